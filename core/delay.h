@@ -1,0 +1,248 @@
+#pragma once
+// Delay and actuator blocks, in simulated time: what happens between the displacement the
+// integrator computes (u_comp) and the one the specimen actually sees (u_real).
+//
+// Input  (CommandSample): t (s), u_comp (m), v_comp (m/s, the integrator's computed velocity).
+// Output: u_real (m).
+// Every stage is called once per step with strictly increasing t (spacing dt, the integration
+// step) and is deterministic given its seed, so an in-process run and a distributed lockstep run
+// agree bit for bit. Initial state: at rest, u_real = 0 before any command.
+//
+// Equations (tau = delay):
+//   TimeShift       u_real(t) = u_comp(t - tau), linear interpolation on the command history;
+//                   tau need not be a multiple of dt; before t = tau the first command is held.
+//   Eq1Lead         u_real = u_comp + v_comp tau   -- the source paper's Eq. 1 exactly as printed.
+//                   With tau > 0 this is a LEAD (overshoot), which adds damping.
+//   Eq1Lag          u_real = u_comp - v_comp tau   -- the first-order Taylor form of a true lag.
+//   FirstOrder      T du_real/dt = u_comp - u_real, discretised exactly for a command held over
+//                   the step: u_real[k] = e^(-dt/T) u_real[k-1] + (1 - e^(-dt/T)) u_comp[k].
+//                   Its phase lag at low frequency is about T.
+//   TransferFunction G(s) = N(s)/D(s), bilinear (Tustin) discretised, direct form II transposed.
+//   BenchmarkActuator the nominal actuator + control-structure-interaction plant of the RTHS
+//                   benchmark (Silva, Dyke et al. 2020), as a TransferFunction.
+//   Jitter          TimeShift whose delay is redrawn each step: tau_k = max(0, mean + sd N(0,1)),
+//                   capped at mean + 6 sd; std::mt19937_64 with the given seed.
+//   Trace           TimeShift whose delay follows a recorded trace tau(t) (linear interpolation,
+//                   held at the ends).
+// Every stage also carries an amplitude gain g: its output is g * (the above).
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace rths::core {
+
+struct CommandSample {
+  double time = 0.0;          // s
+  double displacement = 0.0;  // m
+  double velocity = 0.0;      // m/s
+};
+
+class DelayStage {
+ public:
+  virtual ~DelayStage() = default;
+  // Real-time safe: no allocation after construction.
+  double step(const CommandSample& in) { return gain_ * step_unscaled(in); }
+  virtual void reset() = 0;
+  virtual std::unique_ptr<DelayStage> clone() const = 0;
+  virtual std::string describe() const = 0;
+  // The lag this stage nominally adds at low frequency (s); negative for a lead. For reports.
+  virtual double nominal_delay() const = 0;
+
+  void set_gain(double gain) { gain_ = gain; }
+  double gain() const { return gain_; }
+
+ protected:
+  virtual double step_unscaled(const CommandSample& in) = 0;
+
+ private:
+  double gain_ = 1.0;
+};
+
+class NoDelay final : public DelayStage {
+ public:
+  void reset() override {}
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override { return "none"; }
+  double nominal_delay() const override { return 0.0; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override { return in.displacement; }
+};
+
+// History of (t, u) samples in a fixed ring, with u(t_query) by linear interpolation.
+class CommandHistory {
+ public:
+  // Keeps enough samples to look back `max_lookback` seconds at step `dt`.
+  CommandHistory(double max_lookback, double dt);
+  void push(double time, double value);
+  // @pre at least one sample pushed. Before the oldest kept sample: that sample's value.
+  double at(double time) const;
+  void clear();
+
+ private:
+  std::vector<double> times_, values_;
+  std::size_t head_ = 0, size_ = 0;
+};
+
+class TimeShift final : public DelayStage {
+ public:
+  TimeShift(double delay, double dt);  // @pre delay >= 0, dt > 0
+  void reset() override { history_.clear(); }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return delay_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  double delay_;
+  CommandHistory history_;
+};
+
+class Eq1Lead final : public DelayStage {
+ public:
+  explicit Eq1Lead(double delay) : delay_(delay) {}
+  void reset() override {}
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return -delay_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    return in.displacement + in.velocity * delay_;
+  }
+
+ private:
+  double delay_;
+};
+
+class Eq1Lag final : public DelayStage {
+ public:
+  explicit Eq1Lag(double delay) : delay_(delay) {}
+  void reset() override {}
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return delay_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    return in.displacement - in.velocity * delay_;
+  }
+
+ private:
+  double delay_;
+};
+
+class FirstOrderActuator final : public DelayStage {
+ public:
+  FirstOrderActuator(double time_constant, double dt);  // @pre time_constant > 0, dt > 0
+  void reset() override { state_ = 0.0; }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return time_constant_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  double time_constant_, decay_, state_ = 0.0;
+};
+
+class TransferFunctionStage final : public DelayStage {
+ public:
+  // Continuous-time coefficients, highest power of s first. @pre proper (deg num <= deg den),
+  // denominator leading coefficient non-zero, dt > 0.
+  TransferFunctionStage(std::vector<double> numerator, std::vector<double> denominator, double dt,
+                        std::string label = "transfer-function");
+  void reset() override;
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override { return label_; }
+  // -d(phase)/d(omega) at omega -> 0 of the continuous G(s), i.e. its low-frequency group delay.
+  double nominal_delay() const override { return group_delay_; }
+  double dc_gain() const { return dc_gain_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  std::vector<double> b_, a_;  // discrete, a_[0] == 1
+  std::vector<double> state_;
+  std::string label_;
+  double group_delay_ = 0.0, dc_gain_ = 1.0;
+};
+
+// The benchmark's nominal plant from command to measured actuator displacement.
+std::unique_ptr<TransferFunctionStage> make_benchmark_actuator(double dt);
+
+class JitterShift final : public DelayStage {
+ public:
+  JitterShift(double mean_delay, double std_dev, std::uint64_t seed, double dt);
+  void reset() override;
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return mean_; }
+  double last_delay() const { return last_delay_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  double mean_, std_dev_, cap_;
+  std::uint64_t seed_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  CommandHistory history_;
+  double last_delay_ = 0.0;
+};
+
+struct DelayTrace {
+  std::vector<double> time;   // s, increasing
+  std::vector<double> delay;  // s, >= 0
+  double at(double t) const;
+  double max() const;
+};
+// Two whitespace- or comma-separated columns, '#' comments. Throws naming file and line.
+DelayTrace read_delay_trace(const std::filesystem::path& path);
+
+class TraceShift final : public DelayStage {
+ public:
+  TraceShift(DelayTrace trace, double dt);
+  void reset() override { history_.clear(); }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override;
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  DelayTrace trace_;
+  CommandHistory history_;
+};
+
+// Stages applied in order; the command's velocity is passed unchanged to every stage.
+class DelayChain {
+ public:
+  DelayChain() = default;
+  DelayChain(const DelayChain& other);
+  DelayChain& operator=(const DelayChain& other);
+  DelayChain(DelayChain&&) = default;
+  DelayChain& operator=(DelayChain&&) = default;
+
+  void add(std::unique_ptr<DelayStage> stage) { stages_.push_back(std::move(stage)); }
+  double step(const CommandSample& in);
+  void reset();
+  double nominal_delay() const;
+  std::string describe() const;
+  bool empty() const { return stages_.empty(); }
+
+ private:
+  std::vector<std::unique_ptr<DelayStage>> stages_;
+};
+
+}  // namespace rths::core

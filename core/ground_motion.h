@@ -1,0 +1,50 @@
+#pragma once
+// Ground-motion records: readers for PEER AT2 (both dialects seen in the wild) and plain
+// column text, scaling and linear resampling to the integration step.
+//
+// Output units: time in s, acceleration in m/s^2 (AT2 values, in g, are multiplied by kGravity).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace rths::core {
+
+inline constexpr double kGravity = 9.80665;  // m/s^2, standard gravity
+
+struct GroundMotion {
+  std::string name;                  // file stem or header title
+  double dt = 0.0;                   // s, uniform sample spacing
+  std::vector<double> acceleration;  // m/s^2, sample i at time i * dt
+
+  double duration() const { return dt * static_cast<double>(acceleration.size()); }
+  double peak_abs() const;
+};
+
+// Reads a PEER AT2 file: 4 header lines, the 4th holding NPTS and DT in either of the forms
+// "NPTS=  1559, DT=   .0200 SEC" or "7814    0.0050    NPTS, DT", then values in g in any
+// whitespace-separated layout (8F10.5, 5E15.7, ...). Throws std::runtime_error naming the file and
+// line when the header is malformed, a value does not parse, or fewer than NPTS values are found.
+GroundMotion read_at2(const std::filesystem::path& path);
+
+// Reads plain text: one column (acceleration; needs dt > 0) or two (time, acceleration; uniform
+// spacing is checked). Lines starting with '#' or that are empty are skipped; a non-numeric first
+// line is taken as a header. `to_si` converts the file's acceleration units to m/s^2.
+GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si);
+
+// Chooses AT2 when the 4th line mentions NPTS, otherwise columns.
+GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt = 0.0,
+                                double column_to_si = kGravity);
+
+// Multiplies every sample by `factor`.
+GroundMotion scaled(GroundMotion motion, double factor);
+
+// Linear interpolation onto a grid of step `dt` covering the same duration. Samples past the last
+// record value are held at the last value only up to the record's duration.
+// @pre dt > 0.
+GroundMotion resampled(const GroundMotion& motion, double dt);
+
+// Truncates to the first `duration` seconds (no-op if duration <= 0 or longer than the record).
+GroundMotion truncated(GroundMotion motion, double duration);
+
+}  // namespace rths::core

@@ -1,0 +1,79 @@
+#pragma once
+// Time integrators for M a + C v + r(u, v) = p(t), stepping from t_k to t_{k+1} = t_k + dt.
+//
+// The restoring force is obtained through a RestoringEvaluator so the same integrator drives an
+// in-process model, a delayed experimental substructure, or a node across DDS.
+//
+//   Integrator          predictor (u_{k+1}, v~_{k+1})                 stability (undamped)
+//   EXPLICIT_NEWMARK    u+ = u + dt v + dt^2/2 a;  v~ = v + dt a      omega dt <= 2
+//                       (M + dt/2 C) a+ = p+ - r+ - C (v + dt/2 a);  v+ = v + dt/2 (a + a+)
+//   CENTRAL_DIFFERENCE  u+ = u + dt v_{k+1/2},  v_{k+1/2} = v_{k-1/2} + dt a_k   omega dt <= 2
+//                       v+ = v_{k+1/2} + dt/2 a+ (a+ from equilibrium with that v+)
+//   CHEN_RICLES         v+ = v + dt A1 a;  u+ = u + dt v + dt^2 A2 a,  unconditional for linear
+//                       A1 = A2 = 4 (4M + 2 dt C + dt^2 K0)^-1 M;      and softening systems
+//                       M a+ = p+ - C v+ - r+
+//   NEWMARK_AVERAGE_ACC implicit, beta = 1/4, gamma = 1/2, Newton on the tangent;  unconditional
+//                       needs repeated trials: refused with a delayed experimental part.
+// v~ is the velocity the integrator has computed when it sends u+; the paper's Eq. 1 uses it.
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "core/structure.h"
+
+namespace rths::core {
+
+enum class IntegratorKind { kExplicitNewmark, kCentralDifference, kChenRicles, kNewmarkAverageAcceleration };
+
+std::string to_string(IntegratorKind kind);
+IntegratorKind integrator_from_string(const std::string& name);  // throws listing valid names
+
+// Largest stable omega * dt for an undamped linear system (infinity when unconditional).
+double stability_limit(IntegratorKind kind);
+bool is_explicit(IntegratorKind kind);
+
+// Throws std::invalid_argument naming the integrator, omega_max, dt and the limit when
+// omega_max * dt exceeds it, unless `allow_unstable`.
+void check_stability(IntegratorKind kind, double omega_max, double dt, bool allow_unstable);
+
+// What an integrator asks of the structure each step.
+class RestoringEvaluator {
+ public:
+  virtual ~RestoringEvaluator() = default;
+  // Restoring force at trial displacement u (m) and velocity v (m/s); `tangent` may be null and is
+  // only requested by implicit integrators. Must not mutate committed state.
+  virtual const Vec& trial(const Vec& u, const Vec& v, Mat* tangent) = 0;
+  // The last trial is accepted for this step.
+  virtual void commit() = 0;
+  // Whether trial() may be called more than once per step (false for a delayed or remote
+  // experimental substructure, whose measurement cannot be repeated).
+  virtual bool repeatable() const = 0;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  // Sets u0, v0 and a0 from equilibrium M a0 = p0 - C v0 - r(u0).
+  virtual void initialize(const Vec& u0, const Vec& v0, const Vec& r0, const Vec& p0) = 0;
+  // Advances one step under load p_{k+1}. Real-time safe after initialize() for the explicit
+  // integrators (no allocation).
+  virtual void step(const Vec& load_next, RestoringEvaluator& restoring) = 0;
+
+  const Vec& displacement() const { return u_; }
+  const Vec& velocity() const { return v_; }
+  const Vec& acceleration() const { return a_; }
+  double dt() const { return dt_; }
+  virtual IntegratorKind kind() const = 0;
+
+ protected:
+  Integrator(const StructuralModel& model, double dt);
+  Mat m_, c_, k0_;
+  double dt_;
+  Vec u_, v_, a_;
+};
+
+std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const StructuralModel& model,
+                                            double dt);
+
+}  // namespace rths::core

@@ -1,0 +1,30 @@
+#pragma once
+// Error measures between a reference history and a compared one (same length, same step).
+//
+//   paper_eq2      sqrt(sum_i e_i^2) / N / median|u_ref|   -- the source paper's Eq. 2 exactly
+//                  as printed. Dividing the root-sum by N makes it shrink like 1/sqrt(N): it
+//                  depends on the number of steps (dt and duration), not only on the error.
+//   nrmse          sqrt(mean e^2) / median|u_ref|          -- the N-independent alternative.
+//   peak_error     max |e|
+//   J1 (s)         delay of `measured` behind `target` by cross-correlation peak, with parabolic
+//                  sub-sample refinement (RTHS benchmark, Silva, Dyke et al. 2020).
+//   J2 (%)         100 sqrt(sum (x_m - x_t)^2 / sum x_t^2)  normalised RMS tracking error.
+//   J3 (%)         100 max|x_m - x_t| / max|x_t|           peak tracking error.
+// All throw std::invalid_argument on empty or different-length inputs.
+
+#include <span>
+
+namespace rths::core {
+
+double paper_eq2(std::span<const double> reference, std::span<const double> compared);
+double nrmse(std::span<const double> reference, std::span<const double> compared);
+double peak_error(std::span<const double> reference, std::span<const double> compared);
+double peak_abs(std::span<const double> x);
+double median_abs(std::span<const double> x);
+
+double j1_delay(std::span<const double> target, std::span<const double> measured, double dt,
+                double max_lag);
+double j2_tracking(std::span<const double> target, std::span<const double> measured);
+double j3_peak_tracking(std::span<const double> target, std::span<const double> measured);
+
+}  // namespace rths::core

@@ -1,0 +1,93 @@
+#pragma once
+// Restoring-force blocks: storey shear (N) as a function of inter-storey drift (m).
+//
+// Contract shared by every model (explicit state, Drake-style step):
+//   trial(u)  -> {force, tangent}  evaluates at drift u from the last committed state; no mutation
+//                                  of committed state (implicit integrators call it repeatedly).
+//   commit()                        accepts the last trial as the new committed state.
+//   step(u)   = trial(u) then commit(); what explicit integrators and actuators use.
+// Initial state: zero drift, zero force. All models are rate-independent.
+
+#include <memory>
+#include <string>
+
+namespace rths::core {
+
+struct ForceState {
+  double force = 0.0;    // N
+  double tangent = 0.0;  // N/m, d force / d drift at the trial point
+};
+
+class RestoringForceModel {
+ public:
+  virtual ~RestoringForceModel() = default;
+  virtual ForceState trial(double drift) = 0;
+  virtual void commit() = 0;
+  virtual void reset() = 0;  // back to the initial state
+  virtual double initial_stiffness() const = 0;
+  virtual std::unique_ptr<RestoringForceModel> clone() const = 0;
+  virtual std::string describe() const = 0;
+
+  double step(double drift) {
+    const ForceState s = trial(drift);
+    commit();
+    return s.force;
+  }
+};
+
+// f = k u.
+class LinearSpring final : public RestoringForceModel {
+ public:
+  explicit LinearSpring(double stiffness);
+  ForceState trial(double drift) override;
+  void commit() override {}
+  void reset() override {}
+  double initial_stiffness() const override { return k_; }
+  std::unique_ptr<RestoringForceModel> clone() const override;
+  std::string describe() const override;
+
+ private:
+  double k_;
+};
+
+// Bilinear with kinematic hardening. Elastic stiffness k0, yield force fy = k0 * uy, post-yield
+// stiffness b * k0. The force stays within the band  b k0 u +/- (1 - b) fy  (return mapping), so
+// b < 1 is a softening response. @pre k0 > 0, uy > 0, 0 <= b <= 1.
+class BilinearKinematic final : public RestoringForceModel {
+ public:
+  BilinearKinematic(double k0, double yield_drift, double post_yield_ratio);
+  ForceState trial(double drift) override;
+  void commit() override;
+  void reset() override;
+  double initial_stiffness() const override { return k0_; }
+  std::unique_ptr<RestoringForceModel> clone() const override;
+  std::string describe() const override;
+
+ private:
+  double k0_, fy_, b_;
+  double committed_drift_ = 0.0, committed_force_ = 0.0;
+  double trial_drift_ = 0.0, trial_force_ = 0.0;
+};
+
+// Bouc–Wen: f = alpha k0 u + (1 - alpha) k0 z, with the hysteretic drift z (m) obeying
+//   dz/du = A - |z|^n (beta sgn(du z) + gamma),  A = 1,  beta + gamma = 1 / uy^n,
+// so z saturates at uy. `beta_fraction` = beta uy^n (0.5 gives the classic beta = gamma).
+// z is integrated over each drift increment with RK4 sub-steps of at most uy / 50.
+class BoucWen final : public RestoringForceModel {
+ public:
+  BoucWen(double k0, double yield_drift, double alpha, double n, double beta_fraction);
+  ForceState trial(double drift) override;
+  void commit() override;
+  void reset() override;
+  double initial_stiffness() const override { return k0_; }
+  std::unique_ptr<RestoringForceModel> clone() const override;
+  std::string describe() const override;
+
+ private:
+  double dz_du(double z, double du) const;
+  double k0_, uy_, alpha_, n_, beta_, gamma_;
+  double committed_drift_ = 0.0, committed_z_ = 0.0;
+  double trial_drift_ = 0.0, trial_z_ = 0.0;
+};
+
+}  // namespace rths::core

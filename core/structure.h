@@ -1,0 +1,53 @@
+#pragma once
+// Structural models: lumped-mass shear buildings (an SDOF system is a one-storey building) with
+// mass M, damping C and stiffness K as Eigen matrices, plus the ground-motion influence vector.
+//
+// Equation of motion (relative displacement u, m):  M a + C v + r(u) = -M iota a_g
+// DOF i is floor i (1-based in docs, 0-based in code); storey i joins floor i-1 (ground for i=0)
+// to floor i. Storey drift d_i = u_i - u_{i-1}; storey shear V_i acts as +V_i on floor i and
+// -V_i on floor i-1, so r_i = V_i - V_{i+1}.
+
+#include <Eigen/Dense>
+#include <vector>
+
+namespace rths::core {
+
+using Vec = Eigen::VectorXd;
+using Mat = Eigen::MatrixXd;
+
+struct StructuralModel {
+  Mat mass;       // kg
+  Mat damping;    // N s/m
+  Mat stiffness;  // N/m (initial, linear)
+  Vec influence;  // iota: 1 for every floor under a horizontal ground motion
+  std::vector<double> storey_stiffness;  // N/m, as given
+
+  int dofs() const { return static_cast<int>(mass.rows()); }
+};
+
+// Shear building from floor masses (kg) and storey stiffnesses (N/m), no damping yet.
+// Throws std::invalid_argument on empty, mismatched or non-positive inputs.
+StructuralModel make_shear_building(const std::vector<double>& storey_mass,
+                                    const std::vector<double>& storey_stiffness);
+
+// SDOF with period T (s) and mass m (kg): k = m (2 pi / T)^2; damping c = 2 zeta m omega.
+StructuralModel make_sdof(double period, double zeta, double mass = 1.0);
+
+// Natural circular frequencies (rad/s), ascending, and mass-normalised mode shapes (columns).
+struct Modes {
+  Vec omega;
+  Mat shapes;
+};
+Modes modal_analysis(const Mat& mass, const Mat& stiffness);
+
+// C = a0 M + a1 K meeting zeta at modes i and j (1-based); for one DOF, mass-proportional c =
+// 2 zeta m omega... equivalently a0 = 2 zeta omega, a1 = 0.
+Mat rayleigh_damping(const Mat& mass, const Mat& stiffness, double zeta, int mode_i = 1,
+                     int mode_j = 2);
+// C = M Phi diag(2 zeta omega_n) Phi^T M: the same ratio in every mode.
+Mat modal_damping(const Mat& mass, const Mat& stiffness, double zeta);
+
+// Highest natural circular frequency (rad/s); the explicit integrators' stability limit uses it.
+double max_omega(const StructuralModel& model);
+
+}  // namespace rths::core

@@ -1,0 +1,129 @@
+#pragma once
+// Substructuring of a shear building into a numerical part (in the coordinator or a
+// substructure node) and an experimental part (specimens behind actuators).
+//
+// Blocks:
+//   StoreyAssembly            drifts d = B u  and DOF forces r = B^T V  (B: d_i = u_i - u_{i-1}).
+//   NumericalSubstructure     input storey drifts (m) -> storey shears (N); trial/commit.
+//   Actuator                  input CommandSample (commanded drift) -> {realised drift, measured
+//                             force}: delay chain, then the specimen's restoring-force model.
+//   HybridRestoring           RestoringEvaluator for in-process runs: numerical + actuators.
+// Storey shear V_s = V_numerical_s + V_experimental_s, summed in that order everywhere
+// (in-process and distributed) so results agree bit for bit.
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/delay.h"
+#include "core/integrators.h"
+#include "core/restoring_force.h"
+#include "core/structure.h"
+
+namespace rths::core {
+
+// Makes a storey model of initial stiffness k (N/m).
+using StoreyModelFactory = std::function<std::unique_ptr<RestoringForceModel>(double k)>;
+StoreyModelFactory linear_factory();
+
+struct HybridPartition {
+  // One entry per storey; null where that storey has no numerical / experimental part.
+  std::vector<std::unique_ptr<RestoringForceModel>> numerical;
+  std::vector<std::unique_ptr<RestoringForceModel>> experimental;
+  // Storeys (0-based) that carry an experimental part: one actuator each, in this order.
+  std::vector<int> actuator_storeys;
+
+  HybridPartition() = default;
+  HybridPartition(const HybridPartition& other);
+  HybridPartition& operator=(const HybridPartition& other);
+  HybridPartition(HybridPartition&&) = default;
+  HybridPartition& operator=(HybridPartition&&) = default;
+};
+
+// Every storey: (1 - alpha) k numerical, alpha k experimental. alpha = 0 gives no actuator,
+// alpha = 1 no numerical storey. @pre 0 <= alpha <= 1.
+HybridPartition partition_by_fraction(const std::vector<double>& storey_stiffness, double alpha,
+                                      const StoreyModelFactory& factory);
+// The listed storeys (0-based) are wholly experimental, the rest numerical.
+HybridPartition partition_by_storeys(const std::vector<double>& storey_stiffness,
+                                     const std::vector<int>& experimental_storeys,
+                                     const StoreyModelFactory& factory);
+
+class StoreyAssembly {
+ public:
+  explicit StoreyAssembly(int storeys) : n_(storeys) {}
+  void drifts(const Vec& u, Vec& drift) const;            // d_i = u_i - u_{i-1}
+  void dof_forces(const Vec& shear, Vec& force) const;    // r_i = V_i - V_{i+1}
+  void tangent(const Vec& storey_tangent, Mat& k) const;  // B^T diag(k) B
+  int storeys() const { return n_; }
+
+ private:
+  int n_;
+};
+
+class NumericalSubstructure {
+ public:
+  NumericalSubstructure(std::vector<std::unique_ptr<RestoringForceModel>> storey_models);
+  NumericalSubstructure(const NumericalSubstructure& other);
+  // Storey shears at trial drifts (0 where a storey has no numerical part).
+  void trial(const Vec& drift, Vec& shear, Vec* storey_tangent);
+  void commit();
+  void reset();
+  int storeys() const { return static_cast<int>(models_.size()); }
+
+ private:
+  std::vector<std::unique_ptr<RestoringForceModel>> models_;
+};
+
+struct ActuatorOutput {
+  double realised = 0.0;  // m, drift the specimen sees
+  double force = 0.0;     // N, measured
+};
+
+class Actuator {
+ public:
+  Actuator(DelayChain chain, std::unique_ptr<RestoringForceModel> specimen);
+  Actuator(const Actuator& other);
+  Actuator& operator=(const Actuator& other);
+  Actuator(Actuator&&) = default;
+  Actuator& operator=(Actuator&&) = default;
+  ActuatorOutput step(const CommandSample& command);
+  // Without a delay stage the specimen can be evaluated at trial drifts (implicit reference runs).
+  ForceState trial_undelayed(double drift) { return specimen_->trial(drift); }
+  void commit_undelayed() { specimen_->commit(); }
+  void reset();
+  bool has_delay() const { return !chain_.empty(); }
+  const DelayChain& chain() const { return chain_; }
+
+ private:
+  DelayChain chain_;
+  std::unique_ptr<RestoringForceModel> specimen_;
+};
+
+// In-process restoring force: numerical storeys plus delayed experimental storeys.
+// Records, per step, each actuator's commanded drift, realised drift and measured force.
+class HybridRestoring final : public RestoringEvaluator {
+ public:
+  HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains, double dt);
+  const Vec& trial(const Vec& u, const Vec& v, Mat* tangent) override;
+  void commit() override;
+  bool repeatable() const override;
+  void set_time(double t) { time_ = t; }
+
+  // Last committed step, one entry per actuator.
+  const Vec& command() const { return command_; }
+  const Vec& realised() const { return realised_; }
+  const Vec& measured_force() const { return measured_; }
+  int actuators() const { return static_cast<int>(actuators_.size()); }
+
+ private:
+  StoreyAssembly assembly_;
+  NumericalSubstructure numerical_;
+  std::vector<Actuator> actuators_;
+  std::vector<int> actuator_storeys_;
+  double time_ = 0.0;
+  Vec drift_, drift_velocity_, shear_, storey_tangent_, force_;
+  Vec command_, realised_, measured_;
+};
+
+}  // namespace rths::core
