@@ -1,0 +1,83 @@
+#include "core/simulation.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rths::core {
+
+SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
+                          const SimulationOptions& options) {
+  if (!(setup.dt > 0)) throw std::invalid_argument("simulation: dt must be > 0 s");
+  if (std::abs(motion_at_dt.dt - setup.dt) > 1e-9 * setup.dt) {
+    throw std::invalid_argument("simulation: ground motion '" + motion_at_dt.name + "' has dt " +
+                                std::to_string(motion_at_dt.dt) + " s but the step is " +
+                                std::to_string(setup.dt) + " s; resample it first");
+  }
+  if (motion_at_dt.acceleration.empty()) {
+    throw std::invalid_argument("simulation: ground motion '" + motion_at_dt.name + "' is empty");
+  }
+  check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
+
+  HybridRestoring restoring(setup.partition, setup.delays, setup.dt);
+  if (!is_explicit(setup.integrator) && !restoring.repeatable()) {
+    throw std::invalid_argument(
+        to_string(setup.integrator) +
+        " cannot run with a delay stage: it iterates on the restoring force, which a delayed "
+        "experimental substructure cannot repeat. Use an explicit integrator");
+  }
+  auto integrator = make_integrator(setup.integrator, setup.model, setup.dt);
+
+  const int dofs = setup.model.dofs();
+  const int actuators = restoring.actuators();
+  const std::size_t steps = motion_at_dt.acceleration.size();
+  SimulationResult result;
+  result.dt = setup.dt;
+  result.time.resize(steps);
+  result.displacement = Mat::Zero(static_cast<Eigen::Index>(steps), dofs);
+  result.velocity = Mat::Zero(static_cast<Eigen::Index>(steps), dofs);
+  result.acceleration = Mat::Zero(static_cast<Eigen::Index>(steps), dofs);
+  result.command = Mat::Zero(static_cast<Eigen::Index>(steps), actuators);
+  result.realised = Mat::Zero(static_cast<Eigen::Index>(steps), actuators);
+  result.measured_force = Mat::Zero(static_cast<Eigen::Index>(steps), actuators);
+
+  const Vec mass_iota = setup.model.mass * setup.model.influence;
+  Vec load = -mass_iota * motion_at_dt.acceleration[0];
+  integrator->initialize(Vec::Zero(dofs), Vec::Zero(dofs), Vec::Zero(dofs), load);
+  result.acceleration.row(0) = integrator->acceleration().transpose();
+
+  std::size_t completed = steps;
+  for (std::size_t k = 1; k < steps; ++k) {
+    const double t = static_cast<double>(k) * setup.dt;
+    result.time[k] = t;
+    load = -mass_iota * motion_at_dt.acceleration[k];
+    restoring.set_time(t);
+    integrator->step(load, restoring);
+    const auto row = static_cast<Eigen::Index>(k);
+    result.displacement.row(row) = integrator->displacement().transpose();
+    result.velocity.row(row) = integrator->velocity().transpose();
+    result.acceleration.row(row) = integrator->acceleration().transpose();
+    result.command.row(row) = restoring.command().transpose();
+    result.realised.row(row) = restoring.realised().transpose();
+    result.measured_force.row(row) = restoring.measured_force().transpose();
+    const double peak = integrator->displacement().cwiseAbs().maxCoeff();
+    if (!(peak <= options.divergence_bound)) {  // also catches NaN
+      result.diverged = true;
+      completed = k + 1;
+      break;
+    }
+  }
+  if (completed < steps) {
+    const auto rows = static_cast<Eigen::Index>(completed);
+    result.time.resize(completed);
+    result.displacement.conservativeResize(rows, Eigen::NoChange);
+    result.velocity.conservativeResize(rows, Eigen::NoChange);
+    result.acceleration.conservativeResize(rows, Eigen::NoChange);
+    result.command.conservativeResize(rows, Eigen::NoChange);
+    result.realised.conservativeResize(rows, Eigen::NoChange);
+    result.measured_force.conservativeResize(rows, Eigen::NoChange);
+  }
+  return result;
+}
+
+}  // namespace rths::core

@@ -1,0 +1,309 @@
+#include "core/study.h"
+
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace rths::core {
+namespace {
+
+class CollectingErrors final : public google::protobuf::io::ErrorCollector {
+ public:
+  explicit CollectingErrors(std::string source) : source_(std::move(source)) {}
+  void AddError(int line, google::protobuf::io::ColumnNumber column,
+                const std::string& message) override {
+    if (first_.empty()) {
+      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1) +
+               ": " + message;
+    }
+  }
+  void AddWarning(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
+  const std::string& first() const { return first_; }
+
+ private:
+  std::string source_, first_;
+};
+
+[[noreturn]] void fail(const std::string& source, const std::string& message) {
+  throw std::invalid_argument(source + ": " + message);
+}
+
+void require(bool ok, const std::string& source, const std::string& message) {
+  if (!ok) fail(source, message);
+}
+
+void validate_delay_stage(const config::DelayStage& stage, const std::string& where,
+                          const std::string& source) {
+  using K = config::DelayStage::KindCase;
+  require(stage.amplitude_gain() >= 0, source, where + ".amplitude_gain must be >= 0");
+  switch (stage.kind_case()) {
+    case K::kShift: require(stage.shift().delay() >= 0, source, where + ".shift.delay must be >= 0 s"); break;
+    case K::kEq1: require(stage.eq1().delay() >= 0, source, where + ".eq1.delay must be >= 0 s"); break;
+    case K::kEq1Lag: require(stage.eq1_lag().delay() >= 0, source, where + ".eq1_lag.delay must be >= 0 s"); break;
+    case K::kFirstOrder:
+      require(stage.first_order().time_constant() > 0, source,
+              where + ".first_order.time_constant must be > 0 s");
+      break;
+    case K::kTransferFunction:
+      require(!stage.transfer_function().denominator().empty(), source,
+              where + ".transfer_function.denominator is empty");
+      break;
+    case K::kJitter:
+      require(stage.jitter().mean_delay() >= 0 && stage.jitter().std_dev() >= 0, source,
+              where + ".jitter.mean_delay and std_dev must be >= 0 s");
+      break;
+    case K::kTrace: require(!stage.trace().path().empty(), source, where + ".trace.path is empty"); break;
+    case K::kBenchmark: break;
+    case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
+  }
+}
+
+double effective_gain(const config::DelayStage& stage) {
+  return stage.amplitude_gain() == 0.0 ? 1.0 : stage.amplitude_gain();
+}
+
+}  // namespace
+
+config::Study parse_study(const std::string& text, const std::string& source_name) {
+  config::Study study;
+  CollectingErrors errors(source_name);
+  google::protobuf::TextFormat::Parser parser;
+  parser.RecordErrorsTo(&errors);
+  if (!parser.ParseFromString(text, &study)) {
+    throw std::invalid_argument(errors.first().empty() ? source_name + ": cannot parse config"
+                                                       : errors.first());
+  }
+  validate_study(study, source_name);
+  return study;
+}
+
+config::Study load_study(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot open config " + path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_study(text.str(), path.string());
+}
+
+void validate_study(const config::Study& study, const std::string& source) {
+  require(study.has_structure(), source, "structure is missing");
+  const config::Structure& structure = study.structure();
+  if (structure.has_sdof()) {
+    const config::Sdof& sdof = structure.sdof();
+    require(sdof.period() >= 0, source, "structure.sdof.period must be > 0 s, got " + std::to_string(sdof.period()));
+    require(sdof.mass() >= 0, source, "structure.sdof.mass must be > 0 kg");
+    require(sdof.stiffness() >= 0, source, "structure.sdof.stiffness must be > 0 N/m");
+    require(sdof.period() > 0 || (sdof.mass() > 0 && sdof.stiffness() > 0), source,
+            "structure.sdof needs a period, or both mass and stiffness");
+  } else if (structure.has_shear_building()) {
+    const auto& building = structure.shear_building();
+    require(building.storey_mass_size() > 0, source, "structure.shear_building.storey_mass is empty");
+    require(building.storey_mass_size() == building.storey_stiffness_size(), source,
+            "structure.shear_building: storey_mass and storey_stiffness differ in length");
+  } else {
+    fail(source, "structure needs sdof or shear_building");
+  }
+  if (structure.damping().has_rayleigh()) {
+    require(structure.damping().rayleigh().zeta() >= 0, source, "structure.damping.rayleigh.zeta must be >= 0");
+  } else {
+    require(structure.damping().modal_zeta() >= 0, source, "structure.damping.modal_zeta must be >= 0");
+  }
+  require(study.integrator().dt() >= 0, source, "integrator.dt must be >= 0 s");
+  const auto& sub = study.substructuring();
+  require(sub.experimental_fraction() >= 0 && sub.experimental_fraction() <= 1, source,
+          "substructuring.experimental_fraction must be in [0, 1]");
+  require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
+          "substructuring: give experimental_fraction or experimental_storeys, not both");
+  for (int i = 0; i < study.cases_size(); ++i) {
+    const config::Case& c = study.cases(i);
+    for (int j = 0; j < c.delay_size(); ++j) {
+      validate_delay_stage(c.delay(j), "cases[" + std::to_string(i) + "] '" + c.name() + "' delay[" + std::to_string(j) + "]", source);
+    }
+  }
+  for (double period : study.sweep().periods()) {
+    require(period > 0, source, "sweep.periods must be > 0 s, got " + std::to_string(period));
+  }
+  for (double delay : study.sweep().delays()) {
+    require(delay >= 0, source, "sweep.delays must be >= 0 s, got " + std::to_string(delay));
+  }
+  for (double dt : study.sweep().dts()) require(dt > 0, source, "sweep.dts must be > 0 s");
+  for (double k : study.sweep().stiffnesses()) require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
+  for (double a : study.sweep().experimental_fractions()) {
+    require(a >= 0 && a <= 1, source, "sweep.experimental_fractions must be in [0, 1]");
+  }
+}
+
+GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir) {
+  if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
+  std::filesystem::path path = motion.path();
+  if (path.is_relative()) path = base_dir / path;
+  const double to_si = motion.column_units() == config::GroundMotion::M_PER_S2 ? 1.0 : kGravity;
+  GroundMotion record;
+  switch (motion.format()) {
+    case config::GroundMotion::AT2: record = read_at2(path); break;
+    case config::GroundMotion::COLUMNS: record = read_columns(path, motion.column_dt(), to_si); break;
+    default: record = read_ground_motion(path, motion.column_dt(), to_si); break;
+  }
+  if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
+  if (motion.scale() > 0 && motion.scale() != 1.0) record = scaled(std::move(record), motion.scale());
+  return truncated(std::move(record), motion.duration());
+}
+
+std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
+                                             const std::filesystem::path& base_dir) {
+  using K = config::DelayStage::KindCase;
+  std::unique_ptr<DelayStage> block;
+  switch (stage.kind_case()) {
+    case K::kShift: block = std::make_unique<TimeShift>(stage.shift().delay(), dt); break;
+    case K::kEq1: block = std::make_unique<Eq1Lead>(stage.eq1().delay()); break;
+    case K::kEq1Lag: block = std::make_unique<Eq1Lag>(stage.eq1_lag().delay()); break;
+    case K::kFirstOrder:
+      block = std::make_unique<FirstOrderActuator>(stage.first_order().time_constant(), dt);
+      break;
+    case K::kBenchmark: block = make_benchmark_actuator(dt); break;
+    case K::kTransferFunction: {
+      const auto& tf = stage.transfer_function();
+      block = std::make_unique<TransferFunctionStage>(
+          std::vector<double>(tf.numerator().begin(), tf.numerator().end()),
+          std::vector<double>(tf.denominator().begin(), tf.denominator().end()), dt);
+      break;
+    }
+    case K::kJitter:
+      block = std::make_unique<JitterShift>(stage.jitter().mean_delay(), stage.jitter().std_dev(),
+                                            stage.jitter().seed(), dt);
+      break;
+    case K::kTrace: {
+      std::filesystem::path path = stage.trace().path();
+      if (path.is_relative()) path = base_dir / path;
+      block = std::make_unique<TraceShift>(read_delay_trace(path), dt);
+      break;
+    }
+    case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
+  }
+  block->set_gain(effective_gain(stage));
+  return block;
+}
+
+DelayChain make_delay_chain(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
+                            double dt, const std::filesystem::path& base_dir) {
+  DelayChain chain;
+  for (const config::DelayStage& stage : stages) chain.add(make_delay_stage(stage, dt, base_dir));
+  return chain;
+}
+
+StoreyModelFactory make_storey_factory(const config::RestoringForce& model) {
+  switch (model.kind_case()) {
+    case config::RestoringForce::kBilinear: {
+      const double uy = model.bilinear().yield_displacement();
+      const double b = model.bilinear().post_yield_ratio();
+      if (!(uy > 0)) throw std::invalid_argument("bilinear.yield_displacement must be > 0 m");
+      if (!(b >= 0 && b <= 1)) throw std::invalid_argument("bilinear.post_yield_ratio must be in [0, 1]");
+      return [uy, b](double k) { return std::make_unique<BilinearKinematic>(k, uy, b); };
+    }
+    case config::RestoringForce::kBoucWen: {
+      const auto& bw = model.bouc_wen();
+      if (!(bw.yield_displacement() > 0)) throw std::invalid_argument("bouc_wen.yield_displacement must be > 0 m");
+      const double n = bw.n() == 0 ? 1.0 : bw.n();
+      const double beta = bw.beta() == 0 ? 0.5 : bw.beta();
+      const double uy = bw.yield_displacement(), alpha = bw.alpha();
+      return [=](double k) { return std::make_unique<BoucWen>(k, uy, alpha, n, beta); };
+    }
+    default: return linear_factory();
+  }
+}
+
+StructuralModel make_structure(const config::Structure& structure) {
+  StructuralModel model;
+  if (structure.has_sdof()) {
+    const config::Sdof& sdof = structure.sdof();
+    double mass = sdof.mass() > 0 ? sdof.mass() : 1.0;
+    double stiffness = 0.0;
+    if (sdof.period() > 0 && sdof.stiffness() > 0) {
+      stiffness = sdof.stiffness();
+      mass = stiffness * sdof.period() * sdof.period() / (4.0 * std::numbers::pi * std::numbers::pi);
+    } else if (sdof.period() > 0) {
+      const double omega = 2.0 * std::numbers::pi / sdof.period();
+      stiffness = mass * omega * omega;
+    } else {
+      stiffness = sdof.stiffness();
+    }
+    model = make_shear_building({mass}, {stiffness});
+  } else {
+    const auto& b = structure.shear_building();
+    model = make_shear_building({b.storey_mass().begin(), b.storey_mass().end()},
+                                {b.storey_stiffness().begin(), b.storey_stiffness().end()});
+  }
+  const config::Damping& damping = structure.damping();
+  if (damping.has_rayleigh()) {
+    const auto& r = damping.rayleigh();
+    model.damping = rayleigh_damping(model.mass, model.stiffness, r.zeta(),
+                                     r.mode_i() == 0 ? 1 : r.mode_i(), r.mode_j() == 0 ? 2 : r.mode_j());
+  } else if (model.dofs() == 1) {
+    // 2 zeta m omega written out, so an SDOF from a config equals make_sdof() to the last bit.
+    const double omega = std::sqrt(model.stiffness(0, 0) / model.mass(0, 0));
+    model.damping(0, 0) = 2.0 * damping.modal_zeta() * model.mass(0, 0) * omega;
+  } else {
+    model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
+  }
+  return model;
+}
+
+IntegratorKind integrator_kind(const config::Integrator& integrator) {
+  switch (integrator.kind()) {
+    case config::Integrator::CENTRAL_DIFFERENCE: return IntegratorKind::kCentralDifference;
+    case config::Integrator::CHEN_RICLES: return IntegratorKind::kChenRicles;
+    case config::Integrator::NEWMARK_AVERAGE_ACCELERATION: return IntegratorKind::kNewmarkAverageAcceleration;
+    default: return IntegratorKind::kExplicitNewmark;
+  }
+}
+
+PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir) {
+  PreparedStudy prepared;
+  prepared.config = study;
+  prepared.base_dir = base_dir;
+  GroundMotion record = load_motion(study.motion(), base_dir);
+  const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : record.dt;
+  prepared.motion = std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
+  prepared.base.model = make_structure(study.structure());
+  prepared.base.integrator = integrator_kind(study.integrator());
+  prepared.base.dt = dt;
+  prepared.base.allow_unstable = study.integrator().allow_unstable();
+  const auto& sub = study.substructuring();
+  const StoreyModelFactory factory = make_storey_factory(sub.model());
+  if (!sub.experimental_storeys().empty()) {
+    std::vector<int> storeys;
+    for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
+    prepared.base.partition = partition_by_storeys(prepared.base.model.storey_stiffness, storeys, factory);
+  } else {
+    prepared.base.partition = partition_by_fraction(prepared.base.model.storey_stiffness,
+                                                    sub.experimental_fraction(), factory);
+  }
+  return prepared;
+}
+
+HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case) {
+  HybridSetup setup = prepared.base;
+  setup.delays.clear();
+  for (std::size_t a = 0; a < setup.partition.actuator_storeys.size(); ++a) {
+    setup.delays.push_back(make_delay_chain(study_case.delay(), setup.dt, prepared.base_dir));
+  }
+  return setup;
+}
+
+const config::Case& reference_case(const config::Study& study) {
+  if (study.cases_size() == 0) throw std::invalid_argument("the study has no cases");
+  if (!study.reference_case().empty()) {
+    for (const config::Case& c : study.cases()) {
+      if (c.name() == study.reference_case()) return c;
+    }
+    throw std::invalid_argument("reference_case '" + study.reference_case() + "' is not among the cases");
+  }
+  return study.cases(0);
+}
+
+}  // namespace rths::core

@@ -1,0 +1,208 @@
+#include "core/substructure.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace rths::core {
+namespace {
+
+std::vector<std::unique_ptr<RestoringForceModel>> clone_all(
+    const std::vector<std::unique_ptr<RestoringForceModel>>& models) {
+  std::vector<std::unique_ptr<RestoringForceModel>> copies;
+  copies.reserve(models.size());
+  for (const auto& model : models) copies.push_back(model ? model->clone() : nullptr);
+  return copies;
+}
+
+}  // namespace
+
+StoreyModelFactory linear_factory() {
+  return [](double k) { return std::make_unique<LinearSpring>(k); };
+}
+
+HybridPartition::HybridPartition(const HybridPartition& other)
+    : numerical(clone_all(other.numerical)),
+      experimental(clone_all(other.experimental)),
+      actuator_storeys(other.actuator_storeys) {}
+
+HybridPartition& HybridPartition::operator=(const HybridPartition& other) {
+  if (this != &other) *this = HybridPartition(other);
+  return *this;
+}
+
+HybridPartition partition_by_fraction(const std::vector<double>& storey_stiffness, double alpha,
+                                      const StoreyModelFactory& factory) {
+  if (!(alpha >= 0.0 && alpha <= 1.0)) {
+    throw std::invalid_argument("experimental_fraction must be in [0, 1], got " +
+                                std::to_string(alpha));
+  }
+  HybridPartition partition;
+  for (std::size_t s = 0; s < storey_stiffness.size(); ++s) {
+    const double k = storey_stiffness[s];
+    partition.numerical.push_back(alpha < 1.0 ? factory((1.0 - alpha) * k) : nullptr);
+    partition.experimental.push_back(alpha > 0.0 ? factory(alpha * k) : nullptr);
+    if (alpha > 0.0) partition.actuator_storeys.push_back(static_cast<int>(s));
+  }
+  return partition;
+}
+
+HybridPartition partition_by_storeys(const std::vector<double>& storey_stiffness,
+                                     const std::vector<int>& experimental_storeys,
+                                     const StoreyModelFactory& factory) {
+  const int n = static_cast<int>(storey_stiffness.size());
+  std::vector<bool> experimental(n, false);
+  for (int s : experimental_storeys) {
+    if (s < 0 || s >= n) {
+      throw std::invalid_argument("experimental storey " + std::to_string(s + 1) +
+                                  " is outside 1.." + std::to_string(n));
+    }
+    if (experimental[s]) {
+      throw std::invalid_argument("experimental storey " + std::to_string(s + 1) +
+                                  " is listed twice");
+    }
+    experimental[s] = true;
+  }
+  HybridPartition partition;
+  for (int s = 0; s < n; ++s) {
+    partition.numerical.push_back(experimental[s] ? nullptr : factory(storey_stiffness[s]));
+    partition.experimental.push_back(experimental[s] ? factory(storey_stiffness[s]) : nullptr);
+    if (experimental[s]) partition.actuator_storeys.push_back(s);
+  }
+  return partition;
+}
+
+void StoreyAssembly::drifts(const Vec& u, Vec& drift) const {
+  drift[0] = u[0];
+  for (int i = 1; i < n_; ++i) drift[i] = u[i] - u[i - 1];
+}
+
+void StoreyAssembly::dof_forces(const Vec& shear, Vec& force) const {
+  for (int i = 0; i + 1 < n_; ++i) force[i] = shear[i] - shear[i + 1];
+  force[n_ - 1] = shear[n_ - 1];
+}
+
+void StoreyAssembly::tangent(const Vec& storey_tangent, Mat& k) const {
+  k.setZero(n_, n_);
+  for (int s = 0; s < n_; ++s) {
+    k(s, s) += storey_tangent[s];
+    if (s > 0) {
+      k(s - 1, s - 1) += storey_tangent[s];
+      k(s - 1, s) -= storey_tangent[s];
+      k(s, s - 1) -= storey_tangent[s];
+    }
+  }
+}
+
+NumericalSubstructure::NumericalSubstructure(
+    std::vector<std::unique_ptr<RestoringForceModel>> storey_models)
+    : models_(std::move(storey_models)) {}
+
+NumericalSubstructure::NumericalSubstructure(const NumericalSubstructure& other)
+    : models_(clone_all(other.models_)) {}
+
+void NumericalSubstructure::trial(const Vec& drift, Vec& shear, Vec* storey_tangent) {
+  for (std::size_t s = 0; s < models_.size(); ++s) {
+    ForceState state;
+    if (models_[s]) state = models_[s]->trial(drift[s]);
+    shear[s] = state.force;
+    if (storey_tangent) (*storey_tangent)[s] = state.tangent;
+  }
+}
+
+void NumericalSubstructure::commit() {
+  for (auto& model : models_) {
+    if (model) model->commit();
+  }
+}
+
+void NumericalSubstructure::reset() {
+  for (auto& model : models_) {
+    if (model) model->reset();
+  }
+}
+
+Actuator::Actuator(DelayChain chain, std::unique_ptr<RestoringForceModel> specimen)
+    : chain_(std::move(chain)), specimen_(std::move(specimen)) {
+  if (!specimen_) throw std::invalid_argument("an actuator needs a specimen model");
+}
+
+Actuator::Actuator(const Actuator& other)
+    : chain_(other.chain_), specimen_(other.specimen_->clone()) {}
+
+Actuator& Actuator::operator=(const Actuator& other) {
+  if (this != &other) *this = Actuator(other);
+  return *this;
+}
+
+ActuatorOutput Actuator::step(const CommandSample& command) {
+  ActuatorOutput out;
+  out.realised = chain_.empty() ? command.displacement : chain_.step(command);
+  out.force = specimen_->step(out.realised);
+  return out;
+}
+
+void Actuator::reset() {
+  chain_.reset();
+  specimen_->reset();
+}
+
+HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains,
+                                 double /*dt*/)
+    : assembly_(static_cast<int>(partition.numerical.size())),
+      numerical_(HybridPartition(partition).numerical),
+      actuator_storeys_(partition.actuator_storeys) {
+  const std::size_t actuators = partition.actuator_storeys.size();
+  if (!chains.empty() && chains.size() != actuators) {
+    throw std::invalid_argument(std::to_string(chains.size()) + " delay chains for " +
+                                std::to_string(actuators) + " actuators");
+  }
+  chains.resize(actuators);
+  for (std::size_t a = 0; a < actuators; ++a) {
+    const int storey = partition.actuator_storeys[a];
+    actuators_.emplace_back(std::move(chains[a]), partition.experimental[storey]->clone());
+  }
+  const int n = assembly_.storeys();
+  drift_ = Vec::Zero(n);
+  drift_velocity_ = Vec::Zero(n);
+  shear_ = Vec::Zero(n);
+  storey_tangent_ = Vec::Zero(n);
+  force_ = Vec::Zero(n);
+  command_ = Vec::Zero(static_cast<int>(actuators));
+  realised_ = Vec::Zero(static_cast<int>(actuators));
+  measured_ = Vec::Zero(static_cast<int>(actuators));
+}
+
+bool HybridRestoring::repeatable() const {
+  for (const Actuator& actuator : actuators_) {
+    if (actuator.has_delay()) return false;
+  }
+  return true;
+}
+
+const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
+  assembly_.drifts(u, drift_);
+  assembly_.drifts(v, drift_velocity_);
+  numerical_.trial(drift_, shear_, tangent ? &storey_tangent_ : nullptr);
+  for (std::size_t a = 0; a < actuators_.size(); ++a) {
+    const int s = actuator_storeys_[a];
+    if (tangent) {
+      // Implicit iteration (only when undelayed): evaluate without committing.
+      const ForceState state = actuators_[a].trial_undelayed(drift_[s]);
+      shear_[s] += state.force;
+      storey_tangent_[s] += state.tangent;
+    } else {
+      const ActuatorOutput out = actuators_[a].step({time_, drift_[s], drift_velocity_[s]});
+      command_[a] = drift_[s];
+      realised_[a] = out.realised;
+      measured_[a] = out.force;
+      shear_[s] += out.force;
+    }
+  }
+  assembly_.dof_forces(shear_, force_);
+  if (tangent) assembly_.tangent(storey_tangent_, *tangent);
+  return force_;
+}
+
+void HybridRestoring::commit() { numerical_.commit(); }
+
+}  // namespace rths::core
