@@ -1,0 +1,119 @@
+#include "core/simulation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/metrics.h"
+
+namespace rths::core {
+namespace {
+
+constexpr double kDt = 0.002;
+
+GroundMotion sine_motion(double dt, double seconds, double frequency_hz = 1.5) {
+  GroundMotion m{"sine", dt, {}};
+  for (int k = 0; k * dt < seconds; ++k) m.acceleration.push_back(2.0 * std::sin(2 * M_PI * frequency_hz * k * dt));
+  return m;
+}
+
+HybridSetup sdof_setup(double alpha, double delay, IntegratorKind kind = IntegratorKind::kExplicitNewmark) {
+  HybridSetup setup;
+  setup.model = make_sdof(0.5, 0.05);
+  setup.integrator = kind;
+  setup.dt = kDt;
+  setup.partition = partition_by_fraction(setup.model.storey_stiffness, alpha, linear_factory());
+  if (delay > 0) {
+    DelayChain chain;
+    chain.add(std::make_unique<TimeShift>(delay, kDt));
+    setup.delays.push_back(std::move(chain));
+  }
+  return setup;
+}
+
+std::vector<double> column(const Mat& m, int c) {
+  return std::vector<double>(m.col(c).data(), m.col(c).data() + m.rows());
+}
+
+TEST(SimulationTest, ExplicitReferenceAgreesWithImplicitReference) {
+  const GroundMotion motion = sine_motion(kDt, 4.0);
+  const SimulationResult explicit_run = simulate(sdof_setup(0.5, 0.0), motion);
+  const SimulationResult implicit_run = simulate(sdof_setup(0.5, 0.0, IntegratorKind::kNewmarkAverageAcceleration), motion);
+  ASSERT_EQ(explicit_run.steps(), motion.acceleration.size());
+  EXPECT_LT(nrmse(column(implicit_run.displacement, 0), column(explicit_run.displacement, 0)), 2e-3);
+}
+
+TEST(SimulationTest, ZeroDelayShiftIsBitIdenticalToNoDelay) {
+  const GroundMotion motion = sine_motion(kDt, 2.0);
+  const SimulationResult plain = simulate(sdof_setup(0.5, 0.0), motion);
+  HybridSetup zero = sdof_setup(0.5, 0.0);
+  DelayChain chain;
+  chain.add(std::make_unique<TimeShift>(0.0, kDt));
+  zero.delays.push_back(std::move(chain));
+  const SimulationResult shifted = simulate(zero, motion);
+  EXPECT_EQ(plain.displacement, shifted.displacement);
+}
+
+TEST(SimulationTest, LagEnlargesAndLeadShrinksTheResponse) {
+  const GroundMotion motion = sine_motion(kDt, 8.0, 2.0);  // at resonance
+  const double reference = peak_abs(column(simulate(sdof_setup(1.0 / 3, 0.0), motion).displacement, 0));
+  const double lagged = peak_abs(column(simulate(sdof_setup(1.0 / 3, 0.014), motion).displacement, 0));
+  HybridSetup lead = sdof_setup(1.0 / 3, 0.0);
+  DelayChain chain;
+  chain.add(std::make_unique<Eq1Lead>(0.014));
+  lead.delays.push_back(std::move(chain));
+  const double led = peak_abs(column(simulate(lead, motion).displacement, 0));
+  EXPECT_GT(lagged, 1.2 * reference);
+  EXPECT_LT(led, 0.9 * reference);
+}
+
+TEST(SimulationTest, RecordsCommandRealisedAndForcePerActuator) {
+  const GroundMotion motion = sine_motion(kDt, 1.0);
+  const SimulationResult r = simulate(sdof_setup(0.5, 3 * kDt), motion);
+  ASSERT_EQ(r.command.cols(), 1);
+  for (Eigen::Index k = 3; k < r.command.rows(); ++k) {
+    EXPECT_NEAR(r.realised(k, 0), r.command(k - 3, 0), 1e-15);
+  }
+  const double k_exp = 0.5 * r.measured_force(10, 0) / r.realised(10, 0) * 2;
+  EXPECT_NEAR(k_exp, 0.5 * make_sdof(0.5, 0.05).stiffness(0, 0), 1e-6);
+}
+
+TEST(SimulationTest, UnstableDelayIsFlaggedDivergedNotRunToNaN) {
+  const GroundMotion motion = sine_motion(kDt, 30.0);
+  SimulationOptions options;
+  options.divergence_bound = 10.0;
+  const SimulationResult r = simulate(sdof_setup(1.0, 0.05), motion, options);
+  EXPECT_TRUE(r.diverged);
+  EXPECT_LT(r.steps(), motion.acceleration.size());
+  EXPECT_TRUE(r.displacement.allFinite());
+}
+
+TEST(SimulationTest, RefusesBadSetups) {
+  const GroundMotion motion = sine_motion(kDt, 1.0);
+  EXPECT_THROW(simulate(sdof_setup(0.5, 0.01, IntegratorKind::kNewmarkAverageAcceleration), motion), std::invalid_argument);
+  EXPECT_THROW(simulate(sdof_setup(0.5, 0.0), sine_motion(0.005, 1.0)), std::invalid_argument);
+  HybridSetup too_coarse = sdof_setup(0.5, 0.0);
+  too_coarse.dt = 0.2;  // omega dt = 2.5
+  EXPECT_THROW(simulate(too_coarse, sine_motion(0.2, 5.0)), std::invalid_argument);
+}
+
+TEST(SimulationTest, ShearBuildingWithOneExperimentalStorey) {
+  HybridSetup setup;
+  setup.model = make_shear_building({1000.0, 1000.0}, {4e5, 3e5});
+  setup.model.damping = rayleigh_damping(setup.model.mass, setup.model.stiffness, 0.05);
+  setup.dt = kDt;
+  setup.partition = partition_by_storeys(setup.model.storey_stiffness, {0}, linear_factory());
+  const GroundMotion motion = sine_motion(kDt, 3.0);
+  const SimulationResult reference = simulate(setup, motion);
+  DelayChain chain;
+  chain.add(std::make_unique<TimeShift>(0.01, kDt));
+  setup.delays.push_back(std::move(chain));
+  const SimulationResult delayed = simulate(setup, motion);
+  ASSERT_EQ(reference.displacement.cols(), 2);
+  // The actuator commands storey 1's drift, which is floor 1's displacement.
+  EXPECT_EQ(column(reference.command, 0), column(reference.displacement, 0));
+  EXPECT_GT(nrmse(column(reference.displacement, 1), column(delayed.displacement, 1)), 1e-3);
+}
+
+}  // namespace
+}  // namespace rths::core

@@ -1,0 +1,109 @@
+#include "core/stability.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "core/simulation.h"
+
+namespace rths::core {
+namespace {
+
+constexpr double kPeriod = 0.5, kZeta = 0.05;
+
+TEST(ContinuousStabilityTest, CrossingsSolveTheCharacteristicEquation) {
+  for (double alpha : {0.3, 0.6, 1.0}) {
+    const ContinuousStability s = continuous_critical_delay(kPeriod, kZeta, alpha, 3);
+    ASSERT_TRUE(s.critical_delay.has_value()) << alpha;
+    const double omega_n = 2 * std::numbers::pi / kPeriod, k = omega_n * omega_n;
+    for (const DelayCrossing& c : s.crossings) {
+      const std::complex<double> iw(0.0, c.omega);
+      const std::complex<double> residual = iw * iw + 2 * kZeta * omega_n * iw + (1 - alpha) * k +
+                                            alpha * k * std::exp(-iw * c.delay);
+      EXPECT_LT(std::abs(residual), 1e-9 * k) << "alpha " << alpha << " branch " << c.branch;
+    }
+    EXPECT_DOUBLE_EQ(*s.critical_delay, s.crossings.front().delay);
+  }
+}
+
+TEST(ContinuousStabilityTest, SmallExperimentalPartIsStableForEveryDelay) {
+  // |k_e| below what the damped numerical part can absorb at any frequency: no crossing.
+  const ContinuousStability s = continuous_critical_delay(kPeriod, 0.2, 0.05, 3);
+  EXPECT_TRUE(s.stable_for_all_delays);
+  EXPECT_FALSE(s.critical_delay.has_value());
+}
+
+TEST(ContinuousStabilityTest, CriticalDelayGrowsAsTheExperimentalFractionShrinks) {
+  const double full = *continuous_critical_delay(kPeriod, kZeta, 1.0).critical_delay;
+  const double third = *continuous_critical_delay(kPeriod, kZeta, 1.0 / 3.0).critical_delay;
+  EXPECT_GT(third, 2.0 * full);
+  // Small-delay estimate: instability when alpha omega tau / 2 ~ zeta.
+  EXPECT_NEAR(full, 2 * kZeta / (2 * std::numbers::pi / kPeriod), 0.2 * full);
+}
+
+// Response to a one-step ground pulse, then free vibration with a delayed experimental part.
+double late_over_early_peak(double delay, double alpha, double dt) {
+  HybridSetup setup;
+  setup.model = make_sdof(kPeriod, kZeta);
+  setup.dt = dt;
+  setup.partition = partition_by_fraction(setup.model.storey_stiffness, alpha,
+                                          [](double k) { return std::make_unique<LinearSpring>(k); });
+  DelayChain chain;
+  chain.add(std::make_unique<TimeShift>(delay, dt));
+  setup.delays.push_back(std::move(chain));
+  GroundMotion pulse{"pulse", dt, std::vector<double>(static_cast<std::size_t>(6.0 / dt), 0.0)};
+  pulse.acceleration[1] = 100.0;
+  const SimulationResult r = simulate(setup, pulse);
+  const auto n = r.displacement.rows();
+  const double early = r.displacement.topRows(n / 3).cwiseAbs().maxCoeff();
+  const double late = r.displacement.bottomRows(n / 3).cwiseAbs().maxCoeff();
+  return late / early;
+}
+
+TEST(ContinuousStabilityTest, SimulationDecaysJustBelowAndGrowsJustAboveTheCriticalDelay) {
+  constexpr double kAlpha = 0.6, kDt = 1e-4;
+  const double critical = *continuous_critical_delay(kPeriod, kZeta, kAlpha).critical_delay;
+  EXPECT_LT(late_over_early_peak(0.9 * critical, kAlpha, kDt), 1.0);
+  EXPECT_GT(late_over_early_peak(1.1 * critical, kAlpha, kDt), 1.0);
+}
+
+TEST(DiscreteStabilityTest, FirstUnstableStepCountApproachesContinuousDelayAsDtShrinks) {
+  const double critical = *continuous_critical_delay(kPeriod, kZeta, 1.0).critical_delay;
+  for (double dt : {1e-3, 2e-4}) {
+    const DiscreteStability d = discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, dt, 500);
+    ASSERT_TRUE(d.first_unstable_delay.has_value());
+    EXPECT_NEAR(*d.first_unstable_delay, critical, 2 * dt + 0.05 * critical) << dt;
+  }
+}
+
+TEST(DiscreteStabilityTest, SimulationConfirmsTheFirstUnstableStep) {
+  constexpr double kDt = 1e-3, kAlpha = 1.0;
+  const DiscreteStability d = discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, 200);
+  ASSERT_TRUE(d.first_unstable_steps.has_value());
+  const int n = *d.first_unstable_steps;
+  EXPECT_LT(late_over_early_peak((n - 1) * kDt, kAlpha, kDt), 1.0);
+  EXPECT_GT(late_over_early_peak(n * kDt, kAlpha, kDt), 1.0);
+}
+
+TEST(DiscreteStabilityTest, ExplicitNewmarkWithoutDelayIsUnstableBeyondItsLimit) {
+  const double omega = 2 * std::numbers::pi / kPeriod;
+  const DiscreteStability d = discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, 0.0, 0.0,
+                                                      2.05 / omega, 0);
+  ASSERT_TRUE(d.first_unstable_steps.has_value());
+  EXPECT_EQ(*d.first_unstable_steps, 0);
+}
+
+TEST(DiscreteStabilityTest, EveryIntegratorHasAFiniteCriticalDelayAtFullExperimentalFraction) {
+  for (IntegratorKind kind : {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
+                              IntegratorKind::kChenRicles, IntegratorKind::kNewmarkAverageAcceleration}) {
+    const DiscreteStability d = discrete_critical_delay(kind, kPeriod, kZeta, 1.0, 1e-3, 100);
+    ASSERT_TRUE(d.first_unstable_steps.has_value()) << to_string(kind);
+    EXPECT_GT(*d.first_unstable_steps, 2) << to_string(kind);
+    EXPECT_LT(*d.first_unstable_steps, 20) << to_string(kind);
+  }
+}
+
+}  // namespace
+}  // namespace rths::core
