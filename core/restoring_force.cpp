@@ -1,0 +1,148 @@
+#include "core/restoring_force.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace rths::core {
+namespace {
+
+std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0,
+                   double d = 0.0, double e = 0.0) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, pattern, a, b, c, d, e);
+  return buffer;
+}
+
+void require(bool condition, const std::string& message) {
+  if (!condition) throw std::invalid_argument(message);
+}
+
+bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+LinearSpring::LinearSpring(double stiffness) : k_(stiffness) {
+  require(std::isfinite(stiffness), "LinearSpring: stiffness must be finite");
+}
+
+ForceState LinearSpring::trial(double drift) { return {k_ * drift, k_}; }
+
+std::unique_ptr<RestoringForceModel> LinearSpring::clone() const {
+  return std::make_unique<LinearSpring>(*this);
+}
+
+std::string LinearSpring::describe() const { return format("linear(k = %g N/m)", k_); }
+
+// ---------------------------------------------------------------------------------------------
+BilinearKinematic::BilinearKinematic(double k0, double yield_drift, double post_yield_ratio)
+    : k0_(k0), fy_(k0 * yield_drift), b_(post_yield_ratio) {
+  require(positive_finite(k0), format("BilinearKinematic: k0 must be > 0, got %g", k0));
+  require(positive_finite(yield_drift),
+          format("BilinearKinematic: yield drift must be > 0, got %g", yield_drift));
+  require(post_yield_ratio >= 0.0 && post_yield_ratio <= 1.0,
+          format("BilinearKinematic: post-yield ratio b must be in [0, 1], got %g",
+                 post_yield_ratio));
+}
+
+// Elastic predictor from the committed state, then return to the band b k0 u +/- (1 - b) fy.
+ForceState BilinearKinematic::trial(double drift) {
+  trial_drift_ = drift;
+  const double predictor = committed_force_ + k0_ * (drift - committed_drift_);
+  const double centre = b_ * k0_ * drift;
+  const double half_width = (1.0 - b_) * fy_;
+  if (predictor > centre + half_width) {
+    trial_force_ = centre + half_width;
+    return {trial_force_, b_ * k0_};
+  }
+  if (predictor < centre - half_width) {
+    trial_force_ = centre - half_width;
+    return {trial_force_, b_ * k0_};
+  }
+  trial_force_ = predictor;
+  return {trial_force_, k0_};
+}
+
+void BilinearKinematic::commit() {
+  committed_drift_ = trial_drift_;
+  committed_force_ = trial_force_;
+}
+
+void BilinearKinematic::reset() {
+  committed_drift_ = committed_force_ = trial_drift_ = trial_force_ = 0.0;
+}
+
+std::unique_ptr<RestoringForceModel> BilinearKinematic::clone() const {
+  return std::make_unique<BilinearKinematic>(*this);
+}
+
+std::string BilinearKinematic::describe() const {
+  return format("bilinear-kinematic(k0 = %g N/m, fy = %g N, b = %g)", k0_, fy_, b_);
+}
+
+// ---------------------------------------------------------------------------------------------
+BoucWen::BoucWen(double k0, double yield_drift, double alpha, double n, double beta_fraction)
+    : k0_(k0), uy_(yield_drift), alpha_(alpha), n_(n), beta_(0.0), gamma_(0.0) {
+  require(positive_finite(k0), format("BoucWen: k0 must be > 0, got %g", k0));
+  require(positive_finite(yield_drift),
+          format("BoucWen: yield drift must be > 0, got %g", yield_drift));
+  require(alpha >= 0.0 && alpha <= 1.0,
+          format("BoucWen: alpha (post-yield ratio) must be in [0, 1], got %g", alpha));
+  require(positive_finite(n), format("BoucWen: exponent n must be > 0, got %g", n));
+  // beta_fraction in [0, 1] keeps gamma >= 0 and beta >= 0: a stable, softening loop whose
+  // hysteretic drift z stays within +/- uy.
+  require(beta_fraction >= 0.0 && beta_fraction <= 1.0,
+          format("BoucWen: beta fraction must be in [0, 1], got %g", beta_fraction));
+  const double scale = std::pow(yield_drift, n);
+  beta_ = beta_fraction / scale;
+  gamma_ = (1.0 - beta_fraction) / scale;
+}
+
+double BoucWen::dz_du(double z, double du) const {
+  const double direction = (du * z > 0.0) ? 1.0 : (du * z < 0.0 ? -1.0 : 0.0);
+  return 1.0 - std::pow(std::abs(z), n_) * (beta_ * direction + gamma_);
+}
+
+ForceState BoucWen::trial(double drift) {
+  trial_drift_ = drift;
+  const double du = drift - committed_drift_;
+  double z = committed_z_;
+  if (du != 0.0) {
+    // RK4 in u with sub-steps of at most uy / 50: z changes by at most ~uy/50 per sub-step,
+    // fine enough to follow the knee of the loop.
+    const int substeps = std::max(1, static_cast<int>(std::ceil(std::abs(du) / (uy_ / 50.0))));
+    const double h = du / substeps;
+    for (int i = 0; i < substeps; ++i) {
+      const double k1 = dz_du(z, du);
+      const double k2 = dz_du(z + 0.5 * h * k1, du);
+      const double k3 = dz_du(z + 0.5 * h * k2, du);
+      const double k4 = dz_du(z + h * k3, du);
+      z += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
+  }
+  trial_z_ = z;
+  const double force = alpha_ * k0_ * drift + (1.0 - alpha_) * k0_ * z;
+  // The tangent continues the current loading direction; at rest (du = 0) sgn is taken as 0.
+  const double tangent = alpha_ * k0_ + (1.0 - alpha_) * k0_ * dz_du(z, du);
+  return {force, tangent};
+}
+
+void BoucWen::commit() {
+  committed_drift_ = trial_drift_;
+  committed_z_ = trial_z_;
+}
+
+void BoucWen::reset() { committed_drift_ = committed_z_ = trial_drift_ = trial_z_ = 0.0; }
+
+std::unique_ptr<RestoringForceModel> BoucWen::clone() const {
+  return std::make_unique<BoucWen>(*this);
+}
+
+std::string BoucWen::describe() const {
+  return format("bouc-wen(k0 = %g N/m, uy = %g m, alpha = %g, n = %g, beta uy^n = %g)", k0_, uy_,
+                alpha_, n_, beta_ * std::pow(uy_, n_));
+}
+
+}  // namespace rths::core
