@@ -1,0 +1,322 @@
+#include "core/ground_motion.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+
+namespace rths::core {
+namespace {
+
+std::string where(const std::filesystem::path& path, int line) {
+  return path.string() + ":" + std::to_string(line) + ": ";
+}
+
+// getline that also drops the '\r' of CRLF files (PEER NGA files are CRLF).
+bool read_line(std::istream& in, std::string& line) {
+  if (!std::getline(in, line)) return false;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  return true;
+}
+
+std::string upper(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return text;
+}
+
+// Parses one number at `p` (after optional spaces); returns false if none is there.
+bool parse_number(const char*& p, double& value) {
+  char* end = nullptr;
+  value = std::strtod(p, &end);
+  if (end == p) return false;
+  p = end;
+  return true;
+}
+
+// Every number on a line. strtod stops at the sign of the next value, so fixed-width fields that
+// touch ("-0.12345-0.23456", as 8F10.5 prints large values) split correctly. Fortran 'D'
+// exponents are read as 'E'. Anything else is an error naming file, line and text.
+void parse_values(std::string line, const std::filesystem::path& path, int line_number,
+                  std::vector<double>& out) {
+  for (char& c : line) {
+    if (c == 'D' || c == 'd') c = 'E';
+  }
+  const char* p = line.c_str();
+  while (true) {
+    while (*p != '\0' && std::isspace(static_cast<unsigned char>(*p))) ++p;
+    if (*p == '\0') return;
+    const char* start = p;
+    double value = 0.0;
+    if (!parse_number(p, value) || !std::isfinite(value)) {
+      std::string token(start);
+      token = token.substr(0, token.find_first_of(" \t"));
+      throw std::runtime_error(where(path, line_number) + "'" + token +
+                               "' is not a finite number");
+    }
+    out.push_back(value);
+  }
+}
+
+struct At2Header {
+  long npts = 0;
+  double dt = 0.0;
+};
+
+// "NPTS=  1559, DT=   .0200 SEC" (PEER classic and NGA) or "7814    0.0050    NPTS, DT"
+// (NGA-West2 new format).
+At2Header parse_at2_header(const std::string& line, const std::filesystem::path& path) {
+  const std::string text = upper(line);
+  At2Header header;
+  const auto fail = [&](const std::string& why) {
+    return std::runtime_error(where(path, 4) + why + " in AT2 header line '" + line +
+                              "' (expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT')");
+  };
+  const std::size_t npts_at = text.find("NPTS");
+  if (npts_at == std::string::npos) throw fail("no NPTS");
+  std::size_t after = text.find_first_not_of(' ', npts_at + 4);
+  if (after != std::string::npos && text[after] == '=') {
+    const char* p = text.c_str() + after + 1;
+    double npts = 0.0;
+    if (!parse_number(p, npts)) throw fail("no number after NPTS=");
+    const std::size_t dt_at = text.find("DT", static_cast<std::size_t>(p - text.c_str()));
+    if (dt_at == std::string::npos) throw fail("no DT");
+    const std::size_t equals = text.find_first_not_of(' ', dt_at + 2);
+    if (equals == std::string::npos || text[equals] != '=') throw fail("no '=' after DT");
+    const char* q = text.c_str() + equals + 1;
+    if (!parse_number(q, header.dt)) throw fail("no number after DT=");
+    if (npts != std::floor(npts)) throw fail("NPTS is not a whole number");
+    header.npts = static_cast<long>(npts);
+  } else {
+    const char* p = text.c_str();
+    double npts = 0.0;
+    if (!parse_number(p, npts) || !parse_number(p, header.dt)) {
+      throw fail("no 'NPTS=' and no two leading numbers");
+    }
+    if (npts != std::floor(npts)) throw fail("NPTS is not a whole number");
+    header.npts = static_cast<long>(npts);
+  }
+  if (header.npts <= 0) throw fail("NPTS must be > 0");
+  if (!(header.dt > 0.0) || !std::isfinite(header.dt)) throw fail("DT must be > 0");
+  return header;
+}
+
+// Splits a columns line into numbers; returns false (no throw) if a field is not numeric.
+bool split_numbers(std::string line, std::vector<double>& fields, std::string& bad_field) {
+  std::replace(line.begin(), line.end(), ',', ' ');
+  std::replace(line.begin(), line.end(), '\t', ' ');
+  fields.clear();
+  std::size_t pos = 0;
+  while (true) {
+    pos = line.find_first_not_of(' ', pos);
+    if (pos == std::string::npos) return true;
+    const std::size_t end = std::min(line.find(' ', pos), line.size());
+    const std::string token = line.substr(pos, end - pos);
+    char* stop = nullptr;
+    const double value = std::strtod(token.c_str(), &stop);
+    if (stop == token.c_str() || *stop != '\0' || !std::isfinite(value)) {
+      bad_field = token;
+      return false;
+    }
+    fields.push_back(value);
+    pos = end;
+  }
+}
+
+}  // namespace
+
+double GroundMotion::peak_abs() const {
+  double peak = 0.0;
+  for (double a : acceleration) {
+    if (std::isnan(a)) return a;
+    peak = std::max(peak, std::abs(a));
+  }
+  return peak;
+}
+
+GroundMotion read_at2(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open AT2 file");
+  std::string line;
+  for (int i = 1; i <= 3; ++i) {
+    if (!read_line(in, line)) {
+      throw std::runtime_error(path.string() + ": AT2 header ends at line " + std::to_string(i) +
+                               " (expected 4 header lines)");
+    }
+  }
+  if (!read_line(in, line)) {
+    throw std::runtime_error(path.string() + ": AT2 header has no 4th line with NPTS and DT");
+  }
+  const At2Header header = parse_at2_header(line, path);
+
+  GroundMotion motion;
+  motion.name = path.stem().string();
+  motion.dt = header.dt;
+  motion.acceleration.reserve(static_cast<std::size_t>(header.npts));
+  int line_number = 4;
+  int last_value_line = 4;
+  while (read_line(in, line)) {
+    ++line_number;
+    const std::size_t before = motion.acceleration.size();
+    parse_values(line, path, line_number, motion.acceleration);
+    if (motion.acceleration.size() != before) last_value_line = line_number;
+    if (motion.acceleration.size() > static_cast<std::size_t>(header.npts)) {
+      throw std::runtime_error(where(path, line_number) + "more values than NPTS = " +
+                               std::to_string(header.npts) + " declared on line 4");
+    }
+  }
+  if (motion.acceleration.size() < static_cast<std::size_t>(header.npts)) {
+    throw std::runtime_error(path.string() + ": found " +
+                             std::to_string(motion.acceleration.size()) + " values but NPTS = " +
+                             std::to_string(header.npts) + " (line 4); " +
+                             std::to_string(header.npts -
+                                            static_cast<long>(motion.acceleration.size())) +
+                             " missing after line " + std::to_string(last_value_line) +
+                             " — truncated file?");
+  }
+  for (double& a : motion.acceleration) a *= kGravity;
+  return motion;
+}
+
+GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si) {
+  if (!(to_si > 0.0) || !std::isfinite(to_si)) {
+    throw std::invalid_argument(path.string() + ": unit factor to m/s^2 must be > 0, got " +
+                                std::to_string(to_si));
+  }
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open ground-motion file");
+  std::vector<double> times, values, fields;
+  std::string line, bad_field;
+  int line_number = 0;
+  std::size_t columns = 0;
+  bool header_allowed = true;
+  int first_data_line = 0;
+  while (read_line(in, line)) {
+    ++line_number;
+    const std::size_t start = line.find_first_not_of(" \t");
+    if (start == std::string::npos || line[start] == '#') continue;
+    if (!split_numbers(line, fields, bad_field)) {
+      if (header_allowed) {  // a title line such as "time,accel"
+        header_allowed = false;
+        continue;
+      }
+      throw std::runtime_error(where(path, line_number) + "'" + bad_field +
+                               "' is not a finite number");
+    }
+    header_allowed = false;
+    if (columns == 0) {
+      columns = fields.size();
+      first_data_line = line_number;
+      if (columns != 1 && columns != 2) {
+        throw std::runtime_error(where(path, line_number) + "expected 1 column (acceleration) or "
+                                 "2 (time, acceleration), found " + std::to_string(columns));
+      }
+    } else if (fields.size() != columns) {
+      throw std::runtime_error(where(path, line_number) + "found " +
+                               std::to_string(fields.size()) + " columns, line " +
+                               std::to_string(first_data_line) + " had " +
+                               std::to_string(columns));
+    }
+    if (columns == 2) {
+      if (times.size() >= 2) {
+        const double first_step = times[1] - times[0];
+        const double step = fields[0] - times.back();
+        // 1e-3 relative: text files round their times, but a missing or doubled sample is caught.
+        if (std::abs(step - first_step) > 1e-3 * first_step) {
+          throw std::runtime_error(where(path, line_number) + "time step " + std::to_string(step) +
+                                   " s differs from the first step " +
+                                   std::to_string(first_step) + " s (non-uniform time)");
+        }
+      } else if (times.size() == 1 && !(fields[0] > times[0])) {
+        throw std::runtime_error(where(path, line_number) + "time does not increase");
+      }
+      times.push_back(fields[0]);
+      values.push_back(fields[1] * to_si);
+    } else {
+      values.push_back(fields[0] * to_si);
+    }
+  }
+  if (values.empty()) throw std::runtime_error(path.string() + ": no acceleration values");
+  GroundMotion motion;
+  motion.name = path.stem().string();
+  if (columns == 2) {
+    if (times.size() < 2) {
+      throw std::runtime_error(path.string() + ": two-column file needs at least two samples to "
+                               "define its time step");
+    }
+    motion.dt = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+    if (dt > 0.0 && std::abs(dt - motion.dt) > 1e-3 * motion.dt) {
+      throw std::invalid_argument(path.string() + ": given dt = " + std::to_string(dt) +
+                                  " s disagrees with the file's time column (" +
+                                  std::to_string(motion.dt) + " s)");
+    }
+  } else {
+    if (!(dt > 0.0) || !std::isfinite(dt)) {
+      throw std::invalid_argument(path.string() +
+                                  ": a one-column file needs the time step dt > 0");
+    }
+    motion.dt = dt;
+  }
+  motion.acceleration = std::move(values);
+  return motion;
+}
+
+GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
+                                double column_to_si) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open ground-motion file");
+  std::string line;
+  for (int i = 0; i < 4 && read_line(in, line); ++i) {
+    if (i == 3 && upper(line).find("NPTS") != std::string::npos) return read_at2(path);
+  }
+  return read_columns(path, column_dt, column_to_si);
+}
+
+GroundMotion scaled(GroundMotion motion, double factor) {
+  if (!std::isfinite(factor)) {
+    throw std::invalid_argument("scaled: factor for '" + motion.name + "' must be finite");
+  }
+  for (double& a : motion.acceleration) a *= factor;
+  return motion;
+}
+
+GroundMotion resampled(const GroundMotion& motion, double dt) {
+  if (!(dt > 0.0) || !std::isfinite(dt)) {
+    throw std::invalid_argument("resampled: dt for '" + motion.name + "' must be > 0, got " +
+                                std::to_string(dt));
+  }
+  GroundMotion out;
+  out.name = motion.name;
+  out.dt = dt;
+  const std::size_t n = motion.acceleration.size();
+  if (n == 0) return out;
+  // Samples j with j dt < duration; the 1e-9 keeps an exact ratio (39.07 s / 1 ms) from
+  // gaining a sample to round-off.
+  const double ratio = motion.duration() / dt;
+  const auto count = static_cast<std::size_t>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio)));
+  out.acceleration.resize(std::max<std::size_t>(count, 1));
+  for (std::size_t j = 0; j < out.acceleration.size(); ++j) {
+    const double position = static_cast<double>(j) * dt / motion.dt;  // in source samples
+    const auto i = static_cast<std::size_t>(position);
+    if (i + 1 >= n) {
+      out.acceleration[j] = motion.acceleration[n - 1];
+    } else {
+      const double w = position - static_cast<double>(i);
+      out.acceleration[j] =
+          motion.acceleration[i] + w * (motion.acceleration[i + 1] - motion.acceleration[i]);
+    }
+  }
+  return out;
+}
+
+GroundMotion truncated(GroundMotion motion, double duration) {
+  if (duration <= 0.0 || duration >= motion.duration()) return motion;
+  const double ratio = duration / motion.dt;
+  const auto keep = static_cast<std::size_t>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio)));
+  motion.acceleration.resize(std::max<std::size_t>(keep, 1));
+  return motion;
+}
+
+}  // namespace rths::core
