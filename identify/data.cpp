@@ -1,0 +1,367 @@
+#include "identify/data.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace rths::identify {
+namespace {
+
+std::string trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string_view::npos) return {};
+  const auto last = s.find_last_not_of(" \t\r\n");
+  return std::string(s.substr(first, last - first + 1));
+}
+
+std::vector<std::string> split_fields(const std::string& line, char sep) {
+  std::vector<std::string> fields;
+  std::string field;
+  std::istringstream stream(line);
+  while (std::getline(stream, field, sep)) fields.push_back(trim(field));
+  if (!line.empty() && line.back() == sep) fields.emplace_back();
+  return fields;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string where(const std::filesystem::path& path, std::size_t line) {
+  return path.string() + ":" + std::to_string(line) + ": ";
+}
+
+double parse_number(const std::string& text, const std::filesystem::path& path, std::size_t line,
+                    const std::string& column) {
+  double value = 0.0;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  if (!text.empty() && *begin == '+') ++begin;
+  const auto [ptr, ec] = std::from_chars(begin, end, value);
+  if (text.empty() || ec != std::errc() || ptr != end) {
+    throw std::invalid_argument(where(path, line) + "column '" + column + "': '" + text +
+                                "' is not a number");
+  }
+  if (!std::isfinite(value)) {
+    throw std::invalid_argument(where(path, line) + "column '" + column + "': value is " + text +
+                                " (NaN or infinite)");
+  }
+  return value;
+}
+
+std::size_t column_index(const std::vector<std::string>& header, const std::string& name,
+                         const std::filesystem::path& path, std::size_t line) {
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (lower(header[i]) == lower(name)) return i;
+  }
+  std::string names;
+  for (const auto& h : header) names += (names.empty() ? "" : ", ") + h;
+  throw std::invalid_argument(where(path, line) + "missing column '" + name +
+                              "' (header has: " + names + ")");
+}
+
+}  // namespace
+
+double time_unit_to_s(const std::string& unit) {
+  if (unit == "s") return 1.0;
+  if (unit == "ms") return 1.0e-3;
+  throw std::invalid_argument("unknown time unit '" + unit + "' (use s or ms)");
+}
+
+double length_unit_to_m(const std::string& unit) {
+  if (unit == "m") return 1.0;
+  if (unit == "mm") return 1.0e-3;
+  if (unit == "cm") return 1.0e-2;
+  if (unit == "in") return 0.0254;
+  throw std::invalid_argument("unknown length unit '" + unit + "' (use m, mm, cm or in)");
+}
+
+double force_unit_to_n(const std::string& unit) {
+  if (unit == "N") return 1.0;
+  if (unit == "kN") return 1.0e3;
+  if (unit == "lbf") return 4.4482216152605;
+  if (unit == "kip") return 4448.2216152605;
+  throw std::invalid_argument("unknown force unit '" + unit + "' (use N, kN, lbf or kip)");
+}
+
+DaqColumnMap parse_column_map(const std::string& text) {
+  DaqColumnMap map;
+  for (const auto& entry : split_fields(text, ',')) {
+    if (entry.empty()) continue;
+    const auto eq = entry.find('=');
+    if (eq == std::string::npos) {
+      throw std::invalid_argument("column map entry '" + entry +
+                                  "': expected signal=COLUMN*scale, e.g. command=CHANNEL2*10");
+    }
+    const std::string signal = trim(entry.substr(0, eq));
+    const std::string rhs = trim(entry.substr(eq + 1));
+    ChannelSource source;
+    const auto star = rhs.find('*');
+    source.column = trim(rhs.substr(0, star));
+    if (star != std::string::npos) {
+      const std::string scale = trim(rhs.substr(star + 1));
+      char* end = nullptr;
+      source.scale = std::strtod(scale.c_str(), &end);
+      if (scale.empty() || *end != '\0' || !std::isfinite(source.scale) || source.scale == 0.0) {
+        throw std::invalid_argument("column map entry '" + entry + "': scale '" + scale +
+                                    "' is not a non-zero number");
+      }
+    }
+    if (source.column.empty()) {
+      throw std::invalid_argument("column map entry '" + entry + "': no column name");
+    }
+    if (signal == "command") {
+      map.command = source;
+    } else if (signal == "measured") {
+      map.measured = source;
+    } else if (signal == "force") {
+      map.force = source;
+    } else {
+      throw std::invalid_argument("column map entry '" + entry + "': unknown signal '" + signal +
+                                  "' (use command, measured or force)");
+    }
+  }
+  return map;
+}
+
+void validate(MeasuredData& data, std::size_t min_samples) {
+  const std::size_t n = data.time.size();
+  if (data.command.size() != n || data.measured.size() != n || data.force.size() != n) {
+    throw std::invalid_argument(data.source + ": columns have different lengths");
+  }
+  if (n < std::max<std::size_t>(min_samples, 3)) {
+    throw std::invalid_argument(data.source + ": only " + std::to_string(n) +
+                                " samples; the model needs at least " +
+                                std::to_string(std::max<std::size_t>(min_samples, 3)));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    for (const auto* column : {&data.time, &data.command, &data.measured, &data.force}) {
+      if (!std::isfinite((*column)[i])) {
+        throw std::invalid_argument(data.source + ": sample " + std::to_string(i + 1) +
+                                    " is NaN or infinite");
+      }
+    }
+  }
+  for (std::size_t i = 1; i < n; ++i) {
+    if (!(data.time[i] > data.time[i - 1])) {
+      throw std::invalid_argument(data.source + ": time does not increase at sample " +
+                                  std::to_string(i + 1) + " (t = " + std::to_string(data.time[i]) +
+                                  " s after " + std::to_string(data.time[i - 1]) + " s)");
+    }
+  }
+  const double mean_dt = (data.time.back() - data.time.front()) / static_cast<double>(n - 1);
+  for (std::size_t i = 1; i < n; ++i) {
+    const double step = data.time[i] - data.time[i - 1];
+    if (std::abs(step - mean_dt) > 0.01 * mean_dt) {
+      throw std::invalid_argument(data.source + ": time step is not uniform at sample " +
+                                  std::to_string(i + 1) + " (" + std::to_string(step) +
+                                  " s vs mean " + std::to_string(mean_dt) + " s)");
+    }
+  }
+  data.dt = mean_dt;
+}
+
+MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
+                      std::size_t min_samples) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open");
+  MeasuredData data;
+  data.source = path.string();
+  std::string line;
+  std::size_t line_number = 0;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string t = trim(line);
+    if (t.empty() || t.front() == '#') continue;
+    header = split_fields(t, ',');
+    break;
+  }
+  if (header.empty()) throw std::invalid_argument(path.string() + ": empty file, no header");
+  const std::size_t header_line = line_number;
+  const std::size_t it = column_index(header, "time", path, header_line);
+  const std::size_t ic = column_index(header, "command", path, header_line);
+  const std::size_t im = column_index(header, "measured", path, header_line);
+  const std::size_t iforce = column_index(header, "force", path, header_line);
+  const std::size_t needed = std::max({it, ic, im, iforce}) + 1;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string t = trim(line);
+    if (t.empty() || t.front() == '#') continue;
+    const auto fields = split_fields(t, ',');
+    if (fields.size() < needed) {
+      throw std::invalid_argument(where(path, line_number) + "has " +
+                                  std::to_string(fields.size()) + " columns, expected " +
+                                  std::to_string(header.size()));
+    }
+    data.time.push_back(units.time_to_s * parse_number(fields[it], path, line_number, "time"));
+    data.command.push_back(units.length_to_m *
+                           parse_number(fields[ic], path, line_number, "command"));
+    data.measured.push_back(units.length_to_m *
+                            parse_number(fields[im], path, line_number, "measured"));
+    data.force.push_back(units.force_to_n *
+                         parse_number(fields[iforce], path, line_number, "force"));
+  }
+  validate(data, min_samples);
+  return data;
+}
+
+MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map,
+                      std::size_t min_samples) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open");
+  std::string line;
+  std::size_t line_number = 0;
+  std::map<std::string, std::string> fields_by_key;
+  if (!std::getline(in, line)) throw std::invalid_argument(path.string() + ": empty file");
+  ++line_number;
+  const auto colon = line.find(':');
+  if (colon == std::string::npos || trim(line.substr(0, colon)) != "Header Size") {
+    throw std::invalid_argument(where(path, 1) + "expected 'Header Size: N' (raw DAQ export)");
+  }
+  const int header_size = static_cast<int>(
+      parse_number(trim(line.substr(colon + 1)), path, 1, "Header Size"));
+  if (header_size < 2) throw std::invalid_argument(where(path, 1) + "Header Size below 2");
+  std::vector<std::string> header;
+  double interval = 0.0;
+  while (line_number < static_cast<std::size_t>(header_size)) {
+    if (!std::getline(in, line)) {
+      throw std::invalid_argument(where(path, line_number) + "file ends inside the header");
+    }
+    ++line_number;
+    if (line_number == static_cast<std::size_t>(header_size)) {
+      header = split_fields(trim(line), ',');
+    } else {
+      const auto c = line.find(':');
+      if (c != std::string::npos && trim(line.substr(0, c)) == "Sampling Interval") {
+        interval = parse_number(trim(line.substr(c + 1)), path, line_number, "Sampling Interval");
+      }
+    }
+  }
+  if (!(interval > 0.0)) {
+    throw std::invalid_argument(path.string() + ": header has no positive 'Sampling Interval'");
+  }
+  const std::size_t isample = column_index(header, "Sample Number", path, line_number);
+  const std::size_t ic = column_index(header, map.command.column, path, line_number);
+  const std::size_t im = column_index(header, map.measured.column, path, line_number);
+  const std::size_t iforce = column_index(header, map.force.column, path, line_number);
+  const std::size_t needed = std::max({isample, ic, im, iforce}) + 1;
+
+  MeasuredData data;
+  data.source = path.string();
+  double first_sample = 0.0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string t = trim(line);
+    if (t.empty()) continue;
+    const auto fields = split_fields(t, ',');
+    if (fields.size() < needed) {
+      throw std::invalid_argument(where(path, line_number) + "has " +
+                                  std::to_string(fields.size()) + " columns, expected at least " +
+                                  std::to_string(needed));
+    }
+    const double sample = parse_number(fields[isample], path, line_number, header[isample]);
+    if (data.time.empty()) first_sample = sample;
+    data.time.push_back((sample - first_sample) * interval);
+    data.command.push_back(1.0e-3 * map.command.scale *
+                           parse_number(fields[ic], path, line_number, header[ic]));
+    data.measured.push_back(1.0e-3 * map.measured.scale *
+                            parse_number(fields[im], path, line_number, header[im]));
+    data.force.push_back(map.force.scale *
+                         parse_number(fields[iforce], path, line_number, header[iforce]));
+  }
+  validate(data, min_samples);
+  return data;
+}
+
+MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& units,
+                           const DaqColumnMap& map, std::size_t min_samples) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open");
+  std::string first;
+  std::getline(in, first);
+  if (first.rfind("Header Size", 0) == 0) return read_daq(path, map, min_samples);
+  return read_csv(path, units, min_samples);
+}
+
+void write_csv(const MeasuredData& data, const std::filesystem::path& path) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  out << "time,command,measured,force\n";
+  out.precision(10);
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    out << data.time[i] << ',' << data.command[i] * 1e3 << ',' << data.measured[i] * 1e3 << ','
+        << data.force[i] << '\n';
+  }
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
+}
+
+MeasuredData decimated(const MeasuredData& data, std::size_t factor) {
+  if (factor <= 1) return data;
+  MeasuredData out;
+  out.source = data.source;
+  out.dt = data.dt * static_cast<double>(factor);
+  const std::size_t n = data.size();
+  const auto smooth = [&](const std::vector<double>& x, std::size_t centre) {
+    const std::size_t half = factor / 2;
+    const std::size_t lo = centre >= half ? centre - half : 0;
+    const std::size_t hi = std::min(n, lo + factor);
+    double sum = 0.0;
+    for (std::size_t j = lo; j < hi; ++j) sum += x[j];
+    return sum / static_cast<double>(hi - lo);
+  };
+  for (std::size_t i = 0; i < n; i += factor) {
+    out.time.push_back(data.time[i]);
+    out.command.push_back(smooth(data.command, i));
+    out.measured.push_back(smooth(data.measured, i));
+    out.force.push_back(smooth(data.force, i));
+  }
+  return out;
+}
+
+HoldoutMode parse_holdout_mode(const std::string& name) {
+  if (name == "last") return HoldoutMode::kLast;
+  if (name == "blocks") return HoldoutMode::kBlocks;
+  throw std::invalid_argument("unknown hold-out mode '" + name + "' (use last or blocks)");
+}
+
+Split holdout_split(std::size_t samples, double holdout_fraction, HoldoutMode mode,
+                    std::size_t blocks, std::size_t min_part) {
+  if (!(holdout_fraction > 0.0 && holdout_fraction < 1.0)) {
+    throw std::invalid_argument("hold-out fraction must be in (0, 1), got " +
+                                std::to_string(holdout_fraction));
+  }
+  Split split;
+  split.size = samples;
+  std::vector<bool> held(samples, false);
+  if (mode == HoldoutMode::kLast) {
+    const auto train_end = static_cast<std::size_t>(
+        std::llround(static_cast<double>(samples) * (1.0 - holdout_fraction)));
+    for (std::size_t i = train_end; i < samples; ++i) held[i] = true;
+  } else {
+    if (blocks < 2) throw std::invalid_argument("segment-wise hold-out needs at least 2 blocks");
+    // Block b is held out when the running share floor((b + 1) f) steps up: evenly spread, and
+    // the last block is always among them.
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const double f = holdout_fraction;
+      const bool is_held = std::floor(static_cast<double>(blocks - b) * f) >
+                           std::floor(static_cast<double>(blocks - b - 1) * f);
+      const std::size_t lo = samples * b / blocks, hi = samples * (b + 1) / blocks;
+      for (std::size_t i = lo; i < hi; ++i) held[i] = is_held;
+    }
+  }
+  for (std::size_t i = 0; i < samples; ++i) (held[i] ? split.heldout : split.train).push_back(i);
+  if (split.train.size() < min_part || split.heldout.size() < min_part) {
+    throw std::invalid_argument("too few samples (" + std::to_string(samples) +
+                                ") for a training and a hold-out part of at least " +
+                                std::to_string(min_part) + " samples each");
+  }
+  return split;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,154 @@
+#include "identify/evidence.h"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numeric>
+#include <stdexcept>
+
+namespace rths::identify {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::vector<double> centred(std::span<const double> x) {
+  std::vector<double> out(x.begin(), x.end());
+  if (out.empty()) return out;
+  const double mean = std::accumulate(out.begin(), out.end(), 0.0) / static_cast<double>(out.size());
+  for (double& v : out) v -= mean;
+  return out;
+}
+
+// Forward real FFT of length n (x zero-padded to n).
+std::vector<std::complex<double>> rfft(const std::vector<double>& x, std::size_t n) {
+  std::vector<double> in(n, 0.0);
+  std::copy_n(x.begin(), std::min(n, x.size()), in.begin());
+  std::vector<std::complex<double>> out(n / 2 + 1);
+  fftw_plan plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in.data(),
+                                        reinterpret_cast<fftw_complex*>(out.data()), FFTW_ESTIMATE);
+  if (plan == nullptr) throw std::runtime_error("FFTW could not plan a transform of size " +
+                                                std::to_string(n));
+  fftw_execute(plan);
+  fftw_destroy_plan(plan);
+  return out;
+}
+
+std::vector<double> irfft(std::vector<std::complex<double>> spectrum, std::size_t n) {
+  std::vector<double> out(n);
+  fftw_plan plan = fftw_plan_dft_c2r_1d(static_cast<int>(n),
+                                        reinterpret_cast<fftw_complex*>(spectrum.data()),
+                                        out.data(), FFTW_ESTIMATE);
+  if (plan == nullptr) throw std::runtime_error("FFTW could not plan an inverse transform");
+  fftw_execute(plan);
+  fftw_destroy_plan(plan);
+  for (double& v : out) v /= static_cast<double>(n);
+  return out;
+}
+
+}  // namespace
+
+Spectrum amplitude_spectrum(std::span<const double> x, double dt) {
+  Spectrum s;
+  const std::size_t n = x.size();
+  if (n < 2 || !(dt > 0.0)) return s;
+  auto w = centred(x);
+  double window_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double hann = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(i) /
+                                             static_cast<double>(n - 1));
+    w[i] *= hann;
+    window_sum += hann;
+  }
+  const auto spectrum = rfft(w, n);
+  s.frequency.resize(spectrum.size());
+  s.amplitude.resize(spectrum.size());
+  for (std::size_t k = 0; k < spectrum.size(); ++k) {
+    s.frequency[k] = static_cast<double>(k) / (static_cast<double>(n) * dt);
+    s.amplitude[k] = (k == 0 ? 1.0 : 2.0) * std::abs(spectrum[k]) / window_sum;
+  }
+  return s;
+}
+
+double correlation(std::span<const double> a, std::span<const double> b) {
+  if (a.size() != b.size()) throw std::invalid_argument("correlation: different lengths");
+  const auto ca = centred(a), cb = centred(b);
+  double ab = 0.0, aa = 0.0, bb = 0.0;
+  for (std::size_t i = 0; i < ca.size(); ++i) {
+    ab += ca[i] * cb[i];
+    aa += ca[i] * ca[i];
+    bb += cb[i] * cb[i];
+  }
+  return aa > 0.0 && bb > 0.0 ? ab / std::sqrt(aa * bb) : 0.0;
+}
+
+CrossCorrelation cross_correlation(std::span<const double> a, std::span<const double> b, double dt,
+                                   double max_lag) {
+  if (a.size() != b.size()) throw std::invalid_argument("cross_correlation: different lengths");
+  CrossCorrelation result;
+  const std::size_t n = a.size();
+  if (n < 2 || !(dt > 0.0)) return result;
+  const auto ca = centred(a), cb = centred(b);
+  const double norm = std::sqrt(std::inner_product(ca.begin(), ca.end(), ca.begin(), 0.0) *
+                                std::inner_product(cb.begin(), cb.end(), cb.begin(), 0.0));
+  if (!(norm > 0.0)) return result;
+  std::size_t size = 1;
+  while (size < 2 * n) size <<= 1;
+  auto fa = rfft(ca, size);
+  const auto fb = rfft(cb, size);
+  for (std::size_t k = 0; k < fa.size(); ++k) fa[k] = std::conj(fa[k]) * fb[k];
+  const auto c = irfft(std::move(fa), size);  // c[l] = sum a_i b_{i+l}, negative l wrap around
+  const auto max_l = static_cast<long>(std::min<double>(std::floor(max_lag / dt),
+                                                        static_cast<double>(n - 1)));
+  const auto at = [&](long l) { return c[static_cast<std::size_t>(l >= 0 ? l : static_cast<long>(size) + l)] / norm; };
+  long best = 0;
+  for (long l = -max_l; l <= max_l; ++l) {
+    if (std::abs(at(l)) > std::abs(at(best))) best = l;
+  }
+  double offset = 0.0;
+  if (best > -max_l && best < max_l) {
+    const double y0 = at(best - 1), y1 = at(best), y2 = at(best + 1);
+    const double denom = y0 - 2.0 * y1 + y2;
+    if (denom != 0.0) offset = std::clamp(0.5 * (y0 - y2) / denom, -0.5, 0.5);
+  }
+  result.lag = (static_cast<double>(best) + offset) * dt;
+  result.peak = at(best);
+  return result;
+}
+
+Evidence residual_evidence(const ChannelSignals& signals, std::span<const double> prediction) {
+  Evidence e;
+  const std::size_t n = signals.size();
+  if (prediction.size() != n) throw std::invalid_argument("residual_evidence: sizes differ");
+  std::vector<double> residual(n), sign(n), cubed(n);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    residual[i] = signals.target[i] - prediction[i];
+    sum += residual[i] * residual[i];
+    sign[i] = signals.velocity[i] > 0.0 ? 1.0 : (signals.velocity[i] < 0.0 ? -1.0 : 0.0);
+    cubed[i] = signals.input[i] * signals.input[i] * signals.input[i];
+  }
+  e.residual_rms = n ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
+  e.corr_input = correlation(residual, signals.input);
+  e.corr_velocity = correlation(residual, signals.velocity);
+  e.corr_velocity_sign = correlation(residual, sign);
+  e.corr_input_cubed = correlation(residual, cubed);
+  e.corr_acceleration = correlation(residual, signals.acceleration);
+  e.input_to_residual = cross_correlation(signals.input, residual, signals.dt, 0.2);
+  const auto spectrum = amplitude_spectrum(residual, signals.dt);
+  double total = 0.0, low = 0.0, best = -1.0;
+  for (std::size_t k = 1; k < spectrum.amplitude.size(); ++k) {
+    const double power = spectrum.amplitude[k] * spectrum.amplitude[k];
+    total += power;
+    if (spectrum.frequency[k] < 1.0) low += power;
+    if (spectrum.amplitude[k] > best) {
+      best = spectrum.amplitude[k];
+      e.dominant_frequency = spectrum.frequency[k];
+    }
+  }
+  e.low_frequency_share = total > 0.0 ? low / total : 0.0;
+  return e;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,156 @@
+#include "identify/fit.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace rths::identify {
+namespace {
+
+// One residual block over all training samples; the model is a recursive simulation, so the
+// Jacobian comes from central differences of whole-record predictions.
+class ChannelCost final : public ceres::CostFunction {
+ public:
+  ChannelCost(const ChannelModel& model, const ChannelSignals& signals, const Split& split,
+              std::vector<double> scales, std::size_t stride, double target_scale)
+      : model_(model), signals_(signals), scales_(std::move(scales)), stride_(stride),
+        target_scale_(target_scale) {
+    for (std::size_t r = 0; r < split.train.size(); r += stride_) indices_.push_back(split.train[r]);
+    set_num_residuals(static_cast<int>(indices_.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(scales_.size()));
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const std::size_t p = scales_.size();
+    std::vector<double> physical(p);
+    for (std::size_t i = 0; i < p; ++i) physical[i] = parameters[0][i] * scales_[i];
+    std::vector<double> prediction;
+    predict(model_, physical, signals_, prediction);
+    for (std::size_t r = 0; r < indices_.size(); ++r) {
+      const std::size_t j = indices_[r];
+      residuals[r] = (prediction[j] - signals_.target[j]) / target_scale_;
+      if (!std::isfinite(residuals[r])) return false;
+    }
+    if (jacobians == nullptr || jacobians[0] == nullptr) return true;
+    std::vector<double> plus, minus;
+    const std::size_t m = indices_.size();
+    for (std::size_t i = 0; i < p; ++i) {
+      const double h = 1e-5 * std::max(1.0, std::abs(parameters[0][i]));
+      std::vector<double> shifted = physical;
+      shifted[i] = (parameters[0][i] + h) * scales_[i];
+      predict(model_, shifted, signals_, plus);
+      shifted[i] = (parameters[0][i] - h) * scales_[i];
+      predict(model_, shifted, signals_, minus);
+      for (std::size_t r = 0; r < m; ++r) {
+        const std::size_t j = indices_[r];
+        jacobians[0][r * p + i] = (plus[j] - minus[j]) / (2.0 * h * target_scale_);
+      }
+    }
+    return true;
+  }
+
+ private:
+  const ChannelModel& model_;
+  const ChannelSignals& signals_;
+  std::vector<double> scales_;
+  std::size_t stride_;
+  double target_scale_;
+  std::vector<std::size_t> indices_;
+};
+
+double target_spread(const ChannelSignals& signals, const Split& split) {
+  double mean = 0.0;
+  for (std::size_t j : split.train) mean += signals.target[j];
+  mean /= static_cast<double>(split.train.size());
+  double sum = 0.0;
+  for (std::size_t j : split.train) sum += (signals.target[j] - mean) * (signals.target[j] - mean);
+  const double spread = std::sqrt(sum / static_cast<double>(split.train.size()));
+  return spread > 0.0 ? spread : 1.0;
+}
+
+}  // namespace
+
+FitResult evaluate_channel(const ChannelModel& model, const ChannelSignals& signals,
+                           const Split& split) {
+  FitResult result;
+  result.model = model;
+  result.std_errors.assign(model.params.size(), 0.0);
+  result.prediction = predict(model, signals);
+  result.train_error = normalised_error(signals.target, result.prediction, split.train);
+  result.heldout_error =
+      normalised_error(signals.target, result.prediction, split.heldout);
+  return result;
+}
+
+FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, const Split& split,
+                      const FitOptions& options) {
+  const SignalScales sc = signal_scales(signals);
+  const auto specs = start.specs(sc);
+  const std::size_t p = specs.size();
+  if (p == 0) return evaluate_channel(start, signals, split);
+  std::vector<double> scales(p), theta(p);
+  for (std::size_t i = 0; i < p; ++i) {
+    scales[i] = specs[i].scale;
+    theta[i] = std::clamp(start.params[i], specs[i].lower, specs[i].upper) / scales[i];
+  }
+  const double target_scale = target_spread(signals, split);
+  const std::size_t stride = std::max<std::size_t>(1, options.stride);
+
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  auto* cost = new ChannelCost(start, signals, split, scales, stride, target_scale);
+  problem.AddResidualBlock(cost, nullptr, theta.data());
+  for (std::size_t i = 0; i < p; ++i) {
+    if (specs[i].lower > -1e299) {
+      problem.SetParameterLowerBound(theta.data(), static_cast<int>(i), specs[i].lower / scales[i]);
+    }
+    if (specs[i].upper < 1e299) {
+      problem.SetParameterUpperBound(theta.data(), static_cast<int>(i), specs[i].upper / scales[i]);
+    }
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.function_tolerance = 1e-10;
+  solver_options.parameter_tolerance = 1e-10;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+
+  FitResult result;
+  result.model = start;
+  for (std::size_t i = 0; i < p; ++i) result.model.params[i] = theta[i] * scales[i];
+  result.cost = summary.final_cost;
+
+  // Covariance from the Jacobian at the solution.
+  const std::size_t m = static_cast<std::size_t>(cost->num_residuals());
+  std::vector<double> residuals(m), jacobian(m * p);
+  double* jac_ptr = jacobian.data();
+  const double* param_ptr = theta.data();
+  result.std_errors.assign(p, 0.0);
+  if (cost->Evaluate(&param_ptr, residuals.data(), &jac_ptr) && m > p) {
+    Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+        jacobian.data(), static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(p));
+    double rss = 0.0;
+    for (double r : residuals) rss += r * r;
+    const double sigma2 = rss / static_cast<double>(m - p);
+    const Eigen::MatrixXd jtj = J.transpose() * J;
+    const Eigen::MatrixXd cov = sigma2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
+    for (std::size_t i = 0; i < p; ++i) {
+      const double var = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+      result.std_errors[i] = var > 0.0 ? std::sqrt(var) * scales[i] : 0.0;
+    }
+  }
+  result.prediction = predict(result.model, signals);
+  result.train_error = normalised_error(signals.target, result.prediction, split.train);
+  result.heldout_error =
+      normalised_error(signals.target, result.prediction, split.heldout);
+  return result;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,120 @@
+#pragma once
+// Parametric models of the two measured channels and the library of effects they may contain.
+//
+// Channel `measured` (the actuator): input command u_c(t) (m) -> measured displacement (m):
+//   x(t)  = u_c(t - tau(t))                 tau(t) = delay + delay_slope * s(t)   (interpolated)
+//   x    -> first-order lag    T dy/dt = x - y                  (exact for a held sample)
+//        -> second-order lag   y'' + 2 zeta wn y' + wn^2 y = wn^2 x   (Tustin)
+//        -> backlash / dead band of total width b (play operator)
+//        -> velocity saturation |dy/dt| <= v_max
+//   u_m  = gain * y + offset + drift * s(t)
+// Channel `force` (the specimen): input measured displacement d, velocity v, acceleration a
+// (shifted by the force delay when present) -> force (N):
+//   F = (k + k_slope s(t)) d + k3 d^3 + c v + F_c tanh(v / v_c) + m a + F_bw z + offset + drift s
+//   Bouc–Wen z (dimensionless, |z| <= 1), n = 1, beta = gamma = 1/2 over the drift increment:
+//   dz/dd = (1 - |z| (sgn(dd z) + 1) / 2) / d_y, integrated exactly per step.
+// s(t) = (t - t_mid) / duration is the normalised time, in [-1/2, 1/2].
+// Every effect is the parametric addition of its terms to the model; an effect absent from the
+// model contributes nothing. All parameters are in SI units.
+
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "identify/data.h"
+
+namespace rths::identify {
+
+enum class Channel { kMeasured, kForce };
+std::string channel_name(Channel channel);
+
+enum class Effect {
+  // either channel
+  kDelay,        // constant delay (actuator lag, or force lagging displacement)
+  kOffsetDrift,  // constant offset + linear drift
+  // actuator (channel measured)
+  kFirstOrder,
+  kSecondOrder,
+  kBacklash,
+  kVelocitySaturation,
+  kTimeVaryingDelay,
+  // specimen (channel force)
+  kStiffness,
+  kDamping,
+  kCoulomb,
+  kBoucWen,
+  kCubicStiffness,
+  kTimeVaryingStiffness,
+  kInertia,
+};
+
+std::string effect_name(Effect effect);
+// Inverse of effect_name ("delay", "first_order", ...). Throws std::invalid_argument.
+Effect parse_effect(const std::string& name);
+bool effect_applies(Effect effect, Channel channel);
+// Every effect of the library that applies to the channel, in a fixed order.
+std::vector<Effect> effect_library(Channel channel);
+
+// The prepared signals of one channel: input, its derivatives and the target, at step dt.
+struct ChannelSignals {
+  Channel channel = Channel::kMeasured;
+  double dt = 0.0;
+  std::vector<double> time, input, velocity, acceleration, target;
+  std::size_t size() const { return time.size(); }
+};
+
+// `measured`: input = command. `force`: input = measured displacement. Velocity and acceleration
+// are central differences of the input after a zero-phase moving average over `smooth_window`
+// seconds (keeps differentiated noise out of the force model); the input itself is not smoothed.
+ChannelSignals make_signals(const MeasuredData& data, Channel channel,
+                            double smooth_window = 0.005);
+
+// Typical magnitudes of the signals: used to scale parameters and to seed guesses.
+struct SignalScales {
+  double input = 1.0, velocity = 1.0, acceleration = 1.0, target = 1.0, duration = 1.0, dt = 1.0;
+};
+SignalScales signal_scales(const ChannelSignals& signals);
+
+struct ParamSpec {
+  std::string name, unit;
+  double scale = 1.0;  // typical magnitude, so that value / scale is O(1) for the fit
+  double lower = -1e300, upper = 1e300;
+  std::vector<double> guesses;  // starting values tried when the effect is added
+};
+
+// The parameters an effect adds (in order). Base parameters of a channel: `gain` for measured,
+// none for force.
+std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const SignalScales& scales);
+std::vector<ParamSpec> base_params(Channel channel, const SignalScales& scales);
+
+struct ChannelModel {
+  Channel channel = Channel::kMeasured;
+  std::vector<Effect> effects;  // in the order they were added
+  std::vector<double> params;   // base params, then each effect's params in `effects` order
+
+  bool has(Effect effect) const;
+  std::vector<ParamSpec> specs(const SignalScales& scales) const;
+  // The value of the named parameter of `effect` (or of the base when effect is empty).
+  std::optional<double> param(std::optional<Effect> effect, const std::string& name,
+                              const SignalScales& scales) const;
+  std::string describe(const SignalScales& scales) const;
+};
+
+// The declared model with neutral parameter values (gain 1, delay 0, stiffness 0).
+ChannelModel declared_model(Channel channel, const std::vector<Effect>& effects,
+                            const SignalScales& scales);
+// `model` with `effect` appended, its params set to `guess` (one per ParamSpec).
+ChannelModel with_effect(const ChannelModel& model, Effect effect, std::span<const double> guess);
+
+// Model output over the whole record (the state runs from sample 0, at rest at the first input).
+void predict(const ChannelModel& model, std::span<const double> params,
+             const ChannelSignals& signals, std::vector<double>& out);
+std::vector<double> predict(const ChannelModel& model, const ChannelSignals& signals);
+
+// RMS(target - prediction) / std(target) over the given samples.
+double normalised_error(std::span<const double> target, std::span<const double> prediction,
+                        std::span<const std::size_t> samples);
+
+}  // namespace rths::identify

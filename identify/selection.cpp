@@ -1,0 +1,120 @@
+#include "identify/selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rths::identify {
+namespace {
+
+std::vector<std::vector<double>> guess_grid(const std::vector<ParamSpec>& specs) {
+  std::vector<std::vector<double>> grid{{}};
+  for (const auto& spec : specs) {
+    std::vector<std::vector<double>> next;
+    for (const auto& partial : grid) {
+      for (double g : spec.guesses) {
+        auto extended = partial;
+        extended.push_back(g);
+        next.push_back(std::move(extended));
+      }
+    }
+    grid = std::move(next);
+  }
+  return grid;
+}
+
+}  // namespace
+
+std::vector<Effect> default_declared(Channel channel) {
+  if (channel == Channel::kMeasured) return {Effect::kDelay};
+  return {Effect::kStiffness};
+}
+
+FitResult fit_with_effect(const ChannelModel& model, Effect effect, const ChannelSignals& signals,
+                          const Split& split, const FitOptions& options) {
+  const SignalScales sc = signal_scales(signals);
+  auto specs = effect_params(effect, model.channel, sc);
+  if (effect == Effect::kDelay) {
+    // The lag of the target behind the input by cross-correlation is the natural first guess.
+    const auto xc = cross_correlation(signals.input, signals.target, signals.dt, 0.25);
+    specs[0].guesses.insert(specs[0].guesses.begin(),
+                            std::clamp(xc.lag, specs[0].lower, specs[0].upper));
+    if (model.channel == Channel::kForce) specs[0].guesses = {0.0, 0.002};
+  }
+  FitResult best;
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (const auto& guess : guess_grid(specs)) {
+    const ChannelModel start = with_effect(model, effect, guess);
+    FitResult fit = fit_channel(start, signals, split, options);
+    if (std::isfinite(fit.cost) && fit.cost < best_cost) {
+      best_cost = fit.cost;
+      best = std::move(fit);
+    }
+  }
+  if (!std::isfinite(best_cost)) best = evaluate_channel(with_effect(model, effect, guess_grid(specs)[0]), signals, split);
+  return best;
+}
+
+ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
+                          const std::vector<Effect>& declared, const FitOptions& options) {
+  const SignalScales sc = signal_scales(signals);
+  ChannelModel model = declared_model(signals.channel, {}, sc);
+  for (Effect e : declared) {
+    if (!effect_applies(e, signals.channel) || model.has(e)) continue;
+    model = fit_with_effect(model, e, signals, split, options).model;
+  }
+  return model;
+}
+
+ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
+                                       const std::vector<Effect>& declared,
+                                       const SelectionOptions& options) {
+  ChannelIdentification id;
+  id.channel = signals.channel;
+  id.declared = declared;
+  const ChannelModel declared_fit = fit_declared(signals, split, declared, options.fit);
+  id.declared_fit = fit_channel(declared_fit, signals, split, options.fit);
+  FitResult current = id.declared_fit;
+  const SignalScales sc = signal_scales(signals);
+  std::vector<Effect> pool = options.candidates.empty() ? effect_library(signals.channel)
+                                                        : options.candidates;
+
+  for (std::size_t round = 0; round < options.max_steps; ++round) {
+    std::vector<CandidateTrial> trials;
+    for (Effect e : pool) {
+      if (!effect_applies(e, signals.channel) || current.model.has(e)) continue;
+      CandidateTrial trial;
+      trial.effect = e;
+      trial.added_params = effect_params(e, signals.channel, sc).size();
+      trial.fit = fit_with_effect(current.model, e, signals, split, options.fit);
+      trial.train_error = trial.fit.train_error;
+      trial.heldout_error = trial.fit.heldout_error;
+      trial.score = trial.heldout_error *
+                    (1.0 + options.penalty_per_parameter * static_cast<double>(trial.added_params));
+      trial.pays = trial.heldout_error <=
+                       (1.0 - options.min_relative_improvement) * current.heldout_error &&
+                   trial.score < current.heldout_error;
+      trials.push_back(std::move(trial));
+    }
+    std::sort(trials.begin(), trials.end(),
+              [](const CandidateTrial& a, const CandidateTrial& b) { return a.score < b.score; });
+    if (trials.empty() || !trials.front().pays) {
+      id.last_ranking = std::move(trials);
+      break;
+    }
+    SelectionStep step;
+    step.channel = signals.channel;
+    step.effect = trials.front().effect;
+    step.before = current;
+    step.evidence_before = residual_evidence(signals, current.prediction);
+    step.after = trials.front().fit;
+    current = step.after;
+    step.ranking = std::move(trials);
+    id.steps.push_back(std::move(step));
+  }
+  id.final_fit = current;
+  id.final_evidence = residual_evidence(signals, current.prediction);
+  return id;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,68 @@
+#pragma once
+// Greedy forward selection of missing effects, judged on held-out data.
+//
+// 1. Fit the declared model (effects added one by one from their guesses, then all refitted).
+// 2. For every candidate effect not yet in the model: add it, refit ALL parameters jointly from
+//    each of its starting guesses (best training cost wins), and measure the held-out error e_h.
+// 3. Score = e_h (1 + penalty_per_parameter * parameters added). The best-scoring candidate is
+//    added only if it pays: e_h <= (1 - min_relative_improvement) * e_h(current) and its score
+//    beats the current model's. Otherwise stop. Repeat up to max_steps.
+// The candidate ranking and the residual evidence before each step are kept for the report.
+
+#include <vector>
+
+#include "identify/evidence.h"
+#include "identify/fit.h"
+
+namespace rths::identify {
+
+struct SelectionOptions {
+  std::vector<Effect> candidates;          // empty: the whole library for the channel
+  double min_relative_improvement = 0.05;  // held-out error must fall by at least this share
+  double penalty_per_parameter = 0.01;     // relative penalty per added parameter
+  std::size_t max_steps = 6;
+  FitOptions fit;
+};
+
+struct CandidateTrial {
+  Effect effect = Effect::kDelay;
+  std::size_t added_params = 0;
+  double train_error = 0.0, heldout_error = 0.0, score = 0.0;
+  bool pays = false;
+  FitResult fit;
+};
+
+struct SelectionStep {
+  Channel channel = Channel::kMeasured;
+  Effect effect = Effect::kDelay;
+  FitResult before, after;
+  Evidence evidence_before;               // of the residual the step explains
+  std::vector<CandidateTrial> ranking;    // best score first
+};
+
+struct ChannelIdentification {
+  Channel channel = Channel::kMeasured;
+  std::vector<Effect> declared;
+  FitResult declared_fit;
+  std::vector<SelectionStep> steps;
+  FitResult final_fit;
+  Evidence final_evidence;
+  std::vector<CandidateTrial> last_ranking;  // the round in which nothing paid
+};
+
+// Fits `model` + `effect` from each starting guess of the effect (cartesian product of its
+// parameters' guesses); returns the fit with the lowest training cost.
+FitResult fit_with_effect(const ChannelModel& model, Effect effect, const ChannelSignals& signals,
+                          const Split& split, const FitOptions& options);
+
+ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
+                          const std::vector<Effect>& declared, const FitOptions& options);
+
+ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
+                                       const std::vector<Effect>& declared,
+                                       const SelectionOptions& options);
+
+// The declared model by default: actuator = pure delay + gain, specimen = linear spring.
+std::vector<Effect> default_declared(Channel channel);
+
+}  // namespace rths::identify
