@@ -1,0 +1,71 @@
+#include "identify/identify.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rths::identify {
+
+const ChannelIdentification* Identification::find(Channel channel) const {
+  for (const auto& c : channels) {
+    if (c.channel == channel) return &c;
+  }
+  return nullptr;
+}
+
+std::vector<const SelectionStep*> Identification::steps() const {
+  std::vector<const SelectionStep*> out;
+  for (Channel ch : {Channel::kMeasured, Channel::kForce}) {
+    if (const auto* c = find(ch)) {
+      for (const auto& s : c->steps) out.push_back(&s);
+    }
+  }
+  return out;
+}
+
+Identification identify(const MeasuredData& data, const IdentifyOptions& options) {
+  Identification result;
+  result.source = data.source;
+  result.samples = data.size();
+  result.dt = data.dt;
+  std::size_t factor = options.search_decimation;
+  if (factor == 0) {
+    factor = std::max<std::size_t>(
+        1, (data.size() + options.search_samples - 1) / std::max<std::size_t>(1, options.search_samples));
+  }
+  result.search_decimation = factor;
+  const MeasuredData search = decimated(data, factor);
+  const Split search_split = holdout_split(search.size(), options.holdout_fraction,
+                                           options.holdout_mode, options.holdout_blocks);
+  result.split = holdout_split(data.size(), options.holdout_fraction, options.holdout_mode,
+                               options.holdout_blocks);
+  FitOptions full_fit = options.selection.fit;
+
+  for (Channel channel : options.channels) {
+    const auto& declared =
+        channel == Channel::kMeasured ? options.declared_actuator : options.declared_specimen;
+    const ChannelSignals search_signals = make_signals(search, channel);
+    ChannelIdentification id =
+        identify_channel(search_signals, search_split, declared, options.selection);
+    ChannelSignals signals = make_signals(data, channel);
+    if (factor > 1) {
+      // Refit at the full rate from the search's parameters; the ranking keeps search errors.
+      id.declared_fit = fit_channel(id.declared_fit.model, signals, result.split, full_fit);
+      FitResult previous = id.declared_fit;
+      for (auto& step : id.steps) {
+        step.before = previous;
+        step.evidence_before = residual_evidence(signals, previous.prediction);
+        step.after = fit_channel(step.after.model, signals, result.split, full_fit);
+        previous = step.after;
+        for (auto& trial : step.ranking) trial.fit.prediction.clear();
+      }
+      id.final_fit = previous;
+      id.final_evidence = residual_evidence(signals, previous.prediction);
+      for (auto& trial : id.last_ranking) trial.fit.prediction.clear();
+    }
+    result.channels.push_back(std::move(id));
+    result.signals.push_back(std::move(signals));
+  }
+  return result;
+}
+
+}  // namespace rths::identify

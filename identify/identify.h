@@ -1,0 +1,43 @@
+#pragma once
+// The whole identification of a lab record: both channels, search on a decimated copy (fast),
+// every reported error and parameter refitted and measured at the full rate.
+//
+// Per channel: declared model fitted -> greedy forward selection (selection.h) on the decimated
+// record -> the declared model and each step's model refitted jointly at the full rate, starting
+// from the search's parameters; the step's errors before/after are those full-rate fits.
+
+#include <vector>
+
+#include "identify/selection.h"
+
+namespace rths::identify {
+
+struct IdentifyOptions {
+  std::vector<Channel> channels{Channel::kMeasured, Channel::kForce};
+  std::vector<Effect> declared_actuator{Effect::kDelay};
+  std::vector<Effect> declared_specimen{Effect::kStiffness};
+  double holdout_fraction = 0.3;
+  HoldoutMode holdout_mode = HoldoutMode::kBlocks;
+  std::size_t holdout_blocks = 10;
+  // Decimation factor for the search; 0 chooses one that leaves at most ~search_samples samples.
+  std::size_t search_decimation = 0;
+  std::size_t search_samples = 12000;
+  SelectionOptions selection;
+};
+
+struct Identification {
+  std::string source;
+  std::size_t samples = 0;
+  double dt = 0.0;
+  std::size_t search_decimation = 1;
+  Split split;  // at the full rate
+  std::vector<ChannelIdentification> channels;
+  std::vector<ChannelSignals> signals;  // at the full rate, one per channel
+  const ChannelIdentification* find(Channel channel) const;
+  // All steps of all channels in order (measured first).
+  std::vector<const SelectionStep*> steps() const;
+};
+
+Identification identify(const MeasuredData& data, const IdentifyOptions& options = {});
+
+}  // namespace rths::identify
