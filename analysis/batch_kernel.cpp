@@ -2,19 +2,20 @@
 
 #include <algorithm>
 #include <bit>
+#include <memory>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "analysis/parallel_for.h"
 
-// The lane loops are written as plain loops over arrays of a fixed maximum width, which GCC
-// vectorises; target_clones compiles them for AVX-512, AVX2 and baseline x86-64 and picks one at
+// The lane loops work on 8-double vectors (GCC vector extension), so vectorisation does not
+// depend on the auto-vectoriser's mood; target_clones compiles them for AVX-512, AVX2 and baseline x86-64 and picks one at
 // load time, so the binary runs on any x86-64. fp-contract=off keeps every clone from fusing
 // multiply-adds: all clones (and core::simulate, built for baseline x86-64) then round alike, and
 // a sweep sharded over different machines gives the same numbers. The peak uses a compare-select
-// (`x > p ? x : p`) rather than std::fmax and the divergence flag a compare, not a branch: both
-// vectorise, where NaN-aware library calls would not.
+// (`x > p ? x : p`) rather than std::fmax, |u| a sign-bit mask rather than std::fabs, and the
+// divergence flag a compare, not a branch: NaN-aware library calls would not vectorise.
 #define RTHS_KERNEL_CLONES \
   __attribute__((target_clones("avx512f", "avx2", "default"), optimize("fp-contract=off")))
 
@@ -25,9 +26,9 @@ struct KernelArgs {
   const double* ground;  // samples at t_{k+1}, ...
   std::size_t samples;
   int padded;
-  double dt, half_dt, half_dt_squared, bound;
+  double dt, half_dt, half_dt_squared;
   const double *mass, *effective_inverse, *damping, *k_numerical, *k_experimental;
-  double *u, *v, *a, *peak, *bad;
+  double *u, *v, *a, *peak;
   // Time shift: u_r = w_old u[k+1-n-1] + w_new u[k+1-n]; for n = 0 the newer one is u+.
   double* ring;
   std::size_t ring_mask;
@@ -39,58 +40,111 @@ struct KernelArgs {
 };
 
 constexpr int kW = LinearSdofBatch::kMaxLanes;
+constexpr int kVectorLanes = 8;
+
+// Eight doubles as one value (GCC/Clang vector extension): the loop body below is written once
+// and becomes one AVX-512 instruction, two AVX2 or four SSE2 ones per operation, whichever clone
+// runs. State arrays and ring rows are 64-byte aligned.
+typedef double Vec8 __attribute__((vector_size(64)));
+typedef long long Mask8 __attribute__((vector_size(64)));
 
 // kMode: 0 = no delay, 1 = shift with n >= 1 whole steps, 2 = shift with n = 0 (less than dt).
-template <int kMode>
-[[gnu::always_inline]] inline void advance_lanes(KernelArgs& s) {
-  const int padded = s.padded;
-  const double dt = s.dt, half_dt = s.half_dt, half_dt_squared = s.half_dt_squared;
-  const double bound = s.bound, weight_new = s.weight_new, weight_old = s.weight_old;
-  const double* __restrict mass = s.mass;
-  const double* __restrict effective_inverse = s.effective_inverse;
-  const double* __restrict damping = s.damping;
-  const double* __restrict k_numerical = s.k_numerical;
-  const double* __restrict k_experimental = s.k_experimental;
-  double* __restrict u = s.u;
-  double* __restrict v = s.v;
-  double* __restrict a = s.a;
-  double* __restrict peak = s.peak;
-  double* __restrict bad = s.bad;
+// Advances kVectors vectors (8 lanes each, from vector `first`) over every sample, with u, v, a
+// and the peak held in registers for the whole record: only the ring is stored per step.
+template <int kMode, int kVectors>
+[[gnu::always_inline]] inline void advance_block(const KernelArgs& s, int first) {
+  const Vec8 zero = {};
+  const Vec8 dt = zero + s.dt, half_dt = zero + s.half_dt, half_dt_squared = zero + s.half_dt_squared;
+  const Vec8 weight_new = zero + s.weight_new, weight_old = zero + s.weight_old;
+  const Mask8 magnitude_bits = (Mask8){} + 0x7fffffffffffffffLL;
+  const auto load = [first](const double* p, int j) {
+    return *reinterpret_cast<const Vec8*>(p + (first + j) * kVectorLanes);
+  };
+  Vec8 u[kVectors], v[kVectors], a[kVectors], peak[kVectors];
+  Vec8 mass[kVectors], effective_inverse[kVectors], damping[kVectors], kn[kVectors], ke[kVectors];
+#pragma GCC unroll 8
+  for (int j = 0; j < kVectors; ++j) {
+    u[j] = load(s.u, j);
+    v[j] = load(s.v, j);
+    a[j] = load(s.a, j);
+    peak[j] = load(s.peak, j);
+    mass[j] = load(s.mass, j);
+    effective_inverse[j] = load(s.effective_inverse, j);
+    damping[j] = load(s.damping, j);
+    kn[j] = load(s.k_numerical, j);
+    ke[j] = load(s.k_experimental, j);
+  }
   long k = s.step;
   for (std::size_t i = 0; i < s.samples; ++i, ++k) {
-    const double ground = s.ground[i];
-    double* __restrict written = s.ring + ((static_cast<std::size_t>(k + 1) & s.ring_mask) * kW);
-    const double* __restrict newer =
-        s.ring + ((static_cast<std::size_t>(k + 1 - s.whole_steps) & s.ring_mask) * kW);
-    const double* __restrict older =
-        s.ring + ((static_cast<std::size_t>(k - s.whole_steps) & s.ring_mask) * kW);
-    for (int l = 0; l < padded; ++l) {
-      const double u_next = u[l] + dt * v[l] + half_dt_squared * a[l];
-      double realised = u_next;
+    const Vec8 ground = zero + s.ground[i];
+    const std::size_t lane0 = static_cast<std::size_t>(first) * kVectorLanes;
+    auto* __restrict written = reinterpret_cast<Vec8*>(
+        s.ring + ((static_cast<std::size_t>(k + 1) & s.ring_mask) * kW) + lane0);
+    const auto* __restrict newer = reinterpret_cast<const Vec8*>(
+        s.ring + ((static_cast<std::size_t>(k + 1 - s.whole_steps) & s.ring_mask) * kW) + lane0);
+    const auto* __restrict older = reinterpret_cast<const Vec8*>(
+        s.ring + ((static_cast<std::size_t>(k - s.whole_steps) & s.ring_mask) * kW) + lane0);
+#pragma GCC unroll 8
+    for (int j = 0; j < kVectors; ++j) {
+      const Vec8 u_next = u[j] + dt * v[j] + half_dt_squared * a[j];
+      Vec8 realised = u_next;
       if constexpr (kMode == 1) {
-        written[l] = u_next;
-        realised = weight_old * older[l] + weight_new * newer[l];
+        written[j] = u_next;
+        realised = weight_old * older[j] + weight_new * newer[j];
       } else if constexpr (kMode == 2) {
-        written[l] = u_next;
-        realised = weight_old * older[l] + weight_new * u_next;
+        written[j] = u_next;
+        realised = weight_old * older[j] + weight_new * u_next;
       }
-      const double restoring = k_numerical[l] * u_next + k_experimental[l] * realised;
-      const double load = -mass[l] * ground;
-      const double rhs = (load - restoring) - damping[l] * (v[l] + half_dt * a[l]);
-      const double a_next = effective_inverse[l] * rhs;
-      v[l] = v[l] + half_dt * (a[l] + a_next);
-      u[l] = u_next;
-      a[l] = a_next;
-      const double magnitude = std::fabs(u_next);
-      peak[l] = magnitude > peak[l] ? magnitude : peak[l];
-      bad[l] = magnitude <= bound ? bad[l] : 1.0;  // NaN compares false: flagged too
+      const Vec8 restoring = kn[j] * u_next + ke[j] * realised;
+      const Vec8 load_next = -mass[j] * ground;
+      const Vec8 rhs = (load_next - restoring) - damping[j] * (v[j] + half_dt * a[j]);
+      const Vec8 a_next = effective_inverse[j] * rhs;
+      v[j] = v[j] + half_dt * (a[j] + a_next);
+      u[j] = u_next;
+      a[j] = a_next;
+      // |u| by clearing the sign bit, max by compare-select: a NaN never replaces the peak, and
+      // a lane that diverges passes the bound (and keeps a peak above it) before any NaN.
+      const Vec8 magnitude = reinterpret_cast<Vec8>(reinterpret_cast<Mask8>(u_next) & magnitude_bits);
+      peak[j] = magnitude > peak[j] ? magnitude : peak[j];
     }
     if (s.history) {
       double* row = s.history + i * static_cast<std::size_t>(s.lanes);
-      for (int l = 0; l < s.lanes; ++l) row[l] = u[l];
+      for (int j = 0; j < kVectors; ++j) {
+        alignas(64) double lanes[kVectorLanes];
+        *reinterpret_cast<Vec8*>(lanes) = u[j];
+        const int lane = (first + j) * kVectorLanes;
+        for (int l = 0; l < kVectorLanes && lane + l < s.lanes; ++l) row[lane + l] = lanes[l];
+      }
     }
   }
-  s.step = k;
+#pragma GCC unroll 8
+  for (int j = 0; j < kVectors; ++j) {
+    *reinterpret_cast<Vec8*>(s.u + (first + j) * kVectorLanes) = u[j];
+    *reinterpret_cast<Vec8*>(s.v + (first + j) * kVectorLanes) = v[j];
+    *reinterpret_cast<Vec8*>(s.a + (first + j) * kVectorLanes) = a[j];
+    *reinterpret_cast<Vec8*>(s.peak + (first + j) * kVectorLanes) = peak[j];
+  }
+}
+
+// Splits the lanes into register blocks of at most four vectors (4 x 9 live vectors fit the 32
+// AVX-512 registers), e.g. 7 vectors = 4 + 3.
+template <int kMode>
+[[gnu::always_inline]] inline void advance_lanes(KernelArgs& s) {
+  const int vectors = s.padded / kVectorLanes;
+  int first = 0;
+  while (first < vectors) {
+    const int remaining = vectors - first;
+    const int blocks_left = (remaining + 3) / 4;
+    const int count = (remaining + blocks_left - 1) / blocks_left;
+    switch (count) {
+      case 1: advance_block<kMode, 1>(s, first); break;
+      case 2: advance_block<kMode, 2>(s, first); break;
+      case 3: advance_block<kMode, 3>(s, first); break;
+      default: advance_block<kMode, 4>(s, first); break;
+    }
+    first += count;
+  }
+  s.step += static_cast<long>(s.samples);
 }
 
 RTHS_KERNEL_CLONES void advance_undelayed(KernelArgs& s) { advance_lanes<0>(s); }
@@ -140,7 +194,10 @@ LinearSdofBatch::LinearSdofBatch(std::span<const SdofLane> lanes, double dt, dou
   if (delay > 0) {
     const std::size_t rows = std::bit_ceil(static_cast<std::size_t>(whole_steps_) + 2);
     ring_mask_ = rows - 1;
-    ring_.assign(rows * kMaxLanes, 0.0);
+    ring_storage_.assign(rows * kMaxLanes + kLaneMultiple, 0.0);
+    void* base = ring_storage_.data();
+    std::size_t space = ring_storage_.size() * sizeof(double);
+    ring_row0_ = static_cast<double*>(std::align(64, rows * kMaxLanes * sizeof(double), base, space));
   }
   start(0.0);
 }
@@ -153,7 +210,6 @@ void LinearSdofBatch::start(double first_ground_acceleration) {
     const double load = -mass_[l] * first_ground_acceleration;
     a_[l] = (1.0 / mass_[l]) * ((load - damping_[l] * 0.0) - 0.0);
     peak_[l] = 0.0;
-    bad_[l] = 0.0;
   }
   step_ = 0;
 }
@@ -167,7 +223,6 @@ void LinearSdofBatch::advance(std::span<const double> next_ground_acceleration, 
   args.dt = dt_;
   args.half_dt = 0.5 * dt_;
   args.half_dt_squared = 0.5 * dt_ * dt_;
-  args.bound = bound_;
   args.mass = mass_;
   args.effective_inverse = effective_inverse_;
   args.damping = damping_;
@@ -177,8 +232,7 @@ void LinearSdofBatch::advance(std::span<const double> next_ground_acceleration, 
   args.v = v_;
   args.a = a_;
   args.peak = peak_;
-  args.bad = bad_;
-  args.ring = ring_.data();
+  args.ring = ring_row0_;
   args.ring_mask = ring_mask_;
   args.whole_steps = whole_steps_;
   args.weight_new = 1.0 - fraction_;
@@ -191,7 +245,7 @@ void LinearSdofBatch::advance(std::span<const double> next_ground_acceleration, 
     // with u_1 (computed exactly as the loop will) so every look-back before t_1 reads it.
     for (std::size_t row = 0; row <= ring_mask_; ++row) {
       for (int l = 0; l < kMaxLanes; ++l) {
-        ring_[row * kMaxLanes + l] = u_[l] + dt_ * v_[l] + args.half_dt_squared * a_[l];
+        ring_row0_[row * kMaxLanes + l] = u_[l] + dt_ * v_[l] + args.half_dt_squared * a_[l];
       }
     }
   }
@@ -209,7 +263,8 @@ std::vector<LaneOutcome> LinearSdofBatch::outcomes() const {
   std::vector<LaneOutcome> out(static_cast<std::size_t>(lanes_));
   for (int l = 0; l < lanes_; ++l) {
     out[l].peak_abs = peak_[l];
-    out[l].diverged = bad_[l] != 0.0;
+    // Diverged: |u| passed the bound at some step (the peak keeps it), or u ended as NaN.
+    out[l].diverged = !(peak_[l] <= bound_) || std::isnan(u_[l]);
   }
   return out;
 }
@@ -246,6 +301,29 @@ std::vector<LaneOutcome> run_linear_sdof_lanes(std::span<const SdofLane> lanes,
     }
     const auto result = batch.outcomes();
     std::copy(result.begin(), result.end(), outcomes.begin() + static_cast<std::ptrdiff_t>(first));
+  });
+  return outcomes;
+}
+
+std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(std::span<const SdofLane> lanes,
+                                                           std::span<const double> delays,
+                                                           std::span<const double> ground_acceleration,
+                                                           double dt,
+                                                           const BatchRunOptions& options) {
+  std::vector<std::vector<LaneOutcome>> outcomes(delays.size(), std::vector<LaneOutcome>(lanes.size()));
+  if (lanes.empty() || delays.empty()) return outcomes;
+  if (ground_acceleration.empty()) throw std::invalid_argument("batch run: the motion is empty");
+  const std::size_t max_lanes = static_cast<std::size_t>(LinearSdofBatch::kMaxLanes);
+  const std::size_t batches = (lanes.size() + max_lanes - 1) / max_lanes;
+  const std::size_t per_batch = (lanes.size() + batches - 1) / batches;
+  parallel_for(batches * delays.size(), options.threads, [&](std::size_t item) {
+    const std::size_t d = item / batches, first = (item % batches) * per_batch;
+    const std::size_t count = std::min(per_batch, lanes.size() - first);
+    LinearSdofBatch batch(lanes.subspan(first, count), dt, delays[d], options.divergence_bound);
+    batch.start(ground_acceleration[0]);
+    batch.advance(ground_acceleration.subspan(1), nullptr);
+    const auto result = batch.outcomes();
+    std::copy(result.begin(), result.end(), outcomes[d].begin() + static_cast<std::ptrdiff_t>(first));
   });
   return outcomes;
 }

@@ -70,9 +70,11 @@ class LinearSdofBatch {
   std::size_t ring_mask_ = 0;
   alignas(64) double mass_[kMaxLanes], effective_inverse_[kMaxLanes], damping_[kMaxLanes],
       k_numerical_[kMaxLanes], k_experimental_[kMaxLanes];
-  alignas(64) double u_[kMaxLanes], v_[kMaxLanes], a_[kMaxLanes], peak_[kMaxLanes],
-      bad_[kMaxLanes];
-  std::vector<double> ring_;  // (ring_mask_ + 1) rows of kMaxLanes commands, u_k in row k & mask
+  alignas(64) double u_[kMaxLanes], v_[kMaxLanes], a_[kMaxLanes], peak_[kMaxLanes];
+  // (ring_mask_ + 1) rows of kMaxLanes commands, u_k in row k & mask, starting at ring_row0_ (the
+  // first 64-byte aligned element of ring_storage_).
+  std::vector<double> ring_storage_;
+  double* ring_row0_ = nullptr;
 };
 
 struct BatchRunOptions {
@@ -88,5 +90,13 @@ std::vector<LaneOutcome> run_linear_sdof_lanes(std::span<const SdofLane> lanes,
                                                double dt, double delay,
                                                const BatchRunOptions& options = {},
                                                std::vector<std::vector<double>>* histories = nullptr);
+
+// The same lanes under several delays: outcomes[d][lane] for delays[d]. Every (delay, batch) pair
+// is one work item, so all threads stay busy without storing any history.
+std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(std::span<const SdofLane> lanes,
+                                                           std::span<const double> delays,
+                                                           std::span<const double> ground_acceleration,
+                                                           double dt,
+                                                           const BatchRunOptions& options = {});
 
 }  // namespace rths::analysis
