@@ -1,0 +1,42 @@
+#include "actuator_emulator/actuator_service.h"
+
+#include <stdexcept>
+
+#include "runtime/plan.h"
+
+namespace rths::actuator_emulator {
+
+ActuatorService::ActuatorService(std::int32_t node_id, std::string expected_run_id)
+    : NodeService(node_id, config::NodeSpec::ACTUATOR_EMULATOR, std::move(expected_run_id)) {}
+
+int ActuatorService::configure(const runtime::Assign& assign) {
+  const config::Case& study_case = runtime::find_case(assign.study(), assign.case_name());
+  core::HybridSetup setup =
+      runtime::setup_without_motion(assign.study(), assign.base_dir(), assign.dt(), study_case);
+  const auto& storeys = setup.partition.actuator_storeys;
+  actuators_.clear();
+  for (int a : assign.actuators()) {
+    if (a < 0 || a >= static_cast<int>(storeys.size()))
+      throw std::invalid_argument("actuator " + std::to_string(a) + " does not exist");
+    // The same construction as core::HybridRestoring: the case's chain, a clone of the specimen.
+    actuators_.emplace_back(setup.delays[a], setup.partition.experimental[storeys[a]]->clone());
+  }
+  realised_.assign(actuators_.size(), 0.0);
+  return static_cast<int>(actuators_.size());
+}
+
+void ActuatorService::compute(const runtime::Command& command, runtime::Feedback& feedback) {
+  const int n = static_cast<int>(actuators_.size());
+  if (command.drift_size() != n || command.drift_velocity_size() != n)
+    throw std::invalid_argument(label() + ": command has " + std::to_string(command.drift_size()) +
+                                " drifts for " + std::to_string(n) + " actuators");
+  for (int i = 0; i < n; ++i) {
+    const core::ActuatorOutput out =
+        actuators_[i].step({command.time(), command.drift(i), command.drift_velocity(i)});
+    realised_[i] = out.realised;
+    feedback.add_realised(out.realised);
+    feedback.add_force(out.force);
+  }
+}
+
+}  // namespace rths::actuator_emulator

@@ -1,0 +1,13 @@
+#pragma once
+// A distributed configuration run in one process: the same coordinator and the same node services
+// (substructure node, actuator emulator), connected by transport::InProcessTransport instead of
+// DDS. Deterministic; the reference a lockstep DDS run must equal bit for bit. Wall-clock lag
+// injection does not apply (there is no wire).
+
+#include "coordinator/coordinator.h"
+
+namespace rths::coordinator {
+
+RunOutcome run_in_process(const core::PreparedStudy& prepared, CoordinatorOptions options);
+
+}  // namespace rths::coordinator

@@ -1,0 +1,81 @@
+#include "coordinator/program.h"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+#include <sstream>
+
+#include "transport/dds_endpoint.h"
+
+namespace rths::coordinator {
+
+std::string summary_text(const RunOutcome& o) {
+  std::ostringstream out;
+  const auto& c = o.counters;
+  out << "status: " << o.status << (o.failed_node.empty() ? "" : " [" + o.failed_node + "]")
+      << "\nsteps: " << c.steps() << " in " << o.wall_seconds << " s"
+      << "\nrejected: foreign-run " << c.foreign_run() << ", garbage " << c.garbage()
+      << ", duplicate " << c.duplicate() << ", stale " << c.stale() << ", out-of-order "
+      << c.out_of_order() << ", unknown-node " << c.unknown_node()
+      << "\noverruns: " << c.overruns() << ", late feedback: " << c.late_feedback()
+      << ", max lateness " << o.max_lateness * 1e3 << " ms\n";
+  for (const LinkLagStats& l : o.links)
+    out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "
+        << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3
+        << " ms; injected mean " << l.injected.mean * 1e3 << " ms\n";
+  return out.str();
+}
+
+int coordinator_main(int argc, char** argv) {
+  CLI::App app{"rths-coordinator: the integrator loop of a distributed hybrid test"};
+  std::string config_path, case_name, run_id, record;
+  int domain = -1;
+  app.add_option("--config", config_path, "study config (text format)")->required();
+  app.add_option("--case", case_name, "case to run (default: deployment.case_name or reference)");
+  app.add_option("--run-id", run_id, "run id (default: host-pid-time)");
+  app.add_option("--record", record, "run record file (length-delimited protobuf)");
+  app.add_option("--domain", domain, "DDS domain id (default: deployment.domain_id)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  std::unique_ptr<Coordinator> coordinator;
+  std::unique_ptr<transport::DdsEndpoint> endpoint;
+  try {
+    const config::Study study = core::load_study(config_path);
+    core::PreparedStudy prepared =
+        core::prepare_study(study, std::filesystem::path(config_path).parent_path());
+    transport::DdsEndpointOptions options;
+    options.domain_id =
+        static_cast<std::uint32_t>(domain >= 0 ? domain : study.deployment().domain_id());
+    endpoint = std::make_unique<transport::DdsEndpoint>(options);
+    CoordinatorOptions co;
+    co.run_id = !run_id.empty() ? run_id
+                : !study.deployment().run_id().empty() ? study.deployment().run_id()
+                                                       : make_run_id();
+    co.case_name = case_name;
+    co.record = record;
+    coordinator = std::make_unique<Coordinator>(std::move(prepared), *endpoint, co);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "rths-coordinator: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "rths-coordinator: " << e.what() << "\n";
+    return 3;
+  }
+  try {
+    const RunOutcome outcome = coordinator->run();
+    std::cout << summary_text(outcome) << std::flush;
+    if (!outcome.ok) std::cerr << "rths-coordinator: run failed: " << outcome.status
+                               << (outcome.failed_node.empty() ? "" : " (" + outcome.failed_node + ")")
+                               << "\n";
+    return outcome.ok ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::cerr << "rths-coordinator: " << e.what() << "\n";
+    return 3;
+  }
+}
+
+}  // namespace rths::coordinator

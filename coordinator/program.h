@@ -1,0 +1,19 @@
+#pragma once
+// The coordinator program:
+//   rths-coordinator --config STUDY [--case NAME] [--run-id ID] [--record FILE] [--domain D]
+// Loads the study, opens DDS (domain: --domain, else deployment.domain_id), runs one case and
+// prints a summary. Exit: 0 completed, 1 the run stopped (node lost, limit, start-up timeout),
+// 2 bad config or usage, 3 DDS or file error.
+
+#include <string>
+
+#include "coordinator/coordinator.h"
+
+namespace rths::coordinator {
+
+int coordinator_main(int argc, char** argv);
+
+// One line per fact: status, steps, rejected messages, overruns, lag per link.
+std::string summary_text(const RunOutcome& outcome);
+
+}  // namespace rths::coordinator

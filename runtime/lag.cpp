@@ -1,0 +1,48 @@
+#include "runtime/lag.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace rths::runtime {
+
+LagInjector::LagInjector(const config::LinkLag& spec) : spec_(spec), rng_(spec.seed()) {}
+
+bool LagInjector::active() const {
+  return spec_.one_way_delay() > 0 || spec_.jitter() > 0 || spec_.loss() > 0;
+}
+
+std::optional<std::int64_t> LagInjector::schedule(std::int64_t arrival_ns) {
+  if (spec_.loss() > 0 && uniform_(rng_) < spec_.loss()) return std::nullopt;
+  double delay = spec_.one_way_delay();
+  if (spec_.jitter() > 0) delay = std::max(0.0, delay + spec_.jitter() * normal_(rng_));
+  const std::int64_t release =
+      std::max(arrival_ns + static_cast<std::int64_t>(std::llround(delay * 1e9)), last_release_);
+  last_release_ = release;
+  last_delay_ = static_cast<double>(release - arrival_ns) * 1e-9;
+  return release;
+}
+
+void validate_link_lag(const config::LinkLag& spec, const std::string& where) {
+  if (spec.one_way_delay() < 0)
+    throw std::invalid_argument(where + ".one_way_delay must be >= 0 s");
+  if (spec.jitter() < 0) throw std::invalid_argument(where + ".jitter must be >= 0 s");
+  if (spec.loss() < 0 || spec.loss() >= 1)
+    throw std::invalid_argument(where + ".loss must be in [0, 1)");
+}
+
+LagSummary summarize(std::vector<double> lags) {
+  LagSummary s;
+  s.count = lags.size();
+  if (lags.empty()) return s;
+  std::sort(lags.begin(), lags.end());
+  s.mean = std::accumulate(lags.begin(), lags.end(), 0.0) / static_cast<double>(lags.size());
+  s.median = lags[lags.size() / 2];
+  s.p99 = lags[std::min(lags.size() - 1, static_cast<std::size_t>(0.99 * lags.size()))];
+  s.max = lags.back();
+  return s;
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,48 @@
+#pragma once
+// Wall-clock lag a node injects on one direction of its link, and lag statistics.
+//
+// LagInjector (config LinkLag): for a message taken off the wire at time t (ns, any clock),
+//   delay  = max(0, one_way_delay + jitter * N(0,1))   (std::mt19937_64 seeded with `seed`)
+//   lost   with probability `loss` (then no release time)
+//   release = max(t + delay, previous release)          -- FIFO: a link does not reorder.
+// Deterministic for a given seed and arrival sequence.
+//
+// LagStats: count, mean, median, p99, max of a set of lags (s).
+
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "rths/proto/deployment.pb.h"
+
+namespace rths::runtime {
+
+class LagInjector {
+ public:
+  explicit LagInjector(const config::LinkLag& spec);
+  // Release time (ns) for a message arriving at `arrival_ns`, or nullopt when it is lost.
+  std::optional<std::int64_t> schedule(std::int64_t arrival_ns);
+  double last_delay() const { return last_delay_; }  // s, of the last scheduled message
+  bool active() const;
+
+ private:
+  config::LinkLag spec_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+  std::int64_t last_release_ = 0;
+  double last_delay_ = 0.0;
+};
+
+// Throws std::invalid_argument naming `where` on negative delay/jitter or loss outside [0, 1).
+void validate_link_lag(const config::LinkLag& spec, const std::string& where);
+
+struct LagSummary {
+  std::size_t count = 0;
+  double mean = 0, median = 0, p99 = 0, max = 0;  // s
+};
+
+LagSummary summarize(std::vector<double> lags);
+
+}  // namespace rths::runtime

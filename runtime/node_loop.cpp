@@ -1,0 +1,117 @@
+#include "runtime/node_loop.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <deque>
+#include <memory>
+
+#include "runtime/lag.h"
+#include "runtime/schema.h"
+
+namespace rths::runtime {
+namespace {
+
+struct Delayed {
+  std::int64_t release_ns;
+  transport::Message message;
+  double injected;  // s, receive lag drawn for it
+};
+
+std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(s * 1e9); }
+
+}  // namespace
+
+int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoopOptions& options) {
+  using transport::realtime_ns;
+  std::deque<Delayed> inbound, outbound;
+  std::unique_ptr<LagInjector> receive_lag, send_lag;
+  std::int64_t next_announce = 0, next_heartbeat = 0;
+  const std::int64_t started = realtime_ns();
+  std::int64_t last_from_coordinator = started;
+  std::int64_t heartbeat_ns = seconds_to_ns(0.05), orphan_ns = seconds_to_ns(5.0);
+
+  for (;;) {
+    const std::int64_t now = realtime_ns();
+    if (!service.assigned()) {
+      if (now >= next_announce) {
+        endpoint.send(service.announce());
+        next_announce = now + seconds_to_ns(options.announce_period);
+      }
+      if (now - started > seconds_to_ns(options.assign_timeout)) {
+        spdlog::error("{}: no coordinator assigned this node within {} s", service.label(),
+                      options.assign_timeout);
+        return 1;
+      }
+    } else {
+      if (now >= next_heartbeat) {
+        endpoint.send(service.heartbeat());
+        next_heartbeat = now + heartbeat_ns;
+      }
+      if (now - last_from_coordinator > orphan_ns) {
+        spdlog::error("{}: coordinator silent for {:.3f} s; holding and leaving", service.label(),
+                      static_cast<double>(now - last_from_coordinator) * 1e-9);
+        return 1;
+      }
+    }
+    // Send what is due, then apply what has arrived and is due.
+    while (!outbound.empty() && outbound.front().release_ns <= now) {
+      endpoint.send(outbound.front().message);
+      outbound.pop_front();
+    }
+    while (!inbound.empty() && inbound.front().release_ns <= now) {
+      Delayed item = std::move(inbound.front());
+      inbound.pop_front();
+      const bool was_assigned = service.assigned();
+      std::int64_t send_at = realtime_ns();
+      double injected = item.injected;
+      if (send_lag) {
+        const auto release = send_lag->schedule(send_at);
+        injected += send_lag->last_delay();
+        service.set_injected_lag(injected);
+        auto replies = service.handle(item.message);
+        if (!release) continue;  // the replies are lost on the way out
+        for (auto& r : replies) outbound.push_back({*release, std::move(r), 0.0});
+      } else {
+        service.set_injected_lag(injected);
+        for (auto& r : service.handle(item.message)) endpoint.send(r);
+      }
+      if (!was_assigned && service.assigned()) {
+        const Assign& a = service.assignment();
+        heartbeat_ns = seconds_to_ns(a.heartbeat_period() > 0 ? a.heartbeat_period() : 0.05);
+        orphan_ns = seconds_to_ns(a.orphan_timeout() > 0 ? a.orphan_timeout() : 5.0);
+        if (LagInjector in(a.node().receive_lag()); in.active())
+          receive_lag = std::make_unique<LagInjector>(a.node().receive_lag());
+        if (LagInjector out(a.node().send_lag()); out.active())
+          send_lag = std::make_unique<LagInjector>(a.node().send_lag());
+        last_from_coordinator = realtime_ns();
+        spdlog::info("{}: assigned to run {}", service.label(), service.run_id());
+      }
+      if (service.stopped()) {
+        for (auto& d : outbound) endpoint.send(d.message);
+        spdlog::info("{}: stopped after step {} ({} messages rejected)", service.label(),
+                     service.last_step(), service.rejected().total());
+        return 0;
+      }
+    }
+    // Sleep until the next thing due, or a message.
+    std::int64_t wake = service.assigned() ? next_heartbeat : next_announce;
+    if (!inbound.empty()) wake = std::min(wake, inbound.front().release_ns);
+    if (!outbound.empty()) wake = std::min(wake, outbound.front().release_ns);
+    const auto timeout = std::chrono::nanoseconds(std::max<std::int64_t>(0, wake - realtime_ns()));
+    auto message = endpoint.receive(timeout);
+    if (!message) continue;
+    if (service.assigned() && message->run_id == service.run_id()) {
+      last_from_coordinator = message->received_ns;
+    }
+    if (receive_lag) {
+      const auto release = receive_lag->schedule(message->received_ns);
+      if (!release) continue;  // lost
+      inbound.push_back({*release, std::move(*message), receive_lag->last_delay()});
+    } else {
+      inbound.push_back({message->received_ns, std::move(*message), 0.0});
+    }
+  }
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,54 @@
+#include "runtime/node_main.h"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "core/study.h"
+#include "runtime/node_loop.h"
+#include "transport/dds_endpoint.h"
+
+namespace rths::runtime {
+
+int node_main(int argc, char** argv, const std::string& program, const ServiceFactory& factory) {
+  CLI::App app{program + ": an rths node; the coordinator assigns its part of the study"};
+  int node_id = 0;
+  int domain = -1;
+  std::string config_path, run_id;
+  NodeLoopOptions loop;
+  app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
+  app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
+  app.add_option("--config", config_path, "study config, read only for its domain id");
+  app.add_option("--run-id", run_id, "accept only this run's assignment");
+  app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    if (node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
+    if (domain < 0) {
+      if (config_path.empty()) throw std::invalid_argument("give --domain or --config");
+      domain = core::load_study(config_path).deployment().domain_id();
+    }
+  } catch (const std::exception& e) {
+    std::cerr << program << ": " << e.what() << "\n";
+    return 2;
+  }
+  try {
+    transport::DdsEndpointOptions options;
+    options.domain_id = static_cast<std::uint32_t>(domain);
+    options.coordinator = false;
+    options.node_id = node_id;
+    transport::DdsEndpoint endpoint(options);
+    auto service = factory(node_id, run_id);
+    return run_node(endpoint, *service, loop);
+  } catch (const std::exception& e) {
+    std::cerr << program << " (node " << node_id << "): " << e.what() << "\n";
+    return 3;
+  }
+}
+
+}  // namespace rths::runtime

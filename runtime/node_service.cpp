@@ -1,0 +1,132 @@
+#include "runtime/node_service.h"
+
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <climits>
+#include <limits>
+
+#include "runtime/schema.h"
+
+namespace rths::runtime {
+
+NodeService::NodeService(std::int32_t node_id, config::NodeSpec::Kind kind,
+                         std::string expected_run_id)
+    : node_id_(node_id), kind_(kind), expected_run_id_(std::move(expected_run_id)) {}
+
+std::string NodeService::label() const {
+  return "node " + std::to_string(node_id_) + " (" + node_kind_name(kind_) + ")";
+}
+
+transport::Message NodeService::announce() const {
+  Announce a;
+  a.set_schema_version(kSchemaVersion);
+  a.set_node_id(node_id_);
+  a.set_kind(kind_);
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  a.set_host(host);
+  a.set_pid(static_cast<int>(getpid()));
+  return pack(expected_run_id_, node_id_, ANNOUNCE, 0, a);
+}
+
+transport::Message NodeService::heartbeat() const {
+  Heartbeat h;
+  h.set_node_id(node_id_);
+  h.set_last_step(last_step_);
+  h.set_rejected(rejected_.total());
+  return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);
+}
+
+std::vector<transport::Message> NodeService::start() { return {announce()}; }
+
+std::vector<transport::Message> NodeService::on_assign(const transport::Message& message) {
+  Assign assign;
+  if (!unpack(message, assign)) {
+    rejected_.count(Verdict::kGarbage);
+    return {};
+  }
+  if (!assigned_) {
+    if (!expected_run_id_.empty() && message.run_id != expected_run_id_) {
+      rejected_.count(Verdict::kForeignRun);
+      return {};
+    }
+    run_id_ = message.run_id;
+    assignment_ = assign;
+    assigned_ = true;
+    try {
+      if (assign.schema_version() != kSchemaVersion)
+        throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
+                                    ", this node speaks " + std::to_string(kSchemaVersion));
+      hosted_ = configure(assign);
+    } catch (const std::exception& e) {
+      configure_error_ = label() + ": " + e.what();
+      spdlog::error("{}", configure_error_);
+    }
+  }
+  // A repeated ASSIGN (the coordinator re-sends until it hears READY) gets the same answer.
+  Ready ready;
+  ready.set_node_id(node_id_);
+  ready.set_storeys(hosted_);
+  ready.set_error(configure_error_);
+  return {pack(run_id_, node_id_, READY, 0, ready)};
+}
+
+std::vector<transport::Message> NodeService::handle(const transport::Message& message) {
+  if (!assigned_) {
+    if (message.kind == ASSIGN) return on_assign(message);
+    return {};  // nothing else concerns a node that is not part of a run yet
+  }
+  const Verdict envelope = check_envelope(message, run_id_);
+  if (envelope != Verdict::kAccept) {
+    rejected_.count(envelope);
+    return {};
+  }
+  switch (message.kind) {
+    case ASSIGN:
+      return on_assign(message);
+    case COMMAND: {
+      if (held_ || stopped_ || !configure_error_.empty()) return {};
+      const Verdict order =
+          check_step(message.step, last_step_, std::numeric_limits<std::int64_t>::max());
+      if (order != Verdict::kAccept) {
+        rejected_.count(order);
+        return {};
+      }
+      if (!unpack(message, command_)) {
+        rejected_.count(Verdict::kGarbage);
+        return {};
+      }
+      feedback_.Clear();
+      try {
+        compute(command_, feedback_);  // checks sizes before it changes any state
+      } catch (const std::invalid_argument& e) {
+        spdlog::warn("{}: rejected command of step {}: {}", label(), message.step, e.what());
+        rejected_.count(Verdict::kGarbage);
+        return {};
+      }
+      last_step_ = message.step;
+      feedback_.set_command_received_ns(message.received_ns);
+      feedback_.set_injected_lag(injected_lag_);
+      transport::Message reply = pack(run_id_, node_id_, FEEDBACK, message.step, feedback_);
+      reply.echo_ns = message.sent_ns;
+      return {std::move(reply)};
+    }
+    case HOLD:
+      if (!held_) {
+        held_ = true;
+        on_hold();
+        Hold hold;
+        unpack(message, hold);
+        spdlog::warn("{}: HOLD at step {}: {}", label(), last_step_, hold.reason());
+      }
+      return {};
+    case STOP:
+      stopped_ = true;
+      return {};
+    default:
+      return {};  // heartbeats only refresh liveliness, which the loop tracks
+  }
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,64 @@
+#pragma once
+// What every node does with messages, independent of transport and of its kind:
+//   before assignment   announce itself; accept the first ASSIGN (of the expected run, if given),
+//                       build its part (configure) and answer READY (or READY with an error).
+//   after assignment    COMMAND of a newer step -> compute -> FEEDBACK echoing the command's stamp;
+//                       HOLD -> freeze (further commands ignored); STOP -> stopped();
+//                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
+// Subclasses (substructure node, actuator emulator) supply configure() and compute().
+
+#include <string>
+#include <vector>
+
+#include "rths/proto/runtime.pb.h"
+#include "runtime/validation.h"
+#include "transport/in_process.h"
+
+namespace rths::runtime {
+
+class NodeService : public transport::NodeHandler {
+ public:
+  // `expected_run_id` empty: adopt the run id of the first ASSIGN addressed to this node.
+  NodeService(std::int32_t node_id, config::NodeSpec::Kind kind, std::string expected_run_id);
+  std::vector<transport::Message> start() override;
+  std::vector<transport::Message> handle(const transport::Message& message) override;
+
+  transport::Message announce() const;
+  transport::Message heartbeat() const;
+  // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
+  void set_injected_lag(double seconds) { injected_lag_ = seconds; }
+
+  bool assigned() const { return assigned_; }
+  bool held() const { return held_; }
+  bool stopped() const { return stopped_; }
+  const std::string& run_id() const { return run_id_; }
+  const Assign& assignment() const { return assignment_; }
+  std::int32_t node_id() const { return node_id_; }
+  std::int64_t last_step() const { return last_step_; }
+  const RejectCounters& rejected() const { return rejected_; }
+  std::string label() const;
+
+ protected:
+  // Builds the node's part; returns how many storeys/actuators it hosts. Throws on a bad part.
+  virtual int configure(const Assign& assign) = 0;
+  // One step. Fills force (and realised for actuators), one entry per hosted storey.
+  virtual void compute(const Command& command, Feedback& feedback) = 0;
+  virtual void on_hold() {}
+
+ private:
+  std::vector<transport::Message> on_assign(const transport::Message& message);
+  std::int32_t node_id_;
+  config::NodeSpec::Kind kind_;
+  std::string expected_run_id_, run_id_;
+  bool assigned_ = false, held_ = false, stopped_ = false;
+  std::string configure_error_;
+  int hosted_ = 0;
+  Assign assignment_;
+  std::int64_t last_step_ = -1;
+  double injected_lag_ = 0.0;
+  RejectCounters rejected_;
+  Command command_;
+  Feedback feedback_;
+};
+
+}  // namespace rths::runtime

@@ -1,0 +1,49 @@
+#include "runtime/pacing.h"
+
+#include <cerrno>
+#include <cmath>
+#include <ctime>
+#include <stdexcept>
+#include <string>
+
+namespace rths::runtime {
+
+std::int64_t MonotonicClock::now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+void MonotonicClock::sleep_until_ns(std::int64_t deadline) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(deadline / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(deadline % 1'000'000'000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+Pacer::Pacer(PacingClock& clock, double period)
+    : clock_(clock), period_ns_(std::llround(period * 1e9)), period_(period) {
+  if (!(period > 0)) throw std::invalid_argument("pacing period must be > 0 s, got " +
+                                                 std::to_string(period));
+}
+
+void Pacer::start() { start_ns_ = clock_.now_ns(); }
+
+std::int64_t Pacer::deadline_ns(std::int64_t step) const { return start_ns_ + step * period_ns_; }
+
+PaceResult Pacer::wait(std::int64_t step) {
+  const std::int64_t deadline = deadline_ns(step);
+  PaceResult result;
+  if (clock_.now_ns() > deadline) {
+    result.overrun = true;
+    ++overruns_;
+  } else {
+    clock_.sleep_until_ns(deadline);
+  }
+  result.lateness = static_cast<double>(clock_.now_ns() - deadline) * 1e-9;
+  if (result.lateness > max_lateness_) max_lateness_ = result.lateness;
+  return result;
+}
+
+}  // namespace rths::runtime

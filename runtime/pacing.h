@@ -1,0 +1,52 @@
+#pragma once
+// Real-time pacing with absolute deadlines (the "sleep" unit of a read -> update -> write -> sleep
+// loop). Deadline k = start + k * period on CLOCK_MONOTONIC; the schedule never drifts and is never
+// silently re-based: a late step is counted as an overrun and the next deadline stays on the grid.
+//
+//   wait(k): if now > deadline_k on entry -> overrun (the previous step ran past its slot), no sleep;
+//            else sleep until deadline_k (clock_nanosleep TIMER_ABSTIME).
+//   returns  lateness = wake-up time - deadline_k (s, >= 0 up to clock jitter), overrun flag.
+// Real-time safe: no allocation. The clock is an interface so the unit is tested with a fake one.
+
+#include <cstdint>
+
+namespace rths::runtime {
+
+class PacingClock {
+ public:
+  virtual ~PacingClock() = default;
+  virtual std::int64_t now_ns() = 0;                 // monotonic
+  virtual void sleep_until_ns(std::int64_t deadline) = 0;  // absolute, same clock
+};
+
+// CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME), retried on EINTR.
+class MonotonicClock final : public PacingClock {
+ public:
+  std::int64_t now_ns() override;
+  void sleep_until_ns(std::int64_t deadline) override;
+};
+
+struct PaceResult {
+  double lateness = 0.0;  // s
+  bool overrun = false;
+};
+
+class Pacer {
+ public:
+  Pacer(PacingClock& clock, double period);  // @pre period > 0 (s)
+  void start();                               // deadline 0 = now
+  PaceResult wait(std::int64_t step);
+  std::int64_t deadline_ns(std::int64_t step) const;
+  std::uint64_t overruns() const { return overruns_; }
+  double max_lateness() const { return max_lateness_; }
+
+ private:
+  PacingClock& clock_;
+  std::int64_t period_ns_;
+  double period_;
+  std::int64_t start_ns_ = 0;
+  std::uint64_t overruns_ = 0;
+  double max_lateness_ = 0.0;
+};
+
+}  // namespace rths::runtime

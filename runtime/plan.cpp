@@ -1,0 +1,155 @@
+#include "runtime/plan.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "runtime/lag.h"
+#include "runtime/schema.h"
+
+namespace rths::runtime {
+
+std::string NodePlan::label() const {
+  return "node " + std::to_string(spec.id()) + " (" + node_kind_name(spec.kind()) + ")";
+}
+
+const NodePlan* DeploymentPlan::find(int node_id) const {
+  for (const NodePlan& n : nodes)
+    if (n.spec.id() == node_id) return &n;
+  return nullptr;
+}
+
+DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment) {
+  const auto& partition = base.partition;
+  const int storeys = static_cast<int>(partition.numerical.size());
+  std::set<int> numerical, experimental;
+  for (int s = 0; s < storeys; ++s)
+    if (partition.numerical[s]) numerical.insert(s);
+  for (int s : partition.actuator_storeys) experimental.insert(s);
+
+  DeploymentPlan plan;
+  std::set<int> ids;
+  std::map<int, int> numerical_host, experimental_host;  // storey -> node id
+  bool any_substructure = false;
+  for (const config::NodeSpec& spec : deployment.nodes()) {
+    const std::string where = "deployment.nodes[id " + std::to_string(spec.id()) + "]";
+    if (spec.id() < 1) throw std::invalid_argument(where + ": id must be >= 1 (0 is the coordinator)");
+    if (!ids.insert(spec.id()).second)
+      throw std::invalid_argument(where + ": id used by two nodes");
+    validate_link_lag(spec.receive_lag(), where + ".receive_lag");
+    validate_link_lag(spec.send_lag(), where + ".send_lag");
+    NodePlan node;
+    node.spec = spec;
+    const bool sub = spec.kind() == config::NodeSpec::SUBSTRUCTURE;
+    if (!sub && spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR)
+      throw std::invalid_argument(where + ": kind must be SUBSTRUCTURE or ACTUATOR_EMULATOR");
+    any_substructure |= sub;
+    const std::set<int>& pool = sub ? numerical : experimental;
+    auto& host = sub ? numerical_host : experimental_host;
+    std::vector<int> hosted;
+    if (spec.storeys().empty()) {
+      hosted.assign(pool.begin(), pool.end());
+    } else {
+      for (int s1 : spec.storeys()) {
+        if (s1 < 1 || s1 > storeys)
+          throw std::invalid_argument(where + ": storey " + std::to_string(s1) +
+                                      " does not exist (1.." + std::to_string(storeys) + ")");
+        if (!pool.count(s1 - 1))
+          throw std::invalid_argument(where + ": storey " + std::to_string(s1) + " has no " +
+                                      (sub ? "numerical" : "experimental") + " part");
+        hosted.push_back(s1 - 1);
+      }
+      std::sort(hosted.begin(), hosted.end());
+    }
+    for (int s : hosted) {
+      const auto [it, fresh] = host.emplace(s, spec.id());
+      if (!fresh)
+        throw std::invalid_argument("storey " + std::to_string(s + 1) + " is hosted by nodes " +
+                                    std::to_string(it->second) + " and " +
+                                    std::to_string(spec.id()));
+    }
+    node.storeys = hosted;
+    if (!sub) {
+      for (std::size_t a = 0; a < partition.actuator_storeys.size(); ++a)
+        if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
+          node.actuators.push_back(static_cast<int>(a));
+    }
+    plan.nodes.push_back(std::move(node));
+  }
+  plan.numerical_local = !any_substructure;
+  if (any_substructure)
+    for (int s : numerical)
+      if (!numerical_host.count(s))
+        throw std::invalid_argument("numerical storey " + std::to_string(s + 1) +
+                                    " is hosted by no substructure node");
+  for (int s : experimental)
+    if (!experimental_host.count(s))
+      throw std::invalid_argument("experimental storey " + std::to_string(s + 1) +
+                                  " is hosted by no actuator emulator (deployment.nodes)");
+  return plan;
+}
+
+config::Deployment with_default_nodes(config::Deployment deployment,
+                                     const core::HybridSetup& base) {
+  if (deployment.nodes_size() > 0) return deployment;
+  bool numerical = false;
+  for (const auto& m : base.partition.numerical) numerical = numerical || m != nullptr;
+  if (numerical) {
+    auto* node = deployment.add_nodes();
+    node->set_id(1);
+    node->set_kind(config::NodeSpec::SUBSTRUCTURE);
+  }
+  if (!base.partition.actuator_storeys.empty()) {
+    auto* node = deployment.add_nodes();
+    node->set_id(2);
+    node->set_kind(config::NodeSpec::ACTUATOR_EMULATOR);
+  }
+  return deployment;
+}
+
+const config::Case& find_case(const config::Study& study, const std::string& name) {
+  if (name.empty()) return core::reference_case(study);
+  for (const config::Case& c : study.cases())
+    if (c.name() == name) return c;
+  throw std::invalid_argument("case '" + name + "' is not among the study's cases");
+}
+
+core::HybridSetup setup_without_motion(const config::Study& study,
+                                       const std::filesystem::path& base_dir, double dt,
+                                       const config::Case& study_case) {
+  // Mirrors core::prepare_study's partition step; the lockstep equality tests guard the mirror.
+  core::PreparedStudy prepared;
+  prepared.config = study;
+  prepared.base_dir = base_dir;
+  prepared.base.model = core::make_structure(study.structure());
+  prepared.base.integrator = core::integrator_kind(study.integrator());
+  prepared.base.dt = dt;
+  prepared.base.allow_unstable = study.integrator().allow_unstable();
+  const auto& sub = study.substructuring();
+  const core::StoreyModelFactory factory = core::make_storey_factory(sub.model());
+  if (!sub.experimental_storeys().empty()) {
+    std::vector<int> storeys;
+    for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
+    prepared.base.partition =
+        core::partition_by_storeys(prepared.base.model.storey_stiffness, storeys, factory);
+  } else {
+    prepared.base.partition = core::partition_by_fraction(
+        prepared.base.model.storey_stiffness, sub.experimental_fraction(), factory);
+  }
+  return core::setup_for_case(prepared, study_case);
+}
+
+namespace {
+double or_default(double value, double fallback) { return value > 0 ? value : fallback; }
+}  // namespace
+
+double start_timeout(const config::Deployment& d) { return or_default(d.start_timeout(), 10.0); }
+double heartbeat_period(const config::Deployment& d) { return or_default(d.heartbeat_period(), 0.05); }
+double liveliness_timeout(const config::Deployment& d) { return or_default(d.liveliness_timeout(), 1.0); }
+double step_timeout(const config::Deployment& d) { return or_default(d.step_timeout(), 2.0); }
+double feedback_wait_fraction(const config::Deployment& d) {
+  return or_default(d.feedback_wait_fraction(), 0.5);
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,57 @@
+#pragma once
+// Deployment plan: which node hosts which storeys, checked against the study's partition.
+//
+// Rules (errors name the node id and storey, 1-based):
+//   node ids unique and >= 1 (0 is the coordinator); kind set.
+//   A substructure node hosts numerical storeys (empty list = all of them). If no substructure node
+//   is declared the coordinator evaluates the numerical storeys itself; otherwise every numerical
+//   storey is hosted by exactly one node.
+//   An actuator emulator hosts experimental storeys (empty = all); every experimental storey is
+//   hosted by exactly one emulator.
+// Also: the node-side view of a study (what a node builds from its Assign without the motion file).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/study.h"
+#include "rths/proto/deployment.pb.h"
+
+namespace rths::runtime {
+
+struct NodePlan {
+  config::NodeSpec spec;
+  std::vector<int> storeys;    // 0-based, ascending: numerical storeys or actuator storeys
+  std::vector<int> actuators;  // emulators: actuator indices (into partition.actuator_storeys)
+  std::string label() const;   // "node 2 (substructure)"
+};
+
+struct DeploymentPlan {
+  std::vector<NodePlan> nodes;
+  bool numerical_local = false;  // the coordinator evaluates the numerical storeys
+  const NodePlan* find(int node_id) const;
+};
+
+DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment);
+
+// The deployment with default nodes when it declares none: node 1 a substructure node (if any
+// storey has a numerical part), node 2 an actuator emulator (if any has an experimental part).
+config::Deployment with_default_nodes(config::Deployment deployment, const core::HybridSetup& base);
+
+// The case with this name, or the reference case when empty. Throws naming the missing case.
+const config::Case& find_case(const config::Study& study, const std::string& name);
+
+// The setup of one case built without reading the motion (a node on another host may not have
+// it): the same structure, partition and delay chains as core::prepare_study + setup_for_case.
+core::HybridSetup setup_without_motion(const config::Study& study,
+                                       const std::filesystem::path& base_dir, double dt,
+                                       const config::Case& study_case);
+
+// Defaults of the deployment's timing fields (0 means default), in s.
+double start_timeout(const config::Deployment& d);
+double heartbeat_period(const config::Deployment& d);
+double liveliness_timeout(const config::Deployment& d);
+double step_timeout(const config::Deployment& d);
+double feedback_wait_fraction(const config::Deployment& d);
+
+}  // namespace rths::runtime

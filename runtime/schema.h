@@ -1,0 +1,28 @@
+#pragma once
+// Packing Protobuf payloads into transport messages and back.
+// pack():   (run id, node id, kind, step, payload) -> Message with serialized bytes.
+// unpack(): Message -> payload; false when the bytes do not parse (counted as garbage).
+
+#include <cstdint>
+#include <string>
+
+#include "rths/proto/runtime.pb.h"
+#include "transport/transport.h"
+
+namespace rths::runtime {
+
+// Bumped on any incompatible change to runtime.proto / deployment.proto.
+inline constexpr std::uint32_t kSchemaVersion = 1;
+
+transport::Message pack(const std::string& run_id, std::int32_t node_id, MessageKind kind,
+                        std::int64_t step, const google::protobuf::MessageLite& payload);
+
+template <class T>
+bool unpack(const transport::Message& message, T& payload) {
+  return payload.ParseFromString(message.payload);
+}
+
+std::string kind_name(std::int32_t kind);
+std::string node_kind_name(config::NodeSpec::Kind kind);
+
+}  // namespace rths::runtime

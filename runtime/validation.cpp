@@ -1,0 +1,57 @@
+#include "runtime/validation.h"
+
+namespace rths::runtime {
+
+std::string to_string(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::kAccept: return "accept";
+    case Verdict::kForeignRun: return "foreign run";
+    case Verdict::kGarbage: return "garbage";
+    case Verdict::kDuplicate: return "duplicate";
+    case Verdict::kStale: return "stale";
+    case Verdict::kOutOfOrder: return "out of order";
+    case Verdict::kUnknownNode: return "unknown node";
+  }
+  return "?";
+}
+
+Verdict check_envelope(const transport::Message& message, const std::string& run_id) {
+  if (message.run_id != run_id) return Verdict::kForeignRun;
+  if (!MessageKind_IsValid(message.kind) || message.kind == MESSAGE_KIND_UNSPECIFIED)
+    return Verdict::kGarbage;
+  return Verdict::kAccept;
+}
+
+Verdict check_step(std::int64_t step, std::int64_t last_accepted, std::int64_t newest_possible) {
+  if (step == last_accepted) return Verdict::kDuplicate;
+  if (step < last_accepted) return Verdict::kStale;
+  if (step > newest_possible) return Verdict::kOutOfOrder;
+  return Verdict::kAccept;
+}
+
+void RejectCounters::count(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::kAccept: break;
+    case Verdict::kForeignRun: ++foreign_run; break;
+    case Verdict::kGarbage: ++garbage; break;
+    case Verdict::kDuplicate: ++duplicate; break;
+    case Verdict::kStale: ++stale; break;
+    case Verdict::kOutOfOrder: ++out_of_order; break;
+    case Verdict::kUnknownNode: ++unknown_node; break;
+  }
+}
+
+std::uint64_t RejectCounters::total() const {
+  return foreign_run + garbage + duplicate + stale + out_of_order + unknown_node;
+}
+
+void RejectCounters::fill(Counters& c) const {
+  c.set_foreign_run(foreign_run);
+  c.set_garbage(garbage);
+  c.set_duplicate(duplicate);
+  c.set_stale(stale);
+  c.set_out_of_order(out_of_order);
+  c.set_unknown_node(unknown_node);
+}
+
+}  // namespace rths::runtime

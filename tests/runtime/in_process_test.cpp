@@ -1,0 +1,102 @@
+// The in-process distributed run (coordinator + node services over InProcessTransport) against
+// core::simulate(): the same blocks in the same order must give the same doubles.
+#include <gtest/gtest.h>
+
+#include "coordinator/in_process.h"
+#include "core/simulation.h"
+#include "test_support.h"
+
+namespace rths {
+namespace {
+
+void expect_identical(const core::SimulationResult& a, const core::SimulationResult& b) {
+  ASSERT_EQ(a.steps(), b.steps());
+  for (std::size_t k = 0; k < a.steps(); ++k) ASSERT_EQ(a.time[k], b.time[k]) << k;
+  // Exact equality, not a tolerance: the same operations in the same order.
+  EXPECT_TRUE(a.displacement == b.displacement);
+  EXPECT_TRUE(a.velocity == b.velocity);
+  EXPECT_TRUE(a.acceleration == b.acceleration);
+  EXPECT_TRUE(a.command == b.command);
+  EXPECT_TRUE(a.realised == b.realised);
+  EXPECT_TRUE(a.measured_force == b.measured_force);
+}
+
+struct Variant {
+  const char* name;
+  std::string text;
+  std::string case_name;
+};
+
+class InProcessEqualsSimulate : public testing::TestWithParam<Variant> {};
+
+TEST_P(InProcessEqualsSimulate, BitForBit) {
+  const core::PreparedStudy prepared = test::prepare(GetParam().text);
+  coordinator::CoordinatorOptions options;
+  options.run_id = "in-process";
+  options.case_name = GetParam().case_name;
+  const coordinator::RunOutcome outcome = coordinator::run_in_process(prepared, options);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  const auto& study_case = runtime::find_case(prepared.config, GetParam().case_name);
+  const core::SimulationResult reference =
+      core::simulate(core::setup_for_case(prepared, study_case), prepared.motion);
+  expect_identical(outcome.result, reference);
+  EXPECT_GT(outcome.result.measured_force.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(outcome.counters.steps(), reference.steps() - 1);
+}
+
+const std::string kTwoNodes = "";  // default nodes: 1 substructure, 2 emulator
+const std::string kLocalNumerical = "deployment { nodes { id: 5 kind: ACTUATOR_EMULATOR } }";
+const std::string kSplit =
+    "deployment { nodes { id: 1 kind: SUBSTRUCTURE storeys: [1] } "
+    "nodes { id: 3 kind: SUBSTRUCTURE storeys: [2] } nodes { id: 2 kind: ACTUATOR_EMULATOR } }";
+const std::string kFractionCases =
+    "cases { name: \"reference\" } cases { name: \"lag\" delay { shift { delay: 0.003 } } }";
+
+INSTANTIATE_TEST_SUITE_P(
+    Deployments, InProcessEqualsSimulate,
+    testing::Values(
+        Variant{"paper_reference", test::paper_frame_study(5, kTwoNodes), "reference"},
+        Variant{"paper_shift", test::paper_frame_study(5, kTwoNodes), "lag_shift_14ms"},
+        Variant{"paper_jitter", test::paper_frame_study(5, kTwoNodes), "jitter"},
+        Variant{"paper_local_numerical", test::paper_frame_study(5, kLocalNumerical),
+                "lag_shift_14ms"},
+        Variant{"storey_split",
+                test::two_storey_study(
+                    4, kFractionCases, kSplit,
+                    "substructuring { experimental_fraction: 0.5 model { linear {} } }"),
+                "lag"},
+        Variant{"bilinear_storey2", test::two_storey_study(4, kFractionCases, kTwoNodes), "lag"}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(InProcess, DeploymentThatDoesNotCoverTheExperimentalStoreyIsRefused) {
+  const std::string text = test::paper_frame_study(
+      1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } }");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "x";
+  EXPECT_THROW(
+      {
+        try {
+          coordinator::run_in_process(test::prepare(text), options);
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("experimental storey 1"), std::string::npos)
+              << e.what();
+          throw;
+        }
+      },
+      std::invalid_argument);
+}
+
+TEST(InProcess, DisplacementLimitStopsTheRunAndKeepsStepsBeforeIt) {
+  const std::string text = test::paper_frame_study(
+      5, "deployment { limits { max_displacement: 0.002 } }");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "limits";
+  const auto outcome = coordinator::run_in_process(test::prepare(text), options);
+  EXPECT_FALSE(outcome.ok);
+  EXPECT_NE(outcome.status.find("safety limit"), std::string::npos) << outcome.status;
+  ASSERT_GT(outcome.result.steps(), 10u);
+  EXPECT_LE(outcome.result.displacement.cwiseAbs().maxCoeff(), 0.002);
+}
+
+}  // namespace
+}  // namespace rths

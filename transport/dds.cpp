@@ -1,0 +1,115 @@
+#include "transport/dds.h"
+
+#include <dds/dds.h>
+
+#include <memory>
+#include <stdexcept>
+
+#include "envelope.h"
+
+namespace rths::transport::dds {
+namespace {
+
+// QoS objects are created, applied and freed at once.
+struct QosDeleter {
+  void operator()(dds_qos_t* qos) const { dds_delete_qos(qos); }
+};
+using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
+
+QosPtr make_qos(const QosSpec& spec) {
+  QosPtr qos(dds_create_qos());
+  if (!qos) throw std::runtime_error("dds_create_qos: out of memory");
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE,
+                       DDS_MSECS(spec.max_blocking.count()));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, spec.history_depth);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
+}  // namespace
+
+std::int32_t check(std::int32_t rc, const std::string& what) {
+  if (rc < 0) throw std::runtime_error(what + ": " + dds_strretcode(rc));
+  return rc;
+}
+
+Entity& Entity::operator=(Entity&& other) noexcept {
+  if (this != &other) {
+    if (handle_ > 0) dds_delete(handle_);
+    handle_ = other.release();
+  }
+  return *this;
+}
+
+Entity::~Entity() {
+  // A child already deleted with its participant returns an error here; nothing to do about it.
+  if (handle_ > 0) dds_delete(handle_);
+}
+
+Handle Entity::release() {
+  const Handle h = handle_;
+  handle_ = 0;
+  return h;
+}
+
+Participant::Participant(std::uint32_t domain_id)
+    : entity_(check(dds_create_participant(domain_id, nullptr, nullptr),
+                    "dds_create_participant(domain " + std::to_string(domain_id) + ")")) {}
+
+EnvelopeTopic::EnvelopeTopic(const Participant& participant, const std::string& name,
+                             const QosSpec& qos)
+    : entity_(check(dds_create_topic(participant.get(), &rths_dds_Envelope_desc, name.c_str(),
+                                     make_qos(qos).get(), nullptr),
+                    "dds_create_topic(" + name + ")")) {}
+
+Writer::Writer(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos)
+    : entity_(check(dds_create_writer(participant.get(), topic.get(), make_qos(qos).get(), nullptr),
+                    "dds_create_writer")) {}
+
+int Writer::matched_readers() const {
+  dds_publication_matched_status_t status{};
+  check(dds_get_publication_matched_status(entity_.get(), &status),
+        "dds_get_publication_matched_status");
+  return static_cast<int>(status.current_count);
+}
+
+Reader::Reader(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos)
+    : entity_(check(dds_create_reader(participant.get(), topic.get(), make_qos(qos).get(), nullptr),
+                    "dds_create_reader")) {}
+
+int Reader::matched_writers() const {
+  dds_subscription_matched_status_t status{};
+  check(dds_get_subscription_matched_status(entity_.get(), &status),
+        "dds_get_subscription_matched_status");
+  return static_cast<int>(status.current_count);
+}
+
+GuardCondition::GuardCondition(const Participant& participant)
+    : entity_(check(dds_create_guardcondition(participant.get()), "dds_create_guardcondition")) {}
+
+void GuardCondition::trigger() {
+  check(dds_set_guardcondition(entity_.get(), true), "dds_set_guardcondition");
+}
+
+void GuardCondition::reset() {
+  check(dds_set_guardcondition(entity_.get(), false), "dds_set_guardcondition");
+}
+
+WaitSet::WaitSet(const Participant& participant, const Reader& reader, const GuardCondition& guard)
+    : entity_(check(dds_create_waitset(participant.get()), "dds_create_waitset")),
+      read_condition_(check(dds_create_readcondition(reader.get(), DDS_ANY_STATE),
+                            "dds_create_readcondition")) {
+  check(dds_waitset_attach(entity_.get(), read_condition_.get(), read_condition_.get()),
+        "dds_waitset_attach(read condition)");
+  check(dds_waitset_attach(entity_.get(), guard.get(), guard.get()),
+        "dds_waitset_attach(guard)");
+}
+
+bool WaitSet::wait(std::chrono::nanoseconds timeout) {
+  const dds_duration_t relative = timeout.count() < 0 ? 0 : timeout.count();
+  const dds_return_t n = check(dds_waitset_wait(entity_.get(), nullptr, 0, relative),
+                               "dds_waitset_wait");
+  return n > 0;
+}
+
+}  // namespace rths::transport::dds

@@ -1,0 +1,104 @@
+#pragma once
+// Thin RAII layer over the Cyclone DDS C API. Every dds_* return code is checked and a failure
+// becomes std::runtime_error "<what>: <dds_strretcode>". Entities are deleted in destruction
+// order (children before the participant; dds_delete of a participant also deletes children, so
+// handles are released without double deletes). This header exposes no DDS type: handles are
+// plain int32 (dds_entity_t is int32_t) and the sample type is chosen inside dds.cpp.
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+namespace rths::transport::dds {
+
+using Handle = std::int32_t;
+
+// Throws std::runtime_error("<what>: <reason>") when rc < 0; returns rc otherwise.
+std::int32_t check(std::int32_t rc, const std::string& what);
+
+// Owns one DDS entity; deleting it deletes its children.
+class Entity {
+ public:
+  Entity() = default;
+  explicit Entity(Handle handle) : handle_(handle) {}
+  Entity(const Entity&) = delete;
+  Entity& operator=(const Entity&) = delete;
+  Entity(Entity&& other) noexcept : handle_(other.release()) {}
+  Entity& operator=(Entity&& other) noexcept;
+  ~Entity();
+  Handle get() const { return handle_; }
+  Handle release();
+
+ private:
+  Handle handle_ = 0;
+};
+
+// Reliable, KEEP_LAST `depth`, volatile: what every rths topic, reader and writer uses.
+struct QosSpec {
+  int history_depth = 64;
+  std::chrono::milliseconds max_blocking{1000};
+};
+
+class Participant {
+ public:
+  explicit Participant(std::uint32_t domain_id);
+  Handle get() const { return entity_.get(); }
+
+ private:
+  Entity entity_;
+};
+
+// A topic of the envelope type.
+class EnvelopeTopic {
+ public:
+  EnvelopeTopic(const Participant& participant, const std::string& name, const QosSpec& qos);
+  Handle get() const { return entity_.get(); }
+
+ private:
+  Entity entity_;
+};
+
+class Writer {
+ public:
+  Writer(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos);
+  Handle get() const { return entity_.get(); }
+  int matched_readers() const;
+
+ private:
+  Entity entity_;
+};
+
+class Reader {
+ public:
+  Reader(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos);
+  Handle get() const { return entity_.get(); }
+  int matched_writers() const;
+
+ private:
+  Entity entity_;
+};
+
+class GuardCondition {
+ public:
+  explicit GuardCondition(const Participant& participant);
+  void trigger();
+  void reset();
+  Handle get() const { return entity_.get(); }
+
+ private:
+  Entity entity_;
+};
+
+// Waits for data on one reader or a guard trigger.
+class WaitSet {
+ public:
+  WaitSet(const Participant& participant, const Reader& reader, const GuardCondition& guard);
+  // True when something triggered before the timeout.
+  bool wait(std::chrono::nanoseconds timeout);
+
+ private:
+  Entity entity_;
+  Entity read_condition_;
+};
+
+}  // namespace rths::transport::dds

@@ -1,0 +1,47 @@
+#pragma once
+// Endpoint over Cyclone DDS. Two topics per domain: "rths_down" (coordinator -> nodes, keyed by
+// the addressee) and "rths_up" (nodes -> coordinator, keyed by the sender), both reliable,
+// KEEP_LAST 64, volatile. A node endpoint delivers only messages addressed to its node id or
+// broadcast (-1); filtering happens on receipt, before any payload is parsed.
+//
+// Discovery: the participant reads CYCLONEDDS_URI as usual (configs/dds_loopback.xml for one host).
+// receive() is not real-time safe on the first call (it sizes its buffers); later calls allocate
+// only for the payload strings.
+
+#include <deque>
+#include <memory>
+
+#include "transport/transport.h"
+
+namespace rths::transport {
+
+struct DdsEndpointOptions {
+  std::uint32_t domain_id = 0;
+  bool coordinator = true;                 // false: a node
+  std::int32_t node_id = kCoordinatorId;   // for a node, its id (messages to others are dropped)
+  std::string topic_prefix = "rths";       // topics <prefix>_down and <prefix>_up
+  int history_depth = 64;
+};
+
+class DdsEndpoint final : public Endpoint {
+ public:
+  explicit DdsEndpoint(const DdsEndpointOptions& options);
+  ~DdsEndpoint() override;
+  void send(const Message& message) override;
+  std::optional<Message> receive(std::chrono::nanoseconds timeout) override;
+  void interrupt() override;
+  int matched_peers() const override;
+  int matched_writers() const;
+  // Waits until at least `writers` remote writers feed this endpoint and `readers` remote
+  // readers listen to it. Throws std::runtime_error naming the counts on timeout.
+  void wait_for_match(int readers, int writers, std::chrono::milliseconds timeout) const;
+
+ private:
+  void drain();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  DdsEndpointOptions options_;
+  std::deque<Message> pending_;
+};
+
+}  // namespace rths::transport

@@ -1,0 +1,50 @@
+#pragma once
+// The transport the coordinator and the nodes talk to. A Message is one envelope: who, what kind,
+// which step, two wall-clock stamps and an opaque Protobuf payload. Two directions exist:
+//   down  coordinator -> node   (node_id = addressee)
+//   up    node -> coordinator   (node_id = sender)
+// Implementations: InProcessTransport (function calls, deterministic, no threads) and
+// DdsEndpoint (Cyclone DDS, processes on any host). The same run gives the same numbers on both.
+//
+// Stamps are CLOCK_REALTIME nanoseconds (comparable across hosts up to their clock offset);
+// round trips are measured on one host's clock from sent_ns and the echo, so carry no offset.
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace rths::transport {
+
+struct Message {
+  std::string run_id;
+  std::int32_t node_id = 0;
+  std::int32_t kind = 0;       // rths.runtime.MessageKind
+  std::int64_t step = 0;
+  std::int64_t sent_ns = 0;    // stamped by send() when 0
+  std::int64_t echo_ns = 0;    // sent_ns of the message this answers
+  std::string payload;         // Protobuf bytes
+  std::int64_t received_ns = 0;  // stamped on receipt, never sent
+};
+
+// CLOCK_REALTIME now, ns.
+std::int64_t realtime_ns();
+
+class Endpoint {
+ public:
+  virtual ~Endpoint() = default;
+  // Sends one message in this endpoint's direction. Throws std::runtime_error on failure.
+  virtual void send(const Message& message) = 0;
+  // The next message addressed to this endpoint (nodes see only their own node id and
+  // broadcasts to id -1), or nullopt when `timeout` passes or interrupt() is called.
+  virtual std::optional<Message> receive(std::chrono::nanoseconds timeout) = 0;
+  // Wakes a receive() blocked in another thread (thread safe).
+  virtual void interrupt() = 0;
+  // Number of remote endpoints currently matched to this one's writer.
+  virtual int matched_peers() const = 0;
+};
+
+inline constexpr std::int32_t kCoordinatorId = 0;
+inline constexpr std::int32_t kBroadcastId = -1;
+
+}  // namespace rths::transport
