@@ -1,0 +1,53 @@
+#pragma once
+// Putting the identified actuator back into a simulation: the lab's actuator, as fitted from its
+// record, replaces the declared delay stages of a study config, and the in-process hybrid
+// simulation (core::simulate) predicts how far the test will stray from the reference.
+//
+// The actuator channel model becomes a core::DelayChain:
+//   TimeShift(delay, with the fitted gain) -> FirstOrderActuator(T) -> TransferFunctionStage
+//   wn^2 / (s^2 + 2 zeta wn s + wn^2), for the effects present. A time-varying delay enters with
+//   its mean. Offset/drift, backlash and velocity saturation are lab-scale effects (mm) that do
+//   not scale to another structure's displacements: they are left out and listed in `ignored`.
+//   A negative fitted delay (a lead) is kept as zero delay and listed too.
+// Error measures (core/metrics.h) on the displacement of the top degree of freedom against the
+// reference case's: nrmse (sqrt(mean e^2) / median |u_ref|) and paper_eq2 (the paper's Eq. 2 as
+// printed).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/delay.h"
+#include "identify/model.h"
+
+namespace rths::identify {
+
+struct ActuatorChain {
+  core::DelayChain chain;
+  std::string description;
+  std::vector<std::string> ignored;
+};
+// @pre model.channel == Channel::kMeasured. Throws std::invalid_argument otherwise.
+ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scales, double dt);
+
+struct CaseError {
+  std::string name;
+  double nominal_delay = 0.0;  // s, the chain's low-frequency lag
+  double nrmse = 0.0, paper_eq2 = 0.0, peak_displacement = 0.0;  // -, -, m
+  bool diverged = false;
+};
+
+struct StudyPrediction {
+  std::string config, reference_case;
+  double dt = 0.0;
+  CaseError identified;          // the identified actuator on every experimental storey
+  std::vector<CaseError> cases;  // the config's own cases, for comparison
+  std::string actuator;          // description of the chain
+  std::vector<std::string> ignored;
+};
+
+// Throws what load_study/prepare_study/simulate throw (std::invalid_argument naming the config).
+StudyPrediction predict_study(const std::filesystem::path& config, const ChannelModel& actuator,
+                              const SignalScales& scales);
+
+}  // namespace rths::identify

@@ -1,0 +1,335 @@
+#include "identify/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "analysis/plot.h"
+#include "identify/evidence.h"
+
+namespace rths::identify {
+namespace {
+
+const ChannelSignals& signals_of(const Identification& id, Channel channel) {
+  for (const auto& s : id.signals) {
+    if (s.channel == channel) return s;
+  }
+  throw std::invalid_argument("no signals for channel " + channel_name(channel));
+}
+
+nlohmann::json params_json(const FitResult& fit, const SignalScales& scales) {
+  nlohmann::json out = nlohmann::json::object();
+  const auto specs = fit.model.specs(scales);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    out[specs[i].name] = {{"value", fit.model.params[i]},
+                          {"std_error", i < fit.std_errors.size() ? fit.std_errors[i] : 0.0},
+                          {"unit", specs[i].unit}};
+  }
+  return out;
+}
+
+// Parameters belonging to one effect of the model (for a step's `params`).
+nlohmann::json effect_params_json(const FitResult& fit, Effect effect, const SignalScales& scales) {
+  nlohmann::json out = nlohmann::json::object();
+  std::size_t index = base_params(fit.model.channel, scales).size();
+  for (Effect e : fit.model.effects) {
+    const auto specs = effect_params(e, fit.model.channel, scales);
+    if (e == effect) {
+      for (std::size_t i = 0; i < specs.size(); ++i) {
+        out[specs[i].name] = {{"value", fit.model.params[index + i]},
+                              {"std_error", fit.std_errors.at(index + i)},
+                              {"unit", specs[i].unit}};
+      }
+    }
+    index += specs.size();
+  }
+  return out;
+}
+
+nlohmann::json evidence_json(const Evidence& e) {
+  return {{"residual_rms", e.residual_rms},
+          {"corr_residual_displacement", e.corr_input},
+          {"corr_residual_velocity", e.corr_velocity},
+          {"corr_residual_velocity_sign", e.corr_velocity_sign},
+          {"corr_residual_displacement_cubed", e.corr_input_cubed},
+          {"corr_residual_acceleration", e.corr_acceleration},
+          {"xcorr_input_residual_peak", e.input_to_residual.peak},
+          {"xcorr_input_residual_lag_s", e.input_to_residual.lag},
+          {"residual_dominant_frequency_hz", e.dominant_frequency},
+          {"residual_power_below_1hz", e.low_frequency_share}};
+}
+
+nlohmann::json ranking_json(const std::vector<CandidateTrial>& ranking) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& t : ranking) {
+    out.push_back({{"effect", effect_name(t.effect)},
+                   {"added_params", t.added_params},
+                   {"train_error", t.train_error},
+                   {"heldout_error", t.heldout_error},
+                   {"score", t.score},
+                   {"pays", t.pays}});
+  }
+  return out;
+}
+
+nlohmann::json model_json(const FitResult& fit, const SignalScales& scales) {
+  nlohmann::json effects = nlohmann::json::array();
+  for (Effect e : fit.model.effects) effects.push_back(effect_name(e));
+  return {{"effects", effects},
+          {"params", params_json(fit, scales)},
+          {"train_error", fit.train_error},
+          {"heldout_error", fit.heldout_error}};
+}
+
+nlohmann::json case_json(const CaseError& c) {
+  return {{"name", c.name},
+          {"nominal_delay_s", c.nominal_delay},
+          {"nrmse", c.nrmse},
+          {"paper_eq2", c.paper_eq2},
+          {"peak_displacement_m", c.peak_displacement},
+          {"diverged", c.diverged}};
+}
+
+std::string format_value(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.4g", v);
+  return buffer;
+}
+
+std::string percent(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2f %%", 100.0 * v);
+  return buffer;
+}
+
+// Every `stride`-th sample of [begin, end) as x/y series.
+analysis::Series series(const std::string& title, std::span<const double> x,
+                        std::span<const double> y, std::size_t begin, std::size_t end,
+                        std::size_t max_points = 4000) {
+  analysis::Series s;
+  s.title = title;
+  const std::size_t stride = std::max<std::size_t>(1, (end - begin) / max_points);
+  for (std::size_t i = begin; i < end; i += stride) {
+    s.x.push_back(x[i]);
+    s.y.push_back(y[i]);
+  }
+  return s;
+}
+
+std::vector<double> residual(const ChannelSignals& s, const std::vector<double>& prediction) {
+  std::vector<double> r(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) r[i] = s.target[i] - prediction[i];
+  return r;
+}
+
+// A window of about `seconds` inside the held-out samples with the largest input motion.
+std::pair<std::size_t, std::size_t> heldout_window(const Identification& id,
+                                                   const ChannelSignals& s, double seconds) {
+  const auto width = static_cast<std::size_t>(std::max(10.0, seconds / s.dt));
+  std::size_t best_start = id.split.heldout.front();
+  double best = -1.0;
+  const auto& held = id.split.heldout;
+  for (std::size_t k = 0; k + width < held.size(); k += width / 2) {
+    if (held[k + width] - held[k] != width) continue;  // window must be contiguous
+    double sum = 0.0;
+    for (std::size_t i = held[k]; i < held[k] + width; ++i) sum += s.velocity[i] * s.velocity[i];
+    if (sum > best) {
+      best = sum;
+      best_start = held[k];
+    }
+  }
+  return {best_start, std::min(s.size(), best_start + width)};
+}
+
+}  // namespace
+
+nlohmann::json to_json(const Identification& id, const ReportContext& context,
+                       const std::optional<StudyPrediction>& prediction) {
+  nlohmann::json out;
+  out["source"] = id.source;
+  out["samples"] = id.samples;
+  out["dt"] = id.dt;
+  out["search_decimation"] = id.search_decimation;
+  out["holdout"] = {{"mode", context.holdout_mode == HoldoutMode::kLast ? "last" : "blocks"},
+                    {"fraction", context.holdout_fraction},
+                    {"train_samples", id.split.train.size()},
+                    {"heldout_samples", id.split.heldout.size()}};
+  nlohmann::json steps = nlohmann::json::array();
+  nlohmann::json channels = nlohmann::json::array();
+  for (const auto& c : id.channels) {
+    const SignalScales scales = signal_scales(signals_of(id, c.channel));
+    for (const auto& s : c.steps) {
+      steps.push_back({{"channel", channel_name(s.channel)},
+                       {"effect", effect_name(s.effect)},
+                       {"params", effect_params_json(s.after, s.effect, scales)},
+                       {"all_params", params_json(s.after, scales)},
+                       {"train_error_before", s.before.train_error},
+                       {"train_error_after", s.after.train_error},
+                       {"heldout_error_before", s.before.heldout_error},
+                       {"heldout_error_after", s.after.heldout_error},
+                       {"evidence", evidence_json(s.evidence_before)},
+                       {"ranking", ranking_json(s.ranking)}});
+    }
+    nlohmann::json declared = nlohmann::json::array();
+    for (Effect e : c.declared) declared.push_back(effect_name(e));
+    channels.push_back({{"channel", channel_name(c.channel)},
+                        {"declared_effects", declared},
+                        {"declared", model_json(c.declared_fit, scales)},
+                        {"final", model_json(c.final_fit, scales)},
+                        {"final_evidence", evidence_json(c.final_evidence)},
+                        {"rejected", ranking_json(c.last_ranking)}});
+  }
+  out["steps"] = steps;
+  out["channels"] = channels;
+  if (prediction) {
+    nlohmann::json cases = nlohmann::json::array();
+    for (const auto& c : prediction->cases) cases.push_back(case_json(c));
+    out["prediction"] = {{"config", prediction->config},
+                         {"reference_case", prediction->reference_case},
+                         {"dt", prediction->dt},
+                         {"actuator", prediction->actuator},
+                         {"ignored", prediction->ignored},
+                         {"identified", case_json(prediction->identified)},
+                         {"cases", cases}};
+  }
+  return out;
+}
+
+std::string format_table(const Identification& id,
+                         const std::optional<StudyPrediction>& prediction) {
+  std::ostringstream out;
+  out << "rths identify: " << id.source << " (" << id.samples << " samples, dt " << id.dt
+      << " s; search decimated x" << id.search_decimation << ", errors at the full rate; "
+      << id.split.train.size() << " training / " << id.split.heldout.size()
+      << " held-out samples)\n";
+  out << "error = RMS(residual) / std(measured signal)\n\n";
+  for (const auto& c : id.channels) {
+    const SignalScales scales = signal_scales(signals_of(id, c.channel));
+    out << "channel " << channel_name(c.channel) << ": declared model {";
+    for (std::size_t i = 0; i < c.declared.size(); ++i) {
+      out << (i ? ", " : "") << effect_name(c.declared[i]);
+    }
+    out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
+        << percent(c.declared_fit.heldout_error) << "\n";
+    if (c.steps.empty()) out << "  nothing added: no candidate pays on held-out data\n";
+    int n = 1;
+    for (const auto& s : c.steps) {
+      out << "  step " << n++ << ": + " << effect_name(s.effect) << "   train "
+          << percent(s.before.train_error) << " -> " << percent(s.after.train_error)
+          << "   held-out " << percent(s.before.heldout_error) << " -> "
+          << percent(s.after.heldout_error) << "\n";
+      const auto p = effect_params_json(s.after, s.effect, scales);
+      for (auto it = p.begin(); it != p.end(); ++it) {
+        out << "      " << it.key() << " = " << format_value(it.value()["value"]) << " +/- "
+            << format_value(it.value()["std_error"]) << " "
+            << it.value()["unit"].get<std::string>() << "\n";
+      }
+      const auto& e = s.evidence_before;
+      out << "      evidence before: corr(res, disp) " << format_value(e.corr_input)
+          << ", corr(res, vel) " << format_value(e.corr_velocity) << ", corr(res, sgn vel) "
+          << format_value(e.corr_velocity_sign) << ", xcorr(input, res) "
+          << format_value(e.input_to_residual.peak) << " at "
+          << format_value(e.input_to_residual.lag * 1e3) << " ms, residual peak at "
+          << format_value(e.dominant_frequency) << " Hz\n";
+      out << "      ranking:";
+      for (std::size_t k = 0; k < std::min<std::size_t>(4, s.ranking.size()); ++k) {
+        out << " " << effect_name(s.ranking[k].effect) << " "
+            << percent(s.ranking[k].heldout_error) << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
+      }
+      out << "\n";
+    }
+    out << "  final: " << c.final_fit.model.describe(scales) << "\n";
+    if (!c.last_ranking.empty()) {
+      out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
+          << percent(c.last_ranking.front().heldout_error) << " vs "
+          << percent(c.final_fit.heldout_error) << ")\n";
+    }
+    out << "\n";
+  }
+  if (prediction) {
+    out << "prediction with " << prediction->config << " (reference case '"
+        << prediction->reference_case << "', dt " << prediction->dt << " s)\n";
+    out << "  identified actuator: " << prediction->actuator << "\n";
+    for (const auto& ig : prediction->ignored) out << "  not transferred: " << ig << "\n";
+    const auto line = [&](const CaseError& c) {
+      out << "  " << c.name << ": nominal lag " << format_value(c.nominal_delay * 1e3)
+          << " ms, NRMSE " << percent(c.nrmse) << ", paper Eq. 2 " << format_value(c.paper_eq2)
+          << ", peak " << format_value(c.peak_displacement * 1e3) << " mm"
+          << (c.diverged ? " (DIVERGED)" : "") << "\n";
+    };
+    line(prediction->identified);
+    for (const auto& c : prediction->cases) line(c);
+  }
+  return out.str();
+}
+
+std::vector<std::filesystem::path> write_plots(const Identification& id,
+                                               const std::filesystem::path& directory) {
+  std::error_code ec;
+  std::filesystem::create_directories(directory, ec);
+  if (ec) throw std::runtime_error(directory.string() + ": cannot create: " + ec.message());
+  std::vector<std::filesystem::path> written;
+  for (const auto& c : id.channels) {
+    const ChannelSignals& s = signals_of(id, c.channel);
+    const std::string name = channel_name(c.channel);
+    const auto r0 = residual(s, c.declared_fit.prediction);
+    const auto r1 = residual(s, c.final_fit.prediction);
+    const std::string unit = c.channel == Channel::kMeasured ? "m" : "N";
+
+    analysis::PlotSpec time_plot;
+    time_plot.title = name + ": residual before (declared) and after (final model)";
+    time_plot.xlabel = "time (s)";
+    time_plot.ylabel = "residual (" + unit + ")";
+    time_plot.series = {series("declared", s.time, r0, 0, s.size()),
+                        series("final", s.time, r1, 0, s.size())};
+    written.push_back(directory / (name + "_residual_time.png"));
+    analysis::write_png_plot(time_plot, written.back());
+
+    const auto sp0 = amplitude_spectrum(r0, s.dt), sp1 = amplitude_spectrum(r1, s.dt);
+    analysis::PlotSpec spectrum_plot;
+    spectrum_plot.title = name + ": residual amplitude spectrum before and after";
+    spectrum_plot.xlabel = "frequency (Hz)";
+    spectrum_plot.ylabel = "amplitude (" + unit + ")";
+    spectrum_plot.log_y = true;
+    std::size_t cut = sp0.frequency.size();
+    for (std::size_t k = 0; k < sp0.frequency.size(); ++k) {
+      if (sp0.frequency[k] > std::min(50.0, 0.5 / s.dt)) {
+        cut = k;
+        break;
+      }
+    }
+    spectrum_plot.series = {series("declared", sp0.frequency, sp0.amplitude, 1, cut),
+                            series("final", sp1.frequency, sp1.amplitude, 1, cut)};
+    written.push_back(directory / (name + "_residual_spectrum.png"));
+    analysis::write_png_plot(spectrum_plot, written.back());
+
+    const auto [lo, hi] = heldout_window(id, s, 2.0);
+    if (c.channel == Channel::kForce) {
+      analysis::PlotSpec loops;
+      loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) +
+                    "-" + format_value(s.time[hi - 1]) + " s)";
+      loops.xlabel = "measured displacement (m)";
+      loops.ylabel = "force (N)";
+      loops.series = {series("measured", s.input, s.target, lo, hi),
+                      series("declared model", s.input, c.declared_fit.prediction, lo, hi),
+                      series("final model", s.input, c.final_fit.prediction, lo, hi)};
+      written.push_back(directory / "force_loops.png");
+      analysis::write_png_plot(loops, written.back());
+    } else {
+      analysis::PlotSpec tracking;
+      tracking.title = "actuator tracking (held-out window)";
+      tracking.xlabel = "time (s)";
+      tracking.ylabel = "displacement (m)";
+      tracking.series = {series("command", s.time, s.input, lo, hi),
+                         series("measured", s.time, s.target, lo, hi),
+                         series("declared model", s.time, c.declared_fit.prediction, lo, hi),
+                         series("final model", s.time, c.final_fit.prediction, lo, hi)};
+      written.push_back(directory / "measured_tracking.png");
+      analysis::write_png_plot(tracking, written.back());
+    }
+  }
+  return written;
+}
+
+}  // namespace rths::identify
