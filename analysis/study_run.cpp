@@ -145,11 +145,11 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
 std::string study_summary_text(const StudyOutcome& outcome) {
   std::ostringstream out;
   out << "study: " << outcome.study_name << " (reference: " << outcome.cases[outcome.reference_index].name << ")\n";
-  out << std::left << std::setw(26) << "case" << std::setw(28) << "delay" << std::right
+  out << std::left << std::setw(26) << "case" << std::setw(36) << "delay" << std::right
       << std::setw(12) << "peak (mm)" << std::setw(12) << "NRMSE" << std::setw(16) << "Eq.2 (paper)"
       << std::setw(16) << "peak err (mm)" << "\n";
   for (const CaseOutcome& c : outcome.cases) {
-    out << std::left << std::setw(26) << c.name << std::setw(28) << c.delay_description << std::right
+    out << std::left << std::setw(26) << c.name << std::setw(36) << c.delay_description << std::right
         << std::fixed << std::setprecision(3) << std::setw(12) << c.peak * 1e3 << std::setw(12)
         << c.nrmse << std::setprecision(5) << std::setw(16) << c.paper_eq2 << std::setprecision(3)
         << std::setw(16) << c.peak_error * 1e3 << (c.simulation.diverged ? "  DIVERGED" : "") << "\n";
