@@ -69,7 +69,7 @@ void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem
   script << "set terminal pngcairo size " << panels.front().width << "," << height
          << " font 'sans,10'\n"
          << "set output " << quoted(png.string()) << "\n"
-         << "set grid\nset key top right\n";
+         << "set termoption noenhanced\nset grid\nset key top right\n";
   if (panels.size() > 1) script << "set multiplot layout " << panels.size() << ",1\n";
   for (const PlotSpec& panel : panels) append_panel(script, panel);
   if (panels.size() > 1) script << "unset multiplot\n";
