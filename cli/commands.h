@@ -28,5 +28,6 @@ void add_sdof_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_stability_command(CLI::App& app);
 void add_sweep_command(CLI::App& app);
+void add_identify_command(CLI::App& app);
 
 }  // namespace rths::cli

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   rths::cli::add_run_command(app);
   rths::cli::add_stability_command(app);
   rths::cli::add_sweep_command(app);
+  rths::cli::add_identify_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

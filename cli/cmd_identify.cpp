@@ -1,0 +1,158 @@
+// `rths identify`: measured lab data -> declared model -> residual -> missing effects -> refit,
+// with the error before and after on held-out data; optionally the identified actuator is put
+// back into a study config's simulation (--predict) to predict the test's error.
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "cli/commands.h"
+#include "identify/data.h"
+#include "identify/identify.h"
+#include "identify/predict.h"
+#include "identify/report.h"
+
+namespace rths::cli {
+namespace {
+
+struct IdentifyCliOptions {
+  std::string data, column_map, time_unit = "s", length_unit = "mm", force_unit = "N";
+  std::string channels = "measured,force", declared_actuator = "delay",
+              declared_specimen = "stiffness", candidates, holdout_mode = "blocks";
+  std::string out, predict;
+  double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
+  std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
+  bool json = false;
+};
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    if (!item.empty() && item != "none") out.push_back(item);
+  }
+  return out;
+}
+
+std::vector<identify::Effect> effects_for(const std::string& list, identify::Channel channel,
+                                          const std::string& flag) {
+  std::vector<identify::Effect> out;
+  for (const auto& name : split_list(list)) {
+    const identify::Effect e = identify::parse_effect(name);
+    if (!identify::effect_applies(e, channel)) {
+      throw std::invalid_argument(flag + ": effect '" + name + "' does not apply to channel '" +
+                                  identify::channel_name(channel) + "'");
+    }
+    out.push_back(e);
+  }
+  return out;
+}
+
+void run_identify(const IdentifyCliOptions& o) {
+  identify::CsvUnits units;
+  units.time_to_s = identify::time_unit_to_s(o.time_unit);
+  units.length_to_m = identify::length_unit_to_m(o.length_unit);
+  units.force_to_n = identify::force_unit_to_n(o.force_unit);
+  const identify::DaqColumnMap map = identify::parse_column_map(o.column_map);
+
+  identify::IdentifyOptions options;
+  options.channels.clear();
+  for (const auto& name : split_list(o.channels)) {
+    if (name == "measured") options.channels.push_back(identify::Channel::kMeasured);
+    else if (name == "force") options.channels.push_back(identify::Channel::kForce);
+    else throw std::invalid_argument("--channels: unknown channel '" + name + "' (measured, force)");
+  }
+  if (options.channels.empty()) throw std::invalid_argument("--channels: no channel given");
+  options.declared_actuator =
+      effects_for(o.declared_actuator, identify::Channel::kMeasured, "--declared-actuator");
+  options.declared_specimen =
+      effects_for(o.declared_specimen, identify::Channel::kForce, "--declared-specimen");
+  for (const auto& name : split_list(o.candidates)) {
+    options.selection.candidates.push_back(identify::parse_effect(name));
+  }
+  options.holdout_fraction = o.holdout;
+  options.holdout_mode = identify::parse_holdout_mode(o.holdout_mode);
+  options.holdout_blocks = o.blocks;
+  options.search_decimation = o.decimate;
+  options.search_samples = o.search_samples;
+  options.selection.min_relative_improvement = o.min_improvement;
+  options.selection.penalty_per_parameter = o.penalty;
+  options.selection.max_steps = o.max_steps;
+
+  const identify::MeasuredData data = identify::read_measured(o.data, units, map);
+  const identify::Identification id = identify::identify(data, options);
+
+  std::optional<identify::StudyPrediction> prediction;
+  if (!o.predict.empty()) {
+    const auto* actuator = id.find(identify::Channel::kMeasured);
+    if (actuator == nullptr) {
+      throw std::invalid_argument("--predict needs the 'measured' channel in --channels");
+    }
+    const auto scales = identify::signal_scales(id.signals.front());
+    prediction = identify::predict_study(o.predict, actuator->final_fit.model, scales);
+  }
+  if (!o.out.empty()) {
+    try {
+      identify::write_plots(id, o.out);
+    } catch (const std::exception& e) {
+      throw ExitError(kExitEnvironment, std::string("plots: ") + e.what());
+    }
+  }
+  if (o.json) {
+    const identify::ReportContext context{o.holdout, options.holdout_mode};
+    std::cout << identify::to_json(id, context, prediction).dump(2) << "\n";
+  } else {
+    std::cout << identify::format_table(id, prediction);
+    if (!o.out.empty()) std::cout << "plots written to " << o.out << "\n";
+  }
+}
+
+}  // namespace
+
+void add_identify_command(CLI::App& app) {
+  auto o = std::make_shared<IdentifyCliOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "identify", "Find the effects a declared actuator/specimen model lacks in measured data");
+  cmd->add_option("data", o->data,
+                  "CSV time,command,measured,force or a raw DAQ export (Header Size: ...)")
+      ->required();
+  cmd->add_option("--time-unit", o->time_unit, "CSV time unit: s | ms");
+  cmd->add_option("--length-unit", o->length_unit, "CSV displacement unit: m | mm | cm | in");
+  cmd->add_option("--force-unit", o->force_unit, "CSV force unit: N | kN | lbf | kip");
+  cmd->add_option("--column-map", o->column_map,
+                  "DAQ columns and scales to mm / N, e.g. "
+                  "command=CHANNEL2*10,measured=CHANNEL0*10,force=CHANNEL1*9806.65 (the default)");
+  cmd->add_option("--channels", o->channels, "channels to identify: measured,force");
+  cmd->add_option("--declared-actuator", o->declared_actuator,
+                  "declared actuator effects (gain is always there), comma list or none");
+  cmd->add_option("--declared-specimen", o->declared_specimen,
+                  "declared specimen effects, comma list or none");
+  cmd->add_option("--candidates", o->candidates, "candidate effects (default: the whole library)");
+  cmd->add_option("--holdout", o->holdout, "held-out share of the record")
+      ->check(CLI::Range(0.01, 0.99));
+  cmd->add_option("--holdout-mode", o->holdout_mode, "blocks (segment-wise) | last")
+      ->check(CLI::IsMember({"blocks", "last"}));
+  cmd->add_option("--blocks", o->blocks, "number of segments for --holdout-mode blocks")
+      ->check(CLI::Range(2, 1000));
+  cmd->add_option("--min-improvement", o->min_improvement,
+                  "relative fall of the held-out error an effect must bring")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--penalty", o->penalty, "relative penalty per added parameter")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel");
+  cmd->add_option("--decimate", o->decimate, "decimation for the search (0: automatic)");
+  cmd->add_option("--search-samples", o->search_samples,
+                  "automatic decimation keeps at most about this many samples")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot)");
+  cmd->add_option("--predict", o->predict,
+                  "study config to run with the identified actuator (e.g. configs/paper_frame.textproto)");
+  cmd->add_flag("--json", o->json, "print the steps and models as JSON");
+  cmd->callback([o] { run_identify(*o); });
+}
+
+}  // namespace rths::cli
