@@ -1,0 +1,213 @@
+// `rths sweep CONFIG`: the paper's Fig. 4 grid on every core; `rths sweep merge` joins shards.
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "analysis/parallel_for.h"
+#include "analysis/sweep.h"
+#include "cli/commands.h"
+#include "core/study.h"
+
+namespace rths::cli {
+namespace {
+
+struct SweepOptions {
+  std::string config, out, shard;
+  int threads = 0;
+  bool json = false, no_plots = false, general = false;
+};
+
+struct MergeOptions {
+  std::string out;
+  std::vector<std::string> shards;
+  bool json = false, no_plots = false;
+};
+
+// Progress on stderr: one redrawn bar on a terminal; on a log (not a tty) a plain line per 10 %,
+// so batch-scheduler logs stay short.
+class ProgressReporter {
+ public:
+  explicit ProgressReporter(bool enabled)
+      : enabled_(enabled), tty_(isatty(STDERR_FILENO) != 0), start_(Clock::now()) {}
+
+  void update(std::size_t done, std::size_t total) {
+    if (!enabled_ || total == 0) return;
+    const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+    const double fraction = static_cast<double>(done) / static_cast<double>(total);
+    if (tty_) {
+      if (done < total && seconds - last_draw_ < 0.1) return;
+      last_draw_ = seconds;
+      constexpr int kWidth = 30;
+      const int filled = static_cast<int>(fraction * kWidth);
+      std::fprintf(stderr, "\rsweep [%s%s] %3.0f%% %zu/%zu points %.1f s",
+                   std::string(filled, '#').c_str(), std::string(kWidth - filled, '.').c_str(),
+                   100 * fraction, done, total, seconds);
+      if (done == total) std::fputc('\n', stderr);
+    } else {
+      const int decile = static_cast<int>(std::floor(fraction * 10));
+      if (decile <= last_decile_) return;
+      last_decile_ = decile;
+      std::fprintf(stderr, "sweep: %3d%% (%zu/%zu points, %.1f s)\n", decile * 10, done, total, seconds);
+    }
+    std::fflush(stderr);
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  bool enabled_, tty_;
+  Clock::time_point start_;
+  double last_draw_ = -1;
+  int last_decile_ = 0;
+};
+
+nlohmann::json trends_json(const analysis::SweepTrends& t) {
+  const auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+  return {{"stiffness_max_relative_difference_nrmse", number(t.stiffness_max_relative_difference)},
+          {"period_falling_pair_fraction", number(t.period_falling_fraction)},
+          {"nonlinear_to_linear_nrmse_median_ratio", number(t.nonlinear_to_linear_median_ratio)},
+          {"diverged_points", t.diverged_points}};
+}
+
+void print_trends(const analysis::SweepTrends& t) {
+  std::cout << "stiffness at fixed period: max relative NRMSE difference "
+            << t.stiffness_max_relative_difference << "\n"
+            << "error vs period: NRMSE falls between "
+            << (std::isfinite(t.period_falling_fraction) ? 100 * t.period_falling_fraction : 0.0)
+            << " % of consecutive periods\n";
+  if (std::isfinite(t.nonlinear_to_linear_median_ratio)) {
+    std::cout << "non-linear / linear NRMSE at the same initial period (median): "
+              << t.nonlinear_to_linear_median_ratio << "\n";
+  }
+  if (t.diverged_points) std::cout << "diverged points: " << t.diverged_points << "\n";
+}
+
+void write_plot(const std::vector<analysis::SweepTableRow>& table, const std::filesystem::path& png,
+                const std::string& title) {
+  try {
+    analysis::write_sweep_plot(table, png, title);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "rths sweep: no plot: " << e.what() << "\n";  // e.g. only zero delays swept
+  } catch (const std::runtime_error& e) {
+    throw ExitError(kExitEnvironment, std::string("the CSV is written, the plot failed: ") + e.what());
+  }
+}
+
+void run_sweep_command(const SweepOptions& o) {
+  if (o.config.empty()) throw ExitError(kExitBadInput, "sweep: give a CONFIG, or use `rths sweep merge`");
+  const std::filesystem::path config_path = o.config;
+  const config::Study study = core::load_study(config_path);
+  const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
+  analysis::SweepOptions options;
+  if (!o.shard.empty()) options.shard = analysis::parse_shard(o.shard);
+  options.threads = o.threads;
+  options.general_path_only = o.general;
+  ProgressReporter progress(true);
+  options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
+
+  std::filesystem::path out = o.out;
+  if (out.empty()) out = study.output().directory();
+  if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
+  const bool sharded = options.shard.count > 1;
+  const std::filesystem::path csv =
+      out / (sharded ? "sweep.shard-" + std::to_string(options.shard.index) + "-of-" +
+                           std::to_string(options.shard.count) + ".csv"
+                     : std::string("sweep.csv"));
+
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<analysis::SweepRow> rows = analysis::run_sweep(grid, options);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  try {
+    analysis::write_sweep_csv(csv, grid, options.shard, rows);
+  } catch (const std::exception& e) {
+    throw ExitError(kExitEnvironment, e.what());
+  }
+  const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
+  const std::filesystem::path png = out / "sweep.png";
+  const bool plot = !o.no_plots && !sharded && !rows.empty();
+  if (plot) write_plot(table, png, study.name().empty() ? "sweep" : study.name());
+  const analysis::SweepTrends trends = analysis::measure_trends(table);
+  if (o.json) {
+    nlohmann::json summary = {{"csv", csv.string()},
+                              {"plot", plot ? nlohmann::json(png.string()) : nlohmann::json()},
+                              {"grid_hash", grid.hash_hex()},
+                              {"grid_points", grid.size()},
+                              {"shard", options.shard.to_string()},
+                              {"points_run", rows.size()},
+                              {"threads", analysis::resolve_threads(o.threads)},
+                              {"seconds", seconds},
+                              {"trends", trends_json(trends)}};
+    std::cout << summary.dump(2) << "\n";
+    return;
+  }
+  std::cout << "sweep " << options.shard.to_string() << ": " << rows.size() << " of " << grid.size()
+            << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
+  if (!sharded) print_trends(trends);
+  std::cout << "written: " << csv.string() << (plot ? ", " + png.string() : std::string()) << "\n";
+}
+
+void run_merge_command(const MergeOptions& o) {
+  std::vector<std::filesystem::path> shards(o.shards.begin(), o.shards.end());
+  const analysis::SweepCsv merged = analysis::merge_sweep_csvs(shards, o.out);
+  const std::vector<analysis::SweepTableRow> table = analysis::parse_sweep_rows(merged, o.out);
+  std::filesystem::path png = o.out;
+  png.replace_extension(".png");
+  const bool plot = !o.no_plots && !table.empty();
+  if (plot) write_plot(table, png, "sweep " + merged.grid_hash);
+  const analysis::SweepTrends trends = analysis::measure_trends(table);
+  if (o.json) {
+    std::cout << nlohmann::json{{"csv", o.out},
+                                {"plot", plot ? nlohmann::json(png.string()) : nlohmann::json()},
+                                {"grid_hash", merged.grid_hash},
+                                {"grid_points", merged.points},
+                                {"shards", o.shards.size()},
+                                {"trends", trends_json(trends)}}
+                     .dump(2)
+              << "\n";
+    return;
+  }
+  std::cout << "merged " << o.shards.size() << " shards: " << merged.points << " points (grid "
+            << merged.grid_hash << ")\n";
+  print_trends(trends);
+  std::cout << "written: " << o.out << (plot ? ", " + png.string() : std::string()) << "\n";
+}
+
+}  // namespace
+
+void add_sweep_command(CLI::App& app) {
+  auto options = std::make_shared<SweepOptions>();
+  auto merge = std::make_shared<MergeOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep", "The paper's Fig. 4 study: error vs period over a grid of periods, delays, "
+               "experimental fractions, stiffnesses, dt, records and restoring models");
+  cmd->add_option("config", options->config, "study config with a `sweep` block (Protobuf text format)");
+  cmd->add_option("--shard", options->shard,
+                  "run slice i of N (0-based, contiguous blocks of the grid) and write "
+                  "sweep.shard-i-of-N.csv; join the slices with `rths sweep merge`");
+  cmd->add_option("--out", options->out, "output folder (default: the config's output.directory, else out/<name>)");
+  cmd->add_option("--threads", options->threads, "worker threads (default: every core)")->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--json", options->json, "print the summary as JSON");
+  cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plot");
+  cmd->add_flag("--general", options->general,
+                "run every point through the general simulator (no SIMD batch kernel)");
+
+  CLI::App* merge_cmd = cmd->add_subcommand(
+      "merge", "Join shard CSVs of one grid into a complete CSV (and its plot); refuses shards of "
+               "another grid, duplicates and gaps");
+  merge_cmd->add_option("out", merge->out, "merged CSV to write")->required();
+  merge_cmd->add_option("shards", merge->shards, "shard CSVs")->required();
+  merge_cmd->add_flag("--json", merge->json, "print the summary as JSON");
+  merge_cmd->add_flag("--no-plots", merge->no_plots, "skip the PNG plot");
+  merge_cmd->callback([merge] { run_merge_command(*merge); });
+
+  cmd->callback([options, merge_cmd] {
+    if (merge_cmd->parsed()) return;
+    run_sweep_command(*options);
+  });
+}
+
+}  // namespace rths::cli
