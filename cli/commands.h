@@ -28,6 +28,8 @@ void add_sdof_command(CLI::App& app);
 void add_run_command(CLI::App& app);
 void add_stability_command(CLI::App& app);
 void add_sweep_command(CLI::App& app);
+void add_sites_command(CLI::App& app);
+void add_joint_lag_command(CLI::App& app);
 void add_identify_command(CLI::App& app);
 
 }  // namespace rths::cli

@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   rths::cli::add_run_command(app);
   rths::cli::add_stability_command(app);
   rths::cli::add_sweep_command(app);
+  rths::cli::add_sites_command(app);
+  rths::cli::add_joint_lag_command(app);
   rths::cli::add_identify_command(app);
   try {
     app.parse(argc, argv);

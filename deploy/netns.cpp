@@ -19,7 +19,9 @@ constexpr const char* kPrefix = "rths-";
 constexpr const char* kBridge = "br0";
 constexpr const char* kSiteInterface = "eth0";
 
-void validate_spec(const TopologySpec& spec) {
+}  // namespace
+
+void validate_topology(const TopologySpec& spec) {
   if (spec.sites.empty()) throw std::invalid_argument("topology: no sites");
   if (spec.sites.size() > 200) throw std::invalid_argument("topology: more than 200 sites");
   const std::regex name_rule("[a-z0-9_]{1,16}");
@@ -42,6 +44,8 @@ void validate_spec(const TopologySpec& spec) {
                                 "' must be three octets, e.g. 10.231.0");
   }
 }
+
+namespace {
 
 // Unique per process and per instance without a mutable global: pid + a clock nonce.
 std::string unique_prefix() {
@@ -113,7 +117,7 @@ std::vector<std::string> remove_stale_namespaces() {
 }
 
 NamespaceTopology::NamespaceTopology(const TopologySpec& spec) {
-  validate_spec(spec);
+  validate_topology(spec);
   if (!tool_available("ip")) {
     throw NamespacesUnavailable("the `ip` tool (Debian package iproute2) is not installed");
   }

@@ -68,6 +68,9 @@ class NamespaceTopology {
   std::vector<std::string> created_;  // in creation order
 };
 
+// Throws std::invalid_argument naming the bad site name, duplicate or subnet.
+void validate_topology(const TopologySpec& spec);
+
 // nullopt when this process can create and delete a network namespace, else the reason.
 std::optional<std::string> namespace_support();
 

@@ -1,0 +1,52 @@
+// `rths joint-lag CONFIG`: the network lag x actuator lag study (see deploy/joint_lag.h).
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "cli/commands.h"
+#include "deploy/joint_lag.h"
+
+namespace rths::cli {
+namespace {
+
+struct JointLagOptions {
+  std::string config, out;
+  bool json = false, no_plots = false, no_measure = false;
+};
+
+void run(const JointLagOptions& o) {
+  const std::filesystem::path path = o.config;
+  const auto config = deploy::load_joint_lag(path);
+  deploy::JointLagOptions options;
+  if (!o.out.empty()) options.output_directory = std::filesystem::path(o.out);
+  options.measure = !o.no_measure;
+  options.plots = !o.no_plots;
+  const auto result = deploy::run_joint_lag(config, path.parent_path(), options);
+  deploy::write_joint_lag_outputs(result, options.plots);
+  if (o.json) {
+    std::cout << deploy::to_json(result).dump(2) << "\n";
+  } else {
+    std::cout << deploy::to_text(result);
+  }
+}
+
+}  // namespace
+
+void add_joint_lag_command(CLI::App& app) {
+  auto options = std::make_shared<JointLagOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "joint-lag",
+      "Sweep network lag x actuator lag: error surface, measured total lag vs injected parts; "
+      "optionally real runs across namespace sites (root)");
+  cmd->add_option("config", options->config, "joint lag config (rths.deploy.JointLagStudy)")
+      ->required();
+  cmd->add_option("--out", options->out, "output folder (default: the config's)");
+  cmd->add_flag("--json", options->json, "print the summary as JSON");
+  cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  cmd->add_flag("--no-measure", options->no_measure, "skip the across-sites runs");
+  cmd->callback([options] { run(*options); });
+}
+
+}  // namespace rths::cli

@@ -1,0 +1,75 @@
+#pragma once
+// The joint study: network lag x actuator lag on one study (the paper's frame), error surface and
+// measured total lag against the injected parts.
+//
+// Emulated grid (in process, simulated time, deterministic): for every (network round trip R,
+// actuator lag A) the experimental actuator's chain is [shift(R), actuator(A)], where actuator is
+// shift(A) or a first-order lag with time constant A. For an elastic specimen (force = k u, as in
+// the paper's frame) delaying the force by the up-link equals delaying the displacement by it, so
+// down-link + up-link enter as one shift by their sum R.
+// Per point:
+//   error            nrmse(u_ref, u) = sqrt(mean e^2) / median|u_ref|, and the paper's Eq. 2
+//   measured total   J1 delay of the realised behind the commanded displacement (cross-correlation
+//                    peak, s), compared with injected = R + A.
+// Measured across sites (optional, needs namespaces): selected points run in real time across
+// network-namespace sites, R injected half each way by the actuator emulator, the actuator lag as
+// the case's delay stage. In real time the coordinator uses the newest feedback it has, so the
+// realised displacement it records lags the command by round trip + actuator lag:
+//   measured total = J1(command, realised) on the record, compared with R + A;
+//   measured network = the record's round-trip median; actuator part = their difference.
+// Error against the in-process reference over the same duration.
+//
+// Outputs (in the output directory): grid.csv, measured.csv, error_surface.png (gnuplot pm3d),
+// total_lag.png (measured vs injected), summary.json.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rths/deploy/joint_lag.pb.h"
+
+namespace rths::deploy {
+
+struct JointLagPoint {
+  double network_round_trip = 0.0;  // s, injected
+  double actuator_lag = 0.0;        // s, injected (time shift or time constant)
+  double nrmse = 0.0;               // relative
+  double paper_eq2 = 0.0;
+  double peak_error = 0.0;          // m
+  double measured_total_lag = 0.0;  // s, J1 of realised behind command
+  bool diverged = false;
+  // Across sites only (zero otherwise):
+  double measured_round_trip = 0.0;  // s, record median
+  double measured_actuator_lag = 0.0;  // s, measured total - measured round trip
+};
+
+struct JointLagResult {
+  std::string study_name;
+  std::string actuator_model;
+  std::vector<JointLagPoint> grid;      // network-major: all actuator lags for each round trip
+  std::vector<JointLagPoint> measured;  // across sites
+  std::string measured_skipped;         // why the across-sites part did not run, if it did not
+  std::filesystem::path output_directory;
+};
+
+JointLagStudy load_joint_lag(const std::filesystem::path& path);
+
+struct JointLagOptions {
+  std::optional<std::filesystem::path> output_directory;  // overrides the config's
+  bool measure = true;       // run the across-sites part when the config asks and it is possible
+  bool plots = true;
+};
+
+JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem::path& base_dir,
+                             const JointLagOptions& options);
+
+// Writes the CSVs, summary.json and (if plots) the PNGs into result.output_directory.
+void write_joint_lag_outputs(const JointLagResult& result, bool plots);
+
+nlohmann::json to_json(const JointLagResult& result);
+std::string to_text(const JointLagResult& result);
+
+}  // namespace rths::deploy

@@ -1,0 +1,229 @@
+#include "deploy/sites.h"
+
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "core/study.h"
+#include "deploy/dds_config.h"
+#include "deploy/netns.h"
+#include "deploy/process.h"
+#include "runtime/record.h"
+
+namespace rths::deploy {
+namespace {
+
+constexpr double kDefaultTimeout = 300.0;  // s
+constexpr const char* kDefaultSubnet = "10.231.0";
+
+class CollectingErrors final : public google::protobuf::io::ErrorCollector {
+ public:
+  explicit CollectingErrors(std::string source) : source_(std::move(source)) {}
+  void AddError(int line, google::protobuf::io::ColumnNumber column,
+                const std::string& message) override {
+    if (first_.empty()) {
+      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1) +
+               ": " + message;
+    }
+  }
+  const std::string& first() const { return first_; }
+
+ private:
+  std::string source_, first_;
+};
+
+std::string read_text(const std::filesystem::path& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot open " + what + " " + path.string());
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string kind_name(config::NodeSpec::Kind kind) {
+  switch (kind) {
+    case config::NodeSpec::SUBSTRUCTURE: return "substructure";
+    case config::NodeSpec::ACTUATOR_EMULATOR: return "actuator_emulator";
+    default: return "unspecified";
+  }
+}
+
+void make_absolute(std::string& path, const std::filesystem::path& base_dir) {
+  if (!path.empty() && std::filesystem::path(path).is_relative()) {
+    path = std::filesystem::absolute(base_dir / path).lexically_normal().string();
+  }
+}
+
+// The merged study is written elsewhere than the original, so its relative paths must not move.
+void absolutize_paths(config::Study& study, const std::filesystem::path& base_dir) {
+  make_absolute(*study.mutable_motion()->mutable_path(), base_dir);
+  for (auto& motion : *study.mutable_sweep()->mutable_motions()) {
+    make_absolute(*motion.mutable_path(), base_dir);
+  }
+  for (auto& study_case : *study.mutable_cases()) {
+    for (auto& stage : *study_case.mutable_delay()) {
+      if (stage.has_trace()) make_absolute(*stage.mutable_trace()->mutable_path(), base_dir);
+    }
+  }
+}
+
+void check_lag(const config::LinkLag& lag, const std::string& where) {
+  if (!(lag.one_way_delay() >= 0.0) || !(lag.jitter() >= 0.0) || !(lag.loss() >= 0.0) ||
+      !(lag.loss() < 1.0) || !std::isfinite(lag.one_way_delay()) || !std::isfinite(lag.jitter())) {
+    throw std::invalid_argument(where + ": one_way_delay and jitter must be finite and >= 0, "
+                                "loss in [0, 1)");
+  }
+}
+}  // namespace
+
+Sites parse_sites(const std::string& text, const std::string& source_name) {
+  Sites sites;
+  CollectingErrors errors(source_name);
+  google::protobuf::TextFormat::Parser parser;
+  parser.RecordErrorsTo(&errors);
+  if (!parser.ParseFromString(text, &sites)) {
+    throw std::invalid_argument(errors.first().empty() ? source_name + ": cannot parse sites config"
+                                                       : errors.first());
+  }
+  return sites;
+}
+
+SitesPlan load_sites(const std::filesystem::path& sites_file) {
+  const auto sites = parse_sites(read_text(sites_file, "sites config"), sites_file.string());
+  auto plan = plan_sites(sites, sites_file.parent_path(), sites_file.string());
+  plan.sites_file = sites_file;
+  return plan;
+}
+
+SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
+                     const std::string& source) {
+  SitesPlan plan;
+  plan.sites = sites;
+  if (sites.study().empty()) throw std::invalid_argument(source + ": study is empty");
+  plan.study_file = base_dir / sites.study();
+  plan.study = core::load_study(plan.study_file);
+  if (sites.has_deployment()) {
+    if (plan.study.has_deployment()) {
+      throw std::invalid_argument(source + ": deployment is given here and in " +
+                                  plan.study_file.string() + "; keep one");
+    }
+    *plan.study.mutable_deployment() = sites.deployment();
+  }
+  if (!plan.study.has_deployment() || plan.study.deployment().nodes().empty()) {
+    throw std::invalid_argument(source + ": no nodes: neither " + plan.study_file.string() +
+                                " nor this file has deployment.nodes");
+  }
+  auto& deployment = *plan.study.mutable_deployment();
+  if (sites.domain_id() < 0 || sites.domain_id() > 232) {
+    throw std::invalid_argument(source + ": domain_id must be in 0..232");
+  }
+  if (sites.domain_id() != 0) deployment.set_domain_id(sites.domain_id());
+  if (!sites.case_name().empty()) deployment.set_case_name(sites.case_name());
+  if (sites.clock() == Sites::LOCKSTEP) deployment.set_clock(config::Deployment::LOCKSTEP);
+  if (sites.clock() == Sites::REAL_TIME) deployment.set_clock(config::Deployment::REAL_TIME);
+  if (sites.duration() < 0.0) throw std::invalid_argument(source + ": duration must be >= 0");
+  if (sites.duration() > 0.0) plan.study.mutable_motion()->set_duration(sites.duration());
+  if (sites.timeout() < 0.0) throw std::invalid_argument(source + ": timeout must be >= 0");
+  plan.timeout = sites.timeout() > 0.0 ? sites.timeout() : kDefaultTimeout;
+
+  std::map<int, config::NodeSpec*> nodes;
+  for (auto& node : *deployment.mutable_nodes()) nodes[node.id()] = &node;
+
+  if (sites.sites().empty()) throw std::invalid_argument(source + ": no sites");
+  std::map<int, std::string> site_of;
+  for (const auto& site : sites.sites()) {
+    for (const int id : site.node_ids()) {
+      const std::string where = source + ": site '" + site.name() + "'";
+      if (id != 0 && nodes.count(id) == 0) {
+        throw std::invalid_argument(where + " places node " + std::to_string(id) +
+                                    ", which the study's deployment does not declare");
+      }
+      if (site_of.count(id) != 0) {
+        throw std::invalid_argument(where + " places node " + std::to_string(id) +
+                                    ", already placed at site '" + site_of[id] + "'");
+      }
+      site_of[id] = site.name();
+    }
+  }
+  if (site_of.count(0) == 0) {
+    throw std::invalid_argument(source + ": the coordinator (node 0) is not placed at any site");
+  }
+  plan.placements.push_back({0, "coordinator", site_of[0]});
+  for (const auto& [id, node] : nodes) {
+    if (site_of.count(id) == 0) {
+      throw std::invalid_argument(source + ": node " + std::to_string(id) + " (" +
+                                  kind_name(node->kind()) + ") is not placed at any site");
+    }
+    plan.placements.push_back({id, kind_name(node->kind()), site_of[id]});
+  }
+
+  std::set<int> linked;
+  for (const auto& link : sites.links()) {
+    const std::string where = source + ": link to node " + std::to_string(link.node_id());
+    if (nodes.count(link.node_id()) == 0) {
+      throw std::invalid_argument(where + ": no such node in the study's deployment");
+    }
+    if (!linked.insert(link.node_id()).second) throw std::invalid_argument(where + " given twice");
+    check_lag(link.to_node(), where + " to_node");
+    check_lag(link.from_node(), where + " from_node");
+    *nodes[link.node_id()]->mutable_receive_lag() = link.to_node();
+    *nodes[link.node_id()]->mutable_send_lag() = link.from_node();
+  }
+  absolutize_paths(plan.study, std::filesystem::absolute(plan.study_file).parent_path());
+  // The topology checks names and the subnet; check now so the error names this file.
+  TopologySpec topology;
+  for (const auto& site : sites.sites()) topology.sites.push_back(site.name());
+  topology.subnet = sites.subnet().empty() ? kDefaultSubnet : sites.subnet();
+  try {
+    validate_topology(topology);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  }
+  return plan;
+}
+
+std::vector<LinkMeasurement> measure_links(const std::filesystem::path& record,
+                                           const SitesPlan& plan) {
+  const auto contents = runtime::read_record(record);
+  std::map<int, std::vector<double>> injected, round_trip, down, up;
+  for (const auto* step : contents.steps()) {
+    for (const auto& sample : step->links()) {
+      injected[sample.node_id()].push_back(sample.injected_lag());
+      round_trip[sample.node_id()].push_back(sample.round_trip());
+      down[sample.node_id()].push_back(sample.one_way_down());
+      up[sample.node_id()].push_back(sample.one_way_up());
+    }
+  }
+  std::vector<LinkMeasurement> links;
+  for (const auto& placement : plan.placements) {
+    if (placement.node_id == 0) continue;
+    LinkMeasurement link;
+    link.node_id = placement.node_id;
+    link.kind = placement.kind;
+    link.site = placement.site;
+    for (const auto& node : plan.study.deployment().nodes()) {
+      if (node.id() != placement.node_id) continue;
+      link.configured_to_node = node.receive_lag().one_way_delay();
+      link.configured_from_node = node.send_lag().one_way_delay();
+    }
+    link.injected = runtime::summarize(injected[link.node_id]);
+    link.round_trip = runtime::summarize(round_trip[link.node_id]);
+    link.one_way_down = runtime::summarize(down[link.node_id]);
+    link.one_way_up = runtime::summarize(up[link.node_id]);
+    links.push_back(link);
+  }
+  return links;
+}
+
+}  // namespace rths::deploy

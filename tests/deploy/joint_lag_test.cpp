@@ -1,0 +1,86 @@
+// The joint network x actuator lag study on the paper's frame (in process; no namespaces needed).
+#include "deploy/joint_lag.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace rths::deploy {
+namespace {
+
+const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
+const std::filesystem::path kOut =
+    std::filesystem::path(RTHS_BINARY_DIR) / "test_out" / "deploy" / "joint_lag";
+constexpr double kMs = 1e-3;
+
+JointLagStudy small_grid(JointLagStudy::ActuatorModel model) {
+  JointLagStudy config;
+  config.set_study("paper_frame.textproto");
+  for (double r : {0.0, 0.004, 0.010}) config.add_network_round_trips(r);
+  for (double a : {0.0, 0.006}) config.add_actuator_lags(a);
+  config.set_actuator_model(model);
+  return config;
+}
+
+const JointLagPoint& at(const JointLagResult& result, double network, double actuator) {
+  for (const auto& p : result.grid) {
+    if (std::abs(p.network_round_trip - network) < 1e-12 && std::abs(p.actuator_lag - actuator) < 1e-12) {
+      return p;
+    }
+  }
+  throw std::runtime_error("no grid point");
+}
+
+TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
+  JointLagOptions options;
+  options.output_directory = kOut / "shift";
+  options.measure = false;
+  const auto result = run_joint_lag(small_grid(JointLagStudy::SHIFT), kConfigs, options);
+  ASSERT_EQ(result.grid.size(), 6u);
+  for (const auto& p : result.grid) {
+    ASSERT_FALSE(p.diverged);
+    EXPECT_NEAR(p.measured_total_lag, p.network_round_trip + p.actuator_lag, 0.5 * kMs)
+        << "R " << p.network_round_trip << " A " << p.actuator_lag;
+  }
+  EXPECT_DOUBLE_EQ(at(result, 0, 0).nrmse, 0.0);
+  // The error grows with the total lag, and only the total matters for two pure shifts.
+  EXPECT_GT(at(result, 0.004, 0).nrmse, 0.0);
+  EXPECT_GT(at(result, 0.010, 0).nrmse, at(result, 0.004, 0).nrmse);
+  EXPECT_GT(at(result, 0.010, 0.006).nrmse, at(result, 0.010, 0).nrmse);
+  EXPECT_GT(at(result, 0.004, 0.006).nrmse, at(result, 0, 0.006).nrmse);
+  EXPECT_EQ(result.measured_skipped, "the config asks for no across-sites runs");
+
+  write_joint_lag_outputs(result, true);
+  for (const char* file : {"grid.csv", "summary.json", "error_surface.png", "total_lag.png"}) {
+    EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
+  }
+}
+
+TEST(JointLag, FirstOrderActuatorLagsByAboutItsTimeConstant) {
+  JointLagOptions options;
+  options.output_directory = kOut / "first_order";
+  options.measure = false;
+  const auto result = run_joint_lag(small_grid(JointLagStudy::FIRST_ORDER), kConfigs, options);
+  const auto& p = at(result, 0.004, 0.006);
+  // At the frame's 2 Hz the phase lag of a 6 ms first-order lag is atan(w T)/w ~ 6 ms.
+  EXPECT_NEAR(p.measured_total_lag, 0.010, 1 * kMs);
+}
+
+TEST(JointLag, ConfigErrorsNameTheField) {
+  const auto path = std::filesystem::temp_directory_path() / "rths_joint_lag_bad.textproto";
+  {
+    std::ofstream out(path);
+    out << "study: \"paper_frame.textproto\"\nnetwork_round_trips: [0, -0.01]\nactuator_lags: 0\n";
+  }
+  try {
+    load_joint_lag(path);
+    FAIL() << "negative lag accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("network_round_trips"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(load_joint_lag(kConfigs / "joint_lag_study.textproto"));
+}
+
+}  // namespace
+}  // namespace rths::deploy
