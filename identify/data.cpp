@@ -349,8 +349,8 @@ Split holdout_split(std::size_t samples, double holdout_fraction, HoldoutMode mo
     // the last block is always among them.
     for (std::size_t b = 0; b < blocks; ++b) {
       const double f = holdout_fraction;
-      const bool is_held = std::floor(static_cast<double>(blocks - b) * f) >
-                           std::floor(static_cast<double>(blocks - b - 1) * f);
+      const bool is_held = std::floor(static_cast<double>(b + 1) * f + 1e-9) >
+                           std::floor(static_cast<double>(b) * f + 1e-9);
       const std::size_t lo = samples * b / blocks, hi = samples * (b + 1) / blocks;
       for (std::size_t i = lo; i < hi; ++i) held[i] = is_held;
     }

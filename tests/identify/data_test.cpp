@@ -1,0 +1,158 @@
+#include "identify/data.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace rths::identify {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+const fs::path kRealFile = fs::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
+
+class DataTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("rths_identify_data_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+  static std::string csv_rows(int n, double dt = 0.01) {
+    std::string s;
+    for (int i = 0; i < n; ++i) {
+      s += std::to_string(i * dt) + "," + std::to_string(std::sin(i * 0.1)) + "," +
+           std::to_string(std::sin(i * 0.1 - 0.05)) + "," + std::to_string(100 * std::sin(i * 0.1)) + "\n";
+    }
+    return s;
+  }
+  template <typename F>
+  static std::string error_of(F&& f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "no error";
+  }
+  fs::path dir_;
+};
+
+TEST_F(DataTest, CsvConvertsUnitsToSi) {
+  const auto p = write("ok.csv", "time,command,measured,force\n" + csv_rows(300));
+  const MeasuredData d = read_csv(p);
+  ASSERT_EQ(d.size(), 300u);
+  EXPECT_NEAR(d.dt, 0.01, 1e-9);
+  EXPECT_NEAR(d.command[10], 1e-3 * std::sin(1.0), 1e-9);  // mm -> m
+  EXPECT_NEAR(d.force[10], 100 * std::sin(1.0), 1e-4);
+  CsvUnits metres{1.0, 1.0, 1000.0};
+  EXPECT_NEAR(read_csv(p, metres).force[10], 1e5 * std::sin(1.0), 0.1);
+}
+
+TEST_F(DataTest, CsvColumnsInAnyOrderAndRoundTrip) {
+  const auto p = write("ok.csv", "force,measured,time,command\n1,2,0,3\n4,5,0.5,6\n7,8,1.0,9\n");
+  const MeasuredData d = read_csv(p, {}, 3);
+  EXPECT_DOUBLE_EQ(d.command[1], 6e-3);
+  EXPECT_DOUBLE_EQ(d.force[0], 1.0);
+  write_csv(d, dir_ / "back.csv");
+  const MeasuredData back = read_csv(dir_ / "back.csv", {}, 3);
+  EXPECT_NEAR(back.measured[1], 5e-3, 1e-12);
+}
+
+TEST_F(DataTest, MissingColumnIsNamed) {
+  const auto p = write("bad.csv", "time,command,measured\n" + csv_rows(300));
+  EXPECT_THAT(error_of([&] { read_csv(p); }), HasSubstr("missing column 'force'"));
+}
+
+TEST_F(DataTest, NanIsNamedWithLineAndColumn) {
+  auto rows = csv_rows(300);
+  const auto p = write("nan.csv", "time,command,measured,force\n" + rows.substr(0, rows.find('\n') + 1) +
+                                      "0.01,nan,1,1\n" + rows.substr(rows.find('\n') + 1));
+  const auto message = error_of([&] { read_csv(p); });
+  EXPECT_THAT(message, HasSubstr("nan.csv:3"));
+  EXPECT_THAT(message, HasSubstr("command"));
+}
+
+TEST_F(DataTest, NonMonotonicTimeIsRejected) {
+  const auto p = write("time.csv", "time,command,measured,force\n0,0,0,0\n0.2,0,0,0\n0.1,0,0,0\n");
+  EXPECT_THAT(error_of([&] { read_csv(p, {}, 2); }), HasSubstr("time does not increase at sample 3"));
+}
+
+TEST_F(DataTest, TooShortForTheModel) {
+  const auto p = write("short.csv", "time,command,measured,force\n" + csv_rows(20));
+  EXPECT_THAT(error_of([&] { read_csv(p); }), HasSubstr("only 20 samples"));
+}
+
+TEST_F(DataTest, RaggedRowIsNamed) {
+  const auto p = write("ragged.csv", "time,command,measured,force\n0,1,2,3\n0.1,1,2\n");
+  EXPECT_THAT(error_of([&] { read_csv(p, {}, 1); }), HasSubstr("ragged.csv:3"));
+}
+
+TEST_F(DataTest, RealDaqExportLoadsWithItsScales) {
+  const MeasuredData d = read_measured(kRealFile);
+  ASSERT_EQ(d.size(), 61500u);
+  EXPECT_NEAR(d.dt, 0.001, 1e-12);
+  // First data line: CHANNEL0 -0.0209, CHANNEL1 -0.0166, CHANNEL2 -0.0169.
+  EXPECT_NEAR(d.command[0], -0.0169 * 10 * 1e-3, 1e-12);
+  EXPECT_NEAR(d.measured[0], -0.0209 * 10 * 1e-3, 1e-12);
+  EXPECT_NEAR(d.force[0], -0.0166 * 9806.65, 1e-9);
+}
+
+TEST_F(DataTest, ColumnMapNamingAMissingChannel) {
+  const auto map = parse_column_map("command=CHANNEL7*10");
+  const auto message = error_of([&] { read_daq(kRealFile, map); });
+  EXPECT_THAT(message, HasSubstr("missing column 'CHANNEL7'"));
+  EXPECT_THAT(message, HasSubstr("mts_mrdamper_chirp_0A.txt:7"));
+}
+
+TEST_F(DataTest, ColumnMapSyntaxErrors) {
+  EXPECT_THAT(error_of([] { parse_column_map("command"); }), HasSubstr("expected signal=COLUMN"));
+  EXPECT_THAT(error_of([] { parse_column_map("speed=CHANNEL1*2"); }), HasSubstr("unknown signal 'speed'"));
+  EXPECT_THAT(error_of([] { parse_column_map("force=CHANNEL1*x"); }), HasSubstr("scale 'x'"));
+  EXPECT_EQ(parse_column_map("force=CHANNEL3*2.5").force.column, "CHANNEL3");
+}
+
+TEST_F(DataTest, DaqWithoutSamplingIntervalIsRejected) {
+  const auto p = write("daq.txt", "Header Size:  3\nVersion: 2\nSample Number, CHANNEL0, CHANNEL1, CHANNEL2\n1, 0, 0, 0\n");
+  EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Sampling Interval"));
+}
+
+TEST_F(DataTest, HoldoutSplits) {
+  const Split last = holdout_split(1000, 0.3, HoldoutMode::kLast);
+  EXPECT_EQ(last.train.size(), 700u);
+  EXPECT_EQ(last.heldout.front(), 700u);
+  const Split blocks = holdout_split(1000, 0.3, HoldoutMode::kBlocks, 10);
+  EXPECT_EQ(blocks.heldout.size(), 300u);
+  EXPECT_EQ(blocks.heldout.back(), 999u);  // the last block is held out
+  EXPECT_LT(blocks.heldout.front(), 500u);  // and the others spread over the record
+  EXPECT_THROW(holdout_split(1000, 1.5), std::invalid_argument);
+  EXPECT_THROW(holdout_split(60, 0.3), std::invalid_argument);
+}
+
+TEST_F(DataTest, DecimationAveragesThenPicks) {
+  const auto p = write("ok.csv", "time,command,measured,force\n" + csv_rows(300));
+  const MeasuredData d = decimated(read_csv(p), 3);
+  EXPECT_EQ(d.size(), 100u);
+  EXPECT_NEAR(d.dt, 0.03, 1e-9);
+}
+
+TEST_F(DataTest, UnitNames) {
+  EXPECT_DOUBLE_EQ(length_unit_to_m("in"), 0.0254);
+  EXPECT_DOUBLE_EQ(force_unit_to_n("kN"), 1000.0);
+  EXPECT_THROW(time_unit_to_s("h"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rths::identify

@@ -1,0 +1,74 @@
+#include "identify/evidence.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace rths::identify {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+TEST(EvidenceTest, SpectrumFindsASineAndItsAmplitude) {
+  const double dt = 0.002;
+  std::vector<double> x(5000);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 3.0 * std::sin(2 * kPi * 7.0 * i * dt) + 1.0;
+  const Spectrum s = amplitude_spectrum(x, dt);
+  std::size_t peak = 1;
+  for (std::size_t k = 1; k < s.amplitude.size(); ++k) {
+    if (s.amplitude[k] > s.amplitude[peak]) peak = k;
+  }
+  EXPECT_NEAR(s.frequency[peak], 7.0, 0.1);
+  EXPECT_NEAR(s.amplitude[peak], 3.0, 0.3);
+  EXPECT_LT(s.amplitude[0], 1e-6);  // mean removed
+}
+
+TEST(EvidenceTest, CrossCorrelationFindsASubSampleLag) {
+  const double dt = 0.001;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  std::vector<double> a(4000), b(4000);
+  double state = 0.0;
+  for (auto& v : a) v = state = 0.95 * state + normal(rng);  // smooth random signal
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    const double pos = static_cast<double>(i) - 12.4;
+    const auto j = static_cast<std::size_t>(std::max(0.0, std::floor(pos)));
+    const double f = pos - std::floor(pos);
+    b[i] = pos < 0 ? a[0] : a[j] + f * (a[std::min(j + 1, a.size() - 1)] - a[j]);
+  }
+  const CrossCorrelation c = cross_correlation(a, b, dt, 0.05);
+  EXPECT_NEAR(c.lag, 0.0124, 0.0005);
+  EXPECT_GT(c.peak, 0.95);
+  const CrossCorrelation reverse = cross_correlation(b, a, dt, 0.05);
+  EXPECT_NEAR(reverse.lag, -0.0124, 0.0005);
+}
+
+TEST(EvidenceTest, ResidualProportionalToVelocityShowsInTheEvidence) {
+  ChannelSignals s;
+  s.dt = 0.001;
+  for (std::size_t i = 0; i < 4000; ++i) {
+    const double t = i * s.dt;
+    s.time.push_back(t);
+    s.input.push_back(std::sin(2 * kPi * 2 * t));
+    s.velocity.push_back(2 * kPi * 2 * std::cos(2 * kPi * 2 * t));
+    s.acceleration.push_back(-std::pow(2 * kPi * 2, 2) * std::sin(2 * kPi * 2 * t));
+    s.target.push_back(5.0 * s.input.back() + 0.3 * s.velocity.back());
+  }
+  std::vector<double> prediction(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) prediction[i] = 5.0 * s.input[i];
+  const Evidence e = residual_evidence(s, prediction);
+  EXPECT_GT(e.corr_velocity, 0.99);
+  EXPECT_LT(std::abs(e.corr_input), 0.05);
+  EXPECT_NEAR(e.dominant_frequency, 2.0, 0.3);
+  EXPECT_THROW(residual_evidence(s, std::vector<double>(3)), std::invalid_argument);
+}
+
+TEST(EvidenceTest, CorrelationOfConstantIsZero) {
+  const std::vector<double> a{1, 2, 3}, c{4, 4, 4};
+  EXPECT_DOUBLE_EQ(correlation(a, c), 0.0);
+  EXPECT_NEAR(correlation(a, a), 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace rths::identify

@@ -1,0 +1,135 @@
+#include "identify/model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/delay.h"
+
+namespace rths::identify {
+namespace {
+
+constexpr double kDt = 0.001;
+constexpr double kPi = 3.14159265358979323846;
+
+ChannelSignals sine_signals(Channel channel, double frequency = 2.0, std::size_t n = 3000) {
+  MeasuredData d;
+  d.dt = kDt;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) * kDt;
+    d.time.push_back(t);
+    d.command.push_back(0.002 * std::sin(2 * kPi * frequency * t));
+    d.measured.push_back(0.002 * std::sin(2 * kPi * frequency * t));
+    d.force.push_back(0.0);
+  }
+  return make_signals(d, channel);
+}
+
+TEST(ModelTest, EffectNamesRoundTripAndApply) {
+  for (Channel ch : {Channel::kMeasured, Channel::kForce}) {
+    for (Effect e : effect_library(ch)) {
+      EXPECT_EQ(parse_effect(effect_name(e)), e);
+      EXPECT_TRUE(effect_applies(e, ch));
+    }
+  }
+  EXPECT_FALSE(effect_applies(Effect::kCoulomb, Channel::kMeasured));
+  EXPECT_FALSE(effect_applies(Effect::kFirstOrder, Channel::kForce));
+  EXPECT_THROW(parse_effect("magic"), std::invalid_argument);
+  EXPECT_EQ(effect_library(Channel::kMeasured).size() + effect_library(Channel::kForce).size(), 16u);
+}
+
+TEST(ModelTest, FractionalDelayShiftsTheCommand) {
+  const auto s = sine_signals(Channel::kMeasured);
+  ChannelModel m = declared_model(Channel::kMeasured, {Effect::kDelay}, signal_scales(s));
+  m.params = {1.0, 0.0125};
+  const auto y = predict(m, s);
+  for (std::size_t i = 100; i < s.size(); i += 97) {
+    EXPECT_NEAR(y[i], 0.002 * std::sin(2 * kPi * 2.0 * (s.time[i] - 0.0125)), 1e-6);
+  }
+}
+
+TEST(ModelTest, FirstOrderMatchesTheCoreBlock) {
+  const auto s = sine_signals(Channel::kMeasured, 5.0);
+  const auto sc = signal_scales(s);
+  ChannelModel m = with_effect(declared_model(Channel::kMeasured, {}, sc), Effect::kFirstOrder,
+                               std::vector<double>{0.02});
+  const auto y = predict(m, s);
+  core::FirstOrderActuator block(0.02, kDt);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const double expected = block.step({s.time[i], s.input[i], 0.0});
+    if (i > 200) EXPECT_NEAR(y[i], expected, 1e-9) << i;  // both start at rest near zero input
+  }
+}
+
+TEST(ModelTest, SecondOrderMatchesTheCoreTransferFunction) {
+  const auto s = sine_signals(Channel::kMeasured, 8.0);
+  const auto sc = signal_scales(s);
+  const double wn = 2 * kPi * 15.0, zeta = 0.5;
+  ChannelModel m = with_effect(declared_model(Channel::kMeasured, {}, sc), Effect::kSecondOrder,
+                               std::vector<double>{wn, zeta});
+  const auto y = predict(m, s);
+  core::TransferFunctionStage block({wn * wn}, {1.0, 2 * zeta * wn, wn * wn}, kDt);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    EXPECT_NEAR(y[i], block.step({s.time[i], s.input[i], 0.0}), 1e-9) << i;
+  }
+}
+
+TEST(ModelTest, BacklashHoldsWithinItsWidth) {
+  const auto s = sine_signals(Channel::kMeasured);
+  ChannelModel m = with_effect(declared_model(Channel::kMeasured, {}, signal_scales(s)),
+                               Effect::kBacklash, std::vector<double>{0.001});
+  const auto y = predict(m, s);
+  double peak = 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    EXPECT_LE(std::abs(y[i] - s.input[i]), 0.0005 + 1e-12);
+    peak = std::max(peak, y[i]);
+  }
+  EXPECT_NEAR(peak, 0.002 - 0.0005, 1e-6);
+}
+
+TEST(ModelTest, ForceModelSumsItsTerms) {
+  auto s = sine_signals(Channel::kForce);
+  const auto sc = signal_scales(s);
+  ChannelModel m = declared_model(Channel::kForce, {Effect::kStiffness}, sc);
+  m = with_effect(m, Effect::kDamping, std::vector<double>{100.0});
+  m = with_effect(m, Effect::kOffsetDrift, std::vector<double>{5.0, 0.0});
+  m.params[0] = 1e5;
+  const auto f = predict(m, s);
+  for (std::size_t i = 10; i < s.size(); i += 101) {
+    EXPECT_NEAR(f[i], 1e5 * s.input[i] + 100.0 * s.velocity[i] + 5.0, 1e-9);
+  }
+  EXPECT_EQ(m.param(Effect::kDamping, "damping", sc).value(), 100.0);
+  EXPECT_FALSE(m.param(Effect::kCoulomb, "friction_force", sc).has_value());
+}
+
+TEST(ModelTest, BoucWenIsBoundedAndHysteretic) {
+  auto s = sine_signals(Channel::kForce);
+  ChannelModel m = declared_model(Channel::kForce, {}, signal_scales(s));
+  m = with_effect(m, Effect::kBoucWen, std::vector<double>{10.0, 0.0002});
+  const auto f = predict(m, s);
+  for (double v : f) EXPECT_LE(std::abs(v), 10.0 + 1e-12);
+  // Hysteresis: at zero displacement the force is non-zero and its sign follows the velocity.
+  for (std::size_t i = 600; i + 1 < s.size(); ++i) {
+    if (s.input[i] <= 0.0 && s.input[i + 1] > 0.0) EXPECT_GT(f[i], 5.0);
+    if (s.input[i] >= 0.0 && s.input[i + 1] < 0.0) EXPECT_LT(f[i], -5.0);
+  }
+}
+
+TEST(ModelTest, NormalisedError) {
+  const std::vector<double> target{1, -1, 1, -1}, perfect = target, zero(4, 0.0);
+  const std::vector<std::size_t> all{0, 1, 2, 3};
+  EXPECT_DOUBLE_EQ(normalised_error(target, perfect, all), 0.0);
+  EXPECT_DOUBLE_EQ(normalised_error(target, zero, all), 1.0);
+  EXPECT_THROW(normalised_error(target, zero, std::vector<std::size_t>{}), std::invalid_argument);
+}
+
+TEST(ModelTest, AddingAnEffectTwiceIsAnError) {
+  auto s = sine_signals(Channel::kMeasured);
+  ChannelModel m = declared_model(Channel::kMeasured, {Effect::kDelay}, signal_scales(s));
+  EXPECT_THROW(with_effect(m, Effect::kDelay, std::vector<double>{0.0}), std::invalid_argument);
+  EXPECT_THROW(effect_params(Effect::kInertia, Channel::kMeasured, signal_scales(s)),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rths::identify

@@ -1,0 +1,113 @@
+#include "identify/selection.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+
+#include "identify/generator.h"
+
+namespace rths::identify {
+namespace {
+
+struct UndeclaredCase {
+  std::string name;
+  Channel channel;
+  Effect expected;
+  std::function<void(GeneratorSpec&)> add_effect;
+  GeneratorSpec::Command command = GeneratorSpec::Command::kChirp;
+};
+
+ChannelIdentification run(const GeneratorSpec& spec, Channel channel) {
+  const MeasuredData data = generate_measured(spec);
+  const ChannelSignals s = make_signals(data, channel);
+  const Split split = holdout_split(s.size(), 0.3, HoldoutMode::kBlocks);
+  return identify_channel(s, split, default_declared(channel), SelectionOptions{});
+}
+
+class UndeclaredEffectTest : public ::testing::TestWithParam<UndeclaredCase> {};
+
+TEST_P(UndeclaredEffectTest, NamesTheEffectFirstAndClosesMostOfTheGap) {
+  const UndeclaredCase& c = GetParam();
+  GeneratorSpec clean;
+  clean.command = c.command;
+  GeneratorSpec with_effect = clean;
+  c.add_effect(with_effect);
+  // The floor: what the declared model leaves on the same data without the effect (noise).
+  const double floor = run(clean, c.channel).declared_fit.heldout_error;
+  const ChannelIdentification id = run(with_effect, c.channel);
+  ASSERT_FALSE(id.steps.empty()) << c.name;
+  EXPECT_EQ(id.steps.front().effect, c.expected)
+      << c.name << ": first step was " << effect_name(id.steps.front().effect);
+  const double before = id.declared_fit.heldout_error;
+  const double after = id.final_fit.heldout_error;
+  EXPECT_GT(before, 2.0 * floor) << c.name << ": the effect must be visible";
+  EXPECT_GT((before - after) / (before - floor), 0.8)
+      << c.name << ": held-out " << before << " -> " << after << ", floor " << floor;
+  for (const auto& step : id.steps) {
+    EXPECT_LT(step.after.heldout_error, step.before.heldout_error) << "a step that does not pay";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    GeneratedSets, UndeclaredEffectTest,
+    ::testing::Values(
+        UndeclaredCase{"first_order", Channel::kMeasured, Effect::kFirstOrder,
+                       [](GeneratorSpec& s) { s.first_order_time_constant = 0.015; }},
+        UndeclaredCase{"offset", Channel::kMeasured, Effect::kOffsetDrift,
+                       [](GeneratorSpec& s) { s.offset = 3e-4; },
+                       GeneratorSpec::Command::kEarthquake},
+        UndeclaredCase{"backlash", Channel::kMeasured, Effect::kBacklash,
+                       [](GeneratorSpec& s) { s.backlash_width = 3e-4; }},
+        UndeclaredCase{"coulomb", Channel::kForce, Effect::kCoulomb,
+                       [](GeneratorSpec& s) { s.coulomb_force = 60.0; },
+                       GeneratorSpec::Command::kEarthquake},
+        UndeclaredCase{"cubic", Channel::kForce, Effect::kCubicStiffness,
+                       [](GeneratorSpec& s) { s.cubic_stiffness = 1.5e10; }},
+        UndeclaredCase{"damping", Channel::kForce, Effect::kDamping,
+                       [](GeneratorSpec& s) { s.damping = 3000.0; },
+                       GeneratorSpec::Command::kEarthquake}),
+    [](const ::testing::TestParamInfo<UndeclaredCase>& info) { return info.param.name; });
+
+class CleanDataTest : public ::testing::TestWithParam<GeneratorSpec::Command> {};
+
+TEST_P(CleanDataTest, NothingIsAdded) {
+  GeneratorSpec spec;
+  spec.command = GetParam();
+  spec.seed = 11;
+  for (Channel channel : {Channel::kMeasured, Channel::kForce}) {
+    const ChannelIdentification id = run(spec, channel);
+    EXPECT_TRUE(id.steps.empty()) << channel_name(channel) << ": added "
+                                  << effect_name(id.steps.front().effect);
+    EXPECT_FALSE(id.last_ranking.empty());
+    for (const auto& trial : id.last_ranking) EXPECT_FALSE(trial.pays);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Commands, CleanDataTest,
+                         ::testing::Values(GeneratorSpec::Command::kChirp,
+                                           GeneratorSpec::Command::kEarthquake));
+
+TEST(SelectionTest, RestrictedCandidatesAndMaxSteps) {
+  GeneratorSpec spec;
+  spec.first_order_time_constant = 0.015;
+  spec.offset = 2e-4;
+  const MeasuredData data = generate_measured(spec);
+  const ChannelSignals s = make_signals(data, Channel::kMeasured);
+  const Split split = holdout_split(s.size(), 0.3, HoldoutMode::kBlocks);
+  SelectionOptions options;
+  options.candidates = {Effect::kBacklash, Effect::kOffsetDrift};
+  options.max_steps = 1;
+  const auto id = identify_channel(s, split, default_declared(Channel::kMeasured), options);
+  ASSERT_EQ(id.steps.size(), 1u);
+  EXPECT_EQ(id.steps[0].ranking.size(), 2u);
+  EXPECT_EQ(id.steps[0].effect, Effect::kOffsetDrift);
+}
+
+TEST(SelectionTest, DefaultDeclaredModels) {
+  EXPECT_EQ(default_declared(Channel::kMeasured), std::vector<Effect>{Effect::kDelay});
+  EXPECT_EQ(default_declared(Channel::kForce), std::vector<Effect>{Effect::kStiffness});
+}
+
+}  // namespace
+}  // namespace rths::identify
