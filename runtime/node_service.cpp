@@ -4,8 +4,9 @@
 #include <unistd.h>
 
 #include <climits>
-#include <limits>
+#include <algorithm>
 
+#include "runtime/plan.h"
 #include "runtime/schema.h"
 
 namespace rths::runtime {
@@ -53,6 +54,11 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
     }
     run_id_ = message.run_id;
     assignment_ = assign;
+    const auto& deployment = assign.study().deployment();
+    if (deployment.clock() == config::Deployment::REAL_TIME && assign.dt() > 0) {
+      const double window = liveliness_timeout(deployment) / assign.dt();
+      max_step_gap_ = static_cast<std::int64_t>(window) + 1;
+    }
     assigned_ = true;
     try {
       if (assign.schema_version() != kSchemaVersion)
@@ -87,8 +93,7 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
       return on_assign(message);
     case COMMAND: {
       if (held_ || stopped_ || !configure_error_.empty()) return {};
-      const Verdict order =
-          check_step(message.step, last_step_, std::numeric_limits<std::int64_t>::max());
+      const Verdict order = check_step(message.step, last_step_, last_step_ + max_step_gap_);
       if (order != Verdict::kAccept) {
         rejected_.count(order);
         return {};

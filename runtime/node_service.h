@@ -2,7 +2,8 @@
 // What every node does with messages, independent of transport and of its kind:
 //   before assignment   announce itself; accept the first ASSIGN (of the expected run, if given),
 //                       build its part (configure) and answer READY (or READY with an error).
-//   after assignment    COMMAND of a newer step -> compute -> FEEDBACK echoing the command's stamp;
+//   after assignment    COMMAND of the next step (lockstep: exactly last + 1; real time: newer,
+//                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing the command's stamp;
 //                       HOLD -> freeze (further commands ignored); STOP -> stopped();
 //                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
 // Subclasses (substructure node, actuator emulator) supply configure() and compute().
@@ -54,7 +55,8 @@ class NodeService : public transport::NodeHandler {
   std::string configure_error_;
   int hosted_ = 0;
   Assign assignment_;
-  std::int64_t last_step_ = -1;
+  std::int64_t last_step_ = 0;  // commands start at step 1
+  std::int64_t max_step_gap_ = 1;
   double injected_lag_ = 0.0;
   RejectCounters rejected_;
   Command command_;

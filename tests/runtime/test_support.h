@@ -3,6 +3,8 @@
 
 #include <filesystem>
 #include <string>
+#include <unistd.h>
+#include <sstream>
 
 #include "core/study.h"
 
@@ -44,6 +46,99 @@ inline std::string paper_frame_study(double duration, const std::string& deploym
 
 inline core::PreparedStudy prepare(const std::string& text) {
   return core::prepare_study(core::parse_study(text, "test"), std::filesystem::temp_directory_path());
+}
+
+}  // namespace rths::test
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/simulation.h"
+#include "runtime/launch.h"
+#include "runtime/plan.h"
+#include "runtime/process.h"
+#include "runtime/record.h"
+
+namespace rths::test {
+
+// A fresh directory for one test's files.
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_runtime_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& text) {
+  const auto path = dir / "study.textproto";
+  std::ofstream(path) << text;
+  return path;
+}
+
+inline std::filesystem::path program(const std::string& name, const std::string& subdir) {
+  return std::filesystem::path(RTHS_BINARY_DIR) / subdir / name;
+}
+
+inline std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The in-process reference of one case.
+inline core::SimulationResult reference_result(const std::string& text, const std::string& case_name) {
+  const core::PreparedStudy prepared = prepare(text);
+  return core::simulate(core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name)),
+                        prepared.motion);
+}
+
+// Every recorded step equals the reference row exactly (the doubles went over the wire as bits).
+inline void expect_record_equals(const runtime::RecordContents& record,
+                                 const core::SimulationResult& reference) {
+  const auto steps = record.steps();
+  ASSERT_EQ(steps.size(), reference.steps());
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    const runtime::StepRecord& s = *steps[k];
+    const auto row = static_cast<Eigen::Index>(k);
+    ASSERT_EQ(s.step(), static_cast<std::int64_t>(k));
+    for (int i = 0; i < reference.displacement.cols(); ++i) {
+      ASSERT_EQ(s.displacement(i), reference.displacement(row, i)) << "step " << k;
+      ASSERT_EQ(s.velocity(i), reference.velocity(row, i)) << "step " << k;
+      ASSERT_EQ(s.acceleration(i), reference.acceleration(row, i)) << "step " << k;
+    }
+    for (int a = 0; a < reference.command.cols(); ++a) {
+      ASSERT_EQ(s.command(a), reference.command(row, a)) << "step " << k;
+      ASSERT_EQ(s.realised(a), reference.realised(row, a)) << "step " << k;
+      ASSERT_EQ(s.measured_force(a), reference.measured_force(row, a)) << "step " << k;
+    }
+  }
+}
+
+struct LaunchedRun {
+  runtime::LaunchResult launch;
+  runtime::RecordContents record;
+  std::filesystem::path dir;
+};
+
+inline LaunchedRun launch(const std::string& name, const std::string& text,
+                          const std::string& case_name, int domain, double timeout = 60) {
+  LaunchedRun run;
+  run.dir = scratch_dir(name);
+  runtime::LaunchOptions options;
+  options.config = write_config(run.dir, text);
+  options.case_name = case_name;
+  options.run_id = name;
+  options.domain = domain;
+  options.programs_dir = RTHS_BINARY_DIR;
+  options.record = run.dir / "run.rthsrec";
+  options.log_dir = run.dir;
+  options.timeout = timeout;
+  run.launch = runtime::launch_run(options);
+  run.record = runtime::read_record(options.record);
+  return run;
 }
 
 }  // namespace rths::test

@@ -1,0 +1,109 @@
+// Distributed runs over Cyclone DDS on loopback: real processes (coordinator, substructure node,
+// actuator emulator), each test in its own DDS domain (ids 11-19).
+#include <gtest/gtest.h>
+
+#include <future>
+
+#include "runtime/lag.h"
+#include "test_support.h"
+
+namespace rths {
+namespace {
+
+class DdsRun : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { runtime::ensure_dds_config(); }
+};
+
+TEST_F(DdsRun, LockstepEqualsTheInProcessRunBitForBit) {
+  const std::string text = test::paper_frame_study(3, "");
+  const auto run = test::launch("lockstep_equal", text, "lag_shift_14ms", 11);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  ASSERT_FALSE(run.record.truncated);
+  ASSERT_NE(run.record.footer(), nullptr);
+  EXPECT_TRUE(run.record.footer()->ok());
+  test::expect_record_equals(run.record, test::reference_result(text, "lag_shift_14ms"));
+  for (int code : run.launch.node_exits) EXPECT_EQ(code, 0);
+}
+
+TEST_F(DdsRun, SplitStoreysAcrossTwoSubstructureNodesEqualInProcess) {
+  const std::string text = test::two_storey_study(
+      2, "cases { name: \"lag\" delay { first_order { time_constant: 0.005 } } }",
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE storeys: [1] } "
+      "nodes { id: 3 kind: SUBSTRUCTURE storeys: [2] } nodes { id: 2 kind: ACTUATOR_EMULATOR } }",
+      "substructuring { experimental_fraction: 0.5 model { bilinear { yield_displacement: 0.004 "
+      "post_yield_ratio: 0.1 } } }");
+  const auto run = test::launch("split", text, "lag", 12);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  test::expect_record_equals(run.record, test::reference_result(text, "lag"));
+  EXPECT_EQ(run.launch.node_exits.size(), 3u);
+}
+
+TEST_F(DdsRun, InjectedWallClockLagIsMeasuredAndLeavesTheLockstepResultUnchanged) {
+  constexpr double kOneWay = 0.001;
+  const std::string text = test::paper_frame_study(
+      0.4,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+      "receive_lag { one_way_delay: 0.001 } send_lag { one_way_delay: 0.001 jitter: 0.0002 seed: "
+      "3 } } }");
+  const auto run = test::launch("injected_lag", text, "lag_shift_14ms", 13);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  test::expect_record_equals(run.record, test::reference_result(text, "lag_shift_14ms"));
+  std::vector<double> injected, round_trip, fast_round_trip;
+  for (const runtime::StepRecord* s : run.record.steps()) {
+    for (const runtime::LinkSample& link : s->links()) {
+      EXPECT_EQ(link.answered_step(), s->step());
+      if (link.node_id() == 2) {
+        injected.push_back(link.injected_lag());
+        round_trip.push_back(link.round_trip());
+        // The round trip contains the injected lag plus the real one.
+        EXPECT_GE(link.round_trip(), link.injected_lag());
+      } else {
+        fast_round_trip.push_back(link.round_trip());
+      }
+    }
+  }
+  ASSERT_EQ(injected.size(), run.record.steps().size() - 1);
+  const auto inj = runtime::summarize(injected);
+  EXPECT_NEAR(inj.mean, 2 * kOneWay, 0.0002);
+  EXPECT_GT(runtime::summarize(round_trip).median, 2 * kOneWay);
+  EXPECT_LT(runtime::summarize(fast_round_trip).median, 2 * kOneWay);
+}
+
+TEST_F(DdsRun, TwoRunsSideBySideAreIsolated) {
+  const std::string text = test::paper_frame_study(2, "");
+  auto first = std::async(std::launch::async, [&] {
+    return test::launch("side_a", text, "reference", 14);
+  });
+  auto second = std::async(std::launch::async, [&] {
+    return test::launch("side_b", text, "lag_shift_14ms", 15);
+  });
+  const auto a = first.get();
+  const auto b = second.get();
+  ASSERT_EQ(a.launch.coordinator_exit, 0) << test::read_file(a.launch.coordinator_log);
+  ASSERT_EQ(b.launch.coordinator_exit, 0) << test::read_file(b.launch.coordinator_log);
+  test::expect_record_equals(a.record, test::reference_result(text, "reference"));
+  test::expect_record_equals(b.record, test::reference_result(text, "lag_shift_14ms"));
+  EXPECT_EQ(a.record.footer()->counters().foreign_run(), 0u);
+  EXPECT_EQ(b.record.footer()->counters().foreign_run(), 0u);
+}
+
+TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
+  const std::string text = test::paper_frame_study(1.0, "deployment { clock: REAL_TIME }");
+  const auto run = test::launch("real_time", text, "reference", 16);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto* footer = run.record.footer();
+  ASSERT_NE(footer, nullptr);
+  EXPECT_GE(footer->wall_seconds(), 0.99);  // 1000 steps of 1 ms cannot finish sooner
+  std::uint64_t overruns = 0;
+  for (const runtime::StepRecord* s : run.record.steps()) {
+    overruns += s->overrun() ? 1 : 0;
+    EXPECT_GE(s->lateness(), 0.0);
+    for (const runtime::LinkSample& link : s->links()) EXPECT_LE(link.answered_step(), s->step());
+  }
+  EXPECT_EQ(overruns, footer->counters().overruns());
+  EXPECT_EQ(run.record.header()->clock(), "real_time");
+}
+
+}  // namespace
+}  // namespace rths
