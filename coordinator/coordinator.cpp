@@ -117,6 +117,7 @@ struct Coordinator::State : core::RestoringEvaluator {
           rejected.count(Verdict::kGarbage);
           return true;
         }
+        if (node.ready) return true;  // a late or forged announcement changes nothing
         if (announce_payload.kind() != node.plan->spec.kind())
           throw RunAborted(node.plan->label() + " announced itself as " +
                                runtime::node_kind_name(announce_payload.kind()) +

@@ -1,0 +1,224 @@
+// Faults on real processes over Cyclone DDS (domains 20-29): a node killed or stalled mid-run, the
+// coordinator killed, a node that never comes, and a hostile participant.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <atomic>
+#include <thread>
+
+#include "rths/proto/runtime.pb.h"
+#include "runtime/schema.h"
+#include "test_support.h"
+#include "transport/dds_endpoint.h"
+
+namespace rths {
+namespace {
+
+using runtime::ChildProcess;
+using namespace std::chrono_literals;
+
+struct Cluster {
+  std::filesystem::path dir, record;
+  std::vector<ChildProcess> nodes;
+  std::optional<ChildProcess> coordinator;
+};
+
+// Starts the listed nodes (id, kind) and the coordinator for `text`.
+Cluster start(const std::string& name, const std::string& text, int domain,
+              const std::vector<std::pair<int, bool>>& nodes, const std::string& case_name) {
+  Cluster c;
+  c.dir = test::scratch_dir(name);
+  const auto config = test::write_config(c.dir, text);
+  c.record = c.dir / "run.rthsrec";
+  for (const auto& [id, substructure] : nodes) {
+    c.nodes.emplace_back(
+        substructure ? test::program("rths-substructure-node", "substructure_nodes")
+                     : test::program("rths-actuator-emulator", "actuator_emulator"),
+        std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
+                                 std::to_string(domain), "--run-id", name},
+        c.dir / ("node_" + std::to_string(id) + ".log"));
+  }
+  c.coordinator.emplace(test::program("rths-coordinator", "coordinator"),
+                        std::vector<std::string>{"--config", config.string(), "--run-id", name,
+                                                 "--domain", std::to_string(domain), "--record",
+                                                 c.record.string(), "--case", case_name},
+                        c.dir / "coordinator.log");
+  return c;
+}
+
+// Waits until the record holds at least `steps` steps.
+void wait_for_steps(const std::filesystem::path& record, std::size_t steps) {
+  const auto deadline = std::chrono::steady_clock::now() + 20s;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (std::filesystem::exists(record) && runtime::read_record(record).steps().size() >= steps)
+      return;
+    std::this_thread::sleep_for(20ms);
+  }
+  FAIL() << "the run never reached step " << steps;
+}
+
+// Steps 0..n-1 with no gap, as a record cut at a failure must be.
+void expect_contiguous(const runtime::RecordContents& record) {
+  const auto steps = record.steps();
+  for (std::size_t k = 0; k < steps.size(); ++k) ASSERT_EQ(steps[k]->step(), static_cast<long>(k));
+}
+
+const std::string kRealTime =
+    "deployment { clock: REAL_TIME liveliness_timeout: 0.3 heartbeat_period: 0.02 }";
+
+class KillNode : public testing::TestWithParam<std::tuple<int, int, const char*>> {
+ protected:
+  static void SetUpTestSuite() { runtime::ensure_dds_config(); }
+};
+
+TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
+  const auto [victim, sig, label] = GetParam();
+  const int domain = 20 + victim + (sig == SIGSTOP ? 2 : 0);
+  const std::string name = "kill_" + std::to_string(victim) + "_" + std::to_string(sig);
+  const std::string text = test::paper_frame_study(8, kRealTime);
+  Cluster c = start(name, text, domain, {{1, true}, {2, false}}, "lag_shift_14ms");
+  wait_for_steps(c.record, 300);
+  const auto killed_at = std::chrono::steady_clock::now();
+  c.nodes[victim - 1].signal(sig);
+  const auto code = c.coordinator->wait_for(5s);
+  ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
+  const double stop_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count();
+  EXPECT_EQ(*code, 1);
+  EXPECT_LT(stop_seconds, 1.5);  // liveliness 0.3 s plus process exit
+  const std::string log = test::read_file(c.dir / "coordinator.log");
+  EXPECT_NE(log.find(label), std::string::npos) << log;
+  const auto record = runtime::read_record(c.record);
+  ASSERT_NE(record.footer(), nullptr);
+  EXPECT_FALSE(record.footer()->ok());
+  EXPECT_EQ(record.footer()->failed_node(), label);
+  expect_contiguous(record);
+  EXPECT_GE(record.steps().size(), 300u);
+  EXPECT_LT(record.steps().size(), 8000u);
+  bool hold = false;
+  for (const auto& e : record.entries) hold = hold || (e.has_event() && e.event().what().find("HOLD") == 0);
+  EXPECT_TRUE(hold);
+  // The survivor leaves on STOP; the emulator, when it survived, logged the HOLD first.
+  const int survivor = victim == 1 ? 2 : 1;
+  const auto survivor_code = c.nodes[survivor - 1].wait_for(5s);
+  ASSERT_TRUE(survivor_code.has_value());
+  EXPECT_EQ(*survivor_code, 0);
+  if (survivor == 2)
+    EXPECT_NE(test::read_file(c.dir / "node_2.log").find("HOLD"), std::string::npos);
+  c.nodes[victim - 1].signal(SIGKILL);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Nodes, KillNode,
+    testing::Values(std::make_tuple(1, SIGKILL, "node 1 (substructure)"),
+                    std::make_tuple(2, SIGKILL, "node 2 (actuator emulator)"),
+                    std::make_tuple(2, SIGSTOP, "node 2 (actuator emulator)")),
+    [](const auto& info) {
+      return std::string(std::get<1>(info.param) == SIGSTOP ? "stall_" : "kill_") +
+             std::to_string(std::get<0>(info.param));
+    });
+
+TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
+  runtime::ensure_dds_config();
+  const std::string text = test::paper_frame_study(8, kRealTime);
+  Cluster c = start("kill_coordinator", text, 25, {{1, true}, {2, false}}, "reference");
+  wait_for_steps(c.record, 300);
+  c.coordinator->signal(SIGKILL);
+  EXPECT_EQ(c.coordinator->wait(), 128 + SIGKILL);
+  for (auto& node : c.nodes) {
+    const auto code = node.wait_for(6s);  // orphan timeout max(2, 2 x 0.3) s
+    ASSERT_TRUE(code.has_value()) << node.name() << " outlived its coordinator";
+    EXPECT_EQ(*code, 1);
+  }
+  const auto record = runtime::read_record(c.record);
+  EXPECT_EQ(record.footer(), nullptr);
+  expect_contiguous(record);
+  EXPECT_GE(record.steps().size(), 300u);
+}
+
+TEST(Faults, StartUpTimeoutNamesTheMissingNode) {
+  runtime::ensure_dds_config();
+  const std::string text = test::paper_frame_study(1, "deployment { start_timeout: 1 }");
+  Cluster c = start("missing_node", text, 26, {{1, true}}, "reference");
+  const auto code = c.coordinator->wait_for(10s);
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 1);
+  const std::string log = test::read_file(c.dir / "coordinator.log");
+  EXPECT_NE(log.find("node 2 (actuator emulator) never announced"), std::string::npos) << log;
+  EXPECT_EQ(log.find("node 1 (substructure) never"), std::string::npos) << log;
+  EXPECT_EQ(c.nodes[0].wait_for(5s).value_or(-1), 0);  // stopped, not orphaned
+}
+
+// Publishes junk on both topics until told to stop.
+void hostile(int domain, const std::string& run_id, std::atomic<bool>& stop,
+             std::atomic<int>& sent) {
+  transport::DdsEndpointOptions as_coordinator{static_cast<std::uint32_t>(domain), true, 0};
+  transport::DdsEndpointOptions as_node{static_cast<std::uint32_t>(domain), false, 1};
+  transport::DdsEndpoint down(as_coordinator), up(as_node);
+  runtime::Command command;
+  command.set_time(0.001);
+  command.add_drift(1.0);
+  command.add_drift_velocity(1.0);
+  runtime::Feedback feedback;
+  feedback.add_force(1e9);
+  feedback.add_realised(1.0);
+  while (!stop) {
+    for (int node : {1, 2}) {
+      // To the nodes: another run's command, garbage bytes, a replay of step 0, a far future step.
+      down.send(runtime::pack("someone-else", node, runtime::COMMAND, 5, command));
+      auto garbage = runtime::pack(run_id, node, runtime::COMMAND, 1, command);
+      garbage.payload = "\xff\xff\xff\xff not protobuf";
+      garbage.step = 1'000'000'000;
+      down.send(garbage);
+      down.send(runtime::pack(run_id, node, runtime::COMMAND, 0, command));
+      down.send(runtime::pack(run_id, node, runtime::COMMAND, 0, command));
+      // To the coordinator: foreign run, unknown kind, unknown node, stale and future steps.
+      up.send(runtime::pack("someone-else", node, runtime::FEEDBACK, 3, feedback));
+      auto unknown_kind = runtime::pack(run_id, node, runtime::FEEDBACK, 3, feedback);
+      unknown_kind.kind = 77;
+      up.send(unknown_kind);
+      up.send(runtime::pack(run_id, 42, runtime::HEARTBEAT, 3, runtime::Heartbeat{}));
+      up.send(runtime::pack(run_id, node, runtime::FEEDBACK, 0, feedback));
+      up.send(runtime::pack(run_id, node, runtime::FEEDBACK, 0, feedback));
+      up.send(runtime::pack(run_id, node, runtime::FEEDBACK, 1'000'000'000, feedback));
+      sent += 10;
+    }
+    std::this_thread::sleep_for(2ms);
+  }
+}
+
+TEST(Faults, HostileParticipantChangesNothingAndIsCounted) {
+  runtime::ensure_dds_config();
+  constexpr int kDomain = 27;
+  const std::string name = "hostile";
+  const std::string text = test::paper_frame_study(6, "");
+  std::atomic<bool> stop{false};
+  std::atomic<int> sent{0};
+  std::thread attacker([&] { hostile(kDomain, name, stop, sent); });
+  std::this_thread::sleep_for(200ms);  // already publishing when the run starts
+  Cluster c = start(name, text, kDomain, {{1, true}, {2, false}}, "lag_shift_14ms");
+  const auto code = c.coordinator->wait_for(60s);
+  stop = true;
+  attacker.join();
+  ASSERT_TRUE(code.has_value());
+  ASSERT_EQ(*code, 0) << test::read_file(c.dir / "coordinator.log");
+  EXPECT_GT(sent.load(), 100);
+  const auto record = runtime::read_record(c.record);
+  test::expect_record_equals(record, test::reference_result(text, "lag_shift_14ms"));
+  const auto& counters = record.footer()->counters();
+  EXPECT_GT(counters.foreign_run(), 0u);
+  EXPECT_GT(counters.garbage(), 0u);
+  EXPECT_GT(counters.unknown_node(), 0u);
+  EXPECT_GT(counters.duplicate() + counters.stale(), 0u);
+  EXPECT_GT(counters.out_of_order(), 0u);
+  for (auto& node : c.nodes) EXPECT_EQ(node.wait_for(5s).value_or(-1), 0);
+  // Each node says how many messages it rejected when it stops.
+  for (const char* log : {"node_1.log", "node_2.log"}) {
+    const std::string text_log = test::read_file(c.dir / log);
+    EXPECT_NE(text_log.find("messages rejected"), std::string::npos) << text_log;
+    EXPECT_EQ(text_log.find("(0 messages rejected)"), std::string::npos) << text_log;
+  }
+}
+
+}  // namespace
+}  // namespace rths
