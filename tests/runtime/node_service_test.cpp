@@ -1,0 +1,115 @@
+// Node services driven message by message, without any transport.
+#include <gtest/gtest.h>
+
+#include "actuator_emulator/actuator_service.h"
+#include "runtime/schema.h"
+#include "substructure_nodes/substructure_service.h"
+#include "test_support.h"
+
+namespace rths {
+namespace {
+
+constexpr char kRun[] = "run-1";
+
+transport::Message assign_message(int node, config::NodeSpec::Kind kind,
+                                  std::vector<int> storeys, std::vector<int> actuators) {
+  runtime::Assign a;
+  a.set_schema_version(runtime::kSchemaVersion);
+  *a.mutable_study() = core::parse_study(test::paper_frame_study(1, ""), "t");
+  a.set_case_name("lag_shift_14ms");
+  a.mutable_node()->set_id(node);
+  a.mutable_node()->set_kind(kind);
+  a.set_dt(0.001);
+  for (int s : storeys) a.add_storeys(s);
+  for (int x : actuators) a.add_actuators(x);
+  return runtime::pack(kRun, node, runtime::ASSIGN, 0, a);
+}
+
+transport::Message command(int node, std::int64_t step, double drift, double velocity) {
+  runtime::Command c;
+  c.set_time(0.001 * static_cast<double>(step));
+  c.add_drift(drift);
+  c.add_drift_velocity(velocity);
+  auto m = runtime::pack(kRun, node, runtime::COMMAND, step, c);
+  m.sent_ns = 1000 + step;
+  return m;
+}
+
+TEST(SubstructureService, AnswersAssignThenCommandsWithStoreyShears) {
+  substructure_nodes::SubstructureService node(1, "");
+  ASSERT_EQ(node.start().size(), 1u);
+  auto ready = node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {}));
+  ASSERT_EQ(ready.size(), 1u);
+  runtime::Ready r;
+  ASSERT_TRUE(runtime::unpack(ready[0], r));
+  EXPECT_TRUE(r.error().empty()) << r.error();
+  EXPECT_EQ(r.storeys(), 1);
+  const auto reply = node.handle(command(1, 1, 0.01, 0.0));
+  ASSERT_EQ(reply.size(), 1u);
+  EXPECT_EQ(reply[0].kind, runtime::FEEDBACK);
+  EXPECT_EQ(reply[0].echo_ns, 1001);
+  runtime::Feedback f;
+  ASSERT_TRUE(runtime::unpack(reply[0], f));
+  // Numerical part: 2/3 of k = 1000 (4 pi)^2 N/m, linear.
+  const double k = 1000.0 * std::pow(2 * M_PI / 0.5, 2) * (1 - 0.3333333333333333);
+  EXPECT_NEAR(f.force(0), k * 0.01, 1e-6 * k * 0.01);
+}
+
+TEST(SubstructureService, RejectsDuplicatesForeignRunsAndGarbage) {
+  substructure_nodes::SubstructureService node(1, "");
+  node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {}));
+  EXPECT_EQ(node.handle(command(1, 1, 0.01, 0)).size(), 1u);
+  EXPECT_TRUE(node.handle(command(1, 1, 0.01, 0)).empty());   // duplicate
+  EXPECT_TRUE(node.handle(command(1, 3, 0.01, 0)).empty());   // lockstep: skips step 2
+  auto foreign = command(1, 2, 0.01, 0);
+  foreign.run_id = "other";
+  EXPECT_TRUE(node.handle(foreign).empty());
+  auto garbage = command(1, 2, 0.01, 0);
+  garbage.payload = "\xff\xff";
+  EXPECT_TRUE(node.handle(garbage).empty());
+  auto wrong_size = command(1, 2, 0.01, 0);
+  runtime::Command two;
+  two.add_drift(1);
+  two.add_drift(2);
+  wrong_size.payload = two.SerializeAsString();
+  EXPECT_TRUE(node.handle(wrong_size).empty());
+  EXPECT_EQ(node.rejected().duplicate, 1u);
+  EXPECT_EQ(node.rejected().out_of_order, 1u);
+  EXPECT_EQ(node.rejected().foreign_run, 1u);
+  EXPECT_EQ(node.rejected().garbage, 2u);
+  EXPECT_EQ(node.handle(command(1, 2, 0.01, 0)).size(), 1u);  // the real step 2 still goes
+}
+
+TEST(SubstructureService, IgnoresAnAssignmentOfAnotherRunWhenTold) {
+  substructure_nodes::SubstructureService node(1, "expected-run");
+  EXPECT_TRUE(node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {})).empty());
+  EXPECT_FALSE(node.assigned());
+}
+
+TEST(SubstructureService, BadPartIsReportedInReady) {
+  substructure_nodes::SubstructureService node(1, "");
+  const auto ready = node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {4}, {}));
+  runtime::Ready r;
+  ASSERT_TRUE(runtime::unpack(ready.at(0), r));
+  EXPECT_NE(r.error().find("storey 5"), std::string::npos) << r.error();
+}
+
+TEST(ActuatorService, DelaysTheCommandInSimulatedTimeAndHolds) {
+  actuator_emulator::ActuatorService node(2, "");
+  node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0}));
+  runtime::Feedback f;
+  // A 14 ms time shift: until t = 14 ms the specimen sees the first command.
+  for (int k = 1; k <= 20; ++k) {
+    const auto reply = node.handle(command(2, k, 0.001 * k, 1.0));
+    ASSERT_EQ(reply.size(), 1u);
+    ASSERT_TRUE(runtime::unpack(reply[0], f));
+  }
+  EXPECT_NEAR(f.realised(0), 0.001 * 6, 1e-12);  // u(t - 14 ms) at t = 20 ms
+  node.handle(runtime::pack(kRun, 2, runtime::HOLD, 20, runtime::Hold{}));
+  EXPECT_TRUE(node.held());
+  EXPECT_TRUE(node.handle(command(2, 21, 1.0, 1.0)).empty());
+  EXPECT_NEAR(node.held_position(0), 0.006, 1e-12);
+}
+
+}  // namespace
+}  // namespace rths

@@ -1,0 +1,86 @@
+#include "runtime/plan.h"
+
+#include <google/protobuf/text_format.h>
+#include <gtest/gtest.h>
+
+#include "test_support.h"
+
+namespace rths::runtime {
+namespace {
+
+core::HybridSetup two_storey_fraction() {
+  return test::prepare(test::two_storey_study(
+                           0.1, "cases { name: \"r\" }", "",
+                           "substructuring { experimental_fraction: 0.5 model { linear {} } }"))
+      .base;
+}
+
+config::Deployment deployment(const std::string& text) {
+  config::Deployment d;
+  EXPECT_TRUE(google::protobuf::TextFormat::ParseFromString(text, &d)) << text;
+  return d;
+}
+
+std::string error_of(const core::HybridSetup& setup, const std::string& text) {
+  try {
+    make_plan(setup, deployment(text));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Plan, DefaultNodesHostEverything) {
+  const auto setup = two_storey_fraction();
+  const auto plan = make_plan(setup, with_default_nodes(config::Deployment{}, setup));
+  ASSERT_EQ(plan.nodes.size(), 2u);
+  EXPECT_EQ(plan.nodes[0].storeys, (std::vector<int>{0, 1}));
+  EXPECT_EQ(plan.nodes[1].actuators, (std::vector<int>{0, 1}));
+  EXPECT_FALSE(plan.numerical_local);
+}
+
+TEST(Plan, NoSubstructureNodeMeansTheCoordinatorComputesTheNumericalPart) {
+  const auto plan = make_plan(two_storey_fraction(), deployment("nodes { id: 4 kind: ACTUATOR_EMULATOR }"));
+  EXPECT_TRUE(plan.numerical_local);
+}
+
+TEST(Plan, ErrorsNameNodeAndStorey) {
+  const auto setup = two_storey_fraction();
+  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE storeys: [1] } "
+                            "nodes { id: 2 kind: ACTUATOR_EMULATOR }")
+                .find("numerical storey 2 is hosted by no substructure node"),
+            std::string::npos);
+  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 3 kind: SUBSTRUCTURE } "
+                            "nodes { id: 2 kind: ACTUATOR_EMULATOR }")
+                .find("storey 1 is hosted by nodes 1 and 3"),
+            std::string::npos);
+  EXPECT_NE(error_of(setup, "nodes { id: 0 kind: SUBSTRUCTURE }").find("id must be >= 1"),
+            std::string::npos);
+  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE storeys: [3] }").find("storey 3 does not exist"),
+            std::string::npos);
+  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 1 kind: ACTUATOR_EMULATOR }")
+                .find("id used by two nodes"),
+            std::string::npos);
+  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE }")
+                .find("experimental storey 1 is hosted by no actuator emulator"),
+            std::string::npos);
+}
+
+TEST(Plan, NodeSideSetupMatchesPrepareStudy) {
+  const std::string text = test::two_storey_study(0.1, "cases { name: \"d\" delay { shift { delay: 0.01 } } }", "");
+  const auto prepared = test::prepare(text);
+  const auto& c = find_case(prepared.config, "d");
+  const auto from_core = core::setup_for_case(prepared, c);
+  const auto node_side = setup_without_motion(prepared.config, prepared.base_dir, prepared.base.dt, c);
+  EXPECT_EQ(from_core.partition.actuator_storeys, node_side.partition.actuator_storeys);
+  ASSERT_EQ(from_core.delays.size(), node_side.delays.size());
+  for (std::size_t s = 0; s < from_core.partition.numerical.size(); ++s) {
+    ASSERT_EQ(!from_core.partition.numerical[s], !node_side.partition.numerical[s]);
+    if (from_core.partition.numerical[s])
+      EXPECT_EQ(from_core.partition.numerical[s]->describe(), node_side.partition.numerical[s]->describe());
+  }
+  EXPECT_EQ(from_core.delays[0].describe(), node_side.delays[0].describe());
+}
+
+}  // namespace
+}  // namespace rths::runtime

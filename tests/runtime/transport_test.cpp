@@ -1,0 +1,142 @@
+// The DDS RAII layer and endpoint in one process (domain 30), and the in-process transport.
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "runtime/launch.h"
+#include "transport/dds.h"
+#include "transport/dds_endpoint.h"
+#include "transport/in_process.h"
+
+namespace rths::transport {
+namespace {
+
+using namespace std::chrono_literals;
+constexpr std::uint32_t kDomain = 30;
+
+class DdsTransport : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { runtime::ensure_dds_config(); }
+};
+
+DdsEndpointOptions node_options(std::int32_t id, const std::string& prefix) {
+  return {kDomain, false, id, prefix, 64};
+}
+
+TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
+  DdsEndpoint coordinator({kDomain, true, 0, "t_exchange", 64});
+  DdsEndpoint node1(node_options(1, "t_exchange")), node2(node_options(2, "t_exchange"));
+  coordinator.wait_for_match(2, 2, 5000ms);
+  node1.wait_for_match(1, 1, 5000ms);
+  node2.wait_for_match(1, 1, 5000ms);
+
+  Message to2;
+  to2.run_id = "r";
+  to2.node_id = 2;
+  to2.kind = 4;
+  to2.step = 17;
+  to2.payload = std::string("\x00\x01\x02", 3);
+  coordinator.send(to2);
+  const auto got = node2.receive(2s);
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(got->step, 17);
+  EXPECT_EQ(got->payload, to2.payload);  // embedded zero bytes survive
+  EXPECT_GT(got->sent_ns, 0);
+  EXPECT_GE(got->received_ns, got->sent_ns);
+  EXPECT_FALSE(node1.receive(100ms).has_value()) << "node 1 must not see node 2's message";
+
+  Message reply;
+  reply.run_id = "r";
+  reply.node_id = 2;
+  reply.kind = 5;
+  reply.step = 17;
+  reply.echo_ns = got->sent_ns;
+  node2.send(reply);
+  const auto back = coordinator.receive(2s);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->echo_ns, got->sent_ns);
+  EXPECT_EQ(back->node_id, 2);
+}
+
+TEST_F(DdsTransport, BroadcastReachesEveryNode) {
+  DdsEndpoint coordinator({kDomain, true, 0, "t_broadcast", 64});
+  DdsEndpoint node1(node_options(1, "t_broadcast")), node2(node_options(2, "t_broadcast"));
+  coordinator.wait_for_match(2, 0, 5000ms);
+  Message stop;
+  stop.node_id = kBroadcastId;
+  stop.kind = 8;
+  coordinator.send(stop);
+  EXPECT_TRUE(node1.receive(2s).has_value());
+  EXPECT_TRUE(node2.receive(2s).has_value());
+}
+
+TEST_F(DdsTransport, InterruptWakesABlockedReceive) {
+  DdsEndpoint coordinator({kDomain, true, 0, "t_interrupt", 64});
+  const auto start = std::chrono::steady_clock::now();
+  std::thread waker([&] {
+    std::this_thread::sleep_for(100ms);
+    coordinator.interrupt();
+  });
+  EXPECT_FALSE(coordinator.receive(10s).has_value());
+  waker.join();
+  EXPECT_LT(std::chrono::steady_clock::now() - start, 5s);
+}
+
+TEST_F(DdsTransport, WaitForMatchTimesOutWithCounts) {
+  DdsEndpoint lonely({kDomain, true, 0, "t_lonely", 64});
+  try {
+    lonely.wait_for_match(1, 1, 50ms);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("0/1 readers"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DdsCheck, NamesTheCallAndTheReturnCode) {
+  try {
+    dds::check(-3, "dds_write");  // DDS_RETCODE_BAD_PARAMETER
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind("dds_write: ", 0), 0u) << what;
+    EXPECT_GT(what.size(), std::string("dds_write: ").size());
+  }
+  EXPECT_EQ(dds::check(5, "ok"), 5);
+}
+
+TEST(DdsParticipant, BadDomainIsAnError) {
+  EXPECT_THROW(dds::Participant(999999), std::runtime_error);
+}
+
+class Echo final : public NodeHandler {
+ public:
+  std::vector<Message> start() override { return {Message{"", 3, 1}}; }
+  std::vector<Message> handle(const Message& m) override {
+    Message r = m;
+    r.echo_ns = m.sent_ns;
+    return {r};
+  }
+};
+
+TEST(InProcessTransport, DeliversToTheAddresseeAndQueuesReplies) {
+  InProcessTransport transport;
+  Echo echo;
+  transport.attach(3, echo);
+  const auto announce = transport.receive(0s);
+  ASSERT_TRUE(announce.has_value());
+  EXPECT_EQ(announce->node_id, 3);
+  Message m;
+  m.node_id = 3;
+  m.step = 9;
+  transport.send(m);
+  const auto reply = transport.receive(0s);
+  ASSERT_TRUE(reply.has_value());
+  EXPECT_EQ(reply->step, 9);
+  EXPECT_GT(reply->echo_ns, 0);
+  m.node_id = 4;  // nobody
+  transport.send(m);
+  EXPECT_FALSE(transport.receive(0s).has_value());
+}
+
+}  // namespace
+}  // namespace rths::transport
