@@ -96,15 +96,18 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       auto plan = load_sites(sites_file);
       plan.study.mutable_motion()->set_duration(duration);
       auto& deployment = *plan.study.mutable_deployment();
-      deployment.set_clock(config::Deployment::REAL_TIME);
+      const bool real_time = deployment.clock() == config::Deployment::REAL_TIME;
       auto* joint_case = plan.study.add_cases();
       joint_case->set_name("joint_actuator");
       *joint_case->add_delay() = actuator_stage(config.actuator_model(), actuator);
       deployment.set_case_name("joint_actuator");
       for (auto& node : *deployment.mutable_nodes()) {
         if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
-        node.mutable_receive_lag()->set_one_way_delay(round_trip / 2);
-        node.mutable_send_lag()->set_one_way_delay(round_trip / 2);
+        // Only the delay: the study's point is the injected round trip, without jitter or loss.
+        config::LinkLag lag;
+        lag.set_one_way_delay(round_trip / 2);
+        *node.mutable_receive_lag() = lag;
+        *node.mutable_send_lag() = lag;
       }
       std::ostringstream name;
       name << "measured_R" << round_trip * 1e3 << "ms_A" << actuator * 1e3 << "ms";
@@ -130,11 +133,15 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       if (command.size() < 10 || !(dt > 0.0)) {
         throw std::runtime_error("across-sites run " + name.str() + ": record too short");
       }
-      // In real time the coordinator pairs each command with the newest feedback it has, which
-      // answers an older step when the round trip exceeds the wait: the realised displacement it
-      // records lags the command by the network round trip plus the actuator's own lag.
-      point.measured_total_lag = core::j1_delay(command, realised, dt, search_window(config));
-      point.measured_actuator_lag = point.measured_total_lag - point.measured_round_trip;
+      // Real time: the coordinator pairs each command with the newest feedback it has, which
+      // answers an older step when the round trip exceeds the wait, so the realised displacement
+      // it records lags the command by round trip + actuator lag. Lockstep: each command is
+      // paired with its own answer, so J1 sees the actuator alone and the network part is the
+      // measured round trip.
+      const double j1 = core::j1_delay(command, realised, dt, search_window(config));
+      point.measured_total_lag = real_time ? j1 : point.measured_round_trip + j1;
+      point.measured_actuator_lag = real_time ? j1 - point.measured_round_trip : j1;
+      point.real_time = real_time;
       // The in-process reference over the same duration.
       auto reference_study = plan.study;
       const auto prepared = core::prepare_study(reference_study, base_dir);
@@ -147,6 +154,9 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
   }
 }
 
+// Log z axis (the error spans decades towards instability); zero error is drawn at this floor.
+constexpr double kSurfaceFloorPercent = 0.01;
+
 void write_surface_png(const JointLagResult& result, const std::filesystem::path& out) {
   // gnuplot pm3d wants blocks of equal x separated by blank lines: network-major grid as stored.
   const auto data = out / "error_surface.dat";
@@ -158,21 +168,24 @@ void write_surface_png(const JointLagResult& result, const std::filesystem::path
       if (!std::isnan(previous) && p.network_round_trip != previous) file << "\n";
       previous = p.network_round_trip;
       file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << ' '
-           << (p.diverged ? std::nan("") : 100.0 * p.nrmse) << "\n";
+           << (p.diverged ? std::nan("") : std::max(100.0 * p.nrmse, kSurfaceFloorPercent))
+           << "\n";
     }
   }
   const auto script = out / "error_surface.gp";
   {
     std::ofstream file(script);
-    file << "set terminal pngcairo size 1100,800\n"
+    file << "set terminal pngcairo size 1100,800 noenhanced\n"
          << "set output '" << (out / "error_surface.png").string() << "'\n"
          << "set title 'Joint lag study (" << result.study_name << ", actuator "
          << result.actuator_model << "): NRMSE of the displacement, %'\n"
          << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
-         << "set zlabel 'NRMSE (%)' rotate by 90\n"
+         << "set zlabel 'NRMSE (%), log scale' rotate by 90\n"
+         << "set logscale z\nset logscale cb\nset format z '%g'\nset format cb '%g'\n"
          << "set pm3d at s hidden3d\nset palette rgbformulae 33,13,10\n"
-         << "set view 55,35\nset contour base\nset cntrparam levels 8\nunset key\n"
-         << "splot '" << data.string() << "' using 1:2:3 with pm3d\n";
+         << "set view 55,35\nset contour base\nset cntrparam levels discrete 5,10,20,50,100,1000\n"
+         << "unset key\n"
+         << "splot '" << data.string() << "' using 1:2:3 with pm3d notitle\n";
   }
   const auto run = run_command({"gnuplot", script.string()}, std::chrono::seconds(60));
   if (!run.ok()) {
@@ -196,7 +209,7 @@ void write_total_lag_png(const JointLagResult& result, const std::filesystem::pa
   }
   spec.series.push_back(emulated);
   if (!result.measured.empty()) {
-    analysis::Series sites{"across sites, real time (J1 on the record)", {}, {}, "points pt 9 ps 2"};
+    analysis::Series sites{"across sites (measured from the record)", {}, {}, "points pt 9 ps 2"};
     for (const auto& p : result.measured) {
       sites.x.push_back((p.network_round_trip + p.actuator_lag) * 1e3);
       sites.y.push_back(p.measured_total_lag * 1e3);
@@ -234,7 +247,8 @@ nlohmann::json point_json(const JointLagPoint& p) {
           {"nrmse", p.nrmse},
           {"paper_eq2", p.paper_eq2},
           {"peak_error_m", p.peak_error},
-          {"diverged", p.diverged}};
+          {"diverged", p.diverged},
+          {"real_time", p.real_time}};
 }
 
 }  // namespace
@@ -376,10 +390,9 @@ std::string to_text(const JointLagResult& result) {
     out << "across sites: skipped (" << result.measured_skipped << ")\n";
   }
   for (const auto& p : result.measured) {
-    out << "across sites: injected " << p.network_round_trip * 1e3 << " ms network + "
+    out << "across sites (" << (p.real_time ? "real time" : "lockstep") << "): injected " << p.network_round_trip * 1e3 << " ms network + "
         << p.actuator_lag * 1e3 << " ms actuator = " << (p.network_round_trip + p.actuator_lag) * 1e3
-        << " ms; measured total (J1 on the record) " << p.measured_total_lag * 1e3
-        << " ms = round trip " << p.measured_round_trip * 1e3 << " ms + actuator "
+        << " ms; measured total " << p.measured_total_lag * 1e3 << " ms = round trip " << p.measured_round_trip * 1e3 << " ms + actuator "
         << p.measured_actuator_lag * 1e3
         << " ms; NRMSE " << 100 * p.nrmse << " %\n";
   }

@@ -11,12 +11,14 @@
 //   error            nrmse(u_ref, u) = sqrt(mean e^2) / median|u_ref|, and the paper's Eq. 2
 //   measured total   J1 delay of the realised behind the commanded displacement (cross-correlation
 //                    peak, s), compared with injected = R + A.
-// Measured across sites (optional, needs namespaces): selected points run in real time across
-// network-namespace sites, R injected half each way by the actuator emulator, the actuator lag as
-// the case's delay stage. In real time the coordinator uses the newest feedback it has, so the
-// realised displacement it records lags the command by round trip + actuator lag:
-//   measured total = J1(command, realised) on the record, compared with R + A;
-//   measured network = the record's round-trip median; actuator part = their difference.
+// Measured across sites (optional, needs namespaces): selected points run across network-namespace
+// sites with the clock of the sites config, R injected half each way by the actuator emulator, the
+// actuator lag as the case's delay stage; from the record:
+//   real time  the coordinator uses the newest feedback it has, so the realised displacement it
+//              records lags the command by round trip + actuator lag: total = J1(command,
+//              realised); network = round-trip median; actuator = their difference.
+//   lockstep   each command is paired with its own answer: actuator = J1, network = round-trip
+//              median, total = their sum. (The result itself sees only the actuator lag.)
 // Error against the in-process reference over the same duration.
 //
 // Outputs (in the output directory): grid.csv, measured.csv, error_surface.png (gnuplot pm3d),
@@ -43,7 +45,8 @@ struct JointLagPoint {
   bool diverged = false;
   // Across sites only (zero otherwise):
   double measured_round_trip = 0.0;  // s, record median
-  double measured_actuator_lag = 0.0;  // s, measured total - measured round trip
+  double measured_actuator_lag = 0.0;  // s, see above
+  bool real_time = false;              // the clock of the across-sites run
 };
 
 struct JointLagResult {

@@ -180,6 +180,15 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
     *nodes[link.node_id()]->mutable_receive_lag() = link.to_node();
     *nodes[link.node_id()]->mutable_send_lag() = link.from_node();
   }
+  if (deployment.clock() == config::Deployment::LOCKSTEP) {
+    for (const auto& node : deployment.nodes()) {
+      if (node.receive_lag().loss() > 0.0 || node.send_lag().loss() > 0.0) {
+        throw std::invalid_argument(source + ": node " + std::to_string(node.id()) +
+                                    " has a lag with loss > 0, but the clock is LOCKSTEP, where a "
+                                    "lost message stops the run; use clock: REAL_TIME or loss: 0");
+      }
+    }
+  }
   absolutize_paths(plan.study, std::filesystem::absolute(plan.study_file).parent_path());
   // The topology checks names and the subnet; check now so the error names this file.
   TopologySpec topology;

@@ -98,6 +98,11 @@ TEST(SitesConfig, ErrorsNameTheProblem) {
   EXPECT_NE(error_of(negative).find("link to node 2 to_node"), std::string::npos)
       << error_of(negative);
 
+  auto lossy = three_sites(120, 0.001, 0);
+  lossy.mutable_links(0)->mutable_to_node()->set_loss(0.01);
+  EXPECT_NE(error_of(lossy).find("node 2 has a lag with loss > 0, but the clock is LOCKSTEP"),
+            std::string::npos) << error_of(lossy);
+
   auto bad_name = three_sites(120, 0, 0);
   bad_name.mutable_sites(1)->set_name("Lab A");
   EXPECT_NE(error_of(bad_name).find("'Lab A'"), std::string::npos) << error_of(bad_name);
