@@ -178,6 +178,7 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                         {"declared", model_json(c.declared_fit, scales)},
                         {"final", model_json(c.final_fit, scales)},
                         {"final_evidence", evidence_json(c.final_evidence)},
+                        {"search_heldout_error", c.search_heldout_error},
                         {"rejected", ranking_json(c.last_ranking)}});
   }
   out["steps"] = steps;
@@ -232,7 +233,7 @@ std::string format_table(const Identification& id,
           << format_value(e.input_to_residual.peak) << " at "
           << format_value(e.input_to_residual.lag * 1e3) << " ms, residual peak at "
           << format_value(e.dominant_frequency) << " Hz\n";
-      out << "      ranking:";
+      out << "      ranking (held-out at the search rate):";
       for (std::size_t k = 0; k < std::min<std::size_t>(4, s.ranking.size()); ++k) {
         out << " " << effect_name(s.ranking[k].effect) << " "
             << percent(s.ranking[k].heldout_error) << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
@@ -243,7 +244,7 @@ std::string format_table(const Identification& id,
     if (!c.last_ranking.empty()) {
       out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
           << percent(c.last_ranking.front().heldout_error) << " vs "
-          << percent(c.final_fit.heldout_error) << ")\n";
+          << percent(c.search_heldout_error) << " without it, at the search rate)\n";
     }
     out << "\n";
   }

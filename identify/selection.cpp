@@ -113,6 +113,7 @@ ChannelIdentification identify_channel(const ChannelSignals& signals, const Spli
     id.steps.push_back(std::move(step));
   }
   id.final_fit = current;
+  id.search_heldout_error = current.heldout_error;
   id.final_evidence = residual_evidence(signals, current.prediction);
   return id;
 }

@@ -7,6 +7,7 @@
 // 3. Score = e_h (1 + penalty_per_parameter * parameters added). The best-scoring candidate is
 //    added only if it pays: e_h <= (1 - min_relative_improvement) * e_h(current) and its score
 //    beats the current model's. Otherwise stop. Repeat up to max_steps.
+// Never adds an effect that does not pay: every step lowers the held-out error by the threshold.
 // The candidate ranking and the residual evidence before each step are kept for the report.
 
 #include <vector>
@@ -48,6 +49,8 @@ struct ChannelIdentification {
   FitResult final_fit;
   Evidence final_evidence;
   std::vector<CandidateTrial> last_ranking;  // the round in which nothing paid
+  // Held-out error of the final model on the data the search ran on (rankings compare with it).
+  double search_heldout_error = 0.0;
 };
 
 // Fits `model` + `effect` from each starting guess of the effect (cartesian product of its
