@@ -178,8 +178,10 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   }
   if (!exit_code) exit_code = coordinator->terminate();
   result.coordinator_exit = *exit_code;
+  // After an orderly end the nodes got STOP and exit by themselves; otherwise do not wait long.
+  const auto grace = result.status.empty() ? kNodeExitGrace : std::chrono::seconds(1);
   for (auto& node : nodes) {
-    if (!node->wait_for(kNodeExitGrace)) {
+    if (!node->wait_for(grace)) {
       spdlog::warn("{} did not exit after the coordinator; stopping it", node->name());
     }
     node->terminate();
