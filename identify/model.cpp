@@ -177,19 +177,19 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
       return {{"offset", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0}},
               {"drift", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0}}};
     case Effect::kFirstOrder:
-      return {{"time_constant", "s", 0.01, 0.2 * sc.dt, 1.0, {0.003, 0.01, 0.03}}};
+      return {{"time_constant", "s", 0.01, 0.2 * sc.dt, 1.0, {0.005, 0.03}}};
     case Effect::kSecondOrder:
       return {{"natural_frequency", "rad/s", 100.0, 2.0 * kPi * 0.2, kPi / sc.dt,
-               {2.0 * kPi * 5.0, 2.0 * kPi * 15.0, 2.0 * kPi * 40.0}},
-              {"damping_ratio", "-", 1.0, 0.05, 5.0, {0.4, 0.9}}};
+               {2.0 * kPi * 5.0, 2.0 * kPi * 20.0}},
+              {"damping_ratio", "-", 1.0, 0.05, 5.0, {0.7}}};
     case Effect::kBacklash:
       return {{"width", "m", 0.05 * sc.input, 0.0, 10.0 * sc.input,
-               {0.02 * sc.input, 0.1 * sc.input, 0.3 * sc.input}}};
+               {0.03 * sc.input, 0.2 * sc.input}}};
     case Effect::kVelocitySaturation:
       return {{"max_velocity", "m/s", sc.velocity, 0.01 * sc.velocity, 1e300,
-               {0.8 * sc.velocity, 1.5 * sc.velocity, 3.0 * sc.velocity}}};
+               {0.8 * sc.velocity, 2.0 * sc.velocity}}};
     case Effect::kTimeVaryingDelay:
-      return {{"delay_slope", "s", 0.01, -0.5, 0.5, {0.0, 0.005, -0.005}}};
+      return {{"delay_slope", "s", 0.01, -0.5, 0.5, {0.0}}};
     case Effect::kStiffness:
       return {{"stiffness", "N/m", k_scale, -1e300, 1e300, {0.0}}};
     case Effect::kDamping:
