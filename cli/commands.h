@@ -31,5 +31,7 @@ void add_sweep_command(CLI::App& app);
 void add_sites_command(CLI::App& app);
 void add_joint_lag_command(CLI::App& app);
 void add_identify_command(CLI::App& app);
+void add_launch_command(CLI::App& app);
+void add_export_command(CLI::App& app);
 
 }  // namespace rths::cli

@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   rths::cli::add_sites_command(app);
   rths::cli::add_joint_lag_command(app);
   rths::cli::add_identify_command(app);
+  rths::cli::add_launch_command(app);
+  rths::cli::add_export_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

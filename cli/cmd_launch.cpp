@@ -1,0 +1,221 @@
+// rths launch CONFIG: run a study's cases distributed on this machine (coordinator, substructure
+// node and actuator emulator as separate processes over Cyclone DDS on loopback), one run per
+// case, then write per case the run record, CSV, logs, and plots of the response and of the
+// injected vs measured lag, and print a summary (peaks, NRMSE vs the reference case, measured
+// round trips, overruns, rejected messages).
+// Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
+// 2 bad config, 3 environment); 2 for a bad config caught before starting anything.
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <iomanip>
+#include <iostream>
+#include <map>
+
+#include "analysis/plot.h"
+#include "cli/commands.h"
+#include "core/metrics.h"
+#include "core/study.h"
+#include "runtime/export.h"
+#include "runtime/lag.h"
+#include "runtime/launch.h"
+#include "runtime/record.h"
+#include "transport/transport.h"
+
+namespace rths::cli {
+namespace {
+
+struct LaunchArgs {
+  std::string config, out, bin_dir;
+  std::vector<std::string> cases;
+  int domain = -1;
+  double timeout = 0;
+  bool no_plots = false, json = false;
+};
+
+struct CaseOutcome {
+  std::string name;
+  int exit_code = -1;
+  std::string status;
+  std::vector<double> time, u1;  // s, m (DOF 1)
+  std::map<int, std::vector<double>> round_trip, injected, step_time;  // per node id
+  std::uint64_t overruns = 0, rejected = 0, steps = 0;
+  double peak = 0, nrmse = -1;
+  std::filesystem::path record, csv;
+};
+
+void collect(const runtime::RecordContents& record, CaseOutcome& c) {
+  for (const runtime::StepRecord* s : record.steps()) {
+    c.time.push_back(s->time());
+    c.u1.push_back(s->displacement_size() > 0 ? s->displacement(0) : 0.0);
+    for (const auto& link : s->links()) {
+      c.round_trip[link.node_id()].push_back(link.round_trip());
+      c.injected[link.node_id()].push_back(link.injected_lag());
+      c.step_time[link.node_id()].push_back(s->time());
+    }
+  }
+  c.peak = c.u1.empty() ? 0.0 : core::peak_abs(c.u1);
+  if (const auto* f = record.footer()) {
+    c.status = f->status();
+    const auto& k = f->counters();
+    c.overruns = k.overruns();
+    c.steps = k.steps();
+    c.rejected = k.foreign_run() + k.garbage() + k.duplicate() + k.stale() + k.out_of_order() +
+                 k.unknown_node();
+  } else {
+    c.status = "record without footer: the coordinator died";
+  }
+}
+
+void plot(const std::filesystem::path& out, const std::vector<CaseOutcome>& cases) {
+  analysis::PlotSpec response{"Floor 1 displacement, distributed runs", "time (s)",
+                              "displacement (m)", {}};
+  for (const auto& c : cases) response.series.push_back({c.name, c.time, c.u1});
+  analysis::write_png_plot(response, out / "displacement.png");
+  for (const auto& c : cases) {
+    analysis::PlotSpec lag{"Lag per link, case " + c.name, "time (s)", "lag (ms)", {}};
+    for (const auto& [node, rtt] : c.round_trip) {
+      std::vector<double> rtt_ms, inj_ms;
+      for (double x : rtt) rtt_ms.push_back(x * 1e3);
+      for (double x : c.injected.at(node)) inj_ms.push_back(x * 1e3);
+      lag.series.push_back({"node " + std::to_string(node) + " measured round trip",
+                            c.step_time.at(node), rtt_ms, "lines"});
+      lag.series.push_back({"node " + std::to_string(node) + " injected",
+                            c.step_time.at(node), inj_ms, "lines"});
+    }
+    if (!lag.series.empty()) analysis::write_png_plot(lag, out / ("lag_" + c.name + ".png"));
+  }
+}
+
+int exit_code_of(int coordinator_exit) {
+  switch (coordinator_exit) {
+    case 0: return kExitOk;
+    case 1: return kExitRunFailed;
+    case 2: return kExitBadInput;
+    default: return kExitEnvironment;
+  }
+}
+
+void run_launch(const LaunchArgs& args) {
+  config::Study study;
+  try {
+    study = core::load_study(args.config);
+  } catch (const std::exception& e) {
+    throw ExitError(kExitBadInput, e.what());
+  }
+  std::vector<std::string> names = args.cases;
+  if (names.empty())
+    for (const auto& c : study.cases()) names.push_back(c.name());
+  const std::string reference = core::reference_case(study).name();
+  const std::filesystem::path out =
+      !args.out.empty() ? std::filesystem::path(args.out)
+      : !study.output().directory().empty()
+          ? std::filesystem::path(study.output().directory()) / "distributed"
+          : std::filesystem::path("rths_launch_" + study.name());
+  std::filesystem::create_directories(out);
+  runtime::ensure_dds_config();
+
+  std::vector<CaseOutcome> outcomes;
+  const std::string stamp = std::to_string(transport::realtime_ns());
+  for (const std::string& name : names) {
+    CaseOutcome c;
+    c.name = name;
+    runtime::LaunchOptions options;
+    options.config = args.config;
+    options.case_name = name;
+    options.run_id = study.name() + "-" + name + "-" + stamp;
+    options.domain = args.domain;
+    options.programs_dir = args.bin_dir;
+    options.record = c.record = out / (name + ".rthsrec");
+    options.log_dir = out / "logs" / name;
+    options.timeout = args.timeout;
+    if (!args.json) std::cerr << "rths launch: case " << name << " ...\n";
+    runtime::LaunchResult result;
+    try {
+      result = runtime::launch_run(options);
+    } catch (const std::invalid_argument& e) {
+      throw ExitError(kExitBadInput, e.what());
+    } catch (const std::exception& e) {
+      throw ExitError(kExitEnvironment, e.what());
+    }
+    c.exit_code = result.coordinator_exit;
+    if (std::filesystem::exists(c.record)) {
+      const auto record = runtime::read_record(c.record);
+      if (record.truncated) std::cerr << "rths launch: warning: " << record.warning << "\n";
+      collect(record, c);
+      c.csv = out / (name + ".csv");
+      if (record.header()) runtime::write_csv(record, c.csv);
+    } else {
+      c.status = "no record written; see " + result.coordinator_log.string();
+    }
+    if (c.exit_code != 0)
+      std::cerr << "rths launch: case " << name << " failed (exit " << c.exit_code << "): "
+                << c.status << "; logs in " << options.log_dir << "\n";
+    outcomes.push_back(std::move(c));
+  }
+  const CaseOutcome* ref = nullptr;
+  for (const auto& c : outcomes)
+    if (c.name == reference) ref = &c;
+  for (auto& c : outcomes)
+    if (ref && ref != &c && ref->u1.size() == c.u1.size() && !c.u1.empty())
+      c.nrmse = core::nrmse(ref->u1, c.u1);
+  if (!args.no_plots) {
+    try {
+      plot(out, outcomes);
+    } catch (const std::exception& e) {
+      std::cerr << "rths launch: warning: plots not written: " << e.what() << "\n";
+    }
+  }
+
+  nlohmann::json j = nlohmann::json::array();
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3);
+  for (const auto& c : outcomes) {
+    nlohmann::json links = nlohmann::json::object();
+    text << c.name << ": " << c.status << ", " << c.steps << " steps, peak |u1| " << c.peak * 1e3
+         << " mm";
+    if (c.nrmse >= 0) text << ", NRMSE vs " << reference << " " << c.nrmse * 100 << " %";
+    text << ", overruns " << c.overruns << ", rejected " << c.rejected << "\n";
+    for (const auto& [node, rtt] : c.round_trip) {
+      const auto s = runtime::summarize(rtt);
+      const auto inj = runtime::summarize(c.injected.at(node));
+      text << "  node " << node << " round trip ms: median " << s.median * 1e3 << ", p99 "
+           << s.p99 * 1e3 << ", max " << s.max * 1e3 << " (injected mean " << inj.mean * 1e3
+           << ")\n";
+      links[std::to_string(node)] = {{"round_trip_median", s.median}, {"round_trip_p99", s.p99},
+                                     {"round_trip_max", s.max}, {"injected_mean", inj.mean}};
+    }
+    j.push_back({{"case", c.name}, {"exit_code", c.exit_code}, {"status", c.status},
+                 {"steps", c.steps}, {"peak_displacement", c.peak},
+                 {"nrmse_vs_reference", c.nrmse >= 0 ? nlohmann::json(c.nrmse) : nlohmann::json()},
+                 {"overruns", c.overruns}, {"rejected", c.rejected}, {"links", links},
+                 {"record", c.record.string()}, {"csv", c.csv.string()}});
+  }
+  if (args.json)
+    std::cout << nlohmann::json{{"output", out.string()}, {"cases", j}}.dump(2) << "\n";
+  else
+    std::cout << text.str() << "output: " << out.string() << "\n";
+  for (const auto& c : outcomes)
+    if (c.exit_code != 0)
+      throw ExitError(exit_code_of(c.exit_code), "case " + c.name + ": " + c.status);
+}
+
+}  // namespace
+
+void add_launch_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "launch", "Run a study distributed on this machine (coordinator + nodes over DDS)");
+  auto args = std::make_shared<LaunchArgs>();
+  cmd->add_option("config", args->config, "study config (text format)")->required();
+  cmd->add_option("--case", args->cases, "case(s) to run; default every case");
+  cmd->add_option("--out", args->out, "output folder (records, CSV, plots, logs)");
+  cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)");
+  cmd->add_option("--bin-dir", args->bin_dir,
+                  "where rths-coordinator and the node programs are (default: beside rths)");
+  cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is killed");
+  cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots");
+  cmd->add_flag("--json", args->json, "print the summary as JSON");
+  cmd->callback([args] { run_launch(*args); });
+}
+
+}  // namespace rths::cli
