@@ -8,6 +8,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -43,16 +44,41 @@ double peak_rss_mib() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
+double cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+// Medians over the repetitions of the wall time and of the CPU time summed over threads. The
+// machine may be shared: CPU time shows what the kernel costs, wall time what a user waits.
+struct Timing {
+  double wall = 0, cpu = 0;
+};
+
 template <class Run>
-double median_seconds(int repetitions, Run run) {
-  std::vector<double> seconds;
+Timing median_timing(int repetitions, Run run) {
+  std::vector<double> wall, cpu;
   for (int r = 0; r < repetitions; ++r) {
+    const double cpu_start = cpu_seconds();
     const auto start = std::chrono::steady_clock::now();
     run();
-    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    cpu.push_back(cpu_seconds() - cpu_start);
   }
-  std::sort(seconds.begin(), seconds.end());
-  return seconds[seconds.size() / 2];
+  std::sort(wall.begin(), wall.end());
+  std::sort(cpu.begin(), cpu.end());
+  return {wall[wall.size() / 2], cpu[cpu.size() / 2]};
+}
+
+double load_average() {
+  double load = -1;
+  if (FILE* f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf", &load) != 1) load = -1;
+    std::fclose(f);
+  }
+  return load;
 }
 
 }  // namespace
@@ -94,16 +120,21 @@ int main(int argc, char** argv) {
   rths::analysis::BatchRunOptions single = options;
   single.threads = 1;
   run_grid(lanes, delays, options);  // warm-up
-  const double a1 = median_seconds(repetitions, [&] { run_grid(lanes, no_delay, single); });
-  const double a = median_seconds(repetitions, [&] { run_grid(lanes, no_delay, options); });
-  const double b = median_seconds(repetitions, [&] { run_grid(lanes, delays, options); });
-  const double rate_a1 = 100 * steps / a1, rate_a = 100 * steps / a, rate_b = 1000 * steps / b;
-  std::printf("(a)  100 periods, no delay, 1 thread : %8.3f ms  %.3e steps/s\n", a1 * 1e3, rate_a1);
-  std::printf("(a)  100 periods, no delay           : %8.3f ms  %.3e steps/s  (%.0fx OpenSees' 0.6e6)\n",
-              a * 1e3, rate_a, rate_a / 0.6e6);
-  std::printf("(b)  100 periods x 10 delays 0..18 ms: %8.3f ms  %.3e steps/s\n", b * 1e3, rate_b);
-  std::printf("(b)/(a) steps/s ratio: %.3f  (time per lane step, (b) vs (a): %.2fx)\n", rate_b / rate_a,
-              rate_a / rate_b);
+  const Timing a1 = median_timing(repetitions, [&] { run_grid(lanes, no_delay, single); });
+  const Timing a = median_timing(repetitions, [&] { run_grid(lanes, no_delay, options); });
+  const Timing b = median_timing(repetitions, [&] { run_grid(lanes, delays, options); });
+  const double rate_a1 = 100 * steps / a1.wall, rate_a = 100 * steps / a.wall, rate_b = 1000 * steps / b.wall;
+  std::printf("load average before timing: %.2f (other processes share the cores)\n", load_average());
+  std::printf("median of %d runs; steps/s = lane steps / wall time; per CPU-s = / CPU time of all threads\n",
+              repetitions);
+  std::printf("(a)  100 periods, no delay, 1 thread : %8.3f ms  %.3e steps/s  %.3e per CPU-s\n",
+              a1.wall * 1e3, rate_a1, 100 * steps / a1.cpu);
+  std::printf("(a)  100 periods, no delay           : %8.3f ms  %.3e steps/s  %.3e per CPU-s  (%.0fx OpenSees' 0.6e6)\n",
+              a.wall * 1e3, rate_a, 100 * steps / a.cpu, rate_a / 0.6e6);
+  std::printf("(b)  100 periods x 10 delays 0..18 ms: %8.3f ms  %.3e steps/s  %.3e per CPU-s\n",
+              b.wall * 1e3, rate_b, 1000 * steps / b.cpu);
+  std::printf("(b)/(a) steps/s ratio: %.3f  (a lane step of (b) costs %.2fx one of (a); target <= 3x)\n",
+              rate_b / rate_a, rate_a / rate_b);
   if (memory) {
     for (std::size_t periods : {100u, 1000u, 10000u}) {
       const std::vector<SdofLane> grid = lanes_for(periods);
