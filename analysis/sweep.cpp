@@ -761,10 +761,8 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     if (r.stiffness != stiffness || !(r.delay > 0)) continue;
     series[series_key(r)].push_back({r.period, {r.nrmse, r.eq2_paper}});
   }
-  // gnuplot's enhanced text reads '_' as a subscript: keep names readable.
-  std::string name = title;
-  std::replace(name.begin(), name.end(), '_', ' ');
-  PlotSpec nrmse_panel{name + ": NRMSE = sqrt(mean e^2) / median|u_{ref}|", "period T (s)",
+  const std::string& name = title;
+  PlotSpec nrmse_panel{name + ": NRMSE = sqrt(mean e^2) / median|u_ref|", "period T (s)",
                        "NRMSE (log)", {}, true};
   PlotSpec eq2_panel{name + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
                      "Eq. 2 (log)", {}, true};
@@ -777,7 +775,6 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     if (alphas.size() > 1) label += " alpha=" + format_number(alpha);
     if (dts.size() > 1) label += " dt=" + format_number(dt);
     if (motions.size() > 1) label += " " + motion;
-    std::replace(label.begin(), label.end(), '_', ' ');
     Series a{label, {}, {}, "linespoints"}, b{label, {}, {}, "linespoints"};
     for (const auto& [period, errors] : points) {
       a.x.push_back(period);
