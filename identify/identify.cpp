@@ -51,12 +51,20 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
       // Refit at the full rate from the search's parameters; the ranking keeps search errors.
       id.declared_fit = fit_channel(id.declared_fit.model, signals, result.split, full_fit);
       FitResult previous = id.declared_fit;
-      for (auto& step : id.steps) {
+      for (std::size_t k = 0; k < id.steps.size(); ++k) {
+        auto& step = id.steps[k];
         step.before = previous;
         step.evidence_before = residual_evidence(signals, previous.prediction);
         step.after = fit_channel(step.after.model, signals, result.split, full_fit);
-        previous = step.after;
         for (auto& trial : step.ranking) trial.fit.prediction.clear();
+        if (!(step.after.heldout_error < step.before.heldout_error)) {
+          // Paid on the search data but not at the full rate: not added, and nothing after it.
+          id.dropped_at_full_rate.assign(id.steps.begin() + static_cast<std::ptrdiff_t>(k),
+                                         id.steps.end());
+          id.steps.resize(k);
+          break;
+        }
+        previous = step.after;
       }
       id.final_fit = previous;
       id.final_evidence = residual_evidence(signals, previous.prediction);

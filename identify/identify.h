@@ -5,6 +5,9 @@
 // Per channel: declared model fitted -> greedy forward selection (selection.h) on the decimated
 // record -> the declared model and each step's model refitted jointly at the full rate, starting
 // from the search's parameters; the step's errors before/after are those full-rate fits.
+// The threshold and parameter penalty are applied on the search data (where decimation has
+// averaged the sensor noise); at the full rate a step must still lower the held-out error, or it
+// and the steps after it are dropped (listed in ChannelIdentification::dropped_at_full_rate).
 
 #include <vector>
 

@@ -179,6 +179,16 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                         {"final", model_json(c.final_fit, scales)},
                         {"final_evidence", evidence_json(c.final_evidence)},
                         {"search_heldout_error", c.search_heldout_error},
+                        {"dropped_at_full_rate",
+                         [&] {
+                           nlohmann::json d = nlohmann::json::array();
+                           for (const auto& s : c.dropped_at_full_rate) {
+                             d.push_back({{"effect", effect_name(s.effect)},
+                                          {"heldout_error_before", s.before.heldout_error},
+                                          {"heldout_error_after", s.after.heldout_error}});
+                           }
+                           return d;
+                         }()},
                         {"rejected", ranking_json(c.last_ranking)}});
   }
   out["steps"] = steps;
@@ -239,6 +249,11 @@ std::string format_table(const Identification& id,
             << percent(s.ranking[k].heldout_error) << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
       }
       out << "\n";
+    }
+    for (const auto& d : c.dropped_at_full_rate) {
+      out << "  dropped: + " << effect_name(d.effect) << " paid at the search rate but not at the "
+          << "full rate (held-out " << percent(d.before.heldout_error) << " -> "
+          << percent(d.after.heldout_error) << ")\n";
     }
     out << "  final: " << c.final_fit.model.describe(scales) << "\n";
     if (!c.last_ranking.empty()) {

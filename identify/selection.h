@@ -51,6 +51,8 @@ struct ChannelIdentification {
   std::vector<CandidateTrial> last_ranking;  // the round in which nothing paid
   // Held-out error of the final model on the data the search ran on (rankings compare with it).
   double search_heldout_error = 0.0;
+  // Steps that paid on decimated search data but not when refitted at the full rate.
+  std::vector<SelectionStep> dropped_at_full_rate;
 };
 
 // Fits `model` + `effect` from each starting guess of the effect (cartesian product of its
