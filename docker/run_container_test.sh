@@ -26,19 +26,20 @@ fi
 
 tag="rths-ctest-$$"
 out="$(mktemp -d /tmp/rths-ctest.XXXXXX)"
+# nsenter, not `ip netns exec`: the latter remounts /sys, hiding the cgroup mount runc needs.
+in_ns() { nsenter --net="/run/netns/$tag" "$@"; }
 cleanup() {
   set +e
   for service in coordinator substructure actuator; do
-    ip netns exec "$tag" podman rm -f -t 2 "$tag-$service" >/dev/null 2>&1
+    in_ns podman rm -f -t 2 "$tag-$service" >/dev/null 2>&1
   done
-  ip netns exec "$tag" podman network rm -f "$tag" >/dev/null 2>&1
+  in_ns podman network rm -f "$tag" >/dev/null 2>&1
   ip netns del "$tag" 2>/dev/null
   if [[ "${RTHS_KEEP_OUTPUT:-0}" == 1 ]]; then echo "output kept in $out"; else rm -rf "$out"; fi
 }
 trap cleanup EXIT
 ip netns add "$tag" || { echo "network namespaces are not permitted here" >&2; exit 3; }
 ip -n "$tag" link set lo up
-in_ns() { ip netns exec "$tag" "$@"; }
 
 in_ns podman network create --internal "$tag" >/dev/null
 dds="CYCLONEDDS_URI=file:///opt/rths/configs/dds_netns_containers.xml"
@@ -51,7 +52,7 @@ start_node actuator rths-actuator-emulator 2
 
 echo "running the coordinator (lockstep, 1 s of El Centro, $delay s each way on the actuator link)"
 set +e
-timeout 300 ip netns exec "$tag" podman run --name "$tag-coordinator" --network "$tag" \
+timeout 300 nsenter --net="/run/netns/$tag" podman run --name "$tag-coordinator" --network "$tag" \
   --network-alias coordinator --hostname coordinator -e "$dds" -v "$out:/out" "$image" bash -c "
     sed -e 's/@CLOCK@/LOCKSTEP/' -e 's/@DURATION@/1/' \
         -e 's/@ACTUATOR_ONE_WAY_DELAY@/$delay/g' -e 's/@ACTUATOR_JITTER@/0/g' \
