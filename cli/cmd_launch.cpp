@@ -45,10 +45,15 @@ struct CaseOutcome {
 };
 
 void collect(const runtime::RecordContents& record, CaseOutcome& c) {
+  std::map<int, std::int64_t> last_answer;
   for (const runtime::StepRecord* s : record.steps()) {
     c.time.push_back(s->time());
     c.u1.push_back(s->displacement_size() > 0 ? s->displacement(0) : 0.0);
     for (const auto& link : s->links()) {
+      // Count each answer once: in real time a step may reuse an earlier step's answer.
+      std::int64_t& last = last_answer[link.node_id()];
+      if (link.answered_step() == 0 || link.answered_step() == last) continue;
+      last = link.answered_step();
       c.round_trip[link.node_id()].push_back(link.round_trip());
       c.injected[link.node_id()].push_back(link.injected_lag());
       c.step_time[link.node_id()].push_back(s->time());

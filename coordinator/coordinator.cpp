@@ -263,7 +263,7 @@ struct Coordinator::State : core::RestoringEvaluator {
     for (auto& [id, node] : nodes) {
       if (node.plan->spec.kind() != config::NodeSpec::SUBSTRUCTURE) continue;
       for (std::size_t i = 0; i < node.plan->storeys.size(); ++i)
-        shear[node.plan->storeys[i]] = node.feedback.force(static_cast<int>(i));
+        shear[node.plan->storeys[i]] = force_of(node, i);
     }
     const auto& storeys = setup.partition.actuator_storeys;
     for (auto& [id, node] : nodes) {
@@ -272,13 +272,23 @@ struct Coordinator::State : core::RestoringEvaluator {
         const int a = node.plan->actuators[i];
         const int s = storeys[a];
         command[a] = drift[s];
-        realised[a] = node.feedback.realised(static_cast<int>(i));
-        measured[a] = node.feedback.force(static_cast<int>(i));
+        realised[a] = realised_of(node, i);
+        measured[a] = force_of(node, i);
       }
     }
     for (std::size_t a = 0; a < storeys.size(); ++a) shear[storeys[a]] += measured[a];
     assembly.dof_forces(shear, force);
     return force;
+  }
+
+  // Before a node's first answer (real time, lag longer than the wait) the specimen is at rest.
+  static double force_of(const Node& node, std::size_t i) {
+    const int index = static_cast<int>(i);
+    return index < node.feedback.force_size() ? node.feedback.force(index) : 0.0;
+  }
+  static double realised_of(const Node& node, std::size_t i) {
+    const int index = static_cast<int>(i);
+    return index < node.feedback.realised_size() ? node.feedback.realised(index) : 0.0;
   }
 
   void commit() override {
@@ -322,11 +332,6 @@ struct Coordinator::State : core::RestoringEvaluator {
       for (auto& [id, node] : nodes)
         if (node.last_answer != step) ++late_feedback;
       check_liveliness();
-      for (auto& [id, node] : nodes)
-        if (node.last_answer == 0)
-          throw RunAborted(node.plan->label() + " has not answered any command by step " +
-                               std::to_string(step),
-                           node.plan->label());
       return;
     }
     const auto start = Clock::now();
@@ -371,7 +376,10 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   plan_ = runtime::make_plan(s.setup, s.deployment);
   s.plan = &plan_;
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
-  for (const runtime::NodePlan& n : plan_.nodes) s.nodes[n.spec.id()].plan = &n;
+  for (const runtime::NodePlan& n : plan_.nodes) {
+    s.nodes[n.spec.id()].plan = &n;
+    s.nodes[n.spec.id()].link.set_node_id(n.spec.id());  // answered_step 0: no answer yet
+  }
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
   const int actuators = static_cast<int>(s.setup.partition.actuator_storeys.size());
   s.assembly = core::StoreyAssembly(storeys);
@@ -416,6 +424,7 @@ RunOutcome Coordinator::run() {
   runtime::Pacer pacer(s.options.clock ? *s.options.clock : monotonic, setup.dt);
   std::size_t completed = 1;
   bool failed = false;
+  double step_wall = 0.0;
 
   auto write_step = [&](std::size_t k, const runtime::PaceResult& pace) {
     if (!s.record) return;
@@ -438,6 +447,7 @@ RunOutcome Coordinator::run() {
     if (k > 0)
       for (auto& [id, node] : s.nodes) *r.add_links() = node.link;
     r.set_lateness(pace.lateness);
+    r.set_step_wall(step_wall);
     r.set_overrun(pace.overrun);
     s.record->write(entry);
   };
@@ -484,7 +494,9 @@ RunOutcome Coordinator::run() {
       load = -mass_iota * motion.acceleration[k];
       s.step = static_cast<std::int64_t>(k);
       s.time = t;
+      const auto step_start = Clock::now();
       integrator->step(load, s);
+      step_wall = std::chrono::duration<double>(Clock::now() - step_start).count();
       const auto row = static_cast<Eigen::Index>(k);
       result.displacement.row(row) = integrator->displacement().transpose();
       result.velocity.row(row) = integrator->velocity().transpose();

@@ -1,0 +1,237 @@
+// Runtime benchmark (not a test). Prints:
+//  1. ping-pong round trip of a Command-sized payload over the rths DDS endpoints (same QoS,
+//     same loopback configuration), from this process to an echo child process;
+//  2. lockstep: coordinator (this process) + substructure node + actuator emulator (child
+//     processes) over the 39 s Imperial Valley record: steps/s, step wall-time median / p99;
+//  3. real time at 1024 Hz (and 4096 Hz) over the record: overrun % beside a bare
+//     clock_nanosleep loop with the same Pacer and the same overrun definition.
+// Targets (issue 3): >= 10,000 lockstep steps/s; median step <= 2 x ping-pong median RTT;
+// 1024 Hz overruns <= bare loop + 0.1 point; 4096 Hz overruns <= 1 %.
+//
+//   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D]
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include "coordinator/coordinator.h"
+#include "runtime/launch.h"
+#include "runtime/lag.h"
+#include "runtime/pacing.h"
+#include "runtime/process.h"
+#include "runtime/record.h"
+#include "runtime/schema.h"
+#include "transport/dds_endpoint.h"
+
+namespace {
+
+using namespace rths;
+using namespace std::chrono_literals;
+
+std::string study_text(double dt, double seconds, const std::string& deployment) {
+  return "name: \"bench\"\n"
+         "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+         "motion { path: \"" + std::string(RTHS_SHARED_DATA_DIR) +
+         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
+         " }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: " + std::to_string(dt) + " }\n"
+         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+         "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n" + deployment;
+}
+
+runtime::Command payload() {
+  runtime::Command c;
+  c.set_time(1.234);
+  c.add_drift(0.0123);
+  c.add_drift_velocity(0.456);
+  return c;
+}
+
+int echo_main(int domain, int node_id) {
+  transport::DdsEndpoint node({static_cast<std::uint32_t>(domain), false, node_id, "rths", 64});
+  for (;;) {
+    auto m = node.receive(5s);
+    if (!m) return 0;
+    if (m->kind == runtime::STOP) return 0;
+    runtime::Feedback f;
+    f.add_force(1.0);
+    f.add_realised(0.01);
+    auto reply = runtime::pack(m->run_id, node_id, runtime::FEEDBACK, m->step, f);
+    reply.echo_ns = m->sent_ns;
+    node.send(reply);
+  }
+}
+
+// Round trips to `peers` echo processes at once (a lockstep step talks to two nodes).
+runtime::LagSummary ping_pong(int domain, int count, int peers) {
+  transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  std::vector<runtime::ChildProcess> echoes;
+  for (int p = 1; p <= peers; ++p)
+    echoes.emplace_back(runtime::executable_dir() / "rths_runtime_bench",
+                        std::vector<std::string>{"--echo", std::to_string(domain), "--echo-id",
+                                                 std::to_string(p)},
+                        "/tmp/rths_bench_echo.log");
+  coordinator.wait_for_match(peers, peers, 10000ms);
+  std::vector<double> rtt;
+  rtt.reserve(count);
+  const auto command = payload();
+  for (int i = 1; i <= count + 200; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int p = 1; p <= peers; ++p)
+      coordinator.send(runtime::pack("bench", p, runtime::COMMAND, i, command));
+    for (int answered = 0; answered < peers;) {
+      auto r = coordinator.receive(2s);
+      if (!r) throw std::runtime_error("ping-pong: no echo");
+      if (r->step == i) ++answered;
+    }
+    if (i > 200) rtt.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  coordinator.send(runtime::pack("bench", transport::kBroadcastId, runtime::STOP, 0, runtime::Stop{}));
+  for (auto& e : echoes) e.wait_for(3000ms);
+  return runtime::summarize(rtt);
+}
+
+struct RunFigures {
+  std::size_t steps = 0;
+  double wall = 0, steps_per_second = 0;
+  runtime::LagSummary step_wall;
+  std::uint64_t overruns = 0;
+  double max_lateness = 0;
+  runtime::LagSummary lateness;
+};
+
+RunFigures distributed_run(int domain, const std::string& text, const std::string& name,
+                           bool with_substructure = true) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_bench_" + name);
+  std::filesystem::create_directories(dir);
+  const auto config = dir / "study.textproto";
+  std::ofstream(config) << text;
+  const auto record = dir / "run.rthsrec";
+  const std::string run_id = "bench-" + name;
+  std::vector<runtime::ChildProcess> nodes;
+  if (with_substructure)
+    nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / "substructure_nodes/rths-substructure-node",
+                     std::vector<std::string>{"--node-id", "1", "--domain", std::to_string(domain),
+                                              "--run-id", run_id},
+                     dir / "node_1.log");
+  nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / "actuator_emulator/rths-actuator-emulator",
+                     std::vector<std::string>{"--node-id", "2", "--domain", std::to_string(domain),
+                                              "--run-id", run_id},
+                     dir / "node_2.log");
+  const config::Study study = core::load_study(config);
+  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  coordinator::CoordinatorOptions options;
+  options.run_id = run_id;
+  options.record = record;
+  coordinator::Coordinator coordinator(core::prepare_study(study, dir), endpoint, options);
+  const auto outcome = coordinator.run();
+  if (!outcome.ok) throw std::runtime_error(name + ": " + outcome.status);
+  for (auto& n : nodes) n.wait_for(5000ms);
+  const auto contents = runtime::read_record(record);
+  std::vector<double> walls, lateness;
+  double total = 0;
+  for (const auto* s : contents.steps()) {
+    if (s->step() == 0) continue;
+    walls.push_back(s->step_wall());
+    lateness.push_back(s->lateness());
+    total += s->step_wall();
+  }
+  RunFigures f;
+  f.steps = walls.size();
+  f.wall = outcome.wall_seconds;
+  f.steps_per_second = static_cast<double>(f.steps) / total;
+  f.step_wall = runtime::summarize(walls);
+  f.overruns = outcome.counters.overruns();
+  f.max_lateness = outcome.max_lateness;
+  f.lateness = runtime::summarize(lateness);
+  return f;
+}
+
+struct BareFigures {
+  std::size_t steps = 0;
+  std::uint64_t overruns = 0;
+  runtime::LagSummary lateness;
+};
+
+BareFigures bare_loop(double period, double seconds) {
+  runtime::MonotonicClock clock;
+  runtime::Pacer pacer(clock, period);
+  const auto steps = static_cast<std::int64_t>(seconds / period);
+  std::vector<double> lateness;
+  lateness.reserve(steps);
+  pacer.start();
+  for (std::int64_t k = 1; k <= steps; ++k) lateness.push_back(pacer.wait(k).lateness);
+  return {static_cast<std::size_t>(steps), pacer.overruns(), runtime::summarize(lateness)};
+}
+
+void print_real_time(const char* label, const RunFigures& f, const BareFigures& bare) {
+  const double pct = 100.0 * static_cast<double>(f.overruns) / static_cast<double>(f.steps);
+  const double bare_pct = 100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps);
+  std::printf(
+      "%s: %zu steps, overruns %llu (%.3f %%), wake lateness median %.1f us p99 %.1f us max %.2f "
+      "ms; step wall median %.1f us p99 %.1f us\n"
+      "  bare clock_nanosleep loop: %zu steps, overruns %llu (%.3f %%), lateness median %.1f us "
+      "p99 %.1f us max %.2f ms\n",
+      label, f.steps, static_cast<unsigned long long>(f.overruns), pct, f.lateness.median * 1e6,
+      f.lateness.p99 * 1e6, f.lateness.max * 1e3, f.step_wall.median * 1e6, f.step_wall.p99 * 1e6,
+      bare.steps, static_cast<unsigned long long>(bare.overruns), bare_pct,
+      bare.lateness.median * 1e6, bare.lateness.p99 * 1e6, bare.lateness.max * 1e3);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rths runtime benchmark"};
+  double seconds = 39.0;
+  bool skip_real_time = false;
+  int domain = 40;
+  int echo_domain = -1, echo_id = 1;
+  app.add_option("--seconds", seconds, "s of the record for the real-time runs (default 39)");
+  app.add_flag("--skip-real-time", skip_real_time);
+  app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
+  app.add_option("--echo", echo_domain, "internal: run as the ping-pong echo peer");
+  app.add_option("--echo-id", echo_id, "internal: the echo peer's node id");
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::warn);
+  rths::runtime::ensure_dds_config();
+  if (echo_domain >= 0) return echo_main(echo_domain, echo_id);
+
+  const auto pp = ping_pong(domain, 20000, 1);
+  std::printf("ping-pong (Command payload, reliable KEEP_LAST 64, loopback), 1 peer: %zu round "
+              "trips, median %.1f us, p99 %.1f us, max %.2f ms\n",
+              pp.count, pp.median * 1e6, pp.p99 * 1e6, pp.max * 1e3);
+  const auto pp2 = ping_pong(domain + 4, 20000, 2);
+  std::printf("ping-pong to 2 peers at once (what one lockstep step does): median %.1f us, p99 "
+              "%.1f us, max %.2f ms\n",
+              pp2.median * 1e6, pp2.p99 * 1e6, pp2.max * 1e3);
+  const auto lock = distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep");
+  std::printf("lockstep (coordinator + substructure node + actuator emulator, 39 s record at "
+              "1 ms): %zu steps, %.0f steps/s (step wall sum), run wall %.2f s; step median %.1f "
+              "us, p99 %.1f us, max %.2f ms; median step / median 1-peer ping-pong = %.2f, / 2-peer "
+              "ping-pong = %.2f\n",
+              lock.steps, lock.steps_per_second, lock.wall, lock.step_wall.median * 1e6,
+              lock.step_wall.p99 * 1e6, lock.step_wall.max * 1e3,
+              lock.step_wall.median / pp.median, lock.step_wall.median / pp2.median);
+  const auto one = distributed_run(
+      domain + 4, study_text(0.001, 39.0, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
+      "lockstep_one_node", false);
+  std::printf("lockstep, numerical part in the coordinator + actuator emulator only: %.0f steps/s, "
+              "run wall %.2f s; step median %.1f us, p99 %.1f us; median step / median 1-peer "
+              "ping-pong = %.2f\n",
+              one.steps_per_second, one.wall, one.step_wall.median * 1e6, one.step_wall.p99 * 1e6,
+              one.step_wall.median / pp.median);
+  if (skip_real_time) return 0;
+  for (const double hz : {1024.0, 4096.0}) {
+    const double dt = 1.0 / hz;
+    const auto rt = distributed_run(domain + (hz < 2000 ? 2 : 3),
+                                    study_text(dt, seconds, "deployment { clock: REAL_TIME }"),
+                                    "rt" + std::to_string(static_cast<int>(hz)));
+    const auto bare = bare_loop(dt, seconds);
+    char label[64];
+    std::snprintf(label, sizeof label, "real time %.0f Hz, %.0f s", hz, seconds);
+    print_real_time(label, rt, bare);
+  }
+  return 0;
+}
