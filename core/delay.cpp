@@ -336,7 +336,7 @@ double DelayTrace::max() const {
 
 DelayTrace read_delay_trace(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open delay trace");
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open delay trace");
   DelayTrace trace;
   std::string line;
   int line_number = 0;
@@ -350,7 +350,7 @@ DelayTrace read_delay_trace(const std::filesystem::path& path) {
     for (std::string token; fields >> token;) tokens.push_back(token);
     if (tokens.empty()) continue;
     if (tokens.size() != 2) {
-      throw std::runtime_error(where() + "expected two columns (time, delay), found " +
+      throw std::invalid_argument(where() + "expected two columns (time, delay), found " +
                                std::to_string(tokens.size()));
     }
     double values[2];
@@ -359,22 +359,22 @@ DelayTrace read_delay_trace(const std::filesystem::path& path) {
       char* end = nullptr;
       values[c] = std::strtod(token.c_str(), &end);
       if (end == token.c_str() || *end != '\0' || !std::isfinite(values[c])) {
-        throw std::runtime_error(where() + "column " + std::to_string(c + 1) + " ('" + token +
+        throw std::invalid_argument(where() + "column " + std::to_string(c + 1) + " ('" + token +
                                  "') is not a finite number");
       }
     }
     if (values[1] < 0.0) {
-      throw std::runtime_error(where() + "delay " + tokens[1] + " is negative");
+      throw std::invalid_argument(where() + "delay " + tokens[1] + " is negative");
     }
     if (!trace.time.empty() && !(values[0] > trace.time.back())) {
-      throw std::runtime_error(where() + "time " + tokens[0] +
+      throw std::invalid_argument(where() + "time " + tokens[0] +
                                " does not increase (previous " +
                                std::to_string(trace.time.back()) + ")");
     }
     trace.time.push_back(values[0]);
     trace.delay.push_back(values[1]);
   }
-  if (trace.time.empty()) throw std::runtime_error(path.string() + ": delay trace has no samples");
+  if (trace.time.empty()) throw std::invalid_argument(path.string() + ": delay trace has no samples");
   return trace;
 }
 

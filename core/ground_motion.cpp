@@ -53,7 +53,7 @@ void parse_values(std::string line, const std::filesystem::path& path, int line_
     if (!parse_number(p, value) || !std::isfinite(value)) {
       std::string token(start);
       token = token.substr(0, token.find_first_of(" \t"));
-      throw std::runtime_error(where(path, line_number) + "'" + token +
+      throw std::invalid_argument(where(path, line_number) + "'" + token +
                                "' is not a finite number");
     }
     out.push_back(value);
@@ -71,7 +71,7 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
   const std::string text = upper(line);
   At2Header header;
   const auto fail = [&](const std::string& why) {
-    return std::runtime_error(where(path, 4) + why + " in AT2 header line '" + line +
+    return std::invalid_argument(where(path, 4) + why + " in AT2 header line '" + line +
                               "' (expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT')");
   };
   const std::size_t npts_at = text.find("NPTS");
@@ -138,16 +138,16 @@ double GroundMotion::peak_abs() const {
 
 GroundMotion read_at2(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open AT2 file");
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
   std::string line;
   for (int i = 1; i <= 3; ++i) {
     if (!read_line(in, line)) {
-      throw std::runtime_error(path.string() + ": AT2 header ends at line " + std::to_string(i) +
+      throw std::invalid_argument(path.string() + ": AT2 header ends at line " + std::to_string(i) +
                                " (expected 4 header lines)");
     }
   }
   if (!read_line(in, line)) {
-    throw std::runtime_error(path.string() + ": AT2 header has no 4th line with NPTS and DT");
+    throw std::invalid_argument(path.string() + ": AT2 header has no 4th line with NPTS and DT");
   }
   const At2Header header = parse_at2_header(line, path);
 
@@ -163,12 +163,12 @@ GroundMotion read_at2(const std::filesystem::path& path) {
     parse_values(line, path, line_number, motion.acceleration);
     if (motion.acceleration.size() != before) last_value_line = line_number;
     if (motion.acceleration.size() > static_cast<std::size_t>(header.npts)) {
-      throw std::runtime_error(where(path, line_number) + "more values than NPTS = " +
+      throw std::invalid_argument(where(path, line_number) + "more values than NPTS = " +
                                std::to_string(header.npts) + " declared on line 4");
     }
   }
   if (motion.acceleration.size() < static_cast<std::size_t>(header.npts)) {
-    throw std::runtime_error(path.string() + ": found " +
+    throw std::invalid_argument(path.string() + ": found " +
                              std::to_string(motion.acceleration.size()) + " values but NPTS = " +
                              std::to_string(header.npts) + " (line 4); " +
                              std::to_string(header.npts -
@@ -186,7 +186,7 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
                                 std::to_string(to_si));
   }
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open ground-motion file");
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
   std::vector<double> times, values, fields;
   std::string line, bad_field;
   int line_number = 0;
@@ -202,7 +202,7 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
         header_allowed = false;
         continue;
       }
-      throw std::runtime_error(where(path, line_number) + "'" + bad_field +
+      throw std::invalid_argument(where(path, line_number) + "'" + bad_field +
                                "' is not a finite number");
     }
     header_allowed = false;
@@ -210,11 +210,11 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
       columns = fields.size();
       first_data_line = line_number;
       if (columns != 1 && columns != 2) {
-        throw std::runtime_error(where(path, line_number) + "expected 1 column (acceleration) or "
+        throw std::invalid_argument(where(path, line_number) + "expected 1 column (acceleration) or "
                                  "2 (time, acceleration), found " + std::to_string(columns));
       }
     } else if (fields.size() != columns) {
-      throw std::runtime_error(where(path, line_number) + "found " +
+      throw std::invalid_argument(where(path, line_number) + "found " +
                                std::to_string(fields.size()) + " columns, line " +
                                std::to_string(first_data_line) + " had " +
                                std::to_string(columns));
@@ -225,12 +225,12 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
         const double step = fields[0] - times.back();
         // 1e-3 relative: text files round their times, but a missing or doubled sample is caught.
         if (std::abs(step - first_step) > 1e-3 * first_step) {
-          throw std::runtime_error(where(path, line_number) + "time step " + std::to_string(step) +
+          throw std::invalid_argument(where(path, line_number) + "time step " + std::to_string(step) +
                                    " s differs from the first step " +
                                    std::to_string(first_step) + " s (non-uniform time)");
         }
       } else if (times.size() == 1 && !(fields[0] > times[0])) {
-        throw std::runtime_error(where(path, line_number) + "time does not increase");
+        throw std::invalid_argument(where(path, line_number) + "time does not increase");
       }
       times.push_back(fields[0]);
       values.push_back(fields[1] * to_si);
@@ -238,12 +238,12 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
       values.push_back(fields[0] * to_si);
     }
   }
-  if (values.empty()) throw std::runtime_error(path.string() + ": no acceleration values");
+  if (values.empty()) throw std::invalid_argument(path.string() + ": no acceleration values");
   GroundMotion motion;
   motion.name = path.stem().string();
   if (columns == 2) {
     if (times.size() < 2) {
-      throw std::runtime_error(path.string() + ": two-column file needs at least two samples to "
+      throw std::invalid_argument(path.string() + ": two-column file needs at least two samples to "
                                "define its time step");
     }
     motion.dt = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
@@ -266,7 +266,7 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
 GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
                                 double column_to_si) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open ground-motion file");
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
   std::string line;
   for (int i = 0; i < 4 && read_line(in, line); ++i) {
     if (i == 3 && upper(line).find("NPTS") != std::string::npos) return read_at2(path);

@@ -220,7 +220,7 @@ void expect_trace_error(const std::string& text, const std::string& expected_fra
   try {
     read_delay_trace(path);
     ADD_FAILURE() << "no error for: " << text;
-  } catch (const std::runtime_error& error) {
+  } catch (const std::invalid_argument& error) {
     const std::string message = error.what();
     EXPECT_NE(message.find(path.string()), std::string::npos) << message;
     EXPECT_NE(message.find(expected_fragment), std::string::npos) << message;
@@ -234,7 +234,7 @@ TEST(DelayTrace, ErrorsNameFileAndLine) {
   expect_trace_error("0 0.001 5\n", ":1: expected two columns");
   expect_trace_error("0 -0.001\n", ":1: delay -0.001 is negative");
   expect_trace_error("# nothing\n", "no samples");
-  EXPECT_THROW(read_delay_trace("/nonexistent/trace.txt"), std::runtime_error);
+  EXPECT_THROW(read_delay_trace("/nonexistent/trace.txt"), std::invalid_argument);
 }
 
 TEST(TraceShift, FollowsTheTrace) {

@@ -93,7 +93,7 @@ TEST_F(At2Reader, TruncatedRecordNamesFileAndMissingCount) {
   std::size_t pos = 0;
   for (int line = 0; line < 104; ++line) pos = text.find('\n', pos) + 1;
   const auto path = write("cut.AT2", text.substr(0, pos));
-  expect_error<std::runtime_error>([&] { read_at2(path); }, path,
+  expect_error<std::invalid_argument>([&] { read_at2(path); }, path,
                                    {"found 800 values but NPTS = 1559", "759 missing"});
 }
 
@@ -115,18 +115,18 @@ TEST_F(At2Reader, ReadsTheNewNgaHeaderAndGluedFixedWidthFields) {
 TEST_F(At2Reader, ErrorsNameFileLineAndProblem) {
   const std::string head = "a\nb\nc\n";
   const auto no_npts = write("no_npts.AT2", head + "points and step\n0.1\n");
-  expect_error<std::runtime_error>([&] { read_at2(no_npts); }, no_npts, {":4:", "no NPTS"});
+  expect_error<std::invalid_argument>([&] { read_at2(no_npts); }, no_npts, {":4:", "no NPTS"});
   const auto bad_dt = write("bad_dt.AT2", head + "NPTS= 2, DT= -0.01 SEC\n0.1 0.2\n");
-  expect_error<std::runtime_error>([&] { read_at2(bad_dt); }, bad_dt, {":4:", "DT must be > 0"});
+  expect_error<std::invalid_argument>([&] { read_at2(bad_dt); }, bad_dt, {":4:", "DT must be > 0"});
   const auto bad_value = write("bad_value.AT2", head + "NPTS= 3, DT= .01 SEC\n0.1 0.2\n0.3x\n");
-  expect_error<std::runtime_error>([&] { read_at2(bad_value); }, bad_value, {":6:", "'x'"});
+  expect_error<std::invalid_argument>([&] { read_at2(bad_value); }, bad_value, {":6:", "'x'"});
   const auto too_many = write("too_many.AT2", head + "NPTS= 2, DT= .01 SEC\n0.1 0.2\n0.3\n");
-  expect_error<std::runtime_error>([&] { read_at2(too_many); }, too_many,
+  expect_error<std::invalid_argument>([&] { read_at2(too_many); }, too_many,
                                    {":6:", "more values than NPTS = 2"});
   const auto short_header = write("short.AT2", "a\nb\n");
-  expect_error<std::runtime_error>([&] { read_at2(short_header); }, short_header, {"header"});
+  expect_error<std::invalid_argument>([&] { read_at2(short_header); }, short_header, {"header"});
   const auto missing = dir_ / "missing.AT2";
-  expect_error<std::runtime_error>([&] { read_at2(missing); }, missing, {"cannot open"});
+  expect_error<std::invalid_argument>([&] { read_at2(missing); }, missing, {"cannot open"});
 }
 
 using ColumnReader = TempDir;
@@ -155,19 +155,19 @@ TEST_F(ColumnReader, TwoColumnsWithHeaderAndCommas) {
 
 TEST_F(ColumnReader, ErrorsNameFileAndLine) {
   const auto uneven = write("uneven.txt", "0 1\n0.01 2\n0.02 3\n0.04 4\n");
-  expect_error<std::runtime_error>([&] { read_columns(uneven, 0.0, 1.0); }, uneven,
+  expect_error<std::invalid_argument>([&] { read_columns(uneven, 0.0, 1.0); }, uneven,
                                    {":4:", "non-uniform time"});
   const auto ragged = write("ragged.txt", "0 1\n0.01 2 5\n");
-  expect_error<std::runtime_error>([&] { read_columns(ragged, 0.0, 1.0); }, ragged,
+  expect_error<std::invalid_argument>([&] { read_columns(ragged, 0.0, 1.0); }, ragged,
                                    {":2:", "found 3 columns"});
   const auto text = write("text.txt", "time accel\n0 1\n0.01 abc\n");
-  expect_error<std::runtime_error>([&] { read_columns(text, 0.0, 1.0); }, text,
+  expect_error<std::invalid_argument>([&] { read_columns(text, 0.0, 1.0); }, text,
                                    {":3:", "'abc'"});
   const auto wide = write("wide.txt", "1 2 3\n");
-  expect_error<std::runtime_error>([&] { read_columns(wide, 0.0, 1.0); }, wide,
+  expect_error<std::invalid_argument>([&] { read_columns(wide, 0.0, 1.0); }, wide,
                                    {":1:", "found 3"});
   const auto empty = write("empty.txt", "# nothing\n");
-  expect_error<std::runtime_error>([&] { read_columns(empty, 0.01, 1.0); }, empty,
+  expect_error<std::invalid_argument>([&] { read_columns(empty, 0.01, 1.0); }, empty,
                                    {"no acceleration values"});
 }
 
