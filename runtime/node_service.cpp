@@ -6,6 +6,7 @@
 #include <climits>
 #include <algorithm>
 
+#include "core/study.h"
 #include "runtime/plan.h"
 #include "runtime/schema.h"
 
@@ -65,6 +66,16 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
         throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
                                     ", this node speaks " + std::to_string(kSchemaVersion));
       hosted_ = configure(assign);
+      const auto chains = [&](const std::string& case_name) {
+        std::vector<core::DelayChain> out;
+        if (case_name.empty()) return out;
+        const config::Case& source = find_case(assign.study(), case_name);
+        for (int i = 0; i < hosted_; ++i)
+          out.push_back(core::make_delay_chain(source.delay(), assign.dt(), assign.base_dir()));
+        return out;
+      };
+      receive_chains_ = chains(assign.node().receive_delay_case());
+      send_chains_ = chains(assign.node().send_delay_case());
     } catch (const std::exception& e) {
       configure_error_ = label() + ": " + e.what();
       spdlog::error("{}", configure_error_);
@@ -103,6 +114,13 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
         return {};
       }
       feedback_.Clear();
+      if (!receive_chains_.empty() && command_.drift_size() == hosted_ &&
+          command_.drift_velocity_size() == hosted_) {
+        for (int i = 0; i < hosted_; ++i) {
+          const double velocity = command_.drift_velocity(i);
+          command_.set_drift(i, receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
+        }
+      }
       try {
         compute(command_, feedback_);  // checks sizes before it changes any state
       } catch (const std::invalid_argument& e) {
@@ -110,6 +128,9 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
         rejected_.count(Verdict::kGarbage);
         return {};
       }
+      if (!send_chains_.empty())
+        for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
+          feedback_.set_force(i, send_chains_[i].step({command_.time(), feedback_.force(i), 0.0}));
       last_step_ = message.step;
       feedback_.set_command_received_ns(message.received_ns);
       feedback_.set_injected_lag(injected_lag_);

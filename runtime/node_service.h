@@ -6,11 +6,14 @@
 //                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing the command's stamp;
 //                       HOLD -> freeze (further commands ignored); STOP -> stopped();
 //                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
+//   node delay stages   the spec's receive_delay_case / send_delay_case stages (simulated time) act on
+//                       each received drift before compute() and on each force after it.
 // Subclasses (substructure node, actuator emulator) supply configure() and compute().
 
 #include <string>
 #include <vector>
 
+#include "core/delay.h"
 #include "rths/proto/runtime.pb.h"
 #include "runtime/validation.h"
 #include "transport/in_process.h"
@@ -61,6 +64,8 @@ class NodeService : public transport::NodeHandler {
   RejectCounters rejected_;
   Command command_;
   Feedback feedback_;
+  // Simulated-time stages of the node's spec, one chain per hosted entry (empty: none).
+  std::vector<core::DelayChain> receive_chains_, send_chains_;
 };
 
 }  // namespace rths::runtime

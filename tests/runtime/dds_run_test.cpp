@@ -70,6 +70,15 @@ TEST_F(DdsRun, InjectedWallClockLagIsMeasuredAndLeavesTheLockstepResultUnchanged
   EXPECT_LT(runtime::summarize(fast_round_trip).median, 2 * kOneWay);
 }
 
+TEST_F(DdsRun, DelayStageAtTheEmulatorsInputReproducesTheInProcessDelayedResult) {
+  const std::string text = test::paper_frame_study(
+      2, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+         "receive_delay_case: \"jitter\" } }");
+  const auto run = test::launch("node_delay", text, "reference", 19);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  test::expect_record_equals(run.record, test::reference_result(text, "jitter"));
+}
+
 TEST_F(DdsRun, TwoRunsSideBySideAreIsolated) {
   const std::string text = test::paper_frame_study(2, "");
   auto first = std::async(std::launch::async, [&] {
@@ -103,6 +112,28 @@ TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
   }
   EXPECT_EQ(overruns, footer->counters().overruns());
   EXPECT_EQ(run.record.header()->clock(), "real_time");
+}
+
+// Real time with a link slower than dt: each step uses the newest force available and the record
+// says which step it answers.
+TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
+  const std::string text = test::paper_frame_study(
+      0.6, "deployment { clock: REAL_TIME nodes { id: 1 kind: SUBSTRUCTURE } "
+           "nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { one_way_delay: 0.003 } "
+           "send_lag { one_way_delay: 0.003 } } }");
+  const auto run = test::launch("slow_link", text, "reference", 10);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  std::vector<double> behind;
+  for (const runtime::StepRecord* s : run.record.steps())
+    for (const runtime::LinkSample& link : s->links())
+      if (link.node_id() == 2 && link.answered_step() > 0) {
+        EXPECT_LT(link.answered_step(), s->step());
+        behind.push_back(static_cast<double>(s->step() - link.answered_step()));
+      }
+  ASSERT_GT(behind.size(), 300u);
+  // About 6 ms of injected round trip at 1 ms steps, plus the real one.
+  EXPECT_GE(runtime::summarize(behind).median, 6.0);
+  EXPECT_GT(run.record.footer()->counters().late_feedback(), 300u);
 }
 
 }  // namespace

@@ -68,6 +68,47 @@ INSTANTIATE_TEST_SUITE_P(
         Variant{"bilinear_storey2", test::two_storey_study(4, kFractionCases, kTwoNodes), "lag"}),
     [](const auto& info) { return std::string(info.param.name); });
 
+// A 14 ms shift put on what the actuator emulator receives (a node delay stage) instead of on the
+// actuator (the case) reproduces the delayed case of core::simulate exactly.
+TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
+  const std::string text = test::paper_frame_study(
+      5, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+         "receive_delay_case: \"lag_shift_14ms\" } }");
+  const core::PreparedStudy prepared = test::prepare(text);
+  coordinator::CoordinatorOptions options;
+  options.run_id = "node-delay";
+  options.case_name = "reference";
+  const auto outcome = coordinator::run_in_process(prepared, options);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  const auto delayed = core::simulate(
+      core::setup_for_case(prepared, runtime::find_case(prepared.config, "lag_shift_14ms")),
+      prepared.motion);
+  expect_identical(outcome.result, delayed);
+}
+
+TEST(InProcess, NodeSendDelayDelaysTheForce) {
+  const std::string text = test::paper_frame_study(
+      3, "deployment { nodes { id: 1 kind: SUBSTRUCTURE send_delay_case: \"lag_shift_14ms\" } "
+         "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "send-delay";
+  options.case_name = "reference";
+  const auto outcome = coordinator::run_in_process(test::prepare(text), options);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  const auto undelayed = test::reference_result(text, "reference");
+  // Same length, different response: the numerical storey's force now arrives 14 ms late.
+  ASSERT_EQ(outcome.result.steps(), undelayed.steps());
+  EXPECT_GT((outcome.result.displacement - undelayed.displacement).cwiseAbs().maxCoeff(), 1e-5);
+}
+
+TEST(InProcess, UnknownNodeDelayCaseIsRefused) {
+  const std::string text = test::paper_frame_study(
+      1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay_case: \"nope\" } }");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "x";
+  EXPECT_THROW(coordinator::run_in_process(test::prepare(text), options), std::invalid_argument);
+}
+
 TEST(InProcess, DeploymentThatDoesNotCoverTheExperimentalStoreyIsRefused) {
   const std::string text = test::paper_frame_study(
       1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } }");
