@@ -26,6 +26,10 @@ struct RunAborted : std::runtime_error {
   std::string node;
 };
 
+// Real time: stop draining the transport this long before a deadline and sleep the rest with
+// clock_nanosleep (a waitset's timed wait is less precise).
+constexpr std::int64_t kDrainMarginNs = 150'000;
+
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -424,7 +428,8 @@ RunOutcome Coordinator::run() {
   result.measured_force = core::Mat::Zero(rows, actuators);
 
   runtime::MonotonicClock monotonic;
-  runtime::Pacer pacer(s.options.clock ? *s.options.clock : monotonic, setup.dt);
+  runtime::PacingClock& pacing_clock = s.options.clock ? *s.options.clock : monotonic;
+  runtime::Pacer pacer(pacing_clock, setup.dt);
   std::size_t completed = 1;
   bool failed = false;
   double step_wall = 0.0;
@@ -491,7 +496,15 @@ RunOutcome Coordinator::run() {
     if (s.real_time) pacer.start();
     for (std::size_t k = 1; k < steps; ++k) {
       runtime::PaceResult pace;
-      if (s.real_time) pace = pacer.wait(static_cast<std::int64_t>(k));
+      if (s.real_time) {
+        // Take messages off the wire while waiting, so that their receive stamps (and so the
+        // measured lag) are not delayed by our sleep; the last stretch is clock_nanosleep to the
+        // absolute deadline.
+        const std::int64_t until = pacer.deadline_ns(static_cast<std::int64_t>(k)) - kDrainMarginNs;
+        for (std::int64_t now = pacing_clock.now_ns(); now < until; now = pacing_clock.now_ns())
+          s.pump(std::chrono::nanoseconds(until - now));
+        pace = pacer.wait(static_cast<std::int64_t>(k));
+      }
       const double t = static_cast<double>(k) * setup.dt;
       result.time[k] = t;
       load = -mass_iota * motion.acceleration[k];

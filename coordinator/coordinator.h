@@ -10,7 +10,9 @@
 //              forces. Doubles cross the wire unchanged, so lockstep equals the in-process run
 //              bit for bit.
 //   lockstep   waits for every answer to step k (step_timeout), simulated time only.
-//   real time  absolute deadlines every dt (Pacer); waits at most feedback_wait_fraction * dt for
+//   real time  absolute deadlines every dt (Pacer); between steps it takes messages off the wire
+//              until 150 us before the deadline (so receive stamps are not delayed by its sleep),
+//              then clock_nanosleep; waits at most feedback_wait_fraction * dt for
 //              the answers to step k, otherwise uses the newest answer it has and records which
 //              step that answers; overruns are counted and recorded per step.
 //   safety     a node silent for liveliness_timeout, a missing answer, or a command beyond the
@@ -19,6 +21,9 @@
 //   rejects    foreign-run, garbage, duplicate, stale, out-of-order, unknown-node messages are
 //              counted and never applied.
 // Record: header, one StepRecord per step (flushed), events, footer.
+// Real-time safety: the step allocates (message payload strings, the record entry) and writes
+// the record synchronously (one write + flush per step, so a crash loses at most one step); it
+// does no other blocking I/O.
 
 #include <filesystem>
 #include <map>
