@@ -8,6 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -15,6 +17,7 @@
 #include "analysis/plot.h"
 #include "cli/commands.h"
 #include "core/metrics.h"
+#include "core/simulation.h"
 #include "core/study.h"
 #include "runtime/export.h"
 #include "runtime/lag.h"
@@ -41,8 +44,36 @@ struct CaseOutcome {
   std::map<int, std::vector<double>> round_trip, injected, step_time;  // per node id
   std::uint64_t overruns = 0, rejected = 0, steps = 0;
   double peak = 0, nrmse = -1;
+  // Lockstep without node-level delay stages must equal core::simulate of the same case bit for
+  // bit; -1 when that comparison does not apply (real time, node delay stages, failed run).
+  double max_difference_from_in_process = -1;
   std::filesystem::path record, csv;
 };
+
+// Whether a lockstep run of this study is expected to reproduce core::simulate exactly.
+bool comparable_in_process(const config::Study& study) {
+  if (study.deployment().clock() != config::Deployment::LOCKSTEP) return false;
+  for (const auto& node : study.deployment().nodes()) {
+    if (!node.receive_delay_case().empty() || !node.send_delay_case().empty()) return false;
+  }
+  return true;
+}
+
+// max |u1_distributed - u1_in_process| over the run; u1 is floor 1, as in the record.
+double difference_from_in_process(const core::PreparedStudy& prepared, const std::string& case_name,
+                                  const std::vector<double>& u1) {
+  for (const config::Case& c : prepared.config.cases()) {
+    if (c.name() != case_name) continue;
+    const core::SimulationResult expected = core::simulate(core::setup_for_case(prepared, c), prepared.motion);
+    if (static_cast<std::size_t>(expected.displacement.rows()) != u1.size()) return -1;
+    double worst = 0;
+    for (std::size_t k = 0; k < u1.size(); ++k) {
+      worst = std::max(worst, std::abs(u1[k] - expected.displacement(static_cast<Eigen::Index>(k), 0)));
+    }
+    return worst;
+  }
+  return -1;
+}
 
 void collect(const runtime::RecordContents& record, CaseOutcome& c) {
   std::map<int, std::int64_t> last_answer;
@@ -164,6 +195,11 @@ void run_launch(const LaunchArgs& args) {
   for (auto& c : outcomes)
     if (ref && ref != &c && ref->u1.size() == c.u1.size() && !c.u1.empty())
       c.nrmse = core::nrmse(ref->u1, c.u1);
+  if (comparable_in_process(study)) {
+    const auto prepared = core::prepare_study(study, std::filesystem::path(args.config).parent_path());
+    for (auto& c : outcomes)
+      if (c.exit_code == 0) c.max_difference_from_in_process = difference_from_in_process(prepared, c.name, c.u1);
+  }
   if (!args.no_plots) {
     try {
       plot(out, outcomes);
@@ -181,6 +217,12 @@ void run_launch(const LaunchArgs& args) {
          << " mm";
     if (c.nrmse >= 0) text << ", NRMSE vs " << reference << " " << c.nrmse * 100 << " %";
     text << ", overruns " << c.overruns << ", rejected " << c.rejected << "\n";
+    if (c.max_difference_from_in_process == 0.0) {
+      text << "  equals the in-process run of the same config bit for bit\n";
+    } else if (c.max_difference_from_in_process > 0.0) {
+      text << "  DIFFERS from the in-process run: max |du| = " << std::scientific
+           << c.max_difference_from_in_process << std::fixed << " m\n";
+    }
     for (const auto& [node, rtt] : c.round_trip) {
       const auto s = runtime::summarize(rtt);
       const auto inj = runtime::summarize(c.injected.at(node));
@@ -194,6 +236,8 @@ void run_launch(const LaunchArgs& args) {
                  {"steps", c.steps}, {"peak_displacement", c.peak},
                  {"nrmse_vs_reference", c.nrmse >= 0 ? nlohmann::json(c.nrmse) : nlohmann::json()},
                  {"overruns", c.overruns}, {"rejected", c.rejected}, {"links", links},
+                 {"max_difference_from_in_process_m",
+                  c.max_difference_from_in_process >= 0 ? nlohmann::json(c.max_difference_from_in_process) : nlohmann::json()},
                  {"record", c.record.string()}, {"csv", c.csv.string()}});
   }
   if (args.json)

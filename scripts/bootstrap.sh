@@ -10,7 +10,8 @@ cd "$(dirname "$0")/.."
 
 packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev protobuf-compiler
   libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev cyclonedds-dev cyclonedds-tools
-  libcli11-dev gnuplot-nox libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 procps)
+  libcli11-dev gnuplot-nox libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 iputils-ping
+  procps util-linux)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -33,9 +34,9 @@ fi
 bin="$build/cli/rths"
 echo "== in process: rths run configs/paper_frame.textproto"
 "$bin" run configs/paper_frame.textproto --out out/paper_frame
-if "$bin" launch --help >/dev/null 2>&1; then
-  echo "== distributed over Cyclone DDS on loopback: rths launch configs/paper_frame.textproto"
-  "$bin" launch configs/paper_frame.textproto --out out/paper_frame_distributed
-fi
+echo "== the same study distributed: coordinator + substructure node + actuator emulator as"
+echo "   separate processes over Cyclone DDS on loopback (lockstep; must equal the in-process run)"
+"$bin" launch configs/paper_frame.textproto --domain 7 --case reference --case lag_shift_14ms \
+  --out out/paper_frame_distributed
 echo "== stability of the paper's frame (T = 0.5 s, zeta = 5 %, alpha = 1/3, dt = 1 ms)"
 "$bin" stability --period 0.5 --zeta 0.05 --exp-fraction 0.3333333333 --dt 0.001

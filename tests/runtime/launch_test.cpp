@@ -43,6 +43,9 @@ TEST(Launch, RunsEveryCaseAndWritesRecordsCsvAndASummary) {
   EXPECT_TRUE(j["cases"][0]["nrmse_vs_reference"].is_null());
   EXPECT_GT(j["cases"][1]["nrmse_vs_reference"].get<double>(), 0.0);
   EXPECT_GT(j["cases"][1]["links"]["2"]["round_trip_median"].get<double>(), 0.0);
+  // launch itself checks the lockstep runs against the in-process simulation.
+  EXPECT_EQ(j["cases"][0]["max_difference_from_in_process_m"].get<double>(), 0.0);
+  EXPECT_EQ(j["cases"][1]["max_difference_from_in_process_m"].get<double>(), 0.0);
   const auto record = runtime::read_record(out / "lag_shift_14ms.rthsrec");
   test::expect_record_equals(record, test::reference_result(test::read_file(config), "lag_shift_14ms"));
   EXPECT_TRUE(std::filesystem::exists(out / "reference.csv"));
