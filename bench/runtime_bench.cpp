@@ -185,11 +185,13 @@ void print_real_time(const char* label, const RunFigures& f, const BareFigures& 
 int main(int argc, char** argv) {
   CLI::App app{"rths runtime benchmark"};
   double seconds = 39.0;
-  bool skip_real_time = false;
+  bool skip_real_time = false, lockstep_only = false;
   int domain = 40;
   int echo_domain = -1, echo_id = 1;
   app.add_option("--seconds", seconds, "s of the record for the real-time runs (default 39)");
   app.add_flag("--skip-real-time", skip_real_time);
+  app.add_flag("--lockstep-only", lockstep_only,
+               "only the 3-process lockstep run (for profiling and repeated measurements)");
   app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
   app.add_option("--echo", echo_domain, "internal: run as the ping-pong echo peer");
   app.add_option("--echo-id", echo_id, "internal: the echo peer's node id");
@@ -198,6 +200,13 @@ int main(int argc, char** argv) {
   rths::runtime::ensure_dds_config();
   if (echo_domain >= 0) return echo_main(echo_domain, echo_id);
 
+  if (lockstep_only) {
+    const auto lock = distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep");
+    std::printf("lockstep (3 processes): %.0f steps/s; step median %.1f us, p99 %.1f us, max %.2f ms\n",
+                lock.steps_per_second, lock.step_wall.median * 1e6, lock.step_wall.p99 * 1e6,
+                lock.step_wall.max * 1e3);
+    return 0;
+  }
   const auto pp = ping_pong(domain, 20000, 1);
   std::printf("ping-pong (Command payload, reliable KEEP_LAST 64, loopback), 1 peer: %zu round "
               "trips, median %.1f us, p99 %.1f us, max %.2f ms\n",

@@ -340,10 +340,16 @@ struct Coordinator::State : core::RestoringEvaluator {
     }
     const auto start = Clock::now();
     const double timeout = runtime::step_timeout(deployment);
+    // Be woken once all outstanding answers are in, not once per answer.
+    struct ResetThreshold {
+      transport::Endpoint& endpoint;
+      ~ResetThreshold() { endpoint.set_wake_threshold(1); }
+    } reset{endpoint};
     for (;;) {
-      bool all = true;
-      for (auto& [id, node] : nodes) all = all && node.last_answer == step;
-      if (all) return;
+      int outstanding = 0;
+      for (auto& [id, node] : nodes) outstanding += node.last_answer != step ? 1 : 0;
+      if (outstanding == 0) return;
+      endpoint.set_wake_threshold(outstanding);
       pump(std::chrono::milliseconds(10));
       check_liveliness();
       if (seconds_since(start) > timeout) {

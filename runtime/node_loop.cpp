@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <deque>
 #include <memory>
+#include <mutex>
 
 #include "runtime/lag.h"
 #include "runtime/schema.h"
@@ -30,6 +31,25 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
   const std::int64_t started = realtime_ns();
   std::int64_t last_from_coordinator = started;
   std::int64_t heartbeat_ns = seconds_to_ns(0.05), orphan_ns = seconds_to_ns(5.0);
+
+  // Commands without injected lag are handled inline, on the transport's receive thread (no
+  // thread switch per step); `state` guards the service and last_from_coordinator against this
+  // loop. Declaration order matters: the lock is released before the handler is removed, and the
+  // handler is removed (waiting for a running invocation) before anything it touches goes.
+  std::mutex state;
+  struct RemoveHandler {
+    transport::Endpoint& endpoint;
+    ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
+  } remove_handler{endpoint};
+  const auto handle_inline = [&](const transport::Message& m) {
+    if (m.kind != COMMAND) return false;
+    std::lock_guard guard(state);
+    if (m.run_id == service.run_id()) last_from_coordinator = m.received_ns;
+    service.set_injected_lag(0.0);
+    for (auto& r : service.handle(m)) endpoint.send(r);
+    return true;
+  };
+  std::unique_lock lock(state);
 
   for (;;) {
     const std::int64_t now = realtime_ns();
@@ -86,6 +106,7 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
           send_lag = std::make_unique<LagInjector>(a.node().send_lag());
         last_from_coordinator = realtime_ns();
         spdlog::info("{}: assigned to run {}", service.label(), service.run_id());
+        if (!receive_lag && !send_lag) endpoint.set_inline_handler(handle_inline);
       }
       if (service.stopped()) {
         for (auto& d : outbound) endpoint.send(d.message);
@@ -99,7 +120,9 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
     if (!inbound.empty()) wake = std::min(wake, inbound.front().release_ns);
     if (!outbound.empty()) wake = std::min(wake, outbound.front().release_ns);
     const auto timeout = std::chrono::nanoseconds(std::max<std::int64_t>(0, wake - realtime_ns()));
+    lock.unlock();
     auto message = endpoint.receive(timeout);
+    lock.lock();
     if (!message) continue;
     if (service.assigned() && message->run_id == service.run_id()) {
       last_from_coordinator = message->received_ns;

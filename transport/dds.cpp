@@ -73,9 +73,33 @@ int Writer::matched_readers() const {
   return static_cast<int>(status.current_count);
 }
 
-Reader::Reader(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos)
-    : entity_(check(dds_create_reader(participant.get(), topic.get(), make_qos(qos).get(), nullptr),
-                    "dds_create_reader")) {}
+namespace {
+
+struct ListenerDeleter {
+  void operator()(dds_listener_t* listener) const { dds_delete_listener(listener); }
+};
+
+dds_entity_t make_reader(dds_entity_t participant, dds_entity_t topic, const QosSpec& qos,
+                         DataAvailable on_data, void* arg) {
+  std::unique_ptr<dds_listener_t, ListenerDeleter> listener;
+  if (on_data) {
+    listener.reset(dds_create_listener(arg));
+    if (!listener) throw std::runtime_error("dds_create_listener: out of memory");
+    dds_lset_data_available(listener.get(), on_data);
+  }
+  return check(dds_create_reader(participant, topic, make_qos(qos).get(), listener.get()),
+               "dds_create_reader");
+}
+
+}  // namespace
+
+Reader::Reader(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos,
+               DataAvailable on_data, void* arg)
+    : entity_(make_reader(participant.get(), topic.get(), qos, on_data, arg)) {}
+
+void Reader::clear_listener() {
+  check(dds_set_listener(entity_.get(), nullptr), "dds_set_listener");
+}
 
 int Reader::matched_writers() const {
   dds_subscription_matched_status_t status{};

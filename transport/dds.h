@@ -68,9 +68,17 @@ class Writer {
   Entity entity_;
 };
 
+// Called on Cyclone's receive thread when data arrives (after the sample is stored).
+using DataAvailable = void (*)(Handle reader, void* arg);
+
 class Reader {
  public:
-  Reader(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos);
+  // With `on_data` set, it runs on Cyclone's receive thread for every arrival (arg passed back);
+  // it must not block and `arg` must outlive the reader (or clear_listener()).
+  Reader(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos,
+         DataAvailable on_data = nullptr, void* arg = nullptr);
+  // Removes the listener; returns once no invocation of it is in progress.
+  void clear_listener();
   Handle get() const { return entity_.get(); }
   int matched_writers() const;
 

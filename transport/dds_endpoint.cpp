@@ -2,6 +2,10 @@
 
 #include <dds/dds.h>
 
+#include <algorithm>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -12,19 +16,33 @@ namespace rths::transport {
 
 struct DdsEndpoint::Impl {
   Impl(const DdsEndpointOptions& o, const dds::QosSpec& qos)
-      : participant(o.domain_id),
+      : options(o),
+        participant(o.domain_id),
         down(participant, o.topic_prefix + "_down", qos),
         up(participant, o.topic_prefix + "_up", qos),
         writer(participant, o.coordinator ? down : up, qos),
-        reader(participant, o.coordinator ? up : down, qos),
-        guard(participant),
-        waitset(participant, reader, guard) {}
+        reader(participant, o.coordinator ? up : down, qos, &Impl::on_data, this) {}
+  ~Impl() { reader.clear_listener(); }
+
+  static void on_data(dds::Handle, void* self) { static_cast<Impl*>(self)->drain(); }
+  // Runs on Cyclone's receive thread.
+  void drain();
+
+  const DdsEndpointOptions options;
+  // Shared between the receive thread and the caller; declared before the DDS entities so they
+  // outlive the listener.
+  std::mutex mutex;
+  std::condition_variable arrived, handler_idle;
+  std::deque<Message> pending;
+  bool interrupted = false;
+  std::size_t wake_threshold = 1;
+  std::shared_ptr<const InlineHandler> handler;
+  int handler_calls = 0;  // invocations in progress
+
   dds::Participant participant;
   dds::EnvelopeTopic down, up;
   dds::Writer writer;
   dds::Reader reader;
-  dds::GuardCondition guard;
-  dds::WaitSet waitset;
 };
 
 std::int64_t realtime_ns() {
@@ -34,8 +52,8 @@ std::int64_t realtime_ns() {
 }
 
 DdsEndpoint::DdsEndpoint(const DdsEndpointOptions& options)
-    : impl_(std::make_unique<Impl>(options, dds::QosSpec{options.history_depth, {}})),
-      options_(options) {}
+    : options_(options),
+      impl_(std::make_unique<Impl>(options, dds::QosSpec{options.history_depth, {}})) {}
 
 DdsEndpoint::~DdsEndpoint() = default;
 
@@ -56,19 +74,20 @@ void DdsEndpoint::send(const Message& m) {
   dds::check(dds_write(impl_->writer.get(), &sample), "dds_write");
 }
 
-void DdsEndpoint::drain() {
+void DdsEndpoint::Impl::drain() {
   constexpr int kBatch = 16;
   void* samples[kBatch] = {};
   dds_sample_info_t infos[kBatch];
+  bool queued = false;
   for (;;) {
-    const dds_return_t n = dds::check(
-        dds_take(impl_->reader.get(), samples, infos, kBatch, kBatch), "dds_take");
-    if (n == 0) return;
+    // A failing take here has no caller to throw to; the data stays and the next arrival retries.
+    const dds_return_t n = dds_take(reader.get(), samples, infos, kBatch, kBatch);
+    if (n <= 0) return;
     const std::int64_t now = realtime_ns();
     for (int i = 0; i < n; ++i) {
       if (!infos[i].valid_data) continue;
       const auto* s = static_cast<const rths_dds_Envelope*>(samples[i]);
-      if (!options_.coordinator && s->node_id != options_.node_id && s->node_id != kBroadcastId)
+      if (!options.coordinator && s->node_id != options.node_id && s->node_id != kBroadcastId)
         continue;
       Message m;
       m.run_id = s->run_id ? s->run_id : "";
@@ -79,44 +98,69 @@ void DdsEndpoint::drain() {
       m.echo_ns = s->echo_ns;
       m.payload.assign(reinterpret_cast<const char*>(s->payload._buffer), s->payload._length);
       m.received_ns = now;
-      pending_.push_back(std::move(m));
+      std::shared_ptr<const InlineHandler> h;
+      {
+        std::lock_guard lock(mutex);
+        h = handler;
+        if (h) ++handler_calls;
+      }
+      bool consumed = false;
+      if (h) {
+        try {
+          consumed = (*h)(m);
+        } catch (...) {
+          consumed = false;  // the caller's receive() sees it and handles (or throws) there
+        }
+        std::lock_guard lock(mutex);
+        if (--handler_calls == 0) handler_idle.notify_all();
+      }
+      if (!consumed) {
+        std::lock_guard lock(mutex);
+        pending.push_back(std::move(m));
+        queued = true;
+      }
     }
-    dds::check(dds_return_loan(impl_->reader.get(), samples, n), "dds_return_loan");
-    if (n < kBatch) return;
+    dds_return_loan(reader.get(), samples, n);
+    if (n < kBatch) break;
   }
+  if (!queued) return;
+  std::lock_guard lock(mutex);
+  if (pending.size() >= wake_threshold) arrived.notify_one();
 }
 
 std::optional<Message> DdsEndpoint::receive(std::chrono::nanoseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  for (;;) {
-    if (pending_.empty()) drain();
-    if (!pending_.empty()) {
-      Message m = std::move(pending_.front());
-      pending_.pop_front();
-      return m;
-    }
-    const auto left = deadline - std::chrono::steady_clock::now();
-    if (left <= std::chrono::nanoseconds::zero()) return std::nullopt;
-    if (!impl_->waitset.wait(left)) {
-      drain();
-      if (pending_.empty()) return std::nullopt;
-      continue;
-    }
-    drain();
-    if (pending_.empty()) {
-      // Woken by the guard (interrupt) or by data for another node.
-      bool triggered = false;
-      dds::check(dds_read_guardcondition(impl_->guard.get(), &triggered),
-                 "dds_read_guardcondition");
-      if (triggered) {
-        impl_->guard.reset();
-        return std::nullopt;
-      }
-    }
+  std::unique_lock lock(impl_->mutex);
+  impl_->arrived.wait_until(lock, deadline, [&] {
+    return impl_->pending.size() >= impl_->wake_threshold || impl_->interrupted;
+  });
+  if (!impl_->pending.empty()) {
+    Message m = std::move(impl_->pending.front());
+    impl_->pending.pop_front();
+    return m;
   }
+  if (impl_->interrupted) impl_->interrupted = false;
+  return std::nullopt;
 }
 
-void DdsEndpoint::interrupt() { impl_->guard.trigger(); }
+void DdsEndpoint::interrupt() {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->interrupted = true;
+  }
+  impl_->arrived.notify_all();
+}
+
+void DdsEndpoint::set_inline_handler(InlineHandler handler) {
+  std::unique_lock lock(impl_->mutex);
+  impl_->handler = handler ? std::make_shared<const InlineHandler>(std::move(handler)) : nullptr;
+  impl_->handler_idle.wait(lock, [&] { return impl_->handler_calls == 0; });
+}
+
+void DdsEndpoint::set_wake_threshold(int messages) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->wake_threshold = static_cast<std::size_t>(std::max(1, messages));
+}
 
 int DdsEndpoint::matched_peers() const { return impl_->writer.matched_readers(); }
 int DdsEndpoint::matched_writers() const { return impl_->reader.matched_writers(); }

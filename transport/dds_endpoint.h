@@ -4,11 +4,15 @@
 // KEEP_LAST 64, volatile. A node endpoint delivers only messages addressed to its node id or
 // broadcast (-1); filtering happens on receipt, before any payload is parsed.
 //
+// Receipt: a data-available listener takes the samples on Cyclone's receive thread, offers each to
+// the inline handler (set_inline_handler) and queues the rest for receive(), waking it through a
+// condition variable only when something was queued. So a message for another node never wakes
+// the caller, and a handled one costs no thread switch at all.
+//
 // Discovery: the participant reads CYCLONEDDS_URI as usual (configs/dds_loopback.xml for one host).
 // receive() is not real-time safe on the first call (it sizes its buffers); later calls allocate
 // only for the payload strings.
 
-#include <deque>
 #include <memory>
 
 #include "transport/transport.h"
@@ -35,13 +39,13 @@ class DdsEndpoint final : public Endpoint {
   // Waits until at least `writers` remote writers feed this endpoint and `readers` remote
   // readers listen to it. Throws std::runtime_error naming the counts on timeout.
   void wait_for_match(int readers, int writers, std::chrono::milliseconds timeout) const;
+  void set_inline_handler(InlineHandler handler) override;
+  void set_wake_threshold(int messages) override;
 
  private:
-  void drain();
   struct Impl;
-  std::unique_ptr<Impl> impl_;
   DdsEndpointOptions options_;
-  std::deque<Message> pending_;
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace rths::transport

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -42,6 +43,19 @@ class Endpoint {
   virtual void interrupt() = 0;
   // Number of remote endpoints currently matched to this one's writer.
   virtual int matched_peers() const = 0;
+
+  // Returns true when it consumed the message; false leaves it for receive().
+  using InlineHandler = std::function<bool(const Message&)>;
+  // Optional fast path: a transport with its own receive thread offers each arriving message to
+  // `handler` on that thread first, which spares a thread wake-up per message (the handler must
+  // be quick and thread safe against the caller's own use of its state). An empty handler
+  // removes it; once this returns, no invocation of the old handler is in progress. Transports
+  // without a receive thread ignore it and deliver everything through receive().
+  virtual void set_inline_handler(InlineHandler handler) { (void)handler; }
+  // Hint from a caller that waits for `messages` answers: receive() need not return before that
+  // many are queued or its timeout passes (interrupt() still wakes it), sparing one wake-up per
+  // extra answer. 1 (the default) restores the plain behaviour. Transports may ignore it.
+  virtual void set_wake_threshold(int messages) { (void)messages; }
 };
 
 inline constexpr std::int32_t kCoordinatorId = 0;
