@@ -1,7 +1,6 @@
 #include "core/study.h"
 
-#include <google/protobuf/io/tokenizer.h>
-#include <google/protobuf/text_format.h>
+#include "core/text_format.h"
 
 #include <cmath>
 #include <fstream>
@@ -11,23 +10,6 @@
 
 namespace rths::core {
 namespace {
-
-class CollectingErrors final : public google::protobuf::io::ErrorCollector {
- public:
-  explicit CollectingErrors(std::string source) : source_(std::move(source)) {}
-  void AddError(int line, google::protobuf::io::ColumnNumber column,
-                const std::string& message) override {
-    if (first_.empty()) {
-      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1) +
-               ": " + message;
-    }
-  }
-  void AddWarning(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
-  const std::string& first() const { return first_; }
-
- private:
-  std::string source_, first_;
-};
 
 [[noreturn]] void fail(const std::string& source, const std::string& message) {
   throw std::invalid_argument(source + ": " + message);
@@ -71,23 +53,13 @@ double effective_gain(const config::DelayStage& stage) {
 
 config::Study parse_study(const std::string& text, const std::string& source_name) {
   config::Study study;
-  CollectingErrors errors(source_name);
-  google::protobuf::TextFormat::Parser parser;
-  parser.RecordErrorsTo(&errors);
-  if (!parser.ParseFromString(text, &study)) {
-    throw std::invalid_argument(errors.first().empty() ? source_name + ": cannot parse config"
-                                                       : errors.first());
-  }
+  parse_text_format(text, source_name, study);
   validate_study(study, source_name);
   return study;
 }
 
 config::Study load_study(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot open config " + path.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_study(text.str(), path.string());
+  return parse_study(read_text_file(path, "config"), path.string());
 }
 
 void validate_study(const config::Study& study, const std::string& source) {

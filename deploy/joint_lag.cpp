@@ -1,7 +1,6 @@
 #include "deploy/joint_lag.h"
 
 #include <google/protobuf/io/tokenizer.h>
-#include <google/protobuf/text_format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -14,6 +13,7 @@
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/study.h"
+#include "core/text_format.h"
 #include "deploy/netns.h"
 #include "deploy/process.h"
 #include "deploy/sites.h"
@@ -21,22 +21,6 @@
 
 namespace rths::deploy {
 namespace {
-
-class FirstError final : public google::protobuf::io::ErrorCollector {
- public:
-  explicit FirstError(std::string source) : source_(std::move(source)) {}
-  void AddError(int line, google::protobuf::io::ColumnNumber column,
-                const std::string& message) override {
-    if (first_.empty()) {
-      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1) +
-               ": " + message;
-    }
-  }
-  const std::string& first() const { return first_; }
-
- private:
-  std::string source_, first_;
-};
 
 void check_lags(const google::protobuf::RepeatedField<double>& values, const std::string& field,
                 const std::string& source, bool required) {
@@ -254,18 +238,8 @@ nlohmann::json point_json(const JointLagPoint& p) {
 }  // namespace
 
 JointLagStudy load_joint_lag(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot open joint lag config " + path.string());
-  std::stringstream text;
-  text << in.rdbuf();
   JointLagStudy config;
-  FirstError errors(path.string());
-  google::protobuf::TextFormat::Parser parser;
-  parser.RecordErrorsTo(&errors);
-  if (!parser.ParseFromString(text.str(), &config)) {
-    throw std::invalid_argument(errors.first().empty() ? path.string() + ": cannot parse"
-                                                       : errors.first());
-  }
+  core::parse_text_format(core::read_text_file(path, "joint lag config"), path.string(), config);
   const auto source = path.string();
   if (config.study().empty()) throw std::invalid_argument(source + ": study is empty");
   check_lags(config.network_round_trips(), "network_round_trips", source, true);

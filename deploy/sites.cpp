@@ -1,7 +1,6 @@
 #include "deploy/sites.h"
 
 #include <google/protobuf/io/tokenizer.h>
-#include <google/protobuf/text_format.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -16,6 +15,7 @@
 #include <thread>
 
 #include "core/study.h"
+#include "core/text_format.h"
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
 #include "deploy/process.h"
@@ -26,30 +26,6 @@ namespace {
 
 constexpr double kDefaultTimeout = 300.0;  // s
 constexpr const char* kDefaultSubnet = "10.231.0";
-
-class CollectingErrors final : public google::protobuf::io::ErrorCollector {
- public:
-  explicit CollectingErrors(std::string source) : source_(std::move(source)) {}
-  void AddError(int line, google::protobuf::io::ColumnNumber column,
-                const std::string& message) override {
-    if (first_.empty()) {
-      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1) +
-               ": " + message;
-    }
-  }
-  const std::string& first() const { return first_; }
-
- private:
-  std::string source_, first_;
-};
-
-std::string read_text(const std::filesystem::path& path, const std::string& what) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot open " + what + " " + path.string());
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 std::string kind_name(config::NodeSpec::Kind kind) {
   switch (kind) {
@@ -89,18 +65,12 @@ void check_lag(const config::LinkLag& lag, const std::string& where) {
 
 Sites parse_sites(const std::string& text, const std::string& source_name) {
   Sites sites;
-  CollectingErrors errors(source_name);
-  google::protobuf::TextFormat::Parser parser;
-  parser.RecordErrorsTo(&errors);
-  if (!parser.ParseFromString(text, &sites)) {
-    throw std::invalid_argument(errors.first().empty() ? source_name + ": cannot parse sites config"
-                                                       : errors.first());
-  }
+  core::parse_text_format(text, source_name, sites);
   return sites;
 }
 
 SitesPlan load_sites(const std::filesystem::path& sites_file) {
-  const auto sites = parse_sites(read_text(sites_file, "sites config"), sites_file.string());
+  const auto sites = parse_sites(core::read_text_file(sites_file, "sites config"), sites_file.string());
   auto plan = plan_sites(sites, sites_file.parent_path(), sites_file.string());
   plan.sites_file = sites_file;
   return plan;

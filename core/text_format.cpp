@@ -1,0 +1,53 @@
+#include "core/text_format.h"
+
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace rths::core {
+namespace {
+
+// Keeps the first error: later ones are usually consequences of it.
+class FirstError final : public google::protobuf::io::ErrorCollector {
+ public:
+  explicit FirstError(std::string source) : source_(std::move(source)) {}
+  void AddError(int line, google::protobuf::io::ColumnNumber column,
+                const std::string& message) override {
+    if (first_.empty()) {
+      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(column + 1) +
+               ": " + message;
+    }
+  }
+  void AddWarning(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
+  const std::string& first() const { return first_; }
+
+ private:
+  std::string source_, first_;
+};
+
+}  // namespace
+
+void parse_text_format(const std::string& text, const std::string& source_name,
+                       google::protobuf::Message& message) {
+  FirstError errors(source_name);
+  google::protobuf::TextFormat::Parser parser;
+  parser.RecordErrorsTo(&errors);
+  if (!parser.ParseFromString(text, &message)) {
+    throw std::invalid_argument(errors.first().empty()
+                                    ? source_name + ": cannot parse " + message.GetTypeName()
+                                    : errors.first());
+  }
+}
+
+std::string read_text_file(const std::filesystem::path& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot open " + what + " " + path.string());
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace rths::core
