@@ -5,10 +5,12 @@
 //     processes) over the 39 s Imperial Valley record: steps/s, step wall-time median / p99;
 //  3. real time at 1024 Hz (and 4096 Hz) over the record: overrun % beside a bare
 //     clock_nanosleep loop with the same Pacer and the same overrun definition.
+// Ping-pong and lockstep run with every process on one CPU, as `rths launch` places lockstep runs
+// (--spread: leave placement to the scheduler); the real-time runs are never pinned.
 // Targets (issue 3): >= 10,000 lockstep steps/s; median step <= 2 x ping-pong median RTT;
 // 1024 Hz overruns <= bare loop + 0.1 point; 4096 Hz overruns <= 1 %.
 //
-//   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D]
+//   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D] [--spread] [--lockstep-only]
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
@@ -65,7 +67,10 @@ int echo_main(int domain, int node_id) {
 }
 
 // Round trips to `peers` echo processes at once (a lockstep step talks to two nodes).
-runtime::LagSummary ping_pong(int domain, int count, int peers) {
+// one_cpu: as distributed_run, so the step / round-trip ratio compares like with like.
+runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
+  std::unique_ptr<runtime::ScopedCpuPin> pin;
+  if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
   transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
   std::vector<runtime::ChildProcess> echoes;
   for (int p = 1; p <= peers; ++p)
@@ -102,8 +107,12 @@ struct RunFigures {
   runtime::LagSummary lateness;
 };
 
+// one_cpu: this process (the coordinator, its DDS threads) and the nodes on one CPU, as
+// `rths launch` places lockstep runs by default (runtime::CpuPlacement).
 RunFigures distributed_run(int domain, const std::string& text, const std::string& name,
-                           bool with_substructure = true) {
+                           bool with_substructure = true, bool one_cpu = false) {
+  std::unique_ptr<runtime::ScopedCpuPin> pin;
+  if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
   const auto dir = std::filesystem::temp_directory_path() / ("rths_bench_" + name);
   std::filesystem::create_directories(dir);
   const auto config = dir / "study.textproto";
@@ -185,11 +194,13 @@ void print_real_time(const char* label, const RunFigures& f, const BareFigures& 
 int main(int argc, char** argv) {
   CLI::App app{"rths runtime benchmark"};
   double seconds = 39.0;
-  bool skip_real_time = false, lockstep_only = false;
+  bool skip_real_time = false, lockstep_only = false, spread = false;
   int domain = 40;
   int echo_domain = -1, echo_id = 1;
   app.add_option("--seconds", seconds, "s of the record for the real-time runs (default 39)");
   app.add_flag("--skip-real-time", skip_real_time);
+  app.add_flag("--spread", spread,
+               "lockstep runs without pinning to one CPU (default: pinned, as rths launch does)");
   app.add_flag("--lockstep-only", lockstep_only,
                "only the 3-process lockstep run (for profiling and repeated measurements)");
   app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
@@ -201,31 +212,34 @@ int main(int argc, char** argv) {
   if (echo_domain >= 0) return echo_main(echo_domain, echo_id);
 
   if (lockstep_only) {
-    const auto lock = distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep");
-    std::printf("lockstep (3 processes): %.0f steps/s; step median %.1f us, p99 %.1f us, max %.2f ms\n",
-                lock.steps_per_second, lock.step_wall.median * 1e6, lock.step_wall.p99 * 1e6,
+    const auto lock =
+        distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", true, !spread);
+    std::printf("lockstep (3 processes, %s): %.0f steps/s; step median %.1f us, p99 %.1f us, max %.2f ms\n",
+                spread ? "spread" : "one CPU", lock.steps_per_second, lock.step_wall.median * 1e6, lock.step_wall.p99 * 1e6,
                 lock.step_wall.max * 1e3);
     return 0;
   }
-  const auto pp = ping_pong(domain, 20000, 1);
-  std::printf("ping-pong (Command payload, reliable KEEP_LAST 64, loopback), 1 peer: %zu round "
+  const auto pp = ping_pong(domain, 20000, 1, !spread);
+  std::printf("ping-pong (Command payload, reliable KEEP_LAST 64, loopback, %s), 1 peer: %zu round "
               "trips, median %.1f us, p99 %.1f us, max %.2f ms\n",
-              pp.count, pp.median * 1e6, pp.p99 * 1e6, pp.max * 1e3);
-  const auto pp2 = ping_pong(domain + 4, 20000, 2);
+              spread ? "spread" : "one CPU", pp.count, pp.median * 1e6, pp.p99 * 1e6, pp.max * 1e3);
+  const auto pp2 = ping_pong(domain + 4, 20000, 2, !spread);
   std::printf("ping-pong to 2 peers at once (what one lockstep step does): median %.1f us, p99 "
               "%.1f us, max %.2f ms\n",
               pp2.median * 1e6, pp2.p99 * 1e6, pp2.max * 1e3);
-  const auto lock = distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep");
+  const auto lock =
+      distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", true, !spread);
   std::printf("lockstep (coordinator + substructure node + actuator emulator, 39 s record at "
-              "1 ms): %zu steps, %.0f steps/s (step wall sum), run wall %.2f s; step median %.1f "
+              "1 ms, %s): %zu steps, %.0f steps/s (step wall sum), run wall %.2f s; step median %.1f "
               "us, p99 %.1f us, max %.2f ms; median step / median 1-peer ping-pong = %.2f, / 2-peer "
               "ping-pong = %.2f\n",
-              lock.steps, lock.steps_per_second, lock.wall, lock.step_wall.median * 1e6,
+              spread ? "spread over the CPUs" : "all on one CPU", lock.steps,
+              lock.steps_per_second, lock.wall, lock.step_wall.median * 1e6,
               lock.step_wall.p99 * 1e6, lock.step_wall.max * 1e3,
               lock.step_wall.median / pp.median, lock.step_wall.median / pp2.median);
   const auto one = distributed_run(
       domain + 4, study_text(0.001, 39.0, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
-      "lockstep_one_node", false);
+      "lockstep_one_node", false, !spread);
   std::printf("lockstep, numerical part in the coordinator + actuator emulator only: %.0f steps/s, "
               "run wall %.2f s; step median %.1f us, p99 %.1f us; median step / median 1-peer "
               "ping-pong = %.2f\n",

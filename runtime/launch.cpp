@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "core/study.h"
 #include "runtime/plan.h"
 #include "runtime/process.h"
@@ -52,6 +54,20 @@ LaunchResult launch_run(const LaunchOptions& options) {
   const auto emulator_program =
       find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
 
+  // Children inherit the mask of the thread that forks them; restored before waiting.
+  const bool one_cpu =
+      options.cpu_placement == CpuPlacement::kOneCpu ||
+      (options.cpu_placement == CpuPlacement::kAuto &&
+       deployment.clock() != config::Deployment::REAL_TIME);
+  std::unique_ptr<ScopedCpuPin> pin;
+  if (one_cpu) {
+    try {
+      pin = std::make_unique<ScopedCpuPin>();
+    } catch (const std::runtime_error& e) {
+      if (options.cpu_placement == CpuPlacement::kOneCpu) throw;
+      spdlog::warn("lockstep processes left unpinned: {}", e.what());  // only slower
+    }
+  }
   std::vector<ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
     const bool sub = node.kind() == config::NodeSpec::SUBSTRUCTURE;
@@ -68,6 +84,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
   if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
   result.coordinator_log = options.log_dir / "coordinator.log";
   ChildProcess coordinator(coordinator_program, args, result.coordinator_log);
+  pin.reset();
   if (options.timeout > 0) {
     const auto code = coordinator.wait_for(
         std::chrono::milliseconds(static_cast<long long>(options.timeout * 1000)));

@@ -1,6 +1,7 @@
 #include "runtime/process.h"
 
 #include <fcntl.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,6 +14,31 @@
 #include <thread>
 
 namespace rths::runtime {
+
+struct ScopedCpuPin::Mask {
+  cpu_set_t set;
+};
+
+ScopedCpuPin::ScopedCpuPin(int cpu) : previous_(std::make_unique<Mask>()) {
+  CPU_ZERO(&previous_->set);
+  if (sched_getaffinity(0, sizeof previous_->set, &previous_->set) != 0)
+    throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
+  if (cpu < 0)
+    for (int c = CPU_SETSIZE - 1; c >= 0 && cpu < 0; --c)
+      if (CPU_ISSET(c, &previous_->set)) cpu = c;
+  if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &previous_->set))
+    throw std::runtime_error("cannot pin to CPU " + std::to_string(cpu) +
+                             ": not in this process's allowed CPUs");
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(cpu, &one);
+  if (sched_setaffinity(0, sizeof one, &one) != 0)
+    throw std::runtime_error("sched_setaffinity(CPU " + std::to_string(cpu) +
+                             "): " + std::strerror(errno));
+  cpu_ = cpu;
+}
+
+ScopedCpuPin::~ScopedCpuPin() { sched_setaffinity(0, sizeof previous_->set, &previous_->set); }
 
 ChildProcess::ChildProcess(const std::filesystem::path& program,
                            const std::vector<std::string>& args,

@@ -7,11 +7,30 @@
 
 #include <chrono>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace rths::runtime {
+
+// Pins the calling thread to one CPU while it lives, so children forked meanwhile (and all their
+// threads) start on that CPU alone; the thread's previous mask comes back on destruction.
+// cpu < 0: the highest CPU the thread may run on now (CPU 0 tends to take more interrupts).
+// Throws std::runtime_error when the CPU is not available to this thread.
+class ScopedCpuPin {
+ public:
+  explicit ScopedCpuPin(int cpu = -1);
+  ScopedCpuPin(const ScopedCpuPin&) = delete;
+  ScopedCpuPin& operator=(const ScopedCpuPin&) = delete;
+  ~ScopedCpuPin();
+  int cpu() const { return cpu_; }
+
+ private:
+  struct Mask;
+  std::unique_ptr<Mask> previous_;
+  int cpu_ = -1;
+};
 
 class ChildProcess {
  public:
