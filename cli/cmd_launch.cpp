@@ -33,6 +33,7 @@ struct LaunchArgs {
   std::vector<std::string> cases;
   int domain = -1;
   double timeout = 0;
+  std::string cpu_placement = "auto";
   bool no_plots = false, json = false;
 };
 
@@ -165,6 +166,9 @@ void run_launch(const LaunchArgs& args) {
     options.record = c.record = out / (name + ".rthsrec");
     options.log_dir = out / "logs" / name;
     options.timeout = args.timeout;
+    options.cpu_placement = args.cpu_placement == "one-cpu" ? runtime::CpuPlacement::kOneCpu
+                            : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
+                                                             : runtime::CpuPlacement::kAuto;
     if (!args.json) std::cerr << "rths launch: case " << name << " ...\n";
     runtime::LaunchResult result;
     try {
@@ -262,6 +266,10 @@ void add_launch_command(CLI::App& app) {
   cmd->add_option("--bin-dir", args->bin_dir,
                   "where rths-coordinator and the node programs are (default: beside rths)");
   cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is killed");
+  cmd->add_option("--cpu-placement", args->cpu_placement,
+                  "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
+                  "left to the scheduler; one-cpu; spread")
+      ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
   cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots");
   cmd->add_flag("--json", args->json, "print the summary as JSON");
   cmd->callback([args] { run_launch(*args); });

@@ -108,32 +108,4 @@ int Reader::matched_writers() const {
   return static_cast<int>(status.current_count);
 }
 
-GuardCondition::GuardCondition(const Participant& participant)
-    : entity_(check(dds_create_guardcondition(participant.get()), "dds_create_guardcondition")) {}
-
-void GuardCondition::trigger() {
-  check(dds_set_guardcondition(entity_.get(), true), "dds_set_guardcondition");
-}
-
-void GuardCondition::reset() {
-  check(dds_set_guardcondition(entity_.get(), false), "dds_set_guardcondition");
-}
-
-WaitSet::WaitSet(const Participant& participant, const Reader& reader, const GuardCondition& guard)
-    : entity_(check(dds_create_waitset(participant.get()), "dds_create_waitset")),
-      read_condition_(check(dds_create_readcondition(reader.get(), DDS_ANY_STATE),
-                            "dds_create_readcondition")) {
-  check(dds_waitset_attach(entity_.get(), read_condition_.get(), read_condition_.get()),
-        "dds_waitset_attach(read condition)");
-  check(dds_waitset_attach(entity_.get(), guard.get(), guard.get()),
-        "dds_waitset_attach(guard)");
-}
-
-bool WaitSet::wait(std::chrono::nanoseconds timeout) {
-  const dds_duration_t relative = timeout.count() < 0 ? 0 : timeout.count();
-  const dds_return_t n = check(dds_waitset_wait(entity_.get(), nullptr, 0, relative),
-                               "dds_waitset_wait");
-  return n > 0;
-}
-
 }  // namespace rths::transport::dds

@@ -86,27 +86,4 @@ class Reader {
   Entity entity_;
 };
 
-class GuardCondition {
- public:
-  explicit GuardCondition(const Participant& participant);
-  void trigger();
-  void reset();
-  Handle get() const { return entity_.get(); }
-
- private:
-  Entity entity_;
-};
-
-// Waits for data on one reader or a guard trigger.
-class WaitSet {
- public:
-  WaitSet(const Participant& participant, const Reader& reader, const GuardCondition& guard);
-  // True when something triggered before the timeout.
-  bool wait(std::chrono::nanoseconds timeout);
-
- private:
-  Entity entity_;
-  Entity read_condition_;
-};
-
 }  // namespace rths::transport::dds
