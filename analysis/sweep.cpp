@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "analysis/atomic_file.h"
 #include "analysis/batch_kernel.h"
 #include "analysis/parallel_for.h"
 #include "analysis/plot.h"
@@ -137,20 +138,13 @@ double parse_double(const std::string& text, const std::string& where) {
 void write_csv_file(const std::filesystem::path& path, const std::string& grid_hash,
                     std::size_t points, const Shard& shard,
                     const std::vector<std::string>& lines) {
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-  std::filesystem::path partial = path;
-  partial += ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + partial.string());
-    out << kCsvMagic << " grid=" << grid_hash << " points=" << points
-        << " shard=" << shard.to_string() << "\n"
-        << kCsvHeader << "\n";
-    for (const std::string& line : lines) out << line << "\n";
-    out.flush();
-    if (!out) throw std::runtime_error("writing " + partial.string() + " failed");
-  }
-  std::filesystem::rename(partial, path);
+  AtomicFile file(path);
+  std::ofstream& out = file.stream();
+  out << kCsvMagic << " grid=" << grid_hash << " points=" << points
+      << " shard=" << shard.to_string() << "\n"
+      << kCsvHeader << "\n";
+  for (const std::string& line : lines) out << line << "\n";
+  file.commit();
 }
 
 }  // namespace
