@@ -560,15 +560,7 @@ RunOutcome Coordinator::run() {
   stop.set_reason(outcome.status);
   s.send(transport::kBroadcastId, runtime::STOP, s.step, stop);
 
-  // Keep only the completed steps.
-  const auto kept = static_cast<Eigen::Index>(completed);
-  result.time.resize(completed);
-  result.displacement.conservativeResize(kept, Eigen::NoChange);
-  result.velocity.conservativeResize(kept, Eigen::NoChange);
-  result.acceleration.conservativeResize(kept, Eigen::NoChange);
-  result.command.conservativeResize(kept, Eigen::NoChange);
-  result.realised.conservativeResize(kept, Eigen::NoChange);
-  result.measured_force.conservativeResize(kept, Eigen::NoChange);
+  result.truncate(completed);
 
   s.rejected.fill(outcome.counters);
   outcome.counters.set_overruns(pacer.overruns());

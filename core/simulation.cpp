@@ -6,6 +6,15 @@
 
 namespace rths::core {
 
+void SimulationResult::truncate(std::size_t steps) {
+  if (steps >= time.size()) return;
+  const auto rows = static_cast<Eigen::Index>(steps);
+  time.resize(steps);
+  for (Mat* history : {&displacement, &velocity, &acceleration, &command, &realised, &measured_force}) {
+    history->conservativeResize(rows, Eigen::NoChange);
+  }
+}
+
 SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
                           const SimulationOptions& options) {
   if (!(setup.dt > 0)) throw std::invalid_argument("simulation: dt must be > 0 s");
@@ -67,16 +76,7 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
       break;
     }
   }
-  if (completed < steps) {
-    const auto rows = static_cast<Eigen::Index>(completed);
-    result.time.resize(completed);
-    result.displacement.conservativeResize(rows, Eigen::NoChange);
-    result.velocity.conservativeResize(rows, Eigen::NoChange);
-    result.acceleration.conservativeResize(rows, Eigen::NoChange);
-    result.command.conservativeResize(rows, Eigen::NoChange);
-    result.realised.conservativeResize(rows, Eigen::NoChange);
-    result.measured_force.conservativeResize(rows, Eigen::NoChange);
-  }
+  if (completed < steps) result.truncate(completed);
   return result;
 }
 

@@ -32,6 +32,8 @@ struct SimulationResult {
   Mat command, realised, measured_force;     // per actuator: m, m, N
   bool diverged = false;                     // stopped early: |u| exceeded the divergence bound
   std::size_t steps() const { return time.size(); }
+  // Keeps the first `steps` rows of every history (a run that stopped early).
+  void truncate(std::size_t steps);
 };
 
 struct SimulationOptions {
