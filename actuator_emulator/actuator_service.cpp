@@ -1,5 +1,7 @@
 #include "actuator_emulator/actuator_service.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "runtime/plan.h"
@@ -22,7 +24,23 @@ int ActuatorService::configure(const runtime::Assign& assign) {
     actuators_.emplace_back(setup.delays[a], setup.partition.experimental[storeys[a]]->clone());
   }
   realised_.assign(actuators_.size(), 0.0);
+  last_command_.assign(actuators_.size(), 0.0);
+  max_displacement_step_ = assign.study().deployment().limits().max_displacement_step();
   return static_cast<int>(actuators_.size());
+}
+
+std::string ActuatorService::refusal(const runtime::Command& command) {
+  if (!(max_displacement_step_ > 0)) return {};
+  const int n = std::min<int>(command.drift_size(), static_cast<int>(last_command_.size()));
+  for (int i = 0; i < n; ++i) {
+    const double change = command.drift(i) - last_command_[i];
+    if (!(std::abs(change) <= max_displacement_step_))
+      return "commanded drift of actuator " + std::to_string(i + 1) + " changes by " +
+             std::to_string(change) + " m in one command (rate limit " +
+             std::to_string(max_displacement_step_) + " m per command)";
+  }
+  for (int i = 0; i < n; ++i) last_command_[i] = command.drift(i);
+  return {};
 }
 
 void ActuatorService::compute(const runtime::Command& command, runtime::Feedback& feedback) {

@@ -2,7 +2,18 @@
 // Actuator emulator: hosts the experimental storeys' actuators (core::Actuator: the case's delay
 // chain in simulated time, then the emulated specimen). Input: Command.drift and drift_velocity,
 // one per hosted actuator, and Command.time (s). Output: Feedback.realised (m) and Feedback.force
-// (N, measured), same order. On HOLD it stops moving: later commands are ignored.
+// (N, measured), same order.
+//
+// Faults (the contract a lab relies on; HOLD = freeze at the last realised position, so the
+// specimen sees no jump in position, and ignore every later command):
+//   HOLD from the coordinator                         -> hold at once (the next command is ignored).
+//   a command whose drift changes by more than        -> hold on its own before acting on it, and
+//     deployment.limits.max_displacement_step            answer HOLD (with the reason) instead of
+//     from the previous one                              FEEDBACK; the coordinator stops the run.
+//   real time: no fresh command for                   -> hold on its own (the node loop's watchdog)
+//     deployment.command_watchdog_periods x dt           within one more loop wake-up, and send
+//     (default 3)                                        HOLD with the reason to the coordinator.
+//   the coordinator silent for the orphan timeout     -> leave (exit 1), already holding.
 
 #include "core/substructure.h"
 #include "runtime/node_service.h"
@@ -17,10 +28,13 @@ class ActuatorService final : public runtime::NodeService {
  protected:
   int configure(const runtime::Assign& assign) override;
   void compute(const runtime::Command& command, runtime::Feedback& feedback) override;
+  std::string refusal(const runtime::Command& command) override;
 
  private:
   std::vector<core::Actuator> actuators_;
   std::vector<double> realised_;
+  std::vector<double> last_command_;    // m, drift of the previous accepted command
+  double max_displacement_step_ = 0.0;  // m per command; 0 = no rate limit
 };
 
 }  // namespace rths::actuator_emulator

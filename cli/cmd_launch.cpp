@@ -22,6 +22,7 @@
 #include "runtime/export.h"
 #include "runtime/lag.h"
 #include "runtime/launch.h"
+#include "runtime/measurements.h"
 #include "runtime/record.h"
 #include "transport/transport.h"
 
@@ -77,19 +78,15 @@ double difference_from_in_process(const core::PreparedStudy& prepared, const std
 }
 
 void collect(const runtime::RecordContents& record, CaseOutcome& c) {
-  std::map<int, std::int64_t> last_answer;
-  for (const runtime::StepRecord* s : record.steps()) {
-    c.time.push_back(s->time());
-    c.u1.push_back(s->displacement_size() > 0 ? s->displacement(0) : 0.0);
-    for (const auto& link : s->links()) {
-      // Count each answer once: in real time a step may reuse an earlier step's answer.
-      std::int64_t& last = last_answer[link.node_id()];
-      if (link.answered_step() == 0 || link.answered_step() == last) continue;
-      last = link.answered_step();
-      c.round_trip[link.node_id()].push_back(link.round_trip());
-      c.injected[link.node_id()].push_back(link.injected_lag());
-      c.step_time[link.node_id()].push_back(s->time());
-    }
+  const runtime::RunMeasurements m = runtime::measure_run(record);
+  c.time = m.steps.time;
+  c.u1.resize(c.time.size());
+  for (std::size_t k = 0; k < c.u1.size() && m.steps.displacement.cols() > 0; ++k)
+    c.u1[k] = m.steps.displacement(static_cast<Eigen::Index>(k), 0);
+  for (const auto& [node, series] : m.links) {
+    c.round_trip[node] = series.round_trip;
+    c.injected[node] = series.injected;
+    c.step_time[node] = series.time;
   }
   c.peak = c.u1.empty() ? 0.0 : core::peak_abs(c.u1);
   if (const auto* f = record.footer()) {

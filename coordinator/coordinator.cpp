@@ -1,15 +1,24 @@
 #include "coordinator/coordinator.h"
 
 #include <spdlog/spdlog.h>
+#include <pthread.h>
+#include <sched.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <set>
 #include <stdexcept>
+#include <thread>
 
 #include "core/simulation.h"
+#include "runtime/measurements.h"
 #include "runtime/schema.h"
 #include "runtime/validation.h"
 
@@ -43,7 +52,7 @@ std::string make_run_id() {
          std::to_string(transport::realtime_ns());
 }
 
-struct Coordinator::State : core::RestoringEvaluator {
+struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   core::PreparedStudy prepared;
   core::HybridSetup setup;
   std::string case_name;
@@ -59,22 +68,36 @@ struct Coordinator::State : core::RestoringEvaluator {
     bool announced = false, ready = false;
     Clock::time_point last_seen;
     std::int64_t last_answer = 0;  // step of the newest accepted feedback
+    std::uint64_t answers = 0;     // accepted feedback messages
+    std::uint64_t answers_before_step = 0;
+    int missed_streak = 0;         // real time: consecutive steps without a fresh answer
+    int late_streak = 0;           // real time: consecutive steps on an older answer
     runtime::Feedback feedback;    // newest accepted
     runtime::LinkSample link;
-    std::vector<double> round_trips, injected;
   };
   std::map<int, Node> nodes;
   runtime::RejectCounters rejected;
-  std::uint64_t late_feedback = 0;
+  std::uint64_t late_feedback = 0, worst_late_streak = 0;
+  // The links' lag as the record's reader counts it (runtime/measurements.h), from the same samples.
+  runtime::LinkLagAccumulator lags;
+  core::Vec last_sent_drift;  // m, per storey: the previous command, for the rate limit
 
   // Evaluator state (sized once).
   core::StoreyAssembly assembly{1};
   std::unique_ptr<core::NumericalSubstructure> local_numerical;
-  core::Vec drift, drift_velocity, shear, force, command, realised, measured;
+  core::Vec drift, drift_velocity, shear, force, command_drift, realised_drift, measured;
   std::int64_t step = 0;
   double time = 0.0;
   runtime::Command command_message;
-  std::unique_ptr<runtime::RecordWriter> record;
+  std::unique_ptr<runtime::AsyncRecordWriter> record;
+  // Reused every step so that, after the first steps, building an entry allocates nothing.
+  runtime::RecordEntry step_entry;
+  runtime::StepRecord step_record;
+
+  // Off the loop (header, footer): waits for room rather than drop.
+  void append_waiting(const runtime::RecordEntry& entry) {
+    while (!record->append(entry)) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   Clock::time_point last_heartbeat_sent;
 
   State(core::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
@@ -96,7 +119,8 @@ struct Coordinator::State : core::RestoringEvaluator {
     runtime::RecordEntry entry;
     entry.mutable_event()->set_step(step);
     entry.mutable_event()->set_what(what);
-    record->write(entry);
+    entry.mutable_event()->set_realtime_ns(transport::realtime_ns());
+    record->append(entry);  // a full queue drops it and counts it, as for steps
   }
 
   // Takes one message off the transport and applies it if valid. False on timeout.
@@ -165,6 +189,7 @@ struct Coordinator::State : core::RestoringEvaluator {
         }
         node.last_seen = Clock::now();
         node.last_answer = message->step;
+        ++node.answers;
         node.feedback = std::move(feedback);
         runtime::LinkSample& link = node.link;
         link.set_node_id(node.plan->spec.id());
@@ -174,9 +199,18 @@ struct Coordinator::State : core::RestoringEvaluator {
         link.set_one_way_down(
             static_cast<double>(node.feedback.command_received_ns() - message->echo_ns) * 1e-9);
         link.set_one_way_up(static_cast<double>(message->received_ns - message->sent_ns) * 1e-9);
-        node.round_trips.push_back(link.round_trip());
-        node.injected.push_back(link.injected_lag());
         return true;
+      }
+      case runtime::HOLD: {
+        // An emulator held on its own (its watchdog or limits): the test cannot go on.
+        runtime::Hold hold;
+        if (!runtime::unpack(*message, hold)) {
+          rejected.count(Verdict::kGarbage);
+          return true;
+        }
+        throw RunAborted("held on its own at its step " + std::to_string(message->step) + ": " +
+                             hold.reason(),
+                         node.plan->label());
       }
       case runtime::HEARTBEAT:
         node.last_seen = Clock::now();
@@ -248,6 +282,7 @@ struct Coordinator::State : core::RestoringEvaluator {
     check_limits(u, v);
     assembly.drifts(u, drift);
     assembly.drifts(v, drift_velocity);
+    check_rate_limit();
     for (auto& [id, node] : nodes) {
       command_message.Clear();
       command_message.set_time(time);
@@ -275,15 +310,19 @@ struct Coordinator::State : core::RestoringEvaluator {
       for (std::size_t i = 0; i < node.plan->actuators.size(); ++i) {
         const int a = node.plan->actuators[i];
         const int s = storeys[a];
-        command[a] = drift[s];
-        realised[a] = realised_of(node, i);
+        command_drift[a] = drift[s];
+        realised_drift[a] = realised_of(node, i);
         measured[a] = force_of(node, i);
       }
     }
-    for (std::size_t a = 0; a < storeys.size(); ++a) shear[storeys[a]] += measured[a];
-    assembly.dof_forces(shear, force);
+    core::assemble_storey_forces(assembly, storeys, measured, shear, force);
     return force;
   }
+  void set_time(double t) override { time = t; }
+  const core::Vec& command() const override { return command_drift; }
+  const core::Vec& realised() const override { return realised_drift; }
+  const core::Vec& measured_force() const override { return measured; }
+  int actuators() const override { return static_cast<int>(measured.size()); }
 
   // Before a node's first answer (real time, lag longer than the wait) the specimen is at rest.
   static double force_of(const Node& node, std::size_t i) {
@@ -299,6 +338,126 @@ struct Coordinator::State : core::RestoringEvaluator {
     if (local_numerical) local_numerical->commit();
   }
   bool repeatable() const override { return false; }
+
+  // ---- StepHooks: pacing before a step, record after it ----
+  runtime::PacingClock* pacing_clock = nullptr;  // set by run()
+  runtime::Pacer* pacer = nullptr;
+  runtime::PaceResult pace;
+  Clock::time_point step_start;
+  std::int64_t step_start_realtime_ns = 0;
+
+  void before_step(std::size_t k) override {
+    pace = {};
+    if (real_time) {
+      // Take messages off the wire while waiting, so that their receive stamps (and so the
+      // measured lag) are not delayed by our sleep; the last stretch is clock_nanosleep to the
+      // absolute deadline.
+      const std::int64_t until = pacer->deadline_ns(static_cast<std::int64_t>(k)) - kDrainMarginNs;
+      for (std::int64_t now = pacing_clock->now_ns(); now < until; now = pacing_clock->now_ns())
+        pump(std::chrono::nanoseconds(until - now));
+      pace = pacer->wait(static_cast<std::int64_t>(k));
+    }
+    step = static_cast<std::int64_t>(k);
+    step_start = Clock::now();
+    step_start_realtime_ns = transport::realtime_ns();
+  }
+
+  bool after_step(std::size_t k, const core::SimulationResult& result) override {
+    const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
+    write_step(k, result, step_wall);
+    if (k > 0)
+      for (auto& [id, node] : nodes) lags.add(result.time[k], node.link);
+    if (k == 0) {
+      last_heartbeat_sent = Clock::now();
+      for (auto& [id, node] : nodes) node.last_seen = Clock::now();
+      if (real_time) pacer->start();
+    }
+    return true;
+  }
+
+  // mlockall and the loop thread's CPU, as the deployment asks. Refusals are logged events, not
+  // failures: an unprivileged lab machine still runs, and the record says it was not locked.
+  void prepare_real_time_thread() {
+    if (deployment.lock_memory()) {
+      if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+        event(std::string("mlockall refused (") + std::strerror(errno) + "); memory not locked");
+      else
+        event("memory locked (mlockall)");
+    }
+    if (deployment.pin_loop()) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      CPU_SET(deployment.loop_cpu(), &set);
+      const int rc = pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+      event(rc == 0 ? "loop thread pinned to CPU " + std::to_string(deployment.loop_cpu())
+                    : "pinning to CPU " + std::to_string(deployment.loop_cpu()) + " refused (" +
+                          std::strerror(rc) + ")");
+    }
+  }
+
+  void write_header() {
+    if (!record) return;
+    runtime::RecordEntry entry;
+    runtime::RunHeader& h = *entry.mutable_header();
+    h.set_schema_version(runtime::kSchemaVersion);
+    h.set_run_id(options.run_id);
+    *h.mutable_study() = prepared.config;
+    h.set_case_name(case_name);
+    h.set_clock(real_time ? "real_time" : "lockstep");
+    h.set_dt(setup.dt);
+    h.set_dofs(setup.model.dofs());
+    h.set_actuators(static_cast<int>(setup.partition.actuator_storeys.size()));
+    for (auto& [id, node] : nodes) h.add_link_node_ids(id);
+    h.set_start_realtime_ns(transport::realtime_ns());
+    h.set_timestamp_clock(
+        "CLOCK_REALTIME ns; round_trip uses the coordinator's clock only, one-way lags "
+        "include the clock offset between hosts");
+    append_waiting(entry);
+  }
+
+  void write_step(std::size_t k, const core::SimulationResult& result, double step_wall) {
+    if (!record) return;
+    runtime::StepRecord& r = step_record;
+    r.Clear();  // keeps the repeated fields' storage
+    const auto row = static_cast<Eigen::Index>(k);
+    r.set_step(static_cast<std::int64_t>(k));
+    r.set_time(result.time[k]);
+    r.set_ground_acceleration(prepared.motion.acceleration[k]);
+    for (int i = 0; i < result.displacement.cols(); ++i) {
+      r.add_displacement(result.displacement(row, i));
+      r.add_velocity(result.velocity(row, i));
+      r.add_acceleration(result.acceleration(row, i));
+    }
+    for (int a = 0; a < result.command.cols(); ++a) {
+      r.add_command(result.command(row, a));
+      r.add_realised(result.realised(row, a));
+      r.add_measured_force(result.measured_force(row, a));
+    }
+    if (k > 0)
+      for (auto& [id, node] : nodes) *r.add_links() = node.link;
+    r.set_lateness(pace.lateness);
+    r.set_step_wall(step_wall);
+    r.set_overrun(pace.overrun);
+    r.set_start_realtime_ns(k == 0 ? 0 : step_start_realtime_ns);
+    step_entry.unsafe_arena_set_allocated_step(&step_record);
+    record->append(step_entry);
+    step_entry.unsafe_arena_release_step();
+  }
+
+  // Rate limit on the commanded drift of every actuator storey, against the previous command.
+  void check_rate_limit() {
+    const double limit = deployment.limits().max_displacement_step();
+    if (limit > 0)
+      for (int s : setup.partition.actuator_storeys) {
+        const double change = drift[s] - last_sent_drift[s];
+        if (!(std::abs(change) <= limit))
+          throw RunAborted("safety limit: commanded drift of storey " + std::to_string(s + 1) +
+                               " changes by " + std::to_string(change) + " m in one step (limit " +
+                               std::to_string(limit) + " m per step); command not sent",
+                           "");
+      }
+    last_sent_drift = drift;
+  }
 
   void check_limits(const core::Vec& u, const core::Vec& v) const {
     const auto& limits = deployment.limits();
@@ -333,8 +492,29 @@ struct Coordinator::State : core::RestoringEvaluator {
       }
       while (pump(std::chrono::nanoseconds::zero())) {
       }
-      for (auto& [id, node] : nodes)
-        if (node.last_answer != step) ++late_feedback;
+      const int max_missed = runtime::max_missed_answers(deployment);
+      for (auto& [id, node] : nodes) {
+        if (node.last_answer != step) {
+          ++late_feedback;
+          if (static_cast<std::uint64_t>(++node.late_streak) > worst_late_streak)
+            worst_late_streak = static_cast<std::uint64_t>(node.late_streak);
+        } else {
+          node.late_streak = 0;
+        }
+        // Missing = no fresh answer at all this step (an answer to an older step, as a link
+        // slower than a step delivers, is fresh). Counted once the node has answered: before
+        // that, start-up and liveliness cover it.
+        const bool fresh = node.answers != node.answers_before_step;
+        node.answers_before_step = node.answers;
+        node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
+        if (node.missed_streak >= max_missed)
+          throw RunAborted("no answer for " + std::to_string(node.missed_streak) +
+                               " consecutive steps (steps " +
+                               std::to_string(step - node.missed_streak + 1) + " to " +
+                               std::to_string(step) + "; its newest answers step " +
+                               std::to_string(node.last_answer) + ")",
+                           node.plan->label());
+      }
       check_liveliness();
       return;
     }
@@ -389,8 +569,10 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
       if (!name.empty()) runtime::find_case(s.prepared.config, name);  // throws naming it
   s.plan = &plan_;
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
+  const std::size_t steps = s.prepared.motion.acceleration.size();
   for (const runtime::NodePlan& n : plan_.nodes) {
     s.nodes[n.spec.id()].plan = &n;
+    s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
     s.nodes[n.spec.id()].link.set_node_id(n.spec.id());  // answered_step 0: no answer yet
   }
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
@@ -400,11 +582,12 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
     s.local_numerical = std::make_unique<core::NumericalSubstructure>(
         core::HybridPartition(s.setup.partition).numerical);
   s.drift = core::Vec::Zero(storeys);
+  s.last_sent_drift = core::Vec::Zero(storeys);
   s.drift_velocity = core::Vec::Zero(storeys);
   s.shear = core::Vec::Zero(storeys);
   s.force = core::Vec::Zero(storeys);
-  s.command = core::Vec::Zero(actuators);
-  s.realised = core::Vec::Zero(actuators);
+  s.command_drift = core::Vec::Zero(actuators);
+  s.realised_drift = core::Vec::Zero(actuators);
   s.measured = core::Vec::Zero(actuators);
 }
 
@@ -415,128 +598,42 @@ RunOutcome Coordinator::run() {
   const auto wall_start = Clock::now();
   RunOutcome outcome;
   if (!s.options.record.empty())
-    s.record = std::make_unique<runtime::RecordWriter>(s.options.record);
-
-  const core::HybridSetup& setup = s.setup;
-  const core::GroundMotion& motion = s.prepared.motion;
-  const int dofs = setup.model.dofs();
-  const int actuators = static_cast<int>(setup.partition.actuator_storeys.size());
-  const std::size_t steps = motion.acceleration.size();
-  core::SimulationResult& result = outcome.result;
-  result.dt = setup.dt;
-  const auto rows = static_cast<Eigen::Index>(steps);
-  result.time.assign(steps, 0.0);
-  result.displacement = core::Mat::Zero(rows, dofs);
-  result.velocity = core::Mat::Zero(rows, dofs);
-  result.acceleration = core::Mat::Zero(rows, dofs);
-  result.command = core::Mat::Zero(rows, actuators);
-  result.realised = core::Mat::Zero(rows, actuators);
-  result.measured_force = core::Mat::Zero(rows, actuators);
+    s.record = std::make_unique<runtime::AsyncRecordWriter>(s.options.record);
 
   runtime::MonotonicClock monotonic;
   runtime::PacingClock& pacing_clock = s.options.clock ? *s.options.clock : monotonic;
-  runtime::Pacer pacer(pacing_clock, setup.dt);
-  std::size_t completed = 1;
+  runtime::Pacer pacer(pacing_clock, s.setup.dt, runtime::wait_policy(s.deployment));
+  s.pacing_clock = &pacing_clock;
+  s.pacer = &pacer;
+  core::SimulationResult& result = outcome.result;
   bool failed = false;
-  double step_wall = 0.0;
-
-  auto write_step = [&](std::size_t k, const runtime::PaceResult& pace) {
-    if (!s.record) return;
-    runtime::RecordEntry entry;
-    runtime::StepRecord& r = *entry.mutable_step();
-    const auto row = static_cast<Eigen::Index>(k);
-    r.set_step(static_cast<std::int64_t>(k));
-    r.set_time(result.time[k]);
-    r.set_ground_acceleration(motion.acceleration[k]);
-    for (int i = 0; i < dofs; ++i) {
-      r.add_displacement(result.displacement(row, i));
-      r.add_velocity(result.velocity(row, i));
-      r.add_acceleration(result.acceleration(row, i));
-    }
-    for (int a = 0; a < actuators; ++a) {
-      r.add_command(result.command(row, a));
-      r.add_realised(result.realised(row, a));
-      r.add_measured_force(result.measured_force(row, a));
-    }
-    if (k > 0)
-      for (auto& [id, node] : s.nodes) *r.add_links() = node.link;
-    r.set_lateness(pace.lateness);
-    r.set_step_wall(step_wall);
-    r.set_overrun(pace.overrun);
-    s.record->write(entry);
-  };
 
   try {
-    if (s.record) {
-      runtime::RecordEntry entry;
-      runtime::RunHeader& h = *entry.mutable_header();
-      h.set_schema_version(runtime::kSchemaVersion);
-      h.set_run_id(s.options.run_id);
-      *h.mutable_study() = s.prepared.config;
-      h.set_case_name(s.case_name);
-      h.set_clock(s.real_time ? "real_time" : "lockstep");
-      h.set_dt(setup.dt);
-      h.set_dofs(dofs);
-      h.set_actuators(actuators);
-      for (auto& [id, node] : s.nodes) h.add_link_node_ids(id);
-      h.set_start_realtime_ns(transport::realtime_ns());
-      h.set_timestamp_clock(
-          "CLOCK_REALTIME ns; round_trip uses the coordinator's clock only, one-way lags "
-          "include the clock offset between hosts");
-      s.record->write(entry);
-    }
+    s.write_header();
     s.start_up();
     s.event("all " + std::to_string(s.nodes.size()) + " nodes ready (" +
             std::string(s.real_time ? "real time" : "lockstep") + ", case " + s.case_name + ")");
-
-    // The same sequence as core::simulate().
-    auto integrator = core::make_integrator(setup.integrator, setup.model, setup.dt);
-    const core::Vec mass_iota = setup.model.mass * setup.model.influence;
-    core::Vec load = -mass_iota * motion.acceleration[0];
-    integrator->initialize(core::Vec::Zero(dofs), core::Vec::Zero(dofs), core::Vec::Zero(dofs),
-                           load);
-    result.acceleration.row(0) = integrator->acceleration().transpose();
-    write_step(0, {});
-    s.last_heartbeat_sent = Clock::now();
-    for (auto& [id, node] : s.nodes) node.last_seen = Clock::now();
-    if (s.real_time) pacer.start();
-    for (std::size_t k = 1; k < steps; ++k) {
-      runtime::PaceResult pace;
-      if (s.real_time) {
-        // Take messages off the wire while waiting, so that their receive stamps (and so the
-        // measured lag) are not delayed by our sleep; the last stretch is clock_nanosleep to the
-        // absolute deadline.
-        const std::int64_t until = pacer.deadline_ns(static_cast<std::int64_t>(k)) - kDrainMarginNs;
-        for (std::int64_t now = pacing_clock.now_ns(); now < until; now = pacing_clock.now_ns())
-          s.pump(std::chrono::nanoseconds(until - now));
-        pace = pacer.wait(static_cast<std::int64_t>(k));
-      }
-      const double t = static_cast<double>(k) * setup.dt;
-      result.time[k] = t;
-      load = -mass_iota * motion.acceleration[k];
-      s.step = static_cast<std::int64_t>(k);
-      s.time = t;
-      const auto step_start = Clock::now();
-      integrator->step(load, s);
-      step_wall = std::chrono::duration<double>(Clock::now() - step_start).count();
-      const auto row = static_cast<Eigen::Index>(k);
-      result.displacement.row(row) = integrator->displacement().transpose();
-      result.velocity.row(row) = integrator->velocity().transpose();
-      result.acceleration.row(row) = integrator->acceleration().transpose();
-      result.command.row(row) = s.command.transpose();
-      result.realised.row(row) = s.realised.transpose();
-      result.measured_force.row(row) = s.measured.transpose();
-      completed = k + 1;
-      write_step(k, pace);
-      const double peak = integrator->displacement().cwiseAbs().maxCoeff();
-      if (!(peak <= s.options.divergence_bound)) {
-        result.diverged = true;
-        s.event("diverged: |u| = " + std::to_string(peak) + " m");
-        break;
-      }
-    }
-    outcome.ok = true;
+    if (s.real_time) s.prepare_real_time_thread();
+    core::SimulationOptions loop_options;
+    loop_options.divergence_bound = s.options.divergence_bound;
+    core::run_steps(s.setup, s.prepared.motion, s, s, loop_options, result);
+    if (result.diverged)
+      s.event("diverged: |u| = " +
+              std::to_string(result.displacement.bottomRows(1).cwiseAbs().maxCoeff()) + " m");
+    outcome.ok = !result.diverged;
     outcome.status = result.diverged ? "diverged" : "completed";
+    const double tolerance = runtime::max_overrun_fraction(s.deployment);
+    const double steps_run = static_cast<double>(std::max<std::size_t>(result.steps(), 2) - 1);
+    if (s.real_time && !result.diverged && tolerance >= 0 &&
+        static_cast<double>(pacer.overruns()) > tolerance * steps_run) {
+      outcome.ok = false;
+      outcome.status = "completed with deadline misses: " + std::to_string(pacer.overruns()) +
+                       " overruns in " + std::to_string(result.steps() - 1) + " steps (" +
+                       std::to_string(100.0 * static_cast<double>(pacer.overruns()) / steps_run) +
+                       " %, tolerance " + std::to_string(100.0 * tolerance) +
+                       " %; worst streak " + std::to_string(pacer.worst_overrun_streak()) + ")";
+      s.event(outcome.status);
+    }
   } catch (const RunAborted& e) {
     failed = true;
     outcome.status = e.what();
@@ -560,22 +657,33 @@ RunOutcome Coordinator::run() {
   stop.set_reason(outcome.status);
   s.send(transport::kBroadcastId, runtime::STOP, s.step, stop);
 
-  result.truncate(completed);
-
+  const std::size_t completed = result.steps();
   s.rejected.fill(outcome.counters);
   outcome.counters.set_overruns(pacer.overruns());
   outcome.counters.set_late_feedback(s.late_feedback);
-  outcome.counters.set_steps(completed - 1);
+  outcome.counters.set_worst_overrun_streak(pacer.worst_overrun_streak());
+  outcome.counters.set_worst_late_streak(s.worst_late_streak);
+  outcome.counters.set_steps(completed > 0 ? completed - 1 : 0);
   outcome.max_lateness = pacer.max_lateness();
   for (auto& [id, node] : s.nodes) {
     LinkLagStats stats;
     stats.node_id = id;
     stats.label = node.plan->label();
-    stats.round_trip = runtime::summarize(node.round_trips);
-    stats.injected = runtime::summarize(node.injected);
+    const auto series = s.lags.links().find(id);
+    if (series != s.lags.links().end()) {
+      stats.round_trip = series->second.round_trip_summary();
+      stats.injected = series->second.injected_summary();
+    }
     outcome.links.push_back(stats);
   }
   outcome.wall_seconds = seconds_since(wall_start);
+  if (s.record && s.record->dropped() > 0) {
+    // A gap in the record is lost data: the run did not do what it was for.
+    outcome.ok = false;
+    outcome.status += "; the run record lost " + std::to_string(s.record->dropped()) +
+                      " entries (its writer fell more than " +
+                      std::to_string(s.record->capacity()) + " entries behind)";
+  }
   if (s.record) {
     runtime::RecordEntry entry;
     runtime::RunFooter& f = *entry.mutable_footer();
@@ -585,8 +693,11 @@ RunOutcome Coordinator::run() {
     *f.mutable_counters() = outcome.counters;
     f.set_diverged(result.diverged);
     f.set_wall_seconds(outcome.wall_seconds);
-    s.record->write(entry);
+    s.append_waiting(entry);
+    s.record->close();  // throws naming the file when a write failed
   }
+  s.pacer = nullptr;
+  s.pacing_clock = nullptr;
   return outcome;
 }
 

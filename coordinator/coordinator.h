@@ -9,21 +9,37 @@
 //              storey shear = numerical (nodes, or local) + experimental (emulators), then DOF
 //              forces. Doubles cross the wire unchanged, so lockstep equals the in-process run
 //              bit for bit.
+//   loop       core::run_steps(), the one stepping loop the in-process simulation also runs: this
+//              class is its restoring-force evaluator (exchange over the transport) and its hooks
+//              (pacing before a step, record after it). Lockstep equals in process by construction.
 //   lockstep   waits for every answer to step k (step_timeout), simulated time only.
-//   real time  absolute deadlines every dt (Pacer); between steps it takes messages off the wire
-//              until 150 us before the deadline (so receive stamps are not delayed by its sleep),
-//              then clock_nanosleep; waits at most feedback_wait_fraction * dt for
-//              the answers to step k, otherwise uses the newest answer it has and records which
-//              step that answers; overruns are counted and recorded per step.
-//   safety     a node silent for liveliness_timeout, a missing answer, or a command beyond the
-//              displacement / velocity limits stops the run: HOLD to the emulators, STOP to all,
-//              the record is closed with the reason and the node, outcome.ok = false.
+//   real time  absolute deadlines every dt (Pacer with the deployment's wait policy: sleep,
+//              sleep_then_spin, spin); between steps it takes messages off the wire until 150 us
+//              before the deadline (so receive stamps are not delayed by its wait); waits at most
+//              feedback_wait_fraction * dt for the answers to step k, otherwise uses the newest
+//              answer it has and records which step that answers; overruns, late feedback and
+//              their worst streaks are counted and recorded per step.
+// Outcome: ok only when the run did what it was for. Not ok: diverged; a real-time run whose
+// overruns exceed max_overrun_fraction of its steps ("completed with deadline misses"); any stop
+// below; a run record that lost entries.
+// Faults (what the coordinator does, within how many steps):
+//   a node gives no fresh answer for max_missed_answers (3) consecutive real-time steps
+//                  -> stops at that step: HOLD to the emulators, STOP to all, the node named.
+//                     At most max_missed_answers - 1 steps are integrated on its old force.
+//   an emulator answers HOLD (it held on its own: watchdog, rate limit) -> stops at once, naming it.
+//   a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep),
+//   no lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift
+//   changing by more than limits.max_displacement_step -> stops before the command is sent.
+//   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
 //   rejects    foreign-run, garbage, duplicate, stale, out-of-order, unknown-node messages are
 //              counted and never applied.
-// Record: header, one StepRecord per step (flushed), events, footer.
-// Real-time safety: the step allocates (message payload strings, the record entry) and writes
-// the record synchronously (one write + flush per step, so a crash loses at most one step); it
-// does no other blocking I/O.
+// Record: header, one StepRecord per step, events, footer, through runtime::AsyncRecordWriter:
+// the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
+// loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
+// one or two entries behind). A full ring drops and counts entries and fails the run.
+// Real-time safety of a step: the record entry, the feedback storage and the lag vectors are
+// reused or reserved up front; what still allocates is the transport's message (payload string)
+// and, rarely, an event. mlockall and pinning of the loop thread when the deployment asks.
 
 #include <filesystem>
 #include <map>

@@ -1,5 +1,7 @@
 #include "coordinator/program.h"
 
+#include <spdlog/async.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -18,8 +20,9 @@ std::string summary_text(const RunOutcome& o) {
       << "\nrejected: foreign-run " << c.foreign_run() << ", garbage " << c.garbage()
       << ", duplicate " << c.duplicate() << ", stale " << c.stale() << ", out-of-order "
       << c.out_of_order() << ", unknown-node " << c.unknown_node()
-      << "\noverruns: " << c.overruns() << ", late feedback: " << c.late_feedback()
-      << ", max lateness " << o.max_lateness * 1e3 << " ms\n";
+      << "\noverruns: " << c.overruns() << " (worst streak " << c.worst_overrun_streak()
+      << "), late feedback: " << c.late_feedback() << " (worst streak " << c.worst_late_streak()
+      << "), max lateness " << o.max_lateness * 1e3 << " ms\n";
   for (const LinkLagStats& l : o.links)
     out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "
         << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3
@@ -41,6 +44,13 @@ int coordinator_main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  // Log lines leave the loop thread through spdlog's queue; a full queue overwrites the oldest
+  // line rather than block the loop.
+  spdlog::init_thread_pool(8192, 1);
+  spdlog::set_default_logger(spdlog::create_async_nb<spdlog::sinks::stdout_color_sink_mt>("rths"));
+  struct FlushLogs {
+    ~FlushLogs() { spdlog::shutdown(); }
+  } flush_logs;
   std::unique_ptr<Coordinator> coordinator;
   std::unique_ptr<transport::DdsEndpoint> endpoint;
   try {

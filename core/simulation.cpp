@@ -15,8 +15,9 @@ void SimulationResult::truncate(std::size_t steps) {
   }
 }
 
-SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
-                          const SimulationOptions& options) {
+namespace {
+
+void require_motion_at_dt(const HybridSetup& setup, const GroundMotion& motion_at_dt) {
   if (!(setup.dt > 0)) throw std::invalid_argument("simulation: dt must be > 0 s");
   if (std::abs(motion_at_dt.dt - setup.dt) > 1e-9 * setup.dt) {
     throw std::invalid_argument("simulation: ground motion '" + motion_at_dt.name + "' has dt " +
@@ -26,37 +27,45 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
   if (motion_at_dt.acceleration.empty()) {
     throw std::invalid_argument("simulation: ground motion '" + motion_at_dt.name + "' is empty");
   }
-  check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
+}
 
-  HybridRestoring restoring(setup.partition, setup.delays, setup.dt);
-  if (!is_explicit(setup.integrator) && !restoring.repeatable()) {
-    throw std::invalid_argument(
-        to_string(setup.integrator) +
-        " cannot run with a delay stage: it iterates on the restoring force, which a delayed "
-        "experimental substructure cannot repeat. Use an explicit integrator");
-  }
+}  // namespace
+
+void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
+               HybridEvaluator& restoring, StepHooks& hooks, const SimulationOptions& options,
+               SimulationResult& result) {
+  require_motion_at_dt(setup, motion_at_dt);
   auto integrator = make_integrator(setup.integrator, setup.model, setup.dt);
 
   const int dofs = setup.model.dofs();
   const int actuators = restoring.actuators();
   const std::size_t steps = motion_at_dt.acceleration.size();
-  SimulationResult result;
+  const auto rows = static_cast<Eigen::Index>(steps);
+  result = SimulationResult{};
   result.dt = setup.dt;
-  result.time.resize(steps);
-  result.displacement = Mat::Zero(static_cast<Eigen::Index>(steps), dofs);
-  result.velocity = Mat::Zero(static_cast<Eigen::Index>(steps), dofs);
-  result.acceleration = Mat::Zero(static_cast<Eigen::Index>(steps), dofs);
-  result.command = Mat::Zero(static_cast<Eigen::Index>(steps), actuators);
-  result.realised = Mat::Zero(static_cast<Eigen::Index>(steps), actuators);
-  result.measured_force = Mat::Zero(static_cast<Eigen::Index>(steps), actuators);
+  result.time.assign(steps, 0.0);
+  result.displacement = Mat::Zero(rows, dofs);
+  result.velocity = Mat::Zero(rows, dofs);
+  result.acceleration = Mat::Zero(rows, dofs);
+  result.command = Mat::Zero(rows, actuators);
+  result.realised = Mat::Zero(rows, actuators);
+  result.measured_force = Mat::Zero(rows, actuators);
+
+  // Whatever stops the loop, the result keeps exactly the steps that completed.
+  struct TruncateOnExit {
+    SimulationResult& result;
+    std::size_t completed = 1;
+    ~TruncateOnExit() { result.truncate(completed); }
+  } guard{result};
 
   const Vec mass_iota = setup.model.mass * setup.model.influence;
   Vec load = -mass_iota * motion_at_dt.acceleration[0];
   integrator->initialize(Vec::Zero(dofs), Vec::Zero(dofs), Vec::Zero(dofs), load);
   result.acceleration.row(0) = integrator->acceleration().transpose();
+  if (!hooks.after_step(0, result)) return;
 
-  std::size_t completed = steps;
   for (std::size_t k = 1; k < steps; ++k) {
+    hooks.before_step(k);
     const double t = static_cast<double>(k) * setup.dt;
     result.time[k] = t;
     load = -mass_iota * motion_at_dt.acceleration[k];
@@ -69,14 +78,32 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
     result.command.row(row) = restoring.command().transpose();
     result.realised.row(row) = restoring.realised().transpose();
     result.measured_force.row(row) = restoring.measured_force().transpose();
+    guard.completed = k + 1;
     const double peak = integrator->displacement().cwiseAbs().maxCoeff();
     if (!(peak <= options.divergence_bound)) {  // also catches NaN
       result.diverged = true;
-      completed = k + 1;
-      break;
+      hooks.after_step(k, result);
+      return;
     }
+    if (!hooks.after_step(k, result)) return;
   }
-  if (completed < steps) result.truncate(completed);
+}
+
+SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
+                          const SimulationOptions& options) {
+  require_motion_at_dt(setup, motion_at_dt);
+  check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
+
+  HybridRestoring restoring(setup.partition, setup.delays, setup.dt);
+  if (!is_explicit(setup.integrator) && !restoring.repeatable()) {
+    throw std::invalid_argument(
+        to_string(setup.integrator) +
+        " cannot run with a delay stage: it iterates on the restoring force, which a delayed "
+        "experimental substructure cannot repeat. Use an explicit integrator");
+  }
+  StepHooks no_hooks;
+  SimulationResult result;
+  run_steps(setup, motion_at_dt, restoring, no_hooks, options, result);
   return result;
 }
 

@@ -1,9 +1,20 @@
 #pragma once
-// In-process hybrid simulation: structure + integrator + numerical storeys + delayed experimental
-// storeys under a ground motion. The reference run is the same setup with no delay stages.
+// The one stepping loop of a hybrid simulation, and the in-process run built on it.
 //
+// run_steps() is the only loop that integrates a hybrid test: in process (simulate(), with
+// HybridRestoring), lockstep over a transport and real time (the coordinator, with an evaluator that
+// exchanges commands and feedback with nodes, and hooks that pace and record). So "lockstep equals
+// in process" holds by construction: both run this code with the same doubles.
+//
+//   k = 0       p_0 = -M iota a_g[0]; integrator initialised at rest (u = v = 0, r = 0);
+//               hooks.after_step(0)
+//   k = 1..N-1  hooks.before_step(k)            (real time: wait for deadline k)
+//               restoring.set_time(k dt); p_k = -M iota a_g[k]; integrator.step(p_k, restoring)
+//               row k of the result <- u, v, a (DOFs), command, realised, measured force (actuators)
+//               stop, diverged, when any |u| > options.divergence_bound (or NaN)
+//               hooks.after_step(k)             (record, limits; false stops the run)
 // Input: a ground motion already at the integration step dt (m/s^2).
-// Output: histories at t_k = k dt, k = 0..N (N = number of motion samples), SI units.
+// Output: histories at t_k = k dt, k = 0..N-1 (N = number of motion samples), SI units.
 
 #include <string>
 #include <vector>
@@ -41,6 +52,26 @@ struct SimulationOptions {
   // unstable cases running to inf/NaN.
   double divergence_bound = 1.0e3;
 };
+
+// What a runtime adds around each step. Either hook may throw to abort the run; the loop then
+// truncates the result to the completed steps before the exception leaves it.
+class StepHooks {
+ public:
+  virtual ~StepHooks() = default;
+  // Before step k (k >= 1) is integrated. Real time waits for its deadline here.
+  virtual void before_step(std::size_t /*k*/) {}
+  // After row k of `result` is stored (k = 0 is the initial state). False stops the run
+  // (the step stays in the result).
+  virtual bool after_step(std::size_t /*k*/, const SimulationResult& /*result*/) { return true; }
+};
+
+// Runs the loop. `result` is resized for every step of the motion on entry and truncated to the
+// steps completed on return, or when an exception leaves the loop. Throws std::invalid_argument
+// when dt is not > 0, the motion's dt differs from setup.dt, or the motion is empty. Allocates only
+// on entry (the result, the integrator).
+void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
+               HybridEvaluator& restoring, StepHooks& hooks, const SimulationOptions& options,
+               SimulationResult& result);
 
 // Throws std::invalid_argument when dt is beyond the integrator's limit (unless allowed), when
 // the motion's dt differs from setup.dt, or when an implicit integrator meets a delay stage.

@@ -146,6 +146,13 @@ void Actuator::reset() {
   specimen_->reset();
 }
 
+void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<int>& actuator_storeys,
+                            const Vec& measured, Vec& shear, Vec& force) {
+  for (std::size_t a = 0; a < actuator_storeys.size(); ++a)
+    shear[actuator_storeys[a]] += measured[static_cast<Eigen::Index>(a)];
+  assembly.dof_forces(shear, force);
+}
+
 HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains,
                                  double /*dt*/)
     : assembly_(static_cast<int>(partition.numerical.size())),
@@ -188,17 +195,16 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
     if (tangent) {
       // Implicit iteration (only when undelayed): evaluate without committing.
       const ForceState state = actuators_[a].trial_undelayed(drift_[s]);
-      shear_[s] += state.force;
+      measured_[a] = state.force;
       storey_tangent_[s] += state.tangent;
     } else {
       const ActuatorOutput out = actuators_[a].step({time_, drift_[s], drift_velocity_[s]});
       command_[a] = drift_[s];
       realised_[a] = out.realised;
       measured_[a] = out.force;
-      shear_[s] += out.force;
     }
   }
-  assembly_.dof_forces(shear_, force_);
+  assemble_storey_forces(assembly_, actuator_storeys_, measured_, shear_, force_);
   if (tangent) assembly_.tangent(storey_tangent_, *tangent);
   return force_;
 }

@@ -100,21 +100,40 @@ class Actuator {
   std::unique_ptr<RestoringForceModel> specimen_;
 };
 
+// A restoring-force evaluator for a hybrid run: what the loop records of each step besides forces.
+class HybridEvaluator : public RestoringEvaluator {
+ public:
+  // Time (s) of the step about to be trialled; experimental parts stamp their commands with it.
+  virtual void set_time(double t) = 0;
+  // Of the last step, one entry per actuator: commanded drift (m), realised drift (m), force (N).
+  virtual const Vec& command() const = 0;
+  virtual const Vec& realised() const = 0;
+  virtual const Vec& measured_force() const = 0;
+  virtual int actuators() const = 0;
+};
+
+// Storey shear = numerical + experimental, in that order, then DOF forces: the one assembly every
+// evaluator (local or over a transport) uses, so the sums agree bit for bit.
+//   shear (N, per storey) holds the numerical shears on entry and the total on return;
+//   measured (N, per actuator) is added at actuator_storeys[a]; force (N, per DOF) is written.
+void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<int>& actuator_storeys,
+                            const Vec& measured, Vec& shear, Vec& force);
+
 // In-process restoring force: numerical storeys plus delayed experimental storeys.
 // Records, per step, each actuator's commanded drift, realised drift and measured force.
-class HybridRestoring final : public RestoringEvaluator {
+class HybridRestoring final : public HybridEvaluator {
  public:
   HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains, double dt);
   const Vec& trial(const Vec& u, const Vec& v, Mat* tangent) override;
   void commit() override;
   bool repeatable() const override;
-  void set_time(double t) { time_ = t; }
+  void set_time(double t) override { time_ = t; }
 
   // Last committed step, one entry per actuator.
-  const Vec& command() const { return command_; }
-  const Vec& realised() const { return realised_; }
-  const Vec& measured_force() const { return measured_; }
-  int actuators() const { return static_cast<int>(actuators_.size()); }
+  const Vec& command() const override { return command_; }
+  const Vec& realised() const override { return realised_; }
+  const Vec& measured_force() const override { return measured_; }
+  int actuators() const override { return static_cast<int>(actuators_.size()); }
 
  private:
   StoreyAssembly assembly_;

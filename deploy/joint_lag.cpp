@@ -17,6 +17,7 @@
 #include "deploy/netns.h"
 #include "deploy/process.h"
 #include "deploy/sites.h"
+#include "runtime/measurements.h"
 #include "runtime/record.h"
 
 namespace rths::deploy {
@@ -104,16 +105,14 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       for (const auto& link : run.links) {
         if (link.kind == "actuator_emulator") point.measured_round_trip = link.round_trip.median;
       }
-      const auto contents = runtime::read_record(run.record);
-      std::vector<double> command, realised, u;
-      for (const auto* step : contents.steps()) {
-        if (step->command_size() > 0 && step->realised_size() > 0) {
-          command.push_back(step->command(0));
-          realised.push_back(step->realised(0));
-        }
-        if (step->displacement_size() > 0) u.push_back(step->displacement(0));
-      }
-      const double dt = contents.header() != nullptr ? contents.header()->dt() : 0.0;
+      const runtime::RunMeasurements measured = runtime::measure_run(runtime::read_record(run.record));
+      const core::SimulationResult& steps = measured.steps;
+      if (steps.command.cols() == 0 || steps.displacement.cols() == 0)
+        throw std::runtime_error("across-sites run " + name.str() + ": record has no actuator");
+      const std::vector<double> command = column(steps.command, 0),
+                                realised = column(steps.realised, 0),
+                                u = column(steps.displacement, 0);
+      const double dt = steps.dt;
       if (command.size() < 10 || !(dt > 0.0)) {
         throw std::runtime_error("across-sites run " + name.str() + ": record too short");
       }
@@ -132,7 +131,7 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       const auto reference = core::simulate(
           core::setup_for_case(prepared, core::reference_case(reference_study)), prepared.motion);
       fill_errors(point, column(reference.displacement, 0), u);
-      point.diverged = contents.footer() != nullptr && contents.footer()->diverged();
+      point.diverged = measured.has_footer && measured.footer.diverged();
       result.measured.push_back(point);
     }
   }

@@ -19,6 +19,7 @@
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
 #include "deploy/process.h"
+#include "runtime/measurements.h"
 #include "runtime/record.h"
 
 namespace rths::deploy {
@@ -174,16 +175,7 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
 
 std::vector<LinkMeasurement> measure_links(const std::filesystem::path& record,
                                            const SitesPlan& plan) {
-  const auto contents = runtime::read_record(record);
-  std::map<int, std::vector<double>> injected, round_trip, down, up;
-  for (const auto* step : contents.steps()) {
-    for (const auto& sample : step->links()) {
-      injected[sample.node_id()].push_back(sample.injected_lag());
-      round_trip[sample.node_id()].push_back(sample.round_trip());
-      down[sample.node_id()].push_back(sample.one_way_down());
-      up[sample.node_id()].push_back(sample.one_way_up());
-    }
-  }
+  const runtime::RunMeasurements measured = runtime::measure_run(runtime::read_record(record));
   std::vector<LinkMeasurement> links;
   for (const auto& placement : plan.placements) {
     if (placement.node_id == 0) continue;
@@ -196,10 +188,13 @@ std::vector<LinkMeasurement> measure_links(const std::filesystem::path& record,
       link.configured_to_node = node.receive_lag().one_way_delay();
       link.configured_from_node = node.send_lag().one_way_delay();
     }
-    link.injected = runtime::summarize(injected[link.node_id]);
-    link.round_trip = runtime::summarize(round_trip[link.node_id]);
-    link.one_way_down = runtime::summarize(down[link.node_id]);
-    link.one_way_up = runtime::summarize(up[link.node_id]);
+    const auto series = measured.links.find(link.node_id);
+    if (series != measured.links.end()) {
+      link.injected = series->second.injected_summary();
+      link.round_trip = series->second.round_trip_summary();
+      link.one_way_down = runtime::summarize(series->second.one_way_down);
+      link.one_way_up = runtime::summarize(series->second.one_way_up);
+    }
     links.push_back(link);
   }
   return links;

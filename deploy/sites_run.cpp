@@ -13,6 +13,7 @@
 #include "deploy/netns.h"
 #include "deploy/process.h"
 #include "deploy/sites.h"
+#include "runtime/measurements.h"
 #include "runtime/record.h"
 
 namespace rths::deploy {
@@ -221,19 +222,13 @@ std::string check_record(const std::filesystem::path& record, std::int64_t min_s
     throw std::runtime_error(record.string() + ": " + std::to_string(steps) + " steps, expected >= " +
                              std::to_string(min_steps));
   }
-  std::map<int, std::vector<double>> injected, round_trip;
-  for (const auto* step : contents.steps()) {
-    for (const auto& sample : step->links()) {
-      injected[sample.node_id()].push_back(sample.injected_lag());
-      round_trip[sample.node_id()].push_back(sample.round_trip());
-    }
-  }
+  const runtime::RunMeasurements measured = runtime::measure_run(contents);
   std::ostringstream text;
   text << record.string() << ": " << steps << " steps, status " << footer->status() << "\n";
   double largest_injected = 0.0;
-  for (const auto& [node, lags] : injected) {
-    const auto in = runtime::summarize(lags);
-    const auto rt = runtime::summarize(round_trip[node]);
+  for (const auto& [node, series] : measured.links) {
+    const auto in = series.injected_summary();
+    const auto rt = series.round_trip_summary();
     largest_injected = std::max(largest_injected, in.median);
     text << "  node " << node << ": injected median " << in.median * 1e3 << " ms, round trip median "
          << rt.median * 1e3 << " ms (p99 " << rt.p99 * 1e3 << " ms)\n";

@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "runtime/lag.h"
+#include "runtime/plan.h"
 #include "runtime/schema.h"
 
 namespace rths::runtime {
@@ -31,6 +32,8 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
   const std::int64_t started = realtime_ns();
   std::int64_t last_from_coordinator = started;
   std::int64_t heartbeat_ns = seconds_to_ns(0.05), orphan_ns = seconds_to_ns(5.0);
+  // Command watchdog (real-time actuator emulators only; 0 = off): armed by the first command.
+  std::int64_t watchdog_ns = 0, last_command_ns = 0;
 
   // Commands without injected lag are handled inline, on the transport's receive thread (no
   // thread switch per step); `state` guards the service and last_from_coordinator against this
@@ -44,7 +47,7 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
   const auto handle_inline = [&](const transport::Message& m) {
     if (m.kind != COMMAND) return false;
     std::lock_guard guard(state);
-    if (m.run_id == service.run_id()) last_from_coordinator = m.received_ns;
+    if (m.run_id == service.run_id()) last_from_coordinator = last_command_ns = m.received_ns;
     service.set_injected_lag(0.0);
     for (auto& r : service.handle(m)) endpoint.send(r);
     return true;
@@ -67,6 +70,14 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
       if (now >= next_heartbeat) {
         endpoint.send(service.heartbeat());
         next_heartbeat = now + heartbeat_ns;
+      }
+      if (watchdog_ns > 0 && last_command_ns > 0 && !service.held() &&
+          now - last_command_ns > watchdog_ns) {
+        const double silent_ms = static_cast<double>(now - last_command_ns) * 1e-6;
+        if (auto hold = service.hold_on_own(
+                "command watchdog: no fresh command for " + std::to_string(silent_ms) +
+                " ms (limit " + std::to_string(static_cast<double>(watchdog_ns) * 1e-6) + " ms)"))
+          endpoint.send(*hold);
       }
       if (now - last_from_coordinator > orphan_ns) {
         spdlog::error("{}: coordinator silent for {:.3f} s; holding and leaving", service.label(),
@@ -105,6 +116,10 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
         if (LagInjector out(a.node().send_lag()); out.active())
           send_lag = std::make_unique<LagInjector>(a.node().send_lag());
         last_from_coordinator = realtime_ns();
+        const config::Deployment& deployment = a.study().deployment();
+        if (a.node().kind() == config::NodeSpec::ACTUATOR_EMULATOR &&
+            deployment.clock() == config::Deployment::REAL_TIME)
+          watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment) * a.dt());
         spdlog::info("{}: assigned to run {}", service.label(), service.run_id());
         if (!receive_lag && !send_lag) endpoint.set_inline_handler(handle_inline);
       }
@@ -117,6 +132,8 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
     }
     // Sleep until the next thing due, or a message.
     std::int64_t wake = service.assigned() ? next_heartbeat : next_announce;
+    if (watchdog_ns > 0 && last_command_ns > 0 && !service.held())
+      wake = std::min(wake, last_command_ns + watchdog_ns + 1);
     if (!inbound.empty()) wake = std::min(wake, inbound.front().release_ns);
     if (!outbound.empty()) wake = std::min(wake, outbound.front().release_ns);
     const auto timeout = std::chrono::nanoseconds(std::max<std::int64_t>(0, wake - realtime_ns()));
@@ -126,6 +143,7 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
     if (!message) continue;
     if (service.assigned() && message->run_id == service.run_id()) {
       last_from_coordinator = message->received_ns;
+      if (message->kind == COMMAND) last_command_ns = message->received_ns;
     }
     if (receive_lag) {
       const auto release = receive_lag->schedule(message->received_ns);

@@ -89,6 +89,17 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
   return {pack(run_id_, node_id_, READY, 0, ready)};
 }
 
+std::optional<transport::Message> NodeService::hold_on_own(const std::string& reason) {
+  if (held_ || stopped_) return std::nullopt;
+  held_ = true;
+  on_hold();
+  spdlog::error("{}: holding on its own at step {} (realtime_ns {}): {}", label(), last_step_,
+                transport::realtime_ns(), reason);
+  Hold hold;
+  hold.set_reason(reason);
+  return pack(run_id_, node_id_, HOLD, last_step_, hold);
+}
+
 std::vector<transport::Message> NodeService::handle(const transport::Message& message) {
   if (!assigned_) {
     if (message.kind == ASSIGN) return on_assign(message);
@@ -111,6 +122,12 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
       }
       if (!unpack(message, command_)) {
         rejected_.count(Verdict::kGarbage);
+        return {};
+      }
+      if (const std::string why = refusal(command_); !why.empty()) {
+        auto hold = hold_on_own("refused the command of step " + std::to_string(message.step) +
+                                ": " + why);
+        if (hold) return {std::move(*hold)};
         return {};
       }
       feedback_.Clear();
@@ -144,7 +161,8 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
         on_hold();
         Hold hold;
         unpack(message, hold);
-        spdlog::warn("{}: HOLD at step {}: {}", label(), last_step_, hold.reason());
+        spdlog::warn("{}: HOLD at step {} (realtime_ns {}): {}", label(), last_step_,
+                     transport::realtime_ns(), hold.reason());
       }
       return {};
     case STOP:

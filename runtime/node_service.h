@@ -5,11 +5,14 @@
 //   after assignment    COMMAND of the next step (lockstep: exactly last + 1; real time: newer,
 //                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing the command's stamp;
 //                       HOLD -> freeze (further commands ignored); STOP -> stopped();
+//                       a command the node refuses (refusal(): an emulator's rate limit) -> it
+//                       holds on its own and answers HOLD with the reason instead of FEEDBACK.
 //                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
 //   node delay stages   the spec's receive_delay_case / send_delay_case stages (simulated time) act on
 //                       each received drift before compute() and on each force after it.
 // Subclasses (substructure node, actuator emulator) supply configure() and compute().
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +32,10 @@ class NodeService : public transport::NodeHandler {
 
   transport::Message announce() const;
   transport::Message heartbeat() const;
+  // Freezes the node (as a HOLD from the coordinator does) and returns the HOLD message that tells
+  // the coordinator why. Used by the node's own watchdog and limits. Idempotent: a second call
+  // returns nullopt.
+  std::optional<transport::Message> hold_on_own(const std::string& reason);
   // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
   void set_injected_lag(double seconds) { injected_lag_ = seconds; }
 
@@ -48,6 +55,8 @@ class NodeService : public transport::NodeHandler {
   // One step. Fills force (and realised for actuators), one entry per hosted storey.
   virtual void compute(const Command& command, Feedback& feedback) = 0;
   virtual void on_hold() {}
+  // Non-empty: why this command must not be acted on (checked before any delay stage or block).
+  virtual std::string refusal(const Command& /*command*/) { return {}; }
 
  private:
   std::vector<transport::Message> on_assign(const transport::Message& message);

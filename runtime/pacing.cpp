@@ -24,8 +24,8 @@ void MonotonicClock::sleep_until_ns(std::int64_t deadline) {
   }
 }
 
-Pacer::Pacer(PacingClock& clock, double period)
-    : clock_(clock), period_ns_(std::llround(period * 1e9)), period_(period) {
+Pacer::Pacer(PacingClock& clock, double period, WaitPolicy policy)
+    : clock_(clock), policy_(policy), period_ns_(std::llround(period * 1e9)), period_(period) {
   if (!(period > 0)) throw std::invalid_argument("pacing period must be > 0 s, got " +
                                                  std::to_string(period));
 }
@@ -45,8 +45,10 @@ PaceResult Pacer::wait(std::int64_t step) {
   if (clock_.now_ns() > deadline) {
     result.overrun = true;
     ++overruns_;
+    if (++streak_ > worst_streak_) worst_streak_ = streak_;
   } else {
-    clock_.sleep_until_ns(deadline);
+    streak_ = 0;
+    wait_until(clock_, deadline, policy_);
   }
   result.lateness = static_cast<double>(clock_.now_ns() - deadline) * 1e-9;
   if (result.lateness > max_lateness_) max_lateness_ = result.lateness;

@@ -1,5 +1,7 @@
 #include "runtime/plan.h"
 
+#include <cmath>
+
 #include <algorithm>
 #include <map>
 #include <set>
@@ -150,6 +152,25 @@ double liveliness_timeout(const config::Deployment& d) { return or_default(d.liv
 double step_timeout(const config::Deployment& d) { return or_default(d.step_timeout(), 2.0); }
 double feedback_wait_fraction(const config::Deployment& d) {
   return or_default(d.feedback_wait_fraction(), 0.5);
+}
+WaitPolicy wait_policy(const config::Deployment& d) {
+  WaitPolicy policy;
+  switch (d.wait_policy()) {
+    case config::WAIT_SLEEP_THEN_SPIN: policy.kind = WaitPolicyKind::kSleepThenSpin; break;
+    case config::WAIT_SPIN: policy.kind = WaitPolicyKind::kSpin; break;
+    default: policy.kind = WaitPolicyKind::kSleep; break;
+  }
+  policy.spin_margin_ns = std::llround(or_default(d.spin_margin(), 200e-6) * 1e9);
+  return policy;
+}
+double max_overrun_fraction(const config::Deployment& d) {
+  return d.max_overrun_fraction() == 0 ? 0.001 : d.max_overrun_fraction();
+}
+int max_missed_answers(const config::Deployment& d) {
+  return d.max_missed_answers() > 0 ? d.max_missed_answers() : 3;
+}
+int command_watchdog_periods(const config::Deployment& d) {
+  return d.command_watchdog_periods() > 0 ? d.command_watchdog_periods() : 3;
 }
 
 }  // namespace rths::runtime

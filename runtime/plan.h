@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/wait_policy.h"
+
 #include "core/study.h"
 #include "rths/proto/deployment.pb.h"
 
@@ -53,5 +55,9 @@ double heartbeat_period(const config::Deployment& d);
 double liveliness_timeout(const config::Deployment& d);
 double step_timeout(const config::Deployment& d);
 double feedback_wait_fraction(const config::Deployment& d);
+WaitPolicy wait_policy(const config::Deployment& d);
+double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
+int max_missed_answers(const config::Deployment& d);
+int command_watchdog_periods(const config::Deployment& d);
 
 }  // namespace rths::runtime

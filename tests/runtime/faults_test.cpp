@@ -63,8 +63,12 @@ void expect_contiguous(const runtime::RecordContents& record) {
   for (std::size_t k = 0; k < steps.size(); ++k) ASSERT_EQ(steps[k]->step(), static_cast<long>(k));
 }
 
+// The fail-safe's step counts are widened from 3 to tolerate this shared, loaded test machine
+// (a healthy node must not trip them); the mechanism is the same. Deadline misses are not what
+// these tests judge.
 const std::string kRealTime =
-    "deployment { clock: REAL_TIME liveliness_timeout: 0.3 heartbeat_period: 0.02 }";
+    "deployment { clock: REAL_TIME liveliness_timeout: 0.3 heartbeat_period: 0.02 "
+    "max_missed_answers: 30 command_watchdog_periods: 30 max_overrun_fraction: -1 }";
 
 class KillNode : public testing::TestWithParam<std::tuple<int, int, const char*>> {
  protected:
@@ -79,15 +83,19 @@ TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
   Cluster c = start(name, text, domain, {{1, true}, {2, false}}, "lag_shift_14ms");
   wait_for_steps(c.record, 300);
   const auto killed_at = std::chrono::steady_clock::now();
+  const std::int64_t killed_ns = transport::realtime_ns();
   c.nodes[victim - 1].signal(sig);
   const auto code = c.coordinator->wait_for(5s);
   ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
   const double stop_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count();
   EXPECT_EQ(*code, 1);
-  EXPECT_LT(stop_seconds, 1.5);  // liveliness 0.3 s plus process exit
+  // The process may linger up to ~1 s on exit (DDS writer linger towards a dead reader); the
+  // HOLD goes out at the stop, which must come within the missed-answer window, not liveliness.
+  EXPECT_LT(stop_seconds, 2.5);
   const std::string log = test::read_file(c.dir / "coordinator.log");
   EXPECT_NE(log.find(label), std::string::npos) << log;
+  EXPECT_NE(log.find("consecutive steps"), std::string::npos) << log;
   const auto record = runtime::read_record(c.record);
   ASSERT_NE(record.footer(), nullptr);
   EXPECT_FALSE(record.footer()->ok());
@@ -96,7 +104,12 @@ TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
   EXPECT_GE(record.steps().size(), 300u);
   EXPECT_LT(record.steps().size(), 8000u);
   bool hold = false;
-  for (const auto& e : record.entries) hold = hold || (e.has_event() && e.event().what().find("HOLD") == 0);
+  for (const auto& e : record.entries)
+    if (e.has_event() && e.event().what().find("HOLD") == 0) {
+      hold = true;
+      // 30 steps of 1 ms; generous for this loaded machine, far below the 0.3 s liveliness.
+      EXPECT_LT(static_cast<double>(e.event().realtime_ns() - killed_ns) * 1e-9, 0.2);
+    }
   EXPECT_TRUE(hold);
   // The survivor leaves on STOP; the emulator, when it survived, logged the HOLD first.
   const int survivor = victim == 1 ? 2 : 1;
@@ -130,6 +143,9 @@ TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
     ASSERT_TRUE(code.has_value()) << node.name() << " outlived its coordinator";
     EXPECT_EQ(*code, 1);
   }
+  // The emulator held on its own watchdog long before its orphan timeout.
+  EXPECT_NE(test::read_file(c.dir / "node_2.log").find("command watchdog"), std::string::npos)
+      << test::read_file(c.dir / "node_2.log");
   const auto record = runtime::read_record(c.record);
   EXPECT_EQ(record.footer(), nullptr);
   expect_contiguous(record);

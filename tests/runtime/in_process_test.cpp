@@ -2,7 +2,7 @@
 // core::simulate(): the same blocks in the same order must give the same doubles.
 #include <gtest/gtest.h>
 
-#include "coordinator/in_process.h"
+#include "tests/support/in_process_run.h"
 #include "core/simulation.h"
 #include "test_support.h"
 
@@ -26,6 +26,9 @@ struct Variant {
   std::string text;
   std::string case_name;
 };
+
+// ctest shows the variant's name, not its bytes.
+void PrintTo(const Variant& v, std::ostream* os) { *os << v.name << " (case " << v.case_name << ")"; }
 
 class InProcessEqualsSimulate : public testing::TestWithParam<Variant> {};
 

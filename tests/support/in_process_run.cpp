@@ -1,4 +1,4 @@
-#include "coordinator/in_process.h"
+#include "tests/support/in_process_run.h"
 
 #include "actuator_emulator/actuator_service.h"
 #include "substructure_nodes/substructure_service.h"

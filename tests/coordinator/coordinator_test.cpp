@@ -1,0 +1,157 @@
+// The coordinator's fail-safe and honest outcomes, on the in-process transport (the same
+// coordinator and node services a DDS run uses, without threads): deadline misses fail a run,
+// a node that stops answering stops it within max_missed_answers steps, a rate limit stops it
+// before the offending command leaves, and an emulator that refuses a command stops it.
+#include "coordinator/coordinator.h"
+
+#include <gtest/gtest.h>
+
+#include "actuator_emulator/actuator_service.h"
+#include "substructure_nodes/substructure_service.h"
+#include "tests/runtime/test_support.h"
+#include "transport/in_process.h"
+
+namespace rths {
+namespace {
+
+using coordinator::RunOutcome;
+
+// Forwards to a node service; drops the node's answers to steps after `mute_after` (a node that
+// dies or stalls mid-run, seen from the coordinator).
+class Muted final : public transport::NodeHandler {
+ public:
+  Muted(runtime::NodeService& service, std::int64_t mute_after)
+      : service_(service), mute_after_(mute_after) {}
+  std::vector<transport::Message> start() override { return service_.start(); }
+  std::vector<transport::Message> handle(const transport::Message& m) override {
+    auto replies = service_.handle(m);
+    if (m.kind == runtime::COMMAND && m.step > mute_after_) replies.clear();
+    return replies;
+  }
+
+ private:
+  runtime::NodeService& service_;
+  std::int64_t mute_after_;
+};
+
+// Every wait finds its deadline already passed by `late_ns` (a loop that overruns every step),
+// or, with late_ns = 0, time jumps to each deadline (a loop that keeps every deadline).
+class FakeClock final : public runtime::PacingClock {
+ public:
+  explicit FakeClock(std::int64_t late_ns) : late_ns_(late_ns) {}
+  std::int64_t now_ns() override { return now_ += late_ns_; }
+  void sleep_until_ns(std::int64_t deadline) override { now_ = std::max(now_, deadline); }
+
+ private:
+  std::int64_t late_ns_;
+  std::int64_t now_ = 1'000'000'000;
+};
+
+struct Cluster {
+  transport::InProcessTransport transport;
+  substructure_nodes::SubstructureService substructure{1, "run"};
+  actuator_emulator::ActuatorService emulator{2, "run"};
+  std::unique_ptr<Muted> muted;
+};
+
+RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
+               std::int64_t mute_after = 0, runtime::PacingClock* clock = nullptr,
+               const std::string& case_name = "reference", double seconds = 0.5) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      seconds, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
+               "ACTUATOR_EMULATOR } " + deployment + " }"));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.case_name = case_name;
+  options.clock = clock;
+  Cluster c;
+  coordinator::Coordinator coordinator(prepared, c.transport, options);
+  runtime::NodeService& victim = mute_node == 1 ? static_cast<runtime::NodeService&>(c.substructure)
+                                                : c.emulator;
+  if (mute_node > 0) c.muted = std::make_unique<Muted>(victim, mute_after);
+  c.transport.attach(1, mute_node == 1 ? static_cast<transport::NodeHandler&>(*c.muted)
+                                        : c.substructure);
+  c.transport.attach(2, mute_node == 2 ? static_cast<transport::NodeHandler&>(*c.muted)
+                                        : c.emulator);
+  return coordinator.run();
+}
+
+TEST(Coordinator, RealTimeRunThatKeepsItsDeadlinesCompletes) {
+  FakeClock on_time(0);
+  const RunOutcome o = run("clock: REAL_TIME", 0, 0, &on_time);
+  EXPECT_TRUE(o.ok) << o.status;
+  EXPECT_EQ(o.status, "completed");
+  EXPECT_EQ(o.counters.overruns(), 0u);
+}
+
+TEST(Coordinator, DeadlineMissesBeyondTheToleranceFailTheRun) {
+  FakeClock late(2'000'000);  // every step finds its deadline 2 ms gone
+  const RunOutcome o = run("clock: REAL_TIME", 0, 0, &late);
+  EXPECT_FALSE(o.ok);
+  EXPECT_EQ(o.status.rfind("completed with deadline misses", 0), 0u) << o.status;
+  EXPECT_EQ(o.counters.overruns(), o.counters.steps());
+  EXPECT_EQ(o.counters.worst_overrun_streak(), o.counters.steps());
+  EXPECT_EQ(o.result.steps(), 501u);  // it ran to the end: the outcome, not the run, is judged
+}
+
+TEST(Coordinator, AToleranceOfMinusOneAcceptsDeadlineMisses) {
+  FakeClock late(2'000'000);
+  const RunOutcome o = run("clock: REAL_TIME max_overrun_fraction: -1", 0, 0, &late);
+  EXPECT_TRUE(o.ok) << o.status;
+  EXPECT_GT(o.counters.overruns(), 0u);
+}
+
+TEST(Coordinator, LockstepIsNeverJudgedOnDeadlines) {
+  FakeClock late(2'000'000);
+  EXPECT_TRUE(run("", 0, 0, &late).ok);
+}
+
+class SilentNode : public testing::TestWithParam<int> {};
+
+TEST_P(SilentNode, StopsWithinMaxMissedAnswersAndNamesTheNode) {
+  const int node = GetParam();
+  FakeClock on_time(0);
+  const std::int64_t last_answer = 200;
+  const RunOutcome o = run("clock: REAL_TIME max_missed_answers: 3", node, last_answer, &on_time);
+  EXPECT_FALSE(o.ok);
+  EXPECT_EQ(o.failed_node, node == 1 ? "node 1 (substructure)" : "node 2 (actuator emulator)");
+  EXPECT_NE(o.status.find("no answer for 3 consecutive steps"), std::string::npos) << o.status;
+  // Steps 201, 202 and 203 went unanswered; 203 is not integrated, so 201 and 202 are the steps
+  // integrated on an old force past the fault.
+  EXPECT_EQ(o.result.steps(), static_cast<std::size_t>(last_answer + 3));
+}
+
+INSTANTIATE_TEST_SUITE_P(Nodes, SilentNode, testing::Values(1, 2),
+                         [](const auto& info) { return "node_" + std::to_string(info.param); });
+
+TEST(Coordinator, RateLimitStopsTheRunBeforeTheCommandLeaves) {
+  // The frame's 14 ms case drifts about 5 mm/s at peak: 1 um per 1 ms step trips early.
+  const RunOutcome o = run("limits { max_displacement_step: 1e-6 }");
+  EXPECT_FALSE(o.ok);
+  EXPECT_NE(o.status.find("per step); command not sent"), std::string::npos) << o.status;
+  ASSERT_GT(o.result.steps(), 1u);
+  const auto& u = o.result.displacement;
+  for (Eigen::Index k = 1; k < u.rows(); ++k)
+    EXPECT_LE(std::abs(u(k, 0) - u(k - 1, 0)), 1e-6) << "step " << k;
+}
+
+TEST(Coordinator, DivergedRunFailsAndKeepsTheStepsUpToIt) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.divergence_bound = 1e-3;  // m: the frame passes 1 mm within the first seconds
+  Cluster c;
+  coordinator::Coordinator coordinator(prepared, c.transport, options);
+  c.transport.attach(1, c.substructure);
+  c.transport.attach(2, c.emulator);
+  const RunOutcome o = coordinator.run();
+  EXPECT_FALSE(o.ok);
+  EXPECT_EQ(o.status, "diverged");
+  EXPECT_TRUE(o.result.diverged);
+  ASSERT_GT(o.result.steps(), 2u);
+  EXPECT_GT(o.result.displacement.bottomRows(1).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_LE(o.result.displacement.topRows(o.result.steps() - 1).cwiseAbs().maxCoeff(), 1e-3);
+}
+
+}  // namespace
+}  // namespace rths

@@ -1,0 +1,71 @@
+// A short version of bench/fault_trials in the suite (DDS domains 45-50): one trial per victim,
+// on real processes over Cyclone DDS. The fail-safe's step counts are widened (this machine is
+// shared and loaded; a healthy node must not trip them) and the assertions follow them.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include "runtime/launch.h"
+#include "tests/support/fault_trial.h"
+
+namespace rths {
+namespace {
+
+constexpr int kMissed = 20;  // max_missed_answers and the watchdog, in steps, for this test
+
+}  // namespace
+}  // namespace rths
+
+namespace rths::test {
+void PrintTo(FaultVictim v, std::ostream* os) { *os << to_string(v); }
+}  // namespace rths::test
+
+namespace rths {
+namespace {
+
+class FaultTrial : public testing::TestWithParam<std::tuple<test::FaultVictim, int>> {
+ protected:
+  static void SetUpTestSuite() { runtime::ensure_dds_config(); }
+};
+
+TEST_P(FaultTrial, HoldsStopsNamesAndKeepsTheRecord) {
+  const auto [victim, sig] = GetParam();
+  test::FaultTrialSpec spec;
+  spec.victim = victim;
+  spec.signal = sig;
+  spec.fault_step = 400;
+  spec.seconds = 2.0;
+  spec.domain = 45 + static_cast<int>(victim) * 2 + (sig == SIGSTOP ? 1 : 0);
+  spec.deployment_extra = "max_missed_answers: " + std::to_string(kMissed) +
+                          " command_watchdog_periods: " + std::to_string(kMissed);
+  spec.dir = std::filesystem::temp_directory_path() /
+             ("rths_fault_trial_test_" + std::to_string(spec.domain) + "_" + std::to_string(getpid()));
+  spec.binary_dir = RTHS_BINARY_DIR;
+  spec.motion_path = std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  const test::FaultTrialResult r = test::run_fault_trial(spec);
+  ASSERT_TRUE(r.fault_delivered) << r.why_not;
+  EXPECT_TRUE(r.record_complete) << r.record_steps << " steps";
+  EXPECT_TRUE(r.names_node);
+  if (victim != test::FaultVictim::kCoordinator) {
+    EXPECT_EQ(r.coordinator_exit, 1);
+    EXPECT_LE(r.steps_after_fault, kMissed);
+    EXPECT_GE(r.stop_ms, 0.0);
+  }
+  if (victim != test::FaultVictim::kEmulator) {
+    ASSERT_GE(r.hold_ms, 0.0) << "the emulator never held";
+    EXPECT_LT(r.hold_ms, 500.0);  // steps, not the 1 s liveliness or the 2 s orphan timeout
+  }
+  std::filesystem::remove_all(spec.dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Victims, FaultTrial,
+    testing::Values(std::make_tuple(test::FaultVictim::kSubstructure, SIGKILL),
+                    std::make_tuple(test::FaultVictim::kEmulator, SIGSTOP),
+                    std::make_tuple(test::FaultVictim::kCoordinator, SIGKILL)),
+    [](const auto& info) {
+      return test::to_string(std::get<0>(info.param)) +
+             (std::get<1>(info.param) == SIGKILL ? "_kill" : "_stall");
+    });
+
+}  // namespace
+}  // namespace rths
