@@ -12,12 +12,15 @@
 #include "analysis/sweep.h"
 #include "cli/commands.h"
 #include "core/study.h"
+#include "tables/results.h"
+#include "tables/write.h"
 
 namespace rths::cli {
 namespace {
 
 struct SweepOptions {
   std::string config, out, shard;
+  std::string format = "csv";  // csv | mat | h5; shards are always CSV (merge joins CSVs)
   int threads = 0;
   bool json = false, no_plots = false, general = false;
 };
@@ -113,20 +116,29 @@ void run_sweep_command(const SweepOptions& o) {
   if (out.empty()) out = study.output().directory();
   if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
   const bool sharded = options.shard.count > 1;
+  const tables::Format format = tables::parse_format(o.format);
+  if (sharded && format != tables::Format::kCsv) {
+    throw ExitError(kExitBadInput, "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
+  }
   const std::filesystem::path csv =
       out / (sharded ? "sweep.shard-" + std::to_string(options.shard.index) + "-of-" +
                            std::to_string(options.shard.count) + ".csv"
-                     : std::string("sweep.csv"));
+                     : "sweep" + tables::extension(format));
 
   const auto start = std::chrono::steady_clock::now();
   const std::vector<analysis::SweepRow> rows = analysis::run_sweep(grid, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
   try {
-    analysis::write_sweep_csv(csv, grid, options.shard, rows);
+    // The CSV keeps its own writer: its first line carries the grid hash and shard that merge checks.
+    if (format == tables::Format::kCsv) {
+      analysis::write_sweep_csv(csv, grid, options.shard, rows);
+    } else {
+      tables::write_table(tables::sweep_table(table, grid.hash_hex(), grid.size()), csv, format);
+    }
   } catch (const std::exception& e) {
     throw ExitError(kExitEnvironment, e.what());
   }
-  const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
   const std::filesystem::path png = out / "sweep.png";
   const bool plot = !o.no_plots && !sharded && !rows.empty();
   if (plot) write_plot(table, png, study.name().empty() ? "sweep" : study.name());
@@ -190,6 +202,8 @@ void add_sweep_command(CLI::App& app) {
                   "sweep.shard-i-of-N.csv; join the slices with `rths sweep merge`");
   cmd->add_option("--out", options->out, "output folder (default: the config's output.directory, else out/<name>)");
   cmd->add_option("--threads", options->threads, "worker threads (default: every core)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--format", options->format, "sweep.csv, sweep.mat (MATLAB) or sweep.h5 (HDF5); shards are CSV")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plot");
   cmd->add_flag("--general", options->general,
