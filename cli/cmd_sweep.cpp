@@ -12,6 +12,7 @@
 #include "analysis/sweep.h"
 #include "cli/commands.h"
 #include "core/study.h"
+#include "slurm/sbatch.h"
 #include "tables/results.h"
 #include "tables/write.h"
 
@@ -21,6 +22,8 @@ namespace {
 struct SweepOptions {
   std::string config, out, shard;
   std::string format = "csv";  // csv | mat | h5; shards are always CSV (merge joins CSVs)
+  std::string slurm;           // job folder: write Slurm scripts instead of running
+  slurm::SweepJob job;         // --shards, --partition, --time, --mem of the Slurm job
   int threads = 0;
   bool json = false, no_plots = false, general = false;
 };
@@ -162,6 +165,34 @@ void run_sweep_command(const SweepOptions& o) {
   std::cout << "written: " << csv.string() << (plot ? ", " + png.string() : std::string()) << "\n";
 }
 
+// Writes the Slurm array and merge scripts for the sweep; checks the grid first so a bad config
+// fails here, not on the cluster.
+void write_slurm_job(const SweepOptions& o) {
+  const std::filesystem::path config_path = std::filesystem::absolute(o.config);
+  const config::Study study = core::load_study(config_path);
+  const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
+  slurm::SweepJob job = o.job;
+  job.rths = std::filesystem::read_symlink("/proc/self/exe");
+  job.config = config_path;
+  job.out = std::filesystem::absolute(o.slurm);
+  job.threads = o.threads > 0 ? o.threads : 1;
+  if (job.shards > grid.size()) {
+    throw ExitError(kExitBadInput, "--shards " + std::to_string(job.shards) + " is more than the grid's " +
+                                       std::to_string(grid.size()) + " points");
+  }
+  std::vector<std::filesystem::path> written;
+  try {
+    written = slurm::write_sweep_job(job);
+  } catch (const std::invalid_argument&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw ExitError(kExitEnvironment, e.what());
+  }
+  std::cout << "Slurm job for " << grid.size() << " points in " << job.shards << " array tasks: "
+            << written[0].string() << ", merge: " << written[1].string() << "\n"
+            << "submit with: bash " << written[2].string() << "  (merged CSV: " << (job.out / "sweep.csv").string() << ")\n";
+}
+
 void run_merge_command(const MergeOptions& o) {
   std::vector<std::filesystem::path> shards(o.shards.begin(), o.shards.end());
   const analysis::SweepCsv merged = analysis::merge_sweep_csvs(shards, o.out);
@@ -206,6 +237,13 @@ void add_sweep_command(CLI::App& app) {
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plot");
+  cmd->add_option("--slurm", options->slurm,
+                  "write a Slurm job into this folder instead of running: an sbatch array (one task per "
+                  "shard) and a merge job after it; submit with `bash FOLDER/submit.sh`");
+  cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")->check(CLI::PositiveNumber);
+  cmd->add_option("--partition", options->job.partition, "--slurm: partition (default: the cluster's)");
+  cmd->add_option("--time", options->job.time, "--slurm: time limit per task, e.g. 30 or 02:00:00 (default 01:00:00)");
+  cmd->add_option("--mem", options->job.memory, "--slurm: memory per task, e.g. 500M or 2G (default 1G)");
   cmd->add_flag("--general", options->general,
                 "run every point through the general simulator (no SIMD batch kernel)");
 
@@ -220,6 +258,7 @@ void add_sweep_command(CLI::App& app) {
 
   cmd->callback([options, merge_cmd] {
     if (merge_cmd->parsed()) return;
+    if (!options->slurm.empty()) return write_slurm_job(*options);
     run_sweep_command(*options);
   });
 }
