@@ -17,6 +17,8 @@ class AtomicFile {
   AtomicFile& operator=(const AtomicFile&) = delete;
 
   std::ofstream& stream() { return out_; }
+  // The file being written, for writers that open it by name (HDF5, MAT); commit() then renames it.
+  const std::filesystem::path& partial_path() const { return partial_; }
   // Flushes, closes and renames into place. Throws std::runtime_error naming the file on failure.
   void commit();
 

@@ -21,12 +21,6 @@ std::vector<double> top_floor(const core::SimulationResult& result) {
   return response;
 }
 
-std::string column_name(const std::string& prefix, const std::string& case_name) {
-  std::string name = prefix + "_";
-  for (char c : case_name) name += (std::isalnum(static_cast<unsigned char>(c)) ? c : '_');
-  return name;
-}
-
 }  // namespace
 
 StudyOutcome run_study(const core::PreparedStudy& prepared) {
@@ -64,42 +58,6 @@ StudyOutcome run_study(const core::PreparedStudy& prepared) {
     c.peak_error = core::peak_error(r, x);
   }
   return outcome;
-}
-
-void write_study_csv(const StudyOutcome& outcome, const std::filesystem::path& csv) {
-  AtomicFile file(csv);
-  std::ofstream& out = file.stream();
-  out << "time_s";
-  for (const CaseOutcome& c : outcome.cases) out << "," << column_name("u", c.name) << "_m";
-  for (const CaseOutcome& c : outcome.cases) {
-    if (c.simulation.command.cols() > 0) {
-      out << "," << column_name("command", c.name) << "_m," << column_name("realised", c.name)
-          << "_m," << column_name("force", c.name) << "_N";
-    }
-  }
-  out << "\n";
-  std::size_t rows = 0;
-  for (const CaseOutcome& c : outcome.cases) rows = std::max(rows, c.simulation.steps());
-  const double dt = outcome.cases.front().simulation.dt;
-  for (std::size_t k = 0; k < rows; ++k) {
-    out << static_cast<double>(k) * dt;
-    for (const CaseOutcome& c : outcome.cases) {
-      out << ",";
-      if (k < c.response.size()) out << c.response[k];  // empty after a diverged case stopped
-    }
-    for (const CaseOutcome& c : outcome.cases) {
-      if (c.simulation.command.cols() == 0) continue;
-      if (k < c.simulation.steps()) {
-        const auto row = static_cast<Eigen::Index>(k);
-        out << "," << c.simulation.command(row, 0) << "," << c.simulation.realised(row, 0) << ","
-            << c.simulation.measured_force(row, 0);
-      } else {
-        out << ",,,";
-      }
-    }
-    out << "\n";
-  }
-  file.commit();
 }
 
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {

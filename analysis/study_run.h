@@ -35,8 +35,6 @@ struct StudyOutcome {
 
 StudyOutcome run_study(const core::PreparedStudy& prepared);
 
-// time, then u_<case> for every case, then command_/realised_/force_<case> for the first actuator.
-void write_study_csv(const StudyOutcome& outcome, const std::filesystem::path& csv);
 // displacement.png (reference vs each case, the paper's Fig. 3) and
 // force_displacement.png (command vs measured force: the loop the integrator sees, Figs. 1-2).
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory);

@@ -1,4 +1,5 @@
-// rths export RECORD --csv OUT: a run record (length-delimited protobuf) to CSV.
+// rths export RECORD --csv OUT | --mat OUT | --h5 OUT: a run record (length-delimited protobuf)
+// to CSV, MATLAB or HDF5 (tables/results.h names the variables and units); several at once.
 // A truncated record (the writer crashed) is exported up to its last complete entry with a
 // warning on stderr; exit 0. A missing or corrupt record is exit 2.
 #include <nlohmann/json.hpp>
@@ -6,19 +7,24 @@
 #include <iostream>
 
 #include "cli/commands.h"
-#include "runtime/export.h"
+#include "tables/results.h"
+#include "tables/write.h"
 
 namespace rths::cli {
 
 void add_export_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("export", "Turn a run record into CSV");
+  auto* cmd = app.add_subcommand("export", "Turn a run record into CSV, MATLAB (.mat) or HDF5 (.h5)");
   auto record = std::make_shared<std::string>();
-  auto csv = std::make_shared<std::string>();
+  auto outputs = std::make_shared<std::map<tables::Format, std::string>>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("record", *record, "run record (.rthsrec)")->required();
-  cmd->add_option("--csv", *csv, "CSV file to write")->required();
-  cmd->add_flag("--json", *json, "print a JSON summary on stdout");
+  auto* csv = cmd->add_option_function<std::string>("--csv", [outputs](const std::string& p) { (*outputs)[tables::Format::kCsv] = p; }, "CSV file to write");
+  auto* mat = cmd->add_option_function<std::string>("--mat", [outputs](const std::string& p) { (*outputs)[tables::Format::kMat] = p; },
+      "MATLAB 5 file to write (one variable per CSV column, units in the struct `units`)");
+  auto* h5 = cmd->add_option_function<std::string>("--h5", [outputs](const std::string& p) { (*outputs)[tables::Format::kH5] = p; },
+      "HDF5 file to write (one dataset per CSV column, each with a `units` attribute)");
   cmd->callback([=] {
+    if (csv->count() + mat->count() + h5->count() == 0) throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
     runtime::RecordContents contents;
     try {
       contents = runtime::read_record(*record);
@@ -26,25 +32,33 @@ void add_export_command(CLI::App& app) {
       throw ExitError(kExitBadInput, e.what());
     }
     if (contents.truncated) std::cerr << "rths export: warning: " << contents.warning << "\n";
-    std::size_t rows = 0;
+    tables::Table table;
     try {
-      rows = runtime::write_csv(contents, *csv);
+      table = tables::record_table(contents);
     } catch (const std::invalid_argument& e) {
       throw ExitError(kExitBadInput, *record + ": " + e.what());
-    } catch (const std::exception& e) {
-      throw ExitError(kExitEnvironment, e.what());
+    }
+    for (const auto& [format, path] : *outputs) {
+      try {
+        tables::write_table(table, path, format);
+      } catch (const std::exception& e) {
+        throw ExitError(kExitEnvironment, e.what());
+      }
     }
     const auto* footer = contents.footer();
     const std::string status = footer ? footer->status() : "no footer: the run was cut short";
     if (*json) {
-      nlohmann::json j{{"record", *record}, {"csv", *csv},         {"rows", rows},
-                       {"truncated", contents.truncated}, {"status", status},
-                       {"ok", footer && footer->ok()}};
+      nlohmann::json j{{"record", *record}, {"rows", table.rows()}, {"truncated", contents.truncated},
+                       {"status", status}, {"ok", footer && footer->ok()}};
+      for (const auto& [format, path] : *outputs) j[tables::extension(format).substr(1)] = path;
       std::cout << j.dump(2) << "\n";
     } else {
-      std::cout << "wrote " << rows << " steps to " << *csv << " (" << status << ")\n";
+      for (const auto& [format, path] : *outputs) {
+        std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status << ")\n";
+      }
     }
   });
+  cmd->add_flag("--json", *json, "print a JSON summary on stdout");
 }
 
 }  // namespace rths::cli

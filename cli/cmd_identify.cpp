@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "tables/results.h"
+#include "tables/write.h"
 #include "identify/data.h"
 #include "identify/identify.h"
 #include "identify/predict.h"
@@ -23,6 +25,7 @@ struct IdentifyCliOptions {
   std::string channels = "measured,force", declared_actuator = "delay",
               declared_specimen = "stiffness", candidates, holdout_mode = "blocks";
   std::string out, predict;
+  std::string format = "csv";  // of <out>/identify.<ext>: the record and both models' predictions
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
   bool json = false;
@@ -98,8 +101,10 @@ void run_identify(const IdentifyCliOptions& o) {
   if (!o.out.empty()) {
     try {
       identify::write_plots(id, o.out);
+      const tables::Format format = tables::parse_format(o.format);
+      tables::write_table(tables::identify_table(id), std::filesystem::path(o.out) / ("identify" + tables::extension(format)), format);
     } catch (const std::exception& e) {
-      throw ExitError(kExitEnvironment, std::string("plots: ") + e.what());
+      throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
     }
   }
   if (o.json) {
@@ -107,7 +112,7 @@ void run_identify(const IdentifyCliOptions& o) {
     std::cout << identify::to_json(id, context, prediction).dump(2) << "\n";
   } else {
     std::cout << identify::format_table(id, prediction);
-    if (!o.out.empty()) std::cout << "plots written to " << o.out << "\n";
+    if (!o.out.empty()) std::cout << "plots and identify." << o.format << " written to " << o.out << "\n";
   }
 }
 
@@ -148,7 +153,9 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot)");
+  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot) and identify.<format>: the record and the declared and final models' predictions");
+  cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--predict", o->predict,
                   "study config to run with the identified actuator (e.g. configs/paper_frame.textproto)");
   cmd->add_flag("--json", o->json, "print the steps and models as JSON");

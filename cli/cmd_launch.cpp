@@ -19,11 +19,12 @@
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/study.h"
-#include "runtime/export.h"
 #include "runtime/lag.h"
 #include "runtime/launch.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"
+#include "tables/results.h"
+#include "tables/write.h"
 #include "transport/transport.h"
 
 namespace rths::cli {
@@ -35,6 +36,7 @@ struct LaunchArgs {
   int domain = -1;
   double timeout = 0;
   std::string cpu_placement = "auto";
+  std::string format = "csv";  // of each case's results table: csv | mat | h5
   bool no_plots = false, json = false;
 };
 
@@ -180,8 +182,9 @@ void run_launch(const LaunchArgs& args) {
       const auto record = runtime::read_record(c.record);
       if (record.truncated) std::cerr << "rths launch: warning: " << record.warning << "\n";
       collect(record, c);
-      c.csv = out / (name + ".csv");
-      if (record.header()) runtime::write_csv(record, c.csv);
+      const tables::Format format = tables::parse_format(args.format);
+      c.csv = out / (name + tables::extension(format));
+      if (record.header()) tables::write_table(tables::record_table(record), c.csv, format);
     } else {
       c.status = "no record written; see " + result.coordinator_log.string();
     }
@@ -239,7 +242,7 @@ void run_launch(const LaunchArgs& args) {
                  {"overruns", c.overruns}, {"rejected", c.rejected}, {"links", links},
                  {"max_difference_from_in_process_m",
                   c.max_difference_from_in_process >= 0 ? nlohmann::json(c.max_difference_from_in_process) : nlohmann::json()},
-                 {"record", c.record.string()}, {"csv", c.csv.string()}});
+                 {"record", c.record.string()}, {args.format, c.csv.string()}});
   }
   if (args.json)
     std::cout << nlohmann::json{{"output", out.string()}, {"cases", j}}.dump(2) << "\n";
@@ -267,6 +270,8 @@ void add_launch_command(CLI::App& app) {
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")
       ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
+  cmd->add_option("--format", args->format, "each case's table: csv, mat (MATLAB) or h5 (HDF5), as `rths export`")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots");
   cmd->add_flag("--json", args->json, "print the summary as JSON");
   cmd->callback([args] { run_launch(*args); });

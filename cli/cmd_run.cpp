@@ -1,4 +1,4 @@
-// `rths run CONFIG`: every case of a study, in process; CSV, plots and a summary.
+// `rths run CONFIG`: every case of a study, in process; results (CSV, MATLAB or HDF5), plots and a summary.
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -9,6 +9,8 @@
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "core/study.h"
+#include "tables/results.h"
+#include "tables/write.h"
 
 namespace rths::cli {
 namespace {
@@ -16,6 +18,7 @@ namespace {
 struct RunOptions {
   std::string config;
   std::string out;
+  std::string format = "csv";
   bool json = false, no_plots = false;
 };
 
@@ -28,7 +31,8 @@ void run(const RunOptions& o) {
   std::filesystem::path out = o.out;
   if (out.empty()) out = study.output().directory();
   if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
-  analysis::write_study_csv(outcome, out / "results.csv");
+  const std::filesystem::path results = out / ("results" + tables::extension(tables::parse_format(o.format)));
+  tables::write_table(tables::study_table(outcome), results, tables::parse_format(o.format));
   const bool plots = !o.no_plots;
   if (plots) analysis::write_study_plots(outcome, out);
   const nlohmann::json summary = analysis::study_summary_json(outcome);
@@ -43,7 +47,7 @@ void run(const RunOptions& o) {
   if (o.json) {
     std::cout << summary.dump(2) << "\n";
   } else {
-    std::cout << analysis::study_summary_text(outcome) << "written: " << (out / "results.csv").string()
+    std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
               << (plots ? ", displacement.png, force_displacement.png" : "") << ", summary.txt\n";
   }
 }
@@ -55,6 +59,8 @@ void add_run_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("run", "Run every case of a study config in process");
   cmd->add_option("config", options->config, "study config (Protobuf text format)")->required();
   cmd->add_option("--out", options->out, "output folder (default: the config's output.directory, else out/<name>)");
+  cmd->add_option("--format", options->format, "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5)")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
   cmd->callback([options] { run(*options); });

@@ -12,12 +12,18 @@
 #include "analysis/sweep.h"
 #include "cli/commands.h"
 #include "core/study.h"
+#include "slurm/sbatch.h"
+#include "tables/results.h"
+#include "tables/write.h"
 
 namespace rths::cli {
 namespace {
 
 struct SweepOptions {
   std::string config, out, shard;
+  std::string format = "csv";  // csv | mat | h5; shards are always CSV (merge joins CSVs)
+  std::string slurm;           // job folder: write Slurm scripts instead of running
+  slurm::SweepJob job;         // --shards, --partition, --time, --mem of the Slurm job
   int threads = 0;
   bool json = false, no_plots = false, general = false;
 };
@@ -113,20 +119,29 @@ void run_sweep_command(const SweepOptions& o) {
   if (out.empty()) out = study.output().directory();
   if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
   const bool sharded = options.shard.count > 1;
+  const tables::Format format = tables::parse_format(o.format);
+  if (sharded && format != tables::Format::kCsv) {
+    throw ExitError(kExitBadInput, "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
+  }
   const std::filesystem::path csv =
       out / (sharded ? "sweep.shard-" + std::to_string(options.shard.index) + "-of-" +
                            std::to_string(options.shard.count) + ".csv"
-                     : std::string("sweep.csv"));
+                     : "sweep" + tables::extension(format));
 
   const auto start = std::chrono::steady_clock::now();
   const std::vector<analysis::SweepRow> rows = analysis::run_sweep(grid, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
   try {
-    analysis::write_sweep_csv(csv, grid, options.shard, rows);
+    // The CSV keeps its own writer: its first line carries the grid hash and shard that merge checks.
+    if (format == tables::Format::kCsv) {
+      analysis::write_sweep_csv(csv, grid, options.shard, rows);
+    } else {
+      tables::write_table(tables::sweep_table(table, grid.hash_hex(), grid.size()), csv, format);
+    }
   } catch (const std::exception& e) {
     throw ExitError(kExitEnvironment, e.what());
   }
-  const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
   const std::filesystem::path png = out / "sweep.png";
   const bool plot = !o.no_plots && !sharded && !rows.empty();
   if (plot) write_plot(table, png, study.name().empty() ? "sweep" : study.name());
@@ -148,6 +163,34 @@ void run_sweep_command(const SweepOptions& o) {
             << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
   if (!sharded) print_trends(trends);
   std::cout << "written: " << csv.string() << (plot ? ", " + png.string() : std::string()) << "\n";
+}
+
+// Writes the Slurm array and merge scripts for the sweep; checks the grid first so a bad config
+// fails here, not on the cluster.
+void write_slurm_job(const SweepOptions& o) {
+  const std::filesystem::path config_path = std::filesystem::absolute(o.config);
+  const config::Study study = core::load_study(config_path);
+  const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
+  slurm::SweepJob job = o.job;
+  job.rths = std::filesystem::read_symlink("/proc/self/exe");
+  job.config = config_path;
+  job.out = std::filesystem::absolute(o.slurm);
+  job.threads = o.threads > 0 ? o.threads : 1;
+  if (job.shards > grid.size()) {
+    throw ExitError(kExitBadInput, "--shards " + std::to_string(job.shards) + " is more than the grid's " +
+                                       std::to_string(grid.size()) + " points");
+  }
+  std::vector<std::filesystem::path> written;
+  try {
+    written = slurm::write_sweep_job(job);
+  } catch (const std::invalid_argument&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw ExitError(kExitEnvironment, e.what());
+  }
+  std::cout << "Slurm job for " << grid.size() << " points in " << job.shards << " array tasks: "
+            << written[0].string() << ", merge: " << written[1].string() << "\n"
+            << "submit with: bash " << written[2].string() << "  (merged CSV: " << (job.out / "sweep.csv").string() << ")\n";
 }
 
 void run_merge_command(const MergeOptions& o) {
@@ -190,8 +233,17 @@ void add_sweep_command(CLI::App& app) {
                   "sweep.shard-i-of-N.csv; join the slices with `rths sweep merge`");
   cmd->add_option("--out", options->out, "output folder (default: the config's output.directory, else out/<name>)");
   cmd->add_option("--threads", options->threads, "worker threads (default: every core)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--format", options->format, "sweep.csv, sweep.mat (MATLAB) or sweep.h5 (HDF5); shards are CSV")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plot");
+  cmd->add_option("--slurm", options->slurm,
+                  "write a Slurm job into this folder instead of running: an sbatch array (one task per "
+                  "shard) and a merge job after it; submit with `bash FOLDER/submit.sh`");
+  cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")->check(CLI::PositiveNumber);
+  cmd->add_option("--partition", options->job.partition, "--slurm: partition (default: the cluster's)");
+  cmd->add_option("--time", options->job.time, "--slurm: time limit per task, e.g. 30 or 02:00:00 (default 01:00:00)");
+  cmd->add_option("--mem", options->job.memory, "--slurm: memory per task, e.g. 500M or 2G (default 1G)");
   cmd->add_flag("--general", options->general,
                 "run every point through the general simulator (no SIMD batch kernel)");
 
@@ -206,6 +258,7 @@ void add_sweep_command(CLI::App& app) {
 
   cmd->callback([options, merge_cmd] {
     if (merge_cmd->parsed()) return;
+    if (!options->slurm.empty()) return write_slurm_job(*options);
     run_sweep_command(*options);
   });
 }

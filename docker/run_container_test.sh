@@ -54,7 +54,7 @@ echo "running the coordinator (lockstep, 1 s of El Centro, $delay s each way on 
 set +e
 timeout 300 nsenter --net="/run/netns/$tag" podman run --name "$tag-coordinator" --network "$tag" \
   --network-alias coordinator --hostname coordinator -e "$dds" -v "$out:/out" "$image" bash -c "
-    sed -e 's/@CLOCK@/LOCKSTEP/' -e 's/@DURATION@/1/' \
+    sed -e 's/@CLOCK@/LOCKSTEP/' -e 's/@DURATION@/1/' -e 's/@DOMAIN@/140/' \
         -e 's/@ACTUATOR_ONE_WAY_DELAY@/$delay/g' -e 's/@ACTUATOR_JITTER@/0/g' \
         -e 's/@SUBSTRUCTURE_ONE_WAY_DELAY@/0/g' \
         /opt/rths/docker/compose_study.textproto > /tmp/study.textproto &&

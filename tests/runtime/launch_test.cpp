@@ -4,7 +4,6 @@
 
 #include <cstdio>
 
-#include "runtime/export.h"
 #include "test_support.h"
 
 namespace rths {

@@ -1,0 +1,174 @@
+#include "tables/results.h"
+
+#include <limits>
+#include <stdexcept>
+
+namespace rths::tables {
+namespace {
+
+constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<double> first_column(const Eigen::MatrixXd& m) {
+  std::vector<double> out(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index r = 0; r < m.rows(); ++r) out[static_cast<std::size_t>(r)] = m(r, 0);
+  return out;
+}
+
+}  // namespace
+
+Table study_table(const analysis::StudyOutcome& outcome) {
+  Table table;
+  if (outcome.cases.empty()) return table;
+  std::size_t rows = 0;
+  for (const auto& c : outcome.cases) rows = std::max({rows, c.response.size(), c.simulation.steps()});
+  std::vector<double> time(rows);
+  const double dt = outcome.cases.front().simulation.dt;
+  for (std::size_t k = 0; k < rows; ++k) time[k] = static_cast<double>(k) * dt;
+  table.add_numbers("time_s", "s", std::move(time));
+  const auto padded = [rows](std::vector<double> v) {
+    v.resize(rows, kMissing);
+    return v;
+  };
+  for (const auto& c : outcome.cases) table.add_numbers(identifier("u_" + c.name) + "_m", "m", padded(c.response));
+  for (const auto& c : outcome.cases) {
+    if (c.simulation.command.cols() == 0) continue;
+    table.add_numbers(identifier("command_" + c.name) + "_m", "m", padded(first_column(c.simulation.command)));
+    table.add_numbers(identifier("realised_" + c.name) + "_m", "m", padded(first_column(c.simulation.realised)));
+    table.add_numbers(identifier("force_" + c.name) + "_N", "N", padded(first_column(c.simulation.measured_force)));
+  }
+  table.set_attribute("study", outcome.study_name);
+  table.set_attribute("reference_case", outcome.cases[outcome.reference_index].name);
+  return table;
+}
+
+Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::string& grid_hash,
+                  std::size_t grid_points) {
+  const auto numbers = [&rows](auto field) {
+    std::vector<double> out;
+    out.reserve(rows.size());
+    for (const auto& r : rows) out.push_back(static_cast<double>(field(r)));
+    return out;
+  };
+  const auto texts = [&rows](auto field) {
+    std::vector<std::string> out;
+    for (const auto& r : rows) out.push_back(field(r));
+    return out;
+  };
+  using Row = analysis::SweepTableRow;
+  Table t;
+  t.add_numbers("index", "", numbers([](const Row& r) { return r.index; }));
+  t.add_numbers("period", "s", numbers([](const Row& r) { return r.period; }));
+  t.add_numbers("delay", "s", numbers([](const Row& r) { return r.delay; }));
+  t.add_numbers("alpha", "", numbers([](const Row& r) { return r.alpha; }));
+  t.add_numbers("stiffness", "N/m", numbers([](const Row& r) { return r.stiffness; }));
+  t.add_numbers("dt", "s", numbers([](const Row& r) { return r.dt; }));
+  t.add_texts("motion", "", texts([](const Row& r) { return r.motion; }));
+  t.add_texts("model", "", texts([](const Row& r) { return r.model; }));
+  t.add_numbers("peak_ref", "m", numbers([](const Row& r) { return r.peak_reference; }));
+  t.add_numbers("peak_delayed", "m", numbers([](const Row& r) { return r.peak_delayed; }));
+  t.add_numbers("eq2_paper", "", numbers([](const Row& r) { return r.eq2_paper; }));
+  t.add_numbers("nrmse", "", numbers([](const Row& r) { return r.nrmse; }));
+  t.add_numbers("peak_error", "m", numbers([](const Row& r) { return r.peak_error; }));
+  t.add_numbers("diverged", "", numbers([](const Row& r) { return r.diverged ? 1 : 0; }));
+  t.set_attribute("grid_hash", grid_hash);
+  t.set_attribute("grid_points", std::to_string(grid_points));
+  return t;
+}
+
+Table record_table(const runtime::RecordContents& record) {
+  const runtime::RunHeader* header = record.header();
+  if (!header) throw std::invalid_argument("the run record has no header entry");
+  const std::vector<const runtime::StepRecord*> steps = record.steps();
+  const auto dofs = static_cast<std::size_t>(header->dofs());
+  const auto actuators = static_cast<std::size_t>(header->actuators());
+  const auto links = static_cast<std::size_t>(header->link_node_ids_size());
+
+  // Per-step values of one repeated field, zero where a step carries fewer entries.
+  const auto per_index = [&steps](auto field, std::size_t count) {
+    std::vector<std::vector<double>> out(count, std::vector<double>(steps.size(), 0.0));
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      const auto& values = field(*steps[k]);
+      for (std::size_t i = 0; i < count && static_cast<int>(i) < values.size(); ++i) {
+        out[i][k] = values.Get(static_cast<int>(i));
+      }
+    }
+    return out;
+  };
+  const auto scalar = [&steps](auto field) {
+    std::vector<double> out;
+    out.reserve(steps.size());
+    for (const auto* s : steps) out.push_back(static_cast<double>(field(*s)));
+    return out;
+  };
+  using Step = runtime::StepRecord;
+  Table t;
+  t.add_numbers("step", "", scalar([](const Step& s) { return s.step(); }));
+  t.add_numbers("time", "s", scalar([](const Step& s) { return s.time(); }));
+  t.add_numbers("ground_acceleration", "m/s^2", scalar([](const Step& s) { return s.ground_acceleration(); }));
+  const auto add_indexed = [&t](const std::string& name, const std::string& unit, std::vector<std::vector<double>> columns) {
+    for (std::size_t i = 0; i < columns.size(); ++i) t.add_numbers(name + std::to_string(i + 1), unit, std::move(columns[i]));
+  };
+  add_indexed("u", "m", per_index([](const Step& s) -> const auto& { return s.displacement(); }, dofs));
+  add_indexed("v", "m/s", per_index([](const Step& s) -> const auto& { return s.velocity(); }, dofs));
+  add_indexed("a", "m/s^2", per_index([](const Step& s) -> const auto& { return s.acceleration(); }, dofs));
+  add_indexed("command", "m", per_index([](const Step& s) -> const auto& { return s.command(); }, actuators));
+  add_indexed("realised", "m", per_index([](const Step& s) -> const auto& { return s.realised(); }, actuators));
+  add_indexed("force", "N", per_index([](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
+  for (std::size_t l = 0; l < links; ++l) {
+    const std::string prefix = "node" + std::to_string(header->link_node_ids(static_cast<int>(l))) + "_";
+    // A step without this link's sample (step 0 has no exchange) is missing, not zero.
+    const auto link = [&steps, l](auto field) {
+      std::vector<double> out;
+      out.reserve(steps.size());
+      for (const auto* s : steps) {
+        out.push_back(l < static_cast<std::size_t>(s->links_size()) ? static_cast<double>(field(s->links(static_cast<int>(l)))) : kMissing);
+      }
+      return out;
+    };
+    using Link = runtime::LinkSample;
+    t.add_numbers(prefix + "answered_step", "", link([](const Link& x) { return x.answered_step(); }));
+    t.add_numbers(prefix + "injected_lag", "s", link([](const Link& x) { return x.injected_lag(); }));
+    t.add_numbers(prefix + "round_trip", "s", link([](const Link& x) { return x.round_trip(); }));
+    t.add_numbers(prefix + "one_way_down", "s", link([](const Link& x) { return x.one_way_down(); }));
+    t.add_numbers(prefix + "one_way_up", "s", link([](const Link& x) { return x.one_way_up(); }));
+  }
+  t.add_numbers("lateness", "s", scalar([](const Step& s) { return s.lateness(); }));
+  t.add_numbers("overrun", "", scalar([](const Step& s) { return s.overrun() ? 1 : 0; }));
+  t.set_attribute("run_id", header->run_id());
+  t.set_attribute("case_name", header->case_name());
+  t.set_attribute("clock", header->clock());
+  const runtime::RunFooter* footer = record.footer();
+  t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
+  return t;
+}
+
+Table identify_table(const identify::Identification& identification) {
+  Table t;
+  std::vector<double> time;
+  for (const auto& s : identification.signals) {
+    if (s.time.size() > time.size()) time = s.time;
+  }
+  const std::size_t rows = time.size();
+  t.add_numbers("time_s", "s", std::move(time));
+  const auto padded = [rows](std::vector<double> v) {
+    v.resize(rows, kMissing);
+    return v;
+  };
+  for (const auto& c : identification.channels) {
+    const identify::ChannelSignals* signals = nullptr;
+    for (const auto& s : identification.signals) {
+      if (s.channel == c.channel) signals = &s;
+    }
+    if (!signals) continue;
+    const std::string name = identify::channel_name(c.channel);
+    const std::string unit = c.channel == identify::Channel::kMeasured ? "m" : "N";
+    t.add_numbers(name + "_input_m", "m", padded(signals->input));
+    t.add_numbers(name + "_target_" + unit, unit, padded(signals->target));
+    t.add_numbers(name + "_declared_" + unit, unit, padded(c.declared_fit.prediction));
+    t.add_numbers(name + "_final_" + unit, unit, padded(c.final_fit.prediction));
+  }
+  t.set_attribute("source", identification.source);
+  return t;
+}
+
+}  // namespace rths::tables
