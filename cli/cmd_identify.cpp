@@ -10,12 +10,13 @@
 #include <sstream>
 
 #include "cli/commands.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "identify/compensator_design.h"
 #include "identify/data.h"
 #include "identify/identify.h"
 #include "identify/predict.h"
 #include "identify/report.h"
+#include "tables/results.h"
+#include "tables/write.h"
 
 namespace rths::cli {
 namespace {
@@ -24,8 +25,9 @@ struct IdentifyCliOptions {
   std::string data, column_map, time_unit = "s", length_unit = "mm", force_unit = "N";
   std::string channels = "measured,force", declared_actuator = "delay",
               declared_specimen = "stiffness", candidates, holdout_mode = "blocks";
-  std::string out, predict;
+  std::string out, predict, design_compensator;
   std::string format = "csv";  // of <out>/identify.<ext>: the record and both models' predictions
+  double design_dt = 0.001;
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
   bool json = false;
@@ -98,6 +100,22 @@ void run_identify(const IdentifyCliOptions& o) {
     const auto scales = identify::signal_scales(id.signals.front());
     prediction = identify::predict_study(o.predict, actuator->final_fit.model, scales);
   }
+  if (!o.design_compensator.empty()) {
+    const auto* actuator = id.find(identify::Channel::kMeasured);
+    if (actuator == nullptr) {
+      throw std::invalid_argument("--design-compensator needs the actuator model: include 'measured' in --channels");
+    }
+    const auto design = identify::design_compensator(
+        actuator->final_fit.model, identify::signal_scales(id.signals.front()),
+        identify::parse_compensator_kind(o.design_compensator), o.design_dt);
+    std::filesystem::path written;
+    try {
+      written = identify::write_compensator_case(design, o.out);
+    } catch (const std::runtime_error& e) {
+      throw ExitError(kExitEnvironment, e.what());
+    }
+    std::cerr << "compensator: " << design.summary << "\nwritten to " << written.string() << "\n";
+  }
   if (!o.out.empty()) {
     try {
       identify::write_plots(id, o.out);
@@ -158,8 +176,19 @@ void add_identify_command(CLI::App& app) {
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--predict", o->predict,
                   "study config to run with the identified actuator (e.g. configs/paper_frame.textproto)");
+  cmd->add_option("--design-compensator", o->design_compensator,
+                  "write a compensator designed from the identified actuator to --out: "
+                  "polynomial | ats | model-based")
+      ->check(CLI::IsMember({"polynomial", "ats", "model-based"}));
+  cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--json", o->json, "print the steps and models as JSON");
-  cmd->callback([o] { run_identify(*o); });
+  cmd->callback([o] {
+    if (!o->design_compensator.empty() && o->out.empty()) {
+      throw std::invalid_argument("--design-compensator needs --out DIR");
+    }
+    run_identify(*o);
+  });
 }
 
 }  // namespace rths::cli

@@ -35,7 +35,9 @@ config::Study study_from_flags(const SdofOptions& o) {
       {core::IntegratorKind::kExplicitNewmark, config::Integrator::EXPLICIT_NEWMARK},
       {core::IntegratorKind::kCentralDifference, config::Integrator::CENTRAL_DIFFERENCE},
       {core::IntegratorKind::kChenRicles, config::Integrator::CHEN_RICLES},
-      {core::IntegratorKind::kNewmarkAverageAcceleration, config::Integrator::NEWMARK_AVERAGE_ACCELERATION}};
+      {core::IntegratorKind::kNewmarkAverageAcceleration, config::Integrator::NEWMARK_AVERAGE_ACCELERATION},
+      {core::IntegratorKind::kAlphaOS, config::Integrator::ALPHA_OS},
+      {core::IntegratorKind::kKRAlpha, config::Integrator::KR_ALPHA}};
   study.mutable_integrator()->set_kind(kinds.at(kind));
   study.mutable_substructuring()->set_experimental_fraction(o.alpha);
   study.add_cases()->set_name("reference");

@@ -1,11 +1,15 @@
-// `rths stability`: the critical delay of a delayed SDOF hybrid system, continuous and discrete.
+// `rths stability`: the critical delay of a delayed SDOF hybrid system, continuous and discrete;
+// with --study/--case, the delay margin of that case's actuator and compensator in the loop.
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iostream>
+#include <numbers>
 #include <memory>
 
 #include "cli/commands.h"
 #include "core/stability.h"
+#include "core/study.h"
 
 namespace rths::cli {
 namespace {
@@ -15,9 +19,71 @@ struct StabilityOptions {
   std::string integrator = "explicit-newmark";
   int branches = 3, max_steps = 200;
   bool json = false;
+  std::string study, case_name;
+  double max_extra_delay = 0.1;
 };
 
+// The SDOF loop of a study case: period, zeta, alpha, dt and integrator from the config, the
+// case's delay stages as the actuator and its compensation (at most one block: one actuator).
+void run_compensated(const StabilityOptions& o) {
+  const config::Study study = core::load_study(o.study);
+  const auto& s = study.structure();
+  if (!s.has_sdof()) throw std::invalid_argument(o.study + ": --study needs structure.sdof (the analysis is of an SDOF loop)");
+  if (s.damping().has_rayleigh()) throw std::invalid_argument(o.study + ": --study needs structure.damping.modal_zeta");
+  const core::StructuralModel model = core::make_structure(s);
+  const double period = 2.0 * std::numbers::pi * std::sqrt(model.mass(0, 0) / model.stiffness(0, 0));
+  const double zeta = s.damping().modal_zeta();
+  const double alpha = study.substructuring().experimental_fraction();
+  if (!study.substructuring().experimental_storeys().empty()) throw std::invalid_argument(o.study + ": --study needs substructuring.experimental_fraction");
+  const double dt = study.integrator().dt();
+  if (!(dt > 0)) throw std::invalid_argument(o.study + ": --study needs integrator.dt > 0");
+  const core::IntegratorKind kind = core::integrator_kind(study.integrator());
+  const config::Case* chosen = nullptr;
+  for (const auto& c : study.cases()) if (c.name() == o.case_name) chosen = &c;
+  if (!chosen) throw std::invalid_argument(o.study + ": --case '" + o.case_name + "' is not among the cases");
+  if (chosen->compensation_size() > 1) throw std::invalid_argument("--case '" + o.case_name + "': one compensation block expected (an SDOF has one actuator)");
+  const config::Compensation* compensation = chosen->compensation_size() == 1 ? &chosen->compensation(0) : nullptr;
+  const core::CompensatedStability r = core::compensated_stability(
+      kind, period, zeta, alpha, dt, chosen->delay(), compensation, o.max_extra_delay, o.branches);
+  const auto optional = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
+  if (o.json) {
+    nlohmann::json out;
+    out["input"] = {{"study", o.study}, {"case", o.case_name}, {"period_s", period}, {"zeta", zeta},
+                    {"experimental_fraction", alpha}, {"integrator", core::to_string(kind)}, {"dt_s", dt},
+                    {"compensated", compensation != nullptr}};
+    nlohmann::json crossings = nlohmann::json::array();
+    for (const auto& c : r.crossings) crossings.push_back({{"crossing_omega_rad_per_s", c.omega}, {"extra_delay_s", c.delay}, {"branch", c.branch}});
+    out["discrete"] = {{"stable", r.stable}, {"spectral_radius", r.spectral_radius},
+                       {"extra_delay_margin_s", optional(r.discrete_margin)},
+                       {"searched_up_to_s", r.max_extra_delay}};
+    out["continuous"] = {{"extra_delay_margin_s", optional(r.continuous_margin)}, {"crossings", crossings}};
+    std::cout << out.dump(2) << "\n";
+  } else {
+    std::cout << "case '" << o.case_name << "' of " << o.study << ": SDOF T = " << period << " s, zeta = " << zeta
+              << ", alpha = " << alpha << ", " << core::to_string(kind) << " dt = " << dt * 1e3 << " ms, "
+              << (compensation ? "compensated" : "uncompensated") << "\n";
+    if (!r.stable) {
+      std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius << ")\n";
+    } else if (r.discrete_margin) {
+      std::cout << "discrete: stable; it tolerates " << *r.discrete_margin * 1e3 << " ms of extra delay\n";
+    } else {
+      std::cout << "discrete: stable up to " << r.max_extra_delay * 1e3 << " ms of extra delay\n";
+    }
+    if (r.continuous_margin) {
+      std::cout << "continuous: first crossing at " << *r.continuous_margin * 1e3 << " ms of extra delay (omega = "
+                << r.crossings.front().omega << " rad/s)\n";
+    } else {
+      std::cout << "continuous: no crossing (|k_e H| stays below the numerical part at every frequency)\n";
+    }
+  }
+  if (!r.stable) throw ExitError(kExitRunFailed, "the loop of case '" + o.case_name + "' is unstable as configured");
+}
+
 void run_stability(const StabilityOptions& o) {
+  if (!o.study.empty()) {
+    run_compensated(o);
+    return;
+  }
   const auto kind = core::integrator_from_string(o.integrator);
   const core::ContinuousStability continuous =
       core::continuous_critical_delay(o.period, o.zeta, o.alpha, o.branches);
@@ -78,8 +144,18 @@ void add_stability_command(CLI::App& app) {
   cmd->add_option("--branches", options->branches, "delay branches listed per crossing frequency")
       ->check(CLI::Range(1, 100));
   cmd->add_option("--max-steps", options->max_steps, "largest delay (steps) searched")->check(CLI::Range(0, 5000));
+  cmd->add_option("--study", options->study,
+                  "study config (SDOF): analyse the loop of --case, its actuator stages and compensation");
+  cmd->add_option("--case", options->case_name, "case of --study whose actuator and compensator are analysed");
+  cmd->add_option("--max-extra-delay", options->max_extra_delay, "largest extra delay searched with --study (s)")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_flag("--json", options->json, "print JSON");
-  cmd->callback([options] { run_stability(*options); });
+  cmd->callback([options] {
+    if (options->study.empty() != options->case_name.empty()) {
+      throw std::invalid_argument("--study and --case go together");
+    }
+    run_stability(*options);
+  });
 }
 
 }  // namespace rths::cli

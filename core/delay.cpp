@@ -1,5 +1,7 @@
 #include "core/delay.h"
 
+#include "core/compensation.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -269,7 +271,7 @@ double TransferFunctionStage::step_unscaled(const CommandSample& in) {
 // DanielMaurelE/vRTHS_AMBC_MRdamper (same authors' group); cross-checked only against the brief's
 // quoted a1b0, a2, a3, b1, b2, not against the paper's PDF, so treat the specimen values as the
 // best-documented nominal ones. Units follow the benchmark (consistent SI, gain x_m / x_c).
-std::unique_ptr<TransferFunctionStage> make_benchmark_actuator(double dt) {
+ContinuousTransferFunction benchmark_actuator_transfer_function() {
   constexpr double a1b0 = 2.13e13, a2 = 4.23e6, a3 = 3.3, b1 = 425.0, b2 = 1e5;
   constexpr double me = 29.1, ce = 114.6, ke = 1.19e6;
   // P(s) = me s^3 + (ce + a3 me) s^2 + (ke + a3 ce + a2) s + a3 ke   (highest power first)
@@ -280,7 +282,13 @@ std::unique_ptr<TransferFunctionStage> make_benchmark_actuator(double dt) {
     for (std::size_t j = 0; j < p.size(); ++j) den[i + j] += servo[i] * p[j];
   }
   den.back() += a1b0;
-  return std::make_unique<TransferFunctionStage>(std::vector<double>{a1b0}, std::move(den), dt,
+  return {{a1b0}, std::move(den)};
+}
+
+std::unique_ptr<TransferFunctionStage> make_benchmark_actuator(double dt) {
+  ContinuousTransferFunction plant = benchmark_actuator_transfer_function();
+  return std::make_unique<TransferFunctionStage>(std::move(plant.numerator),
+                                                 std::move(plant.denominator), dt,
                                                  "benchmark-actuator(Silva-Dyke 2020)");
 }
 
@@ -406,38 +414,53 @@ double TraceShift::step_unscaled(const CommandSample& in) {
 }
 
 // ---------------------------------------------------------------------------------------------
-DelayChain::DelayChain(const DelayChain& other) {
+DelayChain::DelayChain() = default;
+DelayChain::~DelayChain() = default;
+DelayChain::DelayChain(DelayChain&&) noexcept = default;
+DelayChain& DelayChain::operator=(DelayChain&&) noexcept = default;
+
+DelayChain::DelayChain(const DelayChain& other)
+    : compensator_(other.compensator_ ? other.compensator_->clone() : nullptr),
+      last_output_(other.last_output_) {
   stages_.reserve(other.stages_.size());
   for (const auto& stage : other.stages_) stages_.push_back(stage->clone());
 }
 
 DelayChain& DelayChain::operator=(const DelayChain& other) {
-  if (this != &other) {
-    DelayChain copy(other);
-    stages_ = std::move(copy.stages_);
-  }
+  if (this != &other) *this = DelayChain(other);
   return *this;
+}
+
+void DelayChain::set_compensator(std::unique_ptr<Compensator> compensator) {
+  compensator_ = std::move(compensator);
 }
 
 double DelayChain::step(const CommandSample& in) {
   CommandSample sample = in;
+  if (compensator_) {
+    sample.displacement = compensator_->step({in.time, in.displacement, last_output_});
+  }
   for (auto& stage : stages_) sample.displacement = stage->step(sample);
+  last_output_ = sample.displacement;
   return sample.displacement;
 }
 
 void DelayChain::reset() {
   for (auto& stage : stages_) stage->reset();
+  if (compensator_) compensator_->reset();
+  last_output_ = 0.0;
 }
 
 double DelayChain::nominal_delay() const {
   double sum = 0.0;
   for (const auto& stage : stages_) sum += stage->nominal_delay();
+  if (compensator_) sum -= compensator_->nominal_lead();
   return sum;
 }
 
 std::string DelayChain::describe() const {
-  if (stages_.empty()) return "none";
-  std::string text;
+  if (empty()) return "none";
+  std::string text = compensator_ ? "compensation " + compensator_->describe() : std::string();
   for (const auto& stage : stages_) {
     if (!text.empty()) text += " -> ";
     text += stage->describe();

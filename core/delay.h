@@ -165,6 +165,9 @@ class TransferFunctionStage final : public DelayStage {
   // -d(phase)/d(omega) at omega -> 0 of the continuous G(s), i.e. its low-frequency group delay.
   double nominal_delay() const override { return group_delay_; }
   double dc_gain() const { return dc_gain_; }
+  // The discrete filter: b (numerator) and a (denominator, a[0] = 1) in powers of z^-1.
+  const std::vector<double>& discrete_numerator() const { return b_; }
+  const std::vector<double>& discrete_denominator() const { return a_; }
 
  protected:
   double step_unscaled(const CommandSample& in) override;
@@ -183,6 +186,11 @@ class TransferFunctionStage final : public DelayStage {
 //   and tested). Source: the benchmark's public MATLAB set-up as reused in
 //   DanielMaurelE/vRTHS_AMBC_MRdamper; not checked against the paper's PDF (see delay.cpp).
 std::unique_ptr<TransferFunctionStage> make_benchmark_actuator(double dt);
+// The same plant as continuous polynomials (highest power of s first), for model-based design.
+struct ContinuousTransferFunction {
+  std::vector<double> numerator, denominator;
+};
+ContinuousTransferFunction benchmark_actuator_transfer_function();
 
 class JitterShift final : public DelayStage {
  public:
@@ -230,24 +238,35 @@ class TraceShift final : public DelayStage {
   CommandHistory history_;
 };
 
+class Compensator;  // core/compensation.h
+
 // Stages applied in order; the command's velocity is passed unchanged to every stage.
+// An optional compensator (core/compensation.h) shapes the command before the first stage; it
+// sees the target (the command given to step) and the chain's output of the previous step (the
+// measured displacement), and nothing else in the chain changes.
 class DelayChain {
  public:
-  DelayChain() = default;
+  DelayChain();
+  ~DelayChain();
   DelayChain(const DelayChain& other);
   DelayChain& operator=(const DelayChain& other);
-  DelayChain(DelayChain&&) = default;
-  DelayChain& operator=(DelayChain&&) = default;
+  DelayChain(DelayChain&&) noexcept;
+  DelayChain& operator=(DelayChain&&) noexcept;
 
   void add(std::unique_ptr<DelayStage> stage) { stages_.push_back(std::move(stage)); }
+  void set_compensator(std::unique_ptr<Compensator> compensator);
+  const Compensator* compensator() const { return compensator_.get(); }
   double step(const CommandSample& in);
   void reset();
+  // The stages' lag minus the compensator's nominal lead (s).
   double nominal_delay() const;
   std::string describe() const;
-  bool empty() const { return stages_.empty(); }
+  bool empty() const { return stages_.empty() && !compensator_; }
 
  private:
   std::vector<std::unique_ptr<DelayStage>> stages_;
+  std::unique_ptr<Compensator> compensator_;
+  double last_output_ = 0.0;  // m, what the chain realised at the previous step
 };
 
 }  // namespace rths::core

@@ -14,6 +14,30 @@
 //                       M a+ = p+ - C v+ - r+
 //   NEWMARK_AVERAGE_ACC implicit, beta = 1/4, gamma = 1/2, Newton on the tangent;  unconditional
 //                       needs repeated trials: refused with a delayed experimental part.
+//   ALPHA_OS            alpha-operator splitting (Combescure & Pegon 1997, Nucl. Eng. Des. 168;
+//                       as OpenSees AlphaOS), alpha in [2/3, 1], beta = (2 - alpha)^2 / 4,
+//                       gamma = 3/2 - alpha. Explicit in displacement: the restoring force is taken
+//                       at the predictor u~+ = u + dt v + (1/2 - beta) dt^2 a (what is commanded),
+//                       v~+ = v + (1 - gamma) dt a;
+//                       [M + alpha gamma dt C + alpha beta dt^2 K0] a+ = f_alpha
+//                         - (1 - alpha) (C v + r~ + K0 (u - u~)) - alpha (C v~+ + r~+),
+//                       f_alpha = (1 - alpha) f + alpha f+, r~ = r(u~) of the previous step;
+//                       u+ = u~+ + beta dt^2 a+, v+ = v~+ + gamma dt a+.
+//                       Unconditionally stable for linear elastic (K = K0) and softening
+//                       (K_t <= K0) systems; second-order accurate; alpha < 1 adds dissipation.
+//   KR_ALPHA            KR-alpha (Kolay & Ricles 2014, Earthquake Engng Struct. Dyn. 43(9); as
+//                       OpenSees KRAlphaExplicit), rho_inf in [0, 1]: alpha_m = (2 - rho)/(1 + rho),
+//                       alpha_f = 1/(1 + rho), beta = 1/(1 + rho)^2, gamma = (3 - rho)/(2 (1 + rho))
+//                       (OpenSees' weights on the new state). D = M + gamma dt C + beta dt^2 K0,
+//                       A1 = D^-1 M, A3 = D^-1 [(1 - alpha_m) M + (1 - alpha_f)(gamma dt C +
+//                       beta dt^2 K0)], M^ = M (I - A3):
+//                       v+ = v + dt A1 a;  u+ = u + dt v + (1/2 + gamma) dt^2 A1 a;
+//                       M^ a+ = f_af - M A3 a - C v_af - r_af,  x_af = (1 - alpha_f) x + alpha_f x+
+//                       (r+ measured at u+, so r_af = (1 - alpha_f) r + alpha_f r+: equal to r(u_af)
+//                       for a linear part). Unconditionally stable for linear elastic and softening
+//                       systems; second-order accurate; rho_inf < 1 adds high-frequency dissipation.
+//                       Neither needs a dt limit, so neither refuses a dt: they refuse parameters
+//                       outside those ranges instead, naming the range.
 // v~ is the velocity the integrator has computed when it sends u+; the paper's Eq. 1 uses it.
 
 #include <functional>
@@ -24,7 +48,20 @@
 
 namespace rths::core {
 
-enum class IntegratorKind { kExplicitNewmark, kCentralDifference, kChenRicles, kNewmarkAverageAcceleration };
+enum class IntegratorKind {
+  kExplicitNewmark,
+  kCentralDifference,
+  kChenRicles,
+  kNewmarkAverageAcceleration,
+  kAlphaOS,
+  kKRAlpha
+};
+
+// Parameters of the dissipative schemes (defaults: no numerical dissipation).
+struct IntegratorParameters {
+  double alpha_os = 1.0;      // ALPHA_OS alpha, in [2/3, 1]
+  double rho_infinity = 1.0;  // KR_ALPHA spectral radius at infinite frequency, in [0, 1]
+};
 
 std::string to_string(IntegratorKind kind);
 IntegratorKind integrator_from_string(const std::string& name);  // throws listing valid names
@@ -75,5 +112,8 @@ class Integrator {
 
 std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const StructuralModel& model,
                                             double dt);
+// Throws std::invalid_argument naming alpha_os or rho_infinity and its range when out of it.
+std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const StructuralModel& model,
+                                            double dt, const IntegratorParameters& parameters);
 
 }  // namespace rths::core

@@ -7,14 +7,37 @@
 //   e^{-i w tau} = -(k_n - m w^2 + i c w) / k_e  gives  tau_j = (theta + 2 pi j) / w, j = 0, 1, ..
 //   with theta in [0, 2 pi). The critical delay is the smallest tau over all crossing branches.
 //   No positive w^2 root: stable for every delay.
+// Compensated loop (the experimental force is k_e x_m, x_m = G(s) C(s) e^{-s delta} u: actuator G,
+//   compensator C, and an extra, unmodelled delay delta the analysis searches for):
+//   continuous: m s^2 + c s + k_n + k_e H(s) e^{-s delta} = 0, H = G C. A root crosses at s = i w
+//     when |k_n - m w^2 + i c w| = k_e |H(i w)|, solved numerically (sign changes on a log grid of
+//     w up to the Nyquist frequency pi / dt, refined by bisection; no closed form once H is not
+//     a pure delay), then e^{-i w delta} = -(k_n - m w^2 + i c w) / (k_e H(i w)) gives
+//     delta_j = (theta + 2 pi j) / w. The delay margin is the smallest delta_j. Without a
+//     compensator and with G a pure shift tau it is continuous_critical_delay() - tau.
+//     H(i w): shift e^{-i w tau}, first order 1 / (1 + i w T), transfer functions N/D; polynomial
+//     compensator sum_j c_j e^{-i w j h}; ATS a0 + a1 i w - a2 w^2; model-based C(i w).
+//   discrete: one step of the integrator on the state [u, v, a, z], z the states of the
+//     compensator, of every actuator stage and of the extra delay (each a discrete SISO state
+//     space, in series; a fractional delay interpolates between two register taps, as TimeShift
+//     does); the amplification matrix is built column by column from unit states. The margin is
+//     the first integer step count whose spectral radius exceeds 1, refined by bisection on the
+//     fractional delay. Stability at zero extra delay is judged here (the continuous search
+//     assumes it). ATS enters frozen at its initial coefficients: the linear analysis cannot
+//     follow its adaptation. Implicit integrators are refused (the delayed loop is explicit).
+//
 // Discrete: the explicit/implicit integrator with the experimental force taken at the command of
 //   n steps earlier (a time shift of n dt); the first n whose amplification matrix has spectral
 //   radius > 1.
 
+#include <complex>
+#include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/integrators.h"
+#include "rths/proto/config.pb.h"
 
 namespace rths::core {
 
@@ -42,5 +65,52 @@ struct DiscreteStability {
 
 DiscreteStability discrete_critical_delay(IntegratorKind kind, double period, double zeta,
                                           double alpha, double dt, int max_steps);
+
+// x+ = a x + b u,  y = c x + d u (discrete, single input and output).
+struct LinearBlock {
+  Mat a;
+  Vec b;
+  Eigen::RowVectorXd c;
+  double d = 1.0;
+  int states() const { return static_cast<int>(a.rows()); }
+};
+LinearBlock series(const LinearBlock& first, const LinearBlock& second);
+LinearBlock shift_block(double delay, double dt);  // TimeShift, interpolated
+// The actuator's delay stages (shift, first_order, transfer_function, benchmark; gains) at dt.
+LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
+                           double dt);
+LinearBlock compensator_block(const config::Compensation& compensation, double dt);
+
+using FrequencyResponse = std::function<std::complex<double>(double omega)>;
+FrequencyResponse actuator_response(
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& stages);
+FrequencyResponse compensator_response(const config::Compensation& compensation, double dt);
+
+struct CompensatedStability {
+  // Discrete, at zero extra delay.
+  bool stable = false;
+  double spectral_radius = 0.0;
+  // Extra delay (s) the loop tolerates before it grows: continuous and discrete.
+  std::optional<double> continuous_margin;  // empty: no crossing (stable for every extra delay)
+  std::vector<DelayCrossing> crossings;     // extra-delay crossings, ascending
+  std::optional<double> discrete_margin;    // empty: stable up to max_extra_delay
+  double max_extra_delay = 0.0;             // s, discrete search range
+};
+
+// @pre an explicit integrator; `compensation` may be null (uncompensated). Throws
+// std::invalid_argument naming what cannot be analysed (an implicit integrator, a jitter or
+// trace stage...).
+CompensatedStability compensated_stability(
+    IntegratorKind kind, double period, double zeta, double alpha, double dt,
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+    const config::Compensation* compensation, double max_extra_delay, int branches = 3);
+
+// The same loop simulated: an SDOF after a one-step ground pulse, free vibration with the
+// compensated actuator and `extra_delay` more; returns peak |u| over the last third of the run
+// divided by that over the first third (> 1 grows, < 1 decays).
+double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,
+                        const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+                        const config::Compensation* compensation, double extra_delay,
+                        double duration);
 
 }  // namespace rths::core

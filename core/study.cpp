@@ -1,5 +1,6 @@
 #include "core/study.h"
 
+#include "core/compensation.h"
 #include "core/text_format.h"
 
 #include <cmath>
@@ -95,6 +96,13 @@ void validate_study(const config::Study& study, const std::string& source) {
     const config::Case& c = study.cases(i);
     for (int j = 0; j < c.delay_size(); ++j) {
       validate_delay_stage(c.delay(j), "cases[" + std::to_string(i) + "] '" + c.name() + "' delay[" + std::to_string(j) + "]", source);
+    }
+    for (int j = 0; j < c.compensation_size(); ++j) {
+      try {
+        validate_compensation(c.compensation(j), "cases[" + std::to_string(i) + "] '" + c.name() + "' compensation[" + std::to_string(j) + "]");
+      } catch (const std::invalid_argument& e) {
+        fail(source, e.what());
+      }
     }
   }
   for (double period : study.sweep().periods()) {
@@ -230,6 +238,8 @@ IntegratorKind integrator_kind(const config::Integrator& integrator) {
     case config::Integrator::CENTRAL_DIFFERENCE: return IntegratorKind::kCentralDifference;
     case config::Integrator::CHEN_RICLES: return IntegratorKind::kChenRicles;
     case config::Integrator::NEWMARK_AVERAGE_ACCELERATION: return IntegratorKind::kNewmarkAverageAcceleration;
+    case config::Integrator::ALPHA_OS: return IntegratorKind::kAlphaOS;
+    case config::Integrator::KR_ALPHA: return IntegratorKind::kKRAlpha;
     default: return IntegratorKind::kExplicitNewmark;
   }
 }
@@ -261,8 +271,21 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
 HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case) {
   HybridSetup setup = prepared.base;
   setup.delays.clear();
-  for (std::size_t a = 0; a < setup.partition.actuator_storeys.size(); ++a) {
+  const std::size_t actuators = setup.partition.actuator_storeys.size();
+  const auto blocks = static_cast<std::size_t>(study_case.compensation_size());
+  if (blocks > 1 && blocks != actuators) {
+    throw std::invalid_argument("case '" + study_case.name() + "': " + std::to_string(blocks) +
+                                " compensation blocks for " + std::to_string(actuators) +
+                                " actuators; give one (for every actuator) or one per actuator");
+  }
+  for (std::size_t a = 0; a < actuators; ++a) {
     setup.delays.push_back(make_delay_chain(study_case.delay(), setup.dt, prepared.base_dir));
+    if (blocks > 0) {
+      const std::size_t b = blocks == 1 ? 0 : a;
+      setup.delays.back().set_compensator(make_compensator(
+          study_case.compensation(static_cast<int>(b)), setup.dt,
+          "case '" + study_case.name() + "' compensation[" + std::to_string(b) + "]"));
+    }
   }
   return setup;
 }

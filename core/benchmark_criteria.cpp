@@ -1,0 +1,103 @@
+#include "core/benchmark_criteria.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "core/metrics.h"
+
+namespace rths::core {
+
+double normalised_std_error(std::span<const double> reference, std::span<const double> compared) {
+  if (reference.empty() || reference.size() != compared.size()) {
+    throw std::invalid_argument("normalised_std_error: inputs are empty or differ in length");
+  }
+  const double n = static_cast<double>(reference.size());
+  double mean_error = 0.0, mean_reference = 0.0;
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    mean_error += compared[i] - reference[i];
+    mean_reference += reference[i];
+  }
+  mean_error /= n;
+  mean_reference /= n;
+  double error_square = 0.0, reference_square = 0.0;
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    const double e = compared[i] - reference[i] - mean_error;
+    const double r = reference[i] - mean_reference;
+    error_square += e * e;
+    reference_square += r * r;
+  }
+  return 100.0 * std::sqrt(error_square / reference_square);
+}
+
+BenchmarkCriteria benchmark_criteria(std::span<const double> target,
+                                     std::span<const double> measured, const Mat& response,
+                                     const Mat& reference, int experimental_storey, double dt,
+                                     double j1_max_lag) {
+  const int floors = static_cast<int>(reference.cols());
+  if (response.cols() != reference.cols()) {
+    throw std::invalid_argument("benchmark_criteria: the response and the reference have " +
+                                std::to_string(response.cols()) + " and " +
+                                std::to_string(floors) + " floors");
+  }
+  if (experimental_storey < 0 || experimental_storey >= floors) {
+    throw std::invalid_argument("benchmark_criteria: experimental storey " +
+                                std::to_string(experimental_storey + 1) + " is outside 1.." +
+                                std::to_string(floors));
+  }
+  const std::size_t n = std::min({target.size(), measured.size(),
+                                  static_cast<std::size_t>(response.rows()),
+                                  static_cast<std::size_t>(reference.rows())});
+  if (n < 2) throw std::invalid_argument("benchmark_criteria: fewer than two common steps");
+  const auto column = [n](const Mat& m, int c) {
+    std::vector<double> out(n);
+    for (std::size_t i = 0; i < n; ++i) out[i] = m(static_cast<Eigen::Index>(i), c);
+    return out;
+  };
+  std::vector<double> reference_drift = column(reference, experimental_storey);
+  if (experimental_storey > 0) {
+    const std::vector<double> below = column(reference, experimental_storey - 1);
+    for (std::size_t i = 0; i < n; ++i) reference_drift[i] -= below[i];
+  }
+  const std::span<const double> t = target.first(n), m = measured.first(n);
+
+  BenchmarkCriteria out;
+  out.j.fill(std::numeric_limits<double>::quiet_NaN());
+  out.j1_search = j1_max_lag;
+  out.j[0] = j1_delay(t, m, dt, j1_max_lag);
+  out.j[1] = normalised_std_error(t, m);
+  out.j[2] = j3_peak_tracking(t, m);
+  out.j[3] = normalised_std_error(reference_drift, m);
+  out.j[4] = j3_peak_tracking(reference_drift, m);
+  int slot = 0;
+  for (int floor = 0; floor < floors && slot < 2; ++floor) {
+    if (floor == experimental_storey) continue;
+    const std::vector<double> ref = column(reference, floor), rths = column(response, floor);
+    out.j[static_cast<std::size_t>(5 + slot)] = normalised_std_error(ref, rths);
+    out.j[static_cast<std::size_t>(7 + slot)] = j3_peak_tracking(ref, rths);
+    ++slot;
+  }
+  return out;
+}
+
+std::string format_criteria(const BenchmarkCriteria& c) {
+  std::string text;
+  char buffer[64];
+  for (int i = 1; i <= 9; ++i) {
+    const double v = c.J(i);
+    if (std::isnan(v)) {
+      std::snprintf(buffer, sizeof buffer, "%sJ%d n/a", i > 1 ? "  " : "", i);
+    } else if (i == 1) {
+      std::snprintf(buffer, sizeof buffer, "J1 %.2f ms", v * 1e3);
+    } else {
+      std::snprintf(buffer, sizeof buffer, "  J%d %.2f %%", i, v);
+    }
+    text += buffer;
+  }
+  return text;
+}
+
+}  // namespace rths::core

@@ -1,0 +1,493 @@
+#include "core/compensation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+
+namespace rths::core {
+namespace {
+
+[[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
+
+void require(bool ok, const std::string& message) {
+  if (!ok) fail(message);
+}
+
+bool finite(double x) { return std::isfinite(x); }
+
+// Second-order backward differences on x[0] (newest), x[1], x[2], x[3].
+double backward_velocity(const double* x, double dt) {
+  return (3.0 * x[0] - 4.0 * x[1] + x[2]) / (2.0 * dt);
+}
+double backward_acceleration(const double* x, double dt) {
+  return (2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]) / (dt * dt);
+}
+
+std::string number(double x) {
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%g", x);
+  return buffer;
+}
+
+void require_step(double dt, const char* who) {
+  require(dt > 0.0 && finite(dt), std::string(who) + ": dt must be > 0 s, got " + number(dt));
+}
+
+// Drops leading zero coefficients; a polynomial keeps at least one coefficient.
+std::vector<double> trimmed(std::vector<double> p) {
+  while (p.size() > 1 && p.front() == 0.0) p.erase(p.begin());
+  return p;
+}
+
+}  // namespace
+
+std::vector<double> polynomial_multiply(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.empty() || b.empty()) return {};
+  std::vector<double> out(a.size() + b.size() - 1, 0.0);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) out[i + j] += a[i] * b[j];
+  return out;
+}
+
+std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients) {
+  const std::vector<double> p = trimmed(coefficients);
+  const int degree = static_cast<int>(p.size()) - 1;
+  if (degree < 1) return {};
+  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(degree, degree);
+  for (int j = 0; j < degree; ++j) companion(0, j) = -p[static_cast<std::size_t>(j) + 1] / p[0];
+  for (int i = 1; i < degree; ++i) companion(i, i - 1) = 1.0;
+  Eigen::EigenSolver<Eigen::MatrixXd> solver(companion, false);
+  std::vector<std::complex<double>> roots;
+  for (int i = 0; i < degree; ++i) roots.push_back(solver.eigenvalues()[i]);
+  return roots;
+}
+
+// ---------------------------------------------------------------------------------------------
+PolynomialExtrapolation::PolynomialExtrapolation(int order, double lead, int spacing_steps,
+                                                 double dt)
+    : order_(order), spacing_(spacing_steps), lead_(lead) {
+  require_step(dt, "polynomial compensator");
+  require(order >= 1 && order <= 3, "polynomial compensator: order must be 1, 2 or 3, got " +
+                                        std::to_string(order));
+  require(lead > 0.0 && lead <= 1.0, "polynomial compensator: lead must be in (0, 1] s, got " +
+                                         number(lead));
+  require(spacing_steps >= 1, "polynomial compensator: spacing must be at least one step (dt)");
+  // Lagrange weights for nodes x_j = -j (in units of the spacing h), evaluated at x = L / h.
+  const double x = lead / (spacing_steps * dt);
+  for (int j = 0; j <= order; ++j) {
+    double c = 1.0;
+    for (int m = 0; m <= order; ++m) {
+      if (m != j) c *= (x + m) / static_cast<double>(m - j);
+    }
+    weights_.push_back(c);
+  }
+  history_.assign(static_cast<std::size_t>(order * spacing_steps + 1), 0.0);
+}
+
+double PolynomialExtrapolation::step(const CompensatorInput& in) {
+  const std::size_t size = history_.size();
+  head_ = (head_ + 1) % size;
+  history_[head_] = in.target;
+  double command = 0.0;
+  for (int j = 0; j <= order_; ++j) {
+    const std::size_t back = static_cast<std::size_t>(j * spacing_);
+    command += weights_[static_cast<std::size_t>(j)] * history_[(head_ + size - back) % size];
+  }
+  return command;
+}
+
+void PolynomialExtrapolation::reset() {
+  std::fill(history_.begin(), history_.end(), 0.0);
+  head_ = 0;
+}
+
+std::unique_ptr<Compensator> PolynomialExtrapolation::clone() const {
+  return std::make_unique<PolynomialExtrapolation>(*this);
+}
+
+std::string PolynomialExtrapolation::describe() const {
+  return "polynomial(order " + std::to_string(order_) + ", lead " + number(lead_ * 1e3) +
+         " ms, spacing " + std::to_string(spacing_) + " steps)";
+}
+
+// ---------------------------------------------------------------------------------------------
+AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double dt)
+    : p_(parameters), dt_(dt), filter_decay_(0.0) {
+  require_step(dt, "adaptive time series compensator");
+  require(finite(p_.window) && p_.window >= 3.0 * dt,
+          "adaptive time series compensator: window must be >= 3 dt (" + number(3.0 * dt) +
+              " s), got " + number(p_.window));
+  require(p_.window / dt <= 1e6, "adaptive time series compensator: window of " +
+                                     number(p_.window) + " s is more than 1e6 steps");
+  const struct {
+    const char* name;
+    double initial;
+    CoefficientBounds bounds;
+  } coefficients[] = {{"a0", p_.a0, p_.a0_bounds}, {"a1", p_.a1, p_.a1_bounds},
+                      {"a2", p_.a2, p_.a2_bounds}};
+  for (const auto& c : coefficients) {
+    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max,
+            std::string("adaptive time series compensator: ") + c.name +
+                "_bounds must have min < max, got [" + number(c.bounds.min) + ", " +
+                number(c.bounds.max) + "]");
+    require(c.initial >= c.bounds.min && c.initial <= c.bounds.max,
+            std::string("adaptive time series compensator: initial_") + c.name + " = " +
+                number(c.initial) + " is outside " + c.name + "_bounds [" + number(c.bounds.min) +
+                ", " + number(c.bounds.max) + "]");
+  }
+  require(p_.a0_bounds.min > 0.0,
+          "adaptive time series compensator: a0_bounds.min must be > 0 (a0 is the command's gain)");
+  require(finite(p_.derivative_cutoff) && p_.derivative_cutoff >= 0.0 &&
+              p_.derivative_cutoff < 0.5 / dt,
+          "adaptive time series compensator: derivative_cutoff must be in [0, Nyquist = " +
+              number(0.5 / dt) + " Hz), got " + number(p_.derivative_cutoff));
+  if (p_.derivative_cutoff > 0.0) {
+    filter_decay_ = std::exp(-2.0 * std::numbers::pi * p_.derivative_cutoff * dt);
+  }
+  const auto window = static_cast<std::size_t>(std::llround(p_.window / dt));
+  rows_x_.assign(window, 0.0);
+  rows_v_.assign(window, 0.0);
+  rows_a_.assign(window, 0.0);
+  rows_u_.assign(window, 0.0);
+  reset();
+}
+
+void AdaptiveTimeSeries::reset() {
+  a_[0] = p_.a0;
+  a_[1] = p_.a1;
+  a_[2] = p_.a2;
+  std::fill(std::begin(target_), std::end(target_), 0.0);
+  std::fill(std::begin(filtered_measured_), std::end(filtered_measured_), 0.0);
+  filtered_command_ = last_command_ = 0.0;
+  samples_seen_ = updates_ = 0;
+  has_previous_ = false;
+  row_head_ = row_count_ = 0;
+}
+
+std::unique_ptr<Compensator> AdaptiveTimeSeries::clone() const {
+  return std::make_unique<AdaptiveTimeSeries>(*this);
+}
+
+std::string AdaptiveTimeSeries::describe() const {
+  return "ats(window " + number(p_.window) + " s, a0 " + number(p_.a0) + ", a1 " +
+         number(p_.a1 * 1e3) + " ms, a2 " + number(p_.a2) + " s^2)";
+}
+
+// One regression row: the command sent at step k-1 and the measurement it produced.
+void AdaptiveTimeSeries::learn(double command, double measured) {
+  const double keep = filter_decay_, take = 1.0 - filter_decay_;
+  filtered_command_ = keep * filtered_command_ + take * command;
+  double* x = filtered_measured_;
+  x[3] = x[2];
+  x[2] = x[1];
+  x[1] = x[0];
+  x[0] = keep * x[0] + take * measured;
+  ++samples_seen_;
+  // The same difference operators as on the target, so the fitted a1, a2 are the ones the
+  // command law needs (at rest before the first sample, so no start-up rows are skipped).
+  const double velocity = backward_velocity(x, dt_);
+  const double acceleration = backward_acceleration(x, dt_);
+  row_head_ = (row_head_ + 1) % rows_x_.size();
+  rows_x_[row_head_] = x[0];
+  rows_v_[row_head_] = velocity;
+  rows_a_[row_head_] = acceleration;
+  rows_u_[row_head_] = filtered_command_;
+  row_count_ = std::min(row_count_ + 1, rows_x_.size());
+  if (row_count_ == rows_x_.size()) fit();
+}
+
+void AdaptiveTimeSeries::fit() {
+  // Normal equations with columns scaled to unit RMS, so x (mm), x' and x'' (m/s^2) weigh alike.
+  const std::size_t n = row_count_;
+  double scale[3] = {0, 0, 0};
+  for (std::size_t i = 0; i < n; ++i) {
+    scale[0] += rows_x_[i] * rows_x_[i];
+    scale[1] += rows_v_[i] * rows_v_[i];
+    scale[2] += rows_a_[i] * rows_a_[i];
+  }
+  for (double& s : scale) {
+    s = std::sqrt(s / static_cast<double>(n));
+    if (!(s > 0.0) || !finite(s)) return;  // no excitation: keep the coefficients
+  }
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d row(rows_x_[i] / scale[0], rows_v_[i] / scale[1], rows_a_[i] / scale[2]);
+    normal.noalias() += row * row.transpose();
+    rhs.noalias() += row * rows_u_[i];
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(normal, Eigen::EigenvaluesOnly);
+  const double largest = eigen.eigenvalues().maxCoeff(), smallest = eigen.eigenvalues().minCoeff();
+  constexpr double kMinConditionRatio = 1e-10;  // below: the window does not excite all 3 terms
+  if (!(smallest > kMinConditionRatio * largest)) return;
+  const Eigen::Vector3d solution = normal.ldlt().solve(rhs);
+  const CoefficientBounds bounds[3] = {p_.a0_bounds, p_.a1_bounds, p_.a2_bounds};
+  for (int i = 0; i < 3; ++i) {
+    const double value = solution[i] / scale[i];
+    if (!finite(value)) return;
+    a_[i] = std::clamp(value, bounds[i].min, bounds[i].max);
+  }
+  ++updates_;
+}
+
+double AdaptiveTimeSeries::step(const CompensatorInput& in) {
+  if (has_previous_) learn(last_command_, in.measured);
+  has_previous_ = true;
+  double* x = target_;
+  x[3] = x[2];
+  x[2] = x[1];
+  x[1] = x[0];
+  x[0] = in.target;
+  last_command_ = a_[0] * x[0] + a_[1] * backward_velocity(x, dt_) +
+                  a_[2] * backward_acceleration(x, dt_);
+  return last_command_;
+}
+
+// ---------------------------------------------------------------------------------------------
+void PlantModel::append(const std::vector<double>& num, const std::vector<double>& den) {
+  numerator = polynomial_multiply(numerator, num);
+  denominator = polynomial_multiply(denominator, den);
+}
+
+std::string PlantModel::describe() const {
+  std::ostringstream out;
+  out << "plant(delay " << delay * 1e3 << " ms, gain " << gain << ", order "
+      << trimmed(denominator).size() - 1 << "/" << trimmed(numerator).size() - 1 << ")";
+  return out.str();
+}
+
+InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz, double dt) {
+  const char* who = "model-based compensator";
+  require_step(dt, who);
+  require(lead_order >= 1 && lead_order <= 3,
+          std::string(who) + ": lead_order must be 1, 2 or 3, got " + std::to_string(lead_order));
+  require(finite(rolloff_hz) && rolloff_hz > 0.0 && rolloff_hz < 0.25 / dt,
+          std::string(who) + ": rolloff_frequency must be in (0, " + number(0.25 / dt) +
+              ") Hz (a quarter of the sampling rate), got " + number(rolloff_hz));
+  require(finite(plant.delay) && plant.delay >= 0.0,
+          std::string(who) + ": plant delay must be >= 0 s, got " + number(plant.delay));
+  require(finite(plant.gain) && plant.gain != 0.0,
+          std::string(who) + ": plant gain must be finite and non-zero");
+  const std::vector<double> num = trimmed(plant.numerator), den = trimmed(plant.denominator);
+  for (double c : num) require(finite(c), std::string(who) + ": plant numerator is not finite");
+  for (double c : den) require(finite(c), std::string(who) + ": plant denominator is not finite");
+  require(num.front() != 0.0, std::string(who) + ": plant numerator is zero");
+  require(den.front() != 0.0, std::string(who) + ": plant denominator is zero");
+  require(num.size() <= den.size(), std::string(who) + ": plant has more zeros than poles");
+  require(num.back() != 0.0 && den.back() != 0.0,
+          std::string(who) + ": plant has a zero or a pole at s = 0 (no finite static gain)");
+  for (const auto& zero : polynomial_roots(num)) {
+    require(zero.real() < 0.0, std::string(who) + ": plant zero at s = " + number(zero.real()) +
+                                   (zero.imag() != 0.0 ? " + " + number(zero.imag()) + "i" : "") +
+                                   " is not in the left half-plane: its inverse would be unstable");
+  }
+  const int relative_degree = static_cast<int>(den.size() - num.size());
+  const int filter_order = relative_degree + lead_order;
+  const double wf = 2.0 * std::numbers::pi * rolloff_hz;
+  InverseDesign design;
+  design.lead = plant.delay + filter_order / wf;
+  // T_m(sL) = sum x^i / i!, highest power first.
+  std::vector<double> taylor(static_cast<std::size_t>(lead_order) + 1);
+  double factorial = 1.0, power = 1.0;
+  for (int i = 0; i <= lead_order; ++i) {
+    if (i > 0) {
+      factorial *= i;
+      power *= design.lead;
+    }
+    taylor[static_cast<std::size_t>(lead_order - i)] = power / factorial;
+  }
+  // Normalised so that D(0) / N(0) and the filter's DC gain are exact.
+  std::vector<double> filter{1.0};
+  for (int i = 0; i < filter_order; ++i) filter = polynomial_multiply(filter, {1.0 / wf, 1.0});
+  design.numerator = polynomial_multiply(den, taylor);
+  design.denominator = polynomial_multiply(num, filter);
+  for (double& c : design.denominator) c *= plant.gain;
+  return design;
+}
+
+ModelBasedInverse::ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt)
+    : ModelBasedInverse(plant, lead_order, rolloff_hz, dt,
+                        design_inverse(plant, lead_order, rolloff_hz, dt)) {}
+
+ModelBasedInverse::ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt,
+                                     const InverseDesign& design)
+    : plant_(std::move(plant)),
+      lead_order_(lead_order),
+      rolloff_hz_(rolloff_hz),
+      lead_(design.lead),
+      numerator_(design.numerator),
+      denominator_(design.denominator),
+      filter_(design.numerator, design.denominator, dt, "model-based inverse") {}
+
+double ModelBasedInverse::step(const CompensatorInput& in) {
+  return filter_.step({in.time, in.target, 0.0});
+}
+
+std::unique_ptr<Compensator> ModelBasedInverse::clone() const {
+  return std::make_unique<ModelBasedInverse>(*this);
+}
+
+std::string ModelBasedInverse::describe() const {
+  return "model-based inverse(" + plant_.describe() + ", lead " + number(lead_ * 1e3) +
+         " ms order " + std::to_string(lead_order_) + ", roll-off " + number(rolloff_hz_) + " Hz)";
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+AtsParameters ats_parameters(const config::Compensation::AdaptiveTimeSeries& c) {
+  AtsParameters p;
+  p.window = c.window();
+  p.a0 = c.initial_a0() == 0.0 ? 1.0 : c.initial_a0();
+  p.a1 = c.initial_a1();
+  p.a2 = c.initial_a2();
+  if (c.has_a0_bounds()) p.a0_bounds = {c.a0_bounds().min(), c.a0_bounds().max()};
+  if (c.has_a1_bounds()) p.a1_bounds = {c.a1_bounds().min(), c.a1_bounds().max()};
+  if (c.has_a2_bounds()) p.a2_bounds = {c.a2_bounds().min(), c.a2_bounds().max()};
+  p.derivative_cutoff = c.derivative_cutoff();
+  return p;
+}
+
+// Messages from the block constructors start with the block's name; the config's field path
+// replaces it.
+[[noreturn]] void rethrow_at(const std::string& where, const std::string& field,
+                             const std::exception& e) {
+  std::string message = e.what();
+  if (const auto colon = message.find(": "); colon != std::string::npos) {
+    message = message.substr(colon + 2);
+  }
+  throw std::invalid_argument(where + "." + field + ": " + message);
+}
+
+}  // namespace
+
+PlantModel plant_from_stages(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
+                             const std::string& where) {
+  using K = config::DelayStage::KindCase;
+  PlantModel plant;
+  require(!stages.empty(), where + " is empty: a model-based compensator needs the actuator model "
+                                   "(e.g. from `rths identify --design-compensator`)");
+  for (int i = 0; i < stages.size(); ++i) {
+    const config::DelayStage& stage = stages[i];
+    const std::string at = where + "[" + std::to_string(i) + "]";
+    if (stage.amplitude_gain() != 0.0) plant.gain *= stage.amplitude_gain();
+    switch (stage.kind_case()) {
+      case K::kShift:
+        require(stage.shift().delay() >= 0.0, at + ".shift.delay must be >= 0 s");
+        plant.delay += stage.shift().delay();
+        break;
+      case K::kFirstOrder:
+        require(stage.first_order().time_constant() > 0.0,
+                at + ".first_order.time_constant must be > 0 s");
+        plant.append({1.0}, {stage.first_order().time_constant(), 1.0});
+        break;
+      case K::kTransferFunction: {
+        const auto& tf = stage.transfer_function();
+        require(!tf.numerator().empty() && !tf.denominator().empty(),
+                at + ".transfer_function needs a numerator and a denominator");
+        plant.append({tf.numerator().begin(), tf.numerator().end()},
+                     {tf.denominator().begin(), tf.denominator().end()});
+        break;
+      }
+      case K::kBenchmark: {
+        const ContinuousTransferFunction benchmark = benchmark_actuator_transfer_function();
+        plant.append(benchmark.numerator, benchmark.denominator);
+        break;
+      }
+      default:
+        fail(at + ": only shift, first_order, transfer_function and benchmark stages describe an "
+                  "invertible actuator model");
+    }
+  }
+  return plant;
+}
+
+void validate_compensation(const config::Compensation& c, const std::string& where) {
+  using K = config::Compensation::KindCase;
+  switch (c.kind_case()) {
+    case K::kPolynomial: {
+      const auto& p = c.polynomial();
+      require(p.order() >= 1 && p.order() <= 3,
+              where + ".polynomial.order must be 1, 2 or 3, got " + std::to_string(p.order()));
+      require(p.lead() > 0.0 && p.lead() <= 1.0,
+              where + ".polynomial.lead must be in (0, 1] s, got " + number(p.lead()));
+      require(p.spacing() >= 0.0 && finite(p.spacing()),
+              where + ".polynomial.spacing must be >= 0 s, got " + number(p.spacing()));
+      break;
+    }
+    case K::kAdaptiveTimeSeries: {
+      const auto& a = c.adaptive_time_series();
+      require(a.window() > 0.0 && finite(a.window()),
+              where + ".adaptive_time_series.window must be > 0 s, got " + number(a.window()));
+      // Bounds and initial values: the block checks them; report them under this path.
+      require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
+              where + ".adaptive_time_series.derivative_cutoff must be >= 0 Hz");
+      try {
+        AtsParameters dt_free = ats_parameters(a);
+        dt_free.derivative_cutoff = 0.0;  // checked against the Nyquist frequency when built
+        AdaptiveTimeSeries(dt_free, std::min(a.window() / 3.0, 1e-3));
+      } catch (const std::invalid_argument& e) {
+        rethrow_at(where, "adaptive_time_series", e);
+      }
+      break;
+    }
+    case K::kModelBased: {
+      const auto& m = c.model_based();
+      require(m.lead_order() >= 1 && m.lead_order() <= 3,
+              where + ".model_based.lead_order must be 1, 2 or 3, got " +
+                  std::to_string(m.lead_order()));
+      require(m.rolloff_frequency() > 0.0 && finite(m.rolloff_frequency()),
+              where + ".model_based.rolloff_frequency must be > 0 Hz, got " +
+                  number(m.rolloff_frequency()));
+      plant_from_stages(m.plant(), where + ".model_based.plant");
+      break;
+    }
+    case K::KIND_NOT_SET:
+      fail(where + " has no kind (polynomial, adaptive_time_series, model_based)");
+  }
+}
+
+std::unique_ptr<Compensator> make_compensator(const config::Compensation& c, double dt,
+                                              const std::string& where) {
+  validate_compensation(c, where);
+  using K = config::Compensation::KindCase;
+  switch (c.kind_case()) {
+    case K::kPolynomial: {
+      const auto& p = c.polynomial();
+      int spacing = 1;
+      if (p.spacing() > 0.0) {
+        const double steps = p.spacing() / dt;
+        spacing = static_cast<int>(std::llround(steps));
+        require(spacing >= 1 && std::abs(steps - spacing) <= 1e-6 * steps,
+                where + ".polynomial.spacing " + number(p.spacing()) +
+                    " s is not a whole number of steps of dt = " + number(dt) + " s");
+      }
+      return std::make_unique<PolynomialExtrapolation>(p.order(), p.lead(), spacing, dt);
+    }
+    case K::kAdaptiveTimeSeries:
+      try {
+        return std::make_unique<AdaptiveTimeSeries>(ats_parameters(c.adaptive_time_series()), dt);
+      } catch (const std::invalid_argument& e) {
+        rethrow_at(where, "adaptive_time_series", e);
+      }
+    case K::kModelBased: {
+      const auto& m = c.model_based();
+      PlantModel plant = plant_from_stages(m.plant(), where + ".model_based.plant");
+      try {
+        return std::make_unique<ModelBasedInverse>(std::move(plant), m.lead_order(),
+                                                   m.rolloff_frequency(), dt);
+      } catch (const std::invalid_argument& e) {
+        rethrow_at(where, "model_based", e);
+      }
+    }
+    case K::KIND_NOT_SET: break;
+  }
+  fail(where + " has no kind (polynomial, adaptive_time_series, model_based)");
+}
+
+}  // namespace rths::core

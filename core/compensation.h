@@ -1,0 +1,199 @@
+#pragma once
+// Delay compensation: blocks that shape the command sent to an actuator so that what the actuator
+// realises follows what the integrator wanted. A compensator only shapes the command: the
+// measured displacement and the measured force go back to the integrator unchanged.
+//
+// Input  (CompensatorInput): t (s), the target x_t (m, the displacement the integrator computed
+//        for this step) and x_m (m, the displacement the actuator realised one step earlier: the
+//        measured feedback a servo controller has when it shapes the next command).
+// Output: the command u_c (m) given to the actuator (the delay chain of core/delay.h).
+// Called once per step with spacing dt; deterministic, so in-process and lockstep distributed
+// runs agree bit for bit. Initial state: at rest (every past target and measurement is 0).
+// step() is real-time safe: every buffer is sized at construction.
+//
+// Equations:
+//   PolynomialExtrapolation (Horiuchi, Inoue, Konno & Namita 1999, Earthquake Engng Struct. Dyn.
+//     28(10), 1121-1141): the polynomial of order n (1..3) through the last n+1 targets, spaced
+//     h = s dt apart (s >= 1 steps), evaluated a lead L ahead:
+//       u_c[k] = sum_{j=0..n} c_j x_t[k - j s],  c_j = prod_{m != j} (L/h + m) / (m - j)
+//     (Lagrange weights for the nodes 0, -h, .., -n h). Exact for polynomials of order <= n.
+//   AdaptiveTimeSeries, ATS (Chae, Kazemibidokhti & Ricles 2013, Earthquake Engng Struct. Dyn.
+//     42(11), 1697-1715):
+//       u_c[k] = a0 x_t + a1 x_t' + a2 x_t''   (derivatives of the target: second-order backward
+//       differences x' = (3x_k - 4x_{k-1} + x_{k-2}) / 2dt, x'' = (2x_k - 5x_{k-1} + 4x_{k-2}
+//       - x_{k-3}) / dt^2, exact for quadratics / cubics).
+//     The coefficients are the least-squares fit of the actuator's inverse over a moving window of
+//     W samples of past commands and measurements:  u_c ~ a0 x_m + a1 x_m' + a2 x_m'' (the same
+//     difference operators as on the target, so a1 and a2 are the ones the command law needs).
+//     Before the fit both u_c and x_m pass the same first-order low-pass (cut-off f_c; the filter on
+//     the derivatives): a linear relation with constant coefficients survives an identical
+//     filter on both sides, so the filter does not bias the coefficients. The fit is refreshed
+//     every step once the window is full and its (column-scaled) normal matrix is well conditioned;
+//     each coefficient is then clamped into its bounds [min_i, max_i].
+//     For an actuator e^{-s tau} / (1 + s T): a0 -> 1, a1 -> T + tau, a2 -> T tau + tau^2 / 2.
+//   ModelBasedInverse (feedforward inverse of an identified plant, e.g. Carrion & Spencer 2007,
+//     Newmark Structural Engineering Laboratory report 9; Chen & Tsai 2013): for the plant
+//       G(s) = g e^{-s tau} N(s) / D(s)   (N Hurwitz: minimum phase; relative degree r_p >= 0)
+//     the compensator is
+//       C(s) = D(s) T_m(s L) / (g N(s) (1 + s / w_f)^(r_p + m)),   L = tau + (r_p + m) / w_f,
+//     T_m(x) = sum_{i=0..m} x^i / i! the Taylor polynomial of e^x (the delay lead, m = 1..3),
+//     w_f = 2 pi f_rolloff. The roll-off makes C proper (causal); its own low-frequency lag
+//     (r_p + m) / w_f is added to the lead so that G C -> 1 (gain and phase) at low frequency.
+//     Tustin-discretised (core::TransferFunctionStage).
+
+#include <complex>
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/delay.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::core {
+
+struct CompensatorInput {
+  double time = 0.0;      // s
+  double target = 0.0;    // m, x_t: what the integrator wants realised
+  double measured = 0.0;  // m, x_m: what the actuator realised at the previous step
+};
+
+class Compensator {
+ public:
+  virtual ~Compensator() = default;
+  // Returns the command u_c (m). Real-time safe.
+  virtual double step(const CompensatorInput& in) = 0;
+  virtual void reset() = 0;
+  virtual std::unique_ptr<Compensator> clone() const = 0;
+  virtual std::string describe() const = 0;
+  // Low-frequency phase lead the block adds (s), for reports; 0 for ATS (it adapts).
+  virtual double nominal_lead() const = 0;
+};
+
+class PolynomialExtrapolation final : public Compensator {
+ public:
+  // @pre order in 1..3, 0 < lead <= 1 s, spacing_steps >= 1, dt > 0. Throws std::invalid_argument.
+  PolynomialExtrapolation(int order, double lead, int spacing_steps, double dt);
+  double step(const CompensatorInput& in) override;
+  void reset() override;
+  std::unique_ptr<Compensator> clone() const override;
+  std::string describe() const override;
+  double nominal_lead() const override { return lead_; }
+  const std::vector<double>& weights() const { return weights_; }  // c_0..c_n
+
+ private:
+  int order_, spacing_;
+  double lead_;
+  std::vector<double> weights_;
+  std::vector<double> history_;  // ring of the last order * spacing + 1 targets
+  std::size_t head_ = 0;
+};
+
+struct CoefficientBounds {
+  double min = 0.0, max = 0.0;
+};
+
+struct AtsParameters {
+  double window = 1.0;                     // s of samples in the least-squares fit
+  double a0 = 1.0, a1 = 0.0, a2 = 0.0;     // initial coefficients (-, s, s^2)
+  CoefficientBounds a0_bounds{0.5, 2.0};   // -
+  CoefficientBounds a1_bounds{0.0, 0.1};   // s
+  CoefficientBounds a2_bounds{-0.01, 0.01};  // s^2
+  double derivative_cutoff = 0.0;          // Hz, low-pass before differentiating; 0 = none
+};
+
+class AdaptiveTimeSeries final : public Compensator {
+ public:
+  // Throws std::invalid_argument naming the parameter (window < 3 dt, min >= max, an initial
+  // coefficient outside its bounds, a cut-off <= 0 or above the Nyquist frequency...).
+  AdaptiveTimeSeries(const AtsParameters& parameters, double dt);
+  double step(const CompensatorInput& in) override;
+  void reset() override;
+  std::unique_ptr<Compensator> clone() const override;
+  std::string describe() const override;
+  double nominal_lead() const override { return 0.0; }
+  double a0() const { return a_[0]; }
+  double a1() const { return a_[1]; }
+  double a2() const { return a_[2]; }
+  std::size_t updates() const { return updates_; }  // fits accepted so far
+
+ private:
+  void learn(double command, double measured);
+  void fit();
+
+  AtsParameters p_;
+  double dt_, filter_decay_;
+  double a_[3];
+  double target_[4] = {0, 0, 0, 0};                 // x_t[k], x_t[k-1], ..
+  double filtered_measured_[4] = {0, 0, 0, 0};      // low-passed x_m, newest first
+  double filtered_command_ = 0.0, last_command_ = 0.0;
+  bool has_previous_ = false;  // a command was sent, so in.measured answers it
+  std::size_t samples_seen_ = 0, updates_ = 0;
+  // Regression rows over the window: [x, x', x''] of the filtered measurement, and the filtered
+  // command they must explain.
+  std::vector<double> rows_x_, rows_v_, rows_a_, rows_u_;
+  std::size_t row_head_ = 0, row_count_ = 0;
+};
+
+// A continuous plant g e^{-s delay} N(s) / D(s), coefficients highest power of s first.
+struct PlantModel {
+  double delay = 0.0;  // s, >= 0
+  double gain = 1.0;
+  std::vector<double> numerator{1.0}, denominator{1.0};
+  void append(const std::vector<double>& num, const std::vector<double>& den);  // G *= num/den
+  std::string describe() const;
+};
+
+// C(s) above, and its total lead L (s).
+struct InverseDesign {
+  std::vector<double> numerator, denominator;
+  double lead = 0.0;
+};
+// Throws as ModelBasedInverse's constructor.
+InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz, double dt);
+
+class ModelBasedInverse final : public Compensator {
+ public:
+  // Throws std::invalid_argument naming the parameter: lead_order outside 1..3, rolloff <= 0 or
+  // at or above a quarter of the sampling rate, a plant with a zero gain, a right-half-plane zero
+  // (its inverse would be unstable), a pole at s = 0, or more zeros than poles.
+  ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt);
+  double step(const CompensatorInput& in) override;
+  void reset() override { filter_.reset(); }
+  std::unique_ptr<Compensator> clone() const override;
+  std::string describe() const override;
+  double nominal_lead() const override { return -filter_.nominal_delay(); }
+  // The continuous compensator C(s), highest power first (for stability analysis and tests).
+  const std::vector<double>& numerator() const { return numerator_; }
+  const std::vector<double>& denominator() const { return denominator_; }
+  double total_lead() const { return lead_; }  // L above (s)
+  const TransferFunctionStage& filter() const { return filter_; }  // the Tustin-discretised C
+
+ private:
+  ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt,
+                    const InverseDesign& design);
+  PlantModel plant_;
+  int lead_order_;
+  double rolloff_hz_, lead_;
+  std::vector<double> numerator_, denominator_;
+  TransferFunctionStage filter_;
+};
+
+// Polynomial helpers (coefficients highest power first).
+std::vector<double> polynomial_multiply(const std::vector<double>& a, const std::vector<double>& b);
+// Roots of a polynomial (companion-matrix eigenvalues). Leading zeros are ignored.
+std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients);
+
+// From a study config. `where` names the block in errors ("cases[3] 'ats' compensation[0]").
+// validate_compensation checks what does not depend on dt; make_compensator builds the block
+// (and throws, naming the field, for what does: spacing or roll-off against dt). Both throw
+// std::invalid_argument "WHERE.FIELD ...".
+void validate_compensation(const config::Compensation& compensation, const std::string& where);
+std::unique_ptr<Compensator> make_compensator(const config::Compensation& compensation, double dt,
+                                              const std::string& where);
+// The actuator model a model-based compensator inverts, from delay stages (shift, first_order,
+// transfer_function, benchmark; amplitude gains multiply). Other kinds cannot be inverted: throws.
+PlantModel plant_from_stages(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
+                             const std::string& where);
+
+}  // namespace rths::core
