@@ -43,8 +43,9 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec) {
          << "set ylabel " << quoted(spec.ylabel) << "\n"
          << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
          << (spec.log_x ? "set logscale x\n" : "unset logscale x\n")
-         << "set xrange " << range(spec.x_min, spec.x_max) << "\n"
-         << "set yrange " << range(spec.y_min, spec.y_max) << "\n"
+         // "[:]" would keep the previous panel's range: autoscale instead.
+         << (spec.x_min || spec.x_max ? "set xrange " + range(spec.x_min, spec.x_max) : "set autoscale x") << "\n"
+         << (spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max) : "set autoscale y") << "\n"
          << "unset arrow\nunset label\n";
   script.precision(10);
   for (std::size_t i = 0; i < spec.markers.size(); ++i) {
@@ -58,8 +59,13 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec) {
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
     const int colour = static_cast<int>(i) % kColours;
     const int dash = (static_cast<int>(i) / kColours) % kDashTypes + 1;
-    script << (i ? ", " : "") << "'-' using 1:2 with " << spec.series[i].style << " lc rgb '"
-           << kPalette[colour] << "' dt " << dash << " title " << quoted(spec.series[i].title);
+    // A style that names its own colour or dash keeps it (gnuplot refuses an option given twice).
+    const std::string& style = spec.series[i].style;
+    const auto has = [&](const char* option) { return (" " + style + " ").find(option) != std::string::npos; };
+    script << (i ? ", " : "") << "'-' using 1:2 with " << style;
+    if (!has(" lc ") && !has(" linecolor ")) script << " lc rgb '" << kPalette[colour] << "'";
+    if (!has(" dt ") && !has(" dashtype ")) script << " dt " << dash;
+    script << " title " << quoted(spec.series[i].title);
   }
   script << "\n";
   for (const Series& s : spec.series) {

@@ -202,4 +202,22 @@ TEST(CliTest, RunWithoutPlotsRemovesStalePlotsAndWritesEveryColumn) {
   EXPECT_NE(header.find(".force_act1_N"), std::string::npos) << header;
 }
 
+TEST(CliTest, ASweepWithDivergedPointsExitsOneUnlessMeantAndMarksThem) {
+  const auto dir = scratch("sweep");
+  std::ofstream(dir / "sweep.textproto")
+      << "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } } "
+         "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.3333333333333333 } "
+         "motion { path: \"" << kMotion << "\" duration: 10 } "
+         "sweep { periods: [0.05, 0.5] delays: [0.002, 0.014] motions { path: \"" << kMotion << "\" duration: 10 } }";
+  Outcome o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " + (dir / "out").string());
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(o.output.find("past their critical delay"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("diverged"), std::string::npos) << o.output;
+  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --allow-unstable --out " + (dir / "out").string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  for (const char* file : {"sweep.csv", "sweep.meta.json", "sweep.png", "sweep.svg", "sweep_vs_delay.png"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
+  }
+}
+
 }  // namespace
