@@ -189,7 +189,8 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
     for (double u : c.response) s.y.push_back(u * 1e3);
     if (!c.diverged()) bounded.push_back(displacement.series.size());
     displacement.series.push_back(std::move(s));
-    if (&c != &reference) {
+    {
+      // The reference too (a zero line), so every case keeps its colour across the panels.
       Series d{label, c.simulation.time, {}};
       for (std::size_t k = 0; k < c.response.size() && k < reference.response.size(); ++k) {
         d.y.push_back((c.response[k] - reference.response[k]) * 1e3);
@@ -221,7 +222,7 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   zoom.x_min = start;
   zoom.x_max = start + 5.0;
   std::vector<PlotSpec> panels = {displacement};
-  if (!difference.series.empty()) panels.push_back(difference);
+  if (outcome.cases.size() > 1) panels.push_back(difference);
   panels.push_back(zoom);
   for (PlotSpec& p : panels) p.height = 380;
   write_png_panels(panels, directory / "displacement.png");
