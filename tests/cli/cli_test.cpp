@@ -185,6 +185,11 @@ TEST(CliTest, AConfigOfAnotherKindIsNamed) {
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("is a joint-lag study"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("rths joint-lag"), std::string::npos) << o.output;
+  const Outcome reverse = run("joint-lag " + (kSource / "configs/paper_frame.textproto").string());
+  EXPECT_EQ(reverse.exit_code, 2) << reverse.output;
+  EXPECT_NE(reverse.output.find("is a study (rths.config.Study) config, not a joint-lag study"), std::string::npos)
+      << reverse.output;
+  EXPECT_NE(reverse.output.find("rths run"), std::string::npos) << reverse.output;
 }
 
 TEST(CliTest, RunWithoutPlotsRemovesStalePlotsAndWritesEveryColumn) {
