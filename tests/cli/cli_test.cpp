@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -223,6 +224,26 @@ TEST(CliTest, ASweepWithDivergedPointsExitsOneUnlessMeantAndMarksThem) {
   for (const char* file : {"sweep.csv", "sweep.meta.json", "sweep.png", "sweep.svg", "sweep_vs_delay.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
+}
+
+TEST(CliTest, IdentifyEchoesTheUnitsItReadTheDataIn) {
+  const auto dir = scratch("identify_units");
+  {
+    std::ofstream csv(dir / "rig.csv");
+    csv << "time,command,measured,force\n";
+    for (int i = 0; i < 4000; ++i) {
+      const double t = i * 0.001, lagged = t - 0.01;
+      const double c = 5 * std::sin(4 * M_PI * t) + 2 * std::sin(14 * M_PI * t);
+      const double m = 5 * std::sin(4 * M_PI * lagged) + 2 * std::sin(14 * M_PI * lagged);
+      csv << t << "," << c << "," << m << "," << 1000 * m << "\n";
+    }
+  }
+  Outcome o = run("identify " + (dir / "rig.csv").string() + " --length-unit cm --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(json_of(o)["input_units"]["length"], "cm");
+  o = run("identify " + (dir / "rig.csv").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("input units: time s, length mm, force N"), std::string::npos) << o.output;
 }
 
 }  // namespace
