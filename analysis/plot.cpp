@@ -1,13 +1,21 @@
 #include "analysis/plot.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 
 namespace rths::analysis {
 namespace {
+
+// Paul Tol's "muted" and "bright" qualitative schemes: distinguishable, colour-blind safe.
+constexpr const char* kPalette[] = {"#4477AA", "#EE6677", "#228833", "#CCBB44", "#66CCEE", "#AA3377",
+                                    "#332288", "#117733", "#882255", "#999933", "#DDCC77", "#BBBBBB"};
+constexpr int kColours = sizeof(kPalette) / sizeof(kPalette[0]);
+constexpr int kDashTypes = 4;
 
 std::string quoted(const std::string& text) {
   std::string out = "\"";
@@ -18,21 +26,53 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
+std::string range(const std::optional<double>& lo, const std::optional<double>& hi) {
+  std::ostringstream out;
+  out.precision(10);
+  out << "[";
+  if (lo) out << *lo;
+  out << ":";
+  if (hi) out << *hi;
+  out << "]";
+  return out.str();
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec) {
   script << "set title " << quoted(spec.title) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
          << "set ylabel " << quoted(spec.ylabel) << "\n"
-         << (spec.log_y ? "set logscale y\n" : "unset logscale y\n") << "plot ";
+         << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
+         << (spec.log_x ? "set logscale x\n" : "unset logscale x\n")
+         // "[:]" would keep the previous panel's range: autoscale instead.
+         << (spec.x_min || spec.x_max ? "set xrange " + range(spec.x_min, spec.x_max) : "set autoscale x") << "\n"
+         << (spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max) : "set autoscale y") << "\n"
+         << "unset arrow\nunset label\n";
+  script.precision(10);
+  for (std::size_t i = 0; i < spec.markers.size(); ++i) {
+    const VerticalMarker& m = spec.markers[i];
+    script << "set arrow from first " << m.x << ", graph 0 to first " << m.x
+           << ", graph 1 nohead dt 2 lw 1.5 lc rgb '#444444'\n"
+           << "set label " << quoted(m.label) << " at first " << m.x << ", graph "
+           << 0.97 - 0.05 * static_cast<double>(i % 6) << " left offset 0.5,0 font 'sans,9'\n";
+  }
+  script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
-    script << (i ? ", " : "") << "'-' using 1:2 with " << spec.series[i].style << " title "
-           << quoted(spec.series[i].title);
+    const int colour = static_cast<int>(i) % kColours;
+    const int dash = (static_cast<int>(i) / kColours) % kDashTypes + 1;
+    // A style that names its own colour or dash keeps it (gnuplot refuses an option given twice).
+    const std::string& style = spec.series[i].style;
+    const auto has = [&](const char* option) { return (" " + style + " ").find(option) != std::string::npos; };
+    script << (i ? ", " : "") << "'-' using 1:2 with " << style;
+    if (!has(" lc ") && !has(" linecolor ")) script << " lc rgb '" << kPalette[colour] << "'";
+    if (!has(" dt ") && !has(" dashtype ")) script << " dt " << dash;
+    script << " title " << quoted(spec.series[i].title);
   }
   script << "\n";
-  script.precision(10);
   for (const Series& s : spec.series) {
     for (std::size_t k = 0; k < s.x.size() && k < s.y.size(); ++k) {
       // gnuplot cannot draw non-finite points (and zero on a log axis); leave a gap instead.
-      if (std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(spec.log_y && s.y[k] <= 0)) {
+      if (std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(spec.log_y && s.y[k] <= 0) &&
+          !(spec.log_x && s.x[k] <= 0)) {
         script << s.x[k] << ' ' << s.y[k] << '\n';
       } else {
         script << '\n';
@@ -56,6 +96,21 @@ void run_gnuplot(const std::string& script, const std::filesystem::path& png) {
   }
 }
 
+std::string figure(const std::vector<PlotSpec>& panels, const std::string& terminal,
+                   const std::filesystem::path& file) {
+  std::ostringstream script;
+  const int height = panels.front().height * static_cast<int>(panels.size());
+  script << "set terminal " << terminal << " size " << panels.front().width << "," << height
+         << " font 'sans,10'\n"
+         << "set output " << quoted(file.string()) << "\n"
+         << "set termoption noenhanced\nset grid\nset key outside right top vertical Left reverse\n";
+  if (panels.size() > 1) script << "set multiplot layout " << panels.size() << ",1\n";
+  for (const PlotSpec& panel : panels) append_panel(script, panel);
+  if (panels.size() > 1) script << "unset multiplot\n";
+  script << "set output\n";
+  return script.str();
+}
+
 }  // namespace
 
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
@@ -64,17 +119,27 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
 
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png) {
   if (panels.empty()) throw std::invalid_argument("no panels to plot into " + png.string());
-  std::ostringstream script;
-  const int height = panels.front().height * static_cast<int>(panels.size());
-  script << "set terminal pngcairo size " << panels.front().width << "," << height
-         << " font 'sans,10'\n"
-         << "set output " << quoted(png.string()) << "\n"
-         << "set termoption noenhanced\nset grid\nset key top right\n";
-  if (panels.size() > 1) script << "set multiplot layout " << panels.size() << ",1\n";
-  for (const PlotSpec& panel : panels) append_panel(script, panel);
-  if (panels.size() > 1) script << "unset multiplot\n";
-  script << "set output\n";
-  run_gnuplot(script.str(), png);
+  run_gnuplot(figure(panels, "pngcairo", png), png);
+  std::filesystem::path svg = png;
+  svg.replace_extension(".svg");
+  run_gnuplot(figure(panels, "svg dynamic", svg), svg);
+}
+
+std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,
+                                                        const std::vector<std::size_t>& include,
+                                                        double margin) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    if (!include.empty() && std::find(include.begin(), include.end(), i) == include.end()) continue;
+    for (double y : series[i].y) {
+      if (!std::isfinite(y)) continue;
+      lo = std::min(lo, y);
+      hi = std::max(hi, y);
+    }
+  }
+  if (!(lo <= hi)) return std::nullopt;
+  const double pad = std::max(hi - lo, std::abs(hi) * 1e-9 + 1e-300) * margin;
+  return std::make_pair(lo - pad, hi + pad);
 }
 
 }  // namespace rths::analysis

@@ -1,8 +1,12 @@
 #pragma once
-// Plots through gnuplot (Debian's gnuplot-nox, pngcairo terminal): line series to a PNG file.
-// Data is streamed inline to gnuplot's stdin; nothing but the PNG is written.
+// Plots through gnuplot (Debian's gnuplot-nox, pngcairo and svg terminals): line series to a PNG
+// file and the same figure as SVG beside it (name.png -> name.svg).
+// Data is streamed inline to gnuplot's stdin; nothing but the PNG and the SVG is written.
+// Every figure: the legend outside the data (right), one colour per series from a 12-colour
+// qualitative palette, then the same colours dashed, so no two of the first 48 series look alike.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,17 +18,34 @@ struct Series {
   std::string style = "lines";  // gnuplot "with" clause: lines, points, linespoints ...
 };
 
+// A labelled vertical line across the panel at x (e.g. a critical delay).
+struct VerticalMarker {
+  double x = 0.0;
+  std::string label;
+};
+
 struct PlotSpec {
   std::string title, xlabel, ylabel;
   std::vector<Series> series;
   bool log_y = false;
   int width = 1100, height = 600;  // pixels
+  bool log_x = false;
+  // Axis range; empty = gnuplot's autoscale. Set it so one diverged series cannot flatten the rest
+  // (points outside are clipped, not dropped from the legend).
+  std::optional<double> x_min, x_max, y_min, y_max;
+  std::vector<VerticalMarker> markers;
 };
 
 // Throws std::runtime_error naming the file when gnuplot is missing or fails.
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 
-// Several panels stacked vertically in one PNG (shared width).
+// Several panels stacked vertically in one PNG (shared width), and the SVG beside it.
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png);
+
+// The range [lo, hi] padded by `margin` of its span on each side, over the finite y of the series
+// (all when `include` is empty, else those whose index is listed). Empty when nothing is finite.
+std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,
+                                                        const std::vector<std::size_t>& include,
+                                                        double margin = 0.08);
 
 }  // namespace rths::analysis

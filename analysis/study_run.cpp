@@ -1,75 +1,198 @@
 #include "analysis/study_run.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <span>
 #include <iomanip>
 #include <sstream>
 
 #include "analysis/atomic_file.h"
 #include "analysis/plot.h"
+#include "analysis/results_csv.h"
 #include "core/metrics.h"
 
 namespace rths::analysis {
 namespace {
 
-std::vector<double> top_floor(const core::SimulationResult& result) {
-  const auto column = result.displacement.cols() - 1;
-  std::vector<double> response(result.steps());
-  for (std::size_t k = 0; k < response.size(); ++k) response[k] = result.displacement(static_cast<Eigen::Index>(k), column);
-  return response;
+std::vector<double> experimental_storey_stiffness(const core::HybridPartition& partition) {
+  std::vector<double> k(partition.experimental.size(), 0.0);
+  for (std::size_t s = 0; s < k.size(); ++s) {
+    if (partition.experimental[s]) k[s] = partition.experimental[s]->initial_stiffness();
+  }
+  return k;
+}
+
+// The first step at which |u| or |v| of a floor passed a limit (0 = no limit), with why.
+std::optional<std::pair<std::size_t, std::string>> first_limit_trip(const core::SimulationResult& r,
+                                                                    const config::SafetyLimits& limits) {
+  for (std::size_t k = 0; k < r.steps(); ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    for (Eigen::Index i = 0; i < r.displacement.cols(); ++i) {
+      std::ostringstream why;
+      why << std::setprecision(4);
+      if (limits.max_displacement() > 0 && !(std::abs(r.displacement(row, i)) <= limits.max_displacement())) {
+        why << "|u| of floor " << i + 1 << " = " << std::abs(r.displacement(row, i)) << " m > limit "
+            << limits.max_displacement() << " m at t = " << r.time[k] << " s";
+        return std::make_pair(k, why.str());
+      }
+      if (limits.max_velocity() > 0 && !(std::abs(r.velocity(row, i)) <= limits.max_velocity())) {
+        why << "|v| of floor " << i + 1 << " = " << std::abs(r.velocity(row, i)) << " m/s > limit "
+            << limits.max_velocity() << " m/s at t = " << r.time[k] << " s";
+        return std::make_pair(k, why.str());
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+std::string ms(double seconds) {
+  std::ostringstream out;
+  out << std::setprecision(3) << seconds * 1e3 << " ms";
+  return out.str();
 }
 
 }  // namespace
 
-StudyOutcome run_study(const core::PreparedStudy& prepared) {
+std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
+  std::vector<std::string> out;
+  for (const CaseOutcome& c : cases) {
+    if (c.status == "limit tripped") out.push_back("case '" + c.name + "': limit tripped: " + c.status_detail);
+    if (c.diverged() && !c.expect_unstable && !allow_unstable) {
+      out.push_back("case '" + c.name + "' diverged: " + c.status_detail);
+    }
+  }
+  return out;
+}
+
+StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options) {
   const config::Study& study = prepared.config;
   config::Study with_cases = study;
   if (with_cases.cases_size() == 0) with_cases.add_cases()->set_name("reference");
   const config::Case& reference = core::reference_case(with_cases);
+  const int floors = prepared.base.model.dofs();
 
   StudyOutcome outcome;
   outcome.study_name = study.name();
+  outcome.motion_units = core::motion_units_name(study.motion());
+  outcome.response = ResponseSpec::top_floor(floors);
+  // The lag-free run: what growth is judged against (a lagged reference case would hide it).
+  const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion);
+  const std::vector<double> lag_free_response = floor_history(lag_free, floors - 1);
+  outcome.lag_free_peak = core::peak_abs(lag_free_response);
+  const std::vector<double> k_experimental = experimental_storey_stiffness(prepared.base.partition);
+  const bool has_experimental =
+      std::any_of(k_experimental.begin(), k_experimental.end(), [](double k) { return k > 0; });
+
   for (int i = 0; i < with_cases.cases_size(); ++i) {
     const config::Case& study_case = with_cases.cases(i);
     if (&study_case == &reference) outcome.reference_index = static_cast<std::size_t>(i);
     core::HybridSetup setup = core::setup_for_case(prepared, study_case);
     CaseOutcome result;
     result.name = study_case.name().empty() ? "case" + std::to_string(i) : study_case.name();
+    result.expect_unstable = study_case.expect_unstable();
     if (!setup.delays.empty()) {
       result.delay_description = setup.delays.front().describe();
-      result.nominal_delay = setup.delays.front().nominal_delay();
+      for (const core::DelayChain& chain : setup.delays) {
+        result.nominal_delay = std::max(result.nominal_delay, chain.nominal_delay());
+      }
     } else {
       result.delay_description = "no experimental substructure";
     }
+    if (has_experimental) {
+      result.stability = core::check_critical_delay(setup.model, k_experimental, setup.integrator,
+                                                    setup.dt, result.nominal_delay);
+      if (result.stability->past() && options.warn) {
+        options.warn("case '" + result.name + "': " + result.stability->describe() +
+                     (result.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge"));
+      }
+    }
     result.simulation = core::simulate(setup, prepared.motion);
-    result.response = top_floor(result.simulation);
-    result.peak = core::peak_abs(result.response);
+    if (const auto trip = first_limit_trip(result.simulation, study.deployment().limits())) {
+      result.simulation.truncate(trip->first);  // the command of that step is never sent
+      result.status = "limit tripped";
+      result.status_detail = trip->second;
+    }
+    result.response = floor_history(result.simulation, floors - 1);
+    const Comparison growth = compare(lag_free_response, result.response, result.simulation.diverged);
+    if (result.status == "completed" && growth.diverged) {
+      result.status = "diverged";
+      std::ostringstream why;
+      why << std::setprecision(4) << "peak " << growth.peak_m * 1e3 << " mm against "
+          << growth.peak_reference_m * 1e3 << " mm without lag (more than "
+          << core::kDivergenceGrowth << "x";
+      if (result.simulation.diverged) why << "; the simulation stopped at t = " << result.simulation.time.back() << " s";
+      why << ")";
+      if (result.stability) why << "; " << result.stability->describe();
+      result.status_detail = why.str();
+    } else if (result.status == "completed" && result.stability && result.stability->past()) {
+      std::ostringstream why;
+      why << std::setprecision(3) << "past its critical delay, but the peak grew only "
+          << growth.peak_m / growth.peak_reference_m << "x over the lag-free run in this record (diverged "
+          << "means more than " << core::kDivergenceGrowth << "x); a longer record may still grow: "
+          << result.stability->describe();
+      result.status_detail = why.str();
+    }
     outcome.cases.push_back(std::move(result));
   }
-  const std::vector<double>& ref = outcome.cases[outcome.reference_index].response;
+  const CaseOutcome& ref = outcome.cases[outcome.reference_index];
   for (CaseOutcome& c : outcome.cases) {
-    // A diverged case stops early; compare over the steps it has, and say so via `diverged`.
-    const std::size_t n = std::min(ref.size(), c.response.size());
-    const std::span<const double> r(ref.data(), n), x(c.response.data(), n);
-    c.paper_eq2 = core::paper_eq2(r, x);
-    c.nrmse = core::nrmse(r, x);
-    c.peak_error = core::peak_error(r, x);
+    c.comparison = compare(ref.simulation, c.simulation, outcome.response);
   }
   return outcome;
 }
 
+std::vector<std::string> study_plot_files() {
+  return {"displacement.png", "displacement.svg", "force_displacement.png", "force_displacement.svg"};
+}
+
+namespace {
+
+// Start of the `window` seconds of the reference with the most energy (sum of u^2).
+double strongest_window_start(const std::vector<double>& u, double dt, double window) {
+  const std::size_t length = std::min(u.size(), static_cast<std::size_t>(std::llround(window / dt)));
+  if (length == 0 || length >= u.size()) return 0.0;
+  double energy = 0.0;
+  for (std::size_t k = 0; k < length; ++k) energy += u[k] * u[k];
+  double best = energy;
+  std::size_t best_start = 0;
+  for (std::size_t start = 1; start + length <= u.size(); ++start) {
+    energy += u[start + length - 1] * u[start + length - 1] - u[start - 1] * u[start - 1];
+    if (energy > best) {
+      best = energy;
+      best_start = start;
+    }
+  }
+  return static_cast<double>(best_start) * dt;
+}
+
+}  // namespace
+
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
   std::filesystem::create_directories(directory);
-  PlotSpec displacement{outcome.study_name + ": top-floor displacement", "time (s)", "displacement (mm)", {}};
+  const CaseOutcome& reference = outcome.cases[outcome.reference_index];
+  const std::string response = outcome.response.describe();
+  PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case", "time (s)",
+                        "displacement (mm)", {}};
+  PlotSpec difference{"difference from the reference (" + reference.name + ")", "time (s)",
+                      "case - reference (mm)", {}};
   PlotSpec loop{outcome.study_name + ": what the integrator sees (experimental part)",
                 "commanded displacement (mm)", "measured force (kN)", {}};
+  std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
   for (const CaseOutcome& c : outcome.cases) {
-    Series s{c.name, c.simulation.time, {}};
+    const std::string label = c.name + (c.diverged() ? " (diverged, clipped)" : "");
+    Series s{label, c.simulation.time, {}};
     for (double u : c.response) s.y.push_back(u * 1e3);
+    if (!c.diverged()) bounded.push_back(displacement.series.size());
     displacement.series.push_back(std::move(s));
-    if (c.simulation.command.cols() > 0) {
+    {
+      // The reference too (a zero line), so every case keeps its colour across the panels.
+      Series d{label, c.simulation.time, {}};
+      for (std::size_t k = 0; k < c.response.size() && k < reference.response.size(); ++k) {
+        d.y.push_back((c.response[k] - reference.response[k]) * 1e3);
+      }
+      if (!c.diverged()) bounded_difference.push_back(difference.series.size());
+      difference.series.push_back(std::move(d));
+    }
+    if (c.simulation.command.cols() > 0 && !c.diverged()) {
       Series l{c.name, {}, {}};
       for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
         l.x.push_back(c.simulation.command(k, 0) * 1e3);
@@ -78,39 +201,91 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
       loop.series.push_back(std::move(l));
     }
   }
-  write_png_plot(displacement, directory / "displacement.png");
+  // A diverged case must not flatten the others: the axes follow the cases that stayed bounded.
+  if (const auto r = padded_y_range(displacement.series, bounded)) {
+    displacement.y_min = r->first;
+    displacement.y_max = r->second;
+  }
+  if (const auto r = padded_y_range(difference.series, bounded_difference)) {
+    difference.y_min = r->first;
+    difference.y_max = r->second;
+  }
+  PlotSpec zoom = displacement;
+  const double start = strongest_window_start(reference.response, reference.simulation.dt, 5.0);
+  zoom.title = "zoom: the strongest 5 s of the reference";
+  zoom.x_min = start;
+  zoom.x_max = start + 5.0;
+  std::vector<PlotSpec> panels = {displacement};
+  if (outcome.cases.size() > 1) panels.push_back(difference);
+  panels.push_back(zoom);
+  for (PlotSpec& p : panels) p.height = 380;
+  write_png_panels(panels, directory / "displacement.png");
   if (!loop.series.empty()) write_png_plot(loop, directory / "force_displacement.png");
 }
 
 nlohmann::json study_summary_json(const StudyOutcome& outcome) {
   nlohmann::json cases = nlohmann::json::array();
   for (const CaseOutcome& c : outcome.cases) {
+    nlohmann::json stability = nullptr;
+    if (c.stability) {
+      const auto& s = *c.stability;
+      const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
+      stability = {{"lag_s", s.lag},
+                   {"continuous_critical_delay_s", opt(s.continuous)},
+                   {"discrete_critical_delay_s", opt(s.discrete)},
+                   {"critical_delay_s", opt(s.critical())},
+                   {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
+                   {"past_critical_delay", s.past()}};
+    }
     cases.push_back({{"name", c.name},
                      {"delay", c.delay_description},
                      {"nominal_delay_s", c.nominal_delay},
-                     {"peak_displacement_m", c.peak},
-                     {"paper_eq2_as_printed", c.paper_eq2},
-                     {"nrmse", c.nrmse},
-                     {"peak_error_m", c.peak_error},
-                     {"diverged", c.simulation.diverged},
+                     {"status", c.status},
+                     {"status_detail", c.status_detail},
+                     {"expect_unstable", c.expect_unstable},
+                     {"stability", stability},
+                     {"peak_displacement_m", c.comparison.peak_m},
+                     {"paper_eq2_as_printed", c.comparison.paper_eq2_as_printed},
+                     {"nrmse_pct", c.comparison.nrmse_pct},
+                     {"peak_error_m", c.comparison.peak_error_m},
+                     {"diverged", c.diverged()},
                      {"steps", c.simulation.steps()}});
   }
   return {{"study", outcome.study_name},
+          {"motion_units", outcome.motion_units},
+          {"response", outcome.response.describe()},
           {"reference_case", outcome.cases[outcome.reference_index].name},
+          {"lag_free_peak_m", outcome.lag_free_peak},
           {"cases", cases}};
 }
 
 std::string study_summary_text(const StudyOutcome& outcome) {
   std::ostringstream out;
-  out << "study: " << outcome.study_name << " (reference: " << outcome.cases[outcome.reference_index].name << ")\n";
-  out << std::left << std::setw(26) << "case" << std::setw(36) << "delay" << std::right
-      << std::setw(12) << "peak (mm)" << std::setw(12) << "NRMSE" << std::setw(16) << "Eq.2 (paper)"
-      << std::setw(16) << "peak err (mm)" << "\n";
+  out << "study: " << outcome.study_name << " (reference: " << outcome.cases[outcome.reference_index].name
+      << "; response: " << outcome.response.describe() << " displacement; motion read in "
+      << outcome.motion_units << ")\n";
+  out << std::left << std::setw(24) << "case" << std::setw(30) << "delay" << std::right << std::setw(11)
+      << "peak (mm)" << std::setw(11) << "NRMSE (%)" << std::setw(14) << "Eq.2 (paper)" << std::setw(15)
+      << "peak err (mm)" << std::setw(16) << "crit. delay" << "  status\n";
   for (const CaseOutcome& c : outcome.cases) {
-    out << std::left << std::setw(26) << c.name << std::setw(36) << c.delay_description << std::right
-        << std::fixed << std::setprecision(3) << std::setw(12) << c.peak * 1e3 << std::setw(12)
-        << c.nrmse << std::setprecision(5) << std::setw(16) << c.paper_eq2 << std::setprecision(3)
-        << std::setw(16) << c.peak_error * 1e3 << (c.simulation.diverged ? "  DIVERGED" : "") << "\n";
+    std::string critical = "-";
+    if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
+    out << std::left << std::setw(24) << c.name << std::setw(30) << c.delay_description << std::right
+        << std::fixed << std::setprecision(3) << std::setw(11) << c.comparison.peak_m * 1e3;
+    if (c.diverged()) {
+      // Errors of a response that grew without bound measure nothing; the JSON keeps them.
+      out << std::setw(11) << "-" << std::setw(14) << "-" << std::setw(15) << "-";
+    } else {
+      out << std::setprecision(2) << std::setw(11) << c.comparison.nrmse_pct << std::setprecision(5)
+          << std::setw(14) << c.comparison.paper_eq2_as_printed << std::setprecision(3) << std::setw(15)
+          << c.comparison.peak_error_m * 1e3;
+    }
+    out << std::setw(16) << critical << "  " << c.status
+        << (c.diverged() && c.expect_unstable ? " (expected)" : "") << "\n";
+    out.unsetf(std::ios::fixed);
+  }
+  for (const CaseOutcome& c : outcome.cases) {
+    if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
   }
   return out.str();
 }

@@ -1,18 +1,31 @@
 #pragma once
-// One study, every case: runs each case of a prepared study in process, compares it with the
-// reference case, and writes the CSV, plots and summary a user reads.
+// One study, every case: checks each case against its critical delay before it runs, runs it in
+// process, judges it, compares it with the reference case, and writes the CSV, plots and summary.
 //
-// Compared quantity: the top-floor displacement (m) relative to the ground (DOF 0 of an SDOF).
-// Metrics per case against the reference: the paper's Eq. 2 as printed, NRMSE, peak error, and
-// the peaks. A case whose response grew past the divergence bound is flagged `diverged`.
+// Before each case: core::check_critical_delay on the structure, the case's lag (the delay
+// chain's nominal delay, the largest over actuators) and the integrator; a case past the limit
+// is announced through RunStudyOptions::warn with the margin.
+// After each case, its status:
+//   "limit tripped"  |u| or |v| of a floor passed deployment.limits (applied in process as the
+//                    coordinator applies them distributed: the run stops before that step)
+//   "diverged"       judged from the response: the top-floor peak grew past
+//                    core::kDivergenceGrowth times the lag-free run's (same structure, no delay
+//                    stage), or the simulation's own guard stopped it
+//   "completed"      otherwise
+// Compared quantity: the top-floor displacement (m) relative to the ground (analysis::compare).
+// A run failed its purpose when a case diverged without `expect_unstable`, or a limit tripped.
 
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/compare.h"
 #include "core/simulation.h"
+#include "core/stability.h"
 #include "core/study.h"
 
 namespace rths::analysis {
@@ -21,23 +34,42 @@ struct CaseOutcome {
   std::string name;
   std::string delay_description;  // e.g. "shift(14 ms)"
   double nominal_delay = 0.0;     // s, low-frequency lag of the chain (negative = lead)
+  bool expect_unstable = false;
+  std::optional<core::CriticalDelayCheck> stability;  // empty: no experimental part
   core::SimulationResult simulation;
   std::vector<double> response;   // m, top-floor displacement
-  double peak = 0.0;              // m, max |response|
-  double paper_eq2 = 0.0, nrmse = 0.0, peak_error = 0.0;  // vs the reference case
+  Comparison comparison;          // against the reference case
+  std::string status = "completed";  // "completed", "diverged", "limit tripped"
+  std::string status_detail;      // why, when not completed
+  bool diverged() const { return status == "diverged"; }
 };
 
 struct StudyOutcome {
   std::string study_name;
+  std::string motion_units;       // units the record was read in: g, m/s2, cm/s2
+  ResponseSpec response = ResponseSpec::floor(1);
   std::size_t reference_index = 0;
+  double lag_free_peak = 0.0;     // m, top floor of the run without any delay stage
   std::vector<CaseOutcome> cases;
+  // Cases that make the run fail its purpose: diverged without expect_unstable (unless
+  // `allow_unstable`), or a limit tripped.
+  std::vector<std::string> failures(bool allow_unstable) const;
 };
 
-StudyOutcome run_study(const core::PreparedStudy& prepared);
+struct RunStudyOptions {
+  std::function<void(const std::string&)> warn;  // pre-run warnings (stderr in the CLI)
+};
 
-// displacement.png (reference vs each case, the paper's Fig. 3) and
-// force_displacement.png (command vs measured force: the loop the integrator sees, Figs. 1-2).
+StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
+
+// The results file (csv, mat, h5) is tables::study_table: analysis/results_csv.h columns.
+// displacement.png/.svg, three panels (mm): every case with the reference (the paper's Fig. 3),
+// each case minus the reference, and a zoom on the reference's strongest 5 s; the axes follow the
+// cases that stayed bounded (a diverged case is clipped and labelled). force_displacement.png/.svg:
+// command vs measured force of the bounded cases (the loop the integrator sees, Figs. 1-2).
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory);
+// The files write_study_plots writes, so a run without plots can remove stale ones.
+std::vector<std::string> study_plot_files();
 nlohmann::json study_summary_json(const StudyOutcome& outcome);
 std::string study_summary_text(const StudyOutcome& outcome);
 

@@ -1,6 +1,7 @@
 #include "analysis/sweep.h"
 
 #include <google/protobuf/text_format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <charconv>
@@ -18,11 +19,13 @@
 
 #include "analysis/atomic_file.h"
 #include "analysis/batch_kernel.h"
+#include "analysis/compare.h"
 #include "analysis/parallel_for.h"
 #include "analysis/plot.h"
 #include "core/integrators.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
+#include "core/stability.h"
 #include "core/study.h"
 #include "core/substructure.h"
 
@@ -30,9 +33,9 @@ namespace rths::analysis {
 namespace {
 
 constexpr const char* kCsvHeader =
-    "index,period,delay,alpha,stiffness,dt,motion,model,peak_ref,peak_delayed,eq2_paper,nrmse,"
-    "peak_error,diverged";
-constexpr const char* kCsvMagic = "# rths-sweep";
+    "index,period_s,delay_s,alpha,stiffness_N_per_m,dt_s,motion,model,peak_ref_m,peak_delayed_m,"
+    "eq2_paper,nrmse_pct,peak_error_m,diverged";
+constexpr const char* kSidecarFormat = "rths-sweep";
 constexpr std::size_t kPeriodsPerFastItem = 16;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -91,19 +94,21 @@ std::vector<double> column0(const core::SimulationResult& result) {
   return u;
 }
 
-// Error measures of one point from the two displacement histories.
+// Error measures of one point from the two displacement histories (analysis::compare). A diverged
+// point keeps its peaks; its error measures are inf (they measure nothing once it has grown).
 void fill_metrics(SweepRow& row, const std::vector<double>& reference, bool reference_diverged,
                   const std::vector<double>& delayed, bool delayed_diverged) {
-  row.diverged = reference_diverged || delayed_diverged;
-  row.peak_reference = reference_diverged ? kInf : core::peak_abs(reference);
-  row.peak_delayed = delayed_diverged ? kInf : core::peak_abs(delayed);
+  const Comparison c = compare(reference, delayed, delayed_diverged);
+  row.diverged = reference_diverged || c.diverged;
+  row.peak_reference = reference_diverged ? kInf : c.peak_reference_m;
+  row.peak_delayed = delayed_diverged ? kInf : c.peak_m;
   if (row.diverged) {
-    row.eq2_paper = row.nrmse = row.peak_error = kInf;
+    row.eq2_paper = row.nrmse_pct = row.peak_error = kInf;
     return;
   }
-  row.eq2_paper = core::paper_eq2(reference, delayed);
-  row.nrmse = core::nrmse(reference, delayed);
-  row.peak_error = core::peak_error(reference, delayed);
+  row.eq2_paper = c.paper_eq2_as_printed;
+  row.nrmse_pct = c.nrmse_pct;
+  row.peak_error = c.peak_error_m;
 }
 
 std::vector<std::string> split_csv(const std::string& line) {
@@ -138,16 +143,30 @@ double parse_double(const std::string& text, const std::string& where) {
 void write_csv_file(const std::filesystem::path& path, const std::string& grid_hash,
                     std::size_t points, const Shard& shard,
                     const std::vector<std::string>& lines) {
+  // The sidecar first: a CSV is never in place without the metadata that says what it holds.
+  AtomicFile sidecar(sweep_sidecar_path(path));
+  sidecar.stream() << nlohmann::json{{"format", kSidecarFormat},
+                                     {"csv", path.filename().string()},
+                                     {"grid", grid_hash},
+                                     {"points", points},
+                                     {"shard", shard.to_string()}}
+                          .dump(2)
+                   << "\n";
+  sidecar.commit();
   AtomicFile file(path);
   std::ofstream& out = file.stream();
-  out << kCsvMagic << " grid=" << grid_hash << " points=" << points
-      << " shard=" << shard.to_string() << "\n"
-      << kCsvHeader << "\n";
+  out << kCsvHeader << "\n";
   for (const std::string& line : lines) out << line << "\n";
   file.commit();
 }
 
 }  // namespace
+
+std::filesystem::path sweep_sidecar_path(const std::filesystem::path& csv) {
+  std::filesystem::path sidecar = csv;
+  sidecar.replace_extension(".meta.json");
+  return sidecar;
+}
 
 // --- shards ------------------------------------------------------------------------------------
 std::string Shard::to_string() const { return std::to_string(index) + "/" + std::to_string(count); }
@@ -518,6 +537,45 @@ class SweepRunner {
 
 }  // namespace
 
+SweepStabilityCheck check_sweep_stability(const SweepGrid& grid) {
+  SweepStabilityCheck out;
+  const core::IntegratorKind kind = core::integrator_kind(grid.study().integrator());
+  const double zeta = grid.study().structure().damping().modal_zeta();
+  for (double period : grid.periods()) {
+    const core::StructuralModel model = core::make_sdof(period, zeta, 1.0);
+    for (double alpha : grid.alphas()) {
+      for (double dt : grid.dts()) {
+        for (double delay : grid.delays()) {
+          if (!(delay > 0) || !(alpha > 0)) continue;
+          const core::CriticalDelayCheck check =
+              core::check_critical_delay(model, {alpha * model.stiffness(0, 0)}, kind, dt, delay);
+          ++out.combinations;
+          if (check.past()) ++out.past;
+          if (check.margin() < out.smallest_margin) {
+            out.smallest_margin = check.margin();
+            std::ostringstream where;
+            where << "T = " << period << " s, alpha = " << alpha << ", dt = " << dt * 1e3 << " ms: " << check.describe();
+            out.worst = where.str();
+          }
+        }
+      }
+    }
+  }
+  return out;
+}
+
+CriticalDelayOf critical_delay_of(const SweepGrid& grid) {
+  const core::IntegratorKind kind = core::integrator_kind(grid.study().integrator());
+  const double zeta = grid.study().structure().damping().modal_zeta();
+  return [kind, zeta](double period, double alpha, double dt) -> std::optional<double> {
+    const core::StructuralModel model = core::make_sdof(period, zeta, 1.0);
+    // The lag only bounds the discrete search: search far enough to find the limit.
+    const auto continuous = core::continuous_critical_delay(period, zeta, alpha).critical_delay;
+    const double search = continuous ? 1.5 * *continuous : period;
+    return core::check_critical_delay(model, {alpha * model.stiffness(0, 0)}, kind, dt, search).critical();
+  };
+}
+
 std::vector<SweepRow> run_sweep(const SweepGrid& grid, const SweepOptions& options) {
   if (options.shard.count == 0 || options.shard.index >= options.shard.count) {
     throw std::invalid_argument("sweep shard " + options.shard.to_string() + " is not 0 <= i < N");
@@ -543,7 +601,7 @@ std::vector<SweepTableRow> to_table(const SweepGrid& grid, const std::vector<Swe
     t.peak_reference = row.peak_reference;
     t.peak_delayed = row.peak_delayed;
     t.eq2_paper = row.eq2_paper;
-    t.nrmse = row.nrmse;
+    t.nrmse_pct = row.nrmse_pct;
     t.peak_error = row.peak_error;
     t.diverged = row.diverged;
     table.push_back(std::move(t));
@@ -559,7 +617,7 @@ void write_sweep_csv(const std::filesystem::path& path, const SweepGrid& grid, c
     std::string line = std::to_string(t.index);
     for (double x : {t.period, t.delay, t.alpha, t.stiffness, t.dt}) line += "," + format_number(x);
     line += "," + t.motion + "," + t.model;
-    for (double x : {t.peak_reference, t.peak_delayed, t.eq2_paper, t.nrmse, t.peak_error}) {
+    for (double x : {t.peak_reference, t.peak_delayed, t.eq2_paper, t.nrmse_pct, t.peak_error}) {
       line += "," + format_number(x);
     }
     line += t.diverged ? ",1" : ",0";
@@ -574,39 +632,30 @@ SweepCsv read_sweep_csv(const std::filesystem::path& path) {
   SweepCsv csv;
   std::string line;
   const std::string name = path.string();
-  if (!std::getline(in, line) || line.rfind(kCsvMagic, 0) != 0) {
-    throw std::invalid_argument(name + ":1: not a sweep CSV (expected a first line '" +
-                                std::string(kCsvMagic) + " grid=... points=... shard=i/N')");
+  const std::filesystem::path sidecar_path = sweep_sidecar_path(path);
+  const std::string sidecar_name = sidecar_path.string();
+  std::ifstream sidecar_in(sidecar_path);
+  if (!sidecar_in) {
+    throw std::invalid_argument(name + ": its metadata " + sidecar_name +
+                                " is missing (grid, points, shard: written beside every sweep CSV)");
   }
-  std::istringstream fields(line.substr(std::string(kCsvMagic).size()));
-  std::string field;
-  bool has_grid = false, has_points = false, has_shard = false;
-  while (fields >> field) {
-    const std::size_t eq = field.find('=');
-    const std::string key = field.substr(0, eq), value = eq == std::string::npos ? "" : field.substr(eq + 1);
-    if (key == "grid") {
-      csv.grid_hash = value;
-      has_grid = !value.empty();
-    } else if (key == "points") {
-      csv.points = parse_index(value, name + ":1: points");
-      has_points = true;
-    } else if (key == "shard") {
-      try {
-        csv.shard = parse_shard(value);
-      } catch (const std::invalid_argument& e) {
-        throw std::invalid_argument(name + ":1: " + e.what());
-      }
-      has_shard = true;
-    }
+  nlohmann::json sidecar;
+  try {
+    sidecar = nlohmann::json::parse(sidecar_in);
+    if (sidecar.value("format", "") != kSidecarFormat) throw std::invalid_argument("not an rths-sweep sidecar");
+    csv.grid_hash = sidecar.at("grid").get<std::string>();
+    csv.points = sidecar.at("points").get<std::size_t>();
+    csv.shard = parse_shard(sidecar.at("shard").get<std::string>());
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(sidecar_name + ": not a sweep CSV's metadata (format, grid, points, shard): " +
+                                e.what());
   }
-  if (!has_grid || !has_points || !has_shard) {
-    throw std::invalid_argument(name + ":1: the sweep header lacks grid=, points= or shard=");
-  }
+  if (csv.grid_hash.empty()) throw std::invalid_argument(sidecar_name + ": empty grid hash");
   if (!std::getline(in, line) || line != kCsvHeader) {
-    throw std::invalid_argument(name + ":2: expected the column header '" + std::string(kCsvHeader) + "'");
+    throw std::invalid_argument(name + ":1: expected the column header '" + std::string(kCsvHeader) + "'");
   }
   csv.header = line;
-  std::size_t line_number = 2;
+  std::size_t line_number = 1;
   while (std::getline(in, line)) {
     ++line_number;
     if (line.empty()) continue;
@@ -712,7 +761,7 @@ std::vector<SweepTableRow> parse_sweep_rows(const SweepCsv& csv, const std::stri
     t.peak_reference = parse_double(c[8], where + " peak_ref");
     t.peak_delayed = parse_double(c[9], where + " peak_delayed");
     t.eq2_paper = parse_double(c[10], where + " eq2_paper");
-    t.nrmse = parse_double(c[11], where + " nrmse");
+    t.nrmse_pct = parse_double(c[11], where + " nrmse_pct");
     t.peak_error = parse_double(c[12], where + " peak_error");
     t.diverged = c[13] == "1";
     rows.push_back(std::move(t));
@@ -737,8 +786,14 @@ std::string delay_label(double delay) {
 
 }  // namespace
 
+std::filesystem::path sweep_delay_plot_path(const std::filesystem::path& png) {
+  std::filesystem::path out = png;
+  out.replace_filename(png.stem().string() + "_vs_delay" + png.extension().string());
+  return out;
+}
+
 void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
-                      const std::string& title) {
+                      const std::string& title, const CriticalDelayOf& critical_delay) {
   if (rows.empty()) throw std::invalid_argument("sweep plot: no rows");
   double stiffness = rows.front().stiffness;
   std::set<std::string> models, motions;
@@ -750,37 +805,121 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     alphas.insert(r.alpha);
     dts.insert(r.dt);
   }
-  std::map<SeriesKey, std::vector<std::pair<double, std::pair<double, double>>>> series;
+  struct Point {
+    double period, nrmse_pct, eq2;
+    bool diverged;
+  };
+  std::map<SeriesKey, std::vector<Point>> series;
+  double largest = 0.0, smallest = std::numeric_limits<double>::infinity();
   for (const auto& r : rows) {
     if (r.stiffness != stiffness || !(r.delay > 0)) continue;
-    series[series_key(r)].push_back({r.period, {r.nrmse, r.eq2_paper}});
+    series[series_key(r)].push_back({r.period, r.nrmse_pct, r.eq2_paper, r.diverged});
+    if (!r.diverged && std::isfinite(r.nrmse_pct) && r.nrmse_pct > 0) {
+      largest = std::max(largest, r.nrmse_pct);
+      smallest = std::min(smallest, r.nrmse_pct);
+    }
   }
   const std::string& name = title;
-  PlotSpec nrmse_panel{name + ": NRMSE = sqrt(mean e^2) / median|u_ref|", "period T (s)",
-                       "NRMSE (log)", {}, true};
+  PlotSpec nrmse_panel{name + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
+                       "period T (s)", "NRMSE (%, log)", {}, true};
   PlotSpec eq2_panel{name + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
                      "Eq. 2 (log)", {}, true};
   nrmse_panel.height = eq2_panel.height = 500;
-  for (auto& [key, points] : series) {
-    std::sort(points.begin(), points.end());
+  // Diverged points sit on a row above every bounded value, so they are seen but set no scale.
+  const double diverged_row = largest > 0 ? largest * 3.0 : 1.0;
+  if (largest > 0) {
+    nrmse_panel.y_min = smallest / 2.0;
+    nrmse_panel.y_max = diverged_row * 2.0;
+  }
+  Series diverged{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
+  auto label_of = [&](const SeriesKey& key) {
     const auto& [model, alpha, dt, motion, delay] = key;
     std::string label = delay_label(delay);
     if (models.size() > 1) label += " " + model;
     if (alphas.size() > 1) label += " alpha=" + format_number(alpha);
     if (dts.size() > 1) label += " dt=" + format_number(dt);
     if (motions.size() > 1) label += " " + motion;
+    return label;
+  };
+  for (auto& [key, points] : series) {
+    std::sort(points.begin(), points.end(), [](const Point& l, const Point& r) { return l.period < r.period; });
+    const std::string label = label_of(key);
     Series a{label, {}, {}, "linespoints"}, b{label, {}, {}, "linespoints"};
-    for (const auto& [period, errors] : points) {
-      a.x.push_back(period);
-      a.y.push_back(errors.first);
-      b.x.push_back(period);
-      b.y.push_back(errors.second);
+    for (const Point& p : points) {
+      a.x.push_back(p.period);
+      a.y.push_back(p.diverged ? std::nan("") : p.nrmse_pct);
+      b.x.push_back(p.period);
+      b.y.push_back(p.diverged ? std::nan("") : p.eq2);
+      if (p.diverged) {
+        diverged.x.push_back(p.period);
+        diverged.y.push_back(diverged_row);
+      }
     }
     nrmse_panel.series.push_back(std::move(a));
     eq2_panel.series.push_back(std::move(b));
   }
   if (nrmse_panel.series.empty()) throw std::invalid_argument("sweep plot: no delay > 0 in the rows");
+  if (!diverged.x.empty()) nrmse_panel.series.push_back(std::move(diverged));
   write_png_panels({nrmse_panel, eq2_panel}, png);
+
+  // Error against delay, one curve per period (at most kPeriodsDrawn, spread over the range), at
+  // the first model, fraction, dt and record; the critical delay of each period drawn.
+  constexpr std::size_t kPeriodsDrawn = 6;
+  std::set<double> periods;
+  for (const auto& r : rows) periods.insert(r.period);
+  std::vector<double> all(periods.begin(), periods.end()), drawn;
+  for (std::size_t i = 0; i < std::min(kPeriodsDrawn, all.size()); ++i) {
+    const std::size_t at = all.size() <= kPeriodsDrawn ? i : i * (all.size() - 1) / (kPeriodsDrawn - 1);
+    drawn.push_back(all[at]);
+  }
+  const SweepTableRow& first = rows.front();
+  PlotSpec by_delay{name + ": NRMSE against delay, one curve per period", "delay (ms)", "NRMSE (%, log)", {}, true};
+  if (largest > 0) {
+    by_delay.y_min = nrmse_panel.y_min;
+    by_delay.y_max = nrmse_panel.y_max;
+  }
+  Series diverged_by_delay{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
+  double largest_delay = 0.0;
+  for (double period : drawn) {
+    std::vector<std::pair<double, const SweepTableRow*>> points;
+    for (const auto& r : rows) {
+      if (r.period == period && r.stiffness == stiffness && r.model == first.model && r.alpha == first.alpha &&
+          r.dt == first.dt && r.motion == first.motion && r.delay > 0) {
+        points.push_back({r.delay, &r});
+        largest_delay = std::max(largest_delay, r.delay);
+      }
+    }
+    std::sort(points.begin(), points.end());
+    std::ostringstream label;
+    label << "T = " << period << " s";
+    Series curve{label.str(), {}, {}, "linespoints"};
+    for (const auto& [delay, row] : points) {
+      curve.x.push_back(delay * 1e3);
+      curve.y.push_back(row->diverged ? std::nan("") : row->nrmse_pct);
+      if (row->diverged) {
+        diverged_by_delay.x.push_back(delay * 1e3);
+        diverged_by_delay.y.push_back(diverged_row);
+      }
+    }
+    if (curve.x.empty()) continue;
+    if (critical_delay) {
+      if (const auto critical = critical_delay(period, first.alpha, first.dt)) {
+        std::ostringstream text;
+        text.precision(3);
+        text << "critical, T = " << period << " s: " << *critical * 1e3 << " ms";
+        by_delay.markers.push_back({*critical * 1e3, text.str()});
+      }
+    }
+    by_delay.series.push_back(std::move(curve));
+  }
+  if (!diverged_by_delay.x.empty()) by_delay.series.push_back(std::move(diverged_by_delay));
+  by_delay.x_min = 0.0;
+  by_delay.x_max = largest_delay * 1e3 * 1.15;
+  // Critical delays beyond the swept range would squeeze the curves: drop them, say so in the title.
+  const std::size_t before = by_delay.markers.size();
+  std::erase_if(by_delay.markers, [&](const VerticalMarker& m) { return m.x > *by_delay.x_max; });
+  if (by_delay.markers.size() < before) by_delay.title += " (critical delays beyond the swept range not drawn)";
+  if (!by_delay.series.empty()) write_png_plot(by_delay, sweep_delay_plot_path(png));
 }
 
 SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
@@ -794,8 +933,8 @@ SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
       continue;
     }
     if (!(r.delay > 0)) continue;  // a zero delay leaves only round-off to compare
-    by_point[{series_key(r), r.period}].push_back(r.nrmse);
-    by_series[{series_key(r), r.stiffness}].push_back({r.period, r.nrmse});
+    by_point[{series_key(r), r.period}].push_back(r.nrmse_pct);
+    by_series[{series_key(r), r.stiffness}].push_back({r.period, r.nrmse_pct});
   }
   for (const auto& [key, values] : by_point) {
     if (values.size() < 2) continue;
@@ -816,21 +955,16 @@ SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
   std::map<std::tuple<double, double, std::string, double, double, double>, double> linear;
   for (const auto& r : rows) {
     if (r.model == "linear" && !r.diverged && r.delay > 0) {
-      linear[{r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness}] = r.nrmse;
+      linear[{r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness}] = r.nrmse_pct;
     }
   }
   std::vector<double> ratios;
   for (const auto& r : rows) {
     if (r.model == "linear" || r.diverged || !(r.delay > 0)) continue;
     const auto it = linear.find({r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness});
-    if (it != linear.end() && it->second > 0) ratios.push_back(r.nrmse / it->second);
+    if (it != linear.end() && it->second > 0) ratios.push_back(r.nrmse_pct / it->second);
   }
-  if (ratios.empty()) {
-    trends.nonlinear_to_linear_median_ratio = std::nan("");
-  } else {
-    std::nth_element(ratios.begin(), ratios.begin() + ratios.size() / 2, ratios.end());
-    trends.nonlinear_to_linear_median_ratio = ratios[ratios.size() / 2];
-  }
+  trends.nonlinear_to_linear_median_ratio = ratios.empty() ? std::nan("") : core::median(std::move(ratios));
   return trends;
 }
 

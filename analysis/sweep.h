@@ -15,7 +15,7 @@
 //
 // Per grid point (SI units): the reference is the purely numerical structure (alpha = 0) without
 // delay; the delayed run splits the storey into (1 - alpha) k numerical and alpha k experimental
-// behind the delay. Outputs: peak |u| of both (m), the paper's Eq. 2 as printed, NRMSE, peak
+// behind the delay. Outputs: peak |u| of both (m), the paper's Eq. 2 as printed, NRMSE (%), peak
 // error (m), and whether the delayed run diverged (then the error measures are inf).
 //
 // Grid order (index 0 first): motion, dt, model, stiffness, period, fraction, delay (innermost).
@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,8 +52,8 @@ struct SweepPoint {
 struct SweepRow {
   SweepPoint point;
   double peak_reference = 0, peak_delayed = 0;  // m
-  double eq2_paper = 0, nrmse = 0, peak_error = 0;
-  bool diverged = false;
+  double eq2_paper = 0, nrmse_pct = 0, peak_error = 0;  // -, %, m (inf when diverged)
+  bool diverged = false;  // analysis::compare: stopped, not finite, or grew past 10x the reference
 };
 
 class SweepGrid {
@@ -107,12 +108,25 @@ struct SweepOptions {
   std::function<void(std::size_t done_points, std::size_t total_points)> progress;
 };
 
+// Before a sweep: every (period, fraction, dt, delay) of the grid against its critical delay
+// (core::check_critical_delay on the SDOF with the study's damping and integrator).
+struct SweepStabilityCheck {
+  std::size_t combinations = 0, past = 0;  // (period, fraction, dt, delay > 0) checked, and past
+  double smallest_margin = 1.0;            // core::CriticalDelayCheck::margin of the worst one
+  std::string worst;                       // "T = 0.05 s, alpha = 0.333, dt = 1 ms: lag 14 ms ..."
+};
+SweepStabilityCheck check_sweep_stability(const SweepGrid& grid);
+
 // Rows of the shard, in index order.
 std::vector<SweepRow> run_sweep(const SweepGrid& grid, const SweepOptions& options);
 
-// --- CSV: a comment line "# rths-sweep grid=<hash> points=<T> shard=<i>/<N>", a header, rows.
-// Numbers are written with 17 significant digits so merged shards equal an unsharded run byte for
-// byte. Written to a temporary file and renamed, so no half-written CSV looks complete.
+// --- CSV: a header (SI, the unit in every column name; NRMSE in percent) and the rows; what the
+// rows are (grid hash, points, shard i/N) goes in a sidecar JSON, sweep_sidecar_path(csv), so the
+// CSV itself is plain for any CSV reader. Numbers are written with 17 significant digits so
+// merged shards equal an unsharded run byte for byte. Both files are written to a temporary file
+// and renamed, so no half-written CSV looks complete.
+// "sweep.csv" -> "sweep.meta.json".
+std::filesystem::path sweep_sidecar_path(const std::filesystem::path& csv);
 void write_sweep_csv(const std::filesystem::path& path, const SweepGrid& grid, const Shard& shard,
                      const std::vector<SweepRow>& rows);
 
@@ -138,16 +152,28 @@ struct SweepTableRow {
   std::size_t index = 0;
   double period = 0, delay = 0, alpha = 0, stiffness = 0, dt = 0;
   std::string motion, model;
-  double peak_reference = 0, peak_delayed = 0, eq2_paper = 0, nrmse = 0, peak_error = 0;
+  double peak_reference = 0, peak_delayed = 0, eq2_paper = 0, nrmse_pct = 0, peak_error = 0;
   bool diverged = false;
 };
 std::vector<SweepTableRow> parse_sweep_rows(const SweepCsv& csv, const std::string& source);
 std::vector<SweepTableRow> to_table(const SweepGrid& grid, const std::vector<SweepRow>& rows);
 
-// NRMSE vs period, one series per delay (and per model, fraction, dt and record when there are
-// several), log y, at the first stiffness (the others coincide). Needs gnuplot.
+// Critical delay (s) of a period (s), fraction and dt (s); empty when stable for every delay.
+using CriticalDelayOf = std::function<std::optional<double>(double period, double alpha, double dt)>;
+// The critical delay of the grid's SDOF (study damping and integrator): core::check_critical_delay.
+CriticalDelayOf critical_delay_of(const SweepGrid& grid);
+
+// Two figures (PNG and SVG), at the first stiffness (the others coincide):
+//   `png`: the paper's Fig. 4, NRMSE (%) against period on a log axis, one curve per delay (and per
+//     model, fraction, dt and record when there are several), diverged points marked on a row above
+//     the curves (they set no scale); below it the paper's Eq. 2 as printed.
+//   sweep_delay_plot_path(png): NRMSE against delay (ms), one curve per period (at most 6, spread
+//     over the range), with each period's critical delay drawn when `critical_delay` is given.
+// Needs gnuplot.
 void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
-                      const std::string& title);
+                      const std::string& title, const CriticalDelayOf& critical_delay = {});
+// "out/sweep.png" -> "out/sweep_vs_delay.png".
+std::filesystem::path sweep_delay_plot_path(const std::filesystem::path& png);
 
 // The paper's claims, measured on the rows.
 struct SweepTrends {

@@ -127,8 +127,12 @@ void run_identify(const IdentifyCliOptions& o) {
   }
   if (o.json) {
     const identify::ReportContext context{o.holdout, options.holdout_mode};
-    std::cout << identify::to_json(id, context, prediction).dump(2) << "\n";
+    nlohmann::json report = identify::to_json(id, context, prediction);
+    report["input_units"] = {{"time", o.time_unit}, {"length", o.length_unit}, {"force", o.force_unit}};
+    std::cout << report.dump(2) << "\n";
   } else {
+    std::cout << "input units: time " << o.time_unit << ", length " << o.length_unit << ", force "
+              << o.force_unit << " (--time-unit, --length-unit, --force-unit)\n";
     std::cout << identify::format_table(id, prediction);
     if (!o.out.empty()) std::cout << "plots and identify." << o.format << " written to " << o.out << "\n";
   }
@@ -144,7 +148,8 @@ void add_identify_command(CLI::App& app) {
                   "CSV time,command,measured,force or a raw DAQ export (Header Size: ...)")
       ->required();
   cmd->add_option("--time-unit", o->time_unit, "CSV time unit: s | ms");
-  cmd->add_option("--length-unit", o->length_unit, "CSV displacement unit: m | mm | cm | in");
+  cmd->add_option("--length-unit", o->length_unit,
+                  "CSV displacement unit: m | mm | cm | in (default mm; echoed in every report)");
   cmd->add_option("--force-unit", o->force_unit, "CSV force unit: N | kN | lbf | kip");
   cmd->add_option("--column-map", o->column_map,
                   "DAQ columns and scales to mm / N, e.g. "

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/support.h"
 #include "deploy/joint_lag.h"
 
 namespace rths::cli {
@@ -18,7 +19,7 @@ struct JointLagOptions {
 
 void run(const JointLagOptions& o) {
   const std::filesystem::path path = o.config;
-  const auto config = deploy::load_joint_lag(path);
+  const auto config = load_config_as<deploy::JointLagStudy>(path, "joint-lag study", deploy::load_joint_lag);
   deploy::JointLagOptions options;
   if (!o.out.empty()) options.output_directory = std::filesystem::path(o.out);
   options.measure = !o.no_measure;

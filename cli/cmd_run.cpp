@@ -1,6 +1,7 @@
 // `rths run CONFIG`: every case of a study, in process; results (CSV, MATLAB or HDF5), plots and a summary.
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -8,6 +9,7 @@
 #include "analysis/atomic_file.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
+#include "cli/support.h"
 #include "core/study.h"
 #include "tables/results.h"
 #include "tables/write.h"
@@ -19,37 +21,22 @@ struct RunOptions {
   std::string config;
   std::string out;
   std::string format = "csv";
-  bool json = false, no_plots = false;
+  std::string motion_units;
+  bool json = false, no_plots = false, allow_unstable = false;
 };
 
 void run(const RunOptions& o) {
   const std::filesystem::path config_path = o.config;
-  const config::Study study = core::load_study(config_path);
+  config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
+  if (!o.motion_units.empty()) study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   const core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
-  const analysis::StudyOutcome outcome = analysis::run_study(prepared);
+  const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
 
   std::filesystem::path out = o.out;
   if (out.empty()) out = study.output().directory();
   if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
-  const std::filesystem::path results = out / ("results" + tables::extension(tables::parse_format(o.format)));
-  tables::write_table(tables::study_table(outcome), results, tables::parse_format(o.format));
-  const bool plots = !o.no_plots;
-  if (plots) analysis::write_study_plots(outcome, out);
-  const nlohmann::json summary = analysis::study_summary_json(outcome);
-  {
-    analysis::AtomicFile json_file(out / "summary.json");
-    json_file.stream() << summary.dump(2) << "\n";
-    json_file.commit();
-    analysis::AtomicFile text_file(out / "summary.txt");
-    text_file.stream() << analysis::study_summary_text(outcome);
-    text_file.commit();
-  }
-  if (o.json) {
-    std::cout << summary.dump(2) << "\n";
-  } else {
-    std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
-              << (plots ? ", displacement.png, force_displacement.png" : "") << ", summary.txt\n";
-  }
+  write_study_outputs(outcome, out, !o.no_plots, o.json, o.format);
+  fail_if_unstable(outcome, o.allow_unstable);
 }
 
 }  // namespace
@@ -62,7 +49,12 @@ void add_run_command(CLI::App& app) {
   cmd->add_option("--format", options->format, "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5)")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--json", options->json, "print the summary as JSON");
-  cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
+  cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots (and remove those of an earlier run)");
+  cmd->add_option("--motion-units", options->motion_units,
+                  "units of the motion record: g | m/s2 | cm/s2 (overrides motion.column_units; AT2 files are in g)")
+      ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
+  cmd->add_flag("--allow-unstable", options->allow_unstable,
+                "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->callback([options] { run(*options); });
 }
 

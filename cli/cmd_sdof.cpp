@@ -10,6 +10,9 @@
 #include "analysis/atomic_file.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
+#include "tables/results.h"
+#include "tables/write.h"
+#include "cli/support.h"
 #include "core/study.h"
 
 namespace rths::cli {
@@ -17,7 +20,7 @@ namespace {
 
 struct SdofOptions {
   double period = 0.5, zeta = 0.05, dt = 0.0, delay = 0.0, alpha = 1.0, scale = 1.0;
-  std::string motion, delay_model = "shift", integrator = "explicit-newmark", out;
+  std::string motion, motion_units, delay_model = "shift", integrator = "explicit-newmark", out;
   bool json = false, allow_unstable = false;
 };
 
@@ -28,6 +31,7 @@ config::Study study_from_flags(const SdofOptions& o) {
   study.mutable_structure()->mutable_damping()->set_modal_zeta(o.zeta);
   study.mutable_motion()->set_path(o.motion);
   study.mutable_motion()->set_scale(o.scale);
+  if (!o.motion_units.empty()) study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   study.mutable_integrator()->set_dt(o.dt);
   study.mutable_integrator()->set_allow_unstable(o.allow_unstable);
   const auto kind = core::integrator_from_string(o.integrator);
@@ -62,37 +66,34 @@ void run_sdof(const SdofOptions& o) {
   }
   const config::Study study = study_from_flags(o);
   const core::PreparedStudy prepared = core::prepare_study(study, std::filesystem::current_path());
-  const analysis::StudyOutcome outcome = analysis::run_study(prepared);
+  const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
   const analysis::CaseOutcome& reference = outcome.cases[0];
   const analysis::CaseOutcome& delayed = outcome.cases[1];
-  if (!o.out.empty()) {
-    analysis::AtomicFile csv(o.out);
-    csv.stream() << "time_s,u_reference_m,u_delayed_m\n";
-    for (std::size_t k = 0; k < reference.response.size(); ++k) {
-      csv.stream() << reference.simulation.time[k] << "," << reference.response[k] << ",";
-      if (k < delayed.response.size()) csv.stream() << delayed.response[k];
-      csv.stream() << "\n";
-    }
-    csv.commit();
-  }
+  if (!o.out.empty()) tables::write_table(tables::study_table(outcome), o.out, tables::Format::kCsv);
   if (o.json) {
     nlohmann::json out = {{"period_s", o.period},
                           {"zeta", o.zeta},
                           {"experimental_fraction", o.alpha},
                           {"dt_s", prepared.base.dt},
+                          {"motion_units", outcome.motion_units},
                           {"delay_model", o.delay_model},
                           {"delay_s", o.delay},
                           {"integrator", o.integrator},
-                          {"peak_reference_m", reference.peak},
-                          {"peak_delayed_m", delayed.peak},
-                          {"paper_eq2_as_printed", delayed.paper_eq2},
-                          {"nrmse", delayed.nrmse},
-                          {"peak_error_m", delayed.peak_error},
-                          {"diverged", delayed.simulation.diverged}};
+                          {"peak_reference_m", reference.comparison.peak_m},
+                          {"peak_delayed_m", delayed.comparison.peak_m},
+                          {"paper_eq2_as_printed", delayed.comparison.paper_eq2_as_printed},
+                          {"nrmse_pct", delayed.comparison.nrmse_pct},
+                          {"peak_error_m", delayed.comparison.peak_error_m},
+                          {"status", delayed.status},
+                          {"status_detail", delayed.status_detail},
+                          {"diverged", delayed.diverged()}};
+    const nlohmann::json cases = analysis::study_summary_json(outcome)["cases"];
+    out["stability"] = cases[1]["stability"];
     std::cout << out.dump(2) << "\n";
   } else {
     std::cout << analysis::study_summary_text(outcome);
   }
+  fail_if_unstable(outcome, o.allow_unstable);
 }
 
 }  // namespace
@@ -100,20 +101,25 @@ void run_sdof(const SdofOptions& o) {
 void add_sdof_command(CLI::App& app) {
   auto o = std::make_shared<SdofOptions>();
   CLI::App* cmd = app.add_subcommand("sdof", "One SDOF run from flags: reference vs delayed");
-  cmd->add_option("--period", o->period, "natural period (s)")->check(CLI::PositiveNumber);
-  cmd->add_option("--zeta", o->zeta, "damping ratio")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--period", o->period, "natural period (s)")->transform(seconds_value());
+  cmd->add_option("--zeta", o->zeta, "damping ratio, 0.05 = 5 % (at most 1)");
   cmd->add_option("--motion", o->motion, "ground motion file (PEER AT2 or columns)")->required();
+  cmd->add_option("--motion-units", o->motion_units,
+                  "units of the motion record: g | m/s2 | cm/s2 (required for a columns file; AT2 files are in g)")
+      ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
   cmd->add_option("--scale", o->scale, "scale factor on the motion")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--dt", o->dt, "integration step (s); default: the record's step")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--delay", o->delay, "delay (s), or the time constant for first-order")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--dt", o->dt, "integration step (s, or 1ms); default: the record's step")->transform(seconds_value());
+  cmd->add_option("--delay", o->delay, "delay (s, or with a unit: 14ms), or the time constant for first-order")
+      ->transform(seconds_value());
   cmd->add_option("--delay-model", o->delay_model, "none | shift | eq1 | eq1-lag | first-order | benchmark")
       ->check(CLI::IsMember({"none", "shift", "eq1", "eq1-lag", "first-order", "benchmark"}));
   cmd->add_option("--exp-fraction", o->alpha, "experimental fraction alpha of the stiffness")->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--integrator", o->integrator,
                   "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
-  cmd->add_flag("--allow-unstable", o->allow_unstable, "run even if dt exceeds the integrator's stability limit");
-  cmd->add_option("--out", o->out, "CSV: time, reference and delayed displacement");
-  cmd->add_flag("--json", o->json, "print peaks, Eq. 2 and NRMSE as JSON");
+  cmd->add_flag("--allow-unstable", o->allow_unstable,
+                "run even if dt exceeds the integrator's limit, and a diverged case does not fail the run");
+  cmd->add_option("--out", o->out, "CSV of both runs (results.csv columns: every floor and actuator, SI)");
+  cmd->add_flag("--json", o->json, "print peaks, Eq. 2, NRMSE (%), status and the critical delay as JSON");
   cmd->callback([o] { run_sdof(*o); });
 }
 

@@ -6,8 +6,10 @@
 #include <iostream>
 #include <numbers>
 #include <memory>
+#include <numbers>
 
 #include "cli/commands.h"
+#include "cli/support.h"
 #include "core/stability.h"
 #include "core/study.h"
 
@@ -85,6 +87,9 @@ void run_stability(const StabilityOptions& o) {
     return;
   }
   const auto kind = core::integrator_from_string(o.integrator);
+  // Beyond the integrator's own limit every delay is unstable, so "first unstable delay = 0
+  // steps" would answer the wrong question: refuse the input instead.
+  core::check_stability(kind, 2.0 * std::numbers::pi / o.period, o.dt, false);
   const core::ContinuousStability continuous =
       core::continuous_critical_delay(o.period, o.zeta, o.alpha, o.branches);
   const core::DiscreteStability discrete =
@@ -138,7 +143,9 @@ void add_stability_command(CLI::App& app) {
   cmd->add_option("--zeta", options->zeta, "damping ratio")->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--exp-fraction", options->alpha, "experimental fraction alpha of the stiffness")
       ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--dt", options->dt, "integration step (s)")->check(CLI::PositiveNumber);
+  cmd->add_option("--dt", options->dt, "integration step (s, or 1ms); exit 2 beyond the integrator's limit")
+      ->transform(seconds_value())
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--integrator", options->integrator,
                   "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
   cmd->add_option("--branches", options->branches, "delay branches listed per crossing frequency")

@@ -2,15 +2,18 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "analysis/parallel_for.h"
 #include "analysis/sweep.h"
 #include "cli/commands.h"
+#include "cli/support.h"
 #include "core/study.h"
 #include "slurm/sbatch.h"
 #include "tables/results.h"
@@ -25,7 +28,7 @@ struct SweepOptions {
   std::string slurm;           // job folder: write Slurm scripts instead of running
   slurm::SweepJob job;         // --shards, --partition, --time, --mem of the Slurm job
   int threads = 0;
-  bool json = false, no_plots = false, general = false;
+  bool json = false, no_plots = false, general = false, allow_unstable = false;
 };
 
 struct MergeOptions {
@@ -93,9 +96,9 @@ void print_trends(const analysis::SweepTrends& t) {
 }
 
 void write_plot(const std::vector<analysis::SweepTableRow>& table, const std::filesystem::path& png,
-                const std::string& title) {
+                const std::string& title, const analysis::CriticalDelayOf& critical_delay = {}) {
   try {
-    analysis::write_sweep_plot(table, png, title);
+    analysis::write_sweep_plot(table, png, title, critical_delay);
   } catch (const std::invalid_argument& e) {
     std::cerr << "rths sweep: no plot: " << e.what() << "\n";  // e.g. only zero delays swept
   } catch (const std::runtime_error& e) {
@@ -106,12 +109,20 @@ void write_plot(const std::vector<analysis::SweepTableRow>& table, const std::fi
 void run_sweep_command(const SweepOptions& o) {
   if (o.config.empty()) throw ExitError(kExitBadInput, "sweep: give a CONFIG, or use `rths sweep merge`");
   const std::filesystem::path config_path = o.config;
-  const config::Study study = core::load_study(config_path);
+  const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
   const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
   analysis::SweepOptions options;
   if (!o.shard.empty()) options.shard = analysis::parse_shard(o.shard);
   options.threads = o.threads;
   options.general_path_only = o.general;
+  const analysis::SweepStabilityCheck stability = analysis::check_sweep_stability(grid);
+  if (stability.past > 0) {
+    std::ostringstream warning;
+    warning << stability.past << " of " << stability.combinations
+            << " (period, fraction, dt, delay) points are past their critical delay; the worst: "
+            << stability.worst;
+    print_warning(warning.str());
+  }
   ProgressReporter progress(true);
   options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
 
@@ -144,7 +155,7 @@ void run_sweep_command(const SweepOptions& o) {
   }
   const std::filesystem::path png = out / "sweep.png";
   const bool plot = !o.no_plots && !sharded && !rows.empty();
-  if (plot) write_plot(table, png, study.name().empty() ? "sweep" : study.name());
+  if (plot) write_plot(table, png, study.name().empty() ? "sweep" : study.name(), analysis::critical_delay_of(grid));
   const analysis::SweepTrends trends = analysis::measure_trends(table);
   if (o.json) {
     nlohmann::json summary = {{"csv", csv.string()},
@@ -157,12 +168,22 @@ void run_sweep_command(const SweepOptions& o) {
                               {"seconds", seconds},
                               {"trends", trends_json(trends)}};
     std::cout << summary.dump(2) << "\n";
-    return;
   }
-  std::cout << "sweep " << options.shard.to_string() << ": " << rows.size() << " of " << grid.size()
-            << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
-  if (!sharded) print_trends(trends);
-  std::cout << "written: " << csv.string() << (plot ? ", " + png.string() : std::string()) << "\n";
+  if (!o.json) {
+    std::cout << "sweep " << options.shard.to_string() << ": " << rows.size() << " of " << grid.size()
+              << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
+    if (!sharded) print_trends(trends);
+    std::cout << "written: " << csv.string() << ", " << analysis::sweep_sidecar_path(csv).string()
+              << (plot ? ", " + png.string() + ", " + analysis::sweep_delay_plot_path(png).string() : std::string())
+              << "\n";
+  }
+  const std::size_t diverged = static_cast<std::size_t>(
+      std::count_if(rows.begin(), rows.end(), [](const analysis::SweepRow& r) { return r.diverged; }));
+  if (diverged > 0 && !o.allow_unstable && !study.sweep().expect_unstable()) {
+    throw ExitError(kExitRunFailed, std::to_string(diverged) + " of " + std::to_string(rows.size()) +
+                                        " sweep points diverged (marked in the CSV and the plot); "
+                                        "--allow-unstable, or sweep { expect_unstable: true }, when that is meant");
+  }
 }
 
 // Writes the Slurm array and merge scripts for the sweep; checks the grid first so a bad config
@@ -244,6 +265,8 @@ void add_sweep_command(CLI::App& app) {
   cmd->add_option("--partition", options->job.partition, "--slurm: partition (default: the cluster's)");
   cmd->add_option("--time", options->job.time, "--slurm: time limit per task, e.g. 30 or 02:00:00 (default 01:00:00)");
   cmd->add_option("--mem", options->job.memory, "--slurm: memory per task, e.g. 500M or 2G (default 1G)");
+  cmd->add_flag("--allow-unstable", options->allow_unstable,
+                "diverged points do not fail the sweep (exit 0); they are still marked");
   cmd->add_flag("--general", options->general,
                 "run every point through the general simulator (no SIMD batch kernel)");
 

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/support.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rths: real-time hybrid simulation with actuator and network lag"};
@@ -19,6 +20,10 @@ int main(int argc, char** argv) {
   rths::cli::add_identify_command(app);
   rths::cli::add_launch_command(app);
   rths::cli::add_export_command(app);
+  if (const std::string unknown = rths::cli::suggest_for_unknown(app, argc, argv); !unknown.empty()) {
+    std::cerr << "rths: " << unknown << "\n";
+    return rths::cli::kExitBadInput;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

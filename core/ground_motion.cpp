@@ -263,15 +263,19 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
   return motion;
 }
 
-GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
-                                double column_to_si) {
+bool is_at2_file(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
   std::string line;
   for (int i = 0; i < 4 && read_line(in, line); ++i) {
-    if (i == 3 && upper(line).find("NPTS") != std::string::npos) return read_at2(path);
+    if (i == 3 && upper(line).find("NPTS") != std::string::npos) return true;
   }
-  return read_columns(path, column_dt, column_to_si);
+  return false;
+}
+
+GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
+                                double column_to_si) {
+  return is_at2_file(path) ? read_at2(path) : read_columns(path, column_dt, column_to_si);
 }
 
 GroundMotion scaled(GroundMotion motion, double factor) {

@@ -32,6 +32,9 @@ GroundMotion read_at2(const std::filesystem::path& path);
 // line is taken as a header. `to_si` converts the file's acceleration units to m/s^2.
 GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si);
 
+// Whether the 4th line mentions NPTS (the AT2 header). Throws when the file cannot be opened.
+bool is_at2_file(const std::filesystem::path& path);
+
 // Chooses AT2 when the 4th line mentions NPTS, otherwise columns.
 GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt = 0.0,
                                 double column_to_si = kGravity);

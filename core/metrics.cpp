@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rths::core {
@@ -43,19 +44,27 @@ double peak_abs(std::span<const double> x) {
   return peak;
 }
 
+double median(std::vector<double> values) {
+  if (values.empty()) throw std::invalid_argument("median: empty input");
+  const std::size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle), values.end());
+  const double upper = values[middle];
+  if (values.size() % 2 == 1) return upper;
+  // Even length: the mean of the two middle values; the lower one is the largest below `middle`.
+  const double lower =
+      *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle));
+  return 0.5 * (lower + upper);
+}
+
 double median_abs(std::span<const double> x) {
   if (x.empty()) throw std::invalid_argument("median_abs: empty input");
   std::vector<double> magnitudes(x.size());
   for (std::size_t i = 0; i < x.size(); ++i) magnitudes[i] = std::abs(x[i]);
-  const std::size_t middle = magnitudes.size() / 2;
-  std::nth_element(magnitudes.begin(), magnitudes.begin() + static_cast<std::ptrdiff_t>(middle),
-                   magnitudes.end());
-  const double upper = magnitudes[middle];
-  if (magnitudes.size() % 2 == 1) return upper;
-  // Even length: the mean of the two middle values; the lower one is the largest below `middle`.
-  const double lower = *std::max_element(
-      magnitudes.begin(), magnitudes.begin() + static_cast<std::ptrdiff_t>(middle));
-  return 0.5 * (lower + upper);
+  return median(std::move(magnitudes));
+}
+
+bool grew_past_reference(double reference_peak, double case_peak) {
+  return !std::isfinite(case_peak) || case_peak > kDivergenceGrowth * reference_peak;
 }
 
 // Literal Eq. 2: the 1/N outside the root is the paper's, so the value scales as 1/sqrt(N).

@@ -10,9 +10,13 @@
 //                  sub-sample refinement (RTHS benchmark, Silva, Dyke et al. 2020).
 //   J2 (%)         100 sqrt(sum (x_m - x_t)^2 / sum x_t^2)  normalised RMS tracking error.
 //   J3 (%)         100 max|x_m - x_t| / max|x_t|           peak tracking error.
+//   median         the textbook median: the middle value, or the mean of the two middle values.
+//   grew_past_reference  divergence judged from the response: |u| of a case beyond
+//                  kDivergenceGrowth times the peak of its lag-free reference (or not finite).
 // All throw std::invalid_argument on empty or different-length inputs.
 
 #include <span>
+#include <vector>
 
 namespace rths::core {
 
@@ -21,6 +25,13 @@ double nrmse(std::span<const double> reference, std::span<const double> compared
 double peak_error(std::span<const double> reference, std::span<const double> compared);
 double peak_abs(std::span<const double> x);
 double median_abs(std::span<const double> x);
+double median(std::vector<double> values);
+
+// A lagged case whose peak response is more than this many times its lag-free reference's has
+// diverged. A stable case near its critical delay can amplify a resonant response a few times
+// (5 % -> 1 % damping at resonance: 5x); an order of magnitude is growth no stable test shows.
+inline constexpr double kDivergenceGrowth = 10.0;
+bool grew_past_reference(double reference_peak, double case_peak);
 
 double j1_delay(std::span<const double> target, std::span<const double> measured, double dt,
                 double max_lag);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -494,6 +495,89 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
   const double early = r.displacement.topRows(n / 3).cwiseAbs().maxCoeff();
   const double late = r.displacement.bottomRows(n / 3).cwiseAbs().maxCoeff();
   return late / early;
+
+std::optional<double> CriticalDelayCheck::critical() const {
+  if (continuous && discrete) return std::min(*continuous, *discrete);
+  if (continuous) return continuous;
+  return discrete;
+}
+
+double CriticalDelayCheck::margin() const {
+  const auto limit = critical();
+  if (!limit || *limit <= 0.0) return limit ? -1.0 : 1.0;
+  return (*limit - lag) / *limit;
+}
+
+std::string CriticalDelayCheck::describe() const {
+  std::ostringstream out;
+  out.precision(3);
+  out << "lag " << lag * 1e3 << " ms";
+  const auto limit = critical();
+  if (!limit) {
+    out << ": stable for every delay (continuous; discrete none up to " << discrete_searched_steps
+        << " steps)";
+    return out.str();
+  }
+  out << " against a critical delay of " << *limit * 1e3 << " ms (continuous ";
+  if (continuous) out << *continuous * 1e3 << " ms"; else out << "none";
+  out << ", discrete ";
+  if (discrete) out << *discrete * 1e3 << " ms"; else out << "none up to " << discrete_searched_steps << " steps";
+  out << "; mode " << governing_mode << ", T = " << governing_period << " s, experimental fraction "
+      << governing_fraction << "): ";
+  const double m = margin();
+  if (m < 0) out << "PAST it by " << -m * 100.0 << " %";
+  else out << m * 100.0 << " % below it";
+  return out.str();
+}
+
+CriticalDelayCheck check_critical_delay(const StructuralModel& model,
+                                        const std::vector<double>& experimental_storey_stiffness,
+                                        IntegratorKind kind, double dt, double lag) {
+  if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
+  const int dofs = model.dofs();
+  if (static_cast<int>(experimental_storey_stiffness.size()) != dofs) {
+    throw std::invalid_argument("critical delay check: one experimental stiffness per storey expected");
+  }
+  // K_e of a shear building from the storeys' experimental stiffnesses.
+  Mat k_experimental = Mat::Zero(dofs, dofs);
+  for (int s = 0; s < dofs; ++s) {
+    const double k = experimental_storey_stiffness[static_cast<std::size_t>(s)];
+    k_experimental(s, s) += k;
+    if (s > 0) {
+      k_experimental(s - 1, s - 1) += k;
+      k_experimental(s - 1, s) -= k;
+      k_experimental(s, s - 1) -= k;
+    }
+  }
+  const Modes modes = modal_analysis(model.mass, model.stiffness);
+  CriticalDelayCheck check;
+  check.lag = lag;
+  const int lag_steps = lag > 0 ? static_cast<int>(std::ceil(lag / dt - 1e-9)) : 0;
+  check.discrete_searched_steps = std::min(lag_steps + 1, CriticalDelayCheck::kMaxDiscreteSteps);
+  for (int i = 0; i < dofs; ++i) {
+    const double omega = modes.omega[i];
+    const Vec phi = modes.shapes.col(i);
+    const double zeta = phi.dot(model.damping * phi) / (2.0 * omega);
+    const double alpha = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
+    const double period = 2.0 * std::numbers::pi / omega;
+    const ContinuousStability continuous = continuous_critical_delay(period, zeta, alpha);
+    if (continuous.critical_delay && (!check.continuous || *continuous.critical_delay < *check.continuous)) {
+      check.continuous = continuous.critical_delay;
+      check.governing_mode = i + 1;
+      check.governing_period = period;
+      check.governing_fraction = alpha;
+    }
+    if (i == 0 && !check.continuous) {
+      check.governing_period = period;
+      check.governing_fraction = alpha;
+    }
+    const DiscreteStability discrete =
+        discrete_critical_delay(kind, period, zeta, alpha, dt, check.discrete_searched_steps);
+    if (discrete.first_unstable_delay && (!check.discrete || *discrete.first_unstable_delay < *check.discrete)) {
+      check.discrete = discrete.first_unstable_delay;
+    }
+  }
+  return check;
 }
 
 }  // namespace rths::core

@@ -20,25 +20,40 @@ void require(bool ok, const std::string& source, const std::string& message) {
   if (!ok) fail(source, message);
 }
 
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// A lag in seconds within [0, kMaxLag]; the message suggests the likely slip (ms written as s).
+void require_lag(double value, const std::string& field, const std::string& source, bool zero_allowed) {
+  require(zero_allowed ? value >= 0 : value > 0, source,
+          field + " must be " + (zero_allowed ? ">= 0" : "> 0") + " s, got " + number(value));
+  require(value <= kMaxLag, source,
+          field + " = " + number(value) + " s is longer than any actuator or network lag (at most " +
+              number(kMaxLag) + " s); delays are in seconds: 14 ms is 0.014");
+}
+
 void validate_delay_stage(const config::DelayStage& stage, const std::string& where,
                           const std::string& source) {
   using K = config::DelayStage::KindCase;
-  require(stage.amplitude_gain() >= 0, source, where + ".amplitude_gain must be >= 0");
+  require(stage.amplitude_gain() >= 0 && stage.amplitude_gain() <= 10, source,
+          where + ".amplitude_gain must be in [0, 10] (0 means 1), got " + number(stage.amplitude_gain()));
   switch (stage.kind_case()) {
-    case K::kShift: require(stage.shift().delay() >= 0, source, where + ".shift.delay must be >= 0 s"); break;
-    case K::kEq1: require(stage.eq1().delay() >= 0, source, where + ".eq1.delay must be >= 0 s"); break;
-    case K::kEq1Lag: require(stage.eq1_lag().delay() >= 0, source, where + ".eq1_lag.delay must be >= 0 s"); break;
+    case K::kShift: require_lag(stage.shift().delay(), where + ".shift.delay", source, true); break;
+    case K::kEq1: require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true); break;
+    case K::kEq1Lag: require_lag(stage.eq1_lag().delay(), where + ".eq1_lag.delay", source, true); break;
     case K::kFirstOrder:
-      require(stage.first_order().time_constant() > 0, source,
-              where + ".first_order.time_constant must be > 0 s");
+      require_lag(stage.first_order().time_constant(), where + ".first_order.time_constant", source, false);
       break;
     case K::kTransferFunction:
       require(!stage.transfer_function().denominator().empty(), source,
               where + ".transfer_function.denominator is empty");
       break;
     case K::kJitter:
-      require(stage.jitter().mean_delay() >= 0 && stage.jitter().std_dev() >= 0, source,
-              where + ".jitter.mean_delay and std_dev must be >= 0 s");
+      require_lag(stage.jitter().mean_delay(), where + ".jitter.mean_delay", source, true);
+      require_lag(stage.jitter().std_dev(), where + ".jitter.std_dev", source, true);
       break;
     case K::kTrace: require(!stage.trace().path().empty(), source, where + ".trace.path is empty"); break;
     case K::kBenchmark: break;
@@ -81,19 +96,38 @@ void validate_study(const config::Study& study, const std::string& source) {
   } else {
     fail(source, "structure needs sdof or shear_building");
   }
-  if (structure.damping().has_rayleigh()) {
-    require(structure.damping().rayleigh().zeta() >= 0, source, "structure.damping.rayleigh.zeta must be >= 0");
-  } else {
-    require(structure.damping().modal_zeta() >= 0, source, "structure.damping.modal_zeta must be >= 0");
+  if (structure.has_sdof()) {
+    require(structure.sdof().period() <= kMaxPeriod, source,
+            "structure.sdof.period = " + number(structure.sdof().period()) + " s is beyond any structure's (at most " +
+                number(kMaxPeriod) + " s)");
   }
-  require(study.integrator().dt() >= 0, source, "integrator.dt must be >= 0 s");
+  const double zeta = structure.damping().has_rayleigh() ? structure.damping().rayleigh().zeta()
+                                                         : structure.damping().modal_zeta();
+  const std::string zeta_field = structure.damping().has_rayleigh() ? "structure.damping.rayleigh.zeta"
+                                                                    : "structure.damping.modal_zeta";
+  require(zeta >= 0 && zeta <= kMaxDampingRatio, source,
+          zeta_field + " is a ratio in [0, 1] (0.05 = 5 % of critical), got " + number(zeta));
+  require(study.integrator().dt() >= 0 && study.integrator().dt() <= kMaxStep, source,
+          "integrator.dt must be in [0, " + number(kMaxStep) + "] s (0 = the record's step), got " +
+              number(study.integrator().dt()));
   const auto& sub = study.substructuring();
   require(sub.experimental_fraction() >= 0 && sub.experimental_fraction() <= 1, source,
           "substructuring.experimental_fraction must be in [0, 1]");
   require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
           "substructuring: give experimental_fraction or experimental_storeys, not both");
+  require(study.motion().scale() >= 0 && study.motion().scale() <= kMaxMotionScale, source,
+          "motion.scale must be in [0, " + number(kMaxMotionScale) + "] (0 means 1), got " + number(study.motion().scale()));
+  require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
+  const auto& limits = study.deployment().limits();
+  require(limits.max_displacement() >= 0 && limits.max_velocity() >= 0, source,
+          "deployment.limits.max_displacement and max_velocity must be >= 0 (0 = no limit)");
   for (int i = 0; i < study.cases_size(); ++i) {
     const config::Case& c = study.cases(i);
+    for (int j = 0; j < i; ++j) {
+      require(study.cases(j).name() != c.name(), source,
+              "cases[" + std::to_string(i) + "] repeats the name '" + c.name() + "' of cases[" +
+                  std::to_string(j) + "]: case names must be unique");
+    }
     for (int j = 0; j < c.delay_size(); ++j) {
       validate_delay_stage(c.delay(j), "cases[" + std::to_string(i) + "] '" + c.name() + "' delay[" + std::to_string(j) + "]", source);
     }
@@ -106,28 +140,66 @@ void validate_study(const config::Study& study, const std::string& source) {
     }
   }
   for (double period : study.sweep().periods()) {
-    require(period > 0, source, "sweep.periods must be > 0 s, got " + std::to_string(period));
+    require(period > 0 && period <= kMaxPeriod, source,
+            "sweep.periods must be in (0, " + number(kMaxPeriod) + "] s, got " + number(period));
   }
-  for (double delay : study.sweep().delays()) {
-    require(delay >= 0, source, "sweep.delays must be >= 0 s, got " + std::to_string(delay));
+  for (double delay : study.sweep().delays()) require_lag(delay, "sweep.delays", source, true);
+  for (double dt : study.sweep().dts()) {
+    require(dt > 0 && dt <= kMaxStep, source, "sweep.dts must be in (0, " + number(kMaxStep) + "] s, got " + number(dt));
   }
-  for (double dt : study.sweep().dts()) require(dt > 0, source, "sweep.dts must be > 0 s");
   for (double k : study.sweep().stiffnesses()) require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
   for (double a : study.sweep().experimental_fractions()) {
     require(a >= 0 && a <= 1, source, "sweep.experimental_fractions must be in [0, 1]");
   }
 }
 
+std::string units_name(config::GroundMotion::Units units) {
+  switch (units) {
+    case config::GroundMotion::M_PER_S2: return "m/s2";
+    case config::GroundMotion::CM_PER_S2: return "cm/s2";
+    default: return "g";
+  }
+}
+
+config::GroundMotion::Units units_from_name(const std::string& name) {
+  if (name == "g") return config::GroundMotion::G;
+  if (name == "m/s2" || name == "m/s^2") return config::GroundMotion::M_PER_S2;
+  if (name == "cm/s2" || name == "cm/s^2" || name == "gal") return config::GroundMotion::CM_PER_S2;
+  throw std::invalid_argument("unknown motion units '" + name + "': use g, m/s2 or cm/s2");
+}
+
+std::string motion_units_name(const config::GroundMotion& motion) {
+  return motion.has_column_units() ? units_name(motion.column_units()) : "g";
+}
+
 GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir) {
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
-  const double to_si = motion.column_units() == config::GroundMotion::M_PER_S2 ? 1.0 : kGravity;
-  GroundMotion record;
-  switch (motion.format()) {
-    case config::GroundMotion::AT2: record = read_at2(path); break;
-    case config::GroundMotion::COLUMNS: record = read_columns(path, motion.column_dt(), to_si); break;
-    default: record = read_ground_motion(path, motion.column_dt(), to_si); break;
+  bool at2 = motion.format() == config::GroundMotion::AT2;
+  if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
+  const std::string what = "motion '" + path.string() + "'";
+  if (at2 && motion.has_column_units() && motion.column_units() != config::GroundMotion::G) {
+    throw std::invalid_argument(what + " is a PEER AT2 file, whose values are in g by its format; "
+                                "motion.column_units (--motion-units) " + units_name(motion.column_units()) +
+                                " contradicts it");
+  }
+  if (!at2 && !motion.has_column_units()) {
+    throw std::invalid_argument(what + " is a columns file, whose numbers carry no unit: give "
+                                "motion.column_units (G, M_PER_S2 or CM_PER_S2; --motion-units g|m/s2|cm/s2)");
+  }
+  double to_si = kGravity;
+  if (motion.column_units() == config::GroundMotion::M_PER_S2) to_si = 1.0;
+  if (motion.column_units() == config::GroundMotion::CM_PER_S2) to_si = 0.01;
+  GroundMotion record = at2 ? read_at2(path) : read_columns(path, motion.column_dt(), to_si);
+  const double peak = record.peak_abs();
+  if (!(peak <= kMaxPeakGroundAcceleration)) {
+    std::ostringstream message;
+    message << what << ": peak acceleration " << peak / kGravity << " g read as "
+            << (at2 ? std::string("g") : units_name(motion.column_units()))
+            << " is beyond any recorded earthquake (under 4 g); are the units right "
+               "(motion.column_units, --motion-units)?";
+    throw std::invalid_argument(message.str());
   }
   if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
   if (motion.scale() > 0 && motion.scale() != 1.0) record = scaled(std::move(record), motion.scale());
@@ -250,7 +322,15 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   prepared.base_dir = base_dir;
   GroundMotion record = load_motion(study.motion(), base_dir);
   const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : record.dt;
+  require(dt < record.duration(), "motion", "integrator.dt = " + number(dt) + " s is not shorter than the record (" +
+                                               number(record.duration()) + " s)");
   prepared.motion = std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
+  for (const config::Case& c : study.cases()) {
+    const double lag = make_delay_chain(c.delay(), dt, base_dir).nominal_delay();
+    require(lag < prepared.motion.duration(), "case '" + c.name() + "'",
+            "its delay of " + number(lag) + " s is not shorter than the record (" +
+                number(prepared.motion.duration()) + " s)");
+  }
   prepared.base.model = make_structure(study.structure());
   prepared.base.integrator = integrator_kind(study.integrator());
   prepared.base.dt = dt;

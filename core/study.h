@@ -14,16 +14,34 @@
 
 namespace rths::core {
 
+// Bounds of physically sound values; validate_study refuses values beyond them, naming the field.
+inline constexpr double kMaxDampingRatio = 1.0;  // critical damping: a ratio, 0.05 = 5 %
+inline constexpr double kMaxLag = 1.0;           // s; RTHS lags are ms to tens of ms
+inline constexpr double kMaxPeriod = 50.0;       // s; the tallest buildings are under 10 s
+inline constexpr double kMaxStep = 0.1;          // s; records are sampled at 0.005 - 0.02 s
+inline constexpr double kMaxMotionScale = 100.0;
+inline constexpr double kMaxPeakGroundAcceleration = 5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
+
 // Parses a text-format Study. Throws std::invalid_argument "FILE:LINE:COL: message" on unknown
 // fields, wrong types or syntax errors, and on semantic errors (negative period or delay, both
 // experimental_fraction and experimental_storeys, ...) naming the field.
 config::Study load_study(const std::filesystem::path& path);
 config::Study parse_study(const std::string& text, const std::string& source_name);
 
-// Checks the semantic rules above; throws std::invalid_argument naming the field.
+// Checks the semantic rules above and the bounds; throws std::invalid_argument naming the field.
+// Unique case names; damping ratio <= 1; every lag in [0, kMaxLag] s; dt <= kMaxStep.
 void validate_study(const config::Study& study, const std::string& source_name);
 
+// Reads the record in SI. Throws std::invalid_argument when a columns file has no column_units,
+// an AT2 file is given a unit other than G, or the peak exceeds kMaxPeakGroundAcceleration (a
+// record in cm/s^2 read as g or m/s^2).
 GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir);
+// "g", "m/s2" or "cm/s2": what a record in these units is called on the command line and in summaries.
+std::string units_name(config::GroundMotion::Units units);
+// Parses "g", "m/s2" or "cm/s2" (also "m/s^2", "cm/s^2"); throws naming the accepted forms.
+config::GroundMotion::Units units_from_name(const std::string& name);
+// The units of the study's record as read: its column_units, or g for an AT2 file.
+std::string motion_units_name(const config::GroundMotion& motion);
 
 std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
                                              const std::filesystem::path& base_dir);

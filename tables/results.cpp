@@ -1,5 +1,9 @@
 #include "tables/results.h"
 
+#include <algorithm>
+
+#include "analysis/results_csv.h"
+
 #include <limits>
 #include <stdexcept>
 
@@ -8,33 +12,39 @@ namespace {
 
 constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();
 
-std::vector<double> first_column(const Eigen::MatrixXd& m) {
-  std::vector<double> out(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index r = 0; r < m.rows(); ++r) out[static_cast<std::size_t>(r)] = m(r, 0);
-  return out;
-}
-
 }  // namespace
 
 Table study_table(const analysis::StudyOutcome& outcome) {
   Table table;
   if (outcome.cases.empty()) return table;
   std::size_t rows = 0;
-  for (const auto& c : outcome.cases) rows = std::max({rows, c.response.size(), c.simulation.steps()});
-  std::vector<double> time(rows);
+  for (const auto& c : outcome.cases) rows = std::max(rows, c.simulation.steps());
   const double dt = outcome.cases.front().simulation.dt;
-  for (std::size_t k = 0; k < rows; ++k) time[k] = static_cast<double>(k) * dt;
+  std::vector<double> step(rows), time(rows);
+  for (std::size_t k = 0; k < rows; ++k) {
+    step[k] = static_cast<double>(k);
+    time[k] = static_cast<double>(k) * dt;
+  }
+  table.add_numbers("step", "1", std::move(step));
   table.add_numbers("time_s", "s", std::move(time));
-  const auto padded = [rows](std::vector<double> v) {
-    v.resize(rows, kMissing);
-    return v;
-  };
-  for (const auto& c : outcome.cases) table.add_numbers(identifier("u_" + c.name) + "_m", "m", padded(c.response));
+  // Every floor and every actuator of every case (analysis/results_csv.h names); a case that
+  // stopped early is NaN (an empty CSV cell) after its last step.
   for (const auto& c : outcome.cases) {
-    if (c.simulation.command.cols() == 0) continue;
-    table.add_numbers(identifier("command_" + c.name) + "_m", "m", padded(first_column(c.simulation.command)));
-    table.add_numbers(identifier("realised_" + c.name) + "_m", "m", padded(first_column(c.simulation.realised)));
-    table.add_numbers(identifier("force_" + c.name) + "_N", "N", padded(first_column(c.simulation.measured_force)));
+    const core::SimulationResult& r = c.simulation;
+    const std::vector<std::string> names = analysis::result_column_names(c.name, r);
+    const auto column = [&](const core::Mat& m, Eigen::Index j) {
+      std::vector<double> v(rows, kMissing);
+      for (Eigen::Index k = 0; k < m.rows(); ++k) v[static_cast<std::size_t>(k)] = m(k, j);
+      return v;
+    };
+    std::size_t n = 0;
+    for (Eigen::Index i = 0; i < r.displacement.cols(); ++i)
+      table.add_numbers(names[n++], "m", column(r.displacement, i));
+    for (Eigen::Index j = 0; j < r.command.cols(); ++j) {
+      table.add_numbers(names[n++], "m", column(r.command, j));
+      table.add_numbers(names[n++], "m", column(r.realised, j));
+      table.add_numbers(names[n++], "N", column(r.measured_force, j));
+    }
   }
   table.set_attribute("study", outcome.study_name);
   table.set_attribute("reference_case", outcome.cases[outcome.reference_index].name);

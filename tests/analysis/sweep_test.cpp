@@ -3,6 +3,7 @@
 #include "analysis/sweep.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -91,7 +92,7 @@ TEST(Sweep, BatchKernelPathAgreesWithGeneralPath) {
     EXPECT_LT(relative_difference(fast[i].peak_reference, general[i].peak_reference), kRoundOff);
     EXPECT_LT(relative_difference(fast[i].peak_delayed, general[i].peak_delayed), kRoundOff);
     if (fast[i].delay > 0) {
-      EXPECT_LT(relative_difference(fast[i].nrmse, general[i].nrmse), kRoundOff) << "point " << i;
+      EXPECT_LT(relative_difference(fast[i].nrmse_pct, general[i].nrmse_pct), kRoundOff) << "point " << i;
       EXPECT_LT(relative_difference(fast[i].eq2_paper, general[i].eq2_paper), kRoundOff);
       ++compared;
     }
@@ -112,8 +113,8 @@ TEST(Sweep, StiffnessHasNoInfluenceAtAFixedPeriod) {
       });
       ASSERT_NE(same, rows.end());
       ASSERT_FALSE(r.diverged);
-      EXPECT_GT(r.nrmse, 1e-3);  // a real error, not round-off, is being compared
-      EXPECT_LT(relative_difference(r.nrmse, same->nrmse), kRoundOff) << "T " << r.period;
+      EXPECT_GT(r.nrmse_pct, 1e-3);  // a real error, not round-off, is being compared
+      EXPECT_LT(relative_difference(r.nrmse_pct, same->nrmse_pct), kRoundOff) << "T " << r.period;
       EXPECT_LT(relative_difference(r.peak_error, same->peak_error), kRoundOff);
       ++checked;
     }
@@ -131,7 +132,7 @@ TEST(Sweep, ErrorFallsWithPeriod) {
     for (const auto& r : rows) {
       if (r.delay == delay) {
         ASSERT_FALSE(r.diverged);
-        errors.push_back(r.nrmse);
+        errors.push_back(r.nrmse_pct);
       }
     }
     ASSERT_EQ(errors.size(), 5u);
@@ -158,7 +159,7 @@ TEST(Sweep, SofteningResponseHasSmallerDelayErrorThanLinear) {
     ASSERT_NE(bilinear, rows.end());
     ASSERT_FALSE(linear.diverged || bilinear->diverged);
     EXPECT_GT(linear.peak_reference, 3 * 0.003) << "must yield substantially, T " << linear.period;
-    EXPECT_LT(bilinear->nrmse, linear.nrmse) << "T " << linear.period;
+    EXPECT_LT(bilinear->nrmse_pct, linear.nrmse_pct) << "T " << linear.period;
     ++compared;
   }
   EXPECT_EQ(compared, 3u);
@@ -252,6 +253,29 @@ TEST_F(SweepShards, ReadingRefusesATruncatedCsv) {
   EXPECT_THROW(read_sweep_csv(dir_ / "cut.csv"), std::invalid_argument);
   std::ofstream(dir_ / "other.csv") << "time,u\n0,0\n";
   EXPECT_THROW(read_sweep_csv(dir_ / "other.csv"), std::invalid_argument);
+}
+
+TEST_F(SweepShards, CsvIsPlainWithUnitsAndItsMetadataIsInASidecar) {
+  const SweepGrid grid = grid_for(kBody);
+  const fs::path a = run_shard(grid, 1, 2);
+  std::ifstream in(a);
+  std::string header;
+  std::getline(in, header);
+  // A naive CSV reader sees the column names first: no comment line, units in the names.
+  EXPECT_EQ(header.rfind("index,period_s,delay_s,", 0), 0u) << header;
+  EXPECT_NE(header.find(",nrmse_pct,"), std::string::npos) << header;
+  EXPECT_NE(header.find(",peak_delayed_m,"), std::string::npos) << header;
+  const nlohmann::json meta = nlohmann::json::parse(slurp(sweep_sidecar_path(a)));
+  EXPECT_EQ(meta["shard"], "1/2");
+  EXPECT_EQ(meta["points"], grid.size());
+  EXPECT_EQ(meta["grid"], grid.hash_hex());
+  fs::remove(sweep_sidecar_path(a));
+  try {
+    read_sweep_csv(a);
+    FAIL() << "read a sweep CSV without its metadata";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("meta.json"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SweepShard, ParsesAndRejects) {

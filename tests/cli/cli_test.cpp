@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,7 @@ namespace {
 const std::string kRths = RTHS_EXECUTABLE;
 const std::filesystem::path kSource = RTHS_SOURCE_DIR;
 const std::filesystem::path kData = RTHS_SHARED_DATA_DIR;
+const std::string kMotion = (kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2").string();
 
 struct Outcome {
   int exit_code = -1;
@@ -52,12 +54,17 @@ TEST(CliTest, SdofJsonAndCsvShowLagEnlargingTheResponse) {
   ASSERT_EQ(o.exit_code, 0) << o.output;
   const nlohmann::json j = json_of(o);
   EXPECT_GT(j["peak_delayed_m"].get<double>(), j["peak_reference_m"].get<double>());
-  EXPECT_GT(j["nrmse"].get<double>(), 0.1);
+  EXPECT_GT(j["nrmse_pct"].get<double>(), 10.0);
   EXPECT_GT(j["paper_eq2_as_printed"].get<double>(), 0.0);
+  EXPECT_EQ(j["status"], "completed");
+  EXPECT_EQ(j["motion_units"], "g");
+  EXPECT_FALSE(j["stability"]["past_critical_delay"].get<bool>());
   std::ifstream csv(dir / "sdof.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header, "time_s,u_reference_m,u_delayed_m");
+  EXPECT_EQ(header, "step,time_s,reference_u_floor1_m,reference_command_act1_m,reference_measured_act1_m,"
+                    "reference_force_act1_N,delayed_u_floor1_m,delayed_command_act1_m,delayed_measured_act1_m,"
+                    "delayed_force_act1_N");
   std::size_t rows = 0;
   for (std::string line; std::getline(csv, line);) ++rows;
   EXPECT_EQ(rows, 39070u);  // 7814 samples at 5 ms resampled to 1 ms over the same duration
@@ -107,6 +114,136 @@ TEST(CliTest, BadInputExitsTwoWithAMessageNamingTheProblem) {
   o = run("sdof --period 0.05 --dt 0.02 --delay 0 --motion " + (kData / "ground_motions/IELC180.AT2").string());
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
+}
+
+// The README's first example: the paper's frame, stable, and meaningful.
+TEST(CliTest, ReadmeFirstExampleIsStableAndExitsZero) {
+  const Outcome o = run("sdof --period 0.5 --zeta 0.05 --motion " + kMotion +
+                        " --dt 0.001 --delay 14ms --delay-model shift --exp-fraction 0.3333 --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const nlohmann::json j = json_of(o);
+  EXPECT_EQ(j["status"], "completed");
+  EXPECT_DOUBLE_EQ(j["delay_s"].get<double>(), 0.014);
+  EXPECT_LT(j["peak_delayed_m"].get<double>(), 0.1);
+}
+
+// The README's unstable example: alpha = 1 is past its 7.97 ms critical delay.
+TEST(CliTest, APastCriticalDelayIsWarnedFlaggedAndExitsOne) {
+  const std::string args = "sdof --period 0.5 --zeta 0.05 --motion " + kMotion +
+                           " --dt 0.001 --delay 0.01 --delay-model shift --exp-fraction 1";
+  Outcome o = run(args);
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(o.output.find("warning"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("PAST"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("diverged"), std::string::npos) << o.output;
+  o = run(args + " --allow-unstable --json");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(json_of(o)["status"], "diverged");
+}
+
+TEST(CliTest, StabilityRefusesADtBeyondTheIntegratorsLimit) {
+  const Outcome o = run("stability --period 0.5 --dt 0.2");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
+}
+
+TEST(CliTest, UnknownCommandsAndFlagsGetDidYouMean) {
+  Outcome o = run("swep configs/paper_sweep.textproto");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("did you mean `rths sweep`"), std::string::npos) << o.output;
+  o = run("sdof --motion x --dealy 0.01");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("did you mean '--delay'"), std::string::npos) << o.output;
+}
+
+TEST(CliTest, FlagValuesWithUnits) {
+  Outcome o = run("sdof --motion " + kMotion + " --exp-fraction 0.3333 --delay 14 --json");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("14 ms is 0.014"), std::string::npos) << o.output;
+  o = run("sdof --motion " + kMotion + " --delay 14parsecs");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("14ms"), std::string::npos) << o.output;
+  EXPECT_EQ(o.output.find("1.797e308"), std::string::npos) << o.output;
+  o = run("sdof --motion " + kMotion + " --zeta 5");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("modal_zeta"), std::string::npos) << o.output;
+}
+
+TEST(CliTest, MotionUnitsAreExplicit) {
+  const auto dir = scratch("units");
+  // El Centro's first seconds as m/s^2 columns.
+  std::ofstream(dir / "ms2.txt") << "0 0\n0.01 1.2\n0.02 -2.5\n0.03 3.1\n0.04 -1.0\n0.05 0.4\n0.06 0\n";
+  Outcome o = run("sdof --motion " + (dir / "ms2.txt").string() + " --exp-fraction 0.3333 --delay 0.002");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--motion-units"), std::string::npos) << o.output;
+  o = run("sdof --motion " + (dir / "ms2.txt").string() + " --motion-units m/s2 --exp-fraction 0.3333 --delay 0.002 --json");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(json_of(o)["motion_units"], "m/s2");
+}
+
+TEST(CliTest, AConfigOfAnotherKindIsNamed) {
+  const Outcome o = run("run " + (kSource / "configs/joint_lag_study.textproto").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("is a joint-lag study"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("rths joint-lag"), std::string::npos) << o.output;
+  const Outcome reverse = run("joint-lag " + (kSource / "configs/paper_frame.textproto").string());
+  EXPECT_EQ(reverse.exit_code, 2) << reverse.output;
+  EXPECT_NE(reverse.output.find("is a study (rths.config.Study) config, not a joint-lag study"), std::string::npos)
+      << reverse.output;
+  EXPECT_NE(reverse.output.find("rths run"), std::string::npos) << reverse.output;
+}
+
+TEST(CliTest, RunWithoutPlotsRemovesStalePlotsAndWritesEveryColumn) {
+  const auto dir = scratch("stale");
+  std::ofstream(dir / "displacement.png") << "old";
+  const Outcome o = run("run " + (kSource / "configs/three_storey_building.textproto").string() +
+                        " --no-plots --out " + dir.string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "displacement.png"));
+  std::ifstream csv(dir / "results.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("step,time_s,reference_u_floor1_m,reference_u_floor2_m,reference_u_floor3_m,", 0), 0u)
+      << header;
+  EXPECT_NE(header.find("_force_act1_N"), std::string::npos) << header;
+}
+
+TEST(CliTest, ASweepWithDivergedPointsExitsOneUnlessMeantAndMarksThem) {
+  const auto dir = scratch("sweep");
+  std::ofstream(dir / "sweep.textproto")
+      << "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } } "
+         "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.3333333333333333 } "
+         "motion { path: \"" << kMotion << "\" duration: 10 } "
+         "sweep { periods: [0.05, 0.5] delays: [0.002, 0.014] motions { path: \"" << kMotion << "\" duration: 10 } }";
+  Outcome o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " + (dir / "out").string());
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(o.output.find("past their critical delay"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("diverged"), std::string::npos) << o.output;
+  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --allow-unstable --out " + (dir / "out").string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  for (const char* file : {"sweep.csv", "sweep.meta.json", "sweep.png", "sweep.svg", "sweep_vs_delay.png"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
+  }
+}
+
+TEST(CliTest, IdentifyEchoesTheUnitsItReadTheDataIn) {
+  const auto dir = scratch("identify_units");
+  {
+    std::ofstream csv(dir / "rig.csv");
+    csv << "time,command,measured,force\n";
+    for (int i = 0; i < 4000; ++i) {
+      const double t = i * 0.001, lagged = t - 0.01;
+      const double c = 5 * std::sin(4 * M_PI * t) + 2 * std::sin(14 * M_PI * t);
+      const double m = 5 * std::sin(4 * M_PI * lagged) + 2 * std::sin(14 * M_PI * lagged);
+      csv << t << "," << c << "," << m << "," << 1000 * m << "\n";
+    }
+  }
+  Outcome o = run("identify " + (dir / "rig.csv").string() + " --length-unit cm --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(json_of(o)["input_units"]["length"], "cm");
+  o = run("identify " + (dir / "rig.csv").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("input units: time s, length mm, force N"), std::string::npos) << o.output;
 }
 
 }  // namespace

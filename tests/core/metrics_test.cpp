@@ -17,6 +17,20 @@ TEST(MedianAbs, OddEvenAndSigns) {
   EXPECT_THROW(median_abs(std::vector<double>{}), std::invalid_argument);
 }
 
+TEST(Median, TextbookMiddleOrMeanOfTheTwoMiddle) {
+  EXPECT_DOUBLE_EQ(median({5.0, 1.0, 3.0}), 3.0);
+  EXPECT_DOUBLE_EQ(median({4.0, 1.0, 2.0, 10.0}), 3.0);  // not 4 (the upper middle)
+  EXPECT_DOUBLE_EQ(median({-2.0, -1.0}), -1.5);
+  EXPECT_THROW(median({}), std::invalid_argument);
+}
+
+TEST(GrewPastReference, OrderOfMagnitudeOrNotFinite) {
+  EXPECT_FALSE(grew_past_reference(0.0136, 0.05));  // 3.7x: a lagged but stable response
+  EXPECT_TRUE(grew_past_reference(0.0136, 2.229));  // sdof --delay 0.01 at alpha = 1: 164x
+  EXPECT_TRUE(grew_past_reference(0.0136, std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_TRUE(grew_past_reference(0.0136, std::numeric_limits<double>::infinity()));
+}
+
 TEST(PeakAbs, NanPropagates) {
   EXPECT_DOUBLE_EQ(peak_abs(std::vector<double>{1.0, -4.0, 2.0}), 4.0);
   EXPECT_TRUE(std::isnan(peak_abs(std::vector<double>{1.0, std::nan(""), 2.0})));

@@ -218,3 +218,63 @@ TEST(CompensatedStabilityTest, RefusesWhatItCannotRepresent) {
 
 }  // namespace
 }  // namespace rths::core
+
+namespace rths::core {
+namespace {
+
+TEST(CriticalDelayCheck, SdofEqualsTheContinuousAndDiscreteLimits) {
+  const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
+  const double k = sdof.stiffness(0, 0);
+  const CriticalDelayCheck check =
+      check_critical_delay(sdof, {k}, IntegratorKind::kExplicitNewmark, 0.001, 0.014);
+  ASSERT_TRUE(check.continuous.has_value());
+  EXPECT_NEAR(*check.continuous, *continuous_critical_delay(0.5, 0.05, 1.0).critical_delay, 1e-12);
+  ASSERT_TRUE(check.discrete.has_value());
+  EXPECT_NEAR(*check.discrete,
+              *discrete_critical_delay(IntegratorKind::kExplicitNewmark, 0.5, 0.05, 1.0, 0.001, 20).first_unstable_delay,
+              1e-12);
+  EXPECT_TRUE(check.past());  // 14 ms against about 8 ms
+  EXPECT_LT(check.margin(), -0.5);
+  EXPECT_NE(check.describe().find("PAST"), std::string::npos) << check.describe();
+}
+
+TEST(CriticalDelayCheck, PaperFrameAtOneThirdIsBelowTheLimit) {
+  const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
+  const CriticalDelayCheck check = check_critical_delay(sdof, {sdof.stiffness(0, 0) / 3.0},
+                                                        IntegratorKind::kExplicitNewmark, 0.001, 0.014);
+  EXPECT_FALSE(check.past());
+  EXPECT_GT(*check.critical(), 0.020);  // about 24 ms
+  EXPECT_LT(*check.critical(), 0.030);
+  EXPECT_GT(check.margin(), 0.3);
+  EXPECT_NE(check.describe().find("below it"), std::string::npos) << check.describe();
+}
+
+TEST(CriticalDelayCheck, ALeadIsNeverPast) {
+  const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
+  const CriticalDelayCheck check = check_critical_delay(sdof, {sdof.stiffness(0, 0)},
+                                                        IntegratorKind::kExplicitNewmark, 0.001, -0.014);
+  EXPECT_FALSE(check.past());
+}
+
+TEST(CriticalDelayCheck, ShearBuildingTakesTheSmallestModalLimit) {
+  StructuralModel building = make_shear_building({1000, 1000, 1000}, {4e6, 3e6, 2e6});
+  building.damping = modal_damping(building.mass, building.stiffness, 0.05);
+  // The whole first storey experimental.
+  const CriticalDelayCheck check = check_critical_delay(building, {4e6, 0, 0},
+                                                        IntegratorKind::kExplicitNewmark, 0.0005, 0.002);
+  ASSERT_TRUE(check.continuous.has_value());
+  for (int mode = 0; mode < 3; ++mode) {
+    const Modes modes = modal_analysis(building.mass, building.stiffness);
+    const double w = modes.omega[mode];
+    const Vec phi = modes.shapes.col(mode);
+    const double drift = phi[0];
+    const double alpha = 4e6 * drift * drift / (w * w);
+    const auto modal = continuous_critical_delay(2 * std::numbers::pi / w, 0.05, alpha).critical_delay;
+    if (modal) EXPECT_LE(*check.continuous, *modal + 1e-12) << "mode " << mode + 1;
+  }
+  EXPECT_THROW(check_critical_delay(building, {4e6}, IntegratorKind::kExplicitNewmark, 0.001, 0.01),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rths::core

@@ -5,6 +5,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include <unistd.h>
+
+#include "core/text_format.h"
+
 namespace rths::core {
 namespace {
 
@@ -125,6 +129,113 @@ TEST(StudyTest, ThreeStoreyBuildingConfigRunsEveryCase) {
     EXPECT_GT(r.displacement.col(0).cwiseAbs().maxCoeff(), 0.004) << c.name();
   }
   EXPECT_GT(reference_peak, 0.0);
+}
+
+}  // namespace
+}  // namespace rths::core
+
+namespace rths::core {
+namespace {
+
+TEST(StudyBounds, AbsurdValuesAreRefusedNamingTheField) {
+  // zeta = 5 is 500 % of critical: a ratio was meant (0.05).
+  const std::string zeta = error_of("structure { sdof { period: 0.5 } damping { modal_zeta: 5 } }");
+  EXPECT_NE(zeta.find("structure.damping.modal_zeta"), std::string::npos) << zeta;
+  EXPECT_NE(zeta.find("0.05 = 5 %"), std::string::npos) << zeta;
+  // delay: 14 is 14 s: milliseconds were meant.
+  const std::string delay =
+      error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { delay: 14 } } }");
+  EXPECT_NE(delay.find("delay[0].shift.delay"), std::string::npos) << delay;
+  EXPECT_NE(delay.find("14 ms is 0.014"), std::string::npos) << delay;
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } integrator { dt: 2 }").find("integrator.dt"),
+            std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 500 } }").find("structure.sdof.period"), std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } sweep { delays: [0.01, 12] }").find("sweep.delays"),
+            std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } deployment { limits { max_displacement: -1 } }")
+                .find("deployment.limits"),
+            std::string::npos);
+}
+
+TEST(StudyBounds, DuplicateCaseNamesAreRefused) {
+  const std::string error =
+      error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" } cases { name: \"b\" } cases { name: \"a\" }");
+  EXPECT_NE(error.find("cases[2] repeats the name 'a'"), std::string::npos) << error;
+}
+
+TEST(StudyBounds, ADelayLongerThanTheRecordIsRefused) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("rths_study_long_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "short.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
+  const config::Study study = parse_study(
+      "structure { sdof { period: 0.5 } } motion { path: \"short.txt\" column_units: G } "
+      "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
+      "cases { name: \"late\" delay { shift { delay: 0.2 } } }", "t");
+  try {
+    prepare_study(study, dir);
+    FAIL() << "a 0.2 s delay on a 0.05 s record was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("case 'late'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not shorter than the record"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+class MotionUnits : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() / ("rths_motion_units_" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir_);
+    // 0.35 g written in three units.
+    std::ofstream(dir_ / "g.txt") << "0 0\n0.01 0.35\n0.02 0\n";
+    std::ofstream(dir_ / "ms2.txt") << "0 0\n0.01 3.4323275\n0.02 0\n";
+    std::ofstream(dir_ / "cms2.txt") << "0 0\n0.01 343.23275\n0.02 0\n";
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  GroundMotion load(const std::string& text) {
+    config::GroundMotion motion;
+    parse_text_format(text, "t", motion);
+    return load_motion(motion, dir_);
+  }
+  std::string error(const std::string& text) {
+    try {
+      load(text);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(MotionUnits, EveryUnitGivesTheSameRecordInSi) {
+  const double expected = 0.35 * kGravity;
+  EXPECT_NEAR(load("path: \"g.txt\" column_units: G").peak_abs(), expected, 1e-9);
+  EXPECT_NEAR(load("path: \"ms2.txt\" column_units: M_PER_S2").peak_abs(), expected, 1e-6);
+  EXPECT_NEAR(load("path: \"cms2.txt\" column_units: CM_PER_S2").peak_abs(), expected, 1e-6);
+}
+
+TEST_F(MotionUnits, AColumnsFileWithoutUnitsIsRefused) {
+  const std::string e = error("path: \"ms2.txt\"");
+  EXPECT_NE(e.find("column_units"), std::string::npos) << e;
+  EXPECT_NE(e.find("--motion-units"), std::string::npos) << e;
+}
+
+TEST_F(MotionUnits, AnImplausiblePeakNamesTheUnits) {
+  // 343 cm/s^2 read as m/s^2 is 35 g.
+  const std::string e = error("path: \"cms2.txt\" column_units: M_PER_S2");
+  EXPECT_NE(e.find("beyond any recorded earthquake"), std::string::npos) << e;
+}
+
+TEST_F(MotionUnits, AnAt2FileIsInGAndRefusesAnotherUnit) {
+  const std::filesystem::path at2 = kConfigs / "motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  config::GroundMotion motion;
+  motion.set_path(at2.string());
+  EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * kGravity, 0.01 * kGravity);  // El Centro #12
+  motion.set_column_units(config::GroundMotion::M_PER_S2);
+  EXPECT_THROW(load_motion(motion, dir_), std::invalid_argument);
+  EXPECT_EQ(units_name(units_from_name("cm/s2")), "cm/s2");
+  EXPECT_THROW(units_from_name("ft/s2"), std::invalid_argument);
 }
 
 }  // namespace

@@ -74,7 +74,7 @@ def test_run_gives_the_cli_numbers_as_arrays_with_units_in_the_names(config, tmp
     for name, values in expected.items():
         assert isinstance(result["series"][name], np.ndarray)
         np.testing.assert_array_equal(result["series"][name], numbers(values), err_msg=name)
-    assert result["units"]["force_lag_shift_14ms_N"] == "N"
+    assert result["units"]["lag_shift_14ms_force_act1_N"] == "N"
     summary = json.loads((tmp_path / "cli/summary.json").read_text())
     assert result["summary"] == summary
     peaks = {c["name"]: c["peak_displacement_m"] for c in result["summary"]["cases"]}

@@ -81,13 +81,13 @@ def test_run_writes_the_same_table_as_csv_mat_and_h5(study, tmp_path):
         out = rths("run", study, "--no-plots", "--format", fmt, "--out", tmp_path / fmt).stdout
         assert str(tmp_path / fmt / f"results.{fmt}") in out
     header, columns = read_csv(tmp_path / "csv/results.csv")
-    assert header[:3] == ["time_s", "u_reference_m", "u_lag_shift_14ms_m"]
+    assert header[:3] == ["step", "time_s", "reference_u_floor1_m"]
     mat = assert_same_as_csv(header, columns, tmp_path / "mat/results.mat", tmp_path / "h5/results.h5")
-    assert mat["units"]["time_s"] == "s" and mat["units"]["force_lag_shift_14ms_N"] == "N"
+    assert mat["units"]["time_s"] == "s" and mat["units"]["lag_shift_14ms_force_act1_N"] == "N"
     assert mat["attributes"]["reference_case"] == "reference"
     assert len(columns["time_s"]) == 2000  # 2 s at 1 ms
     with h5py.File(tmp_path / "h5/results.h5", "r") as h5:
-        lag, ref = h5["u_lag_shift_14ms_m"][()], h5["u_reference_m"][()]
+        lag, ref = h5["lag_shift_14ms_u_floor1_m"][()], h5["reference_u_floor1_m"][()]
         assert np.max(np.abs(lag)) > np.max(np.abs(ref))  # the lag enlarges the response
 
 

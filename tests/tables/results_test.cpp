@@ -30,6 +30,8 @@ analysis::CaseOutcome make_case(const std::string& name, std::size_t steps, bool
     c.simulation.time[k] = 0.01 * static_cast<double>(k);
     c.response.push_back(0.001 * static_cast<double>(k));
   }
+  c.simulation.displacement = Eigen::Map<const Eigen::VectorXd>(c.response.data(),
+                                                                static_cast<Eigen::Index>(steps));
   const auto n = static_cast<Eigen::Index>(actuator ? steps : 0);
   c.simulation.command = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 0.5);
   c.simulation.realised = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 0.25);
@@ -42,14 +44,16 @@ TEST(ResultsTest, StudyTableNamesEachCaseAndPadsAStoppedCaseWithNan) {
   outcome.study_name = "frame";
   outcome.cases = {make_case("reference", 5, false), make_case("lag 14ms", 3, true)};
   const Table t = study_table(outcome);
-  EXPECT_EQ(names(t), (std::vector<std::string>{"time_s", "u_reference_m", "u_lag_14ms_m", "command_lag_14ms_m",
-                                                "realised_lag_14ms_m", "force_lag_14ms_N"}));
+  EXPECT_EQ(names(t), (std::vector<std::string>{"step", "time_s", "reference_u_floor1_m",
+                                                "lag_14ms_u_floor1_m", "lag_14ms_command_act1_m",
+                                                "lag_14ms_measured_act1_m", "lag_14ms_force_act1_N"}));
   EXPECT_EQ(t.rows(), 5u);
   EXPECT_DOUBLE_EQ(t.column("time_s").numbers[4], 0.04);
-  EXPECT_DOUBLE_EQ(t.column("u_lag_14ms_m").numbers[2], 0.002);
-  EXPECT_TRUE(std::isnan(t.column("u_lag_14ms_m").numbers[3]));
-  EXPECT_TRUE(std::isnan(t.column("force_lag_14ms_N").numbers[4]));
-  EXPECT_EQ(t.column("force_lag_14ms_N").unit, "N");
+  EXPECT_DOUBLE_EQ(t.column("step").numbers[4], 4.0);
+  EXPECT_DOUBLE_EQ(t.column("lag_14ms_u_floor1_m").numbers[2], 0.002);
+  EXPECT_TRUE(std::isnan(t.column("lag_14ms_u_floor1_m").numbers[3]));
+  EXPECT_TRUE(std::isnan(t.column("lag_14ms_force_act1_N").numbers[4]));
+  EXPECT_EQ(t.column("lag_14ms_force_act1_N").unit, "N");
   EXPECT_EQ(t.attributes().at("reference_case"), "reference");
 }
 

@@ -1,0 +1,66 @@
+#pragma once
+// One comparison of a case with its reference, used by every command that reports an error
+// against a reference (run, sdof, sweep; launch, joint-lag and identify's predict should call it).
+//
+// The response is named explicitly (ResponseSpec): one floor's displacement relative to the
+// ground, or every floor with the worst value over floors kept ("peak over floors").
+// Over the steps both histories have (a diverged case stops early):
+//   nrmse_pct             100 sqrt(mean e^2) / median|u_ref|        (percent, N-independent)
+//   paper_eq2_as_printed  sqrt(sum e^2) / N / median|u_ref|         (the paper's Eq. 2, literal)
+//   peak_error_m          max |e|;  peak_reference_m, peak_m  max |u| of each (m)
+//   diverged              the case stopped early, is not finite, or its peak grew past
+//                         core::kDivergenceGrowth times the reference's (core::grew_past_reference).
+// Judge divergence against the lag-free reference; a lagged reference hides growth.
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/simulation.h"
+
+namespace rths::analysis {
+
+class ResponseSpec {
+ public:
+  // Floor n, 1-based (1 = first floor; an SDOF has only floor 1).
+  static ResponseSpec floor(int one_based);
+  // The top floor of a structure with `floors` floors.
+  static ResponseSpec top_floor(int floors) { return floor(floors); }
+  // Every floor; each metric is the worst over floors.
+  static ResponseSpec peak_over_floors() { return ResponseSpec(0); }
+
+  bool is_floor() const { return floor_ > 0; }
+  int floor_number() const { return floor_; }  // 0 for peak over floors
+  // "floor 3", "peak over floors".
+  std::string describe() const;
+  // The floors (0-based DOF columns) this spec reads from a result with `dofs` columns. Throws
+  // std::invalid_argument when the floor does not exist.
+  std::vector<int> columns(int dofs) const;
+
+ private:
+  explicit ResponseSpec(int floor) : floor_(floor) {}
+  int floor_;
+};
+
+struct Comparison {
+  std::string response;           // ResponseSpec::describe()
+  std::size_t steps_compared = 0;
+  double peak_reference_m = 0.0, peak_m = 0.0, peak_error_m = 0.0;
+  double nrmse_pct = 0.0, paper_eq2_as_printed = 0.0;
+  bool diverged = false;
+  nlohmann::json to_json() const;
+};
+
+// Displacement history of one floor (m), 0-based column.
+std::vector<double> floor_history(const core::SimulationResult& result, int column);
+
+// Compares histories sampled at the same step. `stopped_early` marks a case the simulation
+// stopped (its own divergence guard or a limit): it counts as diverged.
+Comparison compare(std::span<const double> reference, std::span<const double> result,
+                   bool stopped_early);
+Comparison compare(const core::SimulationResult& reference, const core::SimulationResult& result,
+                   const ResponseSpec& response);
+
+}  // namespace rths::analysis

@@ -1,0 +1,32 @@
+#pragma once
+// The per-step columns of one or more runs: the names every command that writes a run's history
+// uses (run, sdof; written as CSV, MATLAB or HDF5 by tables::study_table / write_table).
+//
+// Columns, SI with the unit in every name (floors and actuators 1-based):
+//   step, time_s,
+//   then per run:  <run>_u_floor<i>_m          every floor's displacement relative to the ground
+//                  <run>_command_act<j>_m      every actuator's commanded displacement
+//                  <run>_measured_act<j>_m     its realised (measured) displacement
+//                  <run>_force_act<j>_N        its measured force
+// <run> is the case name with every character other than [A-Za-z0-9_] replaced by '_'.
+// Row k is t_k = k dt, k = 0..N-1. A run that stopped early (diverged, a limit) leaves its cells
+// empty (NaN) after its last step.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/simulation.h"
+
+namespace rths::analysis {
+
+struct NamedResult {
+  std::string name;
+  const core::SimulationResult* result = nullptr;
+};
+
+// The header cells of one run, in the order above.
+std::vector<std::string> result_column_names(const std::string& run_name, const core::SimulationResult& result);
+
+
+}  // namespace rths::analysis

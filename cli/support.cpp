@@ -1,0 +1,215 @@
+#include "cli/support.h"
+
+#include "tables/results.h"
+#include "tables/write.h"
+
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <iostream>
+#include <memory>
+
+#include "analysis/atomic_file.h"
+#include "cli/commands.h"
+#include "core/text_format.h"
+#include "rths/proto/config.pb.h"
+#if __has_include("rths/deploy/joint_lag.pb.h")
+#include "rths/deploy/joint_lag.pb.h"
+#include "rths/deploy/sites.pb.h"
+#define RTHS_CLI_HAS_DEPLOY 1
+#endif
+
+namespace rths::cli {
+namespace {
+
+class SilentErrors : public google::protobuf::io::ErrorCollector {
+ public:
+  void AddError(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
+};
+
+bool parses_as(const std::string& text, google::protobuf::Message& message) {
+  SilentErrors errors;
+  google::protobuf::TextFormat::Parser parser;
+  parser.RecordErrorsTo(&errors);
+  return parser.ParseFromString(text, &message);
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> previous(b.size() + 1), current(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) previous[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    current[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t substitution = previous[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      current[j] = std::min({previous[j] + 1, current[j - 1] + 1, substitution});
+    }
+    std::swap(previous, current);
+  }
+  return previous[b.size()];
+}
+
+}  // namespace
+
+std::string config_kind_of(const std::filesystem::path& path) {
+  std::string text;
+  try {
+    text = core::read_text_file(path, "config");
+  } catch (const std::invalid_argument&) {
+    return "";
+  }
+  config::Study study;
+  if (parses_as(text, study)) return "study (rths.config.Study)";
+#ifdef RTHS_CLI_HAS_DEPLOY
+  deploy::JointLagStudy joint;
+  if (parses_as(text, joint)) return "joint-lag study (rths.deploy.JointLagStudy)";
+  deploy::Sites sites;
+  if (parses_as(text, sites)) return "sites (rths.deploy.Sites)";
+#endif
+  return "";
+}
+
+void rethrow_with_config_kind(const std::filesystem::path& path, const std::string& expected_kind,
+                              const std::invalid_argument& error) {
+  const std::string kind = config_kind_of(path);
+  if (kind.empty() || kind.rfind(expected_kind, 0) == 0) return;
+  std::string command = "run";
+  if (kind.rfind("joint-lag", 0) == 0) command = "joint-lag";
+  if (kind.rfind("sites", 0) == 0) command = "sites";
+  throw std::invalid_argument(path.string() + " is a " + kind + " config, not a " + expected_kind +
+                              " config: try `rths " + command + " " + path.string() + "` (" +
+                              error.what() + ")");
+}
+
+void print_warning(const std::string& message) { std::cerr << "rths: warning: " << message << "\n"; }
+
+double parse_seconds(const std::string& text) {
+  std::string compact;
+  for (char c : text) {
+    if (!std::isspace(static_cast<unsigned char>(c))) compact += c;
+  }
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(compact, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  const std::string unit = used > 0 ? compact.substr(used) : "";
+  double factor = 0.0;
+  if (unit.empty() || unit == "s") factor = 1.0;
+  else if (unit == "ms") factor = 1e-3;
+  else if (unit == "us") factor = 1e-6;
+  if (used == 0 || factor == 0.0 || !std::isfinite(value)) {
+    throw std::invalid_argument("'" + text + "' is not a time: give seconds (0.014), or a number with "
+                                "its unit: 14ms, 0.014s, 14000us");
+  }
+  return value * factor;
+}
+
+CLI::Validator seconds_value() {
+  return CLI::Validator(
+      [](std::string& input) -> std::string {
+        try {
+          std::ostringstream out;
+          out.precision(17);
+          out << parse_seconds(input);
+          input = out.str();
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      "TIME (s, or 14ms)");
+}
+
+std::optional<std::string> closest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::optional<std::string> best;
+  std::size_t best_distance = std::max<std::size_t>(1, word.size() / 3) + 1;
+  for (const std::string& candidate : candidates) {
+    const std::size_t d = edit_distance(word, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
+
+std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv) {
+  if (argc < 2) return "";
+  const std::string first = argv[1];
+  if (first.empty() || first[0] == '-') return "";
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) names.push_back(sub->get_name());
+  if (std::find(names.begin(), names.end(), first) == names.end()) {
+    std::string message = "unknown command '" + first + "'";
+    if (const auto near = closest(first, names)) message += "; did you mean `rths " + *near + "`?";
+    else {
+      message += "; commands:";
+      for (const std::string& n : names) message += " " + n;
+    }
+    return message;
+  }
+  const CLI::App* sub = app.get_subcommand(first);
+  std::vector<std::string> flags;
+  for (const CLI::Option* option : sub->get_options()) {
+    for (const std::string& name : option->get_lnames()) flags.push_back("--" + name);
+  }
+  for (int i = 2; i < argc; ++i) {
+    std::string word = argv[i];
+    if (word == "--") break;
+    if (word.rfind("--", 0) != 0) continue;
+    word = word.substr(0, word.find('='));
+    if (std::find(flags.begin(), flags.end(), word) != flags.end()) continue;
+    std::string message = "unknown option '" + word + "' for `rths " + first + "`";
+    if (const auto near = closest(word, flags)) message += "; did you mean '" + *near + "'?";
+    else message += " (see `rths " + first + " --help`)";
+    return message;
+  }
+  return "";
+}
+
+void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
+                         bool plots, bool json, const std::string& format) {
+  std::filesystem::create_directories(out);
+  const tables::Format kind = tables::parse_format(format);
+  const std::filesystem::path results = out / ("results" + tables::extension(kind));
+  tables::write_table(tables::study_table(outcome), results, kind);
+  for (const std::string& file : analysis::study_plot_files()) {
+    // A folder must not show plots of an earlier run beside this run's CSV.
+    if (!plots) std::filesystem::remove(out / file);
+  }
+  if (plots) analysis::write_study_plots(outcome, out);
+  const nlohmann::json summary = analysis::study_summary_json(outcome);
+  analysis::AtomicFile json_file(out / "summary.json");
+  json_file.stream() << summary.dump(2) << "\n";
+  json_file.commit();
+  analysis::AtomicFile text_file(out / "summary.txt");
+  text_file.stream() << analysis::study_summary_text(outcome);
+  text_file.commit();
+  if (json) {
+    std::cout << summary.dump(2) << "\n";
+  } else {
+    std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
+              << (plots ? ", displacement.png, force_displacement.png" : "") << ", summary.txt, summary.json\n";
+  }
+}
+
+void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable) {
+  const std::vector<std::string> failures = outcome.failures(allow_unstable);
+  if (failures.empty()) return;
+  std::string message;
+  bool diverged = false;
+  for (const std::string& f : failures) {
+    message += (message.empty() ? "" : "\n  ") + f;
+    diverged = diverged || f.find("diverged") != std::string::npos;
+  }
+  if (diverged) message += "\n  (--allow-unstable, or expect_unstable: true in the case, when that is meant)";
+  throw ExitError(kExitRunFailed, message);
+}
+
+}  // namespace rths::cli

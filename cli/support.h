@@ -1,0 +1,65 @@
+#pragma once
+// What every subcommand shares: loading a config of the expected kind (and naming the kind a
+// mismatched file is), flag values with units, warnings, "did you mean", and the outputs and
+// exit status of a study run (`run` and `sdof`).
+
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/study_run.h"
+
+namespace rths::cli {
+
+// Which kind of config a text-format file parses as: "study (rths.config.Study)", "joint-lag
+// study (rths.deploy.JointLagStudy)", "sites (rths.deploy.Sites)", or empty when none.
+std::string config_kind_of(const std::filesystem::path& path);
+
+// Calls `load`; when it throws std::invalid_argument and the file parses as another kind of
+// config, rethrows with "FILE is a <kind> config, not a <expected> config (use `rths <command>`)".
+template <class Config>
+Config load_config_as(const std::filesystem::path& path, const std::string& expected_kind,
+                      const std::function<Config(const std::filesystem::path&)>& load);
+void rethrow_with_config_kind(const std::filesystem::path& path, const std::string& expected_kind,
+                              const std::invalid_argument& error);
+
+// "rths: warning: ..." on stderr.
+void print_warning(const std::string& message);
+
+// A CLI11 transform for a time flag: "14ms", "14 ms", "0.014s", "14000us" or a bare number (s)
+// become seconds; anything else is refused with a message naming the unit (s) and the forms.
+CLI::Validator seconds_value();
+// The same parse as a function: seconds from text. Throws std::invalid_argument.
+double parse_seconds(const std::string& text);
+
+// The candidate closest to `word` by edit distance, when close enough to be a slip (at most a
+// third of the word's length, and at least 1 edit allowed).
+std::optional<std::string> closest(const std::string& word, const std::vector<std::string>& candidates);
+
+// Before parsing: an unknown subcommand or an unknown --flag of the subcommand gets "did you
+// mean". Returns the message, or empty when the words are known.
+std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv);
+
+// results.csv (removing stale plots when plots are off), plots, summary.json/.txt; prints the
+// summary (JSON or text).
+void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
+                         bool plots, bool json, const std::string& format = "csv");
+// Throws ExitError(1) listing every case that failed the run (analysis::StudyOutcome::failures).
+void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable);
+
+template <class Config>
+Config load_config_as(const std::filesystem::path& path, const std::string& expected_kind,
+                      const std::function<Config(const std::filesystem::path&)>& load) {
+  try {
+    return load(path);
+  } catch (const std::invalid_argument& e) {
+    rethrow_with_config_kind(path, expected_kind, e);
+    throw;
+  }
+}
+
+}  // namespace rths::cli

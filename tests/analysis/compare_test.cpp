@@ -1,0 +1,65 @@
+#include "analysis/compare.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "core/metrics.h"
+
+namespace rths::analysis {
+namespace {
+
+core::SimulationResult result_of(const std::vector<std::vector<double>>& floors) {
+  core::SimulationResult r;
+  r.dt = 0.01;
+  const auto steps = static_cast<Eigen::Index>(floors.front().size());
+  r.displacement = core::Mat::Zero(steps, static_cast<Eigen::Index>(floors.size()));
+  for (std::size_t f = 0; f < floors.size(); ++f) {
+    for (Eigen::Index k = 0; k < steps; ++k) r.displacement(k, static_cast<Eigen::Index>(f)) = floors[f][k];
+  }
+  r.time.resize(static_cast<std::size_t>(steps));
+  return r;
+}
+
+TEST(Compare, NrmseIsAPercentageOfTheCoreMeasure) {
+  const std::vector<double> reference = {0.0, 1.0, -2.0, 1.5, -0.5};
+  const std::vector<double> lagged = {0.0, 1.2, -2.5, 1.4, -0.2};
+  const Comparison c = compare(reference, lagged, false);
+  EXPECT_DOUBLE_EQ(c.nrmse_pct, 100.0 * core::nrmse(reference, lagged));
+  EXPECT_DOUBLE_EQ(c.paper_eq2_as_printed, core::paper_eq2(reference, lagged));
+  EXPECT_DOUBLE_EQ(c.peak_m, 2.5);
+  EXPECT_DOUBLE_EQ(c.peak_reference_m, 2.0);
+  EXPECT_NEAR(c.peak_error_m, 0.5, 1e-15);
+  EXPECT_FALSE(c.diverged);
+  EXPECT_EQ(c.to_json().at("nrmse_pct"), c.nrmse_pct);
+}
+
+TEST(Compare, GrowthPastTheReferenceOrAnEarlyStopIsDivergence) {
+  const std::vector<double> reference = {0.0, 0.01, -0.01, 0.01};
+  EXPECT_TRUE(compare(reference, std::vector<double>{0.0, 0.02, -0.5, 2.0}, false).diverged);
+  EXPECT_TRUE(compare(reference, std::vector<double>{0.0, 0.01}, true).diverged);  // stopped early
+  EXPECT_EQ(compare(reference, std::vector<double>{0.0, 0.01}, true).steps_compared, 2u);
+  EXPECT_FALSE(compare(reference, std::vector<double>{0.0, 0.03, -0.02, 0.01}, false).diverged);
+}
+
+TEST(Compare, TheResponseIsNamed) {
+  const auto reference = result_of({{0, 1, 0, -1}, {0, 2, 0, -2}});
+  const auto lagged = result_of({{0, 1, 0, -1}, {0, 2.5, 0, -2}});
+  const Comparison first = compare(reference, lagged, ResponseSpec::floor(1));
+  EXPECT_EQ(first.response, "floor 1");
+  EXPECT_DOUBLE_EQ(first.nrmse_pct, 0.0);
+  const Comparison top = compare(reference, lagged, ResponseSpec::top_floor(2));
+  EXPECT_EQ(top.response, "floor 2");
+  EXPECT_GT(top.nrmse_pct, 0.0);
+  const Comparison worst = compare(reference, lagged, ResponseSpec::peak_over_floors());
+  EXPECT_EQ(worst.response, "peak over floors");
+  EXPECT_DOUBLE_EQ(worst.nrmse_pct, top.nrmse_pct);
+  EXPECT_DOUBLE_EQ(worst.peak_m, 2.5);
+  EXPECT_THROW(compare(reference, lagged, ResponseSpec::floor(3)), std::invalid_argument);
+  EXPECT_THROW(ResponseSpec::floor(0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rths::analysis

@@ -1,0 +1,38 @@
+#include "analysis/results_csv.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+namespace rths::analysis {
+namespace {
+
+core::SimulationResult three_floors_two_actuators(std::size_t steps) {
+  core::SimulationResult r;
+  r.dt = 0.001;
+  r.time.resize(steps);
+  const auto n = static_cast<Eigen::Index>(steps);
+  r.displacement = core::Mat::Constant(n, 3, 0.25);
+  r.velocity = r.acceleration = core::Mat::Zero(n, 3);
+  r.command = core::Mat::Constant(n, 2, 0.5);
+  r.realised = core::Mat::Constant(n, 2, 0.125);
+  r.measured_force = core::Mat::Constant(n, 2, 1000.0);
+  return r;
+}
+
+TEST(ResultsCsv, EveryFloorAndEveryActuatorWithUnitsInTheNames) {
+  const auto r = three_floors_two_actuators(4);
+  const auto names = result_column_names("lag 14ms", r);
+  const std::vector<std::string> expected = {
+      "lag_14ms_u_floor1_m", "lag_14ms_u_floor2_m", "lag_14ms_u_floor3_m",
+      "lag_14ms_command_act1_m", "lag_14ms_measured_act1_m", "lag_14ms_force_act1_N",
+      "lag_14ms_command_act2_m", "lag_14ms_measured_act2_m", "lag_14ms_force_act2_N"};
+  EXPECT_EQ(names, expected);
+}
+
+}  // namespace
+}  // namespace rths::analysis
