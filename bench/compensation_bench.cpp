@@ -109,8 +109,8 @@ std::vector<Row> evaluate(const std::filesystem::path& config, const std::filesy
     r.name = c.name;
     r.diverged = c.simulation.diverged;
     r.compensated = study.cases(static_cast<int>(i)).compensation_size() > 0;
-    r.nrmse = 100.0 * c.nrmse;
-    r.peak_error = c.peak_error * 1e3;
+    r.nrmse = c.comparison.nrmse_pct;
+    r.peak_error = c.comparison.peak_error_m * 1e3;
     const auto target = column(c.simulation.command, 0), measured = column(c.simulation.realised, 0);
     r.j = core::benchmark_criteria(target, measured, c.simulation.displacement,
                                    reference.displacement, storey, prepared.base.dt, kJ1Search);

@@ -495,6 +495,7 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
   const double early = r.displacement.topRows(n / 3).cwiseAbs().maxCoeff();
   const double late = r.displacement.bottomRows(n / 3).cwiseAbs().maxCoeff();
   return late / early;
+}
 
 std::optional<double> CriticalDelayCheck::critical() const {
   if (continuous && discrete) return std::min(*continuous, *discrete);

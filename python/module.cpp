@@ -67,6 +67,7 @@ std::string unit_suffix(const std::string& unit) {
   std::string out;
   for (char c : unit) {
     if (c == '/') out += "_per_";
+    else if (c == '%') out += "pct";
     else if (c != '^') out += c;
   }
   return out;

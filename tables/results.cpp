@@ -25,7 +25,7 @@ Table study_table(const analysis::StudyOutcome& outcome) {
     step[k] = static_cast<double>(k);
     time[k] = static_cast<double>(k) * dt;
   }
-  table.add_numbers("step", "1", std::move(step));
+  table.add_numbers("step", "", std::move(step));
   table.add_numbers("time_s", "s", std::move(time));
   // Every floor and every actuator of every case (analysis/results_csv.h names); a case that
   // stopped early is NaN (an empty CSV cell) after its last step.
@@ -67,18 +67,18 @@ Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::s
   using Row = analysis::SweepTableRow;
   Table t;
   t.add_numbers("index", "", numbers([](const Row& r) { return r.index; }));
-  t.add_numbers("period", "s", numbers([](const Row& r) { return r.period; }));
-  t.add_numbers("delay", "s", numbers([](const Row& r) { return r.delay; }));
+  t.add_numbers("period_s", "s", numbers([](const Row& r) { return r.period; }));
+  t.add_numbers("delay_s", "s", numbers([](const Row& r) { return r.delay; }));
   t.add_numbers("alpha", "", numbers([](const Row& r) { return r.alpha; }));
-  t.add_numbers("stiffness", "N/m", numbers([](const Row& r) { return r.stiffness; }));
-  t.add_numbers("dt", "s", numbers([](const Row& r) { return r.dt; }));
+  t.add_numbers("stiffness_N_per_m", "N/m", numbers([](const Row& r) { return r.stiffness; }));
+  t.add_numbers("dt_s", "s", numbers([](const Row& r) { return r.dt; }));
   t.add_texts("motion", "", texts([](const Row& r) { return r.motion; }));
   t.add_texts("model", "", texts([](const Row& r) { return r.model; }));
-  t.add_numbers("peak_ref", "m", numbers([](const Row& r) { return r.peak_reference; }));
-  t.add_numbers("peak_delayed", "m", numbers([](const Row& r) { return r.peak_delayed; }));
+  t.add_numbers("peak_ref_m", "m", numbers([](const Row& r) { return r.peak_reference; }));
+  t.add_numbers("peak_delayed_m", "m", numbers([](const Row& r) { return r.peak_delayed; }));
   t.add_numbers("eq2_paper", "", numbers([](const Row& r) { return r.eq2_paper; }));
-  t.add_numbers("nrmse", "", numbers([](const Row& r) { return r.nrmse; }));
-  t.add_numbers("peak_error", "m", numbers([](const Row& r) { return r.peak_error; }));
+  t.add_numbers("nrmse_pct", "%", numbers([](const Row& r) { return r.nrmse_pct; }));
+  t.add_numbers("peak_error_m", "m", numbers([](const Row& r) { return r.peak_error; }));
   t.add_numbers("diverged", "", numbers([](const Row& r) { return r.diverged ? 1 : 0; }));
   t.set_attribute("grid_hash", grid_hash);
   t.set_attribute("grid_points", std::to_string(grid_points));

@@ -92,9 +92,9 @@ def test_sweep_equals_the_cli_sweep_and_its_shards_join(config, tmp_path):
     study = rths.load_study(config)
     whole = rths.sweep(study, threads=1)
     cli("sweep", config, "--no-plots", "--threads", 1, "--out", tmp_path)
-    expected = csv_columns(tmp_path / "sweep.csv", skip_comment=True)
+    expected = csv_columns(tmp_path / "sweep.csv")
     assert whole["grid_points"] == 8 and whole["shard"] == "0/1"
-    assert whole["grid_hash"] in (tmp_path / "sweep.csv").read_text().splitlines()[0]
+    assert whole["grid_hash"] == json.loads((tmp_path / "sweep.meta.json").read_text())["grid"]
     rename = {"period": "period_s", "delay": "delay_s", "dt": "dt_s", "stiffness": "stiffness_N_per_m",
               "peak_ref": "peak_ref_m", "peak_delayed": "peak_delayed_m", "peak_error": "peak_error_m"}
     for name, values in expected.items():
@@ -104,7 +104,7 @@ def test_sweep_equals_the_cli_sweep_and_its_shards_join(config, tmp_path):
         else:
             np.testing.assert_array_equal(whole["series"][key], numbers(values), err_msg=name)
     halves = [rths.sweep(study, shard=f"{i}/2", threads=1) for i in range(2)]
-    np.testing.assert_array_equal(np.concatenate([h["series"]["nrmse"] for h in halves]), whole["series"]["nrmse"])
+    np.testing.assert_array_equal(np.concatenate([h["series"]["nrmse_pct"] for h in halves]), whole["series"]["nrmse_pct"])
     assert whole["trends"]["period_falling_pair_fraction"] == 1.0  # error falls with period (Fig. 4)
     with pytest.raises(rths.BadInputError):
         rths.sweep(study, shard="2/2")

@@ -1,3 +1,4 @@
+import json
 """The MATLAB and HDF5 files rths writes, read back by independent readers (scipy.io.loadmat and
 h5py) and compared value for value with the CSV the same command writes. Run from ctest
 (tables_readback) with RTHS_EXECUTABLE, RTHS_SOURCE_DIR and RTHS_SHARED_DATA_DIR set."""
@@ -94,12 +95,12 @@ def test_run_writes_the_same_table_as_csv_mat_and_h5(study, tmp_path):
 def test_sweep_mat_and_h5_hold_the_sweep_csv_with_text_columns(study, tmp_path):
     for fmt in ("csv", "mat", "h5"):
         rths("sweep", study, "--no-plots", "--threads", 1, "--format", fmt, "--out", tmp_path / fmt)
-    header, columns = read_csv(tmp_path / "csv/sweep.csv", skip_comment=True)
+    header, columns = read_csv(tmp_path / "csv/sweep.csv")
     mat = assert_same_as_csv(header, columns, tmp_path / "mat/sweep.mat", tmp_path / "h5/sweep.h5",
                              text_columns=("motion", "model"))
     assert len(columns["index"]) == 8
-    assert mat["units"]["period"] == "s" and mat["units"]["stiffness"] == "N/m"
-    grid = open(tmp_path / "csv/sweep.csv").readline().split("grid=")[1].split()[0]
+    assert mat["units"]["period_s"] == "s" and mat["units"]["stiffness_N_per_m"] == "N/m"
+    grid = json.loads((tmp_path / "csv/sweep.meta.json").read_text())["grid"]
     with h5py.File(tmp_path / "h5/sweep.h5", "r") as h5:
         assert h5.attrs["grid_hash"] == grid
     rths("sweep", study, "--shard", "0/2", "--format", "mat", "--out", tmp_path / "shard", expect=2)
