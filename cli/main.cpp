@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   rths::cli::add_identify_command(app);
   rths::cli::add_launch_command(app);
   rths::cli::add_export_command(app);
+  rths::cli::add_pki_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev protobuf-compiler
   libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev cyclonedds-dev cyclonedds-tools
   libcli11-dev gnuplot-nox libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 iputils-ping
-  procps util-linux)
+  procps util-linux openssl libssl-dev libxml2-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
