@@ -43,6 +43,17 @@ TEST_P(FuzzTarget, RunsOverItsWholeSeedCorpus) {
   EXPECT_GE(seeds, 2) << "each target keeps at least two real seeds";
 }
 
+// Every input a fuzzer once crashed on (fuzz/regressions/<target>/, each with a regression test
+// of its own next to the parser's tests) keeps coming back cleanly.
+TEST_P(FuzzTarget, RunsOverEveryPastFinding) {
+  const fs::path dir = fs::path(RTHS_SOURCE_DIR) / "fuzz" / "regressions" / GetParam().name;
+  if (!fs::is_directory(dir)) return;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    SCOPED_TRACE(entry.path().string());
+    EXPECT_EQ(run(GetParam(), bytes_of(entry.path())), 0);
+  }
+}
+
 TEST_P(FuzzTarget, SurvivesHostileInput) {
   std::mt19937 random(17);
   std::string noise(4096, '\0');
