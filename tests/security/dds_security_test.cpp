@@ -58,6 +58,9 @@ class DdsSecurity : public ::testing::Test {
     logs_ = lab_ / "logs";
     fs::create_directories(logs_);
   }
+  void TearDown() override {  // logs are kept when the test failed
+    if (!HasFailure()) fs::remove_all(lab_);
+  }
   fs::path lab_, logs_;
 };
 
