@@ -12,6 +12,10 @@
 #include <sstream>
 
 namespace rths::fuzz {
+
+// gtest prints a parameter with this (test names show the target, not its bytes).
+void PrintTo(const Target& target, std::ostream* out) { *out << target.name; }
+
 namespace {
 
 namespace fs = std::filesystem;
