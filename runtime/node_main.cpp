@@ -21,7 +21,8 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   NodeLoopOptions loop;
   app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
   app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
-  app.add_option("--config", config_path, "study config, read only for its domain id");
+  app.add_option("--config", config_path,
+                 "study config, read only for its domain id and security_dir");
   app.add_option("--run-id", run_id, "accept only this run's assignment");
   app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
   app.add_option("--security", security_dir,
