@@ -31,7 +31,7 @@ namespace rths::cli {
 namespace {
 
 struct LaunchArgs {
-  std::string config, out, bin_dir;
+  std::string config, out, bin_dir, security;
   std::vector<std::string> cases;
   int domain = -1;
   double timeout = 0;
@@ -165,6 +165,7 @@ void run_launch(const LaunchArgs& args) {
     options.record = c.record = out / (name + ".rthsrec");
     options.log_dir = out / "logs" / name;
     options.timeout = args.timeout;
+    options.security_dir = args.security;
     options.cpu_placement = args.cpu_placement == "one-cpu" ? runtime::CpuPlacement::kOneCpu
                             : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
                                                              : runtime::CpuPlacement::kAuto;
@@ -272,6 +273,9 @@ void add_launch_command(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
   cmd->add_option("--format", args->format, "each case's table: csv, mat (MATLAB) or h5 (HDF5), as `rths export`")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
+  cmd->add_option("--security", args->security,
+                  "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
+                  "each process uses its node_<id> folder");
   cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots");
   cmd->add_flag("--json", args->json, "print the summary as JSON");
   cmd->callback([args] { run_launch(*args); });

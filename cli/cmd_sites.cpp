@@ -16,7 +16,7 @@ namespace rths::cli {
 namespace {
 
 struct SitesOptions {
-  std::string config, out, bin_dir, check_record;
+  std::string config, out, bin_dir, check_record, security;
   std::int64_t expect_steps = 1;
   double expect_injected = -1.0;
   bool json = false, check = false, cleanup = false;
@@ -66,7 +66,9 @@ void run(const SitesOptions& o) {
     return;
   }
   if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
-  const auto plan = deploy::load_sites(o.config);
+  auto plan = deploy::load_sites(o.config);
+  if (!o.security.empty())
+    plan.study.mutable_deployment()->set_security_dir(std::filesystem::absolute(o.security).string());
   if (o.check) {
     std::cout << "sites config ok: " << plan.placements.size() << " processes on "
               << plan.sites.sites_size() << " sites\n";
@@ -115,6 +117,9 @@ void add_sites_command(CLI::App& app) {
                   "output folder: record, logs, DDS configs (default out/sites_<config name>)");
   cmd->add_option("--bin-dir", options->bin_dir,
                   "folder with rths-coordinator, rths-substructure-node, rths-actuator-emulator");
+  cmd->add_option("--security", options->security,
+                  "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
+                  "each process uses its node_<id> folder");
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--check", options->check, "only load and check the config");
   cmd->add_flag("--cleanup", options->cleanup,

@@ -8,6 +8,8 @@
 #include <iostream>
 #include <sstream>
 
+#include "security/check.h"
+#include "security/pki.h"
 #include "transport/dds_endpoint.h"
 
 namespace rths::coordinator {
@@ -32,13 +34,16 @@ std::string summary_text(const RunOutcome& o) {
 
 int coordinator_main(int argc, char** argv) {
   CLI::App app{"rths-coordinator: the integrator loop of a distributed hybrid test"};
-  std::string config_path, case_name, run_id, record;
+  std::string config_path, case_name, run_id, record, security_dir;
   int domain = -1;
   app.add_option("--config", config_path, "study config (text format)")->required();
   app.add_option("--case", case_name, "case to run (default: deployment.case_name or reference)");
   app.add_option("--run-id", run_id, "run id (default: host-pid-time)");
   app.add_option("--record", record, "run record file (length-delimited protobuf)");
   app.add_option("--domain", domain, "DDS domain id (default: deployment.domain_id)");
+  app.add_option("--security", security_dir,
+                 "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
+                 "default: deployment.security_dir");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -60,6 +65,13 @@ int coordinator_main(int argc, char** argv) {
     transport::DdsEndpointOptions options;
     options.domain_id =
         static_cast<std::uint32_t>(domain >= 0 ? domain : study.deployment().domain_id());
+    if (security_dir.empty() && !study.deployment().security_dir().empty())
+      security_dir = security::node_dir(std::filesystem::path(config_path).parent_path() /
+                                            study.deployment().security_dir(),
+                                        security::kCoordinatorNodeId);
+    if (!security_dir.empty())  // refused here (exit 2), before the participant exists
+      options.participant_properties = security::participant_properties(
+          security::check_node_security(security_dir, security::kCoordinatorNodeId));
     endpoint = std::make_unique<transport::DdsEndpoint>(options);
     CoordinatorOptions co;
     co.run_id = !run_id.empty() ? run_id

@@ -1,6 +1,7 @@
 #pragma once
 // The coordinator program:
 //   rths-coordinator --config STUDY [--case NAME] [--run-id ID] [--record FILE] [--domain D]
+//                    [--security DIR/node_0]   (DDS Security; bad documents: exit 2, nothing sent)
 // Loads the study, opens DDS (domain: --domain, else deployment.domain_id), runs one case and
 // prints a summary. Exit: 0 completed, 1 the run stopped (node lost, limit, start-up timeout),
 // 2 bad config or usage, 3 DDS or file error.

@@ -60,6 +60,12 @@ void parse_values(std::string line, const std::filesystem::path& path, int line_
   }
 }
 
+// Far above any real record (1e8 samples = 5.8 days at 5 ms), and small enough that the count
+// converts to long and the header alone cannot make the reader reserve gigabytes.
+constexpr long kMaxAt2Points = 100'000'000;
+// Samples reserved up front; a record with more grows the vector as values actually arrive.
+constexpr std::size_t kAt2Reserve = 1 << 20;
+
 struct At2Header {
   long npts = 0;
   double dt = 0.0;
@@ -88,6 +94,7 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
     const char* q = text.c_str() + equals + 1;
     if (!parse_number(q, header.dt)) throw fail("no number after DT=");
     if (npts != std::floor(npts)) throw fail("NPTS is not a whole number");
+    if (!(npts <= kMaxAt2Points)) throw fail("NPTS above " + std::to_string(kMaxAt2Points));
     header.npts = static_cast<long>(npts);
   } else {
     const char* p = text.c_str();
@@ -96,6 +103,7 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
       throw fail("no 'NPTS=' and no two leading numbers");
     }
     if (npts != std::floor(npts)) throw fail("NPTS is not a whole number");
+    if (!(npts <= kMaxAt2Points)) throw fail("NPTS above " + std::to_string(kMaxAt2Points));
     header.npts = static_cast<long>(npts);
   }
   if (header.npts <= 0) throw fail("NPTS must be > 0");
@@ -154,7 +162,7 @@ GroundMotion read_at2(const std::filesystem::path& path) {
   GroundMotion motion;
   motion.name = path.stem().string();
   motion.dt = header.dt;
-  motion.acceleration.reserve(static_cast<std::size_t>(header.npts));
+  motion.acceleration.reserve(std::min(static_cast<std::size_t>(header.npts), kAt2Reserve));
   int line_number = 4;
   int last_value_line = 4;
   while (read_line(in, line)) {

@@ -45,6 +45,7 @@ void make_absolute(std::string& path, const std::filesystem::path& base_dir) {
 // The merged study is written elsewhere than the original, so its relative paths must not move.
 void absolutize_paths(config::Study& study, const std::filesystem::path& base_dir) {
   make_absolute(*study.mutable_motion()->mutable_path(), base_dir);
+  if (study.has_deployment()) make_absolute(*study.mutable_deployment()->mutable_security_dir(), base_dir);
   for (auto& motion : *study.mutable_sweep()->mutable_motions()) {
     make_absolute(*motion.mutable_path(), base_dir);
   }

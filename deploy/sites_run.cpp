@@ -15,6 +15,7 @@
 #include "deploy/sites.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"
+#include "security/check.h"
 
 namespace rths::deploy {
 namespace {
@@ -92,6 +93,13 @@ ProgramPaths find_programs(const std::optional<std::filesystem::path>& bin_dir) 
 SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) {
   const auto started = std::chrono::steady_clock::now();
   const auto programs = find_programs(options.bin_dir);
+  // DDS Security: every process's documents are checked before anything is built or started.
+  const std::filesystem::path security_dir = plan.study.deployment().security_dir();
+  if (!security_dir.empty()) {
+    std::vector<int> ids;
+    for (const auto& placement : plan.placements) ids.push_back(placement.node_id);
+    security::check_lab_security(security_dir, ids);
+  }
   SitesRunResult result;
   result.output_dir = std::filesystem::absolute(options.output_dir);
   std::filesystem::create_directories(result.output_dir);
@@ -143,6 +151,8 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
                             std::string("--run-id"), run_id}) {
       argv.push_back(arg);
     }
+    const auto security_args = security::security_arguments(security_dir, placement.node_id);
+    argv.insert(argv.end(), security_args.begin(), security_args.end());
     spdlog::info("site {}: {}", placement.site, command_line(argv));
     nodes.push_back(std::make_unique<ChildProcess>(
         "node " + std::to_string(placement.node_id) + " (" + placement.kind + ") at site " +
@@ -158,6 +168,8 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
                             std::to_string(domain)}) {
       argv.push_back(arg);
     }
+    const auto security_args = security::security_arguments(security_dir, 0);
+    argv.insert(argv.end(), security_args.begin(), security_args.end());
     spdlog::info("site {}: {}", site, command_line(argv));
     coordinator = std::make_unique<ChildProcess>("coordinator at site " + site, argv,
                                                  std::map<std::string, std::string>{

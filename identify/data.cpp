@@ -224,9 +224,14 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
   if (colon == std::string::npos || trim(line.substr(0, colon)) != "Header Size") {
     throw std::invalid_argument(where(path, 1) + "expected 'Header Size: N' (raw DAQ export)");
   }
-  const int header_size = static_cast<int>(
-      parse_number(trim(line.substr(colon + 1)), path, 1, "Header Size"));
-  if (header_size < 2) throw std::invalid_argument(where(path, 1) + "Header Size below 2");
+  // Checked as a double first: converting an out-of-range value to int is undefined behaviour.
+  constexpr double kMaxHeaderSize = 10000;  // real exports have ~7 header lines
+  const double header_value = parse_number(trim(line.substr(colon + 1)), path, 1, "Header Size");
+  if (!(header_value >= 2) || !(header_value <= kMaxHeaderSize) ||
+      header_value != std::floor(header_value))
+    throw std::invalid_argument(where(path, 1) + "Header Size must be a whole number in 2.." +
+                                std::to_string(static_cast<int>(kMaxHeaderSize)));
+  const int header_size = static_cast<int>(header_value);
   std::vector<std::string> header;
   double interval = 0.0;
   while (line_number < static_cast<std::size_t>(header_size)) {

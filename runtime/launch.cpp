@@ -12,6 +12,8 @@
 #include "runtime/plan.h"
 #include "runtime/process.h"
 #include "runtime/schema.h"
+#include "security/check.h"
+#include "security/pki.h"
 #include "transport/transport.h"
 
 namespace rths::runtime {
@@ -44,6 +46,15 @@ LaunchResult launch_run(const LaunchOptions& options) {
                       ? "launch-" + std::to_string(transport::realtime_ns())
                       : options.run_id;
   const int domain = options.domain >= 0 ? options.domain : deployment.domain_id();
+  const std::filesystem::path security_dir =
+      !options.security_dir.empty()        ? options.security_dir
+      : !deployment.security_dir().empty() ? options.config.parent_path() / deployment.security_dir()
+                                           : std::filesystem::path();
+  if (!security_dir.empty()) {  // every document checked before any process starts
+    std::vector<int> ids{security::kCoordinatorNodeId};
+    for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
+    security::check_lab_security(security_dir, ids);
+  }
   ensure_dds_config();
   std::filesystem::create_directories(options.log_dir);
 
@@ -73,15 +84,19 @@ LaunchResult launch_run(const LaunchOptions& options) {
     const bool sub = node.kind() == config::NodeSpec::SUBSTRUCTURE;
     const std::string id = std::to_string(node.id());
     result.node_labels.push_back("node " + id + " (" + node_kind_name(node.kind()) + ")");
-    nodes.emplace_back(sub ? substructure_program : emulator_program,
-                       std::vector<std::string>{"--node-id", id, "--domain", std::to_string(domain),
-                                                "--run-id", result.run_id},
+    std::vector<std::string> node_args{"--node-id", id, "--domain", std::to_string(domain),
+                                       "--run-id", result.run_id};
+    const auto security_args = security::security_arguments(security_dir, node.id());
+    node_args.insert(node_args.end(), security_args.begin(), security_args.end());
+    nodes.emplace_back(sub ? substructure_program : emulator_program, node_args,
                        options.log_dir / ("node_" + id + ".log"));
   }
   std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
                                 "--domain", std::to_string(domain)};
   if (!case_name.empty()) args.insert(args.end(), {"--case", case_name});
   if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
+  const auto security_args = security::security_arguments(security_dir, security::kCoordinatorNodeId);
+  args.insert(args.end(), security_args.begin(), security_args.end());
   result.coordinator_log = options.log_dir / "coordinator.log";
   ChildProcess coordinator(coordinator_program, args, result.coordinator_log);
   pin.reset();

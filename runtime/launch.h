@@ -45,6 +45,9 @@ struct LaunchOptions {
   std::filesystem::path log_dir;       // per-process logs
   double timeout = 0.0;                // s for the coordinator; 0 = none
   CpuPlacement cpu_placement = CpuPlacement::kAuto;
+  // DDS Security: the `rths pki init` directory; each process gets --security DIR/node_<id>.
+  // Empty: the config's deployment.security_dir (relative to the config), else off.
+  std::filesystem::path security_dir;
 };
 
 struct LaunchResult {

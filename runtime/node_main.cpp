@@ -7,6 +7,8 @@
 
 #include "core/study.h"
 #include "runtime/node_loop.h"
+#include "security/check.h"
+#include "security/pki.h"
 #include "transport/dds_endpoint.h"
 
 namespace rths::runtime {
@@ -15,30 +17,41 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   CLI::App app{program + ": an rths node; the coordinator assigns its part of the study"};
   int node_id = 0;
   int domain = -1;
-  std::string config_path, run_id;
+  std::string config_path, run_id, security_dir;
   NodeLoopOptions loop;
   app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
   app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
-  app.add_option("--config", config_path, "study config, read only for its domain id");
+  app.add_option("--config", config_path,
+                 "study config, read only for its domain id and security_dir");
   app.add_option("--run-id", run_id, "accept only this run's assignment");
   app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
+  app.add_option("--security", security_dir,
+                 "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
+                 "the config's deployment.security_dir");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  transport::DdsEndpointOptions options;
   try {
     if (node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
-    if (domain < 0) {
-      if (config_path.empty()) throw std::invalid_argument("give --domain or --config");
-      domain = core::load_study(config_path).deployment().domain_id();
+    if (domain < 0 && config_path.empty()) throw std::invalid_argument("give --domain or --config");
+    if (!config_path.empty()) {
+      const config::Deployment deployment = core::load_study(config_path).deployment();
+      if (domain < 0) domain = deployment.domain_id();
+      if (security_dir.empty() && !deployment.security_dir().empty())
+        security_dir = security::node_dir(std::filesystem::path(config_path).parent_path() /
+                                              deployment.security_dir(), node_id);
     }
+    if (!security_dir.empty())  // refused here, before the participant exists
+      options.participant_properties =
+          security::participant_properties(security::check_node_security(security_dir, node_id));
   } catch (const std::exception& e) {
     std::cerr << program << ": " << e.what() << "\n";
     return 2;
   }
   try {
-    transport::DdsEndpointOptions options;
     options.domain_id = static_cast<std::uint32_t>(domain);
     options.coordinator = false;
     options.node_id = node_id;

@@ -4,6 +4,7 @@
 // 0 stopped by the coordinator, 1 lost the coordinator / never assigned, 2 bad usage, 3 DDS error.
 //
 //   <program> --node-id N [--domain D | --config STUDY] [--run-id ID] [--assign-timeout S]
+//             [--security DIR/node_N]   (DDS Security; bad documents: exit 2 before DDS starts)
 
 #include <functional>
 #include <memory>

@@ -52,9 +52,22 @@ Handle Entity::release() {
   return h;
 }
 
-Participant::Participant(std::uint32_t domain_id)
-    : entity_(check(dds_create_participant(domain_id, nullptr, nullptr),
-                    "dds_create_participant(domain " + std::to_string(domain_id) + ")")) {}
+namespace {
+
+QosPtr make_participant_qos(const Properties& properties) {
+  if (properties.empty()) return nullptr;
+  QosPtr qos(dds_create_qos());
+  if (!qos) throw std::runtime_error("dds_create_qos: out of memory");
+  for (const auto& [name, value] : properties) dds_qset_prop(qos.get(), name.c_str(), value.c_str());
+  return qos;
+}
+
+}  // namespace
+
+Participant::Participant(std::uint32_t domain_id, const Properties& properties)
+    : entity_(check(dds_create_participant(domain_id, make_participant_qos(properties).get(), nullptr),
+                    "dds_create_participant(domain " + std::to_string(domain_id) +
+                        (properties.empty() ? ")" : ", with DDS Security)"))) {}
 
 EnvelopeTopic::EnvelopeTopic(const Participant& participant, const std::string& name,
                              const QosSpec& qos)

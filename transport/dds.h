@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace rths::transport::dds {
 
@@ -39,9 +41,13 @@ struct QosSpec {
   std::chrono::milliseconds max_blocking{1000};
 };
 
+// Name/value QoS properties of a participant (dds_qset_prop), e.g. the "dds.sec.*" ones that
+// switch DDS Security on. Empty = none.
+using Properties = std::vector<std::pair<std::string, std::string>>;
+
 class Participant {
  public:
-  explicit Participant(std::uint32_t domain_id);
+  explicit Participant(std::uint32_t domain_id, const Properties& properties = {});
   Handle get() const { return entity_.get(); }
 
  private:

@@ -17,7 +17,7 @@ namespace rths::transport {
 struct DdsEndpoint::Impl {
   Impl(const DdsEndpointOptions& o, const dds::QosSpec& qos)
       : options(o),
-        participant(o.domain_id),
+        participant(o.domain_id, o.participant_properties),
         down(participant, o.topic_prefix + "_down", qos),
         up(participant, o.topic_prefix + "_up", qos),
         writer(participant, o.coordinator ? down : up, qos),

@@ -14,6 +14,8 @@
 // only for the payload strings.
 
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "transport/transport.h"
 
@@ -25,6 +27,9 @@ struct DdsEndpointOptions {
   std::int32_t node_id = kCoordinatorId;   // for a node, its id (messages to others are dropped)
   std::string topic_prefix = "rths";       // topics <prefix>_down and <prefix>_up
   int history_depth = 64;
+  // QoS properties of the participant: the DDS Security ones (security::participant_properties)
+  // or none. A participant with security talks only to participants of the same lab's PKI.
+  std::vector<std::pair<std::string, std::string>> participant_properties;
 };
 
 class DdsEndpoint final : public Endpoint {

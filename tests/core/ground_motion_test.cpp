@@ -97,6 +97,19 @@ TEST_F(At2Reader, TruncatedRecordNamesFileAndMissingCount) {
                                    {"found 800 values but NPTS = 1559", "759 missing"});
 }
 
+// Found by fuzz_at2_motion (fuzz/regressions/at2_motion/npts_beyond_long): an NPTS of 4e41 was
+// converted to long (undefined behaviour) and reserved before any value was read.
+TEST_F(At2Reader, RefusesAnNptsBeyondAnyRecordBeforeConvertingIt) {
+  const std::filesystem::path found =
+      std::filesystem::path(RTHS_SOURCE_DIR) / "fuzz/regressions/at2_motion/npts_beyond_long";
+  expect_error<std::invalid_argument>([&] { read_at2(found); }, found, {"NPTS above 100000000"});
+  for (const std::string& header : {"NPTS= 4.07778e41, DT= .02 SEC", "1e300 0.02 NPTS, DT",
+                                    "NPTS= 100000001, DT= .02 SEC"}) {
+    const auto path = write("huge.AT2", "title\nplace\nunits\n" + header + "\n0.1 0.2\n");
+    expect_error<std::invalid_argument>([&] { read_at2(path); }, path, {":4: NPTS above 100000000"});
+  }
+}
+
 TEST_F(At2Reader, ReadsTheNewNgaHeaderAndGluedFixedWidthFields) {
   const auto path = write("new.AT2",
                           "PEER NGA STRONG MOTION DATABASE RECORD\r\n"

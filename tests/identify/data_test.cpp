@@ -12,6 +12,7 @@ namespace rths::identify {
 namespace {
 
 namespace fs = std::filesystem;
+using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 const fs::path kRealFile = fs::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
@@ -127,6 +128,18 @@ TEST_F(DataTest, ColumnMapSyntaxErrors) {
 TEST_F(DataTest, DaqWithoutSamplingIntervalIsRejected) {
   const auto p = write("daq.txt", "Header Size:  3\nVersion: 2\nSample Number, CHANNEL0, CHANNEL1, CHANNEL2\n1, 0, 0, 0\n");
   EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Sampling Interval"));
+}
+
+// Found by fuzz_daq_export (fuzz/regressions/daq_export/header_size_beyond_int): a Header Size of
+// 8.9e65 was converted to int (undefined behaviour) before any check.
+TEST_F(DataTest, DaqHeaderSizeOutOfRangeIsNamed) {
+  const fs::path found = fs::path(RTHS_SOURCE_DIR) / "fuzz/regressions/daq_export/header_size_beyond_int";
+  EXPECT_THAT(error_of([&] { read_daq(found); }),
+              AllOf(HasSubstr(found.string() + ":1:"), HasSubstr("Header Size must be a whole number in 2..10000")));
+  for (const char* size : {"1e300", "-3", "2.5", "10001"}) {
+    const auto p = write("daq.txt", std::string("Header Size: ") + size + "\nVersion: 2\n");
+    EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Header Size must be a whole number")) << size;
+  }
 }
 
 TEST_F(DataTest, HoldoutSplits) {

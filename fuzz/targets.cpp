@@ -1,0 +1,214 @@
+#include "fuzz/targets.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "actuator_emulator/actuator_service.h"
+#include "core/study.h"
+#include "core/text_format.h"
+#include "deploy/sites.h"
+#include "identify/data.h"
+#include "runtime/plan.h"
+#include "runtime/record.h"
+#include "runtime/schema.h"
+#include "runtime/validation.h"
+#include "substructure_nodes/substructure_service.h"
+#include "tables/results.h"
+#include "tables/write.h"
+
+namespace rths::fuzz {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The paper's frame (configs/paper_frame.textproto) without its motion: what the deployment and
+// envelope targets assign and plan against.
+constexpr const char* kPaperFrame =
+    "name: \"paper_frame\"\n"
+    "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+    "motion { path: \"unused.AT2\" }\n"
+    "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+    "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+    "cases { name: \"reference\" }\n"
+    "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n";
+constexpr double kPaperDt = 0.001;
+constexpr const char* kRunId = "fuzz";
+
+std::string as_text(const std::uint8_t* data, std::size_t size) {
+  return std::string(reinterpret_cast<const char*>(data), size);
+}
+
+// The one scratch file of this process; rewritten for every input.
+class FuzzScratch {
+ public:
+  FuzzScratch()
+      : dir_(fs::temp_directory_path() / ("rths_fuzz_" + std::to_string(getpid()))) {
+    fs::create_directories(dir_);
+  }
+  ~FuzzScratch() {
+    std::error_code ignored;
+    fs::remove_all(dir_, ignored);
+  }
+  const fs::path& write(const std::uint8_t* data, std::size_t size) {
+    std::ofstream out(input_, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+    return input_;
+  }
+  fs::path output() const { return dir_ / "output.csv"; }
+
+ private:
+  fs::path dir_;
+  fs::path input_ = dir_ / "input";
+};
+
+FuzzScratch& scratch() {
+  static FuzzScratch instance;
+  return instance;
+}
+
+// Runs `body`; the documented errors of bad input end it quietly.
+template <class Body>
+int guarded(Body body) {
+  try {
+    body();
+  } catch (const std::invalid_argument&) {
+  } catch (const std::runtime_error&) {
+  }
+  return 0;
+}
+
+const config::Study& paper_frame() {
+  static const config::Study study = core::parse_study(kPaperFrame, "paper_frame");
+  return study;
+}
+
+const core::HybridSetup& paper_setup() {
+  static const core::HybridSetup setup = runtime::setup_without_motion(
+      paper_frame(), fs::temp_directory_path(), kPaperDt, paper_frame().cases(0));
+  return setup;
+}
+
+std::uint32_t read_le(const std::uint8_t* p, int bytes) {
+  std::uint32_t value = 0;
+  for (int i = bytes - 1; i >= 0; --i) value = (value << 8) | p[i];
+  return value;
+}
+
+}  // namespace
+
+runtime::Assign paper_assign(int node_id, config::NodeSpec::Kind kind) {
+  runtime::Assign assign;
+  assign.set_schema_version(runtime::kSchemaVersion);
+  *assign.mutable_study() = paper_frame();
+  assign.set_base_dir(fs::temp_directory_path().string());
+  assign.set_case_name("lag_shift_14ms");
+  assign.mutable_node()->set_id(node_id);
+  assign.mutable_node()->set_kind(kind);
+  assign.set_dt(kPaperDt);
+  assign.add_storeys(0);
+  if (kind == config::NodeSpec::ACTUATOR_EMULATOR) assign.add_actuators(0);
+  assign.set_heartbeat_period(0.05);
+  assign.set_orphan_timeout(2.0);
+  return assign;
+}
+
+int study_config(const std::uint8_t* data, std::size_t size) {
+  return guarded([&] {
+    const config::Study study = core::parse_study(as_text(data, size), "fuzz");
+    core::validate_study(study, "fuzz");
+    const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : 0.01;
+    runtime::setup_without_motion(study, fs::temp_directory_path(), dt,
+                                  runtime::find_case(study, ""));
+  });
+}
+
+int deployment_config(const std::uint8_t* data, std::size_t size) {
+  return guarded([&] {
+    config::Deployment deployment;
+    core::parse_text_format(as_text(data, size), "fuzz", deployment);
+    runtime::make_plan(paper_setup(), runtime::with_default_nodes(deployment, paper_setup()));
+  });
+}
+
+int sites_config(const std::uint8_t* data, std::size_t size) {
+  return guarded([&] { deploy::parse_sites(as_text(data, size), "fuzz"); });
+}
+
+int at2_motion(const std::uint8_t* data, std::size_t size) {
+  return guarded([&] { core::read_at2(scratch().write(data, size)); });
+}
+
+int column_motion(const std::uint8_t* data, std::size_t size) {
+  const fs::path& file = scratch().write(data, size);
+  guarded([&] { core::read_columns(file, 0.01, core::kGravity); });
+  return guarded([&] { core::read_columns(file, 0.0, 1.0); });
+}
+
+int daq_export(const std::uint8_t* data, std::size_t size) {
+  return guarded([&] { identify::read_measured(scratch().write(data, size), {}, {}, 2); });
+}
+
+int run_record(const std::uint8_t* data, std::size_t size) {
+  return guarded([&] {
+    const runtime::RecordContents contents = runtime::read_record(scratch().write(data, size));
+    tables::write_table(tables::record_table(contents), scratch().output(), tables::Format::kCsv);
+  });
+}
+
+std::string envelope_record(std::int32_t kind, std::int32_t step, const std::string& payload) {
+  std::string out;
+  out.push_back(static_cast<char>(kind));
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((static_cast<std::uint32_t>(step) >> (8 * i)) & 0xff));
+  const std::size_t n = std::min<std::size_t>(payload.size(), 0xffff);
+  out.push_back(static_cast<char>(n & 0xff));
+  out.push_back(static_cast<char>(n >> 8));
+  out.append(payload, 0, n);
+  return out;
+}
+
+int envelope_payload(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return 0;
+  const std::uint8_t flags = data[0];
+  substructure_nodes::SubstructureService substructure(1, "");
+  actuator_emulator::ActuatorService actuator(2, "");
+  runtime::NodeService* services[] = {&substructure, &actuator};
+  if (flags & 1) {
+    const auto assign = [](int id, config::NodeSpec::Kind kind) {
+      return runtime::pack(kRunId, id, runtime::ASSIGN, 0, paper_assign(id, kind));
+    };
+    substructure.handle(assign(1, config::NodeSpec::SUBSTRUCTURE));
+    actuator.handle(assign(2, config::NodeSpec::ACTUATOR_EMULATOR));
+  }
+  std::size_t at = 1;
+  while (at + 7 <= size) {
+    transport::Message m;
+    m.run_id = (flags & 2) ? "another-run" : kRunId;
+    m.kind = data[at];
+    m.step = static_cast<std::int32_t>(read_le(data + at + 1, 4));
+    const std::size_t n = read_le(data + at + 5, 2);
+    at += 7;
+    m.payload = as_text(data + at, std::min(n, size - at));
+    at += m.payload.size();
+    runtime::check_envelope(m, kRunId);
+    for (runtime::NodeService* service : services) {
+      m.node_id = service->node_id();
+      guarded([&] { service->handle(m); });
+    }
+  }
+  return 0;
+}
+
+const std::vector<Target>& targets() {
+  static const std::vector<Target> all{
+      {"study_config", &study_config},   {"deployment_config", &deployment_config},
+      {"sites_config", &sites_config},   {"at2_motion", &at2_motion},
+      {"column_motion", &column_motion}, {"daq_export", &daq_export},
+      {"run_record", &run_record},       {"envelope_payload", &envelope_payload},
+  };
+  return all;
+}
+
+}  // namespace rths::fuzz

@@ -1,0 +1,60 @@
+#pragma once
+// Fuzz entry points: each feeds arbitrary bytes to one of rths's parsers of outside input and
+// returns 0. Input the parser rejects must end in its documented error -- std::invalid_argument
+// or std::runtime_error, caught here; anything else (a crash, an AddressSanitizer or UBSan report,
+// any other exception, a hang, a leak) is a bug the fuzzer reports.
+//
+//   study_config       core::parse_study + validate_study, then the hybrid setup of the reference
+//                      case without its motion (structure, partition, delay chains)
+//   deployment_config  a config::Deployment in text format, its default nodes and plan against
+//                      the paper's frame (runtime::with_default_nodes, make_plan)
+//   sites_config       deploy::parse_sites (the `rths sites` config)
+//   at2_motion         core::read_at2 (PEER AT2, both header dialects)
+//   column_motion      core::read_columns, one column at dt = 0.01 s and two columns (dt = 0)
+//   daq_export         identify::read_measured (DAQ raw export or CSV), at least 2 samples
+//   run_record         runtime::read_record, then the CSV table `rths export` writes of it
+//   envelope_payload   DDS envelopes as they arrive at the two node services (substructure node,
+//                      actuator emulator): runtime::check_envelope and NodeService::handle.
+//                      Input: byte 0 flags (bit 0: both nodes are first assigned the paper's frame;
+//                      bit 1: messages carry another run's id), then records of
+//                      [kind: 1 byte][step: int32 LE][payload size: uint16 LE][payload bytes].
+//
+// File-based readers get the bytes through one scratch file per process (FuzzScratch).
+// libfuzzer_main.cpp wraps one entry as LLVMFuzzerTestOneInput; tests/fuzz runs every entry over
+// its seed corpus (fuzz/corpus/<name>/) with the normal compiler, so the harness cannot rot.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rths/proto/runtime.pb.h"
+
+namespace rths::fuzz {
+
+using Entry = int (*)(const std::uint8_t* data, std::size_t size);
+
+struct Target {
+  const char* name;  // also the corpus folder and the libFuzzer program suffix
+  Entry entry;
+};
+
+int study_config(const std::uint8_t* data, std::size_t size);
+int deployment_config(const std::uint8_t* data, std::size_t size);
+int sites_config(const std::uint8_t* data, std::size_t size);
+int at2_motion(const std::uint8_t* data, std::size_t size);
+int column_motion(const std::uint8_t* data, std::size_t size);
+int daq_export(const std::uint8_t* data, std::size_t size);
+int run_record(const std::uint8_t* data, std::size_t size);
+int envelope_payload(const std::uint8_t* data, std::size_t size);
+
+const std::vector<Target>& targets();
+
+// The paper's frame (lag_shift_14ms case) assigned to node `node_id` of `kind`, dt = 1 ms: what
+// flag bit 0 of envelope_payload delivers first.
+runtime::Assign paper_assign(int node_id, config::NodeSpec::Kind kind);
+
+// One envelope record in the envelope_payload input format.
+std::string envelope_record(std::int32_t kind, std::int32_t step, const std::string& payload);
+
+}  // namespace rths::fuzz
