@@ -73,13 +73,41 @@ nlohmann::json ranking_json(const std::vector<CandidateTrial>& ranking) {
   return out;
 }
 
+nlohmann::json bound_hits_json(const std::vector<BoundHit>& hits) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& h : hits) {
+    out.push_back({{"param", h.name},
+                   {"bound", h.at_lower ? "lower" : "upper"},
+                   {"value", h.bound},
+                   {"message", h.message()}});
+  }
+  return out;
+}
+
 nlohmann::json model_json(const FitResult& fit, const SignalScales& scales) {
   nlohmann::json effects = nlohmann::json::array();
   for (Effect e : fit.model.effects) effects.push_back(effect_name(e));
   return {{"effects", effects},
           {"params", params_json(fit, scales)},
           {"train_error", fit.train_error},
-          {"heldout_error", fit.heldout_error}};
+          {"heldout_error", fit.heldout_error},
+          {"bound_hits", bound_hits_json(fit.bound_hits)}};
+}
+
+nlohmann::json kind_json(const KindProposal& kind) {
+  nlohmann::json ranking = nlohmann::json::array();
+  for (const auto& k : kind.ranking) {
+    ranking.push_back({{"kind", kind_name(k.kind)},
+                       {"heldout_error", k.fit.heldout_error},
+                       {"score", k.score},
+                       {"physical", k.physical},
+                       {"bound_hits", bound_hits_json(k.fit.bound_hits)}});
+  }
+  nlohmann::json out = {{"declared_bound_hits", bound_hits_json(kind.declared_hits)},
+                        {"ranking", ranking}};
+  out["proposed"] = kind.proposed ? nlohmann::json(kind_name(*kind.proposed)) : nlohmann::json();
+  out["hysteretic_damper"] = kind.proposed && is_hysteretic_damper(*kind.proposed);
+  return out;
 }
 
 nlohmann::json case_json(const CaseError& c) {
@@ -176,6 +204,9 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
     channels.push_back({{"channel", channel_name(c.channel)},
                         {"declared_effects", declared},
                         {"declared", model_json(c.declared_fit, scales)},
+                        {"start", model_json(c.start_fit, scales)},
+                        {"kind", c.kind ? kind_json(*c.kind) : nlohmann::json()},
+                        {"noise_floor", c.noise_floor},
                         {"final", model_json(c.final_fit, scales)},
                         {"final_evidence", evidence_json(c.final_evidence)},
                         {"search_heldout_error", c.search_heldout_error},
@@ -223,6 +254,27 @@ std::string format_table(const Identification& id,
     }
     out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
         << percent(c.declared_fit.heldout_error) << "\n";
+    out << "  noise floor (estimated from the record): " << percent(c.noise_floor) << "\n";
+    for (const auto& hit : c.declared_fit.bound_hits) {
+      out << "  declared fit ends at a bound: " << hit.message()
+          << (c.kind ? ": the declared model is the wrong kind" : "") << "\n";
+    }
+    if (c.kind) {
+      out << "  specimen kinds (held-out at the search rate):";
+      for (const auto& k : c.kind->ranking) {
+        out << " " << kind_name(k.kind) << " " << percent(k.fit.heldout_error)
+            << (k.physical ? "" : " (wrong kind: at a bound)") << ";";
+      }
+      out << "\n";
+      if (c.kind->proposed) {
+        out << "  proposed kind: " << kind_name(*c.kind->proposed)
+            << (is_hysteretic_damper(*c.kind->proposed) ? " (a damper with hysteresis)" : "")
+            << "; the search starts from it: held-out " << percent(c.start_fit.heldout_error)
+            << "\n";
+      } else {
+        out << "  no kind of the library fits without reaching a bound\n";
+      }
+    }
     if (c.steps.empty()) out << "  nothing added: no candidate pays on held-out data\n";
     int n = 1;
     for (const auto& s : c.steps) {
@@ -256,6 +308,12 @@ std::string format_table(const Identification& id,
           << percent(d.after.heldout_error) << ")\n";
     }
     out << "  final: " << c.final_fit.model.describe(scales) << "\n";
+    out << "  final held-out " << percent(c.final_fit.heldout_error) << " = "
+        << format_value(c.noise_floor > 0.0 ? c.final_fit.heldout_error / c.noise_floor : 0.0)
+        << " x the noise floor\n";
+    for (const auto& hit : c.final_fit.bound_hits) {
+      out << "  final fit ends at a bound: " << hit.message() << "\n";
+    }
     if (!c.last_ranking.empty()) {
       out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
           << percent(c.last_ranking.front().heldout_error) << " vs "

@@ -104,6 +104,50 @@ TEST(SelectionTest, RestrictedCandidatesAndMaxSteps) {
   EXPECT_EQ(id.steps[0].effect, Effect::kOffsetDrift);
 }
 
+// A damper whose force falls with displacement (c v - k d): the declared spring wants a negative
+// stiffness; the tool says the kind is wrong, proposes the damper and never fits k < 0.
+TEST(SelectionTest, WrongKindIsReportedAndABetterKindProposed) {
+  GeneratorSpec spec;
+  spec.command = GeneratorSpec::Command::kEarthquake;
+  spec.stiffness = 0.0;
+  MeasuredData data = generate_measured(spec);
+  const ChannelSignals first = make_signals(data, Channel::kForce);
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    data.force[i] = 3000.0 * first.velocity[i] - 5.0e4 * data.measured[i];
+  }
+  const ChannelSignals s = make_signals(data, Channel::kForce);
+  const Split split = holdout_split(s.size(), 0.3, HoldoutMode::kBlocks);
+  const auto id = identify_channel(s, split, {Effect::kStiffness}, SelectionOptions{});
+  ASSERT_TRUE(id.kind.has_value());
+  ASSERT_FALSE(id.kind->declared_hits.empty());
+  EXPECT_EQ(id.kind->declared_hits.front().message(), "the data want a negative stiffness");
+  ASSERT_TRUE(id.kind->proposed.has_value());
+  EXPECT_EQ(*id.kind->proposed, SpecimenKind::kViscousDamper);
+  EXPECT_TRUE(id.declared_search_final.has_value());
+  const auto sc = signal_scales(s);
+  EXPECT_GE(id.final_fit.model.param(Effect::kDamping, "damping", sc).value_or(0.0), 2500.0);
+  EXPECT_GE(id.final_fit.model.param(Effect::kStiffness, "stiffness", sc).value_or(0.0), 0.0);
+}
+
+// An MR-damper-like specimen (dashpot + Bouc–Wen hysteresis, no spring): the kind comparison
+// ranks the Spencer model first.
+TEST(SelectionTest, KindComparisonRanksTheHystereticDamperFirst) {
+  GeneratorSpec spec;
+  spec.command = GeneratorSpec::Command::kEarthquake;
+  spec.stiffness = 1.0e6;
+  spec.bouc_wen_yield = 1e-4;
+  spec.bouc_wen_alpha = 0.0;  // pure hysteresis of 100 N
+  spec.damping = 4000.0;
+  const MeasuredData data = generate_measured(spec);
+  const ChannelSignals s = make_signals(data, Channel::kForce);
+  const Split split = holdout_split(s.size(), 0.3, HoldoutMode::kBlocks);
+  const KindProposal proposal = compare_kinds(s, split, {}, SelectionOptions{});
+  ASSERT_TRUE(proposal.proposed.has_value());
+  EXPECT_EQ(*proposal.proposed, SpecimenKind::kMrDamper);
+  EXPECT_TRUE(is_hysteretic_damper(*proposal.proposed));
+  EXPECT_EQ(proposal.ranking.size(), specimen_kinds().size());
+}
+
 TEST(SelectionTest, DefaultDeclaredModels) {
   EXPECT_EQ(default_declared(Channel::kMeasured), std::vector<Effect>{Effect::kDelay});
   EXPECT_EQ(default_declared(Channel::kForce), std::vector<Effect>{Effect::kStiffness});
