@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace rths::identify {
 namespace {
@@ -190,6 +191,29 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   result.heldout_error =
       normalised_error(signals.target, result.prediction, split.heldout);
   return result;
+}
+
+std::vector<WindowEstimate> windowed_estimate(const ChannelModel& model, std::size_t param_index,
+                                              const ChannelSignals& signals, std::size_t windows) {
+  if (param_index >= model.params.size() || windows == 0) {
+    throw std::invalid_argument("windowed_estimate: no such parameter or no window");
+  }
+  ChannelModel one = model;
+  one.fixed.assign(model.params.size(), true);
+  one.fixed[param_index] = false;
+  std::vector<WindowEstimate> out;
+  const std::size_t n = signals.size(), width = n / windows;
+  if (width < 10) throw std::invalid_argument("windowed_estimate: windows too short");
+  for (std::size_t w = 0; w < windows; ++w) {
+    Split split;
+    split.size = n;
+    for (std::size_t i = w * width; i < std::min(n, (w + 1) * width); ++i) split.train.push_back(i);
+    split.heldout = split.train;
+    const FitResult fit = fit_channel(one, signals, split);
+    out.push_back({signals.time[split.train[split.train.size() / 2]], fit.model.params[param_index],
+                   fit.std_errors[param_index]});
+  }
+  return out;
 }
 
 }  // namespace rths::identify

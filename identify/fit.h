@@ -49,6 +49,17 @@ struct FitResult {
 FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, const Split& split,
                       const FitOptions& options = {});
 
+// A parameter estimated window by window: the record cut into `windows` contiguous windows, the
+// parameter refitted alone on each (every other parameter fixed at the model's value), with its
+// standard error from the Jacobian. Shows how a delay, a gain or a stiffness moves over a record.
+struct WindowEstimate {
+  double time = 0.0;       // s, centre of the window
+  double value = 0.0;      // SI
+  double std_error = 0.0;  // SI, one standard deviation
+};
+std::vector<WindowEstimate> windowed_estimate(const ChannelModel& model, std::size_t param_index,
+                                              const ChannelSignals& signals, std::size_t windows);
+
 // Errors of a model as it stands (no fitting), with zero uncertainty.
 FitResult evaluate_channel(const ChannelModel& model, const ChannelSignals& signals,
                            const Split& split);

@@ -81,9 +81,24 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
   const std::vector<double> command_velocity = derivative(data.command, spec.dt);
 
   core::DelayChain chain;
-  auto shift = std::make_unique<core::TimeShift>(spec.delay, spec.dt);
-  shift->set_gain(spec.gain);
-  chain.add(std::move(shift));
+  if (spec.delay_drift != 0.0) {
+    if (std::abs(spec.delay_drift) > spec.delay) {
+      throw std::invalid_argument("generator: delay_drift must not exceed delay (a delay >= 0)");
+    }
+    core::DelayTrace trace;
+    for (std::size_t i = 0; i < n; ++i) {
+      trace.time.push_back(data.time[i]);
+      trace.delay.push_back(spec.delay +
+                            spec.delay_drift * std::sin(2.0 * kPi * data.time[i] / spec.duration));
+    }
+    auto shift = std::make_unique<core::TraceShift>(std::move(trace), spec.dt);
+    shift->set_gain(spec.gain);
+    chain.add(std::move(shift));
+  } else {
+    auto shift = std::make_unique<core::TimeShift>(spec.delay, spec.dt);
+    shift->set_gain(spec.gain);
+    chain.add(std::move(shift));
+  }
   if (spec.first_order_time_constant > 0.0) {
     chain.add(std::make_unique<core::FirstOrderActuator>(spec.first_order_time_constant, spec.dt));
   }

@@ -7,7 +7,9 @@
 //   kEarthquake  white noise (seeded) through two core TransferFunctionStage filters
 //                (a 2nd-order low-pass at `corner_frequency`, zeta 0.6, and a 1st-order high-pass
 //                at 0.2 Hz), times a rise-plateau-decay envelope, scaled to peak `amplitude`.
-// Actuator (channel measured): core TimeShift(delay) -> [core FirstOrderActuator(T)]
+// Actuator (channel measured): core TimeShift(delay), or core TraceShift following
+//   tau(t) = delay + delay_drift sin(2 pi t / duration) when delay_drift != 0 (a lag drifting over
+//   the record: a warming servo-valve, network jitter) -> [core FirstOrderActuator(T)]
 //   -> [core TransferFunctionStage wn^2 / (s^2 + 2 zeta wn s + wn^2)] with gain, then the
 //   effects the core has no block for: backlash (play operator of total width b), velocity
 //   saturation, offset + drift (normalised time s in [-1/2, 1/2]).
@@ -34,6 +36,7 @@ struct GeneratorSpec {
   double corner_frequency = 4.0; // Hz, earthquake-like spectrum
   // actuator
   double delay = 0.012, gain = 1.0;
+  double delay_drift = 0.0;                // s, amplitude of the delay's drift (<= delay)
   double first_order_time_constant = 0.0;  // s, 0 = absent
   double second_order_frequency = 0.0;     // Hz, 0 = absent
   double second_order_damping = 0.7;

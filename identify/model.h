@@ -63,7 +63,7 @@ enum class Effect {
 };
 
 // Number of cosine terms of every slow drift D(s; c).
-inline constexpr std::size_t kDriftTerms = 6;
+inline constexpr std::size_t kDriftTerms = 8;
 // D(s; c) above, for s in [-1/2, 1/2].
 double drift_profile(std::span<const double> coefficients, double s);
 

@@ -170,6 +170,55 @@ std::pair<std::size_t, std::size_t> heldout_window(const Identification& id,
   return {best_start, std::min(s.size(), best_start + width)};
 }
 
+// The time-varying delay of the final model against the delay refitted window by window, with
+// a band of two standard errors.
+void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
+                      const std::filesystem::path& png) {
+  const SignalScales scales = signal_scales(s);
+  const ChannelModel& model = c.final_fit.model;
+  const ChannelModel constant = without_effect(model, Effect::kTimeVaryingDelay, scales);
+  const auto delay_index = constant.index_of(Effect::kDelay, "delay", scales);
+  if (!delay_index) return;
+  const auto windows = windowed_estimate(constant, *delay_index, s, 16);
+  analysis::Series estimate{"delay per window (fit)", {}, {}, "linespoints"};
+  analysis::Series upper{"+2 std. error", {}, {}, "lines"}, lower{"-2 std. error", {}, {}, "lines"};
+  for (const auto& w : windows) {
+    estimate.x.push_back(w.time);
+    estimate.y.push_back(w.value * 1e3);
+    upper.x.push_back(w.time);
+    upper.y.push_back((w.value + 2.0 * w.std_error) * 1e3);
+    lower.x.push_back(w.time);
+    lower.y.push_back((w.value - 2.0 * w.std_error) * 1e3);
+  }
+  const std::size_t first = base_params(model.channel, scales).size();
+  std::size_t index = first;
+  std::vector<double> coefficients;
+  for (Effect e : model.effects) {
+    const std::size_t count = effect_params(e, model.channel, scales).size();
+    if (e == Effect::kTimeVaryingDelay) {
+      coefficients.assign(model.params.begin() + static_cast<std::ptrdiff_t>(index),
+                          model.params.begin() + static_cast<std::ptrdiff_t>(index + count));
+    }
+    index += count;
+  }
+  const double mean = model.param(Effect::kDelay, "delay", scales).value_or(0.0);
+  const double t_mid = 0.5 * (s.time.front() + s.time.back());
+  const double duration = std::max(s.time.back() - s.time.front(), s.dt);
+  analysis::Series curve{"identified model tau(t)", {}, {}, "lines"};
+  const std::size_t stride = std::max<std::size_t>(1, s.size() / 2000);
+  for (std::size_t i = 0; i < s.size(); i += stride) {
+    curve.x.push_back(s.time[i]);
+    curve.y.push_back(
+        std::max(0.0, mean + drift_profile(coefficients, (s.time[i] - t_mid) / duration)) * 1e3);
+  }
+  analysis::PlotSpec plot;
+  plot.title = "actuator delay over the record: model and per-window estimate (band: +/- 2 std. error)";
+  plot.xlabel = "time (s)";
+  plot.ylabel = "delay (ms)";
+  plot.series = {curve, estimate, upper, lower};
+  analysis::write_png_plot(plot, png);
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Identification& id, const ReportContext& context,
@@ -402,6 +451,11 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
       written.push_back(directory / "measured_tracking.png");
       analysis::write_png_plot(tracking, written.back());
     }
+  }
+  if (const auto* c = id.find(Channel::kMeasured);
+      c != nullptr && c->final_fit.model.has(Effect::kTimeVaryingDelay)) {
+    written.push_back(directory / "measured_time_varying_delay.png");
+    write_delay_plot(*c, signals_of(id, Channel::kMeasured), written.back());
   }
   return written;
 }

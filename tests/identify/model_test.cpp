@@ -131,7 +131,7 @@ TEST(ModelTest, PhysicalParametersAreBoundedAtZero) {
 }
 
 TEST(ModelTest, DriftProfileIsZeroMeanOverTheRecord) {
-  const std::vector<double> c{0.3, -0.2, 0.1, 0.05, 0.0, 0.02};
+  const std::vector<double> c{0.3, -0.2, 0.1, 0.05, 0.0, 0.02, 0.0, 0.0};
   double sum = 0.0;
   const int n = 10000;
   for (int i = 0; i < n; ++i) sum += drift_profile(c, (i + 0.5) / n - 0.5);

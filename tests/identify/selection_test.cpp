@@ -57,6 +57,8 @@ INSTANTIATE_TEST_SUITE_P(
         UndeclaredCase{"offset", Channel::kMeasured, Effect::kOffsetDrift,
                        [](GeneratorSpec& s) { s.offset = 3e-4; },
                        GeneratorSpec::Command::kEarthquake},
+        UndeclaredCase{"time_varying_delay", Channel::kMeasured, Effect::kTimeVaryingDelay,
+                       [](GeneratorSpec& s) { s.delay_drift = 0.006; }},
         UndeclaredCase{"backlash", Channel::kMeasured, Effect::kBacklash,
                        [](GeneratorSpec& s) { s.backlash_width = 3e-4; }},
         UndeclaredCase{"coulomb", Channel::kForce, Effect::kCoulomb,
