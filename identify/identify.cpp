@@ -73,6 +73,7 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
         previous = step.after;
       }
       id.final_fit = previous;
+      attribute_shares(id, signals, result.split, full_fit);
       id.final_evidence = residual_evidence(signals, previous.prediction);
       for (auto& trial : id.last_ranking) trial.fit.prediction.clear();
     }

@@ -245,6 +245,8 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                        {"train_error_after", s.after.train_error},
                        {"heldout_error_before", s.before.heldout_error},
                        {"heldout_error_after", s.after.heldout_error},
+                       {"own_error_removed", s.own_error_removed},
+                       {"own_share", s.own_share},
                        {"evidence", evidence_json(s.evidence_before)},
                        {"ranking", ranking_json(s.ranking)}});
     }
@@ -355,6 +357,19 @@ std::string format_table(const Identification& id,
       out << "  dropped: + " << effect_name(d.effect) << " paid at the search rate but not at the "
           << "full rate (held-out " << percent(d.before.heldout_error) << " -> "
           << percent(d.after.heldout_error) << ")\n";
+    }
+    if (c.steps.size() > 1) {
+      std::vector<const SelectionStep*> by_part;
+      for (const auto& st : c.steps) by_part.push_back(&st);
+      std::stable_sort(by_part.begin(), by_part.end(), [](const auto* a, const auto* b) {
+        return a->own_error_removed > b->own_error_removed;
+      });
+      out << "  effects by their own part (held-out error lost when each is left out):";
+      for (const auto* st : by_part) {
+        out << " " << effect_name(st->effect) << " " << percent(st->own_error_removed) << " ("
+            << format_value(100.0 * st->own_share) << " % of the parts);";
+      }
+      out << "\n";
     }
     out << "  final: " << c.final_fit.model.describe(scales) << "\n";
     out << "  final held-out " << percent(c.final_fit.heldout_error) << " = "

@@ -154,6 +154,19 @@ void search_from(ChannelIdentification& id, const FitResult& start, const Channe
 
 }  // namespace
 
+void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, const Split& split,
+                      const FitOptions& options) {
+  const SignalScales scales = signal_scales(signals);
+  double total = 0.0;
+  for (auto& step : id.steps) {
+    const FitResult without =
+        fit_channel(without_effect(id.final_fit.model, step.effect, scales), signals, split, options);
+    step.own_error_removed = std::max(0.0, without.heldout_error - id.final_fit.heldout_error);
+    total += step.own_error_removed;
+  }
+  for (auto& step : id.steps) step.own_share = total > 0.0 ? step.own_error_removed / total : 0.0;
+}
+
 ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
                                        const std::vector<Effect>& declared,
                                        const SelectionOptions& options) {
@@ -177,6 +190,7 @@ ChannelIdentification identify_channel(const ChannelSignals& signals, const Spli
       }
     }
   }
+  attribute_shares(id, signals, split, options.fit);
   id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);
   id.search_heldout_error = id.final_fit.heldout_error;
   id.final_evidence = residual_evidence(signals, id.final_fit.prediction);

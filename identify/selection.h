@@ -65,6 +65,10 @@ struct SelectionStep {
   FitResult before, after;
   Evidence evidence_before;               // of the residual the step explains
   std::vector<CandidateTrial> ranking;    // best score first
+  // The effect's own part, independent of the order of the steps: the final model refitted
+  // without it loses this much held-out error (own_error_removed = e_h(without) - e_h(final)),
+  // and own_share is that part over the sum of every added effect's part.
+  double own_error_removed = 0.0, own_share = 0.0;
 };
 
 struct ChannelIdentification {
@@ -99,6 +103,11 @@ ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
 ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
                                        const std::vector<Effect>& declared,
                                        const SelectionOptions& options);
+
+// Fills own_error_removed and own_share of every step of `id` (drop-one refits of the final
+// model on `signals` / `split`).
+void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, const Split& split,
+                      const FitOptions& options);
 
 // The declared model by default: actuator = pure delay + gain, specimen = linear spring.
 std::vector<Effect> default_declared(Channel channel);

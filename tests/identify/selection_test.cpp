@@ -150,6 +150,42 @@ TEST(SelectionTest, KindComparisonRanksTheHystereticDamperFirst) {
   EXPECT_EQ(proposal.ranking.size(), specimen_kinds().size());
 }
 
+struct EffectPair {
+  std::string name;
+  Effect first, second;
+  std::function<void(GeneratorSpec&)> add;
+};
+
+// Two undeclared actuator effects at once, generated from core blocks: both named, each with its
+// own part of the error removed, and those parts sum to one.
+TEST(SelectionTest, TwoUndeclaredEffectsAreBothNamed) {
+  const std::vector<EffectPair> pairs{
+      {"first_order+offset", Effect::kFirstOrder, Effect::kOffsetDrift,
+       [](GeneratorSpec& s) { s.first_order_time_constant = 0.015; s.offset = 2e-4; }},
+      {"backlash+offset", Effect::kBacklash, Effect::kOffsetDrift,
+       [](GeneratorSpec& s) { s.backlash_width = 3e-4; s.offset = 2e-4; }},
+      {"first_order+backlash", Effect::kFirstOrder, Effect::kBacklash,
+       [](GeneratorSpec& s) { s.first_order_time_constant = 0.015; s.backlash_width = 3e-4; }},
+  };
+  std::size_t both = 0;
+  for (const auto& pair : pairs) {
+    GeneratorSpec spec;
+    spec.duration = 12.0;
+    pair.add(spec);
+    const ChannelIdentification id = run(spec, Channel::kMeasured);
+    const bool named = id.final_fit.model.has(pair.first) && id.final_fit.model.has(pair.second);
+    both += named ? 1 : 0;
+    EXPECT_TRUE(named) << pair.name;
+    double shares = 0.0;
+    for (const auto& step : id.steps) {
+      EXPECT_GT(step.own_error_removed, 0.0) << pair.name << " " << effect_name(step.effect);
+      shares += step.own_share;
+    }
+    EXPECT_NEAR(shares, 1.0, 1e-9) << pair.name;
+  }
+  EXPECT_GE(static_cast<double>(both), 0.9 * static_cast<double>(pairs.size()));
+}
+
 TEST(SelectionTest, DefaultDeclaredModels) {
   EXPECT_EQ(default_declared(Channel::kMeasured), std::vector<Effect>{Effect::kDelay});
   EXPECT_EQ(default_declared(Channel::kForce), std::vector<Effect>{Effect::kStiffness});
