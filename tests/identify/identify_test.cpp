@@ -71,6 +71,35 @@ TEST(IdentifyTest, BothChannelsOfAGeneratedSetInOrder) {
   EXPECT_TRUE(id.find(Channel::kForce)->final_fit.model.has(Effect::kCubicStiffness));
 }
 
+// Labs record at 200 Hz to 4096 Hz: the step comes from the time column (through a CSV round
+// trip), and the lag's time constant is found in seconds whatever the rate.
+class SamplingRateTest : public ::testing::TestWithParam<double> {};
+
+TEST_P(SamplingRateTest, FirstOrderLagFoundInSeconds) {
+  GeneratorSpec spec;
+  spec.dt = 1.0 / GetParam();
+  spec.duration = 12.0;
+  spec.first_order_time_constant = 0.02;
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("rths_identify_rate_" + std::to_string(static_cast<int>(GetParam())) + ".csv");
+  write_csv(generate_measured(spec), path);
+  const MeasuredData data = read_measured(path);
+  std::filesystem::remove(path);
+  EXPECT_NEAR(data.dt, spec.dt, 1e-4 * spec.dt);
+  IdentifyOptions options;
+  options.channels = {Channel::kMeasured};
+  const Identification id = identify(data, options);
+  const auto& c = id.channels.at(0);
+  ASSERT_FALSE(c.steps.empty());
+  EXPECT_EQ(c.steps.front().effect, Effect::kFirstOrder);
+  EXPECT_NEAR(c.final_fit.model.param(Effect::kFirstOrder, "time_constant",
+                                      signal_scales(id.signals[0]))
+                  .value(),
+              0.02, 0.002);
+}
+
+INSTANTIATE_TEST_SUITE_P(Rates, SamplingRateTest, ::testing::Values(200.0, 4096.0));
+
 TEST(IdentifyTest, DecimatedSearchAgreesWithTheFullRate) {
   GeneratorSpec spec;
   spec.offset = 2e-4;
