@@ -17,6 +17,7 @@
 #include "identify/report.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "identify/validation.h"
 
 namespace rths::cli {
 namespace {
@@ -25,9 +26,10 @@ struct IdentifyCliOptions {
   std::string data, column_map, time_unit = "s", length_unit = "mm", force_unit = "N";
   std::string channels = "measured,force", declared_actuator = "delay",
               declared_specimen = "stiffness", candidates, holdout_mode = "blocks";
-  std::string out, predict, design_compensator;
+  std::string out, predict, design_compensator, validate;
   std::string format = "csv";  // of <out>/identify.<ext>: the record and both models' predictions
   double design_dt = 0.001;
+  std::size_t folds = 5;
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
   bool json = false;
@@ -89,6 +91,8 @@ void run_identify(const IdentifyCliOptions& o) {
   options.selection.max_steps = o.max_steps;
 
   const identify::MeasuredData data = identify::read_measured(o.data, units, map);
+  std::optional<identify::MeasuredData> other;  // read first: a bad file fails before the fit
+  if (!o.validate.empty()) other = identify::read_measured(o.validate, units, map);
   const identify::Identification id = identify::identify(data, options);
 
   std::optional<identify::StudyPrediction> prediction;
@@ -125,15 +129,54 @@ void run_identify(const IdentifyCliOptions& o) {
       throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
     }
   }
+  // Validation: k-fold over contiguous blocks and, with --validate, another record of the rig.
+  nlohmann::json validation = nlohmann::json::array();
+  std::ostringstream validation_text;
+  for (std::size_t k = 0; k < id.channels.size(); ++k) {
+    const auto& c = id.channels[k];
+    const auto& model = c.final_fit.model;
+    nlohmann::json entry = {{"channel", identify::channel_name(c.channel)},
+                            {"in_record_heldout_error", c.final_fit.heldout_error}};
+    validation_text << "validation of channel " << identify::channel_name(c.channel)
+                    << ": in-record held-out " << 100.0 * c.final_fit.heldout_error << " %";
+    if (o.folds >= 2) {
+      identify::FitOptions fast;
+      fast.stride = 4;
+      const auto folds = identify::kfold(model, id.signals[k], o.folds, fast);
+      nlohmann::json params = nlohmann::json::object();
+      for (std::size_t p = 0; p < folds.param_names.size(); ++p) {
+        params[folds.param_names[p]] = {{"mean", folds.param_mean[p]},
+                                        {"fold_spread", folds.param_spread[p]},
+                                        {"jacobian_std_error", c.final_fit.std_errors.at(p)}};
+      }
+      entry["kfold"] = {{"folds", o.folds},
+                        {"heldout_errors", folds.heldout_errors},
+                        {"mean", folds.mean},
+                        {"spread", folds.spread},
+                        {"params", params}};
+      validation_text << "; " << o.folds << "-fold " << 100.0 * folds.mean << " +/- "
+                      << 100.0 * folds.spread << " %";
+    }
+    if (other) {
+      const auto result = identify::validate_on(
+          model, identify::make_signals(*other, c.channel), other->source);
+      entry["other_record"] = {{"source", result.source}, {"error", result.error}};
+      validation_text << "; on " << result.source << " " << 100.0 * result.error
+                      << " % (offsets and drifts re-estimated)";
+    }
+    validation_text << "\n";
+    validation.push_back(entry);
+  }
   if (o.json) {
     const identify::ReportContext context{o.holdout, options.holdout_mode};
     nlohmann::json report = identify::to_json(id, context, prediction);
     report["input_units"] = {{"time", o.time_unit}, {"length", o.length_unit}, {"force", o.force_unit}};
+    report["validation"] = validation;
     std::cout << report.dump(2) << "\n";
   } else {
     std::cout << "input units: time " << o.time_unit << ", length " << o.length_unit << ", force "
               << o.force_unit << " (--time-unit, --length-unit, --force-unit)\n";
-    std::cout << identify::format_table(id, prediction);
+    std::cout << identify::format_table(id, prediction) << validation_text.str();
     if (!o.out.empty()) std::cout << "plots and identify." << o.format << " written to " << o.out << "\n";
   }
 }
@@ -187,6 +230,10 @@ void add_identify_command(CLI::App& app) {
       ->check(CLI::IsMember({"polynomial", "ats", "model-based"}));
   cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--folds", o->folds,
+                  "k-fold validation over contiguous blocks of the final model (0: off)");
+  cmd->add_option("--validate", o->validate,
+                  "another record of the same rig: the identified models' error on it");
   cmd->add_flag("--json", o->json, "print the steps and models as JSON");
   cmd->callback([o] {
     if (!o->design_compensator.empty() && o->out.empty()) {

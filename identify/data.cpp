@@ -306,6 +306,26 @@ void write_csv(const MeasuredData& data, const std::filesystem::path& path) {
   if (!out) throw std::runtime_error(path.string() + ": write failed");
 }
 
+MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end) {
+  if (!(begin < end && end <= data.size())) {
+    throw std::invalid_argument(data.source + ": slice [" + std::to_string(begin) + ", " +
+                                std::to_string(end) + ") outside " +
+                                std::to_string(data.size()) + " samples");
+  }
+  MeasuredData out;
+  out.source = data.source + "[" + std::to_string(begin) + ":" + std::to_string(end) + "]";
+  out.dt = data.dt;
+  const auto part = [&](const std::vector<double>& x) {
+    return std::vector<double>(x.begin() + static_cast<std::ptrdiff_t>(begin),
+                               x.begin() + static_cast<std::ptrdiff_t>(end));
+  };
+  out.time = part(data.time);
+  out.command = part(data.command);
+  out.measured = part(data.measured);
+  out.force = part(data.force);
+  return out;
+}
+
 MeasuredData decimated(const MeasuredData& data, std::size_t factor) {
   if (factor <= 1) return data;
   MeasuredData out;

@@ -76,6 +76,10 @@ void write_csv(const MeasuredData& data, const std::filesystem::path& path);
 // Sets dt to the mean step. Throws std::invalid_argument naming the source and the sample.
 void validate(MeasuredData& data, std::size_t min_samples);
 
+// Samples [begin, end) as a record of their own (time kept). Throws std::invalid_argument when
+// the range is empty or beyond the record.
+MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end);
+
 // Every `factor`-th sample (factor >= 1), after a centred moving average over `factor` samples
 // so that decimation does not alias the noise.
 MeasuredData decimated(const MeasuredData& data, std::size_t factor);

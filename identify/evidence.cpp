@@ -117,6 +117,30 @@ CrossCorrelation cross_correlation(std::span<const double> a, std::span<const do
   return result;
 }
 
+double noise_floor(std::span<const double> input, std::span<const double> target, double dt) {
+  if (input.size() != target.size() || target.size() < 16 || !(dt > 0.0)) return 0.0;
+  const Spectrum in = amplitude_spectrum(input, dt), out = amplitude_spectrum(target, dt);
+  double input_total = 0.0;
+  for (std::size_t k = 1; k < in.amplitude.size(); ++k) input_total += in.amplitude[k] * in.amplitude[k];
+  double cumulative = 0.0, signal_band = in.frequency.back();
+  for (std::size_t k = 1; k < in.amplitude.size(); ++k) {
+    cumulative += in.amplitude[k] * in.amplitude[k];
+    if (cumulative >= 0.995 * input_total) {
+      signal_band = in.frequency[k];
+      break;
+    }
+  }
+  const double nyquist = out.frequency.back(), cut = 1.5 * signal_band;
+  if (!(cut < 0.9 * nyquist)) return 0.0;  // no band free of signal: nothing to estimate from
+  double above = 0.0, total = 0.0;
+  for (std::size_t k = 1; k < out.amplitude.size(); ++k) {
+    const double power = out.amplitude[k] * out.amplitude[k];
+    total += power;
+    if (out.frequency[k] > cut) above += power;
+  }
+  return total > 0.0 ? std::sqrt(above * nyquist / (nyquist - cut) / total) : 0.0;
+}
+
 Evidence residual_evidence(const ChannelSignals& signals, std::span<const double> prediction) {
   Evidence e;
   const std::size_t n = signals.size();

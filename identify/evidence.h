@@ -11,6 +11,13 @@
 //                        the input, the input's velocity, sign(velocity), the input cubed and the
 //                        acceleration; the cross-correlation input -> residual; the residual
 //                        spectrum's dominant frequency and the share of its power below 1 Hz.
+//   noise_floor          the sensor noise of a target, relative to its spread: sigma / std(target).
+//                        The signal band is where 99.5 % of the input's power lies (below f_s);
+//                        above 1.5 f_s the target has (ideally) only noise, whose power there,
+//                        spread as a flat density over the whole band 0..Nyquist, is sigma^2:
+//                        sigma^2 = P(f > 1.5 f_s) (f_N / (f_N - 1.5 f_s)). Harmonics a nonlinear
+//                        specimen puts above the band count as noise (an over-estimate); noise
+//                        that the DAQ filters towards Nyquist is under-estimated.
 
 #include <span>
 #include <vector>
@@ -42,6 +49,8 @@ struct Evidence {
   double low_frequency_share = 0.0;  // power below 1 Hz / total
   double residual_rms = 0.0;
 };
+double noise_floor(std::span<const double> input, std::span<const double> target, double dt);
+
 Evidence residual_evidence(const ChannelSignals& signals, std::span<const double> prediction);
 
 }  // namespace rths::identify

@@ -5,6 +5,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <stdexcept>
 
 namespace rths::identify {
 namespace {
@@ -73,6 +75,16 @@ double target_spread(const ChannelSignals& signals, const Split& split) {
 
 }  // namespace
 
+std::string BoundHit::message() const {
+  std::ostringstream out;
+  if (at_lower && !meaning.empty()) {
+    out << "the data want " << meaning;
+  } else {
+    out << "the data want " << name << (at_lower ? " below " : " above ") << bound;
+  }
+  return out.str();
+}
+
 FitResult evaluate_channel(const ChannelModel& model, const ChannelSignals& signals,
                            const Split& split) {
   FitResult result;
@@ -104,6 +116,14 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   ceres::Problem problem(problem_options);
   auto* cost = new ChannelCost(start, signals, split, scales, stride, target_scale);
   problem.AddResidualBlock(cost, nullptr, theta.data());
+  std::vector<int> constant;
+  for (std::size_t i = 0; i < p; ++i) {
+    if (start.is_fixed(i)) constant.push_back(static_cast<int>(i));
+  }
+  if (constant.size() == p) return evaluate_channel(start, signals, split);
+  if (!constant.empty()) {
+    problem.SetManifold(theta.data(), new ceres::SubsetManifold(static_cast<int>(p), constant));
+  }
   for (std::size_t i = 0; i < p; ++i) {
     if (specs[i].lower > -1e299) {
       problem.SetParameterLowerBound(theta.data(), static_cast<int>(i), specs[i].lower / scales[i]);
@@ -138,8 +158,28 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
         jacobian.data(), static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(p));
     double rss = 0.0;
     for (double r : residuals) rss += r * r;
-    const double sigma2 = rss / static_cast<double>(m - p);
-    const Eigen::MatrixXd jtj = J.transpose() * J;
+    const std::size_t free = p - constant.size();
+    const double sigma2 = rss / static_cast<double>(std::max<std::size_t>(1, m - free));
+    Eigen::MatrixXd free_j = J;
+    for (int i : constant) free_j.col(i).setZero();
+    const Eigen::VectorXd gradient =
+        free_j.transpose() * Eigen::Map<const Eigen::VectorXd>(residuals.data(),
+                                                               static_cast<Eigen::Index>(m));
+    for (std::size_t i = 0; i < p; ++i) {
+      if (start.is_fixed(i)) continue;
+      const double value = theta[i] * scales[i];
+      const auto near = [&](double bound) {
+        return std::abs(value - bound) <= 1e-6 * std::max(std::abs(bound), scales[i]);
+      };
+      const double g = gradient(static_cast<Eigen::Index>(i));
+      const double tolerance = 1e-6 * std::max(rss, 1e-12);
+      if (specs[i].lower > -1e299 && near(specs[i].lower) && g > tolerance) {
+        result.bound_hits.push_back({i, specs[i].name, true, specs[i].lower, specs[i].below_means});
+      } else if (specs[i].upper < 1e299 && near(specs[i].upper) && g < -tolerance) {
+        result.bound_hits.push_back({i, specs[i].name, false, specs[i].upper, ""});
+      }
+    }
+    const Eigen::MatrixXd jtj = free_j.transpose() * free_j;
     const Eigen::MatrixXd cov = sigma2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
     for (std::size_t i = 0; i < p; ++i) {
       const double var = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
@@ -151,6 +191,29 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   result.heldout_error =
       normalised_error(signals.target, result.prediction, split.heldout);
   return result;
+}
+
+std::vector<WindowEstimate> windowed_estimate(const ChannelModel& model, std::size_t param_index,
+                                              const ChannelSignals& signals, std::size_t windows) {
+  if (param_index >= model.params.size() || windows == 0) {
+    throw std::invalid_argument("windowed_estimate: no such parameter or no window");
+  }
+  ChannelModel one = model;
+  one.fixed.assign(model.params.size(), true);
+  one.fixed[param_index] = false;
+  std::vector<WindowEstimate> out;
+  const std::size_t n = signals.size(), width = n / windows;
+  if (width < 10) throw std::invalid_argument("windowed_estimate: windows too short");
+  for (std::size_t w = 0; w < windows; ++w) {
+    Split split;
+    split.size = n;
+    for (std::size_t i = w * width; i < std::min(n, (w + 1) * width); ++i) split.train.push_back(i);
+    split.heldout = split.train;
+    const FitResult fit = fit_channel(one, signals, split);
+    out.push_back({signals.time[split.train[split.train.size() / 2]], fit.model.params[param_index],
+                   fit.std_errors[param_index]});
+  }
+  return out;
 }
 
 }  // namespace rths::identify

@@ -81,9 +81,24 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
   const std::vector<double> command_velocity = derivative(data.command, spec.dt);
 
   core::DelayChain chain;
-  auto shift = std::make_unique<core::TimeShift>(spec.delay, spec.dt);
-  shift->set_gain(spec.gain);
-  chain.add(std::move(shift));
+  if (spec.delay_drift != 0.0) {
+    if (std::abs(spec.delay_drift) > spec.delay) {
+      throw std::invalid_argument("generator: delay_drift must not exceed delay (a delay >= 0)");
+    }
+    core::DelayTrace trace;
+    for (std::size_t i = 0; i < n; ++i) {
+      trace.time.push_back(data.time[i]);
+      trace.delay.push_back(spec.delay +
+                            spec.delay_drift * std::sin(2.0 * kPi * data.time[i] / spec.duration));
+    }
+    auto shift = std::make_unique<core::TraceShift>(std::move(trace), spec.dt);
+    shift->set_gain(spec.gain);
+    chain.add(std::move(shift));
+  } else {
+    auto shift = std::make_unique<core::TimeShift>(spec.delay, spec.dt);
+    shift->set_gain(spec.gain);
+    chain.add(std::move(shift));
+  }
   if (spec.first_order_time_constant > 0.0) {
     chain.add(std::make_unique<core::FirstOrderActuator>(spec.first_order_time_constant, spec.dt));
   }
@@ -107,7 +122,9 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
       x = saturated;
     }
     const double s = (data.time[i] - 0.5 * data.time.back()) / data.time.back();
-    realised[i] = x + spec.offset + spec.drift * s;
+    const double drifting_gain =
+        1.0 + spec.gain_drift * std::sin(2.0 * kPi * data.time[i] / spec.duration);
+    realised[i] = drifting_gain * x + spec.offset + spec.drift * s;
   }
 
   const auto velocity = derivative(realised, spec.dt);
@@ -126,7 +143,9 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
   for (std::size_t i = 0; i < n; ++i) {
     const double d = realised[i], v = velocity[i];
     double f = spring->step(d) + spec.damping * v + spec.cubic_stiffness * d * d * d +
-               spec.mass * acceleration[i] + spec.force_offset;
+               spec.mass * acceleration[i] + spec.force_offset +
+               spec.stiffness_drift * spec.stiffness *
+                   std::sin(2.0 * kPi * data.time[i] / spec.duration) * d;
     if (spec.coulomb_force != 0.0) f += spec.coulomb_force * std::tanh(v / spec.coulomb_velocity);
     data.measured[i] = d + spec.displacement_noise * normal(rng);
     data.force[i] = f + spec.force_noise * normal(rng);

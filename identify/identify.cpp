@@ -50,7 +50,13 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
     if (factor > 1) {
       // Refit at the full rate from the search's parameters; the ranking keeps search errors.
       id.declared_fit = fit_channel(id.declared_fit.model, signals, result.split, full_fit);
-      FitResult previous = id.declared_fit;
+      id.start_fit = id.kind && id.kind->proposed
+                         ? fit_channel(id.start_fit.model, signals, result.split, full_fit)
+                         : id.declared_fit;
+      if (id.kind) {
+        for (auto& trial : id.kind->ranking) trial.fit.prediction.clear();
+      }
+      FitResult previous = id.start_fit;
       for (std::size_t k = 0; k < id.steps.size(); ++k) {
         auto& step = id.steps[k];
         step.before = previous;
@@ -67,9 +73,11 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
         previous = step.after;
       }
       id.final_fit = previous;
+      attribute_shares(id, signals, result.split, full_fit);
       id.final_evidence = residual_evidence(signals, previous.prediction);
       for (auto& trial : id.last_ranking) trial.fit.prediction.clear();
     }
+    id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);
     result.channels.push_back(std::move(id));
     result.signals.push_back(std::move(signals));
   }

@@ -18,7 +18,7 @@ struct EffectInfo {
   bool measured, force;
 };
 
-constexpr std::array<EffectInfo, 14> kEffects{{
+constexpr std::array<EffectInfo, 16> kEffects{{
     {Effect::kDelay, "delay", true, true},
     {Effect::kOffsetDrift, "offset_drift", true, true},
     {Effect::kFirstOrder, "first_order", true, false},
@@ -26,6 +26,7 @@ constexpr std::array<EffectInfo, 14> kEffects{{
     {Effect::kBacklash, "backlash", true, false},
     {Effect::kVelocitySaturation, "velocity_saturation", true, false},
     {Effect::kTimeVaryingDelay, "time_varying_delay", true, false},
+    {Effect::kTimeVaryingGain, "time_varying_gain", true, false},
     {Effect::kStiffness, "stiffness", false, true},
     {Effect::kDamping, "damping", false, true},
     {Effect::kCoulomb, "coulomb_friction", false, true},
@@ -33,6 +34,7 @@ constexpr std::array<EffectInfo, 14> kEffects{{
     {Effect::kCubicStiffness, "cubic_stiffness", false, true},
     {Effect::kTimeVaryingStiffness, "time_varying_stiffness", false, true},
     {Effect::kInertia, "inertia", false, true},
+    {Effect::kElastoPlastic, "elastoplastic", false, true},
 }};
 
 const EffectInfo& info(Effect effect) {
@@ -100,7 +102,45 @@ std::vector<double> central_difference(std::span<const double> x, double dt) {
   return d;
 }
 
+ParamSpec param_spec(std::string name, std::string unit, double scale, double lower, double upper,
+                     std::vector<double> guesses) {
+  ParamSpec spec;
+  spec.name = std::move(name);
+  spec.unit = std::move(unit);
+  spec.scale = scale;
+  spec.lower = lower;
+  spec.upper = upper;
+  spec.guesses = std::move(guesses);
+  return spec;
+}
+
+// kDriftTerms coefficients named <prefix>_c1 ... with the given scale and symmetric bound.
+std::vector<ParamSpec> drift_params(const std::string& prefix, const std::string& unit,
+                                    double scale, double bound) {
+  std::vector<ParamSpec> out;
+  for (std::size_t k = 1; k <= kDriftTerms; ++k) {
+    ParamSpec spec = param_spec(prefix + "_c" + std::to_string(k), unit, scale, -bound, bound, {0.0});
+    spec.record_specific = true;
+    out.push_back(std::move(spec));
+  }
+  return out;
+}
+
+ParamSpec non_negative(ParamSpec spec, const std::string& below_means) {
+  spec.lower = 0.0;
+  spec.below_means = below_means;
+  return spec;
+}
+
 }  // namespace
+
+double drift_profile(std::span<const double> c, double s) {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    sum += c[k] * std::cos(kPi * static_cast<double>(k + 1) * (s + 0.5));
+  }
+  return sum;
+}
 
 std::string channel_name(Channel channel) {
   return channel == Channel::kMeasured ? "measured" : "force";
@@ -158,7 +198,7 @@ SignalScales signal_scales(const ChannelSignals& signals) {
 }
 
 std::vector<ParamSpec> base_params(Channel channel, const SignalScales&) {
-  if (channel == Channel::kMeasured) return {{"gain", "-", 1.0, 0.0, 10.0, {1.0}}};
+  if (channel == Channel::kMeasured) return {param_spec("gain", "-", 1.0, 0.0, 10.0, {1.0})};
   return {};
 }
 
@@ -171,44 +211,70 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
   const double out_scale = measured ? sc.input : sc.target;
   const double k_scale = sc.target / sc.input;
   switch (effect) {
-    case Effect::kDelay:
-      return {{"delay", "s", 0.01, -0.5, 1.0, {0.0, 0.005, 0.02}}};
-    case Effect::kOffsetDrift:
-      return {{"offset", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0}},
-              {"drift", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0}}};
+    case Effect::kDelay: {
+      const double longest = std::min(1.0, 0.5 * sc.duration);
+      if (!measured) {
+        // The force's delay behind the measured displacement is a skew between two transducers'
+        // conditioning, of either sign (the displacement's filter may be the slower one).
+        return {param_spec("delay", "s", 0.01, -0.02, longest, {0.0, 0.002})};
+      }
+      const ParamSpec delay = param_spec("delay", "s", 0.01, 0.0, longest, {0.0, 0.005, 0.02});
+      return {non_negative(delay, "a negative delay (a lead)")};
+    }
+    case Effect::kOffsetDrift: {
+      ParamSpec offset = param_spec("offset", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0});
+      ParamSpec drift = param_spec("drift", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0});
+      offset.record_specific = drift.record_specific = true;
+      return {offset, drift};
+    }
     case Effect::kFirstOrder:
-      return {{"time_constant", "s", 0.01, 0.2 * sc.dt, 1.0, {0.005, 0.03}}};
+      return {param_spec("time_constant", "s", 0.01, 0.2 * sc.dt, 1.0, {0.005, 0.03})};
     case Effect::kSecondOrder:
-      return {{"natural_frequency", "rad/s", 100.0, 2.0 * kPi * 0.2, kPi / sc.dt,
-               {2.0 * kPi * 5.0, 2.0 * kPi * 20.0}},
-              {"damping_ratio", "-", 1.0, 0.05, 5.0, {0.7}}};
+      return {param_spec("natural_frequency", "rad/s", 100.0, 2.0 * kPi * 0.2, kPi / sc.dt,
+               {2.0 * kPi * 5.0, 2.0 * kPi * 20.0}),
+              param_spec("damping_ratio", "-", 1.0, 0.05, 5.0, {0.7})};
     case Effect::kBacklash:
-      return {{"width", "m", 0.05 * sc.input, 0.0, 10.0 * sc.input,
-               {0.03 * sc.input, 0.2 * sc.input}}};
+      return {non_negative(param_spec("width", "m", 0.05 * sc.input, 0.0, 10.0 * sc.input,
+                            {0.03 * sc.input, 0.2 * sc.input}),
+                           "a negative backlash width")};
     case Effect::kVelocitySaturation:
-      return {{"max_velocity", "m/s", sc.velocity, 0.01 * sc.velocity, 1e300,
-               {0.8 * sc.velocity, 2.0 * sc.velocity}}};
+      return {param_spec("max_velocity", "m/s", sc.velocity, 0.01 * sc.velocity, 1e300,
+               {0.8 * sc.velocity, 2.0 * sc.velocity})};
     case Effect::kTimeVaryingDelay:
-      return {{"delay_slope", "s", 0.01, -0.5, 0.5, {0.0}}};
+      return drift_params("delay", "s", 0.005, 0.1);
+    case Effect::kTimeVaryingGain:
+      return drift_params("gain", "-", 0.02, 0.5);
     case Effect::kStiffness:
-      return {{"stiffness", "N/m", k_scale, -1e300, 1e300, {0.0}}};
+      return {non_negative(param_spec("stiffness", "N/m", k_scale, 0.0, 1e300, {0.0}),
+                           "a negative stiffness")};
     case Effect::kDamping:
-      return {{"damping", "N s/m", sc.target / sc.velocity, -1e300, 1e300, {0.0}}};
+      return {non_negative(param_spec("damping", "N s/m", sc.target / sc.velocity, 0.0, 1e300, {0.0}),
+                           "a negative damping")};
     case Effect::kCoulomb:
-      return {{"friction_force", "N", sc.target, -1e300, 1e300, {0.0}},
-              {"smoothing_velocity", "m/s", 0.1 * sc.velocity, 1e-4 * sc.velocity,
-               10.0 * sc.velocity, {0.02 * sc.velocity, 0.2 * sc.velocity}}};
+      return {non_negative(param_spec("friction_force", "N", sc.target, 0.0, 1e300, {0.0}),
+                           "a negative friction force"),
+              param_spec("smoothing_velocity", "m/s", 0.1 * sc.velocity, 1e-4 * sc.velocity,
+               10.0 * sc.velocity, {0.02 * sc.velocity, 0.2 * sc.velocity})};
     case Effect::kBoucWen:
-      return {{"hysteretic_force", "N", sc.target, -1e300, 1e300, {0.0}},
-              {"yield_drift", "m", 0.1 * sc.input, 1e-4 * sc.input, 10.0 * sc.input,
-               {0.02 * sc.input, 0.2 * sc.input}}};
+      return {non_negative(param_spec("hysteretic_force", "N", sc.target, 0.0, 1e300, {0.0}),
+                           "a negative hysteretic force"),
+              param_spec("yield_drift", "m", 0.1 * sc.input, 1e-4 * sc.input, 10.0 * sc.input,
+               {0.02 * sc.input, 0.2 * sc.input})};
     case Effect::kCubicStiffness:
-      return {{"cubic_stiffness", "N/m^3", sc.target / std::pow(sc.input, 3), -1e300, 1e300,
-               {0.0}}};
+      return {param_spec("cubic_stiffness", "N/m^3", sc.target / std::pow(sc.input, 3), -1e300, 1e300,
+               {0.0})};
     case Effect::kTimeVaryingStiffness:
-      return {{"stiffness_slope", "N/m", k_scale, -1e300, 1e300, {0.0}}};
+      return drift_params("stiffness", "N/m", 0.05 * k_scale, 1e300);
     case Effect::kInertia:
-      return {{"mass", "kg", sc.target / sc.acceleration, -1e300, 1e300, {0.0}}};
+      return {non_negative(param_spec("mass", "kg", sc.target / sc.acceleration, 0.0, 1e300, {0.0}),
+                           "a negative mass")};
+    case Effect::kElastoPlastic:
+      return {non_negative(param_spec("plastic_stiffness", "N/m", k_scale, 0.0, 1e300,
+                            {k_scale, 5.0 * k_scale}),
+                           "a negative elastic stiffness"),
+              non_negative(param_spec("yield_force", "N", sc.target, 0.0, 1e300,
+                            {0.3 * sc.target, 1.0 * sc.target}),
+                           "a negative yield force")};
   }
   throw std::logic_error("unhandled effect");
 }
@@ -228,25 +294,44 @@ std::vector<ParamSpec> ChannelModel::specs(const SignalScales& scales) const {
 
 std::optional<double> ChannelModel::param(std::optional<Effect> effect, const std::string& name,
                                           const SignalScales& scales) const {
-  std::size_t index = base_params(channel, scales).size();
+  const auto index = index_of(effect, name, scales);
+  if (!index) return std::nullopt;
+  return params.at(*index);
+}
+
+std::optional<std::size_t> ChannelModel::index_of(std::optional<Effect> effect,
+                                                  const std::string& name,
+                                                  const SignalScales& scales) const {
+  const auto base = base_params(channel, scales);
   if (!effect) {
-    const auto base = base_params(channel, scales);
     for (std::size_t i = 0; i < base.size(); ++i) {
-      if (base[i].name == name) return params.at(i);
+      if (base[i].name == name) return i;
     }
     return std::nullopt;
   }
+  std::size_t index = base.size();
   for (Effect e : effects) {
     const auto p = effect_params(e, channel, scales);
     if (e == *effect) {
       for (std::size_t i = 0; i < p.size(); ++i) {
-        if (p[i].name == name) return params.at(index + i);
+        if (p[i].name == name) return index + i;
       }
       return std::nullopt;
     }
     index += p.size();
   }
   return std::nullopt;
+}
+
+std::optional<Effect> ChannelModel::effect_of(std::size_t index, const SignalScales& scales) const {
+  std::size_t first = base_params(channel, scales).size();
+  if (index < first) return std::nullopt;
+  for (Effect e : effects) {
+    const std::size_t count = effect_params(e, channel, scales).size();
+    if (index < first + count) return e;
+    first += count;
+  }
+  throw std::out_of_range("parameter index beyond the model");
 }
 
 std::string ChannelModel::describe(const SignalScales& scales) const {
@@ -294,6 +379,32 @@ ChannelModel with_effect(const ChannelModel& model, Effect effect, std::span<con
   ChannelModel out = model;
   out.effects.push_back(effect);
   out.params.insert(out.params.end(), guess.begin(), guess.end());
+  if (!out.fixed.empty()) out.fixed.resize(out.params.size(), false);
+  return out;
+}
+
+ChannelModel without_effect(const ChannelModel& model, Effect effect, const SignalScales& scales) {
+  if (!model.has(effect)) {
+    throw std::invalid_argument("model has no effect '" + effect_name(effect) + "'");
+  }
+  ChannelModel out;
+  out.channel = model.channel;
+  std::size_t index = base_params(model.channel, scales).size();
+  for (std::size_t i = 0; i < index; ++i) {
+    out.params.push_back(model.params[i]);
+    out.fixed.push_back(model.is_fixed(i));
+  }
+  for (Effect e : model.effects) {
+    const std::size_t count = effect_params(e, model.channel, scales).size();
+    if (e != effect) {
+      out.effects.push_back(e);
+      for (std::size_t i = index; i < index + count; ++i) {
+        out.params.push_back(model.params[i]);
+        out.fixed.push_back(model.is_fixed(i));
+      }
+    }
+    index += count;
+  }
   return out;
 }
 
@@ -307,11 +418,13 @@ void predict(const ChannelModel& model, std::span<const double> p, const Channel
   const auto norm_time = [&](std::size_t i) { return (sig.time[i] - t_mid) / duration; };
 
   // Unpack parameters by effect.
-  double gain = 1.0, delay = 0.0, delay_slope = 0.0, offset = 0.0, drift = 0.0;
+  double gain = 1.0, delay = 0.0, offset = 0.0, drift = 0.0;
   double time_constant = 0.0, wn = 0.0, zeta = 0.0, backlash = 0.0, vmax = 0.0;
-  double k = 0.0, k_slope = 0.0, k3 = 0.0, c = 0.0, fc = 0.0, vc = 1.0, mass = 0.0;
-  double f_bw = 0.0, d_y = 1.0;
+  double k = 0.0, k3 = 0.0, c = 0.0, fc = 0.0, vc = 1.0, mass = 0.0;
+  double f_bw = 0.0, d_y = 1.0, k_p = 0.0, f_y = 0.0;
+  std::span<const double> delay_c, gain_c, k_c;
   bool first = false, second = false, play = false, saturate = false, bouc_wen = false;
+  bool elasto_plastic = false;
   std::size_t i = 0;
   if (model.channel == Channel::kMeasured) gain = p[i++];
   for (Effect e : model.effects) {
@@ -322,22 +435,25 @@ void predict(const ChannelModel& model, std::span<const double> p, const Channel
       case Effect::kSecondOrder: second = true; wn = p[i++]; zeta = p[i++]; break;
       case Effect::kBacklash: play = true; backlash = p[i++]; break;
       case Effect::kVelocitySaturation: saturate = true; vmax = p[i++]; break;
-      case Effect::kTimeVaryingDelay: delay_slope = p[i++]; break;
+      case Effect::kTimeVaryingDelay: delay_c = p.subspan(i, kDriftTerms); i += kDriftTerms; break;
+      case Effect::kTimeVaryingGain: gain_c = p.subspan(i, kDriftTerms); i += kDriftTerms; break;
       case Effect::kStiffness: k = p[i++]; break;
       case Effect::kDamping: c = p[i++]; break;
       case Effect::kCoulomb: fc = p[i++]; vc = p[i++]; break;
       case Effect::kBoucWen: bouc_wen = true; f_bw = p[i++]; d_y = p[i++]; break;
       case Effect::kCubicStiffness: k3 = p[i++]; break;
-      case Effect::kTimeVaryingStiffness: k_slope = p[i++]; break;
+      case Effect::kTimeVaryingStiffness: k_c = p.subspan(i, kDriftTerms); i += kDriftTerms; break;
       case Effect::kInertia: mass = p[i++]; break;
+      case Effect::kElastoPlastic: elasto_plastic = true; k_p = p[i++]; f_y = p[i++]; break;
     }
   }
   if (i != p.size()) throw std::invalid_argument("parameter count does not match the model");
 
-  const bool shifted = delay != 0.0 || delay_slope != 0.0;
+  const bool shifted = delay != 0.0 || !delay_c.empty();
   const auto shifted_at = [&](std::span<const double> x, std::size_t j) {
     if (!shifted) return x[j];
-    const double tau = delay + delay_slope * norm_time(j);
+    const double tau =
+        std::max(0.0, delay + (delay_c.empty() ? 0.0 : drift_profile(delay_c, norm_time(j))));
     return interpolate(x, static_cast<double>(j) - tau / sig.dt);
   };
 
@@ -380,12 +496,13 @@ void predict(const ChannelModel& model, std::span<const double> p, const Channel
         sat_out += std::clamp(x - sat_out, -max_step, max_step);
         x = sat_out;
       }
-      out[j] = gain * x + offset + drift * norm_time(j);
+      const double g = gain_c.empty() ? gain : gain * (1.0 + drift_profile(gain_c, norm_time(j)));
+      out[j] = g * x + offset + drift * norm_time(j);
     }
     return;
   }
 
-  double z = 0.0;
+  double z = 0.0, plastic = 0.0;
   double previous_d = shifted_at(sig.input, 0);
   const double vc_safe = std::max(std::abs(vc), 1e-12);
   const double dy_safe = std::max(std::abs(d_y), 1e-12);
@@ -393,14 +510,19 @@ void predict(const ChannelModel& model, std::span<const double> p, const Channel
     const double d = shifted_at(sig.input, j);
     const double v = shifted_at(sig.velocity, j);
     const double s = norm_time(j);
-    double f = (k + k_slope * s) * d + k3 * d * d * d + c * v + offset + drift * s;
+    const double k_now = k_c.empty() ? k : k + drift_profile(k_c, s);
+    double f = k_now * d + k3 * d * d * d + c * v + offset + drift * s;
     if (fc != 0.0) f += fc * std::tanh(v / vc_safe);
     if (mass != 0.0) f += mass * shifted_at(sig.acceleration, j);
     if (bouc_wen) {
       z = advance_bouc_wen(z, (d - previous_d) / dy_safe);
-      previous_d = d;
       f += f_bw * z;
     }
+    if (elasto_plastic) {
+      plastic = std::clamp(plastic + k_p * (d - previous_d), -std::abs(f_y), std::abs(f_y));
+      f += plastic;
+    }
+    previous_d = d;
     out[j] = f;
   }
 }

@@ -2,18 +2,28 @@
 // Parametric models of the two measured channels and the library of effects they may contain.
 //
 // Channel `measured` (the actuator): input command u_c(t) (m) -> measured displacement (m):
-//   x(t)  = u_c(t - tau(t))                 tau(t) = delay + delay_slope * s(t)   (interpolated)
+//   x(t)  = u_c(t - tau(t))                 tau(t) = max(0, delay + D(s(t); delay_c))   (interpolated)
 //   x    -> first-order lag    T dy/dt = x - y                  (exact for a held sample)
 //        -> second-order lag   y'' + 2 zeta wn y' + wn^2 y = wn^2 x   (Tustin)
 //        -> backlash / dead band of total width b (play operator)
 //        -> velocity saturation |dy/dt| <= v_max
-//   u_m  = gain * y + offset + drift * s(t)
+//   u_m  = gain (1 + D(s(t); gain_c)) * y + offset + drift * s(t)
 // Channel `force` (the specimen): input measured displacement d, velocity v, acceleration a
 // (shifted by the force delay when present) -> force (N):
-//   F = (k + k_slope s(t)) d + k3 d^3 + c v + F_c tanh(v / v_c) + m a + F_bw z + offset + drift s
+//   F = (k + D(s(t); k_c)) d + k3 d^3 + c v + F_c tanh(v / v_c) + m a + F_bw z + p
+//       + offset + drift s
+//   elasto-plastic element p (the bilinear specimen with the spring k as post-yield stiffness):
+//   p_j = clamp(p_{j-1} + k_p (d_j - d_{j-1}), -F_y, F_y).
 //   Bouc–Wen z (dimensionless, |z| <= 1), n = 1, beta = gamma = 1/2 over the drift increment:
 //   dz/dd = (1 - |z| (sgn(dd z) + 1) / 2) / d_y, integrated exactly per step.
 // s(t) = (t - t_mid) / duration is the normalised time, in [-1/2, 1/2].
+// Slow drifts (time-varying delay, gain, stiffness) are zero-mean cosine series over the record:
+//   D(s; c) = sum_{k=1..K} c_k cos(pi k (s + 1/2))
+// (K = kDriftTerms), smooth, orthogonal over the record and free of a constant part, so the
+// constant delay / gain / stiffness keeps its meaning as the record's mean.
+// Bounds are physical: stiffness, damping, mass, friction and hysteretic forces >= 0; delays >= 0
+// and shorter than half the record; time constants between a fifth of a sample step and 1 s and
+// natural frequencies below Nyquist (finite bandwidth).
 // Every effect is the parametric addition of its terms to the model; an effect absent from the
 // model contributes nothing. All parameters are in SI units.
 
@@ -40,6 +50,7 @@ enum class Effect {
   kBacklash,
   kVelocitySaturation,
   kTimeVaryingDelay,
+  kTimeVaryingGain,
   // specimen (channel force)
   kStiffness,
   kDamping,
@@ -48,7 +59,13 @@ enum class Effect {
   kCubicStiffness,
   kTimeVaryingStiffness,
   kInertia,
+  kElastoPlastic,
 };
+
+// Number of cosine terms of every slow drift D(s; c).
+inline constexpr std::size_t kDriftTerms = 8;
+// D(s; c) above, for s in [-1/2, 1/2].
+double drift_profile(std::span<const double> coefficients, double s);
 
 std::string effect_name(Effect effect);
 // Inverse of effect_name ("delay", "first_order", ...). Throws std::invalid_argument.
@@ -82,6 +99,12 @@ struct ParamSpec {
   double scale = 1.0;  // typical magnitude, so that value / scale is O(1) for the fit
   double lower = -1e300, upper = 1e300;
   std::vector<double> guesses;  // starting values tried when the effect is added
+  // What a value below `lower` would mean physically ("a negative stiffness"); empty when the
+  // lower bound is numerical only.
+  std::string below_means;
+  // Offsets, drifts and drift coefficients belong to one record: re-estimated, not carried over,
+  // when a model is validated on another record.
+  bool record_specific = false;
 };
 
 // The parameters an effect adds (in order). Base parameters of a channel: `gain` for measured,
@@ -93,8 +116,16 @@ struct ChannelModel {
   Channel channel = Channel::kMeasured;
   std::vector<Effect> effects;  // in the order they were added
   std::vector<double> params;   // base params, then each effect's params in `effects` order
+  // Parameters held at their value by the fit (same indexing as params; missing = free).
+  std::vector<bool> fixed;
 
   bool has(Effect effect) const;
+  bool is_fixed(std::size_t index) const { return index < fixed.size() && fixed[index]; }
+  // Index of the named parameter of `effect` (or of the base when effect is empty) in params.
+  std::optional<std::size_t> index_of(std::optional<Effect> effect, const std::string& name,
+                                      const SignalScales& scales) const;
+  // The effect that owns parameter `index` (empty for a base parameter).
+  std::optional<Effect> effect_of(std::size_t index, const SignalScales& scales) const;
   std::vector<ParamSpec> specs(const SignalScales& scales) const;
   // The value of the named parameter of `effect` (or of the base when effect is empty).
   std::optional<double> param(std::optional<Effect> effect, const std::string& name,
@@ -107,6 +138,8 @@ ChannelModel declared_model(Channel channel, const std::vector<Effect>& effects,
                             const SignalScales& scales);
 // `model` with `effect` appended, its params set to `guess` (one per ParamSpec).
 ChannelModel with_effect(const ChannelModel& model, Effect effect, std::span<const double> guess);
+// `model` without `effect` and its params. Throws std::invalid_argument when it is absent.
+ChannelModel without_effect(const ChannelModel& model, Effect effect, const SignalScales& scales);
 
 // Model output over the whole record (the state runs from sample 0, at rest at the first input).
 void predict(const ChannelModel& model, std::span<const double> params,

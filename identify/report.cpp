@@ -73,13 +73,41 @@ nlohmann::json ranking_json(const std::vector<CandidateTrial>& ranking) {
   return out;
 }
 
+nlohmann::json bound_hits_json(const std::vector<BoundHit>& hits) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& h : hits) {
+    out.push_back({{"param", h.name},
+                   {"bound", h.at_lower ? "lower" : "upper"},
+                   {"value", h.bound},
+                   {"message", h.message()}});
+  }
+  return out;
+}
+
 nlohmann::json model_json(const FitResult& fit, const SignalScales& scales) {
   nlohmann::json effects = nlohmann::json::array();
   for (Effect e : fit.model.effects) effects.push_back(effect_name(e));
   return {{"effects", effects},
           {"params", params_json(fit, scales)},
           {"train_error", fit.train_error},
-          {"heldout_error", fit.heldout_error}};
+          {"heldout_error", fit.heldout_error},
+          {"bound_hits", bound_hits_json(fit.bound_hits)}};
+}
+
+nlohmann::json kind_json(const KindProposal& kind) {
+  nlohmann::json ranking = nlohmann::json::array();
+  for (const auto& k : kind.ranking) {
+    ranking.push_back({{"kind", kind_name(k.kind)},
+                       {"heldout_error", k.fit.heldout_error},
+                       {"score", k.score},
+                       {"physical", k.physical},
+                       {"bound_hits", bound_hits_json(k.fit.bound_hits)}});
+  }
+  nlohmann::json out = {{"declared_bound_hits", bound_hits_json(kind.declared_hits)},
+                        {"ranking", ranking}};
+  out["proposed"] = kind.proposed ? nlohmann::json(kind_name(*kind.proposed)) : nlohmann::json();
+  out["hysteretic_damper"] = kind.proposed && is_hysteretic_damper(*kind.proposed);
+  return out;
 }
 
 nlohmann::json case_json(const CaseError& c) {
@@ -142,6 +170,55 @@ std::pair<std::size_t, std::size_t> heldout_window(const Identification& id,
   return {best_start, std::min(s.size(), best_start + width)};
 }
 
+// The time-varying delay of the final model against the delay refitted window by window, with
+// a band of two standard errors.
+void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
+                      const std::filesystem::path& png) {
+  const SignalScales scales = signal_scales(s);
+  const ChannelModel& model = c.final_fit.model;
+  const ChannelModel constant = without_effect(model, Effect::kTimeVaryingDelay, scales);
+  const auto delay_index = constant.index_of(Effect::kDelay, "delay", scales);
+  if (!delay_index) return;
+  const auto windows = windowed_estimate(constant, *delay_index, s, 16);
+  analysis::Series estimate{"delay per window (fit)", {}, {}, "linespoints"};
+  analysis::Series upper{"+2 std. error", {}, {}, "lines"}, lower{"-2 std. error", {}, {}, "lines"};
+  for (const auto& w : windows) {
+    estimate.x.push_back(w.time);
+    estimate.y.push_back(w.value * 1e3);
+    upper.x.push_back(w.time);
+    upper.y.push_back((w.value + 2.0 * w.std_error) * 1e3);
+    lower.x.push_back(w.time);
+    lower.y.push_back((w.value - 2.0 * w.std_error) * 1e3);
+  }
+  const std::size_t first = base_params(model.channel, scales).size();
+  std::size_t index = first;
+  std::vector<double> coefficients;
+  for (Effect e : model.effects) {
+    const std::size_t count = effect_params(e, model.channel, scales).size();
+    if (e == Effect::kTimeVaryingDelay) {
+      coefficients.assign(model.params.begin() + static_cast<std::ptrdiff_t>(index),
+                          model.params.begin() + static_cast<std::ptrdiff_t>(index + count));
+    }
+    index += count;
+  }
+  const double mean = model.param(Effect::kDelay, "delay", scales).value_or(0.0);
+  const double t_mid = 0.5 * (s.time.front() + s.time.back());
+  const double duration = std::max(s.time.back() - s.time.front(), s.dt);
+  analysis::Series curve{"identified model tau(t)", {}, {}, "lines"};
+  const std::size_t stride = std::max<std::size_t>(1, s.size() / 2000);
+  for (std::size_t i = 0; i < s.size(); i += stride) {
+    curve.x.push_back(s.time[i]);
+    curve.y.push_back(
+        std::max(0.0, mean + drift_profile(coefficients, (s.time[i] - t_mid) / duration)) * 1e3);
+  }
+  analysis::PlotSpec plot;
+  plot.title = "actuator delay over the record: model and per-window estimate (band: +/- 2 std. error)";
+  plot.xlabel = "time (s)";
+  plot.ylabel = "delay (ms)";
+  plot.series = {curve, estimate, upper, lower};
+  analysis::write_png_plot(plot, png);
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Identification& id, const ReportContext& context,
@@ -168,6 +245,8 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                        {"train_error_after", s.after.train_error},
                        {"heldout_error_before", s.before.heldout_error},
                        {"heldout_error_after", s.after.heldout_error},
+                       {"own_error_removed", s.own_error_removed},
+                       {"own_share", s.own_share},
                        {"evidence", evidence_json(s.evidence_before)},
                        {"ranking", ranking_json(s.ranking)}});
     }
@@ -176,6 +255,9 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
     channels.push_back({{"channel", channel_name(c.channel)},
                         {"declared_effects", declared},
                         {"declared", model_json(c.declared_fit, scales)},
+                        {"start", model_json(c.start_fit, scales)},
+                        {"kind", c.kind ? kind_json(*c.kind) : nlohmann::json()},
+                        {"noise_floor", c.noise_floor},
                         {"final", model_json(c.final_fit, scales)},
                         {"final_evidence", evidence_json(c.final_evidence)},
                         {"search_heldout_error", c.search_heldout_error},
@@ -223,6 +305,27 @@ std::string format_table(const Identification& id,
     }
     out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
         << percent(c.declared_fit.heldout_error) << "\n";
+    out << "  noise floor (estimated from the record): " << percent(c.noise_floor) << "\n";
+    for (const auto& hit : c.declared_fit.bound_hits) {
+      out << "  declared fit ends at a bound: " << hit.message()
+          << (c.kind ? ": the declared model is the wrong kind" : "") << "\n";
+    }
+    if (c.kind) {
+      out << "  specimen kinds (held-out at the search rate):";
+      for (const auto& k : c.kind->ranking) {
+        out << " " << kind_name(k.kind) << " " << percent(k.fit.heldout_error)
+            << (k.physical ? "" : " (wrong kind: at a bound)") << ";";
+      }
+      out << "\n";
+      if (c.kind->proposed) {
+        out << "  proposed kind: " << kind_name(*c.kind->proposed)
+            << (is_hysteretic_damper(*c.kind->proposed) ? " (a damper with hysteresis)" : "")
+            << "; the search starts from it: held-out " << percent(c.start_fit.heldout_error)
+            << "\n";
+      } else {
+        out << "  no kind of the library fits without reaching a bound\n";
+      }
+    }
     if (c.steps.empty()) out << "  nothing added: no candidate pays on held-out data\n";
     int n = 1;
     for (const auto& s : c.steps) {
@@ -255,7 +358,26 @@ std::string format_table(const Identification& id,
           << "full rate (held-out " << percent(d.before.heldout_error) << " -> "
           << percent(d.after.heldout_error) << ")\n";
     }
+    if (c.steps.size() > 1) {
+      std::vector<const SelectionStep*> by_part;
+      for (const auto& st : c.steps) by_part.push_back(&st);
+      std::stable_sort(by_part.begin(), by_part.end(), [](const auto* a, const auto* b) {
+        return a->own_error_removed > b->own_error_removed;
+      });
+      out << "  effects by their own part (held-out error lost when each is left out):";
+      for (const auto* st : by_part) {
+        out << " " << effect_name(st->effect) << " " << percent(st->own_error_removed) << " ("
+            << format_value(100.0 * st->own_share) << " % of the parts);";
+      }
+      out << "\n";
+    }
     out << "  final: " << c.final_fit.model.describe(scales) << "\n";
+    out << "  final held-out " << percent(c.final_fit.heldout_error) << " = "
+        << format_value(c.noise_floor > 0.0 ? c.final_fit.heldout_error / c.noise_floor : 0.0)
+        << " x the noise floor\n";
+    for (const auto& hit : c.final_fit.bound_hits) {
+      out << "  final fit ends at a bound: " << hit.message() << "\n";
+    }
     if (!c.last_ranking.empty()) {
       out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
           << percent(c.last_ranking.front().heldout_error) << " vs "
@@ -344,6 +466,11 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
       written.push_back(directory / "measured_tracking.png");
       analysis::write_png_plot(tracking, written.back());
     }
+  }
+  if (const auto* c = id.find(Channel::kMeasured);
+      c != nullptr && c->final_fit.model.has(Effect::kTimeVaryingDelay)) {
+    written.push_back(directory / "measured_time_varying_delay.png");
+    write_delay_plot(*c, signals_of(id, Channel::kMeasured), written.back());
   }
   return written;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace rths::identify {
 namespace {
@@ -66,19 +67,55 @@ ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
   return model;
 }
 
-ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
-                                       const std::vector<Effect>& declared,
-                                       const SelectionOptions& options) {
-  ChannelIdentification id;
-  id.channel = signals.channel;
-  id.declared = declared;
-  const ChannelModel declared_fit = fit_declared(signals, split, declared, options.fit);
-  id.declared_fit = fit_channel(declared_fit, signals, split, options.fit);
-  FitResult current = id.declared_fit;
-  const SignalScales sc = signal_scales(signals);
-  std::vector<Effect> pool = options.candidates.empty() ? effect_library(signals.channel)
-                                                        : options.candidates;
+KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
+                           const std::vector<BoundHit>& declared_hits,
+                           const SelectionOptions& options) {
+  if (signals.channel != Channel::kForce) {
+    throw std::invalid_argument("compare_kinds: specimen kinds apply to the force channel only");
+  }
+  KindProposal proposal;
+  proposal.declared_hits = declared_hits;
+  for (SpecimenKind kind : specimen_kinds()) {
+    KindTrial trial;
+    trial.kind = kind;
+    auto effects = kind_effects(kind);
+    effects.push_back(Effect::kOffsetDrift);
+    trial.fit = fit_channel(fit_declared(signals, split, effects, options.fit), signals, split,
+                            options.fit);
+    trial.score = trial.fit.heldout_error *
+                  (1.0 + options.penalty_per_parameter *
+                             static_cast<double>(trial.fit.model.params.size()));
+    const auto defining = defining_effects(kind);
+    const SignalScales scales = signal_scales(signals);
+    for (const auto& hit : trial.fit.bound_hits) {
+      const auto owner = trial.fit.model.effect_of(hit.index, scales);
+      if (owner && std::find(defining.begin(), defining.end(), *owner) != defining.end()) {
+        trial.physical = false;
+      }
+    }
+    proposal.ranking.push_back(std::move(trial));
+  }
+  std::stable_sort(proposal.ranking.begin(), proposal.ranking.end(),
+                   [](const KindTrial& a, const KindTrial& b) {
+                     if (a.physical != b.physical) return a.physical;
+                     return a.score < b.score;
+                   });
+  if (proposal.ranking.front().physical) proposal.proposed = proposal.ranking.front().kind;
+  return proposal;
+}
 
+namespace {
+
+// Greedy forward selection from `start`: fills steps, last_ranking and final_fit of `id`.
+void search_from(ChannelIdentification& id, const FitResult& start, const ChannelSignals& signals,
+                 const Split& split, const SelectionOptions& options) {
+  id.start_fit = start;
+  id.steps.clear();
+  id.last_ranking.clear();
+  FitResult current = start;
+  const SignalScales sc = signal_scales(signals);
+  const std::vector<Effect> pool =
+      options.candidates.empty() ? effect_library(signals.channel) : options.candidates;
   for (std::size_t round = 0; round < options.max_steps; ++round) {
     std::vector<CandidateTrial> trials;
     for (Effect e : pool) {
@@ -113,8 +150,50 @@ ChannelIdentification identify_channel(const ChannelSignals& signals, const Spli
     id.steps.push_back(std::move(step));
   }
   id.final_fit = current;
-  id.search_heldout_error = current.heldout_error;
-  id.final_evidence = residual_evidence(signals, current.prediction);
+}
+
+}  // namespace
+
+void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, const Split& split,
+                      const FitOptions& options) {
+  const SignalScales scales = signal_scales(signals);
+  double total = 0.0;
+  for (auto& step : id.steps) {
+    const FitResult without =
+        fit_channel(without_effect(id.final_fit.model, step.effect, scales), signals, split, options);
+    step.own_error_removed = std::max(0.0, without.heldout_error - id.final_fit.heldout_error);
+    total += step.own_error_removed;
+  }
+  for (auto& step : id.steps) step.own_share = total > 0.0 ? step.own_error_removed / total : 0.0;
+}
+
+ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
+                                       const std::vector<Effect>& declared,
+                                       const SelectionOptions& options) {
+  ChannelIdentification id;
+  id.channel = signals.channel;
+  id.declared = declared;
+  const ChannelModel declared_fit = fit_declared(signals, split, declared, options.fit);
+  id.declared_fit = fit_channel(declared_fit, signals, split, options.fit);
+  search_from(id, id.declared_fit, signals, split, options);
+  if (options.propose_kind && signals.channel == Channel::kForce) {
+    // The declared kind is wrong when its parameters end at a physical bound, either at once or
+    // once the search has explained the rest of the force.
+    auto hits = id.declared_fit.bound_hits;
+    hits.insert(hits.end(), id.final_fit.bound_hits.begin(), id.final_fit.bound_hits.end());
+    if (!hits.empty()) {
+      id.kind = compare_kinds(signals, split, hits, options);
+      if (id.kind->proposed) {
+        id.declared_search_final = id.final_fit;
+        id.declared_search_final->prediction.clear();
+        search_from(id, id.kind->ranking.front().fit, signals, split, options);
+      }
+    }
+  }
+  attribute_shares(id, signals, split, options.fit);
+  id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);
+  id.search_heldout_error = id.final_fit.heldout_error;
+  id.final_evidence = residual_evidence(signals, id.final_fit.prediction);
   return id;
 }
 

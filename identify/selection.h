@@ -8,12 +8,19 @@
 //    added only if it pays: e_h <= (1 - min_relative_improvement) * e_h(current) and its score
 //    beats the current model's. Otherwise stop. Repeat up to max_steps.
 // Never adds an effect that does not pay: every step lowers the held-out error by the threshold.
+// Wrong kind (force channel): when the declared fit, or the search's final model from it, ends at
+// a physical bound the data push against (fit.h BoundHit, e.g. a negative stiffness), every
+// specimen kind (specimen.h), each with a force offset/drift (a property of the load cell, not of
+// the specimen), is fitted and ranked by the same score; the best kind with no bound hit is
+// proposed and the search is run again from it. The declared fit is kept and reported.
 // The candidate ranking and the residual evidence before each step are kept for the report.
 
+#include <optional>
 #include <vector>
 
 #include "identify/evidence.h"
 #include "identify/fit.h"
+#include "identify/specimen.h"
 
 namespace rths::identify {
 
@@ -22,8 +29,27 @@ struct SelectionOptions {
   double min_relative_improvement = 0.05;  // held-out error must fall by at least this share
   double penalty_per_parameter = 0.01;     // relative penalty per added parameter
   std::size_t max_steps = 6;
+  bool propose_kind = true;  // force channel: propose a specimen kind when the declared is wrong
   FitOptions fit;
 };
+
+struct KindTrial {
+  SpecimenKind kind = SpecimenKind::kLinearSpring;
+  double score = 0.0;  // held-out error (1 + penalty * parameters)
+  FitResult fit;
+  bool physical = true;  // no bound hit on a parameter of the kind's defining effects
+};
+
+struct KindProposal {
+  std::vector<BoundHit> declared_hits;   // why the declared model is the wrong kind
+  std::vector<KindTrial> ranking;        // physical kinds first, then by score
+  std::optional<SpecimenKind> proposed;  // the best physical kind, if any fits
+};
+
+// Fits every specimen kind on the force channel and ranks them. @pre signals.channel is force.
+KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
+                           const std::vector<BoundHit>& declared_hits,
+                           const SelectionOptions& options);
 
 struct CandidateTrial {
   Effect effect = Effect::kDelay;
@@ -39,18 +65,29 @@ struct SelectionStep {
   FitResult before, after;
   Evidence evidence_before;               // of the residual the step explains
   std::vector<CandidateTrial> ranking;    // best score first
+  // The effect's own part, independent of the order of the steps: the final model refitted
+  // without it loses this much held-out error (own_error_removed = e_h(without) - e_h(final)),
+  // and own_share is that part over the sum of every added effect's part.
+  double own_error_removed = 0.0, own_share = 0.0;
 };
 
 struct ChannelIdentification {
   Channel channel = Channel::kMeasured;
   std::vector<Effect> declared;
   FitResult declared_fit;
+  std::optional<KindProposal> kind;  // when the declared model was the wrong kind
+  FitResult start_fit;               // the search's start: declared_fit or the proposed kind's
+  std::optional<FitResult> declared_search_final;  // the search from the declared model, when
+                                                   // it was replaced (prediction cleared)
   std::vector<SelectionStep> steps;
   FitResult final_fit;
   Evidence final_evidence;
   std::vector<CandidateTrial> last_ranking;  // the round in which nothing paid
   // Held-out error of the final model on the data the search ran on (rankings compare with it).
   double search_heldout_error = 0.0;
+  // Estimated sensor noise of the target, normalised like the errors (evidence.h noise_floor):
+  // no model can reach a held-out error below it.
+  double noise_floor = 0.0;
   // Steps that paid on decimated search data but not when refitted at the full rate.
   std::vector<SelectionStep> dropped_at_full_rate;
 };
@@ -66,6 +103,11 @@ ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
 ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
                                        const std::vector<Effect>& declared,
                                        const SelectionOptions& options);
+
+// Fills own_error_removed and own_share of every step of `id` (drop-one refits of the final
+// model on `signals` / `split`).
+void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, const Split& split,
+                      const FitOptions& options);
 
 // The declared model by default: actuator = pure delay + gain, specimen = linear spring.
 std::vector<Effect> default_declared(Channel channel);

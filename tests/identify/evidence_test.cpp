@@ -5,6 +5,8 @@
 #include <cmath>
 #include <random>
 
+#include "identify/generator.h"
+
 namespace rths::identify {
 namespace {
 
@@ -68,6 +70,21 @@ TEST(EvidenceTest, CorrelationOfConstantIsZero) {
   const std::vector<double> a{1, 2, 3}, c{4, 4, 4};
   EXPECT_DOUBLE_EQ(correlation(a, c), 0.0);
   EXPECT_NEAR(correlation(a, a), 1.0, 1e-12);
+}
+
+TEST(EvidenceTest, NoiseFloorFindsTheGeneratorsNoise) {
+  GeneratorSpec spec;
+  spec.force_noise = 200.0;  // N rms, against a force of about 280 N rms
+  const MeasuredData data = generate_measured(spec);
+  const ChannelSignals s = make_signals(data, Channel::kForce);
+  double mean = 0.0, var = 0.0;
+  for (double f : s.target) mean += f / static_cast<double>(s.size());
+  for (double f : s.target) var += (f - mean) * (f - mean) / static_cast<double>(s.size());
+  const double truth = spec.force_noise / std::sqrt(var);
+  EXPECT_NEAR(noise_floor(s.input, s.target, s.dt), truth, 0.1 * truth);
+  spec.force_noise = 0.0;
+  const ChannelSignals clean = make_signals(generate_measured(spec), Channel::kForce);
+  EXPECT_LT(noise_floor(clean.input, clean.target, clean.dt), 0.01);
 }
 
 }  // namespace

@@ -63,6 +63,44 @@ TEST(FitTest, StrideFitsFewerResidualsButSameModel) {
   EXPECT_NEAR(fit.model.params[1], 0.012, 5e-4);
 }
 
+// A force that falls as the displacement grows: a spring can only match it with a negative
+// stiffness, which its bound forbids; the fit says so instead of returning the artefact.
+TEST(FitTest, ReportsAStiffnessTheDataWantNegative) {
+  GeneratorSpec spec;
+  MeasuredData data = generate_measured(spec);
+  for (std::size_t i = 0; i < data.size(); ++i) data.force[i] = -1.0e5 * data.measured[i];
+  const ChannelSignals s = make_signals(data, Channel::kForce);
+  const Split split = holdout_split(s.size(), 0.3);
+  const FitResult fit = fit_channel(
+      declared_model(Channel::kForce, {Effect::kStiffness}, signal_scales(s)), s, split);
+  EXPECT_GE(fit.model.params[0], 0.0);
+  ASSERT_EQ(fit.bound_hits.size(), 1u);
+  EXPECT_TRUE(fit.bound_hits[0].at_lower);
+  EXPECT_EQ(fit.bound_hits[0].message(), "the data want a negative stiffness");
+  // A positive spring is inside its bounds: nothing reported.
+  for (std::size_t i = 0; i < data.size(); ++i) data.force[i] = 1.0e5 * data.measured[i];
+  const ChannelSignals positive = make_signals(data, Channel::kForce);
+  EXPECT_TRUE(fit_channel(declared_model(Channel::kForce, {Effect::kStiffness},
+                                         signal_scales(positive)),
+                          positive, split)
+                  .bound_hits.empty());
+}
+
+TEST(FitTest, FixedParametersKeepTheirValue) {
+  GeneratorSpec spec;
+  spec.delay = 0.0137;
+  const MeasuredData data = generate_measured(spec);
+  const ChannelSignals s = make_signals(data, Channel::kMeasured);
+  const Split split = holdout_split(s.size(), 0.3);
+  ChannelModel start = declared_model(Channel::kMeasured, {Effect::kDelay}, signal_scales(s));
+  start.params = {0.9, 0.01};
+  start.fixed = {true, false};
+  const FitResult fit = fit_channel(start, s, split);
+  EXPECT_EQ(fit.model.params[0], 0.9);
+  EXPECT_EQ(fit.std_errors[0], 0.0);
+  EXPECT_NEAR(fit.model.params[1], 0.0137, 5e-4);
+}
+
 TEST(FitTest, EvaluateDoesNotChangeParameters) {
   GeneratorSpec spec;
   const MeasuredData data = generate_measured(spec);

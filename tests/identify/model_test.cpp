@@ -35,7 +35,7 @@ TEST(ModelTest, EffectNamesRoundTripAndApply) {
   EXPECT_FALSE(effect_applies(Effect::kCoulomb, Channel::kMeasured));
   EXPECT_FALSE(effect_applies(Effect::kFirstOrder, Channel::kForce));
   EXPECT_THROW(parse_effect("magic"), std::invalid_argument);
-  EXPECT_EQ(effect_library(Channel::kMeasured).size() + effect_library(Channel::kForce).size(), 16u);
+  EXPECT_EQ(effect_library(Channel::kMeasured).size() + effect_library(Channel::kForce).size(), 18u);
 }
 
 TEST(ModelTest, FractionalDelayShiftsTheCommand) {
@@ -113,6 +113,54 @@ TEST(ModelTest, BoucWenIsBoundedAndHysteretic) {
     if (s.input[i] <= 0.0 && s.input[i + 1] > 0.0) EXPECT_GT(f[i], 5.0);
     if (s.input[i] >= 0.0 && s.input[i + 1] < 0.0) EXPECT_LT(f[i], -5.0);
   }
+}
+
+TEST(ModelTest, PhysicalParametersAreBoundedAtZero) {
+  const auto s = sine_signals(Channel::kForce);
+  const auto sc = signal_scales(s);
+  for (Effect e : {Effect::kStiffness, Effect::kDamping, Effect::kInertia}) {
+    const auto spec = effect_params(e, Channel::kForce, sc).front();
+    EXPECT_EQ(spec.lower, 0.0) << effect_name(e);
+    EXPECT_FALSE(spec.below_means.empty()) << effect_name(e);
+  }
+  const auto delay = effect_params(Effect::kDelay, Channel::kMeasured, sc).front();
+  EXPECT_EQ(delay.lower, 0.0);
+  EXPECT_LE(delay.upper, 0.5 * sc.duration);
+  const auto wn = effect_params(Effect::kSecondOrder, Channel::kMeasured, sc).front();
+  EXPECT_LE(wn.upper, kPi / kDt + 1e-9);  // finite bandwidth: below Nyquist
+}
+
+TEST(ModelTest, DriftProfileIsZeroMeanOverTheRecord) {
+  const std::vector<double> c{0.3, -0.2, 0.1, 0.05, 0.0, 0.02, 0.0, 0.0};
+  double sum = 0.0;
+  const int n = 10000;
+  for (int i = 0; i < n; ++i) sum += drift_profile(c, (i + 0.5) / n - 0.5);
+  EXPECT_NEAR(sum / n, 0.0, 1e-6);
+  EXPECT_NEAR(drift_profile(c, -0.5), 0.3 - 0.2 + 0.1 + 0.05 + 0.0 + 0.02, 1e-12);  // cos(0) = 1
+}
+
+TEST(ModelTest, ElastoPlasticForceStaysWithinTheYieldForce) {
+  auto s = sine_signals(Channel::kForce);
+  ChannelModel m = declared_model(Channel::kForce, {}, signal_scales(s));
+  m = with_effect(m, Effect::kElastoPlastic, std::vector<double>{1e6, 50.0});
+  const auto f = predict(m, s);
+  double peak = 0.0;
+  for (double v : f) peak = std::max(peak, std::abs(v));
+  EXPECT_NEAR(peak, 50.0, 1e-9);  // 1e6 N/m over 2 mm would be 2 kN elastic
+  EXPECT_NEAR(f[1], 1e6 * (s.input[1] - s.input[0]), 1e-9);  // elastic at first (25 N < 50 N)
+}
+
+TEST(ModelTest, WithoutEffectRemovesItsParameters) {
+  auto s = sine_signals(Channel::kForce);
+  const auto sc = signal_scales(s);
+  ChannelModel m = declared_model(Channel::kForce, {Effect::kStiffness}, sc);
+  m = with_effect(m, Effect::kBoucWen, std::vector<double>{10.0, 0.0002});
+  m = with_effect(m, Effect::kDamping, std::vector<double>{100.0});
+  const ChannelModel less = without_effect(m, Effect::kBoucWen, sc);
+  EXPECT_EQ(less.effects, (std::vector<Effect>{Effect::kStiffness, Effect::kDamping}));
+  EXPECT_EQ(less.params, (std::vector<double>{0.0, 100.0}));
+  EXPECT_EQ(m.effect_of(2, sc), Effect::kBoucWen);
+  EXPECT_THROW(without_effect(less, Effect::kBoucWen, sc), std::invalid_argument);
 }
 
 TEST(ModelTest, NormalisedError) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "identify/generator.h"
@@ -58,6 +60,35 @@ TEST(ReportTest, TableAndPlots) {
     EXPECT_GT(std::filesystem::file_size(f), 1000u) << f;
   }
   std::filesystem::remove_all(dir);
+}
+
+// A delay drifting by +/- 6 ms: the model's tau(t) and the per-window estimates both follow the
+// truth, and the plot of them is written.
+TEST(ReportTest, TimeVaryingDelayPlotFollowsTheDrift) {
+  GeneratorSpec spec;
+  spec.delay_drift = 0.006;
+  IdentifyOptions options;
+  options.channels = {Channel::kMeasured};
+  const Identification id = identify(generate_measured(spec), options);
+  const auto& c = id.channels.at(0);
+  ASSERT_TRUE(c.final_fit.model.has(Effect::kTimeVaryingDelay));
+  const SignalScales sc = signal_scales(id.signals[0]);
+  const ChannelModel constant = without_effect(c.final_fit.model, Effect::kTimeVaryingDelay, sc);
+  const auto windows =
+      windowed_estimate(constant, constant.index_of(Effect::kDelay, "delay", sc).value(),
+                        id.signals[0], 8);
+  for (const auto& w : windows) {
+    const double truth = spec.delay + spec.delay_drift * std::sin(2.0 * 3.14159265358979 *
+                                                                  w.time / spec.duration);
+    EXPECT_NEAR(w.value, truth, 0.0015) << "window at " << w.time << " s";
+    EXPECT_GT(w.std_error, 0.0);
+  }
+  const auto dir = std::filesystem::temp_directory_path() / "rths_identify_tv_delay_plot";
+  std::filesystem::remove_all(dir);
+  const auto files = write_plots(id, dir);
+  const auto plot = dir / "measured_time_varying_delay.png";
+  EXPECT_NE(std::find(files.begin(), files.end(), plot), files.end());
+  EXPECT_GT(std::filesystem::file_size(plot), 1000u);
 }
 
 }  // namespace
