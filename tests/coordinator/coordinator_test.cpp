@@ -34,16 +34,16 @@ class Muted final : public transport::NodeHandler {
   std::int64_t mute_after_;
 };
 
-// Every wait finds its deadline already passed by `late_ns` (a loop that overruns every step),
-// or, with late_ns = 0, time jumps to each deadline (a loop that keeps every deadline).
+// Each clock read advances time by `step_ns`: 2 ms (more than a 1 ms period) makes every step
+// find its deadline passed; 10 us makes a loop that keeps every deadline (sleeping jumps to it).
 class FakeClock final : public runtime::PacingClock {
  public:
-  explicit FakeClock(std::int64_t late_ns) : late_ns_(late_ns) {}
-  std::int64_t now_ns() override { return now_ += late_ns_; }
+  explicit FakeClock(std::int64_t step_ns) : step_ns_(step_ns) {}
+  std::int64_t now_ns() override { return now_ += step_ns_; }
   void sleep_until_ns(std::int64_t deadline) override { now_ = std::max(now_, deadline); }
 
  private:
-  std::int64_t late_ns_;
+  std::int64_t step_ns_;
   std::int64_t now_ = 1'000'000'000;
 };
 
@@ -77,7 +77,7 @@ RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
 }
 
 TEST(Coordinator, RealTimeRunThatKeepsItsDeadlinesCompletes) {
-  FakeClock on_time(0);
+  FakeClock on_time(10'000);
   const RunOutcome o = run("clock: REAL_TIME", 0, 0, &on_time);
   EXPECT_TRUE(o.ok) << o.status;
   EXPECT_EQ(o.status, "completed");
@@ -91,7 +91,7 @@ TEST(Coordinator, DeadlineMissesBeyondTheToleranceFailTheRun) {
   EXPECT_EQ(o.status.rfind("completed with deadline misses", 0), 0u) << o.status;
   EXPECT_EQ(o.counters.overruns(), o.counters.steps());
   EXPECT_EQ(o.counters.worst_overrun_streak(), o.counters.steps());
-  EXPECT_EQ(o.result.steps(), 501u);  // it ran to the end: the outcome, not the run, is judged
+  EXPECT_EQ(o.result.steps(), 500u);  // it ran to the end: the outcome, not the run, is judged
 }
 
 TEST(Coordinator, AToleranceOfMinusOneAcceptsDeadlineMisses) {
@@ -110,7 +110,7 @@ class SilentNode : public testing::TestWithParam<int> {};
 
 TEST_P(SilentNode, StopsWithinMaxMissedAnswersAndNamesTheNode) {
   const int node = GetParam();
-  FakeClock on_time(0);
+  FakeClock on_time(10'000);
   const std::int64_t last_answer = 200;
   const RunOutcome o = run("clock: REAL_TIME max_missed_answers: 3", node, last_answer, &on_time);
   EXPECT_FALSE(o.ok);
@@ -125,21 +125,21 @@ INSTANTIATE_TEST_SUITE_P(Nodes, SilentNode, testing::Values(1, 2),
                          [](const auto& info) { return "node_" + std::to_string(info.param); });
 
 TEST(Coordinator, RateLimitStopsTheRunBeforeTheCommandLeaves) {
-  // The frame's 14 ms case drifts about 5 mm/s at peak: 1 um per 1 ms step trips early.
-  const RunOutcome o = run("limits { max_displacement_step: 1e-6 }");
+  // The frame moves by more than 10 nm per 1 ms step within its first 2 s.
+  const RunOutcome o = run("limits { max_displacement_step: 1e-8 }", 0, 0, nullptr, "reference", 2.0);
   EXPECT_FALSE(o.ok);
   EXPECT_NE(o.status.find("per step); command not sent"), std::string::npos) << o.status;
   ASSERT_GT(o.result.steps(), 1u);
   const auto& u = o.result.displacement;
   for (Eigen::Index k = 1; k < u.rows(); ++k)
-    EXPECT_LE(std::abs(u(k, 0) - u(k - 1, 0)), 1e-6) << "step " << k;
+    EXPECT_LE(std::abs(u(k, 0) - u(k - 1, 0)), 1e-8) << "step " << k;
 }
 
 TEST(Coordinator, DivergedRunFailsAndKeepsTheStepsUpToIt) {
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
   coordinator::CoordinatorOptions options;
   options.run_id = "run";
-  options.divergence_bound = 1e-3;  // m: the frame passes 1 mm within the first seconds
+  options.divergence_bound = 5e-5;  // m: the frame passes 0.05 mm within its first 2 s
   Cluster c;
   coordinator::Coordinator coordinator(prepared, c.transport, options);
   c.transport.attach(1, c.substructure);
@@ -149,8 +149,10 @@ TEST(Coordinator, DivergedRunFailsAndKeepsTheStepsUpToIt) {
   EXPECT_EQ(o.status, "diverged");
   EXPECT_TRUE(o.result.diverged);
   ASSERT_GT(o.result.steps(), 2u);
-  EXPECT_GT(o.result.displacement.bottomRows(1).cwiseAbs().maxCoeff(), 1e-3);
-  EXPECT_LE(o.result.displacement.topRows(o.result.steps() - 1).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_GT(o.result.displacement.bottomRows(1).cwiseAbs().maxCoeff(), 5e-5)
+      << o.result.steps() << " steps, " << o.result.displacement.rows() << " rows; "
+      << o.result.displacement.bottomRows(3);
+  EXPECT_LE(o.result.displacement.topRows(o.result.steps() - 1).cwiseAbs().maxCoeff(), 5e-5);
 }
 
 }  // namespace
