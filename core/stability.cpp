@@ -29,6 +29,32 @@ SdofParameters sdof_parameters(double period, double zeta, double alpha) {
   return {1.0, 2.0 * zeta * omega, (1.0 - alpha) * k, alpha * k};
 }
 
+// One step of the explicit schemes both delay analyses cover, for an SDOF of unit mass whose
+// restoring force at the predicted displacement is r(u_{k+1}). False for any other integrator.
+template <class RestoringForce>
+bool explicit_sdof_step(IntegratorKind kind, const SdofParameters& p, double dt, double u, double v,
+                        double a, RestoringForce&& r, double& u_next, double& v_next,
+                        double& a_next) {
+  switch (kind) {
+    case IntegratorKind::kExplicitNewmark:
+    case IntegratorKind::kCentralDifference:  // algebraically identical for this system
+      u_next = u + dt * v + 0.5 * dt * dt * a;
+      a_next = (-r(u_next) - p.c * (v + 0.5 * dt * a)) / (p.m + 0.5 * dt * p.c);
+      v_next = v + 0.5 * dt * (a + a_next);
+      return true;
+    case IntegratorKind::kChenRicles: {
+      const double k0 = p.k_numerical + p.k_experimental;
+      const double alpha = 4.0 * p.m / (4.0 * p.m + 2.0 * dt * p.c + dt * dt * k0);
+      v_next = v + dt * alpha * a;
+      u_next = u + dt * v + dt * dt * alpha * a;
+      a_next = (-p.c * v_next - r(u_next)) / p.m;
+      return true;
+    }
+    default:
+      return false;
+  }
+}
+
 // One step of the integrator on the state x = [u, v, a, u_{k-1}, ..., u_{k-n+1}], with the
 // experimental force taken at the displacement of n steps earlier. Linear, so its matrix is
 // built column by column from unit states.
@@ -41,24 +67,15 @@ Vec advance(IntegratorKind kind, const SdofParameters& p, double dt, int n, cons
     return x[3 + (n - 2)];  // u_{k+1-n} = h_{n-1}
   };
   double u_next = 0, v_next = 0, a_next = 0;
+  const auto restoring = [&](double u_plus) {
+    return p.k_numerical * u_plus + p.k_experimental * delayed(u_plus);
+  };
   switch (kind) {
     case IntegratorKind::kExplicitNewmark:
-    case IntegratorKind::kCentralDifference: {  // algebraically identical for this system
-      u_next = u + dt * v + 0.5 * dt * dt * a;
-      const double r = p.k_numerical * u_next + p.k_experimental * delayed(u_next);
-      a_next = (-r - p.c * (v + 0.5 * dt * a)) / (p.m + 0.5 * dt * p.c);
-      v_next = v + 0.5 * dt * (a + a_next);
+    case IntegratorKind::kCentralDifference:
+    case IntegratorKind::kChenRicles:
+      explicit_sdof_step(kind, p, dt, u, v, a, restoring, u_next, v_next, a_next);
       break;
-    }
-    case IntegratorKind::kChenRicles: {
-      const double k0 = p.k_numerical + p.k_experimental;
-      const double alpha = 4.0 * p.m / (4.0 * p.m + 2.0 * dt * p.c + dt * dt * k0);
-      v_next = v + dt * alpha * a;
-      u_next = u + dt * v + dt * dt * alpha * a;
-      const double r = p.k_numerical * u_next + p.k_experimental * delayed(u_next);
-      a_next = (-p.c * v_next - r) / p.m;
-      break;
-    }
     case IntegratorKind::kAlphaOS:
     case IntegratorKind::kKRAlpha:
       throw std::invalid_argument("stability: the discrete delay analysis does not cover " +
@@ -359,26 +376,9 @@ Vec advance_loop(IntegratorKind kind, const SdofParameters& p, double dt, const 
     if (n > 0) next.tail(n) = loop.a * z + loop.b * u_plus;
     return p.k_numerical * u_plus + p.k_experimental * measured;
   };
-  switch (kind) {
-    case IntegratorKind::kExplicitNewmark:
-    case IntegratorKind::kCentralDifference: {
-      u_next = u + dt * v + 0.5 * dt * dt * a;
-      a_next = (-force(u_next) - p.c * (v + 0.5 * dt * a)) / (p.m + 0.5 * dt * p.c);
-      v_next = v + 0.5 * dt * (a + a_next);
-      break;
-    }
-    case IntegratorKind::kChenRicles: {
-      const double k0 = p.k_numerical + p.k_experimental;
-      const double alpha = 4.0 * p.m / (4.0 * p.m + 2.0 * dt * p.c + dt * dt * k0);
-      v_next = v + dt * alpha * a;
-      u_next = u + dt * v + dt * dt * alpha * a;
-      a_next = (-p.c * v_next - force(u_next)) / p.m;
-      break;
-    }
-    default:
-      throw std::invalid_argument("stability: the compensated loop needs an explicit integrator, not " +
-                                  to_string(kind));
-  }
+  if (!explicit_sdof_step(kind, p, dt, u, v, a, force, u_next, v_next, a_next))
+    throw std::invalid_argument("stability: the compensated loop needs an explicit integrator, not " +
+                                to_string(kind));
   next[0] = u_next;
   next[1] = v_next;
   next[2] = a_next;
