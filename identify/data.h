@@ -10,6 +10,12 @@
 //         CHANNEL0, ...`), then one sample per line. Time is (sample number - first) * the
 //         header's `Sampling Interval`. A DaqColumnMap names the channel and scale factor for
 //         each signal: value_in_mm_or_N = raw * scale.
+// Time without a time column: `sample_rate` (Hz, the CLI's --sample-rate; 0 = not given) makes
+// time = sample index / sample_rate for a CSV without a `time` column and sets the interval of a
+// DAQ export whose header gives neither `Sampling Interval` nor `Sampling Rate`; a DAQ export
+// without a `Sample Number` column is then timed by its row index. A file with neither a time
+// base nor a given rate is refused, naming --sample-rate; a given rate that disagrees (> 1 %) with
+// the file's own time base is refused too.
 // Every loader throws std::invalid_argument naming the file, line and column when a column is
 // missing, a value is not a number or is NaN/inf, time does not increase, or there are fewer than
 // `min_samples` samples.
@@ -61,13 +67,13 @@ DaqColumnMap parse_column_map(const std::string& text);
 inline constexpr std::size_t kDefaultMinSamples = 200;
 
 MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units = {},
-                      std::size_t min_samples = kDefaultMinSamples);
+                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
 MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map = {},
-                      std::size_t min_samples = kDefaultMinSamples);
+                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
 // DAQ when the first line starts with "Header Size", CSV otherwise.
 MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& units = {},
                            const DaqColumnMap& map = {},
-                           std::size_t min_samples = kDefaultMinSamples);
+                           std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
 
 // Writes the CSV format above (s, mm, mm, N). Throws std::runtime_error naming the file.
 void write_csv(const MeasuredData& data, const std::filesystem::path& path);

@@ -127,7 +127,51 @@ TEST_F(DataTest, ColumnMapSyntaxErrors) {
 
 TEST_F(DataTest, DaqWithoutSamplingIntervalIsRejected) {
   const auto p = write("daq.txt", "Header Size:  3\nVersion: 2\nSample Number, CHANNEL0, CHANNEL1, CHANNEL2\n1, 0, 0, 0\n");
-  EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Sampling Interval"));
+  EXPECT_THAT(error_of([&] { read_daq(p); }),
+              AllOf(HasSubstr("Sampling Interval"), HasSubstr("--sample-rate HZ")));
+}
+
+// DAQ rows without Sample Number, `rows` of them, channels 0..2 = i, 2 i, 3 i.
+std::string daq_rows(int rows) {
+  std::string s;
+  for (int i = 0; i < rows; ++i) {
+    s += std::to_string(i) + ", " + std::to_string(2 * i) + ", " + std::to_string(3 * i) + "\n";
+  }
+  return s;
+}
+
+TEST_F(DataTest, DaqTimedByTheGivenRateOrTheHeadersRate) {
+  const auto untimed = write("untimed.txt", "Header Size: 3\nVersion: 2\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  const MeasuredData d = read_daq(untimed, {}, kDefaultMinSamples, 200.0);
+  ASSERT_EQ(d.size(), 300u);
+  EXPECT_NEAR(d.dt, 0.005, 1e-15);
+  EXPECT_NEAR(d.time[299], 299 * 0.005, 1e-12);
+  EXPECT_NEAR(d.measured[10], 10 * 10 * 1e-3, 1e-12);  // CHANNEL0 x 10 mm -> m
+  // "Sampling Rate" alone is a time base too; a given rate must agree with it.
+  const auto rated = write("rated.txt", "Header Size: 3\nSampling Rate: 4096\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  EXPECT_NEAR(read_daq(rated).dt, 1.0 / 4096, 1e-12);
+  EXPECT_NEAR(read_daq(rated, {}, kDefaultMinSamples, 4096.0).dt, 1.0 / 4096, 1e-12);
+  EXPECT_THAT(error_of([&] { read_daq(rated, {}, kDefaultMinSamples, 1000.0); }),
+              AllOf(HasSubstr("rated.txt"), HasSubstr("gives 4096"), HasSubstr("--sample-rate says 1000")));
+  const auto both = write("both.txt", "Header Size: 4\nSampling Interval: 0.001\nSampling Rate: 500\n"
+                                      "CHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  EXPECT_THAT(error_of([&] { read_daq(both); }), HasSubstr("disagree"));
+}
+
+TEST_F(DataTest, CsvWithoutTimeNeedsTheSampleRate) {
+  std::string rows;
+  for (int i = 0; i < 300; ++i) rows += std::to_string(i) + "," + std::to_string(i + 1) + ",5\n";
+  const auto p = write("untimed.csv", "command,measured,force\n" + rows);
+  EXPECT_THAT(error_of([&] { read_csv(p); }),
+              AllOf(HasSubstr("untimed.csv:1"), HasSubstr("no 'time' column"), HasSubstr("--sample-rate HZ")));
+  const MeasuredData d = read_measured(p, {}, {}, kDefaultMinSamples, 2048.0);
+  EXPECT_NEAR(d.dt, 1.0 / 2048, 1e-15);
+  EXPECT_NEAR(d.command[7], 7e-3, 1e-15);
+  // A CSV with its own time column: the given rate is checked against it.
+  const auto timed = write("timed.csv", "time,command,measured,force\n" + csv_rows(300));
+  EXPECT_NEAR(read_csv(timed, {}, kDefaultMinSamples, 100.0).dt, 0.01, 1e-9);
+  EXPECT_THAT(error_of([&] { read_csv(timed, {}, kDefaultMinSamples, 1000.0); }),
+              HasSubstr("the time column gives 100"));
 }
 
 // Found by fuzz_daq_export (fuzz/regressions/daq_export/header_size_beyond_int): a Header Size of
