@@ -1,6 +1,8 @@
 // `rths identify`: measured lab data -> declared model -> residual -> missing effects -> refit,
 // with the error before and after on held-out data; optionally the identified actuator is put
-// back into a study config's simulation (--predict) to predict the test's error.
+// back into a study config's simulation (--predict) to predict the test's error. The declared
+// model comes from flags or a file (--model, identify/declared_model.h); --out writes the
+// identified model back as such a file and as study-config parts (identify/study_config.h).
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
