@@ -41,7 +41,7 @@ struct IdentifyCliOptions {
   std::size_t folds = 5;
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
-  bool json = false;
+  bool json = false, trim_idle = false;
 };
 
 std::vector<std::string> split_list(const std::string& text) {
@@ -181,13 +181,26 @@ void run_identify(const IdentifyCliOptions& o) {
   std::optional<identify::DeclaredModel> declared;
   apply_declared_model(o, options, declared);
 
-  const identify::MeasuredData data =
-      identify::read_measured(o.data, units, map, identify::kDefaultMinSamples, o.sample_rate);
+  // With --trim-idle, the idle stretches before and after the test are cut off (data.h).
+  std::vector<std::string> trimmed;
+  const auto load = [&](const std::string& path) {
+    identify::MeasuredData record =
+        identify::read_measured(path, units, map, identify::kDefaultMinSamples, o.sample_rate);
+    if (!o.trim_idle) return record;
+    const identify::ActiveRange active = identify::active_range(record);
+    std::ostringstream note;
+    note << path << ": active part " << record.time[active.begin] << " s to "
+         << record.time[active.end - 1] << " s of " << record.time.front() << " s to "
+         << record.time.back() << " s (--trim-idle)";
+    trimmed.push_back(note.str());
+    identify::MeasuredData active_part = identify::slice(record, active.begin, active.end);
+    active_part.source = record.source;
+    identify::validate(active_part, identify::kDefaultMinSamples);
+    return active_part;
+  };
+  const identify::MeasuredData data = load(o.data);
   std::optional<identify::MeasuredData> other;  // read first: a bad file fails before the fit
-  if (!o.validate.empty()) {
-    other = identify::read_measured(o.validate, units, map, identify::kDefaultMinSamples,
-                                    o.sample_rate);
-  }
+  if (!o.validate.empty()) other = load(o.validate);
   if (declared) {
     for (const auto& [channel, part] :
          {std::pair{identify::Channel::kMeasured, &declared->actuator},
@@ -285,10 +298,12 @@ void run_identify(const IdentifyCliOptions& o) {
     report["input_units"] = {{"time", o.time_unit}, {"length", o.length_unit}, {"force", o.force_unit}};
     report["validation"] = validation;
     if (!configs_written.empty()) report["configs_written"] = configs_written;
+    if (o.trim_idle) report["trimmed"] = trimmed;
     std::cout << report.dump(2) << "\n";
   } else {
     std::cout << "input units: time " << o.time_unit << ", length " << o.length_unit << ", force "
               << o.force_unit << " (--time-unit, --length-unit, --force-unit)\n";
+    for (const auto& line : trimmed) std::cout << line << "\n";
     std::cout << identify::format_table(id, prediction) << validation_text.str();
     if (!o.out.empty()) std::cout << "plots and identify." << o.format << " written to " << o.out << "\n";
     for (const auto& line : configs_written) std::cout << line << "\n";
@@ -358,6 +373,10 @@ void add_identify_command(CLI::App& app) {
                   "k-fold validation over contiguous blocks of the final model (0: off)");
   cmd->add_option("--validate", o->validate,
                   "another record of the same rig: the identified models' error on it");
+  cmd->add_flag("--trim-idle", o->trim_idle,
+                "cut the idle stretches before and after the test off the record(s): keep from "
+                "0.25 s before the command first leaves its rest by 5 % of its peak to 0.25 s after "
+                "it last does");
   cmd->add_flag("--json", o->json, "print the steps and models as JSON");
   cmd->callback([o, actuator_flag, specimen_flag] {
     o->actuator_flag_given = actuator_flag->count() > 0;

@@ -383,6 +383,38 @@ MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end)
   return out;
 }
 
+ActiveRange active_range(const MeasuredData& data, double threshold, double margin,
+                         double rest_window) {
+  if (!(threshold > 0.0 && threshold < 1.0) || !(margin >= 0.0) || !(rest_window > 0.0)) {
+    throw std::invalid_argument("active_range: threshold must be in (0, 1), margin >= 0 s, "
+                                "rest window > 0 s");
+  }
+  const std::size_t n = data.size();
+  ActiveRange whole{0, n};
+  if (n == 0 || !(data.dt > 0.0)) return whole;
+  const auto rest_samples = std::clamp<std::size_t>(
+      static_cast<std::size_t>(std::llround(rest_window / data.dt)), 1, n);
+  double rest_first = 0.0, rest_last = 0.0;
+  for (std::size_t i = 0; i < rest_samples; ++i) {
+    rest_first += data.command[i];
+    rest_last += data.command[n - 1 - i];
+  }
+  rest_first /= static_cast<double>(rest_samples);
+  rest_last /= static_cast<double>(rest_samples);
+  double peak_first = 0.0, peak_last = 0.0;
+  for (double c : data.command) {
+    peak_first = std::max(peak_first, std::abs(c - rest_first));
+    peak_last = std::max(peak_last, std::abs(c - rest_last));
+  }
+  if (!(peak_first > 0.0) || !(peak_last > 0.0)) return whole;
+  std::size_t first = 0, last = n - 1;
+  while (first < n && std::abs(data.command[first] - rest_first) <= threshold * peak_first) ++first;
+  while (last > 0 && std::abs(data.command[last] - rest_last) <= threshold * peak_last) --last;
+  if (first >= last) return whole;
+  const auto pad = static_cast<std::size_t>(std::llround(margin / data.dt));
+  return {first > pad ? first - pad : 0, std::min(n, last + 1 + pad)};
+}
+
 MeasuredData decimated(const MeasuredData& data, std::size_t factor) {
   if (factor <= 1) return data;
   MeasuredData out;

@@ -86,6 +86,20 @@ void validate(MeasuredData& data, std::size_t min_samples);
 // the range is empty or beyond the record.
 MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end);
 
+// The active part of a record, [begin, end): lab records start seconds before the test and run on
+// after it, and those idle stretches hold only sensor noise (which a hysteretic specimen model fed
+// a noisy displacement turns into spurious force, and which weighs on whichever fold holds it).
+// The command's rest values are its means over the first and the last `rest_window` seconds;
+// begin is the first sample whose command leaves the first rest value by more than
+// `threshold` x the command's largest such deviation, less `margin` seconds (so the model starts
+// at rest); end likewise from the last rest value, plus `margin`. A record that moves from its
+// first to its last sample is returned whole. @pre threshold in (0, 1), margin >= 0.
+struct ActiveRange {
+  std::size_t begin = 0, end = 0;
+};
+ActiveRange active_range(const MeasuredData& data, double threshold = 0.05, double margin = 0.25,
+                         double rest_window = 0.5);
+
 // Every `factor`-th sample (factor >= 1), after a centred moving average over `factor` samples
 // so that decimation does not alias the noise.
 MeasuredData decimated(const MeasuredData& data, std::size_t factor);

@@ -158,6 +158,42 @@ TEST_F(DataTest, DaqTimedByTheGivenRateOrTheHeadersRate) {
   EXPECT_THAT(error_of([&] { read_daq(both); }), HasSubstr("disagree"));
 }
 
+// 3 s at rest (offset 0.2 mm, noise-free), a 4 s sine of 2 mm, 2 s at rest at 0.3 mm.
+MeasuredData idle_then_moving() {
+  MeasuredData d;
+  d.source = "idle";
+  d.dt = 0.01;
+  for (int i = 0; i < 900; ++i) {
+    const double t = i * d.dt;
+    const double c = t < 3.0 ? 2e-4 : t < 7.0 ? 2e-4 + 2e-3 * std::sin(2 * M_PI * 0.5 * (t - 3.0)) : 3e-4;
+    d.time.push_back(t);
+    d.command.push_back(c);
+    d.measured.push_back(c);
+    d.force.push_back(1e5 * c);
+  }
+  return d;
+}
+
+TEST_F(DataTest, TheActivePartLeavesTheIdleStretchesOut) {
+  const MeasuredData d = idle_then_moving();
+  // Leaves rest by 5 % of the 2 mm peak (0.1 mm) at asin(0.05) / pi s after 3 s; the last
+  // excursion beyond 0.1 mm from 0.3 mm ends just before 7 s. Margins of 0.25 s either side.
+  const ActiveRange r = active_range(d);
+  const double leaves = 3.0 + std::asin(0.05) / M_PI;
+  EXPECT_NEAR(d.time[r.begin], leaves - 0.25, 0.011);
+  EXPECT_NEAR(d.time[r.end - 1], 7.0 + 0.25, 0.03);
+  const ActiveRange tight = active_range(d, 0.05, 0.0);
+  EXPECT_GT(d.time[tight.begin], 3.0);
+  EXPECT_LT(d.time[tight.end - 1], 7.0);
+  // A record that moves throughout is kept whole.
+  MeasuredData moving = d;
+  for (std::size_t i = 0; i < moving.size(); ++i) moving.command[i] = std::sin(0.05 * i);
+  const ActiveRange whole = active_range(moving);
+  EXPECT_EQ(whole.begin, 0u);
+  EXPECT_EQ(whole.end, moving.size());
+  EXPECT_THROW(active_range(d, 1.5), std::invalid_argument);
+}
+
 TEST_F(DataTest, CsvWithoutTimeNeedsTheSampleRate) {
   std::string rows;
   for (int i = 0; i < 300; ++i) rows += std::to_string(i) + "," + std::to_string(i + 1) + ",5\n";
