@@ -276,11 +276,22 @@ void run_identify(const IdentifyCliOptions& o) {
       }
       entry["kfold"] = {{"folds", o.folds},
                         {"heldout_errors", folds.heldout_errors},
+                        {"noise_floors", folds.noise_floors},
                         {"mean", folds.mean},
                         {"spread", folds.spread},
                         {"params", params}};
       validation_text << "; " << o.folds << "-fold " << 100.0 * folds.mean << " +/- "
-                      << 100.0 * folds.spread << " %";
+                      << 100.0 * folds.spread << " % (folds";
+      for (std::size_t f = 0; f < folds.heldout_errors.size(); ++f) {
+        validation_text << (f ? ", " : " ") << 100.0 * folds.heldout_errors[f] << " % (floor ";
+        // evidence.h: 0 when the block has no band free of signal to estimate the noise from.
+        if (folds.noise_floors[f] > 0.0) {
+          validation_text << 100.0 * folds.noise_floors[f] << " %)";
+        } else {
+          validation_text << "n/a)";
+        }
+      }
+      validation_text << ")";
     }
     if (other) {
       const auto result = identify::validate_on(

@@ -194,5 +194,29 @@ TEST_F(CmdIdentifyTest, AFileWithoutTimeNeedsTheSampleRate) {
   EXPECT_THAT(o.output, AllOf(HasSubstr("the time column gives 500"), HasSubstr("--sample-rate says 1000")));
 }
 
+TEST_F(CmdIdentifyTest, TrimIdleCutsTheRestBeforeTheTestOff) {
+  const MeasuredData record = read_csv(data_);
+  MeasuredData padded;
+  padded.dt = record.dt;
+  for (std::size_t i = 0; i < 1000 + record.size(); ++i) {  // 2 s at rest, then the record
+    const std::size_t j = i < 1000 ? 0 : i - 1000;
+    padded.time.push_back(static_cast<double>(i) * record.dt);
+    padded.command.push_back(i < 1000 ? 0.0 : record.command[j]);
+    padded.measured.push_back(i < 1000 ? 0.0 : record.measured[j]);
+    padded.force.push_back(i < 1000 ? 0.0 : record.force[j]);
+  }
+  write_csv(padded, dir_ / "padded.csv");
+  const Outcome o = run("identify " + (dir_ / "padded.csv").string() +
+                        " --channels measured --folds 0 --max-steps 0 --json --trim-idle");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto j = json_of(o);
+  ASSERT_EQ(j["trimmed"].size(), 1u);
+  EXPECT_THAT(j["trimmed"][0].get<std::string>(), HasSubstr("active part"));
+  // The chirp starts at rest and leaves it within its first second: about 2 s are cut.
+  const auto kept = j["samples"].get<std::size_t>();
+  EXPECT_LT(kept, padded.size() - 800);
+  EXPECT_GT(kept, record.size() - 600);
+}
+
 }  // namespace
 }  // namespace rths::identify
