@@ -7,11 +7,14 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "analysis/plot.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
+#include "core/stability.h"
 #include "core/study.h"
 #include "core/text_format.h"
 #include "deploy/netns.h"
@@ -137,43 +140,121 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
   }
 }
 
-// Log z axis (the error spans decades towards instability); zero error is drawn at this floor.
-constexpr double kSurfaceFloorPercent = 0.01;
+// Log colour scale (the error spans decades towards instability); zero error is drawn at this floor.
+constexpr double kMapFloorPercent = 0.01;
 
-void write_surface_png(const JointLagResult& result, const std::filesystem::path& out) {
-  // gnuplot pm3d wants blocks of equal x separated by blank lines: network-major grid as stored.
-  const auto data = out / "error_surface.dat";
+// The 2-D heat map: NRMSE % over (network round trip, actuator lag), contour lines at round
+// percentages, the continuous stability boundary, diverged points as crosses. PNG and SVG.
+void write_error_map(const JointLagResult& result, const std::filesystem::path& out) {
+  const auto grid_data = out / "error_map.dat";
   {
-    std::ofstream file(data);
-    file << "# network_round_trip_ms actuator_lag_ms nrmse_percent\n";
+    std::ofstream file(grid_data);
+    file << "# network_round_trip_ms actuator_lag_ms nrmse_pct (blocks of equal round trip)\n";
     double previous = std::nan("");
     for (const auto& p : result.grid) {
       if (!std::isnan(previous) && p.network_round_trip != previous) file << "\n";
       previous = p.network_round_trip;
       file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << ' '
-           << (p.diverged ? std::nan("") : std::max(100.0 * p.nrmse, kSurfaceFloorPercent))
-           << "\n";
+           << (p.diverged ? std::nan("") : std::max(100.0 * p.nrmse, kMapFloorPercent)) << "\n";
     }
   }
-  const auto script = out / "error_surface.gp";
+  const auto diverged_data = out / "error_map_diverged.dat";
+  {
+    std::ofstream file(diverged_data);
+    file << "# network_round_trip_ms actuator_lag_ms of diverged points\n";
+    for (const auto& p : result.grid)
+      if (p.diverged) file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
+  }
+  const auto boundary_data = out / "error_map_boundary.dat";
+  {
+    std::ofstream file(boundary_data);
+    file << "# critical_network_round_trip_ms actuator_lag_ms\n";
+    for (const auto& b : result.boundary)
+      if (b.critical_round_trip) file << *b.critical_round_trip * 1e3 << ' ' << b.actuator_lag * 1e3 << "\n";
+  }
+  double max_r = 0.0, max_a = 0.0;
+  for (const auto& p : result.grid) {
+    max_r = std::max(max_r, p.network_round_trip * 1e3);
+    max_a = std::max(max_a, p.actuator_lag * 1e3);
+  }
+  const bool any_diverged = std::any_of(result.grid.begin(), result.grid.end(),
+                                        [](const JointLagPoint& p) { return p.diverged; });
+  const bool any_boundary = std::any_of(result.boundary.begin(), result.boundary.end(),
+                                        [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
+  const auto contours = out / "error_map_contours.dat";
+  const auto script = out / "error_map.gp";
   {
     std::ofstream file(script);
-    file << "set terminal pngcairo size 1100,800 noenhanced\n"
-         << "set output '" << (out / "error_surface.png").string() << "'\n"
-         << "set title 'Joint lag study (" << result.study_name << ", actuator "
-         << result.actuator_model << "): NRMSE of the displacement, %'\n"
+    file << "set table '" << contours.string() << "'\n"
+         << "unset surface\nset contour base\nset cntrparam levels discrete 1,2,5,10,20,50,100\n"
+         << "splot '" << grid_data.string() << "' using 1:2:3 with lines notitle\n"
+         << "unset table\nunset contour\n"
+         << "set bmargin 7\nset title \"Joint lag (" << result.study_name << ", actuator " << result.actuator_model
+         << ")\\nNRMSE of the displacement against the lag-free reference, %\"\n"
          << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
-         << "set zlabel 'NRMSE (%), log scale' rotate by 90\n"
-         << "set logscale z\nset logscale cb\nset format z '%g'\nset format cb '%g'\n"
-         << "set pm3d at s hidden3d\nset palette rgbformulae 33,13,10\n"
-         << "set view 55,35\nset contour base\nset cntrparam levels discrete 5,10,20,50,100,1000\n"
-         << "unset key\n"
-         << "splot '" << data.string() << "' using 1:2:3 with pm3d notitle\n";
+         << "set cblabel 'NRMSE (%), log scale'\nset logscale cb\nset format cb '%g'\n"
+         << "set cbrange [" << kMapFloorPercent << ":*]\n"
+         << "set palette rgbformulae 33,13,10\nset xrange [0:" << std::max(max_r, 1e-3)
+         << "]\nset yrange [0:" << std::max(max_a, 1e-3) << "]\n"
+         << "set key outside below box\n";
+    std::string plot = "plot '" + grid_data.string() +
+                       "' using 1:2:3 with image pixels notitle, '" + contours.string() +
+                       "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours 1, 2, 5, 10, 20, 50, 100 %'";
+    if (any_boundary)
+      plot += ", '" + boundary_data.string() +
+              "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary (continuous)'";
+    if (any_diverged)
+      plot += ", '" + diverged_data.string() +
+              "' using 1:2 with points pt 2 ps 2 lc rgb 'black' title 'diverged'";
+    for (const char* terminal : {"pngcairo size 1200,800", "svg size 1200,800 dynamic"}) {
+      const bool png = std::string(terminal).rfind("png", 0) == 0;
+      file << "set terminal " << terminal << " noenhanced\n"
+           << "set output '" << (out / (png ? "error_map.png" : "error_map.svg")).string() << "'\n"
+           << plot << "\n";
+    }
   }
   const auto run = run_command({"gnuplot", script.string()}, std::chrono::seconds(60));
   if (!run.ok()) {
     throw std::runtime_error("gnuplot failed on " + script.string() + ": " + run.output);
   }
+}
+
+// The continuous boundary for an SDOF study; empty (with the reason) otherwise.
+void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepared,
+                   JointLagResult& result) {
+  const core::StructuralModel& model = prepared.base.model;
+  if (model.mass.rows() != 1) {
+    result.boundary_skipped = "the stability boundary is drawn for a one-storey study only";
+    return;
+  }
+  const auto& experimental = prepared.base.partition.experimental;
+  const double k = model.stiffness(0, 0), m = model.mass(0, 0);
+  const double alpha = experimental.empty() || !experimental[0] ? 0.0 : experimental[0]->initial_stiffness() / k;
+  const double omega = std::sqrt(k / m), period = 2.0 * M_PI / omega;
+  const double zeta = model.damping(0, 0) / (2.0 * m * omega);
+  double largest = 0.0, largest_round_trip = 0.0;
+  for (const double a : config.actuator_lags()) largest = std::max(largest, a);
+  for (const double r : config.network_round_trips()) largest_round_trip = std::max(largest_round_trip, r);
+  constexpr int kPoints = 41;
+  for (int i = 0; i < kPoints; ++i) {
+    const double a = largest * i / (kPoints - 1);
+    google::protobuf::RepeatedPtrField<config::DelayStage> actuator;
+    *actuator.Add() = actuator_stage(config.actuator_model(), a);
+    const core::CompensatedStability s = core::compensated_stability(
+        prepared.base.integrator, period, zeta, alpha, prepared.base.dt, actuator, nullptr,
+        2.0 * largest_round_trip + 0.05);
+    result.boundary.push_back({a, s.stable ? s.continuous_margin : std::optional<double>(0.0)});
+  }
+}
+
+std::optional<double> critical_round_trip_at(const JointLagStudy& config,
+                                             const core::PreparedStudy& prepared, double a) {
+  JointLagResult one;
+  JointLagStudy single = config;
+  single.clear_actuator_lags();
+  single.add_actuator_lags(a);
+  fill_boundary(single, prepared, one);
+  return one.boundary.empty() ? std::nullopt : one.boundary.back().critical_round_trip;
 }
 
 void write_total_lag_png(const JointLagResult& result, const std::filesystem::path& out) {
@@ -209,13 +290,15 @@ void write_total_lag_png(const JointLagResult& result, const std::filesystem::pa
 void write_csv(const std::vector<JointLagPoint>& points, const std::filesystem::path& file) {
   std::ofstream out(file);
   out << "network_round_trip_s,actuator_lag_s,injected_total_s,measured_total_s,"
-         "measured_round_trip_s,measured_actuator_lag_s,nrmse,paper_eq2,peak_error_m,diverged\n";
+         "measured_round_trip_s,measured_actuator_lag_s,nrmse_pct,paper_eq2,peak_error_m,diverged,"
+         "past_stability_boundary\n";
   out.precision(10);
   for (const auto& p : points) {
     out << p.network_round_trip << ',' << p.actuator_lag << ','
         << p.network_round_trip + p.actuator_lag << ',' << p.measured_total_lag << ','
-        << p.measured_round_trip << ',' << p.measured_actuator_lag << ',' << p.nrmse << ','
-        << p.paper_eq2 << ',' << p.peak_error << ',' << (p.diverged ? 1 : 0) << "\n";
+        << p.measured_round_trip << ',' << p.measured_actuator_lag << ',' << 100.0 * p.nrmse << ','
+        << p.paper_eq2 << ',' << p.peak_error << ',' << (p.diverged ? 1 : 0) << ','
+        << (p.past_boundary ? 1 : 0) << "\n";
   }
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
@@ -227,7 +310,8 @@ nlohmann::json point_json(const JointLagPoint& p) {
           {"measured_total_s", p.measured_total_lag},
           {"measured_round_trip_s", p.measured_round_trip},
           {"measured_actuator_lag_s", p.measured_actuator_lag},
-          {"nrmse", p.nrmse},
+          {"nrmse_pct", 100.0 * p.nrmse},
+          {"past_stability_boundary", p.past_boundary},
           {"paper_eq2", p.paper_eq2},
           {"peak_error_m", p.peak_error},
           {"diverged", p.diverged},
@@ -269,6 +353,23 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
       core::simulate(core::setup_for_case(prepared, core::reference_case(study)), prepared.motion);
   const auto u_ref = column(reference.displacement, 0);
   const double window = search_window(config);
+  fill_boundary(config, prepared, result);
+  std::map<double, std::optional<double>> critical_at;  // actuator lag -> critical round trip
+  if (result.boundary_skipped.empty())
+    for (const double a : config.actuator_lags()) critical_at[a] = critical_round_trip_at(config, prepared, a);
+  {
+    int past = 0, total = 0;
+    for (const double r : config.network_round_trips())
+      for (const double a : config.actuator_lags()) {
+        ++total;
+        const auto it = critical_at.find(a);
+        past += it != critical_at.end() && it->second && r >= *it->second ? 1 : 0;
+      }
+    if (past > 0)
+      spdlog::warn("{} of {} grid points lie past the stability boundary (network round trip beyond "
+                   "the critical one for their actuator lag): they are expected to diverge",
+                   past, total);
+  }
   for (const double round_trip : config.network_round_trips()) {
     for (const double actuator : config.actuator_lags()) {
       config::Case joint;
@@ -280,6 +381,8 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
       point.network_round_trip = round_trip;
       point.actuator_lag = actuator;
       point.diverged = run.diverged;
+      if (const auto it = critical_at.find(actuator); it != critical_at.end() && it->second)
+        point.past_boundary = round_trip >= *it->second;
       fill_errors(point, u_ref, column(run.displacement, 0));
       if (!run.diverged) {
         point.measured_total_lag =
@@ -311,7 +414,7 @@ void write_joint_lag_outputs(const JointLagResult& result, bool plots) {
     json << to_json(result).dump(2) << "\n";
   }
   if (plots) {
-    write_surface_png(result, out);
+    write_error_map(result, out);
     write_total_lag_png(result, out);
   }
 }
@@ -320,12 +423,19 @@ nlohmann::json to_json(const JointLagResult& result) {
   nlohmann::json grid = nlohmann::json::array(), measured = nlohmann::json::array();
   for (const auto& p : result.grid) grid.push_back(point_json(p));
   for (const auto& p : result.measured) measured.push_back(point_json(p));
+  nlohmann::json boundary = nlohmann::json::array();
+  for (const auto& b : result.boundary)
+    boundary.push_back({{"actuator_lag_s", b.actuator_lag},
+                        {"critical_network_round_trip_s",
+                         b.critical_round_trip ? nlohmann::json(*b.critical_round_trip) : nlohmann::json()}});
   return {{"study", result.study_name},
           {"actuator_model", result.actuator_model},
           {"output_directory", result.output_directory.string()},
           {"grid", grid},
           {"measured", measured},
-          {"measured_skipped", result.measured_skipped}};
+          {"measured_skipped", result.measured_skipped},
+          {"stability_boundary", boundary},
+          {"stability_boundary_skipped", result.boundary_skipped}};
 }
 
 std::string to_text(const JointLagResult& result) {
@@ -370,7 +480,7 @@ std::string to_text(const JointLagResult& result) {
         << " ms; NRMSE " << 100 * p.nrmse << " %\n";
   }
   out << "written: " << (result.output_directory / "grid.csv").string()
-      << ", error_surface.png, total_lag.png, summary.json\n";
+      << ", error_map.png/.svg, total_lag.png, summary.json\n";
   return out.str();
 }
 

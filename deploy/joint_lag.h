@@ -21,8 +21,13 @@
 //              median, total = their sum. (The result itself sees only the actuator lag.)
 // Error against the in-process reference over the same duration.
 //
-// Outputs (in the output directory): grid.csv, measured.csv, error_surface.png (gnuplot pm3d),
-// total_lag.png (measured vs injected), summary.json.
+// Stability (SDOF studies): before the grid runs, the continuous boundary R*(A) (BoundaryPoint);
+// grid points past it are flagged (past_boundary) and a warning names how many.
+//
+// Outputs (in the output directory): grid.csv, measured.csv (nrmse_pct: the one NRMSE convention,
+// a percentage), error_map.png and .svg (2-D heat map of NRMSE %, log colour scale, contour lines,
+// the stability boundary, diverged points marked), total_lag.png (measured vs injected),
+// summary.json.
 
 #include <filesystem>
 #include <optional>
@@ -47,6 +52,16 @@ struct JointLagPoint {
   double measured_round_trip = 0.0;  // s, record median
   double measured_actuator_lag = 0.0;  // s, see above
   bool real_time = false;              // the clock of the across-sites run
+  bool past_boundary = false;          // network round trip beyond the critical one at this actuator lag
+};
+
+// Continuous stability boundary of the grid: for each actuator lag A, the network round trip R at
+// which the loop (SDOF: m u'' + c u' + k_n u + k_e G_A(s) e^{-s R} u = 0, G_A the actuator model)
+// first goes unstable: core::compensated_stability's continuous margin with the actuator model as
+// the plant. Empty R: stable for every round trip.
+struct BoundaryPoint {
+  double actuator_lag = 0.0;                     // s
+  std::optional<double> critical_round_trip;     // s
 };
 
 struct JointLagResult {
@@ -55,6 +70,8 @@ struct JointLagResult {
   std::vector<JointLagPoint> grid;      // network-major: all actuator lags for each round trip
   std::vector<JointLagPoint> measured;  // across sites
   std::string measured_skipped;         // why the across-sites part did not run, if it did not
+  std::vector<BoundaryPoint> boundary;  // 0 .. largest actuator lag, finely spaced
+  std::string boundary_skipped;         // why there is none (a structure with several storeys)
   std::filesystem::path output_directory;
 };
 

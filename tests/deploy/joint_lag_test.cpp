@@ -52,9 +52,50 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
   EXPECT_EQ(result.measured_skipped, "the config asks for no across-sites runs");
 
   write_joint_lag_outputs(result, true);
-  for (const char* file : {"grid.csv", "summary.json", "error_surface.png", "total_lag.png"}) {
+  for (const char* file : {"grid.csv", "summary.json", "error_map.png", "error_map.svg", "total_lag.png"}) {
     EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
   }
+}
+
+TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
+  // A pure shift: network round trip + actuator lag enter as one delay, so the critical round trip
+  // at actuator lag A is the frame's critical delay minus A (continuous, closed form).
+  JointLagStudy config = small_grid(JointLagStudy::SHIFT);
+  config.clear_network_round_trips();
+  for (double r : {0.0, 0.012, 0.030}) config.add_network_round_trips(r);
+  JointLagOptions options;
+  options.output_directory = kOut / "boundary";
+  options.measure = false;
+  const auto result = run_joint_lag(config, kConfigs, options);
+  ASSERT_TRUE(result.boundary_skipped.empty()) << result.boundary_skipped;
+  ASSERT_GE(result.boundary.size(), 2u);
+  const double critical = *result.boundary.front().critical_round_trip;
+  EXPECT_NEAR(critical, 0.0242, 0.0005);  // the paper's frame: 24.2 ms
+  for (const auto& b : result.boundary) {
+    ASSERT_TRUE(b.critical_round_trip.has_value());
+    EXPECT_NEAR(*b.critical_round_trip, critical - b.actuator_lag, 2e-4) << b.actuator_lag;
+  }
+  EXPECT_FALSE(at(result, 0.012, 0.006).past_boundary);
+  EXPECT_TRUE(at(result, 0.030, 0.0).past_boundary);
+  // Past the boundary the error grows far beyond the points inside it.
+  const auto& past = at(result, 0.030, 0.006);
+  EXPECT_TRUE(past.diverged || past.nrmse > 5 * at(result, 0.012, 0.006).nrmse)
+      << past.nrmse << " vs " << at(result, 0.012, 0.006).nrmse;
+  write_joint_lag_outputs(result, true);
+  const std::string csv = [&] {
+    std::ifstream in(result.output_directory / "grid.csv");
+    std::string header;
+    std::getline(in, header);
+    return header;
+  }();
+  EXPECT_NE(csv.find(",nrmse_pct,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("past_stability_boundary"), std::string::npos) << csv;
+  // The map draws the boundary and marks the diverged points.
+  std::ifstream boundary(result.output_directory / "error_map_boundary.dat");
+  std::string line;
+  int rows = 0;
+  while (std::getline(boundary, line)) rows += line.empty() || line[0] == '#' ? 0 : 1;
+  EXPECT_EQ(rows, static_cast<int>(result.boundary.size()));
 }
 
 TEST(JointLag, FirstOrderActuatorLagsByAboutItsTimeConstant) {
