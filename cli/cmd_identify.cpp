@@ -376,8 +376,8 @@ void add_identify_command(CLI::App& app) {
                   "with --out, also written back with the identified model as identified_study.textproto");
   cmd->add_option("--design-compensator", o->design_compensator,
                   "write a compensator designed from the identified actuator to --out: "
-                  "polynomial | ats | model-based")
-      ->check(CLI::IsMember({"polynomial", "ats", "model-based"}));
+                  "polynomial | ats | model-based | model-based-adaptive")
+      ->check(CLI::IsMember({"polynomial", "ats", "model-based", "model-based-adaptive"}));
   cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--folds", o->folds,

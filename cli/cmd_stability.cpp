@@ -53,6 +53,7 @@ void run_compensated(const StabilityOptions& o) {
     out["input"] = {{"study", o.study}, {"case", o.case_name}, {"period_s", period}, {"zeta", zeta},
                     {"experimental_fraction", alpha}, {"integrator", core::to_string(kind)}, {"dt_s", dt},
                     {"compensated", compensation != nullptr}};
+    if (!r.frozen_coefficients.empty()) out["time_varying"] = {{"analysis", "frozen coefficients"}, {"note", r.frozen_coefficients}};
     nlohmann::json crossings = nlohmann::json::array();
     for (const auto& c : r.crossings) crossings.push_back({{"crossing_omega_rad_per_s", c.omega}, {"extra_delay_s", c.delay}, {"branch", c.branch}});
     out["discrete"] = {{"stable", r.stable}, {"spectral_radius", r.spectral_radius},
@@ -64,6 +65,11 @@ void run_compensated(const StabilityOptions& o) {
     std::cout << "case '" << o.case_name << "' of " << o.study << ": SDOF T = " << period << " s, zeta = " << zeta
               << ", alpha = " << alpha << ", " << core::to_string(kind) << " dt = " << dt * 1e3 << " ms, "
               << (compensation ? "compensated" : "uncompensated") << "\n";
+    if (!r.frozen_coefficients.empty()) {
+      std::cout << "compensator is " << r.frozen_coefficients
+                << "; no fixed amplification matrix exists for the adapting loop, so the figures below "
+                   "are of the frozen loop\n";
+    }
     if (!r.stable) {
       std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius << ")\n";
     } else if (r.discrete_margin) {

@@ -338,7 +338,79 @@ std::string ModelBasedInverse::describe() const {
 }
 
 // ---------------------------------------------------------------------------------------------
+AtsParameters adaptive_correction_defaults() {
+  AtsParameters p;
+  p.window = 1.0;
+  p.a0 = 1.0;
+  p.a1 = 0.0;
+  p.a2 = 0.0;
+  p.a0_bounds = {0.5, 2.0};
+  p.a1_bounds = {-0.05, 0.05};
+  p.a2_bounds = {-1e-3, 1e-3};
+  p.derivative_cutoff = 0.0;
+  return p;
+}
+
 namespace {
+
+// The correction starts at the nominal design (the identity) and its bounds keep it reachable.
+void require_identity_start(const AtsParameters& p) {
+  const struct {
+    const char* name;
+    double initial, identity;
+    CoefficientBounds bounds;
+  } coefficients[] = {{"a0", p.a0, 1.0, p.a0_bounds},
+                      {"a1", p.a1, 0.0, p.a1_bounds},
+                      {"a2", p.a2, 0.0, p.a2_bounds}};
+  for (const auto& c : coefficients) {
+    require(c.initial == c.identity,
+            std::string("adaptive correction: ") + c.name + " must start at " +
+                number(c.identity) + " (the nominal design), got " + number(c.initial));
+    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
+                c.bounds.min <= c.identity && c.identity <= c.bounds.max,
+            std::string("adaptive correction: ") + c.name + "_bounds must have min < max and "
+                "contain " + number(c.identity) + " (the nominal design), got [" +
+                number(c.bounds.min) + ", " + number(c.bounds.max) + "]");
+  }
+}
+
+}  // namespace
+
+AdaptedModelBasedInverse::AdaptedModelBasedInverse(ModelBasedInverse inverse,
+                                                   const AtsParameters& correction, double dt)
+    : correction_((require_identity_start(correction), correction), dt),
+      inverse_(std::move(inverse)) {}
+
+double AdaptedModelBasedInverse::step(const CompensatorInput& in) {
+  const double corrected = correction_.step(in);
+  return inverse_.step({in.time, corrected, in.measured});
+}
+
+void AdaptedModelBasedInverse::reset() {
+  correction_.reset();
+  inverse_.reset();
+}
+
+std::unique_ptr<Compensator> AdaptedModelBasedInverse::clone() const {
+  return std::make_unique<AdaptedModelBasedInverse>(*this);
+}
+
+std::string AdaptedModelBasedInverse::describe() const {
+  return inverse_.describe() + " with adaptive correction " + correction_.describe();
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+AtsParameters correction_parameters(const config::Compensation::AdaptiveCorrection& c) {
+  AtsParameters p = adaptive_correction_defaults();
+  p.window = c.window();
+  if (c.has_a0_bounds()) p.a0_bounds = {c.a0_bounds().min(), c.a0_bounds().max()};
+  if (c.has_a1_bounds()) p.a1_bounds = {c.a1_bounds().min(), c.a1_bounds().max()};
+  if (c.has_a2_bounds()) p.a2_bounds = {c.a2_bounds().min(), c.a2_bounds().max()};
+  p.derivative_cutoff = c.derivative_cutoff();
+  return p;
+}
 
 AtsParameters ats_parameters(const config::Compensation::AdaptiveTimeSeries& c) {
   AtsParameters p;
@@ -445,6 +517,22 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
               where + ".model_based.rolloff_frequency must be > 0 Hz, got " +
                   number(m.rolloff_frequency()));
       plant_from_stages(m.plant(), where + ".model_based.plant");
+      if (m.has_adaptive_correction()) {
+        const auto& a = m.adaptive_correction();
+        const std::string at = where + ".model_based.adaptive_correction";
+        require(a.window() > 0.0 && finite(a.window()),
+                at + ".window must be > 0 s, got " + number(a.window()));
+        require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
+                at + ".derivative_cutoff must be >= 0 Hz, got " + number(a.derivative_cutoff()));
+        try {
+          AtsParameters dt_free = correction_parameters(a);
+          dt_free.derivative_cutoff = 0.0;  // checked against the Nyquist frequency when built
+          require_identity_start(dt_free);
+          AdaptiveTimeSeries(dt_free, std::min(a.window() / 3.0, 1e-3));
+        } catch (const std::invalid_argument& e) {
+          rethrow_at(where, "model_based.adaptive_correction", e);
+        }
+      }
       break;
     }
     case K::KIND_NOT_SET:
@@ -478,11 +566,19 @@ std::unique_ptr<Compensator> make_compensator(const config::Compensation& c, dou
     case K::kModelBased: {
       const auto& m = c.model_based();
       PlantModel plant = plant_from_stages(m.plant(), where + ".model_based.plant");
+      std::unique_ptr<ModelBasedInverse> inverse;
       try {
-        return std::make_unique<ModelBasedInverse>(std::move(plant), m.lead_order(),
-                                                   m.rolloff_frequency(), dt);
+        inverse = std::make_unique<ModelBasedInverse>(std::move(plant), m.lead_order(),
+                                                      m.rolloff_frequency(), dt);
       } catch (const std::invalid_argument& e) {
         rethrow_at(where, "model_based", e);
+      }
+      if (!m.has_adaptive_correction()) return inverse;
+      try {
+        return std::make_unique<AdaptedModelBasedInverse>(
+            std::move(*inverse), correction_parameters(m.adaptive_correction()), dt);
+      } catch (const std::invalid_argument& e) {
+        rethrow_at(where, "model_based.adaptive_correction", e);
       }
     }
     case K::KIND_NOT_SET: break;

@@ -40,6 +40,23 @@
 //     w_f = 2 pi f_rolloff. The roll-off makes C proper (causal); its own low-frequency lag
 //     (r_p + m) / w_f is added to the lead so that G C -> 1 (gain and phase) at low frequency.
 //     Tustin-discretised (core::TransferFunctionStage).
+//   AdaptedModelBasedInverse (the model-based feedforward with an online-adapted correction, as
+//     labs add it when the identified model may be off: Chae, Kazemibidokhti & Ricles 2013 for
+//     the adaptation, Carrion & Spencer 2007 for the feedforward): the chain
+//       x_t -> A -> C(s) -> actuator G -> x_m,   v = A x_t = a0 x_t + a1 x_t' + a2 x_t'',
+//     C the ModelBasedInverse above, A an AdaptiveTimeSeries started from the identity
+//     (a0 = 1, a1 = a2 = 0: the nominal design) whose least-squares fit runs on (v, x_m) over
+//     its moving window. The plant A adapts to is C G, which is 1 when the model is right, so
+//     its coefficients are the residual: for a true actuator e^{-s tau'} / (1 + s T') and a
+//     design for (tau, T), C G ~ e^{-s (tau' - tau)} (1 + s T) / (1 + s T') and
+//       a0 -> 1,  a1 -> (tau' - tau) + (T' - T)   (s; negative when the actuator is faster),
+//       a2 -> the second-order residual (s^2).
+//     A sits in front of C in the signal path: after C it would see G alone and learn G^{-1},
+//     compensating twice. With frozen coefficients the two linear blocks commute, so this is
+//     "C followed by a correction" of the loop. Bounds clamp each coefficient (config
+//     model_based.adaptive_correction: a0 [0.5, 2], a1 [-0.05, 0.05] s, a2 [-1e-3, 1e-3] s^2
+//     when absent; each must contain the identity). Time-varying: a discrete stability analysis
+//     is of the frozen coefficients (core/stability.h).
 
 #include <complex>
 #include <cstddef>
@@ -177,6 +194,31 @@ class ModelBasedInverse final : public Compensator {
   double rolloff_hz_, lead_;
   std::vector<double> numerator_, denominator_;
   TransferFunctionStage filter_;
+};
+
+// The correction's parameters when the config leaves them out: window 1 s, the identity
+// (1, 0, 0), bounds a0 [0.5, 2], a1 [-0.05, 0.05] s, a2 [-1e-3, 1e-3] s^2, no filter.
+AtsParameters adaptive_correction_defaults();
+
+// The identity-started ATS correction in front of a ModelBasedInverse (equation above).
+class AdaptedModelBasedInverse final : public Compensator {
+ public:
+  // @pre `correction` starts at the identity (a0 = 1, a1 = a2 = 0) and its bounds contain it;
+  // throws std::invalid_argument naming the coefficient otherwise. The inverse's and the
+  // correction's own preconditions hold (their constructors throw).
+  AdaptedModelBasedInverse(ModelBasedInverse inverse, const AtsParameters& correction, double dt);
+  double step(const CompensatorInput& in) override;
+  void reset() override;
+  std::unique_ptr<Compensator> clone() const override;
+  std::string describe() const override;
+  // The feedforward's lead; the correction adds a1 (s) on top, which adapts.
+  double nominal_lead() const override { return inverse_.nominal_lead(); }
+  const ModelBasedInverse& inverse() const { return inverse_; }
+  const AdaptiveTimeSeries& correction() const { return correction_; }
+
+ private:
+  AdaptiveTimeSeries correction_;
+  ModelBasedInverse inverse_;
 };
 
 // Polynomial helpers (coefficients highest power first).

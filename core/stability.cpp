@@ -302,6 +302,43 @@ LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::Dela
   return loop;
 }
 
+namespace {
+
+// a0 u + a1 (3u - 4u1 + u2) / 2dt + a2 (2u - 5u1 + 4u2 - u3) / dt^2, coefficients frozen at their
+// present (at construction: initial) values.
+LinearBlock frozen_ats_block(const AdaptiveTimeSeries& a, double dt) {
+  const double v = a.a1() / (2.0 * dt), q = a.a2() / (dt * dt);
+  return fir_block(a.a0() + 3.0 * v + 2.0 * q, {-4.0 * v - 5.0 * q, v + 4.0 * q, -q});
+}
+
+FrequencyResponse frozen_ats_response(const AdaptiveTimeSeries& a) {
+  const double a0 = a.a0(), a1 = a.a1(), a2 = a.a2();
+  return [a0, a1, a2](double w) { return std::complex<double>(a0 - a2 * w * w, a1 * w); };
+}
+
+FrequencyResponse rational_response(const std::vector<double>& num, const std::vector<double>& den) {
+  return [num, den](double w) {
+    const std::complex<double> s(0.0, w);
+    return polynomial_at(num, s) / polynomial_at(den, s);
+  };
+}
+
+}  // namespace
+
+std::string frozen_coefficients(const config::Compensation& compensation, double dt) {
+  const std::unique_ptr<Compensator> block = make_compensator(compensation, dt, "compensation");
+  const AdaptiveTimeSeries* adaptive = dynamic_cast<const AdaptiveTimeSeries*>(block.get());
+  if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
+    adaptive = &am->correction();
+  }
+  if (!adaptive) return "";
+  std::ostringstream out;
+  out << "time-varying (its coefficients adapt online): analysed with them frozen at their initial "
+         "values a0 = " << adaptive->a0() << ", a1 = " << adaptive->a1() * 1e3 << " ms, a2 = "
+      << adaptive->a2() << " s^2";
+  return out.str();
+}
+
 LinearBlock compensator_block(const config::Compensation& compensation, double dt) {
   const std::unique_ptr<Compensator> block = make_compensator(compensation, dt, "compensation");
   if (const auto* p = dynamic_cast<const PolynomialExtrapolation*>(block.get())) {
@@ -314,12 +351,11 @@ LinearBlock compensator_block(const config::Compensation& compensation, double d
     for (int j = 1; j <= order; ++j) taps[static_cast<std::size_t>(j * spacing - 1)] = c[static_cast<std::size_t>(j)];
     return fir_block(c[0], taps);
   }
-  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get())) {
-    // a0 u + a1 (3u - 4u1 + u2) / 2dt + a2 (2u - 5u1 + 4u2 - u3) / dt^2, frozen coefficients.
-    const double v = a->a1() / (2.0 * dt), q = a->a2() / (dt * dt);
-    return fir_block(a->a0() + 3.0 * v + 2.0 * q, {-4.0 * v - 5.0 * q, v + 4.0 * q, -q});
-  }
+  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get())) return frozen_ats_block(*a, dt);
   if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get())) return filter_block(m->filter());
+  if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
+    return series(frozen_ats_block(am->correction(), dt), filter_block(am->inverse().filter()));
+  }
   throw std::invalid_argument("stability: unknown compensator");
 }
 
@@ -346,16 +382,14 @@ FrequencyResponse compensator_response(const config::Compensation& compensation,
       return sum;
     };
   }
-  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get())) {
-    const double a0 = a->a0(), a1 = a->a1(), a2 = a->a2();
-    return [a0, a1, a2](double w) { return std::complex<double>(a0 - a2 * w * w, a1 * w); };
-  }
+  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get())) return frozen_ats_response(*a);
   if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get())) {
-    const std::vector<double> num = m->numerator(), den = m->denominator();
-    return [num, den](double w) {
-      const std::complex<double> s(0.0, w);
-      return polynomial_at(num, s) / polynomial_at(den, s);
-    };
+    return rational_response(m->numerator(), m->denominator());
+  }
+  if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
+    const FrequencyResponse correction = frozen_ats_response(am->correction());
+    const FrequencyResponse inverse = rational_response(am->inverse().numerator(), am->inverse().denominator());
+    return [correction, inverse](double w) { return correction(w) * inverse(w); };
   }
   throw std::invalid_argument("stability: unknown compensator");
 }
@@ -407,6 +441,7 @@ CompensatedStability compensated_stability(
   if (compensation) chain = series(compensator_block(*compensation, dt), chain);
   CompensatedStability out;
   out.max_extra_delay = max_extra_delay;
+  if (compensation) out.frozen_coefficients = frozen_coefficients(*compensation, dt);
   constexpr double kGrowthTolerance = 1e-9;
   const auto radius = [&](double extra) {
     return loop_spectral_radius(kind, p, dt, series(chain, shift_block(extra, dt)));

@@ -79,7 +79,11 @@ LinearBlock shift_block(double delay, double dt);  // TimeShift, interpolated
 // The actuator's delay stages (shift, first_order, transfer_function, benchmark; gains) at dt.
 LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
                            double dt);
+// Adaptive blocks (ATS, model-based with adaptive_correction) with their coefficients frozen at
+// their initial values; the adapted model-based is the frozen correction in series with the inverse.
 LinearBlock compensator_block(const config::Compensation& compensation, double dt);
+// "" for a time-invariant compensator; else what the frozen-coefficient analysis froze.
+std::string frozen_coefficients(const config::Compensation& compensation, double dt);
 
 using FrequencyResponse = std::function<std::complex<double>(double omega)>;
 FrequencyResponse actuator_response(
@@ -95,6 +99,12 @@ struct CompensatedStability {
   std::vector<DelayCrossing> crossings;     // extra-delay crossings, ascending
   std::optional<double> discrete_margin;    // empty: stable up to max_extra_delay
   double max_extra_delay = 0.0;             // s, discrete search range
+  // Non-empty when the compensator adapts online (ATS, model-based with adaptive_correction):
+  // the loop is time-varying and has no fixed amplification matrix; everything above is the
+  // frozen-coefficient analysis at the initial coefficients, which this text states. It is exact
+  // until the first fit (one window) and, for a correction that learns extra delay as model
+  // error, conservative after it (tests/core/stability_test.cpp measures both).
+  std::string frozen_coefficients;
 };
 
 // @pre an explicit integrator; `compensation` may be null (uncompensated). Throws

@@ -16,8 +16,11 @@ CompensatorKind parse_compensator_kind(const std::string& name) {
   if (name == "polynomial") return CompensatorKind::kPolynomial;
   if (name == "ats" || name == "adaptive-time-series") return CompensatorKind::kAdaptiveTimeSeries;
   if (name == "model-based" || name == "model_based") return CompensatorKind::kModelBased;
+  if (name == "model-based-adaptive" || name == "model_based_adaptive") {
+    return CompensatorKind::kAdaptedModelBased;
+  }
   throw std::invalid_argument("--design-compensator: unknown kind '" + name +
-                              "' (polynomial, ats, model-based)");
+                              "' (polynomial, ats, model-based, model-based-adaptive)");
 }
 
 std::string compensator_kind_name(CompensatorKind kind) {
@@ -25,6 +28,7 @@ std::string compensator_kind_name(CompensatorKind kind) {
     case CompensatorKind::kPolynomial: return "polynomial";
     case CompensatorKind::kAdaptiveTimeSeries: return "ats";
     case CompensatorKind::kModelBased: return "model-based";
+    case CompensatorKind::kAdaptedModelBased: return "model-based-adaptive";
   }
   return "unknown";
 }
@@ -71,7 +75,9 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
         "); declare or allow the delay / first_order effects, or run without compensation "
         "knowingly");
   }
-  if (kind == CompensatorKind::kModelBased && !dynamics && delay == 0.0) {
+  const bool model_based =
+      kind == CompensatorKind::kModelBased || kind == CompensatorKind::kAdaptedModelBased;
+  if (model_based && !dynamics && delay == 0.0) {
     throw std::invalid_argument("compensator design: no actuator model to invert");
   }
 
@@ -109,12 +115,25 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
               << " ms, a2 " << a2 << " s^2";
       break;
     }
-    case CompensatorKind::kModelBased: {
+    case CompensatorKind::kModelBased:
+    case CompensatorKind::kAdaptedModelBased: {
       auto* m = c->mutable_model_based();
       for (const auto& stage : design.study_case.delay()) *m->add_plant() = stage;
       m->set_lead_order(2);
       m->set_rolloff_frequency(std::min(50.0, 0.125 / dt));
       summary << "model-based inverse, lead order 2, roll-off " << m->rolloff_frequency() << " Hz";
+      if (kind == CompensatorKind::kAdaptedModelBased) {
+        auto* a = m->mutable_adaptive_correction();
+        a->set_window(1.0);
+        a->mutable_a0_bounds()->set_min(0.5);
+        a->mutable_a0_bounds()->set_max(2.0);
+        a->mutable_a1_bounds()->set_min(-lead);
+        a->mutable_a1_bounds()->set_max(lead);
+        a->mutable_a2_bounds()->set_min(-lead * lead);
+        a->mutable_a2_bounds()->set_max(lead * lead);
+        summary << ", adaptive correction window 1 s, a1 within +-" << lead * 1e3 << " ms, a2 within +-"
+                << lead * lead << " s^2";
+      }
       break;
     }
   }

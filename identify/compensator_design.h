@@ -11,6 +11,9 @@
 //                 delay inverse), bounds a0 [0.5/gain, 2/gain], a1 [0, 3 L], a2 [-3|a2|-1e-6, 3|a2|+1e-6],
 //                 window 1 s, no derivative filter (simulation data are noise free; set it for a lab).
 //   model-based   the plant's inverse with lead order 2 and roll-off min(50 Hz, fs / 8).
+//   model-based-adaptive  the same inverse with an adaptive correction in front (window 1 s,
+//                 a0 [0.5, 2], a1 [-L, L], a2 [-L^2, L^2]: the model may be off by up to its own
+//                 lag L), for when the actuator in the test may differ from the identified one.
 // The identified lab-scale effects (offset/drift, backlash, velocity saturation) are not inverted;
 // they are listed in `ignored`, as identify/predict.h does. A negative fitted delay (a lead) is
 // used as zero and listed.
@@ -27,8 +30,9 @@
 
 namespace rths::identify {
 
-enum class CompensatorKind { kPolynomial, kAdaptiveTimeSeries, kModelBased };
-// "polynomial" | "ats" | "model-based". Throws std::invalid_argument listing them.
+enum class CompensatorKind { kPolynomial, kAdaptiveTimeSeries, kModelBased, kAdaptedModelBased };
+// "polynomial" | "ats" | "model-based" | "model-based-adaptive". Throws std::invalid_argument
+// listing them.
 CompensatorKind parse_compensator_kind(const std::string& name);
 std::string compensator_kind_name(CompensatorKind kind);
 

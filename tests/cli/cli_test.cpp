@@ -147,6 +147,32 @@ TEST(CliTest, StabilityRefusesADtBeyondTheIntegratorsLimit) {
   EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
 }
 
+// `rths stability --study --case` on the adapted model-based block: the frozen-coefficient
+// analysis, said as such; a correction whose bounds exclude the nominal design: exit 2, field named.
+TEST(CliTest, StabilityOfTheAdaptedModelBasedSaysItIsFrozenAndBadBoundsExitTwo) {
+  const auto config = kSource / "configs/paper_frame_compensated.textproto";
+  Outcome o = run("stability --study " + config.string() + " --case model_based_adaptive");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("time-varying"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("frozen"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("discrete: stable"), std::string::npos) << o.output;
+  o = run("stability --study " + config.string() + " --case model_based_adaptive --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(json_of(o)["time_varying"]["analysis"], "frozen coefficients");
+
+  const auto dir = scratch("adaptive_bounds");
+  std::ofstream(dir / "bad.textproto")
+      << "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+         "motion { path: \"" << kMotion << "\" }\nintegrator { dt: 0.001 }\n"
+         "substructuring { experimental_fraction: 0.5 }\ncases { name: \"reference\" }\n"
+         "cases { name: \"adapted\" delay { shift { delay: 0.0046 } }\n"
+         "  compensation { model_based { plant { shift { delay: 0.0046 } } lead_order: 2 rolloff_frequency: 50\n"
+         "    adaptive_correction { window: 1 a1_bounds { min: 0.01 max: 0.05 } } } } }\n";
+  o = run("stability --study " + (dir / "bad.textproto").string() + " --case adapted");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("model_based.adaptive_correction: a1_bounds"), std::string::npos) << o.output;
+}
+
 TEST(CliTest, UnknownCommandsAndFlagsGetDidYouMean) {
   Outcome o = run("swep configs/paper_sweep.textproto");
   EXPECT_EQ(o.exit_code, 2) << o.output;

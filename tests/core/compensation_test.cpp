@@ -214,6 +214,115 @@ TEST(ModelBasedInverse, RefusesRightHalfPlaneZerosOrdersAndRolloff) {
   EXPECT_THROW(ModelBasedInverse(improper, 2, 40.0, kDt), std::invalid_argument);
 }
 
+// ---------------------------------------------------------------------------------------------
+// The nominal design (4.6 ms + 21.8 ms, roll-off 40 Hz) with its adaptive correction, in front of
+// an actuator whose shift and time constant are `scale` times the nominal ones.
+struct AdaptedRun {
+  Tracking tracking;
+  double a0 = 0, a1 = 0, a2 = 0;
+  std::size_t updates = 0;
+  bool stayed_in_bounds = true;
+};
+
+AdaptedRun run_adapted(double scale, const AtsParameters& correction, double seconds) {
+  DelayChain chain;
+  chain.add(std::make_unique<TimeShift>(scale * kShift, kDt));
+  chain.add(std::make_unique<FirstOrderActuator>(scale * kTimeConstant, kDt));
+  auto block = std::make_unique<AdaptedModelBasedInverse>(
+      ModelBasedInverse(mts_plant(), 2, 40.0, kDt), correction, kDt);
+  const AdaptiveTimeSeries& view = block->correction();
+  chain.set_compensator(std::move(block));
+  AdaptedRun out;
+  const int steps = static_cast<int>(seconds / kDt);
+  for (int k = 0; k < steps; ++k) {
+    const double t = k * kDt;
+    out.tracking.target.push_back(excitation(t));
+    out.tracking.realised.push_back(chain.step({t, excitation(t), 0.0}));
+    const bool inside = view.a0() >= correction.a0_bounds.min && view.a0() <= correction.a0_bounds.max &&
+                        view.a1() >= correction.a1_bounds.min && view.a1() <= correction.a1_bounds.max &&
+                        view.a2() >= correction.a2_bounds.min && view.a2() <= correction.a2_bounds.max;
+    out.stayed_in_bounds = out.stayed_in_bounds && inside;
+  }
+  out.a0 = view.a0();
+  out.a1 = view.a1();
+  out.a2 = view.a2();
+  out.updates = view.updates();
+  return out;
+}
+
+TEST(AdaptedModelBasedInverse, LearnsTheResidualLagOfAWrongModel) {
+  AtsParameters correction = adaptive_correction_defaults();
+  correction.window = 2.0;
+  // With the model right the correction stays at the identity.
+  const AdaptedRun right = run_adapted(1.0, correction, 10.0);
+  EXPECT_GT(right.updates, 1000u);
+  EXPECT_NEAR(right.a0, 1.0, 0.02);
+  EXPECT_NEAR(right.a1, 0.0, 1e-3);
+  // Lag 30 % longer / shorter: a1 -> (tau' - tau) + (T' - T) = +-0.3 (4.6 + 21.8) ms = +-7.92 ms.
+  for (double scale : {1.3, 0.7}) {
+    const AdaptedRun wrong = run_adapted(scale, correction, 10.0);
+    const double residual = (scale - 1.0) * (kShift + kTimeConstant);
+    EXPECT_NEAR(wrong.a0, 1.0, 0.03) << scale;
+    EXPECT_NEAR(wrong.a1 - right.a1, residual, 0.1 * std::abs(residual)) << scale;
+    EXPECT_TRUE(wrong.stayed_in_bounds) << scale;
+    EXPECT_LT(wrong.tracking.j2_after(4000), 2.0) << scale;  // %, once the window has adapted (1.0, 0.65)
+    EXPECT_LT(std::abs(j1_delay(std::span(wrong.tracking.target).subspan(4000),
+                                std::span(wrong.tracking.realised).subspan(4000), kDt, 0.05)),
+              0.5e-3)
+        << scale;
+  }
+  // The fixed feedforward against the same wrong actuator: what the correction removes.
+  DelayChain slow;
+  slow.add(std::make_unique<TimeShift>(1.3 * kShift, kDt));
+  slow.add(std::make_unique<FirstOrderActuator>(1.3 * kTimeConstant, kDt));
+  slow.set_compensator(std::make_unique<ModelBasedInverse>(mts_plant(), 2, 40.0, kDt));
+  EXPECT_GT(track(slow, 10.0).j2_after(4000), 5.0);
+}
+
+TEST(AdaptedModelBasedInverse, ClampsTheCorrectionIntoItsBounds) {
+  AtsParameters correction = adaptive_correction_defaults();
+  correction.a1_bounds = {-0.002, 0.002};  // s: the 30 % slower actuator needs ~ 7.9 ms
+  const AdaptedRun clamped = run_adapted(1.3, correction, 5.0);
+  EXPECT_GT(clamped.updates, 0u);
+  EXPECT_TRUE(clamped.stayed_in_bounds);
+  EXPECT_DOUBLE_EQ(clamped.a1, 0.002);
+}
+
+TEST(AdaptedModelBasedInverse, StartsAtTheIdentityAndRefusesBoundsWithoutIt) {
+  const ModelBasedInverse inverse(mts_plant(), 2, 40.0, kDt);
+  AtsParameters p = adaptive_correction_defaults();
+  AdaptedModelBasedInverse fresh(inverse, p, kDt);
+  EXPECT_EQ(fresh.correction().a0(), 1.0);
+  EXPECT_EQ(fresh.correction().a1(), 0.0);
+  EXPECT_EQ(fresh.correction().a2(), 0.0);
+  // Before its window fills it is exactly the fixed feedforward.
+  ModelBasedInverse alone = inverse;
+  for (int k = 0; k < 500; ++k) {
+    const CompensatorInput in{k * kDt, excitation(k * kDt), 0.5 * excitation(k * kDt)};
+    ASSERT_EQ(fresh.step(in), alone.step(in)) << k;
+  }
+  const auto message = [&](const AtsParameters& bad) -> std::string {
+    try {
+      AdaptedModelBasedInverse(inverse, bad, kDt);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  p.a1_bounds = {0.001, 0.05};  // excludes a1 = 0, the nominal design
+  EXPECT_NE(message(p).find("a1_bounds"), std::string::npos) << message(p);
+  p = adaptive_correction_defaults();
+  p.a0_bounds = {1.2, 2.0};
+  EXPECT_NE(message(p).find("a0_bounds"), std::string::npos) << message(p);
+  p = adaptive_correction_defaults();
+  p.a2 = 1e-4;  // not the identity
+  EXPECT_NE(message(p).find("a2 must start at 0"), std::string::npos) << message(p);
+  p = adaptive_correction_defaults();
+  p.window = 2e-3;  // < 3 dt
+  EXPECT_NE(message(p).find("window"), std::string::npos) << message(p);
+}
+
+// ---------------------------------------------------------------------------------------------
 TEST(Polynomials, MultiplyAndRoots) {
   EXPECT_EQ(polynomial_multiply({1.0, 1.0}, {1.0, -2.0}), (std::vector<double>{1.0, -1.0, -2.0}));
   auto roots = polynomial_roots({1.0, -1.0, -2.0});
@@ -309,6 +418,24 @@ TEST(CompensationConfig, BadFieldsAreNamed) {
   EXPECT_NE(error_of("compensation { model_based { plant { first_order { time_constant: 0.02 } } lead_order: 7 rolloff_frequency: 40 } }")
                 .find("model_based.lead_order"),
             std::string::npos);
+  const std::string inverse =
+      "model_based { plant { first_order { time_constant: 0.02 } } lead_order: 2 rolloff_frequency: 40 ";
+  EXPECT_NE(error_of("compensation { " + inverse + "adaptive_correction { window: 0 } } }")
+                .find("compensation[0].model_based.adaptive_correction.window"),
+            std::string::npos);
+  EXPECT_NE(error_of("compensation { " + inverse +
+                     "adaptive_correction { window: 1 a1_bounds { min: 0.01 max: 0.05 } } } }")
+                .find("compensation[0].model_based.adaptive_correction: a1_bounds"),
+            std::string::npos);
+  EXPECT_NE(error_of("compensation { " + inverse +
+                     "adaptive_correction { window: 1 a2_bounds { min: 0.001 max: -0.001 } } } }")
+                .find("compensation[0].model_based.adaptive_correction: a2_bounds"),
+            std::string::npos);
+  EXPECT_NE(error_of("compensation { " + inverse +
+                     "adaptive_correction { window: 1 derivative_cutoff: -5 } } }")
+                .find("model_based.adaptive_correction.derivative_cutoff"),
+            std::string::npos);
+  EXPECT_EQ(error_of("compensation { " + inverse + "adaptive_correction { window: 1 } } }"), "");
   EXPECT_NE(error_of("compensation { }").find("has no kind"), std::string::npos);
   EXPECT_EQ(error_of("compensation { polynomial { order: 2 lead: 0.02 } }"), "");
 }
@@ -334,6 +461,40 @@ TEST(CompensationConfig, DtDependentFieldsAreNamedWhenBuilt) {
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("compensation[0].model_based: rolloff_frequency"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(CompensationConfig, AdaptiveCorrectionBuildsWithItsDefaultsAndNamesDtDependentFields) {
+  config::Compensation c;
+  auto* m = c.mutable_model_based();
+  m->add_plant()->mutable_shift()->set_delay(kShift);
+  m->add_plant()->mutable_first_order()->set_time_constant(kTimeConstant);
+  m->set_lead_order(2);
+  m->set_rolloff_frequency(40.0);
+  m->mutable_adaptive_correction()->set_window(1.0);
+  const std::unique_ptr<Compensator> block = make_compensator(c, kDt, "case 'x' compensation[0]");
+  const auto* adapted = dynamic_cast<const AdaptedModelBasedInverse*>(block.get());
+  ASSERT_NE(adapted, nullptr) << block->describe();
+  EXPECT_NE(block->describe().find("adaptive correction"), std::string::npos);
+  EXPECT_NEAR(block->nominal_lead(), kShift + kTimeConstant, 1e-9);
+  m->mutable_adaptive_correction()->set_window(0.002);  // < 3 dt
+  try {
+    make_compensator(c, kDt, "case 'x' compensation[0]");
+    FAIL() << "a window of two steps accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("compensation[0].model_based.adaptive_correction: window"),
+              std::string::npos)
+        << e.what();
+  }
+  m->mutable_adaptive_correction()->set_window(1.0);
+  m->mutable_adaptive_correction()->set_derivative_cutoff(800.0);  // above Nyquist at 1 kHz
+  try {
+    make_compensator(c, kDt, "case 'x' compensation[0]");
+    FAIL() << "a cut-off above Nyquist accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("model_based.adaptive_correction: derivative_cutoff"),
               std::string::npos)
         << e.what();
   }
@@ -385,6 +546,44 @@ TEST(PaperFrameCompensated, CompensatorsBringTheTestBackFromSevenHundredPercent)
   }
   EXPECT_LT(std::abs(j1_delay(target, realised, mb.dt, 0.1)), 1e-3);
   EXPECT_LT(j2_tracking(target, realised), 5.0);
+}
+
+// The missed target of issue 13: the model-based design for the nominal actuator, run against an
+// actuator whose lag is 30 % off, stays <= 15 % NRMSE with the adaptive correction (the fixed
+// feedforward gives 36-45 %). First 12 s of the record.
+TEST(PaperFrameCompensated, AdaptedModelBasedStaysWithinFifteenPercentWithTheLagThirtyPercentOff) {
+  const std::filesystem::path config =
+      std::filesystem::path(RTHS_SOURCE_DIR) / "configs/paper_frame_compensated.textproto";
+  config::Study study = load_study(config);
+  study.mutable_motion()->set_duration(12.0);
+  const PreparedStudy prepared = prepare_study(study, config.parent_path());
+  const auto run = [&](const std::string& name) {
+    for (const auto& c : study.cases())
+      if (c.name() == name) return simulate(setup_for_case(prepared, c), prepared.motion);
+    throw std::runtime_error("no case " + name);
+  };
+  const auto top = [](const SimulationResult& r) {
+    std::vector<double> u(r.steps());
+    for (std::size_t k = 0; k < u.size(); ++k) u[k] = r.displacement(static_cast<Eigen::Index>(k), 0);
+    return u;
+  };
+  const std::vector<double> reference = top(run("reference"));
+  for (const std::string name : {"model_based_adaptive", "model_based_adaptive_lag_plus_30pct",
+                                 "model_based_adaptive_lag_minus_30pct"}) {
+    const SimulationResult r = run(name);
+    ASSERT_FALSE(r.diverged) << name;
+    const bool nominal = name == "model_based_adaptive";
+    EXPECT_LT(nrmse(reference, top(r)), nominal ? 0.05 : 0.15) << name;
+    std::vector<double> target(r.steps()), realised(r.steps());
+    for (std::size_t k = 0; k < r.steps(); ++k) {
+      target[k] = r.command(static_cast<Eigen::Index>(k), 0);
+      realised[k] = r.realised(static_cast<Eigen::Index>(k), 0);
+    }
+    EXPECT_LT(std::abs(j1_delay(target, realised, r.dt, 0.1)), 1e-3) << name;
+    EXPECT_LT(j2_tracking(target, realised), 5.0) << name;
+  }
+  // The fixed feedforward against the slower actuator misses the target: the correction is needed.
+  EXPECT_GT(nrmse(reference, top(run("model_based_lag_plus_30pct"))), 0.15);
 }
 
 }  // namespace

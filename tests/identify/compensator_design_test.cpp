@@ -36,6 +36,27 @@ TEST(CompensatorDesign, ModelBasedInvertsTheIdentifiedActuator) {
   EXPECT_GT(m.rolloff_frequency(), 0.0);
 }
 
+TEST(CompensatorDesign, ModelBasedAdaptiveAddsACorrectionBoundedByTheIdentifiedLag) {
+  EXPECT_EQ(parse_compensator_kind("model-based-adaptive"), CompensatorKind::kAdaptedModelBased);
+  const CompensatorDesign d =
+      design_compensator(mts(), SignalScales{}, CompensatorKind::kAdaptedModelBased, kDt);
+  EXPECT_EQ(d.study_case.name(), "identified_model-based-adaptive");
+  const auto& m = d.study_case.compensation(0).model_based();
+  EXPECT_EQ(m.plant_size(), 2);
+  ASSERT_TRUE(m.has_adaptive_correction());
+  const auto& a = m.adaptive_correction();
+  EXPECT_DOUBLE_EQ(a.window(), 1.0);
+  EXPECT_NEAR(a.a1_bounds().min(), -0.0264, 1e-12);
+  EXPECT_NEAR(a.a1_bounds().max(), 0.0264, 1e-12);
+  EXPECT_NEAR(a.a2_bounds().max(), 0.0264 * 0.0264, 1e-15);
+  EXPECT_NE(d.summary.find("adaptive correction"), std::string::npos) << d.summary;
+  const auto block = core::make_compensator(d.study_case.compensation(0), kDt, "designed");
+  EXPECT_NE(dynamic_cast<const core::AdaptedModelBasedInverse*>(block.get()), nullptr);
+  // The plain model-based design has no correction.
+  EXPECT_FALSE(design_compensator(mts(), SignalScales{}, CompensatorKind::kModelBased, kDt)
+                   .study_case.compensation(0).model_based().has_adaptive_correction());
+}
+
 TEST(CompensatorDesign, AtsAndPolynomialStartFromTheIdentifiedLag) {
   const auto ats = design_compensator(mts(0.95), SignalScales{}, CompensatorKind::kAdaptiveTimeSeries, kDt);
   const auto& a = ats.study_case.compensation(0).adaptive_time_series();
@@ -52,7 +73,8 @@ TEST(CompensatorDesign, NoActuatorModelIsAnErrorNotASilentFallBack) {
   ChannelModel gain_only;
   gain_only.channel = Channel::kMeasured;
   gain_only.params = {1.0};
-  for (auto kind : {CompensatorKind::kModelBased, CompensatorKind::kPolynomial, CompensatorKind::kAdaptiveTimeSeries}) {
+  for (auto kind : {CompensatorKind::kModelBased, CompensatorKind::kAdaptedModelBased,
+                    CompensatorKind::kPolynomial, CompensatorKind::kAdaptiveTimeSeries}) {
     try {
       design_compensator(gain_only, SignalScales{}, kind, kDt);
       FAIL() << "designed from no actuator model";

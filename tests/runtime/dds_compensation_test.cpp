@@ -1,6 +1,6 @@
 // Compensated cases over Cyclone DDS: the actuator emulator builds its actuators, compensator
 // included, from the same study case as the in-process run, so a lockstep run equals it bit for
-// bit. Real processes on loopback, DDS domains 200-201.
+// bit. Real processes on loopback, DDS domains 200-202.
 #include <gtest/gtest.h>
 
 #include "core/compensation.h"
@@ -55,6 +55,30 @@ TEST_F(DdsCompensation, PolynomialOnThePaperFrameEqualsInProcessBitForBit) {
   const auto run = test::launch("compensated_poly", text, "poly", 201);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "poly"));
+}
+
+// The model-based inverse with its adaptive correction against an actuator 30 % slower than the
+// model: the correction adapts from the emulator's measured feedback (window 0.2 s, so it fits
+// within the run), and the lockstep record still equals the in-process one bit for bit.
+TEST_F(DdsCompensation, AdaptedModelBasedOnThePaperFrameEqualsInProcessBitForBit) {
+  const std::string text = test::paper_frame_study(
+      2, "cases { name: \"adapted\" delay { shift { delay: 0.00598 } } "
+         "delay { first_order { time_constant: 0.02834 } } compensation { model_based { "
+         "plant { shift { delay: 0.0046 } } plant { first_order { time_constant: 0.0218 } } "
+         "lead_order: 2 rolloff_frequency: 50 adaptive_correction { window: 0.2 } } } }\n"
+         "cases { name: \"fixed\" delay { shift { delay: 0.00598 } } "
+         "delay { first_order { time_constant: 0.02834 } } compensation { model_based { "
+         "plant { shift { delay: 0.0046 } } plant { first_order { time_constant: 0.0218 } } "
+         "lead_order: 2 rolloff_frequency: 50 } } }");
+  const core::SimulationResult in_process = test::reference_result(text, "adapted");
+  // The correction acts once its window has filled: it departs from the fixed feedforward.
+  const core::SimulationResult fixed = test::reference_result(text, "fixed");
+  EXPECT_EQ(fixed.realised(100, 0), in_process.realised(100, 0));
+  EXPECT_NE(fixed.realised(1500, 0), in_process.realised(1500, 0));
+  const auto run = test::launch("compensated_adapted", text, "adapted", 202);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  ASSERT_FALSE(run.record.truncated);
+  test::expect_record_equals(run.record, in_process);
 }
 
 }  // namespace
