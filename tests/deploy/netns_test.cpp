@@ -6,9 +6,15 @@
 
 #include <algorithm>
 
-#include "deploy/process.h"
+#include "runtime/process.h"
 
 namespace rths::deploy {
+
+using runtime::CommandResult;
+using runtime::command_line;
+using runtime::run_checked;
+using runtime::run_command;
+using runtime::tool_available;
 namespace {
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
