@@ -15,14 +15,15 @@ int ActuatorService::configure(const runtime::Assign& assign) {
   const config::Case& study_case = runtime::find_case(assign.study(), assign.case_name());
   core::HybridSetup setup =
       runtime::setup_without_motion(assign.study(), assign.base_dir(), assign.dt(), study_case);
-  const auto& storeys = setup.partition.actuator_storeys;
   actuators_.clear();
   for (int a : assign.actuators()) {
-    if (a < 0 || a >= static_cast<int>(storeys.size()))
+    if (a < 0 || a >= static_cast<int>(setup.delays.size()))
       throw std::invalid_argument("actuator " + std::to_string(a) + " does not exist");
-    // The same construction as core::HybridRestoring: the case's chain, a clone of the specimen.
-    actuators_.emplace_back(setup.delays[a], setup.partition.experimental[storeys[a]]->clone());
+    actuators_.push_back(core::make_actuator(setup.partition, a, setup.delays.at(a), setup.dt,
+                                             setup.servo_substeps));
   }
+  const bool real_time = assign.study().deployment().clock() == config::Deployment::REAL_TIME;
+  servo_period_ = real_time && setup.servo_substeps > 1 ? setup.dt / setup.servo_substeps : 0.0;
   realised_.assign(actuators_.size(), 0.0);
   last_command_.assign(actuators_.size(), 0.0);
   max_displacement_step_ = assign.study().deployment().limits().max_displacement_step();
@@ -43,11 +44,31 @@ std::string ActuatorService::refusal(const runtime::Command& command) {
   return {};
 }
 
-void ActuatorService::compute(const runtime::Command& command, runtime::Feedback& feedback) {
+void ActuatorService::require_sizes(const runtime::Command& command) const {
   const int n = static_cast<int>(actuators_.size());
   if (command.drift_size() != n || command.drift_velocity_size() != n)
     throw std::invalid_argument(label() + ": command has " + std::to_string(command.drift_size()) +
                                 " drifts for " + std::to_string(n) + " actuators");
+}
+
+void ActuatorService::load(const runtime::Command& command) {
+  require_sizes(command);
+  for (int i = 0; i < static_cast<int>(actuators_.size()); ++i)
+    actuators_[i].command({command.time(), command.drift(i), command.drift_velocity(i)});
+}
+
+void ActuatorService::tick(runtime::Feedback& feedback) {
+  for (std::size_t i = 0; i < actuators_.size(); ++i) {
+    const core::ActuatorOutput out = actuators_[i].tick();
+    realised_[i] = out.realised;
+    feedback.add_realised(out.realised);
+    feedback.add_force(out.force);
+  }
+}
+
+void ActuatorService::compute(const runtime::Command& command, runtime::Feedback& feedback) {
+  require_sizes(command);
+  const int n = static_cast<int>(actuators_.size());
   for (int i = 0; i < n; ++i) {
     const core::ActuatorOutput out =
         actuators_[i].step({command.time(), command.drift(i), command.drift_velocity(i)});

@@ -4,7 +4,9 @@
 //  2. lockstep: coordinator (this process) + substructure node + actuator emulator (child
 //     processes) over the 39 s Imperial Valley record: steps/s, step wall-time median / p99;
 //  3. real time at 1024 Hz (and 4096 Hz) over the record: overrun % beside a bare
-//     clock_nanosleep loop with the same Pacer and the same overrun definition.
+//     clock_nanosleep loop with the same Pacer and the same overrun definition;
+//  4. multi-rate: integrator 1024 Hz, the emulator's servo loop 4096 Hz: servo overrun % (median
+//     of --repeat runs) beside the bare 4096 Hz loop.
 // Ping-pong and lockstep run with every process on one CPU, as `rths launch` places lockstep runs
 // (--spread: leave placement to the scheduler); the real-time runs are never pinned.
 // Targets (issue 3): >= 10,000 lockstep steps/s; median step <= 2 x ping-pong median RTT;
@@ -105,6 +107,8 @@ struct RunFigures {
   std::uint64_t overruns = 0;
   double max_lateness = 0;
   runtime::LagSummary lateness;
+  runtime::LagSummary command_latency;  // wake-up to the last command written
+  std::uint64_t servo_ticks = 0, servo_overruns = 0;  // the emulator's servo loop, if it streams
 };
 
 // one_cpu: this process (the coordinator, its DDS threads) and the nodes on one CPU, as
@@ -139,11 +143,12 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   if (!outcome.ok) throw std::runtime_error(name + ": " + outcome.status);
   for (auto& n : nodes) n.wait_for(5000ms);
   const auto contents = runtime::read_record(record);
-  std::vector<double> walls, lateness;
+  std::vector<double> walls, lateness, command_latency;
   double total = 0;
   for (const auto* s : contents.steps()) {
     if (s->step() == 0) continue;
     walls.push_back(s->step_wall());
+    command_latency.push_back(s->command_latency());
     lateness.push_back(s->lateness());
     total += s->step_wall();
   }
@@ -155,6 +160,9 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   f.overruns = outcome.counters.overruns();
   f.max_lateness = outcome.max_lateness;
   f.lateness = runtime::summarize(lateness);
+  f.command_latency = runtime::summarize(command_latency);
+  f.servo_ticks = outcome.counters.servo_ticks();
+  f.servo_overruns = outcome.counters.servo_overruns();
   return f;
 }
 
@@ -180,12 +188,13 @@ void print_real_time(const char* label, const RunFigures& f, const BareFigures& 
   const double bare_pct = 100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps);
   std::printf(
       "%s: %zu steps, overruns %llu (%.3f %%), wake lateness median %.1f us p99 %.1f us max %.2f "
-      "ms; step wall median %.1f us p99 %.1f us\n"
+      "ms; step wall median %.1f us p99 %.1f us; wake-up to command written median %.1f us p99 "
+      "%.1f us (target <= 30 / 100 us)\n"
       "  bare loop, same wait policy: %zu steps, overruns %llu (%.3f %%), lateness median %.1f us "
       "p99 %.1f us max %.2f ms\n",
       label, f.steps, static_cast<unsigned long long>(f.overruns), pct, f.lateness.median * 1e6,
       f.lateness.p99 * 1e6, f.lateness.max * 1e3, f.step_wall.median * 1e6, f.step_wall.p99 * 1e6,
-      bare.steps, static_cast<unsigned long long>(bare.overruns), bare_pct,
+      f.command_latency.median * 1e6, f.command_latency.p99 * 1e6, bare.steps, static_cast<unsigned long long>(bare.overruns), bare_pct,
       bare.lateness.median * 1e6, bare.lateness.p99 * 1e6, bare.lateness.max * 1e3);
 }
 
@@ -196,7 +205,7 @@ int main(int argc, char** argv) {
   double seconds = 39.0;
   bool skip_real_time = false, lockstep_only = false, spread = false;
   int domain = 40;
-  int echo_domain = -1, echo_id = 1;
+  int echo_domain = -1, echo_id = 1, repeat = 3;
   app.add_option("--seconds", seconds, "s of the record for the real-time runs (default 39)");
   app.add_flag("--skip-real-time", skip_real_time);
   app.add_flag("--spread", spread,
@@ -204,6 +213,8 @@ int main(int argc, char** argv) {
   app.add_flag("--lockstep-only", lockstep_only,
                "only the 3-process lockstep run (for profiling and repeated measurements)");
   app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
+  app.add_option("--repeat", repeat, "runs per multi-rate row; the median is printed (default 3)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--echo", echo_domain, "internal: run as the ping-pong echo peer");
   app.add_option("--echo-id", echo_id, "internal: the echo peer's node id");
   CLI11_PARSE(app, argc, argv);
@@ -274,6 +285,34 @@ int main(int argc, char** argv) {
                     policy.name);
       print_real_time(label, rt, bare);
     }
+  }
+  // Multi-rate: the integrator at 1024 Hz, the emulator's servo loop at 4096 Hz on the clock,
+  // streaming feedback every servo period. Median of `repeat` runs beside the bare 4096 Hz loop.
+  for (const Policy& policy : policies) {
+    std::vector<double> servo_pct, coordinator_pct, bare_pct;
+    for (int r = 0; r < repeat; ++r) {
+      const auto rt = distributed_run(
+          domain + 4,
+          study_text(1.0 / 1024, seconds,
+                     std::string("servo { rate: 4096 } deployment { clock: REAL_TIME "
+                                 "max_overrun_fraction: -1 max_missed_answers: 1000 "
+                                 "command_watchdog_periods: 1000 wait_policy: ") +
+                         policy.config + " }"),
+          std::string("servo4096") + policy.name + std::to_string(r));
+      servo_pct.push_back(rt.servo_ticks ? 100.0 * static_cast<double>(rt.servo_overruns) /
+                                               static_cast<double>(rt.servo_ticks)
+                                         : -1.0);
+      coordinator_pct.push_back(100.0 * static_cast<double>(rt.overruns) /
+                                static_cast<double>(rt.steps));
+      const auto bare = bare_loop(1.0 / 4096, seconds, policy.bare);
+      bare_pct.push_back(100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps));
+    }
+    std::printf(
+        "multi-rate, integrator 1024 Hz + emulator servo loop 4096 Hz, %.0f s, wait policy %s, "
+        "median of %d runs: servo overruns %.3f %% (target <= 1 %%), coordinator overruns %.3f %%; "
+        "bare 4096 Hz loop %.3f %%\n",
+        seconds, policy.name, repeat, runtime::summarize(servo_pct).median,
+        runtime::summarize(coordinator_pct).median, runtime::summarize(bare_pct).median);
   }
   return 0;
 }

@@ -1,6 +1,8 @@
 // `rths identify`: measured lab data -> declared model -> residual -> missing effects -> refit,
 // with the error before and after on held-out data; optionally the identified actuator is put
-// back into a study config's simulation (--predict) to predict the test's error.
+// back into a study config's simulation (--predict) to predict the test's error. The declared
+// model comes from flags or a file (--model, identify/declared_model.h); --out writes the
+// identified model back as such a file and as study-config parts (identify/study_config.h).
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -10,11 +12,15 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "core/study.h"
+#include "core/text_format.h"
 #include "identify/compensator_design.h"
+#include "identify/declared_model.h"
 #include "identify/data.h"
 #include "identify/identify.h"
 #include "identify/predict.h"
 #include "identify/report.h"
+#include "identify/study_config.h"
 #include "tables/results.h"
 #include "tables/write.h"
 #include "identify/validation.h"
@@ -26,13 +32,16 @@ struct IdentifyCliOptions {
   std::string data, column_map, time_unit = "s", length_unit = "mm", force_unit = "N";
   std::string channels = "measured,force", declared_actuator = "delay",
               declared_specimen = "stiffness", candidates, holdout_mode = "blocks";
-  std::string out, predict, design_compensator, validate;
+  std::string out, predict, design_compensator, validate, model;
+  // Whether the declared-model flags were given on the command line (not just their defaults).
+  bool actuator_flag_given = false, specimen_flag_given = false;
+  double sample_rate = 0.0;  // Hz; 0 = from the file
   std::string format = "csv";  // of <out>/identify.<ext>: the record and both models' predictions
   double design_dt = 0.001;
   std::size_t folds = 5;
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
-  bool json = false;
+  bool json = false, trim_idle = false;
 };
 
 std::vector<std::string> split_list(const std::string& text) {
@@ -57,6 +66,85 @@ std::vector<identify::Effect> effects_for(const std::string& list, identify::Cha
     out.push_back(e);
   }
   return out;
+}
+
+// The declared model from --model FILE where it declares a channel, else from the flags. A
+// channel declared both ways is refused: one source of truth.
+void apply_declared_model(const IdentifyCliOptions& o, identify::IdentifyOptions& options,
+                          std::optional<identify::DeclaredModel>& declared) {
+  if (o.model.empty()) return;
+  declared = identify::load_declared_model(o.model);
+  if (declared->actuator) {
+    if (o.actuator_flag_given) {
+      throw std::invalid_argument("--declared-actuator conflicts with --model " + o.model +
+                                  ", which declares the actuator; give one of them");
+    }
+    options.declared_actuator = declared->actuator->effects;
+    options.actuator_parameters = declared->actuator->parameters;
+  }
+  if (declared->specimen) {
+    if (o.specimen_flag_given) {
+      throw std::invalid_argument("--declared-specimen conflicts with --model " + o.model +
+                                  ", which declares the specimen; give one of them");
+    }
+    options.declared_specimen = declared->specimen->effects;
+    options.specimen_parameters = declared->specimen->parameters;
+  }
+}
+
+// DIR/identified_model.textproto (reads back with --model), DIR/identified_study_fragment.textproto
+// (the study-config parts) and, with a study (--predict), DIR/identified_study.textproto (that
+// study with the identified specimen and actuator, for `rths run`). Returns the lines to print.
+std::vector<std::string> write_identified_configs(const identify::Identification& id,
+                                                  const IdentifyCliOptions& o) {
+  const std::filesystem::path dir = o.out;
+  const identify::ChannelModel* actuator = nullptr;
+  const identify::ChannelModel* specimen = nullptr;
+  std::optional<identify::ActuatorCase> actuator_case;
+  std::optional<identify::SpecimenModel> specimen_model;
+  std::vector<std::string> notes;
+  for (std::size_t k = 0; k < id.channels.size(); ++k) {
+    const auto& model = id.channels[k].final_fit.model;
+    const auto scales = identify::signal_scales(id.signals[k]);
+    if (model.channel == identify::Channel::kMeasured) {
+      actuator = &model;
+      actuator_case = identify::actuator_case(model, scales);
+      for (const auto& n : actuator_case->left_out) notes.push_back("actuator: " + n);
+    } else {
+      specimen = &model;
+      specimen_model = identify::specimen_model(model, scales);
+      notes.push_back("specimen: " + specimen_model->description);
+      for (const auto& n : specimen_model->left_out) notes.push_back("specimen: " + n);
+    }
+  }
+  std::vector<std::string> written;
+  const auto model_path = dir / "identified_model.textproto";
+  core::write_text_format(identify::to_config(actuator, specimen), model_path,
+                          {"Identified by `rths identify " + o.data + "`: fitted values as initial values.",
+                           "Start another identification from it: rths identify DATA --model " +
+                               model_path.string()});
+  written.push_back("identified model (reads back with --model): " + model_path.string());
+  const config::Study fragment = identify::study_fragment(actuator_case, specimen_model);
+  std::vector<std::string> comment{
+      "Identified by `rths identify " + o.data + "`: the parts of a study config it determines.",
+      "Copy substructuring.model into a study's substructuring and append the cases block;",
+      "`rths identify DATA --predict STUDY --out DIR` writes the whole study."};
+  for (const auto& n : notes) comment.push_back(n);
+  const auto fragment_path = dir / "identified_study_fragment.textproto";
+  core::write_text_format(fragment, fragment_path, comment);
+  written.push_back("study-config parts: " + fragment_path.string());
+  if (!o.predict.empty()) {
+    const std::filesystem::path base_path = o.predict;
+    const config::Study study = identify::identified_study(core::load_study(base_path),
+                                                           base_path.parent_path(), fragment);
+    const auto study_path = dir / "identified_study.textproto";
+    comment[1] = base_path.string() + " with the identified specimen model and the case '" +
+                 std::string(identify::kIdentifiedCaseName) + "'.";
+    comment[2] = "Run it: rths run " + study_path.string();
+    core::write_text_format(study, study_path, comment);
+    written.push_back("study with the identified model (rths run): " + study_path.string());
+  }
+  return written;
 }
 
 void run_identify(const IdentifyCliOptions& o) {
@@ -90,9 +178,40 @@ void run_identify(const IdentifyCliOptions& o) {
   options.selection.penalty_per_parameter = o.penalty;
   options.selection.max_steps = o.max_steps;
 
-  const identify::MeasuredData data = identify::read_measured(o.data, units, map);
+  std::optional<identify::DeclaredModel> declared;
+  apply_declared_model(o, options, declared);
+
+  // With --trim-idle, the idle stretches before and after the test are cut off (data.h).
+  std::vector<std::string> trimmed;
+  const auto load = [&](const std::string& path) {
+    identify::MeasuredData record =
+        identify::read_measured(path, units, map, identify::kDefaultMinSamples, o.sample_rate);
+    if (!o.trim_idle) return record;
+    const identify::ActiveRange active = identify::active_range(record);
+    std::ostringstream note;
+    note << path << ": active part " << record.time[active.begin] << " s to "
+         << record.time[active.end - 1] << " s of " << record.time.front() << " s to "
+         << record.time.back() << " s (--trim-idle)";
+    trimmed.push_back(note.str());
+    identify::MeasuredData active_part = identify::slice(record, active.begin, active.end);
+    active_part.source = record.source;
+    identify::validate(active_part, identify::kDefaultMinSamples);
+    return active_part;
+  };
+  const identify::MeasuredData data = load(o.data);
   std::optional<identify::MeasuredData> other;  // read first: a bad file fails before the fit
-  if (!o.validate.empty()) other = identify::read_measured(o.validate, units, map);
+  if (!o.validate.empty()) other = load(o.validate);
+  if (declared) {
+    for (const auto& [channel, part] :
+         {std::pair{identify::Channel::kMeasured, &declared->actuator},
+          std::pair{identify::Channel::kForce, &declared->specimen}}) {
+      if (*part) {
+        identify::check_physical_bounds(
+            **part, channel, identify::signal_scales(identify::make_signals(data, channel)),
+            declared->source);
+      }
+    }
+  }
   const identify::Identification id = identify::identify(data, options);
 
   std::optional<identify::StudyPrediction> prediction;
@@ -120,7 +239,13 @@ void run_identify(const IdentifyCliOptions& o) {
     }
     std::cerr << "compensator: " << design.summary << "\nwritten to " << written.string() << "\n";
   }
+  std::vector<std::string> configs_written;
   if (!o.out.empty()) {
+    try {
+      configs_written = write_identified_configs(id, o);
+    } catch (const std::runtime_error& e) {
+      throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
+    }
     try {
       identify::write_plots(id, o.out);
       const tables::Format format = tables::parse_format(o.format);
@@ -151,11 +276,22 @@ void run_identify(const IdentifyCliOptions& o) {
       }
       entry["kfold"] = {{"folds", o.folds},
                         {"heldout_errors", folds.heldout_errors},
+                        {"noise_floors", folds.noise_floors},
                         {"mean", folds.mean},
                         {"spread", folds.spread},
                         {"params", params}};
       validation_text << "; " << o.folds << "-fold " << 100.0 * folds.mean << " +/- "
-                      << 100.0 * folds.spread << " %";
+                      << 100.0 * folds.spread << " % (folds";
+      for (std::size_t f = 0; f < folds.heldout_errors.size(); ++f) {
+        validation_text << (f ? ", " : " ") << 100.0 * folds.heldout_errors[f] << " % (floor ";
+        // evidence.h: 0 when the block has no band free of signal to estimate the noise from.
+        if (folds.noise_floors[f] > 0.0) {
+          validation_text << 100.0 * folds.noise_floors[f] << " %)";
+        } else {
+          validation_text << "n/a)";
+        }
+      }
+      validation_text << ")";
     }
     if (other) {
       const auto result = identify::validate_on(
@@ -172,12 +308,16 @@ void run_identify(const IdentifyCliOptions& o) {
     nlohmann::json report = identify::to_json(id, context, prediction);
     report["input_units"] = {{"time", o.time_unit}, {"length", o.length_unit}, {"force", o.force_unit}};
     report["validation"] = validation;
+    if (!configs_written.empty()) report["configs_written"] = configs_written;
+    if (o.trim_idle) report["trimmed"] = trimmed;
     std::cout << report.dump(2) << "\n";
   } else {
     std::cout << "input units: time " << o.time_unit << ", length " << o.length_unit << ", force "
               << o.force_unit << " (--time-unit, --length-unit, --force-unit)\n";
+    for (const auto& line : trimmed) std::cout << line << "\n";
     std::cout << identify::format_table(id, prediction) << validation_text.str();
     if (!o.out.empty()) std::cout << "plots and identify." << o.format << " written to " << o.out << "\n";
+    for (const auto& line : configs_written) std::cout << line << "\n";
   }
 }
 
@@ -198,10 +338,19 @@ void add_identify_command(CLI::App& app) {
                   "DAQ columns and scales to mm / N, e.g. "
                   "command=CHANNEL2*10,measured=CHANNEL0*10,force=CHANNEL1*9806.65 (the default)");
   cmd->add_option("--channels", o->channels, "channels to identify: measured,force");
-  cmd->add_option("--declared-actuator", o->declared_actuator,
-                  "declared actuator effects (gain is always there), comma list or none");
-  cmd->add_option("--declared-specimen", o->declared_specimen,
-                  "declared specimen effects, comma list or none");
+  CLI::Option* actuator_flag = cmd->add_option(
+      "--declared-actuator", o->declared_actuator,
+      "declared actuator effects (gain is always there), comma list or none");
+  CLI::Option* specimen_flag = cmd->add_option("--declared-specimen", o->declared_specimen,
+                                               "declared specimen effects, comma list or none");
+  cmd->add_option("--model", o->model,
+                  "declared model file (text-format rths.config.DeclaredModel, proto/identify.proto): "
+                  "actuator stages, specimen kind, each parameter's initial value, min, max, fixed; "
+                  "replaces --declared-actuator / --declared-specimen for the channels it declares");
+  cmd->add_option("--sample-rate", o->sample_rate,
+                  "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
+                  "export without Sampling Interval/Rate); checked against the file's own when both")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--candidates", o->candidates, "candidate effects (default: the whole library)");
   cmd->add_option("--holdout", o->holdout, "held-out share of the record")
       ->check(CLI::Range(0.01, 0.99));
@@ -219,11 +368,12 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot) and identify.<format>: the record and the declared and final models' predictions");
+  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--predict", o->predict,
-                  "study config to run with the identified actuator (e.g. configs/paper_frame.textproto)");
+                  "study config to run with the identified actuator (e.g. configs/paper_frame.textproto); "
+                  "with --out, also written back with the identified model as identified_study.textproto");
   cmd->add_option("--design-compensator", o->design_compensator,
                   "write a compensator designed from the identified actuator to --out: "
                   "polynomial | ats | model-based")
@@ -234,8 +384,14 @@ void add_identify_command(CLI::App& app) {
                   "k-fold validation over contiguous blocks of the final model (0: off)");
   cmd->add_option("--validate", o->validate,
                   "another record of the same rig: the identified models' error on it");
+  cmd->add_flag("--trim-idle", o->trim_idle,
+                "cut the idle stretches before and after the test off the record(s): keep from "
+                "0.25 s before the command first leaves its rest by 5 % of its peak to 0.25 s after "
+                "it last does");
   cmd->add_flag("--json", o->json, "print the steps and models as JSON");
-  cmd->callback([o] {
+  cmd->callback([o, actuator_flag, specimen_flag] {
+    o->actuator_flag_given = actuator_flag->count() > 0;
+    o->specimen_flag_given = specimen_flag->count() > 0;
     if (!o->design_compensator.empty() && o->out.empty()) {
       throw std::invalid_argument("--design-compensator needs --out DIR");
     }

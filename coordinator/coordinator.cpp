@@ -74,6 +74,8 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
     int late_streak = 0;           // real time: consecutive steps on an older answer
     runtime::Feedback feedback;    // newest accepted
     runtime::LinkSample link;
+    std::int64_t servo_sample = 0;  // streaming emulator: newest servo period applied
+    std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
   };
   std::map<int, Node> nodes;
   runtime::RejectCounters rejected;
@@ -110,8 +112,10 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
 
   void send(int node_id, runtime::MessageKind kind, std::int64_t at_step,
             const google::protobuf::MessageLite& payload) {
-    endpoint.send(runtime::pack(options.run_id, node_id, kind, at_step, payload));
+    runtime::pack_into(outgoing, options.run_id, node_id, kind, at_step, payload);
+    endpoint.send(outgoing);
   }
+  transport::Message outgoing;  // reused: no allocation per command once warm
 
   void event(const std::string& what) {
     spdlog::info("step {}: {}", step, what);
@@ -175,7 +179,11 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       case runtime::FEEDBACK: {
         const std::int64_t newest = step;  // nothing newer was ever commanded
         const Verdict order = runtime::check_step(message->step, node.last_answer, newest);
-        if (order != Verdict::kAccept) {
+        // A streaming emulator (servo loop faster than the integrator, real time) sends several
+        // answers to one command: a later servo sample of the answered step replaces the
+        // measurement but is not a new answer (freshness and lag count the first only).
+        const bool same_step = order == Verdict::kDuplicate;
+        if (order != Verdict::kAccept && !same_step) {
           rejected.count(order);
           return true;
         }
@@ -187,9 +195,20 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
           rejected.count(Verdict::kGarbage);
           return true;
         }
+        if (same_step) {
+          if (feedback.servo_sample() <= node.servo_sample) {
+            rejected.count(order);
+            return true;
+          }
+          node.last_seen = Clock::now();
+          node.servo_sample = feedback.servo_sample();
+          node.feedback = std::move(feedback);
+          return true;
+        }
         node.last_seen = Clock::now();
         node.last_answer = message->step;
         ++node.answers;
+        node.servo_sample = feedback.servo_sample();
         node.feedback = std::move(feedback);
         runtime::LinkSample& link = node.link;
         link.set_node_id(node.plan->spec.id());
@@ -212,9 +231,15 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
                              hold.reason(),
                          node.plan->label());
       }
-      case runtime::HEARTBEAT:
+      case runtime::HEARTBEAT: {
         node.last_seen = Clock::now();
+        runtime::Heartbeat heartbeat;
+        if (runtime::unpack(*message, heartbeat)) {
+          node.servo_ticks = heartbeat.servo_ticks();
+          node.servo_overruns = heartbeat.servo_overruns();
+        }
         return true;
+      }
       default:
         return true;  // kinds a coordinator never acts on
     }
@@ -292,6 +317,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       }
       send(id, runtime::COMMAND, step, command_message);
     }
+    commands_written = Clock::now();
     if (local_numerical) {
       local_numerical->trial(drift, shear, nullptr);
     } else {
@@ -343,7 +369,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   runtime::PacingClock* pacing_clock = nullptr;  // set by run()
   runtime::Pacer* pacer = nullptr;
   runtime::PaceResult pace;
-  Clock::time_point step_start;
+  Clock::time_point step_start, commands_written;
   std::int64_t step_start_realtime_ns = 0;
 
   void before_step(std::size_t k) override {
@@ -437,6 +463,8 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       for (auto& [id, node] : nodes) *r.add_links() = node.link;
     r.set_lateness(pace.lateness);
     r.set_step_wall(step_wall);
+    r.set_command_latency(
+        k == 0 ? 0.0 : std::chrono::duration<double>(commands_written - step_start).count());
     r.set_overrun(pace.overrun);
     r.set_start_realtime_ns(k == 0 ? 0 : step_start_realtime_ns);
     step_entry.unsafe_arena_set_allocated_step(&step_record);
@@ -634,6 +662,19 @@ RunOutcome Coordinator::run() {
                        " %; worst streak " + std::to_string(pacer.worst_overrun_streak()) + ")";
       s.event(outcome.status);
     }
+    for (const auto& [id, node] : s.nodes) {
+      if (!outcome.ok || tolerance < 0 || node.servo_ticks == 0) continue;
+      if (static_cast<double>(node.servo_overruns) > tolerance * static_cast<double>(node.servo_ticks)) {
+        outcome.ok = false;
+        outcome.status = "completed with deadline misses: the servo loop of " + node.plan->label() +
+                         " overran " + std::to_string(node.servo_overruns) + " of " +
+                         std::to_string(node.servo_ticks) + " periods (" +
+                         std::to_string(100.0 * static_cast<double>(node.servo_overruns) /
+                                        static_cast<double>(node.servo_ticks)) +
+                         " %, tolerance " + std::to_string(100.0 * tolerance) + " %)";
+        s.event(outcome.status);
+      }
+    }
   } catch (const RunAborted& e) {
     failed = true;
     outcome.status = e.what();
@@ -664,6 +705,10 @@ RunOutcome Coordinator::run() {
   outcome.counters.set_worst_overrun_streak(pacer.worst_overrun_streak());
   outcome.counters.set_worst_late_streak(s.worst_late_streak);
   outcome.counters.set_steps(completed > 0 ? completed - 1 : 0);
+  for (const auto& [id, node] : s.nodes) {
+    outcome.counters.set_servo_ticks(outcome.counters.servo_ticks() + node.servo_ticks);
+    outcome.counters.set_servo_overruns(outcome.counters.servo_overruns() + node.servo_overruns);
+  }
   outcome.max_lateness = pacer.max_lateness();
   for (auto& [id, node] : s.nodes) {
     LinkLagStats stats;

@@ -19,6 +19,12 @@
 //              feedback_wait_fraction * dt for the answers to step k, otherwise uses the newest
 //              answer it has and records which step that answers; overruns, late feedback and
 //              their worst streaks are counted and recorded per step.
+//   servo      an emulator with a servo loop faster than the integrator (study.servo.rate) streams
+//              a FEEDBACK per servo period in real time: the first for step k is its answer (lag,
+//              freshness); later servo samples of step k replace the measurement (newest wins,
+//              never counted as duplicates). Its servo periods and overruns arrive in heartbeats;
+//              more overruns than max_overrun_fraction of its periods is also "completed with
+//              deadline misses". Lockstep: the servo periods run in simulated time, one answer.
 // Outcome: ok only when the run did what it was for. Not ok: diverged; a real-time run whose
 // overruns exceed max_overrun_fraction of its steps ("completed with deadline misses"); any stop
 // below; a run record that lost entries.
@@ -37,9 +43,11 @@
 // the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
 // loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
 // one or two entries behind). A full ring drops and counts entries and fails the run.
-// Real-time safety of a step: the record entry, the feedback storage and the lag vectors are
-// reused or reserved up front; what still allocates is the transport's message (payload string)
-// and, rarely, an event. mlockall and pinning of the loop thread when the deployment asks.
+// Real-time safety of a step: the record entry, the feedback storage, the lag vectors and the
+// outgoing command message (runtime::pack_into) are reused or reserved up front; what still
+// allocates is the transport's received message (copied out of DDS) and, rarely, an event.
+// mlockall and pinning of the loop thread when the deployment asks. Each step records
+// command_latency (wake-up to the last command written); bench/runtime_bench prints it.
 
 #include <filesystem>
 #include <map>

@@ -25,6 +25,10 @@ std::string summary_text(const RunOutcome& o) {
       << "\noverruns: " << c.overruns() << " (worst streak " << c.worst_overrun_streak()
       << "), late feedback: " << c.late_feedback() << " (worst streak " << c.worst_late_streak()
       << "), max lateness " << o.max_lateness * 1e3 << " ms\n";
+  if (c.servo_ticks() > 0)
+    out << "servo loops: " << c.servo_overruns() << " overruns in " << c.servo_ticks()
+        << " periods (" << 100.0 * static_cast<double>(c.servo_overruns()) / static_cast<double>(c.servo_ticks())
+        << " %, as of each emulator's last heartbeat)\n";
   for (const LinkLagStats& l : o.links)
     out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "
         << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3

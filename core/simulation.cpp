@@ -94,7 +94,7 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
   require_motion_at_dt(setup, motion_at_dt);
   check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
 
-  HybridRestoring restoring(setup.partition, setup.delays, setup.dt);
+  HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps);
   if (!is_explicit(setup.integrator) && !restoring.repeatable()) {
     throw std::invalid_argument(
         to_string(setup.integrator) +

@@ -31,7 +31,9 @@ struct HybridSetup {
   double dt = 0.0;  // s
   bool allow_unstable = false;
   HybridPartition partition;
-  std::vector<DelayChain> delays;  // one per actuator (partition.actuator_storeys); may be empty
+  std::vector<DelayChain> delays;  // one per actuator (partition.actuator_storeys); may be empty,
+                                   // built for the servo period dt / servo_substeps
+  int servo_substeps = 1;          // servo periods per integrator step (core::Actuator)
 };
 
 struct SimulationResult {

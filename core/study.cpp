@@ -107,6 +107,8 @@ void validate_study(const config::Study& study, const std::string& source) {
                                                                     : "structure.damping.modal_zeta";
   require(zeta >= 0 && zeta <= kMaxDampingRatio, source,
           zeta_field + " is a ratio in [0, 1] (0.05 = 5 % of critical), got " + number(zeta));
+  require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
+          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " + number(study.servo().rate()));
   require(study.integrator().dt() >= 0 && study.integrator().dt() <= kMaxStep, source,
           "integrator.dt must be in [0, " + number(kMaxStep) + "] s (0 = the record's step), got " +
               number(study.integrator().dt()));
@@ -316,6 +318,40 @@ IntegratorKind integrator_kind(const config::Integrator& integrator) {
   }
 }
 
+int servo_substeps(const config::Study& study, double dt) {
+  const double rate = study.servo().rate();
+  if (rate == 0) return 1;
+  const double per_step = rate * dt;
+  const double whole = std::round(per_step);
+  require(std::isfinite(rate) && rate > 0 && whole >= 1 && whole <= kMaxServoSubsteps &&
+              std::abs(per_step - whole) <= 1e-6 * whole,
+          "servo",
+          "servo.rate = " + number(rate) + " Hz must be an integer multiple (1 to " +
+              std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " + number(1.0 / dt) +
+              " Hz (dt = " + number(dt) + " s)");
+  return static_cast<int>(whole);
+}
+
+HybridSetup base_setup(const config::Study& study, double dt) {
+  HybridSetup base;
+  base.model = make_structure(study.structure());
+  base.integrator = integrator_kind(study.integrator());
+  base.dt = dt;
+  base.allow_unstable = study.integrator().allow_unstable();
+  base.servo_substeps = servo_substeps(study, dt);
+  const auto& sub = study.substructuring();
+  const StoreyModelFactory factory = make_storey_factory(sub.model());
+  if (!sub.experimental_storeys().empty()) {
+    std::vector<int> storeys;
+    for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
+    base.partition = partition_by_storeys(base.model.storey_stiffness, storeys, factory);
+  } else {
+    base.partition = partition_by_fraction(base.model.storey_stiffness,
+                                           sub.experimental_fraction(), factory);
+  }
+  return base;
+}
+
 PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir) {
   PreparedStudy prepared;
   prepared.config = study;
@@ -331,20 +367,7 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
             "its delay of " + number(lag) + " s is not shorter than the record (" +
                 number(prepared.motion.duration()) + " s)");
   }
-  prepared.base.model = make_structure(study.structure());
-  prepared.base.integrator = integrator_kind(study.integrator());
-  prepared.base.dt = dt;
-  prepared.base.allow_unstable = study.integrator().allow_unstable();
-  const auto& sub = study.substructuring();
-  const StoreyModelFactory factory = make_storey_factory(sub.model());
-  if (!sub.experimental_storeys().empty()) {
-    std::vector<int> storeys;
-    for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
-    prepared.base.partition = partition_by_storeys(prepared.base.model.storey_stiffness, storeys, factory);
-  } else {
-    prepared.base.partition = partition_by_fraction(prepared.base.model.storey_stiffness,
-                                                    sub.experimental_fraction(), factory);
-  }
+  prepared.base = base_setup(study, dt);
   return prepared;
 }
 
@@ -358,12 +381,13 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
                                 " compensation blocks for " + std::to_string(actuators) +
                                 " actuators; give one (for every actuator) or one per actuator");
   }
+  const double servo_period = setup.dt / setup.servo_substeps;
   for (std::size_t a = 0; a < actuators; ++a) {
-    setup.delays.push_back(make_delay_chain(study_case.delay(), setup.dt, prepared.base_dir));
+    setup.delays.push_back(make_delay_chain(study_case.delay(), servo_period, prepared.base_dir));
     if (blocks > 0) {
       const std::size_t b = blocks == 1 ? 0 : a;
       setup.delays.back().set_compensator(make_compensator(
-          study_case.compensation(static_cast<int>(b)), setup.dt,
+          study_case.compensation(static_cast<int>(b)), servo_period,
           "case '" + study_case.name() + "' compensation[" + std::to_string(b) + "]"));
     }
   }

@@ -61,6 +61,14 @@ struct PreparedStudy {
 };
 PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir);
 
+// What a study fixes before any motion or case: structure, integrator, dt (s), partition and the
+// servo loop. The one construction in-process runs and distributed nodes share.
+HybridSetup base_setup(const config::Study& study, double dt);
+// Servo periods per integrator step from study.servo.rate (Hz) and dt (s): 1 when unset; throws
+// std::invalid_argument naming servo.rate unless rate * dt is a whole number in [1, 64].
+int servo_substeps(const config::Study& study, double dt);
+constexpr int kMaxServoSubsteps = 64;
+
 // The base setup with the case's delay stages on every actuator.
 HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case);
 

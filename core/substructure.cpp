@@ -134,16 +134,55 @@ Actuator& Actuator::operator=(const Actuator& other) {
   return *this;
 }
 
-ActuatorOutput Actuator::step(const CommandSample& command) {
+void Actuator::set_servo(int substeps, double servo_period) {
+  if (substeps < 1) throw std::invalid_argument("a servo loop needs at least one period per step");
+  if (!(servo_period > 0)) throw std::invalid_argument("the servo period must be > 0 s");
+  substeps_ = substeps;
+  servo_period_ = servo_period;
+  ramp_tick_ = substeps_;
+}
+
+CommandSample Actuator::target_at(int tick) const {
+  CommandSample target = ramp_to_;
+  if (tick < substeps_) {
+    const double f = static_cast<double>(tick) / substeps_;
+    target.time = ramp_from_.time + (ramp_to_.time - ramp_from_.time) * f;
+    target.displacement =
+        ramp_from_.displacement + (ramp_to_.displacement - ramp_from_.displacement) * f;
+    target.velocity = ramp_from_.velocity + (ramp_to_.velocity - ramp_from_.velocity) * f;
+  } else if (tick > substeps_) {
+    target.time += (tick - substeps_) * servo_period_;
+  }
+  return target;
+}
+
+void Actuator::command(const CommandSample& command) {
+  // The ramp starts where the servo's target is now (mid-ramp when a command comes early).
+  ramp_from_ = target_at(ramp_tick_);
+  ramp_to_ = command;
+  ramp_tick_ = 0;
+}
+
+ActuatorOutput Actuator::tick() {
+  const CommandSample target = target_at(++ramp_tick_);
   ActuatorOutput out;
-  out.realised = chain_.empty() ? command.displacement : chain_.step(command);
+  out.realised = chain_.empty() ? target.displacement : chain_.step(target);
   out.force = specimen_->step(out.realised);
+  return out;
+}
+
+ActuatorOutput Actuator::step(const CommandSample& command) {
+  this->command(command);
+  ActuatorOutput out;
+  for (int j = 0; j < substeps_; ++j) out = tick();
   return out;
 }
 
 void Actuator::reset() {
   chain_.reset();
   specimen_->reset();
+  ramp_from_ = ramp_to_ = CommandSample{};
+  ramp_tick_ = substeps_;
 }
 
 void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<int>& actuator_storeys,
@@ -153,8 +192,18 @@ void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<in
   assembly.dof_forces(shear, force);
 }
 
+Actuator make_actuator(const HybridPartition& partition, int a, DelayChain chain, double dt,
+                       int servo_substeps) {
+  if (a < 0 || a >= static_cast<int>(partition.actuator_storeys.size()))
+    throw std::invalid_argument("actuator " + std::to_string(a) + " does not exist");
+  const int storey = partition.actuator_storeys[static_cast<std::size_t>(a)];
+  Actuator actuator(std::move(chain), partition.experimental[static_cast<std::size_t>(storey)]->clone());
+  actuator.set_servo(servo_substeps, dt / servo_substeps);
+  return actuator;
+}
+
 HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains,
-                                 double /*dt*/)
+                                 double dt, int servo_substeps)
     : assembly_(static_cast<int>(partition.numerical.size())),
       numerical_(HybridPartition(partition).numerical),
       actuator_storeys_(partition.actuator_storeys) {
@@ -164,10 +213,9 @@ HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<D
                                 std::to_string(actuators) + " actuators");
   }
   chains.resize(actuators);
-  for (std::size_t a = 0; a < actuators; ++a) {
-    const int storey = partition.actuator_storeys[a];
-    actuators_.emplace_back(std::move(chains[a]), partition.experimental[storey]->clone());
-  }
+  for (std::size_t a = 0; a < actuators; ++a)
+    actuators_.push_back(make_actuator(partition, static_cast<int>(a), std::move(chains[a]), dt,
+                                       servo_substeps));
   const int n = assembly_.storeys();
   drift_ = Vec::Zero(n);
   drift_velocity_ = Vec::Zero(n);

@@ -80,6 +80,18 @@ struct ActuatorOutput {
   double force = 0.0;     // N, measured
 };
 
+// The actuator behind its servo controller (multi-rate). The controller runs `substeps` servo
+// periods per integrator step (servo period = dt / substeps; substeps = 1: one per step). Each new
+// command starts a linear ramp from the target the servo holds now to the command, reached after
+// `substeps` periods, the usual ramp generator of RTHS servo controllers, so the actuator is never
+// driven in steps. At servo period j of a ramp (1 <= j <= substeps):
+//   target_j = from + (to - from) j / substeps   (displacement, velocity and time alike; j =
+//   substeps gives `to` exactly), then the chain (compensation, delay stages, built for the servo
+//   period) and the specimen act on target_j. Past the end of a ramp the target stays at `to`
+//   and time advances by one servo period per tick.
+// step(c) = command(c) then `substeps` ticks, returning the last: the lockstep / in-process form,
+// so in-process and distributed lockstep runs of the same multi-rate model agree bit for bit.
+// command() + tick() paced by a clock is the real-time form (actuator_emulator's servo loop).
 class Actuator {
  public:
   Actuator(DelayChain chain, std::unique_ptr<RestoringForceModel> specimen);
@@ -87,7 +99,14 @@ class Actuator {
   Actuator& operator=(const Actuator& other);
   Actuator(Actuator&&) = default;
   Actuator& operator=(Actuator&&) = default;
+  // @pre substeps >= 1, servo_period > 0 (s). The chain must have been built for servo_period.
+  void set_servo(int substeps, double servo_period);
+  int servo_substeps() const { return substeps_; }
   ActuatorOutput step(const CommandSample& command);
+  void command(const CommandSample& command);
+  ActuatorOutput tick();
+  // Servo periods since the newest command (0 before the first tick of its ramp).
+  int ticks_since_command() const { return ramp_tick_; }
   // Without a delay stage the specimen can be evaluated at trial drifts (implicit reference runs).
   ForceState trial_undelayed(double drift) { return specimen_->trial(drift); }
   void commit_undelayed() { specimen_->commit(); }
@@ -96,9 +115,20 @@ class Actuator {
   const DelayChain& chain() const { return chain_; }
 
  private:
+  CommandSample target_at(int tick) const;
   DelayChain chain_;
   std::unique_ptr<RestoringForceModel> specimen_;
+  int substeps_ = 1;
+  double servo_period_ = 0.0;  // s; 0 = not set (only needed past the end of a ramp)
+  CommandSample ramp_from_, ramp_to_;
+  int ramp_tick_ = 1;  // ticks of the present ramp done; >= substeps_: at the target
 };
+
+// Actuator `a` of a partition (at storey actuator_storeys[a]): the chain, a clone of that storey's
+// specimen, and the servo loop (servo_substeps periods of dt / servo_substeps per step). The one
+// construction in-process runs and the actuator emulator share.
+Actuator make_actuator(const HybridPartition& partition, int a, DelayChain chain, double dt,
+                       int servo_substeps);
 
 // A restoring-force evaluator for a hybrid run: what the loop records of each step besides forces.
 class HybridEvaluator : public RestoringEvaluator {
@@ -123,7 +153,9 @@ void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<in
 // Records, per step, each actuator's commanded drift, realised drift and measured force.
 class HybridRestoring final : public HybridEvaluator {
  public:
-  HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains, double dt);
+  // chains: one per actuator (or none), built for the servo period dt / servo_substeps.
+  HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains, double dt,
+                  int servo_substeps = 1);
   const Vec& trial(const Vec& u, const Vec& v, Mat* tangent) override;
   void commit() override;
   bool repeatable() const override;

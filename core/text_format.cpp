@@ -50,4 +50,18 @@ std::string read_text_file(const std::filesystem::path& path, const std::string&
   return text.str();
 }
 
+void write_text_format(const google::protobuf::Message& message, const std::filesystem::path& path,
+                       const std::vector<std::string>& comment) {
+  std::string body;
+  if (!google::protobuf::TextFormat::PrintToString(message, &body)) {
+    throw std::runtime_error(path.string() + ": cannot print " + message.GetTypeName());
+  }
+  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+  std::ofstream out(path);
+  for (const auto& line : comment) out << "# " << line << "\n";
+  out << body;
+  out.close();
+  if (!out) throw std::runtime_error(path.string() + ": cannot write " + message.GetTypeName());
+}
+
 }  // namespace rths::core

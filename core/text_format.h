@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace rths::core {
 
@@ -17,5 +18,11 @@ void parse_text_format(const std::string& text, const std::string& source_name,
 
 // The whole file as text. Throws std::invalid_argument naming the file when it cannot be read.
 std::string read_text_file(const std::filesystem::path& path, const std::string& what);
+
+// Writes `message` in text format to `path` (parent folders created), after `comment` lines each
+// prefixed "# ". Doubles are printed so that they read back to the same value. Throws
+// std::runtime_error naming the file when it cannot be written.
+void write_text_format(const google::protobuf::Message& message, const std::filesystem::path& path,
+                       const std::vector<std::string>& comment = {});
 
 }  // namespace rths::core

@@ -1,5 +1,7 @@
 #include "identify/compensator_design.h"
 
+#include "identify/study_config.h"
+
 #include <google/protobuf/text_format.h>
 
 #include <algorithm>
@@ -35,57 +37,30 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
   }
   if (!(dt > 0.0)) throw std::invalid_argument("compensator design: dt must be > 0 s");
   CompensatorDesign design;
-  const auto value = [&](std::optional<Effect> e, const char* name) {
-    return actuator.param(e, name, scales);
-  };
-  const double gain = value(std::nullopt, "gain").value_or(1.0);
-  double delay = value(Effect::kDelay, "delay").value_or(0.0);
-  if (delay < 0.0) {
-    design.ignored.push_back("negative delay (lead) of " + std::to_string(delay) + " s, used as 0");
-    delay = 0.0;
-  }
-  design.study_case.set_name("identified_" + compensator_kind_name(kind));
-  auto* shift = design.study_case.add_delay();
-  shift->mutable_shift()->set_delay(delay);
-  if (gain != 1.0) shift->set_amplitude_gain(gain);
+  ActuatorCase identified = actuator_case(actuator, scales, "identified_" + compensator_kind_name(kind));
+  design.study_case = std::move(identified.study_case);
+  design.ignored = std::move(identified.left_out);
+  const auto& shift = design.study_case.delay(0);
+  const double delay = shift.shift().delay();
+  const double gain = shift.amplitude_gain() == 0.0 ? 1.0 : shift.amplitude_gain();
   design.plant.delay = delay;
   design.plant.gain = gain;
   double dynamics_lag = 0.0;
   bool dynamics = false;
-  for (Effect e : actuator.effects) {
-    switch (e) {
-      case Effect::kFirstOrder: {
-        const double t = value(e, "time_constant").value_or(0.0);
-        if (!(t > 0.0)) break;
-        design.study_case.add_delay()->mutable_first_order()->set_time_constant(t);
-        design.plant.append({1.0}, {t, 1.0});
-        dynamics_lag += t;
-        dynamics = true;
-        break;
-      }
-      case Effect::kSecondOrder: {
-        const double wn = value(e, "natural_frequency").value_or(0.0);
-        const double zeta = value(e, "damping_ratio").value_or(0.0);
-        if (!(wn > 0.0) || !(zeta > 0.0)) break;
-        auto* tf = design.study_case.add_delay()->mutable_transfer_function();
-        const std::vector<double> num{wn * wn}, den{1.0, 2.0 * zeta * wn, wn * wn};
-        for (double c : num) tf->add_numerator(c);
-        for (double c : den) tf->add_denominator(c);
-        design.plant.append(num, den);
-        dynamics_lag += 2.0 * zeta / wn;
-        dynamics = true;
-        break;
-      }
-      case Effect::kTimeVaryingDelay:
-        design.ignored.push_back("time-varying delay: its mean is compensated");
-        break;
-      case Effect::kOffsetDrift:
-      case Effect::kBacklash:
-      case Effect::kVelocitySaturation:
-        design.ignored.push_back(effect_name(e) + ": lab-scale effect, not inverted");
-        break;
-      default:
-        break;
+  for (const auto& stage : design.study_case.delay()) {
+    if (stage.has_first_order()) {
+      const double t = stage.first_order().time_constant();
+      design.plant.append({1.0}, {t, 1.0});
+      dynamics_lag += t;
+      dynamics = true;
+    } else if (stage.has_transfer_function()) {
+      // wn^2 / (s^2 + 2 zeta wn s + wn^2): low-frequency lag 2 zeta / wn = den[1] / den[2].
+      const auto& tf = stage.transfer_function();
+      const std::vector<double> num(tf.numerator().begin(), tf.numerator().end());
+      const std::vector<double> den(tf.denominator().begin(), tf.denominator().end());
+      design.plant.append(num, den);
+      dynamics_lag += den.at(1) / den.at(2);
+      dynamics = true;
     }
   }
   design.plant_lag = delay + dynamics_lag;

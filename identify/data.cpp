@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -63,6 +64,31 @@ std::size_t column_index(const std::vector<std::string>& header, const std::stri
   for (const auto& h : header) names += (names.empty() ? "" : ", ") + h;
   throw std::invalid_argument(where(path, line) + "missing column '" + name +
                               "' (header has: " + names + ")");
+}
+
+std::optional<std::size_t> find_column(const std::vector<std::string>& header,
+                                       const std::string& name) {
+  for (std::size_t i = 0; i < header.size(); ++i) {
+    if (lower(header[i]) == lower(name)) return i;
+  }
+  return std::nullopt;
+}
+
+void check_sample_rate(double sample_rate, const std::filesystem::path& path) {
+  if (sample_rate < 0.0 || !std::isfinite(sample_rate)) {
+    throw std::invalid_argument(path.string() + ": --sample-rate must be a positive number of Hz, got " +
+                                std::to_string(sample_rate));
+  }
+}
+
+// The file's own rate against the given one: one time base, not two that disagree.
+void check_same_rate(double file_rate, double sample_rate, const std::string& what,
+                     const std::filesystem::path& path) {
+  if (sample_rate > 0.0 && std::abs(file_rate - sample_rate) > 0.01 * sample_rate) {
+    throw std::invalid_argument(path.string() + ": " + what + " gives " + std::to_string(file_rate) +
+                                " Hz but --sample-rate says " + std::to_string(sample_rate) +
+                                " Hz; drop --sample-rate or fix the file");
+  }
 }
 
 }  // namespace
@@ -167,7 +193,8 @@ void validate(MeasuredData& data, std::size_t min_samples) {
 }
 
 MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
-                      std::size_t min_samples) {
+                      std::size_t min_samples, double sample_rate) {
+  check_sample_rate(sample_rate, path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open");
   MeasuredData data;
@@ -184,11 +211,18 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
   }
   if (header.empty()) throw std::invalid_argument(path.string() + ": empty file, no header");
   const std::size_t header_line = line_number;
-  const std::size_t it = column_index(header, "time", path, header_line);
+  const std::optional<std::size_t> it = find_column(header, "time");
+  if (!it && !(sample_rate > 0.0)) {
+    std::string names;
+    for (const auto& h : header) names += (names.empty() ? "" : ", ") + h;
+    throw std::invalid_argument(where(path, header_line) +
+                                "no 'time' column (header has: " + names +
+                                "); give the sampling rate with --sample-rate HZ");
+  }
   const std::size_t ic = column_index(header, "command", path, header_line);
   const std::size_t im = column_index(header, "measured", path, header_line);
   const std::size_t iforce = column_index(header, "force", path, header_line);
-  const std::size_t needed = std::max({it, ic, im, iforce}) + 1;
+  const std::size_t needed = std::max({it.value_or(0), ic, im, iforce}) + 1;
   while (std::getline(in, line)) {
     ++line_number;
     const std::string t = trim(line);
@@ -199,7 +233,8 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
                                   std::to_string(fields.size()) + " columns, expected " +
                                   std::to_string(header.size()));
     }
-    data.time.push_back(units.time_to_s * parse_number(fields[it], path, line_number, "time"));
+    data.time.push_back(it ? units.time_to_s * parse_number(fields[*it], path, line_number, "time")
+                           : static_cast<double>(data.time.size()) / sample_rate);
     data.command.push_back(units.length_to_m *
                            parse_number(fields[ic], path, line_number, "command"));
     data.measured.push_back(units.length_to_m *
@@ -208,11 +243,13 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
                          parse_number(fields[iforce], path, line_number, "force"));
   }
   validate(data, min_samples);
+  if (it) check_same_rate(1.0 / data.dt, sample_rate, "the time column", path);
   return data;
 }
 
 MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map,
-                      std::size_t min_samples) {
+                      std::size_t min_samples, double sample_rate) {
+  check_sample_rate(sample_rate, path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open");
   std::string line;
@@ -233,7 +270,7 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
                                 std::to_string(static_cast<int>(kMaxHeaderSize)));
   const int header_size = static_cast<int>(header_value);
   std::vector<std::string> header;
-  double interval = 0.0;
+  double interval = 0.0, rate = 0.0;
   while (line_number < static_cast<std::size_t>(header_size)) {
     if (!std::getline(in, line)) {
       throw std::invalid_argument(where(path, line_number) + "file ends inside the header");
@@ -243,19 +280,37 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
       header = split_fields(trim(line), ',');
     } else {
       const auto c = line.find(':');
-      if (c != std::string::npos && trim(line.substr(0, c)) == "Sampling Interval") {
-        interval = parse_number(trim(line.substr(c + 1)), path, line_number, "Sampling Interval");
+      const std::string key = c == std::string::npos ? "" : trim(line.substr(0, c));
+      if (key == "Sampling Interval" || key == "Sampling Rate") {
+        const double value = parse_number(trim(line.substr(c + 1)), path, line_number, key);
+        if (!(value > 0.0)) {
+          throw std::invalid_argument(where(path, line_number) + key + " must be > 0");
+        }
+        (key == "Sampling Interval" ? interval : rate) = value;
       }
     }
   }
-  if (!(interval > 0.0)) {
-    throw std::invalid_argument(path.string() + ": header has no positive 'Sampling Interval'");
+  if (interval > 0.0 && rate > 0.0 && std::abs(interval * rate - 1.0) > 0.01) {
+    throw std::invalid_argument(path.string() + ": header's Sampling Interval " +
+                                std::to_string(interval) + " s and Sampling Rate " +
+                                std::to_string(rate) + " Hz disagree");
   }
-  const std::size_t isample = column_index(header, "Sample Number", path, line_number);
+  if (!(interval > 0.0) && rate > 0.0) interval = 1.0 / rate;
+  if (interval > 0.0) {
+    check_same_rate(1.0 / interval, sample_rate, "the header's Sampling Interval/Rate", path);
+  } else if (sample_rate > 0.0) {
+    interval = 1.0 / sample_rate;
+  } else {
+    throw std::invalid_argument(path.string() +
+                                ": header has no 'Sampling Interval' or 'Sampling Rate'; give the "
+                                "sampling rate with --sample-rate HZ");
+  }
+  // Without a Sample Number column, samples are timed by their row.
+  const std::optional<std::size_t> isample = find_column(header, "Sample Number");
   const std::size_t ic = column_index(header, map.command.column, path, line_number);
   const std::size_t im = column_index(header, map.measured.column, path, line_number);
   const std::size_t iforce = column_index(header, map.force.column, path, line_number);
-  const std::size_t needed = std::max({isample, ic, im, iforce}) + 1;
+  const std::size_t needed = std::max({isample.value_or(0), ic, im, iforce}) + 1;
 
   MeasuredData data;
   data.source = path.string();
@@ -270,7 +325,9 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
                                   std::to_string(fields.size()) + " columns, expected at least " +
                                   std::to_string(needed));
     }
-    const double sample = parse_number(fields[isample], path, line_number, header[isample]);
+    const double sample = isample ? parse_number(fields[*isample], path, line_number,
+                                                 header[*isample])
+                                  : static_cast<double>(data.time.size());
     if (data.time.empty()) first_sample = sample;
     data.time.push_back((sample - first_sample) * interval);
     data.command.push_back(1.0e-3 * map.command.scale *
@@ -285,13 +342,13 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
 }
 
 MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& units,
-                           const DaqColumnMap& map, std::size_t min_samples) {
+                           const DaqColumnMap& map, std::size_t min_samples, double sample_rate) {
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open");
   std::string first;
   std::getline(in, first);
-  if (first.rfind("Header Size", 0) == 0) return read_daq(path, map, min_samples);
-  return read_csv(path, units, min_samples);
+  if (first.rfind("Header Size", 0) == 0) return read_daq(path, map, min_samples, sample_rate);
+  return read_csv(path, units, min_samples, sample_rate);
 }
 
 void write_csv(const MeasuredData& data, const std::filesystem::path& path) {
@@ -324,6 +381,38 @@ MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end)
   out.measured = part(data.measured);
   out.force = part(data.force);
   return out;
+}
+
+ActiveRange active_range(const MeasuredData& data, double threshold, double margin,
+                         double rest_window) {
+  if (!(threshold > 0.0 && threshold < 1.0) || !(margin >= 0.0) || !(rest_window > 0.0)) {
+    throw std::invalid_argument("active_range: threshold must be in (0, 1), margin >= 0 s, "
+                                "rest window > 0 s");
+  }
+  const std::size_t n = data.size();
+  ActiveRange whole{0, n};
+  if (n == 0 || !(data.dt > 0.0)) return whole;
+  const auto rest_samples = std::clamp<std::size_t>(
+      static_cast<std::size_t>(std::llround(rest_window / data.dt)), 1, n);
+  double rest_first = 0.0, rest_last = 0.0;
+  for (std::size_t i = 0; i < rest_samples; ++i) {
+    rest_first += data.command[i];
+    rest_last += data.command[n - 1 - i];
+  }
+  rest_first /= static_cast<double>(rest_samples);
+  rest_last /= static_cast<double>(rest_samples);
+  double peak_first = 0.0, peak_last = 0.0;
+  for (double c : data.command) {
+    peak_first = std::max(peak_first, std::abs(c - rest_first));
+    peak_last = std::max(peak_last, std::abs(c - rest_last));
+  }
+  if (!(peak_first > 0.0) || !(peak_last > 0.0)) return whole;
+  std::size_t first = 0, last = n - 1;
+  while (first < n && std::abs(data.command[first] - rest_first) <= threshold * peak_first) ++first;
+  while (last > 0 && std::abs(data.command[last] - rest_last) <= threshold * peak_last) --last;
+  if (first >= last) return whole;
+  const auto pad = static_cast<std::size_t>(std::llround(margin / data.dt));
+  return {first > pad ? first - pad : 0, std::min(n, last + 1 + pad)};
 }
 
 MeasuredData decimated(const MeasuredData& data, std::size_t factor) {

@@ -10,6 +10,12 @@
 //         CHANNEL0, ...`), then one sample per line. Time is (sample number - first) * the
 //         header's `Sampling Interval`. A DaqColumnMap names the channel and scale factor for
 //         each signal: value_in_mm_or_N = raw * scale.
+// Time without a time column: `sample_rate` (Hz, the CLI's --sample-rate; 0 = not given) makes
+// time = sample index / sample_rate for a CSV without a `time` column and sets the interval of a
+// DAQ export whose header gives neither `Sampling Interval` nor `Sampling Rate`; a DAQ export
+// without a `Sample Number` column is then timed by its row index. A file with neither a time
+// base nor a given rate is refused, naming --sample-rate; a given rate that disagrees (> 1 %) with
+// the file's own time base is refused too.
 // Every loader throws std::invalid_argument naming the file, line and column when a column is
 // missing, a value is not a number or is NaN/inf, time does not increase, or there are fewer than
 // `min_samples` samples.
@@ -61,13 +67,13 @@ DaqColumnMap parse_column_map(const std::string& text);
 inline constexpr std::size_t kDefaultMinSamples = 200;
 
 MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units = {},
-                      std::size_t min_samples = kDefaultMinSamples);
+                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
 MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map = {},
-                      std::size_t min_samples = kDefaultMinSamples);
+                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
 // DAQ when the first line starts with "Header Size", CSV otherwise.
 MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& units = {},
                            const DaqColumnMap& map = {},
-                           std::size_t min_samples = kDefaultMinSamples);
+                           std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
 
 // Writes the CSV format above (s, mm, mm, N). Throws std::runtime_error naming the file.
 void write_csv(const MeasuredData& data, const std::filesystem::path& path);
@@ -79,6 +85,20 @@ void validate(MeasuredData& data, std::size_t min_samples);
 // Samples [begin, end) as a record of their own (time kept). Throws std::invalid_argument when
 // the range is empty or beyond the record.
 MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end);
+
+// The active part of a record, [begin, end): lab records start seconds before the test and run on
+// after it, and those idle stretches hold only sensor noise (which a hysteretic specimen model fed
+// a noisy displacement turns into spurious force, and which weighs on whichever fold holds it).
+// The command's rest values are its means over the first and the last `rest_window` seconds;
+// begin is the first sample whose command leaves the first rest value by more than
+// `threshold` x the command's largest such deviation, less `margin` seconds (so the model starts
+// at rest); end likewise from the last rest value, plus `margin`. A record that moves from its
+// first to its last sample is returned whole. @pre threshold in (0, 1), margin >= 0.
+struct ActiveRange {
+  std::size_t begin = 0, end = 0;
+};
+ActiveRange active_range(const MeasuredData& data, double threshold = 0.05, double margin = 0.25,
+                         double rest_window = 0.5);
 
 // Every `factor`-th sample (factor >= 1), after a centred moving average over `factor` samples
 // so that decimation does not alias the noise.

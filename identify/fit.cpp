@@ -118,7 +118,7 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   problem.AddResidualBlock(cost, nullptr, theta.data());
   std::vector<int> constant;
   for (std::size_t i = 0; i < p; ++i) {
-    if (start.is_fixed(i)) constant.push_back(static_cast<int>(i));
+    if (start.is_fixed(i) || specs[i].fixed) constant.push_back(static_cast<int>(i));
   }
   if (constant.size() == p) return evaluate_channel(start, signals, split);
   if (!constant.empty()) {
@@ -166,7 +166,7 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
         free_j.transpose() * Eigen::Map<const Eigen::VectorXd>(residuals.data(),
                                                                static_cast<Eigen::Index>(m));
     for (std::size_t i = 0; i < p; ++i) {
-      if (start.is_fixed(i)) continue;
+      if (start.is_fixed(i) || specs[i].fixed) continue;
       const double value = theta[i] * scales[i];
       const auto near = [&](double bound) {
         return std::abs(value - bound) <= 1e-6 * std::max(std::abs(bound), scales[i]);

@@ -8,7 +8,8 @@
 // so that they are O(1), within the ParamSpec bounds. The Jacobian is a central difference.
 // Uncertainty: covariance = sigma^2 (J^T J)^+, sigma^2 = RSS / (m - p); reported as one standard
 // deviation per parameter. Residuals of real records are coloured, so these are lower bounds.
-// Fixed parameters (ChannelModel::fixed) are held (Ceres SubsetManifold) and have no uncertainty.
+// Fixed parameters (ChannelModel::fixed, or declared fixed: ParamSpec::fixed) are held (Ceres
+// SubsetManifold) and have no uncertainty. Bounds are the specs' (physical, narrowed by declarations).
 // A bound hit: a free parameter that ends within 1e-6 (relative) of a bound while the gradient of
 // the cost, J^T r, still points beyond it, i.e. the data want a value the bounds forbid.
 

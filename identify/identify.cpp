@@ -44,8 +44,10 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
     const auto& declared =
         channel == Channel::kMeasured ? options.declared_actuator : options.declared_specimen;
     const ChannelSignals search_signals = make_signals(search, channel);
-    ChannelIdentification id =
-        identify_channel(search_signals, search_split, declared, options.selection);
+    const auto& declarations = channel == Channel::kMeasured ? options.actuator_parameters
+                                                             : options.specimen_parameters;
+    ChannelIdentification id = identify_channel(search_signals, search_split, declared,
+                                                options.selection, declarations);
     ChannelSignals signals = make_signals(data, channel);
     if (factor > 1) {
       // Refit at the full rate from the search's parameters; the ranking keeps search errors.

@@ -19,6 +19,8 @@ struct IdentifyOptions {
   std::vector<Channel> channels{Channel::kMeasured, Channel::kForce};
   std::vector<Effect> declared_actuator{Effect::kDelay};
   std::vector<Effect> declared_specimen{Effect::kStiffness};
+  // A declared model's initial values, bounds and fixed parameters (identify/declared_model.h).
+  std::vector<ParamDeclaration> actuator_parameters, specimen_parameters;
   double holdout_fraction = 0.3;
   HoldoutMode holdout_mode = HoldoutMode::kBlocks;
   std::size_t holdout_blocks = 10;

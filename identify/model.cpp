@@ -283,13 +283,32 @@ bool ChannelModel::has(Effect effect) const {
   return std::find(effects.begin(), effects.end(), effect) != effects.end();
 }
 
+std::vector<ParamSpec> declared_specs(std::vector<ParamSpec> specs,
+                                      const std::vector<ParamDeclaration>& declarations) {
+  for (auto& spec : specs) {
+    for (const auto& d : declarations) {
+      if (d.name != spec.name) continue;
+      if (d.lower && *d.lower > spec.lower) {
+        spec.lower = *d.lower;
+        spec.below_means.clear();
+      }
+      if (d.upper && *d.upper < spec.upper) spec.upper = *d.upper;
+      // Only reachable at a decimated search rate whose Nyquist is below a declared minimum.
+      if (spec.lower > spec.upper) spec.upper = spec.lower;
+      if (d.initial) spec.guesses = {std::clamp(*d.initial, spec.lower, spec.upper)};
+      spec.fixed = spec.fixed || d.fixed;
+    }
+  }
+  return specs;
+}
+
 std::vector<ParamSpec> ChannelModel::specs(const SignalScales& scales) const {
   auto out = base_params(channel, scales);
   for (Effect e : effects) {
     auto more = effect_params(e, channel, scales);
     out.insert(out.end(), more.begin(), more.end());
   }
-  return out;
+  return declared_specs(std::move(out), declarations);
 }
 
 std::optional<double> ChannelModel::param(std::optional<Effect> effect, const std::string& name,
@@ -389,6 +408,7 @@ ChannelModel without_effect(const ChannelModel& model, Effect effect, const Sign
   }
   ChannelModel out;
   out.channel = model.channel;
+  out.declarations = model.declarations;
   std::size_t index = base_params(model.channel, scales).size();
   for (std::size_t i = 0; i < index; ++i) {
     out.params.push_back(model.params[i]);

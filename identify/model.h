@@ -105,7 +105,26 @@ struct ParamSpec {
   // Offsets, drifts and drift coefficients belong to one record: re-estimated, not carried over,
   // when a model is validated on another record.
   bool record_specific = false;
+  // Held at its value by every fit (a declared model's `fixed`, see ParamDeclaration).
+  bool fixed = false;
 };
+
+// What a declared model (proto/identify.proto, identify/declared_model.h) says of one parameter,
+// keyed by its name (parameter names are unique within a channel):
+//   initial  replaces the library's starting guesses;
+//   lower / upper narrow the physical bounds (max(physical, declared), min(...)), never widen them;
+//   fixed    holds the parameter at its value in every fit.
+// A declaration whose name is not in the model has no effect (it applies once the effect is added).
+struct ParamDeclaration {
+  std::string name;
+  std::optional<double> initial, lower, upper;
+  bool fixed = false;
+};
+
+// `specs` with the declarations of the same names applied. When a declared lower bound is above
+// the physical one, the bound hit is about the declared bound, so below_means is cleared.
+std::vector<ParamSpec> declared_specs(std::vector<ParamSpec> specs,
+                                      const std::vector<ParamDeclaration>& declarations);
 
 // The parameters an effect adds (in order). Base parameters of a channel: `gain` for measured,
 // none for force.
@@ -118,6 +137,9 @@ struct ChannelModel {
   std::vector<double> params;   // base params, then each effect's params in `effects` order
   // Parameters held at their value by the fit (same indexing as params; missing = free).
   std::vector<bool> fixed;
+  // The declared model's word on parameters (by name); specs() applies them, so every fit,
+  // k-fold and validation of this model and of the models grown from it respects them.
+  std::vector<ParamDeclaration> declarations;
 
   bool has(Effect effect) const;
   bool is_fixed(std::size_t index) const { return index < fixed.size() && fixed[index]; }
@@ -126,6 +148,7 @@ struct ChannelModel {
                                       const SignalScales& scales) const;
   // The effect that owns parameter `index` (empty for a base parameter).
   std::optional<Effect> effect_of(std::size_t index, const SignalScales& scales) const;
+  // Library specs of base and effects, with `declarations` applied.
   std::vector<ParamSpec> specs(const SignalScales& scales) const;
   // The value of the named parameter of `effect` (or of the base when effect is empty).
   std::optional<double> param(std::optional<Effect> effect, const std::string& name,

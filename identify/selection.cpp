@@ -34,8 +34,11 @@ std::vector<Effect> default_declared(Channel channel) {
 FitResult fit_with_effect(const ChannelModel& model, Effect effect, const ChannelSignals& signals,
                           const Split& split, const FitOptions& options) {
   const SignalScales sc = signal_scales(signals);
-  auto specs = effect_params(effect, model.channel, sc);
-  if (effect == Effect::kDelay) {
+  auto specs = declared_specs(effect_params(effect, model.channel, sc), model.declarations);
+  const bool declared_start = std::any_of(
+      model.declarations.begin(), model.declarations.end(),
+      [&](const ParamDeclaration& d) { return d.name == specs[0].name && d.initial; });
+  if (effect == Effect::kDelay && !declared_start) {
     // The lag of the target behind the input by cross-correlation is the natural first guess.
     const auto xc = cross_correlation(signals.input, signals.target, signals.dt, 0.25);
     specs[0].guesses.insert(specs[0].guesses.begin(),
@@ -57,9 +60,13 @@ FitResult fit_with_effect(const ChannelModel& model, Effect effect, const Channe
 }
 
 ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
-                          const std::vector<Effect>& declared, const FitOptions& options) {
+                          const std::vector<Effect>& declared, const FitOptions& options,
+                          const std::vector<ParamDeclaration>& declarations) {
   const SignalScales sc = signal_scales(signals);
   ChannelModel model = declared_model(signals.channel, {}, sc);
+  model.declarations = declarations;
+  const auto base = model.specs(sc);
+  for (std::size_t i = 0; i < base.size(); ++i) model.params[i] = base[i].guesses.at(0);
   for (Effect e : declared) {
     if (!effect_applies(e, signals.channel) || model.has(e)) continue;
     model = fit_with_effect(model, e, signals, split, options).model;
@@ -69,7 +76,8 @@ ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
 
 KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
                            const std::vector<BoundHit>& declared_hits,
-                           const SelectionOptions& options) {
+                           const SelectionOptions& options,
+                           const std::vector<ParamDeclaration>& declarations) {
   if (signals.channel != Channel::kForce) {
     throw std::invalid_argument("compare_kinds: specimen kinds apply to the force channel only");
   }
@@ -80,8 +88,8 @@ KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
     trial.kind = kind;
     auto effects = kind_effects(kind);
     effects.push_back(Effect::kOffsetDrift);
-    trial.fit = fit_channel(fit_declared(signals, split, effects, options.fit), signals, split,
-                            options.fit);
+    trial.fit = fit_channel(fit_declared(signals, split, effects, options.fit, declarations),
+                            signals, split, options.fit);
     trial.score = trial.fit.heldout_error *
                   (1.0 + options.penalty_per_parameter *
                              static_cast<double>(trial.fit.model.params.size()));
@@ -169,11 +177,13 @@ void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, 
 
 ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
                                        const std::vector<Effect>& declared,
-                                       const SelectionOptions& options) {
+                                       const SelectionOptions& options,
+                                       const std::vector<ParamDeclaration>& declarations) {
   ChannelIdentification id;
   id.channel = signals.channel;
   id.declared = declared;
-  const ChannelModel declared_fit = fit_declared(signals, split, declared, options.fit);
+  const ChannelModel declared_fit =
+      fit_declared(signals, split, declared, options.fit, declarations);
   id.declared_fit = fit_channel(declared_fit, signals, split, options.fit);
   search_from(id, id.declared_fit, signals, split, options);
   if (options.propose_kind && signals.channel == Channel::kForce) {
@@ -182,7 +192,7 @@ ChannelIdentification identify_channel(const ChannelSignals& signals, const Spli
     auto hits = id.declared_fit.bound_hits;
     hits.insert(hits.end(), id.final_fit.bound_hits.begin(), id.final_fit.bound_hits.end());
     if (!hits.empty()) {
-      id.kind = compare_kinds(signals, split, hits, options);
+      id.kind = compare_kinds(signals, split, hits, options, declarations);
       if (id.kind->proposed) {
         id.declared_search_final = id.final_fit;
         id.declared_search_final->prediction.clear();

@@ -47,9 +47,11 @@ struct KindProposal {
 };
 
 // Fits every specimen kind on the force channel and ranks them. @pre signals.channel is force.
+// Declarations (model.h) of parameters the kinds share with the declared model apply to them too.
 KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
                            const std::vector<BoundHit>& declared_hits,
-                           const SelectionOptions& options);
+                           const SelectionOptions& options,
+                           const std::vector<ParamDeclaration>& declarations = {});
 
 struct CandidateTrial {
   Effect effect = Effect::kDelay;
@@ -97,12 +99,16 @@ struct ChannelIdentification {
 FitResult fit_with_effect(const ChannelModel& model, Effect effect, const ChannelSignals& signals,
                           const Split& split, const FitOptions& options);
 
+// The declared effects fitted one by one (each from its guesses, or from its declared initial
+// value), with `declarations` (model.h) carried by the model and every model grown from it.
 ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
-                          const std::vector<Effect>& declared, const FitOptions& options);
+                          const std::vector<Effect>& declared, const FitOptions& options,
+                          const std::vector<ParamDeclaration>& declarations = {});
 
 ChannelIdentification identify_channel(const ChannelSignals& signals, const Split& split,
                                        const std::vector<Effect>& declared,
-                                       const SelectionOptions& options);
+                                       const SelectionOptions& options,
+                                       const std::vector<ParamDeclaration>& declarations = {});
 
 // Fills own_error_removed and own_share of every step of `id` (drop-one refits of the final
 // model on `signals` / `split`).

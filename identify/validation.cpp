@@ -1,5 +1,7 @@
 #include "identify/validation.h"
 
+#include "identify/evidence.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -41,6 +43,10 @@ KFoldResult kfold(const ChannelModel& model, const ChannelSignals& signals, std:
     for (std::size_t i = 0; i < n; ++i) (i >= begin && i < end ? split.heldout : split.train).push_back(i);
     const FitResult fit = fit_channel(model, signals, split, options);
     out.heldout_errors.push_back(fit.heldout_error);
+    const auto block = [&](const std::vector<double>& x) {
+      return std::span<const double>(x).subspan(begin, end - begin);
+    };
+    out.noise_floors.push_back(noise_floor(block(signals.input), block(signals.target), signals.dt));
     for (std::size_t p = 0; p < specs.size(); ++p) values[p].push_back(fit.model.params[p]);
   }
   out.mean = mean_of(out.heldout_errors);

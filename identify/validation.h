@@ -6,7 +6,9 @@
 //                   error measured on the block left out. Reported: the k held-out errors, their
 //                   mean and spread (sample standard deviation), and each parameter's mean and
 //                   spread over the folds (an uncertainty that, unlike the Jacobian's, sees the
-//                   coloured residuals of a real record).
+//                   coloured residuals of a real record). Beside each fold's error, the noise
+//                   floor of its block (evidence.h noise_floor): a fold where the signal is small
+//                   against the sensor noise cannot reach the others' error, whatever the model.
 //   validate_on     the model carried to another record of the same rig: physical parameters
 //                   fixed, record-specific ones (offset, drift, drift coefficients; ParamSpec::
 //                   record_specific) re-estimated on it; error over the whole other record.
@@ -21,6 +23,7 @@ namespace rths::identify {
 
 struct KFoldResult {
   std::vector<double> heldout_errors;  // one per fold
+  std::vector<double> noise_floors;    // one per fold, of the held-out block
   double mean = 0.0, spread = 0.0;
   std::vector<std::string> param_names;
   std::vector<double> param_mean, param_spread;  // SI, over the folds

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/metrics.h"
+
 namespace rths::runtime {
 
 LagInjector::LagInjector(const config::LinkLag& spec) : spec_(spec), rng_(spec.seed()) {}
@@ -39,7 +41,7 @@ LagSummary summarize(std::vector<double> lags) {
   if (lags.empty()) return s;
   std::sort(lags.begin(), lags.end());
   s.mean = std::accumulate(lags.begin(), lags.end(), 0.0) / static_cast<double>(lags.size());
-  s.median = lags[lags.size() / 2];
+  s.median = core::median(lags);  // the one median (mean of the middle two when even)
   s.p99 = lags[std::min(lags.size() - 1, static_cast<std::size_t>(0.99 * lags.size()))];
   s.max = lags.back();
   return s;

@@ -3,9 +3,13 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <thread>
+
+#include "runtime/pacing.h"
 
 #include "runtime/lag.h"
 #include "runtime/plan.h"
@@ -53,6 +57,33 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
     return true;
   };
   std::unique_lock lock(state);
+
+  // The servo loop of a streaming node (real time, servo faster than the integrator): its own
+  // thread, paced on CLOCK_MONOTONIC with the deployment's wait policy, one servo_tick() per
+  // period under `state`. Stopped and joined (with `state` released) whenever run_node returns.
+  struct ServoThread {
+    std::unique_lock<std::mutex>& lock;
+    std::atomic<bool> stop{false};
+    std::thread thread;
+    ~ServoThread() {
+      stop = true;
+      if (!thread.joinable()) return;
+      if (lock.owns_lock()) lock.unlock();
+      thread.join();
+    }
+  } servo{lock};
+  const auto start_servo = [&](double period, const WaitPolicy& policy) {
+    servo.thread = std::thread([&, period, policy] {
+      MonotonicClock clock;
+      Pacer pacer(clock, period, policy);
+      pacer.start();
+      for (std::int64_t k = 1; !servo.stop; ++k) {
+        const PaceResult pace = pacer.wait(k);
+        std::lock_guard guard(state);
+        if (auto feedback = service.servo_tick(pace.overrun)) endpoint.send(*feedback);
+      }
+    });
+  };
 
   for (;;) {
     const std::int64_t now = realtime_ns();
@@ -121,6 +152,12 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
             deployment.clock() == config::Deployment::REAL_TIME)
           watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment) * a.dt());
         spdlog::info("{}: assigned to run {}", service.label(), service.run_id());
+        if (service.streaming()) {
+          const double period = service.streaming_period();
+          spdlog::info("{}: servo loop at {:.0f} Hz ({} policy)", service.label(), 1.0 / period,
+                       to_string(wait_policy(deployment).kind));
+          start_servo(period, wait_policy(deployment));
+        }
         if (!receive_lag && !send_lag) endpoint.set_inline_handler(handle_inline);
       }
       if (service.stopped()) {

@@ -37,6 +37,8 @@ transport::Message NodeService::heartbeat() const {
   h.set_node_id(node_id_);
   h.set_last_step(last_step_);
   h.set_rejected(rejected_.total());
+  h.set_servo_ticks(static_cast<std::uint64_t>(servo_samples_));
+  h.set_servo_overruns(servo_overruns_);
   return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);
 }
 
@@ -76,6 +78,12 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
       };
       receive_chains_ = chains(assign.node().receive_delay_case());
       send_chains_ = chains(assign.node().send_delay_case());
+      stream_period_ = servo_period();
+      streaming_ = deployment.clock() == config::Deployment::REAL_TIME && stream_period_ > 0;
+      if (streaming_ && !send_chains_.empty())
+        throw std::invalid_argument(
+            "send_delay_case acts once per command, but a servo loop faster than the integrator "
+            "streams feedback every servo period; inject the lag with send_lag instead");
     } catch (const std::exception& e) {
       configure_error_ = label() + ": " + e.what();
       spdlog::error("{}", configure_error_);
@@ -98,6 +106,20 @@ std::optional<transport::Message> NodeService::hold_on_own(const std::string& re
   Hold hold;
   hold.set_reason(reason);
   return pack(run_id_, node_id_, HOLD, last_step_, hold);
+}
+
+std::optional<transport::Message> NodeService::servo_tick(bool overrun) {
+  if (!streaming_ || held_ || stopped_ || stream_step_ == 0) return std::nullopt;
+  if (overrun) ++servo_overruns_;
+  feedback_.Clear();
+  tick(feedback_);
+  feedback_.set_command_received_ns(stream_received_ns_);
+  feedback_.set_injected_lag(stream_injected_lag_);
+  feedback_.set_servo_sample(++servo_samples_);
+  feedback_.set_sampled_ns(transport::realtime_ns());
+  transport::Message reply = pack(run_id_, node_id_, FEEDBACK, stream_step_, feedback_);
+  reply.echo_ns = stream_echo_ns_;
+  return reply;
 }
 
 std::vector<transport::Message> NodeService::handle(const transport::Message& message) {
@@ -139,10 +161,20 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
         }
       }
       try {
-        compute(command_, feedback_);  // checks sizes before it changes any state
+        if (streaming_)
+          load(command_);
+        else
+          compute(command_, feedback_);  // checks sizes before it changes any state
       } catch (const std::invalid_argument& e) {
         spdlog::warn("{}: rejected command of step {}: {}", label(), message.step, e.what());
         rejected_.count(Verdict::kGarbage);
+        return {};
+      }
+      if (streaming_) {
+        last_step_ = stream_step_ = message.step;
+        stream_echo_ns_ = message.sent_ns;
+        stream_received_ns_ = message.received_ns;
+        stream_injected_lag_ = injected_lag_;
         return {};
       }
       if (!send_chains_.empty())

@@ -10,6 +10,11 @@
 //                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
 //   node delay stages   the spec's receive_delay_case / send_delay_case stages (simulated time) act on
 //                       each received drift before compute() and on each force after it.
+//   streaming           real time with a servo loop faster than the integrator (servo_period() > 0):
+//                       a COMMAND only loads the servo (load()); the node loop calls servo_tick()
+//                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
+//                       for the newest command, stamped with its servo sample. Held, stopped or
+//                       before the first command: no tick runs and nothing is sent.
 // Subclasses (substructure node, actuator emulator) supply configure() and compute().
 
 #include <optional>
@@ -36,6 +41,11 @@ class NodeService : public transport::NodeHandler {
   // the coordinator why. Used by the node's own watchdog and limits. Idempotent: a second call
   // returns nullopt.
   std::optional<transport::Message> hold_on_own(const std::string& reason);
+  // Streaming only: one servo period. nullopt when not streaming, held, stopped or before the
+  // first command. Counts `overrun` (the period started past its deadline) for the heartbeat.
+  std::optional<transport::Message> servo_tick(bool overrun);
+  bool streaming() const { return streaming_; }
+  double streaming_period() const { return streaming_ ? stream_period_ : 0.0; }  // s
   // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
   void set_injected_lag(double seconds) { injected_lag_ = seconds; }
 
@@ -55,6 +65,13 @@ class NodeService : public transport::NodeHandler {
   // One step. Fills force (and realised for actuators), one entry per hosted storey.
   virtual void compute(const Command& command, Feedback& feedback) = 0;
   virtual void on_hold() {}
+  // Real time: the servo period (s) when the node runs a servo loop faster than the integrator,
+  // else 0 (answer each command with compute()). Asked once, after configure().
+  virtual double servo_period() const { return 0.0; }
+  // Streaming: take the command (check sizes before changing state; throw invalid_argument).
+  virtual void load(const Command& /*command*/) {}
+  // Streaming: one servo period; fills force and realised as compute() does.
+  virtual void tick(Feedback& /*feedback*/) {}
   // Non-empty: why this command must not be acted on (checked before any delay stage or block).
   virtual std::string refusal(const Command& /*command*/) { return {}; }
 
@@ -73,6 +90,12 @@ class NodeService : public transport::NodeHandler {
   RejectCounters rejected_;
   Command command_;
   Feedback feedback_;
+  bool streaming_ = false;
+  // Streaming: the newest loaded command's envelope (step 0 = none yet) and the servo counters.
+  std::int64_t stream_step_ = 0, stream_echo_ns_ = 0, stream_received_ns_ = 0;
+  double stream_injected_lag_ = 0.0, stream_period_ = 0.0;
+  std::int64_t servo_samples_ = 0;
+  std::uint64_t servo_overruns_ = 0;
   // Simulated-time stages of the node's spec, one chain per hosted entry (empty: none).
   std::vector<core::DelayChain> receive_chains_, send_chains_;
 };

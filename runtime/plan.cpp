@@ -120,25 +120,10 @@ const config::Case& find_case(const config::Study& study, const std::string& nam
 core::HybridSetup setup_without_motion(const config::Study& study,
                                        const std::filesystem::path& base_dir, double dt,
                                        const config::Case& study_case) {
-  // Mirrors core::prepare_study's partition step; the lockstep equality tests guard the mirror.
   core::PreparedStudy prepared;
   prepared.config = study;
   prepared.base_dir = base_dir;
-  prepared.base.model = core::make_structure(study.structure());
-  prepared.base.integrator = core::integrator_kind(study.integrator());
-  prepared.base.dt = dt;
-  prepared.base.allow_unstable = study.integrator().allow_unstable();
-  const auto& sub = study.substructuring();
-  const core::StoreyModelFactory factory = core::make_storey_factory(sub.model());
-  if (!sub.experimental_storeys().empty()) {
-    std::vector<int> storeys;
-    for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
-    prepared.base.partition =
-        core::partition_by_storeys(prepared.base.model.storey_stiffness, storeys, factory);
-  } else {
-    prepared.base.partition = core::partition_by_fraction(
-        prepared.base.model.storey_stiffness, sub.experimental_fraction(), factory);
-  }
+  prepared.base = core::base_setup(study, dt);
   return core::setup_for_case(prepared, study_case);
 }
 

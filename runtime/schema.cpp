@@ -5,12 +5,18 @@ namespace rths::runtime {
 transport::Message pack(const std::string& run_id, std::int32_t node_id, MessageKind kind,
                         std::int64_t step, const google::protobuf::MessageLite& payload) {
   transport::Message m;
-  m.run_id = run_id;
+  pack_into(m, run_id, node_id, kind, step, payload);
+  return m;
+}
+
+void pack_into(transport::Message& m, const std::string& run_id, std::int32_t node_id,
+               MessageKind kind, std::int64_t step, const google::protobuf::MessageLite& payload) {
+  m.run_id.assign(run_id);
   m.node_id = node_id;
   m.kind = kind;
   m.step = step;
-  payload.SerializeToString(&m.payload);
-  return m;
+  m.sent_ns = m.echo_ns = m.received_ns = 0;
+  payload.SerializeToString(&m.payload);  // clears, keeps the capacity
 }
 
 std::string kind_name(std::int32_t kind) {

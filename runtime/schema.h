@@ -17,6 +17,11 @@ inline constexpr std::uint32_t kSchemaVersion = 1;
 transport::Message pack(const std::string& run_id, std::int32_t node_id, MessageKind kind,
                         std::int64_t step, const google::protobuf::MessageLite& payload);
 
+// The same into an existing message, reusing its strings' capacity: once warm, packing a payload
+// no larger than before allocates nothing (the real-time loop's preallocated command message).
+void pack_into(transport::Message& message, const std::string& run_id, std::int32_t node_id,
+               MessageKind kind, std::int64_t step, const google::protobuf::MessageLite& payload);
+
 template <class T>
 bool unpack(const transport::Message& message, T& payload) {
   return payload.ParseFromString(message.payload);

@@ -157,6 +157,39 @@ TEST(StudyBounds, AbsurdValuesAreRefusedNamingTheField) {
             std::string::npos);
 }
 
+TEST(StudyServo, TheServoRateIsAWholeMultipleOfTheIntegratorRate) {
+  const auto study = [](const std::string& servo) {
+    return parse_study("structure { sdof { period: 0.5 } } " + servo, "t");
+  };
+  EXPECT_EQ(servo_substeps(study(""), 1.0 / 1024), 1);
+  EXPECT_EQ(servo_substeps(study("servo { rate: 4096 }"), 1.0 / 1024), 4);
+  EXPECT_EQ(servo_substeps(study("servo { rate: 1024 }"), 1.0 / 1024), 1);
+  const HybridSetup base = base_setup(study("servo { rate: 4000 } substructuring { experimental_fraction: 0.5 }"), 0.001);
+  EXPECT_EQ(base.servo_substeps, 4);
+  for (const char* bad : {"servo { rate: 3000 }", "servo { rate: 500 }", "servo { rate: 1e6 }"}) {
+    try {
+      servo_substeps(study(bad), 1.0 / 1024);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("servo.rate"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } servo { rate: -4096 }").find("servo.rate"),
+            std::string::npos);
+}
+
+TEST(StudyServo, ACaseChainRunsAtTheServoPeriod) {
+  const config::Study study = load_study(kConfigs / "paper_frame.textproto");
+  config::Study fast = study;
+  fast.mutable_servo()->set_rate(4000);
+  const PreparedStudy prepared = prepare_study(fast, kConfigs);
+  EXPECT_EQ(prepared.base.servo_substeps, 4);
+  const HybridSetup lagged = setup_for_case(prepared, fast.cases(1));
+  ASSERT_EQ(lagged.delays.size(), 1u);
+  // 14 ms is 56 servo periods of 0.25 ms: the same lag in seconds.
+  EXPECT_DOUBLE_EQ(lagged.delays[0].nominal_delay(), 0.014);
+}
+
 TEST(StudyBounds, DuplicateCaseNamesAreRefused) {
   const std::string error =
       error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" } cases { name: \"b\" } cases { name: \"a\" }");

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace rths::core {
 namespace {
 
@@ -94,6 +96,78 @@ TEST(HybridRestoringTest, UndelayedPartitionIsRepeatableWithAFullTangent) {
 TEST(HybridRestoringTest, WrongNumberOfChainsIsRefused) {
   const HybridPartition p = partition_by_fraction({100.0, 40.0}, 0.5, linear_factory());
   EXPECT_THROW(HybridRestoring(p, std::vector<DelayChain>(3), 0.01), std::invalid_argument);
+}
+
+Actuator undelayed_spring(double k) {
+  return Actuator(DelayChain{}, std::make_unique<LinearSpring>(k));
+}
+
+TEST(ActuatorServoTest, OneServoPeriodPerStepActsOnTheCommandItself) {
+  DelayChain chain;
+  chain.add(std::make_unique<FirstOrderActuator>(0.01, 0.001));
+  Actuator plain(chain, std::make_unique<LinearSpring>(2.0e5));
+  Actuator servo(chain, std::make_unique<LinearSpring>(2.0e5));
+  servo.set_servo(1, 0.001);
+  for (int k = 1; k <= 50; ++k) {
+    const CommandSample c{0.001 * k, 0.003 * std::sin(0.2 * k) + 1e-4 / 3.0, 0.1};
+    const ActuatorOutput a = plain.step(c), b = servo.step(c);
+    ASSERT_EQ(a.realised, b.realised) << k;  // bit for bit, no interpolation round-off
+    ASSERT_EQ(a.force, b.force) << k;
+  }
+}
+
+TEST(ActuatorServoTest, EachCommandIsRampedOverTheServoPeriodsOfOneStep) {
+  Actuator actuator = undelayed_spring(1000.0);
+  actuator.set_servo(4, 0.00025);
+  actuator.command({0.001, 0.004, 0.0});
+  std::vector<double> seen;
+  for (int j = 0; j < 4; ++j) seen.push_back(actuator.tick().realised);
+  EXPECT_DOUBLE_EQ(seen[0], 0.001);
+  EXPECT_DOUBLE_EQ(seen[1], 0.002);
+  EXPECT_DOUBLE_EQ(seen[2], 0.003);
+  EXPECT_EQ(seen[3], 0.004);  // the command itself at the end of its step
+  // Past the ramp the servo holds the target (a real-time loop keeps ticking).
+  const ActuatorOutput held = actuator.tick();
+  EXPECT_EQ(held.realised, 0.004);
+  EXPECT_DOUBLE_EQ(held.force, 4.0);
+  // step() is command() then the step's servo periods.
+  EXPECT_EQ(actuator.step({0.002, 0.0, 0.0}).realised, 0.0);
+}
+
+TEST(ActuatorServoTest, ACommandArrivingMidRampStartsFromWhereTheServoIsWithoutAJump) {
+  Actuator actuator = undelayed_spring(1000.0);
+  actuator.set_servo(4, 0.00025);
+  actuator.command({0.001, 0.004, 0.0});
+  actuator.tick();  // 0.001
+  actuator.tick();  // 0.002
+  actuator.command({0.002, 0.010, 0.0});
+  EXPECT_DOUBLE_EQ(actuator.tick().realised, 0.002 + 0.008 / 4);
+  EXPECT_EQ(actuator.ticks_since_command(), 1);
+}
+
+TEST(ActuatorServoTest, FasterServoWithAFirstOrderLagConvergesToTheContinuousResponse) {
+  // tau du/dt = u_c - u with a ramp input u_c = r t: u(t) = r (t - tau (1 - exp(-t / tau))).
+  constexpr double kTau = 0.01, kRate = 0.5, kDt = 0.001;
+  const auto error_with = [&](int substeps) {
+    DelayChain chain;
+    chain.add(std::make_unique<FirstOrderActuator>(kTau, kDt / substeps));
+    Actuator actuator(chain, std::make_unique<LinearSpring>(1.0));
+    actuator.set_servo(substeps, kDt / substeps);
+    double worst = 0.0;
+    for (int k = 1; k <= 100; ++k) {
+      const double t = kDt * k;
+      const double exact = kRate * (t - kTau * (1 - std::exp(-t / kTau)));
+      worst = std::max(worst, std::abs(actuator.step({t, kRate * t, kRate}).realised - exact));
+    }
+    return worst;
+  };
+  EXPECT_LT(error_with(8), 0.5 * error_with(1));
+}
+
+TEST(ActuatorServoTest, BadServoSettingsAreRefused) {
+  Actuator actuator = undelayed_spring(1.0);
+  EXPECT_THROW(actuator.set_servo(0, 0.001), std::invalid_argument);
+  EXPECT_THROW(actuator.set_servo(4, 0.0), std::invalid_argument);
 }
 
 }  // namespace

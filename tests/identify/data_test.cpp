@@ -127,7 +127,87 @@ TEST_F(DataTest, ColumnMapSyntaxErrors) {
 
 TEST_F(DataTest, DaqWithoutSamplingIntervalIsRejected) {
   const auto p = write("daq.txt", "Header Size:  3\nVersion: 2\nSample Number, CHANNEL0, CHANNEL1, CHANNEL2\n1, 0, 0, 0\n");
-  EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Sampling Interval"));
+  EXPECT_THAT(error_of([&] { read_daq(p); }),
+              AllOf(HasSubstr("Sampling Interval"), HasSubstr("--sample-rate HZ")));
+}
+
+// DAQ rows without Sample Number, `rows` of them, channels 0..2 = i, 2 i, 3 i.
+std::string daq_rows(int rows) {
+  std::string s;
+  for (int i = 0; i < rows; ++i) {
+    s += std::to_string(i) + ", " + std::to_string(2 * i) + ", " + std::to_string(3 * i) + "\n";
+  }
+  return s;
+}
+
+TEST_F(DataTest, DaqTimedByTheGivenRateOrTheHeadersRate) {
+  const auto untimed = write("untimed.txt", "Header Size: 3\nVersion: 2\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  const MeasuredData d = read_daq(untimed, {}, kDefaultMinSamples, 200.0);
+  ASSERT_EQ(d.size(), 300u);
+  EXPECT_NEAR(d.dt, 0.005, 1e-15);
+  EXPECT_NEAR(d.time[299], 299 * 0.005, 1e-12);
+  EXPECT_NEAR(d.measured[10], 10 * 10 * 1e-3, 1e-12);  // CHANNEL0 x 10 mm -> m
+  // "Sampling Rate" alone is a time base too; a given rate must agree with it.
+  const auto rated = write("rated.txt", "Header Size: 3\nSampling Rate: 4096\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  EXPECT_NEAR(read_daq(rated).dt, 1.0 / 4096, 1e-12);
+  EXPECT_NEAR(read_daq(rated, {}, kDefaultMinSamples, 4096.0).dt, 1.0 / 4096, 1e-12);
+  EXPECT_THAT(error_of([&] { read_daq(rated, {}, kDefaultMinSamples, 1000.0); }),
+              AllOf(HasSubstr("rated.txt"), HasSubstr("gives 4096"), HasSubstr("--sample-rate says 1000")));
+  const auto both = write("both.txt", "Header Size: 4\nSampling Interval: 0.001\nSampling Rate: 500\n"
+                                      "CHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  EXPECT_THAT(error_of([&] { read_daq(both); }), HasSubstr("disagree"));
+}
+
+// 3 s at rest (offset 0.2 mm, noise-free), a 4 s sine of 2 mm, 2 s at rest at 0.3 mm.
+MeasuredData idle_then_moving() {
+  MeasuredData d;
+  d.source = "idle";
+  d.dt = 0.01;
+  for (int i = 0; i < 900; ++i) {
+    const double t = i * d.dt;
+    const double c = t < 3.0 ? 2e-4 : t < 7.0 ? 2e-4 + 2e-3 * std::sin(2 * M_PI * 0.5 * (t - 3.0)) : 3e-4;
+    d.time.push_back(t);
+    d.command.push_back(c);
+    d.measured.push_back(c);
+    d.force.push_back(1e5 * c);
+  }
+  return d;
+}
+
+TEST_F(DataTest, TheActivePartLeavesTheIdleStretchesOut) {
+  const MeasuredData d = idle_then_moving();
+  // Leaves rest by 5 % of the 2 mm peak (0.1 mm) at asin(0.05) / pi s after 3 s; the last
+  // excursion beyond 0.1 mm from 0.3 mm ends just before 7 s. Margins of 0.25 s either side.
+  const ActiveRange r = active_range(d);
+  const double leaves = 3.0 + std::asin(0.05) / M_PI;
+  EXPECT_NEAR(d.time[r.begin], leaves - 0.25, 0.011);
+  EXPECT_NEAR(d.time[r.end - 1], 7.0 + 0.25, 0.03);
+  const ActiveRange tight = active_range(d, 0.05, 0.0);
+  EXPECT_GT(d.time[tight.begin], 3.0);
+  EXPECT_LT(d.time[tight.end - 1], 7.0);
+  // A record that moves throughout is kept whole.
+  MeasuredData moving = d;
+  for (std::size_t i = 0; i < moving.size(); ++i) moving.command[i] = std::sin(0.05 * i);
+  const ActiveRange whole = active_range(moving);
+  EXPECT_EQ(whole.begin, 0u);
+  EXPECT_EQ(whole.end, moving.size());
+  EXPECT_THROW(active_range(d, 1.5), std::invalid_argument);
+}
+
+TEST_F(DataTest, CsvWithoutTimeNeedsTheSampleRate) {
+  std::string rows;
+  for (int i = 0; i < 300; ++i) rows += std::to_string(i) + "," + std::to_string(i + 1) + ",5\n";
+  const auto p = write("untimed.csv", "command,measured,force\n" + rows);
+  EXPECT_THAT(error_of([&] { read_csv(p); }),
+              AllOf(HasSubstr("untimed.csv:1"), HasSubstr("no 'time' column"), HasSubstr("--sample-rate HZ")));
+  const MeasuredData d = read_measured(p, {}, {}, kDefaultMinSamples, 2048.0);
+  EXPECT_NEAR(d.dt, 1.0 / 2048, 1e-15);
+  EXPECT_NEAR(d.command[7], 7e-3, 1e-15);
+  // A CSV with its own time column: the given rate is checked against it.
+  const auto timed = write("timed.csv", "time,command,measured,force\n" + csv_rows(300));
+  EXPECT_NEAR(read_csv(timed, {}, kDefaultMinSamples, 100.0).dt, 0.01, 1e-9);
+  EXPECT_THAT(error_of([&] { read_csv(timed, {}, kDefaultMinSamples, 1000.0); }),
+              HasSubstr("the time column gives 100"));
 }
 
 // Found by fuzz_daq_export (fuzz/regressions/daq_export/header_size_beyond_int): a Header Size of

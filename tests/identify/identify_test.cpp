@@ -56,6 +56,22 @@ TEST(IdentifyTest, RealDamperForceIsAHystereticDamperNearTheNoiseFloor) {
   EXPECT_LT(c.final_fit.heldout_error, 1.7 * c.noise_floor);
 }
 
+// The same force on the record's active part (data.h active_range, `--trim-idle`): the idle
+// seconds before the test, where the hysteretic model turns displacement noise into force, no
+// longer weigh on the fit. Measured 28.85 % against a floor of 18.83 % (1.53x, from 1.64x on the
+// whole record; the target of 1.5x is not reached).
+TEST(IdentifyTest, RealDamperForceOnTheActivePartComesCloserToTheNoiseFloor) {
+  const MeasuredData data = read_measured(kRealFile);
+  const ActiveRange active = active_range(data);
+  IdentifyOptions options;
+  options.channels = {Channel::kForce};
+  const Identification id = identify(slice(data, active.begin, active.end), options);
+  const ChannelIdentification& c = id.channels.at(0);
+  ASSERT_TRUE(c.kind && c.kind->proposed);
+  EXPECT_TRUE(is_hysteretic_damper(*c.kind->proposed));
+  EXPECT_LT(c.final_fit.heldout_error, 1.56 * c.noise_floor);
+}
+
 TEST(IdentifyTest, BothChannelsOfAGeneratedSetInOrder) {
   GeneratorSpec spec;
   spec.first_order_time_constant = 0.01;

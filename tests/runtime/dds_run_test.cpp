@@ -26,6 +26,38 @@ TEST_F(DdsRun, LockstepEqualsTheInProcessRunBitForBit) {
   for (int code : run.launch.node_exits) EXPECT_EQ(code, 0);
 }
 
+// Multi-rate: the emulator's servo loop at 4x the integrator's rate, in simulated time.
+TEST_F(DdsRun, MultiRateLockstepEqualsTheInProcessMultiRateRunBitForBit) {
+  const std::string text = test::paper_frame_study(2, "servo { rate: 4000 }");
+  const auto run = test::launch("multi_rate", text, "lag_shift_14ms", 51);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const core::SimulationResult multi_rate = test::reference_result(text, "lag_shift_14ms");
+  test::expect_record_equals(run.record, multi_rate);
+  // The servo loop is not a no-op: the ramp changes what the specimen sees.
+  const core::SimulationResult single_rate =
+      test::reference_result(test::paper_frame_study(2, ""), "lag_shift_14ms");
+  EXPECT_GT((multi_rate.realised - single_rate.realised).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+// Real time with the servo at 4x: it streams feedback every servo period; the coordinator takes the
+// newest sample and counts the servo's periods and overruns from the heartbeats.
+TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
+  const std::string text = test::paper_frame_study(
+      1.0, "servo { rate: 4000 } deployment { clock: REAL_TIME max_overrun_fraction: -1 "
+           "max_missed_answers: 30 command_watchdog_periods: 30 }");
+  const auto run = test::launch("servo_real_time", text, "reference", 52);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto* footer = run.record.footer();
+  ASSERT_NE(footer, nullptr);
+  const double steps = static_cast<double>(footer->counters().steps());
+  // Ticks as of the emulator's last heartbeat (every 50 ms): about 4 per step.
+  EXPECT_GT(static_cast<double>(footer->counters().servo_ticks()), 0.7 * 4 * steps);
+  EXPECT_LT(static_cast<double>(footer->counters().servo_ticks()), 1.2 * 4 * steps);
+  // Later servo samples of an answered step replace the measurement without being "duplicates".
+  EXPECT_EQ(footer->counters().duplicate(), 0u);
+  EXPECT_NE(test::read_file(run.launch.coordinator_log).find("servo loops:"), std::string::npos);
+}
+
 TEST_F(DdsRun, SplitStoreysAcrossTwoSubstructureNodesEqualInProcess) {
   const std::string text = test::two_storey_study(
       2, "cases { name: \"lag\" delay { first_order { time_constant: 0.005 } } }",

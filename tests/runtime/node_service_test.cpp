@@ -12,10 +12,11 @@ namespace {
 constexpr char kRun[] = "run-1";
 
 transport::Message assign_message(int node, config::NodeSpec::Kind kind,
-                                  std::vector<int> storeys, std::vector<int> actuators) {
+                                  std::vector<int> storeys, std::vector<int> actuators,
+                                  const std::string& extra = "") {
   runtime::Assign a;
   a.set_schema_version(runtime::kSchemaVersion);
-  *a.mutable_study() = core::parse_study(test::paper_frame_study(1, ""), "t");
+  *a.mutable_study() = core::parse_study(test::paper_frame_study(1, extra), "t");
   a.set_case_name("lag_shift_14ms");
   a.mutable_node()->set_id(node);
   a.mutable_node()->set_kind(kind);
@@ -109,6 +110,65 @@ TEST(ActuatorService, DelaysTheCommandInSimulatedTimeAndHolds) {
   EXPECT_TRUE(node.held());
   EXPECT_TRUE(node.handle(command(2, 21, 1.0, 1.0)).empty());
   EXPECT_NEAR(node.held_position(0), 0.006, 1e-12);
+}
+
+TEST(ActuatorService, LockstepServoRunsItsPeriodsPerCommandAndAnswersOnce) {
+  actuator_emulator::ActuatorService node(2, "");
+  node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0}, "servo { rate: 4000 }"));
+  EXPECT_FALSE(node.streaming());
+  runtime::Feedback f;
+  for (int k = 1; k <= 20; ++k) {
+    const auto reply = node.handle(command(2, k, 0.001 * k, 1.0));
+    ASSERT_EQ(reply.size(), 1u);
+    ASSERT_TRUE(runtime::unpack(reply[0], f));
+    EXPECT_EQ(f.servo_sample(), 0);
+  }
+  EXPECT_NEAR(f.realised(0), 0.006, 1e-12);  // the 14 ms shift, now over 56 servo periods
+  EXPECT_FALSE(node.servo_tick(false).has_value());
+}
+
+TEST(ActuatorService, RealTimeServoStreamsOneFeedbackPerServoPeriodForTheNewestCommand) {
+  actuator_emulator::ActuatorService node(2, "");
+  node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0},
+                             "servo { rate: 4000 } deployment { clock: REAL_TIME }"));
+  ASSERT_TRUE(node.streaming());
+  EXPECT_DOUBLE_EQ(node.streaming_period(), 0.00025);
+  EXPECT_FALSE(node.servo_tick(false).has_value());  // nothing commanded yet: nothing to say
+  EXPECT_TRUE(node.handle(command(2, 1, 0.004, 1.0)).empty());  // loads the ramp only
+  std::vector<std::int64_t> samples;
+  for (int j = 0; j < 6; ++j) {
+    const auto reply = node.servo_tick(j == 5);
+    ASSERT_TRUE(reply.has_value());
+    EXPECT_EQ(reply->kind, runtime::FEEDBACK);
+    EXPECT_EQ(reply->step, 1);
+    EXPECT_EQ(reply->echo_ns, 1001);
+    runtime::Feedback f;
+    ASSERT_TRUE(runtime::unpack(*reply, f));
+    samples.push_back(f.servo_sample());
+    EXPECT_GT(f.sampled_ns(), 0);
+  }
+  EXPECT_EQ(samples, (std::vector<std::int64_t>{1, 2, 3, 4, 5, 6}));
+  const auto heartbeat = node.heartbeat();
+  runtime::Heartbeat h;
+  ASSERT_TRUE(runtime::unpack(heartbeat, h));
+  EXPECT_EQ(h.servo_ticks(), 6u);
+  EXPECT_EQ(h.servo_overruns(), 1u);
+  node.handle(runtime::pack(kRun, 2, runtime::HOLD, 1, runtime::Hold{}));
+  EXPECT_FALSE(node.servo_tick(false).has_value());  // held: the servo says and does nothing
+}
+
+TEST(ActuatorService, AStreamingServoRefusesAPerCommandSendStage) {
+  actuator_emulator::ActuatorService node(2, "");
+  runtime::Assign assign;
+  ASSERT_TRUE(runtime::unpack(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0},
+                                             "servo { rate: 4000 } deployment { clock: REAL_TIME }"),
+                              assign));
+  assign.mutable_node()->set_send_delay_case("jitter");
+  const auto ready = node.handle(runtime::pack(kRun, 2, runtime::ASSIGN, 0, assign));
+  ASSERT_EQ(ready.size(), 1u);
+  runtime::Ready r;
+  ASSERT_TRUE(runtime::unpack(ready[0], r));
+  EXPECT_NE(r.error().find("send_lag"), std::string::npos) << r.error();
 }
 
 }  // namespace

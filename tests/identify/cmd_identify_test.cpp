@@ -1,0 +1,222 @@
+// `rths identify` end to end: the declared model from a file (--model), its refusals (exit 2
+// naming file and field), the identified model written back (--out) and read again, the study
+// built from it run by `rths run`, and --sample-rate for files without a time column.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "identify/data.h"
+#include "identify/generator.h"
+
+namespace rths::identify {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+
+const std::string kRths = RTHS_EXECUTABLE;
+const fs::path kData = RTHS_SHARED_DATA_DIR;
+
+struct Outcome {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+Outcome run(const std::string& arguments) {
+  Outcome outcome;
+  FILE* pipe = popen((kRths + " " + arguments + " 2>&1").c_str(), "r");
+  if (!pipe) return outcome;
+  std::array<char, 4096> buffer{};
+  std::size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) outcome.output.append(buffer.data(), n);
+  const int status = pclose(pipe);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return outcome;
+}
+
+nlohmann::json json_of(const Outcome& o) {
+  const auto start = o.output.find('{');
+  return nlohmann::json::parse(o.output.substr(start == std::string::npos ? 0 : start));
+}
+
+void write_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+}
+
+class CmdIdentifyTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("rths_cmd_identify_test_" + std::to_string(getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    GeneratorSpec spec;
+    spec.duration = 12.0;
+    spec.delay = 0.012;
+    spec.first_order_time_constant = 0.005;
+    spec.stiffness = 2.0e5;
+    write_csv(generate_measured(spec), data_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string data() const { return data_.string(); }
+
+  fs::path dir_;
+  fs::path data_ = fs::temp_directory_path() /
+                   ("rths_cmd_identify_test_" + std::to_string(getpid()) + ".csv");
+};
+
+TEST_F(CmdIdentifyTest, TheModelFileDeclaresTheActuatorWithAFixedParameter) {
+  write_file(dir_ / "lab.textproto", R"(
+      actuator {
+        stages: "delay"
+        stages: "first_order"
+        parameters { name: "delay" initial: 0.011 fixed: true }
+        parameters { name: "time_constant" initial: 0.004 min: 0.001 max: 0.02 }
+      })");
+  const Outcome o = run("identify " + data() + " --channels measured --folds 0 --max-steps 0 --json --model " +
+                        (dir_ / "lab.textproto").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto channel = json_of(o)["channels"][0];
+  EXPECT_EQ(channel["declared_effects"], nlohmann::json({"delay", "first_order"}));
+  const auto params = channel["declared"]["params"];
+  EXPECT_EQ(params["delay"]["value"].get<double>(), 0.011);  // held, not fitted
+  EXPECT_EQ(params["delay"]["std_error"].get<double>(), 0.0);
+  EXPECT_NEAR(params["time_constant"]["value"].get<double>(), 0.005, 0.002);
+}
+
+TEST_F(CmdIdentifyTest, AFileAndAFlagForTheSameChannelConflict) {
+  write_file(dir_ / "lab.textproto", "actuator { stages: \"delay\" }");
+  const Outcome o = run("identify " + data() + " --declared-actuator delay,first_order --model " +
+                        (dir_ / "lab.textproto").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, HasSubstr("--declared-actuator conflicts with --model"));
+}
+
+TEST_F(CmdIdentifyTest, ABadModelFileExitsTwoNamingFileAndField) {
+  const auto bad = (dir_ / "bad.textproto").string();
+  write_file(bad, "actuator { stages: \"delay\" parameters { name: \"delay\" min: 0.05 max: 0.01 } }");
+  Outcome o = run("identify " + data() + " --model " + bad);
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr(bad + ": actuator.parameters[0] (delay)"),
+                              HasSubstr("min 0.05 > max 0.01")));
+  write_file(bad, "specimen { kind: \"linear_spring\" parameters { name: \"stiffness\" min: -1 } }");
+  o = run("identify " + data() + " --model " + bad);
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr(bad + ": specimen.parameters[0] (stiffness)"),
+                              HasSubstr("a negative stiffness")));
+  o = run("identify " + data() + " --model " + (dir_ / "missing.textproto").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, HasSubstr("cannot open declared model"));
+}
+
+// --out writes the identified model, which --model reads back as the declared model, and a study
+// built from the identified model, which `rths run` runs.
+TEST_F(CmdIdentifyTest, TheIdentifiedModelReadsBackAndItsStudyRuns) {
+  fs::copy_file(kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2", dir_ / "motion.AT2");
+  write_file(dir_ / "frame.textproto", R"(
+      name: "frame"
+      structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }
+      motion { path: "motion.AT2" duration: 5 }
+      integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }
+      substructuring { experimental_fraction: 0.3 model { linear {} } }
+      cases { name: "reference" })");
+  const fs::path out = dir_ / "out";
+  const Outcome first = run("identify " + data() + " --folds 0 --json --out " + out.string() +
+                            " --predict " + (dir_ / "frame.textproto").string());
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const auto first_json = json_of(first);
+  EXPECT_EQ(first_json["configs_written"].size(), 3u);
+  for (const char* file : {"identified_model.textproto", "identified_study_fragment.textproto",
+                           "identified_study.textproto"}) {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+  }
+
+  const Outcome again = run("identify " + data() + " --folds 0 --json --model " +
+                            (out / "identified_model.textproto").string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const auto again_json = json_of(again);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const auto& before = first_json["channels"][k];
+    const auto& after = again_json["channels"][k];
+    auto declared = after["declared"]["effects"].get<std::vector<std::string>>();
+    auto identified = before["final"]["effects"].get<std::vector<std::string>>();
+    std::sort(declared.begin(), declared.end());  // a specimen kind lists its effects first
+    std::sort(identified.begin(), identified.end());
+    EXPECT_EQ(declared, identified) << k;
+    EXPECT_NEAR(after["declared"]["heldout_error"].get<double>(),
+                before["final"]["heldout_error"].get<double>(),
+                0.02 * before["final"]["heldout_error"].get<double>())
+        << k;
+  }
+
+  // The study written beside it is the base with the identified parts; `rths run` runs it from
+  // another folder (the motion's relative path was made absolute).
+  fs::create_directories(dir_ / "elsewhere");
+  fs::rename(out / "identified_study.textproto", dir_ / "elsewhere/study.textproto");
+  const Outcome ran = run("run " + (dir_ / "elsewhere/study.textproto").string() + " --no-plots --out " +
+                          (dir_ / "run").string());
+  ASSERT_EQ(ran.exit_code, 0) << ran.output;
+  EXPECT_THAT(ran.output, HasSubstr("identified_actuator"));
+}
+
+TEST_F(CmdIdentifyTest, AFileWithoutTimeNeedsTheSampleRate) {
+  const MeasuredData record = read_csv(data_);
+  {
+    std::ofstream csv(dir_ / "untimed.csv");
+    csv << "command,measured,force\n";
+    csv.precision(10);
+    for (std::size_t i = 0; i < record.size(); ++i) {
+      csv << record.command[i] * 1e3 << "," << record.measured[i] * 1e3 << "," << record.force[i] << "\n";
+    }
+  }
+  const std::string untimed = (dir_ / "untimed.csv").string();
+  Outcome o = run("identify " + untimed + " --channels measured --folds 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr(untimed), HasSubstr("no 'time' column"),
+                              HasSubstr("--sample-rate HZ")));
+  o = run("identify " + untimed + " --channels measured --folds 0 --json --sample-rate 500");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NEAR(json_of(o)["dt"].get<double>(), 0.002, 1e-12);
+  // A rate that contradicts the file's own time column is refused.
+  o = run("identify " + data() + " --channels measured --folds 0 --sample-rate 1000");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr("the time column gives 500"), HasSubstr("--sample-rate says 1000")));
+}
+
+TEST_F(CmdIdentifyTest, TrimIdleCutsTheRestBeforeTheTestOff) {
+  const MeasuredData record = read_csv(data_);
+  MeasuredData padded;
+  padded.dt = record.dt;
+  for (std::size_t i = 0; i < 1000 + record.size(); ++i) {  // 2 s at rest, then the record
+    const std::size_t j = i < 1000 ? 0 : i - 1000;
+    padded.time.push_back(static_cast<double>(i) * record.dt);
+    padded.command.push_back(i < 1000 ? 0.0 : record.command[j]);
+    padded.measured.push_back(i < 1000 ? 0.0 : record.measured[j]);
+    padded.force.push_back(i < 1000 ? 0.0 : record.force[j]);
+  }
+  write_csv(padded, dir_ / "padded.csv");
+  const Outcome o = run("identify " + (dir_ / "padded.csv").string() +
+                        " --channels measured --folds 0 --max-steps 0 --json --trim-idle");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto j = json_of(o);
+  ASSERT_EQ(j["trimmed"].size(), 1u);
+  EXPECT_THAT(j["trimmed"][0].get<std::string>(), HasSubstr("active part"));
+  // The chirp starts at rest and leaves it within its first second: about 2 s are cut.
+  const auto kept = j["samples"].get<std::size_t>();
+  EXPECT_LT(kept, padded.size() - 800);
+  EXPECT_GT(kept, record.size() - 600);
+}
+
+}  // namespace
+}  // namespace rths::identify
