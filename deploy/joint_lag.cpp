@@ -22,11 +22,7 @@
 
 namespace rths::deploy {
 
-using runtime::CommandResult;
-using runtime::command_line;
-using runtime::run_checked;
 using runtime::run_command;
-using runtime::tool_available;
 namespace {
 
 void check_lags(const google::protobuf::RepeatedField<double>& values, const std::string& field,

@@ -15,7 +15,6 @@
 namespace rths::deploy {
 
 using runtime::CommandResult;
-using runtime::command_line;
 using runtime::run_checked;
 using runtime::run_command;
 using runtime::tool_available;

@@ -10,11 +10,7 @@
 
 namespace rths::deploy {
 
-using runtime::CommandResult;
-using runtime::command_line;
-using runtime::run_checked;
 using runtime::run_command;
-using runtime::tool_available;
 namespace {
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
