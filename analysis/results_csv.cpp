@@ -17,8 +17,10 @@ std::string safe_name(const std::string& name) {
 
 }  // namespace
 
+std::string result_column_prefix(const std::string& run_name) { return safe_name(run_name) + "_"; }
+
 std::vector<std::string> result_column_names(const std::string& run_name, const core::SimulationResult& result) {
-  const std::string prefix = safe_name(run_name) + "_";
+  const std::string prefix = result_column_prefix(run_name);
   std::vector<std::string> names;
   for (Eigen::Index i = 0; i < result.displacement.cols(); ++i) {
     names.push_back(prefix + "u_floor" + std::to_string(i + 1) + "_m");

@@ -25,6 +25,9 @@ struct NamedResult {
   const core::SimulationResult* result = nullptr;
 };
 
+// "<run>_": the prefix of every column of one run (the case name made safe as above).
+std::string result_column_prefix(const std::string& run_name);
+
 // The header cells of one run, in the order above.
 std::vector<std::string> result_column_names(const std::string& run_name, const core::SimulationResult& result);
 

@@ -63,6 +63,73 @@ std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
   return out;
 }
 
+namespace {
+
+// What is known of a case before it runs: its delay, and its critical-delay check (announced
+// through options.warn when past).
+CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::HybridSetup& setup,
+                          const config::Case& study_case, const std::string& name,
+                          const RunStudyOptions& options) {
+  const std::vector<double> k_experimental = experimental_storey_stiffness(prepared.base.partition);
+  const bool has_experimental =
+      std::any_of(k_experimental.begin(), k_experimental.end(), [](double k) { return k > 0; });
+  CaseOutcome result;
+  result.name = name;
+  result.expect_unstable = study_case.expect_unstable();
+  if (!setup.delays.empty()) {
+    result.delay_description = setup.delays.front().describe();
+    for (const core::DelayChain& chain : setup.delays) {
+      result.nominal_delay = std::max(result.nominal_delay, chain.nominal_delay());
+    }
+  } else {
+    result.delay_description = "no experimental substructure";
+  }
+  if (has_experimental) {
+    result.stability = core::check_critical_delay(setup.model, k_experimental, setup.integrator,
+                                                  setup.dt, result.nominal_delay);
+    if (result.stability->past() && options.warn) {
+      options.warn("case '" + result.name + "': " + result.stability->describe() +
+                   (result.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge"));
+    }
+  }
+  return result;
+}
+
+// The status of a case that ran, judged from its response against the lag-free run's.
+void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_response, int floors) {
+  result.response = floor_history(result.simulation, floors - 1);
+  const Comparison growth = compare(lag_free_response, result.response, result.simulation.diverged);
+  if (result.status == "completed" && growth.diverged) {
+    result.status = "diverged";
+    std::ostringstream why;
+    why << std::setprecision(4) << "peak " << growth.peak_m * 1e3 << " mm against "
+        << growth.peak_reference_m * 1e3 << " mm without lag (more than "
+        << core::kDivergenceGrowth << "x";
+    if (result.simulation.diverged && !result.simulation.time.empty())
+      why << "; the simulation stopped at t = " << result.simulation.time.back() << " s";
+    why << ")";
+    if (result.stability) why << "; " << result.stability->describe();
+    result.status_detail = why.str();
+  } else if (result.status == "completed" && result.stability && result.stability->past()) {
+    std::ostringstream why;
+    why << std::setprecision(3) << "past its critical delay, but the peak grew only "
+        << growth.peak_m / growth.peak_reference_m << "x over the lag-free run in this record (diverged "
+        << "means more than " << core::kDivergenceGrowth << "x); a longer record may still grow: "
+        << result.stability->describe();
+    result.status_detail = why.str();
+  }
+}
+
+}  // namespace
+
+const CaseOutcome& StudyOutcome::reference() const {
+  return lag_free_reference ? *lag_free_reference : cases.at(reference_index);
+}
+
+std::string StudyOutcome::reference_description() const {
+  return lag_free_reference ? std::string(kLagFreeReference) : "case '" + reference().name + "'";
+}
+
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options) {
   const config::Study& study = prepared.config;
   config::Study with_cases = study;
@@ -78,65 +145,61 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion);
   const std::vector<double> lag_free_response = floor_history(lag_free, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free_response);
-  const std::vector<double> k_experimental = experimental_storey_stiffness(prepared.base.partition);
-  const bool has_experimental =
-      std::any_of(k_experimental.begin(), k_experimental.end(), [](double k) { return k > 0; });
 
   for (int i = 0; i < with_cases.cases_size(); ++i) {
     const config::Case& study_case = with_cases.cases(i);
     if (&study_case == &reference) outcome.reference_index = static_cast<std::size_t>(i);
-    core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-    CaseOutcome result;
-    result.name = study_case.name().empty() ? "case" + std::to_string(i) : study_case.name();
-    result.expect_unstable = study_case.expect_unstable();
-    if (!setup.delays.empty()) {
-      result.delay_description = setup.delays.front().describe();
-      for (const core::DelayChain& chain : setup.delays) {
-        result.nominal_delay = std::max(result.nominal_delay, chain.nominal_delay());
-      }
-    } else {
-      result.delay_description = "no experimental substructure";
-    }
-    if (has_experimental) {
-      result.stability = core::check_critical_delay(setup.model, k_experimental, setup.integrator,
-                                                    setup.dt, result.nominal_delay);
-      if (result.stability->past() && options.warn) {
-        options.warn("case '" + result.name + "': " + result.stability->describe() +
-                     (result.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge"));
-      }
-    }
+    const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+    CaseOutcome result = describe_case(
+        prepared, setup, study_case,
+        study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(), options);
     result.simulation = core::simulate(setup, prepared.motion);
     if (const auto trip = first_limit_trip(result.simulation, study.deployment().limits())) {
       result.simulation.truncate(trip->first);  // the command of that step is never sent
       result.status = "limit tripped";
       result.status_detail = trip->second;
     }
-    result.response = floor_history(result.simulation, floors - 1);
-    const Comparison growth = compare(lag_free_response, result.response, result.simulation.diverged);
-    if (result.status == "completed" && growth.diverged) {
-      result.status = "diverged";
-      std::ostringstream why;
-      why << std::setprecision(4) << "peak " << growth.peak_m * 1e3 << " mm against "
-          << growth.peak_reference_m * 1e3 << " mm without lag (more than "
-          << core::kDivergenceGrowth << "x";
-      if (result.simulation.diverged) why << "; the simulation stopped at t = " << result.simulation.time.back() << " s";
-      why << ")";
-      if (result.stability) why << "; " << result.stability->describe();
-      result.status_detail = why.str();
-    } else if (result.status == "completed" && result.stability && result.stability->past()) {
-      std::ostringstream why;
-      why << std::setprecision(3) << "past its critical delay, but the peak grew only "
-          << growth.peak_m / growth.peak_reference_m << "x over the lag-free run in this record (diverged "
-          << "means more than " << core::kDivergenceGrowth << "x); a longer record may still grow: "
-          << result.stability->describe();
-      result.status_detail = why.str();
-    }
+    judge_case(result, lag_free_response, floors);
     outcome.cases.push_back(std::move(result));
   }
   const CaseOutcome& ref = outcome.cases[outcome.reference_index];
   for (CaseOutcome& c : outcome.cases) {
     c.comparison = compare(ref.simulation, c.simulation, outcome.response);
   }
+  return outcome;
+}
+
+StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared, std::vector<RecordedCase> recorded,
+                                  const RunStudyOptions& options) {
+  if (recorded.empty()) throw std::invalid_argument("judge_recorded_cases: no cases");
+  const int floors = prepared.base.model.dofs();
+  StudyOutcome outcome;
+  outcome.study_name = prepared.config.name();
+  outcome.motion_units = core::motion_units_name(prepared.config.motion());
+  outcome.response = ResponseSpec::top_floor(floors);
+  CaseOutcome lag_free;
+  lag_free.name = "lag_free_in_process";
+  lag_free.delay_description = "none (in process, no delay stage)";
+  lag_free.simulation = core::simulate(prepared.base, prepared.motion);
+  lag_free.response = floor_history(lag_free.simulation, floors - 1);
+  outcome.lag_free_peak = core::peak_abs(lag_free.response);
+  for (RecordedCase& r : recorded) {
+    const config::Case* study_case = nullptr;
+    for (const config::Case& c : prepared.config.cases())
+      if (c.name() == r.name) study_case = &c;
+    if (study_case == nullptr)
+      throw std::invalid_argument("case '" + r.name + "' is not among the study's cases");
+    CaseOutcome result = describe_case(prepared, core::setup_for_case(prepared, *study_case),
+                                       *study_case, r.name, options);
+    result.simulation = std::move(r.simulation);
+    result.status = r.status;
+    if (result.status != "completed") result.status_detail = r.status_detail;
+    judge_case(result, lag_free.response, floors);
+    result.comparison = compare(lag_free.simulation, result.simulation, outcome.response);
+    outcome.cases.push_back(std::move(result));
+  }
+  lag_free.comparison = compare(lag_free.simulation, lag_free.simulation, outcome.response);
+  outcome.lag_free_reference = std::move(lag_free);
   return outcome;
 }
 
@@ -168,7 +231,7 @@ double strongest_window_start(const std::vector<double>& u, double dt, double wi
 
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
   std::filesystem::create_directories(directory);
-  const CaseOutcome& reference = outcome.cases[outcome.reference_index];
+  const CaseOutcome& reference = outcome.reference();
   const std::string response = outcome.response.describe();
   PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case", "time (s)",
                         "displacement (mm)", {}};
@@ -177,7 +240,11 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   PlotSpec loop{outcome.study_name + ": what the integrator sees (experimental part)",
                 "commanded displacement (mm)", "measured force (kN)", {}};
   std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
-  for (const CaseOutcome& c : outcome.cases) {
+  std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
+  if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
+  for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
+  for (const CaseOutcome* drawn_case : drawn) {
+    const CaseOutcome& c = *drawn_case;
     const std::string label = c.name + (c.diverged() ? " (diverged, clipped)" : "");
     Series s{label, c.simulation.time, {}};
     for (double u : c.response) s.y.push_back(u * 1e3);
@@ -216,7 +283,7 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   zoom.x_min = start;
   zoom.x_max = start + 5.0;
   std::vector<PlotSpec> panels = {displacement};
-  if (outcome.cases.size() > 1) panels.push_back(difference);
+  if (drawn.size() > 1) panels.push_back(difference);
   panels.push_back(zoom);
   for (PlotSpec& p : panels) p.height = 380;
   write_png_panels(panels, directory / "displacement.png");
@@ -254,14 +321,15 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
   return {{"study", outcome.study_name},
           {"motion_units", outcome.motion_units},
           {"response", outcome.response.describe()},
-          {"reference_case", outcome.cases[outcome.reference_index].name},
+          {"reference_case", outcome.reference().name},
+          {"reference", outcome.reference_description()},
           {"lag_free_peak_m", outcome.lag_free_peak},
           {"cases", cases}};
 }
 
 std::string study_summary_text(const StudyOutcome& outcome) {
   std::ostringstream out;
-  out << "study: " << outcome.study_name << " (reference: " << outcome.cases[outcome.reference_index].name
+  out << "study: " << outcome.study_name << " (every case against " << outcome.reference_description()
       << "; response: " << outcome.response.describe() << " displacement; motion read in "
       << outcome.motion_units << ")\n";
   out << std::left << std::setw(24) << "case" << std::setw(30) << "delay" << std::right << std::setw(11)

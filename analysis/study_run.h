@@ -44,6 +44,8 @@ struct CaseOutcome {
   bool diverged() const { return status == "diverged"; }
 };
 
+inline constexpr const char* kLagFreeReference = "the lag-free in-process reference";
+
 struct StudyOutcome {
   std::string study_name;
   std::string motion_units;       // units the record was read in: g, m/s2, cm/s2
@@ -51,6 +53,12 @@ struct StudyOutcome {
   std::size_t reference_index = 0;
   double lag_free_peak = 0.0;     // m, top floor of the run without any delay stage
   std::vector<CaseOutcome> cases;
+  // Distributed runs (judge_recorded_cases): the lag-free in-process run every case is compared
+  // with. Empty for `run`, which compares every case with cases[reference_index].
+  std::optional<CaseOutcome> lag_free_reference;
+  const CaseOutcome& reference() const;
+  // kLagFreeReference, or "case '<name>'".
+  std::string reference_description() const;
   // Cases that make the run fail its purpose: diverged without expect_unstable (unless
   // `allow_unstable`), or a limit tripped.
   std::vector<std::string> failures(bool allow_unstable) const;
@@ -61,6 +69,23 @@ struct RunStudyOptions {
 };
 
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
+
+// A case that ran elsewhere (`rths launch`, `rths sites`), as its record tells it.
+struct RecordedCase {
+  std::string name;                   // a case of the study
+  core::SimulationResult simulation;  // per-step history (runtime::measure_run); diverged = the
+                                      // coordinator's own guard stopped it
+  std::string status = "completed";   // "completed", or why the run stopped
+  std::string status_detail;          // e.g. the launcher's reason, the coordinator log's tail
+};
+
+// Distributed cases judged as run_study judges in-process ones (critical-delay check, divergence
+// from the response against the lag-free run), and each compared (analysis::compare, top floor)
+// with the lag-free in-process run of the same structure and motion (prepared.base: no delay
+// stage, no network), which the outcome keeps as lag_free_reference. A recorded case's status
+// other than "completed" is kept. Throws std::invalid_argument for a case the study lacks.
+StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared, std::vector<RecordedCase> cases,
+                                  const RunStudyOptions& options = {});
 
 // The results file (csv, mat, h5) is tables::study_table: analysis/results_csv.h columns.
 // displacement.png/.svg, three panels (mm): every case with the reference (the paper's Fig. 3),

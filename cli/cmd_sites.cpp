@@ -9,46 +9,22 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "cli/distributed.h"
+#include "core/study.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
+#include "runtime/process.h"
 
 namespace rths::cli {
 namespace {
 
 struct SitesOptions {
   std::string config, out, bin_dir, check_record, security;
+  std::string format = "csv";
+  int domain = -1;  // -1: the sites config's / study's domain
   std::int64_t expect_steps = 1;
   double expect_injected = -1.0;
-  bool json = false, check = false, cleanup = false;
-};
-
-// Ctrl-C / SIGTERM are held pending while the run goes and polled, so that the run's teardown
-// (processes, then namespaces) always happens; restores the previous mask on scope exit.
-class HeldStopSignals {
- public:
-  HeldStopSignals() {
-    sigemptyset(&held_);
-    sigaddset(&held_, SIGINT);
-    sigaddset(&held_, SIGTERM);
-    sigaddset(&held_, SIGHUP);
-    pthread_sigmask(SIG_BLOCK, &held_, &previous_);
-  }
-  ~HeldStopSignals() {
-    // A signal received meanwhile is consumed here, not delivered after teardown.
-    timespec zero{0, 0};
-    while (sigtimedwait(&held_, nullptr, &zero) > 0) {
-    }
-    pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
-  }
-  bool stop_requested() const {
-    sigset_t pending;
-    sigpending(&pending);
-    return sigismember(&pending, SIGINT) == 1 || sigismember(&pending, SIGTERM) == 1 ||
-           sigismember(&pending, SIGHUP) == 1;
-  }
-
- private:
-  sigset_t held_{}, previous_{};
+  bool json = false, check = false, cleanup = false, no_plots = false, allow_unstable = false;
 };
 
 void run(const SitesOptions& o) {
@@ -69,9 +45,11 @@ void run(const SitesOptions& o) {
   auto plan = deploy::load_sites(o.config);
   if (!o.security.empty())
     plan.study.mutable_deployment()->set_security_dir(std::filesystem::absolute(o.security).string());
+  if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
   if (o.check) {
     std::cout << "sites config ok: " << plan.placements.size() << " processes on "
-              << plan.sites.sites_size() << " sites\n";
+              << plan.sites.sites_size() << " sites, DDS domain " << plan.study.deployment().domain_id()
+              << "\n";
     return;
   }
   if (const auto reason = deploy::namespace_support()) {
@@ -87,7 +65,7 @@ void run(const SitesOptions& o) {
   if (!o.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.bin_dir);
   deploy::SitesRunResult result;
   {
-    HeldStopSignals signals;
+    runtime::HeldStopSignals signals;
     options.stop_requested = [&signals] { return signals.stop_requested(); };
     try {
       result = deploy::run_sites(plan, options);
@@ -95,12 +73,28 @@ void run(const SitesOptions& o) {
       throw ExitError(kExitEnvironment, std::string("sites: ") + e.what());
     }
   }
+  // The results as `rths run` and `rths launch` write them, against the lag-free in-process
+  // reference (cli/distributed.h).
+  const core::PreparedStudy prepared = core::prepare_study(plan.study, result.output_dir);
+  const std::vector<DistributedRun> runs{{result.case_name, result.coordinator_exit,
+                                          result.status == "interrupted" || result.status.rfind("timed out", 0) == 0
+                                              ? result.status
+                                              : "",
+                                          result.record, result.output_dir.string()}};
+  const DistributedResults results = judge_distributed(prepared, runs);
+  const auto table = write_distributed_outputs(results, result.output_dir, !o.no_plots, o.format);
   if (o.json) {
-    std::cout << deploy::to_json(result).dump(2) << "\n";
+    auto j = deploy::to_json(result);
+    j["results"] = distributed_summary_json(results);
+    j["results_file"] = table.string();
+    std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << deploy::to_text(result);
+    std::cout << deploy::to_text(result) << distributed_summary_text(results) << "written: "
+              << table.string() << ", summary.txt, summary.json" << (o.no_plots ? "" : ", plots")
+              << "\n";
   }
   if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
+  fail_if_distributed_failed(results, runs, o.allow_unstable);
 }
 
 }  // namespace
@@ -114,12 +108,22 @@ void add_sites_command(CLI::App& app) {
       "(or CAP_SYS_ADMIN + CAP_NET_ADMIN); exit 3 when namespaces are not permitted");
   cmd->add_option("config", options->config, "sites config (rths.deploy.Sites, text format)");
   cmd->add_option("--out", options->out,
-                  "output folder: record, logs, DDS configs (default out/sites_<config name>)");
+                  "output folder: record, results, plots, summary, logs, DDS configs (default out/sites_<config name>)");
   cmd->add_option("--bin-dir", options->bin_dir,
                   "folder with rths-coordinator, rths-substructure-node, rths-actuator-emulator");
   cmd->add_option("--security", options->security,
                   "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
                   "each process uses its node_<id> folder");
+  cmd->add_option("--domain", options->domain,
+                  "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
+      ->check(CLI::Range(0, 232));
+  cmd->add_option("--format", options->format,
+                  "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
+                  "plus lag per link")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
+  cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots (and remove those of an earlier run)");
+  cmd->add_flag("--allow-unstable", options->allow_unstable,
+                "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--check", options->check, "only load and check the config");
   cmd->add_flag("--cleanup", options->cleanup,

@@ -18,12 +18,14 @@
 #include "core/study.h"
 #include "core/text_format.h"
 #include "deploy/netns.h"
-#include "deploy/process.h"
+#include "runtime/process.h"
 #include "deploy/sites.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"
 
 namespace rths::deploy {
+
+using runtime::run_command;
 namespace {
 
 void check_lags(const google::protobuf::RepeatedField<double>& values, const std::string& field,

@@ -10,9 +10,14 @@
 #include <regex>
 #include <sstream>
 
-#include "deploy/process.h"
+#include "runtime/process.h"
 
 namespace rths::deploy {
+
+using runtime::CommandResult;
+using runtime::run_checked;
+using runtime::run_command;
+using runtime::tool_available;
 namespace {
 
 constexpr const char* kPrefix = "rths-";

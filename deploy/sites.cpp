@@ -18,7 +18,7 @@
 #include "core/text_format.h"
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
-#include "deploy/process.h"
+#include "runtime/process.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"
 

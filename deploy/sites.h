@@ -7,10 +7,10 @@
 //                  the sites' overrides applied (domain, case, clock, duration, per-link lag as
 //                  each node's receive_lag = to_node and send_lag = from_node).
 //   run_sites      builds one network namespace per site (NamespaceTopology), writes a Cyclone DDS
-//                  unicast config per site (peers = every site address, interface eth0), starts the
-//                  coordinator and every node in its site's namespace, waits for the coordinator
-//                  (bounded by the timeout; stop_requested() is polled, e.g. for Ctrl-C), then stops
-//                  every process and deletes every namespace -- on success, failure or exception.
+//                  unicast config per site (peers = every site address, interface eth0), then runs
+//                  the one launch sequence (runtime::launch_run) with each process placed in its
+//                  site's namespace (bounded by the timeout; stop_requested() is polled, e.g. for
+//                  Ctrl-C), then deletes every namespace -- on success, failure or exception.
 //                  The coordinator's record is summarised per link: injected lag and measured
 //                  round trip / one-way lags (s).
 // Errors: std::invalid_argument for bad configs (naming file and field), NamespacesUnavailable
@@ -51,13 +51,6 @@ SitesPlan load_sites(const std::filesystem::path& sites_file);
 SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
                      const std::string& source_name);
 
-// Where the node programs are: `bin_dir` if given, else $RTHS_BIN_DIR, else next to this
-// executable and in the build tree's program folders, else PATH.
-struct ProgramPaths {
-  std::filesystem::path coordinator, substructure, actuator_emulator;
-};
-ProgramPaths find_programs(const std::optional<std::filesystem::path>& bin_dir = std::nullopt);
-
 struct LinkMeasurement {
   int node_id = 0;
   std::string kind, site;
@@ -72,6 +65,7 @@ struct SitesRunResult {
   int coordinator_exit = -1;
   std::string status;           // footer status, or why the run stopped
   std::string failed_node;
+  std::string run_id, case_name;
   std::filesystem::path output_dir, record;
   std::vector<std::string> namespaces;  // made and removed
   std::vector<LinkMeasurement> links;
@@ -82,7 +76,7 @@ struct SitesRunResult {
 
 struct SitesRunOptions {
   std::filesystem::path output_dir;  // records, logs, DDS configs, merged study; created
-  std::optional<std::filesystem::path> bin_dir;
+  std::optional<std::filesystem::path> bin_dir;  // else runtime::find_node_programs' search
   std::function<bool()> stop_requested;  // polled every few ms; true = stop now
 };
 

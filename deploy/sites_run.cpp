@@ -1,4 +1,5 @@
-// run_sites: topology, DDS configs, processes, wait, record summary; everything undone on exit.
+// run_sites: topology and DDS configs around the one launch sequence (runtime/launch.h), then the
+// record summary; everything undone on exit.
 #include <google/protobuf/text_format.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -11,88 +12,14 @@
 
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
-#include "deploy/process.h"
 #include "deploy/sites.h"
+#include "runtime/launch.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"
 #include "security/check.h"
 
 namespace rths::deploy {
-namespace {
-
-constexpr auto kNodeExitGrace = std::chrono::seconds(5);  // after the coordinator, for STOP
-
-std::filesystem::path self_directory() {
-  std::error_code error;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", error);
-  return error ? std::filesystem::current_path() : exe.parent_path();
-}
-
-std::optional<std::filesystem::path> find_in(const std::vector<std::filesystem::path>& dirs,
-                                             const std::string& program) {
-  for (const auto& dir : dirs) {
-    const auto candidate = dir / program;
-    if (::access(candidate.c_str(), X_OK) == 0) return std::filesystem::absolute(candidate);
-  }
-  return std::nullopt;
-}
-
-std::string make_run_id() {
-  const auto now = std::chrono::system_clock::now().time_since_epoch();
-  return "sites-" + std::to_string(::getpid()) + "-" +
-         std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now).count());
-}
-
-}  // namespace
-
-ProgramPaths find_programs(const std::optional<std::filesystem::path>& bin_dir) {
-  std::vector<std::filesystem::path> dirs;
-  if (bin_dir) {
-    dirs.push_back(*bin_dir);
-  } else {
-    if (const char* env = std::getenv("RTHS_BIN_DIR"); env != nullptr && *env != '\0') {
-      dirs.emplace_back(env);
-    }
-    const auto self = self_directory();
-    // Installed side by side, or the build tree: <build>/cli/rths, <build>/tests/deploy/...
-    for (const auto& base : {self, self.parent_path(), self.parent_path().parent_path()}) {
-      dirs.push_back(base);
-      for (const char* folder : {"coordinator", "substructure_nodes", "actuator_emulator"}) {
-        dirs.push_back(base / folder);
-      }
-    }
-#ifdef RTHS_DEPLOY_BINARY_DIR
-    for (const char* folder : {"coordinator", "substructure_nodes", "actuator_emulator"}) {
-      dirs.push_back(std::filesystem::path(RTHS_DEPLOY_BINARY_DIR) / folder);
-    }
-#endif
-    const char* path = std::getenv("PATH");
-    std::stringstream entries(path != nullptr ? path : "");
-    std::string entry;
-    while (std::getline(entries, entry, ':')) {
-      if (!entry.empty()) dirs.emplace_back(entry);
-    }
-  }
-  ProgramPaths paths;
-  const std::pair<std::filesystem::path*, const char*> wanted[] = {
-      {&paths.coordinator, "rths-coordinator"},
-      {&paths.substructure, "rths-substructure-node"},
-      {&paths.actuator_emulator, "rths-actuator-emulator"}};
-  for (const auto& [slot, program] : wanted) {
-    const auto found = find_in(dirs, program);
-    if (!found) {
-      throw std::runtime_error(std::string("cannot find the program ") + program +
-                               (bin_dir ? " in " + bin_dir->string()
-                                        : " (set RTHS_BIN_DIR or --bin-dir, or build it)"));
-    }
-    *slot = *found;
-  }
-  return paths;
-}
-
 SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) {
-  const auto started = std::chrono::steady_clock::now();
-  const auto programs = find_programs(options.bin_dir);
   // DDS Security: every process's documents are checked before anything is built or started.
   const std::filesystem::path security_dir = plan.study.deployment().security_dir();
   if (!security_dir.empty()) {
@@ -120,8 +47,8 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   for (const auto& site : plan.sites.sites()) spec.sites.push_back(site.name());
   if (!plan.sites.subnet().empty()) spec.subnet = plan.sites.subnet();
   remove_stale_namespaces();
-  // Declared before the processes so that it is destroyed after them: processes stop first, then
-  // their namespaces go.
+  // Lives past launch_run, which stops every process: processes stop first, then their
+  // namespaces go.
   NamespaceTopology topology(spec);
   result.namespaces = topology.namespaces();
 
@@ -132,75 +59,30 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
     dds_uri[site.name] =
         write_dds_config({site.interface, peers, 32}, result.output_dir / ("dds_" + site.name + ".xml"));
   }
+  std::map<int, std::string> site_of;
+  for (const auto& placement : plan.placements) site_of[placement.node_id] = placement.site;
 
-  const std::string run_id = make_run_id();
-  const int domain = plan.study.deployment().domain_id();
-  std::vector<std::unique_ptr<ChildProcess>> nodes;
-  std::unique_ptr<ChildProcess> coordinator;
-  for (const auto& placement : plan.placements) {
-    auto argv = topology.exec_prefix(placement.site);
-    const std::map<std::string, std::string> env{{"CYCLONEDDS_URI", dds_uri.at(placement.site)}};
-    const auto log = result.output_dir / (placement.node_id == 0
-                                              ? std::string("coordinator.log")
-                                              : "node_" + std::to_string(placement.node_id) + ".log");
-    if (placement.node_id == 0) continue;  // started last, once every node listens
-    argv.push_back(placement.kind == "substructure" ? programs.substructure.string()
-                                                    : programs.actuator_emulator.string());
-    for (const auto& arg : {std::string("--node-id"), std::to_string(placement.node_id),
-                            std::string("--domain"), std::to_string(domain),
-                            std::string("--run-id"), run_id}) {
-      argv.push_back(arg);
-    }
-    const auto security_args = security::security_arguments(security_dir, placement.node_id);
-    argv.insert(argv.end(), security_args.begin(), security_args.end());
-    spdlog::info("site {}: {}", placement.site, command_line(argv));
-    nodes.push_back(std::make_unique<ChildProcess>(
-        "node " + std::to_string(placement.node_id) + " (" + placement.kind + ") at site " +
-            placement.site,
-        argv, env, log));
-  }
-  {
-    const auto& site = plan.placements.front().site;  // node 0, placed first by plan_sites
-    auto argv = topology.exec_prefix(site);
-    for (const auto& arg : {programs.coordinator.string(), std::string("--config"),
-                            study_path.string(), std::string("--record"), result.record.string(),
-                            std::string("--run-id"), run_id, std::string("--domain"),
-                            std::to_string(domain)}) {
-      argv.push_back(arg);
-    }
-    const auto security_args = security::security_arguments(security_dir, 0);
-    argv.insert(argv.end(), security_args.begin(), security_args.end());
-    spdlog::info("site {}: {}", site, command_line(argv));
-    coordinator = std::make_unique<ChildProcess>("coordinator at site " + site, argv,
-                                                 std::map<std::string, std::string>{
-                                                     {"CYCLONEDDS_URI", dds_uri.at(site)}},
-                                                 result.output_dir / "coordinator.log");
-  }
-
-  const auto deadline = started + std::chrono::duration<double>(plan.timeout);
-  std::optional<int> exit_code;
-  while (!(exit_code = coordinator->wait_for(std::chrono::milliseconds(20)))) {
-    if (options.stop_requested && options.stop_requested()) {
-      result.status = "interrupted";
-      break;
-    }
-    if (std::chrono::steady_clock::now() > deadline) {
-      result.status = "timed out after " + std::to_string(plan.timeout) + " s";
-      break;
-    }
-  }
-  if (!exit_code) exit_code = coordinator->terminate();
-  result.coordinator_exit = *exit_code;
-  // After an orderly end the nodes got STOP and exit by themselves; otherwise do not wait long.
-  const auto grace = result.status.empty() ? kNodeExitGrace : std::chrono::seconds(1);
-  for (auto& node : nodes) {
-    if (!node->wait_for(grace)) {
-      spdlog::warn("{} did not exit after the coordinator; stopping it", node->name());
-    }
-    node->terminate();
-  }
-  result.wall_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  runtime::LaunchOptions launch;
+  launch.config = study_path;
+  launch.record = result.record;
+  launch.log_dir = result.output_dir;
+  launch.timeout = plan.timeout;
+  if (options.bin_dir) launch.programs_dir = *options.bin_dir;
+  launch.security_dir = security_dir;
+  // The measured network lag is the point of a sites run: leave the processes to the scheduler.
+  launch.cpu_placement = runtime::CpuPlacement::kSpread;
+  launch.stop_requested = options.stop_requested;
+  launch.placement = [&](int node_id) {
+    const std::string& site = site_of.at(node_id);
+    return runtime::Placement{topology.exec_prefix(site), {{"CYCLONEDDS_URI", dds_uri.at(site)}},
+                              "site " + site};
+  };
+  const runtime::LaunchResult launched = runtime::launch_run(launch);
+  result.run_id = launched.run_id;
+  result.case_name = launched.case_name;
+  result.status = launched.status;
+  result.coordinator_exit = launched.coordinator_exit;
+  result.wall_seconds = launched.wall_seconds;
 
   if (std::filesystem::exists(result.record)) {
     const auto contents = runtime::read_record(result.record);
@@ -215,12 +97,12 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
     }
     result.links = measure_links(result.record, plan);
   } else if (result.status.empty()) {
-    result.status = "no record written; coordinator log: " + coordinator->log_tail(1500);
+    result.status = "no record written; coordinator log: " + launched.coordinator_log_tail;
   }
   if (!result.ok && result.status.empty()) {
     result.status = "coordinator exit " + std::to_string(result.coordinator_exit);
   }
-  return result;  // processes, then namespaces, are removed here
+  return result;  // the namespaces are removed here
 }
 
 std::string check_record(const std::filesystem::path& record, std::int64_t min_steps,

@@ -1,8 +1,11 @@
 #include "runtime/launch.h"
 
-#include <csignal>
+#include <unistd.h>
+
+#include <cctype>
 #include <cstdlib>
-#include <fstream>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -31,20 +34,56 @@ std::string ensure_dds_config() {
   return kLoopbackDdsConfig;
 }
 
+std::string make_run_id(const std::string& label) {
+  char host[128] = {};
+  gethostname(host, sizeof host - 1);
+  std::string id;
+  for (char c : label) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+    id += keep ? c : '_';
+  }
+  if (!id.empty()) id += "-";
+  return id + host + "-" + std::to_string(getpid()) + "-" + std::to_string(transport::realtime_ns());
+}
+
+namespace {
+
+Placement local_placement(int /*node_id*/) {
+  const char* uri = std::getenv("CYCLONEDDS_URI");
+  return {{}, {{"CYCLONEDDS_URI", uri && *uri ? uri : kLoopbackDdsConfig}}, "this host"};
+}
+
+ChildProcess start(const std::filesystem::path& program, std::vector<std::string> args,
+                   const std::filesystem::path& security_dir, int node_id,
+                   const std::filesystem::path& log, const std::string& label,
+                   const PlacementStrategy& placement) {
+  const auto security_args = security::security_arguments(security_dir, node_id);
+  args.insert(args.end(), security_args.begin(), security_args.end());
+  Placement where = placement(node_id);
+  std::vector<std::string> argv = where.prefix;
+  argv.push_back(program.string());
+  argv.insert(argv.end(), args.begin(), args.end());
+  spdlog::debug("{} at {}: {}", label, where.where, command_line(argv));
+  return ChildProcess(program, args, log,
+                      {label + " at " + where.where, std::move(where.prefix), std::move(where.environment)});
+}
+
+}  // namespace
+
 LaunchResult launch_run(const LaunchOptions& options) {
   const config::Study study = core::load_study(options.config);
   const core::PreparedStudy prepared =
       core::prepare_study(study, options.config.parent_path());
-  const std::string case_name =
-      options.case_name.empty() ? study.deployment().case_name() : options.case_name;
-  const core::HybridSetup setup = core::setup_for_case(prepared, find_case(study, case_name));
+  const config::Case& study_case = find_case(
+      study, options.case_name.empty() ? study.deployment().case_name() : options.case_name);
+  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
   const config::Deployment deployment = with_default_nodes(study.deployment(), setup);
   make_plan(setup, deployment);  // refuse a bad deployment before starting anything
 
   LaunchResult result;
-  result.run_id = options.run_id.empty()
-                      ? "launch-" + std::to_string(transport::realtime_ns())
-                      : options.run_id;
+  result.case_name = study_case.name();
+  result.run_id = options.run_id.empty() ? make_run_id(study.name() + "-" + result.case_name)
+                                         : options.run_id;
   const int domain = options.domain >= 0 ? options.domain : deployment.domain_id();
   const std::filesystem::path security_dir =
       !options.security_dir.empty()        ? options.security_dir
@@ -55,17 +94,11 @@ LaunchResult launch_run(const LaunchOptions& options) {
     for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
     security::check_lab_security(security_dir, ids);
   }
-  ensure_dds_config();
+  const NodePrograms programs = find_node_programs(options.programs_dir);
+  const PlacementStrategy placement = options.placement ? options.placement : local_placement;
   std::filesystem::create_directories(options.log_dir);
 
-  const auto coordinator_program =
-      find_program("rths-coordinator", "coordinator", options.programs_dir);
-  const auto substructure_program =
-      find_program("rths-substructure-node", "substructure_nodes", options.programs_dir);
-  const auto emulator_program =
-      find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
-
-  // Children inherit the mask of the thread that forks them; restored before waiting.
+  // Children inherit the mask of the thread that starts them; restored before waiting.
   const bool one_cpu =
       options.cpu_placement == CpuPlacement::kOneCpu ||
       (options.cpu_placement == CpuPlacement::kAuto &&
@@ -79,52 +112,65 @@ LaunchResult launch_run(const LaunchOptions& options) {
       spdlog::warn("lockstep processes left unpinned: {}", e.what());  // only slower
     }
   }
+  const auto started = std::chrono::steady_clock::now();
   std::vector<ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
     const bool sub = node.kind() == config::NodeSpec::SUBSTRUCTURE;
     const std::string id = std::to_string(node.id());
-    result.node_labels.push_back("node " + id + " (" + node_kind_name(node.kind()) + ")");
-    std::vector<std::string> node_args{"--node-id", id, "--domain", std::to_string(domain),
-                                       "--run-id", result.run_id};
-    const auto security_args = security::security_arguments(security_dir, node.id());
-    node_args.insert(node_args.end(), security_args.begin(), security_args.end());
-    nodes.emplace_back(sub ? substructure_program : emulator_program, node_args,
-                       options.log_dir / ("node_" + id + ".log"));
+    const std::string label = "node " + id + " (" + node_kind_name(node.kind()) + ")";
+    result.node_labels.push_back(label);
+    result.node_ids.push_back(node.id());
+    nodes.push_back(start(sub ? programs.substructure : programs.actuator_emulator,
+                          {"--node-id", id, "--domain", std::to_string(domain), "--run-id",
+                           result.run_id},
+                          security_dir, node.id(), options.log_dir / ("node_" + id + ".log"), label,
+                          placement));
   }
   std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
-                                "--domain", std::to_string(domain)};
-  if (!case_name.empty()) args.insert(args.end(), {"--case", case_name});
+                                "--domain", std::to_string(domain), "--case", result.case_name};
   if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
-  const auto security_args = security::security_arguments(security_dir, security::kCoordinatorNodeId);
-  args.insert(args.end(), security_args.begin(), security_args.end());
   result.coordinator_log = options.log_dir / "coordinator.log";
-  ChildProcess coordinator(coordinator_program, args, result.coordinator_log);
+  ChildProcess coordinator = start(programs.coordinator, args, security_dir,
+                                   security::kCoordinatorNodeId, result.coordinator_log,
+                                   "coordinator", placement);
   pin.reset();
-  if (options.timeout > 0) {
-    const auto code = coordinator.wait_for(
-        std::chrono::milliseconds(static_cast<long long>(options.timeout * 1000)));
-    if (code) {
-      result.coordinator_exit = *code;
-    } else {
-      coordinator.signal(SIGKILL);
-      coordinator.wait();
-      result.coordinator_exit = 124;
+
+  const auto deadline = options.timeout > 0
+                            ? std::optional(started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                          std::chrono::duration<double>(options.timeout)))
+                            : std::nullopt;
+  std::optional<int> exit_code;
+  while (!(exit_code = coordinator.wait_for(std::chrono::milliseconds(20)))) {
+    if (options.stop_requested && options.stop_requested()) {
+      result.status = "interrupted";
+      break;
     }
-  } else {
-    result.coordinator_exit = coordinator.wait();
+    if (deadline && std::chrono::steady_clock::now() > *deadline) {
+      std::ostringstream why;
+      why << "timed out after " << options.timeout << " s";
+      result.status = why.str();
+      break;
+    }
   }
-  // Nodes leave on STOP; those that do not within a few seconds are killed.
-  const auto grace = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  if (!exit_code) {
+    coordinator.terminate();
+    exit_code = result.status == "interrupted" ? coordinator.wait() : 124;
+  }
+  result.coordinator_exit = *exit_code;
+  // After an orderly end the nodes got STOP and leave by themselves; otherwise do not wait long.
+  const auto grace = std::chrono::steady_clock::now() +
+                     (result.status.empty() ? std::chrono::milliseconds(kNodeExitGrace)
+                                            : std::chrono::milliseconds(1000));
   for (ChildProcess& node : nodes) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         grace - std::chrono::steady_clock::now());
-    auto code = node.wait_for(std::max(left, std::chrono::milliseconds(0)));
-    if (!code) {
-      node.signal(SIGKILL);
-      code = node.wait();
-    }
-    result.node_exits.push_back(*code);
+    if (!node.wait_for(std::max(left, std::chrono::milliseconds(0))))
+      spdlog::warn("{} did not exit after the coordinator; stopping it", node.name());
+    result.node_exits.push_back(node.terminate());
   }
+  result.wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  result.coordinator_log_tail = coordinator.log_tail(1500);
   return result;
 }
 

@@ -1,15 +1,25 @@
 #pragma once
-// Launching a distributed run on this machine: every node of the deployment and the coordinator
-// as separate processes over Cyclone DDS, each logging to its own file.
+// The one launch sequence of a distributed run, for `rths launch` (every process on this host)
+// and `rths sites` (each process in its site's network namespace):
 //
-//   launch_run: start the nodes (--node-id, --domain, --run-id), then the coordinator (--config,
-//   --case, --run-id, --record, --domain); wait for the coordinator (timeout: kill it, exit 124);
-//   give the nodes a few seconds to leave after its STOP, then kill any still running.
+//   launch_run: load the study and refuse a bad deployment before starting anything; check every
+//   DDS Security document; start the nodes (--node-id, --domain, --run-id), then the coordinator
+//   (--config, --case, --run-id, --record, --domain), each where options.placement puts it, with
+//   its log in log_dir (node_<id>.log, coordinator.log); wait for the coordinator until it exits,
+//   options.timeout passes (status "timed out after T s", exit 124) or options.stop_requested()
+//   says so (status "interrupted"); then give the nodes kNodeExitGrace to leave after the STOP
+//   (1 s after a timeout or interruption), and terminate any still running.
 //   Processes are placed on CPUs as options.cpu_placement says (default: lockstep on one CPU).
-// CYCLONEDDS_URI: when unset, set (for the children) to the loopback configuration below, the same
-// settings as configs/dds_loopback.xml.
+//
+// Where a process runs is a strategy (Placement): local by default (CYCLONEDDS_URI = the loopback
+// configuration below, unless the caller's environment sets it), or a site's namespace (prefix
+// `ip netns exec ...`, its own DDS configuration).
+// Run ids: one format, make_run_id().
 
+#include <chrono>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,6 +31,10 @@ extern const char* const kLoopbackDdsConfig;
 
 // Sets CYCLONEDDS_URI to kLoopbackDdsConfig if it is unset. Returns the value in effect.
 std::string ensure_dds_config();
+
+// "<label>-<host>-<pid>-<CLOCK_REALTIME ns>", label = "<study>-<case>" for launch and sites
+// (characters other than [A-Za-z0-9_.-] become '_'); an empty label drops its part.
+std::string make_run_id(const std::string& label = "");
 
 // Where the launched processes run. A lockstep step is strictly sequential (coordinator ->
 // nodes -> coordinator), so on one host it is fastest with every process on one CPU: no
@@ -35,12 +49,23 @@ enum class CpuPlacement {
   kSpread,   // never pin
 };
 
+// Where one process (node id; 0 = the coordinator) runs: a command prefix and environment
+// overrides, and a label for messages ("site lab").
+struct Placement {
+  std::vector<std::string> prefix;
+  std::map<std::string, std::string> environment;
+  std::string where;
+};
+using PlacementStrategy = std::function<Placement(int node_id)>;
+
+inline constexpr std::chrono::seconds kNodeExitGrace{5};  // after the coordinator, for STOP
+
 struct LaunchOptions {
   std::filesystem::path config;
   std::string case_name;               // empty: the deployment's or the reference case
-  std::string run_id;                  // empty: generated
+  std::string run_id;                  // empty: make_run_id("<study>-<case>")
   int domain = -1;                     // -1: the config's deployment.domain_id
-  std::filesystem::path programs_dir;  // empty: found beside this executable / build tree / PATH
+  std::filesystem::path programs_dir;  // empty: find_node_programs' search
   std::filesystem::path record;        // run record to write
   std::filesystem::path log_dir;       // per-process logs
   double timeout = 0.0;                // s for the coordinator; 0 = none
@@ -48,16 +73,25 @@ struct LaunchOptions {
   // DDS Security: the `rths pki init` directory; each process gets --security DIR/node_<id>.
   // Empty: the config's deployment.security_dir (relative to the config), else off.
   std::filesystem::path security_dir;
+  PlacementStrategy placement;         // empty: local (loopback DDS unless CYCLONEDDS_URI is set)
+  std::function<bool()> stop_requested;  // polled every 20 ms; true = stop now
 };
 
 struct LaunchResult {
-  int coordinator_exit = -1;
+  int coordinator_exit = -1;            // 124 when the timeout stopped it
+  std::string status;                   // empty, "interrupted" or "timed out after T s"
   std::string run_id;
+  std::string case_name;                // the case that ran
   std::vector<std::string> node_labels;
-  std::vector<int> node_exits;          // 128 + signal when killed
+  std::vector<int> node_ids;
+  std::vector<int> node_exits;          // 128 + signal when a signal ended it
   std::filesystem::path coordinator_log;
+  std::string coordinator_log_tail;     // the last 1500 bytes, for messages
+  double wall_seconds = 0.0;            // start of the first process to the last one's exit
 };
 
+// Throws std::invalid_argument for a bad config or deployment (before anything starts),
+// std::runtime_error for a program that cannot be found or started.
 LaunchResult launch_run(const LaunchOptions& options);
 
 }  // namespace rths::runtime

@@ -1,20 +1,35 @@
 #pragma once
-// Child processes for `rths launch` and the tests: fork/exec with stdout+stderr to a log file,
-// wait with a timeout, signal. The destructor kills (SIGKILL) and reaps a child still running,
-// so no process outlives its owner by accident.
+// Child processes for `rths launch`, `rths sites`, the deployment tooling and the tests: the one
+// ChildProcess, the one program finder, one-shot commands (`ip ...`, `gnuplot ...`).
+//
+// Contracts:
+//  - A ChildProcess runs `prefix... program args...` (argv[0] looked up in PATH when it has no
+//    '/'); stdout and stderr go together to a log file (none: /dev/null), stdin is /dev/null. It
+//    gets the parent's environment plus `environment` overrides, an empty signal mask and default
+//    SIGINT/SIGTERM/SIGPIPE (the parent may hold them to stop its children in order), its own
+//    process group (a Ctrl-C on the terminal reaches only the parent), and the CPU mask of the
+//    thread that starts it (see ScopedCpuPin).
+//  - It owns its pid: if it is still running when destroyed it gets SIGTERM, then SIGKILL after
+//    kDestructorGrace, and is reaped. Nothing outlives its owner.
+//  - Exit codes: the exit status, or 128 + signal number when a signal ended it.
+//  - A program that cannot be started (missing, not executable, log not creatable) throws
+//    std::runtime_error naming it, from the constructor.
 
 #include <sys/types.h>
 
 #include <chrono>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include <signal.h>
+
 namespace rths::runtime {
 
-// Pins the calling thread to one CPU while it lives, so children forked meanwhile (and all their
+// Pins the calling thread to one CPU while it lives, so children started meanwhile (and all their
 // threads) start on that CPU alone; the thread's previous mask comes back on destruction.
 // cpu < 0: the highest CPU the thread may run on now (CPU 0 tends to take more interrupts).
 // Throws std::runtime_error when the CPU is not available to this thread.
@@ -32,38 +47,95 @@ class ScopedCpuPin {
   int cpu_ = -1;
 };
 
+// How a child is started besides its program and arguments.
+struct ChildOptions {
+  std::string name;                               // for messages; default the program's file name
+  std::vector<std::string> prefix;                // run under this, e.g. {"ip","netns","exec","ns"}
+  std::map<std::string, std::string> environment; // overrides of the parent's environment
+};
+
 class ChildProcess {
  public:
-  // Throws std::runtime_error naming the program when it is missing or fork fails.
+  static constexpr std::chrono::milliseconds kDestructorGrace{1000};
+
   ChildProcess(const std::filesystem::path& program, const std::vector<std::string>& args,
-               const std::filesystem::path& log_file);
+               const std::filesystem::path& log_file, const ChildOptions& options = {});
   ChildProcess(ChildProcess&& other) noexcept;
   ChildProcess& operator=(ChildProcess&&) = delete;
   ChildProcess(const ChildProcess&) = delete;
   ~ChildProcess();
 
   pid_t pid() const { return pid_; }
-  // Exit code, or 128 + signal when killed; nullopt if still running after `timeout`.
+  // Non-blocking: the exit code once the child has exited (reaping it), else nullopt.
+  std::optional<int> poll();
+  bool running() { return !poll().has_value(); }
+  // Blocks up to `timeout`; nullopt if still running.
   std::optional<int> wait_for(std::chrono::milliseconds timeout);
   int wait();
+  // Sends `sig` if the child has not been reaped yet.
   void signal(int sig) const;
-  bool running();
+  // SIGTERM, wait `grace`, then SIGKILL; returns the exit code. Idempotent.
+  int terminate(std::chrono::milliseconds grace = std::chrono::seconds(2));
+
   const std::string& name() const { return name_; }
+  const std::filesystem::path& log_file() const { return log_file_; }
+  // The last `max_bytes` of the log, for error messages.
+  std::string log_tail(std::size_t max_bytes = 2000) const;
 
  private:
-  std::optional<int> reap(bool block);
   pid_t pid_ = -1;
-  std::optional<int> status_;
+  std::optional<int> exit_code_;
   std::string name_;
+  std::filesystem::path log_file_;
+};
+
+struct CommandResult {
+  int exit_code = -1;   // exit status, or 128 + signal number
+  std::string output;   // stdout and stderr interleaved
+  bool ok() const { return exit_code == 0; }
+};
+
+// Runs argv to completion and captures its output. Throws std::runtime_error when it cannot be
+// started (naming the tool) or runs past `timeout` (then killed). A non-zero exit is returned.
+CommandResult run_command(const std::vector<std::string>& argv,
+                          std::chrono::milliseconds timeout = std::chrono::seconds(30));
+// Same, but throws std::runtime_error "<command line>: exit N: <output>" on a non-zero exit.
+std::string run_checked(const std::vector<std::string>& argv,
+                        std::chrono::milliseconds timeout = std::chrono::seconds(30));
+// Joins argv into one shell-like line for messages and logs.
+std::string command_line(const std::vector<std::string>& argv);
+// True when `tool` is an executable in PATH (or an executable path).
+bool tool_available(const std::string& tool);
+
+// Ctrl-C, SIGTERM and SIGHUP held pending while it lives and polled through stop_requested(), so
+// that a launcher always stops its children (and removes what it built) in order; a signal
+// received meanwhile is consumed on destruction, and the previous mask comes back.
+class HeldStopSignals {
+ public:
+  HeldStopSignals();
+  HeldStopSignals(const HeldStopSignals&) = delete;
+  HeldStopSignals& operator=(const HeldStopSignals&) = delete;
+  ~HeldStopSignals();
+  bool stop_requested() const;
+
+ private:
+  sigset_t held_{}, previous_{};
 };
 
 // The directory of the running executable (/proc/self/exe).
 std::filesystem::path executable_dir();
 
-// Finds an rths program: in `explicit_dir` (or its <build_subdir>/) if given; else beside the running executable; else
-// in the build tree's sibling folder (../<build_subdir>/); else on PATH. Throws naming the places
-// looked at.
+// Finds an rths program. With `explicit_dir`: there or in its <build_subdir>/ (a build tree's
+// root) only. Otherwise, in order: $RTHS_BIN_DIR (and its <build_subdir>/); beside the running
+// executable; <exe>/../<build_subdir>/ and <exe>/../../<build_subdir>/ (the build tree, from
+// cli/ or tests/<folder>/); PATH. Returns an absolute path; throws naming the places looked at.
 std::filesystem::path find_program(const std::string& name, const std::string& build_subdir,
                                    const std::filesystem::path& explicit_dir);
+
+// The three programs of a distributed run, found by find_program.
+struct NodePrograms {
+  std::filesystem::path coordinator, substructure, actuator_emulator;
+};
+NodePrograms find_node_programs(const std::filesystem::path& explicit_dir);
 
 }  // namespace rths::runtime

@@ -1,6 +1,7 @@
 #include "tables/results.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "analysis/results_csv.h"
 
@@ -47,7 +48,35 @@ Table study_table(const analysis::StudyOutcome& outcome) {
     }
   }
   table.set_attribute("study", outcome.study_name);
-  table.set_attribute("reference_case", outcome.cases[outcome.reference_index].name);
+  table.set_attribute("reference_case", outcome.reference().name);
+  table.set_attribute("reference", outcome.reference_description());
+  return table;
+}
+
+Table distributed_study_table(const analysis::StudyOutcome& outcome,
+                              const std::vector<std::map<int, runtime::LinkSeries>>& links) {
+  if (links.size() != outcome.cases.size())
+    throw std::invalid_argument("distributed_study_table: " + std::to_string(links.size()) +
+                                " link sets for " + std::to_string(outcome.cases.size()) + " cases");
+  Table table = study_table(outcome);
+  const std::size_t rows = table.rows();
+  for (std::size_t i = 0; i < links.size(); ++i) {
+    const core::SimulationResult& r = outcome.cases[i].simulation;
+    const std::string prefix = analysis::result_column_prefix(outcome.cases[i].name) + "lag_node";
+    for (const auto& [node, series] : links[i]) {
+      std::vector<double> injected(rows, kMissing), round_trip(rows, kMissing);
+      for (std::size_t a = 0; a < series.time.size(); ++a) {
+        // The carrying step's index from its simulated time t_k = k dt.
+        const auto k = r.dt > 0 ? std::llround(series.time[a] / r.dt) : -1;
+        if (k < 0 || static_cast<std::size_t>(k) >= rows) continue;
+        injected[static_cast<std::size_t>(k)] = series.injected[a];
+        round_trip[static_cast<std::size_t>(k)] = series.round_trip[a];
+      }
+      const std::string name = prefix + std::to_string(node);
+      table.add_numbers(name + "_injected_s", "s", std::move(injected));
+      table.add_numbers(name + "_round_trip_s", "s", std::move(round_trip));
+    }
+  }
   return table;
 }
 

@@ -2,10 +2,15 @@
 // Every rths result as a Table (tables/table.h): the one place that names the variables and
 // units of each command's output, for the CSV, MATLAB and HDF5 writers and the Python module.
 //
-//   study_table   `rths run`: time_s, u_<case>_m per case (top-floor displacement relative to
-//                 the ground), then command_<case>_m, realised_<case>_m, force_<case>_N of the
-//                 first actuator for each case that has one. A case that stopped early (diverged)
-//                 is NaN after its last step.
+//   study_table   `rths run`: step, time_s, then per case every floor and every actuator
+//                 (analysis/results_csv.h names). A case that stopped early (diverged) is NaN after
+//                 its last step.
+//   distributed_study_table  `rths launch` and `rths sites`: study_table's columns (the same as
+//                 `run`'s for the same cases), then the lag per link of each case:
+//                 <case>_lag_node<n>_injected_s and <case>_lag_node<n>_round_trip_s (s), filled at the
+//                 step that carried each answer (runtime/measurements.h: an answer counts once) and
+//                 NaN elsewhere (step 0; a real-time step that reused an older answer). Attribute
+//                 "reference": against what every case was compared.
 //   sweep_table   `rths sweep`: index, period (s), delay (s), alpha, stiffness (N/m; 0 = mass
 //                 1 kg), dt (s), motion and model (text), peak_ref, peak_delayed (m),
 //                 eq2_paper, nrmse, peak_error (m), diverged (0/1), as in the sweep CSV;
@@ -25,12 +30,16 @@
 #include "analysis/study_run.h"
 #include "analysis/sweep.h"
 #include "identify/identify.h"
+#include "runtime/measurements.h"
 #include "runtime/record.h"
 #include "tables/table.h"
 
 namespace rths::tables {
 
 Table study_table(const analysis::StudyOutcome& outcome);
+// links[i]: the per-link series of outcome.cases[i] (runtime::measure_run); sizes must agree.
+Table distributed_study_table(const analysis::StudyOutcome& outcome,
+                              const std::vector<std::map<int, runtime::LinkSeries>>& links);
 Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::string& grid_hash,
                   std::size_t grid_points);
 // Throws std::invalid_argument when the record has no header entry.

@@ -71,5 +71,36 @@ TEST(StudyRun, DeploymentLimitsApplyInProcess) {
   EXPECT_EQ(outcome.failures(true).size(), 1u);  // --allow-unstable does not excuse a limit
 }
 
+// A distributed case is compared with the lag-free in-process run, not with the study's reference
+// case: here the study names the lagged case as its reference.
+TEST(StudyRun, RecordedCasesAreComparedWithTheLagFreeInProcessRun) {
+  const core::PreparedStudy prepared =
+      frame(1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }",
+            "reference_case: \"lag_14ms\"");
+  const core::SimulationResult lagged =
+      core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
+  const StudyOutcome outcome = judge_recorded_cases(prepared, {{"lag_14ms", lagged, "completed", ""}});
+  ASSERT_TRUE(outcome.lag_free_reference.has_value());
+  EXPECT_EQ(outcome.reference_description(), kLagFreeReference);
+  EXPECT_EQ(&outcome.reference(), &*outcome.lag_free_reference);
+  ASSERT_EQ(outcome.cases.size(), 1u);
+  const Comparison expected = compare(core::simulate(prepared.base, prepared.motion), lagged, outcome.response);
+  EXPECT_EQ(outcome.cases[0].comparison.nrmse_pct, expected.nrmse_pct);
+  EXPECT_GT(outcome.cases[0].comparison.nrmse_pct, 10.0);
+  EXPECT_EQ(outcome.cases[0].status, "completed");
+  EXPECT_NE(study_summary_text(outcome).find("against the lag-free in-process reference"), std::string::npos)
+      << study_summary_text(outcome);
+  EXPECT_EQ(study_summary_json(outcome)["reference"], kLagFreeReference);
+  // A run that stopped keeps its status; a case the study lacks is refused by name.
+  const StudyOutcome stopped = judge_recorded_cases(prepared, {{"lag_14ms", lagged, "timed out after 2 s", "why"}});
+  EXPECT_EQ(stopped.cases[0].status, "timed out after 2 s");
+  try {
+    judge_recorded_cases(prepared, {{"nope", lagged, "completed", ""}});
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("nope"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace rths::analysis

@@ -6,9 +6,11 @@
 
 #include <algorithm>
 
-#include "deploy/process.h"
+#include "runtime/process.h"
 
 namespace rths::deploy {
+
+using runtime::run_command;
 namespace {
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {

@@ -3,10 +3,19 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
-#include "deploy/process.h"
+#include <nlohmann/json.hpp>
+
+#include "deploy/netns.h"
+
+#include "runtime/process.h"
 
 namespace rths::deploy {
+
+using runtime::run_command;
+using runtime::tool_available;
 namespace {
 
 const std::string kRths = std::string(RTHS_BINARY_DIR) + "/cli/rths";
@@ -16,6 +25,84 @@ TEST(SitesCli, CheckAcceptsTheShippedConfig) {
   const auto result = run_command({kRths, "sites", kConfig, "--check"});
   EXPECT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("3 processes on 3 sites"), std::string::npos) << result.output;
+}
+
+TEST(SitesCli, DomainOverridesTheConfigsAndIsCheckedLikeLaunchs) {
+  const auto result = run_command({kRths, "sites", kConfig, "--check", "--domain", "77"});
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("DDS domain 77"), std::string::npos) << result.output;
+  const auto shipped = run_command({kRths, "sites", kConfig, "--check"});
+  EXPECT_NE(shipped.output.find("DDS domain 101"), std::string::npos) << shipped.output;
+  const auto bad = run_command({kRths, "sites", kConfig, "--check", "--domain", "300"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--domain"), std::string::npos) << bad.output;
+}
+
+std::string read(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> header_of(const std::filesystem::path& csv) {
+  const std::string text = read(csv);
+  std::istringstream line(text.substr(0, text.find('\n')));
+  std::vector<std::string> cells;
+  for (std::string cell; std::getline(line, cell, ',');) cells.push_back(cell);
+  return cells;
+}
+
+// `rths sites` writes its results as `rths run` does: the same columns for its case (plus lag per
+// link), the same step count, plots, and the comparison with the lag-free in-process reference.
+TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
+  if (const auto reason = deploy::namespace_support()) GTEST_SKIP() << *reason;
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_sites_results_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  // The paper's frame, 0.3 s of the record; `run` gets only the case that sites runs.
+  const auto study = [](const std::string& cases) {
+    return "name: \"paper_frame\"\n"
+           "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+           "motion { path: \"" + std::string(RTHS_SOURCE_DIR) +
+           "/configs/motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: 0.3 }\n"
+           "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+           "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n" + cases;
+  };
+  const std::string lagged = "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n";
+  // The study's own reference is the lagged case: sites must compare with the lag-free run instead.
+  std::ofstream(dir / "study.textproto") << study("cases { name: \"reference\" }\n" + lagged +
+                                                  "reference_case: \"lag_shift_14ms\"\n");
+  std::ofstream(dir / "single.textproto") << study(lagged);
+  std::ofstream(dir / "sites.textproto")
+      << "study: \"study.textproto\"\ncase_name: \"lag_shift_14ms\"\nclock: LOCKSTEP\n"
+         "timeout: 60\nsites { name: \"integrator\" node_ids: 0 }\nsites { name: \"lab\" node_ids: [1, 2] }\n"
+         "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
+         "start_timeout: 20 }\n";
+  const auto sites = run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain", "90",
+                                  "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
+                                 std::chrono::seconds(120));
+  ASSERT_EQ(sites.exit_code, 0) << sites.output;
+  EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos) << sites.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "displacement.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "lag_lag_shift_14ms.png"));
+
+  const auto ran = run_command({kRths, "run", (dir / "single.textproto").string(), "--no-plots", "--json",
+                                "--out", (dir / "run").string()});
+  ASSERT_EQ(ran.exit_code, 0) << ran.output;
+  std::vector<std::string> sites_header, lag_columns;
+  for (const auto& cell : header_of(dir / "sites" / "results.csv"))
+    (cell.find("_lag_node") == std::string::npos ? sites_header : lag_columns).push_back(cell);
+  EXPECT_EQ(sites_header, header_of(dir / "run" / "results.csv"));
+  EXPECT_EQ(lag_columns.size(), 4u);  // injected and round trip, two links
+  const auto summary = nlohmann::json::parse(read(dir / "sites" / "summary.json"));
+  const auto in_process = nlohmann::json::parse(ran.output.substr(ran.output.find('{')));
+  EXPECT_EQ(summary["reference"], "the lag-free in-process reference");
+  EXPECT_EQ(summary["cases"][0]["steps"], in_process["cases"][0]["steps"]);
+  // Lockstep across sites equals the in-process run; its reference is the lag-free run, not itself.
+  EXPECT_GT(summary["cases"][0]["nrmse_pct"].get<double>(), 1.0);
+  EXPECT_EQ(summary["cases"][0]["max_difference_from_in_process_m"].get<double>(), 0.0);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(SitesCli, BadConfigExitsTwoNamingTheFile) {

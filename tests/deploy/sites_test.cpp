@@ -135,10 +135,10 @@ const LinkMeasurement& link_of(const SitesRunResult& result, int node_id) {
 // Lockstep: every step waits for both answers, so the run's own pace is an independent measure
 // of the slowest link's round trip, against which the record's per-message lags are checked.
 TEST_F(SitesRun, TenMillisecondsEachWayAddTwentyToTheRoundTripAndTheRecordAgrees) {
-  const auto base_plan = plan_sites(three_sites(121, 0.0, 0.0), kConfigs, "base");
+  const auto base_plan = plan_sites(three_sites(91, 0.0, 0.0), kConfigs, "base");
   const auto base = run_sites(base_plan, {out("base"), std::nullopt, {}});
   ASSERT_TRUE(base.ok) << base.status;
-  const auto lag_plan = plan_sites(three_sites(122, 0.010, 0.010), kConfigs, "lag");
+  const auto lag_plan = plan_sites(three_sites(92, 0.010, 0.010), kConfigs, "lag");
   const auto lagged = run_sites(lag_plan, {out("lag_10ms"), std::nullopt, {}});
   ASSERT_TRUE(lagged.ok) << lagged.status;
   ASSERT_EQ(lagged.steps, base.steps);
@@ -180,7 +180,7 @@ TEST_F(SitesRun, TenMillisecondsEachWayAddTwentyToTheRoundTripAndTheRecordAgrees
 
 TEST_F(SitesRun, AFailedRunStillTearsEverythingDown) {
   // 100 steps at >= 100 ms each cannot finish within the 2 s limit.
-  auto sites = three_sites(123, 0.05, 0.05);
+  auto sites = three_sites(93, 0.05, 0.05);
   sites.set_timeout(2.0);
   const auto plan = plan_sites(sites, kConfigs, "timeout");
   const auto result = run_sites(plan, {out("timeout"), std::nullopt, {}});

@@ -145,6 +145,7 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     cli("launch", config, "--case", "lag_shift_14ms", "--domain", DOMAIN, "--no-plots", "--out", tmp_path)
     record = tmp_path / "lag_shift_14ms.rthsrec"
     got = rths.read_record(record)
+    cli("export", record, "--csv", tmp_path / "lag_shift_14ms.csv")
     expected = csv_columns(tmp_path / "lag_shift_14ms.csv")
     assert not got["truncated"] and got["attributes"]["case_name"] == "lag_shift_14ms"
     np.testing.assert_array_equal(got["series"]["u1_m"], numbers(expected["u1"]))

@@ -1,8 +1,10 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 17-18).
+// `rths launch` and `rths export` end to end (the real binary; domains 70-72 and 18).
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
+#include <sstream>
 
 #include "test_support.h"
 
@@ -27,10 +29,10 @@ Output run(const std::string& command) {
 
 const std::string kRths = std::string(RTHS_BINARY_DIR) + "/cli/rths";
 
-TEST(Launch, RunsEveryCaseAndWritesRecordsCsvAndASummary) {
+TEST(Launch, RunsEveryCaseAndWritesRecordsResultsAndASummary) {
   const auto dir = test::scratch_dir("launch_cli");
   const auto config = test::write_config(
-      dir, test::paper_frame_study(1.5, "deployment { domain_id: 17 }"));
+      dir, test::paper_frame_study(1.5, "deployment { domain_id: 70 }"));
   const auto out = dir / "out";
   const Output o = run(kRths + " launch " + config.string() + " --case reference --case " +
                        "lag_shift_14ms --no-plots --json --bin-dir " + RTHS_BINARY_DIR +
@@ -39,16 +41,98 @@ TEST(Launch, RunsEveryCaseAndWritesRecordsCsvAndASummary) {
   const auto j = nlohmann::json::parse(o.out);
   ASSERT_EQ(j["cases"].size(), 2u);
   EXPECT_EQ(j["cases"][0]["status"], "completed");
-  EXPECT_TRUE(j["cases"][0]["nrmse_vs_reference"].is_null());
-  EXPECT_GT(j["cases"][1]["nrmse_vs_reference"].get<double>(), 0.0);
-  EXPECT_GT(j["cases"][1]["links"]["2"]["round_trip_median"].get<double>(), 0.0);
+  EXPECT_EQ(j["reference"], "the lag-free in-process reference");
+  EXPECT_EQ(j["cases"][0]["nrmse_pct"].get<double>(), 0.0);  // no delay: the lag-free run itself
+  EXPECT_GT(j["cases"][1]["nrmse_pct"].get<double>(), 1.0);
+  EXPECT_GT(j["cases"][1]["links"]["2"]["round_trip_median_s"].get<double>(), 0.0);
   // launch itself checks the lockstep runs against the in-process simulation.
   EXPECT_EQ(j["cases"][0]["max_difference_from_in_process_m"].get<double>(), 0.0);
   EXPECT_EQ(j["cases"][1]["max_difference_from_in_process_m"].get<double>(), 0.0);
   const auto record = runtime::read_record(out / "lag_shift_14ms.rthsrec");
   test::expect_record_equals(record, test::reference_result(test::read_file(config), "lag_shift_14ms"));
-  EXPECT_TRUE(std::filesystem::exists(out / "reference.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "results.csv"));
+  EXPECT_TRUE(std::filesystem::exists(out / "summary.txt"));
   EXPECT_TRUE(std::filesystem::exists(out / "logs" / "reference" / "coordinator.log"));
+}
+
+std::vector<std::string> header_of(const std::filesystem::path& csv) {
+  std::istringstream line(test::read_file(csv).substr(0, test::read_file(csv).find('\n')));
+  std::vector<std::string> cells;
+  for (std::string cell; std::getline(line, cell, ',');) cells.push_back(cell);
+  return cells;
+}
+
+std::size_t rows_of(const std::filesystem::path& csv) {
+  const std::string text = test::read_file(csv);
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) - 1;  // - header
+}
+
+// `run` and `launch` on one config: the same columns (launch adds the lag per link) and the same
+// step count (launch used to report the coordinator's exchange counter: one fewer).
+TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
+  const auto dir = test::scratch_dir("launch_columns");
+  const auto config = test::write_config(dir, test::paper_frame_study(0.5, "deployment { domain_id: 71 }"));
+  const Output ran = run(kRths + " run " + config.string() + " --no-plots --json --out " + (dir / "run").string());
+  ASSERT_EQ(ran.code, 0) << ran.out;
+  const Output launched = run(kRths + " launch " + config.string() + " --no-plots --json --bin-dir " +
+                              RTHS_BINARY_DIR + " --out " + (dir / "launch").string());
+  ASSERT_EQ(launched.code, 0) << launched.out;
+
+  const auto run_header = header_of(dir / "run" / "results.csv");
+  std::vector<std::string> launch_header, lag_columns;
+  for (const auto& cell : header_of(dir / "launch" / "results.csv"))
+    (cell.find("_lag_node") == std::string::npos ? launch_header : lag_columns).push_back(cell);
+  EXPECT_EQ(launch_header, run_header);
+  for (const std::string c : {"reference", "lag_shift_14ms", "jitter"})
+    for (const std::string link : {"1", "2"})
+      for (const std::string what : {"injected_s", "round_trip_s"})
+        EXPECT_EQ(std::count(lag_columns.begin(), lag_columns.end(), c + "_lag_node" + link + "_" + what), 1)
+            << c << " node " << link << " " << what;
+
+  EXPECT_EQ(rows_of(dir / "launch" / "results.csv"), rows_of(dir / "run" / "results.csv"));
+  const auto run_json = nlohmann::json::parse(ran.out);
+  const auto launch_json = nlohmann::json::parse(launched.out);
+  ASSERT_EQ(launch_json["cases"].size(), run_json["cases"].size());
+  for (std::size_t i = 0; i < run_json["cases"].size(); ++i) {
+    EXPECT_EQ(launch_json["cases"][i]["steps"], run_json["cases"][i]["steps"]) << i;
+    EXPECT_EQ(launch_json["cases"][i]["steps"].get<std::size_t>(), rows_of(dir / "launch" / "results.csv"));
+  }
+}
+
+// A study whose reference case is lagged: `run` compares with that case, but every distributed
+// case is compared with the lag-free in-process run, and the summary says so.
+TEST(Launch, ComparesEveryCaseWithTheLagFreeInProcessReference) {
+  const auto dir = test::scratch_dir("launch_reference");
+  const std::string lag_free_named = test::paper_frame_study(0.5, "deployment { domain_id: 72 }");
+  const auto config = test::write_config(dir, "reference_case: \"lag_shift_14ms\"\n" + lag_free_named);
+  const Output launched = run(kRths + " launch " + config.string() +
+                              " --case lag_shift_14ms --no-plots --bin-dir " + RTHS_BINARY_DIR +
+                              " --out " + (dir / "launch").string());
+  ASSERT_EQ(launched.code, 0) << launched.out;
+  EXPECT_NE(launched.out.find("against the lag-free in-process reference"), std::string::npos) << launched.out;
+  const auto summary = nlohmann::json::parse(test::read_file(dir / "launch" / "summary.json"));
+  const double launched_nrmse = summary["cases"][0]["nrmse_pct"].get<double>();
+
+  const auto plain = dir / "plain";
+  std::filesystem::create_directories(plain);
+  const Output ran = run(kRths + " run " + test::write_config(plain, lag_free_named).string() +
+                         " --no-plots --json --out " + (plain / "run").string());
+  ASSERT_EQ(ran.code, 0) << ran.out;
+  const auto run_json = nlohmann::json::parse(ran.out);
+  ASSERT_EQ(run_json["cases"][1]["name"], "lag_shift_14ms");
+  const double in_process_nrmse = run_json["cases"][1]["nrmse_pct"].get<double>();
+  EXPECT_GT(launched_nrmse, 1.0);
+  EXPECT_NEAR(launched_nrmse, in_process_nrmse, 1e-9 * in_process_nrmse);
+}
+
+TEST(Launch, RunIdsHaveOneFormat) {
+  char host[128] = {};
+  gethostname(host, sizeof host - 1);
+  const std::string tail = std::string(host) + "-" + std::to_string(getpid()) + "-";
+  const std::string id = runtime::make_run_id("paper frame-lag/14ms");
+  EXPECT_EQ(id.rfind("paper_frame-lag_14ms-" + tail, 0), 0u) << id;
+  EXPECT_EQ(runtime::make_run_id().rfind(tail, 0), 0u);  // the coordinator's own default format
+  EXPECT_NE(runtime::make_run_id("a"), runtime::make_run_id("a"));
 }
 
 TEST(Launch, BadDeploymentIsBadInputBeforeAnythingStarts) {

@@ -1,13 +1,151 @@
-// ScopedCpuPin: the placement `rths launch` uses for lockstep runs.
+// The one ChildProcess (start, exit code, kill, timeout, log, environment, prefix), one-shot
+// commands, held stop signals, find_program, and ScopedCpuPin (the placement `rths launch` uses
+// for lockstep runs).
 #include "runtime/process.h"
 
 #include <gtest/gtest.h>
 #include <sched.h>
+#include <unistd.h>
 
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 namespace rths::runtime {
 namespace {
+
+std::filesystem::path scratch(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_process_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string read(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool alive(pid_t pid) { return ::kill(pid, 0) == 0; }
+
+TEST(ChildProcessTest, ReportsTheExitCodeAndLogsStdoutAndStderrWithTheEnvironmentOverride) {
+  const auto dir = scratch("exit");
+  ChildProcess child("/bin/sh", {"-c", "echo out $RTHS_PROCESS_TEST; echo err >&2; exit 3"},
+                     dir / "child.log", {"shell", {}, {{"RTHS_PROCESS_TEST", "value-42"}}});
+  EXPECT_EQ(child.name(), "shell");
+  EXPECT_EQ(child.wait(), 3);
+  EXPECT_EQ(child.poll(), 3);  // reaped once, remembered
+  EXPECT_FALSE(child.running());
+  const std::string log = read(dir / "child.log");
+  EXPECT_NE(log.find("out value-42"), std::string::npos) << log;
+  EXPECT_NE(log.find("err"), std::string::npos) << log;
+  EXPECT_NE(child.log_tail(6).find("err"), std::string::npos);
+}
+
+TEST(ChildProcessTest, RunsUnderAPrefixAsANamespaceLauncherWould) {
+  const auto dir = scratch("prefix");
+  // `env NAME=VALUE program args`: a prefix that, like `ip netns exec NS`, execs the program.
+  ChildProcess child("/bin/sh", {"-c", "echo prefixed $PREFIX_SET"}, dir / "child.log",
+                     {"", {"env", "PREFIX_SET=yes"}, {}});
+  EXPECT_EQ(child.wait(), 0);
+  EXPECT_NE(read(dir / "child.log").find("prefixed yes"), std::string::npos);
+}
+
+TEST(ChildProcessTest, WaitForTimesOutOnARunningChildAndASignalEndsIt) {
+  ChildProcess child("/bin/sleep", {"30"}, "");
+  const auto started = std::chrono::steady_clock::now();
+  EXPECT_FALSE(child.wait_for(std::chrono::milliseconds(100)).has_value());
+  EXPECT_GE(std::chrono::steady_clock::now() - started, std::chrono::milliseconds(100));
+  EXPECT_TRUE(child.running());
+  child.signal(SIGKILL);
+  EXPECT_EQ(child.wait(), 128 + SIGKILL);
+}
+
+TEST(ChildProcessTest, TerminateSendsSigtermFirstAndKillsWhatIgnoresIt) {
+  ChildProcess polite("/bin/sleep", {"30"}, "");
+  EXPECT_EQ(polite.terminate(std::chrono::seconds(2)), 128 + SIGTERM);
+  EXPECT_EQ(polite.terminate(), 128 + SIGTERM);  // idempotent
+  const auto dir = scratch("stubborn");
+  ChildProcess stubborn("/bin/sh", {"-c", "trap '' TERM; echo ready; while :; do sleep 0.05; done"},
+                        dir / "stubborn.log");
+  while (read(dir / "stubborn.log").find("ready") == std::string::npos)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const auto started = std::chrono::steady_clock::now();
+  EXPECT_EQ(stubborn.terminate(std::chrono::milliseconds(200)), 128 + SIGKILL);
+  EXPECT_GE(std::chrono::steady_clock::now() - started, std::chrono::milliseconds(200));
+}
+
+TEST(ChildProcessTest, TheDestructorStopsAChildStillRunning) {
+  pid_t pid = -1;
+  {
+    ChildProcess child("/bin/sleep", {"30"}, "");
+    pid = child.pid();
+    EXPECT_TRUE(alive(pid));
+  }
+  EXPECT_FALSE(alive(pid));
+}
+
+TEST(ChildProcessTest, AMovedChildIsOwnedOnce) {
+  std::vector<ChildProcess> children;
+  children.emplace_back("/bin/sh", std::vector<std::string>{"-c", "exit 7"}, "");
+  children.emplace_back("/bin/sh", std::vector<std::string>{"-c", "exit 8"}, "");
+  EXPECT_EQ(children[0].wait(), 7);
+  EXPECT_EQ(children[1].wait(), 8);
+}
+
+TEST(ChildProcessTest, AMissingProgramOrLogFolderIsAnErrorNamingIt) {
+  try {
+    ChildProcess child("/nonexistent/rths-nothing", {}, "");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/rths-nothing"), std::string::npos) << e.what();
+  }
+  try {
+    ChildProcess child("/bin/true", {}, "/nonexistent/dir/child.log");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/child.log"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RunCommandTest, CapturesOutputAndExitAndStopsAtTheTimeout) {
+  const auto result = run_command({"sh", "-c", "echo hello; exit 4"});
+  EXPECT_EQ(result.exit_code, 4);
+  EXPECT_EQ(result.output, "hello\n");
+  EXPECT_THROW(run_checked({"sh", "-c", "exit 1"}), std::runtime_error);
+  EXPECT_THROW(run_command({"sleep", "5"}, std::chrono::milliseconds(100)), std::runtime_error);
+  EXPECT_EQ(command_line({"ip", "netns", "a b"}), "ip netns 'a b'");
+  EXPECT_TRUE(tool_available("sh"));
+  EXPECT_FALSE(tool_available("rths-no-such-tool"));
+}
+
+TEST(HeldStopSignalsTest, ASignalIsHeldPolledAndConsumed) {
+  {
+    const HeldStopSignals held;
+    EXPECT_FALSE(held.stop_requested());
+    ::kill(::getpid(), SIGTERM);  // held pending: the test process lives on
+    EXPECT_TRUE(held.stop_requested());
+  }
+  sigset_t pending;
+  sigpending(&pending);
+  EXPECT_EQ(sigismember(&pending, SIGTERM), 0);
+}
+
+TEST(FindProgramTest, FindsInTheGivenFolderOrItsBuildSubfolderElseNamesWhereItLooked) {
+  const auto dir = scratch("find");
+  std::filesystem::create_directories(dir / "coordinator");
+  std::filesystem::copy_file("/bin/true", dir / "coordinator" / "rths-fake");
+  EXPECT_EQ(find_program("rths-fake", "coordinator", dir), dir / "coordinator" / "rths-fake");
+  try {
+    find_program("rths-missing", "coordinator", dir);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir / "rths-missing").string()), std::string::npos) << e.what();
+  }
+}
 
 cpu_set_t current_mask() {
   cpu_set_t set;

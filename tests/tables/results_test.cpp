@@ -57,6 +57,32 @@ TEST(ResultsTest, StudyTableNamesEachCaseAndPadsAStoppedCaseWithNan) {
   EXPECT_EQ(t.attributes().at("reference_case"), "reference");
 }
 
+TEST(ResultsTest, DistributedTableIsTheStudyTablePlusLagPerLinkAtTheCarryingStep) {
+  analysis::StudyOutcome outcome;
+  outcome.study_name = "frame";
+  outcome.cases = {make_case("lag 14ms", 4, true)};
+  std::map<int, runtime::LinkSeries> links;
+  runtime::LinkSeries& s = links[2];
+  s.node_id = 2;
+  s.time = {0.01, 0.03};  // answers carried by steps 1 and 3; step 2 reused an older one
+  s.answered_step = {1, 3};
+  s.round_trip = {0.0021, 0.0023};
+  s.injected = {0.014, 0.014};
+  const Table t = distributed_study_table(outcome, {links});
+  std::vector<std::string> expected = names(study_table(outcome));
+  expected.push_back("lag_14ms_lag_node2_injected_s");
+  expected.push_back("lag_14ms_lag_node2_round_trip_s");
+  EXPECT_EQ(names(t), expected);
+  const auto& rtt = t.column("lag_14ms_lag_node2_round_trip_s").numbers;
+  ASSERT_EQ(rtt.size(), 4u);
+  EXPECT_TRUE(std::isnan(rtt[0]));
+  EXPECT_DOUBLE_EQ(rtt[1], 0.0021);
+  EXPECT_TRUE(std::isnan(rtt[2]));
+  EXPECT_DOUBLE_EQ(rtt[3], 0.0023);
+  EXPECT_EQ(t.column("lag_14ms_lag_node2_injected_s").unit, "s");
+  EXPECT_THROW(distributed_study_table(outcome, {}), std::invalid_argument);
+}
+
 TEST(ResultsTest, RecordTableHasTheExportColumnsAndNanForStepZerosLink) {
   runtime::RecordContents record;
   runtime::RecordEntry header_entry;
