@@ -35,12 +35,14 @@ using namespace rths;
 using namespace std::chrono_literals;
 
 std::string study_text(double dt, double seconds, const std::string& deployment) {
+  char dt_text[32];
+  std::snprintf(dt_text, sizeof dt_text, "%.17g", dt);  // exact: 1/1024 is not 0.000977
   return "name: \"bench\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
          "motion { path: \"" + std::string(RTHS_SHARED_DATA_DIR) +
          "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
          " }\n"
-         "integrator { kind: EXPLICIT_NEWMARK dt: " + std::to_string(dt) + " }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: " + std::string(dt_text) + " }\n"
          "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
          "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n" + deployment;
 }
