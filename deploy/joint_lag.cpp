@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -232,7 +233,7 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
   const auto& experimental = prepared.base.partition.experimental;
   const double k = model.stiffness(0, 0), m = model.mass(0, 0);
   const double alpha = experimental.empty() || !experimental[0] ? 0.0 : experimental[0]->initial_stiffness() / k;
-  const double omega = std::sqrt(k / m), period = 2.0 * M_PI / omega;
+  const double omega = std::sqrt(k / m), period = 2.0 * std::numbers::pi / omega;
   const double zeta = model.damping(0, 0) / (2.0 * m * omega);
   double largest = 0.0, largest_round_trip = 0.0;
   for (const double a : config.actuator_lags()) largest = std::max(largest, a);

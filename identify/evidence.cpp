@@ -1,5 +1,6 @@
 #include "identify/evidence.h"
 
+#include <numbers>
 #include <fftw3.h>
 
 #include <algorithm>
@@ -11,7 +12,6 @@
 namespace rths::identify {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::vector<double> centred(std::span<const double> x) {
   std::vector<double> out(x.begin(), x.end());
@@ -56,7 +56,7 @@ Spectrum amplitude_spectrum(std::span<const double> x, double dt) {
   auto w = centred(x);
   double window_sum = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double hann = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(i) /
+    const double hann = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
                                              static_cast<double>(n - 1));
     w[i] *= hann;
     window_sum += hann;

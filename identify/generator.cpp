@@ -1,5 +1,6 @@
 #include "identify/generator.h"
 
+#include <numbers>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -11,13 +12,12 @@
 namespace rths::identify {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::vector<double> chirp(const GeneratorSpec& spec, std::size_t n) {
   std::vector<double> u(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) * spec.dt;
-    const double phase = 2.0 * kPi *
+    const double phase = 2.0 * std::numbers::pi *
                          (spec.chirp_start * t +
                           (spec.chirp_end - spec.chirp_start) * t * t / (2.0 * spec.duration));
     // Half-second cosine ramps keep the start and end free of steps.
@@ -30,9 +30,9 @@ std::vector<double> chirp(const GeneratorSpec& spec, std::size_t n) {
 std::vector<double> earthquake_like(const GeneratorSpec& spec, std::size_t n) {
   std::mt19937_64 rng(spec.seed * 7919 + 17);
   std::normal_distribution<double> normal(0.0, 1.0);
-  const double wn = 2.0 * kPi * spec.corner_frequency;
+  const double wn = 2.0 * std::numbers::pi * spec.corner_frequency;
   core::TransferFunctionStage low_pass({wn * wn}, {1.0, 2.0 * 0.6 * wn, wn * wn}, spec.dt);
-  const double wh = 2.0 * kPi * 0.2;
+  const double wh = 2.0 * std::numbers::pi * 0.2;
   core::TransferFunctionStage high_pass({1.0, 0.0}, {1.0, wh}, spec.dt);
   std::vector<double> u(n);
   double peak = 0.0;
@@ -89,7 +89,7 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
     for (std::size_t i = 0; i < n; ++i) {
       trace.time.push_back(data.time[i]);
       trace.delay.push_back(spec.delay +
-                            spec.delay_drift * std::sin(2.0 * kPi * data.time[i] / spec.duration));
+                            spec.delay_drift * std::sin(2.0 * std::numbers::pi * data.time[i] / spec.duration));
     }
     auto shift = std::make_unique<core::TraceShift>(std::move(trace), spec.dt);
     shift->set_gain(spec.gain);
@@ -103,7 +103,7 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
     chain.add(std::make_unique<core::FirstOrderActuator>(spec.first_order_time_constant, spec.dt));
   }
   if (spec.second_order_frequency > 0.0) {
-    const double wn = 2.0 * kPi * spec.second_order_frequency;
+    const double wn = 2.0 * std::numbers::pi * spec.second_order_frequency;
     chain.add(std::make_unique<core::TransferFunctionStage>(
         std::vector<double>{wn * wn},
         std::vector<double>{1.0, 2.0 * spec.second_order_damping * wn, wn * wn}, spec.dt));
@@ -123,7 +123,7 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
     }
     const double s = (data.time[i] - 0.5 * data.time.back()) / data.time.back();
     const double drifting_gain =
-        1.0 + spec.gain_drift * std::sin(2.0 * kPi * data.time[i] / spec.duration);
+        1.0 + spec.gain_drift * std::sin(2.0 * std::numbers::pi * data.time[i] / spec.duration);
     realised[i] = drifting_gain * x + spec.offset + spec.drift * s;
   }
 
@@ -145,7 +145,7 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
     double f = spring->step(d) + spec.damping * v + spec.cubic_stiffness * d * d * d +
                spec.mass * acceleration[i] + spec.force_offset +
                spec.stiffness_drift * spec.stiffness *
-                   std::sin(2.0 * kPi * data.time[i] / spec.duration) * d;
+                   std::sin(2.0 * std::numbers::pi * data.time[i] / spec.duration) * d;
     if (spec.coulomb_force != 0.0) f += spec.coulomb_force * std::tanh(v / spec.coulomb_velocity);
     data.measured[i] = d + spec.displacement_noise * normal(rng);
     data.force[i] = f + spec.force_noise * normal(rng);

@@ -1,5 +1,6 @@
 #include "identify/model.h"
 
+#include <numbers>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,7 +11,6 @@
 namespace rths::identify {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 struct EffectInfo {
   Effect effect;
@@ -137,7 +137,7 @@ ParamSpec non_negative(ParamSpec spec, const std::string& below_means) {
 double drift_profile(std::span<const double> c, double s) {
   double sum = 0.0;
   for (std::size_t k = 0; k < c.size(); ++k) {
-    sum += c[k] * std::cos(kPi * static_cast<double>(k + 1) * (s + 0.5));
+    sum += c[k] * std::cos(std::numbers::pi * static_cast<double>(k + 1) * (s + 0.5));
   }
   return sum;
 }
@@ -230,8 +230,8 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
     case Effect::kFirstOrder:
       return {param_spec("time_constant", "s", 0.01, 0.2 * sc.dt, 1.0, {0.005, 0.03})};
     case Effect::kSecondOrder:
-      return {param_spec("natural_frequency", "rad/s", 100.0, 2.0 * kPi * 0.2, kPi / sc.dt,
-               {2.0 * kPi * 5.0, 2.0 * kPi * 20.0}),
+      return {param_spec("natural_frequency", "rad/s", 100.0, 2.0 * std::numbers::pi * 0.2, std::numbers::pi / sc.dt,
+               {2.0 * std::numbers::pi * 5.0, 2.0 * std::numbers::pi * 20.0}),
               param_spec("damping_ratio", "-", 1.0, 0.05, 5.0, {0.7})};
     case Effect::kBacklash:
       return {non_negative(param_spec("width", "m", 0.05 * sc.input, 0.0, 10.0 * sc.input,

@@ -1,5 +1,6 @@
 #include "identify/predict.h"
 
+#include <numbers>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -71,7 +72,7 @@ ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scal
         out.chain.add(std::make_unique<core::TransferFunctionStage>(
             std::vector<double>{wn * wn}, std::vector<double>{1.0, 2.0 * zeta * wn, wn * wn}, dt,
             "second-order actuator"));
-        description << ", second order fn = " << wn / (2.0 * 3.14159265358979323846)
+        description << ", second order fn = " << wn / (2.0 * std::numbers::pi)
                     << " Hz zeta = " << zeta;
         break;
       }

@@ -1,5 +1,6 @@
 #include "identify/evidence.h"
 
+#include <numbers>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,12 +11,11 @@
 namespace rths::identify {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 TEST(EvidenceTest, SpectrumFindsASineAndItsAmplitude) {
   const double dt = 0.002;
   std::vector<double> x(5000);
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 3.0 * std::sin(2 * kPi * 7.0 * i * dt) + 1.0;
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 3.0 * std::sin(2 * std::numbers::pi * 7.0 * i * dt) + 1.0;
   const Spectrum s = amplitude_spectrum(x, dt);
   std::size_t peak = 1;
   for (std::size_t k = 1; k < s.amplitude.size(); ++k) {
@@ -52,9 +52,9 @@ TEST(EvidenceTest, ResidualProportionalToVelocityShowsInTheEvidence) {
   for (std::size_t i = 0; i < 4000; ++i) {
     const double t = i * s.dt;
     s.time.push_back(t);
-    s.input.push_back(std::sin(2 * kPi * 2 * t));
-    s.velocity.push_back(2 * kPi * 2 * std::cos(2 * kPi * 2 * t));
-    s.acceleration.push_back(-std::pow(2 * kPi * 2, 2) * std::sin(2 * kPi * 2 * t));
+    s.input.push_back(std::sin(2 * std::numbers::pi * 2 * t));
+    s.velocity.push_back(2 * std::numbers::pi * 2 * std::cos(2 * std::numbers::pi * 2 * t));
+    s.acceleration.push_back(-std::pow(2 * std::numbers::pi * 2, 2) * std::sin(2 * std::numbers::pi * 2 * t));
     s.target.push_back(5.0 * s.input.back() + 0.3 * s.velocity.back());
   }
   std::vector<double> prediction(s.size());

@@ -1,5 +1,6 @@
 #include "identify/model.h"
 
+#include <numbers>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,7 +11,6 @@ namespace rths::identify {
 namespace {
 
 constexpr double kDt = 0.001;
-constexpr double kPi = 3.14159265358979323846;
 
 ChannelSignals sine_signals(Channel channel, double frequency = 2.0, std::size_t n = 3000) {
   MeasuredData d;
@@ -18,8 +18,8 @@ ChannelSignals sine_signals(Channel channel, double frequency = 2.0, std::size_t
   for (std::size_t i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) * kDt;
     d.time.push_back(t);
-    d.command.push_back(0.002 * std::sin(2 * kPi * frequency * t));
-    d.measured.push_back(0.002 * std::sin(2 * kPi * frequency * t));
+    d.command.push_back(0.002 * std::sin(2 * std::numbers::pi * frequency * t));
+    d.measured.push_back(0.002 * std::sin(2 * std::numbers::pi * frequency * t));
     d.force.push_back(0.0);
   }
   return make_signals(d, channel);
@@ -44,7 +44,7 @@ TEST(ModelTest, FractionalDelayShiftsTheCommand) {
   m.params = {1.0, 0.0125};
   const auto y = predict(m, s);
   for (std::size_t i = 100; i < s.size(); i += 97) {
-    EXPECT_NEAR(y[i], 0.002 * std::sin(2 * kPi * 2.0 * (s.time[i] - 0.0125)), 1e-6);
+    EXPECT_NEAR(y[i], 0.002 * std::sin(2 * std::numbers::pi * 2.0 * (s.time[i] - 0.0125)), 1e-6);
   }
 }
 
@@ -64,7 +64,7 @@ TEST(ModelTest, FirstOrderMatchesTheCoreBlock) {
 TEST(ModelTest, SecondOrderMatchesTheCoreTransferFunction) {
   const auto s = sine_signals(Channel::kMeasured, 8.0);
   const auto sc = signal_scales(s);
-  const double wn = 2 * kPi * 15.0, zeta = 0.5;
+  const double wn = 2 * std::numbers::pi * 15.0, zeta = 0.5;
   ChannelModel m = with_effect(declared_model(Channel::kMeasured, {}, sc), Effect::kSecondOrder,
                                std::vector<double>{wn, zeta});
   const auto y = predict(m, s);
@@ -127,7 +127,7 @@ TEST(ModelTest, PhysicalParametersAreBoundedAtZero) {
   EXPECT_EQ(delay.lower, 0.0);
   EXPECT_LE(delay.upper, 0.5 * sc.duration);
   const auto wn = effect_params(Effect::kSecondOrder, Channel::kMeasured, sc).front();
-  EXPECT_LE(wn.upper, kPi / kDt + 1e-9);  // finite bandwidth: below Nyquist
+  EXPECT_LE(wn.upper, std::numbers::pi / kDt + 1e-9);  // finite bandwidth: below Nyquist
 }
 
 TEST(ModelTest, DriftProfileIsZeroMeanOverTheRecord) {

@@ -1,5 +1,6 @@
 #include "identify/report.h"
 
+#include <numbers>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -78,7 +79,7 @@ TEST(ReportTest, TimeVaryingDelayPlotFollowsTheDrift) {
       windowed_estimate(constant, constant.index_of(Effect::kDelay, "delay", sc).value(),
                         id.signals[0], 8);
   for (const auto& w : windows) {
-    const double truth = spec.delay + spec.delay_drift * std::sin(2.0 * 3.14159265358979 *
+    const double truth = spec.delay + spec.delay_drift * std::sin(2.0 * std::numbers::pi *
                                                                   w.time / spec.duration);
     EXPECT_NEAR(w.value, truth, 0.0015) << "window at " << w.time << " s";
     EXPECT_GT(w.std_error, 0.0);
