@@ -1,5 +1,7 @@
 // End-to-end checks of the `rths` binary: exit codes, JSON, files, and the paper's findings.
 #include <gtest/gtest.h>
+
+#include "tests/support/run_command_line.h"
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -17,22 +19,9 @@ const std::filesystem::path kSource = RTHS_SOURCE_DIR;
 const std::filesystem::path kData = RTHS_SHARED_DATA_DIR;
 const std::string kMotion = (kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2").string();
 
-struct Outcome {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using Outcome = rths::test::CommandOutcome;
 
-Outcome run(const std::string& arguments) {
-  Outcome outcome;
-  FILE* pipe = popen((kRths + " " + arguments + " 2>&1").c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  std::size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) outcome.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
-}
+Outcome run(const std::string& arguments) { return rths::test::run_command_line(kRths + " " + arguments); }
 
 std::filesystem::path scratch(const std::string& name) {
   auto dir = std::filesystem::temp_directory_path() / ("rths_cli_test_" + name + "_" + std::to_string(getpid()));

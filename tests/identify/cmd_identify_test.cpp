@@ -3,6 +3,8 @@
 // built from it run by `rths run`, and --sample-rate for files without a time column.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+
+#include "tests/support/run_command_line.h"
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -27,22 +29,9 @@ using ::testing::HasSubstr;
 const std::string kRths = RTHS_EXECUTABLE;
 const fs::path kData = RTHS_SHARED_DATA_DIR;
 
-struct Outcome {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using Outcome = test::CommandOutcome;
 
-Outcome run(const std::string& arguments) {
-  Outcome outcome;
-  FILE* pipe = popen((kRths + " " + arguments + " 2>&1").c_str(), "r");
-  if (!pipe) return outcome;
-  std::array<char, 4096> buffer{};
-  std::size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) outcome.output.append(buffer.data(), n);
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
-}
+Outcome run(const std::string& arguments) { return test::run_command_line(kRths + " " + arguments); }
 
 nlohmann::json json_of(const Outcome& o) {
   const auto start = o.output.find('{');
