@@ -37,43 +37,6 @@ struct MergeOptions {
   bool json = false, no_plots = false;
 };
 
-// Progress on stderr: one redrawn bar on a terminal; on a log (not a tty) a plain line per 10 %,
-// so batch-scheduler logs stay short.
-class ProgressReporter {
- public:
-  explicit ProgressReporter(bool enabled)
-      : enabled_(enabled), tty_(isatty(STDERR_FILENO) != 0), start_(Clock::now()) {}
-
-  void update(std::size_t done, std::size_t total) {
-    if (!enabled_ || total == 0) return;
-    const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
-    const double fraction = static_cast<double>(done) / static_cast<double>(total);
-    if (tty_) {
-      if (done < total && seconds - last_draw_ < 0.1) return;
-      last_draw_ = seconds;
-      constexpr int kWidth = 30;
-      const int filled = static_cast<int>(fraction * kWidth);
-      std::fprintf(stderr, "\rsweep [%s%s] %3.0f%% %zu/%zu points %.1f s",
-                   std::string(filled, '#').c_str(), std::string(kWidth - filled, '.').c_str(),
-                   100 * fraction, done, total, seconds);
-      if (done == total) std::fputc('\n', stderr);
-    } else {
-      const int decile = static_cast<int>(std::floor(fraction * 10));
-      if (decile <= last_decile_) return;
-      last_decile_ = decile;
-      std::fprintf(stderr, "sweep: %3d%% (%zu/%zu points, %.1f s)\n", decile * 10, done, total, seconds);
-    }
-    std::fflush(stderr);
-  }
-
- private:
-  using Clock = std::chrono::steady_clock;
-  bool enabled_, tty_;
-  Clock::time_point start_;
-  double last_draw_ = -1;
-  int last_decile_ = 0;
-};
-
 nlohmann::json trends_json(const analysis::SweepTrends& t) {
   const auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
   return {{"stiffness_max_relative_difference_nrmse", number(t.stiffness_max_relative_difference)},
@@ -123,7 +86,7 @@ void run_sweep_command(const SweepOptions& o) {
             << stability.worst;
     print_warning(warning.str());
   }
-  ProgressReporter progress(true);
+  ProgressReporter progress("sweep", "points");
   options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
 
   std::filesystem::path out = o.out;
