@@ -231,15 +231,7 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
     model_names_.push_back(model_name(models_[m]));
   }
 
-  const std::string& delay_model = sweep.delay_model();
-  if (delay_model.empty() || delay_model == "SHIFT") {
-    delay_model_ = "SHIFT";
-  } else if (delay_model == "EQ1" || delay_model == "EQ1_LAG" || delay_model == "FIRST_ORDER") {
-    delay_model_ = delay_model;
-  } else {
-    fail(source, "sweep.delay_model '" + delay_model +
-                     "' is unknown: expected SHIFT, EQ1, EQ1_LAG or FIRST_ORDER");
-  }
+  delay_model_ = sweep.delay_model();
 
   const core::IntegratorKind kind = core::integrator_kind(study.integrator());
   const bool any_delay = std::any_of(delays_.begin(), delays_.end(), [](double d) { return d > 0; });
@@ -350,16 +342,13 @@ core::StructuralModel structure_for(const SweepGrid& grid, double period, double
   return core::make_structure(structure);
 }
 
-config::DelayStage stage_for(const std::string& delay_model, double delay) {
+config::DelayStage stage_for(config::Sweep::DelayModel delay_model, double delay) {
   config::DelayStage stage;
-  if (delay_model == "EQ1") {
-    stage.mutable_eq1()->set_delay(delay);
-  } else if (delay_model == "EQ1_LAG") {
-    stage.mutable_eq1_lag()->set_delay(delay);
-  } else if (delay_model == "FIRST_ORDER") {
-    stage.mutable_first_order()->set_time_constant(delay);
-  } else {
-    stage.mutable_shift()->set_delay(delay);
+  switch (delay_model) {
+    case config::Sweep::EQ1: stage.mutable_eq1()->set_delay(delay); break;
+    case config::Sweep::EQ1_LAG: stage.mutable_eq1_lag()->set_delay(delay); break;
+    case config::Sweep::FIRST_ORDER: stage.mutable_first_order()->set_time_constant(delay); break;
+    default: stage.mutable_shift()->set_delay(delay); break;
   }
   return stage;
 }
@@ -415,7 +404,7 @@ class SweepRunner {
       const bool fast = !options_.general_path_only && is_linear(grid_.models()[key.model]) &&
                         core::integrator_kind(grid_.study().integrator()) ==
                             core::IntegratorKind::kExplicitNewmark &&
-                        grid_.delay_model() == "SHIFT";
+                        grid_.delay_model() == config::Sweep::SHIFT;
       const std::size_t step = fast ? kPeriodsPerFastItem : 1;
       for (std::size_t p = period_begin; p < period_end; p += step) {
         items_.push_back({g, p, std::min(period_end, p + step), fast});

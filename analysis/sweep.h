@@ -84,7 +84,7 @@ class SweepGrid {
   const std::vector<std::string>& motion_names() const { return motion_names_; }
   const std::vector<std::string>& model_names() const { return model_names_; }
   const std::vector<config::RestoringForce>& models() const { return models_; }
-  const std::string& delay_model() const { return delay_model_; }
+  config::Sweep::DelayModel delay_model() const { return delay_model_; }
   // The record `motion` resampled to dts()[dt_index].
   const core::GroundMotion& motion_at(std::size_t motion, std::size_t dt_index) const;
 
@@ -95,7 +95,7 @@ class SweepGrid {
   std::vector<config::RestoringForce> models_;
   std::vector<std::string> motion_names_, model_names_;
   std::vector<std::vector<core::GroundMotion>> motions_;  // [motion][dt]
-  std::string delay_model_;
+  config::Sweep::DelayModel delay_model_ = config::Sweep::SHIFT;
   std::uint64_t hash_ = 0;
 };
 

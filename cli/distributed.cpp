@@ -21,7 +21,7 @@ namespace {
 bool comparable_in_process(const config::Study& study) {
   if (study.deployment().clock() != config::Deployment::LOCKSTEP) return false;
   for (const auto& node : study.deployment().nodes()) {
-    if (!node.receive_delay_case().empty() || !node.send_delay_case().empty()) return false;
+    if (node.receive_delay_size() > 0 || node.send_delay_size() > 0) return false;
   }
   return true;
 }
@@ -30,8 +30,12 @@ bool comparable_in_process(const config::Study& study) {
 std::optional<double> difference_from_in_process(const core::PreparedStudy& prepared,
                                                  const std::string& case_name,
                                                  const core::SimulationResult& recorded) {
-  const core::SimulationResult expected = core::simulate(
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name)), prepared.motion);
+  const core::HybridSetup setup =
+      core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name));
+  const runtime::DeploymentPlan plan =
+      runtime::make_plan(setup, runtime::with_default_nodes(prepared.config.deployment(), setup));
+  const core::SimulationResult expected =
+      core::simulate(runtime::with_node_compensation(setup, plan), prepared.motion);
   if (expected.displacement.rows() != recorded.displacement.rows() ||
       expected.displacement.cols() != recorded.displacement.cols())
     return std::nullopt;

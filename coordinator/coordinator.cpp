@@ -592,9 +592,6 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
                         s.setup.allow_unstable);
   s.deployment = runtime::with_default_nodes(s.deployment, s.setup);
   plan_ = runtime::make_plan(s.setup, s.deployment);
-  for (const runtime::NodePlan& n : plan_.nodes)
-    for (const std::string& name : {n.spec.receive_delay_case(), n.spec.send_delay_case()})
-      if (!name.empty()) runtime::find_case(s.prepared.config, name);  // throws naming it
   s.plan = &plan_;
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
   const std::size_t steps = s.prepared.motion.acceleration.size();

@@ -375,23 +375,38 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
   HybridSetup setup = prepared.base;
   setup.delays.clear();
   const std::size_t actuators = setup.partition.actuator_storeys.size();
-  const auto blocks = static_cast<std::size_t>(study_case.compensation_size());
-  if (blocks > 1 && blocks != actuators) {
-    throw std::invalid_argument("case '" + study_case.name() + "': " + std::to_string(blocks) +
-                                " compensation blocks for " + std::to_string(actuators) +
+  const double servo_period = setup.dt / setup.servo_substeps;
+  for (std::size_t a = 0; a < actuators; ++a)
+    setup.delays.push_back(make_delay_chain(study_case.delay(), servo_period, prepared.base_dir));
+  std::vector<int> all(actuators);
+  for (std::size_t a = 0; a < actuators; ++a) all[a] = static_cast<int>(a);
+  apply_compensation(setup, all, study_case.compensation(), "case '" + study_case.name() + "'");
+  return setup;
+}
+
+void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
+                        const google::protobuf::RepeatedPtrField<config::Compensation>& blocks,
+                        const std::string& where) {
+  if (blocks.empty()) return;
+  const auto count = static_cast<std::size_t>(blocks.size());
+  if (count > 1 && count != actuators.size()) {
+    throw std::invalid_argument(where + ": " + std::to_string(count) + " compensation blocks for " +
+                                std::to_string(actuators.size()) +
                                 " actuators; give one (for every actuator) or one per actuator");
   }
   const double servo_period = setup.dt / setup.servo_substeps;
-  for (std::size_t a = 0; a < actuators; ++a) {
-    setup.delays.push_back(make_delay_chain(study_case.delay(), servo_period, prepared.base_dir));
-    if (blocks > 0) {
-      const std::size_t b = blocks == 1 ? 0 : a;
-      setup.delays.back().set_compensator(make_compensator(
-          study_case.compensation(static_cast<int>(b)), servo_period,
-          "case '" + study_case.name() + "' compensation[" + std::to_string(b) + "]"));
-    }
+  for (std::size_t i = 0; i < actuators.size(); ++i) {
+    const int a = actuators[i];
+    if (a < 0 || a >= static_cast<int>(setup.delays.size()))
+      throw std::invalid_argument(where + ": actuator " + std::to_string(a + 1) + " does not exist");
+    const std::size_t b = count == 1 ? 0 : i;
+    const std::string block_name = where + " compensation[" + std::to_string(b) + "]";
+    if (setup.delays[static_cast<std::size_t>(a)].compensator())
+      throw std::invalid_argument(block_name + ": actuator " + std::to_string(a + 1) +
+                                  " already has a compensator (from its case); give it in one place");
+    setup.delays[static_cast<std::size_t>(a)].set_compensator(
+        make_compensator(blocks[static_cast<int>(b)], servo_period, block_name));
   }
-  return setup;
 }
 
 const config::Case& reference_case(const config::Study& study) {

@@ -69,8 +69,17 @@ HybridSetup base_setup(const config::Study& study, double dt);
 int servo_substeps(const config::Study& study, double dt);
 constexpr int kMaxServoSubsteps = 64;
 
-// The base setup with the case's delay stages on every actuator.
+// The base setup with the case's delay stages on every actuator, behind the case's compensation.
 HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case);
+
+// Puts compensation `blocks` in front of the delay chains of `actuators` (indices into
+// setup.delays), built at the servo period: one block for all of them, or one per actuator, in
+// order. No blocks: nothing changes. Throws std::invalid_argument naming `where` when the count
+// fits neither rule, a block is bad, or an actuator already has a compensator (one compensator per
+// actuator, given in one place: the case's or its emulator node's).
+void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
+                        const google::protobuf::RepeatedPtrField<config::Compensation>& blocks,
+                        const std::string& where);
 
 // The case named `reference_case`, else the first. Throws if there are none.
 const config::Case& reference_case(const config::Study& study);

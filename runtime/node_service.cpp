@@ -68,21 +68,20 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
         throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
                                     ", this node speaks " + std::to_string(kSchemaVersion));
       hosted_ = configure(assign);
-      const auto chains = [&](const std::string& case_name) {
+      const auto chains = [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
         std::vector<core::DelayChain> out;
-        if (case_name.empty()) return out;
-        const config::Case& source = find_case(assign.study(), case_name);
+        if (stages.empty()) return out;
         for (int i = 0; i < hosted_; ++i)
-          out.push_back(core::make_delay_chain(source.delay(), assign.dt(), assign.base_dir()));
+          out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
         return out;
       };
-      receive_chains_ = chains(assign.node().receive_delay_case());
-      send_chains_ = chains(assign.node().send_delay_case());
+      receive_chains_ = chains(assign.node().receive_delay());
+      send_chains_ = chains(assign.node().send_delay());
       stream_period_ = servo_period();
       streaming_ = deployment.clock() == config::Deployment::REAL_TIME && stream_period_ > 0;
       if (streaming_ && !send_chains_.empty())
         throw std::invalid_argument(
-            "send_delay_case acts once per command, but a servo loop faster than the integrator "
+            "send_delay acts once per command, but a servo loop faster than the integrator "
             "streams feedback every servo period; inject the lag with send_lag instead");
     } catch (const std::exception& e) {
       configure_error_ = label() + ": " + e.what();

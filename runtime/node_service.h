@@ -8,7 +8,7 @@
 //                       a command the node refuses (refusal(): an emulator's rate limit) -> it
 //                       holds on its own and answers HOLD with the reason instead of FEEDBACK.
 //                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
-//   node delay stages   the spec's receive_delay_case / send_delay_case stages (simulated time) act on
+//   node delay stages   the spec's receive_delay / send_delay stages (simulated time) act on
 //                       each received drift before compute() and on each force after it.
 //   streaming           real time with a servo loop faster than the integrator (servo_period() > 0):
 //                       a COMMAND only loads the servo (load()); the node loop calls servo_tick()

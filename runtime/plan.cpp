@@ -47,6 +47,9 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
     if (!sub && spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR)
       throw std::invalid_argument(where + ": kind must be SUBSTRUCTURE or ACTUATOR_EMULATOR");
     any_substructure |= sub;
+    if (sub && spec.compensation_size() > 0)
+      throw std::invalid_argument(where + ": compensation shapes actuator commands; only an "
+                                          "ACTUATOR_EMULATOR carries it");
     const std::set<int>& pool = sub ? numerical : experimental;
     auto& host = sub ? numerical_host : experimental_host;
     std::vector<int> hosted;
@@ -89,7 +92,15 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
     if (!experimental_host.count(s))
       throw std::invalid_argument("experimental storey " + std::to_string(s + 1) +
                                   " is hosted by no actuator emulator (deployment.nodes)");
+  (void)with_node_compensation(base, plan);  // refuses bad blocks before any node is started
   return plan;
+}
+
+core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan) {
+  for (const NodePlan& node : plan.nodes)
+    core::apply_compensation(setup, node.actuators, node.spec.compensation(),
+                             "deployment.nodes[id " + std::to_string(node.spec.id()) + "]");
+  return setup;
 }
 
 config::Deployment with_default_nodes(config::Deployment deployment,

@@ -8,6 +8,8 @@
 //   storey is hosted by exactly one node.
 //   An actuator emulator hosts experimental storeys (empty = all); every experimental storey is
 //   hosted by exactly one emulator.
+//   Only an actuator emulator carries `compensation`; its blocks are checked (count, fields, not
+//   also given by the case) against the setup's actuators.
 // Also: the node-side view of a study (what a node builds from its Assign without the motion file).
 
 #include <filesystem>
@@ -35,6 +37,11 @@ struct DeploymentPlan {
 };
 
 DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment);
+
+// The setup with each actuator emulator's `compensation` in front of the chains of the actuators it
+// hosts (core::apply_compensation): what the emulators run, so what an in-process run must use to
+// equal a lockstep distributed run. Throws std::invalid_argument naming the node.
+core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan);
 
 // The deployment with default nodes when it declares none: node 1 a substructure node (if any
 // storey has a numerical part), node 2 an actuator emulator (if any has an experimental part).

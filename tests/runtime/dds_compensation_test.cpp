@@ -1,6 +1,6 @@
 // Compensated cases over Cyclone DDS: the actuator emulator builds its actuators, compensator
 // included, from the same study case as the in-process run, so a lockstep run equals it bit for
-// bit. Real processes on loopback, DDS domains 200-202.
+// bit. Real processes on loopback, DDS domains 200-203.
 #include <gtest/gtest.h>
 
 #include "core/compensation.h"
@@ -79,6 +79,33 @@ TEST_F(DdsCompensation, AdaptedModelBasedOnThePaperFrameEqualsInProcessBitForBit
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_process);
+}
+
+// The compensation given on the emulator nodes of the deployment (one node per actuator, each its
+// own block), not in the case: the lockstep record equals the in-process run of a case that gives
+// the same blocks per actuator, bit for bit.
+TEST_F(DdsCompensation, CompensationOnTheEmulatorNodesEqualsTheCasesBitForBit) {
+  constexpr const char* kAts = "adaptive_time_series { window: 0.2 initial_a1: 0.02 }";
+  constexpr const char* kModelBased =
+      "model_based { plant { shift { delay: 0.0046 } } plant { first_order { time_constant: "
+      "0.0218 } } lead_order: 2 rolloff_frequency: 40 }";
+  const std::string cases = std::string("cases { name: \"mts\" ") + kMtsActuator + " }\n" +
+                            "cases { name: \"in_case\" " + kMtsActuator + " compensation { " +
+                            kModelBased + " } compensation { " + kAts + " } }";
+  const std::string deployment =
+      std::string("deployment { nodes { id: 1 kind: SUBSTRUCTURE } ") +
+      "nodes { id: 2 kind: ACTUATOR_EMULATOR storeys: [1] compensation { " + kModelBased + " } } " +
+      "nodes { id: 3 kind: ACTUATOR_EMULATOR storeys: [2] compensation { " + kAts + " } } }";
+  const std::string text = test::two_storey_study(
+      2, cases, deployment, "substructuring { experimental_fraction: 0.5 model { linear {} } }");
+  const core::SimulationResult in_case = test::reference_result(text, "in_case");
+  const core::SimulationResult bare = test::reference_result(text, "mts");
+  EXPECT_NE(bare.realised(500, 0), in_case.realised(500, 0));  // the blocks act
+  EXPECT_NE(bare.realised(500, 1), in_case.realised(500, 1));
+  const auto run = test::launch("compensated_on_nodes", text, "mts", 203);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  ASSERT_FALSE(run.record.truncated);
+  test::expect_record_equals(run.record, in_case);
 }
 
 }  // namespace

@@ -105,7 +105,7 @@ TEST_F(DdsRun, InjectedWallClockLagIsMeasuredAndLeavesTheLockstepResultUnchanged
 TEST_F(DdsRun, DelayStageAtTheEmulatorsInputReproducesTheInProcessDelayedResult) {
   const std::string text = test::paper_frame_study(
       2, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
-         "receive_delay_case: \"jitter\" } }");
+         "receive_delay { jitter { mean_delay: 0.01 std_dev: 0.003 seed: 5 } } } }");
   const auto run = test::launch("node_delay", text, "reference", 19);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "jitter"));

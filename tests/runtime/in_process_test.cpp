@@ -76,7 +76,7 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
   const std::string text = test::paper_frame_study(
       5, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
-         "receive_delay_case: \"lag_shift_14ms\" } }");
+         "receive_delay { shift { delay: 0.014 } } } }");
   const core::PreparedStudy prepared = test::prepare(text);
   coordinator::CoordinatorOptions options;
   options.run_id = "node-delay";
@@ -91,7 +91,7 @@ TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
 
 TEST(InProcess, NodeSendDelayDelaysTheForce) {
   const std::string text = test::paper_frame_study(
-      3, "deployment { nodes { id: 1 kind: SUBSTRUCTURE send_delay_case: \"lag_shift_14ms\" } "
+      3, "deployment { nodes { id: 1 kind: SUBSTRUCTURE send_delay { shift { delay: 0.014 } } } "
          "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "send-delay";
@@ -104,9 +104,68 @@ TEST(InProcess, NodeSendDelayDelaysTheForce) {
   EXPECT_GT((outcome.result.displacement - undelayed.displacement).cwiseAbs().maxCoeff(), 1e-5);
 }
 
-TEST(InProcess, UnknownNodeDelayCaseIsRefused) {
+// The emulator node's compensation block (deployment) acts as the case's block does (study).
+TEST(InProcess, CompensationOnTheEmulatorNodeEqualsTheCasesBitForBit) {
+  const std::string block = "compensation { polynomial { order: 2 lead: 0.014 } }";
   const std::string text = test::paper_frame_study(
-      1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay_case: \"nope\" } }");
+      2, "cases { name: \"compensated\" delay { shift { delay: 0.014 } } " + block + " }\n" +
+             "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
+             "ACTUATOR_EMULATOR " + block + " } }");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "node-compensation";
+  options.case_name = "lag_shift_14ms";
+  const auto outcome = coordinator::run_in_process(test::prepare(text), options);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  const auto in_case = test::reference_result(text, "compensated");
+  expect_identical(outcome.result, in_case);
+  EXPECT_GT((in_case.displacement - test::reference_result(text, "lag_shift_14ms").displacement)
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-6);
+}
+
+// Compensation given twice (case and node), on a substructure node, or in a count that fits
+// neither "one for all" nor "one per hosted actuator" is refused naming the node.
+TEST(InProcess, MisplacedNodeCompensationIsRefusedNamingTheNode) {
+  const std::string block = "compensation { polynomial { order: 2 lead: 0.014 } }";
+  const auto refusal = [](const std::string& text, const std::string& case_name) -> std::string {
+    coordinator::CoordinatorOptions options;
+    options.run_id = "x";
+    options.case_name = case_name;
+    try {
+      coordinator::run_in_process(test::prepare(text), options);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const std::string twice = refusal(
+      test::paper_frame_study(1, "cases { name: \"c\" " + block + " }\n deployment { nodes { id: 2 "
+                                 "kind: ACTUATOR_EMULATOR " + block + " } }"),
+      "c");
+  EXPECT_NE(twice.find("nodes[id 2]"), std::string::npos) << twice;
+  EXPECT_NE(twice.find("one place"), std::string::npos) << twice;
+  const std::string substructure = refusal(
+      test::paper_frame_study(1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE " + block +
+                                     " } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
+      "reference");
+  EXPECT_NE(substructure.find("nodes[id 1]"), std::string::npos) << substructure;
+  EXPECT_NE(substructure.find("ACTUATOR_EMULATOR"), std::string::npos) << substructure;
+  const std::string count = refusal(
+      test::paper_frame_study(1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR " + block +
+                                     " " + block + " } }"),
+      "reference");
+  EXPECT_NE(count.find("2 compensation blocks for 1 actuators"), std::string::npos) << count;
+  const std::string bad = refusal(
+      test::paper_frame_study(1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR compensation { "
+                                 "polynomial { order: 7 lead: 0.01 } } } }"),
+      "reference");
+  EXPECT_NE(bad.find("nodes[id 2] compensation[0]"), std::string::npos) << bad;
+}
+
+TEST(InProcess, ABadNodeDelayStageIsRefused) {
+  const std::string text = test::paper_frame_study(
+      1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay { first_order { time_constant: -1 } } } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "x";
   EXPECT_THROW(coordinator::run_in_process(test::prepare(text), options), std::invalid_argument);

@@ -163,7 +163,7 @@ TEST(ActuatorService, AStreamingServoRefusesAPerCommandSendStage) {
   ASSERT_TRUE(runtime::unpack(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0},
                                              "servo { rate: 4000 } deployment { clock: REAL_TIME }"),
                               assign));
-  assign.mutable_node()->set_send_delay_case("jitter");
+  assign.mutable_node()->add_send_delay()->mutable_shift()->set_delay(0.01);
   const auto ready = node.handle(runtime::pack(kRun, 2, runtime::ASSIGN, 0, assign));
   ASSERT_EQ(ready.size(), 1u);
   runtime::Ready r;
