@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "runtime/plan.h"
 
 namespace rths::actuator_emulator {
@@ -27,8 +29,12 @@ int ActuatorService::configure(const runtime::Assign& assign) {
   }
   const bool real_time = assign.study().deployment().clock() == config::Deployment::REAL_TIME;
   servo_period_ = real_time && setup.servo_substeps > 1 ? setup.dt / setup.servo_substeps : 0.0;
+  dt_ = setup.dt;
   realised_.assign(actuators_.size(), 0.0);
   last_command_.assign(actuators_.size(), 0.0);
+  previous_drift_.assign(actuators_.size(), 0.0);
+  largest_command_change_.assign(actuators_.size(), 0.0);
+  commanded_ = false;
   max_displacement_step_ = assign.study().deployment().limits().max_displacement_step();
   return static_cast<int>(actuators_.size());
 }
@@ -54,8 +60,18 @@ void ActuatorService::require_sizes(const runtime::Command& command) const {
                                 " drifts for " + std::to_string(n) + " actuators");
 }
 
+void ActuatorService::note_command(const runtime::Command& command) {
+  for (std::size_t i = 0; i < actuators_.size(); ++i) {
+    const double drift = command.drift(static_cast<int>(i));
+    if (commanded_) largest_command_change_[i] = std::max(largest_command_change_[i], std::abs(drift - previous_drift_[i]));
+    previous_drift_[i] = drift;
+  }
+  commanded_ = true;
+}
+
 void ActuatorService::load(const runtime::Command& command) {
   require_sizes(command);
+  note_command(command);
   for (int i = 0; i < static_cast<int>(actuators_.size()); ++i)
     actuators_[i].command({command.time(), command.drift(i), command.drift_velocity(i)});
 }
@@ -69,8 +85,59 @@ void ActuatorService::tick(runtime::Feedback& feedback) {
   }
 }
 
+void ActuatorService::on_hold() {
+  hold_settles_.assign(actuators_.size(), HoldSettle{});
+  for (std::size_t i = 0; i < actuators_.size(); ++i) {
+    core::Actuator& actuator = actuators_[i];
+    HoldSettle& h = hold_settles_[i];
+    h.from = actuator.target_displacement();
+    h.position = realised_[i];
+    const int substeps = actuator.servo_substeps();
+    const double span = std::abs(h.from - h.position);
+    const double per_command =
+        max_displacement_step_ > 0 ? max_displacement_step_ : largest_command_change_[i];
+    h.max_change = per_command > 0 ? per_command / substeps : (span > 0 ? span / substeps : 1.0);
+    actuator.hold(h.position, h.max_change);
+  }
+}
+
+void ActuatorService::on_settle() {
+  for (std::size_t i = 0; i < actuators_.size(); ++i) {
+    core::Actuator& actuator = actuators_[i];
+    HoldSettle& h = hold_settles_.at(i);
+    const double period = servo_period_ > 0 ? servo_period_ : dt_ / actuator.servo_substeps();
+    const int max_ticks = static_cast<int>(kMaxSettleTime / period);
+    double target = h.from, realised = realised_[i];
+    for (int tick = 1; tick <= max_ticks; ++tick) {
+      const core::ActuatorOutput out = actuator.tick();
+      const double now_target = actuator.target_displacement();
+      if (h.ramp_ticks == 0) {
+        h.largest_target_change = std::max(h.largest_target_change, std::abs(now_target - target));
+        if (actuator.hold_reached()) h.ramp_ticks = tick;
+      }
+      h.largest_realised_change = std::max(h.largest_realised_change, std::abs(out.realised - realised));
+      target = now_target;
+      realised = out.realised;
+      if (h.ramp_ticks > 0 && std::abs(realised - h.position) <= 1e-6) {
+        h.settled = true;
+        h.settle_time = tick * period;
+        break;
+      }
+    }
+    h.realised = realised;
+    realised_[i] = realised;
+    spdlog::warn("{}: actuator {} held: target ramped from {:.6f} m to {:.6f} m at <= {:.6f} m per "
+                 "servo period in {} periods; realised {:.6f} m{}",
+                 label(), i + 1, h.from, h.position, h.max_change, h.ramp_ticks, realised,
+                 h.settled ? " at rest after " + std::to_string(h.settle_time) + " s"
+                           : " (not within 1 um of the hold position after " +
+                                 std::to_string(kMaxSettleTime) + " s)");
+  }
+}
+
 void ActuatorService::compute(const runtime::Command& command, runtime::Feedback& feedback) {
   require_sizes(command);
+  note_command(command);
   const int n = static_cast<int>(actuators_.size());
   for (int i = 0; i < n; ++i) {
     const core::ActuatorOutput out =

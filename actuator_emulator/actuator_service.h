@@ -4,8 +4,12 @@
 // one per hosted actuator, and Command.time (s). Output: Feedback.realised (m) and Feedback.force
 // (N, measured), same order.
 //
-// Faults (the contract a lab relies on; HOLD = freeze at the last realised position, so the
-// specimen sees no jump in position, and ignore every later command):
+// Faults (the contract a lab relies on; HOLD = ignore every later command and bring each actuator
+// to rest at the position the specimen had when the hold began, as a servo controller's interlock
+// does: the servo's target ramps there from where it was at the rate limit,
+// deployment.limits.max_displacement_step per command period, never in a jump (no rate limit: at
+// the largest change between two commands the run has sent, so a hold is never faster than the test). The emulator plays this ramp in simulated time once the HOLD has been
+// reported (on_settle, so it never delays the report) and logs it; hold_settles() has it.):
 //   HOLD from the coordinator                         -> hold at once (the next command is ignored).
 //   a command whose drift changes by more than        -> hold on its own before acting on it, and
 //     deployment.limits.max_displacement_step            answer HOLD (with the reason) instead of
@@ -30,7 +34,23 @@ namespace rths::actuator_emulator {
 class ActuatorService final : public runtime::NodeService {
  public:
   ActuatorService(std::int32_t node_id, std::string expected_run_id);
-  double held_position(int index) const { return realised_.at(index); }
+  // Where actuator `index` is held (m): the realised drift when the hold began.
+  double held_position(int index) const { return hold_settles_.empty() ? realised_.at(index) : hold_settles_.at(index).position; }
+
+  // How one actuator came to rest after a hold (all SI: m, s).
+  struct HoldSettle {
+    double from = 0.0;            // the servo's target when the hold began
+    double position = 0.0;        // the hold position (realised drift when the hold began)
+    double max_change = 0.0;      // the ramp's limit per servo period
+    int ramp_ticks = 0;           // servo periods until the target reached the hold position
+    double largest_target_change = 0.0;    // per servo period, over the ramp (<= max_change)
+    double largest_realised_change = 0.0;  // per servo period, until rest
+    double realised = 0.0;        // at rest (or when the settle gave up)
+    double settle_time = 0.0;     // s of simulated time until |realised - position| <= 1 um
+    bool settled = false;         // within 1 um of the hold position within kMaxSettleTime
+  };
+  static constexpr double kMaxSettleTime = 2.0;  // s
+  const std::vector<HoldSettle>& hold_settles() const { return hold_settles_; }
 
  protected:
   int configure(const runtime::Assign& assign) override;
@@ -39,12 +59,20 @@ class ActuatorService final : public runtime::NodeService {
   double servo_period() const override { return servo_period_; }
   void load(const runtime::Command& command) override;
   void tick(runtime::Feedback& feedback) override;
+  void on_hold() override;
+  void on_settle() override;
 
  private:
   std::vector<core::Actuator> actuators_;
   std::vector<double> realised_;
+  std::vector<HoldSettle> hold_settles_;
+  std::vector<double> previous_drift_;          // m, the newest command's drift
+  std::vector<double> largest_command_change_;  // m, largest |drift change| between two commands
+  bool commanded_ = false;
+  void note_command(const runtime::Command& command);
   std::vector<double> last_command_;    // m, drift of the previous accepted command
   double max_displacement_step_ = 0.0;  // m per command; 0 = no rate limit
+  double dt_ = 0.0;            // s, the integrator step
   double servo_period_ = 0.0;  // s; > 0 only in real time with a servo faster than the integrator
   void require_sizes(const runtime::Command& command) const;
 };

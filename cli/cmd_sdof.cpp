@@ -34,15 +34,7 @@ config::Study study_from_flags(const SdofOptions& o) {
   if (!o.motion_units.empty()) study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   study.mutable_integrator()->set_dt(o.dt);
   study.mutable_integrator()->set_allow_unstable(o.allow_unstable);
-  const auto kind = core::integrator_from_string(o.integrator);
-  const std::map<core::IntegratorKind, config::Integrator::Kind> kinds = {
-      {core::IntegratorKind::kExplicitNewmark, config::Integrator::EXPLICIT_NEWMARK},
-      {core::IntegratorKind::kCentralDifference, config::Integrator::CENTRAL_DIFFERENCE},
-      {core::IntegratorKind::kChenRicles, config::Integrator::CHEN_RICLES},
-      {core::IntegratorKind::kNewmarkAverageAcceleration, config::Integrator::NEWMARK_AVERAGE_ACCELERATION},
-      {core::IntegratorKind::kAlphaOS, config::Integrator::ALPHA_OS},
-      {core::IntegratorKind::kKRAlpha, config::Integrator::KR_ALPHA}};
-  study.mutable_integrator()->set_kind(kinds.at(kind));
+  study.mutable_integrator()->set_kind(core::config_integrator_kind(core::integrator_from_string(o.integrator)));
   study.mutable_substructuring()->set_experimental_fraction(o.alpha);
   study.add_cases()->set_name("reference");
   config::Case* delayed = study.add_cases();

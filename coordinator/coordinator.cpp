@@ -45,13 +45,6 @@ double seconds_since(Clock::time_point t) {
 
 }  // namespace
 
-std::string make_run_id() {
-  char host[128] = {};
-  gethostname(host, sizeof host - 1);
-  return std::string(host) + "-" + std::to_string(getpid()) + "-" +
-         std::to_string(transport::realtime_ns());
-}
-
 struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   core::PreparedStudy prepared;
   core::HybridSetup setup;
@@ -592,6 +585,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
                         s.setup.allow_unstable);
   s.deployment = runtime::with_default_nodes(s.deployment, s.setup);
   plan_ = runtime::make_plan(s.setup, s.deployment);
+  runtime::check_node_stages(plan_, s.setup.dt, s.prepared.base_dir);
   s.plan = &plan_;
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
   const std::size_t steps = s.prepared.motion.acceleration.size();

@@ -88,9 +88,6 @@ struct RunOutcome {
   double max_lateness = 0.0;  // s, real time
 };
 
-// Generates "<host>-<pid>-<realtime ns>".
-std::string make_run_id();
-
 class Coordinator {
  public:
   // Throws std::invalid_argument for a deployment that does not fit the study, an implicit

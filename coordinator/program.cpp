@@ -8,6 +8,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "runtime/launch.h"
 #include "security/check.h"
 #include "security/pki.h"
 #include "transport/dds_endpoint.h"
@@ -18,7 +19,9 @@ std::string summary_text(const RunOutcome& o) {
   std::ostringstream out;
   const auto& c = o.counters;
   out << "status: " << o.status << (o.failed_node.empty() ? "" : " [" + o.failed_node + "]")
-      << "\nsteps: " << c.steps() << " in " << o.wall_seconds << " s"
+      // The record holds the initial state and one row per commanded step, as `rths run` counts.
+      << "\nsteps: " << c.steps() + 1 << " recorded (" << c.steps() << " commanded) in "
+      << o.wall_seconds << " s"
       << "\nrejected: foreign-run " << c.foreign_run() << ", garbage " << c.garbage()
       << ", duplicate " << c.duplicate() << ", stale " << c.stale() << ", out-of-order "
       << c.out_of_order() << ", unknown-node " << c.unknown_node()
@@ -80,7 +83,7 @@ int coordinator_main(int argc, char** argv) {
     CoordinatorOptions co;
     co.run_id = !run_id.empty() ? run_id
                 : !study.deployment().run_id().empty() ? study.deployment().run_id()
-                                                       : make_run_id();
+                                                       : runtime::make_run_id(study.name() + "-" + (case_name.empty() ? std::string("reference") : case_name));
     co.case_name = case_name;
     co.record = record;
     coordinator = std::make_unique<Coordinator>(std::move(prepared), *endpoint, co);

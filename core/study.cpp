@@ -8,6 +8,7 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace rths::core {
 namespace {
@@ -307,15 +308,27 @@ StructuralModel make_structure(const config::Structure& structure) {
   return model;
 }
 
+namespace {
+// The one map between the config's integrator kinds and core's, read both ways.
+constexpr std::pair<config::Integrator::Kind, IntegratorKind> kIntegratorKinds[] = {
+    {config::Integrator::EXPLICIT_NEWMARK, IntegratorKind::kExplicitNewmark},
+    {config::Integrator::CENTRAL_DIFFERENCE, IntegratorKind::kCentralDifference},
+    {config::Integrator::CHEN_RICLES, IntegratorKind::kChenRicles},
+    {config::Integrator::NEWMARK_AVERAGE_ACCELERATION, IntegratorKind::kNewmarkAverageAcceleration},
+    {config::Integrator::ALPHA_OS, IntegratorKind::kAlphaOS},
+    {config::Integrator::KR_ALPHA, IntegratorKind::kKRAlpha}};
+}  // namespace
+
 IntegratorKind integrator_kind(const config::Integrator& integrator) {
-  switch (integrator.kind()) {
-    case config::Integrator::CENTRAL_DIFFERENCE: return IntegratorKind::kCentralDifference;
-    case config::Integrator::CHEN_RICLES: return IntegratorKind::kChenRicles;
-    case config::Integrator::NEWMARK_AVERAGE_ACCELERATION: return IntegratorKind::kNewmarkAverageAcceleration;
-    case config::Integrator::ALPHA_OS: return IntegratorKind::kAlphaOS;
-    case config::Integrator::KR_ALPHA: return IntegratorKind::kKRAlpha;
-    default: return IntegratorKind::kExplicitNewmark;
-  }
+  for (const auto& [config_kind, kind] : kIntegratorKinds)
+    if (config_kind == integrator.kind()) return kind;
+  return IntegratorKind::kExplicitNewmark;
+}
+
+config::Integrator::Kind config_integrator_kind(IntegratorKind kind) {
+  for (const auto& [config_kind, core_kind] : kIntegratorKinds)
+    if (core_kind == kind) return config_kind;
+  throw std::invalid_argument("integrator " + to_string(kind) + " has no config kind");
 }
 
 int servo_substeps(const config::Study& study, double dt) {

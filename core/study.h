@@ -51,6 +51,8 @@ DelayChain make_delay_chain(const google::protobuf::RepeatedPtrField<config::Del
 StoreyModelFactory make_storey_factory(const config::RestoringForce& model);
 StructuralModel make_structure(const config::Structure& structure);
 IntegratorKind integrator_kind(const config::Integrator& integrator);
+// The inverse: the config kind of a core integrator (every core kind has one).
+config::Integrator::Kind config_integrator_kind(IntegratorKind kind);
 
 // A study made ready to run: the motion resampled to the step, the structure and the partition.
 struct PreparedStudy {

@@ -1,5 +1,7 @@
 #include "core/substructure.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -127,7 +129,10 @@ Actuator::Actuator(DelayChain chain, std::unique_ptr<RestoringForceModel> specim
 }
 
 Actuator::Actuator(const Actuator& other)
-    : chain_(other.chain_), specimen_(other.specimen_->clone()) {}
+    : chain_(other.chain_), specimen_(other.specimen_->clone()), substeps_(other.substeps_),
+      servo_period_(other.servo_period_), ramp_from_(other.ramp_from_), ramp_to_(other.ramp_to_),
+      ramp_tick_(other.ramp_tick_), holding_(other.holding_), hold_target_(other.hold_target_),
+      hold_position_(other.hold_position_), hold_max_change_(other.hold_max_change_) {}
 
 Actuator& Actuator::operator=(const Actuator& other) {
   if (this != &other) *this = Actuator(other);
@@ -163,8 +168,29 @@ void Actuator::command(const CommandSample& command) {
   ramp_tick_ = 0;
 }
 
+void Actuator::hold(double position, double max_change) {
+  if (!(max_change > 0)) throw std::invalid_argument("a hold ramp needs a positive rate (m per tick)");
+  if (!holding_) hold_target_ = target_at(ramp_tick_);
+  holding_ = true;
+  hold_position_ = position;
+  hold_max_change_ = max_change;
+}
+
 ActuatorOutput Actuator::tick() {
-  const CommandSample target = target_at(++ramp_tick_);
+  CommandSample target;
+  if (holding_) {
+    const double change =
+        std::clamp(hold_position_ - hold_target_.displacement, -hold_max_change_, hold_max_change_);
+    // Landing exactly on the hold position (not within rounding) makes hold_reached() exact.
+    hold_target_.displacement = std::abs(hold_position_ - hold_target_.displacement) <= hold_max_change_
+                                    ? hold_position_
+                                    : hold_target_.displacement + change;
+    hold_target_.velocity = servo_period_ > 0 ? change / servo_period_ : 0.0;
+    hold_target_.time += servo_period_;
+    target = hold_target_;
+  } else {
+    target = target_at(++ramp_tick_);
+  }
   ActuatorOutput out;
   out.realised = chain_.empty() ? target.displacement : chain_.step(target);
   out.force = specimen_->step(out.realised);
@@ -183,6 +209,7 @@ void Actuator::reset() {
   specimen_->reset();
   ramp_from_ = ramp_to_ = CommandSample{};
   ramp_tick_ = substeps_;
+  holding_ = false;
 }
 
 void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<int>& actuator_storeys,

@@ -92,6 +92,11 @@ struct ActuatorOutput {
 // step(c) = command(c) then `substeps` ticks, returning the last: the lockstep / in-process form,
 // so in-process and distributed lockstep runs of the same multi-rate model agree bit for bit.
 // command() + tick() paced by a clock is the real-time form (actuator_emulator's servo loop).
+// hold(position, max_change) is the servo controller's interlock: from then on each tick moves the
+// target from where it is toward `position` (m) by at most `max_change` (m), with commanded
+// velocity = change / servo period, then keeps it there; the chain and the specimen keep acting,
+// so the realised drift comes to rest without a jump. Commands after hold() are the caller's to
+// refuse (command() is not to be called while holding).
 class Actuator {
  public:
   Actuator(DelayChain chain, std::unique_ptr<RestoringForceModel> specimen);
@@ -107,6 +112,13 @@ class Actuator {
   ActuatorOutput tick();
   // Servo periods since the newest command (0 before the first tick of its ramp).
   int ticks_since_command() const { return ramp_tick_; }
+  // @pre max_change > 0 (m per tick).
+  void hold(double position, double max_change);
+  bool holding() const { return holding_; }
+  // The servo's present target displacement (m): mid-ramp, at a command, or on the way to hold.
+  double target_displacement() const { return holding_ ? hold_target_.displacement : target_at(ramp_tick_).displacement; }
+  // Holding and the target has reached the hold position.
+  bool hold_reached() const { return holding_ && hold_target_.displacement == hold_position_; }
   // Without a delay stage the specimen can be evaluated at trial drifts (implicit reference runs).
   ForceState trial_undelayed(double drift) { return specimen_->trial(drift); }
   void commit_undelayed() { specimen_->commit(); }
@@ -122,6 +134,10 @@ class Actuator {
   double servo_period_ = 0.0;  // s; 0 = not set (only needed past the end of a ramp)
   CommandSample ramp_from_, ramp_to_;
   int ramp_tick_ = 1;  // ticks of the present ramp done; >= substeps_: at the target
+  bool holding_ = false;
+  CommandSample hold_target_;   // the target while holding (moves toward hold_position_)
+  double hold_position_ = 0.0;  // m
+  double hold_max_change_ = 0.0;  // m per tick
 };
 
 // Actuator `a` of a partition (at storey actuator_storeys[a]): the chain, a clone of that storey's

@@ -113,6 +113,8 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
       if (now - last_from_coordinator > orphan_ns) {
         spdlog::error("{}: coordinator silent for {:.3f} s; holding and leaving", service.label(),
                       static_cast<double>(now - last_from_coordinator) * 1e-9);
+        if (auto hold = service.hold_on_own("coordinator silent")) endpoint.send(*hold);
+        service.settle_hold();
         return 1;
       }
     }
@@ -162,11 +164,13 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
       }
       if (service.stopped()) {
         for (auto& d : outbound) endpoint.send(d.message);
+        service.settle_hold();
         spdlog::info("{}: stopped after step {} ({} messages rejected)", service.label(),
                      service.last_step(), service.rejected().total());
         return 0;
       }
     }
+    service.settle_hold();  // after a hold was reported (no-op otherwise, and after the first)
     // Sleep until the next thing due, or a message.
     std::int64_t wake = service.assigned() ? next_heartbeat : next_announce;
     if (watchdog_ns > 0 && last_command_ns > 0 && !service.held())

@@ -49,6 +49,14 @@ class NodeService : public transport::NodeHandler {
   // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
   void set_injected_lag(double seconds) { injected_lag_ = seconds; }
 
+  // Held and not yet settled: runs on_settle() once. The node loop calls it after a hold.
+  void settle_hold() {
+    if (held_ && !settled_) {
+      settled_ = true;
+      on_settle();
+    }
+  }
+
   bool assigned() const { return assigned_; }
   bool held() const { return held_; }
   bool stopped() const { return stopped_; }
@@ -65,6 +73,9 @@ class NodeService : public transport::NodeHandler {
   // One step. Fills force (and realised for actuators), one entry per hosted storey.
   virtual void compute(const Command& command, Feedback& feedback) = 0;
   virtual void on_hold() {}
+  // Once per hold, after the HOLD has been reported (so its cost never delays the report):
+  // whatever the node does to come to rest (the emulator's rate-limited ramp).
+  virtual void on_settle() {}
   // Real time: the servo period (s) when the node runs a servo loop faster than the integrator,
   // else 0 (answer each command with compute()). Asked once, after configure().
   virtual double servo_period() const { return 0.0; }
@@ -80,7 +91,7 @@ class NodeService : public transport::NodeHandler {
   std::int32_t node_id_;
   config::NodeSpec::Kind kind_;
   std::string expected_run_id_, run_id_;
-  bool assigned_ = false, held_ = false, stopped_ = false;
+  bool assigned_ = false, held_ = false, settled_ = false, stopped_ = false;
   std::string configure_error_;
   int hosted_ = 0;
   Assign assignment_;

@@ -103,6 +103,20 @@ core::HybridSetup with_node_compensation(core::HybridSetup setup, const Deployme
   return setup;
 }
 
+void check_node_stages(const DeploymentPlan& plan, double dt, const std::filesystem::path& base_dir) {
+  for (const NodePlan& node : plan.nodes) {
+    const std::string where = "deployment.nodes[id " + std::to_string(node.spec.id()) + "]";
+    for (const auto& [field, stages] : {std::pair{".receive_delay", &node.spec.receive_delay()},
+                                        std::pair{".send_delay", &node.spec.send_delay()}}) {
+      try {
+        (void)core::make_delay_chain(*stages, dt, base_dir);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(where + field + ": " + e.what());
+      }
+    }
+  }
+}
+
 config::Deployment with_default_nodes(config::Deployment deployment,
                                      const core::HybridSetup& base) {
   if (deployment.nodes_size() > 0) return deployment;

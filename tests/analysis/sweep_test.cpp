@@ -311,7 +311,7 @@ void expect_bad_config(const std::string& text, const std::string& expected_frag
 }
 
 TEST(SweepConfig, BadInputNamesTheField) {
-  expect_bad_config(study_text("periods: [0.5] delays: [0.01] delay_model: \"LAG\""), "delay_model");  // refused by the parser: the field is an enum
+  expect_bad_config(study_text("periods: [0.5] delays: [0.01] delay_model: LAG"), "delay_model");  // refused by the parser: an enum
   expect_bad_config(study_text("periods: [0.5]"), "sweep.delays");
   expect_bad_config(study_text("periods: [-0.5] delays: [0.01]"), "sweep.periods");
   expect_bad_config(study_text("periods: [0.5] delays: [-0.01]"), "sweep.delays");

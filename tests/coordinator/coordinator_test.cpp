@@ -3,6 +3,7 @@
 // a node that stops answering stops it within max_missed_answers steps, a rate limit stops it
 // before the offending command leaves, and an emulator that refuses a command stops it.
 #include "coordinator/coordinator.h"
+#include "coordinator/program.h"
 
 #include <gtest/gtest.h>
 
@@ -153,6 +154,16 @@ TEST(Coordinator, DivergedRunFailsAndKeepsTheStepsUpToIt) {
       << o.result.steps() << " steps, " << o.result.displacement.rows() << " rows; "
       << o.result.displacement.bottomRows(3);
   EXPECT_LE(o.result.displacement.topRows(o.result.steps() - 1).cwiseAbs().maxCoeff(), 5e-5);
+}
+
+// The summary counts steps as the record and `rths run` do: the initial state plus each
+// commanded step (a coordinator that counted exchanges printed one fewer than `run`).
+TEST(Coordinator, SummaryCountsStepsAsTheRecordDoes) {
+  RunOutcome outcome;
+  outcome.status = "completed";
+  outcome.counters.set_steps(39069);
+  const std::string text = coordinator::summary_text(outcome);
+  EXPECT_NE(text.find("steps: 39070 recorded (39069 commanded)"), std::string::npos) << text;
 }
 
 }  // namespace

@@ -271,5 +271,16 @@ TEST_F(MotionUnits, AnAt2FileIsInGAndRefusesAnotherUnit) {
   EXPECT_THROW(units_from_name("ft/s2"), std::invalid_argument);
 }
 
+// The config's integrator kinds and core's map one to one, both ways (the `sdof` command builds
+// its study through the inverse).
+TEST(StudyTest, EveryIntegratorKindMapsToTheConfigAndBack) {
+  for (int k = config::Integrator::Kind_MIN; k <= config::Integrator::Kind_MAX; ++k) {
+    config::Integrator integrator;
+    integrator.set_kind(static_cast<config::Integrator::Kind>(k));
+    EXPECT_EQ(config_integrator_kind(integrator_kind(integrator)), integrator.kind()) << k;
+  }
+  EXPECT_EQ(integrator_kind(config::Integrator{}), IntegratorKind::kExplicitNewmark);
+}
+
 }  // namespace
 }  // namespace rths::core

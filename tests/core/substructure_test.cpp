@@ -164,6 +164,34 @@ TEST(ActuatorServoTest, FasterServoWithAFirstOrderLagConvergesToTheContinuousRes
   EXPECT_LT(error_with(8), 0.5 * error_with(1));
 }
 
+TEST(ActuatorServoTest, HoldRampsTheTargetFromWhereItIsAtMostMaxChangePerTickThenStays) {
+  Actuator actuator = undelayed_spring(1000.0);
+  actuator.set_servo(4, 0.00025);
+  actuator.command({0.001, 0.004, 0.0});
+  actuator.tick();  // target 1 mm, mid-ramp
+  actuator.tick();  // 2 mm
+  actuator.hold(-0.001, 0.0012);
+  EXPECT_TRUE(actuator.holding());
+  EXPECT_DOUBLE_EQ(actuator.target_displacement(), 0.002);  // starts where the servo is
+  EXPECT_NEAR(actuator.tick().realised, 0.0008, 1e-15);
+  EXPECT_NEAR(actuator.tick().realised, -0.0004, 1e-15);
+  EXPECT_FALSE(actuator.hold_reached());
+  EXPECT_EQ(actuator.tick().realised, -0.001);  // lands exactly, 0.6 mm < 1.2 mm left
+  EXPECT_TRUE(actuator.hold_reached());
+  EXPECT_EQ(actuator.tick().realised, -0.001);  // and stays
+  EXPECT_THROW(actuator.hold(0.0, 0.0), std::invalid_argument);
+}
+
+TEST(ActuatorServoTest, ACopyKeepsItsServoAndRampState) {
+  Actuator actuator = undelayed_spring(1000.0);
+  actuator.set_servo(4, 0.00025);
+  actuator.command({0.001, 0.004, 0.0});
+  actuator.tick();
+  Actuator copy(actuator);
+  EXPECT_EQ(copy.servo_substeps(), 4);
+  EXPECT_EQ(copy.tick().realised, actuator.tick().realised);
+}
+
 TEST(ActuatorServoTest, BadServoSettingsAreRefused) {
   Actuator actuator = undelayed_spring(1.0);
   EXPECT_THROW(actuator.set_servo(0, 0.001), std::invalid_argument);

@@ -163,12 +163,19 @@ TEST(InProcess, MisplacedNodeCompensationIsRefusedNamingTheNode) {
   EXPECT_NE(bad.find("nodes[id 2] compensation[0]"), std::string::npos) << bad;
 }
 
-TEST(InProcess, ABadNodeDelayStageIsRefused) {
+TEST(InProcess, ABadNodeDelayStageIsRefusedNamingTheNodeBeforeTheRun) {
   const std::string text = test::paper_frame_study(
-      1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay { first_order { time_constant: -1 } } } }");
+      1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay { first_order { "
+         "time_constant: -1 } } } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "x";
-  EXPECT_THROW(coordinator::run_in_process(test::prepare(text), options), std::invalid_argument);
+  try {
+    coordinator::run_in_process(test::prepare(text), options);
+    ADD_FAILURE() << "a negative time constant was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("deployment.nodes[id 2].receive_delay"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(InProcess, DeploymentThatDoesNotCoverTheExperimentalStoreyIsRefused) {

@@ -112,6 +112,48 @@ TEST(ActuatorService, DelaysTheCommandInSimulatedTimeAndHolds) {
   EXPECT_NEAR(node.held_position(0), 0.006, 1e-12);
 }
 
+// The interlock ramps the servo's target from where it was (20 mm, the newest command) back to
+// where the specimen was when the hold began (6 mm, behind the 14 ms shift) at the rate limit, and
+// the specimen comes to rest there: no change per period larger than the limit, target or realised.
+TEST(ActuatorService, HoldRampsToRestAtTheRateLimitNeverInAJump) {
+  actuator_emulator::ActuatorService node(2, "");
+  node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0},
+                             "deployment { limits { max_displacement_step: 0.0015 } }"));
+  for (int k = 1; k <= 20; ++k) ASSERT_EQ(node.handle(command(2, k, 0.001 * k, 1.0)).size(), 1u);
+  node.handle(runtime::pack(kRun, 2, runtime::HOLD, 20, runtime::Hold{}));
+  ASSERT_TRUE(node.held());
+  ASSERT_EQ(node.hold_settles().size(), 1u);
+  EXPECT_EQ(node.hold_settles()[0].ramp_ticks, 0);  // reported first, settled after
+  node.settle_hold();
+  const auto& h = node.hold_settles()[0];
+  EXPECT_NEAR(h.from, 0.020, 1e-12);
+  EXPECT_NEAR(h.position, 0.006, 1e-12);
+  EXPECT_DOUBLE_EQ(h.max_change, 0.0015);
+  EXPECT_EQ(h.ramp_ticks, 10);  // ceil(14 mm / 1.5 mm)
+  EXPECT_LE(h.largest_target_change, 0.0015 + 1e-15);
+  EXPECT_LE(h.largest_realised_change, 0.0015 + 1e-15);
+  EXPECT_TRUE(h.settled);
+  EXPECT_NEAR(h.realised, 0.006, 1e-6);
+  EXPECT_NEAR(node.held_position(0), 0.006, 1e-12);
+  node.settle_hold();  // once only
+  EXPECT_EQ(node.hold_settles()[0].ramp_ticks, 10);
+}
+
+// Without a rate limit the ramp runs at the largest change between two commands of the run (1 mm
+// here), never faster than the test itself moved.
+TEST(ActuatorService, HoldWithoutARateLimitRampsAtTheRunsOwnLargestChange) {
+  actuator_emulator::ActuatorService node(2, "");
+  node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0}));
+  for (int k = 1; k <= 20; ++k) ASSERT_EQ(node.handle(command(2, k, 0.001 * k, 1.0)).size(), 1u);
+  node.handle(runtime::pack(kRun, 2, runtime::HOLD, 20, runtime::Hold{}));
+  node.settle_hold();
+  const auto& h = node.hold_settles()[0];
+  EXPECT_NEAR(h.max_change, 0.001, 1e-12);
+  EXPECT_EQ(h.ramp_ticks, 14);
+  EXPECT_LE(h.largest_target_change, 0.001 + 1e-12);
+  EXPECT_TRUE(h.settled);
+}
+
 TEST(ActuatorService, LockstepServoRunsItsPeriodsPerCommandAndAnswersOnce) {
   actuator_emulator::ActuatorService node(2, "");
   node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0}, "servo { rate: 4000 }"));
