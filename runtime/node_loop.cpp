@@ -28,6 +28,8 @@ std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(s * 1e9)
 
 }  // namespace
 
+
+
 int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoopOptions& options) {
   using transport::realtime_ns;
   std::deque<Delayed> inbound, outbound;
@@ -85,6 +87,35 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
     });
   };
 
+  // A message off the transport: stamps what the watchdogs watch, then waits its receive lag.
+  const auto take = [&](transport::Message message) {
+    if (service.assigned() && message.run_id == service.run_id()) {
+      last_from_coordinator = message.received_ns;
+      if (message.kind == COMMAND) last_command_ns = message.received_ns;
+    }
+    if (receive_lag) {
+      const auto release = receive_lag->schedule(message.received_ns);
+      if (!release) return;  // lost
+      inbound.push_back({*release, std::move(message), receive_lag->last_delay()});
+    } else {
+      inbound.push_back({message.received_ns, std::move(message), 0.0});
+    }
+  };
+  // Whether no command has arrived for the watchdog's time. A node that was itself descheduled
+  // wakes with commands waiting on its receive thread: it lets that thread deliver them (a grace
+  // of kWatchdogGrace, lock released) and takes what is queued before it judges the coordinator
+  // silent, so its own stall is not read as the coordinator's. A true silence holds at most the
+  // grace later.
+  const auto commands_stopped = [&](std::int64_t now) {
+    if (watchdog_ns <= 0 || last_command_ns <= 0 || service.held() || now - last_command_ns <= watchdog_ns)
+      return false;
+    lock.unlock();
+    std::this_thread::sleep_for(kWatchdogGrace);
+    lock.lock();
+    while (auto queued = endpoint.receive(std::chrono::nanoseconds(0))) take(std::move(*queued));
+    return !service.held() && realtime_ns() - last_command_ns > watchdog_ns;
+  };
+
   for (;;) {
     const std::int64_t now = realtime_ns();
     if (!service.assigned()) {
@@ -102,9 +133,8 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
         endpoint.send(service.heartbeat());
         next_heartbeat = now + heartbeat_ns;
       }
-      if (watchdog_ns > 0 && last_command_ns > 0 && !service.held() &&
-          now - last_command_ns > watchdog_ns) {
-        const double silent_ms = static_cast<double>(now - last_command_ns) * 1e-6;
+      if (commands_stopped(now)) {
+        const double silent_ms = static_cast<double>(realtime_ns() - last_command_ns) * 1e-6;
         if (auto hold = service.hold_on_own(
                 "command watchdog: no fresh command for " + std::to_string(silent_ms) +
                 " ms (limit " + std::to_string(static_cast<double>(watchdog_ns) * 1e-6) + " ms)"))
@@ -181,18 +211,7 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
     lock.unlock();
     auto message = endpoint.receive(timeout);
     lock.lock();
-    if (!message) continue;
-    if (service.assigned() && message->run_id == service.run_id()) {
-      last_from_coordinator = message->received_ns;
-      if (message->kind == COMMAND) last_command_ns = message->received_ns;
-    }
-    if (receive_lag) {
-      const auto release = receive_lag->schedule(message->received_ns);
-      if (!release) continue;  // lost
-      inbound.push_back({*release, std::move(*message), receive_lag->last_delay()});
-    } else {
-      inbound.push_back({message->received_ns, std::move(*message), 0.0});
-    }
+    if (message) take(std::move(*message));
   }
 }
 

@@ -1,4 +1,4 @@
-// Faults on real processes over Cyclone DDS (domains 20-29): a node killed or stalled mid-run, the
+// Faults on real processes over Cyclone DDS (domains 20-29 and 53): a node killed or stalled mid-run, the
 // coordinator killed, a node that never comes, and a hostile participant.
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -130,6 +130,30 @@ INSTANTIATE_TEST_SUITE_P(
       return std::string(std::get<1>(info.param) == SIGSTOP ? "stall_" : "kill_") +
              std::to_string(std::get<0>(info.param));
     });
+
+// The emulator's own process stalled (SIGSTOP for 30 ms, 15 times) is not a silent coordinator:
+// the commands that waited on its socket are delivered before its 15-period watchdog judges, so
+// it does not hold, and the run completes. (The watchdog is wider than this loaded machine's own
+// gaps between commands, a few ms, and far shorter than the stall.)
+TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
+  runtime::ensure_dds_config();
+  const std::string text = test::paper_frame_study(
+      6, "deployment { clock: REAL_TIME liveliness_timeout: 0.5 heartbeat_period: 0.02 "
+         "max_missed_answers: 120 command_watchdog_periods: 15 max_overrun_fraction: -1 }");
+  Cluster c = start("own_stall", text, 53, {{1, true}, {2, false}}, "reference");
+  wait_for_steps(c.record, 300);
+  for (int i = 0; i < 15; ++i) {
+    c.nodes[1].signal(SIGSTOP);
+    std::this_thread::sleep_for(30ms);
+    c.nodes[1].signal(SIGCONT);
+    std::this_thread::sleep_for(100ms);
+  }
+  const auto code = c.coordinator->wait_for(20s);
+  ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
+  const std::string node_log = test::read_file(c.dir / "node_2.log");
+  EXPECT_EQ(node_log.find("command watchdog"), std::string::npos) << node_log;
+  EXPECT_EQ(*code, 0) << test::read_file(c.dir / "coordinator.log");
+}
 
 TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
   runtime::ensure_dds_config();
