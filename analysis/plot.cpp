@@ -104,7 +104,18 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
          << " font 'sans,10'\n"
          << "set output " << quoted(file.string()) << "\n"
          << "set termoption noenhanced\nset grid\nset key outside right top vertical Left reverse\n";
-  if (panels.size() > 1) script << "set multiplot layout " << panels.size() << ",1\n";
+  if (panels.size() > 1) {
+    // Stacked panels share the time axis: the same margins on every panel, so their data areas
+    // line up whatever each legend's width; the right margin fits the longest legend entry.
+    std::size_t longest = 0;
+    for (const PlotSpec& panel : panels)
+      for (const Series& s : panel.series) longest = std::max(longest, s.title.size());
+    const double width = panels.front().width;
+    const double key = std::clamp((8.0 * static_cast<double>(longest) + 80.0) / width, 0.15, 0.5);
+    script.precision(4);
+    script << "set lmargin at screen " << 85.0 / width << "\nset rmargin at screen " << 1.0 - key << "\n"
+           << "set multiplot layout " << panels.size() << ",1\n";
+  }
   for (const PlotSpec& panel : panels) append_panel(script, panel);
   if (panels.size() > 1) script << "unset multiplot\n";
   script << "set output\n";
@@ -112,6 +123,8 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
 }
 
 }  // namespace
+
+std::string series_colour(std::size_t index) { return kPalette[index % kColours]; }
 
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
   write_png_panels({spec}, png);

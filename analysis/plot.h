@@ -36,6 +36,10 @@ struct PlotSpec {
   std::vector<VerticalMarker> markers;
 };
 
+// The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel
+// of the same figure can name the same colour for the same thing (style "lines lc rgb '...'").
+std::string series_colour(std::size_t index);
+
 // Throws std::runtime_error naming the file when gnuplot is missing or fails.
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 

@@ -65,32 +65,35 @@ std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
 
 namespace {
 
+double nominal_delay_of(const core::HybridSetup& setup) {
+  double nominal = 0.0;
+  for (const core::DelayChain& chain : setup.delays) nominal = std::max(nominal, chain.nominal_delay());
+  return nominal;
+}
+
+std::optional<core::CriticalDelayCheck> check_setup(const core::PreparedStudy& prepared,
+                                                    const core::HybridSetup& setup, double lag) {
+  const std::vector<double> k_experimental = experimental_storey_stiffness(prepared.base.partition);
+  if (std::none_of(k_experimental.begin(), k_experimental.end(), [](double k) { return k > 0; }))
+    return std::nullopt;
+  return core::check_critical_delay(setup.model, k_experimental, setup.integrator, setup.dt, lag);
+}
+
 // What is known of a case before it runs: its delay, and its critical-delay check (announced
 // through options.warn when past).
 CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::HybridSetup& setup,
                           const config::Case& study_case, const std::string& name,
                           const RunStudyOptions& options) {
-  const std::vector<double> k_experimental = experimental_storey_stiffness(prepared.base.partition);
-  const bool has_experimental =
-      std::any_of(k_experimental.begin(), k_experimental.end(), [](double k) { return k > 0; });
   CaseOutcome result;
   result.name = name;
   result.expect_unstable = study_case.expect_unstable();
-  if (!setup.delays.empty()) {
-    result.delay_description = setup.delays.front().describe();
-    for (const core::DelayChain& chain : setup.delays) {
-      result.nominal_delay = std::max(result.nominal_delay, chain.nominal_delay());
-    }
-  } else {
-    result.delay_description = "no experimental substructure";
-  }
-  if (has_experimental) {
-    result.stability = core::check_critical_delay(setup.model, k_experimental, setup.integrator,
-                                                  setup.dt, result.nominal_delay);
-    if (result.stability->past() && options.warn) {
-      options.warn("case '" + result.name + "': " + result.stability->describe() +
-                   (result.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge"));
-    }
+  result.nominal_delay = nominal_delay_of(setup);
+  result.delay_description =
+      setup.delays.empty() ? "no experimental substructure" : setup.delays.front().describe();
+  result.stability = check_setup(prepared, setup, result.nominal_delay + options.extra_lag);
+  if (result.stability && result.stability->past() && options.warn) {
+    options.warn("case '" + result.name + "': " + result.stability->describe() +
+                 (result.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge"));
   }
   return result;
 }
@@ -121,6 +124,13 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
 }
 
 }  // namespace
+
+std::optional<core::CriticalDelayCheck> check_case_critical_delay(const core::PreparedStudy& prepared,
+                                                                  const config::Case& study_case,
+                                                                  double extra_lag) {
+  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  return check_setup(prepared, setup, nominal_delay_of(setup) + extra_lag);
+}
 
 const CaseOutcome& StudyOutcome::reference() const {
   return lag_free_reference ? *lag_free_reference : cases.at(reference_index);

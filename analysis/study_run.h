@@ -66,7 +66,18 @@ struct StudyOutcome {
 
 struct RunStudyOptions {
   std::function<void(const std::string&)> warn;  // pre-run warnings (stderr in the CLI)
+  // s, lag on the actuator's path that the case's own delay stages do not hold (a distributed
+  // run's network round trip and node delay stages), added to each case's lag in its check.
+  double extra_lag = 0.0;
 };
+
+// The critical-delay check of one case before it runs, the one run_study and judge_recorded_cases
+// make: core::check_critical_delay on the structure, the integrator and the lag tau = the case's
+// delay chain's nominal delay (s, the largest over actuators; negative = lead) + extra_lag (s).
+// Empty when the structure has no experimental part.
+std::optional<core::CriticalDelayCheck> check_case_critical_delay(const core::PreparedStudy& prepared,
+                                                                  const config::Case& study_case,
+                                                                  double extra_lag = 0.0);
 
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
 

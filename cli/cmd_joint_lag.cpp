@@ -24,6 +24,8 @@ void run(const JointLagOptions& o) {
   if (!o.out.empty()) options.output_directory = std::filesystem::path(o.out);
   options.measure = !o.no_measure;
   options.plots = !o.no_plots;
+  ProgressReporter progress("joint-lag", "points", !o.json);
+  options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
   const auto result = deploy::run_joint_lag(config, path.parent_path(), options);
   deploy::write_joint_lag_outputs(result, options.plots);
   if (o.json) {

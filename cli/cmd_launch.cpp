@@ -3,6 +3,8 @@
 // case through the one launch sequence (runtime/launch.h), then write the results as `rths run`
 // does (cli/distributed.h: every case against the lag-free in-process reference, `run`'s columns
 // plus lag per link, plots, summary) with each case's run record and process logs.
+// Before the first run, each case is checked against its critical delay with the network's lag on
+// the actuator's path (warn_past_critical_delay); progress per case goes to stderr.
 // Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
 // 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
 // expect_unstable); 2 for a bad config caught before starting anything.
@@ -46,8 +48,11 @@ void run_launch(const LaunchArgs& args) {
           ? std::filesystem::path(study.output().directory()) / "distributed"
           : std::filesystem::path("rths_launch_" + study.name());
   std::filesystem::create_directories(out);
+  // Checked before anything starts: the case's lag plus the network's on the actuator's path.
+  warn_past_critical_delay(prepared, names);
 
   std::vector<DistributedRun> runs;
+  ProgressReporter progress("launch", "cases", !args.json);
   {
     runtime::HeldStopSignals signals;  // Ctrl-C stops the children in order
     for (const std::string& name : names) {
@@ -80,6 +85,7 @@ void run_launch(const LaunchArgs& args) {
         std::cerr << "rths launch: case " << name << " failed (exit " << result.coordinator_exit
                   << (result.status.empty() ? "" : ", " + result.status) << "); logs in "
                   << options.log_dir.string() << "\n";
+      progress.update(runs.size(), names.size());
       if (result.status == "interrupted") break;
     }
   }

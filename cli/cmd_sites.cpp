@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/distributed.h"
+#include "cli/support.h"
 #include "core/study.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
@@ -46,6 +47,10 @@ void run(const SitesOptions& o) {
   if (!o.security.empty())
     plan.study.mutable_deployment()->set_security_dir(std::filesystem::absolute(o.security).string());
   if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
+  // Paths in plan.study are absolute. Checked before anything starts (and by --check): the
+  // case's lag plus the network's on the actuator's path against the critical delay.
+  const core::PreparedStudy prepared = core::prepare_study(plan.study, plan.study_file.parent_path());
+  warn_past_critical_delay(prepared, {plan.study.deployment().case_name()});
   if (o.check) {
     std::cout << "sites config ok: " << plan.placements.size() << " processes on "
               << plan.sites.sites_size() << " sites, DDS domain " << plan.study.deployment().domain_id()
@@ -64,6 +69,7 @@ void run(const SitesOptions& o) {
   options.output_dir = out;
   if (!o.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.bin_dir);
   deploy::SitesRunResult result;
+  ProgressReporter progress("sites", "runs", !o.json);
   {
     runtime::HeldStopSignals signals;
     options.stop_requested = [&signals] { return signals.stop_requested(); };
@@ -73,15 +79,17 @@ void run(const SitesOptions& o) {
       throw ExitError(kExitEnvironment, std::string("sites: ") + e.what());
     }
   }
+  progress.update(1, 1);
   // The results as `rths run` and `rths launch` write them, against the lag-free in-process
-  // reference (cli/distributed.h).
-  const core::PreparedStudy prepared = core::prepare_study(plan.study, result.output_dir);
+  // reference (cli/distributed.h), links labelled by role and site.
+  std::map<int, std::string> site_of_node;
+  for (const deploy::NodePlacement& p : plan.placements) site_of_node[p.node_id] = p.site;
   const std::vector<DistributedRun> runs{{result.case_name, result.coordinator_exit,
                                           result.status == "interrupted" || result.status.rfind("timed out", 0) == 0
                                               ? result.status
                                               : "",
                                           result.record, result.output_dir.string()}};
-  const DistributedResults results = judge_distributed(prepared, runs);
+  const DistributedResults results = judge_distributed(prepared, runs, site_of_node);
   const auto table = write_distributed_outputs(results, result.output_dir, !o.no_plots, o.format);
   if (o.json) {
     auto j = deploy::to_json(result);

@@ -52,6 +52,19 @@ int exit_code_of(int coordinator_exit) {
   }
 }
 
+std::string ms(double seconds) {
+  std::ostringstream out;
+  out << std::setprecision(3) << seconds * 1e3 << " ms";
+  return out.str();
+}
+
+std::vector<double> in_ms(const std::vector<double>& seconds, double offset = 0.0) {
+  std::vector<double> out;
+  out.reserve(seconds.size());
+  for (double x : seconds) out.push_back((x + offset) * 1e3);
+  return out;
+}
+
 std::vector<std::string> lag_plot_files(const DistributedResults& results) {
   std::vector<std::string> files;
   for (const auto& c : results.outcome.cases)
@@ -61,13 +74,72 @@ std::vector<std::string> lag_plot_files(const DistributedResults& results) {
 
 }  // namespace
 
-DistributedResults judge_distributed(const core::PreparedStudy& prepared,
-                                     const std::vector<DistributedRun>& runs) {
-  DistributedResults results;
-  std::vector<analysis::RecordedCase> recorded;
-  const bool comparable = comparable_in_process(prepared.config);
+ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
   const config::Deployment deployment =
       runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
+  ActuatorPathLag worst;
+  worst.real_time = deployment.clock() == config::Deployment::REAL_TIME;
+  for (const config::NodeSpec& node : deployment.nodes()) {
+    if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+    ActuatorPathLag lag;
+    lag.node_id = node.id();
+    lag.real_time = worst.real_time;
+    lag.link_round_trip = node.receive_lag().one_way_delay() + node.send_lag().one_way_delay();
+    for (const auto* stages : {&node.receive_delay(), &node.send_delay()})
+      if (!stages->empty())
+        lag.node_stages += core::make_delay_chain(*stages, prepared.base.dt, prepared.base_dir).nominal_delay();
+    if (worst.node_id < 0 || lag.felt() > worst.felt()) worst = lag;
+  }
+  return worst;
+}
+
+int warn_past_critical_delay(const core::PreparedStudy& prepared, const std::vector<std::string>& case_names) {
+  const ActuatorPathLag path = actuator_path_lag(prepared);
+  int past = 0;
+  for (const std::string& name : case_names) {
+    const config::Case& study_case = runtime::find_case(prepared.config, name);
+    const auto check = analysis::check_case_critical_delay(prepared, study_case, path.felt());
+    if (!check || !check->past()) continue;
+    ++past;
+    std::string parts;
+    if (path.real_time && path.link_round_trip != 0.0)
+      parts += "network round trip " + ms(path.link_round_trip) + " injected on the actuator lab's link + ";
+    if (path.node_stages != 0.0) parts += "the actuator node's delay stages " + ms(path.node_stages) + " + ";
+    parts += "actuator lag " + ms(check->lag - path.felt()) + " (the case's delay stages): ";
+    if (!path.real_time && path.link_round_trip != 0.0)
+      parts = "(lockstep: the link's " + ms(path.link_round_trip) + " round trip does not enter) " + parts;
+    print_warning("case '" + study_case.name() + "': " + parts + check->describe() +
+                  (study_case.expect_unstable() ? " (expect_unstable: meant)" : "; expect it to diverge"));
+  }
+  return past;
+}
+
+std::map<int, std::string> link_roles(const config::Deployment& deployment,
+                                      const std::map<int, std::string>& site_of_node) {
+  std::map<int, int> sharing;  // kind -> nodes of that kind
+  for (const config::NodeSpec& node : deployment.nodes()) ++sharing[node.kind()];
+  std::map<int, std::string> labels;
+  for (const config::NodeSpec& node : deployment.nodes()) {
+    std::string label = node.kind() == config::NodeSpec::ACTUATOR_EMULATOR ? "actuator lab"
+                        : node.kind() == config::NodeSpec::SUBSTRUCTURE    ? "numerical site"
+                                                                           : "node";
+    const auto site = site_of_node.find(node.id());
+    if (site != site_of_node.end() && !site->second.empty()) label += " \"" + site->second + "\"";
+    else if (sharing[node.kind()] > 1) label += " (node " + std::to_string(node.id()) + ")";
+    labels[node.id()] = label;
+  }
+  return labels;
+}
+
+DistributedResults judge_distributed(const core::PreparedStudy& prepared,
+                                     const std::vector<DistributedRun>& runs,
+                                     const std::map<int, std::string>& site_of_node) {
+  DistributedResults results;
+  results.actuator_path = actuator_path_lag(prepared);
+  const std::map<int, std::string> roles =
+      link_roles(runtime::with_default_nodes(prepared.config.deployment(), prepared.base), site_of_node);
+  std::vector<analysis::RecordedCase> recorded;
+  const bool comparable = comparable_in_process(prepared.config);
   for (const DistributedRun& run : runs) {
     if (!std::filesystem::exists(run.record)) {
       results.missing.emplace_back(run.case_name, run.launcher_status.empty()
@@ -101,9 +173,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       c.status = run.launcher_status;
       c.status_detail = run.launcher_status + "; see " + run.log_hint;
     }
-    for (const config::NodeSpec& node : deployment.nodes())
-      facts.link_labels[node.id()] =
-          "node " + std::to_string(node.id()) + " (" + runtime::node_kind_name(node.kind()) + ")";
+    facts.link_labels = roles;
     if (comparable && run.coordinator_exit == 0)
       facts.max_difference_from_in_process =
           difference_from_in_process(prepared, run.case_name, measured.steps);
@@ -113,7 +183,9 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
     recorded.push_back(std::move(c));
   }
   if (!recorded.empty())
-    results.outcome = analysis::judge_recorded_cases(prepared, std::move(recorded), {.warn = print_warning});
+    // Warned before the runs (warn_past_critical_delay); the outcome keeps the same check.
+    results.outcome = analysis::judge_recorded_cases(prepared, std::move(recorded),
+                                                     {.warn = {}, .extra_lag = results.actuator_path.felt()});
   return results;
 }
 
@@ -132,21 +204,8 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
   } else if (!results.outcome.cases.empty()) {
     try {
       analysis::write_study_plots(results.outcome, out);
-      for (std::size_t i = 0; i < results.outcome.cases.size(); ++i) {
-        const auto& c = results.outcome.cases[i];
-        analysis::PlotSpec lag{"lag per link, case " + c.name, "time (s)", "lag (ms)", {}};
-        for (const auto& [node, series] : results.links[i]) {
-          const auto label = results.facts[i].link_labels.count(node)
-                                 ? results.facts[i].link_labels.at(node)
-                                 : "node " + std::to_string(node);
-          std::vector<double> rtt_ms, inj_ms;
-          for (double x : series.round_trip) rtt_ms.push_back(x * 1e3);
-          for (double x : series.injected) inj_ms.push_back(x * 1e3);
-          lag.series.push_back({label + ": measured round trip", series.time, rtt_ms, "lines"});
-          lag.series.push_back({label + ": injected", series.time, inj_ms, "lines"});
-        }
-        if (!lag.series.empty()) analysis::write_png_plot(lag, out / ("lag_" + c.name + ".png"));
-      }
+      for (std::size_t i = 0; i < results.outcome.cases.size(); ++i)
+        if (!results.links[i].empty()) write_lag_plot(results, i, out / ("lag_" + results.outcome.cases[i].name + ".png"));
     } catch (const std::exception& e) {
       print_warning(std::string("plots not written: ") + e.what());
     }
@@ -158,6 +217,75 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
   text_file.stream() << distributed_summary_text(results);
   text_file.commit();
   return table_file;
+}
+
+void write_lag_plot(const DistributedResults& results, std::size_t case_index,
+                    const std::filesystem::path& png) {
+  const analysis::CaseOutcome& c = results.outcome.cases.at(case_index);
+  const DistributedCaseFacts& facts = results.facts.at(case_index);
+  const std::map<int, runtime::LinkSeries>& links = results.links.at(case_index);
+  const ActuatorPathLag& path = results.actuator_path;
+  const auto label_of = [&](int node) {
+    const auto it = facts.link_labels.find(node);
+    return it != facts.link_labels.end() ? it->second : "node " + std::to_string(node);
+  };
+  analysis::PlotSpec network;
+  network.title = "network lag per link, case " + c.name + " (" + (path.real_time ? "real time" : "lockstep") + ")";
+  network.xlabel = "time (s)";
+  network.ylabel = "round trip (ms)";
+  std::string actuator_link_colour = analysis::series_colour(0);
+  const double t0 = c.simulation.time.empty() ? 0.0 : c.simulation.time.front();
+  const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
+  for (const auto& [node, series] : links) {
+    // Injected first, so the measured round trip is drawn over it.
+    network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected)});
+    if (node == path.node_id) actuator_link_colour = analysis::series_colour(network.series.size());
+    network.series.push_back({label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
+  }
+  // The stack: the network round trip the test feels (real time only), the actuator's own lag
+  // on top of it; drawn as the total filled first, then the network part over its lower band.
+  const double actuator = c.nominal_delay + path.node_stages;  // s
+  const std::string actuator_label = "actuator lag, nominal " + ms(actuator) + ": " + c.delay_description +
+                                     (path.node_stages != 0.0 ? " + node stages" : "");
+  analysis::PlotSpec stack;
+  stack.title = path.real_time
+                    ? "lag the test feels on the actuator's path: network round trip + actuator lag (stacked)"
+                    : "lag the test feels on the actuator's path: actuator lag (lockstep: the network does not enter)";
+  stack.xlabel = "time (s)";
+  stack.ylabel = "lag (ms)";
+  const std::string fill = " fs solid 0.45 noborder";  // opaque: the lower band covers the upper's
+  std::size_t colour = network.series.size();
+  const auto link = links.find(path.node_id);
+  if (path.real_time && link != links.end()) {
+    const runtime::LinkSeries& s = link->second;
+    stack.series.push_back({actuator_label, s.time, in_ms(s.round_trip, actuator),
+                            "filledcurves y1=0 lc rgb '" + analysis::series_colour(colour++) + "' dt 1" + fill});
+    stack.series.push_back({label_of(path.node_id) + ": network round trip, measured", s.time, in_ms(s.round_trip),
+                            "filledcurves y1=0 lc rgb '" + actuator_link_colour + "' dt 1" + fill});
+    stack.series.push_back({"injected total: network + actuator", s.time, in_ms(s.injected, actuator),
+                            "lines lw 1.5 lc rgb '" + analysis::series_colour(colour++) + "'"});
+  } else {
+    stack.series.push_back({actuator_label, {t0, t1}, {actuator * 1e3, actuator * 1e3},
+                            "filledcurves y1=0 lc rgb '" + analysis::series_colour(colour++) + "' dt 1" + fill});
+  }
+  if (c.stability) {
+    const auto level = [&](const std::optional<double>& limit, const std::string& what, const char* dash) {
+      if (!limit) return;
+      stack.series.push_back({what + " critical delay " + ms(*limit), {t0, t1}, {*limit * 1e3, *limit * 1e3},
+                              std::string("lines lw 2 dt ") + dash + " lc rgb '" +
+                                  analysis::series_colour(colour++) + "'"});
+    };
+    level(c.stability->continuous, "continuous", "2");
+    level(c.stability->discrete, "discrete", "3");
+  }
+  // From zero, and high enough that the critical delays are never on the border.
+  stack.y_min = network.y_min = 0.0;
+  if (const auto range = analysis::padded_y_range(stack.series, {})) stack.y_max = range->second;
+  network.height = stack.height = 380;
+  std::vector<analysis::PlotSpec> panels;
+  if (!network.series.empty()) panels.push_back(network);
+  panels.push_back(stack);
+  analysis::write_png_panels(panels, png);
 }
 
 std::string distributed_summary_text(const DistributedResults& results) {

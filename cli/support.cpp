@@ -232,7 +232,7 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
     std::cout << summary.dump(2) << "\n";
   } else {
     std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
-              << (plots ? ", displacement.png, force_displacement.png" : "") << ", summary.txt, summary.json\n";
+              << (plots ? ", displacement.png/.svg, force_displacement.png/.svg" : "") << ", summary.txt, summary.json\n";
   }
 }
 

@@ -79,7 +79,8 @@ void fill_errors(JointLagPoint& point, const std::vector<double>& reference,
 }
 
 void run_measured(const JointLagStudy& config, const std::filesystem::path& base_dir,
-                  const std::filesystem::path& out, JointLagResult& result) {
+                  const std::filesystem::path& out, JointLagResult& result,
+                  const std::function<void()>& one_done) {
   const auto sites_file = base_dir / config.sites();
   const double duration = config.measured_duration() > 0.0 ? config.measured_duration() : 5.0;
   for (const double round_trip : config.measured_network_round_trips()) {
@@ -139,6 +140,7 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       fill_errors(point, column(reference.displacement, 0), u);
       point.diverged = measured.has_footer && measured.footer.diverged();
       result.measured.push_back(point);
+      one_done();
     }
   }
 }
@@ -373,6 +375,23 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
                    "the critical one for their actuator lag): they are expected to diverge",
                    past, total);
   }
+  if (config.sites().empty() || config.measured_network_round_trips().empty() ||
+      config.measured_actuator_lags().empty()) {
+    result.measured_skipped = "the config asks for no across-sites runs";
+  } else if (!options.measure) {
+    result.measured_skipped = "across-sites runs not requested (--no-measure)";
+  } else if (const auto reason = namespace_support()) {
+    result.measured_skipped = *reason;
+  }
+  const std::size_t total =
+      static_cast<std::size_t>(config.network_round_trips_size() * config.actuator_lags_size()) +
+      (result.measured_skipped.empty() ? static_cast<std::size_t>(config.measured_network_round_trips_size() *
+                                                                  config.measured_actuator_lags_size())
+                                       : 0);
+  std::size_t done = 0;
+  const std::function<void()> one_done = [&] {
+    if (options.progress) options.progress(++done, total);
+  };
   for (const double round_trip : config.network_round_trips()) {
     for (const double actuator : config.actuator_lags()) {
       config::Case joint;
@@ -392,19 +411,11 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
             core::j1_delay(column(run.command, 0), column(run.realised, 0), prepared.base.dt, window);
       }
       result.grid.push_back(point);
+      one_done();
     }
   }
 
-  if (config.sites().empty() || config.measured_network_round_trips().empty() ||
-      config.measured_actuator_lags().empty()) {
-    result.measured_skipped = "the config asks for no across-sites runs";
-  } else if (!options.measure) {
-    result.measured_skipped = "across-sites runs not requested (--no-measure)";
-  } else if (const auto reason = namespace_support()) {
-    result.measured_skipped = *reason;
-  } else {
-    run_measured(config, base_dir, result.output_directory, result);
-  }
+  if (result.measured_skipped.empty()) run_measured(config, base_dir, result.output_directory, result, one_done);
   return result;
 }
 
@@ -483,7 +494,7 @@ std::string to_text(const JointLagResult& result) {
         << " ms; NRMSE " << 100 * p.nrmse << " %\n";
   }
   out << "written: " << (result.output_directory / "grid.csv").string()
-      << ", error_map.png/.svg, total_lag.png, summary.json\n";
+      << ", error_map.png/.svg, total_lag.png/.svg, summary.json\n";
   return out.str();
 }
 

@@ -26,10 +26,11 @@
 //
 // Outputs (in the output directory): grid.csv, measured.csv (nrmse_pct: the one NRMSE convention,
 // a percentage), error_map.png and .svg (2-D heat map of NRMSE %, log colour scale, contour lines,
-// the stability boundary, diverged points marked), total_lag.png (measured vs injected),
+// the stability boundary, diverged points marked), total_lag.png and .svg (measured vs injected),
 // summary.json.
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -81,6 +82,8 @@ struct JointLagOptions {
   std::optional<std::filesystem::path> output_directory;  // overrides the config's
   bool measure = true;       // run the across-sites part when the config asks and it is possible
   bool plots = true;
+  // Called after each grid point and each across-sites run: done of total (both counted).
+  std::function<void(std::size_t done, std::size_t total)> progress;
 };
 
 JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem::path& base_dir,

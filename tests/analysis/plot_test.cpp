@@ -4,6 +4,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <regex>
+#include <set>
+#include <string>
 
 #include <unistd.h>
 
@@ -33,6 +38,36 @@ TEST(Plot, PaddedRangeFollowsOnlyTheIncludedFiniteSeries) {
   EXPECT_DOUBLE_EQ(r->second, 1.2);
   EXPECT_DOUBLE_EQ(padded_y_range(series, {}, 0.0)->second, 1e6);
   EXPECT_FALSE(padded_y_range({{"empty", {}, {}}}, {}).has_value());
+}
+
+// Stacked panels share an x axis: their data areas line up whatever each legend's width, and
+// every legend sits right of the data. Read from the SVG: each panel's border is a closed black
+// path "M left,top L left,bottom L right,bottom L right,top"; each series' path starts with its
+// legend sample "M x,y L x2,y".
+TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_plot_stack_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  PlotSpec narrow{"short legend", "time (s)", "a (ms)", {{"a", {0, 1, 2}, {0, 1, 4}}}};
+  PlotSpec wide{"long legend", "time (s)", "b (ms)",
+                {{"a much longer legend entry than the panel above has, to widen its key", {0, 2}, {1, 3}},
+                 {"another", {0, 2}, {2, 2}}}};
+  write_png_panels({narrow, wide}, dir / "stack.png");
+  std::ifstream in(dir / "stack.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::regex border(R"(stroke='black'\s+d='M([0-9.]+),([0-9.]+) L\1,([0-9.]+) L([0-9.]+),\3 L\4,\2)");
+  std::set<std::pair<std::string, std::string>> edges;
+  double right = 0.0;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), border); it != std::sregex_iterator(); ++it) {
+    edges.insert({(*it)[1], (*it)[4]});
+    right = std::stod((*it)[4]);
+  }
+  ASSERT_EQ(edges.size(), 1u) << "the panels' data areas differ";
+  const std::regex sample(R"(stroke='rgb\([^)]*\)'\s+d='M([0-9.]+),[0-9.]+ L[0-9.]+,[0-9.]+ M)");
+  int samples = 0;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), sample); it != std::sregex_iterator(); ++it, ++samples)
+    EXPECT_GT(std::stod((*it)[1]), right) << "a legend sample inside the data";
+  EXPECT_EQ(samples, 3);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

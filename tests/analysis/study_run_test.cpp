@@ -102,5 +102,34 @@ TEST(StudyRun, RecordedCasesAreComparedWithTheLagFreeInProcessRun) {
   }
 }
 
+// A distributed run adds lag the case's own stages do not hold (the network's round trip on the
+// actuator's path): the one check takes it as extra lag, before the run and in the judged outcome.
+// The paper's frame: 14 ms alone is 42 % below its 24.2 ms; 14 + 14 ms is past it.
+TEST(StudyRun, TheCriticalDelayCheckTakesTheLagTheCaseDoesNotHold) {
+  const core::PreparedStudy prepared =
+      frame(1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }");
+  const auto alone = check_case_critical_delay(prepared, prepared.config.cases(1));
+  ASSERT_TRUE(alone.has_value());
+  EXPECT_DOUBLE_EQ(alone->lag, 0.014);
+  EXPECT_FALSE(alone->past());
+  const auto with_network = check_case_critical_delay(prepared, prepared.config.cases(1), 0.014);
+  ASSERT_TRUE(with_network.has_value());
+  EXPECT_DOUBLE_EQ(with_network->lag, 0.028);
+  EXPECT_TRUE(with_network->past());
+  EXPECT_EQ(with_network->critical(), alone->critical());
+
+  std::vector<std::string> warnings;
+  const core::SimulationResult lagged =
+      core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
+  const StudyOutcome outcome = judge_recorded_cases(
+      prepared, {{"lag_14ms", lagged, "completed", ""}},
+      {.warn = [&](const std::string& w) { warnings.push_back(w); }, .extra_lag = 0.014});
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("lag_14ms"), std::string::npos) << warnings[0];
+  ASSERT_TRUE(outcome.cases[0].stability.has_value());
+  EXPECT_DOUBLE_EQ(outcome.cases[0].stability->lag, 0.028);
+  EXPECT_DOUBLE_EQ(outcome.cases[0].nominal_delay, 0.014);  // the case's own lag stays its own
+}
+
 }  // namespace
 }  // namespace rths::analysis

@@ -262,3 +262,89 @@ TEST(CliTest, IdentifyEchoesTheUnitsItReadTheDataIn) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// Every plot of `run` and `sweep` is written as PNG and as SVG beside it.
+TEST(CliTest, EveryPlotOfRunAndSweepHasItsSvgBesideItsPng) {
+  const auto dir = scratch("svg");
+  Outcome o = run("run " + (kSource / "configs/paper_frame.textproto").string() + " --out " + (dir / "run").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  std::ofstream(dir / "sweep.textproto")
+      << "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } } "
+         "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.3333333333333333 } "
+         "motion { path: \"" << kMotion << "\" duration: 5 } "
+         "sweep { periods: [0.5, 1.0] delays: [0.002, 0.004] motions { path: \"" << kMotion << "\" duration: 5 } }";
+  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " + (dir / "sweep").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  std::size_t pngs = 0;
+  for (const char* folder : {"run", "sweep"}) {
+    for (const auto& entry : std::filesystem::directory_iterator(dir / folder)) {
+      if (entry.path().extension() != ".png") continue;
+      ++pngs;
+      auto svg = entry.path();
+      svg.replace_extension(".svg");
+      EXPECT_TRUE(std::filesystem::exists(svg)) << svg;
+      EXPECT_NE(read_text(svg).find("<svg"), std::string::npos) << svg;
+    }
+  }
+  EXPECT_GE(pngs, 4u);  // displacement, force_displacement, sweep, sweep_vs_delay
+}
+
+// Progress on stderr (not a terminal here): one plain line per 10 % of the grid points.
+TEST(CliTest, JointLagReportsProgressInPlainLines) {
+  const auto dir = scratch("joint_progress");
+  std::ofstream(dir / "joint.textproto")
+      << "study: \"" << (kSource / "configs/paper_frame.textproto").string() << "\"\n"
+      << "network_round_trips: [0, 0.004]\nactuator_lags: [0, 0.002, 0.004, 0.006, 0.008]\n"
+      << "output_directory: \"" << (dir / "out").string() << "\"\n";
+  const Outcome o = run("joint-lag " + (dir / "joint.textproto").string() + " --no-plots");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  for (int decile = 1; decile <= 10; ++decile) {
+    const std::string line = "joint-lag: " + std::string(decile < 10 ? " " : "") + std::to_string(decile * 10) +
+                             "% (" + std::to_string(decile) + "/10 points";
+    EXPECT_NE(o.output.find(line), std::string::npos) << line << "\n" << o.output;
+  }
+  EXPECT_EQ(o.output.find('\r'), std::string::npos) << "a bar is for terminals only";
+}
+
+// `rths launch` of the shipped distributed frame (real time, 7 ms each way on the actuator lab's
+// link): before anything starts, the 14 ms shift case is named as past the frame's critical
+// delay (14 ms network + 14 ms actuator = 28 ms), and the reference (14 ms) is not; progress per
+// case; the lag plot names the links by role and stacks network and actuator lag against the
+// critical delay. The lagged case may well diverge (exit 1): that is the honest outcome.
+TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
+  const auto dir = scratch("launch_lag");
+  const Outcome o = run("launch " + (kSource / "configs/paper_frame_distributed.textproto").string() +
+                        " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " + dir.string());
+  EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 1) << o.output;
+  const std::string warning =
+      "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the actuator lab's link + "
+      "actuator lag 14 ms (the case's delay stages): lag 28 ms against a critical delay of";
+  const auto warned = o.output.find(warning);
+  ASSERT_NE(warned, std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("PAST it by", warned), std::string::npos) << o.output;
+  EXPECT_LT(warned, o.output.find("rths launch: case reference ...")) << o.output;
+  EXPECT_EQ(o.output.find("warning: case 'reference'"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("launch:  50% (1/2 cases"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("launch: 100% (2/2 cases"), std::string::npos) << o.output;
+  const auto summary = nlohmann::json::parse(read_text(dir / "summary.json"));
+  EXPECT_NEAR(summary["cases"][1]["stability"]["lag_s"].get<double>(), 0.028, 1e-12);
+  EXPECT_TRUE(summary["cases"][1]["stability"]["past_critical_delay"].get<bool>());
+  const std::string plot = read_text(dir / "lag_lag_shift_14ms.svg");
+  for (const char* text : {"actuator lab: round trip, measured", "actuator lab: round trip, injected",
+                           "numerical site: round trip, measured", "actuator lag, nominal 14 ms: shift(14 ms)",
+                           "actuator lab: network round trip, measured", "continuous critical delay",
+                           "round trip (ms)", "lag (ms)"}) {
+    EXPECT_NE(plot.find(text), std::string::npos) << text;
+  }
+  EXPECT_EQ(plot.find("node 2"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir / "lag_lag_shift_14ms.png"));
+}
+
+}  // namespace

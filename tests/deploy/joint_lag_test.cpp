@@ -52,7 +52,7 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
   EXPECT_EQ(result.measured_skipped, "the config asks for no across-sites runs");
 
   write_joint_lag_outputs(result, true);
-  for (const char* file : {"grid.csv", "summary.json", "error_map.png", "error_map.svg", "total_lag.png"}) {
+  for (const char* file : {"grid.csv", "summary.json", "error_map.png", "error_map.svg", "total_lag.png", "total_lag.svg"}) {
     EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
   }
 }

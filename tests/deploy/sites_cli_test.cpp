@@ -38,6 +38,39 @@ TEST(SitesCli, DomainOverridesTheConfigsAndIsCheckedLikeLaunchs) {
   EXPECT_NE(bad.output.find("--domain"), std::string::npos) << bad.output;
 }
 
+std::string read(const std::filesystem::path& path);
+
+// Before a run (and with --check): the case's lag plus the network round trip on the actuator
+// lab's link, against the critical delay. The shipped distributed frame across sites in real
+// time: 7 ms each way + the 14 ms shift = 28 ms, past the frame's 24.2 ms.
+TEST(SitesCli, CheckWarnsWhenNetworkAndActuatorLagTogetherPassTheCriticalDelay) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_sites_critical_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const std::string& name, const std::string& case_name, const std::string& clock) {
+    std::ofstream(dir / name) << "study: \"" << RTHS_SOURCE_DIR << "/configs/paper_frame_distributed.textproto\"\n"
+                              << "case_name: \"" << case_name << "\"\nclock: " << clock << "\n"
+                              << "sites { name: \"integrator\" node_ids: 0 }\nsites { name: \"hpc\" node_ids: 1 }\n"
+                              << "sites { name: \"lab_b\" node_ids: 2 }\n"
+                              << "links { node_id: 2 to_node { one_way_delay: 0.007 } from_node { one_way_delay: 0.007 } }\n";
+  };
+  write("lagged.textproto", "lag_shift_14ms", "REAL_TIME");
+  write("reference.textproto", "reference", "REAL_TIME");
+  write("lockstep.textproto", "lag_shift_14ms", "LOCKSTEP");
+  const auto lagged = run_command({kRths, "sites", (dir / "lagged.textproto").string(), "--check"});
+  EXPECT_EQ(lagged.exit_code, 0) << lagged.output;
+  EXPECT_NE(lagged.output.find("rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the "
+                               "actuator lab's link + actuator lag 14 ms (the case's delay stages): lag 28 ms"),
+            std::string::npos)
+      << lagged.output;
+  EXPECT_NE(lagged.output.find("PAST it by"), std::string::npos) << lagged.output;
+  const auto reference = run_command({kRths, "sites", (dir / "reference.textproto").string(), "--check"});
+  EXPECT_EQ(reference.output.find("warning"), std::string::npos) << reference.output;
+  // Lockstep pairs every command with its own answer: the network lag does not enter.
+  const auto lockstep = run_command({kRths, "sites", (dir / "lockstep.textproto").string(), "--check"});
+  EXPECT_EQ(lockstep.output.find("warning"), std::string::npos) << lockstep.output;
+  std::filesystem::remove_all(dir);
+}
+
 std::string read(const std::filesystem::path& path) {
   std::ifstream in(path);
   std::stringstream s;
@@ -86,6 +119,12 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
   EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos) << sites.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "displacement.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "lag_lag_shift_14ms.png"));
+  EXPECT_NE(sites.output.find("sites: 100% (1/1 runs"), std::string::npos) << sites.output;
+  // Links by role and by the site the sites config names, not by node id.
+  const std::string lag_plot = read(dir / "sites" / "lag_lag_shift_14ms.svg");
+  for (const char* label : {"actuator lab \"lab\": round trip, measured",
+                            "numerical site \"lab\": round trip, injected"})
+    EXPECT_NE(lag_plot.find(label), std::string::npos) << label;
 
   const auto ran = run_command({kRths, "run", (dir / "single.textproto").string(), "--no-plots", "--json",
                                 "--out", (dir / "run").string()});
