@@ -1,5 +1,7 @@
 #include "core/compensation.h"
 
+#include "core/text_columns.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,11 +30,7 @@ double backward_acceleration(const double* x, double dt) {
   return (2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]) / (dt * dt);
 }
 
-std::string number(double x) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof buffer, "%g", x);
-  return buffer;
-}
+std::string number(double x) { return format_number(x); }
 
 void require_step(double dt, const char* who) {
   require(dt > 0.0 && finite(dt), std::string(who) + ": dt must be > 0 s, got " + number(dt));

@@ -1,5 +1,7 @@
 #include "core/delay.h"
 
+#include "core/text_columns.h"
+
 #include "core/compensation.h"
 
 #include <algorithm>
@@ -343,44 +345,22 @@ double DelayTrace::max() const {
 }
 
 DelayTrace read_delay_trace(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(path.string() + ": cannot open delay trace");
   DelayTrace trace;
-  std::string line;
-  int line_number = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const auto where = [&] { return path.string() + ":" + std::to_string(line_number) + ": "; };
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
-    std::replace(line.begin(), line.end(), ',', ' ');
-    std::istringstream fields(line);
-    std::vector<std::string> tokens;
-    for (std::string token; fields >> token;) tokens.push_back(token);
-    if (tokens.empty()) continue;
-    if (tokens.size() != 2) {
-      throw std::invalid_argument(where() + "expected two columns (time, delay), found " +
-                               std::to_string(tokens.size()));
+  for (const TextRow& row : read_text_columns(path, "delay trace").rows) {
+    const std::string where = text_position(path, row.line);
+    if (row.values.size() != 2) {
+      throw std::invalid_argument(where + "expected two columns (time, delay), found " +
+                                  std::to_string(row.values.size()));
     }
-    double values[2];
-    for (int c = 0; c < 2; ++c) {
-      const std::string& token = tokens[static_cast<std::size_t>(c)];
-      char* end = nullptr;
-      values[c] = std::strtod(token.c_str(), &end);
-      if (end == token.c_str() || *end != '\0' || !std::isfinite(values[c])) {
-        throw std::invalid_argument(where() + "column " + std::to_string(c + 1) + " ('" + token +
-                                 "') is not a finite number");
-      }
+    const double time = row.values[0], delay = row.values[1];
+    if (delay < 0.0) throw std::invalid_argument(where + "delay " + format_number(delay) + " is negative");
+    if (!trace.time.empty() && !(time > trace.time.back())) {
+      throw std::invalid_argument(where + "time " + format_number(time) +
+                                  " does not increase (previous " +
+                                  format_number(trace.time.back()) + ")");
     }
-    if (values[1] < 0.0) {
-      throw std::invalid_argument(where() + "delay " + tokens[1] + " is negative");
-    }
-    if (!trace.time.empty() && !(values[0] > trace.time.back())) {
-      throw std::invalid_argument(where() + "time " + tokens[0] +
-                               " does not increase (previous " +
-                               std::to_string(trace.time.back()) + ")");
-    }
-    trace.time.push_back(values[0]);
-    trace.delay.push_back(values[1]);
+    trace.time.push_back(time);
+    trace.delay.push_back(delay);
   }
   if (trace.time.empty()) throw std::invalid_argument(path.string() + ": delay trace has no samples");
   return trace;

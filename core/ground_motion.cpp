@@ -1,5 +1,7 @@
 #include "core/ground_motion.h"
 
+#include "core/text_columns.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -9,10 +11,6 @@
 
 namespace rths::core {
 namespace {
-
-std::string where(const std::filesystem::path& path, int line) {
-  return path.string() + ":" + std::to_string(line) + ": ";
-}
 
 // getline that also drops the '\r' of CRLF files (PEER NGA files are CRLF).
 bool read_line(std::istream& in, std::string& line) {
@@ -53,7 +51,7 @@ void parse_values(std::string line, const std::filesystem::path& path, int line_
     if (!parse_number(p, value) || !std::isfinite(value)) {
       std::string token(start);
       token = token.substr(0, token.find_first_of(" \t"));
-      throw std::invalid_argument(where(path, line_number) + "'" + token +
+      throw std::invalid_argument(text_position(path, line_number) + "'" + token +
                                "' is not a finite number");
     }
     out.push_back(value);
@@ -77,7 +75,7 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
   const std::string text = upper(line);
   At2Header header;
   const auto fail = [&](const std::string& why) {
-    return std::invalid_argument(where(path, 4) + why + " in AT2 header line '" + line +
+    return std::invalid_argument(text_position(path, 4) + why + " in AT2 header line '" + line +
                               "' (expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT')");
   };
   const std::size_t npts_at = text.find("NPTS");
@@ -109,28 +107,6 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
   if (header.npts <= 0) throw fail("NPTS must be > 0");
   if (!(header.dt > 0.0) || !std::isfinite(header.dt)) throw fail("DT must be > 0");
   return header;
-}
-
-// Splits a columns line into numbers; returns false (no throw) if a field is not numeric.
-bool split_numbers(std::string line, std::vector<double>& fields, std::string& bad_field) {
-  std::replace(line.begin(), line.end(), ',', ' ');
-  std::replace(line.begin(), line.end(), '\t', ' ');
-  fields.clear();
-  std::size_t pos = 0;
-  while (true) {
-    pos = line.find_first_not_of(' ', pos);
-    if (pos == std::string::npos) return true;
-    const std::size_t end = std::min(line.find(' ', pos), line.size());
-    const std::string token = line.substr(pos, end - pos);
-    char* stop = nullptr;
-    const double value = std::strtod(token.c_str(), &stop);
-    if (stop == token.c_str() || *stop != '\0' || !std::isfinite(value)) {
-      bad_field = token;
-      return false;
-    }
-    fields.push_back(value);
-    pos = end;
-  }
 }
 
 }  // namespace
@@ -171,7 +147,7 @@ GroundMotion read_at2(const std::filesystem::path& path) {
     parse_values(line, path, line_number, motion.acceleration);
     if (motion.acceleration.size() != before) last_value_line = line_number;
     if (motion.acceleration.size() > static_cast<std::size_t>(header.npts)) {
-      throw std::invalid_argument(where(path, line_number) + "more values than NPTS = " +
+      throw std::invalid_argument(text_position(path, line_number) + "more values than NPTS = " +
                                std::to_string(header.npts) + " declared on line 4");
     }
   }
@@ -193,36 +169,22 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
     throw std::invalid_argument(path.string() + ": unit factor to m/s^2 must be > 0, got " +
                                 std::to_string(to_si));
   }
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
-  std::vector<double> times, values, fields;
-  std::string line, bad_field;
-  int line_number = 0;
+  const TextColumns text = read_text_columns(path, "ground-motion file", /*title_allowed=*/true);
+  std::vector<double> times, values;
   std::size_t columns = 0;
-  bool header_allowed = true;
   int first_data_line = 0;
-  while (read_line(in, line)) {
-    ++line_number;
-    const std::size_t start = line.find_first_not_of(" \t");
-    if (start == std::string::npos || line[start] == '#') continue;
-    if (!split_numbers(line, fields, bad_field)) {
-      if (header_allowed) {  // a title line such as "time,accel"
-        header_allowed = false;
-        continue;
-      }
-      throw std::invalid_argument(where(path, line_number) + "'" + bad_field +
-                               "' is not a finite number");
-    }
-    header_allowed = false;
+  for (const TextRow& row : text.rows) {
+    const int line_number = row.line;
+    const std::vector<double>& fields = row.values;
     if (columns == 0) {
       columns = fields.size();
       first_data_line = line_number;
       if (columns != 1 && columns != 2) {
-        throw std::invalid_argument(where(path, line_number) + "expected 1 column (acceleration) or "
+        throw std::invalid_argument(text_position(path, line_number) + "expected 1 column (acceleration) or "
                                  "2 (time, acceleration), found " + std::to_string(columns));
       }
     } else if (fields.size() != columns) {
-      throw std::invalid_argument(where(path, line_number) + "found " +
+      throw std::invalid_argument(text_position(path, line_number) + "found " +
                                std::to_string(fields.size()) + " columns, line " +
                                std::to_string(first_data_line) + " had " +
                                std::to_string(columns));
@@ -233,12 +195,12 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
         const double step = fields[0] - times.back();
         // 1e-3 relative: text files round their times, but a missing or doubled sample is caught.
         if (std::abs(step - first_step) > 1e-3 * first_step) {
-          throw std::invalid_argument(where(path, line_number) + "time step " + std::to_string(step) +
+          throw std::invalid_argument(text_position(path, line_number) + "time step " + std::to_string(step) +
                                    " s differs from the first step " +
                                    std::to_string(first_step) + " s (non-uniform time)");
         }
       } else if (times.size() == 1 && !(fields[0] > times[0])) {
-        throw std::invalid_argument(where(path, line_number) + "time does not increase");
+        throw std::invalid_argument(text_position(path, line_number) + "time does not increase");
       }
       times.push_back(fields[0]);
       values.push_back(fields[1] * to_si);

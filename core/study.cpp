@@ -1,6 +1,7 @@
 #include "core/study.h"
 
 #include "core/compensation.h"
+#include "core/text_columns.h"
 #include "core/text_format.h"
 
 #include <cmath>
@@ -21,11 +22,7 @@ void require(bool ok, const std::string& source, const std::string& message) {
   if (!ok) fail(source, message);
 }
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+std::string number(double value) { return format_number(value); }
 
 // A lag in seconds within [0, kMaxLag]; the message suggests the likely slip (ms written as s).
 void require_lag(double value, const std::string& field, const std::string& source, bool zero_allowed) {

@@ -8,6 +8,10 @@ namespace rths::deploy {
 
 std::string dds_config_xml(const DdsSiteConfig& config) {
   if (config.interface.empty()) throw std::invalid_argument("DDS config: empty interface name");
+  // Linux interface names; anything else would also break the XML it is written into.
+  if (!std::regex_match(config.interface, std::regex(R"([A-Za-z0-9_.:-]{1,15})")))
+    throw std::invalid_argument("DDS config: interface '" + config.interface +
+                                "' is not a network interface name");
   if (config.peers.empty()) throw std::invalid_argument("DDS config: no peers");
   if (config.max_auto_participant_index < 1) {
     throw std::invalid_argument("DDS config: max_auto_participant_index must be >= 1");

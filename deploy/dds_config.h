@@ -20,7 +20,8 @@ struct DdsSiteConfig {
   int max_auto_participant_index = 32;  // >= number of DDS processes per site
 };
 
-// Throws std::invalid_argument on an empty interface, no peers or an index below 1.
+// Throws std::invalid_argument on an interface that is not an interface name (1-15 of
+// [A-Za-z0-9_.:-]), no peers, a peer that is not IPv4 or an index below 1.
 std::string dds_config_xml(const DdsSiteConfig& config);
 
 // Writes the XML; returns the CYCLONEDDS_URI value for it ("file://" + absolute path).

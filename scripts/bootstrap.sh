@@ -43,3 +43,9 @@ echo "   separate processes over Cyclone DDS on loopback (lockstep; must equal t
   --out out/paper_frame_distributed
 echo "== stability of the paper's frame (T = 0.5 s, zeta = 5 %, alpha = 1/3, dt = 1 ms)"
 "$bin" stability --period 0.5 --zeta 0.05 --exp-fraction 0.3333333333 --dt 0.001
+echo "== the paper's Fig. 4: NRMSE against period, one curve per delay (points past the critical"
+echo "   delay are meant to diverge and are marked), and error against delay per period"
+"$bin" sweep configs/paper_sweep.textproto --out out/paper_sweep
+echo "== network lag x actuator lag on the paper's frame: the error map with the stability boundary,"
+echo "   and the total lag measured across emulated sites against the injected parts"
+"$bin" joint-lag configs/joint_lag_study.textproto --out out/joint_lag

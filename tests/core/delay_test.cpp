@@ -230,7 +230,7 @@ void expect_trace_error(const std::string& text, const std::string& expected_fra
 
 TEST(DelayTrace, ErrorsNameFileAndLine) {
   expect_trace_error("0 0.001\n0 0.002\n", ":2: time 0 does not increase");
-  expect_trace_error("# c\n0 0.001\n1 abc\n", ":3: column 2");
+  expect_trace_error("# c\n0 0.001\n1 abc\n", ":3: 'abc' is not a finite number");
   expect_trace_error("0 0.001 5\n", ":1: expected two columns");
   expect_trace_error("0 -0.001\n", ":1: delay -0.001 is negative");
   expect_trace_error("# nothing\n", "no samples");

@@ -1,0 +1,76 @@
+#include "core/text_columns.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+
+namespace rths::core {
+
+std::optional<double> parse_finite(std::string_view token) {
+  if (token.empty() || std::isspace(static_cast<unsigned char>(token.front()))) return std::nullopt;
+  const std::string text(token);  // strtod needs a terminated string
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+std::string format_number(double value) {
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%g", value);
+  return buffer;
+}
+
+std::string text_position(const std::filesystem::path& path, int line) {
+  return path.string() + ":" + std::to_string(line) + ": ";
+}
+
+TextColumns read_text_columns(const std::filesystem::path& path, const std::string& what,
+                              bool title_allowed) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open " + what);
+  TextColumns out;
+  std::string line;
+  int number = 0;
+  bool first = true;
+  std::vector<std::string> fields;
+  while (std::getline(in, line)) {
+    ++number;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    fields.clear();
+    std::size_t pos = 0;
+    for (;;) {
+      pos = line.find_first_not_of(" \t,\r", pos);
+      if (pos == std::string::npos) break;
+      const std::size_t end = std::min(line.find_first_of(" \t,\r", pos), line.size());
+      fields.push_back(line.substr(pos, end - pos));
+      pos = end;
+    }
+    if (fields.empty()) continue;
+    TextRow row{number, {}};
+    row.values.reserve(fields.size());
+    const std::string* bad = nullptr;
+    for (const std::string& field : fields) {
+      const auto value = parse_finite(field);
+      if (!value) {
+        bad = &field;
+        break;
+      }
+      row.values.push_back(*value);
+    }
+    if (bad && first && title_allowed) {
+      out.title = fields;
+      first = false;
+      continue;
+    }
+    if (bad) throw std::invalid_argument(text_position(path, number) + "'" + *bad + "' is not a finite number");
+    first = false;
+    out.rows.push_back(std::move(row));
+  }
+  return out;
+}
+
+}  // namespace rths::core
