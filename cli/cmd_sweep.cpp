@@ -137,7 +137,8 @@ void run_sweep_command(const SweepOptions& o) {
               << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
     if (!sharded) print_trends(trends);
     std::cout << "written: " << csv.string() << ", " << analysis::sweep_sidecar_path(csv).string()
-              << (plot ? ", " + png.string() + ", " + analysis::sweep_delay_plot_path(png).string() : std::string())
+              << (plot ? ", " + png.string() + "/.svg, " + analysis::sweep_delay_plot_path(png).string() + "/.svg"
+                       : std::string())
               << "\n";
   }
   const std::size_t diverged = static_cast<std::size_t>(
@@ -200,7 +201,7 @@ void run_merge_command(const MergeOptions& o) {
   std::cout << "merged " << o.shards.size() << " shards: " << merged.points << " points (grid "
             << merged.grid_hash << ")\n";
   print_trends(trends);
-  std::cout << "written: " << o.out << (plot ? ", " + png.string() : std::string()) << "\n";
+  std::cout << "written: " << o.out << (plot ? ", " + png.string() + "/.svg" : std::string()) << "\n";
 }
 
 }  // namespace
