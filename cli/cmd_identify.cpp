@@ -383,7 +383,7 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
+  cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--predict", o->predict,
