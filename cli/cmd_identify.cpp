@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "cli/commands.h"
+#include "cli/support.h"
 #include "core/study.h"
 #include "core/text_format.h"
 #include "identify/compensator_design.h"
@@ -212,7 +213,15 @@ void run_identify(const IdentifyCliOptions& o) {
       }
     }
   }
+  // Progress on stderr (cli/support.h): the identification's units, then one per k-fold fit.
+  ProgressReporter progress("identify", "steps");
+  const std::size_t fold_units = o.folds >= 2 ? o.folds * options.channels.size() : 0;
+  const std::size_t identify_units = identify::identify_units(options);
+  options.progress = [&](const identify::IdentifyProgress& p) {
+    progress.update(p.done, p.total + fold_units);
+  };
   const identify::Identification id = identify::identify(data, options);
+  progress.update(identify_units, identify_units + fold_units);
 
   std::optional<identify::StudyPrediction> prediction;
   if (!o.predict.empty()) {
@@ -267,21 +276,27 @@ void run_identify(const IdentifyCliOptions& o) {
     if (o.folds >= 2) {
       identify::FitOptions fast;
       fast.stride = 4;
-      const auto folds = identify::kfold(model, id.signals[k], o.folds, fast);
+      const auto folds = identify::kfold(model, id.signals[k], o.folds, fast, [&](std::size_t done) {
+        progress.update(identify_units + k * o.folds + done, identify_units + fold_units);
+      });
       nlohmann::json params = nlohmann::json::object();
       for (std::size_t p = 0; p < folds.param_names.size(); ++p) {
         params[folds.param_names[p]] = {{"mean", folds.param_mean[p]},
                                         {"fold_spread", folds.param_spread[p]},
                                         {"jacobian_std_error", c.final_fit.std_errors.at(p)}};
       }
+      // identify/validation.h: every fold by the record's std; spread = sample standard deviation.
       entry["kfold"] = {{"folds", o.folds},
+                        {"normalised_by", "std of the target over the whole record"},
                         {"heldout_errors", folds.heldout_errors},
+                        {"heldout_errors_by_block_std", folds.block_errors},
                         {"noise_floors", folds.noise_floors},
                         {"mean", folds.mean},
                         {"spread", folds.spread},
                         {"params", params}};
       validation_text << "; " << o.folds << "-fold " << 100.0 * folds.mean << " +/- "
-                      << 100.0 * folds.spread << " % (folds";
+                      << 100.0 * folds.spread
+                      << " % (of the record's std; +/- one sample standard deviation; folds";
       for (std::size_t f = 0; f < folds.heldout_errors.size(); ++f) {
         validation_text << (f ? ", " : " ") << 100.0 * folds.heldout_errors[f] << " % (floor ";
         // evidence.h: 0 when the block has no band free of signal to estimate the noise from.
@@ -368,7 +383,7 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--out", o->out, "directory for PNG plots (gnuplot), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
+  cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--predict", o->predict,

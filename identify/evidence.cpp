@@ -117,20 +117,116 @@ CrossCorrelation cross_correlation(std::span<const double> a, std::span<const do
   return result;
 }
 
-double noise_floor(std::span<const double> input, std::span<const double> target, double dt) {
-  if (input.size() != target.size() || target.size() < 16 || !(dt > 0.0)) return 0.0;
-  const Spectrum in = amplitude_spectrum(input, dt), out = amplitude_spectrum(target, dt);
-  double input_total = 0.0;
-  for (std::size_t k = 1; k < in.amplitude.size(); ++k) input_total += in.amplitude[k] * in.amplitude[k];
-  double cumulative = 0.0, signal_band = in.frequency.back();
+namespace {
+
+// Welch sums over segments of `segment` samples, 50 % overlap, mean removed, Hann window:
+// S_xx, S_yy (bins 0 .. segment/2) and S_xy = sum conj(X) Y. Unnormalised (ratios only).
+struct WelchSums {
+  std::vector<double> sxx, syy;
+  std::vector<std::complex<double>> sxy;
+  std::size_t segments = 0;
+};
+
+WelchSums welch_sums(std::span<const double> x, std::span<const double> y, std::size_t segment) {
+  const std::size_t bins = segment / 2 + 1, hop = segment / 2;
+  std::vector<double> window(segment);
+  for (std::size_t i = 0; i < segment; ++i) {
+    window[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) /
+                                     static_cast<double>(segment - 1));
+  }
+  WelchSums out;
+  out.sxx.assign(bins, 0.0);
+  out.syy.assign(bins, 0.0);
+  out.sxy.assign(bins, 0.0);
+  const auto windowed = [&](std::span<const double> part) {
+    auto c = centred(part);
+    for (std::size_t i = 0; i < segment; ++i) c[i] *= window[i];
+    return rfft(c, segment);
+  };
+  for (std::size_t start = 0; start + segment <= x.size(); start += hop) {
+    const auto fx = windowed(x.subspan(start, segment));
+    const auto fy = windowed(y.subspan(start, segment));
+    for (std::size_t k = 0; k < bins; ++k) {
+      out.sxx[k] += std::norm(fx[k]);
+      out.syy[k] += std::norm(fy[k]);
+      out.sxy[k] += std::conj(fx[k]) * fy[k];
+    }
+    ++out.segments;
+  }
+  return out;
+}
+
+}  // namespace
+
+TransferEstimate transfer_estimate(std::span<const double> x, std::span<const double> y, double dt,
+                                   std::size_t segment) {
+  if (x.size() != y.size() || segment < 8 || x.size() < segment || !(dt > 0.0)) {
+    throw std::invalid_argument("transfer_estimate: need two series of equal length >= the segment (" +
+                                std::to_string(segment) + " >= 8 samples) and dt > 0");
+  }
+  const WelchSums w = welch_sums(x, y, segment);
+  TransferEstimate out;
+  out.segments = w.segments;
+  double previous = 0.0;
+  for (std::size_t k = 1; k < w.sxx.size(); ++k) {
+    out.frequency.push_back(static_cast<double>(k) / (static_cast<double>(segment) * dt));
+    const std::complex<double> h = w.sxx[k] > 0.0 ? w.sxy[k] / w.sxx[k] : 0.0;
+    out.magnitude.push_back(std::abs(h));
+    double phase = std::arg(h);
+    if (k > 1) phase = previous + std::remainder(phase - previous, 2.0 * std::numbers::pi);
+    out.phase.push_back(phase);
+    previous = phase;
+    const double denominator = w.sxx[k] * w.syy[k];
+    out.coherence.push_back(denominator > 0.0 ? std::min(1.0, std::norm(w.sxy[k]) / denominator) : 0.0);
+  }
+  return out;
+}
+
+double noise_edge(std::span<const double> x, double dt) {
+  const double band = signal_band(x, dt);
+  if (x.size() < 512 || !(band > 0.0)) return 0.0;
+  std::size_t segment = 256;
+  while (segment * 2 <= x.size() / 8 && segment < 4096) segment *= 2;
+  const WelchSums w = welch_sums(x, x, segment);
+  const double df = 1.0 / (static_cast<double>(segment) * dt), nyquist = 0.5 / dt;
+  if (!(1.5 * band < 0.9 * nyquist)) return 0.0;
+  std::vector<double> above;
+  for (std::size_t k = 1; k < w.sxx.size(); ++k) {
+    if (static_cast<double>(k) * df > 1.5 * band) above.push_back(w.sxx[k]);
+  }
+  if (above.empty()) return 0.0;
+  std::nth_element(above.begin(), above.begin() + static_cast<std::ptrdiff_t>(above.size() / 2), above.end());
+  const double noise = above[above.size() / 2];
+  if (!(noise > 0.0)) return 0.0;
+  // The first bin above the band whose 5-bin average has sunk to 10 x the noise density.
+  for (std::size_t k = 3; k + 2 < w.sxx.size(); ++k) {
+    if (static_cast<double>(k) * df <= band) continue;
+    double mean = 0.0;
+    for (std::size_t j = k - 2; j <= k + 2; ++j) mean += w.sxx[j] / 5.0;
+    if (mean <= 10.0 * noise) return static_cast<double>(k) * df;
+  }
+  return nyquist;
+}
+
+double signal_band(std::span<const double> x, double dt) {
+  if (x.size() < 16 || !(dt > 0.0)) return 0.0;
+  const Spectrum in = amplitude_spectrum(x, dt);
+  double total = 0.0;
+  for (std::size_t k = 1; k < in.amplitude.size(); ++k) total += in.amplitude[k] * in.amplitude[k];
+  if (!(total > 0.0)) return 0.0;
+  double cumulative = 0.0;
   for (std::size_t k = 1; k < in.amplitude.size(); ++k) {
     cumulative += in.amplitude[k] * in.amplitude[k];
-    if (cumulative >= 0.995 * input_total) {
-      signal_band = in.frequency[k];
-      break;
-    }
+    if (cumulative >= 0.995 * total) return in.frequency[k];
   }
-  const double nyquist = out.frequency.back(), cut = 1.5 * signal_band;
+  return in.frequency.back();
+}
+
+double noise_floor(std::span<const double> input, std::span<const double> target, double dt) {
+  if (input.size() != target.size() || target.size() < 16 || !(dt > 0.0)) return 0.0;
+  const Spectrum out = amplitude_spectrum(target, dt);
+  const double band = signal_band(input, dt);
+  const double nyquist = out.frequency.back(), cut = 1.5 * (band > 0.0 ? band : nyquist);
   if (!(cut < 0.9 * nyquist)) return 0.0;  // no band free of signal: nothing to estimate from
   double above = 0.0, total = 0.0;
   for (std::size_t k = 1; k < out.amplitude.size(); ++k) {

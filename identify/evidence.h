@@ -11,6 +11,20 @@
 //                        the input, the input's velocity, sign(velocity), the input cubed and the
 //                        acceleration; the cross-correlation input -> residual; the residual
 //                        spectrum's dominant frequency and the share of its power below 1 Hz.
+//   signal_band          f_s (Hz): the frequency below which 99.5 % of x's power lies (mean removed;
+//                        0 for fewer than 16 samples or no power).
+//   transfer_estimate    H1(f) = S_xy(f) / S_xx(f) of output y against input x by Welch averaging:
+//                        segments of `segment` samples with 50 % overlap, each with its mean
+//                        removed and a Hann window, their FFTW r2c transforms' cross and auto
+//                        spectra summed; coherence gamma^2 = |S_xy|^2 / (S_xx S_yy) in [0, 1].
+//                        Bins 1 .. segment/2 (DC left out), f_k = k / (segment dt) Hz; magnitude
+//                        in units of y per unit of x; phase (rad) unwrapped from the lowest bin.
+//   noise_edge           where x's spectrum has sunk to its noise (Hz): the first frequency above
+//                        the signal band where x's Welch power density (5-bin average) is at most
+//                        10 x its noise density, the median density above 1.5 x the band (which
+//                        holds only noise, as for noise_floor). Nyquist when the spectrum never
+//                        sinks that far; 0 when it cannot be estimated (fewer than 512 samples, no
+//                        power, or no band above 1.5 x the signal band).
 //   noise_floor          the sensor noise of a target, relative to its spread: sigma / std(target).
 //                        The signal band is where 99.5 % of the input's power lies (below f_s);
 //                        above 1.5 f_s the target has (ideally) only noise, whose power there,
@@ -49,6 +63,16 @@ struct Evidence {
   double low_frequency_share = 0.0;  // power below 1 Hz / total
   double residual_rms = 0.0;
 };
+struct TransferEstimate {
+  std::vector<double> frequency, magnitude, phase, coherence;  // Hz, y/x, rad, -
+  std::size_t segments = 0;
+};
+// @pre x and y of equal length >= segment >= 8; throws std::invalid_argument otherwise.
+TransferEstimate transfer_estimate(std::span<const double> x, std::span<const double> y, double dt,
+                                   std::size_t segment);
+
+double signal_band(std::span<const double> x, double dt);
+double noise_edge(std::span<const double> x, double dt);
 double noise_floor(std::span<const double> input, std::span<const double> target, double dt);
 
 Evidence residual_evidence(const ChannelSignals& signals, std::span<const double> prediction);

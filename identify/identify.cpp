@@ -22,6 +22,12 @@ std::vector<const SelectionStep*> Identification::steps() const {
   return out;
 }
 
+std::size_t identify_units(const IdentifyOptions& options) {
+  std::size_t total = 0;
+  for (Channel channel : options.channels) total += selection_units(options.selection, channel) + 1;
+  return total;
+}
+
 Identification identify(const MeasuredData& data, const IdentifyOptions& options) {
   Identification result;
   result.source = data.source;
@@ -39,6 +45,11 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
   result.split = holdout_split(data.size(), options.holdout_fraction, options.holdout_mode,
                                options.holdout_blocks);
   FitOptions full_fit = options.selection.fit;
+  const std::size_t total = identify_units(options);
+  std::size_t channel_start = 0;
+  const auto report = [&](std::size_t done, const std::string& stage) {
+    if (options.progress) options.progress({std::min(done, total), total, stage});
+  };
 
   for (Channel channel : options.channels) {
     const auto& declared =
@@ -46,8 +57,14 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
     const ChannelSignals search_signals = make_signals(search, channel);
     const auto& declarations = channel == Channel::kMeasured ? options.actuator_parameters
                                                              : options.specimen_parameters;
+    SelectionOptions selection = options.selection;
+    const std::string name = channel_name(channel);
+    selection.progress = [&](std::size_t units) { report(channel_start + units, name + ": search"); };
+    const std::size_t search_units = selection_units(options.selection, channel);
+    report(channel_start, name + ": search");
     ChannelIdentification id = identify_channel(search_signals, search_split, declared,
-                                                options.selection, declarations);
+                                                selection, declarations);
+    report(channel_start + search_units, name + ": full-rate refit");
     ChannelSignals signals = make_signals(data, channel);
     if (factor > 1) {
       // Refit at the full rate from the search's parameters; the ranking keeps search errors.
@@ -82,6 +99,8 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
     id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);
     result.channels.push_back(std::move(id));
     result.signals.push_back(std::move(signals));
+    channel_start += search_units + 1;
+    report(channel_start, name + ": done");
   }
   return result;
 }

@@ -9,11 +9,22 @@
 // averaged the sensor noise); at the full rate a step must still lower the held-out error, or it
 // and the steps after it are dropped (listed in ChannelIdentification::dropped_at_full_rate).
 
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "identify/selection.h"
 
 namespace rths::identify {
+
+// Progress of identify(): `done` of `total` units of work. Per channel: its search's units
+// (selection.h selection_units: the declared fit, each candidate of each round, the specimen
+// kinds) and one for the refit at the full rate. `done` never decreases and ends at `total`;
+// `stage` says what runs ("force: search", "force: full-rate refit").
+struct IdentifyProgress {
+  std::size_t done = 0, total = 0;
+  std::string stage;
+};
 
 struct IdentifyOptions {
   std::vector<Channel> channels{Channel::kMeasured, Channel::kForce};
@@ -28,7 +39,13 @@ struct IdentifyOptions {
   std::size_t search_decimation = 0;
   std::size_t search_samples = 12000;
   SelectionOptions selection;
+  // Called as the work proceeds (IdentifyProgress); empty = silent. selection.progress is set by
+  // identify() itself.
+  std::function<void(const IdentifyProgress&)> progress;
 };
+
+// The total units identify() reports for these options.
+std::size_t identify_units(const IdentifyOptions& options);
 
 struct Identification {
   std::string source;

@@ -1,5 +1,7 @@
 #include "identify/model.h"
 
+#include "identify/evidence.h"
+
 #include <numbers>
 #include <algorithm>
 #include <array>
@@ -170,6 +172,38 @@ std::vector<Effect> effect_library(Channel channel) {
   return out;
 }
 
+std::vector<double> zero_phase_lowpass(std::span<const double> x, double dt, double cutoff) {
+  if (!(dt > 0.0) || !(cutoff > 0.0) || !(cutoff < 0.5 / dt)) {
+    throw std::invalid_argument("zero_phase_lowpass: need 0 < cutoff < Nyquist (cutoff " +
+                                std::to_string(cutoff) + " Hz, dt " + std::to_string(dt) + " s)");
+  }
+  std::vector<double> y(x.begin(), x.end());
+  if (y.empty()) return y;
+  const double w = std::tan(std::numbers::pi * cutoff * dt);  // pre-warped analogue cut-off
+  const auto section = [&](double q) {
+    const double norm = 1.0 / (1.0 + w / q + w * w);
+    const double b0 = w * w * norm, b1 = 2.0 * b0, b2 = b0;
+    const double a1 = 2.0 * (w * w - 1.0) * norm, a2 = (1.0 - w / q + w * w) * norm;
+    // Direct form II transposed, at rest with input y[0] (DC gain 1).
+    double s2 = (b2 - a2) * y.front();
+    double s1 = (b1 - a1) * y.front() + s2;
+    for (double& v : y) {
+      const double out = b0 * v + s1;
+      s1 = b1 * v - a1 * out + s2;
+      s2 = b2 * v - a2 * out;
+      v = out;
+    }
+  };
+  const double q1 = 1.0 / (2.0 * std::cos(std::numbers::pi / 8.0));
+  const double q2 = 1.0 / (2.0 * std::cos(3.0 * std::numbers::pi / 8.0));
+  for (int pass = 0; pass < 2; ++pass) {
+    section(q1);
+    section(q2);
+    std::reverse(y.begin(), y.end());
+  }
+  return y;
+}
+
 ChannelSignals make_signals(const MeasuredData& data, Channel channel, double smooth_window) {
   ChannelSignals s;
   s.channel = channel;
@@ -177,8 +211,18 @@ ChannelSignals make_signals(const MeasuredData& data, Channel channel, double sm
   s.time = data.time;
   s.input = channel == Channel::kMeasured ? data.command : data.measured;
   s.target = channel == Channel::kMeasured ? data.measured : data.force;
+  if (channel == Channel::kForce && s.input.size() >= 16) {
+    const double edge = noise_edge(s.input, data.dt);
+    const double cutoff =
+        edge > 0.0 ? std::max(kSpecimenInputCutoffFactor * signal_band(s.input, data.dt), edge) : 0.0;
+    if (cutoff > 0.0 && cutoff < 0.8 * 0.5 / data.dt) {
+      s.model_input = zero_phase_lowpass(s.input, data.dt, cutoff);
+      s.input_cutoff = cutoff;
+    }
+  }
+  const std::vector<double>& drive = s.model_input.empty() ? s.input : s.model_input;
   const auto window = static_cast<std::size_t>(std::max(1.0, std::round(smooth_window / data.dt)));
-  const auto smooth = moving_average(s.input, window);
+  const auto smooth = moving_average(drive, window);
   s.velocity = central_difference(smooth, data.dt);
   s.acceleration = central_difference(moving_average(s.velocity, window), data.dt);
   return s;
@@ -522,12 +566,14 @@ void predict(const ChannelModel& model, std::span<const double> p, const Channel
     return;
   }
 
+  // The specimen runs on the low-passed displacement when there is one (make_signals).
+  const std::vector<double>& displacement = sig.model_input.empty() ? sig.input : sig.model_input;
   double z = 0.0, plastic = 0.0;
-  double previous_d = shifted_at(sig.input, 0);
+  double previous_d = shifted_at(displacement, 0);
   const double vc_safe = std::max(std::abs(vc), 1e-12);
   const double dy_safe = std::max(std::abs(d_y), 1e-12);
   for (std::size_t j = 0; j < n; ++j) {
-    const double d = shifted_at(sig.input, j);
+    const double d = shifted_at(displacement, j);
     const double v = shifted_at(sig.velocity, j);
     const double s = norm_time(j);
     const double k_now = k_c.empty() ? k : k + drift_profile(k_c, s);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "analysis/plot.h"
+#include "identify/bode.h"
 #include "identify/evidence.h"
 
 namespace rths::identify {
@@ -258,6 +259,8 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                         {"start", model_json(c.start_fit, scales)},
                         {"kind", c.kind ? kind_json(*c.kind) : nlohmann::json()},
                         {"noise_floor", c.noise_floor},
+                        // model.h make_signals: the specimen's input low-pass (0: none).
+                        {"input_lowpass_hz", signals_of(id, c.channel).input_cutoff},
                         {"final", model_json(c.final_fit, scales)},
                         {"final_evidence", evidence_json(c.final_evidence)},
                         {"search_heldout_error", c.search_heldout_error},
@@ -306,6 +309,10 @@ std::string format_table(const Identification& id,
     out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
         << percent(c.declared_fit.heldout_error) << "\n";
     out << "  noise floor (estimated from the record): " << percent(c.noise_floor) << "\n";
+    if (const double cutoff = signals_of(id, c.channel).input_cutoff; cutoff > 0.0) {
+      out << "  the model runs on the measured displacement low-passed at " << format_value(cutoff)
+          << " Hz (zero phase)\n";
+    }
     for (const auto& hit : c.declared_fit.bound_hits) {
       out << "  declared fit ends at a bound: " << hit.message()
           << (c.kind ? ": the declared model is the wrong kind" : "") << "\n";
@@ -465,6 +472,18 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
                          series("final model", s.time, c.final_fit.prediction, lo, hi)};
       written.push_back(directory / "measured_tracking.png");
       analysis::write_png_plot(tracking, written.back());
+      // A record too short for Welch averaging, or without a coherent band, has no Bode plot.
+      std::optional<BodeData> bode;
+      try {
+        bode = actuator_bode(s, {{"identified model", &c.final_fit.model},
+                                 {"declared model", &c.declared_fit.model}});
+      } catch (const std::invalid_argument&) {
+        bode.reset();
+      }
+      if (bode) {
+        written.push_back(directory / "measured_bode.png");
+        write_bode_plot(*bode, written.back());
+      }
     }
   }
   if (const auto* c = id.find(Channel::kMeasured);

@@ -6,7 +6,8 @@
 //   "steps": [ {channel, effect, params: {name: {value, std_error, unit}}, train_error_before,
 //               train_error_after, heldout_error_before, heldout_error_after, evidence: {...},
 //               ranking: [{effect, train_error, heldout_error, score, pays}]} ... ],
-//   "channels": [ {channel, declared, final: {effects, params, train_error, heldout_error},
+//   "channels": [ {channel, declared, noise_floor, input_lowpass_hz (the specimen model's input
+//                  low-pass, model.h make_signals; 0 = none), final: {effects, params, train_error, heldout_error},
 //                  final_evidence, rejected: [ranking of the round where nothing paid]} ],
 //   "prediction": {...} when a study was predicted }
 // `steps` lists the effects added, in order, measured channel first; clean data gives [].
@@ -18,6 +19,12 @@
 //   force_loops.png                   measured force against measured displacement, with the
 //                                     declared and the final model's force (a held-out window)
 //   measured_tracking.png             command, measured and modelled displacement (a window)
+//   measured_bode.png                 amplitude ratio (mm/mm) and phase (deg) against frequency
+//                                     (Hz, log axis): measured H1 by Welch averaging against the
+//                                     identified and the declared model's response, with the
+//                                     coherence, over the band where it is >= 0.9 (bode.h); left
+//                                     out when the record is too short or has no such band
+// Every PNG has an SVG of the same figure beside it (analysis/plot.h).
 
 #include <filesystem>
 #include <nlohmann/json.hpp>

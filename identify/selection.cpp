@@ -102,6 +102,7 @@ KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
       }
     }
     proposal.ranking.push_back(std::move(trial));
+    if (options.progress) options.progress(proposal.ranking.size());
   }
   std::stable_sort(proposal.ranking.begin(), proposal.ranking.end(),
                    [](const KindTrial& a, const KindTrial& b) {
@@ -114,9 +115,39 @@ KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
 
 namespace {
 
-// Greedy forward selection from `start`: fills steps, last_ranking and final_fit of `id`.
+// The candidates of the pool that apply to the channel (P of selection_units).
+std::size_t pool_units(const SelectionOptions& options, Channel channel) {
+  const std::vector<Effect> pool =
+      options.candidates.empty() ? effect_library(channel) : options.candidates;
+  std::size_t count = 0;
+  for (Effect e : pool) count += effect_applies(e, channel) ? 1 : 0;
+  return std::max<std::size_t>(1, count);
+}
+
+bool proposes_kind(const SelectionOptions& options, Channel channel) {
+  return options.propose_kind && channel == Channel::kForce;
+}
+
+// Reports `units` through options.progress, never less than what was reported before.
+class ProgressUnits {
+ public:
+  explicit ProgressUnits(const SelectionOptions& options) : options_(options) {}
+  void report(std::size_t units) {
+    reported_ = std::max(reported_, units);
+    if (options_.progress) options_.progress(reported_);
+  }
+  std::size_t reported() const { return reported_; }
+
+ private:
+  const SelectionOptions& options_;
+  std::size_t reported_ = 0;
+};
+
+// Greedy forward selection from `start`: fills steps, last_ranking and final_fit of `id`. The
+// search's progress units run from `first_unit` to first_unit + max_steps x P.
 void search_from(ChannelIdentification& id, const FitResult& start, const ChannelSignals& signals,
-                 const Split& split, const SelectionOptions& options) {
+                 const Split& split, const SelectionOptions& options, ProgressUnits& progress,
+                 std::size_t first_unit) {
   id.start_fit = start;
   id.steps.clear();
   id.last_ranking.clear();
@@ -124,8 +155,13 @@ void search_from(ChannelIdentification& id, const FitResult& start, const Channe
   const SignalScales sc = signal_scales(signals);
   const std::vector<Effect> pool =
       options.candidates.empty() ? effect_library(signals.channel) : options.candidates;
+  const std::size_t per_round = pool_units(options, signals.channel);
   for (std::size_t round = 0; round < options.max_steps; ++round) {
     std::vector<CandidateTrial> trials;
+    std::size_t in_round = 0;
+    for (Effect e : pool) {
+      in_round += effect_applies(e, signals.channel) && !current.model.has(e) ? 1 : 0;
+    }
     for (Effect e : pool) {
       if (!effect_applies(e, signals.channel) || current.model.has(e)) continue;
       CandidateTrial trial;
@@ -140,6 +176,7 @@ void search_from(ChannelIdentification& id, const FitResult& start, const Channe
                        (1.0 - options.min_relative_improvement) * current.heldout_error &&
                    trial.score < current.heldout_error;
       trials.push_back(std::move(trial));
+      progress.report(first_unit + round * per_round + trials.size() * per_round / in_round);
     }
     std::sort(trials.begin(), trials.end(),
               [](const CandidateTrial& a, const CandidateTrial& b) { return a.score < b.score; });
@@ -158,9 +195,15 @@ void search_from(ChannelIdentification& id, const FitResult& start, const Channe
     id.steps.push_back(std::move(step));
   }
   id.final_fit = current;
+  progress.report(first_unit + options.max_steps * per_round);
 }
 
 }  // namespace
+
+std::size_t selection_units(const SelectionOptions& options, Channel channel) {
+  const std::size_t search = options.max_steps * pool_units(options, channel);
+  return 1 + search + (proposes_kind(options, channel) ? specimen_kinds().size() + search : 0);
+}
 
 void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, const Split& split,
                       const FitOptions& options) {
@@ -182,23 +225,33 @@ ChannelIdentification identify_channel(const ChannelSignals& signals, const Spli
   ChannelIdentification id;
   id.channel = signals.channel;
   id.declared = declared;
+  ProgressUnits progress(options);
+  const std::size_t search_units = options.max_steps * pool_units(options, signals.channel);
   const ChannelModel declared_fit =
       fit_declared(signals, split, declared, options.fit, declarations);
   id.declared_fit = fit_channel(declared_fit, signals, split, options.fit);
-  search_from(id, id.declared_fit, signals, split, options);
-  if (options.propose_kind && signals.channel == Channel::kForce) {
+  progress.report(1);
+  search_from(id, id.declared_fit, signals, split, options, progress, 1);
+  if (proposes_kind(options, signals.channel)) {
     // The declared kind is wrong when its parameters end at a physical bound, either at once or
     // once the search has explained the rest of the force.
     auto hits = id.declared_fit.bound_hits;
     hits.insert(hits.end(), id.final_fit.bound_hits.begin(), id.final_fit.bound_hits.end());
     if (!hits.empty()) {
-      id.kind = compare_kinds(signals, split, hits, options, declarations);
+      // compare_kinds reports the kinds fitted so far; they follow the first search's units.
+      SelectionOptions counted = options;
+      counted.progress = [&](std::size_t kinds) { progress.report(1 + search_units + kinds); };
+      id.kind = compare_kinds(signals, split, hits, counted, declarations);
+      const std::size_t kinds_done = specimen_kinds().size();
+      progress.report(1 + search_units + kinds_done);
       if (id.kind->proposed) {
         id.declared_search_final = id.final_fit;
         id.declared_search_final->prediction.clear();
-        search_from(id, id.kind->ranking.front().fit, signals, split, options);
+        search_from(id, id.kind->ranking.front().fit, signals, split, options, progress,
+                    1 + search_units + kinds_done);
       }
     }
+    progress.report(selection_units(options, signals.channel));
   }
   attribute_shares(id, signals, split, options.fit);
   id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);

@@ -15,6 +15,7 @@
 // proposed and the search is run again from it. The declared fit is kept and reported.
 // The candidate ranking and the residual evidence before each step are kept for the report.
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -31,7 +32,17 @@ struct SelectionOptions {
   std::size_t max_steps = 6;
   bool propose_kind = true;  // force channel: propose a specimen kind when the declared is wrong
   FitOptions fit;
+  // Progress of identify_channel, in units of work done so far for this channel (out of
+  // selection_units): 1 for the declared fit; per search, max_steps rounds of P units each
+  // (P = the candidates of the pool that apply to the channel; a round's trials fill its P units
+  // in proportion), a search that stops early jumping to its end; on the force channel with
+  // propose_kind, one unit per specimen kind compared and a second search, both skipped (jumped
+  // over) when the declared kind stands. Never decreases; ends at selection_units.
+  std::function<void(std::size_t units_done)> progress;
 };
+
+// The units identify_channel reports through SelectionOptions::progress for `channel`.
+std::size_t selection_units(const SelectionOptions& options, Channel channel);
 
 struct KindTrial {
   SpecimenKind kind = SpecimenKind::kLinearSpring;
@@ -47,6 +58,7 @@ struct KindProposal {
 };
 
 // Fits every specimen kind on the force channel and ranks them. @pre signals.channel is force.
+// options.progress, when set, is called with the number of kinds fitted so far after each.
 // Declarations (model.h) of parameters the kinds share with the declared model apply to them too.
 KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
                            const std::vector<BoundHit>& declared_hits,

@@ -207,5 +207,33 @@ TEST_F(CmdIdentifyTest, TrimIdleCutsTheRestBeforeTheTestOff) {
   EXPECT_GT(kept, record.size() - 600);
 }
 
+// Progress on stderr (cli/support.h ProgressReporter): stderr is a pipe here, not a terminal, so
+// one plain line per 10 %, rising to 100 %, and no bar redrawn with carriage returns. --out also
+// writes the actuator's Bode plot (PNG and SVG).
+TEST_F(CmdIdentifyTest, ProgressIsPlainLinesOnAPipeAndOutWritesTheBodePlot) {
+  const fs::path out = dir_ / "out";
+  const Outcome o = run("identify " + data() + " --channels measured --folds 3 --out " + out.string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_EQ(o.output.find('\r'), std::string::npos);
+  std::vector<int> percents;
+  std::size_t at = 0;
+  while ((at = o.output.find("identify: ", at)) != std::string::npos) {
+    if (at == 0 || o.output[at - 1] == '\n') {
+      percents.push_back(std::stoi(o.output.substr(at + 10, 4)));
+      EXPECT_THAT(o.output.substr(at, o.output.find('\n', at) - at), HasSubstr(" steps, "));
+    }
+    at += 10;
+  }
+  ASSERT_FALSE(percents.empty()) << o.output;
+  EXPECT_LE(percents.size(), 10u);
+  EXPECT_TRUE(std::is_sorted(percents.begin(), percents.end()));
+  EXPECT_EQ(std::adjacent_find(percents.begin(), percents.end()), percents.end());
+  EXPECT_EQ(percents.back(), 100);
+  for (const char* file : {"measured_bode.png", "measured_bode.svg"}) {
+    ASSERT_TRUE(fs::exists(out / file)) << file;
+    EXPECT_GT(fs::file_size(out / file), 1000u) << file;
+  }
+}
+
 }  // namespace
 }  // namespace rths::identify

@@ -87,5 +87,48 @@ TEST(EvidenceTest, NoiseFloorFindsTheGeneratorsNoise) {
   EXPECT_LT(noise_floor(clean.input, clean.target, clean.dt), 0.01);
 }
 
+// H1 by Welch of a pure 3-sample delay of white noise: unit magnitude, phase -w 3 dt, coherence 1;
+// with independent noise on the output the coherence falls to S_signal / (S_signal + S_noise).
+TEST(EvidenceTest, TransferEstimateOfAKnownDelay) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  const double dt = 0.001;
+  std::vector<double> x(40000), y(40000), noisy(40000);
+  for (double& v : x) v = normal(rng);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    y[i] = i >= 3 ? x[i - 3] : 0.0;
+    noisy[i] = y[i] + normal(rng);
+  }
+  const TransferEstimate h = transfer_estimate(x, y, dt, 1024);
+  EXPECT_EQ(h.segments, 2 * 40000 / 1024 - 1);
+  ASSERT_EQ(h.frequency.size(), 512u);
+  EXPECT_NEAR(h.frequency.front(), 1.0 / (1024 * dt), 1e-9);
+  for (std::size_t k = 0; k < h.frequency.size(); k += 50) {
+    EXPECT_NEAR(h.magnitude[k], 1.0, 0.01) << h.frequency[k];
+    EXPECT_NEAR(h.phase[k], -2.0 * std::numbers::pi * h.frequency[k] * 3.0 * dt, 0.01) << h.frequency[k];
+    EXPECT_GT(h.coherence[k], 0.99) << h.frequency[k];
+  }
+  const TransferEstimate n = transfer_estimate(x, noisy, dt, 1024);
+  double mean_coherence = 0.0;
+  for (double c : n.coherence) mean_coherence += c / static_cast<double>(n.coherence.size());
+  EXPECT_NEAR(mean_coherence, 0.5, 0.05);
+  EXPECT_THROW(transfer_estimate(x, std::vector<double>(10, 0.0), dt, 8), std::invalid_argument);
+  EXPECT_THROW(transfer_estimate(std::vector<double>(100, 0.0), std::vector<double>(100, 0.0), dt, 256),
+               std::invalid_argument);
+}
+
+// A chirp to 12 Hz with 2 um of sensor noise: its band ends near 12 Hz and its spectrum sinks to
+// the noise just above; a record too short to estimate from gives 0.
+TEST(EvidenceTest, NoiseEdgeIsWhereTheSpectrumSinksToTheNoise) {
+  GeneratorSpec spec;
+  const MeasuredData data = generate_measured(spec);
+  const double band = signal_band(data.measured, data.dt), edge = noise_edge(data.measured, data.dt);
+  EXPECT_GT(band, 8.0);
+  EXPECT_LT(band, 12.5);
+  EXPECT_GT(edge, band);
+  EXPECT_LT(edge, 25.0);
+  EXPECT_EQ(noise_edge(std::vector<double>(100, 1.0), data.dt), 0.0);
+}
+
 }  // namespace
 }  // namespace rths::identify

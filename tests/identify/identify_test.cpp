@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <iostream>
 
 #include "identify/generator.h"
 
@@ -37,13 +38,10 @@ TEST(IdentifyTest, RealActuatorHeldOutErrorFallsBelowFivePercent) {
 
 // The MR damper's force: a spring is the wrong kind (the data want a negative stiffness); the
 // tool proposes a damper with hysteresis, fits no negative stiffness or damping, and ends near
-// the noise floor it estimates from the record. Measured: 29.4 % against a floor of 18.0 %
-// (1.64x; the issue's target of 1.5x is not reached yet).
-TEST(IdentifyTest, RealDamperForceIsAHystereticDamperNearTheNoiseFloor) {
-  const MeasuredData data = read_measured(kRealFile);
-  IdentifyOptions options;
-  options.channels = {Channel::kForce};
-  const Identification id = identify(data, options);
+// the noise floor it estimates from the record. The specimen model runs on the displacement
+// low-passed at 2.5x its signal band (model.h make_signals): before, the raw displacement's
+// sensor noise switched the hysteresis and the friction at every reversal of the noise.
+void expect_hysteretic_damper(const Identification& id) {
   const ChannelIdentification& c = id.channels.at(0);
   ASSERT_TRUE(c.kind.has_value());
   ASSERT_TRUE(c.kind->proposed.has_value());
@@ -51,25 +49,44 @@ TEST(IdentifyTest, RealDamperForceIsAHystereticDamperNearTheNoiseFloor) {
   const auto sc = signal_scales(id.signals[0]);
   EXPECT_GE(c.final_fit.model.param(Effect::kStiffness, "stiffness", sc).value_or(0.0), 0.0);
   EXPECT_GT(c.final_fit.model.param(Effect::kDamping, "damping", sc).value_or(0.0), 0.0);
-  EXPECT_GT(c.noise_floor, 0.10);
-  EXPECT_LT(c.noise_floor, 0.30);
-  EXPECT_LT(c.final_fit.heldout_error, 1.7 * c.noise_floor);
+  EXPECT_GT(c.final_fit.model.param(Effect::kBoucWen, "hysteretic_force", sc).value_or(0.0), 0.0);
+  for (std::size_t i = 0; i < c.final_fit.model.params.size(); ++i) {
+    const auto spec = c.final_fit.model.specs(sc)[i];
+    if (!spec.below_means.empty()) EXPECT_GE(c.final_fit.model.params[i], 0.0) << spec.name;
+  }
+  EXPECT_GT(id.signals[0].input_cutoff, 0.0);
+  std::cout << c.final_fit.model.describe(sc) << "\nheld-out " << c.final_fit.heldout_error
+            << " noise floor " << c.noise_floor << " ratio "
+            << c.final_fit.heldout_error / c.noise_floor << " (input low-passed at "
+            << id.signals[0].input_cutoff << " Hz)\n";
 }
 
-// The same force on the record's active part (data.h active_range, `--trim-idle`): the idle
-// seconds before the test, where the hysteretic model turns displacement noise into force, no
-// longer weigh on the fit. Measured 28.85 % against a floor of 18.83 % (1.53x, from 1.64x on the
-// whole record; the target of 1.5x is not reached).
-TEST(IdentifyTest, RealDamperForceOnTheActivePartComesCloserToTheNoiseFloor) {
+// Whole record. Measured 27.76 % against a floor of 17.96 % (1.55x; 29.4 %, 1.64x, before the
+// low-pass).
+TEST(IdentifyTest, RealDamperForceIsAHystereticDamperNearTheNoiseFloor) {
+  const MeasuredData data = read_measured(kRealFile);
+  IdentifyOptions options;
+  options.channels = {Channel::kForce};
+  const Identification id = identify(data, options);
+  expect_hysteretic_damper(id);
+  const ChannelIdentification& c = id.channels.at(0);
+  EXPECT_GT(c.noise_floor, 0.10);
+  EXPECT_LT(c.noise_floor, 0.30);
+  EXPECT_LT(c.final_fit.heldout_error, 1.6 * c.noise_floor);
+}
+
+// The same force on the record's active part (data.h active_range, `--trim-idle`), issue 14's
+// target: a held-out error within 1.5x the noise floor. Measured 27.5 % against 18.83 % (1.46x;
+// 28.85 %, 1.53x, before the low-pass).
+TEST(IdentifyTest, RealDamperForceOnTheActivePartIsWithinOneAndAHalfNoiseFloors) {
   const MeasuredData data = read_measured(kRealFile);
   const ActiveRange active = active_range(data);
   IdentifyOptions options;
   options.channels = {Channel::kForce};
   const Identification id = identify(slice(data, active.begin, active.end), options);
+  expect_hysteretic_damper(id);
   const ChannelIdentification& c = id.channels.at(0);
-  ASSERT_TRUE(c.kind && c.kind->proposed);
-  EXPECT_TRUE(is_hysteretic_damper(*c.kind->proposed));
-  EXPECT_LT(c.final_fit.heldout_error, 1.56 * c.noise_floor);
+  EXPECT_LE(c.final_fit.heldout_error, 1.5 * c.noise_floor);
 }
 
 TEST(IdentifyTest, BothChannelsOfAGeneratedSetInOrder) {

@@ -55,7 +55,9 @@ TEST(ReportTest, TableAndPlots) {
   const auto dir = std::filesystem::temp_directory_path() / "rths_identify_report_test_plots";
   std::filesystem::remove_all(dir);
   const auto files = write_plots(id, dir);
-  EXPECT_EQ(files.size(), 6u);
+  EXPECT_EQ(files.size(), 7u);
+  EXPECT_NE(std::find(files.begin(), files.end(), dir / "measured_bode.png"), files.end());
+  EXPECT_TRUE(std::filesystem::exists(dir / "measured_bode.svg"));
   for (const auto& f : files) {
     EXPECT_TRUE(std::filesystem::exists(f)) << f;
     EXPECT_GT(std::filesystem::file_size(f), 1000u) << f;

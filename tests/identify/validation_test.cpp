@@ -64,7 +64,12 @@ TEST(ValidationTest, ModelCarriesToAnotherRecord) {
 }
 
 // Real MTS record, displacement channel: identified on the first half, k-fold over the whole
-// record and the model carried to the second half.
+// record and the model carried to the second half. Issue 14's target: a k-fold spread (sample
+// standard deviation of the folds' held-out errors, each normalised by the record's std) of at
+// most 1 percentage point. Measured: whole record 3.40 +/- 0.25 %, active part 3.21 +/- 0.75 %.
+// Before the errors were normalised by the record's std (each fold by its own block's std), the
+// active part gave 3.69 +/- 1.18 %: the last fold (17-22 Hz, where the actuator realises a third
+// of the command) had the same residual as the others (25-30 um) but a third of their std.
 TEST(ValidationTest, RealActuatorKFoldAndSecondHalf) {
   const MeasuredData data = read_measured(kRealFile);
   IdentifyOptions options;
@@ -78,26 +83,29 @@ TEST(ValidationTest, RealActuatorKFoldAndSecondHalf) {
   for (double e : folds.heldout_errors) std::cout << " " << e;
   std::cout << "  mean " << folds.mean << " spread " << folds.spread << "\n";
   EXPECT_LT(folds.mean, 0.05);
-  // Measured 1.76 points: the issue's target of 1 point is not met (the folds at the chirp's
-  // idle start and fast end differ most).
-  EXPECT_LT(folds.spread, 0.025);
+  EXPECT_LE(folds.spread, 0.01);
 
-  // The record's active part (7.08 s to 59.18 s; data.h active_range): the idle lead-in no longer
-  // weighs on the first fold. Measured 1.18 points; the last fold (17-22 Hz, where the actuator
-  // realises a third of the command) stays above the others.
+  // The record's active part (7.08 s to 59.18 s; data.h active_range).
   const ActiveRange active = active_range(data);
   const Identification trimmed = identify(slice(data, active.begin, active.end), options);
   const KFoldResult trimmed_folds =
       kfold(trimmed.channels.at(0).final_fit.model, trimmed.signals.at(0), 5, fast);
   std::cout << "active part: k-fold held-out:";
   for (std::size_t f = 0; f < 5; ++f) {
-    std::cout << " " << trimmed_folds.heldout_errors[f] << " (floor " << trimmed_folds.noise_floors[f] << ")";
+    std::cout << " " << trimmed_folds.heldout_errors[f] << " (floor " << trimmed_folds.noise_floors[f]
+              << ", by the block's std " << trimmed_folds.block_errors[f] << ")";
   }
   std::cout << "  mean " << trimmed_folds.mean << " spread " << trimmed_folds.spread << "\n";
-  EXPECT_LT(trimmed_folds.mean, folds.mean);
-  EXPECT_LT(trimmed_folds.spread, 0.8 * folds.spread);
-  EXPECT_EQ(trimmed_folds.heldout_errors.back(),
-            *std::max_element(trimmed_folds.heldout_errors.begin(), trimmed_folds.heldout_errors.end()));
+  EXPECT_LT(trimmed_folds.mean, 0.05);
+  EXPECT_LE(trimmed_folds.spread, 0.01);
+  for (std::size_t f = 0; f < 5; ++f) {
+    EXPECT_GE(trimmed_folds.heldout_errors[f], trimmed_folds.noise_floors[f]) << f;
+  }
+  // By each block's own std the chirp's fast end would dominate: the same residual over a third
+  // of the signal.
+  EXPECT_EQ(trimmed_folds.block_errors.back(),
+            *std::max_element(trimmed_folds.block_errors.begin(), trimmed_folds.block_errors.end()));
+  EXPECT_LT(trimmed_folds.heldout_errors.back(), trimmed_folds.block_errors.back());
 
   const MeasuredData first = slice(data, 0, data.size() / 2);
   const MeasuredData second = slice(data, data.size() / 2, data.size());
