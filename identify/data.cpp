@@ -1,7 +1,8 @@
 #include "identify/data.h"
 
+#include "core/text_columns.h"
+
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -34,25 +35,16 @@ std::string lower(std::string s) {
 }
 
 std::string where(const std::filesystem::path& path, std::size_t line) {
-  return path.string() + ":" + std::to_string(line) + ": ";
+  return core::text_position(path, static_cast<int>(line));
 }
 
 double parse_number(const std::string& text, const std::filesystem::path& path, std::size_t line,
                     const std::string& column) {
-  double value = 0.0;
-  const char* begin = text.data();
-  const char* end = text.data() + text.size();
-  if (!text.empty() && *begin == '+') ++begin;
-  const auto [ptr, ec] = std::from_chars(begin, end, value);
-  if (text.empty() || ec != std::errc() || ptr != end) {
+  const auto value = core::parse_finite(text);
+  if (!value)
     throw std::invalid_argument(where(path, line) + "column '" + column + "': '" + text +
-                                "' is not a number");
-  }
-  if (!std::isfinite(value)) {
-    throw std::invalid_argument(where(path, line) + "column '" + column + "': value is " + text +
-                                " (NaN or infinite)");
-  }
-  return value;
+                                "' is not a finite number");
+  return *value;
 }
 
 std::size_t column_index(const std::vector<std::string>& header, const std::string& name,
@@ -131,9 +123,8 @@ DaqColumnMap parse_column_map(const std::string& text) {
     source.column = trim(rhs.substr(0, star));
     if (star != std::string::npos) {
       const std::string scale = trim(rhs.substr(star + 1));
-      char* end = nullptr;
-      source.scale = std::strtod(scale.c_str(), &end);
-      if (scale.empty() || *end != '\0' || !std::isfinite(source.scale) || source.scale == 0.0) {
+      source.scale = core::parse_finite(scale).value_or(0.0);
+      if (source.scale == 0.0) {
         throw std::invalid_argument("column map entry '" + entry + "': scale '" + scale +
                                     "' is not a non-zero number");
       }
