@@ -11,7 +11,10 @@
 #include <sstream>
 
 #include "analysis/parallel_for.h"
-#include "analysis/sweep.h"
+#include "analysis/sweep_csv.h"
+#include "analysis/sweep_grid.h"
+#include "analysis/sweep_report.h"
+#include "analysis/sweep_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/study.h"

@@ -30,7 +30,9 @@
 #include <optional>
 
 #include "analysis/study_run.h"
-#include "analysis/sweep.h"
+#include "analysis/sweep_grid.h"
+#include "analysis/sweep_report.h"
+#include "analysis/sweep_run.h"
 #include "core/stability.h"
 #include "core/study.h"
 #include "identify/data.h"

@@ -28,7 +28,7 @@
 //                 `measured` (displacement), N for `force`.
 
 #include "analysis/study_run.h"
-#include "analysis/sweep.h"
+#include "analysis/sweep_run.h"
 #include "identify/identify.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"

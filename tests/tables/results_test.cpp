@@ -8,6 +8,8 @@
 #include <cmath>
 #include <fstream>
 
+#include "analysis/sweep_csv.h"
+#include "analysis/sweep_grid.h"
 #include "core/study.h"
 
 namespace rths::tables {

@@ -1,0 +1,40 @@
+#pragma once
+// What a sweep shows: its figures, and the paper's claims measured on its rows
+// (analysis/sweep_run.h's SweepTableRow, from a run or read back from a CSV).
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "analysis/sweep_run.h"
+
+namespace rths::analysis {
+
+// Two figures (PNG and SVG), at the first stiffness (the others coincide):
+//   `png`: the paper's Fig. 4, NRMSE (%) against period on a log axis, one curve per delay (and per
+//     model, fraction, dt and record when there are several), diverged points marked on a row above
+//     the curves (they set no scale); below it the paper's Eq. 2 as printed.
+//   sweep_delay_plot_path(png): NRMSE against delay (ms), one curve per period (at most 6, spread
+//     over the range), with each period's critical delay drawn when `critical_delay` is given.
+// Needs gnuplot. Throws std::invalid_argument when there are no rows or no delay > 0.
+void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
+                      const std::string& title, const CriticalDelayOf& critical_delay = {});
+// "out/sweep.png" -> "out/sweep_vs_delay.png".
+std::filesystem::path sweep_delay_plot_path(const std::filesystem::path& png);
+
+// The paper's claims, measured on the rows.
+struct SweepTrends {
+  // max over (period, delay, ...) of |e(k1) - e(k2)| / max|e| across stiffnesses (NRMSE); 0 when
+  // only one stiffness was swept.
+  double stiffness_max_relative_difference = 0;
+  // Per delay > 0 series: fraction of consecutive period pairs where NRMSE falls (1 = monotone).
+  double period_falling_fraction = 0;
+  // Median over periods of NRMSE(non-linear model) / NRMSE(linear), when both were swept;
+  // NaN otherwise. < 1: the softening model has the smaller delay error.
+  double nonlinear_to_linear_median_ratio = 0;
+  std::size_t diverged_points = 0;
+};
+SweepTrends measure_trends(const std::vector<SweepTableRow>& rows);
+
+}  // namespace rths::analysis

@@ -1,0 +1,87 @@
+// The sweep's report: the paper's trends measured on hand-made rows (each claim on its own), and
+// the two figures written where the report says.
+#include "analysis/sweep_report.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+
+#include <unistd.h>
+
+namespace rths::analysis {
+namespace {
+
+namespace fs = std::filesystem;
+
+SweepTableRow row(double period, double delay, double nrmse_pct, double stiffness = 1e3,
+                  const std::string& model = "linear") {
+  SweepTableRow r;
+  r.period = period;
+  r.delay = delay;
+  r.alpha = 0.5;
+  r.stiffness = stiffness;
+  r.dt = 0.002;
+  r.motion = "record";
+  r.model = model;
+  r.nrmse_pct = nrmse_pct;
+  r.eq2_paper = nrmse_pct / 1000;
+  return r;
+}
+
+TEST(SweepTrends, FallingFractionCountsConsecutivePeriodPairsPerSeries) {
+  // delay 4 ms falls over both pairs; delay 8 ms falls once and rises once: 3 of 4 pairs fall.
+  const std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 5), row(2.0, 0.004, 1),
+                                           row(2.0, 0.008, 3), row(0.5, 0.008, 20), row(1.0, 0.008, 2),
+                                           row(1.0, 0.0, 0)};  // a zero delay is left out
+  const SweepTrends trends = measure_trends(rows);
+  EXPECT_DOUBLE_EQ(trends.period_falling_fraction, 0.75);
+  EXPECT_EQ(trends.stiffness_max_relative_difference, 0.0);  // one stiffness
+  EXPECT_TRUE(std::isnan(trends.nonlinear_to_linear_median_ratio));  // one model
+  EXPECT_EQ(trends.diverged_points, 0u);
+}
+
+TEST(SweepTrends, StiffnessDifferenceIsRelativeToTheLargerError) {
+  const std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10, 1e3), row(0.5, 0.004, 8, 1e6),
+                                           row(1.0, 0.004, 4, 1e3), row(1.0, 0.004, 4, 1e6)};
+  EXPECT_DOUBLE_EQ(measure_trends(rows).stiffness_max_relative_difference, 0.2);
+}
+
+TEST(SweepTrends, NonlinearRatioIsTheMedianOverMatchingPointsAndDivergedPointsAreCounted) {
+  std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 10), row(2.0, 0.004, 10),
+                                     row(0.5, 0.004, 5, 1e3, "bilinear"), row(1.0, 0.004, 2, 1e3, "bilinear"),
+                                     row(2.0, 0.004, 30, 1e3, "bilinear")};
+  SweepTableRow diverged = row(3.0, 0.004, std::numeric_limits<double>::infinity(), 1e3, "bilinear");
+  diverged.diverged = true;
+  rows.push_back(diverged);
+  const SweepTrends trends = measure_trends(rows);
+  EXPECT_DOUBLE_EQ(trends.nonlinear_to_linear_median_ratio, 0.5);  // ratios 0.5, 0.2, 3
+  EXPECT_EQ(trends.diverged_points, 1u);
+}
+
+TEST(SweepPlot, DelayFigureSitsBesideTheFigureNamed) {
+  EXPECT_EQ(sweep_delay_plot_path("out/sweep.png"), fs::path("out/sweep_vs_delay.png"));
+}
+
+TEST(SweepPlot, WritesBothFiguresAsPngAndSvg) {
+  const fs::path dir = fs::temp_directory_path() / ("rths_sweep_report_test_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 5), row(0.5, 0.008, 20),
+                                           row(1.0, 0.008, 9)};
+  const fs::path png = dir / "sweep.png";
+  write_sweep_plot(rows, png, "report test", [](double period, double, double) { return period * 0.016; });
+  for (const fs::path& file : {png, sweep_delay_plot_path(png)}) {
+    EXPECT_GT(fs::file_size(file), 1000u) << file;
+    fs::path svg = file;
+    EXPECT_GT(fs::file_size(svg.replace_extension(".svg")), 1000u) << svg;
+  }
+  EXPECT_THROW(write_sweep_plot({}, png, "empty"), std::invalid_argument);
+  EXPECT_THROW(write_sweep_plot({row(0.5, 0.0, 0)}, png, "no delay"), std::invalid_argument);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace rths::analysis
