@@ -47,6 +47,12 @@ std::vector<double> floor_history(const core::SimulationResult& result, int colu
   return u;
 }
 
+std::vector<double> column_of(const core::Mat& history, int column) {
+  std::vector<double> out(static_cast<std::size_t>(history.rows()));
+  for (Eigen::Index i = 0; i < history.rows(); ++i) out[static_cast<std::size_t>(i)] = history(i, column);
+  return out;
+}
+
 Comparison compare(std::span<const double> reference, std::span<const double> result,
                    bool stopped_early) {
   const std::size_t n = std::min(reference.size(), result.size());

@@ -55,6 +55,8 @@ struct Comparison {
 
 // Displacement history of one floor (m), 0-based column.
 std::vector<double> floor_history(const core::SimulationResult& result, int column);
+// Column `column` (0-based) of any per-step history (one row a step), e.g. an actuator's command.
+std::vector<double> column_of(const core::Mat& history, int column);
 
 // Compares histories sampled at the same step. `stopped_early` marks a case the simulation
 // stopped (its own divergence guard or a limit): it counts as diverged.

@@ -82,20 +82,6 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec) {
   }
 }
 
-void run_gnuplot(const std::string& script, const std::filesystem::path& png) {
-  struct PipeCloser {
-    void operator()(FILE* f) const { if (f) pclose(f); }
-  };
-  FILE* pipe = popen("gnuplot 2>/dev/null", "w");
-  if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot for " + png.string());
-  const std::size_t written = std::fwrite(script.data(), 1, script.size(), pipe);
-  const int status = pclose(pipe);
-  if (written != script.size() || status != 0) {
-    throw std::runtime_error("gnuplot failed to write " + png.string() +
-                             " (is gnuplot-nox installed?)");
-  }
-}
-
 std::string figure(const std::vector<PlotSpec>& panels, const std::string& terminal,
                    const std::filesystem::path& file) {
   std::ostringstream script;
@@ -124,6 +110,20 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
 
 }  // namespace
 
+void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure) {
+  struct PipeCloser {
+    void operator()(FILE* f) const { if (f) pclose(f); }
+  };
+  FILE* pipe = popen("gnuplot 2>/dev/null", "w");
+  if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot for " + figure.string());
+  const std::size_t written = std::fwrite(script.data(), 1, script.size(), pipe);
+  const int status = pclose(pipe);
+  if (written != script.size() || status != 0) {
+    throw std::runtime_error("gnuplot failed to write " + figure.string() +
+                             " (is gnuplot-nox installed?)");
+  }
+}
+
 std::string series_colour(std::size_t index) { return kPalette[index % kColours]; }
 
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
@@ -132,10 +132,10 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
 
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png) {
   if (panels.empty()) throw std::invalid_argument("no panels to plot into " + png.string());
-  run_gnuplot(figure(panels, "pngcairo", png), png);
+  run_gnuplot_script(figure(panels, "pngcairo", png), png);
   std::filesystem::path svg = png;
   svg.replace_extension(".svg");
-  run_gnuplot(figure(panels, "svg dynamic", svg), svg);
+  run_gnuplot_script(figure(panels, "svg dynamic", svg), svg);
 }
 
 std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,

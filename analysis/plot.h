@@ -46,6 +46,12 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 // Several panels stacked vertically in one PNG (shared width), and the SVG beside it.
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png);
 
+// Runs a gnuplot script as given (its text on gnuplot's stdin; it sets its own terminals and
+// outputs), for figures a PlotSpec does not describe (e.g. a heat map with contour lines).
+// `figure` names what it draws, for the message. Throws std::runtime_error when gnuplot is
+// missing or fails.
+void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure);
+
 // The range [lo, hi] padded by `margin` of its span on each side, over the finite y of the series
 // (all when `include` is empty, else those whose index is listed). Empty when nothing is finite.
 std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,

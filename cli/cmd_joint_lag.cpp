@@ -1,13 +1,15 @@
-// `rths joint-lag CONFIG`: the network lag x actuator lag study (see deploy/joint_lag.h).
+// `rths joint-lag CONFIG`: the network lag x actuator lag study (see analysis/joint_lag.h; its
+// across-sites runs: deploy/joint_lag_sites.h).
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <iostream>
 #include <memory>
 
+#include "analysis/joint_lag.h"
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "deploy/joint_lag.h"
+#include "deploy/joint_lag_sites.h"
 
 namespace rths::cli {
 namespace {
@@ -19,19 +21,20 @@ struct JointLagOptions {
 
 void run(const JointLagOptions& o) {
   const std::filesystem::path path = o.config;
-  const auto config = load_config_as<deploy::JointLagStudy>(path, "joint-lag study", deploy::load_joint_lag);
-  deploy::JointLagOptions options;
+  const auto config = load_config_as<analysis::JointLagStudy>(path, "joint-lag study", analysis::load_joint_lag);
+  analysis::JointLagOptions options;
   if (!o.out.empty()) options.output_directory = std::filesystem::path(o.out);
   options.measure = !o.no_measure;
   options.plots = !o.no_plots;
+  options.across_sites = deploy::joint_lag_across_sites();
   ProgressReporter progress("joint-lag", "points", !o.json);
   options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
-  const auto result = deploy::run_joint_lag(config, path.parent_path(), options);
-  deploy::write_joint_lag_outputs(result, options.plots);
+  const auto result = analysis::run_joint_lag(config, path.parent_path(), options);
+  analysis::write_joint_lag_outputs(result, options.plots);
   if (o.json) {
-    std::cout << deploy::to_json(result).dump(2) << "\n";
+    std::cout << analysis::to_json(result).dump(2) << "\n";
   } else {
-    std::cout << deploy::to_text(result);
+    std::cout << analysis::to_text(result);
   }
 }
 
@@ -43,7 +46,7 @@ void add_joint_lag_command(CLI::App& app) {
       "joint-lag",
       "Sweep network lag x actuator lag: error surface, measured total lag vs injected parts; "
       "optionally real runs across namespace sites (root)");
-  cmd->add_option("config", options->config, "joint lag config (rths.deploy.JointLagStudy)")
+  cmd->add_option("config", options->config, "joint lag config (rths.analysis.JointLagStudy)")
       ->required();
   cmd->add_option("--out", options->out, "output folder (default: the config's)");
   cmd->add_flag("--json", options->json, "print the summary as JSON");

@@ -20,9 +20,9 @@
 #include "analysis/atomic_file.h"
 #include "cli/commands.h"
 #include "core/text_format.h"
+#include "rths/analysis/joint_lag.pb.h"
 #include "rths/proto/config.pb.h"
-#if __has_include("rths/deploy/joint_lag.pb.h")
-#include "rths/deploy/joint_lag.pb.h"
+#if __has_include("rths/deploy/sites.pb.h")
 #include "rths/deploy/sites.pb.h"
 #define RTHS_CLI_HAS_DEPLOY 1
 #endif
@@ -67,9 +67,9 @@ std::string config_kind_of(const std::filesystem::path& path) {
   }
   config::Study study;
   if (parses_as(text, study)) return "study (rths.config.Study)";
+  analysis::JointLagStudy joint;
+  if (parses_as(text, joint)) return "joint-lag study (rths.analysis.JointLagStudy)";
 #ifdef RTHS_CLI_HAS_DEPLOY
-  deploy::JointLagStudy joint;
-  if (parses_as(text, joint)) return "joint-lag study (rths.deploy.JointLagStudy)";
   deploy::Sites sites;
   if (parses_as(text, sites)) return "sites (rths.deploy.Sites)";
 #endif

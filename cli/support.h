@@ -16,7 +16,7 @@
 namespace rths::cli {
 
 // Which kind of config a text-format file parses as: "study (rths.config.Study)", "joint-lag
-// study (rths.deploy.JointLagStudy)", "sites (rths.deploy.Sites)", or empty when none.
+// study (rths.analysis.JointLagStudy)", "sites (rths.deploy.Sites)", or empty when none.
 std::string config_kind_of(const std::filesystem::path& path);
 
 // Calls `load`; when it throws std::invalid_argument and the file parses as another kind of

@@ -29,6 +29,21 @@ TEST(Plot, WritesThePngAndTheSvgBesideIt) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Plot, RunsAScriptAsGivenAndNamesTheFigureWhenGnuplotFails) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_plot_script_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const auto svg = dir / "map.svg";
+  run_gnuplot_script("set terminal svg\nset output '" + svg.string() + "'\nplot sin(x)\n", svg);
+  EXPECT_GT(std::filesystem::file_size(svg), 1000u);
+  try {
+    run_gnuplot_script("plot no_such_function(x)\n", dir / "broken.png");
+    FAIL() << "a failing script passed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.png"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Plot, PaddedRangeFollowsOnlyTheIncludedFiniteSeries) {
   const std::vector<Series> series = {{"bounded", {0, 1}, {-1.0, 1.0}},
                                       {"diverged", {0, 1}, {1e6, std::nan("")}}};

@@ -12,14 +12,8 @@
 //   measured total   J1 delay of the realised behind the commanded displacement (cross-correlation
 //                    peak, s), compared with injected = R + A.
 // Measured across sites (optional, needs namespaces): selected points run across network-namespace
-// sites with the clock of the sites config, R injected half each way by the actuator emulator, the
-// actuator lag as the case's delay stage; from the record:
-//   real time  the coordinator uses the newest feedback it has, so the realised displacement it
-//              records lags the command by round trip + actuator lag: total = J1(command,
-//              realised); network = round-trip median; actuator = their difference.
-//   lockstep   each command is paired with its own answer: actuator = J1, network = round-trip
-//              median, total = their sum. (The result itself sees only the actuator lag.)
-// Error against the in-process reference over the same duration.
+// sites by a JointLagAcrossSites runner (deploy/joint_lag_sites.h, which analysis/ does not link),
+// and the record's measured lags are compared with the injected parts; see there.
 //
 // Stability (SDOF studies): before the grid runs, the continuous boundary R*(A) (BoundaryPoint);
 // grid points past it are flagged (past_boundary) and a warning names how many.
@@ -37,9 +31,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "rths/deploy/joint_lag.pb.h"
+#include "rths/analysis/joint_lag.pb.h"
+#include "rths/proto/config.pb.h"
 
-namespace rths::deploy {
+namespace rths::analysis {
 
 struct JointLagPoint {
   double network_round_trip = 0.0;  // s, injected
@@ -51,7 +46,7 @@ struct JointLagPoint {
   bool diverged = false;
   // Across sites only (zero otherwise):
   double measured_round_trip = 0.0;  // s, record median
-  double measured_actuator_lag = 0.0;  // s, see above
+  double measured_actuator_lag = 0.0;  // s, see deploy/joint_lag_sites.h
   bool real_time = false;              // the clock of the across-sites run
   bool past_boundary = false;          // network round trip beyond the critical one at this actuator lag
 };
@@ -76,12 +71,29 @@ struct JointLagResult {
   std::filesystem::path output_directory;
 };
 
+// Reads and checks a JointLagStudy (text format). Throws std::invalid_argument naming the file
+// and the field (an empty study or grid, a lag that is negative or not finite).
 JointLagStudy load_joint_lag(const std::filesystem::path& path);
+
+// Runs the across-sites part of the study (deploy::joint_lag_across_sites() gives the one that
+// runs across network-namespace sites).
+struct JointLagAcrossSites {
+  // Why runs across sites are impossible here (e.g. namespaces not permitted); empty when possible.
+  std::function<std::optional<std::string>()> unavailable;
+  // Runs every (measured_network_round_trips x measured_actuator_lags) point of `config` (paths
+  // relative to `base_dir`) into result.output_directory, appends one point each to
+  // result.measured, and calls one_done after each. Throws std::runtime_error when a run fails.
+  std::function<void(const JointLagStudy& config, const std::filesystem::path& base_dir,
+                     JointLagResult& result, const std::function<void()>& one_done)>
+      run;
+};
 
 struct JointLagOptions {
   std::optional<std::filesystem::path> output_directory;  // overrides the config's
   bool measure = true;       // run the across-sites part when the config asks and it is possible
   bool plots = true;
+  // The across-sites runner; without one the across-sites part is skipped (and says so).
+  JointLagAcrossSites across_sites;
   // Called after each grid point and each across-sites run: done of total (both counted).
   std::function<void(std::size_t done, std::size_t total)> progress;
 };
@@ -95,4 +107,14 @@ void write_joint_lag_outputs(const JointLagResult& result, bool plots);
 nlohmann::json to_json(const JointLagResult& result);
 std::string to_text(const JointLagResult& result);
 
-}  // namespace rths::deploy
+// --- shared with the across-sites runner -------------------------------------------------------
+// The actuator's own stage: a shift by `lag` (s), or a first-order lag of time constant `lag`.
+config::DelayStage joint_lag_actuator_stage(JointLagStudy::ActuatorModel model, double lag);
+// The J1 search window (s): max_lag_search, or 2 x the largest injected total + 10 ms.
+double joint_lag_search_window(const JointLagStudy& config);
+// NRMSE, the paper's Eq. 2 and the peak error of `u` against `reference` (m) over their common
+// length (a diverged run is shorter), into `point`.
+void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& reference,
+                           const std::vector<double>& u);
+
+}  // namespace rths::analysis

@@ -1,4 +1,4 @@
-#include "deploy/joint_lag.h"
+#include "analysis/joint_lag.h"
 
 #include <google/protobuf/io/tokenizer.h>
 #include <spdlog/spdlog.h>
@@ -12,21 +12,15 @@
 #include <optional>
 #include <sstream>
 
+#include "analysis/compare.h"
 #include "analysis/plot.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/stability.h"
 #include "core/study.h"
 #include "core/text_format.h"
-#include "deploy/netns.h"
-#include "runtime/process.h"
-#include "deploy/sites.h"
-#include "runtime/measurements.h"
-#include "runtime/record.h"
 
-namespace rths::deploy {
-
-using runtime::run_command;
+namespace rths::analysis {
 namespace {
 
 void check_lags(const google::protobuf::RepeatedField<double>& values, const std::string& field,
@@ -39,110 +33,8 @@ void check_lags(const google::protobuf::RepeatedField<double>& values, const std
   }
 }
 
-config::DelayStage actuator_stage(JointLagStudy::ActuatorModel model, double lag) {
-  config::DelayStage stage;
-  if (model == JointLagStudy::FIRST_ORDER && lag > 0.0) {
-    stage.mutable_first_order()->set_time_constant(lag);
-  } else {
-    stage.mutable_shift()->set_delay(lag);
-  }
-  return stage;
-}
-
-std::vector<double> column(const core::Mat& m, int col) {
-  std::vector<double> out(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) out[static_cast<std::size_t>(i)] = m(i, col);
-  return out;
-}
-
 std::string model_name(JointLagStudy::ActuatorModel model) {
   return model == JointLagStudy::FIRST_ORDER ? "first_order" : "shift";
-}
-
-double search_window(const JointLagStudy& config) {
-  if (config.max_lag_search() > 0.0) return config.max_lag_search();
-  double largest = 0.0;
-  for (const double r : config.network_round_trips()) {
-    for (const double a : config.actuator_lags()) largest = std::max(largest, r + a);
-  }
-  return 2.0 * largest + 0.01;
-}
-
-// Error measures of u against the reference over their common length (a diverged run is shorter).
-void fill_errors(JointLagPoint& point, const std::vector<double>& reference,
-                 const std::vector<double>& u) {
-  const std::size_t n = std::min(reference.size(), u.size());
-  const std::span<const double> ref(reference.data(), n), got(u.data(), n);
-  point.nrmse = core::nrmse(ref, got);
-  point.paper_eq2 = core::paper_eq2(ref, got);
-  point.peak_error = core::peak_error(ref, got);
-}
-
-void run_measured(const JointLagStudy& config, const std::filesystem::path& base_dir,
-                  const std::filesystem::path& out, JointLagResult& result,
-                  const std::function<void()>& one_done) {
-  const auto sites_file = base_dir / config.sites();
-  const double duration = config.measured_duration() > 0.0 ? config.measured_duration() : 5.0;
-  for (const double round_trip : config.measured_network_round_trips()) {
-    for (const double actuator : config.measured_actuator_lags()) {
-      auto plan = load_sites(sites_file);
-      plan.study.mutable_motion()->set_duration(duration);
-      auto& deployment = *plan.study.mutable_deployment();
-      const bool real_time = deployment.clock() == config::Deployment::REAL_TIME;
-      auto* joint_case = plan.study.add_cases();
-      joint_case->set_name("joint_actuator");
-      *joint_case->add_delay() = actuator_stage(config.actuator_model(), actuator);
-      deployment.set_case_name("joint_actuator");
-      for (auto& node : *deployment.mutable_nodes()) {
-        if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
-        // Only the delay: the study's point is the injected round trip, without jitter or loss.
-        config::LinkLag lag;
-        lag.set_one_way_delay(round_trip / 2);
-        *node.mutable_receive_lag() = lag;
-        *node.mutable_send_lag() = lag;
-      }
-      std::ostringstream name;
-      name << "measured_R" << round_trip * 1e3 << "ms_A" << actuator * 1e3 << "ms";
-      const auto run = run_sites(plan, {out / name.str(), std::nullopt, {}});
-      if (!run.ok) throw std::runtime_error("across-sites run " + name.str() + ": " + run.status);
-
-      JointLagPoint point;
-      point.network_round_trip = round_trip;
-      point.actuator_lag = actuator;
-      for (const auto& link : run.links) {
-        if (link.kind == "actuator_emulator") point.measured_round_trip = link.round_trip.median;
-      }
-      const runtime::RunMeasurements measured = runtime::measure_run(runtime::read_record(run.record));
-      const core::SimulationResult& steps = measured.steps;
-      if (steps.command.cols() == 0 || steps.displacement.cols() == 0)
-        throw std::runtime_error("across-sites run " + name.str() + ": record has no actuator");
-      const std::vector<double> command = column(steps.command, 0),
-                                realised = column(steps.realised, 0),
-                                u = column(steps.displacement, 0);
-      const double dt = steps.dt;
-      if (command.size() < 10 || !(dt > 0.0)) {
-        throw std::runtime_error("across-sites run " + name.str() + ": record too short");
-      }
-      // Real time: the coordinator pairs each command with the newest feedback it has, which
-      // answers an older step when the round trip exceeds the wait, so the realised displacement
-      // it records lags the command by round trip + actuator lag. Lockstep: each command is
-      // paired with its own answer, so J1 sees the actuator alone and the network part is the
-      // measured round trip.
-      const double j1 = core::j1_delay(command, realised, dt, search_window(config));
-      point.measured_total_lag = real_time ? j1 : point.measured_round_trip + j1;
-      point.measured_actuator_lag = real_time ? j1 - point.measured_round_trip : j1;
-      point.real_time = real_time;
-      // The in-process reference over the same duration.
-      auto reference_study = plan.study;
-      const auto prepared = core::prepare_study(reference_study, base_dir);
-      const auto reference = core::simulate(
-          core::setup_for_case(prepared, core::reference_case(reference_study)), prepared.motion);
-      fill_errors(point, column(reference.displacement, 0), u);
-      point.diverged = measured.has_footer && measured.footer.diverged();
-      result.measured.push_back(point);
-      one_done();
-    }
-  }
 }
 
 // Log colour scale (the error spans decades towards instability); zero error is drawn at this floor.
@@ -188,8 +80,8 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
                                         [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
   const auto contours = out / "error_map_contours.dat";
   const auto script = out / "error_map.gp";
+  std::ostringstream file;
   {
-    std::ofstream file(script);
     file << "set table '" << contours.string() << "'\n"
          << "unset surface\nset contour base\nset cntrparam levels discrete 1,2,5,10,20,50,100\n"
          << "splot '" << grid_data.string() << "' using 1:2:3 with lines notitle\n"
@@ -218,10 +110,9 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
            << plot << "\n";
     }
   }
-  const auto run = run_command({"gnuplot", script.string()}, std::chrono::seconds(60));
-  if (!run.ok()) {
-    throw std::runtime_error("gnuplot failed on " + script.string() + ": " + run.output);
-  }
+  // The script is kept beside the figures, so the map can be redrawn or restyled by hand.
+  std::ofstream(script) << file.str();
+  run_gnuplot_script(file.str(), out / "error_map.png");
 }
 
 // The continuous boundary for an SDOF study; empty (with the reason) otherwise.
@@ -244,7 +135,7 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
   for (int i = 0; i < kPoints; ++i) {
     const double a = largest * i / (kPoints - 1);
     google::protobuf::RepeatedPtrField<config::DelayStage> actuator;
-    *actuator.Add() = actuator_stage(config.actuator_model(), a);
+    *actuator.Add() = joint_lag_actuator_stage(config.actuator_model(), a);
     const core::CompensatedStability s = core::compensated_stability(
         prepared.base.integrator, period, zeta, alpha, prepared.base.dt, actuator, nullptr,
         2.0 * largest_round_trip + 0.05);
@@ -325,6 +216,34 @@ nlohmann::json point_json(const JointLagPoint& p) {
 
 }  // namespace
 
+config::DelayStage joint_lag_actuator_stage(JointLagStudy::ActuatorModel model, double lag) {
+  config::DelayStage stage;
+  if (model == JointLagStudy::FIRST_ORDER && lag > 0.0) {
+    stage.mutable_first_order()->set_time_constant(lag);
+  } else {
+    stage.mutable_shift()->set_delay(lag);
+  }
+  return stage;
+}
+
+double joint_lag_search_window(const JointLagStudy& config) {
+  if (config.max_lag_search() > 0.0) return config.max_lag_search();
+  double largest = 0.0;
+  for (const double r : config.network_round_trips()) {
+    for (const double a : config.actuator_lags()) largest = std::max(largest, r + a);
+  }
+  return 2.0 * largest + 0.01;
+}
+
+void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& reference,
+                           const std::vector<double>& u) {
+  const std::size_t n = std::min(reference.size(), u.size());
+  const std::span<const double> ref(reference.data(), n), got(u.data(), n);
+  point.nrmse = core::nrmse(ref, got);
+  point.paper_eq2 = core::paper_eq2(ref, got);
+  point.peak_error = core::peak_error(ref, got);
+}
+
 JointLagStudy load_joint_lag(const std::filesystem::path& path) {
   JointLagStudy config;
   core::parse_text_format(core::read_text_file(path, "joint lag config"), path.string(), config);
@@ -356,8 +275,8 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   const auto prepared = core::prepare_study(study, study_dir);
   const auto reference =
       core::simulate(core::setup_for_case(prepared, core::reference_case(study)), prepared.motion);
-  const auto u_ref = column(reference.displacement, 0);
-  const double window = search_window(config);
+  const auto u_ref = floor_history(reference, 0);
+  const double window = joint_lag_search_window(config);
   fill_boundary(config, prepared, result);
   std::map<double, std::optional<double>> critical_at;  // actuator lag -> critical round trip
   if (result.boundary_skipped.empty())
@@ -380,7 +299,9 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
     result.measured_skipped = "the config asks for no across-sites runs";
   } else if (!options.measure) {
     result.measured_skipped = "across-sites runs not requested (--no-measure)";
-  } else if (const auto reason = namespace_support()) {
+  } else if (!options.across_sites.unavailable || !options.across_sites.run) {
+    result.measured_skipped = "this program cannot run across sites (no across-sites runner)";
+  } else if (const auto reason = options.across_sites.unavailable()) {
     result.measured_skipped = *reason;
   }
   const std::size_t total =
@@ -397,7 +318,7 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
       config::Case joint;
       joint.set_name("joint");
       joint.add_delay()->mutable_shift()->set_delay(round_trip);
-      *joint.add_delay() = actuator_stage(config.actuator_model(), actuator);
+      *joint.add_delay() = joint_lag_actuator_stage(config.actuator_model(), actuator);
       const auto run = core::simulate(core::setup_for_case(prepared, joint), prepared.motion);
       JointLagPoint point;
       point.network_round_trip = round_trip;
@@ -405,17 +326,17 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
       point.diverged = run.diverged;
       if (const auto it = critical_at.find(actuator); it != critical_at.end() && it->second)
         point.past_boundary = round_trip >= *it->second;
-      fill_errors(point, u_ref, column(run.displacement, 0));
+      fill_joint_lag_errors(point, u_ref, floor_history(run, 0));
       if (!run.diverged) {
         point.measured_total_lag =
-            core::j1_delay(column(run.command, 0), column(run.realised, 0), prepared.base.dt, window);
+            core::j1_delay(column_of(run.command, 0), column_of(run.realised, 0), prepared.base.dt, window);
       }
       result.grid.push_back(point);
       one_done();
     }
   }
 
-  if (result.measured_skipped.empty()) run_measured(config, base_dir, result.output_directory, result, one_done);
+  if (result.measured_skipped.empty()) options.across_sites.run(config, base_dir, result, one_done);
   return result;
 }
 
@@ -498,4 +419,4 @@ std::string to_text(const JointLagResult& result) {
   return out.str();
 }
 
-}  // namespace rths::deploy
+}  // namespace rths::analysis

@@ -1,17 +1,22 @@
 // The joint network x actuator lag study on the paper's frame (in process; no namespaces needed).
-#include "deploy/joint_lag.h"
+#include "analysis/joint_lag.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
-namespace rths::deploy {
+namespace rths::analysis {
 namespace {
 
 const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
 const std::filesystem::path kOut =
-    std::filesystem::path(RTHS_BINARY_DIR) / "test_out" / "deploy" / "joint_lag";
+    std::filesystem::path(RTHS_BINARY_DIR) / "test_out" / "analysis" / "joint_lag";
 constexpr double kMs = 1e-3;
 
 JointLagStudy small_grid(JointLagStudy::ActuatorModel model) {
@@ -108,6 +113,71 @@ TEST(JointLag, FirstOrderActuatorLagsByAboutItsTimeConstant) {
   EXPECT_NEAR(p.measured_total_lag, 0.010, 1 * kMs);
 }
 
+// The across-sites part is a runner handed in (deploy's, in `rths joint-lag`): whether it runs,
+// why not, and that its points are counted in the progress.
+JointLagStudy with_measured_points() {
+  JointLagStudy config;
+  config.set_study("paper_frame.textproto");
+  config.add_network_round_trips(0.004);
+  config.add_actuator_lags(0.002);
+  config.set_sites("sites_paper_frame.textproto");
+  for (double r : {0.0, 0.014}) config.add_measured_network_round_trips(r);
+  config.add_measured_actuator_lags(0.008);
+  return config;
+}
+
+TEST(JointLag, AcrossSitesRunsOnlyWhenAskedAndPossibleAndCountsInTheProgress) {
+  std::size_t runs = 0;
+  JointLagOptions options;
+  options.output_directory = kOut / "across_sites";
+  std::optional<std::string> unavailable = "namespaces are not permitted here";
+  options.across_sites.unavailable = [&] { return unavailable; };
+  options.across_sites.run = [&](const JointLagStudy& config, const std::filesystem::path& base_dir,
+                                 JointLagResult& result, const std::function<void()>& one_done) {
+    ++runs;
+    EXPECT_EQ(base_dir, kConfigs);
+    EXPECT_EQ(result.output_directory, kOut / "across_sites");
+    for (const double r : config.measured_network_round_trips()) {
+      JointLagPoint point;
+      point.network_round_trip = r;
+      point.actuator_lag = config.measured_actuator_lags(0);
+      result.measured.push_back(point);
+      one_done();
+    }
+  };
+  std::vector<std::pair<std::size_t, std::size_t>> progress;
+  options.progress = [&](std::size_t done, std::size_t total) { progress.emplace_back(done, total); };
+  const JointLagStudy config = with_measured_points();
+
+  // Impossible here: skipped with the runner's reason; only the grid point counts.
+  JointLagResult result = run_joint_lag(config, kConfigs, options);
+  EXPECT_EQ(result.measured_skipped, "namespaces are not permitted here");
+  EXPECT_EQ(runs, 0u);
+  EXPECT_EQ(progress.back(), std::make_pair(std::size_t{1}, std::size_t{1}));
+
+  // Not requested, or no runner: skipped, saying which.
+  unavailable.reset();
+  options.measure = false;
+  EXPECT_EQ(run_joint_lag(config, kConfigs, options).measured_skipped,
+            "across-sites runs not requested (--no-measure)");
+  options.measure = true;
+  JointLagOptions without_runner = options;
+  without_runner.across_sites = {};
+  EXPECT_NE(run_joint_lag(config, kConfigs, without_runner).measured_skipped.find("no across-sites runner"),
+            std::string::npos);
+  EXPECT_EQ(runs, 0u);
+
+  // Possible: the runner's points are in the result and in the progress (1 grid + 2 measured).
+  progress.clear();
+  result = run_joint_lag(config, kConfigs, options);
+  EXPECT_TRUE(result.measured_skipped.empty()) << result.measured_skipped;
+  EXPECT_EQ(runs, 1u);
+  ASSERT_EQ(result.measured.size(), 2u);
+  EXPECT_EQ(result.measured[1].network_round_trip, 0.014);
+  ASSERT_EQ(progress.size(), 3u);
+  EXPECT_EQ(progress.back(), std::make_pair(std::size_t{3}, std::size_t{3}));
+}
+
 TEST(JointLag, ConfigErrorsNameTheField) {
   const auto path = std::filesystem::temp_directory_path() / "rths_joint_lag_bad.textproto";
   {
@@ -124,4 +194,4 @@ TEST(JointLag, ConfigErrorsNameTheField) {
 }
 
 }  // namespace
-}  // namespace rths::deploy
+}  // namespace rths::analysis
