@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "analysis/parallel_for.h"
+#include "util/parallel_for.h"
 
 // The lane loops work on 8-double vectors (GCC vector extension), so vectorisation does not
 // depend on the auto-vectoriser's mood; target_clones compiles them for AVX-512, AVX2 and baseline x86-64 and picks one at
@@ -301,7 +301,7 @@ std::vector<LaneOutcome> run_linear_sdof_lanes(std::span<const SdofLane> lanes,
   if (lanes.empty()) return outcomes;
   if (ground_acceleration.empty()) throw std::invalid_argument("batch run: the motion is empty");
   const auto items = split_lanes(lanes.size());
-  parallel_for(items.size(), options.threads, [&](std::size_t item) {
+  util::parallel_for(items.size(), options.threads, [&](std::size_t item) {
     const auto [first, count] = items[item];
     LinearSdofBatch batch(lanes.subspan(first, count), dt, delay, options.divergence_bound);
     batch.start(ground_acceleration[0]);
@@ -333,7 +333,7 @@ std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(std::span<const SdofL
   if (lanes.empty() || delays.empty()) return outcomes;
   if (ground_acceleration.empty()) throw std::invalid_argument("batch run: the motion is empty");
   const auto items = split_lanes(lanes.size());
-  parallel_for(items.size() * delays.size(), options.threads, [&](std::size_t item) {
+  util::parallel_for(items.size() * delays.size(), options.threads, [&](std::size_t item) {
     const std::size_t d = item / items.size();
     const auto [first, count] = items[item % items.size()];
     LinearSdofBatch batch(lanes.subspan(first, count), dt, delays[d], options.divergence_bound);

@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "analysis/compare.h"
-#include "analysis/plot.h"
+#include "util/plot.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/stability.h"
@@ -112,7 +112,7 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
   }
   // The script is kept beside the figures, so the map can be redrawn or restyled by hand.
   std::ofstream(script) << file.str();
-  run_gnuplot_script(file.str(), out / "error_map.png");
+  util::run_gnuplot_script(file.str(), out / "error_map.png");
 }
 
 // The continuous boundary for an SDOF study; empty (with the reason) otherwise.
@@ -154,12 +154,12 @@ std::optional<double> critical_round_trip_at(const JointLagStudy& config,
 }
 
 void write_total_lag_png(const JointLagResult& result, const std::filesystem::path& out) {
-  analysis::PlotSpec spec;
+  util::PlotSpec spec;
   spec.title = "Measured total lag vs injected network + actuator lag";
   spec.xlabel = "injected network round trip + actuator lag (ms)";
   spec.ylabel = "measured total lag (ms)";
-  analysis::Series emulated{"in-process grid (J1 of realised vs command)", {}, {}, "points pt 7"};
-  analysis::Series identity{"measured = injected", {}, {}, "lines dt 2"};
+  util::Series emulated{"in-process grid (J1 of realised vs command)", {}, {}, "points pt 7"};
+  util::Series identity{"measured = injected", {}, {}, "lines dt 2"};
   double largest = 0.0;
   for (const auto& p : result.grid) {
     if (p.diverged) continue;
@@ -169,7 +169,7 @@ void write_total_lag_png(const JointLagResult& result, const std::filesystem::pa
   }
   spec.series.push_back(emulated);
   if (!result.measured.empty()) {
-    analysis::Series sites{"across sites (measured from the record)", {}, {}, "points pt 9 ps 2"};
+    util::Series sites{"across sites (measured from the record)", {}, {}, "points pt 9 ps 2"};
     for (const auto& p : result.measured) {
       sites.x.push_back((p.network_round_trip + p.actuator_lag) * 1e3);
       sites.y.push_back(p.measured_total_lag * 1e3);
@@ -180,7 +180,7 @@ void write_total_lag_png(const JointLagResult& result, const std::filesystem::pa
   identity.x = {0.0, largest};
   identity.y = {0.0, largest};
   spec.series.push_back(identity);
-  analysis::write_png_plot(spec, out / "total_lag.png");
+  util::write_png_plot(spec, out / "total_lag.png");
 }
 
 void write_csv(const std::vector<JointLagPoint>& points, const std::filesystem::path& file) {

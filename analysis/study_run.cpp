@@ -5,8 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
-#include "analysis/atomic_file.h"
-#include "analysis/plot.h"
+#include "util/atomic_file.h"
+#include "util/plot.h"
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
 
@@ -243,11 +243,11 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   std::filesystem::create_directories(directory);
   const CaseOutcome& reference = outcome.reference();
   const std::string response = outcome.response.describe();
-  PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case", "time (s)",
+  util::PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case", "time (s)",
                         "displacement (mm)", {}};
-  PlotSpec difference{"difference from the reference (" + reference.name + ")", "time (s)",
+  util::PlotSpec difference{"difference from the reference (" + reference.name + ")", "time (s)",
                       "case - reference (mm)", {}};
-  PlotSpec loop{outcome.study_name + ": what the integrator sees (experimental part)",
+  util::PlotSpec loop{outcome.study_name + ": what the integrator sees (experimental part)",
                 "commanded displacement (mm)", "measured force (kN)", {}};
   std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
   std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
@@ -256,13 +256,13 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   for (const CaseOutcome* drawn_case : drawn) {
     const CaseOutcome& c = *drawn_case;
     const std::string label = c.name + (c.diverged() ? " (diverged, clipped)" : "");
-    Series s{label, c.simulation.time, {}};
+    util::Series s{label, c.simulation.time, {}};
     for (double u : c.response) s.y.push_back(u * 1e3);
     if (!c.diverged()) bounded.push_back(displacement.series.size());
     displacement.series.push_back(std::move(s));
     {
       // The reference too (a zero line), so every case keeps its colour across the panels.
-      Series d{label, c.simulation.time, {}};
+      util::Series d{label, c.simulation.time, {}};
       for (std::size_t k = 0; k < c.response.size() && k < reference.response.size(); ++k) {
         d.y.push_back((c.response[k] - reference.response[k]) * 1e3);
       }
@@ -270,7 +270,7 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
       difference.series.push_back(std::move(d));
     }
     if (c.simulation.command.cols() > 0 && !c.diverged()) {
-      Series l{c.name, {}, {}};
+      util::Series l{c.name, {}, {}};
       for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
         l.x.push_back(c.simulation.command(k, 0) * 1e3);
         l.y.push_back(c.simulation.measured_force(k, 0) * 1e-3);
@@ -279,25 +279,25 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
     }
   }
   // A diverged case must not flatten the others: the axes follow the cases that stayed bounded.
-  if (const auto r = padded_y_range(displacement.series, bounded)) {
+  if (const auto r = util::padded_y_range(displacement.series, bounded)) {
     displacement.y_min = r->first;
     displacement.y_max = r->second;
   }
-  if (const auto r = padded_y_range(difference.series, bounded_difference)) {
+  if (const auto r = util::padded_y_range(difference.series, bounded_difference)) {
     difference.y_min = r->first;
     difference.y_max = r->second;
   }
-  PlotSpec zoom = displacement;
+  util::PlotSpec zoom = displacement;
   const double start = strongest_window_start(reference.response, reference.simulation.dt, 5.0);
   zoom.title = "zoom: the strongest 5 s of the reference";
   zoom.x_min = start;
   zoom.x_max = start + 5.0;
-  std::vector<PlotSpec> panels = {displacement};
+  std::vector<util::PlotSpec> panels = {displacement};
   if (drawn.size() > 1) panels.push_back(difference);
   panels.push_back(zoom);
-  for (PlotSpec& p : panels) p.height = 380;
-  write_png_panels(panels, directory / "displacement.png");
-  if (!loop.series.empty()) write_png_plot(loop, directory / "force_displacement.png");
+  for (util::PlotSpec& p : panels) p.height = 380;
+  util::write_png_panels(panels, directory / "displacement.png");
+  if (!loop.series.empty()) util::write_png_plot(loop, directory / "force_displacement.png");
 }
 
 nlohmann::json study_summary_json(const StudyOutcome& outcome) {

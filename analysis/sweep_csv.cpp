@@ -8,7 +8,7 @@
 #include <set>
 #include <stdexcept>
 
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 #include "analysis/sweep_internal.h"
 
 namespace rths::analysis {
@@ -46,7 +46,7 @@ void write_csv_file(const std::filesystem::path& path, const std::string& grid_h
                     std::size_t points, const Shard& shard,
                     const std::vector<std::string>& lines) {
   // The sidecar first: a CSV is never in place without the metadata that says what it holds.
-  AtomicFile sidecar(sweep_sidecar_path(path));
+  util::AtomicFile sidecar(sweep_sidecar_path(path));
   sidecar.stream() << nlohmann::json{{"format", kSidecarFormat},
                                      {"csv", path.filename().string()},
                                      {"grid", grid_hash},
@@ -55,7 +55,7 @@ void write_csv_file(const std::filesystem::path& path, const std::string& grid_h
                           .dump(2)
                    << "\n";
   sidecar.commit();
-  AtomicFile file(path);
+  util::AtomicFile file(path);
   std::ofstream& out = file.stream();
   out << kCsvHeader << "\n";
   for (const std::string& line : lines) out << line << "\n";

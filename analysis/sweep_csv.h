@@ -3,7 +3,7 @@
 // rows are (grid hash, points, shard i/N) goes in a sidecar JSON, sweep_sidecar_path(csv), so the
 // CSV itself is plain for any CSV reader. Numbers are written with 17 significant digits so
 // merged shards equal an unsharded run byte for byte. Both files are written to a temporary file
-// and renamed (analysis/atomic_file.h), so no half-written CSV looks complete.
+// and renamed (util/atomic_file.h), so no half-written CSV looks complete.
 
 #include <cstddef>
 #include <filesystem>

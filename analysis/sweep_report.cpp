@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "analysis/plot.h"
+#include "util/plot.h"
 #include "analysis/sweep_internal.h"
 #include "core/metrics.h"
 
@@ -66,9 +66,9 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     }
   }
   const std::string& name = title;
-  PlotSpec nrmse_panel{name + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
+  util::PlotSpec nrmse_panel{name + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
                        "period T (s)", "NRMSE (%, log)", {}, true};
-  PlotSpec eq2_panel{name + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
+  util::PlotSpec eq2_panel{name + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
                      "Eq. 2 (log)", {}, true};
   nrmse_panel.height = eq2_panel.height = 500;
   // Diverged points sit on a row above every bounded value, so they are seen but set no scale.
@@ -77,7 +77,7 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     nrmse_panel.y_min = smallest / 2.0;
     nrmse_panel.y_max = diverged_row * 2.0;
   }
-  Series diverged{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
+  util::Series diverged{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
   auto label_of = [&](const SeriesKey& key) {
     const auto& [model, alpha, dt, motion, delay] = key;
     std::string label = delay_label(delay);
@@ -90,7 +90,7 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
   for (auto& [key, points] : series) {
     std::sort(points.begin(), points.end(), [](const Point& l, const Point& r) { return l.period < r.period; });
     const std::string label = label_of(key);
-    Series a{label, {}, {}, "linespoints"}, b{label, {}, {}, "linespoints"};
+    util::Series a{label, {}, {}, "linespoints"}, b{label, {}, {}, "linespoints"};
     for (const Point& p : points) {
       a.x.push_back(p.period);
       a.y.push_back(p.diverged ? std::nan("") : p.nrmse_pct);
@@ -106,7 +106,7 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
   }
   if (nrmse_panel.series.empty()) throw std::invalid_argument("sweep plot: no delay > 0 in the rows");
   if (!diverged.x.empty()) nrmse_panel.series.push_back(std::move(diverged));
-  write_png_panels({nrmse_panel, eq2_panel}, png);
+  util::write_png_panels({nrmse_panel, eq2_panel}, png);
 
   // Error against delay, one curve per period (at most kPeriodsDrawn, spread over the range), at
   // the first model, fraction, dt and record; the critical delay of each period drawn.
@@ -119,12 +119,12 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     drawn.push_back(all[at]);
   }
   const SweepTableRow& first = rows.front();
-  PlotSpec by_delay{name + ": NRMSE against delay, one curve per period", "delay (ms)", "NRMSE (%, log)", {}, true};
+  util::PlotSpec by_delay{name + ": NRMSE against delay, one curve per period", "delay (ms)", "NRMSE (%, log)", {}, true};
   if (largest > 0) {
     by_delay.y_min = nrmse_panel.y_min;
     by_delay.y_max = nrmse_panel.y_max;
   }
-  Series diverged_by_delay{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
+  util::Series diverged_by_delay{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
   double largest_delay = 0.0;
   for (double period : drawn) {
     std::vector<std::pair<double, const SweepTableRow*>> points;
@@ -138,7 +138,7 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     std::sort(points.begin(), points.end());
     std::ostringstream label;
     label << "T = " << period << " s";
-    Series curve{label.str(), {}, {}, "linespoints"};
+    util::Series curve{label.str(), {}, {}, "linespoints"};
     for (const auto& [delay, row] : points) {
       curve.x.push_back(delay * 1e3);
       curve.y.push_back(row->diverged ? std::nan("") : row->nrmse_pct);
@@ -163,9 +163,9 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
   by_delay.x_max = largest_delay * 1e3 * 1.15;
   // Critical delays beyond the swept range would squeeze the curves: drop them, say so in the title.
   const std::size_t before = by_delay.markers.size();
-  std::erase_if(by_delay.markers, [&](const VerticalMarker& m) { return m.x > *by_delay.x_max; });
+  std::erase_if(by_delay.markers, [&](const util::VerticalMarker& m) { return m.x > *by_delay.x_max; });
   if (by_delay.markers.size() < before) by_delay.title += " (critical delays beyond the swept range not drawn)";
-  if (!by_delay.series.empty()) write_png_plot(by_delay, sweep_delay_plot_path(png));
+  if (!by_delay.series.empty()) util::write_png_plot(by_delay, sweep_delay_plot_path(png));
 }
 
 SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {

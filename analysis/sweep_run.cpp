@@ -9,7 +9,7 @@
 
 #include "analysis/batch_kernel.h"
 #include "analysis/compare.h"
-#include "analysis/parallel_for.h"
+#include "util/parallel_for.h"
 #include "core/integrators.h"
 #include "core/simulation.h"
 #include "core/stability.h"
@@ -79,7 +79,7 @@ class SweepRunner {
 
   std::vector<SweepRow> run() {
     build_items();
-    parallel_for(items_.size(), options_.threads, [this](std::size_t i) { run_item(items_[i]); });
+    util::parallel_for(items_.size(), options_.threads, [this](std::size_t i) { run_item(items_[i]); });
     return std::move(rows_);
   }
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/plot.h"
+#include "util/plot.h"
 #include "analysis/study_run.h"
 #include "core/benchmark_criteria.h"
 #include "core/compensation.h"
@@ -51,7 +51,7 @@ const Row* best_compensated(const std::vector<Row>& rows, bool robustness) {
 void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   const auto& reference = outcome.cases[outcome.reference_index];
-  analysis::PlotSpec error{outcome.study_name + ": tracking error x_m - x_t at the actuator",
+  util::PlotSpec error{outcome.study_name + ": tracking error x_m - x_t at the actuator",
                            "time (s)", "tracking error (mm)", {}};
   std::size_t peak_step = 0;
   for (std::size_t k = 0; k < reference.response.size(); ++k) {
@@ -60,13 +60,13 @@ void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& d
   const double dt = reference.simulation.dt;
   const double t_peak = static_cast<double>(peak_step) * dt;
   const double from = std::max(0.0, t_peak - 0.5), to = t_peak + 0.5;
-  std::vector<analysis::PlotSpec> zoom;
+  std::vector<util::PlotSpec> zoom;
   for (const auto& c : outcome.cases) {
     if (c.simulation.command.cols() == 0 || &c == &reference) continue;
-    analysis::Series e{c.name, c.simulation.time, {}};
-    analysis::PlotSpec panel{c.name + ": command wanted (x_t) and realised (x_m), zoom", "time (s)",
+    util::Series e{c.name, c.simulation.time, {}};
+    util::PlotSpec panel{c.name + ": command wanted (x_t) and realised (x_m), zoom", "time (s)",
                              "drift (mm)", {}};
-    analysis::Series target{"x_t (integrator)", {}, {}}, measured{"x_m (actuator)", {}, {}};
+    util::Series target{"x_t (integrator)", {}, {}}, measured{"x_m (actuator)", {}, {}};
     for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
       const double xt = c.simulation.command(k, 0), xm = c.simulation.realised(k, 0);
       e.y.push_back((xm - xt) * 1e3);
@@ -84,11 +84,11 @@ void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& d
     zoom.push_back(std::move(panel));
   }
   // The uncompensated error dwarfs the rest: a second panel without it.
-  analysis::PlotSpec compensated = error;
+  util::PlotSpec compensated = error;
   compensated.title = outcome.study_name + ": tracking error of the compensated cases";
-  std::erase_if(compensated.series, [](const analysis::Series& s) { return s.title.find("uncompensated") != std::string::npos; });
-  analysis::write_png_panels({error, compensated}, dir / "tracking_error.png");
-  analysis::write_png_panels(zoom, dir / "command_vs_measured.png");
+  std::erase_if(compensated.series, [](const util::Series& s) { return s.title.find("uncompensated") != std::string::npos; });
+  util::write_png_panels({error, compensated}, dir / "tracking_error.png");
+  util::write_png_panels(zoom, dir / "command_vs_measured.png");
 }
 
 std::vector<Row> evaluate(const std::filesystem::path& config, const std::filesystem::path& out) {

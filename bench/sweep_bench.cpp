@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "analysis/batch_kernel.h"
-#include "analysis/parallel_for.h"
+#include "util/parallel_for.h"
 #include "core/ground_motion.h"
 #include "core/structure.h"
 
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
   const rths::core::GroundMotion motion = rths::core::resampled(record, kDt);
   const double steps = static_cast<double>(motion.acceleration.size());
   rths::analysis::BatchRunOptions options;
-  options.threads = rths::analysis::resolve_threads(threads);
+  options.threads = rths::util::resolve_threads(threads);
   std::printf("sweep_bench: El Centro 1940 at dt = %g s: %zu steps per run; %d threads; %s\n", kDt,
               motion.acceleration.size(), options.threads,
               __builtin_cpu_supports("avx512f") ? "AVX-512 kernel"

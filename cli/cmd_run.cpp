@@ -6,7 +6,7 @@
 #include <iostream>
 #include <memory>
 
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"

@@ -7,7 +7,7 @@
 #include <map>
 #include <memory>
 
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "tables/results.h"

@@ -10,7 +10,7 @@
 #include <memory>
 #include <sstream>
 
-#include "analysis/parallel_for.h"
+#include "util/parallel_for.h"
 #include "analysis/sweep_csv.h"
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
@@ -130,7 +130,7 @@ void run_sweep_command(const SweepOptions& o) {
                               {"grid_points", grid.size()},
                               {"shard", options.shard.to_string()},
                               {"points_run", rows.size()},
-                              {"threads", analysis::resolve_threads(o.threads)},
+                              {"threads", util::resolve_threads(o.threads)},
                               {"seconds", seconds},
                               {"trends", trends_json(trends)}};
     std::cout << summary.dump(2) << "\n";

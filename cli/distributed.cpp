@@ -4,8 +4,8 @@
 #include <iomanip>
 #include <sstream>
 
-#include "analysis/atomic_file.h"
-#include "analysis/plot.h"
+#include "util/atomic_file.h"
+#include "util/plot.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "runtime/plan.h"
@@ -210,10 +210,10 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
       print_warning(std::string("plots not written: ") + e.what());
     }
   }
-  analysis::AtomicFile json_file(out / "summary.json");
+  util::AtomicFile json_file(out / "summary.json");
   json_file.stream() << distributed_summary_json(results).dump(2) << "\n";
   json_file.commit();
-  analysis::AtomicFile text_file(out / "summary.txt");
+  util::AtomicFile text_file(out / "summary.txt");
   text_file.stream() << distributed_summary_text(results);
   text_file.commit();
   return table_file;
@@ -229,17 +229,17 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
     const auto it = facts.link_labels.find(node);
     return it != facts.link_labels.end() ? it->second : "node " + std::to_string(node);
   };
-  analysis::PlotSpec network;
+  util::PlotSpec network;
   network.title = "network lag per link, case " + c.name + " (" + (path.real_time ? "real time" : "lockstep") + ")";
   network.xlabel = "time (s)";
   network.ylabel = "round trip (ms)";
-  std::string actuator_link_colour = analysis::series_colour(0);
+  std::string actuator_link_colour = util::series_colour(0);
   const double t0 = c.simulation.time.empty() ? 0.0 : c.simulation.time.front();
   const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
   for (const auto& [node, series] : links) {
     // Injected first, so the measured round trip is drawn over it.
     network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected)});
-    if (node == path.node_id) actuator_link_colour = analysis::series_colour(network.series.size());
+    if (node == path.node_id) actuator_link_colour = util::series_colour(network.series.size());
     network.series.push_back({label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
   }
   // The stack: the network round trip the test feels (real time only), the actuator's own lag
@@ -247,7 +247,7 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   const double actuator = c.nominal_delay + path.node_stages;  // s
   const std::string actuator_label = "actuator lag, nominal " + ms(actuator) + ": " + c.delay_description +
                                      (path.node_stages != 0.0 ? " + node stages" : "");
-  analysis::PlotSpec stack;
+  util::PlotSpec stack;
   stack.title = path.real_time
                     ? "lag the test feels on the actuator's path: network round trip + actuator lag (stacked)"
                     : "lag the test feels on the actuator's path: actuator lag (lockstep: the network does not enter)";
@@ -259,33 +259,33 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   if (path.real_time && link != links.end()) {
     const runtime::LinkSeries& s = link->second;
     stack.series.push_back({actuator_label, s.time, in_ms(s.round_trip, actuator),
-                            "filledcurves y1=0 lc rgb '" + analysis::series_colour(colour++) + "' dt 1" + fill});
+                            "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
     stack.series.push_back({label_of(path.node_id) + ": network round trip, measured", s.time, in_ms(s.round_trip),
                             "filledcurves y1=0 lc rgb '" + actuator_link_colour + "' dt 1" + fill});
     stack.series.push_back({"injected total: network + actuator", s.time, in_ms(s.injected, actuator),
-                            "lines lw 1.5 lc rgb '" + analysis::series_colour(colour++) + "'"});
+                            "lines lw 1.5 lc rgb '" + util::series_colour(colour++) + "'"});
   } else {
     stack.series.push_back({actuator_label, {t0, t1}, {actuator * 1e3, actuator * 1e3},
-                            "filledcurves y1=0 lc rgb '" + analysis::series_colour(colour++) + "' dt 1" + fill});
+                            "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
   }
   if (c.stability) {
     const auto level = [&](const std::optional<double>& limit, const std::string& what, const char* dash) {
       if (!limit) return;
       stack.series.push_back({what + " critical delay " + ms(*limit), {t0, t1}, {*limit * 1e3, *limit * 1e3},
                               std::string("lines lw 2 dt ") + dash + " lc rgb '" +
-                                  analysis::series_colour(colour++) + "'"});
+                                  util::series_colour(colour++) + "'"});
     };
     level(c.stability->continuous, "continuous", "2");
     level(c.stability->discrete, "discrete", "3");
   }
   // From zero, and high enough that the critical delays are never on the border.
   stack.y_min = network.y_min = 0.0;
-  if (const auto range = analysis::padded_y_range(stack.series, {})) stack.y_max = range->second;
+  if (const auto range = util::padded_y_range(stack.series, {})) stack.y_max = range->second;
   network.height = stack.height = 380;
-  std::vector<analysis::PlotSpec> panels;
+  std::vector<util::PlotSpec> panels;
   if (!network.series.empty()) panels.push_back(network);
   panels.push_back(stack);
-  analysis::write_png_panels(panels, png);
+  util::write_png_panels(panels, png);
 }
 
 std::string distributed_summary_text(const DistributedResults& results) {

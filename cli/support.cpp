@@ -17,7 +17,7 @@
 #include <iostream>
 #include <memory>
 
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 #include "cli/commands.h"
 #include "core/text_format.h"
 #include "rths/analysis/joint_lag.pb.h"
@@ -222,10 +222,10 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
   }
   if (plots) analysis::write_study_plots(outcome, out);
   const nlohmann::json summary = analysis::study_summary_json(outcome);
-  analysis::AtomicFile json_file(out / "summary.json");
+  util::AtomicFile json_file(out / "summary.json");
   json_file.stream() << summary.dump(2) << "\n";
   json_file.commit();
-  analysis::AtomicFile text_file(out / "summary.txt");
+  util::AtomicFile text_file(out / "summary.txt");
   text_file.stream() << analysis::study_summary_text(outcome);
   text_file.commit();
   if (json) {

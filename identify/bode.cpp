@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "analysis/plot.h"
+#include "util/plot.h"
 #include "identify/evidence.h"
 
 namespace rths::identify {
@@ -132,7 +132,7 @@ void write_bode_plot(const BodeData& bode, const std::filesystem::path& png) {
   const std::string band = format_hz(bode.band_low) + "-" + format_hz(bode.band_high) + " Hz";
   std::ostringstream coherence_text;
   coherence_text << bode.min_coherence;
-  analysis::PlotSpec amplitude, phase, coherence;
+  util::PlotSpec amplitude, phase, coherence;
   amplitude.title = "actuator, command -> measured displacement: band " + band +
                     " (coherence >= " + coherence_text.str() + ")";
   phase.title = "measured: H1 = S_uy / S_uu, Welch, " + std::to_string(bode.segments) +
@@ -183,7 +183,7 @@ void write_bode_plot(const BodeData& bode, const std::filesystem::path& png) {
     p->x_max = bode.band_high;
     p->height = 380;
   }
-  analysis::write_png_panels({amplitude, phase, coherence}, png);
+  util::write_png_panels({amplitude, phase, coherence}, png);
 }
 
 }  // namespace rths::identify

@@ -64,7 +64,7 @@ BodeData actuator_bode(const ChannelSignals& signals, const std::vector<BodeMode
 
 // Three panels (amplitude ratio, on a log axis when it spans more than a decade; phase in
 // degrees; coherence), frequency on a log axis over the band, the measured estimate and each model; the PNG and the SVG beside it
-// (analysis/plot.h). Throws std::runtime_error naming the file.
+// (util/plot.h). Throws std::runtime_error naming the file.
 void write_bode_plot(const BodeData& bode, const std::filesystem::path& png);
 
 }  // namespace rths::identify

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "analysis/plot.h"
+#include "util/plot.h"
 #include "identify/bode.h"
 #include "identify/evidence.h"
 
@@ -133,10 +133,10 @@ std::string percent(double v) {
 }
 
 // Every `stride`-th sample of [begin, end) as x/y series.
-analysis::Series series(const std::string& title, std::span<const double> x,
+util::Series series(const std::string& title, std::span<const double> x,
                         std::span<const double> y, std::size_t begin, std::size_t end,
                         std::size_t max_points = 4000) {
-  analysis::Series s;
+  util::Series s;
   s.title = title;
   const std::size_t stride = std::max<std::size_t>(1, (end - begin) / max_points);
   for (std::size_t i = begin; i < end; i += stride) {
@@ -181,8 +181,8 @@ void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
   const auto delay_index = constant.index_of(Effect::kDelay, "delay", scales);
   if (!delay_index) return;
   const auto windows = windowed_estimate(constant, *delay_index, s, 16);
-  analysis::Series estimate{"delay per window (fit)", {}, {}, "linespoints"};
-  analysis::Series upper{"+2 std. error", {}, {}, "lines"}, lower{"-2 std. error", {}, {}, "lines"};
+  util::Series estimate{"delay per window (fit)", {}, {}, "linespoints"};
+  util::Series upper{"+2 std. error", {}, {}, "lines"}, lower{"-2 std. error", {}, {}, "lines"};
   for (const auto& w : windows) {
     estimate.x.push_back(w.time);
     estimate.y.push_back(w.value * 1e3);
@@ -205,19 +205,19 @@ void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
   const double mean = model.param(Effect::kDelay, "delay", scales).value_or(0.0);
   const double t_mid = 0.5 * (s.time.front() + s.time.back());
   const double duration = std::max(s.time.back() - s.time.front(), s.dt);
-  analysis::Series curve{"identified model tau(t)", {}, {}, "lines"};
+  util::Series curve{"identified model tau(t)", {}, {}, "lines"};
   const std::size_t stride = std::max<std::size_t>(1, s.size() / 2000);
   for (std::size_t i = 0; i < s.size(); i += stride) {
     curve.x.push_back(s.time[i]);
     curve.y.push_back(
         std::max(0.0, mean + drift_profile(coefficients, (s.time[i] - t_mid) / duration)) * 1e3);
   }
-  analysis::PlotSpec plot;
+  util::PlotSpec plot;
   plot.title = "actuator delay over the record: model and per-window estimate (band: +/- 2 std. error)";
   plot.xlabel = "time (s)";
   plot.ylabel = "delay (ms)";
   plot.series = {curve, estimate, upper, lower};
-  analysis::write_png_plot(plot, png);
+  util::write_png_plot(plot, png);
 }
 
 }  // namespace
@@ -422,17 +422,17 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
     const auto r1 = residual(s, c.final_fit.prediction);
     const std::string unit = c.channel == Channel::kMeasured ? "m" : "N";
 
-    analysis::PlotSpec time_plot;
+    util::PlotSpec time_plot;
     time_plot.title = name + ": residual before (declared) and after (final model)";
     time_plot.xlabel = "time (s)";
     time_plot.ylabel = "residual (" + unit + ")";
     time_plot.series = {series("declared", s.time, r0, 0, s.size()),
                         series("final", s.time, r1, 0, s.size())};
     written.push_back(directory / (name + "_residual_time.png"));
-    analysis::write_png_plot(time_plot, written.back());
+    util::write_png_plot(time_plot, written.back());
 
     const auto sp0 = amplitude_spectrum(r0, s.dt), sp1 = amplitude_spectrum(r1, s.dt);
-    analysis::PlotSpec spectrum_plot;
+    util::PlotSpec spectrum_plot;
     spectrum_plot.title = name + ": residual amplitude spectrum before and after";
     spectrum_plot.xlabel = "frequency (Hz)";
     spectrum_plot.ylabel = "amplitude (" + unit + ")";
@@ -447,11 +447,11 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
     spectrum_plot.series = {series("declared", sp0.frequency, sp0.amplitude, 1, cut),
                             series("final", sp1.frequency, sp1.amplitude, 1, cut)};
     written.push_back(directory / (name + "_residual_spectrum.png"));
-    analysis::write_png_plot(spectrum_plot, written.back());
+    util::write_png_plot(spectrum_plot, written.back());
 
     const auto [lo, hi] = heldout_window(id, s, 2.0);
     if (c.channel == Channel::kForce) {
-      analysis::PlotSpec loops;
+      util::PlotSpec loops;
       loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) +
                     "-" + format_value(s.time[hi - 1]) + " s)";
       loops.xlabel = "measured displacement (m)";
@@ -460,9 +460,9 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
                       series("declared model", s.input, c.declared_fit.prediction, lo, hi),
                       series("final model", s.input, c.final_fit.prediction, lo, hi)};
       written.push_back(directory / "force_loops.png");
-      analysis::write_png_plot(loops, written.back());
+      util::write_png_plot(loops, written.back());
     } else {
-      analysis::PlotSpec tracking;
+      util::PlotSpec tracking;
       tracking.title = "actuator tracking (held-out window)";
       tracking.xlabel = "time (s)";
       tracking.ylabel = "displacement (m)";
@@ -471,7 +471,7 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
                          series("declared model", s.time, c.declared_fit.prediction, lo, hi),
                          series("final model", s.time, c.final_fit.prediction, lo, hi)};
       written.push_back(directory / "measured_tracking.png");
-      analysis::write_png_plot(tracking, written.back());
+      util::write_png_plot(tracking, written.back());
       // A record too short for Welch averaging, or without a coherent band, has no Bode plot.
       std::optional<BodeData> bode;
       try {

@@ -24,7 +24,7 @@
 //                                     identified and the declared model's response, with the
 //                                     coherence, over the band where it is >= 0.9 (bode.h); left
 //                                     out when the record is too short or has no such band
-// Every PNG has an SVG of the same figure beside it (analysis/plot.h).
+// Every PNG has an SVG of the same figure beside it (util/plot.h).
 
 #include <filesystem>
 #include <nlohmann/json.hpp>

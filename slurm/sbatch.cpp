@@ -3,7 +3,7 @@
 #include <regex>
 #include <stdexcept>
 
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 
 namespace rths::slurm {
 namespace {
@@ -85,7 +85,7 @@ std::vector<std::filesystem::path> write_sweep_job(const SweepJob& job) {
   for (const auto& [name, text] : {std::pair{"sweep_array.sbatch", &scripts.array},
                                    std::pair{"sweep_merge.sbatch", &scripts.merge},
                                    std::pair{"submit.sh", &scripts.submit}}) {
-    analysis::AtomicFile file(job.out / name);
+    util::AtomicFile file(job.out / name);
     file.stream() << *text;
     file.commit();
     std::filesystem::permissions(job.out / name, std::filesystem::perms::owner_exec | std::filesystem::perms::group_exec,

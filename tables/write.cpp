@@ -9,7 +9,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 
 namespace rths::tables {
 namespace {
@@ -21,7 +21,7 @@ std::string csv_field(const std::string& text) {
   return quoted + "\"";
 }
 
-void write_csv(const Table& table, analysis::AtomicFile& file) {
+void write_csv(const Table& table, util::AtomicFile& file) {
   std::ofstream& out = file.stream();
   const auto& columns = table.columns();
   for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c].name;
@@ -217,7 +217,7 @@ std::string extension(Format format) {
 }
 
 void write_table(const Table& table, const std::filesystem::path& path, Format format) {
-  analysis::AtomicFile file(path);
+  util::AtomicFile file(path);
   switch (format) {
     case Format::kCsv: write_csv(table, file); break;
     case Format::kMat: write_mat(table, file.partial_path(), path.string()); break;

@@ -1,6 +1,6 @@
 #pragma once
 // Writes a Table (tables/table.h) as CSV, MATLAB or HDF5, always complete or absent (written to
-// "<name>.partial" and renamed, analysis/atomic_file.h).
+// "<name>.partial" and renamed, util/atomic_file.h).
 //
 //   csv  a header line of the column names, then one line per row; numbers with 17 significant
 //        digits (round-trip exact), NaN as an empty field, text quoted only when it holds a comma

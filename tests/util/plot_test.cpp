@@ -1,4 +1,4 @@
-#include "analysis/plot.h"
+#include "util/plot.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 
 #include <unistd.h>
 
-namespace rths::analysis {
+namespace rths::util {
 namespace {
 
 TEST(Plot, WritesThePngAndTheSvgBesideIt) {
@@ -86,4 +86,4 @@ TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
 }
 
 }  // namespace
-}  // namespace rths::analysis
+}  // namespace rths::util

@@ -1,4 +1,4 @@
-#include "analysis/plot.h"
+#include "util/plot.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace rths::analysis {
+namespace rths::util {
 namespace {
 
 // Paul Tol's "muted" and "bright" qualitative schemes: distinguishable, colour-blind safe.
@@ -155,4 +155,4 @@ std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series
   return std::make_pair(lo - pad, hi + pad);
 }
 
-}  // namespace rths::analysis
+}  // namespace rths::util

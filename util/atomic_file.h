@@ -7,7 +7,7 @@
 #include <fstream>
 #include <string>
 
-namespace rths::analysis {
+namespace rths::util {
 
 class AtomicFile {
  public:
@@ -28,4 +28,4 @@ class AtomicFile {
   bool committed_ = false;
 };
 
-}  // namespace rths::analysis
+}  // namespace rths::util

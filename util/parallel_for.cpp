@@ -1,4 +1,4 @@
-#include "analysis/parallel_for.h"
+#include "util/parallel_for.h"
 
 #include <algorithm>
 #include <atomic>
@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-namespace rths::analysis {
+namespace rths::util {
 
 int resolve_threads(int threads) {
   if (threads > 0) return threads;
@@ -44,4 +44,4 @@ void parallel_for(std::size_t count, int threads, const std::function<void(std::
   if (first_error) std::rethrow_exception(first_error);
 }
 
-}  // namespace rths::analysis
+}  // namespace rths::util

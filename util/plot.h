@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace rths::analysis {
+namespace rths::util {
 
 struct Series {
   std::string title;
@@ -58,4 +58,4 @@ std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series
                                                         const std::vector<std::size_t>& include,
                                                         double margin = 0.08);
 
-}  // namespace rths::analysis
+}  // namespace rths::util

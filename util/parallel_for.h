@@ -7,9 +7,9 @@
 #include <cstddef>
 #include <functional>
 
-namespace rths::analysis {
+namespace rths::util {
 
 int resolve_threads(int threads);
 void parallel_for(std::size_t count, int threads, const std::function<void(std::size_t)>& body);
 
-}  // namespace rths::analysis
+}  // namespace rths::util

@@ -1,9 +1,9 @@
-#include "analysis/atomic_file.h"
+#include "util/atomic_file.h"
 
 #include <stdexcept>
 #include <system_error>
 
-namespace rths::analysis {
+namespace rths::util {
 
 AtomicFile::AtomicFile(std::filesystem::path target)
     : target_(std::move(target)), partial_(target_.string() + ".partial") {
@@ -35,4 +35,4 @@ void AtomicFile::commit() {
   committed_ = true;
 }
 
-}  // namespace rths::analysis
+}  // namespace rths::util
