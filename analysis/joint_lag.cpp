@@ -13,12 +13,12 @@
 #include <sstream>
 
 #include "analysis/compare.h"
-#include "util/plot.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/stability.h"
 #include "core/study.h"
 #include "core/text_format.h"
+#include "util/plot.h"
 
 namespace rths::analysis {
 namespace {

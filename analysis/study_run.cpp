@@ -5,10 +5,10 @@
 #include <iomanip>
 #include <sstream>
 
-#include "util/atomic_file.h"
-#include "util/plot.h"
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
+#include "util/atomic_file.h"
+#include "util/plot.h"
 
 namespace rths::analysis {
 namespace {

@@ -8,8 +8,8 @@
 #include <set>
 #include <stdexcept>
 
-#include "util/atomic_file.h"
 #include "analysis/sweep_internal.h"
+#include "util/atomic_file.h"
 
 namespace rths::analysis {
 namespace {

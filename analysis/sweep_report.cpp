@@ -9,9 +9,9 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "util/plot.h"
 #include "analysis/sweep_internal.h"
 #include "core/metrics.h"
+#include "util/plot.h"
 
 namespace rths::analysis {
 namespace {

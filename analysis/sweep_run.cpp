@@ -9,12 +9,12 @@
 
 #include "analysis/batch_kernel.h"
 #include "analysis/compare.h"
-#include "util/parallel_for.h"
 #include "core/integrators.h"
 #include "core/simulation.h"
 #include "core/stability.h"
 #include "core/study.h"
 #include "core/substructure.h"
+#include "util/parallel_for.h"
 
 namespace rths::analysis {
 namespace {

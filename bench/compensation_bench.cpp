@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "util/plot.h"
 #include "analysis/study_run.h"
 #include "core/benchmark_criteria.h"
 #include "core/compensation.h"
 #include "core/study.h"
+#include "util/plot.h"
 
 namespace {
 

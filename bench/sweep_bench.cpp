@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "analysis/batch_kernel.h"
-#include "util/parallel_for.h"
 #include "core/ground_motion.h"
 #include "core/structure.h"
+#include "util/parallel_for.h"
 
 namespace {
 

@@ -6,13 +6,13 @@
 #include <iostream>
 #include <memory>
 
-#include "util/atomic_file.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/study.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "util/atomic_file.h"
 
 namespace rths::cli {
 namespace {

@@ -7,13 +7,13 @@
 #include <map>
 #include <memory>
 
-#include "util/atomic_file.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
-#include "tables/results.h"
-#include "tables/write.h"
 #include "cli/support.h"
 #include "core/study.h"
+#include "tables/results.h"
+#include "tables/write.h"
+#include "util/atomic_file.h"
 
 namespace rths::cli {
 namespace {

@@ -10,7 +10,6 @@
 #include <memory>
 #include <sstream>
 
-#include "util/parallel_for.h"
 #include "analysis/sweep_csv.h"
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
@@ -21,6 +20,7 @@
 #include "slurm/sbatch.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "util/parallel_for.h"
 
 namespace rths::cli {
 namespace {

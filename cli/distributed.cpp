@@ -4,8 +4,6 @@
 #include <iomanip>
 #include <sstream>
 
-#include "util/atomic_file.h"
-#include "util/plot.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "runtime/plan.h"
@@ -13,6 +11,8 @@
 #include "runtime/schema.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "util/atomic_file.h"
+#include "util/plot.h"
 
 namespace rths::cli {
 namespace {

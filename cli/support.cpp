@@ -17,11 +17,11 @@
 #include <iostream>
 #include <memory>
 
-#include "util/atomic_file.h"
 #include "cli/commands.h"
 #include "core/text_format.h"
 #include "rths/analysis/joint_lag.pb.h"
 #include "rths/proto/config.pb.h"
+#include "util/atomic_file.h"
 #if __has_include("rths/deploy/sites.pb.h")
 #include "rths/deploy/sites.pb.h"
 #define RTHS_CLI_HAS_DEPLOY 1

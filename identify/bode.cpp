@@ -6,8 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "util/plot.h"
 #include "identify/evidence.h"
+#include "util/plot.h"
 
 namespace rths::identify {
 namespace {

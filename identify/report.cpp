@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <sstream>
 
-#include "util/plot.h"
 #include "identify/bode.h"
 #include "identify/evidence.h"
+#include "util/plot.h"
 
 namespace rths::identify {
 namespace {
