@@ -289,10 +289,14 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
         const auto it = critical_at.find(a);
         past += it != critical_at.end() && it->second && r >= *it->second ? 1 : 0;
       }
-    if (past > 0)
-      spdlog::warn("{} of {} grid points lie past the stability boundary (network round trip beyond "
-                   "the critical one for their actuator lag): they are expected to diverge",
-                   past, total);
+    if (past > 0) {
+      const std::string warning =
+          std::to_string(past) + " of " + std::to_string(total) +
+          " grid points lie past the stability boundary (network round trip beyond the critical "
+          "one for their actuator lag): they are expected to diverge";
+      if (options.warn) options.warn(warning);
+      else spdlog::warn("{}", warning);
+    }
   }
   if (config.sites().empty() || config.measured_network_round_trips().empty() ||
       config.measured_actuator_lags().empty()) {
@@ -412,7 +416,8 @@ std::string to_text(const JointLagResult& result) {
         << p.actuator_lag * 1e3 << " ms actuator = " << (p.network_round_trip + p.actuator_lag) * 1e3
         << " ms; measured total " << p.measured_total_lag * 1e3 << " ms = round trip " << p.measured_round_trip * 1e3 << " ms + actuator "
         << p.measured_actuator_lag * 1e3
-        << " ms; NRMSE " << 100 * p.nrmse << " %\n";
+        << " ms; NRMSE " << 100 * p.nrmse << " % over the first " << p.duration
+        << " s (the grid's NRMSE covers the whole record)\n";
   }
   out << "written: " << (result.output_directory / "grid.csv").string()
       << ", error_map.png/.svg, total_lag.png/.svg, summary.json\n";

@@ -48,6 +48,8 @@ struct JointLagPoint {
   double measured_round_trip = 0.0;  // s, record median
   double measured_actuator_lag = 0.0;  // s, see deploy/joint_lag_sites.h
   bool real_time = false;              // the clock of the across-sites run
+  double duration = 0.0;               // s of the record run across sites: its NRMSE covers only
+                                       // this stretch, so it is not comparable with the grid's
   bool past_boundary = false;          // network round trip beyond the critical one at this actuator lag
 };
 
@@ -96,6 +98,9 @@ struct JointLagOptions {
   JointLagAcrossSites across_sites;
   // Called after each grid point and each across-sites run: done of total (both counted).
   std::function<void(std::size_t done, std::size_t total)> progress;
+  // Before the grid runs: a warning for the user (points past the stability boundary); unset,
+  // it goes to the log.
+  std::function<void(const std::string& warning)> warn;
 };
 
 JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem::path& base_dir,

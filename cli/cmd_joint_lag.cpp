@@ -29,6 +29,7 @@ void run(const JointLagOptions& o) {
   options.across_sites = deploy::joint_lag_across_sites();
   ProgressReporter progress("joint-lag", "points", !o.json);
   options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
+  options.warn = print_warning;
   const auto result = analysis::run_joint_lag(config, path.parent_path(), options);
   analysis::write_joint_lag_outputs(result, options.plots);
   if (o.json) {

@@ -74,6 +74,7 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       point.measured_total_lag = real_time ? j1 : point.measured_round_trip + j1;
       point.measured_actuator_lag = real_time ? j1 - point.measured_round_trip : j1;
       point.real_time = real_time;
+      point.duration = duration;
       // The in-process reference over the same duration.
       auto reference_study = plan.study;
       const auto prepared = core::prepare_study(reference_study, base_dir);

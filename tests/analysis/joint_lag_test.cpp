@@ -71,8 +71,14 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   JointLagOptions options;
   options.output_directory = kOut / "boundary";
   options.measure = false;
+  std::vector<std::string> warnings;
+  options.warn = [&warnings](const std::string& w) { warnings.push_back(w); };
   const auto result = run_joint_lag(config, kConfigs, options);
   ASSERT_TRUE(result.boundary_skipped.empty()) << result.boundary_skipped;
+  // The user is told before the grid runs how many points lie past the boundary (30 ms at both
+  // actuator lags).
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].rfind("2 of 6 grid points lie past the stability boundary", 0), 0u) << warnings[0];
   ASSERT_GE(result.boundary.size(), 2u);
   const double critical = *result.boundary.front().critical_round_trip;
   EXPECT_NEAR(critical, 0.0242, 0.0005);  // the paper's frame: 24.2 ms
@@ -101,6 +107,23 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   int rows = 0;
   while (std::getline(boundary, line)) rows += line.empty() || line[0] == '#' ? 0 : 1;
   EXPECT_EQ(rows, static_cast<int>(result.boundary.size()));
+}
+
+// An across-sites point's NRMSE covers only its shorter run: the summary says so, so nobody reads
+// it beside the grid's whole-record NRMSE.
+TEST(JointLag, TheAcrossSitesLineNamesTheStretchItsErrorCovers) {
+  JointLagResult result;
+  result.study_name = "paper_frame";
+  JointLagPoint p;
+  p.network_round_trip = 0.014;
+  p.actuator_lag = 0.008;
+  p.nrmse = 0.0735;
+  p.duration = 1.0;
+  result.measured.push_back(p);
+  const std::string text = to_text(result);
+  EXPECT_NE(text.find("NRMSE 7.35 % over the first 1.00 s (the grid's NRMSE covers the whole record)"),
+            std::string::npos)
+      << text;
 }
 
 TEST(JointLag, FirstOrderActuatorLagsByAboutItsTimeConstant) {
