@@ -26,7 +26,7 @@ SeriesKey series_key(const SweepTableRow& r) { return {r.model, r.alpha, r.dt, r
 std::string delay_label(double delay) {
   std::ostringstream s;
   s.precision(4);
-  s << delay * 1e3 << " ms";
+  s << "delay " << delay * 1e3 << " ms";
   return s.str();
 }
 

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -78,6 +81,11 @@ TEST(SweepPlot, WritesBothFiguresAsPngAndSvg) {
     fs::path svg = file;
     EXPECT_GT(fs::file_size(svg.replace_extension(".svg")), 1000u) << svg;
   }
+  // The NRMSE-against-period figure's curves say what their number is (one curve per delay).
+  std::ifstream in(dir / "sweep.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(svg.find("delay 4 ms"), std::string::npos);
+  EXPECT_NE(svg.find("delay 8 ms"), std::string::npos);
   EXPECT_THROW(write_sweep_plot({}, png, "empty"), std::invalid_argument);
   EXPECT_THROW(write_sweep_plot({row(0.5, 0.0, 0)}, png, "no delay"), std::invalid_argument);
   fs::remove_all(dir);
