@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "runtime/launch.h"
+#include "runtime/plan.h"
 #include "security/check.h"
 #include "security/pki.h"
 #include "transport/dds_endpoint.h"
@@ -83,7 +84,7 @@ int coordinator_main(int argc, char** argv) {
     CoordinatorOptions co;
     co.run_id = !run_id.empty() ? run_id
                 : !study.deployment().run_id().empty() ? study.deployment().run_id()
-                                                       : runtime::make_run_id(study.name() + "-" + (case_name.empty() ? std::string("reference") : case_name));
+                                                       : runtime::make_run_id(study.name() + "-" + runtime::find_case(study, case_name).name());
     co.case_name = case_name;
     co.record = record;
     coordinator = std::make_unique<Coordinator>(std::move(prepared), *endpoint, co);

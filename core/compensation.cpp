@@ -30,10 +30,8 @@ double backward_acceleration(const double* x, double dt) {
   return (2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]) / (dt * dt);
 }
 
-std::string number(double x) { return format_number(x); }
-
 void require_step(double dt, const char* who) {
-  require(dt > 0.0 && finite(dt), std::string(who) + ": dt must be > 0 s, got " + number(dt));
+  require(dt > 0.0 && finite(dt), std::string(who) + ": dt must be > 0 s, got " + format_number(dt));
 }
 
 // Drops leading zero coefficients; a polynomial keeps at least one coefficient.
@@ -73,7 +71,7 @@ PolynomialExtrapolation::PolynomialExtrapolation(int order, double lead, int spa
   require(order >= 1 && order <= 3, "polynomial compensator: order must be 1, 2 or 3, got " +
                                         std::to_string(order));
   require(lead > 0.0 && lead <= 1.0, "polynomial compensator: lead must be in (0, 1] s, got " +
-                                         number(lead));
+                                         format_number(lead));
   require(spacing_steps >= 1, "polynomial compensator: spacing must be at least one step (dt)");
   // Lagrange weights for nodes x_j = -j (in units of the spacing h), evaluated at x = L / h.
   const double x = lead / (spacing_steps * dt);
@@ -109,7 +107,7 @@ std::unique_ptr<Compensator> PolynomialExtrapolation::clone() const {
 }
 
 std::string PolynomialExtrapolation::describe() const {
-  return "polynomial(order " + std::to_string(order_) + ", lead " + number(lead_ * 1e3) +
+  return "polynomial(order " + std::to_string(order_) + ", lead " + format_number(lead_ * 1e3) +
          " ms, spacing " + std::to_string(spacing_) + " steps)";
 }
 
@@ -118,10 +116,10 @@ AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double d
     : p_(parameters), dt_(dt), filter_decay_(0.0) {
   require_step(dt, "adaptive time series compensator");
   require(finite(p_.window) && p_.window >= 3.0 * dt,
-          "adaptive time series compensator: window must be >= 3 dt (" + number(3.0 * dt) +
-              " s), got " + number(p_.window));
+          "adaptive time series compensator: window must be >= 3 dt (" + format_number(3.0 * dt) +
+              " s), got " + format_number(p_.window));
   require(p_.window / dt <= 1e6, "adaptive time series compensator: window of " +
-                                     number(p_.window) + " s is more than 1e6 steps");
+                                     format_number(p_.window) + " s is more than 1e6 steps");
   const struct {
     const char* name;
     double initial;
@@ -131,19 +129,19 @@ AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double d
   for (const auto& c : coefficients) {
     require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max,
             std::string("adaptive time series compensator: ") + c.name +
-                "_bounds must have min < max, got [" + number(c.bounds.min) + ", " +
-                number(c.bounds.max) + "]");
+                "_bounds must have min < max, got [" + format_number(c.bounds.min) + ", " +
+                format_number(c.bounds.max) + "]");
     require(c.initial >= c.bounds.min && c.initial <= c.bounds.max,
             std::string("adaptive time series compensator: initial_") + c.name + " = " +
-                number(c.initial) + " is outside " + c.name + "_bounds [" + number(c.bounds.min) +
-                ", " + number(c.bounds.max) + "]");
+                format_number(c.initial) + " is outside " + c.name + "_bounds [" + format_number(c.bounds.min) +
+                ", " + format_number(c.bounds.max) + "]");
   }
   require(p_.a0_bounds.min > 0.0,
           "adaptive time series compensator: a0_bounds.min must be > 0 (a0 is the command's gain)");
   require(finite(p_.derivative_cutoff) && p_.derivative_cutoff >= 0.0 &&
               p_.derivative_cutoff < 0.5 / dt,
           "adaptive time series compensator: derivative_cutoff must be in [0, Nyquist = " +
-              number(0.5 / dt) + " Hz), got " + number(p_.derivative_cutoff));
+              format_number(0.5 / dt) + " Hz), got " + format_number(p_.derivative_cutoff));
   if (p_.derivative_cutoff > 0.0) {
     filter_decay_ = std::exp(-2.0 * std::numbers::pi * p_.derivative_cutoff * dt);
   }
@@ -172,8 +170,8 @@ std::unique_ptr<Compensator> AdaptiveTimeSeries::clone() const {
 }
 
 std::string AdaptiveTimeSeries::describe() const {
-  return "ats(window " + number(p_.window) + " s, a0 " + number(p_.a0) + ", a1 " +
-         number(p_.a1 * 1e3) + " ms, a2 " + number(p_.a2) + " s^2)";
+  return "ats(window " + format_number(p_.window) + " s, a0 " + format_number(p_.a0) + ", a1 " +
+         format_number(p_.a1 * 1e3) + " ms, a2 " + format_number(p_.a2) + " s^2)";
 }
 
 // One regression row: the command sent at step k-1 and the measurement it produced.
@@ -265,10 +263,10 @@ InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rol
   require(lead_order >= 1 && lead_order <= 3,
           std::string(who) + ": lead_order must be 1, 2 or 3, got " + std::to_string(lead_order));
   require(finite(rolloff_hz) && rolloff_hz > 0.0 && rolloff_hz < 0.25 / dt,
-          std::string(who) + ": rolloff_frequency must be in (0, " + number(0.25 / dt) +
-              ") Hz (a quarter of the sampling rate), got " + number(rolloff_hz));
+          std::string(who) + ": rolloff_frequency must be in (0, " + format_number(0.25 / dt) +
+              ") Hz (a quarter of the sampling rate), got " + format_number(rolloff_hz));
   require(finite(plant.delay) && plant.delay >= 0.0,
-          std::string(who) + ": plant delay must be >= 0 s, got " + number(plant.delay));
+          std::string(who) + ": plant delay must be >= 0 s, got " + format_number(plant.delay));
   require(finite(plant.gain) && plant.gain != 0.0,
           std::string(who) + ": plant gain must be finite and non-zero");
   const std::vector<double> num = trimmed(plant.numerator), den = trimmed(plant.denominator);
@@ -280,8 +278,8 @@ InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rol
   require(num.back() != 0.0 && den.back() != 0.0,
           std::string(who) + ": plant has a zero or a pole at s = 0 (no finite static gain)");
   for (const auto& zero : polynomial_roots(num)) {
-    require(zero.real() < 0.0, std::string(who) + ": plant zero at s = " + number(zero.real()) +
-                                   (zero.imag() != 0.0 ? " + " + number(zero.imag()) + "i" : "") +
+    require(zero.real() < 0.0, std::string(who) + ": plant zero at s = " + format_number(zero.real()) +
+                                   (zero.imag() != 0.0 ? " + " + format_number(zero.imag()) + "i" : "") +
                                    " is not in the left half-plane: its inverse would be unstable");
   }
   const int relative_degree = static_cast<int>(den.size() - num.size());
@@ -331,8 +329,8 @@ std::unique_ptr<Compensator> ModelBasedInverse::clone() const {
 }
 
 std::string ModelBasedInverse::describe() const {
-  return "model-based inverse(" + plant_.describe() + ", lead " + number(lead_ * 1e3) +
-         " ms order " + std::to_string(lead_order_) + ", roll-off " + number(rolloff_hz_) + " Hz)";
+  return "model-based inverse(" + plant_.describe() + ", lead " + format_number(lead_ * 1e3) +
+         " ms order " + std::to_string(lead_order_) + ", roll-off " + format_number(rolloff_hz_) + " Hz)";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -363,12 +361,12 @@ void require_identity_start(const AtsParameters& p) {
   for (const auto& c : coefficients) {
     require(c.initial == c.identity,
             std::string("adaptive correction: ") + c.name + " must start at " +
-                number(c.identity) + " (the nominal design), got " + number(c.initial));
+                format_number(c.identity) + " (the nominal design), got " + format_number(c.initial));
     require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
                 c.bounds.min <= c.identity && c.identity <= c.bounds.max,
             std::string("adaptive correction: ") + c.name + "_bounds must have min < max and "
-                "contain " + number(c.identity) + " (the nominal design), got [" +
-                number(c.bounds.min) + ", " + number(c.bounds.max) + "]");
+                "contain " + format_number(c.identity) + " (the nominal design), got [" +
+                format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
   }
 }
 
@@ -485,15 +483,15 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
       require(p.order() >= 1 && p.order() <= 3,
               where + ".polynomial.order must be 1, 2 or 3, got " + std::to_string(p.order()));
       require(p.lead() > 0.0 && p.lead() <= 1.0,
-              where + ".polynomial.lead must be in (0, 1] s, got " + number(p.lead()));
+              where + ".polynomial.lead must be in (0, 1] s, got " + format_number(p.lead()));
       require(p.spacing() >= 0.0 && finite(p.spacing()),
-              where + ".polynomial.spacing must be >= 0 s, got " + number(p.spacing()));
+              where + ".polynomial.spacing must be >= 0 s, got " + format_number(p.spacing()));
       break;
     }
     case K::kAdaptiveTimeSeries: {
       const auto& a = c.adaptive_time_series();
       require(a.window() > 0.0 && finite(a.window()),
-              where + ".adaptive_time_series.window must be > 0 s, got " + number(a.window()));
+              where + ".adaptive_time_series.window must be > 0 s, got " + format_number(a.window()));
       // Bounds and initial values: the block checks them; report them under this path.
       require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
               where + ".adaptive_time_series.derivative_cutoff must be >= 0 Hz");
@@ -513,15 +511,15 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
                   std::to_string(m.lead_order()));
       require(m.rolloff_frequency() > 0.0 && finite(m.rolloff_frequency()),
               where + ".model_based.rolloff_frequency must be > 0 Hz, got " +
-                  number(m.rolloff_frequency()));
+                  format_number(m.rolloff_frequency()));
       plant_from_stages(m.plant(), where + ".model_based.plant");
       if (m.has_adaptive_correction()) {
         const auto& a = m.adaptive_correction();
         const std::string at = where + ".model_based.adaptive_correction";
         require(a.window() > 0.0 && finite(a.window()),
-                at + ".window must be > 0 s, got " + number(a.window()));
+                at + ".window must be > 0 s, got " + format_number(a.window()));
         require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
-                at + ".derivative_cutoff must be >= 0 Hz, got " + number(a.derivative_cutoff()));
+                at + ".derivative_cutoff must be >= 0 Hz, got " + format_number(a.derivative_cutoff()));
         try {
           AtsParameters dt_free = correction_parameters(a);
           dt_free.derivative_cutoff = 0.0;  // checked against the Nyquist frequency when built
@@ -550,8 +548,8 @@ std::unique_ptr<Compensator> make_compensator(const config::Compensation& c, dou
         const double steps = p.spacing() / dt;
         spacing = static_cast<int>(std::llround(steps));
         require(spacing >= 1 && std::abs(steps - spacing) <= 1e-6 * steps,
-                where + ".polynomial.spacing " + number(p.spacing()) +
-                    " s is not a whole number of steps of dt = " + number(dt) + " s");
+                where + ".polynomial.spacing " + format_number(p.spacing()) +
+                    " s is not a whole number of steps of dt = " + format_number(dt) + " s");
       }
       return std::make_unique<PolynomialExtrapolation>(p.order(), p.lead(), spacing, dt);
     }

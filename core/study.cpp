@@ -22,22 +22,20 @@ void require(bool ok, const std::string& source, const std::string& message) {
   if (!ok) fail(source, message);
 }
 
-std::string number(double value) { return format_number(value); }
-
 // A lag in seconds within [0, kMaxLag]; the message suggests the likely slip (ms written as s).
 void require_lag(double value, const std::string& field, const std::string& source, bool zero_allowed) {
   require(zero_allowed ? value >= 0 : value > 0, source,
-          field + " must be " + (zero_allowed ? ">= 0" : "> 0") + " s, got " + number(value));
+          field + " must be " + (zero_allowed ? ">= 0" : "> 0") + " s, got " + format_number(value));
   require(value <= kMaxLag, source,
-          field + " = " + number(value) + " s is longer than any actuator or network lag (at most " +
-              number(kMaxLag) + " s); delays are in seconds: 14 ms is 0.014");
+          field + " = " + format_number(value) + " s is longer than any actuator or network lag (at most " +
+              format_number(kMaxLag) + " s); delays are in seconds: 14 ms is 0.014");
 }
 
 void validate_delay_stage(const config::DelayStage& stage, const std::string& where,
                           const std::string& source) {
   using K = config::DelayStage::KindCase;
   require(stage.amplitude_gain() >= 0 && stage.amplitude_gain() <= 10, source,
-          where + ".amplitude_gain must be in [0, 10] (0 means 1), got " + number(stage.amplitude_gain()));
+          where + ".amplitude_gain must be in [0, 10] (0 means 1), got " + format_number(stage.amplitude_gain()));
   switch (stage.kind_case()) {
     case K::kShift: require_lag(stage.shift().delay(), where + ".shift.delay", source, true); break;
     case K::kEq1: require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true); break;
@@ -96,27 +94,27 @@ void validate_study(const config::Study& study, const std::string& source) {
   }
   if (structure.has_sdof()) {
     require(structure.sdof().period() <= kMaxPeriod, source,
-            "structure.sdof.period = " + number(structure.sdof().period()) + " s is beyond any structure's (at most " +
-                number(kMaxPeriod) + " s)");
+            "structure.sdof.period = " + format_number(structure.sdof().period()) + " s is beyond any structure's (at most " +
+                format_number(kMaxPeriod) + " s)");
   }
   const double zeta = structure.damping().has_rayleigh() ? structure.damping().rayleigh().zeta()
                                                          : structure.damping().modal_zeta();
   const std::string zeta_field = structure.damping().has_rayleigh() ? "structure.damping.rayleigh.zeta"
                                                                     : "structure.damping.modal_zeta";
   require(zeta >= 0 && zeta <= kMaxDampingRatio, source,
-          zeta_field + " is a ratio in [0, 1] (0.05 = 5 % of critical), got " + number(zeta));
+          zeta_field + " is a ratio in [0, 1] (0.05 = 5 % of critical), got " + format_number(zeta));
   require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
-          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " + number(study.servo().rate()));
+          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " + format_number(study.servo().rate()));
   require(study.integrator().dt() >= 0 && study.integrator().dt() <= kMaxStep, source,
-          "integrator.dt must be in [0, " + number(kMaxStep) + "] s (0 = the record's step), got " +
-              number(study.integrator().dt()));
+          "integrator.dt must be in [0, " + format_number(kMaxStep) + "] s (0 = the record's step), got " +
+              format_number(study.integrator().dt()));
   const auto& sub = study.substructuring();
   require(sub.experimental_fraction() >= 0 && sub.experimental_fraction() <= 1, source,
           "substructuring.experimental_fraction must be in [0, 1]");
   require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
           "substructuring: give experimental_fraction or experimental_storeys, not both");
   require(study.motion().scale() >= 0 && study.motion().scale() <= kMaxMotionScale, source,
-          "motion.scale must be in [0, " + number(kMaxMotionScale) + "] (0 means 1), got " + number(study.motion().scale()));
+          "motion.scale must be in [0, " + format_number(kMaxMotionScale) + "] (0 means 1), got " + format_number(study.motion().scale()));
   require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
   const auto& limits = study.deployment().limits();
   require(limits.max_displacement() >= 0 && limits.max_velocity() >= 0, source,
@@ -141,11 +139,11 @@ void validate_study(const config::Study& study, const std::string& source) {
   }
   for (double period : study.sweep().periods()) {
     require(period > 0 && period <= kMaxPeriod, source,
-            "sweep.periods must be in (0, " + number(kMaxPeriod) + "] s, got " + number(period));
+            "sweep.periods must be in (0, " + format_number(kMaxPeriod) + "] s, got " + format_number(period));
   }
   for (double delay : study.sweep().delays()) require_lag(delay, "sweep.delays", source, true);
   for (double dt : study.sweep().dts()) {
-    require(dt > 0 && dt <= kMaxStep, source, "sweep.dts must be in (0, " + number(kMaxStep) + "] s, got " + number(dt));
+    require(dt > 0 && dt <= kMaxStep, source, "sweep.dts must be in (0, " + format_number(kMaxStep) + "] s, got " + format_number(dt));
   }
   for (double k : study.sweep().stiffnesses()) require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
   for (double a : study.sweep().experimental_fractions()) {
@@ -336,9 +334,9 @@ int servo_substeps(const config::Study& study, double dt) {
   require(std::isfinite(rate) && rate > 0 && whole >= 1 && whole <= kMaxServoSubsteps &&
               std::abs(per_step - whole) <= 1e-6 * whole,
           "servo",
-          "servo.rate = " + number(rate) + " Hz must be an integer multiple (1 to " +
-              std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " + number(1.0 / dt) +
-              " Hz (dt = " + number(dt) + " s)");
+          "servo.rate = " + format_number(rate) + " Hz must be an integer multiple (1 to " +
+              std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " + format_number(1.0 / dt) +
+              " Hz (dt = " + format_number(dt) + " s)");
   return static_cast<int>(whole);
 }
 
@@ -368,14 +366,14 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   prepared.base_dir = base_dir;
   GroundMotion record = load_motion(study.motion(), base_dir);
   const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : record.dt;
-  require(dt < record.duration(), "motion", "integrator.dt = " + number(dt) + " s is not shorter than the record (" +
-                                               number(record.duration()) + " s)");
+  require(dt < record.duration(), "motion", "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
+                                               format_number(record.duration()) + " s)");
   prepared.motion = std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
   for (const config::Case& c : study.cases()) {
     const double lag = make_delay_chain(c.delay(), dt, base_dir).nominal_delay();
     require(lag < prepared.motion.duration(), "case '" + c.name() + "'",
-            "its delay of " + number(lag) + " s is not shorter than the record (" +
-                number(prepared.motion.duration()) + " s)");
+            "its delay of " + format_number(lag) + " s is not shorter than the record (" +
+                format_number(prepared.motion.duration()) + " s)");
   }
   prepared.base = base_setup(study, dt);
   return prepared;
