@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "coordinator/feedback_intake.h"
 #include "core/simulation.h"
 #include "runtime/measurements.h"
 #include "runtime/schema.h"
@@ -60,18 +61,18 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
     const runtime::NodePlan* plan;
     bool announced = false, ready = false;
     Clock::time_point last_seen;
-    std::int64_t last_answer = 0;  // step of the newest accepted feedback
-    std::uint64_t answers = 0;     // accepted feedback messages
+    std::int64_t last_answer = 0;  // step of the newest answer taken from the intake
+    std::uint64_t answers = 0;     // answers taken so far
     std::uint64_t answers_before_step = 0;
     int missed_streak = 0;         // real time: consecutive steps without a fresh answer
     int late_streak = 0;           // real time: consecutive steps on an older answer
-    runtime::Feedback feedback;    // newest accepted
-    runtime::LinkSample link;
-    std::int64_t servo_sample = 0;  // streaming emulator: newest servo period applied
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
   };
   std::map<int, Node> nodes;
-  runtime::RejectCounters rejected;
+  // The nodes' feedback, filled by the transport's receive thread (or by pump() on a transport
+  // without one) and read wait-free by the loop.
+  std::unique_ptr<FeedbackIntake> intake;
+  runtime::RejectCounters rejected;  // everything but feedback (the intake counts those)
   std::uint64_t late_feedback = 0, worst_late_streak = 0;
   // The links' lag as the record's reader counts it (runtime/measurements.h), from the same samples.
   runtime::LinkLagAccumulator lags;
@@ -124,6 +125,10 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   bool pump(std::chrono::nanoseconds timeout) {
     auto message = endpoint.receive(timeout);
     if (!message) return false;
+    if (message->kind == runtime::FEEDBACK) {
+      intake->offer(*message);
+      return true;
+    }
     const auto it = nodes.find(message->node_id);
     // Announcements carry the node's expected run id, empty when it was started without one.
     const bool announce = message->kind == runtime::ANNOUNCE &&
@@ -167,50 +172,6 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
         if (!ready.error().empty())
           throw RunAborted("could not build its part: " + ready.error(), node.plan->label());
         node.ready = true;
-        return true;
-      }
-      case runtime::FEEDBACK: {
-        const std::int64_t newest = step;  // nothing newer was ever commanded
-        const Verdict order = runtime::check_step(message->step, node.last_answer, newest);
-        // A streaming emulator (servo loop faster than the integrator, real time) sends several
-        // answers to one command: a later servo sample of the answered step replaces the
-        // measurement but is not a new answer (freshness and lag count the first only).
-        const bool same_step = order == Verdict::kDuplicate;
-        if (order != Verdict::kAccept && !same_step) {
-          rejected.count(order);
-          return true;
-        }
-        runtime::Feedback feedback;
-        const int expected = static_cast<int>(node.plan->storeys.size());
-        const bool emulator = node.plan->spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR;
-        if (!runtime::unpack(*message, feedback) || feedback.force_size() != expected ||
-            (emulator && feedback.realised_size() != expected)) {
-          rejected.count(Verdict::kGarbage);
-          return true;
-        }
-        if (same_step) {
-          if (feedback.servo_sample() <= node.servo_sample) {
-            rejected.count(order);
-            return true;
-          }
-          node.last_seen = Clock::now();
-          node.servo_sample = feedback.servo_sample();
-          node.feedback = std::move(feedback);
-          return true;
-        }
-        node.last_seen = Clock::now();
-        node.last_answer = message->step;
-        ++node.answers;
-        node.servo_sample = feedback.servo_sample();
-        node.feedback = std::move(feedback);
-        runtime::LinkSample& link = node.link;
-        link.set_node_id(node.plan->spec.id());
-        link.set_answered_step(message->step);
-        link.set_injected_lag(node.feedback.injected_lag());
-        link.set_round_trip(static_cast<double>(message->received_ns - message->echo_ns) * 1e-9);
-        link.set_one_way_down(
-            static_cast<double>(node.feedback.command_received_ns() - message->echo_ns) * 1e-9);
-        link.set_one_way_up(static_cast<double>(message->received_ns - message->sent_ns) * 1e-9);
         return true;
       }
       case runtime::HOLD: {
@@ -294,6 +255,17 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   }
 
   // ---- RestoringEvaluator: one exchange per step ----
+  // Takes each node's newest feedback from the intake, if new since the last take.
+  void absorb() {
+    for (auto& [id, node] : nodes) {
+      const ArrivedFeedback* arrived = intake->take(id);
+      if (!arrived) continue;
+      node.last_seen = Clock::now();
+      node.last_answer = arrived->answered_step;
+      node.answers = arrived->answers;
+    }
+  }
+
   const core::Vec& trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) override {
     if (tangent)
       throw std::invalid_argument("the distributed runtime needs an explicit integrator");
@@ -344,14 +316,17 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   int actuators() const override { return static_cast<int>(measured.size()); }
 
   // Before a node's first answer (real time, lag longer than the wait) the specimen is at rest.
-  static double force_of(const Node& node, std::size_t i) {
+  double force_of(const Node& node, std::size_t i) {
+    const runtime::Feedback& f = intake->latest(node.plan->spec.id()).feedback;
     const int index = static_cast<int>(i);
-    return index < node.feedback.force_size() ? node.feedback.force(index) : 0.0;
+    return index < f.force_size() ? f.force(index) : 0.0;
   }
-  static double realised_of(const Node& node, std::size_t i) {
+  double realised_of(const Node& node, std::size_t i) {
+    const runtime::Feedback& f = intake->latest(node.plan->spec.id()).feedback;
     const int index = static_cast<int>(i);
-    return index < node.feedback.realised_size() ? node.feedback.realised(index) : 0.0;
+    return index < f.realised_size() ? f.realised(index) : 0.0;
   }
+  const runtime::LinkSample& link_of(int id) { return intake->latest(id).link; }
 
   void commit() override {
     if (local_numerical) local_numerical->commit();
@@ -377,6 +352,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       pace = pacer->wait(static_cast<std::int64_t>(k));
     }
     step = static_cast<std::int64_t>(k);
+    intake->await_step(step);
     step_start = Clock::now();
     step_start_realtime_ns = transport::realtime_ns();
   }
@@ -385,7 +361,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
     const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
     write_step(k, result, step_wall);
     if (k > 0)
-      for (auto& [id, node] : nodes) lags.add(result.time[k], node.link);
+      for (auto& [id, node] : nodes) lags.add(result.time[k], link_of(id));
     if (k == 0) {
       last_heartbeat_sent = Clock::now();
       for (auto& [id, node] : nodes) node.last_seen = Clock::now();
@@ -453,7 +429,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       r.add_measured_force(result.measured_force(row, a));
     }
     if (k > 0)
-      for (auto& [id, node] : nodes) *r.add_links() = node.link;
+      for (auto& [id, node] : nodes) *r.add_links() = link_of(id);
     r.set_lateness(pace.lateness);
     r.set_step_wall(step_wall);
     r.set_command_latency(
@@ -504,6 +480,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
                                                 runtime::feedback_wait_fraction(deployment) *
                                                 setup.dt));
       for (;;) {
+        absorb();
         bool all = true;
         for (auto& [id, node] : nodes) all = all && node.last_answer == step;
         if (all) break;
@@ -513,6 +490,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       }
       while (pump(std::chrono::nanoseconds::zero())) {
       }
+      absorb();
       const int max_missed = runtime::max_missed_answers(deployment);
       for (auto& [id, node] : nodes) {
         if (node.last_answer != step) {
@@ -541,16 +519,12 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
     }
     const auto start = Clock::now();
     const double timeout = runtime::step_timeout(deployment);
-    // Be woken once all outstanding answers are in, not once per answer.
-    struct ResetThreshold {
-      transport::Endpoint& endpoint;
-      ~ResetThreshold() { endpoint.set_wake_threshold(1); }
-    } reset{endpoint};
+    // The intake wakes the loop (interrupt) once the last answer to the step is in.
     for (;;) {
+      absorb();
       int outstanding = 0;
       for (auto& [id, node] : nodes) outstanding += node.last_answer != step ? 1 : 0;
       if (outstanding == 0) return;
-      endpoint.set_wake_threshold(outstanding);
       pump(std::chrono::milliseconds(10));
       check_liveliness();
       if (seconds_since(start) > timeout) {
@@ -592,8 +566,12 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   for (const runtime::NodePlan& n : plan_.nodes) {
     s.nodes[n.spec.id()].plan = &n;
     s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
-    s.nodes[n.spec.id()].link.set_node_id(n.spec.id());  // answered_step 0: no answer yet
   }
+  std::vector<IntakeNode> intake_nodes;
+  for (const runtime::NodePlan& n : plan_.nodes)
+    intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),
+                            n.spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR});
+  s.intake = std::make_unique<FeedbackIntake>(s.options.run_id, intake_nodes);
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
   const int actuators = static_cast<int>(s.setup.partition.actuator_storeys.size());
   s.assembly = core::StoreyAssembly(storeys);
@@ -635,7 +613,20 @@ RunOutcome Coordinator::run() {
     if (s.real_time) s.prepare_real_time_thread();
     core::SimulationOptions loop_options;
     loop_options.divergence_bound = s.options.divergence_bound;
-    core::run_steps(s.setup, s.prepared.motion, s, s, loop_options, result);
+    {
+      // Feedback is judged and boxed on the transport's receive thread; the loop is woken once
+      // a step's answers are all in. Removed (waiting out a running call) before the loop ends.
+      s.endpoint.set_inline_handler([&s](const transport::Message& m) {
+        if (m.kind != runtime::FEEDBACK) return false;
+        if (s.intake->offer(m)) s.endpoint.interrupt();
+        return true;
+      });
+      struct RemoveHandler {
+        transport::Endpoint& endpoint;
+        ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
+      } remove_handler{s.endpoint};
+      core::run_steps(s.setup, s.prepared.motion, s, s, loop_options, result);
+    }
     if (result.diverged)
       s.event("diverged: |u| = " +
               std::to_string(result.displacement.bottomRows(1).cwiseAbs().maxCoeff()) + " m");
@@ -678,19 +669,26 @@ RunOutcome Coordinator::run() {
   if (failed) {
     spdlog::error("run {} stopped at step {}: {}", s.options.run_id, s.step, outcome.status);
     for (auto& [id, node] : s.nodes) {
-      if (node.plan->spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+      // A node that never announced runs nothing of this run (and has no addressed topic yet).
+      if (node.plan->spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR || !node.announced) continue;
       runtime::Hold hold;
       hold.set_reason(outcome.status);
       s.send(id, runtime::HOLD, s.step, hold);
     }
     s.event("HOLD sent to the actuator emulators: " + outcome.status);
   }
+  // Addressed to each node, so its STOP cannot overtake its HOLD (the transport orders per
+  // addressee only); then broadcast, for nodes that announced but are not in the plan.
   runtime::Stop stop;
   stop.set_reason(outcome.status);
+  for (auto& [id, node] : s.nodes)
+    if (node.announced) s.send(id, runtime::STOP, s.step, stop);
   s.send(transport::kBroadcastId, runtime::STOP, s.step, stop);
 
   const std::size_t completed = result.steps();
-  s.rejected.fill(outcome.counters);
+  runtime::RejectCounters rejected = s.rejected;
+  rejected.add(s.intake->rejected());
+  rejected.fill(outcome.counters);
   outcome.counters.set_overruns(pacer.overruns());
   outcome.counters.set_late_feedback(s.late_feedback);
   outcome.counters.set_worst_overrun_streak(pacer.worst_overrun_streak());

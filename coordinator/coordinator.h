@@ -43,9 +43,13 @@
 // the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
 // loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
 // one or two entries behind). A full ring drops and counts entries and fails the run.
-// Real-time safety of a step: the record entry, the feedback storage, the lag vectors and the
-// outgoing command message (runtime::pack_into) are reused or reserved up front; what still
-// allocates is the transport's received message (copied out of DDS) and, rarely, an event.
+// Feedback: judged and decoded on the transport's receive thread (its inline handler) by
+// coordinator::FeedbackIntake into one wait-free LatestBox per node; the loop takes the newest
+// without a lock or a copy, and is woken once per step, when the step's last answer is in.
+// Real-time safety of a step: the record entry, the feedback slots, the lag vectors and the
+// outgoing command message (runtime::pack_into) are reused or reserved up front, and the receive
+// thread's decode of a feedback allocates nothing once warm; what still allocates is a message
+// other than feedback (heartbeats, taken off the transport's queue) and, rarely, an event.
 // mlockall and pinning of the loop thread when the deployment asks. Each step records
 // command_latency (wake-up to the last command written); bench/runtime_bench prints it.
 

@@ -41,6 +41,15 @@ void RejectCounters::count(Verdict verdict) {
   }
 }
 
+void RejectCounters::add(const RejectCounters& o) {
+  foreign_run += o.foreign_run;
+  garbage += o.garbage;
+  duplicate += o.duplicate;
+  stale += o.stale;
+  out_of_order += o.out_of_order;
+  unknown_node += o.unknown_node;
+}
+
 std::uint64_t RejectCounters::total() const {
   return foreign_run + garbage + duplicate + stale + out_of_order + unknown_node;
 }

@@ -31,6 +31,7 @@ Verdict check_step(std::int64_t step, std::int64_t last_accepted, std::int64_t n
 class RejectCounters {
  public:
   void count(Verdict verdict);
+  void add(const RejectCounters& other);
   std::uint64_t total() const;
   void fill(Counters& counters) const;
   std::uint64_t foreign_run = 0, garbage = 0, duplicate = 0, stale = 0, out_of_order = 0,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <condition_variable>
 #include <deque>
+#include <map>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -14,36 +15,89 @@
 
 namespace rths::transport {
 
+namespace {
+
+// How long the first message to a node may wait for that node's command reader to match the
+// writer it creates (volatile data written before the match would be lost). Start-up only: the
+// first addressed message is the ASSIGN answering the node's announcement, so the node is there.
+constexpr auto kAddressedMatchTimeout = std::chrono::milliseconds(2000);
+
+std::string addressed_topic_name(const std::string& prefix, std::int32_t node_id) {
+  return prefix + "_node" + std::to_string(node_id) + "_down";
+}
+
+}  // namespace
+
+// A node's reader of its own command topic, or of the broadcast topic; each owns its topic.
+struct DdsEndpoint::NodeReader {
+  dds::EnvelopeTopic topic;
+  dds::Reader reader;
+};
+
 struct DdsEndpoint::Impl {
   Impl(const DdsEndpointOptions& o, const dds::QosSpec& qos)
       : options(o),
+        qos(qos),
         participant(o.domain_id, o.participant_properties),
         down(participant, o.topic_prefix + "_down", qos),
         up(participant, o.topic_prefix + "_up", qos),
         writer(participant, o.coordinator ? down : up, qos),
-        reader(participant, o.coordinator ? up : down, qos, &Impl::on_data, this) {}
-  ~Impl() { reader.clear_listener(); }
+        reader(participant, o.coordinator ? up : down, qos, &Impl::on_data, this) {
+    if (!o.coordinator) {
+      dds::EnvelopeTopic own(participant, addressed_topic_name(o.topic_prefix, o.node_id), qos);
+      dds::Reader own_reader(participant, own, qos, &Impl::on_data, this);
+      addressed.reset(new NodeReader{std::move(own), std::move(own_reader)});
+    }
+  }
+  ~Impl() {
+    reader.clear_listener();
+    if (addressed) addressed->reader.clear_listener();
+  }
 
-  static void on_data(dds::Handle, void* self) { static_cast<Impl*>(self)->drain(); }
+  static void on_data(dds::Handle reader, void* self) { static_cast<Impl*>(self)->drain(reader); }
   // Runs on Cyclone's receive thread.
-  void drain();
+  void drain(dds::Handle from);
+  // The coordinator's writer of node_id's command topic, created (and matched) on first use.
+  dds::Handle addressed_writer(std::int32_t node_id);
 
   const DdsEndpointOptions options;
+  const dds::QosSpec qos;
   // Shared between the receive thread and the caller; declared before the DDS entities so they
   // outlive the listener.
   std::mutex mutex;
   std::condition_variable arrived, handler_idle;
   std::deque<Message> pending;
   bool interrupted = false;
-  std::size_t wake_threshold = 1;
   std::shared_ptr<const InlineHandler> handler;
   int handler_calls = 0;  // invocations in progress
 
   dds::Participant participant;
   dds::EnvelopeTopic down, up;
-  dds::Writer writer;
-  dds::Reader reader;
+  dds::Writer writer;  // coordinator: broadcasts on <prefix>_down; node: <prefix>_up
+  dds::Reader reader;  // coordinator: <prefix>_up; node: broadcasts on <prefix>_down
+  std::unique_ptr<NodeReader> addressed;  // node only: <prefix>_node<id>_down
+  // Coordinator only: one topic and writer per addressee, so a command reaches its node only.
+  struct AddressedWriter {
+    dds::EnvelopeTopic topic;
+    dds::Writer writer;
+  };
+  std::mutex writers_mutex;
+  std::map<std::int32_t, std::unique_ptr<AddressedWriter>> addressed_writers;
 };
+
+dds::Handle DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
+  std::lock_guard lock(writers_mutex);
+  auto& slot = addressed_writers[node_id];
+  if (!slot) {
+    dds::EnvelopeTopic topic(participant, addressed_topic_name(options.topic_prefix, node_id), qos);
+    dds::Writer w(participant, topic, qos);
+    slot.reset(new AddressedWriter{std::move(topic), std::move(w)});
+    const auto deadline = std::chrono::steady_clock::now() + kAddressedMatchTimeout;
+    while (slot->writer.matched_readers() < 1 && std::chrono::steady_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  return slot->writer.get();
+}
 
 std::int64_t realtime_ns() {
   timespec ts{};
@@ -71,25 +125,29 @@ void DdsEndpoint::send(const Message& m) {
   sample.payload._buffer =
       reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
   sample.payload._release = false;
-  dds::check(dds_write(impl_->writer.get(), &sample), "dds_write");
+  const bool addressed = options_.coordinator && m.node_id != kBroadcastId;
+  dds::check(dds_write(addressed ? impl_->addressed_writer(m.node_id) : impl_->writer.get(), &sample),
+             "dds_write");
 }
 
-void DdsEndpoint::Impl::drain() {
+void DdsEndpoint::Impl::drain(dds::Handle from) {
   constexpr int kBatch = 16;
   void* samples[kBatch] = {};
   dds_sample_info_t infos[kBatch];
   bool queued = false;
   for (;;) {
     // A failing take here has no caller to throw to; the data stays and the next arrival retries.
-    const dds_return_t n = dds_take(reader.get(), samples, infos, kBatch, kBatch);
-    if (n <= 0) return;
+    const dds_return_t n = dds_take(from, samples, infos, kBatch, kBatch);
+    if (n <= 0) break;  // (after a full batch: what was queued still needs its wake-up)
     const std::int64_t now = realtime_ns();
     for (int i = 0; i < n; ++i) {
       if (!infos[i].valid_data) continue;
       const auto* s = static_cast<const rths_dds_Envelope*>(samples[i]);
       if (!options.coordinator && s->node_id != options.node_id && s->node_id != kBroadcastId)
         continue;
-      Message m;
+      // Per receive thread, reused: assigning into its strings allocates nothing once they have
+      // grown to the largest message (moved into the queue, it starts over).
+      thread_local Message m;
       m.run_id = s->run_id ? s->run_id : "";
       m.node_id = s->node_id;
       m.kind = s->kind;
@@ -120,19 +178,19 @@ void DdsEndpoint::Impl::drain() {
         queued = true;
       }
     }
-    dds_return_loan(reader.get(), samples, n);
+    dds_return_loan(from, samples, n);
     if (n < kBatch) break;
   }
   if (!queued) return;
   std::lock_guard lock(mutex);
-  if (pending.size() >= wake_threshold) arrived.notify_one();
+  arrived.notify_one();
 }
 
 std::optional<Message> DdsEndpoint::receive(std::chrono::nanoseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   std::unique_lock lock(impl_->mutex);
   impl_->arrived.wait_until(lock, deadline, [&] {
-    return impl_->pending.size() >= impl_->wake_threshold || impl_->interrupted;
+    return !impl_->pending.empty() || impl_->interrupted;
   });
   if (!impl_->pending.empty()) {
     Message m = std::move(impl_->pending.front());
@@ -157,10 +215,6 @@ void DdsEndpoint::set_inline_handler(InlineHandler handler) {
   impl_->handler_idle.wait(lock, [&] { return impl_->handler_calls == 0; });
 }
 
-void DdsEndpoint::set_wake_threshold(int messages) {
-  std::lock_guard lock(impl_->mutex);
-  impl_->wake_threshold = static_cast<std::size_t>(std::max(1, messages));
-}
 
 int DdsEndpoint::matched_peers() const { return impl_->writer.matched_readers(); }
 int DdsEndpoint::matched_writers() const { return impl_->reader.matched_writers(); }

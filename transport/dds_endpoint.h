@@ -1,8 +1,16 @@
 #pragma once
-// Endpoint over Cyclone DDS. Two topics per domain: "rths_down" (coordinator -> nodes, keyed by
-// the addressee) and "rths_up" (nodes -> coordinator, keyed by the sender), both reliable,
-// KEEP_LAST 64, volatile. A node endpoint delivers only messages addressed to its node id or
-// broadcast (-1); filtering happens on receipt, before any payload is parsed.
+// Endpoint over Cyclone DDS. Topics, all reliable, KEEP_LAST 64, volatile:
+//   "rths_node<id>_down"  coordinator -> node <id>: messages addressed to that node only
+//   "rths_down"           coordinator -> every node: broadcasts (node id -1)
+//   "rths_up"             nodes -> coordinator, keyed by the sender
+// One topic per addressee, not one shared topic, because DDS delivers every sample to every
+// matched reader: on a shared topic each command woke every node process, to be thrown away by
+// all but one (on one CPU, a context switch per wasted delivery). The coordinator creates a
+// node's writer on the first message addressed to it and waits (up to 2 s, at start-up) for the
+// node's reader to match, so that first message is not lost. Order holds per topic only: a
+// broadcast may overtake an addressed message, so what must follow a node's HOLD is addressed
+// to it. A node endpoint also drops anything not addressed to it or broadcast, before any
+// payload is parsed.
 //
 // Receipt: a data-available listener takes the samples on Cyclone's receive thread, offers each to
 // the inline handler (set_inline_handler) and queues the rest for receive(), waking it through a
@@ -10,8 +18,9 @@
 // the caller, and a handled one costs no thread switch at all.
 //
 // Discovery: the participant reads CYCLONEDDS_URI as usual (configs/dds_loopback.xml for one host).
-// receive() is not real-time safe on the first call (it sizes its buffers); later calls allocate
-// only for the payload strings.
+// A message the inline handler consumes costs no allocation once warm: the receive thread decodes
+// each sample into a message of its own whose strings keep their capacity. A message queued for
+// receive() is moved out of it (the queue and the next decode allocate).
 
 #include <memory>
 #include <utility>
@@ -45,10 +54,10 @@ class DdsEndpoint final : public Endpoint {
   // readers listen to it. Throws std::runtime_error naming the counts on timeout.
   void wait_for_match(int readers, int writers, std::chrono::milliseconds timeout) const;
   void set_inline_handler(InlineHandler handler) override;
-  void set_wake_threshold(int messages) override;
 
  private:
   struct Impl;
+  struct NodeReader;
   DdsEndpointOptions options_;
   std::unique_ptr<Impl> impl_;
 };

@@ -52,10 +52,6 @@ class Endpoint {
   // removes it; once this returns, no invocation of the old handler is in progress. Transports
   // without a receive thread ignore it and deliver everything through receive().
   virtual void set_inline_handler(InlineHandler handler) { (void)handler; }
-  // Hint from a caller that waits for `messages` answers: receive() need not return before that
-  // many are queued or its timeout passes (interrupt() still wakes it), sparing one wake-up per
-  // extra answer. 1 (the default) restores the plain behaviour. Transports may ignore it.
-  virtual void set_wake_threshold(int messages) { (void)messages; }
 };
 
 inline constexpr std::int32_t kCoordinatorId = 0;
