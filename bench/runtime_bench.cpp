@@ -12,11 +12,17 @@
 // Targets (issue 3): >= 10,000 lockstep steps/s; median step <= 2 x ping-pong median RTT;
 // 1024 Hz overruns <= bare loop + 0.1 point; 4096 Hz overruns <= 1 %.
 //
+//  5. with --memory-steps N (alone): RSS of every process over an N-step real-time run.
+//
 //   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D] [--spread] [--lockstep-only]
+//                      [--memory-steps N [--memory-rate HZ]]
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <atomic>
+#include <cmath>
 #include <cstdio>
+#include <map>
 #include <fstream>
 #include <thread>
 
@@ -168,6 +174,102 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   return f;
 }
 
+// Resident set size (kB) of a process, from /proc/<pid>/status; -1 when it is gone.
+long rss_kb(const std::string& pid) {
+  std::ifstream status("/proc/" + pid + "/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return -1;
+}
+
+// This process's children (the node processes), from /proc/self/task/*/children.
+std::vector<std::string> child_pids() {
+  std::vector<std::string> pids;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream children(task.path() / "children");
+    for (std::string pid; children >> pid;) pids.push_back(pid);
+  }
+  return pids;
+}
+
+// A long real-time run with the coordinator's and the nodes' RSS sampled every 100 ms: RSS at
+// 10 %, 50 % and 95 % of the run, and the growth from 10 % to 95 %. The motion is a 2 Hz sine
+// long enough for `steps` steps; the run's fail-safe and deadline tolerance are widened, as for
+// the other rows, so the run is measured rather than stopped.
+void memory_run(int domain, std::int64_t steps, double hz, const std::string& deployment_extra) {
+  const double dt = 1.0 / hz;
+  const auto dir = std::filesystem::temp_directory_path() / "rths_bench_memory";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream motion(dir / "motion.txt");
+    for (std::int64_t k = 0; k < steps; ++k)
+      motion << 0.05 * std::sin(2.0 * M_PI * 2.0 * static_cast<double>(k) * dt) << "\n";
+  }
+  char dt_text[32];
+  std::snprintf(dt_text, sizeof dt_text, "%.17g", dt);
+  const std::string text =
+      "name: \"bench\"\n"
+      "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+      "motion { path: \"" + (dir / "motion.txt").string() + "\" format: COLUMNS column_dt: " +
+      dt_text + " column_units: G }\n"
+      "integrator { kind: EXPLICIT_NEWMARK dt: " + dt_text + " }\n"
+      "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+      "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
+      "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 1000 "
+      "command_watchdog_periods: 1000 " + deployment_extra + " }\n";
+  struct Sample {
+    double t;
+    long coordinator;
+    std::map<std::string, long> nodes;
+  };
+  std::vector<Sample> samples;
+  std::atomic<bool> done{false};
+  const auto start = std::chrono::steady_clock::now();
+  std::thread sampler([&] {
+    while (!done) {
+      Sample sample{std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                    rss_kb("self"), {}};
+      for (const auto& pid : child_pids()) sample.nodes[pid] = rss_kb(pid);
+      samples.push_back(sample);
+      std::this_thread::sleep_for(100ms);
+    }
+  });
+  RunFigures f;
+  try {
+    f = distributed_run(domain, text, "memory");
+  } catch (...) {
+    done = true;
+    sampler.join();
+    throw;
+  }
+  done = true;
+  sampler.join();
+  const double loop_seconds = static_cast<double>(steps) * dt;
+  // The loop ran in the last loop_seconds of the coordinator's run (start-up before it); reading
+  // the record back afterwards is not part of the run.
+  const double loop_start = f.wall - loop_seconds;
+  const auto at = [&](double fraction) -> const Sample& {
+    const double t = loop_start + fraction * loop_seconds;
+    for (const Sample& s : samples)
+      if (s.t >= t) return s;
+    return samples.back();
+  };
+  const Sample &s10 = at(0.10), &s50 = at(0.50), &s95 = at(0.95);
+  std::printf("memory, real time %.0f Hz, %lld steps (%.0f s), overruns %llu: RSS at 10 / 50 / 95 %% "
+              "of the run, growth 10 -> 95 %%:\n  coordinator: %.1f / %.1f / %.1f MB, %+.2f MB\n",
+              hz, static_cast<long long>(steps), loop_seconds,
+              static_cast<unsigned long long>(f.overruns), s10.coordinator / 1024.0,
+              s50.coordinator / 1024.0, s95.coordinator / 1024.0,
+              (s95.coordinator - s10.coordinator) / 1024.0);
+  for (const auto& [pid, rss10] : s10.nodes) {
+    const auto r50 = s50.nodes.count(pid) ? s50.nodes.at(pid) : -1;
+    const auto r95 = s95.nodes.count(pid) ? s95.nodes.at(pid) : -1;
+    std::printf("  node process %s: %.1f / %.1f / %.1f MB, %+.2f MB\n", pid.c_str(), rss10 / 1024.0,
+                r50 / 1024.0, r95 / 1024.0, (r95 - rss10) / 1024.0);
+  }
+}
+
 struct BareFigures {
   std::size_t steps = 0;
   std::uint64_t overruns = 0;
@@ -217,6 +319,20 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
   app.add_option("--repeat", repeat, "runs per multi-rate row; the median is printed (default 3)")
       ->check(CLI::PositiveNumber);
+  std::vector<double> rates{1024.0, 4096.0};
+  std::string deployment_extra;
+  bool skip_lockstep = false, skip_multi_rate = false;
+  app.add_flag("--skip-multi-rate", skip_multi_rate, "no multi-rate rows");
+  app.add_option("--rate", rates, "integrator rates of the real-time rows (default 1024 4096)");
+  app.add_option("--deployment-extra", deployment_extra,
+                 "deployment fields added to every real-time run, e.g. \"pin_loop: true loop_cpu: 1\"");
+  app.add_flag("--skip-lockstep", skip_lockstep, "no ping-pong and lockstep rows");
+  std::int64_t memory_steps = 0;
+  double memory_rate = 4096;
+  app.add_option("--memory-steps", memory_steps,
+                 "only a real-time run of this many steps (e.g. 1000000) with RSS sampled");
+  app.add_option("--memory-rate", memory_rate, "Hz of the --memory-steps run (default 4096)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--echo", echo_domain, "internal: run as the ping-pong echo peer");
   app.add_option("--echo-id", echo_id, "internal: the echo peer's node id");
   CLI11_PARSE(app, argc, argv);
@@ -224,6 +340,10 @@ int main(int argc, char** argv) {
   rths::runtime::ensure_dds_config();
   if (echo_domain >= 0) return echo_main(echo_domain, echo_id);
 
+  if (memory_steps > 0) {
+    memory_run(domain + 3, memory_steps, memory_rate, deployment_extra);
+    return 0;
+  }
   if (lockstep_only) {
     const auto lock =
         distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", true, !spread);
@@ -232,6 +352,7 @@ int main(int argc, char** argv) {
                 lock.step_wall.max * 1e3);
     return 0;
   }
+  if (!skip_lockstep) {
   const auto pp = ping_pong(domain, 20000, 1, !spread);
   std::printf("ping-pong (Command payload, reliable KEEP_LAST 64, loopback, %s), 1 peer: %zu round "
               "trips, median %.1f us, p99 %.1f us, max %.2f ms\n",
@@ -258,6 +379,7 @@ int main(int argc, char** argv) {
               "ping-pong = %.2f\n",
               one.steps_per_second, one.wall, one.step_wall.median * 1e6, one.step_wall.p99 * 1e6,
               one.step_wall.median / pp.median);
+  }
   if (skip_real_time) return 0;
   // Each wait policy beside the bare loop waiting the same way, in the same run. The bench judges
   // nothing itself: no deadline tolerance, and the fail-safe widened so that a spinning loop that
@@ -271,7 +393,7 @@ int main(int argc, char** argv) {
       {"sleep", "WAIT_SLEEP", {runtime::WaitPolicyKind::kSleep}},
       {"sleep_then_spin", "WAIT_SLEEP_THEN_SPIN", {runtime::WaitPolicyKind::kSleepThenSpin, 200'000}},
   };
-  for (const double hz : {1024.0, 4096.0}) {
+  for (const double hz : rates) {
     for (const Policy& policy : policies) {
       const double dt = 1.0 / hz;
       const auto rt = distributed_run(
@@ -279,7 +401,7 @@ int main(int argc, char** argv) {
           study_text(dt, seconds,
                      std::string("deployment { clock: REAL_TIME max_overrun_fraction: -1 "
                                  "max_missed_answers: 1000 command_watchdog_periods: 1000 "
-                                 "wait_policy: ") + policy.config + " }"),
+                                 "wait_policy: ") + policy.config + " " + deployment_extra + " }"),
           "rt" + std::to_string(static_cast<int>(hz)) + policy.name);
       const auto bare = bare_loop(dt, seconds, policy.bare);
       char label[96];
@@ -288,6 +410,7 @@ int main(int argc, char** argv) {
       print_real_time(label, rt, bare);
     }
   }
+  if (skip_multi_rate) return 0;
   // Multi-rate: the integrator at 1024 Hz, the emulator's servo loop at 4096 Hz on the clock,
   // streaming feedback every servo period. Median of `repeat` runs beside the bare 4096 Hz loop.
   for (const Policy& policy : policies) {
@@ -299,7 +422,7 @@ int main(int argc, char** argv) {
                      std::string("servo { rate: 4096 } deployment { clock: REAL_TIME "
                                  "max_overrun_fraction: -1 max_missed_answers: 1000 "
                                  "command_watchdog_periods: 1000 wait_policy: ") +
-                         policy.config + " }"),
+                         policy.config + " " + deployment_extra + " }"),
           std::string("servo4096") + policy.name + std::to_string(r));
       servo_pct.push_back(rt.servo_ticks ? 100.0 * static_cast<double>(rt.servo_overruns) /
                                                static_cast<double>(rt.servo_ticks)

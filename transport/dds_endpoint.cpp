@@ -3,6 +3,7 @@
 #include <dds/dds.h>
 
 #include <algorithm>
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <map>
@@ -70,6 +71,7 @@ struct DdsEndpoint::Impl {
   bool interrupted = false;
   std::shared_ptr<const InlineHandler> handler;
   int handler_calls = 0;  // invocations in progress
+  std::atomic<std::uint64_t> samples_taken{0};
 
   dds::Participant participant;
   dds::EnvelopeTopic down, up;
@@ -142,6 +144,7 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
     const std::int64_t now = realtime_ns();
     for (int i = 0; i < n; ++i) {
       if (!infos[i].valid_data) continue;
+      samples_taken.fetch_add(1, std::memory_order_relaxed);
       const auto* s = static_cast<const rths_dds_Envelope*>(samples[i]);
       if (!options.coordinator && s->node_id != options.node_id && s->node_id != kBroadcastId)
         continue;
@@ -215,6 +218,10 @@ void DdsEndpoint::set_inline_handler(InlineHandler handler) {
   impl_->handler_idle.wait(lock, [&] { return impl_->handler_calls == 0; });
 }
 
+
+std::uint64_t DdsEndpoint::samples_taken() const {
+  return impl_->samples_taken.load(std::memory_order_relaxed);
+}
 
 int DdsEndpoint::matched_peers() const { return impl_->writer.matched_readers(); }
 int DdsEndpoint::matched_writers() const { return impl_->reader.matched_writers(); }

@@ -54,6 +54,9 @@ class DdsEndpoint final : public Endpoint {
   // readers listen to it. Throws std::runtime_error naming the counts on timeout.
   void wait_for_match(int readers, int writers, std::chrono::milliseconds timeout) const;
   void set_inline_handler(InlineHandler handler) override;
+  // Samples taken off DDS so far, including any dropped as not addressed to this node (with one
+  // topic per addressee, a node takes only its own and broadcasts).
+  std::uint64_t samples_taken() const;
 
  private:
   struct Impl;

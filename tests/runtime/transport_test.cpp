@@ -58,6 +58,35 @@ TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
   EXPECT_EQ(back->node_id, 2);
 }
 
+// One topic per addressee: a command for node 2 never reaches node 1's process at all (on a
+// shared topic it woke node 1 to be thrown away), while a broadcast reaches both.
+TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
+  DdsEndpoint coordinator({kDomain, true, 0, "t_addressed", 64});
+  DdsEndpoint node1(node_options(1, "t_addressed")), node2(node_options(2, "t_addressed"));
+  coordinator.wait_for_match(2, 2, 5000ms);
+  Message to2;
+  to2.run_id = "r";
+  to2.node_id = 2;
+  to2.kind = 4;
+  for (int step = 1; step <= 20; ++step) {
+    to2.step = step;
+    coordinator.send(to2);
+  }
+  for (int step = 1; step <= 20; ++step) {
+    const auto got = node2.receive(2s);
+    ASSERT_TRUE(got.has_value()) << "step " << step;
+    EXPECT_EQ(got->step, step) << "addressed messages keep their order";
+  }
+  Message stop;
+  stop.node_id = kBroadcastId;
+  stop.kind = 8;
+  coordinator.send(stop);
+  ASSERT_TRUE(node1.receive(2s).has_value());
+  ASSERT_TRUE(node2.receive(2s).has_value());
+  EXPECT_EQ(node1.samples_taken(), 1u) << "node 1 took node 2's commands off the wire";
+  EXPECT_EQ(node2.samples_taken(), 21u);
+}
+
 TEST_F(DdsTransport, BroadcastReachesEveryNode) {
   DdsEndpoint coordinator({kDomain, true, 0, "t_broadcast", 64});
   DdsEndpoint node1(node_options(1, "t_broadcast")), node2(node_options(2, "t_broadcast"));
