@@ -131,6 +131,8 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   std::ofstream(config) << text;
   const auto record = dir / "run.rthsrec";
   const std::string run_id = "bench-" + name;
+  const config::Study study = core::load_study(config);
+  const auto off_loop_cpu = runtime::keep_off_loop_cpu(study.deployment());  // as rths launch
   std::vector<runtime::ChildProcess> nodes;
   if (with_substructure)
     nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / "substructure_nodes/rths-substructure-node",
@@ -141,7 +143,6 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
                      std::vector<std::string>{"--node-id", "2", "--domain", std::to_string(domain),
                                               "--run-id", run_id},
                      dir / "node_2.log");
-  const config::Study study = core::load_study(config);
   transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
   coordinator::CoordinatorOptions options;
   options.run_id = run_id;

@@ -14,8 +14,9 @@
 //              (pacing before a step, record after it). Lockstep equals in process by construction.
 //   lockstep   waits for every answer to step k (step_timeout), simulated time only.
 //   real time  absolute deadlines every dt (Pacer with the deployment's wait policy: sleep,
-//              sleep_then_spin, spin); between steps it takes messages off the wire until 150 us
-//              before the deadline (so receive stamps are not delayed by its wait); waits at most
+//              sleep_then_spin, spin), the only timed wait between steps (feedback is stamped
+//              and boxed on the receive thread meanwhile; other messages queue, stamped on
+//              arrival, and are taken after the wait, before the commands); waits at most
 //              feedback_wait_fraction * dt for the answers to step k, otherwise uses the newest
 //              answer it has and records which step that answers; overruns, late feedback and
 //              their worst streaks are counted and recorded per step.

@@ -70,6 +70,18 @@ ChildProcess start(const std::filesystem::path& program, std::vector<std::string
 
 }  // namespace
 
+std::unique_ptr<ScopedCpuExclude> keep_off_loop_cpu(const config::Deployment& deployment) {
+  if (deployment.clock() != config::Deployment::REAL_TIME || !deployment.pin_loop()) return nullptr;
+  auto guard = std::make_unique<ScopedCpuExclude>(deployment.loop_cpu());
+  if (!guard->active()) {
+    spdlog::warn("pin_loop: CPU {} cannot be kept for the loop alone (not allowed, or the only "
+                 "CPU); the nodes share it",
+                 deployment.loop_cpu());
+    return nullptr;
+  }
+  return guard;
+}
+
 LaunchResult launch_run(const LaunchOptions& options) {
   const config::Study study = core::load_study(options.config);
   const core::PreparedStudy prepared =
@@ -112,6 +124,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
       spdlog::warn("lockstep processes left unpinned: {}", e.what());  // only slower
     }
   }
+  auto off_loop_cpu = keep_off_loop_cpu(deployment);
   const auto started = std::chrono::steady_clock::now();
   std::vector<ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
@@ -134,6 +147,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
                                    security::kCoordinatorNodeId, result.coordinator_log,
                                    "coordinator", placement);
   pin.reset();
+  off_loop_cpu.reset();
 
   const auto deadline = options.timeout > 0
                             ? std::optional(started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(

@@ -20,8 +20,12 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "rths/proto/deployment.pb.h"
+#include "runtime/process.h"
 
 namespace rths::runtime {
 
@@ -89,6 +93,12 @@ struct LaunchResult {
   std::string coordinator_log_tail;     // the last 1500 bytes, for messages
   double wall_seconds = 0.0;            // start of the first process to the last one's exit
 };
+
+// A real-time deployment with pin_loop gives loop_cpu to the coordinator's loop thread alone: the
+// processes started while the returned guard lives (the nodes, the coordinator) start on the
+// other CPUs; the coordinator then moves its loop thread onto loop_cpu. Null otherwise, and when
+// the machine has no other CPU.
+std::unique_ptr<ScopedCpuExclude> keep_off_loop_cpu(const config::Deployment& deployment);
 
 // Throws std::invalid_argument for a bad config or deployment (before anything starts),
 // std::runtime_error for a program that cannot be found or started.

@@ -3,12 +3,14 @@
 #include <fcntl.h>
 #include <sched.h>
 #include <spawn.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -42,6 +44,58 @@ ScopedCpuPin::ScopedCpuPin(int cpu) : previous_(std::make_unique<Mask>()) {
 }
 
 ScopedCpuPin::~ScopedCpuPin() { sched_setaffinity(0, sizeof previous_->set, &previous_->set); }
+
+ScopedCpuExclude::ScopedCpuExclude(int cpu) : previous_(std::make_unique<ScopedCpuPin::Mask>()) {
+  CPU_ZERO(&previous_->set);
+  if (sched_getaffinity(0, sizeof previous_->set, &previous_->set) != 0)
+    throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
+  if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &previous_->set) ||
+      CPU_COUNT(&previous_->set) < 2)
+    return;
+  cpu_set_t others = previous_->set;
+  CPU_CLR(cpu, &others);
+  active_ = sched_setaffinity(0, sizeof others, &others) == 0;
+}
+
+ScopedCpuExclude::~ScopedCpuExclude() {
+  if (active_) sched_setaffinity(0, sizeof previous_->set, &previous_->set);
+}
+
+void isolate_calling_thread_on_cpu(int cpu) {
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof allowed, &allowed) != 0)
+    throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
+  // The process's CPUs: the union of its threads' masks (this thread may be pinned already).
+  const auto self = static_cast<pid_t>(syscall(SYS_gettid));
+  std::vector<pid_t> others;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    const auto tid = static_cast<pid_t>(std::stol(task.path().filename().string()));
+    if (tid == self) continue;
+    others.push_back(tid);
+    cpu_set_t mask;
+    CPU_ZERO(&mask);
+    if (sched_getaffinity(tid, sizeof mask, &mask) == 0) CPU_OR(&allowed, &allowed, &mask);
+  }
+  if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &allowed))
+    throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) +
+                             ": not among this process's CPUs");
+  if (CPU_COUNT(&allowed) < 2)
+    throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) +
+                             ": it is the only CPU this process may use");
+  cpu_set_t one;
+  CPU_ZERO(&one);
+  CPU_SET(cpu, &one);
+  if (sched_setaffinity(0, sizeof one, &one) != 0)
+    throw std::runtime_error("sched_setaffinity(CPU " + std::to_string(cpu) +
+                             "): " + std::strerror(errno));
+  cpu_set_t rest = allowed;
+  CPU_CLR(cpu, &rest);
+  for (pid_t tid : others)
+    if (sched_setaffinity(tid, sizeof rest, &rest) != 0 && errno != ESRCH)
+      throw std::runtime_error("sched_setaffinity(thread " + std::to_string(tid) +
+                               "): " + std::strerror(errno));
+}
 
 namespace {
 

@@ -41,11 +41,36 @@ class ScopedCpuPin {
   ~ScopedCpuPin();
   int cpu() const { return cpu_; }
 
+ struct Mask;  // a saved cpu_set_t
+
  private:
-  struct Mask;
   std::unique_ptr<Mask> previous_;
   int cpu_ = -1;
 };
+
+// Keeps the calling thread, and children started meanwhile, off one CPU while it lives (its mask
+// minus `cpu`); the previous mask comes back on destruction. It changes nothing (active() false)
+// when `cpu` is not in the mask or is the only CPU in it.
+class ScopedCpuExclude {
+ public:
+  explicit ScopedCpuExclude(int cpu);
+  ScopedCpuExclude(const ScopedCpuExclude&) = delete;
+  ScopedCpuExclude& operator=(const ScopedCpuExclude&) = delete;
+  ~ScopedCpuExclude();
+  bool active() const { return active_; }
+
+ private:
+  std::unique_ptr<ScopedCpuPin::Mask> previous_;
+  bool active_ = false;
+};
+
+// Gives `cpu` to the calling thread alone within this process: pins the calling thread to it and
+// moves every other thread of the process (a transport's receive threads, a record writer) to the
+// allowed CPUs but it, so none of them can wake up on the loop's CPU and preempt the loop. Threads
+// created later inherit their creator's mask. Throws std::runtime_error naming the call and the
+// reason when the CPU cannot be had (not allowed, or the only one); a thread that ends meanwhile is
+// skipped.
+void isolate_calling_thread_on_cpu(int cpu);
 
 // How a child is started besides its program and arguments.
 struct ChildOptions {

@@ -6,6 +6,9 @@
 #include "coordinator/program.h"
 
 #include <gtest/gtest.h>
+#include <sched.h>
+
+#include <filesystem>
 
 #include "actuator_emulator/actuator_service.h"
 #include "substructure_nodes/substructure_service.h"
@@ -83,6 +86,46 @@ TEST(Coordinator, RealTimeRunThatKeepsItsDeadlinesCompletes) {
   EXPECT_TRUE(o.ok) << o.status;
   EXPECT_EQ(o.status, "completed");
   EXPECT_EQ(o.counters.overruns(), 0u);
+}
+
+// pin_loop gives the loop its CPU alone, and the record says so (a lab reading it later knows how
+// the loop ran). The test thread is the loop thread here: its CPUs are given back afterwards.
+TEST(Coordinator, PinLoopIsolatesTheLoopThreadAndTheRecordSaysSo) {
+  cpu_set_t before;
+  CPU_ZERO(&before);
+  sched_getaffinity(0, sizeof before, &before);
+  if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
+  int highest = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &before)) highest = c;
+  const auto record = std::filesystem::temp_directory_path() / "rths_coordinator_pin_loop.rthsrec";
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      0.1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
+           "clock: REAL_TIME max_overrun_fraction: -1 pin_loop: true loop_cpu: " +
+               std::to_string(highest) + " }"));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.case_name = "reference";
+  options.record = record;
+  FakeClock on_time(10'000);
+  options.clock = &on_time;
+  Cluster c;
+  coordinator::Coordinator coordinator(prepared, c.transport, options);
+  c.transport.attach(1, c.substructure);
+  c.transport.attach(2, c.emulator);
+  const RunOutcome o = coordinator.run();
+  cpu_set_t during;
+  CPU_ZERO(&during);
+  sched_getaffinity(0, sizeof during, &during);
+  sched_setaffinity(0, sizeof before, &before);
+  EXPECT_TRUE(o.ok) << o.status;
+  EXPECT_EQ(CPU_COUNT(&during), 1);
+  EXPECT_TRUE(CPU_ISSET(highest, &during));
+  std::string events;
+  for (const auto& entry : runtime::read_record(record).entries)
+    if (entry.has_event()) events += entry.event().what() + "\n";
+  EXPECT_NE(events.find("loop thread alone on CPU " + std::to_string(highest)), std::string::npos)
+      << events;
 }
 
 TEST(Coordinator, DeadlineMissesBeyondTheToleranceFailTheRun) {

@@ -7,6 +7,7 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -186,6 +187,86 @@ TEST(ScopedCpuPinTest, RefusesACpuOutsideTheAllowedSetNamingIt) {
     if (!CPU_ISSET(CPU_SETSIZE - 1, &allowed)) FAIL() << "expected a refusal";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(std::to_string(CPU_SETSIZE - 1)), std::string::npos) << e.what();
+  }
+}
+
+TEST(ScopedCpuExcludeTest, KeepsTheThreadAndItsChildrenOffTheCpuAndRestoresTheMask) {
+  const cpu_set_t before = current_mask();
+  if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
+  int highest = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &before)) highest = c;
+  {
+    const ScopedCpuExclude exclude(highest);
+    EXPECT_TRUE(exclude.active());
+    const cpu_set_t during = current_mask();
+    EXPECT_FALSE(CPU_ISSET(highest, &during));
+    EXPECT_EQ(CPU_COUNT(&during), CPU_COUNT(&before) - 1);
+    bool child_on_it = true;
+    std::thread([&] {
+      const cpu_set_t inherited = current_mask();
+      child_on_it = CPU_ISSET(highest, &inherited);
+    }).join();
+    EXPECT_FALSE(child_on_it);
+  }
+  const cpu_set_t after = current_mask();
+  EXPECT_TRUE(CPU_EQUAL(&before, &after));
+  const ScopedCpuExclude not_allowed(CPU_SETSIZE - 1);
+  EXPECT_FALSE(not_allowed.active());
+}
+
+// The coordinator's pin_loop: the loop thread alone on its CPU, every other thread of the
+// process (here: this test's main thread and a bystander) moved off it.
+TEST(IsolateCallingThreadOnCpu, PinsTheCallerAndMovesEveryOtherThreadOff) {
+  const cpu_set_t before = current_mask();
+  if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
+  int highest = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &before)) highest = c;
+  std::atomic<bool> release{false}, bystander_checked{false};
+  bool bystander_on_it = true;
+  std::atomic<bool> isolated{false};
+  std::thread bystander([&] {
+    while (!isolated) std::this_thread::yield();
+    const cpu_set_t mine = current_mask();
+    bystander_on_it = CPU_ISSET(highest, &mine);
+    bystander_checked = true;
+    while (!release) std::this_thread::yield();
+  });
+  cpu_set_t loop_mask;
+  CPU_ZERO(&loop_mask);
+  std::string error;
+  std::thread loop([&] {
+    try {
+      isolate_calling_thread_on_cpu(highest);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    loop_mask = current_mask();
+    isolated = true;
+  });
+  loop.join();
+  while (!bystander_checked) std::this_thread::yield();
+  release = true;
+  bystander.join();
+  const cpu_set_t main_mask = current_mask();
+  sched_setaffinity(0, sizeof before, &before);  // give this test thread its CPUs back
+  ASSERT_EQ(error, "");
+  EXPECT_EQ(CPU_COUNT(&loop_mask), 1);
+  EXPECT_TRUE(CPU_ISSET(highest, &loop_mask));
+  EXPECT_FALSE(bystander_on_it);
+  EXPECT_FALSE(CPU_ISSET(highest, &main_mask));
+  EXPECT_EQ(CPU_COUNT(&main_mask), CPU_COUNT(&before) - 1);
+}
+
+TEST(IsolateCallingThreadOnCpu, RefusesACpuTheProcessMayNotUseNamingIt) {
+  try {
+    isolate_calling_thread_on_cpu(CPU_SETSIZE + 3);
+    FAIL() << "expected a refusal";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot isolate CPU " + std::to_string(CPU_SETSIZE + 3)),
+              std::string::npos)
+        << e.what();
   }
 }
 
