@@ -24,31 +24,43 @@ struct ScopedCpuPin::Mask {
   cpu_set_t set;
 };
 
-ScopedCpuPin::ScopedCpuPin(int cpu) : previous_(std::make_unique<Mask>()) {
-  CPU_ZERO(&previous_->set);
-  if (sched_getaffinity(0, sizeof previous_->set, &previous_->set) != 0)
+namespace {
+
+cpu_set_t calling_thread_mask() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0)
     throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
-  if (cpu < 0)
-    for (int c = CPU_SETSIZE - 1; c >= 0 && cpu < 0; --c)
-      if (CPU_ISSET(c, &previous_->set)) cpu = c;
-  if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &previous_->set))
-    throw std::runtime_error("cannot pin to CPU " + std::to_string(cpu) +
-                             ": not in this process's allowed CPUs");
+  return set;
+}
+
+void pin_calling_thread(int cpu) {
   cpu_set_t one;
   CPU_ZERO(&one);
   CPU_SET(cpu, &one);
   if (sched_setaffinity(0, sizeof one, &one) != 0)
     throw std::runtime_error("sched_setaffinity(CPU " + std::to_string(cpu) +
                              "): " + std::strerror(errno));
+}
+
+}  // namespace
+
+ScopedCpuPin::ScopedCpuPin(int cpu) : previous_(std::make_unique<Mask>()) {
+  previous_->set = calling_thread_mask();
+  if (cpu < 0)
+    for (int c = CPU_SETSIZE - 1; c >= 0 && cpu < 0; --c)
+      if (CPU_ISSET(c, &previous_->set)) cpu = c;
+  if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &previous_->set))
+    throw std::runtime_error("cannot pin to CPU " + std::to_string(cpu) +
+                             ": not in this process's allowed CPUs");
+  pin_calling_thread(cpu);
   cpu_ = cpu;
 }
 
 ScopedCpuPin::~ScopedCpuPin() { sched_setaffinity(0, sizeof previous_->set, &previous_->set); }
 
 ScopedCpuExclude::ScopedCpuExclude(int cpu) : previous_(std::make_unique<ScopedCpuPin::Mask>()) {
-  CPU_ZERO(&previous_->set);
-  if (sched_getaffinity(0, sizeof previous_->set, &previous_->set) != 0)
-    throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
+  previous_->set = calling_thread_mask();
   if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &previous_->set) ||
       CPU_COUNT(&previous_->set) < 2)
     return;
@@ -62,10 +74,7 @@ ScopedCpuExclude::~ScopedCpuExclude() {
 }
 
 void isolate_calling_thread_on_cpu(int cpu) {
-  cpu_set_t allowed;
-  CPU_ZERO(&allowed);
-  if (sched_getaffinity(0, sizeof allowed, &allowed) != 0)
-    throw std::runtime_error(std::string("sched_getaffinity: ") + std::strerror(errno));
+  cpu_set_t allowed = calling_thread_mask();
   // The process's CPUs: the union of its threads' masks (this thread may be pinned already).
   const auto self = static_cast<pid_t>(syscall(SYS_gettid));
   std::vector<pid_t> others;
@@ -83,12 +92,7 @@ void isolate_calling_thread_on_cpu(int cpu) {
   if (CPU_COUNT(&allowed) < 2)
     throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) +
                              ": it is the only CPU this process may use");
-  cpu_set_t one;
-  CPU_ZERO(&one);
-  CPU_SET(cpu, &one);
-  if (sched_setaffinity(0, sizeof one, &one) != 0)
-    throw std::runtime_error("sched_setaffinity(CPU " + std::to_string(cpu) +
-                             "): " + std::strerror(errno));
+  pin_calling_thread(cpu);
   cpu_set_t rest = allowed;
   CPU_CLR(cpu, &rest);
   for (pid_t tid : others)

@@ -155,12 +155,16 @@ cpu_set_t current_mask() {
   return set;
 }
 
+int highest_cpu(const cpu_set_t& set) {
+  int highest = -1;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &set)) highest = c;
+  return highest;
+}
+
 TEST(ScopedCpuPinTest, PinsToTheHighestAllowedCpuAndRestoresTheMask) {
   const cpu_set_t before = current_mask();
-  int highest = -1;
-  for (int c = 0; c < CPU_SETSIZE; ++c) {
-    if (CPU_ISSET(c, &before)) highest = c;
-  }
+  const int highest = highest_cpu(before);
   {
     const ScopedCpuPin pin;
     EXPECT_EQ(pin.cpu(), highest);
@@ -193,9 +197,7 @@ TEST(ScopedCpuPinTest, RefusesACpuOutsideTheAllowedSetNamingIt) {
 TEST(ScopedCpuExcludeTest, KeepsTheThreadAndItsChildrenOffTheCpuAndRestoresTheMask) {
   const cpu_set_t before = current_mask();
   if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
-  int highest = -1;
-  for (int c = 0; c < CPU_SETSIZE; ++c)
-    if (CPU_ISSET(c, &before)) highest = c;
+  const int highest = highest_cpu(before);
   {
     const ScopedCpuExclude exclude(highest);
     EXPECT_TRUE(exclude.active());
@@ -220,9 +222,7 @@ TEST(ScopedCpuExcludeTest, KeepsTheThreadAndItsChildrenOffTheCpuAndRestoresTheMa
 TEST(IsolateCallingThreadOnCpu, PinsTheCallerAndMovesEveryOtherThreadOff) {
   const cpu_set_t before = current_mask();
   if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
-  int highest = -1;
-  for (int c = 0; c < CPU_SETSIZE; ++c)
-    if (CPU_ISSET(c, &before)) highest = c;
+  const int highest = highest_cpu(before);
   std::atomic<bool> release{false}, bystander_checked{false};
   bool bystander_on_it = true;
   std::atomic<bool> isolated{false};
