@@ -61,6 +61,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
     std::uint64_t answers_before_step = 0;
     int missed_streak = 0;         // real time: consecutive steps without a fresh answer
     int late_streak = 0;           // real time: consecutive steps on an older answer
+    bool awaited = true;           // awaits_answers_of(its spec)
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
   };
   std::map<int, Node> nodes;
@@ -250,6 +251,16 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   }
 
   // ---- RestoringEvaluator: one exchange per step ----
+  // Whether the loop waits for the node's answer to each step: always in lockstep; in real time
+  // unless the node's link injects a round trip (receive_lag + send_lag one-way delays; jitter
+  // has zero mean) at least as long as the wait, so its answer cannot come in time and waiting
+  // for it would only eat half of every period (and turn a small hiccup into an overrun).
+  bool awaits_answers_of(const config::NodeSpec& spec) const {
+    if (!real_time) return true;
+    const double injected = spec.receive_lag().one_way_delay() + spec.send_lag().one_way_delay();
+    return injected < runtime::feedback_wait_fraction(deployment) * setup.dt;
+  }
+
   // Takes each node's newest feedback from the intake, if new since the last take.
   void absorb() {
     for (auto& [id, node] : nodes) {
@@ -480,7 +491,7 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
       for (;;) {
         absorb();
         bool all = true;
-        for (auto& [id, node] : nodes) all = all && node.last_answer == step;
+        for (auto& [id, node] : nodes) all = all && (!node.awaited || node.last_answer == step);
         if (all) break;
         const auto left = until - Clock::now();
         if (left <= Clock::duration::zero()) break;
@@ -561,14 +572,15 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   s.plan = &plan_;
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
   const std::size_t steps = s.prepared.motion.acceleration.size();
-  for (const runtime::NodePlan& n : plan_.nodes) {
-    s.nodes[n.spec.id()].plan = &n;
-    s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
-  }
   std::vector<IntakeNode> intake_nodes;
-  for (const runtime::NodePlan& n : plan_.nodes)
+  for (const runtime::NodePlan& n : plan_.nodes) {
+    State::Node& node = s.nodes[n.spec.id()];
+    node.plan = &n;
+    node.awaited = s.awaits_answers_of(n.spec);
+    s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
     intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),
-                            n.spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR});
+                            n.spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR, node.awaited});
+  }
   s.intake = std::make_unique<FeedbackIntake>(s.options.run_id, intake_nodes);
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
   const int actuators = static_cast<int>(s.setup.partition.actuator_storeys.size());
@@ -609,6 +621,14 @@ RunOutcome Coordinator::run() {
     s.event("all " + std::to_string(s.nodes.size()) + " nodes ready (" +
             std::string(s.real_time ? "real time" : "lockstep") + ", case " + s.case_name + ")");
     if (s.real_time) s.prepare_real_time_thread();
+    for (const auto& [id, node] : s.nodes)
+      if (!node.awaited)
+        s.event("not waiting for the answers of " + node.plan->label() + ": its link injects a " +
+                std::to_string(1e3 * (node.plan->spec.receive_lag().one_way_delay() +
+                                      node.plan->spec.send_lag().one_way_delay())) +
+                " ms round trip, longer than the loop's wait of " +
+                std::to_string(1e3 * runtime::feedback_wait_fraction(s.deployment) * s.setup.dt) +
+                " ms; each step uses its newest answer");
     core::SimulationOptions loop_options;
     loop_options.divergence_bound = s.options.divergence_bound;
     {

@@ -61,9 +61,9 @@ bool FeedbackIntake::offer(const transport::Message& message) {
   arrived.answers = node.answers;
   arrived.link = node.link;
   node.box.publish();
-  if (same_step || message.step != awaited) return false;
+  if (same_step || message.step != awaited || !node.shape.awaited) return false;
   for (const auto& [id, other] : nodes_)
-    if (other->last_answer != awaited) return false;
+    if (other->shape.awaited && other->last_answer != awaited) return false;
   return true;
 }
 

@@ -7,8 +7,10 @@
 //             message as the loop would: envelope (run id, known node), step order against the
 //             newest commanded step (await_step), payload size. An accepted message is decoded
 //             straight into the node's LatestBox slot (no allocation once warm) and published.
-//             Returns true when it completed the awaited step: every node has now answered it,
-//             so the waiting loop should be woken (one wake-up per step, not one per answer).
+//             Returns true when it completed the awaited step: every awaited node has now
+//             answered it, so the waiting loop should be woken (one wake-up per step, not one
+//             per answer). A node not awaited (a real-time link slower than the loop's wait)
+//             never completes a step.
 //   consumer  take(node) on the loop thread: wait-free; the node's newest feedback, if new since
 //             the last take. latest(node) reads the last taken one without copying it.
 // Answers: the first FEEDBACK of a step is the node's answer to it (counted, its lag measured).
@@ -45,6 +47,7 @@ struct IntakeNode {
   int id = 0;
   int values = 0;         // forces per feedback (the node's storeys or actuators)
   bool emulator = false;  // also sends realised drifts, as many
+  bool awaited = true;    // the loop waits for its answer to each step (see offer())
 };
 
 class FeedbackIntake {

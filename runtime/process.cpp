@@ -74,8 +74,11 @@ ScopedCpuExclude::~ScopedCpuExclude() {
 }
 
 void isolate_calling_thread_on_cpu(int cpu) {
-  cpu_set_t allowed = calling_thread_mask();
-  // The process's CPUs: the union of its threads' masks (this thread may be pinned already).
+  if (cpu < 0 || cpu >= CPU_SETSIZE)
+    throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) + ": no such CPU");
+  // The CPUs the process runs on now: the union of its threads' masks. The loop's CPU need not
+  // be among them (rths launch starts the coordinator off it); the kernel says whether it may be.
+  cpu_set_t used = calling_thread_mask();
   const auto self = static_cast<pid_t>(syscall(SYS_gettid));
   std::vector<pid_t> others;
   for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
@@ -84,17 +87,18 @@ void isolate_calling_thread_on_cpu(int cpu) {
     others.push_back(tid);
     cpu_set_t mask;
     CPU_ZERO(&mask);
-    if (sched_getaffinity(tid, sizeof mask, &mask) == 0) CPU_OR(&allowed, &allowed, &mask);
+    if (sched_getaffinity(tid, sizeof mask, &mask) == 0) CPU_OR(&used, &used, &mask);
   }
-  if (cpu < 0 || cpu >= CPU_SETSIZE || !CPU_ISSET(cpu, &allowed))
-    throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) +
-                             ": not among this process's CPUs");
-  if (CPU_COUNT(&allowed) < 2)
+  cpu_set_t rest = used;
+  CPU_CLR(cpu, &rest);
+  if (CPU_COUNT(&rest) == 0)
     throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) +
                              ": it is the only CPU this process may use");
-  pin_calling_thread(cpu);
-  cpu_set_t rest = allowed;
-  CPU_CLR(cpu, &rest);
+  try {
+    pin_calling_thread(cpu);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("cannot isolate CPU " + std::to_string(cpu) + ": " + e.what());
+  }
   for (pid_t tid : others)
     if (sched_setaffinity(tid, sizeof rest, &rest) != 0 && errno != ESRCH)
       throw std::runtime_error("sched_setaffinity(thread " + std::to_string(tid) +

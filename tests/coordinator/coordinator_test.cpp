@@ -128,6 +128,36 @@ TEST(Coordinator, PinLoopIsolatesTheLoopThreadAndTheRecordSaysSo) {
       << events;
 }
 
+// A real-time link whose injected round trip is longer than the loop's wait (half a step) cannot
+// answer in time: the loop does not wait for it, says so, and still counts its answers as late.
+TEST(Coordinator, RealTimeDoesNotWaitForALinkSlowerThanItsWait) {
+  const auto record = std::filesystem::temp_directory_path() / "rths_coordinator_slow_link.rthsrec";
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      0.1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+           "receive_lag { one_way_delay: 0.003 } send_lag { one_way_delay: 0.003 } } "
+           "clock: REAL_TIME max_overrun_fraction: -1 }"));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.case_name = "reference";
+  options.record = record;
+  FakeClock on_time(10'000);
+  options.clock = &on_time;
+  Cluster c;
+  coordinator::Coordinator coordinator(prepared, c.transport, options);
+  c.transport.attach(1, c.substructure);
+  c.transport.attach(2, c.emulator);
+  const RunOutcome o = coordinator.run();
+  EXPECT_TRUE(o.ok) << o.status;
+  std::string events;
+  for (const auto& entry : runtime::read_record(record).entries)
+    if (entry.has_event()) events += entry.event().what() + "\n";
+  EXPECT_NE(events.find("not waiting for the answers of node 2 (actuator emulator): its link "
+                        "injects a 6.000000 ms round trip"),
+            std::string::npos)
+      << events;
+  EXPECT_EQ(events.find("not waiting for the answers of node 1"), std::string::npos) << events;
+}
+
 TEST(Coordinator, DeadlineMissesBeyondTheToleranceFailTheRun) {
   FakeClock late(2'000'000);  // every step finds its deadline 2 ms gone
   const RunOutcome o = run("clock: REAL_TIME", 0, 0, &late);

@@ -64,6 +64,20 @@ TEST_F(Intake, TheLastAnswerToTheAwaitedStepAsksForTheWakeUp) {
   EXPECT_FALSE(intake.offer(feedback(2, 3, 2.0, 7))) << "a servo sample is not a new answer";
 }
 
+// A node the loop does not wait for (a real-time link slower than the wait) neither holds back
+// the wake-up nor causes one; its answers are still taken.
+TEST(IntakeNotAwaited, TheAwaitedNodesAloneCompleteAStep) {
+  FeedbackIntake intake{"run", {{1, 1, false, true}, {2, 1, true, false}}};
+  intake.await_step(4);
+  EXPECT_FALSE(intake.offer(feedback(2, 4, 1.0)));
+  EXPECT_TRUE(intake.offer(feedback(1, 4, 1.0)));
+  intake.await_step(5);
+  EXPECT_TRUE(intake.offer(feedback(1, 5, 1.0))) << "node 2 still owes step 5 and is not awaited";
+  const ArrivedFeedback* got = intake.take(2);
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(got->answered_step, 4);
+}
+
 TEST_F(Intake, RejectsAndCountsEachCause) {
   intake.await_step(5);
   intake.offer(feedback(1, 4, 1.0, 0, "other-run"));  // foreign run

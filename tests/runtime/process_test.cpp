@@ -259,6 +259,33 @@ TEST(IsolateCallingThreadOnCpu, PinsTheCallerAndMovesEveryOtherThreadOff) {
   EXPECT_EQ(CPU_COUNT(&main_mask), CPU_COUNT(&before) - 1);
 }
 
+// As rths launch starts the coordinator: every thread off the loop's CPU at first.
+TEST(IsolateCallingThreadOnCpu, TakesACpuTheProcessWasStartedOff) {
+  const cpu_set_t before = current_mask();
+  if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
+  const int highest = highest_cpu(before);
+  cpu_set_t loop_mask;
+  CPU_ZERO(&loop_mask);
+  std::string error;
+  {
+    const ScopedCpuExclude started_off(highest);
+    ASSERT_TRUE(started_off.active());
+    std::thread loop([&] {
+      try {
+        isolate_calling_thread_on_cpu(highest);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      loop_mask = current_mask();
+    });
+    loop.join();
+  }
+  sched_setaffinity(0, sizeof before, &before);
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(CPU_COUNT(&loop_mask), 1);
+  EXPECT_TRUE(CPU_ISSET(highest, &loop_mask));
+}
+
 TEST(IsolateCallingThreadOnCpu, RefusesACpuTheProcessMayNotUseNamingIt) {
   try {
     isolate_calling_thread_on_cpu(CPU_SETSIZE + 3);
