@@ -9,8 +9,11 @@
 //     of --repeat runs) beside the bare 4096 Hz loop.
 // Ping-pong and lockstep run with every process on one CPU, as `rths launch` places lockstep runs
 // (--spread: leave placement to the scheduler); the real-time runs are never pinned.
-// Targets (issue 3): >= 10,000 lockstep steps/s; median step <= 2 x ping-pong median RTT;
-// 1024 Hz overruns <= bare loop + 0.1 point; 4096 Hz overruns <= 1 %.
+// Targets (issue 10), judged on the "=>" lines (medians of --repeat runs, each beside its own bare
+// loop or ping-pong): lockstep >= ~12,300 steps/s and median step <= 2 x the 1-peer ping-pong;
+// 1024 Hz overruns <= bare loop + 0.1 point, wake-up to command written median <= 30 us and
+// p99 <= 100 us; the emulator's 4096 Hz servo loop under a 1024 Hz integrator overruns <= 1 %;
+// --memory-steps 1000000: flat RSS.
 //
 //  5. with --memory-steps N (alone): RSS of every process over an N-step real-time run.
 //
@@ -318,7 +321,8 @@ int main(int argc, char** argv) {
   app.add_flag("--lockstep-only", lockstep_only,
                "only the 3-process lockstep run (for profiling and repeated measurements)");
   app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
-  app.add_option("--repeat", repeat, "runs per multi-rate row; the median is printed (default 3)")
+  app.add_option("--repeat", repeat,
+                 "runs per lockstep, real-time and multi-rate row; the medians are printed (default 3)")
       ->check(CLI::PositiveNumber);
   std::vector<double> rates{1024.0, 4096.0};
   std::string deployment_extra;
@@ -380,6 +384,20 @@ int main(int argc, char** argv) {
               "ping-pong = %.2f\n",
               one.steps_per_second, one.wall, one.step_wall.median * 1e6, one.step_wall.p99 * 1e6,
               one.step_wall.median / pp.median);
+  // The 3-process lockstep row again, each beside its own ping-pong, for the medians the targets
+  // are judged on (issue 10: no slower than ~12,300 steps/s; step <= 2 x the 1-peer ping-pong).
+  std::vector<double> steps_per_second{lock.steps_per_second},
+      ratio{lock.step_wall.median / pp.median};
+  for (int r = 1; r < repeat; ++r) {
+    const auto pp_r = ping_pong(domain, 5000, 1, !spread);
+    const auto lock_r = distributed_run(domain + 1, study_text(0.001, 39.0, ""),
+                                        "lockstep" + std::to_string(r), true, !spread);
+    steps_per_second.push_back(lock_r.steps_per_second);
+    ratio.push_back(lock_r.step_wall.median / pp_r.median);
+  }
+  std::printf("  => lockstep, median of %d: %.0f steps/s; median step / median 1-peer ping-pong = "
+              "%.2f (target <= 2)\n",
+              repeat, runtime::summarize(steps_per_second).median, runtime::summarize(ratio).median);
   }
   if (skip_real_time) return 0;
   // Each wait policy beside the bare loop waiting the same way, in the same run. The bench judges
@@ -394,21 +412,39 @@ int main(int argc, char** argv) {
       {"sleep", "WAIT_SLEEP", {runtime::WaitPolicyKind::kSleep}},
       {"sleep_then_spin", "WAIT_SLEEP_THEN_SPIN", {runtime::WaitPolicyKind::kSleepThenSpin, 200'000}},
   };
+  // Each row `repeat` times, each run beside its own bare loop; then the medians the targets
+  // are judged on (issue 10: overruns <= bare + 0.1 point, wake-up to command <= 30 / 100 us).
   for (const double hz : rates) {
     for (const Policy& policy : policies) {
       const double dt = 1.0 / hz;
-      const auto rt = distributed_run(
-          domain + (hz < 2000 ? 2 : 3),
-          study_text(dt, seconds,
-                     std::string("deployment { clock: REAL_TIME max_overrun_fraction: -1 "
-                                 "max_missed_answers: 1000 command_watchdog_periods: 1000 "
-                                 "wait_policy: ") + policy.config + " " + deployment_extra + " }"),
-          "rt" + std::to_string(static_cast<int>(hz)) + policy.name);
-      const auto bare = bare_loop(dt, seconds, policy.bare);
-      char label[96];
-      std::snprintf(label, sizeof label, "real time %.0f Hz, %.0f s, wait policy %s", hz, seconds,
-                    policy.name);
-      print_real_time(label, rt, bare);
+      std::vector<double> pct, bare_pct, difference, command_median, command_p99;
+      for (int r = 0; r < repeat; ++r) {
+        const auto rt = distributed_run(
+            domain + (hz < 2000 ? 2 : 3),
+            study_text(dt, seconds,
+                       std::string("deployment { clock: REAL_TIME max_overrun_fraction: -1 "
+                                   "max_missed_answers: 1000 command_watchdog_periods: 1000 "
+                                   "wait_policy: ") + policy.config + " " + deployment_extra + " }"),
+            "rt" + std::to_string(static_cast<int>(hz)) + policy.name);
+        const auto bare = bare_loop(dt, seconds, policy.bare);
+        char label[96];
+        std::snprintf(label, sizeof label, "real time %.0f Hz, %.0f s, wait policy %s", hz, seconds,
+                      policy.name);
+        print_real_time(label, rt, bare);
+        pct.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
+        bare_pct.push_back(100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps));
+        difference.push_back(pct.back() - bare_pct.back());
+        command_median.push_back(rt.command_latency.median);
+        command_p99.push_back(rt.command_latency.p99);
+      }
+      std::printf(
+          "  => %.0f Hz %s%s, median of %d: overruns %.3f %% beside the bare loop's %.3f %% "
+          "(difference %+.3f points, target <= +0.1); wake-up to command written median %.1f us, "
+          "p99 %.1f us (targets 30 / 100 us)\n",
+          hz, policy.name, deployment_extra.empty() ? "" : (" [" + deployment_extra + "]").c_str(),
+          repeat, runtime::summarize(pct).median, runtime::summarize(bare_pct).median,
+          runtime::summarize(difference).median, runtime::summarize(command_median).median * 1e6,
+          runtime::summarize(command_p99).median * 1e6);
     }
   }
   if (skip_multi_rate) return 0;

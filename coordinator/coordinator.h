@@ -53,6 +53,11 @@
 // other than feedback (heartbeats, taken off the transport's queue) and, rarely, an event.
 // mlockall and pinning of the loop thread when the deployment asks. Each step records
 // command_latency (wake-up to the last command written); bench/runtime_bench prints it.
+// pin_loop: the loop thread alone on loop_cpu (runtime::isolate_calling_thread_on_cpu; rths
+// launch starts the nodes off it). Measured (2-core VM, 1024 Hz, medians of 3, README "Real
+// time"): overruns within +0.03 to +0.09 points of a bare clock_nanosleep loop; wake-up to command
+// written median 29-31 us unpinned, 17 us with pin_loop (p99 27-88 us); lockstep step 1.52 x a
+// DDS ping-pong; RSS flat over 10^6 steps (+0.3 %).
 
 #include <filesystem>
 #include <map>

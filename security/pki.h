@@ -19,7 +19,8 @@
 // every topic.
 // Permissions (default DENY): the coordinator (node 0) publishes "*_down" (commands) and
 // subscribes "*_up"; substructure nodes and actuator emulators publish "*_up" (feedback) and
-// subscribe "*_down" (transport/dds_endpoint.h: topics <prefix>_down and <prefix>_up).
+// subscribe "*_down" (transport/dds_endpoint.h: topics <prefix>_node<id>_down, <prefix>_down
+// and <prefix>_up).
 // Validity: certificates and grants from one hour before creation (clock skew between sites)
 // to `days` after it.
 
