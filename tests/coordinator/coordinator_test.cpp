@@ -80,6 +80,33 @@ RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
   return coordinator.run();
 }
 
+// A 0.1 s real-time run on time (fake clock) with a record; its outcome and the record's events.
+struct RecordedRun {
+  RunOutcome outcome;
+  std::string events;  // one per line
+};
+RecordedRun run_recorded(const std::string& deployment, const std::string& record_name) {
+  const auto record = std::filesystem::temp_directory_path() / record_name;
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      0.1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
+               deployment + " }"));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.case_name = "reference";
+  options.record = record;
+  FakeClock on_time(10'000);
+  options.clock = &on_time;
+  Cluster c;
+  coordinator::Coordinator coordinator(prepared, c.transport, options);
+  c.transport.attach(1, c.substructure);
+  c.transport.attach(2, c.emulator);
+  RecordedRun r;
+  r.outcome = coordinator.run();
+  for (const auto& entry : runtime::read_record(record).entries)
+    if (entry.has_event()) r.events += entry.event().what() + "\n";
+  return r;
+}
+
 TEST(Coordinator, RealTimeRunThatKeepsItsDeadlinesCompletes) {
   FakeClock on_time(10'000);
   const RunOutcome o = run("clock: REAL_TIME", 0, 0, &on_time);
@@ -98,59 +125,29 @@ TEST(Coordinator, PinLoopIsolatesTheLoopThreadAndTheRecordSaysSo) {
   int highest = -1;
   for (int c = 0; c < CPU_SETSIZE; ++c)
     if (CPU_ISSET(c, &before)) highest = c;
-  const auto record = std::filesystem::temp_directory_path() / "rths_coordinator_pin_loop.rthsrec";
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
-      0.1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
-           "clock: REAL_TIME max_overrun_fraction: -1 pin_loop: true loop_cpu: " +
-               std::to_string(highest) + " }"));
-  coordinator::CoordinatorOptions options;
-  options.run_id = "run";
-  options.case_name = "reference";
-  options.record = record;
-  FakeClock on_time(10'000);
-  options.clock = &on_time;
-  Cluster c;
-  coordinator::Coordinator coordinator(prepared, c.transport, options);
-  c.transport.attach(1, c.substructure);
-  c.transport.attach(2, c.emulator);
-  const RunOutcome o = coordinator.run();
+  const RecordedRun r = run_recorded("} clock: REAL_TIME max_overrun_fraction: -1 pin_loop: true loop_cpu: " +
+                                         std::to_string(highest),
+                                     "rths_coordinator_pin_loop.rthsrec");
   cpu_set_t during;
   CPU_ZERO(&during);
   sched_getaffinity(0, sizeof during, &during);
   sched_setaffinity(0, sizeof before, &before);
-  EXPECT_TRUE(o.ok) << o.status;
+  EXPECT_TRUE(r.outcome.ok) << r.outcome.status;
   EXPECT_EQ(CPU_COUNT(&during), 1);
   EXPECT_TRUE(CPU_ISSET(highest, &during));
-  std::string events;
-  for (const auto& entry : runtime::read_record(record).entries)
-    if (entry.has_event()) events += entry.event().what() + "\n";
-  EXPECT_NE(events.find("loop thread alone on CPU " + std::to_string(highest)), std::string::npos)
-      << events;
+  EXPECT_NE(r.events.find("loop thread alone on CPU " + std::to_string(highest)), std::string::npos)
+      << r.events;
 }
 
 // A real-time link whose injected round trip is longer than the loop's wait (half a step) cannot
 // answer in time: the loop does not wait for it, says so, and still counts its answers as late.
 TEST(Coordinator, RealTimeDoesNotWaitForALinkSlowerThanItsWait) {
-  const auto record = std::filesystem::temp_directory_path() / "rths_coordinator_slow_link.rthsrec";
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
-      0.1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
-           "receive_lag { one_way_delay: 0.003 } send_lag { one_way_delay: 0.003 } } "
-           "clock: REAL_TIME max_overrun_fraction: -1 }"));
-  coordinator::CoordinatorOptions options;
-  options.run_id = "run";
-  options.case_name = "reference";
-  options.record = record;
-  FakeClock on_time(10'000);
-  options.clock = &on_time;
-  Cluster c;
-  coordinator::Coordinator coordinator(prepared, c.transport, options);
-  c.transport.attach(1, c.substructure);
-  c.transport.attach(2, c.emulator);
-  const RunOutcome o = coordinator.run();
-  EXPECT_TRUE(o.ok) << o.status;
-  std::string events;
-  for (const auto& entry : runtime::read_record(record).entries)
-    if (entry.has_event()) events += entry.event().what() + "\n";
+  const RecordedRun r = run_recorded(
+      "receive_lag { one_way_delay: 0.003 } send_lag { one_way_delay: 0.003 } } "
+      "clock: REAL_TIME max_overrun_fraction: -1",
+      "rths_coordinator_slow_link.rthsrec");
+  EXPECT_TRUE(r.outcome.ok) << r.outcome.status;
+  const std::string& events = r.events;
   EXPECT_NE(events.find("not waiting for the answers of node 2 (actuator emulator): its link "
                         "injects a 6.000000 ms round trip"),
             std::string::npos)

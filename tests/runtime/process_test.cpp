@@ -217,6 +217,26 @@ TEST(ScopedCpuExcludeTest, KeepsTheThreadAndItsChildrenOffTheCpuAndRestoresTheMa
   EXPECT_FALSE(not_allowed.active());
 }
 
+// isolate_calling_thread_on_cpu(cpu) on a new thread: its error (empty: none) and its mask after.
+struct Isolation {
+  std::string error;
+  cpu_set_t mask;
+};
+Isolation isolate_on_new_thread(int cpu) {
+  Isolation result;
+  CPU_ZERO(&result.mask);
+  std::thread loop([&] {
+    try {
+      isolate_calling_thread_on_cpu(cpu);
+    } catch (const std::exception& e) {
+      result.error = e.what();
+    }
+    result.mask = current_mask();
+  });
+  loop.join();
+  return result;
+}
+
 // The coordinator's pin_loop: the loop thread alone on its CPU, every other thread of the
 // process (here: this test's main thread and a bystander) moved off it.
 TEST(IsolateCallingThreadOnCpu, PinsTheCallerAndMovesEveryOtherThreadOff) {
@@ -233,19 +253,10 @@ TEST(IsolateCallingThreadOnCpu, PinsTheCallerAndMovesEveryOtherThreadOff) {
     bystander_checked = true;
     while (!release) std::this_thread::yield();
   });
-  cpu_set_t loop_mask;
-  CPU_ZERO(&loop_mask);
-  std::string error;
-  std::thread loop([&] {
-    try {
-      isolate_calling_thread_on_cpu(highest);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    loop_mask = current_mask();
-    isolated = true;
-  });
-  loop.join();
+  const Isolation isolation = isolate_on_new_thread(highest);
+  const std::string& error = isolation.error;
+  const cpu_set_t loop_mask = isolation.mask;
+  isolated = true;
   while (!bystander_checked) std::this_thread::yield();
   release = true;
   bystander.join();
@@ -264,22 +275,14 @@ TEST(IsolateCallingThreadOnCpu, TakesACpuTheProcessWasStartedOff) {
   const cpu_set_t before = current_mask();
   if (CPU_COUNT(&before) < 2) GTEST_SKIP() << "needs two CPUs";
   const int highest = highest_cpu(before);
-  cpu_set_t loop_mask;
-  CPU_ZERO(&loop_mask);
-  std::string error;
+  Isolation isolation;
   {
     const ScopedCpuExclude started_off(highest);
     ASSERT_TRUE(started_off.active());
-    std::thread loop([&] {
-      try {
-        isolate_calling_thread_on_cpu(highest);
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-      loop_mask = current_mask();
-    });
-    loop.join();
+    isolation = isolate_on_new_thread(highest);
   }
+  const std::string& error = isolation.error;
+  const cpu_set_t loop_mask = isolation.mask;
   sched_setaffinity(0, sizeof before, &before);
   EXPECT_EQ(error, "");
   EXPECT_EQ(CPU_COUNT(&loop_mask), 1);
