@@ -6,9 +6,12 @@ namespace rths::coordinator {
 
 CommandLimits::CommandLimits(const config::SafetyLimits& limits, std::vector<int> actuator_storeys,
                              int storeys)
-    : limits_(limits), actuator_storeys_(std::move(actuator_storeys)), previous_(core::Vec::Zero(storeys)) {}
+    : limits_(limits),
+      actuator_storeys_(std::move(actuator_storeys)),
+      previous_(core::Vec::Zero(storeys)) {}
 
-std::optional<std::string> CommandLimits::check_state(const core::Vec& u, const core::Vec& v) const {
+std::optional<std::string> CommandLimits::check_state(const core::Vec& u,
+                                                      const core::Vec& v) const {
   for (int i = 0; i < u.size(); ++i) {
     if (limits_.max_displacement() > 0 && !(std::abs(u[i]) <= limits_.max_displacement()))
       return "safety limit: |u| of DOF " + std::to_string(i + 1) + " = " + std::to_string(u[i]) +

@@ -1,0 +1,285 @@
+// The coordinator's messages with the nodes and the step's exchange (see state.h).
+#include "coordinator/state.h"
+
+#include <algorithm>
+#include <string>
+
+namespace rths::coordinator {
+
+using runtime::Verdict;
+
+bool Coordinator::State::pump(std::chrono::nanoseconds timeout) {
+  auto message = endpoint.receive(timeout);
+  if (!message) return false;
+  if (message->kind == runtime::FEEDBACK) {
+    intake->offer(*message);
+    return true;
+  }
+  const auto it = nodes.find(message->node_id);
+  // Announcements carry the node's expected run id, empty when it was started without one.
+  const bool announce = message->kind == runtime::ANNOUNCE &&
+                        (message->run_id.empty() || message->run_id == options.run_id);
+  Verdict verdict = announce ? Verdict::kAccept : runtime::check_envelope(*message, options.run_id);
+  if (verdict == Verdict::kAccept && it == nodes.end()) verdict = Verdict::kUnknownNode;
+  if (verdict != Verdict::kAccept) {
+    rejected.count(verdict);
+    return true;
+  }
+  Node& node = it->second;
+  switch (message->kind) {
+    case runtime::ANNOUNCE: {
+      runtime::Announce announce_payload;
+      if (!runtime::unpack(*message, announce_payload)) {
+        rejected.count(Verdict::kGarbage);
+        return true;
+      }
+      if (node.ready) return true;  // a late or forged announcement changes nothing
+      if (announce_payload.kind() != node.plan->spec.kind())
+        throw RunAborted(node.plan->label() + " announced itself as " +
+                             runtime::node_kind_name(announce_payload.kind()) +
+                             " (pid " + std::to_string(announce_payload.pid()) + " on " +
+                             announce_payload.host() + ")",
+                         node.plan->label());
+      node.last_seen = Clock::now();
+      if (!node.announced)
+        spdlog::info("{} announced from {} pid {}", node.plan->label(), announce_payload.host(),
+                     announce_payload.pid());
+      node.announced = true;
+      if (!node.ready) send_assign(node);
+      return true;
+    }
+    case runtime::READY: {
+      runtime::Ready ready;
+      if (!runtime::unpack(*message, ready)) {
+        rejected.count(Verdict::kGarbage);
+        return true;
+      }
+      node.last_seen = Clock::now();
+      if (!ready.error().empty())
+        throw RunAborted("could not build its part: " + ready.error(), node.plan->label());
+      node.ready = true;
+      return true;
+    }
+    case runtime::HOLD: {
+      // An emulator held on its own (its watchdog or limits): the test cannot go on.
+      runtime::Hold hold;
+      if (!runtime::unpack(*message, hold)) {
+        rejected.count(Verdict::kGarbage);
+        return true;
+      }
+      throw RunAborted("held on its own at its step " + std::to_string(message->step) + ": " +
+                           hold.reason(),
+                       node.plan->label());
+    }
+    case runtime::HEARTBEAT: {
+      node.last_seen = Clock::now();
+      runtime::Heartbeat heartbeat;
+      if (runtime::unpack(*message, heartbeat)) {
+        node.servo_ticks = heartbeat.servo_ticks();
+        node.servo_overruns = heartbeat.servo_overruns();
+      }
+      return true;
+    }
+    default:
+      return true;  // kinds a coordinator never acts on
+  }
+}
+
+void Coordinator::State::send_assign(const Node& node) {
+  runtime::Assign assign;
+  assign.set_schema_version(runtime::kSchemaVersion);
+  *assign.mutable_study() = prepared.config;
+  assign.set_base_dir(prepared.base_dir.string());
+  assign.set_case_name(case_name);
+  *assign.mutable_node() = node.plan->spec;
+  assign.set_dt(setup.dt);
+  for (int s : node.plan->storeys) assign.add_storeys(s);
+  for (int a : node.plan->actuators) assign.add_actuators(a);
+  assign.set_heartbeat_period(runtime::heartbeat_period(deployment));
+  // A node outlives a silent coordinator only a little longer than the coordinator tolerates it.
+  assign.set_orphan_timeout(std::max(2.0, 2.0 * runtime::liveliness_timeout(deployment)));
+  send(node.plan->spec.id(), runtime::ASSIGN, 0, assign);
+}
+
+void Coordinator::State::check_liveliness() {
+  const double limit = runtime::liveliness_timeout(deployment);
+  for (auto& [id, node] : nodes) {
+    const double silent = seconds_since(node.last_seen);
+    if (silent > limit)
+      throw RunAborted(node.plan->label() + " silent for " + std::to_string(silent) +
+                           " s (liveliness timeout " + std::to_string(limit) + " s)",
+                       node.plan->label());
+  }
+  if (seconds_since(last_heartbeat_sent) > runtime::heartbeat_period(deployment)) {
+    runtime::Heartbeat hb;
+    hb.set_last_step(step);
+    send(transport::kBroadcastId, runtime::HEARTBEAT, step, hb);
+    last_heartbeat_sent = Clock::now();
+  }
+}
+
+void Coordinator::State::start_up() {
+  const double timeout = runtime::start_timeout(deployment);
+  const auto start = Clock::now();
+  for (auto& [id, node] : nodes) node.last_seen = start;
+  for (;;) {
+    bool all = true;
+    for (auto& [id, node] : nodes) all = all && node.ready;
+    if (all) return;
+    if (seconds_since(start) > timeout) {
+      std::string missing;
+      for (auto& [id, node] : nodes) {
+        if (node.ready) continue;
+        missing += (missing.empty() ? "" : "; ") + node.plan->label() +
+                   (node.announced ? " announced but never became ready" : " never announced");
+      }
+      throw RunAborted("start-up timed out after " + std::to_string(timeout) + " s: " + missing,
+                       "");
+    }
+    pump(std::chrono::milliseconds(20));
+  }
+}
+
+bool Coordinator::State::awaits_answers_of(const config::NodeSpec& spec) const {
+  if (!real_time) return true;
+  const double injected = spec.receive_lag().one_way_delay() + spec.send_lag().one_way_delay();
+  return injected < runtime::feedback_wait_fraction(deployment) * setup.dt;
+}
+
+void Coordinator::State::absorb() {
+  for (auto& [id, node] : nodes) {
+    const ArrivedFeedback* arrived = intake->take(id);
+    if (!arrived) continue;
+    node.last_seen = Clock::now();
+    node.last_answer = arrived->answered_step;
+    node.answers = arrived->answers;
+  }
+}
+
+const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& v,
+                                           core::Mat* tangent) {
+  if (tangent)
+    throw std::invalid_argument("the distributed runtime needs an explicit integrator");
+  if (auto violation = limits->check_state(u, v)) throw RunAborted(*violation, "");
+  assembly.drifts(u, drift);
+  assembly.drifts(v, drift_velocity);
+  if (auto violation = limits->check_rate(drift)) throw RunAborted(*violation, "");
+  for (auto& [id, node] : nodes) {
+    command_message.Clear();
+    command_message.set_time(time);
+    for (int s : node.plan->storeys) {
+      command_message.add_drift(drift[s]);
+      command_message.add_drift_velocity(drift_velocity[s]);
+    }
+    send(id, runtime::COMMAND, step, command_message);
+  }
+  commands_written = Clock::now();
+  if (local_numerical) {
+    local_numerical->trial(drift, shear, nullptr);
+  } else {
+    shear.setZero();
+  }
+  collect();
+  // Storey shear = numerical + experimental, the order core::HybridRestoring uses.
+  for (auto& [id, node] : nodes) {
+    if (node.plan->spec.kind() != config::NodeSpec::SUBSTRUCTURE) continue;
+    for (std::size_t i = 0; i < node.plan->storeys.size(); ++i)
+      shear[node.plan->storeys[i]] = force_of(node, i);
+  }
+  const auto& storeys = setup.partition.actuator_storeys;
+  for (auto& [id, node] : nodes) {
+    if (node.plan->spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+    for (std::size_t i = 0; i < node.plan->actuators.size(); ++i) {
+      const int a = node.plan->actuators[i];
+      const int s = storeys[a];
+      command_drift[a] = drift[s];
+      realised_drift[a] = realised_of(node, i);
+      measured[a] = force_of(node, i);
+    }
+  }
+  core::assemble_storey_forces(assembly, storeys, measured, shear, force);
+  return force;
+}
+
+double Coordinator::State::force_of(const Node& node, std::size_t i) {
+  const runtime::Feedback& f = intake->latest(node.plan->spec.id()).feedback;
+  const int index = static_cast<int>(i);
+  return index < f.force_size() ? f.force(index) : 0.0;
+}
+
+double Coordinator::State::realised_of(const Node& node, std::size_t i) {
+  const runtime::Feedback& f = intake->latest(node.plan->spec.id()).feedback;
+  const int index = static_cast<int>(i);
+  return index < f.realised_size() ? f.realised(index) : 0.0;
+}
+
+void Coordinator::State::collect() {
+  if (real_time) {
+    // Wait part of the step for this step's answers, then go with the newest available.
+    const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(
+                                              runtime::feedback_wait_fraction(deployment) *
+                                              setup.dt));
+    for (;;) {
+      absorb();
+      bool all = true;
+      for (auto& [id, node] : nodes) all = all && (!node.awaited || node.last_answer == step);
+      if (all) break;
+      const auto left = until - Clock::now();
+      if (left <= Clock::duration::zero()) break;
+      pump(left);
+    }
+    while (pump(std::chrono::nanoseconds::zero())) {
+    }
+    absorb();
+    const int max_missed = runtime::max_missed_answers(deployment);
+    for (auto& [id, node] : nodes) {
+      if (node.last_answer != step) {
+        ++late_feedback;
+        if (static_cast<std::uint64_t>(++node.late_streak) > worst_late_streak)
+          worst_late_streak = static_cast<std::uint64_t>(node.late_streak);
+      } else {
+        node.late_streak = 0;
+      }
+      // Missing = no fresh answer at all this step (an answer to an older step, as a link
+      // slower than a step delivers, is fresh). Counted once the node has answered: before
+      // that, start-up and liveliness cover it.
+      const bool fresh = node.answers != node.answers_before_step;
+      node.answers_before_step = node.answers;
+      node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
+      if (node.missed_streak >= max_missed)
+        throw RunAborted("no answer for " + std::to_string(node.missed_streak) +
+                             " consecutive steps (steps " +
+                             std::to_string(step - node.missed_streak + 1) + " to " +
+                             std::to_string(step) + "; its newest answers step " +
+                             std::to_string(node.last_answer) + ")",
+                         node.plan->label());
+    }
+    check_liveliness();
+    return;
+  }
+  const auto start = Clock::now();
+  const double timeout = runtime::step_timeout(deployment);
+  // The intake wakes the loop (interrupt) once the last answer to the step is in.
+  for (;;) {
+    absorb();
+    int outstanding = 0;
+    for (auto& [id, node] : nodes) outstanding += node.last_answer != step ? 1 : 0;
+    if (outstanding == 0) return;
+    pump(std::chrono::milliseconds(10));
+    check_liveliness();
+    if (seconds_since(start) > timeout) {
+      std::string missing, first;
+      for (auto& [id, node] : nodes)
+        if (node.last_answer != step) {
+          missing += (missing.empty() ? "" : ", ") + node.plan->label();
+          if (first.empty()) first = node.plan->label();
+        }
+      throw RunAborted("no answer to step " + std::to_string(step) + " within " +
+                           std::to_string(timeout) + " s from " + missing,
+                       first);
+    }
+  }
+}
+
+}  // namespace rths::coordinator

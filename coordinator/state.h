@@ -1,0 +1,166 @@
+#pragma once
+// The coordinator's state and the members of its run, shared by the files that implement them
+// (internal to rths_coordinator; the contract is in coordinator.h):
+//   exchange.cpp     messages with the nodes (start-up, liveliness) and the step's exchange
+//                    (the restoring-force evaluator: commands out, answers in)
+//   step_hooks.cpp   pacing before a step, the real-time thread, the record after it
+//   coordinator.cpp  construction from the study and the run's lifecycle and outcome
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include "coordinator/command_limits.h"
+#include "coordinator/coordinator.h"
+#include "coordinator/feedback_intake.h"
+#include "core/simulation.h"
+#include "runtime/measurements.h"
+#include "runtime/schema.h"
+#include "runtime/validation.h"
+
+namespace rths::coordinator {
+
+using Clock = std::chrono::steady_clock;
+
+// Thrown inside the loop when the run must stop; caught by run().
+struct RunAborted : std::runtime_error {
+  RunAborted(const std::string& why, std::string node)
+      : std::runtime_error(why), node(std::move(node)) {}
+  std::string node;
+};
+
+inline double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
+  core::PreparedStudy prepared;
+  core::HybridSetup setup;
+  std::string case_name;
+  transport::Endpoint& endpoint;
+  CoordinatorOptions options;
+  const runtime::DeploymentPlan* plan = nullptr;
+  config::Deployment deployment;
+  bool real_time = false;
+
+  // Per node.
+  struct Node {
+    const runtime::NodePlan* plan;
+    bool announced = false, ready = false;
+    Clock::time_point last_seen;
+    std::int64_t last_answer = 0;  // step of the newest answer taken from the intake
+    std::uint64_t answers = 0;     // answers taken so far
+    std::uint64_t answers_before_step = 0;
+    int missed_streak = 0;         // real time: consecutive steps without a fresh answer
+    int late_streak = 0;           // real time: consecutive steps on an older answer
+    bool awaited = true;           // awaits_answers_of(its spec)
+    std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
+  };
+  std::map<int, Node> nodes;
+  // The nodes' feedback, filled by the transport's receive thread (or by pump() on a transport
+  // without one) and read wait-free by the loop.
+  std::unique_ptr<FeedbackIntake> intake;
+  runtime::RejectCounters rejected;  // everything but feedback (the intake counts those)
+  std::uint64_t late_feedback = 0, worst_late_streak = 0;
+  // The links' lag as the record's reader counts it (runtime/measurements.h), from the same
+  // samples.
+  runtime::LinkLagAccumulator lags;
+  std::unique_ptr<CommandLimits> limits;  // checked before each command leaves
+
+  // Evaluator state (sized once).
+  core::StoreyAssembly assembly{1};
+  std::unique_ptr<core::NumericalSubstructure> local_numerical;
+  core::Vec drift, drift_velocity, shear, force, command_drift, realised_drift, measured;
+  std::int64_t step = 0;
+  double time = 0.0;
+  runtime::Command command_message;
+  std::unique_ptr<runtime::AsyncRecordWriter> record;
+  // Reused every step so that, after the first steps, building an entry allocates nothing.
+  runtime::RecordEntry step_entry;
+  runtime::StepRecord step_record;
+
+  // Off the loop (header, footer): waits for room rather than drop.
+  void append_waiting(const runtime::RecordEntry& entry) {
+    while (!record->append(entry)) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  Clock::time_point last_heartbeat_sent;
+
+  State(core::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
+      : prepared(std::move(p)), endpoint(e), options(std::move(o)) {}
+
+  void send(int node_id, runtime::MessageKind kind, std::int64_t at_step,
+            const google::protobuf::MessageLite& payload) {
+    runtime::pack_into(outgoing, options.run_id, node_id, kind, at_step, payload);
+    endpoint.send(outgoing);
+  }
+  transport::Message outgoing;  // reused: no allocation per command once warm
+
+  // Logs what happened and appends it to the record as an event (a full ring drops and counts it).
+  void event(const std::string& what);
+
+  // ---- Messages (exchange.cpp) ----
+  // Takes one message off the transport and applies it if valid. False on timeout.
+  bool pump(std::chrono::nanoseconds timeout);
+
+  void send_assign(const Node& node);
+  // Throws RunAborted for a node silent beyond the liveliness timeout; sends the heartbeat when
+  // it is due.
+  void check_liveliness();
+  // Until every node is READY (start_timeout), naming each that never announced or became ready.
+  void start_up();
+
+  // ---- RestoringEvaluator: one exchange per step (exchange.cpp) ----
+  // Whether the loop waits for the node's answer to each step: always in lockstep; in real time
+  // unless the node's link injects a round trip (receive_lag + send_lag one-way delays; jitter
+  // has zero mean) at least as long as the wait, so its answer cannot come in time and waiting
+  // for it would only eat half of every period (and turn a small hiccup into an overrun).
+  bool awaits_answers_of(const config::NodeSpec& spec) const;
+
+  // Takes each node's newest feedback from the intake, if new since the last take.
+  void absorb();
+
+  const core::Vec& trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) override;
+  void set_time(double t) override { time = t; }
+  const core::Vec& command() const override { return command_drift; }
+  const core::Vec& realised() const override { return realised_drift; }
+  const core::Vec& measured_force() const override { return measured; }
+  int actuators() const override { return static_cast<int>(measured.size()); }
+
+  // Before a node's first answer (real time, lag longer than the wait) the specimen is at rest.
+  double force_of(const Node& node, std::size_t i);
+  double realised_of(const Node& node, std::size_t i);
+  const runtime::LinkSample& link_of(int id) { return intake->latest(id).link; }
+
+  void commit() override {
+    if (local_numerical) local_numerical->commit();
+  }
+  bool repeatable() const override { return false; }
+
+  // Waits for the step's answers (lockstep: all, within step_timeout; real time: the awaited
+  // ones, within feedback_wait_fraction of the step), takes what queued, judges missed answers.
+  void collect();
+
+  // ---- StepHooks: pacing before a step, record after it (step_hooks.cpp) ----
+  runtime::PacingClock* pacing_clock = nullptr;  // set by run()
+  runtime::Pacer* pacer = nullptr;
+  runtime::PaceResult pace;
+  Clock::time_point step_start, commands_written;
+  std::int64_t step_start_realtime_ns = 0;
+
+  void before_step(std::size_t k) override;
+  bool after_step(std::size_t k, const core::SimulationResult& result) override;
+
+  // mlockall and the loop thread's CPU, as the deployment asks. Refusals are logged events, not
+  // failures: an unprivileged lab machine still runs, and the record says it was not locked.
+  void prepare_real_time_thread();
+
+  void write_header();
+  void write_step(std::size_t k, const core::SimulationResult& result, double step_wall);
+};
+
+}  // namespace rths::coordinator

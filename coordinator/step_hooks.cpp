@@ -1,0 +1,128 @@
+// Pacing before a step, the real-time thread and the record after it (see state.h).
+#include "coordinator/state.h"
+
+#include <sys/mman.h>
+
+#include <cerrno>
+#include <cstring>
+#include <string>
+
+#include "runtime/process.h"
+
+namespace rths::coordinator {
+
+void Coordinator::State::event(const std::string& what) {
+  spdlog::info("step {}: {}", step, what);
+  if (!record) return;
+  runtime::RecordEntry entry;
+  entry.mutable_event()->set_step(step);
+  entry.mutable_event()->set_what(what);
+  entry.mutable_event()->set_realtime_ns(transport::realtime_ns());
+  record->append(entry);  // a full queue drops it and counts it, as for steps
+}
+
+void Coordinator::State::before_step(std::size_t k) {
+  pace = {};
+  // One timed wait per period, the pacer's: feedback is stamped and boxed on the receive thread
+  // meanwhile, and other messages wait in the transport's queue (stamped on arrival). A second
+  // timed wait here (draining until shortly before the deadline, as before) turned every late
+  // wake-up of it into an overrun.
+  if (real_time) {
+    pace = pacer->wait(static_cast<std::int64_t>(k));
+    // What queued during the wait (an emulator's HOLD stops the run before the next command).
+    while (pump(std::chrono::nanoseconds::zero())) {
+    }
+  }
+  step = static_cast<std::int64_t>(k);
+  intake->await_step(step);
+  step_start = Clock::now();
+  step_start_realtime_ns = transport::realtime_ns();
+}
+
+bool Coordinator::State::after_step(std::size_t k,
+                                    const core::SimulationResult& result) {
+  const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
+  write_step(k, result, step_wall);
+  if (k > 0)
+    for (auto& [id, node] : nodes) lags.add(result.time[k], link_of(id));
+  if (k == 0) {
+    last_heartbeat_sent = Clock::now();
+    for (auto& [id, node] : nodes) node.last_seen = Clock::now();
+    if (real_time) pacer->start();
+  }
+  return true;
+}
+
+void Coordinator::State::prepare_real_time_thread() {
+  if (deployment.lock_memory()) {
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+      event(std::string("mlockall refused (") + std::strerror(errno) + "); memory not locked");
+    else
+      event("memory locked (mlockall)");
+  }
+  if (deployment.pin_loop()) {
+    // The CPU is the loop's alone: a receive thread woken on it would preempt the loop between
+    // its commands (bench: wake-up to command written 31 -> 18 us median at 1024 Hz).
+    try {
+      runtime::isolate_calling_thread_on_cpu(deployment.loop_cpu());
+      event("loop thread alone on CPU " + std::to_string(deployment.loop_cpu()) +
+            " (the process's other threads moved off it)");
+    } catch (const std::runtime_error& e) {
+      event(std::string("loop thread not isolated: ") + e.what());
+    }
+  }
+}
+
+void Coordinator::State::write_header() {
+  if (!record) return;
+  runtime::RecordEntry entry;
+  runtime::RunHeader& h = *entry.mutable_header();
+  h.set_schema_version(runtime::kSchemaVersion);
+  h.set_run_id(options.run_id);
+  *h.mutable_study() = prepared.config;
+  h.set_case_name(case_name);
+  h.set_clock(real_time ? "real_time" : "lockstep");
+  h.set_dt(setup.dt);
+  h.set_dofs(setup.model.dofs());
+  h.set_actuators(static_cast<int>(setup.partition.actuator_storeys.size()));
+  for (auto& [id, node] : nodes) h.add_link_node_ids(id);
+  h.set_start_realtime_ns(transport::realtime_ns());
+  h.set_timestamp_clock(
+      "CLOCK_REALTIME ns; round_trip uses the coordinator's clock only, one-way lags "
+      "include the clock offset between hosts");
+  append_waiting(entry);
+}
+
+void Coordinator::State::write_step(std::size_t k, const core::SimulationResult& result,
+                                    double step_wall) {
+  if (!record) return;
+  runtime::StepRecord& r = step_record;
+  r.Clear();  // keeps the repeated fields' storage
+  const auto row = static_cast<Eigen::Index>(k);
+  r.set_step(static_cast<std::int64_t>(k));
+  r.set_time(result.time[k]);
+  r.set_ground_acceleration(prepared.motion.acceleration[k]);
+  for (int i = 0; i < result.displacement.cols(); ++i) {
+    r.add_displacement(result.displacement(row, i));
+    r.add_velocity(result.velocity(row, i));
+    r.add_acceleration(result.acceleration(row, i));
+  }
+  for (int a = 0; a < result.command.cols(); ++a) {
+    r.add_command(result.command(row, a));
+    r.add_realised(result.realised(row, a));
+    r.add_measured_force(result.measured_force(row, a));
+  }
+  if (k > 0)
+    for (auto& [id, node] : nodes) *r.add_links() = link_of(id);
+  r.set_lateness(pace.lateness);
+  r.set_step_wall(step_wall);
+  r.set_command_latency(
+      k == 0 ? 0.0 : std::chrono::duration<double>(commands_written - step_start).count());
+  r.set_overrun(pace.overrun);
+  r.set_start_realtime_ns(k == 0 ? 0 : step_start_realtime_ns);
+  step_entry.unsafe_arena_set_allocated_step(&step_record);
+  record->append(step_entry);
+  step_entry.unsafe_arena_release_step();
+}
+
+}  // namespace rths::coordinator
