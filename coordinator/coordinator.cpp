@@ -27,7 +27,6 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   s.deployment = runtime::with_default_nodes(s.deployment, s.setup);
   plan_ = runtime::make_plan(s.setup, s.deployment);
   runtime::check_node_stages(plan_, s.setup.dt, s.prepared.base_dir);
-  s.plan = &plan_;
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
   const std::size_t steps = s.prepared.motion.acceleration.size();
   std::vector<IntakeNode> intake_nodes;
@@ -83,11 +82,9 @@ RunOutcome Coordinator::run() {
     for (const auto& [id, node] : s.nodes)
       if (!node.awaited)
         s.event("not waiting for the answers of " + node.plan->label() + ": its link injects a " +
-                std::to_string(1e3 * (node.plan->spec.receive_lag().one_way_delay() +
-                                      node.plan->spec.send_lag().one_way_delay())) +
+                std::to_string(1e3 * State::injected_round_trip(node.plan->spec)) +
                 " ms round trip, longer than the loop's wait of " +
-                std::to_string(1e3 * runtime::feedback_wait_fraction(s.deployment) * s.setup.dt) +
-                " ms; each step uses its newest answer");
+                std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
     core::SimulationOptions loop_options;
     loop_options.divergence_bound = s.options.divergence_bound;
     {

@@ -140,10 +140,16 @@ void Coordinator::State::start_up() {
   }
 }
 
+double Coordinator::State::injected_round_trip(const config::NodeSpec& spec) {
+  return spec.receive_lag().one_way_delay() + spec.send_lag().one_way_delay();
+}
+
+double Coordinator::State::answer_wait() const {
+  return runtime::feedback_wait_fraction(deployment) * setup.dt;
+}
+
 bool Coordinator::State::awaits_answers_of(const config::NodeSpec& spec) const {
-  if (!real_time) return true;
-  const double injected = spec.receive_lag().one_way_delay() + spec.send_lag().one_way_delay();
-  return injected < runtime::feedback_wait_fraction(deployment) * setup.dt;
+  return !real_time || injected_round_trip(spec) < answer_wait();
 }
 
 void Coordinator::State::absorb() {
@@ -217,9 +223,7 @@ void Coordinator::State::collect() {
   if (real_time) {
     // Wait part of the step for this step's answers, then go with the newest available.
     const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                          std::chrono::duration<double>(
-                                              runtime::feedback_wait_fraction(deployment) *
-                                              setup.dt));
+                                          std::chrono::duration<double>(answer_wait()));
     for (;;) {
       absorb();
       bool all = true;

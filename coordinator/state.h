@@ -44,7 +44,6 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   std::string case_name;
   transport::Endpoint& endpoint;
   CoordinatorOptions options;
-  const runtime::DeploymentPlan* plan = nullptr;
   config::Deployment deployment;
   bool real_time = false;
 
@@ -120,6 +119,10 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   // has zero mean) at least as long as the wait, so its answer cannot come in time and waiting
   // for it would only eat half of every period (and turn a small hiccup into an overrun).
   bool awaits_answers_of(const config::NodeSpec& spec) const;
+  // s: the round trip the node's link injects (one-way delays both ways; jitter has zero mean).
+  static double injected_round_trip(const config::NodeSpec& spec);
+  // s: how long a real-time step waits for its answers (feedback_wait_fraction x dt).
+  double answer_wait() const;
 
   // Takes each node's newest feedback from the intake, if new since the last take.
   void absorb();
