@@ -62,6 +62,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/study.h"
@@ -79,6 +80,8 @@ struct CoordinatorOptions {
   std::filesystem::path record;       // empty: no record file
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
   double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
+  // Real time: the platform check the run starts under, kept in the record's header.
+  std::optional<runtime::PlatformSummary> platform;
 };
 
 struct LinkLagStats {

@@ -182,7 +182,7 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
         const config::Deployment& deployment = a.study().deployment();
         if (a.node().kind() == config::NodeSpec::ACTUATOR_EMULATOR &&
             deployment.clock() == config::Deployment::REAL_TIME)
-          watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment) * a.dt());
+          watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment, a.dt()) * a.dt());
         spdlog::info("{}: assigned to run {}", service.label(), service.run_id());
         if (service.streaming()) {
           const double period = service.streaming_period();
