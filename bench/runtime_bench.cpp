@@ -58,6 +58,11 @@ std::string study_text(double dt, double seconds, const std::string& deployment)
          "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n" + deployment;
 }
 
+// The node processes of a run: substructure nodes 1..substructures, then the emulators.
+struct NodeSet {
+  int substructures = 1, emulators = 1;
+};
+
 // A 9-storey shear building, every storey a third experimental: `substructures` nodes share the
 // numerical storeys and `emulators` nodes the actuators, in contiguous blocks.
 std::string scaling_text(NodeSet n, double seconds, const std::string& deployment) {
@@ -190,11 +195,6 @@ struct RunFigures {
 
 // one_cpu: this process (the coordinator, its DDS threads) and the nodes on one CPU, as
 // `rths launch` places lockstep runs by default (runtime::CpuPlacement).
-// The node processes of a run: substructure nodes 1..substructures, then the emulators.
-struct NodeSet {
-  int substructures = 1, emulators = 1;
-};
-
 RunFigures distributed_run(int domain, const std::string& text, const std::string& name,
                            NodeSet node_set = {}, bool one_cpu = false) {
   std::unique_ptr<runtime::ScopedCpuPin> pin;

@@ -41,7 +41,7 @@ TEST(PlatformSummary, CarriesTheFactsTheFiguresAndTheVerdict) {
   EXPECT_DOUBLE_EQ(s.lateness_max(), 3.2e-3);
   EXPECT_DOUBLE_EQ(s.stalls_over_1ms_per_minute(), 30.0);  // 10 in 20 CPU-seconds
   EXPECT_DOUBLE_EQ(s.stalls_over_5ms_per_minute(), 0.0);
-  EXPECT_NEAR(s.window_ms, 3 * 1000.0 / 1024, 1e-9);
+  EXPECT_NEAR(s.window_ms(), 3 * 1000.0 / 1024, 1e-9);
   EXPECT_TRUE(s.refused());
   EXPECT_THAT(s.verdict(), HasSubstr("does NOT hold"));
   const std::string text = summary_text(s);
