@@ -92,41 +92,6 @@ std::string scaling_text(NodeSet n, double seconds, const std::string& deploymen
          "deployment { " + nodes + deployment + " }\n";
 }
 
-// Rows per node count: lockstep steps/s (one CPU as `rths launch` places it, and spread) and the
-// real-time step wall at 1024 Hz, medians of `repeat` runs each, with the ratio to 1 + 1 nodes.
-void scaling_rows(int domain, int repeat, double seconds, const std::string& deployment_extra) {
-  const NodeSet sets[] = {{1, 1}, {2, 1}, {4, 1}, {8, 1}, {1, 2}, {1, 4}, {8, 4}};
-  double base_one_cpu = 0, base_spread = 0;
-  std::printf("nodes (substructure + emulator) | lockstep steps/s one CPU (x 1+1) | spread (x 1+1) | "
-              "real time 1024 Hz: step wall median / p99 us, overruns %%\n");
-  for (const NodeSet n : sets) {
-    std::vector<double> one_cpu, spread, wall, wall99, overruns;
-    for (int r = 0; r < repeat; ++r) {
-      const std::string tag = std::to_string(n.substructures) + "_" + std::to_string(n.emulators) +
-                              "_" + std::to_string(r);
-      one_cpu.push_back(distributed_run(domain, scaling_text(n, 10, ""), "scale_one" + tag, n, true)
-                            .steps_per_second);
-      spread.push_back(distributed_run(domain, scaling_text(n, 10, ""), "scale_spread" + tag, n, false)
-                           .steps_per_second);
-      const auto rt = distributed_run(
-          domain, scaling_text(n, seconds, "clock: REAL_TIME max_overrun_fraction: -1 "
-                                           "max_missed_answers: 1000 command_watchdog_periods: 1000 " +
-                                               deployment_extra),
-          "scale_rt" + tag, n, false);
-      wall.push_back(rt.step_wall.median);
-      wall99.push_back(rt.step_wall.p99);
-      overruns.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
-    }
-    const double o = runtime::summarize(one_cpu).median, sp = runtime::summarize(spread).median;
-    if (base_one_cpu == 0) base_one_cpu = o, base_spread = sp;
-    std::printf("%d + %d | %.0f (%.2f) | %.0f (%.2f) | %.1f / %.1f, %.3f %%\n", n.substructures,
-                n.emulators, o, o / base_one_cpu, sp, sp / base_spread,
-                runtime::summarize(wall).median * 1e6, runtime::summarize(wall99).median * 1e6,
-                runtime::summarize(overruns).median);
-    std::fflush(stdout);
-  }
-}
-
 runtime::Command payload() {
   runtime::Command c;
   c.set_time(1.234);
@@ -250,6 +215,41 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   f.servo_ticks = outcome.counters.servo_ticks();
   f.servo_overruns = outcome.counters.servo_overruns();
   return f;
+}
+
+// Rows per node count: lockstep steps/s (one CPU as `rths launch` places it, and spread) and the
+// real-time step wall at 1024 Hz, medians of `repeat` runs each, with the ratio to 1 + 1 nodes.
+void scaling_rows(int domain, int repeat, double seconds, const std::string& deployment_extra) {
+  const NodeSet sets[] = {{1, 1}, {2, 1}, {4, 1}, {8, 1}, {1, 2}, {1, 4}, {8, 4}};
+  double base_one_cpu = 0, base_spread = 0;
+  std::printf("nodes (substructure + emulator) | lockstep steps/s one CPU (x 1+1) | spread (x 1+1) | "
+              "real time 1024 Hz: step wall median / p99 us, overruns %%\n");
+  for (const NodeSet n : sets) {
+    std::vector<double> one_cpu, spread, wall, wall99, overruns;
+    for (int r = 0; r < repeat; ++r) {
+      const std::string tag = std::to_string(n.substructures) + "_" + std::to_string(n.emulators) +
+                              "_" + std::to_string(r);
+      one_cpu.push_back(distributed_run(domain, scaling_text(n, 10, ""), "scale_one" + tag, n, true)
+                            .steps_per_second);
+      spread.push_back(distributed_run(domain, scaling_text(n, 10, ""), "scale_spread" + tag, n, false)
+                           .steps_per_second);
+      const auto rt = distributed_run(
+          domain, scaling_text(n, seconds, "clock: REAL_TIME max_overrun_fraction: -1 "
+                                           "max_missed_answers: 1000 command_watchdog_periods: 1000 " +
+                                               deployment_extra),
+          "scale_rt" + tag, n, false);
+      wall.push_back(rt.step_wall.median);
+      wall99.push_back(rt.step_wall.p99);
+      overruns.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
+    }
+    const double o = runtime::summarize(one_cpu).median, sp = runtime::summarize(spread).median;
+    if (base_one_cpu == 0) base_one_cpu = o, base_spread = sp;
+    std::printf("%d + %d | %.0f (%.2f) | %.0f (%.2f) | %.1f / %.1f, %.3f %%\n", n.substructures,
+                n.emulators, o, o / base_one_cpu, sp, sp / base_spread,
+                runtime::summarize(wall).median * 1e6, runtime::summarize(wall99).median * 1e6,
+                runtime::summarize(overruns).median);
+    std::fflush(stdout);
+  }
 }
 
 // Resident set size (kB) of a process, from /proc/<pid>/status; -1 when it is gone.
