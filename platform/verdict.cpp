@@ -14,6 +14,7 @@ constexpr double kGrid = 0.25e-3;       // s, thresholds of the tail fit and of 
 constexpr double kFitFrom = 0.5e-3;     // s, the tail starts here (below: ordinary timer jitter)
 constexpr std::uint64_t kSeen = 3;      // stalls seen for a measured rate
 constexpr double kMaxWindow = 60.0;     // s
+constexpr double kMaxSensibleTolerance = 0.05;  // beyond, a "real-time" run is mostly late steps
 
 // log r(x) = a + b x, least squares over the measured thresholds with >= kSeen stalls.
 struct Tail {
@@ -128,7 +129,7 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
       fmt("fail-safe window %.2f ms (%.0f steps at %.0f Hz): stalls longer than %.2f ms come ",
           v.window_ms, steps, 1.0 / in.dt, 1e3 * x) +
       fmt("%.3g per minute (", rate_with(stats, tail, x)) + source +
-      fmt("); a %.1f s run is stopped falsely with probability %.2g %%", in.run_seconds,
+      fmt("); a %.1f s run is stopped falsely with probability %.3g %%", in.run_seconds,
           100.0 * v.false_stop_probability));
   v.findings.push_back(fmt("required: %.2f ms (%.0f steps) for <= 1 %% false stops; the longest stall "
                            "measured was %.2f ms: ",
@@ -143,9 +144,13 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
                           "fault is then held within %.2f ms instead of %.2f ms)",
                           v.required_window_ms, v.required_window_ms, v.required_window_ms,
                           v.window_ms));
-  if (!v.overruns_hold)
+  if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
     v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",
                           2.0 * v.predicted_overrun_fraction));
+  else if (!v.overruns_hold)
+    v.fixes.push_back(fmt("no overrun tolerance makes this a real-time test: %.1f %% of the steps "
+                          "would overrun; run at a lower rate or on a quieter machine",
+                          100.0 * v.predicted_overrun_fraction));
   if (v.refused()) tuning_fixes(facts, in, v.fixes);
   return v;
 }

@@ -16,7 +16,8 @@
 // stall measured. A window shorter than it does not hold.
 // Overruns: predicted fraction = LatencyStats::overrun_fraction(work), work = the wait for answers
 // (feedback_wait_fraction x dt) when the loop waits for any node, else 5 % of dt; it holds when
-// <= max_overrun_fraction (a negative tolerance is never checked).
+// <= max_overrun_fraction (a negative tolerance is never checked). The fix offered is twice the
+// predicted fraction, up to 5 %; beyond that the machine cannot run the rate in real time now.
 // refused(): a real-time run under this verdict refuses to start unless --accept-platform.
 
 #include <string>

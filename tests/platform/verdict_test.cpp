@@ -12,6 +12,7 @@ namespace rths::platform {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 constexpr double kDt = 1.0 / 1024;
 
@@ -75,6 +76,15 @@ TEST(Verdict, OverrunsAreJudgedAgainstTheTolerance) {
   EXPECT_FALSE(judge_failsafe(stats, stock_vm(), in).refused());
   in.overrun_tolerance = -1;  // not checked
   EXPECT_TRUE(judge_failsafe(stats, stock_vm(), in).overruns_hold);
+}
+
+TEST(Verdict, AMachineOverrunningMostStepsIsNotOfferedATolerance) {
+  WakeupSamples s = minute(0, 0);
+  for (std::size_t i = 0; i < s.lateness[0].size(); i += 4) s.lateness[0][i] = 1.5e-3;  // 25 %
+  const FailSafeVerdict v = judge_failsafe(LatencyStats(s), stock_vm(), input(3));
+  EXPECT_FALSE(v.overruns_hold);
+  EXPECT_THAT(v.refusal(), Not(HasSubstr("max_overrun_fraction:")));
+  EXPECT_THAT(v.refusal(), HasSubstr("25.0 % of the steps would overrun"));
 }
 
 TEST(Verdict, ACleanMachineHoldsTheDefaultWindow) {
