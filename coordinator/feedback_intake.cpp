@@ -64,9 +64,13 @@ Verdict FeedbackIntake::judge(const transport::Message& message, Node*& node) {
     raise(message.node_id,
           "another participant answers as node " + std::to_string(message.node_id) +
               ": its answer to step " + std::to_string(message.step) +
-              arrival(" ", message.sent_ns, message.received_ns, message.writer) +
-              "; the node's own answer to step " + std::to_string(node->last_answer) +
-              arrival(" ", node->accepted.sent_ns, node->accepted.received_ns, node->writer));
+              arrival("", message.sent_ns, message.received_ns, message.writer) +
+              (node->answers == 0
+                   ? "; the node itself (writer " + std::to_string(node->writer) +
+                         ") has not answered yet"
+                   : "; the node's own answer to step " + std::to_string(node->last_answer) +
+                         arrival("", node->accepted.sent_ns, node->accepted.received_ns,
+                                 node->writer)));
     return Verdict::kNotEntitled;
   }
   const std::int64_t awaited = awaited_.load(std::memory_order_acquire);

@@ -105,6 +105,7 @@ void attack_control(Rogue& rogue, transport::DdsEndpoint& as_coordinator,
   as_node2.send(runtime::pack("", 2, runtime::ANNOUNCE, 0, announce));
   as_node2.send(runtime::pack(run, 1, runtime::HOLD, 1, hold));  // node 1's id on node 2's topic
   auto garbage = runtime::pack(run, 2, runtime::HEARTBEAT, 1, runtime::Heartbeat{});
+  garbage.kind = 99;  // no such kind
   garbage.payload = "\xff\xff\xff not protobuf";
   as_node2.send(garbage);
   as_node2.send(runtime::pack("another-run", 2, runtime::HOLD, 1, hold));
