@@ -48,7 +48,7 @@ std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
   } catch (const std::runtime_error& e) {
     throw ExitError(kExitEnvironment, std::string("platform check: ") + e.what());
   }
-  if (!args.json) std::cerr << platform::summary_text(check.summary);
+  if (!args.json || check.verdict.refused()) std::cerr << platform::summary_text(check.summary);
   if (check.verdict.refused() && !args.accept_platform)
     throw ExitError(kExitEnvironment,
                     "refusing to start: the deployment's fail-safe or overrun tolerance will not "
