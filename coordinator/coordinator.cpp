@@ -175,7 +175,7 @@ RunOutcome Coordinator::run() {
     outcome.links.push_back(stats);
   }
   outcome.wall_seconds = seconds_since(wall_start);
-  if (s.record && s.record->dropped() > 0) {
+  if (s.record && s.record->dropped() > 0 && !s.record_failed) {
     // A gap in the record is lost data: the run did not do what it was for.
     outcome.ok = false;
     outcome.status += "; the run record lost " + std::to_string(s.record->dropped()) +
@@ -192,7 +192,12 @@ RunOutcome Coordinator::run() {
     f.set_diverged(result.diverged);
     f.set_wall_seconds(outcome.wall_seconds);
     s.append_waiting(entry);
-    s.record->close();  // throws naming the file when a write failed
+    try {
+      s.record->close();
+    } catch (const std::runtime_error& e) {  // a write failed: the run kept nothing after it
+      outcome.ok = false;
+      if (!s.record_failed) outcome.status += std::string("; ") + e.what();
+    }
   }
   s.pacer = nullptr;
   s.pacing_clock = nullptr;

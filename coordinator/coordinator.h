@@ -37,13 +37,17 @@
 //   a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep),
 //   no lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift
 //   changing by more than limits.max_displacement_step -> stops before the command is sent.
+//   the record's writer fails a write (disk full, I/O error, file size limit) or falls more than
+//   its ring (4096 entries) behind -> stops within a step or two of it, naming the file and the
+//   reason; the record is the readable prefix written before the failure.
 //   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
 //   rejects    foreign-run, garbage, duplicate, stale, out-of-order, unknown-node messages are
 //              counted and never applied.
 // Record: header, one StepRecord per step, events, footer, through runtime::AsyncRecordWriter:
 // the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
 // loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
-// one or two entries behind). A full ring drops and counts entries and fails the run.
+// one or two entries behind). Every entry carries a CRC-32C (runtime/record.h). A record that
+// cannot be written stops the run, as a fault below: nothing would be kept of it.
 // Feedback: judged and decoded on the transport's receive thread (its inline handler) by
 // coordinator::FeedbackIntake into one wait-free LatestBox per node; the loop takes the newest
 // without a lock or a copy, and is woken once per step, when the step's last answer is in.

@@ -164,6 +164,12 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
 
   void write_header();
   void write_step(std::size_t k, const core::SimulationResult& result, double step_wall);
+  // After each step: a record whose writer failed (disk full, I/O error) or fell behind beyond
+  // its ring stops the run (RunAborted naming the file and the reason): nothing would be kept.
+  // Detected within a step or two of the failed write (the writer flushes whenever its ring runs
+  // empty, and this runs every step).
+  void check_record();
+  bool record_failed = false;  // check_record() stopped the run
 };
 
 }  // namespace rths::coordinator

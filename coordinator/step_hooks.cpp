@@ -43,6 +43,7 @@ bool Coordinator::State::after_step(std::size_t k,
                                     const core::SimulationResult& result) {
   const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
   write_step(k, result, step_wall);
+  check_record();
   if (k > 0)
     for (auto& [id, node] : nodes) lags.add(result.time[k], link_of(id));
   if (k == 0) {
@@ -51,6 +52,21 @@ bool Coordinator::State::after_step(std::size_t k,
     if (real_time) pacer->start();
   }
   return true;
+}
+
+void Coordinator::State::check_record() {
+  if (!record) return;
+  if (record->failed()) {
+    record_failed = true;
+    throw RunAborted(record->failure(), "");
+  }
+  if (record->dropped() > 0) {
+    record_failed = true;
+    throw RunAborted("the run record's writer fell more than " +
+                         std::to_string(record->capacity()) + " entries behind (" +
+                         std::to_string(record->dropped()) + " dropped)",
+                     "");
+  }
 }
 
 void Coordinator::State::prepare_real_time_thread() {
