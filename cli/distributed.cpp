@@ -148,7 +148,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       continue;
     }
     const runtime::RecordContents record = runtime::read_record(run.record);
-    if (record.truncated) print_warning(record.warning);
+    if (!record.warning.empty()) print_warning(record.warning);
     if (record.header() == nullptr) {
       results.missing.emplace_back(run.case_name, "the record has no header; see " + run.log_hint);
       continue;
@@ -168,6 +168,10 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
     } else {
       c.status = "cut short";
       c.status_detail = "the record has no footer: the coordinator stopped abruptly";
+    }
+    if (record.lost_entries()) {  // checksums failed: its rows are not the run's
+      c.status = "record damaged";
+      c.status_detail = record.loss_report();
     }
     if (!run.launcher_status.empty()) {
       c.status = run.launcher_status;
