@@ -73,7 +73,7 @@ int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoop
       if (lock.owns_lock()) lock.unlock();
       thread.join();
     }
-  } servo{lock};
+  } servo{lock, {false}, {}};
   const auto start_servo = [&](double period, const WaitPolicy& policy) {
     servo.thread = std::thread([&, period, policy] {
       MonotonicClock clock;
