@@ -310,6 +310,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
       stability = {{"lag_s", s.lag},
                    {"continuous_critical_delay_s", opt(s.continuous)},
                    {"discrete_critical_delay_s", opt(s.discrete)},
+                   {"discrete_check", s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
                    {"critical_delay_s", opt(s.critical())},
                    {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
                    {"past_critical_delay", s.past()}};
@@ -344,10 +345,16 @@ std::string study_summary_text(const StudyOutcome& outcome) {
       << outcome.motion_units << ")\n";
   out << std::left << std::setw(24) << "case" << std::setw(30) << "delay" << std::right << std::setw(11)
       << "peak (mm)" << std::setw(11) << "NRMSE (%)" << std::setw(14) << "Eq.2 (paper)" << std::setw(15)
-      << "peak err (mm)" << std::setw(16) << "crit. delay" << "  status\n";
+      << "peak err (mm)" << std::setw(16) << "crit. delay" << std::setw(10) << "margin" << "  status\n";
   for (const CaseOutcome& c : outcome.cases) {
-    std::string critical = "-";
+    std::string critical = "-", margin = "-";
     if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
+    if (c.stability && c.stability->critical()) {
+      // (critical - lag) / critical, as summary.json's margin_pct: negative when past it.
+      std::ostringstream pct;
+      pct << std::fixed << std::setprecision(0) << 100.0 * c.stability->margin() << " %";
+      margin = pct.str();
+    }
     out << std::left << std::setw(24) << c.name << std::setw(30) << c.delay_description << std::right
         << std::fixed << std::setprecision(3) << std::setw(11) << c.comparison.peak_m * 1e3;
     if (c.diverged()) {
@@ -358,7 +365,7 @@ std::string study_summary_text(const StudyOutcome& outcome) {
           << std::setw(14) << c.comparison.paper_eq2_as_printed << std::setprecision(3) << std::setw(15)
           << c.comparison.peak_error_m * 1e3;
     }
-    out << std::setw(16) << critical << "  " << c.status
+    out << std::setw(16) << critical << std::setw(10) << margin << "  " << c.status
         << (c.diverged() && c.expect_unstable ? " (expected)" : "") << "\n";
     out.unsetf(std::ios::fixed);
   }

@@ -13,6 +13,7 @@
 #include "cli/commands.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "util/distinct_paths.h"
 
 namespace rths::cli {
 
@@ -29,6 +30,8 @@ void add_export_command(CLI::App& app) {
       "HDF5 file to write (one dataset per CSV column, each with a `units` attribute)");
   cmd->callback([=] {
     if (csv->count() + mat->count() + h5->count() == 0) throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
+    for (const auto& [format, path] : *outputs)
+      util::refuse_output_over_input({"--" + tables::extension(format).substr(1), path}, {{"record", *record}});
     runtime::RecordContents contents;
     try {
       contents = runtime::read_record(*record);

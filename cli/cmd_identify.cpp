@@ -365,7 +365,7 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--sample-rate", o->sample_rate,
                   "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
                   "export without Sampling Interval/Rate); checked against the file's own when both")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(core::Quantity::kFrequency));
   cmd->add_option("--candidates", o->candidates, "candidate effects (default: the whole library)");
   cmd->add_option("--holdout", o->holdout, "held-out share of the record")
       ->check(CLI::Range(0.01, 0.99));
@@ -378,11 +378,11 @@ void add_identify_command(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--penalty", o->penalty, "relative penalty per added parameter")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel");
+  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel")->check(in_range(core::Quantity::kCount));
   cmd->add_option("--decimate", o->decimate, "decimation for the search (0: automatic)");
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(core::Quantity::kCount));
   cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
@@ -393,8 +393,8 @@ void add_identify_command(CLI::App& app) {
                   "write a compensator designed from the identified actuator to --out: "
                   "polynomial | ats | model-based | model-based-adaptive")
       ->check(CLI::IsMember({"polynomial", "ats", "model-based", "model-based-adaptive"}));
-  cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s, or 1ms)")
+      ->transform(seconds_in(core::Quantity::kStep));
   cmd->add_option("--folds", o->folds,
                   "k-fold validation over contiguous blocks of the final model (0: off)");
   cmd->add_option("--validate", o->validate,

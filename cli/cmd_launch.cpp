@@ -114,11 +114,11 @@ void add_launch_command(CLI::App& app) {
   cmd->add_option("--case", args->cases, "case(s) to run; default every case");
   cmd->add_option("--out", args->out, "output folder (records, results, plots, logs)");
   cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)")
-      ->check(CLI::Range(0, 232));
+      ->check(in_range(core::Quantity::kDdsDomain));
   cmd->add_option("--bin-dir", args->bin_dir,
                   "where rths-coordinator and the node programs are (default: beside rths)");
   cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is stopped")
-      ->transform(seconds_value());
+      ->transform(seconds_in(core::Quantity::kTimeout));
   cmd->add_option("--cpu-placement", args->cpu_placement,
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")

@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "coordinator/answer_verdict.h"
 #include "coordinator/deadline_verdict.h"
 #include "coordinator/state.h"
 
@@ -114,6 +115,9 @@ void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outco
     if (outcome.ok && !misses)
       misses = servo_deadline_misses(node.plan->label(), node.servo_overruns, node.servo_ticks,
                                      tolerance);
+  for (const auto& [id, node] : s.nodes)
+    if (s.real_time && outcome.ok && !misses)
+      misses = answer_shortfall(id, node.fresh_steps, node.judged_steps, kMinAnswerFraction);
   if (misses) {
     outcome.ok = false;
     outcome.status = *misses;

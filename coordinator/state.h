@@ -67,6 +67,7 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
     std::uint64_t answers_before_step = 0;
     int missed_streak = 0;         // real time: consecutive steps without a fresh answer
     int late_streak = 0;           // real time: consecutive steps on an older answer
+    std::uint64_t fresh_steps = 0, judged_steps = 0;  // real time: for answer_shortfall
     bool awaited = true;           // awaits_answers_of(its spec)
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
     std::uint64_t writer = 0;      // its announcement's writer: only it may speak as this node

@@ -16,8 +16,8 @@
 //
 // "series" maps a name with its unit (time_s, u1_m, force1_N, node2_round_trip_s, a1_m_per_s2)
 // to a 1-D NumPy float64 array (text columns: a list of str); the names and units are those of
-// tables/results.h, the same the CSV, MATLAB and HDF5 files carry, with the unit appended where
-// the file's variable name does not already end in it. "units" maps the same names to the unit.
+// tables/results.h, the same the CSV, MATLAB and HDF5 files carry (one naming rule,
+// tables/table.h). "units" maps the same names to the unit.
 // Summaries are plain dicts with the keys of the CLI's --json output.
 //
 // Errors: bad input (a malformed config, an unknown effect, a truncated data file) raises
@@ -38,6 +38,7 @@
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
 #include "analysis/sweep_run.h"
+#include "core/ranges.h"
 #include "core/stability.h"
 #include "core/study.h"
 #include "identify/data.h"
@@ -69,24 +70,6 @@ struct Study {
   }
 };
 
-// "m/s^2" -> "m_per_s2": a unit as the tail of a Python name.
-std::string unit_suffix(const std::string& unit) {
-  std::string out;
-  for (char c : unit) {
-    if (c == '/') out += "_per_";
-    else if (c == '%') out += "pct";
-    else if (c != '^') out += c;
-  }
-  return out;
-}
-
-std::string series_name(const tables::Column& column) {
-  if (column.unit.empty()) return column.name;
-  const std::string suffix = "_" + unit_suffix(column.unit);
-  const bool has = column.name.size() > suffix.size() &&
-                   column.name.compare(column.name.size() - suffix.size(), suffix.size(), suffix) == 0;
-  return has ? column.name : column.name + suffix;
-}
 
 py::object to_python(const nlohmann::json& j) {
   switch (j.type()) {
@@ -114,7 +97,7 @@ py::object to_python(const nlohmann::json& j) {
 py::dict table_dict(const tables::Table& table) {
   py::dict series, units;
   for (const tables::Column& c : table.columns()) {
-    const py::str name(series_name(c));
+    const py::str name(c.name);  // already ends in its unit (tables/table.h)
     if (c.is_text) {
       series[name] = py::cast(c.texts);
     } else {
@@ -203,6 +186,13 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
 
 py::dict stability(double period, double zeta, double alpha, double dt, const std::string& integrator,
                    int branches, int max_steps) {
+  // The same range rules as `rths stability`'s flags (core/ranges.h), named as the arguments.
+  core::check_range(core::Quantity::kPeriod, period, "period_s");
+  core::check_range(core::Quantity::kDampingRatio, zeta, "zeta");
+  core::check_range(core::Quantity::kFraction, alpha, "experimental_fraction");
+  core::check_range(core::Quantity::kStep, dt, "dt_s");
+  core::check_range(core::Quantity::kCount, static_cast<long long>(branches), "branches");
+  core::check_range(core::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
   const auto kind = core::integrator_from_string(integrator);
   const core::ContinuousStability continuous = core::continuous_critical_delay(period, zeta, alpha, branches);
   const core::DiscreteStability discrete = core::discrete_critical_delay(kind, period, zeta, alpha, dt, max_steps);
@@ -254,6 +244,8 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
                          const std::optional<std::vector<std::string>>& candidates, double holdout,
                          const std::string& holdout_mode, std::size_t max_steps, const std::string& length_unit,
                          const std::string& force_unit, const std::string& time_unit, const std::string& column_map) {
+  core::check_range(core::Quantity::kFraction, holdout, "holdout");
+  core::check_range(core::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
   identify::IdentifyOptions options;
   options.channels.clear();
   for (const auto& name : channels) {

@@ -181,7 +181,55 @@ TEST(CliTest, FlagValuesWithUnits) {
   EXPECT_EQ(o.output.find("1.797e308"), std::string::npos) << o.output;
   o = run("sdof --motion " + kMotion + " --zeta 5");
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find("modal_zeta"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("--zeta: 5 is outside [0, 1]"), std::string::npos) << o.output;
+}
+
+// Every number a user types is checked where it is parsed: exit 2, the flag, the value, the range.
+TEST(CliTest, NumbersOutsideTheirRangeExitTwoNamingTheFlagValueAndRange) {
+  Outcome o = run("sdof --motion " + kMotion + " --dt 1e-9");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--dt: 1e-09 s is outside [1e-06, 1] s"), std::string::npos) << o.output;
+  o = run("stability --period 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--period: 0 s is outside (0, 50] s"), std::string::npos) << o.output;
+  o = run("stability --period 1e300");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--period"), std::string::npos) << o.output;
+  o = run("launch " + (kSource / "configs/paper_frame.textproto").string() + " --timeout -1");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--timeout: -1 s is outside (0, 86400] s"), std::string::npos) << o.output;
+  o = run("pki init " + scratch("days").string() + "/pki --node 2:actuator_emulator --days 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--days"), std::string::npos) << o.output;
+}
+
+// A nested command (`rths pki init`) parses its own flags and suggests from them.
+TEST(CliTest, NestedCommandsTakeAndSuggestTheirOwnFlags) {
+  const auto dir = scratch("pki");
+  Outcome o = run("pki init " + (dir / "pki").string() + " --confg configs/paper_frame.textproto");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("did you mean '--config'"), std::string::npos) << o.output;
+  o = run("pki innit " + (dir / "pki").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("did you mean `rths pki init`"), std::string::npos) << o.output;
+  o = run("pki init " + (dir / "pki").string() + " --config " + (kSource / "configs/paper_frame.textproto").string() +
+          " --days 30 --organisation lab");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_TRUE(std::filesystem::is_directory(dir / "pki" / "node_2")) << o.output;
+}
+
+// An output that is one of the command's inputs is refused before anything is written.
+TEST(CliTest, ExportNeverOverwritesTheRecordItReads) {
+  const auto dir = scratch("export");
+  const auto record = dir / "R.rthsrec";
+  std::filesystem::copy_file(kSource / "fuzz/corpus/run_record/header_only.rthsrec", record);
+  const auto size = std::filesystem::file_size(record);
+  Outcome o = run("export " + record.string() + " --csv " + record.string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--csv '" + record.string() + "' is the input record"), std::string::npos) << o.output;
+  EXPECT_EQ(std::filesystem::file_size(record), size);
+  o = run("export " + record.string() + " --csv " + (dir / "R.csv").string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
 }
 
 TEST(CliTest, MotionUnitsAreExplicit) {
@@ -194,6 +242,50 @@ TEST(CliTest, MotionUnitsAreExplicit) {
   o = run("sdof --motion " + (dir / "ms2.txt").string() + " --motion-units m/s2 --exp-fraction 0.3333 --delay 0.002 --json");
   EXPECT_EQ(o.exit_code, 0) << o.output;
   EXPECT_EQ(json_of(o)["motion_units"], "m/s2");
+}
+
+// A motion that is not a text file of numbers is named for what it is, never as a unit problem,
+// and its bytes never reach the terminal raw; a one-column motion takes its step from --motion-dt.
+TEST(CliTest, MotionFilesThatAreNotMotionsAreNamedForWhatTheyAre) {
+  const auto dir = scratch("motion_files");
+  std::ofstream(dir / "empty.txt").close();
+  std::ofstream(dir / "binary.bin", std::ios::binary) << std::string("\x7f" "ELF\x02\x01\x01\x00\x00\x9b\xff", 12);
+  std::filesystem::create_directories(dir / "folder");
+  Outcome o = run("sdof --motion " + (dir / "empty.txt").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("is empty, not a ground-motion file"), std::string::npos) << o.output;
+  o = run("sdof --motion " + (dir / "folder").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("is a directory"), std::string::npos) << o.output;
+  for (const std::string units : {"", " --motion-units g"}) {
+    o = run("sdof --motion " + (dir / "binary.bin").string() + units);
+    EXPECT_EQ(o.exit_code, 2) << o.output;
+    EXPECT_NE(o.output.find("holds binary data"), std::string::npos) << o.output;
+    EXPECT_EQ(o.output.find("\x7f" "ELF"), std::string::npos) << "raw bytes printed";
+    EXPECT_EQ(o.output.find("carry no unit"), std::string::npos) << o.output;
+  }
+  std::ofstream(dir / "one.txt") << "0\n0.1\n-0.2\n0.3\n-0.1\n0.05\n0\n0\n";
+  o = run("sdof --motion " + (dir / "one.txt").string() + " --motion-units g --dt 0.001");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--motion-dt"), std::string::npos) << o.output;
+  o = run("sdof --motion " + (dir / "one.txt").string() + " --motion-units g --motion-dt 0.01 --dt 0.001 --json");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+}
+
+// Integrators outside the discrete delay analysis run; the summary says the check was skipped.
+// For the others the discrete critical delay is found also below the lag (filled, not null).
+TEST(CliTest, AlphaOsRunsWithTheDiscreteCheckSkippedAndOthersReportTheirDiscreteLimit) {
+  Outcome o = run("sdof --motion " + kMotion + " --integrator alpha-os --exp-fraction 0.3333 --delay 14ms --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  nlohmann::json j = json_of(o);
+  EXPECT_EQ(j["stability"]["discrete_check"].get<std::string>().rfind("skipped: ", 0), 0u) << j.dump();
+  EXPECT_TRUE(j["stability"]["discrete_critical_delay_s"].is_null());
+  o = run("sdof --motion " + kMotion + " --exp-fraction 0.3333 --dt 0.001 --delay 14ms --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  j = json_of(o);
+  EXPECT_EQ(j["stability"]["discrete_check"], "made");
+  ASSERT_TRUE(j["stability"]["discrete_critical_delay_s"].is_number()) << j.dump();
+  EXPECT_GT(j["stability"]["discrete_critical_delay_s"].get<double>(), 0.014);
 }
 
 TEST(CliTest, AConfigOfAnotherKindIsNamed) {

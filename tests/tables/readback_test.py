@@ -114,15 +114,15 @@ def test_launch_and_export_write_the_record_in_every_format(study, tmp_path):
     out.mkdir()
     rths("export", record, "--csv", out / "r.csv", "--mat", out / "r.mat", "--h5", out / "r.h5")
     header, columns = read_csv(out / "r.csv")
-    assert header[:4] == ["step", "time", "ground_acceleration", "u1"]
+    assert header[:4] == ["step", "time_s", "ground_acceleration_m_per_s2", "u1_m"]
     mat = assert_same_as_csv(header, columns, out / "r.mat", out / "r.h5")
-    assert mat["units"]["node2_round_trip"] == "s" and mat["units"]["force1"] == "N"
-    link = [n for n in header if n.endswith("_round_trip")][0]
+    assert mat["units"]["node2_round_trip_s"] == "s" and mat["units"]["force1_N"] == "N"
+    link = [n for n in header if n.endswith("_round_trip_s")][0]
     # launch writes run's results table (every case's columns, SI names) beside the record.
     with h5py.File(out / "r.h5", "r") as exported, h5py.File(tmp_path / "launch/results.h5", "r") as launched:
         assert math.isnan(exported[link][0])  # step 0 has no exchange
         assert np.all(exported[link][1:] > 0)
-        np.testing.assert_array_equal(exported["u1"][()], launched["lag_shift_14ms_u_floor1_m"][()])
+        np.testing.assert_array_equal(exported["u1_m"][()], launched["lag_shift_14ms_u_floor1_m"][()])
         assert exported.attrs["case_name"] == "lag_shift_14ms"
         assert exported.attrs["integrity"] == "verified (CRC-32C per entry)"
         assert exported.attrs["lost_steps"] == ""
