@@ -140,6 +140,7 @@ struct CriticalDelayCheck {
   std::optional<double> continuous;          // s; empty: stable for every delay
   std::optional<double> discrete;            // s; empty: none found up to the searched steps
   int discrete_searched_steps = 0;           // n searched for the discrete limit
+  std::string assumed;                       // what the check assumed (modal approximation...)
   int governing_mode = 1;                    // 1-based mode with the smallest continuous delay
   double governing_period = 0.0;             // s
   double governing_fraction = 0.0;           // alpha of that mode
@@ -155,6 +156,10 @@ struct CriticalDelayCheck {
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         const std::vector<double>& experimental_storey_stiffness,
+                                        IntegratorKind kind, double dt, double lag);
+// The same with K_e given as a matrix (N/m, n x n): a structure given by matrices, whose
+// experimental parts sit at DOFs (HybridPartition::experimental_stiffness()).
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
                                         IntegratorKind kind, double dt, double lag);
 
 }  // namespace rths::core

@@ -1,6 +1,7 @@
 #include "core/study.h"
 
 #include "core/compensation.h"
+#include "core/structure_config.h"
 #include "core/text_columns.h"
 #include "core/text_format.h"
 
@@ -89,8 +90,8 @@ void validate_study(const config::Study& study, const std::string& source) {
     require(building.storey_mass_size() > 0, source, "structure.shear_building.storey_mass is empty");
     require(building.storey_mass_size() == building.storey_stiffness_size(), source,
             "structure.shear_building: storey_mass and storey_stiffness differ in length");
-  } else {
-    fail(source, "structure needs sdof or shear_building");
+  } else if (!structure.has_matrices()) {
+    fail(source, "structure needs sdof, shear_building or matrices");
   }
   if (structure.has_sdof()) {
     require(structure.sdof().period() <= kMaxPeriod, source,
@@ -113,6 +114,13 @@ void validate_study(const config::Study& study, const std::string& source) {
           "substructuring.experimental_fraction must be in [0, 1]");
   require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
           "substructuring: give experimental_fraction or experimental_storeys, not both");
+  if (structure.has_matrices()) {
+    require(sub.experimental_storeys().empty() && sub.experimental_fraction() == 0, source,
+            "substructuring: a structure given by matrices is split at experimental_dofs, not by storeys");
+  } else {
+    require(sub.experimental_dofs().empty(), source,
+            "substructuring.experimental_dofs needs structure.matrices (a shear building is split by storeys)");
+  }
   require(study.motion().scale() >= 0 && study.motion().scale() <= kMaxMotionScale, source,
           "motion.scale must be in [0, " + format_number(kMaxMotionScale) + "] (0 means 1), got " + format_number(study.motion().scale()));
   require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
@@ -267,7 +275,9 @@ StoreyModelFactory make_storey_factory(const config::RestoringForce& model) {
   }
 }
 
-StructuralModel make_structure(const config::Structure& structure) {
+StructuralModel make_structure(const config::Structure& structure,
+                               const std::filesystem::path& base_dir) {
+  if (structure.has_matrices()) return matrix_structure(structure, base_dir);
   StructuralModel model;
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
@@ -340,14 +350,18 @@ int servo_substeps(const config::Study& study, double dt) {
   return static_cast<int>(whole);
 }
 
-HybridSetup base_setup(const config::Study& study, double dt) {
+HybridSetup base_setup(const config::Study& study, double dt, const std::filesystem::path& base_dir) {
   HybridSetup base;
-  base.model = make_structure(study.structure());
+  base.model = make_structure(study.structure(), base_dir);
   base.integrator = integrator_kind(study.integrator());
   base.dt = dt;
   base.allow_unstable = study.integrator().allow_unstable();
   base.servo_substeps = servo_substeps(study, dt);
   const auto& sub = study.substructuring();
+  if (study.structure().has_matrices()) {
+    base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps);
+    return base;
+  }
   const StoreyModelFactory factory = make_storey_factory(sub.model());
   if (!sub.experimental_storeys().empty()) {
     std::vector<int> storeys;
@@ -375,7 +389,7 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
             "its delay of " + format_number(lag) + " s is not shorter than the record (" +
                 format_number(prepared.motion.duration()) + " s)");
   }
-  prepared.base = base_setup(study, dt);
+  prepared.base = base_setup(study, dt, base_dir);
   return prepared;
 }
 
