@@ -2,6 +2,7 @@
 
 #include "core/compensation.h"
 #include "core/structure_config.h"
+#include "core/tracking.h"
 #include "core/text_columns.h"
 #include "core/text_format.h"
 
@@ -54,6 +55,7 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
       break;
     case K::kTrace: require(!stage.trace().path().empty(), source, where + ".trace.path is empty"); break;
     case K::kBenchmark: break;
+    case K::kTrackingLoop: break;  // checked where it is built (core::TrackingLoop), naming the field
     case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   }
 }
@@ -241,6 +243,9 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
       block = std::make_unique<TraceShift>(read_delay_trace(path), dt);
       break;
     }
+    case K::kTrackingLoop:
+      block = std::make_unique<TrackingLoop>(stage.tracking_loop(), dt, "tracking_loop");
+      break;
     case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
   }
   block->set_gain(effective_gain(stage));
