@@ -13,14 +13,6 @@
 namespace rths::analysis {
 namespace {
 
-std::vector<double> experimental_storey_stiffness(const core::HybridPartition& partition) {
-  std::vector<double> k(partition.experimental.size(), 0.0);
-  for (std::size_t s = 0; s < k.size(); ++s) {
-    if (partition.experimental[s]) k[s] = partition.experimental[s]->initial_stiffness();
-  }
-  return k;
-}
-
 // The first step at which |u| or |v| of a floor passed a limit (0 = no limit), with why.
 std::optional<std::pair<std::size_t, std::string>> first_limit_trip(const core::SimulationResult& r,
                                                                     const config::SafetyLimits& limits) {
@@ -73,10 +65,9 @@ double nominal_delay_of(const core::HybridSetup& setup) {
 
 std::optional<core::CriticalDelayCheck> check_setup(const core::PreparedStudy& prepared,
                                                     const core::HybridSetup& setup, double lag) {
-  const std::vector<double> k_experimental = experimental_storey_stiffness(prepared.base.partition);
-  if (std::none_of(k_experimental.begin(), k_experimental.end(), [](double k) { return k > 0; }))
-    return std::nullopt;
-  return core::check_critical_delay(setup.model, k_experimental, setup.integrator, setup.dt, lag);
+  if (prepared.base.partition.actuator_storeys.empty()) return std::nullopt;
+  return core::check_modal_critical_delay(setup.model, prepared.base.partition.experimental_stiffness(),
+                                          setup.integrator, setup.dt, lag);
 }
 
 // What is known of a case before it runs: its delay, and its critical-delay check (announced
@@ -313,7 +304,8 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                    {"discrete_check", s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
                    {"critical_delay_s", opt(s.critical())},
                    {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
-                   {"past_critical_delay", s.past()}};
+                   {"past_critical_delay", s.past()},
+                   {"assumed", s.assumed}};
     }
     cases.push_back({{"name", c.name},
                      {"delay", c.delay_description},

@@ -44,10 +44,9 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
                                               s.deployment.limits().max_displacement());
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
   const int actuators = static_cast<int>(s.setup.partition.actuator_storeys.size());
-  s.assembly = core::StoreyAssembly(storeys);
+  s.assembly = s.setup.partition.assembly();
   if (plan_.numerical_local)
-    s.local_numerical = std::make_unique<core::NumericalSubstructure>(
-        core::HybridPartition(s.setup.partition).numerical);
+    s.local_numerical = std::make_unique<core::NumericalSubstructure>(s.setup.partition);
   s.drift = core::Vec::Zero(storeys);
   s.limits = std::make_unique<CommandLimits>(s.deployment.limits(),
                                              s.setup.partition.actuator_storeys, storeys);

@@ -574,26 +574,34 @@ bool discrete_analysis_covers(IntegratorKind kind) {
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         const std::vector<double>& experimental_storey_stiffness,
                                         IntegratorKind kind, double dt, double lag) {
-  if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
   const int dofs = model.dofs();
   if (static_cast<int>(experimental_storey_stiffness.size()) != dofs) {
     throw std::invalid_argument("critical delay check: one experimental stiffness per storey expected");
   }
   // K_e of a shear building from the storeys' experimental stiffnesses.
-  Mat k_experimental = Mat::Zero(dofs, dofs);
-  for (int s = 0; s < dofs; ++s) {
-    const double k = experimental_storey_stiffness[static_cast<std::size_t>(s)];
-    k_experimental(s, s) += k;
-    if (s > 0) {
-      k_experimental(s - 1, s - 1) += k;
-      k_experimental(s - 1, s) -= k;
-      k_experimental(s, s - 1) -= k;
-    }
-  }
+  Mat k_experimental;
+  StoreyAssembly(dofs).tangent(Eigen::Map<const Vec>(experimental_storey_stiffness.data(), dofs),
+                               k_experimental);
+  return check_modal_critical_delay(model, k_experimental, kind, dt, lag);
+}
+
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
+                                        IntegratorKind kind, double dt, double lag) {
+  if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
+  const int dofs = model.dofs();
+  if (k_experimental.rows() != dofs || k_experimental.cols() != dofs)
+    throw std::invalid_argument("critical delay check: K_e must be n x n for the structure's n DOFs");
   const Modes modes = modal_analysis(model.mass, model.stiffness);
   CriticalDelayCheck check;
   check.lag = lag;
   const int lag_steps = lag > 0 ? static_cast<int>(std::ceil(lag / dt - 1e-9)) : 0;
+  check.discrete_searched_steps = std::min(lag_steps + 1, CriticalDelayCheck::kMaxDiscreteSteps);
+  check.assumed = dofs == 1 ? "exact for one DOF (the experimental part at its initial stiffness)"
+                            : "modal approximation over the " + std::to_string(dofs) +
+                                  " modes of (M, K), each an SDOF with its modal damping and "
+                                  "experimental fraction phi' K_e phi / omega^2; the coupling the "
+                                  "delayed force adds between modes is ignored; the experimental "
+                                  "part at its initial stiffness";
   if (!discrete_analysis_covers(kind))
     check.discrete_skipped = "the discrete delay analysis does not cover " + to_string(kind);
   for (int i = 0; i < dofs; ++i) {

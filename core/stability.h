@@ -143,6 +143,7 @@ struct CriticalDelayCheck {
   // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
   // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
   std::string discrete_skipped;
+  std::string assumed;                       // what the check assumed (modal approximation...)
   int governing_mode = 1;                    // 1-based mode with the smallest continuous delay
   double governing_period = 0.0;             // s
   double governing_fraction = 0.0;           // alpha of that mode
@@ -161,6 +162,10 @@ bool discrete_analysis_covers(IntegratorKind kind);
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         const std::vector<double>& experimental_storey_stiffness,
+                                        IntegratorKind kind, double dt, double lag);
+// The same with K_e given as a matrix (N/m, n x n): a structure given by matrices, whose
+// experimental parts sit at DOFs (HybridPartition::experimental_stiffness()).
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
                                         IntegratorKind kind, double dt, double lag);
 
 }  // namespace rths::core

@@ -2,6 +2,8 @@
 
 #include "core/compensation.h"
 #include "core/ranges.h"
+#include "core/structure_config.h"
+#include "core/tracking.h"
 #include "core/text_columns.h"
 #include "core/text_format.h"
 
@@ -58,6 +60,7 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
       break;
     case K::kTrace: require(!stage.trace().path().empty(), source, where + ".trace.path is empty"); break;
     case K::kBenchmark: break;
+    case K::kTrackingLoop: break;  // checked where it is built (core::TrackingLoop), naming the field
     case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   }
 }
@@ -94,8 +97,8 @@ void validate_structure(const config::Structure& structure, const std::string& s
     require(building.storey_mass_size() > 0, source, "structure.shear_building.storey_mass is empty");
     require(building.storey_mass_size() == building.storey_stiffness_size(), source,
             "structure.shear_building: storey_mass and storey_stiffness differ in length");
-  } else {
-    fail(source, "structure needs sdof or shear_building");
+  } else if (!structure.has_matrices()) {
+    fail(source, "structure needs sdof, shear_building or matrices");
   }
   const bool rayleigh = structure.damping().has_rayleigh();
   require_in(Quantity::kDampingRatio,
@@ -186,6 +189,13 @@ void validate_study(const config::Study& study, const std::string& source) {
   require_in(Quantity::kFraction, sub.experimental_fraction(), "substructuring.experimental_fraction", source);
   require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
           "substructuring: give experimental_fraction or experimental_storeys, not both");
+  if (study.structure().has_matrices()) {
+    require(sub.experimental_storeys().empty() && sub.experimental_fraction() == 0, source,
+            "substructuring: a structure given by matrices is split at experimental_dofs, not by storeys");
+  } else {
+    require(sub.experimental_dofs().empty(), source,
+            "substructuring.experimental_dofs needs structure.matrices (a shear building is split by storeys)");
+  }
   require_unset_or_in(Quantity::kMotionScale, study.motion().scale(), "motion.scale (0 means 1)", source);
   require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
   validate_cases(study, source);
@@ -277,6 +287,9 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
       block = std::make_unique<TraceShift>(read_delay_trace(path), dt);
       break;
     }
+    case K::kTrackingLoop:
+      block = std::make_unique<TrackingLoop>(stage.tracking_loop(), dt, "tracking_loop");
+      break;
     case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
   }
   block->set_gain(effective_gain(stage));
@@ -311,7 +324,9 @@ StoreyModelFactory make_storey_factory(const config::RestoringForce& model) {
   }
 }
 
-StructuralModel make_structure(const config::Structure& structure) {
+StructuralModel make_structure(const config::Structure& structure,
+                               const std::filesystem::path& base_dir) {
+  if (structure.has_matrices()) return matrix_structure(structure, base_dir);
   StructuralModel model;
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
@@ -384,14 +399,18 @@ int servo_substeps(const config::Study& study, double dt) {
   return static_cast<int>(whole);
 }
 
-HybridSetup base_setup(const config::Study& study, double dt) {
+HybridSetup base_setup(const config::Study& study, double dt, const std::filesystem::path& base_dir) {
   HybridSetup base;
-  base.model = make_structure(study.structure());
+  base.model = make_structure(study.structure(), base_dir);
   base.integrator = integrator_kind(study.integrator());
   base.dt = dt;
   base.allow_unstable = study.integrator().allow_unstable();
   base.servo_substeps = servo_substeps(study, dt);
   const auto& sub = study.substructuring();
+  if (study.structure().has_matrices()) {
+    base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps);
+    return base;
+  }
   const StoreyModelFactory factory = make_storey_factory(sub.model());
   if (!sub.experimental_storeys().empty()) {
     std::vector<int> storeys;
@@ -419,7 +438,7 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
             "its delay of " + format_number(lag) + " s is not shorter than the record (" +
                 format_number(prepared.motion.duration()) + " s)");
   }
-  prepared.base = base_setup(study, dt);
+  prepared.base = base_setup(study, dt, base_dir);
   return prepared;
 }
 

@@ -50,7 +50,9 @@ DelayChain make_delay_chain(const google::protobuf::RepeatedPtrField<config::Del
                             double dt, const std::filesystem::path& base_dir);
 
 StoreyModelFactory make_storey_factory(const config::RestoringForce& model);
-StructuralModel make_structure(const config::Structure& structure);
+// Relative matrix files (structure.matrices) resolve against base_dir.
+StructuralModel make_structure(const config::Structure& structure,
+                               const std::filesystem::path& base_dir = {});
 IntegratorKind integrator_kind(const config::Integrator& integrator);
 // The inverse: the config kind of a core integrator (every core kind has one).
 config::Integrator::Kind config_integrator_kind(IntegratorKind kind);
@@ -65,8 +67,11 @@ struct PreparedStudy {
 PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir);
 
 // What a study fixes before any motion or case: structure, integrator, dt (s), partition and the
-// servo loop. The one construction in-process runs and distributed nodes share.
-HybridSetup base_setup(const config::Study& study, double dt);
+// servo loop. The one construction in-process runs and distributed nodes share. Relative matrix
+// files resolve against base_dir. A structure given by matrices is split at its experimental DOFs
+// (core/structure_config.h): the model's mass and damping are then the numerical part's.
+HybridSetup base_setup(const config::Study& study, double dt,
+                       const std::filesystem::path& base_dir = {});
 // Servo periods per integrator step from study.servo.rate (Hz) and dt (s): 1 when unset; throws
 // std::invalid_argument naming servo.rate unless rate * dt is a whole number in [1, 64].
 int servo_substeps(const config::Study& study, double dt);
