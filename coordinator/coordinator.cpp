@@ -99,7 +99,10 @@ RunOutcome Coordinator::run() {
         transport::Endpoint& endpoint;
         ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
       } remove_handler{s.endpoint};
-      core::run_steps(s.setup, s.prepared.motion, s, s, loop_options, result);
+      if (s.options.driver)
+        s.options.driver(s, s, result);
+      else
+        core::run_steps(s.setup, s.prepared.motion, s, s, loop_options, result);
     }
     if (result.diverged)
       s.event("diverged: |u| = " +

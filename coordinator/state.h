@@ -27,13 +27,6 @@ namespace rths::coordinator {
 
 using Clock = std::chrono::steady_clock;
 
-// Thrown inside the loop when the run must stop; caught by run().
-struct RunAborted : std::runtime_error {
-  RunAborted(const std::string& why, std::string node)
-      : std::runtime_error(why), node(std::move(node)) {}
-  std::string node;
-};
-
 inline double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
