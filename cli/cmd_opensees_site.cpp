@@ -1,8 +1,8 @@
 // rths opensees-site CONFIG [--port 8090] [--listen 127.0.0.1] [--case NAME] [--out DIR]
-//   [--domain N] [--no-start-nodes] [--accept-timeout S] [--security DIR] [--run-id ID]
+//   [--domain N] [--no-start-nodes] [--no-plots] [--accept-timeout S] [--security DIR] [--run-id ID]
 // Serves one OpenSees genericClient element (opensees_site/site.h): the study's actuator
-// emulators over DDS, the record in OUT/run.rthsrec, node logs beside it, the coordinator's
-// summary on stdout. Listens on loopback unless --listen names another address.
+// emulators over DDS, the record in OUT/run.rthsrec, node logs, results.csv and the plots of
+// opensees_site/outputs.h (unless --no-plots) beside it, the coordinator's summary on stdout. Listens on loopback unless --listen names another address.
 // Exit: 0 the client's analysis completed; 1 the client was refused or the run stopped (silent
 // client, bad frame, implicit iteration, limits, a node lost, no client within --accept-timeout);
 // 2 bad config or flags; 3 cannot listen, a node program missing, DDS or file error.
@@ -11,6 +11,7 @@
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "coordinator/program.h"
+#include "opensees_site/outputs.h"
 #include "opensees_site/site.h"
 
 namespace rths::cli {
@@ -20,7 +21,7 @@ namespace {
 struct SiteFlags {
   std::string config, case_name, out = "out/opensees_site", listen = "127.0.0.1", run_id, security;
   int port = 8090, domain = -1;
-  bool no_start_nodes = false;
+  bool no_start_nodes = false, no_plots = false;
   double accept_timeout = -1;
 };
 
@@ -60,6 +61,13 @@ int serve(const SiteFlags& f) {
   if (!outcome.refusal.empty())
     throw ExitError(kExitRunFailed, "refused the OpenSees client " + outcome.client + ": " +
                                         outcome.refusal);
+  if (outcome.served && std::filesystem::exists(options.record)) {
+    try {
+      opensees::write_site_outputs(options.record, f.out, !f.no_plots);
+    } catch (const std::exception& e) {
+      throw ExitError(kExitEnvironment, e.what());
+    }
+  }
   std::cout << "client: " << outcome.client << " (" << outcome.ending << ")\n"
             << coordinator::summary_text(outcome.run) << "record: " << options.record.string()
             << "\n";
@@ -93,6 +101,7 @@ void add_opensees_site_command(CLI::App& app) {
   cmd->add_option("--security", f->security, "`rths pki init` directory (DDS Security)");
   cmd->add_flag("--no-start-nodes", f->no_start_nodes,
                 "the actuator emulators run elsewhere (started by hand with this run id)");
+  cmd->add_flag("--no-plots", f->no_plots, "write results.csv but no plots");
   cmd->add_option("--accept-timeout", f->accept_timeout,
                   "s to wait for the client (default: forever)");
   cmd->callback([f] { serve(*f); });

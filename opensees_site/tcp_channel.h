@@ -6,6 +6,8 @@
 //   Connection   reads exactly N bytes within a deadline and writes whole buffers. While it
 //                waits it also accepts and closes any further client on the listener, logging
 //                the refusal, so a second OpenSees never shares the actuators.
+// Quick ACKs after every read: genericClient leaves Nagle on, and a delayed ACK of a frame that
+// gets no answer would hold its next frame back 40 ms.
 // Bytes are the host's: genericClient sends native ints and doubles without an endianness check.
 
 #include <chrono>

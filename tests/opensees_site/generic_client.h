@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -96,7 +97,8 @@ class GenericClient {
     timeval tv{ms / 1000, (ms % 1000) * 1000};
     ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
     char c;
-    return ::recv(fd_, &c, 1, 0) == 0;
+    const ssize_t n = ::recv(fd_, &c, 1, 0);
+    return n == 0 || (n < 0 && errno == ECONNRESET);  // a reset when our bytes went unread
   }
   void close() {
     if (fd_ >= 0) ::close(fd_);

@@ -94,7 +94,7 @@ double peak_relative_difference(const test::FrameRun& a, const test::FrameRun& b
 }
 
 TEST(Session, LagFreeServedColumnEqualsTheElasticElement) {
-  const std::string text = test::site_study(2, "");
+  const std::string text = test::site_study(4, "");
   const auto ground = test::ground_motion(text);
   InProcessSite site(text, "reference");
   auto served = site.serve();
@@ -108,7 +108,7 @@ TEST(Session, LagFreeServedColumnEqualsTheElasticElement) {
   const double k = frame().k_spec;
   const test::FrameRun elastic =
       test::run_frame(frame(), ground, [k](double u, double, double) { return k * u; });
-  EXPECT_GT(elastic.peak(), 1e-3);
+  EXPECT_GT(elastic.peak(), 1e-3);  // m: the record has begun to shake the frame
   EXPECT_LE(peak_relative_difference(run, elastic), 1e-9);
   ASSERT_EQ(s.result.steps(), ground.size());
   EXPECT_EQ(s.result.displacement(100, 0), run.u[100]);
@@ -199,7 +199,11 @@ std::string refusal_after(const std::function<void(test::GenericClient&)>& frame
   auto served = site.serve(frame_timeout);
   test::GenericClient client(site.port(), 2);
   client.send_sizes();
-  frames(client);
+  try {
+    frames(client);
+  } catch (const std::runtime_error&) {
+    // The server refused a frame and closed before the answer the client waited for.
+  }
   const Served s = served.get();
   EXPECT_TRUE(client.closed_by_server(2000) || !s.refusal.empty());
   return s.refusal;

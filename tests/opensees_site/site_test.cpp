@@ -11,6 +11,7 @@
 
 #include "frame_study.h"
 #include "generic_client.h"
+#include "opensees_site/outputs.h"
 #include "runtime/launch.h"
 #include "runtime/record.h"
 
@@ -97,6 +98,10 @@ TEST_F(OpenSeesSite, LockstepLagFreeEqualsTheElasticElementAndIsRecorded) {
                                      run.record().string() + " --csv " + exported + " > /dev/null";
   EXPECT_EQ(std::system(export_command.c_str()), 0);
   EXPECT_TRUE(std::filesystem::exists(exported));
+  write_site_outputs(run.record(), run.dir, true);
+  for (const char* file : {"results.csv", "command_realised.png", "force_displacement.png",
+                           "lag.png", "lag.svg"})
+    EXPECT_TRUE(std::filesystem::exists(run.dir / file)) << file;
 }
 
 // 14 ms on the actuator link (the emulator's receive_delay, in simulated time): the frame's peak
