@@ -56,7 +56,8 @@ std::vector<runtime::ChildProcess> start_nodes(const config::Deployment& deploym
                                                const SiteOptions& options,
                                                const std::filesystem::path& security_dir,
                                                int domain, const std::string& run_id) {
-  const runtime::NodePrograms programs = runtime::find_node_programs(options.programs_dir);
+  const std::filesystem::path emulator =
+      runtime::find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
   if (!options.log_dir.empty()) std::filesystem::create_directories(options.log_dir);
   std::vector<runtime::ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
@@ -67,7 +68,7 @@ std::vector<runtime::ChildProcess> start_nodes(const config::Deployment& deploym
     args.insert(args.end(), security.begin(), security.end());
     const auto log = options.log_dir.empty() ? std::filesystem::path("/dev/null")
                                              : options.log_dir / ("node_" + id + ".log");
-    nodes.emplace_back(programs.actuator_emulator, args, log,
+    nodes.emplace_back(emulator, args, log,
                        runtime::ChildOptions{"node " + id + " (actuator emulator)", {}, {}});
   }
   return nodes;
