@@ -79,8 +79,8 @@ void activate(Coordinator::State& s) {
               std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
 }
 
-// core::run_steps with this run as its evaluator and hooks. Feedback is judged and boxed on the
-// transport's receive thread; the loop is woken once a step's answers are all in (or a fault
+// core::run_steps (or the options' outside StepDriver) with this run as its evaluator and hooks.
+// Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's answers are all in (or a fault
 // was raised). The handler is removed (waiting out a running call) before this returns.
 void loop(Coordinator::State& s, core::SimulationResult& result) {
   core::SimulationOptions options;
@@ -94,7 +94,10 @@ void loop(Coordinator::State& s, core::SimulationResult& result) {
     transport::Endpoint& endpoint;
     ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
   } remove_handler{s.endpoint};
-  core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
+  if (s.options.driver)
+    s.options.driver(s, s, result);
+  else
+    core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
 }
 
 // A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), or completed.

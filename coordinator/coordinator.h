@@ -73,8 +73,10 @@
 // launch starts the nodes off it). The figures measured are in the README ("Real time").
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "core/study.h"
@@ -86,12 +88,31 @@
 
 namespace rths::coordinator {
 
+// Stops the run: thrown inside the loop (by the coordinator's own parts or by a StepDriver) with
+// the reason and the label of the participant at fault (empty: none). The run then sends HOLD to
+// the emulators and STOP to all, and closes the record with the reason.
+struct RunAborted : std::runtime_error {
+  RunAborted(const std::string& why, std::string node)
+      : std::runtime_error(why), node(std::move(node)) {}
+  std::string node;
+};
+
+// Where a run's trial states come from. Empty: core::run_steps with the study's integrator.
+// Otherwise an outside integrator (an OpenSees model over TCP) drives the coordinator's evaluator
+// and hooks under run_steps' contract: result sized for the motion's steps and truncated to the
+// completed ones, row 0 the rest state, then for each step k >= 1 hooks.before_step(k),
+// evaluator.set_time(k dt), evaluator.trial(u, v, nullptr), row k stored, hooks.after_step(k),
+// evaluator.commit(); k stays below the motion's sample count (the record's ground acceleration).
+using StepDriver = std::function<void(core::HybridEvaluator& evaluator, core::StepHooks& hooks,
+                                      core::SimulationResult& result)>;
+
 struct CoordinatorOptions {
   std::string run_id;                 // must be non-empty
   std::string case_name;              // empty: deployment.case_name, else the reference case
   std::filesystem::path record;       // empty: no record file
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
   double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
+  StepDriver driver;                  // empty: the study's integrator (core::run_steps)
 };
 
 struct LinkLagStats {

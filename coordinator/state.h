@@ -32,13 +32,6 @@ using Clock = std::chrono::steady_clock;
 // rejected, by cause); a node that does not send it in time is reported as of its last one.
 inline constexpr auto kFinalReportWait = std::chrono::milliseconds(1000);
 
-// Thrown inside the loop when the run must stop; caught by run().
-struct RunAborted : std::runtime_error {
-  RunAborted(const std::string& why, std::string node)
-      : std::runtime_error(why), node(std::move(node)) {}
-  std::string node;
-};
-
 inline double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
