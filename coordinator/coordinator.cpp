@@ -64,6 +64,7 @@ RunOutcome Coordinator::run() {
   RunOutcome outcome;
   if (!s.options.record.empty())
     s.record = std::make_unique<runtime::AsyncRecordWriter>(s.options.record);
+  if (s.record) s.record->set_observer(s.options.record_observer);
 
   runtime::MonotonicClock monotonic;
   runtime::PacingClock& pacing_clock = s.options.clock ? *s.options.clock : monotonic;

@@ -37,6 +37,8 @@
 //   a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep),
 //   no lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift
 //   changing by more than limits.max_displacement_step -> stops before the command is sent.
+//   a stop request (options.stop_request: the view's stop button) -> stops before the next step,
+//                  status kStoppedFromView.
 //   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
 //   rejects    foreign-run, garbage, duplicate, stale, out-of-order, unknown-node messages are
 //              counted and never applied.
@@ -59,6 +61,7 @@
 // written median 29-31 us unpinned, 17 us with pin_loop (p99 27-88 us); lockstep step 1.52 x a
 // DDS ping-pong; RSS flat over 10^6 steps (+0.3 %).
 
+#include <atomic>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -79,7 +82,14 @@ struct CoordinatorOptions {
   std::filesystem::path record;       // empty: no record file
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
   double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
+  // Sees each record entry on the record's writer thread (the live view); needs `record`.
+  runtime::RecordObserver* record_observer = nullptr;
+  // Set from another thread (the view's stop button): the loop stops before its next step as for
+  // any fault, HOLD then STOP, with the status kStoppedFromView. Read once per step (relaxed).
+  const std::atomic<bool>* stop_request = nullptr;
 };
+
+inline constexpr const char* kStoppedFromView = "stopped from the view";
 
 struct LinkLagStats {
   int node_id = 0;

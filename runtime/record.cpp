@@ -98,6 +98,7 @@ void AsyncRecordWriter::drain() {
       write_errno_ = errno;
       failed_.store(true, std::memory_order_relaxed);
     }
+    if (observer_) observer_->on_entry(slot);
     head_.store(head + 1, std::memory_order_release);
     written_.fetch_add(1, std::memory_order_relaxed);
   }

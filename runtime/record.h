@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -32,6 +33,15 @@ class RecordWriter {
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::string buffer_;
+};
+
+// Sees each entry after the writer thread wrote it, on that thread (never on the thread that
+// appends): `delimited` is the entry as in the file (varint size, then the bytes). It must return
+// quickly and must not throw; it is how a live view follows a run without touching the loop.
+class RecordObserver {
+ public:
+  virtual ~RecordObserver() = default;
+  virtual void on_entry(std::string_view delimited) = 0;
 };
 
 // The real-time loop's record writer: the loop hands each entry to a writer thread through a
@@ -64,9 +74,12 @@ class AsyncRecordWriter {
   std::uint64_t written() const { return written_.load(std::memory_order_relaxed); }
   std::size_t capacity() const { return slots_.size(); }
   const std::filesystem::path& path() const { return path_; }
+  // Set before the first append(); null (the default) for none. Not owned; must outlive close().
+  void set_observer(RecordObserver* observer) { observer_ = observer; }
 
  private:
   void drain();
+  RecordObserver* observer_ = nullptr;
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::vector<std::string> slots_;
