@@ -72,13 +72,15 @@ void Feed::on_header(const runtime::RunHeader& header) {
   links_ = header.link_node_ids_size();
   const double dt = header.dt() > 0 ? header.dt() : 1e-3;
   stride_ = std::max<std::int64_t>(1, std::llround(1.0 / (dt * options_.points_per_second)));
-  samples_.assign(std::max<std::size_t>(options_.history, 1), Sample{});
-  for (Sample& s : samples_)
-    for (auto* v : {&s.command, &s.measured, &s.force, &s.ti}) v->assign(actuators_, 0.0);
-  for (Sample& s : samples_) {
-    s.injected.assign(links_, 0.0);
-    s.round_trip.assign(links_, 0.0);
-  }
+  history_ = std::max<std::size_t>(options_.history, 1);
+  samples_.step.assign(history_, 0);
+  samples_.overruns.assign(history_, 0);
+  samples_.late.assign(history_, 0);
+  for (auto* v : {&samples_.time, &samples_.u_top, &samples_.lateness}) v->assign(history_, 0.0);
+  for (auto* v : {&samples_.command, &samples_.measured, &samples_.force, &samples_.ti})
+    v->assign(history_ * static_cast<std::size_t>(actuators_), 0.0);
+  for (auto* v : {&samples_.injected, &samples_.round_trip})
+    v->assign(history_ * static_cast<std::size_t>(links_), 0.0);
   const std::size_t n = spectrum_length(dt);
   window_.resize(n);
   double sum = 0;
@@ -137,22 +139,25 @@ void Feed::on_step(const runtime::StepRecord& step) {
   if (state_ == "starting") state_ = "armed";
   if (steps_ >= window_.size() && step.step() % steps_per_spectrum_ == 0) compute_spectrum(step);
   if (step.step() % stride_ != 0) return;
-  Sample& s = samples_[samples_total_ % samples_.size()];
-  s.step = step.step();
-  s.time = step.time();
-  s.u_top = step.displacement_size() > 0 ? step.displacement(step.displacement_size() - 1) * kMm : 0;
-  s.lateness = step.lateness() * kMs;
-  s.overruns = overruns_;
-  s.late = late_;
+  Samples& s = samples_;
+  const std::size_t r = static_cast<std::size_t>(samples_total_ % history_);
+  s.step[r] = step.step();
+  s.time[r] = step.time();
+  s.u_top[r] = step.displacement_size() > 0 ? step.displacement(step.displacement_size() - 1) * kMm : 0;
+  s.lateness[r] = step.lateness() * kMs;
+  s.overruns[r] = overruns_;
+  s.late[r] = late_;
   for (int a = 0; a < actuators_; ++a) {
-    s.command[a] = a < step.command_size() ? step.command(a) * kMm : 0;
-    s.measured[a] = a < step.realised_size() ? step.realised(a) * kMm : 0;
-    s.force[a] = a < step.measured_force_size() ? step.measured_force(a) : 0;
-    s.ti[a] = ti_[a];
+    const std::size_t i = r * static_cast<std::size_t>(actuators_) + static_cast<std::size_t>(a);
+    s.command[i] = a < step.command_size() ? step.command(a) * kMm : 0;
+    s.measured[i] = a < step.realised_size() ? step.realised(a) * kMm : 0;
+    s.force[i] = a < step.measured_force_size() ? step.measured_force(a) : 0;
+    s.ti[i] = ti_[a];
   }
   for (int l = 0; l < links_; ++l) {
-    s.injected[l] = l < step.links_size() ? step.links(l).injected_lag() * kMs : 0;
-    s.round_trip[l] = l < step.links_size() ? step.links(l).round_trip() * kMs : 0;
+    const std::size_t i = r * static_cast<std::size_t>(links_) + static_cast<std::size_t>(l);
+    s.injected[i] = l < step.links_size() ? step.links(l).injected_lag() * kMs : 0;
+    s.round_trip[i] = l < step.links_size() ? step.links(l).round_trip() * kMs : 0;
   }
   ++samples_total_;
 }
@@ -243,25 +248,27 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
   for (int l = 0; l < links_; ++l)
     for (const char* name : {"injected_ms", "round_trip_ms"}) j[name].push_back(nlohmann::json::array());
   for (const char* name : {"u_top_mm", "lateness_ms", "overruns", "late_feedback"}) j[name] = nlohmann::json::array();
+  const Samples& s = samples_;
+  const auto A = static_cast<std::size_t>(actuators_), L = static_cast<std::size_t>(links_);
   for (std::uint64_t i = from; i < samples_total_; ++i) {
-    const Sample& s = samples_[i % samples_.size()];
-    j["step"].push_back(s.step);
-    j["time_s"].push_back(s.time);
-    for (int a = 0; a < actuators_; ++a) {
-      j["command_mm"][a].push_back(s.command[a]);
-      j["measured_mm"][a].push_back(s.measured[a]);
-      j["error_mm"][a].push_back(s.command[a] - s.measured[a]);
-      j["force_N"][a].push_back(s.force[a]);
-      j["ti_mm2"][a].push_back(s.ti[a]);
+    const std::size_t r = static_cast<std::size_t>(i % history_);
+    j["step"].push_back(s.step[r]);
+    j["time_s"].push_back(s.time[r]);
+    for (std::size_t a = 0; a < A; ++a) {
+      j["command_mm"][a].push_back(s.command[r * A + a]);
+      j["measured_mm"][a].push_back(s.measured[r * A + a]);
+      j["error_mm"][a].push_back(s.command[r * A + a] - s.measured[r * A + a]);
+      j["force_N"][a].push_back(s.force[r * A + a]);
+      j["ti_mm2"][a].push_back(s.ti[r * A + a]);
     }
-    for (int l = 0; l < links_; ++l) {
-      j["injected_ms"][l].push_back(s.injected[l]);
-      j["round_trip_ms"][l].push_back(s.round_trip[l]);
+    for (std::size_t l = 0; l < L; ++l) {
+      j["injected_ms"][l].push_back(s.injected[r * L + l]);
+      j["round_trip_ms"][l].push_back(s.round_trip[r * L + l]);
     }
-    j["u_top_mm"].push_back(s.u_top);
-    j["lateness_ms"].push_back(s.lateness);
-    j["overruns"].push_back(s.overruns);
-    j["late_feedback"].push_back(s.late);
+    j["u_top_mm"].push_back(s.u_top[r]);
+    j["lateness_ms"].push_back(s.lateness[r]);
+    j["overruns"].push_back(s.overruns[r]);
+    j["late_feedback"].push_back(s.late[r]);
   }
   return j;
 }
@@ -287,7 +294,7 @@ nlohmann::json Feed::since(FeedCursor& cursor) const {
   const auto oldest = [](std::uint64_t total, std::size_t ring) {
     return total > ring ? total - ring : 0;
   };
-  const std::uint64_t first = std::max(cursor.samples, oldest(samples_total_, samples_.size()));
+  const std::uint64_t first = std::max(cursor.samples, oldest(samples_total_, history_));
   j["samples"] = samples_json(first);
   cursor.samples = samples_total_;
   j["spectra"] = spectra_json(std::max(cursor.spectra, oldest(spectra_total_, spectra_.size())));

@@ -81,11 +81,12 @@ class Feed : public runtime::RecordObserver {
   std::uint64_t unreadable_entries() const;
 
  private:
-  struct Sample {
-    std::int64_t step = 0;
-    double time = 0, u_top = 0, lateness = 0;
-    std::uint64_t overruns = 0, late = 0;
-    std::vector<double> command, measured, force, ti, injected, round_trip;
+  // The kept samples, a ring of options_.history rows in flat columns (row r of a per-actuator
+  // column is at r * actuators_ + a; per link, r * links_ + l).
+  struct Samples {
+    std::vector<std::int64_t> step;
+    std::vector<std::uint64_t> overruns, late;
+    std::vector<double> time, u_top, lateness, command, measured, force, ti, injected, round_trip;
   };
   struct Spectrum {
     std::int64_t step = 0;
@@ -117,7 +118,8 @@ class Feed : public runtime::RecordObserver {
   std::int64_t stride_ = 1;
   int actuators_ = 0, links_ = 0;
 
-  std::vector<Sample> samples_;  // ring of options_.history
+  Samples samples_;
+  std::size_t history_ = 1;
   std::uint64_t samples_total_ = 0;
   std::vector<Spectrum> spectra_;  // ring of options_.spectra_kept
   std::uint64_t spectra_total_ = 0;

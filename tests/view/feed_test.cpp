@@ -125,8 +125,9 @@ TEST(Feed, TrackingIndicatorGrowsWithLagFallsWithLeadAndStaysNearZeroWhenTrackin
 TEST(Feed, SpectrumOfTheErrorPeaksAtItsFrequencyWithItsAmplitude) {
   Feed feed;
   feed.add(header());
-  // command 0, measured = -2 mm sin(2 pi f t), f on bin 33 of the 1024-step window: error 2 mm.
-  const double f = 33.0 / (1024 * kDt);
+  // command 0, measured = -2 mm sin(2 pi f t), f on bin 17 of the 512-step window (the largest
+  // power of two <= 1 s of steps): error 2 mm.
+  const double f = 17.0 / (512 * kDt);
   for (int k = 0; k < 2000; ++k) {
     auto e = step(k);
     e.mutable_step()->set_command(0, 0.0);
@@ -136,6 +137,7 @@ TEST(Feed, SpectrumOfTheErrorPeaksAtItsFrequencyWithItsAmplitude) {
   FeedCursor cursor;
   const auto j = feed.since(cursor);
   ASSERT_FALSE(j["spectra"].empty());
+  ASSERT_EQ(j["header"]["spectrum_window_steps"], 512);
   const auto& hz = j["header"]["spectrum_hz"];
   const auto& amp = j["spectra"].back()["amplitude_mm"][0];
   std::size_t peak = 0;
