@@ -45,7 +45,7 @@ function study(dir, { clock, duration, domain }) {
   fs.mkdirSync(dir, { recursive: true });
   const deployment = clock === 'REAL_TIME'
     // Fail-safe windows widened for this shared, loaded machine; the mechanism is the same.
-    ? `deployment { domain_id: ${domain} clock: REAL_TIME liveliness_timeout: 0.3 heartbeat_period: 0.02 max_missed_answers: 30 command_watchdog_periods: 30 max_overrun_fraction: -1 }`
+    ? `deployment { domain_id: ${domain} clock: REAL_TIME liveliness_timeout: 1 heartbeat_period: 0.02 max_missed_answers: 300 command_watchdog_periods: 300 max_overrun_fraction: -1 }`
     : `deployment { domain_id: ${domain} }`;
   const text = `name: "view_test"
 structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }

@@ -19,7 +19,7 @@ function timePlot(el, title, yLabel, names, colors) {
   return new uPlot({
     title, width: chartWidth(), height: 210, class: 'chart',
     scales: { x: { time: false } },
-    series,
+    series, legend: { live: false },
     axes: [{ label: 'time (s)' }, { label: yLabel, size: 60 }],
   }, [[], ...names.map(() => [])], el);
 }
@@ -40,6 +40,7 @@ function spectrumPlot(el, title, color) {
     title, width: chartWidth(), height: 210, class: 'chart',
     scales: { x: { time: false } },
     series: [{ label: 'frequency (Hz)' }, { label: 'amplitude (mm)', stroke: color, width: 1.5 }],
+    legend: { live: false },
     axes: [{ label: 'frequency (Hz)' }, { label: 'error amplitude (mm)', size: 60 }],
   }, [[], []], el);
 }
