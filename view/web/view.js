@@ -149,10 +149,12 @@ function draw() {
 
 function showStatus(st) {
   V.status = st;
+  // A HOLD stays on the badge after the run stopped: the footer often follows it within an update.
+  const held = st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD'));
   const state = $('state');
-  state.textContent = st.state === 'HOLD' ? 'HOLD' : st.state;
-  state.className = 'state ' + st.state;
-  if (st.state === 'HOLD' && V.holdSeenMs === null) V.holdSeenMs = Date.now();
+  state.textContent = held && st.state !== 'HOLD' ? 'HOLD · ' + st.state : st.state;
+  state.className = 'state ' + (held ? 'HOLD' : st.state);
+  if (held && V.holdSeenMs === null) V.holdSeenMs = Date.now();
   $('step').textContent = st.latest_step < 0 ? '–' : st.latest_step;
   $('time').textContent = st.latest_time_s.toFixed(3);
   $('overruns').textContent = st.overruns;
