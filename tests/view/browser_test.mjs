@@ -42,6 +42,7 @@ after(async () => {
 });
 
 function study(dir, { clock, duration, domain }) {
+  fs.rmSync(dir, { recursive: true, force: true });  // an earlier run's log names an old port
   fs.mkdirSync(dir, { recursive: true });
   const deployment = clock === 'REAL_TIME'
     // Fail-safe windows widened for this shared, loaded machine; the mechanism is the same.
@@ -124,8 +125,8 @@ test('lockstep over DDS: the step counter advances and the plotted series are th
   const ex = start(['export', path.join(dir, 'lag_shift_14ms.rthsrec'), '--csv', exported]);
   assert.equal(await ex.done, 0, ex.output);
   const csv = csvColumns(exported);
-  const name = k => Object.keys(csv).find(n => n.includes(k));
-  const command = csv[name('command_act1')], measured = csv[name('measured_act1')];
+  const command = csv.command1, measured = csv.realised1;  // m, the record's columns
+  assert.ok(command && measured, 'record columns: ' + Object.keys(csv).join(','));
   const plotted = await view(page, () => ({ steps: window.rthsView.drawn.steps, data: window.rthsView.plots.act[0].cmd.data }));
   assert.ok(plotted.steps.length > 100, 'plotted points: ' + plotted.steps.length);
   const row = Object.fromEntries(csv.step.map((s, i) => [s, i]));
