@@ -1,7 +1,5 @@
 #include "view/feed.h"
 
-#include <google/protobuf/io/coded_stream.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -23,13 +21,11 @@ std::size_t spectrum_length(double dt) {
 
 Feed::Feed(FeedOptions options) : options_(options) {}
 
-void Feed::on_entry(std::string_view delimited) {
-  google::protobuf::io::CodedInputStream coded(reinterpret_cast<const std::uint8_t*>(delimited.data()),
-                                               static_cast<int>(delimited.size()));
-  std::uint32_t size = 0;
+void Feed::on_entry(std::string_view frame) {
   runtime::RecordEntry entry;
-  if (!coded.ReadVarint32(&size) || size != delimited.size() - static_cast<std::size_t>(coded.CurrentPosition()) ||
-      !entry.ParseFromCodedStream(&coded)) {
+  if (frame.size() < runtime::kRecordFrameHeaderBytes ||
+      !entry.ParseFromArray(frame.data() + runtime::kRecordFrameHeaderBytes,
+                            static_cast<int>(frame.size() - runtime::kRecordFrameHeaderBytes))) {
     std::lock_guard lock(mutex_);
     ++unreadable_;
     changed();

@@ -60,8 +60,8 @@ class Feed : public runtime::RecordObserver {
  public:
   explicit Feed(FeedOptions options = {});
 
-  // runtime::RecordObserver: parses one length-delimited entry; an unreadable one is counted.
-  void on_entry(std::string_view delimited) override;
+  // runtime::RecordObserver: parses one record frame's entry; an unreadable one is counted.
+  void on_entry(std::string_view frame) override;
   void add(const runtime::RecordEntry& entry);
 
   // Facts about the run that are not in the record (critical-delay check, prediction), shown as

@@ -1,8 +1,6 @@
 #include "view/feed.h"
 
 #include <gtest/gtest.h>
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
 #include <cmath>
 #include <numbers>
@@ -173,21 +171,17 @@ TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
   EXPECT_TRUE(feed.finished());
 }
 
-std::string delimited(const runtime::RecordEntry& e) {
+std::string frame(const runtime::RecordEntry& e) {
   std::string out;
-  google::protobuf::io::StringOutputStream raw(&out);
-  google::protobuf::io::CodedOutputStream coded(&raw);
-  coded.WriteVarint32(static_cast<std::uint32_t>(e.ByteSizeLong()));
-  e.SerializeToCodedStream(&coded);
-  coded.Trim();
+  runtime::append_record_frame(e, out);
   return out;
 }
 
 TEST(Feed, ObservesTheWritersBytesAndCountsWhatItCannotRead) {
   Feed feed;
-  feed.on_entry(delimited(header()));
-  feed.on_entry(delimited(step(0)));
-  feed.on_entry("\x05garbage-longer-than-said");
+  feed.on_entry(frame(header()));
+  feed.on_entry(frame(step(0)));
+  feed.on_entry(std::string(runtime::kRecordFrameHeaderBytes, '\0') + "\xff\xff garbage");
   feed.on_entry(std::string_view("\xff", 1));
   EXPECT_EQ(feed.steps_seen(), 1u);
   EXPECT_EQ(feed.unreadable_entries(), 2u);
