@@ -227,6 +227,7 @@ RunOutcome Coordinator::run() {
   RunOutcome outcome;
   if (!s.options.record.empty())
     s.record = std::make_unique<runtime::AsyncRecordWriter>(s.options.record);
+  if (s.record) s.record->set_observer(s.options.record_observer);
   runtime::MonotonicClock monotonic;
   runtime::Pacer pacer(s.options.clock ? *s.options.clock : monotonic, s.setup.dt,
                        runtime::wait_policy(s.deployment));

@@ -40,6 +40,8 @@
 //   the record's writer fails a write (disk full, I/O error, file size limit) or falls more than
 //   its ring (4096 entries) behind -> stops within a step or two of it, naming the file and the
 //   reason; the record is the readable prefix written before the failure.
+//   a stop request (options.stop_request: the view's stop button) -> stops before the next step,
+//                  status kStoppedFromView.
 //   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
 //   an integrity fault (coordinator::FeedbackIntake: an answer as a node from a participant other
 //   than the one that announced as it, or two different answers to one step) -> stops at the
@@ -72,6 +74,7 @@
 // pin_loop: the loop thread alone on loop_cpu (runtime::isolate_calling_thread_on_cpu; rths
 // launch starts the nodes off it). The figures measured are in the README ("Real time").
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -113,7 +116,14 @@ struct CoordinatorOptions {
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
   double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
   StepDriver driver;                  // empty: the study's integrator (core::run_steps)
+  // Sees each record entry on the record's writer thread (the live view); needs `record`.
+  runtime::RecordObserver* record_observer = nullptr;
+  // Set from another thread (the view's stop button): the loop stops before its next step as for
+  // any fault, HOLD then STOP, with the status kStoppedFromView. Read once per step (relaxed).
+  const std::atomic<bool>* stop_request = nullptr;
 };
+
+inline constexpr const char* kStoppedFromView = "stopped from the view";
 
 struct LinkLagStats {
   int node_id = 0;

@@ -33,6 +33,8 @@ void Coordinator::State::before_step(std::size_t k) {
     }
   }
   step = static_cast<std::int64_t>(k);
+  if (options.stop_request && options.stop_request->load(std::memory_order_relaxed))
+    throw RunAborted(kStoppedFromView, "");
   intake->await_step(step);
   step_start = Clock::now();
   step_start_realtime_ns = transport::realtime_ns();

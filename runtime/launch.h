@@ -79,6 +79,7 @@ struct LaunchOptions {
   std::filesystem::path security_dir;
   PlacementStrategy placement;         // empty: local (loopback DDS unless CYCLONEDDS_URI is set)
   std::function<bool()> stop_requested;  // polled every 20 ms; true = stop now
+  std::vector<std::string> coordinator_args;  // appended to the coordinator's (e.g. --view H:P)
 };
 
 struct LaunchResult {

@@ -15,7 +15,11 @@ packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev pro
   procps util-linux
   libmatio-dev libhdf5-dev pybind11-dev python3-dev python3-numpy python3-h5py python3-scipy
   python3-pytest python3-matplotlib slurm-wlm munge podman runc podman-compose debootstrap
-  netavark aardvark-dns iptables openssl libssl-dev libxml2-dev)
+  netavark aardvark-dns iptables openssl libssl-dev libxml2-dev
+  libcpp-httplib-dev nodejs chromium)
+# npm (the view's page library, uPlot, and playwright-core for its browser tests): Debian's npm
+# package, unless the installed nodejs already brings npm.
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
