@@ -36,6 +36,8 @@ struct IdentifyCliOptions {
   std::size_t folds = 5;
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
+  double search_tolerance = 1e-6;
+  int search_iterations = 30;
   bool json = false, trim_idle = false;
 };
 
@@ -131,6 +133,8 @@ identify::SessionRequest session_request(const IdentifyCliOptions& o) {
   options.holdout_blocks = o.blocks;
   options.search_decimation = o.decimate;
   options.search_samples = o.search_samples;
+  options.search_tolerance = o.search_tolerance;
+  options.search_iterations = o.search_iterations;
   options.selection.min_relative_improvement = o.min_improvement;
   options.selection.penalty_per_parameter = o.penalty;
   options.selection.max_steps = o.max_steps;
@@ -225,6 +229,13 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--search-tolerance", o->search_tolerance,
+                  "relative change of cost or parameters at which a fit of the decimated search "
+                  "stops (the full-rate refits stop at 1e-10)")
+      ->check(CLI::Range(1e-12, 1e-2));
+  cmd->add_option("--search-iterations", o->search_iterations,
+                  "at most this many solver iterations per fit of the decimated search")
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));

@@ -160,7 +160,8 @@ std::vector<double> spike_model(const std::vector<double>& x, const std::vector<
   const double height = median_of(heights);
   std::vector<double> model = base;
   for (std::size_t i = 0; i < x.size(); ++i) {
-    const double phase = std::fmod(time[i] - t0 + 1e3 * period, period);
+    double phase = std::fmod(time[i] - t0 + 1e3 * period, period);
+    if (phase > period - 0.5 * dt) phase -= period;  // a rounding short of a whole period
     if (phase >= -0.5 * dt && phase < width + 0.5 * dt) model[i] += height;
   }
   return model;

@@ -177,7 +177,11 @@ ActuatorPath identify_actuator(const std::filesystem::path& record, const runtim
   if (const auto* c = out.id.find(Channel::kMeasured)) {
     const SignalScales scales = signal_scales(out.id.signals.front());
     out.fitted_gain = c->final_fit.model.param(std::nullopt, "gain", scales).value_or(1.0);
-    for (const auto& step : c->steps) out.undeclared.push_back(effect_name(step.effect));
+    for (const auto& step : c->steps) {
+      if (step.before.heldout_error - step.after.heldout_error > kMinErrorRemoved) {
+        out.undeclared.push_back(effect_name(step.effect));
+      }
+    }
     if (std::abs(out.fitted_gain - declared.gain) > kGainTolerance * declared.gain) {
       out.undeclared.push_back("gain error");
     }

@@ -9,8 +9,9 @@
 // specimen, measured displacement -> force, identified by identify.h with the effect library;
 // declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
 // transfer function -> second_order, each with the config's value as initial value), gain = the
-// stages' amplitude gain. Undeclared effects: the steps the search added, and a fitted gain off
-// the declared one by more than kGainTolerance (an emulator gain error).
+// stages' amplitude gain. Undeclared effects: the steps the search added that remove more than
+// kMinErrorRemoved of held-out error, and a fitted gain off the declared one by more than
+// kGainTolerance (an emulator gain error).
 // A run that diverged is identified up to the last step whose response is finite and below the
 // coordinator's divergence bound; a truncated record (no footer, or a cut last entry) is
 // identified from what it holds; both say so (`held`).
@@ -30,6 +31,10 @@
 namespace rths::identify {
 
 inline constexpr double kGainTolerance = 0.02;  // relative
+// An added effect is named only when it removes at least this much held-out error (a share of
+// the signal's std): the record of a simulated run has no sensor noise, and below this a relative
+// fall of the error is round-off, not an effect.
+inline constexpr double kMinErrorRemoved = 1.0e-4;
 
 struct ActuatorPath {
   int actuator = 0;  // 1-based
