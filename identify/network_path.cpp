@@ -162,7 +162,7 @@ std::vector<double> spike_model(const std::vector<double>& x, const std::vector<
   for (std::size_t i = 0; i < x.size(); ++i) {
     double phase = std::fmod(time[i] - t0 + 1e3 * period, period);
     if (phase > period - 0.5 * dt) phase -= period;  // a rounding short of a whole period
-    if (phase >= -0.5 * dt && phase < width + 0.5 * dt) model[i] += height;
+    if (phase >= -0.5 * dt && phase < width - 0.5 * dt) model[i] += height;
   }
   return model;
 }
