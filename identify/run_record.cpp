@@ -25,6 +25,7 @@ runtime::RecordContents read_checked(const std::filesystem::path& record) {
   } catch (const std::runtime_error& e) {
     bad(record, "record", e.what());
   }
+  if (contents.lost_entries()) bad(record, "damaged entries", contents.loss_report());
   const runtime::RunHeader* header = contents.header();
   if (header == nullptr) bad(record, "entry 0", "no header: not a run record, or its start was lost");
   if (header->schema_version() != runtime::kSchemaVersion) {

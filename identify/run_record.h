@@ -16,7 +16,7 @@
 // coordinator's divergence bound; a truncated record (no footer, or a cut last entry) is
 // identified from what it holds; both say so (`held`).
 // Bad input -> std::invalid_argument "RECORD: ENTRY: PROBLEM": a record that cannot be read or
-// has a corrupt entry, a header of another schema version, no header, a link the header lists
+// has damaged entries (the reader's loss report names them), a header of another schema version, no header, a link the header lists
 // with no answer, fewer steps than identification needs.
 
 #include <nlohmann/json.hpp>

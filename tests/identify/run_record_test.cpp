@@ -157,6 +157,14 @@ TEST(RunRecord, BadRecordsAreRefusedNamingRecordEntryAndProblem) {
     if (e.has_header()) e.mutable_header()->add_link_node_ids(9);
   });
   expect_refused(missing_link, "link to node 9", "0 answers");
+  const fs::path damaged = scratch("damaged");
+  fs::copy_file(record, damaged, fs::copy_options::overwrite_existing);
+  {
+    std::fstream bytes(damaged, std::ios::in | std::ios::out | std::ios::binary);
+    bytes.seekp(static_cast<std::streamoff>(fs::file_size(damaged) / 2));
+    bytes.put('\x5a').put('\xa5').put('\x5a');
+  }
+  expect_refused(damaged, "damaged entries", "");
   const fs::path not_a_record = scratch("not_a_record");
   std::ofstream(not_a_record) << "time,command\n";
   expect_refused(not_a_record, "", "");
