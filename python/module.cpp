@@ -1,4 +1,5 @@
-// The `rths` Python module: the library (not the CLI) for researchers who work in Python.
+// The compiled part of the `rths` Python package (rths._rths; python/rths/ adds sdof(), Study
+// built in code and __version__ over it): the library, not the CLI, for researchers in Python.
 //
 //   load_study(path) / parse_study(text, base_dir=".")  -> Study (name, cases, text)
 //   run(study, cases=None)      every case in process        -> {"summary", "series", "units"}
@@ -307,7 +308,7 @@ py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
 }  // namespace
 }  // namespace rths::python
 
-PYBIND11_MODULE(rths, m) {
+PYBIND11_MODULE(_rths, m) {
   using namespace rths::python;
   m.doc() = "rths: real-time hybrid simulation with actuator and network lag (the C++ library from Python)";
   static py::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);
@@ -331,7 +332,7 @@ PYBIND11_MODULE(rths, m) {
       .def_property_readonly("cases", &Study::case_names, "case names, the reference first unless reference_case is set")
       .def_property_readonly("base_dir", [](const Study& s) { return s.base_dir; })
       .def_property_readonly("text", &Study::text, "the config in Protobuf text format")
-      .def("__repr__", [](const Study& s) { return "<rths.Study '" + s.config.name() + "' from " + s.source + ">"; });
+      .def("__repr__", [](const Study& s) { return "<rths.LoadedStudy '" + s.config.name() + "' from " + s.source + ">"; });
 
   m.def("load_study", &load_study, py::arg("path"), "Read a study config file (Protobuf text format)");
   m.def("parse_study", &parse_study, py::arg("text"), py::arg("base_dir") = std::filesystem::path("."),

@@ -14,7 +14,7 @@ packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev pro
   libcli11-dev gnuplot-nox libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 iputils-ping
   procps util-linux
   libmatio-dev libhdf5-dev pybind11-dev python3-dev python3-numpy python3-h5py python3-scipy
-  python3-pytest python3-matplotlib slurm-wlm munge podman runc podman-compose debootstrap
+  python3-pytest python3-matplotlib python3-nbclient python3-nbformat python3-ipykernel slurm-wlm munge podman runc podman-compose debootstrap
   netavark aardvark-dns iptables openssl libssl-dev libxml2-dev
   libcpp-httplib-dev nodejs chromium)
 # npm (the view's page library, uPlot, and playwright-core for its browser tests): Debian's npm

@@ -45,6 +45,8 @@ struct PlotSpec {
   // (points outside are clipped, not dropped from the legend).
   std::optional<double> x_min, x_max, y_min, y_max;
   std::vector<VerticalMarker> markers;
+  // gnuplot format of the y tick labels (e.g. "%g": 1e-05 rather than 0.000010); empty = default.
+  std::string y_format;
 };
 
 // The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel

@@ -405,14 +405,14 @@ TEST(CliTest, JointLagReportsProgressInPlainLines) {
   EXPECT_EQ(o.output.find('\r'), std::string::npos) << "a bar is for terminals only";
 }
 
-// `rths launch` of the shipped distributed frame (real time, 7 ms each way on the actuator lab's
-// link): before anything starts, the 14 ms shift case is named as past the frame's critical
-// delay (14 ms network + 14 ms actuator = 28 ms), and the reference (14 ms) is not; progress per
-// case; the lag plot names the links by role and stacks network and actuator lag against the
-// critical delay. The lagged case may well diverge (exit 1): that is the honest outcome.
+// `rths launch` of the shipped instability-on-purpose frame (real time, 7 ms each way on the
+// actuator lab's link): before anything starts, the 14 ms shift case is named as past the frame's
+// critical delay (14 ms network + 14 ms actuator = 28 ms), meant (expect_unstable), and the
+// network-only case (14 ms) is not; progress per case; the lag plot names the links by role and
+// stacks network and actuator lag against the critical delay.
 TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   const auto dir = scratch("launch_lag");
-  const Outcome o = run("launch " + (kSource / "configs/paper_frame_distributed.textproto").string() +
+  const Outcome o = run("launch " + (kSource / "configs/paper_frame_network_lag.textproto").string() +
                         " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " + dir.string());
   EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 1) << o.output;
   const std::string warning =
@@ -421,14 +421,15 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   const auto warned = o.output.find(warning);
   ASSERT_NE(warned, std::string::npos) << o.output;
   EXPECT_NE(o.output.find("PAST it by", warned), std::string::npos) << o.output;
-  EXPECT_LT(warned, o.output.find("rths launch: case reference ...")) << o.output;
-  EXPECT_EQ(o.output.find("warning: case 'reference'"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("(expect_unstable: meant)", warned), std::string::npos) << o.output;
+  EXPECT_LT(warned, o.output.find("rths launch: case network_lag_only ...")) << o.output;
+  EXPECT_EQ(o.output.find("warning: case 'network_lag_only'"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("launch:  50% (1/2 cases"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("launch: 100% (2/2 cases"), std::string::npos) << o.output;
   const auto summary = nlohmann::json::parse(read_text(dir / "summary.json"));
   EXPECT_NEAR(summary["cases"][1]["stability"]["lag_s"].get<double>(), 0.028, 1e-12);
   EXPECT_TRUE(summary["cases"][1]["stability"]["past_critical_delay"].get<bool>());
-  const std::string plot = read_text(dir / "lag_lag_shift_14ms.svg");
+  const std::string plot = read_text(dir / "links_lag_shift_14ms.svg");
   for (const char* text : {"actuator lab: round trip, measured", "actuator lab: round trip, injected",
                            "numerical site: round trip, measured", "actuator lag, nominal 14 ms: shift(14 ms)",
                            "actuator lab: network round trip, measured", "continuous critical delay",
@@ -436,7 +437,7 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
     EXPECT_NE(plot.find(text), std::string::npos) << text;
   }
   EXPECT_EQ(plot.find("node 2"), std::string::npos);
-  EXPECT_TRUE(std::filesystem::exists(dir / "lag_lag_shift_14ms.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "links_lag_shift_14ms.png"));
 }
 
 // A run that stops before its first step (its start-up times out at once) still
