@@ -37,13 +37,29 @@
 //   a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep),
 //   no lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift
 //   changing by more than limits.max_displacement_step -> stops before the command is sent.
+//   the record's writer fails a write (disk full, I/O error, file size limit) or falls more than
+//   its ring (4096 entries) behind -> stops within a step or two of it, naming the file and the
+//   reason; the record is the readable prefix written before the failure.
 //   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
-//   rejects    foreign-run, garbage, duplicate, stale, out-of-order, unknown-node messages are
-//              counted and never applied.
+//   an integrity fault (coordinator::FeedbackIntake: an answer as a node from a participant other
+//   than the one that announced as it, or two different answers to one step) -> stops at the
+//   loop's next look at the intake (within the step in lockstep), naming the node and both
+//   arrivals.
+//   rejects    foreign-run (and empty run id), garbage, duplicate, stale, out-of-order (incl. an
+//              answer not echoing its step's command), unknown-node, not-entitled (a node's id on
+//              another node's topic or from another writer than the one pinned at its
+//              announcement; a coordinator's kind sent as a node) and out-of-range (a force or
+//              drift not finite, beyond the limits) messages are counted and never applied.
+// Trust: each node speaks on its own up topic; its first announcement pins its writer. An
+// announcement never stops the run (once ready, or of the wrong kind, it is counted).
+// Start-up heartbeats keep the nodes already assigned alive while late ones join.
+// After the STOPs, each node's last heartbeat reports what it rejected, by cause
+// (RunOutcome::node_rejects, the footer's node_rejects).
 // Record: header, one StepRecord per step, events, footer, through runtime::AsyncRecordWriter:
 // the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
 // loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
-// one or two entries behind). A full ring drops and counts entries and fails the run.
+// one or two entries behind). Every entry carries a CRC-32C (runtime/record.h). A record that
+// cannot be written stops the run, as a fault below: nothing would be kept of it.
 // Feedback: judged and decoded on the transport's receive thread (its inline handler) by
 // coordinator::FeedbackIntake into one wait-free LatestBox per node; the loop takes the newest
 // without a lock or a copy, and is woken once per step, when the step's last answer is in.
@@ -54,10 +70,7 @@
 // mlockall and pinning of the loop thread when the deployment asks. Each step records
 // command_latency (wake-up to the last command written); bench/runtime_bench prints it.
 // pin_loop: the loop thread alone on loop_cpu (runtime::isolate_calling_thread_on_cpu; rths
-// launch starts the nodes off it). Measured (2-core VM, 1024 Hz, medians of 3, README "Real
-// time"): overruns within +0.03 to +0.09 points of a bare clock_nanosleep loop; wake-up to command
-// written median 29-31 us unpinned, 17 us with pin_loop (p99 27-88 us); lockstep step 1.52 x a
-// DDS ping-pong; RSS flat over 10^6 steps (+0.3 %).
+// launch starts the nodes off it). The figures measured are in the README ("Real time").
 
 #include <filesystem>
 #include <map>
@@ -94,6 +107,7 @@ struct RunOutcome {
   core::SimulationResult result;  // steps completed (up to the failure)
   runtime::Counters counters;
   std::vector<LinkLagStats> links;
+  std::vector<runtime::NodeRejects> node_rejects;  // per node, what it rejected (its last report)
   double wall_seconds = 0.0;
   double max_lateness = 0.0;  // s, real time
 };
@@ -108,8 +122,10 @@ class Coordinator {
   RunOutcome run();
   const runtime::DeploymentPlan& plan() const { return plan_; }
 
- private:
+  // The coordinator's state (coordinator/state.h, internal to rths_coordinator).
   struct State;
+
+ private:
   std::unique_ptr<State> state_;
   runtime::DeploymentPlan plan_;
 };

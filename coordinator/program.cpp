@@ -16,6 +16,19 @@
 
 namespace rths::coordinator {
 
+namespace {
+
+std::string reject_text(const runtime::Counters& c) {
+  return "foreign-run " + std::to_string(c.foreign_run()) + ", garbage " +
+         std::to_string(c.garbage()) + ", duplicate " + std::to_string(c.duplicate()) +
+         ", stale " + std::to_string(c.stale()) + ", out-of-order " +
+         std::to_string(c.out_of_order()) + ", unknown-node " + std::to_string(c.unknown_node()) +
+         ", not-entitled " + std::to_string(c.not_entitled()) + ", out-of-range " +
+         std::to_string(c.out_of_range());
+}
+
+}  // namespace
+
 std::string summary_text(const RunOutcome& o) {
   std::ostringstream out;
   const auto& c = o.counters;
@@ -23,9 +36,7 @@ std::string summary_text(const RunOutcome& o) {
       // The record holds the initial state and one row per commanded step, as `rths run` counts.
       << "\nsteps: " << c.steps() + 1 << " recorded (" << c.steps() << " commanded) in "
       << o.wall_seconds << " s"
-      << "\nrejected: foreign-run " << c.foreign_run() << ", garbage " << c.garbage()
-      << ", duplicate " << c.duplicate() << ", stale " << c.stale() << ", out-of-order "
-      << c.out_of_order() << ", unknown-node " << c.unknown_node()
+      << "\nrejected: " << reject_text(c)
       << "\noverruns: " << c.overruns() << " (worst streak " << c.worst_overrun_streak()
       << "), late feedback: " << c.late_feedback() << " (worst streak " << c.worst_late_streak()
       << "), max lateness " << o.max_lateness * 1e3 << " ms\n";
@@ -33,6 +44,9 @@ std::string summary_text(const RunOutcome& o) {
     out << "servo loops: " << c.servo_overruns() << " overruns in " << c.servo_ticks()
         << " periods (" << 100.0 * static_cast<double>(c.servo_overruns()) / static_cast<double>(c.servo_ticks())
         << " %, as of each emulator's last heartbeat)\n";
+  for (const runtime::NodeRejects& n : o.node_rejects)
+    out << n.label() << " rejected: " << reject_text(n.rejected())
+        << (n.final() ? "" : " (as of its last heartbeat; no report on STOP)") << "\n";
   for (const LinkLagStats& l : o.links)
     out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "
         << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3

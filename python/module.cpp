@@ -6,8 +6,13 @@
 //                                                                "grid_points", "shard", "trends"}
 //   stability(period_s, zeta, experimental_fraction=1, dt_s=0.001, integrator=..., ...) -> dict
 //   identify(path, channels=..., ...)                         -> {"report", "series", "units"}
-//   read_record(path)           a run record (.rthsrec)      -> {"series", "units", "attributes",
-//                                                                "truncated", "warning"}
+//   read_record(path, allow_loss=False)  a run record (.rthsrec) -> {"series", "units",
+//                               "attributes", "truncated", "warning", "checksummed", "losses"}
+//                               Every entry's checksum is verified (runtime::read_record, as
+//                               `rths export`); a record that lost entries raises rths.Error
+//                               naming the lost steps, unless allow_loss=True, which returns the
+//                               intact entries and "losses" (one description per damaged
+//                               region); attributes integrity and lost_steps as tables/results.h.
 //
 // "series" maps a name with its unit (time_s, u1_m, force1_N, node2_round_trip_s, a1_m_per_s2)
 // to a 1-D NumPy float64 array (text columns: a list of str); the names and units are those of
@@ -273,7 +278,7 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
   return out;
 }
 
-py::dict read_record(const std::filesystem::path& path) {
+py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
   runtime::RecordContents contents;
   tables::Table table;
   {
@@ -281,14 +286,21 @@ py::dict read_record(const std::filesystem::path& path) {
     try {
       contents = runtime::read_record(path);
     } catch (const std::runtime_error& e) {
-      throw std::invalid_argument(e.what());  // a missing or corrupt record is bad input, as in the CLI
+      throw std::invalid_argument(e.what());  // a missing file or no record is bad input, as in the CLI
     }
+    if (contents.lost_entries() && !allow_loss)
+      throw std::runtime_error("the record lost entries: " + contents.loss_report() +
+                               " (read_record(path, allow_loss=True) returns the intact ones)");
     table = tables::record_table(contents);
   }
   py::dict out = table_dict(table);
   out["attributes"] = py::cast(table.attributes());
   out["truncated"] = contents.truncated;
   out["warning"] = contents.warning;
+  out["checksummed"] = contents.checksummed;
+  py::list losses;
+  for (const runtime::RecordLoss& loss : contents.losses) losses.append(loss.describe());
+  out["losses"] = losses;
   return out;
 }
 
@@ -339,5 +351,7 @@ PYBIND11_MODULE(rths, m) {
         py::arg("max_steps") = 6, py::arg("length_unit") = "mm", py::arg("force_unit") = "N",
         py::arg("time_unit") = "s", py::arg("column_map") = "",
         "Identify the effects the declared models lack in measured data, as `rths identify --json`");
-  m.def("read_record", &read_record, py::arg("path"), "A run record (.rthsrec), also a truncated one");
+  m.def("read_record", &read_record, py::arg("path"), py::arg("allow_loss") = false,
+        "A run record (.rthsrec), also a truncated one; checksums verified, a damaged record "
+        "raises unless allow_loss=True (then its intact entries and 'losses')");
 }

@@ -104,7 +104,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
   if (!security_dir.empty()) {  // every document checked before any process starts
     std::vector<int> ids{security::kCoordinatorNodeId};
     for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
-    security::check_lab_security(security_dir, ids);
+    security::check_lab_security(security_dir, ids, domain);
   }
   const NodePrograms programs = find_node_programs(options.programs_dir);
   const PlacementStrategy placement = options.placement ? options.placement : local_placement;

@@ -179,6 +179,14 @@ Table record_table(const runtime::RecordContents& record) {
   t.set_attribute("clock", header->clock());
   const runtime::RunFooter* footer = record.footer();
   t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
+  t.set_attribute("integrity", !record.checksummed ? "unverified: written without checksums"
+                               : record.lost_entries() ? "damaged: " + record.loss_report()
+                                                       : "verified (CRC-32C per entry)");
+  std::string lost;
+  for (const auto& [first, last] : record.missing_steps())
+    lost += (lost.empty() ? "" : ",") + std::to_string(first) +
+            (last > first ? "-" + std::to_string(last) : "");
+  t.set_attribute("lost_steps", lost);
   return t;
 }
 

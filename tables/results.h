@@ -21,7 +21,9 @@
 //                 node<n>_answered_step, node<n>_injected_lag_s, node<n>_round_trip_s,
 //                 node<n>_one_way_down_s, node<n>_one_way_up_s (NaN at step 0, which has no
 //                 exchange), then lateness_s and overrun (0/1); attributes run_id, case_name,
-//                 clock, status.
+//                 clock, status, integrity ("verified (CRC-32C per entry)", "damaged: <what
+//                 was lost>" or "unverified: ..." for an old record) and lost_steps (step
+//                 numbers missing from the rows, e.g. "1059-1061,2000"; empty when none).
 //   identify_table `rths identify`: time_s, then per channel c (measured, force):
 //                 c_input_m, c_target_<unit>, c_declared_<unit>, c_final_<unit> (the record, and
 //                 the declared and final model's predictions over the whole record); unit m for

@@ -439,4 +439,29 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   EXPECT_TRUE(std::filesystem::exists(dir / "lag_lag_shift_14ms.png"));
 }
 
+// A run that stops before its first step (its start-up times out at once) still
+// leaves summary.txt and summary.json with the reason, and `rths launch` exits 1 (the run
+// failed), not 2 ("an empty history") or 3.
+TEST(CliTest, LaunchThatStopsBeforeStepOneWritesTheSummaryWithTheReason) {
+  const auto dir = scratch("launch_step1");
+  const auto config = dir / "study.textproto";
+  std::ofstream(config) << "name: \"frame\"\n"
+                           "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+                           "motion { path: \"" + kMotion + "\" duration: 0.5 }\n"
+                           "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+                           "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+                           "cases { name: \"reference\" }\n"
+                           "deployment { start_timeout: 0.001 }\n";
+  const Outcome o = run("launch " + config.string() + " --domain 85 --no-plots --bin-dir " +
+                        std::string(RTHS_BINARY_DIR) + " --out " + (dir / "out").string());
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  const std::string summary = read_text(dir / "out" / "summary.txt");
+  EXPECT_NE(summary.find("reference: FAILED, stopped before step 1: start-up timed out"),
+            std::string::npos)
+      << summary;
+  const auto json = nlohmann::json::parse(read_text(dir / "out" / "summary.json"));
+  EXPECT_EQ(json["failed_without_record"].size(), 1u) << json.dump(2);
+  EXPECT_EQ(o.output.find("empty history"), std::string::npos) << o.output;
+}
+
 }  // namespace

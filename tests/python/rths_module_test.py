@@ -170,6 +170,21 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     truncated = rths.read_record(cut)
     assert truncated["truncated"] and truncated["warning"]
     assert len(truncated["series"]["step"]) == len(got["series"]["step"])  # only the footer was cut
+    assert got["checksummed"] and got["losses"] == [] and got["attributes"]["lost_steps"] == ""
+    # A flipped byte in the middle: the reader's checksums catch it; Python gets the intact rows
+    # only when it asks for them, with what was lost.
+    damaged = tmp_path / "damaged.rthsrec"
+    data = bytearray(record.read_bytes())
+    data[len(data) // 2] ^= 0x01
+    damaged.write_bytes(bytes(data))
+    with pytest.raises(rths.Error, match="lost"):
+        rths.read_record(damaged)
+    salvaged = rths.read_record(damaged, allow_loss=True)
+    lost = int(salvaged["attributes"]["lost_steps"])
+    assert len(salvaged["losses"]) == 1 and f"step {lost} lost" in salvaged["losses"][0]
+    kept = got["series"]["step"] != lost
+    np.testing.assert_array_equal(salvaged["series"]["step"], got["series"]["step"][kept])
+    np.testing.assert_array_equal(salvaged["series"]["u1_m"], got["series"]["u1_m"][kept])
 
 
 def test_errors_carry_the_cli_messages(tmp_path):
