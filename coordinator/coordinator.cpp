@@ -100,7 +100,8 @@ void loop(Coordinator::State& s, core::SimulationResult& result) {
     core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
 }
 
-// A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), or completed.
+// A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), a node that
+// answered too few steps (answer_shortfall), or completed.
 void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   const core::SimulationResult& result = outcome.result;
   if (result.diverged)

@@ -144,7 +144,7 @@ def test_launch_and_export_write_the_record_in_every_format(study, tmp_path):
     assert mat["attributes"]["lost_steps"] == lost
     _, kept = read_csv(out / "d.csv")
     assert kept["step"] == [s for s in columns["step"] if s != lost]
-    assert kept["u1"] == [u for s, u in zip(columns["step"], columns["u1"]) if s != lost]
+    assert kept["u1_m"] == [u for s, u in zip(columns["step"], columns["u1_m"]) if s != lost]
 
 
 def test_identify_writes_the_record_and_both_models_predictions(tmp_path):
