@@ -224,7 +224,7 @@ void add_identify_command(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--penalty", o->penalty, "relative penalty per added parameter")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel")->check(in_range(core::Quantity::kCount));
+  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel")->check(CLI::Range(0, 1000));  // 0: fit the declared model only
   cmd->add_option("--decimate", o->decimate, "decimation for the search (0: automatic)");
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")

@@ -183,9 +183,15 @@ Table record_table(const runtime::RecordContents& record) {
                                : record.lost_entries() ? "damaged: " + record.loss_report()
                                                        : "verified (CRC-32C per entry)");
   std::string lost;
-  for (const auto& [first, last] : record.missing_steps())
-    lost += (lost.empty() ? "" : ",") + std::to_string(first) +
-            (last > first ? "-" + std::to_string(last) : "");
+  // Appended piece by piece: GCC 12 misreads `"-" + std::to_string(...)` here (-Wrestrict).
+  for (const auto& [first, last] : record.missing_steps()) {
+    if (!lost.empty()) lost += ',';
+    lost += std::to_string(first);
+    if (last > first) {
+      lost += '-';
+      lost += std::to_string(last);
+    }
+  }
   t.set_attribute("lost_steps", lost);
   return t;
 }

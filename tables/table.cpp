@@ -38,7 +38,8 @@ void Table::add(Column column) {
                                 "'_', at most 63 characters)");
   }
   if (!column.unit.empty()) {
-    const std::string tail = "_" + unit_suffix(column.unit);
+    std::string tail = "_";  // appended: GCC 12 misreads `"_" + std::string` here (-Wrestrict)
+    tail += unit_suffix(column.unit);
     if (column.name.size() <= tail.size() ||
         column.name.compare(column.name.size() - tail.size(), tail.size(), tail) != 0)
       throw std::invalid_argument("table column '" + column.name + "' (unit " + column.unit +
