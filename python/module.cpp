@@ -246,7 +246,8 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
                          const std::string& holdout_mode, std::size_t max_steps, const std::string& length_unit,
                          const std::string& force_unit, const std::string& time_unit, const std::string& column_map) {
   core::check_range(core::Quantity::kFraction, holdout, "holdout");
-  core::check_range(core::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
+  if (max_steps > 1000)  // 0: the declared model only, as `rths identify --max-steps 0`
+    throw std::invalid_argument("max_steps = " + std::to_string(max_steps) + " is outside [0, 1000]");
   identify::IdentifyOptions options;
   options.channels.clear();
   for (const auto& name : channels) {
