@@ -102,7 +102,7 @@ def help_failures(env):
     listing = subprocess.run(["rths", "--help"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if listing.returncode != 0 or "SUBCOMMANDS" not in listing.stdout.upper():
         return [f"`rths --help`: exit {listing.returncode}:\n{listing.stdout}"]
-    names = re.findall(r"^  (\w[\w-]*)\s", listing.stdout.split("UBCOMMANDS", 1)[1], re.M)
+    names = re.findall(r"^  (\w[\w-]*)\s", re.split(r"(?i)subcommands:?", listing.stdout, maxsplit=1)[1], re.M)
     failures = []
     for name in names:
         done = subprocess.run(["rths", name, "--help"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

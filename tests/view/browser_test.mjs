@@ -125,7 +125,7 @@ test('lockstep over DDS: the step counter advances and the plotted series are th
   const ex = start(['export', path.join(dir, 'lag_shift_14ms.rthsrec'), '--csv', exported]);
   assert.equal(await ex.done, 0, ex.output);
   const csv = csvColumns(exported);
-  const command = csv.command1, measured = csv.realised1;  // m, the record's columns
+  const command = csv.command1_m, measured = csv.realised1_m;  // m, the record's columns
   assert.ok(command && measured, 'record columns: ' + Object.keys(csv).join(','));
   const plotted = await view(page, () => ({ steps: window.rthsView.drawn.steps, data: window.rthsView.plots.act[0].cmd.data }));
   assert.ok(plotted.steps.length > 100, 'plotted points: ' + plotted.steps.length);
