@@ -13,6 +13,7 @@
 // 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
 // expect_unstable); 2 for a bad config caught before starting anything.
 #include <fstream>
+#include <cstdlib>
 #include <iostream>
 
 #include "cli/commands.h"
@@ -22,6 +23,7 @@
 #include "platform/check.h"
 #include "runtime/launch.h"
 #include "runtime/process.h"
+#include "view/server.h"
 
 namespace rths::cli {
 namespace {
@@ -36,6 +38,8 @@ struct LaunchArgs {
   bool no_plots = false, json = false, allow_unstable = false;
   double platform_seconds = 5.0;
   bool accept_platform = false;
+  std::string view;  // HOST:PORT of the live view, empty: none
+  bool view_stop = false;
 };
 
 // Real time: the platform check once for every case; its summary file, or empty in lockstep.
@@ -57,6 +61,32 @@ std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
   const std::filesystem::path file = out / "platform.json";
   std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(2);
   return file;
+}
+
+// --view / --view-stop as the coordinator's arguments; beyond loopback the stop token is made
+// here, handed down in the environment (never on a command line) and printed.
+std::vector<std::string> view_arguments(const LaunchArgs& args) {
+  if (args.view.empty()) {
+    if (args.view_stop) throw ExitError(kExitBadInput, "--view-stop needs --view HOST:PORT");
+    return {};
+  }
+  view::ListenAddress address;
+  try {
+    address = view::parse_listen_address(args.view);
+  } catch (const std::invalid_argument& e) {
+    throw ExitError(kExitBadInput, e.what());
+  }
+  std::string token;
+  if (args.view_stop && !address.loopback()) {
+    token = view::make_token();
+    ::setenv("RTHS_VIEW_TOKEN", token.c_str(), 1);
+  }
+  std::cerr << "rths launch: live view of each case at http://" << args.view << "/"
+            << (args.view_stop ? " with a stop button" : "")
+            << (token.empty() ? "" : "; stop token " + token) << "\n";
+  std::vector<std::string> out{"--view", args.view};
+  if (args.view_stop) out.push_back("--view-stop");
+  return out;
 }
 
 void run_launch(const LaunchArgs& args) {
@@ -81,6 +111,7 @@ void run_launch(const LaunchArgs& args) {
   warn_past_critical_delay(prepared, names);
   const std::filesystem::path platform_file = check_platform_first(prepared, args, out);
 
+  const std::vector<std::string> coordinator_args = view_arguments(args);
   std::vector<DistributedRun> runs;
   ProgressReporter progress("launch", "cases", !args.json);
   {
@@ -101,6 +132,7 @@ void run_launch(const LaunchArgs& args) {
                               : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
                                                                : runtime::CpuPlacement::kAuto;
       options.stop_requested = [&signals] { return signals.stop_requested(); };
+      options.coordinator_args = coordinator_args;
       std::filesystem::remove(options.record);
       if (!args.json) std::cerr << "rths launch: case " << name << " ...\n";
       runtime::LaunchResult result;
@@ -146,11 +178,11 @@ void add_launch_command(CLI::App& app) {
   cmd->add_option("--case", args->cases, "case(s) to run; default every case");
   cmd->add_option("--out", args->out, "output folder (records, results, plots, logs)");
   cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)")
-      ->check(CLI::Range(0, 232));
+      ->check(in_range(core::Quantity::kDdsDomain));
   cmd->add_option("--bin-dir", args->bin_dir,
                   "where rths-coordinator and the node programs are (default: beside rths)");
   cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is stopped")
-      ->transform(seconds_value());
+      ->transform(seconds_in(core::Quantity::kTimeout));
   cmd->add_option("--cpu-placement", args->cpu_placement,
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")
@@ -162,6 +194,12 @@ void add_launch_command(CLI::App& app) {
   cmd->add_option("--security", args->security,
                   "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
                   "each process uses its node_<id> folder");
+  cmd->add_option("--view", args->view,
+                  "serve the live view of each case at HOST:PORT (e.g. 127.0.0.1:8080); "
+                  "`rths view RECORD` shows a finished one");
+  cmd->add_flag("--view-stop", args->view_stop,
+                "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
+                "token printed here");
   cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots (and remove those of an earlier run)");
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "a diverged case does not fail the run (exit 0); the summary still says diverged");

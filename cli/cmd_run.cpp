@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 
+#include "analysis/benchmark_evaluation.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
@@ -36,6 +37,15 @@ void run(const RunOptions& o) {
   if (out.empty()) out = study.output().directory();
   if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
   write_study_outputs(outcome, out, !o.no_plots, o.json, o.format);
+  if (const auto benchmark = analysis::evaluate_benchmark(prepared, outcome)) {
+    util::AtomicFile text(out / "benchmark.txt");
+    text.stream() << analysis::benchmark_table(*benchmark);
+    text.commit();
+    util::AtomicFile json(out / "benchmark.json");
+    json.stream() << analysis::benchmark_json(*benchmark).dump(2) << "\n";
+    json.commit();
+    if (!o.json) std::cout << analysis::benchmark_table(*benchmark) << "written: benchmark.txt, benchmark.json\n";
+  }
   fail_if_unstable(outcome, o.allow_unstable);
 }
 

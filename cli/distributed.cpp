@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
+#include "runtime/deadline_diagnosis.h"
 #include "runtime/plan.h"
 #include "runtime/record.h"
 #include "runtime/schema.h"
@@ -95,7 +96,7 @@ std::vector<double> in_ms(const std::vector<double>& seconds, double offset = 0.
 std::vector<std::string> lag_plot_files(const DistributedResults& results) {
   std::vector<std::string> files;
   for (const auto& c : results.outcome.cases)
-    for (const char* extension : {".png", ".svg"}) files.push_back("lag_" + c.name + extension);
+    for (const char* extension : {".png", ".svg"}) files.push_back("links_" + c.name + extension);
   return files;
 }
 
@@ -175,7 +176,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       continue;
     }
     const runtime::RecordContents record = runtime::read_record(run.record);
-    if (record.truncated) print_warning(record.warning);
+    if (!record.warning.empty()) print_warning(record.warning);
     if (record.header() == nullptr) {
       results.missing.emplace_back(run.case_name, "the record has no header; see " + run.log_hint);
       continue;
@@ -200,9 +201,19 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       facts.rejected = runtime::RejectCounters::from(k).total();
       facts.node_rejects.assign(measured.footer.node_rejects().begin(),
                                 measured.footer.node_rejects().end());
+      if (c.status.find("deadline misses") != std::string::npos)
+        facts.deadline_diagnosis =
+            runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
+                                        static_cast<std::uint64_t>(runtime::max_missed_answers(
+                                            prepared.config.deployment())))
+                .describe();
     } else {
       c.status = "cut short";
       c.status_detail = "the record has no footer: the coordinator stopped abruptly";
+    }
+    if (record.lost_entries()) {  // checksums failed: its rows are not the run's
+      c.status = "record damaged";
+      c.status_detail = record.loss_report();
     }
     if (!run.launcher_status.empty()) {
       c.status = run.launcher_status;
@@ -240,7 +251,7 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
     try {
       analysis::write_study_plots(results.outcome, out);
       for (std::size_t i = 0; i < results.outcome.cases.size(); ++i)
-        if (!results.links[i].empty()) write_lag_plot(results, i, out / ("lag_" + results.outcome.cases[i].name + ".png"));
+        if (!results.links[i].empty()) write_lag_plot(results, i, out / ("links_" + results.outcome.cases[i].name + ".png"));
     } catch (const std::exception& e) {
       print_warning(std::string("plots not written: ") + e.what());
     }
@@ -273,7 +284,9 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
   for (const auto& [node, series] : links) {
     // Injected first, so the measured round trip is drawn over it.
-    network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected)});
+    // Thick and dashed: in lockstep it lies on zero, under the processes' own exchange times.
+    network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected),
+                              "lines lw 3 dt 2"});
     if (node == path.node_id) actuator_link_colour = util::series_colour(network.series.size());
     network.series.push_back({label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
   }
@@ -313,8 +326,13 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
     level(c.stability->continuous, "continuous", "2");
     level(c.stability->discrete, "discrete", "3");
   }
-  // From zero, and high enough that the critical delays are never on the border.
-  stack.y_min = network.y_min = 0.0;
+  if (!path.real_time)
+    network.title = "wall-clock round trip per link, case " + c.name +
+                    " (lockstep: simulated time carries no network lag; these are the processes' own exchange times)";
+  // From zero, and high enough that the critical delays are never on the border; the network
+  // panel a little below zero, so that an injected lag of zero is seen, not hidden in the axis.
+  stack.y_min = 0.0;
+  if (const auto range = util::padded_y_range(network.series, {})) network.y_min = -0.05 * std::max(range->second, 1e-3);
   if (const auto range = util::padded_y_range(stack.series, {})) stack.y_max = range->second;
   network.height = stack.height = 380;
   std::vector<util::PlotSpec> panels;
@@ -333,6 +351,7 @@ std::string distributed_summary_text(const DistributedResults& results) {
     text << c.name << ": " << c.simulation.steps() << " steps, coordinator exit " << f.coordinator_exit
          << ", overruns " << f.overruns << ", rejected " << f.rejected << ", record " << f.record.string()
          << "\n";
+    if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
     if (f.difference_from_in_process) {
       if (!f.difference_from_in_process->first_step)
         text << "  equals the in-process run of the same case bit for bit\n";
@@ -381,6 +400,7 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     c["rejected"] = f.rejected;
     c["links"] = links;
     c["record"] = f.record.string();
+    c["deadline_diagnosis"] = f.deadline_diagnosis.empty() ? nlohmann::json() : nlohmann::json(f.deadline_diagnosis);
     c["max_difference_from_in_process_m"] = f.difference_from_in_process
                                                 ? nlohmann::json(f.difference_from_in_process->max)
                                                 : nlohmann::json();

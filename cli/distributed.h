@@ -87,6 +87,9 @@ struct DistributedCaseFacts {
   std::map<int, std::string> link_labels;  // node id -> link_roles' label
   std::optional<InProcessDifference> difference_from_in_process;
   std::vector<runtime::NodeRejects> node_rejects;  // the footer's: each node's, by cause
+  // A real-time run that missed its deadlines: why, what to do, what the record is good for
+  // (runtime::diagnose_deadlines); empty otherwise.
+  std::string deadline_diagnosis;
 };
 
 struct DistributedResults {
@@ -102,7 +105,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
                                      const std::vector<DistributedRun>& runs,
                                      const std::map<int, std::string>& site_of_node = {});
 
-// lag_<case>.png and .svg, two panels sharing the time axis (ms):
+// links_<case>.png and .svg, two panels sharing the time axis (ms):
 //   1. network lag per link, by role: measured round trip and injected round trip;
 //   2. the lag the test feels on the actuator's path, stacked: the actuator lab's network round
 //      trip (measured; real time only, lockstep does not feel it) with the actuator's own lag

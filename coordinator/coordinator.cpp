@@ -1,9 +1,11 @@
 #include "coordinator/coordinator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 
+#include "coordinator/answer_verdict.h"
 #include "coordinator/deadline_verdict.h"
 #include "coordinator/state.h"
 
@@ -43,10 +45,9 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
                                               s.deployment.limits().max_displacement());
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
   const int actuators = static_cast<int>(s.setup.partition.actuator_storeys.size());
-  s.assembly = core::StoreyAssembly(storeys);
+  s.assembly = s.setup.partition.assembly();
   if (plan_.numerical_local)
-    s.local_numerical = std::make_unique<core::NumericalSubstructure>(
-        core::HybridPartition(s.setup.partition).numerical);
+    s.local_numerical = std::make_unique<core::NumericalSubstructure>(s.setup.partition);
   s.drift = core::Vec::Zero(storeys);
   s.limits = std::make_unique<CommandLimits>(s.deployment.limits(),
                                              s.setup.partition.actuator_storeys, storeys);
@@ -79,8 +80,8 @@ void activate(Coordinator::State& s) {
               std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
 }
 
-// core::run_steps with this run as its evaluator and hooks. Feedback is judged and boxed on the
-// transport's receive thread; the loop is woken once a step's answers are all in (or a fault
+// core::run_steps (or the options' outside StepDriver) with this run as its evaluator and hooks.
+// Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's answers are all in (or a fault
 // was raised). The handler is removed (waiting out a running call) before this returns.
 void loop(Coordinator::State& s, core::SimulationResult& result) {
   core::SimulationOptions options;
@@ -94,10 +95,14 @@ void loop(Coordinator::State& s, core::SimulationResult& result) {
     transport::Endpoint& endpoint;
     ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
   } remove_handler{s.endpoint};
-  core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
+  if (s.options.driver)
+    s.options.driver(s, s, result);
+  else
+    core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
 }
 
-// A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), or completed.
+// A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), a node that
+// answered too few steps (answer_shortfall), or completed.
 void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   const core::SimulationResult& result = outcome.result;
   if (result.diverged)
@@ -114,6 +119,14 @@ void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outco
     if (outcome.ok && !misses)
       misses = servo_deadline_misses(node.plan->label(), node.servo_overruns, node.servo_ticks,
                                      tolerance);
+  for (const auto& [id, node] : s.nodes)
+    if (s.real_time && outcome.ok && !misses) {
+      // Answers to the last steps of a link slower than a step are still on the wire at the end.
+      const auto in_flight = static_cast<std::uint64_t>(
+          std::ceil(Coordinator::State::injected_round_trip(node.plan->spec) / s.setup.dt)) + 1;
+      const std::uint64_t due = node.judged_steps > in_flight ? node.judged_steps - in_flight : 0;
+      misses = answer_shortfall(id, std::min(node.answers, due), due, kMinAnswerFraction);
+    }
   if (misses) {
     outcome.ok = false;
     outcome.status = *misses;
@@ -189,7 +202,7 @@ void report(const Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome
 // A record that lost entries fails the run; the footer closes it.
 void close_record(Coordinator::State& s, RunOutcome& outcome) {
   if (!s.record) return;
-  if (s.record->dropped() > 0) {
+  if (s.record->dropped() > 0 && !s.record_failed) {
     outcome.ok = false;
     outcome.status += "; the run record lost " + std::to_string(s.record->dropped()) +
                       " entries (its writer fell more than " +
@@ -205,7 +218,12 @@ void close_record(Coordinator::State& s, RunOutcome& outcome) {
   f.set_wall_seconds(outcome.wall_seconds);
   for (const runtime::NodeRejects& n : outcome.node_rejects) *f.add_node_rejects() = n;
   s.append_waiting(entry);
-  s.record->close();  // throws naming the file when a write failed
+  try {
+    s.record->close();
+  } catch (const std::runtime_error& e) {  // a write failed: the run kept nothing after it
+    outcome.ok = false;
+    if (!s.record_failed) outcome.status += std::string("; ") + e.what();
+  }
 }
 
 }  // namespace
@@ -216,6 +234,7 @@ RunOutcome Coordinator::run() {
   RunOutcome outcome;
   if (!s.options.record.empty())
     s.record = std::make_unique<runtime::AsyncRecordWriter>(s.options.record);
+  if (s.record) s.record->set_observer(s.options.record_observer);
   runtime::MonotonicClock monotonic;
   runtime::Pacer pacer(s.options.clock ? *s.options.clock : monotonic, s.setup.dt,
                        runtime::wait_policy(s.deployment));

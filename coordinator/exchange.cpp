@@ -273,6 +273,8 @@ void Coordinator::State::collect() {
       // slower than a step delivers, is fresh). Counted once the node has answered: before
       // that, start-up and liveliness cover it.
       const bool fresh = node.answers != node.answers_before_step;
+      node.fresh_steps += fresh ? 1 : 0;
+      ++node.judged_steps;
       node.answers_before_step = node.answers;
       node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
       if (node.missed_streak >= max_missed)

@@ -32,13 +32,6 @@ using Clock = std::chrono::steady_clock;
 // rejected, by cause); a node that does not send it in time is reported as of its last one.
 inline constexpr auto kFinalReportWait = std::chrono::milliseconds(1000);
 
-// Thrown inside the loop when the run must stop; caught by run().
-struct RunAborted : std::runtime_error {
-  RunAborted(const std::string& why, std::string node)
-      : std::runtime_error(why), node(std::move(node)) {}
-  std::string node;
-};
-
 inline double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -67,6 +60,7 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
     std::uint64_t answers_before_step = 0;
     int missed_streak = 0;         // real time: consecutive steps without a fresh answer
     int late_streak = 0;           // real time: consecutive steps on an older answer
+    std::uint64_t fresh_steps = 0, judged_steps = 0;  // real time: for answer_shortfall
     bool awaited = true;           // awaits_answers_of(its spec)
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
     std::uint64_t writer = 0;      // its announcement's writer: only it may speak as this node
@@ -182,6 +176,12 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
 
   void write_header();
   void write_step(std::size_t k, const core::SimulationResult& result, double step_wall);
+  // After each step: a record whose writer failed (disk full, I/O error) or fell behind beyond
+  // its ring stops the run (RunAborted naming the file and the reason): nothing would be kept.
+  // Detected within a step or two of the failed write (the writer flushes whenever its ring runs
+  // empty, and this runs every step).
+  void check_record();
+  bool record_failed = false;  // check_record() stopped the run
 };
 
 }  // namespace rths::coordinator

@@ -33,6 +33,8 @@ void Coordinator::State::before_step(std::size_t k) {
     }
   }
   step = static_cast<std::int64_t>(k);
+  if (options.stop_request && options.stop_request->load(std::memory_order_relaxed))
+    throw RunAborted(kStoppedFromView, "");
   intake->await_step(step);
   step_start = Clock::now();
   step_start_realtime_ns = transport::realtime_ns();
@@ -42,6 +44,7 @@ bool Coordinator::State::after_step(std::size_t k,
                                     const core::SimulationResult& result) {
   const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
   write_step(k, result, step_wall);
+  check_record();
   if (k > 0)
     for (auto& [id, node] : nodes) lags.add(result.time[k], link_of(id));
   if (k == 0) {
@@ -50,6 +53,21 @@ bool Coordinator::State::after_step(std::size_t k,
     if (real_time) pacer->start();
   }
   return true;
+}
+
+void Coordinator::State::check_record() {
+  if (!record) return;
+  if (record->failed()) {
+    record_failed = true;
+    throw RunAborted(record->failure(), "");
+  }
+  if (record->dropped() > 0) {
+    record_failed = true;
+    throw RunAborted("the run record's writer fell more than " +
+                         std::to_string(record->capacity()) + " entries behind (" +
+                         std::to_string(record->dropped()) + " dropped)",
+                     "");
+  }
 }
 
 void Coordinator::State::prepare_real_time_thread() {

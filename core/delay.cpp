@@ -274,8 +274,12 @@ double TransferFunctionStage::step_unscaled(const CommandSample& in) {
 // quoted a1b0, a2, a3, b1, b2, not against the paper's PDF, so treat the specimen values as the
 // best-documented nominal ones. Units follow the benchmark (consistent SI, gain x_m / x_c).
 ContinuousTransferFunction benchmark_actuator_transfer_function() {
-  constexpr double a1b0 = 2.13e13, a2 = 4.23e6, a3 = 3.3, b1 = 425.0, b2 = 1e5;
-  constexpr double me = 29.1, ce = 114.6, ke = 1.19e6;
+  return benchmark_actuator_transfer_function(BenchmarkPlantParameters{});
+}
+
+ContinuousTransferFunction benchmark_actuator_transfer_function(const BenchmarkPlantParameters& q) {
+  const double a1b0 = q.a1_beta0, a2 = q.a2, a3 = q.a3, b1 = q.beta1, b2 = q.beta2;
+  const double me = q.mass, ce = q.damping, ke = q.stiffness;
   // P(s) = me s^3 + (ce + a3 me) s^2 + (ke + a3 ce + a2) s + a3 ke   (highest power first)
   const std::vector<double> p{me, ce + a3 * me, ke + a3 * ce + a2, a3 * ke};
   const std::vector<double> servo{1.0, b1, b2};
@@ -284,7 +288,24 @@ ContinuousTransferFunction benchmark_actuator_transfer_function() {
     for (std::size_t j = 0; j < p.size(); ++j) den[i + j] += servo[i] * p[j];
   }
   den.back() += a1b0;
-  return {{a1b0}, std::move(den)};
+  return {{q.gain * a1b0}, std::move(den)};
+}
+
+DiscreteCoefficients tustin(const std::vector<double>& numerator, const std::vector<double>& denominator,
+                            double dt) {
+  if (numerator.empty() || denominator.empty() || numerator.size() > denominator.size())
+    throw std::invalid_argument("Tustin: a proper transfer function needs deg num <= deg den (both non-empty)");
+  if (denominator.front() == 0.0) throw std::invalid_argument("Tustin: the denominator's leading coefficient is 0");
+  if (!(dt > 0)) throw std::invalid_argument("Tustin: the step must be > 0 s");
+  const std::vector<double> num_up(numerator.rbegin(), numerator.rend());
+  const std::vector<double> den_up(denominator.rbegin(), denominator.rend());
+  const int order = static_cast<int>(den_up.size()) - 1;
+  DiscreteCoefficients out{tustin_polynomial(num_up, order, dt), tustin_polynomial(den_up, order, dt)};
+  const double a0 = out.a[0];
+  if (a0 == 0.0) throw std::invalid_argument("Tustin: a pole at z = infinity (D(2/dt) = 0); choose another step");
+  for (double& c : out.b) c /= a0;
+  for (double& c : out.a) c /= a0;
+  return out;
 }
 
 std::unique_ptr<TransferFunctionStage> make_benchmark_actuator(double dt) {

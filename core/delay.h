@@ -191,6 +191,21 @@ struct ContinuousTransferFunction {
   std::vector<double> numerator, denominator;
 };
 ContinuousTransferFunction benchmark_actuator_transfer_function();
+// The plant with every parameter given (the defaults are the nominal values above, gain 1):
+//   gain a1b0 / ((s^2 + beta1 s + beta2) ((s + a3)(m s^2 + c s + k) + a2 s) + a1b0).
+struct BenchmarkPlantParameters {
+  double a1_beta0 = 2.13e13, a2 = 4.23e6, a3 = 3.3, beta1 = 425.0, beta2 = 1e5, gain = 1.0;
+  double mass = 29.1, damping = 114.6, stiffness = 1.19e6;  // kg, N s/m, N/m
+};
+ContinuousTransferFunction benchmark_actuator_transfer_function(const BenchmarkPlantParameters& p);
+
+// Tustin map of num(s)/den(s) (highest power of s first, proper) at step dt: b and a in ascending
+// powers of z^-1, a[0] = 1. Throws std::invalid_argument when improper, empty, or D(2/dt) = 0.
+struct DiscreteCoefficients {
+  std::vector<double> b, a;
+};
+DiscreteCoefficients tustin(const std::vector<double>& numerator, const std::vector<double>& denominator,
+                            double dt);
 
 class JitterShift final : public DelayStage {
  public:

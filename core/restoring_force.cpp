@@ -145,4 +145,46 @@ std::string BoucWen::describe() const {
                 alpha_, n_, beta_ * std::pow(uy_, n_));
 }
 
+// ---------------------------------------------------------------------------------------------
+InertialSpecimen::InertialSpecimen(std::unique_ptr<RestoringForceModel> model, double mass,
+                                   double damping, double period)
+    : model_(std::move(model)), m_(mass), c_(damping), h_(period) {
+  require(model_ != nullptr, "InertialSpecimen: a restoring-force model is needed");
+  require(mass >= 0.0 && std::isfinite(mass), "InertialSpecimen: mass must be >= 0 kg");
+  require(damping >= 0.0 && std::isfinite(damping), "InertialSpecimen: damping must be >= 0 N s/m");
+  require(positive_finite(period), "InertialSpecimen: the sampling period must be > 0 s");
+}
+
+InertialSpecimen::InertialSpecimen(const InertialSpecimen& other)
+    : model_(other.model_->clone()), m_(other.m_), c_(other.c_), h_(other.h_), x1_(other.x1_),
+      x2_(other.x2_), trial_(other.trial_) {}
+
+ForceState InertialSpecimen::trial(double drift) {
+  trial_ = drift;
+  const ForceState r = model_->trial(drift);
+  const double velocity = (drift - x1_) / h_;
+  const double acceleration = (drift - 2.0 * x1_ + x2_) / (h_ * h_);
+  return {m_ * acceleration + c_ * velocity + r.force, r.tangent + c_ / h_ + m_ / (h_ * h_)};
+}
+
+void InertialSpecimen::commit() {
+  model_->commit();
+  x2_ = x1_;
+  x1_ = trial_;
+}
+
+void InertialSpecimen::reset() {
+  model_->reset();
+  x1_ = x2_ = trial_ = 0.0;
+}
+
+std::unique_ptr<RestoringForceModel> InertialSpecimen::clone() const {
+  return std::make_unique<InertialSpecimen>(*this);
+}
+
+std::string InertialSpecimen::describe() const {
+  return format("specimen(m = %g kg, c = %g N s/m, h = %g s, ", m_, c_, h_) + model_->describe() + ")";
+}
+
 }  // namespace rths::core
+

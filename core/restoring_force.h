@@ -90,4 +90,27 @@ class BoucWen final : public RestoringForceModel {
   double trial_drift_ = 0.0, trial_z_ = 0.0;
 };
 
+// A specimen with inertia and damping, as a force transducer between actuator and specimen
+// measures it: f = m x'' + c x' + r(x), r the wrapped model, x' = (x - x1) / h and
+// x'' = (x - 2 x1 + x2) / h^2 the backward differences over the committed drifts x1, x2 of the
+// previous two calls (h s apart: the servo period). Tangent d f / d x = r' + c / h + m / h^2.
+// @pre m >= 0, c >= 0, h > 0, a model.
+class InertialSpecimen final : public RestoringForceModel {
+ public:
+  InertialSpecimen(std::unique_ptr<RestoringForceModel> model, double mass, double damping,
+                   double period);
+  InertialSpecimen(const InertialSpecimen& other);
+  ForceState trial(double drift) override;
+  void commit() override;
+  void reset() override;
+  double initial_stiffness() const override { return model_->initial_stiffness(); }
+  std::unique_ptr<RestoringForceModel> clone() const override;
+  std::string describe() const override;
+
+ private:
+  std::unique_ptr<RestoringForceModel> model_;
+  double m_, c_, h_;
+  double x1_ = 0.0, x2_ = 0.0, trial_ = 0.0;
+};
+
 }  // namespace rths::core

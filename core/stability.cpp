@@ -549,15 +549,16 @@ std::string CriticalDelayCheck::describe() const {
   out.precision(3);
   out << "lag " << lag * 1e3 << " ms";
   const auto limit = critical();
+  const std::string discrete_text = !discrete_skipped.empty() ? "discrete check skipped: " + discrete_skipped
+                                   : "discrete none up to " + std::to_string(discrete_searched_steps) + " steps";
   if (!limit) {
-    out << ": stable for every delay (continuous; discrete none up to " << discrete_searched_steps
-        << " steps)";
+    out << ": stable for every delay (continuous; " << discrete_text << ")";
     return out.str();
   }
   out << " against a critical delay of " << *limit * 1e3 << " ms (continuous ";
   if (continuous) out << *continuous * 1e3 << " ms"; else out << "none";
-  out << ", discrete ";
-  if (discrete) out << *discrete * 1e3 << " ms"; else out << "none up to " << discrete_searched_steps << " steps";
+  out << ", ";
+  if (discrete) out << "discrete " << *discrete * 1e3 << " ms"; else out << discrete_text;
   out << "; mode " << governing_mode << ", T = " << governing_period << " s, experimental fraction "
       << governing_fraction << "): ";
   const double m = margin();
@@ -566,30 +567,43 @@ std::string CriticalDelayCheck::describe() const {
   return out.str();
 }
 
+bool discrete_analysis_covers(IntegratorKind kind) {
+  return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha;
+}
+
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         const std::vector<double>& experimental_storey_stiffness,
                                         IntegratorKind kind, double dt, double lag) {
-  if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
   const int dofs = model.dofs();
   if (static_cast<int>(experimental_storey_stiffness.size()) != dofs) {
     throw std::invalid_argument("critical delay check: one experimental stiffness per storey expected");
   }
   // K_e of a shear building from the storeys' experimental stiffnesses.
-  Mat k_experimental = Mat::Zero(dofs, dofs);
-  for (int s = 0; s < dofs; ++s) {
-    const double k = experimental_storey_stiffness[static_cast<std::size_t>(s)];
-    k_experimental(s, s) += k;
-    if (s > 0) {
-      k_experimental(s - 1, s - 1) += k;
-      k_experimental(s - 1, s) -= k;
-      k_experimental(s, s - 1) -= k;
-    }
-  }
+  Mat k_experimental;
+  StoreyAssembly(dofs).tangent(Eigen::Map<const Vec>(experimental_storey_stiffness.data(), dofs),
+                               k_experimental);
+  return check_modal_critical_delay(model, k_experimental, kind, dt, lag);
+}
+
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
+                                        IntegratorKind kind, double dt, double lag) {
+  if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
+  const int dofs = model.dofs();
+  if (k_experimental.rows() != dofs || k_experimental.cols() != dofs)
+    throw std::invalid_argument("critical delay check: K_e must be n x n for the structure's n DOFs");
   const Modes modes = modal_analysis(model.mass, model.stiffness);
   CriticalDelayCheck check;
   check.lag = lag;
   const int lag_steps = lag > 0 ? static_cast<int>(std::ceil(lag / dt - 1e-9)) : 0;
   check.discrete_searched_steps = std::min(lag_steps + 1, CriticalDelayCheck::kMaxDiscreteSteps);
+  check.assumed = dofs == 1 ? "exact for one DOF (the experimental part at its initial stiffness)"
+                            : "modal approximation over the " + std::to_string(dofs) +
+                                  " modes of (M, K), each an SDOF with its modal damping and "
+                                  "experimental fraction phi' K_e phi / omega^2; the coupling the "
+                                  "delayed force adds between modes is ignored; the experimental "
+                                  "part at its initial stiffness";
+  if (!discrete_analysis_covers(kind))
+    check.discrete_skipped = "the discrete delay analysis does not cover " + to_string(kind);
   for (int i = 0; i < dofs; ++i) {
     const double omega = modes.omega[i];
     const Vec phi = modes.shapes.col(i);
@@ -607,8 +621,14 @@ CriticalDelayCheck check_critical_delay(const StructuralModel& model,
       check.governing_period = period;
       check.governing_fraction = alpha;
     }
-    const DiscreteStability discrete =
-        discrete_critical_delay(kind, period, zeta, alpha, dt, check.discrete_searched_steps);
+    if (!check.discrete_skipped.empty()) continue;
+    // Searched past the lag to 1.5x the mode's continuous limit, so the discrete limit is found
+    // (and reported) also for a lag below it.
+    const double reach = continuous.critical_delay ? 1.5 * *continuous.critical_delay / dt : 0.0;
+    const int steps = std::min(CriticalDelayCheck::kMaxDiscreteSteps,
+                               std::max(lag_steps + 1, static_cast<int>(std::ceil(reach))));
+    check.discrete_searched_steps = std::max(check.discrete_searched_steps, steps);
+    const DiscreteStability discrete = discrete_critical_delay(kind, period, zeta, alpha, dt, steps);
     if (discrete.first_unstable_delay && (!check.discrete || *discrete.first_unstable_delay < *check.discrete)) {
       check.discrete = discrete.first_unstable_delay;
     }

@@ -140,6 +140,10 @@ struct CriticalDelayCheck {
   std::optional<double> continuous;          // s; empty: stable for every delay
   std::optional<double> discrete;            // s; empty: none found up to the searched steps
   int discrete_searched_steps = 0;           // n searched for the discrete limit
+  // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
+  // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
+  std::string discrete_skipped;
+  std::string assumed;                       // what the check assumed (modal approximation...)
   int governing_mode = 1;                    // 1-based mode with the smallest continuous delay
   double governing_period = 0.0;             // s
   double governing_fraction = 0.0;           // alpha of that mode
@@ -153,8 +157,15 @@ struct CriticalDelayCheck {
   std::string describe() const;
 };
 
+// False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha).
+bool discrete_analysis_covers(IntegratorKind kind);
+
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         const std::vector<double>& experimental_storey_stiffness,
+                                        IntegratorKind kind, double dt, double lag);
+// The same with K_e given as a matrix (N/m, n x n): a structure given by matrices, whose
+// experimental parts sit at DOFs (HybridPartition::experimental_stiffness()).
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
                                         IntegratorKind kind, double dt, double lag);
 
 }  // namespace rths::core

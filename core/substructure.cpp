@@ -25,7 +25,68 @@ StoreyModelFactory linear_factory() {
 HybridPartition::HybridPartition(const HybridPartition& other)
     : numerical(clone_all(other.numerical)),
       experimental(clone_all(other.experimental)),
-      actuator_storeys(other.actuator_storeys) {}
+      actuator_storeys(other.actuator_storeys),
+      by_dofs(other.by_dofs),
+      numerical_matrix(other.numerical_matrix) {}
+
+bool HybridPartition::has_numerical(int s) const {
+  if (numerical[static_cast<std::size_t>(s)]) return true;
+  return numerical_matrix.size() > 0 && numerical_matrix.row(s).cwiseAbs().maxCoeff() > 0;
+}
+
+std::vector<int> HybridPartition::coupled_to(const std::vector<int>& hosted) const {
+  std::vector<bool> needed(numerical.size(), false);
+  for (int s : hosted) {
+    needed[static_cast<std::size_t>(s)] = true;
+    if (numerical_matrix.size() == 0) continue;
+    for (Eigen::Index j = 0; j < numerical_matrix.cols(); ++j)
+      if (numerical_matrix(s, j) != 0.0) needed[static_cast<std::size_t>(j)] = true;
+  }
+  std::vector<int> out;
+  for (std::size_t s = 0; s < needed.size(); ++s)
+    if (needed[s]) out.push_back(static_cast<int>(s));
+  return out;
+}
+
+Mat HybridPartition::experimental_stiffness() const {
+  const int n = static_cast<int>(experimental.size());
+  Vec k = Vec::Zero(n);
+  for (int s = 0; s < n; ++s)
+    if (experimental[static_cast<std::size_t>(s)]) k[s] = experimental[static_cast<std::size_t>(s)]->initial_stiffness();
+  Mat out;
+  assembly().tangent(k, out);
+  return out;
+}
+
+StoreyAssembly HybridPartition::assembly() const {
+  return StoreyAssembly(static_cast<int>(numerical.size()), by_dofs);
+}
+
+HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen> specimens) {
+  const int n = static_cast<int>(stiffness.rows());
+  HybridPartition partition;
+  partition.by_dofs = true;
+  partition.numerical.resize(static_cast<std::size_t>(n));
+  partition.experimental.resize(static_cast<std::size_t>(n));
+  partition.numerical_matrix = stiffness;
+  for (DofSpecimen& specimen : specimens) {
+    const int d = specimen.dof;
+    const std::string name = "experimental DOF " + std::to_string(d + 1);
+    if (d < 0 || d >= n) throw std::invalid_argument(name + " is outside 1.." + std::to_string(n));
+    if (partition.experimental[static_cast<std::size_t>(d)]) throw std::invalid_argument(name + " is listed twice");
+    if (!specimen.model) throw std::invalid_argument(name + " has no specimen model");
+    const double k = specimen.model->initial_stiffness();
+    if (!(k > 0 && k <= stiffness(d, d)))
+      throw std::invalid_argument(name + ": stiffness " + std::to_string(k) + " N/m must be in (0, K(" +
+                                  std::to_string(d + 1) + ", " + std::to_string(d + 1) + ") = " +
+                                  std::to_string(stiffness(d, d)) + "]");
+    partition.numerical_matrix(d, d) -= k;
+    partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
+  }
+  for (int d = 0; d < n; ++d)
+    if (partition.experimental[static_cast<std::size_t>(d)]) partition.actuator_storeys.push_back(d);
+  return partition;
+}
 
 HybridPartition& HybridPartition::operator=(const HybridPartition& other) {
   if (this != &other) *this = HybridPartition(other);
@@ -74,11 +135,19 @@ HybridPartition partition_by_storeys(const std::vector<double>& storey_stiffness
 }
 
 void StoreyAssembly::drifts(const Vec& u, Vec& drift) const {
+  if (by_dofs_) {
+    drift = u;
+    return;
+  }
   drift[0] = u[0];
   for (int i = 1; i < n_; ++i) drift[i] = u[i] - u[i - 1];
 }
 
 void StoreyAssembly::dof_forces(const Vec& shear, Vec& force) const {
+  if (by_dofs_) {
+    force = shear;
+    return;
+  }
   for (int i = 0; i + 1 < n_; ++i) force[i] = shear[i] - shear[i + 1];
   force[n_ - 1] = shear[n_ - 1];
 }
@@ -87,7 +156,7 @@ void StoreyAssembly::tangent(const Vec& storey_tangent, Mat& k) const {
   k.setZero(n_, n_);
   for (int s = 0; s < n_; ++s) {
     k(s, s) += storey_tangent[s];
-    if (s > 0) {
+    if (s > 0 && !by_dofs_) {
       k(s - 1, s - 1) += storey_tangent[s];
       k(s - 1, s) -= storey_tangent[s];
       k(s, s - 1) -= storey_tangent[s];
@@ -96,11 +165,14 @@ void StoreyAssembly::tangent(const Vec& storey_tangent, Mat& k) const {
 }
 
 NumericalSubstructure::NumericalSubstructure(
-    std::vector<std::unique_ptr<RestoringForceModel>> storey_models)
-    : models_(std::move(storey_models)) {}
+    std::vector<std::unique_ptr<RestoringForceModel>> storey_models, Mat matrix)
+    : models_(std::move(storey_models)), matrix_(std::move(matrix)) {}
+
+NumericalSubstructure::NumericalSubstructure(const HybridPartition& partition)
+    : models_(clone_all(partition.numerical)), matrix_(partition.numerical_matrix) {}
 
 NumericalSubstructure::NumericalSubstructure(const NumericalSubstructure& other)
-    : models_(clone_all(other.models_)) {}
+    : models_(clone_all(other.models_)), matrix_(other.matrix_) {}
 
 void NumericalSubstructure::trial(const Vec& drift, Vec& shear, Vec* storey_tangent) {
   for (std::size_t s = 0; s < models_.size(); ++s) {
@@ -109,6 +181,8 @@ void NumericalSubstructure::trial(const Vec& drift, Vec& shear, Vec* storey_tang
     shear[s] = state.force;
     if (storey_tangent) (*storey_tangent)[s] = state.tangent;
   }
+  // Row by row, the same sums in every process (no allocation, no reordering by size).
+  for (Eigen::Index i = 0; i < matrix_.rows(); ++i) shear[i] += matrix_.row(i).dot(drift);
 }
 
 void NumericalSubstructure::commit() {
@@ -231,8 +305,8 @@ Actuator make_actuator(const HybridPartition& partition, int a, DelayChain chain
 
 HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains,
                                  double dt, int servo_substeps)
-    : assembly_(static_cast<int>(partition.numerical.size())),
-      numerical_(HybridPartition(partition).numerical),
+    : assembly_(partition.assembly()),
+      numerical_(partition),
       actuator_storeys_(partition.actuator_storeys) {
   const std::size_t actuators = partition.actuator_storeys.size();
   if (!chains.empty() && chains.size() != actuators) {
@@ -280,7 +354,10 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
     }
   }
   assemble_storey_forces(assembly_, actuator_storeys_, measured_, shear_, force_);
-  if (tangent) assembly_.tangent(storey_tangent_, *tangent);
+  if (tangent) {
+    assembly_.tangent(storey_tangent_, *tangent);
+    if (numerical_.matrix().size() > 0) *tangent += numerical_.matrix();
+  }
   return force_;
 }
 

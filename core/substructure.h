@@ -1,9 +1,13 @@
 #pragma once
-// Substructuring of a shear building into a numerical part (in the coordinator or a
-// substructure node) and an experimental part (specimens behind actuators).
+// Substructuring of a structure into a numerical part (in the coordinator or a substructure node)
+// and an experimental part (specimens behind actuators). A shear building is split by storeys;
+// a structure given by matrices by DOFs: its "storeys" are then its DOFs (B = I), each
+// experimental DOF's specimen acts between that DOF and the ground, and the numerical part is the
+// linear K_N = K - K_e as a matrix (plus no per-DOF model).
 //
 // Blocks:
-//   StoreyAssembly            drifts d = B u  and DOF forces r = B^T V  (B: d_i = u_i - u_{i-1}).
+//   StoreyAssembly            drifts d = B u  and DOF forces r = B^T V  (shear building B:
+//                             d_i = u_i - u_{i-1}; by DOFs B = I).
 //   NumericalSubstructure     input storey drifts (m) -> storey shears (N); trial/commit.
 //   Actuator                  input CommandSample (commanded drift) -> {realised drift, measured
 //                             force}: delay chain, then the specimen's restoring-force model.
@@ -26,12 +30,27 @@ namespace rths::core {
 using StoreyModelFactory = std::function<std::unique_ptr<RestoringForceModel>(double k)>;
 StoreyModelFactory linear_factory();
 
+class StoreyAssembly;
+
 struct HybridPartition {
   // One entry per storey; null where that storey has no numerical / experimental part.
   std::vector<std::unique_ptr<RestoringForceModel>> numerical;
   std::vector<std::unique_ptr<RestoringForceModel>> experimental;
   // Storeys (0-based) that carry an experimental part: one actuator each, in this order.
   std::vector<int> actuator_storeys;
+  // Split by DOFs (a structure given by matrices): B = I and the numerical part's linear
+  // stiffness K_N (N/m, n x n) acting on the DOF displacements; empty for a shear building.
+  bool by_dofs = false;
+  Mat numerical_matrix;
+
+  // Whether storey (or DOF) s has a numerical part: a model, or a non-zero row of K_N.
+  bool has_numerical(int s) const;
+  // The DOFs (0-based) whose displacement the numerical part of `hosted` needs: `hosted` itself
+  // and, through K_N, every DOF coupled to one of them.
+  std::vector<int> coupled_to(const std::vector<int>& hosted) const;
+  // K_e (N/m, n x n): each experimental part's initial stiffness assembled at its storey or DOF.
+  Mat experimental_stiffness() const;
+  StoreyAssembly assembly() const;
 
   HybridPartition() = default;
   HybridPartition(const HybridPartition& other);
@@ -49,30 +68,47 @@ HybridPartition partition_by_storeys(const std::vector<double>& storey_stiffness
                                      const std::vector<int>& experimental_storeys,
                                      const StoreyModelFactory& factory);
 
+// The experimental DOFs of a structure given by matrices (0-based), each with its specimen model.
+struct DofSpecimen {
+  int dof = 0;
+  std::unique_ptr<RestoringForceModel> model;
+};
+// By DOFs: every listed DOF experimental (its model's initial stiffness k_e taken out of K at
+// (dof, dof)), the numerical part K_N = K - K_e. Throws std::invalid_argument naming the DOF when
+// it is outside 1..n, listed twice, or k_e is not in (0, K(dof, dof)].
+HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen> specimens);
+
 class StoreyAssembly {
  public:
-  explicit StoreyAssembly(int storeys) : n_(storeys) {}
-  void drifts(const Vec& u, Vec& drift) const;            // d_i = u_i - u_{i-1}
-  void dof_forces(const Vec& shear, Vec& force) const;    // r_i = V_i - V_{i+1}
+  explicit StoreyAssembly(int storeys, bool by_dofs = false) : n_(storeys), by_dofs_(by_dofs) {}
+  void drifts(const Vec& u, Vec& drift) const;            // d_i = u_i - u_{i-1}  (by DOFs: u_i)
+  void dof_forces(const Vec& shear, Vec& force) const;    // r_i = V_i - V_{i+1}  (by DOFs: V_i)
   void tangent(const Vec& storey_tangent, Mat& k) const;  // B^T diag(k) B
   int storeys() const { return n_; }
 
  private:
   int n_;
+  bool by_dofs_;
 };
 
 class NumericalSubstructure {
  public:
-  NumericalSubstructure(std::vector<std::unique_ptr<RestoringForceModel>> storey_models);
+  // `matrix`: the linear K_N of a partition by DOFs (empty: none).
+  explicit NumericalSubstructure(std::vector<std::unique_ptr<RestoringForceModel>> storey_models,
+                                 Mat matrix = {});
+  explicit NumericalSubstructure(const HybridPartition& partition);
   NumericalSubstructure(const NumericalSubstructure& other);
-  // Storey shears at trial drifts (0 where a storey has no numerical part).
+  // Storey shears at trial drifts (0 where a storey has no numerical part): each storey's model,
+  // then + (K_N drift)_s. `storey_tangent` gets the models' tangents only; matrix() is the rest.
   void trial(const Vec& drift, Vec& shear, Vec* storey_tangent);
   void commit();
   void reset();
   int storeys() const { return static_cast<int>(models_.size()); }
+  const Mat& matrix() const { return matrix_; }
 
  private:
   std::vector<std::unique_ptr<RestoringForceModel>> models_;
+  Mat matrix_;
 };
 
 struct ActuatorOutput {

@@ -147,6 +147,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
   if (options.platform_seconds >= 0)
     args.insert(args.end(), {"--platform-seconds", std::to_string(options.platform_seconds)});
   if (options.accept_platform) args.push_back("--accept-platform");
+  args.insert(args.end(), options.coordinator_args.begin(), options.coordinator_args.end());
   result.coordinator_log = options.log_dir / "coordinator.log";
   ChildProcess coordinator = start(programs.coordinator, args, security_dir,
                                    security::kCoordinatorNodeId, result.coordinator_log,

@@ -85,6 +85,7 @@ struct LaunchOptions {
   std::filesystem::path platform_file;
   double platform_seconds = -1.0;
   bool accept_platform = false;
+  std::vector<std::string> coordinator_args;  // appended to the coordinator's (e.g. --view H:P)
 };
 
 struct LaunchResult {

@@ -27,7 +27,7 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
   const int storeys = static_cast<int>(partition.numerical.size());
   std::set<int> numerical, experimental;
   for (int s = 0; s < storeys; ++s)
-    if (partition.numerical[s]) numerical.insert(s);
+    if (partition.has_numerical(s)) numerical.insert(s);
   for (int s : partition.actuator_storeys) experimental.insert(s);
 
   check_failsafe_windows(deployment);
@@ -76,6 +76,9 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
                                     std::to_string(spec.id()));
     }
     node.storeys = hosted;
+    if (sub && partition.coupled_to(hosted) != hosted)
+      throw std::invalid_argument(where + ": the numerical stiffness matrix couples its DOFs to "
+                                          "others; one substructure node hosts every coupled DOF");
     if (!sub) {
       for (std::size_t a = 0; a < partition.actuator_storeys.size(); ++a)
         if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
@@ -122,7 +125,8 @@ config::Deployment with_default_nodes(config::Deployment deployment,
                                      const core::HybridSetup& base) {
   if (deployment.nodes_size() > 0) return deployment;
   bool numerical = false;
-  for (const auto& m : base.partition.numerical) numerical = numerical || m != nullptr;
+  for (int s = 0; s < static_cast<int>(base.partition.numerical.size()); ++s)
+    numerical = numerical || base.partition.has_numerical(s);
   if (numerical) {
     auto* node = deployment.add_nodes();
     node->set_id(1);
@@ -149,7 +153,7 @@ core::HybridSetup setup_without_motion(const config::Study& study,
   core::PreparedStudy prepared;
   prepared.config = study;
   prepared.base_dir = base_dir;
-  prepared.base = core::base_setup(study, dt);
+  prepared.base = core::base_setup(study, dt, base_dir);
   return core::setup_for_case(prepared, study_case);
 }
 

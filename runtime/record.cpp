@@ -135,6 +135,7 @@ void AsyncRecordWriter::drain() {
       if (std::fwrite(slot.data(), 1, slot.size(), file_) != slot.size()) fail(errno);
       else written_.fetch_add(1, std::memory_order_relaxed);
     }
+    if (observer_) observer_->on_entry(slot);
     head_.store(head + 1, std::memory_order_release);
   }
   if (!failed() && std::fflush(file_) != 0) fail(errno);

@@ -69,6 +69,16 @@ class RecordWriter {
   std::string buffer_;
 };
 
+// Sees each entry after the writer thread wrote it, on that thread (never on the thread that
+// appends): `frame` is the entry's frame as in the file (kRecordFrameHeaderBytes of frame header,
+// then the entry's bytes). It must return quickly and must not throw; it is how a live view
+// follows a run without touching the loop.
+class RecordObserver {
+ public:
+  virtual ~RecordObserver() = default;
+  virtual void on_entry(std::string_view frame) = 0;
+};
+
 // The real-time loop's record writer: the loop hands each entry to a writer thread through a
 // bounded single-producer single-consumer ring of preallocated slots, so append() neither blocks
 // nor does I/O, and, once every slot has grown to the largest entry, allocates nothing.
@@ -109,10 +119,13 @@ class AsyncRecordWriter {
   std::string failure() const;
   std::size_t capacity() const { return slots_.size(); }
   const std::filesystem::path& path() const { return path_; }
+  // Set before the first append(); null (the default) for none. Not owned; must outlive close().
+  void set_observer(RecordObserver* observer) { observer_ = observer; }
 
  private:
   void drain();
   void fail(int error);  // writer thread: keeps the first error
+  RecordObserver* observer_ = nullptr;
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::vector<std::string> slots_;

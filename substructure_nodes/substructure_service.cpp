@@ -17,11 +17,13 @@ int SubstructureService::configure(const runtime::Assign& assign) {
   std::vector<std::unique_ptr<core::RestoringForceModel>> models(n);
   storeys_.assign(assign.storeys().begin(), assign.storeys().end());
   for (int s : storeys_) {
-    if (s < 0 || s >= n || !setup.partition.numerical[s])
+    if (s < 0 || s >= n || !setup.partition.has_numerical(s))
       throw std::invalid_argument("storey " + std::to_string(s + 1) + " has no numerical part");
-    models[s] = setup.partition.numerical[s]->clone();
+    if (setup.partition.numerical[s]) models[s] = setup.partition.numerical[s]->clone();
   }
-  numerical_ = std::make_unique<core::NumericalSubstructure>(std::move(models));
+  // A matrix part (a structure given by matrices): the plan has this node host every coupled DOF.
+  numerical_ = std::make_unique<core::NumericalSubstructure>(std::move(models),
+                                                             setup.partition.numerical_matrix);
   drift_ = core::Vec::Zero(n);
   shear_ = core::Vec::Zero(n);
   return static_cast<int>(storeys_.size());

@@ -67,8 +67,6 @@ struct DdsEndpoint::Impl {
   void add_reader(const std::string& topic, std::int32_t node);
   // The node whose topic `reader` reads; nullopt for a reader this endpoint does not own.
   std::optional<std::int32_t> topic_node_of(dds::Handle reader);
-  // Coordinator: the nodes addressed so far (a broadcast goes to each).
-  std::vector<std::int32_t> addressed_nodes();
 
   const DdsEndpointOptions options;
   const dds::QosSpec qos;
@@ -121,13 +119,6 @@ dds::Handle DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
   return slot->writer.get();
 }
 
-std::vector<std::int32_t> DdsEndpoint::Impl::addressed_nodes() {
-  std::lock_guard lock(writers_mutex);
-  std::vector<std::int32_t> nodes;
-  for (const auto& [id, w] : addressed_writers) nodes.push_back(id);
-  return nodes;
-}
-
 void DdsEndpoint::listen_to(std::int32_t node_id) {
   if (!options_.coordinator) return;
   {
@@ -172,8 +163,10 @@ void DdsEndpoint::send(const Message& m) {
     dds::check(dds_write(impl_->addressed_writer(m.node_id), &sample), "dds_write");
     return;
   }
-  for (const std::int32_t node : impl_->addressed_nodes())
-    dds::check(dds_write(impl_->addressed_writer(node), &sample), "dds_write");
+  // To each node addressed so far, without allocating (a heartbeat goes out from the loop).
+  std::lock_guard lock(impl_->writers_mutex);
+  for (const auto& [node, w] : impl_->addressed_writers)
+    dds::check(dds_write(w->writer.get(), &sample), "dds_write");
 }
 
 void DdsEndpoint::Impl::drain(dds::Handle from) {

@@ -254,6 +254,18 @@ TEST_P(SilentNode, StopsWithinMaxMissedAnswersAndNamesTheNode) {
 INSTANTIATE_TEST_SUITE_P(Nodes, SilentNode, testing::Values(1, 2),
                          [](const auto& info) { return "node_" + std::to_string(info.param); });
 
+// A node whose answers stop arriving while max_missed_answers is too wide to fire (or, never
+// having answered, never starts a streak) and liveliness has not run out: the run went to its
+// end, but it is not ok, since the node answered fewer than kMinAnswerFraction of the steps.
+TEST(Coordinator, ARunOnWhichANodeAnsweredTooFewStepsFails) {
+  FakeClock on_time(10'000);
+  const RunOutcome o =
+      run("clock: REAL_TIME max_overrun_fraction: 1 max_missed_answers: 100000", 2, 450, &on_time);
+  EXPECT_FALSE(o.ok) << o.status;
+  EXPECT_EQ(o.status.rfind("failed: node 2 answered 450 of ", 0), 0u) << o.status;
+  EXPECT_EQ(o.result.steps(), 500u);  // it ran to the end: the outcome, not the run, is judged
+}
+
 TEST(Coordinator, RateLimitStopsTheRunBeforeTheCommandLeaves) {
   // The frame moves by more than 10 nm per 1 ms step within its first 2 s.
   const RunOutcome o = run("limits { max_displacement_step: 1e-8 }", 0, 0, nullptr, "reference", 2.0);

@@ -206,3 +206,28 @@ TEST(BoucWen, RejectsBadParameters) {
 
 }  // namespace
 }  // namespace rths::core
+
+namespace rths::core {
+namespace {
+
+TEST(InertialSpecimenTest, AddsInertiaAndDampingFromBackwardDifferences) {
+  const double h = 0.01;
+  InertialSpecimen specimen(std::make_unique<LinearSpring>(100.0), 2.0, 3.0, h);
+  EXPECT_EQ(specimen.initial_stiffness(), 100.0);
+  // x: 0, then 1e-3, 3e-3: v = 0.2 m/s, a = (3e-3 - 2e-3 + 0) / h^2 = 10 m/s^2 at the third.
+  EXPECT_DOUBLE_EQ(specimen.step(1e-3), 2.0 * 1e-3 / (h * h) + 3.0 * 1e-3 / h + 0.1);
+  const ForceState s = specimen.trial(3e-3);
+  EXPECT_NEAR(s.force, 2.0 * 10.0 + 3.0 * 0.2 + 0.3, 1e-12);
+  EXPECT_DOUBLE_EQ(s.tangent, 100.0 + 3.0 / h + 2.0 / (h * h));
+  // A trial does not move the committed history; a clone carries it.
+  EXPECT_NEAR(specimen.trial(3e-3).force, s.force, 1e-15);
+  auto copy = specimen.clone();
+  EXPECT_EQ(copy->trial(3e-3).force, s.force);
+  specimen.reset();
+  EXPECT_DOUBLE_EQ(specimen.trial(0.0).force, 0.0);
+  EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), -1.0, 0.0, h), std::invalid_argument);
+  EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), 1.0, 0.0, 0.0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rths::core

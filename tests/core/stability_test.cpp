@@ -318,5 +318,28 @@ TEST(CriticalDelayCheck, ShearBuildingTakesTheSmallestModalLimit) {
                std::invalid_argument);
 }
 
+// K_e at a DOF of a structure given by matrices: storey 1 of a shear building is the element
+// between DOF 1 and the ground, so the same K_e as a matrix gives the same check; the check says
+// what it assumed.
+TEST(CriticalDelayCheck, ExperimentalStiffnessAsAMatrixAndWhatWasAssumed) {
+  StructuralModel building = make_shear_building({1000, 1000, 1000}, {4e6, 3e6, 2e6});
+  building.damping = modal_damping(building.mass, building.stiffness, 0.05);
+  Mat k_e = Mat::Zero(3, 3);
+  k_e(0, 0) = 4e6;
+  const CriticalDelayCheck by_storey =
+      check_critical_delay(building, {4e6, 0, 0}, IntegratorKind::kExplicitNewmark, 0.0005, 0.002);
+  const CriticalDelayCheck by_matrix =
+      check_modal_critical_delay(building, k_e, IntegratorKind::kExplicitNewmark, 0.0005, 0.002);
+  ASSERT_TRUE(by_matrix.continuous.has_value());
+  EXPECT_EQ(*by_matrix.continuous, *by_storey.continuous);
+  EXPECT_EQ(by_matrix.governing_mode, by_storey.governing_mode);
+  EXPECT_NE(by_matrix.assumed.find("modal approximation over the 3 modes"), std::string::npos);
+  const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
+  EXPECT_NE(check_critical_delay(sdof, {1.0}, IntegratorKind::kExplicitNewmark, 0.001, 0.0).assumed.find("exact"),
+            std::string::npos);
+  EXPECT_THROW(check_modal_critical_delay(building, Mat::Zero(2, 2), IntegratorKind::kExplicitNewmark, 0.001, 0.01),
+               std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace rths::core

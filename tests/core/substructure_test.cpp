@@ -27,6 +27,44 @@ TEST(StoreyAssemblyTest, DriftsForcesAndTangentAreConsistent) {
   EXPECT_TRUE((k * u).isApprox(linear_force));
 }
 
+TEST(StoreyAssemblyTest, ByDofsIsTheIdentity) {
+  const StoreyAssembly assembly(3, true);
+  Vec u(3), drift(3), force(3);
+  u << 1.0, 3.0, 6.0;
+  assembly.drifts(u, drift);
+  EXPECT_EQ(drift, u);
+  assembly.dof_forces(u, force);
+  EXPECT_EQ(force, u);
+  Mat k;
+  assembly.tangent(u, k);
+  EXPECT_EQ(k, Mat(u.asDiagonal()));
+}
+
+TEST(PartitionTest, ByDofsTakesEachSpecimenOutOfTheStiffnessMatrix) {
+  Mat k(3, 3);
+  k << 4, -2, 0, -2, 4, -2, 0, -2, 2;
+  std::vector<DofSpecimen> specimens;
+  specimens.push_back({2, std::make_unique<LinearSpring>(1.5)});
+  const HybridPartition p = partition_by_dofs(k, std::move(specimens));
+  EXPECT_EQ(p.actuator_storeys, std::vector<int>{2});
+  EXPECT_EQ(p.numerical_matrix(2, 2), 0.5);
+  EXPECT_TRUE(p.has_numerical(0) && p.has_numerical(2));
+  // DOF 1 couples to DOF 2 only; DOF 2 to all three.
+  EXPECT_EQ(p.coupled_to({0}), (std::vector<int>{0, 1}));
+  EXPECT_EQ(p.coupled_to({1}), (std::vector<int>{0, 1, 2}));
+  // The numerical part: K_N u, row by row; a copy carries the matrix.
+  NumericalSubstructure numerical(p);
+  const NumericalSubstructure copy(numerical);
+  EXPECT_EQ(copy.matrix(), p.numerical_matrix);
+  Vec u(3), shear(3);
+  u << 1.0, 2.0, 3.0;
+  numerical.trial(u, shear, nullptr);
+  EXPECT_EQ(shear, p.numerical_matrix * u);
+  std::vector<DofSpecimen> too_stiff;
+  too_stiff.push_back({0, std::make_unique<LinearSpring>(5.0)});
+  EXPECT_THROW(partition_by_dofs(k, std::move(too_stiff)), std::invalid_argument);
+}
+
 TEST(PartitionTest, FractionSplitsEveryStoreyAndPlacesOneActuatorEach) {
   const HybridPartition p = partition_by_fraction({100.0, 50.0}, 0.25, linear_factory());
   ASSERT_EQ(p.actuator_storeys, (std::vector<int>{0, 1}));

@@ -1,13 +1,15 @@
-// Faults on real processes over Cyclone DDS (domains 20-29, 53 and 80-86): a node killed or stalled
-// mid-run, the coordinator killed, a node that never comes or comes late, and hostile
+// Faults on real processes over Cyclone DDS (domains 20-29, 53, 80-86 and 90): a node killed or
+// stalled mid-run, the coordinator killed, a node that never comes or comes late, hostile
 // participants (a junk publisher, and tests/support's rths_rogue forging answers and control
-// messages).
+// messages), and a disk that fills up under the run record.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <iostream>
 #include <thread>
 
@@ -28,9 +30,11 @@ struct Cluster {
   std::optional<ChildProcess> coordinator;
 };
 
-// Starts the listed nodes (id, kind) and the coordinator for `text`.
+// Starts the listed nodes (id, kind) and the coordinator for `text` (started as
+// `coordinator_options` says).
 Cluster start(const std::string& name, const std::string& text, int domain,
-              const std::vector<std::pair<int, bool>>& nodes, const std::string& case_name) {
+              const std::vector<std::pair<int, bool>>& nodes, const std::string& case_name,
+              const runtime::ChildOptions& coordinator_options = {}) {
   Cluster c;
   c.dir = test::scratch_dir(name);
   const auto config = test::write_config(c.dir, text);
@@ -48,7 +52,7 @@ Cluster start(const std::string& name, const std::string& text, int domain,
                                                  "--domain", std::to_string(domain), "--record",
                                                  c.record.string(), "--case", case_name,
                                                  "--platform-seconds", "0", "--accept-platform"},
-                        c.dir / "coordinator.log");
+                        c.dir / "coordinator.log", coordinator_options);
   return c;
 }
 
@@ -384,6 +388,53 @@ TEST(Faults, ALateJoinerWithinTheStartTimeoutIsWaitedFor) {
                       << test::read_file(c.dir / "node_1.log");
   EXPECT_EQ(c.nodes[0].wait_for(5s).value_or(-1), 0) << test::read_file(c.dir / "node_1.log");
   EXPECT_EQ(late.wait_for(5s).value_or(-1), 0);
+}
+
+// The disk fills up under the record of a real-time run: the coordinator's file size is limited
+// (prlimit's RLIMIT_FSIZE, with SIGXFSZ ignored, so a write past it fails with EFBIG as a full
+// disk fails with ENOSPC; no root or mount needed). The run stops within 5 steps of the last
+// entry the disk took, holds and stops the nodes, names the reason, and the record reads up to
+// there.
+TEST(Faults, ARecordThatCannotBeWrittenStopsTheRunWithinFiveSteps) {
+  if (!runtime::tool_available("prlimit")) GTEST_SKIP() << "prlimit (util-linux) is not installed";
+  runtime::ensure_dds_config();
+  // About 1000 steps of this run's entries (header ~1.3 KB, a step ~190 bytes with two links).
+  constexpr std::uintmax_t kLimit = 200'000;
+  runtime::ChildOptions limited;
+  limited.prefix = {"sh", "-c", "trap '' XFSZ; exec prlimit --fsize=" + std::to_string(kLimit) +
+                                    " \"$0\" \"$@\""};
+  // The nodes' own fail-safes are widened far beyond this loaded machine's stalls: the record is
+  // what this test judges, and only the record may stop the run.
+  const std::string text = test::paper_frame_study(
+      8, "deployment { clock: REAL_TIME liveliness_timeout: 5 heartbeat_period: 0.02 "
+         "max_missed_answers: 5000 command_watchdog_periods: 5000 max_overrun_fraction: -1 }");
+  Cluster c = start("disk_full", text, 90, {{1, true}, {2, false}}, "lag_shift_14ms", limited);
+  const auto code = c.coordinator->wait_for(20s);
+  ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
+  const std::string log = test::read_file(c.dir / "coordinator.log");
+  EXPECT_EQ(*code, 1) << log;
+  EXPECT_NE(log.find("cannot write run record " + c.record.string() + ": " + std::strerror(EFBIG)),
+            std::string::npos) << log;
+  EXPECT_EQ(std::filesystem::file_size(c.record), kLimit);
+  const auto record = runtime::read_record(c.record);
+  EXPECT_TRUE(record.truncated);
+  EXPECT_FALSE(record.lost_entries()) << record.warning;
+  EXPECT_EQ(record.footer(), nullptr);  // the disk took nothing after the failure
+  expect_contiguous(record);
+  const auto steps = static_cast<long>(record.steps().size());
+  EXPECT_GT(steps, 500);
+  EXPECT_LT(steps, 2000);
+  const std::string marker = "stopped at step ";
+  const auto at = log.find(marker);
+  ASSERT_NE(at, std::string::npos) << log;
+  const long stopped = std::stol(log.substr(at + marker.size()));
+  std::cout << "record full at step " << steps - 1 << " (" << record.entries.size()
+            << " entries); the coordinator stopped at step " << stopped << "\n";
+  EXPECT_GE(stopped, steps - 1);
+  EXPECT_LE(stopped - (steps - 1), 5);
+  EXPECT_NE(log.find("HOLD sent to the actuator emulators"), std::string::npos) << log;
+  for (auto& node : c.nodes) EXPECT_EQ(node.wait_for(5s).value_or(-1), 0) << node.name();
+  EXPECT_NE(test::read_file(c.dir / "node_2.log").find("HOLD"), std::string::npos);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <cstring>
 #include <iterator>
+#include <string_view>
 #include <thread>
 
 namespace rths::runtime {
@@ -357,6 +358,38 @@ TEST(AsyncRecord, KillMinus9LosesAtMostTheQueuedEntriesAndLeavesAReadablePrefix)
   const auto steps = record.steps();
   EXPECT_GE(steps.size(), static_cast<std::size_t>(kAppended) - kCapacity);
   for (std::size_t k = 0; k < steps.size(); ++k) ASSERT_EQ(steps[k]->step(), static_cast<long>(k));
+  std::filesystem::remove(path);
+}
+
+// The live view's seam: every entry, in order, as the file has it, on the writer's thread.
+TEST(AsyncRecord, TheObserverSeesEachWrittenEntryOnTheWritersThread) {
+  struct Seen : RecordObserver {
+    std::string bytes;
+    std::vector<std::thread::id> threads;
+    void on_entry(std::string_view delimited) override {
+      bytes.append(delimited);
+      threads.push_back(std::this_thread::get_id());
+    }
+  } seen;
+  const auto path = temp_record("observer");
+  {
+    AsyncRecordWriter writer(path, 8);
+    writer.set_observer(&seen);
+    for (int k = 0; k < kSteps; ++k) {
+      RecordEntry step;
+      step.mutable_step()->set_step(k);
+      while (!writer.append(step)) std::this_thread::yield();
+    }
+    writer.close();
+  }
+  std::ifstream in(path, std::ios::binary);
+  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The file is the preamble, then exactly the frames the observer saw.
+  ASSERT_GE(file.size(), seen.bytes.size());
+  EXPECT_EQ(file.substr(file.size() - seen.bytes.size()), seen.bytes);
+  EXPECT_EQ(file.size() - seen.bytes.size(), kRecordPreambleBytes);
+  ASSERT_EQ(seen.threads.size(), static_cast<std::size_t>(kSteps));
+  for (const auto& id : seen.threads) EXPECT_NE(id, std::this_thread::get_id());
   std::filesystem::remove(path);
 }
 

@@ -1,0 +1,40 @@
+#pragma once
+// Matrices of a structure given by its matrices, read from a study's config: inline values or a
+// file, and the checks every structural matrix must pass.
+//
+//   read_matrix(spec, base_dir, field) -> Mat
+//     inline:  `values` row-major with `rows` rows (a vector: one column of `values.size()`);
+//     `.mat`:  the MATLAB variable `variable` (v5, v7.3), real double, 2-D;
+//     `.mtx`:  Matrix Market, `matrix coordinate|array real|integer general|symmetric`;
+//     `.csv`:  one matrix row per line, fields separated by commas or blanks ('#' comments).
+//   Relative paths resolve against base_dir. Every error throws std::invalid_argument naming the
+//   field, the file and (for .mat) the variable, and the problem: "structure.matrices.mass:
+//   frame.mat: no variable 'Mx' (variables: M, C, K)".
+//
+//   check_structural_matrices: M symmetric positive definite, K symmetric positive semi-definite
+//   and C symmetric positive semi-definite, each n x n; iota of length n. Symmetry is judged to a
+//   relative 1e-9 of the largest entry; definiteness by the eigenvalues (tolerance 1e-9 of the
+//   largest), so condensed models rounded on export still pass.
+
+#include <filesystem>
+#include <string>
+
+#include "core/structure.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::core {
+
+Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
+                const std::string& field);
+
+// The structure of structure.matrices: M, K, damping (matrix, or from Structure.damping by the
+// caller when absent: returned zero), iota; checked. `field` prefixes every error.
+StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
+                                      const std::filesystem::path& base_dir,
+                                      const std::string& field);
+
+// Throws std::invalid_argument "<field>.<name>: <problem>" when a matrix is not square, not n x n,
+// not symmetric, or not definite as required (see above); `where` names the matrices' source.
+void check_structural_matrices(const StructuralModel& model, const std::string& field);
+
+}  // namespace rths::core

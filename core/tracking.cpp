@@ -1,0 +1,225 @@
+#include "core/tracking.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+namespace rths::core {
+namespace {
+
+[[noreturn]] void fail(const std::string& field, const std::string& problem) {
+  throw std::invalid_argument(field + ": " + problem);
+}
+
+std::vector<double> values(const google::protobuf::RepeatedField<double>& field) {
+  return {field.begin(), field.end()};
+}
+
+// kp + ki / s + kd s / (tf s + 1) over the common denominator s (tf s + 1).
+ContinuousTransferFunction pid_transfer_function(const config::DelayStage::LinearFilter::Pid& pid,
+                                                 const std::string& field) {
+  if (pid.kd() != 0.0 && !(pid.derivative_filter() > 0))
+    fail(field + ".pid.derivative_filter", "must be > 0 s when kd is set (a proper derivative)");
+  const double tf = pid.derivative_filter();
+  if (tf == 0.0) return {{pid.kp(), pid.ki()}, {1.0, 0.0}};
+  return {{pid.kp() * tf + pid.kd(), pid.kp() + pid.ki() * tf, pid.ki()}, {tf, 1.0, 0.0}};
+}
+
+}  // namespace
+
+DiscreteFilter::DiscreteFilter() : b_{1.0}, a_{1.0}, state_(1, 0.0) {}
+
+DiscreteFilter::DiscreteFilter(std::vector<double> b, std::vector<double> a) : b_(std::move(b)), a_(std::move(a)) {
+  if (a_.empty() || b_.empty() || a_[0] == 0.0)
+    throw std::invalid_argument("discrete filter: a[0] must be non-zero and b, a non-empty");
+  const double a0 = a_[0];
+  for (double& c : a_) c /= a0;
+  for (double& c : b_) c /= a0;
+  const std::size_t n = std::max(a_.size(), b_.size());
+  a_.resize(n, 0.0);
+  b_.resize(n, 0.0);
+  state_.assign(n, 0.0);
+}
+
+double DiscreteFilter::step(double x) {
+  // Direct form II transposed: y = b0 x + s0;  s_i = b_{i+1} x - a_{i+1} y + s_{i+1}.
+  const double y = b_[0] * x + state_[0];
+  const std::size_t n = a_.size() - 1;
+  for (std::size_t i = 0; i < n; ++i) state_[i] = b_[i + 1] * x - a_[i + 1] * y + (i + 1 < n ? state_[i + 1] : 0.0);
+  return y;
+}
+
+void DiscreteFilter::reset() { std::fill(state_.begin(), state_.end(), 0.0); }
+
+std::complex<double> DiscreteFilter::response(std::complex<double> z) const {
+  std::complex<double> num = 0.0, den = 0.0, power = 1.0;
+  for (std::size_t i = 0; i < a_.size(); ++i, power /= z) {
+    num += b_[i] * power;
+    den += a_[i] * power;
+  }
+  return num / den;
+}
+
+DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h, const std::string& field) {
+  using K = config::DelayStage::LinearFilter::KindCase;
+  try {
+    switch (spec.kind_case()) {
+      case K::kContinuous: {
+        const DiscreteCoefficients d = tustin(values(spec.continuous().numerator()), values(spec.continuous().denominator()), h);
+        return DiscreteFilter(d.b, d.a);
+      }
+      case K::kDiscrete:
+        return DiscreteFilter(values(spec.discrete().numerator()), values(spec.discrete().denominator()));
+      case K::kPid: {
+        const ContinuousTransferFunction tf = pid_transfer_function(spec.pid(), field);
+        const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
+        return DiscreteFilter(d.b, d.a);
+      }
+      case K::kPhaseLead: {
+        const auto& lead = spec.phase_lead();
+        if (!(lead.zero() > 0 && lead.pole() > 0 && lead.gain() != 0))
+          fail(field + ".phase_lead", "zero and pole must be > 0 rad/s and the gain non-zero");
+        const DiscreteCoefficients d = tustin({lead.gain(), lead.gain() * lead.zero()}, {1.0, lead.pole()}, h);
+        return DiscreteFilter(d.b, d.a);
+      }
+      case K::KIND_NOT_SET: break;
+    }
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    if (what.rfind(field, 0) == 0) throw;
+    fail(field, what);
+  }
+  fail(field, "has no kind (continuous, discrete, pid or phase_lead)");
+}
+
+ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator, double h) {
+  if (denominator.empty() || denominator.front() == 0.0 || numerator.size() >= denominator.size() || !(h > 0))
+    throw std::invalid_argument("plant: a strictly proper num(s)/den(s) with den[0] != 0 and a step > 0 s is needed");
+  const int n = static_cast<int>(denominator.size()) - 1;
+  // Controllable canonical form of num/den normalised by den[0].
+  Mat a = Mat::Zero(n, n);
+  for (int i = 0; i + 1 < n; ++i) a(i, i + 1) = 1.0;
+  for (int j = 0; j < n; ++j) a(n - 1, j) = -denominator[static_cast<std::size_t>(n - j)] / denominator[0];
+  c_ = Eigen::RowVectorXd::Zero(n);
+  for (std::size_t k = 0; k < numerator.size(); ++k)
+    c_(static_cast<Eigen::Index>(numerator.size() - 1 - k)) = numerator[k] / denominator[0];
+  Mat augmented = Mat::Zero(n + 1, n + 1);
+  augmented.topLeftCorner(n, n) = a;
+  augmented(n - 1, n) = 1.0;
+  const Mat e = (augmented * h).exp();
+  ad_ = e.topLeftCorner(n, n);
+  bd_ = e.block(0, n, n, 1);
+  x_ = Vec::Zero(n);
+  next_ = Vec::Zero(n);
+}
+
+void ZohPlant::advance(double u) {
+  next_.noalias() = ad_ * x_;
+  next_ += bd_ * u;
+  x_.swap(next_);
+}
+
+std::complex<double> ZohPlant::response(std::complex<double> z) const {
+  const Eigen::Index n = ad_.rows();
+  const Eigen::MatrixXcd resolvent = z * Eigen::MatrixXcd::Identity(n, n) - ad_.cast<std::complex<double>>();
+  const Eigen::VectorXcd x = resolvent.partialPivLu().solve(bd_.cast<std::complex<double>>());
+  return (c_.cast<std::complex<double>>() * x)(0);
+}
+
+double Converter::analog_to_digital(double x) const {
+  if (range > 0) x = std::clamp(x, -range, range);
+  return quantum > 0 ? quantum * std::round(x / quantum) : x;
+}
+
+double Converter::digital_to_analog(double x) const {
+  if (quantum > 0) x = quantum * std::round(x / quantum);
+  return range > 0 ? std::clamp(x, -range, range) : x;
+}
+
+BenchmarkPlantParameters benchmark_plant_parameters(const config::DelayStage::BenchmarkPlant& spec) {
+  const auto or_nominal = [](double value, double nominal) { return value != 0.0 ? value : nominal; };
+  BenchmarkPlantParameters p;
+  p.a1_beta0 = or_nominal(spec.a1_beta0(), 2.1283e13);
+  p.a2 = or_nominal(spec.a2(), 4.2297e6);
+  p.a3 = or_nominal(spec.a3(), 3.3);
+  p.beta1 = or_nominal(spec.beta1(), 425.0);
+  p.beta2 = or_nominal(spec.beta2(), 9.9976e4);
+  p.gain = or_nominal(spec.gain(), 1.0261);
+  p.mass = or_nominal(spec.mass(), 29.13);
+  p.stiffness = or_nominal(spec.stiffness(), 1.19e6);
+  p.damping = or_nominal(spec.damping(), 2.0 * 0.0097 * std::sqrt(p.stiffness * p.mass));
+  return p;
+}
+
+namespace {
+
+ContinuousTransferFunction plant_of(const config::DelayStage::TrackingLoop& spec, const std::string& field) {
+  if (spec.has_benchmark_plant())
+    return benchmark_actuator_transfer_function(benchmark_plant_parameters(spec.benchmark_plant()));
+  if (!spec.has_plant()) fail(field + ".plant", "is missing (plant or benchmark_plant)");
+  return {values(spec.plant().numerator()), values(spec.plant().denominator())};
+}
+
+ZohPlant make_plant(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field) {
+  const ContinuousTransferFunction tf = plant_of(spec, field);
+  try {
+    return ZohPlant(tf.numerator, tf.denominator, h);
+  } catch (const std::invalid_argument& e) {
+    fail(field + ".plant", e.what());
+  }
+}
+
+}  // namespace
+
+TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field)
+    : plant_(make_plant(spec, h, field)),
+      controller_(spec.has_controller() ? make_filter(spec.controller(), h, field + ".controller") : DiscreteFilter()),
+      feedforward_(spec.has_feedforward() ? make_filter(spec.feedforward(), h, field + ".feedforward") : DiscreteFilter()),
+      converter_{spec.converter().range(), spec.converter().quantum()},
+      noise_rms_(spec.displacement_noise_rms()),
+      h_(h),
+      seed_(spec.seed()),
+      rng_(spec.seed()) {
+  if (!(converter_.range >= 0 && converter_.quantum >= 0 && std::isfinite(converter_.range) &&
+        std::isfinite(converter_.quantum)))
+    fail(field + ".converter", "range and quantum must be >= 0 m (0 = none)");
+  if (!(noise_rms_ >= 0 && std::isfinite(noise_rms_)))
+    fail(field + ".displacement_noise_rms", "must be >= 0 m");
+  std::ostringstream label;
+  label << "tracking-loop(" << (spec.has_benchmark_plant() ? "benchmark plant" : "plant")
+        << (spec.has_controller() ? ", controller" : "") << (spec.has_feedforward() ? ", feedforward" : "")
+        << (converter_.quantum > 0 || converter_.range > 0 ? ", converters" : "")
+        << (noise_rms_ > 0 ? ", noise" : "") << ")";
+  label_ = label.str();
+  constexpr double w = 0.1;  // rad/s, well below every corner of a servo loop
+  nominal_delay_ = -std::arg(response(w)) / w;
+}
+
+std::complex<double> TrackingLoop::response(double omega) const {
+  const std::complex<double> z = std::exp(std::complex<double>(0.0, omega * h_));
+  const std::complex<double> open = controller_.response(z) * plant_.response(z);
+  return feedforward_.response(z) * open / (1.0 + open);
+}
+
+void TrackingLoop::reset() {
+  plant_.reset();
+  controller_.reset();
+  feedforward_.reset();
+  rng_.seed(seed_);
+  normal_.reset();
+}
+
+double TrackingLoop::step_unscaled(const CommandSample& in) {
+  const double displacement = plant_.output();
+  const double measured = displacement + (noise_rms_ > 0 ? noise_rms_ * normal_(rng_) : 0.0);
+  const double target = converter_.digital_to_analog(feedforward_.step(converter_.analog_to_digital(in.displacement)));
+  const double error = converter_.analog_to_digital(target - measured);
+  plant_.advance(converter_.digital_to_analog(controller_.step(error)));
+  return displacement;
+}
+
+}  // namespace rths::core

@@ -1,0 +1,98 @@
+#pragma once
+// A servo controller's tracking loop, as a lab's (and the RTHS benchmark's) controller runs it at
+// the servo period h, as one delay stage: command r (m) in, measured displacement y (m) out.
+//
+//   x_k = P's displacement at t_k                  (P continuous, zero-order hold on u, exact)
+//   y_k = x_k + noise_k                            (the displacement sensor the controller reads)
+//   u_k = DA(C(AD(DA(F(AD(r_k))) - y_k)))          (F feedforward, C controller, both discrete)
+//   P advances over [t_k, t_k + h] under u_k;  output x_k: the specimen's displacement, whose
+//   force (with the specimen's inertia and damping) is what the integrator gets back.
+// AD/DA: saturation at +-range, quantisation to multiples of quantum (Converter; 0 = none).
+// Noise: Gaussian, rms given, from a seeded generator (the same draws in every process).
+//
+// Blocks (each step(x) -> y with explicit state, no allocation after construction):
+//   DiscreteFilter  y = b(z^-1) / a(z^-1) x, direct form II transposed; a[0] = 1.
+//   ZohPlant        x+ = Ad x + Bd u, y = C x: a continuous num(s)/den(s) (strictly proper) in
+//                   controllable canonical form, Ad = e^{A h}, Bd = int_0^h e^{A r} dr B.
+//   Converter       AD/DA above.
+//   TrackingLoop    the loop above.
+// A continuous filter is discretised by Tustin at h (core::tustin); PI/PID and phase lead are
+// named forms of one: kp + ki/s + kd s/(tf s + 1), gain (s + zero)/(s + pole).
+// The loop's linear dynamics (converters and noise left out), for reports and analysis:
+//   H(z) = F(z) C(z) P(z) / (1 + C(z) P(z)),  P(z) = C (zI - Ad)^-1 Bd.
+
+#include <complex>
+#include <random>
+
+#include "core/delay.h"
+#include "core/structure.h"
+#include "rths/proto/stages.pb.h"
+
+namespace rths::core {
+
+class DiscreteFilter {
+ public:
+  DiscreteFilter();  // identity
+  DiscreteFilter(std::vector<double> b, std::vector<double> a);  // @pre a[0] != 0, sizes >= 1
+  double step(double x);
+  void reset();
+  std::complex<double> response(std::complex<double> z) const;  // b(z^-1) / a(z^-1)
+
+ private:
+  std::vector<double> b_, a_, state_;
+};
+
+// Builds the filter of `spec` at step h; throws std::invalid_argument naming `field`.
+DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h, const std::string& field);
+
+class ZohPlant {
+ public:
+  // @pre deg numerator < deg denominator (highest power first), denominator[0] != 0, h > 0.
+  ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator, double h);
+  double output() const { return c_.dot(x_); }
+  void advance(double u);
+  void reset() { x_.setZero(); }
+  std::complex<double> response(std::complex<double> z) const;
+
+ private:
+  Mat ad_;
+  Vec bd_, x_, next_;
+  Eigen::RowVectorXd c_;
+};
+
+struct Converter {
+  double range = 0.0, quantum = 0.0;  // m; 0 = none
+  double analog_to_digital(double x) const;  // saturate, then quantise
+  double digital_to_analog(double x) const;  // quantise, then saturate
+};
+
+// The nominal benchmark plant of F1_input_file.m with the given fields overriding it (0 = nominal).
+BenchmarkPlantParameters benchmark_plant_parameters(const config::DelayStage::BenchmarkPlant& spec);
+
+class TrackingLoop final : public DelayStage {
+ public:
+  // Throws std::invalid_argument naming `field` for a bad plant, filter or converter.
+  TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field);
+  void reset() override;
+  std::unique_ptr<DelayStage> clone() const override { return std::make_unique<TrackingLoop>(*this); }
+  std::string describe() const override { return label_; }
+  // -arg H(e^{i w h}) / w at w = 0.1 rad/s: the loop's low-frequency lag (s).
+  double nominal_delay() const override { return nominal_delay_; }
+  std::complex<double> response(double omega) const;  // H(e^{i omega h})
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  ZohPlant plant_;
+  DiscreteFilter controller_, feedforward_;
+  Converter converter_;
+  double noise_rms_ = 0.0, h_ = 0.0;
+  std::uint64_t seed_ = 0;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_;
+  std::string label_;
+  double nominal_delay_ = 0.0;
+};
+
+}  // namespace rths::core

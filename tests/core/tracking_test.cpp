@@ -1,0 +1,119 @@
+#include "core/tracking.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rths::core {
+namespace {
+
+config::DelayStage::TrackingLoop first_order_loop(double kp, double ki) {
+  config::DelayStage::TrackingLoop spec;
+  spec.mutable_plant()->add_numerator(50.0);  // 50 / (s + 50): a 20 ms first-order plant
+  spec.mutable_plant()->add_denominator(1.0);
+  spec.mutable_plant()->add_denominator(50.0);
+  spec.mutable_controller()->mutable_pid()->set_kp(kp);
+  spec.mutable_controller()->mutable_pid()->set_ki(ki);
+  return spec;
+}
+
+TEST(DiscreteFilterTest, TustinPiIsTrapezoidalIntegration) {
+  config::DelayStage::LinearFilter spec;
+  spec.mutable_pid()->set_kp(2.0);
+  spec.mutable_pid()->set_ki(10.0);
+  const double h = 0.01;
+  DiscreteFilter pi = make_filter(spec, h, "c");
+  // A unit step: y_k = kp + ki h (k + 1/2) (trapezoids of the held input, the first a half).
+  for (int k = 0; k < 5; ++k) EXPECT_NEAR(pi.step(1.0), 2.0 + 10.0 * h * (k + 0.5), 1e-12) << k;
+  pi.reset();
+  EXPECT_NEAR(pi.step(1.0), 2.0 + 10.0 * h * 0.5, 1e-12);
+  EXPECT_EQ(DiscreteFilter().step(3.5), 3.5);
+}
+
+TEST(DiscreteFilterTest, PhaseLeadKeepsItsDcGainAndBadFiltersNameTheField) {
+  config::DelayStage::LinearFilter spec;
+  spec.mutable_phase_lead()->set_gain(50.8);
+  spec.mutable_phase_lead()->set_zero(168.6);
+  spec.mutable_phase_lead()->set_pole(8570);
+  const DiscreteFilter lead = make_filter(spec, 1.0 / 4096, "feedforward");
+  EXPECT_NEAR(std::abs(lead.response(1.0)), 50.8 * 168.6 / 8570, 1e-12);
+  spec.mutable_phase_lead()->set_pole(0.0);
+  try {
+    make_filter(spec, 1.0 / 4096, "cases[1].feedforward");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cases[1].feedforward.phase_lead"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(make_filter(config::DelayStage::LinearFilter(), 0.001, "f"), std::invalid_argument);
+}
+
+TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
+  const double h = 0.002;
+  ZohPlant plant({50.0}, {1.0, 50.0}, h);
+  for (int k = 1; k <= 20; ++k) {
+    plant.advance(1.0);
+    EXPECT_NEAR(plant.output(), 1.0 - std::exp(-50.0 * h * k), 1e-12) << k;
+  }
+  EXPECT_NEAR(std::abs(plant.response(1.0)), 1.0, 1e-12);  // DC gain
+  EXPECT_THROW(ZohPlant({1.0, 0.0}, {1.0, 50.0}, h), std::invalid_argument);  // not strictly proper
+}
+
+TEST(ConverterTest, SaturatesAndQuantises) {
+  const Converter c{3.8, 0.25};
+  EXPECT_EQ(c.analog_to_digital(0.3), 0.25);
+  EXPECT_EQ(c.analog_to_digital(-9.0), -3.75);  // saturated at -3.8, then quantised
+  EXPECT_EQ(c.digital_to_analog(9.0), 3.8);     // quantised, then saturated
+  EXPECT_EQ(Converter{}.analog_to_digital(0.123), 0.123);
+}
+
+TEST(TrackingLoopTest, PiAroundAFirstOrderPlantTracksWithItsLoopsLag) {
+  const double h = 0.001;
+  TrackingLoop loop(first_order_loop(2.0, 100.0), h, "tracking_loop");
+  // Closed loop ~ unity at DC; the lag at low frequency is positive and of a few ms.
+  EXPECT_NEAR(std::abs(loop.response(0.1)), 1.0, 1e-6);
+  EXPECT_GT(loop.nominal_delay(), 0.001);
+  EXPECT_LT(loop.nominal_delay(), 0.05);
+  double x = 0.0;
+  for (int k = 0; k < 2000; ++k) x = loop.step({k * h, 0.01, 0.0});
+  EXPECT_NEAR(x, 0.01, 1e-6);  // the integrator removes the steady error
+  // A ramp r = t: the output trails it by about the nominal delay.
+  loop.reset();
+  for (int k = 0; k < 3000; ++k) x = loop.step({k * h, k * h, 1.0});
+  EXPECT_NEAR(2999 * h - x, loop.nominal_delay(), 2 * h);
+}
+
+TEST(TrackingLoopTest, SeededNoiseRepeatsAfterResetAndInACopy) {
+  auto spec = first_order_loop(2.0, 100.0);
+  spec.set_displacement_noise_rms(1e-4);
+  spec.set_seed(7);
+  TrackingLoop a(spec, 0.001, "t");
+  std::vector<double> first;
+  for (int k = 0; k < 50; ++k) first.push_back(a.step({k * 0.001, 0.0, 0.0}));
+  EXPECT_NE(first.back(), 0.0);  // the noise moved the plant through the controller
+  a.reset();
+  auto copy = a.clone();
+  for (int k = 0; k < 50; ++k) {
+    EXPECT_EQ(a.step({k * 0.001, 0.0, 0.0}), first[static_cast<std::size_t>(k)]);
+    EXPECT_EQ(copy->step({k * 0.001, 0.0, 0.0}), first[static_cast<std::size_t>(k)]);
+  }
+}
+
+TEST(TrackingLoopTest, BenchmarkPlantIsTheNominalF1PlantUnlessOverridden) {
+  const BenchmarkPlantParameters p = benchmark_plant_parameters({});
+  EXPECT_EQ(p.a1_beta0, 2.1283e13);
+  EXPECT_EQ(p.beta2, 9.9976e4);
+  EXPECT_EQ(p.gain, 1.0261);
+  EXPECT_NEAR(p.damping, 2 * 0.0097 * std::sqrt(1.19e6 * 29.13), 1e-12);
+  config::DelayStage::BenchmarkPlant spec;
+  spec.set_a3(4.0);
+  EXPECT_EQ(benchmark_plant_parameters(spec).a3, 4.0);
+  // Its DC gain: gain a1b0 / (beta2 a3 k + a1b0).
+  const ContinuousTransferFunction tf = benchmark_actuator_transfer_function(p);
+  EXPECT_NEAR(tf.numerator[0] / tf.denominator.back(),
+              1.0261 * 2.1283e13 / (9.9976e4 * 3.3 * 1.19e6 + 2.1283e13), 1e-12);
+  config::DelayStage::TrackingLoop loop;
+  EXPECT_THROW(TrackingLoop(loop, 1.0 / 4096, "t"), std::invalid_argument);  // no plant
+}
+
+}  // namespace
+}  // namespace rths::core
