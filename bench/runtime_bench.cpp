@@ -101,7 +101,7 @@ runtime::Command payload() {
 }
 
 int echo_main(int domain, int node_id) {
-  transport::DdsEndpoint node({static_cast<std::uint32_t>(domain), false, node_id, "rths", 64});
+  transport::DdsEndpoint node({static_cast<std::uint32_t>(domain), false, node_id, "rths", 64, {}});
   for (;;) {
     auto m = node.receive(5s);
     if (!m) return 0;
@@ -120,7 +120,7 @@ int echo_main(int domain, int node_id) {
 runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
   std::unique_ptr<runtime::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
-  transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
   for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
   std::vector<runtime::ChildProcess> echoes;
   for (int p = 1; p <= peers; ++p)
@@ -186,7 +186,7 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
                                                 std::to_string(domain), "--run-id", run_id},
                        dir / ("node_" + std::to_string(id) + ".log"));
   }
-  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
   coordinator::CoordinatorOptions options;
   options.run_id = run_id;
   options.record = record;

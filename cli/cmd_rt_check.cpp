@@ -54,6 +54,8 @@ void add_rt_check_command(CLI::App& app) {
     platform::PlatformCheck check;
     try {
       check = run_check(*args, *cmd);
+    } catch (const ExitError&) {
+      throw;  // already classified (bad input)
     } catch (const std::runtime_error& e) {
       throw ExitError(kExitEnvironment, std::string("rt-check: ") + e.what());
     }

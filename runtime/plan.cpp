@@ -185,6 +185,9 @@ WaitPolicy wait_policy(const config::Deployment& d) {
 double max_overrun_fraction(const config::Deployment& d) {
   return d.max_overrun_fraction() == 0 ? 0.001 : d.max_overrun_fraction();
 }
+double min_answer_fraction(const config::Deployment& d) {
+  return d.min_answer_fraction() == 0 ? 0.99 : d.min_answer_fraction();
+}
 namespace {
 constexpr int kDefaultWindowSteps = 3;
 constexpr double kMaxWindowMs = 60'000.0;

@@ -72,6 +72,7 @@ double feedback_wait_fraction(const config::Deployment& d);
 bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt);
 WaitPolicy wait_policy(const config::Deployment& d);
 double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
+double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
 // The fail-safe windows in steps of dt (s): answer_window_ms / command_watchdog_ms when given
 // (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3.
 int max_missed_answers(const config::Deployment& d, double dt);
