@@ -19,6 +19,11 @@
 #define RTHS_KERNEL_CLONES \
   __attribute__((target_clones("avx512f", "avx2", "default"), optimize("fp-contract=off")))
 
+// GCC notes (-Wpsabi) that returning a 64-byte vector changes the ABI between builds with and
+// without AVX-512. These vectors never cross a function boundary that is not inlined in this
+// file, and every clone is compiled here with the same flags, so no two ABIs ever meet.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace rths::analysis {
 namespace {
 
@@ -56,7 +61,8 @@ template <int kMode, int kVectors>
   const Vec8 zero = {};
   const Vec8 dt = zero + s.dt, half_dt = zero + s.half_dt, half_dt_squared = zero + s.half_dt_squared;
   const Vec8 weight_new = zero + s.weight_new, weight_old = zero + s.weight_old;
-  const Mask8 magnitude_bits = (Mask8){} + 0x7fffffffffffffffLL;
+  const Mask8 no_bits = {};
+  const Mask8 magnitude_bits = no_bits + 0x7fffffffffffffffLL;
   const auto load = [first](const double* p, int j) {
     return *reinterpret_cast<const Vec8*>(p + (first + j) * kVectorLanes);
   };

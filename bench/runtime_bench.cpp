@@ -16,6 +16,8 @@
 // --memory-steps 1000000: flat RSS.
 //
 //  5. with --memory-steps N (alone): RSS of every process over an N-step real-time run.
+//  6. with --scaling (alone): per node count (a 9-storey building, 1, 2, 4, 8 substructure nodes
+//     and 1, 2, 4 emulators), lockstep steps/s on one CPU and spread, and the real-time step wall.
 //
 //   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D] [--spread] [--lockstep-only]
 //                      [--memory-steps N [--memory-rate HZ]]
@@ -56,6 +58,40 @@ std::string study_text(double dt, double seconds, const std::string& deployment)
          "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n" + deployment;
 }
 
+// The node processes of a run: substructure nodes 1..substructures, then the emulators.
+struct NodeSet {
+  int substructures = 1, emulators = 1;
+};
+
+// A 9-storey shear building, every storey a third experimental: `substructures` nodes share the
+// numerical storeys and `emulators` nodes the actuators, in contiguous blocks.
+std::string scaling_text(NodeSet n, double seconds, const std::string& deployment) {
+  std::string nodes;
+  const auto block = [](int i, int of) {
+    std::string storeys;
+    for (int s = 9 * i / of + 1; s <= 9 * (i + 1) / of; ++s)
+      storeys += (storeys.empty() ? "" : ", ") + std::to_string(s);
+    return storeys;
+  };
+  for (int i = 0; i < n.substructures + n.emulators; ++i) {
+    const bool sub = i < n.substructures;
+    nodes += "nodes { id: " + std::to_string(i + 1) + " kind: " +
+             (sub ? "SUBSTRUCTURE" : "ACTUATOR_EMULATOR") + " storeys: [" +
+             (sub ? block(i, n.substructures) : block(i - n.substructures, n.emulators)) + "] } ";
+  }
+  return "name: \"scaling\"\n"
+         "structure { shear_building { storey_mass: [2e5, 2e5, 2e5, 2e5, 2e5, 2e5, 2e5, 2e5, 2e5] "
+         "storey_stiffness: [2e8, 2e8, 2e8, 2e8, 2e8, 2e8, 2e8, 2e8, 2e8] } "
+         "damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
+         "motion { path: \"" + std::string(RTHS_SHARED_DATA_DIR) +
+         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
+         " }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: 0.0009765625 }\n"
+         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+         "cases { name: \"reference\" }\n"
+         "deployment { " + nodes + deployment + " }\n";
+}
+
 runtime::Command payload() {
   runtime::Command c;
   c.set_time(1.234);
@@ -65,7 +101,7 @@ runtime::Command payload() {
 }
 
 int echo_main(int domain, int node_id) {
-  transport::DdsEndpoint node({static_cast<std::uint32_t>(domain), false, node_id, "rths", 64});
+  transport::DdsEndpoint node({static_cast<std::uint32_t>(domain), false, node_id, "rths", 64, {}});
   for (;;) {
     auto m = node.receive(5s);
     if (!m) return 0;
@@ -84,7 +120,7 @@ int echo_main(int domain, int node_id) {
 runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
   std::unique_ptr<runtime::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
-  transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
   for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
   std::vector<runtime::ChildProcess> echoes;
   for (int p = 1; p <= peers; ++p)
@@ -126,7 +162,7 @@ struct RunFigures {
 // one_cpu: this process (the coordinator, its DDS threads) and the nodes on one CPU, as
 // `rths launch` places lockstep runs by default (runtime::CpuPlacement).
 RunFigures distributed_run(int domain, const std::string& text, const std::string& name,
-                           bool with_substructure = true, bool one_cpu = false) {
+                           NodeSet node_set = {}, bool one_cpu = false) {
   std::unique_ptr<runtime::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
   const auto dir = std::filesystem::temp_directory_path() / ("rths_bench_" + name);
@@ -138,16 +174,19 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   const config::Study study = core::load_study(config);
   const auto off_loop_cpu = runtime::keep_off_loop_cpu(study.deployment());  // as rths launch
   std::vector<runtime::ChildProcess> nodes;
-  if (with_substructure)
-    nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / "substructure_nodes/rths-substructure-node",
-                     std::vector<std::string>{"--node-id", "1", "--domain", std::to_string(domain),
-                                              "--run-id", run_id},
-                     dir / "node_1.log");
-  nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / "actuator_emulator/rths-actuator-emulator",
-                     std::vector<std::string>{"--node-id", "2", "--domain", std::to_string(domain),
-                                              "--run-id", run_id},
-                     dir / "node_2.log");
-  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  const int count = node_set.substructures + node_set.emulators;
+  for (int i = 0; i < count; ++i) {
+    const bool substructure = i < node_set.substructures;
+    // Without substructure nodes the emulator keeps id 2, as the studies' deployments name it.
+    const int id = node_set.substructures == 0 ? 2 + i : i + 1;
+    nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) /
+                           (substructure ? "substructure_nodes/rths-substructure-node"
+                                         : "actuator_emulator/rths-actuator-emulator"),
+                       std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
+                                                std::to_string(domain), "--run-id", run_id},
+                       dir / ("node_" + std::to_string(id) + ".log"));
+  }
+  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
   coordinator::CoordinatorOptions options;
   options.run_id = run_id;
   options.record = record;
@@ -177,6 +216,41 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
   f.servo_ticks = outcome.counters.servo_ticks();
   f.servo_overruns = outcome.counters.servo_overruns();
   return f;
+}
+
+// Rows per node count: lockstep steps/s (one CPU as `rths launch` places it, and spread) and the
+// real-time step wall at 1024 Hz, medians of `repeat` runs each, with the ratio to 1 + 1 nodes.
+void scaling_rows(int domain, int repeat, double seconds, const std::string& deployment_extra) {
+  const NodeSet sets[] = {{1, 1}, {2, 1}, {4, 1}, {8, 1}, {1, 2}, {1, 4}, {8, 4}};
+  double base_one_cpu = 0, base_spread = 0;
+  std::printf("nodes (substructure + emulator) | lockstep steps/s one CPU (x 1+1) | spread (x 1+1) | "
+              "real time 1024 Hz: step wall median / p99 us, overruns %%\n");
+  for (const NodeSet n : sets) {
+    std::vector<double> one_cpu, spread, wall, wall99, overruns;
+    for (int r = 0; r < repeat; ++r) {
+      const std::string tag = std::to_string(n.substructures) + "_" + std::to_string(n.emulators) +
+                              "_" + std::to_string(r);
+      one_cpu.push_back(distributed_run(domain, scaling_text(n, 10, ""), "scale_one" + tag, n, true)
+                            .steps_per_second);
+      spread.push_back(distributed_run(domain, scaling_text(n, 10, ""), "scale_spread" + tag, n, false)
+                           .steps_per_second);
+      const auto rt = distributed_run(
+          domain, scaling_text(n, seconds, "clock: REAL_TIME max_overrun_fraction: -1 "
+                                           "max_missed_answers: 1000 command_watchdog_periods: 1000 " +
+                                               deployment_extra),
+          "scale_rt" + tag, n, false);
+      wall.push_back(rt.step_wall.median);
+      wall99.push_back(rt.step_wall.p99);
+      overruns.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
+    }
+    const double o = runtime::summarize(one_cpu).median, sp = runtime::summarize(spread).median;
+    if (base_one_cpu == 0) base_one_cpu = o, base_spread = sp;
+    std::printf("%d + %d | %.0f (%.2f) | %.0f (%.2f) | %.1f / %.1f, %.3f %%\n", n.substructures,
+                n.emulators, o, o / base_one_cpu, sp, sp / base_spread,
+                runtime::summarize(wall).median * 1e6, runtime::summarize(wall99).median * 1e6,
+                runtime::summarize(overruns).median);
+    std::fflush(stdout);
+  }
 }
 
 // Resident set size (kB) of a process, from /proc/<pid>/status; -1 when it is gone.
@@ -339,6 +413,10 @@ int main(int argc, char** argv) {
                  "only a real-time run of this many steps (e.g. 1000000) with RSS sampled");
   app.add_option("--memory-rate", memory_rate, "Hz of the --memory-steps run (default 4096)")
       ->check(CLI::PositiveNumber);
+  bool scaling = false;
+  app.add_flag("--scaling", scaling,
+               "only the rows per node count (1, 2, 4, 8 substructure nodes + 1, 2, 4 emulators): "
+               "lockstep steps/s and real-time step wall (--seconds of record)");
   app.add_option("--echo", echo_domain, "internal: run as the ping-pong echo peer");
   app.add_option("--echo-id", echo_id, "internal: the echo peer's node id");
   CLI11_PARSE(app, argc, argv);
@@ -346,13 +424,17 @@ int main(int argc, char** argv) {
   rths::runtime::ensure_dds_config();
   if (echo_domain >= 0) return echo_main(echo_domain, echo_id);
 
+  if (scaling) {
+    scaling_rows(domain, repeat, seconds, deployment_extra);
+    return 0;
+  }
   if (memory_steps > 0) {
     memory_run(domain + 3, memory_steps, memory_rate, deployment_extra);
     return 0;
   }
   if (lockstep_only) {
     const auto lock =
-        distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", true, !spread);
+        distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", {}, !spread);
     std::printf("lockstep (3 processes, %s): %.0f steps/s; step median %.1f us, p99 %.1f us, max %.2f ms\n",
                 spread ? "spread" : "one CPU", lock.steps_per_second, lock.step_wall.median * 1e6, lock.step_wall.p99 * 1e6,
                 lock.step_wall.max * 1e3);
@@ -368,7 +450,7 @@ int main(int argc, char** argv) {
               "%.1f us, max %.2f ms\n",
               pp2.median * 1e6, pp2.p99 * 1e6, pp2.max * 1e3);
   const auto lock =
-      distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", true, !spread);
+      distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", {}, !spread);
   std::printf("lockstep (coordinator + substructure node + actuator emulator, 39 s record at "
               "1 ms, %s): %zu steps, %.0f steps/s (step wall sum), run wall %.2f s; step median %.1f "
               "us, p99 %.1f us, max %.2f ms; median step / median 1-peer ping-pong = %.2f, / 2-peer "
@@ -379,7 +461,7 @@ int main(int argc, char** argv) {
               lock.step_wall.median / pp.median, lock.step_wall.median / pp2.median);
   const auto one = distributed_run(
       domain + 4, study_text(0.001, 39.0, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
-      "lockstep_one_node", false, !spread);
+      "lockstep_one_node", {0, 1}, !spread);
   std::printf("lockstep, numerical part in the coordinator + actuator emulator only: %.0f steps/s, "
               "run wall %.2f s; step median %.1f us, p99 %.1f us; median step / median 1-peer "
               "ping-pong = %.2f\n",
@@ -392,7 +474,7 @@ int main(int argc, char** argv) {
   for (int r = 1; r < repeat; ++r) {
     const auto pp_r = ping_pong(domain, 5000, 1, !spread);
     const auto lock_r = distributed_run(domain + 1, study_text(0.001, 39.0, ""),
-                                        "lockstep" + std::to_string(r), true, !spread);
+                                        "lockstep" + std::to_string(r), {}, !spread);
     steps_per_second.push_back(lock_r.steps_per_second);
     ratio.push_back(lock_r.step_wall.median / pp_r.median);
   }

@@ -92,7 +92,7 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
                        std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
                                                 std::to_string(domain), "--run-id", run_id},
                        dir / ("node_" + std::to_string(id) + ".log"));
-  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
   coordinator::CoordinatorOptions options;
   options.run_id = run_id;
   options.record = dir / "run.rthsrec";

@@ -5,9 +5,14 @@
 // plus lag per link, plots, summary) with each case's run record and process logs.
 // Before the first run, each case is checked against its critical delay with the network's lag on
 // the actuator's path (warn_past_critical_delay); progress per case goes to stderr.
+// A real-time study is checked against this machine first (platform/check.h, --platform-seconds
+// of measurement, written to OUT/platform.json and handed to every case's coordinator): when its
+// fail-safe or overrun tolerance will not hold, nothing starts (exit 3, the numbers and the fix
+// named) unless --accept-platform.
 // Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
 // 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
 // expect_unstable); 2 for a bad config caught before starting anything.
+#include <fstream>
 #include <cstdlib>
 #include <iostream>
 
@@ -15,6 +20,7 @@
 #include "cli/distributed.h"
 #include "cli/support.h"
 #include "core/study.h"
+#include "platform/check.h"
 #include "runtime/launch.h"
 #include "runtime/process.h"
 #include "view/server.h"
@@ -30,9 +36,32 @@ struct LaunchArgs {
   std::string cpu_placement = "auto";
   std::string format = "csv";  // of the results table: csv | mat | h5
   bool no_plots = false, json = false, allow_unstable = false;
+  double platform_seconds = 5.0;
+  bool accept_platform = false;
   std::string view;  // HOST:PORT of the live view, empty: none
   bool view_stop = false;
 };
+
+// Real time: the platform check once for every case; its summary file, or empty in lockstep.
+std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
+                                           const LaunchArgs& args, const std::filesystem::path& out) {
+  if (prepared.config.deployment().clock() != config::Deployment::REAL_TIME) return {};
+  platform::PlatformCheck check;
+  try {
+    check = platform::check_platform(prepared, args.platform_seconds);
+  } catch (const std::runtime_error& e) {
+    throw ExitError(kExitEnvironment, std::string("platform check: ") + e.what());
+  }
+  if (!args.json || check.verdict.refused()) std::cerr << platform::summary_text(check.summary);
+  if (check.verdict.refused() && !args.accept_platform)
+    throw ExitError(kExitEnvironment,
+                    "refusing to start: the deployment's fail-safe or overrun tolerance will not "
+                    "hold on this machine (numbers and fixes above; `rths rt-check CONFIG` "
+                    "repeats the check); --accept-platform runs anyway and the records say so");
+  const std::filesystem::path file = out / "platform.json";
+  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(2);
+  return file;
+}
 
 // --view / --view-stop as the coordinator's arguments; beyond loopback the stop token is made
 // here, handed down in the environment (never on a command line) and printed.
@@ -80,6 +109,7 @@ void run_launch(const LaunchArgs& args) {
   std::filesystem::create_directories(out);
   // Checked before anything starts: the case's lag plus the network's on the actuator's path.
   warn_past_critical_delay(prepared, names);
+  const std::filesystem::path platform_file = check_platform_first(prepared, args, out);
 
   const std::vector<std::string> coordinator_args = view_arguments(args);
   std::vector<DistributedRun> runs;
@@ -96,6 +126,8 @@ void run_launch(const LaunchArgs& args) {
       options.log_dir = out / "logs" / name;
       options.timeout = args.timeout;
       options.security_dir = args.security;
+      options.platform_file = platform_file;
+      options.accept_platform = args.accept_platform;
       options.cpu_placement = args.cpu_placement == "one-cpu" ? runtime::CpuPlacement::kOneCpu
                               : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
                                                                : runtime::CpuPlacement::kAuto;
@@ -172,6 +204,12 @@ void add_launch_command(CLI::App& app) {
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->add_flag("--json", args->json, "print the summary as JSON");
+  cmd->add_option("--platform-seconds", args->platform_seconds,
+                  "real time: s of platform measurement before the runs (default 5)")
+      ->check(CLI::Range(0.1, 600.0));
+  cmd->add_flag("--accept-platform", args->accept_platform,
+                "real time: run even when the platform check says the fail-safe or the overrun "
+                "tolerance will not hold (the records say so)");
   cmd->callback([args] { run_launch(*args); });
 }
 

@@ -205,7 +205,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
         facts.deadline_diagnosis =
             runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
                                         static_cast<std::uint64_t>(runtime::max_missed_answers(
-                                            prepared.config.deployment())))
+                                            prepared.config.deployment(), record.header()->dt())))
                 .describe();
     } else {
       c.status = "cut short";

@@ -4,7 +4,7 @@
 //   answer_shortfall   fresh < min_fraction x steps  ->  "failed: node N answered K of M steps
 //                      (at least P % needed)"
 // fresh: steps on which the node gave a fresh answer (one it had not given before); steps: the
-// steps judged; min_fraction in [0, 1] (the coordinator uses kMinAnswerFraction).
+// steps judged; min_fraction in [0, 1] (the deployment's, runtime::min_answer_fraction).
 // Nothing (nullopt) when the node answered enough, or when no step was judged.
 
 #include <cstdint>
@@ -12,9 +12,6 @@
 #include <string>
 
 namespace rths::coordinator {
-
-// A real-time run needs a fresh answer from every node on at least 99 % of its steps.
-inline constexpr double kMinAnswerFraction = 0.99;
 
 std::optional<std::string> answer_shortfall(int node_id, std::uint64_t fresh, std::uint64_t steps,
                                             double min_fraction);

@@ -119,13 +119,14 @@ void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outco
     if (outcome.ok && !misses)
       misses = servo_deadline_misses(node.plan->label(), node.servo_overruns, node.servo_ticks,
                                      tolerance);
+  const double min_answers = runtime::min_answer_fraction(s.deployment);
   for (const auto& [id, node] : s.nodes)
-    if (s.real_time && outcome.ok && !misses) {
+    if (s.real_time && outcome.ok && !misses && min_answers >= 0) {
       // Answers to the last steps of a link slower than a step are still on the wire at the end.
       const auto in_flight = static_cast<std::uint64_t>(
           std::ceil(Coordinator::State::injected_round_trip(node.plan->spec) / s.setup.dt)) + 1;
       const std::uint64_t due = node.judged_steps > in_flight ? node.judged_steps - in_flight : 0;
-      misses = answer_shortfall(id, std::min(node.answers, due), due, kMinAnswerFraction);
+      misses = answer_shortfall(id, std::min(node.answers, due), due, min_answers);
     }
   if (misses) {
     outcome.ok = false;

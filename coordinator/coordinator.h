@@ -79,6 +79,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -115,6 +116,8 @@ struct CoordinatorOptions {
   std::filesystem::path record;       // empty: no record file
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
   double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
+  // Real time: the platform check the run starts under, kept in the record's header.
+  std::optional<runtime::PlatformSummary> platform;
   StepDriver driver;                  // empty: the study's integrator (core::run_steps)
   // Sees each record entry on the record's writer thread (the live view); needs `record`.
   runtime::RecordObserver* record_observer = nullptr;

@@ -168,7 +168,7 @@ double Coordinator::State::answer_wait() const {
 }
 
 bool Coordinator::State::awaits_answers_of(const config::NodeSpec& spec) const {
-  return !real_time || injected_round_trip(spec) < answer_wait();
+  return !real_time || runtime::awaits_answers(deployment, spec, setup.dt);
 }
 
 void Coordinator::State::absorb() {
@@ -260,7 +260,7 @@ void Coordinator::State::collect() {
     while (pump(std::chrono::nanoseconds::zero())) {
     }
     absorb();
-    const int max_missed = runtime::max_missed_answers(deployment);
+    const int max_missed = runtime::max_missed_answers(deployment, setup.dt);
     for (auto& [id, node] : nodes) {
       if (node.last_answer != step) {
         ++late_feedback;

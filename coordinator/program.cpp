@@ -11,6 +11,7 @@
 #include <tuple>
 #include <sstream>
 
+#include "platform/check.h"
 #include "runtime/launch.h"
 #include "runtime/plan.h"
 #include "security/check.h"
@@ -65,6 +66,40 @@ std::string summary_text(const RunOutcome& o) {
 
 namespace {
 
+struct PlatformArgs {
+  std::string file;
+  double seconds = 3.0;
+  bool accept = false;
+};
+
+// The platform summary a real-time run records: read from --platform, else measured for
+// --platform-seconds (0: not measured, only with --accept-platform). Throws PlatformRefused when
+// the check refuses the deployment and --accept-platform was not given.
+struct PlatformRefused : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared, const PlatformArgs& args) {
+  runtime::PlatformSummary summary;
+  if (!args.file.empty()) {
+    summary = platform::read_summary_file(args.file);
+  } else if (args.seconds > 0) {
+    summary = platform::check_platform(prepared, args.seconds).summary;
+  } else {
+    if (!args.accept)
+      throw std::invalid_argument("--platform-seconds 0 (not measured) needs --accept-platform");
+    summary.set_verdict("not measured (--platform-seconds 0)");
+    summary.set_refused(true);
+  }
+  if (summary.refused() && !args.accept)
+    throw PlatformRefused(platform::summary_text(summary) +
+                          "refusing to start: the fail-safe or the overrun tolerance will not hold "
+                          "on this machine; change the deployment as above, or run anyway with "
+                          "--accept-platform (the record says so)");
+  summary.set_accepted_override(summary.refused());
+  return summary;
+}
+
 // The live view (--view): a feed of the record and its server. Bad address or no record:
 // std::invalid_argument; an address that cannot be bound or page files missing: runtime_error.
 std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_view(
@@ -97,6 +132,16 @@ int coordinator_main(int argc, char** argv) {
   CLI::App app{"rths-coordinator: the integrator loop of a distributed hybrid test"};
   std::string config_path, case_name, run_id, record, security_dir;
   int domain = -1;
+  PlatformArgs platform_args;
+  app.add_option("--platform", platform_args.file,
+                 "real time: the platform check to use (`rths rt-check CONFIG --json` output) "
+                 "instead of measuring");
+  app.add_option("--platform-seconds", platform_args.seconds,
+                 "real time: s of platform measurement before the run (default 3; 0 = none, "
+                 "with --accept-platform)")
+      ->check(CLI::Range(0.0, 20.0));
+  app.add_flag("--accept-platform", platform_args.accept,
+               "real time: run even when the platform check refuses the deployment (recorded)");
   app.add_option("--config", config_path, "study config (text format)")->required();
   app.add_option("--case", case_name, "case to run (default: deployment.case_name or reference)");
   app.add_option("--run-id", run_id, "run id (default: host-pid-time)");
@@ -130,10 +175,21 @@ int coordinator_main(int argc, char** argv) {
   std::unique_ptr<view::ViewServer> server;
   std::unique_ptr<Coordinator> coordinator;
   std::unique_ptr<transport::DdsEndpoint> endpoint;
+  std::unique_ptr<platform::DmaLatencyHold> dma_latency;
   try {
     const config::Study study = core::load_study(config_path);
     core::PreparedStudy prepared =
         core::prepare_study(study, std::filesystem::path(config_path).parent_path());
+    CoordinatorOptions co;
+    if (study.deployment().clock() == config::Deployment::REAL_TIME) {
+      runtime::check_failsafe_windows(study.deployment());
+      co.platform = platform_summary(prepared, platform_args);
+      // Held for the whole run: CPUs stay out of deep idle states, whose exit adds to wake-ups.
+      dma_latency = std::make_unique<platform::DmaLatencyHold>();
+      co.platform->set_dma_latency_held(dma_latency->held());
+      if (!dma_latency->held())
+        std::cerr << "rths-coordinator: not holding /dev/cpu_dma_latency: " << dma_latency->why_not() << "\n";
+    }
     transport::DdsEndpointOptions options;
     options.domain_id =
         static_cast<std::uint32_t>(domain >= 0 ? domain : study.deployment().domain_id());
@@ -145,7 +201,6 @@ int coordinator_main(int argc, char** argv) {
       options.participant_properties = security::participant_properties(
           security::check_node_security(security_dir, security::kCoordinatorNodeId));
     endpoint = std::make_unique<transport::DdsEndpoint>(options);
-    CoordinatorOptions co;
     co.run_id = !run_id.empty() ? run_id
                 : !study.deployment().run_id().empty() ? study.deployment().run_id()
                                                        : runtime::make_run_id(study.name() + "-" + runtime::find_case(study, case_name).name());
@@ -161,7 +216,7 @@ int coordinator_main(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     std::cerr << "rths-coordinator: " << e.what() << "\n";
     return 2;
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // PlatformRefused too: this machine cannot keep the run
     std::cerr << "rths-coordinator: " << e.what() << "\n";
     return 3;
   }

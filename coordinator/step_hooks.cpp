@@ -107,6 +107,7 @@ void Coordinator::State::write_header() {
   h.set_timestamp_clock(
       "CLOCK_REALTIME ns; round_trip uses the coordinator's clock only, one-way lags "
       "include the clock offset between hosts");
+  if (options.platform) *h.mutable_platform() = *options.platform;
   append_waiting(entry);
 }
 

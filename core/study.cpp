@@ -162,6 +162,8 @@ void validate_deployment(const config::Deployment& d, bool allow_long_lag, const
   require_unset_or_in(Quantity::kLag, d.spin_margin(), at + "spin_margin", source);
   if (d.max_overrun_fraction() >= 0)
     require_in(Quantity::kFraction, d.max_overrun_fraction(), at + "max_overrun_fraction (< 0: off)", source);
+  if (d.min_answer_fraction() >= 0)
+    require_in(Quantity::kFraction, d.min_answer_fraction(), at + "min_answer_fraction (< 0: off)", source);
   require_unset_or_in(Quantity::kCount, d.max_missed_answers(), at + "max_missed_answers", source);
   require_unset_or_in(Quantity::kCount, d.command_watchdog_periods(), at + "command_watchdog_periods", source);
   if (d.pin_loop() || d.loop_cpu() > 0) require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);

@@ -149,11 +149,11 @@ coordinator::RunOutcome Site::run_session(Connection& client, int frame_size,
   so.dofs = p.setup.model.dofs();
   so.frame_size = frame_size;
   so.first_frame_timeout = duration_cast<nanoseconds>(Seconds(runtime::start_timeout(p.deployment)));
-  const double watchdog = runtime::command_watchdog_periods(p.deployment) * p.setup.dt;
+  const double watchdog = runtime::command_watchdog_periods(p.deployment, p.setup.dt) * p.setup.dt;
   const double frame_timeout = real_time ? watchdog : runtime::step_timeout(p.deployment);
   so.frame_timeout = duration_cast<nanoseconds>(Seconds(frame_timeout));
   so.frame_timeout_reason =
-      real_time ? "the emulator's watchdog (command_watchdog_periods x dt = " +
+      real_time ? "the emulator's watchdog (its window in steps x dt = " +
                       std::to_string(watchdog) + " s)"
                 : "step_timeout (" + std::to_string(frame_timeout) + " s)";
   so.divergence_bound = options.divergence_bound;

@@ -142,6 +142,11 @@ LaunchResult launch_run(const LaunchOptions& options) {
   std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
                                 "--domain", std::to_string(domain), "--case", result.case_name};
   if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
+  if (!options.platform_file.empty())
+    args.insert(args.end(), {"--platform", options.platform_file.string()});
+  if (options.platform_seconds >= 0)
+    args.insert(args.end(), {"--platform-seconds", std::to_string(options.platform_seconds)});
+  if (options.accept_platform) args.push_back("--accept-platform");
   args.insert(args.end(), options.coordinator_args.begin(), options.coordinator_args.end());
   result.coordinator_log = options.log_dir / "coordinator.log";
   ChildProcess coordinator = start(programs.coordinator, args, security_dir,

@@ -79,6 +79,12 @@ struct LaunchOptions {
   std::filesystem::path security_dir;
   PlacementStrategy placement;         // empty: local (loopback DDS unless CYCLONEDDS_URI is set)
   std::function<bool()> stop_requested;  // polled every 20 ms; true = stop now
+  // Real time: the coordinator's platform check (coordinator/program.h): a check already made
+  // (`rths rt-check --json` output), else seconds of measurement (< 0: the coordinator's
+  // default); accept_platform runs a deployment the check refuses (the record says so).
+  std::filesystem::path platform_file;
+  double platform_seconds = -1.0;
+  bool accept_platform = false;
   std::vector<std::string> coordinator_args;  // appended to the coordinator's (e.g. --view H:P)
 };
 

@@ -215,7 +215,7 @@ void NodeLoop::on_assigned() {
   const config::Deployment& deployment = a.study().deployment();
   if (a.node().kind() == config::NodeSpec::ACTUATOR_EMULATOR &&
       deployment.clock() == config::Deployment::REAL_TIME)
-    assigned_.watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment) * a.dt());
+    assigned_.watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment, a.dt()) * a.dt());
   spdlog::info("{}: assigned to run {}", service_.label(), service_.run_id());
   if (service_.streaming()) {
     const double period = service_.streaming_period();

@@ -30,6 +30,7 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
     if (partition.has_numerical(s)) numerical.insert(s);
   for (int s : partition.actuator_storeys) experimental.insert(s);
 
+  check_failsafe_windows(deployment);
   DeploymentPlan plan;
   std::set<int> ids;
   std::map<int, int> numerical_host, experimental_host;  // storey -> node id
@@ -167,6 +168,10 @@ double step_timeout(const config::Deployment& d) { return or_default(d.step_time
 double feedback_wait_fraction(const config::Deployment& d) {
   return or_default(d.feedback_wait_fraction(), 0.5);
 }
+bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt) {
+  const double round_trip = node.receive_lag().one_way_delay() + node.send_lag().one_way_delay();
+  return round_trip < feedback_wait_fraction(d) * dt;
+}
 WaitPolicy wait_policy(const config::Deployment& d) {
   WaitPolicy policy;
   switch (d.wait_policy()) {
@@ -180,11 +185,45 @@ WaitPolicy wait_policy(const config::Deployment& d) {
 double max_overrun_fraction(const config::Deployment& d) {
   return d.max_overrun_fraction() == 0 ? 0.001 : d.max_overrun_fraction();
 }
-int max_missed_answers(const config::Deployment& d) {
-  return d.max_missed_answers() > 0 ? d.max_missed_answers() : 3;
+double min_answer_fraction(const config::Deployment& d) {
+  return d.min_answer_fraction() == 0 ? 0.99 : d.min_answer_fraction();
 }
-int command_watchdog_periods(const config::Deployment& d) {
-  return d.command_watchdog_periods() > 0 ? d.command_watchdog_periods() : 3;
+namespace {
+constexpr int kDefaultWindowSteps = 3;
+constexpr double kMaxWindowMs = 60'000.0;
+
+int window_steps(double window_ms, int steps, double dt) {
+  if (window_ms > 0) {
+    // The tolerance keeps a window of exactly k steps at k (ms / dt in floating point).
+    const double exact = window_ms * 1e-3 / dt;
+    return std::max(1, static_cast<int>(std::ceil(exact - 1e-9)));
+  }
+  return steps > 0 ? steps : kDefaultWindowSteps;
+}
+
+void check_window(double window_ms, const char* ms_field, int steps, const char* steps_field) {
+  if (!std::isfinite(window_ms) || window_ms < 0 || window_ms > kMaxWindowMs)
+    throw std::invalid_argument("deployment." + std::string(ms_field) + " = " +
+                                std::to_string(window_ms) + " ms: must be in [0, 60000] ms");
+  if (window_ms > 0 && steps > 0)
+    throw std::invalid_argument("deployment." + std::string(ms_field) + " and deployment." +
+                                steps_field + " both given (" + std::to_string(window_ms) +
+                                " ms and " + std::to_string(steps) +
+                                " steps): give the window one way");
+}
+}  // namespace
+
+int max_missed_answers(const config::Deployment& d, double dt) {
+  return window_steps(d.answer_window_ms(), d.max_missed_answers(), dt);
+}
+int command_watchdog_periods(const config::Deployment& d, double dt) {
+  return window_steps(d.command_watchdog_ms(), d.command_watchdog_periods(), dt);
+}
+void check_failsafe_windows(const config::Deployment& d) {
+  check_window(d.answer_window_ms(), "answer_window_ms", d.max_missed_answers(),
+               "max_missed_answers");
+  check_window(d.command_watchdog_ms(), "command_watchdog_ms", d.command_watchdog_periods(),
+               "command_watchdog_periods");
 }
 
 }  // namespace rths::runtime

@@ -67,9 +67,18 @@ double heartbeat_period(const config::Deployment& d);
 double liveliness_timeout(const config::Deployment& d);
 double step_timeout(const config::Deployment& d);
 double feedback_wait_fraction(const config::Deployment& d);
+// Real time: whether the loop waits (feedback_wait_fraction x dt) for a node's answer to the step
+// it just commanded; not for a node whose link injects a round trip at least that long.
+bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt);
 WaitPolicy wait_policy(const config::Deployment& d);
 double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
-int max_missed_answers(const config::Deployment& d);
-int command_watchdog_periods(const config::Deployment& d);
+double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
+// The fail-safe windows in steps of dt (s): answer_window_ms / command_watchdog_ms when given
+// (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3.
+int max_missed_answers(const config::Deployment& d, double dt);
+int command_watchdog_periods(const config::Deployment& d, double dt);
+// Throws std::invalid_argument naming the field, its value and the allowed range when a window
+// is given both in steps and in ms, or its ms value is not in [0, 60000] (0 = not given).
+void check_failsafe_windows(const config::Deployment& d);
 
 }  // namespace rths::runtime

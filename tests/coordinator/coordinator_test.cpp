@@ -224,6 +224,17 @@ TEST(Coordinator, DeadlineMissesBeyondTheToleranceFailTheRun) {
   EXPECT_EQ(o.result.steps(), 500u);  // it ran to the end: the outcome, not the run, is judged
 }
 
+// The fraction is the deployment's: 450 of 500 answers pass a stated 0.8, and fail a stated 0.95.
+TEST(Coordinator, TheAnswerFractionIsTheDeployments) {
+  const std::string base = "clock: REAL_TIME max_overrun_fraction: 1 max_missed_answers: 100000 ";
+  FakeClock loose_clock(10'000), strict_clock(10'000);
+  const RunOutcome loose = run(base + "min_answer_fraction: 0.8", 2, 450, &loose_clock);
+  EXPECT_TRUE(loose.ok) << loose.status;
+  const RunOutcome strict = run(base + "min_answer_fraction: 0.95", 2, 450, &strict_clock);
+  EXPECT_FALSE(strict.ok);
+  EXPECT_NE(strict.status.find("(at least 95 % needed)"), std::string::npos) << strict.status;
+}
+
 TEST(Coordinator, AToleranceOfMinusOneAcceptsDeadlineMisses) {
   FakeClock late(2'000'000);
   const RunOutcome o = run("clock: REAL_TIME max_overrun_fraction: -1", 0, 0, &late);
@@ -256,7 +267,7 @@ INSTANTIATE_TEST_SUITE_P(Nodes, SilentNode, testing::Values(1, 2),
 
 // A node whose answers stop arriving while max_missed_answers is too wide to fire (or, never
 // having answered, never starts a streak) and liveliness has not run out: the run went to its
-// end, but it is not ok, since the node answered fewer than kMinAnswerFraction of the steps.
+// end, but it is not ok, since the node answered fewer than the deployment's min_answer_fraction (0.99) of the steps.
 TEST(Coordinator, ARunOnWhichANodeAnsweredTooFewStepsFails) {
   FakeClock on_time(10'000);
   const RunOutcome o =

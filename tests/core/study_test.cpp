@@ -294,6 +294,8 @@ TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
                 .find("receive_lag.jitter = 5 s"), std::string::npos);
   EXPECT_NE(error_of(base + "deployment { max_missed_answers: -3 }").find("deployment.max_missed_answers = -3"),
             std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { min_answer_fraction: 1.5 }").find("deployment.min_answer_fraction"),
+            std::string::npos);
   EXPECT_NE(error_of(base + "deployment { pin_loop: true loop_cpu: 99999 }").find("deployment.loop_cpu = 99999"),
             std::string::npos);
   EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"), std::string::npos);

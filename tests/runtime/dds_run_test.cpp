@@ -44,7 +44,8 @@ TEST_F(DdsRun, MultiRateLockstepEqualsTheInProcessMultiRateRunBitForBit) {
 TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
   const std::string text = test::paper_frame_study(
       1.0, "servo { rate: 4000 } deployment { clock: REAL_TIME max_overrun_fraction: -1 "
-           "max_missed_answers: 30 command_watchdog_periods: 30 }");
+           "max_missed_answers: 30 command_watchdog_periods: 30 min_answer_fraction: -1 }");
+  // The streaming's mechanics are judged here, not whether this machine keeps a 4 kHz servo.
   const auto run = test::launch("servo_real_time", text, "reference", 52);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const auto* footer = run.record.footer();

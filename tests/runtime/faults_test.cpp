@@ -50,7 +50,8 @@ Cluster start(const std::string& name, const std::string& text, int domain,
   c.coordinator.emplace(test::program("rths-coordinator", "coordinator"),
                         std::vector<std::string>{"--config", config.string(), "--run-id", name,
                                                  "--domain", std::to_string(domain), "--record",
-                                                 c.record.string(), "--case", case_name},
+                                                 c.record.string(), "--case", case_name,
+                                                 "--platform-seconds", "0", "--accept-platform"},
                         c.dir / "coordinator.log", coordinator_options);
   return c;
 }

@@ -82,5 +82,30 @@ TEST(Plan, NodeSideSetupMatchesPrepareStudy) {
   EXPECT_EQ(from_core.delays[0].describe(), node_side.delays[0].describe());
 }
 
+TEST(FailSafeWindows, StepsFromMillisecondsOrTheStepFields) {
+  const double dt = 1.0 / 1024;
+  EXPECT_EQ(max_missed_answers(deployment(""), dt), 3);
+  EXPECT_EQ(command_watchdog_periods(deployment(""), dt), 3);
+  EXPECT_EQ(max_missed_answers(deployment("max_missed_answers: 7"), dt), 7);
+  EXPECT_EQ(command_watchdog_periods(deployment("command_watchdog_periods: 5"), dt), 5);
+  EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 10"), dt), 11);  // ceil(10.24)
+  EXPECT_EQ(command_watchdog_periods(deployment("command_watchdog_ms: 8"), dt), 9);
+  EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 3"), 0.001), 3);  // exactly 3 steps
+  EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 0.1"), 0.001), 1);
+}
+
+TEST(FailSafeWindows, BothWaysOrOutOfRangeIsBadInputNamingTheFields) {
+  const core::HybridSetup setup = two_storey_fraction();
+  EXPECT_EQ(error_of(setup, "answer_window_ms: 10 max_missed_answers: 4"),
+            "deployment.answer_window_ms and deployment.max_missed_answers both given "
+            "(10.000000 ms and 4 steps): give the window one way");
+  EXPECT_NE(error_of(setup, "command_watchdog_ms: -1").find(
+                "deployment.command_watchdog_ms = -1.000000 ms: must be in [0, 60000] ms"),
+            std::string::npos);
+  EXPECT_NE(error_of(setup, "answer_window_ms: 70000").find("[0, 60000]"), std::string::npos);
+  EXPECT_NO_THROW(check_failsafe_windows(deployment("answer_window_ms: 10 command_watchdog_periods: 4")));
+}
+
+
 }  // namespace
 }  // namespace rths::runtime

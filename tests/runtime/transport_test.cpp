@@ -24,7 +24,7 @@ DdsEndpointOptions node_options(std::int32_t id, const std::string& prefix) {
 }
 
 TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_exchange", 64});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_exchange", 64, {}});
   DdsEndpoint node1(node_options(1, "t_exchange")), node2(node_options(2, "t_exchange"));
   coordinator.listen_to(1);
   coordinator.listen_to(2);
@@ -66,7 +66,7 @@ TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
 // The envelope's node id is a claim; the topic and the writer say who sent it. Node 1 claiming
 // to be node 2 arrives stamped as node 1's topic, from another writer than node 2's.
 TEST_F(DdsTransport, EachNodeSpeaksOnItsOwnTopicAndWriter) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_own", 64});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_own", 64, {}});
   DdsEndpoint node1(node_options(1, "t_own")), node2(node_options(2, "t_own"));
   coordinator.listen_to(1);
   coordinator.listen_to(2);
@@ -107,7 +107,7 @@ TEST_F(DdsTransport, EachNodeSpeaksOnItsOwnTopicAndWriter) {
 // One topic per addressee: a command for node 2 never reaches node 1's process at all (on a
 // shared topic it woke node 1 to be thrown away), while a broadcast reaches both.
 TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_addressed", 64});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_addressed", 64, {}});
   DdsEndpoint node1(node_options(1, "t_addressed")), node2(node_options(2, "t_addressed"));
   coordinator.listen_to(1);
   coordinator.listen_to(2);
@@ -142,7 +142,7 @@ TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
 }
 
 TEST_F(DdsTransport, InterruptWakesABlockedReceive) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_interrupt", 64});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_interrupt", 64, {}});
   const auto start = std::chrono::steady_clock::now();
   std::thread waker([&] {
     std::this_thread::sleep_for(100ms);
@@ -154,7 +154,7 @@ TEST_F(DdsTransport, InterruptWakesABlockedReceive) {
 }
 
 TEST_F(DdsTransport, WaitForMatchTimesOutWithCounts) {
-  DdsEndpoint lonely({kDomain, true, 0, "t_lonely", 64});
+  DdsEndpoint lonely({kDomain, true, 0, "t_lonely", 64, {}});
   try {
     lonely.wait_for_match(1, 1, 50ms);
     FAIL();

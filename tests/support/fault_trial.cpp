@@ -79,11 +79,13 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   };
   runtime::ChildProcess substructure = node("rths-substructure-node", "substructure_nodes", 1);
   runtime::ChildProcess emulator = node("rths-actuator-emulator", "actuator_emulator", 2);
-  runtime::ChildProcess coordinator(
-      spec.binary_dir / "coordinator" / "rths-coordinator",
-      {"--config", config.string(), "--run-id", run_id, "--domain", std::to_string(spec.domain),
-       "--record", record.string()},
-      spec.dir / "coordinator.log");
+  std::vector<std::string> coordinator_args{"--config", config.string(), "--run-id", run_id,
+                                            "--domain", std::to_string(spec.domain), "--record",
+                                            record.string()};
+  coordinator_args.insert(coordinator_args.end(), spec.coordinator_extra.begin(),
+                          spec.coordinator_extra.end());
+  runtime::ChildProcess coordinator(spec.binary_dir / "coordinator" / "rths-coordinator",
+                                    coordinator_args, spec.dir / "coordinator.log");
   runtime::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator   ? coordinator
                                   : spec.victim == FaultVictim::kSubstructure ? substructure
                                                                               : emulator;
@@ -94,6 +96,11 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
     if (!coordinator.running()) {
       out.why_not = "the run ended before step " + std::to_string(spec.fault_step) + ": " +
                     read_text(spec.dir / "coordinator.log");
+      try {
+        out.record_steps = static_cast<long>(runtime::read_record(record).steps().size());
+      } catch (const std::exception&) {
+        out.record_steps = 0;  // no record: the run stopped before its first step
+      }
       return out;
     }
     if (std::filesystem::exists(record)) {

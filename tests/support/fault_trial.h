@@ -19,6 +19,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace rths::test {
 
@@ -33,6 +34,8 @@ struct FaultTrialSpec {
   double seconds = 3.0;           // of the record
   int domain = 60;                // DDS domain id, one per concurrent trial
   std::string deployment_extra;   // appended inside deployment { } (e.g. max_missed_answers: 30)
+  // Appended to the coordinator's arguments; default: no platform measurement (recorded so).
+  std::vector<std::string> coordinator_extra{"--platform-seconds", "0", "--accept-platform"};
   std::filesystem::path dir;      // scratch folder (created, emptied)
   std::filesystem::path binary_dir;  // the build tree (programs under its subfolders)
   std::string motion_path;        // AT2 file
@@ -46,7 +49,7 @@ struct FaultTrialResult {
   bool record_complete = false;
   bool names_node = false;
   int coordinator_exit = -1;      // -1: the coordinator was the victim
-  long record_steps = 0;
+  long record_steps = 0;           // also when the fault was not delivered: steps run healthy
 };
 
 // Throws std::runtime_error when a program cannot be started.

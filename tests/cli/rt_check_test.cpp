@@ -1,0 +1,47 @@
+// `rths rt-check`: the report's JSON shape, the verdict's exit code and its bad input, run as a
+// user would (short measurements: figures are not judged here).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/support/run_command_line.h"
+
+namespace {
+
+using ::testing::HasSubstr;
+
+const std::string kRths = RTHS_EXECUTABLE;
+
+TEST(RtCheck, JsonHasThePlatformTheVerdictAndTheFixes) {
+  // A 1 s window always holds the default 60 s run at 100 Hz on a machine that keeps up at all.
+  const auto r = rths::test::run_command_line(kRths + " rt-check --seconds 0.3 --rate 100 --json");
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')), nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << r.output;
+  for (const char* key : {"preemption", "governor", "isolated_cpus", "irq_affinity", "memlock_limit_bytes",
+                          "rtprio_limit", "dma_latency_holdable", "measured_cpus", "lateness_median",
+                          "lateness_p99", "lateness_p9999", "lateness_max", "stalls_over_1ms_per_minute",
+                          "stalls_over_2ms_per_minute", "stalls_over_5ms_per_minute", "required_window_ms",
+                          "predicted_overrun_fraction", "verdict"})
+    EXPECT_TRUE(j["platform"].contains(key)) << key;
+  EXPECT_DOUBLE_EQ(j["platform"]["rate_hz"].get<double>(), 100.0);
+  EXPECT_EQ(j["holds"].get<bool>(), r.exit_code == 0);
+  EXPECT_TRUE(j["fixes"].is_array());
+  EXPECT_EQ(j["findings"].size(), 3u);
+}
+
+TEST(RtCheck, AConfigsDeploymentIsJudgedAndItsRateCannotBeOverridden) {
+  const std::string config = std::string(RTHS_SOURCE_DIR) + "/configs/paper_frame_distributed.textproto";
+  const auto bad = rths::test::run_command_line(kRths + " rt-check " + config + " --rate 100");
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_THAT(bad.output, HasSubstr("--rate is for the default deployment"));
+  const auto r = rths::test::run_command_line(kRths + " rt-check " + config + " --seconds 0.3");
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  EXPECT_THAT(r.output, HasSubstr("wake-up lateness at 1000 Hz"));
+  EXPECT_THAT(r.output, HasSubstr("a 15.0 s run"));
+  const auto seconds = rths::test::run_command_line(kRths + " rt-check --seconds 0");
+  EXPECT_EQ(seconds.exit_code, 2) << seconds.output;
+}
+
+}  // namespace
