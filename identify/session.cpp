@@ -1,5 +1,6 @@
 #include "identify/session.h"
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -15,8 +16,13 @@ namespace {
 // The record at `path`, cut to its active part with trim_idle (the note says what was kept).
 MeasuredData load_record(const SessionRequest& request, const std::string& path,
                          std::vector<std::string>& trimmed) {
+  const auto& channels = request.options.channels;
+  const ForceColumn force = std::find(channels.begin(), channels.end(), Channel::kForce) ==
+                                    channels.end()
+                                ? ForceColumn::kOptional
+                                : ForceColumn::kRequired;
   MeasuredData record = read_measured(path, request.units, request.map, kDefaultMinSamples,
-                                      request.sample_rate);
+                                      request.sample_rate, force);
   if (!request.trim_idle) return record;
   const ActiveRange active = active_range(record);
   std::ostringstream note;

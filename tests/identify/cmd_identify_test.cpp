@@ -183,6 +183,30 @@ TEST_F(CmdIdentifyTest, AFileWithoutTimeNeedsTheSampleRate) {
   EXPECT_THAT(o.output, AllOf(HasSubstr("the time column gives 500"), HasSubstr("--sample-rate says 1000")));
 }
 
+TEST_F(CmdIdentifyTest, ADaqExportWithoutForceIdentifiesTheActuatorAlone) {
+  // A raw DAQ export that logged only the command and the measured displacement.
+  const MeasuredData record = read_csv(data_);
+  const fs::path daq = dir_ / "no_force.txt";
+  {
+    std::ofstream out(daq);
+    out << "Header Size: 4\nSampling Interval: " << record.dt << "\nTest: actuator only\n"
+        << "Sample Number, CHANNEL0, CHANNEL2\n";
+    out.precision(10);
+    for (std::size_t i = 0; i < record.size(); ++i) {
+      out << i << ", " << record.measured[i] * 1e2 << ", " << record.command[i] * 1e2 << "\n";
+    }
+  }
+  Outcome o = run("identify " + daq.string() + " --channels measured --folds 0 --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto report = json_of(o);
+  ASSERT_EQ(report["channels"].size(), 1u);
+  EXPECT_EQ(report["channels"][0]["channel"], "measured");
+  // The force channel asked for still needs the column, and the message names it.
+  o = run("identify " + daq.string() + " --channels measured,force --folds 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr(daq.string()), HasSubstr("missing column 'CHANNEL1'")));
+}
+
 TEST_F(CmdIdentifyTest, TrimIdleCutsTheRestBeforeTheTestOff) {
   const MeasuredData record = read_csv(data_);
   MeasuredData padded;
