@@ -1,5 +1,6 @@
 #include "identify/run_record.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -190,6 +191,30 @@ ActuatorPath identify_actuator(const std::filesystem::path& record, const runtim
   return out;
 }
 
+// The study re-run over the identified steps from the record's ground acceleration.
+RunResidual residual(const std::filesystem::path& record, const runtime::RecordContents& contents,
+                     const runtime::RunHeader& header, const runtime::RunMeasurements& m,
+                     const RunIdentification& run) {
+  ResidualInput input;
+  input.study = &header.study();
+  input.case_name = header.case_name();
+  input.clock = m.clock;
+  input.motion.name = record.stem().string();
+  input.motion.dt = header.dt();
+  for (const runtime::StepRecord* step : contents.steps()) {
+    if (input.motion.acceleration.size() == run.steps) break;
+    input.motion.acceleration.push_back(step->ground_acceleration());
+  }
+  const core::Mat recorded = m.steps.displacement.topRows(static_cast<Eigen::Index>(run.steps));
+  input.recorded = &recorded;
+  input.actuators = &run.actuators;
+  try {
+    return run_residual(input);
+  } catch (const std::invalid_argument& e) {
+    bad(record, "header", std::string("re-run of its study: ") + e.what());
+  }
+}
+
 }  // namespace
 
 bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }
@@ -213,6 +238,11 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
   for (int a = 0; a < header.actuators(); ++a) {
     out.actuators.push_back(identify_actuator(record, header, m, out.steps, a, options));
+  }
+  const auto& channels = options.channels;
+  if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
+    if (options.progress) options.progress({0, 0, "re-run: declared and identified models"});
+    out.residual = residual(record, contents, header, m, out);
   }
   return out;
 }
@@ -264,6 +294,42 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << (a.undeclared.empty() ? "none\n" : "\n");
 }
 
+void residual_text(const RunResidual& r, std::ostream& out) {
+  out << "response re-run in process over " << r.steps << " steps, NRMSE against the record "
+      << "(declared -> identified):";
+  for (const auto& f : r.floors) {
+    out << " floor " << f.dof << " " << percent(f.declared) << " -> " << percent(f.identified) << ";";
+  }
+  out << (r.declared_diverged ? " the declared model diverges;" : "")
+      << (r.identified_diverged ? " the identified model diverges;" : "") << "\n";
+  for (const auto* kind : {&r.links, &r.effects}) {
+    for (const auto& s : *kind) {
+      out << "  " << s.link << (s.effect == "all" ? "" : ": " + s.effect) << " removes "
+          << percent(s.removed) << " of NRMSE from the worst floor (share " << percent(s.share)
+          << ")\n";
+    }
+  }
+  for (const auto& n : r.notes) out << "  note: " << n << "\n";
+}
+
+nlohmann::json residual_json(const RunResidual& r) {
+  nlohmann::json floors = nlohmann::json::array(), links = nlohmann::json::array(),
+                 effects = nlohmann::json::array();
+  for (const auto& f : r.floors) {
+    floors.push_back({{"dof", f.dof}, {"declared_nrmse", f.declared}, {"identified_nrmse", f.identified}});
+  }
+  for (const auto& [kind, list] : {std::pair{&r.links, &links}, std::pair{&r.effects, &effects}}) {
+    for (const auto& s : *kind) {
+      list->push_back({{"link", s.link}, {"effect", s.effect}, {"nrmse_removed", s.removed},
+                       {"share", s.share}});
+    }
+  }
+  return {{"steps", r.steps}, {"floors", floors}, {"declared_nrmse", r.declared},
+          {"identified_nrmse", r.identified}, {"declared_diverged", r.declared_diverged},
+          {"identified_diverged", r.identified_diverged}, {"links", links},
+          {"effects", effects}, {"notes", r.notes}};
+}
+
 }  // namespace
 
 std::string run_record_text(const RunIdentification& run) {
@@ -272,6 +338,7 @@ std::string run_record_text(const RunIdentification& run) {
       << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
   for (const auto& l : run.links) link_text(l, out);
   for (const auto& a : run.actuators) actuator_text(a, out);
+  if (run.residual) residual_text(*run.residual, out);
   return out.str();
 }
 
@@ -303,9 +370,11 @@ nlohmann::json run_record_json(const RunIdentification& run) {
                          {"declared_gain", a.declared_gain}, {"fitted_gain", a.fitted_gain},
                          {"channels", channels}, {"undeclared", a.undeclared}});
   }
-  return {{"record", run.record}, {"case", run.case_name}, {"clock", run.clock},
-          {"held", run.held}, {"steps", run.steps}, {"duration_s", run.duration},
-          {"links", links}, {"actuators", actuators}};
+  nlohmann::json out = {{"record", run.record}, {"case", run.case_name}, {"clock", run.clock},
+                        {"held", run.held}, {"steps", run.steps}, {"duration_s", run.duration},
+                        {"links", links}, {"actuators", actuators}};
+  if (run.residual) out["residual"] = residual_json(*run.residual);
+  return out;
 }
 
 }  // namespace rths::identify

@@ -14,7 +14,8 @@
 // kGainTolerance (an emulator gain error).
 // A run that diverged is identified up to the last step whose response is finite and below the
 // coordinator's divergence bound; a truncated record (no footer, or a cut last entry) is
-// identified from what it holds; both say so (`held`).
+// identified from what it holds; both say so (`held`). The system-level residual re-runs the
+// study over the same steps, from the record's own ground acceleration (run_residual.h).
 // Bad input -> std::invalid_argument "RECORD: ENTRY: PROBLEM": a record that cannot be read or
 // has damaged entries (the reader's loss report names them), a header of another schema version, no header, a link the header lists
 // with no answer, fewer steps than identification needs.
@@ -22,11 +23,13 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "identify/identify.h"
 #include "identify/network_path.h"
+#include "identify/run_residual.h"
 
 namespace rths::identify {
 
@@ -51,6 +54,9 @@ struct RunIdentification {
   std::string held;       // how much the record held: complete, truncated, diverged
   std::vector<NetworkPath> links;
   std::vector<ActuatorPath> actuators;
+  // The study re-run with the declared and the identified actuators (run_residual.h); absent
+  // when the actuator channel was not identified.
+  std::optional<RunResidual> residual;
 };
 
 RunIdentification identify_run_record(const std::filesystem::path& record,

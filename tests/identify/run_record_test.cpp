@@ -13,52 +13,15 @@
 
 #include "identify/run_record.h"
 #include "runtime/record.h"
-#include "tests/runtime/test_support.h"
-#include "tests/support/in_process_run.h"
+#include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {
 namespace {
 
 namespace fs = std::filesystem;
-
-const std::string kDeclared = "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }";
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rths_run_record_" + std::to_string(getpid()));
-  fs::create_directories(dir);
-  return dir / (name + ".rthsrec");
-}
-
-// Every entry of `record` written again, with `edit` applied to each first.
-template <class Edit>
-void rewrite(const fs::path& record, Edit edit) {
-  runtime::RecordContents contents = runtime::read_record(record);
-  runtime::RecordWriter writer(record);
-  for (auto& entry : contents.entries) {
-    edit(entry);
-    writer.write(entry);
-  }
-}
-
-// A 10 s paper-frame run of case lag_shift_14ms whose actuator emulator carries `emulator_stages`
-// (config text of DelayStage fields) that the declared config, written into the record, lacks.
-fs::path run_with_undeclared(const std::string& name, const std::string& emulator_stages) {
-  const std::string actual =
-      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
-      emulator_stages + " } }";
-  coordinator::CoordinatorOptions options;
-  options.run_id = name;
-  options.case_name = "lag_shift_14ms";
-  options.record = scratch(name);
-  const auto outcome = coordinator::run_in_process(test::prepare(test::paper_frame_study(10.0, actual)),
-                                                   options);
-  EXPECT_TRUE(outcome.ok) << outcome.status;
-  const config::Study declared = test::prepare(test::paper_frame_study(10.0, kDeclared)).config;
-  rewrite(options.record, [&](runtime::RecordEntry& e) {
-    if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
-  });
-  return options.record;
-}
+using test::rewrite;
+using test::run_with_undeclared;
+using test::scratch;
 
 IdentifyOptions actuator_only() {
   IdentifyOptions options;
