@@ -211,6 +211,7 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
                                                  " in the run", before, after, 0.0});
     base = drift;
   }
+  out.model = base;
   const auto train_spikes = spike_indices(x, threshold, split.train);
   if (out.spike_period > 0.0 && train_spikes.size() >= 2) {
     const auto model = spike_model(x, a.time, base, train_spikes, out.spike_period, dt);
@@ -221,6 +222,7 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
                                                     ms(out.spike_height) + " every " +
                                                     ms(out.spike_period),
                              spikes_before, spikes_after, 0.0});
+      out.model = model;
     }
   }
   double removed = 0.0;
@@ -248,6 +250,10 @@ NetworkPath identify_network_path(const LinkAnswers& a, const DeclaredLink& decl
   count_lost_and_late(a, dt, out);
   fit_effects(a, x, dt, out);
   counted_effects(out);
+  out.time = a.time;
+  out.round_trip = a.round_trip;
+  out.injected = a.injected;
+  for (std::size_t i = 0; i < n; ++i) out.model[i] += a.injected[i];
   return out;
 }
 

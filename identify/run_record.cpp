@@ -228,6 +228,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.record = record.string();
   out.clock = m.clock;
   out.case_name = m.case_name;
+  out.study = header.study();
   out.steps = usable_steps(m.steps);
   out.held = held_note(contents, m, out.steps);
   if (out.steps < kDefaultMinSamples) {

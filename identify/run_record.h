@@ -52,6 +52,7 @@ struct RunIdentification {
   std::size_t steps = 0;  // identified
   double duration = 0.0;  // s
   std::string held;       // how much the record held: complete, truncated, diverged
+  config::Study study;    // the run's own config (the record header's)
   std::vector<NetworkPath> links;
   std::vector<ActuatorPath> actuators;
   // The study re-run with the declared and the identified actuators (run_residual.h); absent
