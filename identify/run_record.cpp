@@ -217,6 +217,13 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
 
 }  // namespace
 
+std::string percent_text(double ratio) {
+  std::ostringstream out;
+  out.precision(3);
+  out << 100.0 * ratio << " %";
+  return out.str();
+}
+
 bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }
 
 RunIdentification identify_run_record(const std::filesystem::path& record,
@@ -253,13 +260,6 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
 namespace rths::identify {
 namespace {
 
-std::string percent(double ratio) {
-  std::ostringstream out;
-  out.precision(3);
-  out << 100.0 * ratio << " %";
-  return out.str();
-}
-
 void link_text(const NetworkPath& l, std::ostream& out) {
   out << "link to node " << l.node_id << ": " << l.answers << " answers; round trip beyond the"
       << " injected lag: bias " << l.bias * 1e3 << " ms, jitter " << l.jitter * 1e3
@@ -272,7 +272,7 @@ void link_text(const NetworkPath& l, std::ostream& out) {
     out << "  undeclared: " << e.name << ": " << e.detail;
     if (e.heldout_before > 0.0) {
       out << " (held-out RMS " << e.heldout_before * 1e3 << " -> " << e.heldout_after * 1e3
-          << " ms, share " << percent(e.share) << ")";
+          << " ms, share " << percent_text(e.share) << ")";
     }
     out << "\n";
   }
@@ -283,10 +283,10 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   for (const auto& d : a.declared) out << " " << d << ",";
   out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")\n";
   for (const auto& c : a.id.channels) {
-    out << "  " << channel_name(c.channel) << ": held-out " << percent(c.declared_fit.heldout_error)
-        << " declared -> " << percent(c.final_fit.heldout_error) << " identified";
+    out << "  " << channel_name(c.channel) << ": held-out " << percent_text(c.declared_fit.heldout_error)
+        << " declared -> " << percent_text(c.final_fit.heldout_error) << " identified";
     for (const auto& step : c.steps) {
-      out << "; + " << effect_name(step.effect) << " (share " << percent(step.own_share) << ")";
+      out << "; + " << effect_name(step.effect) << " (share " << percent_text(step.own_share) << ")";
     }
     out << "\n";
   }
@@ -299,14 +299,14 @@ void residual_text(const RunResidual& r, std::ostream& out) {
   out << "response re-run in process over " << r.steps << " steps, NRMSE against the record "
       << "(declared -> identified):";
   for (const auto& f : r.floors) {
-    out << " floor " << f.dof << " " << percent(f.declared) << " -> " << percent(f.identified) << ";";
+    out << " floor " << f.dof << " " << percent_text(f.declared) << " -> " << percent_text(f.identified) << ";";
   }
   out << (r.declared_diverged ? " the declared model diverges;" : "")
       << (r.identified_diverged ? " the identified model diverges;" : "") << "\n";
   for (const auto* kind : {&r.links, &r.effects}) {
     for (const auto& s : *kind) {
       out << "  " << s.link << (s.effect == "all" ? "" : ": " + s.effect) << " removes "
-          << percent(s.removed) << " of NRMSE from the worst floor (share " << percent(s.share)
+          << percent_text(s.removed) << " of NRMSE from the worst floor (share " << percent_text(s.share)
           << ")\n";
     }
   }

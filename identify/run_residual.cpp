@@ -169,6 +169,11 @@ RunResidual run_residual(const ResidualInput& input) {
   for (std::size_t i = 0; i < before.floors.size(); ++i) {
     out.floors.push_back({static_cast<int>(i + 1), before.floors[i], after.floors[i]});
   }
+  const auto rows = static_cast<Eigen::Index>(out.steps);
+  out.time.assign(after.result.time.begin(), after.result.time.begin() + rows);
+  out.recorded_response = input.recorded->topRows(rows);
+  out.declared_response = before.result.displacement.topRows(rows);
+  out.identified_response = after.result.displacement.topRows(rows);
   add_shares(reruns, paths, all, out);
   if (input.clock == "real_time") {
     out.notes.push_back("network paths: their lag is in the re-run only as the actuator paths' "

@@ -54,6 +54,9 @@ struct RunResidual {
   bool declared_diverged = false, identified_diverged = false;
   std::vector<ResidualShare> links, effects;
   std::vector<std::string> notes;  // stages left out of the re-run, network paths
+  // The responses compared (steps x DOFs, m) at `time` (s): for plots.
+  std::vector<double> time;
+  core::Mat recorded_response, declared_response, identified_response;
 };
 
 struct ResidualInput {

@@ -296,6 +296,9 @@ TEST_F(CmdIdentifyTest, ARunRecordIsWrittenBackAsAStudyThatRunReproduces) {
                           [](const auto& c) { return c.name() == "identified_actuator"; }));
   EXPECT_TRUE(fs::exists(dir_ / "id" / "lag_node_1.csv"));
   EXPECT_TRUE(fs::exists(dir_ / "id" / "lag_node_2.csv"));
+  for (const char* png : {"record_lag.png", "record_response.png", "record_shares.png"}) {
+    EXPECT_TRUE(fs::exists(dir_ / "id" / png)) << png;
+  }
   o = run("run " + study.string() + " --no-plots --out " + (dir_ / "rerun").string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   // The study's identified case reproduces the recorded response; the run's declared case did not.
