@@ -187,6 +187,15 @@ ActuatorPath identify_actuator(const std::filesystem::path& record, const runtim
     if (std::abs(out.fitted_gain - declared.gain) > kGainTolerance * declared.gain) {
       out.undeclared.push_back("gain error");
     }
+    for (const auto& p : declared.parameters) {
+      if (p.name != "delay" || !p.initial) continue;
+      out.declared_delay = *p.initial;
+      out.fitted_delay = c->final_fit.model.param(Effect::kDelay, "delay", scales).value_or(0.0);
+      if (std::abs(out.fitted_delay - out.declared_delay) >
+          std::max(kDelayTolerance * out.declared_delay, 0.25 * header.dt())) {
+        out.undeclared.push_back("delay change");
+      }
+    }
   }
   return out;
 }
@@ -281,7 +290,11 @@ void link_text(const NetworkPath& l, std::ostream& out) {
 void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "actuator " << a.actuator << ": declared";
   for (const auto& d : a.declared) out << " " << d << ",";
-  out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")\n";
+  out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")";
+  if (a.declared_delay > 0.0) {
+    out << ", delay " << a.declared_delay * 1e3 << " ms (fitted " << a.fitted_delay * 1e3 << " ms)";
+  }
+  out << "\n";
   for (const auto& c : a.id.channels) {
     out << "  " << channel_name(c.channel) << ": held-out " << percent_text(c.declared_fit.heldout_error)
         << " declared -> " << percent_text(c.final_fit.heldout_error) << " identified";
@@ -369,6 +382,7 @@ nlohmann::json run_record_json(const RunIdentification& run) {
     }
     actuators.push_back({{"actuator", a.actuator}, {"declared", a.declared},
                          {"declared_gain", a.declared_gain}, {"fitted_gain", a.fitted_gain},
+                         {"declared_delay_s", a.declared_delay}, {"fitted_delay_s", a.fitted_delay},
                          {"channels", channels}, {"undeclared", a.undeclared}});
   }
   nlohmann::json out = {{"record", run.record}, {"case", run.case_name}, {"clock", run.clock},

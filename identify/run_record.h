@@ -11,7 +11,7 @@
 // transfer function -> second_order, each with the config's value as initial value), gain = the
 // stages' amplitude gain. Undeclared effects: the steps the search added that remove more than
 // kMinErrorRemoved of held-out error, and a fitted gain off the declared one by more than
-// kGainTolerance (an emulator gain error).
+// kGainTolerance (an emulator gain error), and a fitted delay off the declared one (kDelayTolerance).
 // A run that diverged is identified up to the last step whose response is finite and below the
 // coordinator's divergence bound; a truncated record (no footer, or a cut last entry) is
 // identified from what it holds; both say so (`held`). The system-level residual re-runs the
@@ -34,6 +34,10 @@
 namespace rths::identify {
 
 inline constexpr double kGainTolerance = 0.02;  // relative
+// A fitted delay off the declared one by more than this share of it, and by more than a quarter
+// of the run's step, is named "delay change" (e.g. a network lag that reached the actuator path
+// of a real-time run).
+inline constexpr double kDelayTolerance = 0.05;
 // An added effect is named only when it removes at least this much held-out error (a share of
 // the signal's std): the record of a simulated run has no sensor noise, and below this a relative
 // fall of the error is round-off, not an effect.
@@ -43,6 +47,7 @@ struct ActuatorPath {
   int actuator = 0;  // 1-based
   std::vector<std::string> declared;  // the case's stages, as effects
   double declared_gain = 1.0, fitted_gain = 1.0;
+  double declared_delay = 0.0, fitted_delay = 0.0;  // s; both 0 when no delay was declared
   Identification id;  // channels measured and force
   std::vector<std::string> undeclared;  // effects named beyond the declared model
 };

@@ -75,9 +75,12 @@ void set_shares(std::vector<ResidualShare>& shares) {
 // The identified model of actuator path `path` with one undeclared effect taken back out.
 ChannelModel without(const ActuatorPath& path, const std::string& effect, const SignalScales& scales) {
   const ChannelModel& model = path.id.find(Channel::kMeasured)->final_fit.model;
-  if (effect == "gain error") {
+  if (effect == "gain error" || effect == "delay change") {
     ChannelModel out = model;
-    if (const auto i = out.index_of(std::nullopt, "gain", scales)) out.params[*i] = path.declared_gain;
+    const bool gain = effect == "gain error";
+    const auto i = gain ? out.index_of(std::nullopt, "gain", scales)
+                        : out.index_of(Effect::kDelay, "delay", scales);
+    if (i) out.params[*i] = gain ? path.declared_gain : path.declared_delay;
     return out;
   }
   return without_effect(model, parse_effect(effect), scales);

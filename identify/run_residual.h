@@ -17,8 +17,9 @@
 // Which link explains how much: the error measure E is the worst floor's NRMSE.
 //   per actuator link a   E(declared) - E(only actuator a identified): the error it removes;
 //   per undeclared effect E(identified without the effect) - E(identified): the error the effect
-//                         removes on top of the rest ("gain error": the gain set back to the
-//                         declared one; any other: the effect taken out of the model).
+//                         removes on top of the rest ("gain error", "delay change": the gain or
+//                         delay set back to the declared one; any other: the effect taken out of
+//                         the model).
 // Each removal's share is its error removed over the sum of the positive ones of its kind.
 // The network paths' lag is not in the re-run: in simulated time (lockstep, in process) it does
 // not reach the response, and in real time what the actuator path saw of it (the answers the loop

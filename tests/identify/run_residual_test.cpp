@@ -75,5 +75,19 @@ TEST(RunResidual, AnEmulatorGainErrorIsReproducedAndNamedAsTheCause) {
   EXPECT_NEAR(r.effects[0].share, 1.0, 1e-12);
 }
 
+TEST(RunResidual, AnUndeclaredExtraDelayIsNamedAsADelayChangeAndReproduced) {
+  const RunIdentification run = identify_run_record(
+      test::run_with_undeclared("residual_delay", "receive_delay { shift { delay: 0.006 } }"),
+      actuator_only());
+  const RunResidual& r = residual_of(run);
+  print("extra delay 6 ms", r);
+  EXPECT_NEAR(run.actuators.at(0).fitted_delay, 0.020, 2e-4) << run_record_text(run);
+  EXPECT_GE(r.declared, 0.20) << run_record_text(run);
+  EXPECT_LE(r.identified, 0.02) << run_record_text(run);
+  ASSERT_EQ(r.effects.size(), 1u) << run_record_text(run);
+  EXPECT_EQ(r.effects[0].effect, "delay change");
+  EXPECT_NEAR(r.effects[0].share, 1.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace rths::identify
