@@ -94,6 +94,18 @@ TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {
   EXPECT_LT(run.steps, 6000u);
 }
 
+TEST(RunRecord, ADivergedRunIsIdentifiedUpToItsDivergenceAndSaysSo) {
+  // 100 ms more lag than declared: the paper frame's hybrid loop goes unstable.
+  const fs::path record = run_with_undeclared("diverged", "receive_delay { shift { delay: 0.1 } }",
+                                              "lag_shift_14ms", 25.0, false);
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_EQ(run.held.rfind("diverged", 0), 0u) << run.held;
+  EXPECT_NE(run.held.find("identified up to step " + std::to_string(run.steps)), std::string::npos)
+      << run.held;
+  EXPECT_TRUE(undeclared(run, 1).count("delay change")) << run_record_text(run);
+  EXPECT_NEAR(run.actuators.at(0).fitted_delay, 0.114, 1e-3) << run_record_text(run);
+}
+
 void expect_refused(const fs::path& record, const std::string& entry, const std::string& problem) {
   try {
     identify_run_record(record, actuator_only());

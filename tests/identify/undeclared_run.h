@@ -36,11 +36,11 @@ void rewrite(const std::filesystem::path& record, Edit edit) {
 
 // A `duration` s paper-frame run of case `case_name` whose actuator emulator carries
 // `emulator_stages` (config text of DelayStage fields) that the declared config, written into the
-// record, lacks.
+// record, lacks; `expect_ok` = false for a run meant to fail (e.g. diverge).
 inline std::filesystem::path run_with_undeclared(const std::string& name,
                                                  const std::string& emulator_stages,
                                                  const std::string& case_name = "lag_shift_14ms",
-                                                 double duration = 10.0) {
+                                                 double duration = 10.0, bool expect_ok = true) {
   const std::string actual =
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
       emulator_stages + " } }";
@@ -49,7 +49,7 @@ inline std::filesystem::path run_with_undeclared(const std::string& name,
   options.case_name = case_name;
   options.record = scratch(name);
   const auto outcome = coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
-  EXPECT_TRUE(outcome.ok) << outcome.status;
+  EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
   const config::Study declared = prepare(paper_frame_study(duration, kDeclared)).config;
   rewrite(options.record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
