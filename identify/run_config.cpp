@@ -37,7 +37,8 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
     const auto* c = path.id.find(Channel::kMeasured);
     if (!c) continue;
     ActuatorCase part = actuator_case(c->final_fit.model, signal_scales(path.id.signals.front()));
-    for (const auto& l : part.left_out) notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
+    for (const auto& l : part.left_out)
+      notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
     config::Case study_case = part.study_case;
     if (run_case) *study_case.mutable_compensation() = run_case->compensation();
     out.push_back(study_case);
@@ -79,13 +80,15 @@ IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem
       if (link.node_id != node.id()) continue;
       fit_link_lag(link, node);
       if (run.clock == "real_time") {
-        node.add_receive_delay()->mutable_trace()->set_path(trace_path(trace_dir, link.node_id).string());
+        node.add_receive_delay()->mutable_trace()->set_path(
+            trace_path(trace_dir, link.node_id).string());
       }
     }
   }
   if (run.clock != "real_time") {
-    out.notes.push_back("links: a lockstep record's lag did not reach the response; the fitted "
-                        "receive_lag/send_lag apply to a real-time run");
+    out.notes.push_back(
+        "links: a lockstep record's lag did not reach the response; the fitted "
+        "receive_lag/send_lag apply to a real-time run");
   }
   return out;
 }
@@ -98,13 +101,15 @@ std::vector<std::string> write_identified_run(const RunIdentification& run,
   for (const auto& link : run.links) {
     const auto path = trace_path(dir, link.node_id);
     util::AtomicFile file(path);
-    file.stream() << "# measured round trip of the link to node " << link.node_id << ": time s, delay s\n";
+    file.stream() << "# measured round trip of the link to node " << link.node_id
+                  << ": time s, delay s\n";
     file.stream().precision(17);
     for (std::size_t i = 0; i < link.time.size(); ++i) {
       file.stream() << link.time[i] << "," << link.round_trip[i] << "\n";
     }
     file.commit();
-    written.push_back("lag trace of the link to node " + std::to_string(link.node_id) + ": " + path.string());
+    written.push_back("lag trace of the link to node " + std::to_string(link.node_id) + ": " +
+                      path.string());
   }
   const IdentifiedRun identified = identified_run(run, base_dir, dir);
   std::vector<std::string> comment{

@@ -31,7 +31,8 @@ std::filesystem::path lag_plot(const RunIdentification& run, const std::filesyst
     util::PlotSpec p("link to node " + std::to_string(l.node_id) + ": round trip over the run (" +
                          effects_of(l) + ")",
                      "time (s)", "lag (ms)");
-    p.series.emplace_back("measured round trip", l.time, scaled(l.round_trip, 1e3), "points pt 7 ps 0.3");
+    p.series.emplace_back("measured round trip", l.time, scaled(l.round_trip, 1e3),
+                          "points pt 7 ps 0.3");
     p.series.emplace_back("injected by the node", l.time, scaled(l.injected, 1e3));
     p.series.emplace_back("identified model", l.time, scaled(l.model, 1e3), "lines lw 2");
     p.height = 400;
@@ -49,10 +50,12 @@ std::filesystem::path response_plot(const RunResidual& r, const std::filesystem:
     const auto recorded = column(r.recorded_response, i, 1e3);
     const auto declared = column(r.declared_response, i, 1e3);
     const auto identified = column(r.identified_response, i, 1e3);
-    util::PlotSpec p("floor " + std::to_string(f.dof) + ": displacement, recorded and re-run in process",
-                     "time (s)", "displacement (mm)");
+    util::PlotSpec p(
+        "floor " + std::to_string(f.dof) + ": displacement, recorded and re-run in process",
+        "time (s)", "displacement (mm)");
     p.series.emplace_back("recorded", r.time, recorded, "lines lw 3");
-    p.series.emplace_back("declared model (NRMSE " + percent_text(f.declared) + ")", r.time, declared);
+    p.series.emplace_back("declared model (NRMSE " + percent_text(f.declared) + ")", r.time,
+                          declared);
     p.series.emplace_back("identified model (NRMSE " + percent_text(f.identified) + ")", r.time,
                           identified, "lines dt 2 lw 2");
     // The recorded and identified responses set the range: a diverged declared re-run is clipped.
@@ -68,7 +71,8 @@ std::filesystem::path response_plot(const RunResidual& r, const std::filesystem:
       ie[k] = identified[k] - recorded[k];
     }
     // The colours of the re-runs they come from in the panel above.
-    e.series.emplace_back("declared - recorded", r.time, de, "lines lc rgb '" + util::series_colour(1) + "'");
+    e.series.emplace_back("declared - recorded", r.time, de,
+                          "lines lc rgb '" + util::series_colour(1) + "'");
     e.series.emplace_back("identified - recorded", r.time, ie,
                           "lines lw 2 dt 2 lc rgb '" + util::series_colour(2) + "'");
     p.height = e.height = 400;

@@ -73,7 +73,8 @@ void set_shares(std::vector<ResidualShare>& shares) {
 }
 
 // The identified model of actuator path `path` with one undeclared effect taken back out.
-ChannelModel without(const ActuatorPath& path, const std::string& effect, const SignalScales& scales) {
+ChannelModel without(const ActuatorPath& path, const std::string& effect,
+                     const SignalScales& scales) {
   const ChannelModel& model = path.id.find(Channel::kMeasured)->final_fit.model;
   if (effect == "gain error" || effect == "delay change") {
     ChannelModel out = model;
@@ -154,12 +155,14 @@ RunResidual run_residual(const ResidualInput& input) {
   for (std::size_t a = 0; a < paths.size(); ++a) {
     const auto* c = paths[a].id.find(Channel::kMeasured);
     if (!c) {
-      throw std::invalid_argument("actuator " + std::to_string(a + 1) + ": actuator path not identified");
+      throw std::invalid_argument("actuator " + std::to_string(a + 1) +
+                                  ": actuator path not identified");
     }
     all[a] = &c->final_fit.model;
     std::vector<std::string> left_out;
     model_case(*all[a], reruns.scales(a), reruns.declared(), &left_out);
-    for (const auto& l : left_out) out.notes.push_back("actuator " + std::to_string(a + 1) + ": " + l);
+    for (const auto& l : left_out)
+      out.notes.push_back("actuator " + std::to_string(a + 1) + ": " + l);
   }
   const Rerun before = reruns.run(std::vector<const ChannelModel*>(paths.size(), nullptr));
   const Rerun after = reruns.run(all);
@@ -179,8 +182,9 @@ RunResidual run_residual(const ResidualInput& input) {
   out.identified_response = after.result.displacement.topRows(rows);
   add_shares(reruns, paths, all, out);
   if (input.clock == "real_time") {
-    out.notes.push_back("network paths: their lag is in the re-run only as the actuator paths' "
-                        "fitted delay (the answers the loop used)");
+    out.notes.push_back(
+        "network paths: their lag is in the re-run only as the actuator paths' "
+        "fitted delay (the answers the loop used)");
   }
   return out;
 }

@@ -42,8 +42,8 @@ struct FloorError {
 };
 
 struct ResidualShare {
-  std::string link;    // "actuator 1"
-  std::string effect;  // "all" (the link's whole identified model) or the effect's name
+  std::string link;      // "actuator 1"
+  std::string effect;    // "all" (the link's whole identified model) or the effect's name
   double removed = 0.0;  // NRMSE of the worst floor removed by it
   double share = 0.0;    // of the removals of its kind
 };
@@ -63,8 +63,8 @@ struct RunResidual {
 struct ResidualInput {
   const config::Study* study = nullptr;
   std::string case_name, clock;
-  core::GroundMotion motion;             // at the run's dt, one sample per recorded step
-  const core::Mat* recorded = nullptr;   // m, steps x DOFs (at least motion's steps)
+  core::GroundMotion motion;            // at the run's dt, one sample per recorded step
+  const core::Mat* recorded = nullptr;  // m, steps x DOFs (at least motion's steps)
   const std::vector<ActuatorPath>* actuators = nullptr;
 };
 

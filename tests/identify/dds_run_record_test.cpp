@@ -61,8 +61,8 @@ std::set<std::string> link_effects(const RunIdentification& run, int node) {
 }
 
 TEST_F(DdsRunRecord, ACleanRecordNamesNothingAndReRunsAsRecorded) {
-  const RunIdentification run =
-      identify_run_record(launch_with_undeclared("identify_dds_clean", "", "", 220), actuator_only());
+  const RunIdentification run = identify_run_record(
+      launch_with_undeclared("identify_dds_clean", "", "", 220), actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(run.held.rfind("complete", 0), 0u) << text;
   EXPECT_TRUE(link_effects(run, 1).empty()) << text;
@@ -82,8 +82,9 @@ TEST_F(DdsRunRecord, ALagOnOneLinkAndAFirstOrderLagOnTheActuatorAreEachNamedWher
   EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"injection"}) << text;
   EXPECT_TRUE(link_effects(run, 2).empty()) << text;
   ASSERT_EQ(run.actuators.size(), 1u);
-  EXPECT_EQ(std::set<std::string>(run.actuators[0].undeclared.begin(), run.actuators[0].undeclared.end()),
-            std::set<std::string>{"first_order"})
+  EXPECT_EQ(
+      std::set<std::string>(run.actuators[0].undeclared.begin(), run.actuators[0].undeclared.end()),
+      std::set<std::string>{"first_order"})
       << text;
   ASSERT_TRUE(run.residual.has_value());
   std::printf("DDS first order 8 ms + 1 ms lag on node 1: NRMSE declared %.4f -> identified %.6f\n",

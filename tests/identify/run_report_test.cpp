@@ -2,8 +2,8 @@
 // figures only with a residual.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <unistd.h>
+#include <filesystem>
 
 #include "identify/run_report.h"
 

@@ -28,8 +28,8 @@ const RunResidual& residual_of(const RunIdentification& run) {
 
 // The floor NRMSEs, on stdout for the report of the figures.
 void print(const std::string& name, const RunResidual& r) {
-  std::printf("%s: worst floor NRMSE declared %.4f -> identified %.4f over %zu steps\n", name.c_str(),
-              r.declared, r.identified, r.steps);
+  std::printf("%s: worst floor NRMSE declared %.4f -> identified %.4f over %zu steps\n",
+              name.c_str(), r.declared, r.identified, r.steps);
 }
 
 TEST(RunResidual, ACleanRecordReRunsAsRecorded) {

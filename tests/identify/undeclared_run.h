@@ -4,9 +4,9 @@
 // emulator carrying extra stages, then the record's header given the declared config, as a lab's
 // record holds the config it meant to run.
 
+#include <unistd.h>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 #include "runtime/record.h"
 #include "tests/runtime/test_support.h"
@@ -18,7 +18,8 @@ inline const std::string kDeclared =
     "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }";
 
 inline std::filesystem::path scratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_run_record_" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_run_record_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   return dir / (name + ".rthsrec");
 }
@@ -48,7 +49,8 @@ inline std::filesystem::path run_with_undeclared(const std::string& name,
   options.run_id = name;
   options.case_name = case_name;
   options.record = scratch(name);
-  const auto outcome = coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
+  const auto outcome =
+      coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
   EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
   const config::Study declared = prepare(paper_frame_study(duration, kDeclared)).config;
   rewrite(options.record, [&](runtime::RecordEntry& e) {
