@@ -1,6 +1,5 @@
 #include "identify/session.h"
 
-#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,13 +15,8 @@ namespace {
 // The record at `path`, cut to its active part with trim_idle (the note says what was kept).
 MeasuredData load_record(const SessionRequest& request, const std::string& path,
                          std::vector<std::string>& trimmed) {
-  const auto& channels = request.options.channels;
-  const ForceColumn force = std::find(channels.begin(), channels.end(), Channel::kForce) ==
-                                    channels.end()
-                                ? ForceColumn::kOptional
-                                : ForceColumn::kRequired;
   MeasuredData record = read_measured(path, request.units, request.map, kDefaultMinSamples,
-                                      request.sample_rate, force);
+                                      request.sample_rate, force_column(request.options.channels));
   if (!request.trim_idle) return record;
   const ActiveRange active = active_range(record);
   std::ostringstream note;
