@@ -85,6 +85,33 @@ TEST(RunRecord, ADriftOnOneLinkAndALagOnTheActuatorAreEachNamedWhereTheyAre) {
   EXPECT_TRUE(undeclared(run, 1).count("first_order")) << run_record_text(run);
 }
 
+// Undeclared network effects as traces on the record's links (in lockstep they do not reach the
+// response): each is named on its own link, nothing on the other or on the actuator, and the
+// re-run finds no response error to explain.
+TEST(RunRecord, PeriodicSpikesOnOneLinkAndABurstOfLostAnswersOnTheOtherAreEachNamedWhereTheyAre) {
+  const fs::path record = run_with_undeclared("spikes_and_burst", "");
+  rewrite(record, [](runtime::RecordEntry& e) {
+    if (!e.has_step()) return;
+    const std::int64_t k = e.step().step();
+    for (auto& link : *e.mutable_step()->mutable_links()) {
+      // Node 2: 6 ms spikes of 3 steps every 500 ms.
+      if (link.node_id() == 2 && k % 500 >= 100 && k % 500 < 103) {
+        link.set_round_trip(link.round_trip() + 0.006);
+      }
+      // Node 1: 12 answers in a row never arrive (the steps keep the answer before them).
+      if (link.node_id() == 1 && k >= 4000 && k < 4012) link.set_answered_step(3999);
+    }
+  });
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"lost answers"}) << text;
+  EXPECT_EQ(link_effects(run, 2), std::set<std::string>{"periodic spikes"}) << text;
+  EXPECT_EQ(run.links.at(0).longest_burst, 12u) << text;
+  EXPECT_TRUE(undeclared(run, 1).empty()) << text;
+  ASSERT_TRUE(run.residual.has_value());
+  EXPECT_LT(run.residual->declared, 1e-9) << text;
+}
+
 TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {
   const fs::path record = run_with_undeclared("truncated", "");
   fs::resize_file(record, fs::file_size(record) / 2 + 3);
