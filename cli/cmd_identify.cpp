@@ -15,7 +15,9 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
+#include "identify/run_config.h"
 #include "identify/run_record.h"
+#include "identify/run_report.h"
 #include "identify/session.h"
 #include "tables/results.h"
 #include "tables/write.h"
@@ -147,6 +149,18 @@ void run_identify_record(const IdentifyCliOptions& o, const identify::IdentifyOp
   identify::IdentifyOptions with_progress = options;
   with_progress.progress = [&](const identify::IdentifyProgress& p) { progress(p); };
   const identify::RunIdentification run = identify::identify_run_record(o.data, with_progress);
+  if (!o.out.empty()) {
+    try {
+      for (const auto& line : identify::write_identified_run(run, std::filesystem::current_path(), o.out)) {
+        std::cerr << line << "\n";
+      }
+      for (const auto& png : identify::write_run_plots(run, o.out)) {
+        std::cerr << "plot: " << png.string() << " (and .svg)\n";
+      }
+    } catch (const std::runtime_error& e) {
+      throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
+    }
+  }
   if (o.json) {
     std::cout << identify::run_record_json(run).dump(2) << "\n";
   } else {
@@ -236,7 +250,7 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--search-iterations", o->search_iterations,
                   "at most this many solver iterations per fit of the decimated search")
       ->check(CLI::Range(1, 1000));
-  cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
+  cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run); for a RECORD.rthsrec: identified_run.textproto (the run's study with the identified actuator as case identified_actuator and each substructure link's measured lag; rths run / launch accept it) and the lag trace of every link, lag_node_<id>.csv, with the plots record_lag.png (lag per link: measured, injected, identified model), record_response.png (response per floor: recorded, declared and identified re-runs) and record_shares.png (what each link and effect explains)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--predict", o->predict,

@@ -148,7 +148,8 @@ DaqColumnMap parse_column_map(const std::string& text) {
 
 void validate(MeasuredData& data, std::size_t min_samples) {
   const std::size_t n = data.time.size();
-  if (data.command.size() != n || data.measured.size() != n || data.force.size() != n) {
+  if (data.command.size() != n || data.measured.size() != n ||
+      (data.has_force() && data.force.size() != n)) {
     throw std::invalid_argument(data.source + ": columns have different lengths");
   }
   if (n < std::max<std::size_t>(min_samples, 3)) {
@@ -158,7 +159,7 @@ void validate(MeasuredData& data, std::size_t min_samples) {
   }
   for (std::size_t i = 0; i < n; ++i) {
     for (const auto* column : {&data.time, &data.command, &data.measured, &data.force}) {
-      if (!std::isfinite((*column)[i])) {
+      if (!column->empty() && !std::isfinite((*column)[i])) {
         throw std::invalid_argument(data.source + ": sample " + std::to_string(i + 1) +
                                     " is NaN or infinite");
       }
@@ -184,7 +185,7 @@ void validate(MeasuredData& data, std::size_t min_samples) {
 }
 
 MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
-                      std::size_t min_samples, double sample_rate) {
+                      std::size_t min_samples, double sample_rate, ForceColumn force) {
   check_sample_rate(sample_rate, path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open");
@@ -212,8 +213,10 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
   }
   const std::size_t ic = column_index(header, "command", path, header_line);
   const std::size_t im = column_index(header, "measured", path, header_line);
-  const std::size_t iforce = column_index(header, "force", path, header_line);
-  const std::size_t needed = std::max({it.value_or(0), ic, im, iforce}) + 1;
+  const std::optional<std::size_t> iforce =
+      force == ForceColumn::kRequired ? column_index(header, "force", path, header_line)
+                                      : find_column(header, "force");
+  const std::size_t needed = std::max({it.value_or(0), ic, im, iforce.value_or(0)}) + 1;
   while (std::getline(in, line)) {
     ++line_number;
     const std::string t = trim(line);
@@ -230,8 +233,10 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
                            parse_number(fields[ic], path, line_number, "command"));
     data.measured.push_back(units.length_to_m *
                             parse_number(fields[im], path, line_number, "measured"));
-    data.force.push_back(units.force_to_n *
-                         parse_number(fields[iforce], path, line_number, "force"));
+    if (iforce) {
+      data.force.push_back(units.force_to_n *
+                           parse_number(fields[*iforce], path, line_number, "force"));
+    }
   }
   validate(data, min_samples);
   if (it) check_same_rate(1.0 / data.dt, sample_rate, "the time column", path);
@@ -239,7 +244,7 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
 }
 
 MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map,
-                      std::size_t min_samples, double sample_rate) {
+                      std::size_t min_samples, double sample_rate, ForceColumn force) {
   check_sample_rate(sample_rate, path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open");
@@ -300,8 +305,10 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
   const std::optional<std::size_t> isample = find_column(header, "Sample Number");
   const std::size_t ic = column_index(header, map.command.column, path, line_number);
   const std::size_t im = column_index(header, map.measured.column, path, line_number);
-  const std::size_t iforce = column_index(header, map.force.column, path, line_number);
-  const std::size_t needed = std::max({isample.value_or(0), ic, im, iforce}) + 1;
+  const std::optional<std::size_t> iforce =
+      force == ForceColumn::kRequired ? column_index(header, map.force.column, path, line_number)
+                                      : find_column(header, map.force.column);
+  const std::size_t needed = std::max({isample.value_or(0), ic, im, iforce.value_or(0)}) + 1;
 
   MeasuredData data;
   data.source = path.string();
@@ -325,31 +332,37 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
                            parse_number(fields[ic], path, line_number, header[ic]));
     data.measured.push_back(1.0e-3 * map.measured.scale *
                             parse_number(fields[im], path, line_number, header[im]));
-    data.force.push_back(map.force.scale *
-                         parse_number(fields[iforce], path, line_number, header[iforce]));
+    if (iforce) {
+      data.force.push_back(map.force.scale *
+                           parse_number(fields[*iforce], path, line_number, header[*iforce]));
+    }
   }
   validate(data, min_samples);
   return data;
 }
 
 MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& units,
-                           const DaqColumnMap& map, std::size_t min_samples, double sample_rate) {
+                           const DaqColumnMap& map, std::size_t min_samples, double sample_rate,
+                           ForceColumn force) {
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open");
   std::string first;
   std::getline(in, first);
-  if (first.rfind("Header Size", 0) == 0) return read_daq(path, map, min_samples, sample_rate);
-  return read_csv(path, units, min_samples, sample_rate);
+  if (first.rfind("Header Size", 0) == 0) {
+    return read_daq(path, map, min_samples, sample_rate, force);
+  }
+  return read_csv(path, units, min_samples, sample_rate, force);
 }
 
 void write_csv(const MeasuredData& data, const std::filesystem::path& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path.string() + ": cannot write");
-  out << "time,command,measured,force\n";
+  out << "time,command,measured" << (data.has_force() ? ",force\n" : "\n");
   out.precision(10);
   for (std::size_t i = 0; i < data.size(); ++i) {
-    out << data.time[i] << ',' << data.command[i] * 1e3 << ',' << data.measured[i] * 1e3 << ','
-        << data.force[i] << '\n';
+    out << data.time[i] << ',' << data.command[i] * 1e3 << ',' << data.measured[i] * 1e3;
+    if (data.has_force()) out << ',' << data.force[i];
+    out << '\n';
   }
   if (!out) throw std::runtime_error(path.string() + ": write failed");
 }
@@ -364,6 +377,7 @@ MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end)
   out.source = data.source + "[" + std::to_string(begin) + ":" + std::to_string(end) + "]";
   out.dt = data.dt;
   const auto part = [&](const std::vector<double>& x) {
+    if (x.empty()) return std::vector<double>{};
     return std::vector<double>(x.begin() + static_cast<std::ptrdiff_t>(begin),
                                x.begin() + static_cast<std::ptrdiff_t>(end));
   };
@@ -424,7 +438,7 @@ MeasuredData decimated(const MeasuredData& data, std::size_t factor) {
     out.time.push_back(data.time[i]);
     out.command.push_back(smooth(data.command, i));
     out.measured.push_back(smooth(data.measured, i));
-    out.force.push_back(smooth(data.force, i));
+    if (data.has_force()) out.force.push_back(smooth(data.force, i));
   }
   return out;
 }

@@ -16,6 +16,8 @@
 // without a `Sample Number` column is then timed by its row index. A file with neither a time
 // base nor a given rate is refused, naming --sample-rate; a given rate that disagrees (> 1 %) with
 // the file's own time base is refused too.
+// The force column: ForceColumn::kOptional (the actuator channel alone is identified) reads it
+// when the file has it and leaves `force` empty when it has not; kRequired refuses a file without.
 // Every loader throws std::invalid_argument naming the file, line and column when a column is
 // missing, a value is not a number or is NaN/inf, time does not increase, or there are fewer than
 // `min_samples` samples.
@@ -33,8 +35,9 @@ struct MeasuredData {
   std::vector<double> time;      // s
   std::vector<double> command;   // m
   std::vector<double> measured;  // m
-  std::vector<double> force;     // N
+  std::vector<double> force;     // N; empty when the file has no force column (ForceColumn)
   std::size_t size() const { return time.size(); }
+  bool has_force() const { return !force.empty(); }
 };
 
 struct CsvUnits {
@@ -66,19 +69,25 @@ DaqColumnMap parse_column_map(const std::string& text);
 
 inline constexpr std::size_t kDefaultMinSamples = 200;
 
+enum class ForceColumn { kRequired, kOptional };
+
 MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units = {},
-                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
+                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0,
+                      ForceColumn force = ForceColumn::kRequired);
 MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map = {},
-                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
+                      std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0,
+                      ForceColumn force = ForceColumn::kRequired);
 // DAQ when the first line starts with "Header Size", CSV otherwise.
 MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& units = {},
                            const DaqColumnMap& map = {},
-                           std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0);
+                           std::size_t min_samples = kDefaultMinSamples, double sample_rate = 0.0,
+                           ForceColumn force = ForceColumn::kRequired);
 
-// Writes the CSV format above (s, mm, mm, N). Throws std::runtime_error naming the file.
+// Writes the CSV format above (s, mm, mm, N; without the force column when the record has none).
+// Throws std::runtime_error naming the file.
 void write_csv(const MeasuredData& data, const std::filesystem::path& path);
 
-// Checks sizes, finiteness, strictly increasing and uniform (within 1 %) time, and length.
+// Checks sizes (force: as long as time, or empty), finiteness, strictly increasing and uniform (within 1 %) time, and length.
 // Sets dt to the mean step. Throws std::invalid_argument naming the source and the sample.
 void validate(MeasuredData& data, std::size_t min_samples);
 

@@ -117,4 +117,9 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
   return result;
 }
 
+ForceColumn force_column(const std::vector<Channel>& channels) {
+  const bool force = std::find(channels.begin(), channels.end(), Channel::kForce) != channels.end();
+  return force ? ForceColumn::kRequired : ForceColumn::kOptional;
+}
+
 }  // namespace rths::identify

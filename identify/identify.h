@@ -69,4 +69,8 @@ struct Identification {
 
 Identification identify(const MeasuredData& data, const IdentifyOptions& options = {});
 
+// A record's force column is required when `channels` holds the force channel, optional otherwise
+// (the actuator channel alone needs command and measured displacement).
+ForceColumn force_column(const std::vector<Channel>& channels);
+
 }  // namespace rths::identify

@@ -84,22 +84,50 @@ std::vector<std::size_t> spike_indices(const std::vector<double>& x, double thre
   return out;
 }
 
-// Period of the spikes at `times` when their spacing is regular (within 20 % of the median
-// spacing, spikes of one burst counted once); 0 otherwise.
-double regular_period(const std::vector<double>& times, double dt) {
+// The starts of the bursts of spikes at `times` (spikes within 3 steps of a burst's start are
+// one burst).
+std::vector<double> burst_starts(const std::vector<double>& times, double dt) {
   std::vector<double> starts;
   for (double t : times) {
     if (starts.empty() || t - starts.back() > 3.0 * dt) starts.push_back(t);
   }
+  return starts;
+}
+
+bool on_grid(double spacing, double period) {
+  const double cycles = std::round(spacing / period);
+  return cycles >= 1.0 && std::abs(spacing - cycles * period) <= 0.2 * period;
+}
+
+// Period of the spikes at `times` when their spacing is regular: the median spacing P of the
+// bursts' starts, when at least 2/3 of the spacings are within 20 % of a whole number of P (a
+// stray spike between two periodic ones breaks two spacings, so a few strays on a busy host do
+// not hide the period); 0 otherwise.
+double regular_period(const std::vector<double>& times, double dt) {
+  const std::vector<double> starts = burst_starts(times, dt);
   if (starts.size() < 3) return 0.0;
   std::vector<double> spacing;
   for (std::size_t i = 1; i < starts.size(); ++i) spacing.push_back(starts[i] - starts[i - 1]);
   const double period = median_of(spacing);
-  for (double d : spacing) {
-    const double cycles = std::round(d / period);
-    if (cycles < 1.0 || std::abs(d - cycles * period) > 0.2 * period) return 0.0;
+  const auto regular = std::count_if(spacing.begin(), spacing.end(),
+                                     [&](double d) { return on_grid(d, period); });
+  return 3 * regular >= 2 * static_cast<std::ptrdiff_t>(spacing.size()) ? period : 0.0;
+}
+
+// The burst start that the most other starts lie on the grid of (t0 + k period, within 3 steps
+// or 2 % of the period): the phase of the periodic spikes, not of a stray one.
+double grid_origin(const std::vector<double>& starts, double period, double dt) {
+  const double tolerance = std::max(3.0 * dt, 0.02 * period);
+  double best = starts.front();
+  std::ptrdiff_t most = -1;
+  for (double t0 : starts) {
+    const auto n = std::count_if(starts.begin(), starts.end(), [&](double t) {
+      const double off = t - t0 - std::round((t - t0) / period) * period;
+      return std::abs(off) <= tolerance;
+    });
+    if (n > most) most = n, best = t0;
   }
-  return period;
+  return best;
 }
 
 // Lost answers (steps between the first and the last answered that no answer came for), the
@@ -149,8 +177,10 @@ std::vector<double> spike_model(const std::vector<double>& x, const std::vector<
                                 const std::vector<double>& base,
                                 const std::vector<std::size_t>& train_spikes, double period,
                                 double dt) {
-  std::vector<double> heights;
-  double t0 = time[train_spikes.front()], width = dt, run_start = t0, last = t0;
+  std::vector<double> heights, spike_times;
+  for (std::size_t i : train_spikes) spike_times.push_back(time[i]);
+  const double t0 = grid_origin(burst_starts(spike_times, dt), period, dt);
+  double width = dt, run_start = time[train_spikes.front()], last = run_start;
   for (std::size_t i : train_spikes) {
     heights.push_back(x[i] - base[i]);
     if (time[i] - last > 3.0 * dt) run_start = time[i];
@@ -211,6 +241,7 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
                                                  " in the run", before, after, 0.0});
     base = drift;
   }
+  out.model = base;
   const auto train_spikes = spike_indices(x, threshold, split.train);
   if (out.spike_period > 0.0 && train_spikes.size() >= 2) {
     const auto model = spike_model(x, a.time, base, train_spikes, out.spike_period, dt);
@@ -221,6 +252,7 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
                                                     ms(out.spike_height) + " every " +
                                                     ms(out.spike_period),
                              spikes_before, spikes_after, 0.0});
+      out.model = model;
     }
   }
   double removed = 0.0;
@@ -248,6 +280,10 @@ NetworkPath identify_network_path(const LinkAnswers& a, const DeclaredLink& decl
   count_lost_and_late(a, dt, out);
   fit_effects(a, x, dt, out);
   counted_effects(out);
+  out.time = a.time;
+  out.round_trip = a.round_trip;
+  out.injected = a.injected;
+  for (std::size_t i = 0; i < n; ++i) out.model[i] += a.injected[i];
   return out;
 }
 

@@ -69,6 +69,10 @@ struct NetworkPath {
   DeclaredLink declared;
   double heldout_declared = 0.0;      // s, RMS of x about the bias over the held-out answers
   std::vector<NetworkEffect> effects; // the undeclared effects named, fitted ones first
+  // Per answer: its time, round trip, injected lag and the identified model of the round trip
+  // (injected + the excess's median over the training answers, + the drift and the periodic
+  // spikes when they were named), s.
+  std::vector<double> time, round_trip, injected, model;
 };
 
 // @pre answers has at least 20 answers (fewer: no statistics, throws std::invalid_argument

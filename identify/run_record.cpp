@@ -1,5 +1,6 @@
 #include "identify/run_record.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -186,11 +187,51 @@ ActuatorPath identify_actuator(const std::filesystem::path& record, const runtim
     if (std::abs(out.fitted_gain - declared.gain) > kGainTolerance * declared.gain) {
       out.undeclared.push_back("gain error");
     }
+    for (const auto& p : declared.parameters) {
+      if (p.name != "delay" || !p.initial) continue;
+      out.declared_delay = *p.initial;
+      out.fitted_delay = c->final_fit.model.param(Effect::kDelay, "delay", scales).value_or(0.0);
+      if (std::abs(out.fitted_delay - out.declared_delay) >
+          std::max(kDelayTolerance * out.declared_delay, 0.25 * header.dt())) {
+        out.undeclared.push_back("delay change");
+      }
+    }
   }
   return out;
 }
 
+// The study re-run over the identified steps from the record's ground acceleration.
+RunResidual residual(const std::filesystem::path& record, const runtime::RecordContents& contents,
+                     const runtime::RunHeader& header, const runtime::RunMeasurements& m,
+                     const RunIdentification& run) {
+  ResidualInput input;
+  input.study = &header.study();
+  input.case_name = header.case_name();
+  input.clock = m.clock;
+  input.motion.name = record.stem().string();
+  input.motion.dt = header.dt();
+  for (const runtime::StepRecord* step : contents.steps()) {
+    if (input.motion.acceleration.size() == run.steps) break;
+    input.motion.acceleration.push_back(step->ground_acceleration());
+  }
+  const core::Mat recorded = m.steps.displacement.topRows(static_cast<Eigen::Index>(run.steps));
+  input.recorded = &recorded;
+  input.actuators = &run.actuators;
+  try {
+    return run_residual(input);
+  } catch (const std::invalid_argument& e) {
+    bad(record, "header", std::string("re-run of its study: ") + e.what());
+  }
+}
+
 }  // namespace
+
+std::string percent_text(double ratio) {
+  std::ostringstream out;
+  out.precision(3);
+  out << 100.0 * ratio << " %";
+  return out.str();
+}
 
 bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }
 
@@ -203,6 +244,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.record = record.string();
   out.clock = m.clock;
   out.case_name = m.case_name;
+  out.study = header.study();
   out.steps = usable_steps(m.steps);
   out.held = held_note(contents, m, out.steps);
   if (out.steps < kDefaultMinSamples) {
@@ -214,6 +256,11 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   for (int a = 0; a < header.actuators(); ++a) {
     out.actuators.push_back(identify_actuator(record, header, m, out.steps, a, options));
   }
+  const auto& channels = options.channels;
+  if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
+    if (options.progress) options.progress({0, 0, "re-run: declared and identified models"});
+    out.residual = residual(record, contents, header, m, out);
+  }
   return out;
 }
 
@@ -221,13 +268,6 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
 
 namespace rths::identify {
 namespace {
-
-std::string percent(double ratio) {
-  std::ostringstream out;
-  out.precision(3);
-  out << 100.0 * ratio << " %";
-  return out.str();
-}
 
 void link_text(const NetworkPath& l, std::ostream& out) {
   out << "link to node " << l.node_id << ": " << l.answers << " answers; round trip beyond the"
@@ -241,7 +281,7 @@ void link_text(const NetworkPath& l, std::ostream& out) {
     out << "  undeclared: " << e.name << ": " << e.detail;
     if (e.heldout_before > 0.0) {
       out << " (held-out RMS " << e.heldout_before * 1e3 << " -> " << e.heldout_after * 1e3
-          << " ms, share " << percent(e.share) << ")";
+          << " ms, share " << percent_text(e.share) << ")";
     }
     out << "\n";
   }
@@ -250,18 +290,58 @@ void link_text(const NetworkPath& l, std::ostream& out) {
 void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "actuator " << a.actuator << ": declared";
   for (const auto& d : a.declared) out << " " << d << ",";
-  out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")\n";
+  out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")";
+  if (a.declared_delay > 0.0) {
+    out << ", delay " << a.declared_delay * 1e3 << " ms (fitted " << a.fitted_delay * 1e3 << " ms)";
+  }
+  out << "\n";
   for (const auto& c : a.id.channels) {
-    out << "  " << channel_name(c.channel) << ": held-out " << percent(c.declared_fit.heldout_error)
-        << " declared -> " << percent(c.final_fit.heldout_error) << " identified";
+    out << "  " << channel_name(c.channel) << ": held-out " << percent_text(c.declared_fit.heldout_error)
+        << " declared -> " << percent_text(c.final_fit.heldout_error) << " identified";
     for (const auto& step : c.steps) {
-      out << "; + " << effect_name(step.effect) << " (share " << percent(step.own_share) << ")";
+      out << "; + " << effect_name(step.effect) << " (share " << percent_text(step.own_share) << ")";
     }
     out << "\n";
   }
   out << "  undeclared effects: ";
   for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
   out << (a.undeclared.empty() ? "none\n" : "\n");
+}
+
+void residual_text(const RunResidual& r, std::ostream& out) {
+  out << "response re-run in process over " << r.steps << " steps, NRMSE against the record "
+      << "(declared -> identified):";
+  for (const auto& f : r.floors) {
+    out << " floor " << f.dof << " " << percent_text(f.declared) << " -> " << percent_text(f.identified) << ";";
+  }
+  out << (r.declared_diverged ? " the declared model diverges;" : "")
+      << (r.identified_diverged ? " the identified model diverges;" : "") << "\n";
+  for (const auto* kind : {&r.links, &r.effects}) {
+    for (const auto& s : *kind) {
+      out << "  " << s.link << (s.effect == "all" ? "" : ": " + s.effect) << " removes "
+          << percent_text(s.removed) << " of NRMSE from the worst floor (share " << percent_text(s.share)
+          << ")\n";
+    }
+  }
+  for (const auto& n : r.notes) out << "  note: " << n << "\n";
+}
+
+nlohmann::json residual_json(const RunResidual& r) {
+  nlohmann::json floors = nlohmann::json::array(), links = nlohmann::json::array(),
+                 effects = nlohmann::json::array();
+  for (const auto& f : r.floors) {
+    floors.push_back({{"dof", f.dof}, {"declared_nrmse", f.declared}, {"identified_nrmse", f.identified}});
+  }
+  for (const auto& [kind, list] : {std::pair{&r.links, &links}, std::pair{&r.effects, &effects}}) {
+    for (const auto& s : *kind) {
+      list->push_back({{"link", s.link}, {"effect", s.effect}, {"nrmse_removed", s.removed},
+                       {"share", s.share}});
+    }
+  }
+  return {{"steps", r.steps}, {"floors", floors}, {"declared_nrmse", r.declared},
+          {"identified_nrmse", r.identified}, {"declared_diverged", r.declared_diverged},
+          {"identified_diverged", r.identified_diverged}, {"links", links},
+          {"effects", effects}, {"notes", r.notes}};
 }
 
 }  // namespace
@@ -272,6 +352,7 @@ std::string run_record_text(const RunIdentification& run) {
       << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
   for (const auto& l : run.links) link_text(l, out);
   for (const auto& a : run.actuators) actuator_text(a, out);
+  if (run.residual) residual_text(*run.residual, out);
   return out.str();
 }
 
@@ -301,11 +382,14 @@ nlohmann::json run_record_json(const RunIdentification& run) {
     }
     actuators.push_back({{"actuator", a.actuator}, {"declared", a.declared},
                          {"declared_gain", a.declared_gain}, {"fitted_gain", a.fitted_gain},
+                         {"declared_delay_s", a.declared_delay}, {"fitted_delay_s", a.fitted_delay},
                          {"channels", channels}, {"undeclared", a.undeclared}});
   }
-  return {{"record", run.record}, {"case", run.case_name}, {"clock", run.clock},
-          {"held", run.held}, {"steps", run.steps}, {"duration_s", run.duration},
-          {"links", links}, {"actuators", actuators}};
+  nlohmann::json out = {{"record", run.record}, {"case", run.case_name}, {"clock", run.clock},
+                        {"held", run.held}, {"steps", run.steps}, {"duration_s", run.duration},
+                        {"links", links}, {"actuators", actuators}};
+  if (run.residual) out["residual"] = residual_json(*run.residual);
+  return out;
 }
 
 }  // namespace rths::identify

@@ -16,7 +16,7 @@ namespace {
 MeasuredData load_record(const SessionRequest& request, const std::string& path,
                          std::vector<std::string>& trimmed) {
   MeasuredData record = read_measured(path, request.units, request.map, kDefaultMinSamples,
-                                      request.sample_rate);
+                                      request.sample_rate, force_column(request.options.channels));
   if (!request.trim_idle) return record;
   const ActiveRange active = active_range(record);
   std::ostringstream note;

@@ -3,7 +3,8 @@
 // only parses flags into a SessionRequest, calls run_session and prints session_text or
 // session_json.
 //
-//   1. load the record (and --validate's), trimmed to its active part with trim_idle (data.h);
+//   1. load the record (and --validate's), trimmed to its active part with trim_idle (data.h); a
+//      record without a force column is read when the force channel is not asked for;
 //   2. the declared model from `model` (a file, declared_model.h) where it declares a channel, else
 //      from the options; a channel declared both ways is refused (one source of truth);
 //   3. identify (identify.h) -> optionally predict a study with the identified actuator

@@ -172,6 +172,10 @@ config::Study identified_study(const config::Study& base, const std::filesystem:
     motion.set_path(absolute_from(base_dir, motion.path()));
   }
   for (auto& c : *study.mutable_cases()) absolute_traces(*c.mutable_delay(), base_dir);
+  for (auto& node : *study.mutable_deployment()->mutable_nodes()) {
+    absolute_traces(*node.mutable_receive_delay(), base_dir);
+    absolute_traces(*node.mutable_send_delay(), base_dir);
+  }
   if (fragment.has_substructuring() && fragment.substructuring().has_model()) {
     *study.mutable_substructuring()->mutable_model() = fragment.substructuring().model();
   }

@@ -21,7 +21,8 @@
 // Fragment (study_fragment, written with core::write_text_format): a text-format Study holding only
 //   substructuring { model { ... } } and cases { name: "identified_actuator" ... },
 // the parts to copy into a study. identified_study() puts them into a whole study: the base's
-// model replaced, the case appended, relative paths of the base made absolute, so the result can
+// model replaced, the case appended, relative paths of the base (motions, the cases' and the
+// nodes' traces) made absolute, so the result can
 // be written anywhere and run with `rths run`.
 
 #include <filesystem>

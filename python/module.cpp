@@ -271,7 +271,10 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
   tables::Table table;
   {
     py::gil_scoped_release release;
-    const identify::Identification id = identify::identify(identify::read_measured(path, units, map), options);
+    const identify::Identification id = identify::identify(
+        identify::read_measured(path, units, map, identify::kDefaultMinSamples, 0.0,
+                                identify::force_column(options.channels)),
+        options);
     report = identify::to_json(id, identify::ReportContext{holdout, options.holdout_mode});
     table = tables::identify_table(id);
   }

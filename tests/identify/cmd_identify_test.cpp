@@ -1,6 +1,7 @@
 // `rths identify` end to end: the declared model from a file (--model), its refusals (exit 2
 // naming file and field), the identified model written back (--out) and read again, the study
-// built from it run by `rths run`, and --sample-rate for files without a time column.
+// built from it run by `rths run`, --sample-rate for files without a time column, a DAQ export
+// without force, and a distributed run's record written back as a study that `rths run` re-runs.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -16,8 +17,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "core/metrics.h"
+#include "core/study.h"
+#include "core/text_columns.h"
 #include "identify/data.h"
 #include "identify/generator.h"
+#include "runtime/measurements.h"
+#include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {
 namespace {
@@ -183,6 +189,30 @@ TEST_F(CmdIdentifyTest, AFileWithoutTimeNeedsTheSampleRate) {
   EXPECT_THAT(o.output, AllOf(HasSubstr("the time column gives 500"), HasSubstr("--sample-rate says 1000")));
 }
 
+TEST_F(CmdIdentifyTest, ADaqExportWithoutForceIdentifiesTheActuatorAlone) {
+  // A raw DAQ export that logged only the command and the measured displacement.
+  const MeasuredData record = read_csv(data_);
+  const fs::path daq = dir_ / "no_force.txt";
+  {
+    std::ofstream out(daq);
+    out << "Header Size: 4\nSampling Interval: " << record.dt << "\nTest: actuator only\n"
+        << "Sample Number, CHANNEL0, CHANNEL2\n";
+    out.precision(10);
+    for (std::size_t i = 0; i < record.size(); ++i) {
+      out << i << ", " << record.measured[i] * 1e2 << ", " << record.command[i] * 1e2 << "\n";
+    }
+  }
+  Outcome o = run("identify " + daq.string() + " --channels measured --folds 0 --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto report = json_of(o);
+  ASSERT_EQ(report["channels"].size(), 1u);
+  EXPECT_EQ(report["channels"][0]["channel"], "measured");
+  // The force channel asked for still needs the column, and the message names it.
+  o = run("identify " + daq.string() + " --channels measured,force --folds 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr(daq.string()), HasSubstr("missing column 'CHANNEL1'")));
+}
+
 TEST_F(CmdIdentifyTest, TrimIdleCutsTheRestBeforeTheTestOff) {
   const MeasuredData record = read_csv(data_);
   MeasuredData padded;
@@ -233,6 +263,66 @@ TEST_F(CmdIdentifyTest, ProgressIsPlainLinesOnAPipeAndOutWritesTheBodePlot) {
     ASSERT_TRUE(fs::exists(out / file)) << file;
     EXPECT_GT(fs::file_size(out / file), 1000u) << file;
   }
+}
+
+}  // namespace
+}  // namespace rths::identify
+
+namespace rths::identify {
+namespace {
+
+// Column `name` of a `rths run` results.csv.
+std::vector<double> results_column(const fs::path& csv, const std::string& name) {
+  const core::TextColumns table = core::read_text_columns(csv, "results", true);
+  const auto at = std::find(table.title.begin(), table.title.end(), name);
+  if (at == table.title.end()) throw std::invalid_argument(csv.string() + ": no column " + name);
+  std::vector<double> out;
+  for (const auto& row : table.rows) out.push_back(row.values.at(static_cast<std::size_t>(at - table.title.begin())));
+  return out;
+}
+
+TEST_F(CmdIdentifyTest, ARunRecordIsWrittenBackAsAStudyThatRunReproduces) {
+  const fs::path record = test::run_with_undeclared(
+      "written_back", "receive_delay { first_order { time_constant: 0.008 } }");
+  Outcome o = run("identify " + record.string() + " --channels measured --json --out " +
+                  (dir_ / "id").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto residual = json_of(o)["residual"];
+  EXPECT_GE(residual["declared_nrmse"].get<double>(), 0.20) << residual;
+  EXPECT_LE(residual["identified_nrmse"].get<double>(), 0.02) << residual;
+  const fs::path study = dir_ / "id" / "identified_run.textproto";
+  const config::Study parsed = core::load_study(study);
+  EXPECT_TRUE(std::any_of(parsed.cases().begin(), parsed.cases().end(),
+                          [](const auto& c) { return c.name() == "identified_actuator"; }));
+  EXPECT_TRUE(fs::exists(dir_ / "id" / "lag_node_1.csv"));
+  EXPECT_TRUE(fs::exists(dir_ / "id" / "lag_node_2.csv"));
+  for (const char* png : {"record_lag.png", "record_response.png", "record_shares.png"}) {
+    EXPECT_TRUE(fs::exists(dir_ / "id" / png)) << png;
+  }
+  o = run("run " + study.string() + " --no-plots --out " + (dir_ / "rerun").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  // The study's identified case reproduces the recorded response; the run's declared case did not.
+  const auto steps = runtime::measure_run(runtime::read_record(record)).steps;
+  std::vector<double> recorded(static_cast<std::size_t>(steps.displacement.rows()));
+  for (std::size_t k = 0; k < recorded.size(); ++k) recorded[k] = steps.displacement(static_cast<Eigen::Index>(k), 0);
+  const fs::path results = dir_ / "rerun" / "results.csv";
+  const auto identified = results_column(results, "identified_actuator_u_floor1_m");
+  const auto declared = results_column(results, "lag_shift_14ms_u_floor1_m");
+  ASSERT_EQ(identified.size(), recorded.size());
+  EXPECT_LE(core::nrmse(recorded, identified), 0.02);
+  EXPECT_GE(core::nrmse(recorded, declared), 0.20);
+}
+
+TEST_F(CmdIdentifyTest, ADamagedRunRecordExitsTwoNamingRecordAndEntry) {
+  const fs::path record = test::run_with_undeclared("damaged_cli", "");
+  {
+    std::fstream bytes(record, std::ios::in | std::ios::out | std::ios::binary);
+    bytes.seekp(static_cast<std::streamoff>(fs::file_size(record) / 2));
+    bytes.put('\x5a').put('\xa5').put('\x5a');
+  }
+  const Outcome o = run("identify " + record.string() + " --channels measured");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_THAT(o.output, AllOf(HasSubstr(record.string()), HasSubstr("damaged entries")));
 }
 
 }  // namespace

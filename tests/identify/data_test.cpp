@@ -101,6 +101,18 @@ TEST_F(DataTest, RaggedRowIsNamed) {
   EXPECT_THAT(error_of([&] { read_csv(p, {}, 1); }), HasSubstr("ragged.csv:3"));
 }
 
+TEST_F(DataTest, TheForceColumnIsOptionalOnlyWhenAskedSo) {
+  const auto p = write("no_force.csv", "time,command,measured\n" + csv_rows(300));
+  EXPECT_THAT(error_of([&] { read_csv(p); }), HasSubstr("missing column 'force'"));
+  const MeasuredData d = read_csv(p, {}, kDefaultMinSamples, 0.0, ForceColumn::kOptional);
+  EXPECT_EQ(d.size(), 300u);
+  EXPECT_FALSE(d.has_force());
+  EXPECT_EQ(slice(d, 10, 20).size(), 10u);
+  EXPECT_FALSE(decimated(d, 4).has_force());
+  const auto with = write("with_force.csv", "time,command,measured,force\n" + csv_rows(300));
+  EXPECT_TRUE(read_csv(with, {}, kDefaultMinSamples, 0.0, ForceColumn::kOptional).has_force());
+}
+
 TEST_F(DataTest, RealDaqExportLoadsWithItsScales) {
   const MeasuredData d = read_measured(kRealFile);
   ASSERT_EQ(d.size(), 61500u);

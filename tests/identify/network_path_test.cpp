@@ -73,6 +73,22 @@ TEST(NetworkPath, PeriodicSpikesAreNamedWithTheirPeriod) {
   EXPECT_NEAR(path.spike_height, 0.005, 2e-4);
 }
 
+TEST(NetworkPath, PeriodicSpikesAmongAFewStrayOnesAreStillNamedWithTheirPeriodAndPhase) {
+  LinkAnswers a = clean_link();
+  for (std::size_t i = 0; i < kAnswers; ++i) {
+    if (i % 512 >= 100 && i % 512 < 103) a.round_trip[i] += 0.005;  // 5 ms, 3 answers, every 0.5 s
+  }
+  // A busy host's stray spikes, off the period, the first one before the periodic ones start.
+  for (std::size_t i : {40u, 3000u, 7500u}) a.round_trip[i] += 0.004;
+  const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+  ASSERT_EQ(names(path), std::set<std::string>{"periodic spikes"})
+      << path.spikes << " spikes, period " << path.spike_period;
+  EXPECT_NEAR(path.spike_period, 0.5, 2 * kDt);
+  // The model's spikes sit on the periodic ones, not on the stray first spike.
+  EXPECT_GT(path.model[612] - path.model[600], 0.004);
+  EXPECT_LT(path.model[40] - path.model[600], 1e-4);
+}
+
 TEST(NetworkPath, ABurstOfLostAnswersIsNamedWithItsLength) {
   LinkAnswers a = clean_link();
   const auto cut = [&](auto& v) { v.erase(v.begin() + 5000, v.begin() + 5012); };

@@ -13,52 +13,15 @@
 
 #include "identify/run_record.h"
 #include "runtime/record.h"
-#include "tests/runtime/test_support.h"
-#include "tests/support/in_process_run.h"
+#include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {
 namespace {
 
 namespace fs = std::filesystem;
-
-const std::string kDeclared = "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }";
-
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rths_run_record_" + std::to_string(getpid()));
-  fs::create_directories(dir);
-  return dir / (name + ".rthsrec");
-}
-
-// Every entry of `record` written again, with `edit` applied to each first.
-template <class Edit>
-void rewrite(const fs::path& record, Edit edit) {
-  runtime::RecordContents contents = runtime::read_record(record);
-  runtime::RecordWriter writer(record);
-  for (auto& entry : contents.entries) {
-    edit(entry);
-    writer.write(entry);
-  }
-}
-
-// A 10 s paper-frame run of case lag_shift_14ms whose actuator emulator carries `emulator_stages`
-// (config text of DelayStage fields) that the declared config, written into the record, lacks.
-fs::path run_with_undeclared(const std::string& name, const std::string& emulator_stages) {
-  const std::string actual =
-      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
-      emulator_stages + " } }";
-  coordinator::CoordinatorOptions options;
-  options.run_id = name;
-  options.case_name = "lag_shift_14ms";
-  options.record = scratch(name);
-  const auto outcome = coordinator::run_in_process(test::prepare(test::paper_frame_study(10.0, actual)),
-                                                   options);
-  EXPECT_TRUE(outcome.ok) << outcome.status;
-  const config::Study declared = test::prepare(test::paper_frame_study(10.0, kDeclared)).config;
-  rewrite(options.record, [&](runtime::RecordEntry& e) {
-    if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
-  });
-  return options.record;
-}
+using test::rewrite;
+using test::run_with_undeclared;
+using test::scratch;
 
 IdentifyOptions actuator_only() {
   IdentifyOptions options;
@@ -122,6 +85,33 @@ TEST(RunRecord, ADriftOnOneLinkAndALagOnTheActuatorAreEachNamedWhereTheyAre) {
   EXPECT_TRUE(undeclared(run, 1).count("first_order")) << run_record_text(run);
 }
 
+// Undeclared network effects as traces on the record's links (in lockstep they do not reach the
+// response): each is named on its own link, nothing on the other or on the actuator, and the
+// re-run finds no response error to explain.
+TEST(RunRecord, PeriodicSpikesOnOneLinkAndABurstOfLostAnswersOnTheOtherAreEachNamedWhereTheyAre) {
+  const fs::path record = run_with_undeclared("spikes_and_burst", "");
+  rewrite(record, [](runtime::RecordEntry& e) {
+    if (!e.has_step()) return;
+    const std::int64_t k = e.step().step();
+    for (auto& link : *e.mutable_step()->mutable_links()) {
+      // Node 2: 6 ms spikes of 3 steps every 500 ms.
+      if (link.node_id() == 2 && k % 500 >= 100 && k % 500 < 103) {
+        link.set_round_trip(link.round_trip() + 0.006);
+      }
+      // Node 1: 12 answers in a row never arrive (the steps keep the answer before them).
+      if (link.node_id() == 1 && k >= 4000 && k < 4012) link.set_answered_step(3999);
+    }
+  });
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"lost answers"}) << text;
+  EXPECT_EQ(link_effects(run, 2), std::set<std::string>{"periodic spikes"}) << text;
+  EXPECT_EQ(run.links.at(0).longest_burst, 12u) << text;
+  EXPECT_TRUE(undeclared(run, 1).empty()) << text;
+  ASSERT_TRUE(run.residual.has_value());
+  EXPECT_LT(run.residual->declared, 1e-9) << text;
+}
+
 TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {
   const fs::path record = run_with_undeclared("truncated", "");
   fs::resize_file(record, fs::file_size(record) / 2 + 3);
@@ -129,6 +119,18 @@ TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {
   EXPECT_EQ(run.held.rfind("truncated", 0), 0u) << run.held;
   EXPECT_GT(run.steps, 4000u);
   EXPECT_LT(run.steps, 6000u);
+}
+
+TEST(RunRecord, ADivergedRunIsIdentifiedUpToItsDivergenceAndSaysSo) {
+  // 100 ms more lag than declared: the paper frame's hybrid loop goes unstable.
+  const fs::path record = run_with_undeclared("diverged", "receive_delay { shift { delay: 0.1 } }",
+                                              "lag_shift_14ms", 25.0, false);
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_EQ(run.held.rfind("diverged", 0), 0u) << run.held;
+  EXPECT_NE(run.held.find("identified up to step " + std::to_string(run.steps)), std::string::npos)
+      << run.held;
+  EXPECT_TRUE(undeclared(run, 1).count("delay change")) << run_record_text(run);
+  EXPECT_NEAR(run.actuators.at(0).fitted_delay, 0.114, 1e-3) << run_record_text(run);
 }
 
 void expect_refused(const fs::path& record, const std::string& entry, const std::string& problem) {

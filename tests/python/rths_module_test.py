@@ -150,6 +150,19 @@ def test_identify_finds_a_known_delay_in_synthetic_data(tmp_path):
     assert result["report"] == expected
 
 
+def test_identify_reads_a_record_without_force_for_the_actuator_alone(tmp_path):
+    dt, delay = 0.001, 0.012  # s
+    t = np.arange(0, 10, dt)
+    command = 5 * np.sin(2 * np.pi * (0.2 + 0.4 * t) * t)  # mm
+    data = tmp_path / "actuator.csv"
+    np.savetxt(data, np.column_stack([t, command, np.interp(t - delay, t, command, left=0.0)]),
+               delimiter=",", header="time,command,measured", comments="")
+    result = rths.identify(data, channels=["measured"], candidates=[], max_steps=0)
+    assert [c["channel"] for c in result["report"]["channels"]] == ["measured"]
+    with pytest.raises(ValueError, match="missing column 'force'"):
+        rths.identify(data, candidates=[], max_steps=0)
+
+
 def test_read_record_gives_the_exported_columns(config, tmp_path):
     cli("launch", config, "--case", "lag_shift_14ms", "--domain", DOMAIN, "--no-plots", "--out", tmp_path)
     record = tmp_path / "lag_shift_14ms.rthsrec"

@@ -1,0 +1,62 @@
+#pragma once
+// Records of rths's own distributed runs with an effect the run's config does not declare, for the
+// identification tests: coordinator + node services in one process (tests/support), the actuator
+// emulator carrying extra stages, then the record's header given the declared config, as a lab's
+// record holds the config it meant to run.
+
+#include <unistd.h>
+#include <filesystem>
+#include <string>
+
+#include "runtime/record.h"
+#include "tests/runtime/test_support.h"
+#include "tests/support/in_process_run.h"
+
+namespace rths::test {
+
+inline const std::string kDeclared =
+    "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }";
+
+inline std::filesystem::path scratch(const std::string& name) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_run_record_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  return dir / (name + ".rthsrec");
+}
+
+// Every entry of `record` written again, with `edit` applied to each first.
+template <class Edit>
+void rewrite(const std::filesystem::path& record, Edit edit) {
+  runtime::RecordContents contents = runtime::read_record(record);
+  runtime::RecordWriter writer(record);
+  for (auto& entry : contents.entries) {
+    edit(entry);
+    writer.write(entry);
+  }
+}
+
+// A `duration` s paper-frame run of case `case_name` whose actuator emulator carries
+// `emulator_stages` (config text of DelayStage fields) that the declared config, written into the
+// record, lacks; `expect_ok` = false for a run meant to fail (e.g. diverge).
+inline std::filesystem::path run_with_undeclared(const std::string& name,
+                                                 const std::string& emulator_stages,
+                                                 const std::string& case_name = "lag_shift_14ms",
+                                                 double duration = 10.0, bool expect_ok = true) {
+  const std::string actual =
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
+      emulator_stages + " } }";
+  coordinator::CoordinatorOptions options;
+  options.run_id = name;
+  options.case_name = case_name;
+  options.record = scratch(name);
+  const auto outcome =
+      coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
+  EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
+  const config::Study declared = prepare(paper_frame_study(duration, kDeclared)).config;
+  rewrite(options.record, [&](runtime::RecordEntry& e) {
+    if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
+  });
+  return options.record;
+}
+
+}  // namespace rths::test
