@@ -40,12 +40,17 @@ std::string model_name(JointLagStudy::ActuatorModel model) {
 // Log colour scale (the error spans decades towards instability); zero error is drawn at this floor.
 constexpr double kMapFloorPercent = 0.01;
 
-// The 2-D heat map: NRMSE % over (network round trip, actuator lag), contour lines at round
-// percentages, the continuous stability boundary, diverged points as crosses. PNG and SVG.
-void write_error_map(const JointLagResult& result, const std::filesystem::path& out) {
-  const auto grid_data = out / "error_map.dat";
+// The map's data files beside the figures: the grid (blocks of equal round trip), the diverged
+// points, the bounded points past the boundary, and the continuous boundary; all in ms and %.
+struct MapFiles {
+  std::filesystem::path grid, diverged, past, boundary;
+};
+
+MapFiles write_map_data(const JointLagResult& result, const std::filesystem::path& out) {
+  const MapFiles files{out / "error_map.dat", out / "error_map_diverged.dat",
+                       out / "error_map_past_boundary.dat", out / "error_map_boundary.dat"};
   {
-    std::ofstream file(grid_data);
+    std::ofstream file(files.grid);
     file << "# network_round_trip_ms actuator_lag_ms nrmse_pct (blocks of equal round trip)\n";
     double previous = std::nan("");
     for (const auto& p : result.grid) {
@@ -55,27 +60,35 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
            << (p.diverged ? std::nan("") : std::max(100.0 * p.nrmse, kMapFloorPercent)) << "\n";
     }
   }
-  const auto diverged_data = out / "error_map_diverged.dat";
   {
-    std::ofstream file(diverged_data);
+    std::ofstream file(files.diverged);
     file << "# network_round_trip_ms actuator_lag_ms of diverged points\n";
     for (const auto& p : result.grid)
       if (p.diverged) file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
   }
-  const auto past_data = out / "error_map_past_boundary.dat";
   {
-    std::ofstream file(past_data);
+    std::ofstream file(files.past);
     file << "# network_round_trip_ms actuator_lag_ms of bounded points past the stability boundary\n";
     for (const auto& p : result.grid)
       if (p.past_boundary && !p.diverged) file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
   }
-  const auto boundary_data = out / "error_map_boundary.dat";
   {
-    std::ofstream file(boundary_data);
+    std::ofstream file(files.boundary);
     file << "# critical_network_round_trip_ms actuator_lag_ms\n";
     for (const auto& b : result.boundary)
       if (b.critical_round_trip) file << *b.critical_round_trip * 1e3 << ' ' << b.actuator_lag * 1e3 << "\n";
   }
+  return files;
+}
+
+// The 2-D heat map: NRMSE % over (network round trip, actuator lag), contour lines at round
+// percentages, the continuous stability boundary, diverged points as crosses. PNG and SVG.
+void write_error_map(const JointLagResult& result, const std::filesystem::path& out) {
+  const MapFiles files = write_map_data(result, out);
+  const std::filesystem::path& grid_data = files.grid;
+  const std::filesystem::path& diverged_data = files.diverged;
+  const std::filesystem::path& past_data = files.past;
+  const std::filesystem::path& boundary_data = files.boundary;
   double max_r = 0.0, max_a = 0.0;
   for (const auto& p : result.grid) {
     max_r = std::max(max_r, p.network_round_trip * 1e3);

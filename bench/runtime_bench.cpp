@@ -236,7 +236,7 @@ void scaling_rows(int domain, int repeat, double seconds, const std::string& dep
                            .steps_per_second);
       const auto rt = distributed_run(
           domain, scaling_text(n, seconds, "clock: REAL_TIME max_overrun_fraction: -1 "
-                                           "max_missed_answers: 1000 command_watchdog_periods: 1000 " +
+                                           "min_answer_fraction: -1 max_missed_answers: 1000 command_watchdog_periods: 1000 " +
                                                deployment_extra),
           "scale_rt" + tag, n, false);
       wall.push_back(rt.step_wall.median);
@@ -295,8 +295,8 @@ void memory_run(int domain, std::int64_t steps, double hz, const std::string& de
       "integrator { kind: EXPLICIT_NEWMARK dt: " + dt_text + " }\n"
       "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
       "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
-      "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 1000 "
-      "command_watchdog_periods: 1000 " + deployment_extra + " }\n";
+      "deployment { clock: REAL_TIME max_overrun_fraction: -1 min_answer_fraction: -1 "
+      "max_missed_answers: 1000 command_watchdog_periods: 1000 " + deployment_extra + " }\n";
   struct Sample {
     double t;
     long coordinator;
@@ -381,183 +381,200 @@ void print_real_time(const char* label, const RunFigures& f, const BareFigures& 
       bare.lateness.median * 1e6, bare.lateness.p99 * 1e6, bare.lateness.max * 1e3);
 }
 
-}  // namespace
+// Each wait policy beside the bare loop waiting the same way, in the same run. The bench judges
+// nothing itself: no deadline or answer tolerance, and the fail-safe widened so that a spinning
+// loop that starves the nodes on a small machine is measured rather than stopped.
+struct Policy {
+  const char* name;
+  const char* config;
+  runtime::WaitPolicy bare;
+};
+const Policy kPolicies[] = {
+    {"sleep", "WAIT_SLEEP", {runtime::WaitPolicyKind::kSleep}},
+    {"sleep_then_spin", "WAIT_SLEEP_THEN_SPIN", {runtime::WaitPolicyKind::kSleepThenSpin, 200'000}},
+};
+constexpr const char* kUnjudged =
+    "max_overrun_fraction: -1 min_answer_fraction: -1 max_missed_answers: 1000 "
+    "command_watchdog_periods: 1000 ";
 
-int main(int argc, char** argv) {
-  CLI::App app{"rths runtime benchmark"};
+struct BenchArgs {
   double seconds = 39.0;
   bool skip_real_time = false, lockstep_only = false, spread = false;
   int domain = 40;
   int echo_domain = -1, echo_id = 1, repeat = 3;
-  app.add_option("--seconds", seconds, "s of the record for the real-time runs (default 39)");
-  app.add_flag("--skip-real-time", skip_real_time);
-  app.add_flag("--spread", spread,
-               "lockstep runs without pinning to one CPU (default: pinned, as rths launch does)");
-  app.add_flag("--lockstep-only", lockstep_only,
-               "only the 3-process lockstep run (for profiling and repeated measurements)");
-  app.add_option("--domain", domain, "first of 5 DDS domain ids (default 40)");
-  app.add_option("--repeat", repeat,
-                 "runs per lockstep, real-time and multi-rate row; the medians are printed (default 3)")
-      ->check(CLI::PositiveNumber);
   std::vector<double> rates{1024.0, 4096.0};
   std::string deployment_extra;
   bool skip_lockstep = false, skip_multi_rate = false;
-  app.add_flag("--skip-multi-rate", skip_multi_rate, "no multi-rate rows");
-  app.add_option("--rate", rates, "integrator rates of the real-time rows (default 1024 4096)");
-  app.add_option("--deployment-extra", deployment_extra,
-                 "deployment fields added to every real-time run, e.g. \"pin_loop: true loop_cpu: 1\"");
-  app.add_flag("--skip-lockstep", skip_lockstep, "no ping-pong and lockstep rows");
   std::int64_t memory_steps = 0;
   double memory_rate = 4096;
-  app.add_option("--memory-steps", memory_steps,
-                 "only a real-time run of this many steps (e.g. 1000000) with RSS sampled");
-  app.add_option("--memory-rate", memory_rate, "Hz of the --memory-steps run (default 4096)")
-      ->check(CLI::PositiveNumber);
   bool scaling = false;
-  app.add_flag("--scaling", scaling,
+};
+
+void add_arguments(CLI::App& app, BenchArgs& a) {
+  app.add_option("--seconds", a.seconds, "s of the record for the real-time runs (default 39)");
+  app.add_flag("--skip-real-time", a.skip_real_time);
+  app.add_flag("--spread", a.spread,
+               "lockstep runs without pinning to one CPU (default: pinned, as rths launch does)");
+  app.add_flag("--lockstep-only", a.lockstep_only,
+               "only the 3-process lockstep run (for profiling and repeated measurements)");
+  app.add_option("--domain", a.domain, "first of 5 DDS domain ids (default 40)");
+  app.add_option("--repeat", a.repeat,
+                 "runs per lockstep, real-time and multi-rate row; the medians are printed (default 3)")
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--skip-multi-rate", a.skip_multi_rate, "no multi-rate rows");
+  app.add_option("--rate", a.rates, "integrator rates of the real-time rows (default 1024 4096)");
+  app.add_option("--deployment-extra", a.deployment_extra,
+                 "deployment fields added to every real-time run, e.g. \"pin_loop: true loop_cpu: 1\"");
+  app.add_flag("--skip-lockstep", a.skip_lockstep, "no ping-pong and lockstep rows");
+  app.add_option("--memory-steps", a.memory_steps,
+                 "only a real-time run of this many steps (e.g. 1000000) with RSS sampled");
+  app.add_option("--memory-rate", a.memory_rate, "Hz of the --memory-steps run (default 4096)")
+      ->check(CLI::PositiveNumber);
+  app.add_flag("--scaling", a.scaling,
                "only the rows per node count (1, 2, 4, 8 substructure nodes + 1, 2, 4 emulators): "
                "lockstep steps/s and real-time step wall (--seconds of record)");
-  app.add_option("--echo", echo_domain, "internal: run as the ping-pong echo peer");
-  app.add_option("--echo-id", echo_id, "internal: the echo peer's node id");
-  CLI11_PARSE(app, argc, argv);
-  spdlog::set_level(spdlog::level::warn);
-  rths::runtime::ensure_dds_config();
-  if (echo_domain >= 0) return echo_main(echo_domain, echo_id);
+  app.add_option("--echo", a.echo_domain, "internal: run as the ping-pong echo peer");
+  app.add_option("--echo-id", a.echo_id, "internal: the echo peer's node id");
+}
 
-  if (scaling) {
-    scaling_rows(domain, repeat, seconds, deployment_extra);
-    return 0;
-  }
-  if (memory_steps > 0) {
-    memory_run(domain + 3, memory_steps, memory_rate, deployment_extra);
-    return 0;
-  }
-  if (lockstep_only) {
-    const auto lock =
-        distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", {}, !spread);
-    std::printf("lockstep (3 processes, %s): %.0f steps/s; step median %.1f us, p99 %.1f us, max %.2f ms\n",
-                spread ? "spread" : "one CPU", lock.steps_per_second, lock.step_wall.median * 1e6, lock.step_wall.p99 * 1e6,
-                lock.step_wall.max * 1e3);
-    return 0;
-  }
-  if (!skip_lockstep) {
-  const auto pp = ping_pong(domain, 20000, 1, !spread);
+void lockstep_only_row(const BenchArgs& a) {
+  const auto lock =
+      distributed_run(a.domain + 1, study_text(0.001, 39.0, ""), "lockstep", {}, !a.spread);
+  std::printf("lockstep (3 processes, %s): %.0f steps/s; step median %.1f us, p99 %.1f us, max %.2f ms\n",
+              a.spread ? "spread" : "one CPU", lock.steps_per_second, lock.step_wall.median * 1e6,
+              lock.step_wall.p99 * 1e6, lock.step_wall.max * 1e3);
+}
+
+void lockstep_rows(const BenchArgs& a) {
+  const bool one_cpu = !a.spread;
+  const auto pp = ping_pong(a.domain, 20000, 1, one_cpu);
   std::printf("ping-pong (Command payload, reliable KEEP_LAST 64, loopback, %s), 1 peer: %zu round "
               "trips, median %.1f us, p99 %.1f us, max %.2f ms\n",
-              spread ? "spread" : "one CPU", pp.count, pp.median * 1e6, pp.p99 * 1e6, pp.max * 1e3);
-  const auto pp2 = ping_pong(domain + 4, 20000, 2, !spread);
+              a.spread ? "spread" : "one CPU", pp.count, pp.median * 1e6, pp.p99 * 1e6, pp.max * 1e3);
+  const auto pp2 = ping_pong(a.domain + 4, 20000, 2, one_cpu);
   std::printf("ping-pong to 2 peers at once (what one lockstep step does): median %.1f us, p99 "
               "%.1f us, max %.2f ms\n",
               pp2.median * 1e6, pp2.p99 * 1e6, pp2.max * 1e3);
   const auto lock =
-      distributed_run(domain + 1, study_text(0.001, 39.0, ""), "lockstep", {}, !spread);
+      distributed_run(a.domain + 1, study_text(0.001, 39.0, ""), "lockstep", {}, one_cpu);
   std::printf("lockstep (coordinator + substructure node + actuator emulator, 39 s record at "
               "1 ms, %s): %zu steps, %.0f steps/s (step wall sum), run wall %.2f s; step median %.1f "
               "us, p99 %.1f us, max %.2f ms; median step / median 1-peer ping-pong = %.2f, / 2-peer "
               "ping-pong = %.2f\n",
-              spread ? "spread over the CPUs" : "all on one CPU", lock.steps,
+              a.spread ? "spread over the CPUs" : "all on one CPU", lock.steps,
               lock.steps_per_second, lock.wall, lock.step_wall.median * 1e6,
               lock.step_wall.p99 * 1e6, lock.step_wall.max * 1e3,
               lock.step_wall.median / pp.median, lock.step_wall.median / pp2.median);
   const auto one = distributed_run(
-      domain + 4, study_text(0.001, 39.0, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
-      "lockstep_one_node", {0, 1}, !spread);
+      a.domain + 4, study_text(0.001, 39.0, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
+      "lockstep_one_node", {0, 1}, one_cpu);
   std::printf("lockstep, numerical part in the coordinator + actuator emulator only: %.0f steps/s, "
               "run wall %.2f s; step median %.1f us, p99 %.1f us; median step / median 1-peer "
               "ping-pong = %.2f\n",
               one.steps_per_second, one.wall, one.step_wall.median * 1e6, one.step_wall.p99 * 1e6,
               one.step_wall.median / pp.median);
-  // The 3-process lockstep row again, each beside its own ping-pong, for the medians the targets
-  // are judged on (issue 10: no slower than ~12,300 steps/s; step <= 2 x the 1-peer ping-pong).
+  // The 3-process lockstep row again, each beside its own ping-pong, for the medians the README's
+  // targets are judged on (steps/s; median step against the 1-peer ping-pong).
   std::vector<double> steps_per_second{lock.steps_per_second},
       ratio{lock.step_wall.median / pp.median};
-  for (int r = 1; r < repeat; ++r) {
-    const auto pp_r = ping_pong(domain, 5000, 1, !spread);
-    const auto lock_r = distributed_run(domain + 1, study_text(0.001, 39.0, ""),
-                                        "lockstep" + std::to_string(r), {}, !spread);
+  for (int r = 1; r < a.repeat; ++r) {
+    const auto pp_r = ping_pong(a.domain, 5000, 1, one_cpu);
+    const auto lock_r = distributed_run(a.domain + 1, study_text(0.001, 39.0, ""),
+                                        "lockstep" + std::to_string(r), {}, one_cpu);
     steps_per_second.push_back(lock_r.steps_per_second);
     ratio.push_back(lock_r.step_wall.median / pp_r.median);
   }
   std::printf("  => lockstep, median of %d: %.0f steps/s; median step / median 1-peer ping-pong = "
               "%.2f (target <= 2)\n",
-              repeat, runtime::summarize(steps_per_second).median, runtime::summarize(ratio).median);
+              a.repeat, runtime::summarize(steps_per_second).median, runtime::summarize(ratio).median);
+}
+
+// One rate and policy, `repeat` times, each run beside its own bare loop; then the medians.
+void real_time_row(const BenchArgs& a, double hz, const Policy& policy) {
+  const double dt = 1.0 / hz;
+  std::vector<double> pct, bare_pct, difference, command_median, command_p99;
+  for (int r = 0; r < a.repeat; ++r) {
+    const auto rt = distributed_run(
+        a.domain + (hz < 2000 ? 2 : 3),
+        study_text(dt, a.seconds,
+                   std::string("deployment { clock: REAL_TIME ") + kUnjudged + "wait_policy: " +
+                       policy.config + " " + a.deployment_extra + " }"),
+        "rt" + std::to_string(static_cast<int>(hz)) + policy.name);
+    const auto bare = bare_loop(dt, a.seconds, policy.bare);
+    char label[96];
+    std::snprintf(label, sizeof label, "real time %.0f Hz, %.0f s, wait policy %s", hz, a.seconds,
+                  policy.name);
+    print_real_time(label, rt, bare);
+    pct.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
+    bare_pct.push_back(100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps));
+    difference.push_back(pct.back() - bare_pct.back());
+    command_median.push_back(rt.command_latency.median);
+    command_p99.push_back(rt.command_latency.p99);
   }
-  if (skip_real_time) return 0;
-  // Each wait policy beside the bare loop waiting the same way, in the same run. The bench judges
-  // nothing itself: no deadline tolerance, and the fail-safe widened so that a spinning loop that
-  // starves the nodes on a small machine is measured rather than stopped.
-  struct Policy {
-    const char* name;
-    const char* config;
-    runtime::WaitPolicy bare;
-  };
-  const Policy policies[] = {
-      {"sleep", "WAIT_SLEEP", {runtime::WaitPolicyKind::kSleep}},
-      {"sleep_then_spin", "WAIT_SLEEP_THEN_SPIN", {runtime::WaitPolicyKind::kSleepThenSpin, 200'000}},
-  };
-  // Each row `repeat` times, each run beside its own bare loop; then the medians the targets
-  // are judged on (issue 10: overruns <= bare + 0.1 point, wake-up to command <= 30 / 100 us).
-  for (const double hz : rates) {
-    for (const Policy& policy : policies) {
-      const double dt = 1.0 / hz;
-      std::vector<double> pct, bare_pct, difference, command_median, command_p99;
-      for (int r = 0; r < repeat; ++r) {
-        const auto rt = distributed_run(
-            domain + (hz < 2000 ? 2 : 3),
-            study_text(dt, seconds,
-                       std::string("deployment { clock: REAL_TIME max_overrun_fraction: -1 "
-                                   "max_missed_answers: 1000 command_watchdog_periods: 1000 "
-                                   "wait_policy: ") + policy.config + " " + deployment_extra + " }"),
-            "rt" + std::to_string(static_cast<int>(hz)) + policy.name);
-        const auto bare = bare_loop(dt, seconds, policy.bare);
-        char label[96];
-        std::snprintf(label, sizeof label, "real time %.0f Hz, %.0f s, wait policy %s", hz, seconds,
-                      policy.name);
-        print_real_time(label, rt, bare);
-        pct.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
-        bare_pct.push_back(100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps));
-        difference.push_back(pct.back() - bare_pct.back());
-        command_median.push_back(rt.command_latency.median);
-        command_p99.push_back(rt.command_latency.p99);
-      }
-      std::printf(
-          "  => %.0f Hz %s%s, median of %d: overruns %.3f %% beside the bare loop's %.3f %% "
-          "(difference %+.3f points, target <= +0.1); wake-up to command written median %.1f us, "
-          "p99 %.1f us (targets 30 / 100 us)\n",
-          hz, policy.name, deployment_extra.empty() ? "" : (" [" + deployment_extra + "]").c_str(),
-          repeat, runtime::summarize(pct).median, runtime::summarize(bare_pct).median,
-          runtime::summarize(difference).median, runtime::summarize(command_median).median * 1e6,
-          runtime::summarize(command_p99).median * 1e6);
-    }
+  std::printf(
+      "  => %.0f Hz %s%s, median of %d: overruns %.3f %% beside the bare loop's %.3f %% "
+      "(difference %+.3f points, target <= +0.1); wake-up to command written median %.1f us, "
+      "p99 %.1f us (targets 30 / 100 us)\n",
+      hz, policy.name, a.deployment_extra.empty() ? "" : (" [" + a.deployment_extra + "]").c_str(),
+      a.repeat, runtime::summarize(pct).median, runtime::summarize(bare_pct).median,
+      runtime::summarize(difference).median, runtime::summarize(command_median).median * 1e6,
+      runtime::summarize(command_p99).median * 1e6);
+}
+
+// The integrator at 1024 Hz, the emulator's servo loop at 4096 Hz on the clock, streaming
+// feedback every servo period; median of `repeat` runs beside the bare 4096 Hz loop.
+void multi_rate_row(const BenchArgs& a, const Policy& policy) {
+  std::vector<double> servo_pct, coordinator_pct, bare_pct;
+  for (int r = 0; r < a.repeat; ++r) {
+    const auto rt = distributed_run(
+        a.domain + 4,
+        study_text(1.0 / 1024, a.seconds,
+                   std::string("servo { rate: 4096 } deployment { clock: REAL_TIME ") + kUnjudged +
+                       "wait_policy: " + policy.config + " " + a.deployment_extra + " }"),
+        std::string("servo4096") + policy.name + std::to_string(r));
+    servo_pct.push_back(rt.servo_ticks ? 100.0 * static_cast<double>(rt.servo_overruns) /
+                                             static_cast<double>(rt.servo_ticks)
+                                       : -1.0);
+    coordinator_pct.push_back(100.0 * static_cast<double>(rt.overruns) /
+                              static_cast<double>(rt.steps));
+    const auto bare = bare_loop(1.0 / 4096, a.seconds, policy.bare);
+    bare_pct.push_back(100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps));
   }
-  if (skip_multi_rate) return 0;
-  // Multi-rate: the integrator at 1024 Hz, the emulator's servo loop at 4096 Hz on the clock,
-  // streaming feedback every servo period. Median of `repeat` runs beside the bare 4096 Hz loop.
-  for (const Policy& policy : policies) {
-    std::vector<double> servo_pct, coordinator_pct, bare_pct;
-    for (int r = 0; r < repeat; ++r) {
-      const auto rt = distributed_run(
-          domain + 4,
-          study_text(1.0 / 1024, seconds,
-                     std::string("servo { rate: 4096 } deployment { clock: REAL_TIME "
-                                 "max_overrun_fraction: -1 max_missed_answers: 1000 "
-                                 "command_watchdog_periods: 1000 wait_policy: ") +
-                         policy.config + " " + deployment_extra + " }"),
-          std::string("servo4096") + policy.name + std::to_string(r));
-      servo_pct.push_back(rt.servo_ticks ? 100.0 * static_cast<double>(rt.servo_overruns) /
-                                               static_cast<double>(rt.servo_ticks)
-                                         : -1.0);
-      coordinator_pct.push_back(100.0 * static_cast<double>(rt.overruns) /
-                                static_cast<double>(rt.steps));
-      const auto bare = bare_loop(1.0 / 4096, seconds, policy.bare);
-      bare_pct.push_back(100.0 * static_cast<double>(bare.overruns) / static_cast<double>(bare.steps));
-    }
-    std::printf(
-        "multi-rate, integrator 1024 Hz + emulator servo loop 4096 Hz, %.0f s, wait policy %s, "
-        "median of %d runs: servo overruns %.3f %% (target <= 1 %%), coordinator overruns %.3f %%; "
-        "bare 4096 Hz loop %.3f %%\n",
-        seconds, policy.name, repeat, runtime::summarize(servo_pct).median,
-        runtime::summarize(coordinator_pct).median, runtime::summarize(bare_pct).median);
+  std::printf(
+      "multi-rate, integrator 1024 Hz + emulator servo loop 4096 Hz, %.0f s, wait policy %s, "
+      "median of %d runs: servo overruns %.3f %% (target <= 1 %%), coordinator overruns %.3f %%; "
+      "bare 4096 Hz loop %.3f %%\n",
+      a.seconds, policy.name, a.repeat, runtime::summarize(servo_pct).median,
+      runtime::summarize(coordinator_pct).median, runtime::summarize(bare_pct).median);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rths runtime benchmark"};
+  BenchArgs a;
+  add_arguments(app, a);
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::warn);
+  rths::runtime::ensure_dds_config();
+  if (a.echo_domain >= 0) return echo_main(a.echo_domain, a.echo_id);
+  if (a.scaling) {
+    scaling_rows(a.domain, a.repeat, a.seconds, a.deployment_extra);
+    return 0;
   }
+  if (a.memory_steps > 0) {
+    memory_run(a.domain + 3, a.memory_steps, a.memory_rate, a.deployment_extra);
+    return 0;
+  }
+  if (a.lockstep_only) {
+    lockstep_only_row(a);
+    return 0;
+  }
+  if (!a.skip_lockstep) lockstep_rows(a);
+  if (a.skip_real_time) return 0;
+  for (const double hz : a.rates)
+    for (const Policy& policy : kPolicies) real_time_row(a, hz, policy);
+  if (a.skip_multi_rate) return 0;
+  for (const Policy& policy : kPolicies) multi_rate_row(a, policy);
   return 0;
 }

@@ -102,7 +102,9 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
   Figures f;
   if (with_view) {
     options.record_observer = &feed;
-    server = std::make_unique<view::ViewServer>(feed, view::ServerOptions{});
+    view::ServerOptions loopback_any_port;
+    loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};
+    server = std::make_unique<view::ViewServer>(feed, std::move(loopback_any_port));
     if (browser) {
       const auto profile = dir / "chromium_profile";
       std::filesystem::remove_all(profile);

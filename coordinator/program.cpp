@@ -126,37 +126,112 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
   return {std::move(feed), std::move(server)};
 }
 
+
+struct ProgramArgs {
+  std::string config_path, case_name, run_id, record, security_dir;
+  int domain = -1;
+  PlatformArgs platform;
+  std::string view_address;
+  bool view_stop = false;
+};
+
+void add_arguments(CLI::App& app, ProgramArgs& a) {
+  app.add_option("--platform", a.platform.file,
+                 "real time: the platform check to use (`rths rt-check CONFIG --json` output) "
+                 "instead of measuring");
+  app.add_option("--platform-seconds", a.platform.seconds,
+                 "real time: s of platform measurement before the run (default 3; 0 = none, "
+                 "with --accept-platform)")
+      ->check(CLI::Range(0.0, 20.0));
+  app.add_flag("--accept-platform", a.platform.accept,
+               "real time: run even when the platform check refuses the deployment (recorded)");
+  app.add_option("--config", a.config_path, "study config (text format)")->required();
+  app.add_option("--case", a.case_name, "case to run (default: deployment.case_name or reference)");
+  app.add_option("--run-id", a.run_id, "run id (default: host-pid-time)");
+  app.add_option("--record", a.record, "run record file (length-delimited protobuf)");
+  app.add_option("--domain", a.domain, "DDS domain id (default: deployment.domain_id)");
+  app.add_option("--security", a.security_dir,
+                 "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
+                 "default: deployment.security_dir");
+  app.add_option("--view", a.view_address,
+                 "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
+  app.add_flag("--view-stop", a.view_stop,
+               "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
+               "token printed at start-up");
+}
+
+// Everything a run holds, in the order it is torn down: the coordinator first, then what it
+// uses (the record's writer feeds the view, so the view outlives it).
+struct Session {
+  std::atomic<bool> stop_request{false};
+  std::unique_ptr<view::Feed> feed;
+  std::unique_ptr<view::ViewServer> server;
+  std::unique_ptr<platform::DmaLatencyHold> dma_latency;
+  std::unique_ptr<transport::DdsEndpoint> endpoint;
+  std::unique_ptr<Coordinator> coordinator;
+};
+
+// Real time: the platform gate (PlatformRefused) and /dev/cpu_dma_latency held for the run, so
+// CPUs stay out of deep idle states, whose exit adds to wake-ups.
+void prepare_real_time(const core::PreparedStudy& prepared, const PlatformArgs& args,
+                       CoordinatorOptions& co, Session& session) {
+  runtime::check_failsafe_windows(prepared.config.deployment());
+  co.platform = platform_summary(prepared, args);
+  session.dma_latency = std::make_unique<platform::DmaLatencyHold>();
+  co.platform->set_dma_latency_held(session.dma_latency->held());
+  if (!session.dma_latency->held())
+    std::cerr << "rths-coordinator: not holding /dev/cpu_dma_latency: "
+              << session.dma_latency->why_not() << "\n";
+}
+
+std::unique_ptr<transport::DdsEndpoint> open_endpoint(const config::Study& study, ProgramArgs& a) {
+  transport::DdsEndpointOptions options;
+  options.domain_id =
+      static_cast<std::uint32_t>(a.domain >= 0 ? a.domain : study.deployment().domain_id());
+  if (a.security_dir.empty() && !study.deployment().security_dir().empty())
+    a.security_dir = security::node_dir(std::filesystem::path(a.config_path).parent_path() /
+                                            study.deployment().security_dir(),
+                                        security::kCoordinatorNodeId);
+  if (!a.security_dir.empty())  // refused here (exit 2), before the participant exists
+    options.participant_properties = security::participant_properties(
+        security::check_node_security(a.security_dir, security::kCoordinatorNodeId));
+  return std::make_unique<transport::DdsEndpoint>(options);
+}
+
+// Throws std::invalid_argument for bad input, PlatformRefused or another exception when this
+// machine cannot keep the run.
+void start_session(ProgramArgs& a, Session& session) {
+  const config::Study study = core::load_study(a.config_path);
+  core::PreparedStudy prepared =
+      core::prepare_study(study, std::filesystem::path(a.config_path).parent_path());
+  CoordinatorOptions co;
+  if (study.deployment().clock() == config::Deployment::REAL_TIME)
+    prepare_real_time(prepared, a.platform, co, session);
+  session.endpoint = open_endpoint(study, a);
+  co.run_id = !a.run_id.empty() ? a.run_id
+              : !study.deployment().run_id().empty()
+                  ? study.deployment().run_id()
+                  : runtime::make_run_id(study.name() + "-" +
+                                         runtime::find_case(study, a.case_name).name());
+  co.case_name = a.case_name;
+  co.record = a.record;
+  if (!a.view_address.empty()) {
+    const std::string shown_case =
+        a.case_name.empty() ? study.deployment().case_name() : a.case_name;
+    std::tie(session.feed, session.server) = start_view(
+        a.view_address, a.view_stop, a.record, prepared, shown_case, session.stop_request);
+    co.record_observer = session.feed.get();
+    co.stop_request = &session.stop_request;
+  }
+  session.coordinator = std::make_unique<Coordinator>(std::move(prepared), *session.endpoint, co);
+}
+
 }  // namespace
 
 int coordinator_main(int argc, char** argv) {
   CLI::App app{"rths-coordinator: the integrator loop of a distributed hybrid test"};
-  std::string config_path, case_name, run_id, record, security_dir;
-  int domain = -1;
-  PlatformArgs platform_args;
-  app.add_option("--platform", platform_args.file,
-                 "real time: the platform check to use (`rths rt-check CONFIG --json` output) "
-                 "instead of measuring");
-  app.add_option("--platform-seconds", platform_args.seconds,
-                 "real time: s of platform measurement before the run (default 3; 0 = none, "
-                 "with --accept-platform)")
-      ->check(CLI::Range(0.0, 20.0));
-  app.add_flag("--accept-platform", platform_args.accept,
-               "real time: run even when the platform check refuses the deployment (recorded)");
-  app.add_option("--config", config_path, "study config (text format)")->required();
-  app.add_option("--case", case_name, "case to run (default: deployment.case_name or reference)");
-  app.add_option("--run-id", run_id, "run id (default: host-pid-time)");
-  app.add_option("--record", record, "run record file (length-delimited protobuf)");
-  app.add_option("--domain", domain, "DDS domain id (default: deployment.domain_id)");
-  app.add_option("--security", security_dir,
-                 "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
-                 "default: deployment.security_dir");
-  std::string view_address;
-  bool view_stop = false;
-  app.add_option("--view", view_address,
-                 "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
-  app.add_flag("--view-stop", view_stop,
-               "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
-               "token printed at start-up");
+  ProgramArgs args;
+  add_arguments(app, args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -169,50 +244,9 @@ int coordinator_main(int argc, char** argv) {
   struct FlushLogs {
     ~FlushLogs() { spdlog::shutdown(); }
   } flush_logs;
-  // Declared before the coordinator, so they outlive it (the record's writer feeds the view).
-  std::atomic<bool> stop_request{false};
-  std::unique_ptr<view::Feed> feed;
-  std::unique_ptr<view::ViewServer> server;
-  std::unique_ptr<Coordinator> coordinator;
-  std::unique_ptr<transport::DdsEndpoint> endpoint;
-  std::unique_ptr<platform::DmaLatencyHold> dma_latency;
+  Session session;
   try {
-    const config::Study study = core::load_study(config_path);
-    core::PreparedStudy prepared =
-        core::prepare_study(study, std::filesystem::path(config_path).parent_path());
-    CoordinatorOptions co;
-    if (study.deployment().clock() == config::Deployment::REAL_TIME) {
-      runtime::check_failsafe_windows(study.deployment());
-      co.platform = platform_summary(prepared, platform_args);
-      // Held for the whole run: CPUs stay out of deep idle states, whose exit adds to wake-ups.
-      dma_latency = std::make_unique<platform::DmaLatencyHold>();
-      co.platform->set_dma_latency_held(dma_latency->held());
-      if (!dma_latency->held())
-        std::cerr << "rths-coordinator: not holding /dev/cpu_dma_latency: " << dma_latency->why_not() << "\n";
-    }
-    transport::DdsEndpointOptions options;
-    options.domain_id =
-        static_cast<std::uint32_t>(domain >= 0 ? domain : study.deployment().domain_id());
-    if (security_dir.empty() && !study.deployment().security_dir().empty())
-      security_dir = security::node_dir(std::filesystem::path(config_path).parent_path() /
-                                            study.deployment().security_dir(),
-                                        security::kCoordinatorNodeId);
-    if (!security_dir.empty())  // refused here (exit 2), before the participant exists
-      options.participant_properties = security::participant_properties(
-          security::check_node_security(security_dir, security::kCoordinatorNodeId));
-    endpoint = std::make_unique<transport::DdsEndpoint>(options);
-    co.run_id = !run_id.empty() ? run_id
-                : !study.deployment().run_id().empty() ? study.deployment().run_id()
-                                                       : runtime::make_run_id(study.name() + "-" + runtime::find_case(study, case_name).name());
-    co.case_name = case_name;
-    co.record = record;
-    if (!view_address.empty()) {
-      const std::string shown_case = case_name.empty() ? study.deployment().case_name() : case_name;
-      std::tie(feed, server) = start_view(view_address, view_stop, record, prepared, shown_case, stop_request);
-      co.record_observer = feed.get();
-      co.stop_request = &stop_request;
-    }
-    coordinator = std::make_unique<Coordinator>(std::move(prepared), *endpoint, co);
+    start_session(args, session);
   } catch (const std::invalid_argument& e) {
     std::cerr << "rths-coordinator: " << e.what() << "\n";
     return 2;
@@ -221,12 +255,12 @@ int coordinator_main(int argc, char** argv) {
     return 3;
   }
   try {
-    const RunOutcome outcome = coordinator->run();
+    const RunOutcome outcome = session.coordinator->run();
     std::cout << summary_text(outcome) << std::flush;
-    if (server) server->shutdown();  // open pages get the run's last state first
-    if (!outcome.ok) std::cerr << "rths-coordinator: run failed: " << outcome.status
-                               << (outcome.failed_node.empty() ? "" : " (" + outcome.failed_node + ")")
-                               << "\n";
+    if (session.server) session.server->shutdown();  // open pages get the run's last state first
+    if (!outcome.ok)
+      std::cerr << "rths-coordinator: run failed: " << outcome.status
+                << (outcome.failed_node.empty() ? "" : " (" + outcome.failed_node + ")") << "\n";
     return outcome.ok ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "rths-coordinator: " << e.what() << "\n";

@@ -19,6 +19,59 @@
 #include "security/check.h"
 
 namespace rths::deploy {
+namespace {
+
+// The study as run, beside the record, with where it came from.
+void write_study_copy(const SitesPlan& plan, const std::filesystem::path& path) {
+  std::string text;
+  google::protobuf::TextFormat::PrintToString(plan.study, &text);
+  std::ofstream out(path);
+  out << "# Written by `rths sites` from " << plan.study_file.string() << " and "
+      << plan.sites_file.string() << "\n" << text;
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+// One Cyclone DDS config per site: its own interface, every site's address as a peer.
+std::map<std::string, std::string> site_dds_configs(const NamespaceTopology& topology,
+                                                    const std::filesystem::path& dir) {
+  std::vector<std::string> peers;
+  for (const auto& site : topology.sites()) peers.push_back(site.address);
+  std::map<std::string, std::string> dds_uri;
+  for (const auto& site : topology.sites())
+    dds_uri[site.name] =
+        write_dds_config({site.interface, peers, 32}, dir / ("dds_" + site.name + ".xml"));
+  return dds_uri;
+}
+
+// The outcome as the record tells it (footer, steps, measured links), else as the launch did.
+void read_outcome(const SitesPlan& plan, const runtime::LaunchResult& launched,
+                  SitesRunResult& result) {
+  result.run_id = launched.run_id;
+  result.case_name = launched.case_name;
+  result.status = launched.status;
+  result.coordinator_exit = launched.coordinator_exit;
+  result.wall_seconds = launched.wall_seconds;
+  if (std::filesystem::exists(result.record)) {
+    const auto contents = runtime::read_record(result.record);
+    result.steps = static_cast<std::int64_t>(contents.steps().size());
+    if (const auto* footer = contents.footer()) {
+      if (result.status.empty()) result.status = footer->status();
+      result.failed_node = footer->failed_node();
+      result.record_wall_seconds = footer->wall_seconds();
+      result.ok = footer->ok() && result.coordinator_exit == 0;
+    } else if (result.status.empty()) {
+      result.status = "the record has no footer (the coordinator stopped abruptly)";
+    }
+    result.links = measure_links(result.record, plan);
+  } else if (result.status.empty()) {
+    result.status = "no record written; coordinator log: " + launched.coordinator_log_tail;
+  }
+  if (!result.ok && result.status.empty())
+    result.status = "coordinator exit " + std::to_string(result.coordinator_exit);
+}
+
+}  // namespace
+
 SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) {
   // DDS Security: every process's documents are checked before anything is built or started.
   const std::filesystem::path security_dir = plan.study.deployment().security_dir();
@@ -32,16 +85,8 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   std::filesystem::create_directories(result.output_dir);
   result.record = result.output_dir / "record.pb";
   std::filesystem::remove(result.record);
-
   const auto study_path = result.output_dir / "study.textproto";
-  {
-    std::string text;
-    google::protobuf::TextFormat::PrintToString(plan.study, &text);
-    std::ofstream out(study_path);
-    out << "# Written by `rths sites` from " << plan.study_file.string() << " and "
-        << plan.sites_file.string() << "\n" << text;
-    if (!out) throw std::runtime_error("cannot write " + study_path.string());
-  }
+  write_study_copy(plan, study_path);
 
   TopologySpec spec;
   for (const auto& site : plan.sites.sites()) spec.sites.push_back(site.name());
@@ -51,14 +96,7 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   // namespaces go.
   NamespaceTopology topology(spec);
   result.namespaces = topology.namespaces();
-
-  std::vector<std::string> peers;
-  for (const auto& site : topology.sites()) peers.push_back(site.address);
-  std::map<std::string, std::string> dds_uri;
-  for (const auto& site : topology.sites()) {
-    dds_uri[site.name] =
-        write_dds_config({site.interface, peers, 32}, result.output_dir / ("dds_" + site.name + ".xml"));
-  }
+  const std::map<std::string, std::string> dds_uri = site_dds_configs(topology, result.output_dir);
   std::map<int, std::string> site_of;
   for (const auto& placement : plan.placements) site_of[placement.node_id] = placement.site;
 
@@ -77,31 +115,7 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
     return runtime::Placement{topology.exec_prefix(site), {{"CYCLONEDDS_URI", dds_uri.at(site)}},
                               "site " + site};
   };
-  const runtime::LaunchResult launched = runtime::launch_run(launch);
-  result.run_id = launched.run_id;
-  result.case_name = launched.case_name;
-  result.status = launched.status;
-  result.coordinator_exit = launched.coordinator_exit;
-  result.wall_seconds = launched.wall_seconds;
-
-  if (std::filesystem::exists(result.record)) {
-    const auto contents = runtime::read_record(result.record);
-    result.steps = static_cast<std::int64_t>(contents.steps().size());
-    if (const auto* footer = contents.footer()) {
-      if (result.status.empty()) result.status = footer->status();
-      result.failed_node = footer->failed_node();
-      result.record_wall_seconds = footer->wall_seconds();
-      result.ok = footer->ok() && result.coordinator_exit == 0;
-    } else if (result.status.empty()) {
-      result.status = "the record has no footer (the coordinator stopped abruptly)";
-    }
-    result.links = measure_links(result.record, plan);
-  } else if (result.status.empty()) {
-    result.status = "no record written; coordinator log: " + launched.coordinator_log_tail;
-  }
-  if (!result.ok && result.status.empty()) {
-    result.status = "coordinator exit " + std::to_string(result.coordinator_exit);
-  }
+  read_outcome(plan, runtime::launch_run(launch), result);
   return result;  // the namespaces are removed here
 }
 

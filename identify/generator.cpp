@@ -62,34 +62,21 @@ std::vector<double> derivative(const std::vector<double>& x, double dt) {
 
 }  // namespace
 
-MeasuredData generate_measured(const GeneratorSpec& spec) {
-  if (!(spec.duration > 0.0)) throw std::invalid_argument("generator: duration must be > 0");
-  if (!(spec.dt > 0.0)) throw std::invalid_argument("generator: dt must be > 0");
-  if (!(spec.amplitude > 0.0)) throw std::invalid_argument("generator: amplitude must be > 0");
-  const auto n = static_cast<std::size_t>(std::floor(spec.duration / spec.dt)) + 1;
-  if (n < kDefaultMinSamples) {
-    throw std::invalid_argument("generator: duration / dt gives fewer than " +
-                                std::to_string(kDefaultMinSamples) + " samples");
-  }
-  MeasuredData data;
-  data.source = "generator";
-  data.dt = spec.dt;
-  data.time.resize(n);
-  for (std::size_t i = 0; i < n; ++i) data.time[i] = static_cast<double>(i) * spec.dt;
-  data.command = spec.command == GeneratorSpec::Command::kChirp ? chirp(spec, n)
-                                                                : earthquake_like(spec, n);
-  const std::vector<double> command_velocity = derivative(data.command, spec.dt);
+namespace {
 
+// The actuator's declared path: a (possibly drifting) delay with gain, then the optional first-
+// and second-order lags.
+core::DelayChain actuator_chain(const GeneratorSpec& spec, const std::vector<double>& time) {
   core::DelayChain chain;
   if (spec.delay_drift != 0.0) {
     if (std::abs(spec.delay_drift) > spec.delay) {
       throw std::invalid_argument("generator: delay_drift must not exceed delay (a delay >= 0)");
     }
     core::DelayTrace trace;
-    for (std::size_t i = 0; i < n; ++i) {
-      trace.time.push_back(data.time[i]);
+    for (const double t : time) {
+      trace.time.push_back(t);
       trace.delay.push_back(spec.delay +
-                            spec.delay_drift * std::sin(2.0 * std::numbers::pi * data.time[i] / spec.duration));
+                            spec.delay_drift * std::sin(2.0 * std::numbers::pi * t / spec.duration));
     }
     auto shift = std::make_unique<core::TraceShift>(std::move(trace), spec.dt);
     shift->set_gain(spec.gain);
@@ -108,6 +95,15 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
         std::vector<double>{wn * wn},
         std::vector<double>{1.0, 2.0 * spec.second_order_damping * wn, wn * wn}, spec.dt));
   }
+  return chain;
+}
+
+// The displacement the actuator reaches (m): the chain, then backlash, velocity saturation,
+// drifting gain, offset and drift.
+std::vector<double> realised_displacement(const GeneratorSpec& spec, const MeasuredData& data) {
+  const std::size_t n = data.time.size();
+  const std::vector<double> command_velocity = derivative(data.command, spec.dt);
+  core::DelayChain chain = actuator_chain(spec, data.time);
   std::vector<double> realised(n);
   double play = 0.0, saturated = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -126,7 +122,13 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
         1.0 + spec.gain_drift * std::sin(2.0 * std::numbers::pi * data.time[i] / spec.duration);
     realised[i] = drifting_gain * x + spec.offset + spec.drift * s;
   }
+  return realised;
+}
 
+// The specimen's force (N) on the realised displacement, and both channels with their noise.
+void measure_specimen(const GeneratorSpec& spec, const std::vector<double>& realised,
+                      MeasuredData& data) {
+  const std::size_t n = realised.size();
   const auto velocity = derivative(realised, spec.dt);
   const auto acceleration = derivative(velocity, spec.dt);
   std::unique_ptr<core::RestoringForceModel> spring;
@@ -150,6 +152,27 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
     data.measured[i] = d + spec.displacement_noise * normal(rng);
     data.force[i] = f + spec.force_noise * normal(rng);
   }
+}
+
+}  // namespace
+
+MeasuredData generate_measured(const GeneratorSpec& spec) {
+  if (!(spec.duration > 0.0)) throw std::invalid_argument("generator: duration must be > 0");
+  if (!(spec.dt > 0.0)) throw std::invalid_argument("generator: dt must be > 0");
+  if (!(spec.amplitude > 0.0)) throw std::invalid_argument("generator: amplitude must be > 0");
+  const auto n = static_cast<std::size_t>(std::floor(spec.duration / spec.dt)) + 1;
+  if (n < kDefaultMinSamples) {
+    throw std::invalid_argument("generator: duration / dt gives fewer than " +
+                                std::to_string(kDefaultMinSamples) + " samples");
+  }
+  MeasuredData data;
+  data.source = "generator";
+  data.dt = spec.dt;
+  data.time.resize(n);
+  for (std::size_t i = 0; i < n; ++i) data.time[i] = static_cast<double>(i) * spec.dt;
+  data.command = spec.command == GeneratorSpec::Command::kChirp ? chirp(spec, n)
+                                                                : earthquake_like(spec, n);
+  measure_specimen(spec, realised_displacement(spec, data), data);
   validate(data, kDefaultMinSamples);
   return data;
 }

@@ -82,6 +82,96 @@ std::unique_ptr<ScopedCpuExclude> keep_off_loop_cpu(const config::Deployment& de
   return guard;
 }
 
+namespace {
+
+std::filesystem::path security_dir_of(const LaunchOptions& options,
+                                      const config::Deployment& deployment, int domain) {
+  const std::filesystem::path dir =
+      !options.security_dir.empty()        ? options.security_dir
+      : !deployment.security_dir().empty() ? options.config.parent_path() / deployment.security_dir()
+                                           : std::filesystem::path();
+  if (!dir.empty()) {  // every document checked before any process starts
+    std::vector<int> ids{security::kCoordinatorNodeId};
+    for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
+    security::check_lab_security(dir, ids, domain);
+  }
+  return dir;
+}
+
+// Lockstep processes share one CPU (auto) or always (kOneCpu); children inherit the mask of the
+// thread that starts them, so the pin is released once they have started.
+std::unique_ptr<ScopedCpuPin> pin_for_children(const LaunchOptions& options,
+                                               const config::Deployment& deployment) {
+  const bool one_cpu = options.cpu_placement == CpuPlacement::kOneCpu ||
+                       (options.cpu_placement == CpuPlacement::kAuto &&
+                        deployment.clock() != config::Deployment::REAL_TIME);
+  if (!one_cpu) return nullptr;
+  try {
+    return std::make_unique<ScopedCpuPin>();
+  } catch (const std::runtime_error& e) {
+    if (options.cpu_placement == CpuPlacement::kOneCpu) throw;
+    spdlog::warn("lockstep processes left unpinned: {}", e.what());  // only slower
+    return nullptr;
+  }
+}
+
+std::vector<std::string> coordinator_arguments(const LaunchOptions& options,
+                                               const LaunchResult& result, int domain) {
+  std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
+                                "--domain", std::to_string(domain), "--case", result.case_name};
+  if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
+  if (!options.platform_file.empty())
+    args.insert(args.end(), {"--platform", options.platform_file.string()});
+  if (options.platform_seconds >= 0)
+    args.insert(args.end(), {"--platform-seconds", std::to_string(options.platform_seconds)});
+  if (options.accept_platform) args.push_back("--accept-platform");
+  args.insert(args.end(), options.coordinator_args.begin(), options.coordinator_args.end());
+  return args;
+}
+
+// The coordinator's exit code; on a stop request or the timeout it is terminated and
+// result.status says why (124 for a timeout).
+int wait_for_coordinator(ChildProcess& coordinator, const LaunchOptions& options,
+                         std::chrono::steady_clock::time_point started, LaunchResult& result) {
+  const auto deadline =
+      options.timeout > 0
+          ? std::optional(started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                        std::chrono::duration<double>(options.timeout)))
+          : std::nullopt;
+  std::optional<int> exit_code;
+  while (!(exit_code = coordinator.wait_for(std::chrono::milliseconds(20)))) {
+    if (options.stop_requested && options.stop_requested()) {
+      result.status = "interrupted";
+      break;
+    }
+    if (deadline && std::chrono::steady_clock::now() > *deadline) {
+      std::ostringstream why;
+      why << "timed out after " << options.timeout << " s";
+      result.status = why.str();
+      break;
+    }
+  }
+  if (exit_code) return *exit_code;
+  coordinator.terminate();
+  return result.status == "interrupted" ? coordinator.wait() : 124;
+}
+
+// After an orderly end the nodes got STOP and leave by themselves; otherwise do not wait long.
+void reap_nodes(std::vector<ChildProcess>& nodes, LaunchResult& result) {
+  const auto grace = std::chrono::steady_clock::now() +
+                     (result.status.empty() ? std::chrono::milliseconds(kNodeExitGrace)
+                                            : std::chrono::milliseconds(1000));
+  for (ChildProcess& node : nodes) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        grace - std::chrono::steady_clock::now());
+    if (!node.wait_for(std::max(left, std::chrono::milliseconds(0))))
+      spdlog::warn("{} did not exit after the coordinator; stopping it", node.name());
+    result.node_exits.push_back(node.terminate());
+  }
+}
+
+}  // namespace
+
 LaunchResult launch_run(const LaunchOptions& options) {
   const config::Study study = core::load_study(options.config);
   const core::PreparedStudy prepared =
@@ -97,33 +187,12 @@ LaunchResult launch_run(const LaunchOptions& options) {
   result.run_id = options.run_id.empty() ? make_run_id(study.name() + "-" + result.case_name)
                                          : options.run_id;
   const int domain = options.domain >= 0 ? options.domain : deployment.domain_id();
-  const std::filesystem::path security_dir =
-      !options.security_dir.empty()        ? options.security_dir
-      : !deployment.security_dir().empty() ? options.config.parent_path() / deployment.security_dir()
-                                           : std::filesystem::path();
-  if (!security_dir.empty()) {  // every document checked before any process starts
-    std::vector<int> ids{security::kCoordinatorNodeId};
-    for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
-    security::check_lab_security(security_dir, ids, domain);
-  }
+  const std::filesystem::path security_dir = security_dir_of(options, deployment, domain);
   const NodePrograms programs = find_node_programs(options.programs_dir);
   const PlacementStrategy placement = options.placement ? options.placement : local_placement;
   std::filesystem::create_directories(options.log_dir);
 
-  // Children inherit the mask of the thread that starts them; restored before waiting.
-  const bool one_cpu =
-      options.cpu_placement == CpuPlacement::kOneCpu ||
-      (options.cpu_placement == CpuPlacement::kAuto &&
-       deployment.clock() != config::Deployment::REAL_TIME);
-  std::unique_ptr<ScopedCpuPin> pin;
-  if (one_cpu) {
-    try {
-      pin = std::make_unique<ScopedCpuPin>();
-    } catch (const std::runtime_error& e) {
-      if (options.cpu_placement == CpuPlacement::kOneCpu) throw;
-      spdlog::warn("lockstep processes left unpinned: {}", e.what());  // only slower
-    }
-  }
+  std::unique_ptr<ScopedCpuPin> pin = pin_for_children(options, deployment);
   auto off_loop_cpu = keep_off_loop_cpu(deployment);
   const auto started = std::chrono::steady_clock::now();
   std::vector<ChildProcess> nodes;
@@ -139,55 +208,15 @@ LaunchResult launch_run(const LaunchOptions& options) {
                           security_dir, node.id(), options.log_dir / ("node_" + id + ".log"), label,
                           placement));
   }
-  std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
-                                "--domain", std::to_string(domain), "--case", result.case_name};
-  if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
-  if (!options.platform_file.empty())
-    args.insert(args.end(), {"--platform", options.platform_file.string()});
-  if (options.platform_seconds >= 0)
-    args.insert(args.end(), {"--platform-seconds", std::to_string(options.platform_seconds)});
-  if (options.accept_platform) args.push_back("--accept-platform");
-  args.insert(args.end(), options.coordinator_args.begin(), options.coordinator_args.end());
   result.coordinator_log = options.log_dir / "coordinator.log";
-  ChildProcess coordinator = start(programs.coordinator, args, security_dir,
-                                   security::kCoordinatorNodeId, result.coordinator_log,
-                                   "coordinator", placement);
+  ChildProcess coordinator = start(programs.coordinator, coordinator_arguments(options, result, domain),
+                                   security_dir, security::kCoordinatorNodeId,
+                                   result.coordinator_log, "coordinator", placement);
   pin.reset();
   off_loop_cpu.reset();
 
-  const auto deadline = options.timeout > 0
-                            ? std::optional(started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                          std::chrono::duration<double>(options.timeout)))
-                            : std::nullopt;
-  std::optional<int> exit_code;
-  while (!(exit_code = coordinator.wait_for(std::chrono::milliseconds(20)))) {
-    if (options.stop_requested && options.stop_requested()) {
-      result.status = "interrupted";
-      break;
-    }
-    if (deadline && std::chrono::steady_clock::now() > *deadline) {
-      std::ostringstream why;
-      why << "timed out after " << options.timeout << " s";
-      result.status = why.str();
-      break;
-    }
-  }
-  if (!exit_code) {
-    coordinator.terminate();
-    exit_code = result.status == "interrupted" ? coordinator.wait() : 124;
-  }
-  result.coordinator_exit = *exit_code;
-  // After an orderly end the nodes got STOP and leave by themselves; otherwise do not wait long.
-  const auto grace = std::chrono::steady_clock::now() +
-                     (result.status.empty() ? std::chrono::milliseconds(kNodeExitGrace)
-                                            : std::chrono::milliseconds(1000));
-  for (ChildProcess& node : nodes) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-        grace - std::chrono::steady_clock::now());
-    if (!node.wait_for(std::max(left, std::chrono::milliseconds(0))))
-      spdlog::warn("{} did not exit after the coordinator; stopping it", node.name());
-    result.node_exits.push_back(node.terminate());
-  }
+  result.coordinator_exit = wait_for_coordinator(coordinator, options, started, result);
+  reap_nodes(nodes, result);
   result.wall_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   result.coordinator_log_tail = coordinator.log_tail(1500);

@@ -114,6 +114,34 @@ Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::s
   return t;
 }
 
+namespace {
+
+// The run's identity, outcome and integrity as table attributes.
+void set_record_attributes(const runtime::RecordContents& record, Table& t) {
+  const runtime::RunHeader* header = record.header();
+  t.set_attribute("run_id", header->run_id());
+  t.set_attribute("case_name", header->case_name());
+  t.set_attribute("clock", header->clock());
+  const runtime::RunFooter* footer = record.footer();
+  t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
+  t.set_attribute("integrity", !record.checksummed ? "unverified: written without checksums"
+                               : record.lost_entries() ? "damaged: " + record.loss_report()
+                                                       : "verified (CRC-32C per entry)");
+  std::string lost;
+  // Appended piece by piece: GCC 12 misreads `"-" + std::to_string(...)` here (-Wrestrict).
+  for (const auto& [first, last] : record.missing_steps()) {
+    if (!lost.empty()) lost += ',';
+    lost += std::to_string(first);
+    if (last > first) {
+      lost += '-';
+      lost += std::to_string(last);
+    }
+  }
+  t.set_attribute("lost_steps", lost);
+}
+
+}  // namespace
+
 Table record_table(const runtime::RecordContents& record) {
   const runtime::RunHeader* header = record.header();
   if (!header) throw std::invalid_argument("the run record has no header entry");
@@ -174,25 +202,7 @@ Table record_table(const runtime::RecordContents& record) {
   }
   t.add_numbers("lateness_s", "s", scalar([](const Step& s) { return s.lateness(); }));
   t.add_numbers("overrun", "", scalar([](const Step& s) { return s.overrun() ? 1 : 0; }));
-  t.set_attribute("run_id", header->run_id());
-  t.set_attribute("case_name", header->case_name());
-  t.set_attribute("clock", header->clock());
-  const runtime::RunFooter* footer = record.footer();
-  t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
-  t.set_attribute("integrity", !record.checksummed ? "unverified: written without checksums"
-                               : record.lost_entries() ? "damaged: " + record.loss_report()
-                                                       : "verified (CRC-32C per entry)");
-  std::string lost;
-  // Appended piece by piece: GCC 12 misreads `"-" + std::to_string(...)` here (-Wrestrict).
-  for (const auto& [first, last] : record.missing_steps()) {
-    if (!lost.empty()) lost += ',';
-    lost += std::to_string(first);
-    if (last > first) {
-      lost += '-';
-      lost += std::to_string(last);
-    }
-  }
-  t.set_attribute("lost_steps", lost);
+  set_record_attributes(record, t);
   return t;
 }
 
