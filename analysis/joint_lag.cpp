@@ -62,6 +62,13 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
     for (const auto& p : result.grid)
       if (p.diverged) file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
   }
+  const auto past_data = out / "error_map_past_boundary.dat";
+  {
+    std::ofstream file(past_data);
+    file << "# network_round_trip_ms actuator_lag_ms of bounded points past the stability boundary\n";
+    for (const auto& p : result.grid)
+      if (p.past_boundary && !p.diverged) file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
+  }
   const auto boundary_data = out / "error_map_boundary.dat";
   {
     std::ofstream file(boundary_data);
@@ -76,6 +83,8 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
   }
   const bool any_diverged = std::any_of(result.grid.begin(), result.grid.end(),
                                         [](const JointLagPoint& p) { return p.diverged; });
+  const bool any_past = std::any_of(result.grid.begin(), result.grid.end(),
+                                    [](const JointLagPoint& p) { return p.past_boundary && !p.diverged; });
   const bool any_boundary = std::any_of(result.boundary.begin(), result.boundary.end(),
                                         [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
   const auto contours = out / "error_map_contours.dat";
@@ -91,12 +100,21 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
          << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
          << "set cblabel 'NRMSE (%), log scale'\nset logscale cb\nset format cb '%g'\n"
          << "set cbrange [" << kMapFloorPercent << ":*]\n"
-         << "set palette rgbformulae 33,13,10\nset xrange [0:" << std::max(max_r, 1e-3)
+         // viridis: perceptually uniform and readable in grey, unlike a rainbow.
+         << "set palette defined (0 '#440154', 1 '#482878', 2 '#3E4A89', 3 '#31688E', 4 '#26828E', "
+            "5 '#1F9E89', 6 '#35B779', 7 '#6DCD59', 8 '#B4DE2C', 9 '#FDE725')\n"
+         << "set style textbox opaque fc rgb 'white' noborder\nset xrange [0:" << std::max(max_r, 1e-3)
          << "]\nset yrange [0:" << std::max(max_a, 1e-3) << "]\n"
          << "set key outside below box\n";
     std::string plot = "plot '" + grid_data.string() +
                        "' using 1:2:3 with image pixels notitle, '" + contours.string() +
-                       "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours 1, 2, 5, 10, 20, 50, 100 %'";
+                       "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours 1, 2, 5, 10, 20, 50, 100 %', '" +
+                       contours.string() + "' using 1:2:(sprintf('%g %%', $3)) every 25::5 with labels boxed "
+                       "font 'sans,8' tc rgb 'black' notitle";
+    if (any_past)
+      plot += ", '" + past_data.string() +
+              "' using 1:2 with points pt 1 ps 1 lw 1.5 lc rgb 'white' title 'past the stability boundary "
+              "(expected to diverge)'";
     if (any_boundary)
       plot += ", '" + boundary_data.string() +
               "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary (continuous)'";
@@ -236,12 +254,12 @@ double joint_lag_search_window(const JointLagStudy& config) {
 }
 
 void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& reference,
-                           const std::vector<double>& u) {
-  const std::size_t n = std::min(reference.size(), u.size());
-  const std::span<const double> ref(reference.data(), n), got(u.data(), n);
-  point.nrmse = core::nrmse(ref, got);
-  point.paper_eq2 = core::paper_eq2(ref, got);
-  point.peak_error = core::peak_error(ref, got);
+                           const std::vector<double>& u, bool stopped_early) {
+  const Comparison c = compare(reference, u, stopped_early);
+  point.nrmse = c.nrmse_pct / 100.0;
+  point.paper_eq2 = c.paper_eq2_as_printed;
+  point.peak_error = c.peak_error_m;
+  point.diverged = c.diverged;
 }
 
 JointLagStudy load_joint_lag(const std::filesystem::path& path) {
@@ -327,11 +345,10 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
       JointLagPoint point;
       point.network_round_trip = round_trip;
       point.actuator_lag = actuator;
-      point.diverged = run.diverged;
       if (const auto it = critical_at.find(actuator); it != critical_at.end() && it->second)
         point.past_boundary = round_trip >= *it->second;
-      fill_joint_lag_errors(point, u_ref, floor_history(run, 0));
-      if (!run.diverged) {
+      fill_joint_lag_errors(point, u_ref, floor_history(run, 0), run.diverged);
+      if (!point.diverged) {
         point.measured_total_lag =
             core::j1_delay(column_of(run.command, 0), column_of(run.realised, 0), prepared.base.dt, window);
       }

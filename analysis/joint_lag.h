@@ -117,9 +117,11 @@ std::string to_text(const JointLagResult& result);
 config::DelayStage joint_lag_actuator_stage(JointLagStudy::ActuatorModel model, double lag);
 // The J1 search window (s): max_lag_search, or 2 x the largest injected total + 10 ms.
 double joint_lag_search_window(const JointLagStudy& config);
-// NRMSE, the paper's Eq. 2 and the peak error of `u` against `reference` (m) over their common
-// length (a diverged run is shorter), into `point`.
+// NRMSE, the paper's Eq. 2, the peak error of `u` against `reference` (m) over their common
+// length (a diverged run is shorter) and the verdict, into `point`: analysis::compare, the one
+// divergence rule of every command (stopped early, not finite, or grown past
+// core::kDivergenceGrowth times the reference's peak).
 void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& reference,
-                           const std::vector<double>& u);
+                           const std::vector<double>& u, bool stopped_early);
 
 }  // namespace rths::analysis

@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <numbers>
 #include <sstream>
 
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
 #include "util/atomic_file.h"
 #include "util/plot.h"
+#include "util/text_table.h"
 
 namespace rths::analysis {
 namespace {
@@ -70,8 +72,67 @@ std::optional<core::CriticalDelayCheck> check_setup(const core::PreparedStudy& p
                                           setup.integrator, setup.dt, lag);
 }
 
+// The compensated loop of a one-storey case with one compensator (CompensatedVerdict); none for
+// a case without compensation or without an experimental part.
+std::optional<CompensatedVerdict> judge_compensated_loop(
+    const core::HybridSetup& setup, const config::Case& study_case,
+    const std::optional<core::CriticalDelayCheck>& uncompensated) {
+  constexpr double kMaxExtraDelay = 0.1;  // s searched beyond the configured loop
+  if (study_case.compensation_size() == 0 || !uncompensated) return std::nullopt;
+  CompensatedVerdict verdict;
+  const std::string beside = "; uncompensated, " + uncompensated->describe();
+  if (setup.model.dofs() != 1 || study_case.compensation_size() != 1) {
+    verdict.text = "the compensated loop is analysed for a one-storey study with one compensator only: "
+                   "not judged before the run" + beside;
+    return verdict;
+  }
+  const double m = setup.model.mass(0, 0), k = setup.model.stiffness(0, 0), c = setup.model.damping(0, 0);
+  const double omega = std::sqrt(k / m);
+  try {
+    const core::CompensatedStability loop = core::compensated_stability(
+        setup.integrator, 2.0 * std::numbers::pi / omega, c / (2.0 * m * omega),
+        uncompensated->governing_fraction, setup.dt, study_case.delay(), &study_case.compensation(0),
+        kMaxExtraDelay);
+    if (!loop.frozen_coefficients.empty()) {
+      verdict.text = "adaptive compensation: its coefficients change during the run, so its loop cannot "
+                     "be judged before it" + beside;
+      return verdict;
+    }
+    verdict.analysed = true;
+    verdict.stable = loop.stable;
+    std::ostringstream text;
+    text << std::setprecision(3) << "compensated loop: ";
+    if (!loop.stable) {
+      text << "UNSTABLE as configured (spectral radius " << loop.spectral_radius << ")";
+    } else {
+      std::optional<double> margin = loop.continuous_margin;
+      if (loop.discrete_margin) margin = margin ? std::min(*margin, *loop.discrete_margin) : loop.discrete_margin;
+      verdict.extra_delay_tolerated = margin;
+      if (margin) text << "stable, tolerates " << *margin * 1e3 << " ms more lag";
+      else text << "stable for up to " << kMaxExtraDelay * 1e3 << " ms more lag (searched)";
+    }
+    verdict.text = text.str() + beside;
+  } catch (const std::invalid_argument& e) {
+    verdict.text = std::string("the compensated loop cannot be analysed (") + e.what() + ")" + beside;
+  }
+  return verdict;
+}
+
+// The pre-run warning of a case, if any: the compensated loop's verdict when the case has
+// compensation, else the uncompensated lag past its critical delay.
+std::optional<std::string> pre_run_warning(const CaseOutcome& c) {
+  const std::string meant = c.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge";
+  if (c.compensated) {
+    if (c.compensated->analysed && !c.compensated->stable) return c.compensated->text + meant;
+    if (!c.compensated->analysed && c.stability && c.stability->past()) return c.compensated->text;
+    return std::nullopt;
+  }
+  if (c.stability && c.stability->past()) return c.stability->describe() + meant;
+  return std::nullopt;
+}
+
 // What is known of a case before it runs: its delay, and its critical-delay check (announced
-// through options.warn when past).
+// through options.warn when past; for a compensated case, its compensated loop's verdict).
 CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::HybridSetup& setup,
                           const config::Case& study_case, const std::string& name,
                           const RunStudyOptions& options) {
@@ -82,10 +143,16 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   result.delay_description =
       setup.delays.empty() ? "no experimental substructure" : setup.delays.front().describe();
   result.stability = check_setup(prepared, setup, result.nominal_delay + options.extra_lag);
-  if (result.stability && result.stability->past() && options.warn) {
-    options.warn("case '" + result.name + "': " + result.stability->describe() +
-                 (result.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge"));
+  if (study_case.compensation_size() > 0) {
+    // Beside the compensated loop's verdict: the same case without its compensators.
+    config::Case bare = study_case;
+    bare.clear_compensation();
+    const core::HybridSetup bare_setup = core::setup_for_case(prepared, bare);
+    result.compensated = judge_compensated_loop(
+        setup, study_case, check_setup(prepared, bare_setup, nominal_delay_of(bare_setup) + options.extra_lag));
   }
+  if (const auto warning = pre_run_warning(result); warning && options.warn)
+    options.warn("case '" + result.name + "': " + *warning);
   return result;
 }
 
@@ -104,7 +171,8 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
     why << ")";
     if (result.stability) why << "; " << result.stability->describe();
     result.status_detail = why.str();
-  } else if (result.status == "completed" && result.stability && result.stability->past()) {
+  } else if (result.status == "completed" && result.stability && result.stability->past() &&
+             !result.compensated) {
     std::ostringstream why;
     why << std::setprecision(3) << "past its critical delay, but the peak grew only "
         << growth.peak_m / growth.peak_reference_m << "x over the lag-free run in this record (diverged "
@@ -244,16 +312,21 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
   if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
   for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
-  for (const CaseOutcome* drawn_case : drawn) {
-    const CaseOutcome& c = *drawn_case;
+  for (std::size_t i = 0; i < drawn.size(); ++i) {
+    const CaseOutcome& c = *drawn[i];
     const std::string label = c.name + (c.diverged() ? " (diverged, clipped)" : "");
-    util::Series s{label, c.simulation.time, {}};
+    // Each case keeps its colour on every panel and is drawn thinner than the case before it, so
+    // that two cases whose responses coincide are both seen (solid: cairo draws a dashed line of
+    // 10^4 points very slowly).
+    const std::string style = "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw " +
+                              std::to_string(std::max(0.7, 3.0 - 0.8 * static_cast<double>(i)));
+    util::Series s{label, c.simulation.time, {}, style};
     for (double u : c.response) s.y.push_back(u * 1e3);
     if (!c.diverged()) bounded.push_back(displacement.series.size());
     displacement.series.push_back(std::move(s));
-    {
-      // The reference too (a zero line), so every case keeps its colour across the panels.
-      util::Series d{label, c.simulation.time, {}};
+    if (&c != &reference) {
+      // The reference against itself is a zero line that says nothing: it is left out.
+      util::Series d{label, c.simulation.time, {}, style};
       for (std::size_t k = 0; k < c.response.size() && k < reference.response.size(); ++k) {
         d.y.push_back((c.response[k] - reference.response[k]) * 1e3);
       }
@@ -261,7 +334,7 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
       difference.series.push_back(std::move(d));
     }
     if (c.simulation.command.cols() > 0 && !c.diverged()) {
-      util::Series l{c.name, {}, {}};
+      util::Series l{c.name, {}, {}, style};
       for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
         l.x.push_back(c.simulation.command(k, 0) * 1e3);
         l.y.push_back(c.simulation.measured_force(k, 0) * 1e-3);
@@ -284,12 +357,25 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   zoom.x_min = start;
   zoom.x_max = start + 5.0;
   std::vector<util::PlotSpec> panels = {displacement};
-  if (drawn.size() > 1) panels.push_back(difference);
+  if (!difference.series.empty()) panels.push_back(difference);
   panels.push_back(zoom);
   for (util::PlotSpec& p : panels) p.height = 380;
   util::write_png_panels(panels, directory / "displacement.png");
   if (!loop.series.empty()) util::write_png_plot(loop, directory / "force_displacement.png");
 }
+
+namespace {
+
+nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
+  if (!v) return nullptr;
+  return {{"analysed", v->analysed},
+          {"stable", v->analysed ? nlohmann::json(v->stable) : nlohmann::json()},
+          {"extra_delay_tolerated_s", v->extra_delay_tolerated ? nlohmann::json(*v->extra_delay_tolerated)
+                                                               : nlohmann::json()},
+          {"verdict", v->text}};
+}
+
+}  // namespace
 
 nlohmann::json study_summary_json(const StudyOutcome& outcome) {
   nlohmann::json cases = nlohmann::json::array();
@@ -301,6 +387,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
       stability = {{"lag_s", s.lag},
                    {"continuous_critical_delay_s", opt(s.continuous)},
                    {"discrete_critical_delay_s", opt(s.discrete)},
+                   {"discrete_check", s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
                    {"critical_delay_s", opt(s.critical())},
                    {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
                    {"past_critical_delay", s.past()},
@@ -313,6 +400,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                      {"status_detail", c.status_detail},
                      {"expect_unstable", c.expect_unstable},
                      {"stability", stability},
+                     {"compensated_loop", compensated_json(c.compensated)},
                      {"peak_displacement_m", c.comparison.peak_m},
                      {"paper_eq2_as_printed", c.comparison.paper_eq2_as_printed},
                      {"nrmse_pct", c.comparison.nrmse_pct},
@@ -329,33 +417,56 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
           {"cases", cases}};
 }
 
+namespace {
+
+std::string fixed(double value, int decimals) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << value;
+  return out.str();
+}
+
+// The row of one case: errors of a response that grew without bound measure nothing (the JSON
+// keeps them), so a diverged case shows "-" there.
+std::vector<std::string> summary_row(const CaseOutcome& c) {
+  std::string critical = "-", margin = "-";
+  if (c.stability) {
+    critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
+    if (c.stability->critical()) margin = fixed(100.0 * c.stability->margin(), 1) + " %";
+  }
+  const bool bounded = !c.diverged();
+  return {c.name,
+          c.delay_description,
+          fixed(c.comparison.peak_m * 1e3, 3),
+          bounded ? fixed(c.comparison.nrmse_pct, 2) : "-",
+          bounded ? fixed(c.comparison.paper_eq2_as_printed, 5) : "-",
+          bounded ? fixed(c.comparison.peak_error_m * 1e3, 3) : "-",
+          critical,
+          margin,
+          c.status + (c.diverged() && c.expect_unstable ? " (expected)" : "")};
+}
+
+}  // namespace
+
 std::string study_summary_text(const StudyOutcome& outcome) {
   std::ostringstream out;
   out << "study: " << outcome.study_name << " (every case against " << outcome.reference_description()
       << "; response: " << outcome.response.describe() << " displacement; motion read in "
       << outcome.motion_units << ")\n";
-  out << std::left << std::setw(24) << "case" << std::setw(30) << "delay" << std::right << std::setw(11)
-      << "peak (mm)" << std::setw(11) << "NRMSE (%)" << std::setw(14) << "Eq.2 (paper)" << std::setw(15)
-      << "peak err (mm)" << std::setw(16) << "crit. delay" << "  status\n";
-  for (const CaseOutcome& c : outcome.cases) {
-    std::string critical = "-";
-    if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
-    out << std::left << std::setw(24) << c.name << std::setw(30) << c.delay_description << std::right
-        << std::fixed << std::setprecision(3) << std::setw(11) << c.comparison.peak_m * 1e3;
-    if (c.diverged()) {
-      // Errors of a response that grew without bound measure nothing; the JSON keeps them.
-      out << std::setw(11) << "-" << std::setw(14) << "-" << std::setw(15) << "-";
-    } else {
-      out << std::setprecision(2) << std::setw(11) << c.comparison.nrmse_pct << std::setprecision(5)
-          << std::setw(14) << c.comparison.paper_eq2_as_printed << std::setprecision(3) << std::setw(15)
-          << c.comparison.peak_error_m * 1e3;
-    }
-    out << std::setw(16) << critical << "  " << c.status
-        << (c.diverged() && c.expect_unstable ? " (expected)" : "") << "\n";
-    out.unsetf(std::ios::fixed);
-  }
+  using Align = util::TextTable::Align;
+  util::TextTable table({{"case", Align::kLeft, 32},
+                         {"delay", Align::kLeft, 28},
+                         {"peak (mm)", Align::kRight},
+                         {"NRMSE (%)", Align::kRight},
+                         {"Eq.2 (paper)", Align::kRight},
+                         {"peak err (mm)", Align::kRight},
+                         {"crit. delay", Align::kRight},
+                         {"margin", Align::kRight},
+                         {"status", Align::kLeft, 40}});
+  for (const CaseOutcome& c : outcome.cases) table.add_row(summary_row(c));
+  out << table.render();
   for (const CaseOutcome& c : outcome.cases) {
     if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
+    if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";
   }
   return out.str();
 }

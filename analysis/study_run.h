@@ -4,7 +4,9 @@
 //
 // Before each case: core::check_critical_delay on the structure, the case's lag (the delay
 // chain's nominal delay, the largest over actuators) and the integrator; a case past the limit
-// is announced through RunStudyOptions::warn with the margin.
+// is announced through RunStudyOptions::warn with the margin. A case with compensation is judged
+// on its compensated loop instead (CompensatedVerdict): a linear one analysed, an adaptive one
+// stated as not analysable, with the uncompensated margin beside.
 // After each case, its status:
 //   "limit tripped"  |u| or |v| of a floor passed deployment.limits (applied in process as the
 //                    coordinator applies them distributed: the run stops before that step)
@@ -30,12 +32,26 @@
 
 namespace rths::analysis {
 
+// Pre-run verdict on a compensated case's loop. Linear compensators (polynomial, model-based
+// without an adaptive correction) are analysed with core::compensated_stability on the one-storey
+// loop; an adaptive one (ATS, an adaptive correction) changes its coefficients during the run and
+// cannot be judged before it, which the text says, with the uncompensated lag's check beside.
+struct CompensatedVerdict {
+  bool analysed = false;  // false: adaptive, or a structure the analysis does not cover
+  bool stable = false;    // analysed and stable as configured (meaningful when analysed)
+  std::optional<double> extra_delay_tolerated;  // s, analysed and stable: the smaller margin
+  std::string text;       // one line, e.g. "compensated loop (polynomial): stable, tolerates 9.1 ms more"
+};
+
 struct CaseOutcome {
   std::string name;
   std::string delay_description;  // e.g. "shift(14 ms)"
   double nominal_delay = 0.0;     // s, low-frequency lag of the chain (negative = lead)
   bool expect_unstable = false;
   std::optional<core::CriticalDelayCheck> stability;  // empty: no experimental part
+  // A case with compensation: the compensated loop's own verdict (judge_compensated_loop);
+  // `stability` above stays the uncompensated lag's check, shown beside it.
+  std::optional<CompensatedVerdict> compensated;
   core::SimulationResult simulation;
   std::vector<double> response;   // m, top-floor displacement
   Comparison comparison;          // against the reference case

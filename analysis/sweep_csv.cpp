@@ -76,10 +76,17 @@ void write_sweep_csv(const std::filesystem::path& path, const SweepGrid& grid, c
   lines.reserve(rows.size());
   for (const SweepTableRow& t : to_table(grid, rows)) {
     std::string line = std::to_string(t.index);
-    for (double x : {t.period, t.delay, t.alpha, t.stiffness, t.dt}) line += "," + format_number(x);
-    line += "," + t.motion + "," + t.model;
+    // Appended piece by piece: `line += "," + text` makes GCC 12 report a false -Wrestrict
+    // inside std::string's operator+ (GCC bug 105329).
+    const auto field = [&line](const std::string& text) {
+      line += ',';
+      line += text;
+    };
+    for (double x : {t.period, t.delay, t.alpha, t.stiffness, t.dt}) field(format_number(x));
+    field(t.motion);
+    field(t.model);
     for (double x : {t.peak_reference, t.peak_delayed, t.eq2_paper, t.nrmse_pct, t.peak_error}) {
-      line += "," + format_number(x);
+      field(format_number(x));
     }
     line += t.diverged ? ",1" : ",0";
     lines.push_back(std::move(line));

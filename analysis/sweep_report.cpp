@@ -30,7 +30,187 @@ std::string delay_label(double delay) {
   return s.str();
 }
 
+// What varies across the rows, so a label names only what tells curves apart, and each delay and
+// model keeps one colour and one dash on every figure.
+struct SweepAxes {
+  double stiffness = 0;  // the first (smallest) stiffness: the others coincide
+  std::vector<std::string> models, motions;
+  std::vector<double> alphas, dts, delays;
+
+  explicit SweepAxes(const std::vector<SweepTableRow>& rows) {
+    std::set<std::string> model_set, motion_set;
+    std::set<double> alpha_set, dt_set, delay_set;
+    stiffness = rows.front().stiffness;
+    for (const auto& r : rows) {
+      stiffness = std::min(stiffness, r.stiffness);
+      model_set.insert(r.model);
+      motion_set.insert(r.motion);
+      alpha_set.insert(r.alpha);
+      dt_set.insert(r.dt);
+      if (r.delay > 0) delay_set.insert(r.delay);
+    }
+    models.assign(model_set.begin(), model_set.end());
+    motions.assign(motion_set.begin(), motion_set.end());
+    alphas.assign(alpha_set.begin(), alpha_set.end());
+    dts.assign(dt_set.begin(), dt_set.end());
+    delays.assign(delay_set.begin(), delay_set.end());
+  }
+
+  template <class T>
+  static int index_of(const std::vector<T>& values, const T& value) {
+    return static_cast<int>(std::find(values.begin(), values.end(), value) - values.begin());
+  }
+  // Colour by delay, dash and point type by model.
+  std::string style(double delay, const std::string& model, const std::string& with) const {
+    const int m = index_of(models, model);
+    return with + " lc rgb '" + util::series_colour(static_cast<std::size_t>(index_of(delays, delay))) +
+           "' dt " + std::to_string(m % 4 + 1) + " pt " + std::to_string(m % 6 + 5);
+  }
+  std::string label(const SeriesKey& key) const {
+    const auto& [model, alpha, dt, motion, delay] = key;
+    std::string text = delay_label(delay);
+    if (models.size() > 1) text += ", " + model_label(model);
+    if (alphas.size() > 1) text += ", alpha " + format_number(alpha);
+    if (dts.size() > 1) text += ", dt " + format_number(dt * 1e3) + " ms";
+    if (motions.size() > 1) text += ", " + motion;
+    return text;
+  }
+};
+
+struct CurvePoint {
+  double period, nrmse_pct, eq2;
+  bool diverged;
+};
+
+// The rows at the figure's stiffness with a delay, one sorted curve per series key.
+std::map<SeriesKey, std::vector<CurvePoint>> curves_by_key(const std::vector<SweepTableRow>& rows,
+                                                           double stiffness) {
+  std::map<SeriesKey, std::vector<CurvePoint>> curves;
+  for (const auto& r : rows) {
+    if (r.stiffness != stiffness || !(r.delay > 0)) continue;
+    curves[series_key(r)].push_back({r.period, r.nrmse_pct, r.eq2_paper, r.diverged});
+  }
+  for (auto& [key, points] : curves)
+    std::sort(points.begin(), points.end(),
+              [](const CurvePoint& l, const CurvePoint& r) { return l.period < r.period; });
+  return curves;
+}
+
+// Smallest and largest bounded NRMSE (%) > 0; {inf, 0} when there is none.
+std::pair<double, double> bounded_range(const std::map<SeriesKey, std::vector<CurvePoint>>& curves) {
+  double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
+  for (const auto& [key, points] : curves)
+    for (const CurvePoint& p : points)
+      if (!p.diverged && std::isfinite(p.nrmse_pct) && p.nrmse_pct > 0) {
+        smallest = std::min(smallest, p.nrmse_pct);
+        largest = std::max(largest, p.nrmse_pct);
+      }
+  return {smallest, largest};
+}
+
+constexpr double kRowStep = 1.35;  // each curve's diverged marks sit this factor above the last's
+
+// At most kPeriodsDrawn periods, spread over the swept range.
+std::vector<double> periods_drawn(const std::vector<SweepTableRow>& rows) {
+  constexpr std::size_t kPeriodsDrawn = 6;
+  std::set<double> periods;
+  for (const auto& r : rows) periods.insert(r.period);
+  const std::vector<double> all(periods.begin(), periods.end());
+  std::vector<double> drawn;
+  for (std::size_t i = 0; i < std::min(kPeriodsDrawn, all.size()); ++i)
+    drawn.push_back(all[all.size() <= kPeriodsDrawn ? i : i * (all.size() - 1) / (kPeriodsDrawn - 1)]);
+  return drawn;
+}
+
+// The critical delay of each drawn period as a marker, those beyond the x range left out and
+// the title saying so.
+void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& periods, const SweepTableRow& at,
+                          const CriticalDelayOf& critical_delay) {
+  if (!critical_delay) return;
+  for (double period : periods) {
+    if (const auto critical = critical_delay(period, at.alpha, at.dt)) {
+      std::ostringstream text;
+      text.precision(3);
+      text << "critical, T = " << period << " s: " << *critical * 1e3 << " ms";
+      plot.markers.push_back({*critical * 1e3, text.str()});
+    }
+  }
+  const std::size_t before = plot.markers.size();
+  std::erase_if(plot.markers, [&](const util::VerticalMarker& m) { return m.x > *plot.x_max; });
+  if (plot.markers.size() < before) plot.title += " (critical delays beyond the swept range not drawn)";
+}
+
+// NRMSE against delay, one curve per drawn period and model (colour by period, dash by model), at
+// the first fraction, dt and record; diverged points on a row above the curves.
+void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
+                            const std::string& title, const CriticalDelayOf& critical_delay,
+                            const SweepAxes& axes, const util::PlotSpec& period_panel) {
+  const SweepTableRow& first = rows.front();
+  const std::vector<double> periods = periods_drawn(rows);
+  util::PlotSpec plot{title + ": NRMSE against delay, one curve per period" +
+                          (axes.models.size() > 1 ? " and model" : ""),
+                      "delay (ms)", "NRMSE (%, log)", {}, true};
+  plot.y_min = period_panel.y_min;
+  plot.y_max = period_panel.y_max;
+  plot.y_format = "%g";
+  const double row = period_panel.y_max ? *period_panel.y_max / 1.5 / kRowStep : 1.0;
+  util::Series diverged{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2 lc rgb 'black'"};
+  double largest_delay = 0.0;
+  for (std::size_t p = 0; p < periods.size(); ++p) {
+    for (std::size_t m = 0; m < axes.models.size(); ++m) {
+      std::vector<const SweepTableRow*> points;
+      for (const auto& r : rows)
+        if (r.period == periods[p] && r.stiffness == axes.stiffness && r.model == axes.models[m] &&
+            r.alpha == first.alpha && r.dt == first.dt && r.motion == first.motion && r.delay > 0)
+          points.push_back(&r);
+      if (points.empty()) continue;
+      std::sort(points.begin(), points.end(), [](auto* l, auto* r) { return l->delay < r->delay; });
+      std::ostringstream label;
+      label << "T = " << periods[p] << " s";
+      if (axes.models.size() > 1) label << ", " << model_label(axes.models[m]);
+      util::Series curve{label.str(), {}, {},
+                         "linespoints lc rgb '" + util::series_colour(p) + "' dt " + std::to_string(m % 4 + 1) +
+                             " pt " + std::to_string(m % 6 + 5)};
+      for (const SweepTableRow* r : points) {
+        curve.x.push_back(r->delay * 1e3);
+        curve.y.push_back(r->diverged ? std::nan("") : r->nrmse_pct);
+        largest_delay = std::max(largest_delay, r->delay);
+        if (r->diverged) {
+          diverged.x.push_back(r->delay * 1e3);
+          diverged.y.push_back(row);
+        }
+      }
+      plot.series.push_back(std::move(curve));
+    }
+  }
+  if (plot.series.empty()) return;
+  if (!diverged.x.empty()) plot.series.push_back(std::move(diverged));
+  plot.x_min = 0.0;
+  plot.x_max = largest_delay * 1e3 * 1.15;
+  mark_critical_delays(plot, periods, first, critical_delay);
+  util::write_png_plot(plot, png);
+}
+
 }  // namespace
+
+std::string model_label(const std::string& model) {
+  std::istringstream parts(model);
+  std::string name, part, out;
+  std::getline(parts, name, ':');
+  while (std::getline(parts, part, ':')) {
+    const auto equals = part.find('=');
+    if (equals == std::string::npos) continue;
+    const std::string key = part.substr(0, equals), value = part.substr(equals + 1);
+    std::string shown = value;
+    if (key == "uy") {
+      std::ostringstream mm;
+      mm << std::stod(value) * 1e3 << " mm";
+      shown = mm.str();
+    }
+    out += (out.empty() ? "" : ", ") + key + " = " + shown;
+  }
+  return out.empty() ? name : name + " (" + out + ")";
+}
 
 std::filesystem::path sweep_delay_plot_path(const std::filesystem::path& png) {
   std::filesystem::path out = png;
@@ -41,131 +221,47 @@ std::filesystem::path sweep_delay_plot_path(const std::filesystem::path& png) {
 void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
                       const std::string& title, const CriticalDelayOf& critical_delay) {
   if (rows.empty()) throw std::invalid_argument("sweep plot: no rows");
-  double stiffness = rows.front().stiffness;
-  std::set<std::string> models, motions;
-  std::set<double> alphas, dts;
-  for (const auto& r : rows) {
-    stiffness = std::min(stiffness, r.stiffness);
-    models.insert(r.model);
-    motions.insert(r.motion);
-    alphas.insert(r.alpha);
-    dts.insert(r.dt);
-  }
-  struct Point {
-    double period, nrmse_pct, eq2;
-    bool diverged;
-  };
-  std::map<SeriesKey, std::vector<Point>> series;
-  double largest = 0.0, smallest = std::numeric_limits<double>::infinity();
-  for (const auto& r : rows) {
-    if (r.stiffness != stiffness || !(r.delay > 0)) continue;
-    series[series_key(r)].push_back({r.period, r.nrmse_pct, r.eq2_paper, r.diverged});
-    if (!r.diverged && std::isfinite(r.nrmse_pct) && r.nrmse_pct > 0) {
-      largest = std::max(largest, r.nrmse_pct);
-      smallest = std::min(smallest, r.nrmse_pct);
-    }
-  }
-  const std::string& name = title;
-  util::PlotSpec nrmse_panel{name + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
-                       "period T (s)", "NRMSE (%, log)", {}, true};
-  util::PlotSpec eq2_panel{name + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
-                     "Eq. 2 (log)", {}, true};
+  const SweepAxes axes(rows);
+  const auto curves = curves_by_key(rows, axes.stiffness);
+  if (curves.empty()) throw std::invalid_argument("sweep plot: no delay > 0 in the rows");
+  const auto [smallest, largest] = bounded_range(curves);
+  util::PlotSpec nrmse_panel{title + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
+                             "period T (s)", "NRMSE (%, log)", {}, true};
+  util::PlotSpec eq2_panel{title + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
+                           "Eq. 2 (log)", {}, true};
   nrmse_panel.height = eq2_panel.height = 500;
-  // Diverged points sit on a row above every bounded value, so they are seen but set no scale.
-  const double diverged_row = largest > 0 ? largest * 3.0 : 1.0;
-  if (largest > 0) {
-    nrmse_panel.y_min = smallest / 2.0;
-    nrmse_panel.y_max = diverged_row * 2.0;
-  }
-  util::Series diverged{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
-  auto label_of = [&](const SeriesKey& key) {
-    const auto& [model, alpha, dt, motion, delay] = key;
-    std::string label = delay_label(delay);
-    if (models.size() > 1) label += " " + model;
-    if (alphas.size() > 1) label += " alpha=" + format_number(alpha);
-    if (dts.size() > 1) label += " dt=" + format_number(dt);
-    if (motions.size() > 1) label += " " + motion;
-    return label;
-  };
-  for (auto& [key, points] : series) {
-    std::sort(points.begin(), points.end(), [](const Point& l, const Point& r) { return l.period < r.period; });
-    const std::string label = label_of(key);
-    util::Series a{label, {}, {}, "linespoints"}, b{label, {}, {}, "linespoints"};
-    for (const Point& p : points) {
-      a.x.push_back(p.period);
-      a.y.push_back(p.diverged ? std::nan("") : p.nrmse_pct);
-      b.x.push_back(p.period);
-      b.y.push_back(p.diverged ? std::nan("") : p.eq2);
+  nrmse_panel.y_format = eq2_panel.y_format = "%g";
+  // Diverged points sit on rows above every bounded value, so they are seen but set no scale.
+  const double first_row = largest > 0 ? largest * 3.0 : 1.0;
+  std::vector<util::Series> marks;
+  for (const auto& [key, points] : curves) {
+    const std::string label = axes.label(key);
+    const std::string style = axes.style(std::get<4>(key), std::get<0>(key), "linespoints");
+    util::Series nrmse{label, {}, {}, style}, eq2{label, {}, {}, style};
+    util::Series diverged{label + ": diverged", {}, {},
+                          axes.style(std::get<4>(key), std::get<0>(key), "points") + " lw 2 ps 1.6"};
+    const double row = first_row * std::pow(kRowStep, static_cast<double>(marks.size()));
+    for (const CurvePoint& p : points) {
+      nrmse.x.push_back(p.period);
+      nrmse.y.push_back(p.diverged ? std::nan("") : p.nrmse_pct);
+      eq2.x.push_back(p.period);
+      eq2.y.push_back(p.diverged ? std::nan("") : p.eq2);
       if (p.diverged) {
         diverged.x.push_back(p.period);
-        diverged.y.push_back(diverged_row);
+        diverged.y.push_back(row);
       }
     }
-    nrmse_panel.series.push_back(std::move(a));
-    eq2_panel.series.push_back(std::move(b));
+    nrmse_panel.series.push_back(std::move(nrmse));
+    eq2_panel.series.push_back(std::move(eq2));
+    if (!diverged.x.empty()) marks.push_back(std::move(diverged));
   }
-  if (nrmse_panel.series.empty()) throw std::invalid_argument("sweep plot: no delay > 0 in the rows");
-  if (!diverged.x.empty()) nrmse_panel.series.push_back(std::move(diverged));
-  util::write_png_panels({nrmse_panel, eq2_panel}, png);
-
-  // Error against delay, one curve per period (at most kPeriodsDrawn, spread over the range), at
-  // the first model, fraction, dt and record; the critical delay of each period drawn.
-  constexpr std::size_t kPeriodsDrawn = 6;
-  std::set<double> periods;
-  for (const auto& r : rows) periods.insert(r.period);
-  std::vector<double> all(periods.begin(), periods.end()), drawn;
-  for (std::size_t i = 0; i < std::min(kPeriodsDrawn, all.size()); ++i) {
-    const std::size_t at = all.size() <= kPeriodsDrawn ? i : i * (all.size() - 1) / (kPeriodsDrawn - 1);
-    drawn.push_back(all[at]);
-  }
-  const SweepTableRow& first = rows.front();
-  util::PlotSpec by_delay{name + ": NRMSE against delay, one curve per period", "delay (ms)", "NRMSE (%, log)", {}, true};
   if (largest > 0) {
-    by_delay.y_min = nrmse_panel.y_min;
-    by_delay.y_max = nrmse_panel.y_max;
+    nrmse_panel.y_min = smallest / 2.0;
+    nrmse_panel.y_max = first_row * std::pow(kRowStep, static_cast<double>(marks.size())) * 1.5;
   }
-  util::Series diverged_by_delay{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2"};
-  double largest_delay = 0.0;
-  for (double period : drawn) {
-    std::vector<std::pair<double, const SweepTableRow*>> points;
-    for (const auto& r : rows) {
-      if (r.period == period && r.stiffness == stiffness && r.model == first.model && r.alpha == first.alpha &&
-          r.dt == first.dt && r.motion == first.motion && r.delay > 0) {
-        points.push_back({r.delay, &r});
-        largest_delay = std::max(largest_delay, r.delay);
-      }
-    }
-    std::sort(points.begin(), points.end());
-    std::ostringstream label;
-    label << "T = " << period << " s";
-    util::Series curve{label.str(), {}, {}, "linespoints"};
-    for (const auto& [delay, row] : points) {
-      curve.x.push_back(delay * 1e3);
-      curve.y.push_back(row->diverged ? std::nan("") : row->nrmse_pct);
-      if (row->diverged) {
-        diverged_by_delay.x.push_back(delay * 1e3);
-        diverged_by_delay.y.push_back(diverged_row);
-      }
-    }
-    if (curve.x.empty()) continue;
-    if (critical_delay) {
-      if (const auto critical = critical_delay(period, first.alpha, first.dt)) {
-        std::ostringstream text;
-        text.precision(3);
-        text << "critical, T = " << period << " s: " << *critical * 1e3 << " ms";
-        by_delay.markers.push_back({*critical * 1e3, text.str()});
-      }
-    }
-    by_delay.series.push_back(std::move(curve));
-  }
-  if (!diverged_by_delay.x.empty()) by_delay.series.push_back(std::move(diverged_by_delay));
-  by_delay.x_min = 0.0;
-  by_delay.x_max = largest_delay * 1e3 * 1.15;
-  // Critical delays beyond the swept range would squeeze the curves: drop them, say so in the title.
-  const std::size_t before = by_delay.markers.size();
-  std::erase_if(by_delay.markers, [&](const util::VerticalMarker& m) { return m.x > *by_delay.x_max; });
-  if (by_delay.markers.size() < before) by_delay.title += " (critical delays beyond the swept range not drawn)";
-  if (!by_delay.series.empty()) util::write_png_plot(by_delay, sweep_delay_plot_path(png));
+  for (util::Series& m : marks) nrmse_panel.series.push_back(std::move(m));
+  util::write_png_panels({nrmse_panel, eq2_panel}, png);
+  write_sweep_delay_plot(rows, sweep_delay_plot_path(png), title, critical_delay, axes, nrmse_panel);
 }
 
 SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {

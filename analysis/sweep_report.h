@@ -13,13 +13,18 @@ namespace rths::analysis {
 
 // Two figures (PNG and SVG), at the first stiffness (the others coincide):
 //   `png`: the paper's Fig. 4, NRMSE (%) against period on a log axis, one curve per delay (and per
-//     model, fraction, dt and record when there are several), diverged points marked on a row above
-//     the curves (they set no scale); below it the paper's Eq. 2 as printed.
+//     model, fraction, dt and record when there are several; colour by delay, dash by model),
+//     each curve's diverged points marked in its colour on a row of its own above the curves
+//     (they set no scale, and every one is seen); below it the paper's Eq. 2 as printed.
 //   sweep_delay_plot_path(png): NRMSE against delay (ms), one curve per period (at most 6, spread
-//     over the range), with each period's critical delay drawn when `critical_delay` is given.
+//     over the range) and model, with each period's critical delay drawn when `critical_delay`
+//     is given.
 // Needs gnuplot. Throws std::invalid_argument when there are no rows or no delay > 0.
 void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
                       const std::string& title, const CriticalDelayOf& critical_delay = {});
+// A sweep model's name as a legend reads it: "bilinear:uy=0.005:b=0.1" -> "bilinear (uy = 5 mm,
+// b = 0.1)"; "linear" stays.
+std::string model_label(const std::string& model);
 // "out/sweep.png" -> "out/sweep_vs_delay.png".
 std::filesystem::path sweep_delay_plot_path(const std::filesystem::path& png);
 

@@ -85,13 +85,14 @@ runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
   std::unique_ptr<runtime::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
   transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64});
+  for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
   std::vector<runtime::ChildProcess> echoes;
   for (int p = 1; p <= peers; ++p)
     echoes.emplace_back(runtime::executable_dir() / "rths_runtime_bench",
                         std::vector<std::string>{"--echo", std::to_string(domain), "--echo-id",
                                                  std::to_string(p)},
                         "/tmp/rths_bench_echo.log");
-  coordinator.wait_for_match(peers, peers, 10000ms);
+  coordinator.wait_for_match(0, peers, 10000ms);
   std::vector<double> rtt;
   rtt.reserve(count);
   const auto command = payload();

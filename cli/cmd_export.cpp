@@ -1,7 +1,11 @@
 // rths export RECORD --csv OUT | --mat OUT | --h5 OUT: a run record (length-delimited protobuf)
 // to CSV, MATLAB or HDF5 (tables/results.h names the variables and units); several at once.
-// A truncated record (the writer crashed) is exported up to its last complete entry with a
-// warning on stderr; exit 0. A missing or corrupt record is exit 2.
+// Every entry's checksum is verified (runtime::read_record). A damaged record is exported with
+// every intact entry (the reader resynchronises after each damaged region); what was lost (bytes,
+// step numbers) goes to stderr and to the outputs' attributes (integrity, lost_steps), and the
+// exit is 1. A truncated record (the writer crashed or its disk filled) is exported up to its
+// last complete entry with a warning on stderr; exit 0. An old record without checksums is
+// exported with a warning; exit 0. A missing file, or one that is no record, is exit 2.
 #include <nlohmann/json.hpp>
 
 #include <iostream>
@@ -9,6 +13,7 @@
 #include "cli/commands.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "util/distinct_paths.h"
 
 namespace rths::cli {
 
@@ -25,13 +30,15 @@ void add_export_command(CLI::App& app) {
       "HDF5 file to write (one dataset per CSV column, each with a `units` attribute)");
   cmd->callback([=] {
     if (csv->count() + mat->count() + h5->count() == 0) throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
+    for (const auto& [format, path] : *outputs)
+      util::refuse_output_over_input({"--" + tables::extension(format).substr(1), path}, {{"record", *record}});
     runtime::RecordContents contents;
     try {
       contents = runtime::read_record(*record);
     } catch (const std::exception& e) {
       throw ExitError(kExitBadInput, e.what());
     }
-    if (contents.truncated) std::cerr << "rths export: warning: " << contents.warning << "\n";
+    if (!contents.warning.empty()) std::cerr << "rths export: warning: " << contents.warning << "\n";
     tables::Table table;
     try {
       table = tables::record_table(contents);
@@ -49,7 +56,11 @@ void add_export_command(CLI::App& app) {
     const std::string status = footer ? footer->status() : "no footer: the run was cut short";
     if (*json) {
       nlohmann::json j{{"record", *record}, {"rows", table.rows()}, {"truncated", contents.truncated},
-                       {"status", status}, {"ok", footer && footer->ok()}};
+                       {"status", status}, {"ok", footer && footer->ok()},
+                       {"checksummed", contents.checksummed},
+                       {"integrity", table.attributes().at("integrity")},
+                       {"lost_steps", table.attributes().at("lost_steps")},
+                       {"damaged_regions", contents.losses.size()}};
       for (const auto& [format, path] : *outputs) j[tables::extension(format).substr(1)] = path;
       std::cout << j.dump(2) << "\n";
     } else {
@@ -57,6 +68,9 @@ void add_export_command(CLI::App& app) {
         std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status << ")\n";
       }
     }
+    if (contents.lost_entries())
+      throw ExitError(kExitRunFailed, "export: the record lost entries (intact ones exported): " +
+                                          contents.loss_report());
   });
   cmd->add_flag("--json", *json, "print a JSON summary on stdout");
 }

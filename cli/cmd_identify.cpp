@@ -3,8 +3,10 @@
 // back into a study config's simulation (--predict) to predict the test's error. The declared
 // model comes from flags or a file (--model, identify/declared_model.h); --out writes the
 // identified model back as such a file and as study-config parts (identify/study_config.h).
-#include <nlohmann/json.hpp>
+#include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -13,18 +15,10 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "core/study.h"
-#include "core/text_format.h"
-#include "identify/compensator_design.h"
-#include "identify/declared_model.h"
-#include "identify/data.h"
-#include "identify/identify.h"
-#include "identify/predict.h"
-#include "identify/report.h"
-#include "identify/study_config.h"
+#include "identify/run_record.h"
+#include "identify/session.h"
 #include "tables/results.h"
 #include "tables/write.h"
-#include "identify/validation.h"
 
 namespace rths::cli {
 namespace {
@@ -42,6 +36,8 @@ struct IdentifyCliOptions {
   std::size_t folds = 5;
   double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
   std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
+  double search_tolerance = 1e-6;
+  int search_iterations = 30;
   bool json = false, trim_idle = false;
 };
 
@@ -69,93 +65,55 @@ std::vector<identify::Effect> effects_for(const std::string& list, identify::Cha
   return out;
 }
 
-// The declared model from --model FILE where it declares a channel, else from the flags. A
-// channel declared both ways is refused: one source of truth.
-void apply_declared_model(const IdentifyCliOptions& o, identify::IdentifyOptions& options,
-                          std::optional<identify::DeclaredModel>& declared) {
-  if (o.model.empty()) return;
-  declared = identify::load_declared_model(o.model);
-  if (declared->actuator) {
-    if (o.actuator_flag_given) {
-      throw std::invalid_argument("--declared-actuator conflicts with --model " + o.model +
-                                  ", which declares the actuator; give one of them");
+// Progress on stderr: the bar or one line per 10 % (cli/support.h), and what is being fitted
+// ("force: candidate bouc_wen (round 2)") on a line of its own when it has changed and 2 s have
+// passed since the last such line, or 5 s have passed: a long fit always says what it is doing.
+class IdentifyProgressPrinter {
+ public:
+  void operator()(const identify::IdentifyProgress& p) {
+    bar_.update(p.done, p.total);
+    const auto now = std::chrono::steady_clock::now();
+    const auto quiet = now - last_line_;
+    if (quiet < std::chrono::seconds(2) ||
+        (p.stage == last_stage_ && quiet < std::chrono::seconds(5))) {
+      return;
     }
-    options.declared_actuator = declared->actuator->effects;
-    options.actuator_parameters = declared->actuator->parameters;
+    last_stage_ = p.stage;
+    last_line_ = now;
+    // On a terminal the line replaces the bar, which the next update draws again below it.
+    std::cerr << (tty_ ? "\r\033[K" : "") << "  fitting " << p.stage << " ("
+              << std::chrono::duration<double>(now - start_).count() << " s)\n";
   }
-  if (declared->specimen) {
-    if (o.specimen_flag_given) {
-      throw std::invalid_argument("--declared-specimen conflicts with --model " + o.model +
-                                  ", which declares the specimen; give one of them");
-    }
-    options.declared_specimen = declared->specimen->effects;
-    options.specimen_parameters = declared->specimen->parameters;
-  }
-}
 
-// DIR/identified_model.textproto (reads back with --model), DIR/identified_study_fragment.textproto
-// (the study-config parts) and, with a study (--predict), DIR/identified_study.textproto (that
-// study with the identified specimen and actuator, for `rths run`). Returns the lines to print.
-std::vector<std::string> write_identified_configs(const identify::Identification& id,
-                                                  const IdentifyCliOptions& o) {
-  const std::filesystem::path dir = o.out;
-  const identify::ChannelModel* actuator = nullptr;
-  const identify::ChannelModel* specimen = nullptr;
-  std::optional<identify::ActuatorCase> actuator_case;
-  std::optional<identify::SpecimenModel> specimen_model;
-  std::vector<std::string> notes;
-  for (std::size_t k = 0; k < id.channels.size(); ++k) {
-    const auto& model = id.channels[k].final_fit.model;
-    const auto scales = identify::signal_scales(id.signals[k]);
-    if (model.channel == identify::Channel::kMeasured) {
-      actuator = &model;
-      actuator_case = identify::actuator_case(model, scales);
-      for (const auto& n : actuator_case->left_out) notes.push_back("actuator: " + n);
-    } else {
-      specimen = &model;
-      specimen_model = identify::specimen_model(model, scales);
-      notes.push_back("specimen: " + specimen_model->description);
-      for (const auto& n : specimen_model->left_out) notes.push_back("specimen: " + n);
-    }
-  }
-  std::vector<std::string> written;
-  const auto model_path = dir / "identified_model.textproto";
-  core::write_text_format(identify::to_config(actuator, specimen), model_path,
-                          {"Identified by `rths identify " + o.data + "`: fitted values as initial values.",
-                           "Start another identification from it: rths identify DATA --model " +
-                               model_path.string()});
-  written.push_back("identified model (reads back with --model): " + model_path.string());
-  const config::Study fragment = identify::study_fragment(actuator_case, specimen_model);
-  std::vector<std::string> comment{
-      "Identified by `rths identify " + o.data + "`: the parts of a study config it determines.",
-      "Copy substructuring.model into a study's substructuring and append the cases block;",
-      "`rths identify DATA --predict STUDY --out DIR` writes the whole study."};
-  for (const auto& n : notes) comment.push_back(n);
-  const auto fragment_path = dir / "identified_study_fragment.textproto";
-  core::write_text_format(fragment, fragment_path, comment);
-  written.push_back("study-config parts: " + fragment_path.string());
-  if (!o.predict.empty()) {
-    const std::filesystem::path base_path = o.predict;
-    const config::Study study = identify::identified_study(core::load_study(base_path),
-                                                           base_path.parent_path(), fragment);
-    const auto study_path = dir / "identified_study.textproto";
-    comment[1] = base_path.string() + " with the identified specimen model and the case '" +
-                 std::string(identify::kIdentifiedCaseName) + "'.";
-    comment[2] = "Run it: rths run " + study_path.string();
-    core::write_text_format(study, study_path, comment);
-    written.push_back("study with the identified model (rths run): " + study_path.string());
-  }
-  return written;
-}
+ private:
+  ProgressReporter bar_{"identify", "steps"};
+  bool tty_ = isatty(fileno(stderr)) != 0;
+  std::string last_stage_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_line_ = start_;
+};
 
-void run_identify(const IdentifyCliOptions& o) {
-  identify::CsvUnits units;
-  units.time_to_s = identify::time_unit_to_s(o.time_unit);
-  units.length_to_m = identify::length_unit_to_m(o.length_unit);
-  units.force_to_n = identify::force_unit_to_n(o.force_unit);
-  const identify::DaqColumnMap map = identify::parse_column_map(o.column_map);
-
-  identify::IdentifyOptions options;
+identify::SessionRequest session_request(const IdentifyCliOptions& o) {
+  identify::SessionRequest r;
+  r.data = o.data;
+  r.validate = o.validate;
+  r.model = o.model;
+  r.predict = o.predict;
+  r.out = o.out;
+  r.design_compensator = o.design_compensator;
+  r.design_dt = o.design_dt;
+  r.units.time_to_s = identify::time_unit_to_s(o.time_unit);
+  r.units.length_to_m = identify::length_unit_to_m(o.length_unit);
+  r.units.force_to_n = identify::force_unit_to_n(o.force_unit);
+  r.time_unit = o.time_unit;
+  r.length_unit = o.length_unit;
+  r.force_unit = o.force_unit;
+  r.map = identify::parse_column_map(o.column_map);
+  r.sample_rate = o.sample_rate;
+  r.trim_idle = o.trim_idle;
+  r.folds = o.folds;
+  r.actuator_given = o.actuator_flag_given;
+  r.specimen_given = o.specimen_flag_given;
+  identify::IdentifyOptions& options = r.options;
   options.channels.clear();
   for (const auto& name : split_list(o.channels)) {
     if (name == "measured") options.channels.push_back(identify::Channel::kMeasured);
@@ -175,164 +133,51 @@ void run_identify(const IdentifyCliOptions& o) {
   options.holdout_blocks = o.blocks;
   options.search_decimation = o.decimate;
   options.search_samples = o.search_samples;
+  options.search_tolerance = o.search_tolerance;
+  options.search_iterations = o.search_iterations;
   options.selection.min_relative_improvement = o.min_improvement;
   options.selection.penalty_per_parameter = o.penalty;
   options.selection.max_steps = o.max_steps;
+  return r;
+}
 
-  std::optional<identify::DeclaredModel> declared;
-  apply_declared_model(o, options, declared);
+// RECORD.rthsrec: a distributed run identified link by link (identify/run_record.h).
+void run_identify_record(const IdentifyCliOptions& o, const identify::IdentifyOptions& options) {
+  IdentifyProgressPrinter progress;
+  identify::IdentifyOptions with_progress = options;
+  with_progress.progress = [&](const identify::IdentifyProgress& p) { progress(p); };
+  const identify::RunIdentification run = identify::identify_run_record(o.data, with_progress);
+  if (o.json) {
+    std::cout << identify::run_record_json(run).dump(2) << "\n";
+  } else {
+    std::cout << identify::run_record_text(run);
+  }
+}
 
-  // With --trim-idle, the idle stretches before and after the test are cut off (data.h).
-  std::vector<std::string> trimmed;
-  const auto load = [&](const std::string& path) {
-    identify::MeasuredData record =
-        identify::read_measured(path, units, map, identify::kDefaultMinSamples, o.sample_rate);
-    if (!o.trim_idle) return record;
-    const identify::ActiveRange active = identify::active_range(record);
-    std::ostringstream note;
-    note << path << ": active part " << record.time[active.begin] << " s to "
-         << record.time[active.end - 1] << " s of " << record.time.front() << " s to "
-         << record.time.back() << " s (--trim-idle)";
-    trimmed.push_back(note.str());
-    identify::MeasuredData active_part = identify::slice(record, active.begin, active.end);
-    active_part.source = record.source;
-    identify::validate(active_part, identify::kDefaultMinSamples);
-    return active_part;
-  };
-  const identify::MeasuredData data = load(o.data);
-  std::optional<identify::MeasuredData> other;  // read first: a bad file fails before the fit
-  if (!o.validate.empty()) other = load(o.validate);
-  if (declared) {
-    for (const auto& [channel, part] :
-         {std::pair{identify::Channel::kMeasured, &declared->actuator},
-          std::pair{identify::Channel::kForce, &declared->specimen}}) {
-      if (*part) {
-        identify::check_physical_bounds(
-            **part, channel, identify::signal_scales(identify::make_signals(data, channel)),
-            declared->source);
-      }
-    }
+void run_identify(const IdentifyCliOptions& o) {
+  const identify::SessionRequest request = session_request(o);
+  if (identify::is_run_record(o.data)) return run_identify_record(o, request.options);
+  IdentifyProgressPrinter progress;
+  const identify::SessionResult result =
+      identify::run_session(request, [&](const identify::IdentifyProgress& p) { progress(p); });
+  if (result.compensator) {
+    std::cerr << "compensator: " << result.compensator->summary << "\nwritten to "
+              << result.compensator_file.string() << "\n";
   }
-  // Progress on stderr (cli/support.h): the identification's units, then one per k-fold fit.
-  ProgressReporter progress("identify", "steps");
-  const std::size_t fold_units = o.folds >= 2 ? o.folds * options.channels.size() : 0;
-  const std::size_t identify_units = identify::identify_units(options);
-  options.progress = [&](const identify::IdentifyProgress& p) {
-    progress.update(p.done, p.total + fold_units);
-  };
-  const identify::Identification id = identify::identify(data, options);
-  progress.update(identify_units, identify_units + fold_units);
-
-  std::optional<identify::StudyPrediction> prediction;
-  if (!o.predict.empty()) {
-    const auto* actuator = id.find(identify::Channel::kMeasured);
-    if (actuator == nullptr) {
-      throw std::invalid_argument("--predict needs the 'measured' channel in --channels");
-    }
-    const auto scales = identify::signal_scales(id.signals.front());
-    prediction = identify::predict_study(o.predict, actuator->final_fit.model, scales);
-  }
-  if (!o.design_compensator.empty()) {
-    const auto* actuator = id.find(identify::Channel::kMeasured);
-    if (actuator == nullptr) {
-      throw std::invalid_argument("--design-compensator needs the actuator model: include 'measured' in --channels");
-    }
-    const auto design = identify::design_compensator(
-        actuator->final_fit.model, identify::signal_scales(id.signals.front()),
-        identify::parse_compensator_kind(o.design_compensator), o.design_dt);
-    std::filesystem::path written;
-    try {
-      written = identify::write_compensator_case(design, o.out);
-    } catch (const std::runtime_error& e) {
-      throw ExitError(kExitEnvironment, e.what());
-    }
-    std::cerr << "compensator: " << design.summary << "\nwritten to " << written.string() << "\n";
-  }
-  std::vector<std::string> configs_written;
   if (!o.out.empty()) {
     try {
-      configs_written = write_identified_configs(id, o);
-    } catch (const std::runtime_error& e) {
-      throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
-    }
-    try {
-      identify::write_plots(id, o.out);
       const tables::Format format = tables::parse_format(o.format);
-      tables::write_table(tables::identify_table(id), std::filesystem::path(o.out) / ("identify" + tables::extension(format)), format);
+      tables::write_table(tables::identify_table(result.id),
+                          std::filesystem::path(o.out) / ("identify" + tables::extension(format)),
+                          format);
     } catch (const std::exception& e) {
       throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
     }
   }
-  // Validation: k-fold over contiguous blocks and, with --validate, another record of the rig.
-  nlohmann::json validation = nlohmann::json::array();
-  std::ostringstream validation_text;
-  for (std::size_t k = 0; k < id.channels.size(); ++k) {
-    const auto& c = id.channels[k];
-    const auto& model = c.final_fit.model;
-    nlohmann::json entry = {{"channel", identify::channel_name(c.channel)},
-                            {"in_record_heldout_error", c.final_fit.heldout_error}};
-    validation_text << "validation of channel " << identify::channel_name(c.channel)
-                    << ": in-record held-out " << 100.0 * c.final_fit.heldout_error << " %";
-    if (o.folds >= 2) {
-      identify::FitOptions fast;
-      fast.stride = 4;
-      const auto folds = identify::kfold(model, id.signals[k], o.folds, fast, [&](std::size_t done) {
-        progress.update(identify_units + k * o.folds + done, identify_units + fold_units);
-      });
-      nlohmann::json params = nlohmann::json::object();
-      for (std::size_t p = 0; p < folds.param_names.size(); ++p) {
-        params[folds.param_names[p]] = {{"mean", folds.param_mean[p]},
-                                        {"fold_spread", folds.param_spread[p]},
-                                        {"jacobian_std_error", c.final_fit.std_errors.at(p)}};
-      }
-      // identify/validation.h: every fold by the record's std; spread = sample standard deviation.
-      entry["kfold"] = {{"folds", o.folds},
-                        {"normalised_by", "std of the target over the whole record"},
-                        {"heldout_errors", folds.heldout_errors},
-                        {"heldout_errors_by_block_std", folds.block_errors},
-                        {"noise_floors", folds.noise_floors},
-                        {"mean", folds.mean},
-                        {"spread", folds.spread},
-                        {"params", params}};
-      validation_text << "; " << o.folds << "-fold " << 100.0 * folds.mean << " +/- "
-                      << 100.0 * folds.spread
-                      << " % (of the record's std; +/- one sample standard deviation; folds";
-      for (std::size_t f = 0; f < folds.heldout_errors.size(); ++f) {
-        validation_text << (f ? ", " : " ") << 100.0 * folds.heldout_errors[f] << " % (floor ";
-        // evidence.h: 0 when the block has no band free of signal to estimate the noise from.
-        if (folds.noise_floors[f] > 0.0) {
-          validation_text << 100.0 * folds.noise_floors[f] << " %)";
-        } else {
-          validation_text << "n/a)";
-        }
-      }
-      validation_text << ")";
-    }
-    if (other) {
-      const auto result = identify::validate_on(
-          model, identify::make_signals(*other, c.channel), other->source);
-      entry["other_record"] = {{"source", result.source}, {"error", result.error}};
-      validation_text << "; on " << result.source << " " << 100.0 * result.error
-                      << " % (offsets and drifts re-estimated)";
-    }
-    validation_text << "\n";
-    validation.push_back(entry);
-  }
   if (o.json) {
-    const identify::ReportContext context{o.holdout, options.holdout_mode};
-    nlohmann::json report = identify::to_json(id, context, prediction);
-    report["input_units"] = {{"time", o.time_unit}, {"length", o.length_unit}, {"force", o.force_unit}};
-    report["validation"] = validation;
-    if (!configs_written.empty()) report["configs_written"] = configs_written;
-    if (o.trim_idle) report["trimmed"] = trimmed;
-    std::cout << report.dump(2) << "\n";
+    std::cout << identify::session_json(result, request).dump(2) << "\n";
   } else {
-    std::cout << "input units: time " << o.time_unit << ", length " << o.length_unit << ", force "
-              << o.force_unit << " (--time-unit, --length-unit, --force-unit)\n";
-    for (const auto& line : trimmed) std::cout << line << "\n";
-    std::cout << identify::format_table(id, prediction) << validation_text.str();
-    if (!o.out.empty()) std::cout << "plots and identify." << o.format << " written to " << o.out << "\n";
-    for (const auto& line : configs_written) std::cout << line << "\n";
+    std::cout << identify::session_text(result, request, o.format);
   }
 }
 
@@ -343,7 +188,8 @@ void add_identify_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "identify", "Find the effects a declared actuator/specimen model lacks in measured data");
   cmd->add_option("data", o->data,
-                  "CSV time,command,measured,force or a raw DAQ export (Header Size: ...)")
+                  "CSV time,command,measured,force, a raw DAQ export (Header Size: ...) or a "
+                  "distributed run's record RECORD.rthsrec (every link and actuator identified)")
       ->required();
   cmd->add_option("--time-unit", o->time_unit, "CSV time unit: s | ms");
   cmd->add_option("--length-unit", o->length_unit,
@@ -365,7 +211,7 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--sample-rate", o->sample_rate,
                   "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
                   "export without Sampling Interval/Rate); checked against the file's own when both")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(core::Quantity::kFrequency));
   cmd->add_option("--candidates", o->candidates, "candidate effects (default: the whole library)");
   cmd->add_option("--holdout", o->holdout, "held-out share of the record")
       ->check(CLI::Range(0.01, 0.99));
@@ -378,11 +224,18 @@ void add_identify_command(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--penalty", o->penalty, "relative penalty per added parameter")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel");
+  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel")->check(CLI::Range(0, 1000));  // 0: fit the declared model only
   cmd->add_option("--decimate", o->decimate, "decimation for the search (0: automatic)");
   cmd->add_option("--search-samples", o->search_samples,
                   "automatic decimation keeps at most about this many samples")
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(core::Quantity::kCount));
+  cmd->add_option("--search-tolerance", o->search_tolerance,
+                  "relative change of cost or parameters at which a fit of the decimated search "
+                  "stops (the full-rate refits stop at 1e-10)")
+      ->check(CLI::Range(1e-12, 1e-2));
+  cmd->add_option("--search-iterations", o->search_iterations,
+                  "at most this many solver iterations per fit of the decimated search")
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run)");
   cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
@@ -393,8 +246,8 @@ void add_identify_command(CLI::App& app) {
                   "write a compensator designed from the identified actuator to --out: "
                   "polynomial | ats | model-based | model-based-adaptive")
       ->check(CLI::IsMember({"polynomial", "ats", "model-based", "model-based-adaptive"}));
-  cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s, or 1ms)")
+      ->transform(seconds_in(core::Quantity::kStep));
   cmd->add_option("--folds", o->folds,
                   "k-fold validation over contiguous blocks of the final model (0: off)");
   cmd->add_option("--validate", o->validate,

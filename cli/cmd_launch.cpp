@@ -8,6 +8,7 @@
 // Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
 // 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
 // expect_unstable); 2 for a bad config caught before starting anything.
+#include <cstdlib>
 #include <iostream>
 
 #include "cli/commands.h"
@@ -16,6 +17,7 @@
 #include "core/study.h"
 #include "runtime/launch.h"
 #include "runtime/process.h"
+#include "view/server.h"
 
 namespace rths::cli {
 namespace {
@@ -28,7 +30,35 @@ struct LaunchArgs {
   std::string cpu_placement = "auto";
   std::string format = "csv";  // of the results table: csv | mat | h5
   bool no_plots = false, json = false, allow_unstable = false;
+  std::string view;  // HOST:PORT of the live view, empty: none
+  bool view_stop = false;
 };
+
+// --view / --view-stop as the coordinator's arguments; beyond loopback the stop token is made
+// here, handed down in the environment (never on a command line) and printed.
+std::vector<std::string> view_arguments(const LaunchArgs& args) {
+  if (args.view.empty()) {
+    if (args.view_stop) throw ExitError(kExitBadInput, "--view-stop needs --view HOST:PORT");
+    return {};
+  }
+  view::ListenAddress address;
+  try {
+    address = view::parse_listen_address(args.view);
+  } catch (const std::invalid_argument& e) {
+    throw ExitError(kExitBadInput, e.what());
+  }
+  std::string token;
+  if (args.view_stop && !address.loopback()) {
+    token = view::make_token();
+    ::setenv("RTHS_VIEW_TOKEN", token.c_str(), 1);
+  }
+  std::cerr << "rths launch: live view of each case at http://" << args.view << "/"
+            << (args.view_stop ? " with a stop button" : "")
+            << (token.empty() ? "" : "; stop token " + token) << "\n";
+  std::vector<std::string> out{"--view", args.view};
+  if (args.view_stop) out.push_back("--view-stop");
+  return out;
+}
 
 void run_launch(const LaunchArgs& args) {
   const std::filesystem::path config_path = args.config;
@@ -51,6 +81,7 @@ void run_launch(const LaunchArgs& args) {
   // Checked before anything starts: the case's lag plus the network's on the actuator's path.
   warn_past_critical_delay(prepared, names);
 
+  const std::vector<std::string> coordinator_args = view_arguments(args);
   std::vector<DistributedRun> runs;
   ProgressReporter progress("launch", "cases", !args.json);
   {
@@ -69,6 +100,7 @@ void run_launch(const LaunchArgs& args) {
                               : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
                                                                : runtime::CpuPlacement::kAuto;
       options.stop_requested = [&signals] { return signals.stop_requested(); };
+      options.coordinator_args = coordinator_args;
       std::filesystem::remove(options.record);
       if (!args.json) std::cerr << "rths launch: case " << name << " ...\n";
       runtime::LaunchResult result;
@@ -114,11 +146,11 @@ void add_launch_command(CLI::App& app) {
   cmd->add_option("--case", args->cases, "case(s) to run; default every case");
   cmd->add_option("--out", args->out, "output folder (records, results, plots, logs)");
   cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)")
-      ->check(CLI::Range(0, 232));
+      ->check(in_range(core::Quantity::kDdsDomain));
   cmd->add_option("--bin-dir", args->bin_dir,
                   "where rths-coordinator and the node programs are (default: beside rths)");
   cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is stopped")
-      ->transform(seconds_value());
+      ->transform(seconds_in(core::Quantity::kTimeout));
   cmd->add_option("--cpu-placement", args->cpu_placement,
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")
@@ -130,6 +162,12 @@ void add_launch_command(CLI::App& app) {
   cmd->add_option("--security", args->security,
                   "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
                   "each process uses its node_<id> folder");
+  cmd->add_option("--view", args->view,
+                  "serve the live view of each case at HOST:PORT (e.g. 127.0.0.1:8080); "
+                  "`rths view RECORD` shows a finished one");
+  cmd->add_flag("--view-stop", args->view_stop,
+                "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
+                "token printed here");
   cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots (and remove those of an earlier run)");
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "a diverged case does not fail the run (exit 0); the summary still says diverged");

@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/support.h"
 #include "core/study.h"
 #include "runtime/plan.h"
 #include "security/pki.h"
@@ -92,7 +93,8 @@ void add_pki_command(CLI::App& app) {
   init->add_option("--config", args->config, "study whose deployment names the nodes");
   init->add_option("--case", args->case_name, "case whose default nodes are used (with --config)");
   init->add_option("--node", args->nodes, "ID:KIND (substructure | actuator_emulator), repeatable");
-  init->add_option("--days", args->days, "validity of certificates and grants in days (default 365)");
+  init->add_option("--days", args->days, "validity of certificates and grants in days (default 365)")
+      ->check(in_range(core::Quantity::kDays));
   init->add_option("--organisation", args->organisation, "O= of every subject (default rths-lab)");
   init->callback([args] { run_pki_init(*args); });
 }

@@ -14,12 +14,13 @@
 #include "tables/results.h"
 #include "tables/write.h"
 #include "util/atomic_file.h"
+#include "util/distinct_paths.h"
 
 namespace rths::cli {
 namespace {
 
 struct SdofOptions {
-  double period = 0.5, zeta = 0.05, dt = 0.0, delay = 0.0, alpha = 1.0, scale = 1.0;
+  double period = 0.5, zeta = 0.05, dt = 0.0, motion_dt = 0.0, delay = 0.0, alpha = 1.0, scale = 1.0;
   std::string motion, motion_units, delay_model = "shift", integrator = "explicit-newmark", out;
   bool json = false, allow_unstable = false;
 };
@@ -31,6 +32,7 @@ config::Study study_from_flags(const SdofOptions& o) {
   study.mutable_structure()->mutable_damping()->set_modal_zeta(o.zeta);
   study.mutable_motion()->set_path(o.motion);
   study.mutable_motion()->set_scale(o.scale);
+  study.mutable_motion()->set_column_dt(o.motion_dt);
   if (!o.motion_units.empty()) study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   study.mutable_integrator()->set_dt(o.dt);
   study.mutable_integrator()->set_allow_unstable(o.allow_unstable);
@@ -56,6 +58,7 @@ void run_sdof(const SdofOptions& o) {
   if (o.delay_model == "first-order" && !(o.delay > 0)) {
     throw std::invalid_argument("--delay-model first-order needs --delay > 0 (its time constant, s)");
   }
+  util::refuse_output_over_input({"--out", o.out}, {{"--motion", o.motion}});
   const config::Study study = study_from_flags(o);
   const core::PreparedStudy prepared = core::prepare_study(study, std::filesystem::current_path());
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
@@ -93,19 +96,21 @@ void run_sdof(const SdofOptions& o) {
 void add_sdof_command(CLI::App& app) {
   auto o = std::make_shared<SdofOptions>();
   CLI::App* cmd = app.add_subcommand("sdof", "One SDOF run from flags: reference vs delayed");
-  cmd->add_option("--period", o->period, "natural period (s)")->transform(seconds_value());
-  cmd->add_option("--zeta", o->zeta, "damping ratio, 0.05 = 5 % (at most 1)");
+  cmd->add_option("--period", o->period, "natural period (s)")->transform(seconds_in(core::Quantity::kPeriod));
+  cmd->add_option("--zeta", o->zeta, "damping ratio, 0.05 = 5 % (at most 1)")->check(in_range(core::Quantity::kDampingRatio));
   cmd->add_option("--motion", o->motion, "ground motion file (PEER AT2 or columns)")->required();
   cmd->add_option("--motion-units", o->motion_units,
                   "units of the motion record: g | m/s2 | cm/s2 (required for a columns file; AT2 files are in g)")
       ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
-  cmd->add_option("--scale", o->scale, "scale factor on the motion")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--dt", o->dt, "integration step (s, or 1ms); default: the record's step")->transform(seconds_value());
+  cmd->add_option("--scale", o->scale, "scale factor on the motion")->check(in_range(core::Quantity::kMotionScale));
+  cmd->add_option("--motion-dt", o->motion_dt, "sample step of a one-column motion file (s, or 5ms)")
+      ->transform(seconds_in(core::Quantity::kStep));
+  cmd->add_option("--dt", o->dt, "integration step (s, or 1ms); default: the record's step")->transform(seconds_in(core::Quantity::kStep));
   cmd->add_option("--delay", o->delay, "delay (s, or with a unit: 14ms), or the time constant for first-order")
-      ->transform(seconds_value());
+      ->transform(seconds_in(core::Quantity::kLag));
   cmd->add_option("--delay-model", o->delay_model, "none | shift | eq1 | eq1-lag | first-order | benchmark")
       ->check(CLI::IsMember({"none", "shift", "eq1", "eq1-lag", "first-order", "benchmark"}));
-  cmd->add_option("--exp-fraction", o->alpha, "experimental fraction alpha of the stiffness")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--exp-fraction", o->alpha, "experimental fraction alpha of the stiffness")->check(in_range(core::Quantity::kFraction));
   cmd->add_option("--integrator", o->integrator,
                   "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
   cmd->add_flag("--allow-unstable", o->allow_unstable,

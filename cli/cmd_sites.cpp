@@ -124,7 +124,7 @@ void add_sites_command(CLI::App& app) {
                   "each process uses its node_<id> folder");
   cmd->add_option("--domain", options->domain,
                   "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
-      ->check(CLI::Range(0, 232));
+      ->check(in_range(core::Quantity::kDdsDomain));
   cmd->add_option("--format", options->format,
                   "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
                   "plus lag per link")
@@ -138,9 +138,10 @@ void add_sites_command(CLI::App& app) {
                 "remove namespaces left by killed `rths sites` runs (then run CONFIG, if given)");
   cmd->add_option("--check-record", options->check_record,
                   "only check a record written elsewhere (e.g. by docker/run_container_test.sh)");
-  cmd->add_option("--expect-steps", options->expect_steps, "with --check-record: minimum steps");
+  cmd->add_option("--expect-steps", options->expect_steps, "with --check-record: minimum steps")->check(in_range(core::Quantity::kCount));
   cmd->add_option("--expect-injected", options->expect_injected,
-                  "with --check-record: expected largest median injected lag (s)");
+                  "with --check-record: expected largest median injected lag (s)")
+      ->transform(seconds_in(core::Quantity::kLag));
   cmd->callback([options] { run(*options); });
 }
 

@@ -145,13 +145,12 @@ void run_stability(const StabilityOptions& o) {
 void add_stability_command(CLI::App& app) {
   auto options = std::make_shared<StabilityOptions>();
   CLI::App* cmd = app.add_subcommand("stability", "Critical delay of a delayed SDOF hybrid system");
-  cmd->add_option("--period", options->period, "natural period T (s)")->check(CLI::PositiveNumber);
-  cmd->add_option("--zeta", options->zeta, "damping ratio")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--period", options->period, "natural period T (s, or 500ms)")->transform(seconds_in(core::Quantity::kPeriod));
+  cmd->add_option("--zeta", options->zeta, "damping ratio")->check(in_range(core::Quantity::kDampingRatio));
   cmd->add_option("--exp-fraction", options->alpha, "experimental fraction alpha of the stiffness")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(in_range(core::Quantity::kFraction));
   cmd->add_option("--dt", options->dt, "integration step (s, or 1ms); exit 2 beyond the integrator's limit")
-      ->transform(seconds_value())
-      ->check(CLI::PositiveNumber);
+      ->transform(seconds_in(core::Quantity::kStep));
   cmd->add_option("--integrator", options->integrator,
                   "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
   cmd->add_option("--branches", options->branches, "delay branches listed per crossing frequency")
@@ -161,7 +160,7 @@ void add_stability_command(CLI::App& app) {
                   "study config (SDOF): analyse the loop of --case, its actuator stages and compensation");
   cmd->add_option("--case", options->case_name, "case of --study whose actuator and compensator are analysed");
   cmd->add_option("--max-extra-delay", options->max_extra_delay, "largest extra delay searched with --study (s)")
-      ->check(CLI::Range(0.0, 10.0));
+      ->transform(seconds_in(core::Quantity::kLag));
   cmd->add_flag("--json", options->json, "print JSON");
   cmd->callback([options] {
     if (options->study.empty() != options->case_name.empty()) {

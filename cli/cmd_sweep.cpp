@@ -16,6 +16,7 @@
 #include "analysis/sweep_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
+#include "util/distinct_paths.h"
 #include "core/study.h"
 #include "slurm/sbatch.h"
 #include "tables/results.h"
@@ -183,6 +184,9 @@ void write_slurm_job(const SweepOptions& o) {
 
 void run_merge_command(const MergeOptions& o) {
   std::vector<std::filesystem::path> shards(o.shards.begin(), o.shards.end());
+  std::vector<util::NamedPath> inputs;
+  for (const auto& shard : shards) inputs.push_back({"shard", shard});
+  util::refuse_output_over_input({"out", o.out}, inputs);
   const analysis::SweepCsv merged = analysis::merge_sweep_csvs(shards, o.out);
   const std::vector<analysis::SweepTableRow> table = analysis::parse_sweep_rows(merged, o.out);
   std::filesystem::path png = o.out;
@@ -228,7 +232,7 @@ void add_sweep_command(CLI::App& app) {
   cmd->add_option("--slurm", options->slurm,
                   "write a Slurm job into this folder instead of running: an sbatch array (one task per "
                   "shard) and a merge job after it; submit with `bash FOLDER/submit.sh`");
-  cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")->check(CLI::PositiveNumber);
+  cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")->check(in_range(core::Quantity::kCount));
   cmd->add_option("--partition", options->job.partition, "--slurm: partition (default: the cluster's)");
   cmd->add_option("--time", options->job.time, "--slurm: time limit per task, e.g. 30 or 02:00:00 (default 01:00:00)");
   cmd->add_option("--mem", options->job.memory, "--slurm: memory per task, e.g. 500M or 2G (default 1G)");

@@ -34,5 +34,7 @@ void add_identify_command(CLI::App& app);
 void add_launch_command(CLI::App& app);
 void add_export_command(CLI::App& app);
 void add_pki_command(CLI::App& app);
+void add_opensees_site_command(CLI::App& app);
+void add_view_command(CLI::App& app);
 
 }  // namespace rths::cli

@@ -6,9 +6,11 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
+#include "runtime/deadline_diagnosis.h"
 #include "runtime/plan.h"
 #include "runtime/record.h"
 #include "runtime/schema.h"
+#include "runtime/validation.h"
 #include "tables/results.h"
 #include "tables/write.h"
 #include "util/atomic_file.h"
@@ -26,10 +28,11 @@ bool comparable_in_process(const config::Study& study) {
   return true;
 }
 
-// max |u_distributed - u_in_process| over every floor and step; nullopt when the step counts differ.
-std::optional<double> difference_from_in_process(const core::PreparedStudy& prepared,
-                                                 const std::string& case_name,
-                                                 const core::SimulationResult& recorded) {
+// max |u_distributed - u_in_process| over every floor and step, and the first step where they
+// differ; nullopt when the step counts differ.
+std::optional<InProcessDifference> difference_from_in_process(const core::PreparedStudy& prepared,
+                                                              const std::string& case_name,
+                                                              const core::SimulationResult& recorded) {
   const core::HybridSetup setup =
       core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name));
   const runtime::DeploymentPlan plan =
@@ -39,17 +42,42 @@ std::optional<double> difference_from_in_process(const core::PreparedStudy& prep
   if (expected.displacement.rows() != recorded.displacement.rows() ||
       expected.displacement.cols() != recorded.displacement.cols())
     return std::nullopt;
-  if (expected.displacement.size() == 0) return 0.0;
-  return (expected.displacement - recorded.displacement).cwiseAbs().maxCoeff();
+  InProcessDifference difference;
+  if (expected.displacement.size() == 0) return difference;
+  const core::Mat delta = (expected.displacement - recorded.displacement).cwiseAbs();
+  difference.max = delta.maxCoeff();
+  for (Eigen::Index k = 0; k < delta.rows() && !difference.first_step; ++k)
+    if (delta.row(k).maxCoeff() != 0.0) difference.first_step = static_cast<std::int64_t>(k);
+  return difference;
 }
 
+// A coordinator that ran and failed, or that was killed (128 + signal) or stopped at the
+// launcher's timeout (124), failed the run; 2 and 3 are its own bad input and environment.
 int exit_code_of(int coordinator_exit) {
   switch (coordinator_exit) {
     case 0: return kExitOk;
     case 1: return kExitRunFailed;
     case 2: return kExitBadInput;
-    default: return kExitEnvironment;
+    case 3: return kExitEnvironment;
+    default: return coordinator_exit >= 124 ? kExitRunFailed : kExitEnvironment;
   }
+}
+
+nlohmann::json rejects_json(const runtime::Counters& c) {
+  return {{"foreign_run", c.foreign_run()},   {"garbage", c.garbage()},
+          {"duplicate", c.duplicate()},       {"stale", c.stale()},
+          {"out_of_order", c.out_of_order()}, {"unknown_node", c.unknown_node()},
+          {"not_entitled", c.not_entitled()}, {"out_of_range", c.out_of_range()}};
+}
+
+std::string rejects_text(const runtime::Counters& c) {
+  std::string text;
+  const nlohmann::json causes = rejects_json(c);
+  for (const auto& cause : causes.items()) {
+    const auto n = cause.value().get<std::uint64_t>();
+    if (n > 0) text += (text.empty() ? "" : ", ") + cause.key() + " " + std::to_string(n);
+  }
+  return text.empty() ? "none" : text;
 }
 
 std::string ms(double seconds) {
@@ -68,7 +96,7 @@ std::vector<double> in_ms(const std::vector<double>& seconds, double offset = 0.
 std::vector<std::string> lag_plot_files(const DistributedResults& results) {
   std::vector<std::string> files;
   for (const auto& c : results.outcome.cases)
-    for (const char* extension : {".png", ".svg"}) files.push_back("lag_" + c.name + extension);
+    for (const char* extension : {".png", ".svg"}) files.push_back("links_" + c.name + extension);
   return files;
 }
 
@@ -148,7 +176,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       continue;
     }
     const runtime::RecordContents record = runtime::read_record(run.record);
-    if (record.truncated) print_warning(record.warning);
+    if (!record.warning.empty()) print_warning(record.warning);
     if (record.header() == nullptr) {
       results.missing.emplace_back(run.case_name, "the record has no header; see " + run.log_hint);
       continue;
@@ -159,15 +187,33 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
     DistributedCaseFacts facts;
     facts.coordinator_exit = run.coordinator_exit;
     facts.record = run.record;
+    if (measured.has_footer && measured.steps.steps() < 2) {
+      // Stopped before step 1: nothing to compare, the footer says why.
+      results.missing.emplace_back(run.case_name, "stopped before step 1: " +
+                                                      measured.footer.status() + "; see " +
+                                                      run.log_hint);
+      continue;
+    }
     if (measured.has_footer) {
       c.status = measured.footer.status();
       const auto& k = measured.footer.counters();
       facts.overruns = k.overruns();
-      facts.rejected = k.foreign_run() + k.garbage() + k.duplicate() + k.stale() + k.out_of_order() +
-                       k.unknown_node();
+      facts.rejected = runtime::RejectCounters::from(k).total();
+      facts.node_rejects.assign(measured.footer.node_rejects().begin(),
+                                measured.footer.node_rejects().end());
+      if (c.status.find("deadline misses") != std::string::npos)
+        facts.deadline_diagnosis =
+            runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
+                                        static_cast<std::uint64_t>(runtime::max_missed_answers(
+                                            prepared.config.deployment())))
+                .describe();
     } else {
       c.status = "cut short";
       c.status_detail = "the record has no footer: the coordinator stopped abruptly";
+    }
+    if (record.lost_entries()) {  // checksums failed: its rows are not the run's
+      c.status = "record damaged";
+      c.status_detail = record.loss_report();
     }
     if (!run.launcher_status.empty()) {
       c.status = run.launcher_status;
@@ -175,7 +221,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
     }
     facts.link_labels = roles;
     if (comparable && run.coordinator_exit == 0)
-      facts.max_difference_from_in_process =
+      facts.difference_from_in_process =
           difference_from_in_process(prepared, run.case_name, measured.steps);
     c.simulation = std::move(measured.steps);
     results.links.push_back(std::move(measured.links));
@@ -205,7 +251,7 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
     try {
       analysis::write_study_plots(results.outcome, out);
       for (std::size_t i = 0; i < results.outcome.cases.size(); ++i)
-        if (!results.links[i].empty()) write_lag_plot(results, i, out / ("lag_" + results.outcome.cases[i].name + ".png"));
+        if (!results.links[i].empty()) write_lag_plot(results, i, out / ("links_" + results.outcome.cases[i].name + ".png"));
     } catch (const std::exception& e) {
       print_warning(std::string("plots not written: ") + e.what());
     }
@@ -238,7 +284,9 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
   for (const auto& [node, series] : links) {
     // Injected first, so the measured round trip is drawn over it.
-    network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected)});
+    // Thick and dashed: in lockstep it lies on zero, under the processes' own exchange times.
+    network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected),
+                              "lines lw 3 dt 2"});
     if (node == path.node_id) actuator_link_colour = util::series_colour(network.series.size());
     network.series.push_back({label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
   }
@@ -278,8 +326,13 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
     level(c.stability->continuous, "continuous", "2");
     level(c.stability->discrete, "discrete", "3");
   }
-  // From zero, and high enough that the critical delays are never on the border.
-  stack.y_min = network.y_min = 0.0;
+  if (!path.real_time)
+    network.title = "wall-clock round trip per link, case " + c.name +
+                    " (lockstep: simulated time carries no network lag; these are the processes' own exchange times)";
+  // From zero, and high enough that the critical delays are never on the border; the network
+  // panel a little below zero, so that an injected lag of zero is seen, not hidden in the axis.
+  stack.y_min = 0.0;
+  if (const auto range = util::padded_y_range(network.series, {})) network.y_min = -0.05 * std::max(range->second, 1e-3);
   if (const auto range = util::padded_y_range(stack.series, {})) stack.y_max = range->second;
   network.height = stack.height = 380;
   std::vector<util::PlotSpec> panels;
@@ -298,13 +351,18 @@ std::string distributed_summary_text(const DistributedResults& results) {
     text << c.name << ": " << c.simulation.steps() << " steps, coordinator exit " << f.coordinator_exit
          << ", overruns " << f.overruns << ", rejected " << f.rejected << ", record " << f.record.string()
          << "\n";
-    if (f.max_difference_from_in_process) {
-      if (*f.max_difference_from_in_process == 0.0)
+    if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
+    if (f.difference_from_in_process) {
+      if (!f.difference_from_in_process->first_step)
         text << "  equals the in-process run of the same case bit for bit\n";
       else
-        text << "  DIFFERS from the in-process run of the same case: max |du| = " << std::scientific
-             << *f.max_difference_from_in_process << std::fixed << " m\n";
+        text << "  DIFFERS from the in-process run of the same case from step "
+             << *f.difference_from_in_process->first_step << ": max |du| = " << std::scientific
+             << f.difference_from_in_process->max << std::fixed << " m\n";
     }
+    for (const runtime::NodeRejects& n : f.node_rejects)
+      text << "  " << n.label() << " rejected: " << rejects_text(n.rejected())
+           << (n.final() ? "" : " (as of its last heartbeat)") << "\n";
     for (const auto& [node, series] : results.links[i]) {
       const auto rt = series.round_trip_summary();
       const auto inj = series.injected_summary();
@@ -342,9 +400,21 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     c["rejected"] = f.rejected;
     c["links"] = links;
     c["record"] = f.record.string();
-    c["max_difference_from_in_process_m"] = f.max_difference_from_in_process
-                                                ? nlohmann::json(*f.max_difference_from_in_process)
+    c["deadline_diagnosis"] = f.deadline_diagnosis.empty() ? nlohmann::json() : nlohmann::json(f.deadline_diagnosis);
+    c["max_difference_from_in_process_m"] = f.difference_from_in_process
+                                                ? nlohmann::json(f.difference_from_in_process->max)
                                                 : nlohmann::json();
+    c["first_step_differing_from_in_process"] =
+        f.difference_from_in_process && f.difference_from_in_process->first_step
+            ? nlohmann::json(*f.difference_from_in_process->first_step)
+            : nlohmann::json();
+    nlohmann::json nodes = nlohmann::json::array();
+    for (const runtime::NodeRejects& n : f.node_rejects)
+      nodes.push_back({{"node_id", n.node_id()},
+                       {"label", n.label()},
+                       {"final", n.final()},
+                       {"rejected", rejects_json(n.rejected())}});
+    c["node_rejects"] = nodes;
   }
   nlohmann::json missing = nlohmann::json::array();
   for (const auto& [name, why] : results.missing) missing.push_back({{"case", name}, {"why", why}});
@@ -360,6 +430,8 @@ void fail_if_distributed_failed(const DistributedResults& results,
       for (std::size_t i = 0; i < results.outcome.cases.size(); ++i)
         if (results.outcome.cases[i].name == run.case_name && status.empty())
           status = results.outcome.cases[i].status;
+      for (const auto& [name, why] : results.missing)
+        if (name == run.case_name && status.empty()) status = why;
       throw ExitError(exit_code_of(run.coordinator_exit),
                       "case " + run.case_name + ": " + status + "; see " + run.log_hint);
     }
@@ -367,6 +439,15 @@ void fail_if_distributed_failed(const DistributedResults& results,
   if (!results.missing.empty())
     throw ExitError(kExitEnvironment, "case " + results.missing.front().first + ": " +
                                           results.missing.front().second);
+  for (std::size_t i = 0; i < results.facts.size(); ++i) {
+    const auto& difference = results.facts[i].difference_from_in_process;
+    if (difference && difference->first_step)
+      throw ExitError(kExitRunFailed,
+                      "case " + results.outcome.cases[i].name +
+                          ": the lockstep run differs from the in-process run from step " +
+                          std::to_string(*difference->first_step) + " (max |du| " +
+                          std::to_string(difference->max) + " m)");
+  }
   fail_if_unstable(results.outcome, allow_unstable);
 }
 

@@ -16,9 +16,11 @@
 //                       and summary.txt. With plots off, stale plots go.
 //   distributed_summary_text / _json   analysis::study_summary_text/_json plus per case: steps,
 //                       coordinator exit, overruns, rejected messages, lag per link (median, p99,
-//                       max round trip; median injected; s), and, for a lockstep run without node
-//                       delay stages, the largest difference from the in-process run of the same
-//                       case (0 = bit for bit).
+//                       max round trip; median injected; s), each node's rejects by cause, and,
+//                       for a lockstep run without node delay stages, the largest difference from
+//                       the in-process run of the same case and the first step that differs (none
+//                       = bit for bit). A case whose record stops before step 1 is listed in
+//                       `missing` with the footer's reason.
 
 #include <filesystem>
 #include <map>
@@ -31,6 +33,7 @@
 #include "analysis/study_run.h"
 #include "core/study.h"
 #include "runtime/measurements.h"
+#include "rths/proto/runtime.pb.h"
 
 namespace rths::cli {
 
@@ -71,12 +74,22 @@ int warn_past_critical_delay(const core::PreparedStudy& prepared, const std::vec
 std::map<int, std::string> link_roles(const config::Deployment& deployment,
                                       const std::map<int, std::string>& site_of_node = {});
 
+// A lockstep run against the in-process run of the same case.
+struct InProcessDifference {
+  double max = 0.0;                       // m, max |u_distributed - u_in_process|
+  std::optional<std::int64_t> first_step;  // the first step that differs; none = bit for bit
+};
+
 struct DistributedCaseFacts {
   int coordinator_exit = -1;
-  std::uint64_t overruns = 0, rejected = 0;
+  std::uint64_t overruns = 0, rejected = 0;  // rejected: the coordinator's, every cause
   std::filesystem::path record;
   std::map<int, std::string> link_labels;  // node id -> link_roles' label
-  std::optional<double> max_difference_from_in_process;  // m
+  std::optional<InProcessDifference> difference_from_in_process;
+  std::vector<runtime::NodeRejects> node_rejects;  // the footer's: each node's, by cause
+  // A real-time run that missed its deadlines: why, what to do, what the record is good for
+  // (runtime::diagnose_deadlines); empty otherwise.
+  std::string deadline_diagnosis;
 };
 
 struct DistributedResults {
@@ -92,7 +105,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
                                      const std::vector<DistributedRun>& runs,
                                      const std::map<int, std::string>& site_of_node = {});
 
-// lag_<case>.png and .svg, two panels sharing the time axis (ms):
+// links_<case>.png and .svg, two panels sharing the time axis (ms):
 //   1. network lag per link, by role: measured round trip and injected round trip;
 //   2. the lag the test feels on the actuator's path, stacked: the actuator lab's network round
 //      trip (measured; real time only, lockstep does not feel it) with the actuator's own lag
@@ -108,9 +121,11 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
 std::string distributed_summary_text(const DistributedResults& results);
 nlohmann::json distributed_summary_json(const DistributedResults& results);
 
-// Exit status of distributed cases: the first failing coordinator's (1 run failed, 2 bad config,
-// else 3 environment), then a case that left no record (3), then a diverged case (1; unless
-// allow_unstable or expect_unstable). Throws ExitError; returns when every case passed.
+// Exit status of distributed cases: the first failing coordinator's (1 run failed, also when it
+// was killed by a signal or stopped at the timeout; 2 bad config; 3 environment), then a case
+// that left no record (3), then a lockstep case that differs from the in-process run (1, naming
+// the first differing step), then a diverged case (1; unless allow_unstable or expect_unstable).
+// Throws ExitError; returns when every case passed.
 void fail_if_distributed_failed(const DistributedResults& results,
                                 const std::vector<DistributedRun>& runs, bool allow_unstable);
 

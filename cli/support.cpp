@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "cli/commands.h"
+#include "core/text_columns.h"
 #include "core/text_format.h"
 #include "rths/analysis/joint_lag.pb.h"
 #include "rths/proto/config.pb.h"
@@ -163,6 +164,40 @@ CLI::Validator seconds_value() {
       "TIME (s, or 14ms)");
 }
 
+namespace {
+// CLI11 prefixes a validator's message with the flag ("--dt: "), so the rule's message omits it.
+CLI::Validator range_validator(core::Quantity quantity, bool seconds) {
+  return CLI::Validator(
+      [quantity, seconds](std::string& input) -> std::string {
+        double value = 0;
+        if (seconds) {
+          try {
+            value = parse_seconds(input);
+          } catch (const std::invalid_argument& e) {
+            return e.what();
+          }
+        } else if (const auto number = core::parse_finite(input)) {
+          value = *number;
+        } else {
+          return "'" + input + "' is not a number";
+        }
+        const std::string violation = core::range_violation(quantity, value, "");
+        if (!violation.empty()) return violation;
+        if (seconds) {
+          std::ostringstream out;
+          out.precision(17);
+          out << value;
+          input = out.str();
+        }
+        return "";
+      },
+      core::range_of(quantity).text());
+}
+}  // namespace
+
+CLI::Validator seconds_in(core::Quantity quantity) { return range_validator(quantity, true); }
+CLI::Validator in_range(core::Quantity quantity) { return range_validator(quantity, false); }
+
 std::optional<std::string> closest(const std::string& word, const std::vector<std::string>& candidates) {
   std::optional<std::string> best;
   std::size_t best_distance = std::max<std::size_t>(1, word.size() / 3) + 1;
@@ -176,36 +211,66 @@ std::optional<std::string> closest(const std::string& word, const std::vector<st
   return best;
 }
 
-std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv) {
-  if (argc < 2) return "";
-  const std::string first = argv[1];
-  if (first.empty() || first[0] == '-') return "";
+namespace {
+
+std::vector<std::string> subcommand_names(const CLI::App& app) {
   std::vector<std::string> names;
   for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) names.push_back(sub->get_name());
-  if (std::find(names.begin(), names.end(), first) == names.end()) {
-    std::string message = "unknown command '" + first + "'";
-    if (const auto near = closest(first, names)) message += "; did you mean `rths " + *near + "`?";
-    else {
-      message += "; commands:";
-      for (const std::string& n : names) message += " " + n;
-    }
-    return message;
-  }
-  const CLI::App* sub = app.get_subcommand(first);
+  return names;
+}
+
+std::vector<std::string> flag_names(const CLI::App& app) {
   std::vector<std::string> flags;
-  for (const CLI::Option* option : sub->get_options()) {
+  for (const CLI::Option* option : app.get_options()) {
     for (const std::string& name : option->get_lnames()) flags.push_back("--" + name);
   }
-  for (int i = 2; i < argc; ++i) {
+  return flags;
+}
+
+std::string unknown_command(const std::string& word, const std::string& path, const std::vector<std::string>& names) {
+  std::string message = "unknown command '" + word + "'" + (path == "rths" ? "" : " for `" + path + "`");
+  if (const auto near = closest(word, names)) return message + "; did you mean `" + path + " " + *near + "`?";
+  message += "; commands:";
+  for (const std::string& n : names) message += " " + n;
+  return message;
+}
+
+std::string unknown_flag(const std::string& word, const std::string& path, const std::vector<std::string>& flags) {
+  std::string message = "unknown option '" + word + "' for `" + path + "`";
+  if (const auto near = closest(word, flags)) return message + "; did you mean '" + *near + "'?";
+  return message + " (see `" + path + " --help`)";
+}
+
+}  // namespace
+
+std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv) {
+  // Walks the words level by level: a subcommand name descends into it; a --flag is checked
+  // against the flags of the level it appears at, so a nested command's slip is suggested from
+  // its own flags; a bare word where a level needs a subcommand must be one of its names.
+  const CLI::App* level = &app;
+  std::string path = "rths";
+  bool chose = false;
+  for (int i = 1; i < argc; ++i) {
     std::string word = argv[i];
     if (word == "--") break;
-    if (word.rfind("--", 0) != 0) continue;
-    word = word.substr(0, word.find('='));
-    if (std::find(flags.begin(), flags.end(), word) != flags.end()) continue;
-    std::string message = "unknown option '" + word + "' for `rths " + first + "`";
-    if (const auto near = closest(word, flags)) message += "; did you mean '" + *near + "'?";
-    else message += " (see `rths " + first + " --help`)";
-    return message;
+    if (word.rfind("--", 0) == 0) {
+      if (level == &app) continue;  // --help, --version: CLI11's own
+      word = word.substr(0, word.find('='));
+      const std::vector<std::string> flags = flag_names(*level);
+      if (std::find(flags.begin(), flags.end(), word) == flags.end()) return unknown_flag(word, path, flags);
+      continue;
+    }
+    if (word.empty() || word[0] == '-') continue;
+    const std::vector<std::string> names = subcommand_names(*level);
+    if (std::find(names.begin(), names.end(), word) != names.end()) {
+      level = level->get_subcommand(word);
+      path += " " + word;
+      chose = false;
+      continue;
+    }
+    const bool needs_subcommand = level->get_require_subcommand_min() > 0 && !chose;
+    if (needs_subcommand && !names.empty()) return unknown_command(word, path, names);
+    chose = true;
   }
   return "";
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "analysis/study_run.h"
+#include "core/ranges.h"
 
 namespace rths::cli {
 
@@ -51,13 +52,20 @@ void print_warning(const std::string& message);
 CLI::Validator seconds_value();
 // The same parse as a function: seconds from text. Throws std::invalid_argument.
 double parse_seconds(const std::string& text);
+// A time flag checked against its quantity's range rule (core/ranges.h): seconds_value() then
+// the rule; attach with ->transform (it rewrites "14ms" to seconds); CLI11 refuses a value as
+// "--dt: 1e-09 s is outside [1e-06, 1] s (...)", exit 2.
+CLI::Validator seconds_in(core::Quantity quantity);
+// A plain number flag checked against its quantity's range rule (counts, fractions, CPUs...).
+CLI::Validator in_range(core::Quantity quantity);
 
 // The candidate closest to `word` by edit distance, when close enough to be a slip (at most a
 // third of the word's length, and at least 1 edit allowed).
 std::optional<std::string> closest(const std::string& word, const std::vector<std::string>& candidates);
 
-// Before parsing: an unknown subcommand or an unknown --flag of the subcommand gets "did you
-// mean". Returns the message, or empty when the words are known.
+// Before parsing, level by level (`rths pki init ...` is three levels): an unknown subcommand or
+// an unknown --flag gets "did you mean" from that level's own subcommands and flags. Returns the
+// message, or empty when the words are known.
 std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv);
 
 // results.csv (removing stale plots when plots are off), plots, summary.json/.txt; prints the

@@ -1,9 +1,11 @@
 #include "coordinator/coordinator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <string>
 
+#include "coordinator/answer_verdict.h"
 #include "coordinator/deadline_verdict.h"
 #include "coordinator/state.h"
 
@@ -35,10 +37,12 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
     node.plan = &n;
     node.awaited = s.awaits_answers_of(n.spec);
     s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
+    s.endpoint.listen_to(n.spec.id());
     intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),
                             n.spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR, node.awaited});
   }
-  s.intake = std::make_unique<FeedbackIntake>(s.options.run_id, intake_nodes);
+  s.intake = std::make_unique<FeedbackIntake>(s.options.run_id, intake_nodes,
+                                              s.deployment.limits().max_displacement());
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
   const int actuators = static_cast<int>(s.setup.partition.actuator_storeys.size());
   s.assembly = s.setup.partition.assembly();
@@ -57,98 +61,115 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
 
 Coordinator::~Coordinator() = default;
 
-RunOutcome Coordinator::run() {
-  State& s = *state_;
-  const auto wall_start = Clock::now();
-  RunOutcome outcome;
-  if (!s.options.record.empty())
-    s.record = std::make_unique<runtime::AsyncRecordWriter>(s.options.record);
+namespace {
 
-  runtime::MonotonicClock monotonic;
-  runtime::PacingClock& pacing_clock = s.options.clock ? *s.options.clock : monotonic;
-  runtime::Pacer pacer(pacing_clock, s.setup.dt, runtime::wait_policy(s.deployment));
-  s.pacing_clock = &pacing_clock;
-  s.pacer = &pacer;
-  core::SimulationResult& result = outcome.result;
-  bool failed = false;
+// The run's lifecycle, as run() calls it: activate -> loop -> judge -> deactivate -> report.
 
-  try {
-    s.write_header();
-    s.start_up();
-    s.event("all " + std::to_string(s.nodes.size()) + " nodes ready (" +
-            std::string(s.real_time ? "real time" : "lockstep") + ", case " + s.case_name + ")");
-    if (s.real_time) s.prepare_real_time_thread();
-    for (const auto& [id, node] : s.nodes)
-      if (!node.awaited)
-        s.event("not waiting for the answers of " + node.plan->label() + ": its link injects a " +
-                std::to_string(1e3 * State::injected_round_trip(node.plan->spec)) +
-                " ms round trip, longer than the loop's wait of " +
-                std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
-    core::SimulationOptions loop_options;
-    loop_options.divergence_bound = s.options.divergence_bound;
-    {
-      // Feedback is judged and boxed on the transport's receive thread; the loop is woken once
-      // a step's answers are all in. Removed (waiting out a running call) before the loop ends.
-      s.endpoint.set_inline_handler([&s](const transport::Message& m) {
-        if (m.kind != runtime::FEEDBACK) return false;
-        if (s.intake->offer(m)) s.endpoint.interrupt();
-        return true;
-      });
-      struct RemoveHandler {
-        transport::Endpoint& endpoint;
-        ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
-      } remove_handler{s.endpoint};
-      core::run_steps(s.setup, s.prepared.motion, s, s, loop_options, result);
+// The record's header, every node ready, the real-time thread prepared.
+void activate(Coordinator::State& s) {
+  s.write_header();
+  s.start_up();
+  s.event("all " + std::to_string(s.nodes.size()) + " nodes ready (" +
+          std::string(s.real_time ? "real time" : "lockstep") + ", case " + s.case_name + ")");
+  if (s.real_time) s.prepare_real_time_thread();
+  for (const auto& [id, node] : s.nodes)
+    if (!node.awaited)
+      s.event("not waiting for the answers of " + node.plan->label() + ": its link injects a " +
+              std::to_string(1e3 * Coordinator::State::injected_round_trip(node.plan->spec)) +
+              " ms round trip, longer than the loop's wait of " +
+              std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
+}
+
+// core::run_steps (or the options' outside StepDriver) with this run as its evaluator and hooks.
+// Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's answers are all in (or a fault
+// was raised). The handler is removed (waiting out a running call) before this returns.
+void loop(Coordinator::State& s, core::SimulationResult& result) {
+  core::SimulationOptions options;
+  options.divergence_bound = s.options.divergence_bound;
+  s.endpoint.set_inline_handler([&s](const transport::Message& m) {
+    if (m.kind != runtime::FEEDBACK) return false;
+    if (s.intake->offer(m)) s.endpoint.interrupt();
+    return true;
+  });
+  struct RemoveHandler {
+    transport::Endpoint& endpoint;
+    ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
+  } remove_handler{s.endpoint};
+  if (s.options.driver)
+    s.options.driver(s, s, result);
+  else
+    core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
+}
+
+// A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), a node that
+// answered too few steps (answer_shortfall), or completed.
+void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
+  const core::SimulationResult& result = outcome.result;
+  if (result.diverged)
+    s.event("diverged: |u| = " +
+            std::to_string(result.displacement.bottomRows(1).cwiseAbs().maxCoeff()) + " m");
+  outcome.ok = !result.diverged;
+  outcome.status = result.diverged ? "diverged" : "completed";
+  const double tolerance = runtime::max_overrun_fraction(s.deployment);
+  std::optional<std::string> misses;
+  if (s.real_time && !result.diverged)
+    misses = loop_deadline_misses(pacer.overruns(), pacer.worst_overrun_streak(),
+                                  result.steps() > 0 ? result.steps() - 1 : 0, tolerance);
+  for (const auto& [id, node] : s.nodes)
+    if (outcome.ok && !misses)
+      misses = servo_deadline_misses(node.plan->label(), node.servo_overruns, node.servo_ticks,
+                                     tolerance);
+  for (const auto& [id, node] : s.nodes)
+    if (s.real_time && outcome.ok && !misses) {
+      // Answers to the last steps of a link slower than a step are still on the wire at the end.
+      const auto in_flight = static_cast<std::uint64_t>(
+          std::ceil(Coordinator::State::injected_round_trip(node.plan->spec) / s.setup.dt)) + 1;
+      const std::uint64_t due = node.judged_steps > in_flight ? node.judged_steps - in_flight : 0;
+      misses = answer_shortfall(id, std::min(node.answers, due), due, kMinAnswerFraction);
     }
-    if (result.diverged)
-      s.event("diverged: |u| = " +
-              std::to_string(result.displacement.bottomRows(1).cwiseAbs().maxCoeff()) + " m");
-    outcome.ok = !result.diverged;
-    outcome.status = result.diverged ? "diverged" : "completed";
-    const double tolerance = runtime::max_overrun_fraction(s.deployment);
-    std::optional<std::string> misses;
-    if (s.real_time && !result.diverged)
-      misses = loop_deadline_misses(pacer.overruns(), pacer.worst_overrun_streak(),
-                                    result.steps() > 0 ? result.steps() - 1 : 0, tolerance);
-    for (const auto& [id, node] : s.nodes)
-      if (outcome.ok && !misses)
-        misses = servo_deadline_misses(node.plan->label(), node.servo_overruns, node.servo_ticks,
-                                       tolerance);
-    if (misses) {
-      outcome.ok = false;
-      outcome.status = *misses;
-      s.event(outcome.status);
-    }
-  } catch (const RunAborted& e) {
-    failed = true;
-    outcome.status = e.what();
-    outcome.failed_node = e.node;
-  } catch (const std::exception& e) {
-    // Transport or record failures: still hold the actuators and close the record.
-    failed = true;
-    outcome.status = std::string("internal error: ") + e.what();
+  if (misses) {
+    outcome.ok = false;
+    outcome.status = *misses;
+    s.event(outcome.status);
   }
+}
+
+// HOLD to the emulators after a failure; STOP to every node that announced, addressed to it
+// after its HOLD on the same topic, so the STOP cannot overtake the HOLD (DDS orders per topic
+// only). A node that never announced was never assigned and ignores all but ASSIGN. Then waits
+// (at most kFinalReportWait) for each node's last heartbeat, which carries what it rejected.
+void deactivate(Coordinator::State& s, bool failed, const std::string& status) {
   if (failed) {
-    spdlog::error("run {} stopped at step {}: {}", s.options.run_id, s.step, outcome.status);
-    for (auto& [id, node] : s.nodes) {
-      // A node that never announced runs nothing of this run (and has no addressed topic yet).
-      if (node.plan->spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR || !node.announced)
-        continue;
-      runtime::Hold hold;
-      hold.set_reason(outcome.status);
-      s.send(id, runtime::HOLD, s.step, hold);
-    }
-    s.event("HOLD sent to the actuator emulators: " + outcome.status);
+    spdlog::error("run {} stopped at step {}: {}", s.options.run_id, s.step, status);
+    runtime::Hold hold;
+    hold.set_reason(status);
+    for (auto& [id, node] : s.nodes)
+      if (node.plan->spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR && node.announced)
+        s.send(id, runtime::HOLD, s.step, hold);
+    s.event("HOLD sent to the actuator emulators: " + status);
   }
-  // Addressed to each node that announced, after its HOLD on the same topic, so the STOP cannot
-  // overtake the HOLD (DDS orders per topic only: a broadcast STOP did, in 1 of 23 fault trials).
-  // A node that never announced was never assigned, and an unassigned node ignores all but ASSIGN.
   runtime::Stop stop;
-  stop.set_reason(outcome.status);
+  stop.set_reason(status);
   for (auto& [id, node] : s.nodes)
     if (node.announced) s.send(id, runtime::STOP, s.step, stop);
+  const auto until = Clock::now() + kFinalReportWait;
+  const auto all_reported = [&s] {
+    for (const auto& [id, node] : s.nodes)
+      if (node.announced && !node.final_report) return false;
+    return true;
+  };
+  while (!all_reported() && Clock::now() < until) {
+    try {
+      s.pump(std::chrono::milliseconds(5));
+    } catch (const RunAborted&) {
+      // The run is over: what a node says now (its own HOLD) changes nothing.
+    }
+  }
+}
 
-  const std::size_t completed = result.steps();
+// Counters, link lag and what each node rejected, into the outcome.
+void report(const Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
+  const std::size_t completed = outcome.result.steps();
   runtime::RejectCounters rejected = s.rejected;
   rejected.add(s.intake->rejected());
   rejected.fill(outcome.counters);
@@ -157,12 +178,15 @@ RunOutcome Coordinator::run() {
   outcome.counters.set_worst_overrun_streak(pacer.worst_overrun_streak());
   outcome.counters.set_worst_late_streak(s.worst_late_streak);
   outcome.counters.set_steps(completed > 0 ? completed - 1 : 0);
+  outcome.max_lateness = pacer.max_lateness();
   for (const auto& [id, node] : s.nodes) {
     outcome.counters.set_servo_ticks(outcome.counters.servo_ticks() + node.servo_ticks);
     outcome.counters.set_servo_overruns(outcome.counters.servo_overruns() + node.servo_overruns);
-  }
-  outcome.max_lateness = pacer.max_lateness();
-  for (auto& [id, node] : s.nodes) {
+    runtime::NodeRejects& node_rejects = outcome.node_rejects.emplace_back();
+    node_rejects.set_node_id(id);
+    node_rejects.set_label(node.plan->label());
+    *node_rejects.mutable_rejected() = node.rejects;
+    node_rejects.set_final(node.final_report);
     LinkLagStats stats;
     stats.node_id = id;
     stats.label = node.plan->label();
@@ -173,28 +197,67 @@ RunOutcome Coordinator::run() {
     }
     outcome.links.push_back(stats);
   }
-  outcome.wall_seconds = seconds_since(wall_start);
-  if (s.record && s.record->dropped() > 0) {
-    // A gap in the record is lost data: the run did not do what it was for.
+}
+
+// A record that lost entries fails the run; the footer closes it.
+void close_record(Coordinator::State& s, RunOutcome& outcome) {
+  if (!s.record) return;
+  if (s.record->dropped() > 0 && !s.record_failed) {
     outcome.ok = false;
     outcome.status += "; the run record lost " + std::to_string(s.record->dropped()) +
                       " entries (its writer fell more than " +
                       std::to_string(s.record->capacity()) + " entries behind)";
   }
-  if (s.record) {
-    runtime::RecordEntry entry;
-    runtime::RunFooter& f = *entry.mutable_footer();
-    f.set_ok(outcome.ok);
-    f.set_status(outcome.status);
-    f.set_failed_node(outcome.failed_node);
-    *f.mutable_counters() = outcome.counters;
-    f.set_diverged(result.diverged);
-    f.set_wall_seconds(outcome.wall_seconds);
-    s.append_waiting(entry);
-    s.record->close();  // throws naming the file when a write failed
+  runtime::RecordEntry entry;
+  runtime::RunFooter& f = *entry.mutable_footer();
+  f.set_ok(outcome.ok);
+  f.set_status(outcome.status);
+  f.set_failed_node(outcome.failed_node);
+  *f.mutable_counters() = outcome.counters;
+  f.set_diverged(outcome.result.diverged);
+  f.set_wall_seconds(outcome.wall_seconds);
+  for (const runtime::NodeRejects& n : outcome.node_rejects) *f.add_node_rejects() = n;
+  s.append_waiting(entry);
+  try {
+    s.record->close();
+  } catch (const std::runtime_error& e) {  // a write failed: the run kept nothing after it
+    outcome.ok = false;
+    if (!s.record_failed) outcome.status += std::string("; ") + e.what();
   }
+}
+
+}  // namespace
+
+RunOutcome Coordinator::run() {
+  State& s = *state_;
+  const auto wall_start = Clock::now();
+  RunOutcome outcome;
+  if (!s.options.record.empty())
+    s.record = std::make_unique<runtime::AsyncRecordWriter>(s.options.record);
+  if (s.record) s.record->set_observer(s.options.record_observer);
+  runtime::MonotonicClock monotonic;
+  runtime::Pacer pacer(s.options.clock ? *s.options.clock : monotonic, s.setup.dt,
+                       runtime::wait_policy(s.deployment));
+  s.pacer = &pacer;
+  bool failed = false;
+  try {
+    activate(s);
+    loop(s, outcome.result);
+    judge(s, pacer, outcome);
+  } catch (const RunAborted& e) {
+    failed = true;
+    outcome.status = e.what();
+    outcome.failed_node = e.node;
+  } catch (const std::exception& e) {
+    // Transport or record failures: still hold the actuators and close the record.
+    failed = true;
+    outcome.status = std::string("internal error: ") + e.what();
+  }
+  deactivate(s, failed, outcome.status);
+  report(s, pacer, outcome);
+  outcome.wall_seconds = seconds_since(wall_start);
+  close_record(s, outcome);
   s.pacer = nullptr;
-  s.pacing_clock = nullptr;
   return outcome;
 }
 

@@ -37,13 +37,31 @@
 //   a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep),
 //   no lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift
 //   changing by more than limits.max_displacement_step -> stops before the command is sent.
+//   the record's writer fails a write (disk full, I/O error, file size limit) or falls more than
+//   its ring (4096 entries) behind -> stops within a step or two of it, naming the file and the
+//   reason; the record is the readable prefix written before the failure.
+//   a stop request (options.stop_request: the view's stop button) -> stops before the next step,
+//                  status kStoppedFromView.
 //   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
-//   rejects    foreign-run, garbage, duplicate, stale, out-of-order, unknown-node messages are
-//              counted and never applied.
+//   an integrity fault (coordinator::FeedbackIntake: an answer as a node from a participant other
+//   than the one that announced as it, or two different answers to one step) -> stops at the
+//   loop's next look at the intake (within the step in lockstep), naming the node and both
+//   arrivals.
+//   rejects    foreign-run (and empty run id), garbage, duplicate, stale, out-of-order (incl. an
+//              answer not echoing its step's command), unknown-node, not-entitled (a node's id on
+//              another node's topic or from another writer than the one pinned at its
+//              announcement; a coordinator's kind sent as a node) and out-of-range (a force or
+//              drift not finite, beyond the limits) messages are counted and never applied.
+// Trust: each node speaks on its own up topic; its first announcement pins its writer. An
+// announcement never stops the run (once ready, or of the wrong kind, it is counted).
+// Start-up heartbeats keep the nodes already assigned alive while late ones join.
+// After the STOPs, each node's last heartbeat reports what it rejected, by cause
+// (RunOutcome::node_rejects, the footer's node_rejects).
 // Record: header, one StepRecord per step, events, footer, through runtime::AsyncRecordWriter:
 // the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
 // loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
-// one or two entries behind). A full ring drops and counts entries and fails the run.
+// one or two entries behind). Every entry carries a CRC-32C (runtime/record.h). A record that
+// cannot be written stops the run, as a fault below: nothing would be kept of it.
 // Feedback: judged and decoded on the transport's receive thread (its inline handler) by
 // coordinator::FeedbackIntake into one wait-free LatestBox per node; the loop takes the newest
 // without a lock or a copy, and is woken once per step, when the step's last answer is in.
@@ -54,14 +72,14 @@
 // mlockall and pinning of the loop thread when the deployment asks. Each step records
 // command_latency (wake-up to the last command written); bench/runtime_bench prints it.
 // pin_loop: the loop thread alone on loop_cpu (runtime::isolate_calling_thread_on_cpu; rths
-// launch starts the nodes off it). Measured (2-core VM, 1024 Hz, medians of 3, README "Real
-// time"): overruns within +0.03 to +0.09 points of a bare clock_nanosleep loop; wake-up to command
-// written median 29-31 us unpinned, 17 us with pin_loop (p99 27-88 us); lockstep step 1.52 x a
-// DDS ping-pong; RSS flat over 10^6 steps (+0.3 %).
+// launch starts the nodes off it). The figures measured are in the README ("Real time").
 
+#include <atomic>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "core/study.h"
@@ -73,13 +91,39 @@
 
 namespace rths::coordinator {
 
+// Stops the run: thrown inside the loop (by the coordinator's own parts or by a StepDriver) with
+// the reason and the label of the participant at fault (empty: none). The run then sends HOLD to
+// the emulators and STOP to all, and closes the record with the reason.
+struct RunAborted : std::runtime_error {
+  RunAborted(const std::string& why, std::string node)
+      : std::runtime_error(why), node(std::move(node)) {}
+  std::string node;
+};
+
+// Where a run's trial states come from. Empty: core::run_steps with the study's integrator.
+// Otherwise an outside integrator (an OpenSees model over TCP) drives the coordinator's evaluator
+// and hooks under run_steps' contract: result sized for the motion's steps and truncated to the
+// completed ones, row 0 the rest state, then for each step k >= 1 hooks.before_step(k),
+// evaluator.set_time(k dt), evaluator.trial(u, v, nullptr), row k stored, hooks.after_step(k),
+// evaluator.commit(); k stays below the motion's sample count (the record's ground acceleration).
+using StepDriver = std::function<void(core::HybridEvaluator& evaluator, core::StepHooks& hooks,
+                                      core::SimulationResult& result)>;
+
 struct CoordinatorOptions {
   std::string run_id;                 // must be non-empty
   std::string case_name;              // empty: deployment.case_name, else the reference case
   std::filesystem::path record;       // empty: no record file
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
   double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
+  StepDriver driver;                  // empty: the study's integrator (core::run_steps)
+  // Sees each record entry on the record's writer thread (the live view); needs `record`.
+  runtime::RecordObserver* record_observer = nullptr;
+  // Set from another thread (the view's stop button): the loop stops before its next step as for
+  // any fault, HOLD then STOP, with the status kStoppedFromView. Read once per step (relaxed).
+  const std::atomic<bool>* stop_request = nullptr;
 };
+
+inline constexpr const char* kStoppedFromView = "stopped from the view";
 
 struct LinkLagStats {
   int node_id = 0;
@@ -94,6 +138,7 @@ struct RunOutcome {
   core::SimulationResult result;  // steps completed (up to the failure)
   runtime::Counters counters;
   std::vector<LinkLagStats> links;
+  std::vector<runtime::NodeRejects> node_rejects;  // per node, what it rejected (its last report)
   double wall_seconds = 0.0;
   double max_lateness = 0.0;  // s, real time
 };
@@ -108,8 +153,10 @@ class Coordinator {
   RunOutcome run();
   const runtime::DeploymentPlan& plan() const { return plan_; }
 
- private:
+  // The coordinator's state (coordinator/state.h, internal to rths_coordinator).
   struct State;
+
+ private:
   std::unique_ptr<State> state_;
   runtime::DeploymentPlan plan_;
 };

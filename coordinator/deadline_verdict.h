@@ -1,5 +1,5 @@
 #pragma once
-// Whether a real-time run kept its deadlines, as its outcome says it (issue 10's honest outcome).
+// Whether a real-time run kept its deadlines, as its outcome says it.
 //   loop_deadline_misses    overruns > tolerance x steps  ->  "completed with deadline misses: N
 //                           overruns in S steps (P %, tolerance T %; worst streak W)"
 //   servo_deadline_misses   an emulator's servo loop: overruns > tolerance x periods  ->

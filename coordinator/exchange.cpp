@@ -8,6 +8,18 @@ namespace rths::coordinator {
 
 using runtime::Verdict;
 
+namespace {
+
+// Decodes the payload into `payload`, or counts the message as garbage: false then.
+template <class T>
+bool unpack_or_count(const transport::Message& message, T& payload, runtime::RejectCounters& rejected) {
+  if (runtime::unpack(message, payload)) return true;
+  rejected.count(Verdict::kGarbage);
+  return false;
+}
+
+}  // namespace
+
 bool Coordinator::State::pump(std::chrono::nanoseconds timeout) {
   auto message = endpoint.receive(timeout);
   if (!message) return false;
@@ -15,74 +27,76 @@ bool Coordinator::State::pump(std::chrono::nanoseconds timeout) {
     intake->offer(*message);
     return true;
   }
+  Verdict verdict = runtime::check_envelope(*message, options.run_id);
   const auto it = nodes.find(message->node_id);
-  // Announcements carry the node's expected run id, empty when it was started without one.
-  const bool announce = message->kind == runtime::ANNOUNCE &&
-                        (message->run_id.empty() || message->run_id == options.run_id);
-  Verdict verdict = announce ? Verdict::kAccept : runtime::check_envelope(*message, options.run_id);
   if (verdict == Verdict::kAccept && it == nodes.end()) verdict = Verdict::kUnknownNode;
+  if (verdict == Verdict::kAccept) verdict = runtime::check_sender(*message, it->second.writer);
   if (verdict != Verdict::kAccept) {
     rejected.count(verdict);
     return true;
   }
-  Node& node = it->second;
-  switch (message->kind) {
+  apply(*message, it->second);
+  return true;
+}
+
+void Coordinator::State::apply(const transport::Message& message, Node& node) {
+  switch (message.kind) {
     case runtime::ANNOUNCE: {
-      runtime::Announce announce_payload;
-      if (!runtime::unpack(*message, announce_payload)) {
-        rejected.count(Verdict::kGarbage);
-        return true;
-      }
-      if (node.ready) return true;  // a late or forged announcement changes nothing
-      if (announce_payload.kind() != node.plan->spec.kind())
-        throw RunAborted(node.plan->label() + " announced itself as " +
-                             runtime::node_kind_name(announce_payload.kind()) +
-                             " (pid " + std::to_string(announce_payload.pid()) + " on " +
-                             announce_payload.host() + ")",
-                         node.plan->label());
-      node.last_seen = Clock::now();
-      if (!node.announced)
-        spdlog::info("{} announced from {} pid {}", node.plan->label(), announce_payload.host(),
-                     announce_payload.pid());
-      node.announced = true;
-      if (!node.ready) send_assign(node);
-      return true;
+      runtime::Announce announce;
+      if (unpack_or_count(message, announce, rejected)) on_announce(message, announce, node);
+      return;
     }
     case runtime::READY: {
       runtime::Ready ready;
-      if (!runtime::unpack(*message, ready)) {
-        rejected.count(Verdict::kGarbage);
-        return true;
-      }
+      if (!unpack_or_count(message, ready, rejected)) return;
       node.last_seen = Clock::now();
       if (!ready.error().empty())
         throw RunAborted("could not build its part: " + ready.error(), node.plan->label());
       node.ready = true;
-      return true;
+      return;
     }
     case runtime::HOLD: {
       // An emulator held on its own (its watchdog or limits): the test cannot go on.
       runtime::Hold hold;
-      if (!runtime::unpack(*message, hold)) {
-        rejected.count(Verdict::kGarbage);
-        return true;
-      }
-      throw RunAborted("held on its own at its step " + std::to_string(message->step) + ": " +
+      if (!unpack_or_count(message, hold, rejected)) return;
+      throw RunAborted("held on its own at its step " + std::to_string(message.step) + ": " +
                            hold.reason(),
                        node.plan->label());
     }
     case runtime::HEARTBEAT: {
-      node.last_seen = Clock::now();
       runtime::Heartbeat heartbeat;
-      if (runtime::unpack(*message, heartbeat)) {
-        node.servo_ticks = heartbeat.servo_ticks();
-        node.servo_overruns = heartbeat.servo_overruns();
-      }
-      return true;
+      if (!unpack_or_count(message, heartbeat, rejected)) return;
+      node.last_seen = Clock::now();
+      node.servo_ticks = heartbeat.servo_ticks();
+      node.servo_overruns = heartbeat.servo_overruns();
+      node.rejects = heartbeat.rejected_by_cause();
+      node.final_report = node.final_report || heartbeat.final();
+      return;
     }
     default:
-      return true;  // kinds a coordinator never acts on
+      // A coordinator's own kinds (ASSIGN, COMMAND, STOP) sent as a node: nobody may.
+      rejected.count(Verdict::kNotEntitled);
+      return;
   }
+}
+
+void Coordinator::State::on_announce(const transport::Message& message,
+                                     const runtime::Announce& announce, Node& node) {
+  // Once ready, or announcing as another kind than the deployment's, an announcement changes
+  // nothing: counted, never a reason to stop (anyone can send one).
+  if (node.ready || announce.kind() != node.plan->spec.kind()) {
+    rejected.count(Verdict::kNotEntitled);
+    return;
+  }
+  node.last_seen = Clock::now();
+  if (!node.announced) {
+    spdlog::info("{} announced from {} pid {}", node.plan->label(), announce.host(), announce.pid());
+    // The node's writer is pinned: from now on only it may speak as this node.
+    node.writer = message.writer;
+    intake->pin(node.plan->spec.id(), message.writer);
+  }
+  node.announced = true;
+  send_assign(node);
 }
 
 void Coordinator::State::send_assign(const Node& node) {
@@ -110,12 +124,15 @@ void Coordinator::State::check_liveliness() {
                            " s (liveliness timeout " + std::to_string(limit) + " s)",
                        node.plan->label());
   }
-  if (seconds_since(last_heartbeat_sent) > runtime::heartbeat_period(deployment)) {
-    runtime::Heartbeat hb;
-    hb.set_last_step(step);
-    send(transport::kBroadcastId, runtime::HEARTBEAT, step, hb);
-    last_heartbeat_sent = Clock::now();
-  }
+  send_heartbeat_when_due();
+}
+
+void Coordinator::State::send_heartbeat_when_due() {
+  if (seconds_since(last_heartbeat_sent) <= runtime::heartbeat_period(deployment)) return;
+  runtime::Heartbeat hb;
+  hb.set_last_step(step);
+  send(transport::kBroadcastId, runtime::HEARTBEAT, step, hb);
+  last_heartbeat_sent = Clock::now();
 }
 
 void Coordinator::State::start_up() {
@@ -137,6 +154,8 @@ void Coordinator::State::start_up() {
                        "");
     }
     pump(std::chrono::milliseconds(20));
+    // Nodes already assigned wait for the late ones: the heartbeat keeps them from leaving.
+    send_heartbeat_when_due();
   }
 }
 
@@ -153,6 +172,8 @@ bool Coordinator::State::awaits_answers_of(const config::NodeSpec& spec) const {
 }
 
 void Coordinator::State::absorb() {
+  if (const IntegrityFault* fault = intake->fault())
+    throw RunAborted(fault->what, nodes.at(fault->node_id).plan->label());
   for (auto& [id, node] : nodes) {
     const ArrivedFeedback* arrived = intake->take(id);
     if (!arrived) continue;
@@ -177,7 +198,10 @@ const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& 
       command_message.add_drift(drift[s]);
       command_message.add_drift_velocity(drift_velocity[s]);
     }
-    send(id, runtime::COMMAND, step, command_message);
+    runtime::pack_into(outgoing, options.run_id, id, runtime::COMMAND, step, command_message);
+    outgoing.sent_ns = transport::realtime_ns();
+    intake->command_sent(id, outgoing.sent_ns);  // its answer must echo this stamp
+    endpoint.send(outgoing);
   }
   commands_written = Clock::now();
   if (local_numerical) {
@@ -249,6 +273,8 @@ void Coordinator::State::collect() {
       // slower than a step delivers, is fresh). Counted once the node has answered: before
       // that, start-up and liveliness cover it.
       const bool fresh = node.answers != node.answers_before_step;
+      node.fresh_steps += fresh ? 1 : 0;
+      ++node.judged_steps;
       node.answers_before_step = node.answers;
       node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
       if (node.missed_streak >= max_missed)

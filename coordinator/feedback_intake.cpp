@@ -1,13 +1,38 @@
 #include "coordinator/feedback_intake.h"
 
+#include <cmath>
+
 #include "runtime/schema.h"
 
 namespace rths::coordinator {
 
 using runtime::Verdict;
 
-FeedbackIntake::FeedbackIntake(std::string run_id, const std::vector<IntakeNode>& nodes)
-    : run_id_(std::move(run_id)) {
+namespace {
+
+// FNV-1a, 64 bit: tells two payloads apart. Not a defence against a chosen collision; the
+// writer check is (a forger cannot answer from the node's own writer).
+std::uint64_t hash_of(const std::string& bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string arrival(const char* which, std::int64_t sent_ns, std::int64_t received_ns,
+                    std::uint64_t writer) {
+  return std::string(which) + " arrived at realtime_ns " + std::to_string(received_ns) +
+         " (sent_ns " + std::to_string(sent_ns) +
+         (writer != 0 ? ", writer " + std::to_string(writer) : std::string()) + ")";
+}
+
+}  // namespace
+
+FeedbackIntake::FeedbackIntake(std::string run_id, const std::vector<IntakeNode>& nodes,
+                               double max_realised)
+    : run_id_(std::move(run_id)), max_realised_(max_realised) {
   for (const IntakeNode& shape : nodes) {
     auto node = std::make_unique<Node>();
     node->shape = shape;
@@ -16,52 +41,127 @@ FeedbackIntake::FeedbackIntake(std::string run_id, const std::vector<IntakeNode>
   }
 }
 
+void FeedbackIntake::pin(int node_id, std::uint64_t writer) {
+  std::lock_guard lock(producer_mutex_);
+  nodes_.at(node_id)->writer = writer;
+}
+
+void FeedbackIntake::raise(int node_id, std::string what) {
+  if (faulted_.load(std::memory_order_relaxed)) return;  // the first fault stands
+  fault_.node_id = node_id;
+  fault_.what = "integrity fault: " + std::move(what);
+  faulted_.store(true, std::memory_order_release);
+}
+
+Verdict FeedbackIntake::judge(const transport::Message& message, Node*& node) {
+  const Verdict envelope = runtime::check_envelope(message, run_id_);
+  if (envelope != Verdict::kAccept) return envelope;
+  const auto it = nodes_.find(message.node_id);
+  if (it == nodes_.end()) return Verdict::kUnknownNode;
+  node = it->second.get();
+  if (message.topic_node != message.node_id) return Verdict::kNotEntitled;
+  if (node->writer != 0 && message.writer != 0 && message.writer != node->writer) {
+    raise(message.node_id,
+          "another participant answers as node " + std::to_string(message.node_id) +
+              ": its answer to step " + std::to_string(message.step) +
+              arrival("", message.sent_ns, message.received_ns, message.writer) +
+              (node->answers == 0
+                   ? "; the node itself (writer " + std::to_string(node->writer) +
+                         ") has not answered yet"
+                   : "; the node's own answer to step " + std::to_string(node->last_answer) +
+                         arrival("", node->accepted.sent_ns, node->accepted.received_ns,
+                                 node->writer)));
+    return Verdict::kNotEntitled;
+  }
+  const std::int64_t awaited = awaited_.load(std::memory_order_acquire);
+  const Verdict order = runtime::check_step(message.step, node->last_answer, awaited);
+  if (order == Verdict::kAccept && message.step == awaited && !echoes_command(message, *node))
+    return Verdict::kOutOfOrder;
+  return order;
+}
+
+bool FeedbackIntake::echoes_command(const transport::Message& message, Node& node) const {
+  // The loop stores the new awaited step before the new command's stamp: if the step moved on
+  // while the stamp was read, the stamp may be the next command's, and this answer is to an
+  // older step now (not checked, as every older step's answer).
+  const std::int64_t echo = node.command_echo.load(std::memory_order_acquire);
+  if (awaited_.load(std::memory_order_acquire) != message.step) return true;
+  return echo >= 0 && message.echo_ns == echo;
+}
+
+bool FeedbackIntake::values_in_range(const runtime::Feedback& f) const {
+  return runtime::finite_within(f.force(), 0.0) && runtime::finite_within(f.realised(), max_realised_) &&
+         std::isfinite(f.injected_lag()) && f.injected_lag() >= 0.0 &&
+         f.command_received_ns() >= 0 && f.sampled_ns() >= 0 && f.servo_sample() >= 0;
+}
+
+Verdict FeedbackIntake::judge_repeat(const transport::Message& message, Node& node,
+                                     std::uint64_t hash, std::int64_t servo_sample) {
+  if (servo_sample > node.servo_sample) return Verdict::kAccept;
+  if (servo_sample == node.servo_sample && hash != node.accepted.payload_hash)
+    raise(message.node_id,
+          "two different answers to step " + std::to_string(message.step) + " from node " +
+              std::to_string(message.node_id) + ": the first" +
+              arrival("", node.accepted.sent_ns, node.accepted.received_ns, node.accepted.writer) +
+              ", the second" + arrival("", message.sent_ns, message.received_ns, message.writer));
+  return Verdict::kDuplicate;
+}
+
+void FeedbackIntake::record_answer(const transport::Message& message, Node& node,
+                                   std::uint64_t hash) {
+  node.accepted = {hash, message.writer, message.sent_ns, message.received_ns};
+  node.last_answer = message.step;
+  ++node.answers;
+  const runtime::Feedback& feedback = node.box.slot().feedback;
+  runtime::LinkSample& link = node.link;
+  link.set_answered_step(message.step);
+  link.set_injected_lag(feedback.injected_lag());
+  link.set_round_trip(static_cast<double>(message.received_ns - message.echo_ns) * 1e-9);
+  link.set_one_way_down(static_cast<double>(feedback.command_received_ns() - message.echo_ns) *
+                        1e-9);
+  link.set_one_way_up(static_cast<double>(message.received_ns - message.sent_ns) * 1e-9);
+}
+
 bool FeedbackIntake::offer(const transport::Message& message) {
   std::lock_guard lock(producer_mutex_);
-  Verdict verdict = runtime::check_envelope(message, run_id_);
-  const auto it = nodes_.find(message.node_id);
-  if (verdict == Verdict::kAccept && it == nodes_.end()) verdict = Verdict::kUnknownNode;
-  if (verdict != Verdict::kAccept) {
+  const bool faulted_before = faulted_.load(std::memory_order_relaxed);
+  Node* node = nullptr;
+  const Verdict verdict = judge(message, node);
+  const bool same_step = verdict == Verdict::kDuplicate;
+  if (verdict != Verdict::kAccept && !same_step) {
     rejected_.count(verdict);
-    return false;
+    return faulted_.load(std::memory_order_relaxed) != faulted_before;
   }
-  Node& node = *it->second;
-  const std::int64_t awaited = awaited_.load(std::memory_order_acquire);
-  const Verdict order = runtime::check_step(message.step, node.last_answer, awaited);
-  const bool same_step = order == Verdict::kDuplicate;
-  if (order != Verdict::kAccept && !same_step) {
-    rejected_.count(order);
-    return false;
-  }
-  ArrivedFeedback& arrived = node.box.slot();
+  ArrivedFeedback& arrived = node->box.slot();
   runtime::Feedback& feedback = arrived.feedback;
-  const int expected = node.shape.values;
+  const int expected = node->shape.values;
   if (!runtime::unpack(message, feedback) || feedback.force_size() != expected ||
-      (node.shape.emulator && feedback.realised_size() != expected)) {
+      (node->shape.emulator && feedback.realised_size() != expected)) {
     rejected_.count(Verdict::kGarbage);
     return false;
   }
-  if (same_step && feedback.servo_sample() <= node.servo_sample) {
-    rejected_.count(order);
+  if (!values_in_range(feedback)) {
+    rejected_.count(Verdict::kOutOfRange);
     return false;
   }
-  node.servo_sample = feedback.servo_sample();
-  if (!same_step) {
-    node.last_answer = message.step;
-    ++node.answers;
-    runtime::LinkSample& link = node.link;
-    link.set_answered_step(message.step);
-    link.set_injected_lag(feedback.injected_lag());
-    link.set_round_trip(static_cast<double>(message.received_ns - message.echo_ns) * 1e-9);
-    link.set_one_way_down(static_cast<double>(feedback.command_received_ns() - message.echo_ns) *
-                          1e-9);
-    link.set_one_way_up(static_cast<double>(message.received_ns - message.sent_ns) * 1e-9);
+  const std::uint64_t hash = hash_of(message.payload);
+  if (same_step) {
+    const Verdict repeat = judge_repeat(message, *node, hash, feedback.servo_sample());
+    if (repeat != Verdict::kAccept) {
+      rejected_.count(repeat);
+      return faulted_.load(std::memory_order_relaxed) != faulted_before;
+    }
+    node->accepted = {hash, message.writer, message.sent_ns, message.received_ns};
+  } else {
+    record_answer(message, *node, hash);
   }
-  arrived.answered_step = node.last_answer;
-  arrived.answers = node.answers;
-  arrived.link = node.link;
-  node.box.publish();
-  if (same_step || message.step != awaited || !node.shape.awaited) return false;
+  node->servo_sample = feedback.servo_sample();
+  arrived.answered_step = node->last_answer;
+  arrived.answers = node->answers;
+  arrived.link = node->link;
+  node->box.publish();
+  const std::int64_t awaited = awaited_.load(std::memory_order_acquire);
+  if (same_step || message.step != awaited || !node->shape.awaited) return false;
   for (const auto& [id, other] : nodes_)
     if (other->shape.awaited && other->last_answer != awaited) return false;
   return true;

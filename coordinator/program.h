@@ -2,6 +2,9 @@
 // The coordinator program:
 //   rths-coordinator --config STUDY [--case NAME] [--run-id ID] [--record FILE] [--domain D]
 //                    [--security DIR/node_0]   (DDS Security; bad documents: exit 2, nothing sent)
+//                    [--view HOST:PORT [--view-stop]]  (the live view, view/server.h; needs --record;
+//                    the stop button HOLDs then STOPs the run, "stopped from the view"; beyond
+//                    loopback it needs the token printed at start-up)
 // Loads the study, opens DDS (domain: --domain, else deployment.domain_id), runs one case and
 // prints a summary. Exit: 0 completed, 1 the run stopped (node lost, limit, start-up timeout),
 // 2 bad config or usage, 3 DDS or file error.

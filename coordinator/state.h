@@ -1,6 +1,7 @@
 #pragma once
-// The coordinator's state and the members of its run, shared by the files that implement them
-// (internal to rths_coordinator; the contract is in coordinator.h):
+// The coordinator's configuration (RunConfiguration: fixed once constructed) and its run state
+// (State's own members), shared by the files that implement them (internal to
+// rths_coordinator; the contract is in coordinator.h):
 //   exchange.cpp     messages with the nodes (start-up, liveliness) and the step's exchange
 //                    (the restoring-force evaluator: commands out, answers in)
 //   step_hooks.cpp   pacing before a step, the real-time thread, the record after it
@@ -27,25 +28,27 @@ namespace rths::coordinator {
 
 using Clock = std::chrono::steady_clock;
 
-// Thrown inside the loop when the run must stop; caught by run().
-struct RunAborted : std::runtime_error {
-  RunAborted(const std::string& why, std::string node)
-      : std::runtime_error(why), node(std::move(node)) {}
-  std::string node;
-};
+// After the STOPs, how long the coordinator waits for every node's last heartbeat (what it
+// rejected, by cause); a node that does not send it in time is reported as of its last one.
+inline constexpr auto kFinalReportWait = std::chrono::milliseconds(1000);
 
 inline double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
+// What the run is: the study, the case and the deployment, settled by the constructor and never
+// changed by the run (the run's state is State's own members).
+struct RunConfiguration {
   core::PreparedStudy prepared;
   core::HybridSetup setup;
   std::string case_name;
-  transport::Endpoint& endpoint;
   CoordinatorOptions options;
   config::Deployment deployment;
   bool real_time = false;
+};
+
+struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepHooks {
+  transport::Endpoint& endpoint;
 
   // Per node.
   struct Node {
@@ -57,8 +60,12 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
     std::uint64_t answers_before_step = 0;
     int missed_streak = 0;         // real time: consecutive steps without a fresh answer
     int late_streak = 0;           // real time: consecutive steps on an older answer
+    std::uint64_t fresh_steps = 0, judged_steps = 0;  // real time: for answer_shortfall
     bool awaited = true;           // awaits_answers_of(its spec)
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
+    std::uint64_t writer = 0;      // its announcement's writer: only it may speak as this node
+    runtime::Counters rejects;     // what the node rejected, by cause, as of its last heartbeat
+    bool final_report = false;     // that heartbeat was its last (sent on STOP)
   };
   std::map<int, Node> nodes;
   // The nodes' feedback, filled by the transport's receive thread (or by pump() on a transport
@@ -90,11 +97,12 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   Clock::time_point last_heartbeat_sent;
 
   State(core::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
-      : prepared(std::move(p)), endpoint(e), options(std::move(o)) {}
+      : RunConfiguration{std::move(p), {}, {}, std::move(o), {}, false}, endpoint(e) {}
 
   void send(int node_id, runtime::MessageKind kind, std::int64_t at_step,
             const google::protobuf::MessageLite& payload) {
     runtime::pack_into(outgoing, options.run_id, node_id, kind, at_step, payload);
+    outgoing.sent_ns = transport::realtime_ns();
     endpoint.send(outgoing);
   }
   transport::Message outgoing;  // reused: no allocation per command once warm
@@ -105,11 +113,15 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   // ---- Messages (exchange.cpp) ----
   // Takes one message off the transport and applies it if valid. False on timeout.
   bool pump(std::chrono::nanoseconds timeout);
+  // A message from `node` that passed the envelope and sender checks.
+  void apply(const transport::Message& message, Node& node);
+  void on_announce(const transport::Message& message, const runtime::Announce& announce, Node& node);
 
   void send_assign(const Node& node);
   // Throws RunAborted for a node silent beyond the liveliness timeout; sends the heartbeat when
   // it is due.
   void check_liveliness();
+  void send_heartbeat_when_due();
   // Until every node is READY (start_timeout), naming each that never announced or became ready.
   void start_up();
 
@@ -124,7 +136,8 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   // s: how long a real-time step waits for its answers (feedback_wait_fraction x dt).
   double answer_wait() const;
 
-  // Takes each node's newest feedback from the intake, if new since the last take.
+  // Takes each node's newest feedback from the intake, if new since the last take. Throws
+  // RunAborted, naming the node, once the intake raised an integrity fault.
   void absorb();
 
   const core::Vec& trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) override;
@@ -149,7 +162,6 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
   void collect();
 
   // ---- StepHooks: pacing before a step, record after it (step_hooks.cpp) ----
-  runtime::PacingClock* pacing_clock = nullptr;  // set by run()
   runtime::Pacer* pacer = nullptr;
   runtime::PaceResult pace;
   Clock::time_point step_start, commands_written;
@@ -164,6 +176,12 @@ struct Coordinator::State : core::HybridEvaluator, core::StepHooks {
 
   void write_header();
   void write_step(std::size_t k, const core::SimulationResult& result, double step_wall);
+  // After each step: a record whose writer failed (disk full, I/O error) or fell behind beyond
+  // its ring stops the run (RunAborted naming the file and the reason): nothing would be kept.
+  // Detected within a step or two of the failed write (the writer flushes whenever its ring runs
+  // empty, and this runs every step).
+  void check_record();
+  bool record_failed = false;  // check_record() stopped the run
 };
 
 }  // namespace rths::coordinator

@@ -24,9 +24,8 @@ void Coordinator::State::event(const std::string& what) {
 void Coordinator::State::before_step(std::size_t k) {
   pace = {};
   // One timed wait per period, the pacer's: feedback is stamped and boxed on the receive thread
-  // meanwhile, and other messages wait in the transport's queue (stamped on arrival). A second
-  // timed wait here (draining until shortly before the deadline, as before) turned every late
-  // wake-up of it into an overrun.
+  // meanwhile, and other messages wait in the transport's queue (stamped on arrival). No second
+  // timed wait here: each late wake-up of one would be an overrun.
   if (real_time) {
     pace = pacer->wait(static_cast<std::int64_t>(k));
     // What queued during the wait (an emulator's HOLD stops the run before the next command).
@@ -34,6 +33,8 @@ void Coordinator::State::before_step(std::size_t k) {
     }
   }
   step = static_cast<std::int64_t>(k);
+  if (options.stop_request && options.stop_request->load(std::memory_order_relaxed))
+    throw RunAborted(kStoppedFromView, "");
   intake->await_step(step);
   step_start = Clock::now();
   step_start_realtime_ns = transport::realtime_ns();
@@ -43,6 +44,7 @@ bool Coordinator::State::after_step(std::size_t k,
                                     const core::SimulationResult& result) {
   const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
   write_step(k, result, step_wall);
+  check_record();
   if (k > 0)
     for (auto& [id, node] : nodes) lags.add(result.time[k], link_of(id));
   if (k == 0) {
@@ -51,6 +53,21 @@ bool Coordinator::State::after_step(std::size_t k,
     if (real_time) pacer->start();
   }
   return true;
+}
+
+void Coordinator::State::check_record() {
+  if (!record) return;
+  if (record->failed()) {
+    record_failed = true;
+    throw RunAborted(record->failure(), "");
+  }
+  if (record->dropped() > 0) {
+    record_failed = true;
+    throw RunAborted("the run record's writer fell more than " +
+                         std::to_string(record->capacity()) + " entries behind (" +
+                         std::to_string(record->dropped()) + " dropped)",
+                     "");
+  }
 }
 
 void Coordinator::State::prepare_real_time_thread() {
@@ -62,7 +79,7 @@ void Coordinator::State::prepare_real_time_thread() {
   }
   if (deployment.pin_loop()) {
     // The CPU is the loop's alone: a receive thread woken on it would preempt the loop between
-    // its commands (bench: wake-up to command written 31 -> 18 us median at 1024 Hz).
+    // its commands (README "Real time" has the wake-up to command figures).
     try {
       runtime::isolate_calling_thread_on_cpu(deployment.loop_cpu());
       event("loop thread alone on CPU " + std::to_string(deployment.loop_cpu()) +

@@ -225,7 +225,8 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
   } else {
     if (!(dt > 0.0) || !std::isfinite(dt)) {
       throw std::invalid_argument(path.string() +
-                                  ": a one-column file needs the time step dt > 0");
+                                  ": a one-column file has no time column: give its sample step, "
+                                  "motion.column_dt (--motion-dt), in s");
     }
     motion.dt = dt;
   }

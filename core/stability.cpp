@@ -549,21 +549,26 @@ std::string CriticalDelayCheck::describe() const {
   out.precision(3);
   out << "lag " << lag * 1e3 << " ms";
   const auto limit = critical();
+  const std::string discrete_text = !discrete_skipped.empty() ? "discrete check skipped: " + discrete_skipped
+                                   : "discrete none up to " + std::to_string(discrete_searched_steps) + " steps";
   if (!limit) {
-    out << ": stable for every delay (continuous; discrete none up to " << discrete_searched_steps
-        << " steps)";
+    out << ": stable for every delay (continuous; " << discrete_text << ")";
     return out.str();
   }
   out << " against a critical delay of " << *limit * 1e3 << " ms (continuous ";
   if (continuous) out << *continuous * 1e3 << " ms"; else out << "none";
-  out << ", discrete ";
-  if (discrete) out << *discrete * 1e3 << " ms"; else out << "none up to " << discrete_searched_steps << " steps";
+  out << ", ";
+  if (discrete) out << "discrete " << *discrete * 1e3 << " ms"; else out << discrete_text;
   out << "; mode " << governing_mode << ", T = " << governing_period << " s, experimental fraction "
       << governing_fraction << "): ";
   const double m = margin();
   if (m < 0) out << "PAST it by " << -m * 100.0 << " %";
   else out << m * 100.0 << " % below it";
   return out.str();
+}
+
+bool discrete_analysis_covers(IntegratorKind kind) {
+  return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha;
 }
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
@@ -597,6 +602,8 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, cons
                                   "experimental fraction phi' K_e phi / omega^2; the coupling the "
                                   "delayed force adds between modes is ignored; the experimental "
                                   "part at its initial stiffness";
+  if (!discrete_analysis_covers(kind))
+    check.discrete_skipped = "the discrete delay analysis does not cover " + to_string(kind);
   for (int i = 0; i < dofs; ++i) {
     const double omega = modes.omega[i];
     const Vec phi = modes.shapes.col(i);
@@ -614,8 +621,14 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, cons
       check.governing_period = period;
       check.governing_fraction = alpha;
     }
-    const DiscreteStability discrete =
-        discrete_critical_delay(kind, period, zeta, alpha, dt, check.discrete_searched_steps);
+    if (!check.discrete_skipped.empty()) continue;
+    // Searched past the lag to 1.5x the mode's continuous limit, so the discrete limit is found
+    // (and reported) also for a lag below it.
+    const double reach = continuous.critical_delay ? 1.5 * *continuous.critical_delay / dt : 0.0;
+    const int steps = std::min(CriticalDelayCheck::kMaxDiscreteSteps,
+                               std::max(lag_steps + 1, static_cast<int>(std::ceil(reach))));
+    check.discrete_searched_steps = std::max(check.discrete_searched_steps, steps);
+    const DiscreteStability discrete = discrete_critical_delay(kind, period, zeta, alpha, dt, steps);
     if (discrete.first_unstable_delay && (!check.discrete || *discrete.first_unstable_delay < *check.discrete)) {
       check.discrete = discrete.first_unstable_delay;
     }

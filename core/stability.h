@@ -140,6 +140,9 @@ struct CriticalDelayCheck {
   std::optional<double> continuous;          // s; empty: stable for every delay
   std::optional<double> discrete;            // s; empty: none found up to the searched steps
   int discrete_searched_steps = 0;           // n searched for the discrete limit
+  // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
+  // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
+  std::string discrete_skipped;
   std::string assumed;                       // what the check assumed (modal approximation...)
   int governing_mode = 1;                    // 1-based mode with the smallest continuous delay
   double governing_period = 0.0;             // s
@@ -153,6 +156,9 @@ struct CriticalDelayCheck {
   // 1 ms): past it by 76 %" or "... 42 % below it".
   std::string describe() const;
 };
+
+// False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha).
+bool discrete_analysis_covers(IntegratorKind kind);
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         const std::vector<double>& experimental_storey_stiffness,

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/ranges.h"
 #include "core/structure_io.h"
 #include "core/study.h"
 #include "core/text_columns.h"
@@ -48,7 +49,7 @@ Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralMode
   Specimen out;
   out.mass = spec.mass();
   if (spec.has_zeta()) {
-    if (!(spec.zeta() >= 0 && spec.zeta() <= kMaxDampingRatio && spec.mass() > 0))
+    if (!(spec.zeta() >= 0 && range_of(Quantity::kDampingRatio).contains(spec.zeta()) && spec.mass() > 0))
       fail(field + ".zeta", format_number(spec.zeta()) + " must be in [0, 1] with a mass > 0");
     out.damping = 2.0 * spec.zeta() * spec.mass() * std::sqrt(spec.stiffness() / spec.mass());
   } else {

@@ -1,6 +1,7 @@
 #include "core/study.h"
 
 #include "core/compensation.h"
+#include "core/ranges.h"
 #include "core/structure_config.h"
 #include "core/tracking.h"
 #include "core/text_columns.h"
@@ -24,34 +25,38 @@ void require(bool ok, const std::string& source, const std::string& message) {
   if (!ok) fail(source, message);
 }
 
-// A lag in seconds within [0, kMaxLag]; the message suggests the likely slip (ms written as s).
-void require_lag(double value, const std::string& field, const std::string& source, bool zero_allowed) {
-  require(zero_allowed ? value >= 0 : value > 0, source,
-          field + " must be " + (zero_allowed ? ">= 0" : "> 0") + " s, got " + format_number(value));
-  require(value <= kMaxLag, source,
-          field + " = " + format_number(value) + " s is longer than any actuator or network lag (at most " +
-              format_number(kMaxLag) + " s); delays are in seconds: 14 ms is 0.014");
+// A number against its range rule (core/ranges.h), the message prefixed with the source.
+void require_in(Quantity quantity, double value, const std::string& field, const std::string& source) {
+  const std::string message = range_violation(quantity, value, field);
+  if (!message.empty()) fail(source, message);
+}
+
+// A lag in seconds (core::check_lag); a time constant must also be > 0.
+void require_lag(double value, const std::string& field, const std::string& source, bool zero_allowed,
+                 bool allow_long_lag) {
+  require(zero_allowed || value > 0, source, field + " must be > 0 s, got " + format_number(value));
+  require_in(allow_long_lag ? Quantity::kLongLag : Quantity::kLag, value, field, source);
 }
 
 void validate_delay_stage(const config::DelayStage& stage, const std::string& where,
-                          const std::string& source) {
+                          const std::string& source, bool long_lag) {
   using K = config::DelayStage::KindCase;
   require(stage.amplitude_gain() >= 0 && stage.amplitude_gain() <= 10, source,
           where + ".amplitude_gain must be in [0, 10] (0 means 1), got " + format_number(stage.amplitude_gain()));
   switch (stage.kind_case()) {
-    case K::kShift: require_lag(stage.shift().delay(), where + ".shift.delay", source, true); break;
-    case K::kEq1: require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true); break;
-    case K::kEq1Lag: require_lag(stage.eq1_lag().delay(), where + ".eq1_lag.delay", source, true); break;
+    case K::kShift: require_lag(stage.shift().delay(), where + ".shift.delay", source, true, long_lag); break;
+    case K::kEq1: require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true, long_lag); break;
+    case K::kEq1Lag: require_lag(stage.eq1_lag().delay(), where + ".eq1_lag.delay", source, true, long_lag); break;
     case K::kFirstOrder:
-      require_lag(stage.first_order().time_constant(), where + ".first_order.time_constant", source, false);
+      require_lag(stage.first_order().time_constant(), where + ".first_order.time_constant", source, false, long_lag);
       break;
     case K::kTransferFunction:
       require(!stage.transfer_function().denominator().empty(), source,
               where + ".transfer_function.denominator is empty");
       break;
     case K::kJitter:
-      require_lag(stage.jitter().mean_delay(), where + ".jitter.mean_delay", source, true);
-      require_lag(stage.jitter().std_dev(), where + ".jitter.std_dev", source, true);
+      require_lag(stage.jitter().mean_delay(), where + ".jitter.mean_delay", source, true, long_lag);
+      require_lag(stage.jitter().std_dev(), where + ".jitter.std_dev", source, true, long_lag);
       break;
     case K::kTrace: require(!stage.trace().path().empty(), source, where + ".trace.path is empty"); break;
     case K::kBenchmark: break;
@@ -77,14 +82,14 @@ config::Study load_study(const std::filesystem::path& path) {
   return parse_study(read_text_file(path, "config"), path.string());
 }
 
-void validate_study(const config::Study& study, const std::string& source) {
-  require(study.has_structure(), source, "structure is missing");
-  const config::Structure& structure = study.structure();
+namespace {
+
+void validate_structure(const config::Structure& structure, const std::string& source) {
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
-    require(sdof.period() >= 0, source, "structure.sdof.period must be > 0 s, got " + std::to_string(sdof.period()));
     require(sdof.mass() >= 0, source, "structure.sdof.mass must be > 0 kg");
     require(sdof.stiffness() >= 0, source, "structure.sdof.stiffness must be > 0 N/m");
+    if (sdof.period() != 0) require_in(Quantity::kPeriod, sdof.period(), "structure.sdof.period", source);
     require(sdof.period() > 0 || (sdof.mass() > 0 && sdof.stiffness() > 0), source,
             "structure.sdof needs a period, or both mass and stiffness");
   } else if (structure.has_shear_building()) {
@@ -95,70 +100,107 @@ void validate_study(const config::Study& study, const std::string& source) {
   } else if (!structure.has_matrices()) {
     fail(source, "structure needs sdof, shear_building or matrices");
   }
-  if (structure.has_sdof()) {
-    require(structure.sdof().period() <= kMaxPeriod, source,
-            "structure.sdof.period = " + format_number(structure.sdof().period()) + " s is beyond any structure's (at most " +
-                format_number(kMaxPeriod) + " s)");
-  }
-  const double zeta = structure.damping().has_rayleigh() ? structure.damping().rayleigh().zeta()
-                                                         : structure.damping().modal_zeta();
-  const std::string zeta_field = structure.damping().has_rayleigh() ? "structure.damping.rayleigh.zeta"
-                                                                    : "structure.damping.modal_zeta";
-  require(zeta >= 0 && zeta <= kMaxDampingRatio, source,
-          zeta_field + " is a ratio in [0, 1] (0.05 = 5 % of critical), got " + format_number(zeta));
-  require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
-          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " + format_number(study.servo().rate()));
-  require(study.integrator().dt() >= 0 && study.integrator().dt() <= kMaxStep, source,
-          "integrator.dt must be in [0, " + format_number(kMaxStep) + "] s (0 = the record's step), got " +
-              format_number(study.integrator().dt()));
-  const auto& sub = study.substructuring();
-  require(sub.experimental_fraction() >= 0 && sub.experimental_fraction() <= 1, source,
-          "substructuring.experimental_fraction must be in [0, 1]");
-  require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
-          "substructuring: give experimental_fraction or experimental_storeys, not both");
-  if (structure.has_matrices()) {
-    require(sub.experimental_storeys().empty() && sub.experimental_fraction() == 0, source,
-            "substructuring: a structure given by matrices is split at experimental_dofs, not by storeys");
-  } else {
-    require(sub.experimental_dofs().empty(), source,
-            "substructuring.experimental_dofs needs structure.matrices (a shear building is split by storeys)");
-  }
-  require(study.motion().scale() >= 0 && study.motion().scale() <= kMaxMotionScale, source,
-          "motion.scale must be in [0, " + format_number(kMaxMotionScale) + "] (0 means 1), got " + format_number(study.motion().scale()));
-  require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
-  const auto& limits = study.deployment().limits();
-  require(limits.max_displacement() >= 0 && limits.max_velocity() >= 0, source,
-          "deployment.limits.max_displacement and max_velocity must be >= 0 (0 = no limit)");
+  const bool rayleigh = structure.damping().has_rayleigh();
+  require_in(Quantity::kDampingRatio,
+             rayleigh ? structure.damping().rayleigh().zeta() : structure.damping().modal_zeta(),
+             rayleigh ? "structure.damping.rayleigh.zeta" : "structure.damping.modal_zeta", source);
+}
+
+void validate_cases(const config::Study& study, const std::string& source) {
   for (int i = 0; i < study.cases_size(); ++i) {
     const config::Case& c = study.cases(i);
+    const std::string where = "cases[" + std::to_string(i) + "] '" + c.name() + "'";
     for (int j = 0; j < i; ++j) {
       require(study.cases(j).name() != c.name(), source,
               "cases[" + std::to_string(i) + "] repeats the name '" + c.name() + "' of cases[" +
                   std::to_string(j) + "]: case names must be unique");
     }
     for (int j = 0; j < c.delay_size(); ++j) {
-      validate_delay_stage(c.delay(j), "cases[" + std::to_string(i) + "] '" + c.name() + "' delay[" + std::to_string(j) + "]", source);
+      validate_delay_stage(c.delay(j), where + " delay[" + std::to_string(j) + "]", source,
+                           study.allow_long_lag());
     }
     for (int j = 0; j < c.compensation_size(); ++j) {
       try {
-        validate_compensation(c.compensation(j), "cases[" + std::to_string(i) + "] '" + c.name() + "' compensation[" + std::to_string(j) + "]");
+        validate_compensation(c.compensation(j), where + " compensation[" + std::to_string(j) + "]");
       } catch (const std::invalid_argument& e) {
         fail(source, e.what());
       }
     }
   }
-  for (double period : study.sweep().periods()) {
-    require(period > 0 && period <= kMaxPeriod, source,
-            "sweep.periods must be in (0, " + format_number(kMaxPeriod) + "] s, got " + format_number(period));
-  }
-  for (double delay : study.sweep().delays()) require_lag(delay, "sweep.delays", source, true);
-  for (double dt : study.sweep().dts()) {
-    require(dt > 0 && dt <= kMaxStep, source, "sweep.dts must be in (0, " + format_number(kMaxStep) + "] s, got " + format_number(dt));
-  }
+}
+
+void validate_sweep(const config::Study& study, const std::string& source) {
+  for (double period : study.sweep().periods()) require_in(Quantity::kPeriod, period, "sweep.periods", source);
+  for (double delay : study.sweep().delays()) require_lag(delay, "sweep.delays", source, true, study.allow_long_lag());
+  for (double dt : study.sweep().dts()) require_in(Quantity::kStep, dt, "sweep.dts", source);
   for (double k : study.sweep().stiffnesses()) require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
   for (double a : study.sweep().experimental_fractions()) {
-    require(a >= 0 && a <= 1, source, "sweep.experimental_fractions must be in [0, 1]");
+    require_in(Quantity::kFraction, a, "sweep.experimental_fractions", source);
   }
+}
+
+// 0 means "the default" for these fields; any other value must be inside its range.
+void require_unset_or_in(Quantity quantity, double value, const std::string& field, const std::string& source) {
+  if (value != 0) require_in(quantity, value, field, source);
+}
+
+void validate_deployment(const config::Deployment& d, bool allow_long_lag, const std::string& source) {
+  const std::string at = "deployment.";
+  require_in(Quantity::kDdsDomain, d.domain_id(), at + "domain_id", source);
+  for (int i = 0; i < d.nodes_size(); ++i) {
+    const std::string node = at + "nodes[" + std::to_string(i) + "].";
+    for (const auto& [name, lag] : {std::pair{"receive_lag", &d.nodes(i).receive_lag()},
+                                    std::pair{"send_lag", &d.nodes(i).send_lag()}}) {
+      validate_link_lag(*lag, node + name, allow_long_lag, source);
+    }
+  }
+  require_unset_or_in(Quantity::kTimeout, d.start_timeout(), at + "start_timeout", source);
+  require_unset_or_in(Quantity::kTimeout, d.heartbeat_period(), at + "heartbeat_period", source);
+  require_unset_or_in(Quantity::kTimeout, d.liveliness_timeout(), at + "liveliness_timeout", source);
+  require_unset_or_in(Quantity::kTimeout, d.step_timeout(), at + "step_timeout", source);
+  require_unset_or_in(Quantity::kFraction, d.feedback_wait_fraction(), at + "feedback_wait_fraction", source);
+  require_unset_or_in(Quantity::kLag, d.spin_margin(), at + "spin_margin", source);
+  if (d.max_overrun_fraction() >= 0)
+    require_in(Quantity::kFraction, d.max_overrun_fraction(), at + "max_overrun_fraction (< 0: off)", source);
+  require_unset_or_in(Quantity::kCount, d.max_missed_answers(), at + "max_missed_answers", source);
+  require_unset_or_in(Quantity::kCount, d.command_watchdog_periods(), at + "command_watchdog_periods", source);
+  if (d.pin_loop() || d.loop_cpu() > 0) require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);
+  require(d.limits().max_displacement() >= 0 && d.limits().max_velocity() >= 0, source,
+          "deployment.limits.max_displacement and max_velocity must be >= 0 (0 = no limit)");
+}
+
+}  // namespace
+
+void validate_link_lag(const config::LinkLag& lag, const std::string& where, bool allow_long_lag,
+                       const std::string& source) {
+  require_lag(lag.one_way_delay(), where + ".one_way_delay", source, true, allow_long_lag);
+  require_lag(lag.jitter(), where + ".jitter", source, true, allow_long_lag);
+  require(lag.loss() >= 0 && lag.loss() < 1, source,
+          where + ".loss = " + format_number(lag.loss()) + " is outside [0, 1) (a probability)");
+}
+
+void validate_study(const config::Study& study, const std::string& source) {
+  require(study.has_structure(), source, "structure is missing");
+  validate_structure(study.structure(), source);
+  require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
+          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " + format_number(study.servo().rate()));
+  require_unset_or_in(Quantity::kStep, study.integrator().dt(), "integrator.dt (0 = the record's step)", source);
+  const auto& sub = study.substructuring();
+  require_in(Quantity::kFraction, sub.experimental_fraction(), "substructuring.experimental_fraction", source);
+  require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
+          "substructuring: give experimental_fraction or experimental_storeys, not both");
+  if (study.structure().has_matrices()) {
+    require(sub.experimental_storeys().empty() && sub.experimental_fraction() == 0, source,
+            "substructuring: a structure given by matrices is split at experimental_dofs, not by storeys");
+  } else {
+    require(sub.experimental_dofs().empty(), source,
+            "substructuring.experimental_dofs needs structure.matrices (a shear building is split by storeys)");
+  }
+  require_unset_or_in(Quantity::kMotionScale, study.motion().scale(), "motion.scale (0 means 1)", source);
+  require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
+  validate_cases(study, source);
+  validate_sweep(study, source);
+  validate_deployment(study.deployment(), study.allow_long_lag(), source);
 }
 
 std::string units_name(config::GroundMotion::Units units) {
@@ -184,6 +226,8 @@ GroundMotion load_motion(const config::GroundMotion& motion, const std::filesyst
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
+  if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
+    throw std::invalid_argument("motion: " + why);
   bool at2 = motion.format() == config::GroundMotion::AT2;
   if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
   const std::string what = "motion '" + path.string() + "'";

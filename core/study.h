@@ -14,12 +14,7 @@
 
 namespace rths::core {
 
-// Bounds of physically sound values; validate_study refuses values beyond them, naming the field.
-inline constexpr double kMaxDampingRatio = 1.0;  // critical damping: a ratio, 0.05 = 5 %
-inline constexpr double kMaxLag = 1.0;           // s; RTHS lags are ms to tens of ms
-inline constexpr double kMaxPeriod = 50.0;       // s; the tallest buildings are under 10 s
-inline constexpr double kMaxStep = 0.1;          // s; records are sampled at 0.005 - 0.02 s
-inline constexpr double kMaxMotionScale = 100.0;
+// Every number of a study is checked against its range rule (core/ranges.h) by validate_study.
 inline constexpr double kMaxPeakGroundAcceleration = 5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
 
 // Parses a text-format Study. Throws std::invalid_argument "FILE:LINE:COL: message" on unknown
@@ -29,8 +24,14 @@ config::Study load_study(const std::filesystem::path& path);
 config::Study parse_study(const std::string& text, const std::string& source_name);
 
 // Checks the semantic rules above and the bounds; throws std::invalid_argument naming the field.
-// Unique case names; damping ratio <= 1; every lag in [0, kMaxLag] s; dt <= kMaxStep.
+// Unique case names; every number inside its range (core/ranges.h): lags <= 1 s unless
+// allow_long_lag, dt in [1 us, 1 s] (0 = the record's), periods in (0, 50] s, counts >= 1, the
+// deployment's timeouts > 0 (0 = default), loop_cpu a CPU of this machine.
 void validate_study(const config::Study& study, const std::string& source_name);
+// One link's injected lag: delay and jitter by the lag rule, loss a probability in [0, 1).
+// Throws std::invalid_argument "SOURCE: WHERE.field = ...".
+void validate_link_lag(const config::LinkLag& lag, const std::string& where, bool allow_long_lag,
+                       const std::string& source);
 
 // Reads the record in SI. Throws std::invalid_argument when a columns file has no column_units,
 // an AT2 file is given a unit other than G, or the peak exceeds kMaxPeakGroundAcceleration (a

@@ -24,6 +24,44 @@ std::string format_number(double value) {
   return buffer;
 }
 
+std::string printable(std::string_view token) {
+  constexpr std::size_t kMax = 40;
+  std::string out;
+  for (std::size_t i = 0; i < token.size() && i < kMax; ++i) {
+    const auto byte = static_cast<unsigned char>(token[i]);
+    if (byte >= 0x20 && byte < 0x7f) {
+      out += static_cast<char>(byte);
+    } else {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", byte);
+      out += escaped;
+    }
+  }
+  if (token.size() > kMax) out += "...";
+  return out;
+}
+
+std::string not_a_text_file(const std::filesystem::path& path, const std::string& what) {
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  if (!std::filesystem::exists(status)) return path.string() + ": no such " + what;
+  if (std::filesystem::is_directory(status)) return path.string() + " is a directory, not a " + what;
+  if (!std::filesystem::is_regular_file(status)) return path.string() + " is not a regular file, not a " + what;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return path.string() + ": cannot open " + what;
+  char head[4096];
+  in.read(head, sizeof head);
+  const std::streamsize n = in.gcount();
+  if (n == 0) return path.string() + " is empty, not a " + what;
+  for (std::streamsize i = 0; i < n; ++i) {
+    const auto byte = static_cast<unsigned char>(head[i]);
+    if (byte < 0x20 && byte != '\t' && byte != '\n' && byte != '\r' && byte != '\f')
+      return path.string() + " holds binary data (byte " + std::to_string(i) + " is " +
+             printable(std::string_view(head + i, 1)) + "), not a " + what + " (text)";
+  }
+  return "";
+}
+
 std::string text_position(const std::filesystem::path& path, int line) {
   return path.string() + ":" + std::to_string(line) + ": ";
 }
@@ -66,7 +104,7 @@ TextColumns read_text_columns(const std::filesystem::path& path, const std::stri
       first = false;
       continue;
     }
-    if (bad) throw std::invalid_argument(text_position(path, number) + "'" + *bad + "' is not a finite number");
+    if (bad) throw std::invalid_argument(text_position(path, number) + "'" + printable(*bad) + "' is not a finite number");
     first = false;
     out.rows.push_back(std::move(row));
   }

@@ -38,6 +38,15 @@ std::optional<double> parse_finite(std::string_view token);
 // A number as messages print it: %g (6 significant digits, no trailing zeros: "0.014", "1e-05").
 std::string format_number(double value);
 
+// A token as an error message may show it: bytes outside printable ASCII as \xNN, at most 40
+// characters ("..." after), so a binary file never reaches the terminal raw.
+std::string printable(std::string_view token);
+
+// Why `path` cannot be a text file of numbers, or empty when it may be: it does not exist, is a
+// directory (not a regular file), is empty, or holds binary bytes (a NUL or a control character
+// other than tab, CR, LF, FF in its first 4096 bytes). `what` names it: "ground-motion file".
+std::string not_a_text_file(const std::filesystem::path& path, const std::string& what);
+
 // "PATH:LINE: ", how every error about a place in a text file starts.
 std::string text_position(const std::filesystem::path& path, int line);
 

@@ -80,8 +80,8 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       const auto prepared = core::prepare_study(reference_study, base_dir);
       const auto reference = core::simulate(
           core::setup_for_case(prepared, core::reference_case(reference_study)), prepared.motion);
-      analysis::fill_joint_lag_errors(point, analysis::floor_history(reference, 0), u);
-      point.diverged = measured.has_footer && measured.footer.diverged();
+      analysis::fill_joint_lag_errors(point, analysis::floor_history(reference, 0), u,
+                                      measured.has_footer && measured.footer.diverged());
       result.measured.push_back(point);
       one_done();
     }

@@ -2,8 +2,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <stdexcept>
 
 #include "actuator_emulator/actuator_service.h"
@@ -158,6 +161,123 @@ int run_record(const std::uint8_t* data, std::size_t size) {
   });
 }
 
+std::string flip_test_record(int steps) {
+  std::string bytes(runtime::record_preamble());
+  runtime::RecordEntry entry;
+  runtime::RunHeader& h = *entry.mutable_header();
+  h.set_schema_version(runtime::kSchemaVersion);
+  h.set_run_id(kRunId);
+  *h.mutable_study() = paper_frame();
+  h.set_clock("real_time");
+  h.set_dt(kPaperDt);
+  h.set_dofs(1);
+  h.set_actuators(1);
+  h.add_link_node_ids(1);
+  h.add_link_node_ids(2);
+  runtime::append_record_frame(entry, bytes);
+  for (int k = 0; k < steps; ++k) {
+    entry.Clear();
+    runtime::StepRecord& s = *entry.mutable_step();
+    s.set_step(k);
+    s.set_time(k * kPaperDt);
+    s.add_displacement(0.01 * std::sin(0.05 * k));
+    s.add_command(0.01 * std::sin(0.05 * (k - 14)));
+    s.add_measured_force(-1e3 * std::sin(0.05 * k));
+    for (int node : {1, 2}) {
+      runtime::LinkSample& link = *s.add_links();
+      link.set_node_id(node);
+      link.set_answered_step(k);
+      link.set_round_trip(2e-4 + 1e-6 * (k % 7));
+    }
+    runtime::append_record_frame(entry, bytes);
+    if (k % 100 == 99) {
+      entry.Clear();
+      entry.mutable_event()->set_step(k);
+      entry.mutable_event()->set_what("an event at step " + std::to_string(k));
+      runtime::append_record_frame(entry, bytes);
+    }
+  }
+  entry.Clear();
+  entry.mutable_footer()->set_ok(true);
+  entry.mutable_footer()->set_status("completed");
+  entry.mutable_footer()->mutable_counters()->set_steps(static_cast<std::uint64_t>(std::max(steps - 1, 0)));
+  runtime::append_record_frame(entry, bytes);
+  return bytes;
+}
+
+FlipVerdict& FlipVerdict::operator+=(const FlipVerdict& o) {
+  entries += o.entries, damaged += o.damaged, intact += o.intact, detected += o.detected;
+  recovered += o.recovered, silent += o.silent, unreported += o.unreported;
+  lost_intact += o.lost_intact;
+  return *this;
+}
+
+FlipVerdict check_flipped_record(const std::string& original, const std::string& damaged) {
+  const runtime::RecordContents truth = runtime::parse_record(original, "original");
+  runtime::RecordContents read;
+  try {
+    read = runtime::parse_record(damaged, "damaged");
+  } catch (const std::runtime_error&) {  // nothing of a record left: every entry dropped
+  }
+  FlipVerdict v;
+  std::map<std::uint64_t, std::size_t> read_at;  // offset -> index in `read`
+  for (std::size_t j = 0; j < read.offsets.size(); ++j) read_at[read.offsets[j]] = j;
+  for (std::size_t i = 0; i < truth.offsets.size(); ++i) {
+    const std::uint64_t first = truth.offsets[i];
+    const std::uint64_t end = i + 1 < truth.offsets.size() ? truth.offsets[i + 1] : original.size();
+    const bool hit = original.compare(first, end - first, damaged, first, end - first) != 0;
+    const auto found = read_at.find(first);
+    const bool read_there = found != read_at.end();
+    const bool back = read_there && read.entries[found->second].SerializeAsString() ==
+                                        truth.entries[i].SerializeAsString();
+    if (read_there) read_at.erase(found);
+    ++v.entries;
+    if (!hit) {
+      ++v.intact;
+      ++(back ? v.recovered : v.lost_intact);
+      continue;
+    }
+    ++v.damaged;
+    bool reported = false;
+    for (const runtime::RecordLoss& loss : read.losses)
+      reported = reported || (loss.first_byte <= first && end <= loss.end_byte);
+    if (read_there) ++v.silent;
+    else if (reported) ++v.detected;
+    else ++v.unreported;
+  }
+  v.silent += read_at.size();  // entries read at an offset where none was written
+  return v;
+}
+
+std::string flips_input(int steps, const std::vector<std::pair<std::uint32_t, std::uint8_t>>& flips) {
+  std::string out;
+  const auto n = static_cast<std::uint32_t>(std::max(steps - 1, 0));
+  out.push_back(static_cast<char>(n & 0xff));
+  out.push_back(static_cast<char>((n >> 8) & 0xff));
+  for (const auto& [position, mask] : flips) {
+    for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((position >> (8 * i)) & 0xff));
+    out.push_back(static_cast<char>(mask));
+  }
+  return out;
+}
+
+int record_flips(const std::uint8_t* data, std::size_t size) {
+  if (size < 2) return 0;
+  const std::string original = flip_test_record(1 + static_cast<int>(read_le(data, 2) % 1024));
+  std::string damaged = original;
+  for (std::size_t at = 2; at + 5 <= size; at += 5) {
+    const std::uint8_t mask = data[at + 4] != 0 ? data[at + 4] : 0x01;
+    char& byte = damaged[read_le(data + at, 4) % damaged.size()];
+    byte = static_cast<char>(byte ^ mask);
+  }
+  const FlipVerdict v = check_flipped_record(original, damaged);
+  if (!v.holds())
+    throw std::logic_error("record_flips: " + std::to_string(v.silent) + " silent, " +
+                           std::to_string(v.unreported) + " unreported, " +
+                           std::to_string(v.lost_intact) + " intact entries lost");
+  return 0;
+}
+
 std::string envelope_record(std::int32_t kind, std::int32_t step, const std::string& payload) {
   std::string out;
   out.push_back(static_cast<char>(kind));
@@ -207,6 +327,7 @@ const std::vector<Target>& targets() {
       {"sites_config", &sites_config},   {"at2_motion", &at2_motion},
       {"column_motion", &column_motion}, {"daq_export", &daq_export},
       {"run_record", &run_record},       {"envelope_payload", &envelope_payload},
+      {"record_flips", &record_flips},
   };
   return all;
 }

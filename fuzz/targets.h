@@ -13,6 +13,12 @@
 //   column_motion      core::read_columns, one column at dt = 0.01 s and two columns (dt = 0)
 //   daq_export         identify::read_measured (DAQ raw export or CSV), at least 2 samples
 //   run_record         runtime::read_record, then the CSV table `rths export` writes of it
+//   record_flips       a checksummed record built from the input, with bytes flipped as the
+//                      input says, read back (runtime::parse_record): every damaged entry must be
+//                      dropped and reported in a loss region, every intact one recovered as it
+//                      was (check_flipped_record; a violation throws std::logic_error, which the
+//                      fuzzer reports). Input: [steps: uint16 LE, 1 + value % 1024], then records
+//                      of [position: uint32 LE, modulo the record's size][xor: 1 byte, 0 -> 0x01].
 //   envelope_payload   DDS envelopes as they arrive at the two node services (substructure node,
 //                      actuator emulator): runtime::check_envelope and NodeService::handle.
 //                      Input: byte 0 flags (bit 0: both nodes are first assigned the paper's frame;
@@ -46,6 +52,7 @@ int at2_motion(const std::uint8_t* data, std::size_t size);
 int column_motion(const std::uint8_t* data, std::size_t size);
 int daq_export(const std::uint8_t* data, std::size_t size);
 int run_record(const std::uint8_t* data, std::size_t size);
+int record_flips(const std::uint8_t* data, std::size_t size);
 int envelope_payload(const std::uint8_t* data, std::size_t size);
 
 const std::vector<Target>& targets();
@@ -53,6 +60,27 @@ const std::vector<Target>& targets();
 // The paper's frame (lag_shift_14ms case) assigned to node `node_id` of `kind`, dt = 1 ms: what
 // flag bit 0 of envelope_payload delivers first.
 runtime::Assign paper_assign(int node_id, config::NodeSpec::Kind kind);
+
+// A checksummed record of a short real-time run: header, `steps` steps (a sine, two links), an
+// event every 100 steps, and a footer.
+std::string flip_test_record(int steps);
+
+// What a reader made of a record with bytes flipped (`damaged`, the same size as `original`):
+// per entry of the original, damaged (a byte of its frame differs) or intact.
+struct FlipVerdict {
+  std::size_t entries = 0, damaged = 0, intact = 0;
+  std::size_t detected = 0;    // damaged, dropped, and inside a reported loss region
+  std::size_t recovered = 0;   // intact and read back byte for byte
+  std::size_t silent = 0;      // damaged but read back as an entry, or an entry that never was
+  std::size_t unreported = 0;  // damaged, dropped, but in no loss region
+  std::size_t lost_intact = 0; // intact but not read back
+  bool holds() const { return silent == 0 && unreported == 0 && lost_intact == 0; }
+  FlipVerdict& operator+=(const FlipVerdict& other);
+};
+FlipVerdict check_flipped_record(const std::string& original, const std::string& damaged);
+
+// The record_flips input for a record of `steps` steps with these (position, xor) flips.
+std::string flips_input(int steps, const std::vector<std::pair<std::uint32_t, std::uint8_t>>& flips);
 
 // One envelope record in the envelope_payload input format.
 std::string envelope_record(std::int32_t kind, std::int32_t step, const std::string& payload);

@@ -1,5 +1,7 @@
 #include "identify/fit.h"
 
+#include "util/parallel_for.h"
+
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -16,9 +18,9 @@ namespace {
 class ChannelCost final : public ceres::CostFunction {
  public:
   ChannelCost(const ChannelModel& model, const ChannelSignals& signals, const Split& split,
-              std::vector<double> scales, std::size_t stride, double target_scale)
+              std::vector<double> scales, std::size_t stride, double target_scale, int threads)
       : model_(model), signals_(signals), scales_(std::move(scales)), stride_(stride),
-        target_scale_(target_scale) {
+        target_scale_(target_scale), threads_(threads) {
     for (std::size_t r = 0; r < split.train.size(); r += stride_) indices_.push_back(split.train[r]);
     set_num_residuals(static_cast<int>(indices_.size()));
     mutable_parameter_block_sizes()->push_back(static_cast<int>(scales_.size()));
@@ -29,23 +31,34 @@ class ChannelCost final : public ceres::CostFunction {
     const std::size_t p = scales_.size();
     std::vector<double> physical(p);
     for (std::size_t i = 0; i < p; ++i) physical[i] = parameters[0][i] * scales_[i];
-    std::vector<double> prediction;
-    predict(model_, physical, signals_, prediction);
+    const bool with_jacobian = jacobians != nullptr && jacobians[0] != nullptr;
+    // Item 0 is the prediction at the parameters; items 2i+1 and 2i+2 shift parameter i up and
+    // down by h_i (central difference). Each item is a whole-record simulation of its own, so
+    // they run on threads_ threads; every value is the same whatever the threads.
+    const std::size_t items = with_jacobian ? 2 * p + 1 : 1;
+    std::vector<std::vector<double>> runs(items);
+    const auto step = [&](std::size_t i) { return 1e-5 * std::max(1.0, std::abs(parameters[0][i])); };
+    util::parallel_for(items, items > 1 ? threads_ : 1, [&](std::size_t item) {
+      std::vector<double> shifted = physical;
+      if (item > 0) {
+        const std::size_t i = (item - 1) / 2;
+        const double h = item % 2 == 1 ? step(i) : -step(i);
+        shifted[i] = (parameters[0][i] + h) * scales_[i];
+      }
+      predict(model_, shifted, signals_, runs[item]);
+    });
+    const std::vector<double>& prediction = runs[0];
     for (std::size_t r = 0; r < indices_.size(); ++r) {
       const std::size_t j = indices_[r];
       residuals[r] = (prediction[j] - signals_.target[j]) / target_scale_;
       if (!std::isfinite(residuals[r])) return false;
     }
-    if (jacobians == nullptr || jacobians[0] == nullptr) return true;
-    std::vector<double> plus, minus;
+    if (!with_jacobian) return true;
     const std::size_t m = indices_.size();
     for (std::size_t i = 0; i < p; ++i) {
-      const double h = 1e-5 * std::max(1.0, std::abs(parameters[0][i]));
-      std::vector<double> shifted = physical;
-      shifted[i] = (parameters[0][i] + h) * scales_[i];
-      predict(model_, shifted, signals_, plus);
-      shifted[i] = (parameters[0][i] - h) * scales_[i];
-      predict(model_, shifted, signals_, minus);
+      const double h = step(i);
+      const std::vector<double>& plus = runs[2 * i + 1];
+      const std::vector<double>& minus = runs[2 * i + 2];
       for (std::size_t r = 0; r < m; ++r) {
         const std::size_t j = indices_[r];
         jacobians[0][r * p + i] = (plus[j] - minus[j]) / (2.0 * h * target_scale_);
@@ -60,7 +73,21 @@ class ChannelCost final : public ceres::CostFunction {
   std::vector<double> scales_;
   std::size_t stride_;
   double target_scale_;
+  int threads_;
   std::vector<std::size_t> indices_;
+};
+
+// FitOptions::on_iteration as a Ceres callback.
+class Heartbeat final : public ceres::IterationCallback {
+ public:
+  explicit Heartbeat(const std::function<void()>& beat) : beat_(beat) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    beat_();
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::function<void()>& beat_;
 };
 
 double target_spread(const ChannelSignals& signals, const Split& split) {
@@ -114,11 +141,12 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  auto* cost = new ChannelCost(start, signals, split, scales, stride, target_scale);
+  auto* cost = new ChannelCost(start, signals, split, scales, stride, target_scale,
+                               util::resolve_threads(options.threads));
   problem.AddResidualBlock(cost, nullptr, theta.data());
   std::vector<int> constant;
   for (std::size_t i = 0; i < p; ++i) {
-    if (start.is_fixed(i) || specs[i].fixed) constant.push_back(static_cast<int>(i));
+    if (specs[i].fixed) constant.push_back(static_cast<int>(i));
   }
   if (constant.size() == p) return evaluate_channel(start, signals, split);
   if (!constant.empty()) {
@@ -137,8 +165,10 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.num_threads = 1;
   solver_options.logging_type = ceres::SILENT;
-  solver_options.function_tolerance = 1e-10;
-  solver_options.parameter_tolerance = 1e-10;
+  solver_options.function_tolerance = options.tolerance;
+  solver_options.parameter_tolerance = options.tolerance;
+  Heartbeat heartbeat(options.on_iteration);
+  if (options.on_iteration) solver_options.callbacks.push_back(&heartbeat);
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
 
@@ -166,7 +196,7 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
         free_j.transpose() * Eigen::Map<const Eigen::VectorXd>(residuals.data(),
                                                                static_cast<Eigen::Index>(m));
     for (std::size_t i = 0; i < p; ++i) {
-      if (start.is_fixed(i) || specs[i].fixed) continue;
+      if (specs[i].fixed) continue;
       const double value = theta[i] * scales[i];
       const auto near = [&](double bound) {
         return std::abs(value - bound) <= 1e-6 * std::max(std::abs(bound), scales[i]);

@@ -13,6 +13,7 @@
 // A bound hit: a free parameter that ends within 1e-6 (relative) of a bound while the gradient of
 // the cost, J^T r, still points beyond it, i.e. the data want a value the bounds forbid.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,14 @@ namespace rths::identify {
 struct FitOptions {
   std::size_t stride = 1;
   int max_iterations = 60;
+  // The solver stops when an iteration changes the cost, or the parameters, by less than this
+  // share (Ceres function_tolerance and parameter_tolerance).
+  double tolerance = 1e-10;
+  // Threads that simulate the Jacobian's columns (util::resolve_threads: <= 0 = every core).
+  // The result does not depend on it.
+  int threads = 0;
+  // Called after every iteration of the solver (a heartbeat for progress); empty = none.
+  std::function<void()> on_iteration;
 };
 
 struct BoundHit {

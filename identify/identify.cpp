@@ -44,12 +44,18 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
                                            options.holdout_mode, options.holdout_blocks);
   result.split = holdout_split(data.size(), options.holdout_fraction, options.holdout_mode,
                                options.holdout_blocks);
-  FitOptions full_fit = options.selection.fit;
   const std::size_t total = identify_units(options);
-  std::size_t channel_start = 0;
+  std::size_t channel_start = 0, last_done = 0;
+  std::string last_stage;
   const auto report = [&](std::size_t done, const std::string& stage) {
-    if (options.progress) options.progress({std::min(done, total), total, stage});
+    last_done = std::min(done, total);
+    last_stage = stage;
+    if (options.progress) options.progress({last_done, total, stage});
   };
+  // Every solver iteration repeats the last report: progress moves while one fit runs long.
+  const auto heartbeat = [&] { report(last_done, last_stage); };
+  FitOptions full_fit = options.selection.fit;
+  full_fit.on_iteration = heartbeat;
 
   for (Channel channel : options.channels) {
     const auto& declared =
@@ -59,7 +65,13 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
                                                              : options.specimen_parameters;
     SelectionOptions selection = options.selection;
     const std::string name = channel_name(channel);
-    selection.progress = [&](std::size_t units) { report(channel_start + units, name + ": search"); };
+    selection.progress = [&](std::size_t units) { report(channel_start + units, last_stage); };
+    selection.stage = [&](const std::string& what) { report(last_done, name + ": " + what); };
+    selection.fit.on_iteration = heartbeat;
+    if (factor > 1) {
+      selection.fit.tolerance = options.search_tolerance;
+      selection.fit.max_iterations = std::min(selection.fit.max_iterations, options.search_iterations);
+    }
     const std::size_t search_units = selection_units(options.selection, channel);
     report(channel_start, name + ": search");
     ChannelIdentification id = identify_channel(search_signals, search_split, declared,

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -144,6 +145,20 @@ double drift_profile(std::span<const double> c, double s) {
   return sum;
 }
 
+std::vector<double> drift_basis(std::span<const double> time, double dt) {
+  std::vector<double> basis(time.size() * kDriftTerms);
+  if (time.empty()) return basis;
+  const double t_mid = 0.5 * (time.front() + time.back());
+  const double duration = std::max(time.back() - time.front(), dt);
+  for (std::size_t j = 0; j < time.size(); ++j) {
+    const double s = (time[j] - t_mid) / duration;
+    for (std::size_t k = 0; k < kDriftTerms; ++k) {
+      basis[j * kDriftTerms + k] = std::cos(std::numbers::pi * static_cast<double>(k + 1) * (s + 0.5));
+    }
+  }
+  return basis;
+}
+
 std::string channel_name(Channel channel) {
   return channel == Channel::kMeasured ? "measured" : "force";
 }
@@ -225,6 +240,9 @@ ChannelSignals make_signals(const MeasuredData& data, Channel channel, double sm
   const auto smooth = moving_average(drive, window);
   s.velocity = central_difference(smooth, data.dt);
   s.acceleration = central_difference(moving_average(s.velocity, window), data.dt);
+  s.drift_basis = drift_basis(s.time, s.dt);
+  static std::atomic<std::uint64_t> next_id{1};
+  s.id = next_id.fetch_add(1);
   return s;
 }
 
@@ -352,7 +370,9 @@ std::vector<ParamSpec> ChannelModel::specs(const SignalScales& scales) const {
     auto more = effect_params(e, channel, scales);
     out.insert(out.end(), more.begin(), more.end());
   }
-  return declared_specs(std::move(out), declarations);
+  out = declared_specs(std::move(out), declarations);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i].fixed = out[i].fixed || is_fixed(i);
+  return out;
 }
 
 std::optional<double> ChannelModel::param(std::optional<Effect> effect, const std::string& name,
@@ -410,6 +430,22 @@ std::string ChannelModel::describe(const SignalScales& scales) const {
   return out.str();
 }
 
+namespace {
+
+// The value of a parameter that leaves the output as it is without its effect: zero, within the
+// bounds, except for dynamics (a zero time constant or a finite frequency would not be neutral),
+// a velocity limit (far above the record's velocities) and a smoothing scale (its first guess).
+double neutral_value(const ParamSpec& spec, const SignalScales& scales) {
+  if (spec.name == "time_constant") return spec.lower;
+  if (spec.name == "natural_frequency") return 0.5 * spec.upper;
+  if (spec.name == "damping_ratio") return 0.7;
+  if (spec.name == "max_velocity") return 1e3 * scales.velocity;
+  if (spec.name == "smoothing_velocity" || spec.name == "yield_drift") return spec.guesses.at(0);
+  return std::clamp(0.0, spec.lower, spec.upper);
+}
+
+}  // namespace
+
 ChannelModel declared_model(Channel channel, const std::vector<Effect>& effects,
                             const SignalScales& scales) {
   ChannelModel model;
@@ -419,16 +455,7 @@ ChannelModel declared_model(Channel channel, const std::vector<Effect>& effects,
     if (model.has(e)) continue;
     std::vector<double> neutral;
     for (const auto& spec : effect_params(e, channel, scales)) {
-      neutral.push_back(std::clamp(0.0, spec.lower, spec.upper));
-    }
-    // Dynamics with a zero time constant or a finite neutral frequency would not be neutral.
-    if (e == Effect::kFirstOrder) neutral[0] = effect_params(e, channel, scales)[0].lower;
-    if (e == Effect::kSecondOrder) {
-      neutral = {effect_params(e, channel, scales)[0].upper * 0.5, 0.7};
-    }
-    if (e == Effect::kVelocitySaturation) neutral[0] = 1e3 * scales.velocity;
-    if (e == Effect::kCoulomb || e == Effect::kBoucWen) {
-      neutral[1] = effect_params(e, channel, scales)[1].guesses[0];
+      neutral.push_back(neutral_value(spec, scales));
     }
     model = with_effect(model, e, neutral);
   }
@@ -472,124 +499,243 @@ ChannelModel without_effect(const ChannelModel& model, Effect effect, const Sign
   return out;
 }
 
-void predict(const ChannelModel& model, std::span<const double> p, const ChannelSignals& sig,
-             std::vector<double>& out) {
-  const std::size_t n = sig.size();
-  out.assign(n, 0.0);
-  if (n == 0) return;
-  const double t_mid = 0.5 * (sig.time.front() + sig.time.back());
-  const double duration = std::max(sig.time.back() - sig.time.front(), sig.dt);
-  const auto norm_time = [&](std::size_t i) { return (sig.time[i] - t_mid) / duration; };
+namespace {
 
-  // Unpack parameters by effect.
-  double gain = 1.0, delay = 0.0, offset = 0.0, drift = 0.0;
-  double time_constant = 0.0, wn = 0.0, zeta = 0.0, backlash = 0.0, vmax = 0.0;
-  double k = 0.0, k3 = 0.0, c = 0.0, fc = 0.0, vc = 1.0, mass = 0.0;
-  double f_bw = 0.0, d_y = 1.0, k_p = 0.0, f_y = 0.0;
-  std::span<const double> delay_c, gain_c, k_c;
-  bool first = false, second = false, play = false, saturate = false, bouc_wen = false;
-  bool elasto_plastic = false;
-  std::size_t i = 0;
-  if (model.channel == Channel::kMeasured) gain = p[i++];
-  for (Effect e : model.effects) {
-    switch (e) {
-      case Effect::kDelay: delay = p[i++]; break;
-      case Effect::kOffsetDrift: offset = p[i++]; drift = p[i++]; break;
-      case Effect::kFirstOrder: first = true; time_constant = p[i++]; break;
-      case Effect::kSecondOrder: second = true; wn = p[i++]; zeta = p[i++]; break;
-      case Effect::kBacklash: play = true; backlash = p[i++]; break;
-      case Effect::kVelocitySaturation: saturate = true; vmax = p[i++]; break;
-      case Effect::kTimeVaryingDelay: delay_c = p.subspan(i, kDriftTerms); i += kDriftTerms; break;
-      case Effect::kTimeVaryingGain: gain_c = p.subspan(i, kDriftTerms); i += kDriftTerms; break;
-      case Effect::kStiffness: k = p[i++]; break;
-      case Effect::kDamping: c = p[i++]; break;
-      case Effect::kCoulomb: fc = p[i++]; vc = p[i++]; break;
-      case Effect::kBoucWen: bouc_wen = true; f_bw = p[i++]; d_y = p[i++]; break;
-      case Effect::kCubicStiffness: k3 = p[i++]; break;
-      case Effect::kTimeVaryingStiffness: k_c = p.subspan(i, kDriftTerms); i += kDriftTerms; break;
-      case Effect::kInertia: mass = p[i++]; break;
-      case Effect::kElastoPlastic: elasto_plastic = true; k_p = p[i++]; f_y = p[i++]; break;
+// One model's parameter values by effect and name: the names and order are effect_params' (the
+// one declaration of every parameter), so nothing here mirrors the layout by position.
+class ParamValues {
+ public:
+  ParamValues(const ChannelModel& model, std::span<const double> p) : model_(model), p_(p) {
+    const SignalScales names_only;  // the names and order do not depend on the scales
+    for (const auto& spec : base_params(model.channel, names_only)) add(std::nullopt, spec.name);
+    for (Effect e : model.effects) {
+      for (const auto& spec : effect_params(e, model.channel, names_only)) add(e, spec.name);
+    }
+    if (p.size() != entries_.size()) {
+      throw std::invalid_argument("parameter count does not match the model");
     }
   }
-  if (i != p.size()) throw std::invalid_argument("parameter count does not match the model");
+  // The named parameter of `effect` (of the base when empty); `absent` when the model lacks it.
+  double at(std::optional<Effect> effect, const std::string& name, double absent) const {
+    const auto i = index(effect, name);
+    return i ? p_[*i] : absent;
+  }
+  // The kDriftTerms coefficients <prefix>_c1... of a slow drift; empty when the model lacks it.
+  std::span<const double> drift(Effect effect, const std::string& prefix) const {
+    const auto i = index(effect, prefix + "_c1");
+    return i ? p_.subspan(*i, kDriftTerms) : std::span<const double>{};
+  }
+  bool has(Effect effect) const { return model_.has(effect); }
 
-  const bool shifted = delay != 0.0 || !delay_c.empty();
-  const auto shifted_at = [&](std::span<const double> x, std::size_t j) {
-    if (!shifted) return x[j];
-    const double tau =
-        std::max(0.0, delay + (delay_c.empty() ? 0.0 : drift_profile(delay_c, norm_time(j))));
-    return interpolate(x, static_cast<double>(j) - tau / sig.dt);
+ private:
+  struct Entry {
+    std::optional<Effect> effect;
+    std::string name;
   };
+  void add(std::optional<Effect> effect, const std::string& name) { entries_.push_back({effect, name}); }
+  std::optional<std::size_t> index(std::optional<Effect> effect, const std::string& name) const {
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+      if (entries_[i].effect == effect && entries_[i].name == name) return i;
+    }
+    return std::nullopt;
+  }
+  const ChannelModel& model_;
+  std::span<const double> p_;
+  std::vector<Entry> entries_;
+};
 
-  if (model.channel == Channel::kMeasured) {
-    const double decay = first ? std::exp(-sig.dt / std::max(time_constant, 1e-12)) : 0.0;
-    // Tustin biquad of wn^2 / (s^2 + 2 zeta wn s + wn^2), pre-warp free (rates well below Nyquist).
-    const double K = 2.0 / sig.dt;
-    const double a0 = K * K + 2.0 * zeta * wn * K + wn * wn;
-    const double b0 = wn * wn / a0, b1 = 2.0 * b0, b2 = b0;
-    const double a1 = (2.0 * wn * wn - 2.0 * K * K) / a0;
-    const double a2 = (K * K - 2.0 * zeta * wn * K + wn * wn) / a0;
-    const double x0 = shifted_at(sig.input, 0);
-    double y1 = x0;                  // first-order state
-    double s1 = 0.0, s2 = 0.0;  // direct form II transposed states
-    if (second) {
-      // Direct form II transposed at rest with input x0 (DC gain 1): y = x0.
-      s2 = b2 * x0 - a2 * x0;
-      s1 = b1 * x0 - a1 * x0 + s2;
-    }
-    double play_out = x0, sat_out = x0;
-    const double half_width = 0.5 * std::abs(backlash);
-    const double max_step = std::abs(vmax) * sig.dt;
-    for (std::size_t j = 0; j < n; ++j) {
-      double x = shifted_at(sig.input, j);
-      if (first) {
-        y1 = decay * y1 + (1.0 - decay) * x;
-        x = y1;
-      }
-      if (second) {
-        const double y = b0 * x + s1;
-        s1 = b1 * x - a1 * y + s2;
-        s2 = b2 * x - a2 * y;
-        x = y;
-      }
-      if (play) {
-        play_out = std::clamp(play_out, x - half_width, x + half_width);
-        x = play_out;
-      }
-      if (saturate) {
-        sat_out += std::clamp(x - sat_out, -max_step, max_step);
-        x = sat_out;
-      }
-      const double g = gain_c.empty() ? gain : gain * (1.0 + drift_profile(gain_c, norm_time(j)));
-      out[j] = g * x + offset + drift * norm_time(j);
-    }
-    return;
+// The record's normalised time s_j, the slow drifts D(s_j; c) on it and the shift both channels
+// share: x(t_j - tau_j), tau_j = max(0, delay + D(s_j; delay_c)), interpolated.
+class RecordClock {
+ public:
+  RecordClock(const ChannelSignals& sig, double delay, std::span<const double> delay_c)
+      : sig_(sig), t_mid_(0.5 * (sig.time.front() + sig.time.back())),
+        duration_(std::max(sig.time.back() - sig.time.front(), sig.dt)),
+        has_basis_(sig.drift_basis.size() == sig.size() * kDriftTerms), delay_(delay),
+        delay_c_(delay_c) {}
+  double s(std::size_t j) const { return (sig_.time[j] - t_mid_) / duration_; }
+  // D(s_j; c), from the signals' precomputed basis when they carry one (same terms, same order).
+  double drift(std::span<const double> c, std::size_t j) const {
+    if (!has_basis_ || c.size() != kDriftTerms) return drift_profile(c, s(j));
+    const double* row = sig_.drift_basis.data() + j * kDriftTerms;
+    double sum = 0.0;
+    for (std::size_t k = 0; k < kDriftTerms; ++k) sum += c[k] * row[k];
+    return sum;
+  }
+  double shifted(std::span<const double> x, std::size_t j) const {
+    if (delay_ == 0.0 && delay_c_.empty()) return x[j];
+    const double tau = std::max(0.0, delay_ + (delay_c_.empty() ? 0.0 : drift(delay_c_, j)));
+    return interpolate(x, static_cast<double>(j) - tau / sig_.dt);
   }
 
-  // The specimen runs on the low-passed displacement when there is one (make_signals).
-  const std::vector<double>& displacement = sig.model_input.empty() ? sig.input : sig.model_input;
-  double z = 0.0, plastic = 0.0;
-  double previous_d = shifted_at(displacement, 0);
-  const double vc_safe = std::max(std::abs(vc), 1e-12);
-  const double dy_safe = std::max(std::abs(d_y), 1e-12);
-  for (std::size_t j = 0; j < n; ++j) {
-    const double d = shifted_at(displacement, j);
-    const double v = shifted_at(sig.velocity, j);
-    const double s = norm_time(j);
-    const double k_now = k_c.empty() ? k : k + drift_profile(k_c, s);
-    double f = k_now * d + k3 * d * d * d + c * v + offset + drift * s;
-    if (fc != 0.0) f += fc * std::tanh(v / vc_safe);
-    if (mass != 0.0) f += mass * shifted_at(sig.acceleration, j);
-    if (bouc_wen) {
-      z = advance_bouc_wen(z, (d - previous_d) / dy_safe);
-      f += f_bw * z;
+ private:
+  const ChannelSignals& sig_;
+  double t_mid_, duration_;
+  bool has_basis_;
+  double delay_;
+  std::span<const double> delay_c_;
+};
+
+// Tustin biquad of wn^2 / (s^2 + 2 zeta wn s + wn^2) in direct form II transposed, pre-warp free
+// (rates well below Nyquist), started at rest at x0 (DC gain 1: y = x0).
+class SecondOrderLag {
+ public:
+  SecondOrderLag(double wn, double zeta, double dt, double x0) {
+    const double K = 2.0 / dt;
+    const double a0 = K * K + 2.0 * zeta * wn * K + wn * wn;
+    b0_ = wn * wn / a0;
+    b1_ = 2.0 * b0_;
+    b2_ = b0_;
+    a1_ = (2.0 * wn * wn - 2.0 * K * K) / a0;
+    a2_ = (K * K - 2.0 * zeta * wn * K + wn * wn) / a0;
+    s2_ = b2_ * x0 - a2_ * x0;
+    s1_ = b1_ * x0 - a1_ * x0 + s2_;
+  }
+  double step(double x) {
+    const double y = b0_ * x + s1_;
+    s1_ = b1_ * x - a1_ * y + s2_;
+    s2_ = b2_ * x - a2_ * y;
+    return y;
+  }
+
+ private:
+  double b0_ = 0.0, b1_ = 0.0, b2_ = 0.0, a1_ = 0.0, a2_ = 0.0, s1_ = 0.0, s2_ = 0.0;
+};
+
+// Channel measured (model.h): shift -> first order -> second order -> backlash -> saturation
+// -> gain (1 + D(s; gain_c)) + offset + drift s.
+void predict_actuator(const ParamValues& v, const ChannelSignals& sig, std::vector<double>& out) {
+  const RecordClock clock(sig, v.at(Effect::kDelay, "delay", 0.0),
+                          v.drift(Effect::kTimeVaryingDelay, "delay"));
+  const double gain = v.at(std::nullopt, "gain", 1.0);
+  const double offset = v.at(Effect::kOffsetDrift, "offset", 0.0);
+  const double drift = v.at(Effect::kOffsetDrift, "drift", 0.0);
+  const std::span<const double> gain_c = v.drift(Effect::kTimeVaryingGain, "gain");
+  const bool first = v.has(Effect::kFirstOrder), second = v.has(Effect::kSecondOrder);
+  const bool play = v.has(Effect::kBacklash), saturate = v.has(Effect::kVelocitySaturation);
+  const double time_constant = v.at(Effect::kFirstOrder, "time_constant", 0.0);
+  const double decay = first ? std::exp(-sig.dt / std::max(time_constant, 1e-12)) : 0.0;
+  const double x0 = clock.shifted(sig.input, 0);
+  SecondOrderLag lag(v.at(Effect::kSecondOrder, "natural_frequency", 0.0),
+                     v.at(Effect::kSecondOrder, "damping_ratio", 0.0), sig.dt, x0);
+  double y1 = x0, play_out = x0, sat_out = x0;
+  const double half_width = 0.5 * std::abs(v.at(Effect::kBacklash, "width", 0.0));
+  const double max_step = std::abs(v.at(Effect::kVelocitySaturation, "max_velocity", 0.0)) * sig.dt;
+  for (std::size_t j = 0; j < sig.size(); ++j) {
+    double x = clock.shifted(sig.input, j);
+    if (first) x = y1 = decay * y1 + (1.0 - decay) * x;
+    if (second) x = lag.step(x);
+    if (play) x = play_out = std::clamp(play_out, x - half_width, x + half_width);
+    if (saturate) x = sat_out += std::clamp(x - sat_out, -max_step, max_step);
+    const double g = gain_c.empty() ? gain : gain * (1.0 + clock.drift(gain_c, j));
+    out[j] = g * x + offset + drift * clock.s(j);
+  }
+}
+
+// The last two sequences a thread computed, each for one signals' id and two parameters, reused
+// when asked again for the same: friction tanh(v_j / v_c) and Bouc-Wen z_j depend on the delay
+// and one parameter of their own only, so a Jacobian column of any other parameter finds the
+// base run's sequence here (two slots: a column that moves them does not evict the base's).
+class SequenceMemo {
+ public:
+  template <class Compute>
+  const std::vector<double>& get(const ChannelSignals& sig, double a, double b, Compute compute) {
+    for (Slot& slot : slots_) {
+      if (sig.id != 0 && slot.id == sig.id && slot.a == a && slot.b == b &&
+          slot.values.size() == sig.size()) {
+        slot.used = ++clock_;
+        return slot.values;
+      }
     }
+    Slot& slot = slots_[0].used <= slots_[1].used ? slots_[0] : slots_[1];
+    slot.id = 0;
+    slot.values.resize(sig.size());
+    compute(slot.values);
+    slot.id = sig.id;
+    slot.a = a;
+    slot.b = b;
+    slot.used = ++clock_;
+    return slot.values;
+  }
+
+ private:
+  struct Slot {
+    std::uint64_t id = 0, used = 0;
+    double a = 0.0, b = 0.0;
+    std::vector<double> values;
+  };
+  std::array<Slot, 2> slots_;
+  std::uint64_t clock_ = 0;
+};
+
+// Channel force (model.h), on the low-passed displacement when there is one (make_signals).
+void predict_specimen(const ParamValues& v, const ChannelSignals& sig, std::vector<double>& out) {
+  const RecordClock clock(sig, v.at(Effect::kDelay, "delay", 0.0), {});
+  const double k = v.at(Effect::kStiffness, "stiffness", 0.0);
+  const double k3 = v.at(Effect::kCubicStiffness, "cubic_stiffness", 0.0);
+  const double c = v.at(Effect::kDamping, "damping", 0.0);
+  const double fc = v.at(Effect::kCoulomb, "friction_force", 0.0);
+  const double mass = v.at(Effect::kInertia, "mass", 0.0);
+  const double f_bw = v.at(Effect::kBoucWen, "hysteretic_force", 0.0);
+  const double k_p = v.at(Effect::kElastoPlastic, "plastic_stiffness", 0.0);
+  const double f_y = v.at(Effect::kElastoPlastic, "yield_force", 0.0);
+  const double offset = v.at(Effect::kOffsetDrift, "offset", 0.0);
+  const double drift = v.at(Effect::kOffsetDrift, "drift", 0.0);
+  const std::span<const double> k_c = v.drift(Effect::kTimeVaryingStiffness, "stiffness");
+  const bool bouc_wen = v.has(Effect::kBoucWen), elasto_plastic = v.has(Effect::kElastoPlastic);
+  const double vc_safe = std::max(std::abs(v.at(Effect::kCoulomb, "smoothing_velocity", 1.0)), 1e-12);
+  const double dy_safe = std::max(std::abs(v.at(Effect::kBoucWen, "yield_drift", 1.0)), 1e-12);
+  const std::vector<double>& displacement = sig.model_input.empty() ? sig.input : sig.model_input;
+  const double delay = v.at(Effect::kDelay, "delay", 0.0);
+  thread_local SequenceMemo friction_memo, hysteresis_memo;
+  const std::vector<double>& friction =
+      fc == 0.0 ? displacement
+                : friction_memo.get(sig, delay, vc_safe, [&](std::vector<double>& out) {
+                    for (std::size_t j = 0; j < sig.size(); ++j) {
+                      out[j] = std::tanh(clock.shifted(sig.velocity, j) / vc_safe);
+                    }
+                  });
+  const std::vector<double>& hysteresis =
+      !bouc_wen ? displacement
+                : hysteresis_memo.get(sig, delay, dy_safe, [&](std::vector<double>& out) {
+                    double z = 0.0, previous = clock.shifted(displacement, 0);
+                    for (std::size_t j = 0; j < sig.size(); ++j) {
+                      const double d = clock.shifted(displacement, j);
+                      out[j] = z = advance_bouc_wen(z, (d - previous) / dy_safe);
+                      previous = d;
+                    }
+                  });
+  double plastic = 0.0;
+  double previous_d = clock.shifted(displacement, 0);
+  for (std::size_t j = 0; j < sig.size(); ++j) {
+    const double d = clock.shifted(displacement, j);
+    const double vel = clock.shifted(sig.velocity, j);
+    const double s = clock.s(j);
+    const double k_now = k_c.empty() ? k : k + clock.drift(k_c, j);
+    double f = k_now * d + k3 * d * d * d + c * vel + offset + drift * s;
+    if (fc != 0.0) f += fc * friction[j];
+    if (mass != 0.0) f += mass * clock.shifted(sig.acceleration, j);
+    if (bouc_wen) f += f_bw * hysteresis[j];
     if (elasto_plastic) {
       plastic = std::clamp(plastic + k_p * (d - previous_d), -std::abs(f_y), std::abs(f_y));
       f += plastic;
     }
     previous_d = d;
     out[j] = f;
+  }
+}
+
+}  // namespace
+
+void predict(const ChannelModel& model, std::span<const double> p, const ChannelSignals& sig,
+             std::vector<double>& out) {
+  const ParamValues values(model, p);
+  out.assign(sig.size(), 0.0);
+  if (sig.size() == 0) return;
+  if (model.channel == Channel::kMeasured) {
+    predict_actuator(values, sig, out);
+  } else {
+    predict_specimen(values, sig, out);
   }
 }
 

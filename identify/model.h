@@ -28,6 +28,7 @@
 // model contributes nothing. All parameters are in SI units.
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <string>
@@ -83,8 +84,20 @@ struct ChannelSignals {
   // model_input, velocity and acceleration; empty = input itself (the actuator's clean command).
   std::vector<double> model_input;
   double input_cutoff = 0.0;  // Hz, the low-pass that made model_input from input; 0 = none
+  // The slow drifts' basis at every sample, row-major n x kDriftTerms: cos(pi k (s_j + 1/2)),
+  // k = 1..kDriftTerms, s_j the normalised time of sample j (drift_basis()). make_signals fills it
+  // so that predict, run thousands of times per fit, evaluates no cosine; empty = computed per call.
+  std::vector<double> drift_basis;
+  // Unique to one make_signals call (copies share it; 0 = none): lets predict reuse, within a
+  // thread, the friction and hysteresis sequences of the last call on the same signals when their
+  // parameters are unchanged (a Jacobian column of another parameter), with the same values.
+  std::uint64_t id = 0;
   std::size_t size() const { return time.size(); }
 };
+
+// The rows of ChannelSignals::drift_basis for `time` (s, increasing): s_j = (t_j - t_mid) /
+// duration with t_mid the record's centre and duration = max(t_last - t_first, dt).
+std::vector<double> drift_basis(std::span<const double> time, double dt);
 
 // The specimen model's input is low-passed at f_c = max(kSpecimenInputCutoffFactor x the input's
 // signal band, the input's noise edge) (evidence.h signal_band, noise_edge): far enough above the
@@ -170,7 +183,8 @@ struct ChannelModel {
                                       const SignalScales& scales) const;
   // The effect that owns parameter `index` (empty for a base parameter).
   std::optional<Effect> effect_of(std::size_t index, const SignalScales& scales) const;
-  // Library specs of base and effects, with `declarations` applied.
+  // Library specs of base and effects, with `declarations` applied; a spec is `fixed` when its
+  // declaration or this model's `fixed` holds it: the one place a fit asks.
   std::vector<ParamSpec> specs(const SignalScales& scales) const;
   // The value of the named parameter of `effect` (or of the base when effect is empty).
   std::optional<double> param(std::optional<Effect> effect, const std::string& name,

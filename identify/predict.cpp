@@ -8,6 +8,7 @@
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/study.h"
+#include "identify/study_config.h"
 
 namespace rths::identify {
 namespace {
@@ -37,58 +38,37 @@ CaseError compare(const std::string& name, const std::vector<double>& reference,
   return e;
 }
 
+// "time shift 4.6 ms, gain 1, first order T = 21.8 ms, second order fn = 12 Hz zeta = 0.7".
+std::string describe_stages(const config::Case& study_case) {
+  std::ostringstream out;
+  for (const auto& stage : study_case.delay()) {
+    if (stage.has_shift()) {
+      const double gain = stage.amplitude_gain() == 0.0 ? 1.0 : stage.amplitude_gain();
+      out << "time shift " << stage.shift().delay() * 1e3 << " ms, gain " << gain;
+    } else if (stage.has_first_order()) {
+      out << ", first order T = " << stage.first_order().time_constant() * 1e3 << " ms";
+    } else if (stage.has_transfer_function() && stage.transfer_function().denominator_size() == 3) {
+      const auto& den = stage.transfer_function().denominator();
+      const double wn = std::sqrt(den[2]);
+      out << ", second order fn = " << wn / (2.0 * std::numbers::pi) << " Hz zeta = "
+          << den[1] / (2.0 * wn);
+    }
+  }
+  return out.str();
+}
+
 }  // namespace
 
 ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scales, double dt) {
   if (model.channel != Channel::kMeasured) {
     throw std::invalid_argument("actuator_chain: needs the model of channel 'measured'");
   }
+  // The one translation of effects into stages is the study config's (study_config.h).
+  const ActuatorCase study_case = actuator_case(model, scales);
   ActuatorChain out;
-  const auto value = [&](std::optional<Effect> e, const char* name, double fallback) {
-    return model.param(e, name, scales).value_or(fallback);
-  };
-  double delay = value(Effect::kDelay, "delay", 0.0);
-  const double gain = value(std::nullopt, "gain", 1.0);
-  if (delay < 0.0) {
-    out.ignored.push_back("negative delay (lead) of " + std::to_string(delay) + " s, used as 0");
-    delay = 0.0;
-  }
-  std::ostringstream description;
-  description << "time shift " << delay * 1e3 << " ms, gain " << gain;
-  auto shift = std::make_unique<core::TimeShift>(delay, dt);
-  shift->set_gain(gain);
-  out.chain.add(std::move(shift));
-  for (Effect e : model.effects) {
-    switch (e) {
-      case Effect::kFirstOrder: {
-        const double t = value(e, "time_constant", 0.0);
-        out.chain.add(std::make_unique<core::FirstOrderActuator>(t, dt));
-        description << ", first order T = " << t * 1e3 << " ms";
-        break;
-      }
-      case Effect::kSecondOrder: {
-        const double wn = value(e, "natural_frequency", 0.0);
-        const double zeta = value(e, "damping_ratio", 0.0);
-        out.chain.add(std::make_unique<core::TransferFunctionStage>(
-            std::vector<double>{wn * wn}, std::vector<double>{1.0, 2.0 * zeta * wn, wn * wn}, dt,
-            "second-order actuator"));
-        description << ", second order fn = " << wn / (2.0 * std::numbers::pi)
-                    << " Hz zeta = " << zeta;
-        break;
-      }
-      case Effect::kTimeVaryingDelay:
-        out.ignored.push_back("time-varying delay: its mean is used");
-        break;
-      case Effect::kOffsetDrift:
-      case Effect::kBacklash:
-      case Effect::kVelocitySaturation:
-        out.ignored.push_back(effect_name(e) + ": lab-scale effect, not transferred");
-        break;
-      default:
-        break;
-    }
-  }
-  out.description = description.str();
+  out.chain = core::make_delay_chain(study_case.study_case.delay(), dt, {});
+  out.description = describe_stages(study_case.study_case);
+  out.ignored = study_case.left_out;
   return out;
 }
 

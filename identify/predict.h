@@ -3,12 +3,10 @@
 // record, replaces the declared delay stages of a study config, and the in-process hybrid
 // simulation (core::simulate) predicts how far the test will stray from the reference.
 //
-// The actuator channel model becomes a core::DelayChain:
-//   TimeShift(delay, with the fitted gain) -> FirstOrderActuator(T) -> TransferFunctionStage
-//   wn^2 / (s^2 + 2 zeta wn s + wn^2), for the effects present. A time-varying delay enters with
-//   its mean. Offset/drift, backlash and velocity saturation are lab-scale effects (mm) that do
-//   not scale to another structure's displacements: they are left out and listed in `ignored`.
-//   A negative fitted delay (a lead) is kept as zero delay and listed too.
+// The actuator channel model becomes a core::DelayChain made (core::make_delay_chain) from the
+// stages study_config.h's actuator_case writes, the one translation of effects into stages: what
+// --predict simulates is what --out writes for `rths run`, and what a study cannot hold (offsets,
+// backlash, saturation, drifts' variation, a lead) is listed in `ignored`.
 // Error measures (core/metrics.h) on the displacement of the top degree of freedom against the
 // reference case's: nrmse (sqrt(mean e^2) / median |u_ref|) and paper_eq2 (the paper's Eq. 2 as
 // printed).

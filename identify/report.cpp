@@ -153,6 +153,25 @@ std::vector<double> residual(const ChannelSignals& s, const std::vector<double>&
 }
 
 // A window of about `seconds` inside the held-out samples with the largest input motion.
+// `s` with x and y multiplied by their scales (m -> mm: 1e3), for plots in the units a lab reads.
+util::Series scaled(util::Series s, double x_scale, double y_scale) {
+  for (double& x : s.x) x *= x_scale;
+  for (double& y : s.y) y *= y_scale;
+  return s;
+}
+
+// About `cycles` cycles of the command's dominant frequency in [lo, hi), ending at hi: a window a
+// reader can follow (a whole held-out window of a 20 Hz test holds some 40 cycles).
+std::size_t zoom_start(const ChannelSignals& s, std::size_t lo, std::size_t hi, double cycles) {
+  const Spectrum spectrum = amplitude_spectrum(std::span<const double>(s.input).subspan(lo, hi - lo), s.dt);
+  std::size_t peak = 1;
+  for (std::size_t k = 1; k < spectrum.amplitude.size(); ++k)
+    if (spectrum.amplitude[k] > spectrum.amplitude[peak]) peak = k;
+  if (peak >= spectrum.frequency.size() || !(spectrum.frequency[peak] > 0)) return lo;
+  const auto length = static_cast<std::size_t>(cycles / spectrum.frequency[peak] / s.dt);
+  return hi - lo > length ? hi - length : lo;
+}
+
 std::pair<std::size_t, std::size_t> heldout_window(const Identification& id,
                                                    const ChannelSignals& s, double seconds) {
   const auto width = static_cast<std::size_t>(std::max(10.0, seconds / s.dt));
@@ -420,14 +439,16 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
     const std::string name = channel_name(c.channel);
     const auto r0 = residual(s, c.declared_fit.prediction);
     const auto r1 = residual(s, c.final_fit.prediction);
-    const std::string unit = c.channel == Channel::kMeasured ? "m" : "N";
+    const bool displacement = c.channel == Channel::kMeasured;
+    const std::string unit = displacement ? "mm" : "N";
+    const double to_unit = displacement ? 1e3 : 1.0;  // displacements in mm on every plot
 
     util::PlotSpec time_plot;
     time_plot.title = name + ": residual before (declared) and after (final model)";
     time_plot.xlabel = "time (s)";
     time_plot.ylabel = "residual (" + unit + ")";
-    time_plot.series = {series("declared", s.time, r0, 0, s.size()),
-                        series("final", s.time, r1, 0, s.size())};
+    time_plot.series = {scaled(series("declared", s.time, r0, 0, s.size()), 1.0, to_unit),
+                        scaled(series("final", s.time, r1, 0, s.size()), 1.0, to_unit)};
     written.push_back(directory / (name + "_residual_time.png"));
     util::write_png_plot(time_plot, written.back());
 
@@ -444,8 +465,8 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
         break;
       }
     }
-    spectrum_plot.series = {series("declared", sp0.frequency, sp0.amplitude, 1, cut),
-                            series("final", sp1.frequency, sp1.amplitude, 1, cut)};
+    spectrum_plot.series = {scaled(series("declared", sp0.frequency, sp0.amplitude, 1, cut), 1.0, to_unit),
+                            scaled(series("final", sp1.frequency, sp1.amplitude, 1, cut), 1.0, to_unit)};
     written.push_back(directory / (name + "_residual_spectrum.png"));
     util::write_png_plot(spectrum_plot, written.back());
 
@@ -454,24 +475,34 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
       util::PlotSpec loops;
       loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) +
                     "-" + format_value(s.time[hi - 1]) + " s)";
-      loops.xlabel = "measured displacement (m)";
+      loops.xlabel = "measured displacement (mm)";
       loops.ylabel = "force (N)";
-      loops.series = {series("measured", s.input, s.target, lo, hi),
-                      series("declared model", s.input, c.declared_fit.prediction, lo, hi),
-                      series("final model", s.input, c.final_fit.prediction, lo, hi)};
+      loops.series = {scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
+                      scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
+                      scaled(series("final model", s.input, c.final_fit.prediction, lo, hi), 1e3, 1.0)};
       written.push_back(directory / "force_loops.png");
       util::write_png_plot(loops, written.back());
     } else {
       util::PlotSpec tracking;
-      tracking.title = "actuator tracking (held-out window)";
+      tracking.title = "actuator tracking (held-out window " + format_value(s.time[lo]) + "-" +
+                       format_value(s.time[hi - 1]) + " s)";
       tracking.xlabel = "time (s)";
-      tracking.ylabel = "displacement (m)";
-      tracking.series = {series("command", s.time, s.input, lo, hi),
-                         series("measured", s.time, s.target, lo, hi),
-                         series("declared model", s.time, c.declared_fit.prediction, lo, hi),
-                         series("final model", s.time, c.final_fit.prediction, lo, hi)};
+      tracking.ylabel = "displacement (mm)";
+      const auto tracking_series = [&](std::size_t from) {
+        return std::vector<util::Series>{
+            scaled(series("command", s.time, s.input, from, hi), 1.0, 1e3),
+            scaled(series("measured", s.time, s.target, from, hi), 1.0, 1e3),
+            scaled(series("declared model", s.time, c.declared_fit.prediction, from, hi), 1.0, 1e3),
+            scaled(series("final model", s.time, c.final_fit.prediction, from, hi), 1.0, 1e3)};
+      };
+      tracking.series = tracking_series(lo);
+      util::PlotSpec zoom = tracking;
+      const std::size_t from = zoom_start(s, lo, hi, 5.0);
+      zoom.title = "zoom: the last " + format_value(s.time[hi - 1] - s.time[from]) + " s (about 5 cycles)";
+      zoom.series = tracking_series(from);
+      tracking.height = zoom.height = 420;
       written.push_back(directory / "measured_tracking.png");
-      util::write_png_plot(tracking, written.back());
+      util::write_png_panels({tracking, zoom}, written.back());
       // A record too short for Welch averaging, or without a coherent band, has no Bode plot.
       std::optional<BodeData> bode;
       try {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace rths::identify {
 namespace {
@@ -84,6 +85,7 @@ KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
   KindProposal proposal;
   proposal.declared_hits = declared_hits;
   for (SpecimenKind kind : specimen_kinds()) {
+    if (options.stage) options.stage("specimen kind " + kind_name(kind));
     KindTrial trial;
     trial.kind = kind;
     auto effects = kind_effects(kind);
@@ -164,6 +166,9 @@ void search_from(ChannelIdentification& id, const FitResult& start, const Channe
     }
     for (Effect e : pool) {
       if (!effect_applies(e, signals.channel) || current.model.has(e)) continue;
+      if (options.stage) {
+        options.stage("candidate " + effect_name(e) + " (round " + std::to_string(round + 1) + ")");
+      }
       CandidateTrial trial;
       trial.effect = e;
       trial.added_params = effect_params(e, signals.channel, sc).size();
@@ -227,6 +232,7 @@ ChannelIdentification identify_channel(const ChannelSignals& signals, const Spli
   id.declared = declared;
   ProgressUnits progress(options);
   const std::size_t search_units = options.max_steps * pool_units(options, signals.channel);
+  if (options.stage) options.stage("declared model");
   const ChannelModel declared_fit =
       fit_declared(signals, split, declared, options.fit, declarations);
   id.declared_fit = fit_channel(declared_fit, signals, split, options.fit);

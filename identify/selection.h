@@ -17,6 +17,7 @@
 
 #include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "identify/evidence.h"
@@ -39,6 +40,9 @@ struct SelectionOptions {
   // propose_kind, one unit per specimen kind compared and a second search, both skipped (jumped
   // over) when the declared kind stands. Never decreases; ends at selection_units.
   std::function<void(std::size_t units_done)> progress;
+  // Called with what is fitted next ("declared model", "candidate first_order (round 2)",
+  // "specimen kind bouc_wen"), so that progress can name it; empty = silent.
+  std::function<void(const std::string& what)> stage;
 };
 
 // The units identify_channel reports through SelectionOptions::progress for `channel`.

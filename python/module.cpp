@@ -1,4 +1,5 @@
-// The `rths` Python module: the library (not the CLI) for researchers who work in Python.
+// The compiled part of the `rths` Python package (rths._rths; python/rths/ adds sdof(), Study
+// built in code and __version__ over it): the library, not the CLI, for researchers in Python.
 //
 //   load_study(path) / parse_study(text, base_dir=".")  -> Study (name, cases, text)
 //   run(study, cases=None)      every case in process        -> {"summary", "series", "units"}
@@ -6,13 +7,18 @@
 //                                                                "grid_points", "shard", "trends"}
 //   stability(period_s, zeta, experimental_fraction=1, dt_s=0.001, integrator=..., ...) -> dict
 //   identify(path, channels=..., ...)                         -> {"report", "series", "units"}
-//   read_record(path)           a run record (.rthsrec)      -> {"series", "units", "attributes",
-//                                                                "truncated", "warning"}
+//   read_record(path, allow_loss=False)  a run record (.rthsrec) -> {"series", "units",
+//                               "attributes", "truncated", "warning", "checksummed", "losses"}
+//                               Every entry's checksum is verified (runtime::read_record, as
+//                               `rths export`); a record that lost entries raises rths.Error
+//                               naming the lost steps, unless allow_loss=True, which returns the
+//                               intact entries and "losses" (one description per damaged
+//                               region); attributes integrity and lost_steps as tables/results.h.
 //
 // "series" maps a name with its unit (time_s, u1_m, force1_N, node2_round_trip_s, a1_m_per_s2)
 // to a 1-D NumPy float64 array (text columns: a list of str); the names and units are those of
-// tables/results.h, the same the CSV, MATLAB and HDF5 files carry, with the unit appended where
-// the file's variable name does not already end in it. "units" maps the same names to the unit.
+// tables/results.h, the same the CSV, MATLAB and HDF5 files carry (one naming rule,
+// tables/table.h). "units" maps the same names to the unit.
 // Summaries are plain dicts with the keys of the CLI's --json output.
 //
 // Errors: bad input (a malformed config, an unknown effect, a truncated data file) raises
@@ -33,6 +39,7 @@
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
 #include "analysis/sweep_run.h"
+#include "core/ranges.h"
 #include "core/stability.h"
 #include "core/study.h"
 #include "identify/data.h"
@@ -64,24 +71,6 @@ struct Study {
   }
 };
 
-// "m/s^2" -> "m_per_s2": a unit as the tail of a Python name.
-std::string unit_suffix(const std::string& unit) {
-  std::string out;
-  for (char c : unit) {
-    if (c == '/') out += "_per_";
-    else if (c == '%') out += "pct";
-    else if (c != '^') out += c;
-  }
-  return out;
-}
-
-std::string series_name(const tables::Column& column) {
-  if (column.unit.empty()) return column.name;
-  const std::string suffix = "_" + unit_suffix(column.unit);
-  const bool has = column.name.size() > suffix.size() &&
-                   column.name.compare(column.name.size() - suffix.size(), suffix.size(), suffix) == 0;
-  return has ? column.name : column.name + suffix;
-}
 
 py::object to_python(const nlohmann::json& j) {
   switch (j.type()) {
@@ -109,7 +98,7 @@ py::object to_python(const nlohmann::json& j) {
 py::dict table_dict(const tables::Table& table) {
   py::dict series, units;
   for (const tables::Column& c : table.columns()) {
-    const py::str name(series_name(c));
+    const py::str name(c.name);  // already ends in its unit (tables/table.h)
     if (c.is_text) {
       series[name] = py::cast(c.texts);
     } else {
@@ -198,6 +187,13 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
 
 py::dict stability(double period, double zeta, double alpha, double dt, const std::string& integrator,
                    int branches, int max_steps) {
+  // The same range rules as `rths stability`'s flags (core/ranges.h), named as the arguments.
+  core::check_range(core::Quantity::kPeriod, period, "period_s");
+  core::check_range(core::Quantity::kDampingRatio, zeta, "zeta");
+  core::check_range(core::Quantity::kFraction, alpha, "experimental_fraction");
+  core::check_range(core::Quantity::kStep, dt, "dt_s");
+  core::check_range(core::Quantity::kCount, static_cast<long long>(branches), "branches");
+  core::check_range(core::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
   const auto kind = core::integrator_from_string(integrator);
   const core::ContinuousStability continuous = core::continuous_critical_delay(period, zeta, alpha, branches);
   const core::DiscreteStability discrete = core::discrete_critical_delay(kind, period, zeta, alpha, dt, max_steps);
@@ -249,6 +245,9 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
                          const std::optional<std::vector<std::string>>& candidates, double holdout,
                          const std::string& holdout_mode, std::size_t max_steps, const std::string& length_unit,
                          const std::string& force_unit, const std::string& time_unit, const std::string& column_map) {
+  core::check_range(core::Quantity::kFraction, holdout, "holdout");
+  if (max_steps > 1000)  // 0: the declared model only, as `rths identify --max-steps 0`
+    throw std::invalid_argument("max_steps = " + std::to_string(max_steps) + " is outside [0, 1000]");
   identify::IdentifyOptions options;
   options.channels.clear();
   for (const auto& name : channels) {
@@ -281,7 +280,7 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
   return out;
 }
 
-py::dict read_record(const std::filesystem::path& path) {
+py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
   runtime::RecordContents contents;
   tables::Table table;
   {
@@ -289,21 +288,28 @@ py::dict read_record(const std::filesystem::path& path) {
     try {
       contents = runtime::read_record(path);
     } catch (const std::runtime_error& e) {
-      throw std::invalid_argument(e.what());  // a missing or corrupt record is bad input, as in the CLI
+      throw std::invalid_argument(e.what());  // a missing file or no record is bad input, as in the CLI
     }
+    if (contents.lost_entries() && !allow_loss)
+      throw std::runtime_error("the record lost entries: " + contents.loss_report() +
+                               " (read_record(path, allow_loss=True) returns the intact ones)");
     table = tables::record_table(contents);
   }
   py::dict out = table_dict(table);
   out["attributes"] = py::cast(table.attributes());
   out["truncated"] = contents.truncated;
   out["warning"] = contents.warning;
+  out["checksummed"] = contents.checksummed;
+  py::list losses;
+  for (const runtime::RecordLoss& loss : contents.losses) losses.append(loss.describe());
+  out["losses"] = losses;
   return out;
 }
 
 }  // namespace
 }  // namespace rths::python
 
-PYBIND11_MODULE(rths, m) {
+PYBIND11_MODULE(_rths, m) {
   using namespace rths::python;
   m.doc() = "rths: real-time hybrid simulation with actuator and network lag (the C++ library from Python)";
   static py::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);
@@ -327,7 +333,7 @@ PYBIND11_MODULE(rths, m) {
       .def_property_readonly("cases", &Study::case_names, "case names, the reference first unless reference_case is set")
       .def_property_readonly("base_dir", [](const Study& s) { return s.base_dir; })
       .def_property_readonly("text", &Study::text, "the config in Protobuf text format")
-      .def("__repr__", [](const Study& s) { return "<rths.Study '" + s.config.name() + "' from " + s.source + ">"; });
+      .def("__repr__", [](const Study& s) { return "<rths.LoadedStudy '" + s.config.name() + "' from " + s.source + ">"; });
 
   m.def("load_study", &load_study, py::arg("path"), "Read a study config file (Protobuf text format)");
   m.def("parse_study", &parse_study, py::arg("text"), py::arg("base_dir") = std::filesystem::path("."),
@@ -347,5 +353,7 @@ PYBIND11_MODULE(rths, m) {
         py::arg("max_steps") = 6, py::arg("length_unit") = "mm", py::arg("force_unit") = "N",
         py::arg("time_unit") = "s", py::arg("column_map") = "",
         "Identify the effects the declared models lack in measured data, as `rths identify --json`");
-  m.def("read_record", &read_record, py::arg("path"), "A run record (.rthsrec), also a truncated one");
+  m.def("read_record", &read_record, py::arg("path"), py::arg("allow_loss") = false,
+        "A run record (.rthsrec), also a truncated one; checksums verified, a damaged record "
+        "raises unless allow_loss=True (then its intact entries and 'losses')");
 }

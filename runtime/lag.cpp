@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/metrics.h"
+#include "core/study.h"
 
 namespace rths::runtime {
 
@@ -28,11 +29,9 @@ std::optional<std::int64_t> LagInjector::schedule(std::int64_t arrival_ns) {
 }
 
 void validate_link_lag(const config::LinkLag& spec, const std::string& where) {
-  if (spec.one_way_delay() < 0)
-    throw std::invalid_argument(where + ".one_way_delay must be >= 0 s");
-  if (spec.jitter() < 0) throw std::invalid_argument(where + ".jitter must be >= 0 s");
-  if (spec.loss() < 0 || spec.loss() >= 1)
-    throw std::invalid_argument(where + ".loss must be in [0, 1)");
+  // The lag rule's upper bound (1 s unless allow_long_lag) was checked with the study's flag when
+  // the study was parsed (core::validate_study); here only what holds for every study.
+  core::validate_link_lag(spec, where, /*allow_long_lag=*/true, "deployment");
 }
 
 LagSummary summarize(std::vector<double> lags) {

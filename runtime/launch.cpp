@@ -104,7 +104,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
   if (!security_dir.empty()) {  // every document checked before any process starts
     std::vector<int> ids{security::kCoordinatorNodeId};
     for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
-    security::check_lab_security(security_dir, ids);
+    security::check_lab_security(security_dir, ids, domain);
   }
   const NodePrograms programs = find_node_programs(options.programs_dir);
   const PlacementStrategy placement = options.placement ? options.placement : local_placement;
@@ -142,6 +142,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
   std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
                                 "--domain", std::to_string(domain), "--case", result.case_name};
   if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
+  args.insert(args.end(), options.coordinator_args.begin(), options.coordinator_args.end());
   result.coordinator_log = options.log_dir / "coordinator.log";
   ChildProcess coordinator = start(programs.coordinator, args, security_dir,
                                    security::kCoordinatorNodeId, result.coordinator_log,

@@ -3,7 +3,7 @@
 // and `rths sites` (each process in its site's network namespace):
 //
 //   launch_run: load the study and refuse a bad deployment before starting anything; check every
-//   DDS Security document; start the nodes (--node-id, --domain, --run-id), then the coordinator
+//   DDS Security document, and that the governance covers the run's domain; start the nodes (--node-id, --domain, --run-id), then the coordinator
 //   (--config, --case, --run-id, --record, --domain), each where options.placement puts it, with
 //   its log in log_dir (node_<id>.log, coordinator.log); wait for the coordinator until it exits,
 //   options.timeout passes (status "timed out after T s", exit 124) or options.stop_requested()
@@ -79,6 +79,7 @@ struct LaunchOptions {
   std::filesystem::path security_dir;
   PlacementStrategy placement;         // empty: local (loopback DDS unless CYCLONEDDS_URI is set)
   std::function<bool()> stop_requested;  // polled every 20 ms; true = stop now
+  std::vector<std::string> coordinator_args;  // appended to the coordinator's (e.g. --view H:P)
 };
 
 struct LaunchResult {

@@ -32,7 +32,10 @@ void LinkLagAccumulator::add(double time, const LinkSample& sample) {
 
 RunMeasurements measure_run(const RecordContents& record) {
   const RunHeader* header = record.header();
-  if (header == nullptr) throw std::invalid_argument("run record has no header");
+  if (header == nullptr)
+    throw std::invalid_argument(
+        "run record has no header" +
+        (record.lost_entries() ? " (" + record.loss_report() + ")" : std::string()));
   RunMeasurements m;
   m.clock = header->clock();
   m.case_name = header->case_name();

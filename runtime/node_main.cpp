@@ -23,7 +23,8 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
   app.add_option("--config", config_path,
                  "study config, read only for its domain id and security_dir");
-  app.add_option("--run-id", run_id, "accept only this run's assignment");
+  app.add_option("--run-id", run_id,
+                 "the run this node joins (default: the config's deployment.run_id); required");
   app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
   app.add_option("--security", security_dir,
                  "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
@@ -40,6 +41,7 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     if (!config_path.empty()) {
       const config::Deployment deployment = core::load_study(config_path).deployment();
       if (domain < 0) domain = deployment.domain_id();
+      if (run_id.empty()) run_id = deployment.run_id();
       if (security_dir.empty() && !deployment.security_dir().empty())
         security_dir = security::node_dir(std::filesystem::path(config_path).parent_path() /
                                               deployment.security_dir(), node_id);
@@ -47,6 +49,10 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     if (!security_dir.empty())  // refused here, before the participant exists
       options.participant_properties =
           security::participant_properties(security::check_node_security(security_dir, node_id));
+    if (run_id.empty())
+      throw std::invalid_argument(
+          "give --run-id (or deployment.run_id in --config): the coordinator accepts only "
+          "announcements of its own run, and this node only that run's assignment");
   } catch (const std::exception& e) {
     std::cerr << program << ": " << e.what() << "\n";
     return 2;

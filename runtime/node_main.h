@@ -3,7 +3,8 @@
 // open the DDS endpoint, run the node loop. Returns the process exit code:
 // 0 stopped by the coordinator, 1 lost the coordinator / never assigned, 2 bad usage, 3 DDS error.
 //
-//   <program> --node-id N [--domain D | --config STUDY] [--run-id ID] [--assign-timeout S]
+//   <program> --node-id N [--domain D | --config STUDY] --run-id ID [--assign-timeout S]
+//             (the run id may come from the config's deployment.run_id instead; none: exit 2)
 //             [--security DIR/node_N]   (DDS Security; bad documents: exit 2 before DDS starts)
 
 #include <functional>

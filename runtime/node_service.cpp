@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <climits>
+#include <cmath>
 #include <algorithm>
 
 #include "core/study.h"
@@ -32,30 +33,53 @@ transport::Message NodeService::announce() const {
   return pack(expected_run_id_, node_id_, ANNOUNCE, 0, a);
 }
 
-transport::Message NodeService::heartbeat() const {
+transport::Message NodeService::heartbeat() const { return heartbeat_message(false); }
+
+transport::Message NodeService::heartbeat_message(bool final) const {
   Heartbeat h;
   h.set_node_id(node_id_);
   h.set_last_step(last_step_);
   h.set_rejected(rejected_.total());
   h.set_servo_ticks(static_cast<std::uint64_t>(servo_samples_));
   h.set_servo_overruns(servo_overruns_);
+  rejected_.fill(*h.mutable_rejected_by_cause());
+  h.set_final(final);
   return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);
+}
+
+bool NodeService::entitled(const transport::Message& message) {
+  const bool own_topic = message.topic_node == node_id_ && message.node_id == node_id_;
+  const bool own_writer = coordinator_writer_ == 0 || message.writer == 0 ||
+                          message.writer == coordinator_writer_;
+  if (own_topic && own_writer) return true;
+  rejected_.count(Verdict::kNotEntitled);
+  return false;
+}
+
+bool NodeService::in_range(const Command& command) const {
+  const config::SafetyLimits& limits = assignment_.study().deployment().limits();
+  return std::isfinite(command.time()) && command.time() >= 0.0 &&
+         finite_within(command.drift(), 2.0 * limits.max_displacement()) &&
+         finite_within(command.drift_velocity(), 2.0 * limits.max_velocity());
 }
 
 std::vector<transport::Message> NodeService::start() { return {announce()}; }
 
 std::vector<transport::Message> NodeService::on_assign(const transport::Message& message) {
+  if (!entitled(message)) return {};
   Assign assign;
   if (!unpack(message, assign)) {
     rejected_.count(Verdict::kGarbage);
     return {};
   }
   if (!assigned_) {
-    if (!expected_run_id_.empty() && message.run_id != expected_run_id_) {
+    if (message.run_id.empty() ||
+        (!expected_run_id_.empty() && message.run_id != expected_run_id_)) {
       rejected_.count(Verdict::kForeignRun);
       return {};
     }
     run_id_ = message.run_id;
+    coordinator_writer_ = message.writer;
     assignment_ = assign;
     const auto& deployment = assign.study().deployment();
     if (deployment.clock() == config::Deployment::REAL_TIME && assign.dt() > 0) {
@@ -134,59 +158,10 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
   switch (message.kind) {
     case ASSIGN:
       return on_assign(message);
-    case COMMAND: {
-      if (held_ || stopped_ || !configure_error_.empty()) return {};
-      const Verdict order = check_step(message.step, last_step_, last_step_ + max_step_gap_);
-      if (order != Verdict::kAccept) {
-        rejected_.count(order);
-        return {};
-      }
-      if (!unpack(message, command_)) {
-        rejected_.count(Verdict::kGarbage);
-        return {};
-      }
-      if (const std::string why = refusal(command_); !why.empty()) {
-        auto hold = hold_on_own("refused the command of step " + std::to_string(message.step) +
-                                ": " + why);
-        if (hold) return {std::move(*hold)};
-        return {};
-      }
-      feedback_.Clear();
-      if (!receive_chains_.empty() && command_.drift_size() == hosted_ &&
-          command_.drift_velocity_size() == hosted_) {
-        for (int i = 0; i < hosted_; ++i) {
-          const double velocity = command_.drift_velocity(i);
-          command_.set_drift(i, receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
-        }
-      }
-      try {
-        if (streaming_)
-          load(command_);
-        else
-          compute(command_, feedback_);  // checks sizes before it changes any state
-      } catch (const std::invalid_argument& e) {
-        spdlog::warn("{}: rejected command of step {}: {}", label(), message.step, e.what());
-        rejected_.count(Verdict::kGarbage);
-        return {};
-      }
-      if (streaming_) {
-        last_step_ = stream_step_ = message.step;
-        stream_echo_ns_ = message.sent_ns;
-        stream_received_ns_ = message.received_ns;
-        stream_injected_lag_ = injected_lag_;
-        return {};
-      }
-      if (!send_chains_.empty())
-        for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
-          feedback_.set_force(i, send_chains_[i].step({command_.time(), feedback_.force(i), 0.0}));
-      last_step_ = message.step;
-      feedback_.set_command_received_ns(message.received_ns);
-      feedback_.set_injected_lag(injected_lag_);
-      transport::Message reply = pack(run_id_, node_id_, FEEDBACK, message.step, feedback_);
-      reply.echo_ns = message.sent_ns;
-      return {std::move(reply)};
-    }
+    case COMMAND:
+      return on_command(message);
     case HOLD:
+      if (!entitled(message)) return {};
       if (!held_) {
         held_ = true;
         on_hold();
@@ -197,11 +172,69 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
       }
       return {};
     case STOP:
+      if (!entitled(message)) return {};
       stopped_ = true;
-      return {};
+      return {heartbeat_message(true)};
     default:
       return {};  // heartbeats only refresh liveliness, which the loop tracks
   }
+}
+
+std::vector<transport::Message> NodeService::on_command(const transport::Message& message) {
+  if (!entitled(message) || held_ || stopped_ || !configure_error_.empty()) return {};
+  const Verdict order = check_step(message.step, last_step_, last_step_ + max_step_gap_);
+  if (order != Verdict::kAccept) {
+    rejected_.count(order);
+    return {};
+  }
+  if (!unpack(message, command_)) {
+    rejected_.count(Verdict::kGarbage);
+    return {};
+  }
+  if (!in_range(command_)) {
+    rejected_.count(Verdict::kOutOfRange);
+    return {};
+  }
+  if (const std::string why = refusal(command_); !why.empty()) {
+    auto hold = hold_on_own("refused the command of step " + std::to_string(message.step) +
+                            ": " + why);
+    if (hold) return {std::move(*hold)};
+    return {};
+  }
+  feedback_.Clear();
+  if (!receive_chains_.empty() && command_.drift_size() == hosted_ &&
+      command_.drift_velocity_size() == hosted_) {
+    for (int i = 0; i < hosted_; ++i) {
+      const double velocity = command_.drift_velocity(i);
+      command_.set_drift(i, receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
+    }
+  }
+  try {
+    if (streaming_)
+      load(command_);
+    else
+      compute(command_, feedback_);  // checks sizes before it changes any state
+  } catch (const std::invalid_argument& e) {
+    spdlog::warn("{}: rejected command of step {}: {}", label(), message.step, e.what());
+    rejected_.count(Verdict::kGarbage);
+    return {};
+  }
+  if (streaming_) {
+    last_step_ = stream_step_ = message.step;
+    stream_echo_ns_ = message.sent_ns;
+    stream_received_ns_ = message.received_ns;
+    stream_injected_lag_ = injected_lag_;
+    return {};
+  }
+  if (!send_chains_.empty())
+    for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
+      feedback_.set_force(i, send_chains_[i].step({command_.time(), feedback_.force(i), 0.0}));
+  last_step_ = message.step;
+  feedback_.set_command_received_ns(message.received_ns);
+  feedback_.set_injected_lag(injected_lag_);
+  transport::Message reply = pack(run_id_, node_id_, FEEDBACK, message.step, feedback_);
+  reply.echo_ns = message.sent_ns;
+  return {std::move(reply)};
 }
 
 }  // namespace rths::runtime

@@ -4,10 +4,19 @@
 //                       build its part (configure) and answer READY (or READY with an error).
 //   after assignment    COMMAND of the next step (lockstep: exactly last + 1; real time: newer,
 //                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing the command's stamp;
-//                       HOLD -> freeze (further commands ignored); STOP -> stopped();
+//                       HOLD -> freeze (further commands ignored); STOP -> stopped(), answered
+//                       by the node's last heartbeat (final, with its rejects by cause);
 //                       a command the node refuses (refusal(): an emulator's rate limit) -> it
 //                       holds on its own and answers HOLD with the reason instead of FEEDBACK.
 //                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
+//   trust               ASSIGN, COMMAND, HOLD and STOP count only on the node's own command
+//                       topic (never the broadcast) and, after the first accepted ASSIGN, only
+//                       from the writer that sent it (transport::Message::writer; 0 = unknown,
+//                       not checked); anything else is counted not entitled. An empty run id is
+//                       never this run's. A command whose time, drifts or drift velocities are not
+//                       finite, or beyond twice the run's max_displacement / max_velocity (a
+//                       storey drift spans two DOFs, each within the limit), is counted out of
+//                       range and not acted on.
 //   node delay stages   the spec's receive_delay / send_delay stages (simulated time) act on
 //                       each received drift before compute() and on each force after it.
 //   streaming           real time with a servo loop faster than the integrator (servo_period() > 0):
@@ -88,6 +97,13 @@ class NodeService : public transport::NodeHandler {
 
  private:
   std::vector<transport::Message> on_assign(const transport::Message& message);
+  std::vector<transport::Message> on_command(const transport::Message& message);
+  // Whether a control message (ASSIGN, COMMAND, HOLD, STOP) came from the coordinator that
+  // assigned this node, on this node's own topic; counts it not entitled otherwise.
+  bool entitled(const transport::Message& message);
+  bool in_range(const Command& command) const;
+  transport::Message heartbeat_message(bool final) const;
+  std::uint64_t coordinator_writer_ = 0;  // the first accepted ASSIGN's writer
   std::int32_t node_id_;
   config::NodeSpec::Kind kind_;
   std::string expected_run_id_, run_id_;

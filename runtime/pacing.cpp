@@ -25,7 +25,7 @@ void MonotonicClock::sleep_until_ns(std::int64_t deadline) {
 }
 
 Pacer::Pacer(PacingClock& clock, double period, WaitPolicy policy)
-    : clock_(clock), policy_(policy), period_ns_(std::llround(period * 1e9)), period_(period) {
+    : clock_(clock), policy_(policy), period_ns_(std::llround(period * 1e9)) {
   if (!(period > 0)) throw std::invalid_argument("pacing period must be > 0 s, got " +
                                                  std::to_string(period));
 }

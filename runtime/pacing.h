@@ -49,7 +49,6 @@ class Pacer {
   PacingClock& clock_;
   WaitPolicy policy_;
   std::int64_t period_ns_;
-  double period_;
   std::int64_t start_ns_ = 0;
   std::uint64_t overruns_ = 0;
   std::uint64_t streak_ = 0, worst_streak_ = 0;

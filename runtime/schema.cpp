@@ -16,6 +16,10 @@ void pack_into(transport::Message& m, const std::string& run_id, std::int32_t no
   m.kind = kind;
   m.step = step;
   m.sent_ns = m.echo_ns = m.received_ns = 0;
+  // As if carried on the node's own topic, from no known writer; a transport stamps the real
+  // ones on receipt.
+  m.topic_node = node_id;
+  m.writer = 0;
   payload.SerializeToString(&m.payload);  // clears, keeps the capacity
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // Packing Protobuf payloads into transport messages and back.
-// pack():   (run id, node id, kind, step, payload) -> Message with serialized bytes.
+// pack():   (run id, node id, kind, step, payload) -> Message with serialized bytes (topic_node
+//           = node id and writer 0, as a receiving transport stamps them for that node's topic).
 // unpack(): Message -> payload; false when the bytes do not parse (counted as garbage).
 
 #include <cstdint>

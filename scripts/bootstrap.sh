@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# One entry point for a fresh Debian 12 machine: installs what is missing, builds, then
+# One entry point for a fresh Debian 12 machine: installs what is missing, builds, installs
+# `rths` and the node programs into /usr/local/bin, then
 #   demo  runs the paper's frame (reference vs 14 ms actuator lag), in process and distributed
 #         over Cyclone DDS on loopback, and writes CSV, plots and summaries under out/
 #   test  runs the whole test suite (ctest)
@@ -13,8 +14,12 @@ packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev pro
   libcli11-dev gnuplot-nox libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 iputils-ping
   procps util-linux
   libmatio-dev libhdf5-dev pybind11-dev python3-dev python3-numpy python3-h5py python3-scipy
-  python3-pytest python3-matplotlib slurm-wlm munge podman runc podman-compose debootstrap
-  netavark aardvark-dns iptables openssl libssl-dev libxml2-dev)
+  python3-pytest python3-matplotlib python3-nbclient python3-nbformat python3-ipykernel slurm-wlm munge podman runc podman-compose debootstrap
+  netavark aardvark-dns iptables openssl libssl-dev libxml2-dev
+  libcpp-httplib-dev nodejs chromium)
+# npm (the view's page library, uPlot, and playwright-core for its browser tests): Debian's npm
+# package, unless the installed nodejs already brings npm.
+command -v npm >/dev/null 2>&1 || packages+=(npm)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -27,8 +32,12 @@ if ((${#missing[@]})); then
 fi
 
 build=build
+# A warning in rths's own code fails this build (and so CI).
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j"$(nproc)"
+# `rths` and the node programs on PATH (/usr/local/bin), so the README's commands run as written.
+sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
+$sudo cmake --install "$build" >/dev/null
 
 if [ "$mode" = test ]; then
   exec ctest --test-dir "$build" --output-on-failure -j"$(nproc)" --timeout 300

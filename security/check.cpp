@@ -5,6 +5,7 @@
 #include <openssl/pem.h>
 #include <openssl/x509v3.h>
 
+#include <limits>
 #include <memory>
 
 #include "security/openssl.h"
@@ -120,10 +121,46 @@ std::string text_of(const xmlNode* node) {
   return first == std::string::npos ? "" : text.substr(first, last - first + 1);
 }
 
-void check_governance(const fs::path& file, X509* ca) {
+bool is_element(const xmlNode* node, const char* name) {
+  return node->type == XML_ELEMENT_NODE &&
+         std::string(reinterpret_cast<const char*>(node->name)) == name;
+}
+
+int domain_id_of(const fs::path& file, const xmlNode* node) {
+  const std::string text = text_of(node);
+  try {
+    std::size_t used = 0;
+    const int id = std::stoi(text, &used);
+    if (used == text.size() && id >= 0) return id;
+  } catch (const std::exception&) {
+  }
+  refuse(file, "domain id '" + text + "' is not a number >= 0");
+}
+
+// The domain ids a <domains> element covers: <id>N</id> and <id_range><min>A</min><max>B</max>
+// (no <max>: every id from A on).
+void add_domains(const fs::path& file, const xmlNode* domains, std::vector<DomainRange>& out) {
+  for (const xmlNode* d = domains ? domains->children : nullptr; d; d = d->next) {
+    if (is_element(d, "id")) {
+      const int id = domain_id_of(file, d);
+      out.push_back({id, id});
+    } else if (is_element(d, "id_range")) {
+      const xmlNode* min = child(d, "min");
+      const xmlNode* max = child(d, "max");
+      out.push_back({min ? domain_id_of(file, min) : 0,
+                     max ? domain_id_of(file, max) : std::numeric_limits<int>::max()});
+    }
+  }
+}
+
+std::vector<DomainRange> check_governance(const fs::path& file, X509* ca) {
   const XmlDoc doc = parse_xml(file, verified_content(file, ca));
   const xmlNode* rules = child(xmlDocGetRootElement(doc.get()), "domain_access_rules");
   if (!child(rules, "domain_rule")) refuse(file, "no <domain_access_rules><domain_rule>");
+  std::vector<DomainRange> domains;
+  for (const xmlNode* rule = rules->children; rule; rule = rule->next)
+    if (is_element(rule, "domain_rule")) add_domains(file, child(rule, "domains"), domains);
+  return domains;
 }
 
 void check_permissions(const fs::path& file, X509* ca, const std::string& subject) {
@@ -169,13 +206,32 @@ NodeSecurityFiles check_node_security(const fs::path& dir, int node_id) {
     refuse(files.private_key, "does not match " + files.certificate.filename().string());
   }
   files.subject = subject_of(cert.get());
-  check_governance(files.governance, ca.get());
+  files.governance_domains = check_governance(files.governance, ca.get());
   check_permissions(files.permissions, ca.get(), files.subject);
   return files;
 }
 
-void check_lab_security(const fs::path& pki_dir, const std::vector<int>& node_ids) {
-  for (const int id : node_ids) check_node_security(node_dir(pki_dir, id), id);
+void check_lab_security(const fs::path& pki_dir, const std::vector<int>& node_ids, int domain) {
+  for (const int id : node_ids) {
+    const NodeSecurityFiles files = check_node_security(node_dir(pki_dir, id), id);
+    if (domain < 0) continue;
+    std::string covered;
+    for (const DomainRange& r : files.governance_domains) {
+      if (domain >= r.min && domain <= r.max) {
+        covered.clear();
+        break;
+      }
+      if (!covered.empty()) covered.append(", ");
+      covered.append(std::to_string(r.min));
+      if (r.max != r.min) covered.append("-");
+      if (r.max != r.min && r.max != std::numeric_limits<int>::max())
+        covered.append(std::to_string(r.max));
+    }
+    if (!covered.empty() || files.governance_domains.empty())
+      refuse(files.governance, "its domain rules cover " +
+                                   (covered.empty() ? std::string("no domain") : covered) +
+                                   ", not the run's DDS domain " + std::to_string(domain));
+  }
 }
 
 std::vector<std::string> security_arguments(const fs::path& pki_dir, int node_id) {

@@ -27,16 +27,24 @@ struct SecurityError : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+struct DomainRange {
+  int min = 0, max = 0;  // inclusive
+};
+
 struct NodeSecurityFiles {
   std::filesystem::path identity_ca, certificate, private_key, governance, permissions;
   std::string subject;  // cert.pem's subject, "CN=...,OU=...,O=..."
+  std::vector<DomainRange> governance_domains;  // the domain ids its domain rules cover
 };
 
 NodeSecurityFiles check_node_security(const std::filesystem::path& node_dir, int node_id);
 
 // For launchers, before they start anything: check_node_security of every id's folder
-// (pki_dir/node_<id>) under the `rths pki init` directory.
-void check_lab_security(const std::filesystem::path& pki_dir, const std::vector<int>& node_ids);
+// (pki_dir/node_<id>) under the `rths pki init` directory, and (domain >= 0) that each folder's
+// governance covers the run's DDS domain (else SecurityError naming governance.p7s, the
+// domains it covers and the run's).
+void check_lab_security(const std::filesystem::path& pki_dir, const std::vector<int>& node_ids,
+                        int domain = -1);
 
 // The arguments that hand node `node_id` its folder: {"--security", pki_dir/node_<id>}, or {}
 // when pki_dir is empty (security off).

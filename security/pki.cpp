@@ -183,8 +183,9 @@ std::string governance_xml() {
 std::string permissions_xml(const NodeIdentity& node, const std::string& organisation,
                             const std::string& not_before, const std::string& not_after) {
   const bool coordinator = node.node_id == kCoordinatorNodeId;
-  const std::string publish = coordinator ? "*_down" : "*_up";
-  const std::string subscribe = coordinator ? "*_up" : "*_down";
+  const std::string own = "*_node" + std::to_string(node.node_id);
+  const std::string publish = coordinator ? "*_down" : own + "_up";
+  const std::string subscribe = coordinator ? "*_up" : own + "_down";
   return R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
   <permissions>

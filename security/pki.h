@@ -18,9 +18,10 @@
 // and every topic's metadata and data encrypted (AES-GCM), read and write access control on
 // every topic.
 // Permissions (default DENY): the coordinator (node 0) publishes "*_down" (commands) and
-// subscribes "*_up"; substructure nodes and actuator emulators publish "*_up" (feedback) and
-// subscribe "*_down" (transport/dds_endpoint.h: topics <prefix>_node<id>_down, <prefix>_down
-// and <prefix>_up).
+// subscribes "*_up"; node N (a substructure node or an actuator emulator) publishes
+// "*_node<N>_up" and subscribes "*_node<N>_down", its own two topics and nothing else
+// (transport/dds_endpoint.h: topics <prefix>_node<id>_down and <prefix>_node<id>_up). So a
+// certificate of node 2 cannot publish as node 1: DDS refuses the writer.
 // Validity: certificates and grants from one hour before creation (clock skew between sites)
 // to `days` after it.
 

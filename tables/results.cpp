@@ -142,10 +142,11 @@ Table record_table(const runtime::RecordContents& record) {
   using Step = runtime::StepRecord;
   Table t;
   t.add_numbers("step", "", scalar([](const Step& s) { return s.step(); }));
-  t.add_numbers("time", "s", scalar([](const Step& s) { return s.time(); }));
-  t.add_numbers("ground_acceleration", "m/s^2", scalar([](const Step& s) { return s.ground_acceleration(); }));
+  t.add_numbers("time_s", "s", scalar([](const Step& s) { return s.time(); }));
+  t.add_numbers("ground_acceleration_m_per_s2", "m/s^2", scalar([](const Step& s) { return s.ground_acceleration(); }));
   const auto add_indexed = [&t](const std::string& name, const std::string& unit, std::vector<std::vector<double>> columns) {
-    for (std::size_t i = 0; i < columns.size(); ++i) t.add_numbers(name + std::to_string(i + 1), unit, std::move(columns[i]));
+    for (std::size_t i = 0; i < columns.size(); ++i)
+      t.add_numbers(name + std::to_string(i + 1) + "_" + unit_suffix(unit), unit, std::move(columns[i]));
   };
   add_indexed("u", "m", per_index([](const Step& s) -> const auto& { return s.displacement(); }, dofs));
   add_indexed("v", "m/s", per_index([](const Step& s) -> const auto& { return s.velocity(); }, dofs));
@@ -166,18 +167,32 @@ Table record_table(const runtime::RecordContents& record) {
     };
     using Link = runtime::LinkSample;
     t.add_numbers(prefix + "answered_step", "", link([](const Link& x) { return x.answered_step(); }));
-    t.add_numbers(prefix + "injected_lag", "s", link([](const Link& x) { return x.injected_lag(); }));
-    t.add_numbers(prefix + "round_trip", "s", link([](const Link& x) { return x.round_trip(); }));
-    t.add_numbers(prefix + "one_way_down", "s", link([](const Link& x) { return x.one_way_down(); }));
-    t.add_numbers(prefix + "one_way_up", "s", link([](const Link& x) { return x.one_way_up(); }));
+    t.add_numbers(prefix + "injected_lag_s", "s", link([](const Link& x) { return x.injected_lag(); }));
+    t.add_numbers(prefix + "round_trip_s", "s", link([](const Link& x) { return x.round_trip(); }));
+    t.add_numbers(prefix + "one_way_down_s", "s", link([](const Link& x) { return x.one_way_down(); }));
+    t.add_numbers(prefix + "one_way_up_s", "s", link([](const Link& x) { return x.one_way_up(); }));
   }
-  t.add_numbers("lateness", "s", scalar([](const Step& s) { return s.lateness(); }));
+  t.add_numbers("lateness_s", "s", scalar([](const Step& s) { return s.lateness(); }));
   t.add_numbers("overrun", "", scalar([](const Step& s) { return s.overrun() ? 1 : 0; }));
   t.set_attribute("run_id", header->run_id());
   t.set_attribute("case_name", header->case_name());
   t.set_attribute("clock", header->clock());
   const runtime::RunFooter* footer = record.footer();
   t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
+  t.set_attribute("integrity", !record.checksummed ? "unverified: written without checksums"
+                               : record.lost_entries() ? "damaged: " + record.loss_report()
+                                                       : "verified (CRC-32C per entry)");
+  std::string lost;
+  // Appended piece by piece: GCC 12 misreads `"-" + std::to_string(...)` here (-Wrestrict).
+  for (const auto& [first, last] : record.missing_steps()) {
+    if (!lost.empty()) lost += ',';
+    lost += std::to_string(first);
+    if (last > first) {
+      lost += '-';
+      lost += std::to_string(last);
+    }
+  }
+  t.set_attribute("lost_steps", lost);
   return t;
 }
 

@@ -15,13 +15,15 @@
 //                 1 kg), dt (s), motion and model (text), peak_ref, peak_delayed (m),
 //                 eq2_paper, nrmse, peak_error (m), diverged (0/1), as in the sweep CSV;
 //                 attributes grid_hash and grid_points.
-//   record_table  a run record (`rths launch`, `rths export`): step, time (s),
-//                 ground_acceleration (m/s^2), u<i> (m), v<i> (m/s), a<i> (m/s^2) per DOF,
-//                 command<j>, realised<j> (m), force<j> (N) per actuator, then per link to node n:
-//                 node<n>_answered_step, node<n>_injected_lag, node<n>_round_trip,
-//                 node<n>_one_way_down, node<n>_one_way_up (s; NaN at step 0, which has no
-//                 exchange), then lateness (s) and overrun (0/1); attributes run_id, case_name,
-//                 clock, status.
+//   record_table  a run record (`rths launch`, `rths export`): step, time_s,
+//                 ground_acceleration_m_per_s2, u<i>_m, v<i>_m_per_s, a<i>_m_per_s2 per DOF,
+//                 command<j>_m, realised<j>_m, force<j>_N per actuator, then per link to node n:
+//                 node<n>_answered_step, node<n>_injected_lag_s, node<n>_round_trip_s,
+//                 node<n>_one_way_down_s, node<n>_one_way_up_s (NaN at step 0, which has no
+//                 exchange), then lateness_s and overrun (0/1); attributes run_id, case_name,
+//                 clock, status, integrity ("verified (CRC-32C per entry)", "damaged: <what
+//                 was lost>" or "unverified: ..." for an old record) and lost_steps (step
+//                 numbers missing from the rows, e.g. "1059-1061,2000"; empty when none).
 //   identify_table `rths identify`: time_s, then per channel c (measured, force):
 //                 c_input_m, c_target_<unit>, c_declared_<unit>, c_final_<unit> (the record, and
 //                 the declared and final model's predictions over the whole record); unit m for

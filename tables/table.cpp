@@ -37,6 +37,14 @@ void Table::add(Column column) {
                                 "' is not a valid variable name (a letter, then letters, digits or "
                                 "'_', at most 63 characters)");
   }
+  if (!column.unit.empty()) {
+    std::string tail = "_";  // appended: GCC 12 misreads `"_" + std::string` here (-Wrestrict)
+    tail += unit_suffix(column.unit);
+    if (column.name.size() <= tail.size() ||
+        column.name.compare(column.name.size() - tail.size(), tail.size(), tail) != 0)
+      throw std::invalid_argument("table column '" + column.name + "' (unit " + column.unit +
+                                  ") must end in '" + tail + "': [<case>_]<quantity><index>_<unit>");
+  }
   for (const Column& c : columns_) {
     if (c.name == column.name) throw std::invalid_argument("table column '" + column.name + "' appears twice");
   }
@@ -45,6 +53,16 @@ void Table::add(Column column) {
                                 " rows, the columns before it " + std::to_string(rows()));
   }
   columns_.push_back(std::move(column));
+}
+
+std::string unit_suffix(const std::string& unit) {
+  std::string out;
+  for (char c : unit) {
+    if (c == '/') out += "_per_";
+    else if (c == '%') out += "pct";
+    else if (c != '^') out += c;
+  }
+  return out;
 }
 
 void Table::add_numbers(const std::string& name, const std::string& unit, std::vector<double> values) {

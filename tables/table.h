@@ -3,9 +3,13 @@
 // It is the one in-memory form every rths result takes before it is written (CSV, MATLAB, HDF5)
 // or handed to Python, so the variable names and units are the same in every format.
 //
-// Column names are the CSV header names and the MATLAB / HDF5 variable names: they must be valid
-// MATLAB identifiers (a letter, then letters, digits or '_', at most 63 characters). A unit is an
-// SI symbol ("s", "m", "m/s^2", "N") or "" for a dimensionless column or a count. A missing value
+// Column names are the CSV header names, the MATLAB / HDF5 variable names and the Python series
+// names: they must be valid MATLAB identifiers (a letter, then letters, digits or '_', at most 63
+// characters). A unit is an SI symbol ("s", "m", "m/s^2", "N") or "" for a dimensionless column or
+// a count. One naming rule for every table, enforced by add_numbers / add_texts:
+//   [<case>_]<quantity>[<index>]_<unit>     e.g. lag_shift_14ms_u_floor1_m, time_s, force1_N
+// the name ends in "_" + unit_suffix(unit) ("m/s^2" -> "m_per_s2", "%" -> "pct"); a column
+// without a unit has no suffix (step, alpha, diverged). A missing value
 // (a run that stopped early, a link with no exchange at step 0) is NaN; CSV writes it as an empty
 // field.
 
@@ -27,7 +31,8 @@ struct Column {
 class Table {
  public:
   // Appends a column. Throws std::invalid_argument naming it when the name is not a valid
-  // MATLAB identifier, is already taken, or its length differs from the columns before it.
+  // MATLAB identifier, does not end in its unit (the naming rule above), is already taken, or
+  // its length differs from the columns before it.
   void add_numbers(const std::string& name, const std::string& unit, std::vector<double> values);
   void add_texts(const std::string& name, const std::string& unit, std::vector<std::string> values);
   // A file-level attribute (HDF5 root attribute, MATLAB field of `attributes`); not in CSV.
@@ -48,6 +53,9 @@ class Table {
 // A name as a MATLAB identifier: characters outside [A-Za-z0-9_] become '_', a leading digit or
 // '_' gets an "x" in front, and the result is cut to 63 characters.
 std::string identifier(const std::string& text);
+// A unit as the tail of a column name: "m/s^2" -> "m_per_s2", "N/m" -> "N_per_m", "%" -> "pct".
+std::string unit_suffix(const std::string& unit);
+
 // True when `name` is already a valid MATLAB identifier.
 bool is_identifier(const std::string& name);
 

@@ -8,6 +8,7 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -23,36 +24,38 @@ namespace {
 // first addressed message is the ASSIGN answering the node's announcement, so the node is there.
 constexpr auto kAddressedMatchTimeout = std::chrono::milliseconds(2000);
 
-std::string addressed_topic_name(const std::string& prefix, std::int32_t node_id) {
-  return prefix + "_node" + std::to_string(node_id) + "_down";
+std::string node_topic_name(const std::string& prefix, std::int32_t node_id, const char* way) {
+  return prefix + "_node" + std::to_string(node_id) + way;
 }
 
 }  // namespace
 
-// A node's reader of its own command topic, or of the broadcast topic; each owns its topic.
+// One reader of one topic, owning the topic; `node` is the node whose topic it is.
 struct DdsEndpoint::NodeReader {
   dds::EnvelopeTopic topic;
   dds::Reader reader;
+  std::int32_t node;
+};
+
+// One writer of one topic, owning the topic.
+struct DdsEndpoint::TopicWriter {
+  dds::EnvelopeTopic topic;
+  dds::Writer writer;
 };
 
 struct DdsEndpoint::Impl {
   Impl(const DdsEndpointOptions& o, const dds::QosSpec& qos)
-      : options(o),
-        qos(qos),
-        participant(o.domain_id, o.participant_properties),
-        down(participant, o.topic_prefix + "_down", qos),
-        up(participant, o.topic_prefix + "_up", qos),
-        writer(participant, o.coordinator ? down : up, qos),
-        reader(participant, o.coordinator ? up : down, qos, &Impl::on_data, this) {
-    if (!o.coordinator) {
-      dds::EnvelopeTopic own(participant, addressed_topic_name(o.topic_prefix, o.node_id), qos);
-      dds::Reader own_reader(participant, own, qos, &Impl::on_data, this);
-      addressed.reset(new NodeReader{std::move(own), std::move(own_reader)});
-    }
+      : options(o), qos(qos), participant(o.domain_id, o.participant_properties) {
+    if (o.coordinator) return;
+    dds::EnvelopeTopic up(participant, node_topic_name(o.topic_prefix, o.node_id, "_up"), qos);
+    dds::Writer w(participant, up, qos);
+    own.reset(new TopicWriter{std::move(up), std::move(w)});
+    add_reader(node_topic_name(o.topic_prefix, o.node_id, "_down"), o.node_id);
   }
+  // No reader is added once destruction starts; the lock is not held while a running listener
+  // (which takes it) is waited for.
   ~Impl() {
-    reader.clear_listener();
-    if (addressed) addressed->reader.clear_listener();
+    for (auto& r : readers) r->reader.clear_listener();
   }
 
   static void on_data(dds::Handle reader, void* self) { static_cast<Impl*>(self)->drain(reader); }
@@ -60,6 +63,10 @@ struct DdsEndpoint::Impl {
   void drain(dds::Handle from);
   // The coordinator's writer of node_id's command topic, created (and matched) on first use.
   dds::Handle addressed_writer(std::int32_t node_id);
+  // A reader of `topic`, whose messages are stamped as carried by `node`'s topic.
+  void add_reader(const std::string& topic, std::int32_t node);
+  // The node whose topic `reader` reads; nullopt for a reader this endpoint does not own.
+  std::optional<std::int32_t> topic_node_of(dds::Handle reader);
 
   const DdsEndpointOptions options;
   const dds::QosSpec qos;
@@ -74,31 +81,52 @@ struct DdsEndpoint::Impl {
   std::atomic<std::uint64_t> samples_taken{0};
 
   dds::Participant participant;
-  dds::EnvelopeTopic down, up;
-  dds::Writer writer;  // coordinator: broadcasts on <prefix>_down; node: <prefix>_up
-  dds::Reader reader;  // coordinator: <prefix>_up; node: broadcasts on <prefix>_down
-  std::unique_ptr<NodeReader> addressed;  // node only: <prefix>_node<id>_down
+  std::unique_ptr<TopicWriter> own;  // node only: <prefix>_node<id>_up
+  // Node: <prefix>_node<id>_down; coordinator: <prefix>_node<id>_up of every node it listens
+  // to. Only added to (entries never move: the listener reads them).
+  std::mutex readers_mutex;
+  std::vector<std::unique_ptr<NodeReader>> readers;
   // Coordinator only: one topic and writer per addressee, so a command reaches its node only.
-  struct AddressedWriter {
-    dds::EnvelopeTopic topic;
-    dds::Writer writer;
-  };
   std::mutex writers_mutex;
-  std::map<std::int32_t, std::unique_ptr<AddressedWriter>> addressed_writers;
+  std::map<std::int32_t, std::unique_ptr<TopicWriter>> addressed_writers;
 };
+
+void DdsEndpoint::Impl::add_reader(const std::string& name, std::int32_t node) {
+  dds::EnvelopeTopic topic(participant, name, qos);
+  dds::Reader reader(participant, topic, qos, &Impl::on_data, this);
+  std::lock_guard lock(readers_mutex);
+  readers.push_back(std::make_unique<NodeReader>(NodeReader{std::move(topic), std::move(reader), node}));
+}
+
+std::optional<std::int32_t> DdsEndpoint::Impl::topic_node_of(dds::Handle reader) {
+  std::lock_guard lock(readers_mutex);
+  for (const auto& r : readers)
+    if (r->reader.get() == reader) return r->node;
+  return std::nullopt;
+}
 
 dds::Handle DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
   std::lock_guard lock(writers_mutex);
   auto& slot = addressed_writers[node_id];
   if (!slot) {
-    dds::EnvelopeTopic topic(participant, addressed_topic_name(options.topic_prefix, node_id), qos);
+    dds::EnvelopeTopic topic(participant, node_topic_name(options.topic_prefix, node_id, "_down"), qos);
     dds::Writer w(participant, topic, qos);
-    slot.reset(new AddressedWriter{std::move(topic), std::move(w)});
+    slot.reset(new TopicWriter{std::move(topic), std::move(w)});
     const auto deadline = std::chrono::steady_clock::now() + kAddressedMatchTimeout;
     while (slot->writer.matched_readers() < 1 && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
   return slot->writer.get();
+}
+
+void DdsEndpoint::listen_to(std::int32_t node_id) {
+  if (!options_.coordinator) return;
+  {
+    std::lock_guard lock(impl_->readers_mutex);
+    for (const auto& r : impl_->readers)
+      if (r->node == node_id) return;
+  }
+  impl_->add_reader(node_topic_name(options_.topic_prefix, node_id, "_up"), node_id);
 }
 
 std::int64_t realtime_ns() {
@@ -127,9 +155,18 @@ void DdsEndpoint::send(const Message& m) {
   sample.payload._buffer =
       reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
   sample.payload._release = false;
-  const bool addressed = options_.coordinator && m.node_id != kBroadcastId;
-  dds::check(dds_write(addressed ? impl_->addressed_writer(m.node_id) : impl_->writer.get(), &sample),
-             "dds_write");
+  if (!options_.coordinator) {
+    dds::check(dds_write(impl_->own->writer.get(), &sample), "dds_write");
+    return;
+  }
+  if (m.node_id != kBroadcastId) {
+    dds::check(dds_write(impl_->addressed_writer(m.node_id), &sample), "dds_write");
+    return;
+  }
+  // To each node addressed so far, without allocating (a heartbeat goes out from the loop).
+  std::lock_guard lock(impl_->writers_mutex);
+  for (const auto& [node, w] : impl_->addressed_writers)
+    dds::check(dds_write(w->writer.get(), &sample), "dds_write");
 }
 
 void DdsEndpoint::Impl::drain(dds::Handle from) {
@@ -137,6 +174,8 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
   void* samples[kBatch] = {};
   dds_sample_info_t infos[kBatch];
   bool queued = false;
+  const std::optional<std::int32_t> topic_node = topic_node_of(from);
+  if (!topic_node) return;
   for (;;) {
     // A failing take here has no caller to throw to; the data stays and the next arrival retries.
     const dds_return_t n = dds_take(from, samples, infos, kBatch, kBatch);
@@ -159,6 +198,8 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       m.echo_ns = s->echo_ns;
       m.payload.assign(reinterpret_cast<const char*>(s->payload._buffer), s->payload._length);
       m.received_ns = now;
+      m.topic_node = *topic_node;
+      m.writer = infos[i].publication_handle;
       std::shared_ptr<const InlineHandler> h;
       {
         std::lock_guard lock(mutex);
@@ -223,8 +264,19 @@ std::uint64_t DdsEndpoint::samples_taken() const {
   return impl_->samples_taken.load(std::memory_order_relaxed);
 }
 
-int DdsEndpoint::matched_peers() const { return impl_->writer.matched_readers(); }
-int DdsEndpoint::matched_writers() const { return impl_->reader.matched_writers(); }
+int DdsEndpoint::matched_peers() const {
+  if (impl_->own) return impl_->own->writer.matched_readers();
+  std::lock_guard lock(impl_->writers_mutex);
+  int readers = 0;
+  for (const auto& [id, w] : impl_->addressed_writers) readers += w->writer.matched_readers();
+  return readers;
+}
+int DdsEndpoint::matched_writers() const {
+  std::lock_guard lock(impl_->readers_mutex);
+  int writers = 0;
+  for (const auto& r : impl_->readers) writers += r->reader.matched_writers();
+  return writers;
+}
 
 void DdsEndpoint::wait_for_match(int readers, int writers,
                                  std::chrono::milliseconds timeout) const {

@@ -1,16 +1,20 @@
 #pragma once
-// Endpoint over Cyclone DDS. Topics, all reliable, KEEP_LAST 64, volatile:
-//   "rths_node<id>_down"  coordinator -> node <id>: messages addressed to that node only
-//   "rths_down"           coordinator -> every node: broadcasts (node id -1)
-//   "rths_up"             nodes -> coordinator, keyed by the sender
-// One topic per addressee, not one shared topic, because DDS delivers every sample to every
+// Endpoint over Cyclone DDS. Two topics per node, all reliable, KEEP_LAST 64, volatile:
+//   "rths_node<id>_down"  coordinator -> node <id>: everything addressed to that node
+//   "rths_node<id>_up"    node <id> -> coordinator: everything node <id> sends
+// A coordinator's broadcast (node id -1) is written to the command topic of every node it has
+// addressed so far: no topic is shared, so a node's DDS Security permissions can allow it its
+// own two topics and nothing else (`rths pki init`). The coordinator reads the up topic of each
+// node it listens to (listen_to). Every message taken is stamped with the node whose topic
+// carried it (topic_node) and the DDS instance handle of the writer that sent it (writer), so a
+// receiver can check the envelope's node id against the topic and pin each peer's writer: a
+// participant that claims another node's id is told apart.
+// One topic per addressee, not one shared topic, also because DDS delivers every sample to every
 // matched reader: on a shared topic each command woke every node process, to be thrown away by
-// all but one (on one CPU, a context switch per wasted delivery). The coordinator creates a
-// node's writer on the first message addressed to it and waits (up to 2 s, at start-up) for the
-// node's reader to match, so that first message is not lost. Order holds per topic only: a
-// broadcast may overtake an addressed message, so what must follow a node's HOLD is addressed
-// to it. A node endpoint also drops anything not addressed to it or broadcast, before any
-// payload is parsed.
+// all but one. The coordinator creates a node's writer on the first message addressed to it and
+// waits (up to 2 s, at start-up) for the node's reader to match, so that first message is not
+// lost. Order holds per topic only. A node endpoint also drops anything not addressed to it or
+// broadcast, before any payload is parsed.
 //
 // Receipt: a data-available listener takes the samples on Cyclone's receive thread, offers each to
 // the inline handler (set_inline_handler) and queues the rest for receive(), waking it through a
@@ -34,7 +38,7 @@ struct DdsEndpointOptions {
   std::uint32_t domain_id = 0;
   bool coordinator = true;                 // false: a node
   std::int32_t node_id = kCoordinatorId;   // for a node, its id (messages to others are dropped)
-  std::string topic_prefix = "rths";       // topics <prefix>_down and <prefix>_up
+  std::string topic_prefix = "rths";       // topics <prefix>_node<id>_down and _up
   int history_depth = 64;
   // QoS properties of the participant: the DDS Security ones (security::participant_properties)
   // or none. A participant with security talks only to participants of the same lab's PKI.
@@ -49,9 +53,11 @@ class DdsEndpoint final : public Endpoint {
   std::optional<Message> receive(std::chrono::nanoseconds timeout) override;
   void interrupt() override;
   int matched_peers() const override;
+  void listen_to(std::int32_t node_id) override;
+  // Remote writers feeding any of this endpoint's readers.
   int matched_writers() const;
   // Waits until at least `writers` remote writers feed this endpoint and `readers` remote
-  // readers listen to it. Throws std::runtime_error naming the counts on timeout.
+  // readers listen to it (a coordinator's writers exist once it has addressed a node). Throws std::runtime_error naming the counts on timeout.
   void wait_for_match(int readers, int writers, std::chrono::milliseconds timeout) const;
   void set_inline_handler(InlineHandler handler) override;
   // Samples taken off DDS so far, including any dropped as not addressed to this node (with one
@@ -61,6 +67,7 @@ class DdsEndpoint final : public Endpoint {
  private:
   struct Impl;
   struct NodeReader;
+  struct TopicWriter;
   DdsEndpointOptions options_;
   std::unique_ptr<Impl> impl_;
 };

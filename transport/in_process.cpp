@@ -6,14 +6,17 @@ void InProcessTransport::attach(std::int32_t node_id, NodeHandler& handler) {
   nodes_[node_id] = &handler;
   for (Message& m : handler.start()) {
     m.received_ns = realtime_ns();
+    m.topic_node = node_id;
     inbox_.push_back(std::move(m));
   }
 }
 
-void InProcessTransport::deliver(NodeHandler& handler, const Message& message) {
+void InProcessTransport::deliver(std::int32_t node_id, NodeHandler& handler,
+                                 const Message& message) {
   for (Message& reply : handler.handle(message)) {
     if (reply.sent_ns == 0) reply.sent_ns = realtime_ns();
     reply.received_ns = realtime_ns();
+    reply.topic_node = node_id;
     inbox_.push_back(std::move(reply));
   }
 }
@@ -22,12 +25,17 @@ void InProcessTransport::send(const Message& message) {
   Message stamped = message;
   if (stamped.sent_ns == 0) stamped.sent_ns = realtime_ns();
   stamped.received_ns = stamped.sent_ns;
+  stamped.topic_node = message.node_id;
   if (message.node_id == kBroadcastId) {
-    for (auto& [id, handler] : nodes_) deliver(*handler, stamped);
+    // On each node's own topic, as DdsEndpoint writes a broadcast.
+    for (auto& [id, handler] : nodes_) {
+      stamped.topic_node = id;
+      deliver(id, *handler, stamped);
+    }
     return;
   }
   const auto it = nodes_.find(message.node_id);
-  if (it != nodes_.end()) deliver(*it->second, stamped);
+  if (it != nodes_.end()) deliver(it->first, *it->second, stamped);
 }
 
 std::optional<Message> InProcessTransport::receive(std::chrono::nanoseconds) {

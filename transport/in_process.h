@@ -1,7 +1,8 @@
 #pragma once
 // In-process transport: the coordinator's endpoint calls the nodes' handlers directly. No threads,
 // no clocks involved in ordering: a down message is handled at once and the node's replies are
-// queued for the coordinator's next receive(). Used for the in-process reference of a distributed
+// queued for the coordinator's next receive(), stamped with the topic of the node that sent them
+// (writer 0: no writer identity in process). Used for the in-process reference of a distributed
 // configuration and for unit tests; the node logic is the same object a node process runs.
 
 #include <deque>
@@ -33,7 +34,8 @@ class InProcessTransport final : public Endpoint {
   int matched_peers() const override { return static_cast<int>(nodes_.size()); }
 
  private:
-  void deliver(NodeHandler& handler, const Message& message);
+  // Hands `message` to node `node_id`'s handler and queues its replies, stamped as from its topic.
+  void deliver(std::int32_t node_id, NodeHandler& handler, const Message& message);
   std::map<std::int32_t, NodeHandler*> nodes_;
   std::deque<Message> inbox_;
 };

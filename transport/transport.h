@@ -5,6 +5,9 @@
 //   up    node -> coordinator   (node_id = sender)
 // Implementations: InProcessTransport (function calls, deterministic, no threads) and
 // DdsEndpoint (Cyclone DDS, processes on any host). The same run gives the same numbers on both.
+// Who may say what: every node has its own topic each way, so a receiver knows which node's
+// topic carried a message (topic_node) and which writer sent it (writer); the envelope's node_id
+// is only a claim, checked against both by the receiver (runtime/validation.h).
 //
 // Stamps are CLOCK_REALTIME nanoseconds (comparable across hosts up to their clock offset);
 // round trips are measured on one host's clock from sent_ns and the echo, so carry no offset.
@@ -26,6 +29,11 @@ struct Message {
   std::int64_t echo_ns = 0;    // sent_ns of the message this answers
   std::string payload;         // Protobuf bytes
   std::int64_t received_ns = 0;  // stamped on receipt, never sent
+  // Stamped on receipt, never sent: the node whose topic carried the message (its addressee on
+  // the way down, its sender on the way up; kBroadcastId for the broadcast topic), and the
+  // transport's identity of the writer that sent it (0 when the transport has none).
+  std::int32_t topic_node = 0;
+  std::uint64_t writer = 0;
 };
 
 // CLOCK_REALTIME now, ns.
@@ -43,6 +51,9 @@ class Endpoint {
   virtual void interrupt() = 0;
   // Number of remote endpoints currently matched to this one's writer.
   virtual int matched_peers() const = 0;
+  // Coordinator: listen to node `node_id` on its own up topic (a node's messages arrive only
+  // after this). Idempotent; transports that need no set-up ignore it.
+  virtual void listen_to(std::int32_t node_id) { (void)node_id; }
 
   // Returns true when it consumed the message; false leaves it for receive().
   using InlineHandler = std::function<bool(const Message&)>;

@@ -46,6 +46,7 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec) {
          // "[:]" would keep the previous panel's range: autoscale instead.
          << (spec.x_min || spec.x_max ? "set xrange " + range(spec.x_min, spec.x_max) : "set autoscale x") << "\n"
          << (spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max) : "set autoscale y") << "\n"
+         << "set format y " << quoted(spec.y_format.empty() ? "% h" : spec.y_format) << "\n"
          << "unset arrow\nunset label\n";
   script.precision(10);
   for (std::size_t i = 0; i < spec.markers.size(); ++i) {

@@ -8,11 +8,17 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rths::util {
 
+// Series and PlotSpec take their leading fields by constructor (not as aggregates), so a figure
+// names what it sets and -Wmissing-field-initializers has nothing to say about the rest.
 struct Series {
+  Series() = default;
+  Series(std::string title, std::vector<double> x, std::vector<double> y, std::string style = "lines")
+      : title(std::move(title)), x(std::move(x)), y(std::move(y)), style(std::move(style)) {}
   std::string title;
   std::vector<double> x, y;
   std::string style = "lines";  // gnuplot "with" clause: lines, points, linespoints ...
@@ -25,6 +31,11 @@ struct VerticalMarker {
 };
 
 struct PlotSpec {
+  PlotSpec() = default;
+  PlotSpec(std::string title, std::string xlabel, std::string ylabel, std::vector<Series> series = {},
+           bool log_y = false)
+      : title(std::move(title)), xlabel(std::move(xlabel)), ylabel(std::move(ylabel)),
+        series(std::move(series)), log_y(log_y) {}
   std::string title, xlabel, ylabel;
   std::vector<Series> series;
   bool log_y = false;
@@ -34,6 +45,8 @@ struct PlotSpec {
   // (points outside are clipped, not dropped from the legend).
   std::optional<double> x_min, x_max, y_min, y_max;
   std::vector<VerticalMarker> markers;
+  // gnuplot format of the y tick labels (e.g. "%g": 1e-05 rather than 0.000010); empty = default.
+  std::string y_format;
 };
 
 // The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel

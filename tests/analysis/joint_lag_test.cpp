@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <functional>
 #include <optional>
 #include <string>
@@ -60,6 +61,37 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
   for (const char* file : {"grid.csv", "summary.json", "error_map.png", "error_map.svg", "total_lag.png", "total_lag.svg"}) {
     EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
   }
+}
+
+// The grid judges divergence by the one rule every command uses (analysis::compare): 16 ms of
+// network and 14 ms of actuator lag, past the frame's 24.2 ms, grow the peak far past 10x the
+// lag-free run's, so the point is diverged as `rths sdof --delay 30ms` calls the same lag; and
+// the map marks it, labels its contours and marks the cells past the boundary.
+TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
+  JointLagStudy config;
+  config.set_study("paper_frame.textproto");
+  for (double r : {0.0, 0.016}) config.add_network_round_trips(r);
+  for (double a : {0.0, 0.014}) config.add_actuator_lags(a);
+  JointLagOptions options;
+  options.output_directory = kOut / "one_rule";
+  options.measure = false;
+  options.warn = [](const std::string&) {};
+  const auto result = run_joint_lag(config, kConfigs, options);
+  const JointLagPoint& past = at(result, 0.016, 0.014);
+  EXPECT_TRUE(past.past_boundary);
+  EXPECT_TRUE(past.diverged) << "NRMSE " << past.nrmse * 100 << " %, peak error " << past.peak_error;
+  EXPECT_FALSE(at(result, 0.016, 0.0).diverged);
+  write_joint_lag_outputs(result, true);
+  std::ifstream in(result.output_directory / "error_map.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(svg.find("diverged"), std::string::npos);
+  EXPECT_NE(svg.find("network round trip (ms)"), std::string::npos);
+  EXPECT_NE(svg.find("actuator lag (ms)"), std::string::npos);
+  std::ifstream gp(result.output_directory / "error_map.gp");
+  const std::string script((std::istreambuf_iterator<char>(gp)), std::istreambuf_iterator<char>());
+  EXPECT_NE(script.find("#440154"), std::string::npos) << "viridis, not a rainbow";
+  EXPECT_EQ(script.find("rgbformulae"), std::string::npos);
+  EXPECT_NE(script.find("with labels"), std::string::npos) << "contours carry their value";
 }
 
 TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {

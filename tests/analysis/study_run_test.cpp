@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <iterator>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -14,9 +16,11 @@ namespace {
 const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
 
 // The paper's frame (T = 0.5 s, 5 %, El Centro) with a case list and extras.
-core::PreparedStudy frame(double alpha, const std::string& cases, const std::string& extra = "") {
+core::PreparedStudy frame(double alpha, const std::string& cases, const std::string& extra = "",
+                          double duration = 0.0) {
   const std::string text = "name: \"frame\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
-                           "motion { path: \"motions/RSN175_IMPVALL.H_H-E12140.AT2\" } "
+                           "motion { path: \"motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
+                           std::to_string(duration) + " } "
                            "integrator { dt: 0.001 } substructuring { experimental_fraction: " +
                            std::to_string(alpha) + " } " + cases + " " + extra;
   return core::prepare_study(core::parse_study(text, "test"), kConfigs);
@@ -37,6 +41,66 @@ TEST(StudyRun, ACasePastItsCriticalDelayIsWarnedAndJudgedDiverged) {
   EXPECT_EQ(outcome.cases[0].status, "completed");
   ASSERT_EQ(outcome.failures(false).size(), 1u);
   EXPECT_TRUE(outcome.failures(true).empty());
+}
+
+// A compensated case is judged on its compensated loop: a linear compensator is analysed (and
+// then not warned about, though its uncompensated lag is past), an adaptive one is stated as not
+// judgeable, with the uncompensated margin beside and no "expect it to diverge".
+TEST(StudyRun, ACompensatedCaseIsJudgedOnItsCompensatedLoop) {
+  std::vector<std::string> warnings;
+  const StudyOutcome outcome = run_study(
+      frame(1.0, "cases { name: \"reference\" } "
+                 "cases { name: \"poly\" delay { shift { delay: 0.010 } } "
+                 "        compensation { polynomial { order: 2 lead: 0.010 spacing: 0.001 } } } "
+                 "cases { name: \"ats\" delay { shift { delay: 0.010 } } "
+                 "        compensation { adaptive_time_series { window: 1 initial_a1: 0.010 } } }"),
+      {.warn = [&](const std::string& w) { warnings.push_back(w); }});
+  const CaseOutcome& poly = outcome.cases[1];
+  const CaseOutcome& ats = outcome.cases[2];
+  ASSERT_TRUE(ats.stability && ats.stability->past());  // 10 ms, the ATS's lead unknown: past 7.97 ms
+  ASSERT_TRUE(poly.compensated.has_value());
+  EXPECT_TRUE(poly.compensated->analysed);
+  EXPECT_TRUE(poly.compensated->stable) << poly.compensated->text;
+  EXPECT_NE(poly.compensated->text.find("uncompensated, lag 10 ms"), std::string::npos) << poly.compensated->text;
+  ASSERT_TRUE(ats.compensated.has_value());
+  EXPECT_FALSE(ats.compensated->analysed);
+  EXPECT_NE(ats.compensated->text.find("cannot be judged before it"), std::string::npos) << ats.compensated->text;
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("case 'ats'"), std::string::npos) << warnings[0];
+  EXPECT_EQ(warnings[0].find("expect it to diverge"), std::string::npos) << warnings[0];
+  EXPECT_EQ(poly.status, "completed") << poly.status_detail;
+  EXPECT_TRUE(poly.status_detail.empty()) << poly.status_detail;
+  const auto summary = study_summary_json(outcome);
+  EXPECT_TRUE(summary["cases"][1]["compensated_loop"]["stable"].get<bool>());
+  EXPECT_TRUE(summary["cases"][0]["compensated_loop"].is_null());
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// Every case is seen on every panel it belongs to, with units on the axes; the reference is
+// left out of the difference panel (against itself it is a zero line that says nothing).
+TEST(StudyRun, StudyPlotsShowEveryCaseAndLeaveTheReferenceOutOfTheDifference) {
+  const StudyOutcome outcome = run_study(frame(
+      1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } } "
+                 "cases { name: \"eq1_lag_14ms\" delay { eq1_lag { delay: 0.014 } } }",
+      "", 6.0));
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_study_plots_" + std::to_string(::getpid()));
+  write_study_plots(outcome, dir);
+  std::ifstream in(dir / "displacement.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(count(svg, ">lag_shift_14ms<"), 3u);  // response, difference, zoom
+  EXPECT_EQ(count(svg, ">eq1_lag_14ms<"), 3u);
+  EXPECT_EQ(count(svg, ">reference<"), 2u);       // response and zoom only
+  for (const char* axis : {"displacement (mm)", "case - reference (mm)", "time (s)"})
+    EXPECT_NE(svg.find(axis), std::string::npos) << axis;
+  // The two 14 ms cases nearly coincide: drawn in decreasing widths, neither hides the other.
+  EXPECT_NE(svg.find("stroke-width=\"3.00\""), std::string::npos);
+  EXPECT_NE(svg.find("stroke-width=\"2.20\""), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(StudyRun, ExpectUnstableMakesTheDivergenceMeant) {

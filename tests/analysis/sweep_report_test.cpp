@@ -86,8 +86,48 @@ TEST(SweepPlot, WritesBothFiguresAsPngAndSvg) {
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(svg.find("delay 4 ms"), std::string::npos);
   EXPECT_NE(svg.find("delay 8 ms"), std::string::npos);
+  EXPECT_EQ(svg.find("0.000010"), std::string::npos) << "log ticks as %g";
   EXPECT_THROW(write_sweep_plot({}, png, "empty"), std::invalid_argument);
   EXPECT_THROW(write_sweep_plot({row(0.5, 0.0, 0)}, png, "no delay"), std::invalid_argument);
+  fs::remove_all(dir);
+}
+
+TEST(SweepPlot, ModelNamesReadAsWordsWithUnits) {
+  EXPECT_EQ(model_label("linear"), "linear");
+  EXPECT_EQ(model_label("bilinear:uy=0.005:b=0.1"), "bilinear (uy = 5 mm, b = 0.1)");
+}
+
+// Every curve's diverged points are their own legend entry in the curve's colour, so that no
+// diverged point of one delay or model hides another's; each model is named on both figures.
+TEST(SweepPlot, EveryDivergedPointIsSeenWithItsDelayAndModel) {
+  const fs::path dir = fs::temp_directory_path() / ("rths_sweep_diverged_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::vector<SweepTableRow> rows;
+  for (const std::string model : {"linear", "bilinear:uy=0.005:b=0.1"}) {
+    for (double delay : {0.004, 0.030}) {
+      for (double period : {0.2, 0.5, 1.0}) {
+        SweepTableRow r = row(period, delay, 10 * delay / period, 1e3, model);
+        r.diverged = delay > 0.02 && period < 0.6;
+        rows.push_back(r);
+      }
+    }
+  }
+  const fs::path png = dir / "sweep.png";
+  write_sweep_plot(rows, png, "diverged test");
+  std::ifstream in(dir / "sweep.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* entry : {"delay 30 ms, linear: diverged", "delay 30 ms, bilinear (uy = 5 mm, b = 0.1): diverged",
+                            "delay 4 ms, linear", "delay 4 ms, bilinear (uy = 5 mm, b = 0.1)", "period T (s)",
+                            "NRMSE (%, log)"}) {
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
+  }
+  EXPECT_EQ(svg.find("delay 4 ms, linear: diverged"), std::string::npos);
+  std::ifstream by_delay_in(dir / "sweep_vs_delay.svg");
+  const std::string by_delay((std::istreambuf_iterator<char>(by_delay_in)), std::istreambuf_iterator<char>());
+  for (const char* entry : {"T = 0.2 s, linear", "T = 0.2 s, bilinear (uy = 5 mm, b = 0.1)", "delay (ms)"}) {
+    EXPECT_NE(by_delay.find(entry), std::string::npos) << entry;
+  }
   fs::remove_all(dir);
 }
 

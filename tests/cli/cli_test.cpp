@@ -181,7 +181,55 @@ TEST(CliTest, FlagValuesWithUnits) {
   EXPECT_EQ(o.output.find("1.797e308"), std::string::npos) << o.output;
   o = run("sdof --motion " + kMotion + " --zeta 5");
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find("modal_zeta"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("--zeta: 5 is outside [0, 1]"), std::string::npos) << o.output;
+}
+
+// Every number a user types is checked where it is parsed: exit 2, the flag, the value, the range.
+TEST(CliTest, NumbersOutsideTheirRangeExitTwoNamingTheFlagValueAndRange) {
+  Outcome o = run("sdof --motion " + kMotion + " --dt 1e-9");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--dt: 1e-09 s is outside [1e-06, 1] s"), std::string::npos) << o.output;
+  o = run("stability --period 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--period: 0 s is outside (0, 50] s"), std::string::npos) << o.output;
+  o = run("stability --period 1e300");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--period"), std::string::npos) << o.output;
+  o = run("launch " + (kSource / "configs/paper_frame.textproto").string() + " --timeout -1");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--timeout: -1 s is outside (0, 86400] s"), std::string::npos) << o.output;
+  o = run("pki init " + scratch("days").string() + "/pki --node 2:actuator_emulator --days 0");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--days"), std::string::npos) << o.output;
+}
+
+// A nested command (`rths pki init`) parses its own flags and suggests from them.
+TEST(CliTest, NestedCommandsTakeAndSuggestTheirOwnFlags) {
+  const auto dir = scratch("pki");
+  Outcome o = run("pki init " + (dir / "pki").string() + " --confg configs/paper_frame.textproto");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("did you mean '--config'"), std::string::npos) << o.output;
+  o = run("pki innit " + (dir / "pki").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("did you mean `rths pki init`"), std::string::npos) << o.output;
+  o = run("pki init " + (dir / "pki").string() + " --config " + (kSource / "configs/paper_frame.textproto").string() +
+          " --days 30 --organisation lab");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_TRUE(std::filesystem::is_directory(dir / "pki" / "node_2")) << o.output;
+}
+
+// An output that is one of the command's inputs is refused before anything is written.
+TEST(CliTest, ExportNeverOverwritesTheRecordItReads) {
+  const auto dir = scratch("export");
+  const auto record = dir / "R.rthsrec";
+  std::filesystem::copy_file(kSource / "fuzz/corpus/run_record/header_only.rthsrec", record);
+  const auto size = std::filesystem::file_size(record);
+  Outcome o = run("export " + record.string() + " --csv " + record.string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--csv '" + record.string() + "' is the input record"), std::string::npos) << o.output;
+  EXPECT_EQ(std::filesystem::file_size(record), size);
+  o = run("export " + record.string() + " --csv " + (dir / "R.csv").string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
 }
 
 TEST(CliTest, MotionUnitsAreExplicit) {
@@ -194,6 +242,50 @@ TEST(CliTest, MotionUnitsAreExplicit) {
   o = run("sdof --motion " + (dir / "ms2.txt").string() + " --motion-units m/s2 --exp-fraction 0.3333 --delay 0.002 --json");
   EXPECT_EQ(o.exit_code, 0) << o.output;
   EXPECT_EQ(json_of(o)["motion_units"], "m/s2");
+}
+
+// A motion that is not a text file of numbers is named for what it is, never as a unit problem,
+// and its bytes never reach the terminal raw; a one-column motion takes its step from --motion-dt.
+TEST(CliTest, MotionFilesThatAreNotMotionsAreNamedForWhatTheyAre) {
+  const auto dir = scratch("motion_files");
+  std::ofstream(dir / "empty.txt").close();
+  std::ofstream(dir / "binary.bin", std::ios::binary) << std::string("\x7f" "ELF\x02\x01\x01\x00\x00\x9b\xff", 12);
+  std::filesystem::create_directories(dir / "folder");
+  Outcome o = run("sdof --motion " + (dir / "empty.txt").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("is empty, not a ground-motion file"), std::string::npos) << o.output;
+  o = run("sdof --motion " + (dir / "folder").string());
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("is a directory"), std::string::npos) << o.output;
+  for (const std::string units : {"", " --motion-units g"}) {
+    o = run("sdof --motion " + (dir / "binary.bin").string() + units);
+    EXPECT_EQ(o.exit_code, 2) << o.output;
+    EXPECT_NE(o.output.find("holds binary data"), std::string::npos) << o.output;
+    EXPECT_EQ(o.output.find("\x7f" "ELF"), std::string::npos) << "raw bytes printed";
+    EXPECT_EQ(o.output.find("carry no unit"), std::string::npos) << o.output;
+  }
+  std::ofstream(dir / "one.txt") << "0\n0.1\n-0.2\n0.3\n-0.1\n0.05\n0\n0\n";
+  o = run("sdof --motion " + (dir / "one.txt").string() + " --motion-units g --dt 0.001");
+  EXPECT_EQ(o.exit_code, 2) << o.output;
+  EXPECT_NE(o.output.find("--motion-dt"), std::string::npos) << o.output;
+  o = run("sdof --motion " + (dir / "one.txt").string() + " --motion-units g --motion-dt 0.01 --dt 0.001 --json");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+}
+
+// Integrators outside the discrete delay analysis run; the summary says the check was skipped.
+// For the others the discrete critical delay is found also below the lag (filled, not null).
+TEST(CliTest, AlphaOsRunsWithTheDiscreteCheckSkippedAndOthersReportTheirDiscreteLimit) {
+  Outcome o = run("sdof --motion " + kMotion + " --integrator alpha-os --exp-fraction 0.3333 --delay 14ms --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  nlohmann::json j = json_of(o);
+  EXPECT_EQ(j["stability"]["discrete_check"].get<std::string>().rfind("skipped: ", 0), 0u) << j.dump();
+  EXPECT_TRUE(j["stability"]["discrete_critical_delay_s"].is_null());
+  o = run("sdof --motion " + kMotion + " --exp-fraction 0.3333 --dt 0.001 --delay 14ms --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  j = json_of(o);
+  EXPECT_EQ(j["stability"]["discrete_check"], "made");
+  ASSERT_TRUE(j["stability"]["discrete_critical_delay_s"].is_number()) << j.dump();
+  EXPECT_GT(j["stability"]["discrete_critical_delay_s"].get<double>(), 0.014);
 }
 
 TEST(CliTest, AConfigOfAnotherKindIsNamed) {
@@ -313,14 +405,14 @@ TEST(CliTest, JointLagReportsProgressInPlainLines) {
   EXPECT_EQ(o.output.find('\r'), std::string::npos) << "a bar is for terminals only";
 }
 
-// `rths launch` of the shipped distributed frame (real time, 7 ms each way on the actuator lab's
-// link): before anything starts, the 14 ms shift case is named as past the frame's critical
-// delay (14 ms network + 14 ms actuator = 28 ms), and the reference (14 ms) is not; progress per
-// case; the lag plot names the links by role and stacks network and actuator lag against the
-// critical delay. The lagged case may well diverge (exit 1): that is the honest outcome.
+// `rths launch` of the shipped instability-on-purpose frame (real time, 7 ms each way on the
+// actuator lab's link): before anything starts, the 14 ms shift case is named as past the frame's
+// critical delay (14 ms network + 14 ms actuator = 28 ms), meant (expect_unstable), and the
+// network-only case (14 ms) is not; progress per case; the lag plot names the links by role and
+// stacks network and actuator lag against the critical delay.
 TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   const auto dir = scratch("launch_lag");
-  const Outcome o = run("launch " + (kSource / "configs/paper_frame_distributed.textproto").string() +
+  const Outcome o = run("launch " + (kSource / "configs/paper_frame_network_lag.textproto").string() +
                         " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " + dir.string());
   EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 1) << o.output;
   const std::string warning =
@@ -329,14 +421,15 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   const auto warned = o.output.find(warning);
   ASSERT_NE(warned, std::string::npos) << o.output;
   EXPECT_NE(o.output.find("PAST it by", warned), std::string::npos) << o.output;
-  EXPECT_LT(warned, o.output.find("rths launch: case reference ...")) << o.output;
-  EXPECT_EQ(o.output.find("warning: case 'reference'"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("(expect_unstable: meant)", warned), std::string::npos) << o.output;
+  EXPECT_LT(warned, o.output.find("rths launch: case network_lag_only ...")) << o.output;
+  EXPECT_EQ(o.output.find("warning: case 'network_lag_only'"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("launch:  50% (1/2 cases"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("launch: 100% (2/2 cases"), std::string::npos) << o.output;
   const auto summary = nlohmann::json::parse(read_text(dir / "summary.json"));
   EXPECT_NEAR(summary["cases"][1]["stability"]["lag_s"].get<double>(), 0.028, 1e-12);
   EXPECT_TRUE(summary["cases"][1]["stability"]["past_critical_delay"].get<bool>());
-  const std::string plot = read_text(dir / "lag_lag_shift_14ms.svg");
+  const std::string plot = read_text(dir / "links_lag_shift_14ms.svg");
   for (const char* text : {"actuator lab: round trip, measured", "actuator lab: round trip, injected",
                            "numerical site: round trip, measured", "actuator lag, nominal 14 ms: shift(14 ms)",
                            "actuator lab: network round trip, measured", "continuous critical delay",
@@ -344,7 +437,32 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
     EXPECT_NE(plot.find(text), std::string::npos) << text;
   }
   EXPECT_EQ(plot.find("node 2"), std::string::npos);
-  EXPECT_TRUE(std::filesystem::exists(dir / "lag_lag_shift_14ms.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "links_lag_shift_14ms.png"));
+}
+
+// A run that stops before its first step (its start-up times out at once) still
+// leaves summary.txt and summary.json with the reason, and `rths launch` exits 1 (the run
+// failed), not 2 ("an empty history") or 3.
+TEST(CliTest, LaunchThatStopsBeforeStepOneWritesTheSummaryWithTheReason) {
+  const auto dir = scratch("launch_step1");
+  const auto config = dir / "study.textproto";
+  std::ofstream(config) << "name: \"frame\"\n"
+                           "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+                           "motion { path: \"" + kMotion + "\" duration: 0.5 }\n"
+                           "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+                           "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+                           "cases { name: \"reference\" }\n"
+                           "deployment { start_timeout: 0.001 }\n";
+  const Outcome o = run("launch " + config.string() + " --domain 85 --no-plots --bin-dir " +
+                        std::string(RTHS_BINARY_DIR) + " --out " + (dir / "out").string());
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  const std::string summary = read_text(dir / "out" / "summary.txt");
+  EXPECT_NE(summary.find("reference: FAILED, stopped before step 1: start-up timed out"),
+            std::string::npos)
+      << summary;
+  const auto json = nlohmann::json::parse(read_text(dir / "out" / "summary.json"));
+  EXPECT_EQ(json["failed_without_record"].size(), 1u) << json.dump(2);
+  EXPECT_EQ(o.output.find("empty history"), std::string::npos) << o.output;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <filesystem>
 
 #include "actuator_emulator/actuator_service.h"
+#include "runtime/schema.h"
 #include "substructure_nodes/substructure_service.h"
 #include "tests/runtime/test_support.h"
 #include "transport/in_process.h"
@@ -36,6 +37,30 @@ class Muted final : public transport::NodeHandler {
  private:
   runtime::NodeService& service_;
   std::int64_t mute_after_;
+};
+
+// Forwards to a node service; at step `at` the node also sends a second, different answer to the
+// same step (12345 N): a node that contradicts itself, or a forger in-process.
+class Contradicting final : public transport::NodeHandler {
+ public:
+  Contradicting(runtime::NodeService& service, std::int64_t at) : service_(service), at_(at) {}
+  std::vector<transport::Message> start() override { return service_.start(); }
+  std::vector<transport::Message> handle(const transport::Message& m) override {
+    auto replies = service_.handle(m);
+    if (m.kind == runtime::COMMAND && m.step == at_ && !replies.empty()) {
+      transport::Message forged = replies.front();
+      runtime::Feedback f;
+      runtime::unpack(forged, f);
+      f.set_force(0, 12345.0);
+      f.SerializeToString(&forged.payload);
+      replies.push_back(forged);
+    }
+    return replies;
+  }
+
+ private:
+  runtime::NodeService& service_;
+  std::int64_t at_;
 };
 
 // Each clock read advances time by `step_ns`: 2 ms (more than a 1 ms period) makes every step
@@ -105,6 +130,40 @@ RecordedRun run_recorded(const std::string& deployment, const std::string& recor
   for (const auto& entry : runtime::read_record(record).entries)
     if (entry.has_event()) r.events += entry.event().what() + "\n";
   return r;
+}
+
+TEST(Coordinator, TwoDifferentAnswersToOneStepStopTheRunNamingTheNode) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      0.5, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.case_name = "reference";
+  Cluster c;
+  Contradicting node1(c.substructure, 100);
+  coordinator::Coordinator coordinator(prepared, c.transport, options);
+  c.transport.attach(1, node1);
+  c.transport.attach(2, c.emulator);
+  const RunOutcome o = coordinator.run();
+  EXPECT_FALSE(o.ok);
+  EXPECT_NE(o.status.find("integrity fault: two different answers to step 100 from node 1"),
+            std::string::npos) << o.status;
+  EXPECT_EQ(o.failed_node, "node 1 (substructure)");
+  EXPECT_LE(o.result.steps(), 102u) << "stops within the step after the contradiction";
+  EXPECT_EQ(c.emulator.held(), true) << "HOLD to the emulator";
+  EXPECT_TRUE(c.substructure.stopped());
+}
+
+// After STOP, each node's last heartbeat reports what it rejected, and the outcome carries it.
+TEST(Coordinator, TheOutcomeCarriesEveryNodesFinalRejectCounts) {
+  const RunOutcome o = run("");
+  ASSERT_TRUE(o.ok) << o.status;
+  ASSERT_EQ(o.node_rejects.size(), 2u);
+  EXPECT_EQ(o.node_rejects[0].label(), "node 1 (substructure)");
+  EXPECT_EQ(o.node_rejects[1].node_id(), 2);
+  for (const runtime::NodeRejects& n : o.node_rejects) {
+    EXPECT_TRUE(n.final()) << n.label();
+    EXPECT_EQ(runtime::RejectCounters::from(n.rejected()).total(), 0u) << n.label();
+  }
 }
 
 TEST(Coordinator, RealTimeRunThatKeepsItsDeadlinesCompletes) {
@@ -194,6 +253,18 @@ TEST_P(SilentNode, StopsWithinMaxMissedAnswersAndNamesTheNode) {
 
 INSTANTIATE_TEST_SUITE_P(Nodes, SilentNode, testing::Values(1, 2),
                          [](const auto& info) { return "node_" + std::to_string(info.param); });
+
+// A node whose answers stop arriving while max_missed_answers is too wide to fire (or, never
+// having answered, never starts a streak) and liveliness has not run out: the run went to its
+// end, but it is not ok, since the node answered fewer than kMinAnswerFraction of the steps.
+TEST(Coordinator, ARunOnWhichANodeAnsweredTooFewStepsFails) {
+  FakeClock on_time(10'000);
+  const RunOutcome o =
+      run("clock: REAL_TIME max_overrun_fraction: 1 max_missed_answers: 100000", 2, 450, &on_time);
+  EXPECT_FALSE(o.ok) << o.status;
+  EXPECT_EQ(o.status.rfind("failed: node 2 answered 450 of ", 0), 0u) << o.status;
+  EXPECT_EQ(o.result.steps(), 500u);  // it ran to the end: the outcome, not the run, is judged
+}
 
 TEST(Coordinator, RateLimitStopsTheRunBeforeTheCommandLeaves) {
   // The frame moves by more than 10 nm per 1 ms step within its first 2 s.

@@ -1,16 +1,19 @@
 // FeedbackIntake: what it accepts and rejects (as the coordinator's loop counts them), the answer
-// and servo-sample rule, the lag it measures, the one wake-up per step, and a receive thread
-// offering while the loop takes.
+// and servo-sample rule, the lag it measures, the one wake-up per step, the integrity faults, and
+// a receive thread offering while the loop takes.
 #include "coordinator/feedback_intake.h"
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <thread>
 
 #include "runtime/schema.h"
 
 namespace rths::coordinator {
 namespace {
+
+constexpr std::int64_t kEcho = 1'000'000;  // every test command's sent_ns
 
 transport::Message feedback(int node, std::int64_t step, double force, std::int64_t servo = 0,
                             const std::string& run = "run") {
@@ -21,16 +24,23 @@ transport::Message feedback(int node, std::int64_t step, double force, std::int6
   f.set_command_received_ns(1'000'500);
   f.set_injected_lag(0.002);
   transport::Message m = runtime::pack(run, node, runtime::FEEDBACK, step, f);
-  m.echo_ns = 1'000'000;
+  m.echo_ns = kEcho;
   m.sent_ns = 1'001'000;
   m.received_ns = 1'003'000;
   return m;
 }
 
+// The loop's side of a step: awaits it, then sends each node its command stamped kEcho.
+void command(FeedbackIntake& intake, std::int64_t step, const std::vector<int>& nodes = {1, 2}) {
+  intake.await_step(step);
+  for (const int node : nodes) intake.command_sent(node, kEcho);
+}
+
 class Intake : public testing::Test {
  protected:
-  // Node 1 a substructure (one storey), node 2 an emulator (one actuator).
-  FeedbackIntake intake{"run", {{1, 1, false}, {2, 1, true}}};
+  void command(std::int64_t step) { coordinator::command(intake, step); }
+  // Node 1 a substructure (one storey), node 2 an emulator (one actuator); |realised| <= 0.5 m.
+  FeedbackIntake intake{"run", {{1, 1, false}, {2, 1, true}}, 0.5};
 };
 
 TEST_F(Intake, NothingToTakeBeforeAnAnswer) {
@@ -40,7 +50,7 @@ TEST_F(Intake, NothingToTakeBeforeAnAnswer) {
 }
 
 TEST_F(Intake, AnAnswerIsTakenWithItsForceCountAndLag) {
-  intake.await_step(1);
+  command(1);
   EXPECT_FALSE(intake.offer(feedback(1, 1, 5.0)));  // node 2 still owes step 1
   const ArrivedFeedback* got = intake.take(1);
   ASSERT_NE(got, nullptr);
@@ -57,7 +67,7 @@ TEST_F(Intake, AnAnswerIsTakenWithItsForceCountAndLag) {
 }
 
 TEST_F(Intake, TheLastAnswerToTheAwaitedStepAsksForTheWakeUp) {
-  intake.await_step(3);
+  command(3);
   EXPECT_FALSE(intake.offer(feedback(2, 2, 1.0)));  // an older step's answer completes nothing
   EXPECT_FALSE(intake.offer(feedback(1, 3, 1.0)));
   EXPECT_TRUE(intake.offer(feedback(2, 3, 1.0)));
@@ -68,10 +78,10 @@ TEST_F(Intake, TheLastAnswerToTheAwaitedStepAsksForTheWakeUp) {
 // the wake-up nor causes one; its answers are still taken.
 TEST(IntakeNotAwaited, TheAwaitedNodesAloneCompleteAStep) {
   FeedbackIntake intake{"run", {{1, 1, false, true}, {2, 1, true, false}}};
-  intake.await_step(4);
+  command(intake, 4);
   EXPECT_FALSE(intake.offer(feedback(2, 4, 1.0)));
   EXPECT_TRUE(intake.offer(feedback(1, 4, 1.0)));
-  intake.await_step(5);
+  command(intake, 5);
   EXPECT_TRUE(intake.offer(feedback(1, 5, 1.0))) << "node 2 still owes step 5 and is not awaited";
   const ArrivedFeedback* got = intake.take(2);
   ASSERT_NE(got, nullptr);
@@ -79,12 +89,12 @@ TEST(IntakeNotAwaited, TheAwaitedNodesAloneCompleteAStep) {
 }
 
 TEST_F(Intake, RejectsAndCountsEachCause) {
-  intake.await_step(5);
+  command(5);
   intake.offer(feedback(1, 4, 1.0, 0, "other-run"));  // foreign run
   intake.offer(feedback(9, 4, 1.0));                  // unknown node
   intake.offer(feedback(1, 6, 1.0));                  // out of order: never commanded
   intake.offer(feedback(1, 4, 1.0));                  // accepted
-  intake.offer(feedback(1, 4, 2.0));                  // duplicate (no newer servo sample)
+  intake.offer(feedback(1, 4, 1.0));                  // duplicate: the same answer again
   intake.offer(feedback(1, 3, 1.0));                  // stale
   transport::Message garbage = feedback(1, 5, 1.0);
   garbage.payload = "\xff\xff\xff";
@@ -92,10 +102,15 @@ TEST_F(Intake, RejectsAndCountsEachCause) {
   runtime::Feedback two_forces;
   two_forces.add_force(1.0);
   two_forces.add_force(2.0);
-  intake.offer(runtime::pack("run", 1, runtime::FEEDBACK, 5, two_forces));  // wrong size
+  transport::Message wrong_size = runtime::pack("run", 1, runtime::FEEDBACK, 5, two_forces);
+  wrong_size.echo_ns = kEcho;
+  intake.offer(wrong_size);
   runtime::Feedback no_realised;
   no_realised.add_force(1.0);
-  intake.offer(runtime::pack("run", 2, runtime::FEEDBACK, 5, no_realised));  // emulator w/o realised
+  transport::Message emulator_without_realised =
+      runtime::pack("run", 2, runtime::FEEDBACK, 5, no_realised);
+  emulator_without_realised.echo_ns = kEcho;
+  intake.offer(emulator_without_realised);
   const runtime::RejectCounters r = intake.rejected();
   EXPECT_EQ(r.foreign_run, 1u);
   EXPECT_EQ(r.unknown_node, 1u);
@@ -107,10 +122,88 @@ TEST_F(Intake, RejectsAndCountsEachCause) {
   ASSERT_NE(got, nullptr);
   EXPECT_EQ(got->feedback.force(0), 1.0) << "no rejected message may reach the box";
   EXPECT_EQ(got->answers, 1u);
+  EXPECT_EQ(intake.fault(), nullptr);
+}
+
+TEST_F(Intake, NothingForAStepIsAcceptedBeforeItsCommandLeft) {
+  intake.await_step(1);  // the step is commanded, its commands not yet sent
+  EXPECT_FALSE(intake.offer(feedback(1, 1, 1.0)));
+  intake.command_sent(1, kEcho + 1);
+  EXPECT_FALSE(intake.offer(feedback(1, 1, 1.0))) << "echoes another command";
+  EXPECT_EQ(intake.rejected().out_of_order, 2u);
+  EXPECT_EQ(intake.take(1), nullptr);
+  intake.command_sent(1, kEcho);
+  intake.offer(feedback(1, 1, 1.0));
+  EXPECT_NE(intake.take(1), nullptr);
+}
+
+TEST_F(Intake, ValuesThatAreNotFiniteOrBeyondTheLimitsAreRejected) {
+  command(1);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  intake.offer(feedback(1, 1, nan));
+  intake.offer(feedback(1, 1, std::numeric_limits<double>::infinity()));
+  intake.offer(feedback(2, 1, 1e3));  // realised 1 m, beyond 0.5 m
+  transport::Message negative_lag = feedback(1, 1, 1.0);
+  runtime::Feedback f;
+  ASSERT_TRUE(runtime::unpack(negative_lag, f));
+  f.set_injected_lag(-1.0);
+  f.SerializeToString(&negative_lag.payload);
+  intake.offer(negative_lag);
+  EXPECT_EQ(intake.rejected().out_of_range, 4u);
+  EXPECT_EQ(intake.take(1), nullptr);
+  EXPECT_EQ(intake.take(2), nullptr);
+}
+
+TEST_F(Intake, ANodesIdOnAnotherNodesTopicIsNotEntitled) {
+  command(1);
+  transport::Message claim = feedback(1, 1, 1.0);
+  claim.topic_node = 2;
+  EXPECT_FALSE(intake.offer(claim));
+  EXPECT_EQ(intake.rejected().not_entitled, 1u);
+  EXPECT_EQ(intake.take(1), nullptr);
+  EXPECT_EQ(intake.fault(), nullptr);
+}
+
+TEST_F(Intake, TwoDifferentAnswersToOneStepAreAnIntegrityFaultNamingBothArrivals) {
+  command(1);
+  intake.offer(feedback(1, 1, 1.0));
+  EXPECT_EQ(intake.fault(), nullptr);
+  transport::Message second = feedback(1, 1, 12345.0);
+  second.received_ns = 1'007'000;
+  EXPECT_TRUE(intake.offer(second)) << "a fault wakes the loop";
+  const IntegrityFault* fault = intake.fault();
+  ASSERT_NE(fault, nullptr);
+  EXPECT_EQ(fault->node_id, 1);
+  EXPECT_NE(fault->what.find("integrity fault: two different answers to step 1 from node 1"),
+            std::string::npos) << fault->what;
+  EXPECT_NE(fault->what.find("1003000"), std::string::npos) << fault->what;
+  EXPECT_NE(fault->what.find("1007000"), std::string::npos) << fault->what;
+  const ArrivedFeedback* got = intake.take(1);
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(got->feedback.force(0), 1.0) << "the second answer is never applied";
+}
+
+TEST_F(Intake, AnAnswerFromAnotherWriterThanTheNodesIsAnIntegrityFault) {
+  intake.pin(1, 7);
+  command(1);
+  transport::Message own = feedback(1, 1, 1.0);
+  own.writer = 7;
+  intake.offer(own);
+  transport::Message forged = feedback(1, 2, 12345.0);  // even a step not yet commanded
+  forged.writer = 9;
+  EXPECT_TRUE(intake.offer(forged));
+  const IntegrityFault* fault = intake.fault();
+  ASSERT_NE(fault, nullptr);
+  EXPECT_EQ(fault->node_id, 1);
+  EXPECT_NE(fault->what.find("another participant answers as node 1"), std::string::npos)
+      << fault->what;
+  EXPECT_NE(fault->what.find("writer 9"), std::string::npos) << fault->what;
+  EXPECT_NE(fault->what.find("writer 7"), std::string::npos) << fault->what;
+  EXPECT_EQ(intake.rejected().not_entitled, 1u);
 }
 
 TEST_F(Intake, ANewerServoSampleReplacesTheMeasurementButKeepsTheAnswersLag) {
-  intake.await_step(2);
+  command(2);
   intake.offer(feedback(2, 2, 1.0, 10));
   transport::Message later = feedback(2, 2, 3.0, 12);
   later.received_ns = 1'090'000;  // would be a longer round trip if it counted as the answer
@@ -126,7 +219,7 @@ TEST_F(Intake, ANewerServoSampleReplacesTheMeasurementButKeepsTheAnswersLag) {
 
 TEST_F(Intake, NewestWinsAndCarriesEveryAnswerCount) {
   for (int step = 1; step <= 5; ++step) {
-    intake.await_step(step);
+    command(step);
     intake.offer(feedback(1, step, step * 10.0));
   }
   const ArrivedFeedback* got = intake.take(1);
@@ -140,7 +233,7 @@ TEST_F(Intake, NewestWinsAndCarriesEveryAnswerCount) {
 // whole (force = 10 x its step) and never older than the one before.
 TEST_F(Intake, AReceiveThreadAndTheLoopNeverSeeATornOrOlderAnswer) {
   constexpr int kSteps = 20'000;
-  intake.await_step(kSteps);
+  command(kSteps);
   std::thread receiver([&] {
     for (int step = 1; step <= kSteps; ++step) intake.offer(feedback(1, step, step * 10.0));
   });

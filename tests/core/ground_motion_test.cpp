@@ -151,7 +151,7 @@ TEST_F(ColumnReader, OneColumnNeedsDtAndConvertsUnits) {
   EXPECT_DOUBLE_EQ(motion.dt, 0.02);
   EXPECT_DOUBLE_EQ(motion.acceleration[1], -0.2 * kGravity);
   expect_error<std::invalid_argument>([&] { read_columns(path, 0.0, kGravity); }, path,
-                                      {"needs the time step"});
+                                      {"give its sample step"});
   // Not AT2 (no NPTS on line 4): read_ground_motion takes the columns path.
   EXPECT_EQ(read_ground_motion(path, 0.02, 1.0).acceleration[2], 0.3);
 }

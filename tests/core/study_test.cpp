@@ -282,5 +282,26 @@ TEST(StudyTest, EveryIntegratorKindMapsToTheConfigAndBack) {
   EXPECT_EQ(integrator_kind(config::Integrator{}), IntegratorKind::kExplicitNewmark);
 }
 
+// Every number of the deployment is checked when the study is parsed, by the range rules.
+TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
+  const std::string base = "structure { sdof { period: 0.5 } } ";
+  const std::string lag = error_of(base + "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR send_lag { one_way_delay: 7 } } }");
+  EXPECT_NE(lag.find("deployment.nodes[0].send_lag.one_way_delay = 7 s is outside [0, 1] s"), std::string::npos) << lag;
+  EXPECT_NE(lag.find("allow_long_lag"), std::string::npos) << lag;
+  EXPECT_EQ(error_of(base + "allow_long_lag: true deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR "
+                            "send_lag { one_way_delay: 7 } } }"), "");
+  EXPECT_NE(error_of(base + "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { jitter: 5 } } }")
+                .find("receive_lag.jitter = 5 s"), std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { max_missed_answers: -3 }").find("deployment.max_missed_answers = -3"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { pin_loop: true loop_cpu: 99999 }").find("deployment.loop_cpu = 99999"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"), std::string::npos);
+  EXPECT_NE(error_of(base + "cases { name: \"a\" delay { shift { delay: 2 } } }").find("allow_long_lag"),
+            std::string::npos);
+  EXPECT_EQ(error_of(base + "allow_long_lag: true cases { name: \"a\" delay { shift { delay: 2 } } }"), "");
+  EXPECT_NE(error_of(base + "integrator { dt: 1e-9 }").find("integrator.dt"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace rths::core

@@ -118,10 +118,10 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
   ASSERT_EQ(sites.exit_code, 0) << sites.output;
   EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos) << sites.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "displacement.png"));
-  EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "lag_lag_shift_14ms.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "links_lag_shift_14ms.png"));
   EXPECT_NE(sites.output.find("sites: 100% (1/1 runs"), std::string::npos) << sites.output;
   // Links by role and by the site the sites config names, not by node id.
-  const std::string lag_plot = read(dir / "sites" / "lag_lag_shift_14ms.svg");
+  const std::string lag_plot = read(dir / "sites" / "links_lag_shift_14ms.svg");
   for (const char* label : {"actuator lab \"lab\": round trip, measured",
                             "numerical site \"lab\": round trip, injected"})
     EXPECT_NE(lag_plot.find(label), std::string::npos) << label;

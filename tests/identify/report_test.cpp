@@ -3,6 +3,10 @@
 #include <numbers>
 #include <gtest/gtest.h>
 
+#include <iterator>
+
+#include <fstream>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -62,6 +66,17 @@ TEST(ReportTest, TableAndPlots) {
     EXPECT_TRUE(std::filesystem::exists(f)) << f;
     EXPECT_GT(std::filesystem::file_size(f), 1000u) << f;
   }
+  // Displacements in mm on every plot, and the tracking shown whole and zoomed to a few cycles.
+  const auto text = [&](const char* name) {
+    std::ifstream in(dir / name);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string tracking = text("measured_tracking.svg");
+  EXPECT_NE(tracking.find("displacement (mm)"), std::string::npos);
+  EXPECT_NE(tracking.find("zoom: the last"), std::string::npos);
+  EXPECT_NE(text("measured_residual_time.svg").find("residual (mm)"), std::string::npos);
+  EXPECT_NE(text("force_loops.svg").find("measured displacement (mm)"), std::string::npos);
+  EXPECT_EQ(tracking.find("(m)"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 

@@ -110,6 +110,15 @@ def test_sweep_equals_the_cli_sweep_and_its_shards_join(config, tmp_path):
         rths.sweep(study, shard="2/2")
 
 
+def test_numbers_follow_the_same_range_rules_as_the_flags():
+    with pytest.raises(rths.BadInputError, match=r"period_s = 0 s is outside \(0, 50\] s"):
+        rths.stability(0.0, 0.05)
+    with pytest.raises(rths.BadInputError, match=r"dt_s = 1e-09 s is outside \[1e-06, 1\] s"):
+        rths.stability(0.5, 0.05, dt_s=1e-9)
+    with pytest.raises(rths.BadInputError, match="zeta"):
+        rths.stability(0.5, 5.0)
+
+
 def test_stability_is_the_cli_json(tmp_path):
     got = rths.stability(0.5, 0.05, experimental_fraction=1.0, dt_s=0.001)
     expected = json.loads(cli("stability", "--period", 0.5, "--zeta", 0.05, "--exp-fraction", 1, "--dt", 0.001,
@@ -148,9 +157,11 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     cli("export", record, "--csv", tmp_path / "lag_shift_14ms.csv")
     expected = csv_columns(tmp_path / "lag_shift_14ms.csv")
     assert not got["truncated"] and got["attributes"]["case_name"] == "lag_shift_14ms"
-    np.testing.assert_array_equal(got["series"]["u1_m"], numbers(expected["u1"]))
-    np.testing.assert_array_equal(got["series"]["time_s"], numbers(expected["time"]))
-    np.testing.assert_array_equal(got["series"]["a1_m_per_s2"], numbers(expected["a1"]))
+    # One naming rule: Python's names are the CSV's (tables/table.h).
+    assert list(got["series"]) == list(expected)
+    np.testing.assert_array_equal(got["series"]["u1_m"], numbers(expected["u1_m"]))
+    np.testing.assert_array_equal(got["series"]["time_s"], numbers(expected["time_s"]))
+    np.testing.assert_array_equal(got["series"]["a1_m_per_s2"], numbers(expected["a1_m_per_s2"]))
     round_trip = [k for k in got["series"] if k.endswith("_round_trip_s")][0]
     assert math.isnan(got["series"][round_trip][0]) and np.all(got["series"][round_trip][1:] > 0)
     cut = tmp_path / "cut.rthsrec"
@@ -159,6 +170,21 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     truncated = rths.read_record(cut)
     assert truncated["truncated"] and truncated["warning"]
     assert len(truncated["series"]["step"]) == len(got["series"]["step"])  # only the footer was cut
+    assert got["checksummed"] and got["losses"] == [] and got["attributes"]["lost_steps"] == ""
+    # A flipped byte in the middle: the reader's checksums catch it; Python gets the intact rows
+    # only when it asks for them, with what was lost.
+    damaged = tmp_path / "damaged.rthsrec"
+    data = bytearray(record.read_bytes())
+    data[len(data) // 2] ^= 0x01
+    damaged.write_bytes(bytes(data))
+    with pytest.raises(rths.Error, match="lost"):
+        rths.read_record(damaged)
+    salvaged = rths.read_record(damaged, allow_loss=True)
+    lost = int(salvaged["attributes"]["lost_steps"])
+    assert len(salvaged["losses"]) == 1 and f"step {lost} lost" in salvaged["losses"][0]
+    kept = got["series"]["step"] != lost
+    np.testing.assert_array_equal(salvaged["series"]["step"], got["series"]["step"][kept])
+    np.testing.assert_array_equal(salvaged["series"]["u1_m"], got["series"]["u1_m"][kept])
 
 
 def test_errors_carry_the_cli_messages(tmp_path):

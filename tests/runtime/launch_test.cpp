@@ -157,9 +157,10 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   ASSERT_GT(steps, 100);
   EXPECT_EQ(nlohmann::json::parse(o.out)["rows"].get<long>(), steps);
   const std::string table = test::read_file(csv);
-  EXPECT_EQ(table.rfind("step,time,ground_acceleration,u1,v1,a1,command1,realised1,force1,", 0), 0u)
+  EXPECT_EQ(table.rfind("step,time_s,ground_acceleration_m_per_s2,u1_m,v1_m_per_s,a1_m_per_s2,command1_m,"
+                        "realised1_m,force1_N,", 0), 0u)
       << table.substr(0, 200);
-  EXPECT_NE(table.find("node2_round_trip"), std::string::npos);
+  EXPECT_NE(table.find("node2_round_trip_s"), std::string::npos);
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), steps + 1);  // + header
 
   std::filesystem::resize_file(record, std::filesystem::file_size(record) - 5);

@@ -1,6 +1,9 @@
 // Node services driven message by message, without any transport.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "actuator_emulator/actuator_service.h"
 #include "runtime/schema.h"
 #include "substructure_nodes/substructure_service.h"
@@ -79,6 +82,76 @@ TEST(SubstructureService, RejectsDuplicatesForeignRunsAndGarbage) {
   EXPECT_EQ(node.rejected().foreign_run, 1u);
   EXPECT_EQ(node.rejected().garbage, 2u);
   EXPECT_EQ(node.handle(command(1, 2, 0.01, 0)).size(), 1u);  // the real step 2 still goes
+}
+
+// Control messages count only from the coordinator that assigned the node, on the node's own
+// topic: never a broadcast, never another writer, never an empty run id.
+TEST(SubstructureService, TakesControlOnlyFromItsCoordinatorOnItsOwnTopic) {
+  substructure_nodes::SubstructureService node(1, "");
+  auto broadcast_assign = assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {});
+  broadcast_assign.node_id = broadcast_assign.topic_node = transport::kBroadcastId;
+  EXPECT_TRUE(node.handle(broadcast_assign).empty());
+  auto anonymous_assign = assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {});
+  anonymous_assign.run_id.clear();
+  EXPECT_TRUE(node.handle(anonymous_assign).empty());
+  EXPECT_FALSE(node.assigned());
+  auto assign = assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {});
+  assign.writer = 5;
+  ASSERT_EQ(node.handle(assign).size(), 1u);
+  auto stranger = command(1, 1, 0.01, 0);
+  stranger.writer = 6;
+  EXPECT_TRUE(node.handle(stranger).empty());
+  auto on_broadcast = command(1, 1, 0.01, 0);
+  on_broadcast.writer = 5;
+  on_broadcast.topic_node = on_broadcast.node_id = transport::kBroadcastId;
+  EXPECT_TRUE(node.handle(on_broadcast).empty());
+  auto stop = runtime::pack(kRun, 1, runtime::STOP, 1, runtime::Stop{});
+  stop.writer = 6;
+  EXPECT_TRUE(node.handle(stop).empty());
+  EXPECT_FALSE(node.stopped());
+  auto hold = runtime::pack(kRun, transport::kBroadcastId, runtime::HOLD, 1, runtime::Hold{});
+  hold.writer = 5;
+  EXPECT_TRUE(node.handle(hold).empty());
+  EXPECT_FALSE(node.held());
+  EXPECT_EQ(node.rejected().not_entitled, 5u);
+  EXPECT_EQ(node.rejected().foreign_run, 1u);
+  auto own = command(1, 1, 0.01, 0);
+  own.writer = 5;
+  EXPECT_EQ(node.handle(own).size(), 1u);
+}
+
+TEST(SubstructureService, RefusesACommandThatIsNotFiniteOrBeyondTheLimits) {
+  substructure_nodes::SubstructureService node(1, "");
+  node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {},
+                             "deployment { limits { max_displacement: 0.1 max_velocity: 1 } }"));
+  EXPECT_TRUE(node.handle(command(1, 1, std::nan(""), 0)).empty());
+  EXPECT_TRUE(node.handle(command(1, 1, 0.25, 0)).empty());   // beyond 2 x 0.1 m
+  EXPECT_TRUE(node.handle(command(1, 1, 0.01, 1e300)).empty());
+  auto bad_time = command(1, 1, 0.01, 0);
+  runtime::Command c;
+  ASSERT_TRUE(runtime::unpack(bad_time, c));
+  c.set_time(std::numeric_limits<double>::infinity());
+  bad_time.payload = c.SerializeAsString();
+  EXPECT_TRUE(node.handle(bad_time).empty());
+  EXPECT_EQ(node.rejected().out_of_range, 4u);
+  EXPECT_EQ(node.handle(command(1, 1, 0.15, 0.5)).size(), 1u);
+}
+
+// STOP is answered by the node's last heartbeat: what it rejected, by cause, marked final.
+TEST(SubstructureService, AnswersStopWithItsFinalRejectCounts) {
+  substructure_nodes::SubstructureService node(1, "");
+  node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {}));
+  auto foreign = command(1, 1, 0.01, 0);
+  foreign.run_id = "other";
+  node.handle(foreign);
+  const auto replies = node.handle(runtime::pack(kRun, 1, runtime::STOP, 1, runtime::Stop{}));
+  ASSERT_EQ(replies.size(), 1u);
+  EXPECT_TRUE(node.stopped());
+  runtime::Heartbeat h;
+  ASSERT_TRUE(runtime::unpack(replies[0], h));
+  EXPECT_TRUE(h.final());
+  EXPECT_EQ(h.rejected_by_cause().foreign_run(), 1u);
+  EXPECT_EQ(h.rejected(), 1u);
 }
 
 TEST(SubstructureService, IgnoresAnAssignmentOfAnotherRunWhenTold) {

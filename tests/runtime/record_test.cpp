@@ -3,12 +3,17 @@
 #include <gtest/gtest.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <cstring>
+#include <iterator>
+#include <string_view>
 #include <thread>
 
 namespace rths::runtime {
@@ -89,13 +94,139 @@ TEST(Record, MissingFileIsAnErrorNamingIt) {
       std::runtime_error);
 }
 
-TEST(Record, CorruptEntryIsAnErrorNotSilentlySkipped) {
+TEST(Record, BytesThatAreNoRecordAreAnErrorNotAnEmptyRecord) {
   const auto path = temp_record("corrupt");
   {
     std::ofstream out(path, std::ios::binary);
-    out << '\x04' << "\xff\xff\xff\xff";  // a 4-byte entry that is not a RecordEntry
+    out << '\x04' << "\xff\xff\xff\xff";  // no preamble, no frame, no unchecksummed header
   }
   EXPECT_THROW(read_record(path), std::runtime_error);
+}
+
+std::string bytes_of(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// The frame offsets of write_run's entries: header, steps 0..kSteps-1, footer.
+std::vector<std::size_t> frame_offsets(const std::string& bytes) {
+  std::vector<std::size_t> out;
+  for (std::size_t at = kRecordPreambleBytes; at < bytes.size();) {
+    out.push_back(at);
+    std::uint32_t size = 0;
+    for (int i = 3; i >= 0; --i) size = (size << 8) | static_cast<std::uint8_t>(bytes[at + 4 + i]);
+    at += kRecordFrameHeaderBytes + size;
+  }
+  return out;
+}
+
+TEST(Record, StartsWithItsPreambleAndFramesEachEntryWithItsChecksums) {
+  const auto path = temp_record("framed");
+  write_run(path, true);
+  const std::string bytes = bytes_of(path);
+  EXPECT_EQ(bytes.substr(0, kRecordPreambleBytes), std::string(record_preamble()));
+  EXPECT_EQ(frame_offsets(bytes).size(), static_cast<std::size_t>(kSteps + 2));
+  const RecordContents contents = parse_record(bytes, "mem");
+  EXPECT_TRUE(contents.checksummed);
+  EXPECT_FALSE(contents.lost_entries());
+  EXPECT_TRUE(contents.warning.empty()) << contents.warning;
+  const auto frames = frame_offsets(bytes);
+  EXPECT_EQ(contents.offsets, std::vector<std::uint64_t>(frames.begin(), frames.end()));
+}
+
+// Every single byte of a step's frame, flipped alone: that step is reported lost by number and
+// every other entry comes back intact.
+TEST(Record, AFlippedByteLosesOnlyItsEntryAndTheReportNamesTheStep) {
+  const auto path = temp_record("flip");
+  write_run(path, true);
+  const std::string good = bytes_of(path);
+  const auto frames = frame_offsets(good);
+  const int victim = 20;  // step 20: frame 21 (after the header)
+  for (std::size_t at = frames[victim + 1]; at < frames[victim + 2]; ++at) {
+    std::string bytes = good;
+    bytes[at] = static_cast<char>(bytes[at] ^ 0x5A);
+    const RecordContents contents = parse_record(bytes, "mem");
+    SCOPED_TRACE("byte " + std::to_string(at));
+    ASSERT_EQ(contents.losses.size(), 1u);
+    EXPECT_EQ(contents.losses[0].first_byte, frames[victim + 1]);
+    EXPECT_EQ(contents.losses[0].last_step_before, victim - 1);
+    EXPECT_EQ(contents.losses[0].first_step_after, victim + 1);
+    EXPECT_NE(contents.warning.find("step 20 lost"), std::string::npos) << contents.warning;
+    EXPECT_EQ(contents.steps().size(), static_cast<std::size_t>(kSteps - 1));
+    EXPECT_EQ(contents.missing_steps(), (std::vector<std::pair<std::int64_t, std::int64_t>>{{20, 20}}));
+    ASSERT_NE(contents.header(), nullptr);
+    ASSERT_NE(contents.footer(), nullptr);
+    EXPECT_FALSE(contents.truncated);
+  }
+}
+
+TEST(Record, ADamagedHeaderOrFooterIsALossNotATruncation) {
+  const auto path = temp_record("ends");
+  write_run(path, true);
+  const std::string good = bytes_of(path);
+  const auto frames = frame_offsets(good);
+  std::string bytes = good;
+  bytes[frames.front() + 2] ^= 1;  // the header's sync
+  bytes[frames.back() + 5] ^= 1;   // the footer's size
+  const RecordContents contents = parse_record(bytes, "mem");
+  EXPECT_EQ(contents.header(), nullptr);
+  EXPECT_EQ(contents.footer(), nullptr);
+  EXPECT_FALSE(contents.truncated);
+  ASSERT_EQ(contents.losses.size(), 2u);
+  EXPECT_NE(contents.losses[0].describe().find("before step 0"), std::string::npos);
+  EXPECT_NE(contents.losses[1].describe().find("after step 49"), std::string::npos);
+  EXPECT_EQ(contents.steps().size(), static_cast<std::size_t>(kSteps));
+}
+
+TEST(Record, ADamagedPreambleIsReportedAndEveryEntryStillReads) {
+  const auto path = temp_record("preamble");
+  write_run(path, true);
+  std::string bytes = bytes_of(path);
+  bytes[3] = 'x';
+  const RecordContents contents = parse_record(bytes, "mem");
+  ASSERT_EQ(contents.losses.size(), 1u);
+  EXPECT_EQ(contents.losses[0].end_byte, kRecordPreambleBytes);
+  EXPECT_EQ(contents.steps().size(), static_cast<std::size_t>(kSteps));
+  EXPECT_TRUE(contents.checksummed);
+}
+
+// A crash cuts the file anywhere: every cut inside an entry reads as a truncation of intact
+// entries, never as damage; a cut between entries is a shorter record.
+TEST(Record, EveryCutIsATruncationOfIntactEntries) {
+  const auto path = temp_record("cuts");
+  write_run(path, false);
+  const std::string good = bytes_of(path);
+  const auto frames = frame_offsets(good);
+  for (std::size_t size = 0; size < good.size(); ++size) {
+    const RecordContents contents = parse_record(good.substr(0, size), "mem");
+    SCOPED_TRACE("cut at " + std::to_string(size));
+    const auto whole = static_cast<std::size_t>(
+        std::upper_bound(frames.begin(), frames.end(), size) - frames.begin());
+    const bool between = std::find(frames.begin(), frames.end(), size) != frames.end();
+    EXPECT_EQ(contents.truncated, !between);
+    EXPECT_FALSE(contents.lost_entries()) << contents.warning;
+    EXPECT_EQ(contents.entries.size(), size < kRecordPreambleBytes ? 0 : whole - 1);  // all but the cut one
+  }
+}
+
+// A record from before checksums: varint size, then the entry.
+TEST(Record, AnOldRecordWithoutChecksumsStillReadsWithAWarning) {
+  std::string bytes;
+  for (int k = -1; k < 3; ++k) {
+    RecordEntry e;
+    if (k < 0) e.mutable_header()->set_run_id("old");
+    else e.mutable_step()->set_step(k);
+    const std::string payload = e.SerializeAsString();
+    bytes.push_back(static_cast<char>(payload.size()));  // < 128: a one-byte varint
+    bytes += payload;
+  }
+  const RecordContents contents = parse_record(bytes, "old.rthsrec");
+  EXPECT_FALSE(contents.checksummed);
+  ASSERT_NE(contents.header(), nullptr);
+  EXPECT_EQ(contents.header()->run_id(), "old");
+  EXPECT_EQ(contents.steps().size(), 3u);
+  EXPECT_NE(contents.warning.find("without checksums"), std::string::npos) << contents.warning;
+  EXPECT_NE(contents.warning.find("old.rthsrec"), std::string::npos);
 }
 
 RecordEntry step_entry(int k) {
@@ -159,6 +290,54 @@ TEST(AsyncRecord, AFullQueueDropsAndCountsInsteadOfBlocking) {
   std::filesystem::remove(fifo);
 }
 
+TEST(AsyncRecord, AFullDiskFailsTheWriterWhichSaysWhyAndNeverBlocks) {
+  AsyncRecordWriter writer("/dev/full", 8);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  for (int k = 0; !writer.failed() && std::chrono::steady_clock::now() < deadline; ++k) {
+    writer.append(step_entry(k));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(writer.failed());
+  EXPECT_NE(writer.failure().find("/dev/full"), std::string::npos) << writer.failure();
+  EXPECT_NE(writer.failure().find(std::strerror(ENOSPC)), std::string::npos) << writer.failure();
+  for (int k = 0; k < 100; ++k) writer.append(step_entry(k));  // drained, not blocked
+  EXPECT_THROW(writer.close(), std::runtime_error);
+}
+
+// A file-size limit (RLIMIT_FSIZE, SIGXFSZ ignored: writes past it fail with EFBIG) in a child
+// process: the writer fails at the limit and the file is a readable prefix of what was appended.
+TEST(AsyncRecord, AWriteThatFailsLeavesAReadablePrefixAndNothingAfterIt) {
+  constexpr rlim_t kLimit = 20000;
+  const auto path = temp_record("fsize");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{kLimit, kLimit};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    AsyncRecordWriter writer(path, 16);
+    for (int k = 0; k < 3000 && !writer.failed(); ++k) {
+      while (!writer.append(step_entry(k))) {
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+    }
+    const bool failed = writer.failed() && writer.failure().find(std::strerror(EFBIG)) != std::string::npos;
+    _exit(failed ? 0 : 1);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the writer did not report EFBIG";
+  EXPECT_EQ(std::filesystem::file_size(path), kLimit);
+  const RecordContents record = read_record(path);
+  EXPECT_TRUE(record.truncated);
+  EXPECT_FALSE(record.lost_entries()) << record.warning;
+  const auto steps = record.steps();
+  EXPECT_GT(steps.size(), 500u);
+  for (std::size_t k = 0; k < steps.size(); ++k) ASSERT_EQ(steps[k]->step(), static_cast<long>(k));
+  std::filesystem::remove(path);
+}
+
 TEST(AsyncRecord, KillMinus9LosesAtMostTheQueuedEntriesAndLeavesAReadablePrefix) {
   constexpr std::size_t kCapacity = 16;
   constexpr int kAppended = 3000;
@@ -179,6 +358,38 @@ TEST(AsyncRecord, KillMinus9LosesAtMostTheQueuedEntriesAndLeavesAReadablePrefix)
   const auto steps = record.steps();
   EXPECT_GE(steps.size(), static_cast<std::size_t>(kAppended) - kCapacity);
   for (std::size_t k = 0; k < steps.size(); ++k) ASSERT_EQ(steps[k]->step(), static_cast<long>(k));
+  std::filesystem::remove(path);
+}
+
+// The live view's seam: every entry, in order, as the file has it, on the writer's thread.
+TEST(AsyncRecord, TheObserverSeesEachWrittenEntryOnTheWritersThread) {
+  struct Seen : RecordObserver {
+    std::string bytes;
+    std::vector<std::thread::id> threads;
+    void on_entry(std::string_view delimited) override {
+      bytes.append(delimited);
+      threads.push_back(std::this_thread::get_id());
+    }
+  } seen;
+  const auto path = temp_record("observer");
+  {
+    AsyncRecordWriter writer(path, 8);
+    writer.set_observer(&seen);
+    for (int k = 0; k < kSteps; ++k) {
+      RecordEntry step;
+      step.mutable_step()->set_step(k);
+      while (!writer.append(step)) std::this_thread::yield();
+    }
+    writer.close();
+  }
+  std::ifstream in(path, std::ios::binary);
+  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The file is the preamble, then exactly the frames the observer saw.
+  ASSERT_GE(file.size(), seen.bytes.size());
+  EXPECT_EQ(file.substr(file.size() - seen.bytes.size()), seen.bytes);
+  EXPECT_EQ(file.size() - seen.bytes.size(), kRecordPreambleBytes);
+  ASSERT_EQ(seen.threads.size(), static_cast<std::size_t>(kSteps));
+  for (const auto& id : seen.threads) EXPECT_NE(id, std::this_thread::get_id());
   std::filesystem::remove(path);
 }
 

@@ -26,9 +26,11 @@ DdsEndpointOptions node_options(std::int32_t id, const std::string& prefix) {
 TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
   DdsEndpoint coordinator({kDomain, true, 0, "t_exchange", 64});
   DdsEndpoint node1(node_options(1, "t_exchange")), node2(node_options(2, "t_exchange"));
-  coordinator.wait_for_match(2, 2, 5000ms);
-  node1.wait_for_match(1, 1, 5000ms);
-  node2.wait_for_match(1, 1, 5000ms);
+  coordinator.listen_to(1);
+  coordinator.listen_to(2);
+  coordinator.wait_for_match(0, 2, 5000ms);
+  node1.wait_for_match(1, 0, 5000ms);
+  node2.wait_for_match(1, 0, 5000ms);
 
   Message to2;
   to2.run_id = "r";
@@ -56,6 +58,50 @@ TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
   ASSERT_TRUE(back.has_value());
   EXPECT_EQ(back->echo_ns, got->sent_ns);
   EXPECT_EQ(back->node_id, 2);
+  EXPECT_EQ(back->topic_node, 2);
+  EXPECT_NE(back->writer, 0u);
+  EXPECT_EQ(got->topic_node, 2) << "came on node 2's own command topic";
+}
+
+// The envelope's node id is a claim; the topic and the writer say who sent it. Node 1 claiming
+// to be node 2 arrives stamped as node 1's topic, from another writer than node 2's.
+TEST_F(DdsTransport, EachNodeSpeaksOnItsOwnTopicAndWriter) {
+  DdsEndpoint coordinator({kDomain, true, 0, "t_own", 64});
+  DdsEndpoint node1(node_options(1, "t_own")), node2(node_options(2, "t_own"));
+  coordinator.listen_to(1);
+  coordinator.listen_to(2);
+  coordinator.listen_to(2);  // idempotent
+  coordinator.wait_for_match(0, 2, 5000ms);
+  node1.wait_for_match(1, 0, 5000ms);
+  node2.wait_for_match(1, 0, 5000ms);
+  Message m;
+  m.run_id = "r";
+  m.kind = 6;
+  m.node_id = 2;
+  node2.send(m);
+  const auto genuine = coordinator.receive(2s);
+  ASSERT_TRUE(genuine.has_value());
+  node1.send(m);  // claims node 2
+  const auto forged = coordinator.receive(2s);
+  ASSERT_TRUE(forged.has_value());
+  EXPECT_EQ(genuine->topic_node, 2);
+  EXPECT_EQ(forged->node_id, 2);
+  EXPECT_EQ(forged->topic_node, 1);
+  EXPECT_NE(forged->writer, genuine->writer);
+  // A broadcast travels on each addressed node's own topic: no topic is shared.
+  Message to1 = m;
+  to1.node_id = 1;
+  coordinator.send(to1);
+  ASSERT_TRUE(node1.receive(2s).has_value());
+  Message broadcast;
+  broadcast.node_id = kBroadcastId;
+  broadcast.kind = 6;
+  coordinator.send(broadcast);
+  const auto heard = node1.receive(2s);
+  ASSERT_TRUE(heard.has_value());
+  EXPECT_EQ(heard->node_id, kBroadcastId);
+  EXPECT_EQ(heard->topic_node, 1);
+  EXPECT_FALSE(node2.receive(100ms).has_value()) << "node 2 was never addressed";
 }
 
 // One topic per addressee: a command for node 2 never reaches node 1's process at all (on a
@@ -63,7 +109,15 @@ TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
 TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
   DdsEndpoint coordinator({kDomain, true, 0, "t_addressed", 64});
   DdsEndpoint node1(node_options(1, "t_addressed")), node2(node_options(2, "t_addressed"));
-  coordinator.wait_for_match(2, 2, 5000ms);
+  coordinator.listen_to(1);
+  coordinator.listen_to(2);
+  coordinator.wait_for_match(0, 2, 5000ms);
+  Message to1;
+  to1.run_id = "r";
+  to1.node_id = 1;
+  to1.kind = 6;
+  coordinator.send(to1);  // node 1 addressed once, so a broadcast reaches it
+  ASSERT_TRUE(node1.receive(2s).has_value());
   Message to2;
   to2.run_id = "r";
   to2.node_id = 2;
@@ -83,7 +137,7 @@ TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
   coordinator.send(stop);
   ASSERT_TRUE(node1.receive(2s).has_value());
   ASSERT_TRUE(node2.receive(2s).has_value());
-  EXPECT_EQ(node1.samples_taken(), 1u) << "node 1 took node 2's commands off the wire";
+  EXPECT_EQ(node1.samples_taken(), 2u) << "node 1 took node 2's commands off the wire";
   EXPECT_EQ(node2.samples_taken(), 21u);
 }
 
@@ -106,6 +160,7 @@ TEST_F(DdsTransport, WaitForMatchTimesOutWithCounts) {
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("0/1 readers"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0/1 writers"), std::string::npos) << e.what();
   }
 }
 

@@ -85,9 +85,9 @@ TEST(Check, RefusesAnUnsignedOrTamperedDocument) {
               AllOf(HasSubstr("permissions.p7s"), HasSubstr("not an S/MIME signed document")));
   // A grant widened after signing.
   std::string text = test::slurp(node_dir(dir, 2) / "permissions.p7s");
-  const auto at = text.find("<topic>*_up</topic>");
+  const auto at = text.find("<topic>*_node2_up</topic>");
   ASSERT_NE(at, std::string::npos);
-  text.replace(at, 19, "<topic>*_do</topic>");
+  text.replace(at, 25, "<topic>*_node1_up</topic>");
   std::ofstream(node_dir(dir, 2) / "permissions.p7s") << text;
   EXPECT_THAT(refusal(node_dir(dir, 2), 2), HasSubstr("signature does not verify"));
 }
@@ -119,6 +119,27 @@ TEST(Check, DocumentsSignedWithTheOpensslCommandLineAreAccepted) {
   const fs::path dir = test::make_lab("openssl_signed");
   test::sign_with_openssl(dir, governance_xml(), node_dir(dir, 2) / "governance.p7s");
   EXPECT_NO_THROW(check_node_security(node_dir(dir, 2), 2));
+}
+
+// A signed governance that does not cover the run's domain is refused by the launcher's check,
+// before anything starts, naming the file, what it covers and the run's domain.
+TEST(Check, TheLabCheckRefusesAGovernanceThatDoesNotCoverTheRunsDomain) {
+  const fs::path dir = test::make_lab("governance_domains");
+  EXPECT_NO_THROW(check_lab_security(dir, {0, 1, 2}, 7));
+  std::string narrow = governance_xml();
+  const std::string wide = "<id_range><min>0</min><max>230</max></id_range>";
+  narrow.replace(narrow.find(wide), wide.size(), "<id>3</id><id_range><min>10</min><max>12</max></id_range>");
+  test::sign_with_openssl(dir, narrow, node_dir(dir, 2) / "governance.p7s");
+  EXPECT_NO_THROW(check_lab_security(dir, {0, 1, 2}, 11));
+  EXPECT_EQ(check_node_security(node_dir(dir, 2), 2).governance_domains.size(), 2u);
+  try {
+    check_lab_security(dir, {0, 1, 2}, 7);
+    FAIL() << "accepted";
+  } catch (const SecurityError& e) {
+    EXPECT_THAT(std::string(e.what()),
+                AllOf(HasSubstr("node_2/governance.p7s"), HasSubstr("cover 3, 10-12"),
+                      HasSubstr("not the run's DDS domain 7")));
+  }
 }
 
 TEST(Check, PropertiesPointCycloneAtThePluginsAndTheFiles) {

@@ -1,10 +1,10 @@
 // dds_probe: one DDS participant for the security tests, as a separate process.
-//   dds_probe send|receive --domain D --prefix P --as coordinator|node [--node-id N]
+//   dds_probe send|receive --domain D --prefix P --as coordinator|node [--node-id N] [--peer M]
 //             [--security NODE_DIR [--identity ID]] --seconds S
-// send:    an rths endpoint (coordinator: writes <P>_down; node: writes <P>_up) that writes one
-//          message every 5 ms for S seconds; prints "sent N".
-// receive: the same endpoint reading the other topic; counts every message delivered to it for
-//          S seconds; prints "received N".
+// send:    an rths endpoint (coordinator: writes <P>_node<M>_down; node N: writes <P>_node<N>_up)
+//          that writes one message every 5 ms for S seconds; prints "sent N".
+// receive: the same endpoint reading the other way (coordinator: <P>_node<M>_up); counts every
+//          message delivered to it for S seconds; prints "received N".
 // --identity: the node whose certificate NODE_DIR must hold (default: 0 as coordinator, else
 // --node-id); a node identity in the coordinator's role is how a test forges commands.
 // Exit 0 when it ran, 2 for refused security documents, 3 when DDS refused (e.g. an entity the
@@ -21,13 +21,14 @@ int main(int argc, char** argv) {
   using namespace rths;
   CLI::App app{"dds_probe"};
   std::string mode, role, security_dir, prefix;
-  int domain = -1, node_id = 1, identity = -1;
+  int domain = -1, node_id = 1, identity = -1, peer = 1;
   double seconds = 1;
   app.add_option("mode", mode)->required()->check(CLI::IsMember({"send", "receive"}));
   app.add_option("--domain", domain)->required();
   app.add_option("--prefix", prefix)->required();
   app.add_option("--as", role)->required()->check(CLI::IsMember({"coordinator", "node"}));
   app.add_option("--node-id", node_id);
+  app.add_option("--peer", peer, "coordinator: the node it writes to or listens to");
   app.add_option("--security", security_dir);
   app.add_option("--identity", identity);
   app.add_option("--seconds", seconds);
@@ -49,12 +50,13 @@ int main(int argc, char** argv) {
   }
   try {
     transport::DdsEndpoint endpoint(options);
+    endpoint.listen_to(peer);
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     long count = 0;
     if (mode == "send") {
       transport::Message m;
       m.run_id = "probe";
-      m.node_id = options.coordinator ? transport::kBroadcastId : node_id;
+      m.node_id = options.coordinator ? peer : node_id;
       m.kind = 6;  // HEARTBEAT
       m.payload = "probe";
       while (std::chrono::steady_clock::now() < end) {

@@ -33,10 +33,11 @@ struct Probe {
 // A dds_probe (tests/security/dds_probe.cpp) in `domain`; security off when `node_dir` is empty.
 Probe probe(const fs::path& logs, const std::string& label, const std::string& mode, int domain,
             const std::string& role, int node_id, const fs::path& node_dir, double seconds,
-            int identity = -1) {
+            int identity = -1, int peer = 1) {
   std::vector<std::string> args{mode, "--domain", std::to_string(domain), "--prefix",
                                 "sec" + std::to_string(domain), "--as", role, "--node-id",
-                                std::to_string(node_id), "--seconds", std::to_string(seconds)};
+                                std::to_string(node_id), "--seconds", std::to_string(seconds),
+                                "--peer", std::to_string(peer)};
   if (!node_dir.empty()) args.insert(args.end(), {"--security", node_dir.string()});
   if (identity >= 0) args.insert(args.end(), {"--identity", std::to_string(identity)});
   const fs::path log = logs / (label + ".log");
@@ -87,8 +88,8 @@ TEST_F(DdsSecurity, OnlyTheLabsParticipantsDeliverAnyMessage) {
   EXPECT_EQ(count_in(alien_rx.log, "received"), 0);
 }
 
-// Node 1's permissions allow publishing feedback (*_up) only. With its own valid identity in the
-// coordinator's role (our start-up check passes: the folder is node 1's), DDS access control
+// Node 1's permissions allow publishing on its own up topic only. With its own valid identity in
+// the coordinator's role (our start-up check passes: the folder is node 1's), DDS access control
 // refuses the command writer (*_down) and the node listening for commands receives nothing. The
 // coordinator's identity, in the next domain, is the control. Without --identity, our own check
 // refuses the same folder first, naming the certificate.
@@ -96,15 +97,38 @@ TEST_F(DdsSecurity, ANodeCannotPublishOnTheCommandTopic) {
   const fs::path node1 = security::node_dir(lab_, 1), node2 = security::node_dir(lab_, 2);
   Probe rx = probe(logs_, "rx", "receive", 173, "node", 2, node2, 7.0);
   Probe control_rx = probe(logs_, "control_rx", "receive", 174, "node", 2, node2, 7.0);
-  Probe forger = probe(logs_, "forger", "send", 173, "coordinator", 0, node1, 5.0, 1);
-  Probe control = probe(logs_, "control", "send", 174, "coordinator", 0, security::node_dir(lab_, 0), 5.0);
-  Probe unchecked = probe(logs_, "unchecked", "send", 173, "coordinator", 0, node1, 5.0);
+  Probe forger = probe(logs_, "forger", "send", 173, "coordinator", 0, node1, 5.0, 1, 2);
+  Probe control =
+      probe(logs_, "control", "send", 174, "coordinator", 0, security::node_dir(lab_, 0), 5.0, -1, 2);
+  Probe unchecked = probe(logs_, "unchecked", "send", 173, "coordinator", 0, node1, 5.0, -1, 2);
   EXPECT_EQ(forger.process.wait(), 3);
-  EXPECT_THAT(test::slurp(forger.log), AllOf(HasSubstr("dds_create_writer"), HasSubstr("Security")));
+  // Refused at its first entity outside node 1's own topics (its listener's node-2 topic or the
+  // command writer).
+  EXPECT_THAT(test::slurp(forger.log), AllOf(HasSubstr("dds_create_"), HasSubstr("Security")));
   EXPECT_EQ(unchecked.process.wait(), 2);
   EXPECT_THAT(test::slurp(unchecked.log),
               AllOf(HasSubstr("cert.pem"), HasSubstr("is for rths-node-1, not for node 0")));
   EXPECT_EQ(control.process.wait(), 0) << test::slurp(control.log);
+  EXPECT_EQ(rx.process.wait(), 0);
+  EXPECT_EQ(control_rx.process.wait(), 0);
+  EXPECT_EQ(count_in(rx.log, "received"), 0);
+  EXPECT_GT(count_in(control_rx.log, "received"), 100);
+}
+
+// Identity bound to node: an insider holding node 2's certificate (valid, of this lab) tries to
+// answer as node 1 on node 1's topic. Node 2's permissions allow only its own two topics, so DDS
+// refuses the writer and the coordinator listening to node 1 receives nothing; node 1's own
+// certificate, in the next domain, is the control.
+TEST_F(DdsSecurity, ANodesCertificateCannotPublishAsAnotherNode) {
+  const fs::path node0 = security::node_dir(lab_, 0);
+  Probe rx = probe(logs_, "rx", "receive", 87, "coordinator", 0, node0, 7.0, -1, 1);
+  Probe control_rx = probe(logs_, "control_rx", "receive", 88, "coordinator", 0, node0, 7.0, -1, 1);
+  Probe insider =
+      probe(logs_, "insider", "send", 87, "node", 1, security::node_dir(lab_, 2), 5.0, 2);
+  Probe own = probe(logs_, "own", "send", 88, "node", 1, security::node_dir(lab_, 1), 5.0);
+  EXPECT_EQ(insider.process.wait(), 3);
+  EXPECT_THAT(test::slurp(insider.log), AllOf(HasSubstr("dds_create_"), HasSubstr("Security")));
+  EXPECT_EQ(own.process.wait(), 0) << test::slurp(own.log);
   EXPECT_EQ(rx.process.wait(), 0);
   EXPECT_EQ(control_rx.process.wait(), 0);
   EXPECT_EQ(count_in(rx.log, "received"), 0);

@@ -46,14 +46,19 @@ TEST(Pki, OpensslVerifiesEveryCertificateAndSignatureAgainstTheLabCa) {
             0);
 }
 
-TEST(Pki, EachNodeKindMayOnlyUseItsOwnDirection) {
+// The coordinator one direction on every node's topics; node N its own two topics only.
+TEST(Pki, EachNodeMayOnlyUseItsOwnTopics) {
   const std::string coordinator = permissions_xml({0, "coordinator"}, "lab", "a", "b");
   EXPECT_NE(coordinator.find("<publish><topics><topic>*_down</topic>"), std::string::npos);
   EXPECT_NE(coordinator.find("<subscribe><topics><topic>*_up</topic>"), std::string::npos);
   for (const NodeIdentity node : {NodeIdentity{1, "substructure"}, NodeIdentity{2, "actuator_emulator"}}) {
     const std::string text = permissions_xml(node, "lab", "a", "b");
-    EXPECT_NE(text.find("<publish><topics><topic>*_up</topic>"), std::string::npos);
-    EXPECT_NE(text.find("<subscribe><topics><topic>*_down</topic>"), std::string::npos);
+    const std::string own = "*_node" + std::to_string(node.node_id);
+    EXPECT_NE(text.find("<publish><topics><topic>" + own + "_up</topic></topics>"), std::string::npos);
+    EXPECT_NE(text.find("<subscribe><topics><topic>" + own + "_down</topic></topics>"),
+              std::string::npos);
+    EXPECT_EQ(text.find("<topic>*_up</topic>"), std::string::npos);
+    EXPECT_EQ(text.find("<topic>*_down</topic>"), std::string::npos);
     EXPECT_EQ(text.find("_down</topic></topics></publish>"), std::string::npos);
     EXPECT_NE(text.find("<subject_name>" + subject_name(node, "lab") + "</subject_name>"),
               std::string::npos);

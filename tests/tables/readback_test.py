@@ -114,17 +114,37 @@ def test_launch_and_export_write_the_record_in_every_format(study, tmp_path):
     out.mkdir()
     rths("export", record, "--csv", out / "r.csv", "--mat", out / "r.mat", "--h5", out / "r.h5")
     header, columns = read_csv(out / "r.csv")
-    assert header[:4] == ["step", "time", "ground_acceleration", "u1"]
+    assert header[:4] == ["step", "time_s", "ground_acceleration_m_per_s2", "u1_m"]
     mat = assert_same_as_csv(header, columns, out / "r.mat", out / "r.h5")
-    assert mat["units"]["node2_round_trip"] == "s" and mat["units"]["force1"] == "N"
-    link = [n for n in header if n.endswith("_round_trip")][0]
+    assert mat["units"]["node2_round_trip_s"] == "s" and mat["units"]["force1_N"] == "N"
+    link = [n for n in header if n.endswith("_round_trip_s")][0]
     # launch writes run's results table (every case's columns, SI names) beside the record.
     with h5py.File(out / "r.h5", "r") as exported, h5py.File(tmp_path / "launch/results.h5", "r") as launched:
         assert math.isnan(exported[link][0])  # step 0 has no exchange
         assert np.all(exported[link][1:] > 0)
-        np.testing.assert_array_equal(exported["u1"][()], launched["lag_shift_14ms_u_floor1_m"][()])
+        np.testing.assert_array_equal(exported["u1_m"][()], launched["lag_shift_14ms_u_floor1_m"][()])
         assert exported.attrs["case_name"] == "lag_shift_14ms"
+        assert exported.attrs["integrity"] == "verified (CRC-32C per entry)"
+        assert exported.attrs["lost_steps"] == ""
     rths("export", record, expect=2)  # no output named
+
+    # One flipped byte in the middle of the record: that step's entry fails its checksum; every
+    # other row is exported, every format says which step was lost, and the exit is 1.
+    damaged = tmp_path / "damaged.rthsrec"
+    data = bytearray(record.read_bytes())
+    data[len(data) // 2] ^= 0x40
+    damaged.write_bytes(bytes(data))
+    done = rths("export", damaged, "--csv", out / "d.csv", "--mat", out / "d.mat", "--h5", out / "d.h5", expect=1)
+    with h5py.File(out / "d.h5", "r") as h5:
+        lost = h5.attrs["lost_steps"]
+        assert h5.attrs["integrity"].startswith("damaged: ")
+    assert lost.isdigit(), lost  # exactly one step
+    assert f"step {lost} lost" in done.stderr
+    mat = scipy.io.loadmat(out / "d.mat", simplify_cells=True)
+    assert mat["attributes"]["lost_steps"] == lost
+    _, kept = read_csv(out / "d.csv")
+    assert kept["step"] == [s for s in columns["step"] if s != lost]
+    assert kept["u1_m"] == [u for s, u in zip(columns["step"], columns["u1_m"]) if s != lost]
 
 
 def test_identify_writes_the_record_and_both_models_predictions(tmp_path):

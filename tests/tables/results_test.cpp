@@ -114,16 +114,17 @@ TEST(ResultsTest, RecordTableHasTheExportColumnsAndNanForStepZerosLink) {
     record.entries.push_back(e);
   }
   const Table t = record_table(record);
-  EXPECT_EQ(names(t), (std::vector<std::string>{"step", "time", "ground_acceleration", "u1", "v1", "a1", "command1",
-                                                "realised1", "force1", "node2_answered_step", "node2_injected_lag",
-                                                "node2_round_trip", "node2_one_way_down", "node2_one_way_up",
-                                                "lateness", "overrun"}));
+  EXPECT_EQ(names(t), (std::vector<std::string>{"step", "time_s", "ground_acceleration_m_per_s2", "u1_m",
+                                                "v1_m_per_s", "a1_m_per_s2", "command1_m", "realised1_m",
+                                                "force1_N", "node2_answered_step", "node2_injected_lag_s",
+                                                "node2_round_trip_s", "node2_one_way_down_s", "node2_one_way_up_s",
+                                                "lateness_s", "overrun"}));
   EXPECT_EQ(t.rows(), 2u);
-  EXPECT_TRUE(std::isnan(t.column("node2_round_trip").numbers[0]));
-  EXPECT_DOUBLE_EQ(t.column("node2_round_trip").numbers[1], 0.0002);
-  EXPECT_EQ(t.column("node2_round_trip").unit, "s");
-  EXPECT_EQ(t.column("a1").unit, "m/s^2");
-  EXPECT_DOUBLE_EQ(t.column("u1").numbers[1], 0.5);
+  EXPECT_TRUE(std::isnan(t.column("node2_round_trip_s").numbers[0]));
+  EXPECT_DOUBLE_EQ(t.column("node2_round_trip_s").numbers[1], 0.0002);
+  EXPECT_EQ(t.column("node2_round_trip_s").unit, "s");
+  EXPECT_EQ(t.column("a1_m_per_s2").unit, "m/s^2");
+  EXPECT_DOUBLE_EQ(t.column("u1_m").numbers[1], 0.5);
   EXPECT_EQ(t.column("overrun").numbers, (std::vector<double>{0, 1}));
   EXPECT_EQ(t.attributes().at("status"), "no footer: the run was cut short");
   EXPECT_THROW(record_table(runtime::RecordContents{}), std::invalid_argument);

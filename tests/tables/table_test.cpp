@@ -21,9 +21,9 @@ TEST(TableTest, IdentifierMakesAValidMatlabName) {
 
 TEST(TableTest, RejectsBadNamesDuplicatesAndUnequalLengths) {
   Table t;
-  t.add_numbers("time", "s", {0, 1, 2});
-  EXPECT_THROW(t.add_numbers("2x", "m", {0, 1, 2}), std::invalid_argument);
-  EXPECT_THROW(t.add_numbers("time", "s", {0, 1, 2}), std::invalid_argument);
+  t.add_numbers("time_s", "s", {0, 1, 2});
+  EXPECT_THROW(t.add_numbers("2x_m", "m", {0, 1, 2}), std::invalid_argument);
+  EXPECT_THROW(t.add_numbers("time_s", "s", {0, 1, 2}), std::invalid_argument);
   try {
     t.add_texts("name", "", {"a", "b"});
     FAIL() << "a short column was accepted";
@@ -33,8 +33,26 @@ TEST(TableTest, RejectsBadNamesDuplicatesAndUnequalLengths) {
   t.add_texts("label", "", {"a", "b", "c"});
   EXPECT_EQ(t.rows(), 3u);
   EXPECT_EQ(t.column("label").texts[2], "c");
-  EXPECT_EQ(t.column("time").unit, "s");
+  EXPECT_EQ(t.column("time_s").unit, "s");
   EXPECT_THROW(t.column("missing"), std::out_of_range);
+}
+
+// One naming rule for every writer: a column's name ends in its unit.
+TEST(TableTest, EveryNameEndsInItsUnit) {
+  Table t;
+  t.add_numbers("lag_shift_14ms_u_floor1_m", "m", {0});
+  t.add_numbers("a1_m_per_s2", "m/s^2", {0});
+  t.add_numbers("nrmse_pct", "%", {0});
+  t.add_numbers("step", "", {0});
+  EXPECT_EQ(unit_suffix("N/m"), "N_per_m");
+  try {
+    t.add_numbers("time", "s", {0});
+    FAIL() << "a name without its unit was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("must end in '_s'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(t.add_numbers("u1_mm", "m", {0}), std::invalid_argument);
+  EXPECT_THROW(t.add_numbers("_m", "m", {0}), std::invalid_argument);
 }
 
 TEST(TableTest, PadWithNanFillsShortColumns) {

@@ -29,8 +29,8 @@ std::string read(const std::filesystem::path& path) {
 
 Table sample() {
   Table t;
-  t.add_numbers("time", "s", {0.0, 0.1, 1e-20});
-  t.add_numbers("u1", "m", {1.0 / 3.0, std::numeric_limits<double>::quiet_NaN(), -2});
+  t.add_numbers("time_s", "s", {0.0, 0.1, 1e-20});
+  t.add_numbers("u1_m", "m", {1.0 / 3.0, std::numeric_limits<double>::quiet_NaN(), -2});
   t.add_texts("label", "", {"a", "b,c", "say \"hi\""});
   t.set_attribute("case_name", "lag_shift_14ms");
   return t;
@@ -40,7 +40,7 @@ TEST(WriteTest, CsvHasNamesExactNumbersEmptyNanAndQuotedText) {
   const auto dir = scratch("csv");
   write_table(sample(), dir / "t.csv", Format::kCsv);
   EXPECT_EQ(read(dir / "t.csv"),
-            "time,u1,label\n"
+            "time_s,u1_m,label\n"
             "0,0.33333333333333331,a\n"
             "0.10000000000000001,,\"b,c\"\n"
             "9.9999999999999995e-21,-2,\"say \"\"hi\"\"\"\n");

@@ -1,0 +1,254 @@
+#include "identify/network_path.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "identify/data.h"
+#include "identify/model.h"
+
+namespace rths::identify {
+namespace {
+
+double median_of(std::vector<double> x) {
+  if (x.empty()) return 0.0;
+  const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
+  std::nth_element(x.begin(), mid, x.end());
+  return *mid;
+}
+
+double robust_sigma(const std::vector<double>& x, double centre) {
+  std::vector<double> deviation;
+  for (double v : x) deviation.push_back(std::abs(v - centre));
+  return 1.4826 * median_of(std::move(deviation));
+}
+
+double rms_about(const std::vector<double>& x, const std::vector<double>& model,
+                 const std::vector<std::size_t>& samples) {
+  double sum = 0.0;
+  for (std::size_t i : samples) sum += (x[i] - model[i]) * (x[i] - model[i]);
+  return samples.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(samples.size()));
+}
+
+std::string ms(double seconds) {
+  std::ostringstream out;
+  out.precision(3);
+  out << seconds * 1e3 << " ms";
+  return out.str();
+}
+
+// Normalised time of each answer over the run, in [-1/2, 1/2] (model.h drift_profile).
+std::vector<double> normalised_time(const std::vector<double>& time) {
+  const double mid = 0.5 * (time.front() + time.back());
+  const double span = std::max(time.back() - time.front(), 1e-12);
+  std::vector<double> s;
+  for (double t : time) s.push_back((t - mid) / span);
+  return s;
+}
+
+// bias + D(s; c) fitted by least squares on `fit_on`; evaluated at every answer.
+std::vector<double> drift_model(const std::vector<double>& x, const std::vector<double>& s,
+                                const std::vector<std::size_t>& fit_on) {
+  const auto rows = static_cast<Eigen::Index>(fit_on.size());
+  const auto cols = static_cast<Eigen::Index>(kDriftTerms + 1);
+  Eigen::MatrixXd a(rows, cols);
+  Eigen::VectorXd b(rows);
+  std::vector<double> unit(kDriftTerms, 0.0);
+  const auto basis = [&](double si, std::size_t k) {
+    std::fill(unit.begin(), unit.end(), 0.0);
+    unit[k] = 1.0;
+    return drift_profile(unit, si);
+  };
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    const std::size_t i = fit_on[static_cast<std::size_t>(r)];
+    a(r, 0) = 1.0;
+    for (std::size_t k = 0; k < kDriftTerms; ++k) a(r, static_cast<Eigen::Index>(k + 1)) = basis(s[i], k);
+    b(r) = x[i];
+  }
+  const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
+  std::vector<double> coefficients(c.data() + 1, c.data() + cols);
+  std::vector<double> model;
+  for (double si : s) model.push_back(c(0) + drift_profile(coefficients, si));
+  return model;
+}
+
+std::vector<std::size_t> spike_indices(const std::vector<double>& x, double threshold,
+                                       const std::vector<std::size_t>& among) {
+  std::vector<std::size_t> out;
+  for (std::size_t i : among) {
+    if (x[i] > threshold) out.push_back(i);
+  }
+  return out;
+}
+
+// Period of the spikes at `times` when their spacing is regular (within 20 % of the median
+// spacing, spikes of one burst counted once); 0 otherwise.
+double regular_period(const std::vector<double>& times, double dt) {
+  std::vector<double> starts;
+  for (double t : times) {
+    if (starts.empty() || t - starts.back() > 3.0 * dt) starts.push_back(t);
+  }
+  if (starts.size() < 3) return 0.0;
+  std::vector<double> spacing;
+  for (std::size_t i = 1; i < starts.size(); ++i) spacing.push_back(starts[i] - starts[i - 1]);
+  const double period = median_of(spacing);
+  for (double d : spacing) {
+    const double cycles = std::round(d / period);
+    if (cycles < 1.0 || std::abs(d - cycles * period) > 0.2 * period) return 0.0;
+  }
+  return period;
+}
+
+// Lost answers (steps between the first and the last answered that no answer came for), the
+// longest run of them, and the answers carried more than one step after the usual.
+void count_lost_and_late(const LinkAnswers& a, double dt, NetworkPath& out) {
+  std::vector<std::int64_t> steps = a.answered_step;
+  std::sort(steps.begin(), steps.end());
+  steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
+  for (std::size_t i = 1; i < steps.size(); ++i) {
+    const auto gap = static_cast<std::size_t>(steps[i] - steps[i - 1] - 1);
+    out.lost += gap;
+    out.longest_burst = std::max(out.longest_burst, gap);
+  }
+  std::vector<double> carried;
+  for (std::size_t i = 0; i < a.time.size(); ++i) {
+    carried.push_back(std::round(a.time[i] / dt) - static_cast<double>(a.answered_step[i]));
+  }
+  const double usual = median_of(carried);
+  for (double c : carried) out.late += c > usual + 1.0 ? 1 : 0;
+}
+
+// The named effects judged by counting (network_path.h): lost answers and the injection.
+void counted_effects(NetworkPath& out) {
+  const double expected_burst_probability =
+      static_cast<double>(out.answers) *
+      std::pow(out.declared.loss, static_cast<double>(out.longest_burst));
+  if (out.lost > 0 && (out.declared.loss == 0.0 ||
+                       (out.longest_burst >= 3 && expected_burst_probability < 1e-3))) {
+    out.effects.push_back({"lost answers",
+                           std::to_string(out.lost) + " lost, longest burst " +
+                               std::to_string(out.longest_burst) + " consecutive (declared loss " +
+                               std::to_string(out.declared.loss) + ")",
+                           0.0, 0.0, 0.0});
+  }
+  const double difference = out.injected_mean - out.declared.round_trip;
+  if (std::abs(difference) > std::max(1e-4, 0.05 * out.declared.round_trip)) {
+    out.effects.push_back({"injection", "the node injected " + ms(out.injected_mean) +
+                                            " per round trip, the config declares " +
+                                            ms(out.declared.round_trip),
+                           0.0, 0.0, 0.0});
+  }
+}
+
+// Periodic spikes predicted from the training answers: at times t0 + k P, lasting as long as
+// the longest training spike run, of the training spikes' median height above `base`.
+std::vector<double> spike_model(const std::vector<double>& x, const std::vector<double>& time,
+                                const std::vector<double>& base,
+                                const std::vector<std::size_t>& train_spikes, double period,
+                                double dt) {
+  std::vector<double> heights;
+  double t0 = time[train_spikes.front()], width = dt, run_start = t0, last = t0;
+  for (std::size_t i : train_spikes) {
+    heights.push_back(x[i] - base[i]);
+    if (time[i] - last > 3.0 * dt) run_start = time[i];
+    width = std::max(width, time[i] - run_start + dt);
+    last = time[i];
+  }
+  const double height = median_of(heights);
+  std::vector<double> model = base;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    double phase = std::fmod(time[i] - t0 + 1e3 * period, period);
+    if (phase > period - 0.5 * dt) phase -= period;  // a rounding short of a whole period
+    if (phase >= -0.5 * dt && phase < width - 0.5 * dt) model[i] += height;
+  }
+  return model;
+}
+
+// A candidate pays when the held-out RMS falls by at least 20 % and by more than kMinEffect.
+bool pays(double before, double after) {
+  return after <= 0.8 * before && before - after > kMinEffect;
+}
+
+std::vector<std::size_t> without(const std::vector<std::size_t>& samples,
+                                 const std::vector<double>& x, double threshold) {
+  std::vector<std::size_t> out;
+  for (std::size_t i : samples) {
+    if (x[i] <= threshold) out.push_back(i);
+  }
+  return out;
+}
+
+// The fitted candidates (network_path.h): drifting delay, then periodic spikes on top of it.
+void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, NetworkPath& out) {
+  const Split split = holdout_split(x.size(), 0.3, HoldoutMode::kBlocks, 10, 5);
+  const double threshold = out.bias + std::max(6.0 * out.jitter, kMinSpike);
+  std::vector<std::size_t> all(x.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  const auto spikes = spike_indices(x, threshold, all);
+  std::vector<double> spike_times, heights;
+  for (std::size_t i : spikes) {
+    spike_times.push_back(a.time[i]);
+    heights.push_back(x[i] - out.bias);
+  }
+  out.spikes = spikes.size();
+  out.spike_period = regular_period(spike_times, dt);
+  out.spike_height = median_of(heights);
+  const auto train = without(split.train, x, threshold);
+  const auto heldout = without(split.heldout, x, threshold);
+  std::vector<double> train_x;
+  for (std::size_t i : train) train_x.push_back(x[i]);
+  std::vector<double> base(x.size(), median_of(train_x));
+  out.heldout_declared = rms_about(x, base, split.heldout);
+  const std::vector<double> drift = drift_model(x, normalised_time(a.time), train);
+  const auto [low, high] = std::minmax_element(drift.begin(), drift.end());
+  out.drift_range = *high - *low;
+  const double before = rms_about(x, base, heldout), after = rms_about(x, drift, heldout);
+  if (pays(before, after)) {
+    out.effects.push_back({"drifting delay", "the excess lag moves over " + ms(out.drift_range) +
+                                                 " in the run", before, after, 0.0});
+    base = drift;
+  }
+  const auto train_spikes = spike_indices(x, threshold, split.train);
+  if (out.spike_period > 0.0 && train_spikes.size() >= 2) {
+    const auto model = spike_model(x, a.time, base, train_spikes, out.spike_period, dt);
+    const double spikes_before = rms_about(x, base, split.heldout);
+    const double spikes_after = rms_about(x, model, split.heldout);
+    if (pays(spikes_before, spikes_after)) {
+      out.effects.push_back({"periodic spikes", std::to_string(out.spikes) + " spikes of " +
+                                                    ms(out.spike_height) + " every " +
+                                                    ms(out.spike_period),
+                             spikes_before, spikes_after, 0.0});
+    }
+  }
+  double removed = 0.0;
+  for (const auto& e : out.effects) removed += e.heldout_before - e.heldout_after;
+  for (auto& e : out.effects) e.share = removed > 0.0 ? (e.heldout_before - e.heldout_after) / removed : 0.0;
+}
+
+}  // namespace
+
+NetworkPath identify_network_path(const LinkAnswers& a, const DeclaredLink& declared, double dt) {
+  const std::size_t n = a.round_trip.size();
+  if (n < 20) {
+    throw std::invalid_argument("link to node " + std::to_string(a.node_id) + ": " +
+                                std::to_string(n) + " answers, at least 20 are needed");
+  }
+  NetworkPath out;
+  out.node_id = a.node_id;
+  out.answers = n;
+  out.declared = declared;
+  std::vector<double> x(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = a.round_trip[i] - a.injected[i];
+  out.bias = median_of(x);
+  out.jitter = robust_sigma(x, out.bias);
+  for (double q : a.injected) out.injected_mean += q / static_cast<double>(n);
+  count_lost_and_late(a, dt, out);
+  fit_effects(a, x, dt, out);
+  counted_effects(out);
+  return out;
+}
+
+}  // namespace rths::identify

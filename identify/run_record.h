@@ -1,0 +1,65 @@
+#pragma once
+// A distributed run identified from its record (`rths identify RECORD.rthsrec`), read through the
+// project's one record reader (runtime read_record + measure_run), against the run's own config
+// (the record header's study: the declared model).
+//
+// Per link (node): the network path (network_path.h), declared = the node's receive_lag +
+// send_lag in the header's deployment.
+// Per actuator a (1-based): the actuator path, command -> measured displacement, and the
+// specimen, measured displacement -> force, identified by identify.h with the effect library;
+// declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
+// transfer function -> second_order, each with the config's value as initial value), gain = the
+// stages' amplitude gain. Undeclared effects: the steps the search added that remove more than
+// kMinErrorRemoved of held-out error, and a fitted gain off the declared one by more than
+// kGainTolerance (an emulator gain error).
+// A run that diverged is identified up to the last step whose response is finite and below the
+// coordinator's divergence bound; a truncated record (no footer, or a cut last entry) is
+// identified from what it holds; both say so (`held`).
+// Bad input -> std::invalid_argument "RECORD: ENTRY: PROBLEM": a record that cannot be read or
+// has damaged entries (the reader's loss report names them), a header of another schema version, no header, a link the header lists
+// with no answer, fewer steps than identification needs.
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "identify/identify.h"
+#include "identify/network_path.h"
+
+namespace rths::identify {
+
+inline constexpr double kGainTolerance = 0.02;  // relative
+// An added effect is named only when it removes at least this much held-out error (a share of
+// the signal's std): the record of a simulated run has no sensor noise, and below this a relative
+// fall of the error is round-off, not an effect.
+inline constexpr double kMinErrorRemoved = 1.0e-4;
+
+struct ActuatorPath {
+  int actuator = 0;  // 1-based
+  std::vector<std::string> declared;  // the case's stages, as effects
+  double declared_gain = 1.0, fitted_gain = 1.0;
+  Identification id;  // channels measured and force
+  std::vector<std::string> undeclared;  // effects named beyond the declared model
+};
+
+struct RunIdentification {
+  std::string record, clock, case_name;
+  std::size_t steps = 0;  // identified
+  double duration = 0.0;  // s
+  std::string held;       // how much the record held: complete, truncated, diverged
+  std::vector<NetworkPath> links;
+  std::vector<ActuatorPath> actuators;
+};
+
+RunIdentification identify_run_record(const std::filesystem::path& record,
+                                      const IdentifyOptions& options);
+
+std::string run_record_text(const RunIdentification& run);
+nlohmann::json run_record_json(const RunIdentification& run);
+
+// True for a path named *.rthsrec (what `rths identify` reads as a run record).
+bool is_run_record(const std::filesystem::path& path);
+
+}  // namespace rths::identify

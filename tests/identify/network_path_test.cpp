@@ -1,0 +1,132 @@
+// The network path of a link from its answers: each undeclared effect named (drifting delay,
+// periodic spikes, a burst of lost answers, an injection other than declared), clean answers
+// giving none, and a link with too few answers refused naming its node.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+#include <string>
+
+#include "identify/network_path.h"
+
+namespace rths::identify {
+namespace {
+
+constexpr double kDt = 1.0 / 1024.0;
+constexpr std::size_t kAnswers = 10240;  // 10 s
+
+// Answers of a healthy link: every step answered at once, 0.3 ms of transport with 40 us of
+// Gaussian jitter on top of the injected 2 ms.
+LinkAnswers clean_link(std::uint64_t seed = 1) {
+  LinkAnswers a;
+  a.node_id = 2;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> jitter(0.0, 40e-6);
+  for (std::size_t i = 0; i < kAnswers; ++i) {
+    a.time.push_back(static_cast<double>(i + 1) * kDt);
+    a.answered_step.push_back(static_cast<std::int64_t>(i + 1));
+    a.injected.push_back(0.002);
+    a.round_trip.push_back(0.002 + 0.0003 + jitter(rng));
+  }
+  return a;
+}
+
+DeclaredLink declared_2ms() { return {0.002, 0.0, 0.0}; }
+
+std::set<std::string> names(const NetworkPath& path) {
+  std::set<std::string> out;
+  for (const auto& e : path.effects) out.insert(e.name);
+  return out;
+}
+
+TEST(NetworkPath, ACleanLinkNamesNothingAndMeasuresItsBiasAndJitter) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    const NetworkPath path = identify_network_path(clean_link(seed), declared_2ms(), kDt);
+    EXPECT_TRUE(path.effects.empty()) << path.effects.front().name;
+    EXPECT_NEAR(path.bias, 0.0003, 5e-6);
+    EXPECT_NEAR(path.jitter, 40e-6, 5e-6);
+    EXPECT_EQ(path.lost, 0u);
+    EXPECT_EQ(path.late, 0u);
+  }
+}
+
+TEST(NetworkPath, ADriftingDelayIsNamedWithItsRange) {
+  LinkAnswers a = clean_link();
+  for (std::size_t i = 0; i < kAnswers; ++i) a.round_trip[i] += 0.003 * a.time[i] / 10.0;
+  const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+  ASSERT_EQ(names(path), std::set<std::string>{"drifting delay"});
+  EXPECT_NEAR(path.drift_range, 0.003, 3e-4);
+  EXPECT_LT(path.effects[0].heldout_after, 0.2 * path.effects[0].heldout_before);
+  EXPECT_DOUBLE_EQ(path.effects[0].share, 1.0);
+}
+
+TEST(NetworkPath, PeriodicSpikesAreNamedWithTheirPeriod) {
+  LinkAnswers a = clean_link();
+  for (std::size_t i = 0; i < kAnswers; ++i) {
+    if (i % 512 < 3) a.round_trip[i] += 0.005;  // 5 ms for 3 answers every 0.5 s
+  }
+  const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+  ASSERT_EQ(names(path), std::set<std::string>{"periodic spikes"});
+  EXPECT_NEAR(path.spike_period, 0.5, 2 * kDt);
+  EXPECT_NEAR(path.spike_height, 0.005, 2e-4);
+}
+
+TEST(NetworkPath, ABurstOfLostAnswersIsNamedWithItsLength) {
+  LinkAnswers a = clean_link();
+  const auto cut = [&](auto& v) { v.erase(v.begin() + 5000, v.begin() + 5012); };
+  cut(a.time);
+  cut(a.answered_step);
+  cut(a.round_trip);
+  cut(a.injected);
+  const NetworkPath path = identify_network_path(a, {0.002, 0.0, 0.001}, kDt);
+  ASSERT_EQ(names(path), std::set<std::string>{"lost answers"});
+  EXPECT_EQ(path.lost, 12u);
+  EXPECT_EQ(path.longest_burst, 12u);
+}
+
+TEST(NetworkPath, LostAnswersWithinTheDeclaredLossAreNotNamed) {
+  LinkAnswers a = clean_link();
+  for (std::size_t k : {9000u, 7000u, 3000u}) {  // three single losses at 1 % declared
+    for (auto* v : {&a.time, &a.round_trip, &a.injected}) v->erase(v->begin() + static_cast<std::ptrdiff_t>(k));
+    a.answered_step.erase(a.answered_step.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  const NetworkPath path = identify_network_path(a, {0.002, 0.0, 0.01}, kDt);
+  EXPECT_EQ(path.lost, 3u);
+  EXPECT_TRUE(path.effects.empty());
+}
+
+TEST(NetworkPath, DriftAndSpikesTogetherAreBothNamedWithShares) {
+  LinkAnswers a = clean_link();
+  for (std::size_t i = 0; i < kAnswers; ++i) {
+    a.round_trip[i] += 0.003 * a.time[i] / 10.0 + (i % 512 < 3 ? 0.008 : 0.0);
+  }
+  const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+  ASSERT_EQ(names(path), (std::set<std::string>{"drifting delay", "periodic spikes"}));
+  double shares = 0.0;
+  for (const auto& e : path.effects) shares += e.share;
+  EXPECT_NEAR(shares, 1.0, 1e-12);
+}
+
+TEST(NetworkPath, ANodeInjectingOtherThanDeclaredIsNamed) {
+  LinkAnswers a = clean_link();
+  const NetworkPath path = identify_network_path(a, {0.001, 0.0, 0.0}, kDt);
+  ASSERT_EQ(names(path), std::set<std::string>{"injection"});
+  EXPECT_NEAR(path.injected_mean, 0.002, 1e-12);
+}
+
+TEST(NetworkPath, TooFewAnswersAreRefusedNamingTheNode) {
+  LinkAnswers a = clean_link();
+  for (auto* v : {&a.time, &a.round_trip, &a.injected}) v->resize(10);
+  a.answered_step.resize(10);
+  try {
+    identify_network_path(a, declared_2ms(), kDt);
+    FAIL() << "no throw";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("node 2"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace rths::identify

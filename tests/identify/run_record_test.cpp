@@ -1,0 +1,174 @@
+// A distributed run identified from its record. The records come from rths's own distributed
+// runs (coordinator + node services in one process, tests/support): the run is made with an
+// effect its config does not declare (a node stage on the actuator emulator), then the record's
+// header is given the declared config, as a lab's record holds the config it meant to run. Each
+// effect must be named on the right link or actuator, a clean record must name none, a truncated
+// record identifies what it holds, and bad records are refused naming record, entry and problem.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include "identify/run_record.h"
+#include "runtime/record.h"
+#include "tests/runtime/test_support.h"
+#include "tests/support/in_process_run.h"
+
+namespace rths::identify {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kDeclared = "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }";
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("rths_run_record_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  return dir / (name + ".rthsrec");
+}
+
+// Every entry of `record` written again, with `edit` applied to each first.
+template <class Edit>
+void rewrite(const fs::path& record, Edit edit) {
+  runtime::RecordContents contents = runtime::read_record(record);
+  runtime::RecordWriter writer(record);
+  for (auto& entry : contents.entries) {
+    edit(entry);
+    writer.write(entry);
+  }
+}
+
+// A 10 s paper-frame run of case lag_shift_14ms whose actuator emulator carries `emulator_stages`
+// (config text of DelayStage fields) that the declared config, written into the record, lacks.
+fs::path run_with_undeclared(const std::string& name, const std::string& emulator_stages) {
+  const std::string actual =
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
+      emulator_stages + " } }";
+  coordinator::CoordinatorOptions options;
+  options.run_id = name;
+  options.case_name = "lag_shift_14ms";
+  options.record = scratch(name);
+  const auto outcome = coordinator::run_in_process(test::prepare(test::paper_frame_study(10.0, actual)),
+                                                   options);
+  EXPECT_TRUE(outcome.ok) << outcome.status;
+  const config::Study declared = test::prepare(test::paper_frame_study(10.0, kDeclared)).config;
+  rewrite(options.record, [&](runtime::RecordEntry& e) {
+    if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
+  });
+  return options.record;
+}
+
+IdentifyOptions actuator_only() {
+  IdentifyOptions options;
+  options.channels = {Channel::kMeasured};
+  return options;
+}
+
+std::set<std::string> undeclared(const RunIdentification& run, int actuator) {
+  const auto& names = run.actuators.at(static_cast<std::size_t>(actuator - 1)).undeclared;
+  return {names.begin(), names.end()};
+}
+
+std::set<std::string> link_effects(const RunIdentification& run, int node) {
+  std::set<std::string> out;
+  for (const auto& l : run.links) {
+    if (l.node_id != node) continue;
+    for (const auto& e : l.effects) out.insert(e.name);
+  }
+  return out;
+}
+
+TEST(RunRecord, ACleanRunNamesNothing) {
+  const fs::path record = run_with_undeclared("clean", "");
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_EQ(run.held.rfind("complete", 0), 0u) << run.held;
+  ASSERT_EQ(run.actuators.size(), 1u);
+  EXPECT_TRUE(undeclared(run, 1).empty()) << run_record_text(run);
+  EXPECT_TRUE(link_effects(run, 1).empty()) << run_record_text(run);
+  EXPECT_TRUE(link_effects(run, 2).empty()) << run_record_text(run);
+}
+
+TEST(RunRecord, AnExtraActuatorFirstOrderLagIsNamedOnTheActuator) {
+  const fs::path record =
+      run_with_undeclared("first_order", "receive_delay { first_order { time_constant: 0.008 } }");
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_TRUE(undeclared(run, 1).count("first_order")) << run_record_text(run);
+  EXPECT_TRUE(link_effects(run, 2).empty()) << run_record_text(run);
+}
+
+TEST(RunRecord, AnEmulatorGainErrorIsNamedOnTheActuator) {
+  const fs::path record =
+      run_with_undeclared("gain", "receive_delay { shift { delay: 0 } amplitude_gain: 1.08 }");
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_EQ(undeclared(run, 1), std::set<std::string>{"gain error"}) << run_record_text(run);
+  EXPECT_NEAR(run.actuators[0].fitted_gain, 1.08, 0.01);
+}
+
+TEST(RunRecord, ADriftOnOneLinkAndALagOnTheActuatorAreEachNamedWhereTheyAre) {
+  const fs::path record =
+      run_with_undeclared("two", "receive_delay { first_order { time_constant: 0.008 } }");
+  // The substructure's link (node 1) drifts by 3 ms over the run: a trace on its round trips.
+  rewrite(record, [](runtime::RecordEntry& e) {
+    if (!e.has_step()) return;
+    for (auto& link : *e.mutable_step()->mutable_links()) {
+      if (link.node_id() == 1) link.set_round_trip(link.round_trip() + 0.003 * e.step().time() / 10.0);
+    }
+  });
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"drifting delay"}) << run_record_text(run);
+  EXPECT_TRUE(link_effects(run, 2).empty()) << run_record_text(run);
+  EXPECT_TRUE(undeclared(run, 1).count("first_order")) << run_record_text(run);
+}
+
+TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {
+  const fs::path record = run_with_undeclared("truncated", "");
+  fs::resize_file(record, fs::file_size(record) / 2 + 3);
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  EXPECT_EQ(run.held.rfind("truncated", 0), 0u) << run.held;
+  EXPECT_GT(run.steps, 4000u);
+  EXPECT_LT(run.steps, 6000u);
+}
+
+void expect_refused(const fs::path& record, const std::string& entry, const std::string& problem) {
+  try {
+    identify_run_record(record, actuator_only());
+    FAIL() << "no throw for " << entry;
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(record.string()), std::string::npos) << what;
+    EXPECT_NE(what.find(entry), std::string::npos) << what;
+    EXPECT_NE(what.find(problem), std::string::npos) << what;
+  }
+}
+
+TEST(RunRecord, BadRecordsAreRefusedNamingRecordEntryAndProblem) {
+  const fs::path record = run_with_undeclared("bad", "");
+  const fs::path other_version = scratch("other_version");
+  fs::copy_file(record, other_version, fs::copy_options::overwrite_existing);
+  rewrite(other_version, [](runtime::RecordEntry& e) {
+    if (e.has_header()) e.mutable_header()->set_schema_version(99);
+  });
+  expect_refused(other_version, "header", "schema version 99");
+  const fs::path missing_link = scratch("missing_link");
+  fs::copy_file(record, missing_link, fs::copy_options::overwrite_existing);
+  rewrite(missing_link, [](runtime::RecordEntry& e) {
+    if (e.has_header()) e.mutable_header()->add_link_node_ids(9);
+  });
+  expect_refused(missing_link, "link to node 9", "0 answers");
+  const fs::path damaged = scratch("damaged");
+  fs::copy_file(record, damaged, fs::copy_options::overwrite_existing);
+  {
+    std::fstream bytes(damaged, std::ios::in | std::ios::out | std::ios::binary);
+    bytes.seekp(static_cast<std::streamoff>(fs::file_size(damaged) / 2));
+    bytes.put('\x5a').put('\xa5').put('\x5a');
+  }
+  expect_refused(damaged, "damaged entries", "");
+  const fs::path not_a_record = scratch("not_a_record");
+  std::ofstream(not_a_record) << "time,command\n";
+  expect_refused(not_a_record, "", "");
+}
+
+}  // namespace
+}  // namespace rths::identify

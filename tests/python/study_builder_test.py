@@ -1,0 +1,110 @@
+"""rths.sdof and rths.Study built in code against the command line: the same study gives the same
+numbers and the same verdict however it is entered. Run from ctest (python_study_builder) with
+PYTHONPATH=build/python, RTHS_EXECUTABLE and RTHS_SOURCE_DIR set. DDS domain 228."""
+import json
+import os
+import re
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rths
+
+RTHS = os.environ["RTHS_EXECUTABLE"]
+SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
+MOTION = str(SOURCE / "configs/motions/RSN175_IMPVALL.H_H-E12140.AT2")
+DOMAIN = 228
+
+
+def cli_json(*args, expect=0):
+    done = subprocess.run([RTHS, *map(str, args)], capture_output=True, text=True, timeout=240)
+    assert done.returncode == expect, f"rths {args}: exit {done.returncode}\n{done.stderr}"
+    return json.loads(done.stdout)
+
+
+def frame(name="frame"):
+    return (rths.Study(name)
+            .sdof(period=0.5, zeta=0.05)
+            .motion(MOTION)
+            .integrator("explicit-newmark", dt=0.001)
+            .experimental(fraction=1 / 3)
+            .case("reference")
+            .case("lag_shift_14ms", delay=0.014))
+
+
+def test_version_is_the_projects():
+    cmake = (SOURCE / "CMakeLists.txt").read_text()
+    assert rths.__version__ == re.search(r"project\(rths VERSION ([0-9.]+)", cmake).group(1)
+
+
+def test_sdof_gives_the_clis_numbers_and_verdict():
+    got = rths.sdof(period=0.5, zeta=0.05, motion=MOTION, delay=0.014, experimental_fraction=1 / 3)
+    want = cli_json("sdof", "--period", 0.5, "--zeta", 0.05, "--motion", MOTION, "--dt", 0.001,
+                    "--delay", "14ms", "--exp-fraction", 1 / 3, "--json")
+    assert isinstance(got["delayed_m"], np.ndarray) and got["delayed_m"].dtype == np.float64
+    assert len(got["time_s"]) == len(got["reference_m"]) == len(got["delayed_m"])
+    verdict = got["verdict"]
+    assert verdict["status"] == want["status"] == "completed"
+    assert verdict["nrmse_pct"] == pytest.approx(want["nrmse_pct"], rel=1e-12)
+    assert verdict["peak_delayed_m"] == pytest.approx(want["peak_delayed_m"], rel=1e-12)
+    assert np.max(np.abs(got["delayed_m"])) == pytest.approx(verdict["peak_delayed_m"], rel=1e-12)
+    assert verdict["stability"]["past_critical_delay"] is False
+    assert verdict["stability"]["margin_pct"] > 0
+
+
+def test_sdof_past_the_critical_delay_is_judged_diverged_as_on_the_command_line():
+    got = rths.sdof(period=0.5, zeta=0.05, motion=MOTION, delay=0.03, allow_unstable=True)
+    want = cli_json("sdof", "--period", 0.5, "--zeta", 0.05, "--motion", MOTION, "--dt", 0.001,
+                    "--delay", "30ms", "--json", "--allow-unstable")
+    assert got["verdict"]["diverged"] is True
+    assert got["verdict"]["status"] == want["status"]
+    assert got["verdict"]["stability"]["past_critical_delay"] is True
+
+
+def test_a_study_built_in_code_equals_its_written_config_run_by_the_cli(tmp_path):
+    study = frame()
+    assert study.cases == ["reference", "lag_shift_14ms"]
+    in_python = study.run()
+    config = study.write(tmp_path / "frame.textproto")
+    subprocess.run([RTHS, "run", config, "--out", tmp_path / "out", "--no-plots"], check=True,
+                   capture_output=True, timeout=240)
+    on_cli = json.loads((tmp_path / "out" / "summary.json").read_text())
+    for mine, theirs in zip(in_python["summary"]["cases"], on_cli["cases"]):
+        assert mine["name"] == theirs["name"]
+        assert mine["peak_displacement_m"] == theirs["peak_displacement_m"]
+        assert mine["status"] == theirs["status"]
+
+
+def test_a_study_built_in_code_runs_distributed_and_equals_its_in_process_run(tmp_path):
+    study = frame("frame_distributed")
+    study.deployment("nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR }")
+    in_process = study.run()
+    summary = study.launch(tmp_path / "launch", domain=DOMAIN, cases=["lag_shift_14ms"], timeout=240)
+    assert summary["exit_code"] == 0
+    launched = {c["name"]: c for c in summary["cases"]}["lag_shift_14ms"]
+    wanted = {c["name"]: c for c in in_process["summary"]["cases"]}["lag_shift_14ms"]
+    assert launched["peak_displacement_m"] == wanted["peak_displacement_m"]
+
+
+def test_bad_input_is_named_before_anything_runs():
+    with pytest.raises(rths.BadInputError, match="period"):
+        rths.Study("x").sdof(period=0)
+    with pytest.raises(rths.BadInputError, match="dt"):
+        rths.Study("x").integrator(dt=1e-9)
+    with pytest.raises(rths.BadInputError, match="delay"):
+        rths.Study("x").case("late", delay=7)
+    with pytest.raises(rths.BadInputError, match="already a case"):
+        rths.Study("x").case("a").case("a")
+    with pytest.raises(rths.BadInputError, match="no ground motion"):
+        rths.Study("x").sdof(0.5).case("a").text
+    with pytest.raises(rths.BadInputError):
+        rths.Study("x").sdof(0.5).motion("/nonexistent.AT2").case("a").run()
+
+
+def test_every_public_function_has_a_docstring():
+    for name in rths.__all__:
+        if name in ("__version__", "Error", "BadInputError"):
+            continue
+        assert getattr(rths, name).__doc__, name

@@ -1,0 +1,71 @@
+// Why a real-time run missed its deadlines, from hand-made steps: each overrun put down to the
+// platform (the work fitted, the wake-up came late) or to the loop's own work, the advice that
+// follows, and what the record is still good for.
+#include "runtime/deadline_diagnosis.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace rths::runtime {
+namespace {
+
+constexpr double kDt = 1e-3;
+
+std::vector<StepRecord> steps(std::size_t n) {
+  std::vector<StepRecord> out(n);
+  for (auto& s : out) s.set_step_wall(0.1e-3);
+  return out;
+}
+
+std::vector<const StepRecord*> pointers(const std::vector<StepRecord>& s) {
+  std::vector<const StepRecord*> out;
+  for (const auto& r : s) out.push_back(&r);
+  return out;
+}
+
+void overrun(StepRecord& s, double wall, double lateness) {
+  s.set_overrun(true);
+  s.set_step_wall(wall);
+  s.set_lateness(lateness);
+}
+
+TEST(DeadlineDiagnosis, IsolatedLateWakeUpsArePlatformStallsAndTheRecordIsUsable) {
+  auto s = steps(1000);
+  overrun(s[100], 0.1e-3, 3e-3);
+  overrun(s[101], 0.1e-3, 2e-3);
+  overrun(s[600], 0.2e-3, 1e-3);
+  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, 10);
+  EXPECT_EQ(d.overruns, 3u);
+  EXPECT_EQ(d.stall_overruns, 3u);
+  EXPECT_EQ(d.work_overruns, 0u);
+  EXPECT_EQ(d.worst_streak, 2u);
+  EXPECT_DOUBLE_EQ(d.worst_lateness, 3e-3);
+  EXPECT_EQ(d.cause, "platform stalls");
+  ASSERT_FALSE(d.advice.empty());
+  EXPECT_NE(d.advice.front().find("rt-check"), std::string::npos);
+  EXPECT_EQ(d.usability.rfind("usable as recorded", 0), 0u) << d.usability;
+  const std::string text = d.describe();
+  EXPECT_NE(text.find("3 of 1000 steps"), std::string::npos) << text;
+  EXPECT_NE(text.find("to do:"), std::string::npos) << text;
+}
+
+TEST(DeadlineDiagnosis, StepsWhoseOwnWorkOutlastsThePeriodBlameTheLoopAndLongStreaksAreFlagged) {
+  auto s = steps(100);
+  for (std::size_t k = 10; k < 40; ++k) overrun(s[k], 1.4e-3, 0.5e-3);
+  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, 10);
+  EXPECT_EQ(d.work_overruns, 30u);
+  EXPECT_EQ(d.cause, "the loop's own work");
+  EXPECT_NE(d.advice.front().find("too slow for dt"), std::string::npos);
+  EXPECT_EQ(d.usability.rfind("use with care", 0), 0u) << d.usability;
+}
+
+TEST(DeadlineDiagnosis, ARunThatKeptItsDeadlinesHasNoCause) {
+  const auto s = steps(10);
+  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, 3);
+  EXPECT_EQ(d.cause, "none");
+  EXPECT_TRUE(d.advice.empty());
+}
+
+}  // namespace
+}  // namespace rths::runtime

@@ -1,0 +1,214 @@
+// The view in a real browser (Debian's Chromium driven by playwright-core) over real runs:
+// `rths launch --view` of a lockstep and of real-time runs over Cyclone DDS (domains 212-214),
+// and `rths view RECORD`. Skipped, with the reason printed, where Chromium cannot start.
+// Screenshots go to RTHS_VIEW_TEST_OUT (view_live.png, view_hold.png, view_replay.png).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import { createRequire } from 'node:module';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+
+const RTHS = process.env.RTHS_BIN;
+const OUT = process.env.RTHS_VIEW_TEST_OUT;
+const MOTION = path.resolve(process.env.RTHS_SOURCE_DIR, '../shared/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2');
+const CHROMIUM = '/usr/bin/chromium';
+const FLAGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+  '--disable-background-networking', '--disable-component-update', '--disable-sync'];
+
+let context = null, skip = null;
+const children = [];
+
+before(async () => {
+  fs.mkdirSync(OUT, { recursive: true });
+  let chromium;
+  try {
+    ({ chromium } = createRequire(process.env.RTHS_VIEW_NODE_MODULES + '/')('playwright-core'));
+  } catch (e) { skip = 'playwright-core is not installed (the rths_view_web target runs npm ci): ' + e.message; }
+  if (!skip && !fs.existsSync(CHROMIUM)) skip = CHROMIUM + ' is missing (apt-get install chromium)';
+  if (!skip) {
+    try {
+      context = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(os.tmpdir(), 'rths_chromium_')),
+        { executablePath: CHROMIUM, headless: true, args: FLAGS, viewport: { width: 1500, height: 1000 }, timeout: 120000 });
+    } catch (e) { skip = 'Chromium cannot start: ' + e.message.split('\n')[0]; }
+  }
+  if (skip) console.log('# SKIP the browser tests of the view: ' + skip);
+});
+
+after(async () => {
+  for (const c of children) if (c.exitCode === null && c.signalCode === null) c.kill('SIGTERM');
+  if (context) await context.close();
+});
+
+function study(dir, { clock, duration, domain }) {
+  fs.rmSync(dir, { recursive: true, force: true });  // an earlier run's log names an old port
+  fs.mkdirSync(dir, { recursive: true });
+  const deployment = clock === 'REAL_TIME'
+    // Fail-safe windows widened for this shared, loaded machine; the mechanism is the same.
+    ? `deployment { domain_id: ${domain} clock: REAL_TIME liveliness_timeout: 1 heartbeat_period: 0.02 max_missed_answers: 300 command_watchdog_periods: 300 max_overrun_fraction: -1 }`
+    : `deployment { domain_id: ${domain} }`;
+  const text = `name: "view_test"
+structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }
+motion { path: "${MOTION}" duration: ${duration} }
+integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }
+substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }
+cases { name: "lag_shift_14ms" delay { shift { delay: 0.014 } } }
+${deployment}
+`;
+  fs.writeFileSync(path.join(dir, 'study.textproto'), text);
+  return path.join(dir, 'study.textproto');
+}
+
+function start(args) {
+  const child = spawn(RTHS, args, { stdio: ['ignore', 'pipe', 'pipe'] });
+  child.output = '';
+  child.stdout.on('data', d => { child.output += d; });
+  child.stderr.on('data', d => { child.output += d; });
+  child.done = new Promise(resolve => child.on('exit', code => resolve(code)));
+  children.push(child);
+  return child;
+}
+
+async function until(what, probe, ms = 60000) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const value = await probe();
+    if (value) return value;
+    if (Date.now() > end) throw new Error('timed out waiting for ' + what);
+    await new Promise(r => setTimeout(r, 50));
+  }
+}
+
+// `rths launch --view 127.0.0.1:0`: the coordinator's log names the port it got.
+async function launchWithView(dir, config, domain, extra = []) {
+  const child = start(['launch', config, '--domain', String(domain), '--out', dir, '--no-plots',
+    '--view', '127.0.0.1:0', ...extra]);
+  const log = path.join(dir, 'logs', 'lag_shift_14ms', 'coordinator.log');
+  const url = await until('the view to listen', () => {
+    if (child.exitCode !== null) throw new Error('rths launch exited: ' + child.output);
+    const text = fs.existsSync(log) ? fs.readFileSync(log, 'utf8') : '';
+    const m = text.match(/live view at (http:\/\/\S+\/)/);
+    return m && m[1];
+  });
+  return { child, url, log };
+}
+
+async function open(url) {
+  const page = await context.newPage();
+  page.on('dialog', d => d.accept());
+  await page.goto(url);
+  return page;
+}
+
+const view = (page, expr, arg) => page.evaluate(expr, arg);
+const step = async page => Number(await page.textContent('#step')) || 0;
+
+function csvColumns(file) {
+  const [head, ...rows] = fs.readFileSync(file, 'utf8').trim().split('\n');
+  const names = head.split(',');
+  const cols = Object.fromEntries(names.map(n => [n, []]));
+  for (const r of rows) r.split(',').forEach((v, i) => cols[names[i]].push(Number(v)));
+  return cols;
+}
+
+test('lockstep over DDS: the step counter advances and the plotted series are the record\'s', { timeout: 300000 }, async t => {
+  if (skip) return t.skip(skip);
+  const dir = path.join(OUT, 'lockstep');
+  const { child, url } = await launchWithView(dir, study(dir, { clock: 'LOCKSTEP', duration: 25, domain: 212 }), 212);
+  const page = await open(url);
+  const first = await until('a first step on the page', () => step(page));
+  await until('the step counter to advance', async () => (await step(page)) > first);
+  await until('the run\'s last state on the page', () => view(page, () => window.rthsView.status && window.rthsView.status.finished), 240000);
+  assert.equal(await child.done, 0, child.output);
+  const exported = path.join(dir, 'record.csv');
+  const ex = start(['export', path.join(dir, 'lag_shift_14ms.rthsrec'), '--csv', exported]);
+  assert.equal(await ex.done, 0, ex.output);
+  const csv = csvColumns(exported);
+  const command = csv.command1_m, measured = csv.realised1_m;  // m, the record's columns
+  assert.ok(command && measured, 'record columns: ' + Object.keys(csv).join(','));
+  const plotted = await view(page, () => ({ steps: window.rthsView.drawn.steps, data: window.rthsView.plots.act[0].cmd.data }));
+  assert.ok(plotted.steps.length > 100, 'plotted points: ' + plotted.steps.length);
+  const row = Object.fromEntries(csv.step.map((s, i) => [s, i]));
+  plotted.steps.forEach((s, i) => {
+    assert.ok(Math.abs(plotted.data[1][i] - command[row[s]] * 1e3) <= 1e-9 * Math.max(1, Math.abs(plotted.data[1][i])), `command at step ${s}`);
+    assert.ok(Math.abs(plotted.data[2][i] - measured[row[s]] * 1e3) <= 1e-9 * Math.max(1, Math.abs(plotted.data[2][i])), `measured at step ${s}`);
+  });
+  await page.close();
+});
+
+// The substructure node's pid, found by its command line (domain and node id).
+function nodePid(domain, program) {
+  for (const pid of fs.readdirSync('/proc').filter(p => /^\d+$/.test(p))) {
+    try {
+      const args = fs.readFileSync(`/proc/${pid}/cmdline`, 'utf8').split('\0');
+      if (args[0].endsWith(program) && args.includes(String(domain))) return Number(pid);
+    } catch { /* gone meanwhile */ }
+  }
+  return null;
+}
+
+test('real time over DDS: a HOLD after a node is killed is on the page within 1 s', { timeout: 300000 }, async t => {
+  if (skip) return t.skip(skip);
+  const dir = path.join(OUT, 'hold');
+  const { child, url } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 213 }), 213);
+  const page = await open(url);
+  await until('step 3000 on the page', async () => (await step(page)) > 3000);
+  await page.screenshot({ path: path.join(OUT, 'view_live.png'), fullPage: true });
+  const pid = nodePid(213, 'rths-substructure-node');
+  assert.ok(pid, 'the substructure node is running');
+  process.kill(pid, 'SIGKILL');
+  await until('HOLD on the page', () => view(page, () => window.rthsView.holdSeenMs), 20000);
+  const { seen, hold } = await view(page, () => ({
+    seen: window.rthsView.holdSeenMs,
+    hold: window.rthsView.events.find(e => e.what.startsWith('HOLD')),
+  }));
+  assert.ok(hold, 'the record\'s HOLD event reached the page');
+  const delay = seen - hold.realtime_ns / 1e6;
+  console.log(`# HOLD on the page ${delay.toFixed(0)} ms after the coordinator sent it`);
+  assert.ok(delay < 1000, `HOLD shown ${delay} ms after it was sent`);
+  assert.match(await page.textContent('#state'), /^HOLD/);
+  await page.screenshot({ path: path.join(OUT, 'view_hold.png'), fullPage: true });
+  assert.notEqual(await child.done, 0);
+  await page.close();
+});
+
+test('real time over DDS: the stop button stops the run, HOLD then STOP, "stopped from the view"', { timeout: 300000 }, async t => {
+  if (skip) return t.skip(skip);
+  const dir = path.join(OUT, 'stop');
+  const { child, url, log } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 214 }), 214, ['--view-stop']);
+  const page = await open(url);
+  await until('step 1000 on the page', async () => (await step(page)) > 1000);
+  await page.click('#stop');
+  const code = await until('rths launch to end', () => child.exitCode !== null ? { code: child.exitCode } : null, 30000);
+  assert.equal(code.code, 1, child.output);
+  const summary = JSON.parse(fs.readFileSync(path.join(dir, 'summary.json'), 'utf8'));
+  assert.equal(summary.cases[0].status, 'stopped from the view', JSON.stringify(summary.cases[0]));
+  const text = fs.readFileSync(log, 'utf8');
+  assert.match(text, /HOLD sent to the actuator emulators: stopped from the view/);
+  assert.ok(summary.cases[0].steps === undefined || summary.cases[0].steps < 30000);
+  await page.close();
+});
+
+test('rths view RECORD: the finished record with a time slider', { timeout: 120000 }, async t => {
+  if (skip) return t.skip(skip);
+  const record = path.join(OUT, 'hold', 'lag_shift_14ms.rthsrec');
+  if (!fs.existsSync(record)) return t.skip('the real-time record of the HOLD test is missing');
+  const server = start(['view', record, '--listen', '127.0.0.1:0', '--for', '100']);
+  const url = await until('rths view to listen', () => {
+    if (server.exitCode !== null) throw new Error('rths view exited: ' + server.output);
+    const m = server.output.match(/at (http:\/\/\S+\/)/);
+    return m && m[1];
+  });
+  const page = await open(url);
+  await until('the slider', () => page.isVisible('#slider'));
+  assert.equal(await view(page, () => window.rthsView.mode), 'replay');
+  const all = await view(page, () => window.rthsView.drawn.i1);
+  await page.$eval('#slider', s => { s.value = String(Number(s.max) / 2); s.dispatchEvent(new Event('input')); });
+  await until('the charts to follow the slider', () => view(page, n => window.rthsView.drawn.i1 < n, all));
+  assert.equal(await page.textContent('#state'), 'HOLD · stopped');
+  await page.screenshot({ path: path.join(OUT, 'view_replay.png'), fullPage: true });
+  server.kill('SIGTERM');
+  await server.done;
+  await page.close();
+});

@@ -1,0 +1,202 @@
+#include "view/feed.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <thread>
+
+namespace rths::view {
+namespace {
+
+constexpr double kDt = 0.001;
+
+runtime::RecordEntry header(int actuators = 1) {
+  runtime::RecordEntry e;
+  auto& h = *e.mutable_header();
+  h.set_run_id("run-1");
+  h.set_case_name("lag");
+  h.set_clock("real_time");
+  h.set_dt(kDt);
+  h.set_dofs(1);
+  h.set_actuators(actuators);
+  h.add_link_node_ids(1);
+  h.add_link_node_ids(2);
+  return e;
+}
+
+// Command c = A sin(w t); measured m = A sin(w (t - lag)); k-th step.
+runtime::RecordEntry step(std::int64_t k, double lag = 0.0, double amplitude = 0.01, double hz = 2.0) {
+  runtime::RecordEntry e;
+  auto& s = *e.mutable_step();
+  const double t = static_cast<double>(k) * kDt, w = 2 * std::numbers::pi * hz;
+  s.set_step(k);
+  s.set_time(t);
+  s.add_displacement(0.5 * amplitude * std::sin(w * t));
+  s.add_command(amplitude * std::sin(w * t));
+  s.add_realised(amplitude * std::sin(w * (t - lag)));
+  s.add_measured_force(1000.0 * static_cast<double>(k));
+  for (int id : {1, 2}) {
+    auto& l = *s.add_links();
+    l.set_node_id(id);
+    l.set_answered_step(k % 7 == 0 ? k - 1 : k);  // every 7th step on an older answer
+    l.set_injected_lag(0.007);
+    l.set_round_trip(0.0001 * static_cast<double>(id));
+  }
+  s.set_overrun(k % 100 == 5);
+  s.set_lateness(k % 100 == 5 ? 0.002 : -0.0005);
+  s.set_start_realtime_ns(1'000'000'000 + k * 1'000'000);
+  return e;
+}
+
+runtime::RecordEntry event(std::int64_t at, const std::string& what) {
+  runtime::RecordEntry e;
+  e.mutable_event()->set_step(at);
+  e.mutable_event()->set_what(what);
+  return e;
+}
+
+TEST(Feed, KeepsEveryStrideThStepWithTheRecordsValuesInMillimetres) {
+  Feed feed;  // 100 points per simulated second at dt = 1 ms: every 10th step
+  feed.add(header());
+  for (int k = 0; k < 1000; ++k) feed.add(step(k, 0.01));
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  ASSERT_EQ(j["header"]["stride_steps"], 10);
+  const auto& steps = j["samples"]["step"];
+  ASSERT_EQ(steps.size(), 100u);
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const std::int64_t k = steps[i];
+    ASSERT_EQ(k, static_cast<std::int64_t>(10 * i));
+    const auto s = step(k, 0.01).step();
+    EXPECT_EQ(j["samples"]["command_mm"][0][i].get<double>(), s.command(0) * 1e3);
+    EXPECT_EQ(j["samples"]["measured_mm"][0][i].get<double>(), s.realised(0) * 1e3);
+    EXPECT_EQ(j["samples"]["force_N"][0][i].get<double>(), s.measured_force(0));
+    EXPECT_EQ(j["samples"]["round_trip_ms"][1][i].get<double>(), s.links(1).round_trip() * 1e3);
+    EXPECT_EQ(j["samples"]["injected_ms"][0][i].get<double>(), 7.0);
+  }
+  EXPECT_EQ(j["status"]["state"], "armed");
+  EXPECT_EQ(j["status"]["steps"], 1000);
+  EXPECT_EQ(j["status"]["overruns"], 10);
+  EXPECT_EQ(j["status"]["late_feedback"], 143);  // k = 0, 7, ..., 994
+  EXPECT_EQ(j["status"]["latest_step_realtime_ns"], 1'000'000'000 + 999 * 1'000'000LL);
+}
+
+TEST(Feed, ACursorGetsOnlyWhatIsNewAndALaggingReaderTheOldestKept) {
+  FeedOptions options;
+  options.history = 5;
+  Feed feed(options);
+  feed.add(header());
+  FeedCursor live;
+  for (int k = 0; k < 30; ++k) feed.add(step(k));
+  const auto first = feed.since(live);
+  EXPECT_TRUE(first.contains("header"));
+  EXPECT_EQ(first["samples"]["step"], nlohmann::json({0, 10, 20}));
+  for (int k = 30; k < 100; ++k) feed.add(step(k));
+  const auto j = feed.since(live);
+  EXPECT_FALSE(j.contains("header"));
+  // 30..90 are new, but the ring keeps the newest 5 samples only.
+  EXPECT_EQ(j["samples"]["step"], nlohmann::json({50, 60, 70, 80, 90}));
+  FeedCursor fresh;
+  EXPECT_EQ(feed.since(fresh)["samples"]["step"], nlohmann::json({50, 60, 70, 80, 90}));
+  EXPECT_EQ(feed.since(live)["samples"]["step"].size(), 0u);
+}
+
+double final_ti(double lag) {
+  Feed feed;
+  feed.add(header());
+  for (int k = 0; k <= 2000; ++k) feed.add(step(k, lag));  // 4 cycles of 2 Hz
+  FeedCursor cursor;
+  return feed.since(cursor)["samples"]["ti_mm2"][0].back().get<double>();
+}
+
+TEST(Feed, TrackingIndicatorGrowsWithLagFallsWithLeadAndStaysNearZeroWhenTracking) {
+  // Per cycle: A = integral of m dc = -pi a^2 sin(w lag) and TA = -A, so TI = pi a^2 sin(w lag)
+  // per cycle (mm^2); 4 cycles.
+  const double a = 10.0, w = 2 * std::numbers::pi * 2.0;
+  const double expected = 4 * std::numbers::pi * a * a * std::sin(w * 0.01);
+  EXPECT_NEAR(final_ti(0.01), expected, 0.02 * expected);
+  EXPECT_NEAR(final_ti(-0.01), -expected, 0.02 * expected);
+  EXPECT_NEAR(final_ti(0.0), 0.0, 1e-9);
+}
+
+TEST(Feed, SpectrumOfTheErrorPeaksAtItsFrequencyWithItsAmplitude) {
+  Feed feed;
+  feed.add(header());
+  // command 0, measured = -2 mm sin(2 pi f t), f on bin 17 of the 512-step window (the largest
+  // power of two <= 1 s of steps): error 2 mm.
+  const double f = 17.0 / (512 * kDt);
+  for (int k = 0; k < 2000; ++k) {
+    auto e = step(k);
+    e.mutable_step()->set_command(0, 0.0);
+    e.mutable_step()->set_realised(0, -0.002 * std::sin(2 * std::numbers::pi * f * static_cast<double>(k) * kDt));
+    feed.add(e);
+  }
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  ASSERT_FALSE(j["spectra"].empty());
+  ASSERT_EQ(j["header"]["spectrum_window_steps"], 512);
+  const auto& hz = j["header"]["spectrum_hz"];
+  const auto& amp = j["spectra"].back()["amplitude_mm"][0];
+  std::size_t peak = 0;
+  for (std::size_t i = 0; i < amp.size(); ++i)
+    if (amp[i].get<double>() > amp[peak].get<double>()) peak = i;
+  EXPECT_DOUBLE_EQ(hz[peak].get<double>(), f);
+  EXPECT_NEAR(amp[peak].get<double>(), 2.0, 1e-9);
+  EXPECT_LE(hz.back().get<double>(), 100.0);
+}
+
+TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
+  Feed feed;
+  feed.add(header());
+  feed.add(step(0));
+  feed.add(event(0, "all 2 nodes ready"));
+  FeedCursor cursor;
+  EXPECT_EQ(feed.since(cursor)["status"]["state"], "armed");
+  feed.add(event(12, "HOLD sent to the actuator emulators: stopped from the view"));
+  auto j = feed.since(cursor);
+  EXPECT_EQ(j["status"]["state"], "HOLD");
+  EXPECT_EQ(j["status"]["reason"], "HOLD sent to the actuator emulators: stopped from the view");
+  EXPECT_EQ(j["events"].size(), 1u);
+  EXPECT_FALSE(feed.finished());
+  runtime::RecordEntry footer;
+  footer.mutable_footer()->set_ok(false);
+  footer.mutable_footer()->set_status("node 2 (actuator emulator) gave no answer");
+  footer.mutable_footer()->set_failed_node("node 2 (actuator emulator)");
+  feed.add(footer);
+  j = feed.since(cursor);
+  EXPECT_EQ(j["status"]["state"], "stopped");
+  EXPECT_EQ(j["status"]["node"], "node 2 (actuator emulator)");
+  EXPECT_TRUE(j["status"]["finished"]);
+  EXPECT_TRUE(feed.finished());
+}
+
+std::string frame(const runtime::RecordEntry& e) {
+  std::string out;
+  runtime::append_record_frame(e, out);
+  return out;
+}
+
+TEST(Feed, ObservesTheWritersBytesAndCountsWhatItCannotRead) {
+  Feed feed;
+  feed.on_entry(frame(header()));
+  feed.on_entry(frame(step(0)));
+  feed.on_entry(std::string(runtime::kRecordFrameHeaderBytes, '\0') + "\xff\xff garbage");
+  feed.on_entry(std::string_view("\xff", 1));
+  EXPECT_EQ(feed.steps_seen(), 1u);
+  EXPECT_EQ(feed.unreadable_entries(), 2u);
+}
+
+TEST(Feed, WaitChangeWakesOnANewEntry) {
+  Feed feed;
+  const auto version = feed.version();
+  std::thread writer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    feed.add(header());
+  });
+  EXPECT_NE(feed.wait_change(version, std::chrono::seconds(10)), version);
+  writer.join();
+}
+
+}  // namespace
+}  // namespace rths::view

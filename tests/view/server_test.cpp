@@ -1,0 +1,205 @@
+// The view's server on loopback: pages from a fixed list, refusals counted, the stop button's
+// rules, the event stream, and a client that never reads.
+#include "view/server.h"
+
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <thread>
+
+namespace rths::view {
+namespace {
+
+using namespace std::chrono_literals;
+
+runtime::RecordEntry header() {
+  runtime::RecordEntry e;
+  e.mutable_header()->set_run_id("r");
+  e.mutable_header()->set_dt(0.001);
+  e.mutable_header()->set_actuators(1);
+  return e;
+}
+
+runtime::RecordEntry step(std::int64_t k) {
+  runtime::RecordEntry e;
+  e.mutable_step()->set_step(k);
+  e.mutable_step()->set_time(0.001 * static_cast<double>(k));
+  e.mutable_step()->add_command(1e-3);
+  e.mutable_step()->add_realised(1e-3);
+  e.mutable_step()->add_measured_force(1);
+  return e;
+}
+
+// Sends raw bytes and returns the whole answer (until the server closes or 2 s pass).
+std::string raw_request(int port, const std::string& bytes) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) return "";
+  timeval tv{2, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  (void)!write(fd, bytes.data(), bytes.size());
+  std::string out;
+  char buffer[4096];
+  for (ssize_t n; (n = read(fd, buffer, sizeof buffer)) > 0;) out.append(buffer, static_cast<std::size_t>(n));
+  close(fd);
+  return out;
+}
+
+TEST(ListenAddress, ParsesHostAndPortAndRefusesTheRest) {
+  const auto a = parse_listen_address("127.0.0.1:8080");
+  EXPECT_EQ(a.host, "127.0.0.1");
+  EXPECT_EQ(a.port, 8080);
+  EXPECT_TRUE(a.loopback());
+  EXPECT_FALSE(parse_listen_address("0.0.0.0:80").loopback());
+  EXPECT_TRUE(parse_listen_address("localhost:0").loopback());
+  for (const char* bad : {"8080", ":8080", "127.0.0.1:", "127.0.0.1:70000", "127.0.0.1:8o", "lab-pc:8080",
+                          "1.2.3:80"})
+    EXPECT_THROW(parse_listen_address(bad), std::invalid_argument) << bad;
+  try {
+    parse_listen_address("127.0.0.1:70000");
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--view 127.0.0.1:70000"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("0-65535"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(make_token().size(), 32u);
+  EXPECT_NE(make_token(), make_token());
+}
+
+TEST(ViewServer, ServesThePageFromAFixedListAndCountsWhatItRefuses) {
+  Feed feed;
+  ViewServer server(feed, {});
+  httplib::Client client("127.0.0.1", server.port());
+  auto page = client.Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("/view.js"), std::string::npos);
+  EXPECT_EQ(client.Get("/uPlot.iife.min.js")->status, 200);
+  for (const char* path : {"/../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/view.js/../../CMakeLists.txt",
+                           "/index.html", "/node_modules/uplot/package.json"}) {
+    const auto r = client.Get(path);
+    ASSERT_TRUE(r) << path;
+    EXPECT_EQ(r->status, 404) << path;
+    EXPECT_EQ(r->body.find("root:"), std::string::npos);
+  }
+  EXPECT_EQ(server.counters()["not_found"], 5);
+  EXPECT_NE(raw_request(server.port(), "NONSENSE\r\n\r\n").find(" 400 "), std::string::npos);
+  const std::string big(8192, 'x');
+  EXPECT_EQ(client.Post("/api/stop", big, "text/plain")->status, 413);
+  EXPECT_EQ(server.counters()["refused"], 2);
+}
+
+TEST(ViewServer, StopIsOffUnlessAskedAndThenNeedsTheTokenWhenOneIsSet) {
+  Feed feed;
+  std::atomic<int> stops{0};
+  ServerOptions options;
+  options.on_stop = [&] { ++stops; };
+  {
+    ViewServer off(feed, options);
+    EXPECT_EQ(httplib::Client("127.0.0.1", off.port()).Post("/api/stop")->status, 403);
+  }
+  options.allow_stop = true;
+  options.token = "0123456789abcdef0123456789abcdef";
+  ViewServer server(feed, options);
+  httplib::Client client("127.0.0.1", server.port());
+  EXPECT_EQ(client.Post("/api/stop")->status, 403);
+  EXPECT_EQ(client.Post("/api/stop", {{"X-RTHS-Token", "0123456789abcdef0123456789abcdee"}}, "", "")->status, 403);
+  EXPECT_EQ(server.counters()["bad_token"], 2);
+  EXPECT_EQ(stops, 0);
+  EXPECT_EQ(client.Post("/api/stop", {{"X-RTHS-Token", options.token}}, "", "")->status, 202);
+  EXPECT_EQ(client.Post("/api/stop", {{"X-RTHS-Token", options.token}}, "", "")->status, 202);
+  EXPECT_EQ(stops, 1);  // once, however often it is pressed
+  EXPECT_TRUE(server.stop_requested());
+}
+
+TEST(ViewServer, StreamsTheFeedAsEventsAndEndsAfterItFinished) {
+  Feed feed;
+  ViewServer server(feed, {});
+  feed.add(header());
+  std::thread run([&] {
+    for (int k = 0; k < 300; ++k) {
+      feed.add(step(k));
+      std::this_thread::sleep_for(1ms);
+    }
+    feed.finish();
+  });
+  httplib::Client client("127.0.0.1", server.port());
+  std::string body;
+  int events = 0;
+  const auto r = client.Get("/api/stream", [&](const char* data, std::size_t n) {
+    body.append(data, n);
+    return true;
+  });
+  run.join();
+  ASSERT_TRUE(r);
+  for (std::size_t at = 0; (at = body.find("data: ", at)) != std::string::npos; ++at) ++events;
+  EXPECT_GE(events, 2);
+  EXPECT_LE(events, 60);  // ~0.3 s of run at most 30 updates/s, plus the last
+  std::size_t samples = 0;
+  for (std::size_t at = 0; (at = body.find("data: ", at)) != std::string::npos;) {
+    const auto end = body.find("\n\n", at);
+    const auto j = nlohmann::json::parse(body.substr(at + 6, end - at - 6));
+    if (j.contains("samples")) samples += j["samples"]["step"].size();
+    at = end;
+  }
+  EXPECT_EQ(samples, 30u);  // steps 0, 10, ..., 290, each once
+  EXPECT_EQ(server.counters()["streams_served"], 1);
+}
+
+TEST(ViewServer, AClientThatNeverReadsIsDroppedAndCountedAndTheFeedNeverWaits) {
+  FeedOptions every_step;
+  every_step.points_per_second = 1000;  // large updates, so that the socket's buffers fill soon
+  Feed feed(every_step);
+  ServerOptions options;
+  options.write_timeout = 300ms;
+  ViewServer server(feed, options);
+  feed.add(header());
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  int small = 1024;
+  setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(server.port()));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  const std::string get = "GET /api/stream HTTP/1.1\r\nHost: x\r\n\r\n";
+  ASSERT_EQ(write(fd, get.data(), get.size()), static_cast<ssize_t>(get.size()));
+  const auto start = std::chrono::steady_clock::now();
+  std::int64_t k = 0;
+  while (server.counters()["streams_dropped"] == 0 && std::chrono::steady_clock::now() - start < 20s)
+    for (int i = 0; i < 2000; ++i) feed.add(step(k++));  // never blocks on the stuck client
+  EXPECT_EQ(server.counters()["streams_dropped"], 1);
+  close(fd);
+  // The server still serves others.
+  EXPECT_EQ(httplib::Client("127.0.0.1", server.port()).Get("/api/health")->status, 200);
+}
+
+TEST(ViewServer, RefusesStreamsBeyondItsLimit) {
+  Feed feed;
+  ServerOptions options;
+  options.max_streams = 1;
+  ViewServer server(feed, options);
+  std::atomic<bool> first_open{false};
+  std::thread first([&] {
+    httplib::Client c("127.0.0.1", server.port());
+    c.Get("/api/stream", [&](const char*, std::size_t) {
+      first_open = true;
+      return !server.stop_requested() && server.counters()["streams_refused"] == 0;
+    });
+  });
+  while (!first_open) std::this_thread::sleep_for(5ms);
+  EXPECT_EQ(httplib::Client("127.0.0.1", server.port()).Get("/api/stream")->status, 503);
+  EXPECT_EQ(server.counters()["streams_refused"], 1);
+  feed.finish();
+  first.join();
+}
+
+}  // namespace
+}  // namespace rths::view

@@ -1,0 +1,334 @@
+#include "view/feed.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace rths::view {
+namespace {
+
+constexpr double kMm = 1e3;  // m -> mm
+constexpr double kMs = 1e3;  // s -> ms
+
+// Largest power of two <= 1 / dt, at least 64.
+std::size_t spectrum_length(double dt) {
+  std::size_t n = 64;
+  while (static_cast<double>(n * 2) * dt <= 1.0 + 1e-9) n *= 2;
+  return n;
+}
+
+}  // namespace
+
+Feed::Feed(FeedOptions options) : options_(options) {}
+
+void Feed::on_entry(std::string_view frame) {
+  runtime::RecordEntry entry;
+  if (frame.size() < runtime::kRecordFrameHeaderBytes ||
+      !entry.ParseFromArray(frame.data() + runtime::kRecordFrameHeaderBytes,
+                            static_cast<int>(frame.size() - runtime::kRecordFrameHeaderBytes))) {
+    std::lock_guard lock(mutex_);
+    ++unreadable_;
+    changed();
+    return;
+  }
+  add(entry);
+}
+
+void Feed::add(const runtime::RecordEntry& entry) {
+  std::lock_guard lock(mutex_);
+  if (entry.has_header()) on_header(entry.header());
+  else if (entry.has_step() && have_header_) on_step(entry.step());
+  else if (entry.has_event()) on_event(entry.event());
+  else if (entry.has_footer()) on_footer(entry.footer());
+  else ++unreadable_;  // a step before any header cannot be drawn
+  changed();
+}
+
+void Feed::set_context(nlohmann::json context) {
+  std::lock_guard lock(mutex_);
+  context_ = std::move(context);
+  changed();
+}
+
+void Feed::finish() {
+  std::lock_guard lock(mutex_);
+  finished_ = true;
+  changed();
+}
+
+void Feed::changed() {
+  ++version_;
+  change_.notify_all();
+}
+
+void Feed::on_header(const runtime::RunHeader& header) {
+  header_ = header;
+  have_header_ = true;
+  actuators_ = header.actuators();
+  links_ = header.link_node_ids_size();
+  const double dt = header.dt() > 0 ? header.dt() : 1e-3;
+  stride_ = std::max<std::int64_t>(1, std::llround(1.0 / (dt * options_.points_per_second)));
+  history_ = std::max<std::size_t>(options_.history, 1);
+  samples_.step.assign(history_, 0);
+  samples_.overruns.assign(history_, 0);
+  samples_.late.assign(history_, 0);
+  for (auto* v : {&samples_.time, &samples_.u_top, &samples_.lateness}) v->assign(history_, 0.0);
+  for (auto* v : {&samples_.command, &samples_.measured, &samples_.force, &samples_.ti})
+    v->assign(history_ * static_cast<std::size_t>(actuators_), 0.0);
+  for (auto* v : {&samples_.injected, &samples_.round_trip})
+    v->assign(history_ * static_cast<std::size_t>(links_), 0.0);
+  const std::size_t n = spectrum_length(dt);
+  window_.resize(n);
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+  for (double& w : window_) w /= sum;  // so that 2 |X_j| is the amplitude of a sine
+  cos_.resize(n);
+  sin_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    cos_[i] = std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+    sin_[i] = std::sin(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+  }
+  const double df = 1.0 / (static_cast<double>(n) * dt);
+  const double top = std::min(options_.spectrum_max_hz, 0.5 / dt);
+  bins_hz_.clear();
+  for (std::size_t j = 1; static_cast<double>(j) * df <= top + 1e-9 && j < n / 2 + 1; ++j)
+    bins_hz_.push_back(static_cast<double>(j) * df);
+  error_ring_.assign(actuators_, std::vector<double>(n, 0.0));
+  spectra_.assign(std::max<std::size_t>(options_.spectra_kept, 1),
+                  Spectrum{0, 0, std::vector<std::vector<double>>(actuators_, std::vector<double>(bins_hz_.size()))});
+  steps_per_spectrum_ = std::max<std::int64_t>(1, std::llround(options_.spectrum_every / dt));
+  for (auto* v : {&prev_command_, &prev_measured_, &area_, &transposed_area_, &ti_}) v->assign(actuators_, 0.0);
+  events_.assign(std::max<std::size_t>(options_.max_events, 1), runtime::RunEvent{});
+}
+
+// Full-rate tracking indicator and error ring, per actuator.
+void Feed::track(const runtime::StepRecord& step) {
+  const int n = std::min({actuators_, step.command_size(), step.realised_size()});
+  for (int a = 0; a < n; ++a) {
+    const double c = step.command(a) * kMm, m = step.realised(a) * kMm;
+    if (steps_ > 0) {
+      area_[a] += 0.5 * (m + prev_measured_[a]) * (c - prev_command_[a]);
+      transposed_area_[a] += 0.5 * (c + prev_command_[a]) * (m - prev_measured_[a]);
+      ti_[a] = 0.5 * (transposed_area_[a] - area_[a]);
+    }
+    prev_command_[a] = c;
+    prev_measured_[a] = m;
+    std::vector<double>& ring = error_ring_[a];
+    ring[static_cast<std::size_t>(steps_) % ring.size()] = c - m;
+  }
+}
+
+void Feed::on_step(const runtime::StepRecord& step) {
+  track(step);
+  ++steps_;
+  if (step.overrun()) ++overruns_;
+  for (const auto& link : step.links())
+    if (link.answered_step() < step.step()) {
+      ++late_;
+      break;
+    }
+  max_lateness_ = std::max(max_lateness_, step.lateness());
+  last_step_ = step.step();
+  last_time_ = step.time();
+  if (step.start_realtime_ns() != 0) last_step_realtime_ns_ = step.start_realtime_ns();
+  if (state_ == "starting") state_ = "armed";
+  if (steps_ >= window_.size() && step.step() % steps_per_spectrum_ == 0) compute_spectrum(step);
+  if (step.step() % stride_ != 0) return;
+  Samples& s = samples_;
+  const std::size_t r = static_cast<std::size_t>(samples_total_ % history_);
+  s.step[r] = step.step();
+  s.time[r] = step.time();
+  s.u_top[r] = step.displacement_size() > 0 ? step.displacement(step.displacement_size() - 1) * kMm : 0;
+  s.lateness[r] = step.lateness() * kMs;
+  s.overruns[r] = overruns_;
+  s.late[r] = late_;
+  for (int a = 0; a < actuators_; ++a) {
+    const std::size_t i = r * static_cast<std::size_t>(actuators_) + static_cast<std::size_t>(a);
+    s.command[i] = a < step.command_size() ? step.command(a) * kMm : 0;
+    s.measured[i] = a < step.realised_size() ? step.realised(a) * kMm : 0;
+    s.force[i] = a < step.measured_force_size() ? step.measured_force(a) : 0;
+    s.ti[i] = ti_[a];
+  }
+  for (int l = 0; l < links_; ++l) {
+    const std::size_t i = r * static_cast<std::size_t>(links_) + static_cast<std::size_t>(l);
+    s.injected[i] = l < step.links_size() ? step.links(l).injected_lag() * kMs : 0;
+    s.round_trip[i] = l < step.links_size() ? step.links(l).round_trip() * kMs : 0;
+  }
+  ++samples_total_;
+}
+
+// Direct DFT of the windowed error at the few bins shown (cheaper than a full FFT for ~100 bins).
+void Feed::compute_spectrum(const runtime::StepRecord& step) {
+  Spectrum& out = spectra_[spectra_total_ % spectra_.size()];
+  out.step = step.step();
+  out.time = step.time();
+  const std::size_t n = window_.size();
+  const std::size_t oldest = static_cast<std::size_t>(steps_) % n;  // ring index of the oldest
+  for (int a = 0; a < actuators_; ++a) {
+    const std::vector<double>& ring = error_ring_[a];
+    for (std::size_t j = 0; j < bins_hz_.size(); ++j) {
+      double re = 0, im = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double x = ring[(oldest + i) % n] * window_[i];
+        const std::size_t phase = ((j + 1) * i) % n;
+        re += x * cos_[phase];
+        im -= x * sin_[phase];
+      }
+      out.amplitude[a][j] = 2 * std::hypot(re, im);
+    }
+  }
+  ++spectra_total_;
+}
+
+void Feed::on_event(const runtime::RunEvent& event) {
+  if (!events_.empty()) events_[events_total_ % events_.size()] = event;
+  ++events_total_;
+  const std::string& what = event.what();
+  if (what.rfind("HOLD", 0) == 0) {  // the coordinator's "HOLD sent to the actuator emulators: why"
+    if (state_ != "HOLD") reason_ = what;
+    state_ = "HOLD";
+  }
+}
+
+void Feed::on_footer(const runtime::RunFooter& footer) {
+  footer_ = footer;
+  have_footer_ = true;
+  state_ = footer.ok() ? "completed" : "stopped";
+  reason_ = footer.status();
+  node_ = footer.failed_node();
+  overruns_ = std::max<std::uint64_t>(overruns_, footer.counters().overruns());
+  finished_ = true;
+}
+
+
+// ---- JSON: what the page reads ----
+
+nlohmann::json Feed::header_json() const {
+  nlohmann::json h = {{"run_id", header_.run_id()}, {"case", header_.case_name()},
+                      {"clock", header_.clock()}, {"dt_s", header_.dt()},
+                      {"dofs", header_.dofs()}, {"actuators", actuators_},
+                      {"links", header_.link_node_ids()}, {"stride_steps", stride_},
+                      {"start_realtime_ns", header_.start_realtime_ns()},
+                      {"study", header_.study().name()}, {"spectrum_hz", bins_hz_},
+                      {"spectrum_window_steps", window_.size()}};
+  for (const auto& node : header_.study().deployment().nodes())
+    h["link_labels"][std::to_string(node.id())] = config::NodeSpec::Kind_Name(node.kind());
+  return h;
+}
+
+nlohmann::json Feed::status_json() const {
+  nlohmann::json s = {{"state", state_}, {"reason", reason_}, {"node", node_},
+                      {"steps", steps_}, {"latest_step", last_step_}, {"latest_time_s", last_time_},
+                      {"latest_step_realtime_ns", last_step_realtime_ns_},
+                      {"overruns", overruns_}, {"late_feedback", late_},
+                      {"max_lateness_ms", max_lateness_ * kMs}, {"finished", finished_},
+                      {"unreadable_entries", unreadable_}};
+  if (have_footer_) {
+    const auto& c = footer_.counters();
+    s["footer"] = {{"ok", footer_.ok()}, {"status", footer_.status()},
+                   {"failed_node", footer_.failed_node()}, {"diverged", footer_.diverged()},
+                   {"wall_seconds", footer_.wall_seconds()}, {"overruns", c.overruns()},
+                   {"late_feedback", c.late_feedback()}, {"steps", c.steps()}};
+  }
+  return s;
+}
+
+nlohmann::json Feed::samples_json(std::uint64_t from) const {
+  nlohmann::json j = {{"step", nlohmann::json::array()}, {"time_s", nlohmann::json::array()}};
+  const char* per_actuator[] = {"command_mm", "measured_mm", "error_mm", "force_N", "ti_mm2"};
+  for (const char* name : per_actuator) j[name] = nlohmann::json::array();
+  for (const char* name : {"injected_ms", "round_trip_ms"}) j[name] = nlohmann::json::array();
+  for (int a = 0; a < actuators_; ++a)
+    for (const char* name : per_actuator) j[name].push_back(nlohmann::json::array());
+  for (int l = 0; l < links_; ++l)
+    for (const char* name : {"injected_ms", "round_trip_ms"}) j[name].push_back(nlohmann::json::array());
+  for (const char* name : {"u_top_mm", "lateness_ms", "overruns", "late_feedback"}) j[name] = nlohmann::json::array();
+  const Samples& s = samples_;
+  const auto A = static_cast<std::size_t>(actuators_), L = static_cast<std::size_t>(links_);
+  for (std::uint64_t i = from; i < samples_total_; ++i) {
+    const std::size_t r = static_cast<std::size_t>(i % history_);
+    j["step"].push_back(s.step[r]);
+    j["time_s"].push_back(s.time[r]);
+    for (std::size_t a = 0; a < A; ++a) {
+      j["command_mm"][a].push_back(s.command[r * A + a]);
+      j["measured_mm"][a].push_back(s.measured[r * A + a]);
+      j["error_mm"][a].push_back(s.command[r * A + a] - s.measured[r * A + a]);
+      j["force_N"][a].push_back(s.force[r * A + a]);
+      j["ti_mm2"][a].push_back(s.ti[r * A + a]);
+    }
+    for (std::size_t l = 0; l < L; ++l) {
+      j["injected_ms"][l].push_back(s.injected[r * L + l]);
+      j["round_trip_ms"][l].push_back(s.round_trip[r * L + l]);
+    }
+    j["u_top_mm"].push_back(s.u_top[r]);
+    j["lateness_ms"].push_back(s.lateness[r]);
+    j["overruns"].push_back(s.overruns[r]);
+    j["late_feedback"].push_back(s.late[r]);
+  }
+  return j;
+}
+
+nlohmann::json Feed::spectra_json(std::uint64_t from) const {
+  nlohmann::json list = nlohmann::json::array();
+  for (std::uint64_t i = from; i < spectra_total_; ++i) {
+    const Spectrum& s = spectra_[i % spectra_.size()];
+    list.push_back({{"step", s.step}, {"time_s", s.time}, {"amplitude_mm", s.amplitude}});
+  }
+  return list;
+}
+
+nlohmann::json Feed::since(FeedCursor& cursor) const {
+  std::lock_guard lock(mutex_);
+  nlohmann::json j = {{"version", version_}, {"status", status_json()}};
+  if (!have_header_) return j;
+  if (!cursor.header_sent) {
+    j["header"] = header_json();
+    j["context"] = context_;
+    cursor.header_sent = true;
+  }
+  const auto oldest = [](std::uint64_t total, std::size_t ring) {
+    return total > ring ? total - ring : 0;
+  };
+  const std::uint64_t first = std::max(cursor.samples, oldest(samples_total_, history_));
+  j["samples"] = samples_json(first);
+  cursor.samples = samples_total_;
+  j["spectra"] = spectra_json(std::max(cursor.spectra, oldest(spectra_total_, spectra_.size())));
+  cursor.spectra = spectra_total_;
+  j["events"] = nlohmann::json::array();
+  for (std::uint64_t i = std::max(cursor.events, oldest(events_total_, events_.size()));
+       i < events_total_; ++i) {
+    const auto& e = events_[i % events_.size()];
+    j["events"].push_back({{"step", e.step()}, {"what", e.what()}, {"realtime_ns", e.realtime_ns()}});
+  }
+  cursor.events = events_total_;
+  return j;
+}
+
+std::uint64_t Feed::wait_change(std::uint64_t version, std::chrono::milliseconds timeout) const {
+  std::unique_lock lock(mutex_);
+  change_.wait_for(lock, timeout, [&] { return version_ != version || finished_; });
+  return version_;
+}
+
+std::uint64_t Feed::version() const {
+  std::lock_guard lock(mutex_);
+  return version_;
+}
+
+bool Feed::finished() const {
+  std::lock_guard lock(mutex_);
+  return finished_;
+}
+
+std::uint64_t Feed::steps_seen() const {
+  std::lock_guard lock(mutex_);
+  return steps_;
+}
+
+std::uint64_t Feed::unreadable_entries() const {
+  std::lock_guard lock(mutex_);
+  return unreadable_;
+}
+
+}  // namespace rths::view

@@ -1,0 +1,145 @@
+#pragma once
+// What the live view shows, built from the run record's entries (header, steps, events, footer)
+// as the record's writer thread writes them (runtime::RecordObserver), or from a finished record.
+// Never on the loop thread: the loop only appends to the record's ring.
+//
+// Inputs: RecordEntry values in record order. Per step, per actuator a: command c (m), realised
+// (measured) displacement m (m), measured force f (N); per link: injected lag and round trip (s);
+// lateness (s) and the overrun flag.
+// Outputs (JSON, what the page draws; every name carries its unit):
+//   samples   one every `stride` steps, stride = max(1, round(1 / (dt * points_per_second))): step,
+//             time_s, command_mm, measured_mm, error_mm = (c - m), force_N, tracking indicator
+//             ti_mm2, top floor u_mm, injected_ms / round_trip_ms per link, lateness_ms, overruns
+//             and late feedback so far. A sample holds the record's values of its step unchanged
+//             (only scaled to mm/ms), so the page can be checked against the record step by step.
+//   ti        tracking indicator (Mercan & Ricles 2007) at full rate, sign chosen so that lag
+//             makes it grow: A_k = A_{k-1} + (m_k + m_{k-1})(c_k - c_{k-1}) / 2,
+//             TA_k = TA_{k-1} + (c_k + c_{k-1})(m_k - m_{k-1}) / 2, TI_k = (TA_k - A_k) / 2 (mm^2).
+//   spectra   every `spectrum_every` s of test time: the amplitude spectrum (mm, single-sided,
+//             Hann window, 2 |X_j| / sum(w)) of the tracking error over the last N steps at full
+//             rate, N = the largest power of two <= 1 / dt (at least 64), bins up to
+//             min(spectrum_max_hz, Nyquist).
+//   status    fail-safe state: "starting" before the first step, "armed" while stepping, "HOLD"
+//             from a HOLD event on (its text is the reason), "stopped" / "completed" from the
+//             footer (its status and failed node); counters; the newest step and its CLOCK_REALTIME
+//             start, from which the page tells how far behind the test it is.
+//   events    the newest `max_events` events.
+// Memory: every buffer is sized when the header arrives (rings), so a long run keeps a flat RSS.
+// Thread safety: every member may be called from any thread.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "runtime/record.h"
+
+namespace rths::view {
+
+struct FeedOptions {
+  double points_per_second = 100.0;  // samples kept per simulated second
+  std::size_t history = 60000;       // samples kept (a ring): 10 min at 100 per second
+  double spectrum_every = 0.5;       // s of test time between spectra
+  double spectrum_max_hz = 100.0;
+  std::size_t spectra_kept = 1200;   // 10 min at one per 0.5 s
+  std::size_t max_events = 500;
+};
+
+// Where a reader of the feed is: how many samples, spectra and events it has had.
+struct FeedCursor {
+  std::uint64_t samples = 0, spectra = 0, events = 0;
+  bool header_sent = false;
+};
+
+class Feed : public runtime::RecordObserver {
+ public:
+  explicit Feed(FeedOptions options = {});
+
+  // runtime::RecordObserver: parses one record frame's entry; an unreadable one is counted.
+  void on_entry(std::string_view frame) override;
+  void add(const runtime::RecordEntry& entry);
+
+  // Facts about the run that are not in the record (critical-delay check, prediction), shown as
+  // given; and a note (e.g. a truncated record's warning).
+  void set_context(nlohmann::json context);
+  // The record is complete (footer seen, or a finished record fully read): readers stop waiting.
+  void finish();
+
+  // Everything the reader at `cursor` has not had yet (all of it from a fresh cursor), and moves
+  // the cursor. A reader that fell behind the rings gets the oldest kept.
+  nlohmann::json since(FeedCursor& cursor) const;
+  // Waits until something changed after `version`, the feed finished, or `timeout`.
+  std::uint64_t wait_change(std::uint64_t version, std::chrono::milliseconds timeout) const;
+  std::uint64_t version() const;
+  bool finished() const;
+  std::uint64_t steps_seen() const;
+  std::uint64_t unreadable_entries() const;
+
+ private:
+  // The kept samples, a ring of options_.history rows in flat columns (row r of a per-actuator
+  // column is at r * actuators_ + a; per link, r * links_ + l).
+  struct Samples {
+    std::vector<std::int64_t> step;
+    std::vector<std::uint64_t> overruns, late;
+    std::vector<double> time, u_top, lateness, command, measured, force, ti, injected, round_trip;
+  };
+  struct Spectrum {
+    std::int64_t step = 0;
+    double time = 0;
+    std::vector<std::vector<double>> amplitude;  // [actuator][bin], mm
+  };
+  void on_header(const runtime::RunHeader& header);
+  void on_step(const runtime::StepRecord& step);
+  void on_event(const runtime::RunEvent& event);
+  void on_footer(const runtime::RunFooter& footer);
+  void track(const runtime::StepRecord& step);
+  void compute_spectrum(const runtime::StepRecord& step);
+  nlohmann::json header_json() const;
+  nlohmann::json status_json() const;
+  nlohmann::json samples_json(std::uint64_t from) const;
+  nlohmann::json spectra_json(std::uint64_t from) const;
+  void changed();
+
+  FeedOptions options_;
+  mutable std::mutex mutex_;
+  mutable std::condition_variable change_;
+  std::uint64_t version_ = 0;
+  bool finished_ = false;
+  std::uint64_t unreadable_ = 0;
+
+  bool have_header_ = false;
+  runtime::RunHeader header_;
+  nlohmann::json context_;
+  std::int64_t stride_ = 1;
+  int actuators_ = 0, links_ = 0;
+
+  Samples samples_;
+  std::size_t history_ = 1;
+  std::uint64_t samples_total_ = 0;
+  std::vector<Spectrum> spectra_;  // ring of options_.spectra_kept
+  std::uint64_t spectra_total_ = 0;
+  std::vector<runtime::RunEvent> events_;  // ring of options_.max_events
+  std::uint64_t events_total_ = 0;
+
+  // Full-rate state.
+  std::uint64_t steps_ = 0, overruns_ = 0, late_ = 0;
+  double max_lateness_ = 0;
+  std::int64_t last_step_ = -1, last_step_realtime_ns_ = 0;
+  double last_time_ = 0;
+  std::vector<double> prev_command_, prev_measured_, area_, transposed_area_, ti_;
+  std::vector<std::vector<double>> error_ring_;  // [actuator][N], mm
+  std::vector<double> window_, bins_hz_, cos_, sin_;  // cos_/sin_: e^{-2 pi i k / N}
+  std::int64_t steps_per_spectrum_ = 1;
+
+  // Fail-safe.
+  std::string state_ = "starting", reason_, node_;
+  bool have_footer_ = false;
+  runtime::RunFooter footer_;
+};
+
+}  // namespace rths::view

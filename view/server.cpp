@@ -1,0 +1,214 @@
+#include "view/server.h"
+
+#include <arpa/inet.h>
+#include <httplib.h>
+
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <stdexcept>
+
+#include "transport/transport.h"
+
+#ifndef RTHS_VIEW_WEB_DIR
+#error "RTHS_VIEW_WEB_DIR must name the page's source folder"
+#endif
+#ifndef RTHS_VIEW_UPLOT_DIR
+#error "RTHS_VIEW_UPLOT_DIR must name uPlot's dist folder (npm, installed by the build)"
+#endif
+
+namespace rths::view {
+namespace {
+
+std::string read_whole(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw std::runtime_error("the view's page file " + path.string() +
+                             " is missing (build the rths_view_web target: it runs npm ci)");
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Equal strings in a time that does not depend on where they differ.
+bool same_token(const std::string& a, const std::string& b) {
+  unsigned diff = a.size() == b.size() ? 0u : 1u;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
+    diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+  return diff == 0;
+}
+
+}  // namespace
+
+bool ListenAddress::loopback() const {
+  return host == "localhost" || host.rfind("127.", 0) == 0;
+}
+
+ListenAddress parse_listen_address(const std::string& text, const std::string& flag) {
+  const auto fail = [&](const std::string& why) {
+    return std::invalid_argument(flag + " " + text + ": " + why +
+                                 " (expected HOST:PORT, HOST an IPv4 address or localhost, "
+                                 "PORT 0-65535, e.g. 127.0.0.1:8080)");
+  };
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0) throw fail("no HOST:PORT");
+  ListenAddress a;
+  a.host = text.substr(0, colon);
+  const std::string port = text.substr(colon + 1);
+  if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos)
+    throw fail("port '" + port + "' is not a number");
+  a.port = std::stoi(port);
+  if (a.port > 65535) throw fail("port " + port + " is above 65535");
+  in_addr parsed{};
+  if (a.host != "localhost" && inet_pton(AF_INET, a.host.c_str(), &parsed) != 1)
+    throw fail("host '" + a.host + "' is not an IPv4 address");
+  return a;
+}
+
+std::string make_token() {
+  std::random_device random;
+  std::string token;
+  const char* hex = "0123456789abcdef";
+  for (int i = 0; i < 16; ++i) {
+    const unsigned byte = random() & 0xffu;
+    token += hex[byte >> 4];
+    token += hex[byte & 0xfu];
+  }
+  return token;
+}
+
+ViewServer::ViewServer(const Feed& feed, ServerOptions options)
+    : feed_(feed), options_(std::move(options)), server_(std::make_unique<httplib::Server>()) {
+  const std::filesystem::path web = options_.web_dir.empty() ? RTHS_VIEW_WEB_DIR : options_.web_dir;
+  const std::filesystem::path uplot =
+      options_.uplot_dir.empty() ? RTHS_VIEW_UPLOT_DIR : options_.uplot_dir;
+  files_["/"] = {"text/html; charset=utf-8", read_whole(web / "index.html")};
+  files_["/view.js"] = {"text/javascript; charset=utf-8", read_whole(web / "view.js")};
+  files_["/view.css"] = {"text/css; charset=utf-8", read_whole(web / "view.css")};
+  files_["/uPlot.iife.min.js"] = {"text/javascript; charset=utf-8", read_whole(uplot / "uPlot.iife.min.js")};
+  files_["/uPlot.min.css"] = {"text/css; charset=utf-8", read_whole(uplot / "uPlot.min.css")};
+  const int threads = options_.max_streams + 4;
+  server_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
+  server_->set_payload_max_length(4096);
+  server_->set_read_timeout(std::chrono::seconds(5));
+  server_->set_write_timeout(options_.write_timeout);
+  server_->set_keep_alive_max_count(100);
+  routes();
+  const auto& a = options_.address;
+  port_ = a.port == 0 ? server_->bind_to_any_port(a.host) : (server_->bind_to_port(a.host, a.port) ? a.port : -1);
+  if (port_ <= 0)
+    throw std::runtime_error("the view cannot listen on " + a.host + ":" + std::to_string(a.port) +
+                             " (in use, or not an address of this host)");
+  thread_ = std::thread([this] { server_->listen_after_bind(); });
+}
+
+void ViewServer::routes() {
+  httplib::Server& s = *server_;
+  for (const auto& [path, file] : files_)
+    s.Get(path, [this, &file = file](const httplib::Request&, httplib::Response& res) {
+      res.set_content(file.second, file.first.c_str());
+      res.set_header("Cache-Control", "no-store");
+    });
+  s.Get("/api/snapshot", [this](const httplib::Request&, httplib::Response& res) {
+    FeedCursor cursor;
+    nlohmann::json j = feed_.since(cursor);
+    j["mode"] = options_.mode;
+    res.set_content(j.dump(), "application/json");
+  });
+  s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
+    const nlohmann::json j = {{"mode", options_.mode}, {"stop_enabled", options_.allow_stop},
+                              {"token_required", !options_.token.empty()},
+                              {"counters", counters()}};
+    res.set_content(j.dump(), "application/json");
+  });
+  s.Post("/api/stop", [this](const httplib::Request& req, httplib::Response& res) {
+    if (!options_.allow_stop || !options_.on_stop) {
+      res.status = 403;
+      res.set_content("the stop button is off: start the view with --view-stop", "text/plain");
+      return;
+    }
+    if (!options_.token.empty() && !same_token(req.get_header_value("X-RTHS-Token"), options_.token)) {
+      ++bad_token_;
+      res.status = 403;
+      res.set_content("wrong or missing token (X-RTHS-Token; printed when the view started)", "text/plain");
+      return;
+    }
+    ++stop_requests_;
+    if (!stop_requested_.exchange(true)) options_.on_stop();
+    res.status = 202;
+    res.set_content("stop requested: HOLD, then STOP (\"stopped from the view\")", "text/plain");
+  });
+  stream(s);
+  s.set_error_handler(httplib::Server::HandlerWithResponse(
+      [this](const httplib::Request&, httplib::Response& res) {
+    if (res.status == 404) ++not_found_;
+    else if (res.status >= 400) ++refused_;
+    if (res.body.empty()) res.set_content(std::to_string(res.status) + "\n", "text/plain");
+    return httplib::Server::HandlerResponse::Handled;
+  }));
+}
+
+// One server-sent-events stream per client: the feed's news at most once per update_period.
+// The provider runs on the connection's pool thread; a write that cannot go out within
+// write_timeout (a client that does not read) fails and drops the connection.
+void ViewServer::stream(httplib::Server& s) {
+  s.Get("/api/stream", [this](const httplib::Request&, httplib::Response& res) {
+    if (streams_.fetch_add(1) >= options_.max_streams) {
+      streams_.fetch_sub(1);
+      ++streams_refused_;
+      res.status = 503;
+      res.set_content("too many open views", "text/plain");
+      return;
+    }
+    ++streams_served_;
+    res.set_header("Cache-Control", "no-store");
+    auto cursor = std::make_shared<FeedCursor>();
+    auto last = std::make_shared<std::chrono::steady_clock::time_point>();
+    auto seen = std::make_shared<std::uint64_t>(0);
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, cursor, last, seen](std::size_t, httplib::DataSink& sink) {
+          if (stopping_.load()) return false;
+          std::this_thread::sleep_until(*last + options_.update_period);
+          feed_.wait_change(*seen, options_.update_period);
+          const bool finished = feed_.finished();
+          nlohmann::json j = feed_.since(*cursor);
+          *seen = j["version"].get<std::uint64_t>();
+          j["mode"] = options_.mode;
+          j["server_realtime_ns"] = transport::realtime_ns();
+          const std::string message = "data: " + j.dump() + "\n\n";
+          *last = std::chrono::steady_clock::now();
+          if (!sink.write(message.data(), message.size())) {
+            ++streams_dropped_;
+            return false;
+          }
+          ++updates_sent_;
+          if (finished) sink.done();
+          return true;
+        },
+        [this](bool) { streams_.fetch_sub(1); });
+  });
+}
+
+ViewServer::~ViewServer() { shutdown(std::chrono::milliseconds(0)); }
+
+std::string ViewServer::url() const {
+  return "http://" + options_.address.host + ":" + std::to_string(port_) + "/";
+}
+
+nlohmann::json ViewServer::counters() const {
+  return {{"refused", refused_.load()},           {"not_found", not_found_.load()},
+          {"bad_token", bad_token_.load()},       {"streams_open", streams_.load()},
+          {"streams_served", streams_served_.load()}, {"streams_refused", streams_refused_.load()},
+          {"streams_dropped", streams_dropped_.load()}, {"updates_sent", updates_sent_.load()},
+          {"stop_requests", stop_requests_.load()}};
+}
+
+void ViewServer::shutdown(std::chrono::milliseconds linger) {
+  const auto until = std::chrono::steady_clock::now() + linger;
+  while (streams_.load() > 0 && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  stopping_.store(true);
+  if (server_) server_->stop();
+  if (thread_.joinable()) thread_.join();
+}
+
+}  // namespace rths::view
