@@ -182,6 +182,7 @@ TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double 
       converter_{spec.converter().range(), spec.converter().quantum()},
       noise_rms_(spec.displacement_noise_rms()),
       h_(h),
+      force_noise_rms_(spec.force_noise_rms()),
       seed_(spec.seed()),
       rng_(spec.seed()) {
   if (!(converter_.range >= 0 && converter_.quantum >= 0 && std::isfinite(converter_.range) &&
@@ -189,11 +190,19 @@ TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double 
     fail(field + ".converter", "range and quantum must be >= 0 m (0 = none)");
   if (!(noise_rms_ >= 0 && std::isfinite(noise_rms_)))
     fail(field + ".displacement_noise_rms", "must be >= 0 m");
+  if (!(force_noise_rms_ >= 0 && std::isfinite(force_noise_rms_)))
+    fail(field + ".force_noise_rms", "must be >= 0 N");
+  constexpr std::uint32_t kMaxForceDelay = 64;
+  if (spec.force_delay_periods() > kMaxForceDelay)
+    fail(field + ".force_delay_periods", std::to_string(spec.force_delay_periods()) + " is outside 0.." +
+                                             std::to_string(kMaxForceDelay));
+  force_queue_.assign(spec.force_delay_periods() + 1, 0.0);
   std::ostringstream label;
   label << "tracking-loop(" << (spec.has_benchmark_plant() ? "benchmark plant" : "plant")
         << (spec.has_controller() ? ", controller" : "") << (spec.has_feedforward() ? ", feedforward" : "")
         << (converter_.quantum > 0 || converter_.range > 0 ? ", converters" : "")
-        << (noise_rms_ > 0 ? ", noise" : "") << ")";
+        << (noise_rms_ > 0 ? ", noise" : "") << (force_noise_rms_ > 0 ? ", force noise" : "")
+        << (force_queue_.size() > 1 ? ", force delay " + std::to_string(force_queue_.size() - 1) : "") << ")";
   label_ = label.str();
   constexpr double w = 0.1;  // rad/s, well below every corner of a servo loop
   nominal_delay_ = -std::arg(response(w)) / w;
@@ -211,11 +220,23 @@ void TrackingLoop::reset() {
   feedforward_.reset();
   rng_.seed(seed_);
   normal_.reset();
+  sensor_error_ = 0.0;
+  std::fill(force_queue_.begin(), force_queue_.end(), 0.0);
+  force_head_ = 0;
+}
+
+double TrackingLoop::measure_force(double force) {
+  // The ring holds the readings of the last d + 1 periods; the slot written now is read d later.
+  const double reading = force + (force_noise_rms_ > 0 ? force_noise_rms_ * normal_(rng_) : 0.0);
+  force_queue_[force_head_] = reading;
+  force_head_ = (force_head_ + 1) % force_queue_.size();
+  return force_queue_[force_head_];
 }
 
 double TrackingLoop::step_unscaled(const CommandSample& in) {
   const double displacement = plant_.output();
-  const double measured = displacement + (noise_rms_ > 0 ? noise_rms_ * normal_(rng_) : 0.0);
+  sensor_error_ = noise_rms_ > 0 ? noise_rms_ * normal_(rng_) : 0.0;
+  const double measured = displacement + sensor_error_;
   const double target = converter_.digital_to_analog(feedforward_.step(converter_.analog_to_digital(in.displacement)));
   const double error = converter_.analog_to_digital(target - measured);
   plant_.advance(converter_.digital_to_analog(controller_.step(error)));

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
+#include <string>
 
 namespace rths::core {
 namespace {
@@ -96,6 +98,66 @@ TEST(TrackingLoopTest, SeededNoiseRepeatsAfterResetAndInACopy) {
     EXPECT_EQ(a.step({k * 0.001, 0.0, 0.0}), first[static_cast<std::size_t>(k)]);
     EXPECT_EQ(copy->step({k * 0.001, 0.0, 0.0}), first[static_cast<std::size_t>(k)]);
   }
+}
+
+// The displacement sensor's reading is the output plus the drawn error; the load cell's reading
+// reaches the integrator force_delay_periods periods later, with its own noise.
+TEST(TrackingLoopTest, SensorsReportTheirReadingsAndTheLoadCellItsDelayedForce) {
+  auto spec = first_order_loop(2.0, 100.0);
+  spec.set_force_delay_periods(2);
+  TrackingLoop quiet(spec, 0.001, "t");
+  EXPECT_EQ(quiet.measure_force(10.0), 0.0);
+  EXPECT_EQ(quiet.measure_force(20.0), 0.0);
+  EXPECT_EQ(quiet.measure_force(30.0), 10.0);
+  EXPECT_EQ(quiet.measure_force(40.0), 20.0);
+  quiet.reset();
+  EXPECT_EQ(quiet.measure_force(50.0), 0.0);  // reset empties the queue
+  quiet.step({0.0, 0.01, 0.0});
+  EXPECT_EQ(quiet.sensor_error(), 0.0);
+
+  spec.set_force_delay_periods(0);
+  spec.set_displacement_noise_rms(1e-4);
+  spec.set_force_noise_rms(2.0);
+  spec.set_seed(11);
+  TrackingLoop noisy(spec, 0.001, "t");
+  double displacement_square = 0.0, force_square = 0.0;
+  constexpr int kDraws = 20000;
+  for (int k = 0; k < kDraws; ++k) {
+    noisy.step({k * 0.001, 0.0, 0.0});
+    displacement_square += noisy.sensor_error() * noisy.sensor_error();
+    const double force_error = noisy.measure_force(5.0) - 5.0;
+    force_square += force_error * force_error;
+  }
+  EXPECT_NEAR(std::sqrt(displacement_square / kDraws), 1e-4, 3e-6);
+  EXPECT_NEAR(std::sqrt(force_square / kDraws), 2.0, 0.06);
+
+  spec.set_force_delay_periods(65);
+  try {
+    TrackingLoop bad(spec, 0.001, "cases[1].delay[0].tracking_loop");
+    FAIL() << "a force delay of 65 periods was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cases[1].delay[0].tracking_loop.force_delay_periods: 65 is outside 0..64"),
+              std::string::npos) << e.what();
+  }
+  spec.set_force_delay_periods(0);
+  spec.set_force_noise_rms(-1.0);
+  EXPECT_THROW(TrackingLoop(spec, 0.001, "t"), std::invalid_argument);
+}
+
+// A chain reports the specimen's displacement from step() and the sensor's reading from measured().
+TEST(TrackingLoopTest, ChainMeasuresWhatItsSensorReads) {
+  auto spec = first_order_loop(2.0, 100.0);
+  spec.set_displacement_noise_rms(1e-3);
+  spec.set_seed(3);
+  DelayChain chain;
+  chain.add(std::make_unique<TrackingLoop>(spec, 0.001, "t"));
+  TrackingLoop alone(spec, 0.001, "t");
+  for (int k = 0; k < 20; ++k) {
+    const double output = chain.step({k * 0.001, 0.01, 0.0});
+    EXPECT_EQ(output, alone.step({k * 0.001, 0.01, 0.0}));
+    EXPECT_EQ(chain.measured(), output + alone.sensor_error());
+  }
+  EXPECT_NE(alone.sensor_error(), 0.0);
 }
 
 TEST(TrackingLoopTest, BenchmarkPlantIsTheNominalF1PlantUnlessOverridden) {
