@@ -29,6 +29,31 @@ ContinuousTransferFunction pid_transfer_function(const config::DelayStage::Linea
   return {{pid.kp() * tf + pid.kd(), pid.kp() + pid.ki() * tf, pid.ki()}, {tf, 1.0, 0.0}};
 }
 
+// Parlett-Reinsch balancing by powers of two (exact): a <- D^-1 a D with the off-diagonal row and
+// column norms of every state within a factor of two of each other; returns diag(D).
+Vec balance(Mat& a) {
+  const Eigen::Index n = a.rows();
+  Vec d = Vec::Ones(n);
+  for (bool done = false; !done;) {
+    done = true;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double column = a.col(i).cwiseAbs().sum() - std::abs(a(i, i));
+      double row = a.row(i).cwiseAbs().sum() - std::abs(a(i, i));
+      if (column == 0.0 || row == 0.0) continue;
+      const double before = column + row;
+      double f = 1.0;
+      while (column < row / 2) column *= 2, row /= 2, f *= 2;
+      while (column >= row * 2) column /= 2, row *= 2, f /= 2;
+      if (column + row >= 0.95 * before) continue;  // column, row: the norms after the scaling
+      done = false;
+      d[i] *= f;
+      a.row(i) /= f;
+      a.col(i) *= f;
+    }
+  }
+  return d;
+}
+
 }  // namespace
 
 DiscreteFilter::DiscreteFilter() : b_{1.0}, a_{1.0}, state_(1, 0.0) {}
@@ -107,9 +132,13 @@ ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<doubl
   c_ = Eigen::RowVectorXd::Zero(n);
   for (std::size_t k = 0; k < numerator.size(); ++k)
     c_(static_cast<Eigen::Index>(numerator.size() - 1 - k)) = numerator[k] / denominator[0];
+  // The companion form's entries span many decades (the benchmark plant's: 1 to 1e12), which the
+  // exponential's scaling and squaring amplifies; a balanced realisation D^-1 A D keeps it exact.
+  const Vec d = balance(a);
+  c_ = c_.cwiseProduct(d.transpose());
   Mat augmented = Mat::Zero(n + 1, n + 1);
   augmented.topLeftCorner(n, n) = a;
-  augmented(n - 1, n) = 1.0;
+  augmented(n - 1, n) = 1.0 / d[n - 1];
   const Mat e = (augmented * h).exp();
   ad_ = e.topLeftCorner(n, n);
   bd_ = e.block(0, n, n, 1);

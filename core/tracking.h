@@ -17,7 +17,8 @@
 // Blocks (each step(x) -> y with explicit state, no allocation after construction):
 //   DiscreteFilter  y = b(z^-1) / a(z^-1) x, direct form II transposed; a[0] = 1.
 //   ZohPlant        x+ = Ad x + Bd u, y = C x: a continuous num(s)/den(s) (strictly proper) in
-//                   controllable canonical form, Ad = e^{A h}, Bd = int_0^h e^{A r} dr B.
+//                   controllable canonical form, balanced (Parlett-Reinsch, powers of two),
+//                   Ad = e^{A h}, Bd = int_0^h e^{A r} dr B.
 //   Converter       AD/DA above.
 //   TrackingLoop    the loop above.
 // A continuous filter is discretised by Tustin at h (core::tustin); PI/PID and phase lead are

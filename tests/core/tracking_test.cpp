@@ -60,6 +60,17 @@ TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
   EXPECT_THROW(ZohPlant({1.0, 0.0}, {1.0, 50.0}, h), std::invalid_argument);  // not strictly proper
 }
 
+// The benchmark plant's companion form spans twelve decades; its discretisation must still settle
+// at the DC gain for any draw of the perturbed plants (here beta2 2 % off nominal).
+TEST(ZohPlantTest, BenchmarkPlantSettlesAtItsDcGainWhenPerturbed) {
+  config::DelayStage::BenchmarkPlant spec;
+  spec.set_beta2(1.02e5);
+  const ContinuousTransferFunction tf = benchmark_actuator_transfer_function(benchmark_plant_parameters(spec));
+  ZohPlant plant(tf.numerator, tf.denominator, 1.0 / 4096);
+  for (int k = 0; k < 3 * 4096; ++k) plant.advance(1.0);
+  EXPECT_NEAR(plant.output(), tf.numerator.back() / tf.denominator.back(), 1e-3);
+}
+
 TEST(ConverterTest, SaturatesAndQuantises) {
   const Converter c{3.8, 0.25};
   EXPECT_EQ(c.analog_to_digital(0.3), 0.25);
