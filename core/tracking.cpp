@@ -54,6 +54,48 @@ Vec balance(Mat& a) {
   return d;
 }
 
+// Characteristic polynomial det(sI - a), highest power first (Faddeev-LeVerrier).
+std::vector<double> characteristic_polynomial(const Mat& a) {
+  const Eigen::Index n = a.rows();
+  std::vector<double> c(static_cast<std::size_t>(n + 1), 0.0);
+  c[0] = 1.0;
+  Mat m = Mat::Zero(n, n);
+  for (Eigen::Index k = 1; k <= n; ++k) {
+    m = a * m + c[static_cast<std::size_t>(k - 1)] * Mat::Identity(n, n);
+    c[static_cast<std::size_t>(k)] = -(a * m).trace() / static_cast<double>(k);
+  }
+  return c;
+}
+
+// The transfer function of a single-input single-output state space, both polynomials highest
+// power first: den = det(sI - A), num = det(sI - A + B C) - den + D den (the SISO identity
+// C adj(sI - A) B = det(sI - A + B C) - det(sI - A)).
+ContinuousTransferFunction state_space_transfer_function(const config::DelayStage::LinearFilter::StateSpace& spec,
+                                                         const std::string& field) {
+  const int n = spec.states();
+  const auto size = static_cast<std::size_t>(n);
+  if (n < 1 || n > 16) fail(field + ".state_space.states", std::to_string(n) + " is outside 1..16");
+  if (static_cast<std::size_t>(spec.a_size()) != size * size || static_cast<std::size_t>(spec.b_size()) != size ||
+      static_cast<std::size_t>(spec.c_size()) != size)
+    fail(field + ".state_space", "a needs states^2 = " + std::to_string(n * n) + " values (row-major), b and c " +
+                                     std::to_string(n) + "; got " + std::to_string(spec.a_size()) + ", " +
+                                     std::to_string(spec.b_size()) + ", " + std::to_string(spec.c_size()));
+  Mat a(n, n);
+  Vec b(n), c(n);
+  for (int i = 0; i < n; ++i) {
+    b[i] = spec.b(i);
+    c[i] = spec.c(i);
+    for (int j = 0; j < n; ++j) a(i, j) = spec.a(i * n + j);
+  }
+  if (!a.allFinite() || !b.allFinite() || !c.allFinite() || !std::isfinite(spec.d()))
+    fail(field + ".state_space", "holds a value that is not finite");
+  const std::vector<double> den = characteristic_polynomial(a);
+  const std::vector<double> coupled = characteristic_polynomial(a - b * c.transpose());
+  ContinuousTransferFunction tf{std::vector<double>(size + 1), den};
+  for (std::size_t i = 0; i <= size; ++i) tf.numerator[i] = coupled[i] - den[i] + spec.d() * den[i];
+  return tf;
+}
+
 }  // namespace
 
 DiscreteFilter::DiscreteFilter() : b_{1.0}, a_{1.0}, state_(1, 0.0) {}
@@ -99,6 +141,13 @@ DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double 
       }
       case K::kDiscrete:
         return DiscreteFilter(values(spec.discrete().numerator()), values(spec.discrete().denominator()));
+      case K::kStateSpace: {
+        // A polynomial in z, highest power first, is b(z^-1) in ascending powers: the same list.
+        const ContinuousTransferFunction tf = state_space_transfer_function(spec.state_space(), field);
+        if (spec.state_space().discrete()) return DiscreteFilter(tf.numerator, tf.denominator);
+        const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
+        return DiscreteFilter(d.b, d.a);
+      }
       case K::kPid: {
         const ContinuousTransferFunction tf = pid_transfer_function(spec.pid(), field);
         const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
@@ -118,7 +167,7 @@ DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double 
     if (what.rfind(field, 0) == 0) throw;
     fail(field, what);
   }
-  fail(field, "has no kind (continuous, discrete, pid or phase_lead)");
+  fail(field, "has no kind (continuous, discrete, pid, phase_lead or state_space)");
 }
 
 ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator, double h) {

@@ -22,7 +22,9 @@
 //   Converter       AD/DA above.
 //   TrackingLoop    the loop above.
 // A continuous filter is discretised by Tustin at h (core::tustin); PI/PID and phase lead are
-// named forms of one: kp + ki/s + kd s/(tf s + 1), gain (s + zero)/(s + pole).
+// named forms of one: kp + ki/s + kd s/(tf s + 1), gain (s + zero)/(s + pole). A state space
+// (A, B, C, D), continuous or discrete, becomes its transfer function: den = det(sI - A),
+// num = det(sI - A + B C) - den + D den (characteristic polynomials by Faddeev-LeVerrier).
 // The loop's linear dynamics (converters and noise left out), for reports and analysis:
 //   H(z) = F(z) C(z) P(z) / (1 + C(z) P(z)),  P(z) = C (zI - Ad)^-1 Bd.
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <memory>
 #include <string>
 
@@ -47,6 +48,58 @@ TEST(DiscreteFilterTest, PhaseLeadKeepsItsDcGainAndBadFiltersNameTheField) {
     EXPECT_NE(std::string(e.what()).find("cases[1].feedforward.phase_lead"), std::string::npos) << e.what();
   }
   EXPECT_THROW(make_filter(config::DelayStage::LinearFilter(), 0.001, "f"), std::invalid_argument);
+}
+
+// A state space is the transfer function it realises: the PI 2 + 95/s as x' = u, y = 95 x + 2 u
+// (Tustin) steps as the named PI does; a discrete one x+ = x + u, y = 0.5 x + u is
+// (1 - 0.5 z^-1) / (1 - z^-1); a wrong size names the field and the sizes.
+TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
+  const double h = 1.0 / 4096;
+  config::DelayStage::LinearFilter pi, space;
+  pi.mutable_pid()->set_kp(2.0);
+  pi.mutable_pid()->set_ki(95.0);
+  auto* ss = space.mutable_state_space();
+  ss->set_states(1);
+  ss->add_a(0.0);
+  ss->add_b(1.0);
+  ss->add_c(95.0);
+  ss->set_d(2.0);
+  DiscreteFilter named = make_filter(pi, h, "c"), realised = make_filter(space, h, "c");
+  for (int k = 0; k < 50; ++k) {
+    const double u = std::sin(0.3 * k);
+    EXPECT_NEAR(realised.step(u), named.step(u), 1e-12) << k;
+  }
+
+  // Two states with a coupling: x' = [0 1; -4 -0.4] x + [0; 1] u, y = [4 0] x: 4 / (s^2 + 0.4 s + 4).
+  config::DelayStage::LinearFilter oscillator, continuous;
+  auto* two = oscillator.mutable_state_space();
+  two->set_states(2);
+  for (double v : {0.0, 1.0, -4.0, -0.4}) two->add_a(v);
+  for (double v : {0.0, 1.0}) two->add_b(v);
+  for (double v : {4.0, 0.0}) two->add_c(v);
+  for (double v : {4.0}) continuous.mutable_continuous()->add_numerator(v);
+  for (double v : {1.0, 0.4, 4.0}) continuous.mutable_continuous()->add_denominator(v);
+  const DiscreteFilter from_space = make_filter(oscillator, 0.01, "c"), from_tf = make_filter(continuous, 0.01, "c");
+  for (double w : {0.5, 2.0, 20.0}) {
+    const std::complex<double> z = std::exp(std::complex<double>(0.0, w * 0.01));
+    EXPECT_NEAR(std::abs(from_space.response(z) - from_tf.response(z)), 0.0, 1e-12) << w;
+  }
+
+  ss->set_discrete(true);
+  ss->set_c(0, 0.5);
+  ss->set_d(1.0);
+  ss->set_a(0, 1.0);
+  DiscreteFilter discrete = make_filter(space, h, "c"), expected({1.0, -0.5}, {1.0, -1.0});
+  for (int k = 0; k < 20; ++k) EXPECT_NEAR(discrete.step(1.0), expected.step(1.0), 1e-12) << k;
+
+  ss->add_b(1.0);
+  try {
+    make_filter(space, h, "cases[1].delay[0].tracking_loop.controller");
+    FAIL() << "a 1-state space with 2 inputs in b was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("tracking_loop.controller.state_space: a needs states^2 = 1 values"),
+              std::string::npos) << e.what();
+  }
 }
 
 TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
