@@ -4,8 +4,9 @@
 // measured displacement and the measured force go back to the integrator unchanged.
 //
 // Input  (CompensatorInput): t (s), the target x_t (m, the displacement the integrator computed
-//        for this step) and x_m (m, the displacement the actuator realised one step earlier: the
-//        measured feedback a servo controller has when it shapes the next command).
+//        for this step) and x_m (m, the displacement the actuator realised one step earlier, as
+//        its sensor read it: the measured feedback a servo controller has when it shapes the
+//        next command).
 // Output: the command u_c (m) given to the actuator (the delay chain of core/delay.h).
 // Called once per step with spacing dt; deterministic, so in-process and lockstep distributed
 // runs agree bit for bit. Initial state: at rest (every past target and measurement is 0).
@@ -72,7 +73,7 @@ namespace rths::core {
 struct CompensatorInput {
   double time = 0.0;      // s
   double target = 0.0;    // m, x_t: what the integrator wants realised
-  double measured = 0.0;  // m, x_m: what the actuator realised at the previous step
+  double measured = 0.0;  // m, x_m: what the sensor read of the previous step's displacement
 };
 
 class Compensator {

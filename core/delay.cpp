@@ -422,7 +422,7 @@ DelayChain& DelayChain::operator=(DelayChain&&) noexcept = default;
 
 DelayChain::DelayChain(const DelayChain& other)
     : compensator_(other.compensator_ ? other.compensator_->clone() : nullptr),
-      last_output_(other.last_output_) {
+      measured_(other.measured_) {
   stages_.reserve(other.stages_.size());
   for (const auto& stage : other.stages_) stages_.push_back(stage->clone());
 }
@@ -439,17 +439,23 @@ void DelayChain::set_compensator(std::unique_ptr<Compensator> compensator) {
 double DelayChain::step(const CommandSample& in) {
   CommandSample sample = in;
   if (compensator_) {
-    sample.displacement = compensator_->step({in.time, in.displacement, last_output_});
+    sample.displacement = compensator_->step({in.time, in.displacement, measured_});
   }
   for (auto& stage : stages_) sample.displacement = stage->step(sample);
-  last_output_ = sample.displacement;
+  measured_ = sample.displacement;
+  for (const auto& stage : stages_) measured_ += stage->sensor_error();
   return sample.displacement;
+}
+
+double DelayChain::measure_force(double force) {
+  for (auto& stage : stages_) force = stage->measure_force(force);
+  return force;
 }
 
 void DelayChain::reset() {
   for (auto& stage : stages_) stage->reset();
   if (compensator_) compensator_->reset();
-  last_output_ = 0.0;
+  measured_ = 0.0;
 }
 
 double DelayChain::nominal_delay() const {

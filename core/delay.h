@@ -51,6 +51,13 @@ class DelayStage {
   virtual std::string describe() const = 0;
   // The lag this stage nominally adds at low frequency (s); negative for a lead. For reports.
   virtual double nominal_delay() const = 0;
+  // A stage that models the displacement sensor: its error on the last step's reading (m), which
+  // the reading adds to the stage's output. 0 for a stage without a sensor.
+  virtual double sensor_error() const { return 0.0; }
+  // A stage that models the load cell: the force (N) the integrator receives in this servo
+  // period when the specimen's force is `force` (noise, transport delay). Called once per step
+  // after step(). Identity for a stage without one. Real-time safe.
+  virtual double measure_force(double force) { return force; }
 
   void set_gain(double gain) { gain_ = gain; }
   double gain() const { return gain_; }
@@ -256,9 +263,12 @@ class TraceShift final : public DelayStage {
 class Compensator;  // core/compensation.h
 
 // Stages applied in order; the command's velocity is passed unchanged to every stage.
+// step() returns the specimen's displacement; measured() what the displacement sensor read at
+// that step (the output plus every stage's sensor_error()); measure_force() passes the
+// specimen's force through every stage's load cell, in order.
 // An optional compensator (core/compensation.h) shapes the command before the first stage; it
-// sees the target (the command given to step) and the chain's output of the previous step (the
-// measured displacement), and nothing else in the chain changes.
+// sees the target (the command given to step) and the measured displacement of the previous
+// step, and nothing else in the chain changes.
 class DelayChain {
  public:
   DelayChain();
@@ -272,6 +282,8 @@ class DelayChain {
   void set_compensator(std::unique_ptr<Compensator> compensator);
   const Compensator* compensator() const { return compensator_.get(); }
   double step(const CommandSample& in);
+  double measured() const { return measured_; }
+  double measure_force(double force);
   void reset();
   // The stages' lag minus the compensator's nominal lead (s).
   double nominal_delay() const;
@@ -281,7 +293,7 @@ class DelayChain {
  private:
   std::vector<std::unique_ptr<DelayStage>> stages_;
   std::unique_ptr<Compensator> compensator_;
-  double last_output_ = 0.0;  // m, what the chain realised at the previous step
+  double measured_ = 0.0;  // m, what the sensor read at the previous step
 };
 
 }  // namespace rths::core

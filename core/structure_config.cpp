@@ -88,6 +88,9 @@ HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuri
     specimens.push_back({d, std::move(specimen.model)});
   }
   HybridPartition partition = partition_by_dofs(model.stiffness, std::move(specimens));
+  // The specimen's force holds m_e x'' of the relative acceleration only, so the numerical part
+  // carries the ground motion's load on the whole mass, -M iota a_g = -M_N (M_N^-1 M iota) a_g.
+  model.influence = mass.ldlt().solve(model.mass * model.influence);
   model.mass = mass;
   model.damping = damping;
   return partition;

@@ -7,8 +7,10 @@
 //     substructuring.experimental_dofs, each specimen f = m x'' + c x' + r(x) (InertialSpecimen
 //     over the restoring-force model of initial stiffness k; a bare model when m = c = 0); the
 //     numerical substructure is the rest: the model's mass and damping become M - M_e and
-//     C - C_e (what the integrator carries), K stays whole (the explicit integrators' K0) and
-//     the partition's K_N = K - K_e.
+//     C - C_e (what the integrator carries), K stays whole (the explicit integrators' K0), the
+//     partition's K_N = K - K_e, and the influence becomes (M - M_e)^-1 M iota, so the load
+//     -(M - M_e) iota' a_g is the whole structure's -M iota a_g (the specimen's m_e x'' is
+//     relative).
 // Errors throw std::invalid_argument naming the field (substructuring.experimental_dofs[i]...),
 // the value and the allowed range.
 

@@ -266,8 +266,14 @@ ActuatorOutput Actuator::tick() {
     target = target_at(++ramp_tick_);
   }
   ActuatorOutput out;
-  out.realised = chain_.empty() ? target.displacement : chain_.step(target);
-  out.force = specimen_->step(out.realised);
+  if (chain_.empty()) {
+    out.realised = target.displacement;
+    out.force = specimen_->step(out.realised);
+    return out;
+  }
+  // The specimen moves with the chain's output; the controller reports its sensors' readings.
+  out.force = chain_.measure_force(specimen_->step(chain_.step(target)));
+  out.realised = chain_.measured();
   return out;
 }
 

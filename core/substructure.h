@@ -112,8 +112,8 @@ class NumericalSubstructure {
 };
 
 struct ActuatorOutput {
-  double realised = 0.0;  // m, drift the specimen sees
-  double force = 0.0;     // N, measured
+  double realised = 0.0;  // m, the specimen's drift as the displacement sensor reads it
+  double force = 0.0;     // N, as the load cell reports it to the integrator
 };
 
 // The actuator behind its servo controller (multi-rate). The controller runs `substeps` servo

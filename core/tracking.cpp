@@ -29,6 +29,73 @@ ContinuousTransferFunction pid_transfer_function(const config::DelayStage::Linea
   return {{pid.kp() * tf + pid.kd(), pid.kp() + pid.ki() * tf, pid.ki()}, {tf, 1.0, 0.0}};
 }
 
+// Parlett-Reinsch balancing by powers of two (exact): a <- D^-1 a D with the off-diagonal row and
+// column norms of every state within a factor of two of each other; returns diag(D).
+Vec balance(Mat& a) {
+  const Eigen::Index n = a.rows();
+  Vec d = Vec::Ones(n);
+  for (bool done = false; !done;) {
+    done = true;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double column = a.col(i).cwiseAbs().sum() - std::abs(a(i, i));
+      double row = a.row(i).cwiseAbs().sum() - std::abs(a(i, i));
+      if (column == 0.0 || row == 0.0) continue;
+      const double before = column + row;
+      double f = 1.0;
+      while (column < row / 2) column *= 2, row /= 2, f *= 2;
+      while (column >= row * 2) column /= 2, row *= 2, f /= 2;
+      if (column + row >= 0.95 * before) continue;  // column, row: the norms after the scaling
+      done = false;
+      d[i] *= f;
+      a.row(i) /= f;
+      a.col(i) *= f;
+    }
+  }
+  return d;
+}
+
+// Characteristic polynomial det(sI - a), highest power first (Faddeev-LeVerrier).
+std::vector<double> characteristic_polynomial(const Mat& a) {
+  const Eigen::Index n = a.rows();
+  std::vector<double> c(static_cast<std::size_t>(n + 1), 0.0);
+  c[0] = 1.0;
+  Mat m = Mat::Zero(n, n);
+  for (Eigen::Index k = 1; k <= n; ++k) {
+    m = a * m + c[static_cast<std::size_t>(k - 1)] * Mat::Identity(n, n);
+    c[static_cast<std::size_t>(k)] = -(a * m).trace() / static_cast<double>(k);
+  }
+  return c;
+}
+
+// The transfer function of a single-input single-output state space, both polynomials highest
+// power first: den = det(sI - A), num = det(sI - A + B C) - den + D den (the SISO identity
+// C adj(sI - A) B = det(sI - A + B C) - det(sI - A)).
+ContinuousTransferFunction state_space_transfer_function(const config::DelayStage::LinearFilter::StateSpace& spec,
+                                                         const std::string& field) {
+  const int n = spec.states();
+  const auto size = static_cast<std::size_t>(n);
+  if (n < 1 || n > 16) fail(field + ".state_space.states", std::to_string(n) + " is outside 1..16");
+  if (static_cast<std::size_t>(spec.a_size()) != size * size || static_cast<std::size_t>(spec.b_size()) != size ||
+      static_cast<std::size_t>(spec.c_size()) != size)
+    fail(field + ".state_space", "a needs states^2 = " + std::to_string(n * n) + " values (row-major), b and c " +
+                                     std::to_string(n) + "; got " + std::to_string(spec.a_size()) + ", " +
+                                     std::to_string(spec.b_size()) + ", " + std::to_string(spec.c_size()));
+  Mat a(n, n);
+  Vec b(n), c(n);
+  for (int i = 0; i < n; ++i) {
+    b[i] = spec.b(i);
+    c[i] = spec.c(i);
+    for (int j = 0; j < n; ++j) a(i, j) = spec.a(i * n + j);
+  }
+  if (!a.allFinite() || !b.allFinite() || !c.allFinite() || !std::isfinite(spec.d()))
+    fail(field + ".state_space", "holds a value that is not finite");
+  const std::vector<double> den = characteristic_polynomial(a);
+  const std::vector<double> coupled = characteristic_polynomial(a - b * c.transpose());
+  ContinuousTransferFunction tf{std::vector<double>(size + 1), den};
+  for (std::size_t i = 0; i <= size; ++i) tf.numerator[i] = coupled[i] - den[i] + spec.d() * den[i];
+  return tf;
+}
+
 }  // namespace
 
 DiscreteFilter::DiscreteFilter() : b_{1.0}, a_{1.0}, state_(1, 0.0) {}
@@ -74,6 +141,13 @@ DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double 
       }
       case K::kDiscrete:
         return DiscreteFilter(values(spec.discrete().numerator()), values(spec.discrete().denominator()));
+      case K::kStateSpace: {
+        // A polynomial in z, highest power first, is b(z^-1) in ascending powers: the same list.
+        const ContinuousTransferFunction tf = state_space_transfer_function(spec.state_space(), field);
+        if (spec.state_space().discrete()) return DiscreteFilter(tf.numerator, tf.denominator);
+        const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
+        return DiscreteFilter(d.b, d.a);
+      }
       case K::kPid: {
         const ContinuousTransferFunction tf = pid_transfer_function(spec.pid(), field);
         const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
@@ -93,7 +167,7 @@ DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double 
     if (what.rfind(field, 0) == 0) throw;
     fail(field, what);
   }
-  fail(field, "has no kind (continuous, discrete, pid or phase_lead)");
+  fail(field, "has no kind (continuous, discrete, pid, phase_lead or state_space)");
 }
 
 ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator, double h) {
@@ -107,9 +181,13 @@ ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<doubl
   c_ = Eigen::RowVectorXd::Zero(n);
   for (std::size_t k = 0; k < numerator.size(); ++k)
     c_(static_cast<Eigen::Index>(numerator.size() - 1 - k)) = numerator[k] / denominator[0];
+  // The companion form's entries span many decades (the benchmark plant's: 1 to 1e12), which the
+  // exponential's scaling and squaring amplifies; a balanced realisation D^-1 A D keeps it exact.
+  const Vec d = balance(a);
+  c_ = c_.cwiseProduct(d.transpose());
   Mat augmented = Mat::Zero(n + 1, n + 1);
   augmented.topLeftCorner(n, n) = a;
-  augmented(n - 1, n) = 1.0;
+  augmented(n - 1, n) = 1.0 / d[n - 1];
   const Mat e = (augmented * h).exp();
   ad_ = e.topLeftCorner(n, n);
   bd_ = e.block(0, n, n, 1);
@@ -182,6 +260,7 @@ TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double 
       converter_{spec.converter().range(), spec.converter().quantum()},
       noise_rms_(spec.displacement_noise_rms()),
       h_(h),
+      force_noise_rms_(spec.force_noise_rms()),
       seed_(spec.seed()),
       rng_(spec.seed()) {
   if (!(converter_.range >= 0 && converter_.quantum >= 0 && std::isfinite(converter_.range) &&
@@ -189,11 +268,19 @@ TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double 
     fail(field + ".converter", "range and quantum must be >= 0 m (0 = none)");
   if (!(noise_rms_ >= 0 && std::isfinite(noise_rms_)))
     fail(field + ".displacement_noise_rms", "must be >= 0 m");
+  if (!(force_noise_rms_ >= 0 && std::isfinite(force_noise_rms_)))
+    fail(field + ".force_noise_rms", "must be >= 0 N");
+  constexpr std::uint32_t kMaxForceDelay = 64;
+  if (spec.force_delay_periods() > kMaxForceDelay)
+    fail(field + ".force_delay_periods", std::to_string(spec.force_delay_periods()) + " is outside 0.." +
+                                             std::to_string(kMaxForceDelay));
+  force_queue_.assign(spec.force_delay_periods() + 1, 0.0);
   std::ostringstream label;
   label << "tracking-loop(" << (spec.has_benchmark_plant() ? "benchmark plant" : "plant")
         << (spec.has_controller() ? ", controller" : "") << (spec.has_feedforward() ? ", feedforward" : "")
         << (converter_.quantum > 0 || converter_.range > 0 ? ", converters" : "")
-        << (noise_rms_ > 0 ? ", noise" : "") << ")";
+        << (noise_rms_ > 0 ? ", noise" : "") << (force_noise_rms_ > 0 ? ", force noise" : "")
+        << (force_queue_.size() > 1 ? ", force delay " + std::to_string(force_queue_.size() - 1) : "") << ")";
   label_ = label.str();
   constexpr double w = 0.1;  // rad/s, well below every corner of a servo loop
   nominal_delay_ = -std::arg(response(w)) / w;
@@ -211,11 +298,23 @@ void TrackingLoop::reset() {
   feedforward_.reset();
   rng_.seed(seed_);
   normal_.reset();
+  sensor_error_ = 0.0;
+  std::fill(force_queue_.begin(), force_queue_.end(), 0.0);
+  force_head_ = 0;
+}
+
+double TrackingLoop::measure_force(double force) {
+  // The ring holds the readings of the last d + 1 periods; the slot written now is read d later.
+  const double reading = force + (force_noise_rms_ > 0 ? force_noise_rms_ * normal_(rng_) : 0.0);
+  force_queue_[force_head_] = reading;
+  force_head_ = (force_head_ + 1) % force_queue_.size();
+  return force_queue_[force_head_];
 }
 
 double TrackingLoop::step_unscaled(const CommandSample& in) {
   const double displacement = plant_.output();
-  const double measured = displacement + (noise_rms_ > 0 ? noise_rms_ * normal_(rng_) : 0.0);
+  sensor_error_ = noise_rms_ > 0 ? noise_rms_ * normal_(rng_) : 0.0;
+  const double measured = displacement + sensor_error_;
   const double target = converter_.digital_to_analog(feedforward_.step(converter_.analog_to_digital(in.displacement)));
   const double error = converter_.analog_to_digital(target - measured);
   plant_.advance(converter_.digital_to_analog(controller_.step(error)));

@@ -6,18 +6,25 @@
 //   y_k = x_k + noise_k                            (the displacement sensor the controller reads)
 //   u_k = DA(C(AD(DA(F(AD(r_k))) - y_k)))          (F feedforward, C controller, both discrete)
 //   P advances over [t_k, t_k + h] under u_k;  output x_k: the specimen's displacement, whose
-//   force (with the specimen's inertia and damping) is what the integrator gets back.
+//   force f_k (with the specimen's inertia and damping) is what the integrator gets back.
+//   sensor_error() = noise_k: the actuator reports y_k as the realised displacement.
+//   measure_force(f_k) = f_{k-d} + force noise_{k-d}: the load cell's reading reaches the
+//   integrator d = force_delay_periods servo periods later (zero before the first d periods).
 // AD/DA: saturation at +-range, quantisation to multiples of quantum (Converter; 0 = none).
-// Noise: Gaussian, rms given, from a seeded generator (the same draws in every process).
+// Noise: Gaussian, rms given, from one seeded generator (the same draws in every process):
+// per period the displacement's draw, then the force's.
 //
 // Blocks (each step(x) -> y with explicit state, no allocation after construction):
 //   DiscreteFilter  y = b(z^-1) / a(z^-1) x, direct form II transposed; a[0] = 1.
 //   ZohPlant        x+ = Ad x + Bd u, y = C x: a continuous num(s)/den(s) (strictly proper) in
-//                   controllable canonical form, Ad = e^{A h}, Bd = int_0^h e^{A r} dr B.
+//                   controllable canonical form, balanced (Parlett-Reinsch, powers of two),
+//                   Ad = e^{A h}, Bd = int_0^h e^{A r} dr B.
 //   Converter       AD/DA above.
 //   TrackingLoop    the loop above.
 // A continuous filter is discretised by Tustin at h (core::tustin); PI/PID and phase lead are
-// named forms of one: kp + ki/s + kd s/(tf s + 1), gain (s + zero)/(s + pole).
+// named forms of one: kp + ki/s + kd s/(tf s + 1), gain (s + zero)/(s + pole). A state space
+// (A, B, C, D), continuous or discrete, becomes its transfer function: den = det(sI - A),
+// num = det(sI - A + B C) - den + D den (characteristic polynomials by Faddeev-LeVerrier).
 // The loop's linear dynamics (converters and noise left out), for reports and analysis:
 //   H(z) = F(z) C(z) P(z) / (1 + C(z) P(z)),  P(z) = C (zI - Ad)^-1 Bd.
 
@@ -79,6 +86,8 @@ class TrackingLoop final : public DelayStage {
   // -arg H(e^{i w h}) / w at w = 0.1 rad/s: the loop's low-frequency lag (s).
   double nominal_delay() const override { return nominal_delay_; }
   std::complex<double> response(double omega) const;  // H(e^{i omega h})
+  double sensor_error() const override { return sensor_error_; }
+  double measure_force(double force) override;
 
  protected:
   double step_unscaled(const CommandSample& in) override;
@@ -87,7 +96,10 @@ class TrackingLoop final : public DelayStage {
   ZohPlant plant_;
   DiscreteFilter controller_, feedforward_;
   Converter converter_;
-  double noise_rms_ = 0.0, h_ = 0.0;
+  double noise_rms_ = 0.0, h_ = 0.0, sensor_error_ = 0.0;
+  double force_noise_rms_ = 0.0;
+  std::vector<double> force_queue_;  // the last force_delay_periods + 1 readings, a ring
+  std::size_t force_head_ = 0;
   std::uint64_t seed_ = 0;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_;

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <unistd.h>
 
@@ -79,6 +80,39 @@ TEST(MatrixStructureCli, BenchmarkCasePrintsItsCriteriaBesideThePublishedOnes) {
   EXPECT_NE(o.output.find("published (sample_controller)"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("vs published"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(out / "benchmark.json"));
+}
+
+// --perturbed N: N seeded perturbed-plant draws (case 1 cut to 6 s), J as mean +- std; the same
+// seed gives the same figures; a study without a benchmark section is refused.
+TEST(MatrixStructureCli, PerturbedPlantsReportMeanAndSpreadOfTheCriteria) {
+  const auto dir = scratch() / "perturbed";
+  std::filesystem::create_directories(dir);
+  for (const char* file : {"case_1.mat", "el_centro.txt"})
+    std::filesystem::copy_file(kSource / "configs/benchmark" / file, dir / file,
+                               std::filesystem::copy_options::overwrite_existing);
+  std::ifstream in(kSource / "configs/benchmark/case_1.textproto");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string scale = "scale: 0.4 }";
+  ASSERT_NE(text.find(scale), std::string::npos);
+  text.replace(text.find(scale), scale.size(), "scale: 0.4 duration: 6 }");
+  std::ofstream(dir / "case_1.textproto") << text;
+  const std::string command = "run " + (dir / "case_1.textproto").string() + " --no-plots --perturbed 3 --perturbed-seed 5 --out ";
+  const auto first = run(command + (dir / "a").string());
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("perturbed plants, sample_controller: 3 draws (seed 5), mean +- std"), std::string::npos)
+      << first.output;
+  std::ifstream json_a(dir / "a" / "benchmark_perturbed.json");
+  const std::string a((std::istreambuf_iterator<char>(json_a)), std::istreambuf_iterator<char>());
+  EXPECT_NE(a.find("\"draws\": 3"), std::string::npos) << a;
+  const auto second = run(command + (dir / "b").string());
+  ASSERT_EQ(second.exit_code, 0) << second.output;
+  std::ifstream json_b(dir / "b" / "benchmark_perturbed.json");
+  EXPECT_EQ(a, std::string((std::istreambuf_iterator<char>(json_b)), std::istreambuf_iterator<char>()));
+
+  const auto zero = run("run " + (dir / "case_1.textproto").string() + " --no-plots --perturbed 0 --out " + (dir / "c").string());
+  EXPECT_EQ(zero.exit_code, 2) << zero.output;
+  expect_bad_input(study("no_benchmark", "mass { rows: 1 values: 1 } stiffness { rows: 1 values: 100 }") + " --perturbed 2",
+                   {"--perturbed", "no benchmark section"});
 }
 
 }  // namespace

@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
+#include <memory>
+#include <string>
 
 namespace rths::core {
 namespace {
@@ -47,6 +50,58 @@ TEST(DiscreteFilterTest, PhaseLeadKeepsItsDcGainAndBadFiltersNameTheField) {
   EXPECT_THROW(make_filter(config::DelayStage::LinearFilter(), 0.001, "f"), std::invalid_argument);
 }
 
+// A state space is the transfer function it realises: the PI 2 + 95/s as x' = u, y = 95 x + 2 u
+// (Tustin) steps as the named PI does; a discrete one x+ = x + u, y = 0.5 x + u is
+// (1 - 0.5 z^-1) / (1 - z^-1); a wrong size names the field and the sizes.
+TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
+  const double h = 1.0 / 4096;
+  config::DelayStage::LinearFilter pi, space;
+  pi.mutable_pid()->set_kp(2.0);
+  pi.mutable_pid()->set_ki(95.0);
+  auto* ss = space.mutable_state_space();
+  ss->set_states(1);
+  ss->add_a(0.0);
+  ss->add_b(1.0);
+  ss->add_c(95.0);
+  ss->set_d(2.0);
+  DiscreteFilter named = make_filter(pi, h, "c"), realised = make_filter(space, h, "c");
+  for (int k = 0; k < 50; ++k) {
+    const double u = std::sin(0.3 * k);
+    EXPECT_NEAR(realised.step(u), named.step(u), 1e-12) << k;
+  }
+
+  // Two states with a coupling: x' = [0 1; -4 -0.4] x + [0; 1] u, y = [4 0] x: 4 / (s^2 + 0.4 s + 4).
+  config::DelayStage::LinearFilter oscillator, continuous;
+  auto* two = oscillator.mutable_state_space();
+  two->set_states(2);
+  for (double v : {0.0, 1.0, -4.0, -0.4}) two->add_a(v);
+  for (double v : {0.0, 1.0}) two->add_b(v);
+  for (double v : {4.0, 0.0}) two->add_c(v);
+  for (double v : {4.0}) continuous.mutable_continuous()->add_numerator(v);
+  for (double v : {1.0, 0.4, 4.0}) continuous.mutable_continuous()->add_denominator(v);
+  const DiscreteFilter from_space = make_filter(oscillator, 0.01, "c"), from_tf = make_filter(continuous, 0.01, "c");
+  for (double w : {0.5, 2.0, 20.0}) {
+    const std::complex<double> z = std::exp(std::complex<double>(0.0, w * 0.01));
+    EXPECT_NEAR(std::abs(from_space.response(z) - from_tf.response(z)), 0.0, 1e-12) << w;
+  }
+
+  ss->set_discrete(true);
+  ss->set_c(0, 0.5);
+  ss->set_d(1.0);
+  ss->set_a(0, 1.0);
+  DiscreteFilter discrete = make_filter(space, h, "c"), expected({1.0, -0.5}, {1.0, -1.0});
+  for (int k = 0; k < 20; ++k) EXPECT_NEAR(discrete.step(1.0), expected.step(1.0), 1e-12) << k;
+
+  ss->add_b(1.0);
+  try {
+    make_filter(space, h, "cases[1].delay[0].tracking_loop.controller");
+    FAIL() << "a 1-state space with 2 inputs in b was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("tracking_loop.controller.state_space: a needs states^2 = 1 values"),
+              std::string::npos) << e.what();
+  }
+}
+
 TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
   const double h = 0.002;
   ZohPlant plant({50.0}, {1.0, 50.0}, h);
@@ -56,6 +111,17 @@ TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
   }
   EXPECT_NEAR(std::abs(plant.response(1.0)), 1.0, 1e-12);  // DC gain
   EXPECT_THROW(ZohPlant({1.0, 0.0}, {1.0, 50.0}, h), std::invalid_argument);  // not strictly proper
+}
+
+// The benchmark plant's companion form spans twelve decades; its discretisation must still settle
+// at the DC gain for any draw of the perturbed plants (here beta2 2 % off nominal).
+TEST(ZohPlantTest, BenchmarkPlantSettlesAtItsDcGainWhenPerturbed) {
+  config::DelayStage::BenchmarkPlant spec;
+  spec.set_beta2(1.02e5);
+  const ContinuousTransferFunction tf = benchmark_actuator_transfer_function(benchmark_plant_parameters(spec));
+  ZohPlant plant(tf.numerator, tf.denominator, 1.0 / 4096);
+  for (int k = 0; k < 3 * 4096; ++k) plant.advance(1.0);
+  EXPECT_NEAR(plant.output(), tf.numerator.back() / tf.denominator.back(), 1e-3);
 }
 
 TEST(ConverterTest, SaturatesAndQuantises) {
@@ -96,6 +162,66 @@ TEST(TrackingLoopTest, SeededNoiseRepeatsAfterResetAndInACopy) {
     EXPECT_EQ(a.step({k * 0.001, 0.0, 0.0}), first[static_cast<std::size_t>(k)]);
     EXPECT_EQ(copy->step({k * 0.001, 0.0, 0.0}), first[static_cast<std::size_t>(k)]);
   }
+}
+
+// The displacement sensor's reading is the output plus the drawn error; the load cell's reading
+// reaches the integrator force_delay_periods periods later, with its own noise.
+TEST(TrackingLoopTest, SensorsReportTheirReadingsAndTheLoadCellItsDelayedForce) {
+  auto spec = first_order_loop(2.0, 100.0);
+  spec.set_force_delay_periods(2);
+  TrackingLoop quiet(spec, 0.001, "t");
+  EXPECT_EQ(quiet.measure_force(10.0), 0.0);
+  EXPECT_EQ(quiet.measure_force(20.0), 0.0);
+  EXPECT_EQ(quiet.measure_force(30.0), 10.0);
+  EXPECT_EQ(quiet.measure_force(40.0), 20.0);
+  quiet.reset();
+  EXPECT_EQ(quiet.measure_force(50.0), 0.0);  // reset empties the queue
+  quiet.step({0.0, 0.01, 0.0});
+  EXPECT_EQ(quiet.sensor_error(), 0.0);
+
+  spec.set_force_delay_periods(0);
+  spec.set_displacement_noise_rms(1e-4);
+  spec.set_force_noise_rms(2.0);
+  spec.set_seed(11);
+  TrackingLoop noisy(spec, 0.001, "t");
+  double displacement_square = 0.0, force_square = 0.0;
+  constexpr int kDraws = 20000;
+  for (int k = 0; k < kDraws; ++k) {
+    noisy.step({k * 0.001, 0.0, 0.0});
+    displacement_square += noisy.sensor_error() * noisy.sensor_error();
+    const double force_error = noisy.measure_force(5.0) - 5.0;
+    force_square += force_error * force_error;
+  }
+  EXPECT_NEAR(std::sqrt(displacement_square / kDraws), 1e-4, 3e-6);
+  EXPECT_NEAR(std::sqrt(force_square / kDraws), 2.0, 0.06);
+
+  spec.set_force_delay_periods(65);
+  try {
+    TrackingLoop bad(spec, 0.001, "cases[1].delay[0].tracking_loop");
+    FAIL() << "a force delay of 65 periods was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cases[1].delay[0].tracking_loop.force_delay_periods: 65 is outside 0..64"),
+              std::string::npos) << e.what();
+  }
+  spec.set_force_delay_periods(0);
+  spec.set_force_noise_rms(-1.0);
+  EXPECT_THROW(TrackingLoop(spec, 0.001, "t"), std::invalid_argument);
+}
+
+// A chain reports the specimen's displacement from step() and the sensor's reading from measured().
+TEST(TrackingLoopTest, ChainMeasuresWhatItsSensorReads) {
+  auto spec = first_order_loop(2.0, 100.0);
+  spec.set_displacement_noise_rms(1e-3);
+  spec.set_seed(3);
+  DelayChain chain;
+  chain.add(std::make_unique<TrackingLoop>(spec, 0.001, "t"));
+  TrackingLoop alone(spec, 0.001, "t");
+  for (int k = 0; k < 20; ++k) {
+    const double output = chain.step({k * 0.001, 0.01, 0.0});
+    EXPECT_EQ(output, alone.step({k * 0.001, 0.01, 0.0}));
+    EXPECT_EQ(chain.measured(), output + alone.sensor_error());
+  }
+  EXPECT_NE(alone.sensor_error(), 0.0);
 }
 
 TEST(TrackingLoopTest, BenchmarkPlantIsTheNominalF1PlantUnlessOverridden) {
