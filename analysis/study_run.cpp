@@ -191,6 +191,11 @@ std::optional<core::CriticalDelayCheck> check_case_critical_delay(const core::Pr
   return check_setup(prepared, setup, nominal_delay_of(setup) + extra_lag);
 }
 
+std::optional<core::CriticalDelayCheck> check_lag_critical_delay(const core::PreparedStudy& prepared,
+                                                                 double lag) {
+  return check_setup(prepared, prepared.base, lag);
+}
+
 const CaseOutcome& StudyOutcome::reference() const {
   return lag_free_reference ? *lag_free_reference : cases.at(reference_index);
 }

@@ -95,6 +95,11 @@ std::optional<core::CriticalDelayCheck> check_case_critical_delay(const core::Pr
                                                                   const config::Case& study_case,
                                                                   double extra_lag = 0.0);
 
+// The same check for a lag given directly (s; e.g. an identified actuator's nominal delay) on
+// the study's base setup. Empty when the structure has no experimental part.
+std::optional<core::CriticalDelayCheck> check_lag_critical_delay(const core::PreparedStudy& prepared,
+                                                                 double lag);
+
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
 
 // A case that ran elsewhere (`rths launch`, `rths sites`), as its record tells it.

@@ -134,6 +134,65 @@ std::vector<Row> evaluate(const std::filesystem::path& config, const std::filesy
 
 const char* verdict(bool ok) { return ok ? "met" : "NOT MET"; }
 
+// The targets each compensator family is judged on, for one study's rows.
+void print_targets(const std::filesystem::path& config, const std::vector<Row>& rows) {
+  const Row* best = best_compensated(rows, false);
+  // Worst case with the lag 30 % off, per family of blocks designed on the nominal model.
+  const Row* worst_robust = nullptr;          // model_based_lag_*: the fixed feedforward
+  const Row* worst_adapted_robust = nullptr;  // model_based_adaptive_lag_*
+  const Row* worst_adaptive = nullptr;        // ats_lag_*
+  for (const Row& r : rows) {
+    if (r.name.find("_lag_") == std::string::npos) continue;
+    const Row*& slot = r.name.rfind("model_based_adaptive", 0) == 0 ? worst_adapted_robust
+                       : r.name.rfind("model_based", 0) == 0        ? worst_robust
+                                                                    : worst_adaptive;
+    if (!slot || r.nrmse > slot->nrmse) slot = &r;
+  }
+  const Row* uncompensated = nullptr;
+  for (const Row& r : rows) if (!r.compensated) uncompensated = &r;
+  std::printf("targets:\n");
+  if (uncompensated) {
+    std::printf("  uncompensated: NRMSE %.1f %%, J1 %.2f ms, J2 %.2f %%\n", uncompensated->nrmse,
+                uncompensated->j.J(1) * 1e3, uncompensated->j.J(2));
+  }
+  if (best) {
+    std::printf("  best compensator (%s): NRMSE %.2f %% (target <= 5 %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)\n",
+                best->name.c_str(), best->nrmse, verdict(best->nrmse <= 5.0),
+                best->j.J(1) * 1e3, verdict(std::abs(best->j.J(1)) <= 1e-3), best->j.J(2),
+                verdict(best->j.J(2) <= 5.0));
+    if (config.filename().string().find("benchmark") != std::string::npos) {
+      std::printf("  published sample controller (PI + phase lead, Silva, Dyke et al. 2020): J1 4.6 ms, J2 ~9-10 %%: best beats it on J1 %s, on J2 %s\n",
+                  verdict(std::abs(best->j.J(1)) < 4.6e-3), verdict(best->j.J(2) < 9.0));
+    }
+  }
+  if (worst_robust) {
+    std::printf("  model-based (fixed feedforward) with the lag 30 %% off, worst (%s): NRMSE %.2f %% (target <= 15 %%: %s%s)\n",
+                worst_robust->name.c_str(), worst_robust->nrmse, verdict(worst_robust->nrmse <= 15.0),
+                worst_adapted_robust && worst_robust->nrmse > 15.0
+                    ? " by the fixed feedforward; the adaptive correction below is the answer"
+                    : "");
+  }
+  // The adapted model-based block, case by case: nominal, lag +30 %, lag -30 %.
+  for (const Row& r : rows) {
+    if (r.name.rfind("model_based_adaptive", 0) != 0) continue;
+    const bool robustness = r.name.find("_lag_") != std::string::npos;
+    const double nrmse_target = robustness ? 15.0 : 5.0;
+    std::printf("  model-based + adaptive correction (%s): NRMSE %.2f %% (target <= %.0f %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)%s\n",
+                r.name.c_str(), r.nrmse, nrmse_target, verdict(!r.diverged && r.nrmse <= nrmse_target),
+                r.j.J(1) * 1e3, verdict(std::abs(r.j.J(1)) <= 1e-3), r.j.J(2),
+                verdict(r.j.J(2) <= 5.0), r.diverged ? " DIVERGED" : "");
+  }
+  if (worst_adapted_robust) {
+    std::printf("  model-based + adaptive correction with the lag 30 %% off, worst (%s): NRMSE %.2f %% (target <= 15 %%: %s)\n",
+                worst_adapted_robust->name.c_str(), worst_adapted_robust->nrmse,
+                verdict(!worst_adapted_robust->diverged && worst_adapted_robust->nrmse <= 15.0));
+  }
+  if (worst_adaptive) {
+    std::printf("  ATS started from the nominal model, lag 30 %% off, worst (%s): NRMSE %.2f %%\n",
+                worst_adaptive->name.c_str(), worst_adaptive->nrmse);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -157,61 +216,7 @@ int main(int argc, char** argv) {
   try {
     for (const auto& config : configs) {
       const std::vector<Row> rows = evaluate(config, out);
-      const Row* best = best_compensated(rows, false);
-      // Worst case with the lag 30 % off, per family of blocks designed on the nominal model.
-      const Row* worst_robust = nullptr;          // model_based_lag_*: the fixed feedforward
-      const Row* worst_adapted_robust = nullptr;  // model_based_adaptive_lag_*
-      const Row* worst_adaptive = nullptr;        // ats_lag_*
-      for (const Row& r : rows) {
-        if (r.name.find("_lag_") == std::string::npos) continue;
-        const Row*& slot = r.name.rfind("model_based_adaptive", 0) == 0 ? worst_adapted_robust
-                           : r.name.rfind("model_based", 0) == 0        ? worst_robust
-                                                                        : worst_adaptive;
-        if (!slot || r.nrmse > slot->nrmse) slot = &r;
-      }
-      const Row* uncompensated = nullptr;
-      for (const Row& r : rows) if (!r.compensated) uncompensated = &r;
-      std::printf("targets:\n");
-      if (uncompensated) {
-        std::printf("  uncompensated: NRMSE %.1f %%, J1 %.2f ms, J2 %.2f %%\n", uncompensated->nrmse,
-                    uncompensated->j.J(1) * 1e3, uncompensated->j.J(2));
-      }
-      if (best) {
-        std::printf("  best compensator (%s): NRMSE %.2f %% (target <= 5 %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)\n",
-                    best->name.c_str(), best->nrmse, verdict(best->nrmse <= 5.0),
-                    best->j.J(1) * 1e3, verdict(std::abs(best->j.J(1)) <= 1e-3), best->j.J(2),
-                    verdict(best->j.J(2) <= 5.0));
-        if (config.filename().string().find("benchmark") != std::string::npos) {
-          std::printf("  published sample controller (PI + phase lead, Silva, Dyke et al. 2020): J1 4.6 ms, J2 ~9-10 %%: best beats it on J1 %s, on J2 %s\n",
-                      verdict(std::abs(best->j.J(1)) < 4.6e-3), verdict(best->j.J(2) < 9.0));
-        }
-      }
-      if (worst_robust) {
-        std::printf("  model-based (fixed feedforward) with the lag 30 %% off, worst (%s): NRMSE %.2f %% (target <= 15 %%: %s%s)\n",
-                    worst_robust->name.c_str(), worst_robust->nrmse, verdict(worst_robust->nrmse <= 15.0),
-                    worst_adapted_robust && worst_robust->nrmse > 15.0
-                        ? " by the fixed feedforward; the adaptive correction below is the answer"
-                        : "");
-      }
-      // The adapted model-based block, case by case: nominal, lag +30 %, lag -30 %.
-      for (const Row& r : rows) {
-        if (r.name.rfind("model_based_adaptive", 0) != 0) continue;
-        const bool robustness = r.name.find("_lag_") != std::string::npos;
-        const double nrmse_target = robustness ? 15.0 : 5.0;
-        std::printf("  model-based + adaptive correction (%s): NRMSE %.2f %% (target <= %.0f %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)%s\n",
-                    r.name.c_str(), r.nrmse, nrmse_target, verdict(!r.diverged && r.nrmse <= nrmse_target),
-                    r.j.J(1) * 1e3, verdict(std::abs(r.j.J(1)) <= 1e-3), r.j.J(2),
-                    verdict(r.j.J(2) <= 5.0), r.diverged ? " DIVERGED" : "");
-      }
-      if (worst_adapted_robust) {
-        std::printf("  model-based + adaptive correction with the lag 30 %% off, worst (%s): NRMSE %.2f %% (target <= 15 %%: %s)\n",
-                    worst_adapted_robust->name.c_str(), worst_adapted_robust->nrmse,
-                    verdict(!worst_adapted_robust->diverged && worst_adapted_robust->nrmse <= 15.0));
-      }
-      if (worst_adaptive) {
-        std::printf("  ATS started from the nominal model, lag 30 %% off, worst (%s): NRMSE %.2f %%\n",
-                    worst_adaptive->name.c_str(), worst_adaptive->nrmse);
-      }
+      print_targets(config, rows);
     }
   } catch (const std::exception& e) {
     std::cerr << "compensation_bench: " << e.what() << "\n";

@@ -197,80 +197,99 @@ void run_identify(const IdentifyCliOptions& o) {
 
 }  // namespace
 
+namespace {
+
+// What is read: the data, its units and columns, the channels, the declared model.
+void add_input_options(CLI::App* cmd, IdentifyCliOptions& o) {
+  cmd->add_option("data", o.data,
+                  "CSV time,command,measured,force, a raw DAQ export (Header Size: ...) or a "
+                  "distributed run's record RECORD.rthsrec (every link and actuator identified)")
+      ->required();
+  cmd->add_option("--time-unit", o.time_unit, "CSV time unit: s | ms");
+  cmd->add_option("--length-unit", o.length_unit,
+                  "CSV displacement unit: m | mm | cm | in (default mm; echoed in every report)");
+  cmd->add_option("--force-unit", o.force_unit, "CSV force unit: N | kN | lbf | kip");
+  cmd->add_option("--column-map", o.column_map,
+                  "DAQ columns and scales to mm / N, e.g. "
+                  "command=CHANNEL2*10,measured=CHANNEL0*10,force=CHANNEL1*9806.65 (the default)");
+  cmd->add_option("--channels", o.channels, "channels to identify: measured,force");
+  cmd->add_option("--model", o.model,
+                  "declared model file (text-format rths.config.DeclaredModel, proto/identify.proto): "
+                  "actuator stages, specimen kind, each parameter's initial value, min, max, fixed; "
+                  "replaces --declared-actuator / --declared-specimen for the channels it declares");
+  cmd->add_option("--sample-rate", o.sample_rate,
+                  "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
+                  "export without Sampling Interval/Rate); checked against the file's own when both")
+      ->check(in_range(core::Quantity::kFrequency));
+}
+
+// How the candidates are searched and the held-out error judged.
+void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
+  cmd->add_option("--candidates", o.candidates, "candidate effects (default: the whole library)");
+  cmd->add_option("--holdout", o.holdout, "held-out share of the record")
+      ->check(CLI::Range(0.01, 0.99));
+  cmd->add_option("--holdout-mode", o.holdout_mode, "blocks (segment-wise) | last")
+      ->check(CLI::IsMember({"blocks", "last"}));
+  cmd->add_option("--blocks", o.blocks, "number of segments for --holdout-mode blocks")
+      ->check(CLI::Range(2, 1000));
+  cmd->add_option("--min-improvement", o.min_improvement,
+                  "relative fall of the held-out error an effect must bring")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--penalty", o.penalty, "relative penalty per added parameter")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-steps", o.max_steps, "at most this many effects per channel")->check(CLI::Range(0, 1000));  // 0: fit the declared model only
+  cmd->add_option("--decimate", o.decimate, "decimation for the search (0: automatic)");
+  cmd->add_option("--search-samples", o.search_samples,
+                  "automatic decimation keeps at most about this many samples")
+      ->check(in_range(core::Quantity::kCount));
+  cmd->add_option("--search-tolerance", o.search_tolerance,
+                  "relative change of cost or parameters at which a fit of the decimated search "
+                  "stops (the full-rate refits stop at 1e-10)")
+      ->check(CLI::Range(1e-12, 1e-2));
+  cmd->add_option("--search-iterations", o.search_iterations,
+                  "at most this many solver iterations per fit of the decimated search")
+      ->check(CLI::Range(1, 1000));
+}
+
+// What is written and run with the result: plots and tables, prediction, compensator, validation.
+void add_output_options(CLI::App* cmd, IdentifyCliOptions& o) {
+  cmd->add_option("--out", o.out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run); for a RECORD.rthsrec: identified_run.textproto (the run's study with the identified actuator as case identified_actuator and each substructure link's measured lag; rths run / launch accept it) and the lag trace of every link, lag_node_<id>.csv, with the plots record_lag.png (lag per link: measured, injected, identified model), record_response.png (response per floor: recorded, declared and identified re-runs) and record_shares.png (what each link and effect explains)");
+  cmd->add_option("--format", o.format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
+  cmd->add_option("--predict", o.predict,
+                  "study config to run with the identified actuator (e.g. configs/paper_frame.textproto); "
+                  "with --out, also written back with the identified model as identified_study.textproto");
+  cmd->add_option("--design-compensator", o.design_compensator,
+                  "write a compensator designed from the identified actuator to --out: "
+                  "polynomial | ats | model-based | model-based-adaptive")
+      ->check(CLI::IsMember({"polynomial", "ats", "model-based", "model-based-adaptive"}));
+  cmd->add_option("--design-dt", o.design_dt, "integration step of the planned test (s, or 1ms)")
+      ->transform(seconds_in(core::Quantity::kStep));
+  cmd->add_option("--folds", o.folds,
+                  "k-fold validation over contiguous blocks of the final model (0: off)");
+  cmd->add_option("--validate", o.validate,
+                  "another record of the same rig: the identified models' error on it");
+  cmd->add_flag("--trim-idle", o.trim_idle,
+                "cut the idle stretches before and after the test off the record(s): keep from "
+                "0.25 s before the command first leaves its rest by 5 % of its peak to 0.25 s after "
+                "it last does");
+  cmd->add_flag("--json", o.json, "print the steps and models as JSON");
+}
+
+}  // namespace
+
 void add_identify_command(CLI::App& app) {
   auto o = std::make_shared<IdentifyCliOptions>();
   CLI::App* cmd = app.add_subcommand(
       "identify", "Find the effects a declared actuator/specimen model lacks in measured data");
-  cmd->add_option("data", o->data,
-                  "CSV time,command,measured,force, a raw DAQ export (Header Size: ...) or a "
-                  "distributed run's record RECORD.rthsrec (every link and actuator identified)")
-      ->required();
-  cmd->add_option("--time-unit", o->time_unit, "CSV time unit: s | ms");
-  cmd->add_option("--length-unit", o->length_unit,
-                  "CSV displacement unit: m | mm | cm | in (default mm; echoed in every report)");
-  cmd->add_option("--force-unit", o->force_unit, "CSV force unit: N | kN | lbf | kip");
-  cmd->add_option("--column-map", o->column_map,
-                  "DAQ columns and scales to mm / N, e.g. "
-                  "command=CHANNEL2*10,measured=CHANNEL0*10,force=CHANNEL1*9806.65 (the default)");
-  cmd->add_option("--channels", o->channels, "channels to identify: measured,force");
+  add_input_options(cmd, *o);
   CLI::Option* actuator_flag = cmd->add_option(
       "--declared-actuator", o->declared_actuator,
       "declared actuator effects (gain is always there), comma list or none");
   CLI::Option* specimen_flag = cmd->add_option("--declared-specimen", o->declared_specimen,
                                                "declared specimen effects, comma list or none");
-  cmd->add_option("--model", o->model,
-                  "declared model file (text-format rths.config.DeclaredModel, proto/identify.proto): "
-                  "actuator stages, specimen kind, each parameter's initial value, min, max, fixed; "
-                  "replaces --declared-actuator / --declared-specimen for the channels it declares");
-  cmd->add_option("--sample-rate", o->sample_rate,
-                  "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
-                  "export without Sampling Interval/Rate); checked against the file's own when both")
-      ->check(in_range(core::Quantity::kFrequency));
-  cmd->add_option("--candidates", o->candidates, "candidate effects (default: the whole library)");
-  cmd->add_option("--holdout", o->holdout, "held-out share of the record")
-      ->check(CLI::Range(0.01, 0.99));
-  cmd->add_option("--holdout-mode", o->holdout_mode, "blocks (segment-wise) | last")
-      ->check(CLI::IsMember({"blocks", "last"}));
-  cmd->add_option("--blocks", o->blocks, "number of segments for --holdout-mode blocks")
-      ->check(CLI::Range(2, 1000));
-  cmd->add_option("--min-improvement", o->min_improvement,
-                  "relative fall of the held-out error an effect must bring")
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--penalty", o->penalty, "relative penalty per added parameter")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-steps", o->max_steps, "at most this many effects per channel")->check(CLI::Range(0, 1000));  // 0: fit the declared model only
-  cmd->add_option("--decimate", o->decimate, "decimation for the search (0: automatic)");
-  cmd->add_option("--search-samples", o->search_samples,
-                  "automatic decimation keeps at most about this many samples")
-      ->check(in_range(core::Quantity::kCount));
-  cmd->add_option("--search-tolerance", o->search_tolerance,
-                  "relative change of cost or parameters at which a fit of the decimated search "
-                  "stops (the full-rate refits stop at 1e-10)")
-      ->check(CLI::Range(1e-12, 1e-2));
-  cmd->add_option("--search-iterations", o->search_iterations,
-                  "at most this many solver iterations per fit of the decimated search")
-      ->check(CLI::Range(1, 1000));
-  cmd->add_option("--out", o->out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run); for a RECORD.rthsrec: identified_run.textproto (the run's study with the identified actuator as case identified_actuator and each substructure link's measured lag; rths run / launch accept it) and the lag trace of every link, lag_node_<id>.csv, with the plots record_lag.png (lag per link: measured, injected, identified model), record_response.png (response per floor: recorded, declared and identified re-runs) and record_shares.png (what each link and effect explains)");
-  cmd->add_option("--format", o->format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
-      ->check(CLI::IsMember({"csv", "mat", "h5"}));
-  cmd->add_option("--predict", o->predict,
-                  "study config to run with the identified actuator (e.g. configs/paper_frame.textproto); "
-                  "with --out, also written back with the identified model as identified_study.textproto");
-  cmd->add_option("--design-compensator", o->design_compensator,
-                  "write a compensator designed from the identified actuator to --out: "
-                  "polynomial | ats | model-based | model-based-adaptive")
-      ->check(CLI::IsMember({"polynomial", "ats", "model-based", "model-based-adaptive"}));
-  cmd->add_option("--design-dt", o->design_dt, "integration step of the planned test (s, or 1ms)")
-      ->transform(seconds_in(core::Quantity::kStep));
-  cmd->add_option("--folds", o->folds,
-                  "k-fold validation over contiguous blocks of the final model (0: off)");
-  cmd->add_option("--validate", o->validate,
-                  "another record of the same rig: the identified models' error on it");
-  cmd->add_flag("--trim-idle", o->trim_idle,
-                "cut the idle stretches before and after the test off the record(s): keep from "
-                "0.25 s before the command first leaves its rest by 5 % of its peak to 0.25 s after "
-                "it last does");
-  cmd->add_flag("--json", o->json, "print the steps and models as JSON");
+  add_search_options(cmd, *o);
+  add_output_options(cmd, *o);
   cmd->callback([o, actuator_flag, specimen_flag] {
     o->actuator_flag_given = actuator_flag->count() > 0;
     o->specimen_flag_given = specimen_flag->count() > 0;

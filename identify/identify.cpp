@@ -28,6 +28,44 @@ std::size_t identify_units(const IdentifyOptions& options) {
   return total;
 }
 
+namespace {
+
+// Refits the search's models at the full rate, from the search's parameters; the ranking keeps
+// the search's errors. A step that paid on the search data but not at the full rate is dropped,
+// with every step after it.
+void refit_at_full_rate(ChannelIdentification& id, const ChannelSignals& signals,
+                        const Split& split, const FitOptions& full_fit) {
+  id.declared_fit = fit_channel(id.declared_fit.model, signals, split, full_fit);
+  id.start_fit = id.kind && id.kind->proposed
+                     ? fit_channel(id.start_fit.model, signals, split, full_fit)
+                     : id.declared_fit;
+  if (id.kind) {
+    for (auto& trial : id.kind->ranking) trial.fit.prediction.clear();
+  }
+  FitResult previous = id.start_fit;
+  for (std::size_t k = 0; k < id.steps.size(); ++k) {
+    auto& step = id.steps[k];
+    step.before = previous;
+    step.evidence_before = residual_evidence(signals, previous.prediction);
+    step.after = fit_channel(step.after.model, signals, split, full_fit);
+    for (auto& trial : step.ranking) trial.fit.prediction.clear();
+    if (!(step.after.heldout_error < step.before.heldout_error)) {
+      // Paid on the search data but not at the full rate: not added, and nothing after it.
+      id.dropped_at_full_rate.assign(id.steps.begin() + static_cast<std::ptrdiff_t>(k),
+                                     id.steps.end());
+      id.steps.resize(k);
+      break;
+    }
+    previous = step.after;
+  }
+  id.final_fit = previous;
+  attribute_shares(id, signals, split, full_fit);
+  id.final_evidence = residual_evidence(signals, previous.prediction);
+  for (auto& trial : id.last_ranking) trial.fit.prediction.clear();
+}
+
+}  // namespace
+
 Identification identify(const MeasuredData& data, const IdentifyOptions& options) {
   Identification result;
   result.source = data.source;
@@ -78,36 +116,7 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
                                                 selection, declarations);
     report(channel_start + search_units, name + ": full-rate refit");
     ChannelSignals signals = make_signals(data, channel);
-    if (factor > 1) {
-      // Refit at the full rate from the search's parameters; the ranking keeps search errors.
-      id.declared_fit = fit_channel(id.declared_fit.model, signals, result.split, full_fit);
-      id.start_fit = id.kind && id.kind->proposed
-                         ? fit_channel(id.start_fit.model, signals, result.split, full_fit)
-                         : id.declared_fit;
-      if (id.kind) {
-        for (auto& trial : id.kind->ranking) trial.fit.prediction.clear();
-      }
-      FitResult previous = id.start_fit;
-      for (std::size_t k = 0; k < id.steps.size(); ++k) {
-        auto& step = id.steps[k];
-        step.before = previous;
-        step.evidence_before = residual_evidence(signals, previous.prediction);
-        step.after = fit_channel(step.after.model, signals, result.split, full_fit);
-        for (auto& trial : step.ranking) trial.fit.prediction.clear();
-        if (!(step.after.heldout_error < step.before.heldout_error)) {
-          // Paid on the search data but not at the full rate: not added, and nothing after it.
-          id.dropped_at_full_rate.assign(id.steps.begin() + static_cast<std::ptrdiff_t>(k),
-                                         id.steps.end());
-          id.steps.resize(k);
-          break;
-        }
-        previous = step.after;
-      }
-      id.final_fit = previous;
-      attribute_shares(id, signals, result.split, full_fit);
-      id.final_evidence = residual_evidence(signals, previous.prediction);
-      for (auto& trial : id.last_ranking) trial.fit.prediction.clear();
-    }
+    if (factor > 1) refit_at_full_rate(id, signals, result.split, full_fit);
     id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);
     result.channels.push_back(std::move(id));
     result.signals.push_back(std::move(signals));

@@ -12,10 +12,12 @@
 // printed).
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/delay.h"
+#include "core/stability.h"
 #include "identify/model.h"
 
 namespace rths::identify {
@@ -42,6 +44,10 @@ struct StudyPrediction {
   std::vector<CaseError> cases;  // the config's own cases, for comparison
   std::string actuator;          // description of the chain
   std::vector<std::string> ignored;
+  // The identified actuator's lag against the study's critical delay (analysis/study_run.h's one
+  // pre-run judgement): the margin, the verdict and the lag the test could take. Empty when the
+  // study has no experimental part.
+  std::optional<core::CriticalDelayCheck> stability;
 };
 
 // Throws what load_study/prepare_study/simulate throw (std::invalid_argument naming the config).

@@ -126,6 +126,19 @@ std::string format_value(double v) {
   return buffer;
 }
 
+// The identified lag against the planned test's critical delay, as every pre-run check says it,
+// and the lag the test could take.
+std::string predicted_verdict(const core::CriticalDelayCheck& check) {
+  std::string text = check.describe();
+  if (const auto critical = check.critical()) {
+    text += "; the test could take up to ";
+    text += format_value(*critical * 1e3);
+    text += " ms";
+    if (check.past()) text += ": expect it to diverge without compensation (--design-compensator)";
+  }
+  return text;
+}
+
 std::string percent(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.2f %%", 100.0 * v);
@@ -307,6 +320,15 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                          {"ignored", prediction->ignored},
                          {"identified", case_json(prediction->identified)},
                          {"cases", cases}};
+    if (const auto& st = prediction->stability) {
+      const auto critical = st->critical();
+      out["prediction"]["stability"] = {
+          {"lag_s", st->lag},
+          {"critical_delay_s", critical ? nlohmann::json(*critical) : nlohmann::json(nullptr)},
+          {"margin", critical ? nlohmann::json(st->margin()) : nlohmann::json(nullptr)},
+          {"past", st->past()},
+          {"verdict", predicted_verdict(*st)}};
+    }
   }
   return out;
 }
@@ -424,6 +446,8 @@ std::string format_table(const Identification& id,
     };
     line(prediction->identified);
     for (const auto& c : prediction->cases) line(c);
+    if (const auto& st = prediction->stability)
+      out << "  before booking the lab: the identified actuator's " << predicted_verdict(*st) << "\n";
   }
   return out.str();
 }

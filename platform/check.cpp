@@ -13,7 +13,11 @@ namespace {
 
 std::string cpu_list(const std::vector<int>& cpus) {
   std::string out;
-  for (int cpu : cpus) out += (out.empty() ? "" : ",") + std::to_string(cpu);
+  // Appended piece by piece: GCC 12 misreads `"," + std::to_string(...)` here (-Wrestrict).
+  for (int cpu : cpus) {
+    if (!out.empty()) out += ',';
+    out += std::to_string(cpu);
+  }
   return out;
 }
 

@@ -132,6 +132,23 @@ TEST_F(CmdIdentifyTest, TheIdentifiedModelReadsBackAndItsStudyRuns) {
   ASSERT_EQ(first.exit_code, 0) << first.output;
   const auto first_json = json_of(first);
   EXPECT_EQ(first_json["configs_written"].size(), 3u);
+  // The identified lag is judged as `rths stability` judges the same structure: one verdict.
+  const auto& stability = first_json["prediction"]["stability"];
+  ASSERT_TRUE(stability.is_object()) << first_json["prediction"].dump();
+  EXPECT_DOUBLE_EQ(stability["lag_s"].get<double>(),
+                   first_json["prediction"]["identified"]["nominal_delay_s"].get<double>());
+  const Outcome planned =
+      run("stability --period 0.5 --zeta 0.05 --exp-fraction 0.3 --dt 0.001 --json");
+  ASSERT_EQ(planned.exit_code, 0) << planned.output;
+  const auto planned_json = json_of(planned);
+  const double critical =
+      std::min(planned_json["continuous"]["critical_delay_s"].get<double>(),
+               planned_json["discrete"]["first_unstable_delay_s"].get<double>());
+  EXPECT_NEAR(stability["critical_delay_s"].get<double>(), critical, 1e-9);
+  EXPECT_NEAR(stability["margin"].get<double>(),
+              (critical - stability["lag_s"].get<double>()) / critical, 1e-9);
+  EXPECT_EQ(stability["past"].get<bool>(), stability["lag_s"].get<double>() >= critical);
+  EXPECT_THAT(stability["verdict"].get<std::string>(), HasSubstr("the test could take up to"));
   for (const char* file : {"identified_model.textproto", "identified_study_fragment.textproto",
                            "identified_study.textproto"}) {
     EXPECT_TRUE(fs::exists(out / file)) << file;
