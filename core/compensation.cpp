@@ -40,6 +40,28 @@ std::vector<double> trimmed(std::vector<double> p) {
   return p;
 }
 
+// The coefficients' bounds and starting values, which do not depend on dt: the one statement of
+// these preconditions, for the block's constructor and for a study config's validation. `label`
+// prefixes the message ("adaptive time series compensator", or a config path).
+void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
+  const struct {
+    const char* name;
+    double initial;
+    CoefficientBounds bounds;
+  } coefficients[] = {{"a0", p.a0, p.a0_bounds}, {"a1", p.a1, p.a1_bounds},
+                      {"a2", p.a2, p.a2_bounds}};
+  for (const auto& c : coefficients) {
+    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max,
+            label + ": " + c.name + "_bounds must have min < max, got [" +
+                format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
+    require(c.initial >= c.bounds.min && c.initial <= c.bounds.max,
+            label + ": initial_" + c.name + " = " + format_number(c.initial) + " is outside " +
+                c.name + "_bounds [" + format_number(c.bounds.min) + ", " +
+                format_number(c.bounds.max) + "]");
+  }
+  require(p.a0_bounds.min > 0.0, label + ": a0_bounds.min must be > 0 (a0 is the command's gain)");
+}
+
 }  // namespace
 
 std::vector<double> polynomial_multiply(const std::vector<double>& a, const std::vector<double>& b) {
@@ -120,24 +142,7 @@ AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double d
               " s), got " + format_number(p_.window));
   require(p_.window / dt <= 1e6, "adaptive time series compensator: window of " +
                                      format_number(p_.window) + " s is more than 1e6 steps");
-  const struct {
-    const char* name;
-    double initial;
-    CoefficientBounds bounds;
-  } coefficients[] = {{"a0", p_.a0, p_.a0_bounds}, {"a1", p_.a1, p_.a1_bounds},
-                      {"a2", p_.a2, p_.a2_bounds}};
-  for (const auto& c : coefficients) {
-    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max,
-            std::string("adaptive time series compensator: ") + c.name +
-                "_bounds must have min < max, got [" + format_number(c.bounds.min) + ", " +
-                format_number(c.bounds.max) + "]");
-    require(c.initial >= c.bounds.min && c.initial <= c.bounds.max,
-            std::string("adaptive time series compensator: initial_") + c.name + " = " +
-                format_number(c.initial) + " is outside " + c.name + "_bounds [" + format_number(c.bounds.min) +
-                ", " + format_number(c.bounds.max) + "]");
-  }
-  require(p_.a0_bounds.min > 0.0,
-          "adaptive time series compensator: a0_bounds.min must be > 0 (a0 is the command's gain)");
+  check_ats_coefficients(p_, "adaptive time series compensator");
   require(finite(p_.derivative_cutoff) && p_.derivative_cutoff >= 0.0 &&
               p_.derivative_cutoff < 0.5 / dt,
           "adaptive time series compensator: derivative_cutoff must be in [0, Nyquist = " +
@@ -350,7 +355,8 @@ AtsParameters adaptive_correction_defaults() {
 namespace {
 
 // The correction starts at the nominal design (the identity) and its bounds keep it reachable.
-void require_identity_start(const AtsParameters& p) {
+void require_identity_start(const AtsParameters& p,
+                            const std::string& label = "adaptive correction") {
   const struct {
     const char* name;
     double initial, identity;
@@ -360,11 +366,11 @@ void require_identity_start(const AtsParameters& p) {
                       {"a2", p.a2, 0.0, p.a2_bounds}};
   for (const auto& c : coefficients) {
     require(c.initial == c.identity,
-            std::string("adaptive correction: ") + c.name + " must start at " +
+            label + ": " + c.name + " must start at " +
                 format_number(c.identity) + " (the nominal design), got " + format_number(c.initial));
     require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
                 c.bounds.min <= c.identity && c.identity <= c.bounds.max,
-            std::string("adaptive correction: ") + c.name + "_bounds must have min < max and "
+            label + ": " + c.name + "_bounds must have min < max and "
                 "contain " + format_number(c.identity) + " (the nominal design), got [" +
                 format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
   }
@@ -492,16 +498,10 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
       const auto& a = c.adaptive_time_series();
       require(a.window() > 0.0 && finite(a.window()),
               where + ".adaptive_time_series.window must be > 0 s, got " + format_number(a.window()));
-      // Bounds and initial values: the block checks them; report them under this path.
+      // Bounds and initial values do not depend on dt: checked here as the block checks them.
       require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
               where + ".adaptive_time_series.derivative_cutoff must be >= 0 Hz");
-      try {
-        AtsParameters dt_free = ats_parameters(a);
-        dt_free.derivative_cutoff = 0.0;  // checked against the Nyquist frequency when built
-        AdaptiveTimeSeries(dt_free, std::min(a.window() / 3.0, 1e-3));
-      } catch (const std::invalid_argument& e) {
-        rethrow_at(where, "adaptive_time_series", e);
-      }
+      check_ats_coefficients(ats_parameters(a), where + ".adaptive_time_series");
       break;
     }
     case K::kModelBased: {
@@ -520,14 +520,9 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
                 at + ".window must be > 0 s, got " + format_number(a.window()));
         require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
                 at + ".derivative_cutoff must be >= 0 Hz, got " + format_number(a.derivative_cutoff()));
-        try {
-          AtsParameters dt_free = correction_parameters(a);
-          dt_free.derivative_cutoff = 0.0;  // checked against the Nyquist frequency when built
-          require_identity_start(dt_free);
-          AdaptiveTimeSeries(dt_free, std::min(a.window() / 3.0, 1e-3));
-        } catch (const std::invalid_argument& e) {
-          rethrow_at(where, "model_based.adaptive_correction", e);
-        }
+        const AtsParameters correction = correction_parameters(a);
+        require_identity_start(correction, at);
+        check_ats_coefficients(correction, at);
       }
       break;
     }

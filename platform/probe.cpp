@@ -45,9 +45,14 @@ std::string governor_of(const std::filesystem::path& cpu_dir, const std::vector<
   std::string out;
   for (int cpu : cpus) {
     std::string governor;
-    if (!read_line(cpu_dir / ("cpu" + std::to_string(cpu)) / "cpufreq/scaling_governor", governor))
-      continue;
-    out += (out.empty() ? "" : " ") + std::to_string(cpu) + ":" + governor;
+    // Appended piece by piece: GCC 12 misreads `"cpu" + std::to_string(...)` (-Wrestrict).
+    std::string cpu_name = "cpu";
+    cpu_name += std::to_string(cpu);
+    if (!read_line(cpu_dir / cpu_name / "cpufreq/scaling_governor", governor)) continue;
+    if (!out.empty()) out += ' ';
+    out += std::to_string(cpu);
+    out += ':';
+    out += governor;
   }
   return out.empty() ? "none (no cpufreq)" : out;
 }

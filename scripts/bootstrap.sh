@@ -33,7 +33,7 @@ fi
 
 build=build
 # A warning in rths's own code fails this build (and so CI).
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRTHS_WARNINGS_AS_ERRORS=ON >/dev/null
 cmake --build "$build" -j"$(nproc)"
 # `rths` and the node programs on PATH (/usr/local/bin), so the README's commands run as written.
 sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"

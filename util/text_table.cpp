@@ -23,7 +23,11 @@ std::string TextTable::render() const {
     for (std::size_t c = 0; c < row.size(); ++c)
       if (row[c].size() > columns_[c].max_width) {
         notes.push_back(row[c]);
-        row[c] = "[" + std::to_string(notes.size()) + "]";
+        // Built apart and swapped in: GCC 12 misreads a replace of row[c] here (-Wrestrict).
+        std::string mark(1, '[');
+        mark += std::to_string(notes.size());
+        mark += ']';
+        row[c].swap(mark);
       }
   std::vector<std::size_t> width(columns_.size());
   for (std::size_t c = 0; c < columns_.size(); ++c) {

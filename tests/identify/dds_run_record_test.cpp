@@ -17,6 +17,7 @@ namespace rths::identify {
 namespace {
 
 namespace fs = std::filesystem;
+using test::link_effects;
 
 constexpr double kDuration = 5.0;  // s of the paper frame's motion
 
@@ -49,15 +50,6 @@ IdentifyOptions actuator_only() {
   IdentifyOptions options;
   options.channels = {Channel::kMeasured};
   return options;
-}
-
-std::set<std::string> link_effects(const RunIdentification& run, int node) {
-  std::set<std::string> out;
-  for (const auto& l : run.links) {
-    if (l.node_id != node) continue;
-    for (const auto& e : l.effects) out.insert(e.name);
-  }
-  return out;
 }
 
 TEST_F(DdsRunRecord, ACleanRecordNamesNothingAndReRunsAsRecorded) {

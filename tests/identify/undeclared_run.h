@@ -6,8 +6,10 @@
 
 #include <unistd.h>
 #include <filesystem>
+#include <set>
 #include <string>
 
+#include "identify/run_record.h"
 #include "runtime/record.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
@@ -57,6 +59,16 @@ inline std::filesystem::path run_with_undeclared(const std::string& name,
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
   });
   return options.record;
+}
+
+// The effects identified on the link to node `node`.
+inline std::set<std::string> link_effects(const identify::RunIdentification& run, int node) {
+  std::set<std::string> out;
+  for (const auto& l : run.links) {
+    if (l.node_id != node) continue;
+    for (const auto& e : l.effects) out.insert(e.name);
+  }
+  return out;
 }
 
 }  // namespace rths::test
