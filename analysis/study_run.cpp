@@ -1,6 +1,7 @@
 #include "analysis/study_run.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <iomanip>
 #include <numbers>
@@ -303,6 +304,32 @@ double strongest_window_start(const std::vector<double>& u, double dt, double wi
 
 }  // namespace
 
+namespace {
+
+// " (within X mm of NAME)" when case i's response stays within 5 % of its peak of an earlier
+// drawn case's, so that a reader told the curves overlap looks for both; else "".
+std::string coincides_with(const std::vector<const CaseOutcome*>& drawn, std::size_t i) {
+  const std::vector<double>& r = drawn[i]->response;
+  const double peak = core::peak_abs(r);
+  for (std::size_t j = 0; j < i; ++j) {
+    const CaseOutcome& other = *drawn[j];
+    if (other.diverged() || other.response.size() != r.size() || peak <= 0.0) continue;
+    double largest = 0.0;
+    for (std::size_t k = 0; k < r.size(); ++k)
+      largest = std::max(largest, std::abs(r[k] - other.response[k]));
+    if (largest > 0.05 * peak) continue;
+    char within[64];
+    std::snprintf(within, sizeof within, " (within %.2g mm of ", largest * 1e3);
+    std::string text = within;
+    text += other.name;
+    text += ')';
+    return text;
+  }
+  return "";
+}
+
+}  // namespace
+
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
   std::filesystem::create_directories(directory);
   const CaseOutcome& reference = outcome.reference();
@@ -319,7 +346,8 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
   for (std::size_t i = 0; i < drawn.size(); ++i) {
     const CaseOutcome& c = *drawn[i];
-    const std::string label = c.name + (c.diverged() ? " (diverged, clipped)" : "");
+    const std::string label =
+        c.name + (c.diverged() ? " (diverged, clipped)" : coincides_with(drawn, i));
     // Each case keeps its colour on every panel and is drawn thinner than the case before it, so
     // that two cases whose responses coincide are both seen (solid: cairo draws a dashed line of
     // 10^4 points very slowly).
