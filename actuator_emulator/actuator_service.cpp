@@ -63,7 +63,9 @@ void ActuatorService::require_sizes(const runtime::Command& command) const {
 void ActuatorService::note_command(const runtime::Command& command) {
   for (std::size_t i = 0; i < actuators_.size(); ++i) {
     const double drift = command.drift(static_cast<int>(i));
-    if (commanded_) largest_command_change_[i] = std::max(largest_command_change_[i], std::abs(drift - previous_drift_[i]));
+    if (commanded_)
+      largest_command_change_[i] =
+          std::max(largest_command_change_[i], std::abs(drift - previous_drift_[i]));
     previous_drift_[i] = drift;
   }
   commanded_ = true;
@@ -115,7 +117,8 @@ void ActuatorService::on_settle() {
         h.largest_target_change = std::max(h.largest_target_change, std::abs(now_target - target));
         if (actuator.hold_reached()) h.ramp_ticks = tick;
       }
-      h.largest_realised_change = std::max(h.largest_realised_change, std::abs(out.realised - realised));
+      h.largest_realised_change =
+          std::max(h.largest_realised_change, std::abs(out.realised - realised));
       target = now_target;
       realised = out.realised;
       if (h.ramp_ticks > 0 && std::abs(realised - h.position) <= 1e-6) {
@@ -126,12 +129,13 @@ void ActuatorService::on_settle() {
     }
     h.realised = realised;
     realised_[i] = realised;
-    spdlog::warn("{}: actuator {} held: target ramped from {:.6f} m to {:.6f} m at <= {:.6f} m per "
-                 "servo period in {} periods; realised {:.6f} m{}",
-                 label(), i + 1, h.from, h.position, h.max_change, h.ramp_ticks, realised,
-                 h.settled ? " at rest after " + std::to_string(h.settle_time) + " s"
-                           : " (not within 1 um of the hold position after " +
-                                 std::to_string(kMaxSettleTime) + " s)");
+    spdlog::warn(
+        "{}: actuator {} held: target ramped from {:.6f} m to {:.6f} m at <= {:.6f} m per "
+        "servo period in {} periods; realised {:.6f} m{}",
+        label(), i + 1, h.from, h.position, h.max_change, h.ramp_ticks, realised,
+        h.settled ? " at rest after " + std::to_string(h.settle_time) + " s"
+                  : " (not within 1 um of the hold position after " +
+                        std::to_string(kMaxSettleTime) + " s)");
   }
 }
 

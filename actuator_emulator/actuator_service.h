@@ -8,10 +8,12 @@
 // to rest at the position the specimen had when the hold began, as a servo controller's interlock
 // does: the servo's target ramps there from where it was at the rate limit,
 // deployment.limits.max_displacement_step per command period, never in a jump (no rate limit: at
-// the largest change between two commands the run has sent, so a hold is never faster than the test). The emulator plays this ramp in simulated time once the HOLD has been
-// reported (on_settle, so it never delays the report) and logs it; hold_settles() has it.):
-//   HOLD from the coordinator                         -> hold at once (the next command is ignored).
-//   a command whose drift changes by more than        -> hold on its own before acting on it, and
+// the largest change between two commands the run has sent, so a hold is never faster than the
+// test). The emulator plays this ramp in simulated time once the HOLD has been reported (on_settle,
+// so it never delays the report) and logs it; hold_settles() has it.):
+//   HOLD from the coordinator                         -> hold at once (the next command is
+//   ignored). a command whose drift changes by more than        -> hold on its own before acting on
+//   it, and
 //     deployment.limits.max_displacement_step            answer HOLD (with the reason) instead of
 //     from the previous one                              FEEDBACK; the coordinator stops the run.
 //   real time: no fresh command for                   -> hold on its own (the node loop's watchdog)
@@ -35,19 +37,21 @@ class ActuatorService final : public runtime::NodeService {
  public:
   ActuatorService(std::int32_t node_id, std::string expected_run_id);
   // Where actuator `index` is held (m): the realised drift when the hold began.
-  double held_position(int index) const { return hold_settles_.empty() ? realised_.at(index) : hold_settles_.at(index).position; }
+  double held_position(int index) const {
+    return hold_settles_.empty() ? realised_.at(index) : hold_settles_.at(index).position;
+  }
 
   // How one actuator came to rest after a hold (all SI: m, s).
   struct HoldSettle {
-    double from = 0.0;            // the servo's target when the hold began
-    double position = 0.0;        // the hold position (realised drift when the hold began)
-    double max_change = 0.0;      // the ramp's limit per servo period
-    int ramp_ticks = 0;           // servo periods until the target reached the hold position
-    double largest_target_change = 0.0;    // per servo period, over the ramp (<= max_change)
+    double from = 0.0;                   // the servo's target when the hold began
+    double position = 0.0;               // the hold position (realised drift when the hold began)
+    double max_change = 0.0;             // the ramp's limit per servo period
+    int ramp_ticks = 0;                  // servo periods until the target reached the hold position
+    double largest_target_change = 0.0;  // per servo period, over the ramp (<= max_change)
     double largest_realised_change = 0.0;  // per servo period, until rest
-    double realised = 0.0;        // at rest (or when the settle gave up)
-    double settle_time = 0.0;     // s of simulated time until |realised - position| <= 1 um
-    bool settled = false;         // within 1 um of the hold position within kMaxSettleTime
+    double realised = 0.0;                 // at rest (or when the settle gave up)
+    double settle_time = 0.0;  // s of simulated time until |realised - position| <= 1 um
+    bool settled = false;      // within 1 um of the hold position within kMaxSettleTime
   };
   static constexpr double kMaxSettleTime = 2.0;  // s
   const std::vector<HoldSettle>& hold_settles() const { return hold_settles_; }
@@ -72,7 +76,7 @@ class ActuatorService final : public runtime::NodeService {
   void note_command(const runtime::Command& command);
   std::vector<double> last_command_;    // m, drift of the previous accepted command
   double max_displacement_step_ = 0.0;  // m per command; 0 = no rate limit
-  double dt_ = 0.0;            // s, the integrator step
+  double dt_ = 0.0;                     // s, the integrator step
   double servo_period_ = 0.0;  // s; > 0 only in real time with a servo faster than the integrator
   void require_sizes(const runtime::Command& command) const;
 };

@@ -2,18 +2,19 @@
 
 #include <algorithm>
 #include <bit>
-#include <memory>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "util/parallel_for.h"
 
 // The lane loops work on 8-double vectors (GCC vector extension), so vectorisation does not
-// depend on the auto-vectoriser's mood; target_clones compiles them for AVX-512, AVX2 and baseline x86-64 and picks one at
-// load time, so the binary runs on any x86-64. fp-contract=off keeps every clone from fusing
-// multiply-adds: all clones (and core::simulate, built for baseline x86-64) then round alike, and
-// a sweep sharded over different machines gives the same numbers. The peak uses a compare-select
+// depend on the auto-vectoriser's mood; target_clones compiles them for AVX-512, AVX2 and baseline
+// x86-64 and picks one at load time, so the binary runs on any x86-64. fp-contract=off keeps every
+// clone from fusing multiply-adds: all clones (and core::simulate, built for baseline x86-64) then
+// round alike, and a sweep sharded over different machines gives the same numbers. The peak uses a
+// compare-select
 // (`x > p ? x : p`) rather than std::fmax, |u| a sign-bit mask rather than std::fabs, and the
 // divergence flag a compare, not a branch: NaN-aware library calls would not vectorise.
 #define RTHS_KERNEL_CLONES \
@@ -59,7 +60,8 @@ typedef long long Mask8 __attribute__((vector_size(64)));
 template <int kMode, int kVectors>
 [[gnu::always_inline]] inline void advance_block(const KernelArgs& s, int first) {
   const Vec8 zero = {};
-  const Vec8 dt = zero + s.dt, half_dt = zero + s.half_dt, half_dt_squared = zero + s.half_dt_squared;
+  const Vec8 dt = zero + s.dt, half_dt = zero + s.half_dt,
+             half_dt_squared = zero + s.half_dt_squared;
   const Vec8 weight_new = zero + s.weight_new, weight_old = zero + s.weight_old;
   const Mask8 no_bits = {};
   const Mask8 magnitude_bits = no_bits + 0x7fffffffffffffffLL;
@@ -110,7 +112,8 @@ template <int kMode, int kVectors>
       a[j] = a_next;
       // |u| by clearing the sign bit, max by compare-select: a NaN never replaces the peak, and
       // a lane that diverges passes the bound (and keeps a peak above it) before any NaN.
-      const Vec8 magnitude = reinterpret_cast<Vec8>(reinterpret_cast<Mask8>(u_next) & magnitude_bits);
+      const Vec8 magnitude =
+          reinterpret_cast<Vec8>(reinterpret_cast<Mask8>(u_next) & magnitude_bits);
       peak[j] = magnitude > peak[j] ? magnitude : peak[j];
     }
     if (s.history) {
@@ -203,7 +206,8 @@ LinearSdofBatch::LinearSdofBatch(std::span<const SdofLane> lanes, double dt, dou
     ring_storage_.assign(rows * kMaxLanes + kLaneMultiple, 0.0);
     void* base = ring_storage_.data();
     std::size_t space = ring_storage_.size() * sizeof(double);
-    ring_row0_ = static_cast<double*>(std::align(64, rows * kMaxLanes * sizeof(double), base, space));
+    ring_row0_ =
+        static_cast<double*>(std::align(64, rows * kMaxLanes * sizeof(double), base, space));
   }
   start(0.0);
 }
@@ -330,12 +334,11 @@ std::vector<LaneOutcome> run_linear_sdof_lanes(std::span<const SdofLane> lanes,
   return outcomes;
 }
 
-std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(std::span<const SdofLane> lanes,
-                                                           std::span<const double> delays,
-                                                           std::span<const double> ground_acceleration,
-                                                           double dt,
-                                                           const BatchRunOptions& options) {
-  std::vector<std::vector<LaneOutcome>> outcomes(delays.size(), std::vector<LaneOutcome>(lanes.size()));
+std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(
+    std::span<const SdofLane> lanes, std::span<const double> delays,
+    std::span<const double> ground_acceleration, double dt, const BatchRunOptions& options) {
+  std::vector<std::vector<LaneOutcome>> outcomes(delays.size(),
+                                                 std::vector<LaneOutcome>(lanes.size()));
   if (lanes.empty() || delays.empty()) return outcomes;
   if (ground_acceleration.empty()) throw std::invalid_argument("batch run: the motion is empty");
   const auto items = split_lanes(lanes.size());
@@ -346,7 +349,8 @@ std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(std::span<const SdofL
     batch.start(ground_acceleration[0]);
     batch.advance(ground_acceleration.subspan(1), nullptr);
     const auto result = batch.outcomes();
-    std::copy(result.begin(), result.end(), outcomes[d].begin() + static_cast<std::ptrdiff_t>(first));
+    std::copy(result.begin(), result.end(),
+              outcomes[d].begin() + static_cast<std::ptrdiff_t>(first));
   });
   return outcomes;
 }

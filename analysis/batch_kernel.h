@@ -64,9 +64,9 @@ class LinearSdofBatch {
  private:
   int lanes_ = 0, padded_ = 0;
   double dt_, delay_, bound_;
-  long whole_steps_ = 0;      // n = floor(tau / dt) (snapped when tau is a whole multiple)
-  double fraction_ = 0.0;     // f = tau / dt - n, in [0, 1)
-  long step_ = 0;             // index k of the last computed state
+  long whole_steps_ = 0;   // n = floor(tau / dt) (snapped when tau is a whole multiple)
+  double fraction_ = 0.0;  // f = tau / dt - n, in [0, 1)
+  long step_ = 0;          // index k of the last computed state
   std::size_t ring_mask_ = 0;
   alignas(64) double mass_[kMaxLanes], effective_inverse_[kMaxLanes], damping_[kMaxLanes],
       k_numerical_[kMaxLanes], k_experimental_[kMaxLanes];
@@ -85,18 +85,15 @@ struct BatchRunOptions {
 // Runs every lane over the whole motion (sampled at dt) with the time-shift delay `delay` (0 =
 // none), splitting the lanes into balanced batches of at most kMaxLanes. When `histories` is not
 // null it is resized to lanes.size() vectors of motion.size() displacements.
-std::vector<LaneOutcome> run_linear_sdof_lanes(std::span<const SdofLane> lanes,
-                                               std::span<const double> ground_acceleration,
-                                               double dt, double delay,
-                                               const BatchRunOptions& options = {},
-                                               std::vector<std::vector<double>>* histories = nullptr);
+std::vector<LaneOutcome> run_linear_sdof_lanes(
+    std::span<const SdofLane> lanes, std::span<const double> ground_acceleration, double dt,
+    double delay, const BatchRunOptions& options = {},
+    std::vector<std::vector<double>>* histories = nullptr);
 
 // The same lanes under several delays: outcomes[d][lane] for delays[d]. Every (delay, batch) pair
 // is one work item, so all threads stay busy without storing any history.
-std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(std::span<const SdofLane> lanes,
-                                                           std::span<const double> delays,
-                                                           std::span<const double> ground_acceleration,
-                                                           double dt,
-                                                           const BatchRunOptions& options = {});
+std::vector<std::vector<LaneOutcome>> run_linear_sdof_grid(
+    std::span<const SdofLane> lanes, std::span<const double> delays,
+    std::span<const double> ground_acceleration, double dt, const BatchRunOptions& options = {});
 
 }  // namespace rths::analysis

@@ -29,7 +29,7 @@ struct BenchmarkEvaluation {
   std::vector<BenchmarkCaseCriteria> cases;
   std::vector<double> published;  // J1 (ms), J2-J9 (%); empty when none
   std::string published_case, published_source;
-  double dt = 0.0;                // s
+  double dt = 0.0;  // s
 };
 
 // Empty when the study has no `benchmark` section. Throws std::invalid_argument naming

@@ -16,7 +16,8 @@ constexpr double kA3 = 3.3, kA3Sd = 1.3;               // 1/s
 constexpr double kStiffnessSd = 5e4;                   // N/m
 
 int experimental_dof(const config::Study& study) {
-  if (!study.has_benchmark()) throw std::invalid_argument("perturbed plants need the study's benchmark section");
+  if (!study.has_benchmark())
+    throw std::invalid_argument("perturbed plants need the study's benchmark section");
   return study.benchmark().experimental_dof() == 0 ? 1 : study.benchmark().experimental_dof();
 }
 
@@ -37,7 +38,8 @@ void set_plant(config::DelayStage::BenchmarkPlant* plant, const PlantDraw& draw)
 
 }  // namespace
 
-std::vector<PlantDraw> draw_benchmark_plants(int count, std::uint64_t seed, double nominal_stiffness) {
+std::vector<PlantDraw> draw_benchmark_plants(int count, std::uint64_t seed,
+                                             double nominal_stiffness) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<PlantDraw> draws;
@@ -69,7 +71,6 @@ config::Study perturbed_study(const config::Study& study, const PlantDraw& draw)
   return out;
 }
 
-
 std::vector<CriteriaSpread> criteria_spread(const std::vector<BenchmarkEvaluation>& draws) {
   std::vector<CriteriaSpread> out;
   if (draws.empty()) return out;
@@ -82,7 +83,8 @@ std::vector<CriteriaSpread> criteria_spread(const std::vector<BenchmarkEvaluatio
       double sum = 0.0, square = 0.0;
       for (const BenchmarkEvaluation& e : draws) sum += scale * e.cases.at(c).criteria.j[j];
       s.mean[j] = sum / s.draws;
-      for (const BenchmarkEvaluation& e : draws) square += std::pow(scale * e.cases.at(c).criteria.j[j] - s.mean[j], 2);
+      for (const BenchmarkEvaluation& e : draws)
+        square += std::pow(scale * e.cases.at(c).criteria.j[j] - s.mean[j], 2);
       s.std[j] = s.draws > 1 ? std::sqrt(square / (s.draws - 1)) : 0.0;
     }
     out.push_back(s);
@@ -94,7 +96,8 @@ std::string spread_table(const std::vector<CriteriaSpread>& spread, std::uint64_
   std::ostringstream out;
   char buffer[48];
   for (const CriteriaSpread& s : spread) {
-    out << "perturbed plants, " << s.name << ": " << s.draws << " draws (seed " << seed << "), mean +- std\n ";
+    out << "perturbed plants, " << s.name << ": " << s.draws << " draws (seed " << seed
+        << "), mean +- std\n ";
     for (std::size_t j = 0; j < 9; ++j) {
       std::snprintf(buffer, sizeof buffer, " J%zu %.2f+-%.2f", j + 1, s.mean[j], s.std[j]);
       out << buffer;

@@ -26,11 +26,12 @@ namespace rths::analysis {
 
 struct PlantDraw {
   double beta1 = 0.0, beta2 = 0.0, a3 = 0.0;  // -, 1/s, 1/s
-  double stiffness = 0.0;                      // N/m, k_e
+  double stiffness = 0.0;                     // N/m, k_e
 };
 
 // @pre count >= 0; nominal_stiffness > 0 (N/m).
-std::vector<PlantDraw> draw_benchmark_plants(int count, std::uint64_t seed, double nominal_stiffness);
+std::vector<PlantDraw> draw_benchmark_plants(int count, std::uint64_t seed,
+                                             double nominal_stiffness);
 
 // The study's experimental DOF's stiffness (N/m). Throws std::invalid_argument naming
 // benchmark.experimental_dof when the study has no such experimental DOF.

@@ -9,7 +9,8 @@
 namespace rths::analysis {
 
 ResponseSpec ResponseSpec::floor(int one_based) {
-  if (one_based < 1) throw std::invalid_argument("response floor must be >= 1, got " + std::to_string(one_based));
+  if (one_based < 1)
+    throw std::invalid_argument("response floor must be >= 1, got " + std::to_string(one_based));
   return ResponseSpec(one_based);
 }
 
@@ -43,13 +44,15 @@ nlohmann::json Comparison::to_json() const {
 
 std::vector<double> floor_history(const core::SimulationResult& result, int column) {
   std::vector<double> u(result.steps());
-  for (std::size_t k = 0; k < u.size(); ++k) u[k] = result.displacement(static_cast<Eigen::Index>(k), column);
+  for (std::size_t k = 0; k < u.size(); ++k)
+    u[k] = result.displacement(static_cast<Eigen::Index>(k), column);
   return u;
 }
 
 std::vector<double> column_of(const core::Mat& history, int column) {
   std::vector<double> out(static_cast<std::size_t>(history.rows()));
-  for (Eigen::Index i = 0; i < history.rows(); ++i) out[static_cast<std::size_t>(i)] = history(i, column);
+  for (Eigen::Index i = 0; i < history.rows(); ++i)
+    out[static_cast<std::size_t>(i)] = history(i, column);
   return out;
 }
 
@@ -72,13 +75,15 @@ Comparison compare(std::span<const double> reference, std::span<const double> re
 Comparison compare(const core::SimulationResult& reference, const core::SimulationResult& result,
                    const ResponseSpec& response) {
   if (reference.displacement.cols() != result.displacement.cols()) {
-    throw std::invalid_argument("compare: the reference has " + std::to_string(reference.displacement.cols()) +
+    throw std::invalid_argument("compare: the reference has " +
+                                std::to_string(reference.displacement.cols()) +
                                 " floors, the case " + std::to_string(result.displacement.cols()));
   }
   Comparison worst;
   bool first = true;
   for (int column : response.columns(static_cast<int>(result.displacement.cols()))) {
-    const Comparison c = compare(floor_history(reference, column), floor_history(result, column), result.diverged);
+    const Comparison c =
+        compare(floor_history(reference, column), floor_history(result, column), result.diverged);
     if (first) {
       worst = c;
       first = false;

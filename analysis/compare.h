@@ -9,7 +9,8 @@
 //   paper_eq2_as_printed  sqrt(sum e^2) / N / median|u_ref|         (the paper's Eq. 2, literal)
 //   peak_error_m          max |e|;  peak_reference_m, peak_m  max |u| of each (m)
 //   diverged              the case stopped early, is not finite, or its peak grew past
-//                         core::kDivergenceGrowth times the reference's (core::grew_past_reference).
+//                         core::kDivergenceGrowth times the reference's
+//                         (core::grew_past_reference).
 // Judge divergence against the lag-free reference; a lagged reference hides growth.
 
 #include <span>
@@ -45,7 +46,7 @@ class ResponseSpec {
 };
 
 struct Comparison {
-  std::string response;           // ResponseSpec::describe()
+  std::string response;  // ResponseSpec::describe()
   std::size_t steps_compared = 0;
   double peak_reference_m = 0.0, peak_m = 0.0, peak_error_m = 0.0;
   double nrmse_pct = 0.0, paper_eq2_as_printed = 0.0;

@@ -37,7 +37,8 @@ std::string model_name(JointLagStudy::ActuatorModel model) {
   return model == JointLagStudy::FIRST_ORDER ? "first_order" : "shift";
 }
 
-// Log colour scale (the error spans decades towards instability); zero error is drawn at this floor.
+// Log colour scale (the error spans decades towards instability); zero error is drawn at this
+// floor.
 constexpr double kMapFloorPercent = 0.01;
 
 // The map's data files beside the figures: the grid (blocks of equal round trip), the diverged
@@ -68,15 +69,18 @@ MapFiles write_map_data(const JointLagResult& result, const std::filesystem::pat
   }
   {
     std::ofstream file(files.past);
-    file << "# network_round_trip_ms actuator_lag_ms of bounded points past the stability boundary\n";
+    file << "# network_round_trip_ms actuator_lag_ms of bounded points past the stability "
+            "boundary\n";
     for (const auto& p : result.grid)
-      if (p.past_boundary && !p.diverged) file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
+      if (p.past_boundary && !p.diverged)
+        file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
   }
   {
     std::ofstream file(files.boundary);
     file << "# critical_network_round_trip_ms actuator_lag_ms\n";
     for (const auto& b : result.boundary)
-      if (b.critical_round_trip) file << *b.critical_round_trip * 1e3 << ' ' << b.actuator_lag * 1e3 << "\n";
+      if (b.critical_round_trip)
+        file << *b.critical_round_trip * 1e3 << ' ' << b.actuator_lag * 1e3 << "\n";
   }
   return files;
 }
@@ -96,10 +100,12 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
   }
   const bool any_diverged = std::any_of(result.grid.begin(), result.grid.end(),
                                         [](const JointLagPoint& p) { return p.diverged; });
-  const bool any_past = std::any_of(result.grid.begin(), result.grid.end(),
-                                    [](const JointLagPoint& p) { return p.past_boundary && !p.diverged; });
-  const bool any_boundary = std::any_of(result.boundary.begin(), result.boundary.end(),
-                                        [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
+  const bool any_past =
+      std::any_of(result.grid.begin(), result.grid.end(),
+                  [](const JointLagPoint& p) { return p.past_boundary && !p.diverged; });
+  const bool any_boundary =
+      std::any_of(result.boundary.begin(), result.boundary.end(),
+                  [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
   const auto contours = out / "error_map_contours.dat";
   const auto script = out / "error_map.gp";
   std::ostringstream file;
@@ -108,29 +114,35 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
          << "unset surface\nset contour base\nset cntrparam levels discrete 1,2,5,10,20,50,100\n"
          << "splot '" << grid_data.string() << "' using 1:2:3 with lines notitle\n"
          << "unset table\nunset contour\n"
-         << "set bmargin 7\nset title \"Joint lag (" << result.study_name << ", actuator " << result.actuator_model
+         << "set bmargin 7\nset title \"Joint lag (" << result.study_name << ", actuator "
+         << result.actuator_model
          << ")\\nNRMSE of the displacement against the lag-free reference, %\"\n"
          << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
          << "set cblabel 'NRMSE (%), log scale'\nset logscale cb\nset format cb '%g'\n"
-         << "set cbrange [" << kMapFloorPercent << ":*]\n"
+         << "set cbrange [" << kMapFloorPercent
+         << ":*]\n"
          // viridis: perceptually uniform and readable in grey, unlike a rainbow.
          << "set palette defined (0 '#440154', 1 '#482878', 2 '#3E4A89', 3 '#31688E', 4 '#26828E', "
             "5 '#1F9E89', 6 '#35B779', 7 '#6DCD59', 8 '#B4DE2C', 9 '#FDE725')\n"
-         << "set style textbox opaque fc rgb 'white' noborder\nset xrange [0:" << std::max(max_r, 1e-3)
-         << "]\nset yrange [0:" << std::max(max_a, 1e-3) << "]\n"
+         << "set style textbox opaque fc rgb 'white' noborder\nset xrange [0:"
+         << std::max(max_r, 1e-3) << "]\nset yrange [0:" << std::max(max_a, 1e-3) << "]\n"
          << "set key outside below box\n";
     std::string plot = "plot '" + grid_data.string() +
                        "' using 1:2:3 with image pixels notitle, '" + contours.string() +
-                       "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours 1, 2, 5, 10, 20, 50, 100 %', '" +
-                       contours.string() + "' using 1:2:(sprintf('%g %%', $3)) every 25::5 with labels boxed "
+                       "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours 1, 2, 5, "
+                       "10, 20, 50, 100 %', '" +
+                       contours.string() +
+                       "' using 1:2:(sprintf('%g %%', $3)) every 25::5 with labels boxed "
                        "font 'sans,8' tc rgb 'black' notitle";
     if (any_past)
       plot += ", '" + past_data.string() +
-              "' using 1:2 with points pt 1 ps 1 lw 1.5 lc rgb 'white' title 'past the stability boundary "
+              "' using 1:2 with points pt 1 ps 1 lw 1.5 lc rgb 'white' title 'past the stability "
+              "boundary "
               "(expected to diverge)'";
     if (any_boundary)
       plot += ", '" + boundary_data.string() +
-              "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary (continuous)'";
+              "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary "
+              "(continuous)'";
     if (any_diverged)
       plot += ", '" + diverged_data.string() +
               "' using 1:2 with points pt 2 ps 2 lc rgb 'black' title 'diverged'";
@@ -156,20 +168,22 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
   }
   const auto& experimental = prepared.base.partition.experimental;
   const double k = model.stiffness(0, 0), m = model.mass(0, 0);
-  const double alpha = experimental.empty() || !experimental[0] ? 0.0 : experimental[0]->initial_stiffness() / k;
+  const double alpha =
+      experimental.empty() || !experimental[0] ? 0.0 : experimental[0]->initial_stiffness() / k;
   const double omega = std::sqrt(k / m), period = 2.0 * std::numbers::pi / omega;
   const double zeta = model.damping(0, 0) / (2.0 * m * omega);
   double largest = 0.0, largest_round_trip = 0.0;
   for (const double a : config.actuator_lags()) largest = std::max(largest, a);
-  for (const double r : config.network_round_trips()) largest_round_trip = std::max(largest_round_trip, r);
+  for (const double r : config.network_round_trips())
+    largest_round_trip = std::max(largest_round_trip, r);
   constexpr int kPoints = 41;
   for (int i = 0; i < kPoints; ++i) {
     const double a = largest * i / (kPoints - 1);
     google::protobuf::RepeatedPtrField<config::DelayStage> actuator;
     *actuator.Add() = joint_lag_actuator_stage(config.actuator_model(), a);
-    const core::CompensatedStability s = core::compensated_stability(
-        prepared.base.integrator, period, zeta, alpha, prepared.base.dt, actuator, nullptr,
-        2.0 * largest_round_trip + 0.05);
+    const core::CompensatedStability s =
+        core::compensated_stability(prepared.base.integrator, period, zeta, alpha, prepared.base.dt,
+                                    actuator, nullptr, 2.0 * largest_round_trip + 0.05);
     result.boundary.push_back({a, s.stable ? s.continuous_margin : std::optional<double>(0.0)});
   }
 }
@@ -311,7 +325,8 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   fill_boundary(config, prepared, result);
   std::map<double, std::optional<double>> critical_at;  // actuator lag -> critical round trip
   if (result.boundary_skipped.empty())
-    for (const double a : config.actuator_lags()) critical_at[a] = critical_round_trip_at(config, prepared, a);
+    for (const double a : config.actuator_lags())
+      critical_at[a] = critical_round_trip_at(config, prepared, a);
   {
     int past = 0, total = 0;
     for (const double r : config.network_round_trips())
@@ -325,8 +340,10 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
           std::to_string(past) + " of " + std::to_string(total) +
           " grid points lie past the stability boundary (network round trip beyond the critical "
           "one for their actuator lag): they are expected to diverge";
-      if (options.warn) options.warn(warning);
-      else spdlog::warn("{}", warning);
+      if (options.warn)
+        options.warn(warning);
+      else
+        spdlog::warn("{}", warning);
     }
   }
   if (config.sites().empty() || config.measured_network_round_trips().empty() ||
@@ -341,9 +358,10 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   }
   const std::size_t total =
       static_cast<std::size_t>(config.network_round_trips_size() * config.actuator_lags_size()) +
-      (result.measured_skipped.empty() ? static_cast<std::size_t>(config.measured_network_round_trips_size() *
-                                                                  config.measured_actuator_lags_size())
-                                       : 0);
+      (result.measured_skipped.empty()
+           ? static_cast<std::size_t>(config.measured_network_round_trips_size() *
+                                      config.measured_actuator_lags_size())
+           : 0);
   std::size_t done = 0;
   const std::function<void()> one_done = [&] {
     if (options.progress) options.progress(++done, total);
@@ -362,8 +380,8 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
         point.past_boundary = round_trip >= *it->second;
       fill_joint_lag_errors(point, u_ref, floor_history(run, 0), run.diverged);
       if (!point.diverged) {
-        point.measured_total_lag =
-            core::j1_delay(column_of(run.command, 0), column_of(run.realised, 0), prepared.base.dt, window);
+        point.measured_total_lag = core::j1_delay(
+            column_of(run.command, 0), column_of(run.realised, 0), prepared.base.dt, window);
       }
       result.grid.push_back(point);
       one_done();
@@ -394,9 +412,10 @@ nlohmann::json to_json(const JointLagResult& result) {
   for (const auto& p : result.measured) measured.push_back(point_json(p));
   nlohmann::json boundary = nlohmann::json::array();
   for (const auto& b : result.boundary)
-    boundary.push_back({{"actuator_lag_s", b.actuator_lag},
-                        {"critical_network_round_trip_s",
-                         b.critical_round_trip ? nlohmann::json(*b.critical_round_trip) : nlohmann::json()}});
+    boundary.push_back(
+        {{"actuator_lag_s", b.actuator_lag},
+         {"critical_network_round_trip_s",
+          b.critical_round_trip ? nlohmann::json(*b.critical_round_trip) : nlohmann::json()}});
   return {{"study", result.study_name},
           {"actuator_model", result.actuator_model},
           {"output_directory", result.output_directory.string()},
@@ -442,10 +461,11 @@ std::string to_text(const JointLagResult& result) {
     out << "across sites: skipped (" << result.measured_skipped << ")\n";
   }
   for (const auto& p : result.measured) {
-    out << "across sites (" << (p.real_time ? "real time" : "lockstep") << "): injected " << p.network_round_trip * 1e3 << " ms network + "
-        << p.actuator_lag * 1e3 << " ms actuator = " << (p.network_round_trip + p.actuator_lag) * 1e3
-        << " ms; measured total " << p.measured_total_lag * 1e3 << " ms = round trip " << p.measured_round_trip * 1e3 << " ms + actuator "
-        << p.measured_actuator_lag * 1e3
+    out << "across sites (" << (p.real_time ? "real time" : "lockstep") << "): injected "
+        << p.network_round_trip * 1e3 << " ms network + " << p.actuator_lag * 1e3
+        << " ms actuator = " << (p.network_round_trip + p.actuator_lag) * 1e3
+        << " ms; measured total " << p.measured_total_lag * 1e3 << " ms = round trip "
+        << p.measured_round_trip * 1e3 << " ms + actuator " << p.measured_actuator_lag * 1e3
         << " ms; NRMSE " << 100 * p.nrmse << " % over the first " << p.duration
         << " s (the grid's NRMSE covers the whole record)\n";
   }

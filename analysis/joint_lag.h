@@ -45,12 +45,12 @@ struct JointLagPoint {
   double measured_total_lag = 0.0;  // s, J1 of realised behind command
   bool diverged = false;
   // Across sites only (zero otherwise):
-  double measured_round_trip = 0.0;  // s, record median
+  double measured_round_trip = 0.0;    // s, record median
   double measured_actuator_lag = 0.0;  // s, see deploy/joint_lag_sites.h
   bool real_time = false;              // the clock of the across-sites run
   double duration = 0.0;               // s of the record run across sites: its NRMSE covers only
                                        // this stretch, so it is not comparable with the grid's
-  bool past_boundary = false;          // network round trip beyond the critical one at this actuator lag
+  bool past_boundary = false;  // network round trip beyond the critical one at this actuator lag
 };
 
 // Continuous stability boundary of the grid: for each actuator lag A, the network round trip R at
@@ -58,8 +58,8 @@ struct JointLagPoint {
 // first goes unstable: core::compensated_stability's continuous margin with the actuator model as
 // the plant. Empty R: stable for every round trip.
 struct BoundaryPoint {
-  double actuator_lag = 0.0;                     // s
-  std::optional<double> critical_round_trip;     // s
+  double actuator_lag = 0.0;                  // s
+  std::optional<double> critical_round_trip;  // s
 };
 
 struct JointLagResult {
@@ -92,7 +92,7 @@ struct JointLagAcrossSites {
 
 struct JointLagOptions {
   std::optional<std::filesystem::path> output_directory;  // overrides the config's
-  bool measure = true;       // run the across-sites part when the config asks and it is possible
+  bool measure = true;  // run the across-sites part when the config asks and it is possible
   bool plots = true;
   // The across-sites runner; without one the across-sites part is skipped (and says so).
   JointLagAcrossSites across_sites;

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <stdexcept>
 
-
 namespace rths::analysis {
 namespace {
 
@@ -19,7 +18,8 @@ std::string safe_name(const std::string& name) {
 
 std::string result_column_prefix(const std::string& run_name) { return safe_name(run_name) + "_"; }
 
-std::vector<std::string> result_column_names(const std::string& run_name, const core::SimulationResult& result) {
+std::vector<std::string> result_column_names(const std::string& run_name,
+                                             const core::SimulationResult& result) {
   const std::string prefix = result_column_prefix(run_name);
   std::vector<std::string> names;
   for (Eigen::Index i = 0; i < result.displacement.cols(); ++i) {

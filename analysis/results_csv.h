@@ -29,7 +29,7 @@ struct NamedResult {
 std::string result_column_prefix(const std::string& run_name);
 
 // The header cells of one run, in the order above.
-std::vector<std::string> result_column_names(const std::string& run_name, const core::SimulationResult& result);
-
+std::vector<std::string> result_column_names(const std::string& run_name,
+                                             const core::SimulationResult& result);
 
 }  // namespace rths::analysis

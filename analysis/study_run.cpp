@@ -1,8 +1,8 @@
 #include "analysis/study_run.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -17,16 +17,17 @@ namespace rths::analysis {
 namespace {
 
 // The first step at which |u| or |v| of a floor passed a limit (0 = no limit), with why.
-std::optional<std::pair<std::size_t, std::string>> first_limit_trip(const core::SimulationResult& r,
-                                                                    const config::SafetyLimits& limits) {
+std::optional<std::pair<std::size_t, std::string>> first_limit_trip(
+    const core::SimulationResult& r, const config::SafetyLimits& limits) {
   for (std::size_t k = 0; k < r.steps(); ++k) {
     const auto row = static_cast<Eigen::Index>(k);
     for (Eigen::Index i = 0; i < r.displacement.cols(); ++i) {
       std::ostringstream why;
       why << std::setprecision(4);
-      if (limits.max_displacement() > 0 && !(std::abs(r.displacement(row, i)) <= limits.max_displacement())) {
-        why << "|u| of floor " << i + 1 << " = " << std::abs(r.displacement(row, i)) << " m > limit "
-            << limits.max_displacement() << " m at t = " << r.time[k] << " s";
+      if (limits.max_displacement() > 0 &&
+          !(std::abs(r.displacement(row, i)) <= limits.max_displacement())) {
+        why << "|u| of floor " << i + 1 << " = " << std::abs(r.displacement(row, i))
+            << " m > limit " << limits.max_displacement() << " m at t = " << r.time[k] << " s";
         return std::make_pair(k, why.str());
       }
       if (limits.max_velocity() > 0 && !(std::abs(r.velocity(row, i)) <= limits.max_velocity())) {
@@ -50,7 +51,8 @@ std::string ms(double seconds) {
 std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
   std::vector<std::string> out;
   for (const CaseOutcome& c : cases) {
-    if (c.status == "limit tripped") out.push_back("case '" + c.name + "': limit tripped: " + c.status_detail);
+    if (c.status == "limit tripped")
+      out.push_back("case '" + c.name + "': limit tripped: " + c.status_detail);
     if (c.diverged() && !c.expect_unstable && !allow_unstable) {
       out.push_back("case '" + c.name + "' diverged: " + c.status_detail);
     }
@@ -62,14 +64,16 @@ namespace {
 
 double nominal_delay_of(const core::HybridSetup& setup) {
   double nominal = 0.0;
-  for (const core::DelayChain& chain : setup.delays) nominal = std::max(nominal, chain.nominal_delay());
+  for (const core::DelayChain& chain : setup.delays)
+    nominal = std::max(nominal, chain.nominal_delay());
   return nominal;
 }
 
 std::optional<core::CriticalDelayCheck> check_setup(const core::PreparedStudy& prepared,
                                                     const core::HybridSetup& setup, double lag) {
   if (prepared.base.partition.actuator_storeys.empty()) return std::nullopt;
-  return core::check_modal_critical_delay(setup.model, prepared.base.partition.experimental_stiffness(),
+  return core::check_modal_critical_delay(setup.model,
+                                          prepared.base.partition.experimental_stiffness(),
                                           setup.integrator, setup.dt, lag);
 }
 
@@ -83,20 +87,25 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
   CompensatedVerdict verdict;
   const std::string beside = "; uncompensated, " + uncompensated->describe();
   if (setup.model.dofs() != 1 || study_case.compensation_size() != 1) {
-    verdict.text = "the compensated loop is analysed for a one-storey study with one compensator only: "
-                   "not judged before the run" + beside;
+    verdict.text =
+        "the compensated loop is analysed for a one-storey study with one compensator only: "
+        "not judged before the run" +
+        beside;
     return verdict;
   }
-  const double m = setup.model.mass(0, 0), k = setup.model.stiffness(0, 0), c = setup.model.damping(0, 0);
+  const double m = setup.model.mass(0, 0), k = setup.model.stiffness(0, 0),
+               c = setup.model.damping(0, 0);
   const double omega = std::sqrt(k / m);
   try {
     const core::CompensatedStability loop = core::compensated_stability(
         setup.integrator, 2.0 * std::numbers::pi / omega, c / (2.0 * m * omega),
-        uncompensated->governing_fraction, setup.dt, study_case.delay(), &study_case.compensation(0),
-        kMaxExtraDelay);
+        uncompensated->governing_fraction, setup.dt, study_case.delay(),
+        &study_case.compensation(0), kMaxExtraDelay);
     if (!loop.frozen_coefficients.empty()) {
-      verdict.text = "adaptive compensation: its coefficients change during the run, so its loop cannot "
-                     "be judged before it" + beside;
+      verdict.text =
+          "adaptive compensation: its coefficients change during the run, so its loop cannot "
+          "be judged before it" +
+          beside;
       return verdict;
     }
     verdict.analysed = true;
@@ -107,14 +116,18 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
       text << "UNSTABLE as configured (spectral radius " << loop.spectral_radius << ")";
     } else {
       std::optional<double> margin = loop.continuous_margin;
-      if (loop.discrete_margin) margin = margin ? std::min(*margin, *loop.discrete_margin) : loop.discrete_margin;
+      if (loop.discrete_margin)
+        margin = margin ? std::min(*margin, *loop.discrete_margin) : loop.discrete_margin;
       verdict.extra_delay_tolerated = margin;
-      if (margin) text << "stable, tolerates " << *margin * 1e3 << " ms more lag";
-      else text << "stable for up to " << kMaxExtraDelay * 1e3 << " ms more lag (searched)";
+      if (margin)
+        text << "stable, tolerates " << *margin * 1e3 << " ms more lag";
+      else
+        text << "stable for up to " << kMaxExtraDelay * 1e3 << " ms more lag (searched)";
     }
     verdict.text = text.str() + beside;
   } catch (const std::invalid_argument& e) {
-    verdict.text = std::string("the compensated loop cannot be analysed (") + e.what() + ")" + beside;
+    verdict.text =
+        std::string("the compensated loop cannot be analysed (") + e.what() + ")" + beside;
   }
   return verdict;
 }
@@ -122,7 +135,8 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
 // The pre-run warning of a case, if any: the compensated loop's verdict when the case has
 // compensation, else the uncompensated lag past its critical delay.
 std::optional<std::string> pre_run_warning(const CaseOutcome& c) {
-  const std::string meant = c.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge";
+  const std::string meant =
+      c.expect_unstable ? " (expect_unstable: meant)" : "; expect it to diverge";
   if (c.compensated) {
     if (c.compensated->analysed && !c.compensated->stable) return c.compensated->text + meant;
     if (!c.compensated->analysed && c.stability && c.stability->past()) return c.compensated->text;
@@ -150,7 +164,8 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
     bare.clear_compensation();
     const core::HybridSetup bare_setup = core::setup_for_case(prepared, bare);
     result.compensated = judge_compensated_loop(
-        setup, study_case, check_setup(prepared, bare_setup, nominal_delay_of(bare_setup) + options.extra_lag));
+        setup, study_case,
+        check_setup(prepared, bare_setup, nominal_delay_of(bare_setup) + options.extra_lag));
   }
   if (const auto warning = pre_run_warning(result); warning && options.warn)
     options.warn("case '" + result.name + "': " + *warning);
@@ -165,8 +180,8 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
     result.status = "diverged";
     std::ostringstream why;
     why << std::setprecision(4) << "peak " << growth.peak_m * 1e3 << " mm against "
-        << growth.peak_reference_m * 1e3 << " mm without lag (more than "
-        << core::kDivergenceGrowth << "x";
+        << growth.peak_reference_m * 1e3 << " mm without lag (more than " << core::kDivergenceGrowth
+        << "x";
     if (result.simulation.diverged && !result.simulation.time.empty())
       why << "; the simulation stopped at t = " << result.simulation.time.back() << " s";
     why << ")";
@@ -176,24 +191,24 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
              !result.compensated) {
     std::ostringstream why;
     why << std::setprecision(3) << "past its critical delay, but the peak grew only "
-        << growth.peak_m / growth.peak_reference_m << "x over the lag-free run in this record (diverged "
-        << "means more than " << core::kDivergenceGrowth << "x); a longer record may still grow: "
-        << result.stability->describe();
+        << growth.peak_m / growth.peak_reference_m
+        << "x over the lag-free run in this record (diverged "
+        << "means more than " << core::kDivergenceGrowth
+        << "x); a longer record may still grow: " << result.stability->describe();
     result.status_detail = why.str();
   }
 }
 
 }  // namespace
 
-std::optional<core::CriticalDelayCheck> check_case_critical_delay(const core::PreparedStudy& prepared,
-                                                                  const config::Case& study_case,
-                                                                  double extra_lag) {
+std::optional<core::CriticalDelayCheck> check_case_critical_delay(
+    const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag) {
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
   return check_setup(prepared, setup, nominal_delay_of(setup) + extra_lag);
 }
 
-std::optional<core::CriticalDelayCheck> check_lag_critical_delay(const core::PreparedStudy& prepared,
-                                                                 double lag) {
+std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
+    const core::PreparedStudy& prepared, double lag) {
   return check_setup(prepared, prepared.base, lag);
 }
 
@@ -244,7 +259,8 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   return outcome;
 }
 
-StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared, std::vector<RecordedCase> recorded,
+StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
+                                  std::vector<RecordedCase> recorded,
                                   const RunStudyOptions& options) {
   if (recorded.empty()) throw std::invalid_argument("judge_recorded_cases: no cases");
   const int floors = prepared.base.model.dofs();
@@ -279,14 +295,16 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared, std::vect
 }
 
 std::vector<std::string> study_plot_files() {
-  return {"displacement.png", "displacement.svg", "force_displacement.png", "force_displacement.svg"};
+  return {"displacement.png", "displacement.svg", "force_displacement.png",
+          "force_displacement.svg"};
 }
 
 namespace {
 
 // Start of the `window` seconds of the reference with the most energy (sum of u^2).
 double strongest_window_start(const std::vector<double>& u, double dt, double window) {
-  const std::size_t length = std::min(u.size(), static_cast<std::size_t>(std::llround(window / dt)));
+  const std::size_t length =
+      std::min(u.size(), static_cast<std::size_t>(std::llround(window / dt)));
   if (length == 0 || length >= u.size()) return 0.0;
   double energy = 0.0;
   for (std::size_t k = 0; k < length; ++k) energy += u[k] * u[k];
@@ -334,12 +352,18 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   std::filesystem::create_directories(directory);
   const CaseOutcome& reference = outcome.reference();
   const std::string response = outcome.response.describe();
-  util::PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case", "time (s)",
-                        "displacement (mm)", {}};
-  util::PlotSpec difference{"difference from the reference (" + reference.name + ")", "time (s)",
-                      "case - reference (mm)", {}};
+  util::PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case",
+                              "time (s)",
+                              "displacement (mm)",
+                              {}};
+  util::PlotSpec difference{"difference from the reference (" + reference.name + ")",
+                            "time (s)",
+                            "case - reference (mm)",
+                            {}};
   util::PlotSpec loop{outcome.study_name + ": what the integrator sees (experimental part)",
-                "commanded displacement (mm)", "measured force (kN)", {}};
+                      "commanded displacement (mm)",
+                      "measured force (kN)",
+                      {}};
   std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
   std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
   if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
@@ -403,8 +427,8 @@ nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
   if (!v) return nullptr;
   return {{"analysed", v->analysed},
           {"stable", v->analysed ? nlohmann::json(v->stable) : nlohmann::json()},
-          {"extra_delay_tolerated_s", v->extra_delay_tolerated ? nlohmann::json(*v->extra_delay_tolerated)
-                                                               : nlohmann::json()},
+          {"extra_delay_tolerated_s",
+           v->extra_delay_tolerated ? nlohmann::json(*v->extra_delay_tolerated) : nlohmann::json()},
           {"verdict", v->text}};
 }
 
@@ -416,15 +440,19 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
     nlohmann::json stability = nullptr;
     if (c.stability) {
       const auto& s = *c.stability;
-      const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
-      stability = {{"lag_s", s.lag},
-                   {"continuous_critical_delay_s", opt(s.continuous)},
-                   {"discrete_critical_delay_s", opt(s.discrete)},
-                   {"discrete_check", s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
-                   {"critical_delay_s", opt(s.critical())},
-                   {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
-                   {"past_critical_delay", s.past()},
-                   {"assumed", s.assumed}};
+      const auto opt = [](const std::optional<double>& v) {
+        return v ? nlohmann::json(*v) : nlohmann::json();
+      };
+      stability = {
+          {"lag_s", s.lag},
+          {"continuous_critical_delay_s", opt(s.continuous)},
+          {"discrete_critical_delay_s", opt(s.discrete)},
+          {"discrete_check",
+           s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
+          {"critical_delay_s", opt(s.critical())},
+          {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
+          {"past_critical_delay", s.past()},
+          {"assumed", s.assumed}};
     }
     cases.push_back({{"name", c.name},
                      {"delay", c.delay_description},
@@ -482,9 +510,9 @@ std::vector<std::string> summary_row(const CaseOutcome& c) {
 
 std::string study_summary_text(const StudyOutcome& outcome) {
   std::ostringstream out;
-  out << "study: " << outcome.study_name << " (every case against " << outcome.reference_description()
-      << "; response: " << outcome.response.describe() << " displacement; motion read in "
-      << outcome.motion_units << ")\n";
+  out << "study: " << outcome.study_name << " (every case against "
+      << outcome.reference_description() << "; response: " << outcome.response.describe()
+      << " displacement; motion read in " << outcome.motion_units << ")\n";
   using Align = util::TextTable::Align;
   util::TextTable table({{"case", Align::kLeft, 32},
                          {"delay", Align::kLeft, 28},

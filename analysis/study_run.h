@@ -40,7 +40,8 @@ struct CompensatedVerdict {
   bool analysed = false;  // false: adaptive, or a structure the analysis does not cover
   bool stable = false;    // analysed and stable as configured (meaningful when analysed)
   std::optional<double> extra_delay_tolerated;  // s, analysed and stable: the smaller margin
-  std::string text;       // one line, e.g. "compensated loop (polynomial): stable, tolerates 9.1 ms more"
+  std::string
+      text;  // one line, e.g. "compensated loop (polynomial): stable, tolerates 9.1 ms more"
 };
 
 struct CaseOutcome {
@@ -53,10 +54,10 @@ struct CaseOutcome {
   // `stability` above stays the uncompensated lag's check, shown beside it.
   std::optional<CompensatedVerdict> compensated;
   core::SimulationResult simulation;
-  std::vector<double> response;   // m, top-floor displacement
-  Comparison comparison;          // against the reference case
+  std::vector<double> response;      // m, top-floor displacement
+  Comparison comparison;             // against the reference case
   std::string status = "completed";  // "completed", "diverged", "limit tripped"
-  std::string status_detail;      // why, when not completed
+  std::string status_detail;         // why, when not completed
   bool diverged() const { return status == "diverged"; }
 };
 
@@ -64,10 +65,10 @@ inline constexpr const char* kLagFreeReference = "the lag-free in-process refere
 
 struct StudyOutcome {
   std::string study_name;
-  std::string motion_units;       // units the record was read in: g, m/s2, cm/s2
+  std::string motion_units;  // units the record was read in: g, m/s2, cm/s2
   ResponseSpec response = ResponseSpec::floor(1);
   std::size_t reference_index = 0;
-  double lag_free_peak = 0.0;     // m, top floor of the run without any delay stage
+  double lag_free_peak = 0.0;  // m, top floor of the run without any delay stage
   std::vector<CaseOutcome> cases;
   // Distributed runs (judge_recorded_cases): the lag-free in-process run every case is compared
   // with. Empty for `run`, which compares every case with cases[reference_index].
@@ -91,14 +92,13 @@ struct RunStudyOptions {
 // make: core::check_critical_delay on the structure, the integrator and the lag tau = the case's
 // delay chain's nominal delay (s, the largest over actuators; negative = lead) + extra_lag (s).
 // Empty when the structure has no experimental part.
-std::optional<core::CriticalDelayCheck> check_case_critical_delay(const core::PreparedStudy& prepared,
-                                                                  const config::Case& study_case,
-                                                                  double extra_lag = 0.0);
+std::optional<core::CriticalDelayCheck> check_case_critical_delay(
+    const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag = 0.0);
 
 // The same check for a lag given directly (s; e.g. an identified actuator's nominal delay) on
 // the study's base setup. Empty when the structure has no experimental part.
-std::optional<core::CriticalDelayCheck> check_lag_critical_delay(const core::PreparedStudy& prepared,
-                                                                 double lag);
+std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
+    const core::PreparedStudy& prepared, double lag);
 
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
 
@@ -116,7 +116,8 @@ struct RecordedCase {
 // with the lag-free in-process run of the same structure and motion (prepared.base: no delay
 // stage, no network), which the outcome keeps as lag_free_reference. A recorded case's status
 // other than "completed" is kept. Throws std::invalid_argument for a case the study lacks.
-StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared, std::vector<RecordedCase> cases,
+StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
+                                  std::vector<RecordedCase> cases,
                                   const RunStudyOptions& options = {});
 
 // The results file (csv, mat, h5) is tables::study_table: analysis/results_csv.h columns.

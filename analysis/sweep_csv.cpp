@@ -27,7 +27,8 @@ std::vector<std::string> split_csv(const std::string& line) {
   std::size_t start = 0;
   for (;;) {
     const std::size_t comma = line.find(',', start);
-    cells.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    cells.push_back(
+        line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (comma == std::string::npos) return cells;
     start = comma + 1;
   }
@@ -43,8 +44,7 @@ double parse_double(const std::string& text, const std::string& where) {
 }
 
 void write_csv_file(const std::filesystem::path& path, const std::string& grid_hash,
-                    std::size_t points, const Shard& shard,
-                    const std::vector<std::string>& lines) {
+                    std::size_t points, const Shard& shard, const std::vector<std::string>& lines) {
   // The sidecar first: a CSV is never in place without the metadata that says what it holds.
   util::AtomicFile sidecar(sweep_sidecar_path(path));
   sidecar.stream() << nlohmann::json{{"format", kSidecarFormat},
@@ -104,23 +104,26 @@ SweepCsv read_sweep_csv(const std::filesystem::path& path) {
   const std::string sidecar_name = sidecar_path.string();
   std::ifstream sidecar_in(sidecar_path);
   if (!sidecar_in) {
-    throw std::invalid_argument(name + ": its metadata " + sidecar_name +
-                                " is missing (grid, points, shard: written beside every sweep CSV)");
+    throw std::invalid_argument(
+        name + ": its metadata " + sidecar_name +
+        " is missing (grid, points, shard: written beside every sweep CSV)");
   }
   nlohmann::json sidecar;
   try {
     sidecar = nlohmann::json::parse(sidecar_in);
-    if (sidecar.value("format", "") != kSidecarFormat) throw std::invalid_argument("not an rths-sweep sidecar");
+    if (sidecar.value("format", "") != kSidecarFormat)
+      throw std::invalid_argument("not an rths-sweep sidecar");
     csv.grid_hash = sidecar.at("grid").get<std::string>();
     csv.points = sidecar.at("points").get<std::size_t>();
     csv.shard = parse_shard(sidecar.at("shard").get<std::string>());
   } catch (const std::exception& e) {
-    throw std::invalid_argument(sidecar_name + ": not a sweep CSV's metadata (format, grid, points, shard): " +
-                                e.what());
+    throw std::invalid_argument(
+        sidecar_name + ": not a sweep CSV's metadata (format, grid, points, shard): " + e.what());
   }
   if (csv.grid_hash.empty()) throw std::invalid_argument(sidecar_name + ": empty grid hash");
   if (!std::getline(in, line) || line != kCsvHeader) {
-    throw std::invalid_argument(name + ":1: expected the column header '" + std::string(kCsvHeader) + "'");
+    throw std::invalid_argument(name + ":1: expected the column header '" +
+                                std::string(kCsvHeader) + "'");
   }
   csv.header = line;
   std::size_t line_number = 1;
@@ -131,7 +134,8 @@ SweepCsv read_sweep_csv(const std::filesystem::path& path) {
     const std::size_t comma = line.find(',');
     csv.indices.push_back(parse_index(line.substr(0, comma), where + ": index"));
     if (split_csv(line).size() != split_csv(kCsvHeader).size()) {
-      throw std::invalid_argument(where + ": expected " + std::to_string(split_csv(kCsvHeader).size()) +
+      throw std::invalid_argument(where + ": expected " +
+                                  std::to_string(split_csv(kCsvHeader).size()) +
                                   " columns (a truncated file?)");
     }
     csv.lines.push_back(line);
@@ -147,10 +151,10 @@ SweepCsv merge_sweep_csvs(const std::vector<std::filesystem::path>& shards,
   const SweepCsv& first = parts.front();
   for (std::size_t i = 1; i < parts.size(); ++i) {
     if (parts[i].grid_hash != first.grid_hash || parts[i].points != first.points) {
-      throw std::invalid_argument("merge: " + shards[i].string() + " comes from another grid (grid=" +
-                                  parts[i].grid_hash + ", " + std::to_string(parts[i].points) +
-                                  " points) than " + shards[0].string() + " (grid=" + first.grid_hash +
-                                  ", " + std::to_string(first.points) + " points)");
+      throw std::invalid_argument(
+          "merge: " + shards[i].string() + " comes from another grid (grid=" + parts[i].grid_hash +
+          ", " + std::to_string(parts[i].points) + " points) than " + shards[0].string() +
+          " (grid=" + first.grid_hash + ", " + std::to_string(first.points) + " points)");
     }
   }
   const std::size_t total = first.points;
@@ -165,9 +169,9 @@ SweepCsv merge_sweep_csvs(const std::vector<std::filesystem::path>& shards,
                                     std::to_string(total) + " points");
       }
       if (owner[index] >= 0) {
-        throw std::invalid_argument("merge: point " + std::to_string(index) + " appears twice (in " +
-                                    shards[owner[index]].string() + " and " + shards[s].string() +
-                                    "); was a shard given twice?");
+        throw std::invalid_argument("merge: point " + std::to_string(index) +
+                                    " appears twice (in " + shards[owner[index]].string() +
+                                    " and " + shards[s].string() + "); was a shard given twice?");
       }
       owner[index] = static_cast<int>(s);
       line_of[index] = &parts[s].lines[r];
@@ -178,18 +182,21 @@ SweepCsv merge_sweep_csvs(const std::vector<std::filesystem::path>& shards,
     if (owner[i] < 0) missing.push_back(i);
   }
   if (!missing.empty()) {
-    std::string message = "merge: " + std::to_string(missing.size()) + " of " + std::to_string(total) +
-                          " points are missing (first index " + std::to_string(missing.front()) +
-                          ", last " + std::to_string(missing.back()) + ")";
+    std::string message = "merge: " + std::to_string(missing.size()) + " of " +
+                          std::to_string(total) + " points are missing (first index " +
+                          std::to_string(missing.front()) + ", last " +
+                          std::to_string(missing.back()) + ")";
     const std::size_t count = first.shard.count;
     if (count > 1) {
       std::set<std::size_t> lacking;
-      for (std::size_t i : missing) lacking.insert(std::min(count - 1, (i * count + count - 1) / total));
+      for (std::size_t i : missing)
+        lacking.insert(std::min(count - 1, (i * count + count - 1) / total));
       // Shard s holds [s T / N, (s+1) T / N); name the ones whose points are absent.
       std::string names;
       for (std::size_t s = 0; s < count; ++s) {
         const std::size_t lo = total * s / count, hi = total * (s + 1) / count;
-        if (lo < hi && owner[lo] < 0) names += (names.empty() ? "" : ", ") + std::to_string(s) + "/" + std::to_string(count);
+        if (lo < hi && owner[lo] < 0)
+          names += (names.empty() ? "" : ", ") + std::to_string(s) + "/" + std::to_string(count);
       }
       if (!names.empty()) message += "; missing shard(s) " + names;
     }

@@ -108,7 +108,8 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
 
   std::vector<config::GroundMotion> motion_configs(sweep.motions().begin(), sweep.motions().end());
   if (motion_configs.empty()) {
-    if (study.motion().path().empty()) fail(source, "sweep.motions is empty and motion.path is not set");
+    if (study.motion().path().empty())
+      fail(source, "sweep.motions is empty and motion.path is not set");
     motion_configs.push_back(study.motion());
   }
 
@@ -126,8 +127,10 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
   delay_model_ = sweep.delay_model();
 
   const core::IntegratorKind kind = core::integrator_kind(study.integrator());
-  const bool any_delay = std::any_of(delays_.begin(), delays_.end(), [](double d) { return d > 0; });
-  const bool any_experimental = std::any_of(alphas_.begin(), alphas_.end(), [](double a) { return a > 0; });
+  const bool any_delay =
+      std::any_of(delays_.begin(), delays_.end(), [](double d) { return d > 0; });
+  const bool any_experimental =
+      std::any_of(alphas_.begin(), alphas_.end(), [](double a) { return a > 0; });
   if (!core::is_explicit(kind) && any_delay && any_experimental) {
     fail(source, "integrator " + core::to_string(kind) +
                      " cannot run a delayed experimental part; use an explicit integrator");
@@ -146,7 +149,8 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
     try {
       record = core::load_motion(motion_configs[m], base_dir);
     } catch (const std::exception& e) {
-      fail(source, "sweep motion " + std::to_string(m) + " ('" + motion_configs[m].path() + "'): " + e.what());
+      fail(source, "sweep motion " + std::to_string(m) + " ('" + motion_configs[m].path() +
+                       "'): " + e.what());
     }
     std::string name = std::filesystem::path(motion_configs[m].path()).stem().string();
     const double scale = motion_configs[m].scale();
@@ -161,8 +165,8 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
         core::check_stability(kind, 2.0 * std::numbers::pi / shortest_period, step,
                               study.integrator().allow_unstable());
       } catch (const std::invalid_argument& e) {
-        fail(source, "sweep: the shortest period " + format_number(shortest_period) +
-                         " s at dt " + format_number(step) + " s: " + e.what());
+        fail(source, "sweep: the shortest period " + format_number(shortest_period) + " s at dt " +
+                         format_number(step) + " s: " + e.what());
       }
       hash = fnv1a(hash, &step, sizeof step);
       hash = fnv1a(hash, motion.acceleration.data(), motion.acceleration.size() * sizeof(double));
@@ -179,7 +183,8 @@ std::size_t SweepGrid::size() const {
 }
 
 SweepPoint SweepGrid::point(std::size_t index) const {
-  if (index >= size()) throw std::out_of_range("sweep index " + std::to_string(index) + " beyond the grid");
+  if (index >= size())
+    throw std::out_of_range("sweep index " + std::to_string(index) + " beyond the grid");
   SweepPoint p;
   p.index = index;
   std::size_t rest = index;

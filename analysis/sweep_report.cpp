@@ -19,7 +19,8 @@ namespace {
 using sweep_internal::format_number;
 
 // Series key: everything but period and stiffness.
-using SeriesKey = std::tuple<std::string, double, double, std::string, double>;  // model, alpha, dt, motion, delay
+using SeriesKey = std::tuple<std::string, double, double, std::string,
+                             double>;  // model, alpha, dt, motion, delay
 
 SeriesKey series_key(const SweepTableRow& r) { return {r.model, r.alpha, r.dt, r.motion, r.delay}; }
 
@@ -63,8 +64,9 @@ struct SweepAxes {
   // Colour by delay, dash and point type by model.
   std::string style(double delay, const std::string& model, const std::string& with) const {
     const int m = index_of(models, model);
-    return with + " lc rgb '" + util::series_colour(static_cast<std::size_t>(index_of(delays, delay))) +
-           "' dt " + std::to_string(m % 4 + 1) + " pt " + std::to_string(m % 6 + 5);
+    return with + " lc rgb '" +
+           util::series_colour(static_cast<std::size_t>(index_of(delays, delay))) + "' dt " +
+           std::to_string(m % 4 + 1) + " pt " + std::to_string(m % 6 + 5);
   }
   std::string label(const SeriesKey& key) const {
     const auto& [model, alpha, dt, motion, delay] = key;
@@ -97,7 +99,8 @@ std::map<SeriesKey, std::vector<CurvePoint>> curves_by_key(const std::vector<Swe
 }
 
 // Smallest and largest bounded NRMSE (%) > 0; {inf, 0} when there is none.
-std::pair<double, double> bounded_range(const std::map<SeriesKey, std::vector<CurvePoint>>& curves) {
+std::pair<double, double> bounded_range(
+    const std::map<SeriesKey, std::vector<CurvePoint>>& curves) {
   double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
   for (const auto& [key, points] : curves)
     for (const CurvePoint& p : points)
@@ -118,14 +121,15 @@ std::vector<double> periods_drawn(const std::vector<SweepTableRow>& rows) {
   const std::vector<double> all(periods.begin(), periods.end());
   std::vector<double> drawn;
   for (std::size_t i = 0; i < std::min(kPeriodsDrawn, all.size()); ++i)
-    drawn.push_back(all[all.size() <= kPeriodsDrawn ? i : i * (all.size() - 1) / (kPeriodsDrawn - 1)]);
+    drawn.push_back(
+        all[all.size() <= kPeriodsDrawn ? i : i * (all.size() - 1) / (kPeriodsDrawn - 1)]);
   return drawn;
 }
 
 // The critical delay of each drawn period as a marker, those beyond the x range left out and
 // the title saying so.
-void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& periods, const SweepTableRow& at,
-                          const CriticalDelayOf& critical_delay) {
+void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& periods,
+                          const SweepTableRow& at, const CriticalDelayOf& critical_delay) {
   if (!critical_delay) return;
   for (double period : periods) {
     if (const auto critical = critical_delay(period, at.alpha, at.dt)) {
@@ -137,24 +141,30 @@ void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& perio
   }
   const std::size_t before = plot.markers.size();
   std::erase_if(plot.markers, [&](const util::VerticalMarker& m) { return m.x > *plot.x_max; });
-  if (plot.markers.size() < before) plot.title += " (critical delays beyond the swept range not drawn)";
+  if (plot.markers.size() < before)
+    plot.title += " (critical delays beyond the swept range not drawn)";
 }
 
 // NRMSE against delay, one curve per drawn period and model (colour by period, dash by model), at
 // the first fraction, dt and record; diverged points on a row above the curves.
-void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows, const std::filesystem::path& png,
-                            const std::string& title, const CriticalDelayOf& critical_delay,
-                            const SweepAxes& axes, const util::PlotSpec& period_panel) {
+void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows,
+                            const std::filesystem::path& png, const std::string& title,
+                            const CriticalDelayOf& critical_delay, const SweepAxes& axes,
+                            const util::PlotSpec& period_panel) {
   const SweepTableRow& first = rows.front();
   const std::vector<double> periods = periods_drawn(rows);
   util::PlotSpec plot{title + ": NRMSE against delay, one curve per period" +
                           (axes.models.size() > 1 ? " and model" : ""),
-                      "delay (ms)", "NRMSE (%, log)", {}, true};
+                      "delay (ms)",
+                      "NRMSE (%, log)",
+                      {},
+                      true};
   plot.y_min = period_panel.y_min;
   plot.y_max = period_panel.y_max;
   plot.y_format = "%g";
   const double row = period_panel.y_max ? *period_panel.y_max / 1.5 / kRowStep : 1.0;
-  util::Series diverged{"diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2 lc rgb 'black'"};
+  util::Series diverged{
+      "diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2 lc rgb 'black'"};
   double largest_delay = 0.0;
   for (std::size_t p = 0; p < periods.size(); ++p) {
     for (std::size_t m = 0; m < axes.models.size(); ++m) {
@@ -168,9 +178,11 @@ void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows, const std::f
       std::ostringstream label;
       label << "T = " << periods[p] << " s";
       if (axes.models.size() > 1) label << ", " << model_label(axes.models[m]);
-      util::Series curve{label.str(), {}, {},
-                         "linespoints lc rgb '" + util::series_colour(p) + "' dt " + std::to_string(m % 4 + 1) +
-                             " pt " + std::to_string(m % 6 + 5)};
+      util::Series curve{label.str(),
+                         {},
+                         {},
+                         "linespoints lc rgb '" + util::series_colour(p) + "' dt " +
+                             std::to_string(m % 4 + 1) + " pt " + std::to_string(m % 6 + 5)};
       for (const SweepTableRow* r : points) {
         curve.x.push_back(r->delay * 1e3);
         curve.y.push_back(r->diverged ? std::nan("") : r->nrmse_pct);
@@ -225,10 +237,17 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
   const auto curves = curves_by_key(rows, axes.stiffness);
   if (curves.empty()) throw std::invalid_argument("sweep plot: no delay > 0 in the rows");
   const auto [smallest, largest] = bounded_range(curves);
-  util::PlotSpec nrmse_panel{title + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
-                             "period T (s)", "NRMSE (%, log)", {}, true};
-  util::PlotSpec eq2_panel{title + ": the paper's Eq. 2 as printed (depends on N)", "period T (s)",
-                           "Eq. 2 (log)", {}, true};
+  util::PlotSpec nrmse_panel{
+      title + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
+      "period T (s)",
+      "NRMSE (%, log)",
+      {},
+      true};
+  util::PlotSpec eq2_panel{title + ": the paper's Eq. 2 as printed (depends on N)",
+                           "period T (s)",
+                           "Eq. 2 (log)",
+                           {},
+                           true};
   nrmse_panel.height = eq2_panel.height = 500;
   nrmse_panel.y_format = eq2_panel.y_format = "%g";
   // Diverged points sit on rows above every bounded value, so they are seen but set no scale.
@@ -238,8 +257,11 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
     const std::string label = axes.label(key);
     const std::string style = axes.style(std::get<4>(key), std::get<0>(key), "linespoints");
     util::Series nrmse{label, {}, {}, style}, eq2{label, {}, {}, style};
-    util::Series diverged{label + ": diverged", {}, {},
-                          axes.style(std::get<4>(key), std::get<0>(key), "points") + " lw 2 ps 1.6"};
+    util::Series diverged{
+        label + ": diverged",
+        {},
+        {},
+        axes.style(std::get<4>(key), std::get<0>(key), "points") + " lw 2 ps 1.6"};
     const double row = first_row * std::pow(kRowStep, static_cast<double>(marks.size()));
     for (const CurvePoint& p : points) {
       nrmse.x.push_back(p.period);
@@ -261,7 +283,8 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
   }
   for (util::Series& m : marks) nrmse_panel.series.push_back(std::move(m));
   util::write_png_panels({nrmse_panel, eq2_panel}, png);
-  write_sweep_delay_plot(rows, sweep_delay_plot_path(png), title, critical_delay, axes, nrmse_panel);
+  write_sweep_delay_plot(rows, sweep_delay_plot_path(png), title, critical_delay, axes,
+                         nrmse_panel);
 }
 
 SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
@@ -282,8 +305,9 @@ SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
     if (values.size() < 2) continue;
     const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
     const double scale = std::max(std::abs(*lo), std::abs(*hi));
-    if (scale > 0) trends.stiffness_max_relative_difference =
-        std::max(trends.stiffness_max_relative_difference, (*hi - *lo) / scale);
+    if (scale > 0)
+      trends.stiffness_max_relative_difference =
+          std::max(trends.stiffness_max_relative_difference, (*hi - *lo) / scale);
   }
   std::size_t pairs = 0, falling = 0;
   for (auto& [key, points] : by_series) {
@@ -306,7 +330,8 @@ SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
     const auto it = linear.find({r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness});
     if (it != linear.end() && it->second > 0) ratios.push_back(r.nrmse_pct / it->second);
   }
-  trends.nonlinear_to_linear_median_ratio = ratios.empty() ? std::nan("") : core::median(std::move(ratios));
+  trends.nonlinear_to_linear_median_ratio =
+      ratios.empty() ? std::nan("") : core::median(std::move(ratios));
   return trends;
 }
 

@@ -69,8 +69,7 @@ config::DelayStage stage_for(config::Sweep::DelayModel delay_model, double delay
 
 class SweepRunner {
  public:
-  SweepRunner(const SweepGrid& grid, const SweepOptions& options)
-      : grid_(grid), options_(options) {
+  SweepRunner(const SweepGrid& grid, const SweepOptions& options) : grid_(grid), options_(options) {
     std::tie(first_, last_) = grid.shard_range(options.shard);
     rows_.resize(last_ - first_);
     per_period_ = grid.alphas().size() * grid.delays().size();
@@ -79,7 +78,8 @@ class SweepRunner {
 
   std::vector<SweepRow> run() {
     build_items();
-    util::parallel_for(items_.size(), options_.threads, [this](std::size_t i) { run_item(items_[i]); });
+    util::parallel_for(items_.size(), options_.threads,
+                       [this](std::size_t i) { run_item(items_[i]); });
     return std::move(rows_);
   }
 
@@ -103,7 +103,8 @@ class SweepRunner {
   }
 
   bool in_shard(std::size_t index) const { return index >= first_ && index < last_; }
-  std::size_t index_of(std::size_t group, std::size_t period, std::size_t alpha, std::size_t delay) const {
+  std::size_t index_of(std::size_t group, std::size_t period, std::size_t alpha,
+                       std::size_t delay) const {
     return group * per_group_ + period * per_period_ + alpha * grid_.delays().size() + delay;
   }
 
@@ -158,7 +159,8 @@ class SweepRunner {
           if (!in_shard(index)) continue;
           const double alpha = grid_.alphas()[a], delay = grid_.delays()[d];
           core::HybridSetup delayed = setup;
-          delayed.partition = core::partition_by_fraction(setup.model.storey_stiffness, alpha, factory);
+          delayed.partition =
+              core::partition_by_fraction(setup.model.storey_stiffness, alpha, factory);
           delayed.delays.clear();
           if (delay > 0 && !delayed.partition.actuator_storeys.empty()) {
             const config::DelayStage stage = stage_for(grid_.delay_model(), delay);
@@ -171,7 +173,8 @@ class SweepRunner {
           const core::SimulationResult result = core::simulate(delayed, motion);
           SweepRow& row = row_at(index);
           row.point = grid_.point(index);
-          fill_metrics(row, reference_u, reference.diverged, floor_history(result, 0), result.diverged);
+          fill_metrics(row, reference_u, reference.diverged, floor_history(result, 0),
+                       result.diverged);
           ++done;
         }
       }
@@ -191,7 +194,8 @@ class SweepRunner {
       models.push_back(structure_for(grid_, grid_.periods()[p], stiffness));
       const core::StructuralModel& model = models.back();
       // alpha = 0: the whole storey numerical, as core::partition_by_fraction(..., 0, ...).
-      reference_lanes.push_back({model.mass(0, 0), model.damping(0, 0), model.storey_stiffness[0], 0.0});
+      reference_lanes.push_back(
+          {model.mass(0, 0), model.damping(0, 0), model.storey_stiffness[0], 0.0});
     }
     std::vector<std::vector<double>> reference;
     const std::vector<LaneOutcome> reference_outcome = run_linear_sdof_lanes(
@@ -208,8 +212,8 @@ class SweepRunner {
           const double k = model.storey_stiffness[0], alpha = grid_.alphas()[a];
           // The split of core::partition_by_fraction: (1 - alpha) k and alpha k, each present
           // only when non-zero.
-          lanes.push_back({model.mass(0, 0), model.damping(0, 0), alpha < 1.0 ? (1.0 - alpha) * k : 0.0,
-                           alpha > 0.0 ? alpha * k : 0.0});
+          lanes.push_back({model.mass(0, 0), model.damping(0, 0),
+                           alpha < 1.0 ? (1.0 - alpha) * k : 0.0, alpha > 0.0 ? alpha * k : 0.0});
           lane_points.emplace_back(p - item.period_begin, index);
         }
       }
@@ -257,7 +261,8 @@ SweepStabilityCheck check_sweep_stability(const SweepGrid& grid) {
           if (check.margin() < out.smallest_margin) {
             out.smallest_margin = check.margin();
             std::ostringstream where;
-            where << "T = " << period << " s, alpha = " << alpha << ", dt = " << dt * 1e3 << " ms: " << check.describe();
+            where << "T = " << period << " s, alpha = " << alpha << ", dt = " << dt * 1e3
+                  << " ms: " << check.describe();
             out.worst = where.str();
           }
         }
@@ -275,7 +280,8 @@ CriticalDelayOf critical_delay_of(const SweepGrid& grid) {
     // The lag only bounds the discrete search: search far enough to find the limit.
     const auto continuous = core::continuous_critical_delay(period, zeta, alpha).critical_delay;
     const double search = continuous ? 1.5 * *continuous : period;
-    return core::check_critical_delay(model, {alpha * model.stiffness(0, 0)}, kind, dt, search).critical();
+    return core::check_critical_delay(model, {alpha * model.stiffness(0, 0)}, kind, dt, search)
+        .critical();
   };
 }
 

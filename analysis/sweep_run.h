@@ -22,7 +22,7 @@ namespace rths::analysis {
 
 struct SweepRow {
   SweepPoint point;
-  double peak_reference = 0, peak_delayed = 0;  // m
+  double peak_reference = 0, peak_delayed = 0;          // m
   double eq2_paper = 0, nrmse_pct = 0, peak_error = 0;  // -, %, m (inf when diverged)
   bool diverged = false;  // analysis::compare: stopped, not finite, or grew past 10x the reference
 };
@@ -46,7 +46,8 @@ struct SweepStabilityCheck {
 SweepStabilityCheck check_sweep_stability(const SweepGrid& grid);
 
 // Critical delay (s) of a period (s), fraction and dt (s); empty when stable for every delay.
-using CriticalDelayOf = std::function<std::optional<double>(double period, double alpha, double dt)>;
+using CriticalDelayOf =
+    std::function<std::optional<double>(double period, double alpha, double dt)>;
 // The critical delay of the grid's SDOF (study damping and integrator): core::check_critical_delay.
 CriticalDelayOf critical_delay_of(const SweepGrid& grid);
 

@@ -5,7 +5,8 @@
 // reference's peak) per study.
 //
 //   compensation_bench [--out DIR] [STUDY.textproto ...]
-// Default studies: configs/paper_frame_compensated.textproto, configs/benchmark_compensated.textproto.
+// Default studies: configs/paper_frame_compensated.textproto,
+// configs/benchmark_compensated.textproto.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -52,7 +53,9 @@ void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& d
   std::filesystem::create_directories(dir);
   const auto& reference = outcome.cases[outcome.reference_index];
   util::PlotSpec error{outcome.study_name + ": tracking error x_m - x_t at the actuator",
-                           "time (s)", "tracking error (mm)", {}};
+                       "time (s)",
+                       "tracking error (mm)",
+                       {}};
   std::size_t peak_step = 0;
   for (std::size_t k = 0; k < reference.response.size(); ++k) {
     if (std::abs(reference.response[k]) > std::abs(reference.response[peak_step])) peak_step = k;
@@ -64,8 +67,8 @@ void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& d
   for (const auto& c : outcome.cases) {
     if (c.simulation.command.cols() == 0 || &c == &reference) continue;
     util::Series e{c.name, c.simulation.time, {}};
-    util::PlotSpec panel{c.name + ": command wanted (x_t) and realised (x_m), zoom", "time (s)",
-                             "drift (mm)", {}};
+    util::PlotSpec panel{
+        c.name + ": command wanted (x_t) and realised (x_m), zoom", "time (s)", "drift (mm)", {}};
     util::Series target{"x_t (integrator)", {}, {}}, measured{"x_m (actuator)", {}, {}};
     for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
       const double xt = c.simulation.command(k, 0), xm = c.simulation.realised(k, 0);
@@ -86,7 +89,9 @@ void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& d
   // The uncompensated error dwarfs the rest: a second panel without it.
   util::PlotSpec compensated = error;
   compensated.title = outcome.study_name + ": tracking error of the compensated cases";
-  std::erase_if(compensated.series, [](const util::Series& s) { return s.title.find("uncompensated") != std::string::npos; });
+  std::erase_if(compensated.series, [](const util::Series& s) {
+    return s.title.find("uncompensated") != std::string::npos;
+  });
   util::write_png_panels({error, compensated}, dir / "tracking_error.png");
   util::write_png_panels(zoom, dir / "command_vs_measured.png");
 }
@@ -111,13 +116,16 @@ std::vector<Row> evaluate(const std::filesystem::path& config, const std::filesy
     r.compensated = study.cases(static_cast<int>(i)).compensation_size() > 0;
     r.nrmse = c.comparison.nrmse_pct;
     r.peak_error = c.comparison.peak_error_m * 1e3;
-    const auto target = column(c.simulation.command, 0), measured = column(c.simulation.realised, 0);
+    const auto target = column(c.simulation.command, 0),
+               measured = column(c.simulation.realised, 0);
     r.j = core::benchmark_criteria(target, measured, c.simulation.displacement,
                                    reference.displacement, storey, prepared.base.dt, kJ1Search);
     std::printf("%-38s %9.2f %9.3f %8.2f", r.name.c_str(), r.nrmse, r.peak_error, r.j.J(1) * 1e3);
     for (int j = 2; j <= 9; ++j) {
-      if (std::isnan(r.j.J(j))) std::printf(" %7s", "n/a");
-      else std::printf(" %7.2f", r.j.J(j));
+      if (std::isnan(r.j.J(j)))
+        std::printf(" %7s", "n/a");
+      else
+        std::printf(" %7.2f", r.j.J(j));
     }
     std::printf("%s\n", r.diverged ? "  DIVERGED" : "");
     rows.push_back(r);
@@ -149,43 +157,53 @@ void print_targets(const std::filesystem::path& config, const std::vector<Row>& 
     if (!slot || r.nrmse > slot->nrmse) slot = &r;
   }
   const Row* uncompensated = nullptr;
-  for (const Row& r : rows) if (!r.compensated) uncompensated = &r;
+  for (const Row& r : rows)
+    if (!r.compensated) uncompensated = &r;
   std::printf("targets:\n");
   if (uncompensated) {
     std::printf("  uncompensated: NRMSE %.1f %%, J1 %.2f ms, J2 %.2f %%\n", uncompensated->nrmse,
                 uncompensated->j.J(1) * 1e3, uncompensated->j.J(2));
   }
   if (best) {
-    std::printf("  best compensator (%s): NRMSE %.2f %% (target <= 5 %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)\n",
-                best->name.c_str(), best->nrmse, verdict(best->nrmse <= 5.0),
-                best->j.J(1) * 1e3, verdict(std::abs(best->j.J(1)) <= 1e-3), best->j.J(2),
-                verdict(best->j.J(2) <= 5.0));
+    std::printf(
+        "  best compensator (%s): NRMSE %.2f %% (target <= 5 %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 "
+        "%.2f %% (<= 5 %%: %s)\n",
+        best->name.c_str(), best->nrmse, verdict(best->nrmse <= 5.0), best->j.J(1) * 1e3,
+        verdict(std::abs(best->j.J(1)) <= 1e-3), best->j.J(2), verdict(best->j.J(2) <= 5.0));
     if (config.filename().string().find("benchmark") != std::string::npos) {
-      std::printf("  published sample controller (PI + phase lead, Silva, Dyke et al. 2020): J1 4.6 ms, J2 ~9-10 %%: best beats it on J1 %s, on J2 %s\n",
-                  verdict(std::abs(best->j.J(1)) < 4.6e-3), verdict(best->j.J(2) < 9.0));
+      std::printf(
+          "  published sample controller (PI + phase lead, Silva, Dyke et al. 2020): J1 4.6 ms, J2 "
+          "~9-10 %%: best beats it on J1 %s, on J2 %s\n",
+          verdict(std::abs(best->j.J(1)) < 4.6e-3), verdict(best->j.J(2) < 9.0));
     }
   }
   if (worst_robust) {
-    std::printf("  model-based (fixed feedforward) with the lag 30 %% off, worst (%s): NRMSE %.2f %% (target <= 15 %%: %s%s)\n",
-                worst_robust->name.c_str(), worst_robust->nrmse, verdict(worst_robust->nrmse <= 15.0),
-                worst_adapted_robust && worst_robust->nrmse > 15.0
-                    ? " by the fixed feedforward; the adaptive correction below is the answer"
-                    : "");
+    std::printf(
+        "  model-based (fixed feedforward) with the lag 30 %% off, worst (%s): NRMSE %.2f %% "
+        "(target <= 15 %%: %s%s)\n",
+        worst_robust->name.c_str(), worst_robust->nrmse, verdict(worst_robust->nrmse <= 15.0),
+        worst_adapted_robust && worst_robust->nrmse > 15.0
+            ? " by the fixed feedforward; the adaptive correction below is the answer"
+            : "");
   }
   // The adapted model-based block, case by case: nominal, lag +30 %, lag -30 %.
   for (const Row& r : rows) {
     if (r.name.rfind("model_based_adaptive", 0) != 0) continue;
     const bool robustness = r.name.find("_lag_") != std::string::npos;
     const double nrmse_target = robustness ? 15.0 : 5.0;
-    std::printf("  model-based + adaptive correction (%s): NRMSE %.2f %% (target <= %.0f %%: %s), J1 %.3f ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)%s\n",
-                r.name.c_str(), r.nrmse, nrmse_target, verdict(!r.diverged && r.nrmse <= nrmse_target),
-                r.j.J(1) * 1e3, verdict(std::abs(r.j.J(1)) <= 1e-3), r.j.J(2),
-                verdict(r.j.J(2) <= 5.0), r.diverged ? " DIVERGED" : "");
+    std::printf(
+        "  model-based + adaptive correction (%s): NRMSE %.2f %% (target <= %.0f %%: %s), J1 %.3f "
+        "ms (<= 1 ms: %s), J2 %.2f %% (<= 5 %%: %s)%s\n",
+        r.name.c_str(), r.nrmse, nrmse_target, verdict(!r.diverged && r.nrmse <= nrmse_target),
+        r.j.J(1) * 1e3, verdict(std::abs(r.j.J(1)) <= 1e-3), r.j.J(2), verdict(r.j.J(2) <= 5.0),
+        r.diverged ? " DIVERGED" : "");
   }
   if (worst_adapted_robust) {
-    std::printf("  model-based + adaptive correction with the lag 30 %% off, worst (%s): NRMSE %.2f %% (target <= 15 %%: %s)\n",
-                worst_adapted_robust->name.c_str(), worst_adapted_robust->nrmse,
-                verdict(!worst_adapted_robust->diverged && worst_adapted_robust->nrmse <= 15.0));
+    std::printf(
+        "  model-based + adaptive correction with the lag 30 %% off, worst (%s): NRMSE %.2f %% "
+        "(target <= 15 %%: %s)\n",
+        worst_adapted_robust->name.c_str(), worst_adapted_robust->nrmse,
+        verdict(!worst_adapted_robust->diverged && worst_adapted_robust->nrmse <= 15.0));
   }
   if (worst_adaptive) {
     std::printf("  ATS started from the nominal model, lag 30 %% off, worst (%s): NRMSE %.2f %%\n",

@@ -14,8 +14,8 @@
 //
 //   fault_trials [--trials N] [--delivered N] [--seed S] [--domain D] [--rate HZ] [--extra "..."]
 //                [--window-ms LIST] [--platform-seconds S]
-#include <CLI/CLI.hpp>
 #include <google/protobuf/text_format.h>
+#include <CLI/CLI.hpp>
 
 #include <signal.h>
 
@@ -39,8 +39,8 @@ struct Setting {
   int trials = 100, wanted = 0, domain = 60;
   unsigned seed = 1;
   double rate = 1024, seconds = 2.5;
-  std::string extra;                       // deployment fields
-  std::vector<std::string> coordinator;    // coordinator arguments
+  std::string extra;                     // deployment fields
+  std::vector<std::string> coordinator;  // coordinator arguments
   bool verbose = true;
 };
 
@@ -56,14 +56,17 @@ struct Tally {
   }
 };
 
-void count_trial(const test::FaultTrialSpec& spec, const test::FaultTrialResult& r, double window_ms,
-                 Tally& t) {
-  t.healthy_seconds += static_cast<double>(r.fault_delivered ? spec.fault_step : r.record_steps) /
-                       spec.rate_hz;
+void count_trial(const test::FaultTrialSpec& spec, const test::FaultTrialResult& r,
+                 double window_ms, Tally& t) {
+  t.healthy_seconds +=
+      static_cast<double>(r.fault_delivered ? spec.fault_step : r.record_steps) / spec.rate_hz;
   if (!r.fault_delivered) {
-    if (r.why_not.find("command watchdog") != std::string::npos) ++t.tripped_watchdog;
-    else if (r.why_not.find("consecutive steps") != std::string::npos) ++t.tripped_missed;
-    else ++t.tripped_other;
+    if (r.why_not.find("command watchdog") != std::string::npos)
+      ++t.tripped_watchdog;
+    else if (r.why_not.find("consecutive steps") != std::string::npos)
+      ++t.tripped_missed;
+    else
+      ++t.tripped_other;
     return;
   }
   ++t.delivered;
@@ -114,9 +117,10 @@ Tally run_trials(const Setting& s, double window_ms) {
     if (!r.fault_delivered)
       std::printf("not delivered: %s\n", r.why_not.substr(0, 200).c_str());
     else
-      std::printf("steps after %2ld, hold %7.2f ms, stop %7.2f ms, record %s (%ld steps), %s, exit %d\n",
-                  r.steps_after_fault, r.hold_ms, r.stop_ms, r.record_complete ? "complete" : "INCOMPLETE",
-                  r.record_steps, r.names_node ? "names it" : "DOES NOT NAME IT", r.coordinator_exit);
+      std::printf(
+          "steps after %2ld, hold %7.2f ms, stop %7.2f ms, record %s (%ld steps), %s, exit %d\n",
+          r.steps_after_fault, r.hold_ms, r.stop_ms, r.record_complete ? "complete" : "INCOMPLETE",
+          r.record_steps, r.names_node ? "names it" : "DOES NOT NAME IT", r.coordinator_exit);
   }
   return t;
 }
@@ -132,13 +136,14 @@ void print_tally(const Tally& t, const Setting& s, double window_ms) {
       "record complete up to the fault: %d/%d\n"
       "the stop names the victim: %d/%d\n"
       "false stops (healthy runs stopped before the fault): %d of %d = %.1f %%, %.0f per hour of "
-      "healthy running (coordinator, missed answers: %d; emulator, command watchdog: %d; other: %d)\n",
+      "healthy running (coordinator, missed answers: %d; emulator, command watchdog: %d; other: "
+      "%d)\n",
       t.run, t.delivered, s.rate, window_ms, t.window_steps, s.extra.empty() ? "" : "; ",
       s.extra.c_str(), t.held_in_window, t.hold_cases, hold.median, hold.max, t.window_steps,
       t.within_steps, t.step_cases, steps_after.median, steps_after.max, stop.median, stop.max,
-      t.exit_ok, t.exit_cases, t.complete, t.delivered, t.named, t.delivered, t.false_stops(), t.run,
-      t.run > 0 ? 100.0 * t.false_stops() / t.run : 0.0, t.false_stops_per_hour(), t.tripped_missed,
-      t.tripped_watchdog, t.tripped_other);
+      t.exit_ok, t.exit_cases, t.complete, t.delivered, t.named, t.delivered, t.false_stops(),
+      t.run, t.run > 0 ? 100.0 * t.false_stops() / t.run : 0.0, t.false_stops_per_hour(),
+      t.tripped_missed, t.tripped_watchdog, t.tripped_other);
 }
 
 // The platform check once, at the trials' rate and run length; its file for every coordinator.
@@ -149,7 +154,8 @@ std::string check_platform_once(const Setting& s, double platform_seconds) {
       platform::check_platform(deployment, 1.0 / s.rate, s.seconds, platform_seconds);
   std::printf("%s\n", platform::summary_text(check.summary).c_str());
   const auto file = std::filesystem::temp_directory_path() / "rths_fault_trials_platform.json";
-  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(2);
+  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(
+      2);
   return file.string();
 }
 
@@ -160,7 +166,8 @@ int main(int argc, char** argv) {
   Setting s;
   std::vector<double> windows;
   double platform_seconds = 10;
-  app.add_option("--trials", s.trials, "number of trials (default 100; per window with --window-ms)");
+  app.add_option("--trials", s.trials,
+                 "number of trials (default 100; per window with --window-ms)");
   app.add_option("--delivered", s.wanted,
                  "run until this many faults were delivered (at most --trials trials; default: "
                  "run exactly --trials)");
@@ -172,14 +179,16 @@ int main(int argc, char** argv) {
   app.add_option("--window-ms", windows, "fail-safe windows to sweep, ms (both windows)")
       ->delimiter(',')
       ->check(CLI::Range(0.1, 1000.0));
-  app.add_option("--platform-seconds", platform_seconds, "s of platform measurement first (default 10)")
+  app.add_option("--platform-seconds", platform_seconds,
+                 "s of platform measurement first (default 10)")
       ->check(CLI::Range(0.1, 600.0));
   CLI11_PARSE(app, argc, argv);
   s.coordinator = {"--platform", check_platform_once(s, platform_seconds), "--accept-platform"};
   if (windows.empty()) {
     config::Deployment d;
     if (!google::protobuf::TextFormat::ParseFromString(s.extra, &d)) {
-      std::fprintf(stderr, "fault_trials: --extra \"%s\" is not deployment fields\n", s.extra.c_str());
+      std::fprintf(stderr, "fault_trials: --extra \"%s\" is not deployment fields\n",
+                   s.extra.c_str());
       return 2;
     }
     const int steps = runtime::max_missed_answers(d, 1.0 / s.rate);
@@ -196,11 +205,14 @@ int main(int argc, char** argv) {
     rows.emplace_back(w, run_trials(s, w));
     print_tally(rows.back().second, s, w);
   }
-  std::printf("\nwindow ms | steps | false stops | per hour healthy | HOLD after a fault: median / max ms | "
-              "held within window + 2 ms\n");
+  std::printf(
+      "\nwindow ms | steps | false stops | per hour healthy | HOLD after a fault: median / max ms "
+      "| "
+      "held within window + 2 ms\n");
   for (const auto& [w, t] : rows)
     std::printf("%9.2f | %5d | %4d of %3d | %16.0f | %8.2f / %6.2f | %d/%d\n", w, t.window_steps,
-                t.false_stops(), t.run, t.false_stops_per_hour(), runtime::summarize(t.holds).median,
-                runtime::summarize(t.holds).max, t.held_in_window, t.hold_cases);
+                t.false_stops(), t.run, t.false_stops_per_hour(),
+                runtime::summarize(t.holds).median, runtime::summarize(t.holds).max,
+                t.held_in_window, t.hold_cases);
   return 0;
 }

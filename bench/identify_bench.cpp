@@ -7,7 +7,8 @@
 // Default records: ../shared/data/measured/mts_mrdamper_chirp_0A.txt and a one-minute record at
 // 1 kHz of the same rig made by identify::generate_measured (a 15 Hz sinusoidal test with the MR
 // damper energised: 4.6 ms delay and a 21.8 ms first-order lag, Bouc-Wen + viscous + friction
-// force, drifting delay, gain and stiffness, play, offsets, inertia, sensor noise). Each record is run N times (default 1); the median time is printed.
+// force, drifting delay, gain and stiffness, play, offsets, inertia, sensor noise). Each record is
+// run N times (default 1); the median time is printed.
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -43,7 +44,8 @@ Run run_identify(const std::string& rths, const fs::path& record) {
   if (pipe == nullptr) return run;
   std::array<char, 4096> buffer{};
   std::size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) run.output.append(buffer.data(), n);
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    run.output.append(buffer.data(), n);
   const int status = pclose(pipe);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -124,9 +126,12 @@ int main(int argc, char** argv) {
   std::vector<fs::path> records;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--repeat" && i + 1 < argc) repeat = std::max(1, std::stoi(argv[++i]));
-    else if (arg == "--rths" && i + 1 < argc) rths = argv[++i];
-    else if (arg == "--keep" && i + 1 < argc) keep = argv[++i];
+    if (arg == "--repeat" && i + 1 < argc)
+      repeat = std::max(1, std::stoi(argv[++i]));
+    else if (arg == "--rths" && i + 1 < argc)
+      rths = argv[++i];
+    else if (arg == "--keep" && i + 1 < argc)
+      keep = argv[++i];
     else if (!arg.empty() && arg[0] == '-') {
       std::cerr << "usage: identify_bench [--repeat N] [--rths PATH] [--keep DIR] [RECORD ...]\n";
       return 2;

@@ -9,9 +9,9 @@
 //                       [--domain D (D: off, D + 1: on; default 190)]
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
 #include <cstdio>
 #include <fstream>
-#include <unistd.h>
 
 #include "runtime/lag.h"
 #include "runtime/launch.h"
@@ -34,8 +34,10 @@ Figures lockstep_run(const fs::path& dir, int domain, double seconds, const fs::
   std::ofstream(config)
       << "name: \"bench\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" << RTHS_SHARED_DATA_DIR
-      << "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " << seconds << " }\n"
+         "motion { path: \""
+      << RTHS_SHARED_DATA_DIR
+      << "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " << seconds
+      << " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
          "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
          "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n";
@@ -59,7 +61,8 @@ Figures lockstep_run(const fs::path& dir, int domain, double seconds, const fs::
     walls.push_back(step->step_wall());
     total += step->step_wall();
   }
-  return {static_cast<double>(walls.size()) / total, runtime::summarize(walls).median, walls.size()};
+  return {static_cast<double>(walls.size()) / total, runtime::summarize(walls).median,
+          walls.size()};
 }
 
 }  // namespace
@@ -73,7 +76,8 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain, "DDS domain of the runs without security; +1 with");
   CLI11_PARSE(app, argc, argv);
   runtime::ensure_dds_config();
-  const fs::path dir = fs::temp_directory_path() / ("rths_security_bench_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("rths_security_bench_" + std::to_string(getpid()));
   fs::remove_all(dir);
   security::init_pki(dir / "pki", {"rths-lab", 1, {{1, "substructure"}, {2, "actuator_emulator"}}});
   std::vector<double> off, on;

@@ -8,9 +8,9 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -30,7 +30,8 @@ constexpr double kZeta = 0.05;
 std::vector<SdofLane> lanes_for(std::size_t periods) {
   std::vector<SdofLane> lanes;
   for (std::size_t i = 0; i < periods; ++i) {
-    const double period = 0.05 + (3.0 - 0.05) * static_cast<double>(i) / static_cast<double>(periods - 1);
+    const double period =
+        0.05 + (3.0 - 0.05) * static_cast<double>(i) / static_cast<double>(periods - 1);
     const rths::core::StructuralModel model = rths::core::make_sdof(period, kZeta, 1.0);
     // alpha = 1: the whole storey is experimental, behind the delay.
     lanes.push_back({model.mass(0, 0), model.damping(0, 0), 0.0, model.storey_stiffness[0]});
@@ -87,9 +88,12 @@ int main(int argc, char** argv) {
   int threads = 0, repetitions = 15;
   bool memory = true;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--repetitions") && i + 1 < argc) repetitions = std::max(1, std::atoi(argv[++i]));
-    else if (!std::strcmp(argv[i], "--skip-memory")) memory = false;
+    if (!std::strcmp(argv[i], "--threads") && i + 1 < argc)
+      threads = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--repetitions") && i + 1 < argc)
+      repetitions = std::max(1, std::atoi(argv[++i]));
+    else if (!std::strcmp(argv[i], "--skip-memory"))
+      memory = false;
     else {
       std::fprintf(stderr, "usage: sweep_bench [--threads N] [--repetitions R] [--skip-memory]\n");
       return 2;
@@ -104,7 +108,8 @@ int main(int argc, char** argv) {
   std::printf("sweep_bench: El Centro 1940 at dt = %g s: %zu steps per run; %d threads; %s\n", kDt,
               motion.acceleration.size(), options.threads,
               __builtin_cpu_supports("avx512f") ? "AVX-512 kernel"
-              : __builtin_cpu_supports("avx2") ? "AVX2 kernel" : "baseline kernel");
+              : __builtin_cpu_supports("avx2")  ? "AVX2 kernel"
+                                                : "baseline kernel");
 
   const std::vector<SdofLane> lanes = lanes_for(100);
   std::vector<double> delays;
@@ -123,24 +128,32 @@ int main(int argc, char** argv) {
   const Timing a1 = median_timing(repetitions, [&] { run_grid(lanes, no_delay, single); });
   const Timing a = median_timing(repetitions, [&] { run_grid(lanes, no_delay, options); });
   const Timing b = median_timing(repetitions, [&] { run_grid(lanes, delays, options); });
-  const double rate_a1 = 100 * steps / a1.wall, rate_a = 100 * steps / a.wall, rate_b = 1000 * steps / b.wall;
-  std::printf("load average before timing: %.2f (other processes share the cores)\n", load_average());
-  std::printf("median of %d runs; steps/s = lane steps / wall time; per CPU-s = / CPU time of all threads\n",
-              repetitions);
+  const double rate_a1 = 100 * steps / a1.wall, rate_a = 100 * steps / a.wall,
+               rate_b = 1000 * steps / b.wall;
+  std::printf("load average before timing: %.2f (other processes share the cores)\n",
+              load_average());
+  std::printf(
+      "median of %d runs; steps/s = lane steps / wall time; per CPU-s = / CPU time of all "
+      "threads\n",
+      repetitions);
   std::printf("(a)  100 periods, no delay, 1 thread : %8.3f ms  %.3e steps/s  %.3e per CPU-s\n",
               a1.wall * 1e3, rate_a1, 100 * steps / a1.cpu);
-  std::printf("(a)  100 periods, no delay           : %8.3f ms  %.3e steps/s  %.3e per CPU-s  (%.0fx OpenSees' 0.6e6)\n",
-              a.wall * 1e3, rate_a, 100 * steps / a.cpu, rate_a / 0.6e6);
+  std::printf(
+      "(a)  100 periods, no delay           : %8.3f ms  %.3e steps/s  %.3e per CPU-s  (%.0fx "
+      "OpenSees' 0.6e6)\n",
+      a.wall * 1e3, rate_a, 100 * steps / a.cpu, rate_a / 0.6e6);
   std::printf("(b)  100 periods x 10 delays 0..18 ms: %8.3f ms  %.3e steps/s  %.3e per CPU-s\n",
               b.wall * 1e3, rate_b, 1000 * steps / b.cpu);
-  std::printf("(b)/(a) steps/s ratio: %.3f  (a lane step of (b) costs %.2fx one of (a); target <= 3x)\n",
-              rate_b / rate_a, rate_a / rate_b);
+  std::printf(
+      "(b)/(a) steps/s ratio: %.3f  (a lane step of (b) costs %.2fx one of (a); target <= 3x)\n",
+      rate_b / rate_a, rate_a / rate_b);
   if (memory) {
     for (std::size_t periods : {100u, 1000u, 10000u}) {
       const std::vector<SdofLane> grid = lanes_for(periods);
       const auto start = std::chrono::steady_clock::now();
       run_grid(grid, delays, options);
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::printf("memory: %6zu periods x 10 delays: peak RSS %7.1f MiB  (%.3e steps/s)\n", periods,
                   peak_rss_mib(), static_cast<double>(periods) * 10 * steps / s);
     }

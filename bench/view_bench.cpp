@@ -10,9 +10,9 @@
 // Target (issue 26): overruns with the view within +0.02 points of the run without it; wake-up
 // to command unchanged.
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -38,13 +38,19 @@ std::string study_text(double rate, double seconds, int domain) {
   std::snprintf(dt, sizeof dt, "%.17g", 1.0 / rate);
   return "name: \"view_bench\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" + std::string(RTHS_SHARED_DATA_DIR) +
-         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) + " }\n"
-         "integrator { kind: EXPLICIT_NEWMARK dt: " + dt + " }\n"
+         "motion { path: \"" +
+         std::string(RTHS_SHARED_DATA_DIR) +
+         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
+         " }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: " +
+         dt +
+         " }\n"
          "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
          "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
-         "deployment { domain_id: " + std::to_string(domain) +
-         " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 command_watchdog_periods: 30 }\n";
+         "deployment { domain_id: " +
+         std::to_string(domain) +
+         " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
+         "command_watchdog_periods: 30 }\n";
 }
 
 double cpu_seconds() {
@@ -72,14 +78,16 @@ std::thread rss_sampler(double seconds, std::vector<double>& out, const std::ato
   return std::thread([seconds, &out, &done] {
     const auto start = std::chrono::steady_clock::now();
     for (double at : {0.1, 0.5, 0.95}) {
-      while (!done && std::chrono::steady_clock::now() - start < std::chrono::duration<double>(at * seconds))
+      while (!done &&
+             std::chrono::steady_clock::now() - start < std::chrono::duration<double>(at * seconds))
         std::this_thread::sleep_for(20ms);
       if (!done) out.push_back(rss_mb());
     }
   });
 }
 
-Figures run(const std::string& name, double rate, double seconds, int domain, bool with_view, bool browser) {
+Figures run(const std::string& name, double rate, double seconds, int domain, bool with_view,
+            bool browser) {
   const auto dir = std::filesystem::temp_directory_path() / ("rths_view_bench_" + name);
   std::filesystem::create_directories(dir);
   const auto config = dir / "study.textproto";
@@ -108,16 +116,18 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
     if (browser) {
       const auto profile = dir / "chromium_profile";
       std::filesystem::remove_all(profile);
-      chromium.emplace("/usr/bin/chromium",
-                       std::vector<std::string>{"--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                                                "--no-first-run", "--disable-background-networking",
-                                                "--disable-component-update", "--disable-sync",
-                                                "--user-data-dir=" + profile.string(), server->url()},
-                       dir / "chromium.log");
+      chromium.emplace(
+          "/usr/bin/chromium",
+          std::vector<std::string>{"--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                                   "--no-first-run", "--disable-background-networking",
+                                   "--disable-component-update", "--disable-sync",
+                                   "--user-data-dir=" + profile.string(), server->url()},
+          dir / "chromium.log");
       f.browser = "chromium";
     }
   }
-  coordinator::Coordinator coordinator(core::prepare_study(core::load_study(config), dir), endpoint, options);
+  coordinator::Coordinator coordinator(core::prepare_study(core::load_study(config), dir), endpoint,
+                                       options);
   std::atomic<bool> done{false};
   std::thread sampler = rss_sampler(seconds, f.rss_mb, done);
   const double cpu0 = cpu_seconds();
@@ -137,7 +147,9 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
     if (s->step() > 0) latency.push_back(s->command_latency());
   const auto summary = runtime::summarize(latency);
   const auto steps = outcome.counters.steps();
-  f.overrun_pct = steps ? 100.0 * static_cast<double>(outcome.counters.overruns()) / static_cast<double>(steps) : 0;
+  f.overrun_pct =
+      steps ? 100.0 * static_cast<double>(outcome.counters.overruns()) / static_cast<double>(steps)
+            : 0;
   f.latency_median_us = summary.median * 1e6;
   f.latency_p99_us = summary.p99 * 1e6;
   return f;
@@ -186,11 +198,12 @@ int main(int argc, char** argv) {
     on_cpu.push_back(on.cpu_s);
     std::fflush(stdout);
   }
-  std::printf("=> medians of %d: overruns %.3f %% without the view, %.3f %% with it (%+.3f points; "
-              "target <= +0.02); wake-up to command %.1f / %.1f us; the view's CPU %.2f s in %g s "
-              "(%.1f %% of a core)\n",
-              repeat, median(off_overruns), median(on_overruns), median(on_overruns) - median(off_overruns),
-              median(off_latency), median(on_latency), median(on_cpu) - median(off_cpu), seconds,
-              100.0 * (median(on_cpu) - median(off_cpu)) / seconds);
+  std::printf(
+      "=> medians of %d: overruns %.3f %% without the view, %.3f %% with it (%+.3f points; "
+      "target <= +0.02); wake-up to command %.1f / %.1f us; the view's CPU %.2f s in %g s "
+      "(%.1f %% of a core)\n",
+      repeat, median(off_overruns), median(on_overruns), median(on_overruns) - median(off_overruns),
+      median(off_latency), median(on_latency), median(on_cpu) - median(off_cpu), seconds,
+      100.0 * (median(on_cpu) - median(off_cpu)) / seconds);
   return 0;
 }

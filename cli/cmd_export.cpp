@@ -18,27 +18,35 @@
 namespace rths::cli {
 
 void add_export_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("export", "Turn a run record into CSV, MATLAB (.mat) or HDF5 (.h5)");
+  auto* cmd =
+      app.add_subcommand("export", "Turn a run record into CSV, MATLAB (.mat) or HDF5 (.h5)");
   auto record = std::make_shared<std::string>();
   auto outputs = std::make_shared<std::map<tables::Format, std::string>>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("record", *record, "run record (.rthsrec)")->required();
-  auto* csv = cmd->add_option_function<std::string>("--csv", [outputs](const std::string& p) { (*outputs)[tables::Format::kCsv] = p; }, "CSV file to write");
-  auto* mat = cmd->add_option_function<std::string>("--mat", [outputs](const std::string& p) { (*outputs)[tables::Format::kMat] = p; },
+  auto* csv = cmd->add_option_function<std::string>(
+      "--csv", [outputs](const std::string& p) { (*outputs)[tables::Format::kCsv] = p; },
+      "CSV file to write");
+  auto* mat = cmd->add_option_function<std::string>(
+      "--mat", [outputs](const std::string& p) { (*outputs)[tables::Format::kMat] = p; },
       "MATLAB 5 file to write (one variable per CSV column, units in the struct `units`)");
-  auto* h5 = cmd->add_option_function<std::string>("--h5", [outputs](const std::string& p) { (*outputs)[tables::Format::kH5] = p; },
+  auto* h5 = cmd->add_option_function<std::string>(
+      "--h5", [outputs](const std::string& p) { (*outputs)[tables::Format::kH5] = p; },
       "HDF5 file to write (one dataset per CSV column, each with a `units` attribute)");
   cmd->callback([=] {
-    if (csv->count() + mat->count() + h5->count() == 0) throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
+    if (csv->count() + mat->count() + h5->count() == 0)
+      throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
     for (const auto& [format, path] : *outputs)
-      util::refuse_output_over_input({"--" + tables::extension(format).substr(1), path}, {{"record", *record}});
+      util::refuse_output_over_input({"--" + tables::extension(format).substr(1), path},
+                                     {{"record", *record}});
     runtime::RecordContents contents;
     try {
       contents = runtime::read_record(*record);
     } catch (const std::exception& e) {
       throw ExitError(kExitBadInput, e.what());
     }
-    if (!contents.warning.empty()) std::cerr << "rths export: warning: " << contents.warning << "\n";
+    if (!contents.warning.empty())
+      std::cerr << "rths export: warning: " << contents.warning << "\n";
     tables::Table table;
     try {
       table = tables::record_table(contents);
@@ -55,8 +63,11 @@ void add_export_command(CLI::App& app) {
     const auto* footer = contents.footer();
     const std::string status = footer ? footer->status() : "no footer: the run was cut short";
     if (*json) {
-      nlohmann::json j{{"record", *record}, {"rows", table.rows()}, {"truncated", contents.truncated},
-                       {"status", status}, {"ok", footer && footer->ok()},
+      nlohmann::json j{{"record", *record},
+                       {"rows", table.rows()},
+                       {"truncated", contents.truncated},
+                       {"status", status},
+                       {"ok", footer && footer->ok()},
                        {"checksummed", contents.checksummed},
                        {"integrity", table.attributes().at("integrity")},
                        {"lost_steps", table.attributes().at("lost_steps")},

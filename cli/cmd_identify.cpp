@@ -32,7 +32,7 @@ struct IdentifyCliOptions {
   std::string out, predict, design_compensator, validate, model;
   // Whether the declared-model flags were given on the command line (not just their defaults).
   bool actuator_flag_given = false, specimen_flag_given = false;
-  double sample_rate = 0.0;  // Hz; 0 = from the file
+  double sample_rate = 0.0;    // Hz; 0 = from the file
   std::string format = "csv";  // of <out>/identify.<ext>: the record and both models' predictions
   double design_dt = 0.001;
   std::size_t folds = 5;
@@ -91,7 +91,8 @@ class IdentifyProgressPrinter {
   ProgressReporter bar_{"identify", "steps"};
   bool tty_ = isatty(fileno(stderr)) != 0;
   std::string last_stage_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_line_ = start_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(),
+                                        last_line_ = start_;
 };
 
 identify::SessionRequest session_request(const IdentifyCliOptions& o) {
@@ -118,9 +119,12 @@ identify::SessionRequest session_request(const IdentifyCliOptions& o) {
   identify::IdentifyOptions& options = r.options;
   options.channels.clear();
   for (const auto& name : split_list(o.channels)) {
-    if (name == "measured") options.channels.push_back(identify::Channel::kMeasured);
-    else if (name == "force") options.channels.push_back(identify::Channel::kForce);
-    else throw std::invalid_argument("--channels: unknown channel '" + name + "' (measured, force)");
+    if (name == "measured")
+      options.channels.push_back(identify::Channel::kMeasured);
+    else if (name == "force")
+      options.channels.push_back(identify::Channel::kForce);
+    else
+      throw std::invalid_argument("--channels: unknown channel '" + name + "' (measured, force)");
   }
   if (options.channels.empty()) throw std::invalid_argument("--channels: no channel given");
   options.declared_actuator =
@@ -151,7 +155,8 @@ void run_identify_record(const IdentifyCliOptions& o, const identify::IdentifyOp
   const identify::RunIdentification run = identify::identify_run_record(o.data, with_progress);
   if (!o.out.empty()) {
     try {
-      for (const auto& line : identify::write_identified_run(run, std::filesystem::current_path(), o.out)) {
+      for (const auto& line :
+           identify::write_identified_run(run, std::filesystem::current_path(), o.out)) {
         std::cerr << line << "\n";
       }
       for (const auto& png : identify::write_run_plots(run, o.out)) {
@@ -213,13 +218,15 @@ void add_input_options(CLI::App* cmd, IdentifyCliOptions& o) {
                   "DAQ columns and scales to mm / N, e.g. "
                   "command=CHANNEL2*10,measured=CHANNEL0*10,force=CHANNEL1*9806.65 (the default)");
   cmd->add_option("--channels", o.channels, "channels to identify: measured,force");
-  cmd->add_option("--model", o.model,
-                  "declared model file (text-format rths.config.DeclaredModel, proto/identify.proto): "
-                  "actuator stages, specimen kind, each parameter's initial value, min, max, fixed; "
-                  "replaces --declared-actuator / --declared-specimen for the channels it declares");
-  cmd->add_option("--sample-rate", o.sample_rate,
-                  "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
-                  "export without Sampling Interval/Rate); checked against the file's own when both")
+  cmd->add_option(
+      "--model", o.model,
+      "declared model file (text-format rths.config.DeclaredModel, proto/identify.proto): "
+      "actuator stages, specimen kind, each parameter's initial value, min, max, fixed; "
+      "replaces --declared-actuator / --declared-specimen for the channels it declares");
+  cmd->add_option(
+         "--sample-rate", o.sample_rate,
+         "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
+         "export without Sampling Interval/Rate); checked against the file's own when both")
       ->check(in_range(core::Quantity::kFrequency));
 }
 
@@ -237,7 +244,8 @@ void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
       ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--penalty", o.penalty, "relative penalty per added parameter")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-steps", o.max_steps, "at most this many effects per channel")->check(CLI::Range(0, 1000));  // 0: fit the declared model only
+  cmd->add_option("--max-steps", o.max_steps, "at most this many effects per channel")
+      ->check(CLI::Range(0, 1000));  // 0: fit the declared model only
   cmd->add_option("--decimate", o.decimate, "decimation for the search (0: automatic)");
   cmd->add_option("--search-samples", o.search_samples,
                   "automatic decimation keeps at most about this many samples")
@@ -253,12 +261,26 @@ void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
 
 // What is written and run with the result: plots and tables, prediction, compensator, validation.
 void add_output_options(CLI::App* cmd, IdentifyCliOptions& o) {
-  cmd->add_option("--out", o.out, "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the band where the coherence >= 0.9), identify.<format> (the record and the declared and final models' predictions), identified_model.textproto (for --model), identified_study_fragment.textproto (study-config parts) and, with --predict, identified_study.textproto (for rths run); for a RECORD.rthsrec: identified_run.textproto (the run's study with the identified actuator as case identified_actuator and each substructure link's measured lag; rths run / launch accept it) and the lag trace of every link, lag_node_<id>.csv, with the plots record_lag.png (lag per link: measured, injected, identified model), record_response.png (response per floor: recorded, declared and identified re-runs) and record_shares.png (what each link and effect explains)");
-  cmd->add_option("--format", o.format, "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
+  cmd->add_option(
+      "--out", o.out,
+      "directory for PNG plots with an SVG beside each (gnuplot; among them measured_bode.png, the "
+      "actuator's amplitude ratio and phase, measured by Welch H1 against the models, over the "
+      "band where the coherence >= 0.9), identify.<format> (the record and the declared and final "
+      "models' predictions), identified_model.textproto (for --model), "
+      "identified_study_fragment.textproto (study-config parts) and, with --predict, "
+      "identified_study.textproto (for rths run); for a RECORD.rthsrec: identified_run.textproto "
+      "(the run's study with the identified actuator as case identified_actuator and each "
+      "substructure link's measured lag; rths run / launch accept it) and the lag trace of every "
+      "link, lag_node_<id>.csv, with the plots record_lag.png (lag per link: measured, injected, "
+      "identified model), record_response.png (response per floor: recorded, declared and "
+      "identified re-runs) and record_shares.png (what each link and effect explains)");
+  cmd->add_option("--format", o.format,
+                  "identify.csv, identify.mat (MATLAB) or identify.h5 (HDF5) in --out")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
-  cmd->add_option("--predict", o.predict,
-                  "study config to run with the identified actuator (e.g. configs/paper_frame.textproto); "
-                  "with --out, also written back with the identified model as identified_study.textproto");
+  cmd->add_option(
+      "--predict", o.predict,
+      "study config to run with the identified actuator (e.g. configs/paper_frame.textproto); "
+      "with --out, also written back with the identified model as identified_study.textproto");
   cmd->add_option("--design-compensator", o.design_compensator,
                   "write a compensator designed from the identified actuator to --out: "
                   "polynomial | ats | model-based | model-based-adaptive")
@@ -269,10 +291,11 @@ void add_output_options(CLI::App* cmd, IdentifyCliOptions& o) {
                   "k-fold validation over contiguous blocks of the final model (0: off)");
   cmd->add_option("--validate", o.validate,
                   "another record of the same rig: the identified models' error on it");
-  cmd->add_flag("--trim-idle", o.trim_idle,
-                "cut the idle stretches before and after the test off the record(s): keep from "
-                "0.25 s before the command first leaves its rest by 5 % of its peak to 0.25 s after "
-                "it last does");
+  cmd->add_flag(
+      "--trim-idle", o.trim_idle,
+      "cut the idle stretches before and after the test off the record(s): keep from "
+      "0.25 s before the command first leaves its rest by 5 % of its peak to 0.25 s after "
+      "it last does");
   cmd->add_flag("--json", o.json, "print the steps and models as JSON");
 }
 
@@ -283,9 +306,9 @@ void add_identify_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "identify", "Find the effects a declared actuator/specimen model lacks in measured data");
   add_input_options(cmd, *o);
-  CLI::Option* actuator_flag = cmd->add_option(
-      "--declared-actuator", o->declared_actuator,
-      "declared actuator effects (gain is always there), comma list or none");
+  CLI::Option* actuator_flag =
+      cmd->add_option("--declared-actuator", o->declared_actuator,
+                      "declared actuator effects (gain is always there), comma list or none");
   CLI::Option* specimen_flag = cmd->add_option("--declared-specimen", o->declared_specimen,
                                                "declared specimen effects, comma list or none");
   add_search_options(cmd, *o);

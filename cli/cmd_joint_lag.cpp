@@ -21,14 +21,17 @@ struct JointLagOptions {
 
 void run(const JointLagOptions& o) {
   const std::filesystem::path path = o.config;
-  const auto config = load_config_as<analysis::JointLagStudy>(path, "joint-lag study", analysis::load_joint_lag);
+  const auto config =
+      load_config_as<analysis::JointLagStudy>(path, "joint-lag study", analysis::load_joint_lag);
   analysis::JointLagOptions options;
   if (!o.out.empty()) options.output_directory = std::filesystem::path(o.out);
   options.measure = !o.no_measure;
   options.plots = !o.no_plots;
   options.across_sites = deploy::joint_lag_across_sites();
   ProgressReporter progress("joint-lag", "points", !o.json);
-  options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
+  options.progress = [&progress](std::size_t done, std::size_t total) {
+    progress.update(done, total);
+  };
   options.warn = print_warning;
   const auto result = analysis::run_joint_lag(config, path.parent_path(), options);
   analysis::write_joint_lag_outputs(result, options.plots);

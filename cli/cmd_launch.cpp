@@ -12,8 +12,8 @@
 // Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
 // 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
 // expect_unstable); 2 for a bad config caught before starting anything.
-#include <fstream>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 
 #include "cli/commands.h"
@@ -44,7 +44,8 @@ struct LaunchArgs {
 
 // Real time: the platform check once for every case; its summary file, or empty in lockstep.
 std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
-                                           const LaunchArgs& args, const std::filesystem::path& out) {
+                                           const LaunchArgs& args,
+                                           const std::filesystem::path& out) {
   if (prepared.config.deployment().clock() != config::Deployment::REAL_TIME) return {};
   platform::PlatformCheck check;
   try {
@@ -59,7 +60,8 @@ std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
                     "hold on this machine (numbers and fixes above; `rths rt-check CONFIG` "
                     "repeats the check); --accept-platform runs anyway and the records say so");
   const std::filesystem::path file = out / "platform.json";
-  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(2);
+  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(
+      2);
   return file;
 }
 
@@ -128,7 +130,7 @@ void run_launch(const LaunchArgs& args) {
       options.security_dir = args.security;
       options.platform_file = platform_file;
       options.accept_platform = args.accept_platform;
-      options.cpu_placement = args.cpu_placement == "one-cpu" ? runtime::CpuPlacement::kOneCpu
+      options.cpu_placement = args.cpu_placement == "one-cpu"  ? runtime::CpuPlacement::kOneCpu
                               : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
                                                                : runtime::CpuPlacement::kAuto;
       options.stop_requested = [&signals] { return signals.stop_requested(); };
@@ -187,9 +189,10 @@ void add_launch_command(CLI::App& app) {
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")
       ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
-  cmd->add_option("--format", args->format,
-                  "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
-                  "plus lag per link")
+  cmd->add_option(
+         "--format", args->format,
+         "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
+         "plus lag per link")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--security", args->security,
                   "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
@@ -200,7 +203,8 @@ void add_launch_command(CLI::App& app) {
   cmd->add_flag("--view-stop", args->view_stop,
                 "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
                 "token printed here");
-  cmd->add_flag("--no-plots", args->no_plots, "skip the PNG plots (and remove those of an earlier run)");
+  cmd->add_flag("--no-plots", args->no_plots,
+                "skip the PNG plots (and remove those of an earlier run)");
   cmd->add_flag("--allow-unstable", args->allow_unstable,
                 "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->add_flag("--json", args->json, "print the summary as JSON");

@@ -1,11 +1,13 @@
 // rths opensees-site CONFIG [--port 8090] [--listen 127.0.0.1] [--case NAME] [--out DIR]
-//   [--domain N] [--no-start-nodes] [--no-plots] [--accept-timeout S] [--security DIR] [--run-id ID]
+//   [--domain N] [--no-start-nodes] [--no-plots] [--accept-timeout S] [--security DIR] [--run-id
+//   ID]
 // Serves one OpenSees genericClient element (opensees_site/site.h): the study's actuator
 // emulators over DDS, the record in OUT/run.rthsrec, node logs, results.csv and the plots of
-// opensees_site/outputs.h (unless --no-plots) beside it, the coordinator's summary on stdout. Listens on loopback unless --listen names another address.
-// Exit: 0 the client's analysis completed; 1 the client was refused or the run stopped (silent
-// client, bad frame, implicit iteration, limits, a node lost, no client within --accept-timeout);
-// 2 bad config or flags; 3 cannot listen, a node program missing, DDS or file error.
+// opensees_site/outputs.h (unless --no-plots) beside it, the coordinator's summary on stdout.
+// Listens on loopback unless --listen names another address. Exit: 0 the client's analysis
+// completed; 1 the client was refused or the run stopped (silent client, bad frame, implicit
+// iteration, limits, a node lost, no client within --accept-timeout); 2 bad config or flags; 3
+// cannot listen, a node program missing, DDS or file error.
 #include <iostream>
 
 #include "cli/commands.h"
@@ -44,7 +46,8 @@ int serve(const SiteFlags& f) {
     throw ExitError(kExitBadInput, f.config + ": " + e.what());
   }
   if (!opensees::is_loopback(f.listen))
-    print_warning("listening on " + f.listen + ": anyone who can reach this address can drive "
+    print_warning("listening on " + f.listen +
+                  ": anyone who can reach this address can drive "
                   "the actuators (loopback is the default)");
   std::filesystem::create_directories(f.out);
   opensees::Listener listener(f.listen, f.port);
@@ -59,8 +62,8 @@ int serve(const SiteFlags& f) {
                     e.what());
   }
   if (!outcome.refusal.empty())
-    throw ExitError(kExitRunFailed, "refused the OpenSees client " + outcome.client + ": " +
-                                        outcome.refusal);
+    throw ExitError(kExitRunFailed,
+                    "refused the OpenSees client " + outcome.client + ": " + outcome.refusal);
   if (outcome.served && std::filesystem::exists(options.record)) {
     try {
       opensees::write_site_outputs(options.record, f.out, !f.no_plots);
@@ -72,19 +75,20 @@ int serve(const SiteFlags& f) {
             << coordinator::summary_text(outcome.run) << "record: " << options.record.string()
             << "\n";
   if (!outcome.ok())
-    throw ExitError(kExitRunFailed, "run failed: " + outcome.run.status +
-                                        (outcome.run.failed_node.empty()
-                                             ? ""
-                                             : " (" + outcome.run.failed_node + ")"));
+    throw ExitError(
+        kExitRunFailed,
+        "run failed: " + outcome.run.status +
+            (outcome.run.failed_node.empty() ? "" : " (" + outcome.run.failed_node + ")"));
   return kExitOk;
 }
 
 }  // namespace
 
 void add_opensees_site_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand(
-      "opensees-site", "Serve an OpenSees genericClient element: its trials drive the study's "
-                       "actuator emulators over DDS");
+  auto* cmd =
+      app.add_subcommand("opensees-site",
+                         "Serve an OpenSees genericClient element: its trials drive the study's "
+                         "actuator emulators over DDS");
   auto f = std::make_shared<SiteFlags>();
   cmd->add_option("config", f->config, "the site's study: actuators, lag, limits, deployment")
       ->required()
@@ -93,7 +97,8 @@ void add_opensees_site_command(CLI::App& app) {
       ->check(CLI::Range(0, 65535));
   cmd->add_option("--listen", f->listen,
                   "IPv4 address to listen on; anything but loopback must be asked for here");
-  cmd->add_option("--case", f->case_name, "case to run (default: deployment.case_name or reference)");
+  cmd->add_option("--case", f->case_name,
+                  "case to run (default: deployment.case_name or reference)");
   cmd->add_option("--out", f->out, "directory for run.rthsrec and the node logs");
   cmd->add_option("--domain", f->domain, "DDS domain id (default: deployment.domain_id)")
       ->check(CLI::Range(0, 232));

@@ -49,8 +49,9 @@ std::vector<security::NodeIdentity> study_nodes(const std::string& config,
   std::vector<security::NodeIdentity> nodes;
   const config::Deployment deployment = runtime::with_default_nodes(study.deployment(), setup);
   for (const config::NodeSpec& node : deployment.nodes())
-    nodes.push_back({node.id(), node.kind() == config::NodeSpec::SUBSTRUCTURE ? "substructure"
-                                                                               : "actuator_emulator"});
+    nodes.push_back({node.id(), node.kind() == config::NodeSpec::SUBSTRUCTURE
+                                    ? "substructure"
+                                    : "actuator_emulator"});
   return nodes;
 }
 
@@ -93,7 +94,8 @@ void add_pki_command(CLI::App& app) {
   init->add_option("--config", args->config, "study whose deployment names the nodes");
   init->add_option("--case", args->case_name, "case whose default nodes are used (with --config)");
   init->add_option("--node", args->nodes, "ID:KIND (substructure | actuator_emulator), repeatable");
-  init->add_option("--days", args->days, "validity of certificates and grants in days (default 365)")
+  init->add_option("--days", args->days,
+                   "validity of certificates and grants in days (default 365)")
       ->check(in_range(core::Quantity::kDays));
   init->add_option("--organisation", args->organisation, "O= of every subject (default rths-lab)");
   init->callback([args] { run_pki_init(*args); });

@@ -39,7 +39,8 @@ platform::PlatformCheck run_check(const RtCheckArgs& args, CLI::App& cmd) {
 
 void add_rt_check_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
-      "rt-check", "Measure this machine's real-time wake-ups and judge a deployment's fail-safe on them");
+      "rt-check",
+      "Measure this machine's real-time wake-ups and judge a deployment's fail-safe on them");
   auto args = std::make_shared<RtCheckArgs>();
   cmd->add_option("config", args->config, "study config whose deployment is judged (text format)");
   cmd->add_option("--seconds", args->seconds, "s of measurement (default 10)")
@@ -74,8 +75,9 @@ void add_rt_check_command(CLI::App& app) {
       std::cout << platform::summary_text(check.summary);
     }
     if (check.verdict.refused())
-      throw ExitError(kExitRunFailed, "the deployment's fail-safe or overrun tolerance will not hold "
-                                      "on this machine (see above)");
+      throw ExitError(kExitRunFailed,
+                      "the deployment's fail-safe or overrun tolerance will not hold "
+                      "on this machine (see above)");
   });
 }
 

@@ -20,7 +20,8 @@ namespace rths::cli {
 namespace {
 
 struct SdofOptions {
-  double period = 0.5, zeta = 0.05, dt = 0.0, motion_dt = 0.0, delay = 0.0, alpha = 1.0, scale = 1.0;
+  double period = 0.5, zeta = 0.05, dt = 0.0, motion_dt = 0.0, delay = 0.0, alpha = 1.0,
+         scale = 1.0;
   std::string motion, motion_units, delay_model = "shift", integrator = "explicit-newmark", out;
   bool json = false, allow_unstable = false;
 };
@@ -33,22 +34,30 @@ config::Study study_from_flags(const SdofOptions& o) {
   study.mutable_motion()->set_path(o.motion);
   study.mutable_motion()->set_scale(o.scale);
   study.mutable_motion()->set_column_dt(o.motion_dt);
-  if (!o.motion_units.empty()) study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
+  if (!o.motion_units.empty())
+    study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   study.mutable_integrator()->set_dt(o.dt);
   study.mutable_integrator()->set_allow_unstable(o.allow_unstable);
-  study.mutable_integrator()->set_kind(core::config_integrator_kind(core::integrator_from_string(o.integrator)));
+  study.mutable_integrator()->set_kind(
+      core::config_integrator_kind(core::integrator_from_string(o.integrator)));
   study.mutable_substructuring()->set_experimental_fraction(o.alpha);
   study.add_cases()->set_name("reference");
   config::Case* delayed = study.add_cases();
   delayed->set_name("delayed");
   if (o.delay_model != "none") {
     config::DelayStage* stage = delayed->add_delay();
-    if (o.delay_model == "shift") stage->mutable_shift()->set_delay(o.delay);
-    else if (o.delay_model == "eq1") stage->mutable_eq1()->set_delay(o.delay);
-    else if (o.delay_model == "eq1-lag") stage->mutable_eq1_lag()->set_delay(o.delay);
-    else if (o.delay_model == "first-order") stage->mutable_first_order()->set_time_constant(o.delay);
-    else if (o.delay_model == "benchmark") stage->mutable_benchmark();
-    else throw std::invalid_argument("unknown --delay-model '" + o.delay_model + "'");
+    if (o.delay_model == "shift")
+      stage->mutable_shift()->set_delay(o.delay);
+    else if (o.delay_model == "eq1")
+      stage->mutable_eq1()->set_delay(o.delay);
+    else if (o.delay_model == "eq1-lag")
+      stage->mutable_eq1_lag()->set_delay(o.delay);
+    else if (o.delay_model == "first-order")
+      stage->mutable_first_order()->set_time_constant(o.delay);
+    else if (o.delay_model == "benchmark")
+      stage->mutable_benchmark();
+    else
+      throw std::invalid_argument("unknown --delay-model '" + o.delay_model + "'");
   }
   core::validate_study(study, "command line");
   return study;
@@ -56,7 +65,8 @@ config::Study study_from_flags(const SdofOptions& o) {
 
 void run_sdof(const SdofOptions& o) {
   if (o.delay_model == "first-order" && !(o.delay > 0)) {
-    throw std::invalid_argument("--delay-model first-order needs --delay > 0 (its time constant, s)");
+    throw std::invalid_argument(
+        "--delay-model first-order needs --delay > 0 (its time constant, s)");
   }
   util::refuse_output_over_input({"--out", o.out}, {{"--motion", o.motion}});
   const config::Study study = study_from_flags(o);
@@ -64,7 +74,8 @@ void run_sdof(const SdofOptions& o) {
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
   const analysis::CaseOutcome& reference = outcome.cases[0];
   const analysis::CaseOutcome& delayed = outcome.cases[1];
-  if (!o.out.empty()) tables::write_table(tables::study_table(outcome), o.out, tables::Format::kCsv);
+  if (!o.out.empty())
+    tables::write_table(tables::study_table(outcome), o.out, tables::Format::kCsv);
   if (o.json) {
     nlohmann::json out = {{"period_s", o.period},
                           {"zeta", o.zeta},
@@ -96,27 +107,40 @@ void run_sdof(const SdofOptions& o) {
 void add_sdof_command(CLI::App& app) {
   auto o = std::make_shared<SdofOptions>();
   CLI::App* cmd = app.add_subcommand("sdof", "One SDOF run from flags: reference vs delayed");
-  cmd->add_option("--period", o->period, "natural period (s)")->transform(seconds_in(core::Quantity::kPeriod));
-  cmd->add_option("--zeta", o->zeta, "damping ratio, 0.05 = 5 % (at most 1)")->check(in_range(core::Quantity::kDampingRatio));
+  cmd->add_option("--period", o->period, "natural period (s)")
+      ->transform(seconds_in(core::Quantity::kPeriod));
+  cmd->add_option("--zeta", o->zeta, "damping ratio, 0.05 = 5 % (at most 1)")
+      ->check(in_range(core::Quantity::kDampingRatio));
   cmd->add_option("--motion", o->motion, "ground motion file (PEER AT2 or columns)")->required();
   cmd->add_option("--motion-units", o->motion_units,
-                  "units of the motion record: g | m/s2 | cm/s2 (required for a columns file; AT2 files are in g)")
+                  "units of the motion record: g | m/s2 | cm/s2 (required for a columns file; AT2 "
+                  "files are in g)")
       ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
-  cmd->add_option("--scale", o->scale, "scale factor on the motion")->check(in_range(core::Quantity::kMotionScale));
-  cmd->add_option("--motion-dt", o->motion_dt, "sample step of a one-column motion file (s, or 5ms)")
+  cmd->add_option("--scale", o->scale, "scale factor on the motion")
+      ->check(in_range(core::Quantity::kMotionScale));
+  cmd->add_option("--motion-dt", o->motion_dt,
+                  "sample step of a one-column motion file (s, or 5ms)")
       ->transform(seconds_in(core::Quantity::kStep));
-  cmd->add_option("--dt", o->dt, "integration step (s, or 1ms); default: the record's step")->transform(seconds_in(core::Quantity::kStep));
-  cmd->add_option("--delay", o->delay, "delay (s, or with a unit: 14ms), or the time constant for first-order")
+  cmd->add_option("--dt", o->dt, "integration step (s, or 1ms); default: the record's step")
+      ->transform(seconds_in(core::Quantity::kStep));
+  cmd->add_option("--delay", o->delay,
+                  "delay (s, or with a unit: 14ms), or the time constant for first-order")
       ->transform(seconds_in(core::Quantity::kLag));
-  cmd->add_option("--delay-model", o->delay_model, "none | shift | eq1 | eq1-lag | first-order | benchmark")
+  cmd->add_option("--delay-model", o->delay_model,
+                  "none | shift | eq1 | eq1-lag | first-order | benchmark")
       ->check(CLI::IsMember({"none", "shift", "eq1", "eq1-lag", "first-order", "benchmark"}));
-  cmd->add_option("--exp-fraction", o->alpha, "experimental fraction alpha of the stiffness")->check(in_range(core::Quantity::kFraction));
-  cmd->add_option("--integrator", o->integrator,
-                  "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
-  cmd->add_flag("--allow-unstable", o->allow_unstable,
-                "run even if dt exceeds the integrator's limit, and a diverged case does not fail the run");
-  cmd->add_option("--out", o->out, "CSV of both runs (results.csv columns: every floor and actuator, SI)");
-  cmd->add_flag("--json", o->json, "print peaks, Eq. 2, NRMSE (%), status and the critical delay as JSON");
+  cmd->add_option("--exp-fraction", o->alpha, "experimental fraction alpha of the stiffness")
+      ->check(in_range(core::Quantity::kFraction));
+  cmd->add_option(
+      "--integrator", o->integrator,
+      "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
+  cmd->add_flag(
+      "--allow-unstable", o->allow_unstable,
+      "run even if dt exceeds the integrator's limit, and a diverged case does not fail the run");
+  cmd->add_option("--out", o->out,
+                  "CSV of both runs (results.csv columns: every floor and actuator, SI)");
+  cmd->add_flag("--json", o->json,
+                "print peaks, Eq. 2, NRMSE (%), status and the critical delay as JSON");
   cmd->callback([o] { run_sdof(*o); });
 }
 

@@ -45,16 +45,18 @@ void run(const SitesOptions& o) {
   if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
   auto plan = deploy::load_sites(o.config);
   if (!o.security.empty())
-    plan.study.mutable_deployment()->set_security_dir(std::filesystem::absolute(o.security).string());
+    plan.study.mutable_deployment()->set_security_dir(
+        std::filesystem::absolute(o.security).string());
   if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
   // Paths in plan.study are absolute. Checked before anything starts (and by --check): the
   // case's lag plus the network's on the actuator's path against the critical delay.
-  const core::PreparedStudy prepared = core::prepare_study(plan.study, plan.study_file.parent_path());
+  const core::PreparedStudy prepared =
+      core::prepare_study(plan.study, plan.study_file.parent_path());
   warn_past_critical_delay(prepared, {plan.study.deployment().case_name()});
   if (o.check) {
     std::cout << "sites config ok: " << plan.placements.size() << " processes on "
-              << plan.sites.sites_size() << " sites, DDS domain " << plan.study.deployment().domain_id()
-              << "\n";
+              << plan.sites.sites_size() << " sites, DDS domain "
+              << plan.study.deployment().domain_id() << "\n";
     return;
   }
   if (const auto reason = deploy::namespace_support()) {
@@ -62,8 +64,8 @@ void run(const SitesOptions& o) {
   }
   std::filesystem::path out = o.out;
   if (out.empty()) {
-    out = std::filesystem::path("out") /
-          ("sites_" + std::filesystem::path(o.config).stem().string());
+    out =
+        std::filesystem::path("out") / ("sites_" + std::filesystem::path(o.config).stem().string());
   }
   deploy::SitesRunOptions options;
   options.output_dir = out;
@@ -84,11 +86,11 @@ void run(const SitesOptions& o) {
   // reference (cli/distributed.h), links labelled by role and site.
   std::map<int, std::string> site_of_node;
   for (const deploy::NodePlacement& p : plan.placements) site_of_node[p.node_id] = p.site;
-  const std::vector<DistributedRun> runs{{result.case_name, result.coordinator_exit,
-                                          result.status == "interrupted" || result.status.rfind("timed out", 0) == 0
-                                              ? result.status
-                                              : "",
-                                          result.record, result.output_dir.string()}};
+  const std::vector<DistributedRun> runs{
+      {result.case_name, result.coordinator_exit,
+       result.status == "interrupted" || result.status.rfind("timed out", 0) == 0 ? result.status
+                                                                                  : "",
+       result.record, result.output_dir.string()}};
   const DistributedResults results = judge_distributed(prepared, runs, site_of_node);
   const auto table = write_distributed_outputs(results, result.output_dir, !o.no_plots, o.format);
   if (o.json) {
@@ -97,9 +99,9 @@ void run(const SitesOptions& o) {
     j["results_file"] = table.string();
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << deploy::to_text(result) << distributed_summary_text(results) << "written: "
-              << table.string() << ", summary.txt, summary.json" << (o.no_plots ? "" : ", plots")
-              << "\n";
+    std::cout << deploy::to_text(result) << distributed_summary_text(results)
+              << "written: " << table.string() << ", summary.txt, summary.json"
+              << (o.no_plots ? "" : ", plots") << "\n";
   }
   if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
   fail_if_distributed_failed(results, runs, o.allow_unstable);
@@ -116,20 +118,24 @@ void add_sites_command(CLI::App& app) {
       "(or CAP_SYS_ADMIN + CAP_NET_ADMIN); exit 3 when namespaces are not permitted");
   cmd->add_option("config", options->config, "sites config (rths.deploy.Sites, text format)");
   cmd->add_option("--out", options->out,
-                  "output folder: record, results, plots, summary, logs, DDS configs (default out/sites_<config name>)");
+                  "output folder: record, results, plots, summary, logs, DDS configs (default "
+                  "out/sites_<config name>)");
   cmd->add_option("--bin-dir", options->bin_dir,
                   "folder with rths-coordinator, rths-substructure-node, rths-actuator-emulator");
   cmd->add_option("--security", options->security,
                   "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
                   "each process uses its node_<id> folder");
-  cmd->add_option("--domain", options->domain,
-                  "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
+  cmd->add_option(
+         "--domain", options->domain,
+         "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
       ->check(in_range(core::Quantity::kDdsDomain));
-  cmd->add_option("--format", options->format,
-                  "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
-                  "plus lag per link")
+  cmd->add_option(
+         "--format", options->format,
+         "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
+         "plus lag per link")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
-  cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots (and remove those of an earlier run)");
+  cmd->add_flag("--no-plots", options->no_plots,
+                "skip the PNG plots (and remove those of an earlier run)");
   cmd->add_flag("--allow-unstable", options->allow_unstable,
                 "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->add_flag("--json", options->json, "print the summary as JSON");
@@ -138,7 +144,8 @@ void add_sites_command(CLI::App& app) {
                 "remove namespaces left by killed `rths sites` runs (then run CONFIG, if given)");
   cmd->add_option("--check-record", options->check_record,
                   "only check a record written elsewhere (e.g. by docker/run_container_test.sh)");
-  cmd->add_option("--expect-steps", options->expect_steps, "with --check-record: minimum steps")->check(in_range(core::Quantity::kCount));
+  cmd->add_option("--expect-steps", options->expect_steps, "with --check-record: minimum steps")
+      ->check(in_range(core::Quantity::kCount));
   cmd->add_option("--expect-injected", options->expect_injected,
                   "with --check-record: expected largest median injected lag (s)")
       ->transform(seconds_in(core::Quantity::kLag));

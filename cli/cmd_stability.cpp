@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <iostream>
-#include <numbers>
 #include <memory>
 #include <numbers>
 
@@ -30,61 +29,91 @@ struct StabilityOptions {
 void run_compensated(const StabilityOptions& o) {
   const config::Study study = core::load_study(o.study);
   const auto& s = study.structure();
-  if (!s.has_sdof()) throw std::invalid_argument(o.study + ": --study needs structure.sdof (the analysis is of an SDOF loop)");
-  if (s.damping().has_rayleigh()) throw std::invalid_argument(o.study + ": --study needs structure.damping.modal_zeta");
+  if (!s.has_sdof())
+    throw std::invalid_argument(o.study +
+                                ": --study needs structure.sdof (the analysis is of an SDOF loop)");
+  if (s.damping().has_rayleigh())
+    throw std::invalid_argument(o.study + ": --study needs structure.damping.modal_zeta");
   const core::StructuralModel model = core::make_structure(s);
-  const double period = 2.0 * std::numbers::pi * std::sqrt(model.mass(0, 0) / model.stiffness(0, 0));
+  const double period =
+      2.0 * std::numbers::pi * std::sqrt(model.mass(0, 0) / model.stiffness(0, 0));
   const double zeta = s.damping().modal_zeta();
   const double alpha = study.substructuring().experimental_fraction();
-  if (!study.substructuring().experimental_storeys().empty()) throw std::invalid_argument(o.study + ": --study needs substructuring.experimental_fraction");
+  if (!study.substructuring().experimental_storeys().empty())
+    throw std::invalid_argument(o.study + ": --study needs substructuring.experimental_fraction");
   const double dt = study.integrator().dt();
   if (!(dt > 0)) throw std::invalid_argument(o.study + ": --study needs integrator.dt > 0");
   const core::IntegratorKind kind = core::integrator_kind(study.integrator());
   const config::Case* chosen = nullptr;
-  for (const auto& c : study.cases()) if (c.name() == o.case_name) chosen = &c;
-  if (!chosen) throw std::invalid_argument(o.study + ": --case '" + o.case_name + "' is not among the cases");
-  if (chosen->compensation_size() > 1) throw std::invalid_argument("--case '" + o.case_name + "': one compensation block expected (an SDOF has one actuator)");
-  const config::Compensation* compensation = chosen->compensation_size() == 1 ? &chosen->compensation(0) : nullptr;
+  for (const auto& c : study.cases())
+    if (c.name() == o.case_name) chosen = &c;
+  if (!chosen)
+    throw std::invalid_argument(o.study + ": --case '" + o.case_name + "' is not among the cases");
+  if (chosen->compensation_size() > 1)
+    throw std::invalid_argument("--case '" + o.case_name +
+                                "': one compensation block expected (an SDOF has one actuator)");
+  const config::Compensation* compensation =
+      chosen->compensation_size() == 1 ? &chosen->compensation(0) : nullptr;
   const core::CompensatedStability r = core::compensated_stability(
       kind, period, zeta, alpha, dt, chosen->delay(), compensation, o.max_extra_delay, o.branches);
-  const auto optional = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(); };
+  const auto optional = [](const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json();
+  };
   if (o.json) {
     nlohmann::json out;
-    out["input"] = {{"study", o.study}, {"case", o.case_name}, {"period_s", period}, {"zeta", zeta},
-                    {"experimental_fraction", alpha}, {"integrator", core::to_string(kind)}, {"dt_s", dt},
+    out["input"] = {{"study", o.study},
+                    {"case", o.case_name},
+                    {"period_s", period},
+                    {"zeta", zeta},
+                    {"experimental_fraction", alpha},
+                    {"integrator", core::to_string(kind)},
+                    {"dt_s", dt},
                     {"compensated", compensation != nullptr}};
-    if (!r.frozen_coefficients.empty()) out["time_varying"] = {{"analysis", "frozen coefficients"}, {"note", r.frozen_coefficients}};
+    if (!r.frozen_coefficients.empty())
+      out["time_varying"] = {{"analysis", "frozen coefficients"}, {"note", r.frozen_coefficients}};
     nlohmann::json crossings = nlohmann::json::array();
-    for (const auto& c : r.crossings) crossings.push_back({{"crossing_omega_rad_per_s", c.omega}, {"extra_delay_s", c.delay}, {"branch", c.branch}});
-    out["discrete"] = {{"stable", r.stable}, {"spectral_radius", r.spectral_radius},
+    for (const auto& c : r.crossings)
+      crossings.push_back({{"crossing_omega_rad_per_s", c.omega},
+                           {"extra_delay_s", c.delay},
+                           {"branch", c.branch}});
+    out["discrete"] = {{"stable", r.stable},
+                       {"spectral_radius", r.spectral_radius},
                        {"extra_delay_margin_s", optional(r.discrete_margin)},
                        {"searched_up_to_s", r.max_extra_delay}};
-    out["continuous"] = {{"extra_delay_margin_s", optional(r.continuous_margin)}, {"crossings", crossings}};
+    out["continuous"] = {{"extra_delay_margin_s", optional(r.continuous_margin)},
+                         {"crossings", crossings}};
     std::cout << out.dump(2) << "\n";
   } else {
-    std::cout << "case '" << o.case_name << "' of " << o.study << ": SDOF T = " << period << " s, zeta = " << zeta
-              << ", alpha = " << alpha << ", " << core::to_string(kind) << " dt = " << dt * 1e3 << " ms, "
-              << (compensation ? "compensated" : "uncompensated") << "\n";
+    std::cout << "case '" << o.case_name << "' of " << o.study << ": SDOF T = " << period
+              << " s, zeta = " << zeta << ", alpha = " << alpha << ", " << core::to_string(kind)
+              << " dt = " << dt * 1e3 << " ms, " << (compensation ? "compensated" : "uncompensated")
+              << "\n";
     if (!r.frozen_coefficients.empty()) {
-      std::cout << "compensator is " << r.frozen_coefficients
-                << "; no fixed amplification matrix exists for the adapting loop, so the figures below "
-                   "are of the frozen loop\n";
+      std::cout
+          << "compensator is " << r.frozen_coefficients
+          << "; no fixed amplification matrix exists for the adapting loop, so the figures below "
+             "are of the frozen loop\n";
     }
     if (!r.stable) {
-      std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius << ")\n";
+      std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius
+                << ")\n";
     } else if (r.discrete_margin) {
-      std::cout << "discrete: stable; it tolerates " << *r.discrete_margin * 1e3 << " ms of extra delay\n";
+      std::cout << "discrete: stable; it tolerates " << *r.discrete_margin * 1e3
+                << " ms of extra delay\n";
     } else {
       std::cout << "discrete: stable up to " << r.max_extra_delay * 1e3 << " ms of extra delay\n";
     }
     if (r.continuous_margin) {
-      std::cout << "continuous: first crossing at " << *r.continuous_margin * 1e3 << " ms of extra delay (omega = "
-                << r.crossings.front().omega << " rad/s)\n";
+      std::cout << "continuous: first crossing at " << *r.continuous_margin * 1e3
+                << " ms of extra delay (omega = " << r.crossings.front().omega << " rad/s)\n";
     } else {
-      std::cout << "continuous: no crossing (|k_e H| stays below the numerical part at every frequency)\n";
+      std::cout << "continuous: no crossing (|k_e H| stays below the numerical part at every "
+                   "frequency)\n";
     }
   }
-  if (!r.stable) throw ExitError(kExitRunFailed, "the loop of case '" + o.case_name + "' is unstable as configured");
+  if (!r.stable)
+    throw ExitError(kExitRunFailed,
+                    "the loop of case '" + o.case_name + "' is unstable as configured");
 }
 
 void run_stability(const StabilityOptions& o) {
@@ -102,25 +131,38 @@ void run_stability(const StabilityOptions& o) {
       core::discrete_critical_delay(kind, o.period, o.zeta, o.alpha, o.dt, o.max_steps);
   if (o.json) {
     nlohmann::json out;
-    out["input"] = {{"period_s", o.period}, {"zeta", o.zeta}, {"experimental_fraction", o.alpha},
-                    {"integrator", core::to_string(kind)}, {"dt_s", o.dt}};
+    out["input"] = {{"period_s", o.period},
+                    {"zeta", o.zeta},
+                    {"experimental_fraction", o.alpha},
+                    {"integrator", core::to_string(kind)},
+                    {"dt_s", o.dt}};
     nlohmann::json crossings = nlohmann::json::array();
     for (const auto& c : continuous.crossings) {
-      crossings.push_back({{"crossing_omega_rad_per_s", c.omega}, {"delay_s", c.delay}, {"branch", c.branch}});
+      crossings.push_back(
+          {{"crossing_omega_rad_per_s", c.omega}, {"delay_s", c.delay}, {"branch", c.branch}});
     }
-    out["continuous"] = {{"stable_without_delay", continuous.stable_without_delay},
-                         {"stable_for_all_delays", continuous.stable_for_all_delays},
-                         {"critical_delay_s", continuous.critical_delay ? nlohmann::json(*continuous.critical_delay) : nlohmann::json()},
-                         {"crossings", crossings}};
+    out["continuous"] = {
+        {"stable_without_delay", continuous.stable_without_delay},
+        {"stable_for_all_delays", continuous.stable_for_all_delays},
+        {"critical_delay_s",
+         continuous.critical_delay ? nlohmann::json(*continuous.critical_delay) : nlohmann::json()},
+        {"crossings", crossings}};
     out["discrete"] = {
-        {"first_unstable_delay_steps", discrete.first_unstable_steps ? nlohmann::json(*discrete.first_unstable_steps) : nlohmann::json()},
-        {"first_unstable_delay_s", discrete.first_unstable_delay ? nlohmann::json(*discrete.first_unstable_delay) : nlohmann::json()},
+        {"first_unstable_delay_steps", discrete.first_unstable_steps
+                                           ? nlohmann::json(*discrete.first_unstable_steps)
+                                           : nlohmann::json()},
+        {"first_unstable_delay_s", discrete.first_unstable_delay
+                                       ? nlohmann::json(*discrete.first_unstable_delay)
+                                       : nlohmann::json()},
         {"searched_up_to_steps", o.max_steps},
-        {"spectral_radius_at_first_unstable", discrete.spectral_radius.empty() ? nlohmann::json() : nlohmann::json(discrete.spectral_radius.back())}};
+        {"spectral_radius_at_first_unstable",
+         discrete.spectral_radius.empty() ? nlohmann::json()
+                                          : nlohmann::json(discrete.spectral_radius.back())}};
     std::cout << out.dump(2) << "\n";
     return;
   }
-  std::cout << "SDOF T = " << o.period << " s, zeta = " << o.zeta << ", experimental fraction = " << o.alpha << "\n";
+  std::cout << "SDOF T = " << o.period << " s, zeta = " << o.zeta
+            << ", experimental fraction = " << o.alpha << "\n";
   if (continuous.stable_for_all_delays) {
     std::cout << "continuous: stable for every delay (|k_e| too small to cross)\n";
   } else if (continuous.critical_delay) {
@@ -131,9 +173,10 @@ void run_stability(const StabilityOptions& o) {
     }
   }
   if (discrete.first_unstable_steps) {
-    std::cout << core::to_string(kind) << ", dt = " << o.dt * 1e3 << " ms: first unstable delay = "
-              << *discrete.first_unstable_steps << " steps (" << *discrete.first_unstable_delay * 1e3
-              << " ms), spectral radius " << discrete.spectral_radius.back() << "\n";
+    std::cout << core::to_string(kind) << ", dt = " << o.dt * 1e3
+              << " ms: first unstable delay = " << *discrete.first_unstable_steps << " steps ("
+              << *discrete.first_unstable_delay * 1e3 << " ms), spectral radius "
+              << discrete.spectral_radius.back() << "\n";
   } else {
     std::cout << core::to_string(kind) << ", dt = " << o.dt * 1e3 << " ms: stable up to "
               << o.max_steps << " steps of delay\n";
@@ -145,21 +188,29 @@ void run_stability(const StabilityOptions& o) {
 void add_stability_command(CLI::App& app) {
   auto options = std::make_shared<StabilityOptions>();
   CLI::App* cmd = app.add_subcommand("stability", "Critical delay of a delayed SDOF hybrid system");
-  cmd->add_option("--period", options->period, "natural period T (s, or 500ms)")->transform(seconds_in(core::Quantity::kPeriod));
-  cmd->add_option("--zeta", options->zeta, "damping ratio")->check(in_range(core::Quantity::kDampingRatio));
+  cmd->add_option("--period", options->period, "natural period T (s, or 500ms)")
+      ->transform(seconds_in(core::Quantity::kPeriod));
+  cmd->add_option("--zeta", options->zeta, "damping ratio")
+      ->check(in_range(core::Quantity::kDampingRatio));
   cmd->add_option("--exp-fraction", options->alpha, "experimental fraction alpha of the stiffness")
       ->check(in_range(core::Quantity::kFraction));
-  cmd->add_option("--dt", options->dt, "integration step (s, or 1ms); exit 2 beyond the integrator's limit")
+  cmd->add_option("--dt", options->dt,
+                  "integration step (s, or 1ms); exit 2 beyond the integrator's limit")
       ->transform(seconds_in(core::Quantity::kStep));
-  cmd->add_option("--integrator", options->integrator,
-                  "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
+  cmd->add_option(
+      "--integrator", options->integrator,
+      "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
   cmd->add_option("--branches", options->branches, "delay branches listed per crossing frequency")
       ->check(CLI::Range(1, 100));
-  cmd->add_option("--max-steps", options->max_steps, "largest delay (steps) searched")->check(CLI::Range(0, 5000));
-  cmd->add_option("--study", options->study,
-                  "study config (SDOF): analyse the loop of --case, its actuator stages and compensation");
-  cmd->add_option("--case", options->case_name, "case of --study whose actuator and compensator are analysed");
-  cmd->add_option("--max-extra-delay", options->max_extra_delay, "largest extra delay searched with --study (s)")
+  cmd->add_option("--max-steps", options->max_steps, "largest delay (steps) searched")
+      ->check(CLI::Range(0, 5000));
+  cmd->add_option(
+      "--study", options->study,
+      "study config (SDOF): analyse the loop of --case, its actuator stages and compensation");
+  cmd->add_option("--case", options->case_name,
+                  "case of --study whose actuator and compensator are analysed");
+  cmd->add_option("--max-extra-delay", options->max_extra_delay,
+                  "largest extra delay searched with --study (s)")
       ->transform(seconds_in(core::Quantity::kLag));
   cmd->add_flag("--json", options->json, "print JSON");
   cmd->callback([options] {

@@ -1,6 +1,6 @@
 // `rths sweep CONFIG`: the paper's Fig. 4 grid on every core; `rths sweep merge` joins shards.
-#include <nlohmann/json.hpp>
 #include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -16,11 +16,11 @@
 #include "analysis/sweep_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "util/distinct_paths.h"
 #include "core/study.h"
 #include "slurm/sbatch.h"
 #include "tables/results.h"
 #include "tables/write.h"
+#include "util/distinct_paths.h"
 #include "util/parallel_for.h"
 
 namespace rths::cli {
@@ -42,7 +42,9 @@ struct MergeOptions {
 };
 
 nlohmann::json trends_json(const analysis::SweepTrends& t) {
-  const auto number = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
+  const auto number = [](double x) {
+    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
+  };
   return {{"stiffness_max_relative_difference_nrmse", number(t.stiffness_max_relative_difference)},
           {"period_falling_pair_fraction", number(t.period_falling_fraction)},
           {"nonlinear_to_linear_nrmse_median_ratio", number(t.nonlinear_to_linear_median_ratio)},
@@ -69,12 +71,14 @@ void write_plot(const std::vector<analysis::SweepTableRow>& table, const std::fi
   } catch (const std::invalid_argument& e) {
     std::cerr << "rths sweep: no plot: " << e.what() << "\n";  // e.g. only zero delays swept
   } catch (const std::runtime_error& e) {
-    throw ExitError(kExitEnvironment, std::string("the CSV is written, the plot failed: ") + e.what());
+    throw ExitError(kExitEnvironment,
+                    std::string("the CSV is written, the plot failed: ") + e.what());
   }
 }
 
 void run_sweep_command(const SweepOptions& o) {
-  if (o.config.empty()) throw ExitError(kExitBadInput, "sweep: give a CONFIG, or use `rths sweep merge`");
+  if (o.config.empty())
+    throw ExitError(kExitBadInput, "sweep: give a CONFIG, or use `rths sweep merge`");
   const std::filesystem::path config_path = o.config;
   const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
   const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
@@ -91,15 +95,20 @@ void run_sweep_command(const SweepOptions& o) {
     print_warning(warning.str());
   }
   ProgressReporter progress("sweep", "points");
-  options.progress = [&progress](std::size_t done, std::size_t total) { progress.update(done, total); };
+  options.progress = [&progress](std::size_t done, std::size_t total) {
+    progress.update(done, total);
+  };
 
   std::filesystem::path out = o.out;
   if (out.empty()) out = study.output().directory();
-  if (out.empty()) out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
+  if (out.empty())
+    out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
   const bool sharded = options.shard.count > 1;
   const tables::Format format = tables::parse_format(o.format);
   if (sharded && format != tables::Format::kCsv) {
-    throw ExitError(kExitBadInput, "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
+    throw ExitError(
+        kExitBadInput,
+        "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
   }
   const std::filesystem::path csv =
       out / (sharded ? "sweep.shard-" + std::to_string(options.shard.index) + "-of-" +
@@ -108,10 +117,12 @@ void run_sweep_command(const SweepOptions& o) {
 
   const auto start = std::chrono::steady_clock::now();
   const std::vector<analysis::SweepRow> rows = analysis::run_sweep(grid, options);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
   try {
-    // The CSV keeps its own writer: its first line carries the grid hash and shard that merge checks.
+    // The CSV keeps its own writer: its first line carries the grid hash and shard that merge
+    // checks.
     if (format == tables::Format::kCsv) {
       analysis::write_sweep_csv(csv, grid, options.shard, rows);
     } else {
@@ -122,7 +133,9 @@ void run_sweep_command(const SweepOptions& o) {
   }
   const std::filesystem::path png = out / "sweep.png";
   const bool plot = !o.no_plots && !sharded && !rows.empty();
-  if (plot) write_plot(table, png, study.name().empty() ? "sweep" : study.name(), analysis::critical_delay_of(grid));
+  if (plot)
+    write_plot(table, png, study.name().empty() ? "sweep" : study.name(),
+               analysis::critical_delay_of(grid));
   const analysis::SweepTrends trends = analysis::measure_trends(table);
   if (o.json) {
     nlohmann::json summary = {{"csv", csv.string()},
@@ -137,20 +150,22 @@ void run_sweep_command(const SweepOptions& o) {
     std::cout << summary.dump(2) << "\n";
   }
   if (!o.json) {
-    std::cout << "sweep " << options.shard.to_string() << ": " << rows.size() << " of " << grid.size()
-              << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
+    std::cout << "sweep " << options.shard.to_string() << ": " << rows.size() << " of "
+              << grid.size() << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
     if (!sharded) print_trends(trends);
     std::cout << "written: " << csv.string() << ", " << analysis::sweep_sidecar_path(csv).string()
-              << (plot ? ", " + png.string() + "/.svg, " + analysis::sweep_delay_plot_path(png).string() + "/.svg"
+              << (plot ? ", " + png.string() + "/.svg, " +
+                             analysis::sweep_delay_plot_path(png).string() + "/.svg"
                        : std::string())
               << "\n";
   }
-  const std::size_t diverged = static_cast<std::size_t>(
-      std::count_if(rows.begin(), rows.end(), [](const analysis::SweepRow& r) { return r.diverged; }));
+  const std::size_t diverged = static_cast<std::size_t>(std::count_if(
+      rows.begin(), rows.end(), [](const analysis::SweepRow& r) { return r.diverged; }));
   if (diverged > 0 && !o.allow_unstable && !study.sweep().expect_unstable()) {
-    throw ExitError(kExitRunFailed, std::to_string(diverged) + " of " + std::to_string(rows.size()) +
-                                        " sweep points diverged (marked in the CSV and the plot); "
-                                        "--allow-unstable, or sweep { expect_unstable: true }, when that is meant");
+    throw ExitError(kExitRunFailed,
+                    std::to_string(diverged) + " of " + std::to_string(rows.size()) +
+                        " sweep points diverged (marked in the CSV and the plot); "
+                        "--allow-unstable, or sweep { expect_unstable: true }, when that is meant");
   }
 }
 
@@ -166,8 +181,9 @@ void write_slurm_job(const SweepOptions& o) {
   job.out = std::filesystem::absolute(o.slurm);
   job.threads = o.threads > 0 ? o.threads : 1;
   if (job.shards > grid.size()) {
-    throw ExitError(kExitBadInput, "--shards " + std::to_string(job.shards) + " is more than the grid's " +
-                                       std::to_string(grid.size()) + " points");
+    throw ExitError(kExitBadInput, "--shards " + std::to_string(job.shards) +
+                                       " is more than the grid's " + std::to_string(grid.size()) +
+                                       " points");
   }
   std::vector<std::filesystem::path> written;
   try {
@@ -177,9 +193,10 @@ void write_slurm_job(const SweepOptions& o) {
   } catch (const std::exception& e) {
     throw ExitError(kExitEnvironment, e.what());
   }
-  std::cout << "Slurm job for " << grid.size() << " points in " << job.shards << " array tasks: "
-            << written[0].string() << ", merge: " << written[1].string() << "\n"
-            << "submit with: bash " << written[2].string() << "  (merged CSV: " << (job.out / "sweep.csv").string() << ")\n";
+  std::cout << "Slurm job for " << grid.size() << " points in " << job.shards
+            << " array tasks: " << written[0].string() << ", merge: " << written[1].string() << "\n"
+            << "submit with: bash " << written[2].string()
+            << "  (merged CSV: " << (job.out / "sweep.csv").string() << ")\n";
 }
 
 void run_merge_command(const MergeOptions& o) {
@@ -208,7 +225,8 @@ void run_merge_command(const MergeOptions& o) {
   std::cout << "merged " << o.shards.size() << " shards: " << merged.points << " points (grid "
             << merged.grid_hash << ")\n";
   print_trends(trends);
-  std::cout << "written: " << o.out << (plot ? ", " + png.string() + "/.svg" : std::string()) << "\n";
+  std::cout << "written: " << o.out << (plot ? ", " + png.string() + "/.svg" : std::string())
+            << "\n";
 }
 
 }  // namespace
@@ -217,33 +235,44 @@ void add_sweep_command(CLI::App& app) {
   auto options = std::make_shared<SweepOptions>();
   auto merge = std::make_shared<MergeOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "sweep", "The paper's Fig. 4 study: error vs period over a grid of periods, delays, "
-               "experimental fractions, stiffnesses, dt, records and restoring models");
-  cmd->add_option("config", options->config, "study config with a `sweep` block (Protobuf text format)");
+      "sweep",
+      "The paper's Fig. 4 study: error vs period over a grid of periods, delays, "
+      "experimental fractions, stiffnesses, dt, records and restoring models");
+  cmd->add_option("config", options->config,
+                  "study config with a `sweep` block (Protobuf text format)");
   cmd->add_option("--shard", options->shard,
                   "run slice i of N (0-based, contiguous blocks of the grid) and write "
                   "sweep.shard-i-of-N.csv; join the slices with `rths sweep merge`");
-  cmd->add_option("--out", options->out, "output folder (default: the config's output.directory, else out/<name>)");
-  cmd->add_option("--threads", options->threads, "worker threads (default: every core)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--format", options->format, "sweep.csv, sweep.mat (MATLAB) or sweep.h5 (HDF5); shards are CSV")
+  cmd->add_option("--out", options->out,
+                  "output folder (default: the config's output.directory, else out/<name>)");
+  cmd->add_option("--threads", options->threads, "worker threads (default: every core)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--format", options->format,
+                  "sweep.csv, sweep.mat (MATLAB) or sweep.h5 (HDF5); shards are CSV")
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plot");
-  cmd->add_option("--slurm", options->slurm,
-                  "write a Slurm job into this folder instead of running: an sbatch array (one task per "
-                  "shard) and a merge job after it; submit with `bash FOLDER/submit.sh`");
-  cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")->check(in_range(core::Quantity::kCount));
-  cmd->add_option("--partition", options->job.partition, "--slurm: partition (default: the cluster's)");
-  cmd->add_option("--time", options->job.time, "--slurm: time limit per task, e.g. 30 or 02:00:00 (default 01:00:00)");
-  cmd->add_option("--mem", options->job.memory, "--slurm: memory per task, e.g. 500M or 2G (default 1G)");
+  cmd->add_option(
+      "--slurm", options->slurm,
+      "write a Slurm job into this folder instead of running: an sbatch array (one task per "
+      "shard) and a merge job after it; submit with `bash FOLDER/submit.sh`");
+  cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")
+      ->check(in_range(core::Quantity::kCount));
+  cmd->add_option("--partition", options->job.partition,
+                  "--slurm: partition (default: the cluster's)");
+  cmd->add_option("--time", options->job.time,
+                  "--slurm: time limit per task, e.g. 30 or 02:00:00 (default 01:00:00)");
+  cmd->add_option("--mem", options->job.memory,
+                  "--slurm: memory per task, e.g. 500M or 2G (default 1G)");
   cmd->add_flag("--allow-unstable", options->allow_unstable,
                 "diverged points do not fail the sweep (exit 0); they are still marked");
   cmd->add_flag("--general", options->general,
                 "run every point through the general simulator (no SIMD batch kernel)");
 
   CLI::App* merge_cmd = cmd->add_subcommand(
-      "merge", "Join shard CSVs of one grid into a complete CSV (and its plot); refuses shards of "
-               "another grid, duplicates and gaps");
+      "merge",
+      "Join shard CSVs of one grid into a complete CSV (and its plot); refuses shards of "
+      "another grid, duplicates and gaps");
   merge_cmd->add_option("out", merge->out, "merged CSV to write")->required();
   merge_cmd->add_option("shards", merge->shards, "shard CSVs")->required();
   merge_cmd->add_flag("--json", merge->json, "print the summary as JSON");

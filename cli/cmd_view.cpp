@@ -32,11 +32,13 @@ void run_view(const ViewArgs& args) {
   } catch (const std::exception& e) {
     throw ExitError(kExitBadInput, e.what());
   }
-  if (!contents.header()) throw ExitError(kExitBadInput, args.record + ": no run header: not a run record");
+  if (!contents.header())
+    throw ExitError(kExitBadInput, args.record + ": no run header: not a run record");
   view::Feed feed;
   for (const auto& entry : contents.entries) feed.add(entry);
-  nlohmann::json context = view::run_context(contents.header()->study(), contents.header()->case_name(),
-                                             std::filesystem::path(args.record).parent_path());
+  nlohmann::json context =
+      view::run_context(contents.header()->study(), contents.header()->case_name(),
+                        std::filesystem::path(args.record).parent_path());
   if (contents.truncated) context["note"] = contents.warning;
   feed.set_context(std::move(context));
   feed.finish();
@@ -54,7 +56,8 @@ void run_view(const ViewArgs& args) {
             << (contents.truncated ? ", cut short" : "") << ") at " << server->url()
             << "  (Ctrl-C to stop)" << std::endl;
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(args.seconds);
-  while (!signals.stop_requested() && (args.seconds <= 0 || std::chrono::steady_clock::now() < until))
+  while (!signals.stop_requested() &&
+         (args.seconds <= 0 || std::chrono::steady_clock::now() < until))
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   server->shutdown(std::chrono::milliseconds(0));
 }
@@ -62,11 +65,14 @@ void run_view(const ViewArgs& args) {
 }  // namespace
 
 void add_view_command(CLI::App& app) {
-  auto* cmd = app.add_subcommand("view", "Serve the view of a run record in the browser, with a time slider");
+  auto* cmd = app.add_subcommand(
+      "view", "Serve the view of a run record in the browser, with a time slider");
   auto args = std::make_shared<ViewArgs>();
   cmd->add_option("record", args->record, "run record (.rthsrec), also one cut short")->required();
-  cmd->add_option("--listen", args->listen, "HOST:PORT to serve on (default 127.0.0.1:8080; port 0 = any free)");
-  cmd->add_option("--for", args->seconds, "stop serving after this many seconds (default: until Ctrl-C)")
+  cmd->add_option("--listen", args->listen,
+                  "HOST:PORT to serve on (default 127.0.0.1:8080; port 0 = any free)");
+  cmd->add_option("--for", args->seconds,
+                  "stop serving after this many seconds (default: until Ctrl-C)")
       ->transform(seconds_value());
   cmd->callback([args] { run_view(*args); });
 }

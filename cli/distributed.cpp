@@ -30,9 +30,9 @@ bool comparable_in_process(const config::Study& study) {
 
 // max |u_distributed - u_in_process| over every floor and step, and the first step where they
 // differ; nullopt when the step counts differ.
-std::optional<InProcessDifference> difference_from_in_process(const core::PreparedStudy& prepared,
-                                                              const std::string& case_name,
-                                                              const core::SimulationResult& recorded) {
+std::optional<InProcessDifference> difference_from_in_process(
+    const core::PreparedStudy& prepared, const std::string& case_name,
+    const core::SimulationResult& recorded) {
   const core::HybridSetup setup =
       core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name));
   const runtime::DeploymentPlan plan =
@@ -115,13 +115,15 @@ ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
     lag.link_round_trip = node.receive_lag().one_way_delay() + node.send_lag().one_way_delay();
     for (const auto* stages : {&node.receive_delay(), &node.send_delay()})
       if (!stages->empty())
-        lag.node_stages += core::make_delay_chain(*stages, prepared.base.dt, prepared.base_dir).nominal_delay();
+        lag.node_stages +=
+            core::make_delay_chain(*stages, prepared.base.dt, prepared.base_dir).nominal_delay();
     if (worst.node_id < 0 || lag.felt() > worst.felt()) worst = lag;
   }
   return worst;
 }
 
-int warn_past_critical_delay(const core::PreparedStudy& prepared, const std::vector<std::string>& case_names) {
+int warn_past_critical_delay(const core::PreparedStudy& prepared,
+                             const std::vector<std::string>& case_names) {
   const ActuatorPathLag path = actuator_path_lag(prepared);
   int past = 0;
   for (const std::string& name : case_names) {
@@ -131,13 +133,17 @@ int warn_past_critical_delay(const core::PreparedStudy& prepared, const std::vec
     ++past;
     std::string parts;
     if (path.real_time && path.link_round_trip != 0.0)
-      parts += "network round trip " + ms(path.link_round_trip) + " injected on the actuator lab's link + ";
-    if (path.node_stages != 0.0) parts += "the actuator node's delay stages " + ms(path.node_stages) + " + ";
+      parts += "network round trip " + ms(path.link_round_trip) +
+               " injected on the actuator lab's link + ";
+    if (path.node_stages != 0.0)
+      parts += "the actuator node's delay stages " + ms(path.node_stages) + " + ";
     parts += "actuator lag " + ms(check->lag - path.felt()) + " (the case's delay stages): ";
     if (!path.real_time && path.link_round_trip != 0.0)
-      parts = "(lockstep: the link's " + ms(path.link_round_trip) + " round trip does not enter) " + parts;
-    print_warning("case '" + study_case.name() + "': " + parts + check->describe() +
-                  (study_case.expect_unstable() ? " (expect_unstable: meant)" : "; expect it to diverge"));
+      parts = "(lockstep: the link's " + ms(path.link_round_trip) + " round trip does not enter) " +
+              parts;
+    print_warning(
+        "case '" + study_case.name() + "': " + parts + check->describe() +
+        (study_case.expect_unstable() ? " (expect_unstable: meant)" : "; expect it to diverge"));
   }
   return past;
 }
@@ -152,8 +158,10 @@ std::map<int, std::string> link_roles(const config::Deployment& deployment,
                         : node.kind() == config::NodeSpec::SUBSTRUCTURE    ? "numerical site"
                                                                            : "node";
     const auto site = site_of_node.find(node.id());
-    if (site != site_of_node.end() && !site->second.empty()) label += " \"" + site->second + "\"";
-    else if (sharing[node.kind()] > 1) label += " (node " + std::to_string(node.id()) + ")";
+    if (site != site_of_node.end() && !site->second.empty())
+      label += " \"" + site->second + "\"";
+    else if (sharing[node.kind()] > 1)
+      label += " (node " + std::to_string(node.id()) + ")";
     labels[node.id()] = label;
   }
   return labels;
@@ -164,15 +172,16 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
                                      const std::map<int, std::string>& site_of_node) {
   DistributedResults results;
   results.actuator_path = actuator_path_lag(prepared);
-  const std::map<int, std::string> roles =
-      link_roles(runtime::with_default_nodes(prepared.config.deployment(), prepared.base), site_of_node);
+  const std::map<int, std::string> roles = link_roles(
+      runtime::with_default_nodes(prepared.config.deployment(), prepared.base), site_of_node);
   std::vector<analysis::RecordedCase> recorded;
   const bool comparable = comparable_in_process(prepared.config);
   for (const DistributedRun& run : runs) {
     if (!std::filesystem::exists(run.record)) {
-      results.missing.emplace_back(run.case_name, run.launcher_status.empty()
-                                                      ? "no record written; see " + run.log_hint
-                                                      : run.launcher_status + "; see " + run.log_hint);
+      results.missing.emplace_back(run.case_name,
+                                   run.launcher_status.empty()
+                                       ? "no record written; see " + run.log_hint
+                                       : run.launcher_status + "; see " + run.log_hint);
       continue;
     }
     const runtime::RecordContents record = runtime::read_record(run.record);
@@ -189,9 +198,9 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
     facts.record = run.record;
     if (measured.has_footer && measured.steps.steps() < 2) {
       // Stopped before step 1: nothing to compare, the footer says why.
-      results.missing.emplace_back(run.case_name, "stopped before step 1: " +
-                                                      measured.footer.status() + "; see " +
-                                                      run.log_hint);
+      results.missing.emplace_back(
+          run.case_name,
+          "stopped before step 1: " + measured.footer.status() + "; see " + run.log_hint);
       continue;
     }
     if (measured.has_footer) {
@@ -230,8 +239,8 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
   }
   if (!recorded.empty())
     // Warned before the runs (warn_past_critical_delay); the outcome keeps the same check.
-    results.outcome = analysis::judge_recorded_cases(prepared, std::move(recorded),
-                                                     {.warn = {}, .extra_lag = results.actuator_path.felt()});
+    results.outcome = analysis::judge_recorded_cases(
+        prepared, std::move(recorded), {.warn = {}, .extra_lag = results.actuator_path.felt()});
   return results;
 }
 
@@ -242,16 +251,19 @@ std::filesystem::path write_distributed_outputs(const DistributedResults& result
   const tables::Format kind = tables::parse_format(format);
   const std::filesystem::path table_file = out / ("results" + tables::extension(kind));
   if (!results.outcome.cases.empty())
-    tables::write_table(tables::distributed_study_table(results.outcome, results.links), table_file, kind);
+    tables::write_table(tables::distributed_study_table(results.outcome, results.links), table_file,
+                        kind);
   if (!plots) {
     // A folder must not show plots of an earlier run beside this run's results.
-    for (const std::string& file : analysis::study_plot_files()) std::filesystem::remove(out / file);
+    for (const std::string& file : analysis::study_plot_files())
+      std::filesystem::remove(out / file);
     for (const std::string& file : lag_plot_files(results)) std::filesystem::remove(out / file);
   } else if (!results.outcome.cases.empty()) {
     try {
       analysis::write_study_plots(results.outcome, out);
       for (std::size_t i = 0; i < results.outcome.cases.size(); ++i)
-        if (!results.links[i].empty()) write_lag_plot(results, i, out / ("links_" + results.outcome.cases[i].name + ".png"));
+        if (!results.links[i].empty())
+          write_lag_plot(results, i, out / ("links_" + results.outcome.cases[i].name + ".png"));
     } catch (const std::exception& e) {
       print_warning(std::string("plots not written: ") + e.what());
     }
@@ -276,7 +288,8 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
     return it != facts.link_labels.end() ? it->second : "node " + std::to_string(node);
   };
   util::PlotSpec network;
-  network.title = "network lag per link, case " + c.name + " (" + (path.real_time ? "real time" : "lockstep") + ")";
+  network.title = "network lag per link, case " + c.name + " (" +
+                  (path.real_time ? "real time" : "lockstep") + ")";
   network.xlabel = "time (s)";
   network.ylabel = "round trip (ms)";
   std::string actuator_link_colour = util::series_colour(0);
@@ -285,20 +298,24 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   for (const auto& [node, series] : links) {
     // Injected first, so the measured round trip is drawn over it.
     // Thick and dashed: in lockstep it lies on zero, under the processes' own exchange times.
-    network.series.push_back({label_of(node) + ": round trip, injected", series.time, in_ms(series.injected),
-                              "lines lw 3 dt 2"});
+    network.series.push_back({label_of(node) + ": round trip, injected", series.time,
+                              in_ms(series.injected), "lines lw 3 dt 2"});
     if (node == path.node_id) actuator_link_colour = util::series_colour(network.series.size());
-    network.series.push_back({label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
+    network.series.push_back(
+        {label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
   }
   // The stack: the network round trip the test feels (real time only), the actuator's own lag
   // on top of it; drawn as the total filled first, then the network part over its lower band.
   const double actuator = c.nominal_delay + path.node_stages;  // s
-  const std::string actuator_label = "actuator lag, nominal " + ms(actuator) + ": " + c.delay_description +
+  const std::string actuator_label = "actuator lag, nominal " + ms(actuator) + ": " +
+                                     c.delay_description +
                                      (path.node_stages != 0.0 ? " + node stages" : "");
   util::PlotSpec stack;
-  stack.title = path.real_time
-                    ? "lag the test feels on the actuator's path: network round trip + actuator lag (stacked)"
-                    : "lag the test feels on the actuator's path: actuator lag (lockstep: the network does not enter)";
+  stack.title =
+      path.real_time
+          ? "lag the test feels on the actuator's path: network round trip + actuator lag (stacked)"
+          : "lag the test feels on the actuator's path: actuator lag (lockstep: the network does "
+            "not enter)";
   stack.xlabel = "time (s)";
   stack.ylabel = "lag (ms)";
   const std::string fill = " fs solid 0.45 noborder";  // opaque: the lower band covers the upper's
@@ -306,20 +323,29 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   const auto link = links.find(path.node_id);
   if (path.real_time && link != links.end()) {
     const runtime::LinkSeries& s = link->second;
-    stack.series.push_back({actuator_label, s.time, in_ms(s.round_trip, actuator),
-                            "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
-    stack.series.push_back({label_of(path.node_id) + ": network round trip, measured", s.time, in_ms(s.round_trip),
+    stack.series.push_back(
+        {actuator_label, s.time, in_ms(s.round_trip, actuator),
+         "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
+    stack.series.push_back({label_of(path.node_id) + ": network round trip, measured", s.time,
+                            in_ms(s.round_trip),
                             "filledcurves y1=0 lc rgb '" + actuator_link_colour + "' dt 1" + fill});
-    stack.series.push_back({"injected total: network + actuator", s.time, in_ms(s.injected, actuator),
+    stack.series.push_back({"injected total: network + actuator", s.time,
+                            in_ms(s.injected, actuator),
                             "lines lw 1.5 lc rgb '" + util::series_colour(colour++) + "'"});
   } else {
-    stack.series.push_back({actuator_label, {t0, t1}, {actuator * 1e3, actuator * 1e3},
-                            "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
+    stack.series.push_back(
+        {actuator_label,
+         {t0, t1},
+         {actuator * 1e3, actuator * 1e3},
+         "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
   }
   if (c.stability) {
-    const auto level = [&](const std::optional<double>& limit, const std::string& what, const char* dash) {
+    const auto level = [&](const std::optional<double>& limit, const std::string& what,
+                           const char* dash) {
       if (!limit) return;
-      stack.series.push_back({what + " critical delay " + ms(*limit), {t0, t1}, {*limit * 1e3, *limit * 1e3},
+      stack.series.push_back({what + " critical delay " + ms(*limit),
+                              {t0, t1},
+                              {*limit * 1e3, *limit * 1e3},
                               std::string("lines lw 2 dt ") + dash + " lc rgb '" +
                                   util::series_colour(colour++) + "'"});
     };
@@ -328,11 +354,13 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   }
   if (!path.real_time)
     network.title = "wall-clock round trip per link, case " + c.name +
-                    " (lockstep: simulated time carries no network lag; these are the processes' own exchange times)";
+                    " (lockstep: simulated time carries no network lag; these are the processes' "
+                    "own exchange times)";
   // From zero, and high enough that the critical delays are never on the border; the network
   // panel a little below zero, so that an injected lag of zero is seen, not hidden in the axis.
   stack.y_min = 0.0;
-  if (const auto range = util::padded_y_range(network.series, {})) network.y_min = -0.05 * std::max(range->second, 1e-3);
+  if (const auto range = util::padded_y_range(network.series, {}))
+    network.y_min = -0.05 * std::max(range->second, 1e-3);
   if (const auto range = util::padded_y_range(stack.series, {})) stack.y_max = range->second;
   network.height = stack.height = 380;
   std::vector<util::PlotSpec> panels;
@@ -348,9 +376,9 @@ std::string distributed_summary_text(const DistributedResults& results) {
   for (std::size_t i = 0; i < results.outcome.cases.size(); ++i) {
     const auto& c = results.outcome.cases[i];
     const auto& f = results.facts[i];
-    text << c.name << ": " << c.simulation.steps() << " steps, coordinator exit " << f.coordinator_exit
-         << ", overruns " << f.overruns << ", rejected " << f.rejected << ", record " << f.record.string()
-         << "\n";
+    text << c.name << ": " << c.simulation.steps() << " steps, coordinator exit "
+         << f.coordinator_exit << ", overruns " << f.overruns << ", rejected " << f.rejected
+         << ", record " << f.record.string() << "\n";
     if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
     if (f.difference_from_in_process) {
       if (!f.difference_from_in_process->first_step)
@@ -366,7 +394,8 @@ std::string distributed_summary_text(const DistributedResults& results) {
     for (const auto& [node, series] : results.links[i]) {
       const auto rt = series.round_trip_summary();
       const auto inj = series.injected_summary();
-      text << "  " << (f.link_labels.count(node) ? f.link_labels.at(node) : "node " + std::to_string(node))
+      text << "  "
+           << (f.link_labels.count(node) ? f.link_labels.at(node) : "node " + std::to_string(node))
            << " round trip ms: median " << rt.median * 1e3 << ", p99 " << rt.p99 * 1e3 << ", max "
            << rt.max * 1e3 << " (injected median " << inj.median * 1e3 << ", " << rt.count
            << " answers)\n";
@@ -387,12 +416,13 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     for (const auto& [node, series] : results.links[i]) {
       const auto rt = series.round_trip_summary();
       const auto inj = series.injected_summary();
-      links[std::to_string(node)] = {{"label", f.link_labels.count(node) ? f.link_labels.at(node) : ""},
-                                     {"answers", rt.count},
-                                     {"round_trip_median_s", rt.median},
-                                     {"round_trip_p99_s", rt.p99},
-                                     {"round_trip_max_s", rt.max},
-                                     {"injected_median_s", inj.median}};
+      links[std::to_string(node)] = {
+          {"label", f.link_labels.count(node) ? f.link_labels.at(node) : ""},
+          {"answers", rt.count},
+          {"round_trip_median_s", rt.median},
+          {"round_trip_p99_s", rt.p99},
+          {"round_trip_max_s", rt.max},
+          {"injected_median_s", inj.median}};
     }
     auto& c = j["cases"][i];
     c["coordinator_exit"] = f.coordinator_exit;
@@ -400,7 +430,8 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     c["rejected"] = f.rejected;
     c["links"] = links;
     c["record"] = f.record.string();
-    c["deadline_diagnosis"] = f.deadline_diagnosis.empty() ? nlohmann::json() : nlohmann::json(f.deadline_diagnosis);
+    c["deadline_diagnosis"] =
+        f.deadline_diagnosis.empty() ? nlohmann::json() : nlohmann::json(f.deadline_diagnosis);
     c["max_difference_from_in_process_m"] = f.difference_from_in_process
                                                 ? nlohmann::json(f.difference_from_in_process->max)
                                                 : nlohmann::json();

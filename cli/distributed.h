@@ -32,8 +32,8 @@
 
 #include "analysis/study_run.h"
 #include "core/study.h"
-#include "runtime/measurements.h"
 #include "rths/proto/runtime.pb.h"
+#include "runtime/measurements.h"
 
 namespace rths::cli {
 
@@ -41,22 +41,22 @@ namespace rths::cli {
 struct DistributedRun {
   std::string case_name;
   int coordinator_exit = -1;
-  std::string launcher_status;          // runtime::LaunchResult::status (empty: ran to its end)
+  std::string launcher_status;  // runtime::LaunchResult::status (empty: ran to its end)
   std::filesystem::path record;
-  std::string log_hint;                 // where to look when it failed
+  std::string log_hint;  // where to look when it failed
 };
 
 // The lag a distributed run adds on the actuator's path beyond the case's own delay stages, from
 // the deployment; the actuator emulator node that adds the most when there are several.
 struct ActuatorPathLag {
-  int node_id = -1;              // the actuator emulator node (-1: the deployment has none)
-  bool real_time = false;        // deployment.clock
+  int node_id = -1;        // the actuator emulator node (-1: the deployment has none)
+  bool real_time = false;  // deployment.clock
   // s, the injected one-way lags of the node's link both ways (receive_lag + send_lag
   // one_way_delay; jitter has zero mean). In real time the coordinator uses the newest force it
   // has, so this round trip acts on the test as actuator lag; in lockstep every command waits for
   // its own answer, and it does not.
   double link_round_trip = 0.0;
-  double node_stages = 0.0;      // s, nominal delay of the node's own receive_delay + send_delay stages
+  double node_stages = 0.0;  // s, nominal delay of the node's own receive_delay + send_delay stages
   // s, what the test feels: node_stages + link_round_trip in real time, node_stages in lockstep.
   double felt() const { return node_stages + (real_time ? link_round_trip : 0.0); }
 };
@@ -66,7 +66,8 @@ ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared);
 // analysis::check_case_critical_delay with actuator_path_lag(prepared).felt() added to its own lag;
 // for each case past its continuous or discrete critical delay, print_warning names the network
 // and actuator parts of the lag, the critical delays and the margin. Returns how many are past.
-int warn_past_critical_delay(const core::PreparedStudy& prepared, const std::vector<std::string>& case_names);
+int warn_past_critical_delay(const core::PreparedStudy& prepared,
+                             const std::vector<std::string>& case_names);
 
 // The role of a link for plots and summaries: "actuator lab" (an actuator emulator's link) or
 // "numerical site" (a substructure node's), followed by the site's name when the sites config
@@ -76,7 +77,7 @@ std::map<int, std::string> link_roles(const config::Deployment& deployment,
 
 // A lockstep run against the in-process run of the same case.
 struct InProcessDifference {
-  double max = 0.0;                       // m, max |u_distributed - u_in_process|
+  double max = 0.0;                        // m, max |u_distributed - u_in_process|
   std::optional<std::int64_t> first_step;  // the first step that differs; none = bit for bit
 };
 
@@ -93,9 +94,9 @@ struct DistributedCaseFacts {
 };
 
 struct DistributedResults {
-  analysis::StudyOutcome outcome;                        // cases that left a record
-  std::vector<DistributedCaseFacts> facts;               // per outcome.cases[i]
-  std::vector<std::map<int, runtime::LinkSeries>> links; // per outcome.cases[i]
+  analysis::StudyOutcome outcome;                            // cases that left a record
+  std::vector<DistributedCaseFacts> facts;                   // per outcome.cases[i]
+  std::vector<std::map<int, runtime::LinkSeries>> links;     // per outcome.cases[i]
   std::vector<std::pair<std::string, std::string>> missing;  // case, why no record
   ActuatorPathLag actuator_path;  // each case's stability check includes actuator_path.felt()
 };

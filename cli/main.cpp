@@ -24,7 +24,8 @@ int main(int argc, char** argv) {
   rths::cli::add_rt_check_command(app);
   rths::cli::add_opensees_site_command(app);
   rths::cli::add_view_command(app);
-  if (const std::string unknown = rths::cli::suggest_for_unknown(app, argc, argv); !unknown.empty()) {
+  if (const std::string unknown = rths::cli::suggest_for_unknown(app, argc, argv);
+      !unknown.empty()) {
     std::cerr << "rths: " << unknown << "\n";
     return rths::cli::kExitBadInput;
   }

@@ -10,10 +10,10 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
-#include <cstdio>
 #include <cctype>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 
@@ -96,8 +96,11 @@ double monotonic_seconds() {
 }  // namespace
 
 ProgressReporter::ProgressReporter(std::string label, std::string unit, bool enabled)
-    : label_(std::move(label)), unit_(std::move(unit)), enabled_(enabled),
-      tty_(isatty(STDERR_FILENO) != 0), start_seconds_(monotonic_seconds()) {}
+    : label_(std::move(label)),
+      unit_(std::move(unit)),
+      enabled_(enabled),
+      tty_(isatty(STDERR_FILENO) != 0),
+      start_seconds_(monotonic_seconds()) {}
 
 void ProgressReporter::update(std::size_t done, std::size_t total) {
   if (!enabled_ || total == 0) return;
@@ -116,13 +119,15 @@ void ProgressReporter::update(std::size_t done, std::size_t total) {
     const int decile = static_cast<int>(std::floor(fraction * 10));
     if (decile <= last_decile_) return;
     last_decile_ = decile;
-    std::fprintf(stderr, "%s: %3d%% (%zu/%zu %s, %.1f s)\n", label_.c_str(), decile * 10, done, total,
-                 unit_.c_str(), seconds);
+    std::fprintf(stderr, "%s: %3d%% (%zu/%zu %s, %.1f s)\n", label_.c_str(), decile * 10, done,
+                 total, unit_.c_str(), seconds);
   }
   std::fflush(stderr);
 }
 
-void print_warning(const std::string& message) { std::cerr << "rths: warning: " << message << "\n"; }
+void print_warning(const std::string& message) {
+  std::cerr << "rths: warning: " << message << "\n";
+}
 
 double parse_seconds(const std::string& text) {
   std::string compact;
@@ -138,11 +143,15 @@ double parse_seconds(const std::string& text) {
   }
   const std::string unit = used > 0 ? compact.substr(used) : "";
   double factor = 0.0;
-  if (unit.empty() || unit == "s") factor = 1.0;
-  else if (unit == "ms") factor = 1e-3;
-  else if (unit == "us") factor = 1e-6;
+  if (unit.empty() || unit == "s")
+    factor = 1.0;
+  else if (unit == "ms")
+    factor = 1e-3;
+  else if (unit == "us")
+    factor = 1e-6;
   if (used == 0 || factor == 0.0 || !std::isfinite(value)) {
-    throw std::invalid_argument("'" + text + "' is not a time: give seconds (0.014), or a number with "
+    throw std::invalid_argument("'" + text +
+                                "' is not a time: give seconds (0.014), or a number with "
                                 "its unit: 14ms, 0.014s, 14000us");
   }
   return value * factor;
@@ -198,7 +207,8 @@ CLI::Validator range_validator(core::Quantity quantity, bool seconds) {
 CLI::Validator seconds_in(core::Quantity quantity) { return range_validator(quantity, true); }
 CLI::Validator in_range(core::Quantity quantity) { return range_validator(quantity, false); }
 
-std::optional<std::string> closest(const std::string& word, const std::vector<std::string>& candidates) {
+std::optional<std::string> closest(const std::string& word,
+                                   const std::vector<std::string>& candidates) {
   std::optional<std::string> best;
   std::size_t best_distance = std::max<std::size_t>(1, word.size() / 3) + 1;
   for (const std::string& candidate : candidates) {
@@ -215,7 +225,8 @@ namespace {
 
 std::vector<std::string> subcommand_names(const CLI::App& app) {
   std::vector<std::string> names;
-  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) names.push_back(sub->get_name());
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    names.push_back(sub->get_name());
   return names;
 }
 
@@ -227,15 +238,19 @@ std::vector<std::string> flag_names(const CLI::App& app) {
   return flags;
 }
 
-std::string unknown_command(const std::string& word, const std::string& path, const std::vector<std::string>& names) {
-  std::string message = "unknown command '" + word + "'" + (path == "rths" ? "" : " for `" + path + "`");
-  if (const auto near = closest(word, names)) return message + "; did you mean `" + path + " " + *near + "`?";
+std::string unknown_command(const std::string& word, const std::string& path,
+                            const std::vector<std::string>& names) {
+  std::string message =
+      "unknown command '" + word + "'" + (path == "rths" ? "" : " for `" + path + "`");
+  if (const auto near = closest(word, names))
+    return message + "; did you mean `" + path + " " + *near + "`?";
   message += "; commands:";
   for (const std::string& n : names) message += " " + n;
   return message;
 }
 
-std::string unknown_flag(const std::string& word, const std::string& path, const std::vector<std::string>& flags) {
+std::string unknown_flag(const std::string& word, const std::string& path,
+                         const std::vector<std::string>& flags) {
   std::string message = "unknown option '" + word + "' for `" + path + "`";
   if (const auto near = closest(word, flags)) return message + "; did you mean '" + *near + "'?";
   return message + " (see `" + path + " --help`)";
@@ -257,7 +272,8 @@ std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const
       if (level == &app) continue;  // --help, --version: CLI11's own
       word = word.substr(0, word.find('='));
       const std::vector<std::string> flags = flag_names(*level);
-      if (std::find(flags.begin(), flags.end(), word) == flags.end()) return unknown_flag(word, path, flags);
+      if (std::find(flags.begin(), flags.end(), word) == flags.end())
+        return unknown_flag(word, path, flags);
       continue;
     }
     if (word.empty() || word[0] == '-') continue;
@@ -297,7 +313,8 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
     std::cout << summary.dump(2) << "\n";
   } else {
     std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
-              << (plots ? ", displacement.png/.svg, force_displacement.png/.svg" : "") << ", summary.txt, summary.json\n";
+              << (plots ? ", displacement.png/.svg, force_displacement.png/.svg" : "")
+              << ", summary.txt, summary.json\n";
   }
 }
 
@@ -310,7 +327,8 @@ void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable
     message += (message.empty() ? "" : "\n  ") + f;
     diverged = diverged || f.find("diverged") != std::string::npos;
   }
-  if (diverged) message += "\n  (--allow-unstable, or expect_unstable: true in the case, when that is meant)";
+  if (diverged)
+    message += "\n  (--allow-unstable, or expect_unstable: true in the case, when that is meant)";
   throw ExitError(kExitRunFailed, message);
 }
 

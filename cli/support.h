@@ -61,7 +61,8 @@ CLI::Validator in_range(core::Quantity quantity);
 
 // The candidate closest to `word` by edit distance, when close enough to be a slip (at most a
 // third of the word's length, and at least 1 edit allowed).
-std::optional<std::string> closest(const std::string& word, const std::vector<std::string>& candidates);
+std::optional<std::string> closest(const std::string& word,
+                                   const std::vector<std::string>& candidates);
 
 // Before parsing, level by level (`rths pki init ...` is three levels): an unknown subcommand or
 // an unknown --flag gets "did you mean" from that level's own subcommands and flags. Returns the

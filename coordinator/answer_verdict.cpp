@@ -9,8 +9,8 @@ std::optional<std::string> answer_shortfall(int node_id, std::uint64_t fresh, st
   if (steps == 0 || static_cast<double>(fresh) >= min_fraction * static_cast<double>(steps))
     return std::nullopt;
   std::ostringstream out;
-  out << "failed: node " << node_id << " answered " << fresh << " of " << steps << " steps (at least "
-      << 100.0 * min_fraction << " % needed)";
+  out << "failed: node " << node_id << " answered " << fresh << " of " << steps
+      << " steps (at least " << 100.0 * min_fraction << " % needed)";
   return out.str();
 }
 

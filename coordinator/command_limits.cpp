@@ -29,9 +29,9 @@ std::optional<std::string> CommandLimits::check_rate(const core::Vec& drift) {
     for (int s : actuator_storeys_) {
       const double change = drift[s] - previous_[s];
       if (!(std::abs(change) <= limit))
-        return "safety limit: commanded drift of storey " + std::to_string(s + 1) +
-               " changes by " + std::to_string(change) + " m in one step (limit " +
-               std::to_string(limit) + " m per step); command not sent";
+        return "safety limit: commanded drift of storey " + std::to_string(s + 1) + " changes by " +
+               std::to_string(change) + " m in one step (limit " + std::to_string(limit) +
+               " m per step); command not sent";
     }
   previous_ = drift;
   return std::nullopt;

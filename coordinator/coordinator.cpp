@@ -81,8 +81,9 @@ void activate(Coordinator::State& s) {
 }
 
 // core::run_steps (or the options' outside StepDriver) with this run as its evaluator and hooks.
-// Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's answers are all in (or a fault
-// was raised). The handler is removed (waiting out a running call) before this returns.
+// Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's
+// answers are all in (or a fault was raised). The handler is removed (waiting out a running call)
+// before this returns.
 void loop(Coordinator::State& s, core::SimulationResult& result) {
   core::SimulationOptions options;
   options.divergence_bound = s.options.divergence_bound;
@@ -123,8 +124,10 @@ void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outco
   for (const auto& [id, node] : s.nodes)
     if (s.real_time && outcome.ok && !misses && min_answers >= 0) {
       // Answers to the last steps of a link slower than a step are still on the wire at the end.
-      const auto in_flight = static_cast<std::uint64_t>(
-          std::ceil(Coordinator::State::injected_round_trip(node.plan->spec) / s.setup.dt)) + 1;
+      const auto in_flight =
+          static_cast<std::uint64_t>(
+              std::ceil(Coordinator::State::injected_round_trip(node.plan->spec) / s.setup.dt)) +
+          1;
       const std::uint64_t due = node.judged_steps > in_flight ? node.judged_steps - in_flight : 0;
       misses = answer_shortfall(id, std::min(node.answers, due), due, min_answers);
     }

@@ -33,14 +33,14 @@
 //   a node gives no fresh answer for max_missed_answers (3) consecutive real-time steps
 //                  -> stops at that step: HOLD to the emulators, STOP to all, the node named.
 //                     At most max_missed_answers - 1 steps are integrated on its old force.
-//   an emulator answers HOLD (it held on its own: watchdog, rate limit) -> stops at once, naming it.
-//   a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep),
-//   no lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift
-//   changing by more than limits.max_displacement_step -> stops before the command is sent.
-//   the record's writer fails a write (disk full, I/O error, file size limit) or falls more than
-//   its ring (4096 entries) behind -> stops within a step or two of it, naming the file and the
-//   reason; the record is the readable prefix written before the failure.
-//   a stop request (options.stop_request: the view's stop button) -> stops before the next step,
+//   an emulator answers HOLD (it held on its own: watchdog, rate limit) -> stops at once, naming
+//   it. a node silent for liveliness_timeout (1 s; the slower second line, also in lockstep), no
+//   lockstep answer within step_timeout, |u| or |v| beyond the limits, a commanded drift changing
+//   by more than limits.max_displacement_step -> stops before the command is sent. the record's
+//   writer fails a write (disk full, I/O error, file size limit) or falls more than its ring (4096
+//   entries) behind -> stops within a step or two of it, naming the file and the reason; the record
+//   is the readable prefix written before the failure. a stop request (options.stop_request: the
+//   view's stop button) -> stops before the next step,
 //                  status kStoppedFromView.
 //   Every stop: HOLD to the emulators, STOP to all, the record closed with the reason and node.
 //   an integrity fault (coordinator::FeedbackIntake: an answer as a node from a participant other
@@ -111,14 +111,14 @@ using StepDriver = std::function<void(core::HybridEvaluator& evaluator, core::St
                                       core::SimulationResult& result)>;
 
 struct CoordinatorOptions {
-  std::string run_id;                 // must be non-empty
-  std::string case_name;              // empty: deployment.case_name, else the reference case
-  std::filesystem::path record;       // empty: no record file
+  std::string run_id;                     // must be non-empty
+  std::string case_name;                  // empty: deployment.case_name, else the reference case
+  std::filesystem::path record;           // empty: no record file
   runtime::PacingClock* clock = nullptr;  // real time; null = CLOCK_MONOTONIC
-  double divergence_bound = 1.0e3;    // m, as core::SimulationOptions
+  double divergence_bound = 1.0e3;        // m, as core::SimulationOptions
   // Real time: the platform check the run starts under, kept in the record's header.
   std::optional<runtime::PlatformSummary> platform;
-  StepDriver driver;                  // empty: the study's integrator (core::run_steps)
+  StepDriver driver;  // empty: the study's integrator (core::run_steps)
   // Sees each record entry on the record's writer thread (the live view); needs `record`.
   runtime::RecordObserver* record_observer = nullptr;
   // Set from another thread (the view's stop button): the loop stops before its next step as for
@@ -136,8 +136,8 @@ struct LinkLagStats {
 
 struct RunOutcome {
   bool ok = false;
-  std::string status;        // "completed" or why it stopped
-  std::string failed_node;   // label of the node that caused the stop, if one did
+  std::string status;             // "completed" or why it stopped
+  std::string failed_node;        // label of the node that caused the stop, if one did
   core::SimulationResult result;  // steps completed (up to the failure)
   runtime::Counters counters;
   std::vector<LinkLagStats> links;

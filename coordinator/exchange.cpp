@@ -12,7 +12,8 @@ namespace {
 
 // Decodes the payload into `payload`, or counts the message as garbage: false then.
 template <class T>
-bool unpack_or_count(const transport::Message& message, T& payload, runtime::RejectCounters& rejected) {
+bool unpack_or_count(const transport::Message& message, T& payload,
+                     runtime::RejectCounters& rejected) {
   if (runtime::unpack(message, payload)) return true;
   rejected.count(Verdict::kGarbage);
   return false;
@@ -59,9 +60,9 @@ void Coordinator::State::apply(const transport::Message& message, Node& node) {
       // An emulator held on its own (its watchdog or limits): the test cannot go on.
       runtime::Hold hold;
       if (!unpack_or_count(message, hold, rejected)) return;
-      throw RunAborted("held on its own at its step " + std::to_string(message.step) + ": " +
-                           hold.reason(),
-                       node.plan->label());
+      throw RunAborted(
+          "held on its own at its step " + std::to_string(message.step) + ": " + hold.reason(),
+          node.plan->label());
     }
     case runtime::HEARTBEAT: {
       runtime::Heartbeat heartbeat;
@@ -90,7 +91,8 @@ void Coordinator::State::on_announce(const transport::Message& message,
   }
   node.last_seen = Clock::now();
   if (!node.announced) {
-    spdlog::info("{} announced from {} pid {}", node.plan->label(), announce.host(), announce.pid());
+    spdlog::info("{} announced from {} pid {}", node.plan->label(), announce.host(),
+                 announce.pid());
     // The node's writer is pinned: from now on only it may speak as this node.
     node.writer = message.writer;
     intake->pin(node.plan->spec.id(), message.writer);
@@ -185,8 +187,7 @@ void Coordinator::State::absorb() {
 
 const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& v,
                                            core::Mat* tangent) {
-  if (tangent)
-    throw std::invalid_argument("the distributed runtime needs an explicit integrator");
+  if (tangent) throw std::invalid_argument("the distributed runtime needs an explicit integrator");
   if (auto violation = limits->check_state(u, v)) throw RunAborted(*violation, "");
   assembly.drifts(u, drift);
   assembly.drifts(v, drift_velocity);
@@ -257,8 +258,7 @@ void Coordinator::State::collect() {
       if (left <= Clock::duration::zero()) break;
       pump(left);
     }
-    while (pump(std::chrono::nanoseconds::zero())) {
-    }
+    while (pump(std::chrono::nanoseconds::zero())) {}
     absorb();
     const int max_missed = runtime::max_missed_answers(deployment, setup.dt);
     for (auto& [id, node] : nodes) {
@@ -278,12 +278,11 @@ void Coordinator::State::collect() {
       node.answers_before_step = node.answers;
       node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
       if (node.missed_streak >= max_missed)
-        throw RunAborted("no answer for " + std::to_string(node.missed_streak) +
-                             " consecutive steps (steps " +
-                             std::to_string(step - node.missed_streak + 1) + " to " +
-                             std::to_string(step) + "; its newest answers step " +
-                             std::to_string(node.last_answer) + ")",
-                         node.plan->label());
+        throw RunAborted(
+            "no answer for " + std::to_string(node.missed_streak) + " consecutive steps (steps " +
+                std::to_string(step - node.missed_streak + 1) + " to " + std::to_string(step) +
+                "; its newest answers step " + std::to_string(node.last_answer) + ")",
+            node.plan->label());
     }
     check_liveliness();
     return;

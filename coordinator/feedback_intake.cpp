@@ -90,9 +90,10 @@ bool FeedbackIntake::echoes_command(const transport::Message& message, Node& nod
 }
 
 bool FeedbackIntake::values_in_range(const runtime::Feedback& f) const {
-  return runtime::finite_within(f.force(), 0.0) && runtime::finite_within(f.realised(), max_realised_) &&
-         std::isfinite(f.injected_lag()) && f.injected_lag() >= 0.0 &&
-         f.command_received_ns() >= 0 && f.sampled_ns() >= 0 && f.servo_sample() >= 0;
+  return runtime::finite_within(f.force(), 0.0) &&
+         runtime::finite_within(f.realised(), max_realised_) && std::isfinite(f.injected_lag()) &&
+         f.injected_lag() >= 0.0 && f.command_received_ns() >= 0 && f.sampled_ns() >= 0 &&
+         f.servo_sample() >= 0;
 }
 
 Verdict FeedbackIntake::judge_repeat(const transport::Message& message, Node& node,

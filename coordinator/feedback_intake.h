@@ -46,10 +46,10 @@ namespace rths::coordinator {
 
 // One node's newest feedback, as the loop reads it.
 struct ArrivedFeedback {
-  runtime::Feedback feedback;       // the newest accepted measurement (answer or servo sample)
-  std::int64_t answered_step = 0;   // step of the newest answer; 0 before the first
-  std::uint64_t answers = 0;        // answers accepted so far
-  runtime::LinkSample link;         // the newest answer's lag (s); answered_step 0 before one
+  runtime::Feedback feedback;      // the newest accepted measurement (answer or servo sample)
+  std::int64_t answered_step = 0;  // step of the newest answer; 0 before the first
+  std::uint64_t answers = 0;       // answers accepted so far
+  runtime::LinkSample link;        // the newest answer's lag (s); answered_step 0 before one
 };
 
 struct IntakeNode {
@@ -120,8 +120,8 @@ class FeedbackIntake {
   bool values_in_range(const runtime::Feedback& feedback) const;
   // Same step as the node's newest answer: a newer servo sample (kAccept), the same bytes
   // (kDuplicate), or a contradiction (raises the fault, kDuplicate).
-  runtime::Verdict judge_repeat(const transport::Message& message, Node& node,
-                                std::uint64_t hash, std::int64_t servo_sample);
+  runtime::Verdict judge_repeat(const transport::Message& message, Node& node, std::uint64_t hash,
+                                std::int64_t servo_sample);
   void raise(int node_id, std::string what);
   void record_answer(const transport::Message& message, Node& node, std::uint64_t hash);
 

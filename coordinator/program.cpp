@@ -8,8 +8,8 @@
 #include <atomic>
 #include <cstdlib>
 #include <iostream>
-#include <tuple>
 #include <sstream>
+#include <tuple>
 
 #include "platform/check.h"
 #include "runtime/launch.h"
@@ -27,11 +27,10 @@ namespace {
 
 std::string reject_text(const runtime::Counters& c) {
   return "foreign-run " + std::to_string(c.foreign_run()) + ", garbage " +
-         std::to_string(c.garbage()) + ", duplicate " + std::to_string(c.duplicate()) +
-         ", stale " + std::to_string(c.stale()) + ", out-of-order " +
-         std::to_string(c.out_of_order()) + ", unknown-node " + std::to_string(c.unknown_node()) +
-         ", not-entitled " + std::to_string(c.not_entitled()) + ", out-of-range " +
-         std::to_string(c.out_of_range());
+         std::to_string(c.garbage()) + ", duplicate " + std::to_string(c.duplicate()) + ", stale " +
+         std::to_string(c.stale()) + ", out-of-order " + std::to_string(c.out_of_order()) +
+         ", unknown-node " + std::to_string(c.unknown_node()) + ", not-entitled " +
+         std::to_string(c.not_entitled()) + ", out-of-range " + std::to_string(c.out_of_range());
 }
 
 }  // namespace
@@ -39,28 +38,30 @@ std::string reject_text(const runtime::Counters& c) {
 std::string summary_text(const RunOutcome& o) {
   std::ostringstream out;
   const auto& c = o.counters;
-  out << "status: " << o.status << (o.failed_node.empty() ? "" : " [" + o.failed_node + "]")
+  out << "status: " << o.status
+      << (o.failed_node.empty() ? "" : " [" + o.failed_node + "]")
       // The record holds the initial state and one row per commanded step, as `rths run` counts.
       << "\nsteps: " << c.steps() + 1 << " recorded (" << c.steps() << " commanded) in "
       << o.wall_seconds << " s"
-      << "\nrejected: " << reject_text(c)
-      << "\noverruns: " << c.overruns() << " (worst streak " << c.worst_overrun_streak()
-      << "), max lateness " << o.max_lateness * 1e3 << " ms"
+      << "\nrejected: " << reject_text(c) << "\noverruns: " << c.overruns() << " (worst streak "
+      << c.worst_overrun_streak() << "), max lateness " << o.max_lateness * 1e3
+      << " ms"
       // In real time a link whose round trip is longer than a step answers later by design; the
       // count says how often the integrator used an older answer, not that anything failed.
       << "\nsteps on an older answer (by design where a link's round trip exceeds the step): "
       << c.late_feedback() << " (worst streak " << c.worst_late_streak() << ")\n";
   if (c.servo_ticks() > 0)
     out << "servo loops: " << c.servo_overruns() << " overruns in " << c.servo_ticks()
-        << " periods (" << 100.0 * static_cast<double>(c.servo_overruns()) / static_cast<double>(c.servo_ticks())
+        << " periods ("
+        << 100.0 * static_cast<double>(c.servo_overruns()) / static_cast<double>(c.servo_ticks())
         << " %, as of each emulator's last heartbeat)\n";
   for (const runtime::NodeRejects& n : o.node_rejects)
     out << n.label() << " rejected: " << reject_text(n.rejected())
         << (n.final() ? "" : " (as of its last heartbeat; no report on STOP)") << "\n";
   for (const LinkLagStats& l : o.links)
     out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "
-        << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3
-        << " ms; injected mean " << l.injected.mean * 1e3 << " ms\n";
+        << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3 << " ms; injected mean "
+        << l.injected.mean * 1e3 << " ms\n";
   return out.str();
 }
 
@@ -79,7 +80,8 @@ struct PlatformRefused : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared, const PlatformArgs& args) {
+runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared,
+                                          const PlatformArgs& args) {
   runtime::PlatformSummary summary;
   if (!args.file.empty()) {
     summary = platform::read_summary_file(args.file);
@@ -104,8 +106,10 @@ runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared, c
 // std::invalid_argument; an address that cannot be bound or page files missing: runtime_error.
 std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_view(
     const std::string& address_text, bool allow_stop, const std::string& record,
-    const core::PreparedStudy& prepared, const std::string& case_name, std::atomic<bool>& stop_request) {
-  if (record.empty()) throw std::invalid_argument("--view needs --record: the view follows the run record");
+    const core::PreparedStudy& prepared, const std::string& case_name,
+    std::atomic<bool>& stop_request) {
+  if (record.empty())
+    throw std::invalid_argument("--view needs --record: the view follows the run record");
   view::ServerOptions options;
   options.address = view::parse_listen_address(address_text);
   options.allow_stop = allow_stop;
@@ -125,7 +129,6 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
               << server->url() << " sees the run" << std::endl;
   return {std::move(feed), std::move(server)};
 }
-
 
 struct ProgramArgs {
   std::string config_path, case_name, run_id, record, security_dir;
@@ -153,8 +156,9 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
   app.add_option("--security", a.security_dir,
                  "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
                  "default: deployment.security_dir");
-  app.add_option("--view", a.view_address,
-                 "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
+  app.add_option(
+      "--view", a.view_address,
+      "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
   app.add_flag("--view-stop", a.view_stop,
                "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
                "token printed at start-up");
@@ -189,9 +193,9 @@ std::unique_ptr<transport::DdsEndpoint> open_endpoint(const config::Study& study
   options.domain_id =
       static_cast<std::uint32_t>(a.domain >= 0 ? a.domain : study.deployment().domain_id());
   if (a.security_dir.empty() && !study.deployment().security_dir().empty())
-    a.security_dir = security::node_dir(std::filesystem::path(a.config_path).parent_path() /
-                                            study.deployment().security_dir(),
-                                        security::kCoordinatorNodeId);
+    a.security_dir = security::node_dir(
+        std::filesystem::path(a.config_path).parent_path() / study.deployment().security_dir(),
+        security::kCoordinatorNodeId);
   if (!a.security_dir.empty())  // refused here (exit 2), before the participant exists
     options.participant_properties = security::participant_properties(
         security::check_node_security(a.security_dir, security::kCoordinatorNodeId));
@@ -218,8 +222,8 @@ void start_session(ProgramArgs& a, Session& session) {
   if (!a.view_address.empty()) {
     const std::string shown_case =
         a.case_name.empty() ? study.deployment().case_name() : a.case_name;
-    std::tie(session.feed, session.server) = start_view(
-        a.view_address, a.view_stop, a.record, prepared, shown_case, session.stop_request);
+    std::tie(session.feed, session.server) = start_view(a.view_address, a.view_stop, a.record,
+                                                        prepared, shown_case, session.stop_request);
     co.record_observer = session.feed.get();
     co.stop_request = &session.stop_request;
   }

@@ -7,9 +7,9 @@
 // read from FILE), refuses with exit 3 naming the numbers and the fix when the deployment's
 // fail-safe or overrun tolerance will not hold (unless --accept-platform), holds
 // /dev/cpu_dma_latency at 0 for the run when permitted, and records the check in the header.
-//                    [--view HOST:PORT [--view-stop]]  (the live view, view/server.h; needs --record;
-//                    the stop button HOLDs then STOPs the run, "stopped from the view"; beyond
-//                    loopback it needs the token printed at start-up)
+//                    [--view HOST:PORT [--view-stop]]  (the live view, view/server.h; needs
+//                    --record; the stop button HOLDs then STOPs the run, "stopped from the view";
+//                    beyond loopback it needs the token printed at start-up)
 // Loads the study, opens DDS (domain: --domain, else deployment.domain_id), runs one case and
 // prints a summary. Exit: 0 completed, 1 the run stopped (node lost, limit, start-up timeout),
 // 2 bad config or usage, 3 DDS or file error.

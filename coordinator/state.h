@@ -58,14 +58,14 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
     std::int64_t last_answer = 0;  // step of the newest answer taken from the intake
     std::uint64_t answers = 0;     // answers taken so far
     std::uint64_t answers_before_step = 0;
-    int missed_streak = 0;         // real time: consecutive steps without a fresh answer
-    int late_streak = 0;           // real time: consecutive steps on an older answer
-    std::uint64_t fresh_steps = 0, judged_steps = 0;  // real time: for answer_shortfall
-    bool awaited = true;           // awaits_answers_of(its spec)
+    int missed_streak = 0;  // real time: consecutive steps without a fresh answer
+    int late_streak = 0;    // real time: consecutive steps on an older answer
+    std::uint64_t fresh_steps = 0, judged_steps = 0;    // real time: for answer_shortfall
+    bool awaited = true;                                // awaits_answers_of(its spec)
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
-    std::uint64_t writer = 0;      // its announcement's writer: only it may speak as this node
-    runtime::Counters rejects;     // what the node rejected, by cause, as of its last heartbeat
-    bool final_report = false;     // that heartbeat was its last (sent on STOP)
+    std::uint64_t writer = 0;   // its announcement's writer: only it may speak as this node
+    runtime::Counters rejects;  // what the node rejected, by cause, as of its last heartbeat
+    bool final_report = false;  // that heartbeat was its last (sent on STOP)
   };
   std::map<int, Node> nodes;
   // The nodes' feedback, filled by the transport's receive thread (or by pump() on a transport
@@ -115,7 +115,8 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
   bool pump(std::chrono::nanoseconds timeout);
   // A message from `node` that passed the envelope and sender checks.
   void apply(const transport::Message& message, Node& node);
-  void on_announce(const transport::Message& message, const runtime::Announce& announce, Node& node);
+  void on_announce(const transport::Message& message, const runtime::Announce& announce,
+                   Node& node);
 
   void send_assign(const Node& node);
   // Throws RunAborted for a node silent beyond the liveliness timeout; sends the heartbeat when

@@ -29,8 +29,7 @@ void Coordinator::State::before_step(std::size_t k) {
   if (real_time) {
     pace = pacer->wait(static_cast<std::int64_t>(k));
     // What queued during the wait (an emulator's HOLD stops the run before the next command).
-    while (pump(std::chrono::nanoseconds::zero())) {
-    }
+    while (pump(std::chrono::nanoseconds::zero())) {}
   }
   step = static_cast<std::int64_t>(k);
   if (options.stop_request && options.stop_request->load(std::memory_order_relaxed))
@@ -40,8 +39,7 @@ void Coordinator::State::before_step(std::size_t k) {
   step_start_realtime_ns = transport::realtime_ns();
 }
 
-bool Coordinator::State::after_step(std::size_t k,
-                                    const core::SimulationResult& result) {
+bool Coordinator::State::after_step(std::size_t k, const core::SimulationResult& result) {
   const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
   write_step(k, result, step_wall);
   check_record();

@@ -40,17 +40,17 @@ BenchmarkCriteria benchmark_criteria(std::span<const double> target,
   const int floors = static_cast<int>(reference.cols());
   if (response.cols() != reference.cols()) {
     throw std::invalid_argument("benchmark_criteria: the response and the reference have " +
-                                std::to_string(response.cols()) + " and " +
-                                std::to_string(floors) + " floors");
+                                std::to_string(response.cols()) + " and " + std::to_string(floors) +
+                                " floors");
   }
   if (experimental_storey < 0 || experimental_storey >= floors) {
     throw std::invalid_argument("benchmark_criteria: experimental storey " +
                                 std::to_string(experimental_storey + 1) + " is outside 1.." +
                                 std::to_string(floors));
   }
-  const std::size_t n = std::min({target.size(), measured.size(),
-                                  static_cast<std::size_t>(response.rows()),
-                                  static_cast<std::size_t>(reference.rows())});
+  const std::size_t n =
+      std::min({target.size(), measured.size(), static_cast<std::size_t>(response.rows()),
+                static_cast<std::size_t>(reference.rows())});
   if (n < 2) throw std::invalid_argument("benchmark_criteria: fewer than two common steps");
   const auto column = [n](const Mat& m, int c) {
     std::vector<double> out(n);

@@ -31,7 +31,8 @@ double backward_acceleration(const double* x, double dt) {
 }
 
 void require_step(double dt, const char* who) {
-  require(dt > 0.0 && finite(dt), std::string(who) + ": dt must be > 0 s, got " + format_number(dt));
+  require(dt > 0.0 && finite(dt),
+          std::string(who) + ": dt must be > 0 s, got " + format_number(dt));
 }
 
 // Drops leading zero coefficients; a polynomial keeps at least one coefficient.
@@ -48,8 +49,8 @@ void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
     const char* name;
     double initial;
     CoefficientBounds bounds;
-  } coefficients[] = {{"a0", p.a0, p.a0_bounds}, {"a1", p.a1, p.a1_bounds},
-                      {"a2", p.a2, p.a2_bounds}};
+  } coefficients[] = {
+      {"a0", p.a0, p.a0_bounds}, {"a1", p.a1, p.a1_bounds}, {"a2", p.a2, p.a2_bounds}};
   for (const auto& c : coefficients) {
     require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max,
             label + ": " + c.name + "_bounds must have min < max, got [" +
@@ -64,7 +65,8 @@ void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
 
 }  // namespace
 
-std::vector<double> polynomial_multiply(const std::vector<double>& a, const std::vector<double>& b) {
+std::vector<double> polynomial_multiply(const std::vector<double>& a,
+                                        const std::vector<double>& b) {
   if (a.empty() || b.empty()) return {};
   std::vector<double> out(a.size() + b.size() - 1, 0.0);
   for (std::size_t i = 0; i < a.size(); ++i)
@@ -90,10 +92,10 @@ PolynomialExtrapolation::PolynomialExtrapolation(int order, double lead, int spa
                                                  double dt)
     : order_(order), spacing_(spacing_steps), lead_(lead) {
   require_step(dt, "polynomial compensator");
-  require(order >= 1 && order <= 3, "polynomial compensator: order must be 1, 2 or 3, got " +
-                                        std::to_string(order));
-  require(lead > 0.0 && lead <= 1.0, "polynomial compensator: lead must be in (0, 1] s, got " +
-                                         format_number(lead));
+  require(order >= 1 && order <= 3,
+          "polynomial compensator: order must be 1, 2 or 3, got " + std::to_string(order));
+  require(lead > 0.0 && lead <= 1.0,
+          "polynomial compensator: lead must be in (0, 1] s, got " + format_number(lead));
   require(spacing_steps >= 1, "polynomial compensator: spacing must be at least one step (dt)");
   // Lagrange weights for nodes x_j = -j (in units of the spacing h), evaluated at x = L / h.
   const double x = lead / (spacing_steps * dt);
@@ -244,8 +246,8 @@ double AdaptiveTimeSeries::step(const CompensatorInput& in) {
   x[2] = x[1];
   x[1] = x[0];
   x[0] = in.target;
-  last_command_ = a_[0] * x[0] + a_[1] * backward_velocity(x, dt_) +
-                  a_[2] * backward_acceleration(x, dt_);
+  last_command_ =
+      a_[0] * x[0] + a_[1] * backward_velocity(x, dt_) + a_[2] * backward_acceleration(x, dt_);
   return last_command_;
 }
 
@@ -262,7 +264,8 @@ std::string PlantModel::describe() const {
   return out.str();
 }
 
-InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz, double dt) {
+InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz,
+                             double dt) {
   const char* who = "model-based compensator";
   require_step(dt, who);
   require(lead_order >= 1 && lead_order <= 3,
@@ -283,9 +286,10 @@ InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rol
   require(num.back() != 0.0 && den.back() != 0.0,
           std::string(who) + ": plant has a zero or a pole at s = 0 (no finite static gain)");
   for (const auto& zero : polynomial_roots(num)) {
-    require(zero.real() < 0.0, std::string(who) + ": plant zero at s = " + format_number(zero.real()) +
-                                   (zero.imag() != 0.0 ? " + " + format_number(zero.imag()) + "i" : "") +
-                                   " is not in the left half-plane: its inverse would be unstable");
+    require(zero.real() < 0.0,
+            std::string(who) + ": plant zero at s = " + format_number(zero.real()) +
+                (zero.imag() != 0.0 ? " + " + format_number(zero.imag()) + "i" : "") +
+                " is not in the left half-plane: its inverse would be unstable");
   }
   const int relative_degree = static_cast<int>(den.size() - num.size());
   const int filter_order = relative_degree + lead_order;
@@ -335,7 +339,8 @@ std::unique_ptr<Compensator> ModelBasedInverse::clone() const {
 
 std::string ModelBasedInverse::describe() const {
   return "model-based inverse(" + plant_.describe() + ", lead " + format_number(lead_ * 1e3) +
-         " ms order " + std::to_string(lead_order_) + ", roll-off " + format_number(rolloff_hz_) + " Hz)";
+         " ms order " + std::to_string(lead_order_) + ", roll-off " + format_number(rolloff_hz_) +
+         " Hz)";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -365,13 +370,15 @@ void require_identity_start(const AtsParameters& p,
                       {"a1", p.a1, 0.0, p.a1_bounds},
                       {"a2", p.a2, 0.0, p.a2_bounds}};
   for (const auto& c : coefficients) {
-    require(c.initial == c.identity,
-            label + ": " + c.name + " must start at " +
-                format_number(c.identity) + " (the nominal design), got " + format_number(c.initial));
+    require(c.initial == c.identity, label + ": " + c.name + " must start at " +
+                                         format_number(c.identity) + " (the nominal design), got " +
+                                         format_number(c.initial));
     require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
                 c.bounds.min <= c.identity && c.identity <= c.bounds.max,
-            label + ": " + c.name + "_bounds must have min < max and "
-                "contain " + format_number(c.identity) + " (the nominal design), got [" +
+            label + ": " + c.name +
+                "_bounds must have min < max and "
+                "contain " +
+                format_number(c.identity) + " (the nominal design), got [" +
                 format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
   }
 }
@@ -444,8 +451,9 @@ PlantModel plant_from_stages(const google::protobuf::RepeatedPtrField<config::De
                              const std::string& where) {
   using K = config::DelayStage::KindCase;
   PlantModel plant;
-  require(!stages.empty(), where + " is empty: a model-based compensator needs the actuator model "
-                                   "(e.g. from `rths identify --design-compensator`)");
+  require(!stages.empty(), where +
+                               " is empty: a model-based compensator needs the actuator model "
+                               "(e.g. from `rths identify --design-compensator`)");
   for (int i = 0; i < stages.size(); ++i) {
     const config::DelayStage& stage = stages[i];
     const std::string at = where + "[" + std::to_string(i) + "]";
@@ -474,8 +482,9 @@ PlantModel plant_from_stages(const google::protobuf::RepeatedPtrField<config::De
         break;
       }
       default:
-        fail(at + ": only shift, first_order, transfer_function and benchmark stages describe an "
-                  "invertible actuator model");
+        fail(at +
+             ": only shift, first_order, transfer_function and benchmark stages describe an "
+             "invertible actuator model");
     }
   }
   return plant;
@@ -496,8 +505,9 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
     }
     case K::kAdaptiveTimeSeries: {
       const auto& a = c.adaptive_time_series();
-      require(a.window() > 0.0 && finite(a.window()),
-              where + ".adaptive_time_series.window must be > 0 s, got " + format_number(a.window()));
+      require(
+          a.window() > 0.0 && finite(a.window()),
+          where + ".adaptive_time_series.window must be > 0 s, got " + format_number(a.window()));
       // Bounds and initial values do not depend on dt: checked here as the block checks them.
       require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
               where + ".adaptive_time_series.derivative_cutoff must be >= 0 Hz");
@@ -518,8 +528,9 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
         const std::string at = where + ".model_based.adaptive_correction";
         require(a.window() > 0.0 && finite(a.window()),
                 at + ".window must be > 0 s, got " + format_number(a.window()));
-        require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
-                at + ".derivative_cutoff must be >= 0 Hz, got " + format_number(a.derivative_cutoff()));
+        require(
+            a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
+            at + ".derivative_cutoff must be >= 0 Hz, got " + format_number(a.derivative_cutoff()));
         const AtsParameters correction = correction_parameters(a);
         require_identity_start(correction, at);
         check_ats_coefficients(correction, at);

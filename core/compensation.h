@@ -26,8 +26,8 @@
 //     The coefficients are the least-squares fit of the actuator's inverse over a moving window of
 //     W samples of past commands and measurements:  u_c ~ a0 x_m + a1 x_m' + a2 x_m'' (the same
 //     difference operators as on the target, so a1 and a2 are the ones the command law needs).
-//     Before the fit both u_c and x_m pass the same first-order low-pass (cut-off f_c; the filter on
-//     the derivatives): a linear relation with constant coefficients survives an identical
+//     Before the fit both u_c and x_m pass the same first-order low-pass (cut-off f_c; the filter
+//     on the derivatives): a linear relation with constant coefficients survives an identical
 //     filter on both sides, so the filter does not bias the coefficients. The fit is refreshed
 //     every step once the window is full and its (column-scaled) normal matrix is well conditioned;
 //     each coefficient is then clamped into its bounds [min_i, max_i].
@@ -112,12 +112,12 @@ struct CoefficientBounds {
 };
 
 struct AtsParameters {
-  double window = 1.0;                     // s of samples in the least-squares fit
-  double a0 = 1.0, a1 = 0.0, a2 = 0.0;     // initial coefficients (-, s, s^2)
-  CoefficientBounds a0_bounds{0.5, 2.0};   // -
-  CoefficientBounds a1_bounds{0.0, 0.1};   // s
+  double window = 1.0;                       // s of samples in the least-squares fit
+  double a0 = 1.0, a1 = 0.0, a2 = 0.0;       // initial coefficients (-, s, s^2)
+  CoefficientBounds a0_bounds{0.5, 2.0};     // -
+  CoefficientBounds a1_bounds{0.0, 0.1};     // s
   CoefficientBounds a2_bounds{-0.01, 0.01};  // s^2
-  double derivative_cutoff = 0.0;          // Hz, low-pass before differentiating; 0 = none
+  double derivative_cutoff = 0.0;            // Hz, low-pass before differentiating; 0 = none
 };
 
 class AdaptiveTimeSeries final : public Compensator {
@@ -142,8 +142,8 @@ class AdaptiveTimeSeries final : public Compensator {
   AtsParameters p_;
   double dt_, filter_decay_;
   double a_[3];
-  double target_[4] = {0, 0, 0, 0};                 // x_t[k], x_t[k-1], ..
-  double filtered_measured_[4] = {0, 0, 0, 0};      // low-passed x_m, newest first
+  double target_[4] = {0, 0, 0, 0};             // x_t[k], x_t[k-1], ..
+  double filtered_measured_[4] = {0, 0, 0, 0};  // low-passed x_m, newest first
   double filtered_command_ = 0.0, last_command_ = 0.0;
   bool has_previous_ = false;  // a command was sent, so in.measured answers it
   std::size_t samples_seen_ = 0, updates_ = 0;
@@ -184,7 +184,7 @@ class ModelBasedInverse final : public Compensator {
   // The continuous compensator C(s), highest power first (for stability analysis and tests).
   const std::vector<double>& numerator() const { return numerator_; }
   const std::vector<double>& denominator() const { return denominator_; }
-  double total_lead() const { return lead_; }  // L above (s)
+  double total_lead() const { return lead_; }                      // L above (s)
   const TransferFunctionStage& filter() const { return filter_; }  // the Tustin-discretised C
 
  private:

@@ -62,7 +62,8 @@ std::vector<double> tustin_polynomial(const std::vector<double>& ascending, int 
       const std::vector<double> plus = binomial_power(order - k, 1.0);
       for (std::size_t i = 0; i < minus.size(); ++i) {
         for (std::size_t j = 0; j < plus.size(); ++j) {
-          result[i + j] += ascending[static_cast<std::size_t>(k)] * scale_power * minus[i] * plus[j];
+          result[i + j] +=
+              ascending[static_cast<std::size_t>(k)] * scale_power * minus[i] * plus[j];
         }
       }
     }
@@ -202,10 +203,14 @@ TransferFunctionStage::TransferFunctionStage(std::vector<double> numerator,
                                 std::to_string(denominator.size() - 1) + ")");
   }
   for (double c : numerator) {
-    if (!std::isfinite(c)) throw std::invalid_argument("TransferFunctionStage '" + label_ + "': non-finite numerator coefficient");
+    if (!std::isfinite(c))
+      throw std::invalid_argument("TransferFunctionStage '" + label_ +
+                                  "': non-finite numerator coefficient");
   }
   for (double c : denominator) {
-    if (!std::isfinite(c)) throw std::invalid_argument("TransferFunctionStage '" + label_ + "': non-finite denominator coefficient");
+    if (!std::isfinite(c))
+      throw std::invalid_argument("TransferFunctionStage '" + label_ +
+                                  "': non-finite denominator coefficient");
   }
   // Ascending powers of s make the low-frequency expansion direct.
   std::vector<double> num_up(numerator.rbegin(), numerator.rend());
@@ -224,8 +229,7 @@ TransferFunctionStage::TransferFunctionStage(std::vector<double> numerator,
     throw std::invalid_argument("TransferFunctionStage '" + label_ + "': numerator is zero");
   }
   const double den_term = den_up.size() > 1 ? den_up[1] / den_up[0] : 0.0;
-  const double num_term =
-      lowest + 1 < num_up.size() ? num_up[lowest + 1] / num_up[lowest] : 0.0;
+  const double num_term = lowest + 1 < num_up.size() ? num_up[lowest + 1] / num_up[lowest] : 0.0;
   group_delay_ = den_term - num_term;
 
   const int order = static_cast<int>(den_up.size()) - 1;
@@ -291,18 +295,23 @@ ContinuousTransferFunction benchmark_actuator_transfer_function(const BenchmarkP
   return {{q.gain * a1b0}, std::move(den)};
 }
 
-DiscreteCoefficients tustin(const std::vector<double>& numerator, const std::vector<double>& denominator,
-                            double dt) {
+DiscreteCoefficients tustin(const std::vector<double>& numerator,
+                            const std::vector<double>& denominator, double dt) {
   if (numerator.empty() || denominator.empty() || numerator.size() > denominator.size())
-    throw std::invalid_argument("Tustin: a proper transfer function needs deg num <= deg den (both non-empty)");
-  if (denominator.front() == 0.0) throw std::invalid_argument("Tustin: the denominator's leading coefficient is 0");
+    throw std::invalid_argument(
+        "Tustin: a proper transfer function needs deg num <= deg den (both non-empty)");
+  if (denominator.front() == 0.0)
+    throw std::invalid_argument("Tustin: the denominator's leading coefficient is 0");
   if (!(dt > 0)) throw std::invalid_argument("Tustin: the step must be > 0 s");
   const std::vector<double> num_up(numerator.rbegin(), numerator.rend());
   const std::vector<double> den_up(denominator.rbegin(), denominator.rend());
   const int order = static_cast<int>(den_up.size()) - 1;
-  DiscreteCoefficients out{tustin_polynomial(num_up, order, dt), tustin_polynomial(den_up, order, dt)};
+  DiscreteCoefficients out{tustin_polynomial(num_up, order, dt),
+                           tustin_polynomial(den_up, order, dt)};
   const double a0 = out.a[0];
-  if (a0 == 0.0) throw std::invalid_argument("Tustin: a pole at z = infinity (D(2/dt) = 0); choose another step");
+  if (a0 == 0.0)
+    throw std::invalid_argument(
+        "Tustin: a pole at z = infinity (D(2/dt) = 0); choose another step");
   for (double& c : out.b) c /= a0;
   for (double& c : out.a) c /= a0;
   return out;
@@ -374,7 +383,8 @@ DelayTrace read_delay_trace(const std::filesystem::path& path) {
                                   std::to_string(row.values.size()));
     }
     const double time = row.values[0], delay = row.values[1];
-    if (delay < 0.0) throw std::invalid_argument(where + "delay " + format_number(delay) + " is negative");
+    if (delay < 0.0)
+      throw std::invalid_argument(where + "delay " + format_number(delay) + " is negative");
     if (!trace.time.empty() && !(time > trace.time.back())) {
       throw std::invalid_argument(where + "time " + format_number(time) +
                                   " does not increase (previous " +
@@ -383,7 +393,8 @@ DelayTrace read_delay_trace(const std::filesystem::path& path) {
     trace.time.push_back(time);
     trace.delay.push_back(delay);
   }
-  if (trace.time.empty()) throw std::invalid_argument(path.string() + ": delay trace has no samples");
+  if (trace.time.empty())
+    throw std::invalid_argument(path.string() + ": delay trace has no samples");
   return trace;
 }
 

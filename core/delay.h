@@ -211,8 +211,8 @@ ContinuousTransferFunction benchmark_actuator_transfer_function(const BenchmarkP
 struct DiscreteCoefficients {
   std::vector<double> b, a;
 };
-DiscreteCoefficients tustin(const std::vector<double>& numerator, const std::vector<double>& denominator,
-                            double dt);
+DiscreteCoefficients tustin(const std::vector<double>& numerator,
+                            const std::vector<double>& denominator, double dt);
 
 class JitterShift final : public DelayStage {
  public:

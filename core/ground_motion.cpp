@@ -52,7 +52,7 @@ void parse_values(std::string line, const std::filesystem::path& path, int line_
       std::string token(start);
       token = token.substr(0, token.find_first_of(" \t"));
       throw std::invalid_argument(text_position(path, line_number) + "'" + token +
-                               "' is not a finite number");
+                                  "' is not a finite number");
     }
     out.push_back(value);
   }
@@ -76,7 +76,7 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
   At2Header header;
   const auto fail = [&](const std::string& why) {
     return std::invalid_argument(text_position(path, 4) + why + " in AT2 header line '" + line +
-                              "' (expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT')");
+                                 "' (expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT')");
   };
   const std::size_t npts_at = text.find("NPTS");
   if (npts_at == std::string::npos) throw fail("no NPTS");
@@ -127,7 +127,7 @@ GroundMotion read_at2(const std::filesystem::path& path) {
   for (int i = 1; i <= 3; ++i) {
     if (!read_line(in, line)) {
       throw std::invalid_argument(path.string() + ": AT2 header ends at line " + std::to_string(i) +
-                               " (expected 4 header lines)");
+                                  " (expected 4 header lines)");
     }
   }
   if (!read_line(in, line)) {
@@ -148,17 +148,15 @@ GroundMotion read_at2(const std::filesystem::path& path) {
     if (motion.acceleration.size() != before) last_value_line = line_number;
     if (motion.acceleration.size() > static_cast<std::size_t>(header.npts)) {
       throw std::invalid_argument(text_position(path, line_number) + "more values than NPTS = " +
-                               std::to_string(header.npts) + " declared on line 4");
+                                  std::to_string(header.npts) + " declared on line 4");
     }
   }
   if (motion.acceleration.size() < static_cast<std::size_t>(header.npts)) {
-    throw std::invalid_argument(path.string() + ": found " +
-                             std::to_string(motion.acceleration.size()) + " values but NPTS = " +
-                             std::to_string(header.npts) + " (line 4); " +
-                             std::to_string(header.npts -
-                                            static_cast<long>(motion.acceleration.size())) +
-                             " missing after line " + std::to_string(last_value_line) +
-                             " — truncated file?");
+    throw std::invalid_argument(
+        path.string() + ": found " + std::to_string(motion.acceleration.size()) +
+        " values but NPTS = " + std::to_string(header.npts) + " (line 4); " +
+        std::to_string(header.npts - static_cast<long>(motion.acceleration.size())) +
+        " missing after line " + std::to_string(last_value_line) + " — truncated file?");
   }
   for (double& a : motion.acceleration) a *= kGravity;
   return motion;
@@ -180,14 +178,15 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
       columns = fields.size();
       first_data_line = line_number;
       if (columns != 1 && columns != 2) {
-        throw std::invalid_argument(text_position(path, line_number) + "expected 1 column (acceleration) or "
-                                 "2 (time, acceleration), found " + std::to_string(columns));
+        throw std::invalid_argument(text_position(path, line_number) +
+                                    "expected 1 column (acceleration) or "
+                                    "2 (time, acceleration), found " +
+                                    std::to_string(columns));
       }
     } else if (fields.size() != columns) {
-      throw std::invalid_argument(text_position(path, line_number) + "found " +
-                               std::to_string(fields.size()) + " columns, line " +
-                               std::to_string(first_data_line) + " had " +
-                               std::to_string(columns));
+      throw std::invalid_argument(
+          text_position(path, line_number) + "found " + std::to_string(fields.size()) +
+          " columns, line " + std::to_string(first_data_line) + " had " + std::to_string(columns));
     }
     if (columns == 2) {
       if (times.size() >= 2) {
@@ -195,9 +194,9 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
         const double step = fields[0] - times.back();
         // 1e-3 relative: text files round their times, but a missing or doubled sample is caught.
         if (std::abs(step - first_step) > 1e-3 * first_step) {
-          throw std::invalid_argument(text_position(path, line_number) + "time step " + std::to_string(step) +
-                                   " s differs from the first step " +
-                                   std::to_string(first_step) + " s (non-uniform time)");
+          throw std::invalid_argument(text_position(path, line_number) + "time step " +
+                                      std::to_string(step) + " s differs from the first step " +
+                                      std::to_string(first_step) + " s (non-uniform time)");
         }
       } else if (times.size() == 1 && !(fields[0] > times[0])) {
         throw std::invalid_argument(text_position(path, line_number) + "time does not increase");
@@ -213,8 +212,9 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
   motion.name = path.stem().string();
   if (columns == 2) {
     if (times.size() < 2) {
-      throw std::invalid_argument(path.string() + ": two-column file needs at least two samples to "
-                               "define its time step");
+      throw std::invalid_argument(path.string() +
+                                  ": two-column file needs at least two samples to "
+                                  "define its time step");
     }
     motion.dt = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
     if (dt > 0.0 && std::abs(dt - motion.dt) > 1e-3 * motion.dt) {

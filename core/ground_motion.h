@@ -23,8 +23,9 @@ struct GroundMotion {
 
 // Reads a PEER AT2 file: 4 header lines, the 4th holding NPTS and DT in either of the forms
 // "NPTS=  1559, DT=   .0200 SEC" or "7814    0.0050    NPTS, DT", then values in g in any
-// whitespace-separated layout (8F10.5, 5E15.7, ...). Throws std::invalid_argument (bad input) naming the file and
-// line when the header is malformed, a value does not parse, or fewer than NPTS values are found.
+// whitespace-separated layout (8F10.5, 5E15.7, ...). Throws std::invalid_argument (bad input)
+// naming the file and line when the header is malformed, a value does not parse, or fewer than NPTS
+// values are found.
 GroundMotion read_at2(const std::filesystem::path& path);
 
 // Reads plain text: one column (acceleration; needs dt > 0) or two (time, acceleration; uniform

@@ -20,10 +20,12 @@ std::string to_string(IntegratorKind kind) {
 }
 
 IntegratorKind integrator_from_string(const std::string& name) {
-  if (name == "explicit-newmark" || name == "newmark-explicit") return IntegratorKind::kExplicitNewmark;
+  if (name == "explicit-newmark" || name == "newmark-explicit")
+    return IntegratorKind::kExplicitNewmark;
   if (name == "central-difference" || name == "cd") return IntegratorKind::kCentralDifference;
   if (name == "chen-ricles" || name == "cr") return IntegratorKind::kChenRicles;
-  if (name == "newmark-average-acceleration" || name == "implicit-newmark" || name == "average-acceleration") {
+  if (name == "newmark-average-acceleration" || name == "implicit-newmark" ||
+      name == "average-acceleration") {
     return IntegratorKind::kNewmarkAverageAcceleration;
   }
   if (name == "alpha-os" || name == "alphaos") return IntegratorKind::kAlphaOS;
@@ -45,15 +47,17 @@ double stability_limit(IntegratorKind kind) {
   return 0.0;
 }
 
-bool is_explicit(IntegratorKind kind) { return kind != IntegratorKind::kNewmarkAverageAcceleration; }
+bool is_explicit(IntegratorKind kind) {
+  return kind != IntegratorKind::kNewmarkAverageAcceleration;
+}
 
 void check_stability(IntegratorKind kind, double omega_max, double dt, bool allow_unstable) {
   if (!(dt > 0)) throw std::invalid_argument("time step dt must be > 0 s");
   const double limit = stability_limit(kind);
   if (omega_max * dt > limit && !allow_unstable) {
     std::ostringstream msg;
-    msg << to_string(kind) << " is unstable for omega_max * dt = " << omega_max * dt
-        << " > " << limit << " (omega_max = " << omega_max << " rad/s, dt = " << dt
+    msg << to_string(kind) << " is unstable for omega_max * dt = " << omega_max * dt << " > "
+        << limit << " (omega_max = " << omega_max << " rad/s, dt = " << dt
         << " s); use dt <= " << limit / omega_max << " s, another integrator, or allow_unstable";
     throw std::invalid_argument(msg.str());
   }
@@ -206,8 +210,9 @@ class NewmarkAverageAcceleration final : public Integrator {
       u_next += du;
       if (du.cwiseAbs().maxCoeff() <= 1e-13 * scale) break;
       if (iteration == 50) {
-        throw std::runtime_error("newmark-average-acceleration: Newton did not converge in 50 "
-                                 "iterations");
+        throw std::runtime_error(
+            "newmark-average-acceleration: Newton did not converge in 50 "
+            "iterations");
       }
     }
     a_next = c1 * (u_next - u_ - dt_ * v_) - a_;
@@ -225,11 +230,13 @@ class AlphaOperatorSplitting final : public ExplicitBase {
   AlphaOperatorSplitting(const StructuralModel& model, double dt, double alpha)
       : ExplicitBase(model, dt), alpha_(alpha) {
     if (!(alpha >= 2.0 / 3.0 && alpha <= 1.0)) {
-      throw std::invalid_argument("alpha-os: alpha_os must be in [2/3, 1], got " + std::to_string(alpha));
+      throw std::invalid_argument("alpha-os: alpha_os must be in [2/3, 1], got " +
+                                  std::to_string(alpha));
     }
     beta_ = 0.25 * (2.0 - alpha) * (2.0 - alpha);
     gamma_ = 1.5 - alpha;
-    effective_inverse_ = (m_ + (alpha_ * gamma_ * dt_) * c_ + (alpha_ * beta_ * dt_ * dt_) * k0_).inverse();
+    effective_inverse_ =
+        (m_ + (alpha_ * gamma_ * dt_) * c_ + (alpha_ * beta_ * dt_ * dt_) * k0_).inverse();
     const int n = model.dofs();
     predictor_ = previous_predictor_ = previous_force_ = previous_load_ = Vec::Zero(n);
   }
@@ -246,7 +253,8 @@ class AlphaOperatorSplitting final : public ExplicitBase {
     const Vec& r = restoring.trial(predictor_, v_next_, nullptr);
     restoring.commit();
     rhs_ = (1.0 - alpha_) * previous_load_ + alpha_ * load_next;
-    rhs_.noalias() -= (1.0 - alpha_) * (c_ * v_ + previous_force_ + k0_ * (u_ - previous_predictor_));
+    rhs_.noalias() -=
+        (1.0 - alpha_) * (c_ * v_ + previous_force_ + k0_ * (u_ - previous_predictor_));
     rhs_.noalias() -= alpha_ * (c_ * v_next_ + r);
     a_next_.noalias() = effective_inverse_ * rhs_;
     u_ = predictor_ + (beta_ * dt_ * dt_) * a_next_;
@@ -267,10 +275,10 @@ class AlphaOperatorSplitting final : public ExplicitBase {
 // over 2000 steps at omega dt = 1000); rho_inf < 1 damps those modes.
 class KRAlphaExplicit final : public ExplicitBase {
  public:
-  KRAlphaExplicit(const StructuralModel& model, double dt, double rho)
-      : ExplicitBase(model, dt) {
+  KRAlphaExplicit(const StructuralModel& model, double dt, double rho) : ExplicitBase(model, dt) {
     if (!(rho >= 0.0 && rho <= 1.0)) {
-      throw std::invalid_argument("kr-alpha: rho_infinity must be in [0, 1], got " + std::to_string(rho));
+      throw std::invalid_argument("kr-alpha: rho_infinity must be in [0, 1], got " +
+                                  std::to_string(rho));
     }
     alpha_m_ = (2.0 - rho) / (1.0 + rho);
     alpha_f_ = 1.0 / (1.0 + rho);

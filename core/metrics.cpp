@@ -47,7 +47,8 @@ double peak_abs(std::span<const double> x) {
 double median(std::vector<double> values) {
   if (values.empty()) throw std::invalid_argument("median: empty input");
   const std::size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle), values.end());
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle),
+                   values.end());
   const double upper = values[middle];
   if (values.size() % 2 == 1) return upper;
   // Even length: the mean of the two middle values; the lower one is the largest below `middle`.
@@ -103,8 +104,7 @@ double j1_delay(std::span<const double> target, std::span<const double> measured
   if (!(dt > 0.0)) throw std::invalid_argument("j1_delay: dt must be > 0");
   if (!(max_lag >= 0.0)) throw std::invalid_argument("j1_delay: max_lag must be >= 0");
   const long n = static_cast<long>(target.size());
-  const long max_steps =
-      std::min<long>(n - 1, static_cast<long>(std::ceil(max_lag / dt - 1e-9)));
+  const long max_steps = std::min<long>(n - 1, static_cast<long>(std::ceil(max_lag / dt - 1e-9)));
   const auto correlation = [&](long lag) {
     const long begin = std::max<long>(0, -lag), end = std::min<long>(n, n - lag);
     double cross = 0.0, target_energy = 0.0, measured_energy = 0.0;

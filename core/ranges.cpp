@@ -31,10 +31,11 @@ bool Range::contains(double value) const {
 }
 
 std::string Range::text() const {
-  return with_unit(std::string(min_open ? "(" : "[") + format_number(min) + ", " +
-                       (integer ? std::to_string(static_cast<long long>(max)) : format_number(max)) +
-                       (max_open ? ")" : "]"),
-                   unit);
+  return with_unit(
+      std::string(min_open ? "(" : "[") + format_number(min) + ", " +
+          (integer ? std::to_string(static_cast<long long>(max)) : format_number(max)) +
+          (max_open ? ")" : "]"),
+      unit);
 }
 
 Range range_of(Quantity quantity) {
@@ -62,11 +63,13 @@ std::string range_violation(Quantity quantity, double value, std::string_view na
   const Range range = range_of(quantity);
   if (range.contains(value)) return "";
   std::string message = (name.empty() ? "" : std::string(name) + " = ") +
-                        with_unit(format_number(value), range.unit) +
-                        " is outside " + range.text() + " (" + std::string(range.what) + ")";
+                        with_unit(format_number(value), range.unit) + " is outside " +
+                        range.text() + " (" + std::string(range.what) + ")";
   if (quantity == Quantity::kLag && value > range.max) {
-    message += "; lags are in seconds (14 ms is 0.014); allow_long_lag: true in the study allows "
-               "up to " + format_number(range_of(Quantity::kLongLag).max) + " s";
+    message +=
+        "; lags are in seconds (14 ms is 0.014); allow_long_lag: true in the study allows "
+        "up to " +
+        format_number(range_of(Quantity::kLongLag).max) + " s";
   }
   return message;
 }

@@ -8,8 +8,8 @@
 namespace rths::core {
 namespace {
 
-std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0,
-                   double d = 0.0, double e = 0.0) {
+std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0, double d = 0.0,
+                   double e = 0.0) {
   char buffer[160];
   std::snprintf(buffer, sizeof buffer, pattern, a, b, c, d, e);
   return buffer;
@@ -42,9 +42,9 @@ BilinearKinematic::BilinearKinematic(double k0, double yield_drift, double post_
   require(positive_finite(k0), format("BilinearKinematic: k0 must be > 0, got %g", k0));
   require(positive_finite(yield_drift),
           format("BilinearKinematic: yield drift must be > 0, got %g", yield_drift));
-  require(post_yield_ratio >= 0.0 && post_yield_ratio <= 1.0,
-          format("BilinearKinematic: post-yield ratio b must be in [0, 1], got %g",
-                 post_yield_ratio));
+  require(
+      post_yield_ratio >= 0.0 && post_yield_ratio <= 1.0,
+      format("BilinearKinematic: post-yield ratio b must be in [0, 1], got %g", post_yield_ratio));
 }
 
 // Elastic predictor from the committed state, then return to the band b k0 u +/- (1 - b) fy.
@@ -156,8 +156,13 @@ InertialSpecimen::InertialSpecimen(std::unique_ptr<RestoringForceModel> model, d
 }
 
 InertialSpecimen::InertialSpecimen(const InertialSpecimen& other)
-    : model_(other.model_->clone()), m_(other.m_), c_(other.c_), h_(other.h_), x1_(other.x1_),
-      x2_(other.x2_), trial_(other.trial_) {}
+    : model_(other.model_->clone()),
+      m_(other.m_),
+      c_(other.c_),
+      h_(other.h_),
+      x1_(other.x1_),
+      x2_(other.x2_),
+      trial_(other.trial_) {}
 
 ForceState InertialSpecimen::trial(double drift) {
   trial_ = drift;
@@ -183,8 +188,8 @@ std::unique_ptr<RestoringForceModel> InertialSpecimen::clone() const {
 }
 
 std::string InertialSpecimen::describe() const {
-  return format("specimen(m = %g kg, c = %g N s/m, h = %g s, ", m_, c_, h_) + model_->describe() + ")";
+  return format("specimen(m = %g kg, c = %g N s/m, h = %g s, ", m_, c_, h_) + model_->describe() +
+         ")";
 }
 
 }  // namespace rths::core
-

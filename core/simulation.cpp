@@ -10,7 +10,8 @@ void SimulationResult::truncate(std::size_t steps) {
   if (steps >= time.size()) return;
   const auto rows = static_cast<Eigen::Index>(steps);
   time.resize(steps);
-  for (Mat* history : {&displacement, &velocity, &acceleration, &command, &realised, &measured_force}) {
+  for (Mat* history :
+       {&displacement, &velocity, &acceleration, &command, &realised, &measured_force}) {
     history->conservativeResize(rows, Eigen::NoChange);
   }
 }

@@ -23,7 +23,8 @@ struct SdofParameters {
 SdofParameters sdof_parameters(double period, double zeta, double alpha) {
   if (!(period > 0)) throw std::invalid_argument("stability: period must be > 0 s");
   if (zeta < 0) throw std::invalid_argument("stability: zeta must be >= 0");
-  if (!(alpha >= 0 && alpha <= 1)) throw std::invalid_argument("stability: alpha must be in [0, 1]");
+  if (!(alpha >= 0 && alpha <= 1))
+    throw std::invalid_argument("stability: alpha must be in [0, 1]");
   const double omega = 2.0 * std::numbers::pi / period;
   const double k = omega * omega;  // unit mass: the result does not depend on it
   return {1.0, 2.0 * zeta * omega, (1.0 - alpha) * k, alpha * k};
@@ -50,8 +51,7 @@ bool explicit_sdof_step(IntegratorKind kind, const SdofParameters& p, double dt,
       a_next = (-p.c * v_next - r(u_next)) / p.m;
       return true;
     }
-    default:
-      return false;
+    default: return false;
   }
 }
 
@@ -133,7 +133,8 @@ ContinuousStability continuous_critical_delay(double period, double zeta, double
   if (discriminant >= 0) {
     const double root = std::sqrt(discriminant);
     for (double x : {(-qb + root) / (2.0 * qa), (-qb - root) / (2.0 * qa)}) {
-      if (x > 0 && std::find(omega_squared.begin(), omega_squared.end(), x) == omega_squared.end()) {
+      if (x > 0 &&
+          std::find(omega_squared.begin(), omega_squared.end(), x) == omega_squared.end()) {
         omega_squared.push_back(x);
       }
     }
@@ -263,7 +264,8 @@ std::complex<double> polynomial_at(const std::vector<double>& p, std::complex<do
 }  // namespace
 
 LinearBlock shift_block(double delay, double dt) {
-  if (!(delay >= 0.0) || !(dt > 0.0)) throw std::invalid_argument("stability: shift needs delay >= 0 and dt > 0");
+  if (!(delay >= 0.0) || !(dt > 0.0))
+    throw std::invalid_argument("stability: shift needs delay >= 0 and dt > 0");
   // u(t - delay) with delay = (n + w) dt: (1 - w) u[k - n] + w u[k - n - 1].
   const double steps = delay / dt;
   int n = static_cast<int>(std::floor(steps + 1e-9));
@@ -271,8 +273,10 @@ LinearBlock shift_block(double delay, double dt) {
   if (w < 1e-9) w = 0.0;
   std::vector<double> taps(static_cast<std::size_t>(w > 0.0 ? n + 1 : n), 0.0);
   double d = 0.0;
-  if (n == 0) d = 1.0 - w;
-  else taps[static_cast<std::size_t>(n) - 1] += 1.0 - w;
+  if (n == 0)
+    d = 1.0 - w;
+  else
+    taps[static_cast<std::size_t>(n) - 1] += 1.0 - w;
   if (w > 0.0) taps[static_cast<std::size_t>(n)] += w;
   return fir_block(d, taps);
 }
@@ -294,7 +298,10 @@ LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::Dela
         break;
       }
       case K::kTransferFunction:
-      case K::kBenchmark: block = filter_block(static_cast<const TransferFunctionStage&>(*make_delay_stage(stage, dt, {}))); break;
+      case K::kBenchmark:
+        block = filter_block(
+            static_cast<const TransferFunctionStage&>(*make_delay_stage(stage, dt, {})));
+        break;
       default: not_linear("delay stage {" + stage.ShortDebugString() + "}");
     }
     loop = series(loop, series(block, gain_block(stage_gain(stage))));
@@ -316,7 +323,8 @@ FrequencyResponse frozen_ats_response(const AdaptiveTimeSeries& a) {
   return [a0, a1, a2](double w) { return std::complex<double>(a0 - a2 * w * w, a1 * w); };
 }
 
-FrequencyResponse rational_response(const std::vector<double>& num, const std::vector<double>& den) {
+FrequencyResponse rational_response(const std::vector<double>& num,
+                                    const std::vector<double>& den) {
   return [num, den](double w) {
     const std::complex<double> s(0.0, w);
     return polynomial_at(num, s) / polynomial_at(den, s);
@@ -334,8 +342,9 @@ std::string frozen_coefficients(const config::Compensation& compensation, double
   if (!adaptive) return "";
   std::ostringstream out;
   out << "time-varying (its coefficients adapt online): analysed with them frozen at their initial "
-         "values a0 = " << adaptive->a0() << ", a1 = " << adaptive->a1() * 1e3 << " ms, a2 = "
-      << adaptive->a2() << " s^2";
+         "values a0 = "
+      << adaptive->a0() << ", a1 = " << adaptive->a1() * 1e3 << " ms, a2 = " << adaptive->a2()
+      << " s^2";
   return out.str();
 }
 
@@ -344,15 +353,19 @@ LinearBlock compensator_block(const config::Compensation& compensation, double d
   if (const auto* p = dynamic_cast<const PolynomialExtrapolation*>(block.get())) {
     const auto& c = p->weights();
     const int order = static_cast<int>(c.size()) - 1;
-    const int spacing = compensation.polynomial().spacing() > 0.0
-                            ? static_cast<int>(std::llround(compensation.polynomial().spacing() / dt))
-                            : 1;
+    const int spacing =
+        compensation.polynomial().spacing() > 0.0
+            ? static_cast<int>(std::llround(compensation.polynomial().spacing() / dt))
+            : 1;
     std::vector<double> taps(static_cast<std::size_t>(order * spacing), 0.0);
-    for (int j = 1; j <= order; ++j) taps[static_cast<std::size_t>(j * spacing - 1)] = c[static_cast<std::size_t>(j)];
+    for (int j = 1; j <= order; ++j)
+      taps[static_cast<std::size_t>(j * spacing - 1)] = c[static_cast<std::size_t>(j)];
     return fir_block(c[0], taps);
   }
-  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get())) return frozen_ats_block(*a, dt);
-  if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get())) return filter_block(m->filter());
+  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get()))
+    return frozen_ats_block(*a, dt);
+  if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get()))
+    return filter_block(m->filter());
   if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
     return series(frozen_ats_block(am->correction(), dt), filter_block(am->inverse().filter()));
   }
@@ -373,7 +386,8 @@ FrequencyResponse compensator_response(const config::Compensation& compensation,
   std::shared_ptr<Compensator> block = make_compensator(compensation, dt, "compensation");
   if (const auto* p = dynamic_cast<const PolynomialExtrapolation*>(block.get())) {
     const std::vector<double> c = p->weights();
-    const double h = (compensation.polynomial().spacing() > 0.0 ? compensation.polynomial().spacing() : dt);
+    const double h =
+        (compensation.polynomial().spacing() > 0.0 ? compensation.polynomial().spacing() : dt);
     return [c, h](double w) {
       std::complex<double> sum = 0.0;
       for (std::size_t j = 0; j < c.size(); ++j) {
@@ -382,13 +396,15 @@ FrequencyResponse compensator_response(const config::Compensation& compensation,
       return sum;
     };
   }
-  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get())) return frozen_ats_response(*a);
+  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get()))
+    return frozen_ats_response(*a);
   if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get())) {
     return rational_response(m->numerator(), m->denominator());
   }
   if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
     const FrequencyResponse correction = frozen_ats_response(am->correction());
-    const FrequencyResponse inverse = rational_response(am->inverse().numerator(), am->inverse().denominator());
+    const FrequencyResponse inverse =
+        rational_response(am->inverse().numerator(), am->inverse().denominator());
     return [correction, inverse](double w) { return correction(w) * inverse(w); };
   }
   throw std::invalid_argument("stability: unknown compensator");
@@ -411,8 +427,8 @@ Vec advance_loop(IntegratorKind kind, const SdofParameters& p, double dt, const 
     return p.k_numerical * u_plus + p.k_experimental * measured;
   };
   if (!explicit_sdof_step(kind, p, dt, u, v, a, force, u_next, v_next, a_next))
-    throw std::invalid_argument("stability: the compensated loop needs an explicit integrator, not " +
-                                to_string(kind));
+    throw std::invalid_argument(
+        "stability: the compensated loop needs an explicit integrator, not " + to_string(kind));
   next[0] = u_next;
   next[1] = v_next;
   next[2] = a_next;
@@ -423,7 +439,8 @@ double loop_spectral_radius(IntegratorKind kind, const SdofParameters& p, double
                             const LinearBlock& loop) {
   const int size = 3 + loop.states();
   Mat amplification(size, size);
-  for (int j = 0; j < size; ++j) amplification.col(j) = advance_loop(kind, p, dt, loop, Vec::Unit(size, j));
+  for (int j = 0; j < size; ++j)
+    amplification.col(j) = advance_loop(kind, p, dt, loop, Vec::Unit(size, j));
   Eigen::EigenSolver<Mat> solver(amplification, false);
   return solver.eigenvalues().cwiseAbs().maxCoeff();
 }
@@ -435,7 +452,8 @@ CompensatedStability compensated_stability(
     const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
     const config::Compensation* compensation, double max_extra_delay, int branches) {
   if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
-  if (!(max_extra_delay >= 0)) throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
+  if (!(max_extra_delay >= 0))
+    throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
   const SdofParameters p = sdof_parameters(period, zeta, alpha);
   LinearBlock chain = actuator_block(actuator, dt);
   if (compensation) chain = series(compensator_block(*compensation, dt), chain);
@@ -465,10 +483,13 @@ CompensatedStability compensated_stability(
 
   // Continuous crossings of the extra delay.
   const FrequencyResponse plant = actuator_response(actuator);
-  const FrequencyResponse shaper = compensation ? compensator_response(*compensation, dt)
-                                                : FrequencyResponse([](double) { return std::complex<double>(1.0); });
+  const FrequencyResponse shaper =
+      compensation ? compensator_response(*compensation, dt)
+                   : FrequencyResponse([](double) { return std::complex<double>(1.0); });
   const auto h = [&](double w) { return plant(w) * shaper(w); };
-  const auto q = [&](double w) { return std::complex<double>(p.k_numerical - p.m * w * w, p.c * w); };
+  const auto q = [&](double w) {
+    return std::complex<double>(p.k_numerical - p.m * w * w, p.c * w);
+  };
   const auto f = [&](double w) { return std::abs(q(w)) - p.k_experimental * std::abs(h(w)); };
   if (p.k_experimental > 0.0) {
     const double w_min = 1e-3 * std::sqrt((p.k_numerical + p.k_experimental) / p.m);
@@ -521,7 +542,8 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
   if (extra_delay > 0.0) chain.add(std::make_unique<TimeShift>(extra_delay, dt));
   if (compensation) chain.set_compensator(make_compensator(*compensation, dt, "compensation"));
   setup.delays.push_back(std::move(chain));
-  GroundMotion pulse{"pulse", dt, std::vector<double>(static_cast<std::size_t>(duration / dt), 0.0)};
+  GroundMotion pulse{"pulse", dt,
+                     std::vector<double>(static_cast<std::size_t>(duration / dt), 0.0)};
   pulse.acceleration[1] = 100.0;
   SimulationOptions options;
   options.divergence_bound = 1e12;
@@ -549,21 +571,31 @@ std::string CriticalDelayCheck::describe() const {
   out.precision(3);
   out << "lag " << lag * 1e3 << " ms";
   const auto limit = critical();
-  const std::string discrete_text = !discrete_skipped.empty() ? "discrete check skipped: " + discrete_skipped
-                                   : "discrete none up to " + std::to_string(discrete_searched_steps) + " steps";
+  const std::string discrete_text =
+      !discrete_skipped.empty()
+          ? "discrete check skipped: " + discrete_skipped
+          : "discrete none up to " + std::to_string(discrete_searched_steps) + " steps";
   if (!limit) {
     out << ": stable for every delay (continuous; " << discrete_text << ")";
     return out.str();
   }
   out << " against a critical delay of " << *limit * 1e3 << " ms (continuous ";
-  if (continuous) out << *continuous * 1e3 << " ms"; else out << "none";
+  if (continuous)
+    out << *continuous * 1e3 << " ms";
+  else
+    out << "none";
   out << ", ";
-  if (discrete) out << "discrete " << *discrete * 1e3 << " ms"; else out << discrete_text;
+  if (discrete)
+    out << "discrete " << *discrete * 1e3 << " ms";
+  else
+    out << discrete_text;
   out << "; mode " << governing_mode << ", T = " << governing_period << " s, experimental fraction "
       << governing_fraction << "): ";
   const double m = margin();
-  if (m < 0) out << "PAST it by " << -m * 100.0 << " %";
-  else out << m * 100.0 << " % below it";
+  if (m < 0)
+    out << "PAST it by " << -m * 100.0 << " %";
+  else
+    out << m * 100.0 << " % below it";
   return out.str();
 }
 
@@ -576,7 +608,8 @@ CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         IntegratorKind kind, double dt, double lag) {
   const int dofs = model.dofs();
   if (static_cast<int>(experimental_storey_stiffness.size()) != dofs) {
-    throw std::invalid_argument("critical delay check: one experimental stiffness per storey expected");
+    throw std::invalid_argument(
+        "critical delay check: one experimental stiffness per storey expected");
   }
   // K_e of a shear building from the storeys' experimental stiffnesses.
   Mat k_experimental;
@@ -585,12 +618,14 @@ CriticalDelayCheck check_critical_delay(const StructuralModel& model,
   return check_modal_critical_delay(model, k_experimental, kind, dt, lag);
 }
 
-CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
-                                        IntegratorKind kind, double dt, double lag) {
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
+                                              const Mat& k_experimental, IntegratorKind kind,
+                                              double dt, double lag) {
   if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
   const int dofs = model.dofs();
   if (k_experimental.rows() != dofs || k_experimental.cols() != dofs)
-    throw std::invalid_argument("critical delay check: K_e must be n x n for the structure's n DOFs");
+    throw std::invalid_argument(
+        "critical delay check: K_e must be n x n for the structure's n DOFs");
   const Modes modes = modal_analysis(model.mass, model.stiffness);
   CriticalDelayCheck check;
   check.lag = lag;
@@ -611,7 +646,8 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, cons
     const double alpha = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
     const double period = 2.0 * std::numbers::pi / omega;
     const ContinuousStability continuous = continuous_critical_delay(period, zeta, alpha);
-    if (continuous.critical_delay && (!check.continuous || *continuous.critical_delay < *check.continuous)) {
+    if (continuous.critical_delay &&
+        (!check.continuous || *continuous.critical_delay < *check.continuous)) {
       check.continuous = continuous.critical_delay;
       check.governing_mode = i + 1;
       check.governing_period = period;
@@ -628,8 +664,10 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, cons
     const int steps = std::min(CriticalDelayCheck::kMaxDiscreteSteps,
                                std::max(lag_steps + 1, static_cast<int>(std::ceil(reach))));
     check.discrete_searched_steps = std::max(check.discrete_searched_steps, steps);
-    const DiscreteStability discrete = discrete_critical_delay(kind, period, zeta, alpha, dt, steps);
-    if (discrete.first_unstable_delay && (!check.discrete || *discrete.first_unstable_delay < *check.discrete)) {
+    const DiscreteStability discrete =
+        discrete_critical_delay(kind, period, zeta, alpha, dt, steps);
+    if (discrete.first_unstable_delay &&
+        (!check.discrete || *discrete.first_unstable_delay < *check.discrete)) {
       check.discrete = discrete.first_unstable_delay;
     }
   }

@@ -58,9 +58,9 @@ ContinuousStability continuous_critical_delay(double period, double zeta, double
                                               int branches = 3);
 
 struct DiscreteStability {
-  std::optional<int> first_unstable_steps;    // n; empty if none up to max_steps
-  std::optional<double> first_unstable_delay; // n dt, s
-  std::vector<double> spectral_radius;        // for n = 0..max_steps (until first unstable + 1)
+  std::optional<int> first_unstable_steps;     // n; empty if none up to max_steps
+  std::optional<double> first_unstable_delay;  // n dt, s
+  std::vector<double> spectral_radius;         // for n = 0..max_steps (until first unstable + 1)
 };
 
 DiscreteStability discrete_critical_delay(IntegratorKind kind, double period, double zeta,
@@ -80,7 +80,8 @@ LinearBlock shift_block(double delay, double dt);  // TimeShift, interpolated
 LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
                            double dt);
 // Adaptive blocks (ATS, model-based with adaptive_correction) with their coefficients frozen at
-// their initial values; the adapted model-based is the frozen correction in series with the inverse.
+// their initial values; the adapted model-based is the frozen correction in series with the
+// inverse.
 LinearBlock compensator_block(const config::Compensation& compensation, double dt);
 // "" for a time-invariant compensator; else what the frozen-coefficient analysis froze.
 std::string frozen_coefficients(const config::Compensation& compensation, double dt);
@@ -136,17 +137,17 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
 // taken n steps late (discrete_critical_delay, searched up to kMaxDiscreteSteps).
 struct CriticalDelayCheck {
   static constexpr int kMaxDiscreteSteps = 120;
-  double lag = 0.0;                          // s, the tau checked
-  std::optional<double> continuous;          // s; empty: stable for every delay
-  std::optional<double> discrete;            // s; empty: none found up to the searched steps
-  int discrete_searched_steps = 0;           // n searched for the discrete limit
+  double lag = 0.0;                  // s, the tau checked
+  std::optional<double> continuous;  // s; empty: stable for every delay
+  std::optional<double> discrete;    // s; empty: none found up to the searched steps
+  int discrete_searched_steps = 0;   // n searched for the discrete limit
   // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
   // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
   std::string discrete_skipped;
-  std::string assumed;                       // what the check assumed (modal approximation...)
-  int governing_mode = 1;                    // 1-based mode with the smallest continuous delay
-  double governing_period = 0.0;             // s
-  double governing_fraction = 0.0;           // alpha of that mode
+  std::string assumed;              // what the check assumed (modal approximation...)
+  int governing_mode = 1;           // 1-based mode with the smallest continuous delay
+  double governing_period = 0.0;    // s
+  double governing_fraction = 0.0;  // alpha of that mode
   // The smaller of the two limits (continuous, discrete); empty when neither exists.
   std::optional<double> critical() const;
   bool past() const { return critical() && lag >= *critical(); }
@@ -165,7 +166,8 @@ CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         IntegratorKind kind, double dt, double lag);
 // The same with K_e given as a matrix (N/m, n x n): a structure given by matrices, whose
 // experimental parts sit at DOFs (HybridPartition::experimental_stiffness()).
-CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model, const Mat& k_experimental,
-                                        IntegratorKind kind, double dt, double lag);
+CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
+                                              const Mat& k_experimental, IntegratorKind kind,
+                                              double dt, double lag);
 
 }  // namespace rths::core

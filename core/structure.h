@@ -16,10 +16,10 @@ using Vec = Eigen::VectorXd;
 using Mat = Eigen::MatrixXd;
 
 struct StructuralModel {
-  Mat mass;       // kg
-  Mat damping;    // N s/m
-  Mat stiffness;  // N/m (initial, linear)
-  Vec influence;  // iota: 1 for every floor under a horizontal ground motion
+  Mat mass;                              // kg
+  Mat damping;                           // N s/m
+  Mat stiffness;                         // N/m (initial, linear)
+  Vec influence;                         // iota: 1 for every floor under a horizontal ground motion
   std::vector<double> storey_stiffness;  // N/m, as given
 
   int dofs() const { return static_cast<int>(mass.rows()); }

@@ -18,11 +18,13 @@ namespace {
 void apply_damping(StructuralModel& model, const config::Damping& damping, bool has_matrix) {
   const bool ratio = damping.has_rayleigh() || damping.modal_zeta() > 0;
   if (has_matrix && ratio)
-    fail("structure.damping", "structure.matrices.damping is given: give the matrix or the ratios, not both");
+    fail("structure.damping",
+         "structure.matrices.damping is given: give the matrix or the ratios, not both");
   if (damping.has_rayleigh()) {
     const auto& r = damping.rayleigh();
-    model.damping = rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
-                                     r.mode_j() == 0 ? 2 : r.mode_j());
+    model.damping =
+        rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
+                         r.mode_j() == 0 ? 2 : r.mode_j());
   } else if (!has_matrix) {
     model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
   }
@@ -41,15 +43,18 @@ Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralMode
     fail(field + ".dof", std::to_string(spec.dof()) + " is outside 1.." + std::to_string(n));
   const int d = spec.dof() - 1;
   if (!(spec.stiffness() > 0 && spec.stiffness() <= model.stiffness(d, d)))
-    fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be in (0, K(" + std::to_string(d + 1) +
-                                   ", " + std::to_string(d + 1) + ") = " + format_number(model.stiffness(d, d)) + "]");
+    fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be in (0, K(" +
+                                   std::to_string(d + 1) + ", " + std::to_string(d + 1) +
+                                   ") = " + format_number(model.stiffness(d, d)) + "]");
   if (!(spec.mass() >= 0 && spec.mass() < model.mass(d, d)))
-    fail(field + ".mass", format_number(spec.mass()) + " kg must be in [0, M(" + std::to_string(d + 1) + ", " +
-                              std::to_string(d + 1) + ") = " + format_number(model.mass(d, d)) + ")");
+    fail(field + ".mass", format_number(spec.mass()) + " kg must be in [0, M(" +
+                              std::to_string(d + 1) + ", " + std::to_string(d + 1) +
+                              ") = " + format_number(model.mass(d, d)) + ")");
   Specimen out;
   out.mass = spec.mass();
   if (spec.has_zeta()) {
-    if (!(spec.zeta() >= 0 && range_of(Quantity::kDampingRatio).contains(spec.zeta()) && spec.mass() > 0))
+    if (!(spec.zeta() >= 0 && range_of(Quantity::kDampingRatio).contains(spec.zeta()) &&
+          spec.mass() > 0))
       fail(field + ".zeta", format_number(spec.zeta()) + " must be in [0, 1] with a mass > 0");
     out.damping = 2.0 * spec.zeta() * spec.mass() * std::sqrt(spec.stiffness() / spec.mass());
   } else {
@@ -59,13 +64,15 @@ Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralMode
   }
   out.model = make_storey_factory(spec.model())(spec.stiffness());
   if (out.mass > 0 || out.damping > 0)
-    out.model = std::make_unique<InertialSpecimen>(std::move(out.model), out.mass, out.damping, servo_period);
+    out.model = std::make_unique<InertialSpecimen>(std::move(out.model), out.mass, out.damping,
+                                                   servo_period);
   return out;
 }
 
 }  // namespace
 
-StructuralModel matrix_structure(const config::Structure& structure, const std::filesystem::path& base_dir) {
+StructuralModel matrix_structure(const config::Structure& structure,
+                                 const std::filesystem::path& base_dir) {
   const config::MatrixStructure& spec = structure.matrices();
   StructuralModel model = read_matrix_structure(spec, base_dir, "structure.matrices");
   apply_damping(model, structure.damping(), spec.has_damping());

@@ -27,7 +27,8 @@ Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
   if (count == 0) fail(field, "no values and no file");
   const int rows = spec.rows() > 0 ? spec.rows() : count;
   if (spec.rows() < 0 || count % rows != 0)
-    fail(field, std::to_string(count) + " values do not fill " + std::to_string(spec.rows()) + " rows");
+    fail(field,
+         std::to_string(count) + " values do not fill " + std::to_string(spec.rows()) + " rows");
   const int cols = count / rows;
   Mat m(rows, cols);
   for (int i = 0; i < rows; ++i)
@@ -77,7 +78,8 @@ std::string mat_variables(mat_t* file) {
   return names.empty() ? "none" : names;
 }
 
-Mat mat_matrix(const std::filesystem::path& path, const std::string& variable, const std::string& where) {
+Mat mat_matrix(const std::filesystem::path& path, const std::string& variable,
+               const std::string& where) {
   if (variable.empty()) fail(where, "a .mat file needs `variable`, the name of the matrix in it");
   std::unique_ptr<mat_t, MatFileCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) fail(where, "cannot be opened as a MATLAB file");
@@ -110,8 +112,10 @@ MarketHeader market_header(const std::string& line, const std::string& where) {
     for (char& c : *s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (banner != "%%MatrixMarket" || object != "matrix")
     fail(where, "line 1 is not a '%%MatrixMarket matrix ...' header");
-  if (format != "coordinate" && format != "array") fail(where, "format '" + format + "' is not coordinate or array");
-  if (field != "real" && field != "integer") fail(where, "field '" + field + "' is not real or integer");
+  if (format != "coordinate" && format != "array")
+    fail(where, "format '" + format + "' is not coordinate or array");
+  if (field != "real" && field != "integer")
+    fail(where, "field '" + field + "' is not real or integer");
   if (symmetry != "general" && symmetry != "symmetric")
     fail(where, "symmetry '" + symmetry + "' is not general or symmetric");
   return {format == "coordinate", symmetry == "symmetric"};
@@ -123,7 +127,8 @@ std::vector<double> market_numbers(const std::string& line, int line_no, const s
   std::string token;
   while (in >> token) {
     const auto value = parse_finite(token);
-    if (!value) fail(where + ":" + std::to_string(line_no), "'" + token + "' is not a finite number");
+    if (!value)
+      fail(where + ":" + std::to_string(line_no), "'" + token + "' is not a finite number");
     out.push_back(*value);
   }
   return out;
@@ -131,7 +136,8 @@ std::vector<double> market_numbers(const std::string& line, int line_no, const s
 
 int market_index(double value, Eigen::Index size, int line_no, const std::string& where) {
   if (value != std::floor(value) || value < 1 || value > static_cast<double>(size))
-    fail(where + ":" + std::to_string(line_no), "index " + format_number(value) + " is outside 1.." + std::to_string(size));
+    fail(where + ":" + std::to_string(line_no),
+         "index " + format_number(value) + " is outside 1.." + std::to_string(size));
   return static_cast<int>(value) - 1;
 }
 
@@ -147,21 +153,27 @@ Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
   Eigen::Index filled = 0, entries = 0;
   while (std::getline(in, line)) {
     ++line_no;
-    if (line.empty() || line[0] == '%' || line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (line.empty() || line[0] == '%' || line.find_first_not_of(" \t\r") == std::string::npos)
+      continue;
     const std::vector<double> v = market_numbers(line, line_no, where);
     if (size.empty()) {
-      if (v.size() != (header.coordinate ? 3u : 2u) || v[0] < 1 || v[1] < 1 || v[0] > 1e5 || v[1] > 1e5)
-        fail(where + ":" + std::to_string(line_no), "the size line must be 'rows cols" + std::string(header.coordinate ? " entries'" : "'") + " (each 1..100000)");
+      if (v.size() != (header.coordinate ? 3u : 2u) || v[0] < 1 || v[1] < 1 || v[0] > 1e5 ||
+          v[1] > 1e5)
+        fail(where + ":" + std::to_string(line_no),
+             "the size line must be 'rows cols" +
+                 std::string(header.coordinate ? " entries'" : "'") + " (each 1..100000)");
       size = v;
       m = Mat::Zero(static_cast<Eigen::Index>(v[0]), static_cast<Eigen::Index>(v[1]));
       entries = header.coordinate ? static_cast<Eigen::Index>(v[2])
                                   : (header.symmetric ? m.rows() * (m.rows() + 1) / 2 : m.size());
       continue;
     }
-    if (filled >= entries) fail(where + ":" + std::to_string(line_no), "more entries than the size line declares");
+    if (filled >= entries)
+      fail(where + ":" + std::to_string(line_no), "more entries than the size line declares");
     if (header.coordinate) {
       if (v.size() != 3) fail(where + ":" + std::to_string(line_no), "an entry is 'row col value'");
-      const int i = market_index(v[0], m.rows(), line_no, where), j = market_index(v[1], m.cols(), line_no, where);
+      const int i = market_index(v[0], m.rows(), line_no, where),
+                j = market_index(v[1], m.cols(), line_no, where);
       m(i, j) = v[2];
       if (header.symmetric) m(j, i) = v[2];
     } else {
@@ -180,7 +192,8 @@ Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
   }
   if (size.empty()) fail(where, "has no size line");
   if (filled != entries)
-    fail(where, "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
+    fail(where,
+         "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
   return m;
 }
 
@@ -193,8 +206,10 @@ Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
     const TextRow& row = columns.rows[i];
     if (row.values.size() != cols)
       fail(text_position(path, row.line) + where, "row has " + std::to_string(row.values.size()) +
-                                                      " values, the first has " + std::to_string(cols));
-    for (std::size_t j = 0; j < cols; ++j) m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row.values[j];
+                                                      " values, the first has " +
+                                                      std::to_string(cols));
+    for (std::size_t j = 0; j < cols; ++j)
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row.values[j];
   }
   return m;
 }
@@ -204,7 +219,8 @@ Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
 Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
                 const std::string& field) {
   if (spec.file().empty()) {
-    if (!spec.variable().empty()) fail(field, "`variable` names a .mat variable but no file is given");
+    if (!spec.variable().empty())
+      fail(field, "`variable` names a .mat variable but no file is given");
     return inline_matrix(spec, field);
   }
   if (spec.values_size() > 0) fail(field, "give values or a file, not both");
@@ -224,7 +240,9 @@ namespace {
 
 void check_square(const Mat& m, Eigen::Index n, const std::string& where) {
   if (m.rows() != m.cols()) fail(where, "is " + shape(m.rows(), m.cols()) + ", not square");
-  if (m.rows() != n) fail(where, "is " + shape(m.rows(), m.cols()) + ", the structure has " + std::to_string(n) + " DOFs");
+  if (m.rows() != n)
+    fail(where,
+         "is " + shape(m.rows(), m.cols()) + ", the structure has " + std::to_string(n) + " DOFs");
   if (!m.allFinite()) fail(where, "holds a value that is not finite");
 }
 
@@ -242,14 +260,15 @@ void check_symmetric(const Mat& m, const std::string& where) {
 
 // Smallest eigenvalue against `floor` (relative to the largest |eigenvalue|).
 void check_definite(const Mat& m, bool strictly, const std::string& where) {
-  const Eigen::SelfAdjointEigenSolver<Mat> solver(0.5 * (m + m.transpose()), Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<Mat> solver(0.5 * (m + m.transpose()),
+                                                  Eigen::EigenvaluesOnly);
   const double largest = solver.eigenvalues().cwiseAbs().maxCoeff();
   const double smallest = solver.eigenvalues().minCoeff();
   const double floor = 1e-9 * largest;
   if (strictly ? !(smallest > floor) : smallest < -floor) {
     std::ostringstream why;
-    why << "is not positive " << (strictly ? "definite" : "semi-definite") << ": smallest eigenvalue "
-        << smallest << " (largest " << largest << ")";
+    why << "is not positive " << (strictly ? "definite" : "semi-definite")
+        << ": smallest eigenvalue " << smallest << " (largest " << largest << ")";
     fail(where, why.str());
   }
 }
@@ -267,10 +286,11 @@ void check_structural_matrices(const StructuralModel& model, const std::string& 
   check_symmetric(model.damping, field + ".damping");
   check_definite(model.mass, true, field + ".mass");
   check_definite(model.stiffness, false, field + ".stiffness");
-  if (model.damping.cwiseAbs().maxCoeff() > 0) check_definite(model.damping, false, field + ".damping");
+  if (model.damping.cwiseAbs().maxCoeff() > 0)
+    check_definite(model.damping, false, field + ".damping");
   if (model.influence.size() != n)
-    fail(field + ".influence", "has " + std::to_string(model.influence.size()) + " entries, the structure " +
-                                   std::to_string(n) + " DOFs");
+    fail(field + ".influence", "has " + std::to_string(model.influence.size()) +
+                                   " entries, the structure " + std::to_string(n) + " DOFs");
   if (!model.influence.allFinite()) fail(field + ".influence", "holds a value that is not finite");
 }
 
@@ -283,7 +303,8 @@ StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
   model.mass = read_matrix(spec.mass(), base_dir, field + ".mass");
   const Eigen::Index n = model.mass.rows();
   model.stiffness = read_matrix(spec.stiffness(), base_dir, field + ".stiffness");
-  model.damping = spec.has_damping() ? read_matrix(spec.damping(), base_dir, field + ".damping") : Mat::Zero(n, n);
+  model.damping = spec.has_damping() ? read_matrix(spec.damping(), base_dir, field + ".damping")
+                                     : Mat::Zero(n, n);
   if (spec.has_influence()) {
     const Mat iota = read_matrix(spec.influence(), base_dir, field + ".influence");
     if (iota.cols() != 1 && iota.rows() != 1)

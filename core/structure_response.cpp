@@ -34,7 +34,9 @@ LinearResponse exact_linear_response(const StructuralModel& model, const GroundM
     out.displacement.row(k) = x.head(n).transpose();
     out.velocity.row(k) = x.tail(n).transpose();
     out.acceleration.row(k) =
-        (-mass.solve(model.stiffness * x.head(n) + model.damping * x.tail(n)) - model.influence * ag).transpose();
+        (-mass.solve(model.stiffness * x.head(n) + model.damping * x.tail(n)) -
+         model.influence * ag)
+            .transpose();
     if (k + 1 == samples) break;
     const double slope = (motion.acceleration[static_cast<std::size_t>(k + 1)] - ag) / dt;
     next.noalias() = phi * x + g0 * ag + g1 * slope;

@@ -3,9 +3,9 @@
 #include "core/compensation.h"
 #include "core/ranges.h"
 #include "core/structure_config.h"
-#include "core/tracking.h"
 #include "core/text_columns.h"
 #include "core/text_format.h"
+#include "core/tracking.h"
 
 #include <cmath>
 #include <fstream>
@@ -26,14 +26,15 @@ void require(bool ok, const std::string& source, const std::string& message) {
 }
 
 // A number against its range rule (core/ranges.h), the message prefixed with the source.
-void require_in(Quantity quantity, double value, const std::string& field, const std::string& source) {
+void require_in(Quantity quantity, double value, const std::string& field,
+                const std::string& source) {
   const std::string message = range_violation(quantity, value, field);
   if (!message.empty()) fail(source, message);
 }
 
 // A lag in seconds (core::check_lag); a time constant must also be > 0.
-void require_lag(double value, const std::string& field, const std::string& source, bool zero_allowed,
-                 bool allow_long_lag) {
+void require_lag(double value, const std::string& field, const std::string& source,
+                 bool zero_allowed, bool allow_long_lag) {
   require(zero_allowed || value > 0, source, field + " must be > 0 s, got " + format_number(value));
   require_in(allow_long_lag ? Quantity::kLongLag : Quantity::kLag, value, field, source);
 }
@@ -42,25 +43,37 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
                           const std::string& source, bool long_lag) {
   using K = config::DelayStage::KindCase;
   require(stage.amplitude_gain() >= 0 && stage.amplitude_gain() <= 10, source,
-          where + ".amplitude_gain must be in [0, 10] (0 means 1), got " + format_number(stage.amplitude_gain()));
+          where + ".amplitude_gain must be in [0, 10] (0 means 1), got " +
+              format_number(stage.amplitude_gain()));
   switch (stage.kind_case()) {
-    case K::kShift: require_lag(stage.shift().delay(), where + ".shift.delay", source, true, long_lag); break;
-    case K::kEq1: require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true, long_lag); break;
-    case K::kEq1Lag: require_lag(stage.eq1_lag().delay(), where + ".eq1_lag.delay", source, true, long_lag); break;
+    case K::kShift:
+      require_lag(stage.shift().delay(), where + ".shift.delay", source, true, long_lag);
+      break;
+    case K::kEq1:
+      require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true, long_lag);
+      break;
+    case K::kEq1Lag:
+      require_lag(stage.eq1_lag().delay(), where + ".eq1_lag.delay", source, true, long_lag);
+      break;
     case K::kFirstOrder:
-      require_lag(stage.first_order().time_constant(), where + ".first_order.time_constant", source, false, long_lag);
+      require_lag(stage.first_order().time_constant(), where + ".first_order.time_constant", source,
+                  false, long_lag);
       break;
     case K::kTransferFunction:
       require(!stage.transfer_function().denominator().empty(), source,
               where + ".transfer_function.denominator is empty");
       break;
     case K::kJitter:
-      require_lag(stage.jitter().mean_delay(), where + ".jitter.mean_delay", source, true, long_lag);
+      require_lag(stage.jitter().mean_delay(), where + ".jitter.mean_delay", source, true,
+                  long_lag);
       require_lag(stage.jitter().std_dev(), where + ".jitter.std_dev", source, true, long_lag);
       break;
-    case K::kTrace: require(!stage.trace().path().empty(), source, where + ".trace.path is empty"); break;
+    case K::kTrace:
+      require(!stage.trace().path().empty(), source, where + ".trace.path is empty");
+      break;
     case K::kBenchmark: break;
-    case K::kTrackingLoop: break;  // checked where it is built (core::TrackingLoop), naming the field
+    case K::kTrackingLoop:
+      break;  // checked where it is built (core::TrackingLoop), naming the field
     case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   }
 }
@@ -89,12 +102,14 @@ void validate_structure(const config::Structure& structure, const std::string& s
     const config::Sdof& sdof = structure.sdof();
     require(sdof.mass() >= 0, source, "structure.sdof.mass must be > 0 kg");
     require(sdof.stiffness() >= 0, source, "structure.sdof.stiffness must be > 0 N/m");
-    if (sdof.period() != 0) require_in(Quantity::kPeriod, sdof.period(), "structure.sdof.period", source);
+    if (sdof.period() != 0)
+      require_in(Quantity::kPeriod, sdof.period(), "structure.sdof.period", source);
     require(sdof.period() > 0 || (sdof.mass() > 0 && sdof.stiffness() > 0), source,
             "structure.sdof needs a period, or both mass and stiffness");
   } else if (structure.has_shear_building()) {
     const auto& building = structure.shear_building();
-    require(building.storey_mass_size() > 0, source, "structure.shear_building.storey_mass is empty");
+    require(building.storey_mass_size() > 0, source,
+            "structure.shear_building.storey_mass is empty");
     require(building.storey_mass_size() == building.storey_stiffness_size(), source,
             "structure.shear_building: storey_mass and storey_stiffness differ in length");
   } else if (!structure.has_matrices()) {
@@ -121,7 +136,8 @@ void validate_cases(const config::Study& study, const std::string& source) {
     }
     for (int j = 0; j < c.compensation_size(); ++j) {
       try {
-        validate_compensation(c.compensation(j), where + " compensation[" + std::to_string(j) + "]");
+        validate_compensation(c.compensation(j),
+                              where + " compensation[" + std::to_string(j) + "]");
       } catch (const std::invalid_argument& e) {
         fail(source, e.what());
       }
@@ -130,21 +146,26 @@ void validate_cases(const config::Study& study, const std::string& source) {
 }
 
 void validate_sweep(const config::Study& study, const std::string& source) {
-  for (double period : study.sweep().periods()) require_in(Quantity::kPeriod, period, "sweep.periods", source);
-  for (double delay : study.sweep().delays()) require_lag(delay, "sweep.delays", source, true, study.allow_long_lag());
+  for (double period : study.sweep().periods())
+    require_in(Quantity::kPeriod, period, "sweep.periods", source);
+  for (double delay : study.sweep().delays())
+    require_lag(delay, "sweep.delays", source, true, study.allow_long_lag());
   for (double dt : study.sweep().dts()) require_in(Quantity::kStep, dt, "sweep.dts", source);
-  for (double k : study.sweep().stiffnesses()) require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
+  for (double k : study.sweep().stiffnesses())
+    require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
   for (double a : study.sweep().experimental_fractions()) {
     require_in(Quantity::kFraction, a, "sweep.experimental_fractions", source);
   }
 }
 
 // 0 means "the default" for these fields; any other value must be inside its range.
-void require_unset_or_in(Quantity quantity, double value, const std::string& field, const std::string& source) {
+void require_unset_or_in(Quantity quantity, double value, const std::string& field,
+                         const std::string& source) {
   if (value != 0) require_in(quantity, value, field, source);
 }
 
-void validate_deployment(const config::Deployment& d, bool allow_long_lag, const std::string& source) {
+void validate_deployment(const config::Deployment& d, bool allow_long_lag,
+                         const std::string& source) {
   const std::string at = "deployment.";
   require_in(Quantity::kDdsDomain, d.domain_id(), at + "domain_id", source);
   for (int i = 0; i < d.nodes_size(); ++i) {
@@ -156,17 +177,23 @@ void validate_deployment(const config::Deployment& d, bool allow_long_lag, const
   }
   require_unset_or_in(Quantity::kTimeout, d.start_timeout(), at + "start_timeout", source);
   require_unset_or_in(Quantity::kTimeout, d.heartbeat_period(), at + "heartbeat_period", source);
-  require_unset_or_in(Quantity::kTimeout, d.liveliness_timeout(), at + "liveliness_timeout", source);
+  require_unset_or_in(Quantity::kTimeout, d.liveliness_timeout(), at + "liveliness_timeout",
+                      source);
   require_unset_or_in(Quantity::kTimeout, d.step_timeout(), at + "step_timeout", source);
-  require_unset_or_in(Quantity::kFraction, d.feedback_wait_fraction(), at + "feedback_wait_fraction", source);
+  require_unset_or_in(Quantity::kFraction, d.feedback_wait_fraction(),
+                      at + "feedback_wait_fraction", source);
   require_unset_or_in(Quantity::kLag, d.spin_margin(), at + "spin_margin", source);
   if (d.max_overrun_fraction() >= 0)
-    require_in(Quantity::kFraction, d.max_overrun_fraction(), at + "max_overrun_fraction (< 0: off)", source);
+    require_in(Quantity::kFraction, d.max_overrun_fraction(),
+               at + "max_overrun_fraction (< 0: off)", source);
   if (d.min_answer_fraction() >= 0)
-    require_in(Quantity::kFraction, d.min_answer_fraction(), at + "min_answer_fraction (< 0: off)", source);
+    require_in(Quantity::kFraction, d.min_answer_fraction(), at + "min_answer_fraction (< 0: off)",
+               source);
   require_unset_or_in(Quantity::kCount, d.max_missed_answers(), at + "max_missed_answers", source);
-  require_unset_or_in(Quantity::kCount, d.command_watchdog_periods(), at + "command_watchdog_periods", source);
-  if (d.pin_loop() || d.loop_cpu() > 0) require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);
+  require_unset_or_in(Quantity::kCount, d.command_watchdog_periods(),
+                      at + "command_watchdog_periods", source);
+  if (d.pin_loop() || d.loop_cpu() > 0)
+    require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);
   require(d.limits().max_displacement() >= 0 && d.limits().max_velocity() >= 0, source,
           "deployment.limits.max_displacement and max_velocity must be >= 0 (0 = no limit)");
 }
@@ -185,20 +212,26 @@ void validate_study(const config::Study& study, const std::string& source) {
   require(study.has_structure(), source, "structure is missing");
   validate_structure(study.structure(), source);
   require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
-          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " + format_number(study.servo().rate()));
-  require_unset_or_in(Quantity::kStep, study.integrator().dt(), "integrator.dt (0 = the record's step)", source);
+          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " +
+              format_number(study.servo().rate()));
+  require_unset_or_in(Quantity::kStep, study.integrator().dt(),
+                      "integrator.dt (0 = the record's step)", source);
   const auto& sub = study.substructuring();
-  require_in(Quantity::kFraction, sub.experimental_fraction(), "substructuring.experimental_fraction", source);
+  require_in(Quantity::kFraction, sub.experimental_fraction(),
+             "substructuring.experimental_fraction", source);
   require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
           "substructuring: give experimental_fraction or experimental_storeys, not both");
   if (study.structure().has_matrices()) {
     require(sub.experimental_storeys().empty() && sub.experimental_fraction() == 0, source,
-            "substructuring: a structure given by matrices is split at experimental_dofs, not by storeys");
+            "substructuring: a structure given by matrices is split at experimental_dofs, not by "
+            "storeys");
   } else {
     require(sub.experimental_dofs().empty(), source,
-            "substructuring.experimental_dofs needs structure.matrices (a shear building is split by storeys)");
+            "substructuring.experimental_dofs needs structure.matrices (a shear building is split "
+            "by storeys)");
   }
-  require_unset_or_in(Quantity::kMotionScale, study.motion().scale(), "motion.scale (0 means 1)", source);
+  require_unset_or_in(Quantity::kMotionScale, study.motion().scale(), "motion.scale (0 means 1)",
+                      source);
   require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
   validate_cases(study, source);
   validate_sweep(study, source);
@@ -224,7 +257,8 @@ std::string motion_units_name(const config::GroundMotion& motion) {
   return motion.has_column_units() ? units_name(motion.column_units()) : "g";
 }
 
-GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir) {
+GroundMotion load_motion(const config::GroundMotion& motion,
+                         const std::filesystem::path& base_dir) {
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
@@ -234,13 +268,16 @@ GroundMotion load_motion(const config::GroundMotion& motion, const std::filesyst
   if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
   const std::string what = "motion '" + path.string() + "'";
   if (at2 && motion.has_column_units() && motion.column_units() != config::GroundMotion::G) {
-    throw std::invalid_argument(what + " is a PEER AT2 file, whose values are in g by its format; "
-                                "motion.column_units (--motion-units) " + units_name(motion.column_units()) +
-                                " contradicts it");
+    throw std::invalid_argument(what +
+                                " is a PEER AT2 file, whose values are in g by its format; "
+                                "motion.column_units (--motion-units) " +
+                                units_name(motion.column_units()) + " contradicts it");
   }
   if (!at2 && !motion.has_column_units()) {
-    throw std::invalid_argument(what + " is a columns file, whose numbers carry no unit: give "
-                                "motion.column_units (G, M_PER_S2 or CM_PER_S2; --motion-units g|m/s2|cm/s2)");
+    throw std::invalid_argument(
+        what +
+        " is a columns file, whose numbers carry no unit: give "
+        "motion.column_units (G, M_PER_S2 or CM_PER_S2; --motion-units g|m/s2|cm/s2)");
   }
   double to_si = kGravity;
   if (motion.column_units() == config::GroundMotion::M_PER_S2) to_si = 1.0;
@@ -256,7 +293,8 @@ GroundMotion load_motion(const config::GroundMotion& motion, const std::filesyst
     throw std::invalid_argument(message.str());
   }
   if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
-  if (motion.scale() > 0 && motion.scale() != 1.0) record = scaled(std::move(record), motion.scale());
+  if (motion.scale() > 0 && motion.scale() != 1.0)
+    record = scaled(std::move(record), motion.scale());
   return truncated(std::move(record), motion.duration());
 }
 
@@ -311,12 +349,14 @@ StoreyModelFactory make_storey_factory(const config::RestoringForce& model) {
       const double uy = model.bilinear().yield_displacement();
       const double b = model.bilinear().post_yield_ratio();
       if (!(uy > 0)) throw std::invalid_argument("bilinear.yield_displacement must be > 0 m");
-      if (!(b >= 0 && b <= 1)) throw std::invalid_argument("bilinear.post_yield_ratio must be in [0, 1]");
+      if (!(b >= 0 && b <= 1))
+        throw std::invalid_argument("bilinear.post_yield_ratio must be in [0, 1]");
       return [uy, b](double k) { return std::make_unique<BilinearKinematic>(k, uy, b); };
     }
     case config::RestoringForce::kBoucWen: {
       const auto& bw = model.bouc_wen();
-      if (!(bw.yield_displacement() > 0)) throw std::invalid_argument("bouc_wen.yield_displacement must be > 0 m");
+      if (!(bw.yield_displacement() > 0))
+        throw std::invalid_argument("bouc_wen.yield_displacement must be > 0 m");
       const double n = bw.n() == 0 ? 1.0 : bw.n();
       const double beta = bw.beta() == 0 ? 0.5 : bw.beta();
       const double uy = bw.yield_displacement(), alpha = bw.alpha();
@@ -336,7 +376,8 @@ StructuralModel make_structure(const config::Structure& structure,
     double stiffness = 0.0;
     if (sdof.period() > 0 && sdof.stiffness() > 0) {
       stiffness = sdof.stiffness();
-      mass = stiffness * sdof.period() * sdof.period() / (4.0 * std::numbers::pi * std::numbers::pi);
+      mass =
+          stiffness * sdof.period() * sdof.period() / (4.0 * std::numbers::pi * std::numbers::pi);
     } else if (sdof.period() > 0) {
       const double omega = 2.0 * std::numbers::pi / sdof.period();
       stiffness = mass * omega * omega;
@@ -352,8 +393,9 @@ StructuralModel make_structure(const config::Structure& structure,
   const config::Damping& damping = structure.damping();
   if (damping.has_rayleigh()) {
     const auto& r = damping.rayleigh();
-    model.damping = rayleigh_damping(model.mass, model.stiffness, r.zeta(),
-                                     r.mode_i() == 0 ? 1 : r.mode_i(), r.mode_j() == 0 ? 2 : r.mode_j());
+    model.damping =
+        rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
+                         r.mode_j() == 0 ? 2 : r.mode_j());
   } else if (model.dofs() == 1) {
     // 2 zeta m omega written out, so an SDOF from a config equals make_sdof() to the last bit.
     const double omega = std::sqrt(model.stiffness(0, 0) / model.mass(0, 0));
@@ -396,12 +438,13 @@ int servo_substeps(const config::Study& study, double dt) {
               std::abs(per_step - whole) <= 1e-6 * whole,
           "servo",
           "servo.rate = " + format_number(rate) + " Hz must be an integer multiple (1 to " +
-              std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " + format_number(1.0 / dt) +
-              " Hz (dt = " + format_number(dt) + " s)");
+              std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " +
+              format_number(1.0 / dt) + " Hz (dt = " + format_number(dt) + " s)");
   return static_cast<int>(whole);
 }
 
-HybridSetup base_setup(const config::Study& study, double dt, const std::filesystem::path& base_dir) {
+HybridSetup base_setup(const config::Study& study, double dt,
+                       const std::filesystem::path& base_dir) {
   HybridSetup base;
   base.model = make_structure(study.structure(), base_dir);
   base.integrator = integrator_kind(study.integrator());
@@ -419,8 +462,8 @@ HybridSetup base_setup(const config::Study& study, double dt, const std::filesys
     for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
     base.partition = partition_by_storeys(base.model.storey_stiffness, storeys, factory);
   } else {
-    base.partition = partition_by_fraction(base.model.storey_stiffness,
-                                           sub.experimental_fraction(), factory);
+    base.partition =
+        partition_by_fraction(base.model.storey_stiffness, sub.experimental_fraction(), factory);
   }
   return base;
 }
@@ -431,9 +474,11 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   prepared.base_dir = base_dir;
   GroundMotion record = load_motion(study.motion(), base_dir);
   const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : record.dt;
-  require(dt < record.duration(), "motion", "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
-                                               format_number(record.duration()) + " s)");
-  prepared.motion = std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
+  require(dt < record.duration(), "motion",
+          "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
+              format_number(record.duration()) + " s)");
+  prepared.motion =
+      std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
   for (const config::Case& c : study.cases()) {
     const double lag = make_delay_chain(c.delay(), dt, base_dir).nominal_delay();
     require(lag < prepared.motion.duration(), "case '" + c.name() + "'",
@@ -471,12 +516,14 @@ void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
   for (std::size_t i = 0; i < actuators.size(); ++i) {
     const int a = actuators[i];
     if (a < 0 || a >= static_cast<int>(setup.delays.size()))
-      throw std::invalid_argument(where + ": actuator " + std::to_string(a + 1) + " does not exist");
+      throw std::invalid_argument(where + ": actuator " + std::to_string(a + 1) +
+                                  " does not exist");
     const std::size_t b = count == 1 ? 0 : i;
     const std::string block_name = where + " compensation[" + std::to_string(b) + "]";
     if (setup.delays[static_cast<std::size_t>(a)].compensator())
-      throw std::invalid_argument(block_name + ": actuator " + std::to_string(a + 1) +
-                                  " already has a compensator (from its case); give it in one place");
+      throw std::invalid_argument(
+          block_name + ": actuator " + std::to_string(a + 1) +
+          " already has a compensator (from its case); give it in one place");
     setup.delays[static_cast<std::size_t>(a)].set_compensator(
         make_compensator(blocks[static_cast<int>(b)], servo_period, block_name));
   }
@@ -488,7 +535,8 @@ const config::Case& reference_case(const config::Study& study) {
     for (const config::Case& c : study.cases()) {
       if (c.name() == study.reference_case()) return c;
     }
-    throw std::invalid_argument("reference_case '" + study.reference_case() + "' is not among the cases");
+    throw std::invalid_argument("reference_case '" + study.reference_case() +
+                                "' is not among the cases");
   }
   return study.cases(0);
 }

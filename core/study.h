@@ -15,7 +15,8 @@
 namespace rths::core {
 
 // Every number of a study is checked against its range rule (core/ranges.h) by validate_study.
-inline constexpr double kMaxPeakGroundAcceleration = 5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
+inline constexpr double kMaxPeakGroundAcceleration =
+    5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
 
 // Parses a text-format Study. Throws std::invalid_argument "FILE:LINE:COL: message" on unknown
 // fields, wrong types or syntax errors, and on semantic errors (negative period or delay, both
@@ -37,7 +38,8 @@ void validate_link_lag(const config::LinkLag& lag, const std::string& where, boo
 // an AT2 file is given a unit other than G, or the peak exceeds kMaxPeakGroundAcceleration (a
 // record in cm/s^2 read as g or m/s^2).
 GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir);
-// "g", "m/s2" or "cm/s2": what a record in these units is called on the command line and in summaries.
+// "g", "m/s2" or "cm/s2": what a record in these units is called on the command line and in
+// summaries.
 std::string units_name(config::GroundMotion::Units units);
 // Parses "g", "m/s2" or "cm/s2" (also "m/s^2", "cm/s^2"); throws naming the accepted forms.
 config::GroundMotion::Units units_from_name(const std::string& name);

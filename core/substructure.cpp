@@ -52,7 +52,8 @@ Mat HybridPartition::experimental_stiffness() const {
   const int n = static_cast<int>(experimental.size());
   Vec k = Vec::Zero(n);
   for (int s = 0; s < n; ++s)
-    if (experimental[static_cast<std::size_t>(s)]) k[s] = experimental[static_cast<std::size_t>(s)]->initial_stiffness();
+    if (experimental[static_cast<std::size_t>(s)])
+      k[s] = experimental[static_cast<std::size_t>(s)]->initial_stiffness();
   Mat out;
   assembly().tangent(k, out);
   return out;
@@ -73,18 +74,21 @@ HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen>
     const int d = specimen.dof;
     const std::string name = "experimental DOF " + std::to_string(d + 1);
     if (d < 0 || d >= n) throw std::invalid_argument(name + " is outside 1.." + std::to_string(n));
-    if (partition.experimental[static_cast<std::size_t>(d)]) throw std::invalid_argument(name + " is listed twice");
+    if (partition.experimental[static_cast<std::size_t>(d)])
+      throw std::invalid_argument(name + " is listed twice");
     if (!specimen.model) throw std::invalid_argument(name + " has no specimen model");
     const double k = specimen.model->initial_stiffness();
     if (!(k > 0 && k <= stiffness(d, d)))
-      throw std::invalid_argument(name + ": stiffness " + std::to_string(k) + " N/m must be in (0, K(" +
-                                  std::to_string(d + 1) + ", " + std::to_string(d + 1) + ") = " +
-                                  std::to_string(stiffness(d, d)) + "]");
+      throw std::invalid_argument(name + ": stiffness " + std::to_string(k) +
+                                  " N/m must be in (0, K(" + std::to_string(d + 1) + ", " +
+                                  std::to_string(d + 1) + ") = " + std::to_string(stiffness(d, d)) +
+                                  "]");
     partition.numerical_matrix(d, d) -= k;
     partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
   }
   for (int d = 0; d < n; ++d)
-    if (partition.experimental[static_cast<std::size_t>(d)]) partition.actuator_storeys.push_back(d);
+    if (partition.experimental[static_cast<std::size_t>(d)])
+      partition.actuator_storeys.push_back(d);
   return partition;
 }
 
@@ -203,10 +207,17 @@ Actuator::Actuator(DelayChain chain, std::unique_ptr<RestoringForceModel> specim
 }
 
 Actuator::Actuator(const Actuator& other)
-    : chain_(other.chain_), specimen_(other.specimen_->clone()), substeps_(other.substeps_),
-      servo_period_(other.servo_period_), ramp_from_(other.ramp_from_), ramp_to_(other.ramp_to_),
-      ramp_tick_(other.ramp_tick_), holding_(other.holding_), hold_target_(other.hold_target_),
-      hold_position_(other.hold_position_), hold_max_change_(other.hold_max_change_) {}
+    : chain_(other.chain_),
+      specimen_(other.specimen_->clone()),
+      substeps_(other.substeps_),
+      servo_period_(other.servo_period_),
+      ramp_from_(other.ramp_from_),
+      ramp_to_(other.ramp_to_),
+      ramp_tick_(other.ramp_tick_),
+      holding_(other.holding_),
+      hold_target_(other.hold_target_),
+      hold_position_(other.hold_position_),
+      hold_max_change_(other.hold_max_change_) {}
 
 Actuator& Actuator::operator=(const Actuator& other) {
   if (this != &other) *this = Actuator(other);
@@ -243,7 +254,8 @@ void Actuator::command(const CommandSample& command) {
 }
 
 void Actuator::hold(double position, double max_change) {
-  if (!(max_change > 0)) throw std::invalid_argument("a hold ramp needs a positive rate (m per tick)");
+  if (!(max_change > 0))
+    throw std::invalid_argument("a hold ramp needs a positive rate (m per tick)");
   if (!holding_) hold_target_ = target_at(ramp_tick_);
   holding_ = true;
   hold_position_ = position;
@@ -256,9 +268,10 @@ ActuatorOutput Actuator::tick() {
     const double change =
         std::clamp(hold_position_ - hold_target_.displacement, -hold_max_change_, hold_max_change_);
     // Landing exactly on the hold position (not within rounding) makes hold_reached() exact.
-    hold_target_.displacement = std::abs(hold_position_ - hold_target_.displacement) <= hold_max_change_
-                                    ? hold_position_
-                                    : hold_target_.displacement + change;
+    hold_target_.displacement =
+        std::abs(hold_position_ - hold_target_.displacement) <= hold_max_change_
+            ? hold_position_
+            : hold_target_.displacement + change;
     hold_target_.velocity = servo_period_ > 0 ? change / servo_period_ : 0.0;
     hold_target_.time += servo_period_;
     target = hold_target_;
@@ -292,8 +305,9 @@ void Actuator::reset() {
   holding_ = false;
 }
 
-void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<int>& actuator_storeys,
-                            const Vec& measured, Vec& shear, Vec& force) {
+void assemble_storey_forces(const StoreyAssembly& assembly,
+                            const std::vector<int>& actuator_storeys, const Vec& measured,
+                            Vec& shear, Vec& force) {
   for (std::size_t a = 0; a < actuator_storeys.size(); ++a)
     shear[actuator_storeys[a]] += measured[static_cast<Eigen::Index>(a)];
   assembly.dof_forces(shear, force);
@@ -304,7 +318,8 @@ Actuator make_actuator(const HybridPartition& partition, int a, DelayChain chain
   if (a < 0 || a >= static_cast<int>(partition.actuator_storeys.size()))
     throw std::invalid_argument("actuator " + std::to_string(a) + " does not exist");
   const int storey = partition.actuator_storeys[static_cast<std::size_t>(a)];
-  Actuator actuator(std::move(chain), partition.experimental[static_cast<std::size_t>(storey)]->clone());
+  Actuator actuator(std::move(chain),
+                    partition.experimental[static_cast<std::size_t>(storey)]->clone());
   actuator.set_servo(servo_substeps, dt / servo_substeps);
   return actuator;
 }
@@ -321,8 +336,8 @@ HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<D
   }
   chains.resize(actuators);
   for (std::size_t a = 0; a < actuators; ++a)
-    actuators_.push_back(make_actuator(partition, static_cast<int>(a), std::move(chains[a]), dt,
-                                       servo_substeps));
+    actuators_.push_back(
+        make_actuator(partition, static_cast<int>(a), std::move(chains[a]), dt, servo_substeps));
   const int n = assembly_.storeys();
   drift_ = Vec::Zero(n);
   drift_velocity_ = Vec::Zero(n);

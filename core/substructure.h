@@ -152,7 +152,9 @@ class Actuator {
   void hold(double position, double max_change);
   bool holding() const { return holding_; }
   // The servo's present target displacement (m): mid-ramp, at a command, or on the way to hold.
-  double target_displacement() const { return holding_ ? hold_target_.displacement : target_at(ramp_tick_).displacement; }
+  double target_displacement() const {
+    return holding_ ? hold_target_.displacement : target_at(ramp_tick_).displacement;
+  }
   // Holding and the target has reached the hold position.
   bool hold_reached() const { return holding_ && hold_target_.displacement == hold_position_; }
   // Without a delay stage the specimen can be evaluated at trial drifts (implicit reference runs).
@@ -171,8 +173,8 @@ class Actuator {
   CommandSample ramp_from_, ramp_to_;
   int ramp_tick_ = 1;  // ticks of the present ramp done; >= substeps_: at the target
   bool holding_ = false;
-  CommandSample hold_target_;   // the target while holding (moves toward hold_position_)
-  double hold_position_ = 0.0;  // m
+  CommandSample hold_target_;     // the target while holding (moves toward hold_position_)
+  double hold_position_ = 0.0;    // m
   double hold_max_change_ = 0.0;  // m per tick
 };
 
@@ -198,8 +200,9 @@ class HybridEvaluator : public RestoringEvaluator {
 // evaluator (local or over a transport) uses, so the sums agree bit for bit.
 //   shear (N, per storey) holds the numerical shears on entry and the total on return;
 //   measured (N, per actuator) is added at actuator_storeys[a]; force (N, per DOF) is written.
-void assemble_storey_forces(const StoreyAssembly& assembly, const std::vector<int>& actuator_storeys,
-                            const Vec& measured, Vec& shear, Vec& force);
+void assemble_storey_forces(const StoreyAssembly& assembly,
+                            const std::vector<int>& actuator_storeys, const Vec& measured,
+                            Vec& shear, Vec& force);
 
 // In-process restoring force: numerical storeys plus delayed experimental storeys.
 // Records, per step, each actuator's commanded drift, realised drift and measured force.

@@ -45,8 +45,10 @@ std::string not_a_text_file(const std::filesystem::path& path, const std::string
   std::error_code error;
   const auto status = std::filesystem::status(path, error);
   if (!std::filesystem::exists(status)) return path.string() + ": no such " + what;
-  if (std::filesystem::is_directory(status)) return path.string() + " is a directory, not a " + what;
-  if (!std::filesystem::is_regular_file(status)) return path.string() + " is not a regular file, not a " + what;
+  if (std::filesystem::is_directory(status))
+    return path.string() + " is a directory, not a " + what;
+  if (!std::filesystem::is_regular_file(status))
+    return path.string() + " is not a regular file, not a " + what;
   std::ifstream in(path, std::ios::binary);
   if (!in) return path.string() + ": cannot open " + what;
   char head[4096];
@@ -104,7 +106,9 @@ TextColumns read_text_columns(const std::filesystem::path& path, const std::stri
       first = false;
       continue;
     }
-    if (bad) throw std::invalid_argument(text_position(path, number) + "'" + printable(*bad) + "' is not a finite number");
+    if (bad)
+      throw std::invalid_argument(text_position(path, number) + "'" + printable(*bad) +
+                                  "' is not a finite number");
     first = false;
     out.rows.push_back(std::move(row));
   }

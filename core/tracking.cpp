@@ -70,16 +70,18 @@ std::vector<double> characteristic_polynomial(const Mat& a) {
 // The transfer function of a single-input single-output state space, both polynomials highest
 // power first: den = det(sI - A), num = det(sI - A + B C) - den + D den (the SISO identity
 // C adj(sI - A) B = det(sI - A + B C) - det(sI - A)).
-ContinuousTransferFunction state_space_transfer_function(const config::DelayStage::LinearFilter::StateSpace& spec,
-                                                         const std::string& field) {
+ContinuousTransferFunction state_space_transfer_function(
+    const config::DelayStage::LinearFilter::StateSpace& spec, const std::string& field) {
   const int n = spec.states();
   const auto size = static_cast<std::size_t>(n);
   if (n < 1 || n > 16) fail(field + ".state_space.states", std::to_string(n) + " is outside 1..16");
-  if (static_cast<std::size_t>(spec.a_size()) != size * size || static_cast<std::size_t>(spec.b_size()) != size ||
+  if (static_cast<std::size_t>(spec.a_size()) != size * size ||
+      static_cast<std::size_t>(spec.b_size()) != size ||
       static_cast<std::size_t>(spec.c_size()) != size)
-    fail(field + ".state_space", "a needs states^2 = " + std::to_string(n * n) + " values (row-major), b and c " +
-                                     std::to_string(n) + "; got " + std::to_string(spec.a_size()) + ", " +
-                                     std::to_string(spec.b_size()) + ", " + std::to_string(spec.c_size()));
+    fail(field + ".state_space",
+         "a needs states^2 = " + std::to_string(n * n) + " values (row-major), b and c " +
+             std::to_string(n) + "; got " + std::to_string(spec.a_size()) + ", " +
+             std::to_string(spec.b_size()) + ", " + std::to_string(spec.c_size()));
   Mat a(n, n);
   Vec b(n), c(n);
   for (int i = 0; i < n; ++i) {
@@ -100,7 +102,8 @@ ContinuousTransferFunction state_space_transfer_function(const config::DelayStag
 
 DiscreteFilter::DiscreteFilter() : b_{1.0}, a_{1.0}, state_(1, 0.0) {}
 
-DiscreteFilter::DiscreteFilter(std::vector<double> b, std::vector<double> a) : b_(std::move(b)), a_(std::move(a)) {
+DiscreteFilter::DiscreteFilter(std::vector<double> b, std::vector<double> a)
+    : b_(std::move(b)), a_(std::move(a)) {
   if (a_.empty() || b_.empty() || a_[0] == 0.0)
     throw std::invalid_argument("discrete filter: a[0] must be non-zero and b, a non-empty");
   const double a0 = a_[0];
@@ -116,7 +119,8 @@ double DiscreteFilter::step(double x) {
   // Direct form II transposed: y = b0 x + s0;  s_i = b_{i+1} x - a_{i+1} y + s_{i+1}.
   const double y = b_[0] * x + state_[0];
   const std::size_t n = a_.size() - 1;
-  for (std::size_t i = 0; i < n; ++i) state_[i] = b_[i + 1] * x - a_[i + 1] * y + (i + 1 < n ? state_[i + 1] : 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    state_[i] = b_[i + 1] * x - a_[i + 1] * y + (i + 1 < n ? state_[i + 1] : 0.0);
   return y;
 }
 
@@ -131,19 +135,23 @@ std::complex<double> DiscreteFilter::response(std::complex<double> z) const {
   return num / den;
 }
 
-DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h, const std::string& field) {
+DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h,
+                           const std::string& field) {
   using K = config::DelayStage::LinearFilter::KindCase;
   try {
     switch (spec.kind_case()) {
       case K::kContinuous: {
-        const DiscreteCoefficients d = tustin(values(spec.continuous().numerator()), values(spec.continuous().denominator()), h);
+        const DiscreteCoefficients d = tustin(values(spec.continuous().numerator()),
+                                              values(spec.continuous().denominator()), h);
         return DiscreteFilter(d.b, d.a);
       }
       case K::kDiscrete:
-        return DiscreteFilter(values(spec.discrete().numerator()), values(spec.discrete().denominator()));
+        return DiscreteFilter(values(spec.discrete().numerator()),
+                              values(spec.discrete().denominator()));
       case K::kStateSpace: {
         // A polynomial in z, highest power first, is b(z^-1) in ascending powers: the same list.
-        const ContinuousTransferFunction tf = state_space_transfer_function(spec.state_space(), field);
+        const ContinuousTransferFunction tf =
+            state_space_transfer_function(spec.state_space(), field);
         if (spec.state_space().discrete()) return DiscreteFilter(tf.numerator, tf.denominator);
         const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
         return DiscreteFilter(d.b, d.a);
@@ -157,7 +165,8 @@ DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double 
         const auto& lead = spec.phase_lead();
         if (!(lead.zero() > 0 && lead.pole() > 0 && lead.gain() != 0))
           fail(field + ".phase_lead", "zero and pole must be > 0 rad/s and the gain non-zero");
-        const DiscreteCoefficients d = tustin({lead.gain(), lead.gain() * lead.zero()}, {1.0, lead.pole()}, h);
+        const DiscreteCoefficients d =
+            tustin({lead.gain(), lead.gain() * lead.zero()}, {1.0, lead.pole()}, h);
         return DiscreteFilter(d.b, d.a);
       }
       case K::KIND_NOT_SET: break;
@@ -170,14 +179,18 @@ DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double 
   fail(field, "has no kind (continuous, discrete, pid, phase_lead or state_space)");
 }
 
-ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator, double h) {
-  if (denominator.empty() || denominator.front() == 0.0 || numerator.size() >= denominator.size() || !(h > 0))
-    throw std::invalid_argument("plant: a strictly proper num(s)/den(s) with den[0] != 0 and a step > 0 s is needed");
+ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator,
+                   double h) {
+  if (denominator.empty() || denominator.front() == 0.0 || numerator.size() >= denominator.size() ||
+      !(h > 0))
+    throw std::invalid_argument(
+        "plant: a strictly proper num(s)/den(s) with den[0] != 0 and a step > 0 s is needed");
   const int n = static_cast<int>(denominator.size()) - 1;
   // Controllable canonical form of num/den normalised by den[0].
   Mat a = Mat::Zero(n, n);
   for (int i = 0; i + 1 < n; ++i) a(i, i + 1) = 1.0;
-  for (int j = 0; j < n; ++j) a(n - 1, j) = -denominator[static_cast<std::size_t>(n - j)] / denominator[0];
+  for (int j = 0; j < n; ++j)
+    a(n - 1, j) = -denominator[static_cast<std::size_t>(n - j)] / denominator[0];
   c_ = Eigen::RowVectorXd::Zero(n);
   for (std::size_t k = 0; k < numerator.size(); ++k)
     c_(static_cast<Eigen::Index>(numerator.size() - 1 - k)) = numerator[k] / denominator[0];
@@ -203,7 +216,8 @@ void ZohPlant::advance(double u) {
 
 std::complex<double> ZohPlant::response(std::complex<double> z) const {
   const Eigen::Index n = ad_.rows();
-  const Eigen::MatrixXcd resolvent = z * Eigen::MatrixXcd::Identity(n, n) - ad_.cast<std::complex<double>>();
+  const Eigen::MatrixXcd resolvent =
+      z * Eigen::MatrixXcd::Identity(n, n) - ad_.cast<std::complex<double>>();
   const Eigen::VectorXcd x = resolvent.partialPivLu().solve(bd_.cast<std::complex<double>>());
   return (c_.cast<std::complex<double>>() * x)(0);
 }
@@ -218,8 +232,11 @@ double Converter::digital_to_analog(double x) const {
   return range > 0 ? std::clamp(x, -range, range) : x;
 }
 
-BenchmarkPlantParameters benchmark_plant_parameters(const config::DelayStage::BenchmarkPlant& spec) {
-  const auto or_nominal = [](double value, double nominal) { return value != 0.0 ? value : nominal; };
+BenchmarkPlantParameters benchmark_plant_parameters(
+    const config::DelayStage::BenchmarkPlant& spec) {
+  const auto or_nominal = [](double value, double nominal) {
+    return value != 0.0 ? value : nominal;
+  };
   BenchmarkPlantParameters p;
   p.a1_beta0 = or_nominal(spec.a1_beta0(), 2.1283e13);
   p.a2 = or_nominal(spec.a2(), 4.2297e6);
@@ -235,14 +252,16 @@ BenchmarkPlantParameters benchmark_plant_parameters(const config::DelayStage::Be
 
 namespace {
 
-ContinuousTransferFunction plant_of(const config::DelayStage::TrackingLoop& spec, const std::string& field) {
+ContinuousTransferFunction plant_of(const config::DelayStage::TrackingLoop& spec,
+                                    const std::string& field) {
   if (spec.has_benchmark_plant())
     return benchmark_actuator_transfer_function(benchmark_plant_parameters(spec.benchmark_plant()));
   if (!spec.has_plant()) fail(field + ".plant", "is missing (plant or benchmark_plant)");
   return {values(spec.plant().numerator()), values(spec.plant().denominator())};
 }
 
-ZohPlant make_plant(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field) {
+ZohPlant make_plant(const config::DelayStage::TrackingLoop& spec, double h,
+                    const std::string& field) {
   const ContinuousTransferFunction tf = plant_of(spec, field);
   try {
     return ZohPlant(tf.numerator, tf.denominator, h);
@@ -253,10 +272,14 @@ ZohPlant make_plant(const config::DelayStage::TrackingLoop& spec, double h, cons
 
 }  // namespace
 
-TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field)
+TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h,
+                           const std::string& field)
     : plant_(make_plant(spec, h, field)),
-      controller_(spec.has_controller() ? make_filter(spec.controller(), h, field + ".controller") : DiscreteFilter()),
-      feedforward_(spec.has_feedforward() ? make_filter(spec.feedforward(), h, field + ".feedforward") : DiscreteFilter()),
+      controller_(spec.has_controller() ? make_filter(spec.controller(), h, field + ".controller")
+                                        : DiscreteFilter()),
+      feedforward_(spec.has_feedforward()
+                       ? make_filter(spec.feedforward(), h, field + ".feedforward")
+                       : DiscreteFilter()),
       converter_{spec.converter().range(), spec.converter().quantum()},
       noise_rms_(spec.displacement_noise_rms()),
       h_(h),
@@ -272,15 +295,18 @@ TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double 
     fail(field + ".force_noise_rms", "must be >= 0 N");
   constexpr std::uint32_t kMaxForceDelay = 64;
   if (spec.force_delay_periods() > kMaxForceDelay)
-    fail(field + ".force_delay_periods", std::to_string(spec.force_delay_periods()) + " is outside 0.." +
-                                             std::to_string(kMaxForceDelay));
+    fail(field + ".force_delay_periods", std::to_string(spec.force_delay_periods()) +
+                                             " is outside 0.." + std::to_string(kMaxForceDelay));
   force_queue_.assign(spec.force_delay_periods() + 1, 0.0);
   std::ostringstream label;
   label << "tracking-loop(" << (spec.has_benchmark_plant() ? "benchmark plant" : "plant")
-        << (spec.has_controller() ? ", controller" : "") << (spec.has_feedforward() ? ", feedforward" : "")
+        << (spec.has_controller() ? ", controller" : "")
+        << (spec.has_feedforward() ? ", feedforward" : "")
         << (converter_.quantum > 0 || converter_.range > 0 ? ", converters" : "")
         << (noise_rms_ > 0 ? ", noise" : "") << (force_noise_rms_ > 0 ? ", force noise" : "")
-        << (force_queue_.size() > 1 ? ", force delay " + std::to_string(force_queue_.size() - 1) : "") << ")";
+        << (force_queue_.size() > 1 ? ", force delay " + std::to_string(force_queue_.size() - 1)
+                                    : "")
+        << ")";
   label_ = label.str();
   constexpr double w = 0.1;  // rad/s, well below every corner of a servo loop
   nominal_delay_ = -std::arg(response(w)) / w;
@@ -315,7 +341,8 @@ double TrackingLoop::step_unscaled(const CommandSample& in) {
   const double displacement = plant_.output();
   sensor_error_ = noise_rms_ > 0 ? noise_rms_ * normal_(rng_) : 0.0;
   const double measured = displacement + sensor_error_;
-  const double target = converter_.digital_to_analog(feedforward_.step(converter_.analog_to_digital(in.displacement)));
+  const double target = converter_.digital_to_analog(
+      feedforward_.step(converter_.analog_to_digital(in.displacement)));
   const double error = converter_.analog_to_digital(target - measured);
   plant_.advance(converter_.digital_to_analog(controller_.step(error)));
   return displacement;

@@ -39,7 +39,7 @@ namespace rths::core {
 
 class DiscreteFilter {
  public:
-  DiscreteFilter();  // identity
+  DiscreteFilter();                                              // identity
   DiscreteFilter(std::vector<double> b, std::vector<double> a);  // @pre a[0] != 0, sizes >= 1
   double step(double x);
   void reset();
@@ -50,7 +50,8 @@ class DiscreteFilter {
 };
 
 // Builds the filter of `spec` at step h; throws std::invalid_argument naming `field`.
-DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h, const std::string& field);
+DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h,
+                           const std::string& field);
 
 class ZohPlant {
  public:
@@ -68,7 +69,7 @@ class ZohPlant {
 };
 
 struct Converter {
-  double range = 0.0, quantum = 0.0;  // m; 0 = none
+  double range = 0.0, quantum = 0.0;         // m; 0 = none
   double analog_to_digital(double x) const;  // saturate, then quantise
   double digital_to_analog(double x) const;  // quantise, then saturate
 };
@@ -81,7 +82,9 @@ class TrackingLoop final : public DelayStage {
   // Throws std::invalid_argument naming `field` for a bad plant, filter or converter.
   TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field);
   void reset() override;
-  std::unique_ptr<DelayStage> clone() const override { return std::make_unique<TrackingLoop>(*this); }
+  std::unique_ptr<DelayStage> clone() const override {
+    return std::make_unique<TrackingLoop>(*this);
+  }
   std::string describe() const override { return label_; }
   // -arg H(e^{i w h}) / w at w = 0.1 rad/s: the loop's low-frequency lag (s).
   double nominal_delay() const override { return nominal_delay_; }

@@ -22,12 +22,15 @@ std::string dds_config_xml(const DdsSiteConfig& config) {
       "<CycloneDDS xmlns=\"https://cdds.io/config\">\n"
       "  <Domain Id=\"any\">\n"
       "    <General>\n"
-      "      <Interfaces><NetworkInterface name=\"" + config.interface + "\"/></Interfaces>\n"
+      "      <Interfaces><NetworkInterface name=\"" +
+      config.interface +
+      "\"/></Interfaces>\n"
       "      <AllowMulticast>false</AllowMulticast>\n"
       "    </General>\n"
       "    <Discovery>\n"
       "      <ParticipantIndex>auto</ParticipantIndex>\n"
-      "      <MaxAutoParticipantIndex>" + std::to_string(config.max_auto_participant_index) +
+      "      <MaxAutoParticipantIndex>" +
+      std::to_string(config.max_auto_participant_index) +
       "</MaxAutoParticipantIndex>\n"
       "      <Peers>\n";
   for (const auto& peer : config.peers) {

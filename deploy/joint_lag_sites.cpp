@@ -33,7 +33,8 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       const bool real_time = deployment.clock() == config::Deployment::REAL_TIME;
       auto* joint_case = plan.study.add_cases();
       joint_case->set_name("joint_actuator");
-      *joint_case->add_delay() = analysis::joint_lag_actuator_stage(config.actuator_model(), actuator);
+      *joint_case->add_delay() =
+          analysis::joint_lag_actuator_stage(config.actuator_model(), actuator);
       deployment.set_case_name("joint_actuator");
       for (auto& node : *deployment.mutable_nodes()) {
         if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
@@ -54,7 +55,8 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       for (const auto& link : run.links) {
         if (link.kind == "actuator_emulator") point.measured_round_trip = link.round_trip.median;
       }
-      const runtime::RunMeasurements measured = runtime::measure_run(runtime::read_record(run.record));
+      const runtime::RunMeasurements measured =
+          runtime::measure_run(runtime::read_record(run.record));
       const core::SimulationResult& steps = measured.steps;
       if (steps.command.cols() == 0 || steps.displacement.cols() == 0)
         throw std::runtime_error("across-sites run " + name.str() + ": record has no actuator");
@@ -70,7 +72,8 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       // it records lags the command by round trip + actuator lag. Lockstep: each command is
       // paired with its own answer, so J1 sees the actuator alone and the network part is the
       // measured round trip.
-      const double j1 = core::j1_delay(command, realised, dt, analysis::joint_lag_search_window(config));
+      const double j1 =
+          core::j1_delay(command, realised, dt, analysis::joint_lag_search_window(config));
       point.measured_total_lag = real_time ? j1 : point.measured_round_trip + j1;
       point.measured_actuator_lag = real_time ? j1 - point.measured_round_trip : j1;
       point.real_time = real_time;
@@ -90,8 +93,6 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
 
 }  // namespace
 
-analysis::JointLagAcrossSites joint_lag_across_sites() {
-  return {namespace_support, run_measured};
-}
+analysis::JointLagAcrossSites joint_lag_across_sites() { return {namespace_support, run_measured}; }
 
 }  // namespace rths::deploy

@@ -54,8 +54,8 @@ namespace {
 
 // Unique per process and per instance without a mutable global: pid + a clock nonce.
 std::string unique_prefix() {
-  const auto nonce = static_cast<unsigned long long>(
-      std::chrono::steady_clock::now().time_since_epoch().count());
+  const auto nonce =
+      static_cast<unsigned long long>(std::chrono::steady_clock::now().time_since_epoch().count());
   std::ostringstream out;
   out << kPrefix << ::getpid() << '-' << std::hex << ((nonce >> 10) & 0xffffff) << '-';
   return out.str();
@@ -142,7 +142,8 @@ void NamespaceTopology::build(const TopologySpec& spec) {
   auto add_namespace = [this](const std::string& name) {
     const auto result = run_command({"ip", "netns", "add", name});
     if (!result.ok()) {
-      const std::string why = "cannot create network namespace " + name + ": " + trimmed(result.output);
+      const std::string why =
+          "cannot create network namespace " + name + ": " + trimmed(result.output);
       if (looks_like_permission_problem(result.output)) {
         throw NamespacesUnavailable(why + " (run as root or with CAP_SYS_ADMIN and CAP_NET_ADMIN)");
       }
@@ -167,8 +168,8 @@ void NamespaceTopology::build(const TopologySpec& spec) {
                  site.interface, "netns", site.netns});
     run_checked({"ip", "-n", hub_, "link", "set", port, "master", kBridge});
     run_checked({"ip", "-n", hub_, "link", "set", port, "up"});
-    run_checked({"ip", "-n", site.netns, "addr", "add", site.address + "/24", "dev",
-                 site.interface});
+    run_checked(
+        {"ip", "-n", site.netns, "addr", "add", site.address + "/24", "dev", site.interface});
     run_checked({"ip", "-n", site.netns, "link", "set", site.interface, "up"});
     sites_.push_back(site);
   }

@@ -18,8 +18,8 @@
 #include "core/text_format.h"
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
-#include "runtime/process.h"
 #include "runtime/measurements.h"
+#include "runtime/process.h"
 #include "runtime/record.h"
 
 namespace rths::deploy {
@@ -45,7 +45,8 @@ void make_absolute(std::string& path, const std::filesystem::path& base_dir) {
 // The merged study is written elsewhere than the original, so its relative paths must not move.
 void absolutize_paths(config::Study& study, const std::filesystem::path& base_dir) {
   make_absolute(*study.mutable_motion()->mutable_path(), base_dir);
-  if (study.has_deployment()) make_absolute(*study.mutable_deployment()->mutable_security_dir(), base_dir);
+  if (study.has_deployment())
+    make_absolute(*study.mutable_deployment()->mutable_security_dir(), base_dir);
   for (auto& motion : *study.mutable_sweep()->mutable_motions()) {
     make_absolute(*motion.mutable_path(), base_dir);
   }
@@ -59,7 +60,8 @@ void absolutize_paths(config::Study& study, const std::filesystem::path& base_di
 void check_lag(const config::LinkLag& lag, const std::string& where) {
   if (!(lag.one_way_delay() >= 0.0) || !(lag.jitter() >= 0.0) || !(lag.loss() >= 0.0) ||
       !(lag.loss() < 1.0) || !std::isfinite(lag.one_way_delay()) || !std::isfinite(lag.jitter())) {
-    throw std::invalid_argument(where + ": one_way_delay and jitter must be finite and >= 0, "
+    throw std::invalid_argument(where +
+                                ": one_way_delay and jitter must be finite and >= 0, "
                                 "loss in [0, 1)");
   }
 }
@@ -72,7 +74,8 @@ Sites parse_sites(const std::string& text, const std::string& source_name) {
 }
 
 SitesPlan load_sites(const std::filesystem::path& sites_file) {
-  const auto sites = parse_sites(core::read_text_file(sites_file, "sites config"), sites_file.string());
+  const auto sites =
+      parse_sites(core::read_text_file(sites_file, "sites config"), sites_file.string());
   auto plan = plan_sites(sites, sites_file.parent_path(), sites_file.string());
   plan.sites_file = sites_file;
   return plan;

@@ -31,8 +31,8 @@
 namespace rths::deploy {
 
 struct NodePlacement {
-  int node_id = 0;     // 0 = coordinator
-  std::string kind;    // "coordinator", "substructure", "actuator_emulator"
+  int node_id = 0;   // 0 = coordinator
+  std::string kind;  // "coordinator", "substructure", "actuator_emulator"
   std::string site;
 };
 
@@ -61,23 +61,23 @@ struct LinkMeasurement {
 };
 
 struct SitesRunResult {
-  bool ok = false;              // the coordinator exited 0 and the record has a completed footer
+  bool ok = false;  // the coordinator exited 0 and the record has a completed footer
   int coordinator_exit = -1;
-  std::string status;           // footer status, or why the run stopped
+  std::string status;  // footer status, or why the run stopped
   std::string failed_node;
   std::string run_id, case_name;
   std::filesystem::path output_dir, record;
   std::vector<std::string> namespaces;  // made and removed
   std::vector<LinkMeasurement> links;
   std::int64_t steps = 0;
-  double wall_seconds = 0.0;    // whole run as measured here (start-up included)
+  double wall_seconds = 0.0;         // whole run as measured here (start-up included)
   double record_wall_seconds = 0.0;  // the coordinator's own run time (footer)
 };
 
 struct SitesRunOptions {
   std::filesystem::path output_dir;  // records, logs, DDS configs, merged study; created
   std::optional<std::filesystem::path> bin_dir;  // else runtime::find_node_programs' search
-  std::function<bool()> stop_requested;  // polled every few ms; true = stop now
+  std::function<bool()> stop_requested;          // polled every few ms; true = stop now
 };
 
 SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options);

@@ -27,7 +27,8 @@ void write_study_copy(const SitesPlan& plan, const std::filesystem::path& path) 
   google::protobuf::TextFormat::PrintToString(plan.study, &text);
   std::ofstream out(path);
   out << "# Written by `rths sites` from " << plan.study_file.string() << " and "
-      << plan.sites_file.string() << "\n" << text;
+      << plan.sites_file.string() << "\n"
+      << text;
   if (!out) throw std::runtime_error("cannot write " + path.string());
 }
 
@@ -112,8 +113,8 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   launch.stop_requested = options.stop_requested;
   launch.placement = [&](int node_id) {
     const std::string& site = site_of.at(node_id);
-    return runtime::Placement{topology.exec_prefix(site), {{"CYCLONEDDS_URI", dds_uri.at(site)}},
-                              "site " + site};
+    return runtime::Placement{
+        topology.exec_prefix(site), {{"CYCLONEDDS_URI", dds_uri.at(site)}}, "site " + site};
   };
   read_outcome(plan, runtime::launch_run(launch), result);
   return result;  // the namespaces are removed here
@@ -124,11 +125,12 @@ std::string check_record(const std::filesystem::path& record, std::int64_t min_s
   const auto contents = runtime::read_record(record);
   const auto* footer = contents.footer();
   if (footer == nullptr) throw std::runtime_error(record.string() + ": no footer (run cut short)");
-  if (!footer->ok()) throw std::runtime_error(record.string() + ": run failed: " + footer->status());
+  if (!footer->ok())
+    throw std::runtime_error(record.string() + ": run failed: " + footer->status());
   const auto steps = static_cast<std::int64_t>(contents.steps().size());
   if (steps < min_steps) {
-    throw std::runtime_error(record.string() + ": " + std::to_string(steps) + " steps, expected >= " +
-                             std::to_string(min_steps));
+    throw std::runtime_error(record.string() + ": " + std::to_string(steps) +
+                             " steps, expected >= " + std::to_string(min_steps));
   }
   const runtime::RunMeasurements measured = runtime::measure_run(contents);
   std::ostringstream text;
@@ -138,23 +140,27 @@ std::string check_record(const std::filesystem::path& record, std::int64_t min_s
     const auto in = series.injected_summary();
     const auto rt = series.round_trip_summary();
     largest_injected = std::max(largest_injected, in.median);
-    text << "  node " << node << ": injected median " << in.median * 1e3 << " ms, round trip median "
-         << rt.median * 1e3 << " ms (p99 " << rt.p99 * 1e3 << " ms)\n";
+    text << "  node " << node << ": injected median " << in.median * 1e3
+         << " ms, round trip median " << rt.median * 1e3 << " ms (p99 " << rt.p99 * 1e3 << " ms)\n";
     if (rt.median + 1e-4 < in.median) {
       throw std::runtime_error(text.str() + "node " + std::to_string(node) +
                                ": measured round trip is below the injected lag");
     }
   }
   if (expected_injected >= 0.0 && std::abs(largest_injected - expected_injected) > 1e-4) {
-    throw std::runtime_error(text.str() + "largest injected lag " + std::to_string(largest_injected) +
-                             " s, expected " + std::to_string(expected_injected) + " s");
+    throw std::runtime_error(text.str() + "largest injected lag " +
+                             std::to_string(largest_injected) + " s, expected " +
+                             std::to_string(expected_injected) + " s");
   }
   return text.str();
 }
 
 namespace {
 nlohmann::json summary_json(const runtime::LagSummary& s) {
-  return {{"count", s.count}, {"mean_s", s.mean}, {"median_s", s.median}, {"p99_s", s.p99},
+  return {{"count", s.count},
+          {"mean_s", s.mean},
+          {"median_s", s.median},
+          {"p99_s", s.p99},
           {"max_s", s.max}};
 }
 }  // namespace

@@ -4,7 +4,8 @@
 #include "fuzz/targets.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spdlog::set_level(spdlog::level::off);  // nodes log every rejected message; the fuzzer needs speed
+  spdlog::set_level(
+      spdlog::level::off);  // nodes log every rejected message; the fuzzer needs speed
   return 0;
 }
 

@@ -60,9 +60,11 @@ int main(int argc, char** argv) {
   // Unassigned nodes get their ASSIGN over the wire (the fuzzer mutates the study inside it).
   std::string assigned_by_message(1, '\x00');
   assigned_by_message += fuzz::envelope_record(
-      runtime::ASSIGN, 0, fuzz::paper_assign(1, config::NodeSpec::SUBSTRUCTURE).SerializeAsString());
+      runtime::ASSIGN, 0,
+      fuzz::paper_assign(1, config::NodeSpec::SUBSTRUCTURE).SerializeAsString());
   for (int k = 1; k <= 3; ++k)
-    assigned_by_message += fuzz::envelope_record(runtime::COMMAND, k, command(k * 0.001, 1e-4 * k, 0.1));
+    assigned_by_message +=
+        fuzz::envelope_record(runtime::COMMAND, k, command(k * 0.001, 1e-4 * k, 0.1));
   write(dir / "assign_message", assigned_by_message);
   std::string foreign(1, '\x03');
   foreign += fuzz::envelope_record(runtime::COMMAND, 1, command(0.001, 1e-4, 0.1));

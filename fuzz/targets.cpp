@@ -47,8 +47,7 @@ std::string as_text(const std::uint8_t* data, std::size_t size) {
 // The one scratch file of this process; rewritten for every input.
 class FuzzScratch {
  public:
-  FuzzScratch()
-      : dir_(fs::temp_directory_path() / ("rths_fuzz_" + std::to_string(getpid()))) {
+  FuzzScratch() : dir_(fs::temp_directory_path() / ("rths_fuzz_" + std::to_string(getpid()))) {
     fs::create_directories(dir_);
   }
   ~FuzzScratch() {
@@ -78,8 +77,7 @@ int guarded(Body body) {
   try {
     body();
   } catch (const std::invalid_argument&) {
-  } catch (const std::runtime_error&) {
-  }
+  } catch (const std::runtime_error&) {}
   return 0;
 }
 
@@ -200,7 +198,8 @@ std::string flip_test_record(int steps) {
   entry.Clear();
   entry.mutable_footer()->set_ok(true);
   entry.mutable_footer()->set_status("completed");
-  entry.mutable_footer()->mutable_counters()->set_steps(static_cast<std::uint64_t>(std::max(steps - 1, 0)));
+  entry.mutable_footer()->mutable_counters()->set_steps(
+      static_cast<std::uint64_t>(std::max(steps - 1, 0)));
   runtime::append_record_frame(entry, bytes);
   return bytes;
 }
@@ -241,15 +240,19 @@ FlipVerdict check_flipped_record(const std::string& original, const std::string&
     bool reported = false;
     for (const runtime::RecordLoss& loss : read.losses)
       reported = reported || (loss.first_byte <= first && end <= loss.end_byte);
-    if (read_there) ++v.silent;
-    else if (reported) ++v.detected;
-    else ++v.unreported;
+    if (read_there)
+      ++v.silent;
+    else if (reported)
+      ++v.detected;
+    else
+      ++v.unreported;
   }
   v.silent += read_at.size();  // entries read at an offset where none was written
   return v;
 }
 
-std::string flips_input(int steps, const std::vector<std::pair<std::uint32_t, std::uint8_t>>& flips) {
+std::string flips_input(int steps,
+                        const std::vector<std::pair<std::uint32_t, std::uint8_t>>& flips) {
   std::string out;
   const auto n = static_cast<std::uint32_t>(std::max(steps - 1, 0));
   out.push_back(static_cast<char>(n & 0xff));
@@ -281,7 +284,8 @@ int record_flips(const std::uint8_t* data, std::size_t size) {
 std::string envelope_record(std::int32_t kind, std::int32_t step, const std::string& payload) {
   std::string out;
   out.push_back(static_cast<char>(kind));
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((static_cast<std::uint32_t>(step) >> (8 * i)) & 0xff));
+  for (int i = 0; i < 4; ++i)
+    out.push_back(static_cast<char>((static_cast<std::uint32_t>(step) >> (8 * i)) & 0xff));
   const std::size_t n = std::min<std::size_t>(payload.size(), 0xffff);
   out.push_back(static_cast<char>(n & 0xff));
   out.push_back(static_cast<char>(n >> 8));

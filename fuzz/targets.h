@@ -69,18 +69,19 @@ std::string flip_test_record(int steps);
 // per entry of the original, damaged (a byte of its frame differs) or intact.
 struct FlipVerdict {
   std::size_t entries = 0, damaged = 0, intact = 0;
-  std::size_t detected = 0;    // damaged, dropped, and inside a reported loss region
-  std::size_t recovered = 0;   // intact and read back byte for byte
-  std::size_t silent = 0;      // damaged but read back as an entry, or an entry that never was
-  std::size_t unreported = 0;  // damaged, dropped, but in no loss region
-  std::size_t lost_intact = 0; // intact but not read back
+  std::size_t detected = 0;     // damaged, dropped, and inside a reported loss region
+  std::size_t recovered = 0;    // intact and read back byte for byte
+  std::size_t silent = 0;       // damaged but read back as an entry, or an entry that never was
+  std::size_t unreported = 0;   // damaged, dropped, but in no loss region
+  std::size_t lost_intact = 0;  // intact but not read back
   bool holds() const { return silent == 0 && unreported == 0 && lost_intact == 0; }
   FlipVerdict& operator+=(const FlipVerdict& other);
 };
 FlipVerdict check_flipped_record(const std::string& original, const std::string& damaged);
 
 // The record_flips input for a record of `steps` steps with these (position, xor) flips.
-std::string flips_input(int steps, const std::vector<std::pair<std::uint32_t, std::uint8_t>>& flips);
+std::string flips_input(int steps,
+                        const std::vector<std::pair<std::uint32_t, std::uint8_t>>& flips);
 
 // One envelope record in the envelope_payload input format.
 std::string envelope_record(std::int32_t kind, std::int32_t step, const std::string& payload);

@@ -12,7 +12,8 @@
 //               H(f) = gain e^{-i w tau} F(w) B(w),   w = 2 pi f,
 //               F(w) = (1 - a) / (1 - a e^{-i w dt}), a = exp(-dt / T)   (first-order lag, exact
 //                      for the model's recursion; 1 when absent),
-//               B(w) = wn^2 / (wn^2 - v^2 + 2 i zeta wn v), v = (2 / dt) tan(w dt / 2)   (the Tustin
+//               B(w) = wn^2 / (wn^2 - v^2 + 2 i zeta wn v), v = (2 / dt) tan(w dt / 2)   (the
+//               Tustin
 //                      second-order lag, exact for the model's biquad; 1 when absent).
 //             A time-varying delay or gain enters at its mean (the constant part). Backlash and
 //             velocity saturation depend on the amplitude, not the frequency, and offsets do not
@@ -63,8 +64,8 @@ BodeData actuator_bode(const ChannelSignals& signals, const std::vector<BodeMode
                        double min_coherence = 0.9);
 
 // Three panels (amplitude ratio, on a log axis when it spans more than a decade; phase in
-// degrees; coherence), frequency on a log axis over the band, the measured estimate and each model; the PNG and the SVG beside it
-// (util/plot.h). Throws std::runtime_error naming the file.
+// degrees; coherence), frequency on a log axis over the band, the measured estimate and each model;
+// the PNG and the SVG beside it (util/plot.h). Throws std::runtime_error naming the file.
 void write_bode_plot(const BodeData& bode, const std::filesystem::path& png);
 
 }  // namespace rths::identify

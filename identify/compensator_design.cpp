@@ -36,12 +36,15 @@ std::string compensator_kind_name(CompensatorKind kind) {
 CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalScales& scales,
                                      CompensatorKind kind, double dt) {
   if (actuator.channel != Channel::kMeasured) {
-    throw std::invalid_argument("compensator design needs the actuator model (channel 'measured'), "
-                                "got channel '" + channel_name(actuator.channel) + "'");
+    throw std::invalid_argument(
+        "compensator design needs the actuator model (channel 'measured'), "
+        "got channel '" +
+        channel_name(actuator.channel) + "'");
   }
   if (!(dt > 0.0)) throw std::invalid_argument("compensator design: dt must be > 0 s");
   CompensatorDesign design;
-  ActuatorCase identified = actuator_case(actuator, scales, "identified_" + compensator_kind_name(kind));
+  ActuatorCase identified =
+      actuator_case(actuator, scales, "identified_" + compensator_kind_name(kind));
   design.study_case = std::move(identified.study_case);
   design.ignored = std::move(identified.left_out);
   const auto& shift = design.study_case.delay(0);
@@ -71,7 +74,8 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
   if (!(design.plant_lag > 0.0)) {
     throw std::invalid_argument(
         "compensator design: the identification found no actuator delay or dynamics to "
-        "compensate (model: " + actuator.describe(scales) +
+        "compensate (model: " +
+        actuator.describe(scales) +
         "); declare or allow the delay / first_order effects, or run without compensation "
         "knowingly");
   }
@@ -111,8 +115,8 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
       const double a2_span = 3.0 * std::abs(a2) + 1e-6;
       a->mutable_a2_bounds()->set_min(-a2_span);
       a->mutable_a2_bounds()->set_max(a2_span);
-      summary << "ATS window 1 s, initial a0 " << 1.0 / gain << ", a1 " << lead * 1e3
-              << " ms, a2 " << a2 << " s^2";
+      summary << "ATS window 1 s, initial a0 " << 1.0 / gain << ", a1 " << lead * 1e3 << " ms, a2 "
+              << a2 << " s^2";
       break;
     }
     case CompensatorKind::kModelBased:
@@ -131,8 +135,8 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
         a->mutable_a1_bounds()->set_max(lead);
         a->mutable_a2_bounds()->set_min(-lead * lead);
         a->mutable_a2_bounds()->set_max(lead * lead);
-        summary << ", adaptive correction window 1 s, a1 within +-" << lead * 1e3 << " ms, a2 within +-"
-                << lead * lead << " s^2";
+        summary << ", adaptive correction window 1 s, a1 within +-" << lead * 1e3
+                << " ms, a2 within +-" << lead * lead << " s^2";
       }
       break;
     }

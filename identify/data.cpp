@@ -68,7 +68,8 @@ std::optional<std::size_t> find_column(const std::vector<std::string>& header,
 
 void check_sample_rate(double sample_rate, const std::filesystem::path& path) {
   if (sample_rate < 0.0 || !std::isfinite(sample_rate)) {
-    throw std::invalid_argument(path.string() + ": --sample-rate must be a positive number of Hz, got " +
+    throw std::invalid_argument(path.string() +
+                                ": --sample-rate must be a positive number of Hz, got " +
                                 std::to_string(sample_rate));
   }
 }
@@ -77,8 +78,9 @@ void check_sample_rate(double sample_rate, const std::filesystem::path& path) {
 void check_same_rate(double file_rate, double sample_rate, const std::string& what,
                      const std::filesystem::path& path) {
   if (sample_rate > 0.0 && std::abs(file_rate - sample_rate) > 0.01 * sample_rate) {
-    throw std::invalid_argument(path.string() + ": " + what + " gives " + std::to_string(file_rate) +
-                                " Hz but --sample-rate says " + std::to_string(sample_rate) +
+    throw std::invalid_argument(path.string() + ": " + what + " gives " +
+                                std::to_string(file_rate) + " Hz but --sample-rate says " +
+                                std::to_string(sample_rate) +
                                 " Hz; drop --sample-rate or fix the file");
   }
 }
@@ -207,15 +209,14 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
   if (!it && !(sample_rate > 0.0)) {
     std::string names;
     for (const auto& h : header) names += (names.empty() ? "" : ", ") + h;
-    throw std::invalid_argument(where(path, header_line) +
-                                "no 'time' column (header has: " + names +
-                                "); give the sampling rate with --sample-rate HZ");
+    throw std::invalid_argument(where(path, header_line) + "no 'time' column (header has: " +
+                                names + "); give the sampling rate with --sample-rate HZ");
   }
   const std::size_t ic = column_index(header, "command", path, header_line);
   const std::size_t im = column_index(header, "measured", path, header_line);
-  const std::optional<std::size_t> iforce =
-      force == ForceColumn::kRequired ? column_index(header, "force", path, header_line)
-                                      : find_column(header, "force");
+  const std::optional<std::size_t> iforce = force == ForceColumn::kRequired
+                                                ? column_index(header, "force", path, header_line)
+                                                : find_column(header, "force");
   const std::size_t needed = std::max({it.value_or(0), ic, im, iforce.value_or(0)}) + 1;
   while (std::getline(in, line)) {
     ++line_number;
@@ -323,9 +324,9 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
                                   std::to_string(fields.size()) + " columns, expected at least " +
                                   std::to_string(needed));
     }
-    const double sample = isample ? parse_number(fields[*isample], path, line_number,
-                                                 header[*isample])
-                                  : static_cast<double>(data.time.size());
+    const double sample = isample
+                              ? parse_number(fields[*isample], path, line_number, header[*isample])
+                              : static_cast<double>(data.time.size());
     if (data.time.empty()) first_sample = sample;
     data.time.push_back((sample - first_sample) * interval);
     data.command.push_back(1.0e-3 * map.command.scale *
@@ -370,8 +371,8 @@ void write_csv(const MeasuredData& data, const std::filesystem::path& path) {
 MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end) {
   if (!(begin < end && end <= data.size())) {
     throw std::invalid_argument(data.source + ": slice [" + std::to_string(begin) + ", " +
-                                std::to_string(end) + ") outside " +
-                                std::to_string(data.size()) + " samples");
+                                std::to_string(end) + ") outside " + std::to_string(data.size()) +
+                                " samples");
   }
   MeasuredData out;
   out.source = data.source + "[" + std::to_string(begin) + ":" + std::to_string(end) + "]";
@@ -391,14 +392,15 @@ MeasuredData slice(const MeasuredData& data, std::size_t begin, std::size_t end)
 ActiveRange active_range(const MeasuredData& data, double threshold, double margin,
                          double rest_window) {
   if (!(threshold > 0.0 && threshold < 1.0) || !(margin >= 0.0) || !(rest_window > 0.0)) {
-    throw std::invalid_argument("active_range: threshold must be in (0, 1), margin >= 0 s, "
-                                "rest window > 0 s");
+    throw std::invalid_argument(
+        "active_range: threshold must be in (0, 1), margin >= 0 s, "
+        "rest window > 0 s");
   }
   const std::size_t n = data.size();
   ActiveRange whole{0, n};
   if (n == 0 || !(data.dt > 0.0)) return whole;
-  const auto rest_samples = std::clamp<std::size_t>(
-      static_cast<std::size_t>(std::llround(rest_window / data.dt)), 1, n);
+  const auto rest_samples =
+      std::clamp<std::size_t>(static_cast<std::size_t>(std::llround(rest_window / data.dt)), 1, n);
   double rest_first = 0.0, rest_last = 0.0;
   for (std::size_t i = 0; i < rest_samples; ++i) {
     rest_first += data.command[i];

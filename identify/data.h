@@ -87,8 +87,9 @@ MeasuredData read_measured(const std::filesystem::path& path, const CsvUnits& un
 // Throws std::runtime_error naming the file.
 void write_csv(const MeasuredData& data, const std::filesystem::path& path);
 
-// Checks sizes (force: as long as time, or empty), finiteness, strictly increasing and uniform (within 1 %) time, and length.
-// Sets dt to the mean step. Throws std::invalid_argument naming the source and the sample.
+// Checks sizes (force: as long as time, or empty), finiteness, strictly increasing and uniform
+// (within 1 %) time, and length. Sets dt to the mean step. Throws std::invalid_argument naming the
+// source and the sample.
 void validate(MeasuredData& data, std::size_t min_samples);
 
 // Samples [begin, end) as a record of their own (time kept). Throws std::invalid_argument when

@@ -31,8 +31,8 @@ Effect channel_effect(const std::string& name, Channel channel, const std::strin
     fail(source, field, e.what());
   }
   if (!effect_applies(effect, channel)) {
-    fail(source, field, "effect '" + name + "' does not apply to channel '" +
-                            channel_name(channel) + "'");
+    fail(source, field,
+         "effect '" + name + "' does not apply to channel '" + channel_name(channel) + "'");
   }
   return effect;
 }
@@ -70,8 +70,8 @@ std::vector<ParamDeclaration> read_parameters(
       std::string list;
       for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
       fail(source, field,
-           "unknown parameter '" + p.name() + "' for the declared " + prefix + " (its parameters: " +
-               (list.empty() ? "none" : list) + ")");
+           "unknown parameter '" + p.name() + "' for the declared " + prefix +
+               " (its parameters: " + (list.empty() ? "none" : list) + ")");
     }
     for (const auto& earlier : out) {
       if (earlier.name == p.name()) fail(source, field, "parameter declared twice");
@@ -82,9 +82,10 @@ std::vector<ParamDeclaration> read_parameters(
     if (p.has_initial()) d.initial = p.initial();
     if (p.has_min()) d.lower = p.min();
     if (p.has_max()) d.upper = p.max();
-    for (const auto& [what, value] : {std::pair{"initial", d.initial}, std::pair{"min", d.lower},
-                                      std::pair{"max", d.upper}}) {
-      if (value && !std::isfinite(*value)) fail(source, field, std::string(what) + " is not finite");
+    for (const auto& [what, value] :
+         {std::pair{"initial", d.initial}, std::pair{"min", d.lower}, std::pair{"max", d.upper}}) {
+      if (value && !std::isfinite(*value))
+        fail(source, field, std::string(what) + " is not finite");
     }
     if (d.lower && d.upper && *d.lower > *d.upper) {
       fail(source, field, "min " + number(*d.lower) + " > max " + number(*d.upper));
@@ -155,7 +156,8 @@ DeclaredModel parse_declared_model(const std::string& text, const std::string& s
       const Effect e = channel_effect(s.effects(i), Channel::kForce, source, field);
       if (specimen.kind && std::find(specimen.effects.begin(), specimen.effects.end(), e) !=
                                specimen.effects.end()) {
-        fail(source, field, "effect '" + s.effects(i) + "' is already part of kind '" + s.kind() + "'");
+        fail(source, field,
+             "effect '" + s.effects(i) + "' is already part of kind '" + s.kind() + "'");
       }
       add_effect(specimen.effects, e, source, field);
     }
@@ -182,11 +184,10 @@ void check_physical_bounds(const DeclaredChannel& declared, Channel channel,
     const auto spec = std::find_if(physical.begin(), physical.end(),
                                    [&](const ParamSpec& s) { return s.name == d.name; });
     if (spec == physical.end()) continue;  // parse_declared_model refused unknown names
-    const std::string field =
-        prefix + ".parameters[" + std::to_string(i) + "] (" + d.name + ")";
+    const std::string field = prefix + ".parameters[" + std::to_string(i) + "] (" + d.name + ")";
     const std::string unit = " " + spec->unit;
-    for (const auto& [what, value] : {std::pair{"min", d.lower}, std::pair{"max", d.upper},
-                                      std::pair{"initial", d.initial}}) {
+    for (const auto& [what, value] :
+         {std::pair{"min", d.lower}, std::pair{"max", d.upper}, std::pair{"initial", d.initial}}) {
       if (!value) continue;
       if (*value < spec->lower) {
         fail(source, field,
@@ -216,8 +217,8 @@ config::DeclaredModel to_config(const ChannelModel* actuator, const ChannelModel
     std::size_t best_size = 0;
     for (SpecimenKind kind : specimen_kinds()) {
       const auto effects = kind_effects(kind);
-      const bool contained = std::all_of(effects.begin(), effects.end(),
-                                         [&](Effect e) { return specimen->has(e); });
+      const bool contained =
+          std::all_of(effects.begin(), effects.end(), [&](Effect e) { return specimen->has(e); });
       if (contained && effects.size() > best_size) {
         best = kind;
         best_size = effects.size();

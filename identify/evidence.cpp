@@ -1,7 +1,7 @@
 #include "identify/evidence.h"
 
-#include <numbers>
 #include <fftw3.h>
+#include <numbers>
 
 #include <algorithm>
 #include <cmath>
@@ -12,11 +12,11 @@
 namespace rths::identify {
 namespace {
 
-
 std::vector<double> centred(std::span<const double> x) {
   std::vector<double> out(x.begin(), x.end());
   if (out.empty()) return out;
-  const double mean = std::accumulate(out.begin(), out.end(), 0.0) / static_cast<double>(out.size());
+  const double mean =
+      std::accumulate(out.begin(), out.end(), 0.0) / static_cast<double>(out.size());
   for (double& v : out) v -= mean;
   return out;
 }
@@ -28,8 +28,8 @@ std::vector<std::complex<double>> rfft(const std::vector<double>& x, std::size_t
   std::vector<std::complex<double>> out(n / 2 + 1);
   fftw_plan plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in.data(),
                                         reinterpret_cast<fftw_complex*>(out.data()), FFTW_ESTIMATE);
-  if (plan == nullptr) throw std::runtime_error("FFTW could not plan a transform of size " +
-                                                std::to_string(n));
+  if (plan == nullptr)
+    throw std::runtime_error("FFTW could not plan a transform of size " + std::to_string(n));
   fftw_execute(plan);
   fftw_destroy_plan(plan);
   return out;
@@ -37,9 +37,9 @@ std::vector<std::complex<double>> rfft(const std::vector<double>& x, std::size_t
 
 std::vector<double> irfft(std::vector<std::complex<double>> spectrum, std::size_t n) {
   std::vector<double> out(n);
-  fftw_plan plan = fftw_plan_dft_c2r_1d(static_cast<int>(n),
-                                        reinterpret_cast<fftw_complex*>(spectrum.data()),
-                                        out.data(), FFTW_ESTIMATE);
+  fftw_plan plan =
+      fftw_plan_dft_c2r_1d(static_cast<int>(n), reinterpret_cast<fftw_complex*>(spectrum.data()),
+                           out.data(), FFTW_ESTIMATE);
   if (plan == nullptr) throw std::runtime_error("FFTW could not plan an inverse transform");
   fftw_execute(plan);
   fftw_destroy_plan(plan);
@@ -99,9 +99,11 @@ CrossCorrelation cross_correlation(std::span<const double> a, std::span<const do
   const auto fb = rfft(cb, size);
   for (std::size_t k = 0; k < fa.size(); ++k) fa[k] = std::conj(fa[k]) * fb[k];
   const auto c = irfft(std::move(fa), size);  // c[l] = sum a_i b_{i+l}, negative l wrap around
-  const auto max_l = static_cast<long>(std::min<double>(std::floor(max_lag / dt),
-                                                        static_cast<double>(n - 1)));
-  const auto at = [&](long l) { return c[static_cast<std::size_t>(l >= 0 ? l : static_cast<long>(size) + l)] / norm; };
+  const auto max_l =
+      static_cast<long>(std::min<double>(std::floor(max_lag / dt), static_cast<double>(n - 1)));
+  const auto at = [&](long l) {
+    return c[static_cast<std::size_t>(l >= 0 ? l : static_cast<long>(size) + l)] / norm;
+  };
   long best = 0;
   for (long l = -max_l; l <= max_l; ++l) {
     if (std::abs(at(l)) > std::abs(at(best))) best = l;
@@ -161,8 +163,9 @@ WelchSums welch_sums(std::span<const double> x, std::span<const double> y, std::
 TransferEstimate transfer_estimate(std::span<const double> x, std::span<const double> y, double dt,
                                    std::size_t segment) {
   if (x.size() != y.size() || segment < 8 || x.size() < segment || !(dt > 0.0)) {
-    throw std::invalid_argument("transfer_estimate: need two series of equal length >= the segment (" +
-                                std::to_string(segment) + " >= 8 samples) and dt > 0");
+    throw std::invalid_argument(
+        "transfer_estimate: need two series of equal length >= the segment (" +
+        std::to_string(segment) + " >= 8 samples) and dt > 0");
   }
   const WelchSums w = welch_sums(x, y, segment);
   TransferEstimate out;
@@ -177,7 +180,8 @@ TransferEstimate transfer_estimate(std::span<const double> x, std::span<const do
     out.phase.push_back(phase);
     previous = phase;
     const double denominator = w.sxx[k] * w.syy[k];
-    out.coherence.push_back(denominator > 0.0 ? std::min(1.0, std::norm(w.sxy[k]) / denominator) : 0.0);
+    out.coherence.push_back(denominator > 0.0 ? std::min(1.0, std::norm(w.sxy[k]) / denominator)
+                                              : 0.0);
   }
   return out;
 }
@@ -195,7 +199,8 @@ double noise_edge(std::span<const double> x, double dt) {
     if (static_cast<double>(k) * df > 1.5 * band) above.push_back(w.sxx[k]);
   }
   if (above.empty()) return 0.0;
-  std::nth_element(above.begin(), above.begin() + static_cast<std::ptrdiff_t>(above.size() / 2), above.end());
+  std::nth_element(above.begin(), above.begin() + static_cast<std::ptrdiff_t>(above.size() / 2),
+                   above.end());
   const double noise = above[above.size() / 2];
   if (!(noise > 0.0)) return 0.0;
   // The first bin above the band whose 5-bin average has sunk to 10 x the noise density.

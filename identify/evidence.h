@@ -11,7 +11,8 @@
 //                        the input, the input's velocity, sign(velocity), the input cubed and the
 //                        acceleration; the cross-correlation input -> residual; the residual
 //                        spectrum's dominant frequency and the share of its power below 1 Hz.
-//   signal_band          f_s (Hz): the frequency below which 99.5 % of x's power lies (mean removed;
+//   signal_band          f_s (Hz): the frequency below which 99.5 % of x's power lies (mean
+//   removed;
 //                        0 for fewer than 16 samples or no power).
 //   transfer_estimate    H1(f) = S_xy(f) / S_xx(f) of output y against input x by Welch averaging:
 //                        segments of `segment` samples with 50 % overlap, each with its mean

@@ -19,9 +19,14 @@ class ChannelCost final : public ceres::CostFunction {
  public:
   ChannelCost(const ChannelModel& model, const ChannelSignals& signals, const Split& split,
               std::vector<double> scales, std::size_t stride, double target_scale, int threads)
-      : model_(model), signals_(signals), scales_(std::move(scales)), stride_(stride),
-        target_scale_(target_scale), threads_(threads) {
-    for (std::size_t r = 0; r < split.train.size(); r += stride_) indices_.push_back(split.train[r]);
+      : model_(model),
+        signals_(signals),
+        scales_(std::move(scales)),
+        stride_(stride),
+        target_scale_(target_scale),
+        threads_(threads) {
+    for (std::size_t r = 0; r < split.train.size(); r += stride_)
+      indices_.push_back(split.train[r]);
     set_num_residuals(static_cast<int>(indices_.size()));
     mutable_parameter_block_sizes()->push_back(static_cast<int>(scales_.size()));
   }
@@ -37,7 +42,9 @@ class ChannelCost final : public ceres::CostFunction {
     // they run on threads_ threads; every value is the same whatever the threads.
     const std::size_t items = with_jacobian ? 2 * p + 1 : 1;
     std::vector<std::vector<double>> runs(items);
-    const auto step = [&](std::size_t i) { return 1e-5 * std::max(1.0, std::abs(parameters[0][i])); };
+    const auto step = [&](std::size_t i) {
+      return 1e-5 * std::max(1.0, std::abs(parameters[0][i]));
+    };
     util::parallel_for(items, items > 1 ? threads_ : 1, [&](std::size_t item) {
       std::vector<double> shifted = physical;
       if (item > 0) {
@@ -119,8 +126,7 @@ FitResult evaluate_channel(const ChannelModel& model, const ChannelSignals& sign
   result.std_errors.assign(model.params.size(), 0.0);
   result.prediction = predict(model, signals);
   result.train_error = normalised_error(signals.target, result.prediction, split.train);
-  result.heldout_error =
-      normalised_error(signals.target, result.prediction, split.heldout);
+  result.heldout_error = normalised_error(signals.target, result.prediction, split.heldout);
   return result;
 }
 
@@ -193,8 +199,8 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
     Eigen::MatrixXd free_j = J;
     for (int i : constant) free_j.col(i).setZero();
     const Eigen::VectorXd gradient =
-        free_j.transpose() * Eigen::Map<const Eigen::VectorXd>(residuals.data(),
-                                                               static_cast<Eigen::Index>(m));
+        free_j.transpose() *
+        Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(m));
     for (std::size_t i = 0; i < p; ++i) {
       if (specs[i].fixed) continue;
       const double value = theta[i] * scales[i];
@@ -218,8 +224,7 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   }
   result.prediction = predict(result.model, signals);
   result.train_error = normalised_error(signals.target, result.prediction, split.train);
-  result.heldout_error =
-      normalised_error(signals.target, result.prediction, split.heldout);
+  result.heldout_error = normalised_error(signals.target, result.prediction, split.heldout);
   return result;
 }
 

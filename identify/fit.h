@@ -9,9 +9,10 @@
 // Uncertainty: covariance = sigma^2 (J^T J)^+, sigma^2 = RSS / (m - p); reported as one standard
 // deviation per parameter. Residuals of real records are coloured, so these are lower bounds.
 // Fixed parameters (ChannelModel::fixed, or declared fixed: ParamSpec::fixed) are held (Ceres
-// SubsetManifold) and have no uncertainty. Bounds are the specs' (physical, narrowed by declarations).
-// A bound hit: a free parameter that ends within 1e-6 (relative) of a bound while the gradient of
-// the cost, J^T r, still points beyond it, i.e. the data want a value the bounds forbid.
+// SubsetManifold) and have no uncertainty. Bounds are the specs' (physical, narrowed by
+// declarations). A bound hit: a free parameter that ends within 1e-6 (relative) of a bound while
+// the gradient of the cost, J^T r, still points beyond it, i.e. the data want a value the bounds
+// forbid.
 
 #include <functional>
 #include <string>
@@ -36,22 +37,22 @@ struct FitOptions {
 };
 
 struct BoundHit {
-  std::size_t index = 0;   // in the model's params
-  std::string name;        // parameter name
-  bool at_lower = true;    // which bound
-  double bound = 0.0;      // its value, SI
-  std::string meaning;     // ParamSpec::below_means when at_lower, else ""
+  std::size_t index = 0;  // in the model's params
+  std::string name;       // parameter name
+  bool at_lower = true;   // which bound
+  double bound = 0.0;     // its value, SI
+  std::string meaning;    // ParamSpec::below_means when at_lower, else ""
   // "the data want a negative stiffness" or "the data want time_constant above 1 s"
   std::string message() const;
 };
 
 struct FitResult {
-  ChannelModel model;               // with fitted parameters
-  std::vector<double> std_errors;   // one per parameter, same units
-  std::vector<double> prediction;   // over the whole record
-  double train_error = 0.0;         // normalised_error over split.train
-  double heldout_error = 0.0;       // normalised_error over split.heldout
-  double cost = 0.0;                // final Ceres cost (training, at the stride)
+  ChannelModel model;              // with fitted parameters
+  std::vector<double> std_errors;  // one per parameter, same units
+  std::vector<double> prediction;  // over the whole record
+  double train_error = 0.0;        // normalised_error over split.train
+  double heldout_error = 0.0;      // normalised_error over split.heldout
+  double cost = 0.0;               // final Ceres cost (training, at the stride)
   std::vector<BoundHit> bound_hits;
 };
 

@@ -1,8 +1,8 @@
 #include "identify/generator.h"
 
-#include <numbers>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 
@@ -11,7 +11,6 @@
 
 namespace rths::identify {
 namespace {
-
 
 std::vector<double> chirp(const GeneratorSpec& spec, std::size_t n) {
   std::vector<double> u(n);
@@ -42,7 +41,8 @@ std::vector<double> earthquake_like(const GeneratorSpec& spec, std::size_t n) {
     const double y = high_pass.step({t, x, 0.0});
     const double rise = 0.1 * spec.duration, decay_start = 0.6 * spec.duration;
     double envelope = t < rise ? t / rise : 1.0;
-    if (t > decay_start) envelope = std::exp(-3.0 * (t - decay_start) / (spec.duration - decay_start));
+    if (t > decay_start)
+      envelope = std::exp(-3.0 * (t - decay_start) / (spec.duration - decay_start));
     u[i] = y * envelope;
     peak = std::max(peak, std::abs(u[i]));
   }
@@ -75,8 +75,8 @@ core::DelayChain actuator_chain(const GeneratorSpec& spec, const std::vector<dou
     core::DelayTrace trace;
     for (const double t : time) {
       trace.time.push_back(t);
-      trace.delay.push_back(spec.delay +
-                            spec.delay_drift * std::sin(2.0 * std::numbers::pi * t / spec.duration));
+      trace.delay.push_back(spec.delay + spec.delay_drift *
+                                             std::sin(2.0 * std::numbers::pi * t / spec.duration));
     }
     auto shift = std::make_unique<core::TraceShift>(std::move(trace), spec.dt);
     shift->set_gain(spec.gain);
@@ -170,8 +170,8 @@ MeasuredData generate_measured(const GeneratorSpec& spec) {
   data.dt = spec.dt;
   data.time.resize(n);
   for (std::size_t i = 0; i < n; ++i) data.time[i] = static_cast<double>(i) * spec.dt;
-  data.command = spec.command == GeneratorSpec::Command::kChirp ? chirp(spec, n)
-                                                                : earthquake_like(spec, n);
+  data.command =
+      spec.command == GeneratorSpec::Command::kChirp ? chirp(spec, n) : earthquake_like(spec, n);
   measure_specimen(spec, realised_displacement(spec, data), data);
   validate(data, kDefaultMinSamples);
   return data;

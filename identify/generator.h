@@ -30,36 +30,36 @@ namespace rths::identify {
 struct GeneratorSpec {
   enum class Command { kChirp, kEarthquake };
   Command command = Command::kChirp;
-  double duration = 20.0;        // s
-  double dt = 0.002;             // s
-  double amplitude = 0.002;      // m, peak command
-  double chirp_start = 0.3;      // Hz
-  double chirp_end = 12.0;       // Hz
-  double corner_frequency = 4.0; // Hz, earthquake-like spectrum
+  double duration = 20.0;         // s
+  double dt = 0.002;              // s
+  double amplitude = 0.002;       // m, peak command
+  double chirp_start = 0.3;       // Hz
+  double chirp_end = 12.0;        // Hz
+  double corner_frequency = 4.0;  // Hz, earthquake-like spectrum
   // actuator
   double delay = 0.012, gain = 1.0;
-  double delay_drift = 0.0;                // s, amplitude of the delay's drift (<= delay)
-  double gain_drift = 0.0;  // relative: the realised displacement times 1 + g sin(2 pi t / T)
+  double delay_drift = 0.0;  // s, amplitude of the delay's drift (<= delay)
+  double gain_drift = 0.0;   // relative: the realised displacement times 1 + g sin(2 pi t / T)
   double first_order_time_constant = 0.0;  // s, 0 = absent
   double second_order_frequency = 0.0;     // Hz, 0 = absent
   double second_order_damping = 0.7;
-  double backlash_width = 0.0;             // m
-  double max_velocity = 0.0;               // m/s, 0 = no saturation
-  double offset = 0.0, drift = 0.0;        // m
+  double backlash_width = 0.0;       // m
+  double max_velocity = 0.0;         // m/s, 0 = no saturation
+  double offset = 0.0, drift = 0.0;  // m
   // specimen
-  double stiffness = 2.0e5;                // N/m
-  double damping = 0.0;                    // N s/m
+  double stiffness = 2.0e5;                              // N/m
+  double damping = 0.0;                                  // N s/m
   double coulomb_force = 0.0, coulomb_velocity = 0.002;  // N, m/s
-  double cubic_stiffness = 0.0;            // N/m^3
-  double mass = 0.0;                       // kg
+  double cubic_stiffness = 0.0;                          // N/m^3
+  double mass = 0.0;                                     // kg
   double bouc_wen_yield = 0.0, bouc_wen_alpha = 0.1;     // m (0 = linear spring), -
-  double force_offset = 0.0;               // N
+  double force_offset = 0.0;                             // N
   // relative drift of the stiffness: + stiffness_drift k sin(2 pi t / duration) d (a warming or
   // cracking specimen)
   double stiffness_drift = 0.0;
   // noise
-  double displacement_noise = 2.0e-6;      // m rms
-  double force_noise = 2.0;                // N rms
+  double displacement_noise = 2.0e-6;  // m rms
+  double force_noise = 2.0;            // N rms
   std::uint64_t seed = 1;
 };
 

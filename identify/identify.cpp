@@ -73,8 +73,8 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
   result.dt = data.dt;
   std::size_t factor = options.search_decimation;
   if (factor == 0) {
-    factor = std::max<std::size_t>(
-        1, (data.size() + options.search_samples - 1) / std::max<std::size_t>(1, options.search_samples));
+    factor = std::max<std::size_t>(1, (data.size() + options.search_samples - 1) /
+                                          std::max<std::size_t>(1, options.search_samples));
   }
   result.search_decimation = factor;
   const MeasuredData search = decimated(data, factor);
@@ -99,8 +99,8 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
     const auto& declared =
         channel == Channel::kMeasured ? options.declared_actuator : options.declared_specimen;
     const ChannelSignals search_signals = make_signals(search, channel);
-    const auto& declarations = channel == Channel::kMeasured ? options.actuator_parameters
-                                                             : options.specimen_parameters;
+    const auto& declarations =
+        channel == Channel::kMeasured ? options.actuator_parameters : options.specimen_parameters;
     SelectionOptions selection = options.selection;
     const std::string name = channel_name(channel);
     selection.progress = [&](std::size_t units) { report(channel_start + units, last_stage); };
@@ -108,12 +108,13 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
     selection.fit.on_iteration = heartbeat;
     if (factor > 1) {
       selection.fit.tolerance = options.search_tolerance;
-      selection.fit.max_iterations = std::min(selection.fit.max_iterations, options.search_iterations);
+      selection.fit.max_iterations =
+          std::min(selection.fit.max_iterations, options.search_iterations);
     }
     const std::size_t search_units = selection_units(options.selection, channel);
     report(channel_start, name + ": search");
-    ChannelIdentification id = identify_channel(search_signals, search_split, declared,
-                                                selection, declarations);
+    ChannelIdentification id =
+        identify_channel(search_signals, search_split, declared, selection, declarations);
     report(channel_start + search_units, name + ": full-rate refit");
     ChannelSignals signals = make_signals(data, channel);
     if (factor > 1) refit_at_full_rate(id, signals, result.split, full_fit);

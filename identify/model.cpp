@@ -2,18 +2,17 @@
 
 #include "identify/evidence.h"
 
-#include <numbers>
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
 
 namespace rths::identify {
 namespace {
-
 
 struct EffectInfo {
   Effect effect;
@@ -122,7 +121,8 @@ std::vector<ParamSpec> drift_params(const std::string& prefix, const std::string
                                     double scale, double bound) {
   std::vector<ParamSpec> out;
   for (std::size_t k = 1; k <= kDriftTerms; ++k) {
-    ParamSpec spec = param_spec(prefix + "_c" + std::to_string(k), unit, scale, -bound, bound, {0.0});
+    ParamSpec spec =
+        param_spec(prefix + "_c" + std::to_string(k), unit, scale, -bound, bound, {0.0});
     spec.record_specific = true;
     out.push_back(std::move(spec));
   }
@@ -153,7 +153,8 @@ std::vector<double> drift_basis(std::span<const double> time, double dt) {
   for (std::size_t j = 0; j < time.size(); ++j) {
     const double s = (time[j] - t_mid) / duration;
     for (std::size_t k = 0; k < kDriftTerms; ++k) {
-      basis[j * kDriftTerms + k] = std::cos(std::numbers::pi * static_cast<double>(k + 1) * (s + 0.5));
+      basis[j * kDriftTerms + k] =
+          std::cos(std::numbers::pi * static_cast<double>(k + 1) * (s + 0.5));
     }
   }
   return basis;
@@ -229,7 +230,8 @@ ChannelSignals make_signals(const MeasuredData& data, Channel channel, double sm
   if (channel == Channel::kForce && s.input.size() >= 16) {
     const double edge = noise_edge(s.input, data.dt);
     const double cutoff =
-        edge > 0.0 ? std::max(kSpecimenInputCutoffFactor * signal_band(s.input, data.dt), edge) : 0.0;
+        edge > 0.0 ? std::max(kSpecimenInputCutoffFactor * signal_band(s.input, data.dt), edge)
+                   : 0.0;
     if (cutoff > 0.0 && cutoff < 0.8 * 0.5 / data.dt) {
       s.model_input = zero_phase_lowpass(s.input, data.dt, cutoff);
       s.input_cutoff = cutoff;
@@ -284,7 +286,8 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
       return {non_negative(delay, "a negative delay (a lead)")};
     }
     case Effect::kOffsetDrift: {
-      ParamSpec offset = param_spec("offset", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0});
+      ParamSpec offset =
+          param_spec("offset", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0});
       ParamSpec drift = param_spec("drift", measured ? "m" : "N", out_scale, -1e300, 1e300, {0.0});
       offset.record_specific = drift.record_specific = true;
       return {offset, drift};
@@ -292,39 +295,39 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
     case Effect::kFirstOrder:
       return {param_spec("time_constant", "s", 0.01, 0.2 * sc.dt, 1.0, {0.005, 0.03})};
     case Effect::kSecondOrder:
-      return {param_spec("natural_frequency", "rad/s", 100.0, 2.0 * std::numbers::pi * 0.2, std::numbers::pi / sc.dt,
-               {2.0 * std::numbers::pi * 5.0, 2.0 * std::numbers::pi * 20.0}),
+      return {param_spec("natural_frequency", "rad/s", 100.0, 2.0 * std::numbers::pi * 0.2,
+                         std::numbers::pi / sc.dt,
+                         {2.0 * std::numbers::pi * 5.0, 2.0 * std::numbers::pi * 20.0}),
               param_spec("damping_ratio", "-", 1.0, 0.05, 5.0, {0.7})};
     case Effect::kBacklash:
       return {non_negative(param_spec("width", "m", 0.05 * sc.input, 0.0, 10.0 * sc.input,
-                            {0.03 * sc.input, 0.2 * sc.input}),
+                                      {0.03 * sc.input, 0.2 * sc.input}),
                            "a negative backlash width")};
     case Effect::kVelocitySaturation:
       return {param_spec("max_velocity", "m/s", sc.velocity, 0.01 * sc.velocity, 1e300,
-               {0.8 * sc.velocity, 2.0 * sc.velocity})};
-    case Effect::kTimeVaryingDelay:
-      return drift_params("delay", "s", 0.005, 0.1);
-    case Effect::kTimeVaryingGain:
-      return drift_params("gain", "-", 0.02, 0.5);
+                         {0.8 * sc.velocity, 2.0 * sc.velocity})};
+    case Effect::kTimeVaryingDelay: return drift_params("delay", "s", 0.005, 0.1);
+    case Effect::kTimeVaryingGain: return drift_params("gain", "-", 0.02, 0.5);
     case Effect::kStiffness:
       return {non_negative(param_spec("stiffness", "N/m", k_scale, 0.0, 1e300, {0.0}),
                            "a negative stiffness")};
     case Effect::kDamping:
-      return {non_negative(param_spec("damping", "N s/m", sc.target / sc.velocity, 0.0, 1e300, {0.0}),
-                           "a negative damping")};
+      return {
+          non_negative(param_spec("damping", "N s/m", sc.target / sc.velocity, 0.0, 1e300, {0.0}),
+                       "a negative damping")};
     case Effect::kCoulomb:
       return {non_negative(param_spec("friction_force", "N", sc.target, 0.0, 1e300, {0.0}),
                            "a negative friction force"),
               param_spec("smoothing_velocity", "m/s", 0.1 * sc.velocity, 1e-4 * sc.velocity,
-               10.0 * sc.velocity, {0.02 * sc.velocity, 0.2 * sc.velocity})};
+                         10.0 * sc.velocity, {0.02 * sc.velocity, 0.2 * sc.velocity})};
     case Effect::kBoucWen:
       return {non_negative(param_spec("hysteretic_force", "N", sc.target, 0.0, 1e300, {0.0}),
                            "a negative hysteretic force"),
               param_spec("yield_drift", "m", 0.1 * sc.input, 1e-4 * sc.input, 10.0 * sc.input,
-               {0.02 * sc.input, 0.2 * sc.input})};
+                         {0.02 * sc.input, 0.2 * sc.input})};
     case Effect::kCubicStiffness:
-      return {param_spec("cubic_stiffness", "N/m^3", sc.target / std::pow(sc.input, 3), -1e300, 1e300,
-               {0.0})};
+      return {param_spec("cubic_stiffness", "N/m^3", sc.target / std::pow(sc.input, 3), -1e300,
+                         1e300, {0.0})};
     case Effect::kTimeVaryingStiffness:
       return drift_params("stiffness", "N/m", 0.05 * k_scale, 1e300);
     case Effect::kInertia:
@@ -332,10 +335,10 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
                            "a negative mass")};
     case Effect::kElastoPlastic:
       return {non_negative(param_spec("plastic_stiffness", "N/m", k_scale, 0.0, 1e300,
-                            {k_scale, 5.0 * k_scale}),
+                                      {k_scale, 5.0 * k_scale}),
                            "a negative elastic stiffness"),
               non_negative(param_spec("yield_force", "N", sc.target, 0.0, 1e300,
-                            {0.3 * sc.target, 1.0 * sc.target}),
+                                      {0.3 * sc.target, 1.0 * sc.target}),
                            "a negative yield force")};
   }
   throw std::logic_error("unhandled effect");
@@ -532,7 +535,9 @@ class ParamValues {
     std::optional<Effect> effect;
     std::string name;
   };
-  void add(std::optional<Effect> effect, const std::string& name) { entries_.push_back({effect, name}); }
+  void add(std::optional<Effect> effect, const std::string& name) {
+    entries_.push_back({effect, name});
+  }
   std::optional<std::size_t> index(std::optional<Effect> effect, const std::string& name) const {
     for (std::size_t i = 0; i < entries_.size(); ++i) {
       if (entries_[i].effect == effect && entries_[i].name == name) return i;
@@ -549,9 +554,11 @@ class ParamValues {
 class RecordClock {
  public:
   RecordClock(const ChannelSignals& sig, double delay, std::span<const double> delay_c)
-      : sig_(sig), t_mid_(0.5 * (sig.time.front() + sig.time.back())),
+      : sig_(sig),
+        t_mid_(0.5 * (sig.time.front() + sig.time.back())),
         duration_(std::max(sig.time.back() - sig.time.front(), sig.dt)),
-        has_basis_(sig.drift_basis.size() == sig.size() * kDriftTerms), delay_(delay),
+        has_basis_(sig.drift_basis.size() == sig.size() * kDriftTerms),
+        delay_(delay),
         delay_c_(delay_c) {}
   double s(std::size_t j) const { return (sig_.time[j] - t_mid_) / duration_; }
   // D(s_j; c), from the signals' precomputed basis when they carry one (same terms, same order).
@@ -683,7 +690,8 @@ void predict_specimen(const ParamValues& v, const ChannelSignals& sig, std::vect
   const double drift = v.at(Effect::kOffsetDrift, "drift", 0.0);
   const std::span<const double> k_c = v.drift(Effect::kTimeVaryingStiffness, "stiffness");
   const bool bouc_wen = v.has(Effect::kBoucWen), elasto_plastic = v.has(Effect::kElastoPlastic);
-  const double vc_safe = std::max(std::abs(v.at(Effect::kCoulomb, "smoothing_velocity", 1.0)), 1e-12);
+  const double vc_safe =
+      std::max(std::abs(v.at(Effect::kCoulomb, "smoothing_velocity", 1.0)), 1e-12);
   const double dy_safe = std::max(std::abs(v.at(Effect::kBoucWen, "yield_drift", 1.0)), 1e-12);
   const std::vector<double>& displacement = sig.model_input.empty() ? sig.input : sig.model_input;
   const double delay = v.at(Effect::kDelay, "delay", 0.0);

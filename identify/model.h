@@ -2,8 +2,9 @@
 // Parametric models of the two measured channels and the library of effects they may contain.
 //
 // Channel `measured` (the actuator): input command u_c(t) (m) -> measured displacement (m):
-//   x(t)  = u_c(t - tau(t))                 tau(t) = max(0, delay + D(s(t); delay_c))   (interpolated)
-//   x    -> first-order lag    T dy/dt = x - y                  (exact for a held sample)
+//   x(t)  = u_c(t - tau(t))                 tau(t) = max(0, delay + D(s(t); delay_c))
+//   (interpolated) x    -> first-order lag    T dy/dt = x - y                  (exact for a held
+//   sample)
 //        -> second-order lag   y'' + 2 zeta wn y' + wn^2 y = wn^2 x   (Tustin)
 //        -> backlash / dead band of total width b (play operator)
 //        -> velocity saturation |dy/dt| <= v_max
@@ -86,7 +87,8 @@ struct ChannelSignals {
   double input_cutoff = 0.0;  // Hz, the low-pass that made model_input from input; 0 = none
   // The slow drifts' basis at every sample, row-major n x kDriftTerms: cos(pi k (s_j + 1/2)),
   // k = 1..kDriftTerms, s_j the normalised time of sample j (drift_basis()). make_signals fills it
-  // so that predict, run thousands of times per fit, evaluates no cosine; empty = computed per call.
+  // so that predict, run thousands of times per fit, evaluates no cosine; empty = computed per
+  // call.
   std::vector<double> drift_basis;
   // Unique to one make_signals call (copies share it; 0 = none): lets predict reuse, within a
   // thread, the friction and hysteresis sequences of the last call on the same signals when their

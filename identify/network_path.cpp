@@ -65,7 +65,8 @@ std::vector<double> drift_model(const std::vector<double>& x, const std::vector<
   for (Eigen::Index r = 0; r < rows; ++r) {
     const std::size_t i = fit_on[static_cast<std::size_t>(r)];
     a(r, 0) = 1.0;
-    for (std::size_t k = 0; k < kDriftTerms; ++k) a(r, static_cast<Eigen::Index>(k + 1)) = basis(s[i], k);
+    for (std::size_t k = 0; k < kDriftTerms; ++k)
+      a(r, static_cast<Eigen::Index>(k + 1)) = basis(s[i], k);
     b(r) = x[i];
   }
   const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
@@ -109,8 +110,8 @@ double regular_period(const std::vector<double>& times, double dt) {
   std::vector<double> spacing;
   for (std::size_t i = 1; i < starts.size(); ++i) spacing.push_back(starts[i] - starts[i - 1]);
   const double period = median_of(spacing);
-  const auto regular = std::count_if(spacing.begin(), spacing.end(),
-                                     [&](double d) { return on_grid(d, period); });
+  const auto regular =
+      std::count_if(spacing.begin(), spacing.end(), [&](double d) { return on_grid(d, period); });
   return 3 * regular >= 2 * static_cast<std::ptrdiff_t>(spacing.size()) ? period : 0.0;
 }
 
@@ -154,8 +155,8 @@ void counted_effects(NetworkPath& out) {
   const double expected_burst_probability =
       static_cast<double>(out.answers) *
       std::pow(out.declared.loss, static_cast<double>(out.longest_burst));
-  if (out.lost > 0 && (out.declared.loss == 0.0 ||
-                       (out.longest_burst >= 3 && expected_burst_probability < 1e-3))) {
+  if (out.lost > 0 &&
+      (out.declared.loss == 0.0 || (out.longest_burst >= 3 && expected_burst_probability < 1e-3))) {
     out.effects.push_back({"lost answers",
                            std::to_string(out.lost) + " lost, longest burst " +
                                std::to_string(out.longest_burst) + " consecutive (declared loss " +
@@ -164,9 +165,10 @@ void counted_effects(NetworkPath& out) {
   }
   const double difference = out.injected_mean - out.declared.round_trip;
   if (std::abs(difference) > std::max(1e-4, 0.05 * out.declared.round_trip)) {
-    out.effects.push_back({"injection", "the node injected " + ms(out.injected_mean) +
-                                            " per round trip, the config declares " +
-                                            ms(out.declared.round_trip),
+    out.effects.push_back({"injection",
+                           "the node injected " + ms(out.injected_mean) +
+                               " per round trip, the config declares " +
+                               ms(out.declared.round_trip),
                            0.0, 0.0, 0.0});
   }
 }
@@ -237,8 +239,9 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
   out.drift_range = *high - *low;
   const double before = rms_about(x, base, heldout), after = rms_about(x, drift, heldout);
   if (pays(before, after)) {
-    out.effects.push_back({"drifting delay", "the excess lag moves over " + ms(out.drift_range) +
-                                                 " in the run", before, after, 0.0});
+    out.effects.push_back({"drifting delay",
+                           "the excess lag moves over " + ms(out.drift_range) + " in the run",
+                           before, after, 0.0});
     base = drift;
   }
   out.model = base;
@@ -248,16 +251,17 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
     const double spikes_before = rms_about(x, base, split.heldout);
     const double spikes_after = rms_about(x, model, split.heldout);
     if (pays(spikes_before, spikes_after)) {
-      out.effects.push_back({"periodic spikes", std::to_string(out.spikes) + " spikes of " +
-                                                    ms(out.spike_height) + " every " +
-                                                    ms(out.spike_period),
+      out.effects.push_back({"periodic spikes",
+                             std::to_string(out.spikes) + " spikes of " + ms(out.spike_height) +
+                                 " every " + ms(out.spike_period),
                              spikes_before, spikes_after, 0.0});
       out.model = model;
     }
   }
   double removed = 0.0;
   for (const auto& e : out.effects) removed += e.heldout_before - e.heldout_after;
-  for (auto& e : out.effects) e.share = removed > 0.0 ? (e.heldout_before - e.heldout_after) / removed : 0.0;
+  for (auto& e : out.effects)
+    e.share = removed > 0.0 ? (e.heldout_before - e.heldout_after) / removed : 0.0;
 }
 
 }  // namespace

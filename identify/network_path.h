@@ -48,27 +48,27 @@ struct DeclaredLink {
 
 struct LinkAnswers {
   int node_id = 0;
-  std::vector<double> time;                  // s
+  std::vector<double> time;  // s
   std::vector<std::int64_t> answered_step;
   std::vector<double> round_trip, injected;  // s
 };
 
 struct NetworkEffect {
-  std::string name;     // "drifting delay", "periodic spikes", "lost answers", "injection"
-  std::string detail;   // what was measured, with units
+  std::string name;    // "drifting delay", "periodic spikes", "lost answers", "injection"
+  std::string detail;  // what was measured, with units
   double heldout_before = 0.0, heldout_after = 0.0;  // s, RMS of x about the model (fitted ones)
-  double share = 0.0;   // of the held-out RMS the fitted effects removed
+  double share = 0.0;  // of the held-out RMS the fitted effects removed
 };
 
 struct NetworkPath {
   int node_id = 0;
   std::size_t answers = 0, lost = 0, longest_burst = 0, late = 0, spikes = 0;
   double bias = 0.0, jitter = 0.0, drift_range = 0.0, spike_period = 0.0;  // s
-  double spike_height = 0.0;          // s, median excess of the spikes above the bias
-  double injected_mean = 0.0;         // s
+  double spike_height = 0.0;   // s, median excess of the spikes above the bias
+  double injected_mean = 0.0;  // s
   DeclaredLink declared;
-  double heldout_declared = 0.0;      // s, RMS of x about the bias over the held-out answers
-  std::vector<NetworkEffect> effects; // the undeclared effects named, fitted ones first
+  double heldout_declared = 0.0;       // s, RMS of x about the bias over the held-out answers
+  std::vector<NetworkEffect> effects;  // the undeclared effects named, fitted ones first
   // Per answer: its time, round trip, injected lag and the identified model of the round trip
   // (injected + the excess's median over the training answers, + the drift and the periodic
   // spikes when they were named), s.

@@ -1,7 +1,7 @@
 #include "identify/predict.h"
 
-#include <numbers>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -51,8 +51,8 @@ std::string describe_stages(const config::Case& study_case) {
     } else if (stage.has_transfer_function() && stage.transfer_function().denominator_size() == 3) {
       const auto& den = stage.transfer_function().denominator();
       const double wn = std::sqrt(den[2]);
-      out << ", second order fn = " << wn / (2.0 * std::numbers::pi) << " Hz zeta = "
-          << den[1] / (2.0 * wn);
+      out << ", second order fn = " << wn / (2.0 * std::numbers::pi)
+          << " Hz zeta = " << den[1] / (2.0 * wn);
     }
   }
   return out.str();
@@ -89,7 +89,8 @@ StudyPrediction predict_study(const std::filesystem::path& config, const Channel
     if (c.name() == ref_case.name()) continue;
     const core::HybridSetup setup = core::setup_for_case(prepared, c);
     const double nominal = setup.delays.empty() ? 0.0 : setup.delays.front().nominal_delay();
-    out.cases.push_back(compare(c.name(), reference, core::simulate(setup, prepared.motion), nominal));
+    out.cases.push_back(
+        compare(c.name(), reference, core::simulate(setup, prepared.motion), nominal));
   }
 
   ActuatorChain chain = actuator_chain(actuator, scales, reference_setup.dt);

@@ -32,7 +32,7 @@ ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scal
 
 struct CaseError {
   std::string name;
-  double nominal_delay = 0.0;  // s, the chain's low-frequency lag
+  double nominal_delay = 0.0;                                    // s, the chain's low-frequency lag
   double nrmse = 0.0, paper_eq2 = 0.0, peak_displacement = 0.0;  // -, -, m
   bool diverged = false;
 };

@@ -146,9 +146,8 @@ std::string percent(double v) {
 }
 
 // Every `stride`-th sample of [begin, end) as x/y series.
-util::Series series(const std::string& title, std::span<const double> x,
-                        std::span<const double> y, std::size_t begin, std::size_t end,
-                        std::size_t max_points = 4000) {
+util::Series series(const std::string& title, std::span<const double> x, std::span<const double> y,
+                    std::size_t begin, std::size_t end, std::size_t max_points = 4000) {
   util::Series s;
   s.title = title;
   const std::size_t stride = std::max<std::size_t>(1, (end - begin) / max_points);
@@ -176,7 +175,8 @@ util::Series scaled(util::Series s, double x_scale, double y_scale) {
 // About `cycles` cycles of the command's dominant frequency in [lo, hi), ending at hi: a window a
 // reader can follow (a whole held-out window of a 20 Hz test holds some 40 cycles).
 std::size_t zoom_start(const ChannelSignals& s, std::size_t lo, std::size_t hi, double cycles) {
-  const Spectrum spectrum = amplitude_spectrum(std::span<const double>(s.input).subspan(lo, hi - lo), s.dt);
+  const Spectrum spectrum =
+      amplitude_spectrum(std::span<const double>(s.input).subspan(lo, hi - lo), s.dt);
   std::size_t peak = 1;
   for (std::size_t k = 1; k < spectrum.amplitude.size(); ++k)
     if (spectrum.amplitude[k] > spectrum.amplitude[peak]) peak = k;
@@ -245,7 +245,8 @@ void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
         std::max(0.0, mean + drift_profile(coefficients, (s.time[i] - t_mid) / duration)) * 1e3);
   }
   util::PlotSpec plot;
-  plot.title = "actuator delay over the record: model and per-window estimate (band: +/- 2 std. error)";
+  plot.title =
+      "actuator delay over the record: model and per-window estimate (band: +/- 2 std. error)";
   plot.xlabel = "time (s)";
   plot.ylabel = "delay (ms)";
   plot.series = {curve, estimate, upper, lower};
@@ -384,8 +385,8 @@ std::string format_table(const Identification& id,
       const auto p = effect_params_json(s.after, s.effect, scales);
       for (auto it = p.begin(); it != p.end(); ++it) {
         out << "      " << it.key() << " = " << format_value(it.value()["value"]) << " +/- "
-            << format_value(it.value()["std_error"]) << " "
-            << it.value()["unit"].get<std::string>() << "\n";
+            << format_value(it.value()["std_error"]) << " " << it.value()["unit"].get<std::string>()
+            << "\n";
       }
       const auto& e = s.evidence_before;
       out << "      evidence before: corr(res, disp) " << format_value(e.corr_input)
@@ -396,8 +397,8 @@ std::string format_table(const Identification& id,
           << format_value(e.dominant_frequency) << " Hz\n";
       out << "      ranking (held-out at the search rate):";
       for (std::size_t k = 0; k < std::min<std::size_t>(4, s.ranking.size()); ++k) {
-        out << " " << effect_name(s.ranking[k].effect) << " "
-            << percent(s.ranking[k].heldout_error) << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
+        out << " " << effect_name(s.ranking[k].effect) << " " << percent(s.ranking[k].heldout_error)
+            << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
       }
       out << "\n";
     }
@@ -447,7 +448,8 @@ std::string format_table(const Identification& id,
     line(prediction->identified);
     for (const auto& c : prediction->cases) line(c);
     if (const auto& st = prediction->stability)
-      out << "  before booking the lab: the identified actuator's " << predicted_verdict(*st) << "\n";
+      out << "  before booking the lab: the identified actuator's " << predicted_verdict(*st)
+          << "\n";
   }
   return out.str();
 }
@@ -489,21 +491,23 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
         break;
       }
     }
-    spectrum_plot.series = {scaled(series("declared", sp0.frequency, sp0.amplitude, 1, cut), 1.0, to_unit),
-                            scaled(series("final", sp1.frequency, sp1.amplitude, 1, cut), 1.0, to_unit)};
+    spectrum_plot.series = {
+        scaled(series("declared", sp0.frequency, sp0.amplitude, 1, cut), 1.0, to_unit),
+        scaled(series("final", sp1.frequency, sp1.amplitude, 1, cut), 1.0, to_unit)};
     written.push_back(directory / (name + "_residual_spectrum.png"));
     util::write_png_plot(spectrum_plot, written.back());
 
     const auto [lo, hi] = heldout_window(id, s, 2.0);
     if (c.channel == Channel::kForce) {
       util::PlotSpec loops;
-      loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) +
-                    "-" + format_value(s.time[hi - 1]) + " s)";
+      loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) + "-" +
+                    format_value(s.time[hi - 1]) + " s)";
       loops.xlabel = "measured displacement (mm)";
       loops.ylabel = "force (N)";
-      loops.series = {scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
-                      scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
-                      scaled(series("final model", s.input, c.final_fit.prediction, lo, hi), 1e3, 1.0)};
+      loops.series = {
+          scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
+          scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
+          scaled(series("final model", s.input, c.final_fit.prediction, lo, hi), 1e3, 1.0)};
       written.push_back(directory / "force_loops.png");
       util::write_png_plot(loops, written.back());
     } else {
@@ -522,7 +526,8 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
       tracking.series = tracking_series(lo);
       util::PlotSpec zoom = tracking;
       const std::size_t from = zoom_start(s, lo, hi, 5.0);
-      zoom.title = "zoom: the last " + format_value(s.time[hi - 1] - s.time[from]) + " s (about 5 cycles)";
+      zoom.title =
+          "zoom: the last " + format_value(s.time[hi - 1] - s.time[from]) + " s (about 5 cycles)";
       zoom.series = tracking_series(from);
       tracking.height = zoom.height = 420;
       written.push_back(directory / "measured_tracking.png");

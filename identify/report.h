@@ -7,8 +7,9 @@
 //               train_error_after, heldout_error_before, heldout_error_after, evidence: {...},
 //               ranking: [{effect, train_error, heldout_error, score, pays}]} ... ],
 //   "channels": [ {channel, declared, noise_floor, input_lowpass_hz (the specimen model's input
-//                  low-pass, model.h make_signals; 0 = none), final: {effects, params, train_error, heldout_error},
-//                  final_evidence, rejected: [ranking of the round where nothing paid]} ],
+//                  low-pass, model.h make_signals; 0 = none), final: {effects, params, train_error,
+//                  heldout_error}, final_evidence, rejected: [ranking of the round where nothing
+//                  paid]} ],
 //   "prediction": {...} when a study was predicted }
 // `steps` lists the effects added, in order, measured channel first; clean data gives [].
 // Errors are RMS(residual) / std(measured signal) over the training / held-out samples.

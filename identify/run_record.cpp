@@ -28,11 +28,12 @@ runtime::RecordContents read_checked(const std::filesystem::path& record) {
   }
   if (contents.lost_entries()) bad(record, "damaged entries", contents.loss_report());
   const runtime::RunHeader* header = contents.header();
-  if (header == nullptr) bad(record, "entry 0", "no header: not a run record, or its start was lost");
+  if (header == nullptr)
+    bad(record, "entry 0", "no header: not a run record, or its start was lost");
   if (header->schema_version() != runtime::kSchemaVersion) {
-    bad(record, "header", "schema version " + std::to_string(header->schema_version()) +
-                              ", this rths reads version " +
-                              std::to_string(runtime::kSchemaVersion));
+    bad(record, "header",
+        "schema version " + std::to_string(header->schema_version()) +
+            ", this rths reads version " + std::to_string(runtime::kSchemaVersion));
   }
   return contents;
 }
@@ -48,8 +49,8 @@ std::size_t usable_steps(const core::SimulationResult& steps) {
   return static_cast<std::size_t>(steps.displacement.rows());
 }
 
-std::string held_note(const runtime::RecordContents& contents,
-                      const runtime::RunMeasurements& m, std::size_t usable) {
+std::string held_note(const runtime::RecordContents& contents, const runtime::RunMeasurements& m,
+                      std::size_t usable) {
   std::ostringstream out;
   const auto recorded = static_cast<std::size_t>(m.steps.displacement.rows());
   if (usable < recorded || (m.has_footer && m.footer.diverged())) {
@@ -130,13 +131,15 @@ void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
   };
   if (stage.amplitude_gain() != 0.0) out.gain *= stage.amplitude_gain();
   if (stage.has_shift()) {
-    add(Effect::kDelay, "delay", stage.shift().delay(), "shift " + std::to_string(stage.shift().delay()) + " s");
+    add(Effect::kDelay, "delay", stage.shift().delay(),
+        "shift " + std::to_string(stage.shift().delay()) + " s");
   } else if (stage.has_first_order()) {
     const double t = stage.first_order().time_constant();
     add(Effect::kFirstOrder, "time_constant", t, "first_order " + std::to_string(t) + " s");
   } else if (stage.has_transfer_function() && stage.transfer_function().denominator_size() == 3) {
     const double wn = std::sqrt(stage.transfer_function().denominator(2));
-    add(Effect::kSecondOrder, "natural_frequency", wn, "second_order " + std::to_string(wn) + " rad/s");
+    add(Effect::kSecondOrder, "natural_frequency", wn,
+        "second_order " + std::to_string(wn) + " rad/s");
   }
 }
 
@@ -154,9 +157,9 @@ DeclaredActuator declared_actuator(const config::Study& study, const std::string
   return out;
 }
 
-ActuatorPath identify_actuator(const std::filesystem::path& record, const runtime::RunHeader& header,
-                               const runtime::RunMeasurements& m, std::size_t steps, int a,
-                               const IdentifyOptions& base) {
+ActuatorPath identify_actuator(const std::filesystem::path& record,
+                               const runtime::RunHeader& header, const runtime::RunMeasurements& m,
+                               std::size_t steps, int a, const IdentifyOptions& base) {
   MeasuredData data;
   data.source = record.string() + " actuator " + std::to_string(a + 1);
   for (std::size_t k = 0; k < steps; ++k) {
@@ -248,8 +251,9 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.steps = usable_steps(m.steps);
   out.held = held_note(contents, m, out.steps);
   if (out.steps < kDefaultMinSamples) {
-    bad(record, "steps", std::to_string(out.steps) + " usable steps, at least " +
-                             std::to_string(kDefaultMinSamples) + " are needed");
+    bad(record, "steps",
+        std::to_string(out.steps) + " usable steps, at least " +
+            std::to_string(kDefaultMinSamples) + " are needed");
   }
   out.duration = m.steps.time[out.steps - 1] - m.steps.time.front();
   out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
@@ -273,9 +277,9 @@ void link_text(const NetworkPath& l, std::ostream& out) {
   out << "link to node " << l.node_id << ": " << l.answers << " answers; round trip beyond the"
       << " injected lag: bias " << l.bias * 1e3 << " ms, jitter " << l.jitter * 1e3
       << " ms, drift over the run " << l.drift_range * 1e3 << " ms; " << l.spikes
-      << " spikes; lost " << l.lost << " (longest burst " << l.longest_burst << "), late "
-      << l.late << "; injected " << l.injected_mean * 1e3 << " ms (declared "
-      << l.declared.round_trip * 1e3 << " ms)\n";
+      << " spikes; lost " << l.lost << " (longest burst " << l.longest_burst << "), late " << l.late
+      << "; injected " << l.injected_mean * 1e3 << " ms (declared " << l.declared.round_trip * 1e3
+      << " ms)\n";
   if (l.effects.empty()) out << "  undeclared effects: none\n";
   for (const auto& e : l.effects) {
     out << "  undeclared: " << e.name << ": " << e.detail;
@@ -296,10 +300,12 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   }
   out << "\n";
   for (const auto& c : a.id.channels) {
-    out << "  " << channel_name(c.channel) << ": held-out " << percent_text(c.declared_fit.heldout_error)
-        << " declared -> " << percent_text(c.final_fit.heldout_error) << " identified";
+    out << "  " << channel_name(c.channel) << ": held-out "
+        << percent_text(c.declared_fit.heldout_error) << " declared -> "
+        << percent_text(c.final_fit.heldout_error) << " identified";
     for (const auto& step : c.steps) {
-      out << "; + " << effect_name(step.effect) << " (share " << percent_text(step.own_share) << ")";
+      out << "; + " << effect_name(step.effect) << " (share " << percent_text(step.own_share)
+          << ")";
     }
     out << "\n";
   }
@@ -312,15 +318,16 @@ void residual_text(const RunResidual& r, std::ostream& out) {
   out << "response re-run in process over " << r.steps << " steps, NRMSE against the record "
       << "(declared -> identified):";
   for (const auto& f : r.floors) {
-    out << " floor " << f.dof << " " << percent_text(f.declared) << " -> " << percent_text(f.identified) << ";";
+    out << " floor " << f.dof << " " << percent_text(f.declared) << " -> "
+        << percent_text(f.identified) << ";";
   }
   out << (r.declared_diverged ? " the declared model diverges;" : "")
       << (r.identified_diverged ? " the identified model diverges;" : "") << "\n";
   for (const auto* kind : {&r.links, &r.effects}) {
     for (const auto& s : *kind) {
       out << "  " << s.link << (s.effect == "all" ? "" : ": " + s.effect) << " removes "
-          << percent_text(s.removed) << " of NRMSE from the worst floor (share " << percent_text(s.share)
-          << ")\n";
+          << percent_text(s.removed) << " of NRMSE from the worst floor (share "
+          << percent_text(s.share) << ")\n";
     }
   }
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
@@ -330,18 +337,26 @@ nlohmann::json residual_json(const RunResidual& r) {
   nlohmann::json floors = nlohmann::json::array(), links = nlohmann::json::array(),
                  effects = nlohmann::json::array();
   for (const auto& f : r.floors) {
-    floors.push_back({{"dof", f.dof}, {"declared_nrmse", f.declared}, {"identified_nrmse", f.identified}});
+    floors.push_back(
+        {{"dof", f.dof}, {"declared_nrmse", f.declared}, {"identified_nrmse", f.identified}});
   }
   for (const auto& [kind, list] : {std::pair{&r.links, &links}, std::pair{&r.effects, &effects}}) {
     for (const auto& s : *kind) {
-      list->push_back({{"link", s.link}, {"effect", s.effect}, {"nrmse_removed", s.removed},
+      list->push_back({{"link", s.link},
+                       {"effect", s.effect},
+                       {"nrmse_removed", s.removed},
                        {"share", s.share}});
     }
   }
-  return {{"steps", r.steps}, {"floors", floors}, {"declared_nrmse", r.declared},
-          {"identified_nrmse", r.identified}, {"declared_diverged", r.declared_diverged},
-          {"identified_diverged", r.identified_diverged}, {"links", links},
-          {"effects", effects}, {"notes", r.notes}};
+  return {{"steps", r.steps},
+          {"floors", floors},
+          {"declared_nrmse", r.declared},
+          {"identified_nrmse", r.identified},
+          {"declared_diverged", r.declared_diverged},
+          {"identified_diverged", r.identified_diverged},
+          {"links", links},
+          {"effects", effects},
+          {"notes", r.notes}};
 }
 
 }  // namespace
@@ -361,16 +376,26 @@ nlohmann::json run_record_json(const RunIdentification& run) {
   for (const auto& l : run.links) {
     nlohmann::json effects = nlohmann::json::array();
     for (const auto& e : l.effects) {
-      effects.push_back({{"name", e.name}, {"detail", e.detail}, {"heldout_rms_before_s", e.heldout_before},
-                         {"heldout_rms_after_s", e.heldout_after}, {"share", e.share}});
+      effects.push_back({{"name", e.name},
+                         {"detail", e.detail},
+                         {"heldout_rms_before_s", e.heldout_before},
+                         {"heldout_rms_after_s", e.heldout_after},
+                         {"share", e.share}});
     }
-    links.push_back({{"node_id", l.node_id}, {"answers", l.answers}, {"bias_s", l.bias},
-                     {"jitter_s", l.jitter}, {"drift_range_s", l.drift_range},
-                     {"spikes", l.spikes}, {"spike_period_s", l.spike_period},
-                     {"lost", l.lost}, {"longest_burst", l.longest_burst}, {"late", l.late},
+    links.push_back({{"node_id", l.node_id},
+                     {"answers", l.answers},
+                     {"bias_s", l.bias},
+                     {"jitter_s", l.jitter},
+                     {"drift_range_s", l.drift_range},
+                     {"spikes", l.spikes},
+                     {"spike_period_s", l.spike_period},
+                     {"lost", l.lost},
+                     {"longest_burst", l.longest_burst},
+                     {"late", l.late},
                      {"injected_mean_s", l.injected_mean},
                      {"declared_round_trip_s", l.declared.round_trip},
-                     {"heldout_rms_declared_s", l.heldout_declared}, {"undeclared", effects}});
+                     {"heldout_rms_declared_s", l.heldout_declared},
+                     {"undeclared", effects}});
   }
   nlohmann::json actuators = nlohmann::json::array();
   for (const auto& a : run.actuators) {
@@ -380,14 +405,19 @@ nlohmann::json run_record_json(const RunIdentification& run) {
                           {"declared_heldout_error", c.declared_fit.heldout_error},
                           {"identified_heldout_error", c.final_fit.heldout_error}});
     }
-    actuators.push_back({{"actuator", a.actuator}, {"declared", a.declared},
-                         {"declared_gain", a.declared_gain}, {"fitted_gain", a.fitted_gain},
-                         {"declared_delay_s", a.declared_delay}, {"fitted_delay_s", a.fitted_delay},
-                         {"channels", channels}, {"undeclared", a.undeclared}});
+    actuators.push_back({{"actuator", a.actuator},
+                         {"declared", a.declared},
+                         {"declared_gain", a.declared_gain},
+                         {"fitted_gain", a.fitted_gain},
+                         {"declared_delay_s", a.declared_delay},
+                         {"fitted_delay_s", a.fitted_delay},
+                         {"channels", channels},
+                         {"undeclared", a.undeclared}});
   }
-  nlohmann::json out = {{"record", run.record}, {"case", run.case_name}, {"clock", run.clock},
-                        {"held", run.held}, {"steps", run.steps}, {"duration_s", run.duration},
-                        {"links", links}, {"actuators", actuators}};
+  nlohmann::json out = {{"record", run.record}, {"case", run.case_name},
+                        {"clock", run.clock},   {"held", run.held},
+                        {"steps", run.steps},   {"duration_s", run.duration},
+                        {"links", links},       {"actuators", actuators}};
   if (run.residual) out["residual"] = residual_json(*run.residual);
   return out;
 }

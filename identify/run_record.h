@@ -11,14 +11,14 @@
 // transfer function -> second_order, each with the config's value as initial value), gain = the
 // stages' amplitude gain. Undeclared effects: the steps the search added that remove more than
 // kMinErrorRemoved of held-out error, and a fitted gain off the declared one by more than
-// kGainTolerance (an emulator gain error), and a fitted delay off the declared one (kDelayTolerance).
-// A run that diverged is identified up to the last step whose response is finite and below the
-// coordinator's divergence bound; a truncated record (no footer, or a cut last entry) is
-// identified from what it holds; both say so (`held`). The system-level residual re-runs the
+// kGainTolerance (an emulator gain error), and a fitted delay off the declared one
+// (kDelayTolerance). A run that diverged is identified up to the last step whose response is finite
+// and below the coordinator's divergence bound; a truncated record (no footer, or a cut last entry)
+// is identified from what it holds; both say so (`held`). The system-level residual re-runs the
 // study over the same steps, from the record's own ground acceleration (run_residual.h).
 // Bad input -> std::invalid_argument "RECORD: ENTRY: PROBLEM": a record that cannot be read or
-// has damaged entries (the reader's loss report names them), a header of another schema version, no header, a link the header lists
-// with no answer, fewer steps than identification needs.
+// has damaged entries (the reader's loss report names them), a header of another schema version, no
+// header, a link the header lists with no answer, fewer steps than identification needs.
 
 #include <nlohmann/json.hpp>
 
@@ -44,12 +44,12 @@ inline constexpr double kDelayTolerance = 0.05;
 inline constexpr double kMinErrorRemoved = 1.0e-4;
 
 struct ActuatorPath {
-  int actuator = 0;  // 1-based
+  int actuator = 0;                   // 1-based
   std::vector<std::string> declared;  // the case's stages, as effects
   double declared_gain = 1.0, fitted_gain = 1.0;
   double declared_delay = 0.0, fitted_delay = 0.0;  // s; both 0 when no delay was declared
-  Identification id;  // channels measured and force
-  std::vector<std::string> undeclared;  // effects named beyond the declared model
+  Identification id;                                // channels measured and force
+  std::vector<std::string> undeclared;              // effects named beyond the declared model
 };
 
 struct RunIdentification {

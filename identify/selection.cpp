@@ -36,9 +36,9 @@ FitResult fit_with_effect(const ChannelModel& model, Effect effect, const Channe
                           const Split& split, const FitOptions& options) {
   const SignalScales sc = signal_scales(signals);
   auto specs = declared_specs(effect_params(effect, model.channel, sc), model.declarations);
-  const bool declared_start = std::any_of(
-      model.declarations.begin(), model.declarations.end(),
-      [&](const ParamDeclaration& d) { return d.name == specs[0].name && d.initial; });
+  const bool declared_start =
+      std::any_of(model.declarations.begin(), model.declarations.end(),
+                  [&](const ParamDeclaration& d) { return d.name == specs[0].name && d.initial; });
   if (effect == Effect::kDelay && !declared_start) {
     // The lag of the target behind the input by cross-correlation is the natural first guess.
     const auto xc = cross_correlation(signals.input, signals.target, signals.dt, 0.25);
@@ -56,7 +56,8 @@ FitResult fit_with_effect(const ChannelModel& model, Effect effect, const Channe
       best = std::move(fit);
     }
   }
-  if (!std::isfinite(best_cost)) best = evaluate_channel(with_effect(model, effect, guess_grid(specs)[0]), signals, split);
+  if (!std::isfinite(best_cost))
+    best = evaluate_channel(with_effect(model, effect, guess_grid(specs)[0]), signals, split);
   return best;
 }
 
@@ -92,9 +93,9 @@ KindProposal compare_kinds(const ChannelSignals& signals, const Split& split,
     effects.push_back(Effect::kOffsetDrift);
     trial.fit = fit_channel(fit_declared(signals, split, effects, options.fit, declarations),
                             signals, split, options.fit);
-    trial.score = trial.fit.heldout_error *
-                  (1.0 + options.penalty_per_parameter *
-                             static_cast<double>(trial.fit.model.params.size()));
+    trial.score =
+        trial.fit.heldout_error *
+        (1.0 + options.penalty_per_parameter * static_cast<double>(trial.fit.model.params.size()));
     const auto defining = defining_effects(kind);
     const SignalScales scales = signal_scales(signals);
     for (const auto& hit : trial.fit.bound_hits) {
@@ -177,9 +178,9 @@ void search_from(ChannelIdentification& id, const FitResult& start, const Channe
       trial.heldout_error = trial.fit.heldout_error;
       trial.score = trial.heldout_error *
                     (1.0 + options.penalty_per_parameter * static_cast<double>(trial.added_params));
-      trial.pays = trial.heldout_error <=
-                       (1.0 - options.min_relative_improvement) * current.heldout_error &&
-                   trial.score < current.heldout_error;
+      trial.pays =
+          trial.heldout_error <= (1.0 - options.min_relative_improvement) * current.heldout_error &&
+          trial.score < current.heldout_error;
       trials.push_back(std::move(trial));
       progress.report(first_unit + round * per_round + trials.size() * per_round / in_round);
     }
@@ -215,8 +216,8 @@ void attribute_shares(ChannelIdentification& id, const ChannelSignals& signals, 
   const SignalScales scales = signal_scales(signals);
   double total = 0.0;
   for (auto& step : id.steps) {
-    const FitResult without =
-        fit_channel(without_effect(id.final_fit.model, step.effect, scales), signals, split, options);
+    const FitResult without = fit_channel(without_effect(id.final_fit.model, step.effect, scales),
+                                          signals, split, options);
     step.own_error_removed = std::max(0.0, without.heldout_error - id.final_fit.heldout_error);
     total += step.own_error_removed;
   }

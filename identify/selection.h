@@ -81,8 +81,8 @@ struct SelectionStep {
   Channel channel = Channel::kMeasured;
   Effect effect = Effect::kDelay;
   FitResult before, after;
-  Evidence evidence_before;               // of the residual the step explains
-  std::vector<CandidateTrial> ranking;    // best score first
+  Evidence evidence_before;             // of the residual the step explains
+  std::vector<CandidateTrial> ranking;  // best score first
   // The effect's own part, independent of the order of the steps: the final model refitted
   // without it loses this much held-out error (own_error_removed = e_h(without) - e_h(final)),
   // and own_share is that part over the sum of every added effect's part.

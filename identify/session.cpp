@@ -87,15 +87,15 @@ std::vector<std::string> write_identified_configs(const Identification& id,
   }
   std::vector<std::string> written;
   const auto model_path = dir / "identified_model.textproto";
-  core::write_text_format(to_config(actuator, specimen), model_path,
-                          {"Identified by `rths identify " + request.data +
-                               "`: fitted values as initial values.",
-                           "Start another identification from it: rths identify DATA --model " +
-                               model_path.string()});
+  core::write_text_format(
+      to_config(actuator, specimen), model_path,
+      {"Identified by `rths identify " + request.data + "`: fitted values as initial values.",
+       "Start another identification from it: rths identify DATA --model " + model_path.string()});
   written.push_back("identified model (reads back with --model): " + model_path.string());
   const config::Study fragment = study_fragment(actuator_part, specimen_part);
   std::vector<std::string> comment{
-      "Identified by `rths identify " + request.data + "`: the parts of a study config it determines.",
+      "Identified by `rths identify " + request.data +
+          "`: the parts of a study config it determines.",
       "Copy substructuring.model into a study's substructuring and append the cases block;",
       "`rths identify DATA --predict STUDY --out DIR` writes the whole study."};
   for (const auto& n : notes) comment.push_back(n);
@@ -128,15 +128,14 @@ void predict_and_design(const SessionRequest& request, SessionResult& result) {
   if (!request.predict.empty()) {
     const ChannelModel& actuator =
         actuator_of(id, "--predict needs the 'measured' channel in --channels");
-    result.prediction =
-        predict_study(request.predict, actuator, signal_scales(id.signals.front()));
+    result.prediction = predict_study(request.predict, actuator, signal_scales(id.signals.front()));
   }
   if (request.design_compensator.empty()) return;
   const ChannelModel& actuator = actuator_of(
       id, "--design-compensator needs the actuator model: include 'measured' in --channels");
-  result.compensator = design_compensator(actuator, signal_scales(id.signals.front()),
-                                          parse_compensator_kind(request.design_compensator),
-                                          request.design_dt);
+  result.compensator =
+      design_compensator(actuator, signal_scales(id.signals.front()),
+                         parse_compensator_kind(request.design_compensator), request.design_dt);
   try {
     result.compensator_file = write_compensator_case(*result.compensator, request.out);
   } catch (const std::runtime_error& e) {
@@ -176,10 +175,11 @@ std::vector<ChannelValidation> validate_channels(
       FitOptions fast;
       fast.stride = 4;
       fast.on_iteration = [&] { report(done, stage); };
-      v.kfold = kfold(c.final_fit.model, id.signals[k], request.folds, fast, [&](std::size_t folds) {
-        done = k * request.folds + folds;
-        report(done, stage);
-      });
+      v.kfold =
+          kfold(c.final_fit.model, id.signals[k], request.folds, fast, [&](std::size_t folds) {
+            done = k * request.folds + folds;
+            report(done, stage);
+          });
     }
     if (other) {
       v.other = validate_on(c.final_fit.model, make_signals(*other, c.channel), other->source);
@@ -292,9 +292,8 @@ std::string session_text(const SessionResult& result, const SessionRequest& requ
 nlohmann::json session_json(const SessionResult& result, const SessionRequest& request) {
   const ReportContext context{request.options.holdout_fraction, request.options.holdout_mode};
   nlohmann::json report = to_json(result.id, context, result.prediction);
-  report["input_units"] = {{"time", request.time_unit},
-                           {"length", request.length_unit},
-                           {"force", request.force_unit}};
+  report["input_units"] = {
+      {"time", request.time_unit}, {"length", request.length_unit}, {"force", request.force_unit}};
   nlohmann::json validation = nlohmann::json::array();
   for (const auto& v : result.validation) validation.push_back(validation_json(v, request.folds));
   report["validation"] = validation;

@@ -36,11 +36,11 @@
 namespace rths::identify {
 
 struct SessionRequest {
-  std::string data;     // the record (CSV or DAQ export)
-  std::string validate; // another record of the same rig; empty = none
-  std::string model;    // declared model file; empty = from `options`
-  std::string predict;  // study config to run with the identified actuator; empty = none
-  std::string out;      // output directory; empty = no files
+  std::string data;                // the record (CSV or DAQ export)
+  std::string validate;            // another record of the same rig; empty = none
+  std::string model;               // declared model file; empty = from `options`
+  std::string predict;             // study config to run with the identified actuator; empty = none
+  std::string out;                 // output directory; empty = no files
   std::string design_compensator;  // compensator kind (compensator_design.h); empty = none
   double design_dt = 0.001;        // s, the planned test's step
   CsvUnits units;

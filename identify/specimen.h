@@ -24,7 +24,14 @@
 
 namespace rths::identify {
 
-enum class SpecimenKind { kLinearSpring, kViscousDamper, kBoucWen, kMrDamper, kBilinear, kFriction };
+enum class SpecimenKind {
+  kLinearSpring,
+  kViscousDamper,
+  kBoucWen,
+  kMrDamper,
+  kBilinear,
+  kFriction
+};
 
 std::string kind_name(SpecimenKind kind);
 // Inverse of kind_name. Throws std::invalid_argument listing the kinds.

@@ -70,8 +70,7 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
       case Effect::kVelocitySaturation:
         out.left_out.push_back(effect_name(e) + ": lab-scale effect, left out");
         break;
-      default:
-        break;
+      default: break;
     }
   }
   return out;
@@ -132,8 +131,9 @@ SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& s
     switch (e) {
       case Effect::kDamping:
       case Effect::kCoulomb:
-        out.left_out.push_back(effect_name(e) +
-                               ": a velocity force, not a storey restoring force (add it as damping)");
+        out.left_out.push_back(
+            effect_name(e) +
+            ": a velocity force, not a storey restoring force (add it as damping)");
         break;
       case Effect::kInertia:
       case Effect::kCubicStiffness:
@@ -142,8 +142,7 @@ SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& s
       case Effect::kDelay:
         out.left_out.push_back(effect_name(e) + ": no place in a storey model, left out");
         break;
-      default:
-        break;
+      default: break;
     }
   }
   out.description = text.str();

@@ -52,7 +52,8 @@ KFoldResult kfold(const ChannelModel& model, const ChannelSignals& signals, std:
     const std::size_t begin = f * n / folds, end = (f + 1) * n / folds;
     Split split;
     split.size = n;
-    for (std::size_t i = 0; i < n; ++i) (i >= begin && i < end ? split.heldout : split.train).push_back(i);
+    for (std::size_t i = 0; i < n; ++i)
+      (i >= begin && i < end ? split.heldout : split.train).push_back(i);
     const FitResult fit = fit_channel(model, signals, split, options);
     // fit.heldout_error is by the block's own std; rescaled to the record's (same residual).
     const double block_std = std_of(signals.target, begin, end);

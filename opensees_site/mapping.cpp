@@ -28,7 +28,8 @@ BasicMapping::BasicMapping(const config::OpenSeesSite& site,
         "opensees-site: the study's case has no actuator (no experimental storey)");
   if (site.basic_dofs() < 0 || site.basic_dofs() > 64)
     throw std::invalid_argument("deployment.opensees.basic_dofs is " +
-                                std::to_string(site.basic_dofs()) + "; allowed 0 (= actuators) to 64");
+                                std::to_string(site.basic_dofs()) +
+                                "; allowed 0 (= actuators) to 64");
   const int n = site.basic_dofs() > 0 ? site.basic_dofs() : actuators;
   require_finite(site.transformation(), "transformation");
   require_finite(site.initial_stiffness(), "initial_stiffness");

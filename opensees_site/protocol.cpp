@@ -11,10 +11,11 @@ int minimum_frame_size(int basic_dofs) {
 
 int check_size_message(const SizeMessage& m, int basic_dofs, int expected_frame_size) {
   // What genericClient's setupConnection() puts in each slot.
-  const std::array<std::int32_t, kSizeMessageInts - 1> want{basic_dofs, basic_dofs, basic_dofs, 0, 1,
-                                                            0,          0,          0,          basic_dofs, 0};
-  static const char* const what[] = {"disp size", "vel size", "accel size", "unused", "time size",
-                                     "unused",    "unused",   "unused",     "force size", "unused"};
+  const std::array<std::int32_t, kSizeMessageInts - 1> want{
+      basic_dofs, basic_dofs, basic_dofs, 0, 1, 0, 0, 0, basic_dofs, 0};
+  static const char* const what[] = {"disp size",  "vel size", "accel size", "unused",
+                                     "time size",  "unused",   "unused",     "unused",
+                                     "force size", "unused"};
   for (int i = 0; i < kSizeMessageInts - 1; ++i)
     if (m[static_cast<std::size_t>(i)] != want[static_cast<std::size_t>(i)])
       throw ProtocolError("size message slot " + std::to_string(i) + " (" + what[i] + ") is " +
@@ -68,9 +69,9 @@ void check_trial_frame(const std::vector<double>& frame, int n) {
     const double x = frame[static_cast<std::size_t>(slot)];
     if (std::isfinite(x)) continue;
     const std::string what = slot == 3 * n + 1
-                                  ? std::string("time")
-                                  : std::string(kinds[(slot - 1) / n]) + " of basic DOF " +
-                                        std::to_string((slot - 1) % n + 1);
+                                 ? std::string("time")
+                                 : std::string(kinds[(slot - 1) / n]) + " of basic DOF " +
+                                       std::to_string((slot - 1) % n + 1);
     throw ProtocolError("setTrialResponse slot " + std::to_string(slot) + " (" + what + ") is " +
                         std::to_string(x) + "; only finite values drive an actuator");
   }

@@ -40,8 +40,7 @@ bool Session::read_frame() {
   const Connection::ReadResult r = connection_.read_exact(in_.data(), bytes, timeout);
   const std::string where = " (after step " + std::to_string(step_) + ")";
   switch (r.status) {
-    case Connection::Read::kComplete:
-      return true;
+    case Connection::Read::kComplete: return true;
     case Connection::Read::kClosed:
       if (step_open_)
         refuse("closed the connection inside step " + std::to_string(step_) +

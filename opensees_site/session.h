@@ -38,16 +38,16 @@
 namespace rths::opensees {
 
 struct SessionOptions {
-  double dt = 0.0;                 // s, the study's step
-  std::size_t max_steps = 0;       // rows of the result: the motion's samples
-  int dofs = 0;                    // the study's floors
+  double dt = 0.0;            // s, the study's step
+  std::size_t max_steps = 0;  // rows of the result: the motion's samples
+  int dofs = 0;               // the study's floors
   int frame_size = kDefaultFrameSize;
   // Before the first command (the analysis may still be setting up) and between frames after it.
   std::chrono::nanoseconds first_frame_timeout{std::chrono::seconds(10)};
   std::chrono::nanoseconds frame_timeout{std::chrono::seconds(2)};
   std::string frame_timeout_reason;  // what the limit is, for the message
   double divergence_bound = 1.0e3;   // m
-  std::string client;                // label of the client in messages ("OpenSees client 127.0.0.1:5")
+  std::string client;  // label of the client in messages ("OpenSees client 127.0.0.1:5")
 };
 
 class Session {

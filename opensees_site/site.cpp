@@ -40,7 +40,8 @@ void require_site_study(const core::HybridSetup& setup, const config::Deployment
       throw std::invalid_argument(
           "opensees-site: storey " + std::to_string(s + 1) + " of case '" + case_name +
           "' has a numerical part; the OpenSees model holds the numerical structure, so every "
-          "storey of the site's study is experimental (substructuring { experimental_fraction: 1 })");
+          "storey of the site's study is experimental (substructuring { experimental_fraction: 1 "
+          "})");
   if (!core::is_explicit(setup.integrator))
     throw std::invalid_argument("opensees-site: integrator " + core::to_string(setup.integrator) +
                                 " is implicit; the site's study needs an explicit one (it only "
@@ -62,8 +63,8 @@ std::vector<runtime::ChildProcess> start_nodes(const config::Deployment& deploym
   std::vector<runtime::ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
     const std::string id = std::to_string(node.id());
-    std::vector<std::string> args{"--node-id", id, "--domain", std::to_string(domain),
-                                  "--run-id", run_id};
+    std::vector<std::string> args{"--node-id", id,    "--domain", std::to_string(domain),
+                                  "--run-id",  run_id};
     const auto security = security::security_arguments(security_dir, node.id());
     args.insert(args.end(), security.begin(), security.end());
     const auto log = options.log_dir.empty() ? std::filesystem::path("/dev/null")
@@ -77,7 +78,8 @@ std::vector<runtime::ChildProcess> start_nodes(const config::Deployment& deploym
 void stop_nodes(std::vector<runtime::ChildProcess>& nodes) {
   const auto grace = std::chrono::steady_clock::now() + runtime::kNodeExitGrace;
   for (runtime::ChildProcess& node : nodes) {
-    const auto left = duration_cast<std::chrono::milliseconds>(grace - std::chrono::steady_clock::now());
+    const auto left =
+        duration_cast<std::chrono::milliseconds>(grace - std::chrono::steady_clock::now());
     if (!node.wait_for(std::max(left, std::chrono::milliseconds(0))))
       spdlog::warn("{} did not exit after the run; stopping it", node.name());
     node.terminate();
@@ -88,13 +90,14 @@ void stop_nodes(std::vector<runtime::ChildProcess>& nodes) {
 std::string read_size_message(Connection& client, int basic_dofs, int expected_frame,
                               double timeout, int& frame_size) {
   SizeMessage sizes{};
-  const auto r = client.read_exact(sizes.data(), sizeof sizes,
-                                   duration_cast<nanoseconds>(Seconds(timeout)));
+  const auto r =
+      client.read_exact(sizes.data(), sizeof sizes, duration_cast<nanoseconds>(Seconds(timeout)));
   if (r.status != Connection::Read::kComplete)
     return "size message incomplete: " + std::to_string(r.bytes) + " of " +
            std::to_string(sizeof sizes) + " bytes (11 ints), then " +
-           (r.status == Connection::Read::kTimedOut ? "nothing for " + std::to_string(timeout) + " s"
-                                                    : std::string("the connection closed"));
+           (r.status == Connection::Read::kTimedOut
+                ? "nothing for " + std::to_string(timeout) + " s"
+                : std::string("the connection closed"));
   try {
     frame_size = check_size_message(sizes, basic_dofs, expected_frame);
   } catch (const ProtocolError& e) {
@@ -105,7 +108,8 @@ std::string read_size_message(Connection& client, int basic_dofs, int expected_f
 
 }  // namespace
 
-Site::Site(SiteOptions options) : prepared_(std::make_unique<Prepared>()), options_(std::move(options)) {
+Site::Site(SiteOptions options)
+    : prepared_(std::make_unique<Prepared>()), options_(std::move(options)) {
   Prepared& p = *prepared_;
   const config::Study study = core::load_study(options_.config);
   p.prepared = core::prepare_study(study, options_.config.parent_path());
@@ -119,10 +123,10 @@ Site::Site(SiteOptions options) : prepared_(std::make_unique<Prepared>()), optio
                              p.prepared.base_dir);
   std::vector<double> stiffness;
   for (int storey : p.setup.partition.actuator_storeys)
-    stiffness.push_back(p.setup.partition.experimental[static_cast<std::size_t>(storey)]->initial_stiffness());
-  p.mapping = std::make_unique<BasicMapping>(p.deployment.opensees(), stiffness,
-                                             p.setup.partition.actuator_storeys,
-                                             p.setup.model.dofs());
+    stiffness.push_back(
+        p.setup.partition.experimental[static_cast<std::size_t>(storey)]->initial_stiffness());
+  p.mapping = std::make_unique<BasicMapping>(
+      p.deployment.opensees(), stiffness, p.setup.partition.actuator_storeys, p.setup.model.dofs());
   p.security_dir = !options_.security_dir.empty() ? options_.security_dir
                    : !p.deployment.security_dir().empty()
                        ? options_.config.parent_path() / p.deployment.security_dir()
@@ -148,14 +152,14 @@ coordinator::RunOutcome Site::run_session(Connection& client, int frame_size,
   so.max_steps = p.prepared.motion.acceleration.size();
   so.dofs = p.setup.model.dofs();
   so.frame_size = frame_size;
-  so.first_frame_timeout = duration_cast<nanoseconds>(Seconds(runtime::start_timeout(p.deployment)));
+  so.first_frame_timeout =
+      duration_cast<nanoseconds>(Seconds(runtime::start_timeout(p.deployment)));
   const double watchdog = runtime::command_watchdog_periods(p.deployment, p.setup.dt) * p.setup.dt;
   const double frame_timeout = real_time ? watchdog : runtime::step_timeout(p.deployment);
   so.frame_timeout = duration_cast<nanoseconds>(Seconds(frame_timeout));
-  so.frame_timeout_reason =
-      real_time ? "the emulator's watchdog (its window in steps x dt = " +
-                      std::to_string(watchdog) + " s)"
-                : "step_timeout (" + std::to_string(frame_timeout) + " s)";
+  so.frame_timeout_reason = real_time ? "the emulator's watchdog (its window in steps x dt = " +
+                                            std::to_string(watchdog) + " s)"
+                                      : "step_timeout (" + std::to_string(frame_timeout) + " s)";
   so.divergence_bound = options.divergence_bound;
   so.client = "OpenSees client " + client.peer();
   Session session(client, *p.mapping, so);
@@ -173,7 +177,8 @@ coordinator::RunOutcome Site::run_session(Connection& client, int frame_size,
 SiteOutcome Site::serve(Listener& listener) {
   Prepared& p = *prepared_;
   SiteOutcome outcome;
-  spdlog::info("waiting for an OpenSees genericClient on {}:{}", listener.address(), listener.port());
+  spdlog::info("waiting for an OpenSees genericClient on {}:{}", listener.address(),
+               listener.port());
   std::optional<Connection> client = listener.accept(options_.accept_timeout);
   if (!client)
     throw std::runtime_error("no OpenSees client connected to " + listener.address() + ":" +
@@ -181,9 +186,9 @@ SiteOutcome Site::serve(Listener& listener) {
                              std::to_string(options_.accept_timeout.count() / 1000.0) + " s");
   outcome.client = client->peer();
   int frame_size = 0;
-  outcome.refusal = read_size_message(*client, p.mapping->basic_dofs(),
-                                      p.deployment.opensees().frame_size(),
-                                      runtime::start_timeout(p.deployment), frame_size);
+  outcome.refusal =
+      read_size_message(*client, p.mapping->basic_dofs(), p.deployment.opensees().frame_size(),
+                        runtime::start_timeout(p.deployment), frame_size);
   if (!outcome.refusal.empty()) {
     spdlog::error("refused the OpenSees client {}: {}; nothing was started", outcome.client,
                   outcome.refusal);
@@ -201,12 +206,14 @@ SiteOutcome Site::serve(Listener& listener) {
   co.case_name = p.case_name;
   co.record = options_.record;
   std::vector<runtime::ChildProcess> nodes;
-  if (options_.start_nodes) nodes = start_nodes(p.deployment, options_, p.security_dir, domain, co.run_id);
+  if (options_.start_nodes)
+    nodes = start_nodes(p.deployment, options_, p.security_dir, domain, co.run_id);
   transport::DdsEndpointOptions dds;
   dds.domain_id = static_cast<std::uint32_t>(domain);
   if (!p.security_dir.empty())
     dds.participant_properties = security::participant_properties(security::check_node_security(
-        security::node_dir(p.security_dir, security::kCoordinatorNodeId), security::kCoordinatorNodeId));
+        security::node_dir(p.security_dir, security::kCoordinatorNodeId),
+        security::kCoordinatorNodeId));
   outcome.run = run_session(*client, frame_size, dds, std::move(co), outcome.ending);
   outcome.served = true;
   client.reset();  // OpenSees sees the close at once

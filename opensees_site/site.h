@@ -36,23 +36,24 @@ namespace rths::opensees {
 
 struct SiteOptions {
   std::filesystem::path config;
-  std::string case_name;              // empty: deployment.case_name, else the reference case
-  std::string run_id;                 // empty: runtime::make_run_id("<study>-<case>")
-  int domain = -1;                    // -1: deployment.domain_id
-  std::filesystem::path record;       // empty: no record
-  std::filesystem::path log_dir;      // the started nodes' logs (node_<id>.log)
-  std::filesystem::path programs_dir; // where rths-actuator-emulator is; empty: runtime::find_program's search
-  bool start_nodes = true;            // false: the emulators were started elsewhere
+  std::string case_name;          // empty: deployment.case_name, else the reference case
+  std::string run_id;             // empty: runtime::make_run_id("<study>-<case>")
+  int domain = -1;                // -1: deployment.domain_id
+  std::filesystem::path record;   // empty: no record
+  std::filesystem::path log_dir;  // the started nodes' logs (node_<id>.log)
+  std::filesystem::path
+      programs_dir;  // where rths-actuator-emulator is; empty: runtime::find_program's search
+  bool start_nodes = true;             // false: the emulators were started elsewhere
   std::filesystem::path security_dir;  // `rths pki init` directory; empty: the deployment's
   std::chrono::milliseconds accept_timeout{-1};  // < 0: wait for a client forever
 };
 
 struct SiteOutcome {
-  bool served = false;            // a client's analysis ran (its size message was accepted)
-  std::string client;             // "127.0.0.1:40312"
-  std::string refusal;            // why the client was refused before the run, if it was
-  std::string ending;             // how the client's analysis ended (session.h)
-  coordinator::RunOutcome run;    // the coordinator's outcome, when served
+  bool served = false;          // a client's analysis ran (its size message was accepted)
+  std::string client;           // "127.0.0.1:40312"
+  std::string refusal;          // why the client was refused before the run, if it was
+  std::string ending;           // how the client's analysis ended (session.h)
+  coordinator::RunOutcome run;  // the coordinator's outcome, when served
   bool ok() const { return served && run.ok; }
 };
 

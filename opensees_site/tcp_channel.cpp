@@ -56,10 +56,10 @@ Connection::ReadResult Connection::read_exact(void* data, std::size_t size,
                                               std::chrono::nanoseconds timeout) {
   auto* out = static_cast<char*>(data);
   ReadResult r;
-  const auto deadline = timeout.count() < 0
-                            ? std::nullopt
-                            : std::optional(Clock::now() +
-                                            std::chrono::duration_cast<Clock::duration>(timeout));
+  const auto deadline =
+      timeout.count() < 0
+          ? std::nullopt
+          : std::optional(Clock::now() + std::chrono::duration_cast<Clock::duration>(timeout));
   while (r.bytes < size) {
     pollfd fds[2] = {{fd_, POLLIN, 0}, {listener_ ? listener_->fd() : -1, POLLIN, 0}};
     const int ready = ::poll(fds, listener_ ? 2 : 1, poll_ms(deadline));
@@ -116,7 +116,8 @@ Listener::Listener(const std::string& address, int port) : address_(address) {
       ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(fd_, 4) != 0) {
     const std::string why = std::strerror(errno);
     if (fd_ >= 0) ::close(fd_);
-    throw std::runtime_error("cannot listen on " + address + ":" + std::to_string(port) + ": " + why);
+    throw std::runtime_error("cannot listen on " + address + ":" + std::to_string(port) + ": " +
+                             why);
   }
   socklen_t length = sizeof a;
   ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &length);

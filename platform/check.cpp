@@ -92,7 +92,9 @@ runtime::PlatformSummary make_summary(const PlatformFacts& facts, const LatencyS
 
 std::string summary_text(const runtime::PlatformSummary& s) {
   std::ostringstream out;
-  const auto limit = [](std::int64_t v) { return v < 0 ? std::string("unlimited") : std::to_string(v); };
+  const auto limit = [](std::int64_t v) {
+    return v < 0 ? std::string("unlimited") : std::to_string(v);
+  };
   out << "host " << s.host() << ": " << s.kernel() << "\n"
       << "preemption: " << s.preemption() << "; governor: " << s.governor()
       << "\nisolated CPUs: " << (s.isolated_cpus().empty() ? "none" : s.isolated_cpus())
@@ -100,8 +102,8 @@ std::string summary_text(const runtime::PlatformSummary& s) {
       << "\nIRQ affinity: " << s.irq_affinity() << "\nlimits: memlock "
       << limit(s.memlock_limit_bytes()) << " bytes, rtprio " << limit(s.rtprio_limit())
       << "; /dev/cpu_dma_latency " << (s.dma_latency_holdable() ? "can be held" : "cannot be held")
-      << "\nwake-up lateness at " << s.rate_hz() << " Hz, " << s.measured_seconds()
-      << " s on CPUs " << s.measured_cpus() << " (" << s.wakeups() << " wake-ups): median "
+      << "\nwake-up lateness at " << s.rate_hz() << " Hz, " << s.measured_seconds() << " s on CPUs "
+      << s.measured_cpus() << " (" << s.wakeups() << " wake-ups): median "
       << 1e6 * s.lateness_median() << " us, p99 " << 1e6 * s.lateness_p99() << " us, p99.99 "
       << 1e6 * s.lateness_p9999() << " us, max " << 1e6 * s.lateness_max() << " us"
       << "\nstalls per minute (all CPUs): > 1 ms " << s.stalls_over_1ms_per_minute() << ", > 2 ms "

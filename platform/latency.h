@@ -6,7 +6,8 @@
 //                    to deadlines on the grid start + k / rate_hz for `seconds`;
 //                    lateness = wake-up - deadline (s). After a late wake-up the next deadline is
 //                    the first grid point still ahead, so a stall counts once, with its length.
-//                    /dev/cpu_dma_latency is held at 0 meanwhile when permitted (as a run holds it).
+//                    /dev/cpu_dma_latency is held at 0 meanwhile when permitted (as a run holds
+//                    it).
 //   LatencyStats     all CPUs pooled: median, p99, p99.99, max; stalls (wake-ups later than x)
 //                    per minute of measurement, all CPUs summed (a stall on any CPU can stop a
 //                    run: the loop's CPU stalls the coordinator, another CPU a node);

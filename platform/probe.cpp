@@ -115,8 +115,8 @@ PlatformFacts read_platform_files(const std::filesystem::path& root) {
   facts.preemption = preemption_of(root, facts.kernel);
   const std::filesystem::path cpu_dir = root / "sys/devices/system/cpu";
   std::string online;
-  facts.online_cpus = read_line(cpu_dir / "online", online) ? parse_cpu_list(online)
-                                                            : std::vector<int>{0};
+  facts.online_cpus =
+      read_line(cpu_dir / "online", online) ? parse_cpu_list(online) : std::vector<int>{0};
   facts.governor = governor_of(cpu_dir, facts.online_cpus);
   read_line(cpu_dir / "isolated", facts.isolated_cpus);
   read_line(cpu_dir / "nohz_full", facts.nohz_full_cpus);

@@ -22,7 +22,7 @@
 namespace rths::platform {
 
 struct PlatformFacts {
-  std::string kernel;          // /proc/version's first line
+  std::string kernel;  // /proc/version's first line
   std::string preemption;
   std::string governor;
   std::string isolated_cpus, nohz_full_cpus;  // kernel cpu lists, "" = none

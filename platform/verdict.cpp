@@ -10,10 +10,10 @@
 namespace rths::platform {
 namespace {
 
-constexpr double kGrid = 0.25e-3;       // s, thresholds of the tail fit and of the window search
-constexpr double kFitFrom = 0.5e-3;     // s, the tail starts here (below: ordinary timer jitter)
-constexpr std::uint64_t kSeen = 3;      // stalls seen for a measured rate
-constexpr double kMaxWindow = 60.0;     // s
+constexpr double kGrid = 0.25e-3;    // s, thresholds of the tail fit and of the window search
+constexpr double kFitFrom = 0.5e-3;  // s, the tail starts here (below: ordinary timer jitter)
+constexpr std::uint64_t kSeen = 3;   // stalls seen for a measured rate
+constexpr double kMaxWindow = 60.0;  // s
 constexpr double kMaxSensibleTolerance = 0.05;  // beyond, a "real-time" run is mostly late steps
 
 // log r(x) = a + b x, least squares over the measured thresholds with >= kSeen stalls.
@@ -52,21 +52,25 @@ std::string fmt(const char* format, double a, double b = 0, double c = 0, double
   return buffer;
 }
 
-void tuning_fixes(const PlatformFacts& facts, const FailSafeInput& in, std::vector<std::string>& fixes) {
+void tuning_fixes(const PlatformFacts& facts, const FailSafeInput& in,
+                  std::vector<std::string>& fixes) {
   if (in.loop_cpu < 0 && in.cpus.size() > 1)
     fixes.push_back("give the loop a CPU of its own: pin_loop: true loop_cpu: " +
                     std::to_string(in.cpus.back()));
   if (facts.isolated_cpus.empty())
-    fixes.push_back("keep the kernel's own work off the loop's CPU: isolcpus= and nohz_full= on the "
-                    "kernel command line, IRQ affinity away from it");
+    fixes.push_back(
+        "keep the kernel's own work off the loop's CPU: isolcpus= and nohz_full= on the "
+        "kernel command line, IRQ affinity away from it");
   if (!facts.realtime_kernel())
-    fixes.push_back("a PREEMPT_RT kernel (its wake-ups are late by tens of us, not ms; this one is " +
-                    facts.preemption + ")");
+    fixes.push_back(
+        "a PREEMPT_RT kernel (its wake-ups are late by tens of us, not ms; this one is " +
+        facts.preemption + ")");
   if (facts.governor.find(':') != std::string::npos &&
       facts.governor.find("powersave") != std::string::npos)
     fixes.push_back("the performance CPU governor (now " + facts.governor + ")");
   if (!facts.dma_latency_holdable)
-    fixes.push_back("permission to hold /dev/cpu_dma_latency (run as root or give the group write access)");
+    fixes.push_back(
+        "permission to hold /dev/cpu_dma_latency (run as root or give the group write access)");
 }
 
 }  // namespace
@@ -85,7 +89,8 @@ FailSafeInput failsafe_input(const config::Deployment& d, double dt, double run_
   in.overrun_tolerance = runtime::max_overrun_fraction(d);
   bool awaits = d.nodes().empty();  // default nodes inject no lag: their answers are awaited
   for (const config::NodeSpec& node : d.nodes()) {
-    in.max_link_jitter = std::max({in.max_link_jitter, node.receive_lag().jitter(), node.send_lag().jitter()});
+    in.max_link_jitter =
+        std::max({in.max_link_jitter, node.receive_lag().jitter(), node.send_lag().jitter()});
     awaits = awaits || runtime::awaits_answers(d, node, dt);
   }
   in.step_work = awaits ? runtime::feedback_wait_fraction(d) * dt : 0.05 * dt;
@@ -119,7 +124,8 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
   v.required_window_ms = 1e3 * required;
   v.window_holds = steps >= v.required_steps;
   v.predicted_overrun_fraction = stats.overrun_fraction(in.step_work);
-  v.overruns_hold = in.overrun_tolerance < 0 || v.predicted_overrun_fraction <= in.overrun_tolerance;
+  v.overruns_hold =
+      in.overrun_tolerance < 0 || v.predicted_overrun_fraction <= in.overrun_tolerance;
 
   const double x = std::max(0.0, window - allowance);
   const std::string source = stats.count_over(x) >= kSeen ? "measured"
@@ -131,26 +137,30 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
       fmt("%.3g per minute (", rate_with(stats, tail, x)) + source +
       fmt("); a %.1f s run is stopped falsely with probability %.3g %%", in.run_seconds,
           100.0 * v.false_stop_probability));
-  v.findings.push_back(fmt("required: %.2f ms (%.0f steps) for <= 1 %% false stops; the longest stall "
-                           "measured was %.2f ms: ",
-                           v.required_window_ms, v.required_steps, 1e3 * stats.max()) +
-                       (v.window_holds ? "the window holds" : "the window does NOT hold"));
+  v.findings.push_back(
+      fmt("required: %.2f ms (%.0f steps) for <= 1 %% false stops; the longest stall "
+          "measured was %.2f ms: ",
+          v.required_window_ms, v.required_steps, 1e3 * stats.max()) +
+      (v.window_holds ? "the window holds" : "the window does NOT hold"));
   v.findings.push_back(
       fmt("predicted overruns %.3f %% of steps against max_overrun_fraction %.3f %%: ",
           100.0 * v.predicted_overrun_fraction, 100.0 * in.overrun_tolerance) +
-      (in.overrun_tolerance < 0 ? "not checked" : v.overruns_hold ? "holds" : "does NOT hold"));
+      (in.overrun_tolerance < 0 ? "not checked"
+       : v.overruns_hold        ? "holds"
+                                : "does NOT hold"));
   if (!v.window_holds)
-    v.fixes.push_back(fmt("answer_window_ms: %.2f command_watchdog_ms: %.2f in the deployment (a real "
-                          "fault is then held within %.2f ms instead of %.2f ms)",
-                          v.required_window_ms, v.required_window_ms, v.required_window_ms,
-                          v.window_ms));
+    v.fixes.push_back(
+        fmt("answer_window_ms: %.2f command_watchdog_ms: %.2f in the deployment (a real "
+            "fault is then held within %.2f ms instead of %.2f ms)",
+            v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms));
   if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
     v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",
                           2.0 * v.predicted_overrun_fraction));
   else if (!v.overruns_hold)
-    v.fixes.push_back(fmt("no overrun tolerance makes this a real-time test: %.1f %% of the steps "
-                          "would overrun; run at a lower rate or on a quieter machine",
-                          100.0 * v.predicted_overrun_fraction));
+    v.fixes.push_back(
+        fmt("no overrun tolerance makes this a real-time test: %.1f %% of the steps "
+            "would overrun; run at a lower rate or on a quieter machine",
+            100.0 * v.predicted_overrun_fraction));
   if (v.refused()) tuning_fixes(facts, in, v.fixes);
   return v;
 }

@@ -32,15 +32,15 @@ namespace rths::platform {
 inline constexpr double kFalseStopTarget = 0.01;  // per run
 
 struct FailSafeInput {
-  double dt = 0.0;               // s
-  double run_seconds = 0.0;      // s of the run judged
-  int answer_steps = 3;          // coordinator: max consecutive steps without an answer
-  int watchdog_steps = 3;        // emulator: command watchdog, periods
-  double max_link_jitter = 0.0;  // s, largest jitter (sigma) of any node's link, either way
+  double dt = 0.0;                   // s
+  double run_seconds = 0.0;          // s of the run judged
+  int answer_steps = 3;              // coordinator: max consecutive steps without an answer
+  int watchdog_steps = 3;            // emulator: command watchdog, periods
+  double max_link_jitter = 0.0;      // s, largest jitter (sigma) of any node's link, either way
   double overrun_tolerance = 0.001;  // < 0: not checked
-  double step_work = 0.0;        // s after the wake-up before the step's commands are out
-  std::vector<int> cpus;         // the CPUs the run uses (the loop's first when pinned)
-  int loop_cpu = -1;             // pinned loop CPU, -1 = unpinned
+  double step_work = 0.0;            // s after the wake-up before the step's commands are out
+  std::vector<int> cpus;             // the CPUs the run uses (the loop's first when pinned)
+  int loop_cpu = -1;                 // pinned loop CPU, -1 = unpinned
 };
 
 // From a study's deployment (runtime/plan.h defaults). `cpus_allowed`: this process's CPUs.
@@ -48,9 +48,9 @@ FailSafeInput failsafe_input(const config::Deployment& deployment, double dt, do
                              const std::vector<int>& cpus_allowed);
 
 struct FailSafeVerdict {
-  double window_ms = 0.0;            // the shorter of the deployment's two windows
+  double window_ms = 0.0;  // the shorter of the deployment's two windows
   double required_window_ms = 0.0;
-  int required_steps = 0;            // ceil(required / dt)
+  int required_steps = 0;               // ceil(required / dt)
   double false_stop_probability = 0.0;  // per run, at the deployment's window
   bool window_holds = false;
   double predicted_overrun_fraction = 0.0;
@@ -58,7 +58,7 @@ struct FailSafeVerdict {
   std::vector<std::string> findings;  // what holds and what does not, with the numbers
   std::vector<std::string> fixes;     // what to change, most direct first
   bool refused() const { return !window_holds || !overruns_hold; }
-  std::string refusal() const;        // findings and fixes as one message
+  std::string refusal() const;  // findings and fixes as one message
 };
 
 // Rate (per minute) of stalls longer than x (s) with the tail extrapolation above.

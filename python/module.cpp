@@ -71,7 +71,6 @@ struct Study {
   }
 };
 
-
 py::object to_python(const nlohmann::json& j) {
   switch (j.type()) {
     case nlohmann::json::value_t::null: return py::none();
@@ -102,7 +101,8 @@ py::dict table_dict(const tables::Table& table) {
     if (c.is_text) {
       series[name] = py::cast(c.texts);
     } else {
-      series[name] = py::array_t<double>(static_cast<py::ssize_t>(c.numbers.size()), c.numbers.data());
+      series[name] =
+          py::array_t<double>(static_cast<py::ssize_t>(c.numbers.size()), c.numbers.data());
     }
     units[name] = c.unit;
   }
@@ -116,7 +116,8 @@ Study load_study(const std::filesystem::path& path) {
   return {core::load_study(path), path.parent_path(), path.string()};
 }
 
-Study parse_study(const std::string& text, const std::filesystem::path& base_dir, const std::string& source) {
+Study parse_study(const std::string& text, const std::filesystem::path& base_dir,
+                  const std::string& source) {
   return {core::parse_study(text, source), base_dir, source};
 }
 
@@ -174,7 +175,9 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
   out["grid_hash"] = hash;
   out["grid_points"] = points;
   out["shard"] = options.shard.to_string();
-  const auto number = [](double x) { return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none()); };
+  const auto number = [](double x) {
+    return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none());
+  };
   py::dict t;
   t["stiffness_max_relative_difference_nrmse"] = number(trends.stiffness_max_relative_difference);
   t["period_falling_pair_fraction"] = number(trends.period_falling_fraction);
@@ -185,8 +188,8 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
   return out;
 }
 
-py::dict stability(double period, double zeta, double alpha, double dt, const std::string& integrator,
-                   int branches, int max_steps) {
+py::dict stability(double period, double zeta, double alpha, double dt,
+                   const std::string& integrator, int branches, int max_steps) {
   // The same range rules as `rths stability`'s flags (core/ranges.h), named as the arguments.
   core::check_range(core::Quantity::kPeriod, period, "period_s");
   core::check_range(core::Quantity::kDampingRatio, zeta, "zeta");
@@ -195,8 +198,10 @@ py::dict stability(double period, double zeta, double alpha, double dt, const st
   core::check_range(core::Quantity::kCount, static_cast<long long>(branches), "branches");
   core::check_range(core::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
   const auto kind = core::integrator_from_string(integrator);
-  const core::ContinuousStability continuous = core::continuous_critical_delay(period, zeta, alpha, branches);
-  const core::DiscreteStability discrete = core::discrete_critical_delay(kind, period, zeta, alpha, dt, max_steps);
+  const core::ContinuousStability continuous =
+      core::continuous_critical_delay(period, zeta, alpha, branches);
+  const core::DiscreteStability discrete =
+      core::discrete_critical_delay(kind, period, zeta, alpha, dt, max_steps);
   py::list crossings;
   for (const auto& c : continuous.crossings) {
     py::dict d;
@@ -213,19 +218,28 @@ py::dict stability(double period, double zeta, double alpha, double dt, const st
   input["dt_s"] = dt;
   cont["stable_without_delay"] = continuous.stable_without_delay;
   cont["stable_for_all_delays"] = continuous.stable_for_all_delays;
-  cont["critical_delay_s"] = continuous.critical_delay ? py::object(py::float_(*continuous.critical_delay)) : py::object(py::none());
+  cont["critical_delay_s"] = continuous.critical_delay
+                                 ? py::object(py::float_(*continuous.critical_delay))
+                                 : py::object(py::none());
   cont["crossings"] = crossings;
-  disc["first_unstable_delay_steps"] = discrete.first_unstable_steps ? py::object(py::int_(*discrete.first_unstable_steps)) : py::object(py::none());
-  disc["first_unstable_delay_s"] = discrete.first_unstable_delay ? py::object(py::float_(*discrete.first_unstable_delay)) : py::object(py::none());
+  disc["first_unstable_delay_steps"] = discrete.first_unstable_steps
+                                           ? py::object(py::int_(*discrete.first_unstable_steps))
+                                           : py::object(py::none());
+  disc["first_unstable_delay_s"] = discrete.first_unstable_delay
+                                       ? py::object(py::float_(*discrete.first_unstable_delay))
+                                       : py::object(py::none());
   disc["searched_up_to_steps"] = max_steps;
-  disc["spectral_radius_at_first_unstable"] = discrete.spectral_radius.empty() ? py::object(py::none()) : py::object(py::float_(discrete.spectral_radius.back()));
+  disc["spectral_radius_at_first_unstable"] =
+      discrete.spectral_radius.empty() ? py::object(py::none())
+                                       : py::object(py::float_(discrete.spectral_radius.back()));
   out["input"] = input;
   out["continuous"] = cont;
   out["discrete"] = disc;
   return out;
 }
 
-std::vector<identify::Effect> effects(const std::vector<std::string>& names, std::optional<identify::Channel> channel,
+std::vector<identify::Effect> effects(const std::vector<std::string>& names,
+                                      std::optional<identify::Channel> channel,
                                       const std::string& what) {
   std::vector<identify::Effect> out;
   for (const auto& name : names) {
@@ -239,25 +253,33 @@ std::vector<identify::Effect> effects(const std::vector<std::string>& names, std
   return out;
 }
 
-py::dict identify_record(const std::filesystem::path& path, const std::vector<std::string>& channels,
+py::dict identify_record(const std::filesystem::path& path,
+                         const std::vector<std::string>& channels,
                          const std::vector<std::string>& declared_actuator,
                          const std::vector<std::string>& declared_specimen,
                          const std::optional<std::vector<std::string>>& candidates, double holdout,
-                         const std::string& holdout_mode, std::size_t max_steps, const std::string& length_unit,
-                         const std::string& force_unit, const std::string& time_unit, const std::string& column_map) {
+                         const std::string& holdout_mode, std::size_t max_steps,
+                         const std::string& length_unit, const std::string& force_unit,
+                         const std::string& time_unit, const std::string& column_map) {
   core::check_range(core::Quantity::kFraction, holdout, "holdout");
   if (max_steps > 1000)  // 0: the declared model only, as `rths identify --max-steps 0`
-    throw std::invalid_argument("max_steps = " + std::to_string(max_steps) + " is outside [0, 1000]");
+    throw std::invalid_argument("max_steps = " + std::to_string(max_steps) +
+                                " is outside [0, 1000]");
   identify::IdentifyOptions options;
   options.channels.clear();
   for (const auto& name : channels) {
-    if (name == "measured") options.channels.push_back(identify::Channel::kMeasured);
-    else if (name == "force") options.channels.push_back(identify::Channel::kForce);
-    else throw std::invalid_argument("channels: unknown channel '" + name + "' (measured, force)");
+    if (name == "measured")
+      options.channels.push_back(identify::Channel::kMeasured);
+    else if (name == "force")
+      options.channels.push_back(identify::Channel::kForce);
+    else
+      throw std::invalid_argument("channels: unknown channel '" + name + "' (measured, force)");
   }
   if (options.channels.empty()) throw std::invalid_argument("channels: no channel given");
-  options.declared_actuator = effects(declared_actuator, identify::Channel::kMeasured, "declared_actuator");
-  options.declared_specimen = effects(declared_specimen, identify::Channel::kForce, "declared_specimen");
+  options.declared_actuator =
+      effects(declared_actuator, identify::Channel::kMeasured, "declared_actuator");
+  options.declared_specimen =
+      effects(declared_specimen, identify::Channel::kForce, "declared_specimen");
   if (candidates) options.selection.candidates = effects(*candidates, std::nullopt, "candidates");
   options.holdout_fraction = holdout;
   options.holdout_mode = identify::parse_holdout_mode(holdout_mode);
@@ -271,10 +293,10 @@ py::dict identify_record(const std::filesystem::path& path, const std::vector<st
   tables::Table table;
   {
     py::gil_scoped_release release;
-    const identify::Identification id = identify::identify(
-        identify::read_measured(path, units, map, identify::kDefaultMinSamples, 0.0,
-                                identify::force_column(options.channels)),
-        options);
+    const identify::Identification id =
+        identify::identify(identify::read_measured(path, units, map, identify::kDefaultMinSamples,
+                                                   0.0, identify::force_column(options.channels)),
+                           options);
     report = identify::to_json(id, identify::ReportContext{holdout, options.holdout_mode});
     table = tables::identify_table(id);
   }
@@ -291,7 +313,8 @@ py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
     try {
       contents = runtime::read_record(path);
     } catch (const std::runtime_error& e) {
-      throw std::invalid_argument(e.what());  // a missing file or no record is bad input, as in the CLI
+      throw std::invalid_argument(
+          e.what());  // a missing file or no record is bad input, as in the CLI
     }
     if (contents.lost_entries() && !allow_loss)
       throw std::runtime_error("the record lost entries: " + contents.loss_report() +
@@ -314,7 +337,9 @@ py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
 
 PYBIND11_MODULE(_rths, m) {
   using namespace rths::python;
-  m.doc() = "rths: real-time hybrid simulation with actuator and network lag (the C++ library from Python)";
+  m.doc() =
+      "rths: real-time hybrid simulation with actuator and network lag (the C++ library from "
+      "Python)";
   static py::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);
   static py::exception<std::invalid_argument> bad_input(m, "BadInputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
@@ -331,31 +356,41 @@ PYBIND11_MODULE(_rths, m) {
     }
   });
 
-  py::class_<Study>(m, "Study", "A study config and the folder its relative paths are resolved against")
+  py::class_<Study>(m, "Study",
+                    "A study config and the folder its relative paths are resolved against")
       .def_property_readonly("name", [](const Study& s) { return s.config.name(); })
-      .def_property_readonly("cases", &Study::case_names, "case names, the reference first unless reference_case is set")
+      .def_property_readonly("cases", &Study::case_names,
+                             "case names, the reference first unless reference_case is set")
       .def_property_readonly("base_dir", [](const Study& s) { return s.base_dir; })
       .def_property_readonly("text", &Study::text, "the config in Protobuf text format")
-      .def("__repr__", [](const Study& s) { return "<rths.LoadedStudy '" + s.config.name() + "' from " + s.source + ">"; });
+      .def("__repr__", [](const Study& s) {
+        return "<rths.LoadedStudy '" + s.config.name() + "' from " + s.source + ">";
+      });
 
-  m.def("load_study", &load_study, py::arg("path"), "Read a study config file (Protobuf text format)");
-  m.def("parse_study", &parse_study, py::arg("text"), py::arg("base_dir") = std::filesystem::path("."),
-        py::arg("source") = "<text>", "A study config from text; relative paths resolve against base_dir");
-  m.def("run", &run, py::arg("study"), py::arg("cases") = std::nullopt,
-        "Run every case of a study (or the named cases and the reference) in process, as `rths run`");
+  m.def("load_study", &load_study, py::arg("path"),
+        "Read a study config file (Protobuf text format)");
+  m.def("parse_study", &parse_study, py::arg("text"),
+        py::arg("base_dir") = std::filesystem::path("."), py::arg("source") = "<text>",
+        "A study config from text; relative paths resolve against base_dir");
+  m.def(
+      "run", &run, py::arg("study"), py::arg("cases") = std::nullopt,
+      "Run every case of a study (or the named cases and the reference) in process, as `rths run`");
   m.def("sweep", &sweep, py::arg("study"), py::arg("shard") = "0/1", py::arg("threads") = 0,
         py::arg("general") = false, "The study's sweep grid (the paper's Fig. 4), as `rths sweep`");
-  m.def("stability", &stability, py::arg("period_s"), py::arg("zeta"), py::arg("experimental_fraction") = 1.0,
-        py::arg("dt_s") = 0.001, py::arg("integrator") = "explicit-newmark", py::arg("branches") = 3,
-        py::arg("max_steps") = 200, "Continuous and discrete critical delay, as `rths stability --json`");
-  m.def("identify", &identify_record, py::arg("path"),
-        py::arg("channels") = std::vector<std::string>{"measured", "force"},
-        py::arg("declared_actuator") = std::vector<std::string>{"delay"},
-        py::arg("declared_specimen") = std::vector<std::string>{"stiffness"},
-        py::arg("candidates") = std::nullopt, py::arg("holdout") = 0.3, py::arg("holdout_mode") = "blocks",
-        py::arg("max_steps") = 6, py::arg("length_unit") = "mm", py::arg("force_unit") = "N",
-        py::arg("time_unit") = "s", py::arg("column_map") = "",
-        "Identify the effects the declared models lack in measured data, as `rths identify --json`");
+  m.def("stability", &stability, py::arg("period_s"), py::arg("zeta"),
+        py::arg("experimental_fraction") = 1.0, py::arg("dt_s") = 0.001,
+        py::arg("integrator") = "explicit-newmark", py::arg("branches") = 3,
+        py::arg("max_steps") = 200,
+        "Continuous and discrete critical delay, as `rths stability --json`");
+  m.def(
+      "identify", &identify_record, py::arg("path"),
+      py::arg("channels") = std::vector<std::string>{"measured", "force"},
+      py::arg("declared_actuator") = std::vector<std::string>{"delay"},
+      py::arg("declared_specimen") = std::vector<std::string>{"stiffness"},
+      py::arg("candidates") = std::nullopt, py::arg("holdout") = 0.3,
+      py::arg("holdout_mode") = "blocks", py::arg("max_steps") = 6, py::arg("length_unit") = "mm",
+      py::arg("force_unit") = "N", py::arg("time_unit") = "s", py::arg("column_map") = "",
+      "Identify the effects the declared models lack in measured data, as `rths identify --json`");
   m.def("read_record", &read_record, py::arg("path"), py::arg("allow_loss") = false,
         "A run record (.rthsrec), also a truncated one; checksums verified, a damaged record "
         "raises unless allow_loss=True (then its intact entries and 'losses')");

@@ -23,15 +23,15 @@ namespace rths::runtime {
 
 struct DeadlineDiagnosis {
   std::uint64_t steps = 0, overruns = 0;
-  std::uint64_t work_overruns = 0;   // step_wall > dt
-  std::uint64_t stall_overruns = 0;  // the rest
-  std::uint64_t worst_streak = 0;    // most consecutive overrun steps
-  double period = 0.0;               // s
+  std::uint64_t work_overruns = 0;                     // step_wall > dt
+  std::uint64_t stall_overruns = 0;                    // the rest
+  std::uint64_t worst_streak = 0;                      // most consecutive overrun steps
+  double period = 0.0;                                 // s
   double step_wall_median = 0.0, step_wall_p99 = 0.0;  // s, over every step
-  double worst_lateness = 0.0;       // s
-  std::string cause;                 // "platform stalls", "the loop's own work", "none"
-  std::vector<std::string> advice;   // settings that would help, most useful first
-  std::string usability;             // what the record is still good for
+  double worst_lateness = 0.0;                         // s
+  std::string cause;                // "platform stalls", "the loop's own work", "none"
+  std::vector<std::string> advice;  // settings that would help, most useful first
+  std::string usability;            // what the record is still good for
   // Several lines for a summary: the cause with its figures, the advice, the usability.
   std::string describe() const;
 };

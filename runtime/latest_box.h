@@ -31,8 +31,8 @@ class LatestBox {
   // Producer: the slot to fill before publish(). Its previous contents are some older value.
   T& slot() { return slots_[write_]; }
   void publish() {
-    const std::uint8_t old = middle_.exchange(static_cast<std::uint8_t>(write_ | kFresh),
-                                              std::memory_order_acq_rel);
+    const std::uint8_t old =
+        middle_.exchange(static_cast<std::uint8_t>(write_ | kFresh), std::memory_order_acq_rel);
     write_ = old & kIndex;
   }
   void set(const T& value) {
@@ -53,9 +53,9 @@ class LatestBox {
  private:
   static constexpr std::uint8_t kIndex = 0x3, kFresh = 0x4;
   std::array<T, 3> slots_{};
-  std::uint8_t write_ = 0;                // producer's slot
-  std::atomic<std::uint8_t> middle_{1};   // swapped slot, with kFresh when untaken
-  std::uint8_t read_ = 2;                 // consumer's slot
+  std::uint8_t write_ = 0;               // producer's slot
+  std::atomic<std::uint8_t> middle_{1};  // swapped slot, with kFresh when untaken
+  std::uint8_t read_ = 2;                // consumer's slot
 };
 
 }  // namespace rths::runtime

@@ -39,11 +39,13 @@ std::string make_run_id(const std::string& label) {
   gethostname(host, sizeof host - 1);
   std::string id;
   for (char c : label) {
-    const bool keep = std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
+    const bool keep =
+        std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-';
     id += keep ? c : '_';
   }
   if (!id.empty()) id += "-";
-  return id + host + "-" + std::to_string(getpid()) + "-" + std::to_string(transport::realtime_ns());
+  return id + host + "-" + std::to_string(getpid()) + "-" +
+         std::to_string(transport::realtime_ns());
 }
 
 namespace {
@@ -64,8 +66,9 @@ ChildProcess start(const std::filesystem::path& program, std::vector<std::string
   argv.push_back(program.string());
   argv.insert(argv.end(), args.begin(), args.end());
   spdlog::debug("{} at {}: {}", label, where.where, command_line(argv));
-  return ChildProcess(program, args, log,
-                      {label + " at " + where.where, std::move(where.prefix), std::move(where.environment)});
+  return ChildProcess(
+      program, args, log,
+      {label + " at " + where.where, std::move(where.prefix), std::move(where.environment)});
 }
 
 }  // namespace
@@ -74,9 +77,10 @@ std::unique_ptr<ScopedCpuExclude> keep_off_loop_cpu(const config::Deployment& de
   if (deployment.clock() != config::Deployment::REAL_TIME || !deployment.pin_loop()) return nullptr;
   auto guard = std::make_unique<ScopedCpuExclude>(deployment.loop_cpu());
   if (!guard->active()) {
-    spdlog::warn("pin_loop: CPU {} cannot be kept for the loop alone (not allowed, or the only "
-                 "CPU); the nodes share it",
-                 deployment.loop_cpu());
+    spdlog::warn(
+        "pin_loop: CPU {} cannot be kept for the loop alone (not allowed, or the only "
+        "CPU); the nodes share it",
+        deployment.loop_cpu());
     return nullptr;
   }
   return guard;
@@ -86,10 +90,10 @@ namespace {
 
 std::filesystem::path security_dir_of(const LaunchOptions& options,
                                       const config::Deployment& deployment, int domain) {
-  const std::filesystem::path dir =
-      !options.security_dir.empty()        ? options.security_dir
-      : !deployment.security_dir().empty() ? options.config.parent_path() / deployment.security_dir()
-                                           : std::filesystem::path();
+  const std::filesystem::path dir = !options.security_dir.empty() ? options.security_dir
+                                    : !deployment.security_dir().empty()
+                                        ? options.config.parent_path() / deployment.security_dir()
+                                        : std::filesystem::path();
   if (!dir.empty()) {  // every document checked before any process starts
     std::vector<int> ids{security::kCoordinatorNodeId};
     for (const config::NodeSpec& node : deployment.nodes()) ids.push_back(node.id());
@@ -118,7 +122,7 @@ std::unique_ptr<ScopedCpuPin> pin_for_children(const LaunchOptions& options,
 std::vector<std::string> coordinator_arguments(const LaunchOptions& options,
                                                const LaunchResult& result, int domain) {
   std::vector<std::string> args{"--config", options.config.string(), "--run-id", result.run_id,
-                                "--domain", std::to_string(domain), "--case", result.case_name};
+                                "--domain", std::to_string(domain),  "--case",   result.case_name};
   if (!options.record.empty()) args.insert(args.end(), {"--record", options.record.string()});
   if (!options.platform_file.empty())
     args.insert(args.end(), {"--platform", options.platform_file.string()});
@@ -174,8 +178,7 @@ void reap_nodes(std::vector<ChildProcess>& nodes, LaunchResult& result) {
 
 LaunchResult launch_run(const LaunchOptions& options) {
   const config::Study study = core::load_study(options.config);
-  const core::PreparedStudy prepared =
-      core::prepare_study(study, options.config.parent_path());
+  const core::PreparedStudy prepared = core::prepare_study(study, options.config.parent_path());
   const config::Case& study_case = find_case(
       study, options.case_name.empty() ? study.deployment().case_name() : options.case_name);
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
@@ -184,8 +187,8 @@ LaunchResult launch_run(const LaunchOptions& options) {
 
   LaunchResult result;
   result.case_name = study_case.name();
-  result.run_id = options.run_id.empty() ? make_run_id(study.name() + "-" + result.case_name)
-                                         : options.run_id;
+  result.run_id =
+      options.run_id.empty() ? make_run_id(study.name() + "-" + result.case_name) : options.run_id;
   const int domain = options.domain >= 0 ? options.domain : deployment.domain_id();
   const std::filesystem::path security_dir = security_dir_of(options, deployment, domain);
   const NodePrograms programs = find_node_programs(options.programs_dir);
@@ -202,16 +205,15 @@ LaunchResult launch_run(const LaunchOptions& options) {
     const std::string label = "node " + id + " (" + node_kind_name(node.kind()) + ")";
     result.node_labels.push_back(label);
     result.node_ids.push_back(node.id());
-    nodes.push_back(start(sub ? programs.substructure : programs.actuator_emulator,
-                          {"--node-id", id, "--domain", std::to_string(domain), "--run-id",
-                           result.run_id},
-                          security_dir, node.id(), options.log_dir / ("node_" + id + ".log"), label,
-                          placement));
+    nodes.push_back(start(
+        sub ? programs.substructure : programs.actuator_emulator,
+        {"--node-id", id, "--domain", std::to_string(domain), "--run-id", result.run_id},
+        security_dir, node.id(), options.log_dir / ("node_" + id + ".log"), label, placement));
   }
   result.coordinator_log = options.log_dir / "coordinator.log";
-  ChildProcess coordinator = start(programs.coordinator, coordinator_arguments(options, result, domain),
-                                   security_dir, security::kCoordinatorNodeId,
-                                   result.coordinator_log, "coordinator", placement);
+  ChildProcess coordinator =
+      start(programs.coordinator, coordinator_arguments(options, result, domain), security_dir,
+            security::kCoordinatorNodeId, result.coordinator_log, "coordinator", placement);
   pin.reset();
   off_loop_cpu.reset();
 

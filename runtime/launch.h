@@ -3,7 +3,8 @@
 // and `rths sites` (each process in its site's network namespace):
 //
 //   launch_run: load the study and refuse a bad deployment before starting anything; check every
-//   DDS Security document, and that the governance covers the run's domain; start the nodes (--node-id, --domain, --run-id), then the coordinator
+//   DDS Security document, and that the governance covers the run's domain; start the nodes
+//   (--node-id, --domain, --run-id), then the coordinator
 //   (--config, --case, --run-id, --record, --domain), each where options.placement puts it, with
 //   its log in log_dir (node_<id>.log, coordinator.log); wait for the coordinator until it exits,
 //   options.timeout passes (status "timed out after T s", exit 124) or options.stop_requested()
@@ -47,10 +48,10 @@ std::string make_run_id(const std::string& label = "");
 // the scheduler's placement: the pacing sleep and the nodes' work should not queue behind each
 // other on one CPU.
 enum class CpuPlacement {
-  kAuto,     // lockstep: one CPU (the highest allowed; unpinned with a warning if that fails);
-             // real time: spread
-  kOneCpu,   // always one CPU (failing to pin is an error)
-  kSpread,   // never pin
+  kAuto,    // lockstep: one CPU (the highest allowed; unpinned with a warning if that fails);
+            // real time: spread
+  kOneCpu,  // always one CPU (failing to pin is an error)
+  kSpread,  // never pin
 };
 
 // Where one process (node id; 0 = the coordinator) runs: a command prefix and environment
@@ -77,7 +78,7 @@ struct LaunchOptions {
   // DDS Security: the `rths pki init` directory; each process gets --security DIR/node_<id>.
   // Empty: the config's deployment.security_dir (relative to the config), else off.
   std::filesystem::path security_dir;
-  PlacementStrategy placement;         // empty: local (loopback DDS unless CYCLONEDDS_URI is set)
+  PlacementStrategy placement;           // empty: local (loopback DDS unless CYCLONEDDS_URI is set)
   std::function<bool()> stop_requested;  // polled every 20 ms; true = stop now
   // Real time: the coordinator's platform check (coordinator/program.h): a check already made
   // (`rths rt-check --json` output), else seconds of measurement (< 0: the coordinator's
@@ -89,16 +90,16 @@ struct LaunchOptions {
 };
 
 struct LaunchResult {
-  int coordinator_exit = -1;            // 124 when the timeout stopped it
-  std::string status;                   // empty, "interrupted" or "timed out after T s"
+  int coordinator_exit = -1;  // 124 when the timeout stopped it
+  std::string status;         // empty, "interrupted" or "timed out after T s"
   std::string run_id;
-  std::string case_name;                // the case that ran
+  std::string case_name;  // the case that ran
   std::vector<std::string> node_labels;
   std::vector<int> node_ids;
-  std::vector<int> node_exits;          // 128 + signal when a signal ended it
+  std::vector<int> node_exits;  // 128 + signal when a signal ended it
   std::filesystem::path coordinator_log;
-  std::string coordinator_log_tail;     // the last 1500 bytes, for messages
-  double wall_seconds = 0.0;            // start of the first process to the last one's exit
+  std::string coordinator_log_tail;  // the last 1500 bytes, for messages
+  double wall_seconds = 0.0;         // start of the first process to the last one's exit
 };
 
 // A real-time deployment with pin_loop gives loop_cpu to the coordinator's loop thread alone: the

@@ -24,9 +24,9 @@ namespace rths::runtime {
 
 struct LinkSeries {
   int node_id = 0;
-  std::vector<double> time;                  // s, simulated time of the step that carried it
+  std::vector<double> time;  // s, simulated time of the step that carried it
   std::vector<std::int64_t> answered_step;
-  std::vector<double> round_trip, injected;  // s
+  std::vector<double> round_trip, injected;      // s
   std::vector<double> one_way_down, one_way_up;  // s (include clock offset across hosts)
   LagSummary round_trip_summary() const { return summarize(round_trip); }
   LagSummary injected_summary() const { return summarize(injected); }
@@ -46,8 +46,8 @@ class LinkLagAccumulator {
 };
 
 struct RunMeasurements {
-  std::string clock;       // "lockstep" or "real_time" (header)
-  std::string case_name;   // header
+  std::string clock;      // "lockstep" or "real_time" (header)
+  std::string case_name;  // header
   core::SimulationResult steps;
   std::map<int, LinkSeries> links;  // by node id
   bool has_footer = false;          // false: the run was cut short

@@ -139,7 +139,8 @@ void NodeLoop::take(transport::Message message) {
 // grace later.
 bool NodeLoop::commands_stopped(std::int64_t now) {
   const std::int64_t watchdog = assigned_.watchdog_ns;
-  if (watchdog <= 0 || last_command_ns_ <= 0 || service_.held() || now - last_command_ns_ <= watchdog)
+  if (watchdog <= 0 || last_command_ns_ <= 0 || service_.held() ||
+      now - last_command_ns_ <= watchdog)
     return false;
   lock_.unlock();
   std::this_thread::sleep_for(kWatchdogGrace);

@@ -43,8 +43,8 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
       if (domain < 0) domain = deployment.domain_id();
       if (run_id.empty()) run_id = deployment.run_id();
       if (security_dir.empty() && !deployment.security_dir().empty())
-        security_dir = security::node_dir(std::filesystem::path(config_path).parent_path() /
-                                              deployment.security_dir(), node_id);
+        security_dir = security::node_dir(
+            std::filesystem::path(config_path).parent_path() / deployment.security_dir(), node_id);
     }
     if (!security_dir.empty())  // refused here, before the participant exists
       options.participant_properties =

@@ -3,9 +3,9 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
-#include <algorithm>
 
 #include "core/study.h"
 #include "runtime/plan.h"
@@ -49,8 +49,8 @@ transport::Message NodeService::heartbeat_message(bool final) const {
 
 bool NodeService::entitled(const transport::Message& message) {
   const bool own_topic = message.topic_node == node_id_ && message.node_id == node_id_;
-  const bool own_writer = coordinator_writer_ == 0 || message.writer == 0 ||
-                          message.writer == coordinator_writer_;
+  const bool own_writer =
+      coordinator_writer_ == 0 || message.writer == 0 || message.writer == coordinator_writer_;
   if (own_topic && own_writer) return true;
   rejected_.count(Verdict::kNotEntitled);
   return false;
@@ -92,13 +92,14 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
         throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
                                     ", this node speaks " + std::to_string(kSchemaVersion));
       hosted_ = configure(assign);
-      const auto chains = [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
-        std::vector<core::DelayChain> out;
-        if (stages.empty()) return out;
-        for (int i = 0; i < hosted_; ++i)
-          out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
-        return out;
-      };
+      const auto chains =
+          [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
+            std::vector<core::DelayChain> out;
+            if (stages.empty()) return out;
+            for (int i = 0; i < hosted_; ++i)
+              out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
+            return out;
+          };
       receive_chains_ = chains(assign.node().receive_delay());
       send_chains_ = chains(assign.node().send_delay());
       stream_period_ = servo_period();
@@ -156,10 +157,8 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
     return {};
   }
   switch (message.kind) {
-    case ASSIGN:
-      return on_assign(message);
-    case COMMAND:
-      return on_command(message);
+    case ASSIGN: return on_assign(message);
+    case COMMAND: return on_command(message);
     case HOLD:
       if (!entitled(message)) return {};
       if (!held_) {
@@ -175,8 +174,7 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
       if (!entitled(message)) return {};
       stopped_ = true;
       return {heartbeat_message(true)};
-    default:
-      return {};  // heartbeats only refresh liveliness, which the loop tracks
+    default: return {};  // heartbeats only refresh liveliness, which the loop tracks
   }
 }
 
@@ -196,8 +194,8 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
     return {};
   }
   if (const std::string why = refusal(command_); !why.empty()) {
-    auto hold = hold_on_own("refused the command of step " + std::to_string(message.step) +
-                            ": " + why);
+    auto hold =
+        hold_on_own("refused the command of step " + std::to_string(message.step) + ": " + why);
     if (hold) return {std::move(*hold)};
     return {};
   }
@@ -206,7 +204,8 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
       command_.drift_velocity_size() == hosted_) {
     for (int i = 0; i < hosted_; ++i) {
       const double velocity = command_.drift_velocity(i);
-      command_.set_drift(i, receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
+      command_.set_drift(i,
+                         receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
     }
   }
   try {

@@ -3,12 +3,13 @@
 //   before assignment   announce itself; accept the first ASSIGN (of the expected run, if given),
 //                       build its part (configure) and answer READY (or READY with an error).
 //   after assignment    COMMAND of the next step (lockstep: exactly last + 1; real time: newer,
-//                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing the command's stamp;
-//                       HOLD -> freeze (further commands ignored); STOP -> stopped(), answered
-//                       by the node's last heartbeat (final, with its rejects by cause);
-//                       a command the node refuses (refusal(): an emulator's rate limit) -> it
-//                       holds on its own and answers HOLD with the reason instead of FEEDBACK.
-//                       foreign-run, garbage, duplicate and stale messages are counted, never applied.
+//                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing
+//                       the command's stamp; HOLD -> freeze (further commands ignored); STOP ->
+//                       stopped(), answered by the node's last heartbeat (final, with its rejects
+//                       by cause); a command the node refuses (refusal(): an emulator's rate limit)
+//                       -> it holds on its own and answers HOLD with the reason instead of
+//                       FEEDBACK. foreign-run, garbage, duplicate and stale messages are counted,
+//                       never applied.
 //   trust               ASSIGN, COMMAND, HOLD and STOP count only on the node's own command
 //                       topic (never the broadcast) and, after the first accepted ASSIGN, only
 //                       from the writer that sent it (transport::Message::writer; 0 = unknown,
@@ -19,7 +20,8 @@
 //                       range and not acted on.
 //   node delay stages   the spec's receive_delay / send_delay stages (simulated time) act on
 //                       each received drift before compute() and on each force after it.
-//   streaming           real time with a servo loop faster than the integrator (servo_period() > 0):
+//   streaming           real time with a servo loop faster than the integrator (servo_period() >
+//   0):
 //                       a COMMAND only loads the servo (load()); the node loop calls servo_tick()
 //                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
 //                       for the newest command, stamped with its servo sample. Held, stopped or

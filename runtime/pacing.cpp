@@ -20,14 +20,13 @@ void MonotonicClock::sleep_until_ns(std::int64_t deadline) {
   timespec ts{};
   ts.tv_sec = static_cast<time_t>(deadline / 1'000'000'000);
   ts.tv_nsec = static_cast<long>(deadline % 1'000'000'000);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {}
 }
 
 Pacer::Pacer(PacingClock& clock, double period, WaitPolicy policy)
     : clock_(clock), policy_(policy), period_ns_(std::llround(period * 1e9)) {
-  if (!(period > 0)) throw std::invalid_argument("pacing period must be > 0 s, got " +
-                                                 std::to_string(period));
+  if (!(period > 0))
+    throw std::invalid_argument("pacing period must be > 0 s, got " + std::to_string(period));
 }
 
 void Pacer::start() {

@@ -3,7 +3,8 @@
 // loop). Deadline k = start + k * period on CLOCK_MONOTONIC; the schedule never drifts and is never
 // silently re-based: a late step is counted as an overrun and the next deadline stays on the grid.
 //
-//   wait(k): if now > deadline_k on entry -> overrun (the previous step ran past its slot), no wait;
+//   wait(k): if now > deadline_k on entry -> overrun (the previous step ran past its slot), no
+//   wait;
 //            else wait until deadline_k with the WaitPolicy (sleep, sleep then spin, spin).
 //   returns  lateness = wake-up time - deadline_k (s, >= 0 up to clock jitter), overrun flag.
 // Real-time safe: no allocation. The clock is an interface so the unit is tested with a fake one.
@@ -17,7 +18,7 @@ namespace rths::runtime {
 class PacingClock {
  public:
   virtual ~PacingClock() = default;
-  virtual std::int64_t now_ns() = 0;                 // monotonic
+  virtual std::int64_t now_ns() = 0;                       // monotonic
   virtual void sleep_until_ns(std::int64_t deadline) = 0;  // absolute, same clock
 };
 

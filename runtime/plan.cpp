@@ -37,7 +37,8 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
   bool any_substructure = false;
   for (const config::NodeSpec& spec : deployment.nodes()) {
     const std::string where = "deployment.nodes[id " + std::to_string(spec.id()) + "]";
-    if (spec.id() < 1) throw std::invalid_argument(where + ": id must be >= 1 (0 is the coordinator)");
+    if (spec.id() < 1)
+      throw std::invalid_argument(where + ": id must be >= 1 (0 is the coordinator)");
     if (!ids.insert(spec.id()).second)
       throw std::invalid_argument(where + ": id used by two nodes");
     validate_link_lag(spec.receive_lag(), where + ".receive_lag");
@@ -49,8 +50,9 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
       throw std::invalid_argument(where + ": kind must be SUBSTRUCTURE or ACTUATOR_EMULATOR");
     any_substructure |= sub;
     if (sub && spec.compensation_size() > 0)
-      throw std::invalid_argument(where + ": compensation shapes actuator commands; only an "
-                                          "ACTUATOR_EMULATOR carries it");
+      throw std::invalid_argument(where +
+                                  ": compensation shapes actuator commands; only an "
+                                  "ACTUATOR_EMULATOR carries it");
     const std::set<int>& pool = sub ? numerical : experimental;
     auto& host = sub ? numerical_host : experimental_host;
     std::vector<int> hosted;
@@ -77,8 +79,9 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
     }
     node.storeys = hosted;
     if (sub && partition.coupled_to(hosted) != hosted)
-      throw std::invalid_argument(where + ": the numerical stiffness matrix couples its DOFs to "
-                                          "others; one substructure node hosts every coupled DOF");
+      throw std::invalid_argument(where +
+                                  ": the numerical stiffness matrix couples its DOFs to "
+                                  "others; one substructure node hosts every coupled DOF");
     if (!sub) {
       for (std::size_t a = 0; a < partition.actuator_storeys.size(); ++a)
         if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
@@ -107,7 +110,8 @@ core::HybridSetup with_node_compensation(core::HybridSetup setup, const Deployme
   return setup;
 }
 
-void check_node_stages(const DeploymentPlan& plan, double dt, const std::filesystem::path& base_dir) {
+void check_node_stages(const DeploymentPlan& plan, double dt,
+                       const std::filesystem::path& base_dir) {
   for (const NodePlan& node : plan.nodes) {
     const std::string where = "deployment.nodes[id " + std::to_string(node.spec.id()) + "]";
     for (const auto& [field, stages] : {std::pair{".receive_delay", &node.spec.receive_delay()},
@@ -122,7 +126,7 @@ void check_node_stages(const DeploymentPlan& plan, double dt, const std::filesys
 }
 
 config::Deployment with_default_nodes(config::Deployment deployment,
-                                     const core::HybridSetup& base) {
+                                      const core::HybridSetup& base) {
   if (deployment.nodes_size() > 0) return deployment;
   bool numerical = false;
   for (int s = 0; s < static_cast<int>(base.partition.numerical.size()); ++s)
@@ -162,8 +166,12 @@ double or_default(double value, double fallback) { return value > 0 ? value : fa
 }  // namespace
 
 double start_timeout(const config::Deployment& d) { return or_default(d.start_timeout(), 10.0); }
-double heartbeat_period(const config::Deployment& d) { return or_default(d.heartbeat_period(), 0.05); }
-double liveliness_timeout(const config::Deployment& d) { return or_default(d.liveliness_timeout(), 1.0); }
+double heartbeat_period(const config::Deployment& d) {
+  return or_default(d.heartbeat_period(), 0.05);
+}
+double liveliness_timeout(const config::Deployment& d) {
+  return or_default(d.liveliness_timeout(), 1.0);
+}
 double step_timeout(const config::Deployment& d) { return or_default(d.step_timeout(), 2.0); }
 double feedback_wait_fraction(const config::Deployment& d) {
   return or_default(d.feedback_wait_fraction(), 0.5);

@@ -46,7 +46,8 @@ core::HybridSetup with_node_compensation(core::HybridSetup setup, const Deployme
 // Builds every node's receive_delay / send_delay chain once (at dt, Trace paths relative to
 // base_dir), so a bad stage is bad input before any node starts. Throws std::invalid_argument
 // naming the node and the field.
-void check_node_stages(const DeploymentPlan& plan, double dt, const std::filesystem::path& base_dir);
+void check_node_stages(const DeploymentPlan& plan, double dt,
+                       const std::filesystem::path& base_dir);
 
 // The deployment with default nodes when it declares none: node 1 a substructure node (if any
 // storey has a numerical part), node 2 an actuator emulator (if any has an experimental part).

@@ -303,7 +303,8 @@ CommandResult run_command(const std::vector<std::string>& argv, std::chrono::mil
   ::lseek(fd, 0, SEEK_SET);
   char buffer[4096];
   ssize_t n = 0;
-  while ((n = ::read(fd, buffer, sizeof buffer)) > 0) result.output.append(buffer, static_cast<std::size_t>(n));
+  while ((n = ::read(fd, buffer, sizeof buffer)) > 0)
+    result.output.append(buffer, static_cast<std::size_t>(n));
   ::close(fd);
   return result;
 }
@@ -327,8 +328,7 @@ HeldStopSignals::HeldStopSignals() {
 
 HeldStopSignals::~HeldStopSignals() {
   timespec zero{0, 0};
-  while (sigtimedwait(&held_, nullptr, &zero) > 0) {
-  }
+  while (sigtimedwait(&held_, nullptr, &zero) > 0) {}
   pthread_sigmask(SIG_SETMASK, &previous_, nullptr);
 }
 

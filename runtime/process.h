@@ -41,7 +41,7 @@ class ScopedCpuPin {
   ~ScopedCpuPin();
   int cpu() const { return cpu_; }
 
- struct Mask;  // a saved cpu_set_t
+  struct Mask;  // a saved cpu_set_t
 
  private:
   std::unique_ptr<Mask> previous_;
@@ -74,9 +74,9 @@ void isolate_calling_thread_on_cpu(int cpu);
 
 // How a child is started besides its program and arguments.
 struct ChildOptions {
-  std::string name;                               // for messages; default the program's file name
-  std::vector<std::string> prefix;                // run under this, e.g. {"ip","netns","exec","ns"}
-  std::map<std::string, std::string> environment; // overrides of the parent's environment
+  std::string name;                 // for messages; default the program's file name
+  std::vector<std::string> prefix;  // run under this, e.g. {"ip","netns","exec","ns"}
+  std::map<std::string, std::string> environment;  // overrides of the parent's environment
 };
 
 class ChildProcess {
@@ -115,8 +115,8 @@ class ChildProcess {
 };
 
 struct CommandResult {
-  int exit_code = -1;   // exit status, or 128 + signal number
-  std::string output;   // stdout and stderr interleaved
+  int exit_code = -1;  // exit status, or 128 + signal number
+  std::string output;  // stdout and stderr interleaved
   bool ok() const { return exit_code == 0; }
 };
 

@@ -3,9 +3,9 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <algorithm>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
@@ -88,8 +88,7 @@ AsyncRecordWriter::AsyncRecordWriter(const std::filesystem::path& path, std::siz
   sem_init(&wake_, 0, 0);
   writer_ = std::thread([this] {
     for (;;) {
-      while (sem_wait(&wake_) != 0 && errno == EINTR) {
-      }
+      while (sem_wait(&wake_) != 0 && errno == EINTR) {}
       drain();
       if (stopping_.load(std::memory_order_acquire)) {
         drain();
@@ -132,8 +131,10 @@ void AsyncRecordWriter::drain() {
     if (!failed()) {
       seal_record_frame(slot.data(),
                         static_cast<std::uint32_t>(slot.size() - kRecordFrameHeaderBytes));
-      if (std::fwrite(slot.data(), 1, slot.size(), file_) != slot.size()) fail(errno);
-      else written_.fetch_add(1, std::memory_order_relaxed);
+      if (std::fwrite(slot.data(), 1, slot.size(), file_) != slot.size())
+        fail(errno);
+      else
+        written_.fetch_add(1, std::memory_order_relaxed);
     }
     if (observer_) observer_->on_entry(slot);
     head_.store(head + 1, std::memory_order_release);
@@ -184,7 +185,7 @@ Frame frame_at(std::string_view bytes, std::size_t at, std::uint32_t* size) {
   *size = load_le32(f + 4);
   if (*size > bytes.size() - at - kRecordFrameHeaderBytes) return Frame::kCut;
   return load_le32(f + 8) == util::crc32c(f + kRecordFrameHeaderBytes, *size) ? Frame::kIntact
-                                                                             : Frame::kDamaged;
+                                                                              : Frame::kDamaged;
 }
 
 // The first frame header at or after `from`; npos when there is none.
@@ -209,8 +210,8 @@ void add_loss(RecordContents& contents, std::uint64_t first, std::uint64_t end) 
 void parse_frames(std::string_view bytes, std::size_t at, RecordContents& contents) {
   while (at < bytes.size()) {
     std::uint32_t size = 0;
-    const Frame frame = bytes.size() - at < kRecordFrameHeaderBytes ? Frame::kCut
-                                                                     : frame_at(bytes, at, &size);
+    const Frame frame =
+        bytes.size() - at < kRecordFrameHeaderBytes ? Frame::kCut : frame_at(bytes, at, &size);
     if (frame == Frame::kCut) {
       contents.truncated = true;
       contents.truncated_at = at;
@@ -256,7 +257,8 @@ void parse_unchecksummed(std::string_view bytes, const std::string& source,
     RecordEntry entry;
     if (!entry.ParseFromCodedStream(&coded) || !coded.ConsumedEntireMessage() ||
         (contents.entries.empty() && !entry.has_header()))
-      throw std::runtime_error(source + ": not a run record, or a corrupt one: no rths record "
+      throw std::runtime_error(source +
+                               ": not a run record, or a corrupt one: no rths record "
                                "preamble, no checksummed entry, and entry " +
                                std::to_string(contents.entries.size()) + " at byte " +
                                std::to_string(start) + " does not parse as an unchecksummed one");
@@ -296,8 +298,7 @@ void compose_warning(RecordContents& contents, const std::string& source, std::s
 }
 
 bool is_prefix_of_preamble(std::string_view bytes) {
-  return bytes.size() < kRecordPreambleBytes &&
-         record_preamble().substr(0, bytes.size()) == bytes;
+  return bytes.size() < kRecordPreambleBytes && record_preamble().substr(0, bytes.size()) == bytes;
 }
 
 }  // namespace

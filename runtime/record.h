@@ -83,8 +83,9 @@ class RecordObserver {
 // bounded single-producer single-consumer ring of preallocated slots, so append() neither blocks
 // nor does I/O, and, once every slot has grown to the largest entry, allocates nothing.
 //   append(entry)   serialises into the next free slot and wakes the writer (sem_post, which never
-//                   blocks). Ring full (the writer is more than `capacity` entries behind): the entry
-//                   is dropped and counted (dropped()); the caller reports the gap, it is never silent.
+//                   blocks). Ring full (the writer is more than `capacity` entries behind): the
+//                   entry is dropped and counted (dropped()); the caller reports the gap, it is
+//                   never silent.
 //   writer thread   seals each slot's frame (checksums), writes it and flushes every time the ring
 //                   runs empty. The first failed write or flush (disk full, I/O error, file size
 //                   limit) is kept (failed(), failure()); nothing is written after it, so the
@@ -141,8 +142,8 @@ class AsyncRecordWriter {
 // A damaged region of a record: bytes that hold no intact entry, skipped by the reader.
 struct RecordLoss {
   std::uint64_t first_byte = 0, end_byte = 0;  // [first_byte, end_byte) of the file
-  std::int64_t last_step_before = -1;  // the last intact step before the region; -1: none
-  std::int64_t first_step_after = -1;  // the first intact step after it; -1: none
+  std::int64_t last_step_before = -1;          // the last intact step before the region; -1: none
+  std::int64_t first_step_after = -1;          // the first intact step after it; -1: none
   // e.g. "bytes 1234-1455 (222 bytes): steps 1059-1061 lost"; "... : no step lost (an entry
   // between step 12 and step 13)"; "...: after step 1058 (every later step lost)".
   std::string describe() const;
@@ -152,11 +153,11 @@ struct RecordContents {
   std::string source;  // the file (or what parse_record was told), for messages
   std::vector<RecordEntry> entries;
   std::vector<std::uint64_t> offsets;  // byte offset of each entry's frame (entries' order)
-  bool truncated = false;  // the file ends inside an entry; everything before it was read
+  bool truncated = false;          // the file ends inside an entry; everything before it was read
   std::uint64_t truncated_at = 0;  // byte where that cut entry starts
-  bool checksummed = true; // false: an old record without checksums (read unverified)
+  bool checksummed = true;         // false: an old record without checksums (read unverified)
   std::vector<RecordLoss> losses;  // damaged regions, in file order (each skipped)
-  std::string warning;     // what the reader has to say: truncation, no checksums, losses
+  std::string warning;             // what the reader has to say: truncation, no checksums, losses
   const RunHeader* header() const;
   const RunFooter* footer() const;
   std::vector<const StepRecord*> steps() const;

@@ -21,13 +21,11 @@ void wait_until(PacingClock& clock, std::int64_t deadline_ns, const WaitPolicy& 
     case WaitPolicyKind::kSleepThenSpin: {
       const std::int64_t wake = deadline_ns - policy.spin_margin_ns;
       if (clock.now_ns() < wake) clock.sleep_until_ns(wake);
-      while (clock.now_ns() < deadline_ns) {
-      }
+      while (clock.now_ns() < deadline_ns) {}
       return;
     }
     case WaitPolicyKind::kSpin:
-      while (clock.now_ns() < deadline_ns) {
-      }
+      while (clock.now_ns() < deadline_ns) {}
       return;
   }
 }

@@ -16,7 +16,7 @@ packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev pro
   libmatio-dev libhdf5-dev pybind11-dev python3-dev python3-numpy python3-h5py python3-scipy
   python3-pytest python3-matplotlib python3-nbclient python3-nbformat python3-ipykernel slurm-wlm munge podman runc podman-compose debootstrap
   netavark aardvark-dns iptables openssl libssl-dev libxml2-dev
-  libcpp-httplib-dev nodejs chromium)
+  libcpp-httplib-dev nodejs chromium clang-format)
 # npm (the view's page library, uPlot, and playwright-core for its browser tests): Debian's npm
 # package, unless the installed nodejs already brings npm.
 command -v npm >/dev/null 2>&1 || packages+=(npm)

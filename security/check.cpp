@@ -44,7 +44,8 @@ std::string subject_of(X509* cert) {
 
 std::string common_name(X509* cert) {
   char cn[256] = {};
-  const int n = X509_NAME_get_text_by_NID(X509_get_subject_name(cert), NID_commonName, cn, sizeof cn);
+  const int n =
+      X509_NAME_get_text_by_NID(X509_get_subject_name(cert), NID_commonName, cn, sizeof cn);
   return n > 0 ? std::string(cn, static_cast<std::size_t>(n)) : std::string();
 }
 
@@ -132,8 +133,7 @@ int domain_id_of(const fs::path& file, const xmlNode* node) {
     std::size_t used = 0;
     const int id = std::stoi(text, &used);
     if (used == text.size() && id >= 0) return id;
-  } catch (const std::exception&) {
-  }
+  } catch (const std::exception&) {}
   refuse(file, "domain id '" + text + "' is not a number >= 0");
 }
 

@@ -33,7 +33,7 @@ struct DomainRange {
 
 struct NodeSecurityFiles {
   std::filesystem::path identity_ca, certificate, private_key, governance, permissions;
-  std::string subject;  // cert.pem's subject, "CN=...,OU=...,O=..."
+  std::string subject;                          // cert.pem's subject, "CN=...,OU=...,O=..."
   std::vector<DomainRange> governance_domains;  // the domain ids its domain rules cover
 };
 

@@ -59,7 +59,8 @@ ossl::Cert make_cert(EVP_PKEY* key, const std::vector<std::pair<const char*, std
   ossl::require(RAND_bytes(serial, sizeof serial) == 1, "certificate serial");
   serial[0] &= 0x7f;  // positive
   BIGNUM* bn = BN_bin2bn(serial, sizeof serial, nullptr);
-  ossl::require(bn && BN_to_ASN1_INTEGER(bn, X509_get_serialNumber(cert.get())), "certificate serial");
+  ossl::require(bn && BN_to_ASN1_INTEGER(bn, X509_get_serialNumber(cert.get())),
+                "certificate serial");
   BN_free(bn);
   X509_gmtime_adj(X509_getm_notBefore(cert.get()), validity.not_before.count());
   X509_gmtime_adj(X509_getm_notAfter(cert.get()), validity.not_after.count());
@@ -86,8 +87,8 @@ void write_text(const fs::path& file, const std::string& text, fs::perms perms) 
   fs::permissions(file, perms);
 }
 
-constexpr fs::perms kPublic = fs::perms::owner_read | fs::perms::owner_write |
-                              fs::perms::group_read | fs::perms::others_read;
+constexpr fs::perms kPublic =
+    fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::others_read;
 constexpr fs::perms kSecret = fs::perms::owner_read | fs::perms::owner_write;
 
 std::string cert_pem(X509* cert) {
@@ -98,9 +99,9 @@ std::string cert_pem(X509* cert) {
 
 std::string key_pem(EVP_PKEY* key) {
   ossl::Bio bio(BIO_new(BIO_s_mem()));
-  ossl::require(bio && PEM_write_bio_PrivateKey(bio.get(), key, nullptr, nullptr, 0, nullptr,
-                                                nullptr) == 1,
-                "PEM private key");
+  ossl::require(
+      bio && PEM_write_bio_PrivateKey(bio.get(), key, nullptr, nullptr, 0, nullptr, nullptr) == 1,
+      "PEM private key");
   return ossl::bio_text(bio.get());
 }
 
@@ -124,8 +125,9 @@ struct LabCa {
 LabCa load_ca(const fs::path& dir) {
   LabCa ca{ossl::read_cert(dir / "ca" / "ca_cert.pem"), ossl::read_key(dir / "ca" / "ca_key.pem")};
   if (!ca.cert || !ca.key)
-    throw std::invalid_argument((dir / "ca").string() +
-                                ": no lab CA (ca_cert.pem and ca_key.pem); run `rths pki init` first");
+    throw std::invalid_argument(
+        (dir / "ca").string() +
+        ": no lab CA (ca_cert.pem and ca_key.pem); run `rths pki init` first");
   return ca;
 }
 
@@ -140,7 +142,8 @@ std::string subject_name(const NodeIdentity& node, const std::string& organisati
 }
 
 void check_identity(const NodeIdentity& node) {
-  if (node.node_id < 0) throw std::invalid_argument("node id " + std::to_string(node.node_id) + " < 0");
+  if (node.node_id < 0)
+    throw std::invalid_argument("node id " + std::to_string(node.node_id) + " < 0");
   if (node.node_id == kCoordinatorNodeId && node.kind != "coordinator")
     throw std::invalid_argument("node 0 is the coordinator, not '" + node.kind + "'");
   if (node.node_id != kCoordinatorNodeId && !is_node_kind(node.kind))
@@ -189,14 +192,19 @@ std::string permissions_xml(const NodeIdentity& node, const std::string& organis
   return R"(<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_permissions.xsd">
   <permissions>
-    <grant name="rths_node_)" + std::to_string(node.node_id) + R"(">
-      <subject_name>)" + subject_name(node, organisation) + R"(</subject_name>
-      <validity><not_before>)" + not_before + "</not_before><not_after>" + not_after +
+    <grant name="rths_node_)" +
+         std::to_string(node.node_id) + R"(">
+      <subject_name>)" +
+         subject_name(node, organisation) + R"(</subject_name>
+      <validity><not_before>)" +
+         not_before + "</not_before><not_after>" + not_after +
          R"(</not_after></validity>
       <allow_rule>
         <domains><id_range><min>0</min><max>230</max></id_range></domains>
-        <publish><topics><topic>)" + publish + R"(</topic></topics></publish>
-        <subscribe><topics><topic>)" + subscribe + R"(</topic></topics></subscribe>
+        <publish><topics><topic>)" +
+         publish + R"(</topic></topics></publish>
+        <subscribe><topics><topic>)" +
+         subscribe + R"(</topic></topics></subscribe>
       </allow_rule>
       <default>DENY</default>
     </grant>
@@ -212,10 +220,10 @@ void issue_node(const fs::path& dir, const NodeIdentity& node, const std::string
   const fs::path out = node_dir(dir, node.node_id);
   fs::create_directories(out);
   const ossl::Key key = new_key();
-  const ossl::Cert cert =
-      make_cert(key.get(),
-                {{"O", organisation}, {"OU", node.kind}, {"CN", "rths-node-" + std::to_string(node.node_id)}},
-                ca.cert.get(), ca.key.get(), validity, false);
+  const ossl::Cert cert = make_cert(
+      key.get(),
+      {{"O", organisation}, {"OU", node.kind}, {"CN", "rths-node-" + std::to_string(node.node_id)}},
+      ca.cert.get(), ca.key.get(), validity, false);
   write_text(out / "identity_ca.pem", cert_pem(ca.cert.get()), kPublic);
   write_text(out / "cert.pem", cert_pem(cert.get()), kPublic);
   write_text(out / "key.pem", key_pem(key.get()), kSecret);
@@ -241,7 +249,8 @@ void init_pki(const fs::path& dir, const PkiOptions& options) {
     has_coordinator |= node.node_id == kCoordinatorNodeId;
     int same = 0;
     for (const NodeIdentity& other : nodes) same += other.node_id == node.node_id;
-    if (same > 1) throw std::invalid_argument("node " + std::to_string(node.node_id) + " given twice");
+    if (same > 1)
+      throw std::invalid_argument("node " + std::to_string(node.node_id) + " given twice");
   }
   if (!has_coordinator) nodes.insert(nodes.begin(), {kCoordinatorNodeId, "coordinator"});
   if (fs::exists(dir / "ca" / "ca_key.pem"))
@@ -250,9 +259,9 @@ void init_pki(const fs::path& dir, const PkiOptions& options) {
   fs::create_directories(dir / "ca");
   fs::permissions(dir / "ca", fs::perms::owner_all);
   const ossl::Key ca_key = new_key();
-  const ossl::Cert ca_cert =
-      make_cert(ca_key.get(), {{"O", options.organisation}, {"CN", "rths-lab-ca"}}, nullptr,
-                nullptr, {std::chrono::seconds(-3600), std::chrono::seconds(kCaDays * 86400)}, true);
+  const ossl::Cert ca_cert = make_cert(
+      ca_key.get(), {{"O", options.organisation}, {"CN", "rths-lab-ca"}}, nullptr, nullptr,
+      {std::chrono::seconds(-3600), std::chrono::seconds(kCaDays * 86400)}, true);
   write_text(dir / "ca" / "ca_cert.pem", cert_pem(ca_cert.get()), kPublic);
   write_text(dir / "ca" / "ca_key.pem", key_pem(ca_key.get()), kSecret);
   write_text(dir / "governance.xml", governance_xml(), kPublic);

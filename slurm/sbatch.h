@@ -14,14 +14,14 @@
 namespace rths::slurm {
 
 struct SweepJob {
-  std::filesystem::path rths;    // the rths executable the nodes run
-  std::filesystem::path config;  // study config with a `sweep` block
-  std::filesystem::path out;     // job folder
-  std::size_t shards = 4;        // array tasks
-  std::string partition;         // empty: the cluster's default
-  std::string time = "01:00:00"; // per task: minutes, MM:SS, HH:MM:SS, D-HH or D-HH:MM:SS
-  std::string memory = "1G";     // per task: a number with an optional K, M, G or T suffix
-  int threads = 1;               // cpus-per-task, and the sweep's --threads
+  std::filesystem::path rths;     // the rths executable the nodes run
+  std::filesystem::path config;   // study config with a `sweep` block
+  std::filesystem::path out;      // job folder
+  std::size_t shards = 4;         // array tasks
+  std::string partition;          // empty: the cluster's default
+  std::string time = "01:00:00";  // per task: minutes, MM:SS, HH:MM:SS, D-HH or D-HH:MM:SS
+  std::string memory = "1G";      // per task: a number with an optional K, M, G or T suffix
+  int threads = 1;                // cpus-per-task, and the sweep's --threads
 };
 
 // Throws std::invalid_argument naming the option when a value would not be accepted by sbatch

@@ -57,7 +57,8 @@ Table distributed_study_table(const analysis::StudyOutcome& outcome,
                               const std::vector<std::map<int, runtime::LinkSeries>>& links) {
   if (links.size() != outcome.cases.size())
     throw std::invalid_argument("distributed_study_table: " + std::to_string(links.size()) +
-                                " link sets for " + std::to_string(outcome.cases.size()) + " cases");
+                                " link sets for " + std::to_string(outcome.cases.size()) +
+                                " cases");
   Table table = study_table(outcome);
   const std::size_t rows = table.rows();
   for (std::size_t i = 0; i < links.size(); ++i) {
@@ -124,7 +125,7 @@ void set_record_attributes(const runtime::RecordContents& record, Table& t) {
   t.set_attribute("clock", header->clock());
   const runtime::RunFooter* footer = record.footer();
   t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
-  t.set_attribute("integrity", !record.checksummed ? "unverified: written without checksums"
+  t.set_attribute("integrity", !record.checksummed     ? "unverified: written without checksums"
                                : record.lost_entries() ? "damaged: " + record.loss_report()
                                                        : "verified (CRC-32C per entry)");
   std::string lost;
@@ -171,33 +172,54 @@ Table record_table(const runtime::RecordContents& record) {
   Table t;
   t.add_numbers("step", "", scalar([](const Step& s) { return s.step(); }));
   t.add_numbers("time_s", "s", scalar([](const Step& s) { return s.time(); }));
-  t.add_numbers("ground_acceleration_m_per_s2", "m/s^2", scalar([](const Step& s) { return s.ground_acceleration(); }));
-  const auto add_indexed = [&t](const std::string& name, const std::string& unit, std::vector<std::vector<double>> columns) {
+  t.add_numbers("ground_acceleration_m_per_s2", "m/s^2",
+                scalar([](const Step& s) { return s.ground_acceleration(); }));
+  const auto add_indexed = [&t](const std::string& name, const std::string& unit,
+                                std::vector<std::vector<double>> columns) {
     for (std::size_t i = 0; i < columns.size(); ++i)
-      t.add_numbers(name + std::to_string(i + 1) + "_" + unit_suffix(unit), unit, std::move(columns[i]));
+      t.add_numbers(name + std::to_string(i + 1) + "_" + unit_suffix(unit), unit,
+                    std::move(columns[i]));
   };
-  add_indexed("u", "m", per_index([](const Step& s) -> const auto& { return s.displacement(); }, dofs));
-  add_indexed("v", "m/s", per_index([](const Step& s) -> const auto& { return s.velocity(); }, dofs));
-  add_indexed("a", "m/s^2", per_index([](const Step& s) -> const auto& { return s.acceleration(); }, dofs));
-  add_indexed("command", "m", per_index([](const Step& s) -> const auto& { return s.command(); }, actuators));
-  add_indexed("realised", "m", per_index([](const Step& s) -> const auto& { return s.realised(); }, actuators));
-  add_indexed("force", "N", per_index([](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
+  add_indexed("u", "m",
+              per_index(
+                  [](const Step& s) -> const auto& { return s.displacement(); }, dofs));
+  add_indexed("v", "m/s",
+              per_index(
+                  [](const Step& s) -> const auto& { return s.velocity(); }, dofs));
+  add_indexed("a", "m/s^2",
+              per_index(
+                  [](const Step& s) -> const auto& { return s.acceleration(); }, dofs));
+  add_indexed("command", "m",
+              per_index(
+                  [](const Step& s) -> const auto& { return s.command(); }, actuators));
+  add_indexed("realised", "m",
+              per_index(
+                  [](const Step& s) -> const auto& { return s.realised(); }, actuators));
+  add_indexed("force", "N",
+              per_index(
+                  [](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
   for (std::size_t l = 0; l < links; ++l) {
-    const std::string prefix = "node" + std::to_string(header->link_node_ids(static_cast<int>(l))) + "_";
+    const std::string prefix =
+        "node" + std::to_string(header->link_node_ids(static_cast<int>(l))) + "_";
     // A step without this link's sample (step 0 has no exchange) is missing, not zero.
     const auto link = [&steps, l](auto field) {
       std::vector<double> out;
       out.reserve(steps.size());
       for (const auto* s : steps) {
-        out.push_back(l < static_cast<std::size_t>(s->links_size()) ? static_cast<double>(field(s->links(static_cast<int>(l)))) : kMissing);
+        out.push_back(l < static_cast<std::size_t>(s->links_size())
+                          ? static_cast<double>(field(s->links(static_cast<int>(l))))
+                          : kMissing);
       }
       return out;
     };
     using Link = runtime::LinkSample;
-    t.add_numbers(prefix + "answered_step", "", link([](const Link& x) { return x.answered_step(); }));
-    t.add_numbers(prefix + "injected_lag_s", "s", link([](const Link& x) { return x.injected_lag(); }));
+    t.add_numbers(prefix + "answered_step", "",
+                  link([](const Link& x) { return x.answered_step(); }));
+    t.add_numbers(prefix + "injected_lag_s", "s",
+                  link([](const Link& x) { return x.injected_lag(); }));
     t.add_numbers(prefix + "round_trip_s", "s", link([](const Link& x) { return x.round_trip(); }));
-    t.add_numbers(prefix + "one_way_down_s", "s", link([](const Link& x) { return x.one_way_down(); }));
+    t.add_numbers(prefix + "one_way_down_s", "s",
+                  link([](const Link& x) { return x.one_way_down(); }));
     t.add_numbers(prefix + "one_way_up_s", "s", link([](const Link& x) { return x.one_way_up(); }));
   }
   t.add_numbers("lateness_s", "s", scalar([](const Step& s) { return s.lateness(); }));

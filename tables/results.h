@@ -7,10 +7,10 @@
 //                 its last step.
 //   distributed_study_table  `rths launch` and `rths sites`: study_table's columns (the same as
 //                 `run`'s for the same cases), then the lag per link of each case:
-//                 <case>_lag_node<n>_injected_s and <case>_lag_node<n>_round_trip_s (s), filled at the
-//                 step that carried each answer (runtime/measurements.h: an answer counts once) and
-//                 NaN elsewhere (step 0; a real-time step that reused an older answer). Attribute
-//                 "reference": against what every case was compared.
+//                 <case>_lag_node<n>_injected_s and <case>_lag_node<n>_round_trip_s (s), filled at
+//                 the step that carried each answer (runtime/measurements.h: an answer counts once)
+//                 and NaN elsewhere (step 0; a real-time step that reused an older answer).
+//                 Attribute "reference": against what every case was compared.
 //   sweep_table   `rths sweep`: index, period (s), delay (s), alpha, stiffness (N/m; 0 = mass
 //                 1 kg), dt (s), motion and model (text), peak_ref, peak_delayed (m),
 //                 eq2_paper, nrmse, peak_error (m), diverged (0/1), as in the sweep CSV;

@@ -13,8 +13,9 @@ constexpr std::size_t kMaxIdentifier = 63;  // MATLAB's namelengthmax
 bool is_identifier(const std::string& name) {
   if (name.empty() || name.size() > kMaxIdentifier) return false;
   if (!std::isalpha(static_cast<unsigned char>(name.front()))) return false;
-  return std::all_of(name.begin(), name.end(),
-                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
 }
 
 std::string identifier(const std::string& text) {
@@ -43,14 +44,17 @@ void Table::add(Column column) {
     if (column.name.size() <= tail.size() ||
         column.name.compare(column.name.size() - tail.size(), tail.size(), tail) != 0)
       throw std::invalid_argument("table column '" + column.name + "' (unit " + column.unit +
-                                  ") must end in '" + tail + "': [<case>_]<quantity><index>_<unit>");
+                                  ") must end in '" + tail +
+                                  "': [<case>_]<quantity><index>_<unit>");
   }
   for (const Column& c : columns_) {
-    if (c.name == column.name) throw std::invalid_argument("table column '" + column.name + "' appears twice");
+    if (c.name == column.name)
+      throw std::invalid_argument("table column '" + column.name + "' appears twice");
   }
   if (!columns_.empty() && column.size() != rows()) {
-    throw std::invalid_argument("table column '" + column.name + "' has " + std::to_string(column.size()) +
-                                " rows, the columns before it " + std::to_string(rows()));
+    throw std::invalid_argument("table column '" + column.name + "' has " +
+                                std::to_string(column.size()) + " rows, the columns before it " +
+                                std::to_string(rows()));
   }
   columns_.push_back(std::move(column));
 }
@@ -58,14 +62,18 @@ void Table::add(Column column) {
 std::string unit_suffix(const std::string& unit) {
   std::string out;
   for (char c : unit) {
-    if (c == '/') out += "_per_";
-    else if (c == '%') out += "pct";
-    else if (c != '^') out += c;
+    if (c == '/')
+      out += "_per_";
+    else if (c == '%')
+      out += "pct";
+    else if (c != '^')
+      out += c;
   }
   return out;
 }
 
-void Table::add_numbers(const std::string& name, const std::string& unit, std::vector<double> values) {
+void Table::add_numbers(const std::string& name, const std::string& unit,
+                        std::vector<double> values) {
   Column c;
   c.name = name;
   c.unit = unit;
@@ -73,7 +81,8 @@ void Table::add_numbers(const std::string& name, const std::string& unit, std::v
   add(std::move(c));
 }
 
-void Table::add_texts(const std::string& name, const std::string& unit, std::vector<std::string> values) {
+void Table::add_texts(const std::string& name, const std::string& unit,
+                      std::vector<std::string> values) {
   Column c;
   c.name = name;
   c.unit = unit;

@@ -65,30 +65,35 @@ MatVar mat_column(const Column& column) {
   }
   MatVar cell(Mat_VarCreate(column.name.c_str(), MAT_C_CELL, MAT_T_CELL, 2, dims, nullptr, 0));
   if (!cell) return cell;
-  for (std::size_t r = 0; r < column.size(); ++r) Mat_VarSetCell(cell.get(), static_cast<int>(r), mat_char(nullptr, column.texts[r]));
+  for (std::size_t r = 0; r < column.size(); ++r)
+    Mat_VarSetCell(cell.get(), static_cast<int>(r), mat_char(nullptr, column.texts[r]));
   return cell;
 }
 
 // A 1 x 1 struct whose fields are the given char values.
-MatVar mat_text_struct(const char* name, const std::vector<std::pair<std::string, std::string>>& fields) {
+MatVar mat_text_struct(const char* name,
+                       const std::vector<std::pair<std::string, std::string>>& fields) {
   std::vector<const char*> names;
   for (const auto& f : fields) names.push_back(f.first.c_str());
   std::size_t dims[2] = {1, 1};
   MatVar s(Mat_VarCreateStruct(name, 2, dims, names.data(), static_cast<unsigned>(names.size())));
   if (!s) return s;
-  for (const auto& f : fields) Mat_VarSetStructFieldByName(s.get(), f.first.c_str(), 0, mat_char(nullptr, f.second));
+  for (const auto& f : fields)
+    Mat_VarSetStructFieldByName(s.get(), f.first.c_str(), 0, mat_char(nullptr, f.second));
   return s;
 }
 
 void write_mat(const Table& table, const std::filesystem::path& path, const std::string& target) {
   for (const Column& c : table.columns()) {
     if (c.name == "units" || c.name == "attributes") {
-      throw std::invalid_argument("MATLAB file " + target + ": a column may not be called '" + c.name +
-                                  "' (the name holds the units / attributes struct)");
+      throw std::invalid_argument("MATLAB file " + target + ": a column may not be called '" +
+                                  c.name + "' (the name holds the units / attributes struct)");
     }
   }
   for (const auto& [key, value] : table.attributes()) {
-    if (!is_identifier(key)) throw std::invalid_argument("MATLAB file " + target + ": attribute '" + key + "' is not a valid field name");
+    if (!is_identifier(key))
+      throw std::invalid_argument("MATLAB file " + target + ": attribute '" + key +
+                                  "' is not a valid field name");
   }
   std::unique_ptr<mat_t, MatFileDeleter> mat(Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5));
   if (!mat) throw std::runtime_error("cannot write MATLAB file " + target);
@@ -102,7 +107,8 @@ void write_mat(const Table& table, const std::filesystem::path& path, const std:
   for (const Column& c : table.columns()) units.emplace_back(c.name, c.unit);
   if (!units.empty()) put(mat_text_struct("units", units), "units");
   if (!table.attributes().empty()) {
-    put(mat_text_struct("attributes", {table.attributes().begin(), table.attributes().end()}), "attributes");
+    put(mat_text_struct("attributes", {table.attributes().begin(), table.attributes().end()}),
+        "attributes");
   }
 }
 
@@ -143,7 +149,8 @@ class H5Writer {
     check(space.ok() && properties.ok(), "cannot describe column " + c.name);
     if (rows > 0) {
       const hsize_t chunk = std::min<hsize_t>(rows, 1 << 16);
-      check(H5Pset_chunk(properties.get(), 1, &chunk) >= 0 && H5Pset_deflate(properties.get(), 4) >= 0,
+      check(H5Pset_chunk(properties.get(), 1, &chunk) >= 0 &&
+                H5Pset_deflate(properties.get(), 4) >= 0,
             "cannot set compression for column " + c.name);
     }
     const hid_t stored = c.is_text ? string_type_.get() : H5T_IEEE_F64LE;
@@ -156,25 +163,32 @@ class H5Writer {
       if (c.is_text) {
         std::vector<const char*> pointers;
         for (const std::string& t : c.texts) pointers.push_back(t.c_str());
-        status = H5Dwrite(dataset.get(), string_type_.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, pointers.data());
+        status = H5Dwrite(dataset.get(), string_type_.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                          pointers.data());
       } else {
-        status = H5Dwrite(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.numbers.data());
+        status = H5Dwrite(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                          c.numbers.data());
       }
       check(status >= 0, "cannot write dataset " + c.name);
     }
     attribute(dataset.get(), "units", c.unit);
   }
 
-  void root_attribute(const std::string& key, const std::string& value) { attribute(file_.get(), key, value); }
+  void root_attribute(const std::string& key, const std::string& value) {
+    attribute(file_.get(), key, value);
+  }
 
   void close() { check(H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) >= 0, "cannot flush"); }
 
  private:
   void attribute(hid_t owner, const std::string& key, const std::string& value) {
     H5Handle scalar(H5Screate(H5S_SCALAR), H5Sclose);
-    H5Handle attr(H5Acreate2(owner, key.c_str(), string_type_.get(), scalar.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+    H5Handle attr(
+        H5Acreate2(owner, key.c_str(), string_type_.get(), scalar.get(), H5P_DEFAULT, H5P_DEFAULT),
+        H5Aclose);
     const char* text = value.c_str();
-    check(attr.ok() && H5Awrite(attr.get(), string_type_.get(), &text) >= 0, "cannot write attribute " + key);
+    check(attr.ok() && H5Awrite(attr.get(), string_type_.get(), &text) >= 0,
+          "cannot write attribute " + key);
   }
   void check(bool ok, const std::string& what) const {
     if (!ok) throw std::runtime_error("HDF5 file " + target_ + ": " + what);

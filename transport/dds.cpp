@@ -19,8 +19,7 @@ using QosPtr = std::unique_ptr<dds_qos_t, QosDeleter>;
 QosPtr make_qos(const QosSpec& spec) {
   QosPtr qos(dds_create_qos());
   if (!qos) throw std::runtime_error("dds_create_qos: out of memory");
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE,
-                       DDS_MSECS(spec.max_blocking.count()));
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(spec.max_blocking.count()));
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, spec.history_depth);
   dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
   return qos;
@@ -58,16 +57,18 @@ QosPtr make_participant_qos(const Properties& properties) {
   if (properties.empty()) return nullptr;
   QosPtr qos(dds_create_qos());
   if (!qos) throw std::runtime_error("dds_create_qos: out of memory");
-  for (const auto& [name, value] : properties) dds_qset_prop(qos.get(), name.c_str(), value.c_str());
+  for (const auto& [name, value] : properties)
+    dds_qset_prop(qos.get(), name.c_str(), value.c_str());
   return qos;
 }
 
 }  // namespace
 
 Participant::Participant(std::uint32_t domain_id, const Properties& properties)
-    : entity_(check(dds_create_participant(domain_id, make_participant_qos(properties).get(), nullptr),
-                    "dds_create_participant(domain " + std::to_string(domain_id) +
-                        (properties.empty() ? ")" : ", with DDS Security)"))) {}
+    : entity_(
+          check(dds_create_participant(domain_id, make_participant_qos(properties).get(), nullptr),
+                "dds_create_participant(domain " + std::to_string(domain_id) +
+                    (properties.empty() ? ")" : ", with DDS Security)"))) {}
 
 EnvelopeTopic::EnvelopeTopic(const Participant& participant, const std::string& name,
                              const QosSpec& qos)

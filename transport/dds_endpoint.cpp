@@ -95,7 +95,8 @@ void DdsEndpoint::Impl::add_reader(const std::string& name, std::int32_t node) {
   dds::EnvelopeTopic topic(participant, name, qos);
   dds::Reader reader(participant, topic, qos, &Impl::on_data, this);
   std::lock_guard lock(readers_mutex);
-  readers.push_back(std::make_unique<NodeReader>(NodeReader{std::move(topic), std::move(reader), node}));
+  readers.push_back(
+      std::make_unique<NodeReader>(NodeReader{std::move(topic), std::move(reader), node}));
 }
 
 std::optional<std::int32_t> DdsEndpoint::Impl::topic_node_of(dds::Handle reader) {
@@ -109,7 +110,8 @@ dds::Handle DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
   std::lock_guard lock(writers_mutex);
   auto& slot = addressed_writers[node_id];
   if (!slot) {
-    dds::EnvelopeTopic topic(participant, node_topic_name(options.topic_prefix, node_id, "_down"), qos);
+    dds::EnvelopeTopic topic(participant, node_topic_name(options.topic_prefix, node_id, "_down"),
+                             qos);
     dds::Writer w(participant, topic, qos);
     slot.reset(new TopicWriter{std::move(topic), std::move(w)});
     const auto deadline = std::chrono::steady_clock::now() + kAddressedMatchTimeout;
@@ -152,8 +154,7 @@ void DdsEndpoint::send(const Message& m) {
   sample.echo_ns = m.echo_ns;
   sample.payload._length = static_cast<uint32_t>(m.payload.size());
   sample.payload._maximum = sample.payload._length;
-  sample.payload._buffer =
-      reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
+  sample.payload._buffer = reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
   sample.payload._release = false;
   if (!options_.coordinator) {
     dds::check(dds_write(impl_->own->writer.get(), &sample), "dds_write");
@@ -233,9 +234,8 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
 std::optional<Message> DdsEndpoint::receive(std::chrono::nanoseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   std::unique_lock lock(impl_->mutex);
-  impl_->arrived.wait_until(lock, deadline, [&] {
-    return !impl_->pending.empty() || impl_->interrupted;
-  });
+  impl_->arrived.wait_until(lock, deadline,
+                            [&] { return !impl_->pending.empty() || impl_->interrupted; });
   if (!impl_->pending.empty()) {
     Message m = std::move(impl_->pending.front());
     impl_->pending.pop_front();
@@ -258,7 +258,6 @@ void DdsEndpoint::set_inline_handler(InlineHandler handler) {
   impl_->handler = handler ? std::make_shared<const InlineHandler>(std::move(handler)) : nullptr;
   impl_->handler_idle.wait(lock, [&] { return impl_->handler_calls == 0; });
 }
-
 
 std::uint64_t DdsEndpoint::samples_taken() const {
   return impl_->samples_taken.load(std::memory_order_relaxed);
@@ -286,11 +285,10 @@ void DdsEndpoint::wait_for_match(int readers, int writers,
     const int w = matched_writers();
     if (r >= readers && w >= writers) return;
     if (std::chrono::steady_clock::now() > deadline)
-      throw std::runtime_error("DDS domain " + std::to_string(options_.domain_id) +
-                               ": matched " + std::to_string(r) + "/" + std::to_string(readers) +
-                               " readers and " + std::to_string(w) + "/" +
-                               std::to_string(writers) + " writers after " +
-                               std::to_string(timeout.count()) + " ms");
+      throw std::runtime_error("DDS domain " + std::to_string(options_.domain_id) + ": matched " +
+                               std::to_string(r) + "/" + std::to_string(readers) + " readers and " +
+                               std::to_string(w) + "/" + std::to_string(writers) +
+                               " writers after " + std::to_string(timeout.count()) + " ms");
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
 }

@@ -36,9 +36,9 @@ namespace rths::transport {
 
 struct DdsEndpointOptions {
   std::uint32_t domain_id = 0;
-  bool coordinator = true;                 // false: a node
-  std::int32_t node_id = kCoordinatorId;   // for a node, its id (messages to others are dropped)
-  std::string topic_prefix = "rths";       // topics <prefix>_node<id>_down and _up
+  bool coordinator = true;                // false: a node
+  std::int32_t node_id = kCoordinatorId;  // for a node, its id (messages to others are dropped)
+  std::string topic_prefix = "rths";      // topics <prefix>_node<id>_down and _up
   int history_depth = 64;
   // QoS properties of the participant: the DDS Security ones (security::participant_properties)
   // or none. A participant with security talks only to participants of the same lab's PKI.
@@ -57,7 +57,8 @@ class DdsEndpoint final : public Endpoint {
   // Remote writers feeding any of this endpoint's readers.
   int matched_writers() const;
   // Waits until at least `writers` remote writers feed this endpoint and `readers` remote
-  // readers listen to it (a coordinator's writers exist once it has addressed a node). Throws std::runtime_error naming the counts on timeout.
+  // readers listen to it (a coordinator's writers exist once it has addressed a node). Throws
+  // std::runtime_error naming the counts on timeout.
   void wait_for_match(int readers, int writers, std::chrono::milliseconds timeout) const;
   void set_inline_handler(InlineHandler handler) override;
   // Samples taken off DDS so far, including any dropped as not addressed to this node (with one

@@ -23,11 +23,11 @@ namespace rths::transport {
 struct Message {
   std::string run_id;
   std::int32_t node_id = 0;
-  std::int32_t kind = 0;       // rths.runtime.MessageKind
+  std::int32_t kind = 0;  // rths.runtime.MessageKind
   std::int64_t step = 0;
-  std::int64_t sent_ns = 0;    // stamped by send() when 0
-  std::int64_t echo_ns = 0;    // sent_ns of the message this answers
-  std::string payload;         // Protobuf bytes
+  std::int64_t sent_ns = 0;      // stamped by send() when 0
+  std::int64_t echo_ns = 0;      // sent_ns of the message this answers
+  std::string payload;           // Protobuf bytes
   std::int64_t received_ns = 0;  // stamped on receipt, never sent
   // Stamped on receipt, never sent: the node whose topic carried the message (its addressee on
   // the way down, its sender on the way up; kBroadcastId for the broadcast topic), and the

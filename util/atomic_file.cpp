@@ -10,7 +10,9 @@ AtomicFile::AtomicFile(std::filesystem::path target)
   if (target_.has_parent_path()) {
     std::error_code ec;
     std::filesystem::create_directories(target_.parent_path(), ec);
-    if (ec) throw std::runtime_error("cannot create folder " + target_.parent_path().string() + ": " + ec.message());
+    if (ec)
+      throw std::runtime_error("cannot create folder " + target_.parent_path().string() + ": " +
+                               ec.message());
   }
   out_.open(partial_, std::ios::out | std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write " + partial_.string());
@@ -31,7 +33,9 @@ void AtomicFile::commit() {
   out_.close();
   std::error_code ec;
   std::filesystem::rename(partial_, target_, ec);
-  if (ec) throw std::runtime_error("cannot rename " + partial_.string() + " to " + target_.string() + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot rename " + partial_.string() + " to " + target_.string() +
+                             ": " + ec.message());
   committed_ = true;
 }
 

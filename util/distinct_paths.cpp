@@ -13,7 +13,8 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   }
   const auto normal = [](const std::filesystem::path& p) {
     std::error_code ignored;
-    return std::filesystem::weakly_canonical(std::filesystem::absolute(p), ignored).lexically_normal();
+    return std::filesystem::weakly_canonical(std::filesystem::absolute(p), ignored)
+        .lexically_normal();
   };
   return normal(a) == normal(b);
 }
@@ -22,8 +23,8 @@ void refuse_output_over_input(const NamedPath& output, const std::vector<NamedPa
   if (output.path.empty()) return;
   for (const NamedPath& input : inputs) {
     if (input.path.empty() || !same_file(output.path, input.path)) continue;
-    throw std::invalid_argument(output.name + " '" + output.path.string() + "' is the input " + input.name +
-                                " '" + input.path.string() +
+    throw std::invalid_argument(output.name + " '" + output.path.string() + "' is the input " +
+                                input.name + " '" + input.path.string() +
                                 "': an output never overwrites an input; write it elsewhere");
   }
 }

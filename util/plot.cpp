@@ -12,8 +12,9 @@ namespace rths::util {
 namespace {
 
 // Paul Tol's "muted" and "bright" qualitative schemes: distinguishable, colour-blind safe.
-constexpr const char* kPalette[] = {"#4477AA", "#EE6677", "#228833", "#CCBB44", "#66CCEE", "#AA3377",
-                                    "#332288", "#117733", "#882255", "#999933", "#DDCC77", "#BBBBBB"};
+constexpr const char* kPalette[] = {"#4477AA", "#EE6677", "#228833", "#CCBB44",
+                                    "#66CCEE", "#AA3377", "#332288", "#117733",
+                                    "#882255", "#999933", "#DDCC77", "#BBBBBB"};
 constexpr int kColours = sizeof(kPalette) / sizeof(kPalette[0]);
 constexpr int kDashTypes = 4;
 
@@ -44,8 +45,12 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec) {
          << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
          << (spec.log_x ? "set logscale x\n" : "unset logscale x\n")
          // "[:]" would keep the previous panel's range: autoscale instead.
-         << (spec.x_min || spec.x_max ? "set xrange " + range(spec.x_min, spec.x_max) : "set autoscale x") << "\n"
-         << (spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max) : "set autoscale y") << "\n"
+         << (spec.x_min || spec.x_max ? "set xrange " + range(spec.x_min, spec.x_max)
+                                      : "set autoscale x")
+         << "\n"
+         << (spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
+                                      : "set autoscale y")
+         << "\n"
          << "set format y " << quoted(spec.y_format.empty() ? "% h" : spec.y_format) << "\n"
          << "unset arrow\nunset label\n";
   script.precision(10);
@@ -62,7 +67,9 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec) {
     const int dash = (static_cast<int>(i) / kColours) % kDashTypes + 1;
     // A style that names its own colour or dash keeps it (gnuplot refuses an option given twice).
     const std::string& style = spec.series[i].style;
-    const auto has = [&](const char* option) { return (" " + style + " ").find(option) != std::string::npos; };
+    const auto has = [&](const char* option) {
+      return (" " + style + " ").find(option) != std::string::npos;
+    };
     script << (i ? ", " : "") << "'-' using 1:2 with " << style;
     if (!has(" lc ") && !has(" linecolor ")) script << " lc rgb '" << kPalette[colour] << "'";
     if (!has(" dt ") && !has(" dashtype ")) script << " dt " << dash;
@@ -87,10 +94,11 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
                    const std::filesystem::path& file) {
   std::ostringstream script;
   const int height = panels.front().height * static_cast<int>(panels.size());
-  script << "set terminal " << terminal << " size " << panels.front().width << "," << height
-         << " font 'sans,10'\n"
-         << "set output " << quoted(file.string()) << "\n"
-         << "set termoption noenhanced\nset grid\nset key outside right top vertical Left reverse\n";
+  script
+      << "set terminal " << terminal << " size " << panels.front().width << "," << height
+      << " font 'sans,10'\n"
+      << "set output " << quoted(file.string()) << "\n"
+      << "set termoption noenhanced\nset grid\nset key outside right top vertical Left reverse\n";
   if (panels.size() > 1) {
     // Stacked panels share the time axis: the same margins on every panel, so their data areas
     // line up whatever each legend's width; the right margin fits the longest legend entry.
@@ -100,7 +108,8 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
     const double width = panels.front().width;
     const double key = std::clamp((8.0 * static_cast<double>(longest) + 80.0) / width, 0.15, 0.5);
     script.precision(4);
-    script << "set lmargin at screen " << 85.0 / width << "\nset rmargin at screen " << 1.0 - key << "\n"
+    script << "set lmargin at screen " << 85.0 / width << "\nset rmargin at screen " << 1.0 - key
+           << "\n"
            << "set multiplot layout " << panels.size() << ",1\n";
   }
   for (const PlotSpec& panel : panels) append_panel(script, panel);
@@ -113,7 +122,9 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
 
 void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure) {
   struct PipeCloser {
-    void operator()(FILE* f) const { if (f) pclose(f); }
+    void operator()(FILE* f) const {
+      if (f) pclose(f);
+    }
   };
   FILE* pipe = popen("gnuplot 2>/dev/null", "w");
   if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot for " + figure.string());

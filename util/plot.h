@@ -17,7 +17,8 @@ namespace rths::util {
 // names what it sets and -Wmissing-field-initializers has nothing to say about the rest.
 struct Series {
   Series() = default;
-  Series(std::string title, std::vector<double> x, std::vector<double> y, std::string style = "lines")
+  Series(std::string title, std::vector<double> x, std::vector<double> y,
+         std::string style = "lines")
       : title(std::move(title)), x(std::move(x)), y(std::move(y)), style(std::move(style)) {}
   std::string title;
   std::vector<double> x, y;
@@ -32,10 +33,13 @@ struct VerticalMarker {
 
 struct PlotSpec {
   PlotSpec() = default;
-  PlotSpec(std::string title, std::string xlabel, std::string ylabel, std::vector<Series> series = {},
-           bool log_y = false)
-      : title(std::move(title)), xlabel(std::move(xlabel)), ylabel(std::move(ylabel)),
-        series(std::move(series)), log_y(log_y) {}
+  PlotSpec(std::string title, std::string xlabel, std::string ylabel,
+           std::vector<Series> series = {}, bool log_y = false)
+      : title(std::move(title)),
+        xlabel(std::move(xlabel)),
+        ylabel(std::move(ylabel)),
+        series(std::move(series)),
+        log_y(log_y) {}
   std::string title, xlabel, ylabel;
   std::vector<Series> series;
   bool log_y = false;

@@ -11,7 +11,8 @@ nlohmann::json run_context(const core::PreparedStudy& prepared, const std::strin
     const config::Case& study_case = runtime::find_case(prepared.config, case_name);
     const auto check = analysis::check_case_critical_delay(prepared, study_case);
     if (!check || !check->critical()) {
-      critical["text"] = check ? "stable for every delay" : "no experimental part: no critical delay";
+      critical["text"] =
+          check ? "stable for every delay" : "no experimental part: no critical delay";
     } else {
       critical = {{"lag_ms", check->lag * 1e3},
                   {"critical_delay_ms", *check->critical() * 1e3},

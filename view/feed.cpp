@@ -36,11 +36,16 @@ void Feed::on_entry(std::string_view frame) {
 
 void Feed::add(const runtime::RecordEntry& entry) {
   std::lock_guard lock(mutex_);
-  if (entry.has_header()) on_header(entry.header());
-  else if (entry.has_step() && have_header_) on_step(entry.step());
-  else if (entry.has_event()) on_event(entry.event());
-  else if (entry.has_footer()) on_footer(entry.footer());
-  else ++unreadable_;  // a step before any header cannot be drawn
+  if (entry.has_header())
+    on_header(entry.header());
+  else if (entry.has_step() && have_header_)
+    on_step(entry.step());
+  else if (entry.has_event())
+    on_event(entry.event());
+  else if (entry.has_footer())
+    on_footer(entry.footer());
+  else
+    ++unreadable_;  // a step before any header cannot be drawn
   changed();
 }
 
@@ -81,7 +86,8 @@ void Feed::on_header(const runtime::RunHeader& header) {
   window_.resize(n);
   double sum = 0;
   for (std::size_t i = 0; i < n; ++i)
-    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) /
+                                             static_cast<double>(n));
   for (double& w : window_) w /= sum;  // so that 2 |X_j| is the amplitude of a sine
   cos_.resize(n);
   sin_.resize(n);
@@ -95,10 +101,13 @@ void Feed::on_header(const runtime::RunHeader& header) {
   for (std::size_t j = 1; static_cast<double>(j) * df <= top + 1e-9 && j < n / 2 + 1; ++j)
     bins_hz_.push_back(static_cast<double>(j) * df);
   error_ring_.assign(actuators_, std::vector<double>(n, 0.0));
-  spectra_.assign(std::max<std::size_t>(options_.spectra_kept, 1),
-                  Spectrum{0, 0, std::vector<std::vector<double>>(actuators_, std::vector<double>(bins_hz_.size()))});
+  spectra_.assign(
+      std::max<std::size_t>(options_.spectra_kept, 1),
+      Spectrum{0, 0,
+               std::vector<std::vector<double>>(actuators_, std::vector<double>(bins_hz_.size()))});
   steps_per_spectrum_ = std::max<std::int64_t>(1, std::llround(options_.spectrum_every / dt));
-  for (auto* v : {&prev_command_, &prev_measured_, &area_, &transposed_area_, &ti_}) v->assign(actuators_, 0.0);
+  for (auto* v : {&prev_command_, &prev_measured_, &area_, &transposed_area_, &ti_})
+    v->assign(actuators_, 0.0);
   events_.assign(std::max<std::size_t>(options_.max_events, 1), runtime::RunEvent{});
 }
 
@@ -139,7 +148,8 @@ void Feed::on_step(const runtime::StepRecord& step) {
   const std::size_t r = static_cast<std::size_t>(samples_total_ % history_);
   s.step[r] = step.step();
   s.time[r] = step.time();
-  s.u_top[r] = step.displacement_size() > 0 ? step.displacement(step.displacement_size() - 1) * kMm : 0;
+  s.u_top[r] =
+      step.displacement_size() > 0 ? step.displacement(step.displacement_size() - 1) * kMm : 0;
   s.lateness[r] = step.lateness() * kMs;
   s.overruns[r] = overruns_;
   s.late[r] = late_;
@@ -201,16 +211,20 @@ void Feed::on_footer(const runtime::RunFooter& footer) {
   finished_ = true;
 }
 
-
 // ---- JSON: what the page reads ----
 
 nlohmann::json Feed::header_json() const {
-  nlohmann::json h = {{"run_id", header_.run_id()}, {"case", header_.case_name()},
-                      {"clock", header_.clock()}, {"dt_s", header_.dt()},
-                      {"dofs", header_.dofs()}, {"actuators", actuators_},
-                      {"links", header_.link_node_ids()}, {"stride_steps", stride_},
+  nlohmann::json h = {{"run_id", header_.run_id()},
+                      {"case", header_.case_name()},
+                      {"clock", header_.clock()},
+                      {"dt_s", header_.dt()},
+                      {"dofs", header_.dofs()},
+                      {"actuators", actuators_},
+                      {"links", header_.link_node_ids()},
+                      {"stride_steps", stride_},
                       {"start_realtime_ns", header_.start_realtime_ns()},
-                      {"study", header_.study().name()}, {"spectrum_hz", bins_hz_},
+                      {"study", header_.study().name()},
+                      {"spectrum_hz", bins_hz_},
                       {"spectrum_window_steps", window_.size()}};
   for (const auto& node : header_.study().deployment().nodes())
     h["link_labels"][std::to_string(node.id())] = config::NodeSpec::Kind_Name(node.kind());
@@ -218,18 +232,28 @@ nlohmann::json Feed::header_json() const {
 }
 
 nlohmann::json Feed::status_json() const {
-  nlohmann::json s = {{"state", state_}, {"reason", reason_}, {"node", node_},
-                      {"steps", steps_}, {"latest_step", last_step_}, {"latest_time_s", last_time_},
+  nlohmann::json s = {{"state", state_},
+                      {"reason", reason_},
+                      {"node", node_},
+                      {"steps", steps_},
+                      {"latest_step", last_step_},
+                      {"latest_time_s", last_time_},
                       {"latest_step_realtime_ns", last_step_realtime_ns_},
-                      {"overruns", overruns_}, {"late_feedback", late_},
-                      {"max_lateness_ms", max_lateness_ * kMs}, {"finished", finished_},
+                      {"overruns", overruns_},
+                      {"late_feedback", late_},
+                      {"max_lateness_ms", max_lateness_ * kMs},
+                      {"finished", finished_},
                       {"unreadable_entries", unreadable_}};
   if (have_footer_) {
     const auto& c = footer_.counters();
-    s["footer"] = {{"ok", footer_.ok()}, {"status", footer_.status()},
-                   {"failed_node", footer_.failed_node()}, {"diverged", footer_.diverged()},
-                   {"wall_seconds", footer_.wall_seconds()}, {"overruns", c.overruns()},
-                   {"late_feedback", c.late_feedback()}, {"steps", c.steps()}};
+    s["footer"] = {{"ok", footer_.ok()},
+                   {"status", footer_.status()},
+                   {"failed_node", footer_.failed_node()},
+                   {"diverged", footer_.diverged()},
+                   {"wall_seconds", footer_.wall_seconds()},
+                   {"overruns", c.overruns()},
+                   {"late_feedback", c.late_feedback()},
+                   {"steps", c.steps()}};
   }
   return s;
 }
@@ -242,8 +266,10 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
   for (int a = 0; a < actuators_; ++a)
     for (const char* name : per_actuator) j[name].push_back(nlohmann::json::array());
   for (int l = 0; l < links_; ++l)
-    for (const char* name : {"injected_ms", "round_trip_ms"}) j[name].push_back(nlohmann::json::array());
-  for (const char* name : {"u_top_mm", "lateness_ms", "overruns", "late_feedback"}) j[name] = nlohmann::json::array();
+    for (const char* name : {"injected_ms", "round_trip_ms"})
+      j[name].push_back(nlohmann::json::array());
+  for (const char* name : {"u_top_mm", "lateness_ms", "overruns", "late_feedback"})
+    j[name] = nlohmann::json::array();
   const Samples& s = samples_;
   const auto A = static_cast<std::size_t>(actuators_), L = static_cast<std::size_t>(links_);
   for (std::uint64_t i = from; i < samples_total_; ++i) {
@@ -299,7 +325,8 @@ nlohmann::json Feed::since(FeedCursor& cursor) const {
   for (std::uint64_t i = std::max(cursor.events, oldest(events_total_, events_.size()));
        i < events_total_; ++i) {
     const auto& e = events_[i % events_.size()];
-    j["events"].push_back({{"step", e.step()}, {"what", e.what()}, {"realtime_ns", e.realtime_ns()}});
+    j["events"].push_back(
+        {{"step", e.step()}, {"what", e.what()}, {"realtime_ns", e.realtime_ns()}});
   }
   cursor.events = events_total_;
   return j;

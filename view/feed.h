@@ -46,7 +46,7 @@ struct FeedOptions {
   std::size_t history = 60000;       // samples kept (a ring): 10 min at 100 per second
   double spectrum_every = 0.5;       // s of test time between spectra
   double spectrum_max_hz = 100.0;
-  std::size_t spectra_kept = 1200;   // 10 min at one per 0.5 s
+  std::size_t spectra_kept = 1200;  // 10 min at one per 0.5 s
   std::size_t max_events = 500;
 };
 
@@ -132,7 +132,7 @@ class Feed : public runtime::RecordObserver {
   std::int64_t last_step_ = -1, last_step_realtime_ns_ = 0;
   double last_time_ = 0;
   std::vector<double> prev_command_, prev_measured_, area_, transposed_area_, ti_;
-  std::vector<std::vector<double>> error_ring_;  // [actuator][N], mm
+  std::vector<std::vector<double>> error_ring_;       // [actuator][N], mm
   std::vector<double> window_, bins_hz_, cos_, sin_;  // cos_/sin_: e^{-2 pi i k / N}
   std::int64_t steps_per_spectrum_ = 1;
 

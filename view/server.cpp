@@ -38,9 +38,7 @@ bool same_token(const std::string& a, const std::string& b) {
 
 }  // namespace
 
-bool ListenAddress::loopback() const {
-  return host == "localhost" || host.rfind("127.", 0) == 0;
-}
+bool ListenAddress::loopback() const { return host == "localhost" || host.rfind("127.", 0) == 0; }
 
 ListenAddress parse_listen_address(const std::string& text, const std::string& flag) {
   const auto fail = [&](const std::string& why) {
@@ -83,17 +81,21 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   files_["/"] = {"text/html; charset=utf-8", read_whole(web / "index.html")};
   files_["/view.js"] = {"text/javascript; charset=utf-8", read_whole(web / "view.js")};
   files_["/view.css"] = {"text/css; charset=utf-8", read_whole(web / "view.css")};
-  files_["/uPlot.iife.min.js"] = {"text/javascript; charset=utf-8", read_whole(uplot / "uPlot.iife.min.js")};
+  files_["/uPlot.iife.min.js"] = {"text/javascript; charset=utf-8",
+                                  read_whole(uplot / "uPlot.iife.min.js")};
   files_["/uPlot.min.css"] = {"text/css; charset=utf-8", read_whole(uplot / "uPlot.min.css")};
   const int threads = options_.max_streams + 4;
-  server_->new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<std::size_t>(threads)); };
+  server_->new_task_queue = [threads] {
+    return new httplib::ThreadPool(static_cast<std::size_t>(threads));
+  };
   server_->set_payload_max_length(4096);
   server_->set_read_timeout(std::chrono::seconds(5));
   server_->set_write_timeout(options_.write_timeout);
   server_->set_keep_alive_max_count(100);
   routes();
   const auto& a = options_.address;
-  port_ = a.port == 0 ? server_->bind_to_any_port(a.host) : (server_->bind_to_port(a.host, a.port) ? a.port : -1);
+  port_ = a.port == 0 ? server_->bind_to_any_port(a.host)
+                      : (server_->bind_to_port(a.host, a.port) ? a.port : -1);
   if (port_ <= 0)
     throw std::runtime_error("the view cannot listen on " + a.host + ":" + std::to_string(a.port) +
                              " (in use, or not an address of this host)");
@@ -114,7 +116,8 @@ void ViewServer::routes() {
     res.set_content(j.dump(), "application/json");
   });
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
-    const nlohmann::json j = {{"mode", options_.mode}, {"stop_enabled", options_.allow_stop},
+    const nlohmann::json j = {{"mode", options_.mode},
+                              {"stop_enabled", options_.allow_stop},
                               {"token_required", !options_.token.empty()},
                               {"counters", counters()}};
     res.set_content(j.dump(), "application/json");
@@ -125,10 +128,12 @@ void ViewServer::routes() {
       res.set_content("the stop button is off: start the view with --view-stop", "text/plain");
       return;
     }
-    if (!options_.token.empty() && !same_token(req.get_header_value("X-RTHS-Token"), options_.token)) {
+    if (!options_.token.empty() &&
+        !same_token(req.get_header_value("X-RTHS-Token"), options_.token)) {
       ++bad_token_;
       res.status = 403;
-      res.set_content("wrong or missing token (X-RTHS-Token; printed when the view started)", "text/plain");
+      res.set_content("wrong or missing token (X-RTHS-Token; printed when the view started)",
+                      "text/plain");
       return;
     }
     ++stop_requests_;
@@ -137,13 +142,15 @@ void ViewServer::routes() {
     res.set_content("stop requested: HOLD, then STOP (\"stopped from the view\")", "text/plain");
   });
   stream(s);
-  s.set_error_handler(httplib::Server::HandlerWithResponse(
-      [this](const httplib::Request&, httplib::Response& res) {
-    if (res.status == 404) ++not_found_;
-    else if (res.status >= 400) ++refused_;
-    if (res.body.empty()) res.set_content(std::to_string(res.status) + "\n", "text/plain");
-    return httplib::Server::HandlerResponse::Handled;
-  }));
+  s.set_error_handler(
+      httplib::Server::HandlerWithResponse([this](const httplib::Request&, httplib::Response& res) {
+        if (res.status == 404)
+          ++not_found_;
+        else if (res.status >= 400)
+          ++refused_;
+        if (res.body.empty()) res.set_content(std::to_string(res.status) + "\n", "text/plain");
+        return httplib::Server::HandlerResponse::Handled;
+      }));
 }
 
 // One server-sent-events stream per client: the feed's news at most once per update_period.
@@ -195,10 +202,14 @@ std::string ViewServer::url() const {
 }
 
 nlohmann::json ViewServer::counters() const {
-  return {{"refused", refused_.load()},           {"not_found", not_found_.load()},
-          {"bad_token", bad_token_.load()},       {"streams_open", streams_.load()},
-          {"streams_served", streams_served_.load()}, {"streams_refused", streams_refused_.load()},
-          {"streams_dropped", streams_dropped_.load()}, {"updates_sent", updates_sent_.load()},
+  return {{"refused", refused_.load()},
+          {"not_found", not_found_.load()},
+          {"bad_token", bad_token_.load()},
+          {"streams_open", streams_.load()},
+          {"streams_served", streams_served_.load()},
+          {"streams_refused", streams_refused_.load()},
+          {"streams_dropped", streams_dropped_.load()},
+          {"updates_sent", updates_sent_.load()},
           {"stop_requests", stop_requests_.load()}};
 }
 

@@ -54,7 +54,7 @@ struct ServerOptions {
   std::filesystem::path uplot_dir;  // uPlot.iife.min.js, uPlot.min.css; empty: the build's npm copy
   std::string mode = "live";        // "live" (a running test) or "replay" (a finished record)
   bool allow_stop = false;
-  std::string token;                // required by /api/stop when non-empty
+  std::string token;  // required by /api/stop when non-empty
   std::function<void()> on_stop;
   int max_streams = 4;
   std::chrono::milliseconds update_period{33};

@@ -47,15 +47,18 @@ CoreRun run_core(double period, double mass, double alpha, double delay,
     setup.delays.push_back(std::move(chain));
   }
   const core::SimulationResult result = core::simulate(setup, motion);
-  CoreRun run{std::vector<double>(static_cast<std::size_t>(result.displacement.rows())), result.diverged};
-  for (std::size_t i = 0; i < run.u.size(); ++i) run.u[i] = result.displacement(static_cast<Eigen::Index>(i), 0);
+  CoreRun run{std::vector<double>(static_cast<std::size_t>(result.displacement.rows())),
+              result.diverged};
+  for (std::size_t i = 0; i < run.u.size(); ++i)
+    run.u[i] = result.displacement(static_cast<Eigen::Index>(i), 0);
   return run;
 }
 
 SdofLane lane_for(double period, double mass, double alpha) {
   const core::StructuralModel model = core::make_sdof(period, kZeta, mass);
   const double k = model.storey_stiffness[0];
-  return {model.mass(0, 0), model.damping(0, 0), alpha < 1 ? (1 - alpha) * k : 0.0, alpha > 0 ? alpha * k : 0.0};
+  return {model.mass(0, 0), model.damping(0, 0), alpha < 1 ? (1 - alpha) * k : 0.0,
+          alpha > 0 ? alpha * k : 0.0};
 }
 
 struct KernelCase {
@@ -83,8 +86,9 @@ TEST_P(KernelMatchesCore, HistoriesAgreeToRoundOff) {
     EXPECT_EQ(outcomes[l].diverged, expected.diverged) << "period " << periods[l];
     // core stops at the first step beyond the bound; compare up to there.
     ASSERT_GE(histories[l].size(), expected.u.size()) << "lane " << l;
-    const std::vector<double> kernel(histories[l].begin(),
-                                     histories[l].begin() + static_cast<std::ptrdiff_t>(expected.u.size()));
+    const std::vector<double> kernel(
+        histories[l].begin(),
+        histories[l].begin() + static_cast<std::ptrdiff_t>(expected.u.size()));
     const double peak = core::peak_abs(expected.u);
     ASSERT_GT(peak, 0.0);
     EXPECT_LE(core::peak_error(expected.u, kernel), kRelativeTolerance * peak)
@@ -107,10 +111,12 @@ INSTANTIATE_TEST_SUITE_P(Delays, KernelMatchesCore,
 
 TEST(LinearSdofBatch, LanesDoNotDependOnTheirNeighbours) {
   const core::GroundMotion motion = test_motion();
-  const std::vector<SdofLane> many = {lane_for(0.3, 1, 1), lane_for(0.9, 1, 1), lane_for(2.0, 1, 1)};
+  const std::vector<SdofLane> many = {lane_for(0.3, 1, 1), lane_for(0.9, 1, 1),
+                                      lane_for(2.0, 1, 1)};
   const auto together = run_linear_sdof_lanes(many, motion.acceleration, kDt, 0.01);
   for (std::size_t l = 0; l < many.size(); ++l) {
-    const auto alone = run_linear_sdof_lanes(std::span(&many[l], 1), motion.acceleration, kDt, 0.01);
+    const auto alone =
+        run_linear_sdof_lanes(std::span(&many[l], 1), motion.acceleration, kDt, 0.01);
     EXPECT_EQ(alone[0].peak_abs, together[l].peak_abs);  // bit for bit
   }
 }
@@ -121,11 +127,13 @@ TEST(LinearSdofBatch, FeedingInPiecesEqualsOneGo) {
   LinearSdofBatch whole(lanes, kDt, 0.013), pieces(lanes, kDt, 0.013);
   whole.start(motion.acceleration[0]);
   pieces.start(motion.acceleration[0]);
-  const std::span<const double> rest(motion.acceleration.data() + 1, motion.acceleration.size() - 1);
+  const std::span<const double> rest(motion.acceleration.data() + 1,
+                                     motion.acceleration.size() - 1);
   whole.advance(rest, nullptr);
   pieces.advance(rest.first(1000), nullptr);
   pieces.advance(rest.subspan(1000), nullptr);
-  for (int l = 0; l < 2; ++l) EXPECT_EQ(whole.outcomes()[l].peak_abs, pieces.outcomes()[l].peak_abs);
+  for (int l = 0; l < 2; ++l)
+    EXPECT_EQ(whole.outcomes()[l].peak_abs, pieces.outcomes()[l].peak_abs);
 }
 
 TEST(LinearSdofBatch, FlagsDivergenceBeyondTheCriticalDelay) {
@@ -135,17 +143,20 @@ TEST(LinearSdofBatch, FlagsDivergenceBeyondTheCriticalDelay) {
   const auto outcomes = run_linear_sdof_lanes(lanes, motion.acceleration, kDt, 0.04);
   EXPECT_TRUE(outcomes[0].diverged);
   EXPECT_FALSE(outcomes[1].diverged);
-  EXPECT_TRUE(core::simulate([&] {
-                core::HybridSetup setup;
-                setup.model = core::make_sdof(0.1, kZeta, 1.0);
-                setup.dt = kDt;
-                setup.partition = core::partition_by_fraction(setup.model.storey_stiffness, 1.0,
-                                                              core::linear_factory());
-                core::DelayChain chain;
-                chain.add(std::make_unique<core::TimeShift>(0.04, kDt));
-                setup.delays.push_back(std::move(chain));
-                return setup;
-              }(), motion).diverged);
+  EXPECT_TRUE(core::simulate(
+                  [&] {
+                    core::HybridSetup setup;
+                    setup.model = core::make_sdof(0.1, kZeta, 1.0);
+                    setup.dt = kDt;
+                    setup.partition = core::partition_by_fraction(setup.model.storey_stiffness, 1.0,
+                                                                  core::linear_factory());
+                    core::DelayChain chain;
+                    chain.add(std::make_unique<core::TimeShift>(0.04, kDt));
+                    setup.delays.push_back(std::move(chain));
+                    return setup;
+                  }(),
+                  motion)
+                  .diverged);
 }
 
 TEST(LinearSdofBatch, RejectsBadInput) {

@@ -13,8 +13,10 @@ namespace rths::analysis {
 namespace {
 
 TEST(BenchmarkEvaluation, CaseOneMeetsThePublishedCriteria) {
-  const std::filesystem::path config = std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
-  const core::PreparedStudy prepared = core::prepare_study(core::load_study(config), config.parent_path());
+  const std::filesystem::path config =
+      std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
+  const core::PreparedStudy prepared =
+      core::prepare_study(core::load_study(config), config.parent_path());
   const StudyOutcome outcome = run_study(prepared, {});
   const std::optional<BenchmarkEvaluation> evaluation = evaluate_benchmark(prepared, outcome);
   ASSERT_TRUE(evaluation.has_value());
@@ -39,7 +41,8 @@ TEST(BenchmarkEvaluation, CompensatorsInFrontOfTheSampleControllerReachTheNoiseF
   config::Study study = core::load_study(config);
   study.mutable_motion()->set_duration(20.0);  // the strong motion; ATS fits every step
   const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
-  const std::optional<BenchmarkEvaluation> evaluation = evaluate_benchmark(prepared, run_study(prepared, {}));
+  const std::optional<BenchmarkEvaluation> evaluation =
+      evaluate_benchmark(prepared, run_study(prepared, {}));
   ASSERT_TRUE(evaluation.has_value());
   ASSERT_EQ(evaluation->cases.size(), 4u);
   EXPECT_GT(evaluation->cases[0].criteria.J(2), 10.0);  // the sample controller alone

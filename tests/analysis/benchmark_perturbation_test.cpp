@@ -10,7 +10,8 @@
 namespace rths::analysis {
 namespace {
 
-const std::filesystem::path kCase1 = std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
+const std::filesystem::path kCase1 =
+    std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
 
 TEST(BenchmarkPerturbation, DrawsAreSeededAndSpreadAsTheBenchmarkDrawsThem) {
   const auto a = draw_benchmark_plants(3, 9, 1.19e6), b = draw_benchmark_plants(3, 9, 1.19e6);

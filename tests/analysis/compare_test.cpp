@@ -17,7 +17,8 @@ core::SimulationResult result_of(const std::vector<std::vector<double>>& floors)
   const auto steps = static_cast<Eigen::Index>(floors.front().size());
   r.displacement = core::Mat::Zero(steps, static_cast<Eigen::Index>(floors.size()));
   for (std::size_t f = 0; f < floors.size(); ++f) {
-    for (Eigen::Index k = 0; k < steps; ++k) r.displacement(k, static_cast<Eigen::Index>(f)) = floors[f][k];
+    for (Eigen::Index k = 0; k < steps; ++k)
+      r.displacement(k, static_cast<Eigen::Index>(f)) = floors[f][k];
   }
   r.time.resize(static_cast<std::size_t>(steps));
   return r;

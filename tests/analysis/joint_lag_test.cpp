@@ -5,8 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <functional>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <utility>
@@ -31,7 +31,8 @@ JointLagStudy small_grid(JointLagStudy::ActuatorModel model) {
 
 const JointLagPoint& at(const JointLagResult& result, double network, double actuator) {
   for (const auto& p : result.grid) {
-    if (std::abs(p.network_round_trip - network) < 1e-12 && std::abs(p.actuator_lag - actuator) < 1e-12) {
+    if (std::abs(p.network_round_trip - network) < 1e-12 &&
+        std::abs(p.actuator_lag - actuator) < 1e-12) {
       return p;
     }
   }
@@ -58,7 +59,8 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
   EXPECT_EQ(result.measured_skipped, "the config asks for no across-sites runs");
 
   write_joint_lag_outputs(result, true);
-  for (const char* file : {"grid.csv", "summary.json", "error_map.png", "error_map.svg", "total_lag.png", "total_lag.svg"}) {
+  for (const char* file : {"grid.csv", "summary.json", "error_map.png", "error_map.svg",
+                           "total_lag.png", "total_lag.svg"}) {
     EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
   }
 }
@@ -79,7 +81,8 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   const auto result = run_joint_lag(config, kConfigs, options);
   const JointLagPoint& past = at(result, 0.016, 0.014);
   EXPECT_TRUE(past.past_boundary);
-  EXPECT_TRUE(past.diverged) << "NRMSE " << past.nrmse * 100 << " %, peak error " << past.peak_error;
+  EXPECT_TRUE(past.diverged) << "NRMSE " << past.nrmse * 100 << " %, peak error "
+                             << past.peak_error;
   EXPECT_FALSE(at(result, 0.016, 0.0).diverged);
   write_joint_lag_outputs(result, true);
   std::ifstream in(result.output_directory / "error_map.svg");
@@ -110,7 +113,8 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   // The user is told before the grid runs how many points lie past the boundary (30 ms at both
   // actuator lags).
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0].rfind("2 of 6 grid points lie past the stability boundary", 0), 0u) << warnings[0];
+  EXPECT_EQ(warnings[0].rfind("2 of 6 grid points lie past the stability boundary", 0), 0u)
+      << warnings[0];
   ASSERT_GE(result.boundary.size(), 2u);
   const double critical = *result.boundary.front().critical_round_trip;
   EXPECT_NEAR(critical, 0.0242, 0.0005);  // the paper's frame: 24.2 ms
@@ -153,8 +157,9 @@ TEST(JointLag, TheAcrossSitesLineNamesTheStretchItsErrorCovers) {
   p.duration = 1.0;
   result.measured.push_back(p);
   const std::string text = to_text(result);
-  EXPECT_NE(text.find("NRMSE 7.35 % over the first 1.00 s (the grid's NRMSE covers the whole record)"),
-            std::string::npos)
+  EXPECT_NE(
+      text.find("NRMSE 7.35 % over the first 1.00 s (the grid's NRMSE covers the whole record)"),
+      std::string::npos)
       << text;
 }
 
@@ -201,7 +206,9 @@ TEST(JointLag, AcrossSitesRunsOnlyWhenAskedAndPossibleAndCountsInTheProgress) {
     }
   };
   std::vector<std::pair<std::size_t, std::size_t>> progress;
-  options.progress = [&](std::size_t done, std::size_t total) { progress.emplace_back(done, total); };
+  options.progress = [&](std::size_t done, std::size_t total) {
+    progress.emplace_back(done, total);
+  };
   const JointLagStudy config = with_measured_points();
 
   // Impossible here: skipped with the runner's reason; only the grid point counts.
@@ -218,7 +225,8 @@ TEST(JointLag, AcrossSitesRunsOnlyWhenAskedAndPossibleAndCountsInTheProgress) {
   options.measure = true;
   JointLagOptions without_runner = options;
   without_runner.across_sites = {};
-  EXPECT_NE(run_joint_lag(config, kConfigs, without_runner).measured_skipped.find("no across-sites runner"),
+  EXPECT_NE(run_joint_lag(config, kConfigs, without_runner)
+                .measured_skipped.find("no across-sites runner"),
             std::string::npos);
   EXPECT_EQ(runs, 0u);
 

@@ -28,7 +28,7 @@ TEST(ResultsCsv, EveryFloorAndEveryActuatorWithUnitsInTheNames) {
   const auto r = three_floors_two_actuators(4);
   const auto names = result_column_names("lag 14ms", r);
   const std::vector<std::string> expected = {
-      "lag_14ms_u_floor1_m", "lag_14ms_u_floor2_m", "lag_14ms_u_floor3_m",
+      "lag_14ms_u_floor1_m",     "lag_14ms_u_floor2_m",      "lag_14ms_u_floor3_m",
       "lag_14ms_command_act1_m", "lag_14ms_measured_act1_m", "lag_14ms_force_act1_N",
       "lag_14ms_command_act2_m", "lag_14ms_measured_act2_m", "lag_14ms_force_act2_N"};
   EXPECT_EQ(names, expected);

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <iterator>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -18,19 +18,23 @@ const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / 
 // The paper's frame (T = 0.5 s, 5 %, El Centro) with a case list and extras.
 core::PreparedStudy frame(double alpha, const std::string& cases, const std::string& extra = "",
                           double duration = 0.0) {
-  const std::string text = "name: \"frame\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
-                           "motion { path: \"motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
-                           std::to_string(duration) + " } "
-                           "integrator { dt: 0.001 } substructuring { experimental_fraction: " +
-                           std::to_string(alpha) + " } " + cases + " " + extra;
+  const std::string text =
+      "name: \"frame\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
+      "motion { path: \"motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
+      std::to_string(duration) +
+      " } "
+      "integrator { dt: 0.001 } substructuring { experimental_fraction: " +
+      std::to_string(alpha) + " } " + cases + " " + extra;
   return core::prepare_study(core::parse_study(text, "test"), kConfigs);
 }
 
 TEST(StudyRun, ACasePastItsCriticalDelayIsWarnedAndJudgedDiverged) {
   std::vector<std::string> warnings;
-  const StudyOutcome outcome = run_study(
-      frame(1.0, "cases { name: \"reference\" } cases { name: \"lag_12ms\" delay { shift { delay: 0.012 } } }"),
-      {.warn = [&](const std::string& w) { warnings.push_back(w); }});
+  const StudyOutcome outcome =
+      run_study(frame(1.0,
+                      "cases { name: \"reference\" } cases { name: \"lag_12ms\" delay { shift { "
+                      "delay: 0.012 } } }"),
+                {.warn = [&](const std::string& w) { warnings.push_back(w); }});
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("lag_12ms"), std::string::npos) << warnings[0];
   EXPECT_NE(warnings[0].find("PAST"), std::string::npos) << warnings[0];
@@ -49,22 +53,26 @@ TEST(StudyRun, ACasePastItsCriticalDelayIsWarnedAndJudgedDiverged) {
 TEST(StudyRun, ACompensatedCaseIsJudgedOnItsCompensatedLoop) {
   std::vector<std::string> warnings;
   const StudyOutcome outcome = run_study(
-      frame(1.0, "cases { name: \"reference\" } "
-                 "cases { name: \"poly\" delay { shift { delay: 0.010 } } "
-                 "        compensation { polynomial { order: 2 lead: 0.010 spacing: 0.001 } } } "
-                 "cases { name: \"ats\" delay { shift { delay: 0.010 } } "
-                 "        compensation { adaptive_time_series { window: 1 initial_a1: 0.010 } } }"),
+      frame(1.0,
+            "cases { name: \"reference\" } "
+            "cases { name: \"poly\" delay { shift { delay: 0.010 } } "
+            "        compensation { polynomial { order: 2 lead: 0.010 spacing: 0.001 } } } "
+            "cases { name: \"ats\" delay { shift { delay: 0.010 } } "
+            "        compensation { adaptive_time_series { window: 1 initial_a1: 0.010 } } }"),
       {.warn = [&](const std::string& w) { warnings.push_back(w); }});
   const CaseOutcome& poly = outcome.cases[1];
   const CaseOutcome& ats = outcome.cases[2];
-  ASSERT_TRUE(ats.stability && ats.stability->past());  // 10 ms, the ATS's lead unknown: past 7.97 ms
+  ASSERT_TRUE(ats.stability &&
+              ats.stability->past());  // 10 ms, the ATS's lead unknown: past 7.97 ms
   ASSERT_TRUE(poly.compensated.has_value());
   EXPECT_TRUE(poly.compensated->analysed);
   EXPECT_TRUE(poly.compensated->stable) << poly.compensated->text;
-  EXPECT_NE(poly.compensated->text.find("uncompensated, lag 10 ms"), std::string::npos) << poly.compensated->text;
+  EXPECT_NE(poly.compensated->text.find("uncompensated, lag 10 ms"), std::string::npos)
+      << poly.compensated->text;
   ASSERT_TRUE(ats.compensated.has_value());
   EXPECT_FALSE(ats.compensated->analysed);
-  EXPECT_NE(ats.compensated->text.find("cannot be judged before it"), std::string::npos) << ats.compensated->text;
+  EXPECT_NE(ats.compensated->text.find("cannot be judged before it"), std::string::npos)
+      << ats.compensated->text;
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("case 'ats'"), std::string::npos) << warnings[0];
   EXPECT_EQ(warnings[0].find("expect it to diverge"), std::string::npos) << warnings[0];
@@ -84,11 +92,14 @@ std::size_t count(const std::string& text, const std::string& what) {
 // Every case is seen on every panel it belongs to, with units on the axes; the reference is
 // left out of the difference panel (against itself it is a zero line that says nothing).
 TEST(StudyRun, StudyPlotsShowEveryCaseAndLeaveTheReferenceOutOfTheDifference) {
-  const StudyOutcome outcome = run_study(frame(
-      1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } } "
-                 "cases { name: \"eq1_lag_14ms\" delay { eq1_lag { delay: 0.014 } } }",
-      "", 6.0));
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_study_plots_" + std::to_string(::getpid()));
+  const StudyOutcome outcome =
+      run_study(frame(1.0 / 3.0,
+                      "cases { name: \"reference\" } cases { name: \"lag_shift_14ms\" delay { "
+                      "shift { delay: 0.014 } } } "
+                      "cases { name: \"eq1_lag_14ms\" delay { eq1_lag { delay: 0.014 } } }",
+                      "", 6.0));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_study_plots_" + std::to_string(::getpid()));
   write_study_plots(outcome, dir);
   std::ifstream in(dir / "displacement.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -97,7 +108,7 @@ TEST(StudyRun, StudyPlotsShowEveryCaseAndLeaveTheReferenceOutOfTheDifference) {
   EXPECT_EQ(count(svg, ">eq1_lag_14ms (within "), 3u);  // response, difference, zoom
   EXPECT_EQ(count(svg, " mm of lag_shift_14ms)<"), 3u);
   EXPECT_EQ(count(svg, ">lag_shift_14ms (within "), 0u);
-  EXPECT_EQ(count(svg, ">reference<"), 2u);       // response and zoom only
+  EXPECT_EQ(count(svg, ">reference<"), 2u);  // response and zoom only
   for (const char* axis : {"displacement (mm)", "case - reference (mm)", "time (s)"})
     EXPECT_NE(svg.find(axis), std::string::npos) << axis;
   // The two 14 ms cases nearly coincide: drawn in decreasing widths, neither hides the other.
@@ -108,17 +119,20 @@ TEST(StudyRun, StudyPlotsShowEveryCaseAndLeaveTheReferenceOutOfTheDifference) {
 
 TEST(StudyRun, ExpectUnstableMakesTheDivergenceMeant) {
   const StudyOutcome outcome = run_study(
-      frame(1.0, "cases { name: \"reference\" } cases { name: \"lag_12ms\" expect_unstable: true "
-                 "delay { shift { delay: 0.012 } } }"));
+      frame(1.0,
+            "cases { name: \"reference\" } cases { name: \"lag_12ms\" expect_unstable: true "
+            "delay { shift { delay: 0.012 } } }"));
   EXPECT_TRUE(outcome.cases[1].diverged());
   EXPECT_TRUE(outcome.failures(false).empty());
 }
 
 TEST(StudyRun, TheStablePaperFrameCompletesWithoutWarning) {
   std::vector<std::string> warnings;
-  const StudyOutcome outcome = run_study(
-      frame(1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }"),
-      {.warn = [&](const std::string& w) { warnings.push_back(w); }});
+  const StudyOutcome outcome =
+      run_study(frame(1.0 / 3.0,
+                      "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { "
+                      "delay: 0.014 } } }"),
+                {.warn = [&](const std::string& w) { warnings.push_back(w); }});
   EXPECT_TRUE(warnings.empty());
   EXPECT_EQ(outcome.cases[1].status, "completed");
   EXPECT_GT(outcome.cases[1].comparison.nrmse_pct, 10.0);  // the paper's "wrong" result, in percent
@@ -128,8 +142,9 @@ TEST(StudyRun, TheStablePaperFrameCompletesWithoutWarning) {
 }
 
 TEST(StudyRun, DeploymentLimitsApplyInProcess) {
-  const StudyOutcome outcome = run_study(
-      frame(1.0 / 3.0, "cases { name: \"reference\" }", "deployment { limits { max_displacement: 0.005 } }"));
+  const StudyOutcome outcome =
+      run_study(frame(1.0 / 3.0, "cases { name: \"reference\" }",
+                      "deployment { limits { max_displacement: 0.005 } }"));
   const CaseOutcome& c = outcome.cases[0];
   EXPECT_EQ(c.status, "limit tripped");
   EXPECT_NE(c.status_detail.find("floor 1"), std::string::npos) << c.status_detail;
@@ -141,25 +156,30 @@ TEST(StudyRun, DeploymentLimitsApplyInProcess) {
 // A distributed case is compared with the lag-free in-process run, not with the study's reference
 // case: here the study names the lagged case as its reference.
 TEST(StudyRun, RecordedCasesAreComparedWithTheLagFreeInProcessRun) {
-  const core::PreparedStudy prepared =
-      frame(1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }",
-            "reference_case: \"lag_14ms\"");
+  const core::PreparedStudy prepared = frame(
+      1.0 / 3.0,
+      "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }",
+      "reference_case: \"lag_14ms\"");
   const core::SimulationResult lagged =
       core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
-  const StudyOutcome outcome = judge_recorded_cases(prepared, {{"lag_14ms", lagged, "completed", ""}});
+  const StudyOutcome outcome =
+      judge_recorded_cases(prepared, {{"lag_14ms", lagged, "completed", ""}});
   ASSERT_TRUE(outcome.lag_free_reference.has_value());
   EXPECT_EQ(outcome.reference_description(), kLagFreeReference);
   EXPECT_EQ(&outcome.reference(), &*outcome.lag_free_reference);
   ASSERT_EQ(outcome.cases.size(), 1u);
-  const Comparison expected = compare(core::simulate(prepared.base, prepared.motion), lagged, outcome.response);
+  const Comparison expected =
+      compare(core::simulate(prepared.base, prepared.motion), lagged, outcome.response);
   EXPECT_EQ(outcome.cases[0].comparison.nrmse_pct, expected.nrmse_pct);
   EXPECT_GT(outcome.cases[0].comparison.nrmse_pct, 10.0);
   EXPECT_EQ(outcome.cases[0].status, "completed");
-  EXPECT_NE(study_summary_text(outcome).find("against the lag-free in-process reference"), std::string::npos)
+  EXPECT_NE(study_summary_text(outcome).find("against the lag-free in-process reference"),
+            std::string::npos)
       << study_summary_text(outcome);
   EXPECT_EQ(study_summary_json(outcome)["reference"], kLagFreeReference);
   // A run that stopped keeps its status; a case the study lacks is refused by name.
-  const StudyOutcome stopped = judge_recorded_cases(prepared, {{"lag_14ms", lagged, "timed out after 2 s", "why"}});
+  const StudyOutcome stopped =
+      judge_recorded_cases(prepared, {{"lag_14ms", lagged, "timed out after 2 s", "why"}});
   EXPECT_EQ(stopped.cases[0].status, "timed out after 2 s");
   try {
     judge_recorded_cases(prepared, {{"nope", lagged, "completed", ""}});
@@ -173,8 +193,9 @@ TEST(StudyRun, RecordedCasesAreComparedWithTheLagFreeInProcessRun) {
 // actuator's path): the one check takes it as extra lag, before the run and in the judged outcome.
 // The paper's frame: 14 ms alone is 42 % below its 24.2 ms; 14 + 14 ms is past it.
 TEST(StudyRun, TheCriticalDelayCheckTakesTheLagTheCaseDoesNotHold) {
-  const core::PreparedStudy prepared =
-      frame(1.0 / 3.0, "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }");
+  const core::PreparedStudy prepared = frame(1.0 / 3.0,
+                                             "cases { name: \"reference\" } cases { name: "
+                                             "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
   const auto alone = check_case_critical_delay(prepared, prepared.config.cases(1));
   ASSERT_TRUE(alone.has_value());
   EXPECT_DOUBLE_EQ(alone->lag, 0.014);

@@ -19,7 +19,8 @@ namespace fs = std::filesystem;
 using sweep_test::grid_for;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("rths_sweep_csv_test_" + name + "_" + std::to_string(::getpid()));
+  const fs::path dir = fs::temp_directory_path() /
+                       ("rths_sweep_csv_test_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
@@ -40,11 +41,13 @@ class SweepCsvFiles : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   // Runs shard i/N of the grid and writes its CSV.
-  fs::path run_shard(const SweepGrid& grid, std::size_t index, std::size_t count, const std::string& tag = "") {
+  fs::path run_shard(const SweepGrid& grid, std::size_t index, std::size_t count,
+                     const std::string& tag = "") {
     SweepOptions options;
     options.shard = {index, count};
     options.threads = 2;
-    const fs::path path = dir_ / (tag + "shard" + std::to_string(index) + "of" + std::to_string(count) + ".csv");
+    const fs::path path =
+        dir_ / (tag + "shard" + std::to_string(index) + "of" + std::to_string(count) + ".csv");
     write_sweep_csv(path, grid, options.shard, run_sweep(grid, options));
     return path;
   }
@@ -98,7 +101,8 @@ TEST_F(SweepCsvFiles, MergeRefusesAShardOfAnotherGrid) {
   // Same size and shape, one delay differs: only the grid hash tells them apart.
   const SweepGrid other = grid_for(
       "periods: [0.3, 0.8, 1.6, 2.5] delays: [0.002, 0.0076] experimental_fractions: [0.5, 1.0] "
-      "models { linear {} } models { bilinear { yield_displacement: 0.01 post_yield_ratio: 0.2 } }");
+      "models { linear {} } models { bilinear { yield_displacement: 0.01 post_yield_ratio: 0.2 } "
+      "}");
   ASSERT_EQ(grid.size(), other.size());
   ASSERT_NE(grid.hash(), other.hash());
   const fs::path a = run_shard(grid, 0, 2), b = run_shard(other, 1, 2, "other_");

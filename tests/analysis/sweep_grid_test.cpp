@@ -17,8 +17,9 @@ using sweep_test::kMotionDir;
 using sweep_test::study_text;
 
 TEST(SweepGrid, OrderHasDelayInnermost) {
-  const SweepGrid grid = grid_for("periods: [0.5, 1.0, 2.0] delays: [0.002, 0.01] "
-                                  "experimental_fractions: [0.5, 1.0] stiffnesses: [100, 200]");
+  const SweepGrid grid = grid_for(
+      "periods: [0.5, 1.0, 2.0] delays: [0.002, 0.01] "
+      "experimental_fractions: [0.5, 1.0] stiffnesses: [100, 200]");
   EXPECT_EQ(grid.size(), 3u * 2 * 2 * 2);
   const SweepPoint p = grid.point(1 + 2 * 1 + 4 * 2 + 12 * 1);
   EXPECT_EQ(p.delay, 0.01);
@@ -29,8 +30,9 @@ TEST(SweepGrid, OrderHasDelayInnermost) {
 }
 
 TEST(SweepGrid, ShardsCoverTheGridOnce) {
-  const SweepGrid grid = grid_for("periods: [0.3, 0.8, 1.6] delays: [0.002, 0.004, 0.006, 0.008] "
-                                  "experimental_fractions: [0.5]");
+  const SweepGrid grid = grid_for(
+      "periods: [0.3, 0.8, 1.6] delays: [0.002, 0.004, 0.006, 0.008] "
+      "experimental_fractions: [0.5]");
   std::size_t next = 0;
   for (std::size_t i = 0; i < 5; ++i) {
     const auto [first, last] = grid.shard_range({i, 5});
@@ -62,22 +64,25 @@ void expect_bad_config(const std::string& text, const std::string& expected_frag
 }
 
 TEST(SweepGrid, BadInputNamesTheField) {
-  expect_bad_config(study_text("periods: [0.5] delays: [0.01] delay_model: LAG"), "delay_model");  // refused by the parser: an enum
+  expect_bad_config(study_text("periods: [0.5] delays: [0.01] delay_model: LAG"),
+                    "delay_model");  // refused by the parser: an enum
   expect_bad_config(study_text("periods: [0.5]"), "sweep.delays");
   expect_bad_config(study_text("periods: [-0.5] delays: [0.01]"), "sweep.periods");
   expect_bad_config(study_text("periods: [0.5] delays: [-0.01]"), "sweep.delays");
   expect_bad_config(study_text("periods: [0.5] delays: [0.01] experimental_fractions: [1.5]"),
                     "experimental_fractions");
   expect_bad_config(study_text("periods: [0.5] delays: [0.01] pariods: [1]"), "pariods");
-  expect_bad_config(study_text("periods: [0.5] delays: [0.01] models { bilinear { yield_displacement: 0 } }"),
-                    "sweep.models[0]");
+  expect_bad_config(
+      study_text("periods: [0.5] delays: [0.01] models { bilinear { yield_displacement: 0 } }"),
+      "sweep.models[0]");
   // omega dt = 2 pi / 0.003 * 0.002 > 2: beyond explicit Newmark's limit.
   expect_bad_config(study_text("periods: [0.003, 0.5] delays: [0.01]"), "shortest period");
   expect_bad_config(R"(structure { shear_building { storey_mass: [1, 1] storey_stiffness: [1, 1] } }
                        sweep { periods: [0.5] delays: [0.01] motions { path: "RSN175_IMPVALL.H_H-E12140.AT2" } })",
                     "structure.sdof");
-  expect_bad_config(study_text("periods: [0.5] delays: [0.01] motions { path: \"no_such_record.AT2\" }"),
-                    "no_such_record");
+  expect_bad_config(
+      study_text("periods: [0.5] delays: [0.01] motions { path: \"no_such_record.AT2\" }"),
+      "no_such_record");
 }
 
 }  // namespace

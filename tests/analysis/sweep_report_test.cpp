@@ -36,12 +36,12 @@ SweepTableRow row(double period, double delay, double nrmse_pct, double stiffnes
 
 TEST(SweepTrends, FallingFractionCountsConsecutivePeriodPairsPerSeries) {
   // delay 4 ms falls over both pairs; delay 8 ms falls once and rises once: 3 of 4 pairs fall.
-  const std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 5), row(2.0, 0.004, 1),
-                                           row(2.0, 0.008, 3), row(0.5, 0.008, 20), row(1.0, 0.008, 2),
-                                           row(1.0, 0.0, 0)};  // a zero delay is left out
+  const std::vector<SweepTableRow> rows = {
+      row(0.5, 0.004, 10), row(1.0, 0.004, 5), row(2.0, 0.004, 1), row(2.0, 0.008, 3),
+      row(0.5, 0.008, 20), row(1.0, 0.008, 2), row(1.0, 0.0, 0)};  // a zero delay is left out
   const SweepTrends trends = measure_trends(rows);
   EXPECT_DOUBLE_EQ(trends.period_falling_fraction, 0.75);
-  EXPECT_EQ(trends.stiffness_max_relative_difference, 0.0);  // one stiffness
+  EXPECT_EQ(trends.stiffness_max_relative_difference, 0.0);          // one stiffness
   EXPECT_TRUE(std::isnan(trends.nonlinear_to_linear_median_ratio));  // one model
   EXPECT_EQ(trends.diverged_points, 0u);
 }
@@ -53,10 +53,14 @@ TEST(SweepTrends, StiffnessDifferenceIsRelativeToTheLargerError) {
 }
 
 TEST(SweepTrends, NonlinearRatioIsTheMedianOverMatchingPointsAndDivergedPointsAreCounted) {
-  std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 10), row(2.0, 0.004, 10),
-                                     row(0.5, 0.004, 5, 1e3, "bilinear"), row(1.0, 0.004, 2, 1e3, "bilinear"),
+  std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10),
+                                     row(1.0, 0.004, 10),
+                                     row(2.0, 0.004, 10),
+                                     row(0.5, 0.004, 5, 1e3, "bilinear"),
+                                     row(1.0, 0.004, 2, 1e3, "bilinear"),
                                      row(2.0, 0.004, 30, 1e3, "bilinear")};
-  SweepTableRow diverged = row(3.0, 0.004, std::numeric_limits<double>::infinity(), 1e3, "bilinear");
+  SweepTableRow diverged =
+      row(3.0, 0.004, std::numeric_limits<double>::infinity(), 1e3, "bilinear");
   diverged.diverged = true;
   rows.push_back(diverged);
   const SweepTrends trends = measure_trends(rows);
@@ -69,13 +73,15 @@ TEST(SweepPlot, DelayFigureSitsBesideTheFigureNamed) {
 }
 
 TEST(SweepPlot, WritesBothFiguresAsPngAndSvg) {
-  const fs::path dir = fs::temp_directory_path() / ("rths_sweep_report_test_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("rths_sweep_report_test_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
-  const std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 5), row(0.5, 0.008, 20),
-                                           row(1.0, 0.008, 9)};
+  const std::vector<SweepTableRow> rows = {row(0.5, 0.004, 10), row(1.0, 0.004, 5),
+                                           row(0.5, 0.008, 20), row(1.0, 0.008, 9)};
   const fs::path png = dir / "sweep.png";
-  write_sweep_plot(rows, png, "report test", [](double period, double, double) { return period * 0.016; });
+  write_sweep_plot(rows, png, "report test",
+                   [](double period, double, double) { return period * 0.016; });
   for (const fs::path& file : {png, sweep_delay_plot_path(png)}) {
     EXPECT_GT(fs::file_size(file), 1000u) << file;
     fs::path svg = file;
@@ -100,7 +106,8 @@ TEST(SweepPlot, ModelNamesReadAsWordsWithUnits) {
 // Every curve's diverged points are their own legend entry in the curve's colour, so that no
 // diverged point of one delay or model hides another's; each model is named on both figures.
 TEST(SweepPlot, EveryDivergedPointIsSeenWithItsDelayAndModel) {
-  const fs::path dir = fs::temp_directory_path() / ("rths_sweep_diverged_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("rths_sweep_diverged_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::vector<SweepTableRow> rows;
@@ -117,15 +124,18 @@ TEST(SweepPlot, EveryDivergedPointIsSeenWithItsDelayAndModel) {
   write_sweep_plot(rows, png, "diverged test");
   std::ifstream in(dir / "sweep.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (const char* entry : {"delay 30 ms, linear: diverged", "delay 30 ms, bilinear (uy = 5 mm, b = 0.1): diverged",
-                            "delay 4 ms, linear", "delay 4 ms, bilinear (uy = 5 mm, b = 0.1)", "period T (s)",
-                            "NRMSE (%, log)"}) {
+  for (const char* entry :
+       {"delay 30 ms, linear: diverged", "delay 30 ms, bilinear (uy = 5 mm, b = 0.1): diverged",
+        "delay 4 ms, linear", "delay 4 ms, bilinear (uy = 5 mm, b = 0.1)", "period T (s)",
+        "NRMSE (%, log)"}) {
     EXPECT_NE(svg.find(entry), std::string::npos) << entry;
   }
   EXPECT_EQ(svg.find("delay 4 ms, linear: diverged"), std::string::npos);
   std::ifstream by_delay_in(dir / "sweep_vs_delay.svg");
-  const std::string by_delay((std::istreambuf_iterator<char>(by_delay_in)), std::istreambuf_iterator<char>());
-  for (const char* entry : {"T = 0.2 s, linear", "T = 0.2 s, bilinear (uy = 5 mm, b = 0.1)", "delay (ms)"}) {
+  const std::string by_delay((std::istreambuf_iterator<char>(by_delay_in)),
+                             std::istreambuf_iterator<char>());
+  for (const char* entry :
+       {"T = 0.2 s, linear", "T = 0.2 s, bilinear (uy = 5 mm, b = 0.1)", "delay (ms)"}) {
     EXPECT_NE(by_delay.find(entry), std::string::npos) << entry;
   }
   fs::remove_all(dir);

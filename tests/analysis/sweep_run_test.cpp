@@ -26,8 +26,9 @@ double relative_difference(double a, double b) {
 }
 
 TEST(SweepRun, BatchKernelPathAgreesWithGeneralPath) {
-  const SweepGrid grid = grid_for("periods: [0.3, 0.7, 1.5, 3.0] delays: [0, 0.004, 0.0105] "
-                                  "experimental_fractions: [0.4, 1.0]");
+  const SweepGrid grid = grid_for(
+      "periods: [0.3, 0.7, 1.5, 3.0] delays: [0, 0.004, 0.0105] "
+      "experimental_fractions: [0.4, 1.0]");
   const auto fast = run_table(grid, false);
   const auto general = run_table(grid, true);
   ASSERT_EQ(fast.size(), general.size());
@@ -39,7 +40,8 @@ TEST(SweepRun, BatchKernelPathAgreesWithGeneralPath) {
     EXPECT_LT(relative_difference(fast[i].peak_reference, general[i].peak_reference), kRoundOff);
     EXPECT_LT(relative_difference(fast[i].peak_delayed, general[i].peak_delayed), kRoundOff);
     if (fast[i].delay > 0) {
-      EXPECT_LT(relative_difference(fast[i].nrmse_pct, general[i].nrmse_pct), kRoundOff) << "point " << i;
+      EXPECT_LT(relative_difference(fast[i].nrmse_pct, general[i].nrmse_pct), kRoundOff)
+          << "point " << i;
       EXPECT_LT(relative_difference(fast[i].eq2_paper, general[i].eq2_paper), kRoundOff);
       ++compared;
     }
@@ -49,8 +51,9 @@ TEST(SweepRun, BatchKernelPathAgreesWithGeneralPath) {
 
 TEST(SweepRun, StiffnessHasNoInfluenceAtAFixedPeriod) {
   for (bool general_only : {true, false}) {
-    const SweepGrid grid = grid_for("periods: [0.4, 1.2] delays: [0.003, 0.008] "
-                                    "experimental_fractions: [0.5] stiffnesses: [1e3, 2.5e5, 7e7]");
+    const SweepGrid grid = grid_for(
+        "periods: [0.4, 1.2] delays: [0.003, 0.008] "
+        "experimental_fractions: [0.5] stiffnesses: [1e3, 2.5e5, 7e7]");
     const auto rows = run_table(grid, general_only);
     std::size_t checked = 0;
     for (const auto& r : rows) {
@@ -71,8 +74,9 @@ TEST(SweepRun, StiffnessHasNoInfluenceAtAFixedPeriod) {
 }
 
 TEST(SweepRun, ErrorFallsWithPeriod) {
-  const SweepGrid grid = grid_for("periods: [0.25, 0.5, 1.0, 2.0, 3.0] delays: [0.004, 0.01] "
-                                  "experimental_fractions: [0.33]");
+  const SweepGrid grid = grid_for(
+      "periods: [0.25, 0.5, 1.0, 2.0, 3.0] delays: [0.004, 0.01] "
+      "experimental_fractions: [0.33]");
   const auto rows = run_table(grid);
   for (double delay : {0.004, 0.01}) {
     std::vector<double> errors;
@@ -95,7 +99,8 @@ TEST(SweepRun, SofteningResponseHasSmallerDelayErrorThanLinear) {
   // uy = 3 mm: the linear system at these periods peaks at several times that.
   const SweepGrid grid = grid_for(
       "periods: [0.4, 0.6, 1.0] delays: [0.006] experimental_fractions: [0.33] "
-      "models { linear {} } models { bilinear { yield_displacement: 0.003 post_yield_ratio: 0.1 } }");
+      "models { linear {} } models { bilinear { yield_displacement: 0.003 post_yield_ratio: 0.1 } "
+      "}");
   const auto rows = run_table(grid);
   std::size_t compared = 0;
   for (const auto& linear : rows) {
@@ -114,8 +119,9 @@ TEST(SweepRun, SofteningResponseHasSmallerDelayErrorThanLinear) {
 }
 
 TEST(SweepRun, AShardRunsOnlyItsSliceInIndexOrder) {
-  const SweepGrid grid = grid_for("periods: [0.3, 0.8, 1.6] delays: [0.002, 0.006] "
-                                  "experimental_fractions: [0.5]");
+  const SweepGrid grid = grid_for(
+      "periods: [0.3, 0.8, 1.6] delays: [0.002, 0.006] "
+      "experimental_fractions: [0.5]");
   SweepOptions options;
   options.shard = {1, 3};
   options.threads = 2;
@@ -130,7 +136,8 @@ TEST(SweepRun, AShardRunsOnlyItsSliceInIndexOrder) {
 TEST(SweepRun, StabilityCheckFlagsTheDelaysPastTheCriticalOne) {
   // alpha = 1, T = 0.5 s, 5 % damping: the critical delay is about 8 ms (DESIGN.md's frame at
   // alpha = 1/3 reaches it near 24 ms); 2 ms lies inside, 30 ms past it.
-  const SweepGrid grid = grid_for("periods: [0.5] delays: [0, 0.002, 0.03] experimental_fractions: [1.0]");
+  const SweepGrid grid =
+      grid_for("periods: [0.5] delays: [0, 0.002, 0.03] experimental_fractions: [1.0]");
   const SweepStabilityCheck check = check_sweep_stability(grid);
   EXPECT_EQ(check.combinations, 2u);  // a zero delay is not checked
   EXPECT_EQ(check.past, 1u);

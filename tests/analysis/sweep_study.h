@@ -22,11 +22,13 @@ inline std::string study_text(const std::string& sweep_body, const std::string& 
   return R"(
 name: "sweep_test"
 structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } }
-integrator { kind: EXPLICIT_NEWMARK )" + integrator + R"( }
+integrator { kind: EXPLICIT_NEWMARK )" +
+         integrator + R"( }
 sweep {
   motions { path: "RSN175_IMPVALL.H_H-E12140.AT2" duration: 12 }
   dts: 0.002
-)" + sweep_body + "}\n";
+)" + sweep_body +
+         "}\n";
 }
 
 inline SweepGrid grid_for(const std::string& sweep_body, const std::string& integrator = "") {

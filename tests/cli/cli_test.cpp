@@ -1,16 +1,16 @@
 // End-to-end checks of the `rths` binary: exit codes, JSON, files, and the paper's findings.
 #include <gtest/gtest.h>
 
-#include "tests/support/run_command_line.h"
 #include <nlohmann/json.hpp>
+#include "tests/support/run_command_line.h"
 
+#include <sys/wait.h>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <sys/wait.h>
 
 namespace {
 
@@ -21,10 +21,13 @@ const std::string kMotion = (kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.A
 
 using Outcome = rths::test::CommandOutcome;
 
-Outcome run(const std::string& arguments) { return rths::test::run_command_line(kRths + " " + arguments); }
+Outcome run(const std::string& arguments) {
+  return rths::test::run_command_line(kRths + " " + arguments);
+}
 
 std::filesystem::path scratch(const std::string& name) {
-  auto dir = std::filesystem::temp_directory_path() / ("rths_cli_test_" + name + "_" + std::to_string(getpid()));
+  auto dir = std::filesystem::temp_directory_path() /
+             ("rths_cli_test_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -37,9 +40,11 @@ nlohmann::json json_of(const Outcome& o) {
 
 TEST(CliTest, SdofJsonAndCsvShowLagEnlargingTheResponse) {
   const auto dir = scratch("sdof");
-  const Outcome o = run("sdof --period 0.5 --zeta 0.05 --exp-fraction 0.3333 --dt 0.001 --delay 0.014 "
-                        "--delay-model shift --motion " + (kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2").string() +
-                        " --json --out " + (dir / "sdof.csv").string());
+  const Outcome o =
+      run("sdof --period 0.5 --zeta 0.05 --exp-fraction 0.3333 --dt 0.001 --delay 0.014 "
+          "--delay-model shift --motion " +
+          (kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2").string() + " --json --out " +
+          (dir / "sdof.csv").string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   const nlohmann::json j = json_of(o);
   EXPECT_GT(j["peak_delayed_m"].get<double>(), j["peak_reference_m"].get<double>());
@@ -51,9 +56,11 @@ TEST(CliTest, SdofJsonAndCsvShowLagEnlargingTheResponse) {
   std::ifstream csv(dir / "sdof.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header, "step,time_s,reference_u_floor1_m,reference_command_act1_m,reference_measured_act1_m,"
-                    "reference_force_act1_N,delayed_u_floor1_m,delayed_command_act1_m,delayed_measured_act1_m,"
-                    "delayed_force_act1_N");
+  EXPECT_EQ(
+      header,
+      "step,time_s,reference_u_floor1_m,reference_command_act1_m,reference_measured_act1_m,"
+      "reference_force_act1_N,delayed_u_floor1_m,delayed_command_act1_m,delayed_measured_act1_m,"
+      "delayed_force_act1_N");
   std::size_t rows = 0;
   for (std::string line; std::getline(csv, line);) ++rows;
   EXPECT_EQ(rows, 39070u);  // 7814 samples at 5 ms resampled to 1 ms over the same duration
@@ -61,15 +68,18 @@ TEST(CliTest, SdofJsonAndCsvShowLagEnlargingTheResponse) {
 
 TEST(CliTest, PaperFrameRunShowsLagLargerAndPrintedEq1Smaller) {
   const auto dir = scratch("run");
-  const Outcome o = run("run " + (kSource / "configs/paper_frame.textproto").string() + " --json --out " + dir.string());
+  const Outcome o = run("run " + (kSource / "configs/paper_frame.textproto").string() +
+                        " --json --out " + dir.string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   const nlohmann::json j = json_of(o);
   std::map<std::string, double> peak;
-  for (const auto& c : j["cases"]) peak[c["name"].get<std::string>()] = c["peak_displacement_m"].get<double>();
+  for (const auto& c : j["cases"])
+    peak[c["name"].get<std::string>()] = c["peak_displacement_m"].get<double>();
   EXPECT_GT(peak.at("lag_shift_14ms"), peak.at("reference"));
   EXPECT_GT(peak.at("eq1_lag_14ms"), peak.at("reference"));
   EXPECT_LT(peak.at("eq1_as_printed_14ms"), peak.at("reference"));
-  for (const char* file : {"results.csv", "summary.json", "summary.txt", "displacement.png", "force_displacement.png"}) {
+  for (const char* file : {"results.csv", "summary.json", "summary.txt", "displacement.png",
+                           "force_displacement.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / file)) << file;
   }
 }
@@ -87,7 +97,8 @@ TEST(CliTest, StabilityJsonNamesBothCriticalDelays) {
 
 TEST(CliTest, BadInputExitsTwoWithAMessageNamingTheProblem) {
   const auto dir = scratch("bad");
-  std::ofstream(dir / "bad.textproto") << "name: \"x\"\nstructure { sdof { period: 0.5 colour: 3 } }\n";
+  std::ofstream(dir / "bad.textproto")
+      << "name: \"x\"\nstructure { sdof { period: 0.5 colour: 3 } }\n";
   Outcome o = run("run " + (dir / "bad.textproto").string() + " --out " + (dir / "out").string());
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("bad.textproto:2:"), std::string::npos) << o.output;
@@ -100,15 +111,17 @@ TEST(CliTest, BadInputExitsTwoWithAMessageNamingTheProblem) {
   o = run("sdof --period -1 --motion x");
   EXPECT_EQ(o.exit_code, 2) << o.output;
 
-  o = run("sdof --period 0.05 --dt 0.02 --delay 0 --motion " + (kData / "ground_motions/IELC180.AT2").string());
+  o = run("sdof --period 0.05 --dt 0.02 --delay 0 --motion " +
+          (kData / "ground_motions/IELC180.AT2").string());
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("unstable"), std::string::npos) << o.output;
 }
 
 // The README's first example: the paper's frame, stable, and meaningful.
 TEST(CliTest, ReadmeFirstExampleIsStableAndExitsZero) {
-  const Outcome o = run("sdof --period 0.5 --zeta 0.05 --motion " + kMotion +
-                        " --dt 0.001 --delay 14ms --delay-model shift --exp-fraction 0.3333 --json");
+  const Outcome o =
+      run("sdof --period 0.5 --zeta 0.05 --motion " + kMotion +
+          " --dt 0.001 --delay 14ms --delay-model shift --exp-fraction 0.3333 --json");
   ASSERT_EQ(o.exit_code, 0) << o.output;
   const nlohmann::json j = json_of(o);
   EXPECT_EQ(j["status"], "completed");
@@ -137,7 +150,8 @@ TEST(CliTest, StabilityRefusesADtBeyondTheIntegratorsLimit) {
 }
 
 // `rths stability --study --case` on the adapted model-based block: the frozen-coefficient
-// analysis, said as such; a correction whose bounds exclude the nominal design: exit 2, field named.
+// analysis, said as such; a correction whose bounds exclude the nominal design: exit 2, field
+// named.
 TEST(CliTest, StabilityOfTheAdaptedModelBasedSaysItIsFrozenAndBadBoundsExitTwo) {
   const auto config = kSource / "configs/paper_frame_compensated.textproto";
   Outcome o = run("stability --study " + config.string() + " --case model_based_adaptive");
@@ -152,14 +166,18 @@ TEST(CliTest, StabilityOfTheAdaptedModelBasedSaysItIsFrozenAndBadBoundsExitTwo) 
   const auto dir = scratch("adaptive_bounds");
   std::ofstream(dir / "bad.textproto")
       << "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" << kMotion << "\" }\nintegrator { dt: 0.001 }\n"
+         "motion { path: \""
+      << kMotion
+      << "\" }\nintegrator { dt: 0.001 }\n"
          "substructuring { experimental_fraction: 0.5 }\ncases { name: \"reference\" }\n"
          "cases { name: \"adapted\" delay { shift { delay: 0.0046 } }\n"
-         "  compensation { model_based { plant { shift { delay: 0.0046 } } lead_order: 2 rolloff_frequency: 50\n"
+         "  compensation { model_based { plant { shift { delay: 0.0046 } } lead_order: 2 "
+         "rolloff_frequency: 50\n"
          "    adaptive_correction { window: 1 a1_bounds { min: 0.01 max: 0.05 } } } } }\n";
   o = run("stability --study " + (dir / "bad.textproto").string() + " --case adapted");
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find("model_based.adaptive_correction: a1_bounds"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("model_based.adaptive_correction: a1_bounds"), std::string::npos)
+      << o.output;
 }
 
 TEST(CliTest, UnknownCommandsAndFlagsGetDidYouMean) {
@@ -197,7 +215,8 @@ TEST(CliTest, NumbersOutsideTheirRangeExitTwoNamingTheFlagValueAndRange) {
   EXPECT_NE(o.output.find("--period"), std::string::npos) << o.output;
   o = run("launch " + (kSource / "configs/paper_frame.textproto").string() + " --timeout -1");
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find("--timeout: -1 s is outside (0, 86400] s"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("--timeout: -1 s is outside (0, 86400] s"), std::string::npos)
+      << o.output;
   o = run("pki init " + scratch("days").string() + "/pki --node 2:actuator_emulator --days 0");
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("--days"), std::string::npos) << o.output;
@@ -212,8 +231,8 @@ TEST(CliTest, NestedCommandsTakeAndSuggestTheirOwnFlags) {
   o = run("pki innit " + (dir / "pki").string());
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("did you mean `rths pki init`"), std::string::npos) << o.output;
-  o = run("pki init " + (dir / "pki").string() + " --config " + (kSource / "configs/paper_frame.textproto").string() +
-          " --days 30 --organisation lab");
+  o = run("pki init " + (dir / "pki").string() + " --config " +
+          (kSource / "configs/paper_frame.textproto").string() + " --days 30 --organisation lab");
   ASSERT_EQ(o.exit_code, 0) << o.output;
   EXPECT_TRUE(std::filesystem::is_directory(dir / "pki" / "node_2")) << o.output;
 }
@@ -226,7 +245,8 @@ TEST(CliTest, ExportNeverOverwritesTheRecordItReads) {
   const auto size = std::filesystem::file_size(record);
   Outcome o = run("export " + record.string() + " --csv " + record.string());
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_NE(o.output.find("--csv '" + record.string() + "' is the input record"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("--csv '" + record.string() + "' is the input record"), std::string::npos)
+      << o.output;
   EXPECT_EQ(std::filesystem::file_size(record), size);
   o = run("export " + record.string() + " --csv " + (dir / "R.csv").string());
   EXPECT_EQ(o.exit_code, 0) << o.output;
@@ -235,11 +255,14 @@ TEST(CliTest, ExportNeverOverwritesTheRecordItReads) {
 TEST(CliTest, MotionUnitsAreExplicit) {
   const auto dir = scratch("units");
   // El Centro's first seconds as m/s^2 columns.
-  std::ofstream(dir / "ms2.txt") << "0 0\n0.01 1.2\n0.02 -2.5\n0.03 3.1\n0.04 -1.0\n0.05 0.4\n0.06 0\n";
-  Outcome o = run("sdof --motion " + (dir / "ms2.txt").string() + " --exp-fraction 0.3333 --delay 0.002");
+  std::ofstream(dir / "ms2.txt")
+      << "0 0\n0.01 1.2\n0.02 -2.5\n0.03 3.1\n0.04 -1.0\n0.05 0.4\n0.06 0\n";
+  Outcome o =
+      run("sdof --motion " + (dir / "ms2.txt").string() + " --exp-fraction 0.3333 --delay 0.002");
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("--motion-units"), std::string::npos) << o.output;
-  o = run("sdof --motion " + (dir / "ms2.txt").string() + " --motion-units m/s2 --exp-fraction 0.3333 --delay 0.002 --json");
+  o = run("sdof --motion " + (dir / "ms2.txt").string() +
+          " --motion-units m/s2 --exp-fraction 0.3333 --delay 0.002 --json");
   EXPECT_EQ(o.exit_code, 0) << o.output;
   EXPECT_EQ(json_of(o)["motion_units"], "m/s2");
 }
@@ -249,7 +272,10 @@ TEST(CliTest, MotionUnitsAreExplicit) {
 TEST(CliTest, MotionFilesThatAreNotMotionsAreNamedForWhatTheyAre) {
   const auto dir = scratch("motion_files");
   std::ofstream(dir / "empty.txt").close();
-  std::ofstream(dir / "binary.bin", std::ios::binary) << std::string("\x7f" "ELF\x02\x01\x01\x00\x00\x9b\xff", 12);
+  std::ofstream(dir / "binary.bin", std::ios::binary) << std::string(
+      "\x7f"
+      "ELF\x02\x01\x01\x00\x00\x9b\xff",
+      12);
   std::filesystem::create_directories(dir / "folder");
   Outcome o = run("sdof --motion " + (dir / "empty.txt").string());
   EXPECT_EQ(o.exit_code, 2) << o.output;
@@ -261,24 +287,30 @@ TEST(CliTest, MotionFilesThatAreNotMotionsAreNamedForWhatTheyAre) {
     o = run("sdof --motion " + (dir / "binary.bin").string() + units);
     EXPECT_EQ(o.exit_code, 2) << o.output;
     EXPECT_NE(o.output.find("holds binary data"), std::string::npos) << o.output;
-    EXPECT_EQ(o.output.find("\x7f" "ELF"), std::string::npos) << "raw bytes printed";
+    EXPECT_EQ(o.output.find("\x7f"
+                            "ELF"),
+              std::string::npos)
+        << "raw bytes printed";
     EXPECT_EQ(o.output.find("carry no unit"), std::string::npos) << o.output;
   }
   std::ofstream(dir / "one.txt") << "0\n0.1\n-0.2\n0.3\n-0.1\n0.05\n0\n0\n";
   o = run("sdof --motion " + (dir / "one.txt").string() + " --motion-units g --dt 0.001");
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_NE(o.output.find("--motion-dt"), std::string::npos) << o.output;
-  o = run("sdof --motion " + (dir / "one.txt").string() + " --motion-units g --motion-dt 0.01 --dt 0.001 --json");
+  o = run("sdof --motion " + (dir / "one.txt").string() +
+          " --motion-units g --motion-dt 0.01 --dt 0.001 --json");
   EXPECT_EQ(o.exit_code, 0) << o.output;
 }
 
 // Integrators outside the discrete delay analysis run; the summary says the check was skipped.
 // For the others the discrete critical delay is found also below the lag (filled, not null).
 TEST(CliTest, AlphaOsRunsWithTheDiscreteCheckSkippedAndOthersReportTheirDiscreteLimit) {
-  Outcome o = run("sdof --motion " + kMotion + " --integrator alpha-os --exp-fraction 0.3333 --delay 14ms --json");
+  Outcome o = run("sdof --motion " + kMotion +
+                  " --integrator alpha-os --exp-fraction 0.3333 --delay 14ms --json");
   ASSERT_EQ(o.exit_code, 0) << o.output;
   nlohmann::json j = json_of(o);
-  EXPECT_EQ(j["stability"]["discrete_check"].get<std::string>().rfind("skipped: ", 0), 0u) << j.dump();
+  EXPECT_EQ(j["stability"]["discrete_check"].get<std::string>().rfind("skipped: ", 0), 0u)
+      << j.dump();
   EXPECT_TRUE(j["stability"]["discrete_critical_delay_s"].is_null());
   o = run("sdof --motion " + kMotion + " --exp-fraction 0.3333 --dt 0.001 --delay 14ms --json");
   ASSERT_EQ(o.exit_code, 0) << o.output;
@@ -295,7 +327,8 @@ TEST(CliTest, AConfigOfAnotherKindIsNamed) {
   EXPECT_NE(o.output.find("rths joint-lag"), std::string::npos) << o.output;
   const Outcome reverse = run("joint-lag " + (kSource / "configs/paper_frame.textproto").string());
   EXPECT_EQ(reverse.exit_code, 2) << reverse.output;
-  EXPECT_NE(reverse.output.find("is a study (rths.config.Study) config, not a joint-lag study"), std::string::npos)
+  EXPECT_NE(reverse.output.find("is a study (rths.config.Study) config, not a joint-lag study"),
+            std::string::npos)
       << reverse.output;
   EXPECT_NE(reverse.output.find("rths run"), std::string::npos) << reverse.output;
 }
@@ -310,7 +343,9 @@ TEST(CliTest, RunWithoutPlotsRemovesStalePlotsAndWritesEveryColumn) {
   std::ifstream csv(dir / "results.csv");
   std::string header;
   std::getline(csv, header);
-  EXPECT_EQ(header.rfind("step,time_s,reference_u_floor1_m,reference_u_floor2_m,reference_u_floor3_m,", 0), 0u)
+  EXPECT_EQ(header.rfind(
+                "step,time_s,reference_u_floor1_m,reference_u_floor2_m,reference_u_floor3_m,", 0),
+            0u)
       << header;
   EXPECT_NE(header.find("_force_act1_N"), std::string::npos) << header;
 }
@@ -320,15 +355,21 @@ TEST(CliTest, ASweepWithDivergedPointsExitsOneUnlessMeantAndMarksThem) {
   std::ofstream(dir / "sweep.textproto")
       << "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } } "
          "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.3333333333333333 } "
-         "motion { path: \"" << kMotion << "\" duration: 10 } "
-         "sweep { periods: [0.05, 0.5] delays: [0.002, 0.014] motions { path: \"" << kMotion << "\" duration: 10 } }";
-  Outcome o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " + (dir / "out").string());
+         "motion { path: \""
+      << kMotion
+      << "\" duration: 10 } "
+         "sweep { periods: [0.05, 0.5] delays: [0.002, 0.014] motions { path: \""
+      << kMotion << "\" duration: 10 } }";
+  Outcome o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " +
+                  (dir / "out").string());
   EXPECT_EQ(o.exit_code, 1) << o.output;
   EXPECT_NE(o.output.find("past their critical delay"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("diverged"), std::string::npos) << o.output;
-  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --allow-unstable --out " + (dir / "out").string());
+  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --allow-unstable --out " +
+          (dir / "out").string());
   EXPECT_EQ(o.exit_code, 0) << o.output;
-  for (const char* file : {"sweep.csv", "sweep.meta.json", "sweep.png", "sweep.svg", "sweep_vs_delay.png"}) {
+  for (const char* file :
+       {"sweep.csv", "sweep.meta.json", "sweep.png", "sweep.svg", "sweep_vs_delay.png"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
   }
 }
@@ -350,7 +391,8 @@ TEST(CliTest, IdentifyEchoesTheUnitsItReadTheDataIn) {
   EXPECT_EQ(json_of(o)["input_units"]["length"], "cm");
   o = run("identify " + (dir / "rig.csv").string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
-  EXPECT_NE(o.output.find("input units: time s, length mm, force N"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("input units: time s, length mm, force N"), std::string::npos)
+      << o.output;
 }
 
 }  // namespace
@@ -365,14 +407,19 @@ std::string read_text(const std::filesystem::path& path) {
 // Every plot of `run` and `sweep` is written as PNG and as SVG beside it.
 TEST(CliTest, EveryPlotOfRunAndSweepHasItsSvgBesideItsPng) {
   const auto dir = scratch("svg");
-  Outcome o = run("run " + (kSource / "configs/paper_frame.textproto").string() + " --out " + (dir / "run").string());
+  Outcome o = run("run " + (kSource / "configs/paper_frame.textproto").string() + " --out " +
+                  (dir / "run").string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   std::ofstream(dir / "sweep.textproto")
       << "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } } "
          "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.3333333333333333 } "
-         "motion { path: \"" << kMotion << "\" duration: 5 } "
-         "sweep { periods: [0.5, 1.0] delays: [0.002, 0.004] motions { path: \"" << kMotion << "\" duration: 5 } }";
-  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " + (dir / "sweep").string());
+         "motion { path: \""
+      << kMotion
+      << "\" duration: 5 } "
+         "sweep { periods: [0.5, 1.0] delays: [0.002, 0.004] motions { path: \""
+      << kMotion << "\" duration: 5 } }";
+  o = run("sweep " + (dir / "sweep.textproto").string() + " --threads 1 --out " +
+          (dir / "sweep").string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   std::size_t pngs = 0;
   for (const char* folder : {"run", "sweep"}) {
@@ -398,8 +445,9 @@ TEST(CliTest, JointLagReportsProgressInPlainLines) {
   const Outcome o = run("joint-lag " + (dir / "joint.textproto").string() + " --no-plots");
   ASSERT_EQ(o.exit_code, 0) << o.output;
   for (int decile = 1; decile <= 10; ++decile) {
-    const std::string line = "joint-lag: " + std::string(decile < 10 ? " " : "") + std::to_string(decile * 10) +
-                             "% (" + std::to_string(decile) + "/10 points";
+    const std::string line = "joint-lag: " + std::string(decile < 10 ? " " : "") +
+                             std::to_string(decile * 10) + "% (" + std::to_string(decile) +
+                             "/10 points";
     EXPECT_NE(o.output.find(line), std::string::npos) << line << "\n" << o.output;
   }
   EXPECT_EQ(o.output.find('\r'), std::string::npos) << "a bar is for terminals only";
@@ -412,12 +460,14 @@ TEST(CliTest, JointLagReportsProgressInPlainLines) {
 // stacks network and actuator lag against the critical delay.
 TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   const auto dir = scratch("launch_lag");
-  const Outcome o = run("launch " + (kSource / "configs/paper_frame_network_lag.textproto").string() +
-                        " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " + dir.string() +
-                        " --platform-seconds 0.2 --accept-platform");  // this machine is not the point here
+  const Outcome o =
+      run("launch " + (kSource / "configs/paper_frame_network_lag.textproto").string() +
+          " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " + dir.string() +
+          " --platform-seconds 0.2 --accept-platform");  // this machine is not the point here
   EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 1) << o.output;
   const std::string warning =
-      "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the actuator lab's link + "
+      "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the actuator "
+      "lab's link + "
       "actuator lag 14 ms (the case's delay stages): lag 28 ms against a critical delay of";
   const auto warned = o.output.find(warning);
   ASSERT_NE(warned, std::string::npos) << o.output;
@@ -431,10 +481,11 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   EXPECT_NEAR(summary["cases"][1]["stability"]["lag_s"].get<double>(), 0.028, 1e-12);
   EXPECT_TRUE(summary["cases"][1]["stability"]["past_critical_delay"].get<bool>());
   const std::string plot = read_text(dir / "links_lag_shift_14ms.svg");
-  for (const char* text : {"actuator lab: round trip, measured", "actuator lab: round trip, injected",
-                           "numerical site: round trip, measured", "actuator lag, nominal 14 ms: shift(14 ms)",
-                           "actuator lab: network round trip, measured", "continuous critical delay",
-                           "round trip (ms)", "lag (ms)"}) {
+  for (const char* text :
+       {"actuator lab: round trip, measured", "actuator lab: round trip, injected",
+        "numerical site: round trip, measured", "actuator lag, nominal 14 ms: shift(14 ms)",
+        "actuator lab: network round trip, measured", "continuous critical delay",
+        "round trip (ms)", "lag (ms)"}) {
     EXPECT_NE(plot.find(text), std::string::npos) << text;
   }
   EXPECT_EQ(plot.find("node 2"), std::string::npos);
@@ -447,13 +498,16 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
 TEST(CliTest, LaunchThatStopsBeforeStepOneWritesTheSummaryWithTheReason) {
   const auto dir = scratch("launch_step1");
   const auto config = dir / "study.textproto";
-  std::ofstream(config) << "name: \"frame\"\n"
-                           "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-                           "motion { path: \"" + kMotion + "\" duration: 0.5 }\n"
-                           "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
-                           "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
-                           "cases { name: \"reference\" }\n"
-                           "deployment { start_timeout: 0.001 }\n";
+  std::ofstream(config)
+      << "name: \"frame\"\n"
+         "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+         "motion { path: \"" +
+             kMotion +
+             "\" duration: 0.5 }\n"
+             "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+             "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+             "cases { name: \"reference\" }\n"
+             "deployment { start_timeout: 0.001 }\n";
   const Outcome o = run("launch " + config.string() + " --domain 85 --no-plots --bin-dir " +
                         std::string(RTHS_BINARY_DIR) + " --out " + (dir / "out").string());
   EXPECT_EQ(o.exit_code, 1) << o.output;

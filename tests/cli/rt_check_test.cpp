@@ -19,11 +19,12 @@ TEST(RtCheck, JsonHasThePlatformTheVerdictAndTheFixes) {
   ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
   const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')), nullptr, false);
   ASSERT_FALSE(j.is_discarded()) << r.output;
-  for (const char* key : {"preemption", "governor", "isolated_cpus", "irq_affinity", "memlock_limit_bytes",
-                          "rtprio_limit", "dma_latency_holdable", "measured_cpus", "lateness_median",
-                          "lateness_p99", "lateness_p9999", "lateness_max", "stalls_over_1ms_per_minute",
-                          "stalls_over_2ms_per_minute", "stalls_over_5ms_per_minute", "required_window_ms",
-                          "predicted_overrun_fraction", "verdict"})
+  for (const char* key :
+       {"preemption", "governor", "isolated_cpus", "irq_affinity", "memlock_limit_bytes",
+        "rtprio_limit", "dma_latency_holdable", "measured_cpus", "lateness_median", "lateness_p99",
+        "lateness_p9999", "lateness_max", "stalls_over_1ms_per_minute",
+        "stalls_over_2ms_per_minute", "stalls_over_5ms_per_minute", "required_window_ms",
+        "predicted_overrun_fraction", "verdict"})
     EXPECT_TRUE(j["platform"].contains(key)) << key;
   EXPECT_DOUBLE_EQ(j["platform"]["rate_hz"].get<double>(), 100.0);
   EXPECT_EQ(j["holds"].get<bool>(), r.exit_code == 0);
@@ -32,7 +33,8 @@ TEST(RtCheck, JsonHasThePlatformTheVerdictAndTheFixes) {
 }
 
 TEST(RtCheck, AConfigsDeploymentIsJudgedAndItsRateCannotBeOverridden) {
-  const std::string config = std::string(RTHS_SOURCE_DIR) + "/configs/paper_frame_distributed.textproto";
+  const std::string config =
+      std::string(RTHS_SOURCE_DIR) + "/configs/paper_frame_distributed.textproto";
   const auto bad = rths::test::run_command_line(kRths + " rt-check " + config + " --rate 100");
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_THAT(bad.output, HasSubstr("--rate is for the default deployment"));

@@ -18,7 +18,9 @@ TEST(AnswerVerdict, TheFractionIsTheBoundary) {
   EXPECT_FALSE(answer_shortfall(1, 0, 1000, 0.0).has_value());
 }
 
-TEST(AnswerVerdict, NothingToJudgeWithoutSteps) { EXPECT_FALSE(answer_shortfall(1, 0, 0, 0.99).has_value()); }
+TEST(AnswerVerdict, NothingToJudgeWithoutSteps) {
+  EXPECT_FALSE(answer_shortfall(1, 0, 0, 0.99).has_value());
+}
 
 }  // namespace
 }  // namespace rths::coordinator

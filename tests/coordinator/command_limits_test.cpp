@@ -26,10 +26,13 @@ core::Vec vec(std::initializer_list<double> values) {
 
 TEST(CommandLimits, DisplacementAndVelocityTripPerDofAndNameIt) {
   const CommandLimits c(limits(0.1, 2.0, 0.0), {0}, 2);
-  EXPECT_FALSE(c.check_state(vec({0.1, -0.1}), vec({2.0, -2.0})).has_value()) << "at the limit passes";
+  EXPECT_FALSE(c.check_state(vec({0.1, -0.1}), vec({2.0, -2.0})).has_value())
+      << "at the limit passes";
   const auto u = c.check_state(vec({0.0, -0.15}), vec({0.0, 0.0}));
   ASSERT_TRUE(u.has_value());
-  EXPECT_NE(u->find("|u| of DOF 2 = -0.150000 m exceeds 0.100000 m; command not sent"), std::string::npos) << *u;
+  EXPECT_NE(u->find("|u| of DOF 2 = -0.150000 m exceeds 0.100000 m; command not sent"),
+            std::string::npos)
+      << *u;
   const auto v = c.check_state(vec({0.0, 0.0}), vec({2.5, 0.0}));
   ASSERT_TRUE(v.has_value());
   EXPECT_NE(v->find("|v| of DOF 1 = 2.500000 m/s exceeds 2.000000 m/s"), std::string::npos) << *v;
@@ -48,7 +51,8 @@ TEST(CommandLimits, RateLimitComparesWithTheLastDriftThatPassedOnActuatorStoreys
   EXPECT_FALSE(c.check_rate(vec({0.0, 0.004})).has_value());
   const auto jump = c.check_rate(vec({0.0, 0.0065}));
   ASSERT_TRUE(jump.has_value());
-  EXPECT_NE(jump->find("commanded drift of storey 2 changes by 0.002500 m in one step (limit 0.002000 m per step); command not sent"),
+  EXPECT_NE(jump->find("commanded drift of storey 2 changes by 0.002500 m in one step (limit "
+                       "0.002000 m per step); command not sent"),
             std::string::npos)
       << *jump;
   EXPECT_FALSE(c.check_rate(vec({0.0, 0.0055})).has_value())

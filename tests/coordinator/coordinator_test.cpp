@@ -86,22 +86,24 @@ struct Cluster {
 RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
                std::int64_t mute_after = 0, runtime::PacingClock* clock = nullptr,
                const std::string& case_name = "reference", double seconds = 0.5) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
-      seconds, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
-               "ACTUATOR_EMULATOR } " + deployment + " }"));
+  const core::PreparedStudy prepared = test::prepare(
+      test::paper_frame_study(seconds,
+                              "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
+                              "ACTUATOR_EMULATOR } " +
+                                  deployment + " }"));
   coordinator::CoordinatorOptions options;
   options.run_id = "run";
   options.case_name = case_name;
   options.clock = clock;
   Cluster c;
   coordinator::Coordinator coordinator(prepared, c.transport, options);
-  runtime::NodeService& victim = mute_node == 1 ? static_cast<runtime::NodeService&>(c.substructure)
-                                                : c.emulator;
+  runtime::NodeService& victim =
+      mute_node == 1 ? static_cast<runtime::NodeService&>(c.substructure) : c.emulator;
   if (mute_node > 0) c.muted = std::make_unique<Muted>(victim, mute_after);
-  c.transport.attach(1, mute_node == 1 ? static_cast<transport::NodeHandler&>(*c.muted)
-                                        : c.substructure);
-  c.transport.attach(2, mute_node == 2 ? static_cast<transport::NodeHandler&>(*c.muted)
-                                        : c.emulator);
+  c.transport.attach(
+      1, mute_node == 1 ? static_cast<transport::NodeHandler&>(*c.muted) : c.substructure);
+  c.transport.attach(2,
+                     mute_node == 2 ? static_cast<transport::NodeHandler&>(*c.muted) : c.emulator);
   return coordinator.run();
 }
 
@@ -113,8 +115,9 @@ struct RecordedRun {
 RecordedRun run_recorded(const std::string& deployment, const std::string& record_name) {
   const auto record = std::filesystem::temp_directory_path() / record_name;
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
-      0.1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
-               deployment + " }"));
+      0.1,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
+          deployment + " }"));
   coordinator::CoordinatorOptions options;
   options.run_id = "run";
   options.case_name = "reference";
@@ -134,7 +137,8 @@ RecordedRun run_recorded(const std::string& deployment, const std::string& recor
 
 TEST(Coordinator, TwoDifferentAnswersToOneStepStopTheRunNamingTheNode) {
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
-      0.5, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
+      0.5,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
   coordinator::CoordinatorOptions options;
   options.run_id = "run";
   options.case_name = "reference";
@@ -146,7 +150,8 @@ TEST(Coordinator, TwoDifferentAnswersToOneStepStopTheRunNamingTheNode) {
   const RunOutcome o = coordinator.run();
   EXPECT_FALSE(o.ok);
   EXPECT_NE(o.status.find("integrity fault: two different answers to step 100 from node 1"),
-            std::string::npos) << o.status;
+            std::string::npos)
+      << o.status;
   EXPECT_EQ(o.failed_node, "node 1 (substructure)");
   EXPECT_LE(o.result.steps(), 102u) << "stops within the step after the contradiction";
   EXPECT_EQ(c.emulator.held(), true) << "HOLD to the emulator";
@@ -184,9 +189,10 @@ TEST(Coordinator, PinLoopIsolatesTheLoopThreadAndTheRecordSaysSo) {
   int highest = -1;
   for (int c = 0; c < CPU_SETSIZE; ++c)
     if (CPU_ISSET(c, &before)) highest = c;
-  const RecordedRun r = run_recorded("} clock: REAL_TIME max_overrun_fraction: -1 pin_loop: true loop_cpu: " +
-                                         std::to_string(highest),
-                                     "rths_coordinator_pin_loop.rthsrec");
+  const RecordedRun r =
+      run_recorded("} clock: REAL_TIME max_overrun_fraction: -1 pin_loop: true loop_cpu: " +
+                       std::to_string(highest),
+                   "rths_coordinator_pin_loop.rthsrec");
   cpu_set_t during;
   CPU_ZERO(&during);
   sched_getaffinity(0, sizeof during, &during);
@@ -267,7 +273,8 @@ INSTANTIATE_TEST_SUITE_P(Nodes, SilentNode, testing::Values(1, 2),
 
 // A node whose answers stop arriving while max_missed_answers is too wide to fire (or, never
 // having answered, never starts a streak) and liveliness has not run out: the run went to its
-// end, but it is not ok, since the node answered fewer than the deployment's min_answer_fraction (0.99) of the steps.
+// end, but it is not ok, since the node answered fewer than the deployment's min_answer_fraction
+// (0.99) of the steps.
 TEST(Coordinator, ARunOnWhichANodeAnsweredTooFewStepsFails) {
   FakeClock on_time(10'000);
   const RunOutcome o =
@@ -279,7 +286,8 @@ TEST(Coordinator, ARunOnWhichANodeAnsweredTooFewStepsFails) {
 
 TEST(Coordinator, RateLimitStopsTheRunBeforeTheCommandLeaves) {
   // The frame moves by more than 10 nm per 1 ms step within its first 2 s.
-  const RunOutcome o = run("limits { max_displacement_step: 1e-8 }", 0, 0, nullptr, "reference", 2.0);
+  const RunOutcome o =
+      run("limits { max_displacement_step: 1e-8 }", 0, 0, nullptr, "reference", 2.0);
   EXPECT_FALSE(o.ok);
   EXPECT_NE(o.status.find("per step); command not sent"), std::string::npos) << o.status;
   ASSERT_GT(o.result.steps(), 1u);

@@ -10,8 +10,9 @@ namespace {
 TEST(DeadlineVerdict, LoopBeyondTheToleranceNamesOverrunsStepsAndStreak) {
   const auto v = loop_deadline_misses(12, 3, 10000, 0.001);
   ASSERT_TRUE(v.has_value());
-  EXPECT_EQ(*v, "completed with deadline misses: 12 overruns in 10000 steps (0.120000 %, "
-                "tolerance 0.100000 %; worst streak 3)");
+  EXPECT_EQ(*v,
+            "completed with deadline misses: 12 overruns in 10000 steps (0.120000 %, "
+            "tolerance 0.100000 %; worst streak 3)");
 }
 
 TEST(DeadlineVerdict, LoopWithinAtOrUnjudgedSaysNothing) {
@@ -25,8 +26,9 @@ TEST(DeadlineVerdict, LoopWithinAtOrUnjudgedSaysNothing) {
 TEST(DeadlineVerdict, ServoLoopBeyondTheToleranceNamesTheNode) {
   const auto v = servo_deadline_misses("node 2 (actuator emulator)", 50, 40000, 0.001);
   ASSERT_TRUE(v.has_value());
-  EXPECT_EQ(*v, "completed with deadline misses: the servo loop of node 2 (actuator emulator) "
-                "overran 50 of 40000 periods (0.125000 %, tolerance 0.100000 %)");
+  EXPECT_EQ(*v,
+            "completed with deadline misses: the servo loop of node 2 (actuator emulator) "
+            "overran 50 of 40000 periods (0.125000 %, tolerance 0.100000 %)");
   EXPECT_FALSE(servo_deadline_misses("n", 40, 40000, 0.001).has_value());
   EXPECT_FALSE(servo_deadline_misses("n", 0, 0, 0.001).has_value()) << "no servo loop ran";
 }

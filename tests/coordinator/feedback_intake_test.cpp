@@ -175,7 +175,8 @@ TEST_F(Intake, TwoDifferentAnswersToOneStepAreAnIntegrityFaultNamingBothArrivals
   ASSERT_NE(fault, nullptr);
   EXPECT_EQ(fault->node_id, 1);
   EXPECT_NE(fault->what.find("integrity fault: two different answers to step 1 from node 1"),
-            std::string::npos) << fault->what;
+            std::string::npos)
+      << fault->what;
   EXPECT_NE(fault->what.find("1003000"), std::string::npos) << fault->what;
   EXPECT_NE(fault->what.find("1007000"), std::string::npos) << fault->what;
   const ArrivedFeedback* got = intake.take(1);

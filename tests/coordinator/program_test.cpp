@@ -23,15 +23,18 @@ const char* kVerdict =
 
 std::filesystem::path refused_check(const std::filesystem::path& dir) {
   const auto path = dir / "platform.json";
-  nlohmann::json platform{{"refused", true}, {"verdict", kVerdict}, {"window_ms", 2.93},
-                          {"required_window_ms", 9.0}, {"lateness_max", 0.0035}};
+  nlohmann::json platform{{"refused", true},
+                          {"verdict", kVerdict},
+                          {"window_ms", 2.93},
+                          {"required_window_ms", 9.0},
+                          {"lateness_max", 0.0035}};
   std::ofstream(path) << nlohmann::json{{"platform", platform}}.dump();
   return path;
 }
 
 std::string coordinator_command(const std::filesystem::path& config, const std::string& extra) {
-  return test::program("rths-coordinator", "coordinator").string() + " --config " + config.string() +
-         " " + extra;
+  return test::program("rths-coordinator", "coordinator").string() + " --config " +
+         config.string() + " " + extra;
 }
 
 TEST(PlatformGate, ARefusedCheckStopsARealTimeRunBeforeItStarts) {
@@ -46,23 +49,28 @@ TEST(PlatformGate, ARefusedCheckStopsARealTimeRunBeforeItStarts) {
   EXPECT_THAT(refused.output, HasSubstr("answer_window_ms: 9.00"));
   EXPECT_THAT(refused.output, HasSubstr("--accept-platform"));
   EXPECT_FALSE(std::filesystem::exists(record));
-  const auto unmeasured = test::run_command_line(coordinator_command(config, "--platform-seconds 0"));
+  const auto unmeasured =
+      test::run_command_line(coordinator_command(config, "--platform-seconds 0"));
   EXPECT_EQ(unmeasured.exit_code, 2) << unmeasured.output;
-  EXPECT_THAT(unmeasured.output, HasSubstr("--platform-seconds 0 (not measured) needs --accept-platform"));
+  EXPECT_THAT(unmeasured.output,
+              HasSubstr("--platform-seconds 0 (not measured) needs --accept-platform"));
   const auto bad_window = test::write_config(
-      dir, test::paper_frame_study(0.2, "deployment { clock: REAL_TIME answer_window_ms: 5 "
-                                        "max_missed_answers: 5 }"));
+      dir, test::paper_frame_study(0.2,
+                                   "deployment { clock: REAL_TIME answer_window_ms: 5 "
+                                   "max_missed_answers: 5 }"));
   const auto both = test::run_command_line(coordinator_command(bad_window, "--platform-seconds 0"));
   EXPECT_EQ(both.exit_code, 2) << both.output;
-  EXPECT_THAT(both.output, HasSubstr("deployment.answer_window_ms and deployment.max_missed_answers"));
+  EXPECT_THAT(both.output,
+              HasSubstr("deployment.answer_window_ms and deployment.max_missed_answers"));
 }
 
 TEST(PlatformGate, AcceptPlatformRunsAndTheRecordSaysSo) {
   const auto dir = test::scratch_dir("gate_accepted");
   runtime::LaunchOptions options;
   options.config = test::write_config(
-      dir, test::paper_frame_study(0.3, "deployment { clock: REAL_TIME max_overrun_fraction: -1 "
-                                        "answer_window_ms: 30 command_watchdog_ms: 30 }"));
+      dir, test::paper_frame_study(0.3,
+                                   "deployment { clock: REAL_TIME max_overrun_fraction: -1 "
+                                   "answer_window_ms: 30 command_watchdog_ms: 30 }"));
   options.case_name = "reference";
   options.run_id = "gate_accepted";
   options.domain = 181;

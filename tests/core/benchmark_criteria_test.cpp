@@ -12,7 +12,10 @@ namespace {
 constexpr double kDt = 1.0 / 4096.0;  // the benchmark's rate
 constexpr int kSteps = 8192;
 
-double wave(int k) { return std::sin(2 * std::numbers::pi * 1.7 * k * kDt) + 0.3 * std::sin(2 * std::numbers::pi * 4.1 * k * kDt); }
+double wave(int k) {
+  return std::sin(2 * std::numbers::pi * 1.7 * k * kDt) +
+         0.3 * std::sin(2 * std::numbers::pi * 4.1 * k * kDt);
+}
 
 TEST(NormalisedStdError, RemovesTheMeanAsTheBenchmarkScriptDoes) {
   std::vector<double> ref, cmp;
@@ -35,8 +38,8 @@ TEST(BenchmarkCriteria, EachCriterionMeasuresItsOwnQuantity) {
     reference(k, 2) = 2.5 * wave(k);
     response(k, 0) = 1.05 * reference(k, 0);  // floor 1: 5 % too large
     response(k, 1) = reference(k, 1);
-    response(k, 2) = 0.8 * reference(k, 2);   // floor 3: 20 % too small
-    target[k] = wave(k);                      // = the reference drift of storey 2 (u1 - u0)
+    response(k, 2) = 0.8 * reference(k, 2);  // floor 3: 20 % too small
+    target[k] = wave(k);                     // = the reference drift of storey 2 (u1 - u0)
     measured[k] = k >= kLag ? wave(k - kLag) : 0.0;
   }
   const BenchmarkCriteria c =

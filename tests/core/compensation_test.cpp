@@ -14,7 +14,7 @@ namespace rths::core {
 namespace {
 
 constexpr double kDt = 1e-3;
-constexpr double kShift = 0.0046;     // s, the identified MTS actuator's dead time
+constexpr double kShift = 0.0046;         // s, the identified MTS actuator's dead time
 constexpr double kTimeConstant = 0.0218;  // s, and its first-order lag
 
 DelayChain mts_actuator(double time_constant = kTimeConstant) {
@@ -114,8 +114,8 @@ TEST(AdaptiveTimeSeries, LearnsTheInverseOfShiftPlusFirstOrder) {
   // e^{-s tau} / (1 + s T) inverted: a1 -> T + tau, a2 -> T tau + tau^2 / 2.
   EXPECT_NEAR(view->a1(), kShift + kTimeConstant, 0.1 * (kShift + kTimeConstant));
   EXPECT_NEAR(view->a2(), kShift * kTimeConstant + kShift * kShift / 2, 6e-5);
-  const double j2_late = j2_tracking(std::span(result.target).subspan(8000),
-                                     std::span(result.realised).subspan(8000));
+  const double j2_late =
+      j2_tracking(std::span(result.target).subspan(8000), std::span(result.realised).subspan(8000));
   EXPECT_LT(j2_late, 3.0);  // %
 }
 
@@ -238,9 +238,10 @@ AdaptedRun run_adapted(double scale, const AtsParameters& correction, double sec
     const double t = k * kDt;
     out.tracking.target.push_back(excitation(t));
     out.tracking.realised.push_back(chain.step({t, excitation(t), 0.0}));
-    const bool inside = view.a0() >= correction.a0_bounds.min && view.a0() <= correction.a0_bounds.max &&
-                        view.a1() >= correction.a1_bounds.min && view.a1() <= correction.a1_bounds.max &&
-                        view.a2() >= correction.a2_bounds.min && view.a2() <= correction.a2_bounds.max;
+    const bool inside =
+        view.a0() >= correction.a0_bounds.min && view.a0() <= correction.a0_bounds.max &&
+        view.a1() >= correction.a1_bounds.min && view.a1() <= correction.a1_bounds.max &&
+        view.a2() >= correction.a2_bounds.min && view.a2() <= correction.a2_bounds.max;
     out.stayed_in_bounds = out.stayed_in_bounds && inside;
   }
   out.a0 = view.a0();
@@ -265,7 +266,8 @@ TEST(AdaptedModelBasedInverse, LearnsTheResidualLagOfAWrongModel) {
     EXPECT_NEAR(wrong.a0, 1.0, 0.03) << scale;
     EXPECT_NEAR(wrong.a1 - right.a1, residual, 0.1 * std::abs(residual)) << scale;
     EXPECT_TRUE(wrong.stayed_in_bounds) << scale;
-    EXPECT_LT(wrong.tracking.j2_after(4000), 2.0) << scale;  // %, once the window has adapted (1.0, 0.65)
+    EXPECT_LT(wrong.tracking.j2_after(4000), 2.0)
+        << scale;  // %, once the window has adapted (1.0, 0.65)
     EXPECT_LT(std::abs(j1_delay(std::span(wrong.tracking.target).subspan(4000),
                                 std::span(wrong.tracking.realised).subspan(4000), kDt, 0.05)),
               0.5e-3)
@@ -406,20 +408,24 @@ TEST(CompensationConfig, BadFieldsAreNamed) {
   EXPECT_NE(error_of("compensation { adaptive_time_series { window: 0 } }")
                 .find("adaptive_time_series.window"),
             std::string::npos);
-  EXPECT_NE(error_of("compensation { adaptive_time_series { window: 1 a0_bounds { min: 2 max: 1 } } }")
-                .find("a0_bounds"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("compensation { adaptive_time_series { window: 1 a0_bounds { min: 2 max: 1 } } }")
+          .find("a0_bounds"),
+      std::string::npos);
   EXPECT_NE(error_of("compensation { model_based { lead_order: 2 rolloff_frequency: 40 } }")
                 .find("model_based.plant is empty"),
             std::string::npos);
-  EXPECT_NE(error_of("compensation { model_based { plant { jitter { mean_delay: 0.01 } } lead_order: 2 rolloff_frequency: 40 } }")
+  EXPECT_NE(error_of("compensation { model_based { plant { jitter { mean_delay: 0.01 } } "
+                     "lead_order: 2 rolloff_frequency: 40 } }")
                 .find("model_based.plant[0]"),
             std::string::npos);
-  EXPECT_NE(error_of("compensation { model_based { plant { first_order { time_constant: 0.02 } } lead_order: 7 rolloff_frequency: 40 } }")
+  EXPECT_NE(error_of("compensation { model_based { plant { first_order { time_constant: 0.02 } } "
+                     "lead_order: 7 rolloff_frequency: 40 } }")
                 .find("model_based.lead_order"),
             std::string::npos);
   const std::string inverse =
-      "model_based { plant { first_order { time_constant: 0.02 } } lead_order: 2 rolloff_frequency: 40 ";
+      "model_based { plant { first_order { time_constant: 0.02 } } lead_order: 2 "
+      "rolloff_frequency: 40 ";
   EXPECT_NE(error_of("compensation { " + inverse + "adaptive_correction { window: 0 } } }")
                 .find("compensation[0].model_based.adaptive_correction.window"),
             std::string::npos);
@@ -523,7 +529,8 @@ TEST(PaperFrameCompensated, CompensatorsBringTheTestBackFromSevenHundredPercent)
   const PreparedStudy prepared = prepare_study(study, config.parent_path());
   const auto top = [](const SimulationResult& r) {
     std::vector<double> u(r.steps());
-    for (std::size_t k = 0; k < u.size(); ++k) u[k] = r.displacement(static_cast<Eigen::Index>(k), 0);
+    for (std::size_t k = 0; k < u.size(); ++k)
+      u[k] = r.displacement(static_cast<Eigen::Index>(k), 0);
     return u;
   };
   const auto run = [&](const std::string& name) {
@@ -564,7 +571,8 @@ TEST(PaperFrameCompensated, AdaptedModelBasedStaysWithinFifteenPercentWithTheLag
   };
   const auto top = [](const SimulationResult& r) {
     std::vector<double> u(r.steps());
-    for (std::size_t k = 0; k < u.size(); ++k) u[k] = r.displacement(static_cast<Eigen::Index>(k), 0);
+    for (std::size_t k = 0; k < u.size(); ++k)
+      u[k] = r.displacement(static_cast<Eigen::Index>(k), 0);
     return u;
   };
   const std::vector<double> reference = top(run("reference"));

@@ -56,7 +56,8 @@ TEST(TimeShift, NonIntegerDelayInterpolatesRamp) {
   // A ramp is reproduced exactly by linear interpolation: u_real(t) = t - tau after t = tau.
   constexpr double kDelay = 2.37e-3;
   TimeShift shift(kDelay, kDt);
-  const auto out = run(shift, 50, [](double t) { return t; }, [](double) { return 1.0; });
+  const auto out = run(
+      shift, 50, [](double t) { return t; }, [](double) { return 1.0; });
   EXPECT_DOUBLE_EQ(out[0], 0.0);
   EXPECT_DOUBLE_EQ(out[2], 0.0);  // before t = tau: the first command is held
   for (int k = 3; k < 50; ++k) EXPECT_NEAR(out[k], k * kDt - kDelay, 1e-15) << k;
@@ -65,7 +66,8 @@ TEST(TimeShift, NonIntegerDelayInterpolatesRamp) {
 
 TEST(TimeShift, ResetForgetsHistoryAndCloneIsIndependent) {
   TimeShift shift(5e-3, kDt);
-  run(shift, 20, [](double t) { return t; }, [](double) { return 1.0; });
+  run(
+      shift, 20, [](double t) { return t; }, [](double) { return 1.0; });
   auto copy = shift.clone();
   shift.reset();
   EXPECT_DOUBLE_EQ(shift.step({1.0, 42.0, 0.0}), 42.0);
@@ -96,7 +98,8 @@ TEST(Gain, ScalesOutput) {
 TEST(FirstOrderActuator, StepResponseIsExactExponential) {
   constexpr double kTau = 0.02;
   FirstOrderActuator actuator(kTau, kDt);
-  const auto out = run(actuator, 100, [](double) { return 1.0; }, [](double) { return 0.0; });
+  const auto out = run(
+      actuator, 100, [](double) { return 1.0; }, [](double) { return 0.0; });
   for (int k = 0; k < 100; ++k) {
     EXPECT_NEAR(out[k], 1.0 - std::exp(-(k + 1) * kDt / kTau), 1e-12) << k;
   }
@@ -130,7 +133,8 @@ TEST(TransferFunctionStage, FirstOrderLagMatchesContinuousFacts) {
   TransferFunctionStage lead_lag({0.004, 1.0}, {0.010, 1.0}, kDt);
   EXPECT_NEAR(lead_lag.nominal_delay(), 0.006, 1e-15);
   // Unity steady state after a long step.
-  const auto out = run(lag, 2000, [](double) { return 1.0; }, [](double) { return 0.0; });
+  const auto out = run(
+      lag, 2000, [](double) { return 1.0; }, [](double) { return 0.0; });
   EXPECT_NEAR(out.back(), 1.0, 1e-12);
 }
 
@@ -139,8 +143,8 @@ TEST(TransferFunctionStage, TustinOfSecondOrderKeepsDcGain) {
   TransferFunctionStage second({4.0}, {1.0, 2.0, 2.0}, 0.01);
   EXPECT_DOUBLE_EQ(second.dc_gain(), 2.0);
   EXPECT_DOUBLE_EQ(second.nominal_delay(), 1.0);
-  const auto out =
-      run(second, 3000, [](double) { return 1.0; }, [](double) { return 0.0; }, 0.01);
+  const auto out = run(
+      second, 3000, [](double) { return 1.0; }, [](double) { return 0.0; }, 0.01);
   EXPECT_NEAR(out.back(), 2.0, 1e-9);
 }
 
@@ -172,7 +176,8 @@ TEST(BenchmarkActuator, DcGainNearOneAndLowFrequencyLagMatchesSimulation) {
     // dt = 1/4096 s, is the rounding of direct-form coefficients with five poles near z = 1).
     plant->reset();
     const int steps = static_cast<int>(10.0 / dt);
-    const auto out = run(*plant, steps, [](double) { return 1.0; }, [](double) { return 0.0; }, dt);
+    const auto out = run(
+        *plant, steps, [](double) { return 1.0; }, [](double) { return 0.0; }, dt);
     EXPECT_NEAR(out.back(), plant->dc_gain(), 1e-7);
   }
 }
@@ -240,7 +245,8 @@ TEST(DelayTrace, ErrorsNameFileAndLine) {
 TEST(TraceShift, FollowsTheTrace) {
   DelayTrace trace{{0.0, 1.0}, {2e-3, 2e-3}};
   TraceShift shift(trace, kDt);
-  const auto out = run(shift, 30, [](double t) { return t; }, [](double) { return 1.0; });
+  const auto out = run(
+      shift, 30, [](double t) { return t; }, [](double) { return 1.0; });
   for (int k = 2; k < 30; ++k) EXPECT_NEAR(out[k], k * kDt - 2e-3, 1e-15);
   EXPECT_DOUBLE_EQ(shift.nominal_delay(), 2e-3);
 }

@@ -12,8 +12,8 @@
 namespace rths::core {
 namespace {
 
-const std::filesystem::path kMotions = std::filesystem::path(RTHS_SHARED_DATA_DIR) /
-                                       "ground_motions";
+const std::filesystem::path kMotions =
+    std::filesystem::path(RTHS_SHARED_DATA_DIR) / "ground_motions";
 
 // The table in shared/data/README.md: file, NPTS, DT (s), PGA (g), time of the PGA (s).
 struct Record {
@@ -94,7 +94,7 @@ TEST_F(At2Reader, TruncatedRecordNamesFileAndMissingCount) {
   for (int line = 0; line < 104; ++line) pos = text.find('\n', pos) + 1;
   const auto path = write("cut.AT2", text.substr(0, pos));
   expect_error<std::invalid_argument>([&] { read_at2(path); }, path,
-                                   {"found 800 values but NPTS = 1559", "759 missing"});
+                                      {"found 800 values but NPTS = 1559", "759 missing"});
 }
 
 // Found by fuzz_at2_motion (fuzz/regressions/at2_motion/npts_beyond_long): an NPTS of 4e41 was
@@ -103,10 +103,11 @@ TEST_F(At2Reader, RefusesAnNptsBeyondAnyRecordBeforeConvertingIt) {
   const std::filesystem::path found =
       std::filesystem::path(RTHS_SOURCE_DIR) / "fuzz/regressions/at2_motion/npts_beyond_long";
   expect_error<std::invalid_argument>([&] { read_at2(found); }, found, {"NPTS above 100000000"});
-  for (const std::string& header : {"NPTS= 4.07778e41, DT= .02 SEC", "1e300 0.02 NPTS, DT",
-                                    "NPTS= 100000001, DT= .02 SEC"}) {
+  for (const std::string& header :
+       {"NPTS= 4.07778e41, DT= .02 SEC", "1e300 0.02 NPTS, DT", "NPTS= 100000001, DT= .02 SEC"}) {
     const auto path = write("huge.AT2", "title\nplace\nunits\n" + header + "\n0.1 0.2\n");
-    expect_error<std::invalid_argument>([&] { read_at2(path); }, path, {":4: NPTS above 100000000"});
+    expect_error<std::invalid_argument>([&] { read_at2(path); }, path,
+                                        {":4: NPTS above 100000000"});
   }
 }
 
@@ -135,7 +136,7 @@ TEST_F(At2Reader, ErrorsNameFileLineAndProblem) {
   expect_error<std::invalid_argument>([&] { read_at2(bad_value); }, bad_value, {":6:", "'x'"});
   const auto too_many = write("too_many.AT2", head + "NPTS= 2, DT= .01 SEC\n0.1 0.2\n0.3\n");
   expect_error<std::invalid_argument>([&] { read_at2(too_many); }, too_many,
-                                   {":6:", "more values than NPTS = 2"});
+                                      {":6:", "more values than NPTS = 2"});
   const auto short_header = write("short.AT2", "a\nb\n");
   expect_error<std::invalid_argument>([&] { read_at2(short_header); }, short_header, {"header"});
   const auto missing = dir_ / "missing.AT2";
@@ -162,26 +163,25 @@ TEST_F(ColumnReader, TwoColumnsWithHeaderAndCommas) {
   ASSERT_EQ(motion.acceleration.size(), 4u);
   EXPECT_NEAR(motion.dt, 0.005, 1e-15);
   EXPECT_DOUBLE_EQ(motion.acceleration[3], 4.0);
-  expect_error<std::invalid_argument>([&] { read_columns(path, 0.01, 1.0); }, path,
-                                      {"disagrees"});
+  expect_error<std::invalid_argument>([&] { read_columns(path, 0.01, 1.0); }, path, {"disagrees"});
 }
 
 TEST_F(ColumnReader, ErrorsNameFileAndLine) {
   const auto uneven = write("uneven.txt", "0 1\n0.01 2\n0.02 3\n0.04 4\n");
   expect_error<std::invalid_argument>([&] { read_columns(uneven, 0.0, 1.0); }, uneven,
-                                   {":4:", "non-uniform time"});
+                                      {":4:", "non-uniform time"});
   const auto ragged = write("ragged.txt", "0 1\n0.01 2 5\n");
   expect_error<std::invalid_argument>([&] { read_columns(ragged, 0.0, 1.0); }, ragged,
-                                   {":2:", "found 3 columns"});
+                                      {":2:", "found 3 columns"});
   const auto text = write("text.txt", "time accel\n0 1\n0.01 abc\n");
   expect_error<std::invalid_argument>([&] { read_columns(text, 0.0, 1.0); }, text,
-                                   {":3:", "'abc'"});
+                                      {":3:", "'abc'"});
   const auto wide = write("wide.txt", "1 2 3\n");
   expect_error<std::invalid_argument>([&] { read_columns(wide, 0.0, 1.0); }, wide,
-                                   {":1:", "found 3"});
+                                      {":1:", "found 3"});
   const auto empty = write("empty.txt", "# nothing\n");
   expect_error<std::invalid_argument>([&] { read_columns(empty, 0.01, 1.0); }, empty,
-                                   {"no acceleration values"});
+                                      {"no acceleration values"});
 }
 
 TEST(Resampled, LinearInterpolationAndHeldTail) {

@@ -11,7 +11,8 @@ namespace {
 // A linear structure r = K u: the real evaluator for a purely linear model, no delay.
 class LinearEvaluator final : public RestoringEvaluator {
  public:
-  explicit LinearEvaluator(Mat k, bool repeatable = true) : k_(std::move(k)), repeatable_(repeatable) {}
+  explicit LinearEvaluator(Mat k, bool repeatable = true)
+      : k_(std::move(k)), repeatable_(repeatable) {}
   const Vec& trial(const Vec& u, const Vec&, Mat* tangent) override {
     force_ = k_ * u;
     if (tangent) *tangent = k_;
@@ -33,7 +34,8 @@ struct FreeVibration {
   std::vector<double> u;
 };
 
-FreeVibration free_vibration(IntegratorKind kind, const StructuralModel& model, double dt, int steps) {
+FreeVibration free_vibration(IntegratorKind kind, const StructuralModel& model, double dt,
+                             int steps) {
   auto integrator = make_integrator(kind, model, dt);
   LinearEvaluator evaluator(model.stiffness);
   const Vec u0 = Vec::Constant(1, 0.01);
@@ -49,7 +51,8 @@ FreeVibration free_vibration(IntegratorKind kind, const StructuralModel& model, 
 
 double closed_form(double t, double omega, double zeta, double u0) {
   const double wd = omega * std::sqrt(1 - zeta * zeta);
-  return u0 * std::exp(-zeta * omega * t) * (std::cos(wd * t) + zeta * omega / wd * std::sin(wd * t));
+  return u0 * std::exp(-zeta * omega * t) *
+         (std::cos(wd * t) + zeta * omega / wd * std::sin(wd * t));
 }
 
 class AllIntegrators : public ::testing::TestWithParam<IntegratorKind> {};
@@ -69,7 +72,9 @@ TEST_P(AllIntegrators, FreeVibrationMatchesClosedForm) {
   // halves, not quarters, with dt), so it gets a looser bound.
   // KR-alpha's explicit velocity carries a larger error constant under viscous damping
   // (measured 5.8e-4 u0 here); its order is checked by DissipativeSchemes.SecondOrderAccurate.
-  const double bound = GetParam() == IntegratorKind::kChenRicles || GetParam() == IntegratorKind::kKRAlpha ? 1e-3 : 2e-4;
+  const double bound =
+      GetParam() == IntegratorKind::kChenRicles || GetParam() == IntegratorKind::kKRAlpha ? 1e-3
+                                                                                          : 2e-4;
   EXPECT_LT(worst, bound * 0.01) << to_string(GetParam());
 }
 
@@ -105,7 +110,8 @@ double growth_after(IntegratorKind kind, double omega_dt) {
   const FreeVibration r = free_vibration(kind, model, dt, 2000);
   double early_peak = 0, late_peak = 0;
   for (std::size_t k = 0; k < 200; ++k) early_peak = std::max(early_peak, std::abs(r.u[k]));
-  for (std::size_t k = r.u.size() - 200; k < r.u.size(); ++k) late_peak = std::max(late_peak, std::abs(r.u[k]));
+  for (std::size_t k = r.u.size() - 200; k < r.u.size(); ++k)
+    late_peak = std::max(late_peak, std::abs(r.u[k]));
   return late_peak / early_peak;
 }
 
@@ -137,9 +143,9 @@ TEST(IntegratorStabilityTest, CheckRefusesDtBeyondLimitUnlessAllowed) {
 
 TEST(IntegratorTest, ExplicitSchemesEvaluateTheRestoringForceOncePerStep) {
   const StructuralModel model = make_sdof(0.5, 0.05);
-  for (IntegratorKind kind : {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
-                              IntegratorKind::kChenRicles, IntegratorKind::kAlphaOS,
-                              IntegratorKind::kKRAlpha}) {
+  for (IntegratorKind kind :
+       {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
+        IntegratorKind::kChenRicles, IntegratorKind::kAlphaOS, IntegratorKind::kKRAlpha}) {
     auto integrator = make_integrator(kind, model, 1e-3);
     LinearEvaluator evaluator(model.stiffness, false);
     integrator->initialize(Vec::Zero(1), Vec::Zero(1), Vec::Zero(1), Vec::Constant(1, 1.0));
@@ -157,9 +163,10 @@ TEST(IntegratorTest, ImplicitRefusesAnUnrepeatableRestoringForce) {
 }
 
 TEST(IntegratorTest, NamesRoundTripAndUnknownNameIsExplained) {
-  for (IntegratorKind kind : {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
-                              IntegratorKind::kChenRicles, IntegratorKind::kNewmarkAverageAcceleration,
-                              IntegratorKind::kAlphaOS, IntegratorKind::kKRAlpha}) {
+  for (IntegratorKind kind :
+       {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
+        IntegratorKind::kChenRicles, IntegratorKind::kNewmarkAverageAcceleration,
+        IntegratorKind::kAlphaOS, IntegratorKind::kKRAlpha}) {
     EXPECT_EQ(integrator_from_string(to_string(kind)), kind);
   }
   try {
@@ -186,7 +193,9 @@ double forced_response(IntegratorKind kind, const IntegratorParameters& paramete
   const StructuralModel model = make_sdof(0.5, 0.05);
   auto integrator = make_integrator(kind, model, dt, parameters);
   LinearEvaluator evaluator(model.stiffness, false);
-  const auto load = [](double t) { return Vec::Constant(1, std::sin(2 * std::numbers::pi * 1.3 * t)); };
+  const auto load = [](double t) {
+    return Vec::Constant(1, std::sin(2 * std::numbers::pi * 1.3 * t));
+  };
   integrator->initialize(Vec::Zero(1), Vec::Zero(1), Vec::Zero(1), load(0.0));
   const int steps = static_cast<int>(std::lround(1.0 / dt));
   for (int k = 1; k <= steps; ++k) integrator->step(load(k * dt), evaluator);
@@ -212,7 +221,8 @@ TEST_P(DissipativeSchemes, AgreesWithExplicitNewmarkAsDtShrinks) {
     if (previous > 0.0) EXPECT_LT(difference, 0.35 * previous) << p.name << " dt " << dt;
     previous = difference;
   }
-  EXPECT_LT(previous, 1e-6 * std::abs(forced_response(IntegratorKind::kExplicitNewmark, {}, 2.5e-4)) * 1e3);
+  EXPECT_LT(previous,
+            1e-6 * std::abs(forced_response(IntegratorKind::kExplicitNewmark, {}, 2.5e-4)) * 1e3);
 }
 
 TEST_P(DissipativeSchemes, BoundedFarBeyondTheExplicitLimit) {
@@ -225,7 +235,8 @@ TEST_P(DissipativeSchemes, BoundedFarBeyondTheExplicitLimit) {
   const double dt = 50.0 / (2 * std::numbers::pi);  // omega dt = 50
   auto integrator = make_integrator(p.kind, model, dt, p.parameters);
   LinearEvaluator evaluator(model.stiffness);
-  integrator->initialize(Vec::Constant(1, 0.01), Vec::Zero(1), model.stiffness * Vec::Constant(1, 0.01), Vec::Zero(1));
+  integrator->initialize(Vec::Constant(1, 0.01), Vec::Zero(1),
+                         model.stiffness * Vec::Constant(1, 0.01), Vec::Zero(1));
   for (int k = 0; k < 2000; ++k) integrator->step(Vec::Zero(1), evaluator);
   EXPECT_LE(std::abs(integrator->displacement()(0)), 0.01 * (1 + 1e-6)) << p.name;
 }
@@ -245,13 +256,15 @@ TEST(DissipativeSchemes, RefuseParametersOutsideTheirStableRange) {
     make_integrator(IntegratorKind::kAlphaOS, model, 1e-3, {0.5, 1.0});
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("alpha_os must be in [2/3, 1]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("alpha_os must be in [2/3, 1]"), std::string::npos)
+        << e.what();
   }
   try {
     make_integrator(IntegratorKind::kKRAlpha, model, 1e-3, {1.0, 1.5});
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("rho_infinity must be in [0, 1]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("rho_infinity must be in [0, 1]"), std::string::npos)
+        << e.what();
   }
   // Unconditionally stable: no dt is refused.
   EXPECT_NO_THROW(check_stability(IntegratorKind::kAlphaOS, 1e6, 1.0, false));

@@ -35,7 +35,8 @@ TEST(Ranges, PeriodExcludesZeroAndStopsAtFifty) {
 
 TEST(Ranges, LagOverOneSecondNamesTheUnitSlipAndAllowLongLag) {
   const std::string message = message_of(Quantity::kLag, 7.0, "nodes[1].send_lag.one_way_delay");
-  EXPECT_NE(message.find("nodes[1].send_lag.one_way_delay = 7 s is outside [0, 1] s"), std::string::npos);
+  EXPECT_NE(message.find("nodes[1].send_lag.one_way_delay = 7 s is outside [0, 1] s"),
+            std::string::npos);
   EXPECT_NE(message.find("allow_long_lag"), std::string::npos);
   EXPECT_EQ(check_lag(7.0, "x", true), 7.0);
   EXPECT_THROW(check_lag(7.0, "x"), std::invalid_argument);

@@ -225,8 +225,10 @@ TEST(InertialSpecimenTest, AddsInertiaAndDampingFromBackwardDifferences) {
   EXPECT_EQ(copy->trial(3e-3).force, s.force);
   specimen.reset();
   EXPECT_DOUBLE_EQ(specimen.trial(0.0).force, 0.0);
-  EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), -1.0, 0.0, h), std::invalid_argument);
-  EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), 1.0, 0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), -1.0, 0.0, h),
+               std::invalid_argument);
+  EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), 1.0, 0.0, 0.0),
+               std::invalid_argument);
 }
 
 }  // namespace

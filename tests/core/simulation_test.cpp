@@ -13,11 +13,13 @@ constexpr double kDt = 0.002;
 
 GroundMotion sine_motion(double dt, double seconds, double frequency_hz = 1.5) {
   GroundMotion m{"sine", dt, {}};
-  for (int k = 0; k * dt < seconds; ++k) m.acceleration.push_back(2.0 * std::sin(2 * M_PI * frequency_hz * k * dt));
+  for (int k = 0; k * dt < seconds; ++k)
+    m.acceleration.push_back(2.0 * std::sin(2 * M_PI * frequency_hz * k * dt));
   return m;
 }
 
-HybridSetup sdof_setup(double alpha, double delay, IntegratorKind kind = IntegratorKind::kExplicitNewmark) {
+HybridSetup sdof_setup(double alpha, double delay,
+                       IntegratorKind kind = IntegratorKind::kExplicitNewmark) {
   HybridSetup setup;
   setup.model = make_sdof(0.5, 0.05);
   setup.integrator = kind;
@@ -38,9 +40,11 @@ std::vector<double> column(const Mat& m, int c) {
 TEST(SimulationTest, ExplicitReferenceAgreesWithImplicitReference) {
   const GroundMotion motion = sine_motion(kDt, 4.0);
   const SimulationResult explicit_run = simulate(sdof_setup(0.5, 0.0), motion);
-  const SimulationResult implicit_run = simulate(sdof_setup(0.5, 0.0, IntegratorKind::kNewmarkAverageAcceleration), motion);
+  const SimulationResult implicit_run =
+      simulate(sdof_setup(0.5, 0.0, IntegratorKind::kNewmarkAverageAcceleration), motion);
   ASSERT_EQ(explicit_run.steps(), motion.acceleration.size());
-  EXPECT_LT(nrmse(column(implicit_run.displacement, 0), column(explicit_run.displacement, 0)), 2e-3);
+  EXPECT_LT(nrmse(column(implicit_run.displacement, 0), column(explicit_run.displacement, 0)),
+            2e-3);
 }
 
 TEST(SimulationTest, ZeroDelayShiftIsBitIdenticalToNoDelay) {
@@ -56,8 +60,10 @@ TEST(SimulationTest, ZeroDelayShiftIsBitIdenticalToNoDelay) {
 
 TEST(SimulationTest, LagEnlargesAndLeadShrinksTheResponse) {
   const GroundMotion motion = sine_motion(kDt, 8.0, 2.0);  // at resonance
-  const double reference = peak_abs(column(simulate(sdof_setup(1.0 / 3, 0.0), motion).displacement, 0));
-  const double lagged = peak_abs(column(simulate(sdof_setup(1.0 / 3, 0.014), motion).displacement, 0));
+  const double reference =
+      peak_abs(column(simulate(sdof_setup(1.0 / 3, 0.0), motion).displacement, 0));
+  const double lagged =
+      peak_abs(column(simulate(sdof_setup(1.0 / 3, 0.014), motion).displacement, 0));
   HybridSetup lead = sdof_setup(1.0 / 3, 0.0);
   DelayChain chain;
   chain.add(std::make_unique<Eq1Lead>(0.014));
@@ -90,7 +96,8 @@ TEST(SimulationTest, UnstableDelayIsFlaggedDivergedNotRunToNaN) {
 
 TEST(SimulationTest, RefusesBadSetups) {
   const GroundMotion motion = sine_motion(kDt, 1.0);
-  EXPECT_THROW(simulate(sdof_setup(0.5, 0.01, IntegratorKind::kNewmarkAverageAcceleration), motion), std::invalid_argument);
+  EXPECT_THROW(simulate(sdof_setup(0.5, 0.01, IntegratorKind::kNewmarkAverageAcceleration), motion),
+               std::invalid_argument);
   EXPECT_THROW(simulate(sdof_setup(0.5, 0.0), sine_motion(0.005, 1.0)), std::invalid_argument);
   HybridSetup too_coarse = sdof_setup(0.5, 0.0);
   too_coarse.dt = 0.2;  // omega dt = 2.5

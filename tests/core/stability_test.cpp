@@ -48,8 +48,9 @@ double late_over_early_peak(double delay, double alpha, double dt) {
   HybridSetup setup;
   setup.model = make_sdof(kPeriod, kZeta);
   setup.dt = dt;
-  setup.partition = partition_by_fraction(setup.model.storey_stiffness, alpha,
-                                          [](double k) { return std::make_unique<LinearSpring>(k); });
+  setup.partition = partition_by_fraction(setup.model.storey_stiffness, alpha, [](double k) {
+    return std::make_unique<LinearSpring>(k);
+  });
   DelayChain chain;
   chain.add(std::make_unique<TimeShift>(delay, dt));
   setup.delays.push_back(std::move(chain));
@@ -72,7 +73,8 @@ TEST(ContinuousStabilityTest, SimulationDecaysJustBelowAndGrowsJustAboveTheCriti
 TEST(DiscreteStabilityTest, FirstUnstableStepCountApproachesContinuousDelayAsDtShrinks) {
   const double critical = *continuous_critical_delay(kPeriod, kZeta, 1.0).critical_delay;
   for (double dt : {1e-3, 2e-4}) {
-    const DiscreteStability d = discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, dt, 500);
+    const DiscreteStability d =
+        discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, dt, 500);
     ASSERT_TRUE(d.first_unstable_delay.has_value());
     EXPECT_NEAR(*d.first_unstable_delay, critical, 2 * dt + 0.05 * critical) << dt;
   }
@@ -80,7 +82,8 @@ TEST(DiscreteStabilityTest, FirstUnstableStepCountApproachesContinuousDelayAsDtS
 
 TEST(DiscreteStabilityTest, SimulationConfirmsTheFirstUnstableStep) {
   constexpr double kDt = 1e-3, kAlpha = 1.0;
-  const DiscreteStability d = discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, 200);
+  const DiscreteStability d =
+      discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, 200);
   ASSERT_TRUE(d.first_unstable_steps.has_value());
   const int n = *d.first_unstable_steps;
   EXPECT_LT(late_over_early_peak((n - 1) * kDt, kAlpha, kDt), 1.0);
@@ -89,15 +92,16 @@ TEST(DiscreteStabilityTest, SimulationConfirmsTheFirstUnstableStep) {
 
 TEST(DiscreteStabilityTest, ExplicitNewmarkWithoutDelayIsUnstableBeyondItsLimit) {
   const double omega = 2 * std::numbers::pi / kPeriod;
-  const DiscreteStability d = discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, 0.0, 0.0,
-                                                      2.05 / omega, 0);
+  const DiscreteStability d =
+      discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, 0.0, 0.0, 2.05 / omega, 0);
   ASSERT_TRUE(d.first_unstable_steps.has_value());
   EXPECT_EQ(*d.first_unstable_steps, 0);
 }
 
 TEST(DiscreteStabilityTest, EveryIntegratorHasAFiniteCriticalDelayAtFullExperimentalFraction) {
-  for (IntegratorKind kind : {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
-                              IntegratorKind::kChenRicles, IntegratorKind::kNewmarkAverageAcceleration}) {
+  for (IntegratorKind kind :
+       {IntegratorKind::kExplicitNewmark, IntegratorKind::kCentralDifference,
+        IntegratorKind::kChenRicles, IntegratorKind::kNewmarkAverageAcceleration}) {
     const DiscreteStability d = discrete_critical_delay(kind, kPeriod, kZeta, 1.0, 1e-3, 100);
     ASSERT_TRUE(d.first_unstable_steps.has_value()) << to_string(kind);
     EXPECT_GT(*d.first_unstable_steps, 2) << to_string(kind);
@@ -108,8 +112,8 @@ TEST(DiscreteStabilityTest, EveryIntegratorHasAFiniteCriticalDelayAtFullExperime
 // ---------------------------------------------------------------------------------------------
 // Compensated loop.
 
-google::protobuf::RepeatedPtrField<config::DelayStage> shift_then_first_order(double shift,
-                                                                             double time_constant) {
+google::protobuf::RepeatedPtrField<config::DelayStage> shift_then_first_order(
+    double shift, double time_constant) {
   google::protobuf::RepeatedPtrField<config::DelayStage> stages;
   stages.Add()->mutable_shift()->set_delay(shift);
   if (time_constant > 0) stages.Add()->mutable_first_order()->set_time_constant(time_constant);
@@ -130,15 +134,15 @@ TEST(CompensatedStabilityTest, WithoutCompensatorItIsThePlainDelayedLoop) {
   const DiscreteStability plain =
       discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, 100);
   for (int n : {0, 3, 7}) {
-    const CompensatedStability c = compensated_stability(
-        IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
-        shift_then_first_order(n * kDt, 0.0), nullptr, 0.0);
+    const CompensatedStability c =
+        compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                              shift_then_first_order(n * kDt, 0.0), nullptr, 0.0);
     EXPECT_NEAR(c.spectral_radius, plain.spectral_radius[static_cast<std::size_t>(n)], 1e-12) << n;
   }
   // Continuous: the margin on top of a shift is the critical delay minus that shift.
-  const CompensatedStability c = compensated_stability(
-      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
-      shift_then_first_order(kShift, 0.0), nullptr, 0.1);
+  const CompensatedStability c =
+      compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                            shift_then_first_order(kShift, 0.0), nullptr, 0.1);
   const double critical = *continuous_critical_delay(kPeriod, kZeta, kAlpha).critical_delay;
   ASSERT_TRUE(c.continuous_margin.has_value());
   EXPECT_NEAR(*c.continuous_margin, critical - kShift, 1e-9);
@@ -149,8 +153,8 @@ TEST(CompensatedStabilityTest, WithoutCompensatorItIsThePlainDelayedLoop) {
 TEST(CompensatedStabilityTest, CompensationMakesTheMtsActuatorLoopStableAtFullFraction) {
   // alpha = 1: the uncompensated critical delay is ~8 ms, the MTS actuator lags 26 ms.
   const auto mts = shift_then_first_order(0.0046, 0.0218);
-  const CompensatedStability bare = compensated_stability(
-      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, 1e-3, mts, nullptr, 0.05);
+  const CompensatedStability bare = compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod,
+                                                          kZeta, 1.0, 1e-3, mts, nullptr, 0.05);
   EXPECT_FALSE(bare.stable);
   const config::Compensation inverse = model_based(0.0046, 0.0218);
   const CompensatedStability compensated = compensated_stability(
@@ -211,12 +215,17 @@ TEST_P(CompensatedMarginBySimulation, DecaysAtNinetyAndGrowsAtHundredTenPercent)
   ASSERT_TRUE(s.discrete_margin.has_value());
   const double margin = *s.discrete_margin;
   EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &c,
-                             0.9 * margin, 20.0), 1.0) << "margin " << margin;
+                             0.9 * margin, 20.0),
+            1.0)
+      << "margin " << margin;
   EXPECT_GT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &c,
-                             1.1 * margin, 20.0), 1.0) << "margin " << margin;
+                             1.1 * margin, 20.0),
+            1.0)
+      << "margin " << margin;
 }
 
-INSTANTIATE_TEST_SUITE_P(Compensators, CompensatedMarginBySimulation, ::testing::Values(0, 1, 2, 3));
+INSTANTIATE_TEST_SUITE_P(Compensators, CompensatedMarginBySimulation,
+                         ::testing::Values(0, 1, 2, 3));
 
 // The adapted model-based block is time-varying: the analysis freezes its correction at the
 // identity it starts from, which is the fixed feedforward's loop, and says so.
@@ -242,9 +251,11 @@ TEST(CompensatedStabilityTest, AdaptedModelBasedIsAnalysedFrozenAtItsStartAndSay
   // its 1 s window has filled, the correction learns the extra delay as model error, so the
   // frozen margin is conservative; it is the guarantee for the first window, before any fit.
   EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts,
-                             &adapted, 0.9 * *a.discrete_margin, 20.0), 1.0);
+                             &adapted, 0.9 * *a.discrete_margin, 20.0),
+            1.0);
   EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts,
-                             &adapted, 1.1 * *a.discrete_margin, 20.0), 1.0);
+                             &adapted, 1.1 * *a.discrete_margin, 20.0),
+            1.0);
 }
 
 TEST(CompensatedStabilityTest, RefusesWhatItCannotRepresent) {
@@ -273,7 +284,8 @@ TEST(CriticalDelayCheck, SdofEqualsTheContinuousAndDiscreteLimits) {
   EXPECT_NEAR(*check.continuous, *continuous_critical_delay(0.5, 0.05, 1.0).critical_delay, 1e-12);
   ASSERT_TRUE(check.discrete.has_value());
   EXPECT_NEAR(*check.discrete,
-              *discrete_critical_delay(IntegratorKind::kExplicitNewmark, 0.5, 0.05, 1.0, 0.001, 20).first_unstable_delay,
+              *discrete_critical_delay(IntegratorKind::kExplicitNewmark, 0.5, 0.05, 1.0, 0.001, 20)
+                   .first_unstable_delay,
               1e-12);
   EXPECT_TRUE(check.past());  // 14 ms against about 8 ms
   EXPECT_LT(check.margin(), -0.5);
@@ -282,8 +294,8 @@ TEST(CriticalDelayCheck, SdofEqualsTheContinuousAndDiscreteLimits) {
 
 TEST(CriticalDelayCheck, PaperFrameAtOneThirdIsBelowTheLimit) {
   const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
-  const CriticalDelayCheck check = check_critical_delay(sdof, {sdof.stiffness(0, 0) / 3.0},
-                                                        IntegratorKind::kExplicitNewmark, 0.001, 0.014);
+  const CriticalDelayCheck check = check_critical_delay(
+      sdof, {sdof.stiffness(0, 0) / 3.0}, IntegratorKind::kExplicitNewmark, 0.001, 0.014);
   EXPECT_FALSE(check.past());
   EXPECT_GT(*check.critical(), 0.020);  // about 24 ms
   EXPECT_LT(*check.critical(), 0.030);
@@ -293,8 +305,8 @@ TEST(CriticalDelayCheck, PaperFrameAtOneThirdIsBelowTheLimit) {
 
 TEST(CriticalDelayCheck, ALeadIsNeverPast) {
   const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
-  const CriticalDelayCheck check = check_critical_delay(sdof, {sdof.stiffness(0, 0)},
-                                                        IntegratorKind::kExplicitNewmark, 0.001, -0.014);
+  const CriticalDelayCheck check = check_critical_delay(
+      sdof, {sdof.stiffness(0, 0)}, IntegratorKind::kExplicitNewmark, 0.001, -0.014);
   EXPECT_FALSE(check.past());
 }
 
@@ -302,8 +314,8 @@ TEST(CriticalDelayCheck, ShearBuildingTakesTheSmallestModalLimit) {
   StructuralModel building = make_shear_building({1000, 1000, 1000}, {4e6, 3e6, 2e6});
   building.damping = modal_damping(building.mass, building.stiffness, 0.05);
   // The whole first storey experimental.
-  const CriticalDelayCheck check = check_critical_delay(building, {4e6, 0, 0},
-                                                        IntegratorKind::kExplicitNewmark, 0.0005, 0.002);
+  const CriticalDelayCheck check =
+      check_critical_delay(building, {4e6, 0, 0}, IntegratorKind::kExplicitNewmark, 0.0005, 0.002);
   ASSERT_TRUE(check.continuous.has_value());
   for (int mode = 0; mode < 3; ++mode) {
     const Modes modes = modal_analysis(building.mass, building.stiffness);
@@ -311,7 +323,8 @@ TEST(CriticalDelayCheck, ShearBuildingTakesTheSmallestModalLimit) {
     const Vec phi = modes.shapes.col(mode);
     const double drift = phi[0];
     const double alpha = 4e6 * drift * drift / (w * w);
-    const auto modal = continuous_critical_delay(2 * std::numbers::pi / w, 0.05, alpha).critical_delay;
+    const auto modal =
+        continuous_critical_delay(2 * std::numbers::pi / w, 0.05, alpha).critical_delay;
     if (modal) EXPECT_LE(*check.continuous, *modal + 1e-12) << "mode " << mode + 1;
   }
   EXPECT_THROW(check_critical_delay(building, {4e6}, IntegratorKind::kExplicitNewmark, 0.001, 0.01),
@@ -335,9 +348,11 @@ TEST(CriticalDelayCheck, ExperimentalStiffnessAsAMatrixAndWhatWasAssumed) {
   EXPECT_EQ(by_matrix.governing_mode, by_storey.governing_mode);
   EXPECT_NE(by_matrix.assumed.find("modal approximation over the 3 modes"), std::string::npos);
   const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
-  EXPECT_NE(check_critical_delay(sdof, {1.0}, IntegratorKind::kExplicitNewmark, 0.001, 0.0).assumed.find("exact"),
+  EXPECT_NE(check_critical_delay(sdof, {1.0}, IntegratorKind::kExplicitNewmark, 0.001, 0.0)
+                .assumed.find("exact"),
             std::string::npos);
-  EXPECT_THROW(check_modal_critical_delay(building, Mat::Zero(2, 2), IntegratorKind::kExplicitNewmark, 0.001, 0.01),
+  EXPECT_THROW(check_modal_critical_delay(building, Mat::Zero(2, 2),
+                                          IntegratorKind::kExplicitNewmark, 0.001, 0.01),
                std::invalid_argument);
 }
 

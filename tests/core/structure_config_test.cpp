@@ -17,7 +17,8 @@ std::string motion() {
 std::string two_storey_matrices(const std::string& substructuring, const std::string& cases = "") {
   return "name: \"m\" structure { matrices { mass { rows: 2 values: [2000, 0, 0, 1500] }"
          " stiffness { rows: 2 values: [5e6, -2e6, -2e6, 2e6] } } damping { modal_zeta: 0.05 } }"
-         " motion { path: \"" + motion() + "\" duration: 4 } integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } " +
+         " motion { path: \"" +
+         motion() + "\" duration: 4 } integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } " +
          substructuring + " " + cases;
 }
 
@@ -52,44 +53,61 @@ TEST(StructureConfig, SplitTakesTheSpecimensMassDampingAndStiffnessOutOfTheNumer
 }
 
 TEST(StructureConfig, BadExperimentalDofsAreRefusedNamingTheField) {
-  EXPECT_NE(error_of([] { prepare(two_storey_matrices("substructuring { experimental_dofs { dof: 3 stiffness: 1e6 } }")); })
-                .find("substructuring.experimental_dofs[0].dof: 3 is outside 1..2"),
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 3 stiffness: 1e6 } }"));
+            }).find("substructuring.experimental_dofs[0].dof: 3 is outside 1..2"),
             std::string::npos);
   EXPECT_NE(error_of([] {
-              prepare(two_storey_matrices("substructuring { experimental_dofs { dof: 1 stiffness: 1e6 } "
-                                          "experimental_dofs { dof: 1 stiffness: 1e6 } }"));
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 1 stiffness: 1e6 } "
+                  "experimental_dofs { dof: 1 stiffness: 1e6 } }"));
             }).find("experimental_dofs[1].dof: 1 is listed twice"),
             std::string::npos);
-  EXPECT_NE(error_of([] { prepare(two_storey_matrices("substructuring { experimental_dofs { dof: 2 stiffness: 3e6 } }")); })
-                .find("experimental_dofs[0].stiffness: 3e+06 N/m must be in (0, K(2, 2) = 2e+06]"),
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 2 stiffness: 3e6 } }"));
+            }).find("experimental_dofs[0].stiffness: 3e+06 N/m must be in (0, K(2, 2) = 2e+06]"),
             std::string::npos);
-  EXPECT_NE(error_of([] { prepare(two_storey_matrices("substructuring { experimental_dofs { dof: 2 stiffness: 1e6 mass: 1500 } }")); })
-                .find("experimental_dofs[0].mass"),
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 2 stiffness: 1e6 mass: 1500 } }"));
+            }).find("experimental_dofs[0].mass"),
             std::string::npos);
-  EXPECT_NE(error_of([] { prepare(two_storey_matrices("substructuring { experimental_fraction: 0.5 }")); })
-                .find("split at experimental_dofs"),
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices("substructuring { experimental_fraction: 0.5 }"));
+            }).find("split at experimental_dofs"),
             std::string::npos);
 }
 
 TEST(StructureConfig, DampingMatrixAndRatiosAreExclusive) {
   const std::string both =
-      "name: \"m\" structure { matrices { mass { rows: 1 values: 1 } stiffness { rows: 1 values: 1 }"
+      "name: \"m\" structure { matrices { mass { rows: 1 values: 1 } stiffness { rows: 1 values: 1 "
+      "}"
       " damping { rows: 1 values: 0.1 } } damping { modal_zeta: 0.05 } }";
-  EXPECT_NE(error_of([&] { make_structure(parse_study(both, "t").structure()); }).find("not both"), std::string::npos);
+  EXPECT_NE(error_of([&] { make_structure(parse_study(both, "t").structure()); }).find("not both"),
+            std::string::npos);
 }
 
 // A shear building given as matrices and split at DOF 1 is the shear building split at storey 1
 // (the storey between the ground and floor 1): the same response up to rounding.
 TEST(StructureConfig, ShearBuildingAsMatricesRunsAsTheShearBuilding) {
   const std::string cases = "cases { name: \"lag\" delay { shift { delay: 0.006 } } }";
-  const PreparedStudy matrices =
-      prepare(two_storey_matrices("substructuring { experimental_dofs { dof: 1 stiffness: 3e6 } }", cases));
+  const PreparedStudy matrices = prepare(
+      two_storey_matrices("substructuring { experimental_dofs { dof: 1 stiffness: 3e6 } }", cases));
   const PreparedStudy storeys = prepare(
-      "name: \"s\" structure { shear_building { storey_mass: [2000, 1500] storey_stiffness: [3e6, 2e6] }"
-      " damping { modal_zeta: 0.05 } } motion { path: \"" + motion() + "\" duration: 4 }"
-      " integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } substructuring { experimental_storeys: [1] } " + cases);
-  const SimulationResult a = simulate(setup_for_case(matrices, matrices.config.cases(0)), matrices.motion);
-  const SimulationResult b = simulate(setup_for_case(storeys, storeys.config.cases(0)), storeys.motion);
+      "name: \"s\" structure { shear_building { storey_mass: [2000, 1500] storey_stiffness: [3e6, "
+      "2e6] }"
+      " damping { modal_zeta: 0.05 } } motion { path: \"" +
+      motion() +
+      "\" duration: 4 }"
+      " integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } substructuring { experimental_storeys: [1] "
+      "} " +
+      cases);
+  const SimulationResult a =
+      simulate(setup_for_case(matrices, matrices.config.cases(0)), matrices.motion);
+  const SimulationResult b =
+      simulate(setup_for_case(storeys, storeys.config.cases(0)), storeys.motion);
   ASSERT_EQ(a.steps(), b.steps());
   const double peak = b.displacement.cwiseAbs().maxCoeff();
   EXPECT_GT(peak, 1e-4);
@@ -103,13 +121,17 @@ TEST(StructureConfig, UndelayedSplitOfTheTwentyDofFrameEqualsTheWholeFrame) {
   const std::string frame =
       "name: \"f\" structure { matrices { mass { file: \"matrices/frame20_mass.mtx\" }"
       " stiffness { file: \"matrices/frame20_stiffness.mtx\" } } damping { modal_zeta: 0.05 } }"
-      " motion { path: \"" + motion() + "\" duration: 3 } ";
-  for (const char* kind : {"EXPLICIT_NEWMARK", "CENTRAL_DIFFERENCE", "CHEN_RICLES", "NEWMARK_AVERAGE_ACCELERATION",
-                           "ALPHA_OS", "KR_ALPHA"}) {
+      " motion { path: \"" +
+      motion() + "\" duration: 3 } ";
+  for (const char* kind : {"EXPLICIT_NEWMARK", "CENTRAL_DIFFERENCE", "CHEN_RICLES",
+                           "NEWMARK_AVERAGE_ACCELERATION", "ALPHA_OS", "KR_ALPHA"}) {
     const std::string integrator = std::string("integrator { kind: ") + kind + " dt: 0.002 } ";
     const fs::path configs = fs::path(RTHS_SOURCE_DIR) / "configs";
     const PreparedStudy split = prepare_study(
-        parse_study(frame + integrator + "substructuring { experimental_dofs { dof: 1 stiffness: 2e6 } }", "t"), configs);
+        parse_study(
+            frame + integrator + "substructuring { experimental_dofs { dof: 1 stiffness: 2e6 } }",
+            "t"),
+        configs);
     const PreparedStudy whole = prepare_study(parse_study(frame + integrator, "t"), configs);
     EXPECT_TRUE(whole.base.partition.actuator_storeys.empty());
     const SimulationResult a = simulate(split.base, split.motion);

@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <unistd.h>
+#include <fstream>
 
 namespace rths::core {
 namespace {
@@ -11,7 +11,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch() {
-  const fs::path dir = fs::temp_directory_path() / ("rths_structure_io_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("rths_structure_io_" + std::to_string(getpid()));
   fs::create_directories(dir);
   return dir;
 }
@@ -55,12 +56,16 @@ TEST(StructureIo, InlineValuesAreRowMajor) {
   EXPECT_EQ(m(1, 0), 3.0);
   const Mat column = read_matrix(inline_spec(0, {1, 1, 1}), {}, "f");
   EXPECT_EQ(column.rows(), 3);
-  EXPECT_NE(error_of([] { read_matrix(inline_spec(2, {1, 2, 3}), {}, "mass"); }).find("mass: 3 values"),
+  EXPECT_NE(error_of([] {
+              read_matrix(inline_spec(2, {1, 2, 3}), {}, "mass");
+            }).find("mass: 3 values"),
             std::string::npos);
 }
 
 TEST(StructureIo, MatrixMarketCoordinateSymmetricFillsBothTriangles) {
-  write("sym.mtx", "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 4\n1 1 2\n2 1 -1\n2 2 2\n3 3 1.5\n");
+  write("sym.mtx",
+        "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 4\n1 1 2\n2 1 -1\n2 2 "
+        "2\n3 3 1.5\n");
   const Mat m = read_matrix(file_spec("sym.mtx"), scratch(), "f");
   EXPECT_EQ(m(0, 1), -1.0);
   EXPECT_EQ(m(1, 0), -1.0);
@@ -82,14 +87,19 @@ TEST(StructureIo, MatrixMarketArrayIsColumnMajorAndSymmetricIsTheLowerTriangle) 
 
 TEST(StructureIo, MatrixMarketErrorsNameTheFileAndLine) {
   write("bad_index.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1.0\n");
-  EXPECT_NE(error_of([] { read_matrix(file_spec("bad_index.mtx"), scratch(), "structure.matrices.mass"); })
-                .find("bad_index.mtx:3: index 3 is outside 1..2"),
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("bad_index.mtx"), scratch(), "structure.matrices.mass");
+            }).find("bad_index.mtx:3: index 3 is outside 1..2"),
             std::string::npos);
   write("short.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n");
-  EXPECT_NE(error_of([] { read_matrix(file_spec("short.mtx"), scratch(), "f"); }).find("declares 2 entries but holds 1"),
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("short.mtx"), scratch(), "f");
+            }).find("declares 2 entries but holds 1"),
             std::string::npos);
   write("complex.mtx", "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n");
-  EXPECT_NE(error_of([] { read_matrix(file_spec("complex.mtx"), scratch(), "f"); }).find("field 'complex'"),
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("complex.mtx"), scratch(), "f");
+            }).find("field 'complex'"),
             std::string::npos);
 }
 
@@ -97,7 +107,9 @@ TEST(StructureIo, CsvRowsAndRaggedRowsRefused) {
   write("k.csv", "# stiffness\n2,-1\n-1,2\n");
   EXPECT_EQ(read_matrix(file_spec("k.csv"), scratch(), "f")(1, 0), -1.0);
   write("ragged.csv", "2,-1\n-1\n");
-  EXPECT_NE(error_of([] { read_matrix(file_spec("ragged.csv"), scratch(), "f"); }).find("row has 1 values"),
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("ragged.csv"), scratch(), "f");
+            }).find("row has 1 values"),
             std::string::npos);
 }
 
@@ -108,17 +120,26 @@ TEST(StructureIo, MatFileVariablesIncludingMatlabsUint16Mass) {
   const Mat k = read_matrix(file_spec("case_1.mat", "K"), benchmark_dir(), "f");
   EXPECT_NEAR(k(0, 0), 26054883.87960384, 1e-6);
   EXPECT_NEAR(k(1, 2), -14419970.77723698, 1e-6);
-  const std::string unknown = error_of([] { read_matrix(file_spec("case_1.mat", "Kx"), benchmark_dir(), "structure.matrices.stiffness"); });
+  const std::string unknown = error_of([] {
+    read_matrix(file_spec("case_1.mat", "Kx"), benchmark_dir(), "structure.matrices.stiffness");
+  });
   EXPECT_NE(unknown.find("structure.matrices.stiffness: "), std::string::npos) << unknown;
-  EXPECT_NE(unknown.find("case_1.mat: no variable 'Kx' (variables: "), std::string::npos) << unknown;
-  EXPECT_NE(error_of([] { read_matrix(file_spec("case_1.mat"), benchmark_dir(), "f"); }).find("needs `variable`"),
+  EXPECT_NE(unknown.find("case_1.mat: no variable 'Kx' (variables: "), std::string::npos)
+      << unknown;
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("case_1.mat"), benchmark_dir(), "f");
+            }).find("needs `variable`"),
             std::string::npos);
 }
 
 TEST(StructureIo, MissingFileAndUnknownExtension) {
-  EXPECT_NE(error_of([] { read_matrix(file_spec("none.mtx"), scratch(), "f"); }).find("no such file"), std::string::npos);
+  EXPECT_NE(
+      error_of([] { read_matrix(file_spec("none.mtx"), scratch(), "f"); }).find("no such file"),
+      std::string::npos);
   write("m.txt", "1\n");
-  EXPECT_NE(error_of([] { read_matrix(file_spec("m.txt"), scratch(), "f"); }).find("unknown extension '.txt'"),
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("m.txt"), scratch(), "f");
+            }).find("unknown extension '.txt'"),
             std::string::npos);
 }
 
@@ -135,34 +156,42 @@ TEST(StructureIo, ChecksNameTheMatrixAndTheProblem) {
   EXPECT_EQ(error_of([] { check_structural_matrices(two_dof(), "s"); }), "");
   StructuralModel m = two_dof();
   m.stiffness(0, 1) = -1.5;
-  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.stiffness: is not symmetric: (1, 2) = -1.5"),
+  EXPECT_NE(error_of([&] {
+              check_structural_matrices(m, "s");
+            }).find("s.stiffness: is not symmetric: (1, 2) = -1.5"),
             std::string::npos);
   m = two_dof();
   m.stiffness(0, 0) = -2;
-  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.stiffness: is not positive semi-definite"),
+  EXPECT_NE(error_of([&] {
+              check_structural_matrices(m, "s");
+            }).find("s.stiffness: is not positive semi-definite"),
             std::string::npos);
   m = two_dof();
   m.mass(1, 1) = 0;
-  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.mass: is not positive definite"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { check_structural_matrices(m, "s"); }).find("s.mass: is not positive definite"),
+      std::string::npos);
   m = two_dof();
   m.damping = Mat::Zero(2, 3);
-  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.damping: is 2 x 3, not square"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { check_structural_matrices(m, "s"); }).find("s.damping: is 2 x 3, not square"),
+      std::string::npos);
   m = two_dof();
   m.damping = Mat::Zero(3, 3);
-  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("the structure has 2 DOFs"), std::string::npos);
+  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("the structure has 2 DOFs"),
+            std::string::npos);
   m = two_dof();
   m.influence = Vec::Ones(3);
-  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.influence: has 3 entries"), std::string::npos);
+  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.influence: has 3 entries"),
+            std::string::npos);
 }
 
 TEST(StructureIo, MatrixStructureFromFilesWithDefaultInfluence) {
   config::MatrixStructure spec;
   *spec.mutable_mass() = file_spec("frame20_mass.mtx");
   *spec.mutable_stiffness() = file_spec("frame20_stiffness.mtx");
-  const StructuralModel model =
-      read_matrix_structure(spec, fs::path(RTHS_SOURCE_DIR) / "configs" / "matrices", "structure.matrices");
+  const StructuralModel model = read_matrix_structure(
+      spec, fs::path(RTHS_SOURCE_DIR) / "configs" / "matrices", "structure.matrices");
   EXPECT_EQ(model.dofs(), 20);
   EXPECT_EQ(model.influence, Vec::Ones(20));
   EXPECT_EQ(model.mass(0, 1), 100.0);  // the mass matrix is not diagonal

@@ -15,9 +15,13 @@ Vec nigam_jennings(double w, double zeta, double dt, const std::vector<double>& 
   const double k = w * w, s1 = std::sqrt(1.0 - zeta * zeta), wd = w * s1;
   const double e = std::exp(-zeta * w * dt), sn = std::sin(wd * dt), cs = std::cos(wd * dt);
   const double A = e * (zeta / s1 * sn + cs), B = e * sn / wd;
-  const double C = (2 * zeta / (w * dt) + e * (((1 - 2 * zeta * zeta) / (wd * dt) - zeta / s1) * sn -
-                                               (1 + 2 * zeta / (w * dt)) * cs)) / k;
-  const double D = (1 - 2 * zeta / (w * dt) + e * ((2 * zeta * zeta - 1) / (wd * dt) * sn + 2 * zeta / (w * dt) * cs)) / k;
+  const double C =
+      (2 * zeta / (w * dt) + e * (((1 - 2 * zeta * zeta) / (wd * dt) - zeta / s1) * sn -
+                                  (1 + 2 * zeta / (w * dt)) * cs)) /
+      k;
+  const double D = (1 - 2 * zeta / (w * dt) +
+                    e * ((2 * zeta * zeta - 1) / (wd * dt) * sn + 2 * zeta / (w * dt) * cs)) /
+                   k;
   const double Ap = -e * w / s1 * sn, Bp = e * (cs - zeta / s1 * sn);
   const double Cp = (-1 / dt + e * ((w / s1 + zeta / (dt * s1)) * sn + cs / dt)) / k;
   const double Dp = (1 - e * (zeta / s1 * sn + cs)) / (k * dt);
@@ -36,8 +40,8 @@ Vec nigam_jennings(double w, double zeta, double dt, const std::vector<double>& 
 // 4096 Hz: the discrete state-space solution equals the modal closed-form one to 1e-6 relative.
 TEST(ExactLinearResponse, BenchmarkCasesEqualTheModalClosedFormSolution) {
   for (int c = 1; c <= 4; ++c) {
-    const std::filesystem::path config =
-        std::filesystem::path(RTHS_SOURCE_DIR) / "configs" / "benchmark" / ("case_" + std::to_string(c) + ".textproto");
+    const std::filesystem::path config = std::filesystem::path(RTHS_SOURCE_DIR) / "configs" /
+                                         "benchmark" / ("case_" + std::to_string(c) + ".textproto");
     config::Study study = load_study(config);
     study.mutable_motion()->set_duration(12.0);
     const PreparedStudy prepared = prepare_study(study, config.parent_path());

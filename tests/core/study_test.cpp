@@ -29,7 +29,9 @@ TEST(StudyTest, PaperFrameConfigPreparesAtOneMillisecond) {
   EXPECT_DOUBLE_EQ(prepared.base.dt, 0.001);
   EXPECT_NEAR(prepared.motion.duration(), 7814 * 0.005, 0.01);
   EXPECT_EQ(prepared.base.partition.actuator_storeys.size(), 1u);
-  EXPECT_NEAR(2 * M_PI / std::sqrt(prepared.base.model.stiffness(0, 0) / prepared.base.model.mass(0, 0)), 0.5, 1e-12);
+  EXPECT_NEAR(
+      2 * M_PI / std::sqrt(prepared.base.model.stiffness(0, 0) / prepared.base.model.mass(0, 0)),
+      0.5, 1e-12);
   ASSERT_GE(study.cases_size(), 2);
   const HybridSetup lagged = setup_for_case(prepared, study.cases(1));
   ASSERT_EQ(lagged.delays.size(), 1u);
@@ -38,7 +40,8 @@ TEST(StudyTest, PaperFrameConfigPreparesAtOneMillisecond) {
 }
 
 TEST(StudyTest, UnknownFieldIsReportedWithLineAndColumn) {
-  const std::string error = error_of("name: \"x\"\nstructure { sdof { period: 0.5 periodd: 2 } }\n");
+  const std::string error =
+      error_of("name: \"x\"\nstructure { sdof { period: 0.5 periodd: 2 } }\n");
   EXPECT_NE(error.find("test.textproto:2:"), std::string::npos) << error;
   EXPECT_NE(error.find("periodd"), std::string::npos) << error;
 }
@@ -49,8 +52,10 @@ TEST(StudyTest, WrongTypeIsReported) {
 }
 
 TEST(StudyTest, SemanticErrorsNameTheField) {
-  EXPECT_NE(error_of("structure { sdof { period: -0.5 } }").find("structure.sdof.period"), std::string::npos);
-  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { delay: -0.01 } } }")
+  EXPECT_NE(error_of("structure { sdof { period: -0.5 } }").find("structure.sdof.period"),
+            std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { "
+                     "delay: -0.01 } } }")
                 .find("delay[0].shift.delay"),
             std::string::npos);
   EXPECT_NE(error_of("structure { shear_building { storey_mass: 1 storey_stiffness: 1 } } "
@@ -58,12 +63,14 @@ TEST(StudyTest, SemanticErrorsNameTheField) {
                 .find("not both"),
             std::string::npos);
   EXPECT_NE(error_of("motion { path: \"x\" }").find("structure is missing"), std::string::npos);
-  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { } }").find("has no kind"),
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { } }")
+                .find("has no kind"),
             std::string::npos);
 }
 
 TEST(StudyTest, MissingMotionFileIsNamed) {
-  const config::Study study = parse_study("structure { sdof { period: 0.5 } } motion { path: \"nowhere.AT2\" }", "t");
+  const config::Study study =
+      parse_study("structure { sdof { period: 0.5 } } motion { path: \"nowhere.AT2\" }", "t");
   try {
     prepare_study(study, "/tmp");
     FAIL();
@@ -89,18 +96,28 @@ TEST(StudyTest, SdofFromPeriodAndStiffnessDerivesMass) {
 }
 
 TEST(StudyTest, EveryDelayKindBuildsAStage) {
-  const config::Study study = parse_study(R"pb(
-    structure { sdof { period: 0.5 } }
-    cases {
-      name: "all"
-      delay { shift { delay: 0.01 } }
-      delay { eq1 { delay: 0.01 } }
-      delay { eq1_lag { delay: 0.01 } amplitude_gain: 0.9 }
-      delay { first_order { time_constant: 0.01 } }
-      delay { benchmark {} }
-      delay { transfer_function { numerator: 1 denominator: [0.01, 1] } }
-      delay { jitter { mean_delay: 0.01 std_dev: 0.001 seed: 7 } }
-    })pb", "all");
+  const config::Study study =
+      parse_study(R"pb(
+                    structure { sdof { period: 0.5 } }
+                    cases {
+                      name: "all"
+                      delay { shift { delay: 0.01 } }
+                      delay { eq1 { delay: 0.01 } }
+                      delay {
+                        eq1_lag { delay: 0.01 }
+                        amplitude_gain: 0.9
+                      }
+                      delay { first_order { time_constant: 0.01 } }
+                      delay { benchmark {} }
+                      delay {
+                        transfer_function {
+                          numerator: 1
+                          denominator: [ 0.01, 1 ]
+                        }
+                      }
+                      delay { jitter { mean_delay: 0.01 std_dev: 0.001 seed: 7 } }
+                    })pb",
+                  "all");
   const DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
   EXPECT_FALSE(chain.empty());
   EXPECT_NE(chain.describe().find("shift"), std::string::npos) << chain.describe();
@@ -143,18 +160,22 @@ TEST(StudyBounds, AbsurdValuesAreRefusedNamingTheField) {
   EXPECT_NE(zeta.find("structure.damping.modal_zeta"), std::string::npos) << zeta;
   EXPECT_NE(zeta.find("0.05 = 5 %"), std::string::npos) << zeta;
   // delay: 14 is 14 s: milliseconds were meant.
-  const std::string delay =
-      error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { delay: 14 } } }");
+  const std::string delay = error_of(
+      "structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { delay: 14 } } }");
   EXPECT_NE(delay.find("delay[0].shift.delay"), std::string::npos) << delay;
   EXPECT_NE(delay.find("14 ms is 0.014"), std::string::npos) << delay;
-  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } integrator { dt: 2 }").find("integrator.dt"),
+  EXPECT_NE(
+      error_of("structure { sdof { period: 0.5 } } integrator { dt: 2 }").find("integrator.dt"),
+      std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 500 } }").find("structure.sdof.period"),
             std::string::npos);
-  EXPECT_NE(error_of("structure { sdof { period: 500 } }").find("structure.sdof.period"), std::string::npos);
-  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } sweep { delays: [0.01, 12] }").find("sweep.delays"),
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } sweep { delays: [0.01, 12] }")
+                .find("sweep.delays"),
             std::string::npos);
-  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } deployment { limits { max_displacement: -1 } }")
-                .find("deployment.limits"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("structure { sdof { period: 0.5 } } deployment { limits { max_displacement: -1 } }")
+          .find("deployment.limits"),
+      std::string::npos);
 }
 
 TEST(StudyServo, TheServoRateIsAWholeMultipleOfTheIntegratorRate) {
@@ -164,7 +185,8 @@ TEST(StudyServo, TheServoRateIsAWholeMultipleOfTheIntegratorRate) {
   EXPECT_EQ(servo_substeps(study(""), 1.0 / 1024), 1);
   EXPECT_EQ(servo_substeps(study("servo { rate: 4096 }"), 1.0 / 1024), 4);
   EXPECT_EQ(servo_substeps(study("servo { rate: 1024 }"), 1.0 / 1024), 1);
-  const HybridSetup base = base_setup(study("servo { rate: 4000 } substructuring { experimental_fraction: 0.5 }"), 0.001);
+  const HybridSetup base = base_setup(
+      study("servo { rate: 4000 } substructuring { experimental_fraction: 0.5 }"), 0.001);
   EXPECT_EQ(base.servo_substeps, 4);
   for (const char* bad : {"servo { rate: 3000 }", "servo { rate: 500 }", "servo { rate: 1e6 }"}) {
     try {
@@ -191,25 +213,29 @@ TEST(StudyServo, ACaseChainRunsAtTheServoPeriod) {
 }
 
 TEST(StudyBounds, DuplicateCaseNamesAreRefused) {
-  const std::string error =
-      error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" } cases { name: \"b\" } cases { name: \"a\" }");
+  const std::string error = error_of(
+      "structure { sdof { period: 0.5 } } cases { name: \"a\" } cases { name: \"b\" } cases { "
+      "name: \"a\" }");
   EXPECT_NE(error.find("cases[2] repeats the name 'a'"), std::string::npos) << error;
 }
 
 TEST(StudyBounds, ADelayLongerThanTheRecordIsRefused) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("rths_study_long_" + std::to_string(getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rths_study_long_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "short.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
   const config::Study study = parse_study(
       "structure { sdof { period: 0.5 } } motion { path: \"short.txt\" column_units: G } "
       "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
-      "cases { name: \"late\" delay { shift { delay: 0.2 } } }", "t");
+      "cases { name: \"late\" delay { shift { delay: 0.2 } } }",
+      "t");
   try {
     prepare_study(study, dir);
     FAIL() << "a 0.2 s delay on a 0.05 s record was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("case 'late'"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("not shorter than the record"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not shorter than the record"), std::string::npos)
+        << e.what();
   }
   std::filesystem::remove_all(dir);
 }
@@ -217,7 +243,8 @@ TEST(StudyBounds, ADelayLongerThanTheRecordIsRefused) {
 class MotionUnits : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() / ("rths_motion_units_" + std::to_string(getpid()));
+    dir_ =
+        std::filesystem::temp_directory_path() / ("rths_motion_units_" + std::to_string(getpid()));
     std::filesystem::create_directories(dir_);
     // 0.35 g written in three units.
     std::ofstream(dir_ / "g.txt") << "0 0\n0.01 0.35\n0.02 0\n";
@@ -264,7 +291,8 @@ TEST_F(MotionUnits, AnAt2FileIsInGAndRefusesAnotherUnit) {
   const std::filesystem::path at2 = kConfigs / "motions/RSN175_IMPVALL.H_H-E12140.AT2";
   config::GroundMotion motion;
   motion.set_path(at2.string());
-  EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * kGravity, 0.01 * kGravity);  // El Centro #12
+  EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * kGravity,
+              0.01 * kGravity);  // El Centro #12
   motion.set_column_units(config::GroundMotion::M_PER_S2);
   EXPECT_THROW(load_motion(motion, dir_), std::invalid_argument);
   EXPECT_EQ(units_name(units_from_name("cm/s2")), "cm/s2");
@@ -285,23 +313,39 @@ TEST(StudyTest, EveryIntegratorKindMapsToTheConfigAndBack) {
 // Every number of the deployment is checked when the study is parsed, by the range rules.
 TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
   const std::string base = "structure { sdof { period: 0.5 } } ";
-  const std::string lag = error_of(base + "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR send_lag { one_way_delay: 7 } } }");
-  EXPECT_NE(lag.find("deployment.nodes[0].send_lag.one_way_delay = 7 s is outside [0, 1] s"), std::string::npos) << lag;
+  const std::string lag = error_of(
+      base +
+      "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR send_lag { one_way_delay: 7 } } }");
+  EXPECT_NE(lag.find("deployment.nodes[0].send_lag.one_way_delay = 7 s is outside [0, 1] s"),
+            std::string::npos)
+      << lag;
   EXPECT_NE(lag.find("allow_long_lag"), std::string::npos) << lag;
-  EXPECT_EQ(error_of(base + "allow_long_lag: true deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR "
-                            "send_lag { one_way_delay: 7 } } }"), "");
-  EXPECT_NE(error_of(base + "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { jitter: 5 } } }")
-                .find("receive_lag.jitter = 5 s"), std::string::npos);
-  EXPECT_NE(error_of(base + "deployment { max_missed_answers: -3 }").find("deployment.max_missed_answers = -3"),
+  EXPECT_EQ(
+      error_of(base + "allow_long_lag: true deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR "
+                      "send_lag { one_way_delay: 7 } } }"),
+      "");
+  EXPECT_NE(
+      error_of(base +
+               "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { jitter: 5 } } }")
+          .find("receive_lag.jitter = 5 s"),
+      std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { max_missed_answers: -3 }")
+                .find("deployment.max_missed_answers = -3"),
             std::string::npos);
-  EXPECT_NE(error_of(base + "deployment { min_answer_fraction: 1.5 }").find("deployment.min_answer_fraction"),
+  EXPECT_NE(error_of(base + "deployment { min_answer_fraction: 1.5 }")
+                .find("deployment.min_answer_fraction"),
             std::string::npos);
-  EXPECT_NE(error_of(base + "deployment { pin_loop: true loop_cpu: 99999 }").find("deployment.loop_cpu = 99999"),
+  EXPECT_NE(error_of(base + "deployment { pin_loop: true loop_cpu: 99999 }")
+                .find("deployment.loop_cpu = 99999"),
             std::string::npos);
-  EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"), std::string::npos);
-  EXPECT_NE(error_of(base + "cases { name: \"a\" delay { shift { delay: 2 } } }").find("allow_long_lag"),
+  EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"),
             std::string::npos);
-  EXPECT_EQ(error_of(base + "allow_long_lag: true cases { name: \"a\" delay { shift { delay: 2 } } }"), "");
+  EXPECT_NE(
+      error_of(base + "cases { name: \"a\" delay { shift { delay: 2 } } }").find("allow_long_lag"),
+      std::string::npos);
+  EXPECT_EQ(
+      error_of(base + "allow_long_lag: true cases { name: \"a\" delay { shift { delay: 2 } } }"),
+      "");
   EXPECT_NE(error_of(base + "integrator { dt: 1e-9 }").find("integrator.dt"), std::string::npos);
 }
 

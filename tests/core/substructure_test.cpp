@@ -92,9 +92,8 @@ TEST(PartitionTest, WholeStoreysAreExperimentalAndBadStoreysAreNamed) {
 }
 
 TEST(PartitionTest, CopiesAreIndependent) {
-  HybridPartition a = partition_by_fraction({100.0}, 0.5, [](double k) {
-    return std::make_unique<BilinearKinematic>(k, 0.01, 0.1);
-  });
+  HybridPartition a = partition_by_fraction(
+      {100.0}, 0.5, [](double k) { return std::make_unique<BilinearKinematic>(k, 0.01, 0.1); });
   HybridPartition b = a;
   a.experimental[0]->step(0.05);  // yields a's copy only
   EXPECT_DOUBLE_EQ(b.experimental[0]->trial(0.001).force, 50.0 * 0.001);

@@ -45,7 +45,8 @@ TEST(DiscreteFilterTest, PhaseLeadKeepsItsDcGainAndBadFiltersNameTheField) {
     make_filter(spec, 1.0 / 4096, "cases[1].feedforward");
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("cases[1].feedforward.phase_lead"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cases[1].feedforward.phase_lead"), std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(make_filter(config::DelayStage::LinearFilter(), 0.001, "f"), std::invalid_argument);
 }
@@ -70,7 +71,8 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
     EXPECT_NEAR(realised.step(u), named.step(u), 1e-12) << k;
   }
 
-  // Two states with a coupling: x' = [0 1; -4 -0.4] x + [0; 1] u, y = [4 0] x: 4 / (s^2 + 0.4 s + 4).
+  // Two states with a coupling: x' = [0 1; -4 -0.4] x + [0; 1] u, y = [4 0] x: 4 / (s^2 + 0.4 s +
+  // 4).
   config::DelayStage::LinearFilter oscillator, continuous;
   auto* two = oscillator.mutable_state_space();
   two->set_states(2);
@@ -79,7 +81,8 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
   for (double v : {4.0, 0.0}) two->add_c(v);
   for (double v : {4.0}) continuous.mutable_continuous()->add_numerator(v);
   for (double v : {1.0, 0.4, 4.0}) continuous.mutable_continuous()->add_denominator(v);
-  const DiscreteFilter from_space = make_filter(oscillator, 0.01, "c"), from_tf = make_filter(continuous, 0.01, "c");
+  const DiscreteFilter from_space = make_filter(oscillator, 0.01, "c"),
+                       from_tf = make_filter(continuous, 0.01, "c");
   for (double w : {0.5, 2.0, 20.0}) {
     const std::complex<double> z = std::exp(std::complex<double>(0.0, w * 0.01));
     EXPECT_NEAR(std::abs(from_space.response(z) - from_tf.response(z)), 0.0, 1e-12) << w;
@@ -97,8 +100,10 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
     make_filter(space, h, "cases[1].delay[0].tracking_loop.controller");
     FAIL() << "a 1-state space with 2 inputs in b was accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("tracking_loop.controller.state_space: a needs states^2 = 1 values"),
-              std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(
+                  "tracking_loop.controller.state_space: a needs states^2 = 1 values"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -109,7 +114,7 @@ TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
     plant.advance(1.0);
     EXPECT_NEAR(plant.output(), 1.0 - std::exp(-50.0 * h * k), 1e-12) << k;
   }
-  EXPECT_NEAR(std::abs(plant.response(1.0)), 1.0, 1e-12);  // DC gain
+  EXPECT_NEAR(std::abs(plant.response(1.0)), 1.0, 1e-12);                     // DC gain
   EXPECT_THROW(ZohPlant({1.0, 0.0}, {1.0, 50.0}, h), std::invalid_argument);  // not strictly proper
 }
 
@@ -118,7 +123,8 @@ TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
 TEST(ZohPlantTest, BenchmarkPlantSettlesAtItsDcGainWhenPerturbed) {
   config::DelayStage::BenchmarkPlant spec;
   spec.set_beta2(1.02e5);
-  const ContinuousTransferFunction tf = benchmark_actuator_transfer_function(benchmark_plant_parameters(spec));
+  const ContinuousTransferFunction tf =
+      benchmark_actuator_transfer_function(benchmark_plant_parameters(spec));
   ZohPlant plant(tf.numerator, tf.denominator, 1.0 / 4096);
   for (int k = 0; k < 3 * 4096; ++k) plant.advance(1.0);
   EXPECT_NEAR(plant.output(), tf.numerator.back() / tf.denominator.back(), 1e-3);
@@ -200,8 +206,10 @@ TEST(TrackingLoopTest, SensorsReportTheirReadingsAndTheLoadCellItsDelayedForce) 
     TrackingLoop bad(spec, 0.001, "cases[1].delay[0].tracking_loop");
     FAIL() << "a force delay of 65 periods was accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("cases[1].delay[0].tracking_loop.force_delay_periods: 65 is outside 0..64"),
-              std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(
+                  "cases[1].delay[0].tracking_loop.force_delay_periods: 65 is outside 0..64"),
+              std::string::npos)
+        << e.what();
   }
   spec.set_force_delay_periods(0);
   spec.set_force_noise_rms(-1.0);

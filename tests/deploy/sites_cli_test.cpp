@@ -44,29 +44,36 @@ std::string read(const std::filesystem::path& path);
 // lab's link, against the critical delay. The shipped distributed frame across sites in real
 // time: 7 ms each way + the 14 ms shift = 28 ms, past the frame's 24.2 ms.
 TEST(SitesCli, CheckWarnsWhenNetworkAndActuatorLagTogetherPassTheCriticalDelay) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_sites_critical_" + std::to_string(::getpid()));
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_sites_critical_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const auto write = [&](const std::string& name, const std::string& case_name, const std::string& clock) {
-    std::ofstream(dir / name) << "study: \"" << RTHS_SOURCE_DIR << "/configs/paper_frame_distributed.textproto\"\n"
-                              << "case_name: \"" << case_name << "\"\nclock: " << clock << "\n"
-                              << "sites { name: \"integrator\" node_ids: 0 }\nsites { name: \"hpc\" node_ids: 1 }\n"
-                              << "sites { name: \"lab_b\" node_ids: 2 }\n"
-                              << "links { node_id: 2 to_node { one_way_delay: 0.007 } from_node { one_way_delay: 0.007 } }\n";
+  const auto write = [&](const std::string& name, const std::string& case_name,
+                         const std::string& clock) {
+    std::ofstream(dir / name)
+        << "study: \"" << RTHS_SOURCE_DIR << "/configs/paper_frame_distributed.textproto\"\n"
+        << "case_name: \"" << case_name << "\"\nclock: " << clock << "\n"
+        << "sites { name: \"integrator\" node_ids: 0 }\nsites { name: \"hpc\" node_ids: 1 }\n"
+        << "sites { name: \"lab_b\" node_ids: 2 }\n"
+        << "links { node_id: 2 to_node { one_way_delay: 0.007 } from_node { one_way_delay: 0.007 } "
+           "}\n";
   };
   write("lagged.textproto", "lag_shift_14ms", "REAL_TIME");
   write("reference.textproto", "reference", "REAL_TIME");
   write("lockstep.textproto", "lag_shift_14ms", "LOCKSTEP");
   const auto lagged = run_command({kRths, "sites", (dir / "lagged.textproto").string(), "--check"});
   EXPECT_EQ(lagged.exit_code, 0) << lagged.output;
-  EXPECT_NE(lagged.output.find("rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the "
-                               "actuator lab's link + actuator lag 14 ms (the case's delay stages): lag 28 ms"),
+  EXPECT_NE(lagged.output.find(
+                "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the "
+                "actuator lab's link + actuator lag 14 ms (the case's delay stages): lag 28 ms"),
             std::string::npos)
       << lagged.output;
   EXPECT_NE(lagged.output.find("PAST it by"), std::string::npos) << lagged.output;
-  const auto reference = run_command({kRths, "sites", (dir / "reference.textproto").string(), "--check"});
+  const auto reference =
+      run_command({kRths, "sites", (dir / "reference.textproto").string(), "--check"});
   EXPECT_EQ(reference.output.find("warning"), std::string::npos) << reference.output;
   // Lockstep pairs every command with its own answer: the network lag does not enter.
-  const auto lockstep = run_command({kRths, "sites", (dir / "lockstep.textproto").string(), "--check"});
+  const auto lockstep =
+      run_command({kRths, "sites", (dir / "lockstep.textproto").string(), "--check"});
   EXPECT_EQ(lockstep.output.find("warning"), std::string::npos) << lockstep.output;
   std::filesystem::remove_all(dir);
 }
@@ -90,33 +97,40 @@ std::vector<std::string> header_of(const std::filesystem::path& csv) {
 // link), the same step count, plots, and the comparison with the lag-free in-process reference.
 TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
   if (const auto reason = deploy::namespace_support()) GTEST_SKIP() << *reason;
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_sites_results_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_sites_results_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   // The paper's frame, 0.3 s of the record; `run` gets only the case that sites runs.
   const auto study = [](const std::string& cases) {
     return "name: \"paper_frame\"\n"
            "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-           "motion { path: \"" + std::string(RTHS_SOURCE_DIR) +
+           "motion { path: \"" +
+           std::string(RTHS_SOURCE_DIR) +
            "/configs/motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: 0.3 }\n"
            "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
-           "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n" + cases;
+           "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n" +
+           cases;
   };
-  const std::string lagged = "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n";
+  const std::string lagged =
+      "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n";
   // The study's own reference is the lagged case: sites must compare with the lag-free run instead.
-  std::ofstream(dir / "study.textproto") << study("cases { name: \"reference\" }\n" + lagged +
-                                                  "reference_case: \"lag_shift_14ms\"\n");
+  std::ofstream(dir / "study.textproto")
+      << study("cases { name: \"reference\" }\n" + lagged + "reference_case: \"lag_shift_14ms\"\n");
   std::ofstream(dir / "single.textproto") << study(lagged);
   std::ofstream(dir / "sites.textproto")
       << "study: \"study.textproto\"\ncase_name: \"lag_shift_14ms\"\nclock: LOCKSTEP\n"
-         "timeout: 60\nsites { name: \"integrator\" node_ids: 0 }\nsites { name: \"lab\" node_ids: [1, 2] }\n"
+         "timeout: 60\nsites { name: \"integrator\" node_ids: 0 }\nsites { name: \"lab\" node_ids: "
+         "[1, 2] }\n"
          "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
          "start_timeout: 20 }\n";
-  const auto sites = run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain", "90",
-                                  "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
-                                 std::chrono::seconds(120));
+  const auto sites =
+      run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain", "90",
+                   "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
+                  std::chrono::seconds(120));
   ASSERT_EQ(sites.exit_code, 0) << sites.output;
-  EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos) << sites.output;
+  EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos)
+      << sites.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "displacement.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "links_lag_shift_14ms.png"));
   EXPECT_NE(sites.output.find("sites: 100% (1/1 runs"), std::string::npos) << sites.output;
@@ -126,8 +140,8 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
                             "numerical site \"lab\": round trip, injected"})
     EXPECT_NE(lag_plot.find(label), std::string::npos) << label;
 
-  const auto ran = run_command({kRths, "run", (dir / "single.textproto").string(), "--no-plots", "--json",
-                                "--out", (dir / "run").string()});
+  const auto ran = run_command({kRths, "run", (dir / "single.textproto").string(), "--no-plots",
+                                "--json", "--out", (dir / "run").string()});
   ASSERT_EQ(ran.exit_code, 0) << ran.output;
   std::vector<std::string> sites_header, lag_columns;
   for (const auto& cell : header_of(dir / "sites" / "results.csv"))

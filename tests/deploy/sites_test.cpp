@@ -101,7 +101,8 @@ TEST(SitesConfig, ErrorsNameTheProblem) {
   auto lossy = three_sites(120, 0.001, 0);
   lossy.mutable_links(0)->mutable_to_node()->set_loss(0.01);
   EXPECT_NE(error_of(lossy).find("node 2 has a lag with loss > 0, but the clock is LOCKSTEP"),
-            std::string::npos) << error_of(lossy);
+            std::string::npos)
+      << error_of(lossy);
 
   auto bad_name = three_sites(120, 0, 0);
   bad_name.mutable_sites(1)->set_name("Lab A");
@@ -148,11 +149,12 @@ TEST_F(SitesRun, TenMillisecondsEachWayAddTwentyToTheRoundTripAndTheRecordAgrees
   const auto& link = link_of(lagged, 2);
   const double base_rt = base_link.round_trip.median;
   const double rt = link.round_trip.median;
-  std::printf("base round trip median %.3f ms (p99 %.3f), with 10+10 ms: %.3f ms (p99 %.3f); "
-              "one-way down/up %.3f/%.3f ms; run pace %.3f ms/step\n",
-              base_rt / kMs, base_link.round_trip.p99 / kMs, rt / kMs, link.round_trip.p99 / kMs,
-              link.one_way_down.median / kMs, link.one_way_up.median / kMs,
-              lagged.record_wall_seconds / lagged.steps / kMs);
+  std::printf(
+      "base round trip median %.3f ms (p99 %.3f), with 10+10 ms: %.3f ms (p99 %.3f); "
+      "one-way down/up %.3f/%.3f ms; run pace %.3f ms/step\n",
+      base_rt / kMs, base_link.round_trip.p99 / kMs, rt / kMs, link.round_trip.p99 / kMs,
+      link.one_way_down.median / kMs, link.one_way_up.median / kMs,
+      lagged.record_wall_seconds / lagged.steps / kMs);
   EXPECT_LT(base_rt, 5 * kMs) << "the base round trip across the veth bridge should be small";
   EXPECT_NEAR(rt - base_rt, 20 * kMs, 2 * kMs);
   // The record's injected lag is what was asked for, and the measured one-way lags carry it.

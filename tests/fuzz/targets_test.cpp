@@ -67,8 +67,8 @@ TEST_P(FuzzTarget, SurvivesHostileInput) {
   std::string noise(4096, '\0');
   for (char& c : noise) c = static_cast<char>(random());
   for (const std::string& input :
-       {std::string(), std::string(1, '\0'), std::string(1, '\x01'), noise,
-        std::string(3000, '9'), std::string("\xff\xff\xff\xff\xff\xff\xff\xff\x01", 9)}) {
+       {std::string(), std::string(1, '\0'), std::string(1, '\x01'), noise, std::string(3000, '9'),
+        std::string("\xff\xff\xff\xff\xff\xff\xff\xff\x01", 9)}) {
     EXPECT_EQ(run(GetParam(), input), 0);
   }
 }
@@ -92,9 +92,9 @@ TEST(RecordFlips, EveryFlippedEntryIsDetectedAndEveryIntactOneRecovered) {
     for (std::size_t at : positions)
       damaged[at] = static_cast<char>(damaged[at] ^ (1 + random() % 255));
     const FlipVerdict v = check_flipped_record(original, damaged);
-    EXPECT_TRUE(v.holds()) << "record " << r << " (" << steps << " steps, " << flips << " flips): "
-                           << v.silent << " silent, " << v.unreported << " unreported, "
-                           << v.lost_intact << " intact lost";
+    EXPECT_TRUE(v.holds()) << "record " << r << " (" << steps << " steps, " << flips
+                           << " flips): " << v.silent << " silent, " << v.unreported
+                           << " unreported, " << v.lost_intact << " intact lost";
     total += v;
   }
   EXPECT_EQ(total.silent, 0u);
@@ -123,8 +123,9 @@ TEST(RecordFlips, TheEntryPointJudgesItsInputFormat) {
   const std::size_t frame = offsets[1], end = offsets[2];  // step 0
   std::string forged = record;
   forged[end - 1] = static_cast<char>(forged[end - 1] ^ 0x01);  // a byte of its last double
-  runtime::seal_record_frame(forged.data() + frame,
-                             static_cast<std::uint32_t>(end - frame - runtime::kRecordFrameHeaderBytes));
+  runtime::seal_record_frame(
+      forged.data() + frame,
+      static_cast<std::uint32_t>(end - frame - runtime::kRecordFrameHeaderBytes));
   const FlipVerdict fooled = check_flipped_record(record, forged);
   EXPECT_EQ(fooled.silent, 1u);
   EXPECT_FALSE(fooled.holds());

@@ -5,17 +5,17 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "tests/support/run_command_line.h"
 #include <nlohmann/json.hpp>
+#include "tests/support/run_command_line.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include "core/metrics.h"
 #include "core/study.h"
@@ -37,7 +37,9 @@ const fs::path kData = RTHS_SHARED_DATA_DIR;
 
 using Outcome = test::CommandOutcome;
 
-Outcome run(const std::string& arguments) { return test::run_command_line(kRths + " " + arguments); }
+Outcome run(const std::string& arguments) {
+  return test::run_command_line(kRths + " " + arguments);
+}
 
 nlohmann::json json_of(const Outcome& o) {
   const auto start = o.output.find('{');
@@ -52,8 +54,9 @@ void write_file(const fs::path& path, const std::string& text) {
 class CmdIdentifyTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("rths_cmd_identify_test_" + std::to_string(getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("rths_cmd_identify_test_" + std::to_string(getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     GeneratorSpec spec;
@@ -67,8 +70,8 @@ class CmdIdentifyTest : public ::testing::Test {
   std::string data() const { return data_.string(); }
 
   fs::path dir_;
-  fs::path data_ = fs::temp_directory_path() /
-                   ("rths_cmd_identify_test_" + std::to_string(getpid()) + ".csv");
+  fs::path data_ =
+      fs::temp_directory_path() / ("rths_cmd_identify_test_" + std::to_string(getpid()) + ".csv");
 };
 
 TEST_F(CmdIdentifyTest, TheModelFileDeclaresTheActuatorWithAFixedParameter) {
@@ -79,8 +82,9 @@ TEST_F(CmdIdentifyTest, TheModelFileDeclaresTheActuatorWithAFixedParameter) {
         parameters { name: "delay" initial: 0.011 fixed: true }
         parameters { name: "time_constant" initial: 0.004 min: 0.001 max: 0.02 }
       })");
-  const Outcome o = run("identify " + data() + " --channels measured --folds 0 --max-steps 0 --json --model " +
-                        (dir_ / "lab.textproto").string());
+  const Outcome o =
+      run("identify " + data() + " --channels measured --folds 0 --max-steps 0 --json --model " +
+          (dir_ / "lab.textproto").string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   const auto channel = json_of(o)["channels"][0];
   EXPECT_EQ(channel["declared_effects"], nlohmann::json({"delay", "first_order"}));
@@ -100,12 +104,14 @@ TEST_F(CmdIdentifyTest, AFileAndAFlagForTheSameChannelConflict) {
 
 TEST_F(CmdIdentifyTest, ABadModelFileExitsTwoNamingFileAndField) {
   const auto bad = (dir_ / "bad.textproto").string();
-  write_file(bad, "actuator { stages: \"delay\" parameters { name: \"delay\" min: 0.05 max: 0.01 } }");
+  write_file(bad,
+             "actuator { stages: \"delay\" parameters { name: \"delay\" min: 0.05 max: 0.01 } }");
   Outcome o = run("identify " + data() + " --model " + bad);
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_THAT(o.output, AllOf(HasSubstr(bad + ": actuator.parameters[0] (delay)"),
                               HasSubstr("min 0.05 > max 0.01")));
-  write_file(bad, "specimen { kind: \"linear_spring\" parameters { name: \"stiffness\" min: -1 } }");
+  write_file(bad,
+             "specimen { kind: \"linear_spring\" parameters { name: \"stiffness\" min: -1 } }");
   o = run("identify " + data() + " --model " + bad);
   EXPECT_EQ(o.exit_code, 2) << o.output;
   EXPECT_THAT(o.output, AllOf(HasSubstr(bad + ": specimen.parameters[0] (stiffness)"),
@@ -176,8 +182,8 @@ TEST_F(CmdIdentifyTest, TheIdentifiedModelReadsBackAndItsStudyRuns) {
   // another folder (the motion's relative path was made absolute).
   fs::create_directories(dir_ / "elsewhere");
   fs::rename(out / "identified_study.textproto", dir_ / "elsewhere/study.textproto");
-  const Outcome ran = run("run " + (dir_ / "elsewhere/study.textproto").string() + " --no-plots --out " +
-                          (dir_ / "run").string());
+  const Outcome ran = run("run " + (dir_ / "elsewhere/study.textproto").string() +
+                          " --no-plots --out " + (dir_ / "run").string());
   ASSERT_EQ(ran.exit_code, 0) << ran.output;
   EXPECT_THAT(ran.output, HasSubstr("identified_actuator"));
 }
@@ -189,7 +195,8 @@ TEST_F(CmdIdentifyTest, AFileWithoutTimeNeedsTheSampleRate) {
     csv << "command,measured,force\n";
     csv.precision(10);
     for (std::size_t i = 0; i < record.size(); ++i) {
-      csv << record.command[i] * 1e3 << "," << record.measured[i] * 1e3 << "," << record.force[i] << "\n";
+      csv << record.command[i] * 1e3 << "," << record.measured[i] * 1e3 << "," << record.force[i]
+          << "\n";
     }
   }
   const std::string untimed = (dir_ / "untimed.csv").string();
@@ -203,7 +210,8 @@ TEST_F(CmdIdentifyTest, AFileWithoutTimeNeedsTheSampleRate) {
   // A rate that contradicts the file's own time column is refused.
   o = run("identify " + data() + " --channels measured --folds 0 --sample-rate 1000");
   EXPECT_EQ(o.exit_code, 2) << o.output;
-  EXPECT_THAT(o.output, AllOf(HasSubstr("the time column gives 500"), HasSubstr("--sample-rate says 1000")));
+  EXPECT_THAT(o.output,
+              AllOf(HasSubstr("the time column gives 500"), HasSubstr("--sample-rate says 1000")));
 }
 
 TEST_F(CmdIdentifyTest, ADaqExportWithoutForceIdentifiesTheActuatorAlone) {
@@ -259,7 +267,8 @@ TEST_F(CmdIdentifyTest, TrimIdleCutsTheRestBeforeTheTestOff) {
 // writes the actuator's Bode plot (PNG and SVG).
 TEST_F(CmdIdentifyTest, ProgressIsPlainLinesOnAPipeAndOutWritesTheBodePlot) {
   const fs::path out = dir_ / "out";
-  const Outcome o = run("identify " + data() + " --channels measured --folds 3 --out " + out.string());
+  const Outcome o =
+      run("identify " + data() + " --channels measured --folds 3 --out " + out.string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   EXPECT_EQ(o.output.find('\r'), std::string::npos);
   std::vector<int> percents;
@@ -294,7 +303,8 @@ std::vector<double> results_column(const fs::path& csv, const std::string& name)
   const auto at = std::find(table.title.begin(), table.title.end(), name);
   if (at == table.title.end()) throw std::invalid_argument(csv.string() + ": no column " + name);
   std::vector<double> out;
-  for (const auto& row : table.rows) out.push_back(row.values.at(static_cast<std::size_t>(at - table.title.begin())));
+  for (const auto& row : table.rows)
+    out.push_back(row.values.at(static_cast<std::size_t>(at - table.title.begin())));
   return out;
 }
 
@@ -321,7 +331,8 @@ TEST_F(CmdIdentifyTest, ARunRecordIsWrittenBackAsAStudyThatRunReproduces) {
   // The study's identified case reproduces the recorded response; the run's declared case did not.
   const auto steps = runtime::measure_run(runtime::read_record(record)).steps;
   std::vector<double> recorded(static_cast<std::size_t>(steps.displacement.rows()));
-  for (std::size_t k = 0; k < recorded.size(); ++k) recorded[k] = steps.displacement(static_cast<Eigen::Index>(k), 0);
+  for (std::size_t k = 0; k < recorded.size(); ++k)
+    recorded[k] = steps.displacement(static_cast<Eigen::Index>(k), 0);
   const fs::path results = dir_ / "rerun" / "results.csv";
   const auto identified = results_column(results, "identified_actuator_u_floor1_m");
   const auto declared = results_column(results, "lag_shift_14ms_u_floor1_m");

@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <unistd.h>
 
 #include "core/study.h"
 
@@ -24,7 +24,8 @@ ChannelModel mts(double gain = 1.0) {
 }
 
 TEST(CompensatorDesign, ModelBasedInvertsTheIdentifiedActuator) {
-  const CompensatorDesign d = design_compensator(mts(), SignalScales{}, CompensatorKind::kModelBased, kDt);
+  const CompensatorDesign d =
+      design_compensator(mts(), SignalScales{}, CompensatorKind::kModelBased, kDt);
   EXPECT_NEAR(d.plant_lag, 0.0264, 1e-12);
   EXPECT_DOUBLE_EQ(d.plant.delay, 0.0046);
   ASSERT_EQ(d.study_case.delay_size(), 2);
@@ -54,11 +55,14 @@ TEST(CompensatorDesign, ModelBasedAdaptiveAddsACorrectionBoundedByTheIdentifiedL
   EXPECT_NE(dynamic_cast<const core::AdaptedModelBasedInverse*>(block.get()), nullptr);
   // The plain model-based design has no correction.
   EXPECT_FALSE(design_compensator(mts(), SignalScales{}, CompensatorKind::kModelBased, kDt)
-                   .study_case.compensation(0).model_based().has_adaptive_correction());
+                   .study_case.compensation(0)
+                   .model_based()
+                   .has_adaptive_correction());
 }
 
 TEST(CompensatorDesign, AtsAndPolynomialStartFromTheIdentifiedLag) {
-  const auto ats = design_compensator(mts(0.95), SignalScales{}, CompensatorKind::kAdaptiveTimeSeries, kDt);
+  const auto ats =
+      design_compensator(mts(0.95), SignalScales{}, CompensatorKind::kAdaptiveTimeSeries, kDt);
   const auto& a = ats.study_case.compensation(0).adaptive_time_series();
   EXPECT_NEAR(a.initial_a0(), 1.0 / 0.95, 1e-12);
   EXPECT_NEAR(a.initial_a1(), 0.0264, 1e-12);
@@ -79,17 +83,20 @@ TEST(CompensatorDesign, NoActuatorModelIsAnErrorNotASilentFallBack) {
       design_compensator(gain_only, SignalScales{}, kind, kDt);
       FAIL() << "designed from no actuator model";
     } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("no actuator delay or dynamics"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("no actuator delay or dynamics"), std::string::npos)
+          << e.what();
     }
   }
   ChannelModel force;
   force.channel = Channel::kForce;
-  EXPECT_THROW(design_compensator(force, SignalScales{}, CompensatorKind::kModelBased, kDt), std::invalid_argument);
+  EXPECT_THROW(design_compensator(force, SignalScales{}, CompensatorKind::kModelBased, kDt),
+               std::invalid_argument);
   EXPECT_THROW(parse_compensator_kind("pid"), std::invalid_argument);
 }
 
 TEST(CompensatorDesign, WrittenCaseAppendsToAStudyAndRuns) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_comp_design_" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_comp_design_" + std::to_string(getpid()));
   const auto d = design_compensator(mts(), SignalScales{}, CompensatorKind::kModelBased, kDt);
   const auto path = write_compensator_case(d, dir);
   std::ifstream in(path);
@@ -98,7 +105,8 @@ TEST(CompensatorDesign, WrittenCaseAppendsToAStudyAndRuns) {
   const std::string study =
       "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
       "motion { path: \"x.AT2\" }\nintegrator { dt: 0.001 }\n"
-      "substructuring { experimental_fraction: 0.3333333333333333 }\ncases { name: \"reference\" }\n" +
+      "substructuring { experimental_fraction: 0.3333333333333333 }\ncases { name: \"reference\" "
+      "}\n" +
       fragment.str();
   const config::Study parsed = core::parse_study(study, path.string());
   ASSERT_EQ(parsed.cases_size(), 2);

@@ -20,9 +20,10 @@ const fs::path kRealFile = fs::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamp
 class DataTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("rths_identify_data_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ =
+        fs::temp_directory_path() /
+        ("rths_identify_data_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -35,7 +36,8 @@ class DataTest : public ::testing::Test {
     std::string s;
     for (int i = 0; i < n; ++i) {
       s += std::to_string(i * dt) + "," + std::to_string(std::sin(i * 0.1)) + "," +
-           std::to_string(std::sin(i * 0.1 - 0.05)) + "," + std::to_string(100 * std::sin(i * 0.1)) + "\n";
+           std::to_string(std::sin(i * 0.1 - 0.05)) + "," +
+           std::to_string(100 * std::sin(i * 0.1)) + "\n";
     }
     return s;
   }
@@ -79,8 +81,9 @@ TEST_F(DataTest, MissingColumnIsNamed) {
 
 TEST_F(DataTest, NanIsNamedWithLineAndColumn) {
   auto rows = csv_rows(300);
-  const auto p = write("nan.csv", "time,command,measured,force\n" + rows.substr(0, rows.find('\n') + 1) +
-                                      "0.01,nan,1,1\n" + rows.substr(rows.find('\n') + 1));
+  const auto p =
+      write("nan.csv", "time,command,measured,force\n" + rows.substr(0, rows.find('\n') + 1) +
+                           "0.01,nan,1,1\n" + rows.substr(rows.find('\n') + 1));
   const auto message = error_of([&] { read_csv(p); });
   EXPECT_THAT(message, HasSubstr("nan.csv:3"));
   EXPECT_THAT(message, HasSubstr("command"));
@@ -88,7 +91,8 @@ TEST_F(DataTest, NanIsNamedWithLineAndColumn) {
 
 TEST_F(DataTest, NonMonotonicTimeIsRejected) {
   const auto p = write("time.csv", "time,command,measured,force\n0,0,0,0\n0.2,0,0,0\n0.1,0,0,0\n");
-  EXPECT_THAT(error_of([&] { read_csv(p, {}, 2); }), HasSubstr("time does not increase at sample 3"));
+  EXPECT_THAT(error_of([&] { read_csv(p, {}, 2); }),
+              HasSubstr("time does not increase at sample 3"));
 }
 
 TEST_F(DataTest, TooShortForTheModel) {
@@ -132,13 +136,16 @@ TEST_F(DataTest, ColumnMapNamingAMissingChannel) {
 
 TEST_F(DataTest, ColumnMapSyntaxErrors) {
   EXPECT_THAT(error_of([] { parse_column_map("command"); }), HasSubstr("expected signal=COLUMN"));
-  EXPECT_THAT(error_of([] { parse_column_map("speed=CHANNEL1*2"); }), HasSubstr("unknown signal 'speed'"));
+  EXPECT_THAT(error_of([] { parse_column_map("speed=CHANNEL1*2"); }),
+              HasSubstr("unknown signal 'speed'"));
   EXPECT_THAT(error_of([] { parse_column_map("force=CHANNEL1*x"); }), HasSubstr("scale 'x'"));
   EXPECT_EQ(parse_column_map("force=CHANNEL3*2.5").force.column, "CHANNEL3");
 }
 
 TEST_F(DataTest, DaqWithoutSamplingIntervalIsRejected) {
-  const auto p = write("daq.txt", "Header Size:  3\nVersion: 2\nSample Number, CHANNEL0, CHANNEL1, CHANNEL2\n1, 0, 0, 0\n");
+  const auto p = write(
+      "daq.txt",
+      "Header Size:  3\nVersion: 2\nSample Number, CHANNEL0, CHANNEL1, CHANNEL2\n1, 0, 0, 0\n");
   EXPECT_THAT(error_of([&] { read_daq(p); }),
               AllOf(HasSubstr("Sampling Interval"), HasSubstr("--sample-rate HZ")));
 }
@@ -153,20 +160,26 @@ std::string daq_rows(int rows) {
 }
 
 TEST_F(DataTest, DaqTimedByTheGivenRateOrTheHeadersRate) {
-  const auto untimed = write("untimed.txt", "Header Size: 3\nVersion: 2\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  const auto untimed = write(
+      "untimed.txt", "Header Size: 3\nVersion: 2\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
   const MeasuredData d = read_daq(untimed, {}, kDefaultMinSamples, 200.0);
   ASSERT_EQ(d.size(), 300u);
   EXPECT_NEAR(d.dt, 0.005, 1e-15);
   EXPECT_NEAR(d.time[299], 299 * 0.005, 1e-12);
   EXPECT_NEAR(d.measured[10], 10 * 10 * 1e-3, 1e-12);  // CHANNEL0 x 10 mm -> m
   // "Sampling Rate" alone is a time base too; a given rate must agree with it.
-  const auto rated = write("rated.txt", "Header Size: 3\nSampling Rate: 4096\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  const auto rated =
+      write("rated.txt",
+            "Header Size: 3\nSampling Rate: 4096\nCHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
   EXPECT_NEAR(read_daq(rated).dt, 1.0 / 4096, 1e-12);
   EXPECT_NEAR(read_daq(rated, {}, kDefaultMinSamples, 4096.0).dt, 1.0 / 4096, 1e-12);
-  EXPECT_THAT(error_of([&] { read_daq(rated, {}, kDefaultMinSamples, 1000.0); }),
-              AllOf(HasSubstr("rated.txt"), HasSubstr("gives 4096"), HasSubstr("--sample-rate says 1000")));
-  const auto both = write("both.txt", "Header Size: 4\nSampling Interval: 0.001\nSampling Rate: 500\n"
-                                      "CHANNEL0, CHANNEL1, CHANNEL2\n" + daq_rows(300));
+  EXPECT_THAT(
+      error_of([&] { read_daq(rated, {}, kDefaultMinSamples, 1000.0); }),
+      AllOf(HasSubstr("rated.txt"), HasSubstr("gives 4096"), HasSubstr("--sample-rate says 1000")));
+  const auto both = write("both.txt",
+                          "Header Size: 4\nSampling Interval: 0.001\nSampling Rate: 500\n"
+                          "CHANNEL0, CHANNEL1, CHANNEL2\n" +
+                              daq_rows(300));
   EXPECT_THAT(error_of([&] { read_daq(both); }), HasSubstr("disagree"));
 }
 
@@ -177,7 +190,9 @@ MeasuredData idle_then_moving() {
   d.dt = 0.01;
   for (int i = 0; i < 900; ++i) {
     const double t = i * d.dt;
-    const double c = t < 3.0 ? 2e-4 : t < 7.0 ? 2e-4 + 2e-3 * std::sin(2 * M_PI * 0.5 * (t - 3.0)) : 3e-4;
+    const double c = t < 3.0   ? 2e-4
+                     : t < 7.0 ? 2e-4 + 2e-3 * std::sin(2 * M_PI * 0.5 * (t - 3.0))
+                               : 3e-4;
     d.time.push_back(t);
     d.command.push_back(c);
     d.measured.push_back(c);
@@ -211,7 +226,8 @@ TEST_F(DataTest, CsvWithoutTimeNeedsTheSampleRate) {
   for (int i = 0; i < 300; ++i) rows += std::to_string(i) + "," + std::to_string(i + 1) + ",5\n";
   const auto p = write("untimed.csv", "command,measured,force\n" + rows);
   EXPECT_THAT(error_of([&] { read_csv(p); }),
-              AllOf(HasSubstr("untimed.csv:1"), HasSubstr("no 'time' column"), HasSubstr("--sample-rate HZ")));
+              AllOf(HasSubstr("untimed.csv:1"), HasSubstr("no 'time' column"),
+                    HasSubstr("--sample-rate HZ")));
   const MeasuredData d = read_measured(p, {}, {}, kDefaultMinSamples, 2048.0);
   EXPECT_NEAR(d.dt, 1.0 / 2048, 1e-15);
   EXPECT_NEAR(d.command[7], 7e-3, 1e-15);
@@ -225,12 +241,15 @@ TEST_F(DataTest, CsvWithoutTimeNeedsTheSampleRate) {
 // Found by fuzz_daq_export (fuzz/regressions/daq_export/header_size_beyond_int): a Header Size of
 // 8.9e65 was converted to int (undefined behaviour) before any check.
 TEST_F(DataTest, DaqHeaderSizeOutOfRangeIsNamed) {
-  const fs::path found = fs::path(RTHS_SOURCE_DIR) / "fuzz/regressions/daq_export/header_size_beyond_int";
+  const fs::path found =
+      fs::path(RTHS_SOURCE_DIR) / "fuzz/regressions/daq_export/header_size_beyond_int";
   EXPECT_THAT(error_of([&] { read_daq(found); }),
-              AllOf(HasSubstr(found.string() + ":1:"), HasSubstr("Header Size must be a whole number in 2..10000")));
+              AllOf(HasSubstr(found.string() + ":1:"),
+                    HasSubstr("Header Size must be a whole number in 2..10000")));
   for (const char* size : {"1e300", "-3", "2.5", "10001"}) {
     const auto p = write("daq.txt", std::string("Header Size: ") + size + "\nVersion: 2\n");
-    EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Header Size must be a whole number")) << size;
+    EXPECT_THAT(error_of([&] { read_daq(p); }), HasSubstr("Header Size must be a whole number"))
+        << size;
   }
 }
 
@@ -240,7 +259,7 @@ TEST_F(DataTest, HoldoutSplits) {
   EXPECT_EQ(last.heldout.front(), 700u);
   const Split blocks = holdout_split(1000, 0.3, HoldoutMode::kBlocks, 10);
   EXPECT_EQ(blocks.heldout.size(), 300u);
-  EXPECT_EQ(blocks.heldout.back(), 999u);  // the last block is held out
+  EXPECT_EQ(blocks.heldout.back(), 999u);   // the last block is held out
   EXPECT_LT(blocks.heldout.front(), 500u);  // and the others spread over the record
   EXPECT_THROW(holdout_split(1000, 1.5), std::invalid_argument);
   EXPECT_THROW(holdout_split(60, 0.3), std::invalid_argument);

@@ -77,9 +77,10 @@ TEST(DeclaredModelTest, BadInputIsRefusedNamingFileAndField) {
   EXPECT_THAT(error_of("actuator { stages: \"delay\" parameters { name: \"tau\" initial: 0.01 } }"),
               AllOf(HasSubstr("lab.textproto: actuator.parameters[0] (tau)"),
                     HasSubstr("unknown parameter 'tau'"), HasSubstr("gain, delay")));
-  EXPECT_THAT(error_of("actuator { stages: \"delay\" parameters { name: \"delay\" min: 0.05 max: 0.01 } }"),
-              AllOf(HasSubstr("lab.textproto: actuator.parameters[0] (delay)"),
-                    HasSubstr("min 0.05 > max 0.01")));
+  EXPECT_THAT(
+      error_of("actuator { stages: \"delay\" parameters { name: \"delay\" min: 0.05 max: 0.01 } }"),
+      AllOf(HasSubstr("lab.textproto: actuator.parameters[0] (delay)"),
+            HasSubstr("min 0.05 > max 0.01")));
   EXPECT_THAT(error_of("specimen { kind: \"linear_spring\" "
                        "parameters { name: \"stiffness\" initial: 5 min: 10 } }"),
               AllOf(HasSubstr("specimen.parameters[0] (stiffness)"),
@@ -87,19 +88,21 @@ TEST(DeclaredModelTest, BadInputIsRefusedNamingFileAndField) {
   EXPECT_THAT(error_of("specimen { kind: \"linear_spring\" "
                        "parameters { name: \"stiffness\" initial: 50 max: 10 } }"),
               HasSubstr("initial 50 is above max 10"));
-  EXPECT_THAT(error_of("actuator { parameters { name: \"gain\" fixed: true } }"),
-              AllOf(HasSubstr("actuator.parameters[0] (gain)"),
-                    HasSubstr("fixed needs an initial value")));
-  EXPECT_THAT(error_of("actuator { stages: \"dealy\" }"),
-              AllOf(HasSubstr("lab.textproto: actuator.stages[0]"), HasSubstr("unknown effect 'dealy'")));
+  EXPECT_THAT(
+      error_of("actuator { parameters { name: \"gain\" fixed: true } }"),
+      AllOf(HasSubstr("actuator.parameters[0] (gain)"), HasSubstr("fixed needs an initial value")));
+  EXPECT_THAT(
+      error_of("actuator { stages: \"dealy\" }"),
+      AllOf(HasSubstr("lab.textproto: actuator.stages[0]"), HasSubstr("unknown effect 'dealy'")));
   EXPECT_THAT(error_of("actuator { stages: \"stiffness\" }"),
               HasSubstr("does not apply to channel 'measured'"));
   EXPECT_THAT(error_of("actuator { stages: \"delay\" stages: \"delay\" }"),
               AllOf(HasSubstr("actuator.stages[1]"), HasSubstr("declared twice")));
   EXPECT_THAT(error_of("specimen { kind: \"spring\" }"),
               AllOf(HasSubstr("specimen.kind"), HasSubstr("unknown specimen kind 'spring'")));
-  EXPECT_THAT(error_of("specimen { kind: \"bouc_wen\" effects: \"stiffness\" }"),
-              AllOf(HasSubstr("specimen.effects[0]"), HasSubstr("already part of kind 'bouc_wen'")));
+  EXPECT_THAT(
+      error_of("specimen { kind: \"bouc_wen\" effects: \"stiffness\" }"),
+      AllOf(HasSubstr("specimen.effects[0]"), HasSubstr("already part of kind 'bouc_wen'")));
   EXPECT_THAT(error_of("actuator { stages: \"delay\" parameters { name: \"delay\" } "
                        "parameters { name: \"delay\" } }"),
               AllOf(HasSubstr("actuator.parameters[1] (delay)"), HasSubstr("declared twice")));
@@ -113,7 +116,8 @@ TEST(DeclaredModelTest, ValuesBeyondThePhysicalBoundsAreRefusedForTheRecord) {
   scales.duration = 10.0;
   scales.dt = 0.001;
   const DeclaredModel spring = parse_declared_model(
-      "specimen { kind: \"linear_spring\" parameters { name: \"stiffness\" min: -5 } }", "lab.textproto");
+      "specimen { kind: \"linear_spring\" parameters { name: \"stiffness\" min: -5 } }",
+      "lab.textproto");
   try {
     check_physical_bounds(*spring.specimen, Channel::kForce, scales, spring.source);
     FAIL() << "a negative stiffness was accepted";
@@ -176,9 +180,9 @@ TEST_F(DeclaredFitTest, TheIdentifiedModelReadsBackAsTheSameModel) {
       "actuator { stages: \"delay\" stages: \"first_order\" "
       "parameters { name: \"delay\" min: 0.002 max: 0.05 } }",
       "f");
-  const FitResult fit = fit_channel(
-      fit_declared(signals_, split_, m.actuator->effects, {}, m.actuator->parameters), signals_,
-      split_);
+  const FitResult fit =
+      fit_channel(fit_declared(signals_, split_, m.actuator->effects, {}, m.actuator->parameters),
+                  signals_, split_);
   std::string text;
   ASSERT_TRUE(google::protobuf::TextFormat::PrintToString(to_config(&fit.model, nullptr), &text));
   const DeclaredModel back = parse_declared_model(text, "written");

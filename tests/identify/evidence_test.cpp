@@ -1,7 +1,7 @@
 #include "identify/evidence.h"
 
-#include <numbers>
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include <cmath>
 #include <random>
@@ -11,11 +11,11 @@
 namespace rths::identify {
 namespace {
 
-
 TEST(EvidenceTest, SpectrumFindsASineAndItsAmplitude) {
   const double dt = 0.002;
   std::vector<double> x(5000);
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 3.0 * std::sin(2 * std::numbers::pi * 7.0 * i * dt) + 1.0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    x[i] = 3.0 * std::sin(2 * std::numbers::pi * 7.0 * i * dt) + 1.0;
   const Spectrum s = amplitude_spectrum(x, dt);
   std::size_t peak = 1;
   for (std::size_t k = 1; k < s.amplitude.size(); ++k) {
@@ -54,7 +54,8 @@ TEST(EvidenceTest, ResidualProportionalToVelocityShowsInTheEvidence) {
     s.time.push_back(t);
     s.input.push_back(std::sin(2 * std::numbers::pi * 2 * t));
     s.velocity.push_back(2 * std::numbers::pi * 2 * std::cos(2 * std::numbers::pi * 2 * t));
-    s.acceleration.push_back(-std::pow(2 * std::numbers::pi * 2, 2) * std::sin(2 * std::numbers::pi * 2 * t));
+    s.acceleration.push_back(-std::pow(2 * std::numbers::pi * 2, 2) *
+                             std::sin(2 * std::numbers::pi * 2 * t));
     s.target.push_back(5.0 * s.input.back() + 0.3 * s.velocity.back());
   }
   std::vector<double> prediction(s.size());
@@ -105,7 +106,8 @@ TEST(EvidenceTest, TransferEstimateOfAKnownDelay) {
   EXPECT_NEAR(h.frequency.front(), 1.0 / (1024 * dt), 1e-9);
   for (std::size_t k = 0; k < h.frequency.size(); k += 50) {
     EXPECT_NEAR(h.magnitude[k], 1.0, 0.01) << h.frequency[k];
-    EXPECT_NEAR(h.phase[k], -2.0 * std::numbers::pi * h.frequency[k] * 3.0 * dt, 0.01) << h.frequency[k];
+    EXPECT_NEAR(h.phase[k], -2.0 * std::numbers::pi * h.frequency[k] * 3.0 * dt, 0.01)
+        << h.frequency[k];
     EXPECT_GT(h.coherence[k], 0.99) << h.frequency[k];
   }
   const TransferEstimate n = transfer_estimate(x, noisy, dt, 1024);
@@ -113,8 +115,9 @@ TEST(EvidenceTest, TransferEstimateOfAKnownDelay) {
   for (double c : n.coherence) mean_coherence += c / static_cast<double>(n.coherence.size());
   EXPECT_NEAR(mean_coherence, 0.5, 0.05);
   EXPECT_THROW(transfer_estimate(x, std::vector<double>(10, 0.0), dt, 8), std::invalid_argument);
-  EXPECT_THROW(transfer_estimate(std::vector<double>(100, 0.0), std::vector<double>(100, 0.0), dt, 256),
-               std::invalid_argument);
+  EXPECT_THROW(
+      transfer_estimate(std::vector<double>(100, 0.0), std::vector<double>(100, 0.0), dt, 256),
+      std::invalid_argument);
 }
 
 // A chirp to 12 Hz with 2 um of sensor noise: its band ends near 12 Hz and its spectrum sinks to
@@ -122,7 +125,8 @@ TEST(EvidenceTest, TransferEstimateOfAKnownDelay) {
 TEST(EvidenceTest, NoiseEdgeIsWhereTheSpectrumSinksToTheNoise) {
   GeneratorSpec spec;
   const MeasuredData data = generate_measured(spec);
-  const double band = signal_band(data.measured, data.dt), edge = noise_edge(data.measured, data.dt);
+  const double band = signal_band(data.measured, data.dt),
+               edge = noise_edge(data.measured, data.dt);
   EXPECT_GT(band, 8.0);
   EXPECT_LT(band, 12.5);
   EXPECT_GT(edge, band);

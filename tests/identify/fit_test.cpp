@@ -80,10 +80,10 @@ TEST(FitTest, ReportsAStiffnessTheDataWantNegative) {
   // A positive spring is inside its bounds: nothing reported.
   for (std::size_t i = 0; i < data.size(); ++i) data.force[i] = 1.0e5 * data.measured[i];
   const ChannelSignals positive = make_signals(data, Channel::kForce);
-  EXPECT_TRUE(fit_channel(declared_model(Channel::kForce, {Effect::kStiffness},
-                                         signal_scales(positive)),
-                          positive, split)
-                  .bound_hits.empty());
+  EXPECT_TRUE(
+      fit_channel(declared_model(Channel::kForce, {Effect::kStiffness}, signal_scales(positive)),
+                  positive, split)
+          .bound_hits.empty());
 }
 
 TEST(FitTest, FixedParametersKeepTheirValue) {

@@ -26,8 +26,8 @@ TEST(IdentifyTest, RealActuatorHeldOutErrorFallsBelowFivePercent) {
   EXPECT_EQ(id.split.size, data.size());
   EXPECT_GT(c.declared_fit.heldout_error, 0.30);
   EXPECT_LT(c.declared_fit.heldout_error, 0.45);
-  const auto delay = c.declared_fit.model.param(Effect::kDelay, "delay",
-                                                signal_scales(id.signals[0]));
+  const auto delay =
+      c.declared_fit.model.param(Effect::kDelay, "delay", signal_scales(id.signals[0]));
   EXPECT_NEAR(delay.value(), 0.017, 0.003);
   ASSERT_FALSE(c.steps.empty());
   EXPECT_LT(c.final_fit.heldout_error, 0.05);
@@ -125,10 +125,10 @@ TEST_P(SamplingRateTest, FirstOrderLagFoundInSeconds) {
   const auto& c = id.channels.at(0);
   ASSERT_FALSE(c.steps.empty());
   EXPECT_EQ(c.steps.front().effect, Effect::kFirstOrder);
-  EXPECT_NEAR(c.final_fit.model.param(Effect::kFirstOrder, "time_constant",
-                                      signal_scales(id.signals[0]))
-                  .value(),
-              0.02, 0.002);
+  EXPECT_NEAR(
+      c.final_fit.model.param(Effect::kFirstOrder, "time_constant", signal_scales(id.signals[0]))
+          .value(),
+      0.02, 0.002);
 }
 
 INSTANTIATE_TEST_SUITE_P(Rates, SamplingRateTest, ::testing::Values(200.0, 4096.0));

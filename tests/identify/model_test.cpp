@@ -1,7 +1,7 @@
 #include "identify/model.h"
 
-#include <numbers>
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include <algorithm>
 #include <cmath>
@@ -38,7 +38,8 @@ TEST(ModelTest, EffectNamesRoundTripAndApply) {
   EXPECT_FALSE(effect_applies(Effect::kCoulomb, Channel::kMeasured));
   EXPECT_FALSE(effect_applies(Effect::kFirstOrder, Channel::kForce));
   EXPECT_THROW(parse_effect("magic"), std::invalid_argument);
-  EXPECT_EQ(effect_library(Channel::kMeasured).size() + effect_library(Channel::kForce).size(), 18u);
+  EXPECT_EQ(effect_library(Channel::kMeasured).size() + effect_library(Channel::kForce).size(),
+            18u);
 }
 
 TEST(ModelTest, FractionalDelayShiftsTheCommand) {

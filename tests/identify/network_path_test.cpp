@@ -105,7 +105,8 @@ TEST(NetworkPath, ABurstOfLostAnswersIsNamedWithItsLength) {
 TEST(NetworkPath, LostAnswersWithinTheDeclaredLossAreNotNamed) {
   LinkAnswers a = clean_link();
   for (std::size_t k : {9000u, 7000u, 3000u}) {  // three single losses at 1 % declared
-    for (auto* v : {&a.time, &a.round_trip, &a.injected}) v->erase(v->begin() + static_cast<std::ptrdiff_t>(k));
+    for (auto* v : {&a.time, &a.round_trip, &a.injected})
+      v->erase(v->begin() + static_cast<std::ptrdiff_t>(k));
     a.answered_step.erase(a.answered_step.begin() + static_cast<std::ptrdiff_t>(k));
   }
   const NetworkPath path = identify_network_path(a, {0.002, 0.0, 0.01}, kDt);

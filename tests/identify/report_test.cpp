@@ -1,7 +1,7 @@
 #include "identify/report.h"
 
-#include <numbers>
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include <iterator>
 
@@ -92,12 +92,11 @@ TEST(ReportTest, TimeVaryingDelayPlotFollowsTheDrift) {
   ASSERT_TRUE(c.final_fit.model.has(Effect::kTimeVaryingDelay));
   const SignalScales sc = signal_scales(id.signals[0]);
   const ChannelModel constant = without_effect(c.final_fit.model, Effect::kTimeVaryingDelay, sc);
-  const auto windows =
-      windowed_estimate(constant, constant.index_of(Effect::kDelay, "delay", sc).value(),
-                        id.signals[0], 8);
+  const auto windows = windowed_estimate(
+      constant, constant.index_of(Effect::kDelay, "delay", sc).value(), id.signals[0], 8);
   for (const auto& w : windows) {
-    const double truth = spec.delay + spec.delay_drift * std::sin(2.0 * std::numbers::pi *
-                                                                  w.time / spec.duration);
+    const double truth =
+        spec.delay + spec.delay_drift * std::sin(2.0 * std::numbers::pi * w.time / spec.duration);
     EXPECT_NEAR(w.value, truth, 0.0015) << "window at " << w.time << " s";
     EXPECT_GT(w.std_error, 0.0);
   }

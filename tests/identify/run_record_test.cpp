@@ -19,10 +19,10 @@ namespace rths::identify {
 namespace {
 
 namespace fs = std::filesystem;
+using test::link_effects;
 using test::rewrite;
 using test::run_with_undeclared;
 using test::scratch;
-using test::link_effects;
 
 IdentifyOptions actuator_only() {
   IdentifyOptions options;
@@ -68,7 +68,8 @@ TEST(RunRecord, ADriftOnOneLinkAndALagOnTheActuatorAreEachNamedWhereTheyAre) {
   rewrite(record, [](runtime::RecordEntry& e) {
     if (!e.has_step()) return;
     for (auto& link : *e.mutable_step()->mutable_links()) {
-      if (link.node_id() == 1) link.set_round_trip(link.round_trip() + 0.003 * e.step().time() / 10.0);
+      if (link.node_id() == 1)
+        link.set_round_trip(link.round_trip() + 0.003 * e.step().time() / 10.0);
     }
   });
   const RunIdentification run = identify_run_record(record, actuator_only());
@@ -89,7 +90,8 @@ TEST(RunRecord, PeriodicSpikesOnOneLinkAndABurstOfLostAnswersOnTheOtherAreEachNa
       // The round trip as this test's network has it (0.2 ms, a few us of deterministic jitter):
       // a loaded machine's own stalls would otherwise add spikes the test did not put there.
       if (k > 0)
-        link.set_round_trip(link.injected_lag() + 2e-4 + 1e-6 * static_cast<double>((k * 7919) % 13));
+        link.set_round_trip(link.injected_lag() + 2e-4 +
+                            1e-6 * static_cast<double>((k * 7919) % 13));
       // Node 2: 6 ms spikes of 3 steps every 500 ms.
       if (link.node_id() == 2 && k % 500 >= 100 && k % 500 < 103) {
         link.set_round_trip(link.round_trip() + 0.006);

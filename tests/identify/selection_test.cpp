@@ -165,11 +165,20 @@ struct EffectPair {
 TEST(SelectionTest, TwoUndeclaredEffectsAreBothNamed) {
   const std::vector<EffectPair> pairs{
       {"first_order+offset", Effect::kFirstOrder, Effect::kOffsetDrift,
-       [](GeneratorSpec& s) { s.first_order_time_constant = 0.015; s.offset = 2e-4; }},
+       [](GeneratorSpec& s) {
+         s.first_order_time_constant = 0.015;
+         s.offset = 2e-4;
+       }},
       {"backlash+offset", Effect::kBacklash, Effect::kOffsetDrift,
-       [](GeneratorSpec& s) { s.backlash_width = 3e-4; s.offset = 2e-4; }},
+       [](GeneratorSpec& s) {
+         s.backlash_width = 3e-4;
+         s.offset = 2e-4;
+       }},
       {"first_order+backlash", Effect::kFirstOrder, Effect::kBacklash,
-       [](GeneratorSpec& s) { s.first_order_time_constant = 0.015; s.backlash_width = 3e-4; }},
+       [](GeneratorSpec& s) {
+         s.first_order_time_constant = 0.015;
+         s.backlash_width = 3e-4;
+       }},
   };
   std::size_t both = 0;
   for (const auto& pair : pairs) {

@@ -97,8 +97,8 @@ TEST(StudyConfigTest, ABoucWenSpecimenGivesTheSameForceAsTheStoreyModel) {
 
 TEST(StudyConfigTest, AnElastoPlasticSpecimenGivesTheSameForceAsTheBilinearStorey) {
   const ChannelSignals s = drift_history();
-  const ChannelModel m = force_model({Effect::kStiffness, Effect::kElastoPlastic},
-                                     {1.0e5, 4.0e5, 300.0});
+  const ChannelModel m =
+      force_model({Effect::kStiffness, Effect::kElastoPlastic}, {1.0e5, 4.0e5, 300.0});
   const SpecimenModel sm = specimen_model(m, SignalScales{});
   ASSERT_TRUE(sm.restoring_force && sm.restoring_force->has_bilinear());
   EXPECT_DOUBLE_EQ(sm.restoring_force->bilinear().yield_displacement(), 300.0 / 4.0e5);
@@ -165,19 +165,22 @@ TEST(StudyConfigTest, AStudyBuiltFromTheFragmentRunsTheIdentifiedCase) {
   // The identified actuator's 7 ms of lag shows in the realised displacement.
   double command_gap = 0.0;
   for (std::size_t i = 0; i < identified.steps(); ++i) {
-    command_gap = std::max(command_gap, std::abs(identified.command(static_cast<Eigen::Index>(i), 0) -
-                                                 identified.realised(static_cast<Eigen::Index>(i), 0)));
+    command_gap =
+        std::max(command_gap, std::abs(identified.command(static_cast<Eigen::Index>(i), 0) -
+                                       identified.realised(static_cast<Eigen::Index>(i), 0)));
   }
   EXPECT_GT(command_gap, 0.0);
 
-  EXPECT_THAT([&] {
-    try {
-      identified_study(study, kData, read_back);
-    } catch (const std::invalid_argument& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  }(), HasSubstr("already has a case named 'identified_actuator'"));
+  EXPECT_THAT(
+      [&] {
+        try {
+          identified_study(study, kData, read_back);
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+        return std::string("no error");
+      }(),
+      HasSubstr("already has a case named 'identified_actuator'"));
   std::filesystem::remove_all(dir);
 }
 

@@ -92,8 +92,9 @@ TEST(ValidationTest, RealActuatorKFoldAndSecondHalf) {
       kfold(trimmed.channels.at(0).final_fit.model, trimmed.signals.at(0), 5, fast);
   std::cout << "active part: k-fold held-out:";
   for (std::size_t f = 0; f < 5; ++f) {
-    std::cout << " " << trimmed_folds.heldout_errors[f] << " (floor " << trimmed_folds.noise_floors[f]
-              << ", by the block's std " << trimmed_folds.block_errors[f] << ")";
+    std::cout << " " << trimmed_folds.heldout_errors[f] << " (floor "
+              << trimmed_folds.noise_floors[f] << ", by the block's std "
+              << trimmed_folds.block_errors[f] << ")";
   }
   std::cout << "  mean " << trimmed_folds.mean << " spread " << trimmed_folds.spread << "\n";
   EXPECT_LT(trimmed_folds.mean, 0.05);
@@ -103,16 +104,15 @@ TEST(ValidationTest, RealActuatorKFoldAndSecondHalf) {
   }
   // By each block's own std the chirp's fast end would dominate: the same residual over a third
   // of the signal.
-  EXPECT_EQ(trimmed_folds.block_errors.back(),
-            *std::max_element(trimmed_folds.block_errors.begin(), trimmed_folds.block_errors.end()));
+  EXPECT_EQ(trimmed_folds.block_errors.back(), *std::max_element(trimmed_folds.block_errors.begin(),
+                                                                 trimmed_folds.block_errors.end()));
   EXPECT_LT(trimmed_folds.heldout_errors.back(), trimmed_folds.block_errors.back());
 
   const MeasuredData first = slice(data, 0, data.size() / 2);
   const MeasuredData second = slice(data, data.size() / 2, data.size());
   const Identification half = identify(first, options);
-  const CrossRecordResult other =
-      validate_on(half.channels.at(0).final_fit.model, make_signals(second, Channel::kMeasured),
-                  second.source);
+  const CrossRecordResult other = validate_on(
+      half.channels.at(0).final_fit.model, make_signals(second, Channel::kMeasured), second.source);
   std::cout << "second half: " << other.error << "\n";
   EXPECT_LT(other.error, 0.08);
   EXPECT_THROW(slice(data, 10, 5), std::invalid_argument);

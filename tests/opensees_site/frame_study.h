@@ -37,13 +37,17 @@ inline std::string exact(double x) {
 inline std::string site_study(double duration, const std::string& deployment) {
   return "name: \"opensees_site\"\n"
          "structure { shear_building { storey_mass: [1000] storey_stiffness: [" +
-         exact(specimen_stiffness()) + "] } }\n"
-         "motion { path: \"" + motion_file() + "\" duration: " + std::to_string(duration) + " }\n"
+         exact(specimen_stiffness()) +
+         "] } }\n"
+         "motion { path: \"" +
+         motion_file() + "\" duration: " + std::to_string(duration) +
+         " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
          "substructuring { experimental_fraction: 1 model { linear {} } }\n"
          "cases { name: \"reference\" }\n"
          "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n"
-         "deployment { opensees { basic_dofs: 2 transformation: [-1, 1] } " + deployment + " }\n";
+         "deployment { opensees { basic_dofs: 2 transformation: [-1, 1] } " +
+         deployment + " }\n";
 }
 
 // The ground motion of the study at its dt (m/s^2).

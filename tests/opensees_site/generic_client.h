@@ -25,7 +25,8 @@ namespace rths::test {
 
 class GenericClient {
  public:
-  GenericClient(int port, int basic_dofs, int frame_size = 256) : n_(basic_dofs), frame_(frame_size) {
+  GenericClient(int port, int basic_dofs, int frame_size = 256)
+      : n_(basic_dofs), frame_(frame_size) {
     fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -117,10 +118,10 @@ class GenericClient {
 // gamma = 1/2) in the form rths's own integrator uses (core/integrators.cpp), the damping c on the
 // floor. Per step, the actions an OpenSees explicit analysis sends: 3, 14, 10, then 5.
 struct OneStoreyFrame {
-  double mass = 1000.0;               // kg
-  double k_num = 0.0, k_spec = 0.0;   // N/m
-  double damping = 0.0;               // N s/m
-  double dt = 0.001;                  // s
+  double mass = 1000.0;              // kg
+  double k_num = 0.0, k_spec = 0.0;  // N/m
+  double damping = 0.0;              // N s/m
+  double dt = 0.001;                 // s
 };
 
 struct FrameRun {

@@ -51,7 +51,8 @@ TEST(BasicMapping, BadMappingsNameTheField) {
     BasicMapping(site(2, {-1, NAN}), {1.0}, {0}, 1);
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("deployment.opensees.transformation[1]"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("deployment.opensees.transformation[1]"),
+              std::string::npos);
   }
 }
 

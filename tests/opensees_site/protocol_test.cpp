@@ -33,7 +33,8 @@ TEST(Protocol, GenericClientsSizeMessageIsAccepted) {
 }
 
 TEST(Protocol, WrongSizeMessagesAreRefusedNamingTheSlot) {
-  EXPECT_NE(refusal(sizes(1, 256), 2).find("slot 0 (disp size) is 1, expected 2"), std::string::npos);
+  EXPECT_NE(refusal(sizes(1, 256), 2).find("slot 0 (disp size) is 1, expected 2"),
+            std::string::npos);
   SizeMessage m = sizes(2, 256);
   m[4] = 0;
   EXPECT_NE(refusal(m, 2).find("slot 4 (time size) is 0"), std::string::npos);
@@ -65,7 +66,8 @@ TEST(Protocol, NonFiniteTrialsAreRefusedNamingWhatTheSlotHolds) {
     check_trial_frame(frame, 2);
     FAIL();
   } catch (const ProtocolError& e) {
-    EXPECT_NE(std::string(e.what()).find("slot 4 (vel of basic DOF 2)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("slot 4 (vel of basic DOF 2)"), std::string::npos)
+        << e.what();
   }
   frame[4] = 0;
   frame[7] = std::nan("");  // time

@@ -104,7 +104,8 @@ TEST(Session, LagFreeServedColumnEqualsTheElasticElement) {
   client.send_action(99);
   const Served s = served.get();
   ASSERT_TRUE(s.refusal.empty()) << s.refusal;
-  EXPECT_NE(s.ending.find("(DIE) after step " + std::to_string(ground.size() - 1)), std::string::npos);
+  EXPECT_NE(s.ending.find("(DIE) after step " + std::to_string(ground.size() - 1)),
+            std::string::npos);
   const double k = frame().k_spec;
   const test::FrameRun elastic =
       test::run_frame(frame(), ground, [k](double u, double, double) { return k * u; });
@@ -134,13 +135,16 @@ TEST(Session, FourteenMsOfLagGrowsThePeakAsRthsOwnPaperFrameRunDoes) {
 
   const std::string paper =
       "name: \"paper_frame\"\nstructure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: "
-      "0.05 } }\nmotion { path: \"" + test::motion_file() + "\" duration: 6 }\n"
+      "0.05 } }\nmotion { path: \"" +
+      test::motion_file() +
+      "\" duration: 6 }\n"
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
       "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
       "cases { name: \"reference\" }\ncases { name: \"lag\" delay { shift { delay: 0.014 } } }\n";
   const core::PreparedStudy p = core::prepare_study(core::parse_study(paper, "paper"), "/");
   const auto peak = [&](const char* name) {
-    const auto r = core::simulate(core::setup_for_case(p, runtime::find_case(p.config, name)), p.motion);
+    const auto r =
+        core::simulate(core::setup_for_case(p, runtime::find_case(p.config, name)), p.motion);
     return r.displacement.cwiseAbs().maxCoeff();
   };
   const double rths_growth = peak("lag") / peak("reference");

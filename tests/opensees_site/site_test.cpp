@@ -51,7 +51,8 @@ SiteRun start_site(const std::string& name, const std::string& text, const std::
   o.accept_timeout = std::chrono::seconds(20);
   run.site = std::make_unique<Site>(o);
   run.listener = std::make_unique<Listener>("127.0.0.1", 0);
-  run.outcome = std::async(std::launch::async, [&s = *run.site, &l = *run.listener] { return s.serve(l); });
+  run.outcome =
+      std::async(std::launch::async, [&s = *run.site, &l = *run.listener] { return s.serve(l); });
   return run;
 }
 
@@ -99,8 +100,8 @@ TEST_F(OpenSeesSite, LockstepLagFreeEqualsTheElasticElementAndIsRecorded) {
   EXPECT_EQ(std::system(export_command.c_str()), 0);
   EXPECT_TRUE(std::filesystem::exists(exported));
   write_site_outputs(run.record(), run.dir, true);
-  for (const char* file : {"results.csv", "command_realised.png", "force_displacement.png",
-                           "lag.png", "lag.svg"})
+  for (const char* file :
+       {"results.csv", "command_realised.png", "force_displacement.png", "lag.png", "lag.svg"})
     EXPECT_TRUE(std::filesystem::exists(run.dir / file)) << file;
 }
 
@@ -118,7 +119,9 @@ TEST_F(OpenSeesSite, FourteenMsOnTheActuatorLinkGrowsThePeakAsThePaperFrameRun) 
   ASSERT_TRUE(run.outcome.get().ok());
   const std::string paper =
       "name: \"paper_frame\"\nstructure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: "
-      "0.05 } }\nmotion { path: \"" + test::motion_file() + "\" duration: 4 }\n"
+      "0.05 } }\nmotion { path: \"" +
+      test::motion_file() +
+      "\" duration: 4 }\n"
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
       "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
       "cases { name: \"reference\" }\ncases { name: \"lag\" delay { shift { delay: 0.014 } } }\n";
@@ -149,7 +152,8 @@ TEST_F(OpenSeesSite, ASilentClientIsAClearStopWithHoldAndAClosedRecord) {
   const SiteOutcome outcome = run.outcome.get();
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
   EXPECT_FALSE(outcome.ok());
-  EXPECT_NE(outcome.run.status.find("sent nothing for 0.5"), std::string::npos) << outcome.run.status;
+  EXPECT_NE(outcome.run.status.find("sent nothing for 0.5"), std::string::npos)
+      << outcome.run.status;
   EXPECT_NE(outcome.run.failed_node.find("OpenSees client"), std::string::npos);
   const runtime::RecordContents record = runtime::read_record(run.record());
   ASSERT_NE(record.footer(), nullptr);
@@ -157,7 +161,8 @@ TEST_F(OpenSeesSite, ASilentClientIsAClearStopWithHoldAndAClosedRecord) {
   EXPECT_EQ(record.steps().size(), 51u);
   bool hold = false;
   for (const auto& e : record.entries)
-    if (e.has_event() && e.event().what().find("HOLD sent to the actuator emulators") != std::string::npos)
+    if (e.has_event() &&
+        e.event().what().find("HOLD sent to the actuator emulators") != std::string::npos)
       hold = true;
   EXPECT_TRUE(hold);
   EXPECT_TRUE(client.closed_by_server(2000));
@@ -178,9 +183,10 @@ TEST_F(OpenSeesSite, AWrongSizeMessageIsRefusedBeforeAnythingStarts) {
 
 // Real time: the emulator paced, the client as fast as it is; the record measures its lateness.
 TEST_F(OpenSeesSite, RealTimeRunCompletesAndRecordsEveryStep) {
-  const std::string text = test::site_study(
-      1, "clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 50 "
-         "command_watchdog_periods: 50");
+  const std::string text =
+      test::site_study(1,
+                       "clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 50 "
+                       "command_watchdog_periods: 50");
   const auto ground = test::ground_motion(text);
   SiteRun run = start_site("real_time", text, "reference", 208);
   test::GenericClient client(run.listener->port(), 2);
@@ -198,8 +204,9 @@ TEST_F(OpenSeesSite, RealTimeRunCompletesAndRecordsEveryStep) {
 }
 
 TEST_F(OpenSeesSite, RealTimeSilentClientIsStoppedWithinTheWatchdog) {
-  const std::string text = test::site_study(2, "clock: REAL_TIME max_overrun_fraction: -1 "
-                                               "max_missed_answers: 50 command_watchdog_periods: 50");
+  const std::string text = test::site_study(2,
+                                            "clock: REAL_TIME max_overrun_fraction: -1 "
+                                            "max_missed_answers: 50 command_watchdog_periods: 50");
   SiteRun run = start_site("real_time_silent", text, "reference", 209);
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();

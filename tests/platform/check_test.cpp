@@ -56,7 +56,8 @@ TEST(PlatformSummary, JsonRoundTripsAndReadsRtChecksOutput) {
   EXPECT_TRUE(j.contains("lateness_p9999"));
   EXPECT_TRUE(j.at("refused").get<bool>());
   EXPECT_EQ(summary_from_json(j).SerializeAsString(), s.SerializeAsString());
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_check_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_check_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "rt_check.json") << nlohmann::json{{"platform", j}, {"holds", false}}.dump();
   std::ofstream(dir / "bare.json") << j.dump();

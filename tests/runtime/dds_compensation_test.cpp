@@ -24,8 +24,10 @@ TEST_F(DdsCompensation, AdaptiveAndModelBasedPerActuatorEqualInProcessBitForBit)
   // the measured feedback, so this also checks that the emulator's feedback path is the in-process
   // one.
   const std::string cases =
-      std::string("cases { name: \"reference\" }\n"
-                  "cases { name: \"compensated\" ") + kMtsActuator +
+      std::string(
+          "cases { name: \"reference\" }\n"
+          "cases { name: \"compensated\" ") +
+      kMtsActuator +
       " compensation { adaptive_time_series { window: 0.2 initial_a1: 0.02 } }"
       " compensation { model_based { plant { shift { delay: 0.0046 } } plant { first_order { "
       "time_constant: 0.0218 } } lead_order: 2 rolloff_frequency: 40 } } }";
@@ -35,7 +37,8 @@ TEST_F(DdsCompensation, AdaptiveAndModelBasedPerActuatorEqualInProcessBitForBit)
   ASSERT_EQ(in_process.command.cols(), 2);
   // The compensators act: the realised drift differs from what the same actuator realises bare.
   const core::PreparedStudy prepared = test::prepare(text);
-  core::HybridSetup bare = core::setup_for_case(prepared, runtime::find_case(prepared.config, "compensated"));
+  core::HybridSetup bare =
+      core::setup_for_case(prepared, runtime::find_case(prepared.config, "compensated"));
   for (auto& chain : bare.delays) chain.set_compensator(nullptr);
   const core::SimulationResult uncompensated = core::simulate(bare, prepared.motion);
   EXPECT_NE(uncompensated.realised(500, 0), in_process.realised(500, 0));
@@ -62,14 +65,15 @@ TEST_F(DdsCompensation, PolynomialOnThePaperFrameEqualsInProcessBitForBit) {
 // within the run), and the lockstep record still equals the in-process one bit for bit.
 TEST_F(DdsCompensation, AdaptedModelBasedOnThePaperFrameEqualsInProcessBitForBit) {
   const std::string text = test::paper_frame_study(
-      2, "cases { name: \"adapted\" delay { shift { delay: 0.00598 } } "
-         "delay { first_order { time_constant: 0.02834 } } compensation { model_based { "
-         "plant { shift { delay: 0.0046 } } plant { first_order { time_constant: 0.0218 } } "
-         "lead_order: 2 rolloff_frequency: 50 adaptive_correction { window: 0.2 } } } }\n"
-         "cases { name: \"fixed\" delay { shift { delay: 0.00598 } } "
-         "delay { first_order { time_constant: 0.02834 } } compensation { model_based { "
-         "plant { shift { delay: 0.0046 } } plant { first_order { time_constant: 0.0218 } } "
-         "lead_order: 2 rolloff_frequency: 50 } } }");
+      2,
+      "cases { name: \"adapted\" delay { shift { delay: 0.00598 } } "
+      "delay { first_order { time_constant: 0.02834 } } compensation { model_based { "
+      "plant { shift { delay: 0.0046 } } plant { first_order { time_constant: 0.0218 } } "
+      "lead_order: 2 rolloff_frequency: 50 adaptive_correction { window: 0.2 } } } }\n"
+      "cases { name: \"fixed\" delay { shift { delay: 0.00598 } } "
+      "delay { first_order { time_constant: 0.02834 } } compensation { model_based { "
+      "plant { shift { delay: 0.0046 } } plant { first_order { time_constant: 0.0218 } } "
+      "lead_order: 2 rolloff_frequency: 50 } } }");
   const core::SimulationResult in_process = test::reference_result(text, "adapted");
   // The correction acts once its window has filled: it departs from the fixed feedforward.
   const core::SimulationResult fixed = test::reference_result(text, "fixed");

@@ -12,13 +12,20 @@ namespace {
 std::string frame20_study(double duration, const std::string& deployment) {
   const std::string matrices = std::string(RTHS_SOURCE_DIR) + "/configs/matrices/";
   return "name: \"frame20\"\n"
-         "structure { matrices { mass { file: \"" + matrices + "frame20_mass.mtx\" }"
-         " stiffness { file: \"" + matrices + "frame20_stiffness.mtx\" } } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" + test::motion_path() + "\" duration: " + std::to_string(duration) + " }\n"
+         "structure { matrices { mass { file: \"" +
+         matrices +
+         "frame20_mass.mtx\" }"
+         " stiffness { file: \"" +
+         matrices +
+         "frame20_stiffness.mtx\" } } damping { modal_zeta: 0.05 } }\n"
+         "motion { path: \"" +
+         test::motion_path() + "\" duration: " + std::to_string(duration) +
+         " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n"
          "substructuring { experimental_dofs { dof: 1 mass: 20 stiffness: 2.0e6 zeta: 0.02 } }\n"
          "cases { name: \"reference\" }\n"
-         "cases { name: \"lag\" delay { shift { delay: 0.01 } } }\n" + deployment;
+         "cases { name: \"lag\" delay { shift { delay: 0.01 } } }\n" +
+         deployment;
 }
 
 class DdsMatrixStructure : public testing::Test {
@@ -54,9 +61,10 @@ TEST_F(DdsMatrixStructure, NumericalMatrixOnTheCoordinatorEqualsInProcessToo) {
 }
 
 TEST_F(DdsMatrixStructure, RealTimeRunIsPacedAndCompletes) {
-  const std::string text = frame20_study(
-      1.0, "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
-           "command_watchdog_periods: 30 }");
+  const std::string text =
+      frame20_study(1.0,
+                    "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
+                    "command_watchdog_periods: 30 }");
   const auto run = test::launch("matrix_real_time", text, "reference", 194);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const auto* footer = run.record.footer();
@@ -69,16 +77,19 @@ TEST_F(DdsMatrixStructure, RealTimeRunIsPacedAndCompletes) {
 }
 
 TEST_F(DdsMatrixStructure, ASubstructureNodeMustHostEveryCoupledDof) {
-  const std::string text = frame20_study(
-      1.0, "deployment { nodes { id: 1 kind: SUBSTRUCTURE storeys: [1, 2] } "
-           "nodes { id: 3 kind: SUBSTRUCTURE storeys: [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20] } "
-           "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
+  const std::string text =
+      frame20_study(1.0,
+                    "deployment { nodes { id: 1 kind: SUBSTRUCTURE storeys: [1, 2] } "
+                    "nodes { id: 3 kind: SUBSTRUCTURE storeys: [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, "
+                    "13, 14, 15, 16, 17, 18, 19, 20] } "
+                    "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
   const core::PreparedStudy prepared = test::prepare(text);
   try {
     runtime::make_plan(prepared.base, prepared.config.deployment());
     FAIL() << "a split of coupled DOFs was accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("deployment.nodes[id 1]: the numerical stiffness matrix couples"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "deployment.nodes[id 1]: the numerical stiffness matrix couples"),
               std::string::npos)
         << e.what();
   }

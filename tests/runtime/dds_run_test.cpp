@@ -43,8 +43,9 @@ TEST_F(DdsRun, MultiRateLockstepEqualsTheInProcessMultiRateRunBitForBit) {
 // newest sample and counts the servo's periods and overruns from the heartbeats.
 TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
   const std::string text = test::paper_frame_study(
-      1.0, "servo { rate: 4000 } deployment { clock: REAL_TIME max_overrun_fraction: -1 "
-           "max_missed_answers: 30 command_watchdog_periods: 30 min_answer_fraction: -1 }");
+      1.0,
+      "servo { rate: 4000 } deployment { clock: REAL_TIME max_overrun_fraction: -1 "
+      "max_missed_answers: 30 command_watchdog_periods: 30 min_answer_fraction: -1 }");
   // The streaming's mechanics are judged here, not whether this machine keeps a 4 kHz servo.
   const auto run = test::launch("servo_real_time", text, "reference", 52);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
@@ -105,8 +106,9 @@ TEST_F(DdsRun, InjectedWallClockLagIsMeasuredAndLeavesTheLockstepResultUnchanged
 
 TEST_F(DdsRun, DelayStageAtTheEmulatorsInputReproducesTheInProcessDelayedResult) {
   const std::string text = test::paper_frame_study(
-      2, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
-         "receive_delay { jitter { mean_delay: 0.01 std_dev: 0.003 seed: 5 } } } }");
+      2,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+      "receive_delay { jitter { mean_delay: 0.01 std_dev: 0.003 seed: 5 } } } }");
   const auto run = test::launch("node_delay", text, "reference", 19);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "jitter"));
@@ -114,12 +116,10 @@ TEST_F(DdsRun, DelayStageAtTheEmulatorsInputReproducesTheInProcessDelayedResult)
 
 TEST_F(DdsRun, TwoRunsSideBySideAreIsolated) {
   const std::string text = test::paper_frame_study(2, "");
-  auto first = std::async(std::launch::async, [&] {
-    return test::launch("side_a", text, "reference", 14);
-  });
-  auto second = std::async(std::launch::async, [&] {
-    return test::launch("side_b", text, "lag_shift_14ms", 15);
-  });
+  auto first =
+      std::async(std::launch::async, [&] { return test::launch("side_a", text, "reference", 14); });
+  auto second = std::async(std::launch::async,
+                           [&] { return test::launch("side_b", text, "lag_shift_14ms", 15); });
   const auto a = first.get();
   const auto b = second.get();
   ASSERT_EQ(a.launch.coordinator_exit, 0) << test::read_file(a.launch.coordinator_log);
@@ -133,8 +133,9 @@ TEST_F(DdsRun, TwoRunsSideBySideAreIsolated) {
 TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
   // Deadline misses on this shared machine are not what this test judges.
   const std::string text = test::paper_frame_study(
-      1.0, "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
-           "command_watchdog_periods: 30 }");
+      1.0,
+      "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
+      "command_watchdog_periods: 30 }");
   const auto run = test::launch("real_time", text, "reference", 16);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const auto* footer = run.record.footer();
@@ -154,10 +155,11 @@ TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
 // says which step it answers.
 TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
   const std::string text = test::paper_frame_study(
-      0.6, "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
-           "command_watchdog_periods: 30 nodes { id: 1 kind: SUBSTRUCTURE } "
-           "nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { one_way_delay: 0.003 } "
-           "send_lag { one_way_delay: 0.003 } } }");
+      0.6,
+      "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
+      "command_watchdog_periods: 30 nodes { id: 1 kind: SUBSTRUCTURE } "
+      "nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { one_way_delay: 0.003 } "
+      "send_lag { one_way_delay: 0.003 } } }");
   const auto run = test::launch("slow_link", text, "reference", 10);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   std::vector<double> behind;

@@ -37,10 +37,12 @@ TEST_P(FaultTrial, HoldsStopsNamesAndKeepsTheRecord) {
   spec.domain = 45 + static_cast<int>(victim) * 2 + (sig == SIGSTOP ? 1 : 0);
   spec.deployment_extra = "max_missed_answers: " + std::to_string(kMissed) +
                           " command_watchdog_periods: " + std::to_string(kMissed);
-  spec.dir = std::filesystem::temp_directory_path() /
-             ("rths_fault_trial_test_" + std::to_string(spec.domain) + "_" + std::to_string(getpid()));
+  spec.dir =
+      std::filesystem::temp_directory_path() /
+      ("rths_fault_trial_test_" + std::to_string(spec.domain) + "_" + std::to_string(getpid()));
   spec.binary_dir = RTHS_BINARY_DIR;
-  spec.motion_path = std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  spec.motion_path =
+      std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
   const test::FaultTrialResult r = test::run_fault_trial(spec);
   ASSERT_TRUE(r.fault_delivered) << r.why_not;
   EXPECT_TRUE(r.record_complete) << r.record_steps << " steps";
@@ -57,15 +59,14 @@ TEST_P(FaultTrial, HoldsStopsNamesAndKeepsTheRecord) {
   std::filesystem::remove_all(spec.dir);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Victims, FaultTrial,
-    testing::Values(std::make_tuple(test::FaultVictim::kSubstructure, SIGKILL),
-                    std::make_tuple(test::FaultVictim::kEmulator, SIGSTOP),
-                    std::make_tuple(test::FaultVictim::kCoordinator, SIGKILL)),
-    [](const auto& info) {
-      return test::to_string(std::get<0>(info.param)) +
-             (std::get<1>(info.param) == SIGKILL ? "_kill" : "_stall");
-    });
+INSTANTIATE_TEST_SUITE_P(Victims, FaultTrial,
+                         testing::Values(std::make_tuple(test::FaultVictim::kSubstructure, SIGKILL),
+                                         std::make_tuple(test::FaultVictim::kEmulator, SIGSTOP),
+                                         std::make_tuple(test::FaultVictim::kCoordinator, SIGKILL)),
+                         [](const auto& info) {
+                           return test::to_string(std::get<0>(info.param)) +
+                                  (std::get<1>(info.param) == SIGKILL ? "_kill" : "_stall");
+                         });
 
 }  // namespace
 }  // namespace rths

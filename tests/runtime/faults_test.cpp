@@ -40,19 +40,19 @@ Cluster start(const std::string& name, const std::string& text, int domain,
   const auto config = test::write_config(c.dir, text);
   c.record = c.dir / "run.rthsrec";
   for (const auto& [id, substructure] : nodes) {
-    c.nodes.emplace_back(
-        substructure ? test::program("rths-substructure-node", "substructure_nodes")
-                     : test::program("rths-actuator-emulator", "actuator_emulator"),
-        std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
-                                 std::to_string(domain), "--run-id", name},
-        c.dir / ("node_" + std::to_string(id) + ".log"));
+    c.nodes.emplace_back(substructure
+                             ? test::program("rths-substructure-node", "substructure_nodes")
+                             : test::program("rths-actuator-emulator", "actuator_emulator"),
+                         std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
+                                                  std::to_string(domain), "--run-id", name},
+                         c.dir / ("node_" + std::to_string(id) + ".log"));
   }
-  c.coordinator.emplace(test::program("rths-coordinator", "coordinator"),
-                        std::vector<std::string>{"--config", config.string(), "--run-id", name,
-                                                 "--domain", std::to_string(domain), "--record",
-                                                 c.record.string(), "--case", case_name,
-                                                 "--platform-seconds", "0", "--accept-platform"},
-                        c.dir / "coordinator.log", coordinator_options);
+  c.coordinator.emplace(
+      test::program("rths-coordinator", "coordinator"),
+      std::vector<std::string>{"--config", config.string(), "--run-id", name, "--domain",
+                               std::to_string(domain), "--record", c.record.string(), "--case",
+                               case_name, "--platform-seconds", "0", "--accept-platform"},
+      c.dir / "coordinator.log", coordinator_options);
   return c;
 }
 
@@ -131,15 +131,15 @@ TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
   c.nodes[victim - 1].signal(SIGKILL);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Nodes, KillNode,
-    testing::Values(std::make_tuple(1, SIGKILL, "node 1 (substructure)"),
-                    std::make_tuple(2, SIGKILL, "node 2 (actuator emulator)"),
-                    std::make_tuple(2, SIGSTOP, "node 2 (actuator emulator)")),
-    [](const auto& info) {
-      return std::string(std::get<1>(info.param) == SIGSTOP ? "stall_" : "kill_") +
-             std::to_string(std::get<0>(info.param));
-    });
+INSTANTIATE_TEST_SUITE_P(Nodes, KillNode,
+                         testing::Values(std::make_tuple(1, SIGKILL, "node 1 (substructure)"),
+                                         std::make_tuple(2, SIGKILL, "node 2 (actuator emulator)"),
+                                         std::make_tuple(2, SIGSTOP, "node 2 (actuator emulator)")),
+                         [](const auto& info) {
+                           return std::string(std::get<1>(info.param) == SIGSTOP ? "stall_"
+                                                                                 : "kill_") +
+                                  std::to_string(std::get<0>(info.param));
+                         });
 
 // The emulator's own process stalled (SIGSTOP for 30 ms, 15 times) is not a silent coordinator:
 // the commands that waited on its socket are delivered before its 15-period watchdog judges, so
@@ -148,8 +148,9 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
   runtime::ensure_dds_config();
   const std::string text = test::paper_frame_study(
-      6, "deployment { clock: REAL_TIME liveliness_timeout: 0.5 heartbeat_period: 0.02 "
-         "max_missed_answers: 120 command_watchdog_periods: 15 max_overrun_fraction: -1 }");
+      6,
+      "deployment { clock: REAL_TIME liveliness_timeout: 0.5 heartbeat_period: 0.02 "
+      "max_missed_answers: 120 command_watchdog_periods: 15 max_overrun_fraction: -1 }");
   Cluster c = start("own_stall", text, 53, {{1, true}, {2, false}}, "reference");
   wait_for_steps(c.record, 300);
   for (int i = 0; i < 15; ++i) {
@@ -334,7 +335,8 @@ TEST_P(ForgedAnswers, StopTheRunWithAnIntegrityFaultNamingNode1) {
 INSTANTIATE_TEST_SUITE_P(
     Rogue, ForgedAnswers,
     testing::Values(std::make_tuple("every_100th_step", 80,
-                                    std::vector<std::string>{"--mode", "answers", "--every", "100"}),
+                                    std::vector<std::string>{"--mode", "answers", "--every",
+                                                             "100"}),
                     std::make_tuple("every_step", 81,
                                     std::vector<std::string>{"--mode", "answers", "--every", "1"}),
                     std::make_tuple("step_1", 82, std::vector<std::string>{"--mode", "first"})),
@@ -401,20 +403,23 @@ TEST(Faults, ARecordThatCannotBeWrittenStopsTheRunWithinFiveSteps) {
   // About 1000 steps of this run's entries (header ~1.3 KB, a step ~190 bytes with two links).
   constexpr std::uintmax_t kLimit = 200'000;
   runtime::ChildOptions limited;
-  limited.prefix = {"sh", "-c", "trap '' XFSZ; exec prlimit --fsize=" + std::to_string(kLimit) +
-                                    " \"$0\" \"$@\""};
+  limited.prefix = {
+      "sh", "-c",
+      "trap '' XFSZ; exec prlimit --fsize=" + std::to_string(kLimit) + " \"$0\" \"$@\""};
   // The nodes' own fail-safes are widened far beyond this loaded machine's stalls: the record is
   // what this test judges, and only the record may stop the run.
   const std::string text = test::paper_frame_study(
-      8, "deployment { clock: REAL_TIME liveliness_timeout: 5 heartbeat_period: 0.02 "
-         "max_missed_answers: 5000 command_watchdog_periods: 5000 max_overrun_fraction: -1 }");
+      8,
+      "deployment { clock: REAL_TIME liveliness_timeout: 5 heartbeat_period: 0.02 "
+      "max_missed_answers: 5000 command_watchdog_periods: 5000 max_overrun_fraction: -1 }");
   Cluster c = start("disk_full", text, 90, {{1, true}, {2, false}}, "lag_shift_14ms", limited);
   const auto code = c.coordinator->wait_for(20s);
   ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
   const std::string log = test::read_file(c.dir / "coordinator.log");
   EXPECT_EQ(*code, 1) << log;
   EXPECT_NE(log.find("cannot write run record " + c.record.string() + ": " + std::strerror(EFBIG)),
-            std::string::npos) << log;
+            std::string::npos)
+      << log;
   EXPECT_EQ(std::filesystem::file_size(c.record), kLimit);
   const auto record = runtime::read_record(c.record);
   EXPECT_TRUE(record.truncated);

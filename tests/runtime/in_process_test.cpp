@@ -2,9 +2,9 @@
 // core::simulate(): the same blocks in the same order must give the same doubles.
 #include <gtest/gtest.h>
 
-#include "tests/support/in_process_run.h"
 #include "core/simulation.h"
 #include "test_support.h"
+#include "tests/support/in_process_run.h"
 
 namespace rths {
 namespace {
@@ -28,7 +28,9 @@ struct Variant {
 };
 
 // ctest shows the variant's name, not its bytes.
-void PrintTo(const Variant& v, std::ostream* os) { *os << v.name << " (case " << v.case_name << ")"; }
+void PrintTo(const Variant& v, std::ostream* os) {
+  *os << v.name << " (case " << v.case_name << ")";
+}
 
 class InProcessEqualsSimulate : public testing::TestWithParam<Variant> {};
 
@@ -75,8 +77,9 @@ INSTANTIATE_TEST_SUITE_P(
 // actuator (the case) reproduces the delayed case of core::simulate exactly.
 TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
   const std::string text = test::paper_frame_study(
-      5, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
-         "receive_delay { shift { delay: 0.014 } } } }");
+      5,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+      "receive_delay { shift { delay: 0.014 } } } }");
   const core::PreparedStudy prepared = test::prepare(text);
   coordinator::CoordinatorOptions options;
   options.run_id = "node-delay";
@@ -91,8 +94,9 @@ TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
 
 TEST(InProcess, NodeSendDelayDelaysTheForce) {
   const std::string text = test::paper_frame_study(
-      3, "deployment { nodes { id: 1 kind: SUBSTRUCTURE send_delay { shift { delay: 0.014 } } } "
-         "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
+      3,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE send_delay { shift { delay: 0.014 } } } "
+      "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "send-delay";
   options.case_name = "reference";
@@ -110,7 +114,8 @@ TEST(InProcess, CompensationOnTheEmulatorNodeEqualsTheCasesBitForBit) {
   const std::string text = test::paper_frame_study(
       2, "cases { name: \"compensated\" delay { shift { delay: 0.014 } } " + block + " }\n" +
              "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
-             "ACTUATOR_EMULATOR " + block + " } }");
+             "ACTUATOR_EMULATOR " +
+             block + " } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "node-compensation";
   options.case_name = "lag_shift_14ms";
@@ -139,34 +144,38 @@ TEST(InProcess, MisplacedNodeCompensationIsRefusedNamingTheNode) {
     }
     return "accepted";
   };
-  const std::string twice = refusal(
-      test::paper_frame_study(1, "cases { name: \"c\" " + block + " }\n deployment { nodes { id: 2 "
-                                 "kind: ACTUATOR_EMULATOR " + block + " } }"),
-      "c");
+  const std::string twice =
+      refusal(test::paper_frame_study(1, "cases { name: \"c\" " + block +
+                                             " }\n deployment { nodes { id: 2 "
+                                             "kind: ACTUATOR_EMULATOR " +
+                                             block + " } }"),
+              "c");
   EXPECT_NE(twice.find("nodes[id 2]"), std::string::npos) << twice;
   EXPECT_NE(twice.find("one place"), std::string::npos) << twice;
-  const std::string substructure = refusal(
-      test::paper_frame_study(1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE " + block +
-                                     " } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
-      "reference");
+  const std::string substructure =
+      refusal(test::paper_frame_study(1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE " + block +
+                                             " } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"),
+              "reference");
   EXPECT_NE(substructure.find("nodes[id 1]"), std::string::npos) << substructure;
   EXPECT_NE(substructure.find("ACTUATOR_EMULATOR"), std::string::npos) << substructure;
-  const std::string count = refusal(
-      test::paper_frame_study(1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR " + block +
-                                     " " + block + " } }"),
-      "reference");
+  const std::string count =
+      refusal(test::paper_frame_study(1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR " +
+                                             block + " " + block + " } }"),
+              "reference");
   EXPECT_NE(count.find("2 compensation blocks for 1 actuators"), std::string::npos) << count;
   const std::string bad = refusal(
-      test::paper_frame_study(1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR compensation { "
-                                 "polynomial { order: 7 lead: 0.01 } } } }"),
+      test::paper_frame_study(1,
+                              "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR compensation { "
+                              "polynomial { order: 7 lead: 0.01 } } } }"),
       "reference");
   EXPECT_NE(bad.find("nodes[id 2] compensation[0]"), std::string::npos) << bad;
 }
 
 TEST(InProcess, ABadNodeDelayStageIsRefusedNamingTheNodeBeforeTheRun) {
   const std::string text = test::paper_frame_study(
-      1, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay { first_order { "
-         "time_constant: -1 } } } }");
+      1,
+      "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay { first_order { "
+      "time_constant: -1 } } } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "x";
   try {
@@ -179,8 +188,8 @@ TEST(InProcess, ABadNodeDelayStageIsRefusedNamingTheNodeBeforeTheRun) {
 }
 
 TEST(InProcess, DeploymentThatDoesNotCoverTheExperimentalStoreyIsRefused) {
-  const std::string text = test::paper_frame_study(
-      1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } }");
+  const std::string text =
+      test::paper_frame_study(1, "deployment { nodes { id: 1 kind: SUBSTRUCTURE } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "x";
   EXPECT_THROW(
@@ -197,8 +206,8 @@ TEST(InProcess, DeploymentThatDoesNotCoverTheExperimentalStoreyIsRefused) {
 }
 
 TEST(InProcess, DisplacementLimitStopsTheRunAndKeepsStepsBeforeIt) {
-  const std::string text = test::paper_frame_study(
-      5, "deployment { limits { max_displacement: 0.002 } }");
+  const std::string text =
+      test::paper_frame_study(5, "deployment { limits { max_displacement: 0.002 } }");
   coordinator::CoordinatorOptions options;
   options.run_id = "limits";
   const auto outcome = coordinator::run_in_process(test::prepare(text), options);

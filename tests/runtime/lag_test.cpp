@@ -29,8 +29,8 @@ TEST(LagInjector, JitterIsReproducibleFromItsSeedAndNeverReorders) {
   for (int i = 0; i < 1000; ++i) {
     const auto ra = a.schedule(i * kMs);
     ASSERT_EQ(ra, b.schedule(i * kMs));
-    ASSERT_GE(*ra, i * kMs);       // never before it arrived
-    ASSERT_GE(*ra, previous);      // FIFO
+    ASSERT_GE(*ra, i * kMs);   // never before it arrived
+    ASSERT_GE(*ra, previous);  // FIFO
     previous = *ra;
   }
 }

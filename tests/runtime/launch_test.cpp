@@ -31,12 +31,12 @@ const std::string kRths = std::string(RTHS_BINARY_DIR) + "/cli/rths";
 
 TEST(Launch, RunsEveryCaseAndWritesRecordsResultsAndASummary) {
   const auto dir = test::scratch_dir("launch_cli");
-  const auto config = test::write_config(
-      dir, test::paper_frame_study(1.5, "deployment { domain_id: 70 }"));
+  const auto config =
+      test::write_config(dir, test::paper_frame_study(1.5, "deployment { domain_id: 70 }"));
   const auto out = dir / "out";
   const Output o = run(kRths + " launch " + config.string() + " --case reference --case " +
-                       "lag_shift_14ms --no-plots --json --bin-dir " + RTHS_BINARY_DIR +
-                       " --out " + out.string());
+                       "lag_shift_14ms --no-plots --json --bin-dir " + RTHS_BINARY_DIR + " --out " +
+                       out.string());
   ASSERT_EQ(o.code, 0) << o.out;
   const auto j = nlohmann::json::parse(o.out);
   ASSERT_EQ(j["cases"].size(), 2u);
@@ -49,7 +49,8 @@ TEST(Launch, RunsEveryCaseAndWritesRecordsResultsAndASummary) {
   EXPECT_EQ(j["cases"][0]["max_difference_from_in_process_m"].get<double>(), 0.0);
   EXPECT_EQ(j["cases"][1]["max_difference_from_in_process_m"].get<double>(), 0.0);
   const auto record = runtime::read_record(out / "lag_shift_14ms.rthsrec");
-  test::expect_record_equals(record, test::reference_result(test::read_file(config), "lag_shift_14ms"));
+  test::expect_record_equals(record,
+                             test::reference_result(test::read_file(config), "lag_shift_14ms"));
   EXPECT_TRUE(std::filesystem::exists(out / "results.csv"));
   EXPECT_TRUE(std::filesystem::exists(out / "summary.txt"));
   EXPECT_TRUE(std::filesystem::exists(out / "logs" / "reference" / "coordinator.log"));
@@ -71,11 +72,14 @@ std::size_t rows_of(const std::filesystem::path& csv) {
 // step count (launch used to report the coordinator's exchange counter: one fewer).
 TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
   const auto dir = test::scratch_dir("launch_columns");
-  const auto config = test::write_config(dir, test::paper_frame_study(0.5, "deployment { domain_id: 71 }"));
-  const Output ran = run(kRths + " run " + config.string() + " --no-plots --json --out " + (dir / "run").string());
+  const auto config =
+      test::write_config(dir, test::paper_frame_study(0.5, "deployment { domain_id: 71 }"));
+  const Output ran =
+      run(kRths + " run " + config.string() + " --no-plots --json --out " + (dir / "run").string());
   ASSERT_EQ(ran.code, 0) << ran.out;
-  const Output launched = run(kRths + " launch " + config.string() + " --no-plots --json --bin-dir " +
-                              RTHS_BINARY_DIR + " --out " + (dir / "launch").string());
+  const Output launched =
+      run(kRths + " launch " + config.string() + " --no-plots --json --bin-dir " + RTHS_BINARY_DIR +
+          " --out " + (dir / "launch").string());
   ASSERT_EQ(launched.code, 0) << launched.out;
 
   const auto run_header = header_of(dir / "run" / "results.csv");
@@ -86,7 +90,9 @@ TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
   for (const std::string c : {"reference", "lag_shift_14ms", "jitter"})
     for (const std::string link : {"1", "2"})
       for (const std::string what : {"injected_s", "round_trip_s"})
-        EXPECT_EQ(std::count(lag_columns.begin(), lag_columns.end(), c + "_lag_node" + link + "_" + what), 1)
+        EXPECT_EQ(
+            std::count(lag_columns.begin(), lag_columns.end(), c + "_lag_node" + link + "_" + what),
+            1)
             << c << " node " << link << " " << what;
 
   EXPECT_EQ(rows_of(dir / "launch" / "results.csv"), rows_of(dir / "run" / "results.csv"));
@@ -95,7 +101,8 @@ TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
   ASSERT_EQ(launch_json["cases"].size(), run_json["cases"].size());
   for (std::size_t i = 0; i < run_json["cases"].size(); ++i) {
     EXPECT_EQ(launch_json["cases"][i]["steps"], run_json["cases"][i]["steps"]) << i;
-    EXPECT_EQ(launch_json["cases"][i]["steps"].get<std::size_t>(), rows_of(dir / "launch" / "results.csv"));
+    EXPECT_EQ(launch_json["cases"][i]["steps"].get<std::size_t>(),
+              rows_of(dir / "launch" / "results.csv"));
   }
 }
 
@@ -104,12 +111,14 @@ TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
 TEST(Launch, ComparesEveryCaseWithTheLagFreeInProcessReference) {
   const auto dir = test::scratch_dir("launch_reference");
   const std::string lag_free_named = test::paper_frame_study(0.5, "deployment { domain_id: 72 }");
-  const auto config = test::write_config(dir, "reference_case: \"lag_shift_14ms\"\n" + lag_free_named);
-  const Output launched = run(kRths + " launch " + config.string() +
-                              " --case lag_shift_14ms --no-plots --bin-dir " + RTHS_BINARY_DIR +
-                              " --out " + (dir / "launch").string());
+  const auto config =
+      test::write_config(dir, "reference_case: \"lag_shift_14ms\"\n" + lag_free_named);
+  const Output launched =
+      run(kRths + " launch " + config.string() + " --case lag_shift_14ms --no-plots --bin-dir " +
+          RTHS_BINARY_DIR + " --out " + (dir / "launch").string());
   ASSERT_EQ(launched.code, 0) << launched.out;
-  EXPECT_NE(launched.out.find("against the lag-free in-process reference"), std::string::npos) << launched.out;
+  EXPECT_NE(launched.out.find("against the lag-free in-process reference"), std::string::npos)
+      << launched.out;
   const auto summary = nlohmann::json::parse(test::read_file(dir / "launch" / "summary.json"));
   const double launched_nrmse = summary["cases"][0]["nrmse_pct"].get<double>();
 
@@ -157,8 +166,11 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   ASSERT_GT(steps, 100);
   EXPECT_EQ(nlohmann::json::parse(o.out)["rows"].get<long>(), steps);
   const std::string table = test::read_file(csv);
-  EXPECT_EQ(table.rfind("step,time_s,ground_acceleration_m_per_s2,u1_m,v1_m_per_s,a1_m_per_s2,command1_m,"
-                        "realised1_m,force1_N,", 0), 0u)
+  EXPECT_EQ(
+      table.rfind("step,time_s,ground_acceleration_m_per_s2,u1_m,v1_m_per_s,a1_m_per_s2,command1_m,"
+                  "realised1_m,force1_N,",
+                  0),
+      0u)
       << table.substr(0, 200);
   EXPECT_NE(table.find("node2_round_trip_s"), std::string::npos);
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), steps + 1);  // + header

@@ -78,7 +78,8 @@ transport::Message command(int node, std::int64_t step) {
   return m;
 }
 
-std::vector<transport::Message> of_kind(const std::vector<transport::Message>& sent, MessageKind kind) {
+std::vector<transport::Message> of_kind(const std::vector<transport::Message>& sent,
+                                        MessageKind kind) {
   std::vector<transport::Message> out;
   for (const auto& m : sent)
     if (m.kind == kind) out.push_back(m);

@@ -14,9 +14,8 @@ namespace {
 
 constexpr char kRun[] = "run-1";
 
-transport::Message assign_message(int node, config::NodeSpec::Kind kind,
-                                  std::vector<int> storeys, std::vector<int> actuators,
-                                  const std::string& extra = "") {
+transport::Message assign_message(int node, config::NodeSpec::Kind kind, std::vector<int> storeys,
+                                  std::vector<int> actuators, const std::string& extra = "") {
   runtime::Assign a;
   a.set_schema_version(runtime::kSchemaVersion);
   *a.mutable_study() = core::parse_study(test::paper_frame_study(1, extra), "t");
@@ -63,8 +62,8 @@ TEST(SubstructureService, RejectsDuplicatesForeignRunsAndGarbage) {
   substructure_nodes::SubstructureService node(1, "");
   node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {}));
   EXPECT_EQ(node.handle(command(1, 1, 0.01, 0)).size(), 1u);
-  EXPECT_TRUE(node.handle(command(1, 1, 0.01, 0)).empty());   // duplicate
-  EXPECT_TRUE(node.handle(command(1, 3, 0.01, 0)).empty());   // lockstep: skips step 2
+  EXPECT_TRUE(node.handle(command(1, 1, 0.01, 0)).empty());  // duplicate
+  EXPECT_TRUE(node.handle(command(1, 3, 0.01, 0)).empty());  // lockstep: skips step 2
   auto foreign = command(1, 2, 0.01, 0);
   foreign.run_id = "other";
   EXPECT_TRUE(node.handle(foreign).empty());
@@ -125,7 +124,7 @@ TEST(SubstructureService, RefusesACommandThatIsNotFiniteOrBeyondTheLimits) {
   node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {},
                              "deployment { limits { max_displacement: 0.1 max_velocity: 1 } }"));
   EXPECT_TRUE(node.handle(command(1, 1, std::nan(""), 0)).empty());
-  EXPECT_TRUE(node.handle(command(1, 1, 0.25, 0)).empty());   // beyond 2 x 0.1 m
+  EXPECT_TRUE(node.handle(command(1, 1, 0.25, 0)).empty());  // beyond 2 x 0.1 m
   EXPECT_TRUE(node.handle(command(1, 1, 0.01, 1e300)).empty());
   auto bad_time = command(1, 1, 0.01, 0);
   runtime::Command c;
@@ -229,7 +228,8 @@ TEST(ActuatorService, HoldWithoutARateLimitRampsAtTheRunsOwnLargestChange) {
 
 TEST(ActuatorService, LockstepServoRunsItsPeriodsPerCommandAndAnswersOnce) {
   actuator_emulator::ActuatorService node(2, "");
-  node.handle(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0}, "servo { rate: 4000 }"));
+  node.handle(
+      assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0}, "servo { rate: 4000 }"));
   EXPECT_FALSE(node.streaming());
   runtime::Feedback f;
   for (int k = 1; k <= 20; ++k) {
@@ -275,9 +275,10 @@ TEST(ActuatorService, RealTimeServoStreamsOneFeedbackPerServoPeriodForTheNewestC
 TEST(ActuatorService, AStreamingServoRefusesAPerCommandSendStage) {
   actuator_emulator::ActuatorService node(2, "");
   runtime::Assign assign;
-  ASSERT_TRUE(runtime::unpack(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0},
-                                             "servo { rate: 4000 } deployment { clock: REAL_TIME }"),
-                              assign));
+  ASSERT_TRUE(
+      runtime::unpack(assign_message(2, config::NodeSpec::ACTUATOR_EMULATOR, {0}, {0},
+                                     "servo { rate: 4000 } deployment { clock: REAL_TIME }"),
+                      assign));
   assign.mutable_node()->add_send_delay()->mutable_shift()->set_delay(0.01);
   const auto ready = node.handle(runtime::pack(kRun, 2, runtime::ASSIGN, 0, assign));
   ASSERT_EQ(ready.size(), 1u);

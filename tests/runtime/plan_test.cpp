@@ -40,44 +40,52 @@ TEST(Plan, DefaultNodesHostEverything) {
 }
 
 TEST(Plan, NoSubstructureNodeMeansTheCoordinatorComputesTheNumericalPart) {
-  const auto plan = make_plan(two_storey_fraction(), deployment("nodes { id: 4 kind: ACTUATOR_EMULATOR }"));
+  const auto plan =
+      make_plan(two_storey_fraction(), deployment("nodes { id: 4 kind: ACTUATOR_EMULATOR }"));
   EXPECT_TRUE(plan.numerical_local);
 }
 
 TEST(Plan, ErrorsNameNodeAndStorey) {
   const auto setup = two_storey_fraction();
-  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE storeys: [1] } "
-                            "nodes { id: 2 kind: ACTUATOR_EMULATOR }")
+  EXPECT_NE(error_of(setup,
+                     "nodes { id: 1 kind: SUBSTRUCTURE storeys: [1] } "
+                     "nodes { id: 2 kind: ACTUATOR_EMULATOR }")
                 .find("numerical storey 2 is hosted by no substructure node"),
             std::string::npos);
-  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 3 kind: SUBSTRUCTURE } "
-                            "nodes { id: 2 kind: ACTUATOR_EMULATOR }")
+  EXPECT_NE(error_of(setup,
+                     "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 3 kind: SUBSTRUCTURE } "
+                     "nodes { id: 2 kind: ACTUATOR_EMULATOR }")
                 .find("storey 1 is hosted by nodes 1 and 3"),
             std::string::npos);
   EXPECT_NE(error_of(setup, "nodes { id: 0 kind: SUBSTRUCTURE }").find("id must be >= 1"),
             std::string::npos);
-  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE storeys: [3] }").find("storey 3 does not exist"),
+  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE storeys: [3] }")
+                .find("storey 3 does not exist"),
             std::string::npos);
-  EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 1 kind: ACTUATOR_EMULATOR }")
-                .find("id used by two nodes"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 1 kind: ACTUATOR_EMULATOR }")
+          .find("id used by two nodes"),
+      std::string::npos);
   EXPECT_NE(error_of(setup, "nodes { id: 1 kind: SUBSTRUCTURE }")
                 .find("experimental storey 1 is hosted by no actuator emulator"),
             std::string::npos);
 }
 
 TEST(Plan, NodeSideSetupMatchesPrepareStudy) {
-  const std::string text = test::two_storey_study(0.1, "cases { name: \"d\" delay { shift { delay: 0.01 } } }", "");
+  const std::string text =
+      test::two_storey_study(0.1, "cases { name: \"d\" delay { shift { delay: 0.01 } } }", "");
   const auto prepared = test::prepare(text);
   const auto& c = find_case(prepared.config, "d");
   const auto from_core = core::setup_for_case(prepared, c);
-  const auto node_side = setup_without_motion(prepared.config, prepared.base_dir, prepared.base.dt, c);
+  const auto node_side =
+      setup_without_motion(prepared.config, prepared.base_dir, prepared.base.dt, c);
   EXPECT_EQ(from_core.partition.actuator_storeys, node_side.partition.actuator_storeys);
   ASSERT_EQ(from_core.delays.size(), node_side.delays.size());
   for (std::size_t s = 0; s < from_core.partition.numerical.size(); ++s) {
     ASSERT_EQ(!from_core.partition.numerical[s], !node_side.partition.numerical[s]);
     if (from_core.partition.numerical[s])
-      EXPECT_EQ(from_core.partition.numerical[s]->describe(), node_side.partition.numerical[s]->describe());
+      EXPECT_EQ(from_core.partition.numerical[s]->describe(),
+                node_side.partition.numerical[s]->describe());
   }
   EXPECT_EQ(from_core.delays[0].describe(), node_side.delays[0].describe());
 }
@@ -99,13 +107,13 @@ TEST(FailSafeWindows, BothWaysOrOutOfRangeIsBadInputNamingTheFields) {
   EXPECT_EQ(error_of(setup, "answer_window_ms: 10 max_missed_answers: 4"),
             "deployment.answer_window_ms and deployment.max_missed_answers both given "
             "(10.000000 ms and 4 steps): give the window one way");
-  EXPECT_NE(error_of(setup, "command_watchdog_ms: -1").find(
-                "deployment.command_watchdog_ms = -1.000000 ms: must be in [0, 60000] ms"),
+  EXPECT_NE(error_of(setup, "command_watchdog_ms: -1")
+                .find("deployment.command_watchdog_ms = -1.000000 ms: must be in [0, 60000] ms"),
             std::string::npos);
   EXPECT_NE(error_of(setup, "answer_window_ms: 70000").find("[0, 60000]"), std::string::npos);
-  EXPECT_NO_THROW(check_failsafe_windows(deployment("answer_window_ms: 10 command_watchdog_periods: 4")));
+  EXPECT_NO_THROW(
+      check_failsafe_windows(deployment("answer_window_ms: 10 command_watchdog_periods: 4")));
 }
-
 
 }  // namespace
 }  // namespace rths::runtime

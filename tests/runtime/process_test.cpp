@@ -102,13 +102,15 @@ TEST(ChildProcessTest, AMissingProgramOrLogFolderIsAnErrorNamingIt) {
     ChildProcess child("/nonexistent/rths-nothing", {}, "");
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/rths-nothing"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/rths-nothing"), std::string::npos)
+        << e.what();
   }
   try {
     ChildProcess child("/bin/true", {}, "/nonexistent/dir/child.log");
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/child.log"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/child.log"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -144,7 +146,8 @@ TEST(FindProgramTest, FindsInTheGivenFolderOrItsBuildSubfolderElseNamesWhereItLo
     find_program("rths-missing", "coordinator", dir);
     FAIL() << "expected an error";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find((dir / "rths-missing").string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find((dir / "rths-missing").string()), std::string::npos)
+        << e.what();
   }
 }
 
@@ -190,7 +193,8 @@ TEST(ScopedCpuPinTest, RefusesACpuOutsideTheAllowedSetNamingIt) {
     const cpu_set_t allowed = current_mask();
     if (!CPU_ISSET(CPU_SETSIZE - 1, &allowed)) FAIL() << "expected a refusal";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(std::to_string(CPU_SETSIZE - 1)), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(std::to_string(CPU_SETSIZE - 1)), std::string::npos)
+        << e.what();
   }
 }
 

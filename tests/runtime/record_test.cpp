@@ -1,7 +1,7 @@
 #include "runtime/record.h"
 
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -9,9 +9,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <cstring>
 #include <iterator>
 #include <string_view>
 #include <thread>
@@ -153,7 +153,8 @@ TEST(Record, AFlippedByteLosesOnlyItsEntryAndTheReportNamesTheStep) {
     EXPECT_EQ(contents.losses[0].first_step_after, victim + 1);
     EXPECT_NE(contents.warning.find("step 20 lost"), std::string::npos) << contents.warning;
     EXPECT_EQ(contents.steps().size(), static_cast<std::size_t>(kSteps - 1));
-    EXPECT_EQ(contents.missing_steps(), (std::vector<std::pair<std::int64_t, std::int64_t>>{{20, 20}}));
+    EXPECT_EQ(contents.missing_steps(),
+              (std::vector<std::pair<std::int64_t, std::int64_t>>{{20, 20}}));
     ASSERT_NE(contents.header(), nullptr);
     ASSERT_NE(contents.footer(), nullptr);
     EXPECT_FALSE(contents.truncated);
@@ -205,7 +206,8 @@ TEST(Record, EveryCutIsATruncationOfIntactEntries) {
     const bool between = std::find(frames.begin(), frames.end(), size) != frames.end();
     EXPECT_EQ(contents.truncated, !between);
     EXPECT_FALSE(contents.lost_entries()) << contents.warning;
-    EXPECT_EQ(contents.entries.size(), size < kRecordPreambleBytes ? 0 : whole - 1);  // all but the cut one
+    EXPECT_EQ(contents.entries.size(),
+              size < kRecordPreambleBytes ? 0 : whole - 1);  // all but the cut one
   }
 }
 
@@ -214,8 +216,10 @@ TEST(Record, AnOldRecordWithoutChecksumsStillReadsWithAWarning) {
   std::string bytes;
   for (int k = -1; k < 3; ++k) {
     RecordEntry e;
-    if (k < 0) e.mutable_header()->set_run_id("old");
-    else e.mutable_step()->set_step(k);
+    if (k < 0)
+      e.mutable_header()->set_run_id("old");
+    else
+      e.mutable_step()->set_step(k);
     const std::string payload = e.SerializeAsString();
     bytes.push_back(static_cast<char>(payload.size()));  // < 128: a one-byte varint
     bytes += payload;
@@ -317,11 +321,11 @@ TEST(AsyncRecord, AWriteThatFailsLeavesAReadablePrefixAndNothingAfterIt) {
     setrlimit(RLIMIT_FSIZE, &limit);
     AsyncRecordWriter writer(path, 16);
     for (int k = 0; k < 3000 && !writer.failed(); ++k) {
-      while (!writer.append(step_entry(k))) {
-      }
+      while (!writer.append(step_entry(k))) {}
       std::this_thread::sleep_for(std::chrono::microseconds(50));
     }
-    const bool failed = writer.failed() && writer.failure().find(std::strerror(EFBIG)) != std::string::npos;
+    const bool failed =
+        writer.failed() && writer.failure().find(std::strerror(EFBIG)) != std::string::npos;
     _exit(failed ? 0 : 1);
   }
   int status = 0;
@@ -347,8 +351,7 @@ TEST(AsyncRecord, KillMinus9LosesAtMostTheQueuedEntriesAndLeavesAReadablePrefix)
   if (child == 0) {
     AsyncRecordWriter writer(path, kCapacity);
     for (int k = 0; k < kAppended; ++k)
-      while (!writer.append(step_entry(k))) {
-      }
+      while (!writer.append(step_entry(k))) {}
     raise(SIGKILL);  // the crash: no close(), no destructor
   }
   int status = 0;

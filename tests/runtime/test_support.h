@@ -1,10 +1,10 @@
 #pragma once
 // Shared by the runtime tests: small studies written as config text, and helpers to run them.
 
-#include <filesystem>
-#include <string>
 #include <unistd.h>
+#include <filesystem>
 #include <sstream>
+#include <string>
 
 #include "core/study.h"
 
@@ -25,7 +25,8 @@ inline std::string two_storey_study(double duration, const std::string& cases,
   return "name: \"two_storey\"\n"
          "structure { shear_building { storey_mass: [2000, 1500] storey_stiffness: [3.0e6, "
          "2.0e6] } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" + motion_path() + "\" duration: " + std::to_string(duration) +
+         "motion { path: \"" +
+         motion_path() + "\" duration: " + std::to_string(duration) +
          " scale: 2 }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n" +
          substructuring + "\n" + cases + "\n" + deployment;
@@ -35,17 +36,21 @@ inline std::string two_storey_study(double duration, const std::string& cases,
 inline std::string paper_frame_study(double duration, const std::string& deployment) {
   return "name: \"paper_frame\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" + motion_path() + "\" duration: " + std::to_string(duration) + " }\n"
+         "motion { path: \"" +
+         motion_path() + "\" duration: " + std::to_string(duration) +
+         " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
          "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
          "cases { name: \"reference\" }\n"
          "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n"
-         "cases { name: \"jitter\" delay { jitter { mean_delay: 0.01 std_dev: 0.003 seed: 5 } } }\n" +
+         "cases { name: \"jitter\" delay { jitter { mean_delay: 0.01 std_dev: 0.003 seed: 5 } } "
+         "}\n" +
          deployment;
 }
 
 inline core::PreparedStudy prepare(const std::string& text) {
-  return core::prepare_study(core::parse_study(text, "test"), std::filesystem::temp_directory_path());
+  return core::prepare_study(core::parse_study(text, "test"),
+                             std::filesystem::temp_directory_path());
 }
 
 }  // namespace rths::test
@@ -71,7 +76,8 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   return dir;
 }
 
-inline std::filesystem::path write_config(const std::filesystem::path& dir, const std::string& text) {
+inline std::filesystem::path write_config(const std::filesystem::path& dir,
+                                          const std::string& text) {
   const auto path = dir / "study.textproto";
   std::ofstream(path) << text;
   return path;
@@ -89,10 +95,12 @@ inline std::string read_file(const std::filesystem::path& path) {
 }
 
 // The in-process reference of one case.
-inline core::SimulationResult reference_result(const std::string& text, const std::string& case_name) {
+inline core::SimulationResult reference_result(const std::string& text,
+                                               const std::string& case_name) {
   const core::PreparedStudy prepared = prepare(text);
-  return core::simulate(core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name)),
-                        prepared.motion);
+  return core::simulate(
+      core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name)),
+      prepared.motion);
 }
 
 // Every recorded step equals the reference row exactly (the doubles went over the wire as bits).

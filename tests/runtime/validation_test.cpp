@@ -56,9 +56,9 @@ TEST(FiniteWithin, RejectsNonFiniteAndBeyondTheLimit) {
 
 TEST(RejectCounters, CountsEveryCauseAndRoundTripsThroughCounters) {
   RejectCounters r;
-  for (const Verdict v : {Verdict::kForeignRun, Verdict::kGarbage, Verdict::kDuplicate,
-                          Verdict::kStale, Verdict::kOutOfOrder, Verdict::kUnknownNode,
-                          Verdict::kNotEntitled, Verdict::kOutOfRange})
+  for (const Verdict v :
+       {Verdict::kForeignRun, Verdict::kGarbage, Verdict::kDuplicate, Verdict::kStale,
+        Verdict::kOutOfOrder, Verdict::kUnknownNode, Verdict::kNotEntitled, Verdict::kOutOfRange})
     r.count(v);
   EXPECT_EQ(r.total(), 8u);
   Counters c;

@@ -73,7 +73,8 @@ TEST(Check, RefusesMissingFilesAndDirectories) {
   const fs::path dir = test::make_lab("missing");
   EXPECT_THAT(refusal(dir / "node_9", 9), HasSubstr("not a directory"));
   fs::remove(node_dir(dir, 1) / "permissions.p7s");
-  EXPECT_THAT(refusal(node_dir(dir, 1), 1), AllOf(HasSubstr("permissions.p7s"), HasSubstr("missing")));
+  EXPECT_THAT(refusal(node_dir(dir, 1), 1),
+              AllOf(HasSubstr("permissions.p7s"), HasSubstr("missing")));
 }
 
 TEST(Check, RefusesAnUnsignedOrTamperedDocument) {
@@ -103,7 +104,8 @@ TEST(Check, RefusesADocumentSignedByAnotherCa) {
 
 TEST(Check, RefusesMalformedXmlEvenWhenProperlySigned) {
   const fs::path dir = test::make_lab("malformed");
-  test::sign_with_openssl(dir, "<dds><domain_access_rules><domain_rule>", node_dir(dir, 0) / "governance.p7s");
+  test::sign_with_openssl(dir, "<dds><domain_access_rules><domain_rule>",
+                          node_dir(dir, 0) / "governance.p7s");
   EXPECT_THAT(refusal(node_dir(dir, 0), 0),
               AllOf(HasSubstr("governance.p7s"), HasSubstr("not well-formed XML")));
   test::sign_with_openssl(dir, "<html><permissions/></html>", node_dir(dir, 1) / "permissions.p7s");
@@ -128,7 +130,8 @@ TEST(Check, TheLabCheckRefusesAGovernanceThatDoesNotCoverTheRunsDomain) {
   EXPECT_NO_THROW(check_lab_security(dir, {0, 1, 2}, 7));
   std::string narrow = governance_xml();
   const std::string wide = "<id_range><min>0</min><max>230</max></id_range>";
-  narrow.replace(narrow.find(wide), wide.size(), "<id>3</id><id_range><min>10</min><max>12</max></id_range>");
+  narrow.replace(narrow.find(wide), wide.size(),
+                 "<id>3</id><id_range><min>10</min><max>12</max></id_range>");
   test::sign_with_openssl(dir, narrow, node_dir(dir, 2) / "governance.p7s");
   EXPECT_NO_THROW(check_lab_security(dir, {0, 1, 2}, 11));
   EXPECT_EQ(check_node_security(node_dir(dir, 2), 2).governance_domains.size(), 2u);
@@ -150,8 +153,10 @@ TEST(Check, PropertiesPointCycloneAtThePluginsAndTheFiles) {
       if (n == name) return v;
     return std::string();
   };
-  EXPECT_EQ(value("dds.sec.auth.identity_certificate"), "file:" + (node_dir(dir, 1) / "cert.pem").string());
-  EXPECT_EQ(value("dds.sec.access.permissions"), "file:" + (node_dir(dir, 1) / "permissions.p7s").string());
+  EXPECT_EQ(value("dds.sec.auth.identity_certificate"),
+            "file:" + (node_dir(dir, 1) / "cert.pem").string());
+  EXPECT_EQ(value("dds.sec.access.permissions"),
+            "file:" + (node_dir(dir, 1) / "permissions.p7s").string());
   EXPECT_THAT(value("dds.sec.auth.library.path"), HasSubstr("dds_security_auth"));
   if (!plugin_directory().empty())
     EXPECT_TRUE(fs::is_regular_file(value("dds.sec.crypto.library.path")));

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   try {
     if (!security_dir.empty())
       options.participant_properties = security::participant_properties(
-          security::check_node_security(security_dir, identity >= 0     ? identity
+          security::check_node_security(security_dir, identity >= 0         ? identity
                                                       : options.coordinator ? 0
                                                                             : node_id));
   } catch (const std::exception& e) {

@@ -17,9 +17,9 @@ namespace rths {
 namespace {
 
 namespace fs = std::filesystem;
+using runtime::ChildProcess;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
-using runtime::ChildProcess;
 
 fs::path binary(const std::string& subdir, const std::string& name) {
   return fs::path(RTHS_BINARY_DIR) / subdir / name;
@@ -34,10 +34,19 @@ struct Probe {
 Probe probe(const fs::path& logs, const std::string& label, const std::string& mode, int domain,
             const std::string& role, int node_id, const fs::path& node_dir, double seconds,
             int identity = -1, int peer = 1) {
-  std::vector<std::string> args{mode, "--domain", std::to_string(domain), "--prefix",
-                                "sec" + std::to_string(domain), "--as", role, "--node-id",
-                                std::to_string(node_id), "--seconds", std::to_string(seconds),
-                                "--peer", std::to_string(peer)};
+  std::vector<std::string> args{mode,
+                                "--domain",
+                                std::to_string(domain),
+                                "--prefix",
+                                "sec" + std::to_string(domain),
+                                "--as",
+                                role,
+                                "--node-id",
+                                std::to_string(node_id),
+                                "--seconds",
+                                std::to_string(seconds),
+                                "--peer",
+                                std::to_string(peer)};
   if (!node_dir.empty()) args.insert(args.end(), {"--security", node_dir.string()});
   if (identity >= 0) args.insert(args.end(), {"--identity", std::to_string(identity)});
   const fs::path log = logs / (label + ".log");
@@ -98,8 +107,8 @@ TEST_F(DdsSecurity, ANodeCannotPublishOnTheCommandTopic) {
   Probe rx = probe(logs_, "rx", "receive", 173, "node", 2, node2, 7.0);
   Probe control_rx = probe(logs_, "control_rx", "receive", 174, "node", 2, node2, 7.0);
   Probe forger = probe(logs_, "forger", "send", 173, "coordinator", 0, node1, 5.0, 1, 2);
-  Probe control =
-      probe(logs_, "control", "send", 174, "coordinator", 0, security::node_dir(lab_, 0), 5.0, -1, 2);
+  Probe control = probe(logs_, "control", "send", 174, "coordinator", 0,
+                        security::node_dir(lab_, 0), 5.0, -1, 2);
   Probe unchecked = probe(logs_, "unchecked", "send", 173, "coordinator", 0, node1, 5.0, -1, 2);
   EXPECT_EQ(forger.process.wait(), 3);
   // Refused at its first entity outside node 1's own topics (its listener's node-2 topic or the
@@ -158,9 +167,10 @@ TEST_F(DdsSecurity, NodeProgramsRefuseBadCertificatesAtStartUp) {
   EXPECT_EQ(other_code, 2);
   EXPECT_THAT(other, HasSubstr("is for rths-node-0, not for node 1"));
   const fs::path stranger = test::make_lab("stranger_for_programs");
-  fs::copy_file(security::node_dir(stranger, 1) / "cert.pem", security::node_dir(lab_, 1) / "cert.pem",
-                fs::copy_options::overwrite_existing);
-  const auto [unsigned_code, unsigned_text] = run("unsigned", substructure, 1, security::node_dir(lab_, 1));
+  fs::copy_file(security::node_dir(stranger, 1) / "cert.pem",
+                security::node_dir(lab_, 1) / "cert.pem", fs::copy_options::overwrite_existing);
+  const auto [unsigned_code, unsigned_text] =
+      run("unsigned", substructure, 1, security::node_dir(lab_, 1));
   EXPECT_EQ(unsigned_code, 2);
   EXPECT_THAT(unsigned_text, AllOf(HasSubstr("cert.pem"), HasSubstr("not signed by the lab CA")));
 }
@@ -171,11 +181,12 @@ TEST_F(DdsSecurity, CoordinatorRefusesAMalformedGovernanceBeforeSendingAnything)
   test::sign_with_openssl(lab_, "<dds><domain_access_rules><domain_rule><domains>",
                           security::node_dir(lab_, 0) / "governance.p7s");
   const fs::path config = test::write_config(
-      lab_, test::paper_frame_study(0.2, "deployment { domain_id: 176 security_dir: \"" +
-                                             lab_.string() + "\" }"));
-  ChildProcess coordinator(binary("coordinator", "rths-coordinator"),
-                           {"--config", config.string(), "--record", (lab_ / "run.rthsrec").string()},
-                           logs_ / "coordinator.log");
+      lab_, test::paper_frame_study(
+                0.2, "deployment { domain_id: 176 security_dir: \"" + lab_.string() + "\" }"));
+  ChildProcess coordinator(
+      binary("coordinator", "rths-coordinator"),
+      {"--config", config.string(), "--record", (lab_ / "run.rthsrec").string()},
+      logs_ / "coordinator.log");
   EXPECT_EQ(coordinator.wait(), 2);
   EXPECT_THAT(test::slurp(logs_ / "coordinator.log"),
               AllOf(HasSubstr("governance.p7s"), HasSubstr("not well-formed XML")));
@@ -185,8 +196,8 @@ TEST_F(DdsSecurity, CoordinatorRefusesAMalformedGovernanceBeforeSendingAnything)
 // `rths launch` with security on: every process authenticates and the lockstep run still equals
 // the in-process simulation bit for bit.
 TEST_F(DdsSecurity, LaunchedSecuredLockstepRunEqualsInProcess) {
-  const std::string text =
-      test::paper_frame_study(0.3, "deployment { domain_id: 177 security_dir: \"" + lab_.string() + "\" }");
+  const std::string text = test::paper_frame_study(
+      0.3, "deployment { domain_id: 177 security_dir: \"" + lab_.string() + "\" }");
   runtime::LaunchOptions options;
   options.config = test::write_config(lab_, text);
   options.case_name = "lag_shift_14ms";
@@ -207,7 +218,8 @@ TEST_F(DdsSecurity, LaunchedSecuredLockstepRunEqualsInProcess) {
 TEST_F(DdsSecurity, LaunchRefusesBadDocumentsBeforeStartingAnyProcess) {
   fs::remove(security::node_dir(lab_, 2) / "permissions.p7s");
   runtime::LaunchOptions options;
-  options.config = test::write_config(lab_, test::paper_frame_study(0.2, "deployment { domain_id: 177 }"));
+  options.config =
+      test::write_config(lab_, test::paper_frame_study(0.2, "deployment { domain_id: 177 }"));
   options.security_dir = lab_;
   options.programs_dir = RTHS_BINARY_DIR;
   options.record = lab_ / "run.rthsrec";

@@ -51,10 +51,12 @@ TEST(Pki, EachNodeMayOnlyUseItsOwnTopics) {
   const std::string coordinator = permissions_xml({0, "coordinator"}, "lab", "a", "b");
   EXPECT_NE(coordinator.find("<publish><topics><topic>*_down</topic>"), std::string::npos);
   EXPECT_NE(coordinator.find("<subscribe><topics><topic>*_up</topic>"), std::string::npos);
-  for (const NodeIdentity node : {NodeIdentity{1, "substructure"}, NodeIdentity{2, "actuator_emulator"}}) {
+  for (const NodeIdentity node :
+       {NodeIdentity{1, "substructure"}, NodeIdentity{2, "actuator_emulator"}}) {
     const std::string text = permissions_xml(node, "lab", "a", "b");
     const std::string own = "*_node" + std::to_string(node.node_id);
-    EXPECT_NE(text.find("<publish><topics><topic>" + own + "_up</topic></topics>"), std::string::npos);
+    EXPECT_NE(text.find("<publish><topics><topic>" + own + "_up</topic></topics>"),
+              std::string::npos);
     EXPECT_NE(text.find("<subscribe><topics><topic>" + own + "_down</topic></topics>"),
               std::string::npos);
     EXPECT_EQ(text.find("<topic>*_up</topic>"), std::string::npos);

@@ -22,7 +22,8 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
 }
 
 // Coordinator (0), a substructure node (1) and an actuator emulator (2).
-inline std::filesystem::path make_lab(const std::string& name, const std::string& organisation = "rths-lab") {
+inline std::filesystem::path make_lab(const std::string& name,
+                                      const std::string& organisation = "rths-lab") {
   const auto dir = fresh_dir(name);
   security::PkiOptions options;
   options.organisation = organisation;
@@ -42,7 +43,8 @@ inline void sign_with_openssl(const std::filesystem::path& pki, const std::strin
   std::ofstream(input) << xml;
   const std::string command = "openssl smime -sign -text -in '" + input + "' -signer '" +
                               (pki / "ca" / "ca_cert.pem").string() + "' -inkey '" +
-                              (pki / "ca" / "ca_key.pem").string() + "' -out '" + out.string() + "'";
+                              (pki / "ca" / "ca_key.pem").string() + "' -out '" + out.string() +
+                              "'";
   if (std::system(command.c_str()) != 0) throw std::runtime_error("failed: " + command);
   std::filesystem::remove(input);
 }

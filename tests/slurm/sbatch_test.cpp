@@ -26,14 +26,17 @@ SweepJob job() {
 TEST(SbatchTest, ArrayHasOneTaskPerShardAndRunsItsShard) {
   const SweepScripts s = sweep_scripts(job());
   EXPECT_EQ(s.array.rfind("#!/bin/bash\n", 0), 0u);
-  for (const char* line : {"#SBATCH --array=0-2\n", "#SBATCH --partition=short\n", "#SBATCH --time=00:30:00\n",
-                           "#SBATCH --mem=2G\n", "#SBATCH --cpus-per-task=2\n",
-                           "#SBATCH --output=/scratch/job/logs/shard-%a.out\n"}) {
+  for (const char* line :
+       {"#SBATCH --array=0-2\n", "#SBATCH --partition=short\n", "#SBATCH --time=00:30:00\n",
+        "#SBATCH --mem=2G\n", "#SBATCH --cpus-per-task=2\n",
+        "#SBATCH --output=/scratch/job/logs/shard-%a.out\n"}) {
     EXPECT_NE(s.array.find(line), std::string::npos) << line << "\n" << s.array;
   }
-  EXPECT_NE(s.array.find("exec '/opt/rths/bin/rths' sweep '/home/lab/it'\\''s here/sweep.textproto' "
-                         "--shard \"$SLURM_ARRAY_TASK_ID/3\" --out '/scratch/job/shards' --threads 2 --no-plots"),
-            std::string::npos)
+  EXPECT_NE(
+      s.array.find(
+          "exec '/opt/rths/bin/rths' sweep '/home/lab/it'\\''s here/sweep.textproto' "
+          "--shard \"$SLURM_ARRAY_TASK_ID/3\" --out '/scratch/job/shards' --threads 2 --no-plots"),
+      std::string::npos)
       << s.array;
 }
 
@@ -41,12 +44,14 @@ TEST(SbatchTest, MergeJoinsEveryShardAfterTheArraySucceeded) {
   const SweepScripts s = sweep_scripts(job());
   EXPECT_NE(s.merge.find("sweep merge '/scratch/job/sweep.csv'"), std::string::npos) << s.merge;
   for (int i = 0; i < 3; ++i) {
-    const std::string shard = "'/scratch/job/shards/sweep.shard-" + std::to_string(i) + "-of-3.csv'";
+    const std::string shard =
+        "'/scratch/job/shards/sweep.shard-" + std::to_string(i) + "-of-3.csv'";
     EXPECT_NE(s.merge.find(shard), std::string::npos) << shard;
   }
   EXPECT_EQ(s.merge.find("--array"), std::string::npos);
   EXPECT_NE(s.submit.find("--dependency=afterok:\"$array\""), std::string::npos) << s.submit;
-  EXPECT_NE(s.submit.find("sbatch --parsable '/scratch/job/sweep_array.sbatch'"), std::string::npos) << s.submit;
+  EXPECT_NE(s.submit.find("sbatch --parsable '/scratch/job/sweep_array.sbatch'"), std::string::npos)
+      << s.submit;
 }
 
 TEST(SbatchTest, NoPartitionLineWhenTheDefaultIsWanted) {

@@ -63,7 +63,8 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   std::ofstream(config)
       << "name: \"fault_trial\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" << spec.motion_path << "\" duration: " << spec.seconds << " }\n"
+         "motion { path: \""
+      << spec.motion_path << "\" duration: " << spec.seconds << " }\n"
       << "integrator { kind: EXPLICIT_NEWMARK dt: " << 1.0 / spec.rate_hz << " }\n"
       << "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
          "cases { name: \"reference\" }\n"
@@ -79,14 +80,14 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   };
   runtime::ChildProcess substructure = node("rths-substructure-node", "substructure_nodes", 1);
   runtime::ChildProcess emulator = node("rths-actuator-emulator", "actuator_emulator", 2);
-  std::vector<std::string> coordinator_args{"--config", config.string(), "--run-id", run_id,
-                                            "--domain", std::to_string(spec.domain), "--record",
-                                            record.string()};
+  std::vector<std::string> coordinator_args{
+      "--config", config.string(), "--run-id", run_id, "--domain", std::to_string(spec.domain),
+      "--record", record.string()};
   coordinator_args.insert(coordinator_args.end(), spec.coordinator_extra.begin(),
                           spec.coordinator_extra.end());
   runtime::ChildProcess coordinator(spec.binary_dir / "coordinator" / "rths-coordinator",
                                     coordinator_args, spec.dir / "coordinator.log");
-  runtime::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator   ? coordinator
+  runtime::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator    ? coordinator
                                   : spec.victim == FaultVictim::kSubstructure ? substructure
                                                                               : emulator;
   FaultTrialResult out;
@@ -105,7 +106,8 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
     }
     if (std::filesystem::exists(record)) {
       try {
-        if (static_cast<long>(runtime::read_record(record).steps().size()) >= spec.fault_step) break;
+        if (static_cast<long>(runtime::read_record(record).steps().size()) >= spec.fault_step)
+          break;
       } catch (const std::exception&) {
         // A partly written entry mid-read: try again.
       }
@@ -136,7 +138,8 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   const std::string coordinator_log = read_text(spec.dir / "coordinator.log");
   const std::string emulator_log = read_text(spec.dir / "node_2.log");
   if (spec.victim != FaultVictim::kEmulator)
-    if (auto hold = stamped_line(emulator_log, "HOLD"); hold || (hold = stamped_line(emulator_log, "holding")))
+    if (auto hold = stamped_line(emulator_log, "HOLD");
+        hold || (hold = stamped_line(emulator_log, "holding")))
       out.hold_ms = static_cast<double>(*hold - fault_ns) * 1e-6;
   out.names_node = spec.victim == FaultVictim::kCoordinator
                        ? emulator_log.find("command watchdog") != std::string::npos
@@ -162,12 +165,12 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
     // Steps that must be there: step 0 and every step begun by the fault (the one in progress
     // at the fault may be cut by a killed coordinator, and its queue may hold more).
     const double dt_ns = 1e9 / spec.rate_hz;
-    const long begun = first_start > 0
-                           ? 1 + static_cast<long>(static_cast<double>(fault_ns - first_start) / dt_ns)
-                           : 0;
+    const long begun =
+        first_start > 0 ? 1 + static_cast<long>(static_cast<double>(fault_ns - first_start) / dt_ns)
+                        : 0;
     const long allowed_loss = spec.victim == FaultVictim::kCoordinator ? 4096 + 1 : 1;
-    out.record_complete = contiguous && before_fault + allowed_loss >= begun &&
-                          before_fault >= spec.fault_step;
+    out.record_complete =
+        contiguous && before_fault + allowed_loss >= begun && before_fault >= spec.fault_step;
   } catch (const std::exception& e) {
     out.record_complete = false;
     out.why_not = std::string("record unreadable: ") + e.what();

@@ -28,28 +28,28 @@ std::string to_string(FaultVictim victim);
 
 struct FaultTrialSpec {
   FaultVictim victim = FaultVictim::kSubstructure;
-  int signal = 9;                 // SIGKILL or SIGSTOP
-  long fault_step = 500;          // the fault comes once the record holds this many steps
-  double rate_hz = 1024;          // integrator rate
-  double seconds = 3.0;           // of the record
-  int domain = 60;                // DDS domain id, one per concurrent trial
-  std::string deployment_extra;   // appended inside deployment { } (e.g. max_missed_answers: 30)
+  int signal = 9;                // SIGKILL or SIGSTOP
+  long fault_step = 500;         // the fault comes once the record holds this many steps
+  double rate_hz = 1024;         // integrator rate
+  double seconds = 3.0;          // of the record
+  int domain = 60;               // DDS domain id, one per concurrent trial
+  std::string deployment_extra;  // appended inside deployment { } (e.g. max_missed_answers: 30)
   // Appended to the coordinator's arguments; default: no platform measurement (recorded so).
   std::vector<std::string> coordinator_extra{"--platform-seconds", "0", "--accept-platform"};
-  std::filesystem::path dir;      // scratch folder (created, emptied)
+  std::filesystem::path dir;         // scratch folder (created, emptied)
   std::filesystem::path binary_dir;  // the build tree (programs under its subfolders)
-  std::string motion_path;        // AT2 file
+  std::string motion_path;           // AT2 file
 };
 
 struct FaultTrialResult {
-  bool fault_delivered = false;   // false: the run ended (or failed) before the fault step
-  std::string why_not;            // when !fault_delivered
+  bool fault_delivered = false;  // false: the run ended (or failed) before the fault step
+  std::string why_not;           // when !fault_delivered
   long steps_after_fault = 0;
   double hold_ms = -1, stop_ms = -1;
   bool record_complete = false;
   bool names_node = false;
-  int coordinator_exit = -1;      // -1: the coordinator was the victim
-  long record_steps = 0;           // also when the fault was not delivered: steps run healthy
+  int coordinator_exit = -1;  // -1: the coordinator was the victim
+  long record_steps = 0;      // also when the fault was not delivered: steps run healthy
 };
 
 // Throws std::runtime_error when a program cannot be started.

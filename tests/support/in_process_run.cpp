@@ -12,11 +12,11 @@ RunOutcome run_in_process(const core::PreparedStudy& prepared, CoordinatorOption
   std::vector<std::unique_ptr<runtime::NodeService>> services;
   for (const runtime::NodePlan& node : coordinator.plan().nodes) {
     if (node.spec.kind() == config::NodeSpec::SUBSTRUCTURE)
-      services.push_back(std::make_unique<substructure_nodes::SubstructureService>(
-          node.spec.id(), options.run_id));
+      services.push_back(std::make_unique<substructure_nodes::SubstructureService>(node.spec.id(),
+                                                                                   options.run_id));
     else
-      services.push_back(std::make_unique<actuator_emulator::ActuatorService>(node.spec.id(),
-                                                                              options.run_id));
+      services.push_back(
+          std::make_unique<actuator_emulator::ActuatorService>(node.spec.id(), options.run_id));
     transport.attach(node.spec.id(), *services.back());
   }
   return coordinator.run();

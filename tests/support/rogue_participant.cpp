@@ -8,7 +8,8 @@
 //              echoing the command's stamp: the best forgery a stranger can make).
 //   first      as node 1: from the moment it learns the run id (node 1's ASSIGN), a FEEDBACK to
 //              step 1 every millisecond until it sees the command of step 1, then an echo of it.
-//   control    never an answer; once the run's commands flow: as the coordinator, HOLD, STOP, ASSIGN and a COMMAND to nodes 1
+//   control    never an answer; once the run's commands flow: as the coordinator, HOLD, STOP,
+//   ASSIGN and a COMMAND to nodes 1
 //              and 2 on their own command topics, addressed and as a broadcast; as node 2 on its
 //              own up topic, HOLD and ANNOUNCE (and an ANNOUNCE with an empty run id); garbage,
 //              another run's messages and replays of the commands it saw.
@@ -38,7 +39,7 @@ struct Rogue {
   std::map<std::string, long> sent;
   std::vector<transport::Message> seen_commands;  // replayed in control mode
   bool stop = false;
-  bool running = false;  // a command of the run was seen
+  bool running = false;           // a command of the run was seen
   std::uint64_t coordinator = 0;  // the writer the run id was learned from (not the rogue's own)
 
   void count(const std::string& what) { ++sent[what]; }

@@ -11,8 +11,8 @@
 namespace rths::test {
 
 struct CommandOutcome {
-  int exit_code = -1;   // -1: could not start, or ended by a signal
-  std::string output;   // stdout and stderr
+  int exit_code = -1;  // -1: could not start, or ended by a signal
+  std::string output;  // stdout and stderr
 };
 
 inline CommandOutcome run_command_line(const std::string& command_line) {
@@ -21,7 +21,8 @@ inline CommandOutcome run_command_line(const std::string& command_line) {
   if (!pipe) return outcome;
   std::array<char, 4096> buffer{};
   std::size_t n;
-  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0) outcome.output.append(buffer.data(), n);
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    outcome.output.append(buffer.data(), n);
   const int status = pclose(pipe);
   outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return outcome;

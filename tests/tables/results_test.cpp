@@ -15,7 +15,8 @@
 namespace rths::tables {
 namespace {
 
-const std::string kMotion = std::string(RTHS_SOURCE_DIR) + "/configs/motions/RSN175_IMPVALL.H_H-E12140.AT2";
+const std::string kMotion =
+    std::string(RTHS_SOURCE_DIR) + "/configs/motions/RSN175_IMPVALL.H_H-E12140.AT2";
 
 std::vector<std::string> names(const Table& t) {
   std::vector<std::string> out;
@@ -32,8 +33,8 @@ analysis::CaseOutcome make_case(const std::string& name, std::size_t steps, bool
     c.simulation.time[k] = 0.01 * static_cast<double>(k);
     c.response.push_back(0.001 * static_cast<double>(k));
   }
-  c.simulation.displacement = Eigen::Map<const Eigen::VectorXd>(c.response.data(),
-                                                                static_cast<Eigen::Index>(steps));
+  c.simulation.displacement =
+      Eigen::Map<const Eigen::VectorXd>(c.response.data(), static_cast<Eigen::Index>(steps));
   const auto n = static_cast<Eigen::Index>(actuator ? steps : 0);
   c.simulation.command = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 0.5);
   c.simulation.realised = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 0.25);
@@ -46,9 +47,10 @@ TEST(ResultsTest, StudyTableNamesEachCaseAndPadsAStoppedCaseWithNan) {
   outcome.study_name = "frame";
   outcome.cases = {make_case("reference", 5, false), make_case("lag 14ms", 3, true)};
   const Table t = study_table(outcome);
-  EXPECT_EQ(names(t), (std::vector<std::string>{"step", "time_s", "reference_u_floor1_m",
-                                                "lag_14ms_u_floor1_m", "lag_14ms_command_act1_m",
-                                                "lag_14ms_measured_act1_m", "lag_14ms_force_act1_N"}));
+  EXPECT_EQ(names(t),
+            (std::vector<std::string>{"step", "time_s", "reference_u_floor1_m",
+                                      "lag_14ms_u_floor1_m", "lag_14ms_command_act1_m",
+                                      "lag_14ms_measured_act1_m", "lag_14ms_force_act1_N"}));
   EXPECT_EQ(t.rows(), 5u);
   EXPECT_DOUBLE_EQ(t.column("time_s").numbers[4], 0.04);
   EXPECT_DOUBLE_EQ(t.column("step").numbers[4], 4.0);
@@ -114,11 +116,11 @@ TEST(ResultsTest, RecordTableHasTheExportColumnsAndNanForStepZerosLink) {
     record.entries.push_back(e);
   }
   const Table t = record_table(record);
-  EXPECT_EQ(names(t), (std::vector<std::string>{"step", "time_s", "ground_acceleration_m_per_s2", "u1_m",
-                                                "v1_m_per_s", "a1_m_per_s2", "command1_m", "realised1_m",
-                                                "force1_N", "node2_answered_step", "node2_injected_lag_s",
-                                                "node2_round_trip_s", "node2_one_way_down_s", "node2_one_way_up_s",
-                                                "lateness_s", "overrun"}));
+  EXPECT_EQ(names(t), (std::vector<std::string>{
+                          "step", "time_s", "ground_acceleration_m_per_s2", "u1_m", "v1_m_per_s",
+                          "a1_m_per_s2", "command1_m", "realised1_m", "force1_N",
+                          "node2_answered_step", "node2_injected_lag_s", "node2_round_trip_s",
+                          "node2_one_way_down_s", "node2_one_way_up_s", "lateness_s", "overrun"}));
   EXPECT_EQ(t.rows(), 2u);
   EXPECT_TRUE(std::isnan(t.column("node2_round_trip_s").numbers[0]));
   EXPECT_DOUBLE_EQ(t.column("node2_round_trip_s").numbers[1], 0.0002);
@@ -134,11 +136,13 @@ TEST(ResultsTest, SweepTableHasTheSweepCsvsColumnsInOrder) {
   const config::Study study = core::parse_study(
       "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } }\n"
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.005 }\n"
-      "sweep { periods: [0.4, 0.8] delays: [0.01] motions { path: \"" + kMotion + "\" duration: 2 } }\n",
+      "sweep { periods: [0.4, 0.8] delays: [0.01] motions { path: \"" +
+          kMotion + "\" duration: 2 } }\n",
       "test");
   const analysis::SweepGrid grid(study, RTHS_SOURCE_DIR, "test");
   const auto rows = analysis::run_sweep(grid, {});
-  const auto csv = std::filesystem::temp_directory_path() / ("rths_tables_sweep_" + std::to_string(getpid()) + ".csv");
+  const auto csv = std::filesystem::temp_directory_path() /
+                   ("rths_tables_sweep_" + std::to_string(getpid()) + ".csv");
   analysis::write_sweep_csv(csv, grid, {}, rows);
   std::ifstream in(csv);
   std::string header;

@@ -14,7 +14,8 @@ namespace rths::tables {
 namespace {
 
 std::filesystem::path scratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_tables_" + name + "_" + std::to_string(getpid()));
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_tables_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -70,7 +71,8 @@ TEST(WriteTest, ErrorsNameTheProblemAndLeaveNoFile) {
   EXPECT_FALSE(std::filesystem::exists(dir / "c.mat"));
   EXPECT_FALSE(std::filesystem::exists(dir / "c.mat.partial"));
   std::filesystem::create_directories(dir / "ro");
-  std::filesystem::permissions(dir / "ro", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
+  std::filesystem::permissions(
+      dir / "ro", std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec);
   if (::geteuid() != 0) {  // root writes anywhere
     EXPECT_THROW(write_table(sample(), dir / "ro" / "t.h5", Format::kH5), std::runtime_error);
   }

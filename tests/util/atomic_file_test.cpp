@@ -20,8 +20,9 @@ class AtomicFileTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("rths_atomic_file_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-            "_" + std::to_string(::getpid()));
+           ("rths_atomic_file_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -57,8 +58,7 @@ TEST_F(AtomicFileTest, AWriteThatFailsBeforeCommitLeavesTheOldFileIntact) {
     AtomicFile file(target);
     file.stream() << "half of the new content";
     throw std::runtime_error("the writer failed");
-  } catch (const std::runtime_error&) {
-  }
+  } catch (const std::runtime_error&) {}
   EXPECT_EQ(slurp(target), "old\n");
   EXPECT_FALSE(fs::exists(target.string() + ".partial"));
 }

@@ -12,7 +12,8 @@ namespace rths::util {
 namespace {
 
 std::filesystem::path scratch() {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_distinct_paths_" + std::to_string(::getpid()));
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_distinct_paths_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return dir;
 }

@@ -21,7 +21,8 @@ TEST(ParallelFor, EveryIndexRunsExactlyOnce) {
     constexpr std::size_t kCount = 1000;
     std::vector<std::atomic<int>> runs(kCount);
     parallel_for(kCount, threads, [&](std::size_t i) { runs[i].fetch_add(1); });
-    for (std::size_t i = 0; i < kCount; ++i) ASSERT_EQ(runs[i].load(), 1) << "index " << i << ", " << threads << " threads";
+    for (std::size_t i = 0; i < kCount; ++i)
+      ASSERT_EQ(runs[i].load(), 1) << "index " << i << ", " << threads << " threads";
   }
 }
 

@@ -16,10 +16,15 @@ namespace rths::util {
 namespace {
 
 TEST(Plot, WritesThePngAndTheSvgBesideIt) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_plot_" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   PlotSpec top{"top", "x", "y", {{"a", {0, 1, 2}, {0, 1, 4}}}};
-  PlotSpec bottom{"bottom", "x", "y (log)", {{"b", {1, 2, 3}, {0.01, 1, 100}}, {"own dash", {1, 3}, {1, 1}, "lines dt 2"}}, true};
+  PlotSpec bottom{"bottom",
+                  "x",
+                  "y (log)",
+                  {{"b", {1, 2, 3}, {0.01, 1, 100}}, {"own dash", {1, 3}, {1, 1}, "lines dt 2"}},
+                  true};
   top.y_min = 0.0;
   top.y_max = 2.0;  // a clipped panel must not carry its range into the next one
   bottom.markers.push_back({2.0, "critical"});
@@ -30,7 +35,8 @@ TEST(Plot, WritesThePngAndTheSvgBesideIt) {
 }
 
 TEST(Plot, RunsAScriptAsGivenAndNamesTheFigureWhenGnuplotFails) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_plot_script_" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_script_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const auto svg = dir / "map.svg";
   run_gnuplot_script("set terminal svg\nset output '" + svg.string() + "'\nplot sin(x)\n", svg);
@@ -60,26 +66,33 @@ TEST(Plot, PaddedRangeFollowsOnlyTheIncludedFiniteSeries) {
 // path "M left,top L left,bottom L right,bottom L right,top"; each series' path starts with its
 // legend sample "M x,y L x2,y".
 TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_plot_stack_" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_stack_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   PlotSpec narrow{"short legend", "time (s)", "a (ms)", {{"a", {0, 1, 2}, {0, 1, 4}}}};
-  PlotSpec wide{"long legend", "time (s)", "b (ms)",
-                {{"a much longer legend entry than the panel above has, to widen its key", {0, 2}, {1, 3}},
-                 {"another", {0, 2}, {2, 2}}}};
+  PlotSpec wide{
+      "long legend",
+      "time (s)",
+      "b (ms)",
+      {{"a much longer legend entry than the panel above has, to widen its key", {0, 2}, {1, 3}},
+       {"another", {0, 2}, {2, 2}}}};
   write_png_panels({narrow, wide}, dir / "stack.png");
   std::ifstream in(dir / "stack.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::regex border(R"(stroke='black'\s+d='M([0-9.]+),([0-9.]+) L\1,([0-9.]+) L([0-9.]+),\3 L\4,\2)");
+  const std::regex border(
+      R"(stroke='black'\s+d='M([0-9.]+),([0-9.]+) L\1,([0-9.]+) L([0-9.]+),\3 L\4,\2)");
   std::set<std::pair<std::string, std::string>> edges;
   double right = 0.0;
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), border); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), border); it != std::sregex_iterator();
+       ++it) {
     edges.insert({(*it)[1], (*it)[4]});
     right = std::stod((*it)[4]);
   }
   ASSERT_EQ(edges.size(), 1u) << "the panels' data areas differ";
   const std::regex sample(R"(stroke='rgb\([^)]*\)'\s+d='M([0-9.]+),[0-9.]+ L[0-9.]+,[0-9.]+ M)");
   int samples = 0;
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), sample); it != std::sregex_iterator(); ++it, ++samples)
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), sample); it != std::sregex_iterator();
+       ++it, ++samples)
     EXPECT_GT(std::stod((*it)[1]), right) << "a legend sample inside the data";
   EXPECT_EQ(samples, 3);
   std::filesystem::remove_all(dir);

@@ -26,7 +26,8 @@ runtime::RecordEntry header(int actuators = 1) {
 }
 
 // Command c = A sin(w t); measured m = A sin(w (t - lag)); k-th step.
-runtime::RecordEntry step(std::int64_t k, double lag = 0.0, double amplitude = 0.01, double hz = 2.0) {
+runtime::RecordEntry step(std::int64_t k, double lag = 0.0, double amplitude = 0.01,
+                          double hz = 2.0) {
   runtime::RecordEntry e;
   auto& s = *e.mutable_step();
   const double t = static_cast<double>(k) * kDt, w = 2 * std::numbers::pi * hz;
@@ -129,7 +130,8 @@ TEST(Feed, SpectrumOfTheErrorPeaksAtItsFrequencyWithItsAmplitude) {
   for (int k = 0; k < 2000; ++k) {
     auto e = step(k);
     e.mutable_step()->set_command(0, 0.0);
-    e.mutable_step()->set_realised(0, -0.002 * std::sin(2 * std::numbers::pi * f * static_cast<double>(k) * kDt));
+    e.mutable_step()->set_realised(
+        0, -0.002 * std::sin(2 * std::numbers::pi * f * static_cast<double>(k) * kDt));
     feed.add(e);
   }
   FeedCursor cursor;

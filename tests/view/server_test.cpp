@@ -48,7 +48,8 @@ std::string raw_request(int port, const std::string& bytes) {
   (void)!write(fd, bytes.data(), bytes.size());
   std::string out;
   char buffer[4096];
-  for (ssize_t n; (n = read(fd, buffer, sizeof buffer)) > 0;) out.append(buffer, static_cast<std::size_t>(n));
+  for (ssize_t n; (n = read(fd, buffer, sizeof buffer)) > 0;)
+    out.append(buffer, static_cast<std::size_t>(n));
   close(fd);
   return out;
 }
@@ -60,8 +61,8 @@ TEST(ListenAddress, ParsesHostAndPortAndRefusesTheRest) {
   EXPECT_TRUE(a.loopback());
   EXPECT_FALSE(parse_listen_address("0.0.0.0:80").loopback());
   EXPECT_TRUE(parse_listen_address("localhost:0").loopback());
-  for (const char* bad : {"8080", ":8080", "127.0.0.1:", "127.0.0.1:70000", "127.0.0.1:8o", "lab-pc:8080",
-                          "1.2.3:80"})
+  for (const char* bad : {"8080", ":8080", "127.0.0.1:", "127.0.0.1:70000", "127.0.0.1:8o",
+                          "lab-pc:8080", "1.2.3:80"})
     EXPECT_THROW(parse_listen_address(bad), std::invalid_argument) << bad;
   try {
     parse_listen_address("127.0.0.1:70000");
@@ -82,8 +83,9 @@ TEST(ViewServer, ServesThePageFromAFixedListAndCountsWhatItRefuses) {
   EXPECT_EQ(page->status, 200);
   EXPECT_NE(page->body.find("/view.js"), std::string::npos);
   EXPECT_EQ(client.Get("/uPlot.iife.min.js")->status, 200);
-  for (const char* path : {"/../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/view.js/../../CMakeLists.txt",
-                           "/index.html", "/node_modules/uplot/package.json"}) {
+  for (const char* path :
+       {"/../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd", "/view.js/../../CMakeLists.txt",
+        "/index.html", "/node_modules/uplot/package.json"}) {
     const auto r = client.Get(path);
     ASSERT_TRUE(r) << path;
     EXPECT_EQ(r->status, 404) << path;
@@ -110,7 +112,10 @@ TEST(ViewServer, StopIsOffUnlessAskedAndThenNeedsTheTokenWhenOneIsSet) {
   ViewServer server(feed, options);
   httplib::Client client("127.0.0.1", server.port());
   EXPECT_EQ(client.Post("/api/stop")->status, 403);
-  EXPECT_EQ(client.Post("/api/stop", {{"X-RTHS-Token", "0123456789abcdef0123456789abcdee"}}, "", "")->status, 403);
+  EXPECT_EQ(
+      client.Post("/api/stop", {{"X-RTHS-Token", "0123456789abcdef0123456789abcdee"}}, "", "")
+          ->status,
+      403);
   EXPECT_EQ(server.counters()["bad_token"], 2);
   EXPECT_EQ(stops, 0);
   EXPECT_EQ(client.Post("/api/stop", {{"X-RTHS-Token", options.token}}, "", "")->status, 202);
@@ -173,7 +178,8 @@ TEST(ViewServer, AClientThatNeverReadsIsDroppedAndCountedAndTheFeedNeverWaits) {
   ASSERT_EQ(write(fd, get.data(), get.size()), static_cast<ssize_t>(get.size()));
   const auto start = std::chrono::steady_clock::now();
   std::int64_t k = 0;
-  while (server.counters()["streams_dropped"] == 0 && std::chrono::steady_clock::now() - start < 20s)
+  while (server.counters()["streams_dropped"] == 0 &&
+         std::chrono::steady_clock::now() - start < 20s)
     for (int i = 0; i < 2000; ++i) feed.add(step(k++));  // never blocks on the stuck client
   EXPECT_EQ(server.counters()["streams_dropped"], 1);
   close(fd);
