@@ -131,16 +131,24 @@ double grid_origin(const std::vector<double>& starts, double period, double dt) 
   return best;
 }
 
-// Lost answers (steps between the first and the last answered that no answer came for), the
-// longest run of them, and the answers carried more than one step after the usual.
+// Lost answers (network_path.h): per gap of g steps between two answers taken in a row, of
+// which the coordinator's count says r more were received (superseded within a step), g - r are
+// lost; the gap's burst is g when r = 0, else the fewest consecutive lost answers g - r allows.
+// Without the count (0), every gap is lost. Late: answers carried more than one step after the
+// usual.
 void count_lost_and_late(const LinkAnswers& a, double dt, NetworkPath& out) {
-  std::vector<std::int64_t> steps = a.answered_step;
-  std::sort(steps.begin(), steps.end());
-  steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
-  for (std::size_t i = 1; i < steps.size(); ++i) {
-    const auto gap = static_cast<std::size_t>(steps[i] - steps[i - 1] - 1);
-    out.lost += gap;
-    out.longest_burst = std::max(out.longest_burst, gap);
+  const bool counted = a.answers.size() == a.answered_step.size();
+  for (std::size_t i = 1; i < a.answered_step.size(); ++i) {
+    const std::int64_t gap = a.answered_step[i] - a.answered_step[i - 1] - 1;
+    if (gap <= 0) continue;
+    std::int64_t received = 0;
+    if (counted && a.answers[i - 1] > 0 && a.answers[i] > a.answers[i - 1])
+      received = std::min(gap, a.answers[i] - a.answers[i - 1] - 1);
+    const std::int64_t lost = gap - received;
+    out.superseded += static_cast<std::size_t>(received);
+    out.lost += static_cast<std::size_t>(lost);
+    const std::int64_t burst = (lost + received) / (received + 1);
+    out.longest_burst = std::max(out.longest_burst, static_cast<std::size_t>(burst));
   }
   std::vector<double> carried;
   for (std::size_t i = 0; i < a.time.size(); ++i) {
@@ -155,7 +163,7 @@ void counted_effects(NetworkPath& out) {
   const double expected_burst_probability =
       static_cast<double>(out.answers) *
       std::pow(out.declared.loss, static_cast<double>(out.longest_burst));
-  if (out.lost > 0 &&
+  if (out.lost > 0 && !out.declared.drops &&
       (out.declared.loss == 0.0 || (out.longest_burst >= 3 && expected_burst_probability < 1e-3))) {
     out.effects.push_back({"lost answers",
                            std::to_string(out.lost) + " lost, longest burst " +
@@ -239,9 +247,10 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
   out.drift_range = *high - *low;
   const double before = rms_about(x, base, heldout), after = rms_about(x, drift, heldout);
   if (pays(before, after)) {
-    out.effects.push_back({"drifting delay",
-                           "the excess lag moves over " + ms(out.drift_range) + " in the run",
-                           before, after, 0.0});
+    if (!out.declared.drift)
+      out.effects.push_back({"drifting delay",
+                             "the excess lag moves over " + ms(out.drift_range) + " in the run",
+                             before, after, 0.0});
     base = drift;
   }
   out.model = base;
@@ -251,10 +260,11 @@ void fit_effects(const LinkAnswers& a, const std::vector<double>& x, double dt, 
     const double spikes_before = rms_about(x, base, split.heldout);
     const double spikes_after = rms_about(x, model, split.heldout);
     if (pays(spikes_before, spikes_after)) {
-      out.effects.push_back({"periodic spikes",
-                             std::to_string(out.spikes) + " spikes of " + ms(out.spike_height) +
-                                 " every " + ms(out.spike_period),
-                             spikes_before, spikes_after, 0.0});
+      if (!out.declared.spikes)
+        out.effects.push_back({"periodic spikes",
+                               std::to_string(out.spikes) + " spikes of " + ms(out.spike_height) +
+                                   " every " + ms(out.spike_period),
+                               spikes_before, spikes_after, 0.0});
       out.model = model;
     }
   }
