@@ -125,7 +125,8 @@ LinkAnswers counted_link(const std::vector<std::size_t>& taken_out, bool receive
   std::sort(out.begin(), out.end());
   for (std::size_t i = 0, o = 0; i < kAnswers; ++i) {
     if (o < out.size() && out[o] == i) {
-      ++o, never += received ? 0 : 1;
+      ++o;
+      never += received ? 0 : 1;
       continue;
     }
     a.answers[i] -= never;
