@@ -185,6 +185,34 @@ TEST(NetworkPath, AnEffectTheConfigDeclaresIsNotNamed) {
   EXPECT_TRUE(names(identify_network_path(a, declared, kDt)).empty());
 }
 
+// A loaded host's stray spikes: `count` answers delayed by 1 to 5 ms at random steps, a few of
+// them by tens of ms.
+void add_strays(LinkAnswers& a, int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> at(0, kAnswers - 1);
+  std::uniform_real_distribution<double> size(0.001, 0.005);
+  for (int i = 0; i < count; ++i) a.round_trip[at(rng)] += i % 50 == 0 ? 0.040 : size(rng);
+}
+
+TEST(NetworkPath, PeriodicSpikesAreNamedAmongManyMoreStrayOnes) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    LinkAnswers a = clean_link(seed);
+    for (std::size_t i = 0; i < kAnswers; ++i) a.round_trip[i] += i % 256 < 3 ? 0.006 : 0.0;
+    add_strays(a, 800, seed);  // 40 bursts of spikes, 800 strays
+    const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+    EXPECT_EQ(names(path), std::set<std::string>{"periodic spikes"}) << "seed " << seed;
+    EXPECT_NEAR(path.spike_period, 0.25, 0.002) << "seed " << seed;
+  }
+}
+
+TEST(NetworkPath, ManyStraySpikesAloneNameNothing) {
+  for (std::uint64_t seed : {4u, 5u, 6u}) {
+    LinkAnswers a = clean_link(seed);
+    add_strays(a, 800, seed);
+    EXPECT_TRUE(names(identify_network_path(a, declared_2ms(), kDt)).empty()) << "seed " << seed;
+  }
+}
+
 TEST(NetworkPath, DriftAndSpikesTogetherAreBothNamedWithShares) {
   LinkAnswers a = clean_link();
   for (std::size_t i = 0; i < kAnswers; ++i) {
