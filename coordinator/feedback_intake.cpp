@@ -116,6 +116,7 @@ void FeedbackIntake::record_answer(const transport::Message& message, Node& node
   const runtime::Feedback& feedback = node.box.slot().feedback;
   runtime::LinkSample& link = node.link;
   link.set_answered_step(message.step);
+  link.set_answers(node.answers);
   link.set_injected_lag(feedback.injected_lag());
   link.set_round_trip(static_cast<double>(message.received_ns - message.echo_ns) * 1e-9);
   link.set_one_way_down(static_cast<double>(feedback.command_received_ns() - message.echo_ns) *

@@ -164,6 +164,24 @@ void require_unset_or_in(Quantity quantity, double value, const std::string& fie
   if (value != 0) require_in(quantity, value, field, source);
 }
 
+// 0 = off for each part; a spike lasts fewer steps than its period, a burst starts at step 1 or
+// later (step 0 sends no command).
+void validate_network_emulation(const config::NetworkEmulation& net, const std::string& where,
+                                bool allow_long_lag, const std::string& source) {
+  require_in(Quantity::kFraction, net.drift_rate(), where + ".drift_rate (s per s)", source);
+  require_lag(net.spike_delay(), where + ".spike_delay", source, true, allow_long_lag);
+  require_unset_or_in(Quantity::kCount, net.spike_every(), where + ".spike_every", source);
+  require_unset_or_in(Quantity::kCount, net.spike_steps(), where + ".spike_steps", source);
+  require(net.spike_steps() < net.spike_every() || net.spike_steps() == 0, source,
+          where + ".spike_steps = " + std::to_string(net.spike_steps()) +
+              " must be below spike_every = " + std::to_string(net.spike_every()) +
+              " (a spike shorter than its period)");
+  require_unset_or_in(Quantity::kCount, net.drop_first_step(), where + ".drop_first_step", source);
+  require_unset_or_in(Quantity::kCount, net.drop_steps(), where + ".drop_steps", source);
+  require(net.drop_steps() == 0 || net.drop_first_step() >= 1, source,
+          where + ".drop_first_step must be >= 1 with drop_steps (step 0 sends no command)");
+}
+
 void validate_deployment(const config::Deployment& d, bool allow_long_lag,
                          const std::string& source) {
   const std::string at = "deployment.";
@@ -206,6 +224,7 @@ void validate_link_lag(const config::LinkLag& lag, const std::string& where, boo
   require_lag(lag.jitter(), where + ".jitter", source, true, allow_long_lag);
   require(lag.loss() >= 0 && lag.loss() < 1, source,
           where + ".loss = " + format_number(lag.loss()) + " is outside [0, 1) (a probability)");
+  validate_network_emulation(lag.network(), where + ".network", allow_long_lag, source);
 }
 
 void validate_study(const config::Study& study, const std::string& source) {

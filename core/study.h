@@ -29,7 +29,9 @@ config::Study parse_study(const std::string& text, const std::string& source_nam
 // allow_long_lag, dt in [1 us, 1 s] (0 = the record's), periods in (0, 50] s, counts >= 1, the
 // deployment's timeouts > 0 (0 = default), loop_cpu a CPU of this machine.
 void validate_study(const config::Study& study, const std::string& source_name);
-// One link's injected lag: delay and jitter by the lag rule, loss a probability in [0, 1).
+// One link's injected lag: delay and jitter by the lag rule, loss a probability in [0, 1); its
+// network emulation: drift_rate a fraction (s per s), spike_delay by the lag rule, spike_every,
+// spike_steps, drop_first_step and drop_steps counts (0 = off), spike_steps < spike_every.
 // Throws std::invalid_argument "SOURCE: WHERE.field = ...".
 void validate_link_lag(const config::LinkLag& lag, const std::string& where, bool allow_long_lag,
                        const std::string& source);

@@ -73,6 +73,11 @@ DeclaredLink declared_link(const config::Deployment& deployment, int node_id) {
     out.round_trip = in.one_way_delay() + send.one_way_delay();
     out.jitter = std::hypot(in.jitter(), send.jitter());
     out.loss = 1.0 - (1.0 - in.loss()) * (1.0 - send.loss());
+    for (const auto* net : {&in.network(), &send.network()}) {
+      out.drift = out.drift || net->drift_rate() != 0.0;
+      out.spikes = out.spikes || (net->spike_delay() != 0.0 && net->spike_every() > 0);
+      out.drops = out.drops || net->drop_steps() > 0;
+    }
   }
   return out;
 }
@@ -90,6 +95,7 @@ std::vector<NetworkPath> identify_links(const std::filesystem::path& record,
       for (std::size_t i = 0; i < s.time.size() && s.time[i] <= until; ++i) {
         answers.time.push_back(s.time[i]);
         answers.answered_step.push_back(s.answered_step[i]);
+        if (i < s.answers.size()) answers.answers.push_back(s.answers[i]);
         answers.round_trip.push_back(s.round_trip[i]);
         answers.injected.push_back(s.injected[i]);
       }
@@ -277,9 +283,9 @@ void link_text(const NetworkPath& l, std::ostream& out) {
   out << "link to node " << l.node_id << ": " << l.answers << " answers; round trip beyond the"
       << " injected lag: bias " << l.bias * 1e3 << " ms, jitter " << l.jitter * 1e3
       << " ms, drift over the run " << l.drift_range * 1e3 << " ms; " << l.spikes
-      << " spikes; lost " << l.lost << " (longest burst " << l.longest_burst << "), late " << l.late
-      << "; injected " << l.injected_mean * 1e3 << " ms (declared " << l.declared.round_trip * 1e3
-      << " ms)\n";
+      << " spikes; lost " << l.lost << " (longest burst " << l.longest_burst << "), superseded "
+      << l.superseded << ", late " << l.late << "; injected " << l.injected_mean * 1e3
+      << " ms (declared " << l.declared.round_trip * 1e3 << " ms)\n";
   if (l.effects.empty()) out << "  undeclared effects: none\n";
   for (const auto& e : l.effects) {
     out << "  undeclared: " << e.name << ": " << e.detail;
@@ -391,6 +397,7 @@ nlohmann::json run_record_json(const RunIdentification& run) {
                      {"spike_period_s", l.spike_period},
                      {"lost", l.lost},
                      {"longest_burst", l.longest_burst},
+                     {"superseded", l.superseded},
                      {"late", l.late},
                      {"injected_mean_s", l.injected_mean},
                      {"declared_round_trip_s", l.declared.round_trip},

@@ -13,8 +13,10 @@ void LinkLagAccumulator::reserve(int node_id, std::size_t answers) {
     v->resize(answers);
     v->clear();
   }
-  s.answered_step.resize(answers);
-  s.answered_step.clear();
+  for (auto* v : {&s.answered_step, &s.answers}) {
+    v->resize(answers);
+    v->clear();
+  }
 }
 
 void LinkLagAccumulator::add(double time, const LinkSample& sample) {
@@ -24,6 +26,7 @@ void LinkLagAccumulator::add(double time, const LinkSample& sample) {
   if (!s.answered_step.empty() && s.answered_step.back() == sample.answered_step()) return;
   s.time.push_back(time);
   s.answered_step.push_back(sample.answered_step());
+  s.answers.push_back(static_cast<std::int64_t>(sample.answers()));
   s.round_trip.push_back(sample.round_trip());
   s.injected.push_back(sample.injected_lag());
   s.one_way_down.push_back(sample.one_way_down());

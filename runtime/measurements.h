@@ -26,6 +26,9 @@ struct LinkSeries {
   int node_id = 0;
   std::vector<double> time;  // s, simulated time of the step that carried it
   std::vector<std::int64_t> answered_step;
+  // Answers the coordinator had accepted from the node by this one, superseded ones included
+  // (LinkSample.answers; 0 in a record without the count).
+  std::vector<std::int64_t> answers;
   std::vector<double> round_trip, injected;      // s
   std::vector<double> one_way_down, one_way_up;  // s (include clock offset across hosts)
   LagSummary round_trip_summary() const { return summarize(round_trip); }

@@ -127,7 +127,8 @@ void NodeLoop::take(transport::Message message) {
     inbound_.push_back({message.received_ns, std::move(message), 0.0});
     return;
   }
-  const auto release = assigned_.receive_lag->schedule(message.received_ns);
+  const auto release = assigned_.receive_lag->schedule(
+      message.received_ns, message.kind == COMMAND ? message.step : std::int64_t{-1});
   if (!release) return;  // lost
   inbound_.push_back({*release, std::move(message), assigned_.receive_lag->last_delay()});
 }
@@ -195,7 +196,8 @@ void NodeLoop::apply(Delayed item) {
     for (auto& r : service_.handle(item.message)) endpoint_.send(r);
     return;
   }
-  const auto release = assigned_.send_lag->schedule(realtime_ns());
+  const auto release = assigned_.send_lag->schedule(
+      realtime_ns(), item.message.kind == COMMAND ? item.message.step : std::int64_t{-1});
   service_.set_injected_lag(item.injected + assigned_.send_lag->last_delay());
   auto replies = service_.handle(item.message);
   if (!release) return;  // the replies are lost on the way out
@@ -209,9 +211,9 @@ void NodeLoop::on_assigned() {
   assigned_.heartbeat_ns = seconds_to_ns(a.heartbeat_period() > 0 ? a.heartbeat_period() : 0.05);
   assigned_.orphan_ns = seconds_to_ns(a.orphan_timeout() > 0 ? a.orphan_timeout() : 5.0);
   if (LagInjector in(a.node().receive_lag()); in.active())
-    assigned_.receive_lag = std::make_unique<LagInjector>(a.node().receive_lag());
+    assigned_.receive_lag = std::make_unique<LagInjector>(a.node().receive_lag(), a.dt());
   if (LagInjector out(a.node().send_lag()); out.active())
-    assigned_.send_lag = std::make_unique<LagInjector>(a.node().send_lag());
+    assigned_.send_lag = std::make_unique<LagInjector>(a.node().send_lag(), a.dt());
   last_from_coordinator_ = realtime_ns();
   const config::Deployment& deployment = a.study().deployment();
   if (a.node().kind() == config::NodeSpec::ACTUATOR_EMULATOR &&

@@ -59,6 +59,7 @@ TEST_F(Intake, AnAnswerIsTakenWithItsForceCountAndLag) {
   EXPECT_EQ(got->answers, 1u);
   EXPECT_EQ(got->link.node_id(), 1);
   EXPECT_EQ(got->link.answered_step(), 1);
+  EXPECT_EQ(got->link.answers(), 1u);
   EXPECT_NEAR(got->link.round_trip(), 3e-6, 1e-15);
   EXPECT_NEAR(got->link.one_way_down(), 0.5e-6, 1e-15);
   EXPECT_NEAR(got->link.one_way_up(), 2e-6, 1e-15);
@@ -86,6 +87,12 @@ TEST(IntakeNotAwaited, TheAwaitedNodesAloneCompleteAStep) {
   const ArrivedFeedback* got = intake.take(2);
   ASSERT_NE(got, nullptr);
   EXPECT_EQ(got->answered_step, 4);
+  // Node 1's answer to step 4 was superseded by its answer to step 5 before the loop took one:
+  // the link's count says both arrived.
+  got = intake.take(1);
+  ASSERT_NE(got, nullptr);
+  EXPECT_EQ(got->link.answered_step(), 5);
+  EXPECT_EQ(got->link.answers(), 2u);
 }
 
 TEST_F(Intake, RejectsAndCountsEachCause) {

@@ -1,11 +1,14 @@
 // Records of rths's own distributed runs over Cyclone DDS (real coordinator and node processes on
-// loopback, lockstep, DDS domains 220-221), identified from the record: the run is launched with
-// effects its config does not declare, then the record's header is given the declared config (as
-// a lab's record holds the config it meant to run). Each effect must be named on its own link,
-// the clean record name none, and the in-process re-run with the identified model reproduce the
-// recorded response where the declared one is far off.
+// loopback, DDS domains 220-221, 225-227, 229-230), identified from the record: the run is
+// launched with effects its config does not declare, injected by the nodes (their stages, and
+// their links' network emulation: a drifting delay, periodic spikes, a burst of dropped commands),
+// then the record's header is given the declared config (as a lab's record holds the config it
+// meant to run). Each effect must be named on its own link, the clean records (lockstep and real
+// time) name none, and the in-process re-run with the identified model reproduce the recorded
+// response where the declared one is far off.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <set>
 #include <string>
 
@@ -26,24 +29,46 @@ class DdsRunRecord : public testing::Test {
   static void SetUpTestSuite() { runtime::ensure_dds_config(); }
 };
 
-// A lockstep DDS run of case lag_shift_14ms whose node 1 and node 2 carry `node1` and `node2`
-// (NodeSpec fields the declared config lacks); the record's header then holds the declared one.
+// A DDS run of case lag_shift_14ms whose node 1 and node 2 carry `node1` and `node2` (NodeSpec
+// fields the declared config lacks); `fields` (deployment fields, e.g. the clock) are declared.
+// The record's header then holds the declared config.
 fs::path launch_with_undeclared(const std::string& name, const std::string& node1,
-                                const std::string& node2, int domain) {
+                                const std::string& node2, int domain,
+                                const std::string& fields = "", double duration = kDuration) {
   const auto deployment = [&](const std::string& n1, const std::string& n2) {
-    return "deployment { nodes { id: 1 kind: SUBSTRUCTURE " + n1 +
+    return "deployment { " + fields + " nodes { id: 1 kind: SUBSTRUCTURE " + n1 +
            " } nodes { id: 2 kind: ACTUATOR_EMULATOR " + n2 + " } }";
   };
-  const auto run = test::launch(name, test::paper_frame_study(kDuration, deployment(node1, node2)),
+  const auto run = test::launch(name, test::paper_frame_study(duration, deployment(node1, node2)),
                                 "lag_shift_14ms", domain);
   EXPECT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const fs::path record = run.dir / "run.rthsrec";
   const config::Study declared =
-      test::prepare(test::paper_frame_study(kDuration, deployment("", ""))).config;
+      test::prepare(test::paper_frame_study(duration, deployment("", ""))).config;
   test::rewrite(record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
   });
   return record;
+}
+
+// A real-time run at the study's 1 kHz, with fail-safe windows wide enough that a loaded machine
+// (or a burst of 12 dropped commands) does not stop it, and no overrun or answer-fraction verdict:
+// these tests judge the record, not this machine's timing.
+const std::string kRealTime =
+    "clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 40 "
+    "command_watchdog_periods: 40 min_answer_fraction: -1";
+constexpr double kRealTimeDuration = 3.0;  // s
+
+// Network emulation on a node's receive lag (config NetworkEmulation fields).
+std::string network(const std::string& fields) {
+  return "receive_lag { network { " + fields + " } }";
+}
+const std::string kDrift = "drift_rate: 0.0006";  // 3 ms over the 5 s run
+const std::string kSpikes = "spike_delay: 0.006 spike_every: 250 spike_steps: 3";
+
+std::set<std::string> undeclared(const RunIdentification& run) {
+  const auto& names = run.actuators.at(0).undeclared;
+  return {names.begin(), names.end()};
 }
 
 IdentifyOptions actuator_only() {
@@ -83,6 +108,85 @@ TEST_F(DdsRunRecord, ALagOnOneLinkAndAFirstOrderLagOnTheActuatorAreEachNamedWher
               run.residual->declared, run.residual->identified);
   EXPECT_GE(run.residual->declared, 0.20) << text;
   EXPECT_LE(run.residual->identified, 0.02) << text;
+}
+
+// Network effects in lockstep do not reach the response: the re-run finds nothing to explain.
+TEST_F(DdsRunRecord, ADriftOnOneLinkAndPeriodicSpikesOnTheOtherAreEachNamedWhereTheyAre) {
+  const RunIdentification run = identify_run_record(
+      launch_with_undeclared("identify_dds_drift_spikes", network(kDrift), network(kSpikes), 230),
+      actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"drifting delay"}) << text;
+  EXPECT_NEAR(run.links.at(0).drift_range, 0.003, 6e-4) << text;
+  EXPECT_EQ(link_effects(run, 2), std::set<std::string>{"periodic spikes"}) << text;
+  EXPECT_NEAR(run.links.at(1).spike_period, 0.25, 0.01) << text;
+  EXPECT_TRUE(undeclared(run).empty()) << text;
+  ASSERT_TRUE(run.residual.has_value());
+  EXPECT_LT(run.residual->declared, 1e-9) << text;
+}
+
+TEST_F(DdsRunRecord, ADriftingDelayAndAnEmulatorGainErrorAreEachNamedWhereTheyAre) {
+  const RunIdentification run = identify_run_record(
+      launch_with_undeclared("identify_dds_drift_gain", network(kDrift),
+                             "receive_delay { shift { delay: 0 } amplitude_gain: 1.08 }", 225),
+      actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"drifting delay"}) << text;
+  EXPECT_TRUE(link_effects(run, 2).empty()) << text;
+  EXPECT_EQ(undeclared(run), std::set<std::string>{"gain error"}) << text;
+  ASSERT_TRUE(run.residual.has_value());
+  std::printf("DDS drift on node 1 + gain 1.08: NRMSE declared %.4f -> identified %.6f\n",
+              run.residual->declared, run.residual->identified);
+  EXPECT_GE(run.residual->declared, 0.20) << text;
+  EXPECT_LE(run.residual->identified, 0.02) << text;
+}
+
+TEST_F(DdsRunRecord, PeriodicSpikesAndAFirstOrderLagAreEachNamedWhereTheyAre) {
+  const RunIdentification run = identify_run_record(
+      launch_with_undeclared(
+          "identify_dds_spikes_lag", "",
+          network(kSpikes) + " receive_delay { first_order { time_constant: 0.008 } }", 226),
+      actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_TRUE(link_effects(run, 1).empty()) << text;
+  EXPECT_EQ(link_effects(run, 2), std::set<std::string>{"periodic spikes"}) << text;
+  EXPECT_EQ(undeclared(run), std::set<std::string>{"first_order"}) << text;
+  ASSERT_TRUE(run.residual.has_value());
+  std::printf("DDS spikes on node 2 + first order 8 ms: NRMSE declared %.4f -> identified %.6f\n",
+              run.residual->declared, run.residual->identified);
+  EXPECT_GE(run.residual->declared, 0.20) << text;
+  EXPECT_LE(run.residual->identified, 0.02) << text;
+}
+
+// In real time the loop may take a newer answer before an older one it also received: the
+// record's answer count tells those apart from lost ones, so a clean run loses none.
+TEST_F(DdsRunRecord, ACleanRealTimeRecordLosesNoAnswersAndNamesNothingOnItsLinks) {
+  const RunIdentification run = identify_run_record(
+      launch_with_undeclared("identify_dds_rt_clean", "", "", 227, kRealTime, kRealTimeDuration),
+      actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_EQ(run.clock, "real_time") << text;
+  for (const NetworkPath& link : run.links) {
+    std::printf("real time, clean: node %d lost %zu, superseded %zu, late %zu of %zu answers\n",
+                link.node_id, link.lost, link.superseded, link.late, link.answers);
+    EXPECT_EQ(link.lost, 0u) << text;
+  }
+  EXPECT_TRUE(link_effects(run, 1).empty()) << text;
+  EXPECT_TRUE(link_effects(run, 2).empty()) << text;
+}
+
+TEST_F(DdsRunRecord, ARealTimeBurstOfDroppedCommandsIsNamedAsLostAnswersOnItsLink) {
+  const RunIdentification run =
+      identify_run_record(launch_with_undeclared("identify_dds_rt_burst",
+                                                 network("drop_first_step: 1000 drop_steps: 12"),
+                                                 "", 229, kRealTime, kRealTimeDuration),
+                          actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"lost answers"}) << text;
+  EXPECT_EQ(run.links.at(0).lost, 12u) << text;
+  EXPECT_EQ(run.links.at(0).longest_burst, 12u) << text;
+  EXPECT_EQ(run.links.at(1).lost, 0u) << text;
+  EXPECT_TRUE(link_effects(run, 2).count("lost answers") == 0) << text;
 }
 
 }  // namespace

@@ -114,6 +114,105 @@ TEST(NetworkPath, LostAnswersWithinTheDeclaredLossAreNotNamed) {
   EXPECT_TRUE(path.effects.empty());
 }
 
+// Answers as a real-time record holds them: with the coordinator's answer count, and with the
+// answers at `taken_out` not taken by the loop (superseded: `received` says whether they reached
+// the coordinator, or were lost).
+LinkAnswers counted_link(const std::vector<std::size_t>& taken_out, bool received) {
+  LinkAnswers a = clean_link();
+  for (std::size_t i = 0; i < kAnswers; ++i) a.answers.push_back(static_cast<std::int64_t>(i + 1));
+  std::int64_t never = 0;
+  std::vector<std::size_t> out = taken_out;
+  std::sort(out.begin(), out.end());
+  for (std::size_t i = 0, o = 0; i < kAnswers; ++i) {
+    if (o < out.size() && out[o] == i) {
+      ++o;
+      never += received ? 0 : 1;
+      continue;
+    }
+    a.answers[i] -= never;
+  }
+  for (auto it = out.rbegin(); it != out.rend(); ++it) {
+    const auto at = static_cast<std::ptrdiff_t>(*it);
+    for (auto* v : {&a.time, &a.round_trip, &a.injected}) v->erase(v->begin() + at);
+    for (auto* v : {&a.answered_step, &a.answers}) v->erase(v->begin() + at);
+  }
+  return a;
+}
+
+TEST(NetworkPath, AnswersSupersededWithinAStepAreNotLost) {
+  std::vector<std::size_t> superseded;
+  for (std::size_t k = 100; k < kAnswers; k += 97) superseded.push_back(k);
+  superseded.push_back(5001);  // two in a row
+  superseded.push_back(5002);
+  const NetworkPath path =
+      identify_network_path(counted_link(superseded, true), declared_2ms(), kDt);
+  EXPECT_EQ(path.lost, 0u);
+  EXPECT_EQ(path.superseded, superseded.size());
+  EXPECT_TRUE(names(path).empty()) << path.effects.front().name;
+  // Without the count, the same gaps read as lost answers.
+  LinkAnswers uncounted = counted_link(superseded, true);
+  uncounted.answers.clear();
+  const NetworkPath old = identify_network_path(uncounted, declared_2ms(), kDt);
+  EXPECT_EQ(old.lost, superseded.size());
+  EXPECT_EQ(names(old), std::set<std::string>{"lost answers"});
+}
+
+TEST(NetworkPath, ABurstOfLostAnswersAmongSupersededOnesIsNamedWithItsLength) {
+  std::vector<std::size_t> lost;
+  for (std::size_t k = 5000; k < 5012; ++k) lost.push_back(k);
+  LinkAnswers a = counted_link(lost, false);
+  const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+  EXPECT_EQ(names(path), std::set<std::string>{"lost answers"});
+  EXPECT_EQ(path.lost, 12u);
+  EXPECT_EQ(path.longest_burst, 12u);
+  // Two of the twelve reached the coordinator but were superseded: 10 lost, in at least one run
+  // of ceil(10 / 3) = 4.
+  const auto after = std::find(a.answered_step.begin(), a.answered_step.end(), 5013);
+  ASSERT_NE(after, a.answered_step.end());
+  const auto i = static_cast<std::size_t>(after - a.answered_step.begin());
+  for (std::size_t j = i; j < a.answers.size(); ++j) a.answers[j] += 2;
+  const NetworkPath partly = identify_network_path(a, declared_2ms(), kDt);
+  EXPECT_EQ(partly.lost, 10u);
+  EXPECT_EQ(partly.superseded, 2u);
+  EXPECT_EQ(partly.longest_burst, 4u);
+}
+
+TEST(NetworkPath, AnEffectTheConfigDeclaresIsNotNamed) {
+  LinkAnswers a = clean_link();
+  for (std::size_t i = 0; i < kAnswers; ++i) a.round_trip[i] += 0.003 * a.time[i] / 10.0;
+  DeclaredLink declared = declared_2ms();
+  declared.drift = true;
+  EXPECT_TRUE(names(identify_network_path(a, declared, kDt)).empty());
+}
+
+// A loaded host's stray spikes: `count` answers delayed by 1 to 5 ms at random steps, a few of
+// them by tens of ms.
+void add_strays(LinkAnswers& a, int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::size_t> at(0, kAnswers - 1);
+  std::uniform_real_distribution<double> size(0.001, 0.005);
+  for (int i = 0; i < count; ++i) a.round_trip[at(rng)] += i % 50 == 0 ? 0.040 : size(rng);
+}
+
+TEST(NetworkPath, PeriodicSpikesAreNamedAmongManyMoreStrayOnes) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    LinkAnswers a = clean_link(seed);
+    for (std::size_t i = 0; i < kAnswers; ++i) a.round_trip[i] += i % 256 < 3 ? 0.006 : 0.0;
+    add_strays(a, 800, seed);  // 40 bursts of spikes, 800 strays
+    const NetworkPath path = identify_network_path(a, declared_2ms(), kDt);
+    EXPECT_EQ(names(path), std::set<std::string>{"periodic spikes"}) << "seed " << seed;
+    EXPECT_NEAR(path.spike_period, 0.25, 0.002) << "seed " << seed;
+  }
+}
+
+TEST(NetworkPath, ManyStraySpikesAloneNameNothing) {
+  for (std::uint64_t seed : {4u, 5u, 6u}) {
+    LinkAnswers a = clean_link(seed);
+    add_strays(a, 800, seed);
+    EXPECT_TRUE(names(identify_network_path(a, declared_2ms(), kDt)).empty()) << "seed " << seed;
+  }
+}
+
 TEST(NetworkPath, DriftAndSpikesTogetherAreBothNamedWithShares) {
   LinkAnswers a = clean_link();
   for (std::size_t i = 0; i < kAnswers; ++i) {

@@ -54,6 +54,64 @@ TEST(ValidateLinkLag, NamesTheBadField) {
   EXPECT_THROW(validate_link_lag(lag(-1, 0, 0, 0), "x"), std::invalid_argument);
 }
 
+config::LinkLag emulated(double drift_rate, double spike_delay, int spike_every, int spike_steps,
+                         int drop_first_step, int drop_steps) {
+  config::LinkLag l = lag(0.001, 0, 0, 1);
+  config::NetworkEmulation& net = *l.mutable_network();
+  net.set_drift_rate(drift_rate);
+  net.set_spike_delay(spike_delay);
+  net.set_spike_every(spike_every);
+  net.set_spike_steps(spike_steps);
+  net.set_drop_first_step(drop_first_step);
+  net.set_drop_steps(drop_steps);
+  return l;
+}
+
+// The emulated network's drift and spikes delay the commands without being reported: the
+// reported lag stays the link's own 1 ms while the release moves.
+TEST(LagInjector, NetworkEmulationDelaysCommandsUnreported) {
+  LagInjector injector(emulated(0.001, 0.006, 500, 3, 0, 0), 0.001);
+  EXPECT_TRUE(injector.active());
+  EXPECT_EQ(injector.schedule(0, 100), 1 * kMs + 100'000);  // 1 ms + 0.1 ms of drift at t = 0.1 s
+  EXPECT_NEAR(injector.last_delay(), 0.001, 1e-12);
+  EXPECT_EQ(injector.schedule(1000 * kMs, 1001), 1007 * kMs + 1'001'000);  // a spike: + 6 ms
+  EXPECT_NEAR(injector.last_delay(), 0.001, 1e-12);
+  EXPECT_EQ(injector.schedule(2000 * kMs, 1003), 2001 * kMs + 1'003'000);  // after it: none
+  EXPECT_EQ(injector.schedule(3000 * kMs), 3001 * kMs);  // not a command: untouched
+}
+
+TEST(LagInjector, NetworkEmulationDropsABurstOfCommandsOnly) {
+  LagInjector injector(emulated(0, 0, 0, 0, 10, 4), 0.001);
+  EXPECT_TRUE(injector.active());
+  int dropped = 0;
+  for (std::int64_t k = 1; k <= 20; ++k) dropped += injector.schedule(k * kMs, k) ? 0 : 1;
+  EXPECT_EQ(dropped, 4);
+  for (std::int64_t k = 10; k < 14; ++k) EXPECT_FALSE(injector.schedule(k * kMs, k));
+  EXPECT_TRUE(injector.schedule(30 * kMs, 9));
+  EXPECT_TRUE(injector.schedule(40 * kMs));  // a heartbeat in the burst's time goes through
+}
+
+TEST(ValidateLinkLag, NetworkEmulationOutOfRangeNamesTheField) {
+  const auto message = [](const config::LinkLag& l) {
+    try {
+      validate_link_lag(l, "nodes[0].receive_lag");
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message(emulated(0.001, 0.006, 500, 3, 10, 4)), "");
+  EXPECT_NE(message(emulated(2.0, 0, 0, 0, 0, 0)).find("receive_lag.network.drift_rate"),
+            std::string::npos);
+  EXPECT_NE(message(emulated(0, 0.006, 3, 3, 0, 0)).find("spike_steps = 3 must be below"),
+            std::string::npos);
+  EXPECT_NE(message(emulated(0, 0, 0, 0, 0, 4)).find("drop_first_step must be >= 1"),
+            std::string::npos);
+  EXPECT_NE(message(emulated(0, 0, 0, 0, 1, -2)).find("network.drop_steps"), std::string::npos);
+  EXPECT_NE(message(emulated(0, -0.001, 10, 1, 0, 0)).find("network.spike_delay"),
+            std::string::npos);
+}
+
 TEST(Summarize, MedianPercentileAndMax) {
   std::vector<double> lags;
   for (int i = 1; i <= 100; ++i) lags.push_back(i * 1e-3);

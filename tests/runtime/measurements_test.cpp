@@ -38,6 +38,7 @@ RecordContents real_time_record() {
       LinkSample& two = *s.add_links();
       two.set_node_id(2);
       two.set_answered_step(answers_of_2[k]);
+      two.set_answers(static_cast<std::uint64_t>(answers_of_2[k]));  // 2 and 4 arrived too
       two.set_round_trip(0.002 + 1e-4 * k);  // a repeat carries the same sample in a real record
       two.set_injected_lag(0.0015);
     }
@@ -73,6 +74,7 @@ TEST(Measurements, EachAnswerCountsOnceAtTheFirstStepThatCarriesIt) {
   const LinkSeries& two = m.links.at(2);
   EXPECT_EQ(two.answered_step, (std::vector<std::int64_t>{1, 3, 5}));
   EXPECT_EQ(two.time, (std::vector<double>{0.001, 0.003, 0.005}));
+  EXPECT_EQ(two.answers, (std::vector<std::int64_t>{1, 3, 5}));  // the coordinator's count
   EXPECT_EQ(two.round_trip_summary().count, 3u);
   EXPECT_DOUBLE_EQ(two.round_trip_summary().median, 0.002 + 3e-4);
   EXPECT_DOUBLE_EQ(two.injected_summary().mean, 0.0015);
@@ -86,6 +88,7 @@ TEST(Measurements, TheLiveAccumulatorAgreesWithTheReader) {
   const RunMeasurements m = measure_run(record);
   for (const auto& [id, series] : m.links) {
     EXPECT_EQ(live.links().at(id).answered_step, series.answered_step);
+    EXPECT_EQ(live.links().at(id).answers, series.answers);
     EXPECT_EQ(live.links().at(id).round_trip, series.round_trip);
   }
 }
