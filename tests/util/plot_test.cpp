@@ -98,5 +98,34 @@ TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Plot, WrapTitleBreaksAtSpacesWithinTheWidth) {
+  EXPECT_EQ(wrap_title("short title", 40), "short title");
+  EXPECT_EQ(wrap_title("aaa bbb ccc ddd", 7), "aaa bbb\nccc ddd");
+  EXPECT_EQ(wrap_title("averyverylongword x", 5), "averyverylongword\nx");
+  EXPECT_EQ(wrap_title("a  b", 10), "a b");
+}
+
+// gnuplot centres a title over the data area: one longer than that area is cut at the figure's
+// left edge, so a figure's long title is drawn on several lines, each whole.
+TEST(Plot, ALongTitleIsDrawnOnSeveralWholeLines) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_title_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string title =
+      "paper_sweep: NRMSE against delay, one curve per period and model (critical delays beyond "
+      "the swept range not drawn)";
+  PlotSpec spec{title,
+                "delay (ms)",
+                "NRMSE (%)",
+                {{"T = 0.05 s, bilinear (uy = 5 mm, b = 0.1)", {0, 1}, {1, 2}}}};
+  write_png_plot(spec, dir / "long.png");
+  std::ifstream in(dir / "long.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(svg.find(title), std::string::npos) << "the title on one line";
+  EXPECT_NE(svg.find(">paper_sweep: NRMSE against delay"), std::string::npos);
+  EXPECT_NE(svg.find("the swept range not drawn)<"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace rths::util
