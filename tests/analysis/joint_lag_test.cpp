@@ -8,6 +8,7 @@
 #include <functional>
 #include <iterator>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -95,6 +96,25 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   EXPECT_NE(script.find("#440154"), std::string::npos) << "viridis, not a rainbow";
   EXPECT_EQ(script.find("rgbformulae"), std::string::npos);
   EXPECT_NE(script.find("with labels"), std::string::npos) << "contours carry their value";
+  // Every layer in the legend; every cell whole (the axes reach half a cell past the grid).
+  for (const char* entry : {"NRMSE contours (%, labelled)", "stability boundary (continuous)",
+                            "diverged (no colour: its error measures nothing)"})
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
+  EXPECT_NE(script.find("set xrange [-8:24]"), std::string::npos) << script;
+  EXPECT_NE(script.find("set yrange [-7:21]"), std::string::npos) << script;
+  // One label per contour level: the grid's values are 0, 126 % and 165 %, so the one level is
+  // 100 %, the 1-2-5 step below the smallest, and it is drawn and labelled.
+  std::ifstream labels_in(result.output_directory / "error_map_labels.dat");
+  std::vector<double> levels;
+  for (std::string line; std::getline(labels_in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double r = 0, a = 0, level = 0;
+    fields >> r >> a >> level;
+    levels.push_back(level);
+  }
+  EXPECT_EQ(levels, std::vector<double>{100.0});
+  EXPECT_NE(svg.find(">100 %<"), std::string::npos);
 }
 
 TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
@@ -145,22 +165,46 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   EXPECT_EQ(rows, static_cast<int>(result.boundary.size()));
 }
 
-// An across-sites point's NRMSE covers only its shorter run: the summary says so, so nobody reads
-// it beside the grid's whole-record NRMSE.
-TEST(JointLag, TheAcrossSitesLineNamesTheStretchItsErrorCovers) {
+// An across-sites point's NRMSE covers only its shorter run: it is printed beside the in-process
+// run of the same stretch. A lockstep run with network lag says plainly that the lag never reaches
+// its response, so it cannot check the map's network axis; a real-time one compares both lags.
+TEST(JointLag, TheAcrossSitesLineComparesLikeWithLikeAndSaysWhatLockstepCannotCheck) {
   JointLagResult result;
   result.study_name = "paper_frame";
   JointLagPoint p;
   p.network_round_trip = 0.014;
   p.actuator_lag = 0.008;
   p.nrmse = 0.0735;
+  p.in_process_nrmse = 0.0735;
   p.duration = 1.0;
   result.measured.push_back(p);
+  p.real_time = true;
+  p.nrmse = 0.52;
+  p.in_process_nrmse = 0.50;
+  result.measured.push_back(p);
   const std::string text = to_text(result);
-  EXPECT_NE(
-      text.find("NRMSE 7.35 % over the first 1.00 s (the grid's NRMSE covers the whole record)"),
-      std::string::npos)
+  EXPECT_NE(text.find("across sites (lockstep): injected 14.00 ms network + 8.00 ms actuator"),
+            std::string::npos)
       << text;
+  EXPECT_NE(text.find("NRMSE 7.35 % over the first 1.00 s against 7.35 % in process for the "
+                      "actuator lag alone over the same 1.00 s"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("NRMSE 52.00 % over the first 1.00 s against 50.00 % in process for the "
+                      "same lags over the same 1.00 s"),
+            std::string::npos)
+      << text;
+  const std::string plainly =
+      "never reaches the response: this run checks the distributed "
+      "machinery, not the map's network axis";
+  const auto said = text.find(plainly);
+  ASSERT_NE(said, std::string::npos) << text;
+  EXPECT_EQ(text.find(plainly, said + 1), std::string::npos) << "the real-time run can check it";
+  EXPECT_EQ(diverged_points(result), 0u);
+  result.measured[1].diverged = true;
+  p.diverged = true;
+  result.grid.push_back(p);
+  EXPECT_EQ(diverged_points(result), 2u);
 }
 
 TEST(JointLag, FirstOrderActuatorLagsByAboutItsTimeConstant) {
