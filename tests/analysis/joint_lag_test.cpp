@@ -64,6 +64,13 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
                            "total_lag.png", "total_lag.svg"}) {
     EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
   }
+  // The total-lag figure: its series in the legend, its axes in ms.
+  std::ifstream in(result.output_directory / "total_lag.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* entry :
+       {">in-process grid (J1 of realised vs command)<", ">measured = injected<",
+        "injected network round trip + actuator lag (ms)", "measured total lag (ms)"})
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
 }
 
 // The grid judges divergence by the one rule every command uses (analysis::compare): 16 ms of
