@@ -111,18 +111,37 @@ std::vector<double> contour_levels(const JointLagResult& result) {
   return levels;
 }
 
-// One label per contour level of the table gnuplot wrote (blocks of "x y level" lines, a level
-// cut into pieces where diverged cells leave holes), at the middle of its longest piece:
-// "x y level" lines into `labels`.
+// The point halfway along a contour piece (by length), and the piece's length.
+std::pair<std::array<double, 3>, double> halfway(const std::vector<std::array<double, 3>>& piece) {
+  std::vector<double> along(1, 0.0);
+  for (std::size_t k = 1; k < piece.size(); ++k)
+    along.push_back(along.back() +
+                    std::hypot(piece[k][0] - piece[k - 1][0], piece[k][1] - piece[k - 1][1]));
+  const double half = along.back() / 2.0;
+  std::size_t k = 1;
+  while (k + 1 < piece.size() && along[k] < half) ++k;
+  const double span = along[k] - along[k - 1];
+  const double f = span > 0.0 ? (half - along[k - 1]) / span : 0.0;
+  std::array<double, 3> point = piece[k];
+  for (int c = 0; c < 2; ++c) point[c] = piece[k - 1][c] + f * (piece[k][c] - piece[k - 1][c]);
+  return {point, along.back()};
+}
+
+// The labels of the contour table gnuplot wrote (blocks of "x y level" lines; a level comes in
+// pieces where the grid's corners or diverged cells cut it): halfway along every piece at least
+// half as long as its level's longest, so each line drawn long enough to read carries its value
+// and a short stub does not. "x y level" lines into `labels`.
 void write_contour_labels(const std::filesystem::path& contours,
                           const std::filesystem::path& labels) {
   std::ifstream in(contours);
-  std::map<double, std::pair<std::size_t, std::array<double, 3>>> longest;  // level: size, middle
+  std::vector<std::pair<std::array<double, 3>, double>> pieces;  // label point, length
+  std::map<double, double> longest;                              // level: longest piece
   std::vector<std::array<double, 3>> piece;
   const auto close_piece = [&] {
     if (piece.size() >= 2) {
-      auto& best = longest[piece.front()[2]];
-      if (piece.size() > best.first) best = {piece.size(), piece[piece.size() / 2]};
+      pieces.push_back(halfway(piece));
+      double& most = longest[piece.front()[2]];
+      most = std::max(most, pieces.back().second);
     }
     piece.clear();
   };
@@ -137,9 +156,10 @@ void write_contour_labels(const std::filesystem::path& contours,
   }
   close_piece();
   std::ofstream out(labels);
-  out << "# network_round_trip_ms actuator_lag_ms nrmse_pct: one label per contour level\n";
-  for (const auto& [level, best] : longest)
-    out << best.second[0] << ' ' << best.second[1] << ' ' << level << "\n";
+  out << "# network_round_trip_ms actuator_lag_ms nrmse_pct: a label per contour piece\n";
+  for (const auto& [point, length] : pieces)
+    if (length >= 0.5 * longest[point[2]])
+      out << point[0] << ' ' << point[1] << ' ' << point[2] << "\n";
 }
 
 // The spacing of a grid axis (ms): its smallest gap between distinct values, 1 when it has one.
@@ -161,7 +181,7 @@ std::string map_settings(const JointLagResult& result) {
   }
   const double dr = cell_size(r) / 2, da = cell_size(a) / 2;
   std::ostringstream out;
-  out << "set bmargin 8\nset title \"Joint lag (" << result.study_name << ", actuator "
+  out << "set bmargin 9\nset title \"Joint lag (" << result.study_name << ", actuator "
       << result.actuator_model
       << ")\\nNRMSE of the displacement against the lag-free reference, %\"\n"
       << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
@@ -176,7 +196,7 @@ std::string map_settings(const JointLagResult& result) {
       << *std::max_element(r.begin(), r.end()) + dr << "]\n"
       << "set yrange [" << *std::min_element(a.begin(), a.end()) - da << ":"
       << *std::max_element(a.begin(), a.end()) + da << "]\n"
-      << "set key outside below center horizontal maxcols 2 box width 2\n";
+      << "set key outside below center vertical maxrows 4 box width 2\n";
   return out.str();
 }
 
@@ -218,12 +238,11 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
   const auto contours = out / "error_map_contours.dat", labels = out / "error_map_labels.dat";
   std::ostringstream table;
   table << "set table '" << contours.string() << "'\nunset surface\nset contour base\n";
-  std::string levels;
-  for (const double level : contour_levels(result))
-    levels += (levels.empty() ? "" : ",") + std::to_string(level);
-  if (!levels.empty())
-    table << "set cntrparam levels discrete " << levels << "\nsplot '" << files.grid.string()
-          << "' using 1:2:3 with lines notitle\n";
+  if (const std::vector<double> levels = contour_levels(result); !levels.empty()) {
+    table << "set cntrparam levels discrete ";
+    for (std::size_t i = 0; i < levels.size(); ++i) table << (i ? "," : "") << levels[i];
+    table << "\nsplot '" << files.grid.string() << "' using 1:2:3 with lines notitle\n";
+  }
   table << "unset table\n";
   std::ofstream(out / "error_map_contours.gp") << table.str();
   util::run_gnuplot_script(table.str(), contours);

@@ -42,13 +42,13 @@ double key_fraction(const std::vector<PlotSpec>& panels) {
 }
 
 // How many characters of a title fit the figure: gnuplot centres the title over the data area
-// (85 px from the left edge to the legend), so a longer one runs off the left edge. About 7 px a
-// character at the figures' 10 pt sans.
+// (85 px from the left edge to the legend), so a longer one runs off the left edge. About 7.5 px
+// a character at the figures' 10 pt sans, with a margin.
 std::size_t title_chars(const std::vector<PlotSpec>& panels) {
   const double width = panels.front().width;
   const double data_right = width * (1.0 - key_fraction(panels));
   const double centre = (85.0 + data_right) / 2.0;
-  return static_cast<std::size_t>(std::max(20.0, (2.0 * centre - 20.0) / 7.0));
+  return static_cast<std::size_t>(std::max(20.0, (2.0 * centre - 40.0) / 7.5));
 }
 
 std::string range(const std::optional<double>& lo, const std::optional<double>& hi) {
@@ -157,17 +157,37 @@ void run_gnuplot_script(const std::string& script, const std::filesystem::path& 
   }
 }
 
-std::string wrap_title(const std::string& title, std::size_t max_chars) {
-  std::string out, line;
-  std::istringstream words(title);
-  for (std::string word; words >> word;) {
-    if (!line.empty() && line.size() + 1 + word.size() > max_chars) {
-      out += line + "\n";
-      line.clear();
-    }
-    line += (line.empty() ? "" : " ") + word;
+namespace {
+
+// Words into lines of at most `width` characters (a longer word alone on its line).
+std::vector<std::string> fill_lines(const std::vector<std::string>& words, std::size_t width) {
+  std::vector<std::string> lines(1);
+  for (const std::string& word : words) {
+    if (!lines.back().empty() && lines.back().size() + 1 + word.size() > width)
+      lines.emplace_back();
+    lines.back() += (lines.back().empty() ? "" : " ") + word;
   }
-  return out + line;
+  return lines;
+}
+
+}  // namespace
+
+std::string wrap_title(const std::string& title, std::size_t max_chars) {
+  std::vector<std::string> words;
+  std::size_t total = 0;
+  std::istringstream in(title);
+  for (std::string word; in >> word; total += word.size() + 1) words.push_back(word);
+  std::vector<std::string> lines = fill_lines(words, max_chars);
+  // As many lines as needed, of even length: no last line of one word.
+  for (std::size_t width = total / lines.size(); lines.size() > 1 && width < max_chars; ++width) {
+    if (auto even = fill_lines(words, width); even.size() == lines.size()) {
+      lines = std::move(even);
+      break;
+    }
+  }
+  std::string out;
+  for (const std::string& line : lines) out += (out.empty() ? "" : "\n") + line;
+  return out;
 }
 
 std::string series_colour(std::size_t index) { return kPalette[index % kColours]; }
