@@ -4,9 +4,11 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -85,77 +87,178 @@ MapFiles write_map_data(const JointLagResult& result, const std::filesystem::pat
   return files;
 }
 
-// The 2-D heat map: NRMSE % over (network round trip, actuator lag), contour lines at round
-// percentages, the continuous stability boundary, diverged points as crosses. PNG and SVG.
+// Contour levels of the map: the 1-2-5 series over the grid's bounded non-zero NRMSE, from the
+// largest step below its smallest value (a line inside the cells next to the lag-free corner,
+// where the interpolation from zero would squeeze any lower one) to its largest value.
+std::vector<double> contour_levels(const JointLagResult& result) {
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (const auto& p : result.grid) {
+    if (p.diverged || !(p.nrmse > 0.0)) continue;
+    lo = std::min(lo, 100.0 * p.nrmse);
+    hi = std::max(hi, 100.0 * p.nrmse);
+  }
+  std::vector<double> levels;
+  double below = 0.0;
+  for (double decade = 1e-2; decade <= hi; decade *= 10.0)
+    for (const double step : {1.0, 2.0, 5.0}) {
+      const double level = decade * step;
+      if (level < lo)
+        below = level;
+      else if (level <= hi)
+        levels.push_back(level);
+    }
+  if (below > 0.0) levels.insert(levels.begin(), below);
+  return levels;
+}
+
+// The point halfway along a contour piece (by length), and the piece's length.
+std::pair<std::array<double, 3>, double> halfway(const std::vector<std::array<double, 3>>& piece) {
+  std::vector<double> along(1, 0.0);
+  for (std::size_t k = 1; k < piece.size(); ++k)
+    along.push_back(along.back() +
+                    std::hypot(piece[k][0] - piece[k - 1][0], piece[k][1] - piece[k - 1][1]));
+  const double half = along.back() / 2.0;
+  std::size_t k = 1;
+  while (k + 1 < piece.size() && along[k] < half) ++k;
+  const double span = along[k] - along[k - 1];
+  const double f = span > 0.0 ? (half - along[k - 1]) / span : 0.0;
+  std::array<double, 3> point = piece[k];
+  for (int c = 0; c < 2; ++c) point[c] = piece[k - 1][c] + f * (piece[k][c] - piece[k - 1][c]);
+  return {point, along.back()};
+}
+
+// The labels of the contour table gnuplot wrote (blocks of "x y level" lines; a level comes in
+// pieces where the grid's corners or diverged cells cut it): halfway along every piece at least
+// half as long as its level's longest, so each line drawn long enough to read carries its value
+// and a short stub does not. "x y level" lines into `labels`.
+void write_contour_labels(const std::filesystem::path& contours,
+                          const std::filesystem::path& labels) {
+  std::ifstream in(contours);
+  std::vector<std::pair<std::array<double, 3>, double>> pieces;  // label point, length
+  std::map<double, double> longest;                              // level: longest piece
+  std::vector<std::array<double, 3>> piece;
+  const auto close_piece = [&] {
+    if (piece.size() >= 2) {
+      pieces.push_back(halfway(piece));
+      double& most = longest[piece.front()[2]];
+      most = std::max(most, pieces.back().second);
+    }
+    piece.clear();
+  };
+  for (std::string line; std::getline(in, line);) {
+    std::array<double, 3> point{};
+    std::istringstream fields(line);
+    if (line.empty() || line[0] == '#' || !(fields >> point[0] >> point[1] >> point[2])) {
+      close_piece();
+      continue;
+    }
+    piece.push_back(point);
+  }
+  close_piece();
+  std::ofstream out(labels);
+  out << "# network_round_trip_ms actuator_lag_ms nrmse_pct: a label per contour piece\n";
+  for (const auto& [point, length] : pieces)
+    if (length >= 0.5 * longest[point[2]])
+      out << point[0] << ' ' << point[1] << ' ' << point[2] << "\n";
+}
+
+// The spacing of a grid axis (ms): its smallest gap between distinct values, 1 when it has one.
+double cell_size(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  double gap = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < values.size(); ++i)
+    if (values[i] > values[i - 1]) gap = std::min(gap, values[i] - values[i - 1]);
+  return std::isfinite(gap) ? gap : 1.0;
+}
+
+// The map's settings: title, axes (each cell whole: the range reaches half a cell past the
+// outer grid points), the log colour scale in a perceptually uniform palette, the legend below.
+std::string map_settings(const JointLagResult& result) {
+  std::vector<double> r, a;
+  for (const auto& p : result.grid) {
+    r.push_back(p.network_round_trip * 1e3);
+    a.push_back(p.actuator_lag * 1e3);
+  }
+  const double dr = cell_size(r) / 2, da = cell_size(a) / 2;
+  std::ostringstream out;
+  out << "set bmargin 9\nset title \"Joint lag (" << result.study_name << ", actuator "
+      << result.actuator_model
+      << ")\\nNRMSE of the displacement against the lag-free reference, %\"\n"
+      << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
+      << "set cblabel 'NRMSE (%), log scale'\nset logscale cb\nset format cb '%g'\n"
+      << "set cbrange [" << kMapFloorPercent
+      << ":*]\n"
+      // viridis: perceptually uniform and readable in grey, unlike a rainbow.
+      << "set palette defined (0 '#440154', 1 '#482878', 2 '#3E4A89', 3 '#31688E', 4 '#26828E', "
+         "5 '#1F9E89', 6 '#35B779', 7 '#6DCD59', 8 '#B4DE2C', 9 '#FDE725')\n"
+      << "set style textbox opaque fc rgb 'white' noborder\n"
+      << "set xrange [" << *std::min_element(r.begin(), r.end()) - dr << ":"
+      << *std::max_element(r.begin(), r.end()) + dr << "]\n"
+      << "set yrange [" << *std::min_element(a.begin(), a.end()) - da << ":"
+      << *std::max_element(a.begin(), a.end()) + da << "]\n"
+      << "set key outside below center vertical maxrows 4 box width 2\n";
+  return out.str();
+}
+
+// The plot command: cells, contour lines with one label each, the points past the boundary
+// (open circles), the boundary itself, diverged points (crosses); only the layers that exist.
+std::string map_plot(const JointLagResult& result, const MapFiles& files,
+                     const std::filesystem::path& contours, const std::filesystem::path& labels) {
+  const auto any = [&](auto&& predicate) {
+    return std::any_of(result.grid.begin(), result.grid.end(), predicate);
+  };
+  std::string plot = "plot '" + files.grid.string() + "' using 1:2:3 with image pixels notitle";
+  if (std::filesystem::file_size(contours) > 0)
+    plot += ", '" + contours.string() +
+            "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours (%, labelled)', '" +
+            labels.string() +
+            "' using 1:2:(sprintf('%g %%', $3)) with labels boxed font 'sans,9' tc rgb 'black' "
+            "notitle";
+  if (any([](const JointLagPoint& p) { return p.past_boundary && !p.diverged; }))
+    plot += ", '" + files.past.string() +
+            "' using 1:2 with points pt 6 ps 3 lw 2 lc rgb 'black' title 'past the stability "
+            "boundary, bounded in this record'";
+  if (std::any_of(result.boundary.begin(), result.boundary.end(),
+                  [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); }))
+    plot += ", '" + files.boundary.string() +
+            "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary "
+            "(continuous)'";
+  if (any([](const JointLagPoint& p) { return p.diverged; }))
+    plot += ", '" + files.diverged.string() +
+            "' using 1:2 with points pt 2 ps 3 lw 2 lc rgb 'black' title 'diverged (no colour: "
+            "its error measures nothing)'";
+  return plot;
+}
+
+// The 2-D heat map: NRMSE % over (network round trip, actuator lag), labelled contour lines,
+// the continuous stability boundary, the points past it and the diverged ones marked. PNG and
+// SVG; the scripts are kept beside them, so the map can be redrawn or restyled by hand.
 void write_error_map(const JointLagResult& result, const std::filesystem::path& out) {
   const MapFiles files = write_map_data(result, out);
-  const std::filesystem::path& grid_data = files.grid;
-  const std::filesystem::path& diverged_data = files.diverged;
-  const std::filesystem::path& past_data = files.past;
-  const std::filesystem::path& boundary_data = files.boundary;
-  double max_r = 0.0, max_a = 0.0;
-  for (const auto& p : result.grid) {
-    max_r = std::max(max_r, p.network_round_trip * 1e3);
-    max_a = std::max(max_a, p.actuator_lag * 1e3);
+  const auto contours = out / "error_map_contours.dat", labels = out / "error_map_labels.dat";
+  std::ostringstream table;
+  table << "set table '" << contours.string() << "'\nunset surface\nset contour base\n";
+  if (const std::vector<double> levels = contour_levels(result); !levels.empty()) {
+    table << "set cntrparam levels discrete ";
+    for (std::size_t i = 0; i < levels.size(); ++i) table << (i ? "," : "") << levels[i];
+    table << "\nsplot '" << files.grid.string() << "' using 1:2:3 with lines notitle\n";
   }
-  const bool any_diverged = std::any_of(result.grid.begin(), result.grid.end(),
-                                        [](const JointLagPoint& p) { return p.diverged; });
-  const bool any_past =
-      std::any_of(result.grid.begin(), result.grid.end(),
-                  [](const JointLagPoint& p) { return p.past_boundary && !p.diverged; });
-  const bool any_boundary =
-      std::any_of(result.boundary.begin(), result.boundary.end(),
-                  [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
-  const auto contours = out / "error_map_contours.dat";
-  const auto script = out / "error_map.gp";
-  std::ostringstream file;
-  {
-    file << "set table '" << contours.string() << "'\n"
-         << "unset surface\nset contour base\nset cntrparam levels discrete 1,2,5,10,20,50,100\n"
-         << "splot '" << grid_data.string() << "' using 1:2:3 with lines notitle\n"
-         << "unset table\nunset contour\n"
-         << "set bmargin 7\nset title \"Joint lag (" << result.study_name << ", actuator "
-         << result.actuator_model
-         << ")\\nNRMSE of the displacement against the lag-free reference, %\"\n"
-         << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
-         << "set cblabel 'NRMSE (%), log scale'\nset logscale cb\nset format cb '%g'\n"
-         << "set cbrange [" << kMapFloorPercent
-         << ":*]\n"
-         // viridis: perceptually uniform and readable in grey, unlike a rainbow.
-         << "set palette defined (0 '#440154', 1 '#482878', 2 '#3E4A89', 3 '#31688E', 4 '#26828E', "
-            "5 '#1F9E89', 6 '#35B779', 7 '#6DCD59', 8 '#B4DE2C', 9 '#FDE725')\n"
-         << "set style textbox opaque fc rgb 'white' noborder\nset xrange [0:"
-         << std::max(max_r, 1e-3) << "]\nset yrange [0:" << std::max(max_a, 1e-3) << "]\n"
-         << "set key outside below box\n";
-    std::string plot = "plot '" + grid_data.string() +
-                       "' using 1:2:3 with image pixels notitle, '" + contours.string() +
-                       "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours 1, 2, 5, "
-                       "10, 20, 50, 100 %', '" +
-                       contours.string() +
-                       "' using 1:2:(sprintf('%g %%', $3)) every 25::5 with labels boxed "
-                       "font 'sans,8' tc rgb 'black' notitle";
-    if (any_past)
-      plot += ", '" + past_data.string() +
-              "' using 1:2 with points pt 1 ps 1 lw 1.5 lc rgb 'white' title 'past the stability "
-              "boundary "
-              "(expected to diverge)'";
-    if (any_boundary)
-      plot += ", '" + boundary_data.string() +
-              "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary "
-              "(continuous)'";
-    if (any_diverged)
-      plot += ", '" + diverged_data.string() +
-              "' using 1:2 with points pt 2 ps 2 lc rgb 'black' title 'diverged'";
-    for (const char* terminal : {"pngcairo size 1200,800", "svg size 1200,800 dynamic"}) {
-      const bool png = std::string(terminal).rfind("png", 0) == 0;
-      file << "set terminal " << terminal << " noenhanced\n"
+  table << "unset table\n";
+  std::ofstream(out / "error_map_contours.gp") << table.str();
+  util::run_gnuplot_script(table.str(), contours);
+  if (!std::filesystem::exists(contours)) std::ofstream{contours};
+  write_contour_labels(contours, labels);
+  std::ostringstream figure;
+  figure << map_settings(result);
+  const std::string plot = map_plot(result, files, contours, labels);
+  for (const char* terminal : {"pngcairo size 1200,820", "svg size 1200,820 dynamic"}) {
+    const bool png = std::string(terminal).rfind("png", 0) == 0;
+    figure << "set terminal " << terminal << " noenhanced\n"
            << "set output '" << (out / (png ? "error_map.png" : "error_map.svg")).string() << "'\n"
            << plot << "\n";
-    }
   }
-  // The script is kept beside the figures, so the map can be redrawn or restyled by hand.
-  std::ofstream(script) << file.str();
-  util::run_gnuplot_script(file.str(), out / "error_map.png");
+  std::ofstream(out / "error_map.gp") << figure.str();
+  util::run_gnuplot_script(figure.str(), out / "error_map.png");
 }
 
 // The continuous boundary for an SDOF study; empty (with the reason) otherwise.
@@ -245,18 +348,21 @@ void write_csv(const std::vector<JointLagPoint>& points, const std::filesystem::
 }
 
 nlohmann::json point_json(const JointLagPoint& p) {
-  return {{"network_round_trip_s", p.network_round_trip},
-          {"actuator_lag_s", p.actuator_lag},
-          {"injected_total_s", p.network_round_trip + p.actuator_lag},
-          {"measured_total_s", p.measured_total_lag},
-          {"measured_round_trip_s", p.measured_round_trip},
-          {"measured_actuator_lag_s", p.measured_actuator_lag},
-          {"nrmse_pct", 100.0 * p.nrmse},
-          {"past_stability_boundary", p.past_boundary},
-          {"paper_eq2", p.paper_eq2},
-          {"peak_error_m", p.peak_error},
-          {"diverged", p.diverged},
-          {"real_time", p.real_time}};
+  nlohmann::json point = {{"network_round_trip_s", p.network_round_trip},
+                          {"actuator_lag_s", p.actuator_lag},
+                          {"injected_total_s", p.network_round_trip + p.actuator_lag},
+                          {"measured_total_s", p.measured_total_lag},
+                          {"measured_round_trip_s", p.measured_round_trip},
+                          {"measured_actuator_lag_s", p.measured_actuator_lag},
+                          {"nrmse_pct", 100.0 * p.nrmse},
+                          {"past_stability_boundary", p.past_boundary},
+                          {"paper_eq2", p.paper_eq2},
+                          {"peak_error_m", p.peak_error},
+                          {"diverged", p.diverged},
+                          {"real_time", p.real_time}};
+  // Across sites (a run of `duration` s): its in-process counterpart over the same stretch.
+  if (p.duration > 0.0) point["in_process_nrmse_pct"] = 100.0 * p.in_process_nrmse;
+  return point;
 }
 
 }  // namespace
@@ -426,6 +532,13 @@ nlohmann::json to_json(const JointLagResult& result) {
           {"stability_boundary_skipped", result.boundary_skipped}};
 }
 
+std::size_t diverged_points(const JointLagResult& result) {
+  const auto diverged = [](const JointLagPoint& p) { return p.diverged; };
+  return static_cast<std::size_t>(
+      std::count_if(result.grid.begin(), result.grid.end(), diverged) +
+      std::count_if(result.measured.begin(), result.measured.end(), diverged));
+}
+
 std::string to_text(const JointLagResult& result) {
   std::ostringstream out;
   out.setf(std::ios::fixed);
@@ -466,8 +579,15 @@ std::string to_text(const JointLagResult& result) {
         << " ms actuator = " << (p.network_round_trip + p.actuator_lag) * 1e3
         << " ms; measured total " << p.measured_total_lag * 1e3 << " ms = round trip "
         << p.measured_round_trip * 1e3 << " ms + actuator " << p.measured_actuator_lag * 1e3
-        << " ms; NRMSE " << 100 * p.nrmse << " % over the first " << p.duration
-        << " s (the grid's NRMSE covers the whole record)\n";
+        << " ms; NRMSE " << 100 * p.nrmse << " % over the first " << p.duration << " s against "
+        << 100 * p.in_process_nrmse << " % in process for "
+        << (p.real_time ? "the same lags" : "the actuator lag alone") << " over the same "
+        << p.duration << " s" << (p.diverged ? " (diverged)" : "") << "\n";
+    if (!p.real_time && p.network_round_trip > 0.0)
+      out << "  lockstep waits for every answer, so the " << p.network_round_trip * 1e3
+          << " ms network round trip delays the exchange in wall-clock time only and never "
+             "reaches the response: this run checks the distributed machinery, not the map's "
+             "network axis (a sites config with clock: REAL_TIME measures that)\n";
   }
   out << "written: " << (result.output_directory / "grid.csv").string()
       << ", error_map.png/.svg, total_lag.png/.svg, summary.json\n";

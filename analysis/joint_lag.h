@@ -51,6 +51,10 @@ struct JointLagPoint {
   double duration = 0.0;               // s of the record run across sites: its NRMSE covers only
                                        // this stretch, so it is not comparable with the grid's
   bool past_boundary = false;  // network round trip beyond the critical one at this actuator lag
+  // Across sites only: the in-process run of the lags the response can see, over the same
+  // stretch (relative NRMSE): network + actuator in real time; the actuator alone in lockstep,
+  // which waits for every answer, so the network lag never reaches the response.
+  double in_process_nrmse = 0.0;
 };
 
 // Continuous stability boundary of the grid: for each actuator lag A, the network round trip R at
@@ -110,7 +114,12 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
 void write_joint_lag_outputs(const JointLagResult& result, bool plots);
 
 nlohmann::json to_json(const JointLagResult& result);
+// The grid as a table, then each across-sites run with its measured lags and its NRMSE beside
+// the in-process run of the lags its response sees (a lockstep run says plainly that it cannot
+// check the map's network axis).
 std::string to_text(const JointLagResult& result);
+// Grid and across-sites points that diverged (the one rule: analysis::compare).
+std::size_t diverged_points(const JointLagResult& result);
 
 // --- shared with the across-sites runner -------------------------------------------------------
 // The actuator's own stage: a shift by `lag` (s), or a first-order lag of time constant `lag`.

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <numbers>
 #include <sstream>
+#include <tuple>
 
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
@@ -346,6 +347,62 @@ std::string coincides_with(const std::vector<const CaseOutcome*>& drawn, std::si
   return "";
 }
 
+// The first actuator's measured force (kN) against its command (mm).
+util::Series force_loop(const CaseOutcome& c, const std::string& label, const std::string& style) {
+  util::Series loop{label, {}, {}, style};
+  for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
+    loop.x.push_back(c.simulation.command(k, 0) * 1e3);
+    loop.y.push_back(c.simulation.measured_force(k, 0) * 1e-3);
+  }
+  return loop;
+}
+
+// force_displacement.png: what the integrator sees of the experimental part, one panel per case
+// with the reference drawn over it, thin and dark. Without lag the reference's loop is a line
+// that every lagged case's ellipse would cover on a shared panel, and cases with near-equal
+// loops would cover each other. A diverged case has no loop worth drawing.
+void write_force_displacement(const std::string& study,
+                              const std::vector<const CaseOutcome*>& drawn,
+                              const CaseOutcome& reference, const std::filesystem::path& png) {
+  const auto has_loop = [](const CaseOutcome& c) {
+    return c.simulation.command.cols() > 0 && !c.diverged();
+  };
+  if (!has_loop(reference)) return;
+  const util::Series over =
+      force_loop(reference, reference.name + " (drawn over)", "lines lc rgb '#222222' dt 1 lw 1.2");
+  std::vector<util::PlotSpec> panels;
+  for (std::size_t i = 0; i < drawn.size(); ++i) {
+    const CaseOutcome& c = *drawn[i];
+    if (&c == &reference || !has_loop(c)) continue;
+    util::PlotSpec panel{
+        study + ": what the integrator sees, " + c.name + " against " + reference.name,
+        "commanded displacement (mm)", "measured force (kN)"};
+    panel.series = {
+        force_loop(c, c.name, "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw 2"), over};
+    panel.height = 340;
+    panels.push_back(std::move(panel));
+  }
+  // One scale on every panel, so that the loops compare at a glance.
+  std::vector<util::Series> all, swapped;
+  for (const util::PlotSpec& p : panels)
+    for (const util::Series& s : p.series) {
+      all.push_back(s);
+      swapped.push_back({s.title, s.y, s.x});
+    }
+  const auto y = util::padded_y_range(all, {}, 0.04), x = util::padded_y_range(swapped, {}, 0.04);
+  for (util::PlotSpec& p : panels) {
+    if (y) std::tie(p.y_min, p.y_max) = *y;
+    if (x) std::tie(p.x_min, p.x_max) = *x;
+  }
+  if (panels.empty()) {
+    util::PlotSpec alone{study + ": what the integrator sees (experimental part)",
+                         "commanded displacement (mm)", "measured force (kN)"};
+    alone.series = {force_loop(reference, reference.name, "lines lw 2")};
+    panels.push_back(std::move(alone));
+  }
+  util::write_png_panels(panels, png);
+}
+
 }  // namespace
 
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
@@ -360,10 +417,6 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
                             "time (s)",
                             "case - reference (mm)",
                             {}};
-  util::PlotSpec loop{outcome.study_name + ": what the integrator sees (experimental part)",
-                      "commanded displacement (mm)",
-                      "measured force (kN)",
-                      {}};
   std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
   std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
   if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
@@ -390,14 +443,6 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
       if (!c.diverged()) bounded_difference.push_back(difference.series.size());
       difference.series.push_back(std::move(d));
     }
-    if (c.simulation.command.cols() > 0 && !c.diverged()) {
-      util::Series l{c.name, {}, {}, style};
-      for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
-        l.x.push_back(c.simulation.command(k, 0) * 1e3);
-        l.y.push_back(c.simulation.measured_force(k, 0) * 1e-3);
-      }
-      loop.series.push_back(std::move(l));
-    }
   }
   // A diverged case must not flatten the others: the axes follow the cases that stayed bounded.
   if (const auto r = util::padded_y_range(displacement.series, bounded)) {
@@ -418,7 +463,8 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   panels.push_back(zoom);
   for (util::PlotSpec& p : panels) p.height = 380;
   util::write_png_panels(panels, directory / "displacement.png");
-  if (!loop.series.empty()) util::write_png_plot(loop, directory / "force_displacement.png");
+  write_force_displacement(outcome.study_name, drawn, reference,
+                           directory / "force_displacement.png");
 }
 
 namespace {
@@ -488,12 +534,24 @@ std::string fixed(double value, int decimals) {
 
 // The row of one case: errors of a response that grew without bound measure nothing (the JSON
 // keeps them), so a diverged case shows "-" there.
-std::vector<std::string> summary_row(const CaseOutcome& c) {
-  std::string critical = "-", margin = "-";
-  if (c.stability) {
-    critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
-    if (c.stability->critical()) margin = fixed(100.0 * c.stability->margin(), 1) + " %";
+// The margin cell: the lag's margin against the critical delay; for a compensated case, the
+// compensated loop's verdict in short (the lag it tolerates beyond its own, "unstable", or "n/a"
+// when it is not analysable), spelled out with the uncompensated margin below the table.
+std::string margin_cell(const CaseOutcome& c) {
+  if (c.compensated) {
+    const CompensatedVerdict& v = *c.compensated;
+    if (!v.analysed) return "n/a [comp.]";
+    if (!v.stable) return "unstable [comp.]";
+    return v.extra_delay_tolerated ? "+" + ms(*v.extra_delay_tolerated) + " [comp.]" : "stable";
   }
+  if (c.stability && c.stability->critical()) return fixed(100.0 * c.stability->margin(), 1) + " %";
+  return "-";
+}
+
+std::vector<std::string> summary_row(const CaseOutcome& c) {
+  std::string critical = "-";
+  if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
+  const std::string margin = margin_cell(c);
   const bool bounded = !c.diverged();
   return {c.name,
           c.delay_description,
@@ -514,7 +572,7 @@ std::string study_summary_text(const StudyOutcome& outcome) {
       << outcome.reference_description() << "; response: " << outcome.response.describe()
       << " displacement; motion read in " << outcome.motion_units << ")\n";
   using Align = util::TextTable::Align;
-  util::TextTable table({{"case", Align::kLeft, 32},
+  util::TextTable table({{"case", Align::kLeft, 40},
                          {"delay", Align::kLeft, 28},
                          {"peak (mm)", Align::kRight},
                          {"NRMSE (%)", Align::kRight},
@@ -525,6 +583,11 @@ std::string study_summary_text(const StudyOutcome& outcome) {
                          {"status", Align::kLeft, 40}});
   for (const CaseOutcome& c : outcome.cases) table.add_row(summary_row(c));
   out << table.render();
+  if (std::any_of(outcome.cases.begin(), outcome.cases.end(),
+                  [](const CaseOutcome& c) { return c.compensated.has_value(); }))
+    out << "margin [comp.]: the compensated loop's, as the lag it tolerates beyond its own (n/a: "
+           "not analysable before the run); each such case's line below gives it with the "
+           "uncompensated margin\n";
   for (const CaseOutcome& c : outcome.cases) {
     if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
     if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";

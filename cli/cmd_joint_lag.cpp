@@ -16,7 +16,7 @@ namespace {
 
 struct JointLagOptions {
   std::string config, out;
-  bool json = false, no_plots = false, no_measure = false;
+  bool json = false, no_plots = false, no_measure = false, allow_unstable = false;
 };
 
 void run(const JointLagOptions& o) {
@@ -40,6 +40,16 @@ void run(const JointLagOptions& o) {
   } else {
     std::cout << analysis::to_text(result);
   }
+  // The one rule of every command: a diverged point fails the run unless it is meant.
+  if (const std::size_t diverged = analysis::diverged_points(result);
+      diverged > 0 && !o.allow_unstable && !config.expect_unstable()) {
+    throw ExitError(kExitRunFailed,
+                    std::to_string(diverged) + " of " +
+                        std::to_string(result.grid.size() + result.measured.size()) +
+                        " joint-lag points diverged (marked in grid.csv and the map); "
+                        "--allow-unstable, or expect_unstable: true in the joint-lag study, when "
+                        "that is meant");
+  }
 }
 
 }  // namespace
@@ -56,6 +66,8 @@ void add_joint_lag_command(CLI::App& app) {
   cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--no-plots", options->no_plots, "skip the PNG plots");
   cmd->add_flag("--no-measure", options->no_measure, "skip the across-sites runs");
+  cmd->add_flag("--allow-unstable", options->allow_unstable,
+                "diverged points do not fail the run (exit 0); they are still marked");
   cmd->callback([options] { run(*options); });
 }
 

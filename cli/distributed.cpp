@@ -210,7 +210,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       facts.rejected = runtime::RejectCounters::from(k).total();
       facts.node_rejects.assign(measured.footer.node_rejects().begin(),
                                 measured.footer.node_rejects().end());
-      if (c.status.find("deadline misses") != std::string::npos)
+      if (runtime::needs_deadline_diagnosis(c.status, k.overruns()))
         facts.deadline_diagnosis =
             runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
                                         static_cast<std::uint64_t>(runtime::max_missed_answers(

@@ -31,10 +31,14 @@ std::filesystem::path lag_plot(const RunIdentification& run, const std::filesyst
     util::PlotSpec p("link to node " + std::to_string(l.node_id) + ": round trip over the run (" +
                          effects_of(l) + ")",
                      "time (s)", "lag (ms)");
+    // Where all three agree none hides another: the injected lag a wide pale band under the
+    // measured points, the model a dashed line over them.
+    p.series.emplace_back("injected by the node", l.time, scaled(l.injected, 1e3),
+                          "lines lw 6 lc rgb '#BBBBBB'");
     p.series.emplace_back("measured round trip", l.time, scaled(l.round_trip, 1e3),
-                          "points pt 7 ps 0.3");
-    p.series.emplace_back("injected by the node", l.time, scaled(l.injected, 1e3));
-    p.series.emplace_back("identified model", l.time, scaled(l.model, 1e3), "lines lw 2");
+                          "points pt 7 ps 0.3 lc rgb '" + util::series_colour(0) + "'");
+    p.series.emplace_back("identified model", l.time, scaled(l.model, 1e3),
+                          "lines lw 2 dt 2 lc rgb '" + util::series_colour(1) + "'");
     p.height = 400;
     panels.push_back(std::move(p));
   }

@@ -35,6 +35,11 @@ std::vector<std::string> advice_for(const DeadlineDiagnosis& d) {
 
 }  // namespace
 
+bool needs_deadline_diagnosis(const std::string& status, std::uint64_t overruns) {
+  return status.find("deadline misses") != std::string::npos ||
+         (overruns > 0 && status != "completed");
+}
+
 DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps, double dt,
                                      std::uint64_t streak_window) {
   DeadlineDiagnosis d;

@@ -36,6 +36,10 @@ struct DeadlineDiagnosis {
   std::string describe() const;
 };
 
+// Whether a run's end calls for the diagnosis: its status names deadline misses, or it did not
+// complete after overruns (a fail-safe stop when stalls outlast the answer window is one).
+bool needs_deadline_diagnosis(const std::string& status, std::uint64_t overruns);
+
 // `streak_window`: the fail-safe's window in steps (max_missed_answers); a run whose worst streak
 // stays within it is called usable with the late steps marked.
 DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps, double dt,

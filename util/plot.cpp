@@ -21,10 +21,34 @@ constexpr int kDashTypes = 4;
 std::string quoted(const std::string& text) {
   std::string out = "\"";
   for (char c : text) {
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
     if (c == '"' || c == '\\') out += '\\';
     out += c;
   }
   return out + "\"";
+}
+
+// The share of the figure's width the legend takes (outside right), from its longest entry at
+// about 8 px a character.
+double key_fraction(const std::vector<PlotSpec>& panels) {
+  std::size_t longest = 0;
+  for (const PlotSpec& panel : panels)
+    for (const Series& s : panel.series) longest = std::max(longest, s.title.size());
+  const double width = panels.front().width;
+  return std::clamp((8.0 * static_cast<double>(longest) + 80.0) / width, 0.15, 0.5);
+}
+
+// How many characters of a title fit the figure: gnuplot centres the title over the data area
+// (85 px from the left edge to the legend), so a longer one runs off the left edge. About 7.5 px
+// a character at the figures' 10 pt sans, with a margin.
+std::size_t title_chars(const std::vector<PlotSpec>& panels) {
+  const double width = panels.front().width;
+  const double data_right = width * (1.0 - key_fraction(panels));
+  const double centre = (85.0 + data_right) / 2.0;
+  return static_cast<std::size_t>(std::max(20.0, (2.0 * centre - 40.0) / 7.5));
 }
 
 std::string range(const std::optional<double>& lo, const std::optional<double>& hi) {
@@ -38,8 +62,8 @@ std::string range(const std::optional<double>& lo, const std::optional<double>& 
   return out.str();
 }
 
-void append_panel(std::ostringstream& script, const PlotSpec& spec) {
-  script << "set title " << quoted(spec.title) << "\n"
+void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t title_width) {
+  script << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
          << "set ylabel " << quoted(spec.ylabel) << "\n"
          << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
@@ -102,17 +126,14 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
   if (panels.size() > 1) {
     // Stacked panels share the time axis: the same margins on every panel, so their data areas
     // line up whatever each legend's width; the right margin fits the longest legend entry.
-    std::size_t longest = 0;
-    for (const PlotSpec& panel : panels)
-      for (const Series& s : panel.series) longest = std::max(longest, s.title.size());
     const double width = panels.front().width;
-    const double key = std::clamp((8.0 * static_cast<double>(longest) + 80.0) / width, 0.15, 0.5);
+    const double key = key_fraction(panels);
     script.precision(4);
     script << "set lmargin at screen " << 85.0 / width << "\nset rmargin at screen " << 1.0 - key
            << "\n"
            << "set multiplot layout " << panels.size() << ",1\n";
   }
-  for (const PlotSpec& panel : panels) append_panel(script, panel);
+  for (const PlotSpec& panel : panels) append_panel(script, panel, title_chars(panels));
   if (panels.size() > 1) script << "unset multiplot\n";
   script << "set output\n";
   return script.str();
@@ -134,6 +155,39 @@ void run_gnuplot_script(const std::string& script, const std::filesystem::path& 
     throw std::runtime_error("gnuplot failed to write " + figure.string() +
                              " (is gnuplot-nox installed?)");
   }
+}
+
+namespace {
+
+// Words into lines of at most `width` characters (a longer word alone on its line).
+std::vector<std::string> fill_lines(const std::vector<std::string>& words, std::size_t width) {
+  std::vector<std::string> lines(1);
+  for (const std::string& word : words) {
+    if (!lines.back().empty() && lines.back().size() + 1 + word.size() > width)
+      lines.emplace_back();
+    lines.back() += (lines.back().empty() ? "" : " ") + word;
+  }
+  return lines;
+}
+
+}  // namespace
+
+std::string wrap_title(const std::string& title, std::size_t max_chars) {
+  std::vector<std::string> words;
+  std::size_t total = 0;
+  std::istringstream in(title);
+  for (std::string word; in >> word; total += word.size() + 1) words.push_back(word);
+  std::vector<std::string> lines = fill_lines(words, max_chars);
+  // As many lines as needed, of even length: no last line of one word.
+  for (std::size_t width = total / lines.size(); lines.size() > 1 && width < max_chars; ++width) {
+    if (auto even = fill_lines(words, width); even.size() == lines.size()) {
+      lines = std::move(even);
+      break;
+    }
+  }
+  std::string out;
+  for (const std::string& line : lines) out += (out.empty() ? "" : "\n") + line;
+  return out;
 }
 
 std::string series_colour(std::size_t index) { return kPalette[index % kColours]; }

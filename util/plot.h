@@ -57,6 +57,12 @@ struct PlotSpec {
 // of the same figure can name the same colour for the same thing (style "lines lc rgb '...'").
 std::string series_colour(std::size_t index);
 
+// `title` broken at spaces into as few lines of at most `max_chars` characters as it needs, of
+// about even length (a longer word keeps a line of its own); runs of spaces become one. Every
+// figure's titles go through it, with the width its data area leaves, so that a long title is never
+// cut at the figure's left edge.
+std::string wrap_title(const std::string& title, std::size_t max_chars);
+
 // Throws std::runtime_error naming the file when gnuplot is missing or fails.
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 

@@ -3,11 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,6 +65,13 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
                            "total_lag.png", "total_lag.svg"}) {
     EXPECT_GT(std::filesystem::file_size(result.output_directory / file), 100u) << file;
   }
+  // The total-lag figure: its series in the legend, its axes in ms.
+  std::ifstream in(result.output_directory / "total_lag.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* entry :
+       {">in-process grid (J1 of realised vs command)<", ">measured = injected<",
+        "injected network round trip + actuator lag (ms)", "measured total lag (ms)"})
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
 }
 
 // The grid judges divergence by the one rule every command uses (analysis::compare): 16 ms of
@@ -72,8 +81,8 @@ TEST(JointLag, MeasuredTotalLagIsTheSumOfTheInjectedParts) {
 TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   JointLagStudy config;
   config.set_study("paper_frame.textproto");
-  for (double r : {0.0, 0.016}) config.add_network_round_trips(r);
-  for (double a : {0.0, 0.014}) config.add_actuator_lags(a);
+  for (double r : {0.0, 0.008, 0.016}) config.add_network_round_trips(r);
+  for (double a : {0.0, 0.007, 0.014}) config.add_actuator_lags(a);
   JointLagOptions options;
   options.output_directory = kOut / "one_rule";
   options.measure = false;
@@ -95,6 +104,41 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   EXPECT_NE(script.find("#440154"), std::string::npos) << "viridis, not a rainbow";
   EXPECT_EQ(script.find("rgbformulae"), std::string::npos);
   EXPECT_NE(script.find("with labels"), std::string::npos) << "contours carry their value";
+  // Every layer in the legend; every cell whole (the axes reach half a cell past the grid).
+  for (const char* entry : {"NRMSE contours (%, labelled)", "stability boundary (continuous)",
+                            "diverged (no colour: its error measures nothing)"})
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
+  EXPECT_NE(script.find("set xrange [-4:20]"), std::string::npos) << script;
+  EXPECT_NE(script.find("set yrange [-3.5:17.5]"), std::string::npos) << script;
+  // Labelled contour levels, each label drawn: 1-2-5 steps up from the one below the smallest
+  // bounded error (the lag-free corner aside) to the largest.
+  std::ifstream labels_in(result.output_directory / "error_map_labels.dat");
+  std::vector<double> levels;
+  for (std::string line; std::getline(labels_in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double r = 0, a = 0, level = 0;
+    fields >> r >> a >> level;
+    levels.push_back(level);
+    std::ostringstream label;
+    label << '>' << level << " %<";
+    EXPECT_NE(svg.find(label.str()), std::string::npos) << label.str();
+  }
+  double smallest = 1e300, largest = 0.0;
+  for (const auto& p : result.grid)
+    if (!p.diverged && p.nrmse > 0.0) {
+      smallest = std::min(smallest, 100.0 * p.nrmse);
+      largest = std::max(largest, 100.0 * p.nrmse);
+    }
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  ASSERT_GE(levels.size(), 2u);
+  EXPECT_LT(levels.front(), smallest);
+  EXPECT_GE(levels[1], smallest);
+  EXPECT_LE(levels.back(), largest);
+  // Every level labelled, the 1-2-5 steps between none left out.
+  for (std::size_t i = 1; i < levels.size(); ++i)
+    EXPECT_LE(levels[i] / levels[i - 1], 2.5 + 1e-9) << levels[i - 1] << " -> " << levels[i];
 }
 
 TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
@@ -145,22 +189,46 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   EXPECT_EQ(rows, static_cast<int>(result.boundary.size()));
 }
 
-// An across-sites point's NRMSE covers only its shorter run: the summary says so, so nobody reads
-// it beside the grid's whole-record NRMSE.
-TEST(JointLag, TheAcrossSitesLineNamesTheStretchItsErrorCovers) {
+// An across-sites point's NRMSE covers only its shorter run: it is printed beside the in-process
+// run of the same stretch. A lockstep run with network lag says plainly that the lag never reaches
+// its response, so it cannot check the map's network axis; a real-time one compares both lags.
+TEST(JointLag, TheAcrossSitesLineComparesLikeWithLikeAndSaysWhatLockstepCannotCheck) {
   JointLagResult result;
   result.study_name = "paper_frame";
   JointLagPoint p;
   p.network_round_trip = 0.014;
   p.actuator_lag = 0.008;
   p.nrmse = 0.0735;
+  p.in_process_nrmse = 0.0735;
   p.duration = 1.0;
   result.measured.push_back(p);
+  p.real_time = true;
+  p.nrmse = 0.52;
+  p.in_process_nrmse = 0.50;
+  result.measured.push_back(p);
   const std::string text = to_text(result);
-  EXPECT_NE(
-      text.find("NRMSE 7.35 % over the first 1.00 s (the grid's NRMSE covers the whole record)"),
-      std::string::npos)
+  EXPECT_NE(text.find("across sites (lockstep): injected 14.00 ms network + 8.00 ms actuator"),
+            std::string::npos)
       << text;
+  EXPECT_NE(text.find("NRMSE 7.35 % over the first 1.00 s against 7.35 % in process for the "
+                      "actuator lag alone over the same 1.00 s"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("NRMSE 52.00 % over the first 1.00 s against 50.00 % in process for the "
+                      "same lags over the same 1.00 s"),
+            std::string::npos)
+      << text;
+  const std::string plainly =
+      "never reaches the response: this run checks the distributed "
+      "machinery, not the map's network axis";
+  const auto said = text.find(plainly);
+  ASSERT_NE(said, std::string::npos) << text;
+  EXPECT_EQ(text.find(plainly, said + 1), std::string::npos) << "the real-time run can check it";
+  EXPECT_EQ(diverged_points(result), 0u);
+  result.measured[1].diverged = true;
+  p.diverged = true;
+  result.grid.push_back(p);
+  EXPECT_EQ(diverged_points(result), 2u);
 }
 
 TEST(JointLag, FirstOrderActuatorLagsByAboutItsTimeConstant) {

@@ -78,6 +78,12 @@ TEST(StudyRun, ACompensatedCaseIsJudgedOnItsCompensatedLoop) {
   EXPECT_EQ(warnings[0].find("expect it to diverge"), std::string::npos) << warnings[0];
   EXPECT_EQ(poly.status, "completed") << poly.status_detail;
   EXPECT_TRUE(poly.status_detail.empty()) << poly.status_detail;
+  // The table's margin column gives the compensated loop's verdict, not a lag margin that
+  // counts a linear compensator's lead and not an adaptive one's.
+  const std::string table = study_summary_text(outcome);
+  EXPECT_NE(table.find(" ms [comp.]"), std::string::npos) << table;
+  EXPECT_NE(table.find("n/a [comp.]"), std::string::npos) << table;
+  EXPECT_NE(table.find("margin [comp.]: the compensated loop's"), std::string::npos) << table;
   const auto summary = study_summary_json(outcome);
   EXPECT_TRUE(summary["cases"][1]["compensated_loop"]["stable"].get<bool>());
   EXPECT_TRUE(summary["cases"][0]["compensated_loop"].is_null());
@@ -114,6 +120,23 @@ TEST(StudyRun, StudyPlotsShowEveryCaseAndLeaveTheReferenceOutOfTheDifference) {
   // The two 14 ms cases nearly coincide: drawn in decreasing widths, neither hides the other.
   EXPECT_NE(svg.find("stroke-width=\"3.00\""), std::string::npos);
   EXPECT_NE(svg.find("stroke-width=\"2.20\""), std::string::npos);
+  // The force-displacement loops: a panel per lagged case, the lag-free line drawn over each
+  // case's loop (after it: on top), on one scale with units.
+  std::ifstream loops_in(dir / "force_displacement.svg");
+  const std::string loops((std::istreambuf_iterator<char>(loops_in)),
+                          std::istreambuf_iterator<char>());
+  EXPECT_EQ(count(loops, ">reference (drawn over)<"), 2u);
+  std::size_t from = 0;
+  for (const char* name : {">lag_shift_14ms<", ">eq1_lag_14ms<"}) {
+    const auto at = loops.find(name, from), over = loops.find(">reference (drawn over)<", from);
+    ASSERT_NE(at, std::string::npos) << name;
+    ASSERT_NE(over, std::string::npos) << name;
+    EXPECT_LT(at, over) << name << ": the reference is drawn under the case";
+    from = over + 1;
+  }
+  EXPECT_EQ(count(loops, ">reference<"), 0u);
+  for (const char* axis : {"commanded displacement (mm)", "measured force (kN)"})
+    EXPECT_EQ(count(loops, axis), 2u) << axis;
   std::filesystem::remove_all(dir);
 }
 

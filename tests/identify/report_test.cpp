@@ -16,6 +16,12 @@
 namespace rths::identify {
 namespace {
 
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
 Identification generated(bool with_effect) {
   GeneratorSpec spec;
   spec.duration = 12.0;
@@ -74,6 +80,8 @@ TEST(ReportTest, TableAndPlots) {
   const std::string tracking = text("measured_tracking.svg");
   EXPECT_NE(tracking.find("displacement (mm)"), std::string::npos);
   EXPECT_NE(tracking.find("zoom: the last"), std::string::npos);
+  for (const char* entry : {">command<", ">measured<", ">declared model<", ">final model<"})
+    EXPECT_EQ(count_of(tracking, entry), 2u) << entry;  // whole and zoomed
   EXPECT_NE(text("measured_residual_time.svg").find("residual (mm)"), std::string::npos);
   EXPECT_NE(text("force_loops.svg").find("measured displacement (mm)"), std::string::npos);
   EXPECT_EQ(tracking.find("(m)"), std::string::npos);

@@ -2,6 +2,10 @@
 // figures only with a residual.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+#include <string>
+
 #include <unistd.h>
 #include <filesystem>
 
@@ -62,6 +66,33 @@ TEST(RunReport, WritesEachFigureAsPngAndSvg) {
     EXPECT_GT(fs::file_size(png), 1000u) << png;
     EXPECT_TRUE(fs::exists(fs::path(png).replace_extension(".svg"))) << png;
   }
+  // Every series in the legend and every axis with its unit. The lag panel's three series agree
+  // here (model = measured): drawn wide to narrow, the injected band first and the model dashed
+  // last, so none hides another.
+  const auto svg = [&](const char* name) {
+    std::ifstream in(dir / name);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  const std::string lag = svg("record_lag.svg");
+  std::size_t previous = 0;
+  for (const char* entry :
+       {">injected by the node<", ">measured round trip<", ">identified model<"}) {
+    const auto at = lag.find(entry);
+    ASSERT_NE(at, std::string::npos) << entry;
+    EXPECT_GT(at, previous) << entry << " drawn out of order";
+    previous = at;
+  }
+  for (const char* axis : {"lag (ms)", "time (s)"}) EXPECT_NE(lag.find(axis), std::string::npos);
+  EXPECT_NE(lag.find("stroke-width=\"6.00\""), std::string::npos);
+  const std::string response = svg("record_response.svg");
+  for (const char* entry : {">recorded<", ">declared model (NRMSE ", ">identified model (NRMSE ",
+                            ">declared - recorded<", ">identified - recorded<", "displacement (mm)",
+                            "error (mm)", "time (s)"})
+    EXPECT_NE(response.find(entry), std::string::npos) << entry;
+  const std::string shares = svg("record_shares.svg");
+  for (const char* entry : {"actuator 1 (its whole model), share", "actuator 1: first_order, share",
+                            "remaining: the identified model's NRMSE", "NRMSE removed (%)"})
+    EXPECT_NE(shares.find(entry), std::string::npos) << entry;
   fs::remove_all(dir);
 }
 

@@ -67,5 +67,15 @@ TEST(DeadlineDiagnosis, ARunThatKeptItsDeadlinesHasNoCause) {
   EXPECT_TRUE(d.advice.empty());
 }
 
+// A run stopped by its fail-safe after overruns is told the cause and the fixes as a run that
+// completed with deadline misses is; a clean run and a lockstep stop (no overruns) are not.
+TEST(DeadlineDiagnosis, AFailSafeStopAfterOverrunsIsDiagnosedToo) {
+  EXPECT_TRUE(needs_deadline_diagnosis("completed with deadline misses (2.6 %)", 2600));
+  EXPECT_TRUE(
+      needs_deadline_diagnosis("no answer for 12 consecutive steps (steps 2591 to 2602)", 1258));
+  EXPECT_FALSE(needs_deadline_diagnosis("no answer for 12 consecutive steps", 0));
+  EXPECT_FALSE(needs_deadline_diagnosis("completed", 3));
+}
+
 }  // namespace
 }  // namespace rths::runtime

@@ -98,5 +98,40 @@ TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Plot, WrapTitleBreaksAtSpacesWithinTheWidth) {
+  EXPECT_EQ(wrap_title("short title", 40), "short title");
+  EXPECT_EQ(wrap_title("aaa bbb ccc ddd", 7), "aaa bbb\nccc ddd");
+  EXPECT_EQ(wrap_title("averyverylongword x", 5), "averyverylongword\nx");
+  EXPECT_EQ(wrap_title("a  b", 10), "a b");
+  EXPECT_EQ(wrap_title("one two three four five six seven", 28),
+            "one two three four\nfive six seven");  // not "... six" and "seven"
+}
+
+// gnuplot centres a title over the data area: one longer than that area is cut at the figure's
+// left edge, so a figure's long title is drawn on several lines, each whole.
+TEST(Plot, ALongTitleIsDrawnOnSeveralWholeLines) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_title_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string title =
+      "paper_sweep: NRMSE against delay, one curve per period and model (critical delays beyond "
+      "the swept range not drawn)";
+  PlotSpec spec{title,
+                "delay (ms)",
+                "NRMSE (%)",
+                {{"T = 0.05 s, bilinear (uy = 5 mm, b = 0.1)", {0, 1}, {1, 2}}}};
+  write_png_plot(spec, dir / "long.png");
+  std::ifstream in(dir / "long.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(svg.find(title), std::string::npos) << "the title on one line";
+  const auto first = svg.find(">paper_sweep: NRMSE against delay"), last = svg.find(" drawn)<");
+  ASSERT_NE(first, std::string::npos);
+  ASSERT_NE(last, std::string::npos);
+  // Two lines of about even length: the first ends, the second starts, halfway through.
+  const auto first_end = svg.find('<', first), last_start = svg.rfind('>', last);
+  EXPECT_NEAR(static_cast<double>(first_end - first), static_cast<double>(last - last_start), 12.0);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace rths::util
