@@ -9,9 +9,11 @@
 // Outputs (JSON, what the page draws; every name carries its unit):
 //   samples   one every `stride` steps, stride = max(1, round(1 / (dt * points_per_second))): step,
 //             time_s, command_mm, measured_mm, error_mm = (c - m), force_N, tracking indicator
-//             ti_mm2, top floor u_mm, injected_ms / round_trip_ms per link, lateness_ms, overruns
-//             and late feedback so far. A sample holds the record's values of its step unchanged
-//             (only scaled to mm/ms), so the page can be checked against the record step by step.
+//             ti_mm2, per DOF the measured response u_mm, the in-process prediction
+//             predicted_u_mm and difference_mm = u - predicted (null where there is no
+//             prediction), injected_ms / round_trip_ms per link, lateness_ms, overruns and late
+//             feedback so far. A sample holds the record's values of its step unchanged (only
+//             scaled to mm/ms), so the page can be checked against the record step by step.
 //   ti        tracking indicator (Mercan & Ricles 2007) at full rate, sign chosen so that lag
 //             makes it grow: A_k = A_{k-1} + (m_k + m_{k-1})(c_k - c_{k-1}) / 2,
 //             TA_k = TA_{k-1} + (c_k + c_{k-1})(m_k - m_{k-1}) / 2, TI_k = (TA_k - A_k) / 2 (mm^2).
@@ -23,6 +25,8 @@
 //             from a HOLD event on (its text is the reason), "stopped" / "completed" from the
 //             footer (its status and failed node); counters; the newest step and its CLOCK_REALTIME
 //             start, from which the page tells how far behind the test it is.
+//             With a prediction, per DOF: the largest |u - predicted| and its root mean square
+//             over the samples compared so far (mm; the samples' steps, not every step).
 //   events    the newest `max_events` events.
 // Memory: every buffer is sized when the header arrives (rings), so a long run keeps a flat RSS.
 // Thread safety: every member may be called from any thread.
@@ -37,6 +41,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/simulation.h"
 #include "runtime/record.h"
 
 namespace rths::view {
@@ -67,6 +72,12 @@ class Feed : public runtime::RecordObserver {
   // Facts about the run that are not in the record (critical-delay check, prediction), shown as
   // given; and a note (e.g. a truncated record's warning).
   void set_context(nlohmann::json context);
+  // The in-process prediction of the run (view/context.h): displacement per DOF (m) at
+  // t_k = k dt. Kept at the samples' steps only (every stride-th, the stride from its dt as for
+  // the samples) in mm: steps / stride x DOFs values. Samples kept before it was set get it too,
+  // and the difference statistics restart over the kept samples. A step the prediction does not
+  // reach (it diverged) has none.
+  void set_prediction(const core::SimulationResult& prediction);
   // The record is complete (footer seen, or a finished record fully read): readers stop waiting.
   void finish();
 
@@ -86,7 +97,15 @@ class Feed : public runtime::RecordObserver {
   struct Samples {
     std::vector<std::int64_t> step;
     std::vector<std::uint64_t> overruns, late;
-    std::vector<double> time, u_top, lateness, command, measured, force, ti, injected, round_trip;
+    std::vector<double> time, lateness, command, measured, force, ti, injected, round_trip;
+    std::vector<double> u, predicted;  // per DOF, mm (predicted: NaN where there is none)
+  };
+  // Measured minus predicted at the compared samples, per DOF, mm.
+  struct Difference {
+    std::vector<double> max_abs, sum_squares;
+    std::uint64_t samples = 0;
+    void reset(int dofs);
+    void add(const double* u, const double* predicted, int dofs);
   };
   struct Spectrum {
     std::int64_t step = 0;
@@ -98,6 +117,9 @@ class Feed : public runtime::RecordObserver {
   void on_event(const runtime::RunEvent& event);
   void on_footer(const runtime::RunFooter& footer);
   void track(const runtime::StepRecord& step);
+  void keep_sample(const runtime::StepRecord& step);
+  // The prediction at `step` for `dof` (mm), NaN where there is none.
+  double predicted(std::int64_t step, int dof) const;
   void compute_spectrum(const runtime::StepRecord& step);
   nlohmann::json header_json() const;
   nlohmann::json status_json() const;
@@ -116,7 +138,12 @@ class Feed : public runtime::RecordObserver {
   runtime::RunHeader header_;
   nlohmann::json context_;
   std::int64_t stride_ = 1;
-  int actuators_ = 0, links_ = 0;
+  int actuators_ = 0, links_ = 0, dofs_ = 0;
+
+  std::vector<double> prediction_;  // [row * prediction_dofs_ + dof], mm; row = step / stride
+  std::int64_t prediction_stride_ = 1;
+  int prediction_dofs_ = 0;
+  Difference difference_;
 
   Samples samples_;
   std::size_t history_ = 1;

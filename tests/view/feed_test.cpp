@@ -173,6 +173,90 @@ TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
   EXPECT_TRUE(feed.finished());
 }
 
+// What the page receives: the JSON as written (NaN, no prediction, becomes null).
+nlohmann::json as_sent(const nlohmann::json& j) { return nlohmann::json::parse(j.dump()); }
+
+// The predicted displacement of one DOF at step k: 1 mm * sin(k / 50) (m).
+double predicted_u(std::int64_t k) { return 0.001 * std::sin(static_cast<double>(k) / 50.0); }
+
+core::SimulationResult prediction(int steps) {
+  core::SimulationResult p;
+  p.dt = kDt;
+  p.displacement.resize(steps, 1);
+  for (int k = 0; k < steps; ++k) p.displacement(k, 0) = predicted_u(k);
+  return p;
+}
+
+// The record's displacement is the prediction plus `offset` (m) from step `from` on.
+runtime::RecordEntry step_near(std::int64_t k, double offset, std::int64_t from) {
+  runtime::RecordEntry e = step(k);
+  e.mutable_step()->set_displacement(0, predicted_u(k) + (k >= from ? offset : 0.0));
+  return e;
+}
+
+void expect_prediction_samples(const nlohmann::json& samples, const core::SimulationResult& p,
+                               std::size_t predicted_steps) {
+  const auto& steps = samples["step"];
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const std::int64_t k = steps[i];
+    const auto& predicted = samples["predicted_u_mm"][0][i];
+    if (static_cast<std::size_t>(k) >= predicted_steps) {
+      EXPECT_TRUE(predicted.is_null()) << "step " << k;
+      EXPECT_TRUE(samples["difference_mm"][0][i].is_null()) << "step " << k;
+      continue;
+    }
+    EXPECT_EQ(predicted.get<double>(), p.displacement(k, 0) * 1e3) << "step " << k;
+    EXPECT_EQ(samples["difference_mm"][0][i].get<double>(),
+              samples["u_mm"][0][i].get<double>() - predicted.get<double>());
+  }
+}
+
+TEST(Feed, DrawsTheResponseAgainstThePredictionAtTheSamplesStepsWithItsRunningDifference) {
+  const core::SimulationResult p = prediction(1000);
+  Feed feed;
+  feed.set_prediction(p);  // as the coordinator does: before the header
+  feed.add(header());
+  for (int k = 0; k < 1200; ++k) feed.add(step_near(k, 0.0005, 500));  // 0.5 mm from 500 on
+  FeedCursor cursor;
+  const auto j = as_sent(feed.since(cursor));
+  ASSERT_EQ(j["samples"]["step"].size(), 120u);
+  EXPECT_EQ(j["header"]["dof_labels"], nlohmann::json({"floor 1"}));
+  expect_prediction_samples(j["samples"], p, 1000);  // none past the prediction's 1000 steps
+  EXPECT_NEAR(j["samples"]["difference_mm"][0][10].get<double>(), 0.0, 1e-12);  // step 100
+  EXPECT_NEAR(j["samples"]["difference_mm"][0][60].get<double>(), 0.5, 1e-9);   // step 600
+  const auto& stats = j["status"]["prediction"];
+  EXPECT_EQ(stats["compared_samples"], 100);  // steps 0, 10, ..., 990
+  EXPECT_NEAR(stats["max_abs_difference_mm"][0].get<double>(), 0.5, 1e-9);
+  EXPECT_NEAR(stats["rms_difference_mm"][0].get<double>(), 0.5 * std::sqrt(0.5), 1e-9);
+}
+
+TEST(Feed, APredictionGivenAfterTheStepsFillsTheKeptSamples) {
+  const core::SimulationResult p = prediction(2000);
+  Feed feed;
+  feed.add(header());
+  for (int k = 0; k < 1000; ++k) feed.add(step_near(k, 0.0, 0));
+  FeedCursor before;
+  EXPECT_FALSE(feed.since(before)["status"].contains("prediction"));
+  feed.set_prediction(p);  // as `rths view` may: after the record's steps
+  FeedCursor after;
+  const auto j = as_sent(feed.since(after));
+  expect_prediction_samples(j["samples"], p, 2000);
+  EXPECT_EQ(j["status"]["prediction"]["compared_samples"], 100);
+  EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
+}
+
+TEST(Feed, WithoutAPredictionTheResponseIsDrawnAlone) {
+  Feed feed;
+  feed.add(header());
+  for (int k = 0; k < 100; ++k) feed.add(step(k));
+  FeedCursor cursor;
+  const auto j = as_sent(feed.since(cursor));
+  ASSERT_EQ(j["samples"]["u_mm"][0].size(), 10u);
+  EXPECT_EQ(j["samples"]["u_mm"][0][3].get<double>(), step(30).step().displacement(0) * 1e3);
+  EXPECT_TRUE(j["samples"]["predicted_u_mm"][0][3].is_null());
+  EXPECT_FALSE(j["status"].contains("prediction"));
+}
+
 std::string frame(const runtime::RecordEntry& e) {
   std::string out;
   runtime::append_record_frame(e, out);
