@@ -11,10 +11,10 @@ namespace {
 constexpr double kMm = 1e3;  // m -> mm
 constexpr double kMs = 1e3;  // s -> ms
 
-// Largest power of two <= 1 / dt, at least 64.
-std::size_t spectrum_length(double dt) {
+// Largest power of two <= seconds / dt, at least 64.
+std::size_t spectrum_length(double dt, double seconds) {
   std::size_t n = 64;
-  while (static_cast<double>(n * 2) * dt <= 1.0 + 1e-9) n *= 2;
+  while (static_cast<double>(n * 2) * dt <= seconds + 1e-9) n *= 2;
   return n;
 }
 
@@ -144,24 +144,7 @@ void Feed::on_header(const runtime::RunHeader& header) {
     v->assign(history_ * static_cast<std::size_t>(actuators_), 0.0);
   for (auto* v : {&samples_.injected, &samples_.round_trip})
     v->assign(history_ * static_cast<std::size_t>(links_), 0.0);
-  const std::size_t n = spectrum_length(dt);
-  window_.resize(n);
-  double sum = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) /
-                                             static_cast<double>(n));
-  for (double& w : window_) w /= sum;  // so that 2 |X_j| is the amplitude of a sine
-  cos_.resize(n);
-  sin_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    cos_[i] = std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
-    sin_[i] = std::sin(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
-  }
-  const double df = 1.0 / (static_cast<double>(n) * dt);
-  const double top = std::min(options_.spectrum_max_hz, 0.5 / dt);
-  bins_hz_.clear();
-  for (std::size_t j = 1; static_cast<double>(j) * df <= top + 1e-9 && j < n / 2 + 1; ++j)
-    bins_hz_.push_back(static_cast<double>(j) * df);
+  const std::size_t n = setup_spectrum(dt);
   error_ring_.assign(actuators_, std::vector<double>(n, 0.0));
   spectra_.assign(
       std::max<std::size_t>(options_.spectra_kept, 1),
@@ -238,7 +221,33 @@ void Feed::keep_sample(const runtime::StepRecord& step) {
   ++samples_total_;
 }
 
-// Direct DFT of the windowed error at the few bins shown (cheaper than a full FFT for ~100 bins).
+// The Hann window (normalised so that 2 |X(f)| is a sine's amplitude) and the log-spaced
+// frequencies with each one's rotation per step; returns the window's length.
+std::size_t Feed::setup_spectrum(double dt) {
+  const std::size_t n = spectrum_length(dt, options_.spectrum_seconds);
+  window_.resize(n);
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) /
+                                             static_cast<double>(n));
+  for (double& w : window_) w /= sum;
+  const double lowest = 1.0 / (static_cast<double>(n) * dt);
+  const double top = std::min(options_.spectrum_max_hz, 0.5 / dt);
+  bins_hz_.clear();
+  cos_.clear();
+  sin_.clear();
+  for (int i = 0;; ++i) {
+    const double f = lowest * std::pow(10.0, i / options_.spectrum_per_decade);
+    if (f > top * (1 + 1e-12)) break;
+    bins_hz_.push_back(f);
+    cos_.push_back(std::cos(2 * std::numbers::pi * f * dt));
+    sin_.push_back(std::sin(2 * std::numbers::pi * f * dt));
+  }
+  return n;
+}
+
+// Direct DTFT of the windowed error at the few log-spaced frequencies shown (~45 for two decades;
+// a full FFT would compute thousands of bins the axis cannot show), e^{-2 pi i f dt k} by rotation.
 void Feed::compute_spectrum(const runtime::StepRecord& step) {
   Spectrum& out = spectra_[spectra_total_ % spectra_.size()];
   out.step = step.step();
@@ -248,12 +257,14 @@ void Feed::compute_spectrum(const runtime::StepRecord& step) {
   for (int a = 0; a < actuators_; ++a) {
     const std::vector<double>& ring = error_ring_[a];
     for (std::size_t j = 0; j < bins_hz_.size(); ++j) {
-      double re = 0, im = 0;
+      double re = 0, im = 0, zr = 1, zi = 0;  // z = e^{-2 pi i f dt k}
       for (std::size_t i = 0; i < n; ++i) {
         const double x = ring[(oldest + i) % n] * window_[i];
-        const std::size_t phase = ((j + 1) * i) % n;
-        re += x * cos_[phase];
-        im -= x * sin_[phase];
+        re += x * zr;
+        im += x * zi;
+        const double next = zr * cos_[j] + zi * sin_[j];
+        zi = zi * cos_[j] - zr * sin_[j];
+        zr = next;
       }
       out.amplitude[a][j] = 2 * std::hypot(re, im);
     }
@@ -295,7 +306,8 @@ nlohmann::json Feed::header_json() const {
                       {"start_realtime_ns", header_.start_realtime_ns()},
                       {"study", header_.study().name()},
                       {"spectrum_hz", bins_hz_},
-                      {"spectrum_window_steps", window_.size()}};
+                      {"spectrum_window_steps", window_.size()},
+                      {"spectrum_window_s", static_cast<double>(window_.size()) * header_.dt()}};
   const bool floors = !header_.study().structure().has_matrices();
   for (int d = 0; d < dofs_; ++d)
     h["dof_labels"].push_back((floors ? "floor " : "DOF ") + std::to_string(d + 1));

@@ -17,10 +17,12 @@
 //   ti        tracking indicator (Mercan & Ricles 2007) at full rate, sign chosen so that lag
 //             makes it grow: A_k = A_{k-1} + (m_k + m_{k-1})(c_k - c_{k-1}) / 2,
 //             TA_k = TA_{k-1} + (c_k + c_{k-1})(m_k - m_{k-1}) / 2, TI_k = (TA_k - A_k) / 2 (mm^2).
-//   spectra   every `spectrum_every` s of test time: the amplitude spectrum (mm, single-sided,
-//             Hann window, 2 |X_j| / sum(w)) of the tracking error over the last N steps at full
-//             rate, N = the largest power of two <= 1 / dt (at least 64), bins up to
-//             min(spectrum_max_hz, Nyquist).
+//   spectra   every `spectrum_every` s of test time: the amplitude spectrum (mm) of the tracking
+//             error e over the last N steps at full rate, N = the largest power of two <=
+//             spectrum_seconds / dt (at least 64), Hann window w: A(f) = 2 |sum_k w_k e_k
+//             e^{-2 pi i f dt k}| / sum_k w_k (a sine's amplitude at its frequency), at
+//             log-spaced f = f_0 10^(i / spectrum_per_decade), f_0 = 1 / (N dt), up to
+//             min(spectrum_max_hz, Nyquist): what a log frequency axis shows.
 //   status    fail-safe state: "starting" before the first step, "armed" while stepping, "HOLD"
 //             from a HOLD event on (its text is the reason), "stopped" / "completed" from the
 //             footer (its status and failed node); counters; the newest step and its CLOCK_REALTIME
@@ -51,7 +53,9 @@ struct FeedOptions {
   std::size_t history = 60000;       // samples kept (a ring): 10 min at 100 per second
   double spectrum_every = 0.5;       // s of test time between spectra
   double spectrum_max_hz = 100.0;
-  std::size_t spectra_kept = 1200;  // 10 min at one per 0.5 s
+  double spectrum_seconds = 4.0;      // s, at most: the window (its resolution is 1 / its length)
+  double spectrum_per_decade = 20.0;  // frequencies shown per decade
+  std::size_t spectra_kept = 1200;    // 10 min at one per 0.5 s
   std::size_t max_events = 500;
 };
 
@@ -120,6 +124,7 @@ class Feed : public runtime::RecordObserver {
   void keep_sample(const runtime::StepRecord& step);
   // The prediction at `step` for `dof` (mm), NaN where there is none.
   double predicted(std::int64_t step, int dof) const;
+  std::size_t setup_spectrum(double dt);
   void compute_spectrum(const runtime::StepRecord& step);
   nlohmann::json header_json() const;
   nlohmann::json status_json() const;
@@ -160,7 +165,7 @@ class Feed : public runtime::RecordObserver {
   double last_time_ = 0;
   std::vector<double> prev_command_, prev_measured_, area_, transposed_area_, ti_;
   std::vector<std::vector<double>> error_ring_;       // [actuator][N], mm
-  std::vector<double> window_, bins_hz_, cos_, sin_;  // cos_/sin_: e^{-2 pi i k / N}
+  std::vector<double> window_, bins_hz_, cos_, sin_;  // cos_/sin_ per bin: of 2 pi f dt
   std::int64_t steps_per_spectrum_ = 1;
 
   // Fail-safe.
