@@ -8,15 +8,25 @@
 //   this process's RSS at 10 / 50 / 95 % of the run (MB; flat = the view's rings are sized at
 //   the start).
 // Target: overruns with the view within +0.02 points of the run without it; wake-up
-// to command unchanged.
+// to command unchanged. The view runs as `rths-coordinator --view` runs it: with the in-process
+// prediction computed before the run (view::describe_run, outside the CPU window).
+// --rss-minutes M instead makes one run of M minutes with the view and Chromium on its page (the
+// 1979 record repeated end to end as a columns file, fail-safe windows widened to 300 periods so
+// a loaded machine's stalls do not hold it) and samples this process's RSS every --rss-every s:
+// prints each sample, the first and last minute's mean and the maximum (flat: the view's rings
+// are sized at the header, so after the first minute nothing grows).
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
+//   rths_view_bench --rss-minutes 10 [--rss-every 10] [--rate HZ] [--domain D]
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <thread>
 
 #include "coordinator/coordinator.h"
@@ -25,6 +35,7 @@
 #include "runtime/process.h"
 #include "runtime/record.h"
 #include "transport/dds_endpoint.h"
+#include "view/context.h"
 #include "view/feed.h"
 #include "view/server.h"
 
@@ -33,14 +44,17 @@ namespace {
 using namespace rths;
 using namespace std::chrono_literals;
 
-std::string study_text(double rate, double seconds, int domain) {
+const std::string kRecord =
+    std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+
+// `motion`: the config's motion fields; `failsafe`: the fail-safe windows in periods.
+std::string study_text(double rate, const std::string& motion, int domain, int failsafe) {
   char dt[32];
   std::snprintf(dt, sizeof dt, "%.17g", 1.0 / rate);
   return "name: \"view_bench\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" +
-         std::string(RTHS_SHARED_DATA_DIR) +
-         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
+         "motion { " +
+         motion +
          " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: " +
          dt +
@@ -49,8 +63,30 @@ std::string study_text(double rate, double seconds, int domain) {
          "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
          "deployment { domain_id: " +
          std::to_string(domain) +
-         " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
-         "command_watchdog_periods: 30 }\n";
+         " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: " +
+         std::to_string(failsafe) + " command_watchdog_periods: " + std::to_string(failsafe) +
+         " }\n";
+}
+
+std::string record_motion(double seconds) {
+  return "path: \"" + kRecord + "\" duration: " + std::to_string(seconds);
+}
+
+// The 1979 record repeated end to end to `seconds`, as a one-column file (m/s^2) in `dir`.
+std::string repeated_motion(double seconds, const std::filesystem::path& dir) {
+  config::GroundMotion spec;
+  spec.set_path(kRecord);
+  const core::GroundMotion record = core::load_motion(spec, {});
+  const auto file = dir / "repeated_motion.txt";
+  std::ofstream out(file);
+  out.precision(17);
+  const auto samples = static_cast<std::size_t>(std::ceil(seconds / record.dt)) + 1;
+  for (std::size_t i = 0; i < samples; ++i)
+    out << record.acceleration[i % record.acceleration.size()] << "\n";
+  char dt[32];
+  std::snprintf(dt, sizeof dt, "%.17g", record.dt);
+  return "path: \"" + file.string() + "\" format: COLUMNS column_dt: " + dt +
+         " column_units: M_PER_S2 duration: " + std::to_string(seconds);
 }
 
 double cpu_seconds() {
@@ -67,83 +103,83 @@ double rss_mb() {
   return -1;
 }
 
-struct Figures {
-  double overrun_pct = 0, latency_median_us = 0, latency_p99_us = 0, cpu_s = 0;
-  std::vector<double> rss_mb;  // at 10, 50, 95 % of the run
-  std::string browser;
+struct Spec {
+  std::string name;
+  double rate = 1024, seconds = 20;
+  int domain = 215, failsafe = 30;
+  bool with_view = false, browser = false;
+  double rss_every = 0;  // s between RSS samples; 0: at 10, 50 and 95 % of the run
 };
 
-// Samples this process's RSS at 10, 50 and 95 % of `seconds` while the run goes.
-std::thread rss_sampler(double seconds, std::vector<double>& out, const std::atomic<bool>& done) {
-  return std::thread([seconds, &out, &done] {
+struct Figures {
+  double overrun_pct = 0, latency_median_us = 0, latency_p99_us = 0, cpu_s = 0;
+  std::vector<std::pair<double, double>> rss;  // (s into the run, MB)
+  std::string status;
+  std::uint64_t streams_served = 0, updates_sent = 0;  // the view's, to the browser
+};
+
+// Samples this process's RSS while the run goes, until `done`.
+std::thread rss_sampler(const Spec& spec, std::vector<std::pair<double, double>>& out,
+                        const std::atomic<bool>& done) {
+  return std::thread([&spec, &out, &done] {
     const auto start = std::chrono::steady_clock::now();
-    for (double at : {0.1, 0.5, 0.95}) {
-      while (!done &&
-             std::chrono::steady_clock::now() - start < std::chrono::duration<double>(at * seconds))
-        std::this_thread::sleep_for(20ms);
-      if (!done) out.push_back(rss_mb());
+    const auto since = [&] {
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    // At 10, 50 and 95 % of the run, or every rss_every s until it ends (a run that falls
+    // behind real time lasts longer than spec.seconds).
+    std::vector<double> at = {0.1 * spec.seconds, 0.5 * spec.seconds, 0.95 * spec.seconds};
+    for (std::size_t i = 0; i < at.size() || spec.rss_every > 0; ++i) {
+      const double t = spec.rss_every > 0 ? spec.rss_every * static_cast<double>(i + 1) : at[i];
+      while (!done && since() < t) std::this_thread::sleep_for(20ms);
+      if (done) return;
+      out.emplace_back(since(), rss_mb());
+      if (spec.rss_every > 0)
+        std::printf("  %6.0f s  RSS %.1f MB\n", out.back().first, out.back().second);
+      std::fflush(stdout);
     }
   });
 }
 
-Figures run(const std::string& name, double rate, double seconds, int domain, bool with_view,
-            bool browser) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_view_bench_" + name);
-  std::filesystem::create_directories(dir);
-  const auto config = dir / "study.textproto";
-  std::ofstream(config) << study_text(rate, seconds, domain);
-  const std::string run_id = "view-bench-" + name;
+// The view as the coordinator program serves it, and one headless Chromium on its page.
+struct View {
+  view::Feed feed;
+  std::unique_ptr<view::ViewServer> server;
+  std::optional<runtime::ChildProcess> chromium;
+  View(const core::PreparedStudy& prepared, const std::filesystem::path& dir, bool browser) {
+    view::describe_run(feed, prepared, "");
+    view::ServerOptions loopback_any_port;
+    loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};
+    server = std::make_unique<view::ViewServer>(feed, std::move(loopback_any_port));
+    if (!browser) return;
+    const auto profile = dir / "chromium_profile";
+    std::filesystem::remove_all(profile);
+    chromium.emplace(
+        "/usr/bin/chromium",
+        std::vector<std::string>{"--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                                 "--no-first-run", "--disable-background-networking",
+                                 "--disable-component-update", "--disable-sync",
+                                 "--user-data-dir=" + profile.string(), server->url()},
+        dir / "chromium.log");
+  }
+};
+
+std::vector<runtime::ChildProcess> start_nodes(const Spec& spec, const std::string& run_id,
+                                               const std::filesystem::path& dir) {
   std::vector<runtime::ChildProcess> nodes;
   for (const auto& [id, program] : {std::pair{1, "substructure_nodes/rths-substructure-node"},
                                     std::pair{2, "actuator_emulator/rths-actuator-emulator"}})
     nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / program,
                        std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
-                                                std::to_string(domain), "--run-id", run_id},
+                                                std::to_string(spec.domain), "--run-id", run_id},
                        dir / ("node_" + std::to_string(id) + ".log"));
-  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
-  coordinator::CoordinatorOptions options;
-  options.run_id = run_id;
-  options.record = dir / "run.rthsrec";
-  view::Feed feed;
-  std::unique_ptr<view::ViewServer> server;
-  std::optional<runtime::ChildProcess> chromium;
-  Figures f;
-  if (with_view) {
-    options.record_observer = &feed;
-    view::ServerOptions loopback_any_port;
-    loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};
-    server = std::make_unique<view::ViewServer>(feed, std::move(loopback_any_port));
-    if (browser) {
-      const auto profile = dir / "chromium_profile";
-      std::filesystem::remove_all(profile);
-      chromium.emplace(
-          "/usr/bin/chromium",
-          std::vector<std::string>{"--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-                                   "--no-first-run", "--disable-background-networking",
-                                   "--disable-component-update", "--disable-sync",
-                                   "--user-data-dir=" + profile.string(), server->url()},
-          dir / "chromium.log");
-      f.browser = "chromium";
-    }
-  }
-  coordinator::Coordinator coordinator(core::prepare_study(core::load_study(config), dir), endpoint,
-                                       options);
-  std::atomic<bool> done{false};
-  std::thread sampler = rss_sampler(seconds, f.rss_mb, done);
-  const double cpu0 = cpu_seconds();
-  const auto outcome = coordinator.run();
-  f.cpu_s = cpu_seconds() - cpu0;
-  done = true;
-  sampler.join();
-  if (server) {
-    spdlog::info("{}: view counters {}", name, server->counters().dump());
-    server->shutdown();
-  }
-  if (chromium) chromium->terminate();
-  for (auto& n : nodes) n.wait_for(5000ms);
-  if (!outcome.ok) spdlog::warn("{}: {}", name, outcome.status);
+  return nodes;
+}
+
+void measure_record(const std::filesystem::path& record, const coordinator::RunOutcome& outcome,
+                    Figures& f) {
   std::vector<double> latency;
-  for (const auto* s : runtime::read_record(options.record).steps())
+  for (const auto* s : runtime::read_record(record).steps())
     if (s->step() > 0) latency.push_back(s->command_latency());
   const auto summary = runtime::summarize(latency);
   const auto steps = outcome.counters.steps();
@@ -152,6 +188,50 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
             : 0;
   f.latency_median_us = summary.median * 1e6;
   f.latency_p99_us = summary.p99 * 1e6;
+  f.status = outcome.status;
+}
+
+Figures run(const Spec& spec) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rths_view_bench_" + spec.name);
+  std::filesystem::create_directories(dir);
+  const auto config = dir / "study.textproto";
+  const std::string motion =
+      spec.seconds > 35 ? repeated_motion(spec.seconds, dir) : record_motion(spec.seconds);
+  std::ofstream(config) << study_text(spec.rate, motion, spec.domain, spec.failsafe);
+  const std::string run_id = "view-bench-" + spec.name;
+  std::vector<runtime::ChildProcess> nodes = start_nodes(spec, run_id, dir);
+  transport::DdsEndpoint endpoint(
+      {static_cast<std::uint32_t>(spec.domain), true, 0, "rths", 64, {}});
+  coordinator::CoordinatorOptions options;
+  options.run_id = run_id;
+  options.record = dir / "run.rthsrec";
+  core::PreparedStudy prepared = core::prepare_study(core::load_study(config), dir);
+  std::optional<View> view;
+  if (spec.with_view) {
+    view.emplace(prepared, dir, spec.browser);
+    options.record_observer = &view->feed;
+  }
+  coordinator::Coordinator coordinator(std::move(prepared), endpoint, options);
+  Figures f;
+  std::atomic<bool> done{false};
+  std::thread sampler = rss_sampler(spec, f.rss, done);
+  const double cpu0 = cpu_seconds();
+  const auto outcome = coordinator.run();
+  f.cpu_s = cpu_seconds() - cpu0;
+  done = true;
+  sampler.join();
+  if (view) {
+    const nlohmann::json counters = view->server->counters();
+    f.streams_served = counters["streams_served"];
+    f.updates_sent = counters["updates_sent"];
+    spdlog::info("{}: view counters {}", spec.name, counters.dump());
+    view->server->shutdown();
+    if (view->chromium) view->chromium->terminate();
+  }
+  for (auto& n : nodes) n.wait_for(5000ms);
+  if (!outcome.ok) spdlog::warn("{}: {}", spec.name, outcome.status);
+  measure_record(options.record, outcome, f);
+  std::filesystem::remove(options.record);
   return f;
 }
 
@@ -163,31 +243,32 @@ double median(std::vector<double> v) {
 void print(const char* label, const Figures& f) {
   std::printf("  %-9s overruns %.3f %%  wake-up to command %.1f / %.1f us  CPU %.2f s  RSS", label,
               f.overrun_pct, f.latency_median_us, f.latency_p99_us, f.cpu_s);
-  for (double r : f.rss_mb) std::printf(" %.1f", r);
-  std::printf(" MB\n");
+  for (const auto& [t, mb] : f.rss) std::printf(" %.1f", mb);
+  std::printf(" MB  (%s; %llu updates sent to %llu page(s))\n", f.status.c_str(),
+              static_cast<unsigned long long>(f.updates_sent),
+              static_cast<unsigned long long>(f.streams_served));
 }
 
-}  // namespace
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string one, five, fifteen;
+  in >> one >> five >> fifteen;
+  return one + " " + five + " " + fifteen;
+}
 
-int main(int argc, char** argv) {
-  CLI::App app{"rths_view_bench: real time with and without the live view (not a test)"};
-  double seconds = 30, rate = 1024;
-  int repeat = 3, domain = 215;
-  bool no_browser = false;
-  app.add_option("--seconds", seconds, "s of test per run");
-  app.add_option("--rate", rate, "integrator rate (Hz)");
-  app.add_option("--repeat", repeat, "pairs of runs (medians over them)");
-  app.add_option("--domain", domain, "DDS domain id");
-  app.add_flag("--no-browser", no_browser, "serve the view but connect no browser");
-  CLI11_PARSE(app, argc, argv);
-  runtime::ensure_dds_config();
-  spdlog::set_level(spdlog::level::warn);
-  const bool browser = !no_browser && std::filesystem::exists("/usr/bin/chromium");
+// Pairs of runs without and with the view; medians.
+void pairs(Spec spec, int repeat, bool browser) {
   std::vector<double> off_overruns, on_overruns, off_latency, on_latency, off_cpu, on_cpu;
   for (int i = 0; i < repeat; ++i) {
-    const Figures off = run("off_" + std::to_string(i), rate, seconds, domain, false, false);
-    const Figures on = run("on_" + std::to_string(i), rate, seconds, domain, true, browser);
-    std::printf("pair %d (%g Hz, %g s):\n", i + 1, rate, seconds);
+    spec.name = "off_" + std::to_string(i);
+    spec.with_view = spec.browser = false;
+    const Figures off = run(spec);
+    spec.name = "on_" + std::to_string(i);
+    spec.with_view = true;
+    spec.browser = browser;
+    const Figures on = run(spec);
+    std::printf("pair %d (%g Hz, %g s, load average %s):\n", i + 1, spec.rate, spec.seconds,
+                load_average().c_str());
     print("no view", off);
     print(browser ? "view+page" : "view", on);
     off_overruns.push_back(off.overrun_pct);
@@ -203,7 +284,73 @@ int main(int argc, char** argv) {
       "target <= +0.02); wake-up to command %.1f / %.1f us; the view's CPU %.2f s in %g s "
       "(%.1f %% of a core)\n",
       repeat, median(off_overruns), median(on_overruns), median(on_overruns) - median(off_overruns),
-      median(off_latency), median(on_latency), median(on_cpu) - median(off_cpu), seconds,
-      100.0 * (median(on_cpu) - median(off_cpu)) / seconds);
+      median(off_latency), median(on_latency), median(on_cpu) - median(off_cpu), spec.seconds,
+      100.0 * (median(on_cpu) - median(off_cpu)) / spec.seconds);
+}
+
+double mean_between(const std::vector<std::pair<double, double>>& rss, double from, double to) {
+  double sum = 0;
+  int n = 0;
+  for (const auto& [t, mb] : rss)
+    if (t >= from && t < to) sum += mb, ++n;
+  return n ? sum / n : 0;
+}
+
+// One long run with the view and a browser: RSS over time.
+void rss_run(Spec spec, bool browser) {
+  spec.name = "rss";
+  spec.with_view = true;
+  spec.browser = browser;
+  spec.failsafe = 300;
+  std::printf("%g min at %g Hz with the view%s, RSS every %g s (load average %s):\n",
+              spec.seconds / 60, spec.rate, browser ? " and Chromium on its page" : "",
+              spec.rss_every, load_average().c_str());
+  std::fflush(stdout);
+  const Figures f = run(spec);
+  double peak = 0;
+  for (const auto& [t, mb] : f.rss) peak = std::max(peak, mb);
+  const double end = f.rss.empty() ? 0 : f.rss.back().first;
+  const double first = mean_between(f.rss, 0, 60);
+  const double last = mean_between(f.rss, end - 60 + 1e-9, end + 1);
+  std::printf(
+      "=> RSS first minute %.1f MB, last minute %.1f MB (%+.1f MB), max %.1f MB over %zu "
+      "samples in %.0f s; overruns %.3f %%, wake-up to command %.1f / %.1f us, CPU %.1f s (%s; "
+      "%llu updates sent to %llu page(s); load average %s)\n",
+      first, last, last - first, peak, f.rss.size(), end, f.overrun_pct, f.latency_median_us,
+      f.latency_p99_us, f.cpu_s, f.status.c_str(), static_cast<unsigned long long>(f.updates_sent),
+      static_cast<unsigned long long>(f.streams_served), load_average().c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rths_view_bench: real time with and without the live view (not a test)"};
+  Spec spec;
+  spec.seconds = 30;
+  int repeat = 3;
+  double rss_minutes = 0;
+  bool no_browser = false;
+  app.add_option("--seconds", spec.seconds, "s of test per run");
+  app.add_option("--rate", spec.rate, "integrator rate (Hz)");
+  app.add_option("--repeat", repeat, "pairs of runs (medians over them)");
+  app.add_option("--domain", spec.domain, "DDS domain id");
+  app.add_flag("--no-browser", no_browser, "serve the view but connect no browser");
+  app.add_option("--rss-minutes", rss_minutes,
+                 "instead of the pairs: one run this long with the view, sampling RSS")
+      ->check(CLI::Range(1.0, 120.0));
+  app.add_option("--rss-every", spec.rss_every, "s between RSS samples of --rss-minutes")
+      ->default_val(10.0)
+      ->check(CLI::Range(1.0, 600.0));
+  CLI11_PARSE(app, argc, argv);
+  runtime::ensure_dds_config();
+  spdlog::set_level(spdlog::level::warn);
+  const bool browser = !no_browser && std::filesystem::exists("/usr/bin/chromium");
+  if (rss_minutes > 0) {
+    spec.seconds = rss_minutes * 60;
+    rss_run(spec, browser);
+  } else {
+    spec.rss_every = 0;
+    pairs(spec, repeat, browser);
+  }
   return 0;
 }

@@ -35,12 +35,11 @@ void run_view(const ViewArgs& args) {
   if (!contents.header())
     throw ExitError(kExitBadInput, args.record + ": no run header: not a run record");
   view::Feed feed;
+  // The critical delay and the in-process prediction from the record's study (relative paths
+  // beside the record; the record's own motion when the study's file is not here), before the
+  // steps, which then carry it.
+  view::describe_record(feed, contents, std::filesystem::path(args.record).parent_path());
   for (const auto& entry : contents.entries) feed.add(entry);
-  nlohmann::json context =
-      view::run_context(contents.header()->study(), contents.header()->case_name(),
-                        std::filesystem::path(args.record).parent_path());
-  if (contents.truncated) context["note"] = contents.warning;
-  feed.set_context(std::move(context));
   feed.finish();
   view::ServerOptions options;
   options.address = address;

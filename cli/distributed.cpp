@@ -7,6 +7,7 @@
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "runtime/deadline_diagnosis.h"
+#include "runtime/in_process.h"
 #include "runtime/plan.h"
 #include "runtime/record.h"
 #include "runtime/schema.h"
@@ -33,12 +34,9 @@ bool comparable_in_process(const config::Study& study) {
 std::optional<InProcessDifference> difference_from_in_process(
     const core::PreparedStudy& prepared, const std::string& case_name,
     const core::SimulationResult& recorded) {
-  const core::HybridSetup setup =
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name));
-  const runtime::DeploymentPlan plan =
-      runtime::make_plan(setup, runtime::with_default_nodes(prepared.config.deployment(), setup));
-  const core::SimulationResult expected =
-      core::simulate(runtime::with_node_compensation(setup, plan), prepared.motion);
+  const core::SimulationResult expected = core::simulate(
+      runtime::in_process_setup(prepared, runtime::find_case(prepared.config, case_name)),
+      prepared.motion);
   if (expected.displacement.rows() != recorded.displacement.rows() ||
       expected.displacement.cols() != recorded.displacement.cols())
     return std::nullopt;

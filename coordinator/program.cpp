@@ -119,7 +119,8 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
     options.token = given && *given ? given : view::make_token();
   options.on_stop = [&stop_request] { stop_request.store(true); };
   auto feed = std::make_unique<view::Feed>();
-  feed->set_context(view::run_context(prepared, case_name));
+  // The prediction runs the case in process here, before the run starts (never on its loop).
+  view::describe_run(*feed, prepared, case_name);
   auto server = std::make_unique<view::ViewServer>(*feed, options);
   std::cout << "rths-coordinator: live view at " << server->url()
             << (allow_stop ? " (stop button on)" : "")

@@ -1,6 +1,7 @@
 #include "view/context.h"
 
 #include "analysis/study_run.h"
+#include "runtime/in_process.h"
 #include "runtime/plan.h"
 
 namespace rths::view {
@@ -22,15 +23,89 @@ nlohmann::json run_context(const core::PreparedStudy& prepared, const std::strin
   } catch (const std::exception& e) {
     critical["text"] = std::string("not known: ") + e.what();
   }
-  return {{"critical_delay", critical}};
+  nlohmann::json context = {{"critical_delay", critical}};
+  // The node behind each link: the deployment's default nodes when it declares none.
+  const config::Deployment deployment =
+      runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
+  for (const config::NodeSpec& node : deployment.nodes())
+    context["node_kinds"][std::to_string(node.id())] = config::NodeSpec::Kind_Name(node.kind());
+  return context;
 }
 
-nlohmann::json run_context(const config::Study& study, const std::string& case_name,
-                           const std::filesystem::path& base_dir) {
+core::SimulationResult predict_case(const core::PreparedStudy& prepared,
+                                    const std::string& case_name) {
+  const config::Case& study_case = runtime::find_case(prepared.config, case_name);
+  return core::simulate(runtime::in_process_setup(prepared, study_case), prepared.motion);
+}
+
+namespace {
+
+// `motion_text`, when not empty, says where the motion came from (in the prediction's text).
+void describe(Feed& feed, const core::PreparedStudy& prepared, const std::string& case_name,
+              const std::string& note, const std::string& motion_text) {
+  nlohmann::json context = run_context(prepared, case_name);
   try {
-    return run_context(core::prepare_study(study, base_dir), case_name);
+    const core::SimulationResult prediction = predict_case(prepared, case_name);
+    feed.set_prediction(prediction);
+    const std::string name = runtime::find_case(prepared.config, case_name).name();
+    context["prediction"] = {{"text", "in-process run of case " + name +
+                                          " (its delays and compensation; not the links' lag)" +
+                                          motion_text + (prediction.diverged ? ": diverged" : "")},
+                             {"steps", prediction.steps()},
+                             {"diverged", prediction.diverged}};
   } catch (const std::exception& e) {
-    return {{"critical_delay", {{"text", std::string("not known: ") + e.what()}}}};
+    context["prediction"] = {{"text", std::string("no in-process prediction: ") + e.what()}};
+  }
+  if (!note.empty()) context["note"] = note;
+  feed.set_context(std::move(context));
+}
+
+}  // namespace
+
+void describe_run(Feed& feed, const core::PreparedStudy& prepared, const std::string& case_name,
+                  const std::string& note) {
+  describe(feed, prepared, case_name, note, "");
+}
+
+core::GroundMotion recorded_motion(const runtime::RecordContents& contents) {
+  core::GroundMotion motion;
+  motion.name = "the record's steps";
+  motion.dt = contents.header() ? contents.header()->dt() : 0.0;
+  for (const runtime::StepRecord* step : contents.steps()) {
+    if (step->step() != static_cast<std::int64_t>(motion.acceleration.size())) break;
+    motion.acceleration.push_back(step->ground_acceleration());
+  }
+  return motion;
+}
+
+void describe_record(Feed& feed, const runtime::RecordContents& contents,
+                     const std::filesystem::path& base_dir) {
+  const runtime::RunHeader& header = *contents.header();
+  const std::string note = contents.warning;
+  std::string why;
+  try {
+    describe(feed, core::prepare_study(header.study(), base_dir), header.case_name(), note, "");
+    return;
+  } catch (const std::exception& e) {
+    why = e.what();
+  }
+  try {  // the study's motion file is not here: the record's steps carry the motion
+    core::PreparedStudy prepared;
+    prepared.config = header.study();
+    prepared.base_dir = base_dir;
+    prepared.motion = recorded_motion(contents);
+    if (prepared.motion.acceleration.size() < 2)
+      throw std::invalid_argument("the record has too few steps to carry the motion");
+    prepared.base = core::base_setup(header.study(), header.dt(), base_dir);
+    describe(feed, prepared, header.case_name(), note,
+             ", over the motion of the record's " +
+                 std::to_string(prepared.motion.acceleration.size()) + " steps (" + why + ")");
+  } catch (const std::exception& e) {
+    const std::string text = std::string("not known: ") + why + "; " + e.what();
+    nlohmann::json context = {{"critical_delay", {{"text", text}}},
+                              {"prediction", {{"text", "no in-process prediction: " + text}}}};
+    if (!note.empty()) context["note"] = note;
+    feed.set_context(std::move(context));
   }
 }
 

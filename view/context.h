@@ -1,21 +1,53 @@
 #pragma once
-// Facts about a run the record does not hold, for the view's status panel: the case's
-// critical-delay check (analysis::check_case_critical_delay, the check `rths run` and `rths launch`
-// make before a case runs): {"lag_ms", "critical_delay_ms", "margin_pct", "text"}, or
-// {"text": why not} when the structure has no experimental part or the study cannot be prepared.
+// Facts about a run the record does not hold, for the view:
+//   run_context   the case's critical-delay check (analysis::check_case_critical_delay, the check
+//                 `rths run` and `rths launch` make before a case runs): {"critical_delay":
+//                 {"lag_ms", "critical_delay_ms", "margin_pct", "text"}}, or {"text": why not}
+//                 when the structure has no experimental part or the study cannot be prepared;
+//                 "node_kinds": {"<node id>": "SUBSTRUCTURE" | "ACTUATOR_EMULATOR" | ...} of the
+//                 deployment (its default nodes when it declares none), to label the links.
+//   predict_case  the in-process prediction: core::simulate of the case's in-process setup
+//                 (runtime::in_process_setup: its delay stages and compensation, the emulators'
+//                 compensation), the response `rths run` computes for the case. A lockstep run
+//                 without node delay stages equals it bit for bit; the links' lag and the nodes'
+//                 own delay stages are not in it, so in real time the measured response differs
+//                 from it by what they (and the actuator) did.
+//   describe_run  both into a Feed: its context (run_context plus "prediction": {"text", "steps",
+//                 "diverged"} or {"text": why there is none}) and its prediction. Called before
+//                 the run starts (the coordinator) or on the view's side (`rths view`), never on
+//                 the loop thread: the prediction runs the whole case.
 
 #include <filesystem>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "core/simulation.h"
 #include "core/study.h"
+#include "runtime/record.h"
+#include "view/feed.h"
 
 namespace rths::view {
 
 nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name);
-// The same from a record's study; `base_dir` resolves its relative paths (the motion).
-nlohmann::json run_context(const config::Study& study, const std::string& case_name,
-                           const std::filesystem::path& base_dir);
+
+// Throws std::invalid_argument naming the case or the block that cannot be built.
+core::SimulationResult predict_case(const core::PreparedStudy& prepared,
+                                    const std::string& case_name);
+
+// `note` (e.g. a cut record's warning), when not empty, is shown as context["note"].
+void describe_run(Feed& feed, const core::PreparedStudy& prepared, const std::string& case_name,
+                  const std::string& note = "");
+// The motion a record's steps carry: their ground acceleration (m/s^2) at the header's dt, over
+// the steps 0, 1, ... up to the first one missing.
+core::GroundMotion recorded_motion(const runtime::RecordContents& contents);
+// describe_run for a record (`rths view`), its header required: the study prepared from the
+// header with `base_dir` resolving its relative paths. When the study's motion file cannot be
+// read here (a record carried away from the lab), the record's own motion (recorded_motion)
+// stands in, so the prediction covers the recorded steps and the page says so; when the study
+// cannot be set up at all, the context says why. The record's warning (cut short, damaged) is
+// the note.
+void describe_record(Feed& feed, const runtime::RecordContents& contents,
+                     const std::filesystem::path& base_dir);
 
 }  // namespace rths::view

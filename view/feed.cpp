@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace rths::view {
@@ -10,11 +11,16 @@ namespace {
 constexpr double kMm = 1e3;  // m -> mm
 constexpr double kMs = 1e3;  // s -> ms
 
-// Largest power of two <= 1 / dt, at least 64.
-std::size_t spectrum_length(double dt) {
+// Largest power of two <= seconds / dt, at least 64.
+std::size_t spectrum_length(double dt, double seconds) {
   std::size_t n = 64;
-  while (static_cast<double>(n * 2) * dt <= 1.0 + 1e-9) n *= 2;
+  while (static_cast<double>(n * 2) * dt <= seconds + 1e-9) n *= 2;
   return n;
+}
+
+// Steps between kept samples: max(1, round(1 / (dt * points_per_second))).
+std::int64_t sample_stride(double dt, double points_per_second) {
+  return std::max<std::int64_t>(1, std::llround(1.0 / (dt * points_per_second)));
 }
 
 }  // namespace
@@ -55,6 +61,58 @@ void Feed::set_context(nlohmann::json context) {
   changed();
 }
 
+void Feed::set_prediction(const core::SimulationResult& prediction) {
+  std::lock_guard lock(mutex_);
+  const double dt = prediction.dt > 0 ? prediction.dt : 1e-3;
+  prediction_stride_ = sample_stride(dt, options_.points_per_second);
+  prediction_dofs_ = static_cast<int>(prediction.displacement.cols());
+  const auto rows = static_cast<std::int64_t>(prediction.displacement.rows());
+  prediction_.clear();
+  prediction_.reserve(static_cast<std::size_t>((rows + prediction_stride_ - 1) /
+                                               prediction_stride_ * prediction_dofs_));
+  for (std::int64_t k = 0; k < rows; k += prediction_stride_)
+    for (int d = 0; d < prediction_dofs_; ++d)
+      prediction_.push_back(prediction.displacement(k, d) * kMm);
+  difference_.reset(dofs_);
+  const auto D = static_cast<std::size_t>(dofs_);
+  const std::uint64_t first = samples_total_ > history_ ? samples_total_ - history_ : 0;
+  for (std::uint64_t i = first; i < samples_total_ && D > 0; ++i) {
+    const std::size_t r = static_cast<std::size_t>(i % history_);
+    for (std::size_t d = 0; d < D; ++d)
+      samples_.predicted[r * D + d] = predicted(samples_.step[r], static_cast<int>(d));
+    difference_.add(&samples_.u[r * D], &samples_.predicted[r * D], dofs_);
+  }
+  changed();
+}
+
+double Feed::predicted(std::int64_t step, int dof) const {
+  if (step < 0 || step % prediction_stride_ != 0 || dof >= prediction_dofs_)
+    return std::numeric_limits<double>::quiet_NaN();
+  const auto i = static_cast<std::size_t>(step / prediction_stride_) *
+                     static_cast<std::size_t>(prediction_dofs_) +
+                 static_cast<std::size_t>(dof);
+  return i < prediction_.size() ? prediction_[i] : std::numeric_limits<double>::quiet_NaN();
+}
+
+void Feed::Difference::reset(int dofs) {
+  max_abs.assign(static_cast<std::size_t>(dofs), 0.0);
+  sum_squares.assign(static_cast<std::size_t>(dofs), 0.0);
+  samples = 0;
+}
+
+// One sample; one without a prediction at every DOF is not compared.
+void Feed::Difference::add(const double* u, const double* predicted, int dofs) {
+  for (int d = 0; d < dofs; ++d)
+    if (std::isnan(predicted[d])) return;
+  for (int d = 0; d < dofs; ++d) {
+    const double e = u[d] - predicted[d];
+    max_abs[static_cast<std::size_t>(d)] =
+        std::max(max_abs[static_cast<std::size_t>(d)], std::abs(e));
+    sum_squares[static_cast<std::size_t>(d)] += e * e;
+  }
+  ++samples;
+}
+
 void Feed::finish() {
   std::lock_guard lock(mutex_);
   finished_ = true;
@@ -71,35 +129,22 @@ void Feed::on_header(const runtime::RunHeader& header) {
   have_header_ = true;
   actuators_ = header.actuators();
   links_ = header.link_node_ids_size();
+  dofs_ = std::max(header.dofs(), 0);
   const double dt = header.dt() > 0 ? header.dt() : 1e-3;
-  stride_ = std::max<std::int64_t>(1, std::llround(1.0 / (dt * options_.points_per_second)));
+  stride_ = sample_stride(dt, options_.points_per_second);
   history_ = std::max<std::size_t>(options_.history, 1);
   samples_.step.assign(history_, 0);
   samples_.overruns.assign(history_, 0);
   samples_.late.assign(history_, 0);
-  for (auto* v : {&samples_.time, &samples_.u_top, &samples_.lateness}) v->assign(history_, 0.0);
+  for (auto* v : {&samples_.time, &samples_.lateness}) v->assign(history_, 0.0);
+  for (auto* v : {&samples_.u, &samples_.predicted})
+    v->assign(history_ * static_cast<std::size_t>(dofs_), 0.0);
+  difference_.reset(dofs_);
   for (auto* v : {&samples_.command, &samples_.measured, &samples_.force, &samples_.ti})
     v->assign(history_ * static_cast<std::size_t>(actuators_), 0.0);
   for (auto* v : {&samples_.injected, &samples_.round_trip})
     v->assign(history_ * static_cast<std::size_t>(links_), 0.0);
-  const std::size_t n = spectrum_length(dt);
-  window_.resize(n);
-  double sum = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) /
-                                             static_cast<double>(n));
-  for (double& w : window_) w /= sum;  // so that 2 |X_j| is the amplitude of a sine
-  cos_.resize(n);
-  sin_.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    cos_[i] = std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
-    sin_[i] = std::sin(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
-  }
-  const double df = 1.0 / (static_cast<double>(n) * dt);
-  const double top = std::min(options_.spectrum_max_hz, 0.5 / dt);
-  bins_hz_.clear();
-  for (std::size_t j = 1; static_cast<double>(j) * df <= top + 1e-9 && j < n / 2 + 1; ++j)
-    bins_hz_.push_back(static_cast<double>(j) * df);
+  const std::size_t n = setup_spectrum(dt);
   error_ring_.assign(actuators_, std::vector<double>(n, 0.0));
   spectra_.assign(
       std::max<std::size_t>(options_.spectra_kept, 1),
@@ -143,13 +188,21 @@ void Feed::on_step(const runtime::StepRecord& step) {
   if (step.start_realtime_ns() != 0) last_step_realtime_ns_ = step.start_realtime_ns();
   if (state_ == "starting") state_ = "armed";
   if (steps_ >= window_.size() && step.step() % steps_per_spectrum_ == 0) compute_spectrum(step);
-  if (step.step() % stride_ != 0) return;
+  if (step.step() % stride_ == 0) keep_sample(step);
+}
+
+void Feed::keep_sample(const runtime::StepRecord& step) {
   Samples& s = samples_;
   const std::size_t r = static_cast<std::size_t>(samples_total_ % history_);
   s.step[r] = step.step();
   s.time[r] = step.time();
-  s.u_top[r] =
-      step.displacement_size() > 0 ? step.displacement(step.displacement_size() - 1) * kMm : 0;
+  const auto D = static_cast<std::size_t>(dofs_);
+  for (std::size_t d = 0; d < D; ++d) {
+    const int i = static_cast<int>(d);
+    s.u[r * D + d] = i < step.displacement_size() ? step.displacement(i) * kMm : 0;
+    s.predicted[r * D + d] = predicted(step.step(), i);
+  }
+  if (D > 0) difference_.add(&s.u[r * D], &s.predicted[r * D], dofs_);
   s.lateness[r] = step.lateness() * kMs;
   s.overruns[r] = overruns_;
   s.late[r] = late_;
@@ -168,7 +221,33 @@ void Feed::on_step(const runtime::StepRecord& step) {
   ++samples_total_;
 }
 
-// Direct DFT of the windowed error at the few bins shown (cheaper than a full FFT for ~100 bins).
+// The Hann window (normalised so that 2 |X(f)| is a sine's amplitude) and the log-spaced
+// frequencies with each one's rotation per step; returns the window's length.
+std::size_t Feed::setup_spectrum(double dt) {
+  const std::size_t n = spectrum_length(dt, options_.spectrum_seconds);
+  window_.resize(n);
+  double sum = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    sum += window_[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) /
+                                             static_cast<double>(n));
+  for (double& w : window_) w /= sum;
+  const double lowest = 1.0 / (static_cast<double>(n) * dt);
+  const double top = std::min(options_.spectrum_max_hz, 0.5 / dt);
+  bins_hz_.clear();
+  cos_.clear();
+  sin_.clear();
+  for (int i = 0;; ++i) {
+    const double f = lowest * std::pow(10.0, i / options_.spectrum_per_decade);
+    if (f > top * (1 + 1e-12)) break;
+    bins_hz_.push_back(f);
+    cos_.push_back(std::cos(2 * std::numbers::pi * f * dt));
+    sin_.push_back(std::sin(2 * std::numbers::pi * f * dt));
+  }
+  return n;
+}
+
+// Direct DTFT of the windowed error at the few log-spaced frequencies shown (~45 for two decades;
+// a full FFT would compute thousands of bins the axis cannot show), e^{-2 pi i f dt k} by rotation.
 void Feed::compute_spectrum(const runtime::StepRecord& step) {
   Spectrum& out = spectra_[spectra_total_ % spectra_.size()];
   out.step = step.step();
@@ -178,12 +257,14 @@ void Feed::compute_spectrum(const runtime::StepRecord& step) {
   for (int a = 0; a < actuators_; ++a) {
     const std::vector<double>& ring = error_ring_[a];
     for (std::size_t j = 0; j < bins_hz_.size(); ++j) {
-      double re = 0, im = 0;
+      double re = 0, im = 0, zr = 1, zi = 0;  // z = e^{-2 pi i f dt k}
       for (std::size_t i = 0; i < n; ++i) {
         const double x = ring[(oldest + i) % n] * window_[i];
-        const std::size_t phase = ((j + 1) * i) % n;
-        re += x * cos_[phase];
-        im -= x * sin_[phase];
+        re += x * zr;
+        im += x * zi;
+        const double next = zr * cos_[j] + zi * sin_[j];
+        zi = zi * cos_[j] - zr * sin_[j];
+        zr = next;
       }
       out.amplitude[a][j] = 2 * std::hypot(re, im);
     }
@@ -225,7 +306,11 @@ nlohmann::json Feed::header_json() const {
                       {"start_realtime_ns", header_.start_realtime_ns()},
                       {"study", header_.study().name()},
                       {"spectrum_hz", bins_hz_},
-                      {"spectrum_window_steps", window_.size()}};
+                      {"spectrum_window_steps", window_.size()},
+                      {"spectrum_window_s", static_cast<double>(window_.size()) * header_.dt()}};
+  const bool floors = !header_.study().structure().has_matrices();
+  for (int d = 0; d < dofs_; ++d)
+    h["dof_labels"].push_back((floors ? "floor " : "DOF ") + std::to_string(d + 1));
   for (const auto& node : header_.study().deployment().nodes())
     h["link_labels"][std::to_string(node.id())] = config::NodeSpec::Kind_Name(node.kind());
   return h;
@@ -255,23 +340,38 @@ nlohmann::json Feed::status_json() const {
                    {"late_feedback", c.late_feedback()},
                    {"steps", c.steps()}};
   }
+  if (difference_.samples > 0) {
+    nlohmann::json rms = nlohmann::json::array();
+    for (double sum : difference_.sum_squares)
+      rms.push_back(std::sqrt(sum / static_cast<double>(difference_.samples)));
+    s["prediction"] = {{"compared_samples", difference_.samples},
+                       {"max_abs_difference_mm", difference_.max_abs},
+                       {"rms_difference_mm", rms}};
+  }
   return s;
 }
 
-nlohmann::json Feed::samples_json(std::uint64_t from) const {
-  nlohmann::json j = {{"step", nlohmann::json::array()}, {"time_s", nlohmann::json::array()}};
-  const char* per_actuator[] = {"command_mm", "measured_mm", "error_mm", "force_N", "ti_mm2"};
-  for (const char* name : per_actuator) j[name] = nlohmann::json::array();
-  for (const char* name : {"injected_ms", "round_trip_ms"}) j[name] = nlohmann::json::array();
-  for (int a = 0; a < actuators_; ++a)
-    for (const char* name : per_actuator) j[name].push_back(nlohmann::json::array());
-  for (int l = 0; l < links_; ++l)
-    for (const char* name : {"injected_ms", "round_trip_ms"})
-      j[name].push_back(nlohmann::json::array());
-  for (const char* name : {"u_top_mm", "lateness_ms", "overruns", "late_feedback"})
+namespace {
+
+// `count` empty arrays under each of `names`.
+void empty_columns(nlohmann::json& j, std::initializer_list<const char*> names, int count) {
+  for (const char* name : names) {
     j[name] = nlohmann::json::array();
+    for (int i = 0; i < count; ++i) j[name].push_back(nlohmann::json::array());
+  }
+}
+
+}  // namespace
+
+nlohmann::json Feed::samples_json(std::uint64_t from) const {
+  nlohmann::json j;
+  empty_columns(j, {"step", "time_s", "lateness_ms", "overruns", "late_feedback"}, 0);
+  empty_columns(j, {"command_mm", "measured_mm", "error_mm", "force_N", "ti_mm2"}, actuators_);
+  empty_columns(j, {"injected_ms", "round_trip_ms"}, links_);
+  empty_columns(j, {"u_mm", "predicted_u_mm", "difference_mm"}, dofs_);
   const Samples& s = samples_;
   const auto A = static_cast<std::size_t>(actuators_), L = static_cast<std::size_t>(links_);
+  const auto D = static_cast<std::size_t>(dofs_);
   for (std::uint64_t i = from; i < samples_total_; ++i) {
     const std::size_t r = static_cast<std::size_t>(i % history_);
     j["step"].push_back(s.step[r]);
@@ -287,7 +387,11 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
       j["injected_ms"][l].push_back(s.injected[r * L + l]);
       j["round_trip_ms"][l].push_back(s.round_trip[r * L + l]);
     }
-    j["u_top_mm"].push_back(s.u_top[r]);
+    for (std::size_t d = 0; d < D; ++d) {  // NaN (no prediction) is written as null
+      j["u_mm"][d].push_back(s.u[r * D + d]);
+      j["predicted_u_mm"][d].push_back(s.predicted[r * D + d]);
+      j["difference_mm"][d].push_back(s.u[r * D + d] - s.predicted[r * D + d]);
+    }
     j["lateness_ms"].push_back(s.lateness[r]);
     j["overruns"].push_back(s.overruns[r]);
     j["late_feedback"].push_back(s.late[r]);

@@ -9,20 +9,26 @@
 // Outputs (JSON, what the page draws; every name carries its unit):
 //   samples   one every `stride` steps, stride = max(1, round(1 / (dt * points_per_second))): step,
 //             time_s, command_mm, measured_mm, error_mm = (c - m), force_N, tracking indicator
-//             ti_mm2, top floor u_mm, injected_ms / round_trip_ms per link, lateness_ms, overruns
-//             and late feedback so far. A sample holds the record's values of its step unchanged
-//             (only scaled to mm/ms), so the page can be checked against the record step by step.
+//             ti_mm2, per DOF the measured response u_mm, the in-process prediction
+//             predicted_u_mm and difference_mm = u - predicted (null where there is no
+//             prediction), injected_ms / round_trip_ms per link, lateness_ms, overruns and late
+//             feedback so far. A sample holds the record's values of its step unchanged (only
+//             scaled to mm/ms), so the page can be checked against the record step by step.
 //   ti        tracking indicator (Mercan & Ricles 2007) at full rate, sign chosen so that lag
 //             makes it grow: A_k = A_{k-1} + (m_k + m_{k-1})(c_k - c_{k-1}) / 2,
 //             TA_k = TA_{k-1} + (c_k + c_{k-1})(m_k - m_{k-1}) / 2, TI_k = (TA_k - A_k) / 2 (mm^2).
-//   spectra   every `spectrum_every` s of test time: the amplitude spectrum (mm, single-sided,
-//             Hann window, 2 |X_j| / sum(w)) of the tracking error over the last N steps at full
-//             rate, N = the largest power of two <= 1 / dt (at least 64), bins up to
-//             min(spectrum_max_hz, Nyquist).
+//   spectra   every `spectrum_every` s of test time: the amplitude spectrum (mm) of the tracking
+//             error e over the last N steps at full rate, N = the largest power of two <=
+//             spectrum_seconds / dt (at least 64), Hann window w: A(f) = 2 |sum_k w_k e_k
+//             e^{-2 pi i f dt k}| / sum_k w_k (a sine's amplitude at its frequency), at
+//             log-spaced f = f_0 10^(i / spectrum_per_decade), f_0 = 1 / (N dt), up to
+//             min(spectrum_max_hz, Nyquist): what a log frequency axis shows.
 //   status    fail-safe state: "starting" before the first step, "armed" while stepping, "HOLD"
 //             from a HOLD event on (its text is the reason), "stopped" / "completed" from the
 //             footer (its status and failed node); counters; the newest step and its CLOCK_REALTIME
 //             start, from which the page tells how far behind the test it is.
+//             With a prediction, per DOF: the largest |u - predicted| and its root mean square
+//             over the samples compared so far (mm; the samples' steps, not every step).
 //   events    the newest `max_events` events.
 // Memory: every buffer is sized when the header arrives (rings), so a long run keeps a flat RSS.
 // Thread safety: every member may be called from any thread.
@@ -37,6 +43,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/simulation.h"
 #include "runtime/record.h"
 
 namespace rths::view {
@@ -46,7 +53,9 @@ struct FeedOptions {
   std::size_t history = 60000;       // samples kept (a ring): 10 min at 100 per second
   double spectrum_every = 0.5;       // s of test time between spectra
   double spectrum_max_hz = 100.0;
-  std::size_t spectra_kept = 1200;  // 10 min at one per 0.5 s
+  double spectrum_seconds = 4.0;      // s, at most: the window (its resolution is 1 / its length)
+  double spectrum_per_decade = 20.0;  // frequencies shown per decade
+  std::size_t spectra_kept = 1200;    // 10 min at one per 0.5 s
   std::size_t max_events = 500;
 };
 
@@ -67,6 +76,12 @@ class Feed : public runtime::RecordObserver {
   // Facts about the run that are not in the record (critical-delay check, prediction), shown as
   // given; and a note (e.g. a truncated record's warning).
   void set_context(nlohmann::json context);
+  // The in-process prediction of the run (view/context.h): displacement per DOF (m) at
+  // t_k = k dt. Kept at the samples' steps only (every stride-th, the stride from its dt as for
+  // the samples) in mm: steps / stride x DOFs values. Samples kept before it was set get it too,
+  // and the difference statistics restart over the kept samples. A step the prediction does not
+  // reach (it diverged) has none.
+  void set_prediction(const core::SimulationResult& prediction);
   // The record is complete (footer seen, or a finished record fully read): readers stop waiting.
   void finish();
 
@@ -86,7 +101,15 @@ class Feed : public runtime::RecordObserver {
   struct Samples {
     std::vector<std::int64_t> step;
     std::vector<std::uint64_t> overruns, late;
-    std::vector<double> time, u_top, lateness, command, measured, force, ti, injected, round_trip;
+    std::vector<double> time, lateness, command, measured, force, ti, injected, round_trip;
+    std::vector<double> u, predicted;  // per DOF, mm (predicted: NaN where there is none)
+  };
+  // Measured minus predicted at the compared samples, per DOF, mm.
+  struct Difference {
+    std::vector<double> max_abs, sum_squares;
+    std::uint64_t samples = 0;
+    void reset(int dofs);
+    void add(const double* u, const double* predicted, int dofs);
   };
   struct Spectrum {
     std::int64_t step = 0;
@@ -98,6 +121,10 @@ class Feed : public runtime::RecordObserver {
   void on_event(const runtime::RunEvent& event);
   void on_footer(const runtime::RunFooter& footer);
   void track(const runtime::StepRecord& step);
+  void keep_sample(const runtime::StepRecord& step);
+  // The prediction at `step` for `dof` (mm), NaN where there is none.
+  double predicted(std::int64_t step, int dof) const;
+  std::size_t setup_spectrum(double dt);
   void compute_spectrum(const runtime::StepRecord& step);
   nlohmann::json header_json() const;
   nlohmann::json status_json() const;
@@ -116,7 +143,12 @@ class Feed : public runtime::RecordObserver {
   runtime::RunHeader header_;
   nlohmann::json context_;
   std::int64_t stride_ = 1;
-  int actuators_ = 0, links_ = 0;
+  int actuators_ = 0, links_ = 0, dofs_ = 0;
+
+  std::vector<double> prediction_;  // [row * prediction_dofs_ + dof], mm; row = step / stride
+  std::int64_t prediction_stride_ = 1;
+  int prediction_dofs_ = 0;
+  Difference difference_;
 
   Samples samples_;
   std::size_t history_ = 1;
@@ -133,7 +165,7 @@ class Feed : public runtime::RecordObserver {
   double last_time_ = 0;
   std::vector<double> prev_command_, prev_measured_, area_, transposed_area_, ti_;
   std::vector<std::vector<double>> error_ring_;       // [actuator][N], mm
-  std::vector<double> window_, bins_hz_, cos_, sin_;  // cos_/sin_: e^{-2 pi i k / N}
+  std::vector<double> window_, bins_hz_, cos_, sin_;  // cos_/sin_ per bin: of 2 pi f dt
   std::int64_t steps_per_spectrum_ = 1;
 
   // Fail-safe.

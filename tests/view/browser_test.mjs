@@ -1,7 +1,8 @@
 // The view in a real browser (Debian's Chromium driven by playwright-core) over real runs:
 // `rths launch --view` of a lockstep and of real-time runs over Cyclone DDS (domains 212-214),
 // and `rths view RECORD`. Skipped, with the reason printed, where Chromium cannot start.
-// Screenshots go to RTHS_VIEW_TEST_OUT (view_live.png, view_hold.png, view_replay.png).
+// Screenshots go to RTHS_VIEW_TEST_OUT (view_lockstep.png, view_live.png, view_hold.png,
+// view_replay.png).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
@@ -134,8 +135,85 @@ test('lockstep over DDS: the step counter advances and the plotted series are th
     assert.ok(Math.abs(plotted.data[1][i] - command[row[s]] * 1e3) <= 1e-9 * Math.max(1, Math.abs(plotted.data[1][i])), `command at step ${s}`);
     assert.ok(Math.abs(plotted.data[2][i] - measured[row[s]] * 1e3) <= 1e-9 * Math.max(1, Math.abs(plotted.data[2][i])), `measured at step ${s}`);
   });
+  await checkPrediction(page, dir, csv, row, true);
+  await checkSpectrum(page, csv, row);
+  await page.screenshot({ path: path.join(OUT, 'view_lockstep.png'), fullPage: true });
   await page.close();
 });
+
+const near = (a, b, what) => assert.ok(Math.abs(a - b) <= 1e-9 * Math.max(1, Math.abs(b)), `${what}: ${a} vs ${b}`);
+
+// The response against the in-process prediction: the predicted series is `rths run`'s (the
+// in-process run of the same study and case) at the plotted steps, the measured one the record's,
+// the page's largest |measured - predicted| that of the record's samples; lockstep over DDS
+// equals the in-process run bit for bit (`lockstep`: that largest difference is 0).
+async function checkPrediction(page, dir, csv, row, lockstep) {
+  const out = path.join(dir, 'in_process');
+  const run = start(['run', path.join(dir, 'study.textproto'), '--out', out, '--no-plots']);
+  assert.equal(await run.done, 0, run.output);
+  const inProcess = csvColumns(path.join(out, 'results.csv'));
+  const predicted = inProcess.lag_shift_14ms_u_floor1_m;
+  assert.ok(predicted, 'rths run columns: ' + Object.keys(inProcess).join(','));
+  const p = await view(page, () => ({
+    steps: window.rthsView.drawn.steps, data: window.rthsView.plots.resp[0].data,
+    axes: window.rthsView.plots.resp[0].axes.map(a => a.label),
+    stats: window.rthsView.status.prediction, text: document.querySelector('#prediction-text').textContent,
+    stride: window.rthsView.header.stride_steps,
+  }));
+  assert.ok(p.steps.length > 100, 'plotted points: ' + p.steps.length);
+  const inRow = Object.fromEntries(inProcess.step.map((s, i) => [s, i]));
+  p.steps.forEach((s, i) => {
+    near(p.data[2][i], predicted[inRow[s]] * 1e3, `predicted at step ${s}`);
+    near(p.data[1][i], csv.u1_m[row[s]] * 1e3, `measured at step ${s}`);
+  });
+  assert.deepEqual(p.axes, ['time (s)', 'displacement (mm)']);
+  assert.match(p.text, /in-process run of case lag_shift_14ms/);
+  let largest = 0, compared = 0;
+  csv.step.forEach((s, i) => {
+    if (s % p.stride !== 0 || inRow[s] === undefined || Number.isNaN(predicted[inRow[s]])) return;
+    largest = Math.max(largest, Math.abs(csv.u1_m[i] * 1e3 - predicted[inRow[s]] * 1e3));
+    compared++;
+  });
+  assert.equal(p.stats.compared_samples, compared, JSON.stringify(p.stats));
+  near(p.stats.max_abs_difference_mm[0], largest, 'largest |measured - predicted|');
+  if (lockstep) assert.equal(p.stats.max_abs_difference_mm[0], 0, 'lockstep equals the in-process run bit for bit');
+  else assert.ok(largest > 0, 'real time differs from the in-process run');
+}
+
+// The tracking error's running spectrum on a log frequency axis: the plotted amplitudes are the
+// Hann-windowed amplitude spectrum (2 |sum w_k e_k e^{-2 pi i f dt k}| / sum w, mm) of the
+// record's command - measured over the window of steps ending at the spectrum's step, at the
+// log-spaced frequencies the header lists.
+async function checkSpectrum(page, csv, row) {
+  const sp = await view(page, () => {
+    const p = window.rthsView.plots.act[0];
+    return { data: p.spec.data, step: p.specStep, distr: p.spec.scales.x.distr,
+      axes: p.spec.axes.map(a => a.label), n: window.rthsView.header.spectrum_window_steps,
+      dt: window.rthsView.header.dt_s, hz: window.rthsView.header.spectrum_hz };
+  });
+  assert.equal(sp.distr, 3, 'log frequency axis');
+  assert.deepEqual(sp.axes, ['frequency (Hz, log scale)', 'error amplitude (mm)']);
+  assert.ok(sp.step >= sp.n - 1 && sp.data[0].length > 30, `spectrum at step ${sp.step}`);
+  assert.deepEqual(sp.data[0], sp.hz);
+  near(sp.hz[0], 1 / (sp.n * sp.dt), 'lowest frequency');
+  const e = [], w = [];
+  for (let i = 0; i < sp.n; i++) {
+    const k = row[sp.step - sp.n + 1 + i];
+    e.push(csv.command1_m[k] * 1e3 - csv.realised1_m[k] * 1e3);
+    w.push(0.5 - 0.5 * Math.cos(2 * Math.PI * i / sp.n));
+  }
+  const sum = w.reduce((a, b) => a + b, 0);
+  const peak = Math.max(...sp.data[1]);
+  assert.ok(peak > 0, 'a tracking error to analyse');
+  sp.hz.forEach((f, b) => {
+    let re = 0, im = 0;
+    for (let i = 0; i < sp.n; i++) {
+      re += e[i] * w[i] / sum * Math.cos(2 * Math.PI * f * sp.dt * i);
+      im -= e[i] * w[i] / sum * Math.sin(2 * Math.PI * f * sp.dt * i);
+    }
+    assert.ok(Math.abs(sp.data[1][b] - 2 * Math.hypot(re, im)) <= 1e-9 * peak, `amplitude at ${f} Hz`);
+  });
+}
 
 // The substructure node's pid, found by its command line (domain and node id).
 function nodePid(domain, program) {
@@ -207,6 +285,11 @@ test('rths view RECORD: the finished record with a time slider', { timeout: 1200
   await page.$eval('#slider', s => { s.value = String(Number(s.max) / 2); s.dispatchEvent(new Event('input')); });
   await until('the charts to follow the slider', () => view(page, n => window.rthsView.drawn.i1 < n, all));
   assert.equal(await page.textContent('#state'), 'HOLD · stopped');
+  const exported = path.join(OUT, 'hold', 'record.csv');
+  const ex = start(['export', record, '--csv', exported]);
+  assert.equal(await ex.done, 0, ex.output);
+  const csv = csvColumns(exported);
+  await checkPrediction(page, path.join(OUT, 'hold'), csv, Object.fromEntries(csv.step.map((s, i) => [s, i])), false);
   await page.screenshot({ path: path.join(OUT, 'view_replay.png'), fullPage: true });
   server.kill('SIGTERM');
   await server.done;

@@ -1,7 +1,9 @@
 // The rths view: reads /api/stream (server-sent events, each a JSON of what is new: header once,
 // samples, spectra, events, status) and draws it with uPlot. Live: the last WINDOW_S seconds.
 // Replay (a finished record): a time slider; every chart shows the record up to the slider.
-// Units: displacement mm, force N, lag and lateness ms, time s, frequency Hz, TI mm^2.
+// Units: displacement mm, force N, lag and lateness ms, time s, frequency Hz (log axis), TI mm^2.
+// The response (per floor or DOF) is drawn against the in-process prediction when the view was
+// given one (null where there is none), with their running difference.
 'use strict';
 const WINDOW_S = 10;
 const COLORS = ['#1f5fbf', '#d1451b', '#2a8f2a', '#8e44ad'];
@@ -13,12 +15,15 @@ const $ = id => document.getElementById(id);
 
 function chartWidth() { return Math.max(300, Math.floor((window.innerWidth - 60) / 3)); }
 
-function timePlot(el, title, yLabel, names, colors) {
-  const series = [{ label: 'time (s)' }];
-  names.forEach((n, i) => series.push({ label: n, stroke: colors[i % colors.length], width: 1.5 }));
+// dashes[i]: the dash pattern of series i (px), or undefined for a solid line; yRange: uPlot's
+// y range function, or undefined for its default.
+function timePlot(el, title, yLabel, names, colors, dashes = [], yRange = undefined) {
+  const series = [{ label: 'time (s)' }], scales = { x: { time: false } };
+  names.forEach((n, i) => series.push({ label: n, stroke: colors[i % colors.length],
+    width: dashes[i] ? 2 : 1.5, dash: dashes[i] }));
+  if (yRange) scales.y = { range: yRange };
   return new uPlot({
-    title, width: chartWidth(), height: 210, class: 'chart',
-    scales: { x: { time: false } },
+    title, width: chartWidth(), height: 210, class: 'chart', scales,
     series, legend: { live: false },
     axes: [{ label: 'time (s)' }, { label: yLabel, size: 60 }],
   }, [[], ...names.map(() => [])], el);
@@ -35,13 +40,16 @@ function xyPlot(el, title, xLabel, yLabel, color) {
   }, [null, [[], []]], el);
 }
 
+// Amplitude (mm) against frequency on a log axis (Hz): decades 1, 10, 100 labelled.
 function spectrumPlot(el, title, color) {
   return new uPlot({
     title, width: chartWidth(), height: 210, class: 'chart',
-    scales: { x: { time: false } },
+    scales: { x: { time: false, distr: 3, log: 10 } },
     series: [{ label: 'frequency (Hz)' }, { label: 'amplitude (mm)', stroke: color, width: 1.5 }],
     legend: { live: false },
-    axes: [{ label: 'frequency (Hz)' }, { label: 'error amplitude (mm)', size: 60 }],
+    axes: [{ label: 'frequency (Hz, log scale)',
+             values: (u, splits) => splits.map(v => [0.1, 1, 10, 100, 1000].includes(Math.round(v * 1e6) / 1e6) ? String(v) : '') },
+           { label: 'error amplitude (mm)', size: 60 }],
   }, [[], []], el);
 }
 
@@ -52,20 +60,41 @@ function row(parent, heading) {
 }
 
 function linkLabel(id) {
-  const kind = (V.header.link_labels || {})[String(id)];
+  const kind = (V.header.link_labels || {})[String(id)] || ((V.context || {}).node_kinds || {})[String(id)];
   return 'node ' + id + (kind ? ' (' + kind.toLowerCase().replace(/_/g, ' ') + ')' : '');
+}
+
+// Symmetric about 0, at least ±0.001 mm: a difference of 0 reads as 0, not on a 0-100 axis.
+function symmetricRange(u, min, max) {
+  const m = 1.1 * Math.max(Math.abs(min || 0), Math.abs(max || 0), 0.001);
+  return [-m, m];
+}
+
+function dofLabel(d) { return (V.header.dof_labels || [])[d] || 'DOF ' + (d + 1); }
+
+// Per floor (DOF): measured and predicted displacement; one chart of their difference.
+function buildResponse() {
+  const h = V.header, el = $('response'), pred = (V.context && V.context.prediction) || {};
+  el.innerHTML = ''; V.plots.resp = [];
+  $('prediction-text').textContent = pred.text || 'no in-process prediction';
+  for (let d = 0; d < h.dofs; d++)
+    V.plots.resp.push(timePlot(el, dofLabel(d) + ': measured vs in-process prediction', 'displacement (mm)',
+      ['measured (mm)', 'predicted (mm)'], ['#d1451b', '#1f5fbf'], [undefined, [7, 5]]));
+  V.plots.diff = timePlot(el, 'measured − predicted displacement', 'difference (mm)',
+    Array.from({ length: h.dofs }, (_, d) => dofLabel(d) + ' (mm)'), COLORS, [], symmetricRange);
 }
 
 function buildCharts() {
   const h = V.header, acts = $('actuators'), links = $('links');
   acts.innerHTML = ''; links.innerHTML = ''; V.plots = { act: [], link: [] };
+  buildResponse();
   for (let a = 0; a < h.actuators; a++) {
     const r = row(acts, 'Actuator ' + (a + 1));
     const c = COLORS[a % COLORS.length];
     V.plots.act.push({
       cmd: timePlot(r, 'command vs measured displacement', 'displacement (mm)', ['command (mm)', 'measured (mm)'], ['#1f5fbf', '#d1451b']),
       err: timePlot(r, 'tracking error (command − measured)', 'error (mm)', ['error (mm)'], [c]),
-      spec: spectrumPlot(r, 'tracking error spectrum (last ' + h.spectrum_window_steps + ' steps)', c),
+      spec: spectrumPlot(r, 'tracking error spectrum (last ' + h.spectrum_window_s.toFixed(2) + ' s, Hann)', c),
       sync: xyPlot(r, 'synchronisation: measured vs command', 'command (mm)', 'measured (mm)', c),
       ti: timePlot(r, 'tracking indicator (grows when the actuator lags)', 'TI (mm²)', ['TI (mm²)'], [c]),
       hyst: xyPlot(r, 'force vs measured displacement', 'measured displacement (mm)', 'force (N)', c),
@@ -80,7 +109,9 @@ function buildCharts() {
 
 function reset(header, context) {
   V.header = header; V.context = context; V.spectra = []; V.events = [];
-  V.cols = { step: [], time_s: [], u_top_mm: [], lateness_ms: [], overruns: [], late_feedback: [] };
+  V.cols = { step: [], time_s: [], lateness_ms: [], overruns: [], late_feedback: [] };
+  for (const k of ['u_mm', 'predicted_u_mm', 'difference_mm'])
+    V.cols[k] = Array.from({ length: header.dofs }, () => []);
   for (const k of ['command_mm', 'measured_mm', 'error_mm', 'force_N', 'ti_mm2'])
     V.cols[k] = Array.from({ length: header.actuators }, () => []);
   for (const k of ['injected_ms', 'round_trip_ms'])
@@ -91,6 +122,7 @@ function reset(header, context) {
   $('critical').textContent = cd.margin_pct !== undefined
     ? cd.critical_delay_ms.toFixed(2) + ' ms, margin ' + cd.margin_pct.toFixed(0) + ' %' : (cd.text || '–');
   $('critical').title = cd.text || '';
+  if (context && context.note) $('run').textContent += ' · ' + context.note;
   buildCharts();
 }
 
@@ -134,6 +166,22 @@ function drawActuator(a, p, i0, i1) {
   let spec = null;
   for (const s of V.spectra) if (s.time_s <= tEnd + 1e-12) spec = s;
   p.spec.setData(spec ? [V.header.spectrum_hz, spec.amplitude_mm[a]] : [[], []]);
+  p.specStep = spec ? spec.step : null;
+}
+
+function drawResponse(i0, i1) {
+  const c = V.cols, t = c.time_s.slice(i0, i1);
+  V.plots.resp.forEach((p, d) => p.setData([t, c.u_mm[d].slice(i0, i1), c.predicted_u_mm[d].slice(i0, i1)]));
+  V.plots.diff.setData([t, ...c.difference_mm.map(col => col.slice(i0, i1))]);
+}
+
+// Max and RMS of measured − predicted so far, per floor (the feed's, over the samples compared).
+function showPrediction(st) {
+  const p = st.prediction;
+  if (!p) { $('prediction-stats').textContent = ''; return; }
+  $('prediction-stats').textContent = p.max_abs_difference_mm.map((m, d) => dofLabel(d) + ': max |measured − predicted| ' +
+    (m === 0 ? '0 mm (identical)' : m.toFixed(3) + ' mm, rms ' + p.rms_difference_mm[d].toFixed(3) + ' mm')).join(' · ') +
+    ' (over ' + p.compared_samples + ' samples)';
 }
 
 function draw() {
@@ -141,6 +189,7 @@ function draw() {
   if (!V.cols) return;
   const [i0, i1] = visible(false), c = V.cols, t = c.time_s.slice(i0, i1);
   V.plots.act.forEach((p, a) => drawActuator(a, p, i0, i1));
+  drawResponse(i0, i1);
   V.plots.link.forEach((p, l) => p.setData([t, c.injected_ms[l].slice(i0, i1), c.round_trip_ms[l].slice(i0, i1)]));
   V.plots.deadlines.setData([t, c.overruns.slice(i0, i1), c.late_feedback.slice(i0, i1)]);
   V.plots.lateness.setData([t, c.lateness_ms.slice(i0, i1)]);
@@ -159,7 +208,8 @@ function showStatus(st) {
   $('time').textContent = st.latest_time_s.toFixed(3);
   $('overruns').textContent = st.overruns;
   $('late').textContent = st.late_feedback;
-  $('reason').textContent = (st.reason ? st.reason : '') + (st.node ? ' [' + st.node + ']' : '');
+  $('reason').textContent = st.state === 'completed' ? '' : (st.reason ? st.reason : '') + (st.node ? ' [' + st.node + ']' : '');
+  if (V.header) showPrediction(st);
   const behind = $('behind');
   if (V.mode === 'replay') { $('behind-box').hidden = true; return; }
   if (st.finished) { behind.textContent = 'run over'; return; }

@@ -1,0 +1,124 @@
+#include "view/context.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <filesystem>
+
+#include "runtime/plan.h"
+#include "tests/runtime/test_support.h"
+#include "tests/support/in_process_run.h"
+
+namespace rths::view {
+namespace {
+
+std::filesystem::path record_path(const std::string& name) {
+  return std::filesystem::temp_directory_path() /
+         ("rths_view_context_" + name + "_" + std::to_string(::getpid()) + ".rthsrec");
+}
+
+// The coordinator with its node services in one process (the reference a lockstep run over DDS
+// equals bit for bit), its record fed to a view given the prediction as the coordinator gives it:
+// measured and predicted are the same doubles at every sample.
+TEST(Context, ALockstepRunEqualsItsPredictionOnThePageAtEverySample) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
+  Feed feed;
+  describe_run(feed, prepared, "lag_shift_14ms");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "view-context";
+  options.case_name = "lag_shift_14ms";
+  options.record = record_path("lockstep");
+  options.record_observer = &feed;
+  const auto outcome = coordinator::run_in_process(prepared, options);
+  std::filesystem::remove(options.record);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  EXPECT_NE(j["context"]["prediction"]["text"].get<std::string>().find("lag_shift_14ms"),
+            std::string::npos);
+  EXPECT_EQ(j["context"]["prediction"]["steps"], outcome.result.steps());
+  EXPECT_EQ(j["context"]["node_kinds"],
+            nlohmann::json({{"1", "SUBSTRUCTURE"}, {"2", "ACTUATOR_EMULATOR"}}));
+  const auto& samples = j["samples"];
+  const std::size_t steps = prepared.motion.acceleration.size();
+  ASSERT_EQ(samples["step"].size(), (steps + 9) / 10);  // every 10th step from 0
+  for (std::size_t i = 0; i < samples["step"].size(); ++i) {
+    const auto k = samples["step"][i].get<Eigen::Index>();
+    EXPECT_EQ(samples["predicted_u_mm"][0][i].get<double>(),
+              outcome.result.displacement(k, 0) * 1e3);
+    EXPECT_EQ(samples["difference_mm"][0][i].get<double>(), 0.0) << "step " << k;
+  }
+  EXPECT_EQ(j["status"]["prediction"]["compared_samples"], (steps + 9) / 10);
+  EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
+  EXPECT_GT(outcome.result.displacement.cwiseAbs().maxCoeff(), 1e-4);  // a response to compare
+}
+
+TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  const core::SimulationResult lagged = predict_case(prepared, "lag_shift_14ms");
+  const core::SimulationResult reference = predict_case(prepared, "reference");
+  ASSERT_EQ(lagged.steps(), prepared.motion.acceleration.size());
+  const auto& study_case = runtime::find_case(prepared.config, "lag_shift_14ms");
+  EXPECT_TRUE(
+      lagged.displacement ==
+      core::simulate(core::setup_for_case(prepared, study_case), prepared.motion).displacement);
+  EXPECT_FALSE(lagged.displacement == reference.displacement);
+  EXPECT_THROW(predict_case(prepared, "no_such_case"), std::invalid_argument);
+}
+
+// A lockstep record read back, its study's motion file gone: the record's own steps carry the
+// motion, and the prediction over them is the in-process run's, bit for bit.
+TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCarry) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "view-record";
+  options.case_name = "lag_shift_14ms";
+  options.record = record_path("away");
+  const auto outcome = coordinator::run_in_process(prepared, options);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  runtime::RecordContents contents = runtime::read_record(options.record);
+  std::filesystem::remove(options.record);
+  ASSERT_TRUE(contents.entries.front().has_header());
+  EXPECT_EQ(recorded_motion(contents).acceleration, prepared.motion.acceleration);
+  contents.entries.front().mutable_header()->mutable_study()->mutable_motion()->set_path(
+      "moved_away.AT2");
+  Feed feed;
+  describe_record(feed, contents, std::filesystem::temp_directory_path());
+  for (const auto& entry : contents.entries) feed.add(entry);
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  const std::string text = j["context"]["prediction"]["text"];
+  const std::size_t steps = prepared.motion.acceleration.size();
+  EXPECT_NE(text.find("over the motion of the record's " + std::to_string(steps) + " steps"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("moved_away.AT2"), std::string::npos) << text;
+  EXPECT_EQ(j["status"]["prediction"]["compared_samples"], (steps + 9) / 10);
+  EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
+}
+
+TEST(Context, WithoutAnyMotionThePageSaysWhyThereIsNoPrediction) {
+  runtime::RecordContents contents;
+  contents.warning = "cut short at byte 9";
+  auto& header = *contents.entries.emplace_back().mutable_header();
+  header.set_dt(0.001);
+  header.set_dofs(1);
+  *header.mutable_study() = core::parse_study(
+      "name: \"lost\"\nstructure { sdof { period: 0.5 } }\n"
+      "motion { path: \"missing_motion.AT2\" }\nintegrator { dt: 0.001 }\n"
+      "substructuring { experimental_fraction: 0.5 model { linear {} } }\n",
+      "test");
+  Feed feed;
+  describe_record(feed, contents, std::filesystem::temp_directory_path());
+  feed.add(contents.entries.front());
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  const std::string text = j["context"]["prediction"]["text"];
+  EXPECT_EQ(text.rfind("no in-process prediction: ", 0), 0u) << text;
+  EXPECT_NE(text.find("missing_motion.AT2"), std::string::npos) << text;
+  EXPECT_EQ(j["context"]["note"], "cut short at byte 9");
+  EXPECT_FALSE(j["status"].contains("prediction"));
+}
+
+}  // namespace
+}  // namespace rths::view
