@@ -125,6 +125,7 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
       else
         text << "stable for up to " << kMaxExtraDelay * 1e3 << " ms more lag (searched)";
     }
+    if (!loop.linearised.empty()) text << " (linearised: " << loop.linearised << ")";
     verdict.text = text.str() + beside;
   } catch (const std::invalid_argument& e) {
     verdict.text =

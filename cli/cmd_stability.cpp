@@ -71,6 +71,7 @@ void run_compensated(const StabilityOptions& o) {
                     {"compensated", compensation != nullptr}};
     if (!r.frozen_coefficients.empty())
       out["time_varying"] = {{"analysis", "frozen coefficients"}, {"note", r.frozen_coefficients}};
+    if (!r.linearised.empty()) out["linearised"] = r.linearised;
     nlohmann::json crossings = nlohmann::json::array();
     for (const auto& c : r.crossings)
       crossings.push_back({{"crossing_omega_rad_per_s", c.omega},
@@ -94,6 +95,7 @@ void run_compensated(const StabilityOptions& o) {
           << "; no fixed amplification matrix exists for the adapting loop, so the figures below "
              "are of the frozen loop\n";
     }
+    if (!r.linearised.empty()) std::cout << "linearised: " << r.linearised << "\n";
     if (!r.stable) {
       std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius
                 << ")\n";

@@ -30,15 +30,8 @@ double backward_acceleration(const double* x, double dt) {
   return (2.0 * x[0] - 5.0 * x[1] + 4.0 * x[2] - x[3]) / (dt * dt);
 }
 
-void require_step(double dt, const char* who) {
-  require(dt > 0.0 && finite(dt),
-          std::string(who) + ": dt must be > 0 s, got " + format_number(dt));
-}
-
-// Drops leading zero coefficients; a polynomial keeps at least one coefficient.
-std::vector<double> trimmed(std::vector<double> p) {
-  while (p.size() > 1 && p.front() == 0.0) p.erase(p.begin());
-  return p;
+void require_step(double dt, const std::string& who) {
+  require(dt > 0.0 && finite(dt), who + ": dt must be > 0 s, got " + format_number(dt));
 }
 
 // The coefficients' bounds and starting values, which do not depend on dt: the one statement of
@@ -65,15 +58,6 @@ void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
 
 }  // namespace
 
-std::vector<double> polynomial_multiply(const std::vector<double>& a,
-                                        const std::vector<double>& b) {
-  if (a.empty() || b.empty()) return {};
-  std::vector<double> out(a.size() + b.size() - 1, 0.0);
-  for (std::size_t i = 0; i < a.size(); ++i)
-    for (std::size_t j = 0; j < b.size(); ++j) out[i + j] += a[i] * b[j];
-  return out;
-}
-
 std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients) {
   const std::vector<double> p = trimmed(coefficients);
   const int degree = static_cast<int>(p.size()) - 1;
@@ -88,9 +72,19 @@ std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& co
 }
 
 // ---------------------------------------------------------------------------------------------
+Linearity Compensator::linearity() const {
+  return {Linearity::Kind::kNone,
+          "compensator " + describe() + " does not state its linear dynamics"};
+}
+
+std::complex<double> Compensator::frequency_response(double) const { fail(linearity().note); }
+
+LinearBlock Compensator::state_space() const { fail(linearity().note); }
+
+// ---------------------------------------------------------------------------------------------
 PolynomialExtrapolation::PolynomialExtrapolation(int order, double lead, int spacing_steps,
                                                  double dt)
-    : order_(order), spacing_(spacing_steps), lead_(lead) {
+    : order_(order), spacing_(spacing_steps), lead_(lead), dt_(dt) {
   require_step(dt, "polynomial compensator");
   require(order >= 1 && order <= 3,
           "polynomial compensator: order must be 1, 2 or 3, got " + std::to_string(order));
@@ -135,20 +129,36 @@ std::string PolynomialExtrapolation::describe() const {
          " ms, spacing " + std::to_string(spacing_) + " steps)";
 }
 
+std::complex<double> PolynomialExtrapolation::frequency_response(double omega) const {
+  const double h = spacing_ * dt_;
+  std::complex<double> sum = 0.0;
+  for (std::size_t j = 0; j < weights_.size(); ++j)
+    sum += weights_[j] * std::exp(std::complex<double>(0.0, -omega * h * static_cast<double>(j)));
+  return sum;
+}
+
+LinearBlock PolynomialExtrapolation::state_space() const {
+  std::vector<double> taps(static_cast<std::size_t>(order_ * spacing_), 0.0);
+  for (int j = 1; j <= order_; ++j)
+    taps[static_cast<std::size_t>(j * spacing_ - 1)] = weights_[static_cast<std::size_t>(j)];
+  return fir_block(weights_[0], taps);
+}
+
 // ---------------------------------------------------------------------------------------------
-AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double dt)
+AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double dt,
+                                       const std::string& label)
     : p_(parameters), dt_(dt), filter_decay_(0.0) {
-  require_step(dt, "adaptive time series compensator");
-  require(finite(p_.window) && p_.window >= 3.0 * dt,
-          "adaptive time series compensator: window must be >= 3 dt (" + format_number(3.0 * dt) +
-              " s), got " + format_number(p_.window));
-  require(p_.window / dt <= 1e6, "adaptive time series compensator: window of " +
-                                     format_number(p_.window) + " s is more than 1e6 steps");
-  check_ats_coefficients(p_, "adaptive time series compensator");
+  require_step(dt, label);
+  require(finite(p_.window) && p_.window >= 3.0 * dt, label + ": window must be >= 3 dt (" +
+                                                          format_number(3.0 * dt) + " s), got " +
+                                                          format_number(p_.window));
+  require(p_.window / dt <= 1e6,
+          label + ": window of " + format_number(p_.window) + " s is more than 1e6 steps");
+  check_ats_coefficients(p_, label);
   require(finite(p_.derivative_cutoff) && p_.derivative_cutoff >= 0.0 &&
               p_.derivative_cutoff < 0.5 / dt,
-          "adaptive time series compensator: derivative_cutoff must be in [0, Nyquist = " +
-              format_number(0.5 / dt) + " Hz), got " + format_number(p_.derivative_cutoff));
+          label + ": derivative_cutoff must be in [0, Nyquist = " + format_number(0.5 / dt) +
+              " Hz), got " + format_number(p_.derivative_cutoff));
   if (p_.derivative_cutoff > 0.0) {
     filter_decay_ = std::exp(-2.0 * std::numbers::pi * p_.derivative_cutoff * dt);
   }
@@ -179,6 +189,24 @@ std::unique_ptr<Compensator> AdaptiveTimeSeries::clone() const {
 std::string AdaptiveTimeSeries::describe() const {
   return "ats(window " + format_number(p_.window) + " s, a0 " + format_number(p_.a0) + ", a1 " +
          format_number(p_.a1 * 1e3) + " ms, a2 " + format_number(p_.a2) + " s^2)";
+}
+
+Linearity AdaptiveTimeSeries::linearity() const {
+  std::ostringstream note;
+  note << "time-varying (its coefficients adapt online): analysed with them frozen at their "
+       << (updates_ == 0 ? "initial" : "present") << " values a0 = " << a_[0]
+       << ", a1 = " << a_[1] * 1e3 << " ms, a2 = " << a_[2] << " s^2";
+  return {Linearity::Kind::kFrozen, note.str()};
+}
+
+std::complex<double> AdaptiveTimeSeries::frequency_response(double omega) const {
+  return {a_[0] - a_[2] * omega * omega, a_[1] * omega};
+}
+
+// a0 u + a1 (3u - 4u1 + u2) / 2dt + a2 (2u - 5u1 + 4u2 - u3) / dt^2.
+LinearBlock AdaptiveTimeSeries::state_space() const {
+  const double v = a_[1] / (2.0 * dt_), q = a_[2] / (dt_ * dt_);
+  return fir_block(a_[0] + 3.0 * v + 2.0 * q, {-4.0 * v - 5.0 * q, v + 4.0 * q, -q});
 }
 
 // One regression row: the command sent at step k-1 and the measurement it produced.
@@ -252,42 +280,29 @@ double AdaptiveTimeSeries::step(const CompensatorInput& in) {
 }
 
 // ---------------------------------------------------------------------------------------------
-void PlantModel::append(const std::vector<double>& num, const std::vector<double>& den) {
-  numerator = polynomial_multiply(numerator, num);
-  denominator = polynomial_multiply(denominator, den);
-}
-
-std::string PlantModel::describe() const {
-  std::ostringstream out;
-  out << "plant(delay " << delay * 1e3 << " ms, gain " << gain << ", order "
-      << trimmed(denominator).size() - 1 << "/" << trimmed(numerator).size() - 1 << ")";
-  return out.str();
-}
-
-InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz,
-                             double dt) {
-  const char* who = "model-based compensator";
+InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz, double dt,
+                             const std::string& who) {
   require_step(dt, who);
   require(lead_order >= 1 && lead_order <= 3,
-          std::string(who) + ": lead_order must be 1, 2 or 3, got " + std::to_string(lead_order));
+          who + ": lead_order must be 1, 2 or 3, got " + std::to_string(lead_order));
   require(finite(rolloff_hz) && rolloff_hz > 0.0 && rolloff_hz < 0.25 / dt,
-          std::string(who) + ": rolloff_frequency must be in (0, " + format_number(0.25 / dt) +
+          who + ": rolloff_frequency must be in (0, " + format_number(0.25 / dt) +
               ") Hz (a quarter of the sampling rate), got " + format_number(rolloff_hz));
   require(finite(plant.delay) && plant.delay >= 0.0,
-          std::string(who) + ": plant delay must be >= 0 s, got " + format_number(plant.delay));
+          who + ": plant delay must be >= 0 s, got " + format_number(plant.delay));
   require(finite(plant.gain) && plant.gain != 0.0,
-          std::string(who) + ": plant gain must be finite and non-zero");
+          who + ": plant gain must be finite and non-zero");
   const std::vector<double> num = trimmed(plant.numerator), den = trimmed(plant.denominator);
-  for (double c : num) require(finite(c), std::string(who) + ": plant numerator is not finite");
-  for (double c : den) require(finite(c), std::string(who) + ": plant denominator is not finite");
-  require(num.front() != 0.0, std::string(who) + ": plant numerator is zero");
-  require(den.front() != 0.0, std::string(who) + ": plant denominator is zero");
-  require(num.size() <= den.size(), std::string(who) + ": plant has more zeros than poles");
+  for (double c : num) require(finite(c), who + ": plant numerator is not finite");
+  for (double c : den) require(finite(c), who + ": plant denominator is not finite");
+  require(num.front() != 0.0, who + ": plant numerator is zero");
+  require(den.front() != 0.0, who + ": plant denominator is zero");
+  require(num.size() <= den.size(), who + ": plant has more zeros than poles");
   require(num.back() != 0.0 && den.back() != 0.0,
-          std::string(who) + ": plant has a zero or a pole at s = 0 (no finite static gain)");
+          who + ": plant has a zero or a pole at s = 0 (no finite static gain)");
   for (const auto& zero : polynomial_roots(num)) {
     require(zero.real() < 0.0,
-            std::string(who) + ": plant zero at s = " + format_number(zero.real()) +
+            who + ": plant zero at s = " + format_number(zero.real()) +
                 (zero.imag() != 0.0 ? " + " + format_number(zero.imag()) + "i" : "") +
                 " is not in the left half-plane: its inverse would be unstable");
   }
@@ -315,9 +330,10 @@ InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rol
   return design;
 }
 
-ModelBasedInverse::ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt)
+ModelBasedInverse::ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt,
+                                     const std::string& label)
     : ModelBasedInverse(plant, lead_order, rolloff_hz, dt,
-                        design_inverse(plant, lead_order, rolloff_hz, dt)) {}
+                        design_inverse(plant, lead_order, rolloff_hz, dt, label)) {}
 
 ModelBasedInverse::ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt,
                                      const InverseDesign& design)
@@ -331,6 +347,17 @@ ModelBasedInverse::ModelBasedInverse(PlantModel plant, int lead_order, double ro
 
 double ModelBasedInverse::step(const CompensatorInput& in) {
   return filter_.step({in.time, in.target, 0.0});
+}
+
+std::complex<double> ModelBasedInverse::frequency_response(double omega) const {
+  const std::complex<double> s(0.0, omega);
+  return polynomial_at(numerator_, s) / polynomial_at(denominator_, s);
+}
+
+std::optional<PlantModel> ModelBasedInverse::transfer_function() const {
+  PlantModel c;
+  c.append(numerator_, denominator_);
+  return c;
 }
 
 std::unique_ptr<Compensator> ModelBasedInverse::clone() const {
@@ -386,8 +413,9 @@ void require_identity_start(const AtsParameters& p,
 }  // namespace
 
 AdaptedModelBasedInverse::AdaptedModelBasedInverse(ModelBasedInverse inverse,
-                                                   const AtsParameters& correction, double dt)
-    : correction_((require_identity_start(correction), correction), dt),
+                                                   const AtsParameters& correction, double dt,
+                                                   const std::string& label)
+    : correction_((require_identity_start(correction, label), correction), dt, label),
       inverse_(std::move(inverse)) {}
 
 double AdaptedModelBasedInverse::step(const CompensatorInput& in) {
@@ -398,6 +426,14 @@ double AdaptedModelBasedInverse::step(const CompensatorInput& in) {
 void AdaptedModelBasedInverse::reset() {
   correction_.reset();
   inverse_.reset();
+}
+
+std::complex<double> AdaptedModelBasedInverse::frequency_response(double omega) const {
+  return correction_.frequency_response(omega) * inverse_.frequency_response(omega);
+}
+
+LinearBlock AdaptedModelBasedInverse::state_space() const {
+  return series(correction_.state_space(), inverse_.state_space());
 }
 
 std::unique_ptr<Compensator> AdaptedModelBasedInverse::clone() const {
@@ -432,17 +468,6 @@ AtsParameters ats_parameters(const config::Compensation::AdaptiveTimeSeries& c) 
   if (c.has_a2_bounds()) p.a2_bounds = {c.a2_bounds().min(), c.a2_bounds().max()};
   p.derivative_cutoff = c.derivative_cutoff();
   return p;
-}
-
-// Messages from the block constructors start with the block's name; the config's field path
-// replaces it.
-[[noreturn]] void rethrow_at(const std::string& where, const std::string& field,
-                             const std::exception& e) {
-  std::string message = e.what();
-  if (const auto colon = message.find(": "); colon != std::string::npos) {
-    message = message.substr(colon + 2);
-  }
-  throw std::invalid_argument(where + "." + field + ": " + message);
 }
 
 }  // namespace
@@ -560,28 +585,17 @@ std::unique_ptr<Compensator> make_compensator(const config::Compensation& c, dou
       return std::make_unique<PolynomialExtrapolation>(p.order(), p.lead(), spacing, dt);
     }
     case K::kAdaptiveTimeSeries:
-      try {
-        return std::make_unique<AdaptiveTimeSeries>(ats_parameters(c.adaptive_time_series()), dt);
-      } catch (const std::invalid_argument& e) {
-        rethrow_at(where, "adaptive_time_series", e);
-      }
+      return std::make_unique<AdaptiveTimeSeries>(ats_parameters(c.adaptive_time_series()), dt,
+                                                  where + ".adaptive_time_series");
     case K::kModelBased: {
       const auto& m = c.model_based();
-      PlantModel plant = plant_from_stages(m.plant(), where + ".model_based.plant");
-      std::unique_ptr<ModelBasedInverse> inverse;
-      try {
-        inverse = std::make_unique<ModelBasedInverse>(std::move(plant), m.lead_order(),
-                                                      m.rolloff_frequency(), dt);
-      } catch (const std::invalid_argument& e) {
-        rethrow_at(where, "model_based", e);
-      }
-      if (!m.has_adaptive_correction()) return inverse;
-      try {
-        return std::make_unique<AdaptedModelBasedInverse>(
-            std::move(*inverse), correction_parameters(m.adaptive_correction()), dt);
-      } catch (const std::invalid_argument& e) {
-        rethrow_at(where, "model_based.adaptive_correction", e);
-      }
+      ModelBasedInverse inverse(plant_from_stages(m.plant(), where + ".model_based.plant"),
+                                m.lead_order(), m.rolloff_frequency(), dt, where + ".model_based");
+      if (!m.has_adaptive_correction())
+        return std::make_unique<ModelBasedInverse>(std::move(inverse));
+      return std::make_unique<AdaptedModelBasedInverse>(
+          std::move(inverse), correction_parameters(m.adaptive_correction()), dt,
+          where + ".model_based.adaptive_correction");
     }
     case K::KIND_NOT_SET: break;
   }

@@ -58,6 +58,15 @@
 //     model_based.adaptive_correction: a0 [0.5, 2], a1 [-0.05, 0.05] s, a2 [-1e-3, 1e-3] s^2
 //     when absent; each must contain the identity). Time-varying: a discrete stability analysis
 //     is of the frozen coefficients (core/stability.h).
+//
+// Linear dynamics (core/linear_dynamics.h), from x_t to u_c (x_m does not enter a frozen block):
+//   PolynomialExtrapolation   H = sum_j c_j e^{-i w j h},  h = s dt; the register of the last
+//                             n s targets.                                   (time-invariant)
+//   AdaptiveTimeSeries        H = a0 + a1 i w - a2 w^2 at the present coefficients; realised with
+//                             the backward differences above.  (kFrozen: "time-varying ...")
+//   ModelBasedInverse         H = C(i w); realised as its Tustin filter.     (time-invariant)
+//   AdaptedModelBasedInverse  H = A(i w) C(i w), A the frozen correction.   (kFrozen)
+// A Compensator that does not state them (the base's default) is not representable (kNone).
 
 #include <complex>
 #include <cstddef>
@@ -76,9 +85,8 @@ struct CompensatorInput {
   double measured = 0.0;  // m, x_m: what the sensor read of the previous step's displacement
 };
 
-class Compensator {
+class Compensator : public LinearDynamics {
  public:
-  virtual ~Compensator() = default;
   // Returns the command u_c (m). Real-time safe.
   virtual double step(const CompensatorInput& in) = 0;
   virtual void reset() = 0;
@@ -86,6 +94,10 @@ class Compensator {
   virtual std::string describe() const = 0;
   // Low-frequency phase lead the block adds (s), for reports; 0 for ATS (it adapts).
   virtual double nominal_lead() const = 0;
+  // By default not representable (kNone, naming the block); both others then throw.
+  Linearity linearity() const override;
+  std::complex<double> frequency_response(double omega) const override;
+  LinearBlock state_space() const override;
 };
 
 class PolynomialExtrapolation final : public Compensator {
@@ -98,10 +110,13 @@ class PolynomialExtrapolation final : public Compensator {
   std::string describe() const override;
   double nominal_lead() const override { return lead_; }
   const std::vector<double>& weights() const { return weights_; }  // c_0..c_n
+  Linearity linearity() const override { return {}; }
+  std::complex<double> frequency_response(double omega) const override;
+  LinearBlock state_space() const override;
 
  private:
   int order_, spacing_;
-  double lead_;
+  double lead_, dt_;
   std::vector<double> weights_;
   std::vector<double> history_;  // ring of the last order * spacing + 1 targets
   std::size_t head_ = 0;
@@ -122,9 +137,11 @@ struct AtsParameters {
 
 class AdaptiveTimeSeries final : public Compensator {
  public:
-  // Throws std::invalid_argument naming the parameter (window < 3 dt, min >= max, an initial
-  // coefficient outside its bounds, a cut-off <= 0 or above the Nyquist frequency...).
-  AdaptiveTimeSeries(const AtsParameters& parameters, double dt);
+  // Throws std::invalid_argument "LABEL: PARAMETER ..." naming the parameter (window < 3 dt,
+  // min >= max, an initial coefficient outside its bounds, a cut-off <= 0 or above the Nyquist
+  // frequency...); `label` names the block (a config path when built from one).
+  AdaptiveTimeSeries(const AtsParameters& parameters, double dt,
+                     const std::string& label = "adaptive time series compensator");
   double step(const CompensatorInput& in) override;
   void reset() override;
   std::unique_ptr<Compensator> clone() const override;
@@ -134,6 +151,10 @@ class AdaptiveTimeSeries final : public Compensator {
   double a1() const { return a_[1]; }
   double a2() const { return a_[2]; }
   std::size_t updates() const { return updates_; }  // fits accepted so far
+  // kFrozen, stating the present coefficients; H and the realisation are at them.
+  Linearity linearity() const override;
+  std::complex<double> frequency_response(double omega) const override;
+  LinearBlock state_space() const override;
 
  private:
   void learn(double command, double measured);
@@ -153,29 +174,23 @@ class AdaptiveTimeSeries final : public Compensator {
   std::size_t row_head_ = 0, row_count_ = 0;
 };
 
-// A continuous plant g e^{-s delay} N(s) / D(s), coefficients highest power of s first.
-struct PlantModel {
-  double delay = 0.0;  // s, >= 0
-  double gain = 1.0;
-  std::vector<double> numerator{1.0}, denominator{1.0};
-  void append(const std::vector<double>& num, const std::vector<double>& den);  // G *= num/den
-  std::string describe() const;
-};
-
 // C(s) above, and its total lead L (s).
 struct InverseDesign {
   std::vector<double> numerator, denominator;
   double lead = 0.0;
 };
 // Throws as ModelBasedInverse's constructor.
-InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz, double dt);
+InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rolloff_hz, double dt,
+                             const std::string& label = "model-based compensator");
 
 class ModelBasedInverse final : public Compensator {
  public:
   // Throws std::invalid_argument naming the parameter: lead_order outside 1..3, rolloff <= 0 or
   // at or above a quarter of the sampling rate, a plant with a zero gain, a right-half-plane zero
-  // (its inverse would be unstable), a pole at s = 0, or more zeros than poles.
-  ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt);
+  // (its inverse would be unstable), a pole at s = 0, or more zeros than poles; the message
+  // opens with `label` (a config path when built from one).
+  ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt,
+                    const std::string& label = "model-based compensator");
   double step(const CompensatorInput& in) override;
   void reset() override { filter_.reset(); }
   std::unique_ptr<Compensator> clone() const override;
@@ -186,6 +201,10 @@ class ModelBasedInverse final : public Compensator {
   const std::vector<double>& denominator() const { return denominator_; }
   double total_lead() const { return lead_; }                      // L above (s)
   const TransferFunctionStage& filter() const { return filter_; }  // the Tustin-discretised C
+  Linearity linearity() const override { return {}; }
+  std::complex<double> frequency_response(double omega) const override;
+  LinearBlock state_space() const override { return filter_.state_space(); }
+  std::optional<PlantModel> transfer_function() const override;
 
  private:
   ModelBasedInverse(PlantModel plant, int lead_order, double rolloff_hz, double dt,
@@ -206,8 +225,10 @@ class AdaptedModelBasedInverse final : public Compensator {
  public:
   // @pre `correction` starts at the identity (a0 = 1, a1 = a2 = 0) and its bounds contain it;
   // throws std::invalid_argument naming the coefficient otherwise. The inverse's and the
-  // correction's own preconditions hold (their constructors throw).
-  AdaptedModelBasedInverse(ModelBasedInverse inverse, const AtsParameters& correction, double dt);
+  // correction's own preconditions hold (their constructors throw; the correction's messages
+  // open with `label`).
+  AdaptedModelBasedInverse(ModelBasedInverse inverse, const AtsParameters& correction, double dt,
+                           const std::string& label = "adaptive correction");
   double step(const CompensatorInput& in) override;
   void reset() override;
   std::unique_ptr<Compensator> clone() const override;
@@ -216,21 +237,22 @@ class AdaptedModelBasedInverse final : public Compensator {
   double nominal_lead() const override { return inverse_.nominal_lead(); }
   const ModelBasedInverse& inverse() const { return inverse_; }
   const AdaptiveTimeSeries& correction() const { return correction_; }
+  Linearity linearity() const override { return correction_.linearity(); }
+  std::complex<double> frequency_response(double omega) const override;
+  LinearBlock state_space() const override;
 
  private:
   AdaptiveTimeSeries correction_;
   ModelBasedInverse inverse_;
 };
 
-// Polynomial helpers (coefficients highest power first).
-std::vector<double> polynomial_multiply(const std::vector<double>& a, const std::vector<double>& b);
 // Roots of a polynomial (companion-matrix eigenvalues). Leading zeros are ignored.
 std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients);
 
 // From a study config. `where` names the block in errors ("cases[3] 'ats' compensation[0]").
-// validate_compensation checks what does not depend on dt; make_compensator builds the block
-// (and throws, naming the field, for what does: spacing or roll-off against dt). Both throw
-// std::invalid_argument "WHERE.FIELD ...".
+// validate_compensation checks what does not depend on dt; make_compensator builds the block,
+// whose constructor checks what does (window or roll-off against dt) under the config path:
+// "WHERE.adaptive_time_series: window ...". Both throw std::invalid_argument "WHERE.FIELD ...".
 void validate_compensation(const config::Compensation& compensation, const std::string& where);
 std::unique_ptr<Compensator> make_compensator(const config::Compensation& compensation, double dt,
                                               const std::string& where);

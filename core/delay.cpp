@@ -76,6 +76,42 @@ std::vector<double> tustin_polynomial(const std::vector<double>& ascending, int 
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
+Linearity DelayStage::linearity() const {
+  return {Linearity::Kind::kNone, "stage " + describe() + " does not state its linear dynamics"};
+}
+
+void DelayStage::require_analysable() const {
+  const Linearity l = linearity();
+  if (!l.analysable()) throw std::invalid_argument(describe() + ": " + l.note);
+}
+
+std::complex<double> DelayStage::unscaled_response(double omega) const {
+  require_analysable();
+  const std::optional<PlantModel> tf = unscaled_transfer_function();
+  if (!tf) throw std::logic_error(describe() + ": a linear stage must state its response");
+  return tf->at(omega);
+}
+
+LinearBlock DelayStage::unscaled_state_space() const {
+  require_analysable();
+  throw std::logic_error(describe() + ": a linear stage must state its realisation");
+}
+
+std::complex<double> DelayStage::frequency_response(double omega) const {
+  return gain_ * unscaled_response(omega);
+}
+
+LinearBlock DelayStage::state_space() const {
+  return series(unscaled_state_space(), gain_block(gain_));
+}
+
+std::optional<PlantModel> DelayStage::transfer_function() const {
+  std::optional<PlantModel> tf = unscaled_transfer_function();
+  if (tf) tf->gain *= gain_;
+  return tf;
+}
+
+// ---------------------------------------------------------------------------------------------
 std::unique_ptr<DelayStage> NoDelay::clone() const { return std::make_unique<NoDelay>(*this); }
 
 // ---------------------------------------------------------------------------------------------
@@ -136,7 +172,15 @@ void CommandHistory::clear() {
 
 // ---------------------------------------------------------------------------------------------
 TimeShift::TimeShift(double delay, double dt)
-    : delay_((require_non_negative_delay(delay, "TimeShift"), delay)), history_(delay, dt) {}
+    : delay_((require_non_negative_delay(delay, "TimeShift"), delay)),
+      dt_(dt),
+      history_(delay, dt) {}
+
+std::optional<PlantModel> TimeShift::unscaled_transfer_function() const {
+  PlantModel shift;
+  shift.delay = delay_;
+  return shift;
+}
 
 std::unique_ptr<DelayStage> TimeShift::clone() const { return std::make_unique<TimeShift>(*this); }
 
@@ -156,6 +200,14 @@ std::string Eq1Lead::describe() const {
 std::unique_ptr<DelayStage> Eq1Lag::clone() const { return std::make_unique<Eq1Lag>(*this); }
 std::string Eq1Lag::describe() const { return "eq1-lag(u - v*" + format_ms(delay_) + ")"; }
 
+namespace {
+constexpr const char* kReadsVelocity =
+    "it reads the command's velocity, which a single-input linear block has not";
+}  // namespace
+
+Linearity Eq1Lead::linearity() const { return {Linearity::Kind::kNone, kReadsVelocity}; }
+Linearity Eq1Lag::linearity() const { return {Linearity::Kind::kNone, kReadsVelocity}; }
+
 // ---------------------------------------------------------------------------------------------
 FirstOrderActuator::FirstOrderActuator(double time_constant, double dt)
     : time_constant_(time_constant), decay_(0.0) {
@@ -173,6 +225,21 @@ std::unique_ptr<DelayStage> FirstOrderActuator::clone() const {
 
 std::string FirstOrderActuator::describe() const {
   return "first-order(T = " + format_ms(time_constant_) + ")";
+}
+
+std::optional<PlantModel> FirstOrderActuator::unscaled_transfer_function() const {
+  PlantModel lag;
+  lag.append({1.0}, {time_constant_, 1.0});
+  return lag;
+}
+
+LinearBlock FirstOrderActuator::unscaled_state_space() const {
+  LinearBlock block;
+  block.a = Mat::Constant(1, 1, decay_);
+  block.b = Vec::Constant(1, 1.0 - decay_);
+  block.c = Eigen::RowVectorXd::Constant(1, decay_);
+  block.d = 1.0 - decay_;
+  return block;
 }
 
 double FirstOrderActuator::step_unscaled(const CommandSample& in) {
@@ -212,6 +279,8 @@ TransferFunctionStage::TransferFunctionStage(std::vector<double> numerator,
       throw std::invalid_argument("TransferFunctionStage '" + label_ +
                                   "': non-finite denominator coefficient");
   }
+  numerator_ = numerator;
+  denominator_ = denominator;
   // Ascending powers of s make the low-frequency expansion direct.
   std::vector<double> num_up(numerator.rbegin(), numerator.rend());
   std::vector<double> den_up(denominator.rbegin(), denominator.rend());
@@ -244,6 +313,12 @@ TransferFunctionStage::TransferFunctionStage(std::vector<double> numerator,
   for (double& c : b_) c /= a0;
   for (double& c : a_) c /= a0;
   state_.assign(a_.size(), 0.0);
+}
+
+std::optional<PlantModel> TransferFunctionStage::unscaled_transfer_function() const {
+  PlantModel g;
+  g.append(numerator_, denominator_);
+  return g;
 }
 
 void TransferFunctionStage::reset() { std::fill(state_.begin(), state_.end(), 0.0); }
@@ -349,6 +424,10 @@ std::string JitterShift::describe() const {
          std::to_string(seed_) + ")";
 }
 
+Linearity JitterShift::linearity() const {
+  return {Linearity::Kind::kNone, "its delay is redrawn every step (time-varying)"};
+}
+
 double JitterShift::step_unscaled(const CommandSample& in) {
   history_.push(in.time, in.displacement);
   // One draw every step, whatever the value, so the sequence depends only on the seed and the
@@ -420,6 +499,10 @@ double TraceShift::nominal_delay() const {
   return sum / static_cast<double>(trace_.delay.size());
 }
 
+Linearity TraceShift::linearity() const {
+  return {Linearity::Kind::kNone, "its delay follows a recorded trace (time-varying)"};
+}
+
 double TraceShift::step_unscaled(const CommandSample& in) {
   history_.push(in.time, in.displacement);
   return history_.at(in.time - trace_.at(in.time));
@@ -489,6 +572,65 @@ std::string DelayChain::describe() const {
     }
   }
   return text;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+int severity(Linearity::Kind kind) {
+  switch (kind) {
+    case Linearity::Kind::kTimeInvariant: return 0;
+    case Linearity::Kind::kFrozen: return 1;
+    case Linearity::Kind::kLinearised: return 2;
+    case Linearity::Kind::kNone: return 3;
+  }
+  return 3;
+}
+
+// Folds one block's linearity into the chain's, naming the block in its note.
+void fold_linearity(Linearity& chain, const Linearity& block, const std::string& name) {
+  if (block.kind == Linearity::Kind::kTimeInvariant) return;
+  if (severity(block.kind) > severity(chain.kind)) {
+    if (block.kind == Linearity::Kind::kNone) chain.note.clear();
+    chain.kind = block.kind;
+  } else if (chain.kind == Linearity::Kind::kNone) {
+    return;  // the first block that cannot be represented is the one named
+  }
+  chain.note += (chain.note.empty() ? "" : "; ") + name + ": " + block.note;
+}
+
+}  // namespace
+
+Linearity DelayChain::linearity() const {
+  Linearity chain;
+  if (compensator_)
+    fold_linearity(chain, compensator_->linearity(), "compensator " + compensator_->describe());
+  for (std::size_t i = 0; i < stages_.size(); ++i)
+    fold_linearity(chain, stages_[i]->linearity(),
+                   "delay stage " + std::to_string(i + 1) + " " + stages_[i]->describe());
+  return chain;
+}
+
+std::complex<double> DelayChain::frequency_response(double omega) const {
+  PlantModel rational;
+  std::vector<const DelayStage*> others;
+  for (const auto& stage : stages_) {
+    if (const std::optional<PlantModel> tf = stage->transfer_function())
+      rational.append(*tf);
+    else
+      others.push_back(stage.get());
+  }
+  std::complex<double> h = rational.at(omega);
+  for (const DelayStage* stage : others) h *= stage->frequency_response(omega);
+  if (compensator_) h *= compensator_->frequency_response(omega);
+  return h;
+}
+
+LinearBlock DelayChain::state_space() const {
+  LinearBlock loop = gain_block(1.0);
+  for (const auto& stage : stages_) loop = series(loop, stage->state_space());
+  if (compensator_) loop = series(compensator_->state_space(), loop);
+  return loop;
 }
 
 }  // namespace rths::core

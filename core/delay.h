@@ -25,6 +25,18 @@
 //   Trace           TimeShift whose delay follows a recorded trace tau(t) (linear interpolation,
 //                   held at the ends).
 // Every stage also carries an amplitude gain g: its output is g * (the above).
+//
+// Linear dynamics (core/linear_dynamics.h), the gain g included, from the command u_comp to what
+// the loop feeds back (u_real; a stage that delays the load cell's force by d steps adds z^-d,
+// as the force of a linear specimen is its stiffness times u_real):
+//   NoDelay           H = 1.
+//   TimeShift         H = e^{-i w tau}; realised as the interpolated register above.
+//   FirstOrder        H = 1 / (1 + i w T); realised as x+ = e x + (1 - e) u,
+//                     y = e x + (1 - e) u, e = e^(-dt/T) (the recursion above).
+//   TransferFunction  H = N(i w) / D(i w); realised as its direct form II transposed.
+//   TrackingLoop      core/tracking.h.
+//   Eq1Lead, Eq1Lag   none: they read the command's velocity, which a single-input block has not.
+//   Jitter, Trace     none: their delay changes with time.
 
 #include <cstdint>
 #include <filesystem>
@@ -32,6 +44,8 @@
 #include <random>
 #include <string>
 #include <vector>
+
+#include "core/linear_dynamics.h"
 
 namespace rths::core {
 
@@ -41,9 +55,8 @@ struct CommandSample {
   double velocity = 0.0;      // m/s
 };
 
-class DelayStage {
+class DelayStage : public LinearDynamics {
  public:
-  virtual ~DelayStage() = default;
   // Real-time safe: no allocation after construction.
   double step(const CommandSample& in) { return gain_ * step_unscaled(in); }
   virtual void reset() = 0;
@@ -62,8 +75,21 @@ class DelayStage {
   void set_gain(double gain) { gain_ = gain; }
   double gain() const { return gain_; }
 
+  // The stage's linear dynamics, the gain included (equations above). By default a stage is not
+  // representable (kNone, naming it); a linear stage overrides linearity() and the unscaled_*.
+  Linearity linearity() const override;
+  std::complex<double> frequency_response(double omega) const final;
+  LinearBlock state_space() const final;
+  std::optional<PlantModel> transfer_function() const final;
+
  protected:
   virtual double step_unscaled(const CommandSample& in) = 0;
+  // Without the gain. The response defaults to the transfer function's, when there is one.
+  virtual std::optional<PlantModel> unscaled_transfer_function() const { return std::nullopt; }
+  virtual std::complex<double> unscaled_response(double omega) const;
+  virtual LinearBlock unscaled_state_space() const;
+  // Throws std::invalid_argument with linearity().note when the stage is not representable.
+  void require_analysable() const;
 
  private:
   double gain_ = 1.0;
@@ -75,9 +101,12 @@ class NoDelay final : public DelayStage {
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override { return "none"; }
   double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
 
  protected:
   double step_unscaled(const CommandSample& in) override { return in.displacement; }
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 };
 
 // History of (t, u) samples in a fixed ring, with u(t_query) by linear interpolation.
@@ -102,12 +131,15 @@ class TimeShift final : public DelayStage {
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override { return delay_; }
+  Linearity linearity() const override { return {}; }
 
  protected:
   double step_unscaled(const CommandSample& in) override;
+  std::optional<PlantModel> unscaled_transfer_function() const override;
+  LinearBlock unscaled_state_space() const override { return shift_block(delay_, dt_); }
 
  private:
-  double delay_;
+  double delay_, dt_;
   CommandHistory history_;
 };
 
@@ -118,6 +150,7 @@ class Eq1Lead final : public DelayStage {
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override { return -delay_; }
+  Linearity linearity() const override;
 
  protected:
   double step_unscaled(const CommandSample& in) override {
@@ -135,6 +168,7 @@ class Eq1Lag final : public DelayStage {
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override { return delay_; }
+  Linearity linearity() const override;
 
  protected:
   double step_unscaled(const CommandSample& in) override {
@@ -152,9 +186,12 @@ class FirstOrderActuator final : public DelayStage {
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override { return time_constant_; }
+  Linearity linearity() const override { return {}; }
 
  protected:
   double step_unscaled(const CommandSample& in) override;
+  std::optional<PlantModel> unscaled_transfer_function() const override;
+  LinearBlock unscaled_state_space() const override;
 
  private:
   double time_constant_, decay_, state_ = 0.0;
@@ -175,12 +212,16 @@ class TransferFunctionStage final : public DelayStage {
   // The discrete filter: b (numerator) and a (denominator, a[0] = 1) in powers of z^-1.
   const std::vector<double>& discrete_numerator() const { return b_; }
   const std::vector<double>& discrete_denominator() const { return a_; }
+  Linearity linearity() const override { return {}; }
 
  protected:
   double step_unscaled(const CommandSample& in) override;
+  std::optional<PlantModel> unscaled_transfer_function() const override;
+  LinearBlock unscaled_state_space() const override { return direct_form_block(b_, a_); }
 
  private:
-  std::vector<double> b_, a_;  // discrete, a_[0] == 1
+  std::vector<double> numerator_, denominator_;  // continuous, highest power first
+  std::vector<double> b_, a_;                    // discrete, a_[0] == 1
   std::vector<double> state_;
   std::string label_;
   double group_delay_ = 0.0, dc_gain_ = 1.0;
@@ -222,6 +263,7 @@ class JitterShift final : public DelayStage {
   std::string describe() const override;
   double nominal_delay() const override { return mean_; }
   double last_delay() const { return last_delay_; }
+  Linearity linearity() const override;
 
  protected:
   double step_unscaled(const CommandSample& in) override;
@@ -251,6 +293,7 @@ class TraceShift final : public DelayStage {
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override;
+  Linearity linearity() const override;
 
  protected:
   double step_unscaled(const CommandSample& in) override;
@@ -269,10 +312,16 @@ class Compensator;  // core/compensation.h
 // An optional compensator (core/compensation.h) shapes the command before the first stage; it
 // sees the target (the command given to step) and the measured displacement of the previous
 // step, and nothing else in the chain changes.
-class DelayChain {
+// Linear dynamics: the compensator C (if any), then the stages G_1 .. G_n in order:
+//   H = (G_1 .. G_n)(i w) C(i w), the stages with a transfer function folded into one
+//   g e^{-s tau} N(s) / D(s) and evaluated once, the others multiplied in;
+//   state space series(C, series(.. series(1, G_1) .., G_n)).
+// Its linearity is the least of its blocks' (kNone before kLinearised before kFrozen), the notes
+// naming each block, joined by "; ".
+class DelayChain final : public LinearDynamics {
  public:
   DelayChain();
-  ~DelayChain();
+  ~DelayChain() override;
   DelayChain(const DelayChain& other);
   DelayChain& operator=(const DelayChain& other);
   DelayChain(DelayChain&&) noexcept;
@@ -289,6 +338,9 @@ class DelayChain {
   double nominal_delay() const;
   std::string describe() const;
   bool empty() const { return stages_.empty() && !compensator_; }
+  Linearity linearity() const override;
+  std::complex<double> frequency_response(double omega) const override;
+  LinearBlock state_space() const override;
 
  private:
   std::vector<std::unique_ptr<DelayStage>> stages_;

@@ -183,233 +183,6 @@ DiscreteStability discrete_critical_delay(IntegratorKind kind, double period, do
 // ---------------------------------------------------------------------------------------------
 // Compensated loop.
 
-LinearBlock series(const LinearBlock& first, const LinearBlock& second) {
-  const int n1 = first.states(), n2 = second.states();
-  LinearBlock out;
-  out.a = Mat::Zero(n1 + n2, n1 + n2);
-  out.b = Vec::Zero(n1 + n2);
-  out.c = Eigen::RowVectorXd::Zero(n1 + n2);
-  if (n1 > 0) {
-    out.a.topLeftCorner(n1, n1) = first.a;
-    out.b.head(n1) = first.b;
-    out.c.head(n1) = second.d * first.c;
-  }
-  if (n2 > 0) {
-    out.a.bottomRightCorner(n2, n2) = second.a;
-    if (n1 > 0) out.a.bottomLeftCorner(n2, n1) = second.b * first.c;
-    out.b.tail(n2) = second.b * first.d;
-    out.c.tail(n2) = second.c;
-  }
-  out.d = second.d * first.d;
-  return out;
-}
-
-namespace {
-
-LinearBlock gain_block(double gain) {
-  LinearBlock g;
-  g.a = Mat::Zero(0, 0);
-  g.b = Vec::Zero(0);
-  g.c = Eigen::RowVectorXd::Zero(0);
-  g.d = gain;
-  return g;
-}
-
-// y = d u + sum_j taps[j] u[k - 1 - j]: a register of past inputs.
-LinearBlock fir_block(double d, const std::vector<double>& taps) {
-  const int n = static_cast<int>(taps.size());
-  LinearBlock f = gain_block(d);
-  if (n == 0) return f;
-  f.a = Mat::Zero(n, n);
-  for (int i = 1; i < n; ++i) f.a(i, i - 1) = 1.0;
-  f.b = Vec::Unit(n, 0);
-  f.c = Eigen::RowVectorXd::Map(taps.data(), n);
-  return f;
-}
-
-// Direct form II transposed of TransferFunctionStage, as a state space.
-LinearBlock filter_block(const TransferFunctionStage& stage) {
-  const std::vector<double>& b = stage.discrete_numerator();
-  const std::vector<double>& a = stage.discrete_denominator();
-  const int n = static_cast<int>(a.size()) - 1;
-  LinearBlock f = gain_block(b[0]);  // the stage's amplitude gain is the caller's
-  if (n == 0) return f;
-  f.a = Mat::Zero(n, n);
-  f.b = Vec::Zero(n);
-  f.c = Eigen::RowVectorXd::Unit(n, 0);
-  for (int i = 0; i < n; ++i) {
-    f.a(i, 0) = -a[static_cast<std::size_t>(i) + 1];
-    if (i + 1 < n) f.a(i, i + 1) = 1.0;
-    f.b[i] = b[static_cast<std::size_t>(i) + 1] - a[static_cast<std::size_t>(i) + 1] * b[0];
-  }
-  return f;
-}
-
-double stage_gain(const config::DelayStage& stage) {
-  return stage.amplitude_gain() == 0.0 ? 1.0 : stage.amplitude_gain();
-}
-
-std::complex<double> polynomial_at(const std::vector<double>& p, std::complex<double> s) {
-  std::complex<double> value = 0.0;
-  for (double c : p) value = value * s + c;
-  return value;
-}
-
-[[noreturn]] void not_linear(const std::string& what) {
-  throw std::invalid_argument("stability: " + what +
-                              " is not a linear time-invariant stage the analysis can represent "
-                              "(shift, first_order, transfer_function, benchmark)");
-}
-
-}  // namespace
-
-LinearBlock shift_block(double delay, double dt) {
-  if (!(delay >= 0.0) || !(dt > 0.0))
-    throw std::invalid_argument("stability: shift needs delay >= 0 and dt > 0");
-  // u(t - delay) with delay = (n + w) dt: (1 - w) u[k - n] + w u[k - n - 1].
-  const double steps = delay / dt;
-  int n = static_cast<int>(std::floor(steps + 1e-9));
-  double w = steps - n;
-  if (w < 1e-9) w = 0.0;
-  std::vector<double> taps(static_cast<std::size_t>(w > 0.0 ? n + 1 : n), 0.0);
-  double d = 0.0;
-  if (n == 0)
-    d = 1.0 - w;
-  else
-    taps[static_cast<std::size_t>(n) - 1] += 1.0 - w;
-  if (w > 0.0) taps[static_cast<std::size_t>(n)] += w;
-  return fir_block(d, taps);
-}
-
-LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
-                           double dt) {
-  using K = config::DelayStage::KindCase;
-  LinearBlock loop = gain_block(1.0);
-  for (const config::DelayStage& stage : stages) {
-    LinearBlock block;
-    switch (stage.kind_case()) {
-      case K::kShift: block = shift_block(stage.shift().delay(), dt); break;
-      case K::kFirstOrder: {
-        const double e = std::exp(-dt / stage.first_order().time_constant());
-        block.a = Mat::Constant(1, 1, e);
-        block.b = Vec::Constant(1, 1.0 - e);
-        block.c = Eigen::RowVectorXd::Constant(1, e);
-        block.d = 1.0 - e;
-        break;
-      }
-      case K::kTransferFunction:
-      case K::kBenchmark:
-        block = filter_block(
-            static_cast<const TransferFunctionStage&>(*make_delay_stage(stage, dt, {})));
-        break;
-      default: not_linear("delay stage {" + stage.ShortDebugString() + "}");
-    }
-    loop = series(loop, series(block, gain_block(stage_gain(stage))));
-  }
-  return loop;
-}
-
-namespace {
-
-// a0 u + a1 (3u - 4u1 + u2) / 2dt + a2 (2u - 5u1 + 4u2 - u3) / dt^2, coefficients frozen at their
-// present (at construction: initial) values.
-LinearBlock frozen_ats_block(const AdaptiveTimeSeries& a, double dt) {
-  const double v = a.a1() / (2.0 * dt), q = a.a2() / (dt * dt);
-  return fir_block(a.a0() + 3.0 * v + 2.0 * q, {-4.0 * v - 5.0 * q, v + 4.0 * q, -q});
-}
-
-FrequencyResponse frozen_ats_response(const AdaptiveTimeSeries& a) {
-  const double a0 = a.a0(), a1 = a.a1(), a2 = a.a2();
-  return [a0, a1, a2](double w) { return std::complex<double>(a0 - a2 * w * w, a1 * w); };
-}
-
-FrequencyResponse rational_response(const std::vector<double>& num,
-                                    const std::vector<double>& den) {
-  return [num, den](double w) {
-    const std::complex<double> s(0.0, w);
-    return polynomial_at(num, s) / polynomial_at(den, s);
-  };
-}
-
-}  // namespace
-
-std::string frozen_coefficients(const config::Compensation& compensation, double dt) {
-  const std::unique_ptr<Compensator> block = make_compensator(compensation, dt, "compensation");
-  const AdaptiveTimeSeries* adaptive = dynamic_cast<const AdaptiveTimeSeries*>(block.get());
-  if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
-    adaptive = &am->correction();
-  }
-  if (!adaptive) return "";
-  std::ostringstream out;
-  out << "time-varying (its coefficients adapt online): analysed with them frozen at their initial "
-         "values a0 = "
-      << adaptive->a0() << ", a1 = " << adaptive->a1() * 1e3 << " ms, a2 = " << adaptive->a2()
-      << " s^2";
-  return out.str();
-}
-
-LinearBlock compensator_block(const config::Compensation& compensation, double dt) {
-  const std::unique_ptr<Compensator> block = make_compensator(compensation, dt, "compensation");
-  if (const auto* p = dynamic_cast<const PolynomialExtrapolation*>(block.get())) {
-    const auto& c = p->weights();
-    const int order = static_cast<int>(c.size()) - 1;
-    const int spacing =
-        compensation.polynomial().spacing() > 0.0
-            ? static_cast<int>(std::llround(compensation.polynomial().spacing() / dt))
-            : 1;
-    std::vector<double> taps(static_cast<std::size_t>(order * spacing), 0.0);
-    for (int j = 1; j <= order; ++j)
-      taps[static_cast<std::size_t>(j * spacing - 1)] = c[static_cast<std::size_t>(j)];
-    return fir_block(c[0], taps);
-  }
-  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get()))
-    return frozen_ats_block(*a, dt);
-  if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get()))
-    return filter_block(m->filter());
-  if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
-    return series(frozen_ats_block(am->correction(), dt), filter_block(am->inverse().filter()));
-  }
-  throw std::invalid_argument("stability: unknown compensator");
-}
-
-FrequencyResponse actuator_response(
-    const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
-  const PlantModel plant = plant_from_stages(stages, "actuator");
-  return [plant](double w) {
-    const std::complex<double> s(0.0, w);
-    return plant.gain * std::exp(-s * plant.delay) * polynomial_at(plant.numerator, s) /
-           polynomial_at(plant.denominator, s);
-  };
-}
-
-FrequencyResponse compensator_response(const config::Compensation& compensation, double dt) {
-  std::shared_ptr<Compensator> block = make_compensator(compensation, dt, "compensation");
-  if (const auto* p = dynamic_cast<const PolynomialExtrapolation*>(block.get())) {
-    const std::vector<double> c = p->weights();
-    const double h =
-        (compensation.polynomial().spacing() > 0.0 ? compensation.polynomial().spacing() : dt);
-    return [c, h](double w) {
-      std::complex<double> sum = 0.0;
-      for (std::size_t j = 0; j < c.size(); ++j) {
-        sum += c[j] * std::exp(std::complex<double>(0.0, -w * h * static_cast<double>(j)));
-      }
-      return sum;
-    };
-  }
-  if (const auto* a = dynamic_cast<const AdaptiveTimeSeries*>(block.get()))
-    return frozen_ats_response(*a);
-  if (const auto* m = dynamic_cast<const ModelBasedInverse*>(block.get())) {
-    return rational_response(m->numerator(), m->denominator());
-  }
-  if (const auto* am = dynamic_cast<const AdaptedModelBasedInverse*>(block.get())) {
-    const FrequencyResponse correction = frozen_ats_response(am->correction());
-    const FrequencyResponse inverse =
-        rational_response(am->inverse().numerator(), am->inverse().denominator());
-    return [correction, inverse](double w) { return correction(w) * inverse(w); };
-  }
-  throw std::invalid_argument("stability: unknown compensator");
-}
-
 namespace {
 
 // One step of an explicit integrator with the experimental force k_e y, y the output of `loop`
@@ -445,52 +218,75 @@ double loop_spectral_radius(IntegratorKind kind, const SdofParameters& p, double
   return solver.eigenvalues().cwiseAbs().maxCoeff();
 }
 
+void require_loop_inputs(double dt, const LinearDynamics& loop) {
+  if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
+  const Linearity linearity = loop.linearity();
+  if (!linearity.analysable())
+    throw std::invalid_argument("stability: " + linearity.note +
+                                "; the analysis represents linear blocks only");
+}
+
+// The root of f between lo and hi (f(lo) = f_lo and f(hi) differ in sign), by bisection.
+template <class F>
+double bisect_sign_change(const F& f, double lo, double hi, double f_lo) {
+  for (int k = 0; k < 100; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    const double fm = f(mid);
+    if ((fm < 0) == (f_lo < 0)) {
+      lo = mid;
+      f_lo = fm;
+    } else {
+      hi = mid;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace
 
-CompensatedStability compensated_stability(
-    IntegratorKind kind, double period, double zeta, double alpha, double dt,
-    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
-    const config::Compensation* compensation, double max_extra_delay, int branches) {
-  if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
+LoopDiscreteStability discrete_loop_stability(IntegratorKind kind, double period, double zeta,
+                                              double alpha, double dt, const LinearDynamics& loop,
+                                              double max_extra_delay) {
+  require_loop_inputs(dt, loop);
   if (!(max_extra_delay >= 0))
     throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
   const SdofParameters p = sdof_parameters(period, zeta, alpha);
-  LinearBlock chain = actuator_block(actuator, dt);
-  if (compensation) chain = series(compensator_block(*compensation, dt), chain);
-  CompensatedStability out;
-  out.max_extra_delay = max_extra_delay;
-  if (compensation) out.frozen_coefficients = frozen_coefficients(*compensation, dt);
+  const LinearBlock chain = loop.state_space();
   constexpr double kGrowthTolerance = 1e-9;
   const auto radius = [&](double extra) {
     return loop_spectral_radius(kind, p, dt, series(chain, shift_block(extra, dt)));
   };
+  LoopDiscreteStability out;
   out.spectral_radius = radius(0.0);
   out.stable = out.spectral_radius <= 1.0 + kGrowthTolerance;
-  if (out.stable) {
-    const int max_steps = static_cast<int>(std::floor(max_extra_delay / dt + 1e-9));
-    for (int n = 1; n <= max_steps; ++n) {
-      if (radius(n * dt) > 1.0 + kGrowthTolerance) {
-        double lo = (n - 1) * dt, hi = n * dt;
-        for (int i = 0; i < 30; ++i) {
-          const double mid = 0.5 * (lo + hi);
-          (radius(mid) > 1.0 + kGrowthTolerance ? hi : lo) = mid;
-        }
-        out.discrete_margin = 0.5 * (lo + hi);
-        break;
+  if (!out.stable) return out;
+  const int max_steps = static_cast<int>(std::floor(max_extra_delay / dt + 1e-9));
+  for (int n = 1; n <= max_steps; ++n) {
+    if (radius(n * dt) > 1.0 + kGrowthTolerance) {
+      double lo = (n - 1) * dt, hi = n * dt;
+      for (int i = 0; i < 30; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (radius(mid) > 1.0 + kGrowthTolerance ? hi : lo) = mid;
       }
+      out.margin = 0.5 * (lo + hi);
+      break;
     }
   }
+  return out;
+}
 
-  // Continuous crossings of the extra delay.
-  const FrequencyResponse plant = actuator_response(actuator);
-  const FrequencyResponse shaper =
-      compensation ? compensator_response(*compensation, dt)
-                   : FrequencyResponse([](double) { return std::complex<double>(1.0); });
-  const auto h = [&](double w) { return plant(w) * shaper(w); };
+LoopContinuousStability continuous_loop_crossings(double period, double zeta, double alpha,
+                                                  double dt, const LinearDynamics& loop,
+                                                  int branches) {
+  require_loop_inputs(dt, loop);
+  const SdofParameters p = sdof_parameters(period, zeta, alpha);
   const auto q = [&](double w) {
     return std::complex<double>(p.k_numerical - p.m * w * w, p.c * w);
   };
-  const auto f = [&](double w) { return std::abs(q(w)) - p.k_experimental * std::abs(h(w)); };
+  const auto f = [&](double w) {
+    return std::abs(q(w)) - p.k_experimental * std::abs(loop.frequency_response(w));
+  };
+  LoopContinuousStability out;
   if (p.k_experimental > 0.0) {
     const double w_min = 1e-3 * std::sqrt((p.k_numerical + p.k_experimental) / p.m);
     const double w_max = std::numbers::pi / dt;
@@ -500,24 +296,13 @@ CompensatedStability compensated_stability(
       const double w = w_min * std::pow(w_max / w_min, static_cast<double>(i) / kGrid);
       const double fw = f(w);
       if ((f_prev < 0) != (fw < 0)) {
-        double lo = w_prev, hi = w, f_lo = f_prev;
-        for (int k = 0; k < 100; ++k) {
-          const double mid = 0.5 * (lo + hi);
-          const double fm = f(mid);
-          if ((fm < 0) == (f_lo < 0)) {
-            lo = mid;
-            f_lo = fm;
-          } else {
-            hi = mid;
-          }
-        }
-        const double root = 0.5 * (lo + hi);
-        const std::complex<double> z = -q(root) / (p.k_experimental * h(root));
+        const double root = bisect_sign_change(f, w_prev, w, f_prev);
+        const std::complex<double> z =
+            -q(root) / (p.k_experimental * loop.frequency_response(root));
         double phase = std::fmod(-std::arg(z), 2.0 * std::numbers::pi);
         if (phase < 0) phase += 2.0 * std::numbers::pi;
-        for (int j = 0; j < branches; ++j) {
+        for (int j = 0; j < branches; ++j)
           out.crossings.push_back({root, (phase + 2.0 * std::numbers::pi * j) / root, j});
-        }
       }
       w_prev = w;
       f_prev = fw;
@@ -525,8 +310,44 @@ CompensatedStability compensated_stability(
   }
   std::sort(out.crossings.begin(), out.crossings.end(),
             [](const DelayCrossing& l, const DelayCrossing& r) { return l.delay < r.delay; });
-  if (!out.crossings.empty()) out.continuous_margin = out.crossings.front().delay;
+  if (!out.crossings.empty()) out.margin = out.crossings.front().delay;
   return out;
+}
+
+CompensatedStability compensated_stability(IntegratorKind kind, double period, double zeta,
+                                           double alpha, double dt, const DelayChain& loop,
+                                           double max_extra_delay, int branches) {
+  const LoopDiscreteStability discrete =
+      discrete_loop_stability(kind, period, zeta, alpha, dt, loop, max_extra_delay);
+  LoopContinuousStability continuous =
+      continuous_loop_crossings(period, zeta, alpha, dt, loop, branches);
+  CompensatedStability out;
+  out.stable = discrete.stable;
+  out.spectral_radius = discrete.spectral_radius;
+  out.discrete_margin = discrete.margin;
+  out.max_extra_delay = max_extra_delay;
+  out.continuous_margin = continuous.margin;
+  out.crossings = std::move(continuous.crossings);
+  if (const Compensator* compensator = loop.compensator()) {
+    const Linearity adapting = compensator->linearity();
+    if (adapting.kind == Linearity::Kind::kFrozen) out.frozen_coefficients = adapting.note;
+  }
+  if (const Linearity l = loop.linearity(); l.kind == Linearity::Kind::kLinearised)
+    out.linearised = l.note;
+  return out;
+}
+
+CompensatedStability compensated_stability(
+    IntegratorKind kind, double period, double zeta, double alpha, double dt,
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+    const config::Compensation* compensation, double max_extra_delay, int branches) {
+  if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
+  if (!(max_extra_delay >= 0))
+    throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
+  sdof_parameters(period, zeta, alpha);
+  DelayChain loop = make_delay_chain(actuator, dt, {});
+  if (compensation) loop.set_compensator(make_compensator(*compensation, dt, "compensation"));
+  return compensated_stability(kind, period, zeta, alpha, dt, loop, max_extra_delay, branches);
 }
 
 double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,

@@ -7,36 +7,40 @@
 //   e^{-i w tau} = -(k_n - m w^2 + i c w) / k_e  gives  tau_j = (theta + 2 pi j) / w, j = 0, 1, ..
 //   with theta in [0, 2 pi). The critical delay is the smallest tau over all crossing branches.
 //   No positive w^2 root: stable for every delay.
-// Compensated loop (the experimental force is k_e x_m, x_m = G(s) C(s) e^{-s delta} u: actuator G,
-//   compensator C, and an extra, unmodelled delay delta the analysis searches for):
-//   continuous: m s^2 + c s + k_n + k_e H(s) e^{-s delta} = 0, H = G C. A root crosses at s = i w
-//     when |k_n - m w^2 + i c w| = k_e |H(i w)|, solved numerically (sign changes on a log grid of
-//     w up to the Nyquist frequency pi / dt, refined by bisection; no closed form once H is not
+// Compensated loop (the experimental force is k_e x_m, x_m = H(s) e^{-s delta} u: H the loop's
+//   blocks, compensator C then actuator stages G, each stating its own linear dynamics
+//   (core/linear_dynamics.h), and an extra, unmodelled delay delta the analysis searches for):
+//   continuous (continuous_loop_crossings): m s^2 + c s + k_n + k_e H(s) e^{-s delta} = 0,
+//     H = G C. A root crosses at s = i w when |k_n - m w^2 + i c w| = k_e |H(i w)|, solved
+//     numerically (sign changes on a log grid of 20000 w from 1e-3 sqrt((k_n + k_e) / m) up to
+//     the Nyquist frequency pi / dt, each refined by 100 bisections; no closed form once H is not
 //     a pure delay), then e^{-i w delta} = -(k_n - m w^2 + i c w) / (k_e H(i w)) gives
 //     delta_j = (theta + 2 pi j) / w. The delay margin is the smallest delta_j. Without a
 //     compensator and with G a pure shift tau it is continuous_critical_delay() - tau.
-//     H(i w): shift e^{-i w tau}, first order 1 / (1 + i w T), transfer functions N/D; polynomial
-//     compensator sum_j c_j e^{-i w j h}; ATS a0 + a1 i w - a2 w^2; model-based C(i w).
-//   discrete: one step of the integrator on the state [u, v, a, z], z the states of the
-//     compensator, of every actuator stage and of the extra delay (each a discrete SISO state
-//     space, in series; a fractional delay interpolates between two register taps, as TimeShift
-//     does); the amplification matrix is built column by column from unit states. The margin is
-//     the first integer step count whose spectral radius exceeds 1, refined by bisection on the
-//     fractional delay. Stability at zero extra delay is judged here (the continuous search
-//     assumes it). ATS enters frozen at its initial coefficients: the linear analysis cannot
-//     follow its adaptation. Implicit integrators are refused (the delayed loop is explicit).
+//   discrete (discrete_loop_stability): one step of the integrator on the state [u, v, a, z], z
+//     the states of the loop's realisation (LinearDynamics::state_space) in series with the extra
+//     delay (a shift_block: a fractional delay interpolates between two register taps, as
+//     TimeShift does); the amplification matrix is built column by column from unit states. The
+//     margin is the first integer step count whose spectral radius exceeds 1 + 1e-9, refined by
+//     30 bisections on the fractional delay. Stability at zero extra delay is judged here (the
+//     continuous search assumes it). Implicit integrators are refused (the delayed loop is
+//     explicit). A block that adapts (ATS) enters frozen at its present coefficients (its
+//     Linearity note says so): the linear analysis cannot follow its adaptation.
+//   A loop with a block that cannot be represented (Linearity kNone: a jitter or trace stage,
+//   the velocity-reading Eq1 stages) is refused with std::invalid_argument naming the block.
 //
 // Discrete: the explicit/implicit integrator with the experimental force taken at the command of
 //   n steps earlier (a time shift of n dt); the first n whose amplification matrix has spectral
 //   radius > 1.
 
 #include <complex>
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/delay.h"
 #include "core/integrators.h"
+#include "core/linear_dynamics.h"
 #include "rths/proto/config.pb.h"
 
 namespace rths::core {
@@ -66,30 +70,24 @@ struct DiscreteStability {
 DiscreteStability discrete_critical_delay(IntegratorKind kind, double period, double zeta,
                                           double alpha, double dt, int max_steps);
 
-// x+ = a x + b u,  y = c x + d u (discrete, single input and output).
-struct LinearBlock {
-  Mat a;
-  Vec b;
-  Eigen::RowVectorXd c;
-  double d = 1.0;
-  int states() const { return static_cast<int>(a.rows()); }
+struct LoopDiscreteStability {
+  bool stable = false;           // at zero extra delay
+  double spectral_radius = 0.0;  // at zero extra delay
+  std::optional<double> margin;  // extra delay (s); empty: stable up to max_extra_delay
 };
-LinearBlock series(const LinearBlock& first, const LinearBlock& second);
-LinearBlock shift_block(double delay, double dt);  // TimeShift, interpolated
-// The actuator's delay stages (shift, first_order, transfer_function, benchmark; gains) at dt.
-LinearBlock actuator_block(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
-                           double dt);
-// Adaptive blocks (ATS, model-based with adaptive_correction) with their coefficients frozen at
-// their initial values; the adapted model-based is the frozen correction in series with the
-// inverse.
-LinearBlock compensator_block(const config::Compensation& compensation, double dt);
-// "" for a time-invariant compensator; else what the frozen-coefficient analysis froze.
-std::string frozen_coefficients(const config::Compensation& compensation, double dt);
+// @pre an explicit integrator, dt > 0, max_extra_delay >= 0, `loop` analysable.
+LoopDiscreteStability discrete_loop_stability(IntegratorKind kind, double period, double zeta,
+                                              double alpha, double dt, const LinearDynamics& loop,
+                                              double max_extra_delay);
 
-using FrequencyResponse = std::function<std::complex<double>(double omega)>;
-FrequencyResponse actuator_response(
-    const google::protobuf::RepeatedPtrField<config::DelayStage>& stages);
-FrequencyResponse compensator_response(const config::Compensation& compensation, double dt);
+struct LoopContinuousStability {
+  std::vector<DelayCrossing> crossings;  // extra-delay crossings, ascending, `branches` each
+  std::optional<double> margin;          // s; empty: no crossing
+};
+// @pre dt > 0 (it bounds the search at pi / dt), `loop` analysable.
+LoopContinuousStability continuous_loop_crossings(double period, double zeta, double alpha,
+                                                  double dt, const LinearDynamics& loop,
+                                                  int branches = 3);
 
 struct CompensatedStability {
   // Discrete, at zero extra delay.
@@ -106,11 +104,17 @@ struct CompensatedStability {
   // until the first fit (one window) and, for a correction that learns extra delay as model
   // error, conservative after it (tests/core/stability_test.cpp measures both).
   std::string frozen_coefficients;
+  // Non-empty when a block was linearised (a tracking loop's converters left out): which.
+  std::string linearised;
 };
 
-// @pre an explicit integrator; `compensation` may be null (uncompensated). Throws
-// std::invalid_argument naming what cannot be analysed (an implicit integrator, a jitter or
-// trace stage...).
+// Both analyses of `loop` (its compensator, if any, then its stages). @pre as above.
+CompensatedStability compensated_stability(IntegratorKind kind, double period, double zeta,
+                                           double alpha, double dt, const DelayChain& loop,
+                                           double max_extra_delay, int branches = 3);
+// The same for a study case's delay stages and compensation (`compensation` may be null:
+// uncompensated), built at dt. Throws std::invalid_argument naming what cannot be analysed (an
+// implicit integrator, a jitter or trace stage...) or what the blocks' constructors refuse.
 CompensatedStability compensated_stability(
     IntegratorKind kind, double period, double zeta, double alpha, double dt,
     const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,

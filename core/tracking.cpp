@@ -215,11 +215,16 @@ void ZohPlant::advance(double u) {
 }
 
 std::complex<double> ZohPlant::response(std::complex<double> z) const {
-  const Eigen::Index n = ad_.rows();
-  const Eigen::MatrixXcd resolvent =
-      z * Eigen::MatrixXcd::Identity(n, n) - ad_.cast<std::complex<double>>();
-  const Eigen::VectorXcd x = resolvent.partialPivLu().solve(bd_.cast<std::complex<double>>());
-  return (c_.cast<std::complex<double>>() * x)(0);
+  return response_at(state_space(), z);
+}
+
+LinearBlock ZohPlant::state_space() const {
+  LinearBlock block;
+  block.a = ad_;
+  block.b = bd_;
+  block.c = c_;
+  block.d = 0.0;
+  return block;
 }
 
 double Converter::analog_to_digital(double x) const {
@@ -316,6 +321,42 @@ std::complex<double> TrackingLoop::response(double omega) const {
   const std::complex<double> z = std::exp(std::complex<double>(0.0, omega * h_));
   const std::complex<double> open = controller_.response(z) * plant_.response(z);
   return feedforward_.response(z) * open / (1.0 + open);
+}
+
+Linearity TrackingLoop::linearity() const {
+  if (converter_.range > 0 || converter_.quantum > 0)
+    return {Linearity::Kind::kLinearised, "its converters' saturation and quantisation left out"};
+  return {};
+}
+
+std::complex<double> TrackingLoop::unscaled_response(double omega) const {
+  const double periods = static_cast<double>(force_queue_.size() - 1);
+  return response(omega) * std::exp(std::complex<double>(0.0, -omega * h_ * periods));
+}
+
+LinearBlock TrackingLoop::unscaled_state_space() const {
+  // The closed loop from v (F's output) to x: e = v - C x, u = Cc s + Dc e, s+ = Ac s + Bc e,
+  // x+ = Ad x + Bd (Cc s + Dc e), state [s, x].
+  const LinearBlock c = controller_.state_space(), p = plant_.state_space();
+  const int nc = c.states(), np = p.states();
+  LinearBlock loop;
+  loop.a = Mat::Zero(nc + np, nc + np);
+  loop.b = Vec::Zero(nc + np);
+  loop.c = Eigen::RowVectorXd::Zero(nc + np);
+  if (nc > 0) {
+    loop.a.topLeftCorner(nc, nc) = c.a;
+    loop.a.topRightCorner(nc, np) = -c.b * p.c;
+    loop.a.bottomLeftCorner(np, nc) = p.b * c.c;
+    loop.b.head(nc) = c.b;
+  }
+  loop.a.bottomRightCorner(np, np) = p.a - c.d * p.b * p.c;
+  loop.b.tail(np) = c.d * p.b;
+  loop.c.tail(np) = p.c;
+  loop.d = 0.0;
+  std::vector<double> register_taps(force_queue_.size() - 1, 0.0);
+  if (!register_taps.empty()) register_taps.back() = 1.0;
+  const LinearBlock force_delay = fir_block(register_taps.empty() ? 1.0 : 0.0, register_taps);
+  return series(series(feedforward_.state_space(), loop), force_delay);
 }
 
 void TrackingLoop::reset() {

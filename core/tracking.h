@@ -26,7 +26,13 @@
 // (A, B, C, D), continuous or discrete, becomes its transfer function: den = det(sI - A),
 // num = det(sI - A + B C) - den + D den (characteristic polynomials by Faddeev-LeVerrier).
 // The loop's linear dynamics (converters and noise left out), for reports and analysis:
-//   H(z) = F(z) C(z) P(z) / (1 + C(z) P(z)),  P(z) = C (zI - Ad)^-1 Bd.
+//   response(w) = H(z) = F(z) C(z) P(z) / (1 + C(z) P(z)),  P(z) = C (zI - Ad)^-1 Bd,
+//   z = e^{i w h}: command r to displacement x.
+// As a LinearDynamics (core/linear_dynamics.h) the stage is what the integrator's loop sees: H
+// then the load cell's d periods, H(z) z^-d, realised with the state [F's, C's, P's states,
+// d registers]: v = F r, e = v - C x, u = C(e), x+ = Ad x + Bd u, output C x (no direct term),
+// then the d-step register. Additive noise does not change it; converters make it kLinearised
+// (their saturation and quantisation left out), else it is time-invariant.
 
 #include <complex>
 #include <random>
@@ -44,6 +50,7 @@ class DiscreteFilter {
   double step(double x);
   void reset();
   std::complex<double> response(std::complex<double> z) const;  // b(z^-1) / a(z^-1)
+  LinearBlock state_space() const { return direct_form_block(b_, a_); }
 
  private:
   std::vector<double> b_, a_, state_;
@@ -61,6 +68,7 @@ class ZohPlant {
   void advance(double u);
   void reset() { x_.setZero(); }
   std::complex<double> response(std::complex<double> z) const;
+  LinearBlock state_space() const;  // (Ad, Bd, C, 0)
 
  private:
   Mat ad_;
@@ -91,9 +99,12 @@ class TrackingLoop final : public DelayStage {
   std::complex<double> response(double omega) const;  // H(e^{i omega h})
   double sensor_error() const override { return sensor_error_; }
   double measure_force(double force) override;
+  Linearity linearity() const override;
 
  protected:
   double step_unscaled(const CommandSample& in) override;
+  std::complex<double> unscaled_response(double omega) const override;  // H(z) z^-d
+  LinearBlock unscaled_state_space() const override;
 
  private:
   ZohPlant plant_;
