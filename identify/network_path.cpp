@@ -202,7 +202,8 @@ SpikeGrid regular_grid(const std::vector<double>& times, double dt) {
 
 // Lost answers (network_path.h): per gap of g steps between two answers taken in a row, of
 // which the coordinator's count says r more were received (superseded within a step), g - r are
-// lost; the gap's burst is g when r = 0, else the fewest consecutive lost answers g - r allows.
+// lost, taken as one burst (a superseded answer arrived a step or so late, so it lies at the
+// gap's edge, next to the answer that superseded it or the one before the gap).
 // Without the count (0), every gap is lost. Late: answers carried more than one step after the
 // usual.
 void count_lost_and_late(const LinkAnswers& a, double dt, NetworkPath& out) {
@@ -216,8 +217,7 @@ void count_lost_and_late(const LinkAnswers& a, double dt, NetworkPath& out) {
     const std::int64_t lost = gap - received;
     out.superseded += static_cast<std::size_t>(received);
     out.lost += static_cast<std::size_t>(lost);
-    const std::int64_t burst = (lost + received) / (received + 1);
-    out.longest_burst = std::max(out.longest_burst, static_cast<std::size_t>(burst));
+    out.longest_burst = std::max(out.longest_burst, static_cast<std::size_t>(lost));
   }
   std::vector<double> carried;
   for (std::size_t i = 0; i < a.time.size(); ++i) {

@@ -26,8 +26,9 @@
 //               answers taken in a row, over which the coordinator's answer count (LinkSample
 //               answers) rose by r + 1, holds r answers superseded within a step (received, then
 //               replaced by a newer one before the loop took it) and g - r lost ones; the longest
-//               burst of consecutive lost ones (per gap: g when r = 0, else ceil((g - r) / (r +
-//               1)), the fewest the count allows). A record without the count: every gap is lost.
+//               burst of consecutive lost ones (per gap g - r: a superseded answer came a step or
+//               so late, at the gap's edge, so the lost ones lie together). A record without the
+//               count: every gap is lost.
 //   late        answers carried by a later step than the one after the step they answer
 //   injected    q against the declared round trip: a node that injected what the config did not
 //               declare (mean difference, s)
