@@ -12,6 +12,7 @@
 // With --delivered N it keeps running trials until N faults were delivered (at most --trials).
 // --window-ms 3,5,8,12 sweeps both windows (answer_window_ms = command_watchdog_ms) and prints the
 // trade-off: false stops per hour of healthy running against the hold time after a real fault.
+// --recommended runs the trials at the window the platform check requires on this machine.
 //
 //   fault_trials [--trials N] [--delivered N] [--seed S] [--domain D] [--rate HZ] [--extra "..."]
 //                [--window-ms LIST] [--platform-seconds S]
@@ -150,8 +151,14 @@ void print_tally(const Tally& t, const Setting& s, double window_ms) {
       t.tripped_missed, t.tripped_watchdog, t.tripped_other);
 }
 
-// The platform check once, at the trials' rate and run length; its file for every coordinator.
-std::string check_platform_once(const Setting& s, double platform_seconds) {
+// The platform check once, at the trials' rate and run length: its file for every coordinator
+// and the window it requires.
+struct CheckedPlatform {
+  std::string file;
+  double required_window_ms = 0.0;
+};
+
+CheckedPlatform check_platform_once(const Setting& s, double platform_seconds) {
   config::Deployment deployment;
   deployment.set_clock(config::Deployment::REAL_TIME);
   const platform::PlatformCheck check =
@@ -160,7 +167,7 @@ std::string check_platform_once(const Setting& s, double platform_seconds) {
   const auto file = std::filesystem::temp_directory_path() / "rths_fault_trials_platform.json";
   std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(
       2);
-  return file.string();
+  return {file.string(), check.verdict.required_window_ms};
 }
 
 }  // namespace
@@ -186,8 +193,17 @@ int main(int argc, char** argv) {
   app.add_option("--platform-seconds", platform_seconds,
                  "s of platform measurement first (default 10)")
       ->check(CLI::Range(0.1, 600.0));
+  bool recommended = false;
+  app.add_flag("--recommended", recommended,
+               "the window the platform check requires on this machine (a --window-ms of one)")
+      ->excludes("--window-ms");
   CLI11_PARSE(app, argc, argv);
-  s.coordinator = {"--platform", check_platform_once(s, platform_seconds), "--accept-platform"};
+  const CheckedPlatform platform = check_platform_once(s, platform_seconds);
+  s.coordinator = {"--platform", platform.file, "--accept-platform"};
+  if (recommended) {
+    windows = {platform.required_window_ms};
+    std::printf("the window the check requires: %.2f ms\n", platform.required_window_ms);
+  }
   if (windows.empty()) {
     config::Deployment d;
     if (!google::protobuf::TextFormat::ParseFromString(s.extra, &d)) {
