@@ -16,6 +16,7 @@
 // prints each sample, the first and last minute's mean and the maximum (flat: the view's rings
 // are sized at the header, so after the first minute nothing grows).
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
+//                   [--failsafe-periods N]
 //   rths_view_bench --rss-minutes 10 [--rss-every 10] [--rate HZ] [--domain D]
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
@@ -335,6 +336,11 @@ int main(int argc, char** argv) {
   app.add_option("--repeat", repeat, "pairs of runs (medians over them)");
   app.add_option("--domain", spec.domain, "DDS domain id");
   app.add_flag("--no-browser", no_browser, "serve the view but connect no browser");
+  app.add_option("--failsafe-periods", spec.failsafe,
+                 "the pairs' fail-safe windows (answers, command watchdog) in periods; wider "
+                 "keeps a loaded machine's stalls from holding runs early")
+      ->default_val(30)
+      ->check(CLI::Range(3, 1000));
   app.add_option("--rss-minutes", rss_minutes,
                  "instead of the pairs: one run this long with the view, sampling RSS")
       ->check(CLI::Range(1.0, 120.0));
