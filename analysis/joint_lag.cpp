@@ -410,6 +410,44 @@ JointLagStudy load_joint_lag(const std::filesystem::path& path) {
   return config;
 }
 
+namespace {
+
+// Before the grid runs: how many of its points lie past the stability boundary, as a warning.
+void warn_past_boundary(const JointLagStudy& config,
+                        const std::map<double, std::optional<double>>& critical_at,
+                        const JointLagOptions& options) {
+  int past = 0, total = 0;
+  for (const double r : config.network_round_trips())
+    for (const double a : config.actuator_lags()) {
+      ++total;
+      const auto it = critical_at.find(a);
+      past += it != critical_at.end() && it->second && r >= *it->second ? 1 : 0;
+    }
+  if (past == 0) return;
+  const std::string warning =
+      std::to_string(past) + " of " + std::to_string(total) +
+      " grid points lie past the stability boundary (network round trip beyond the critical "
+      "one for their actuator lag): they are expected to diverge";
+  if (options.warn)
+    options.warn(warning);
+  else
+    spdlog::warn("{}", warning);
+}
+
+// Why the across-sites part does not run, or empty when it does.
+std::string why_not_across_sites(const JointLagStudy& config, const JointLagOptions& options) {
+  if (config.sites().empty() || config.measured_network_round_trips().empty() ||
+      config.measured_actuator_lags().empty())
+    return "the config asks for no across-sites runs";
+  if (!options.measure) return "across-sites runs not requested (--no-measure)";
+  if (!options.across_sites.unavailable || !options.across_sites.run)
+    return "this program cannot run across sites (no across-sites runner)";
+  if (const auto reason = options.across_sites.unavailable()) return *reason;
+  return "";
+}
+
+}  // namespace
+
 JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem::path& base_dir,
                              const JointLagOptions& options) {
   JointLagResult result;
@@ -433,35 +471,8 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   if (result.boundary_skipped.empty())
     for (const double a : config.actuator_lags())
       critical_at[a] = critical_round_trip_at(config, prepared, a);
-  {
-    int past = 0, total = 0;
-    for (const double r : config.network_round_trips())
-      for (const double a : config.actuator_lags()) {
-        ++total;
-        const auto it = critical_at.find(a);
-        past += it != critical_at.end() && it->second && r >= *it->second ? 1 : 0;
-      }
-    if (past > 0) {
-      const std::string warning =
-          std::to_string(past) + " of " + std::to_string(total) +
-          " grid points lie past the stability boundary (network round trip beyond the critical "
-          "one for their actuator lag): they are expected to diverge";
-      if (options.warn)
-        options.warn(warning);
-      else
-        spdlog::warn("{}", warning);
-    }
-  }
-  if (config.sites().empty() || config.measured_network_round_trips().empty() ||
-      config.measured_actuator_lags().empty()) {
-    result.measured_skipped = "the config asks for no across-sites runs";
-  } else if (!options.measure) {
-    result.measured_skipped = "across-sites runs not requested (--no-measure)";
-  } else if (!options.across_sites.unavailable || !options.across_sites.run) {
-    result.measured_skipped = "this program cannot run across sites (no across-sites runner)";
-  } else if (const auto reason = options.across_sites.unavailable()) {
-    result.measured_skipped = *reason;
-  }
+  warn_past_boundary(config, critical_at, options);
+  result.measured_skipped = why_not_across_sites(config, options);
   const std::size_t total =
       static_cast<std::size_t>(config.network_round_trips_size() * config.actuator_lags_size()) +
       (result.measured_skipped.empty()
