@@ -19,12 +19,9 @@
 #include <fstream>
 #include <thread>
 
-#include "coordinator/coordinator.h"
-#include "runtime/launch.h"
+#include "bench/bench_support.h"
 #include "runtime/measurements.h"
-#include "runtime/process.h"
 #include "runtime/record.h"
-#include "transport/dds_endpoint.h"
 #include "view/feed.h"
 #include "view/server.h"
 
@@ -34,23 +31,10 @@ using namespace rths;
 using namespace std::chrono_literals;
 
 std::string study_text(double rate, double seconds, int domain) {
-  char dt[32];
-  std::snprintf(dt, sizeof dt, "%.17g", 1.0 / rate);
-  return "name: \"view_bench\"\n"
-         "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" +
-         std::string(RTHS_SHARED_DATA_DIR) +
-         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
-         " }\n"
-         "integrator { kind: EXPLICIT_NEWMARK dt: " +
-         dt +
-         " }\n"
-         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
-         "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
-         "deployment { domain_id: " +
-         std::to_string(domain) +
-         " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
-         "command_watchdog_periods: 30 }\n";
+  return bench::sdof_study_text("view_bench", 1.0 / rate, bench::imperial_valley_motion(seconds),
+                                "deployment { domain_id: " + std::to_string(domain) +
+                                    " clock: REAL_TIME max_overrun_fraction: -1 "
+                                    "max_missed_answers: 30 command_watchdog_periods: 30 }\n");
 }
 
 double cpu_seconds() {
@@ -88,23 +72,15 @@ std::thread rss_sampler(double seconds, std::vector<double>& out, const std::ato
 
 Figures run(const std::string& name, double rate, double seconds, int domain, bool with_view,
             bool browser) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_view_bench_" + name);
-  std::filesystem::create_directories(dir);
-  const auto config = dir / "study.textproto";
-  std::ofstream(config) << study_text(rate, seconds, domain);
-  const std::string run_id = "view-bench-" + name;
-  std::vector<runtime::ChildProcess> nodes;
-  for (const auto& [id, program] : {std::pair{1, "substructure_nodes/rths-substructure-node"},
-                                    std::pair{2, "actuator_emulator/rths-actuator-emulator"}})
-    nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / program,
-                       std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
-                                                std::to_string(domain), "--run-id", run_id},
-                       dir / ("node_" + std::to_string(id) + ".log"));
-  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
+  view::Feed feed;  // outlives the coordinator, which feeds it
+  bench::DistributedRun distributed({.directory = "rths_view_bench_" + name,
+                                     .run_id = "view-bench-" + name,
+                                     .study_text = study_text(rate, seconds, domain),
+                                     .domain = domain,
+                                     .nodes = {},
+                                     .keep_off_loop_cpu = false});
+  const auto& dir = distributed.dir();
   coordinator::CoordinatorOptions options;
-  options.run_id = run_id;
-  options.record = dir / "run.rthsrec";
-  view::Feed feed;
   std::unique_ptr<view::ViewServer> server;
   std::optional<runtime::ChildProcess> chromium;
   Figures f;
@@ -126,8 +102,7 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
       f.browser = "chromium";
     }
   }
-  coordinator::Coordinator coordinator(core::prepare_study(core::load_study(config), dir), endpoint,
-                                       options);
+  coordinator::Coordinator& coordinator = distributed.start(options);
   std::atomic<bool> done{false};
   std::thread sampler = rss_sampler(seconds, f.rss_mb, done);
   const double cpu0 = cpu_seconds();
@@ -140,10 +115,10 @@ Figures run(const std::string& name, double rate, double seconds, int domain, bo
     server->shutdown();
   }
   if (chromium) chromium->terminate();
-  for (auto& n : nodes) n.wait_for(5000ms);
+  distributed.wait_for_nodes();
   if (!outcome.ok) spdlog::warn("{}: {}", name, outcome.status);
   std::vector<double> latency;
-  for (const auto* s : runtime::read_record(options.record).steps())
+  for (const auto* s : runtime::read_record(distributed.record()).steps())
     if (s->step() > 0) latency.push_back(s->command_latency());
   const auto summary = runtime::summarize(latency);
   const auto steps = outcome.counters.steps();
