@@ -3,7 +3,8 @@
 // random step. First it checks the platform once (platform/check.h, --platform-seconds) and prints
 // the fail-safe window it recommends; the coordinators run with that check (--accept-platform, so
 // short windows can be tried). Prints per trial and in total:
-//   steps the coordinator integrated after the fault (target <= its window in steps),
+//   steps the coordinator integrated after the victim's last answer (target <= its window in
+//   steps),
 //   ms from the fault to the emulator's HOLD (target <= the window + 2 ms) and to the
 //   coordinator's stop, whether the record is complete up to the fault, whether the stop names
 //   the victim, and the healthy runs the fail-safe stopped before the fault came (false stops), by
@@ -11,6 +12,7 @@
 // With --delivered N it keeps running trials until N faults were delivered (at most --trials).
 // --window-ms 3,5,8,12 sweeps both windows (answer_window_ms = command_watchdog_ms) and prints the
 // trade-off: false stops per hour of healthy running against the hold time after a real fault.
+// --recommended runs the trials at the window the platform check requires on this machine.
 //
 //   fault_trials [--trials N] [--delivered N] [--seed S] [--domain D] [--rate HZ] [--extra "..."]
 //                [--window-ms LIST] [--platform-seconds S]
@@ -77,8 +79,8 @@ void count_trial(const test::FaultTrialSpec& spec, const test::FaultTrialResult&
   }
   if (spec.victim != test::FaultVictim::kCoordinator) {
     ++t.step_cases;
-    t.after.push_back(static_cast<double>(r.steps_after_fault));
-    t.within_steps += r.steps_after_fault <= t.window_steps ? 1 : 0;
+    t.after.push_back(static_cast<double>(r.steps_unanswered));
+    t.within_steps += r.steps_unanswered <= t.window_steps ? 1 : 0;
     if (r.stop_ms >= 0) t.stops.push_back(r.stop_ms);
     ++t.exit_cases;
     t.exit_ok += r.coordinator_exit == 1 ? 1 : 0;
@@ -118,9 +120,11 @@ Tally run_trials(const Setting& s, double window_ms) {
       std::printf("not delivered: %s\n", r.why_not.substr(0, 200).c_str());
     else
       std::printf(
-          "steps after %2ld, hold %7.2f ms, stop %7.2f ms, record %s (%ld steps), %s, exit %d\n",
-          r.steps_after_fault, r.hold_ms, r.stop_ms, r.record_complete ? "complete" : "INCOMPLETE",
-          r.record_steps, r.names_node ? "names it" : "DOES NOT NAME IT", r.coordinator_exit);
+          "steps after %2ld (unanswered %2ld), hold %7.2f ms, stop %7.2f ms, record %s (%ld "
+          "steps), %s, exit %d\n",
+          r.steps_after_fault, r.steps_unanswered, r.hold_ms, r.stop_ms,
+          r.record_complete ? "complete" : "INCOMPLETE", r.record_steps,
+          r.names_node ? "names it" : "DOES NOT NAME IT", r.coordinator_exit);
   }
   return t;
 }
@@ -131,7 +135,8 @@ void print_tally(const Tally& t, const Setting& s, double window_ms) {
   std::printf(
       "\n%d trials, %d faults delivered (rate %.0f Hz, window %.2f ms = %d steps%s%s)\n"
       "emulator HOLD within the window + 2 ms of the fault: %d/%d (median %.2f ms, max %.2f ms)\n"
-      "coordinator integrated <= %d steps past the fault: %d/%d (median %.1f, max %.0f)\n"
+      "coordinator integrated <= %d steps past the victim's last answer: %d/%d (median %.1f, max "
+      "%.0f)\n"
       "coordinator stop after the fault: median %.2f ms, max %.2f ms; exit 1: %d/%d\n"
       "record complete up to the fault: %d/%d\n"
       "the stop names the victim: %d/%d\n"
@@ -146,8 +151,14 @@ void print_tally(const Tally& t, const Setting& s, double window_ms) {
       t.tripped_missed, t.tripped_watchdog, t.tripped_other);
 }
 
-// The platform check once, at the trials' rate and run length; its file for every coordinator.
-std::string check_platform_once(const Setting& s, double platform_seconds) {
+// The platform check once, at the trials' rate and run length: its file for every coordinator
+// and the window it requires.
+struct CheckedPlatform {
+  std::string file;
+  double required_window_ms = 0.0;
+};
+
+CheckedPlatform check_platform_once(const Setting& s, double platform_seconds) {
   config::Deployment deployment;
   deployment.set_clock(config::Deployment::REAL_TIME);
   const platform::PlatformCheck check =
@@ -156,7 +167,7 @@ std::string check_platform_once(const Setting& s, double platform_seconds) {
   const auto file = std::filesystem::temp_directory_path() / "rths_fault_trials_platform.json";
   std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(
       2);
-  return file.string();
+  return {file.string(), check.verdict.required_window_ms};
 }
 
 }  // namespace
@@ -182,8 +193,17 @@ int main(int argc, char** argv) {
   app.add_option("--platform-seconds", platform_seconds,
                  "s of platform measurement first (default 10)")
       ->check(CLI::Range(0.1, 600.0));
+  bool recommended = false;
+  app.add_flag("--recommended", recommended,
+               "the window the platform check requires on this machine (a --window-ms of one)")
+      ->excludes("--window-ms");
   CLI11_PARSE(app, argc, argv);
-  s.coordinator = {"--platform", check_platform_once(s, platform_seconds), "--accept-platform"};
+  const CheckedPlatform platform = check_platform_once(s, platform_seconds);
+  s.coordinator = {"--platform", platform.file, "--accept-platform"};
+  if (recommended) {
+    windows = {platform.required_window_ms};
+    std::printf("the window the check requires: %.2f ms\n", platform.required_window_ms);
+  }
   if (windows.empty()) {
     config::Deployment d;
     if (!google::protobuf::TextFormat::ParseFromString(s.extra, &d)) {

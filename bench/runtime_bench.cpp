@@ -9,7 +9,7 @@
 //     of --repeat runs) beside the bare 4096 Hz loop.
 // Ping-pong and lockstep run with every process on one CPU, as `rths launch` places lockstep runs
 // (--spread: leave placement to the scheduler); the real-time runs are never pinned.
-// Targets (issue 10), judged on the "=>" lines (medians of --repeat runs, each beside its own bare
+// Targets, judged on the "=>" lines (medians of --repeat runs, each beside its own bare
 // loop or ping-pong): lockstep >= ~12,300 steps/s and median step <= 2 x the 1-peer ping-pong;
 // 1024 Hz overruns <= bare loop + 0.1 point, wake-up to command written median <= 30 us and
 // p99 <= 100 us; the emulator's 4096 Hz servo loop under a 1024 Hz integrator overruns <= 1 %;
@@ -18,6 +18,9 @@
 //  5. with --memory-steps N (alone): RSS of every process over an N-step real-time run.
 //  6. with --scaling (alone): per node count (a 9-storey building, 1, 2, 4, 8 substructure nodes
 //     and 1, 2, 4 emulators), lockstep steps/s on one CPU and spread, and the real-time step wall.
+//  7. with --command-path (alone): the coordinator's wake-up to command written replayed with
+//     timestamps between its parts (pack and stamp, DDS write), 1 and 2 peers, paced and back to
+//     back: where the wake-up to command figure of row 3 goes.
 //
 //   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D] [--spread] [--lockstep-only]
 //                      [--memory-steps N [--memory-rate HZ]]
@@ -138,6 +141,93 @@ runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
       runtime::pack("bench", transport::kBroadcastId, runtime::STOP, 0, runtime::Stop{}));
   for (auto& e : echoes) e.wait_for(3000ms);
   return runtime::summarize(rtt);
+}
+
+// The coordinator's path from its wake-up to the last command written, replayed with timestamps
+// between its parts: per peer, the envelope packed and stamped (runtime::pack_into,
+// transport::realtime_ns) and the DDS write (DdsEndpoint::send) to an echo process that answers
+// as a node does (the answers are taken on the receive thread, as the coordinator's intake
+// does). Paced: the loop sleeps to each deadline of `hz` as the real-time loop does, so each step
+// starts with whatever a sleep leaves cold; back to back: the same steps with no sleep between.
+struct CommandPathFigures {
+  runtime::LagSummary pack;   // per peer: pack + stamp, s
+  runtime::LagSummary write;  // per peer: DdsEndpoint::send, s
+  runtime::LagSummary total;  // wake-up (or step start) to the last command written, s
+};
+
+CommandPathFigures command_path(transport::DdsEndpoint& coordinator, int peers, double hz,
+                                double seconds, bool paced) {
+  runtime::MonotonicClock clock;
+  runtime::Pacer pacer(clock, 1.0 / hz);
+  const auto steps = static_cast<std::int64_t>(seconds * hz);
+  std::vector<double> pack, write, total;
+  pack.reserve(static_cast<std::size_t>(steps * peers));
+  write.reserve(static_cast<std::size_t>(steps * peers));
+  total.reserve(static_cast<std::size_t>(steps));
+  const auto command = payload();
+  transport::Message outgoing;
+  using Steady = std::chrono::steady_clock;
+  const auto seconds_between = [](Steady::time_point a, Steady::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+  };
+  pacer.start();
+  for (std::int64_t k = 1; k <= steps; ++k) {
+    if (paced) pacer.wait(k);
+    const auto woken = Steady::now();
+    Steady::time_point written = woken;
+    for (int p = 1; p <= peers; ++p) {
+      const auto begin = Steady::now();
+      runtime::pack_into(outgoing, "bench", p, runtime::COMMAND, k, command);
+      outgoing.sent_ns = transport::realtime_ns();
+      const auto packed = Steady::now();
+      coordinator.send(outgoing);
+      written = Steady::now();
+      pack.push_back(seconds_between(begin, packed));
+      write.push_back(seconds_between(packed, written));
+    }
+    total.push_back(seconds_between(woken, written));
+  }
+  return {runtime::summarize(pack), runtime::summarize(write), runtime::summarize(total)};
+}
+
+// --command-path: the replay above with 1 and 2 echo peers, paced at `hz` and back to back,
+// `repeat` runs of `seconds` each; each figure is the median over the runs of the runs' medians.
+void command_path_rows(int domain, int repeat, double seconds, double hz) {
+  for (const int peers : {1, 2}) {
+    transport::DdsEndpoint coordinator(
+        {static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
+    coordinator.set_inline_handler([](const transport::Message&) { return true; });
+    for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
+    std::vector<runtime::ChildProcess> echoes;
+    for (int p = 1; p <= peers; ++p)
+      echoes.emplace_back(runtime::executable_dir() / "rths_runtime_bench",
+                          std::vector<std::string>{"--echo", std::to_string(domain), "--echo-id",
+                                                   std::to_string(p)},
+                          "/tmp/rths_bench_echo.log");
+    coordinator.wait_for_match(0, peers, 10000ms);
+    for (const bool paced : {true, false}) {
+      std::vector<double> pack, write, total, total_p99;
+      for (int r = 0; r < repeat; ++r) {
+        const auto f = command_path(coordinator, peers, hz, seconds, paced);
+        pack.push_back(f.pack.median);
+        write.push_back(f.write.median);
+        total.push_back(f.total.median);
+        total_p99.push_back(f.total.p99);
+      }
+      const std::string mode =
+          paced ? "paced at " + std::to_string(static_cast<int>(hz)) + " Hz" : "back to back";
+      std::printf(
+          "command path, %d peer%s, %s: per peer pack + stamp median %.1f us, DDS write median "
+          "%.1f us; wake-up to last command written median %.1f us, p99 %.1f us (median of %d)\n",
+          peers, peers > 1 ? "s" : "", mode.c_str(), runtime::summarize(pack).median * 1e6,
+          runtime::summarize(write).median * 1e6, runtime::summarize(total).median * 1e6,
+          runtime::summarize(total_p99).median * 1e6, repeat);
+    }
+    coordinator.set_inline_handler({});
+    coordinator.send(
+        runtime::pack("bench", transport::kBroadcastId, runtime::STOP, 0, runtime::Stop{}));
+    for (auto& e : echoes) e.wait_for(3000ms);
+  }
 }
 
 struct RunFigures {
@@ -386,6 +476,7 @@ struct BenchArgs {
   std::int64_t memory_steps = 0;
   double memory_rate = 4096;
   bool scaling = false;
+  bool command_path = false;
 };
 
 void add_arguments(CLI::App& app, BenchArgs& a) {
@@ -413,6 +504,10 @@ void add_arguments(CLI::App& app, BenchArgs& a) {
   app.add_flag("--scaling", a.scaling,
                "only the rows per node count (1, 2, 4, 8 substructure nodes + 1, 2, 4 emulators): "
                "lockstep steps/s and real-time step wall (--seconds of record)");
+  app.add_flag("--command-path", a.command_path,
+               "only the command path replayed with timestamps between its parts (pack, DDS "
+               "write), paced at the first --rate and back to back, 1 and 2 echo peers "
+               "(--seconds each)");
   app.add_option("--echo", a.echo_domain, "internal: run as the ping-pong echo peer");
   app.add_option("--echo-id", a.echo_id, "internal: the echo peer's node id");
 }
@@ -548,6 +643,10 @@ int main(int argc, char** argv) {
   if (a.echo_domain >= 0) return echo_main(a.echo_domain, a.echo_id);
   if (a.scaling) {
     scaling_rows(a.domain, a.repeat, a.seconds, a.deployment_extra);
+    return 0;
+  }
+  if (a.command_path) {
+    command_path_rows(a.domain, a.repeat, a.seconds, a.rates.front());
     return 0;
   }
   if (a.memory_steps > 0) {

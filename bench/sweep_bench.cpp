@@ -1,4 +1,4 @@
-// Sweep benchmark (issue 2): linear SDOF periods 0.05..3.0 s under El Centro 1940 resampled to
+// Sweep benchmark: linear SDOF periods 0.05..3.0 s under El Centro 1940 resampled to
 // dt = 1 ms (31,180 steps each), peak |u| only (no histories kept), explicit Newmark.
 //   (a) 100 periods, no delay
 //   (b) the same 100 periods x 10 time-shift delays 0, 2, ..., 18 ms, alpha = 1

@@ -7,7 +7,7 @@
 //   the record's writer thread, the server's threads, the JSON);
 //   this process's RSS at 10 / 50 / 95 % of the run (MB; flat = the view's rings are sized at
 //   the start).
-// Target (issue 26): overruns with the view within +0.02 points of the run without it; wake-up
+// Target: overruns with the view within +0.02 points of the run without it; wake-up
 // to command unchanged.
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
 #include <spdlog/spdlog.h>

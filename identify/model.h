@@ -107,7 +107,7 @@ std::vector<double> drift_basis(std::span<const double> time, double dt);
 // at the band's edge), and not below where the displacement still rises above its noise (a
 // broadband record's tail, which velocity and acceleration weigh up); above f_c the displacement
 // sensor's noise, which the model would turn into force through every hysteretic and friction
-// switch, no longer reaches the model. On the MTS record: band 16.1 Hz, f_c 40 Hz.
+// switch, no longer reaches the model.
 inline constexpr double kSpecimenInputCutoffFactor = 2.5;
 
 // `measured`: input = command, the model runs on it unfiltered. `force`: input = measured

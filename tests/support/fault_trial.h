@@ -6,14 +6,20 @@
 //
 // Measured per trial (wall clock = CLOCK_REALTIME, the stamps the record and logs carry):
 //   steps_after_fault   record steps whose work began after the fault (the coordinator integrated
-//                       them on an old answer); 0 when the coordinator is the victim.
+//                       them on an old answer); 0 when the coordinator is the victim. Counted
+//                       from the fault's stamp, so a stall between the stamp and the signal's
+//                       delivery adds the steps the victim still answered.
+//   steps_unanswered    record steps after the last one at which the victim's answered step
+//                       advanced: what the coordinator's answer window bounds (its contract,
+//                       free of when the signal landed); 0 when the coordinator is the victim.
 //   hold_ms             fault -> the emulator's HOLD (its log line's realtime_ns), whoever caused
 //                       it; < 0 when the emulator is the victim or never logged a HOLD.
 //   stop_ms             fault -> the coordinator's "HOLD sent" event in the record; < 0 when the
 //                       coordinator is the victim.
 //   record_complete     the record reads, its steps are 0..n without a gap, and every step whose
-//                       work began before the fault is present except, for a killed coordinator,
-//                       the ones its writer had not yet written (bounded by the queue).
+//                       work began before the fault is present (a surviving coordinator's record
+//                       goes on past the fault) except, for a killed coordinator, the ones its
+//                       writer had not yet written (bounded by the queue).
 //   names_node          the coordinator's log names the victim (coordinator victim: the
 //                       emulator's log says "command watchdog").
 
@@ -45,6 +51,7 @@ struct FaultTrialResult {
   bool fault_delivered = false;  // false: the run ended (or failed) before the fault step
   std::string why_not;           // when !fault_delivered
   long steps_after_fault = 0;
+  long steps_unanswered = 0;
   double hold_ms = -1, stop_ms = -1;
   bool record_complete = false;
   bool names_node = false;
