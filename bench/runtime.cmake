@@ -2,7 +2,7 @@
 # ping-pong of the same payload, and real-time pacing at 1024 / 4096 Hz beside a bare
 # clock_nanosleep loop. Prints figures; never run as a test.
 add_executable(rths_runtime_bench ${CMAKE_CURRENT_LIST_DIR}/runtime_bench.cpp)
-target_link_libraries(rths_runtime_bench PRIVATE rths_coordinator CLI11::CLI11)
+target_link_libraries(rths_runtime_bench PRIVATE rths_bench_support CLI11::CLI11)
 target_compile_definitions(rths_runtime_bench PRIVATE
   RTHS_BINARY_DIR="${PROJECT_BINARY_DIR}"
   RTHS_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")

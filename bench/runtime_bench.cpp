@@ -34,7 +34,7 @@
 #include <map>
 #include <thread>
 
-#include "coordinator/coordinator.h"
+#include "bench/bench_support.h"
 #include "runtime/lag.h"
 #include "runtime/launch.h"
 #include "runtime/pacing.h"
@@ -49,26 +49,10 @@ using namespace rths;
 using namespace std::chrono_literals;
 
 std::string study_text(double dt, double seconds, const std::string& deployment) {
-  char dt_text[32];
-  std::snprintf(dt_text, sizeof dt_text, "%.17g", dt);  // exact: 1/1024 is not 0.000977
-  return "name: \"bench\"\n"
-         "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { path: \"" +
-         std::string(RTHS_SHARED_DATA_DIR) +
-         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
-         " }\n"
-         "integrator { kind: EXPLICIT_NEWMARK dt: " +
-         std::string(dt_text) +
-         " }\n"
-         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
-         "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n" +
-         deployment;
+  return bench::sdof_study_text("bench", dt, bench::imperial_valley_motion(seconds), deployment);
 }
 
-// The node processes of a run: substructure nodes 1..substructures, then the emulators.
-struct NodeSet {
-  int substructures = 1, emulators = 1;
-};
+using bench::NodeSet;
 
 // A 9-storey shear building, every storey a third experimental: `substructures` nodes share the
 // numerical storeys and `emulators` nodes the actuators, in contiguous blocks.
@@ -263,36 +247,17 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
                            NodeSet node_set = {}, bool one_cpu = false) {
   std::unique_ptr<runtime::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_bench_" + name);
-  std::filesystem::create_directories(dir);
-  const auto config = dir / "study.textproto";
-  std::ofstream(config) << text;
-  const auto record = dir / "run.rthsrec";
-  const std::string run_id = "bench-" + name;
-  const config::Study study = core::load_study(config);
-  const auto off_loop_cpu = runtime::keep_off_loop_cpu(study.deployment());  // as rths launch
-  std::vector<runtime::ChildProcess> nodes;
-  const int count = node_set.substructures + node_set.emulators;
-  for (int i = 0; i < count; ++i) {
-    const bool substructure = i < node_set.substructures;
-    // Without substructure nodes the emulator keeps id 2, as the studies' deployments name it.
-    const int id = node_set.substructures == 0 ? 2 + i : i + 1;
-    nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) /
-                           (substructure ? "substructure_nodes/rths-substructure-node"
-                                         : "actuator_emulator/rths-actuator-emulator"),
-                       std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
-                                                std::to_string(domain), "--run-id", run_id},
-                       dir / ("node_" + std::to_string(id) + ".log"));
-  }
-  transport::DdsEndpoint endpoint({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
-  coordinator::CoordinatorOptions options;
-  options.run_id = run_id;
-  options.record = record;
-  coordinator::Coordinator coordinator(core::prepare_study(study, dir), endpoint, options);
-  const auto outcome = coordinator.run();
+  // The nodes start off the loop CPU, as `rths launch` starts them.
+  bench::DistributedRun run({.directory = "rths_bench_" + name,
+                             .run_id = "bench-" + name,
+                             .study_text = text,
+                             .domain = domain,
+                             .nodes = node_set,
+                             .keep_off_loop_cpu = true});
+  const auto outcome = run.start({}).run();
   if (!outcome.ok) throw std::runtime_error(name + ": " + outcome.status);
-  for (auto& n : nodes) n.wait_for(5000ms);
-  const auto contents = runtime::read_record(record);
+  run.wait_for_nodes();
+  const auto contents = runtime::read_record(run.record());
   std::vector<double> walls, lateness, command_latency;
   double total = 0;
   for (const auto* s : contents.steps()) {
@@ -390,20 +355,13 @@ void memory_run(int domain, std::int64_t steps, double hz, const std::string& de
   }
   char dt_text[32];
   std::snprintf(dt_text, sizeof dt_text, "%.17g", dt);
-  const std::string text =
-      "name: \"bench\"\n"
-      "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-      "motion { path: \"" +
-      (dir / "motion.txt").string() + "\" format: COLUMNS column_dt: " + dt_text +
-      " column_units: G }\n"
-      "integrator { kind: EXPLICIT_NEWMARK dt: " +
-      dt_text +
-      " }\n"
-      "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
-      "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
+  const std::string text = bench::sdof_study_text(
+      "bench", dt,
+      "motion { path: \"" + (dir / "motion.txt").string() +
+          "\" format: COLUMNS column_dt: " + dt_text + " column_units: G }\n",
       "deployment { clock: REAL_TIME max_overrun_fraction: -1 min_answer_fraction: -1 "
       "max_missed_answers: 1000 command_watchdog_periods: 1000 " +
-      deployment_extra + " }\n";
+          deployment_extra + " }\n");
   struct Sample {
     double t;
     long coordinator;
