@@ -51,6 +51,8 @@ DistributedRun::DistributedRun(const RunSpec& spec)
   }
 }
 
+core::PreparedStudy DistributedRun::prepared() const { return core::prepare_study(study_, dir_); }
+
 coordinator::Coordinator& DistributedRun::start(coordinator::CoordinatorOptions options) {
   endpoint_ = std::make_unique<transport::DdsEndpoint>(
       transport::DdsEndpointOptions{static_cast<std::uint32_t>(domain_), true, 0, "rths", 64, {}});

@@ -13,7 +13,8 @@
 //   --domain and --run-id, logging to node_<id>.log. With keep_off_loop_cpu the nodes start off
 //   the loop CPU as `rths launch` starts them (runtime::keep_off_loop_cpu), until destruction.
 //   start(options): the coordinator in this process over DDS on the domain (loopback), recording
-//   to run.rthsrec with the spec's run id; the caller runs it. wait_for_nodes(): up to 5 s each.
+//   to run.rthsrec with the spec's run id; the caller runs it. prepared(): the study as start()
+//   prepares it. wait_for_nodes(): up to 5 s each.
 
 #include <filesystem>
 #include <memory>
@@ -50,6 +51,8 @@ class DistributedRun {
   const std::filesystem::path& dir() const { return dir_; }
   const std::filesystem::path& record() const { return record_; }
   const config::Study& study() const { return study_; }
+  // The study prepared as start() prepares it (for what must know the run before it starts).
+  core::PreparedStudy prepared() const;
   coordinator::Coordinator& start(coordinator::CoordinatorOptions options);
   void wait_for_nodes();
 

@@ -30,6 +30,7 @@
 #include <optional>
 #include <thread>
 
+#include "bench/bench_support.h"
 #include "coordinator/coordinator.h"
 #include "runtime/launch.h"
 #include "runtime/measurements.h"
@@ -48,32 +49,18 @@ using namespace std::chrono_literals;
 const std::string kRecord =
     std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 
-// `motion`: the config's motion fields; `failsafe`: the fail-safe windows in periods.
+// `motion`: a motion block; `failsafe`: the fail-safe windows in periods.
 std::string study_text(double rate, const std::string& motion, int domain, int failsafe) {
-  char dt[32];
-  std::snprintf(dt, sizeof dt, "%.17g", 1.0 / rate);
-  return "name: \"view_bench\"\n"
-         "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
-         "motion { " +
-         motion +
-         " }\n"
-         "integrator { kind: EXPLICIT_NEWMARK dt: " +
-         dt +
-         " }\n"
-         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
-         "cases { name: \"lag\" delay { shift { delay: 0.014 } } }\n"
-         "deployment { domain_id: " +
-         std::to_string(domain) +
-         " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: " +
-         std::to_string(failsafe) + " command_watchdog_periods: " + std::to_string(failsafe) +
-         " }\n";
+  return bench::sdof_study_text(
+      "view_bench", 1.0 / rate, motion,
+      "deployment { domain_id: " + std::to_string(domain) +
+          " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: " +
+          std::to_string(failsafe) + " command_watchdog_periods: " + std::to_string(failsafe) +
+          " }\n");
 }
 
-std::string record_motion(double seconds) {
-  return "path: \"" + kRecord + "\" duration: " + std::to_string(seconds);
-}
-
-// The 1979 record repeated end to end to `seconds`, as a one-column file (m/s^2) in `dir`.
+// The 1979 record repeated end to end to `seconds`, as a one-column file (m/s^2) in `dir`; its
+// motion block.
 std::string repeated_motion(double seconds, const std::filesystem::path& dir) {
   config::GroundMotion spec;
   spec.set_path(kRecord);
@@ -86,8 +73,8 @@ std::string repeated_motion(double seconds, const std::filesystem::path& dir) {
     out << record.acceleration[i % record.acceleration.size()] << "\n";
   char dt[32];
   std::snprintf(dt, sizeof dt, "%.17g", record.dt);
-  return "path: \"" + file.string() + "\" format: COLUMNS column_dt: " + dt +
-         " column_units: M_PER_S2 duration: " + std::to_string(seconds);
+  return "motion { path: \"" + file.string() + "\" format: COLUMNS column_dt: " + dt +
+         " column_units: M_PER_S2 duration: " + std::to_string(seconds) + " }\n";
 }
 
 double cpu_seconds() {
@@ -165,18 +152,6 @@ struct View {
   }
 };
 
-std::vector<runtime::ChildProcess> start_nodes(const Spec& spec, const std::string& run_id,
-                                               const std::filesystem::path& dir) {
-  std::vector<runtime::ChildProcess> nodes;
-  for (const auto& [id, program] : {std::pair{1, "substructure_nodes/rths-substructure-node"},
-                                    std::pair{2, "actuator_emulator/rths-actuator-emulator"}})
-    nodes.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) / program,
-                       std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
-                                                std::to_string(spec.domain), "--run-id", run_id},
-                       dir / ("node_" + std::to_string(id) + ".log"));
-  return nodes;
-}
-
 void measure_record(const std::filesystem::path& record, const coordinator::RunOutcome& outcome,
                     Figures& f) {
   std::vector<double> latency;
@@ -193,26 +168,25 @@ void measure_record(const std::filesystem::path& record, const coordinator::RunO
 }
 
 Figures run(const Spec& spec) {
-  const auto dir = std::filesystem::temp_directory_path() / ("rths_view_bench_" + spec.name);
+  const std::string directory = "rths_view_bench_" + spec.name;
+  const auto dir = std::filesystem::temp_directory_path() / directory;
   std::filesystem::create_directories(dir);
-  const auto config = dir / "study.textproto";
-  const std::string motion =
-      spec.seconds > 35 ? repeated_motion(spec.seconds, dir) : record_motion(spec.seconds);
-  std::ofstream(config) << study_text(spec.rate, motion, spec.domain, spec.failsafe);
-  const std::string run_id = "view-bench-" + spec.name;
-  std::vector<runtime::ChildProcess> nodes = start_nodes(spec, run_id, dir);
-  transport::DdsEndpoint endpoint(
-      {static_cast<std::uint32_t>(spec.domain), true, 0, "rths", 64, {}});
+  const std::string motion = spec.seconds > 35 ? repeated_motion(spec.seconds, dir)
+                                               : bench::imperial_valley_motion(spec.seconds);
+  std::optional<View> view;  // outlives the coordinator, which feeds it
+  bench::DistributedRun distributed(
+      {.directory = directory,
+       .run_id = "view-bench-" + spec.name,
+       .study_text = study_text(spec.rate, motion, spec.domain, spec.failsafe),
+       .domain = spec.domain,
+       .nodes = {},
+       .keep_off_loop_cpu = false});
   coordinator::CoordinatorOptions options;
-  options.run_id = run_id;
-  options.record = dir / "run.rthsrec";
-  core::PreparedStudy prepared = core::prepare_study(core::load_study(config), dir);
-  std::optional<View> view;
   if (spec.with_view) {
-    view.emplace(prepared, dir, spec.browser);
+    view.emplace(distributed.prepared(), dir, spec.browser);
     options.record_observer = &view->feed;
   }
-  coordinator::Coordinator coordinator(std::move(prepared), endpoint, options);
+  coordinator::Coordinator& coordinator = distributed.start(options);
   Figures f;
   std::atomic<bool> done{false};
   std::thread sampler = rss_sampler(spec, f.rss, done);
@@ -229,10 +203,10 @@ Figures run(const Spec& spec) {
     view->server->shutdown();
     if (view->chromium) view->chromium->terminate();
   }
-  for (auto& n : nodes) n.wait_for(5000ms);
+  distributed.wait_for_nodes();
   if (!outcome.ok) spdlog::warn("{}: {}", spec.name, outcome.status);
-  measure_record(options.record, outcome, f);
-  std::filesystem::remove(options.record);
+  measure_record(distributed.record(), outcome, f);
+  std::filesystem::remove(distributed.record());
   return f;
 }
 
