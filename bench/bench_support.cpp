@@ -8,9 +8,12 @@
 
 namespace rths::bench {
 
+std::string imperial_valley_path() {
+  return std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+}
+
 std::string imperial_valley_motion(double seconds) {
-  return "motion { path: \"" + std::string(RTHS_SHARED_DATA_DIR) +
-         "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
+  return "motion { path: \"" + imperial_valley_path() + "\" duration: " + std::to_string(seconds) +
          " }\n";
 }
 

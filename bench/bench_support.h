@@ -5,7 +5,8 @@
 // sdof_study_text(name, dt, motion, deployment): T = 0.5 s, m = 1000 kg, zeta = 5 %, a third of
 //   the stiffness experimental (linear), explicit Newmark at dt (s, printed with 17 digits so
 //   1/1024 stays exact), the `motion` block, one case "lag" (a 14 ms shift), then `deployment`
-//   verbatim. imperial_valley_motion(seconds): the shared Imperial Valley record cut to
+//   verbatim. imperial_valley_motion(seconds): the shared Imperial Valley record (the AT2 file at
+//   imperial_valley_path()) cut to
 //   `seconds` (s), as a motion block.
 // DistributedRun(spec): in TMP/<spec.directory>, writes study.textproto (the text) and starts the
 //   node processes: substructure nodes with ids 1..s, then the emulators (ids from 2 when there
@@ -28,6 +29,7 @@
 
 namespace rths::bench {
 
+std::string imperial_valley_path();  // the shared AT2 file
 std::string imperial_valley_motion(double seconds);
 std::string sdof_study_text(const std::string& name, double dt, const std::string& motion,
                             const std::string& deployment);

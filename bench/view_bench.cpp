@@ -46,9 +46,6 @@ namespace {
 using namespace rths;
 using namespace std::chrono_literals;
 
-const std::string kRecord =
-    std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
-
 // `motion`: a motion block; `failsafe`: the fail-safe windows in periods.
 std::string study_text(double rate, const std::string& motion, int domain, int failsafe) {
   return bench::sdof_study_text(
@@ -63,7 +60,7 @@ std::string study_text(double rate, const std::string& motion, int domain, int f
 // motion block.
 std::string repeated_motion(double seconds, const std::filesystem::path& dir) {
   config::GroundMotion spec;
-  spec.set_path(kRecord);
+  spec.set_path(bench::imperial_valley_path());
   const core::GroundMotion record = core::load_motion(spec, {});
   const auto file = dir / "repeated_motion.txt";
   std::ofstream out(file);
