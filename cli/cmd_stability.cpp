@@ -26,93 +26,110 @@ struct StabilityOptions {
 
 // The SDOF loop of a study case: period, zeta, alpha, dt and integrator from the config, the
 // case's delay stages as the actuator and its compensation (at most one block: one actuator).
-void run_compensated(const StabilityOptions& o) {
-  const config::Study study = core::load_study(o.study);
+struct CompensatedLoop {
+  double period = 0, zeta = 0, alpha = 0, dt = 0;
+  core::IntegratorKind kind{};
+  const config::Case* chosen = nullptr;
+  const config::Compensation* compensation = nullptr;
+};
+
+CompensatedLoop compensated_loop_of(const config::Study& study, const StabilityOptions& o) {
   const auto& s = study.structure();
   if (!s.has_sdof())
     throw std::invalid_argument(o.study +
                                 ": --study needs structure.sdof (the analysis is of an SDOF loop)");
   if (s.damping().has_rayleigh())
     throw std::invalid_argument(o.study + ": --study needs structure.damping.modal_zeta");
+  CompensatedLoop loop;
   const core::StructuralModel model = core::make_structure(s);
-  const double period =
-      2.0 * std::numbers::pi * std::sqrt(model.mass(0, 0) / model.stiffness(0, 0));
-  const double zeta = s.damping().modal_zeta();
-  const double alpha = study.substructuring().experimental_fraction();
+  loop.period = 2.0 * std::numbers::pi * std::sqrt(model.mass(0, 0) / model.stiffness(0, 0));
+  loop.zeta = s.damping().modal_zeta();
+  loop.alpha = study.substructuring().experimental_fraction();
   if (!study.substructuring().experimental_storeys().empty())
     throw std::invalid_argument(o.study + ": --study needs substructuring.experimental_fraction");
-  const double dt = study.integrator().dt();
-  if (!(dt > 0)) throw std::invalid_argument(o.study + ": --study needs integrator.dt > 0");
-  const core::IntegratorKind kind = core::integrator_kind(study.integrator());
-  const config::Case* chosen = nullptr;
+  loop.dt = study.integrator().dt();
+  if (!(loop.dt > 0)) throw std::invalid_argument(o.study + ": --study needs integrator.dt > 0");
+  loop.kind = core::integrator_kind(study.integrator());
   for (const auto& c : study.cases())
-    if (c.name() == o.case_name) chosen = &c;
-  if (!chosen)
+    if (c.name() == o.case_name) loop.chosen = &c;
+  if (!loop.chosen)
     throw std::invalid_argument(o.study + ": --case '" + o.case_name + "' is not among the cases");
-  if (chosen->compensation_size() > 1)
+  if (loop.chosen->compensation_size() > 1)
     throw std::invalid_argument("--case '" + o.case_name +
                                 "': one compensation block expected (an SDOF has one actuator)");
-  const config::Compensation* compensation =
-      chosen->compensation_size() == 1 ? &chosen->compensation(0) : nullptr;
-  const core::CompensatedStability r = core::compensated_stability(
-      kind, period, zeta, alpha, dt, chosen->delay(), compensation, o.max_extra_delay, o.branches);
+  if (loop.chosen->compensation_size() == 1) loop.compensation = &loop.chosen->compensation(0);
+  return loop;
+}
+
+nlohmann::json compensated_json(const StabilityOptions& o, const CompensatedLoop& loop,
+                                const core::CompensatedStability& r) {
   const auto optional = [](const std::optional<double>& v) {
     return v ? nlohmann::json(*v) : nlohmann::json();
   };
-  if (o.json) {
-    nlohmann::json out;
-    out["input"] = {{"study", o.study},
-                    {"case", o.case_name},
-                    {"period_s", period},
-                    {"zeta", zeta},
-                    {"experimental_fraction", alpha},
-                    {"integrator", core::to_string(kind)},
-                    {"dt_s", dt},
-                    {"compensated", compensation != nullptr}};
-    if (!r.frozen_coefficients.empty())
-      out["time_varying"] = {{"analysis", "frozen coefficients"}, {"note", r.frozen_coefficients}};
-    if (!r.linearised.empty()) out["linearised"] = r.linearised;
-    nlohmann::json crossings = nlohmann::json::array();
-    for (const auto& c : r.crossings)
-      crossings.push_back({{"crossing_omega_rad_per_s", c.omega},
-                           {"extra_delay_s", c.delay},
-                           {"branch", c.branch}});
-    out["discrete"] = {{"stable", r.stable},
-                       {"spectral_radius", r.spectral_radius},
-                       {"extra_delay_margin_s", optional(r.discrete_margin)},
-                       {"searched_up_to_s", r.max_extra_delay}};
-    out["continuous"] = {{"extra_delay_margin_s", optional(r.continuous_margin)},
-                         {"crossings", crossings}};
-    std::cout << out.dump(2) << "\n";
-  } else {
-    std::cout << "case '" << o.case_name << "' of " << o.study << ": SDOF T = " << period
-              << " s, zeta = " << zeta << ", alpha = " << alpha << ", " << core::to_string(kind)
-              << " dt = " << dt * 1e3 << " ms, " << (compensation ? "compensated" : "uncompensated")
-              << "\n";
-    if (!r.frozen_coefficients.empty()) {
-      std::cout
-          << "compensator is " << r.frozen_coefficients
-          << "; no fixed amplification matrix exists for the adapting loop, so the figures below "
-             "are of the frozen loop\n";
-    }
-    if (!r.linearised.empty()) std::cout << "linearised: " << r.linearised << "\n";
-    if (!r.stable) {
-      std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius
-                << ")\n";
-    } else if (r.discrete_margin) {
-      std::cout << "discrete: stable; it tolerates " << *r.discrete_margin * 1e3
-                << " ms of extra delay\n";
-    } else {
-      std::cout << "discrete: stable up to " << r.max_extra_delay * 1e3 << " ms of extra delay\n";
-    }
-    if (r.continuous_margin) {
-      std::cout << "continuous: first crossing at " << *r.continuous_margin * 1e3
-                << " ms of extra delay (omega = " << r.crossings.front().omega << " rad/s)\n";
-    } else {
-      std::cout << "continuous: no crossing (|k_e H| stays below the numerical part at every "
-                   "frequency)\n";
-    }
+  nlohmann::json out;
+  out["input"] = {{"study", o.study},
+                  {"case", o.case_name},
+                  {"period_s", loop.period},
+                  {"zeta", loop.zeta},
+                  {"experimental_fraction", loop.alpha},
+                  {"integrator", core::to_string(loop.kind)},
+                  {"dt_s", loop.dt},
+                  {"compensated", loop.compensation != nullptr}};
+  if (!r.frozen_coefficients.empty())
+    out["time_varying"] = {{"analysis", "frozen coefficients"}, {"note", r.frozen_coefficients}};
+  if (!r.linearised.empty()) out["linearised"] = r.linearised;
+  nlohmann::json crossings = nlohmann::json::array();
+  for (const auto& c : r.crossings)
+    crossings.push_back(
+        {{"crossing_omega_rad_per_s", c.omega}, {"extra_delay_s", c.delay}, {"branch", c.branch}});
+  out["discrete"] = {{"stable", r.stable},
+                     {"spectral_radius", r.spectral_radius},
+                     {"extra_delay_margin_s", optional(r.discrete_margin)},
+                     {"searched_up_to_s", r.max_extra_delay}};
+  out["continuous"] = {{"extra_delay_margin_s", optional(r.continuous_margin)},
+                       {"crossings", crossings}};
+  return out;
+}
+
+void print_compensated(const StabilityOptions& o, const CompensatedLoop& loop,
+                       const core::CompensatedStability& r) {
+  std::cout << "case '" << o.case_name << "' of " << o.study << ": SDOF T = " << loop.period
+            << " s, zeta = " << loop.zeta << ", alpha = " << loop.alpha << ", "
+            << core::to_string(loop.kind) << " dt = " << loop.dt * 1e3 << " ms, "
+            << (loop.compensation ? "compensated" : "uncompensated") << "\n";
+  if (!r.frozen_coefficients.empty()) {
+    std::cout << "compensator is " << r.frozen_coefficients
+              << "; no fixed amplification matrix exists for the adapting loop, so the figures "
+                 "below are of the frozen loop\n";
   }
+  if (!r.linearised.empty()) std::cout << "linearised: " << r.linearised << "\n";
+  if (!r.stable) {
+    std::cout << "discrete: UNSTABLE as configured (spectral radius " << r.spectral_radius << ")\n";
+  } else if (r.discrete_margin) {
+    std::cout << "discrete: stable; it tolerates " << *r.discrete_margin * 1e3
+              << " ms of extra delay\n";
+  } else {
+    std::cout << "discrete: stable up to " << r.max_extra_delay * 1e3 << " ms of extra delay\n";
+  }
+  if (r.continuous_margin) {
+    std::cout << "continuous: first crossing at " << *r.continuous_margin * 1e3
+              << " ms of extra delay (omega = " << r.crossings.front().omega << " rad/s)\n";
+  } else {
+    std::cout << "continuous: no crossing (|k_e H| stays below the numerical part at every "
+                 "frequency)\n";
+  }
+}
+
+void run_compensated(const StabilityOptions& o) {
+  const config::Study study = core::load_study(o.study);
+  const CompensatedLoop loop = compensated_loop_of(study, o);
+  const core::CompensatedStability r = core::compensated_stability(
+      loop.kind, loop.period, loop.zeta, loop.alpha, loop.dt, loop.chosen->delay(),
+      loop.compensation, o.max_extra_delay, o.branches);
+  if (o.json)
+    std::cout << compensated_json(o, loop, r).dump(2) << "\n";
+  else
+    print_compensated(o, loop, r);
   if (!r.stable)
     throw ExitError(kExitRunFailed,
                     "the loop of case '" + o.case_name + "' is unstable as configured");

@@ -76,6 +76,84 @@ void write_plot(const std::vector<analysis::SweepTableRow>& table, const std::fi
   }
 }
 
+void warn_points_past_critical(const analysis::SweepGrid& grid) {
+  const analysis::SweepStabilityCheck stability = analysis::check_sweep_stability(grid);
+  if (stability.past == 0) return;
+  std::ostringstream warning;
+  warning << stability.past << " of " << stability.combinations
+          << " (period, fraction, dt, delay) points are past their critical delay; the worst: "
+          << stability.worst;
+  print_warning(warning.str());
+}
+
+// Where the sweep's table goes: out/sweep.<format>, or out/sweep.shard-I-of-N.csv for a shard.
+std::filesystem::path sweep_table_path(const SweepOptions& o, const config::Study& study,
+                                       const analysis::Shard& shard, tables::Format format) {
+  std::filesystem::path out = o.out;
+  if (out.empty()) out = study.output().directory();
+  if (out.empty())
+    out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
+  const bool sharded = shard.count > 1;
+  if (sharded && format != tables::Format::kCsv) {
+    throw ExitError(
+        kExitBadInput,
+        "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
+  }
+  return out / (sharded ? "sweep.shard-" + std::to_string(shard.index) + "-of-" +
+                              std::to_string(shard.count) + ".csv"
+                        : "sweep" + tables::extension(format));
+}
+
+void write_sweep_table(const std::filesystem::path& path, tables::Format format,
+                       const analysis::SweepGrid& grid, const analysis::Shard& shard,
+                       const std::vector<analysis::SweepRow>& rows,
+                       const std::vector<analysis::SweepTableRow>& table) {
+  try {
+    // The CSV keeps its own writer: its first line carries the grid hash and shard that merge
+    // checks.
+    if (format == tables::Format::kCsv) {
+      analysis::write_sweep_csv(path, grid, shard, rows);
+    } else {
+      tables::write_table(tables::sweep_table(table, grid.hash_hex(), grid.size()), path, format);
+    }
+  } catch (const std::exception& e) {
+    throw ExitError(kExitEnvironment, e.what());
+  }
+}
+
+struct SweepOutcome {
+  std::filesystem::path csv, png;
+  bool plot = false;
+  std::size_t points_run = 0;
+  double seconds = 0;
+};
+
+void report_sweep(const SweepOptions& o, const analysis::SweepGrid& grid,
+                  const analysis::Shard& shard, const SweepOutcome& r,
+                  const analysis::SweepTrends& trends) {
+  if (o.json) {
+    nlohmann::json summary = {{"csv", r.csv.string()},
+                              {"plot", r.plot ? nlohmann::json(r.png.string()) : nlohmann::json()},
+                              {"grid_hash", grid.hash_hex()},
+                              {"grid_points", grid.size()},
+                              {"shard", shard.to_string()},
+                              {"points_run", r.points_run},
+                              {"threads", util::resolve_threads(o.threads)},
+                              {"seconds", r.seconds},
+                              {"trends", trends_json(trends)}};
+    std::cout << summary.dump(2) << "\n";
+    return;
+  }
+  std::cout << "sweep " << shard.to_string() << ": " << r.points_run << " of " << grid.size()
+            << " points in " << r.seconds << " s (grid " << grid.hash_hex() << ")\n";
+  if (shard.count <= 1) print_trends(trends);
+  std::cout << "written: " << r.csv.string() << ", " << analysis::sweep_sidecar_path(r.csv).string()
+            << (r.plot ? ", " + r.png.string() + "/.svg, " +
+                             analysis::sweep_delay_plot_path(r.png).string() + "/.svg"
+                       : std::string())
+            << "\n";
+}
+
 void run_sweep_command(const SweepOptions& o) {
   if (o.config.empty())
     throw ExitError(kExitBadInput, "sweep: give a CONFIG, or use `rths sweep merge`");
@@ -86,81 +164,29 @@ void run_sweep_command(const SweepOptions& o) {
   if (!o.shard.empty()) options.shard = analysis::parse_shard(o.shard);
   options.threads = o.threads;
   options.general_path_only = o.general;
-  const analysis::SweepStabilityCheck stability = analysis::check_sweep_stability(grid);
-  if (stability.past > 0) {
-    std::ostringstream warning;
-    warning << stability.past << " of " << stability.combinations
-            << " (period, fraction, dt, delay) points are past their critical delay; the worst: "
-            << stability.worst;
-    print_warning(warning.str());
-  }
+  warn_points_past_critical(grid);
   ProgressReporter progress("sweep", "points");
   options.progress = [&progress](std::size_t done, std::size_t total) {
     progress.update(done, total);
   };
-
-  std::filesystem::path out = o.out;
-  if (out.empty()) out = study.output().directory();
-  if (out.empty())
-    out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
-  const bool sharded = options.shard.count > 1;
   const tables::Format format = tables::parse_format(o.format);
-  if (sharded && format != tables::Format::kCsv) {
-    throw ExitError(
-        kExitBadInput,
-        "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
-  }
-  const std::filesystem::path csv =
-      out / (sharded ? "sweep.shard-" + std::to_string(options.shard.index) + "-of-" +
-                           std::to_string(options.shard.count) + ".csv"
-                     : "sweep" + tables::extension(format));
+  SweepOutcome r;
+  r.csv = sweep_table_path(o, study, options.shard, format);
 
   const auto start = std::chrono::steady_clock::now();
   const std::vector<analysis::SweepRow> rows = analysis::run_sweep(grid, options);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.points_run = rows.size();
   const std::vector<analysis::SweepTableRow> table = analysis::to_table(grid, rows);
-  try {
-    // The CSV keeps its own writer: its first line carries the grid hash and shard that merge
-    // checks.
-    if (format == tables::Format::kCsv) {
-      analysis::write_sweep_csv(csv, grid, options.shard, rows);
-    } else {
-      tables::write_table(tables::sweep_table(table, grid.hash_hex(), grid.size()), csv, format);
-    }
-  } catch (const std::exception& e) {
-    throw ExitError(kExitEnvironment, e.what());
-  }
-  const std::filesystem::path png = out / "sweep.png";
-  const bool plot = !o.no_plots && !sharded && !rows.empty();
-  if (plot)
-    write_plot(table, png, study.name().empty() ? "sweep" : study.name(),
+  write_sweep_table(r.csv, format, grid, options.shard, rows, table);
+  r.png = r.csv.parent_path() / "sweep.png";
+  r.plot = !o.no_plots && options.shard.count <= 1 && !rows.empty();
+  if (r.plot)
+    write_plot(table, r.png, study.name().empty() ? "sweep" : study.name(),
                analysis::critical_delay_of(grid));
-  const analysis::SweepTrends trends = analysis::measure_trends(table);
-  if (o.json) {
-    nlohmann::json summary = {{"csv", csv.string()},
-                              {"plot", plot ? nlohmann::json(png.string()) : nlohmann::json()},
-                              {"grid_hash", grid.hash_hex()},
-                              {"grid_points", grid.size()},
-                              {"shard", options.shard.to_string()},
-                              {"points_run", rows.size()},
-                              {"threads", util::resolve_threads(o.threads)},
-                              {"seconds", seconds},
-                              {"trends", trends_json(trends)}};
-    std::cout << summary.dump(2) << "\n";
-  }
-  if (!o.json) {
-    std::cout << "sweep " << options.shard.to_string() << ": " << rows.size() << " of "
-              << grid.size() << " points in " << seconds << " s (grid " << grid.hash_hex() << ")\n";
-    if (!sharded) print_trends(trends);
-    std::cout << "written: " << csv.string() << ", " << analysis::sweep_sidecar_path(csv).string()
-              << (plot ? ", " + png.string() + "/.svg, " +
-                             analysis::sweep_delay_plot_path(png).string() + "/.svg"
-                       : std::string())
-              << "\n";
-  }
+  report_sweep(o, grid, options.shard, r, analysis::measure_trends(table));
   const std::size_t diverged = static_cast<std::size_t>(std::count_if(
-      rows.begin(), rows.end(), [](const analysis::SweepRow& r) { return r.diverged; }));
+      rows.begin(), rows.end(), [](const analysis::SweepRow& row) { return row.diverged; }));
   if (diverged > 0 && !o.allow_unstable && !study.sweep().expect_unstable()) {
     throw ExitError(kExitRunFailed,
                     std::to_string(diverged) + " of " + std::to_string(rows.size()) +

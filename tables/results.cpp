@@ -141,6 +141,36 @@ void set_record_attributes(const runtime::RecordContents& record, Table& t) {
   t.set_attribute("lost_steps", lost);
 }
 
+// Per link of the header, its samples' columns (node<id>_...): a step without this link's sample
+// (step 0 has no exchange) is missing, not zero.
+void add_link_columns(Table& t, const runtime::RunHeader& header,
+                      const std::vector<const runtime::StepRecord*>& steps) {
+  const auto links = static_cast<std::size_t>(header.link_node_ids_size());
+  for (std::size_t l = 0; l < links; ++l) {
+    const std::string prefix =
+        "node" + std::to_string(header.link_node_ids(static_cast<int>(l))) + "_";
+    const auto link = [&steps, l](auto field) {
+      std::vector<double> out;
+      out.reserve(steps.size());
+      for (const auto* s : steps) {
+        out.push_back(l < static_cast<std::size_t>(s->links_size())
+                          ? static_cast<double>(field(s->links(static_cast<int>(l))))
+                          : kMissing);
+      }
+      return out;
+    };
+    using Link = runtime::LinkSample;
+    t.add_numbers(prefix + "answered_step", "",
+                  link([](const Link& x) { return x.answered_step(); }));
+    t.add_numbers(prefix + "injected_lag_s", "s",
+                  link([](const Link& x) { return x.injected_lag(); }));
+    t.add_numbers(prefix + "round_trip_s", "s", link([](const Link& x) { return x.round_trip(); }));
+    t.add_numbers(prefix + "one_way_down_s", "s",
+                  link([](const Link& x) { return x.one_way_down(); }));
+    t.add_numbers(prefix + "one_way_up_s", "s", link([](const Link& x) { return x.one_way_up(); }));
+  }
+}
+
 }  // namespace
 
 Table record_table(const runtime::RecordContents& record) {
@@ -149,7 +179,6 @@ Table record_table(const runtime::RecordContents& record) {
   const std::vector<const runtime::StepRecord*> steps = record.steps();
   const auto dofs = static_cast<std::size_t>(header->dofs());
   const auto actuators = static_cast<std::size_t>(header->actuators());
-  const auto links = static_cast<std::size_t>(header->link_node_ids_size());
 
   // Per-step values of one repeated field, zero where a step carries fewer entries.
   const auto per_index = [&steps](auto field, std::size_t count) {
@@ -198,30 +227,7 @@ Table record_table(const runtime::RecordContents& record) {
   add_indexed("force", "N",
               per_index(
                   [](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
-  for (std::size_t l = 0; l < links; ++l) {
-    const std::string prefix =
-        "node" + std::to_string(header->link_node_ids(static_cast<int>(l))) + "_";
-    // A step without this link's sample (step 0 has no exchange) is missing, not zero.
-    const auto link = [&steps, l](auto field) {
-      std::vector<double> out;
-      out.reserve(steps.size());
-      for (const auto* s : steps) {
-        out.push_back(l < static_cast<std::size_t>(s->links_size())
-                          ? static_cast<double>(field(s->links(static_cast<int>(l))))
-                          : kMissing);
-      }
-      return out;
-    };
-    using Link = runtime::LinkSample;
-    t.add_numbers(prefix + "answered_step", "",
-                  link([](const Link& x) { return x.answered_step(); }));
-    t.add_numbers(prefix + "injected_lag_s", "s",
-                  link([](const Link& x) { return x.injected_lag(); }));
-    t.add_numbers(prefix + "round_trip_s", "s", link([](const Link& x) { return x.round_trip(); }));
-    t.add_numbers(prefix + "one_way_down_s", "s",
-                  link([](const Link& x) { return x.one_way_down(); }));
-    t.add_numbers(prefix + "one_way_up_s", "s", link([](const Link& x) { return x.one_way_up(); }));
-  }
+  add_link_columns(t, *header, steps);
   t.add_numbers("lateness_s", "s", scalar([](const Step& s) { return s.lateness(); }));
   t.add_numbers("overrun", "", scalar([](const Step& s) { return s.overrun() ? 1 : 0; }));
   set_record_attributes(record, t);
