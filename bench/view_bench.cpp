@@ -6,7 +6,14 @@
 //   this process's CPU time over the run (s; the difference is the view's: the feed's parsing on
 //   the record's writer thread, the server's threads, the JSON);
 //   this process's RSS at 10 / 50 / 95 % of the run (MB; flat = the view's rings are sized at
-//   the start).
+//   the start);
+//   the browser's CPU time (s, user + system, summed over Chromium's process tree from
+//   /proc/<pid>/stat, exited children included through their parent's cutime/cstime) from 2 s
+//   into the run (the page loaded) to its end, and as % of one core over that time.
+// --page-query Q opens the page at URL?Q (e.g. fps=30: the page's draw rate cap).
+// --browser-cpu N runs Chromium on CPU N alone (taskset) and both runs of a pair with the
+// deployment's pin_loop on --loop-cpu (default: 1 if N is 0, else 0), the nodes kept off it as
+// `rths launch` keeps them: the loop's CPU is then shared with nothing of the page's.
 // Target: overruns with the view within +0.02 points of the run without it; wake-up
 // to command unchanged. The view runs as `rths-coordinator --view` runs it: with the in-process
 // prediction computed before the run (view::describe_run, outside the CPU window).
@@ -16,10 +23,11 @@
 // prints each sample, the first and last minute's mean and the maximum (flat: the view's rings
 // are sized at the header, so after the first minute nothing grows).
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
-//                   [--failsafe-periods N]
+//                   [--failsafe-periods N] [--page-query Q] [--browser-cpu N [--loop-cpu N]]
 //   rths_view_bench --rss-minutes 10 [--rss-every 10] [--rate HZ] [--domain D]
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -27,7 +35,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "bench/bench_support.h"
@@ -46,14 +56,18 @@ namespace {
 using namespace rths;
 using namespace std::chrono_literals;
 
-// `motion`: a motion block; `failsafe`: the fail-safe windows in periods.
-std::string study_text(double rate, const std::string& motion, int domain, int failsafe) {
+// `motion`: a motion block; `failsafe`: the fail-safe windows in periods; `loop_cpu` >= 0: the
+// loop thread pinned there alone (pin_loop).
+std::string study_text(double rate, const std::string& motion, int domain, int failsafe,
+                       int loop_cpu) {
+  const std::string pin =
+      loop_cpu >= 0 ? " pin_loop: true loop_cpu: " + std::to_string(loop_cpu) : "";
   return bench::sdof_study_text(
       "view_bench", 1.0 / rate, motion,
       "deployment { domain_id: " + std::to_string(domain) +
           " clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: " +
           std::to_string(failsafe) + " command_watchdog_periods: " + std::to_string(failsafe) +
-          " }\n");
+          pin + " }\n");
 }
 
 // The 1979 record repeated end to end to `seconds`, as a one-column file (m/s^2) in `dir`; its
@@ -81,6 +95,38 @@ double cpu_seconds() {
          1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
+// User + system CPU (s) of the process tree under `root`: each live process's utime + stime +
+// cutime + cstime (the last two: its exited, reaped children), from /proc/<pid>/stat.
+double tree_cpu_seconds(pid_t root) {
+  std::map<pid_t, pid_t> parent;
+  std::map<pid_t, double> ticks;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(entry.path() / "stat");
+    std::string line;
+    if (!std::getline(in, line)) continue;  // gone meanwhile
+    const auto close = line.rfind(')');     // the command name may hold spaces
+    if (close == std::string::npos) continue;
+    std::istringstream fields(line.substr(close + 2));
+    std::vector<std::string> f;
+    for (std::string v; fields >> v && f.size() < 15;) f.push_back(v);
+    if (f.size() < 15) continue;
+    // After the name: state(0) ppid(1) ... utime(11) stime(12) cutime(13) cstime(14).
+    const auto pid = static_cast<pid_t>(std::stol(name));
+    parent[pid] = static_cast<pid_t>(std::stol(f[1]));
+    ticks[pid] = std::stod(f[11]) + std::stod(f[12]) + std::stod(f[13]) + std::stod(f[14]);
+  }
+  double sum = 0;
+  for (const auto& [pid, t] : ticks) {
+    pid_t p = pid;
+    for (int depth = 0; p > 1 && p != root && depth < 64; ++depth)
+      p = parent.count(p) ? parent[p] : 0;
+    if (p == root) sum += t;
+  }
+  return sum / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
 double rss_mb() {
   std::ifstream status("/proc/self/status");
   for (std::string line; std::getline(status, line);)
@@ -93,7 +139,10 @@ struct Spec {
   double rate = 1024, seconds = 20;
   int domain = 215, failsafe = 30;
   bool with_view = false, browser = false;
-  double rss_every = 0;  // s between RSS samples; 0: at 10, 50 and 95 % of the run
+  double rss_every = 0;    // s between RSS samples; 0: at 10, 50 and 95 % of the run
+  std::string page_query;  // appended to the page's URL after '?'
+  int browser_cpu = -1;    // >= 0: Chromium on this CPU alone (taskset)
+  int loop_cpu = -1;       // >= 0: the deployment's pin_loop on this CPU
 };
 
 struct Figures {
@@ -101,7 +150,24 @@ struct Figures {
   std::vector<std::pair<double, double>> rss;  // (s into the run, MB)
   std::string status;
   std::uint64_t streams_served = 0, updates_sent = 0;  // the view's, to the browser
+  double browser_cpu_s = 0, browser_window_s = 0;      // Chromium's CPU over that wall time
 };
+
+// Chromium's CPU from 2 s into the run (its page loaded) until `done`.
+std::thread browser_cpu_sampler(pid_t chromium, Figures& f, const std::atomic<bool>& done) {
+  return std::thread([chromium, &f, &done] {
+    const auto start = std::chrono::steady_clock::now();
+    while (!done && std::chrono::steady_clock::now() - start < 2s)
+      std::this_thread::sleep_for(20ms);
+    if (done) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = tree_cpu_seconds(chromium);
+    while (!done) std::this_thread::sleep_for(20ms);
+    f.browser_cpu_s = tree_cpu_seconds(chromium) - c0;
+    f.browser_window_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  });
+}
 
 // Samples this process's RSS while the run goes, until `done`.
 std::thread rss_sampler(const Spec& spec, std::vector<std::pair<double, double>>& out,
@@ -131,21 +197,24 @@ struct View {
   view::Feed feed;
   std::unique_ptr<view::ViewServer> server;
   std::optional<runtime::ChildProcess> chromium;
-  View(const core::PreparedStudy& prepared, const std::filesystem::path& dir, bool browser) {
+  View(const core::PreparedStudy& prepared, const std::filesystem::path& dir, const Spec& spec) {
     view::describe_run(feed, prepared, "");
     view::ServerOptions loopback_any_port;
     loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};
     server = std::make_unique<view::ViewServer>(feed, std::move(loopback_any_port));
-    if (!browser) return;
+    if (!spec.browser) return;
     const auto profile = dir / "chromium_profile";
     std::filesystem::remove_all(profile);
+    runtime::ChildOptions options;
+    if (spec.browser_cpu >= 0) options.prefix = {"taskset", "-c", std::to_string(spec.browser_cpu)};
+    const std::string url = server->url() + (spec.page_query.empty() ? "" : "?" + spec.page_query);
     chromium.emplace(
         "/usr/bin/chromium",
         std::vector<std::string>{"--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
                                  "--no-first-run", "--disable-background-networking",
                                  "--disable-component-update", "--disable-sync",
-                                 "--user-data-dir=" + profile.string(), server->url()},
-        dir / "chromium.log");
+                                 "--user-data-dir=" + profile.string(), url},
+        dir / "chromium.log", options);
   }
 };
 
@@ -174,24 +243,27 @@ Figures run(const Spec& spec) {
   bench::DistributedRun distributed(
       {.directory = directory,
        .run_id = "view-bench-" + spec.name,
-       .study_text = study_text(spec.rate, motion, spec.domain, spec.failsafe),
+       .study_text = study_text(spec.rate, motion, spec.domain, spec.failsafe, spec.loop_cpu),
        .domain = spec.domain,
        .nodes = {},
-       .keep_off_loop_cpu = false});
+       .keep_off_loop_cpu = spec.loop_cpu >= 0});
   coordinator::CoordinatorOptions options;
   if (spec.with_view) {
-    view.emplace(distributed.prepared(), dir, spec.browser);
+    view.emplace(distributed.prepared(), dir, spec);
     options.record_observer = &view->feed;
   }
   coordinator::Coordinator& coordinator = distributed.start(options);
   Figures f;
   std::atomic<bool> done{false};
   std::thread sampler = rss_sampler(spec, f.rss, done);
+  std::thread browser_sampler;
+  if (view && view->chromium) browser_sampler = browser_cpu_sampler(view->chromium->pid(), f, done);
   const double cpu0 = cpu_seconds();
   const auto outcome = coordinator.run();
   f.cpu_s = cpu_seconds() - cpu0;
   done = true;
   sampler.join();
+  if (browser_sampler.joinable()) browser_sampler.join();
   if (view) {
     const nlohmann::json counters = view->server->counters();
     f.streams_served = counters["streams_served"];
@@ -212,6 +284,10 @@ double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+double browser_pct(const Figures& f) {
+  return f.browser_window_s > 0 ? 100.0 * f.browser_cpu_s / f.browser_window_s : 0;
+}
+
 void print(const char* label, const Figures& f) {
   std::printf("  %-9s overruns %.3f %%  wake-up to command %.1f / %.1f us  CPU %.2f s  RSS", label,
               f.overrun_pct, f.latency_median_us, f.latency_p99_us, f.cpu_s);
@@ -219,6 +295,9 @@ void print(const char* label, const Figures& f) {
   std::printf(" MB  (%s; %llu updates sent to %llu page(s))\n", f.status.c_str(),
               static_cast<unsigned long long>(f.updates_sent),
               static_cast<unsigned long long>(f.streams_served));
+  if (f.browser_window_s > 0)
+    std::printf("            browser CPU %.2f s in %.1f s (%.1f %% of a core)\n", f.browser_cpu_s,
+                f.browser_window_s, browser_pct(f));
 }
 
 std::string load_average() {
@@ -230,7 +309,8 @@ std::string load_average() {
 
 // Pairs of runs without and with the view; medians.
 void pairs(Spec spec, int repeat, bool browser) {
-  std::vector<double> off_overruns, on_overruns, off_latency, on_latency, off_cpu, on_cpu;
+  std::vector<double> off_overruns, on_overruns, off_latency, on_latency, off_cpu, on_cpu,
+      browser_cpu;
   for (int i = 0; i < repeat; ++i) {
     spec.name = "off_" + std::to_string(i);
     spec.with_view = spec.browser = false;
@@ -249,6 +329,7 @@ void pairs(Spec spec, int repeat, bool browser) {
     on_latency.push_back(on.latency_median_us);
     off_cpu.push_back(off.cpu_s);
     on_cpu.push_back(on.cpu_s);
+    browser_cpu.push_back(browser_pct(on));
     std::fflush(stdout);
   }
   std::printf(
@@ -258,6 +339,10 @@ void pairs(Spec spec, int repeat, bool browser) {
       repeat, median(off_overruns), median(on_overruns), median(on_overruns) - median(off_overruns),
       median(off_latency), median(on_latency), median(on_cpu) - median(off_cpu), spec.seconds,
       100.0 * (median(on_cpu) - median(off_cpu)) / spec.seconds);
+  if (browser)
+    std::printf("   the browser's CPU %.1f %% of a core (median; page %s%s%s)\n",
+                median(browser_cpu), spec.page_query.empty() ? "as served" : "?",
+                spec.page_query.c_str(), spec.browser_cpu >= 0 ? ", Chromium pinned" : "");
 }
 
 double mean_between(const std::vector<std::pair<double, double>>& rss, double from, double to) {
@@ -318,7 +403,25 @@ int main(int argc, char** argv) {
   app.add_option("--rss-every", spec.rss_every, "s between RSS samples of --rss-minutes")
       ->default_val(10.0)
       ->check(CLI::Range(1.0, 600.0));
+  app.add_option("--page-query", spec.page_query, "opens the page at URL?Q, e.g. fps=30");
+  app.add_option("--browser-cpu", spec.browser_cpu,
+                 "Chromium on this CPU alone (taskset); the loop pinned alone on --loop-cpu")
+      ->check(CLI::Range(0, 1023));
+  app.add_option("--loop-cpu", spec.loop_cpu,
+                 "with --browser-cpu: the deployment's loop_cpu (default 1 if the browser's is 0, "
+                 "else 0)")
+      ->check(CLI::Range(0, 1023));
   CLI11_PARSE(app, argc, argv);
+  if (spec.browser_cpu >= 0 && spec.loop_cpu < 0) spec.loop_cpu = spec.browser_cpu == 0 ? 1 : 0;
+  if (spec.loop_cpu >= 0 && spec.browser_cpu < 0) {
+    std::fprintf(stderr, "--loop-cpu %d needs --browser-cpu\n", spec.loop_cpu);
+    return 2;
+  }
+  if (spec.loop_cpu >= 0 && spec.loop_cpu == spec.browser_cpu) {
+    std::fprintf(stderr, "--loop-cpu %d: must differ from --browser-cpu %d\n", spec.loop_cpu,
+                 spec.browser_cpu);
+    return 2;
+  }
   runtime::ensure_dds_config();
   spdlog::set_level(spdlog::level::warn);
   const bool browser = !no_browser && std::filesystem::exists("/usr/bin/chromium");
