@@ -8,8 +8,9 @@
 //   this process's RSS at 10 / 50 / 95 % of the run (MB; flat = the view's rings are sized at
 //   the start);
 //   the browser's CPU time (s, user + system, summed over Chromium's process tree from
-//   /proc/<pid>/stat, exited children included through their parent's cutime/cstime) from 2 s
-//   into the run (the page loaded) to its end, and as % of one core over that time.
+//   /proc/<pid>/stat, exited children included through their parent's cutime/cstime) over the
+//   run, and as % of one core. Chromium starts before the run, which starts once the page has
+//   opened its stream and settled: its start-up's CPU is in neither run.
 // --page-query Q opens the page at URL?Q (e.g. fps=30: the page's draw rate cap).
 // --browser-cpu N runs Chromium on CPU N alone (taskset) and both runs of a pair with the
 // deployment's pin_loop on --loop-cpu (default: 1 if N is 0, else 0), the nodes kept off it as
@@ -153,13 +154,9 @@ struct Figures {
   double browser_cpu_s = 0, browser_window_s = 0;      // Chromium's CPU over that wall time
 };
 
-// Chromium's CPU from 2 s into the run (its page loaded) until `done`.
+// Chromium's CPU from the run's start (its page already open) until `done`.
 std::thread browser_cpu_sampler(pid_t chromium, Figures& f, const std::atomic<bool>& done) {
   return std::thread([chromium, &f, &done] {
-    const auto start = std::chrono::steady_clock::now();
-    while (!done && std::chrono::steady_clock::now() - start < 2s)
-      std::this_thread::sleep_for(20ms);
-    if (done) return;
     const auto t0 = std::chrono::steady_clock::now();
     const double c0 = tree_cpu_seconds(chromium);
     while (!done) std::this_thread::sleep_for(20ms);
@@ -215,6 +212,19 @@ struct View {
                                  "--disable-component-update", "--disable-sync",
                                  "--user-data-dir=" + profile.string(), url},
         dir / "chromium.log", options);
+    wait_for_page();
+  }
+
+  // Chromium's start-up takes seconds of CPU: the run starts once the page has opened its stream
+  // and settled (1 s more), so neither the run nor the browser's figure includes it.
+  void wait_for_page() const {
+    const auto until = std::chrono::steady_clock::now() + 60s;
+    while (server->counters()["streams_served"] == 0) {
+      if (std::chrono::steady_clock::now() > until)
+        throw std::runtime_error("Chromium did not open the page within 60 s (see its log)");
+      std::this_thread::sleep_for(50ms);
+    }
+    std::this_thread::sleep_for(1s);
   }
 };
 

@@ -2,7 +2,8 @@
 // `rths launch --view` of a lockstep and of real-time runs over Cyclone DDS (domains 212-214),
 // and `rths view RECORD`. Skipped, with the reason printed, where Chromium cannot start.
 // Screenshots go to RTHS_VIEW_TEST_OUT (view_lockstep.png, view_live.png, view_hold.png,
-// view_replay.png).
+// view_replay_early.png, view_replay.png). The page's drawing: ?fps=N caps its draws, none while
+// hidden, decimated series are whole samples of the record, the spectrum's note before its first.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn } from 'node:child_process';
@@ -128,8 +129,16 @@ test('lockstep over DDS: the step counter advances and the plotted series are th
   const csv = csvColumns(exported);
   const command = csv.command1_m, measured = csv.realised1_m;  // m, the record's columns
   assert.ok(command && measured, 'record columns: ' + Object.keys(csv).join(','));
-  const plotted = await view(page, () => ({ steps: window.rthsView.drawn.steps, data: window.rthsView.plots.act[0].cmd.data }));
+  const plotted = await view(page, () => ({ steps: window.rthsView.drawn.steps, data: window.rthsView.plots.act[0].cmd.data,
+    window: window.rthsView.drawn.i1 - window.rthsView.drawn.i0, width: window.rthsView.plots.act[0].cmd.width,
+    noteHidden: window.rthsView.plots.act.map(p => p.spec.note.hidden) }));
   assert.ok(plotted.steps.length > 100, 'plotted points: ' + plotted.steps.length);
+  // The 10 s window holds more samples than the chart has pixels: every k-th whole sample drawn.
+  assert.ok(plotted.window > plotted.width && plotted.steps.length <= plotted.width + 2,
+    `${plotted.steps.length} points drawn of ${plotted.window} samples on ${plotted.width} px`);
+  assert.equal(plotted.data[0].length, plotted.steps.length);
+  plotted.steps.forEach((s, i) => i && assert.ok(s > plotted.steps[i - 1], `steps drawn in order at ${i}`));
+  assert.deepEqual(plotted.noteHidden, [true], 'the spectrum\'s note is gone once it has a spectrum');
   const row = Object.fromEntries(csv.step.map((s, i) => [s, i]));
   plotted.steps.forEach((s, i) => {
     assert.ok(Math.abs(plotted.data[1][i] - command[row[s]] * 1e3) <= 1e-9 * Math.max(1, Math.abs(plotted.data[1][i])), `command at step ${s}`);
@@ -215,6 +224,41 @@ async function checkSpectrum(page, csv, row) {
   });
 }
 
+const sleep = ms => new Promise(r => setTimeout(r, ms));
+const counts = page => view(page, () => ({ draws: window.rthsView.draws, updates: window.rthsView.updates,
+  ms: performance.now(), step: window.rthsView.status.latest_step }));
+
+// ?fps=N: while updates keep arriving, the page draws at most N times a second (draws are at least
+// 1000/N ms apart; a slow machine only draws less), and still draws; the step on the page follows.
+async function checkDrawRate(page, fps) {
+  assert.equal(await view(page, () => window.rthsView.fps), fps);
+  const a = await counts(page);
+  await sleep(3000);
+  const b = await counts(page);
+  const draws = b.draws - a.draws, seconds = (b.ms - a.ms) / 1e3;
+  console.log(`# ?fps=${fps}: ${draws} draws and ${b.updates - a.updates} updates in ${seconds.toFixed(1)} s`);
+  assert.ok(draws >= 1 && draws <= fps * seconds + 1, `${draws} draws in ${seconds} s at ?fps=${fps}`);
+  assert.ok(b.updates - a.updates >= draws && b.step > a.step, 'updates merge at least as often as the page draws');
+}
+
+// Hidden (document.visibilityState): no draws while updates arrive; visible again: drawing resumes.
+async function checkHidden(page) {
+  const hide = hidden => view(page, h => {
+    if (h) Object.defineProperty(document, 'visibilityState', { value: 'hidden', configurable: true });
+    else delete document.visibilityState;
+    document.dispatchEvent(new Event('visibilitychange'));
+  }, hidden);
+  await hide(true);
+  await sleep(1000);  // a draw scheduled before hiding may still land
+  const a = await counts(page);
+  await sleep(2000);
+  const b = await counts(page);
+  assert.equal(b.draws, a.draws, 'no draws while hidden');
+  assert.ok(b.updates > a.updates, 'updates still merge while hidden');
+  await hide(false);
+  await until('a draw once visible again', async () => (await counts(page)).draws > b.draws, 10000);
+}
+
 // The substructure node's pid, found by its command line (domain and node id).
 function nodePid(domain, program) {
   for (const pid of fs.readdirSync('/proc').filter(p => /^\d+$/.test(p))) {
@@ -233,6 +277,7 @@ test('real time over DDS: a HOLD after a node is killed is on the page within 1 
   const page = await open(url);
   await until('step 3000 on the page', async () => (await step(page)) > 3000);
   await page.screenshot({ path: path.join(OUT, 'view_live.png'), fullPage: true });
+  await checkDrawRate(page, 10);  // the default cap
   const pid = nodePid(213, 'rths-substructure-node');
   assert.ok(pid, 'the substructure node is running');
   process.kill(pid, 'SIGKILL');
@@ -255,8 +300,10 @@ test('real time over DDS: the stop button stops the run, HOLD then STOP, "stoppe
   if (skip) return t.skip(skip);
   const dir = path.join(OUT, 'stop');
   const { child, url, log } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 214 }), 214, ['--view-stop']);
-  const page = await open(url);
+  const page = await open(url + '?fps=2');
   await until('step 1000 on the page', async () => (await step(page)) > 1000);
+  await checkDrawRate(page, 2);
+  await checkHidden(page);
   await page.click('#stop');
   const code = await until('rths launch to end', () => child.exitCode !== null ? { code: child.exitCode } : null, 30000);
   assert.equal(code.code, 1, child.output);
@@ -282,8 +329,17 @@ test('rths view RECORD: the finished record with a time slider', { timeout: 1200
   await until('the slider', () => page.isVisible('#slider'));
   assert.equal(await view(page, () => window.rthsView.mode), 'replay');
   const all = await view(page, () => window.rthsView.drawn.i1);
+  assert.equal(await page.isVisible('.chart-note'), false, 'no spectrum note at the record\'s end');
+  // Before the first full window of steps the spectrum chart says when its spectrum comes.
+  const firstS = await view(page, () => window.rthsView.header.spectrum_window_s / 2);
+  await page.$eval('#slider', (s, v) => { s.value = String(v); s.dispatchEvent(new Event('input')); }, firstS);
+  await until('the spectrum note before the first spectrum', () => page.isVisible('.chart-note'), 10000);
+  assert.match(await page.textContent('.chart-note'), /^spectrum after the first \d+\.\d\d s of the test \(a full window\)$/);
+  assert.deepEqual(await view(page, () => window.rthsView.plots.act[0].spec.data[1]), []);
+  await page.screenshot({ path: path.join(OUT, 'view_replay_early.png'), fullPage: true });
   await page.$eval('#slider', s => { s.value = String(Number(s.max) / 2); s.dispatchEvent(new Event('input')); });
   await until('the charts to follow the slider', () => view(page, n => window.rthsView.drawn.i1 < n, all));
+  await until('the spectrum note gone with a spectrum', async () => !(await page.isVisible('.chart-note')), 10000);
   assert.equal(await page.textContent('#state'), 'HOLD · stopped');
   const exported = path.join(OUT, 'hold', 'record.csv');
   const ex = start(['export', record, '--csv', exported]);

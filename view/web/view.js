@@ -4,14 +4,27 @@
 // Units: displacement mm, force N, lag and lateness ms, time s, frequency Hz (log axis), TI mm^2.
 // The response (per floor or DOF) is drawn against the in-process prediction when the view was
 // given one (null where there is none), with their running difference.
+// Drawing: updates merge at the server's rate; the charts are redrawn at most FPS times a second
+// while live (URL parameter ?fps=N, 1-60, default 10), not at all while the page is hidden, only
+// the charts whose data changed, and with at most about one sample per pixel of a chart's width
+// (every k-th whole sample of the window, see picks()). The status line (step, how far behind)
+// follows every update.
 'use strict';
 const WINDOW_S = 10;
+const FPS = fpsParameter();
 const COLORS = ['#1f5fbf', '#d1451b', '#2a8f2a', '#8e44ad'];
 const V = window.rthsView = {
   header: null, context: null, cols: null, spectra: [], events: [], status: null,
   mode: 'live', plots: {}, updates: 0, holdSeenMs: null, health: null,
+  fps: FPS, draws: 0, lastDrawMs: -1e9, drawnKey: null,
 };
 const $ = id => document.getElementById(id);
+
+// ?fps=N: draws per second while live, an integer 1-60; anything else keeps the default 10.
+function fpsParameter() {
+  const n = Number(new URLSearchParams(location.search).get('fps'));
+  return Number.isInteger(n) && n >= 1 && n <= 60 ? n : 10;
+}
 
 function chartWidth() { return Math.max(300, Math.floor((window.innerWidth - 60) / 3)); }
 
@@ -40,9 +53,10 @@ function xyPlot(el, title, xLabel, yLabel, color) {
   }, [null, [[], []]], el);
 }
 
-// Amplitude (mm) against frequency on a log axis (Hz): decades 1, 10, 100 labelled.
-function spectrumPlot(el, title, color) {
-  return new uPlot({
+// Amplitude (mm) against frequency on a log axis (Hz): decades 1, 10, 100 labelled. Until its
+// first spectrum it says when that comes (`note`: the chart's .note element).
+function spectrumPlot(el, title, color, waitS) {
+  const u = new uPlot({
     title, width: chartWidth(), height: 210, class: 'chart',
     scales: { x: { time: false, distr: 3, log: 10 } },
     series: [{ label: 'frequency (Hz)' }, { label: 'amplitude (mm)', stroke: color, width: 1.5 }],
@@ -51,6 +65,11 @@ function spectrumPlot(el, title, color) {
              values: (u, splits) => splits.map(v => [0.1, 1, 10, 100, 1000].includes(Math.round(v * 1e6) / 1e6) ? String(v) : '') },
            { label: 'error amplitude (mm)', size: 60 }],
   }, [[], []], el);
+  u.note = document.createElement('div');
+  u.note.className = 'chart-note';
+  u.note.textContent = 'spectrum after the first ' + waitS.toFixed(2) + ' s of the test (a full window)';
+  u.over.appendChild(u.note);
+  return u;
 }
 
 function row(parent, heading) {
@@ -94,7 +113,8 @@ function buildCharts() {
     V.plots.act.push({
       cmd: timePlot(r, 'command vs measured displacement', 'displacement (mm)', ['command (mm)', 'measured (mm)'], ['#1f5fbf', '#d1451b']),
       err: timePlot(r, 'tracking error (command − measured)', 'error (mm)', ['error (mm)'], [c]),
-      spec: spectrumPlot(r, 'tracking error spectrum (last ' + h.spectrum_window_s.toFixed(2) + ' s, Hann)', c),
+      spec: spectrumPlot(r, 'tracking error spectrum (last ' + h.spectrum_window_s.toFixed(2) + ' s, Hann)', c,
+        h.spectrum_window_s),
       sync: xyPlot(r, 'synchronisation: measured vs command', 'command (mm)', 'measured (mm)', c),
       ti: timePlot(r, 'tracking indicator (grows when the actuator lags)', 'TI (mm²)', ['TI (mm²)'], [c]),
       hyst: xyPlot(r, 'force vs measured displacement', 'measured displacement (mm)', 'force (N)', c),
@@ -108,7 +128,7 @@ function buildCharts() {
 }
 
 function reset(header, context) {
-  V.header = header; V.context = context; V.spectra = []; V.events = [];
+  V.header = header; V.context = context; V.spectra = []; V.events = []; V.drawnKey = null;
   V.cols = { step: [], time_s: [], lateness_ms: [], overruns: [], late_feedback: [] };
   for (const k of ['u_mm', 'predicted_u_mm', 'difference_mm'])
     V.cols[k] = Array.from({ length: header.dofs }, () => []);
@@ -153,26 +173,47 @@ function visible(windowed) {
   return [i0, end];
 }
 
-function drawActuator(a, p, i0, i1) {
-  const c = V.cols, t = c.time_s.slice(i0, i1);
-  const cmd = c.command_mm[a].slice(i0, i1), meas = c.measured_mm[a].slice(i0, i1);
-  p.cmd.setData([t, cmd, meas]);
-  p.err.setData([t, c.error_mm[a].slice(i0, i1)]);
-  p.ti.setData([t, c.ti_mm2[a].slice(i0, i1)]);
-  const [x0, x1] = visible(true);
-  p.sync.setData([null, [c.command_mm[a].slice(x0, x1), c.measured_mm[a].slice(x0, x1)]]);
-  p.hyst.setData([null, [c.measured_mm[a].slice(x0, x1), c.force_N[a].slice(x0, x1)]]);
-  const tEnd = i1 ? c.time_s[i1 - 1] : 0;
-  let spec = null;
-  for (const s of V.spectra) if (s.time_s <= tEnd + 1e-12) spec = s;
-  p.spec.setData(spec ? [V.header.spectrum_hz, spec.amplitude_mm[a]] : [[], []]);
-  p.specStep = spec ? spec.step : null;
+// The indices drawn of the window [i0, i1): every k-th sample, k = ceil((i1 - i0) / width px),
+// counted from the first sample received so the picks stay put as the window slides, and the
+// newest sample. Whole samples: the plotted values are the record's at the steps drawn.
+function picks(i0, i1, width) {
+  const k = Math.max(1, Math.ceil((i1 - i0) / width)), idx = [];
+  for (let i = Math.ceil(i0 / k) * k; i < i1; i += k) idx.push(i);
+  if (i1 > i0 && idx[idx.length - 1] !== i1 - 1) idx.push(i1 - 1);
+  return idx;
 }
 
-function drawResponse(i0, i1) {
-  const c = V.cols, t = c.time_s.slice(i0, i1);
-  V.plots.resp.forEach((p, d) => p.setData([t, c.u_mm[d].slice(i0, i1), c.predicted_u_mm[d].slice(i0, i1)]));
-  V.plots.diff.setData([t, ...c.difference_mm.map(col => col.slice(i0, i1))]);
+const at = (col, idx) => idx.map(i => col[i]);
+
+// The newest spectrum up to time tEnd (s), or null.
+function spectrumUpTo(tEnd) {
+  let spec = null;
+  for (const s of V.spectra) if (s.time_s <= tEnd + 1e-12) spec = s;
+  return spec;
+}
+
+// The spectrum chart, only when its spectrum changed; its note shows while it has none.
+function drawSpectrum(a, p, spec) {
+  const step = spec ? spec.step : null;
+  if (step === p.specStep && p.specDrawn) return;
+  p.spec.setData(spec ? [V.header.spectrum_hz, spec.amplitude_mm[a]] : [[], []]);
+  p.spec.note.hidden = spec !== null;
+  p.specStep = step; p.specDrawn = true;
+}
+
+function drawActuator(a, p, t, idx, xy) {
+  const c = V.cols;
+  p.cmd.setData([t, at(c.command_mm[a], idx), at(c.measured_mm[a], idx)]);
+  p.err.setData([t, at(c.error_mm[a], idx)]);
+  p.ti.setData([t, at(c.ti_mm2[a], idx)]);
+  p.sync.setData([null, [at(c.command_mm[a], xy), at(c.measured_mm[a], xy)]]);
+  p.hyst.setData([null, [at(c.measured_mm[a], xy), at(c.force_N[a], xy)]]);
+}
+
+function drawResponse(t, idx) {
+  const c = V.cols;
+  V.plots.resp.forEach((p, d) => p.setData([t, at(c.u_mm[d], idx), at(c.predicted_u_mm[d], idx)]));
+  V.plots.diff.setData([t, ...c.difference_mm.map(col => at(col, idx))]);
 }
 
 // Max and RMS of measured − predicted so far, per floor (the feed's, over the samples compared).
@@ -184,17 +225,44 @@ function showPrediction(st) {
     ' (over ' + p.compared_samples + ' samples)';
 }
 
+// Redraws what changed since the last draw: the time and x-y charts when the window of samples
+// moved, each spectrum when its newest spectrum did. V.draws counts the draws that set data.
 function draw() {
-  V.drawPending = false;
+  V.drawPending = false; V.lastDrawMs = performance.now();
   if (!V.cols) return;
-  const [i0, i1] = visible(false), c = V.cols, t = c.time_s.slice(i0, i1);
-  V.plots.act.forEach((p, a) => drawActuator(a, p, i0, i1));
-  drawResponse(i0, i1);
-  V.plots.link.forEach((p, l) => p.setData([t, c.injected_ms[l].slice(i0, i1), c.round_trip_ms[l].slice(i0, i1)]));
-  V.plots.deadlines.setData([t, c.overruns.slice(i0, i1), c.late_feedback.slice(i0, i1)]);
-  V.plots.lateness.setData([t, c.lateness_ms.slice(i0, i1)]);
-  V.drawn = { i0, i1, steps: c.step.slice(i0, i1) };
+  const [i0, i1] = visible(false), [x0, x1] = visible(true), c = V.cols;
+  const key = [i0, i1, x0, x1].join();
+  let drew = false;
+  if (key !== V.drawnKey) {
+    V.drawnKey = key; drew = true;
+    const idx = picks(i0, i1, chartWidth()), xy = picks(x0, x1, chartWidth()), t = at(c.time_s, idx);
+    V.plots.act.forEach((p, a) => drawActuator(a, p, t, idx, xy));
+    drawResponse(t, idx);
+    V.plots.link.forEach((p, l) => p.setData([t, at(c.injected_ms[l], idx), at(c.round_trip_ms[l], idx)]));
+    V.plots.deadlines.setData([t, at(c.overruns, idx), at(c.late_feedback, idx)]);
+    V.plots.lateness.setData([t, at(c.lateness_ms, idx)]);
+    V.drawn = { i0, i1, steps: at(c.step, idx) };
+  }
+  const spec = spectrumUpTo(i1 ? c.time_s[i1 - 1] : 0);
+  V.plots.act.forEach((p, a) => {
+    const before = p.specStep;
+    drawSpectrum(a, p, spec);
+    drew = drew || p.specStep !== before;
+  });
+  if (drew) V.draws++;
 }
+
+// A draw FPS times a second at most while live, on the next animation frame; none while hidden
+// (a visibilitychange to visible schedules one).
+function scheduleDraw() {
+  if (V.drawPending || document.visibilityState === 'hidden') return;
+  V.drawPending = true;
+  const gap = V.mode === 'live' ? 1000 / V.fps : 0;
+  const wait = Math.max(0, V.lastDrawMs + gap - performance.now());
+  setTimeout(() => requestAnimationFrame(draw), wait);
+}
+
+document.addEventListener('visibilitychange', scheduleDraw);
 
 function showStatus(st) {
   V.status = st;
@@ -233,7 +301,7 @@ function setupReplay() {
   const end = t.length ? t[t.length - 1] : 0;
   $('replay').hidden = false; slider.max = end; slider.value = end;
   $('slider-end').textContent = end.toFixed(3); $('slider-time').textContent = end.toFixed(3);
-  slider.oninput = () => { $('slider-time').textContent = (+slider.value).toFixed(3); draw(); };
+  slider.oninput = () => { $('slider-time').textContent = (+slider.value).toFixed(3); scheduleDraw(); };
 }
 
 function onUpdate(u) {
@@ -242,7 +310,7 @@ function onUpdate(u) {
   showStatus(u.status);
   if (u.events && u.events.length) showEvents();
   if (u.status.finished && V.source) { V.source.close(); V.source = null; if (V.mode === 'replay') setupReplay(); }
-  if (!V.drawPending) { V.drawPending = true; requestAnimationFrame(draw); }
+  scheduleDraw();
 }
 
 function connect() {
