@@ -328,8 +328,11 @@ test('rths view RECORD: the finished record with a time slider', { timeout: 1200
   const page = await open(url);
   await until('the slider', () => page.isVisible('#slider'));
   assert.equal(await view(page, () => window.rthsView.mode), 'replay');
+  // The draw after the last update: the whole record, its last spectrum, no note.
+  await until('the whole record drawn', () => view(page, () => window.rthsView.drawn &&
+    window.rthsView.drawn.i1 === window.rthsView.cols.time_s.length), 10000);
   const all = await view(page, () => window.rthsView.drawn.i1);
-  assert.equal(await page.isVisible('.chart-note'), false, 'no spectrum note at the record\'s end');
+  await until('no spectrum note at the record\'s end', async () => !(await page.isVisible('.chart-note')), 10000);
   // Before the first full window of steps the spectrum chart says when its spectrum comes.
   const firstS = await view(page, () => window.rthsView.header.spectrum_window_s / 2);
   await page.$eval('#slider', (s, v) => { s.value = String(v); s.dispatchEvent(new Event('input')); }, firstS);

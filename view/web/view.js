@@ -7,8 +7,9 @@
 // Drawing: updates merge at the server's rate; the charts are redrawn at most FPS times a second
 // while live (URL parameter ?fps=N, 1-60, default 10), not at all while the page is hidden, only
 // the charts whose data changed, and with at most about one sample per pixel of a chart's width
-// (every k-th whole sample of the window, see picks()). The status line (step, how far behind)
-// follows every update.
+// (every k-th whole sample of the window, see picks()). The status line
+// (step, how far behind: from the newest update, at the time it is written) is written at each
+// draw, and at once when the run's state changes.
 'use strict';
 const WINDOW_S = 10;
 const FPS = fpsParameter();
@@ -229,6 +230,7 @@ function showPrediction(st) {
 // moved, each spectrum when its newest spectrum did. V.draws counts the draws that set data.
 function draw() {
   V.drawPending = false; V.lastDrawMs = performance.now();
+  if (V.status) showStatus(V.status);
   if (!V.cols) return;
   const [i0, i1] = visible(false), [x0, x1] = visible(true), c = V.cols;
   const key = [i0, i1, x0, x1].join();
@@ -264,12 +266,18 @@ function scheduleDraw() {
 
 document.addEventListener('visibilitychange', scheduleDraw);
 
+// The state badge's text: a HOLD stays on it after the run stopped (the footer often follows it
+// within an update).
+function stateText(st) {
+  const held = st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD'));
+  return held && st.state !== 'HOLD' ? 'HOLD · ' + st.state : st.state;
+}
+
+// Writes the status line: at each draw, and at once when the state changes (see onUpdate).
 function showStatus(st) {
-  V.status = st;
-  // A HOLD stays on the badge after the run stopped: the footer often follows it within an update.
   const held = st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD'));
   const state = $('state');
-  state.textContent = held && st.state !== 'HOLD' ? 'HOLD · ' + st.state : st.state;
+  state.textContent = V.shownState = stateText(st);
   state.className = 'state ' + (held ? 'HOLD' : st.state);
   if (held && V.holdSeenMs === null) V.holdSeenMs = Date.now();
   $('step').textContent = st.latest_step < 0 ? '–' : st.latest_step;
@@ -307,7 +315,8 @@ function setupReplay() {
 function onUpdate(u) {
   V.updates++; V.mode = u.mode || V.mode;
   merge(u);
-  showStatus(u.status);
+  V.status = u.status;
+  if (stateText(u.status) !== V.shownState || u.status.finished) showStatus(u.status);
   if (u.events && u.events.length) showEvents();
   if (u.status.finished && V.source) { V.source.close(); V.source = null; if (V.mode === 'replay') setupReplay(); }
   scheduleDraw();
