@@ -9,9 +9,12 @@
 //   state   the last kJudged round trips (a ring), whether the node is waited for, and how many
 //           answers since the last switch (or the start).
 //   rule    every kJudged answers, on the last kJudged: waiting and median(r) > wait -> stop
-//           waiting; not waiting and median(r) < wait / 2 -> wait again (the gap between the two
-//           keeps a round trip near the wait from switching every judgement). After a switch
-//           the next judgement waits kSettle answers.
+//           waiting; not waiting and median(r) < wait / 4 -> wait again. The gap is wide because
+//           waiting itself lengthens the round trip (by more than half at 4096 Hz on this project's
+//           VM: README), so a narrow one switches back and forth.
+//           The first judgement comes after kJudged answers, the one after the first switch
+//           after kSettle, and each later one after twice as many as the one before: a run
+//           switches a handful of times at most.
 //   output  a Switch (the new state and the median that decided it) when the state changed.
 // Allocation-free: fixed-size ring, the median on a stack copy.
 
@@ -24,7 +27,7 @@ namespace rths::coordinator {
 class AnswerWait {
  public:
   static constexpr std::size_t kJudged = 64;    // answers per judgement
-  static constexpr std::size_t kSettle = 1024;  // answers after a switch before the next one
+  static constexpr std::size_t kSettle = 1024;  // answers after the first switch before the next
 
   struct Switch {
     bool waiting = true;
@@ -40,7 +43,8 @@ class AnswerWait {
   double wait_;
   std::array<double, kJudged> ring_{};
   std::size_t next_ = 0, since_switch_ = 0;
-  bool waiting_ = true, switched_ = false;
+  std::size_t settle_ = kJudged;  // answers before the next judgement may switch
+  bool waiting_ = true;
 };
 
 }  // namespace rths::coordinator

@@ -46,11 +46,12 @@ TEST(AnswerWait, TheMedianDecidesNotTheOutliers) {
   EXPECT_FALSE(most_late.waiting());
 }
 
-TEST(AnswerWait, ARoundTripBetweenHalfTheWaitAndTheWaitKeepsTheStateItFinds) {
+TEST(AnswerWait, ARoundTripBetweenAQuarterOfTheWaitAndTheWaitKeepsTheStateItFinds) {
   AnswerWait w(kWait);
   ASSERT_GT(feed(w, 1000, 200e-6), 0u);
   ASSERT_FALSE(w.waiting());
-  EXPECT_EQ(feed(w, 20000, 0.75 * kWait), 0u);  // no flapping around the wait
+  EXPECT_EQ(feed(w, 20000, 0.3 * kWait), 0u);  // as fast as answers come while nobody waits
+  EXPECT_EQ(feed(w, 20000, 0.9 * kWait), 0u);
   EXPECT_FALSE(w.waiting());
 }
 
@@ -58,11 +59,14 @@ TEST(AnswerWait, FastAnswersAreWaitedForAgainOnlyAfterTheSettlingAnswers) {
   AnswerWait w(kWait);
   ASSERT_GT(feed(w, 1000, 200e-6), 0u);
   AnswerWait::Switch s;
-  EXPECT_EQ(feed(w, 10000, 40e-6, &s), AnswerWait::kSettle);
+  EXPECT_EQ(feed(w, 10000, 25e-6, &s), AnswerWait::kSettle);
   EXPECT_TRUE(s.waiting);
-  EXPECT_DOUBLE_EQ(s.median_round_trip, 40e-6);
+  EXPECT_DOUBLE_EQ(s.median_round_trip, 25e-6);
   EXPECT_TRUE(w.waiting());
-  EXPECT_EQ(feed(w, 10000, 200e-6), AnswerWait::kSettle);  // and settles again
+  // Each later switch waits twice as long as the one before: a round trip that keeps changing
+  // switches a handful of times in a run, not every second.
+  EXPECT_EQ(feed(w, 10000, 200e-6), 2 * AnswerWait::kSettle);
+  EXPECT_EQ(feed(w, 10000, 25e-6), 4 * AnswerWait::kSettle);
 }
 
 }  // namespace
