@@ -285,10 +285,11 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
 // real-time step wall at 1024 Hz, medians of `repeat` runs each, with the ratio to 1 + 1 nodes.
 void scaling_rows(int domain, int repeat, double seconds, const std::string& deployment_extra) {
   const NodeSet sets[] = {{1, 1}, {2, 1}, {4, 1}, {8, 1}, {1, 2}, {1, 4}, {8, 4}};
-  double base_one_cpu = 0, base_spread = 0;
+  double base_one_cpu = 0, base_spread = 0, base_placed = 0;
   std::printf(
       "nodes (substructure + emulator) | lockstep steps/s one CPU (x 1+1) | spread (x 1+1) | "
-      "real time 1024 Hz: step wall median / p99 us, overruns %%\n");
+      "as rths launch places it (x 1+1) | real time 1024 Hz: step wall median / p99 us, overruns "
+      "%%\n");
   for (const NodeSet n : sets) {
     std::vector<double> one_cpu, spread, wall, wall99, overruns;
     for (int r = 0; r < repeat; ++r) {
@@ -312,11 +313,14 @@ void scaling_rows(int domain, int repeat, double seconds, const std::string& dep
       overruns.push_back(100.0 * static_cast<double>(rt.overruns) / static_cast<double>(rt.steps));
     }
     const double o = runtime::summarize(one_cpu).median, sp = runtime::summarize(spread).median;
-    if (base_one_cpu == 0) base_one_cpu = o, base_spread = sp;
-    std::printf("%d + %d | %.0f (%.2f) | %.0f (%.2f) | %.1f / %.1f, %.3f %%\n", n.substructures,
-                n.emulators, o, o / base_one_cpu, sp, sp / base_spread,
-                runtime::summarize(wall).median * 1e6, runtime::summarize(wall99).median * 1e6,
-                runtime::summarize(overruns).median);
+    config::Deployment lockstep;
+    for (int i = 0; i < n.substructures + n.emulators; ++i) lockstep.add_nodes();
+    const double placed = runtime::on_one_cpu(runtime::CpuPlacement::kAuto, lockstep) ? o : sp;
+    if (base_one_cpu == 0) base_one_cpu = o, base_spread = sp, base_placed = placed;
+    std::printf("%d + %d | %.0f (%.2f) | %.0f (%.2f) | %.0f (%.2f) | %.1f / %.1f, %.3f %%\n",
+                n.substructures, n.emulators, o, o / base_one_cpu, sp, sp / base_spread, placed,
+                placed / base_placed, runtime::summarize(wall).median * 1e6,
+                runtime::summarize(wall99).median * 1e6, runtime::summarize(overruns).median);
     std::fflush(stdout);
   }
 }

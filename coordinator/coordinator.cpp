@@ -36,6 +36,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
     State::Node& node = s.nodes[n.spec.id()];
     node.plan = &n;
     node.awaited = s.awaits_answers_of(n.spec);
+    if (s.real_time && node.awaited) node.wait_judge.emplace(s.answer_wait());
     s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
     s.endpoint.listen_to(n.spec.id());
     intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),

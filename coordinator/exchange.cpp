@@ -180,9 +180,28 @@ void Coordinator::State::absorb() {
     const ArrivedFeedback* arrived = intake->take(id);
     if (!arrived) continue;
     node.last_seen = Clock::now();
+    const bool new_answer = arrived->answers != node.answers;
     node.last_answer = arrived->answered_step;
     node.answers = arrived->answers;
+    if (!new_answer || !node.wait_judge) continue;
+    if (const auto change = node.wait_judge->step(arrived->link.round_trip()))
+      switch_answer_wait(id, node, *change);
   }
+}
+
+void Coordinator::State::switch_answer_wait(int id, Node& node, const AnswerWait::Switch& change) {
+  node.awaited = change.waiting;
+  intake->set_awaited(id, change.waiting);
+  const std::string median = std::to_string(1e6 * change.median_round_trip);
+  const std::string wait = std::to_string(1e6 * answer_wait());
+  event(change.waiting
+            ? "waiting again for the answers of " + node.plan->label() + ": their round trip " +
+                  "(median " + median + " us of the last " + std::to_string(AnswerWait::kJudged) +
+                  ") is well within the loop's " + wait + " us wait"
+            : "not waiting for the answers of " + node.plan->label() + ": their round trip " +
+                  "(median " + median + " us of the last " + std::to_string(AnswerWait::kJudged) +
+                  ") is longer than the loop's " + wait +
+                  " us wait; each step uses its newest answer");
 }
 
 const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& v,

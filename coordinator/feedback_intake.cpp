@@ -36,6 +36,7 @@ FeedbackIntake::FeedbackIntake(std::string run_id, const std::vector<IntakeNode>
   for (const IntakeNode& shape : nodes) {
     auto node = std::make_unique<Node>();
     node->shape = shape;
+    node->awaited.store(shape.awaited, std::memory_order_relaxed);
     node->link.set_node_id(shape.id);
     nodes_[shape.id] = std::move(node);
   }
@@ -163,9 +164,10 @@ bool FeedbackIntake::offer(const transport::Message& message) {
   arrived.link = node->link;
   node->box.publish();
   const std::int64_t awaited = awaited_.load(std::memory_order_acquire);
-  if (same_step || message.step != awaited || !node->shape.awaited) return false;
+  const auto waited_for = [](const Node& n) { return n.awaited.load(std::memory_order_acquire); };
+  if (same_step || message.step != awaited || !waited_for(*node)) return false;
   for (const auto& [id, other] : nodes_)
-    if (other->shape.awaited && other->last_answer != awaited) return false;
+    if (waited_for(*other) && other->last_answer != awaited) return false;
   return true;
 }
 

@@ -56,7 +56,8 @@ struct IntakeNode {
   int id = 0;
   int values = 0;         // forces per feedback (the node's storeys or actuators)
   bool emulator = false;  // also sends realised drifts, as many
-  bool awaited = true;    // the loop waits for its answer to each step (see offer())
+  bool awaited = true;    // the loop waits for its answer to each step (see offer()), at the
+                          // start (set_awaited changes it)
 };
 
 // The run's integrity fault: which node, and what (both arrivals, with their stamps).
@@ -78,6 +79,10 @@ class FeedbackIntake {
   // sent_ns, which every answer to the awaited step must echo.
   void command_sent(int node_id, std::int64_t sent_ns) {
     nodes_.at(node_id)->command_echo.store(sent_ns, std::memory_order_release);
+  }
+  // Loop: whether the loop waits for the node's answers from now on (starts as its shape's).
+  void set_awaited(int node_id, bool awaited) {
+    nodes_.at(node_id)->awaited.store(awaited, std::memory_order_release);
   }
   // The writer the node's announcement came from (0: none known); before the run starts.
   void pin(int node_id, std::uint64_t writer);
@@ -103,6 +108,7 @@ class FeedbackIntake {
   };
   struct Node {
     IntakeNode shape;
+    std::atomic<bool> awaited{true};             // shape.awaited, then as the loop sets it
     std::atomic<std::int64_t> command_echo{-1};  // -1: no command sent yet
     // Producer's own view (under producer_mutex_).
     std::uint64_t writer = 0;  // pinned; 0 = not checked

@@ -12,10 +12,12 @@
 #include <chrono>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
 
+#include "coordinator/answer_wait.h"
 #include "coordinator/command_limits.h"
 #include "coordinator/coordinator.h"
 #include "coordinator/feedback_intake.h"
@@ -60,8 +62,10 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
     std::uint64_t answers_before_step = 0;
     int missed_streak = 0;  // real time: consecutive steps without a fresh answer
     int late_streak = 0;    // real time: consecutive steps on an older answer
-    std::uint64_t fresh_steps = 0, judged_steps = 0;    // real time: for answer_shortfall
-    bool awaited = true;                                // awaits_answers_of(its spec)
+    std::uint64_t fresh_steps = 0, judged_steps = 0;  // real time: for answer_shortfall
+    bool awaited = true;  // the loop waits for its answers: awaits_answers_of(its spec), then
+                          // in real time as wait_judge decides
+    std::optional<AnswerWait> wait_judge;  // real time, for a node awaited at the start
     std::uint64_t servo_ticks = 0, servo_overruns = 0;  // as of its last heartbeat
     std::uint64_t writer = 0;   // its announcement's writer: only it may speak as this node
     runtime::Counters rejects;  // what the node rejected, by cause, as of its last heartbeat
@@ -137,9 +141,13 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
   // s: how long a real-time step waits for its answers (feedback_wait_fraction x dt).
   double answer_wait() const;
 
-  // Takes each node's newest feedback from the intake, if new since the last take. Throws
-  // RunAborted, naming the node, once the intake raised an integrity fault.
+  // Takes each node's newest feedback from the intake, if new since the last take, and gives a
+  // new answer's round trip to the node's wait_judge. Throws RunAborted, naming the node, once
+  // the intake raised an integrity fault.
   void absorb();
+  // Applies wait_judge's switch: the loop and the intake stop (or start again) waiting for the
+  // node's answers; an event says why (rare: at most once per AnswerWait::kSettle answers).
+  void switch_answer_wait(int id, Node& node, const AnswerWait::Switch& change);
 
   const core::Vec& trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) override;
   void set_time(double t) override { time = t; }

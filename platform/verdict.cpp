@@ -10,7 +10,7 @@
 namespace rths::platform {
 namespace {
 
-constexpr double kGrid = 0.25e-3;    // s, thresholds of the tail fit and of the window search
+constexpr double kGrid = 0.25e-3;    // s, thresholds of the tail fit
 constexpr double kFitFrom = 0.5e-3;  // s, the tail starts here (below: ordinary timer jitter)
 constexpr std::uint64_t kSeen = 3;   // stalls seen for a measured rate
 constexpr double kMaxWindow = 60.0;  // s
@@ -116,12 +116,14 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
   const double window = steps * in.dt;
   v.window_ms = 1e3 * window;
   v.false_stop_probability = probability(window);
-  double required = in.dt;
-  while (required < kMaxWindow &&
-         (required - allowance < stats.max() || probability(required) > kFalseStopTarget))
-    required += kGrid;
-  v.required_steps = std::max(1, static_cast<int>(std::ceil(required / in.dt - 1e-9)));
-  v.required_window_ms = 1e3 * required;
+  // The run's windows are whole steps, so the search is too: what it names is what runs.
+  int required = 1;
+  const auto too_short = [&](int k) {
+    return k * in.dt - allowance < stats.max() || probability(k * in.dt) > kFalseStopTarget;
+  };
+  while (required * in.dt < kMaxWindow && too_short(required)) ++required;
+  v.required_steps = required;
+  v.required_window_ms = runtime::window_ms_of_steps(required, in.dt);
   v.window_holds = steps >= v.required_steps;
   v.predicted_overrun_fraction = stats.overrun_fraction(in.step_work);
   v.overruns_hold =
@@ -138,7 +140,7 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
       fmt("); a %.1f s run is stopped falsely with probability %.3g %%", in.run_seconds,
           100.0 * v.false_stop_probability));
   v.findings.push_back(
-      fmt("required: %.2f ms (%.0f steps) for <= 1 %% false stops; the longest stall "
+      fmt("required: %.3f ms (%.0f steps) for <= 1 %% false stops; the longest stall "
           "measured was %.2f ms: ",
           v.required_window_ms, v.required_steps, 1e3 * stats.max()) +
       (v.window_holds ? "the window holds" : "the window does NOT hold"));
@@ -150,8 +152,8 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
                                 : "does NOT hold"));
   if (!v.window_holds)
     v.fixes.push_back(
-        fmt("answer_window_ms: %.2f command_watchdog_ms: %.2f in the deployment (a real "
-            "fault is then held within %.2f ms instead of %.2f ms)",
+        fmt("answer_window_ms: %.3f command_watchdog_ms: %.3f in the deployment (a real "
+            "fault is then held within %.3f ms instead of %.2f ms)",
             v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms));
   if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
     v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",

@@ -12,8 +12,9 @@
 // 0.5 ms up to the last threshold with 3 stalls, and 2 x the longest stall measured when fewer
 // than two such thresholds exist. Probability that a run of T minutes is stopped falsely:
 //     P(W) = 1 - exp(-r(x(W)) T).
-// Required window: the smallest W on a 0.25 ms grid with P(W) <= 1 % and x(W) >= the longest
-// stall measured. A window shorter than it does not hold.
+// Required window: the smallest whole number of steps k with P(k dt) <= 1 % and x(k dt) >= the
+// longest stall measured (the run's windows are whole steps), stated in ms as
+// runtime::window_ms_of_steps(k, dt). A window shorter than it does not hold.
 // Overruns: predicted fraction = LatencyStats::overrun_fraction(work), work = the wait for answers
 // (feedback_wait_fraction x dt) when the loop waits for any node, else 5 % of dt; it holds when
 // <= max_overrun_fraction (a negative tolerance is never checked). The fix offered is twice the
@@ -50,7 +51,7 @@ FailSafeInput failsafe_input(const config::Deployment& deployment, double dt, do
 struct FailSafeVerdict {
   double window_ms = 0.0;  // the shorter of the deployment's two windows
   double required_window_ms = 0.0;
-  int required_steps = 0;               // ceil(required / dt)
+  int required_steps = 0;               // k above; required_window_ms is its ms
   double false_stop_probability = 0.0;  // per run, at the deployment's window
   bool window_holds = false;
   double predicted_overrun_fraction = 0.0;

@@ -73,6 +73,12 @@ ChildProcess start(const std::filesystem::path& program, std::vector<std::string
 
 }  // namespace
 
+bool on_one_cpu(CpuPlacement placement, const config::Deployment& deployment) {
+  if (placement != CpuPlacement::kAuto) return placement == CpuPlacement::kOneCpu;
+  return deployment.clock() != config::Deployment::REAL_TIME &&
+         deployment.nodes_size() <= kOneCpuMaxNodes;
+}
+
 std::unique_ptr<ScopedCpuExclude> keep_off_loop_cpu(const config::Deployment& deployment) {
   if (deployment.clock() != config::Deployment::REAL_TIME || !deployment.pin_loop()) return nullptr;
   auto guard = std::make_unique<ScopedCpuExclude>(deployment.loop_cpu());
@@ -102,14 +108,11 @@ std::filesystem::path security_dir_of(const LaunchOptions& options,
   return dir;
 }
 
-// Lockstep processes share one CPU (auto) or always (kOneCpu); children inherit the mask of the
-// thread that starts them, so the pin is released once they have started.
+// Children inherit the mask of the thread that starts them, so the pin is released once they
+// have started.
 std::unique_ptr<ScopedCpuPin> pin_for_children(const LaunchOptions& options,
                                                const config::Deployment& deployment) {
-  const bool one_cpu = options.cpu_placement == CpuPlacement::kOneCpu ||
-                       (options.cpu_placement == CpuPlacement::kAuto &&
-                        deployment.clock() != config::Deployment::REAL_TIME);
-  if (!one_cpu) return nullptr;
+  if (!on_one_cpu(options.cpu_placement, deployment)) return nullptr;
   try {
     return std::make_unique<ScopedCpuPin>();
   } catch (const std::runtime_error& e) {

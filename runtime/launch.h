@@ -42,16 +42,20 @@ std::string ensure_dds_config();
 std::string make_run_id(const std::string& label = "");
 
 // Where the launched processes run. A lockstep step is strictly sequential (coordinator ->
-// nodes -> coordinator), so on one host it is fastest with every process on one CPU: no
-// cross-CPU wake-ups (README "Real time" has rths_runtime_bench's figures). Real-time runs keep
-// the scheduler's placement: the pacing sleep and the nodes' work should not queue behind each
-// other on one CPU.
+// nodes -> coordinator): with one node of each kind it is as fast on one CPU as spread, without
+// cross-CPU wake-ups; with more nodes, their answers are computed in parallel only when spread,
+// and one CPU serves them one after another (README "Nodes and the step's cost" has
+// rths_runtime_bench --scaling's figures). Real-time runs keep the scheduler's placement: the
+// pacing sleep and the nodes' work should not queue behind each other on one CPU.
+inline constexpr int kOneCpuMaxNodes = 2;
 enum class CpuPlacement {
-  kAuto,    // lockstep: one CPU (the highest allowed; unpinned with a warning if that fails);
-            // real time: spread
+  kAuto,    // lockstep with at most kOneCpuMaxNodes nodes: one CPU (the highest allowed;
+            // unpinned with a warning if that fails); otherwise spread
   kOneCpu,  // always one CPU (failing to pin is an error)
   kSpread,  // never pin
 };
+// Whether the launched processes share one CPU: `deployment` with its nodes (default ones added).
+bool on_one_cpu(CpuPlacement placement, const config::Deployment& deployment);
 
 // Where one process (node id; 0 = the coordinator) runs: a command prefix and environment
 // overrides, and a label for messages ("site lab").

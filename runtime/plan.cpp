@@ -227,6 +227,9 @@ int max_missed_answers(const config::Deployment& d, double dt) {
 int command_watchdog_periods(const config::Deployment& d, double dt) {
   return window_steps(d.command_watchdog_ms(), d.command_watchdog_periods(), dt);
 }
+double window_ms_of_steps(int steps, double dt) {
+  return std::floor(static_cast<double>(steps) * dt * 1e6) / 1e3;
+}
 void check_failsafe_windows(const config::Deployment& d) {
   check_window(d.answer_window_ms(), "answer_window_ms", d.max_missed_answers(),
                "max_missed_answers");

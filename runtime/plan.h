@@ -78,6 +78,10 @@ double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
 // (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3.
 int max_missed_answers(const config::Deployment& d, double dt);
 int command_watchdog_periods(const config::Deployment& d, double dt);
+// The window of `steps` whole steps of dt (s) in ms, truncated to the microsecond below, so that
+// the steps derived from it (as above) are `steps` again: what a window is stated as when it was
+// found in steps.
+double window_ms_of_steps(int steps, double dt);
 // Throws std::invalid_argument naming the field, its value and the allowed range when a window
 // is given both in steps and in ms, or its ms value is not in [0, 60000] (0 = not given).
 void check_failsafe_windows(const config::Deployment& d);

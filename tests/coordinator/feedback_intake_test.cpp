@@ -95,6 +95,19 @@ TEST(IntakeNotAwaited, TheAwaitedNodesAloneCompleteAStep) {
   EXPECT_EQ(got->link.answers(), 2u);
 }
 
+// The loop stops (or starts again) waiting for a node in the middle of a run: the wake-up
+// follows at once.
+TEST_F(Intake, ANodeTheLoopStopsWaitingForNoLongerHoldsBackTheWakeUp) {
+  command(6);
+  intake.set_awaited(2, false);
+  EXPECT_TRUE(intake.offer(feedback(1, 6, 1.0)));
+  EXPECT_FALSE(intake.offer(feedback(2, 6, 1.0)));
+  intake.set_awaited(2, true);
+  command(7);
+  EXPECT_FALSE(intake.offer(feedback(1, 7, 1.0)));
+  EXPECT_TRUE(intake.offer(feedback(2, 7, 1.0)));
+}
+
 TEST_F(Intake, RejectsAndCountsEachCause) {
   command(5);
   intake.offer(feedback(1, 4, 1.0, 0, "other-run"));  // foreign run

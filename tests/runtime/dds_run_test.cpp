@@ -1,5 +1,5 @@
 // Distributed runs over Cyclone DDS on loopback: real processes (coordinator, substructure node,
-// actuator emulator), each test in its own DDS domain (ids 11-19).
+// actuator emulator), each test in its own DDS domain (ids 10-19).
 #include <gtest/gtest.h>
 
 #include <future>
@@ -173,6 +173,26 @@ TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
   // About 6 ms of injected round trip at 1 ms steps, plus the real one.
   EXPECT_GE(runtime::summarize(behind).median, 6.0);
   EXPECT_GT(run.record.footer()->counters().late_feedback(), 300u);
+}
+
+// Real time with a wait shorter than any loopback round trip (2 % of a 1 ms step, 20 us): the
+// loop stops waiting for both nodes once their answers show it, says so in the record, and the run
+// completes on the newest answers.
+TEST_F(DdsRun, RealTimeStopsWaitingForAnswersThatCannotComeWithinTheWait) {
+  const std::string text = test::paper_frame_study(
+      0.6,
+      "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
+      "command_watchdog_periods: 30 feedback_wait_fraction: 0.02 }");
+  const auto run = test::launch("answer_wait", text, "reference", 17);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  std::vector<std::string> stopped;
+  for (const runtime::RecordEntry& e : run.record.entries)
+    if (e.has_event() && e.event().what().find("not waiting for the answers of") == 0) {
+      stopped.push_back(e.event().what());
+      EXPECT_GE(e.event().step(), 64) << "judged on 64 answers: " << e.event().what();
+      EXPECT_NE(e.event().what().find("longer than the loop's"), std::string::npos);
+    }
+  EXPECT_EQ(stopped.size(), 2u) << test::read_file(run.launch.coordinator_log);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 // `rths launch` and `rths export` end to end (the real binary; domains 70-72 and 18).
+#include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -142,6 +143,23 @@ TEST(Launch, RunIdsHaveOneFormat) {
   EXPECT_EQ(id.rfind("paper_frame-lag_14ms-" + tail, 0), 0u) << id;
   EXPECT_EQ(runtime::make_run_id().rfind(tail, 0), 0u);  // the coordinator's own default format
   EXPECT_NE(runtime::make_run_id("a"), runtime::make_run_id("a"));
+}
+
+TEST(Launch, LockstepSharesOneCpuWithTwoNodesAndSpreadsWithMore) {
+  const auto deployment = [](const std::string& text) {
+    config::Deployment d;
+    EXPECT_TRUE(google::protobuf::TextFormat::ParseFromString(text, &d)) << text;
+    return d;
+  };
+  const std::string two =
+      "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } ";
+  const std::string three = two + "nodes { id: 3 kind: SUBSTRUCTURE } ";
+  using runtime::CpuPlacement;
+  EXPECT_TRUE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(two)));
+  EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(three)));
+  EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(two + "clock: REAL_TIME")));
+  EXPECT_TRUE(runtime::on_one_cpu(CpuPlacement::kOneCpu, deployment(three + "clock: REAL_TIME")));
+  EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kSpread, deployment(two)));
 }
 
 TEST(Launch, BadDeploymentIsBadInputBeforeAnythingStarts) {

@@ -3,6 +3,8 @@
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "test_support.h"
 
 namespace rths::runtime {
@@ -100,6 +102,19 @@ TEST(FailSafeWindows, StepsFromMillisecondsOrTheStepFields) {
   EXPECT_EQ(command_watchdog_periods(deployment("command_watchdog_ms: 8"), dt), 9);
   EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 3"), 0.001), 3);  // exactly 3 steps
   EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 0.1"), 0.001), 1);
+}
+
+TEST(FailSafeWindows, AWindowFoundInStepsIsStatedInMillisecondsThatGiveTheSameSteps) {
+  for (const double dt : {1.0 / 1024, 1.0 / 4096, 0.001, 0.01, 1.0 / 60, 1.0 / 3000})
+    for (int steps = 1; steps <= 3000; ++steps) {
+      const double ms = window_ms_of_steps(steps, dt);
+      ASSERT_LE(ms, 1e3 * steps * dt);
+      ASSERT_GE(ms, 1e3 * steps * dt - 1e-3 - 1e-9);  // at most a microsecond below
+      char text[64];  // as the platform check prints it in the fix it offers
+      std::snprintf(text, sizeof text, "answer_window_ms: %.3f", ms);
+      ASSERT_EQ(max_missed_answers(deployment(text), dt), steps) << text << " at dt " << dt;
+    }
+  EXPECT_DOUBLE_EQ(window_ms_of_steps(20, 1.0 / 1024), 19.531);
 }
 
 TEST(FailSafeWindows, BothWaysOrOutOfRangeIsBadInputNamingTheFields) {
