@@ -42,12 +42,12 @@ std::string ensure_dds_config();
 std::string make_run_id(const std::string& label = "");
 
 // Where the launched processes run. A lockstep step is strictly sequential (coordinator ->
-// nodes -> coordinator): with one node of each kind it is as fast on one CPU as spread, without
-// cross-CPU wake-ups; with more nodes, their answers are computed in parallel only when spread,
-// and one CPU serves them one after another (README "Nodes and the step's cost" has
+// nodes -> coordinator): with up to three nodes it is about as fast on one CPU as spread,
+// without cross-CPU wake-ups; with more, their answers are computed in parallel only when
+// spread, and one CPU serves them one after another (README "Nodes and the step's cost" has
 // rths_runtime_bench --scaling's figures). Real-time runs keep the scheduler's placement: the
 // pacing sleep and the nodes' work should not queue behind each other on one CPU.
-inline constexpr int kOneCpuMaxNodes = 2;
+inline constexpr int kOneCpuMaxNodes = 3;
 enum class CpuPlacement {
   kAuto,    // lockstep with at most kOneCpuMaxNodes nodes: one CPU (the highest allowed;
             // unpinned with a warning if that fails); otherwise spread

@@ -145,7 +145,7 @@ TEST(Launch, RunIdsHaveOneFormat) {
   EXPECT_NE(runtime::make_run_id("a"), runtime::make_run_id("a"));
 }
 
-TEST(Launch, LockstepSharesOneCpuWithTwoNodesAndSpreadsWithMore) {
+TEST(Launch, LockstepSharesOneCpuUpToThreeNodesAndSpreadsWithMore) {
   const auto deployment = [](const std::string& text) {
     config::Deployment d;
     EXPECT_TRUE(google::protobuf::TextFormat::ParseFromString(text, &d)) << text;
@@ -154,9 +154,11 @@ TEST(Launch, LockstepSharesOneCpuWithTwoNodesAndSpreadsWithMore) {
   const std::string two =
       "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } ";
   const std::string three = two + "nodes { id: 3 kind: SUBSTRUCTURE } ";
+  const std::string four = three + "nodes { id: 4 kind: SUBSTRUCTURE } ";
   using runtime::CpuPlacement;
   EXPECT_TRUE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(two)));
-  EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(three)));
+  EXPECT_TRUE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(three)));
+  EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(four)));
   EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kAuto, deployment(two + "clock: REAL_TIME")));
   EXPECT_TRUE(runtime::on_one_cpu(CpuPlacement::kOneCpu, deployment(three + "clock: REAL_TIME")));
   EXPECT_FALSE(runtime::on_one_cpu(CpuPlacement::kSpread, deployment(two)));
