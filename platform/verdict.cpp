@@ -153,8 +153,9 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
   if (!v.window_holds)
     v.fixes.push_back(
         fmt("answer_window_ms: %.3f command_watchdog_ms: %.3f in the deployment (a real "
-            "fault is then held within %.3f ms instead of %.2f ms)",
-            v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms));
+            "fault is then held within %.3f ms instead of %.2f ms, ",
+            v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms) +
+        fmt("plus any stall at that moment: up to %.2f ms measured here)", 1e3 * stats.max()));
   if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
     v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",
                           2.0 * v.predicted_overrun_fraction));

@@ -58,6 +58,8 @@ TEST(Verdict, AVmStallingOnceASecondRefusesThreeStepsAndNamesTheWindowThatHolds)
   char window[64];
   std::snprintf(window, sizeof window, "answer_window_ms: %.3f", v.required_window_ms);
   EXPECT_THAT(v.refusal(), HasSubstr(window));
+  // A stall at the fault's moment delays the HOLD by as much: the bound says so.
+  EXPECT_THAT(v.refusal(), HasSubstr("plus any stall at that moment: up to 3.50 ms measured here"));
   EXPECT_THAT(v.refusal(), HasSubstr("does NOT hold"));
   EXPECT_THAT(v.refusal(), HasSubstr("PREEMPT_RT"));
   EXPECT_THAT(v.refusal(), HasSubstr("pin_loop: true loop_cpu: 1"));
