@@ -192,16 +192,15 @@ void Coordinator::State::absorb() {
 void Coordinator::State::switch_answer_wait(int id, Node& node, const AnswerWait::Switch& change) {
   node.awaited = change.waiting;
   intake->set_awaited(id, change.waiting);
-  const std::string median = std::to_string(1e6 * change.median_round_trip);
-  const std::string wait = std::to_string(1e6 * answer_wait());
+  const std::string measured = ": their round trip (median " +
+                               std::to_string(1e6 * change.median_round_trip) + " us of the last " +
+                               std::to_string(AnswerWait::kJudged) + ") is ";
+  const std::string wait = std::to_string(1e6 * answer_wait()) + " us wait";
   event(change.waiting
-            ? "waiting again for the answers of " + node.plan->label() + ": their round trip " +
-                  "(median " + median + " us of the last " + std::to_string(AnswerWait::kJudged) +
-                  ") is well within the loop's " + wait + " us wait"
-            : "not waiting for the answers of " + node.plan->label() + ": their round trip " +
-                  "(median " + median + " us of the last " + std::to_string(AnswerWait::kJudged) +
-                  ") is longer than the loop's " + wait +
-                  " us wait; each step uses its newest answer");
+            ? "waiting again for the answers of " + node.plan->label() + measured +
+                  "well within the loop's " + wait
+            : "not waiting for the answers of " + node.plan->label() + measured +
+                  "longer than the loop's " + wait + "; each step uses its newest answer");
 }
 
 const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& v,

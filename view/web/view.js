@@ -268,15 +268,12 @@ document.addEventListener('visibilitychange', scheduleDraw);
 
 // The state badge's text: a HOLD stays on it after the run stopped (the footer often follows it
 // within an update).
-function stateText(st) {
-  const held = st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD'));
-  return held && st.state !== 'HOLD' ? 'HOLD · ' + st.state : st.state;
-}
+function isHeld(st) { return st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD')); }
+function stateText(st) { return isHeld(st) && st.state !== 'HOLD' ? 'HOLD · ' + st.state : st.state; }
 
 // Writes the status line: at each draw, and at once when the state changes (see onUpdate).
 function showStatus(st) {
-  const held = st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD'));
-  const state = $('state');
+  const held = isHeld(st), state = $('state');
   state.textContent = V.shownState = stateText(st);
   state.className = 'state ' + (held ? 'HOLD' : st.state);
   if (held && V.holdSeenMs === null) V.holdSeenMs = Date.now();
