@@ -146,7 +146,8 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
   // the intake raised an integrity fault.
   void absorb();
   // Applies wait_judge's switch: the loop and the intake stop (or start again) waiting for the
-  // node's answers; an event says why (rare: at most once per AnswerWait::kSettle answers).
+  // node's answers; an event says why. The event allocates and logs on the loop thread, which
+  // is why switches are rare (AnswerWait's back-off: a handful per run at most).
   void switch_answer_wait(int id, Node& node, const AnswerWait::Switch& change);
 
   const core::Vec& trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) override;
