@@ -9,7 +9,7 @@
 namespace rths::bench {
 
 std::string imperial_valley_path() {
-  return std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  return std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 }
 
 std::string imperial_valley_motion(double seconds) {

@@ -5,6 +5,6 @@ add_executable(fault_trials ${CMAKE_CURRENT_LIST_DIR}/fault_trials.cpp)
 target_link_libraries(fault_trials PRIVATE rths_test_support rths_platform CLI11::CLI11)
 target_compile_definitions(fault_trials PRIVATE
   RTHS_BINARY_DIR="${PROJECT_BINARY_DIR}"
-  RTHS_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")
+  RTHS_DATA_DIR="${PROJECT_SOURCE_DIR}/data")
 add_dependencies(fault_trials rths-coordinator rths-substructure-node rths-actuator-emulator)
 rths_warnings(fault_trials)

@@ -6,5 +6,5 @@ target_link_libraries(identify_bench PRIVATE rths_identify)
 target_include_directories(identify_bench PRIVATE ${PROJECT_SOURCE_DIR})
 add_dependencies(identify_bench rths)
 target_compile_definitions(identify_bench PRIVATE RTHS_EXECUTABLE="$<TARGET_FILE:rths>"
-                           RTHS_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")
+                           RTHS_DATA_DIR="${PROJECT_SOURCE_DIR}/data")
 rths_warnings(identify_bench)

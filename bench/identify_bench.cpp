@@ -4,7 +4,7 @@
 // held-out error and the k-fold mean, from its JSON.
 //
 //   identify_bench [--repeat N] [--rths PATH] [--keep DIR] [RECORD ...]
-// Default records: ../shared/data/measured/mts_mrdamper_chirp_0A.txt and a one-minute record at
+// Default records: data/measured/mts_mrdamper_chirp_0A.txt and a one-minute record at
 // 1 kHz of the same rig made by identify::generate_measured (a 15 Hz sinusoidal test with the MR
 // damper energised: 4.6 ms delay and a 21.8 ms first-order lag, Bouc-Wen + viscous + friction
 // force, drifting delay, gain and stiffness, play, offsets, inertia, sensor noise). Each record is
@@ -142,7 +142,7 @@ int main(int argc, char** argv) {
   if (records.empty()) {
     const fs::path dir = keep.empty() ? fs::temp_directory_path() / "rths_identify_bench" : keep;
     fs::create_directories(dir);
-    records.push_back(fs::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt");
+    records.push_back(fs::path(RTHS_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt");
     records.push_back(one_minute_record(dir));
   }
   std::cout << "rths identify RECORD --json (both channels, defaults), " << rths

@@ -75,7 +75,7 @@ std::string scaling_text(NodeSet n, double seconds, const std::string& deploymen
          "storey_stiffness: [2e8, 2e8, 2e8, 2e8, 2e8, 2e8, 2e8, 2e8, 2e8] } "
          "damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
          "motion { path: \"" +
-         std::string(RTHS_SHARED_DATA_DIR) +
+         std::string(RTHS_DATA_DIR) +
          "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " + std::to_string(seconds) +
          " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.0009765625 }\n"

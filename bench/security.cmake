@@ -4,6 +4,6 @@ add_executable(rths_security_bench ${CMAKE_CURRENT_LIST_DIR}/security_bench.cpp)
 target_link_libraries(rths_security_bench PRIVATE rths_runtime CLI11::CLI11)
 target_compile_definitions(rths_security_bench PRIVATE
   RTHS_BINARY_DIR="${PROJECT_BINARY_DIR}"
-  RTHS_SHARED_DATA_DIR="${PROJECT_SOURCE_DIR}/../shared/data")
+  RTHS_DATA_DIR="${PROJECT_SOURCE_DIR}/data")
 add_dependencies(rths_security_bench rths-coordinator rths-substructure-node rths-actuator-emulator)
 rths_warnings(rths_security_bench)

@@ -58,6 +58,6 @@ echo "   delay are meant to diverge and are marked), and error against delay per
 echo "== network lag x actuator lag on the paper's frame: the error map with the stability boundary,"
 echo "   and the total lag measured across emulated sites against the injected parts"
 "$bin" joint-lag configs/joint_lag_study.textproto --out out/joint_lag
-echo "== closing the loop with a real actuator: the MTS record (../shared/data), what the declared"
+echo "== closing the loop with a real actuator: the MTS record (data/measured), what the declared"
 echo "   pure-delay model misses, the refitted model, k-fold validation and the Bode plot"
-"$bin" identify ../shared/data/measured/mts_mrdamper_chirp_0A.txt --trim-idle --out out/identify
+"$bin" identify data/measured/mts_mrdamper_chirp_0A.txt --trim-idle --out out/identify

@@ -14,7 +14,7 @@ import re
 import openseespy.opensees as ops
 
 HERE = pathlib.Path(__file__).resolve().parent
-RECORD = HERE / "../../configs/motions/RSN175_IMPVALL.H_H-E12140.AT2"
+RECORD = HERE / "../../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"
 
 
 def read_at2(path):

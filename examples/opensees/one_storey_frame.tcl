@@ -35,7 +35,7 @@ proc read_at2 {in out} {
   return $dt
 }
 set here [file dirname [info script]]
-set dt_record [read_at2 [file join $here ../../configs/motions/RSN175_IMPVALL.H_H-E12140.AT2] elcentro.g]
+set dt_record [read_at2 [file join $here ../../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2] elcentro.g]
 timeSeries Path 1 -dt $dt_record -filePath elcentro.g -factor 9.81
 pattern UniformExcitation 1 1 -accel 1
 

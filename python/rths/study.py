@@ -87,7 +87,7 @@ class Study:
 
         study = (rths.Study("frame")
                  .sdof(period=0.5, zeta=0.05)
-                 .motion("../shared/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2")
+                 .motion("data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2")
                  .integrator("explicit-newmark", dt=0.001)
                  .experimental(fraction=1/3)
                  .case("reference")

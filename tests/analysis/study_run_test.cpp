@@ -20,7 +20,7 @@ core::PreparedStudy frame(double alpha, const std::string& cases, const std::str
                           double duration = 0.0) {
   const std::string text =
       "name: \"frame\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
-      "motion { path: \"motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
+      "motion { path: \"../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
       std::to_string(duration) +
       " } "
       "integrator { dt: 0.001 } substructuring { experimental_fraction: " +

@@ -15,7 +15,7 @@
 namespace rths::analysis::sweep_test {
 
 inline const std::filesystem::path kMotionDir =
-    std::filesystem::path(RTHS_SHARED_DATA_DIR) / "ground_motions";
+    std::filesystem::path(RTHS_DATA_DIR) / "ground_motions";
 
 // A study whose sweep block holds `sweep_body`, with `integrator` added to its integrator block.
 inline std::string study_text(const std::string& sweep_body, const std::string& integrator = "") {

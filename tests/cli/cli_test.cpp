@@ -16,7 +16,7 @@ namespace {
 
 const std::string kRths = RTHS_EXECUTABLE;
 const std::filesystem::path kSource = RTHS_SOURCE_DIR;
-const std::filesystem::path kData = RTHS_SHARED_DATA_DIR;
+const std::filesystem::path kData = RTHS_DATA_DIR;
 const std::string kMotion = (kData / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2").string();
 
 using Outcome = rths::test::CommandOutcome;

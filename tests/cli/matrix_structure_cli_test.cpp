@@ -15,7 +15,7 @@ namespace {
 const std::string kRths = RTHS_EXECUTABLE;
 const std::filesystem::path kSource = RTHS_SOURCE_DIR;
 const std::string kMotion =
-    (std::filesystem::path(RTHS_SHARED_DATA_DIR) / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2")
+    (std::filesystem::path(RTHS_DATA_DIR) / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2")
         .string();
 
 rths::test::CommandOutcome run(const std::string& arguments) {

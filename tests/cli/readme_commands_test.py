@@ -11,10 +11,11 @@ Each command carries its expectation in an HTML comment that the rendered README
   a benchmark, one that needs root and network namespaces). A code-block command without an
   expectation fails the test, so a README change that breaks a command breaks the build.
 
-The commands run in README order, in one fresh directory that holds links to the source's
-configs/, examples/ and scripts/, the build as build/, and ../shared (so `../shared/data/...`
-resolves), with the build's `rths` and node programs first on PATH (as `cmake --install` puts them
-after the set-up). Environment: RTHS_SOURCE_DIR, RTHS_BINARY_DIR.
+The commands run in README order, in a copy of the repository's tracked files (a bare clone: data/
+included, nothing beside it) inside an otherwise empty temporary folder, with the build linked as
+build/ and the build's `rths` and node programs first on PATH (as `cmake --install` puts them after
+the set-up). A command that needs anything outside the clone fails here as it would for a lab.
+Environment: RTHS_SOURCE_DIR, RTHS_BINARY_DIR.
 """
 import os
 import re
@@ -81,14 +82,29 @@ def readme_commands(readme):
     return found
 
 
+def tracked_files():
+    """The repository's files as a clone has them (git ls-files), or every file but the build."""
+    listed = subprocess.run(["git", "ls-files", "-z"], cwd=SOURCE, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL)
+    if listed.returncode == 0 and listed.stdout:
+        return [name for name in listed.stdout.decode().split("\0") if name]
+    names = []
+    for folder, subfolders, files in os.walk(SOURCE):
+        subfolders[:] = [d for d in subfolders if d not in (".git", "build", "out") and
+                         os.path.join(folder, d) != BINARY]
+        names += [os.path.relpath(os.path.join(folder, f), SOURCE) for f in files]
+    return names
+
+
 def fresh_directory():
     root = tempfile.mkdtemp(prefix="rths_readme_")
     work = os.path.join(root, "rths")
-    os.makedirs(work)
-    for name in ("configs", "examples", "scripts"):
-        os.symlink(os.path.join(SOURCE, name), os.path.join(work, name))
+    for name in tracked_files():
+        source = os.path.join(SOURCE, name)
+        if os.path.isfile(source):
+            os.makedirs(os.path.dirname(os.path.join(work, name)), exist_ok=True)
+            shutil.copy2(source, os.path.join(work, name))
     os.symlink(BINARY, os.path.join(work, "build"))
-    os.symlink(os.path.realpath(os.path.join(SOURCE, "..", "shared")), os.path.join(root, "shared"))
     return root, work
 
 

@@ -10,7 +10,7 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string motion() {
-  return std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  return std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 }
 
 // Two storeys as matrices: K of storeys 3e6 and 2e6 N/m, floors 2000 and 1500 kg.

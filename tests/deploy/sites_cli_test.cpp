@@ -107,7 +107,7 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
            "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
            "motion { path: \"" +
            std::string(RTHS_SOURCE_DIR) +
-           "/configs/motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: 0.3 }\n"
+           "/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: 0.3 }\n"
            "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
            "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n" +
            cases;

@@ -33,7 +33,7 @@ using ::testing::AllOf;
 using ::testing::HasSubstr;
 
 const std::string kRths = RTHS_EXECUTABLE;
-const fs::path kData = RTHS_SHARED_DATA_DIR;
+const fs::path kData = RTHS_DATA_DIR;
 
 using Outcome = test::CommandOutcome;
 

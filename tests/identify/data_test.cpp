@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
 
-const fs::path kRealFile = fs::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
+const fs::path kRealFile = fs::path(RTHS_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
 
 class DataTest : public ::testing::Test {
  protected:

@@ -11,7 +11,7 @@ namespace rths::identify {
 namespace {
 
 const std::filesystem::path kRealFile =
-    std::filesystem::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
+    std::filesystem::path(RTHS_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
 
 // The MTS actuator lags its command by about 17 ms; a pure delay (+ gain) still leaves ~38 % on
 // held-out data. The search finds what is missing; the errors are measured at the full rate.

@@ -17,7 +17,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-const std::filesystem::path kData = RTHS_SHARED_DATA_DIR;
+const std::filesystem::path kData = RTHS_DATA_DIR;
 
 // A drift history with growing amplitude: loops of several sizes, so hysteresis shows.
 ChannelSignals drift_history() {

@@ -14,7 +14,7 @@ namespace rths::identify {
 namespace {
 
 const std::filesystem::path kRealFile =
-    std::filesystem::path(RTHS_SHARED_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
+    std::filesystem::path(RTHS_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt";
 
 TEST(ValidationTest, KFoldRecoversAGeneratedTimeConstantWithSmallSpread) {
   GeneratorSpec spec;

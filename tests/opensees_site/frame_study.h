@@ -24,7 +24,7 @@ inline double numerical_stiffness() { return (1.0 - kFraction) * storey_stiffnes
 inline double frame_damping() { return 2 * 0.05 * (2 * kPi / 0.5) * kMass; }
 
 inline std::string motion_file() {
-  return std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  return std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 }
 
 inline std::string exact(double x) {

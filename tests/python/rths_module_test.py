@@ -18,7 +18,7 @@ import rths
 
 RTHS = os.environ["RTHS_EXECUTABLE"]
 SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
-MOTION = SOURCE / "configs/motions/RSN175_IMPVALL.H_H-E12140.AT2"
+MOTION = SOURCE / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"
 DOMAIN = 151
 
 STUDY_TEXT = (

@@ -14,7 +14,7 @@ import rths
 
 RTHS = os.environ["RTHS_EXECUTABLE"]
 SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
-MOTION = str(SOURCE / "configs/motions/RSN175_IMPVALL.H_H-E12140.AT2")
+MOTION = str(SOURCE / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2")
 DOMAIN = 228
 
 

@@ -11,7 +11,7 @@
 namespace rths::test {
 
 inline std::string motion_path() {
-  return std::string(RTHS_SHARED_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  return std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 }
 
 // Two storeys, bilinear storeys, storey 2 experimental, the 1979 record truncated.

@@ -1,7 +1,7 @@
 import json
 """The MATLAB and HDF5 files rths writes, read back by independent readers (scipy.io.loadmat and
 h5py) and compared value for value with the CSV the same command writes. Run from ctest
-(tables_readback) with RTHS_EXECUTABLE, RTHS_SOURCE_DIR and RTHS_SHARED_DATA_DIR set."""
+(tables_readback) with RTHS_EXECUTABLE, RTHS_SOURCE_DIR and RTHS_DATA_DIR set."""
 import csv
 import math
 import os
@@ -15,7 +15,7 @@ import scipy.io
 
 RTHS = os.environ["RTHS_EXECUTABLE"]
 SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
-MOTION = SOURCE / "configs/motions/RSN175_IMPVALL.H_H-E12140.AT2"
+MOTION = SOURCE / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"
 DOMAIN = 150  # DDS domain of the launch below (this suite's range: 150-169)
 
 

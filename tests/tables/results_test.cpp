@@ -16,7 +16,7 @@ namespace rths::tables {
 namespace {
 
 const std::string kMotion =
-    std::string(RTHS_SOURCE_DIR) + "/configs/motions/RSN175_IMPVALL.H_H-E12140.AT2";
+    std::string(RTHS_SOURCE_DIR) + "/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 
 std::vector<std::string> names(const Table& t) {
   std::vector<std::string> out;

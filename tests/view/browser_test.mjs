@@ -14,7 +14,7 @@ import path from 'node:path';
 
 const RTHS = process.env.RTHS_BIN;
 const OUT = process.env.RTHS_VIEW_TEST_OUT;
-const MOTION = path.resolve(process.env.RTHS_SOURCE_DIR, '../shared/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2');
+const MOTION = path.resolve(process.env.RTHS_SOURCE_DIR, 'data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2');
 const CHROMIUM = '/usr/bin/chromium';
 const FLAGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
   '--disable-background-networking', '--disable-component-update', '--disable-sync'];
