@@ -155,8 +155,8 @@ void run_identify_record(const IdentifyCliOptions& o, const identify::IdentifyOp
   const identify::RunIdentification run = identify::identify_run_record(o.data, with_progress);
   if (!o.out.empty()) {
     try {
-      for (const auto& line :
-           identify::write_identified_run(run, std::filesystem::current_path(), o.out)) {
+      for (const auto& line : identify::write_identified_run(
+               run, std::filesystem::path(o.data).parent_path(), o.out)) {
         std::cerr << line << "\n";
       }
       for (const auto& png : identify::write_run_plots(run, o.out)) {

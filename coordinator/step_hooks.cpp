@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string>
 
+#include "core/study_inputs.h"
 #include "runtime/process.h"
 
 namespace rths::coordinator {
@@ -94,7 +95,8 @@ void Coordinator::State::write_header() {
   runtime::RunHeader& h = *entry.mutable_header();
   h.set_schema_version(runtime::kSchemaVersion);
   h.set_run_id(options.run_id);
-  *h.mutable_study() = prepared.config;
+  // The record carries its inputs (motion as run, matrices, traces), so it reads anywhere.
+  *h.mutable_study() = core::with_embedded_inputs(prepared);
   h.set_case_name(case_name);
   h.set_clock(real_time ? "real_time" : "lockstep");
   h.set_dt(setup.dt);

@@ -6,6 +6,7 @@
 #include "core/text_columns.h"
 #include "core/text_format.h"
 #include "core/tracking.h"
+#include "util/sha256.h"
 
 #include <cmath>
 #include <fstream>
@@ -276,13 +277,65 @@ std::string motion_units_name(const config::GroundMotion& motion) {
   return motion.has_column_units() ? units_name(motion.column_units()) : "g";
 }
 
+namespace {
+
+// A motion carried by a run record's header: checked as a file's would be, read from nowhere.
+GroundMotion embedded_motion(const config::EmbeddedMotion& embedded) {
+  const std::string what = "motion.embedded ('" + embedded.name() + "')";
+  if (!(embedded.dt() > 0.0) || !std::isfinite(embedded.dt()))
+    throw std::invalid_argument(what + ": dt = " + format_number(embedded.dt()) +
+                                " s is not a positive step");
+  if (embedded.acceleration_size() == 0) throw std::invalid_argument(what + ": no samples");
+  GroundMotion record{embedded.name(),
+                      embedded.dt(),
+                      {embedded.acceleration().begin(), embedded.acceleration().end()}};
+  for (std::size_t i = 0; i < record.acceleration.size(); ++i)
+    if (!std::isfinite(record.acceleration[i]))
+      throw std::invalid_argument(what + ": sample " + std::to_string(i) + " is not finite");
+  if (!(record.peak_abs() <= kMaxPeakGroundAcceleration))
+    throw std::invalid_argument(what + ": peak " + format_number(record.peak_abs()) +
+                                " m/s^2 is beyond any recorded earthquake");
+  return record;
+}
+
+void check_sha256(const std::filesystem::path& path, const std::string& expected) {
+  const std::string actual = util::file_sha256(path);
+  if (actual != expected)
+    throw std::invalid_argument("motion '" + path.string() + "': sha256 " + actual + ", expected " +
+                                expected +
+                                " (motion.sha256): the file is not the record the study names");
+}
+
+// A delay trace carried by a run record's header, held to read_delay_trace's rules.
+DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
+  const std::string what = "delay trace (embedded, from '" + trace.path() + "')";
+  if (trace.time_size() != trace.delay_size())
+    throw std::invalid_argument(what + ": " + std::to_string(trace.time_size()) + " times but " +
+                                std::to_string(trace.delay_size()) + " delays");
+  DelayTrace out{{trace.time().begin(), trace.time().end()},
+                 {trace.delay().begin(), trace.delay().end()}};
+  for (std::size_t i = 0; i < out.time.size(); ++i) {
+    if (!(out.delay[i] >= 0.0) || !std::isfinite(out.delay[i]))
+      throw std::invalid_argument(what + ": sample " + std::to_string(i) + " has delay " +
+                                  format_number(out.delay[i]));
+    if (!std::isfinite(out.time[i]) || (i > 0 && !(out.time[i] > out.time[i - 1])))
+      throw std::invalid_argument(what + ": time of sample " + std::to_string(i) +
+                                  " does not increase");
+  }
+  return out;
+}
+
+}  // namespace
+
 GroundMotion load_motion(const config::GroundMotion& motion,
                          const std::filesystem::path& base_dir) {
+  if (motion.has_embedded()) return embedded_motion(motion.embedded());
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
   if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
     throw std::invalid_argument("motion: " + why);
+  if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
   bool at2 = motion.format() == config::GroundMotion::AT2;
   if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
   const std::string what = "motion '" + path.string() + "'";
@@ -341,6 +394,10 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
                                             stage.jitter().seed(), dt);
       break;
     case K::kTrace: {
+      if (stage.trace().time_size() > 0) {
+        block = std::make_unique<TraceShift>(embedded_trace(stage.trace()), dt);
+        break;
+      }
       std::filesystem::path path = stage.trace().path();
       if (path.is_relative()) path = base_dir / path;
       block = std::make_unique<TraceShift>(read_delay_trace(path), dt);

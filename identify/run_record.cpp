@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/study_inputs.h"
 #include "runtime/measurements.h"
 #include "runtime/record.h"
 #include "runtime/schema.h"
@@ -217,6 +218,7 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
   input.study = &header.study();
   input.case_name = header.case_name();
   input.clock = m.clock;
+  input.base_dir = record.parent_path();
   input.motion.name = record.stem().string();
   input.motion.dt = header.dt();
   for (const runtime::StepRecord* step : contents.steps()) {
@@ -256,6 +258,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.study = header.study();
   out.steps = usable_steps(m.steps);
   out.held = held_note(contents, m, out.steps);
+  out.inputs = core::inputs_source(header.study(), record.parent_path());
   if (out.steps < kDefaultMinSamples) {
     bad(record, "steps",
         std::to_string(out.steps) + " usable steps, at least " +
@@ -371,6 +374,7 @@ std::string run_record_text(const RunIdentification& run) {
   std::ostringstream out;
   out << "record " << run.record << ": case '" << run.case_name << "', " << run.clock << ", "
       << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
+  out << "inputs: " << run.inputs << "\n";
   for (const auto& l : run.links) link_text(l, out);
   for (const auto& a : run.actuators) actuator_text(a, out);
   if (run.residual) residual_text(*run.residual, out);
@@ -421,10 +425,10 @@ nlohmann::json run_record_json(const RunIdentification& run) {
                          {"channels", channels},
                          {"undeclared", a.undeclared}});
   }
-  nlohmann::json out = {{"record", run.record}, {"case", run.case_name},
-                        {"clock", run.clock},   {"held", run.held},
-                        {"steps", run.steps},   {"duration_s", run.duration},
-                        {"links", links},       {"actuators", actuators}};
+  nlohmann::json out = {
+      {"record", run.record},       {"case", run.case_name}, {"clock", run.clock},
+      {"held", run.held},           {"inputs", run.inputs},  {"steps", run.steps},
+      {"duration_s", run.duration}, {"links", links},        {"actuators", actuators}};
   if (run.residual) out["residual"] = residual_json(*run.residual);
   return out;
 }

@@ -57,6 +57,7 @@ struct RunIdentification {
   std::size_t steps = 0;  // identified
   double duration = 0.0;  // s
   std::string held;       // how much the record held: complete, truncated, diverged
+  std::string inputs;     // where the re-run's inputs came from (core::inputs_source)
   config::Study study;    // the run's own config (the record header's)
   std::vector<NetworkPath> links;
   std::vector<ActuatorPath> actuators;

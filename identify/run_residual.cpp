@@ -94,8 +94,9 @@ class Reruns {
       : input_(input),
         declared_(declared_case(*input.study, run_case(*input.study, input.case_name))) {
     prepared_.config = *input.study;
+    prepared_.base_dir = input.base_dir;
     prepared_.motion = input.motion;
-    prepared_.base = core::base_setup(*input.study, input.motion.dt);
+    prepared_.base = core::base_setup(*input.study, input.motion.dt, input.base_dir);
     setup_ = core::setup_for_case(prepared_, declared_);
     if (setup_.delays.size() != input.actuators->size()) {
       throw std::invalid_argument("study: " + std::to_string(setup_.delays.size()) +

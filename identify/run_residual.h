@@ -63,6 +63,9 @@ struct RunResidual {
 struct ResidualInput {
   const config::Study* study = nullptr;
   std::string case_name, clock;
+  // The record's folder: a study written before records carried their inputs names its matrix
+  // files relative to it (one rule: a file named is relative to the file that names it).
+  std::filesystem::path base_dir;
   core::GroundMotion motion;            // at the run's dt, one sample per recorded step
   const core::Mat* recorded = nullptr;  // m, steps x DOFs (at least motion's steps)
   const std::vector<ActuatorPath>* actuators = nullptr;

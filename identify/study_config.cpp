@@ -170,6 +170,16 @@ config::Study identified_study(const config::Study& base, const std::filesystem:
   for (auto& motion : *study.mutable_sweep()->mutable_motions()) {
     motion.set_path(absolute_from(base_dir, motion.path()));
   }
+  if (study.structure().has_matrices()) {
+    auto& m = *study.mutable_structure()->mutable_matrices();
+    const auto absolute_file = [&](config::Matrix& matrix) {
+      if (!matrix.file().empty()) matrix.set_file(absolute_from(base_dir, matrix.file()));
+    };
+    if (m.has_mass()) absolute_file(*m.mutable_mass());
+    if (m.has_stiffness()) absolute_file(*m.mutable_stiffness());
+    if (m.has_damping()) absolute_file(*m.mutable_damping());
+    if (m.has_influence()) absolute_file(*m.mutable_influence());
+  }
   for (auto& c : *study.mutable_cases()) absolute_traces(*c.mutable_delay(), base_dir);
   for (auto& node : *study.mutable_deployment()->mutable_nodes()) {
     absolute_traces(*node.mutable_receive_delay(), base_dir);

@@ -1,6 +1,7 @@
 #include "view/context.h"
 
 #include "analysis/study_run.h"
+#include "core/study_inputs.h"
 #include "runtime/in_process.h"
 #include "runtime/plan.h"
 
@@ -84,7 +85,8 @@ void describe_record(Feed& feed, const runtime::RecordContents& contents,
   const std::string note = contents.warning;
   std::string why;
   try {
-    describe(feed, core::prepare_study(header.study(), base_dir), header.case_name(), note, "");
+    describe(feed, core::prepare_study(header.study(), base_dir), header.case_name(), note,
+             ", inputs " + core::inputs_source(header.study(), base_dir));
     return;
   } catch (const std::exception& e) {
     why = e.what();

@@ -341,6 +341,31 @@ TEST_F(CmdIdentifyTest, ARunRecordIsWrittenBackAsAStudyThatRunReproduces) {
   EXPECT_GE(core::nrmse(recorded, declared), 0.20);
 }
 
+// A record carries its inputs (the motion as run, the matrices, the traces): copied alone into an
+// archive and identified from another folder, it re-runs from what it holds, and the study it
+// writes back runs from any folder.
+TEST_F(CmdIdentifyTest, ARecordMovedAnywhereIsIdentifiedFromTheInputsItCarries) {
+  const fs::path made =
+      test::run_with_undeclared("moved", "receive_delay { first_order { time_constant: 0.008 } }");
+  const fs::path archive = dir_ / "archive", elsewhere = dir_ / "elsewhere";
+  fs::create_directories(archive);
+  fs::create_directories(elsewhere);
+  const fs::path record = archive / "run.rthsrec";
+  fs::copy_file(made, record);
+  Outcome o = test::run_command_line("cd " + elsewhere.string() + " && " + kRths + " identify " +
+                                     record.string() + " --channels measured --json --out id");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto report = json_of(o);
+  EXPECT_EQ(report["inputs"], "embedded in the record") << report.dump(2);
+  EXPECT_LE(report["residual"]["identified_nrmse"].get<double>(), 0.02) << report["residual"];
+  o = test::run_command_line("cd / && " + kRths + " run " +
+                             (elsewhere / "id" / "identified_run.textproto").string() +
+                             " --no-plots --out " + (dir_ / "rerun").string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  o = run("export " + record.string() + " --csv " + (dir_ / "exported.csv").string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+}
+
 TEST_F(CmdIdentifyTest, ADamagedRunRecordExitsTwoNamingRecordAndEntry) {
   const fs::path record = test::run_with_undeclared("damaged_cli", "");
   {

@@ -9,6 +9,7 @@
 #include <set>
 #include <string>
 
+#include "core/study_inputs.h"
 #include "identify/run_record.h"
 #include "runtime/record.h"
 #include "tests/runtime/test_support.h"
@@ -54,7 +55,9 @@ inline std::filesystem::path run_with_undeclared(const std::string& name,
   const auto outcome =
       coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
   EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
-  const config::Study declared = prepare(paper_frame_study(duration, kDeclared)).config;
+  // The header declares the model without the effect, and carries its inputs as rths writes them.
+  const config::Study declared =
+      core::with_embedded_inputs(prepare(paper_frame_study(duration, kDeclared)));
   rewrite(options.record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
   });

@@ -66,9 +66,33 @@ TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
   EXPECT_THROW(predict_case(prepared, "no_such_case"), std::invalid_argument);
 }
 
-// A lockstep record read back, its study's motion file gone: the record's own steps carry the
-// motion, and the prediction over them is the in-process run's, bit for bit.
-TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCarry) {
+// A record carries its inputs: its study's motion file gone, the prediction runs on the motion
+// embedded in its header, says so, and is the in-process run's, bit for bit.
+TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "view-record-embedded";
+  options.case_name = "lag_shift_14ms";
+  options.record = record_path("embedded");
+  ASSERT_TRUE(coordinator::run_in_process(prepared, options).ok);
+  runtime::RecordContents contents = runtime::read_record(options.record);
+  std::filesystem::remove(options.record);
+  auto& motion = *contents.entries.front().mutable_header()->mutable_study()->mutable_motion();
+  ASSERT_TRUE(motion.has_embedded());
+  motion.set_path("moved_away.AT2");
+  Feed feed;
+  describe_record(feed, contents, std::filesystem::temp_directory_path());
+  for (const auto& entry : contents.entries) feed.add(entry);
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  const std::string text = j["context"]["prediction"]["text"];
+  EXPECT_NE(text.find("inputs embedded in the record"), std::string::npos) << text;
+  EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
+}
+
+// An older record, without embedded inputs, its study's motion file gone: the record's own steps
+// carry the motion, and the prediction over them is the in-process run's, bit for bit.
+TEST(Context, AnOlderRecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCarry) {
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
   coordinator::CoordinatorOptions options;
   options.run_id = "view-record";
@@ -80,8 +104,9 @@ TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCarry) {
   std::filesystem::remove(options.record);
   ASSERT_TRUE(contents.entries.front().has_header());
   EXPECT_EQ(recorded_motion(contents).acceleration, prepared.motion.acceleration);
-  contents.entries.front().mutable_header()->mutable_study()->mutable_motion()->set_path(
-      "moved_away.AT2");
+  auto& motion = *contents.entries.front().mutable_header()->mutable_study()->mutable_motion();
+  motion.clear_embedded();  // as a record written before records carried their inputs
+  motion.set_path("moved_away.AT2");
   Feed feed;
   describe_record(feed, contents, std::filesystem::temp_directory_path());
   for (const auto& entry : contents.entries) feed.add(entry);
