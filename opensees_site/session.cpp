@@ -30,6 +30,7 @@ Session::Session(Connection& connection, const BasicMapping& mapping, SessionOpt
       a_(core::Vec::Zero(options_.dofs)) {}
 
 void Session::refuse(const std::string& why) const {
+  connection_.end();  // the client learns at once that no answer will come
   throw coordinator::RunAborted(options_.client + ": " + why, options_.client);
 }
 
@@ -171,6 +172,7 @@ void Session::drive(core::HybridEvaluator& evaluator, core::StepHooks& hooks,
       case Action::kGetForce:
         if (!get_force(evaluator, hooks, result)) {
           ending_ = result.diverged ? "diverged" : "stopped by the coordinator";
+          connection_.end();  // this step's force is never answered
           return;
         }
         break;
@@ -183,6 +185,9 @@ void Session::drive(core::HybridEvaluator& evaluator, core::StepHooks& hooks,
       case Action::kGetDamp:
       case Action::kGetMass: answer_matrix(nullptr); break;
       case Action::kDie:
+        if (step_open_)
+          refuse("ended its element (DIE) inside step " + std::to_string(step_) +
+                 ", before committing it");
         ending_ = "the client ended its element (DIE) after step " + std::to_string(step_);
         return;
     }

@@ -52,6 +52,10 @@ Connection::~Connection() {
   if (fd_ >= 0) ::close(fd_);
 }
 
+void Connection::end() {
+  if (fd_ >= 0) ::shutdown(fd_, SHUT_RDWR);
+}
+
 Connection::ReadResult Connection::read_exact(void* data, std::size_t size,
                                               std::chrono::nanoseconds timeout) {
   auto* out = static_cast<char*>(data);

@@ -38,6 +38,10 @@ class Connection {
   ReadResult read_exact(void* data, std::size_t size, std::chrono::nanoseconds timeout);
   // Throws std::runtime_error when the peer is gone. Allocates nothing.
   void write_all(const void* data, std::size_t size);
+  // Ends the exchange in both directions now (shutdown): a client blocked waiting for an answer
+  // reads the close at once and fails its analysis, rather than wait for a force that will not
+  // come. The descriptor is closed by the destructor. Allocates nothing.
+  void end();
   const std::string& peer() const { return peer_; }
 
  private:

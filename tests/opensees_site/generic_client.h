@@ -133,20 +133,23 @@ struct FrameRun {
   }
 };
 
-// specimen(u, v, t) -> force on the floor (N). The motion in m/s^2 at dt.
+// specimen(u, v, t) -> force on the floor (N). The motion in m/s^2 at dt, N samples. As OpenSees'
+// `analyze N dt` over a Path time series of the motion: steps 1..N, the last at t = N dt, one past
+// the record's last sample, where the series gives 0; run.u has N + 1 rows.
 inline FrameRun run_frame(const OneStoreyFrame& f, const std::vector<double>& ground,
                           const std::function<double(double, double, double)>& specimen) {
   FrameRun run;
-  run.u.assign(ground.size(), 0.0);
+  run.u.assign(ground.size() + 1, 0.0);
   double u = 0, v = 0;
   double a = -ground[0];  // at rest: m a = -m a_g
   const double effective = f.mass + 0.5 * f.dt * f.damping;
-  for (std::size_t k = 1; k < ground.size(); ++k) {
+  for (std::size_t k = 1; k <= ground.size(); ++k) {
     const double u_next = u + f.dt * v + (0.5 * f.dt * f.dt) * a;
     const double v_next = v + f.dt * a;
     const double t = static_cast<double>(k) * f.dt;
     const double r = f.k_num * u_next + specimen(u_next, v_next, t);
-    double rhs = -f.mass * ground[k] - r;
+    const double ground_k = k < ground.size() ? ground[k] : 0.0;
+    double rhs = -f.mass * ground_k - r;
     rhs -= f.damping * (v + (0.5 * f.dt) * a);
     const double a_next = rhs / effective;
     v += (0.5 * f.dt) * (a + a_next);

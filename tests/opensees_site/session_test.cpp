@@ -47,7 +47,7 @@ class InProcessSite {
       client->read_exact(sizes.data(), sizeof sizes, std::chrono::seconds(5));
       SessionOptions o;
       o.dt = setup_.dt;
-      o.max_steps = prepared_.motion.acceleration.size();
+      o.max_steps = prepared_.motion.acceleration.size() + 1;  // as the Site: step N at t = N dt
       o.dofs = 1;
       try {
         o.frame_size = check_size_message(sizes, mapping_.basic_dofs(), 0);
@@ -104,14 +104,13 @@ TEST(Session, LagFreeServedColumnEqualsTheElasticElement) {
   client.send_action(99);
   const Served s = served.get();
   ASSERT_TRUE(s.refusal.empty()) << s.refusal;
-  EXPECT_NE(s.ending.find("(DIE) after step " + std::to_string(ground.size() - 1)),
-            std::string::npos);
+  EXPECT_NE(s.ending.find("(DIE) after step " + std::to_string(ground.size())), std::string::npos);
   const double k = frame().k_spec;
   const test::FrameRun elastic =
       test::run_frame(frame(), ground, [k](double u, double, double) { return k * u; });
   EXPECT_GT(elastic.peak(), 1e-3);  // m: the record has begun to shake the frame
   EXPECT_LE(peak_relative_difference(run, elastic), 1e-9);
-  ASSERT_EQ(s.result.steps(), ground.size());
+  ASSERT_EQ(s.result.steps(), ground.size() + 1);
   EXPECT_EQ(s.result.displacement(100, 0), run.u[100]);
   EXPECT_EQ(s.result.command(100, 0), run.u[100]);
 }
@@ -125,12 +124,15 @@ TEST(Session, FourteenMsOfLagGrowsThePeakAsRthsOwnPaperFrameRunDoes) {
   auto served = site.serve();
   test::GenericClient client(site.port(), 2);
   client.send_sizes();
-  const test::FrameRun lagged = test::run_frame(frame(), ground, test::served_specimen(client));
+  test::FrameRun lagged = test::run_frame(frame(), ground, test::served_specimen(client));
   client.close();
   ASSERT_TRUE(served.get().refusal.empty());
   const double k = frame().k_spec;
-  const test::FrameRun elastic =
+  test::FrameRun elastic =
       test::run_frame(frame(), ground, [k](double u, double, double) { return k * u; });
+  // Over the motion's own samples: rths's run below has no step past the record's end.
+  lagged.u.resize(ground.size());
+  elastic.u.resize(ground.size());
   const double growth = lagged.peak() / elastic.peak();
 
   const std::string paper =
@@ -259,6 +261,35 @@ TEST(Session, ASilentClientIsStoppedNotWaitedFor) {
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
 }
 
+// A one-second motion at 1 ms: 1000 samples, so OpenSees' `analyze 1000 0.001` is the longest
+// analysis it serves; a step past it is refused, and the client reads the close.
+TEST(Session, AStepPastTheAnalysisAsLongAsTheMotionIsRefused) {
+  bool client_saw_the_close = false;
+  const std::string why = refusal_after([&](test::GenericClient& c) {
+    for (int k = 1; k <= 1001; ++k) {
+      c.set_trial({0, 1e-6 * k}, {0, 0}, {0, 0}, 0.001 * k);
+      try {
+        c.ask(10);
+      } catch (const std::runtime_error&) {
+        client_saw_the_close = k == 1001;
+        throw;
+      }
+      c.send_action(5);
+    }
+  });
+  EXPECT_TRUE(client_saw_the_close);
+  EXPECT_NE(why.find("step 1001 is beyond the study's motion"), std::string::npos) << why;
+}
+
+TEST(Session, ADieInsideAnOpenStepIsRefused) {
+  const std::string why = refusal_after([](test::GenericClient& c) {
+    c.set_trial({0, 1e-3}, {0, 0}, {0, 0}, 0.001);
+    c.ask(10);
+    c.send_action(99);  // no commitState (5) first
+  });
+  EXPECT_NE(why.find("(DIE) inside step 1, before committing it"), std::string::npos) << why;
+}
+
 TEST(Session, AClientTimeStepOtherThanTheStudysIsRefused) {
   const std::string why = refusal_after([](test::GenericClient& c) {
     for (int k = 1; k <= 2; ++k) {
@@ -283,6 +314,7 @@ TEST(Session, ASecondClientIsRefusedWhileTheFirstIsServed) {
   first.set_trial({0, 2e-3}, {0, 0}, {0, 0}, 0.002);
   first.ask(10);  // the server polls the listener while it waits for this frame
   EXPECT_TRUE(second.closed_by_server(3000));
+  first.send_action(5);  // commitState, then the element's end, as OpenSees ends an analysis
   first.send_action(99);
   EXPECT_TRUE(served.get().refusal.empty());
 }
