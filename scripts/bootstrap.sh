@@ -9,14 +9,20 @@ mode="${1:-}"
 case "$mode" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
 cd "$(dirname "$0")/.."
 
+# What the build and the demo need: compilers, the libraries rths links, gnuplot for the figures,
+# Debian's python3 with NumPy for the installed module, and npm for the view's page library.
 packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libprotobuf-dev protobuf-compiler
-  libspdlog-dev libgtest-dev libgmock-dev libbenchmark-dev cyclonedds-dev cyclonedds-tools
-  libcli11-dev gnuplot-nox libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 iputils-ping
-  procps util-linux
-  libmatio-dev libhdf5-dev pybind11-dev python3-dev python3-numpy python3-h5py python3-scipy
-  python3-pytest python3-matplotlib python3-nbclient python3-nbformat python3-ipykernel slurm-wlm munge podman runc podman-compose debootstrap
-  netavark aardvark-dns iptables openssl libssl-dev libxml2-dev
-  libcpp-httplib-dev nodejs chromium clang-format)
+  libspdlog-dev cyclonedds-dev cyclonedds-tools libcli11-dev gnuplot-nox libceres-dev libfftw3-dev
+  nlohmann-json3-dev iproute2 procps util-linux libmatio-dev libhdf5-dev pybind11-dev python3-dev
+  python3-numpy openssl libssl-dev libxml2-dev libcpp-httplib-dev nodejs)
+# What only the suite needs: the test and bench frameworks, Python's test tools, Slurm, containers,
+# a browser for the view's tests and clang-format for the style check.
+if [ "$mode" = test ]; then
+  packages+=(libgtest-dev libgmock-dev libbenchmark-dev iputils-ping python3-h5py python3-scipy
+    python3-pytest python3-matplotlib python3-nbclient python3-nbformat python3-ipykernel slurm-wlm
+    munge podman runc podman-compose debootstrap netavark aardvark-dns iptables chromium
+    clang-format)
+fi
 # npm (the view's page library, uPlot, and playwright-core for its browser tests): Debian's npm
 # package, unless the installed nodejs already brings npm.
 command -v npm >/dev/null 2>&1 || packages+=(npm)
@@ -24,6 +30,17 @@ missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+if [ "$mode" = demo ]; then
+  cat <<PLAN
+== rths demo: what it does (about 10 min on a quiet 2-core machine from nothing; measured 2026-11-26)
+   1. install ${#missing[@]} missing Debian packages (a few minutes, depending on the mirror)
+   2. build rths, its node programs and the Python module, without the tests (about 4 min)
+   3. run the studies, results in out/ (about 3 min):
+      - the source paper's frame in process and over DDS on loopback (lockstep: must equal)
+      - its stability, the paper's Fig. 4 sweep and the network x actuator lag map
+      - the identification of a real MTS actuator's record (data/measured), with its Bode plot
+PLAN
+fi
 if ((${#missing[@]})); then
   sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
   echo "installing: ${missing[*]}"
@@ -33,9 +50,12 @@ fi
 
 build=build
 # A warning in rths's own code fails this build (and so CI).
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRTHS_WARNINGS_AS_ERRORS=ON >/dev/null
+tests=ON; [ "$mode" = test ] || tests=OFF
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DRTHS_WARNINGS_AS_ERRORS=ON \
+  -DRTHS_BUILD_TESTS=$tests >/dev/null
 cmake --build "$build" -j"$(nproc)"
-# `rths` and the node programs on PATH (/usr/local/bin), so the README's commands run as written.
+# `rths` and the node programs on PATH (/usr/local/bin), the Python module where Debian's python3
+# finds it, the data in /usr/local/share/rths, so the README's commands run as written.
 sudo=""; [ "$(id -u)" -eq 0 ] || sudo="sudo"
 $sudo cmake --install "$build" >/dev/null
 

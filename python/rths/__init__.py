@@ -13,7 +13,8 @@ as NumPy arrays and dicts whose names carry their units:
     study.launch("out", domain=7)   # coordinator, substructure node and emulator over DDS
 
 Bad input raises rths.BadInputError (a ValueError) with the message the CLI prints; anything
-else rths.Error (a RuntimeError).
+else rths.Error (a RuntimeError). ``rths.data_path("ground_motions", "RSN175_IMPVALL.H_H-E12140.AT2")``
+names a record shipped with rths, from any folder.
 """
 
 import os as _os
@@ -25,7 +26,21 @@ from .study import Case, Study
 
 __version__ = "@PROJECT_VERSION@"
 
-__all__ = ["BadInputError", "Case", "Error", "LoadedStudy", "Study", "identify", "load_study",
+# The data shipped with rths: installed by `cmake --install`, or the source tree this was built from.
+_DATA_DIRS = ("@RTHS_INSTALLED_DATA_DIR@", "@PROJECT_SOURCE_DIR@/data")
+
+
+def data_path(*parts):
+    """The path of a file shipped in rths's data/ folder (ground_motions/, measured/), e.g.
+    ``data_path("measured", "mts_mrdamper_chirp_0A.txt")``. Raises FileNotFoundError naming the
+    folders searched."""
+    for folder in _DATA_DIRS:
+        candidate = _os.path.join(folder, *parts)
+        if _os.path.exists(candidate):
+            return candidate
+    raise FileNotFoundError(f"{_os.path.join(*parts)}: not in rths's data ({', '.join(_DATA_DIRS)})")
+
+__all__ = ["BadInputError", "Case", "Error", "LoadedStudy", "Study", "data_path", "identify", "load_study",
            "parse_study", "read_record", "run", "sdof", "stability", "sweep", "__version__"]
 
 

@@ -1,5 +1,7 @@
 """The example notebook runs from top to bottom (nbclient, Debian's python3-nbclient and
-python3-ipykernel): every cell's assertions hold. Run from ctest (python_notebook)."""
+python3-ipykernel) from an empty folder, as a Jupyter user starts it: every cell's assertions
+hold and its figures are drawn inline (no backend forced from outside). Run from ctest
+(python_notebook)."""
 import os
 from pathlib import Path
 
@@ -11,12 +13,16 @@ nbclient = pytest.importorskip("nbclient", reason="python3-nbclient is not insta
 SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
 
 
-def test_example_notebook_runs_clean(tmp_path):
+def test_example_notebook_runs_clean_from_any_folder_and_draws_inline(tmp_path, monkeypatch):
+    monkeypatch.delenv("MPLBACKEND", raising=False)  # Jupyter's own inline backend, as a user has
     notebook = nbformat.read(SOURCE / "examples/rths_in_jupyter.ipynb", as_version=4)
     client = nbclient.NotebookClient(notebook, timeout=300, kernel_name="python3",
                                      resources={"metadata": {"path": str(tmp_path)}})
     client.execute()
-    printed = "".join(out.get("text", "") for cell in notebook.cells if cell.cell_type == "code"
-                      for out in cell.get("outputs", []))
+    outputs = [out for cell in notebook.cells if cell.cell_type == "code"
+               for out in cell.get("outputs", [])]
+    printed = "".join(out.get("text", "") for out in outputs)
     assert "completed: peak" in printed
     assert "DIVERGED" in printed
+    figures = [out for out in outputs if "image/png" in out.get("data", {})]
+    assert len(figures) >= 2, "the notebook's figures were not drawn inline"
