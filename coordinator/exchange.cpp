@@ -113,12 +113,12 @@ void Coordinator::State::send_assign(const Node& node) {
   for (int a : node.plan->actuators) assign.add_actuators(a);
   assign.set_heartbeat_period(runtime::heartbeat_period(deployment));
   // A node outlives a silent coordinator only a little longer than the coordinator tolerates it.
-  assign.set_orphan_timeout(std::max(2.0, 2.0 * runtime::liveliness_timeout(deployment)));
+  assign.set_orphan_timeout(std::max(2.0, 2.0 * runtime::judged_liveliness_timeout(deployment)));
   send(node.plan->spec.id(), runtime::ASSIGN, 0, assign);
 }
 
 void Coordinator::State::check_liveliness() {
-  const double limit = runtime::liveliness_timeout(deployment);
+  const double limit = runtime::judged_liveliness_timeout(deployment);
   for (auto& [id, node] : nodes) {
     const double silent = seconds_since(node.last_seen);
     if (silent > limit)

@@ -172,6 +172,10 @@ double heartbeat_period(const config::Deployment& d) {
 double liveliness_timeout(const config::Deployment& d) {
   return or_default(d.liveliness_timeout(), 1.0);
 }
+double judged_liveliness_timeout(const config::Deployment& d) {
+  if (d.clock() == config::Deployment::REAL_TIME) return liveliness_timeout(d);
+  return std::max(liveliness_timeout(d), kLockstepLivelinessFloor);
+}
 double step_timeout(const config::Deployment& d) { return or_default(d.step_timeout(), 2.0); }
 double feedback_wait_fraction(const config::Deployment& d) {
   return or_default(d.feedback_wait_fraction(), 0.5);

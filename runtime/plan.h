@@ -66,6 +66,12 @@ core::HybridSetup setup_without_motion(const config::Study& study,
 double start_timeout(const config::Deployment& d);
 double heartbeat_period(const config::Deployment& d);
 double liveliness_timeout(const config::Deployment& d);
+// How long a node may be silent before the coordinator declares it dead (and, doubled, how long
+// a node outlives a silent coordinator): liveliness_timeout in real time; in lockstep at least
+// kLockstepLivelinessFloor, because a lockstep result cannot depend on timing and a busy machine
+// starves a process for over a second (1.41 s seen with a browser on the run's two CPUs).
+inline constexpr double kLockstepLivelinessFloor = 5.0;  // s
+double judged_liveliness_timeout(const config::Deployment& d);
 double step_timeout(const config::Deployment& d);
 double feedback_wait_fraction(const config::Deployment& d);
 // Real time: whether the loop waits (feedback_wait_fraction x dt) for a node's answer to the step

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 namespace {
 
@@ -458,12 +459,25 @@ TEST(CliTest, JointLagReportsProgressInPlainLines) {
 // critical delay (14 ms network + 14 ms actuator = 28 ms), meant (expect_unstable), and the
 // network-only case (14 ms) is not; progress per case; the lag plot names the links by role and
 // stacks network and actuator lag against the critical delay.
+// The shipped network-lag study, its fail-safe windows widened and its overrun verdict off: the
+// lag check and the plot by role are the point, not whether this machine, busy now, holds the
+// study's 10 ms windows (a HOLD in the first steps leaves no link series to plot).
 TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   const auto dir = scratch("launch_lag");
-  const Outcome o =
-      run("launch " + (kSource / "configs/paper_frame_network_lag.textproto").string() +
-          " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " + dir.string() +
-          " --platform-seconds 0.2 --accept-platform");  // this machine is not the point here
+  std::string text = read_text(kSource / "configs/paper_frame_network_lag.textproto");
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"max_missed_answers: 10", "max_missed_answers: 300"},
+        {"command_watchdog_periods: 10",
+         "command_watchdog_periods: 300 max_overrun_fraction: -1 min_answer_fraction: -1"},
+        {"../data/", (kSource / "data").string() + "/"}}) {
+    const auto at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  }
+  std::ofstream(dir / "network_lag.textproto") << text;
+  const Outcome o = run("launch " + (dir / "network_lag.textproto").string() +
+                        " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " +
+                        (dir / "out").string() + " --platform-seconds 0.2 --accept-platform");
   EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 1) << o.output;
   const std::string warning =
       "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the actuator "
@@ -477,10 +491,10 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
   EXPECT_EQ(o.output.find("warning: case 'network_lag_only'"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("launch:  50% (1/2 cases"), std::string::npos) << o.output;
   EXPECT_NE(o.output.find("launch: 100% (2/2 cases"), std::string::npos) << o.output;
-  const auto summary = nlohmann::json::parse(read_text(dir / "summary.json"));
+  const auto summary = nlohmann::json::parse(read_text(dir / "out" / "summary.json"));
   EXPECT_NEAR(summary["cases"][1]["stability"]["lag_s"].get<double>(), 0.028, 1e-12);
   EXPECT_TRUE(summary["cases"][1]["stability"]["past_critical_delay"].get<bool>());
-  const std::string plot = read_text(dir / "links_lag_shift_14ms.svg");
+  const std::string plot = read_text(dir / "out" / "links_lag_shift_14ms.svg");
   for (const char* text :
        {"actuator lab: round trip, measured", "actuator lab: round trip, injected",
         "numerical site: round trip, measured", "actuator lag, nominal 14 ms: shift(14 ms)",
@@ -489,7 +503,7 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
     EXPECT_NE(plot.find(text), std::string::npos) << text;
   }
   EXPECT_EQ(plot.find("node 2"), std::string::npos);
-  EXPECT_TRUE(std::filesystem::exists(dir / "links_lag_shift_14ms.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "links_lag_shift_14ms.png"));
 }
 
 // A run that stops before its first step (its start-up times out at once) still

@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "deploy/netns.h"
+#include "tests/support/platform_gate.h"
 
 namespace rths::deploy {
 namespace {
@@ -169,10 +170,12 @@ TEST_F(SitesRun, TenMillisecondsEachWayAddTwentyToTheRoundTripAndTheRecordAgrees
               2 * kMs);
   // The un-lagged link to the substructure node is unaffected.
   EXPECT_LT(link_of(lagged, 1).round_trip.median, 5 * kMs);
-  // Independent check: the run's pace per step is the slowest round trip plus a little.
+  // Independent check: the run's pace per step is the slowest round trip plus a little: 5 ms, and
+  // twice the p99 wake-up lateness this machine shows now (each step wakes a process per site).
   const double pace = lagged.record_wall_seconds / static_cast<double>(lagged.steps);
+  const double slack = 5 * kMs + 2 * test::measure_platform(1000.0).p99;
   EXPECT_GE(pace, 0.95 * rt);
-  EXPECT_LE(pace, rt + 5 * kMs);
+  EXPECT_LE(pace, rt + slack);
   // Everything made was removed.
   const auto left = list_namespaces();
   for (const auto& name : lagged.namespaces) {

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
@@ -16,6 +18,7 @@
 #include "rths/proto/runtime.pb.h"
 #include "runtime/schema.h"
 #include "test_support.h"
+#include "tests/support/platform_gate.h"
 #include "transport/dds_endpoint.h"
 
 namespace rths {
@@ -142,15 +145,23 @@ INSTANTIATE_TEST_SUITE_P(Nodes, KillNode,
                          });
 
 // The emulator's own process stalled (SIGSTOP for 30 ms, 15 times) is not a silent coordinator:
-// the commands that waited on its socket are delivered before its 15-period watchdog judges, so
-// it does not hold, and the run completes. (The watchdog is wider than this loaded machine's own
-// gaps between commands, a few ms, and far shorter than the stall.)
+// the commands that waited on its socket are delivered before its watchdog judges, so it does
+// not hold, and the run completes. The watchdog must be shorter than the stall (else the test
+// proves nothing) and longer than the machine's own gaps between commands, which are measured
+// first: twice the longest wake-up stall, at least 15 periods, at most 25 (a 30 ms stall).
 TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
+  constexpr int kLongestWatchdogPeriods = 25;  // of 1 ms, under the 30 ms stall
+  const test::MeasuredPlatform machine = test::measure_platform(1000.0, 1.0);
+  const int watchdog = std::max(15, static_cast<int>(std::ceil(2.0 * machine.max / 1e-3)));
+  if (watchdog > kLongestWatchdogPeriods)
+    GTEST_SKIP() << "this machine stalls too long now to tell a 30 ms stall from its own gaps ("
+                 << machine.text << "; the watchdog would need " << watchdog << " ms)";
   runtime::ensure_dds_config();
   const std::string text = test::paper_frame_study(
       6,
       "deployment { clock: REAL_TIME liveliness_timeout: 0.5 heartbeat_period: 0.02 "
-      "max_missed_answers: 120 command_watchdog_periods: 15 max_overrun_fraction: -1 }");
+      "max_missed_answers: 120 command_watchdog_periods: " +
+          std::to_string(watchdog) + " max_overrun_fraction: -1 }");
   Cluster c = start("own_stall", text, 53, {{1, true}, {2, false}}, "reference");
   wait_for_steps(c.record, 300);
   for (int i = 0; i < 15; ++i) {

@@ -92,6 +92,17 @@ TEST(Plan, NodeSideSetupMatchesPrepareStudy) {
   EXPECT_EQ(from_core.delays[0].describe(), node_side.delays[0].describe());
 }
 
+TEST(Plan, LockstepJudgesANodeDeadOnlyAfterSecondsOfSilenceRealTimeAfterItsOwnTimeout) {
+  config::Deployment d;
+  d.set_liveliness_timeout(1.0);
+  EXPECT_DOUBLE_EQ(judged_liveliness_timeout(d), kLockstepLivelinessFloor);
+  d.set_liveliness_timeout(8.0);
+  EXPECT_DOUBLE_EQ(judged_liveliness_timeout(d), 8.0);
+  d.set_clock(config::Deployment::REAL_TIME);
+  d.set_liveliness_timeout(0.3);
+  EXPECT_DOUBLE_EQ(judged_liveliness_timeout(d), 0.3);
+}
+
 TEST(FailSafeWindows, StepsFromMillisecondsOrTheStepFields) {
   const double dt = 1.0 / 1024;
   EXPECT_EQ(max_missed_answers(deployment(""), dt), 3);

@@ -1,0 +1,25 @@
+#include "tests/support/platform_gate.h"
+
+#include <cstdio>
+
+#include "platform/check.h"
+#include "platform/latency.h"
+
+namespace rths::test {
+
+MeasuredPlatform measure_platform(double rate_hz, double seconds) {
+  const std::vector<int> cpus = platform::allowed_cpus();
+  const platform::LatencyStats stats(platform::measure_wakeups(cpus, rate_hz, seconds));
+  MeasuredPlatform out;
+  out.p99 = stats.quantile(0.99);
+  out.max = stats.max();
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "wake-up lateness at %.0f Hz over %.1f s on %zu CPUs: p99 %.2f ms, max %.1f ms",
+                rate_hz, seconds, cpus.size(), 1e3 * out.p99, 1e3 * out.max);
+  out.text = text;
+  std::printf("platform: %s\n", out.text.c_str());
+  return out;
+}
+
+}  // namespace rths::test

@@ -1,0 +1,24 @@
+#pragma once
+// This machine's scheduling now, measured with the project's own check (platform/latency.h:
+// paced threads on every CPU this process may use, at the test's rate), so that a test of a
+// real-time property sizes its windows and tolerances from what the machine does, and skips,
+// printing what it measured, where the machine cannot hold the property at all. A busy machine
+// then never fails a correct build; a quiet one still checks the property tightly.
+//
+//   measure_platform(rate_hz, seconds) -> MeasuredPlatform
+//     p99, max   wake-up lateness (s) pooled over the CPUs; max is the longest stall seen
+//     text       "wake-up lateness at 1000 Hz over 0.5 s on 2 CPUs: p99 0.08 ms, max 3.9 ms"
+
+#include <string>
+
+namespace rths::test {
+
+struct MeasuredPlatform {
+  double p99 = 0.0;  // s
+  double max = 0.0;  // s
+  std::string text;
+};
+
+MeasuredPlatform measure_platform(double rate_hz, double seconds = 0.5);
+
+}  // namespace rths::test
