@@ -118,8 +118,7 @@ Tally run_trials(const Setting& s, double window_ms) {
     spec.coordinator_extra = s.coordinator;
     spec.dir = std::filesystem::temp_directory_path() / ("rths_fault_trial_" + std::to_string(i));
     spec.binary_dir = RTHS_BINARY_DIR;
-    spec.motion_path =
-        std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+    spec.motion_path = std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
     const test::FaultTrialResult r = test::run_fault_trial(spec);
     const double effective_ms = t.window_steps * 1e3 / s.rate;
     count_trial(spec, r, effective_ms, t);

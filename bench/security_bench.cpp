@@ -35,8 +35,7 @@ Figures lockstep_run(const fs::path& dir, int domain, double seconds, const fs::
       << "name: \"bench\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
          "motion { path: \""
-      << RTHS_DATA_DIR
-      << "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " << seconds
+      << RTHS_DATA_DIR << "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " << seconds
       << " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
          "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"

@@ -3,7 +3,7 @@
 #   base  debootstrap --variant=minbase bookworm including the runtime packages the node programs
 #         load (found with ldd + dpkg -S on this host), then `podman import`; tagged by the hash of
 #         the package list and reused while it is unchanged;
-#   image the base + the three node programs, configs/ and the compose study, `podman build
+#   image the base + the three node programs, configs/, data/ and the compose study, `podman build
 #         --network none`; labelled with the hash of its inputs, rebuilt only when they changed.
 # Minutes from nothing, seconds after a code change. Downloaded packages stay in
 # /var/cache/rths-debootstrap.
@@ -38,7 +38,7 @@ packages=$(for program in "${programs[@]}"; do ldd "$program"; done \
 base_key=$( (echo "$packages"; sed -n '/^# base-image-recipe/,/^# end-base-image-recipe/p' "${BASH_SOURCE[0]}") | sha256sum | cut -c1-16)
 base="localhost/rths-test-base:$base_key"
 key=$( (echo "$base_key"; sha256sum "${programs[@]}" "$here/compose_study.textproto";
-        find "$repo/configs" -type f -print0 | sort -z | xargs -0 sha256sum) | sha256sum | cut -c1-16)
+        find "$repo/configs" "$repo/data" -type f -print0 | sort -z | xargs -0 sha256sum) | sha256sum | cut -c1-16)
 if podman image exists "$image" &&
    [ "$(podman image inspect --format '{{index .Config.Labels "rths.inputs"}}' "$image" 2>/dev/null)" = "$key" ]; then
   echo "image $image is up to date (inputs $key)"
@@ -71,11 +71,13 @@ fi
 mkdir -p "$work/context/bin" "$work/context/docker"
 cp "${programs[@]}" "$work/context/bin/"
 cp -r "$repo/configs" "$work/context/configs"
+cp -r "$repo/data" "$work/context/data"
 cp "$here/compose_study.textproto" "$work/context/docker/"
 cat > "$work/context/Containerfile" <<CONTAINERFILE
 FROM $base
 COPY bin /opt/rths/bin
 COPY configs /opt/rths/configs
+COPY data /opt/rths/data
 COPY docker /opt/rths/docker
 LABEL rths.inputs=$key
 CONTAINERFILE

@@ -12,8 +12,7 @@
 namespace rths::core {
 namespace {
 
-const std::filesystem::path kMotions =
-    std::filesystem::path(RTHS_DATA_DIR) / "ground_motions";
+const std::filesystem::path kMotions = std::filesystem::path(RTHS_DATA_DIR) / "ground_motions";
 
 // The table in shared/data/README.md: file, NPTS, DT (s), PGA (g), time of the PGA (s).
 struct Record {

@@ -288,7 +288,8 @@ TEST_F(MotionUnits, AnImplausiblePeakNamesTheUnits) {
 }
 
 TEST_F(MotionUnits, AnAt2FileIsInGAndRefusesAnotherUnit) {
-  const std::filesystem::path at2 = kConfigs / "../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  const std::filesystem::path at2 =
+      kConfigs / "../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
   config::GroundMotion motion;
   motion.set_path(at2.string());
   EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * kGravity,

@@ -152,7 +152,9 @@ TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
 }
 
 // Real time with a link slower than dt: each step uses the newest force available and the record
-// says which step it answers.
+// says which step it answers. An answer is never to a later step; to the same step only when this
+// machine stalled the loop for longer than the 6 ms round trip after sending (a busy machine does),
+// so the typical answer, not every one, is judged to be 6 steps behind.
 TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
   const std::string text = test::paper_frame_study(
       0.6,
@@ -166,7 +168,7 @@ TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
   for (const runtime::StepRecord* s : run.record.steps())
     for (const runtime::LinkSample& link : s->links())
       if (link.node_id() == 2 && link.answered_step() > 0) {
-        EXPECT_LT(link.answered_step(), s->step());
+        EXPECT_LE(link.answered_step(), s->step());
         behind.push_back(static_cast<double>(s->step() - link.answered_step()));
       }
   ASSERT_GT(behind.size(), 300u);

@@ -44,8 +44,7 @@ TEST_P(FaultTrial, HoldsStopsNamesAndKeepsTheRecord) {
       std::filesystem::temp_directory_path() /
       ("rths_fault_trial_test_" + std::to_string(spec.domain) + "_" + std::to_string(getpid()));
   spec.binary_dir = RTHS_BINARY_DIR;
-  spec.motion_path =
-      std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  spec.motion_path = std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
   const test::FaultTrialResult r = test::run_fault_trial(spec);
   ASSERT_TRUE(r.fault_delivered) << r.why_not;
   EXPECT_TRUE(r.record_complete) << r.record_steps << " steps";
