@@ -9,12 +9,14 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <string>
 
 #include "identify/run_record.h"
 #include "runtime/launch.h"
 #include "tests/identify/undeclared_run.h"
+#include "tests/support/platform_gate.h"
 
 namespace rths::identify {
 namespace {
@@ -66,6 +68,19 @@ std::string network(const std::string& fields) {
 const std::string kDrift = "drift_rate: 0.0006";  // 3 ms over the 5 s run
 const std::string kSpikes = "spike_delay: 0.006 spike_every: 250 spike_steps: 3";
 
+// The injected spikes (6 ms, 3 steps in every 250 at 1 kHz: 720 spiked steps a minute) are told
+// apart from the machine's own only while the machine stalls past half their height far less
+// often; measured first, else the test is skipped naming what the machine did.
+std::optional<std::string> machine_masks_the_spikes() {
+  const test::MeasuredPlatform machine = test::measure_platform(1000.0, 1.0);
+  const double own = machine.stalls->stalls_per_minute(0.003);
+  if (own <= 72.0) return std::nullopt;  // a tenth of the injected spiked steps
+  return "this machine stalls past 3 ms " + std::to_string(static_cast<int>(own)) +
+         " times a minute now (" + machine.text +
+         "), too often to tell 720 injected spiked "
+         "steps a minute from its own";
+}
+
 std::set<std::string> undeclared(const RunIdentification& run) {
   const auto& names = run.actuators.at(0).undeclared;
   return {names.begin(), names.end()};
@@ -112,6 +127,7 @@ TEST_F(DdsRunRecord, ALagOnOneLinkAndAFirstOrderLagOnTheActuatorAreEachNamedWher
 
 // Network effects in lockstep do not reach the response: the re-run finds nothing to explain.
 TEST_F(DdsRunRecord, ADriftOnOneLinkAndPeriodicSpikesOnTheOtherAreEachNamedWhereTheyAre) {
+  if (const auto why = machine_masks_the_spikes()) GTEST_SKIP() << *why;
   const RunIdentification run = identify_run_record(
       launch_with_undeclared("identify_dds_drift_spikes", network(kDrift), network(kSpikes), 230),
       actuator_only());
@@ -142,6 +158,7 @@ TEST_F(DdsRunRecord, ADriftingDelayAndAnEmulatorGainErrorAreEachNamedWhereTheyAr
 }
 
 TEST_F(DdsRunRecord, PeriodicSpikesAndAFirstOrderLagAreEachNamedWhereTheyAre) {
+  if (const auto why = machine_masks_the_spikes()) GTEST_SKIP() << *why;
   const RunIdentification run = identify_run_record(
       launch_with_undeclared(
           "identify_dds_spikes_lag", "",

@@ -3,7 +3,6 @@
 #include <cstdio>
 
 #include "platform/check.h"
-#include "platform/latency.h"
 
 namespace rths::test {
 
@@ -13,6 +12,7 @@ MeasuredPlatform measure_platform(double rate_hz, double seconds) {
   MeasuredPlatform out;
   out.p99 = stats.quantile(0.99);
   out.max = stats.max();
+  out.stalls = stats;
   char text[160];
   std::snprintf(text, sizeof text,
                 "wake-up lateness at %.0f Hz over %.1f s on %zu CPUs: p99 %.2f ms, max %.1f ms",

@@ -7,15 +7,20 @@
 //
 //   measure_platform(rate_hz, seconds) -> MeasuredPlatform
 //     p99, max   wake-up lateness (s) pooled over the CPUs; max is the longest stall seen
+//     stalls     the statistics themselves (stalls_per_minute(x): wake-ups later than x s)
 //     text       "wake-up lateness at 1000 Hz over 0.5 s on 2 CPUs: p99 0.08 ms, max 3.9 ms"
 
+#include <optional>
 #include <string>
+
+#include "platform/latency.h"
 
 namespace rths::test {
 
 struct MeasuredPlatform {
   double p99 = 0.0;  // s
   double max = 0.0;  // s
+  std::optional<platform::LatencyStats> stalls;
   std::string text;
 };
 
