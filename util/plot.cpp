@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -62,6 +64,33 @@ std::string range(const std::optional<double>& lo, const std::optional<double>& 
   return out.str();
 }
 
+// The points of `s` drawn on `spec`'s panel: all when there are at most kPointsPerPixel per pixel
+// of its width, else decimate_min_max over its x range (the panel's, else the series' own).
+std::vector<std::size_t> drawn_points(const PlotSpec& spec, const Series& s) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  std::vector<std::size_t> all;
+  const int buckets = std::max(1, spec.width);
+  if (n <= static_cast<std::size_t>(kPointsPerPixel) * static_cast<std::size_t>(buckets)) {
+    all.resize(n);
+    for (std::size_t k = 0; k < n; ++k) all[k] = k;
+    return all;
+  }
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(s.x[k]) || (spec.log_x && s.x[k] <= 0)) continue;
+    lo = std::min(lo, s.x[k]);
+    hi = std::max(hi, s.x[k]);
+  }
+  if (spec.x_min) lo = *spec.x_min;
+  if (spec.x_max) hi = *spec.x_max;
+  if (!(lo < hi) || (spec.log_x && !(lo > 0))) {
+    all.resize(n);
+    for (std::size_t k = 0; k < n; ++k) all[k] = k;
+    return all;
+  }
+  return decimate_min_max(s, lo, hi, buckets, spec.log_x);
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t title_width) {
   script << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
@@ -101,7 +130,7 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t 
   }
   script << "\n";
   for (const Series& s : spec.series) {
-    for (std::size_t k = 0; k < s.x.size() && k < s.y.size(); ++k) {
+    for (std::size_t k : drawn_points(spec, s)) {
       // gnuplot cannot draw non-finite points (and zero on a log axis); leave a gap instead.
       if (std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(spec.log_y && s.y[k] <= 0) &&
           !(spec.log_x && s.x[k] <= 0)) {
@@ -196,12 +225,86 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
   write_png_panels({spec}, png);
 }
 
+std::vector<std::size_t> decimate_min_max(const Series& s, double x_lo, double x_hi, int buckets,
+                                          bool log_x) {
+  if (buckets <= 0 || !(x_lo < x_hi))
+    throw std::invalid_argument("decimate_min_max: needs buckets > 0 and x_lo < x_hi");
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  std::vector<std::size_t> kept;
+  const auto position = [log_x](double x) { return log_x ? std::log10(x) : x; };
+  const double lo = position(x_lo), width = position(x_hi) - lo;
+  // Column of a finite point: -1 left of the range, `buckets` right of it.
+  const auto column = [&](double x) -> long {
+    const double at = (position(x) - lo) / width * buckets;
+    if (!(at >= 0.0)) return -1;
+    return std::min<long>(static_cast<long>(at), buckets);
+  };
+  for (std::size_t k = 1; k < n; ++k)
+    if (std::isfinite(s.x[k]) && std::isfinite(s.x[k - 1]) && s.x[k] < s.x[k - 1]) {
+      kept.resize(n);  // not ascending: a loop has no columns to keep the extent of
+      for (std::size_t i = 0; i < n; ++i) kept[i] = i;
+      return kept;
+    }
+  // The open column: its first, smallest, largest and last point.
+  bool open = false;
+  long current = 0;
+  std::size_t first = 0, low = 0, high = 0, last = 0;
+  const auto close = [&] {
+    if (!open) return;
+    std::size_t four[4] = {first, low, high, last};
+    std::sort(std::begin(four), std::end(four));
+    for (std::size_t i = 0; i < 4; ++i)
+      if (i == 0 || four[i] != four[i - 1]) kept.push_back(four[i]);
+    open = false;
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool finite = std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(log_x && s.x[k] <= 0);
+    if (!finite) {
+      close();
+      kept.push_back(k);  // the gap
+      continue;
+    }
+    const long c = column(s.x[k]);
+    if (open && c != current) close();
+    if (!open) {
+      open = true;
+      current = c;
+      first = low = high = last = k;
+      continue;
+    }
+    last = k;
+    if (s.y[k] < s.y[low]) low = k;
+    if (s.y[k] > s.y[high]) high = k;
+  }
+  close();
+  return kept;
+}
+
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png) {
   if (panels.empty()) throw std::invalid_argument("no panels to plot into " + png.string());
-  run_gnuplot_script(figure(panels, "pngcairo", png), png);
   std::filesystem::path svg = png;
   svg.replace_extension(".svg");
-  run_gnuplot_script(figure(panels, "svg dynamic", svg), svg);
+  // Both figures from one gnuplot, each into its partial file; renamed only when gnuplot is done.
+  const std::filesystem::path png_partial = png.string() + ".partial",
+                              svg_partial = svg.string() + ".partial";
+  const auto discard = [&] {
+    std::error_code ignored;
+    std::filesystem::remove(png_partial, ignored);
+    std::filesystem::remove(svg_partial, ignored);
+  };
+  try {
+    run_gnuplot_script(
+        figure(panels, "pngcairo", png_partial) + figure(panels, "svg dynamic", svg_partial), png);
+    if (!std::filesystem::exists(png_partial) || !std::filesystem::exists(svg_partial) ||
+        std::filesystem::file_size(png_partial) == 0 ||
+        std::filesystem::file_size(svg_partial) == 0)
+      throw std::runtime_error("gnuplot wrote no figure into " + png.string());
+    std::filesystem::rename(png_partial, png);
+    std::filesystem::rename(svg_partial, svg);
+  } catch (...) {
+    discard();
+    throw;
+  }
 }
 
 std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,
