@@ -69,8 +69,8 @@ std::string range(const std::optional<double>& lo, const std::optional<double>& 
 std::vector<std::size_t> drawn_points(const PlotSpec& spec, const Series& s) {
   const std::size_t n = std::min(s.x.size(), s.y.size());
   std::vector<std::size_t> all;
-  const int buckets = std::max(1, spec.width);
-  if (n <= static_cast<std::size_t>(kPointsPerPixel) * static_cast<std::size_t>(buckets)) {
+  const int buckets = std::max(1, spec.width * kPointsPerPixel / 4);
+  if (n <= 4 * static_cast<std::size_t>(buckets)) {
     all.resize(n);
     for (std::size_t k = 0; k < n; ++k) all[k] = k;
     return all;
@@ -88,7 +88,26 @@ std::vector<std::size_t> drawn_points(const PlotSpec& spec, const Series& s) {
     for (std::size_t k = 0; k < n; ++k) all[k] = k;
     return all;
   }
-  return decimate_min_max(s, lo, hi, buckets, spec.log_x);
+  bool ascending = true;
+  for (std::size_t k = 1; k < n && ascending; ++k)
+    ascending = !(std::isfinite(s.x[k]) && std::isfinite(s.x[k - 1]) && s.x[k] < s.x[k - 1]);
+  if (ascending || spec.log_x || spec.log_y)
+    return decimate_min_max(s, lo, hi, buckets, spec.log_x);
+  // A loop: simplified in the panel's pixels, its y range the panel's or the series' own.
+  double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(s.y[k])) continue;
+    y_lo = std::min(y_lo, s.y[k]);
+    y_hi = std::max(y_hi, s.y[k]);
+  }
+  if (spec.y_min) y_lo = *spec.y_min;
+  if (spec.y_max) y_hi = *spec.y_max;
+  if (!(y_lo < y_hi)) {
+    all.resize(n);
+    for (std::size_t k = 0; k < n; ++k) all[k] = k;
+    return all;
+  }
+  return simplify_path(s, lo, hi, y_lo, y_hi, spec.width, std::max(1, spec.height));
 }
 
 void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t title_width) {
@@ -277,6 +296,64 @@ std::vector<std::size_t> decimate_min_max(const Series& s, double x_lo, double x
     if (s.y[k] > s.y[high]) high = k;
   }
   close();
+  return kept;
+}
+
+std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi, double y_lo,
+                                       double y_hi, int width_px, int height_px,
+                                       double tolerance_px) {
+  if (!(x_lo < x_hi) || !(y_lo < y_hi) || width_px <= 0 || height_px <= 0)
+    throw std::invalid_argument("simplify_path: needs non-empty ranges and sizes > 0");
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  const double sx = width_px / (x_hi - x_lo), sy = height_px / (y_hi - y_lo);
+  const auto px = [&](std::size_t k) { return (s.x[k] - x_lo) * sx; };
+  const auto py = [&](std::size_t k) { return (s.y[k] - y_lo) * sy; };
+  // Distance (px) of point k from the segment a-b.
+  const auto distance = [&](std::size_t k, std::size_t a, std::size_t b) {
+    const double ax = px(a), ay = py(a), dx = px(b) - ax, dy = py(b) - ay;
+    const double length2 = dx * dx + dy * dy;
+    double t = length2 > 0.0 ? ((px(k) - ax) * dx + (py(k) - ay) * dy) / length2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    return std::hypot(px(k) - (ax + t * dx), py(k) - (ay + t * dy));
+  };
+  std::vector<bool> keep(n, false);
+  // Each finite run between gaps simplified on its own; the gaps kept.
+  std::size_t begin = 0;
+  while (begin < n) {
+    const auto finite = [&](std::size_t k) {
+      return std::isfinite(s.x[k]) && std::isfinite(s.y[k]);
+    };
+    if (!finite(begin)) {
+      keep[begin++] = true;
+      continue;
+    }
+    std::size_t end = begin;
+    while (end + 1 < n && finite(end + 1)) ++end;
+    keep[begin] = keep[end] = true;
+    std::vector<std::pair<std::size_t, std::size_t>> pending = {{begin, end}};
+    while (!pending.empty()) {
+      const auto [a, b] = pending.back();
+      pending.pop_back();
+      if (b <= a + 1) continue;
+      std::size_t farthest = a + 1;
+      double largest = -1.0;
+      for (std::size_t k = a + 1; k < b; ++k) {
+        const double d = distance(k, a, b);
+        if (d > largest) {
+          largest = d;
+          farthest = k;
+        }
+      }
+      if (largest <= tolerance_px) continue;
+      keep[farthest] = true;
+      pending.push_back({a, farthest});
+      pending.push_back({farthest, b});
+    }
+    begin = end + 1;
+  }
+  std::vector<std::size_t> kept;
+  for (std::size_t k = 0; k < n; ++k)
+    if (keep[k]) kept.push_back(k);
   return kept;
 }
 

@@ -82,6 +82,37 @@ TEST(Plot, DecimationKeepsEveryPeakAndAtMostFourPointsAColumn) {
   EXPECT_THROW(decimate_min_max(loop, 1.0, 1.0, 1), std::invalid_argument);
 }
 
+// A loop (force against displacement) is simplified in the panel's pixels: 100 turns of an ellipse
+// at 1000 points a turn keep a few percent of their points, a one-point spike stays, and no dropped
+// point is farther than the tolerance from the line drawn.
+TEST(Plot, ALoopIsSimplifiedWithinHalfAPixel) {
+  Series loop{"loop", {}, {}};
+  for (int k = 0; k < 100000; ++k) {
+    const double phase = 2.0 * 3.141592653589793 * k / 1000.0;
+    loop.x.push_back(std::cos(phase));
+    loop.y.push_back(0.5 * std::sin(phase + 0.3));
+  }
+  loop.y[54321] = 0.9;  // a spike
+  const std::vector<std::size_t> kept = simplify_path(loop, -1.0, 1.0, -1.0, 1.0, 1000, 340, 0.5);
+  EXPECT_LT(kept.size(), 100000u / 10u) << kept.size();
+  EXPECT_EQ(std::set<std::size_t>(kept.begin(), kept.end()).count(54321), 1u);
+  EXPECT_EQ(kept.front(), 0u);
+  EXPECT_EQ(kept.back(), 99999u);
+  const auto px = [&](std::size_t k) { return (loop.x[k] + 1.0) * 500.0; };
+  const auto py = [&](std::size_t k) { return (loop.y[k] + 1.0) * 170.0; };
+  double worst = 0.0;
+  for (std::size_t i = 0; i + 1 < kept.size(); ++i) {
+    const std::size_t a = kept[i], b = kept[i + 1];
+    const double dx = px(b) - px(a), dy = py(b) - py(a), length2 = dx * dx + dy * dy;
+    for (std::size_t k = a + 1; k < b; ++k) {
+      const double t = std::clamp(
+          length2 > 0 ? ((px(k) - px(a)) * dx + (py(k) - py(a)) * dy) / length2 : 0.0, 0.0, 1.0);
+      worst = std::max(worst, std::hypot(px(k) - px(a) - t * dx, py(k) - py(a) - t * dy));
+    }
+  }
+  EXPECT_LE(worst, 0.5);
+}
+
 // A figure is complete or absent: gnuplot failing on the plot leaves neither the PNG nor the SVG
 // (nor a partial file), where it used to leave an empty PNG.
 TEST(Plot, AFailedFigureLeavesNoFile) {
