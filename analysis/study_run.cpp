@@ -309,6 +309,13 @@ std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
   return check_setup(prepared, prepared.base, lag);
 }
 
+CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {
+  for (const config::Case& c : prepared.config.cases())
+    if (c.name() == case_name)
+      return describe_case(prepared, core::setup_for_case(prepared, c), c, c.name(), {});
+  throw std::invalid_argument("case '" + case_name + "' is not among the study's cases");
+}
+
 bool CaseOutcome::judged_past() const {
   if (compensated && compensated->analysed) return !compensated->stable;
   return stability && stability->past();

@@ -114,6 +114,12 @@ struct RunStudyOptions {
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
     const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag = 0.0);
 
+// What run_study knows of a case before it runs it (nothing is announced): name, delay, its
+// critical-delay check (`stability`) and, with compensation, its compensated loop's verdict
+// (`compensated`: exact on one DOF, the modal approximation on several). Throws
+// std::invalid_argument for a case the study lacks.
+CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name);
+
 // The same check for a lag given directly (s; e.g. an identified actuator's nominal delay) on
 // the study's base setup. Empty when the structure has no experimental part.
 std::optional<core::CriticalDelayCheck> check_lag_critical_delay(

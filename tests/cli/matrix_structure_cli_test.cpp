@@ -8,6 +8,8 @@
 #include <iterator>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "tests/support/run_command_line.h"
 
 namespace {
@@ -103,6 +105,37 @@ TEST(MatrixStructureCli, BenchmarkCasePrintsItsCriteriaBesideThePublishedOnes) {
   EXPECT_NE(json.find("\"name\": \"J9\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"definition\""), std::string::npos) << json;
   EXPECT_EQ(json.find("J2-J9 %"), std::string::npos) << json;
+}
+
+// `rths stability --study` on a compensated loop of several DOFs gives the verdict `rths run` gives
+// before the run, by the modal approximation, stated as such (it used to refuse any non-SDOF).
+TEST(MatrixStructureCli, StabilityOfACompensatedLoopOnSeveralDofsIsModal) {
+  const auto path = scratch() / "frame3_poly.textproto";
+  std::ofstream(path)
+      << "name: \"frame3\" structure { matrices { "
+         "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
+         "stiffness { rows: 3 values: [4e6, -2e6, 0, -2e6, 3.5e6, -1.5e6, 0, -1.5e6, 1.5e6] } "
+         "damping { rows: 3 values: [2275.816349, -809.9103853, 0, -809.9103853, 2073.338753, "
+         "-607.432789, 0, -607.432789, 1132.229252] } } }\n"
+      << "motion { path: \"" << kMotion << "\" }\n"
+      << "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+         "substructuring { experimental_dofs { dof: 1 stiffness: 0.5e6 } }\n"
+         "cases { name: \"reference\" } cases { name: \"poly\" delay { shift { delay: 0.010 } } "
+         "compensation { polynomial { order: 2 lead: 0.010 spacing: 0.001 } } }\n";
+  const auto o = run("stability --study " + path.string() + " --case poly --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto j = nlohmann::json::parse(o.output.substr(o.output.find('{')));
+  EXPECT_EQ(j["input"]["dofs"], 3);
+  EXPECT_TRUE(j["compensated_loop"]["analysed"].get<bool>()) << o.output;
+  EXPECT_TRUE(j["compensated_loop"]["stable"].get<bool>()) << o.output;
+  EXPECT_NE(j["compensated_loop"]["verdict"].get<std::string>().find("modal approximation"),
+            std::string::npos)
+      << o.output;
+  // Beside it, the uncompensated 10 ms: past the frame's 8.54 ms.
+  EXPECT_NE(j["compensated_loop"]["verdict"].get<std::string>().find(
+                "uncompensated, lag 10 ms against a critical delay of 8.54 ms"),
+            std::string::npos)
+      << o.output;
 }
 
 // `rths run --help` names and defines the criteria a benchmark study is judged by.
