@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/structure_response.h"
+#include "util/text_table.h"
 
 namespace rths::analysis {
 namespace {
@@ -18,19 +19,71 @@ std::vector<double> column(const core::Mat& m, Eigen::Index c) {
   return out;
 }
 
-// "J1 (ms) J2 ... J9 (%)" values of one row, J1 in ms.
-std::string row(const std::string& name, const std::array<double, 9>& j) {
-  char buffer[64];
-  std::string out = name;
-  out.resize(std::max<std::size_t>(out.size() + 1, 24), ' ');
-  for (double v : j) {
-    std::snprintf(buffer, sizeof buffer, "%8.2f", v);
-    out += buffer;
+// Whether two loaded records are one motion: the same dt and the same samples (to 1e-9 of the
+// peak, what a text round trip of the same numbers keeps).
+bool same_motion(const core::GroundMotion& a, const core::GroundMotion& b) {
+  if (a.acceleration.size() != b.acceleration.size() || std::abs(a.dt - b.dt) > 1e-12 * a.dt)
+    return false;
+  const double tolerance = 1e-9 * std::max(a.peak_abs(), b.peak_abs());
+  for (std::size_t i = 0; i < a.acceleration.size(); ++i)
+    if (!(std::abs(a.acceleration[i] - b.acceleration[i]) <= tolerance)) return false;
+  return true;
+}
+
+std::string cell(double value, int decimals = 2) {
+  if (std::isnan(value)) return "n/a";
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  return buffer;
+}
+
+std::string signed_cell(double value) {
+  if (std::isnan(value)) return "n/a";
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%+.2f", value);
+  return buffer;
+}
+
+nlohmann::json number(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
+}
+
+// [{name, value, unit, definition}] of nine values in the criteria's reported units, or with
+// `unit` and `definition` given for every one (differences).
+nlohmann::json named(const std::array<double, 9>& values, const char* unit = nullptr,
+                     const char* definition = nullptr) {
+  nlohmann::json out = nlohmann::json::array();
+  const auto& definitions = core::criterion_definitions();
+  for (std::size_t k = 0; k < 9; ++k) {
+    const core::CriterionDefinition& d = definitions[k];
+    out.push_back({{"name", d.name},
+                   {"value", number(values[k])},
+                   {"unit", unit ? unit : d.unit},
+                   {"definition", definition ? definition : d.definition}});
   }
-  return out + "\n";
+  return out;
+}
+
+std::array<double, 9> reported(const core::BenchmarkCriteria& c) {
+  std::array<double, 9> out{};
+  for (int j = 1; j <= 9; ++j) out[static_cast<std::size_t>(j - 1)] = core::reported_value(c, j);
+  return out;
 }
 
 }  // namespace
+
+bool BenchmarkEvaluation::compared_with_published(const BenchmarkCaseCriteria& c) const {
+  return !published.empty() && published_motion_matches && c.name == published_case;
+}
+
+std::array<double, 9> against_published(const BenchmarkEvaluation& e,
+                                        const BenchmarkCaseCriteria& c) {
+  std::array<double, 9> out{};
+  const std::array<double, 9> j = reported(c.criteria);
+  out[0] = j[0] - e.published.at(0);
+  for (std::size_t k = 1; k < 9; ++k) out[k] = 100.0 * (j[k] - e.published.at(k)) / e.published[k];
+  return out;
+}
 
 std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy& prepared,
                                                       const StudyOutcome& outcome) {
@@ -51,11 +104,33 @@ std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy&
   out.published.assign(spec.published().begin(), spec.published().end());
   out.published_case = spec.published_case();
   out.published_source = spec.published_source();
+  if (!out.published.empty()) {
+    if (!spec.has_published_motion()) {
+      out.published_note =
+          "benchmark.published_motion is not set: the motion the published values belong to is "
+          "unknown, so no case is compared with them";
+    } else {
+      out.published_motion_matches =
+          same_motion(core::load_motion(study.motion(), prepared.base_dir),
+                      core::load_motion(spec.published_motion(), prepared.base_dir));
+      if (!out.published_motion_matches)
+        out.published_note = "this run's motion (" + study.motion().path() +
+                             ") is not the one the published values were computed with (" +
+                             spec.published_motion().path() +
+                             ", benchmark.published_motion): the published values have none for "
+                             "it";
+    }
+  }
   const core::LinearResponse reference = core::exact_linear_response(whole, prepared.motion);
-  const double j1_search = spec.j1_search() > 0 ? spec.j1_search() : 49 * out.dt;
-  for (std::size_t i = 0; i < outcome.cases.size(); ++i) {
-    const CaseOutcome& c = outcome.cases[i];
-    if (i == outcome.reference_index || c.simulation.command.cols() == 0) continue;
+  out.j1_search = spec.j1_search() > 0 ? spec.j1_search() : 49 * out.dt;
+  // The study's reference case is not judged (in a distributed outcome, where every case is a
+  // recorded one, by its name).
+  const std::string reference_name =
+      outcome.lag_free_reference
+          ? (study.cases_size() > 0 ? core::reference_case(study).name() : std::string())
+          : outcome.cases.at(outcome.reference_index).name;
+  for (const CaseOutcome& c : outcome.cases) {
+    if (c.name == reference_name || c.simulation.command.cols() == 0) continue;
     const auto actuator = std::find(prepared.base.partition.actuator_storeys.begin(),
                                     prepared.base.partition.actuator_storeys.end(), dof) -
                           prepared.base.partition.actuator_storeys.begin();
@@ -66,51 +141,100 @@ std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy&
     const std::vector<double> measured = column(c.simulation.realised, actuator);
     out.cases.push_back(
         {c.name, core::benchmark_criteria(target, measured, c.simulation.displacement,
-                                          reference.displacement, dof, out.dt, j1_search)});
+                                          reference.displacement, dof, out.dt, out.j1_search)});
   }
   return out;
 }
 
 std::string benchmark_table(const BenchmarkEvaluation& e) {
   std::ostringstream out;
-  out << "RTHS benchmark criteria (J1 ms, J2-J9 %), against the exact response of the whole "
-         "structure\n";
-  out << std::string(24, ' ')
-      << "      J1      J2      J3      J4      J5      J6      J7      J8      J9\n";
+  out << "RTHS benchmark criteria against the exact response of the whole structure (J1 searched "
+         "over +-"
+      << cell(e.j1_search * 1e3) << " ms)\n";
+  using Align = util::TextTable::Align;
+  const auto& definitions = core::criterion_definitions();
+  std::vector<util::TextTable::Column> columns = {{"case", Align::kLeft, 40}};
+  for (const core::CriterionDefinition& d : definitions)
+    columns.push_back({std::string(d.name) + " (" + d.unit + ")", Align::kRight});
+  util::TextTable values(columns);
+  const auto add = [&](const std::string& name, const std::array<double, 9>& j,
+                       const auto& format) {
+    std::vector<std::string> row = {name};
+    for (double v : j) row.push_back(format(v));
+    values.add_row(std::move(row));
+  };
+  const auto plain = [](double v) { return cell(v); };
   std::array<double, 9> published{};
   if (!e.published.empty()) {
     std::copy(e.published.begin(), e.published.end(), published.begin());
-    out << row("published (" + e.published_case + ")", published);
+    add("published (" + e.published_case + ")", published, plain);
   }
+  for (const BenchmarkCaseCriteria& c : e.cases) add(c.name, reported(c.criteria), plain);
+  out << values.render();
+
+  std::vector<util::TextTable::Column> difference_columns = {{"case", Align::kLeft, 40},
+                                                             {"J1 diff (ms)", Align::kRight}};
+  for (std::size_t k = 1; k < 9; ++k)
+    difference_columns.push_back({std::string(definitions[k].name) + " rel (%)", Align::kRight});
+  util::TextTable differences(difference_columns);
+  bool any = false;
   for (const BenchmarkCaseCriteria& c : e.cases) {
-    std::array<double, 9> j = c.criteria.j;
-    j[0] *= 1e3;
-    out << row(c.name, j);
-    if (e.published.empty()) continue;
-    std::array<double, 9> difference{};
-    difference[0] = (j[0] - published[0]) * 1e-3 / e.dt;  // samples
-    for (std::size_t k = 1; k < 9; ++k)
-      difference[k] = 100.0 * (j[k] - published[k]) / published[k];
-    out << row("  vs published", difference);
+    if (!e.compared_with_published(c)) continue;
+    std::vector<std::string> row = {c.name};
+    for (double v : against_published(e, c)) row.push_back(signed_cell(v));
+    differences.add_row(std::move(row));
+    any = true;
   }
-  if (!e.published.empty())
-    out << "(\"vs published\": J1 in samples of " << e.dt * 1e3
-        << " ms, J2-J9 relative in %; published: " << e.published_source << ")\n";
+  if (any)
+    out << "against the published values (" << e.published_source
+        << "): J1 - J1_published in ms, 100 (J - J_published) / J_published in % for J2-J9\n"
+        << differences.render();
+  if (!e.published.empty()) {
+    if (!e.published_note.empty()) {
+      out << "no published value: " << e.published_note << "\n";
+    } else {
+      std::string others;
+      for (const BenchmarkCaseCriteria& c : e.cases)
+        if (!e.compared_with_published(c)) others += (others.empty() ? "" : ", ") + c.name;
+      if (!others.empty())
+        out << "no published value for " << others << " (the published values are "
+            << e.published_case << "'s)\n";
+    }
+  }
+  out << core::criteria_glossary();
   return out.str();
 }
 
 nlohmann::json benchmark_json(const BenchmarkEvaluation& e) {
+  nlohmann::json criteria = nlohmann::json::array();
+  for (const core::CriterionDefinition& d : core::criterion_definitions())
+    criteria.push_back({{"name", d.name}, {"unit", d.unit}, {"definition", d.definition}});
   nlohmann::json cases = nlohmann::json::array();
   for (const BenchmarkCaseCriteria& c : e.cases) {
-    nlohmann::json j = nlohmann::json::array();
-    for (std::size_t k = 0; k < 9; ++k)
-      j.push_back(k == 0 ? c.criteria.j[0] * 1e3 : c.criteria.j[k]);
-    cases.push_back({{"name", c.name}, {"J", j}});
+    nlohmann::json vs = nullptr;
+    if (e.compared_with_published(c)) {
+      vs = named(against_published(e, c), "%",
+                 "100 (J - J_published) / J_published; for J1, J1 - J1_published in ms");
+      vs[0]["unit"] = "ms";
+      vs[0]["definition"] = "J1 - J1_published (ms)";
+    }
+    cases.push_back(
+        {{"name", c.name}, {"criteria", named(reported(c.criteria))}, {"vs_published", vs}});
   }
-  return {{"units", "J1 ms, J2-J9 %"},
-          {"published", e.published},
-          {"published_case", e.published_case},
-          {"published_source", e.published_source},
+  nlohmann::json published = nullptr;
+  if (!e.published.empty()) {
+    std::array<double, 9> values{};
+    std::copy(e.published.begin(), e.published.end(), values.begin());
+    published = {
+        {"case", e.published_case},
+        {"source", e.published_source},
+        {"motion_matches", e.published_motion_matches},
+        {"note", e.published_note.empty() ? nlohmann::json() : nlohmann::json(e.published_note)},
+        {"criteria", named(values)}};
+  }
+  return {{"criteria", criteria},
+          {"j1_search_ms", e.j1_search * 1e3},
+          {"published", published},
           {"cases", cases}};
 }
 

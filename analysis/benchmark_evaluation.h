@@ -6,9 +6,13 @@
 //   the numerical response (every DOF) against the exact linear response of the whole structure
 //   (core::exact_linear_response of M, C, K before the split, same motion and dt).
 // J1 is searched over +-j1_search (default 49 samples, as F4_evaluation.m searches 0..49).
-// The table prints each case beside the published values of `published_case`, with the relative
-// difference of J2-J9 and J1's difference in samples.
+// Published values (benchmark.published, for benchmark.published_case on
+// benchmark.published_motion) are compared with only for that case, and only when the study's
+// motion is the published one (the same samples at the same dt once loaded and scaled): a
+// compensated case, or a run on another motion, has no published value, which the reports say.
+// Every criterion is named with its unit and definition (core::criterion_definitions).
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,15 +33,33 @@ struct BenchmarkEvaluation {
   std::vector<BenchmarkCaseCriteria> cases;
   std::vector<double> published;  // J1 (ms), J2-J9 (%); empty when none
   std::string published_case, published_source;
-  double dt = 0.0;  // s
+  // The study's motion is benchmark.published_motion (false without one).
+  bool published_motion_matches = false;
+  // Why the published values are compared with nowhere (empty when they are for published_case).
+  std::string published_note;
+  double dt = 0.0;         // s
+  double j1_search = 0.0;  // s, J1's lag range (+-)
+  // Whether case i's criteria have published values to be compared with.
+  bool compared_with_published(const BenchmarkCaseCriteria& c) const;
 };
+
+// 100 (J - J_published) / J_published for J2-J9 (%), J1 - J1_published (ms) for J1.
+std::array<double, 9> against_published(const BenchmarkEvaluation& e,
+                                        const BenchmarkCaseCriteria& c);
 
 // Empty when the study has no `benchmark` section. Throws std::invalid_argument naming
 // benchmark.experimental_dof or benchmark.published when they do not fit the structure.
 std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy& prepared,
                                                       const StudyOutcome& outcome);
 
+// Aligned columns, one unit each (J1 (ms), J2-J9 (%)): the published row, each case; then, where
+// a case is compared with published values, a second table of its differences (J1 in ms, J2-J9
+// relative, %); then what has no published value and why; then every criterion's definition.
 std::string benchmark_table(const BenchmarkEvaluation& evaluation);
+// {"criteria": [{name, unit, definition}], "j1_search_ms", "published": {case, source,
+//  motion_matches, note, criteria: [{name, value, unit, definition}]} or null,
+//  "cases": [{name, criteria: [{name, value, unit, definition}], vs_published: [{name, value, unit,
+//  definition}] or null}]}. A NaN criterion (no such floor) is null.
 nlohmann::json benchmark_json(const BenchmarkEvaluation& evaluation);
 
 }  // namespace rths::analysis

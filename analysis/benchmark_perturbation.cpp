@@ -6,6 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "util/text_table.h"
+
 namespace rths::analysis {
 namespace {
 
@@ -94,24 +96,40 @@ std::vector<CriteriaSpread> criteria_spread(const std::vector<BenchmarkEvaluatio
 
 std::string spread_table(const std::vector<CriteriaSpread>& spread, std::uint64_t seed) {
   std::ostringstream out;
-  char buffer[48];
+  using Align = util::TextTable::Align;
+  const auto& definitions = core::criterion_definitions();
   for (const CriteriaSpread& s : spread) {
     out << "perturbed plants, " << s.name << ": " << s.draws << " draws (seed " << seed
-        << "), mean +- std\n ";
+        << "), mean +- std\n";
+    util::TextTable table({{"criterion", Align::kLeft},
+                           {"mean", Align::kRight},
+                           {"std", Align::kRight},
+                           {"unit", Align::kLeft}});
+    char mean[32], sd[32];
     for (std::size_t j = 0; j < 9; ++j) {
-      std::snprintf(buffer, sizeof buffer, " J%zu %.2f+-%.2f", j + 1, s.mean[j], s.std[j]);
-      out << buffer;
+      std::snprintf(mean, sizeof mean, "%.2f", s.mean[j]);
+      std::snprintf(sd, sizeof sd, "%.2f", s.std[j]);
+      table.add_row({definitions[j].name, mean, sd, definitions[j].unit});
     }
-    out << "\n";
+    out << table.render();
   }
   return out.str();
 }
 
 nlohmann::json spread_json(const std::vector<CriteriaSpread>& spread, std::uint64_t seed) {
   nlohmann::json cases = nlohmann::json::array();
-  for (const CriteriaSpread& s : spread)
-    cases.push_back({{"name", s.name}, {"draws", s.draws}, {"mean", s.mean}, {"std", s.std}});
-  return {{"units", "J1 ms, J2-J9 %"}, {"seed", seed}, {"cases", cases}};
+  const auto& definitions = core::criterion_definitions();
+  for (const CriteriaSpread& s : spread) {
+    nlohmann::json criteria = nlohmann::json::array();
+    for (std::size_t j = 0; j < 9; ++j)
+      criteria.push_back({{"name", definitions[j].name},
+                          {"mean", s.mean[j]},
+                          {"std", s.std[j]},
+                          {"unit", definitions[j].unit},
+                          {"definition", definitions[j].definition}});
+    cases.push_back({{"name", s.name}, {"draws", s.draws}, {"criteria", criteria}});
+  }
+  return {{"seed", seed}, {"cases", cases}};
 }
 
 }  // namespace rths::analysis

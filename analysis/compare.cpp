@@ -34,9 +34,12 @@ std::vector<int> ResponseSpec::columns(int dofs) const {
 nlohmann::json Comparison::to_json() const {
   return {{"response", response},
           {"steps_compared", steps_compared},
+          {"reference_steps", reference_steps},
           {"peak_reference_m", peak_reference_m},
           {"peak_m", peak_m},
           {"peak_error_m", peak_error_m},
+          {"peak_error_pct", peak_error_pct},
+          {"rms_error_pct", rms_error_pct},
           {"nrmse_pct", nrmse_pct},
           {"paper_eq2_as_printed", paper_eq2_as_printed},
           {"diverged", diverged}};
@@ -63,9 +66,12 @@ Comparison compare(std::span<const double> reference, std::span<const double> re
   const auto r = reference.first(n), x = result.first(n);
   Comparison c;
   c.steps_compared = n;
+  c.reference_steps = reference.size();
   c.peak_reference_m = core::peak_abs(r);
   c.peak_m = core::peak_abs(result);
   c.peak_error_m = core::peak_error(r, x);
+  c.peak_error_pct = core::relative_peak_error_pct(r, x);
+  c.rms_error_pct = core::relative_rms_error_pct(r, x);
   c.nrmse_pct = 100.0 * core::nrmse(r, x);
   c.paper_eq2_as_printed = core::paper_eq2(r, x);
   c.diverged = stopped_early || core::grew_past_reference(c.peak_reference_m, c.peak_m);
@@ -94,6 +100,8 @@ Comparison compare(const core::SimulationResult& reference, const core::Simulati
     worst.peak_reference_m = worse(worst.peak_reference_m, c.peak_reference_m);
     worst.peak_m = worse(worst.peak_m, c.peak_m);
     worst.peak_error_m = worse(worst.peak_error_m, c.peak_error_m);
+    worst.peak_error_pct = worse(worst.peak_error_pct, c.peak_error_pct);
+    worst.rms_error_pct = worse(worst.rms_error_pct, c.rms_error_pct);
     worst.nrmse_pct = worse(worst.nrmse_pct, c.nrmse_pct);
     worst.paper_eq2_as_printed = worse(worst.paper_eq2_as_printed, c.paper_eq2_as_printed);
     worst.diverged = worst.diverged || c.diverged;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
+#include <future>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -55,7 +57,9 @@ std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
     if (c.status == "limit tripped")
       out.push_back("case '" + c.name + "': limit tripped: " + c.status_detail);
     if (c.diverged() && !c.expect_unstable && !allow_unstable) {
-      out.push_back("case '" + c.name + "' diverged: " + c.status_detail);
+      out.push_back("case '" + c.name +
+                    (c.status == "diverging" ? "' is diverging: " : "' diverged: ") +
+                    c.status_detail);
     }
   }
   return out;
@@ -78,54 +82,119 @@ std::optional<core::CriticalDelayCheck> check_setup(const core::PreparedStudy& p
                                           setup.integrator, setup.dt, lag);
 }
 
-// The compensated loop of a one-storey case with one compensator (CompensatedVerdict); none for
-// a case without compensation or without an experimental part.
+// One mode of the structure taken as an SDOF for the compensated loop's analysis.
+struct ModalSdof {
+  int mode = 1;         // 1-based
+  double period = 0.0;  // s
+  double zeta = 0.0;    // modal damping ratio
+  double alpha = 0.0;   // experimental fraction phi' K_e phi / omega^2
+};
+
+// The SDOFs the compensated loop is analysed on: the structure itself when it has one DOF
+// (exact), else every mode of (M, K) that carries experimental stiffness (the modal
+// approximation, as core::check_modal_critical_delay takes it).
+std::vector<ModalSdof> loop_sdofs(const core::HybridSetup& setup, const core::Mat& k_experimental,
+                                  double sdof_alpha) {
+  const core::StructuralModel& model = setup.model;
+  if (model.dofs() == 1) {
+    const double m = model.mass(0, 0), k = model.stiffness(0, 0), c = model.damping(0, 0);
+    const double omega = std::sqrt(k / m);
+    return {{1, 2.0 * std::numbers::pi / omega, c / (2.0 * m * omega), sdof_alpha}};
+  }
+  const core::Modes modes = core::modal_analysis(model.mass, model.stiffness);
+  std::vector<ModalSdof> out;
+  for (int i = 0; i < model.dofs(); ++i) {
+    const double omega = modes.omega[i];
+    const core::Vec phi = modes.shapes.col(i);
+    const double alpha = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
+    if (!(alpha > 0.0)) continue;
+    out.push_back({i + 1, 2.0 * std::numbers::pi / omega,
+                   phi.dot(model.damping * phi) / (2.0 * omega), alpha});
+  }
+  return out;
+}
+
+// The compensated loop of a case with one compensator (CompensatedVerdict): exact for one storey,
+// the modal approximation (each mode with experimental stiffness an SDOF, the smallest margin
+// kept, stated as such) for several. None for a case without compensation or experimental part.
 std::optional<CompensatedVerdict> judge_compensated_loop(
-    const core::HybridSetup& setup, const config::Case& study_case,
+    const core::HybridSetup& setup, const core::Mat& k_experimental, const config::Case& study_case,
     const std::optional<core::CriticalDelayCheck>& uncompensated) {
   constexpr double kMaxExtraDelay = 0.1;  // s searched beyond the configured loop
   if (study_case.compensation_size() == 0 || !uncompensated) return std::nullopt;
   CompensatedVerdict verdict;
   const std::string beside = "; uncompensated, " + uncompensated->describe();
-  if (setup.model.dofs() != 1 || study_case.compensation_size() != 1) {
+  if (study_case.compensation_size() != 1) {
     verdict.text =
-        "the compensated loop is analysed for a one-storey study with one compensator only: "
-        "not judged before the run" +
+        "the compensated loop is analysed for one compensator only (one actuator): not judged "
+        "before the run" +
         beside;
     return verdict;
   }
-  const double m = setup.model.mass(0, 0), k = setup.model.stiffness(0, 0),
-               c = setup.model.damping(0, 0);
-  const double omega = std::sqrt(k / m);
+  const std::vector<ModalSdof> sdofs =
+      loop_sdofs(setup, k_experimental, uncompensated->governing_fraction);
+  const bool modal = setup.model.dofs() > 1;
   try {
-    const core::CompensatedStability loop = core::compensated_stability(
-        setup.integrator, 2.0 * std::numbers::pi / omega, c / (2.0 * m * omega),
-        uncompensated->governing_fraction, setup.dt, study_case.delay(),
-        &study_case.compensation(0), kMaxExtraDelay);
-    if (!loop.frozen_coefficients.empty()) {
-      verdict.text =
-          "adaptive compensation: its coefficients change during the run, so its loop cannot "
-          "be judged before it" +
-          beside;
-      return verdict;
+    bool stable = true;
+    double radius = 0.0;
+    int unstable_mode = 0, governing = 0;
+    std::optional<double> margin;
+    bool unbounded = true;  // every mode stable up to the searched range
+    std::string linearised;
+    for (const ModalSdof& sdof : sdofs) {
+      const core::CompensatedStability loop = core::compensated_stability(
+          setup.integrator, sdof.period, sdof.zeta, sdof.alpha, setup.dt, study_case.delay(),
+          &study_case.compensation(0), kMaxExtraDelay);
+      if (!loop.frozen_coefficients.empty()) {
+        verdict.text =
+            "adaptive compensation: its coefficients change during the run, so its loop cannot "
+            "be judged before it" +
+            beside;
+        return verdict;
+      }
+      if (!loop.linearised.empty()) linearised = loop.linearised;
+      if (!loop.stable) {
+        if (stable) {
+          radius = loop.spectral_radius;
+          unstable_mode = sdof.mode;
+        }
+        stable = false;
+        continue;
+      }
+      std::optional<double> mode_margin = loop.continuous_margin;
+      if (loop.discrete_margin)
+        mode_margin =
+            mode_margin ? std::min(*mode_margin, *loop.discrete_margin) : loop.discrete_margin;
+      if (mode_margin) {
+        unbounded = false;
+        if (!margin || *mode_margin < *margin) {
+          margin = mode_margin;
+          governing = sdof.mode;
+        }
+      }
     }
     verdict.analysed = true;
-    verdict.stable = loop.stable;
+    verdict.stable = stable;
     std::ostringstream text;
     text << std::setprecision(3) << "compensated loop: ";
-    if (!loop.stable) {
-      text << "UNSTABLE as configured (spectral radius " << loop.spectral_radius << ")";
+    if (!stable) {
+      text << "UNSTABLE as configured (spectral radius " << radius;
+      if (modal) text << ", mode " << unstable_mode;
+      text << ")";
     } else {
-      std::optional<double> margin = loop.continuous_margin;
-      if (loop.discrete_margin)
-        margin = margin ? std::min(*margin, *loop.discrete_margin) : loop.discrete_margin;
       verdict.extra_delay_tolerated = margin;
-      if (margin)
+      if (margin && !unbounded) {
         text << "stable, tolerates " << *margin * 1e3 << " ms more lag";
-      else
+        if (modal) text << " (mode " << governing << " governs)";
+      } else {
         text << "stable for up to " << kMaxExtraDelay * 1e3 << " ms more lag (searched)";
+      }
     }
-    if (!loop.linearised.empty()) text << " (linearised: " << loop.linearised << ")";
+    if (modal)
+      text << " (modal approximation over the " << sdofs.size()
+           << " modes with experimental stiffness, each an SDOF; the coupling the delayed force "
+              "adds between modes is ignored)";
+    if (!linearised.empty()) text << " (linearised: " << linearised << ")";
     verdict.text = text.str() + beside;
   } catch (const std::invalid_argument& e) {
     verdict.text =
@@ -166,7 +235,7 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
     bare.clear_compensation();
     const core::HybridSetup bare_setup = core::setup_for_case(prepared, bare);
     result.compensated = judge_compensated_loop(
-        setup, study_case,
+        setup, prepared.base.partition.experimental_stiffness(), study_case,
         check_setup(prepared, bare_setup, nominal_delay_of(bare_setup) + options.extra_lag));
   }
   if (const auto warning = pre_run_warning(result); warning && options.warn)
@@ -174,31 +243,57 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   return result;
 }
 
-// The status of a case that ran, judged from its response against the lag-free run's.
+// "its envelope grows exponentially over its last 33 cycles of 0.3 s: 0.35 /s, doubling every
+// 1.98 s (fit r^2 0.99)", or "... does not grow ...: -0.2 /s".
+std::string describe_growth(const core::EnvelopeGrowth& g) {
+  std::ostringstream out;
+  out << std::setprecision(3) << "its envelope "
+      << (g.grows() ? "grows exponentially" : "does not grow") << " over its last " << g.windows
+      << " cycles of " << g.period << " s: " << g.rate << " /s";
+  if (g.rate > 0.0) out << ", doubling every " << g.doubling_time << " s";
+  out << " (fit r^2 " << g.r_squared << ")";
+  return out.str();
+}
+
+// The status of a case that ran, judged from its response against the lag-free run's and from
+// its envelope's growth.
 void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_response, int floors) {
   result.response = floor_history(result.simulation, floors - 1);
+  if (result.stability && result.stability->governing_period > 0.0 && result.simulation.dt > 0.0)
+    result.growth = core::envelope_growth(result.response, result.simulation.dt,
+                                          result.stability->governing_period);
+  const bool grows = result.growth && result.growth->grows();
   const Comparison growth = compare(lag_free_response, result.response, result.simulation.diverged);
-  if (result.status == "completed" && growth.diverged) {
+  if (result.status != "completed") return;
+  std::ostringstream why;
+  why << std::setprecision(4);
+  if (growth.diverged) {
     result.status = "diverged";
-    std::ostringstream why;
-    why << std::setprecision(4) << "peak " << growth.peak_m * 1e3 << " mm against "
-        << growth.peak_reference_m * 1e3 << " mm without lag (more than " << core::kDivergenceGrowth
-        << "x";
+    why << "peak " << growth.peak_m * 1e3 << " mm against " << growth.peak_reference_m * 1e3
+        << " mm without lag (more than " << core::kDivergenceGrowth << "x";
     if (result.simulation.diverged && !result.simulation.time.empty())
       why << "; the simulation stopped at t = " << result.simulation.time.back() << " s";
     why << ")";
     if (result.stability) why << "; " << result.stability->describe();
-    result.status_detail = why.str();
-  } else if (result.status == "completed" && result.stability && result.stability->past() &&
-             !result.compensated) {
-    std::ostringstream why;
-    why << std::setprecision(3) << "past its critical delay, but the peak grew only "
-        << growth.peak_m / growth.peak_reference_m
-        << "x over the lag-free run in this record (diverged "
-        << "means more than " << core::kDivergenceGrowth
-        << "x); a longer record may still grow: " << result.stability->describe();
-    result.status_detail = why.str();
+  } else if (grows && result.judged_past()) {
+    result.status = "diverging";
+    why << "past its critical delay and " << describe_growth(*result.growth) << "; peak "
+        << growth.peak_m / growth.peak_reference_m << "x the lag-free run's; "
+        << result.stability->describe();
+  } else if (grows) {
+    why << "inside its critical delay, yet " << describe_growth(*result.growth)
+        << " (forcing late in the record, or a limit the check does not see): "
+        << result.stability->describe();
+  } else if (result.judged_past() && !result.compensated) {
+    why << std::setprecision(3) << "past its critical delay, but "
+        << (result.growth ? describe_growth(*result.growth)
+                          : std::string("the record is too short to fit its envelope's growth"))
+        << ", and its peak is " << growth.peak_m / growth.peak_reference_m
+        << "x the lag-free run's; a longer record may still grow: " << result.stability->describe();
+  } else {
+    return;
   }
+  result.status_detail = why.str();
 }
 
 }  // namespace
@@ -212,6 +307,18 @@ std::optional<core::CriticalDelayCheck> check_case_critical_delay(
 std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
     const core::PreparedStudy& prepared, double lag) {
   return check_setup(prepared, prepared.base, lag);
+}
+
+CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {
+  for (const config::Case& c : prepared.config.cases())
+    if (c.name() == case_name)
+      return describe_case(prepared, core::setup_for_case(prepared, c), c, c.name(), {});
+  throw std::invalid_argument("case '" + case_name + "' is not among the study's cases");
+}
+
+bool CaseOutcome::judged_past() const {
+  if (compensated && compensated->analysed) return !compensated->stable;
+  return stability && stability->past();
 }
 
 const CaseOutcome& StudyOutcome::reference() const {
@@ -297,8 +404,8 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
 }
 
 std::vector<std::string> study_plot_files() {
-  return {"displacement.png", "displacement.svg", "force_displacement.png",
-          "force_displacement.svg"};
+  return {"displacement.png",       "displacement.svg", "force_displacement.png",
+          "force_displacement.svg", "tracking.png",     "tracking.svg"};
 }
 
 namespace {
@@ -404,6 +511,54 @@ void write_force_displacement(const std::string& study,
   util::write_png_panels(panels, png);
 }
 
+// tracking.png, the RTHS benchmark's tracking figure: per case that drives an actuator and stayed
+// bounded, x_t (the command of the first actuator) and x_m (what it measured there), mm, over the
+// record, then the same over `zoom` s from `zoom_start` (s), where the lag between them shows.
+// Nothing when no such case.
+void write_tracking(const std::string& study, const std::vector<const CaseOutcome*>& drawn,
+                    const CaseOutcome& reference, double zoom_start, double zoom,
+                    const std::filesystem::path& png) {
+  std::vector<util::PlotSpec> panels;
+  for (const CaseOutcome* c : drawn) {
+    if (c == &reference || c->diverged() || c->simulation.command.cols() == 0 ||
+        c->simulation.realised.cols() == 0)
+      continue;
+    util::PlotSpec whole{study + ": tracking of " + c->name + ", x_t (command) and x_m (measured)",
+                         "time (s)", "displacement at actuator 1 (mm)"};
+    util::Series target{"x_t, command", c->simulation.time, {}, "lines lw 2"};
+    util::Series measured{"x_m, measured", c->simulation.time, {}, "lines lw 1"};
+    for (Eigen::Index k = 0; k < c->simulation.command.rows(); ++k) {
+      target.y.push_back(c->simulation.command(k, 0) * 1e3);
+      measured.y.push_back(c->simulation.realised(k, 0) * 1e3);
+    }
+    target.x.resize(target.y.size());
+    measured.x.resize(measured.y.size());
+    whole.series = {target, measured};
+    util::PlotSpec close = whole;
+    char title[160];
+    std::snprintf(title, sizeof title, "zoom: %s over %g s at the reference's strongest",
+                  c->name.c_str(), zoom);
+    close.title = title;
+    close.x_min = zoom_start;
+    close.x_max = zoom_start + zoom;
+    // The zoom's y range follows what is in its window.
+    double lo = 0.0, hi = 0.0;
+    for (std::size_t k = 0; k < target.x.size(); ++k) {
+      if (target.x[k] < zoom_start || target.x[k] > zoom_start + zoom) continue;
+      lo = std::min({lo, target.y[k], measured.y[k]});
+      hi = std::max({hi, target.y[k], measured.y[k]});
+    }
+    if (hi > lo) {
+      close.y_min = lo - 0.08 * (hi - lo);
+      close.y_max = hi + 0.08 * (hi - lo);
+    }
+    whole.height = close.height = 340;
+    panels.push_back(std::move(whole));
+    panels.push_back(std::move(close));
+  }
+  if (!panels.empty()) util::write_png_panels(panels, png);
+}
+
 }  // namespace
 
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
@@ -425,7 +580,7 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   for (std::size_t i = 0; i < drawn.size(); ++i) {
     const CaseOutcome& c = *drawn[i];
     const std::string label =
-        c.name + (c.diverged() ? " (diverged, clipped)" : coincides_with(drawn, i));
+        c.name + (c.diverged() ? " (" + c.status + ", clipped)" : coincides_with(drawn, i));
     // Each case keeps its colour on every panel and is drawn thinner than the case before it, so
     // that two cases whose responses coincide are both seen (solid: cairo draws a dashed line of
     // 10^4 points very slowly).
@@ -463,9 +618,32 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   if (!difference.series.empty()) panels.push_back(difference);
   panels.push_back(zoom);
   for (util::PlotSpec& p : panels) p.height = 380;
-  util::write_png_panels(panels, directory / "displacement.png");
-  write_force_displacement(outcome.study_name, drawn, reference,
-                           directory / "force_displacement.png");
+  // A stale tracking figure must not stay beside a study that has none.
+  std::filesystem::remove(directory / "tracking.png");
+  std::filesystem::remove(directory / "tracking.svg");
+  // The three figures are independent (each its own gnuplot and files): drawn at once, so their
+  // wall-clock time is the slowest one's where there are cores for them. Any failure is rethrown.
+  std::vector<std::future<void>> figures;
+  figures.push_back(std::async(
+      std::launch::async, [&] { util::write_png_panels(panels, directory / "displacement.png"); }));
+  figures.push_back(std::async(std::launch::async, [&] {
+    write_force_displacement(outcome.study_name, drawn, reference,
+                             directory / "force_displacement.png");
+  }));
+  figures.push_back(std::async(std::launch::async, [&] {
+    write_tracking(outcome.study_name, drawn, reference,
+                   strongest_window_start(reference.response, reference.simulation.dt, 1.0), 1.0,
+                   directory / "tracking.png");
+  }));
+  std::exception_ptr failure;
+  for (std::future<void>& figure : figures) {
+    try {
+      figure.get();
+    } catch (...) {
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
 }
 
 namespace {
@@ -479,7 +657,30 @@ nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
           {"verdict", v->text}};
 }
 
+nlohmann::json growth_json(const std::optional<core::EnvelopeGrowth>& g) {
+  if (!g) return nullptr;
+  return {{"grows", g->grows()},
+          {"rate_per_s", g->rate},
+          {"doubling_time_s", g->rate > 0.0 ? nlohmann::json(g->doubling_time) : nlohmann::json()},
+          {"r_squared", g->r_squared},
+          {"cycles", g->windows},
+          {"cycle_s", g->period},
+          {"span_s", g->span}};
+}
+
 }  // namespace
+
+nlohmann::json error_measures_json() {
+  return {{"peak_error_pct", kPeakErrorDefinition},
+          {"rms_error_pct", kRmsErrorDefinition},
+          {"peak_error_m", "max|u - u_ref| (m)"},
+          {"nrmse_pct",
+           "the paper's normalisation: 100 sqrt(mean (u - u_ref)^2) / median|u_ref| (%); a record "
+           "ending in near-zero motion has a tiny median and inflates it"},
+          {"paper_eq2_as_printed",
+           "the paper's Eq. 2 as printed: sqrt(sum (u - u_ref)^2) / N / "
+           "median|u_ref| (shrinks like 1/sqrt(N))"}};
+}
 
 nlohmann::json study_summary_json(const StudyOutcome& outcome) {
   nlohmann::json cases = nlohmann::json::array();
@@ -501,6 +702,16 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
           {"past_critical_delay", s.past()},
           {"assumed", s.assumed}};
     }
+    // A case that stopped early has no error over the steps it did not run: its errors are null,
+    // and those over the steps it covered are given apart, named as such.
+    const bool covers = c.comparison.covers_reference();
+    const auto whole = [covers](double v) { return covers ? nlohmann::json(v) : nlohmann::json(); };
+    const nlohmann::json covered =
+        covers ? nlohmann::json()
+               : nlohmann::json{{"steps", c.comparison.steps_compared},
+                                {"peak_error_pct", c.comparison.peak_error_pct},
+                                {"rms_error_pct", c.comparison.rms_error_pct},
+                                {"peak_error_m", c.comparison.peak_error_m}};
     cases.push_back({{"name", c.name},
                      {"delay", c.delay_description},
                      {"nominal_delay_s", c.nominal_delay},
@@ -509,14 +720,21 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                      {"expect_unstable", c.expect_unstable},
                      {"stability", stability},
                      {"compensated_loop", compensated_json(c.compensated)},
+                     {"envelope_growth", growth_json(c.growth)},
                      {"peak_displacement_m", c.comparison.peak_m},
-                     {"paper_eq2_as_printed", c.comparison.paper_eq2_as_printed},
-                     {"nrmse_pct", c.comparison.nrmse_pct},
-                     {"peak_error_m", c.comparison.peak_error_m},
+                     {"peak_error_pct", whole(c.comparison.peak_error_pct)},
+                     {"rms_error_pct", whole(c.comparison.rms_error_pct)},
+                     {"peak_error_m", whole(c.comparison.peak_error_m)},
+                     {"paper_eq2_as_printed", whole(c.comparison.paper_eq2_as_printed)},
+                     {"nrmse_pct", whole(c.comparison.nrmse_pct)},
+                     {"steps_compared", c.comparison.steps_compared},
+                     {"reference_steps", c.comparison.reference_steps},
+                     {"errors_over_covered_steps", covered},
                      {"diverged", c.diverged()},
                      {"steps", c.simulation.steps()}});
   }
   return {{"study", outcome.study_name},
+          {"measures", error_measures_json()},
           {"motion_units", outcome.motion_units},
           {"response", outcome.response.describe()},
           {"reference_case", outcome.reference().name},
@@ -549,17 +767,19 @@ std::string margin_cell(const CaseOutcome& c) {
   return "-";
 }
 
+// Errors only for a case that stayed bounded and covered the whole reference: a case that stopped
+// early has no error over the steps it did not run ("-", and a line below with the steps it did).
 std::vector<std::string> summary_row(const CaseOutcome& c) {
   std::string critical = "-";
   if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
   const std::string margin = margin_cell(c);
-  const bool bounded = !c.diverged();
+  const bool measured = !c.diverged() && c.comparison.covers_reference();
   return {c.name,
           c.delay_description,
           fixed(c.comparison.peak_m * 1e3, 3),
-          bounded ? fixed(c.comparison.nrmse_pct, 2) : "-",
-          bounded ? fixed(c.comparison.paper_eq2_as_printed, 5) : "-",
-          bounded ? fixed(c.comparison.peak_error_m * 1e3, 3) : "-",
+          measured ? fixed(c.comparison.peak_error_pct, 2) : "-",
+          measured ? fixed(c.comparison.rms_error_pct, 2) : "-",
+          measured ? fixed(c.comparison.peak_error_m * 1e3, 3) : "-",
           critical,
           margin,
           c.status + (c.diverged() && c.expect_unstable ? " (expected)" : "")};
@@ -576,14 +796,23 @@ std::string study_summary_text(const StudyOutcome& outcome) {
   util::TextTable table({{"case", Align::kLeft, 40},
                          {"delay", Align::kLeft, 28},
                          {"peak (mm)", Align::kRight},
-                         {"NRMSE (%)", Align::kRight},
-                         {"Eq.2 (paper)", Align::kRight},
+                         {"E_peak (%)", Align::kRight},
+                         {"E_rms (%)", Align::kRight},
                          {"peak err (mm)", Align::kRight},
                          {"crit. delay", Align::kRight},
                          {"margin", Align::kRight},
                          {"status", Align::kLeft, 40}});
   for (const CaseOutcome& c : outcome.cases) table.add_row(summary_row(c));
   out << table.render();
+  out << "E_peak: " << kPeakErrorDefinition << "; E_rms: " << kRmsErrorDefinition
+      << "; the paper's median-normalised NRMSE and Eq. 2 are in summary.json\n";
+  for (const CaseOutcome& c : outcome.cases) {
+    if (c.diverged() || c.comparison.covers_reference()) continue;
+    out << c.name << ": stopped at step " << c.comparison.steps_compared << " of "
+        << c.comparison.reference_steps << ": no error over the steps it did not run; over its "
+        << c.comparison.steps_compared << " steps E_peak " << fixed(c.comparison.peak_error_pct, 2)
+        << " %, E_rms " << fixed(c.comparison.rms_error_pct, 2) << " %\n";
+  }
   if (std::any_of(outcome.cases.begin(), outcome.cases.end(),
                   [](const CaseOutcome& c) { return c.compensated.has_value(); }))
     out << "margin [comp.]: the compensated loop's, as the lag it tolerates beyond its own (n/a: "

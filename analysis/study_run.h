@@ -13,9 +13,14 @@
 //   "diverged"       judged from the response: the top-floor peak grew past
 //                    core::kDivergenceGrowth times the lag-free run's (same structure, no delay
 //                    stage), or the simulation's own guard stopped it
-//   "completed"      otherwise
+//   "diverging"      past its critical delay (judged_past) and the top floor's envelope grows
+//                    exponentially over the record's last cycles (core::envelope_growth, windows
+//                    of the check's governing period), whatever its peak ratio
+//   "completed"      otherwise; a case inside its critical delay whose envelope grows stays
+//                    completed, with the fitted rate in status_detail (flagged, not failed)
 // Compared quantity: the top-floor displacement (m) relative to the ground (analysis::compare).
-// A run failed its purpose when a case diverged without `expect_unstable`, or a limit tripped.
+// A run failed its purpose when a case diverged or is diverging without `expect_unstable`, or a
+// limit tripped.
 
 #include <filesystem>
 #include <functional>
@@ -26,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/compare.h"
+#include "core/envelope_growth.h"
 #include "core/simulation.h"
 #include "core/stability.h"
 #include "core/study.h"
@@ -33,9 +39,13 @@
 namespace rths::analysis {
 
 // Pre-run verdict on a compensated case's loop. Linear compensators (polynomial, model-based
-// without an adaptive correction) are analysed with core::compensated_stability on the one-storey
-// loop; an adaptive one (ATS, an adaptive correction) changes its coefficients during the run and
-// cannot be judged before it, which the text says, with the uncompensated lag's check beside.
+// without an adaptive correction) are analysed with core::compensated_stability: exactly on a
+// one-storey loop; on several DOFs by the modal approximation (each mode of (M, K) with
+// experimental stiffness an SDOF with its modal damping and experimental fraction, the loop
+// unstable when any mode is, the smallest margin kept), which the text states. An adaptive one
+// (ATS, an adaptive correction) changes its coefficients during the run and cannot be judged
+// before it, which the text says, with the uncompensated lag's check beside. A case with several
+// compensators (several actuators) is not analysed.
 struct CompensatedVerdict {
   bool analysed = false;  // false: adaptive, or a structure the analysis does not cover
   bool stable = false;    // analysed and stable as configured (meaningful when analysed)
@@ -53,12 +63,21 @@ struct CaseOutcome {
   // A case with compensation: the compensated loop's own verdict (judge_compensated_loop);
   // `stability` above stays the uncompensated lag's check, shown beside it.
   std::optional<CompensatedVerdict> compensated;
+  // The top floor's envelope over the last cycles (core::envelope_growth at the check's governing
+  // period); empty without a check or when the record is too short to fit.
+  std::optional<core::EnvelopeGrowth> growth;
   core::SimulationResult simulation;
   std::vector<double> response;      // m, top-floor displacement
   Comparison comparison;             // against the reference case
-  std::string status = "completed";  // "completed", "diverged", "limit tripped"
-  std::string status_detail;         // why, when not completed
-  bool diverged() const { return status == "diverged"; }
+  std::string status = "completed";  // "completed", "diverged", "diverging", "limit tripped"
+  std::string status_detail;         // why, when not completed; a growth flag when completed
+  // Diverged or diverging: the run failed its purpose unless expected, and its errors measure
+  // nothing.
+  bool diverged() const { return status == "diverged" || status == "diverging"; }
+  // Before the run, the case was judged unstable: uncompensated, its lag is past the critical
+  // delay; compensated, its analysed loop is unstable, or (not analysable) its uncompensated lag
+  // is past.
+  bool judged_past() const;
 };
 
 inline constexpr const char* kLagFreeReference = "the lag-free in-process reference";
@@ -95,6 +114,12 @@ struct RunStudyOptions {
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
     const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag = 0.0);
 
+// What run_study knows of a case before it runs it (nothing is announced): name, delay, its
+// critical-delay check (`stability`) and, with compensation, its compensated loop's verdict
+// (`compensated`: exact on one DOF, the modal approximation on several). Throws
+// std::invalid_argument for a case the study lacks.
+CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name);
+
 // The same check for a lag given directly (s; e.g. an identified actuator's nominal delay) on
 // the study's base setup. Empty when the structure has no experimental part.
 std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
@@ -125,10 +150,27 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
 // each case minus the reference, and a zoom on the reference's strongest 5 s; the axes follow the
 // cases that stayed bounded (a diverged case is clipped and labelled). force_displacement.png/.svg:
 // command vs measured force of the bounded cases (the loop the integrator sees, Figs. 1-2).
+// tracking.png/.svg (the RTHS benchmark's tracking figure): per bounded case with an actuator,
+// x_t (command) and x_m (measured) at actuator 1 (mm) over the record and over a 1 s zoom on the
+// reference's strongest second; absent when no case has an actuator.
 void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory);
 // The files write_study_plots writes, so a run without plots can remove stale ones.
 std::vector<std::string> study_plot_files();
+// The errors each summary leads with (analysis::compare), defined where they are printed.
+inline constexpr const char* kPeakErrorDefinition =
+    "100 max|u - u_ref| / max|u_ref| (%, the peak error against the reference's peak)";
+inline constexpr const char* kRmsErrorDefinition =
+    "100 sqrt(sum (u - u_ref)^2 / sum u_ref^2) (%, the RMS error against the reference's RMS)";
+// {field: definition} of every error field a case's summary carries.
+nlohmann::json error_measures_json();
+// Per case: status, stability check, envelope_growth (null without a fit), peak_displacement_m,
+// then the errors against the reference: peak_error_pct (E_peak) and rms_error_pct (E_rms) lead,
+// peak_error_m, and the paper's nrmse_pct and paper_eq2_as_printed; all null when the case stopped
+// before the reference's end (steps_compared < reference_steps), whose errors over the steps it
+// covered are in errors_over_covered_steps. "measures" defines every error field.
 nlohmann::json study_summary_json(const StudyOutcome& outcome);
+// The table leads with E_peak and E_rms ("-" for a case that diverged or stopped early, whose
+// covered steps' errors follow on a line of their own), their definitions below it.
 std::string study_summary_text(const StudyOutcome& outcome);
 
 }  // namespace rths::analysis

@@ -9,6 +9,8 @@
 // of measurement, written to OUT/platform.json and handed to every case's coordinator): when its
 // fail-safe or overrun tolerance will not hold, nothing starts (exit 3, the numbers and the fix
 // named) unless --accept-platform.
+// A study with a benchmark section also gets benchmark.txt/.json (J1-J9 of every recorded case but
+// the study's reference, as `rths run`).
 // Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
 // 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
 // expect_unstable); 2 for a bad config caught before starting anything.
@@ -157,6 +159,10 @@ void run_launch(const LaunchArgs& args) {
   }
   const DistributedResults results = judge_distributed(prepared, runs);
   const auto table = write_distributed_outputs(results, out, !args.no_plots, args.format);
+  // J1-J9 of the recorded cases, as `rths run` gives them (before the summary: the JSON summary
+  // must stay the last thing printed).
+  if (!results.outcome.cases.empty())
+    write_benchmark_outputs(prepared, results.outcome, out, args.json);
   if (args.json) {
     auto j = distributed_summary_json(results);
     j["output"] = out.string();

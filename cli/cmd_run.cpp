@@ -14,6 +14,7 @@
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
+#include "core/benchmark_criteria.h"
 #include "core/study.h"
 #include "tables/results.h"
 #include "tables/write.h"
@@ -32,9 +33,43 @@ struct RunOptions {
   std::uint64_t perturbed_seed = 1;
 };
 
+// Every draw, one row each: the drawn plant (beta1, beta2 1/s, a3 1/s, k_e N/m) and J1 (ms),
+// J2-J9 (%) of every case, named <case>_J<n>_<unit>.
+tables::Table draws_table(const std::vector<analysis::PlantDraw>& draws,
+                          const std::vector<analysis::BenchmarkEvaluation>& evaluations) {
+  tables::Table t;
+  std::vector<double> index, beta1, beta2, a3, stiffness;
+  for (std::size_t d = 0; d < draws.size(); ++d) {
+    index.push_back(static_cast<double>(d + 1));
+    beta1.push_back(draws[d].beta1);
+    beta2.push_back(draws[d].beta2);
+    a3.push_back(draws[d].a3);
+    stiffness.push_back(draws[d].stiffness);
+  }
+  t.add_numbers("draw", "", index);
+  t.add_numbers("beta1", "", beta1);
+  t.add_numbers("beta2_1_per_s", "1/s", beta2);
+  t.add_numbers("a3_1_per_s", "1/s", a3);
+  t.add_numbers("k_e_N_per_m", "N/m", stiffness);
+  if (evaluations.empty()) return t;
+  const auto& definitions = core::criterion_definitions();
+  for (std::size_t c = 0; c < evaluations.front().cases.size(); ++c) {
+    for (int j = 1; j <= 9; ++j) {
+      const core::CriterionDefinition& d = definitions[static_cast<std::size_t>(j - 1)];
+      std::vector<double> values;
+      for (const analysis::BenchmarkEvaluation& e : evaluations)
+        values.push_back(core::reported_value(e.cases.at(c).criteria, j));
+      t.add_numbers(tables::identifier(evaluations.front().cases[c].name) + "_" + d.name + "_" +
+                        tables::unit_suffix(d.unit),
+                    d.unit, values);
+    }
+  }
+  return t;
+}
+
 // N perturbed-plant draws of the benchmark (analysis/benchmark_perturbation.h), each run in
 // process like the nominal one: J1-J9 per case as mean +- std, printed and in
-// benchmark_perturbed.json.
+// benchmark_perturbed.json; every draw in benchmark_perturbed.csv (draws_table).
 void run_perturbed(const config::Study& study, const std::filesystem::path& base_dir,
                    const RunOptions& o, const std::filesystem::path& out) {
   if (!study.has_benchmark())
@@ -53,9 +88,11 @@ void run_perturbed(const config::Study& study, const std::filesystem::path& base
   util::AtomicFile json(out / "benchmark_perturbed.json");
   json.stream() << analysis::spread_json(spread, o.perturbed_seed).dump(2) << "\n";
   json.commit();
+  tables::write_table(draws_table(draws, evaluations), out / "benchmark_perturbed.csv",
+                      tables::Format::kCsv);
   if (!o.json)
     std::cout << analysis::spread_table(spread, o.perturbed_seed)
-              << "written: benchmark_perturbed.json\n";
+              << "written: benchmark_perturbed.json, benchmark_perturbed.csv (every draw)\n";
 }
 
 void run(const RunOptions& o) {
@@ -71,17 +108,7 @@ void run(const RunOptions& o) {
   if (out.empty())
     out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
   write_study_outputs(outcome, out, !o.no_plots, o.json, o.format);
-  if (const auto benchmark = analysis::evaluate_benchmark(prepared, outcome)) {
-    util::AtomicFile text(out / "benchmark.txt");
-    text.stream() << analysis::benchmark_table(*benchmark);
-    text.commit();
-    util::AtomicFile json(out / "benchmark.json");
-    json.stream() << analysis::benchmark_json(*benchmark).dump(2) << "\n";
-    json.commit();
-    if (!o.json)
-      std::cout << analysis::benchmark_table(*benchmark)
-                << "written: benchmark.txt, benchmark.json\n";
-  }
+  write_benchmark_outputs(prepared, outcome, out, o.json);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
   fail_if_unstable(outcome, o.allow_unstable);
 }
@@ -113,6 +140,9 @@ void add_run_command(CLI::App& app) {
       ->check(in_range(core::Quantity::kCount));
   cmd->add_option("--perturbed-seed", options->perturbed_seed,
                   "seed of the perturbed draws (default 1)");
+  cmd->footer("A study with a benchmark section is also judged by the " +
+              core::criteria_glossary() +
+              "(benchmark.txt, benchmark.json: each criterion as {name, value, unit, definition})");
   cmd->callback([options] { run(*options); });
 }
 

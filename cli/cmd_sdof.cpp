@@ -87,6 +87,8 @@ void run_sdof(const SdofOptions& o) {
                           {"integrator", o.integrator},
                           {"peak_reference_m", reference.comparison.peak_m},
                           {"peak_delayed_m", delayed.comparison.peak_m},
+                          {"peak_error_pct", delayed.comparison.peak_error_pct},
+                          {"rms_error_pct", delayed.comparison.rms_error_pct},
                           {"paper_eq2_as_printed", delayed.comparison.paper_eq2_as_printed},
                           {"nrmse_pct", delayed.comparison.nrmse_pct},
                           {"peak_error_m", delayed.comparison.peak_error_m},
@@ -95,6 +97,8 @@ void run_sdof(const SdofOptions& o) {
                           {"diverged", delayed.diverged()}};
     const nlohmann::json cases = analysis::study_summary_json(outcome)["cases"];
     out["stability"] = cases[1]["stability"];
+    out["envelope_growth"] = cases[1]["envelope_growth"];
+    out["measures"] = analysis::error_measures_json();
     std::cout << out.dump(2) << "\n";
   } else {
     std::cout << analysis::study_summary_text(outcome);

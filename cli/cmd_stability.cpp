@@ -1,5 +1,7 @@
 // `rths stability`: the critical delay of a delayed SDOF hybrid system, continuous and discrete;
-// with --study/--case, the delay margin of that case's actuator and compensator in the loop.
+// with --study/--case, the delay margin of that case's actuator and compensator in the loop (a
+// study of several DOFs: the verdict `rths run` gives before the run, by the modal
+// approximation, stated as such).
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -7,6 +9,7 @@
 #include <memory>
 #include <numbers>
 
+#include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/stability.h"
@@ -120,8 +123,50 @@ void print_compensated(const StabilityOptions& o, const CompensatedLoop& loop,
   }
 }
 
+// A study of several DOFs (matrices, a shear building): the verdict `rths run` gives the case
+// before it runs it, by the modal approximation (analysis::pre_run_verdict), which it states.
+// Exit 1 when the compensated loop is analysed unstable.
+void run_modal(const StabilityOptions& o, const config::Study& study) {
+  const std::filesystem::path path = o.study;
+  const core::PreparedStudy prepared = core::prepare_study(study, path.parent_path());
+  const analysis::CaseOutcome c = analysis::pre_run_verdict(prepared, o.case_name);
+  analysis::StudyOutcome alone;
+  alone.study_name = study.name();
+  alone.cases = {c};
+  const nlohmann::json summary = analysis::study_summary_json(alone)["cases"][0];
+  if (o.json) {
+    std::cout << nlohmann::json{{"input",
+                                 {{"study", o.study},
+                                  {"case", o.case_name},
+                                  {"dofs", prepared.base.model.dofs()},
+                                  {"compensated", c.compensated.has_value()}}},
+                                {"stability", summary["stability"]},
+                                {"compensated_loop", summary["compensated_loop"]}}
+                     .dump(2)
+              << "\n";
+  } else {
+    std::cout << "case '" << o.case_name << "' of " << o.study << ": " << prepared.base.model.dofs()
+              << " DOFs\n";
+    // A compensated case's own check counts its compensator's lead; its verdict names the
+    // uncompensated lag's check instead.
+    if (c.stability && !c.compensated) std::cout << c.stability->describe() << "\n";
+    if (c.stability) std::cout << "assumed: " << c.stability->assumed << "\n";
+    if (c.compensated) std::cout << c.compensated->text << "\n";
+  }
+  if (c.compensated && c.compensated->analysed && !c.compensated->stable)
+    throw ExitError(kExitRunFailed,
+                    "the loop of case '" + o.case_name + "' is unstable as configured");
+  if (!c.compensated && c.stability && c.stability->past())
+    throw ExitError(kExitRunFailed, "case '" + o.case_name +
+                                        "' is past its critical delay: " + c.stability->describe());
+}
+
 void run_compensated(const StabilityOptions& o) {
   const config::Study study = core::load_study(o.study);
+  if (!study.structure().has_sdof()) {
+    run_modal(o, study);
+    return;
+  }
   const CompensatedLoop loop = compensated_loop_of(study, o);
   const core::CompensatedStability r = core::compensated_stability(
       loop.kind, loop.period, loop.zeta, loop.alpha, loop.dt, loop.chosen->delay(),
@@ -225,7 +270,8 @@ void add_stability_command(CLI::App& app) {
       ->check(CLI::Range(0, 5000));
   cmd->add_option(
       "--study", options->study,
-      "study config (SDOF): analyse the loop of --case, its actuator stages and compensation");
+      "study config: analyse the loop of --case, its actuator stages and compensation (an SDOF "
+      "exactly; several DOFs by the modal approximation, as `rths run` judges it before the run)");
   cmd->add_option("--case", options->case_name,
                   "case of --study whose actuator and compensator are analysed");
   cmd->add_option("--max-extra-delay", options->max_extra_delay,

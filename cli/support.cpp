@@ -17,6 +17,7 @@
 #include <iostream>
 #include <memory>
 
+#include "analysis/benchmark_evaluation.h"
 #include "cli/commands.h"
 #include "core/text_columns.h"
 #include "core/text_format.h"
@@ -313,9 +314,25 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
     std::cout << summary.dump(2) << "\n";
   } else {
     std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
-              << (plots ? ", displacement.png/.svg, force_displacement.png/.svg" : "")
+              << (plots ? ", displacement.png/.svg, force_displacement.png/.svg, tracking.png/.svg"
+                        : "")
               << ", summary.txt, summary.json\n";
   }
+}
+
+void write_benchmark_outputs(const core::PreparedStudy& prepared,
+                             const analysis::StudyOutcome& outcome,
+                             const std::filesystem::path& out, bool quiet) {
+  const auto benchmark = analysis::evaluate_benchmark(prepared, outcome);
+  if (!benchmark) return;
+  const std::string table = analysis::benchmark_table(*benchmark);
+  util::AtomicFile text(out / "benchmark.txt");
+  text.stream() << table;
+  text.commit();
+  util::AtomicFile json(out / "benchmark.json");
+  json.stream() << analysis::benchmark_json(*benchmark).dump(2) << "\n";
+  json.commit();
+  if (!quiet) std::cout << table << "written: benchmark.txt, benchmark.json\n";
 }
 
 void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable) {
@@ -325,7 +342,7 @@ void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable
   bool diverged = false;
   for (const std::string& f : failures) {
     message += (message.empty() ? "" : "\n  ") + f;
-    diverged = diverged || f.find("diverged") != std::string::npos;
+    diverged = diverged || f.find("diverg") != std::string::npos;
   }
   if (diverged)
     message += "\n  (--allow-unstable, or expect_unstable: true in the case, when that is meant)";

@@ -73,6 +73,12 @@ std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const
 // summary (JSON or text).
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format = "csv");
+// A study with a benchmark section: J1-J9 of its cases (analysis::evaluate_benchmark) written to
+// out/benchmark.txt and out/benchmark.json, and the table printed unless `quiet`. Nothing without
+// one. The same after `rths run` and `rths launch`.
+void write_benchmark_outputs(const core::PreparedStudy& prepared,
+                             const analysis::StudyOutcome& outcome,
+                             const std::filesystem::path& out, bool quiet);
 // Throws ExitError(1) listing every case that failed the run (analysis::StudyOutcome::failures).
 void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable);
 

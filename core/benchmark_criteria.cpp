@@ -83,6 +83,43 @@ BenchmarkCriteria benchmark_criteria(std::span<const double> target,
   return out;
 }
 
+const std::array<CriterionDefinition, 9>& criterion_definitions() {
+  static const std::array<CriterionDefinition, 9> definitions = {{
+      {"J1", "ms", "delay of x_m behind x_t at their cross-correlation peak (tracking delay)"},
+      {"J2", "%", "100 std(x_m - x_t) / std(x_t) (RMS tracking error)"},
+      {"J3", "%", "100 max|x_m - x_t| / max|x_t| (peak tracking error)"},
+      {"J4", "%",
+       "100 std(x_m - d_ref) / std(d_ref) (RMS error of the experimental storey's drift)"},
+      {"J5", "%", "100 max|x_m - d_ref| / max|d_ref| (peak error of that drift)"},
+      {"J6", "%",
+       "100 std(u_i - u_ref,i) / std(u_ref,i), i the first floor other than the experimental "
+       "one (RMS error; the benchmark's floor 2)"},
+      {"J7", "%", "as J6 for the second other floor (the benchmark's floor 3)"},
+      {"J8", "%",
+       "100 max|u_i - u_ref,i| / max|u_ref,i| for J6's floor (peak error; the benchmark's floor "
+       "2)"},
+      {"J9", "%", "as J8 for J7's floor (the benchmark's floor 3)"},
+  }};
+  return definitions;
+}
+
+double reported_value(const BenchmarkCriteria& criteria, int number) {
+  return number == 1 ? criteria.J(1) * 1e3 : criteria.J(number);
+}
+
+std::string criteria_glossary() {
+  std::string text =
+      "RTHS benchmark criteria (Silva et al. 2020): x_t the command at the experimental DOF, x_m "
+      "the displacement measured there, d_ref the reference's drift of that storey, u_ref,i the "
+      "reference's floor i (the exact response of the whole structure)\n";
+  for (const CriterionDefinition& d : criterion_definitions()) {
+    const std::string head = std::string(d.name) + " (" + d.unit + ")";
+    text +=
+        "  " + head + std::string(head.size() < 9 ? 9 - head.size() : 1, ' ') + d.definition + "\n";
+  }
+  return text;
+}
+
 std::string format_criteria(const BenchmarkCriteria& c) {
   std::string text;
   char buffer[64];

@@ -47,6 +47,19 @@ BenchmarkCriteria benchmark_criteria(std::span<const double> target,
                                      const Mat& reference, int experimental_storey, double dt,
                                      double j1_max_lag);
 
+// The name, unit and definition of each criterion, J1 first, as every report names them (text,
+// JSON, Python, `rths run --help`). J1 is reported in ms, J2-J9 in %.
+struct CriterionDefinition {
+  const char* name;        // "J1"
+  const char* unit;        // "ms" or "%"
+  const char* definition;  // one line, in the terms above (x_t, x_m, d_ref, u_ref)
+};
+const std::array<CriterionDefinition, 9>& criterion_definitions();
+// A criterion's value in its reported unit: J1 in ms, the others as computed (%).
+double reported_value(const BenchmarkCriteria& criteria, int number);
+// One line per criterion, "J1 (ms)  delay of ...", after a line naming x_t, x_m and d_ref.
+std::string criteria_glossary();
+
 // "J1 = 4.60 ms  J2 = 9.1 % ..." with n/a for NaN.
 std::string format_criteria(const BenchmarkCriteria& criteria);
 

@@ -93,6 +93,19 @@ double peak_error(std::span<const double> reference, std::span<const double> com
   return peak;
 }
 
+double relative_peak_error_pct(std::span<const double> reference,
+                               std::span<const double> compared) {
+  require_pair(reference, compared, "relative_peak_error_pct");
+  return 100.0 * peak_error(reference, compared) / peak_abs(reference);
+}
+
+double relative_rms_error_pct(std::span<const double> reference, std::span<const double> compared) {
+  require_pair(reference, compared, "relative_rms_error_pct");
+  double reference_energy = 0.0;
+  for (double x : reference) reference_energy += x * x;
+  return 100.0 * std::sqrt(sum_squared_error(reference, compared) / reference_energy);
+}
+
 // r(L) = sum t_i m_{i+L} / sqrt(sum t_i^2 sum m_{i+L}^2) over the overlap of the two records;
 // a positive L means `measured` lags. Normalising by the energies of the same overlap cancels,
 // to first order, the edge terms a finite record leaves (a window that no longer covers whole
@@ -138,14 +151,12 @@ double j1_delay(std::span<const double> target, std::span<const double> measured
 
 double j2_tracking(std::span<const double> target, std::span<const double> measured) {
   require_pair(target, measured, "j2_tracking");
-  double target_energy = 0.0;
-  for (double x : target) target_energy += x * x;
-  return 100.0 * std::sqrt(sum_squared_error(target, measured) / target_energy);
+  return relative_rms_error_pct(target, measured);
 }
 
 double j3_peak_tracking(std::span<const double> target, std::span<const double> measured) {
   require_pair(target, measured, "j3_peak_tracking");
-  return 100.0 * peak_error(target, measured) / peak_abs(target);
+  return relative_peak_error_pct(target, measured);
 }
 
 }  // namespace rths::core

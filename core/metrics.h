@@ -6,6 +6,11 @@
 //                  depends on the number of steps (dt and duration), not only on the error.
 //   nrmse          sqrt(mean e^2) / median|u_ref|          -- the N-independent alternative.
 //   peak_error     max |e|
+//   relative_peak_error_pct  E_peak = 100 max|e| / max|u_ref|       (%)
+//   relative_rms_error_pct   E_rms  = 100 sqrt(sum e^2 / sum u_ref^2) (%)
+//                  The errors a lab reads: against the reference's own peak and RMS, so a miss of
+//                  a tenth of the peak reads 10 %, whatever the record's quiet tail. A zero
+//                  reference gives inf (or NaN for zero error).
 //   J1 (s)         delay of `measured` behind `target` by cross-correlation peak, with parabolic
 //                  sub-sample refinement (RTHS benchmark, Silva, Dyke et al. 2020).
 //   J2 (%)         100 sqrt(sum (x_m - x_t)^2 / sum x_t^2)  normalised RMS tracking error.
@@ -23,6 +28,8 @@ namespace rths::core {
 double paper_eq2(std::span<const double> reference, std::span<const double> compared);
 double nrmse(std::span<const double> reference, std::span<const double> compared);
 double peak_error(std::span<const double> reference, std::span<const double> compared);
+double relative_peak_error_pct(std::span<const double> reference, std::span<const double> compared);
+double relative_rms_error_pct(std::span<const double> reference, std::span<const double> compared);
 double peak_abs(std::span<const double> x);
 double median_abs(std::span<const double> x);
 double median(std::vector<double> values);

@@ -2,7 +2,11 @@
 // built in code and __version__ over it): the library, not the CLI, for researchers in Python.
 //
 //   load_study(path) / parse_study(text, base_dir=".")  -> Study (name, cases, text)
-//   run(study, cases=None)      every case in process        -> {"summary", "series", "units"}
+//   run(study, cases=None)      every case in process        -> {"summary", "series", "units",
+//                               "benchmark"}: benchmark is benchmark.json's content (J1-J9 of
+//                               each case as {name, value, unit, definition}) for a study with a
+//                               benchmark section, else None
+//   benchmark_criteria()        [{name, unit, definition}] of J1-J9
 //   sweep(study, shard="0/1", threads=0, general=False)      -> {"series", "units", "grid_hash",
 //                                                                "grid_points", "shard", "trends"}
 //   stability(period_s, zeta, experimental_fraction=1, dt_s=0.001, integrator=..., ...) -> dict
@@ -35,10 +39,12 @@
 
 #include <optional>
 
+#include "analysis/benchmark_evaluation.h"
 #include "analysis/study_run.h"
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
 #include "analysis/sweep_run.h"
+#include "core/benchmark_criteria.h"
 #include "core/ranges.h"
 #include "core/stability.h"
 #include "core/study.h"
@@ -141,14 +147,19 @@ py::dict run(const Study& study, const std::optional<std::vector<std::string>>& 
   }
   analysis::StudyOutcome outcome;
   tables::Table table;
+  std::optional<analysis::BenchmarkEvaluation> benchmark;
   {
     py::gil_scoped_release release;
     const core::PreparedStudy prepared = core::prepare_study(chosen, study.base_dir);
     outcome = analysis::run_study(prepared);
     table = tables::study_table(outcome);
+    benchmark = analysis::evaluate_benchmark(prepared, outcome);
   }
   py::dict out = table_dict(table);
   out["summary"] = to_python(analysis::study_summary_json(outcome));
+  // As `rths run` writes benchmark.json: each criterion {name, value, unit, definition}.
+  out["benchmark"] =
+      benchmark ? to_python(analysis::benchmark_json(*benchmark)) : py::object(py::none());
   out["attributes"] = py::cast(table.attributes());
   return out;
 }
@@ -375,6 +386,20 @@ PYBIND11_MODULE(_rths, m) {
   m.def(
       "run", &run, py::arg("study"), py::arg("cases") = std::nullopt,
       "Run every case of a study (or the named cases and the reference) in process, as `rths run`");
+  m.def(
+      "benchmark_criteria",
+      [] {
+        py::list out;
+        for (const rths::core::CriterionDefinition& d : rths::core::criterion_definitions()) {
+          py::dict entry;
+          entry["name"] = d.name;
+          entry["unit"] = d.unit;
+          entry["definition"] = d.definition;
+          out.append(entry);
+        }
+        return out;
+      },
+      "The RTHS benchmark's criteria J1-J9: [{name, unit, definition}]");
   m.def("sweep", &sweep, py::arg("study"), py::arg("shard") = "0/1", py::arg("threads") = 0,
         py::arg("general") = false, "The study's sweep grid (the paper's Fig. 4), as `rths sweep`");
   m.def("stability", &stability, py::arg("period_s"), py::arg("zeta"),

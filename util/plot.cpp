@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <sstream>
@@ -62,6 +64,52 @@ std::string range(const std::optional<double>& lo, const std::optional<double>& 
   return out.str();
 }
 
+// The points of `s` drawn on `spec`'s panel: all when there are at most kPointsPerPixel per pixel
+// of its width, else decimate_min_max over its x range (the panel's, else the series' own).
+std::vector<std::size_t> drawn_points(const PlotSpec& spec, const Series& s) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  std::vector<std::size_t> all;
+  const int buckets = std::max(1, spec.width * kPointsPerPixel / 4);
+  if (n <= 4 * static_cast<std::size_t>(buckets)) {
+    all.resize(n);
+    for (std::size_t k = 0; k < n; ++k) all[k] = k;
+    return all;
+  }
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(s.x[k]) || (spec.log_x && s.x[k] <= 0)) continue;
+    lo = std::min(lo, s.x[k]);
+    hi = std::max(hi, s.x[k]);
+  }
+  if (spec.x_min) lo = *spec.x_min;
+  if (spec.x_max) hi = *spec.x_max;
+  if (!(lo < hi) || (spec.log_x && !(lo > 0))) {
+    all.resize(n);
+    for (std::size_t k = 0; k < n; ++k) all[k] = k;
+    return all;
+  }
+  bool ascending = true;
+  for (std::size_t k = 1; k < n && ascending; ++k)
+    ascending = !(std::isfinite(s.x[k]) && std::isfinite(s.x[k - 1]) && s.x[k] < s.x[k - 1]);
+  if (ascending || spec.log_x || spec.log_y)
+    return decimate_min_max(s, lo, hi, buckets, spec.log_x);
+  // A loop: simplified in the panel's pixels, its y range the panel's or the series' own.
+  double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(s.y[k])) continue;
+    y_lo = std::min(y_lo, s.y[k]);
+    y_hi = std::max(y_hi, s.y[k]);
+  }
+  if (spec.y_min) y_lo = *spec.y_min;
+  if (spec.y_max) y_hi = *spec.y_max;
+  if (!(y_lo < y_hi)) {
+    all.resize(n);
+    for (std::size_t k = 0; k < n; ++k) all[k] = k;
+    return all;
+  }
+  return simplify_path(s, lo, hi, y_lo, y_hi, spec.width, std::max(1, spec.height));
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t title_width) {
   script << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
@@ -101,7 +149,7 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t 
   }
   script << "\n";
   for (const Series& s : spec.series) {
-    for (std::size_t k = 0; k < s.x.size() && k < s.y.size(); ++k) {
+    for (std::size_t k : drawn_points(spec, s)) {
       // gnuplot cannot draw non-finite points (and zero on a log axis); leave a gap instead.
       if (std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(spec.log_y && s.y[k] <= 0) &&
           !(spec.log_x && s.x[k] <= 0)) {
@@ -196,12 +244,144 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png) {
   write_png_panels({spec}, png);
 }
 
+std::vector<std::size_t> decimate_min_max(const Series& s, double x_lo, double x_hi, int buckets,
+                                          bool log_x) {
+  if (buckets <= 0 || !(x_lo < x_hi))
+    throw std::invalid_argument("decimate_min_max: needs buckets > 0 and x_lo < x_hi");
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  std::vector<std::size_t> kept;
+  const auto position = [log_x](double x) { return log_x ? std::log10(x) : x; };
+  const double lo = position(x_lo), width = position(x_hi) - lo;
+  // Column of a finite point: -1 left of the range, `buckets` right of it.
+  const auto column = [&](double x) -> long {
+    const double at = (position(x) - lo) / width * buckets;
+    if (!(at >= 0.0)) return -1;
+    return std::min<long>(static_cast<long>(at), buckets);
+  };
+  for (std::size_t k = 1; k < n; ++k)
+    if (std::isfinite(s.x[k]) && std::isfinite(s.x[k - 1]) && s.x[k] < s.x[k - 1]) {
+      kept.resize(n);  // not ascending: a loop has no columns to keep the extent of
+      for (std::size_t i = 0; i < n; ++i) kept[i] = i;
+      return kept;
+    }
+  // The open column: its first, smallest, largest and last point.
+  bool open = false;
+  long current = 0;
+  std::size_t first = 0, low = 0, high = 0, last = 0;
+  const auto close = [&] {
+    if (!open) return;
+    std::size_t four[4] = {first, low, high, last};
+    std::sort(std::begin(four), std::end(four));
+    for (std::size_t i = 0; i < 4; ++i)
+      if (i == 0 || four[i] != four[i - 1]) kept.push_back(four[i]);
+    open = false;
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool finite = std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(log_x && s.x[k] <= 0);
+    if (!finite) {
+      close();
+      kept.push_back(k);  // the gap
+      continue;
+    }
+    const long c = column(s.x[k]);
+    if (open && c != current) close();
+    if (!open) {
+      open = true;
+      current = c;
+      first = low = high = last = k;
+      continue;
+    }
+    last = k;
+    if (s.y[k] < s.y[low]) low = k;
+    if (s.y[k] > s.y[high]) high = k;
+  }
+  close();
+  return kept;
+}
+
+std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi, double y_lo,
+                                       double y_hi, int width_px, int height_px,
+                                       double tolerance_px) {
+  if (!(x_lo < x_hi) || !(y_lo < y_hi) || width_px <= 0 || height_px <= 0)
+    throw std::invalid_argument("simplify_path: needs non-empty ranges and sizes > 0");
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  const double sx = width_px / (x_hi - x_lo), sy = height_px / (y_hi - y_lo);
+  const auto px = [&](std::size_t k) { return (s.x[k] - x_lo) * sx; };
+  const auto py = [&](std::size_t k) { return (s.y[k] - y_lo) * sy; };
+  // Distance (px) of point k from the segment a-b.
+  const auto distance = [&](std::size_t k, std::size_t a, std::size_t b) {
+    const double ax = px(a), ay = py(a), dx = px(b) - ax, dy = py(b) - ay;
+    const double length2 = dx * dx + dy * dy;
+    double t = length2 > 0.0 ? ((px(k) - ax) * dx + (py(k) - ay) * dy) / length2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    return std::hypot(px(k) - (ax + t * dx), py(k) - (ay + t * dy));
+  };
+  std::vector<bool> keep(n, false);
+  // Each finite run between gaps simplified on its own; the gaps kept.
+  std::size_t begin = 0;
+  while (begin < n) {
+    const auto finite = [&](std::size_t k) {
+      return std::isfinite(s.x[k]) && std::isfinite(s.y[k]);
+    };
+    if (!finite(begin)) {
+      keep[begin++] = true;
+      continue;
+    }
+    std::size_t end = begin;
+    while (end + 1 < n && finite(end + 1)) ++end;
+    keep[begin] = keep[end] = true;
+    std::vector<std::pair<std::size_t, std::size_t>> pending = {{begin, end}};
+    while (!pending.empty()) {
+      const auto [a, b] = pending.back();
+      pending.pop_back();
+      if (b <= a + 1) continue;
+      std::size_t farthest = a + 1;
+      double largest = -1.0;
+      for (std::size_t k = a + 1; k < b; ++k) {
+        const double d = distance(k, a, b);
+        if (d > largest) {
+          largest = d;
+          farthest = k;
+        }
+      }
+      if (largest <= tolerance_px) continue;
+      keep[farthest] = true;
+      pending.push_back({a, farthest});
+      pending.push_back({farthest, b});
+    }
+    begin = end + 1;
+  }
+  std::vector<std::size_t> kept;
+  for (std::size_t k = 0; k < n; ++k)
+    if (keep[k]) kept.push_back(k);
+  return kept;
+}
+
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png) {
   if (panels.empty()) throw std::invalid_argument("no panels to plot into " + png.string());
-  run_gnuplot_script(figure(panels, "pngcairo", png), png);
   std::filesystem::path svg = png;
   svg.replace_extension(".svg");
-  run_gnuplot_script(figure(panels, "svg dynamic", svg), svg);
+  // Both figures from one gnuplot, each into its partial file; renamed only when gnuplot is done.
+  const std::filesystem::path png_partial = png.string() + ".partial",
+                              svg_partial = svg.string() + ".partial";
+  const auto discard = [&] {
+    std::error_code ignored;
+    std::filesystem::remove(png_partial, ignored);
+    std::filesystem::remove(svg_partial, ignored);
+  };
+  try {
+    run_gnuplot_script(
+        figure(panels, "pngcairo", png_partial) + figure(panels, "svg dynamic", svg_partial), png);
+    if (!std::filesystem::exists(png_partial) || !std::filesystem::exists(svg_partial) ||
+        std::filesystem::file_size(png_partial) == 0 ||
+        std::filesystem::file_size(svg_partial) == 0)
+      throw std::runtime_error("gnuplot wrote no figure into " + png.string());
+    std::filesystem::rename(png_partial, png);
+    std::filesystem::rename(svg_partial, svg);
+  } catch (...) {
+    discard();
+    throw;
+  }
 }
 
 std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,

@@ -1,7 +1,13 @@
 #pragma once
 // Plots through gnuplot (Debian's gnuplot-nox, pngcairo and svg terminals): line series to a PNG
-// file and the same figure as SVG beside it (name.png -> name.svg).
-// Data is streamed inline to gnuplot's stdin; nothing but the PNG and the SVG is written.
+// file and the same figure as SVG beside it (name.png -> name.svg), both drawn by one gnuplot
+// process.
+// Data is streamed inline to gnuplot's stdin; nothing but the PNG and the SVG is written, each
+// first as "<name>.partial" and renamed into place once gnuplot succeeded: a figure is complete or
+// absent (a failed or interrupted plot leaves no file, and an earlier complete one stays).
+// A series longer than kPointsPerPixel points per pixel of its panel's width is drawn decimated
+// (decimate_min_max; a path whose x is not ascending, simplify_path): no peak is lost, and
+// gnuplot's time no longer grows with the record.
 // Every figure: the legend outside the data (right), one colour per series from a 12-colour
 // qualitative palette, then the same colours dashed, so no two of the first 48 series look alike.
 
@@ -62,6 +68,30 @@ std::string series_colour(std::size_t index);
 // figure's titles go through it, with the width its data area leaves, so that a long title is never
 // cut at the figure's left edge.
 std::string wrap_title(const std::string& title, std::size_t max_chars);
+
+// At most this many points per pixel of a panel's width are drawn of one series: columns of
+// 4 / kPointsPerPixel pixels, each drawn with at most 4 points (decimate_min_max).
+inline constexpr int kPointsPerPixel = 2;
+
+// The indices of the points of `s` to draw, ascending, when its x is cut into `buckets` equal
+// columns over [x_lo, x_hi] (on log10 x when `log_x`): in each column the first, the smallest y,
+// the largest y and the last point, so every column's extent is drawn as it is (min/max
+// decimation; at most 4 points a column). Points left or right of the range form one column each
+// (the lines into the range stay right, clipped at its edge). A point whose x or y is not finite
+// is kept: it ends a line (the gap gnuplot draws). When x is not ascending (a loop, force against
+// displacement) every index is kept (simplify_path draws those). @pre buckets > 0, x_lo < x_hi.
+std::vector<std::size_t> decimate_min_max(const Series& s, double x_lo, double x_hi, int buckets,
+                                          bool log_x = false);
+
+// The indices of the points of a path (x not ascending: a loop, force against displacement) to
+// draw, ascending: the path simplified (Ramer-Douglas-Peucker) so that no dropped point lies more
+// than `tolerance_px` from the drawn line, in pixels of a panel `width_px` x `height_px` showing
+// [x_lo, x_hi] x [y_lo, y_hi]. Every turning point of the loop farther than that from its chord
+// stays. A point whose x or y is not finite is kept and ends a line. @pre the ranges are not
+// empty, the sizes > 0.
+std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi, double y_lo,
+                                       double y_hi, int width_px, int height_px,
+                                       double tolerance_px = 0.5);
 
 // Throws std::runtime_error naming the file when gnuplot is missing or fails.
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);

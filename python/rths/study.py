@@ -10,10 +10,12 @@ Units are SI everywhere: seconds, metres, kilograms, newtons; lags in seconds.
 
 import json
 import math
+import numbers
 import os
 import shutil
 import subprocess
 import tempfile
+import warnings
 
 from . import _rths
 
@@ -35,13 +37,18 @@ _INTEGRATORS = {
 _MOTION_UNITS = {"g": "G", "m/s2": "M_PER_S2", "cm/s2": "CM_PER_S2"}
 
 
+def _type_name(value):
+    kind = type(value)
+    return kind.__name__ if kind.__module__ == "builtins" else f"{kind.__module__}.{kind.__name__}"
+
+
 def _number(value, what, low=None, high=None, low_open=False):
-    """A finite float within [low, high] (low excluded when low_open), else BadInputError naming
-    `what`, the value and the range."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise _rths.BadInputError(f"{what}: '{value}' is not a number") from None
+    """A finite float within [low, high] (low excluded when low_open): a value of another type
+    (a str, a list, an array) raises TypeError naming `what` and the type it got; a number out of
+    range BadInputError naming `what`, the value and the range."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{what}: expected a number, got {_type_name(value)} ({value!r:.60})")
+    x = float(value)
     below = low is not None and (x <= low if low_open else x < low)
     if not math.isfinite(x) or below or (high is not None and x > high):
         bracket = "(" if low_open else "["
@@ -51,6 +58,57 @@ def _number(value, what, low=None, high=None, low_open=False):
 
 def _quoted(text):
     return '"' + str(text).replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _matrix(value, what, n=None):
+    """`value` as an n x n float64 array (square of any size when n is None): TypeError naming
+    `what` when it is not an array of numbers, BadInputError for a wrong shape or a value that is
+    not finite."""
+    import numpy as np
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        raise TypeError(f"{what}: expected a 2-D array of numbers (NumPy array or nested lists), "
+                        f"got {_type_name(value)}")
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{what}: expected a 2-D array of numbers, got {_type_name(value)} "
+                        "holding something else") from None
+    if array.ndim != 2 or array.shape[0] != array.shape[1] or array.shape[0] == 0:
+        raise _rths.BadInputError(f"{what}: shape {array.shape}, expected a square n x n matrix")
+    if n is not None and array.shape[0] != n:
+        raise _rths.BadInputError(f"{what}: {array.shape[0]} x {array.shape[0]}, the structure has "
+                                  f"{n} DOFs (M is {n} x {n})")
+    if not np.all(np.isfinite(array)):
+        raise _rths.BadInputError(f"{what}: holds a value that is not finite")
+    return array
+
+
+def _vector(value, what, n):
+    import numpy as np
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        raise TypeError(f"{what}: expected a 1-D array of numbers, got {_type_name(value)}")
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"{what}: expected a 1-D array of numbers, got {_type_name(value)}") from None
+    if array.shape != (n,) or not np.all(np.isfinite(array)):
+        raise _rths.BadInputError(f"{what}: shape {array.shape}, expected {n} finite values")
+    return array
+
+
+def _matrix_text(array):
+    """The body of a config Matrix: rows and the values row by row, each as Python's repr keeps it
+    (a float's repr reads back to the same double)."""
+    values = ", ".join(repr(float(x)) for x in array.ravel(order="C"))
+    return f"rows: {array.shape[0]} values: [{values}]"
+
+
+def _warn_unexpected_divergence(study, summary):
+    """warnings.warn for every case of a summary that diverged or is diverging unexpectedly."""
+    for case in summary.get("cases", []):
+        if case.get("diverged") and not case.get("expect_unstable"):
+            warnings.warn(f"study '{study}', case '{case['name']}': {case['status']}: "
+                          f"{case.get('status_detail', '')}", RuntimeWarning, stacklevel=3)
 
 
 class Case:
@@ -106,6 +164,8 @@ class Study:
         self._cases = []
         self._deployment = None
         self._servo_rate = None
+        self._experimental_dofs = []
+        self._benchmark = None
 
     # --- the structure --------------------------------------------------------------------------
     def sdof(self, period, zeta=0.05, mass=1000.0):
@@ -132,8 +192,40 @@ class Study:
         return self
 
     def structure_text(self, text):
-        """Any structure the config format holds, as the text of its ``structure { ... }`` block."""
+        """Any structure the config format holds, as the text of its ``structure { ... }`` block.
+        Matrices as arrays go to ``matrices(M, C, K)``."""
+        if not isinstance(text, str):
+            raise TypeError(f"structure_text: text must be a str (the body of a structure {{ ... }} "
+                            f"block), got {_type_name(text)}; give matrices to Study.matrices(M, C, K)")
         self._structure = f"structure {{ {text} }}"
+        return self
+
+    def matrices(self, M, C=None, K=None, influence=None, zeta=None):
+        """A structure by its matrices, SI units, as NumPy arrays (or nested lists): mass M (kg),
+        damping C (N s/m) and stiffness K (N/m), each n x n, and the influence vector (n, default
+        all ones). Without C, give ``zeta``: modal damping of that ratio. The library checks that
+        M is symmetric positive definite and K positive semi-definite when the study compiles.
+        A wrong type raises TypeError naming the argument; a wrong shape or a value that is not
+        finite, BadInputError."""
+        if K is None:
+            raise TypeError("matrices: K (the stiffness, N/m) is required")
+        mass = _matrix(M, "matrices: M (kg)")
+        n = mass.shape[0]
+        blocks = [f"mass {{ {_matrix_text(mass)} }}",
+                  f"stiffness {{ {_matrix_text(_matrix(K, 'matrices: K (N/m)', n))} }}"]
+        if C is not None:
+            if zeta is not None:
+                raise _rths.BadInputError("matrices: give C or zeta, not both")
+            blocks.append(f"damping {{ {_matrix_text(_matrix(C, 'matrices: C (N s/m)', n))} }}")
+        if influence is not None:
+            iota = _vector(influence, "matrices: influence", n)
+            blocks.append(f"influence {{ rows: {n} values: [{', '.join(repr(float(x)) for x in iota)}] }}")
+        damping = ""
+        if C is None:
+            if zeta is None:
+                raise _rths.BadInputError("matrices: give C (N s/m) or zeta (modal damping ratio)")
+            damping = f" damping {{ modal_zeta: {_number(zeta, 'matrices: zeta', 0.0, 1.0)!r} }}"
+        self._structure = f"structure {{ matrices {{ {' '.join(blocks)} }}{damping} }}"
         return self
 
     # --- the motion, the integrator, the experimental part -----------------------------------------
@@ -165,8 +257,55 @@ class Study:
         storey model as config text (``linear {}``, ``bilinear { yield_displacement: 0.01
         post_yield_ratio: 0.1 }``, ...)."""
         fraction = _number(fraction, "experimental: fraction", 0.0, 1.0, low_open=True)
+        if not isinstance(model, str):
+            raise TypeError(f"experimental: model must be config text (str), got {_type_name(model)}")
+        self._experimental_dofs = []
         self._substructuring = f"substructuring {{ experimental_fraction: {fraction!r} model {{ {model} }} }}"
         return self
+
+    def experimental_dof(self, dof, stiffness, mass=0.0, damping=None, zeta=None, model="linear {}"):
+        """Adds an experimental DOF to a structure given by matrices: the specimen between DOF
+        `dof` (1-based) and the ground, of stiffness (N/m), mass (kg) and damping (N s/m) or
+        damping ratio zeta, with the restoring-force model as config text. The numerical part is
+        the rest (M - M_e, C - C_e, K - K_e). Call once per experimental DOF."""
+        if isinstance(dof, bool) or not isinstance(dof, numbers.Integral):
+            raise TypeError(f"experimental_dof: dof must be an int (1-based), got {_type_name(dof)}")
+        if dof < 1:
+            raise _rths.BadInputError(f"experimental_dof: dof {dof} is not 1-based (>= 1)")
+        fields = [f"dof: {int(dof)}",
+                  f"mass: {_number(mass, 'experimental_dof: mass (kg)', 0.0, None)!r}",
+                  f"stiffness: {_number(stiffness, 'experimental_dof: stiffness (N/m)', 0.0, None, True)!r}"]
+        if damping is not None and zeta is not None:
+            raise _rths.BadInputError("experimental_dof: give damping or zeta, not both")
+        if damping is not None:
+            fields.append(f"damping: {_number(damping, 'experimental_dof: damping (N s/m)', 0.0, None)!r}")
+        if zeta is not None:
+            fields.append(f"zeta: {_number(zeta, 'experimental_dof: zeta', 0.0, 1.0)!r}")
+        if not isinstance(model, str):
+            raise TypeError(f"experimental_dof: model must be config text (str), got {_type_name(model)}")
+        fields.append(f"model {{ {model} }}")
+        self._experimental_dofs.append("experimental_dofs { " + " ".join(fields) + " }")
+        self._substructuring = "substructuring { " + " ".join(self._experimental_dofs) + " }"
+        return self
+
+    def benchmark(self, experimental_dof=1, j1_search=None):
+        """Judge every case but the reference by the RTHS benchmark's criteria J1-J9
+        (``Study.criteria()`` defines them): ``run()["benchmark"]`` then holds each
+        case's J as {name, value, unit, definition}. experimental_dof (1-based) is where x_t and
+        x_m are read; j1_search (s) J1's lag range (default 49 steps)."""
+        if isinstance(experimental_dof, bool) or not isinstance(experimental_dof, numbers.Integral):
+            raise TypeError(f"benchmark: experimental_dof must be an int, got {_type_name(experimental_dof)}")
+        fields = [f"experimental_dof: {int(experimental_dof)}"]
+        if j1_search is not None:
+            fields.append(f"j1_search: {_number(j1_search, 'benchmark: j1_search (s)', 0.0, 1.0, True)!r}")
+        self._benchmark = "benchmark { " + " ".join(fields) + " }"
+        return self
+
+    @staticmethod
+    def criteria():
+        """The RTHS benchmark's criteria J1-J9 as [{name, unit, definition}] (J1 in ms, J2-J9 in
+        %), as every report names them."""
+        return _rths.benchmark_criteria()
 
     # --- cases and deployment ----------------------------------------------------------------
     def case(self, name, delay=None, delay_model="shift", compensation=None, expect_unstable=False):
@@ -205,6 +344,8 @@ class Study:
         lines += [c.text() for c in self._cases]
         if self._servo_rate is not None:
             lines.append(f"servo {{ rate: {self._servo_rate!r} }}")
+        if self._benchmark:
+            lines.append(self._benchmark)
         if self._deployment:
             lines.append(self._deployment)
         return "\n".join(lines) + "\n"
@@ -221,8 +362,15 @@ class Study:
         return path
 
     def run(self, cases=None):
-        """Every case in process, as ``rths.run(study)``: {"summary", "series", "units", ...}."""
-        return _rths.run(self.compile(), cases)
+        """Every case in process, as ``rths.run(study)``: {"summary", "series", "units",
+        "benchmark", ...}; "benchmark" holds J1-J9 per case ({name, value, unit, definition})
+        when the study has a benchmark section (``benchmark()``), else None. A case that diverged
+        or is diverging, and was not expected to (``expect_unstable``), is announced with
+        ``warnings.warn`` (RuntimeWarning) naming the case and the verdict; the result is returned
+        as it is."""
+        result = _rths.run(self.compile(), cases)
+        _warn_unexpected_divergence(self.name, result["summary"])
+        return result
 
     def launch(self, out, domain, cases=None, executable=None, timeout=None):
         """Every case (or the named ones) as separate processes over Cyclone DDS, as ``rths
@@ -249,6 +397,7 @@ class Study:
         with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
             summary = json.load(f)
         summary["exit_code"] = done.returncode
+        _warn_unexpected_divergence(self.name, summary)
         return summary
 
     def __repr__(self):

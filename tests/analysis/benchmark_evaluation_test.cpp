@@ -6,6 +6,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "core/study.h"
 
@@ -30,6 +34,90 @@ TEST(BenchmarkEvaluation, CaseOneMeetsThePublishedCriteria) {
     const double published = evaluation->published[static_cast<std::size_t>(j - 1)];
     EXPECT_NEAR(measured.J(j), published, kRelative * published) << "J" << j;
   }
+  // The case and the motion are the published ones: compared, and said so in every report.
+  EXPECT_TRUE(evaluation->published_motion_matches);
+  EXPECT_TRUE(evaluation->compared_with_published(evaluation->cases[0]));
+  const nlohmann::json json = benchmark_json(*evaluation);
+  const nlohmann::json& j5 = json["cases"][0]["criteria"][4];
+  EXPECT_EQ(j5["name"], "J5");
+  EXPECT_EQ(j5["unit"], "%");
+  EXPECT_DOUBLE_EQ(j5["value"].get<double>(), measured.J(5));
+  EXPECT_NE(j5["definition"].get<std::string>().find("max|x_m - d_ref|"), std::string::npos);
+  EXPECT_EQ(json["cases"][0]["criteria"][0]["unit"], "ms");
+  EXPECT_DOUBLE_EQ(json["cases"][0]["criteria"][0]["value"].get<double>(), measured.J(1) * 1e3);
+  EXPECT_EQ(json["published"]["criteria"][3]["value"], 36.1);
+  EXPECT_NEAR(json["cases"][0]["vs_published"][4]["value"].get<double>(),
+              100.0 * (measured.J(5) - 19.0) / 19.0, 1e-9);
+  EXPECT_FALSE(json.contains("units"));
+  std::cout << benchmark_table(*evaluation);
+}
+
+// The table's columns line up: the published row, each case and the header have their cells
+// under the same header, one unit per column.
+TEST(BenchmarkEvaluation, TheTableIsAlignedWithOneUnitPerColumn) {
+  BenchmarkEvaluation e;
+  e.published = {4.6, 10.4, 11.5, 36.1, 19.0, 32.3, 32.4, 14.8, 14.8};
+  e.published_case = "sample_controller";
+  e.published_source = "Silva et al. 2020, Table 3, case 1, El Centro";
+  e.published_motion_matches = true;
+  e.dt = 1.0 / 4096;
+  e.j1_search = 49 * e.dt;
+  core::BenchmarkCriteria c;
+  c.j = {0.0047, 9.9, 11.0, 34.6, 18.1, 31.0, 31.2, 14.2, 14.3};
+  e.cases = {{"sample_controller", c}, {"a_compensated_case_with_a_long_name", c}};
+  const std::string table = benchmark_table(e);
+  std::istringstream lines(table);
+  std::vector<std::string> block;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("case ", 0) == 0 || line.rfind("published (", 0) == 0 ||
+        line.rfind("sample_controller ", 0) == 0 || line.rfind("a_compensated", 0) == 0)
+      block.push_back(line);
+  }
+  ASSERT_GE(block.size(), 4u) << table;
+  // Right-aligned numbers: every line of the first table ends at its header's end, and J1's
+  // column ends at the same place in each.
+  const std::size_t j1_end = block[0].find("J1 (ms)") + std::string("J1 (ms)").size();
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(block[i].size(), block[0].size()) << table;
+    EXPECT_NE(block[i][j1_end - 1], ' ') << block[i];
+    EXPECT_TRUE(j1_end == block[i].size() || block[i][j1_end] == ' ') << block[i];
+  }
+  EXPECT_NE(table.find("J1 diff (ms)"), std::string::npos) << table;
+  EXPECT_NE(table.find("J5 rel (%)"), std::string::npos) << table;
+  EXPECT_NE(table.find("no published value for a_compensated_case_with_a_long_name"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("J6 (%)   100 std(u_i - u_ref,i)"), std::string::npos) << table;
+  const nlohmann::json json = benchmark_json(e);
+  EXPECT_FALSE(json["cases"][0]["vs_published"].is_null());
+  EXPECT_TRUE(json["cases"][1]["vs_published"].is_null());
+}
+
+// The published values belong to El Centro at 40 %: a run on another motion has none, and says so.
+TEST(BenchmarkEvaluation, AnotherMotionHasNoPublishedValue) {
+  const std::filesystem::path config =
+      std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
+  config::Study study = core::load_study(config);
+  study.mutable_motion()->set_path("kobe.txt");
+  study.mutable_motion()->set_duration(4.0);
+  const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+  const std::optional<BenchmarkEvaluation> evaluation =
+      evaluate_benchmark(prepared, run_study(prepared, {}));
+  ASSERT_TRUE(evaluation.has_value());
+  EXPECT_FALSE(evaluation->published_motion_matches);
+  EXPECT_FALSE(evaluation->compared_with_published(evaluation->cases.at(0)));
+  const std::string table = benchmark_table(*evaluation);
+  EXPECT_EQ(table.find("rel (%)"), std::string::npos) << table;
+  EXPECT_NE(table.find("no published value: this run's motion (kobe.txt) is not the one"),
+            std::string::npos)
+      << table;
+  const nlohmann::json json = benchmark_json(*evaluation);
+  EXPECT_TRUE(json["cases"][0]["vs_published"].is_null());
+  EXPECT_FALSE(json["published"]["motion_matches"].get<bool>());
+  // The same motion cut short is not the published one either.
+  study.mutable_motion()->set_path("el_centro.txt");
+  const core::PreparedStudy cut = core::prepare_study(study, config.parent_path());
+  EXPECT_FALSE(evaluate_benchmark(cut, run_study(cut, {}))->published_motion_matches);
 }
 
 // rths's compensators in front of the sample controller (configs/benchmark/case_1_compensated):
@@ -46,6 +134,10 @@ TEST(BenchmarkEvaluation, CompensatorsInFrontOfTheSampleControllerReachTheNoiseF
   ASSERT_TRUE(evaluation.has_value());
   ASSERT_EQ(evaluation->cases.size(), 4u);
   EXPECT_GT(evaluation->cases[0].criteria.J(2), 10.0);  // the sample controller alone
+  // Cut to 20 s, the motion is not the published one: no case is compared with Table 3.
+  EXPECT_FALSE(evaluation->published_motion_matches);
+  for (const BenchmarkCaseCriteria& c : evaluation->cases)
+    EXPECT_FALSE(evaluation->compared_with_published(c)) << c.name;
   for (std::size_t c = 1; c < evaluation->cases.size(); ++c) {
     const core::BenchmarkCriteria& j = evaluation->cases[c].criteria;
     EXPECT_LT(std::abs(j.J(1)), 1.0 / 4096) << evaluation->cases[c].name;

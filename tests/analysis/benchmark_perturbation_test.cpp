@@ -80,7 +80,9 @@ TEST(BenchmarkPerturbation, SpreadIsMeanAndSampleStdWithJ1InMilliseconds) {
   EXPECT_NEAR(spread[0].std[3], std::sqrt(8.0), 1e-12);
   EXPECT_EQ(spread[0].std[2], 0.0);
   EXPECT_NE(spread_table(spread, 4).find("pi: 2 draws (seed 4)"), std::string::npos);
-  EXPECT_EQ(spread_json(spread, 4)["cases"][0]["mean"][1], 11.0);
+  EXPECT_EQ(spread_json(spread, 4)["cases"][0]["criteria"][1]["mean"], 11.0);
+  EXPECT_EQ(spread_json(spread, 4)["cases"][0]["criteria"][1]["name"], "J2");
+  EXPECT_EQ(spread_json(spread, 4)["cases"][0]["criteria"][0]["unit"], "ms");
 }
 
 }  // namespace

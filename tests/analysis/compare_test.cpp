@@ -37,6 +37,24 @@ TEST(Compare, NrmseIsAPercentageOfTheCoreMeasure) {
   EXPECT_EQ(c.to_json().at("nrmse_pct"), c.nrmse_pct);
 }
 
+// The errors a summary leads with: against the reference's own peak and RMS, over the steps both
+// have; a case shorter than its reference does not cover it.
+TEST(Compare, PeakAndRmsErrorsAgainstTheReferencesOwnAndTheStepsCovered) {
+  const std::vector<double> reference = {0.0, 2.0, -4.0, 2.0};
+  const std::vector<double> lagged = {0.0, 2.5, -4.0, 1.5};
+  const Comparison c = compare(reference, lagged, false);
+  EXPECT_DOUBLE_EQ(c.peak_error_pct, 12.5);
+  EXPECT_DOUBLE_EQ(c.rms_error_pct, 100.0 * std::sqrt(0.5 / 24.0));
+  EXPECT_EQ(c.reference_steps, 4u);
+  EXPECT_TRUE(c.covers_reference());
+  EXPECT_EQ(c.to_json().at("peak_error_pct"), c.peak_error_pct);
+  const Comparison held = compare(reference, std::vector<double>{0.0, 2.0}, true);
+  EXPECT_FALSE(held.covers_reference());
+  EXPECT_EQ(held.steps_compared, 2u);
+  EXPECT_DOUBLE_EQ(held.peak_error_pct,
+                   0.0);  // over its two steps: a report must not show it alone
+}
+
 TEST(Compare, GrowthPastTheReferenceOrAnEarlyStopIsDivergence) {
   const std::vector<double> reference = {0.0, 0.01, -0.01, 0.01};
   EXPECT_TRUE(compare(reference, std::vector<double>{0.0, 0.02, -0.5, 2.0}, false).diverged);

@@ -8,6 +8,8 @@
 #include <iterator>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "tests/support/run_command_line.h"
 
 namespace {
@@ -94,8 +96,80 @@ TEST(MatrixStructureCli, BenchmarkCasePrintsItsCriteriaBesideThePublishedOnes) {
                      " --no-plots --out " + out.string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
   EXPECT_NE(o.output.find("published (sample_controller)"), std::string::npos) << o.output;
-  EXPECT_NE(o.output.find("vs published"), std::string::npos);
-  EXPECT_TRUE(std::filesystem::exists(out / "benchmark.json"));
+  EXPECT_NE(o.output.find("against the published values"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("J1 diff (ms)"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("J4 (%)   100 std(x_m - d_ref) / std(d_ref)"), std::string::npos)
+      << o.output;
+  std::ifstream in(out / "benchmark.json");
+  const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"name\": \"J9\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"definition\""), std::string::npos) << json;
+  EXPECT_EQ(json.find("J2-J9 %"), std::string::npos) << json;
+}
+
+// `rths stability --study` on a compensated loop of several DOFs gives the verdict `rths run` gives
+// before the run, by the modal approximation, stated as such (it used to refuse any non-SDOF).
+TEST(MatrixStructureCli, StabilityOfACompensatedLoopOnSeveralDofsIsModal) {
+  const auto path = scratch() / "frame3_poly.textproto";
+  std::ofstream(path)
+      << "name: \"frame3\" structure { matrices { "
+         "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
+         "stiffness { rows: 3 values: [4e6, -2e6, 0, -2e6, 3.5e6, -1.5e6, 0, -1.5e6, 1.5e6] } "
+         "damping { rows: 3 values: [2275.816349, -809.9103853, 0, -809.9103853, 2073.338753, "
+         "-607.432789, 0, -607.432789, 1132.229252] } } }\n"
+      << "motion { path: \"" << kMotion << "\" }\n"
+      << "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+         "substructuring { experimental_dofs { dof: 1 stiffness: 0.5e6 } }\n"
+         "cases { name: \"reference\" } cases { name: \"poly\" delay { shift { delay: 0.010 } } "
+         "compensation { polynomial { order: 2 lead: 0.010 spacing: 0.001 } } }\n";
+  const auto o = run("stability --study " + path.string() + " --case poly --json");
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto j = nlohmann::json::parse(o.output.substr(o.output.find('{')));
+  EXPECT_EQ(j["input"]["dofs"], 3);
+  EXPECT_TRUE(j["compensated_loop"]["analysed"].get<bool>()) << o.output;
+  EXPECT_TRUE(j["compensated_loop"]["stable"].get<bool>()) << o.output;
+  EXPECT_NE(j["compensated_loop"]["verdict"].get<std::string>().find("modal approximation"),
+            std::string::npos)
+      << o.output;
+  // Beside it, the uncompensated 10 ms: past the frame's 8.54 ms.
+  EXPECT_NE(j["compensated_loop"]["verdict"].get<std::string>().find(
+                "uncompensated, lag 10 ms against a critical delay of 8.54 ms"),
+            std::string::npos)
+      << o.output;
+}
+
+// `rths run --help` names and defines the criteria a benchmark study is judged by.
+TEST(MatrixStructureCli, RunHelpDefinesTheBenchmarkCriteria) {
+  const auto o = run("run --help");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  for (const char* text : {"J1 (ms)", "J2 (%)   100 std(x_m - x_t) / std(x_t)", "J9 (%)"})
+    EXPECT_NE(o.output.find(text), std::string::npos) << text << "\n" << o.output;
+}
+
+// Issue 39's 3-DOF frame with 10 ms of lag, 17 % past its 8.54 ms critical delay: its envelope
+// grows to the end of the record while its peak stays under 10x the lag-free run's. `rths run`
+// reports it diverging with its growth rate and exits 1; --allow-unstable exits 0.
+TEST(MatrixStructureCli, AFramePastItsCriticalDelayThatGrowsIsDivergingAndExitsOne) {
+  const auto path = scratch() / "frame3.textproto";
+  std::ofstream(path)
+      << "name: \"frame3\" structure { matrices { "
+         "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
+         "stiffness { rows: 3 values: [4e6, -2e6, 0, -2e6, 3.5e6, -1.5e6, 0, -1.5e6, 1.5e6] } "
+         "damping { rows: 3 values: [2275.816349, -809.9103853, 0, -809.9103853, 2073.338753, "
+         "-607.432789, 0, -607.432789, 1132.229252] } } }\n"
+      << "motion { path: \"" << kMotion << "\" }\n"
+      << "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+         "substructuring { experimental_dofs { dof: 1 stiffness: 0.5e6 } }\n"
+         "cases { name: \"reference\" } cases { name: \"lag_10ms\" delay { shift { delay: 0.010 "
+         "} } }\n";
+  const auto out = scratch() / "frame3";
+  auto o = run("run " + path.string() + " --no-plots --out " + out.string());
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(o.output.find("diverging"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("doubling every"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("'lag_10ms' is diverging"), std::string::npos) << o.output;
+  o = run("run " + path.string() + " --no-plots --allow-unstable --out " + out.string());
+  EXPECT_EQ(o.exit_code, 0) << o.output;
 }
 
 // --perturbed N: N seeded perturbed-plant draws (case 1 cut to 6 s), J as mean +- std; the same
@@ -122,6 +196,19 @@ TEST(MatrixStructureCli, PerturbedPlantsReportMeanAndSpreadOfTheCriteria) {
   std::ifstream json_a(dir / "a" / "benchmark_perturbed.json");
   const std::string a((std::istreambuf_iterator<char>(json_a)), std::istreambuf_iterator<char>());
   EXPECT_NE(a.find("\"draws\": 3"), std::string::npos) << a;
+  // Every draw is kept: one row each, the plant drawn and every criterion named with its unit.
+  std::ifstream csv(dir / "a" / "benchmark_perturbed.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("draw,beta1,beta2_1_per_s,a3_1_per_s,k_e_N_per_m,sample_controller_J1_ms,"
+                         "sample_controller_J2_pct,",
+                         0),
+            0u)
+      << header;
+  int rows = 0;
+  while (std::getline(csv, line))
+    if (!line.empty()) ++rows;
+  EXPECT_EQ(rows, 3);
   const auto second = run(command + (dir / "b").string());
   ASSERT_EQ(second.exit_code, 0) << second.output;
   std::ifstream json_b(dir / "b" / "benchmark_perturbed.json");

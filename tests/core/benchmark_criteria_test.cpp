@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 #include <vector>
 
 namespace rths::core {
@@ -70,6 +71,26 @@ TEST(BenchmarkCriteria, SingleFloorHasNoOtherFloorCriteria) {
   for (int j = 6; j <= 9; ++j) EXPECT_TRUE(std::isnan(c.J(j))) << "J" << j;
   EXPECT_NE(format_criteria(c).find("J6 n/a"), std::string::npos);
   EXPECT_THROW(benchmark_criteria(x, x, response, reference, 1, kDt, 0.01), std::invalid_argument);
+}
+
+// Every criterion is named with its unit and a definition, in order, so that no report has to
+// number an unnamed array; J1 is reported in ms.
+TEST(BenchmarkCriteria, EveryCriterionIsNamedWithItsUnitAndDefinition) {
+  const auto& definitions = criterion_definitions();
+  for (int i = 0; i < 9; ++i) {
+    const CriterionDefinition& d = definitions[static_cast<std::size_t>(i)];
+    EXPECT_EQ(std::string(d.name), "J" + std::to_string(i + 1));
+    EXPECT_EQ(std::string(d.unit), i == 0 ? "ms" : "%");
+    EXPECT_GT(std::string(d.definition).size(), 10u) << d.name;
+  }
+  BenchmarkCriteria c;
+  c.j = {0.0046, 10.4, 11.5, 36.1, 19.0, 32.3, 32.4, 14.8, 14.8};
+  EXPECT_DOUBLE_EQ(reported_value(c, 1), 4.6);
+  EXPECT_DOUBLE_EQ(reported_value(c, 5), 19.0);
+  const std::string glossary = criteria_glossary();
+  for (int i = 1; i <= 9; ++i)
+    EXPECT_NE(glossary.find("J" + std::to_string(i) + " ("), std::string::npos) << glossary;
+  EXPECT_NE(glossary.find("std(x_m - x_t) / std(x_t)"), std::string::npos) << glossary;
 }
 
 }  // namespace

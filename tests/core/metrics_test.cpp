@@ -24,6 +24,30 @@ TEST(Median, TextbookMiddleOrMeanOfTheTwoMiddle) {
   EXPECT_THROW(median({}), std::invalid_argument);
 }
 
+TEST(RelativeErrors, AgainstTheReferencesOwnPeakAndRms) {
+  const std::vector<double> reference = {0.0, 2.0, -4.0, 2.0};
+  const std::vector<double> compared = {0.0, 2.5, -4.0, 1.5};
+  EXPECT_DOUBLE_EQ(relative_peak_error_pct(reference, compared), 100.0 * 0.5 / 4.0);
+  EXPECT_DOUBLE_EQ(relative_rms_error_pct(reference, compared),
+                   100.0 * std::sqrt(0.5 / 24.0));  // sum e^2 = 0.5, sum u_ref^2 = 24
+  EXPECT_THROW(relative_peak_error_pct(reference, std::vector<double>{1.0}), std::invalid_argument);
+}
+
+// A record that ends in long near-zero motion makes the median-normalised NRMSE explode; the
+// errors against the reference's peak and RMS stay what the curves show: a miss of 4 % of the
+// peak everywhere reads at most 5 %.
+TEST(RelativeErrors, AQuietTailDoesNotInflateThem) {
+  std::vector<double> reference, compared;
+  for (int k = 0; k < 4000; ++k) {
+    const double strong = k < 1000 ? std::sin(0.05 * k) : 1e-4 * std::sin(0.05 * k);
+    reference.push_back(strong);
+    compared.push_back(strong + 0.04 * (k < 1000 ? std::cos(0.05 * k) : 0.0));
+  }
+  EXPECT_GT(100.0 * nrmse(reference, compared), 100.0);
+  EXPECT_LE(relative_peak_error_pct(reference, compared), 5.0 + 1e-9);
+  EXPECT_LE(relative_rms_error_pct(reference, compared), 5.0 + 1e-9);
+}
+
 TEST(GrewPastReference, OrderOfMagnitudeOrNotFinite) {
   EXPECT_FALSE(grew_past_reference(0.0136, 0.05));  // 3.7x: a lagged but stable response
   EXPECT_TRUE(grew_past_reference(0.0136, 2.229));  // sdof --delay 0.01 at alpha = 1: 164x

@@ -5,6 +5,7 @@ import json
 import os
 import re
 import subprocess
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -101,6 +102,70 @@ def test_bad_input_is_named_before_anything_runs():
         rths.Study("x").sdof(0.5).case("a").text
     with pytest.raises(rths.BadInputError):
         rths.Study("x").sdof(0.5).motion("/nonexistent.AT2").case("a").run()
+
+
+# Issue 39's 3-DOF frame (SI), given as NumPy arrays with its experimental DOF.
+M3 = np.diag([1000.0, 1000.0, 800.0])
+K3 = np.array([[4e6, -2e6, 0], [-2e6, 3.5e6, -1.5e6], [0, -1.5e6, 1.5e6]])
+C3 = np.array([[2275.816349, -809.9103853, 0], [-809.9103853, 2073.338753, -607.432789],
+               [0, -607.432789, 1132.229252]])
+
+
+def frame3(name, *cases):
+    study = (rths.Study(name)
+             .matrices(M3, C3, K3)
+             .motion(MOTION)
+             .integrator("explicit-newmark", dt=0.001)
+             .experimental_dof(1, stiffness=0.5e6)
+             .case("reference"))
+    for case, delay in cases:
+        study.case(case, delay=delay)
+    return study
+
+
+def test_matrices_and_experimental_dofs_from_numpy_run_as_their_written_config(tmp_path):
+    study = frame3("frame3_matrices", ("lag_7ms", 0.007)).benchmark(experimental_dof=1)
+    assert "experimental_dofs { dof: 1" in study.text and "rows: 3" in study.text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a stable study warns of nothing
+        in_python = study.run()
+    config = study.write(tmp_path / "frame3.textproto")
+    subprocess.run([RTHS, "run", config, "--out", tmp_path / "out", "--no-plots"], check=True,
+                   capture_output=True, timeout=240)
+    on_cli = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert [c["peak_displacement_m"] for c in in_python["summary"]["cases"]] == \
+        [c["peak_displacement_m"] for c in on_cli["cases"]]
+    # J from Python, named: a 7 ms shift tracks 7 ms late (J1 within one step of 1 ms).
+    benchmark = in_python["benchmark"]
+    assert benchmark == json.loads((tmp_path / "out" / "benchmark.json").read_text())
+    j = {c["name"]: c["value"] for c in benchmark["cases"][0]["criteria"]}
+    assert benchmark["cases"][0]["name"] == "lag_7ms"
+    assert j["J1"] == pytest.approx(7.0, abs=1.0)
+    assert [c["unit"] for c in benchmark["cases"][0]["criteria"]] == ["ms"] + ["%"] * 8
+    assert [c["name"] for c in rths.Study.criteria()] == [f"J{i}" for i in range(1, 10)]
+    assert frame("no_benchmark").run()["benchmark"] is None
+
+
+def test_a_diverging_case_is_warned_with_its_verdict():
+    with pytest.warns(RuntimeWarning, match=r"case 'lag_10ms': diverging: .*doubling every"):
+        result = frame3("frame3_diverging", ("lag_10ms", 0.010)).run()
+    assert result["summary"]["cases"][1]["status"] == "diverging"
+    assert result["summary"]["cases"][1]["envelope_growth"]["rate_per_s"] > 0
+
+
+def test_a_wrong_type_is_a_type_error_naming_the_argument():
+    with pytest.raises(TypeError, match="structure_text: text must be a str.*numpy.ndarray"):
+        rths.Study("x").structure_text(np.eye(2))
+    with pytest.raises(TypeError, match=r"sdof: period \(s\): expected a number, got str"):
+        rths.Study("x").sdof(period="0.5")
+    with pytest.raises(TypeError, match=r"matrices: M \(kg\): expected a 2-D array"):
+        rths.Study("x").matrices("M", C3, K3)
+    with pytest.raises(TypeError, match=r"matrices: K \(N/m\)"):
+        rths.Study("x").matrices(M3, C3, [["a", "b", "c"]] * 3)
+    with pytest.raises(TypeError, match="experimental_dof: dof must be an int"):
+        rths.Study("x").experimental_dof(1.5, stiffness=1e6)
+    with pytest.raises(rths.BadInputError, match=r"matrices: C \(N s/m\): 2 x 2, the structure has 3"):
+        rths.Study("x").matrices(M3, np.eye(2), K3)
 
 
 def test_every_public_function_has_a_docstring():

@@ -1,4 +1,4 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 70-72 and 18).
+// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74 and 18).
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -133,6 +133,39 @@ TEST(Launch, ComparesEveryCaseWithTheLagFreeInProcessReference) {
   const double in_process_nrmse = run_json["cases"][1]["nrmse_pct"].get<double>();
   EXPECT_GT(launched_nrmse, 1.0);
   EXPECT_NEAR(launched_nrmse, in_process_nrmse, 1e-9 * in_process_nrmse);
+}
+
+// A benchmark study gets J1-J9 after `rths launch` as after `rths run`: the benchmark's case 1 cut
+// to 7 s (lockstep, domain 74), its sample controller's criteria equal to the in-process run's,
+// each named, and no published value (the cut motion is not the published one).
+TEST(Launch, ComputesTheBenchmarkCriteriaAsRunDoes) {
+  const auto dir = test::scratch_dir("launch_benchmark");
+  const std::filesystem::path source = std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark";
+  for (const char* file : {"case_1.mat", "el_centro.txt"})
+    std::filesystem::copy_file(source / file, dir / file,
+                               std::filesystem::copy_options::overwrite_existing);
+  std::string text = test::read_file(source / "case_1.textproto");
+  const std::string scale = "scale: 0.4 }";
+  text.replace(text.find(scale), scale.size(), "scale: 0.4 duration: 7 }");
+  text += "deployment { domain_id: 74 }\n";
+  const auto config = test::write_config(dir, text);
+  const Output launched = run(kRths + " launch " + config.string() + " --no-plots --bin-dir " +
+                              RTHS_BINARY_DIR + " --out " + (dir / "launch").string());
+  ASSERT_EQ(launched.code, 0) << launched.out;
+  EXPECT_NE(launched.out.find("J5 (%)"), std::string::npos) << launched.out;
+  const Output in_process =
+      run(kRths + " run " + config.string() + " --no-plots --json --out " + (dir / "run").string());
+  ASSERT_EQ(in_process.code, 0) << in_process.out;
+  const auto read = [](const std::filesystem::path& file) {
+    return nlohmann::json::parse(test::read_file(file));
+  };
+  const auto distributed = read(dir / "launch" / "benchmark.json");
+  const auto local = read(dir / "run" / "benchmark.json");
+  ASSERT_EQ(distributed["cases"].size(), 1u);  // the study's reference case is not judged
+  EXPECT_EQ(distributed["cases"][0]["name"], "sample_controller");
+  EXPECT_EQ(distributed["cases"][0]["criteria"], local["cases"][0]["criteria"]);
+  EXPECT_EQ(distributed["cases"][0]["criteria"][3]["name"], "J4");
+  EXPECT_TRUE(distributed["cases"][0]["vs_published"].is_null());
 }
 
 TEST(Launch, RunIdsHaveOneFormat) {

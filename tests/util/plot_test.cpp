@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <regex>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <unistd.h>
 
@@ -47,6 +49,90 @@ TEST(Plot, RunsAScriptAsGivenAndNamesTheFigureWhenGnuplotFails) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("broken.png"), std::string::npos) << e.what();
   }
+  std::filesystem::remove_all(dir);
+}
+
+// Min/max decimation keeps every column's extent: a one-sample spike in a million points
+// survives, at most four points a column are kept, the ends are kept, a gap stays a gap.
+TEST(Plot, DecimationKeepsEveryPeakAndAtMostFourPointsAColumn) {
+  Series s{"long", {}, {}};
+  const std::size_t n = 1000000;
+  for (std::size_t k = 0; k < n; ++k) {
+    s.x.push_back(static_cast<double>(k) * 1e-4);
+    s.y.push_back(std::sin(0.001 * static_cast<double>(k)));
+  }
+  s.y[777777] = 50.0;   // a spike
+  s.y[123456] = -60.0;  // a dip
+  s.y[500000] = std::nan("");
+  const std::vector<std::size_t> kept = decimate_min_max(s, 0.0, 100.0, 1000);
+  EXPECT_LE(kept.size(), 4u * 1001u + 1u);
+  EXPECT_GT(kept.size(), 1000u);
+  const std::set<std::size_t> set(kept.begin(), kept.end());
+  for (std::size_t k :
+       {std::size_t{0}, n - 1, std::size_t{777777}, std::size_t{123456}, std::size_t{500000}})
+    EXPECT_EQ(set.count(k), 1u) << k;
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
+  // A zoom: the points outside collapse to one column each side, those inside keep their extent.
+  const std::vector<std::size_t> zoom = decimate_min_max(s, 77.0, 78.0, 100);
+  EXPECT_LE(zoom.size(), 4u * 103u + 1u);  // 100 columns, one each side, the gap splits one
+  EXPECT_EQ(std::set<std::size_t>(zoom.begin(), zoom.end()).count(777777), 1u);
+  // A loop (x not ascending) is kept whole.
+  const Series loop{"loop", {0, 1, 0, -1, 0}, {1, 0, -1, 0, 1}};
+  EXPECT_EQ(decimate_min_max(loop, -1.0, 1.0, 1).size(), 5u);
+  EXPECT_THROW(decimate_min_max(loop, 1.0, 1.0, 1), std::invalid_argument);
+}
+
+// A loop (force against displacement) is simplified in the panel's pixels: 100 turns of an ellipse
+// at 1000 points a turn keep a few percent of their points, a one-point spike stays, and no dropped
+// point is farther than the tolerance from the line drawn.
+TEST(Plot, ALoopIsSimplifiedWithinHalfAPixel) {
+  Series loop{"loop", {}, {}};
+  for (int k = 0; k < 100000; ++k) {
+    const double phase = 2.0 * 3.141592653589793 * k / 1000.0;
+    loop.x.push_back(std::cos(phase));
+    loop.y.push_back(0.5 * std::sin(phase + 0.3));
+  }
+  loop.y[54321] = 0.9;  // a spike
+  const std::vector<std::size_t> kept = simplify_path(loop, -1.0, 1.0, -1.0, 1.0, 1000, 340, 0.5);
+  EXPECT_LT(kept.size(), 100000u / 10u) << kept.size();
+  EXPECT_EQ(std::set<std::size_t>(kept.begin(), kept.end()).count(54321), 1u);
+  EXPECT_EQ(kept.front(), 0u);
+  EXPECT_EQ(kept.back(), 99999u);
+  const auto px = [&](std::size_t k) { return (loop.x[k] + 1.0) * 500.0; };
+  const auto py = [&](std::size_t k) { return (loop.y[k] + 1.0) * 170.0; };
+  double worst = 0.0;
+  for (std::size_t i = 0; i + 1 < kept.size(); ++i) {
+    const std::size_t a = kept[i], b = kept[i + 1];
+    const double dx = px(b) - px(a), dy = py(b) - py(a), length2 = dx * dx + dy * dy;
+    for (std::size_t k = a + 1; k < b; ++k) {
+      const double t = std::clamp(
+          length2 > 0 ? ((px(k) - px(a)) * dx + (py(k) - py(a)) * dy) / length2 : 0.0, 0.0, 1.0);
+      worst = std::max(worst, std::hypot(px(k) - px(a) - t * dx, py(k) - py(a) - t * dy));
+    }
+  }
+  EXPECT_LE(worst, 0.5);
+}
+
+// A figure is complete or absent: gnuplot failing on the plot leaves neither the PNG nor the SVG
+// (nor a partial file), where it used to leave an empty PNG.
+TEST(Plot, AFailedFigureLeavesNoFile) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_atomic_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  PlotSpec broken{"broken", "x", "y", {{"a", {0, 1, 2}, {0, 1, 4}, "no_such_style"}}};
+  EXPECT_THROW(write_png_panels({broken}, dir / "broken.png"), std::runtime_error);
+  EXPECT_TRUE(std::filesystem::is_empty(dir)) << "a failed figure left a file";
+  // A long series is drawn decimated, with its spike, into a complete pair of files.
+  PlotSpec long_one{"long", "t (s)", "y", {{"a", {}, {}}}};
+  for (int k = 0; k < 200000; ++k) {
+    long_one.series[0].x.push_back(k * 1e-3);
+    long_one.series[0].y.push_back(k == 150000 ? 123.0 : std::sin(k * 1e-2));
+  }
+  write_png_panels({long_one}, dir / "long.png");
+  EXPECT_GT(std::filesystem::file_size(dir / "long.png"), 1000u);
+  std::ifstream in(dir / "long.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_LT(svg.size(), 2000000u);  // 200 000 points would take several MB
   std::filesystem::remove_all(dir);
 }
 
