@@ -95,8 +95,7 @@ void Coordinator::State::write_header() {
   runtime::RunHeader& h = *entry.mutable_header();
   h.set_schema_version(runtime::kSchemaVersion);
   h.set_run_id(options.run_id);
-  // The record carries its inputs (motion as run, matrices, traces), so it reads anywhere.
-  *h.mutable_study() = core::with_embedded_inputs(prepared);
+  *h.mutable_study() = prepared.config;
   h.set_case_name(case_name);
   h.set_clock(real_time ? "real_time" : "lockstep");
   h.set_dt(setup.dt);
@@ -109,6 +108,11 @@ void Coordinator::State::write_header() {
       "include the clock offset between hosts");
   if (options.platform) *h.mutable_platform() = *options.platform;
   append_waiting(entry);
+  // The record carries its inputs (motion as run, matrices, traces) in an entry of their own, so
+  // it reads anywhere and a damaged inputs entry loses nothing else.
+  runtime::RecordEntry inputs;
+  *inputs.mutable_inputs()->mutable_study() = core::with_embedded_inputs(prepared);
+  append_waiting(inputs);
 }
 
 void Coordinator::State::write_step(std::size_t k, const core::SimulationResult& result,

@@ -215,7 +215,7 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
                      const runtime::RunHeader& header, const runtime::RunMeasurements& m,
                      const RunIdentification& run) {
   ResidualInput input;
-  input.study = &header.study();
+  input.study = contents.study_as_run();
   input.case_name = header.case_name();
   input.clock = m.clock;
   input.base_dir = record.parent_path();
@@ -255,10 +255,10 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.record = record.string();
   out.clock = m.clock;
   out.case_name = m.case_name;
-  out.study = header.study();
+  out.study = *contents.study_as_run();
   out.steps = usable_steps(m.steps);
   out.held = held_note(contents, m, out.steps);
-  out.inputs = core::inputs_source(header.study(), record.parent_path());
+  out.inputs = core::inputs_source(out.study, record.parent_path());
   if (out.steps < kDefaultMinSamples) {
     bad(record, "steps",
         std::to_string(out.steps) + " usable steps, at least " +

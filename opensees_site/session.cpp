@@ -30,7 +30,9 @@ Session::Session(Connection& connection, const BasicMapping& mapping, SessionOpt
       a_(core::Vec::Zero(options_.dofs)) {}
 
 void Session::refuse(const std::string& why) const {
-  connection_.end();  // the client learns at once that no answer will come
+  // The connection ends now: a client that checks its reads learns at once that no answer will
+  // come. (OpenSees 3.8's TCP_Socket does not: it loops on a closed socket until stopped.)
+  connection_.end();
   throw coordinator::RunAborted(options_.client + ": " + why, options_.client);
 }
 

@@ -344,6 +344,12 @@ const RunFooter* RecordContents::footer() const {
   return nullptr;
 }
 
+const config::Study* RecordContents::study_as_run() const {
+  for (const RecordEntry& e : entries)
+    if (e.has_inputs()) return &e.inputs().study();
+  return header() ? &header()->study() : nullptr;
+}
+
 std::vector<const StepRecord*> RecordContents::steps() const {
   std::vector<const StepRecord*> out;
   for (const auto& e : entries)

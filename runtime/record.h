@@ -160,6 +160,9 @@ struct RecordContents {
   std::string warning;             // what the reader has to say: truncation, no checksums, losses
   const RunHeader* header() const;
   const RunFooter* footer() const;
+  // The study as run: the inputs entry's (every file it read embedded), else, for a record
+  // without one (older, or its inputs entry damaged), the header's; nullptr without a header.
+  const config::Study* study_as_run() const;
   std::vector<const StepRecord*> steps() const;
   bool lost_entries() const { return !losses.empty(); }
   // Step numbers missing from the intact steps, as closed ranges [first, last]: gaps in the

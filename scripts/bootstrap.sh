@@ -32,10 +32,12 @@ for p in "${packages[@]}"; do
 done
 if [ "$mode" = demo ]; then
   cat <<PLAN
-== rths demo: what it does (about 10 min on a quiet 2-core machine from nothing; measured 2026-11-26)
-   1. install ${#missing[@]} missing Debian packages (a few minutes, depending on the mirror)
-   2. build rths, its node programs and the Python module, without the tests (about 4 min)
-   3. run the studies, results in out/ (about 3 min):
+== rths demo: what it does, and how long it took from a fresh Debian 12 container on a 2-core VM
+   (2026-11-26): 15 min 45 s in all, with another build and the test suite running beside it;
+   the build needs about 12 CPU-minutes, so about 6 min on two free cores
+   1. install ${#missing[@]} missing Debian packages (and their dependencies; minutes, by the mirror)
+   2. build rths, its node programs and the Python module, without the tests
+   3. run the studies, results in out/ (1 min 43 s, on the same busy machine):
       - the source paper's frame in process and over DDS on loopback (lockstep: must equal)
       - its stability, the paper's Fig. 4 sweep and the network x actuator lag map
       - the identification of a real MTS actuator's record (data/measured), with its Bode plot

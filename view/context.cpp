@@ -82,23 +82,24 @@ core::GroundMotion recorded_motion(const runtime::RecordContents& contents) {
 void describe_record(Feed& feed, const runtime::RecordContents& contents,
                      const std::filesystem::path& base_dir) {
   const runtime::RunHeader& header = *contents.header();
+  const config::Study& study = *contents.study_as_run();
   const std::string note = contents.warning;
   std::string why;
   try {
-    describe(feed, core::prepare_study(header.study(), base_dir), header.case_name(), note,
-             ", inputs " + core::inputs_source(header.study(), base_dir));
+    describe(feed, core::prepare_study(study, base_dir), header.case_name(), note,
+             ", inputs " + core::inputs_source(study, base_dir));
     return;
   } catch (const std::exception& e) {
     why = e.what();
   }
   try {  // the study's motion file is not here: the record's steps carry the motion
     core::PreparedStudy prepared;
-    prepared.config = header.study();
+    prepared.config = study;
     prepared.base_dir = base_dir;
     prepared.motion = recorded_motion(contents);
     if (prepared.motion.acceleration.size() < 2)
       throw std::invalid_argument("the record has too few steps to carry the motion");
-    prepared.base = core::base_setup(header.study(), header.dt(), base_dir);
+    prepared.base = core::base_setup(study, header.dt(), base_dir);
     describe(feed, prepared, header.case_name(), note,
              ", over the motion of the record's " +
                  std::to_string(prepared.motion.acceleration.size()) + " steps (" + why + ")");

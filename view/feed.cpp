@@ -50,7 +50,9 @@ void Feed::add(const runtime::RecordEntry& entry) {
     on_event(entry.event());
   else if (entry.has_footer())
     on_footer(entry.footer());
-  else
+  else if (entry.has_inputs()) {
+    // the run's inputs: the context (view/context.h) reads them; the page has no use for them
+  } else
     ++unreadable_;  // a step before any header cannot be drawn
   changed();
 }

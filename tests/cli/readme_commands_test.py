@@ -199,7 +199,9 @@ def run_all():
     if len(listed[0][1]) < 8:
         return [f"only {len(listed[0][1])} commands found in README.md: the extraction broke"]
     root, work = fresh_directory()
-    env = dict(os.environ, PATH=path_with_programs(), MPLBACKEND="Agg")
+    # `python3 -c "import rths"` as after the set-up, which installs the module: here the build's.
+    env = dict(os.environ, PATH=path_with_programs(), MPLBACKEND="Agg",
+               PYTHONPATH=os.path.join(BINARY, "python"))
     failures = length_failures() + link_failures() + help_failures(env)
     ran, skipped, total_started = 0, 0, time.monotonic()
     try:

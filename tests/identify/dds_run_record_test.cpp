@@ -45,10 +45,11 @@ fs::path launch_with_undeclared(const std::string& name, const std::string& node
                                 "lag_shift_14ms", domain);
   EXPECT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const fs::path record = run.dir / "run.rthsrec";
-  const config::Study declared =
-      test::prepare(test::paper_frame_study(duration, deployment("", ""))).config;
+  const core::PreparedStudy declared =
+      test::prepare(test::paper_frame_study(duration, deployment("", "")));
   test::rewrite(record, [&](runtime::RecordEntry& e) {
-    if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
+    if (e.has_header()) *e.mutable_header()->mutable_study() = declared.config;
+    if (e.has_inputs()) *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
   });
   return record;
 }

@@ -55,11 +55,12 @@ inline std::filesystem::path run_with_undeclared(const std::string& name,
   const auto outcome =
       coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
   EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
-  // The header declares the model without the effect, and carries its inputs as rths writes them.
-  const config::Study declared =
-      core::with_embedded_inputs(prepare(paper_frame_study(duration, kDeclared)));
+  // The header declares the model without the effect; the inputs entry carries it with the inputs
+  // as rths writes them.
+  const core::PreparedStudy declared = prepare(paper_frame_study(duration, kDeclared));
   rewrite(options.record, [&](runtime::RecordEntry& e) {
-    if (e.has_header()) *e.mutable_header()->mutable_study() = declared;
+    if (e.has_header()) *e.mutable_header()->mutable_study() = declared.config;
+    if (e.has_inputs()) *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
   });
   return options.record;
 }

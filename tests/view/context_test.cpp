@@ -77,9 +77,12 @@ TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
   ASSERT_TRUE(coordinator::run_in_process(prepared, options).ok);
   runtime::RecordContents contents = runtime::read_record(options.record);
   std::filesystem::remove(options.record);
-  auto& motion = *contents.entries.front().mutable_header()->mutable_study()->mutable_motion();
+  ASSERT_TRUE(contents.entries.at(1).has_inputs());  // right after the header
+  auto& motion = *contents.entries.at(1).mutable_inputs()->mutable_study()->mutable_motion();
   ASSERT_TRUE(motion.has_embedded());
   motion.set_path("moved_away.AT2");
+  contents.entries.front().mutable_header()->mutable_study()->mutable_motion()->set_path(
+      "moved_away.AT2");
   Feed feed;
   describe_record(feed, contents, std::filesystem::temp_directory_path());
   for (const auto& entry : contents.entries) feed.add(entry);
@@ -104,9 +107,10 @@ TEST(Context, AnOlderRecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCar
   std::filesystem::remove(options.record);
   ASSERT_TRUE(contents.entries.front().has_header());
   EXPECT_EQ(recorded_motion(contents).acceleration, prepared.motion.acceleration);
-  auto& motion = *contents.entries.front().mutable_header()->mutable_study()->mutable_motion();
-  motion.clear_embedded();  // as a record written before records carried their inputs
-  motion.set_path("moved_away.AT2");
+  // As a record written before records carried their inputs (or its inputs entry damaged).
+  contents.entries.erase(contents.entries.begin() + 1);
+  contents.entries.front().mutable_header()->mutable_study()->mutable_motion()->set_path(
+      "moved_away.AT2");
   Feed feed;
   describe_record(feed, contents, std::filesystem::temp_directory_path());
   for (const auto& entry : contents.entries) feed.add(entry);
