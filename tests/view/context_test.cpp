@@ -66,28 +66,41 @@ TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
   EXPECT_THROW(predict_case(prepared, "no_such_case"), std::invalid_argument);
 }
 
-// A record carries its inputs: its study's motion file gone, the prediction runs on the motion
-// embedded in its header, says so, and is the in-process run's, bit for bit.
-TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+// The paper frame's lag_shift_14ms run, recorded, read back and removed from disk.
+runtime::RecordContents recorded_paper_frame(const core::PreparedStudy& prepared,
+                                             const std::string& name) {
   coordinator::CoordinatorOptions options;
-  options.run_id = "view-record-embedded";
+  options.run_id = "view-record-" + name;
   options.case_name = "lag_shift_14ms";
-  options.record = record_path("embedded");
-  ASSERT_TRUE(coordinator::run_in_process(prepared, options).ok);
+  options.record = record_path(name);
+  const auto outcome = coordinator::run_in_process(prepared, options);
+  EXPECT_TRUE(outcome.ok) << outcome.status;
   runtime::RecordContents contents = runtime::read_record(options.record);
   std::filesystem::remove(options.record);
-  ASSERT_TRUE(contents.entries.at(1).has_inputs());  // right after the header
-  auto& motion = *contents.entries.at(1).mutable_inputs()->mutable_study()->mutable_motion();
-  ASSERT_TRUE(motion.has_embedded());
-  motion.set_path("moved_away.AT2");
+  return contents;
+}
+
+// The page's data after describing the record, its header's motion file renamed away.
+nlohmann::json described_away_from_its_motion(runtime::RecordContents& contents) {
   contents.entries.front().mutable_header()->mutable_study()->mutable_motion()->set_path(
       "moved_away.AT2");
   Feed feed;
   describe_record(feed, contents, std::filesystem::temp_directory_path());
   for (const auto& entry : contents.entries) feed.add(entry);
   FeedCursor cursor;
-  const auto j = feed.since(cursor);
+  return feed.since(cursor);
+}
+
+// A record carries its inputs: its study's motion file gone, the prediction runs on the motion
+// its inputs entry carries, says so, and is the in-process run's, bit for bit.
+TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  runtime::RecordContents contents = recorded_paper_frame(prepared, "embedded");
+  ASSERT_TRUE(contents.entries.at(1).has_inputs());  // right after the header
+  auto& motion = *contents.entries.at(1).mutable_inputs()->mutable_study()->mutable_motion();
+  ASSERT_TRUE(motion.has_embedded());
+  motion.set_path("moved_away.AT2");
+  const auto j = described_away_from_its_motion(contents);
   const std::string text = j["context"]["prediction"]["text"];
   EXPECT_NE(text.find("inputs embedded in the record"), std::string::npos) << text;
   EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
@@ -97,25 +110,12 @@ TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
 // carry the motion, and the prediction over them is the in-process run's, bit for bit.
 TEST(Context, AnOlderRecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCarry) {
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
-  coordinator::CoordinatorOptions options;
-  options.run_id = "view-record";
-  options.case_name = "lag_shift_14ms";
-  options.record = record_path("away");
-  const auto outcome = coordinator::run_in_process(prepared, options);
-  ASSERT_TRUE(outcome.ok) << outcome.status;
-  runtime::RecordContents contents = runtime::read_record(options.record);
-  std::filesystem::remove(options.record);
+  runtime::RecordContents contents = recorded_paper_frame(prepared, "away");
   ASSERT_TRUE(contents.entries.front().has_header());
   EXPECT_EQ(recorded_motion(contents).acceleration, prepared.motion.acceleration);
   // As a record written before records carried their inputs (or its inputs entry damaged).
   contents.entries.erase(contents.entries.begin() + 1);
-  contents.entries.front().mutable_header()->mutable_study()->mutable_motion()->set_path(
-      "moved_away.AT2");
-  Feed feed;
-  describe_record(feed, contents, std::filesystem::temp_directory_path());
-  for (const auto& entry : contents.entries) feed.add(entry);
-  FeedCursor cursor;
-  const auto j = feed.since(cursor);
+  const auto j = described_away_from_its_motion(contents);
   const std::string text = j["context"]["prediction"]["text"];
   const std::size_t steps = prepared.motion.acceleration.size();
   EXPECT_NE(text.find("over the motion of the record's " + std::to_string(steps) + " steps"),
