@@ -1,0 +1,258 @@
+// The study's figures (analysis/study_run.h: study_plot_files, write_study_plots): the paper's
+// Fig. 3, the force-displacement loops the integrator sees and the tracking of each actuator.
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <future>
+#include <sstream>
+
+#include "analysis/study_run.h"
+#include "core/metrics.h"
+#include "util/plot.h"
+
+namespace rths::analysis {
+
+std::vector<std::string> study_plot_files() {
+  return {"displacement.png",       "displacement.svg", "force_displacement.png",
+          "force_displacement.svg", "tracking.png",     "tracking.svg"};
+}
+
+namespace {
+
+// Start of the `window` seconds of the reference with the most energy (sum of u^2).
+double strongest_window_start(const std::vector<double>& u, double dt, double window) {
+  const std::size_t length =
+      std::min(u.size(), static_cast<std::size_t>(std::llround(window / dt)));
+  if (length == 0 || length >= u.size()) return 0.0;
+  double energy = 0.0;
+  for (std::size_t k = 0; k < length; ++k) energy += u[k] * u[k];
+  double best = energy;
+  std::size_t best_start = 0;
+  for (std::size_t start = 1; start + length <= u.size(); ++start) {
+    energy += u[start + length - 1] * u[start + length - 1] - u[start - 1] * u[start - 1];
+    if (energy > best) {
+      best = energy;
+      best_start = start;
+    }
+  }
+  return static_cast<double>(best_start) * dt;
+}
+
+}  // namespace
+
+namespace {
+
+// " (within X mm of NAME)" when case i's response stays within 5 % of its peak of an earlier
+// drawn case's, so that a reader told the curves overlap looks for both; else "".
+std::string coincides_with(const std::vector<const CaseOutcome*>& drawn, std::size_t i) {
+  const std::vector<double>& r = drawn[i]->response;
+  const double peak = core::peak_abs(r);
+  for (std::size_t j = 0; j < i; ++j) {
+    const CaseOutcome& other = *drawn[j];
+    if (other.diverged() || other.response.size() != r.size() || peak <= 0.0) continue;
+    double largest = 0.0;
+    for (std::size_t k = 0; k < r.size(); ++k)
+      largest = std::max(largest, std::abs(r[k] - other.response[k]));
+    if (largest > 0.05 * peak) continue;
+    char within[64];
+    std::snprintf(within, sizeof within, " (within %.2g mm of ", largest * 1e3);
+    std::string text = within;
+    text += other.name;
+    text += ')';
+    return text;
+  }
+  return "";
+}
+
+// The first actuator's measured force (kN) against its command (mm).
+util::Series force_loop(const CaseOutcome& c, const std::string& label, const std::string& style) {
+  util::Series loop{label, {}, {}, style};
+  for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
+    loop.x.push_back(c.simulation.command(k, 0) * 1e3);
+    loop.y.push_back(c.simulation.measured_force(k, 0) * 1e-3);
+  }
+  return loop;
+}
+
+// force_displacement.png: what the integrator sees of the experimental part, one panel per case
+// with the reference drawn over it, thin and dark. Without lag the reference's loop is a line
+// that every lagged case's ellipse would cover on a shared panel, and cases with near-equal
+// loops would cover each other. A diverged case has no loop worth drawing.
+void write_force_displacement(const std::string& study,
+                              const std::vector<const CaseOutcome*>& drawn,
+                              const CaseOutcome& reference, const std::filesystem::path& png) {
+  const auto has_loop = [](const CaseOutcome& c) {
+    return c.simulation.command.cols() > 0 && !c.diverged();
+  };
+  if (!has_loop(reference)) return;
+  const util::Series over =
+      force_loop(reference, reference.name + " (drawn over)", "lines lc rgb '#222222' dt 1 lw 1.2");
+  std::vector<util::PlotSpec> panels;
+  for (std::size_t i = 0; i < drawn.size(); ++i) {
+    const CaseOutcome& c = *drawn[i];
+    if (&c == &reference || !has_loop(c)) continue;
+    util::PlotSpec panel{
+        study + ": what the integrator sees, " + c.name + " against " + reference.name,
+        "commanded displacement (mm)", "measured force (kN)"};
+    panel.series = {
+        force_loop(c, c.name, "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw 2"), over};
+    panel.height = 340;
+    panels.push_back(std::move(panel));
+  }
+  // One scale on every panel, so that the loops compare at a glance.
+  std::vector<util::Series> all, swapped;
+  for (const util::PlotSpec& p : panels)
+    for (const util::Series& s : p.series) {
+      all.push_back(s);
+      swapped.push_back({s.title, s.y, s.x});
+    }
+  const auto y = util::padded_y_range(all, {}, 0.04), x = util::padded_y_range(swapped, {}, 0.04);
+  for (util::PlotSpec& p : panels) {
+    if (y) std::tie(p.y_min, p.y_max) = *y;
+    if (x) std::tie(p.x_min, p.x_max) = *x;
+  }
+  if (panels.empty()) {
+    util::PlotSpec alone{study + ": what the integrator sees (experimental part)",
+                         "commanded displacement (mm)", "measured force (kN)"};
+    alone.series = {force_loop(reference, reference.name, "lines lw 2")};
+    panels.push_back(std::move(alone));
+  }
+  util::write_png_panels(panels, png);
+}
+
+// tracking.png, the RTHS benchmark's tracking figure: per case that drives an actuator and stayed
+// bounded, x_t (the command of the first actuator) and x_m (what it measured there), mm, over the
+// record, then the same over `zoom` s from `zoom_start` (s), where the lag between them shows.
+// Nothing when no such case.
+void write_tracking(const std::string& study, const std::vector<const CaseOutcome*>& drawn,
+                    const CaseOutcome& reference, double zoom_start, double zoom,
+                    const std::filesystem::path& png) {
+  std::vector<util::PlotSpec> panels;
+  for (const CaseOutcome* c : drawn) {
+    if (c == &reference || c->diverged() || c->simulation.command.cols() == 0 ||
+        c->simulation.realised.cols() == 0)
+      continue;
+    util::PlotSpec whole{study + ": tracking of " + c->name + ", x_t (command) and x_m (measured)",
+                         "time (s)", "displacement at actuator 1 (mm)"};
+    util::Series target{"x_t, command", c->simulation.time, {}, "lines lw 2"};
+    util::Series measured{"x_m, measured", c->simulation.time, {}, "lines lw 1"};
+    for (Eigen::Index k = 0; k < c->simulation.command.rows(); ++k) {
+      target.y.push_back(c->simulation.command(k, 0) * 1e3);
+      measured.y.push_back(c->simulation.realised(k, 0) * 1e3);
+    }
+    target.x.resize(target.y.size());
+    measured.x.resize(measured.y.size());
+    whole.series = {target, measured};
+    util::PlotSpec close = whole;
+    char title[160];
+    std::snprintf(title, sizeof title, "zoom: %s over %g s at the reference's strongest",
+                  c->name.c_str(), zoom);
+    close.title = title;
+    close.x_min = zoom_start;
+    close.x_max = zoom_start + zoom;
+    // The zoom's y range follows what is in its window.
+    double lo = 0.0, hi = 0.0;
+    for (std::size_t k = 0; k < target.x.size(); ++k) {
+      if (target.x[k] < zoom_start || target.x[k] > zoom_start + zoom) continue;
+      lo = std::min({lo, target.y[k], measured.y[k]});
+      hi = std::max({hi, target.y[k], measured.y[k]});
+    }
+    if (hi > lo) {
+      close.y_min = lo - 0.08 * (hi - lo);
+      close.y_max = hi + 0.08 * (hi - lo);
+    }
+    whole.height = close.height = 340;
+    panels.push_back(std::move(whole));
+    panels.push_back(std::move(close));
+  }
+  if (!panels.empty()) util::write_png_panels(panels, png);
+}
+
+}  // namespace
+
+void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
+  std::filesystem::create_directories(directory);
+  const CaseOutcome& reference = outcome.reference();
+  const std::string response = outcome.response.describe();
+  util::PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case",
+                              "time (s)",
+                              "displacement (mm)",
+                              {}};
+  util::PlotSpec difference{"difference from the reference (" + reference.name + ")",
+                            "time (s)",
+                            "case - reference (mm)",
+                            {}};
+  std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
+  std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
+  if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
+  for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
+  for (std::size_t i = 0; i < drawn.size(); ++i) {
+    const CaseOutcome& c = *drawn[i];
+    const std::string label =
+        c.name + (c.diverged() ? " (" + c.status + ", clipped)" : coincides_with(drawn, i));
+    // Each case keeps its colour on every panel and is drawn thinner than the case before it, so
+    // that two cases whose responses coincide are both seen (solid: cairo draws a dashed line of
+    // 10^4 points very slowly).
+    const std::string style = "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw " +
+                              std::to_string(std::max(0.7, 3.0 - 0.8 * static_cast<double>(i)));
+    util::Series s{label, c.simulation.time, {}, style};
+    for (double u : c.response) s.y.push_back(u * 1e3);
+    if (!c.diverged()) bounded.push_back(displacement.series.size());
+    displacement.series.push_back(std::move(s));
+    if (&c != &reference) {
+      // The reference against itself is a zero line that says nothing: it is left out.
+      util::Series d{label, c.simulation.time, {}, style};
+      for (std::size_t k = 0; k < c.response.size() && k < reference.response.size(); ++k) {
+        d.y.push_back((c.response[k] - reference.response[k]) * 1e3);
+      }
+      if (!c.diverged()) bounded_difference.push_back(difference.series.size());
+      difference.series.push_back(std::move(d));
+    }
+  }
+  // A diverged case must not flatten the others: the axes follow the cases that stayed bounded.
+  if (const auto r = util::padded_y_range(displacement.series, bounded)) {
+    displacement.y_min = r->first;
+    displacement.y_max = r->second;
+  }
+  if (const auto r = util::padded_y_range(difference.series, bounded_difference)) {
+    difference.y_min = r->first;
+    difference.y_max = r->second;
+  }
+  util::PlotSpec zoom = displacement;
+  const double start = strongest_window_start(reference.response, reference.simulation.dt, 5.0);
+  zoom.title = "zoom: the strongest 5 s of the reference";
+  zoom.x_min = start;
+  zoom.x_max = start + 5.0;
+  std::vector<util::PlotSpec> panels = {displacement};
+  if (!difference.series.empty()) panels.push_back(difference);
+  panels.push_back(zoom);
+  for (util::PlotSpec& p : panels) p.height = 380;
+  // A stale tracking figure must not stay beside a study that has none.
+  std::filesystem::remove(directory / "tracking.png");
+  std::filesystem::remove(directory / "tracking.svg");
+  // The three figures are independent (each its own gnuplot and files): drawn at once, so their
+  // wall-clock time is the slowest one's where there are cores for them. Any failure is rethrown.
+  std::vector<std::future<void>> figures;
+  figures.push_back(std::async(
+      std::launch::async, [&] { util::write_png_panels(panels, directory / "displacement.png"); }));
+  figures.push_back(std::async(std::launch::async, [&] {
+    write_force_displacement(outcome.study_name, drawn, reference,
+                             directory / "force_displacement.png");
+  }));
+  figures.push_back(std::async(std::launch::async, [&] {
+    write_tracking(outcome.study_name, drawn, reference,
+                   strongest_window_start(reference.response, reference.simulation.dt, 1.0), 1.0,
+                   directory / "tracking.png");
+  }));
+  std::exception_ptr failure;
+  for (std::future<void>& figure : figures) {
+    try {
+      figure.get();
+    } catch (...) {
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
+}  // namespace rths::analysis

@@ -1,0 +1,205 @@
+// The study's summary as JSON and as text (analysis/study_run.h: error_measures_json,
+// study_summary_json, study_summary_text).
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include "analysis/study_run.h"
+#include "util/text_table.h"
+
+namespace rths::analysis {
+
+namespace {
+
+std::string ms(double seconds) {
+  std::ostringstream out;
+  out << std::setprecision(3) << seconds * 1e3 << " ms";
+  return out.str();
+}
+
+}  // namespace
+
+namespace {
+
+nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
+  if (!v) return nullptr;
+  return {{"analysed", v->analysed},
+          {"stable", v->analysed ? nlohmann::json(v->stable) : nlohmann::json()},
+          {"extra_delay_tolerated_s",
+           v->extra_delay_tolerated ? nlohmann::json(*v->extra_delay_tolerated) : nlohmann::json()},
+          {"verdict", v->text}};
+}
+
+nlohmann::json growth_json(const std::optional<core::EnvelopeGrowth>& g) {
+  if (!g) return nullptr;
+  return {{"grows", g->grows()},
+          {"rate_per_s", g->rate},
+          {"doubling_time_s", g->rate > 0.0 ? nlohmann::json(g->doubling_time) : nlohmann::json()},
+          {"r_squared", g->r_squared},
+          {"cycles", g->windows},
+          {"cycle_s", g->period},
+          {"span_s", g->span}};
+}
+
+}  // namespace
+
+nlohmann::json error_measures_json() {
+  return {{"peak_error_pct", kPeakErrorDefinition},
+          {"rms_error_pct", kRmsErrorDefinition},
+          {"peak_error_m", "max|u - u_ref| (m)"},
+          {"nrmse_pct",
+           "the paper's normalisation: 100 sqrt(mean (u - u_ref)^2) / median|u_ref| (%); a record "
+           "ending in near-zero motion has a tiny median and inflates it"},
+          {"paper_eq2_as_printed",
+           "the paper's Eq. 2 as printed: sqrt(sum (u - u_ref)^2) / N / "
+           "median|u_ref| (shrinks like 1/sqrt(N))"}};
+}
+
+nlohmann::json study_summary_json(const StudyOutcome& outcome) {
+  nlohmann::json cases = nlohmann::json::array();
+  for (const CaseOutcome& c : outcome.cases) {
+    nlohmann::json stability = nullptr;
+    if (c.stability) {
+      const auto& s = *c.stability;
+      const auto opt = [](const std::optional<double>& v) {
+        return v ? nlohmann::json(*v) : nlohmann::json();
+      };
+      stability = {
+          {"lag_s", s.lag},
+          {"continuous_critical_delay_s", opt(s.continuous)},
+          {"discrete_critical_delay_s", opt(s.discrete)},
+          {"discrete_check",
+           s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
+          {"critical_delay_s", opt(s.critical())},
+          {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
+          {"past_critical_delay", s.past()},
+          {"assumed", s.assumed}};
+    }
+    // A case that stopped early has no error over the steps it did not run: its errors are null,
+    // and those over the steps it covered are given apart, named as such.
+    const bool covers = c.comparison.covers_reference();
+    const auto whole = [covers](double v) { return covers ? nlohmann::json(v) : nlohmann::json(); };
+    const nlohmann::json covered =
+        covers ? nlohmann::json()
+               : nlohmann::json{{"steps", c.comparison.steps_compared},
+                                {"peak_error_pct", c.comparison.peak_error_pct},
+                                {"rms_error_pct", c.comparison.rms_error_pct},
+                                {"peak_error_m", c.comparison.peak_error_m}};
+    cases.push_back({{"name", c.name},
+                     {"delay", c.delay_description},
+                     {"nominal_delay_s", c.nominal_delay},
+                     {"status", c.status},
+                     {"status_detail", c.status_detail},
+                     {"expect_unstable", c.expect_unstable},
+                     {"stability", stability},
+                     {"compensated_loop", compensated_json(c.compensated)},
+                     {"envelope_growth", growth_json(c.growth)},
+                     {"peak_displacement_m", c.comparison.peak_m},
+                     {"peak_error_pct", whole(c.comparison.peak_error_pct)},
+                     {"rms_error_pct", whole(c.comparison.rms_error_pct)},
+                     {"peak_error_m", whole(c.comparison.peak_error_m)},
+                     {"paper_eq2_as_printed", whole(c.comparison.paper_eq2_as_printed)},
+                     {"nrmse_pct", whole(c.comparison.nrmse_pct)},
+                     {"steps_compared", c.comparison.steps_compared},
+                     {"reference_steps", c.comparison.reference_steps},
+                     {"errors_over_covered_steps", covered},
+                     {"diverged", c.diverged()},
+                     {"steps", c.simulation.steps()}});
+  }
+  return {{"study", outcome.study_name},
+          {"measures", error_measures_json()},
+          {"motion_units", outcome.motion_units},
+          {"response", outcome.response.describe()},
+          {"reference_case", outcome.reference().name},
+          {"reference", outcome.reference_description()},
+          {"lag_free_peak_m", outcome.lag_free_peak},
+          {"cases", cases}};
+}
+
+namespace {
+
+std::string fixed(double value, int decimals) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << value;
+  return out.str();
+}
+
+// The row of one case: errors of a response that grew without bound measure nothing (the JSON
+// keeps them), so a diverged case shows "-" there.
+// The margin cell: the lag's margin against the critical delay; for a compensated case, the
+// compensated loop's verdict in short (the lag it tolerates beyond its own, "unstable", or "n/a"
+// when it is not analysable), spelled out with the uncompensated margin below the table.
+std::string margin_cell(const CaseOutcome& c) {
+  if (c.compensated) {
+    const CompensatedVerdict& v = *c.compensated;
+    if (!v.analysed) return "n/a [comp.]";
+    if (!v.stable) return "unstable [comp.]";
+    if (!v.extra_delay_tolerated) return "stable";
+    std::string cell = "+";  // appended, not `"+" + ms(...)`: GCC 12 -O3 warns falsely on that
+    cell += ms(*v.extra_delay_tolerated);
+    return cell + " [comp.]";
+  }
+  if (c.stability && c.stability->critical()) return fixed(100.0 * c.stability->margin(), 1) + " %";
+  return "-";
+}
+
+// Errors only for a case that stayed bounded and covered the whole reference: a case that stopped
+// early has no error over the steps it did not run ("-", and a line below with the steps it did).
+std::vector<std::string> summary_row(const CaseOutcome& c) {
+  std::string critical = "-";
+  if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
+  const std::string margin = margin_cell(c);
+  const bool measured = !c.diverged() && c.comparison.covers_reference();
+  return {c.name,
+          c.delay_description,
+          fixed(c.comparison.peak_m * 1e3, 3),
+          measured ? fixed(c.comparison.peak_error_pct, 2) : "-",
+          measured ? fixed(c.comparison.rms_error_pct, 2) : "-",
+          measured ? fixed(c.comparison.peak_error_m * 1e3, 3) : "-",
+          critical,
+          margin,
+          c.status + (c.diverged() && c.expect_unstable ? " (expected)" : "")};
+}
+
+}  // namespace
+
+std::string study_summary_text(const StudyOutcome& outcome) {
+  std::ostringstream out;
+  out << "study: " << outcome.study_name << " (every case against "
+      << outcome.reference_description() << "; response: " << outcome.response.describe()
+      << " displacement; motion read in " << outcome.motion_units << ")\n";
+  using Align = util::TextTable::Align;
+  util::TextTable table({{"case", Align::kLeft, 40},
+                         {"delay", Align::kLeft, 28},
+                         {"peak (mm)", Align::kRight},
+                         {"E_peak (%)", Align::kRight},
+                         {"E_rms (%)", Align::kRight},
+                         {"peak err (mm)", Align::kRight},
+                         {"crit. delay", Align::kRight},
+                         {"margin", Align::kRight},
+                         {"status", Align::kLeft, 40}});
+  for (const CaseOutcome& c : outcome.cases) table.add_row(summary_row(c));
+  out << table.render();
+  out << "E_peak: " << kPeakErrorDefinition << "; E_rms: " << kRmsErrorDefinition
+      << "; the paper's median-normalised NRMSE and Eq. 2 are in summary.json\n";
+  for (const CaseOutcome& c : outcome.cases) {
+    if (c.diverged() || c.comparison.covers_reference()) continue;
+    out << c.name << ": stopped at step " << c.comparison.steps_compared << " of "
+        << c.comparison.reference_steps << ": no error over the steps it did not run; over its "
+        << c.comparison.steps_compared << " steps E_peak " << fixed(c.comparison.peak_error_pct, 2)
+        << " %, E_rms " << fixed(c.comparison.rms_error_pct, 2) << " %\n";
+  }
+  if (std::any_of(outcome.cases.begin(), outcome.cases.end(),
+                  [](const CaseOutcome& c) { return c.compensated.has_value(); }))
+    out << "margin [comp.]: the compensated loop's, as the lag it tolerates beyond its own (n/a: "
+           "not analysable before the run); each such case's line below gives it with the "
+           "uncompensated margin\n";
+  for (const CaseOutcome& c : outcome.cases) {
+    if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
+    if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace rths::analysis
