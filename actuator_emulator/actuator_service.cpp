@@ -6,7 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "runtime/plan.h"
+#include "runtime/node/plan.h"
 
 namespace rths::actuator_emulator {
 

@@ -29,7 +29,7 @@
 // command. Ticks and overruns go up in the heartbeat.
 
 #include "core/substructure.h"
-#include "runtime/node_service.h"
+#include "runtime/node/node_service.h"
 
 namespace rths::actuator_emulator {
 

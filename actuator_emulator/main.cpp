@@ -1,7 +1,7 @@
 // rths-actuator-emulator: delay stages + actuator + emulated specimen behind DDS.
-// See runtime/node_main.h.
+// See runtime/node/node_main.h.
 #include "actuator_emulator/actuator_service.h"
-#include "runtime/node_main.h"
+#include "runtime/node/node_main.h"
 
 int main(int argc, char** argv) {
   return rths::runtime::node_main(

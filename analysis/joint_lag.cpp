@@ -18,8 +18,9 @@
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/stability.h"
-#include "core/study.h"
-#include "core/text_format.h"
+#include "study/stability_config.h"
+#include "study/study.h"
+#include "study/text_format.h"
 #include "util/plot.h"
 
 namespace rths::analysis {

@@ -1,6 +1,6 @@
 #pragma once
 // The per-step columns of one or more runs: the names every command that writes a run's history
-// uses (run, sdof; written as CSV, MATLAB or HDF5 by tables::study_table / write_table).
+// uses (run, sdof; written as CSV, MATLAB or HDF5 by results::study_table / write_table).
 //
 // Columns, SI with the unit in every name (floors and actuators 1-based):
 //   step, time_s,

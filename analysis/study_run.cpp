@@ -12,6 +12,7 @@
 
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
+#include "study/stability_config.h"
 #include "util/atomic_file.h"
 
 namespace rths::analysis {

@@ -34,7 +34,7 @@
 #include "core/envelope_growth.h"
 #include "core/simulation.h"
 #include "core/stability.h"
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::analysis {
 
@@ -145,7 +145,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
                                   std::vector<RecordedCase> cases,
                                   const RunStudyOptions& options = {});
 
-// The results file (csv, mat, h5) is tables::study_table: analysis/results_csv.h columns.
+// The results file (csv, mat, h5) is results::study_table: analysis/results_csv.h columns.
 // displacement.png/.svg, three panels (mm): every case with the reference (the paper's Fig. 3),
 // each case minus the reference, and a zoom on the reference's strongest 5 s; the axes follow the
 // cases that stayed bounded (a diverged case is clipped and labelled). force_displacement.png/.svg:

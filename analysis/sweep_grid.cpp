@@ -11,8 +11,8 @@
 
 #include "analysis/sweep_internal.h"
 #include "core/integrators.h"
-#include "core/study.h"
 #include "core/substructure.h"
+#include "study/study.h"
 
 namespace rths::analysis {
 namespace {

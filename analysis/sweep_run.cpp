@@ -12,8 +12,8 @@
 #include "core/integrators.h"
 #include "core/simulation.h"
 #include "core/stability.h"
-#include "core/study.h"
 #include "core/substructure.h"
+#include "study/study.h"
 #include "util/parallel_for.h"
 
 namespace rths::analysis {

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::bench {
 

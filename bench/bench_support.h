@@ -23,9 +23,9 @@
 #include <vector>
 
 #include "coordinator/coordinator.h"
-#include "runtime/launch.h"
-#include "runtime/process.h"
+#include "runtime/launch/launch.h"
 #include "transport/dds_endpoint.h"
+#include "util/process.h"
 
 namespace rths::bench {
 
@@ -63,8 +63,8 @@ class DistributedRun {
   std::string run_id_;
   int domain_;
   config::Study study_;
-  std::unique_ptr<runtime::ScopedCpuExclude> off_loop_cpu_;
-  std::vector<runtime::ChildProcess> nodes_;
+  std::unique_ptr<util::ScopedCpuExclude> off_loop_cpu_;
+  std::vector<util::ChildProcess> nodes_;
   std::unique_ptr<transport::DdsEndpoint> endpoint_;
   std::unique_ptr<coordinator::Coordinator> coordinator_;
 };

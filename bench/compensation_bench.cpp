@@ -17,7 +17,7 @@
 #include "analysis/study_run.h"
 #include "core/benchmark_criteria.h"
 #include "core/compensation.h"
-#include "core/study.h"
+#include "study/study.h"
 #include "util/plot.h"
 
 namespace {

@@ -1,6 +1,6 @@
 // Fault trials (not a test). Runs N real-time runs of the paper's frame at 1024 Hz; in each, one
 // random process (coordinator, substructure node, actuator emulator) gets SIGKILL or SIGSTOP at a
-// random step. First it checks the platform once (platform/check.h, --platform-seconds) and prints
+// random step. First it checks the platform once (rt_check/check.h, --platform-seconds) and prints
 // the fail-safe window it recommends; the coordinators run with that check (--accept-platform, so
 // short windows can be tried). Prints per trial and in total:
 //   steps the coordinator integrated after the victim's last answer (target <= its window in
@@ -29,9 +29,9 @@
 #include <random>
 #include <vector>
 
-#include "platform/check.h"
-#include "runtime/lag.h"
-#include "runtime/plan.h"
+#include "rt_check/check.h"
+#include "runtime/node/lag.h"
+#include "runtime/node/plan.h"
 #include "tests/support/fault_trial.h"
 
 namespace {
@@ -176,11 +176,11 @@ struct CheckedPlatform {
 CheckedPlatform check_platform_once(const Setting& s, double platform_seconds) {
   config::Deployment deployment;
   deployment.set_clock(config::Deployment::REAL_TIME);
-  const platform::PlatformCheck check =
-      platform::check_platform(deployment, 1.0 / s.rate, s.seconds, platform_seconds);
-  std::printf("%s\n", platform::summary_text(check.summary).c_str());
+  const rt_check::PlatformCheck check =
+      rt_check::check_platform(deployment, 1.0 / s.rate, s.seconds, platform_seconds);
+  std::printf("%s\n", rt_check::summary_text(check.summary).c_str());
   const auto file = std::filesystem::temp_directory_path() / "rths_fault_trials_platform.json";
-  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(
+  std::ofstream(file) << nlohmann::json{{"platform", rt_check::summary_json(check.summary)}}.dump(
       2);
   return {file.string(), check.verdict.required_window_ms};
 }

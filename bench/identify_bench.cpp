@@ -22,8 +22,8 @@
 #include <string>
 #include <vector>
 
-#include "identify/data.h"
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
+#include "identify/model/data.h"
 
 namespace {
 

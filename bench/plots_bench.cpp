@@ -8,9 +8,9 @@
 #include <string>
 
 #include "analysis/study_run.h"
-#include "core/study.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "results/results.h"
+#include "results/write.h"
+#include "study/study.h"
 
 namespace {
 
@@ -28,7 +28,7 @@ void measure(const std::string& relative_config) {
   const core::PreparedStudy prepared =
       core::prepare_study(core::load_study(config), config.parent_path());
   const analysis::StudyOutcome outcome = analysis::run_study(prepared);
-  tables::write_table(tables::study_table(outcome), out / "results.csv", tables::Format::kCsv);
+  results::write_table(results::study_table(outcome), out / "results.csv", results::Format::kCsv);
   const double run = seconds_since(start);
   const auto plotting = std::chrono::steady_clock::now();
   analysis::write_study_plots(outcome, out);

@@ -35,13 +35,13 @@
 #include <thread>
 
 #include "bench/bench_support.h"
-#include "runtime/lag.h"
-#include "runtime/launch.h"
-#include "runtime/pacing.h"
-#include "runtime/process.h"
-#include "runtime/record.h"
-#include "runtime/schema.h"
+#include "runtime/launch/launch.h"
+#include "runtime/node/lag.h"
+#include "runtime/node/schema.h"
+#include "runtime/record/record.h"
+#include "runtime/rt/pacing.h"
 #include "transport/dds_endpoint.h"
+#include "util/process.h"
 
 namespace {
 
@@ -111,14 +111,14 @@ int echo_main(int domain, int node_id) {
 // Round trips to `peers` echo processes at once (a lockstep step talks to two nodes).
 // one_cpu: as distributed_run, so the step / round-trip ratio compares like with like.
 runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
-  std::unique_ptr<runtime::ScopedCpuPin> pin;
-  if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
+  std::unique_ptr<util::ScopedCpuPin> pin;
+  if (one_cpu) pin = std::make_unique<util::ScopedCpuPin>();
   transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
   for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
-  std::vector<runtime::ChildProcess> echoes;
+  std::vector<util::ChildProcess> echoes;
   for (int p = 1; p <= peers; ++p)
     echoes.emplace_back(
-        runtime::executable_dir() / "rths_runtime_bench",
+        util::executable_dir() / "rths_runtime_bench",
         std::vector<std::string>{"--echo", std::to_string(domain), "--echo-id", std::to_string(p)},
         "/tmp/rths_bench_echo.log");
   coordinator.wait_for_match(0, peers, 10000ms);
@@ -198,9 +198,9 @@ void command_path_rows(int domain, int repeat, double seconds, double hz) {
         {static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
     coordinator.set_inline_handler([](const transport::Message&) { return true; });
     for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
-    std::vector<runtime::ChildProcess> echoes;
+    std::vector<util::ChildProcess> echoes;
     for (int p = 1; p <= peers; ++p)
-      echoes.emplace_back(runtime::executable_dir() / "rths_runtime_bench",
+      echoes.emplace_back(util::executable_dir() / "rths_runtime_bench",
                           std::vector<std::string>{"--echo", std::to_string(domain), "--echo-id",
                                                    std::to_string(p)},
                           "/tmp/rths_bench_echo.log");
@@ -245,8 +245,8 @@ struct RunFigures {
 // `rths launch` places lockstep runs by default (runtime::CpuPlacement).
 RunFigures distributed_run(int domain, const std::string& text, const std::string& name,
                            NodeSet node_set = {}, bool one_cpu = false) {
-  std::unique_ptr<runtime::ScopedCpuPin> pin;
-  if (one_cpu) pin = std::make_unique<runtime::ScopedCpuPin>();
+  std::unique_ptr<util::ScopedCpuPin> pin;
+  if (one_cpu) pin = std::make_unique<util::ScopedCpuPin>();
   // The nodes start off the loop CPU, as `rths launch` starts them.
   bench::DistributedRun run({.directory = "rths_bench_" + name,
                              .run_id = "bench-" + name,

@@ -13,9 +13,9 @@
 #include <cstdio>
 #include <fstream>
 
-#include "runtime/lag.h"
-#include "runtime/launch.h"
-#include "runtime/record.h"
+#include "runtime/launch/launch.h"
+#include "runtime/node/lag.h"
+#include "runtime/record/record.h"
 #include "security/pki.h"
 
 namespace {

@@ -18,6 +18,7 @@
 #include "analysis/batch_kernel.h"
 #include "core/ground_motion.h"
 #include "core/structure.h"
+#include "study/motion_files.h"
 #include "util/parallel_for.h"
 
 namespace {

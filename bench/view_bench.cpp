@@ -43,11 +43,11 @@
 
 #include "bench/bench_support.h"
 #include "coordinator/coordinator.h"
-#include "runtime/launch.h"
-#include "runtime/measurements.h"
-#include "runtime/process.h"
-#include "runtime/record.h"
+#include "runtime/launch/launch.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
 #include "transport/dds_endpoint.h"
+#include "util/process.h"
 #include "view/context.h"
 #include "view/feed.h"
 #include "view/server.h"
@@ -193,7 +193,7 @@ std::thread rss_sampler(const Spec& spec, std::vector<std::pair<double, double>>
 struct View {
   view::Feed feed;
   std::unique_ptr<view::ViewServer> server;
-  std::optional<runtime::ChildProcess> chromium;
+  std::optional<util::ChildProcess> chromium;
   View(const core::PreparedStudy& prepared, const std::filesystem::path& dir, const Spec& spec) {
     view::describe_run(feed, prepared, "");
     view::ServerOptions loopback_any_port;
@@ -202,7 +202,7 @@ struct View {
     if (!spec.browser) return;
     const auto profile = dir / "chromium_profile";
     std::filesystem::remove_all(profile);
-    runtime::ChildOptions options;
+    util::ChildOptions options;
     if (spec.browser_cpu >= 0) options.prefix = {"taskset", "-c", std::to_string(spec.browser_cpu)};
     const std::string url = server->url() + (spec.page_query.empty() ? "" : "?" + spec.page_query);
     chromium.emplace(

@@ -1,5 +1,5 @@
 // rths export RECORD --csv OUT | --mat OUT | --h5 OUT: a run record (length-delimited protobuf)
-// to CSV, MATLAB or HDF5 (tables/results.h names the variables and units); several at once.
+// to CSV, MATLAB or HDF5 (results/results.h names the variables and units); several at once.
 // Every entry's checksum is verified (runtime::read_record). A damaged record is exported with
 // every intact entry (the reader resynchronises after each damaged region); what was lost (bytes,
 // step numbers) goes to stderr and to the outputs' attributes (integrity, lost_steps), and the
@@ -11,8 +11,8 @@
 #include <iostream>
 
 #include "cli/commands.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "results/results.h"
+#include "results/write.h"
 #include "util/distinct_paths.h"
 
 namespace rths::cli {
@@ -21,23 +21,23 @@ void add_export_command(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("export", "Turn a run record into CSV, MATLAB (.mat) or HDF5 (.h5)");
   auto record = std::make_shared<std::string>();
-  auto outputs = std::make_shared<std::map<tables::Format, std::string>>();
+  auto outputs = std::make_shared<std::map<results::Format, std::string>>();
   auto json = std::make_shared<bool>(false);
   cmd->add_option("record", *record, "run record (.rthsrec)")->required();
   auto* csv = cmd->add_option_function<std::string>(
-      "--csv", [outputs](const std::string& p) { (*outputs)[tables::Format::kCsv] = p; },
+      "--csv", [outputs](const std::string& p) { (*outputs)[results::Format::kCsv] = p; },
       "CSV file to write");
   auto* mat = cmd->add_option_function<std::string>(
-      "--mat", [outputs](const std::string& p) { (*outputs)[tables::Format::kMat] = p; },
+      "--mat", [outputs](const std::string& p) { (*outputs)[results::Format::kMat] = p; },
       "MATLAB 5 file to write (one variable per CSV column, units in the struct `units`)");
   auto* h5 = cmd->add_option_function<std::string>(
-      "--h5", [outputs](const std::string& p) { (*outputs)[tables::Format::kH5] = p; },
+      "--h5", [outputs](const std::string& p) { (*outputs)[results::Format::kH5] = p; },
       "HDF5 file to write (one dataset per CSV column, each with a `units` attribute)");
   cmd->callback([=] {
     if (csv->count() + mat->count() + h5->count() == 0)
       throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
     for (const auto& [format, path] : *outputs)
-      util::refuse_output_over_input({"--" + tables::extension(format).substr(1), path},
+      util::refuse_output_over_input({"--" + results::extension(format).substr(1), path},
                                      {{"record", *record}});
     runtime::RecordContents contents;
     try {
@@ -47,15 +47,15 @@ void add_export_command(CLI::App& app) {
     }
     if (!contents.warning.empty())
       std::cerr << "rths export: warning: " << contents.warning << "\n";
-    tables::Table table;
+    results::Table table;
     try {
-      table = tables::record_table(contents);
+      table = results::record_table(contents);
     } catch (const std::invalid_argument& e) {
       throw ExitError(kExitBadInput, *record + ": " + e.what());
     }
     for (const auto& [format, path] : *outputs) {
       try {
-        tables::write_table(table, path, format);
+        results::write_table(table, path, format);
       } catch (const std::exception& e) {
         throw ExitError(kExitEnvironment, e.what());
       }
@@ -72,7 +72,7 @@ void add_export_command(CLI::App& app) {
                        {"integrity", table.attributes().at("integrity")},
                        {"lost_steps", table.attributes().at("lost_steps")},
                        {"damaged_regions", contents.losses.size()}};
-      for (const auto& [format, path] : *outputs) j[tables::extension(format).substr(1)] = path;
+      for (const auto& [format, path] : *outputs) j[results::extension(format).substr(1)] = path;
       std::cout << j.dump(2) << "\n";
     } else {
       for (const auto& [format, path] : *outputs) {

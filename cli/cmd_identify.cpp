@@ -1,8 +1,8 @@
 // `rths identify`: measured lab data -> declared model -> residual -> missing effects -> refit,
 // with the error before and after on held-out data; optionally the identified actuator is put
 // back into a study config's simulation (--predict) to predict the test's error. The declared
-// model comes from flags or a file (--model, identify/declared_model.h); --out writes the
-// identified model back as such a file and as study-config parts (identify/study_config.h).
+// model comes from flags or a file (--model, identify/model/declared_model.h); --out writes the
+// identified model back as such a file and as study-config parts (identify/model/study_config.h).
 #include <unistd.h>
 
 #include <chrono>
@@ -15,20 +15,20 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "identify/run_config.h"
-#include "identify/run_record.h"
-#include "identify/run_report.h"
-#include "identify/session.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "identify/fit/request.h"
+#include "identify/lab/session.h"
+#include "identify/run/run_config.h"
+#include "identify/run/run_record.h"
+#include "identify/run/run_report.h"
+#include "results/results.h"
+#include "results/write.h"
 
 namespace rths::cli {
 namespace {
 
 struct IdentifyCliOptions {
   std::string data, column_map, time_unit = "s", length_unit = "mm", force_unit = "N";
-  std::string channels = "measured,force", declared_actuator = "delay",
-              declared_specimen = "stiffness", candidates, holdout_mode = "blocks";
+  identify::IdentifyRequest request;  // the identification's own options (identify/fit/request.h)
   std::string out, predict, design_compensator, validate, model;
   // Whether the declared-model flags were given on the command line (not just their defaults).
   bool actuator_flag_given = false, specimen_flag_given = false;
@@ -36,35 +36,14 @@ struct IdentifyCliOptions {
   std::string format = "csv";  // of <out>/identify.<ext>: the record and both models' predictions
   double design_dt = 0.001;
   std::size_t folds = 5;
-  double holdout = 0.3, min_improvement = 0.05, penalty = 0.01;
-  std::size_t blocks = 10, max_steps = 6, decimate = 0, search_samples = 12000;
-  double search_tolerance = 1e-6;
-  int search_iterations = 30;
   bool json = false, trim_idle = false;
 };
 
-std::vector<std::string> split_list(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    if (!item.empty() && item != "none") out.push_back(item);
-  }
-  return out;
-}
-
-std::vector<identify::Effect> effects_for(const std::string& list, identify::Channel channel,
-                                          const std::string& flag) {
-  std::vector<identify::Effect> out;
-  for (const auto& name : split_list(list)) {
-    const identify::Effect e = identify::parse_effect(name);
-    if (!identify::effect_applies(e, channel)) {
-      throw std::invalid_argument(flag + ": effect '" + name + "' does not apply to channel '" +
-                                  identify::channel_name(channel) + "'");
-    }
-    out.push_back(e);
-  }
-  return out;
+// "declared_actuator" -> "--declared-actuator": the flag of an IdentifyRequest field.
+std::string flag_name(const std::string& field) {
+  std::string flag = "--";
+  for (char ch : field) flag += ch == '_' ? '-' : ch;
+  return flag;
 }
 
 // Progress on stderr: the bar or one line per 10 % (cli/support.h), and what is being fitted
@@ -116,38 +95,11 @@ identify::SessionRequest session_request(const IdentifyCliOptions& o) {
   r.folds = o.folds;
   r.actuator_given = o.actuator_flag_given;
   r.specimen_given = o.specimen_flag_given;
-  identify::IdentifyOptions& options = r.options;
-  options.channels.clear();
-  for (const auto& name : split_list(o.channels)) {
-    if (name == "measured")
-      options.channels.push_back(identify::Channel::kMeasured);
-    else if (name == "force")
-      options.channels.push_back(identify::Channel::kForce);
-    else
-      throw std::invalid_argument("--channels: unknown channel '" + name + "' (measured, force)");
-  }
-  if (options.channels.empty()) throw std::invalid_argument("--channels: no channel given");
-  options.declared_actuator =
-      effects_for(o.declared_actuator, identify::Channel::kMeasured, "--declared-actuator");
-  options.declared_specimen =
-      effects_for(o.declared_specimen, identify::Channel::kForce, "--declared-specimen");
-  for (const auto& name : split_list(o.candidates)) {
-    options.selection.candidates.push_back(identify::parse_effect(name));
-  }
-  options.holdout_fraction = o.holdout;
-  options.holdout_mode = identify::parse_holdout_mode(o.holdout_mode);
-  options.holdout_blocks = o.blocks;
-  options.search_decimation = o.decimate;
-  options.search_samples = o.search_samples;
-  options.search_tolerance = o.search_tolerance;
-  options.search_iterations = o.search_iterations;
-  options.selection.min_relative_improvement = o.min_improvement;
-  options.selection.penalty_per_parameter = o.penalty;
-  options.selection.max_steps = o.max_steps;
+  r.options = identify::identify_options(o.request, flag_name);
   return r;
 }
 
-// RECORD.rthsrec: a distributed run identified link by link (identify/run_record.h).
+// RECORD.rthsrec: a distributed run identified link by link (identify/run/run_record.h).
 void run_identify_record(const IdentifyCliOptions& o, const identify::IdentifyOptions& options) {
   IdentifyProgressPrinter progress;
   identify::IdentifyOptions with_progress = options;
@@ -185,10 +137,10 @@ void run_identify(const IdentifyCliOptions& o) {
   }
   if (!o.out.empty()) {
     try {
-      const tables::Format format = tables::parse_format(o.format);
-      tables::write_table(tables::identify_table(result.id),
-                          std::filesystem::path(o.out) / ("identify" + tables::extension(format)),
-                          format);
+      const results::Format format = results::parse_format(o.format);
+      results::write_table(results::identify_table(result.id),
+                           std::filesystem::path(o.out) / ("identify" + results::extension(format)),
+                           format);
     } catch (const std::exception& e) {
       throw ExitError(kExitEnvironment, std::string("outputs: ") + e.what());
     }
@@ -217,7 +169,8 @@ void add_input_options(CLI::App* cmd, IdentifyCliOptions& o) {
   cmd->add_option("--column-map", o.column_map,
                   "DAQ columns and scales to mm / N, e.g. "
                   "command=CHANNEL2*10,measured=CHANNEL0*10,force=CHANNEL1*9806.65 (the default)");
-  cmd->add_option("--channels", o.channels, "channels to identify: measured,force");
+  cmd->add_option("--channels", o.request.channels, "channels to identify: measured,force")
+      ->delimiter(',');
   cmd->add_option(
       "--model", o.model,
       "declared model file (text-format rths.config.DeclaredModel, proto/identify.proto): "
@@ -232,29 +185,33 @@ void add_input_options(CLI::App* cmd, IdentifyCliOptions& o) {
 
 // How the candidates are searched and the held-out error judged.
 void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
-  cmd->add_option("--candidates", o.candidates, "candidate effects (default: the whole library)");
-  cmd->add_option("--holdout", o.holdout, "held-out share of the record")
+  cmd->add_option("--candidates", o.request.candidates,
+                  "candidate effects (default: the whole library)")
+      ->delimiter(',');
+  cmd->add_option("--holdout", o.request.holdout, "held-out share of the record")
       ->check(CLI::Range(0.01, 0.99));
-  cmd->add_option("--holdout-mode", o.holdout_mode, "blocks (segment-wise) | last")
+  cmd->add_option("--holdout-mode", o.request.holdout_mode, "blocks (segment-wise) | last")
       ->check(CLI::IsMember({"blocks", "last"}));
-  cmd->add_option("--blocks", o.blocks, "number of segments for --holdout-mode blocks")
+  cmd->add_option("--blocks", o.request.holdout_blocks,
+                  "number of segments for --holdout-mode blocks")
       ->check(CLI::Range(2, 1000));
-  cmd->add_option("--min-improvement", o.min_improvement,
+  cmd->add_option("--min-improvement", o.request.min_improvement,
                   "relative fall of the held-out error an effect must bring")
       ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--penalty", o.penalty, "relative penalty per added parameter")
+  cmd->add_option("--penalty", o.request.penalty, "relative penalty per added parameter")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-steps", o.max_steps, "at most this many effects per channel")
+  cmd->add_option("--max-steps", o.request.max_steps, "at most this many effects per channel")
       ->check(CLI::Range(0, 1000));  // 0: fit the declared model only
-  cmd->add_option("--decimate", o.decimate, "decimation for the search (0: automatic)");
-  cmd->add_option("--search-samples", o.search_samples,
+  cmd->add_option("--decimate", o.request.search_decimation,
+                  "decimation for the search (0: automatic)");
+  cmd->add_option("--search-samples", o.request.search_samples,
                   "automatic decimation keeps at most about this many samples")
       ->check(in_range(core::Quantity::kCount));
-  cmd->add_option("--search-tolerance", o.search_tolerance,
+  cmd->add_option("--search-tolerance", o.request.search_tolerance,
                   "relative change of cost or parameters at which a fit of the decimated search "
                   "stops (the full-rate refits stop at 1e-10)")
       ->check(CLI::Range(1e-12, 1e-2));
-  cmd->add_option("--search-iterations", o.search_iterations,
+  cmd->add_option("--search-iterations", o.request.search_iterations,
                   "at most this many solver iterations per fit of the decimated search")
       ->check(CLI::Range(1, 1000));
 }
@@ -307,10 +264,12 @@ void add_identify_command(CLI::App& app) {
       "identify", "Find the effects a declared actuator/specimen model lacks in measured data");
   add_input_options(cmd, *o);
   CLI::Option* actuator_flag =
-      cmd->add_option("--declared-actuator", o->declared_actuator,
-                      "declared actuator effects (gain is always there), comma list or none");
-  CLI::Option* specimen_flag = cmd->add_option("--declared-specimen", o->declared_specimen,
-                                               "declared specimen effects, comma list or none");
+      cmd->add_option("--declared-actuator", o->request.declared_actuator,
+                      "declared actuator effects (gain is always there), comma list or none")
+          ->delimiter(',');
+  CLI::Option* specimen_flag = cmd->add_option("--declared-specimen", o->request.declared_specimen,
+                                               "declared specimen effects, comma list or none")
+                                   ->delimiter(',');
   add_search_options(cmd, *o);
   add_output_options(cmd, *o);
   cmd->callback([o, actuator_flag, specimen_flag] {

@@ -1,43 +1,42 @@
 // rths launch CONFIG: run a study's cases distributed on this machine (coordinator, substructure
 // node and actuator emulator as separate processes over Cyclone DDS on loopback), one run per
-// case through the one launch sequence (runtime/launch.h), then write the results as `rths run`
-// does (cli/distributed.h: every case against the lag-free in-process reference, `run`'s columns
-// plus lag per link, plots, summary) with each case's run record and process logs.
-// Before the first run, each case is checked against its critical delay with the network's lag on
-// the actuator's path (warn_past_critical_delay); progress per case goes to stderr.
-// A real-time study is checked against this machine first (platform/check.h, --platform-seconds
-// of measurement, written to OUT/platform.json and handed to every case's coordinator): when its
-// fail-safe or overrun tolerance will not hold, nothing starts (exit 3, the numbers and the fix
-// named) unless --accept-platform.
-// A study with a benchmark section also gets benchmark.txt/.json (J1-J9 of every recorded case but
-// the study's reference, as `rths run`).
-// Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed,
-// 2 bad config, 3 environment); 1 for a diverged case (unless --allow-unstable or
-// expect_unstable); 2 for a bad config caught before starting anything.
+// case through the one launch sequence (runtime/launch/launch.h), then write the results as `rths
+// run` does (cli/distributed.h: every case against the lag-free in-process reference, `run`'s
+// columns plus lag per link, plots, summary) with each case's run record and process logs. Before
+// the first run, each case is checked against its critical delay with the network's lag on the
+// actuator's path (warn_past_critical_delay); progress per case goes to stderr. A real-time study
+// is checked against this machine first (rt_check/check.h, --platform-seconds of measurement,
+// written to OUT/platform.json and handed to every case's coordinator): when its fail-safe or
+// overrun tolerance will not hold, nothing starts (exit 3, the numbers and the fix named) unless
+// --accept-platform. A study with a benchmark section also gets benchmark.txt/.json (J1-J9 of every
+// recorded case but the study's reference, as `rths run`). Exit: 0 all runs completed; else the
+// first failing coordinator's status (1 run failed, 2 bad config, 3 environment); 1 for a diverged
+// case (unless --allow-unstable or expect_unstable); 2 for a bad config caught before starting
+// anything.
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
 
+#include "analysis/distributed/distributed_outputs.h"
 #include "cli/commands.h"
 #include "cli/distributed.h"
 #include "cli/support.h"
-#include "core/study.h"
-#include "platform/check.h"
-#include "runtime/launch.h"
-#include "runtime/process.h"
+#include "rt_check/check.h"
+#include "runtime/launch/launch.h"
+#include "study/study.h"
+#include "util/process.h"
 #include "view/server.h"
 
 namespace rths::cli {
 namespace {
 
 struct LaunchArgs {
-  std::string config, out, bin_dir, security;
+  std::string config, bin_dir, security;
+  ResultsOptions results;
   std::vector<std::string> cases;
   int domain = -1;
   double timeout = 0;
   std::string cpu_placement = "auto";
-  std::string format = "csv";  // of the results table: csv | mat | h5
-  bool no_plots = false, json = false, allow_unstable = false;
   double platform_seconds = 5.0;
   bool accept_platform = false;
   std::string view;  // HOST:PORT of the live view, empty: none
@@ -49,20 +48,21 @@ std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
                                            const LaunchArgs& args,
                                            const std::filesystem::path& out) {
   if (prepared.config.deployment().clock() != config::Deployment::REAL_TIME) return {};
-  platform::PlatformCheck check;
+  rt_check::PlatformCheck check;
   try {
-    check = platform::check_platform(prepared, args.platform_seconds);
+    check = rt_check::check_platform(prepared, args.platform_seconds);
   } catch (const std::runtime_error& e) {
     throw ExitError(kExitEnvironment, std::string("platform check: ") + e.what());
   }
-  if (!args.json || check.verdict.refused()) std::cerr << platform::summary_text(check.summary);
+  if (!args.results.json || check.verdict.refused())
+    std::cerr << rt_check::summary_text(check.summary);
   if (check.verdict.refused() && !args.accept_platform)
     throw ExitError(kExitEnvironment,
                     "refusing to start: the deployment's fail-safe or overrun tolerance will not "
                     "hold on this machine (numbers and fixes above; `rths rt-check CONFIG` "
                     "repeats the check); --accept-platform runs anyway and the records say so");
   const std::filesystem::path file = out / "platform.json";
-  std::ofstream(file) << nlohmann::json{{"platform", platform::summary_json(check.summary)}}.dump(
+  std::ofstream(file) << nlohmann::json{{"platform", rt_check::summary_json(check.summary)}}.dump(
       2);
   return file;
 }
@@ -106,20 +106,20 @@ void run_launch(const LaunchArgs& args) {
   if (names.empty())
     for (const auto& c : study.cases()) names.push_back(c.name());
   const std::filesystem::path out =
-      !args.out.empty() ? std::filesystem::path(args.out)
+      !args.results.out.empty() ? std::filesystem::path(args.results.out)
       : !study.output().directory().empty()
           ? std::filesystem::path(study.output().directory()) / "distributed"
           : std::filesystem::path("rths_launch_" + study.name());
   std::filesystem::create_directories(out);
   // Checked before anything starts: the case's lag plus the network's on the actuator's path.
-  warn_past_critical_delay(prepared, names);
+  analysis::warn_past_critical_delay(prepared, names, print_warning);
   const std::filesystem::path platform_file = check_platform_first(prepared, args, out);
 
   const std::vector<std::string> coordinator_args = view_arguments(args);
   std::vector<DistributedRun> runs;
-  ProgressReporter progress("launch", "cases", !args.json);
+  ProgressReporter progress("launch", "cases", !args.results.json);
   {
-    runtime::HeldStopSignals signals;  // Ctrl-C stops the children in order
+    util::HeldStopSignals signals;  // Ctrl-C stops the children in order
     for (const std::string& name : names) {
       runtime::LaunchOptions options;
       options.config = config_path;
@@ -138,7 +138,7 @@ void run_launch(const LaunchArgs& args) {
       options.stop_requested = [&signals] { return signals.stop_requested(); };
       options.coordinator_args = coordinator_args;
       std::filesystem::remove(options.record);
-      if (!args.json) std::cerr << "rths launch: case " << name << " ...\n";
+      if (!args.results.json) std::cerr << "rths launch: case " << name << " ...\n";
       runtime::LaunchResult result;
       try {
         result = runtime::launch_run(options);
@@ -157,23 +157,24 @@ void run_launch(const LaunchArgs& args) {
       if (result.status == "interrupted") break;
     }
   }
-  const DistributedResults results = judge_distributed(prepared, runs);
-  const auto table = write_distributed_outputs(results, out, !args.no_plots, args.format);
+  const DistributedResults results = analysis::judge_distributed(prepared, runs, print_warning);
+  const auto table = analysis::write_distributed_outputs(results, out, !args.results.no_plots,
+                                                         args.results.format, print_warning);
   // J1-J9 of the recorded cases, as `rths run` gives them (before the summary: the JSON summary
   // must stay the last thing printed).
   if (!results.outcome.cases.empty())
-    write_benchmark_outputs(prepared, results.outcome, out, args.json);
-  if (args.json) {
-    auto j = distributed_summary_json(results);
+    write_benchmark_outputs(prepared, results.outcome, out, args.results.json);
+  if (args.results.json) {
+    auto j = analysis::distributed_summary_json(results);
     j["output"] = out.string();
     j["results"] = table.string();
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << distributed_summary_text(results) << "written: " << table.string()
-              << ", summary.txt, summary.json" << (args.no_plots ? "" : ", plots") << " in "
+    std::cout << analysis::distributed_summary_text(results) << "written: " << table.string()
+              << ", summary.txt, summary.json" << (args.results.no_plots ? "" : ", plots") << " in "
               << out.string() << "\n";
   }
-  fail_if_distributed_failed(results, runs, args.allow_unstable);
+  fail_if_distributed_failed(results, runs, args.results.allow_unstable);
 }
 
 }  // namespace
@@ -184,7 +185,8 @@ void add_launch_command(CLI::App& app) {
   auto args = std::make_shared<LaunchArgs>();
   cmd->add_option("config", args->config, "study config (text format)")->required();
   cmd->add_option("--case", args->cases, "case(s) to run; default every case");
-  cmd->add_option("--out", args->out, "output folder (records, results, plots, logs)");
+  add_results_options(cmd, args->results, "output folder (records, results, plots, logs)",
+                      ", the columns of `rths run` plus lag per link");
   cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)")
       ->check(in_range(core::Quantity::kDdsDomain));
   cmd->add_option("--bin-dir", args->bin_dir,
@@ -195,11 +197,6 @@ void add_launch_command(CLI::App& app) {
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")
       ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
-  cmd->add_option(
-         "--format", args->format,
-         "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
-         "plus lag per link")
-      ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_option("--security", args->security,
                   "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
                   "each process uses its node_<id> folder");
@@ -209,11 +206,6 @@ void add_launch_command(CLI::App& app) {
   cmd->add_flag("--view-stop", args->view_stop,
                 "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
                 "token printed here");
-  cmd->add_flag("--no-plots", args->no_plots,
-                "skip the PNG plots (and remove those of an earlier run)");
-  cmd->add_flag("--allow-unstable", args->allow_unstable,
-                "a diverged case does not fail the run (exit 0); the summary still says diverged");
-  cmd->add_flag("--json", args->json, "print the summary as JSON");
   cmd->add_option("--platform-seconds", args->platform_seconds,
                   "real time: s of platform measurement before the runs (default 5)")
       ->check(CLI::Range(0.1, 600.0));

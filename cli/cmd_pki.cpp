@@ -7,9 +7,9 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "core/study.h"
-#include "runtime/plan.h"
+#include "runtime/node/plan.h"
 #include "security/pki.h"
+#include "study/study.h"
 
 namespace rths::cli {
 namespace {

@@ -1,5 +1,5 @@
 // rths rt-check [CONFIG]: what this machine offers a real-time run and whether a deployment's
-// fail-safe windows and max_overrun_fraction will hold on it (platform/check.h does the work).
+// fail-safe windows and max_overrun_fraction will hold on it (rt_check/check.h does the work).
 // Without CONFIG it judges the default deployment at --rate for a run of --run-seconds.
 // Exit: 0 the deployment holds; 1 it does not (a real-time run would refuse to start); 2 bad
 // input; 3 the measurement could not run.
@@ -7,7 +7,7 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "platform/check.h"
+#include "rt_check/check.h"
 
 namespace rths::cli {
 namespace {
@@ -18,11 +18,11 @@ struct RtCheckArgs {
   bool json = false;
 };
 
-platform::PlatformCheck run_check(const RtCheckArgs& args, CLI::App& cmd) {
+rt_check::PlatformCheck run_check(const RtCheckArgs& args, CLI::App& cmd) {
   if (args.config.empty()) {
     config::Deployment deployment;
     deployment.set_clock(config::Deployment::REAL_TIME);
-    return platform::check_platform(deployment, 1.0 / args.rate, args.run_seconds, args.seconds);
+    return rt_check::check_platform(deployment, 1.0 / args.rate, args.run_seconds, args.seconds);
   }
   for (const char* flag : {"--rate", "--run-seconds"})
     if (cmd.count(flag) > 0)
@@ -32,7 +32,7 @@ platform::PlatformCheck run_check(const RtCheckArgs& args, CLI::App& cmd) {
   const std::filesystem::path path = args.config;
   const config::Study study = load_config_as<config::Study>(path, "study", core::load_study);
   const core::PreparedStudy prepared = core::prepare_study(study, path.parent_path());
-  return platform::check_platform(prepared, args.seconds);
+  return rt_check::check_platform(prepared, args.seconds);
 }
 
 }  // namespace
@@ -52,7 +52,7 @@ void add_rt_check_command(CLI::App& app) {
       ->check(CLI::Range(0.001, 86400.0));
   cmd->add_flag("--json", args->json, "print the report as JSON");
   cmd->callback([args, cmd] {
-    platform::PlatformCheck check;
+    rt_check::PlatformCheck check;
     try {
       check = run_check(*args, *cmd);
     } catch (const ExitError&) {
@@ -62,7 +62,7 @@ void add_rt_check_command(CLI::App& app) {
     }
     if (args->json) {
       nlohmann::json j;
-      j["platform"] = platform::summary_json(check.summary);
+      j["platform"] = rt_check::summary_json(check.summary);
       j["holds"] = !check.verdict.refused();
       j["window_holds"] = check.verdict.window_holds;
       j["overruns_hold"] = check.verdict.overruns_hold;
@@ -72,7 +72,7 @@ void add_rt_check_command(CLI::App& app) {
       j["fixes"] = check.verdict.fixes;
       std::cout << j.dump(2) << "\n";
     } else {
-      std::cout << platform::summary_text(check.summary);
+      std::cout << rt_check::summary_text(check.summary);
     }
     if (check.verdict.refused())
       throw ExitError(kExitRunFailed,

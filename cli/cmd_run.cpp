@@ -15,9 +15,9 @@
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/benchmark_criteria.h"
-#include "core/study.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "results/results.h"
+#include "results/write.h"
+#include "study/study.h"
 #include "util/atomic_file.h"
 
 namespace rths::cli {
@@ -25,19 +25,17 @@ namespace {
 
 struct RunOptions {
   std::string config;
-  std::string out;
-  std::string format = "csv";
+  ResultsOptions results;
   std::string motion_units;
-  bool json = false, no_plots = false, allow_unstable = false;
   int perturbed = 0;
   std::uint64_t perturbed_seed = 1;
 };
 
 // Every draw, one row each: the drawn plant (beta1, beta2 1/s, a3 1/s, k_e N/m) and J1 (ms),
 // J2-J9 (%) of every case, named <case>_J<n>_<unit>.
-tables::Table draws_table(const std::vector<analysis::PlantDraw>& draws,
-                          const std::vector<analysis::BenchmarkEvaluation>& evaluations) {
-  tables::Table t;
+results::Table draws_table(const std::vector<analysis::PlantDraw>& draws,
+                           const std::vector<analysis::BenchmarkEvaluation>& evaluations) {
+  results::Table t;
   std::vector<double> index, beta1, beta2, a3, stiffness;
   for (std::size_t d = 0; d < draws.size(); ++d) {
     index.push_back(static_cast<double>(d + 1));
@@ -59,8 +57,8 @@ tables::Table draws_table(const std::vector<analysis::PlantDraw>& draws,
       std::vector<double> values;
       for (const analysis::BenchmarkEvaluation& e : evaluations)
         values.push_back(core::reported_value(e.cases.at(c).criteria, j));
-      t.add_numbers(tables::identifier(evaluations.front().cases[c].name) + "_" + d.name + "_" +
-                        tables::unit_suffix(d.unit),
+      t.add_numbers(results::identifier(evaluations.front().cases[c].name) + "_" + d.name + "_" +
+                        results::unit_suffix(d.unit),
                     d.unit, values);
     }
   }
@@ -88,9 +86,9 @@ void run_perturbed(const config::Study& study, const std::filesystem::path& base
   util::AtomicFile json(out / "benchmark_perturbed.json");
   json.stream() << analysis::spread_json(spread, o.perturbed_seed).dump(2) << "\n";
   json.commit();
-  tables::write_table(draws_table(draws, evaluations), out / "benchmark_perturbed.csv",
-                      tables::Format::kCsv);
-  if (!o.json)
+  results::write_table(draws_table(draws, evaluations), out / "benchmark_perturbed.csv",
+                       results::Format::kCsv);
+  if (!o.results.json)
     std::cout << analysis::spread_table(spread, o.perturbed_seed)
               << "written: benchmark_perturbed.json, benchmark_perturbed.csv (every draw)\n";
 }
@@ -103,14 +101,14 @@ void run(const RunOptions& o) {
   const core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
 
-  std::filesystem::path out = o.out;
+  std::filesystem::path out = o.results.out;
   if (out.empty()) out = study.output().directory();
   if (out.empty())
     out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
-  write_study_outputs(outcome, out, !o.no_plots, o.json, o.format);
-  write_benchmark_outputs(prepared, outcome, out, o.json);
+  write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
+  write_benchmark_outputs(prepared, outcome, out, o.results.json);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
-  fail_if_unstable(outcome, o.allow_unstable);
+  fail_if_unstable(outcome, o.results.allow_unstable);
 }
 
 }  // namespace
@@ -119,20 +117,13 @@ void add_run_command(CLI::App& app) {
   auto options = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand("run", "Run every case of a study config in process");
   cmd->add_option("config", options->config, "study config (Protobuf text format)")->required();
-  cmd->add_option("--out", options->out,
-                  "output folder (default: the config's output.directory, else out/<name>)");
-  cmd->add_option("--format", options->format,
-                  "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5)")
-      ->check(CLI::IsMember({"csv", "mat", "h5"}));
-  cmd->add_flag("--json", options->json, "print the summary as JSON");
-  cmd->add_flag("--no-plots", options->no_plots,
-                "skip the PNG plots (and remove those of an earlier run)");
+  add_results_options(cmd, options->results,
+                      "output folder (default: the config's output.directory, else out/<name>)",
+                      "");
   cmd->add_option("--motion-units", options->motion_units,
                   "units of the motion record: g | m/s2 | cm/s2 (overrides motion.column_units; "
                   "AT2 files are in g)")
       ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
-  cmd->add_flag("--allow-unstable", options->allow_unstable,
-                "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->add_option("--perturbed", options->perturbed,
                   "also run N perturbed benchmark plants (beta1, beta2, a3, k_e drawn as the "
                   "benchmark draws "

@@ -10,9 +10,9 @@
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "core/study.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "results/results.h"
+#include "results/write.h"
+#include "study/study.h"
 #include "util/atomic_file.h"
 #include "util/distinct_paths.h"
 
@@ -75,7 +75,7 @@ void run_sdof(const SdofOptions& o) {
   const analysis::CaseOutcome& reference = outcome.cases[0];
   const analysis::CaseOutcome& delayed = outcome.cases[1];
   if (!o.out.empty())
-    tables::write_table(tables::study_table(outcome), o.out, tables::Format::kCsv);
+    results::write_table(results::study_table(outcome), o.out, results::Format::kCsv);
   if (o.json) {
     nlohmann::json out = {{"period_s", o.period},
                           {"zeta", o.zeta},

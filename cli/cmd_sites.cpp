@@ -8,24 +8,25 @@
 #include <iostream>
 #include <memory>
 
+#include "analysis/distributed/distributed_outputs.h"
 #include "cli/commands.h"
 #include "cli/distributed.h"
 #include "cli/support.h"
-#include "core/study.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
-#include "runtime/process.h"
+#include "study/study.h"
+#include "util/process.h"
 
 namespace rths::cli {
 namespace {
 
 struct SitesOptions {
-  std::string config, out, bin_dir, check_record, security;
-  std::string format = "csv";
+  std::string config, bin_dir, check_record, security;
+  ResultsOptions results;
   int domain = -1;  // -1: the sites config's / study's domain
   std::int64_t expect_steps = 1;
   double expect_injected = -1.0;
-  bool json = false, check = false, cleanup = false, no_plots = false, allow_unstable = false;
+  bool check = false, cleanup = false;
 };
 
 void run(const SitesOptions& o) {
@@ -52,7 +53,8 @@ void run(const SitesOptions& o) {
   // case's lag plus the network's on the actuator's path against the critical delay.
   const core::PreparedStudy prepared =
       core::prepare_study(plan.study, plan.study_file.parent_path());
-  warn_past_critical_delay(prepared, {plan.study.deployment().case_name()});
+  analysis::warn_past_critical_delay(prepared, {plan.study.deployment().case_name()},
+                                     print_warning);
   if (o.check) {
     std::cout << "sites config ok: " << plan.placements.size() << " processes on "
               << plan.sites.sites_size() << " sites, DDS domain "
@@ -62,7 +64,7 @@ void run(const SitesOptions& o) {
   if (const auto reason = deploy::namespace_support()) {
     throw ExitError(kExitEnvironment, "sites: " + *reason);
   }
-  std::filesystem::path out = o.out;
+  std::filesystem::path out = o.results.out;
   if (out.empty()) {
     out =
         std::filesystem::path("out") / ("sites_" + std::filesystem::path(o.config).stem().string());
@@ -71,9 +73,9 @@ void run(const SitesOptions& o) {
   options.output_dir = out;
   if (!o.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.bin_dir);
   deploy::SitesRunResult result;
-  ProgressReporter progress("sites", "runs", !o.json);
+  ProgressReporter progress("sites", "runs", !o.results.json);
   {
-    runtime::HeldStopSignals signals;
+    util::HeldStopSignals signals;
     options.stop_requested = [&signals] { return signals.stop_requested(); };
     try {
       result = deploy::run_sites(plan, options);
@@ -91,20 +93,22 @@ void run(const SitesOptions& o) {
        result.status == "interrupted" || result.status.rfind("timed out", 0) == 0 ? result.status
                                                                                   : "",
        result.record, result.output_dir.string()}};
-  const DistributedResults results = judge_distributed(prepared, runs, site_of_node);
-  const auto table = write_distributed_outputs(results, result.output_dir, !o.no_plots, o.format);
-  if (o.json) {
+  const DistributedResults results =
+      analysis::judge_distributed(prepared, runs, print_warning, site_of_node);
+  const auto table = analysis::write_distributed_outputs(
+      results, result.output_dir, !o.results.no_plots, o.results.format, print_warning);
+  if (o.results.json) {
     auto j = deploy::to_json(result);
-    j["results"] = distributed_summary_json(results);
+    j["results"] = analysis::distributed_summary_json(results);
     j["results_file"] = table.string();
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cout << deploy::to_text(result) << distributed_summary_text(results)
+    std::cout << deploy::to_text(result) << analysis::distributed_summary_text(results)
               << "written: " << table.string() << ", summary.txt, summary.json"
-              << (o.no_plots ? "" : ", plots") << "\n";
+              << (o.results.no_plots ? "" : ", plots") << "\n";
   }
   if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
-  fail_if_distributed_failed(results, runs, o.allow_unstable);
+  fail_if_distributed_failed(results, runs, o.results.allow_unstable);
 }
 
 }  // namespace
@@ -117,9 +121,10 @@ void add_sites_command(CLI::App& app) {
       "unicast between them, per-link lag injected by the nodes; always torn down. Needs root "
       "(or CAP_SYS_ADMIN + CAP_NET_ADMIN); exit 3 when namespaces are not permitted");
   cmd->add_option("config", options->config, "sites config (rths.deploy.Sites, text format)");
-  cmd->add_option("--out", options->out,
-                  "output folder: record, results, plots, summary, logs, DDS configs (default "
-                  "out/sites_<config name>)");
+  add_results_options(cmd, options->results,
+                      "output folder: record, results, plots, summary, logs, DDS configs (default "
+                      "out/sites_<config name>)",
+                      ", the columns of `rths run` plus lag per link");
   cmd->add_option("--bin-dir", options->bin_dir,
                   "folder with rths-coordinator, rths-substructure-node, rths-actuator-emulator");
   cmd->add_option("--security", options->security,
@@ -129,16 +134,6 @@ void add_sites_command(CLI::App& app) {
          "--domain", options->domain,
          "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
       ->check(in_range(core::Quantity::kDdsDomain));
-  cmd->add_option(
-         "--format", options->format,
-         "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5), the columns of `rths run` "
-         "plus lag per link")
-      ->check(CLI::IsMember({"csv", "mat", "h5"}));
-  cmd->add_flag("--no-plots", options->no_plots,
-                "skip the PNG plots (and remove those of an earlier run)");
-  cmd->add_flag("--allow-unstable", options->allow_unstable,
-                "a diverged case does not fail the run (exit 0); the summary still says diverged");
-  cmd->add_flag("--json", options->json, "print the summary as JSON");
   cmd->add_flag("--check", options->check, "only load and check the config");
   cmd->add_flag("--cleanup", options->cleanup,
                 "remove namespaces left by killed `rths sites` runs (then run CONFIG, if given)");

@@ -13,7 +13,8 @@
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/stability.h"
-#include "core/study.h"
+#include "study/stability_config.h"
+#include "study/study.h"
 
 namespace rths::cli {
 namespace {

@@ -16,10 +16,10 @@
 #include "analysis/sweep_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "core/study.h"
+#include "results/results.h"
+#include "results/write.h"
 #include "slurm/sbatch.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "study/study.h"
 #include "util/distinct_paths.h"
 #include "util/parallel_for.h"
 
@@ -88,33 +88,33 @@ void warn_points_past_critical(const analysis::SweepGrid& grid) {
 
 // Where the sweep's table goes: out/sweep.<format>, or out/sweep.shard-I-of-N.csv for a shard.
 std::filesystem::path sweep_table_path(const SweepOptions& o, const config::Study& study,
-                                       const analysis::Shard& shard, tables::Format format) {
+                                       const analysis::Shard& shard, results::Format format) {
   std::filesystem::path out = o.out;
   if (out.empty()) out = study.output().directory();
   if (out.empty())
     out = std::filesystem::path("out") / (study.name().empty() ? "sweep" : study.name());
   const bool sharded = shard.count > 1;
-  if (sharded && format != tables::Format::kCsv) {
+  if (sharded && format != results::Format::kCsv) {
     throw ExitError(
         kExitBadInput,
         "sweep --shard writes CSV (`rths sweep merge` joins CSVs); drop --format " + o.format);
   }
   return out / (sharded ? "sweep.shard-" + std::to_string(shard.index) + "-of-" +
                               std::to_string(shard.count) + ".csv"
-                        : "sweep" + tables::extension(format));
+                        : "sweep" + results::extension(format));
 }
 
-void write_sweep_table(const std::filesystem::path& path, tables::Format format,
+void write_sweep_table(const std::filesystem::path& path, results::Format format,
                        const analysis::SweepGrid& grid, const analysis::Shard& shard,
                        const std::vector<analysis::SweepRow>& rows,
                        const std::vector<analysis::SweepTableRow>& table) {
   try {
     // The CSV keeps its own writer: its first line carries the grid hash and shard that merge
     // checks.
-    if (format == tables::Format::kCsv) {
+    if (format == results::Format::kCsv) {
       analysis::write_sweep_csv(path, grid, shard, rows);
     } else {
-      tables::write_table(tables::sweep_table(table, grid.hash_hex(), grid.size()), path, format);
+      results::write_table(results::sweep_table(table, grid.hash_hex(), grid.size()), path, format);
     }
   } catch (const std::exception& e) {
     throw ExitError(kExitEnvironment, e.what());
@@ -169,7 +169,7 @@ void run_sweep_command(const SweepOptions& o) {
   options.progress = [&progress](std::size_t done, std::size_t total) {
     progress.update(done, total);
   };
-  const tables::Format format = tables::parse_format(o.format);
+  const results::Format format = results::parse_format(o.format);
   SweepOutcome r;
   r.csv = sweep_table_path(o, study, options.shard, format);
 

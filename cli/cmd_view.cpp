@@ -9,8 +9,8 @@
 
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "runtime/process.h"
-#include "runtime/record.h"
+#include "runtime/record/record.h"
+#include "util/process.h"
 #include "view/context.h"
 #include "view/feed.h"
 #include "view/server.h"
@@ -45,7 +45,7 @@ void run_view(const ViewArgs& args) {
   options.address = address;
   options.mode = "replay";
   std::unique_ptr<view::ViewServer> server;
-  runtime::HeldStopSignals signals;
+  util::HeldStopSignals signals;
   try {
     server = std::make_unique<view::ViewServer>(feed, options);
   } catch (const std::exception& e) {

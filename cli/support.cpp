@@ -1,7 +1,7 @@
 #include "cli/support.h"
 
-#include "tables/results.h"
-#include "tables/write.h"
+#include "results/results.h"
+#include "results/write.h"
 
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
@@ -19,10 +19,10 @@
 
 #include "analysis/benchmark_evaluation.h"
 #include "cli/commands.h"
-#include "core/text_columns.h"
-#include "core/text_format.h"
 #include "rths/analysis/joint_lag.pb.h"
 #include "rths/proto/config.pb.h"
+#include "study/text_columns.h"
+#include "study/text_format.h"
 #include "util/atomic_file.h"
 #if __has_include("rths/deploy/sites.pb.h")
 #include "rths/deploy/sites.pb.h"
@@ -295,9 +295,9 @@ std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format) {
   std::filesystem::create_directories(out);
-  const tables::Format kind = tables::parse_format(format);
-  const std::filesystem::path results = out / ("results" + tables::extension(kind));
-  tables::write_table(tables::study_table(outcome), results, kind);
+  const results::Format kind = results::parse_format(format);
+  const std::filesystem::path results = out / ("results" + results::extension(kind));
+  results::write_table(results::study_table(outcome), results, kind);
   for (const std::string& file : analysis::study_plot_files()) {
     // A folder must not show plots of an earlier run beside this run's CSV.
     if (!plots) std::filesystem::remove(out / file);
@@ -347,6 +347,19 @@ void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable
   if (diverged)
     message += "\n  (--allow-unstable, or expect_unstable: true in the case, when that is meant)";
   throw ExitError(kExitRunFailed, message);
+}
+
+void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::string& out_help,
+                         const std::string& table_note) {
+  cmd->add_option("--out", options.out, out_help);
+  cmd->add_option("--format", options.format,
+                  "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5)" + table_note)
+      ->check(CLI::IsMember({"csv", "mat", "h5"}));
+  cmd->add_flag("--no-plots", options.no_plots,
+                "skip the PNG plots (and remove those of an earlier run)");
+  cmd->add_flag("--allow-unstable", options.allow_unstable,
+                "a diverged case does not fail the run (exit 0); the summary still says diverged");
+  cmd->add_flag("--json", options.json, "print the summary as JSON");
 }
 
 }  // namespace rths::cli

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "analysis/study_run.h"
-#include "core/ranges.h"
+#include "study/ranges.h"
 
 namespace rths::cli {
 
@@ -47,12 +47,24 @@ class ProgressReporter {
 // "rths: warning: ..." on stderr.
 void print_warning(const std::string& message);
 
+// What a command that runs cases writes and how it ends, declared once for run, launch and sites:
+// --out, --format (csv | mat | h5), --no-plots, --json, --allow-unstable. `out_help` says what
+// the folder holds for this command; `table_note` is added to --format's help (", the columns
+// of ...").
+struct ResultsOptions {
+  std::string out;
+  std::string format = "csv";
+  bool no_plots = false, json = false, allow_unstable = false;
+};
+void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::string& out_help,
+                         const std::string& table_note);
+
 // A CLI11 transform for a time flag: "14ms", "14 ms", "0.014s", "14000us" or a bare number (s)
 // become seconds; anything else is refused with a message naming the unit (s) and the forms.
 CLI::Validator seconds_value();
 // The same parse as a function: seconds from text. Throws std::invalid_argument.
 double parse_seconds(const std::string& text);
-// A time flag checked against its quantity's range rule (core/ranges.h): seconds_value() then
+// A time flag checked against its quantity's range rule (study/ranges.h): seconds_value() then
 // the rule; attach with ->transform (it rewrites "14ms" to seconds); CLI11 refuses a value as
 // "--dt: 1e-09 s is outside [1e-06, 1] s (...)", exit 2.
 CLI::Validator seconds_in(core::Quantity quantity);

@@ -13,8 +13,8 @@ namespace rths::coordinator {
 
 Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endpoint,
                          CoordinatorOptions options)
-    : state_(std::make_unique<State>(std::move(prepared), endpoint, std::move(options))) {
-  State& s = *state_;
+    : state_(std::make_unique<RunState>(std::move(prepared), endpoint, std::move(options))) {
+  RunState& s = *state_;
   if (s.options.run_id.empty()) throw std::invalid_argument("coordinator: empty run id");
   s.deployment = s.prepared.config.deployment();
   s.case_name = !s.options.case_name.empty() ? s.options.case_name : s.deployment.case_name();
@@ -33,7 +33,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   const std::size_t steps = s.prepared.motion.acceleration.size();
   std::vector<IntakeNode> intake_nodes;
   for (const runtime::NodePlan& n : plan_.nodes) {
-    State::Node& node = s.nodes[n.spec.id()];
+    RunState::Node& node = s.nodes[n.spec.id()];
     node.plan = &n;
     node.awaited = s.awaits_answers_of(n.spec);
     if (s.real_time && node.awaited) node.wait_judge.emplace(s.answer_wait());
@@ -67,7 +67,7 @@ namespace {
 // The run's lifecycle, as run() calls it: activate -> loop -> judge -> deactivate -> report.
 
 // The record's header, every node ready, the real-time thread prepared.
-void activate(Coordinator::State& s) {
+void activate(RunState& s) {
   s.write_header();
   s.start_up();
   s.event("all " + std::to_string(s.nodes.size()) + " nodes ready (" +
@@ -76,7 +76,7 @@ void activate(Coordinator::State& s) {
   for (const auto& [id, node] : s.nodes)
     if (!node.awaited)
       s.event("not waiting for the answers of " + node.plan->label() + ": its link injects a " +
-              std::to_string(1e3 * Coordinator::State::injected_round_trip(node.plan->spec)) +
+              std::to_string(1e3 * RunState::injected_round_trip(node.plan->spec)) +
               " ms round trip, longer than the loop's wait of " +
               std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
 }
@@ -85,7 +85,7 @@ void activate(Coordinator::State& s) {
 // Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's
 // answers are all in (or a fault was raised). The handler is removed (waiting out a running call)
 // before this returns.
-void loop(Coordinator::State& s, core::SimulationResult& result) {
+void loop(RunState& s, core::SimulationResult& result) {
   core::SimulationOptions options;
   options.divergence_bound = s.options.divergence_bound;
   s.endpoint.set_inline_handler([&s](const transport::Message& m) {
@@ -105,7 +105,7 @@ void loop(Coordinator::State& s, core::SimulationResult& result) {
 
 // A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), a node that
 // answered too few steps (answer_shortfall), or completed.
-void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
+void judge(RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   const core::SimulationResult& result = outcome.result;
   if (result.diverged)
     s.event("diverged: |u| = " +
@@ -125,10 +125,9 @@ void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outco
   for (const auto& [id, node] : s.nodes)
     if (s.real_time && outcome.ok && !misses && min_answers >= 0) {
       // Answers to the last steps of a link slower than a step are still on the wire at the end.
-      const auto in_flight =
-          static_cast<std::uint64_t>(
-              std::ceil(Coordinator::State::injected_round_trip(node.plan->spec) / s.setup.dt)) +
-          1;
+      const auto in_flight = static_cast<std::uint64_t>(std::ceil(
+                                 RunState::injected_round_trip(node.plan->spec) / s.setup.dt)) +
+                             1;
       const std::uint64_t due = node.judged_steps > in_flight ? node.judged_steps - in_flight : 0;
       misses = answer_shortfall(id, std::min(node.answers, due), due, min_answers);
     }
@@ -143,7 +142,7 @@ void judge(Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outco
 // after its HOLD on the same topic, so the STOP cannot overtake the HOLD (DDS orders per topic
 // only). A node that never announced was never assigned and ignores all but ASSIGN. Then waits
 // (at most kFinalReportWait) for each node's last heartbeat, which carries what it rejected.
-void deactivate(Coordinator::State& s, bool failed, const std::string& status) {
+void deactivate(RunState& s, bool failed, const std::string& status) {
   if (failed) {
     spdlog::error("run {} stopped at step {}: {}", s.options.run_id, s.step, status);
     runtime::Hold hold;
@@ -173,7 +172,7 @@ void deactivate(Coordinator::State& s, bool failed, const std::string& status) {
 }
 
 // Counters, link lag and what each node rejected, into the outcome.
-void report(const Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
+void report(const RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   const std::size_t completed = outcome.result.steps();
   runtime::RejectCounters rejected = s.rejected;
   rejected.add(s.intake->rejected());
@@ -205,7 +204,7 @@ void report(const Coordinator::State& s, const runtime::Pacer& pacer, RunOutcome
 }
 
 // A record that lost entries fails the run; the footer closes it.
-void close_record(Coordinator::State& s, RunOutcome& outcome) {
+void close_record(RunState& s, RunOutcome& outcome) {
   if (!s.record) return;
   if (s.record->dropped() > 0 && !s.record_failed) {
     outcome.ok = false;
@@ -234,7 +233,7 @@ void close_record(Coordinator::State& s, RunOutcome& outcome) {
 }  // namespace
 
 RunOutcome Coordinator::run() {
-  State& s = *state_;
+  RunState& s = *state_;
   const auto wall_start = Clock::now();
   RunOutcome outcome;
   if (!s.options.record.empty())

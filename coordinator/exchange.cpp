@@ -21,7 +21,7 @@ bool unpack_or_count(const transport::Message& message, T& payload,
 
 }  // namespace
 
-bool Coordinator::State::pump(std::chrono::nanoseconds timeout) {
+bool RunState::pump(std::chrono::nanoseconds timeout) {
   auto message = endpoint.receive(timeout);
   if (!message) return false;
   if (message->kind == runtime::FEEDBACK) {
@@ -40,7 +40,7 @@ bool Coordinator::State::pump(std::chrono::nanoseconds timeout) {
   return true;
 }
 
-void Coordinator::State::apply(const transport::Message& message, Node& node) {
+void RunState::apply(const transport::Message& message, Node& node) {
   switch (message.kind) {
     case runtime::ANNOUNCE: {
       runtime::Announce announce;
@@ -81,8 +81,8 @@ void Coordinator::State::apply(const transport::Message& message, Node& node) {
   }
 }
 
-void Coordinator::State::on_announce(const transport::Message& message,
-                                     const runtime::Announce& announce, Node& node) {
+void RunState::on_announce(const transport::Message& message, const runtime::Announce& announce,
+                           Node& node) {
   // Once ready, or announcing as another kind than the deployment's, an announcement changes
   // nothing: counted, never a reason to stop (anyone can send one).
   if (node.ready || announce.kind() != node.plan->spec.kind()) {
@@ -101,7 +101,7 @@ void Coordinator::State::on_announce(const transport::Message& message,
   send_assign(node);
 }
 
-void Coordinator::State::send_assign(const Node& node) {
+void RunState::send_assign(const Node& node) {
   runtime::Assign assign;
   assign.set_schema_version(runtime::kSchemaVersion);
   *assign.mutable_study() = prepared.config;
@@ -117,7 +117,7 @@ void Coordinator::State::send_assign(const Node& node) {
   send(node.plan->spec.id(), runtime::ASSIGN, 0, assign);
 }
 
-void Coordinator::State::check_liveliness() {
+void RunState::check_liveliness() {
   const double limit = runtime::judged_liveliness_timeout(deployment);
   for (auto& [id, node] : nodes) {
     const double silent = seconds_since(node.last_seen);
@@ -129,7 +129,7 @@ void Coordinator::State::check_liveliness() {
   send_heartbeat_when_due();
 }
 
-void Coordinator::State::send_heartbeat_when_due() {
+void RunState::send_heartbeat_when_due() {
   if (seconds_since(last_heartbeat_sent) <= runtime::heartbeat_period(deployment)) return;
   runtime::Heartbeat hb;
   hb.set_last_step(step);
@@ -137,7 +137,7 @@ void Coordinator::State::send_heartbeat_when_due() {
   last_heartbeat_sent = Clock::now();
 }
 
-void Coordinator::State::start_up() {
+void RunState::start_up() {
   const double timeout = runtime::start_timeout(deployment);
   const auto start = Clock::now();
   for (auto& [id, node] : nodes) node.last_seen = start;
@@ -161,19 +161,19 @@ void Coordinator::State::start_up() {
   }
 }
 
-double Coordinator::State::injected_round_trip(const config::NodeSpec& spec) {
+double RunState::injected_round_trip(const config::NodeSpec& spec) {
   return spec.receive_lag().one_way_delay() + spec.send_lag().one_way_delay();
 }
 
-double Coordinator::State::answer_wait() const {
+double RunState::answer_wait() const {
   return runtime::feedback_wait_fraction(deployment) * setup.dt;
 }
 
-bool Coordinator::State::awaits_answers_of(const config::NodeSpec& spec) const {
+bool RunState::awaits_answers_of(const config::NodeSpec& spec) const {
   return !real_time || runtime::awaits_answers(deployment, spec, setup.dt);
 }
 
-void Coordinator::State::absorb() {
+void RunState::absorb() {
   if (const IntegrityFault* fault = intake->fault())
     throw RunAborted(fault->what, nodes.at(fault->node_id).plan->label());
   for (auto& [id, node] : nodes) {
@@ -189,7 +189,7 @@ void Coordinator::State::absorb() {
   }
 }
 
-void Coordinator::State::switch_answer_wait(int id, Node& node, const AnswerWait::Switch& change) {
+void RunState::switch_answer_wait(int id, Node& node, const AnswerWait::Switch& change) {
   node.awaited = change.waiting;
   intake->set_awaited(id, change.waiting);
   const std::string measured = ": their round trip (median " +
@@ -203,8 +203,7 @@ void Coordinator::State::switch_answer_wait(int id, Node& node, const AnswerWait
                   "longer than the loop's " + wait + "; each step uses its newest answer");
 }
 
-const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& v,
-                                           core::Mat* tangent) {
+const core::Vec& RunState::trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) {
   if (tangent) throw std::invalid_argument("the distributed runtime needs an explicit integrator");
   if (auto violation = limits->check_state(u, v)) throw RunAborted(*violation, "");
   assembly.drifts(u, drift);
@@ -250,19 +249,19 @@ const core::Vec& Coordinator::State::trial(const core::Vec& u, const core::Vec& 
   return force;
 }
 
-double Coordinator::State::force_of(const Node& node, std::size_t i) {
+double RunState::force_of(const Node& node, std::size_t i) {
   const runtime::Feedback& f = intake->latest(node.plan->spec.id()).feedback;
   const int index = static_cast<int>(i);
   return index < f.force_size() ? f.force(index) : 0.0;
 }
 
-double Coordinator::State::realised_of(const Node& node, std::size_t i) {
+double RunState::realised_of(const Node& node, std::size_t i) {
   const runtime::Feedback& f = intake->latest(node.plan->spec.id()).feedback;
   const int index = static_cast<int>(i);
   return index < f.realised_size() ? f.realised(index) : 0.0;
 }
 
-void Coordinator::State::collect() {
+void RunState::collect() {
   if (real_time) {
     // Wait part of the step for this step's answers, then go with the newest available.
     const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 
 namespace rths::coordinator {
 

@@ -38,8 +38,8 @@
 #include <string>
 #include <vector>
 
-#include "runtime/latest_box.h"
-#include "runtime/validation.h"
+#include "runtime/node/validation.h"
+#include "runtime/rt/latest_box.h"
 #include "transport/transport.h"
 
 namespace rths::coordinator {

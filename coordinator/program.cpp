@@ -11,9 +11,9 @@
 #include <sstream>
 #include <tuple>
 
-#include "platform/check.h"
-#include "runtime/launch.h"
-#include "runtime/plan.h"
+#include "rt_check/check.h"
+#include "runtime/launch/launch.h"
+#include "runtime/node/plan.h"
 #include "security/check.h"
 #include "security/pki.h"
 #include "transport/dds_endpoint.h"
@@ -84,9 +84,9 @@ runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared,
                                           const PlatformArgs& args) {
   runtime::PlatformSummary summary;
   if (!args.file.empty()) {
-    summary = platform::read_summary_file(args.file);
+    summary = rt_check::read_summary_file(args.file);
   } else if (args.seconds > 0) {
-    summary = platform::check_platform(prepared, args.seconds).summary;
+    summary = rt_check::check_platform(prepared, args.seconds).summary;
   } else {
     if (!args.accept)
       throw std::invalid_argument("--platform-seconds 0 (not measured) needs --accept-platform");
@@ -94,7 +94,7 @@ runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared,
     summary.set_refused(true);
   }
   if (summary.refused() && !args.accept)
-    throw PlatformRefused(platform::summary_text(summary) +
+    throw PlatformRefused(rt_check::summary_text(summary) +
                           "refusing to start: the fail-safe or the overrun tolerance will not hold "
                           "on this machine; change the deployment as above, or run anyway with "
                           "--accept-platform (the record says so)");
@@ -171,7 +171,7 @@ struct Session {
   std::atomic<bool> stop_request{false};
   std::unique_ptr<view::Feed> feed;
   std::unique_ptr<view::ViewServer> server;
-  std::unique_ptr<platform::DmaLatencyHold> dma_latency;
+  std::unique_ptr<rt_check::DmaLatencyHold> dma_latency;
   std::unique_ptr<transport::DdsEndpoint> endpoint;
   std::unique_ptr<Coordinator> coordinator;
 };
@@ -182,7 +182,7 @@ void prepare_real_time(const core::PreparedStudy& prepared, const PlatformArgs& 
                        CoordinatorOptions& co, Session& session) {
   runtime::check_failsafe_windows(prepared.config.deployment());
   co.platform = platform_summary(prepared, args);
-  session.dma_latency = std::make_unique<platform::DmaLatencyHold>();
+  session.dma_latency = std::make_unique<rt_check::DmaLatencyHold>();
   co.platform->set_dma_latency_held(session.dma_latency->held());
   if (!session.dma_latency->held())
     std::cerr << "rths-coordinator: not holding /dev/cpu_dma_latency: "

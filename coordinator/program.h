@@ -3,7 +3,7 @@
 //   rths-coordinator --config STUDY [--case NAME] [--run-id ID] [--record FILE] [--domain D]
 //                    [--security DIR/node_0]   (DDS Security; bad documents: exit 2, nothing sent)
 //                    [--platform FILE | --platform-seconds S] [--accept-platform]
-// A real-time run first checks the platform (platform/check.h: measured for S s, default 3, or
+// A real-time run first checks the platform (rt_check/check.h: measured for S s, default 3, or
 // read from FILE), refuses with exit 3 naming the numbers and the fix when the deployment's
 // fail-safe or overrun tolerance will not hold (unless --accept-platform), holds
 // /dev/cpu_dma_latency at 0 for the run when permitted, and records the check in the header.

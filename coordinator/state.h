@@ -1,6 +1,6 @@
 #pragma once
 // The coordinator's configuration (RunConfiguration: fixed once constructed) and its run state
-// (State's own members), shared by the files that implement them (internal to
+// (RunState's own members), shared by the files that implement them (internal to
 // rths_coordinator; the contract is in coordinator.h):
 //   exchange.cpp     messages with the nodes (start-up, liveliness) and the step's exchange
 //                    (the restoring-force evaluator: commands out, answers in)
@@ -19,12 +19,12 @@
 
 #include "coordinator/answer_wait.h"
 #include "coordinator/command_limits.h"
-#include "coordinator/coordinator.h"
 #include "coordinator/feedback_intake.h"
+#include "coordinator/run_types.h"
 #include "core/simulation.h"
-#include "runtime/measurements.h"
-#include "runtime/schema.h"
-#include "runtime/validation.h"
+#include "runtime/node/schema.h"
+#include "runtime/node/validation.h"
+#include "runtime/record/measurements.h"
 
 namespace rths::coordinator {
 
@@ -39,7 +39,7 @@ inline double seconds_since(Clock::time_point t) {
 }
 
 // What the run is: the study, the case and the deployment, settled by the constructor and never
-// changed by the run (the run's state is State's own members).
+// changed by the run (the run's state is RunState's own members).
 struct RunConfiguration {
   core::PreparedStudy prepared;
   core::HybridSetup setup;
@@ -49,7 +49,7 @@ struct RunConfiguration {
   bool real_time = false;
 };
 
-struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepHooks {
+struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   transport::Endpoint& endpoint;
 
   // Per node.
@@ -77,7 +77,7 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
   std::unique_ptr<FeedbackIntake> intake;
   runtime::RejectCounters rejected;  // everything but feedback (the intake counts those)
   std::uint64_t late_feedback = 0, worst_late_streak = 0;
-  // The links' lag as the record's reader counts it (runtime/measurements.h), from the same
+  // The links' lag as the record's reader counts it (runtime/record/measurements.h), from the same
   // samples.
   runtime::LinkLagAccumulator lags;
   std::unique_ptr<CommandLimits> limits;  // checked before each command leaves
@@ -100,7 +100,7 @@ struct Coordinator::State : RunConfiguration, core::HybridEvaluator, core::StepH
   }
   Clock::time_point last_heartbeat_sent;
 
-  State(core::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
+  RunState(core::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
       : RunConfiguration{std::move(p), {}, {}, std::move(o), {}, false}, endpoint(e) {}
 
   void send(int node_id, runtime::MessageKind kind, std::int64_t at_step,

@@ -7,12 +7,12 @@
 #include <cstring>
 #include <string>
 
-#include "core/study_inputs.h"
-#include "runtime/process.h"
+#include "study/study_inputs.h"
+#include "util/process.h"
 
 namespace rths::coordinator {
 
-void Coordinator::State::event(const std::string& what) {
+void RunState::event(const std::string& what) {
   spdlog::info("step {}: {}", step, what);
   if (!record) return;
   runtime::RecordEntry entry;
@@ -22,7 +22,7 @@ void Coordinator::State::event(const std::string& what) {
   record->append(entry);  // a full queue drops it and counts it, as for steps
 }
 
-void Coordinator::State::before_step(std::size_t k) {
+void RunState::before_step(std::size_t k) {
   pace = {};
   // One timed wait per period, the pacer's: feedback is stamped and boxed on the receive thread
   // meanwhile, and other messages wait in the transport's queue (stamped on arrival). No second
@@ -40,7 +40,7 @@ void Coordinator::State::before_step(std::size_t k) {
   step_start_realtime_ns = transport::realtime_ns();
 }
 
-bool Coordinator::State::after_step(std::size_t k, const core::SimulationResult& result) {
+bool RunState::after_step(std::size_t k, const core::SimulationResult& result) {
   const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
   write_step(k, result, step_wall);
   check_record();
@@ -54,7 +54,7 @@ bool Coordinator::State::after_step(std::size_t k, const core::SimulationResult&
   return true;
 }
 
-void Coordinator::State::check_record() {
+void RunState::check_record() {
   if (!record) return;
   if (record->failed()) {
     record_failed = true;
@@ -69,7 +69,7 @@ void Coordinator::State::check_record() {
   }
 }
 
-void Coordinator::State::prepare_real_time_thread() {
+void RunState::prepare_real_time_thread() {
   if (deployment.lock_memory()) {
     if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
       event(std::string("mlockall refused (") + std::strerror(errno) + "); memory not locked");
@@ -80,7 +80,7 @@ void Coordinator::State::prepare_real_time_thread() {
     // The CPU is the loop's alone: a receive thread woken on it would preempt the loop between
     // its commands (README "Real time" has the wake-up to command figures).
     try {
-      runtime::isolate_calling_thread_on_cpu(deployment.loop_cpu());
+      util::isolate_calling_thread_on_cpu(deployment.loop_cpu());
       event("loop thread alone on CPU " + std::to_string(deployment.loop_cpu()) +
             " (the process's other threads moved off it)");
     } catch (const std::runtime_error& e) {
@@ -89,7 +89,7 @@ void Coordinator::State::prepare_real_time_thread() {
   }
 }
 
-void Coordinator::State::write_header() {
+void RunState::write_header() {
   if (!record) return;
   runtime::RecordEntry entry;
   runtime::RunHeader& h = *entry.mutable_header();
@@ -115,8 +115,7 @@ void Coordinator::State::write_header() {
   append_waiting(inputs);
 }
 
-void Coordinator::State::write_step(std::size_t k, const core::SimulationResult& result,
-                                    double step_wall) {
+void RunState::write_step(std::size_t k, const core::SimulationResult& result, double step_wall) {
   if (!record) return;
   runtime::StepRecord& r = step_record;
   r.Clear();  // keeps the repeated fields' storage

@@ -1,6 +1,6 @@
 #include "core/compensation.h"
 
-#include "core/text_columns.h"
+#include "core/number_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -37,6 +37,31 @@ void require_step(double dt, const std::string& who) {
 // The coefficients' bounds and starting values, which do not depend on dt: the one statement of
 // these preconditions, for the block's constructor and for a study config's validation. `label`
 // prefixes the message ("adaptive time series compensator", or a config path).
+
+}  // namespace
+
+void require_identity_start(const AtsParameters& p, const std::string& label) {
+  const struct {
+    const char* name;
+    double initial, identity;
+    CoefficientBounds bounds;
+  } coefficients[] = {{"a0", p.a0, 1.0, p.a0_bounds},
+                      {"a1", p.a1, 0.0, p.a1_bounds},
+                      {"a2", p.a2, 0.0, p.a2_bounds}};
+  for (const auto& c : coefficients) {
+    require(c.initial == c.identity, label + ": " + c.name + " must start at " +
+                                         format_number(c.identity) + " (the nominal design), got " +
+                                         format_number(c.initial));
+    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
+                c.bounds.min <= c.identity && c.identity <= c.bounds.max,
+            label + ": " + c.name +
+                "_bounds must have min < max and "
+                "contain " +
+                format_number(c.identity) + " (the nominal design), got [" +
+                format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
+  }
+}
+
 void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
   const struct {
     const char* name;
@@ -56,8 +81,6 @@ void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
   require(p.a0_bounds.min > 0.0, label + ": a0_bounds.min must be > 0 (a0 is the command's gain)");
 }
 
-}  // namespace
-
 std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients) {
   const std::vector<double> p = trimmed(coefficients);
   const int degree = static_cast<int>(p.size()) - 1;
@@ -72,14 +95,6 @@ std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& co
 }
 
 // ---------------------------------------------------------------------------------------------
-Linearity Compensator::linearity() const {
-  return {Linearity::Kind::kNone,
-          "compensator " + describe() + " does not state its linear dynamics"};
-}
-
-std::complex<double> Compensator::frequency_response(double) const { fail(linearity().note); }
-
-LinearBlock Compensator::state_space() const { fail(linearity().note); }
 
 // ---------------------------------------------------------------------------------------------
 PolynomialExtrapolation::PolynomialExtrapolation(int order, double lead, int spacing_steps,
@@ -384,34 +399,6 @@ AtsParameters adaptive_correction_defaults() {
   return p;
 }
 
-namespace {
-
-// The correction starts at the nominal design (the identity) and its bounds keep it reachable.
-void require_identity_start(const AtsParameters& p,
-                            const std::string& label = "adaptive correction") {
-  const struct {
-    const char* name;
-    double initial, identity;
-    CoefficientBounds bounds;
-  } coefficients[] = {{"a0", p.a0, 1.0, p.a0_bounds},
-                      {"a1", p.a1, 0.0, p.a1_bounds},
-                      {"a2", p.a2, 0.0, p.a2_bounds}};
-  for (const auto& c : coefficients) {
-    require(c.initial == c.identity, label + ": " + c.name + " must start at " +
-                                         format_number(c.identity) + " (the nominal design), got " +
-                                         format_number(c.initial));
-    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
-                c.bounds.min <= c.identity && c.identity <= c.bounds.max,
-            label + ": " + c.name +
-                "_bounds must have min < max and "
-                "contain " +
-                format_number(c.identity) + " (the nominal design), got [" +
-                format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
-  }
-}
-
-}  // namespace
-
 AdaptedModelBasedInverse::AdaptedModelBasedInverse(ModelBasedInverse inverse,
                                                    const AtsParameters& correction, double dt,
                                                    const std::string& label)
@@ -445,161 +432,4 @@ std::string AdaptedModelBasedInverse::describe() const {
 }
 
 // ---------------------------------------------------------------------------------------------
-namespace {
-
-AtsParameters correction_parameters(const config::Compensation::AdaptiveCorrection& c) {
-  AtsParameters p = adaptive_correction_defaults();
-  p.window = c.window();
-  if (c.has_a0_bounds()) p.a0_bounds = {c.a0_bounds().min(), c.a0_bounds().max()};
-  if (c.has_a1_bounds()) p.a1_bounds = {c.a1_bounds().min(), c.a1_bounds().max()};
-  if (c.has_a2_bounds()) p.a2_bounds = {c.a2_bounds().min(), c.a2_bounds().max()};
-  p.derivative_cutoff = c.derivative_cutoff();
-  return p;
-}
-
-AtsParameters ats_parameters(const config::Compensation::AdaptiveTimeSeries& c) {
-  AtsParameters p;
-  p.window = c.window();
-  p.a0 = c.initial_a0() == 0.0 ? 1.0 : c.initial_a0();
-  p.a1 = c.initial_a1();
-  p.a2 = c.initial_a2();
-  if (c.has_a0_bounds()) p.a0_bounds = {c.a0_bounds().min(), c.a0_bounds().max()};
-  if (c.has_a1_bounds()) p.a1_bounds = {c.a1_bounds().min(), c.a1_bounds().max()};
-  if (c.has_a2_bounds()) p.a2_bounds = {c.a2_bounds().min(), c.a2_bounds().max()};
-  p.derivative_cutoff = c.derivative_cutoff();
-  return p;
-}
-
-}  // namespace
-
-PlantModel plant_from_stages(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
-                             const std::string& where) {
-  using K = config::DelayStage::KindCase;
-  PlantModel plant;
-  require(!stages.empty(), where +
-                               " is empty: a model-based compensator needs the actuator model "
-                               "(e.g. from `rths identify --design-compensator`)");
-  for (int i = 0; i < stages.size(); ++i) {
-    const config::DelayStage& stage = stages[i];
-    const std::string at = where + "[" + std::to_string(i) + "]";
-    if (stage.amplitude_gain() != 0.0) plant.gain *= stage.amplitude_gain();
-    switch (stage.kind_case()) {
-      case K::kShift:
-        require(stage.shift().delay() >= 0.0, at + ".shift.delay must be >= 0 s");
-        plant.delay += stage.shift().delay();
-        break;
-      case K::kFirstOrder:
-        require(stage.first_order().time_constant() > 0.0,
-                at + ".first_order.time_constant must be > 0 s");
-        plant.append({1.0}, {stage.first_order().time_constant(), 1.0});
-        break;
-      case K::kTransferFunction: {
-        const auto& tf = stage.transfer_function();
-        require(!tf.numerator().empty() && !tf.denominator().empty(),
-                at + ".transfer_function needs a numerator and a denominator");
-        plant.append({tf.numerator().begin(), tf.numerator().end()},
-                     {tf.denominator().begin(), tf.denominator().end()});
-        break;
-      }
-      case K::kBenchmark: {
-        const ContinuousTransferFunction benchmark = benchmark_actuator_transfer_function();
-        plant.append(benchmark.numerator, benchmark.denominator);
-        break;
-      }
-      default:
-        fail(at +
-             ": only shift, first_order, transfer_function and benchmark stages describe an "
-             "invertible actuator model");
-    }
-  }
-  return plant;
-}
-
-void validate_compensation(const config::Compensation& c, const std::string& where) {
-  using K = config::Compensation::KindCase;
-  switch (c.kind_case()) {
-    case K::kPolynomial: {
-      const auto& p = c.polynomial();
-      require(p.order() >= 1 && p.order() <= 3,
-              where + ".polynomial.order must be 1, 2 or 3, got " + std::to_string(p.order()));
-      require(p.lead() > 0.0 && p.lead() <= 1.0,
-              where + ".polynomial.lead must be in (0, 1] s, got " + format_number(p.lead()));
-      require(p.spacing() >= 0.0 && finite(p.spacing()),
-              where + ".polynomial.spacing must be >= 0 s, got " + format_number(p.spacing()));
-      break;
-    }
-    case K::kAdaptiveTimeSeries: {
-      const auto& a = c.adaptive_time_series();
-      require(
-          a.window() > 0.0 && finite(a.window()),
-          where + ".adaptive_time_series.window must be > 0 s, got " + format_number(a.window()));
-      // Bounds and initial values do not depend on dt: checked here as the block checks them.
-      require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
-              where + ".adaptive_time_series.derivative_cutoff must be >= 0 Hz");
-      check_ats_coefficients(ats_parameters(a), where + ".adaptive_time_series");
-      break;
-    }
-    case K::kModelBased: {
-      const auto& m = c.model_based();
-      require(m.lead_order() >= 1 && m.lead_order() <= 3,
-              where + ".model_based.lead_order must be 1, 2 or 3, got " +
-                  std::to_string(m.lead_order()));
-      require(m.rolloff_frequency() > 0.0 && finite(m.rolloff_frequency()),
-              where + ".model_based.rolloff_frequency must be > 0 Hz, got " +
-                  format_number(m.rolloff_frequency()));
-      plant_from_stages(m.plant(), where + ".model_based.plant");
-      if (m.has_adaptive_correction()) {
-        const auto& a = m.adaptive_correction();
-        const std::string at = where + ".model_based.adaptive_correction";
-        require(a.window() > 0.0 && finite(a.window()),
-                at + ".window must be > 0 s, got " + format_number(a.window()));
-        require(
-            a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
-            at + ".derivative_cutoff must be >= 0 Hz, got " + format_number(a.derivative_cutoff()));
-        const AtsParameters correction = correction_parameters(a);
-        require_identity_start(correction, at);
-        check_ats_coefficients(correction, at);
-      }
-      break;
-    }
-    case K::KIND_NOT_SET:
-      fail(where + " has no kind (polynomial, adaptive_time_series, model_based)");
-  }
-}
-
-std::unique_ptr<Compensator> make_compensator(const config::Compensation& c, double dt,
-                                              const std::string& where) {
-  validate_compensation(c, where);
-  using K = config::Compensation::KindCase;
-  switch (c.kind_case()) {
-    case K::kPolynomial: {
-      const auto& p = c.polynomial();
-      int spacing = 1;
-      if (p.spacing() > 0.0) {
-        const double steps = p.spacing() / dt;
-        spacing = static_cast<int>(std::llround(steps));
-        require(spacing >= 1 && std::abs(steps - spacing) <= 1e-6 * steps,
-                where + ".polynomial.spacing " + format_number(p.spacing()) +
-                    " s is not a whole number of steps of dt = " + format_number(dt) + " s");
-      }
-      return std::make_unique<PolynomialExtrapolation>(p.order(), p.lead(), spacing, dt);
-    }
-    case K::kAdaptiveTimeSeries:
-      return std::make_unique<AdaptiveTimeSeries>(ats_parameters(c.adaptive_time_series()), dt,
-                                                  where + ".adaptive_time_series");
-    case K::kModelBased: {
-      const auto& m = c.model_based();
-      ModelBasedInverse inverse(plant_from_stages(m.plant(), where + ".model_based.plant"),
-                                m.lead_order(), m.rolloff_frequency(), dt, where + ".model_based");
-      if (!m.has_adaptive_correction())
-        return std::make_unique<ModelBasedInverse>(std::move(inverse));
-      return std::make_unique<AdaptedModelBasedInverse>(
-          std::move(inverse), correction_parameters(m.adaptive_correction()), dt,
-          where + ".model_based.adaptive_correction");
-    }
-    case K::KIND_NOT_SET: break;
-  }
-  fail(where + " has no kind (polynomial, adaptive_time_series, model_based)");
-}
-
 }  // namespace rths::core

@@ -74,31 +74,10 @@
 #include <string>
 #include <vector>
 
+#include "core/compensator.h"
 #include "core/delay.h"
-#include "rths/proto/config.pb.h"
 
 namespace rths::core {
-
-struct CompensatorInput {
-  double time = 0.0;      // s
-  double target = 0.0;    // m, x_t: what the integrator wants realised
-  double measured = 0.0;  // m, x_m: what the sensor read of the previous step's displacement
-};
-
-class Compensator : public LinearDynamics {
- public:
-  // Returns the command u_c (m). Real-time safe.
-  virtual double step(const CompensatorInput& in) = 0;
-  virtual void reset() = 0;
-  virtual std::unique_ptr<Compensator> clone() const = 0;
-  virtual std::string describe() const = 0;
-  // Low-frequency phase lead the block adds (s), for reports; 0 for ATS (it adapts).
-  virtual double nominal_lead() const = 0;
-  // By default not representable (kNone, naming the block); both others then throw.
-  Linearity linearity() const override;
-  std::complex<double> frequency_response(double omega) const override;
-  LinearBlock state_space() const override;
-};
 
 class PolynomialExtrapolation final : public Compensator {
  public:
@@ -216,6 +195,16 @@ class ModelBasedInverse final : public Compensator {
   TransferFunctionStage filter_;
 };
 
+// The one rule for ATS coefficients, checked by the block and by the config reader: each bound
+// finite with min < max, each initial value inside its bounds, a0_bounds.min > 0. Throws
+// std::invalid_argument opening with `label`.
+void check_ats_coefficients(const AtsParameters& p, const std::string& label);
+
+// The one rule for an adaptive correction's start, checked by the block and by the config
+// reader: each coefficient starts at the identity (a0 = 1, a1 = a2 = 0) and its bounds are finite,
+// min < max, and contain it. Throws std::invalid_argument opening with `label`.
+void require_identity_start(const AtsParameters& p, const std::string& label);
+
 // The correction's parameters when the config leaves them out: window 1 s, the identity
 // (1, 0, 0), bounds a0 [0.5, 2], a1 [-0.05, 0.05] s, a2 [-1e-3, 1e-3] s^2, no filter.
 AtsParameters adaptive_correction_defaults();
@@ -248,17 +237,5 @@ class AdaptedModelBasedInverse final : public Compensator {
 
 // Roots of a polynomial (companion-matrix eigenvalues). Leading zeros are ignored.
 std::vector<std::complex<double>> polynomial_roots(const std::vector<double>& coefficients);
-
-// From a study config. `where` names the block in errors ("cases[3] 'ats' compensation[0]").
-// validate_compensation checks what does not depend on dt; make_compensator builds the block,
-// whose constructor checks what does (window or roll-off against dt) under the config path:
-// "WHERE.adaptive_time_series: window ...". Both throw std::invalid_argument "WHERE.FIELD ...".
-void validate_compensation(const config::Compensation& compensation, const std::string& where);
-std::unique_ptr<Compensator> make_compensator(const config::Compensation& compensation, double dt,
-                                              const std::string& where);
-// The actuator model a model-based compensator inverts, from delay stages (shift, first_order,
-// transfer_function, benchmark; amplitude gains multiply). Other kinds cannot be inverted: throws.
-PlantModel plant_from_stages(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
-                             const std::string& where);
 
 }  // namespace rths::core

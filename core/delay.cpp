@@ -1,8 +1,8 @@
 #include "core/delay.h"
 
-#include "core/text_columns.h"
+#include "core/number_text.h"
 
-#include "core/compensation.h"
+#include "core/compensator.h"
 
 #include <algorithm>
 #include <cmath>
@@ -451,30 +451,6 @@ double DelayTrace::at(double t) const {
 
 double DelayTrace::max() const {
   return delay.empty() ? 0.0 : *std::max_element(delay.begin(), delay.end());
-}
-
-DelayTrace read_delay_trace(const std::filesystem::path& path) {
-  DelayTrace trace;
-  for (const TextRow& row : read_text_columns(path, "delay trace").rows) {
-    const std::string where = text_position(path, row.line);
-    if (row.values.size() != 2) {
-      throw std::invalid_argument(where + "expected two columns (time, delay), found " +
-                                  std::to_string(row.values.size()));
-    }
-    const double time = row.values[0], delay = row.values[1];
-    if (delay < 0.0)
-      throw std::invalid_argument(where + "delay " + format_number(delay) + " is negative");
-    if (!trace.time.empty() && !(time > trace.time.back())) {
-      throw std::invalid_argument(where + "time " + format_number(time) +
-                                  " does not increase (previous " +
-                                  format_number(trace.time.back()) + ")");
-    }
-    trace.time.push_back(time);
-    trace.delay.push_back(delay);
-  }
-  if (trace.time.empty())
-    throw std::invalid_argument(path.string() + ": delay trace has no samples");
-  return trace;
 }
 
 TraceShift::TraceShift(DelayTrace trace, double dt)

@@ -39,7 +39,6 @@
 //   Jitter, Trace     none: their delay changes with time.
 
 #include <cstdint>
-#include <filesystem>
 #include <memory>
 #include <random>
 #include <string>
@@ -283,8 +282,6 @@ struct DelayTrace {
   double at(double t) const;
   double max() const;
 };
-// Two whitespace- or comma-separated columns, '#' comments. Throws naming file and line.
-DelayTrace read_delay_trace(const std::filesystem::path& path);
 
 class TraceShift final : public DelayStage {
  public:
@@ -303,7 +300,7 @@ class TraceShift final : public DelayStage {
   CommandHistory history_;
 };
 
-class Compensator;  // core/compensation.h
+class Compensator;  // core/compensator.h
 
 // Stages applied in order; the command's velocity is passed unchanged to every stage.
 // step() returns the specimen's displacement; measured() what the displacement sensor read at

@@ -57,6 +57,10 @@ struct SimulationOptions {
 
 // What a runtime adds around each step. Either hook may throw to abort the run; the loop then
 // truncates the result to the completed steps before the exception leaves it.
+// What the loop does around each step (pacing, recording, live view). Called on the loop thread,
+// between steps: before_step may block until the step's deadline (real time) and nothing else;
+// after_step must not block or allocate (the record and the view copy into preallocated slots
+// and do their I/O on threads of their own).
 class StepHooks {
  public:
   virtual ~StepHooks() = default;

@@ -9,9 +9,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "core/compensation.h"
+#include "core/compensator.h"
 #include "core/simulation.h"
-#include "core/study.h"
 
 namespace rths::core {
 namespace {
@@ -337,32 +336,14 @@ CompensatedStability compensated_stability(IntegratorKind kind, double period, d
   return out;
 }
 
-CompensatedStability compensated_stability(
-    IntegratorKind kind, double period, double zeta, double alpha, double dt,
-    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
-    const config::Compensation* compensation, double max_extra_delay, int branches) {
-  if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
-  if (!(max_extra_delay >= 0))
-    throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
-  sdof_parameters(period, zeta, alpha);
-  DelayChain loop = make_delay_chain(actuator, dt, {});
-  if (compensation) loop.set_compensator(make_compensator(*compensation, dt, "compensation"));
-  return compensated_stability(kind, period, zeta, alpha, dt, loop, max_extra_delay, branches);
-}
-
 double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,
-                        const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
-                        const config::Compensation* compensation, double extra_delay,
-                        double duration) {
+                        DelayChain loop, double duration) {
   HybridSetup setup;
   setup.model = make_sdof(period, zeta);
   setup.dt = dt;
   setup.integrator = kind;
   setup.partition = partition_by_fraction(setup.model.storey_stiffness, alpha, linear_factory());
-  DelayChain chain = make_delay_chain(actuator, dt, {});
-  if (extra_delay > 0.0) chain.add(std::make_unique<TimeShift>(extra_delay, dt));
-  if (compensation) chain.set_compensator(make_compensator(*compensation, dt, "compensation"));
-  setup.delays.push_back(std::move(chain));
+  setup.delays.push_back(std::move(loop));
   GroundMotion pulse{"pulse", dt,
                      std::vector<double>(static_cast<std::size_t>(duration / dt), 0.0)};
   pulse.acceleration[1] = 100.0;

@@ -41,7 +41,6 @@
 #include "core/delay.h"
 #include "core/integrators.h"
 #include "core/linear_dynamics.h"
-#include "rths/proto/config.pb.h"
 
 namespace rths::core {
 
@@ -112,21 +111,11 @@ struct CompensatedStability {
 CompensatedStability compensated_stability(IntegratorKind kind, double period, double zeta,
                                            double alpha, double dt, const DelayChain& loop,
                                            double max_extra_delay, int branches = 3);
-// The same for a study case's delay stages and compensation (`compensation` may be null:
-// uncompensated), built at dt. Throws std::invalid_argument naming what cannot be analysed (an
-// implicit integrator, a jitter or trace stage...) or what the blocks' constructors refuse.
-CompensatedStability compensated_stability(
-    IntegratorKind kind, double period, double zeta, double alpha, double dt,
-    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
-    const config::Compensation* compensation, double max_extra_delay, int branches = 3);
-
-// The same loop simulated: an SDOF after a one-step ground pulse, free vibration with the
-// compensated actuator and `extra_delay` more; returns peak |u| over the last third of the run
-// divided by that over the first third (> 1 grows, < 1 decays).
+// The same loop simulated: an SDOF after a one-step ground pulse, free vibration through `loop`;
+// returns peak |u| over the last third of the run divided by that over the first third (> 1 grows,
+// < 1 decays).
 double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,
-                        const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
-                        const config::Compensation* compensation, double extra_delay,
-                        double duration);
+                        DelayChain loop, double duration);
 
 // Pre-run check of a hybrid setup against the lag its delay stages add.
 //

@@ -21,7 +21,7 @@ struct LinearResponse {
   Mat displacement, velocity, acceleration;
 };
 
-// @pre the model's matrices pass check_structural_matrices (core/structure_io.h); dt = motion's.
+// @pre the model's matrices pass check_structural_matrices (study/structure_io.h); dt = motion's.
 LinearResponse exact_linear_response(const StructuralModel& model, const GroundMotion& motion);
 
 }  // namespace rths::core

@@ -185,6 +185,11 @@ Actuator make_actuator(const HybridPartition& partition, int a, DelayChain chain
                        int servo_substeps);
 
 // A restoring-force evaluator for a hybrid run: what the loop records of each step besides forces.
+// The restoring force of a hybrid step as the loop thread sees it (core::run_steps calls it once
+// per step: set_time, trial, commit). Contract for implementations: no allocation once the first
+// step has run (buffers sized at construction); trial() may block, but only for the step's own
+// answers (the coordinator's exchange, bounded by its step or feedback window), never for I/O;
+// the accessors below return references that stay valid until the next trial().
 class HybridEvaluator : public RestoringEvaluator {
  public:
   // Time (s) of the step about to be trialled; experimental parts stamp their commands with it.

@@ -15,20 +15,6 @@ namespace {
   throw std::invalid_argument(field + ": " + problem);
 }
 
-std::vector<double> values(const google::protobuf::RepeatedField<double>& field) {
-  return {field.begin(), field.end()};
-}
-
-// kp + ki / s + kd s / (tf s + 1) over the common denominator s (tf s + 1).
-ContinuousTransferFunction pid_transfer_function(const config::DelayStage::LinearFilter::Pid& pid,
-                                                 const std::string& field) {
-  if (pid.kd() != 0.0 && !(pid.derivative_filter() > 0))
-    fail(field + ".pid.derivative_filter", "must be > 0 s when kd is set (a proper derivative)");
-  const double tf = pid.derivative_filter();
-  if (tf == 0.0) return {{pid.kp(), pid.ki()}, {1.0, 0.0}};
-  return {{pid.kp() * tf + pid.kd(), pid.kp() + pid.ki() * tf, pid.ki()}, {tf, 1.0, 0.0}};
-}
-
 // Parlett-Reinsch balancing by powers of two (exact): a <- D^-1 a D with the off-diagonal row and
 // column norms of every state within a factor of two of each other; returns diag(D).
 Vec balance(Mat& a) {
@@ -67,38 +53,17 @@ std::vector<double> characteristic_polynomial(const Mat& a) {
   return c;
 }
 
-// The transfer function of a single-input single-output state space, both polynomials highest
-// power first: den = det(sI - A), num = det(sI - A + B C) - den + D den (the SISO identity
-// C adj(sI - A) B = det(sI - A + B C) - det(sI - A)).
-ContinuousTransferFunction state_space_transfer_function(
-    const config::DelayStage::LinearFilter::StateSpace& spec, const std::string& field) {
-  const int n = spec.states();
-  const auto size = static_cast<std::size_t>(n);
-  if (n < 1 || n > 16) fail(field + ".state_space.states", std::to_string(n) + " is outside 1..16");
-  if (static_cast<std::size_t>(spec.a_size()) != size * size ||
-      static_cast<std::size_t>(spec.b_size()) != size ||
-      static_cast<std::size_t>(spec.c_size()) != size)
-    fail(field + ".state_space",
-         "a needs states^2 = " + std::to_string(n * n) + " values (row-major), b and c " +
-             std::to_string(n) + "; got " + std::to_string(spec.a_size()) + ", " +
-             std::to_string(spec.b_size()) + ", " + std::to_string(spec.c_size()));
-  Mat a(n, n);
-  Vec b(n), c(n);
-  for (int i = 0; i < n; ++i) {
-    b[i] = spec.b(i);
-    c[i] = spec.c(i);
-    for (int j = 0; j < n; ++j) a(i, j) = spec.a(i * n + j);
-  }
-  if (!a.allFinite() || !b.allFinite() || !c.allFinite() || !std::isfinite(spec.d()))
-    fail(field + ".state_space", "holds a value that is not finite");
+}  // namespace
+
+ContinuousTransferFunction state_space_transfer_function(const Mat& a, const Vec& b, const Vec& c,
+                                                         double d) {
+  const auto size = static_cast<std::size_t>(a.rows());
   const std::vector<double> den = characteristic_polynomial(a);
   const std::vector<double> coupled = characteristic_polynomial(a - b * c.transpose());
   ContinuousTransferFunction tf{std::vector<double>(size + 1), den};
-  for (std::size_t i = 0; i <= size; ++i) tf.numerator[i] = coupled[i] - den[i] + spec.d() * den[i];
+  for (std::size_t i = 0; i <= size; ++i) tf.numerator[i] = coupled[i] - den[i] + d * den[i];
   return tf;
 }
-
-}  // namespace
 
 DiscreteFilter::DiscreteFilter() : b_{1.0}, a_{1.0}, state_(1, 0.0) {}
 
@@ -133,50 +98,6 @@ std::complex<double> DiscreteFilter::response(std::complex<double> z) const {
     den += a_[i] * power;
   }
   return num / den;
-}
-
-DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h,
-                           const std::string& field) {
-  using K = config::DelayStage::LinearFilter::KindCase;
-  try {
-    switch (spec.kind_case()) {
-      case K::kContinuous: {
-        const DiscreteCoefficients d = tustin(values(spec.continuous().numerator()),
-                                              values(spec.continuous().denominator()), h);
-        return DiscreteFilter(d.b, d.a);
-      }
-      case K::kDiscrete:
-        return DiscreteFilter(values(spec.discrete().numerator()),
-                              values(spec.discrete().denominator()));
-      case K::kStateSpace: {
-        // A polynomial in z, highest power first, is b(z^-1) in ascending powers: the same list.
-        const ContinuousTransferFunction tf =
-            state_space_transfer_function(spec.state_space(), field);
-        if (spec.state_space().discrete()) return DiscreteFilter(tf.numerator, tf.denominator);
-        const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
-        return DiscreteFilter(d.b, d.a);
-      }
-      case K::kPid: {
-        const ContinuousTransferFunction tf = pid_transfer_function(spec.pid(), field);
-        const DiscreteCoefficients d = tustin(tf.numerator, tf.denominator, h);
-        return DiscreteFilter(d.b, d.a);
-      }
-      case K::kPhaseLead: {
-        const auto& lead = spec.phase_lead();
-        if (!(lead.zero() > 0 && lead.pole() > 0 && lead.gain() != 0))
-          fail(field + ".phase_lead", "zero and pole must be > 0 rad/s and the gain non-zero");
-        const DiscreteCoefficients d =
-            tustin({lead.gain(), lead.gain() * lead.zero()}, {1.0, lead.pole()}, h);
-        return DiscreteFilter(d.b, d.a);
-      }
-      case K::KIND_NOT_SET: break;
-    }
-  } catch (const std::invalid_argument& e) {
-    const std::string what = e.what();
-    if (what.rfind(field, 0) == 0) throw;
-    fail(field, what);
-  }
-  fail(field, "has no kind (continuous, discrete, pid, phase_lead or state_space)");
 }
 
 ZohPlant::ZohPlant(const std::vector<double>& numerator, const std::vector<double>& denominator,
@@ -237,60 +158,17 @@ double Converter::digital_to_analog(double x) const {
   return range > 0 ? std::clamp(x, -range, range) : x;
 }
 
-BenchmarkPlantParameters benchmark_plant_parameters(
-    const config::DelayStage::BenchmarkPlant& spec) {
-  const auto or_nominal = [](double value, double nominal) {
-    return value != 0.0 ? value : nominal;
-  };
-  BenchmarkPlantParameters p;
-  p.a1_beta0 = or_nominal(spec.a1_beta0(), 2.1283e13);
-  p.a2 = or_nominal(spec.a2(), 4.2297e6);
-  p.a3 = or_nominal(spec.a3(), 3.3);
-  p.beta1 = or_nominal(spec.beta1(), 425.0);
-  p.beta2 = or_nominal(spec.beta2(), 9.9976e4);
-  p.gain = or_nominal(spec.gain(), 1.0261);
-  p.mass = or_nominal(spec.mass(), 29.13);
-  p.stiffness = or_nominal(spec.stiffness(), 1.19e6);
-  p.damping = or_nominal(spec.damping(), 2.0 * 0.0097 * std::sqrt(p.stiffness * p.mass));
-  return p;
-}
-
-namespace {
-
-ContinuousTransferFunction plant_of(const config::DelayStage::TrackingLoop& spec,
-                                    const std::string& field) {
-  if (spec.has_benchmark_plant())
-    return benchmark_actuator_transfer_function(benchmark_plant_parameters(spec.benchmark_plant()));
-  if (!spec.has_plant()) fail(field + ".plant", "is missing (plant or benchmark_plant)");
-  return {values(spec.plant().numerator()), values(spec.plant().denominator())};
-}
-
-ZohPlant make_plant(const config::DelayStage::TrackingLoop& spec, double h,
-                    const std::string& field) {
-  const ContinuousTransferFunction tf = plant_of(spec, field);
-  try {
-    return ZohPlant(tf.numerator, tf.denominator, h);
-  } catch (const std::invalid_argument& e) {
-    fail(field + ".plant", e.what());
-  }
-}
-
-}  // namespace
-
-TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h,
+TrackingLoop::TrackingLoop(ZohPlant plant, const TrackingLoopOptions& options, double h,
                            const std::string& field)
-    : plant_(make_plant(spec, h, field)),
-      controller_(spec.has_controller() ? make_filter(spec.controller(), h, field + ".controller")
-                                        : DiscreteFilter()),
-      feedforward_(spec.has_feedforward()
-                       ? make_filter(spec.feedforward(), h, field + ".feedforward")
-                       : DiscreteFilter()),
-      converter_{spec.converter().range(), spec.converter().quantum()},
-      noise_rms_(spec.displacement_noise_rms()),
+    : plant_(std::move(plant)),
+      controller_(options.controller.value_or(DiscreteFilter())),
+      feedforward_(options.feedforward.value_or(DiscreteFilter())),
+      converter_(options.converter),
+      noise_rms_(options.displacement_noise_rms),
       h_(h),
-      force_noise_rms_(spec.force_noise_rms()),
-      seed_(spec.seed()),
-      rng_(spec.seed()) {
+      force_noise_rms_(options.force_noise_rms),
+      seed_(options.seed),
+      rng_(options.seed) {
   if (!(converter_.range >= 0 && converter_.quantum >= 0 && std::isfinite(converter_.range) &&
         std::isfinite(converter_.quantum)))
     fail(field + ".converter", "range and quantum must be >= 0 m (0 = none)");
@@ -298,23 +176,26 @@ TrackingLoop::TrackingLoop(const config::DelayStage::TrackingLoop& spec, double 
     fail(field + ".displacement_noise_rms", "must be >= 0 m");
   if (!(force_noise_rms_ >= 0 && std::isfinite(force_noise_rms_)))
     fail(field + ".force_noise_rms", "must be >= 0 N");
-  constexpr std::uint32_t kMaxForceDelay = 64;
-  if (spec.force_delay_periods() > kMaxForceDelay)
-    fail(field + ".force_delay_periods", std::to_string(spec.force_delay_periods()) +
-                                             " is outside 0.." + std::to_string(kMaxForceDelay));
-  force_queue_.assign(spec.force_delay_periods() + 1, 0.0);
+  if (options.force_delay_periods > kMaxForceDelayPeriods)
+    fail(field + ".force_delay_periods", std::to_string(options.force_delay_periods) +
+                                             " is outside 0.." +
+                                             std::to_string(kMaxForceDelayPeriods));
+  force_queue_.assign(options.force_delay_periods + 1, 0.0);
+  label_ = describe_loop(options);
+  constexpr double w = 0.1;  // rad/s, well below every corner of a servo loop
+  nominal_delay_ = -std::arg(response(w)) / w;
+}
+
+std::string TrackingLoop::describe_loop(const TrackingLoopOptions& options) const {
   std::ostringstream label;
-  label << "tracking-loop(" << (spec.has_benchmark_plant() ? "benchmark plant" : "plant")
-        << (spec.has_controller() ? ", controller" : "")
-        << (spec.has_feedforward() ? ", feedforward" : "")
+  label << "tracking-loop(" << options.plant_name << (options.controller ? ", controller" : "")
+        << (options.feedforward ? ", feedforward" : "")
         << (converter_.quantum > 0 || converter_.range > 0 ? ", converters" : "")
         << (noise_rms_ > 0 ? ", noise" : "") << (force_noise_rms_ > 0 ? ", force noise" : "")
         << (force_queue_.size() > 1 ? ", force delay " + std::to_string(force_queue_.size() - 1)
                                     : "")
         << ")";
-  label_ = label.str();
-  constexpr double w = 0.1;  // rad/s, well below every corner of a servo loop
-  nominal_delay_ = -std::arg(response(w)) / w;
+  return label.str();
 }
 
 std::complex<double> TrackingLoop::response(double omega) const {

@@ -35,11 +35,14 @@
 // (their saturation and quantisation left out), else it is time-invariant.
 
 #include <complex>
+#include <cstdint>
+#include <optional>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "core/delay.h"
 #include "core/structure.h"
-#include "rths/proto/stages.pb.h"
 
 namespace rths::core {
 
@@ -56,9 +59,12 @@ class DiscreteFilter {
   std::vector<double> b_, a_, state_;
 };
 
-// Builds the filter of `spec` at step h; throws std::invalid_argument naming `field`.
-DiscreteFilter make_filter(const config::DelayStage::LinearFilter& spec, double h,
-                           const std::string& field);
+// The transfer function of a single-input single-output state space (A n x n, B and C n, D),
+// both polynomials highest power first: den = det(sI - A), num = det(sI - A + B C) - den + D den
+// (the SISO identity C adj(sI - A) B = det(sI - A + B C) - det(sI - A)). For a discrete state
+// space the same polynomials are in z.
+ContinuousTransferFunction state_space_transfer_function(const Mat& a, const Vec& b, const Vec& c,
+                                                         double d);
 
 class ZohPlant {
  public:
@@ -82,13 +88,24 @@ struct Converter {
   double digital_to_analog(double x) const;  // quantise, then saturate
 };
 
-// The nominal benchmark plant of F1_input_file.m with the given fields overriding it (0 = nominal).
-BenchmarkPlantParameters benchmark_plant_parameters(const config::DelayStage::BenchmarkPlant& spec);
+// What a tracking loop holds besides its plant. An absent controller or feedforward is the
+// identity; converter fields of 0 mean none.
+struct TrackingLoopOptions {
+  std::optional<DiscreteFilter> controller, feedforward;
+  Converter converter;
+  double displacement_noise_rms = 0.0;    // m, on the measured displacement
+  double force_noise_rms = 0.0;           // N, on the measured force
+  std::uint32_t force_delay_periods = 0;  // the force reading's lag in steps, 0..64
+  std::uint64_t seed = 0;                 // of both noises
+  std::string plant_name = "plant";       // in the block's label ("benchmark plant")
+};
 
 class TrackingLoop final : public DelayStage {
  public:
-  // Throws std::invalid_argument naming `field` for a bad plant, filter or converter.
-  TrackingLoop(const config::DelayStage::TrackingLoop& spec, double h, const std::string& field);
+  static constexpr std::uint32_t kMaxForceDelayPeriods = 64;
+  // Throws std::invalid_argument naming `field` for a bad converter, noise or force delay.
+  TrackingLoop(ZohPlant plant, const TrackingLoopOptions& options, double h,
+               const std::string& field);
   void reset() override;
   std::unique_ptr<DelayStage> clone() const override {
     return std::make_unique<TrackingLoop>(*this);
@@ -107,6 +124,7 @@ class TrackingLoop final : public DelayStage {
   LinearBlock unscaled_state_space() const override;
 
  private:
+  std::string describe_loop(const TrackingLoopOptions& options) const;
   ZohPlant plant_;
   DiscreteFilter controller_, feedforward_;
   Converter converter_;

@@ -7,11 +7,11 @@
 #include "analysis/compare.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
-#include "core/study.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
-#include "runtime/measurements.h"
-#include "runtime/record.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
+#include "study/study.h"
 
 namespace rths::deploy {
 namespace {

@@ -10,14 +10,14 @@
 #include <regex>
 #include <sstream>
 
-#include "runtime/process.h"
+#include "util/process.h"
 
 namespace rths::deploy {
 
-using runtime::CommandResult;
-using runtime::run_checked;
-using runtime::run_command;
-using runtime::tool_available;
+using util::CommandResult;
+using util::run_checked;
+using util::run_command;
+using util::tool_available;
 namespace {
 
 constexpr const char* kPrefix = "rths-";
@@ -74,7 +74,7 @@ bool looks_like_permission_problem(const std::string& output) {
 }  // namespace
 
 std::vector<std::string> list_namespaces() {
-  const auto output = run_checked({"ip", "netns", "list"});
+  const auto output = util::run_checked({"ip", "netns", "list"});
   std::vector<std::string> names;
   std::istringstream lines(output);
   std::string line;
@@ -87,11 +87,12 @@ std::vector<std::string> list_namespaces() {
 }
 
 std::optional<std::string> namespace_support() {
-  if (!tool_available("ip")) return "the `ip` tool (Debian package iproute2) is not installed";
+  if (!util::tool_available("ip"))
+    return "the `ip` tool (Debian package iproute2) is not installed";
   const std::string probe = unique_prefix() + "probe";
-  CommandResult added;
+  util::CommandResult added;
   try {
-    added = run_command({"ip", "netns", "add", probe});
+    added = util::run_command({"ip", "netns", "add", probe});
   } catch (const std::exception& e) {
     return std::string("cannot run `ip`: ") + e.what();
   }
@@ -103,7 +104,7 @@ std::optional<std::string> namespace_support() {
     }
     return reason;
   }
-  run_command({"ip", "netns", "del", probe});
+  util::run_command({"ip", "netns", "del", probe});
   return std::nullopt;
 }
 
@@ -116,14 +117,14 @@ std::vector<std::string> remove_stale_namespaces() {
     const long pid = std::stol(m[1]);
     const bool alive = ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
     if (alive) continue;
-    if (run_command({"ip", "netns", "del", name}).ok()) removed.push_back(name);
+    if (util::run_command({"ip", "netns", "del", name}).ok()) removed.push_back(name);
   }
   return removed;
 }
 
 NamespaceTopology::NamespaceTopology(const TopologySpec& spec) {
   validate_topology(spec);
-  if (!tool_available("ip")) {
+  if (!util::tool_available("ip")) {
     throw NamespacesUnavailable("the `ip` tool (Debian package iproute2) is not installed");
   }
   prefix_ = unique_prefix();
@@ -140,7 +141,7 @@ NamespaceTopology::~NamespaceTopology() { teardown(); }
 
 void NamespaceTopology::build(const TopologySpec& spec) {
   auto add_namespace = [this](const std::string& name) {
-    const auto result = run_command({"ip", "netns", "add", name});
+    const auto result = util::run_command({"ip", "netns", "add", name});
     if (!result.ok()) {
       const std::string why =
           "cannot create network namespace " + name + ": " + trimmed(result.output);
@@ -150,11 +151,11 @@ void NamespaceTopology::build(const TopologySpec& spec) {
       throw std::runtime_error(why);
     }
     created_.push_back(name);
-    run_checked({"ip", "-n", name, "link", "set", "lo", "up"});
+    util::run_checked({"ip", "-n", name, "link", "set", "lo", "up"});
   };
   add_namespace(hub_);
-  run_checked({"ip", "-n", hub_, "link", "add", kBridge, "type", "bridge"});
-  run_checked({"ip", "-n", hub_, "link", "set", kBridge, "up"});
+  util::run_checked({"ip", "-n", hub_, "link", "add", kBridge, "type", "bridge"});
+  util::run_checked({"ip", "-n", hub_, "link", "set", kBridge, "up"});
   for (std::size_t i = 0; i < spec.sites.size(); ++i) {
     Site site;
     site.name = spec.sites[i];
@@ -164,13 +165,13 @@ void NamespaceTopology::build(const TopologySpec& spec) {
     add_namespace(site.netns);
     // The veth pair is made inside the hub, so its names never meet the host's interfaces.
     const std::string port = "p" + std::to_string(i + 1);
-    run_checked({"ip", "-n", hub_, "link", "add", port, "type", "veth", "peer", "name",
-                 site.interface, "netns", site.netns});
-    run_checked({"ip", "-n", hub_, "link", "set", port, "master", kBridge});
-    run_checked({"ip", "-n", hub_, "link", "set", port, "up"});
-    run_checked(
+    util::run_checked({"ip", "-n", hub_, "link", "add", port, "type", "veth", "peer", "name",
+                       site.interface, "netns", site.netns});
+    util::run_checked({"ip", "-n", hub_, "link", "set", port, "master", kBridge});
+    util::run_checked({"ip", "-n", hub_, "link", "set", port, "up"});
+    util::run_checked(
         {"ip", "-n", site.netns, "addr", "add", site.address + "/24", "dev", site.interface});
-    run_checked({"ip", "-n", site.netns, "link", "set", site.interface, "up"});
+    util::run_checked({"ip", "-n", site.netns, "link", "set", site.interface, "up"});
     sites_.push_back(site);
   }
 }
@@ -197,7 +198,7 @@ void NamespaceTopology::teardown() {
   // Sites first, hub last: deleting a site namespace destroys its veth end and so the hub port.
   for (auto it = created_.rbegin(); it != created_.rend(); ++it) {
     try {
-      const auto result = run_command({"ip", "netns", "del", *it});
+      const auto result = util::run_command({"ip", "netns", "del", *it});
       if (!result.ok()) spdlog::warn("cannot delete namespace {}: {}", *it, result.output);
     } catch (const std::exception& e) {
       spdlog::warn("cannot delete namespace {}: {}", *it, e.what());

@@ -14,13 +14,13 @@
 #include <sstream>
 #include <thread>
 
-#include "core/study.h"
-#include "core/text_format.h"
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
-#include "runtime/measurements.h"
-#include "runtime/process.h"
-#include "runtime/record.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
+#include "study/study.h"
+#include "study/text_format.h"
+#include "util/process.h"
 
 namespace rths::deploy {
 namespace {
@@ -57,14 +57,6 @@ void absolutize_paths(config::Study& study, const std::filesystem::path& base_di
   }
 }
 
-void check_lag(const config::LinkLag& lag, const std::string& where) {
-  if (!(lag.one_way_delay() >= 0.0) || !(lag.jitter() >= 0.0) || !(lag.loss() >= 0.0) ||
-      !(lag.loss() < 1.0) || !std::isfinite(lag.one_way_delay()) || !std::isfinite(lag.jitter())) {
-    throw std::invalid_argument(where +
-                                ": one_way_delay and jitter must be finite and >= 0, "
-                                "loss in [0, 1)");
-  }
-}
 }  // namespace
 
 Sites parse_sites(const std::string& text, const std::string& source_name) {
@@ -150,8 +142,11 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
       throw std::invalid_argument(where + ": no such node in the study's deployment");
     }
     if (!linked.insert(link.node_id()).second) throw std::invalid_argument(where + " given twice");
-    check_lag(link.to_node(), where + " to_node");
-    check_lag(link.from_node(), where + " from_node");
+    // The one lag rule, with the study's allow_long_lag, as for the study's own deployment.
+    core::validate_link_lag(link.to_node(), where + " to_node", plan.study.allow_long_lag(),
+                            source);
+    core::validate_link_lag(link.from_node(), where + " from_node", plan.study.allow_long_lag(),
+                            source);
     *nodes[link.node_id()]->mutable_receive_lag() = link.to_node();
     *nodes[link.node_id()]->mutable_send_lag() = link.from_node();
   }

@@ -26,7 +26,7 @@
 
 #include "rths/deploy/sites.pb.h"
 #include "rths/proto/config.pb.h"
-#include "runtime/lag.h"
+#include "runtime/node/lag.h"
 
 namespace rths::deploy {
 
@@ -76,7 +76,7 @@ struct SitesRunResult {
 
 struct SitesRunOptions {
   std::filesystem::path output_dir;  // records, logs, DDS configs, merged study; created
-  std::optional<std::filesystem::path> bin_dir;  // else runtime::find_node_programs' search
+  std::optional<std::filesystem::path> bin_dir;  // else util::find_node_programs' search
   std::function<bool()> stop_requested;          // polled every few ms; true = stop now
 };
 

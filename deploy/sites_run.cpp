@@ -1,5 +1,5 @@
-// run_sites: topology and DDS configs around the one launch sequence (runtime/launch.h), then the
-// record summary; everything undone on exit.
+// run_sites: topology and DDS configs around the one launch sequence (runtime/launch/launch.h),
+// then the record summary; everything undone on exit.
 #include <google/protobuf/text_format.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -13,9 +13,9 @@
 #include "deploy/dds_config.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
-#include "runtime/launch.h"
-#include "runtime/measurements.h"
-#include "runtime/record.h"
+#include "runtime/launch/launch.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
 #include "security/check.h"
 
 namespace rths::deploy {

@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "fuzz/targets.h"
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 
 namespace {
 

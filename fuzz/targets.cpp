@@ -10,17 +10,18 @@
 #include <stdexcept>
 
 #include "actuator_emulator/actuator_service.h"
-#include "core/study.h"
-#include "core/text_format.h"
 #include "deploy/sites.h"
-#include "identify/data.h"
-#include "runtime/plan.h"
-#include "runtime/record.h"
-#include "runtime/schema.h"
-#include "runtime/validation.h"
+#include "identify/model/data.h"
+#include "results/results.h"
+#include "results/write.h"
+#include "runtime/node/plan.h"
+#include "runtime/node/schema.h"
+#include "runtime/node/validation.h"
+#include "runtime/record/record.h"
+#include "study/motion_files.h"
+#include "study/study.h"
+#include "study/text_format.h"
 #include "substructure_nodes/substructure_service.h"
-#include "tables/results.h"
-#include "tables/write.h"
 
 namespace rths::fuzz {
 namespace {
@@ -155,7 +156,8 @@ int daq_export(const std::uint8_t* data, std::size_t size) {
 int run_record(const std::uint8_t* data, std::size_t size) {
   return guarded([&] {
     const runtime::RecordContents contents = runtime::read_record(scratch().write(data, size));
-    tables::write_table(tables::record_table(contents), scratch().output(), tables::Format::kCsv);
+    results::write_table(results::record_table(contents), scratch().output(),
+                         results::Format::kCsv);
   });
 }
 

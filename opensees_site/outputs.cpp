@@ -2,9 +2,9 @@
 
 #include <string>
 
-#include "runtime/measurements.h"
-#include "tables/results.h"
-#include "tables/write.h"
+#include "results/results.h"
+#include "results/write.h"
+#include "runtime/record/measurements.h"
 #include "util/plot.h"
 
 namespace rths::opensees {
@@ -59,7 +59,7 @@ void write_plots(const runtime::RunMeasurements& m, const std::filesystem::path&
 void write_site_outputs(const std::filesystem::path& record, const std::filesystem::path& out,
                         bool plots) {
   const runtime::RecordContents contents = runtime::read_record(record);
-  tables::write_table(tables::record_table(contents), out / "results.csv", tables::Format::kCsv);
+  results::write_table(results::record_table(contents), out / "results.csv", results::Format::kCsv);
   if (plots) write_plots(runtime::measure_run(contents), out);
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // What an OpenSees site leaves beside its record (OUT/run.rthsrec), read back through the one
 // reader of records (runtime::measure_run), so it says what `rths export` says:
-//   results.csv              the record as a table (tables::record_table: step, time_s, floors,
+//   results.csv              the record as a table (results::record_table: step, time_s, floors,
 //                            command / realised / force per actuator, lag per link), SI units
 //   command_realised.png     commanded and realised drift per actuator (mm) against time (s)
 //   force_displacement.png   measured force (kN) against realised drift (mm), per actuator

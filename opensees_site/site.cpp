@@ -7,14 +7,14 @@
 #include <stdexcept>
 #include <vector>
 
-#include "core/study.h"
 #include "opensees_site/session.h"
-#include "runtime/launch.h"
-#include "runtime/plan.h"
-#include "runtime/process.h"
+#include "runtime/launch/launch.h"
+#include "runtime/node/plan.h"
 #include "security/check.h"
 #include "security/pki.h"
+#include "study/study.h"
 #include "transport/dds_endpoint.h"
+#include "util/process.h"
 
 namespace rths::opensees {
 
@@ -53,14 +53,14 @@ void require_site_study(const core::HybridSetup& setup, const config::Deployment
                                   "actuator emulators");
 }
 
-std::vector<runtime::ChildProcess> start_nodes(const config::Deployment& deployment,
-                                               const SiteOptions& options,
-                                               const std::filesystem::path& security_dir,
-                                               int domain, const std::string& run_id) {
+std::vector<util::ChildProcess> start_nodes(const config::Deployment& deployment,
+                                            const SiteOptions& options,
+                                            const std::filesystem::path& security_dir, int domain,
+                                            const std::string& run_id) {
   const std::filesystem::path emulator =
-      runtime::find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
+      util::find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
   if (!options.log_dir.empty()) std::filesystem::create_directories(options.log_dir);
-  std::vector<runtime::ChildProcess> nodes;
+  std::vector<util::ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
     const std::string id = std::to_string(node.id());
     std::vector<std::string> args{"--node-id", id,    "--domain", std::to_string(domain),
@@ -70,14 +70,14 @@ std::vector<runtime::ChildProcess> start_nodes(const config::Deployment& deploym
     const auto log = options.log_dir.empty() ? std::filesystem::path("/dev/null")
                                              : options.log_dir / ("node_" + id + ".log");
     nodes.emplace_back(emulator, args, log,
-                       runtime::ChildOptions{"node " + id + " (actuator emulator)", {}, {}});
+                       util::ChildOptions{"node " + id + " (actuator emulator)", {}, {}});
   }
   return nodes;
 }
 
-void stop_nodes(std::vector<runtime::ChildProcess>& nodes) {
+void stop_nodes(std::vector<util::ChildProcess>& nodes) {
   const auto grace = std::chrono::steady_clock::now() + runtime::kNodeExitGrace;
-  for (runtime::ChildProcess& node : nodes) {
+  for (util::ChildProcess& node : nodes) {
     const auto left =
         duration_cast<std::chrono::milliseconds>(grace - std::chrono::steady_clock::now());
     if (!node.wait_for(std::max(left, std::chrono::milliseconds(0))))
@@ -208,7 +208,7 @@ SiteOutcome Site::serve(Listener& listener) {
                   : runtime::make_run_id(p.prepared.config.name() + "-" + p.case_name);
   co.case_name = p.case_name;
   co.record = options_.record;
-  std::vector<runtime::ChildProcess> nodes;
+  std::vector<util::ChildProcess> nodes;
   if (options_.start_nodes)
     nodes = start_nodes(p.deployment, options_, p.security_dir, domain, co.run_id);
   transport::DdsEndpointOptions dds;

@@ -42,8 +42,8 @@ struct SiteOptions {
   std::filesystem::path record;   // empty: no record
   std::filesystem::path log_dir;  // the started nodes' logs (node_<id>.log)
   std::filesystem::path
-      programs_dir;  // where rths-actuator-emulator is; empty: runtime::find_program's search
-  bool start_nodes = true;             // false: the emulators were started elsewhere
+      programs_dir;         // where rths-actuator-emulator is; empty: util::find_program's search
+  bool start_nodes = true;  // false: the emulators were started elsewhere
   std::filesystem::path security_dir;  // `rths pki init` directory; empty: the deployment's
   std::chrono::milliseconds accept_timeout{-1};  // < 0: wait for a client forever
 };

@@ -17,12 +17,12 @@
 //                               `rths export`); a record that lost entries raises rths.Error
 //                               naming the lost steps, unless allow_loss=True, which returns the
 //                               intact entries and "losses" (one description per damaged
-//                               region); attributes integrity and lost_steps as tables/results.h.
+//                               region); attributes integrity and lost_steps as results/results.h.
 //
 // "series" maps a name with its unit (time_s, u1_m, force1_N, node2_round_trip_s, a1_m_per_s2)
 // to a 1-D NumPy float64 array (text columns: a list of str); the names and units are those of
-// tables/results.h, the same the CSV, MATLAB and HDF5 files carry (one naming rule,
-// tables/table.h). "units" maps the same names to the unit.
+// results/results.h, the same the CSV, MATLAB and HDF5 files carry (one naming rule,
+// results/table.h). "units" maps the same names to the unit.
 // Summaries are plain dicts with the keys of the CLI's --json output.
 //
 // Errors: bad input (a malformed config, an unknown effect, a truncated data file) raises
@@ -45,14 +45,15 @@
 #include "analysis/sweep_report.h"
 #include "analysis/sweep_run.h"
 #include "core/benchmark_criteria.h"
-#include "core/ranges.h"
 #include "core/stability.h"
-#include "core/study.h"
-#include "identify/data.h"
-#include "identify/identify.h"
-#include "identify/report.h"
-#include "runtime/record.h"
-#include "tables/results.h"
+#include "identify/fit/identify.h"
+#include "identify/fit/request.h"
+#include "identify/lab/report.h"
+#include "identify/model/data.h"
+#include "results/results.h"
+#include "runtime/record/record.h"
+#include "study/ranges.h"
+#include "study/study.h"
 
 namespace py = pybind11;
 
@@ -100,10 +101,10 @@ py::object to_python(const nlohmann::json& j) {
 }
 
 // {"series": {name_unit: array}, "units": {name_unit: unit}} of a table (needs the GIL).
-py::dict table_dict(const tables::Table& table) {
+py::dict table_dict(const results::Table& table) {
   py::dict series, units;
-  for (const tables::Column& c : table.columns()) {
-    const py::str name(c.name);  // already ends in its unit (tables/table.h)
+  for (const results::Column& c : table.columns()) {
+    const py::str name(c.name);  // already ends in its unit (results/table.h)
     if (c.is_text) {
       series[name] = py::cast(c.texts);
     } else {
@@ -146,13 +147,13 @@ py::dict run(const Study& study, const std::optional<std::vector<std::string>>& 
     }
   }
   analysis::StudyOutcome outcome;
-  tables::Table table;
+  results::Table table;
   std::optional<analysis::BenchmarkEvaluation> benchmark;
   {
     py::gil_scoped_release release;
     const core::PreparedStudy prepared = core::prepare_study(chosen, study.base_dir);
     outcome = analysis::run_study(prepared);
-    table = tables::study_table(outcome);
+    table = results::study_table(outcome);
     benchmark = analysis::evaluate_benchmark(prepared, outcome);
   }
   py::dict out = table_dict(table);
@@ -169,7 +170,7 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
   options.shard = analysis::parse_shard(shard);
   options.threads = threads;
   options.general_path_only = general;
-  tables::Table table;
+  results::Table table;
   analysis::SweepTrends trends;
   std::string hash;
   std::size_t points = 0;
@@ -180,7 +181,7 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
     trends = analysis::measure_trends(rows);
     hash = grid.hash_hex();
     points = grid.size();
-    table = tables::sweep_table(rows, hash, points);
+    table = results::sweep_table(rows, hash, points);
   }
   py::dict out = table_dict(table);
   out["grid_hash"] = hash;
@@ -201,7 +202,7 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
 
 py::dict stability(double period, double zeta, double alpha, double dt,
                    const std::string& integrator, int branches, int max_steps) {
-  // The same range rules as `rths stability`'s flags (core/ranges.h), named as the arguments.
+  // The same range rules as `rths stability`'s flags (study/ranges.h), named as the arguments.
   core::check_range(core::Quantity::kPeriod, period, "period_s");
   core::check_range(core::Quantity::kDampingRatio, zeta, "zeta");
   core::check_range(core::Quantity::kFraction, alpha, "experimental_fraction");
@@ -249,21 +250,6 @@ py::dict stability(double period, double zeta, double alpha, double dt,
   return out;
 }
 
-std::vector<identify::Effect> effects(const std::vector<std::string>& names,
-                                      std::optional<identify::Channel> channel,
-                                      const std::string& what) {
-  std::vector<identify::Effect> out;
-  for (const auto& name : names) {
-    const identify::Effect e = identify::parse_effect(name);
-    if (channel && !identify::effect_applies(e, *channel)) {
-      throw std::invalid_argument(what + ": effect '" + name + "' does not apply to channel '" +
-                                  identify::channel_name(*channel) + "'");
-    }
-    out.push_back(e);
-  }
-  return out;
-}
-
 py::dict identify_record(const std::filesystem::path& path,
                          const std::vector<std::string>& channels,
                          const std::vector<std::string>& declared_actuator,
@@ -272,36 +258,23 @@ py::dict identify_record(const std::filesystem::path& path,
                          const std::string& holdout_mode, std::size_t max_steps,
                          const std::string& length_unit, const std::string& force_unit,
                          const std::string& time_unit, const std::string& column_map) {
-  core::check_range(core::Quantity::kFraction, holdout, "holdout");
-  if (max_steps > 1000)  // 0: the declared model only, as `rths identify --max-steps 0`
-    throw std::invalid_argument("max_steps = " + std::to_string(max_steps) +
-                                " is outside [0, 1000]");
-  identify::IdentifyOptions options;
-  options.channels.clear();
-  for (const auto& name : channels) {
-    if (name == "measured")
-      options.channels.push_back(identify::Channel::kMeasured);
-    else if (name == "force")
-      options.channels.push_back(identify::Channel::kForce);
-    else
-      throw std::invalid_argument("channels: unknown channel '" + name + "' (measured, force)");
-  }
-  if (options.channels.empty()) throw std::invalid_argument("channels: no channel given");
-  options.declared_actuator =
-      effects(declared_actuator, identify::Channel::kMeasured, "declared_actuator");
-  options.declared_specimen =
-      effects(declared_specimen, identify::Channel::kForce, "declared_specimen");
-  if (candidates) options.selection.candidates = effects(*candidates, std::nullopt, "candidates");
-  options.holdout_fraction = holdout;
-  options.holdout_mode = identify::parse_holdout_mode(holdout_mode);
-  options.selection.max_steps = max_steps;
+  identify::IdentifyRequest request;
+  request.channels = channels;
+  request.declared_actuator = declared_actuator;
+  request.declared_specimen = declared_specimen;
+  if (candidates) request.candidates = *candidates;
+  request.holdout = holdout;
+  request.holdout_mode = holdout_mode;
+  request.max_steps = max_steps;
+  const identify::IdentifyOptions options =
+      identify::identify_options(request, [](const std::string& field) { return field; });
   identify::CsvUnits units;
   units.time_to_s = identify::time_unit_to_s(time_unit);
   units.length_to_m = identify::length_unit_to_m(length_unit);
   units.force_to_n = identify::force_unit_to_n(force_unit);
   const identify::DaqColumnMap map = identify::parse_column_map(column_map);
   nlohmann::json report;
-  tables::Table table;
+  results::Table table;
   {
     py::gil_scoped_release release;
     const identify::Identification id =
@@ -309,7 +282,7 @@ py::dict identify_record(const std::filesystem::path& path,
                                                    0.0, identify::force_column(options.channels)),
                            options);
     report = identify::to_json(id, identify::ReportContext{holdout, options.holdout_mode});
-    table = tables::identify_table(id);
+    table = results::identify_table(id);
   }
   py::dict out = table_dict(table);
   out["report"] = to_python(report);
@@ -318,7 +291,7 @@ py::dict identify_record(const std::filesystem::path& path,
 
 py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
   runtime::RecordContents contents;
-  tables::Table table;
+  results::Table table;
   {
     py::gil_scoped_release release;
     try {
@@ -330,7 +303,7 @@ py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
     if (contents.lost_entries() && !allow_loss)
       throw std::runtime_error("the record lost entries: " + contents.loss_report() +
                                " (read_record(path, allow_loss=True) returns the intact ones)");
-    table = tables::record_table(contents);
+    table = results::record_table(contents);
   }
   py::dict out = table_dict(table);
   out["attributes"] = py::cast(table.attributes());

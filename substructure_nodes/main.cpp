@@ -1,5 +1,5 @@
-// rths-substructure-node: hosts numerical storeys behind DDS. See runtime/node_main.h.
-#include "runtime/node_main.h"
+// rths-substructure-node: hosts numerical storeys behind DDS. See runtime/node/node_main.h.
+#include "runtime/node/node_main.h"
 #include "substructure_nodes/substructure_service.h"
 
 int main(int argc, char** argv) {

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "runtime/plan.h"
+#include "runtime/node/plan.h"
 
 namespace rths::substructure_nodes {
 

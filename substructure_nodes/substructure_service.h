@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "core/substructure.h"
-#include "runtime/node_service.h"
+#include "runtime/node/node_service.h"
 
 namespace rths::substructure_nodes {
 

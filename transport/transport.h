@@ -7,7 +7,7 @@
 // DdsEndpoint (Cyclone DDS, processes on any host). The same run gives the same numbers on both.
 // Who may say what: every node has its own topic each way, so a receiver knows which node's
 // topic carried a message (topic_node) and which writer sent it (writer); the envelope's node_id
-// is only a claim, checked against both by the receiver (runtime/validation.h).
+// is only a claim, checked against both by the receiver (runtime/node/validation.h).
 //
 // Stamps are CLOCK_REALTIME nanoseconds (comparable across hosts up to their clock offset);
 // round trips are measured on one host's clock from sent_ns and the echo, so carry no offset.
@@ -43,9 +43,16 @@ class Endpoint {
  public:
   virtual ~Endpoint() = default;
   // Sends one message in this endpoint's direction. Throws std::runtime_error on failure.
+  // Loop-thread contract: never waits for a peer (best-effort, no acknowledgement); may take a
+  // short lock shared with the receive thread; allocates nothing in the DDS endpoint once the
+  // addressed writer exists (the first message to a node creates it), and one queue entry in the
+  // in-process one.
   virtual void send(const Message& message) = 0;
   // The next message addressed to this endpoint (nodes see only their own node id and
   // broadcasts to id -1), or nullopt when `timeout` passes or interrupt() is called.
+  // Loop-thread contract: blocks up to `timeout` (0: a poll that never waits); the message
+  // returned is moved out of the queue, so the caller owns its buffers (an allocation per queued
+  // message, which is why feedback takes the inline handler instead).
   virtual std::optional<Message> receive(std::chrono::nanoseconds timeout) = 0;
   // Wakes a receive() blocked in another thread (thread safe).
   virtual void interrupt() = 0;

@@ -1,14 +1,22 @@
 #include "util/plot.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iterator>
 #include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+
+#include "util/process.h"
 
 namespace rths::util {
 namespace {
@@ -189,19 +197,42 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
 
 }  // namespace
 
+namespace {
+
+// A figure set that takes longer than this is stuck (a 1-minute record draws in seconds).
+constexpr std::chrono::seconds kGnuplotTimeout{300};
+
+}  // namespace
+
 void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure) {
-  struct PipeCloser {
-    void operator()(FILE* f) const {
-      if (f) pclose(f);
-    }
-  };
-  FILE* pipe = popen("gnuplot 2>/dev/null", "w");
-  if (pipe == nullptr) throw std::runtime_error("cannot start gnuplot for " + figure.string());
-  const std::size_t written = std::fwrite(script.data(), 1, script.size(), pipe);
-  const int status = pclose(pipe);
-  if (written != script.size() || status != 0) {
-    throw std::runtime_error("gnuplot failed to write " + figure.string() +
+  // The script goes to a file of its own: gnuplot then runs through the one child-process unit
+  // (util/process.h, whose children read /dev/null), and its messages come back for the error.
+  char name[] = "/tmp/rths-plot-XXXXXX";
+  const int fd = ::mkstemp(name);
+  if (fd < 0)
+    throw std::runtime_error(std::string("cannot write the gnuplot script: ") +
+                             std::strerror(errno));
+  const std::filesystem::path script_file = name;
+  const bool written =
+      ::write(fd, script.data(), script.size()) == static_cast<ssize_t>(script.size());
+  ::close(fd);
+  CommandResult result;
+  try {
+    if (!written)
+      throw std::runtime_error("cannot write the gnuplot script " + script_file.string());
+    result = run_command({"gnuplot", script_file.string()}, kGnuplotTimeout);
+  } catch (const std::exception& e) {
+    std::filesystem::remove(script_file);
+    throw std::runtime_error("gnuplot could not draw " + figure.string() + ": " + e.what() +
                              " (is gnuplot-nox installed?)");
+  }
+  std::filesystem::remove(script_file);
+  if (!result.ok()) {
+    constexpr std::size_t kTail = 600;
+    const std::string& out = result.output;
+    throw std::runtime_error("gnuplot failed to write " + figure.string() + " (exit " +
+                             std::to_string(result.exit_code) + "): " +
+                             (out.size() > kTail ? "..." + out.substr(out.size() - kTail) : out));
   }
 }
 

@@ -99,10 +99,11 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 // Several panels stacked vertically in one PNG (shared width), and the SVG beside it.
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png);
 
-// Runs a gnuplot script as given (its text on gnuplot's stdin; it sets its own terminals and
-// outputs), for figures a PlotSpec does not describe (e.g. a heat map with contour lines).
-// `figure` names what it draws, for the message. Throws std::runtime_error when gnuplot is
-// missing or fails.
+// Runs a gnuplot script as given (it sets its own terminals and outputs), for figures a PlotSpec
+// does not describe (e.g. a heat map with contour lines), as a child process (util/process.h)
+// reading the script from a temporary file. Blocks until gnuplot ends (at most 5 minutes).
+// `figure` names what it draws, for the message. Throws std::runtime_error naming the figure
+// when gnuplot is missing, times out or fails, with the end of gnuplot's own messages.
 void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure);
 
 // The range [lo, hi] padded by `margin` of its span on each side, over the finite y of the series

@@ -1,9 +1,9 @@
 #include "view/context.h"
 
 #include "analysis/study_run.h"
-#include "core/study_inputs.h"
-#include "runtime/in_process.h"
-#include "runtime/plan.h"
+#include "runtime/node/in_process.h"
+#include "runtime/node/plan.h"
+#include "study/study_inputs.h"
 
 namespace rths::view {
 

@@ -23,8 +23,8 @@
 #include <nlohmann/json.hpp>
 
 #include "core/simulation.h"
-#include "core/study.h"
-#include "runtime/record.h"
+#include "runtime/record/record.h"
+#include "study/study.h"
 #include "view/feed.h"
 
 namespace rths::view {

@@ -44,7 +44,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/simulation.h"
-#include "runtime/record.h"
+#include "runtime/record/record.h"
 
 namespace rths::view {
 

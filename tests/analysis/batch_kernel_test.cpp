@@ -11,8 +11,9 @@
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/structure.h"
-#include "core/study.h"
 #include "core/substructure.h"
+#include "study/motion_files.h"
+#include "study/study.h"
 
 namespace rths::analysis {
 namespace {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::analysis {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::analysis {
 namespace {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/metrics.h"
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::analysis {
 namespace {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/study.h"
+#include "study/study.h"
 #include "sweep_study.h"
 
 namespace rths::analysis {

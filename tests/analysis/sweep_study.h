@@ -10,7 +10,7 @@
 
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_run.h"
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::analysis::sweep_test {
 

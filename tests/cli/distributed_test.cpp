@@ -43,9 +43,9 @@ TEST(FailIfDistributedFailed, AKilledOrTimedOutCoordinatorIsAFailedRun) {
 
 TEST(FailIfDistributedFailed, ALockstepRunThatDiffersFromInProcessFailsNamingTheFirstStep) {
   DistributedResults results = one_case();
-  results.facts[0].difference_from_in_process = InProcessDifference{0.0, std::nullopt};
+  results.facts[0].difference_from_in_process = analysis::InProcessDifference{0.0, std::nullopt};
   EXPECT_EQ(exit_of(results, {run_with_exit(0)}), 0) << "bit for bit";
-  results.facts[0].difference_from_in_process = InProcessDifference{2.5e-3, 17};
+  results.facts[0].difference_from_in_process = analysis::InProcessDifference{2.5e-3, 17};
   try {
     fail_if_distributed_failed(results, {run_with_exit(0)}, false);
     FAIL() << "passed";
@@ -59,7 +59,7 @@ TEST(FailIfDistributedFailed, ALockstepRunThatDiffersFromInProcessFailsNamingThe
 
 TEST(DistributedSummary, NamesTheFirstDifferingStepAndEveryNodesRejects) {
   DistributedResults results = one_case();
-  results.facts[0].difference_from_in_process = InProcessDifference{2.5e-3, 17};
+  results.facts[0].difference_from_in_process = analysis::InProcessDifference{2.5e-3, 17};
   runtime::NodeRejects node;
   node.set_node_id(2);
   node.set_label("node 2 (actuator emulator)");
@@ -67,14 +67,14 @@ TEST(DistributedSummary, NamesTheFirstDifferingStepAndEveryNodesRejects) {
   node.mutable_rejected()->set_foreign_run(1);
   node.set_final(true);
   results.facts[0].node_rejects.push_back(node);
-  const std::string text = distributed_summary_text(results);
+  const std::string text = analysis::distributed_summary_text(results);
   EXPECT_NE(text.find("DIFFERS from the in-process run of the same case from step 17"),
             std::string::npos)
       << text;
   EXPECT_NE(text.find("node 2 (actuator emulator) rejected: foreign_run 1, not_entitled 5"),
             std::string::npos)
       << text;
-  const nlohmann::json j = distributed_summary_json(results);
+  const nlohmann::json j = analysis::distributed_summary_json(results);
   EXPECT_EQ(j["cases"][0]["first_step_differing_from_in_process"], 17);
   EXPECT_EQ(j["cases"][0]["node_rejects"][0]["rejected"]["not_entitled"], 5);
 }

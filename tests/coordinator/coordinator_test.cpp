@@ -11,7 +11,7 @@
 #include <filesystem>
 
 #include "actuator_emulator/actuator_service.h"
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 #include "substructure_nodes/substructure_service.h"
 #include "tests/runtime/test_support.h"
 #include "transport/in_process.h"

@@ -8,7 +8,7 @@
 #include <limits>
 #include <thread>
 
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 
 namespace rths::coordinator {
 namespace {

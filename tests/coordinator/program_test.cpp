@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "platform/probe.h"
+#include "rt_check/probe.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/run_command_line.h"
 
@@ -88,7 +88,7 @@ TEST(PlatformGate, AcceptPlatformRunsAndTheRecordSaysSo) {
   EXPECT_TRUE(p.refused());
   EXPECT_TRUE(p.accepted_override());
   EXPECT_EQ(p.verdict(), kVerdict);
-  EXPECT_EQ(p.dma_latency_held(), platform::DmaLatencyHold().held());
+  EXPECT_EQ(p.dma_latency_held(), rt_check::DmaLatencyHold().held());
 }
 
 }  // namespace

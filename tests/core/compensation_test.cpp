@@ -8,7 +8,8 @@
 #include <vector>
 
 #include "core/metrics.h"
-#include "core/study.h"
+#include "study/compensation_config.h"
+#include "study/study.h"
 
 namespace rths::core {
 namespace {

@@ -8,6 +8,8 @@
 
 #include "core/compensation.h"
 #include "core/simulation.h"
+#include "study/compensation_config.h"
+#include "study/stability_config.h"
 
 namespace rths::core {
 namespace {

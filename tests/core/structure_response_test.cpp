@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::core {
 namespace {

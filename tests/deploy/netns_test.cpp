@@ -6,11 +6,11 @@
 
 #include <algorithm>
 
-#include "runtime/process.h"
+#include "util/process.h"
 
 namespace rths::deploy {
 
-using runtime::run_command;
+using util::run_command;
 namespace {
 
 bool contains(const std::vector<std::string>& names, const std::string& name) {
@@ -39,7 +39,7 @@ TEST_F(NetnsTest, TwoSitesPingEachOtherAndVanishAfterTeardown) {
     for (const char* arg : {"ping", "-c", "3", "-i", "0.2", "-W", "2", "10.231.1.2"}) {
       argv.push_back(arg);
     }
-    const auto ping = run_command(argv, std::chrono::seconds(10));
+    const auto ping = util::run_command(argv, std::chrono::seconds(10));
     EXPECT_EQ(ping.exit_code, 0) << ping.output;
     EXPECT_NE(ping.output.find("3 received"), std::string::npos) << ping.output;
 
@@ -47,7 +47,7 @@ TEST_F(NetnsTest, TwoSitesPingEachOtherAndVanishAfterTeardown) {
     // and an address outside the topology is unreachable.
     auto outside = topology.exec_prefix("beta");
     for (const char* arg : {"ping", "-c", "1", "-W", "1", "10.231.2.1"}) outside.push_back(arg);
-    EXPECT_NE(run_command(outside, std::chrono::seconds(5)).exit_code, 0);
+    EXPECT_NE(util::run_command(outside, std::chrono::seconds(5)).exit_code, 0);
   }
   const auto after = list_namespaces();
   for (const auto& name : made) EXPECT_FALSE(contains(after, name)) << name << " left behind";
@@ -70,7 +70,7 @@ TEST_F(NetnsTest, TopologiesSideBySideAreIsolated) {
   for (const auto* topology : {&first, &second}) {
     auto argv = topology->exec_prefix("a");
     for (const char* arg : {"ping", "-c", "1", "-W", "2", "10.231.3.2"}) argv.push_back(arg);
-    EXPECT_EQ(run_command(argv, std::chrono::seconds(5)).exit_code, 0);
+    EXPECT_EQ(util::run_command(argv, std::chrono::seconds(5)).exit_code, 0);
   }
 }
 

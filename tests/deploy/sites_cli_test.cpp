@@ -10,30 +10,30 @@
 
 #include "deploy/netns.h"
 
-#include "runtime/process.h"
+#include "util/process.h"
 
 namespace rths::deploy {
 
-using runtime::run_command;
-using runtime::tool_available;
+using util::run_command;
+using util::tool_available;
 namespace {
 
 const std::string kRths = std::string(RTHS_BINARY_DIR) + "/cli/rths";
 const std::string kConfig = std::string(RTHS_SOURCE_DIR) + "/configs/sites_paper_frame.textproto";
 
 TEST(SitesCli, CheckAcceptsTheShippedConfig) {
-  const auto result = run_command({kRths, "sites", kConfig, "--check"});
+  const auto result = util::run_command({kRths, "sites", kConfig, "--check"});
   EXPECT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("3 processes on 3 sites"), std::string::npos) << result.output;
 }
 
 TEST(SitesCli, DomainOverridesTheConfigsAndIsCheckedLikeLaunchs) {
-  const auto result = run_command({kRths, "sites", kConfig, "--check", "--domain", "77"});
+  const auto result = util::run_command({kRths, "sites", kConfig, "--check", "--domain", "77"});
   EXPECT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("DDS domain 77"), std::string::npos) << result.output;
-  const auto shipped = run_command({kRths, "sites", kConfig, "--check"});
+  const auto shipped = util::run_command({kRths, "sites", kConfig, "--check"});
   EXPECT_NE(shipped.output.find("DDS domain 101"), std::string::npos) << shipped.output;
-  const auto bad = run_command({kRths, "sites", kConfig, "--check", "--domain", "300"});
+  const auto bad = util::run_command({kRths, "sites", kConfig, "--check", "--domain", "300"});
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--domain"), std::string::npos) << bad.output;
 }
@@ -60,7 +60,8 @@ TEST(SitesCli, CheckWarnsWhenNetworkAndActuatorLagTogetherPassTheCriticalDelay) 
   write("lagged.textproto", "lag_shift_14ms", "REAL_TIME");
   write("reference.textproto", "reference", "REAL_TIME");
   write("lockstep.textproto", "lag_shift_14ms", "LOCKSTEP");
-  const auto lagged = run_command({kRths, "sites", (dir / "lagged.textproto").string(), "--check"});
+  const auto lagged =
+      util::run_command({kRths, "sites", (dir / "lagged.textproto").string(), "--check"});
   EXPECT_EQ(lagged.exit_code, 0) << lagged.output;
   EXPECT_NE(lagged.output.find(
                 "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the "
@@ -69,11 +70,11 @@ TEST(SitesCli, CheckWarnsWhenNetworkAndActuatorLagTogetherPassTheCriticalDelay) 
       << lagged.output;
   EXPECT_NE(lagged.output.find("PAST it by"), std::string::npos) << lagged.output;
   const auto reference =
-      run_command({kRths, "sites", (dir / "reference.textproto").string(), "--check"});
+      util::run_command({kRths, "sites", (dir / "reference.textproto").string(), "--check"});
   EXPECT_EQ(reference.output.find("warning"), std::string::npos) << reference.output;
   // Lockstep pairs every command with its own answer: the network lag does not enter.
   const auto lockstep =
-      run_command({kRths, "sites", (dir / "lockstep.textproto").string(), "--check"});
+      util::run_command({kRths, "sites", (dir / "lockstep.textproto").string(), "--check"});
   EXPECT_EQ(lockstep.output.find("warning"), std::string::npos) << lockstep.output;
   std::filesystem::remove_all(dir);
 }
@@ -125,9 +126,9 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
          "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
          "start_timeout: 20 }\n";
   const auto sites =
-      run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain", "90",
-                   "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
-                  std::chrono::seconds(120));
+      util::run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain", "90",
+                         "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
+                        std::chrono::seconds(120));
   ASSERT_EQ(sites.exit_code, 0) << sites.output;
   EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos)
       << sites.output;
@@ -140,8 +141,8 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
                             "numerical site \"lab\": round trip, injected"})
     EXPECT_NE(lag_plot.find(label), std::string::npos) << label;
 
-  const auto ran = run_command({kRths, "run", (dir / "single.textproto").string(), "--no-plots",
-                                "--json", "--out", (dir / "run").string()});
+  const auto ran = util::run_command({kRths, "run", (dir / "single.textproto").string(),
+                                      "--no-plots", "--json", "--out", (dir / "run").string()});
   ASSERT_EQ(ran.exit_code, 0) << ran.output;
   std::vector<std::string> sites_header, lag_columns;
   for (const auto& cell : header_of(dir / "sites" / "results.csv"))
@@ -159,7 +160,7 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
 }
 
 TEST(SitesCli, BadConfigExitsTwoNamingTheFile) {
-  const auto missing = run_command({kRths, "sites", "/nonexistent/sites.textproto"});
+  const auto missing = util::run_command({kRths, "sites", "/nonexistent/sites.textproto"});
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_NE(missing.output.find("/nonexistent/sites.textproto"), std::string::npos);
 }
@@ -167,14 +168,15 @@ TEST(SitesCli, BadConfigExitsTwoNamingTheFile) {
 // Without the right to make namespaces (here: the same command as user nobody, which needs root
 // to arrange), the command says so and exits 3 before touching anything.
 TEST(SitesCli, NoNamespacePermissionExitsThreeSayingWhy) {
-  if (::geteuid() != 0 || !tool_available("setpriv")) {
+  if (::geteuid() != 0 || !util::tool_available("setpriv")) {
     GTEST_SKIP() << "needs root and setpriv to run the command as an unprivileged user";
   }
   const auto copy = std::filesystem::temp_directory_path() / "rths_sites_cli_test";
   std::filesystem::create_directories(copy);
   std::filesystem::permissions(copy, std::filesystem::perms::all);
-  const auto result = run_command({"setpriv", "--reuid=65534", "--regid=65534", "--clear-groups",
-                                   kRths, "sites", kConfig, "--out", copy.string()});
+  const auto result =
+      util::run_command({"setpriv", "--reuid=65534", "--regid=65534", "--clear-groups", kRths,
+                         "sites", kConfig, "--out", copy.string()});
   EXPECT_EQ(result.exit_code, 3) << result.output;
   EXPECT_NE(result.output.find("network namespaces are not permitted"), std::string::npos)
       << result.output;

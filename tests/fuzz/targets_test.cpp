@@ -13,7 +13,7 @@
 #include <set>
 #include <sstream>
 
-#include "runtime/record.h"
+#include "runtime/record/record.h"
 
 namespace rths::fuzz {
 

@@ -1,4 +1,4 @@
-#include "identify/bode.h"
+#include "identify/lab/bode.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <numbers>
 
-#include "identify/generator.h"
-#include "identify/identify.h"
+#include "identify/fit/identify.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

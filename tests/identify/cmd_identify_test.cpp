@@ -18,11 +18,11 @@
 #include <string>
 
 #include "core/metrics.h"
-#include "core/study.h"
-#include "core/text_columns.h"
-#include "identify/data.h"
-#include "identify/generator.h"
-#include "runtime/measurements.h"
+#include "identify/lab/generator.h"
+#include "identify/model/data.h"
+#include "runtime/record/measurements.h"
+#include "study/study.h"
+#include "study/text_columns.h"
 #include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {

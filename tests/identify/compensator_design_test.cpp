@@ -1,4 +1,4 @@
-#include "identify/compensator_design.h"
+#include "identify/lab/compensator_design.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/study.h"
+#include "study/compensation_config.h"
+#include "study/study.h"
 
 namespace rths::identify {
 namespace {

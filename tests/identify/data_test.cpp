@@ -1,4 +1,4 @@
-#include "identify/data.h"
+#include "identify/model/data.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

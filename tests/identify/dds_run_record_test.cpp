@@ -13,8 +13,8 @@
 #include <set>
 #include <string>
 
-#include "identify/run_record.h"
-#include "runtime/launch.h"
+#include "identify/run/run_record.h"
+#include "runtime/launch/launch.h"
 #include "tests/identify/undeclared_run.h"
 #include "tests/support/platform_gate.h"
 

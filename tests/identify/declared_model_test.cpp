@@ -1,7 +1,7 @@
 // The declared model as a config file: reading, every refusal naming file and field, the
 // physical bounds at a record's scales, the declarations honoured by the fit, and the round trip
 // of an identified model through the file.
-#include "identify/declared_model.h"
+#include "identify/model/declared_model.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -10,8 +10,8 @@
 
 #include <cmath>
 
-#include "identify/generator.h"
-#include "identify/selection.h"
+#include "identify/fit/selection.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

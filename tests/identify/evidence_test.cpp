@@ -1,4 +1,4 @@
-#include "identify/evidence.h"
+#include "identify/fit/evidence.h"
 
 #include <gtest/gtest.h>
 #include <numbers>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

@@ -1,11 +1,11 @@
-#include "identify/fit.h"
+#include "identify/fit/fit.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

@@ -1,4 +1,4 @@
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
 
 #include <gtest/gtest.h>
 

@@ -1,11 +1,11 @@
-#include "identify/identify.h"
+#include "identify/fit/identify.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <iostream>
 
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

@@ -1,4 +1,4 @@
-#include "identify/model.h"
+#include "identify/model/model.h"
 
 #include <gtest/gtest.h>
 #include <numbers>
@@ -8,7 +8,7 @@
 #include <random>
 
 #include "core/delay.h"
-#include "identify/evidence.h"
+#include "identify/fit/evidence.h"
 
 namespace rths::identify {
 namespace {

@@ -9,7 +9,7 @@
 #include <set>
 #include <string>
 
-#include "identify/network_path.h"
+#include "identify/run/network_path.h"
 
 namespace rths::identify {
 namespace {

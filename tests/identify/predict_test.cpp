@@ -1,4 +1,4 @@
-#include "identify/predict.h"
+#include "identify/lab/predict.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "identify/report.h"
+#include "identify/lab/report.h"
 
 #include <gtest/gtest.h>
 #include <numbers>
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

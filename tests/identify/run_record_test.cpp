@@ -13,8 +13,8 @@
 #include <set>
 #include <string>
 
-#include "identify/run_record.h"
-#include "runtime/record.h"
+#include "identify/run/run_record.h"
+#include "runtime/record/record.h"
 #include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {

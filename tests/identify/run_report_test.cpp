@@ -9,7 +9,7 @@
 #include <unistd.h>
 #include <filesystem>
 
-#include "identify/run_report.h"
+#include "identify/run/run_report.h"
 
 namespace rths::identify {
 namespace {

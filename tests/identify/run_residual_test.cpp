@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <string>
 
-#include "identify/run_record.h"
+#include "identify/run/run_record.h"
 #include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {

@@ -1,11 +1,11 @@
-#include "identify/selection.h"
+#include "identify/fit/selection.h"
 
 #include <gtest/gtest.h>
 
 #include <functional>
 #include <string>
 
-#include "identify/generator.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

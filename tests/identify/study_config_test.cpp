@@ -1,7 +1,7 @@
 // The identified model as study-config parts: the actuator's delay stages, the specimen's storey
 // restoring force (the same force as the identified model for the same drift history), and a
 // whole study built from a base and the fragment, which runs.
-#include "identify/study_config.h"
+#include "identify/model/study_config.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -9,8 +9,8 @@
 #include <cmath>
 
 #include "core/simulation.h"
-#include "core/study.h"
-#include "core/text_format.h"
+#include "study/study.h"
+#include "study/text_format.h"
 
 namespace rths::identify {
 namespace {

@@ -9,9 +9,9 @@
 #include <set>
 #include <string>
 
-#include "core/study_inputs.h"
-#include "identify/run_record.h"
-#include "runtime/record.h"
+#include "identify/run/run_record.h"
+#include "runtime/record/record.h"
+#include "study/study_inputs.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
 

@@ -1,4 +1,4 @@
-#include "identify/validation.h"
+#include "identify/fit/validation.h"
 
 #include <gtest/gtest.h>
 
@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <iostream>
 
-#include "identify/evidence.h"
-#include "identify/generator.h"
-#include "identify/identify.h"
+#include "identify/fit/evidence.h"
+#include "identify/fit/identify.h"
+#include "identify/lab/generator.h"
 
 namespace rths::identify {
 namespace {

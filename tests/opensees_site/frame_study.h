@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::test {
 

@@ -11,7 +11,7 @@
 #include "core/simulation.h"
 #include "frame_study.h"
 #include "generic_client.h"
-#include "runtime/plan.h"
+#include "runtime/node/plan.h"
 
 namespace rths::opensees {
 namespace {

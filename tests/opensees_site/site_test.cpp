@@ -12,8 +12,8 @@
 #include "frame_study.h"
 #include "generic_client.h"
 #include "opensees_site/outputs.h"
-#include "runtime/launch.h"
-#include "runtime/record.h"
+#include "runtime/launch/launch.h"
+#include "runtime/record/record.h"
 
 namespace rths::opensees {
 namespace {

@@ -170,7 +170,7 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     cli("export", record, "--csv", tmp_path / "lag_shift_14ms.csv")
     expected = csv_columns(tmp_path / "lag_shift_14ms.csv")
     assert not got["truncated"] and got["attributes"]["case_name"] == "lag_shift_14ms"
-    # One naming rule: Python's names are the CSV's (tables/table.h).
+    # One naming rule: Python's names are the CSV's (results/table.h).
     assert list(got["series"]) == list(expected)
     np.testing.assert_array_equal(got["series"]["u1_m"], numbers(expected["u1_m"]))
     np.testing.assert_array_equal(got["series"]["time_s"], numbers(expected["time_s"]))

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/compensation.h"
-#include "runtime/lag.h"
+#include "runtime/node/lag.h"
 #include "test_support.h"
 
 namespace rths {

@@ -3,7 +3,7 @@
 // equal) and in real time. DDS domain ids 192-194.
 #include <gtest/gtest.h>
 
-#include "runtime/lag.h"
+#include "runtime/node/lag.h"
 #include "test_support.h"
 
 namespace rths {

@@ -4,7 +4,7 @@
 
 #include <future>
 
-#include "runtime/lag.h"
+#include "runtime/node/lag.h"
 #include "test_support.h"
 
 namespace rths {

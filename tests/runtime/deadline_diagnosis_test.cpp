@@ -1,7 +1,7 @@
 // Why a real-time run missed its deadlines, from hand-made steps: each overrun put down to the
 // platform (the work fitted, the wake-up came late) or to the loop's own work, the advice that
 // follows, and what the record is still good for.
-#include "runtime/deadline_diagnosis.h"
+#include "runtime/record/deadline_diagnosis.h"
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
-#include "runtime/launch.h"
+#include "runtime/launch/launch.h"
 #include "tests/support/fault_trial.h"
 
 namespace rths {

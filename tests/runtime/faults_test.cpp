@@ -16,7 +16,7 @@
 #include <thread>
 
 #include "rths/proto/runtime.pb.h"
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 #include "test_support.h"
 #include "tests/support/platform_gate.h"
 #include "transport/dds_endpoint.h"
@@ -24,20 +24,20 @@
 namespace rths {
 namespace {
 
-using runtime::ChildProcess;
+using util::ChildProcess;
 using namespace std::chrono_literals;
 
 struct Cluster {
   std::filesystem::path dir, record;
-  std::vector<ChildProcess> nodes;
-  std::optional<ChildProcess> coordinator;
+  std::vector<util::ChildProcess> nodes;
+  std::optional<util::ChildProcess> coordinator;
 };
 
 // Starts the listed nodes (id, kind) and the coordinator for `text` (started as
 // `coordinator_options` says).
 Cluster start(const std::string& name, const std::string& text, int domain,
               const std::vector<std::pair<int, bool>>& nodes, const std::string& case_name,
-              const runtime::ChildOptions& coordinator_options = {}) {
+              const util::ChildOptions& coordinator_options = {}) {
   Cluster c;
   c.dir = test::scratch_dir(name);
   const auto config = test::write_config(c.dir, text);
@@ -289,10 +289,11 @@ TEST(Faults, HostileParticipantChangesNothingAndIsCounted) {
 }
 
 // tests/support/rogue_participant.cpp in `domain` (it learns the run id off the wire).
-ChildProcess rogue(const std::filesystem::path& log, int domain, std::vector<std::string> attack) {
+util::ChildProcess rogue(const std::filesystem::path& log, int domain,
+                         std::vector<std::string> attack) {
   std::vector<std::string> args{"--domain", std::to_string(domain), "--seconds", "60"};
   args.insert(args.end(), attack.begin(), attack.end());
-  return ChildProcess(test::program("rths_rogue", "tests/support"), args, log);
+  return util::ChildProcess(test::program("rths_rogue", "tests/support"), args, log);
 }
 
 // Trials per forgery (RTHS_ROGUE_TRIALS overrides; the README quotes a longer measurement).
@@ -318,7 +319,7 @@ TEST_P(ForgedAnswers, StopTheRunWithAnIntegrityFaultNamingNode1) {
   for (int trial = 0; trial < trials; ++trial) {
     const std::string name = std::string("forged_") + label + "_" + std::to_string(trial);
     const auto dir = test::scratch_dir(name);
-    ChildProcess attacker = rogue(dir / "rogue.log", domain, attack);
+    util::ChildProcess attacker = rogue(dir / "rogue.log", domain, attack);
     Cluster c = start(name, text, domain, {{1, true}, {2, false}}, "lag_shift_14ms");
     const auto code = c.coordinator->wait_for(60s);
     attacker.terminate();
@@ -363,7 +364,7 @@ TEST(Faults, ForgedControlMessagesAreRejectedCountedAndChangeNothing) {
   const std::string name = "forged_control";
   const std::string text = test::paper_frame_study(3, "");
   const auto dir = test::scratch_dir(name + "_rogue");
-  ChildProcess attacker = rogue(dir / "rogue.log", kDomain, {"--mode", "control"});
+  util::ChildProcess attacker = rogue(dir / "rogue.log", kDomain, {"--mode", "control"});
   Cluster c = start(name, text, kDomain, {{1, true}, {2, false}}, "lag_shift_14ms");
   const auto code = c.coordinator->wait_for(60s);
   ASSERT_TRUE(code.has_value());
@@ -392,9 +393,9 @@ TEST(Faults, ALateJoinerWithinTheStartTimeoutIsWaitedFor) {
   const std::string text = test::paper_frame_study(0.5, "deployment { start_timeout: 10 }");
   Cluster c = start(name, text, kDomain, {{1, true}}, "reference");
   std::this_thread::sleep_for(4s);
-  ChildProcess late(test::program("rths-actuator-emulator", "actuator_emulator"),
-                    {"--node-id", "2", "--domain", std::to_string(kDomain), "--run-id", name},
-                    c.dir / "node_2.log");
+  util::ChildProcess late(test::program("rths-actuator-emulator", "actuator_emulator"),
+                          {"--node-id", "2", "--domain", std::to_string(kDomain), "--run-id", name},
+                          c.dir / "node_2.log");
   const auto code = c.coordinator->wait_for(30s);
   ASSERT_TRUE(code.has_value());
   EXPECT_EQ(*code, 0) << test::read_file(c.dir / "coordinator.log")
@@ -409,11 +410,11 @@ TEST(Faults, ALateJoinerWithinTheStartTimeoutIsWaitedFor) {
 // entry the disk took, holds and stops the nodes, names the reason, and the record reads up to
 // there.
 TEST(Faults, ARecordThatCannotBeWrittenStopsTheRunWithinFiveSteps) {
-  if (!runtime::tool_available("prlimit")) GTEST_SKIP() << "prlimit (util-linux) is not installed";
+  if (!util::tool_available("prlimit")) GTEST_SKIP() << "prlimit (util-linux) is not installed";
   runtime::ensure_dds_config();
   // About 1000 steps of this run's entries (header ~1.3 KB, a step ~190 bytes with two links).
   constexpr std::uintmax_t kLimit = 200'000;
-  runtime::ChildOptions limited;
+  util::ChildOptions limited;
   limited.prefix = {
       "sh", "-c",
       "trap '' XFSZ; exec prlimit --fsize=" + std::to_string(kLimit) + " \"$0\" \"$@\""};

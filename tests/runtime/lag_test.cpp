@@ -1,4 +1,6 @@
-#include "runtime/lag.h"
+#include "runtime/node/lag.h"
+
+#include "study/study.h"
 
 #include <gtest/gtest.h>
 
@@ -46,12 +48,13 @@ TEST(LagInjector, InactiveWhenAllZero) { EXPECT_FALSE(LagInjector(config::LinkLa
 
 TEST(ValidateLinkLag, NamesTheBadField) {
   try {
-    validate_link_lag(lag(0, 0, 1.5, 0), "nodes[2].send_lag");
+    core::validate_link_lag(lag(0, 0, 1.5, 0), "nodes[2].send_lag", false, "test");
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("nodes[2].send_lag.loss"), std::string::npos);
   }
-  EXPECT_THROW(validate_link_lag(lag(-1, 0, 0, 0), "x"), std::invalid_argument);
+  EXPECT_THROW(core::validate_link_lag(lag(-1, 0, 0, 0), "x", false, "test"),
+               std::invalid_argument);
 }
 
 config::LinkLag emulated(double drift_rate, double spike_delay, int spike_every, int spike_steps,
@@ -94,7 +97,7 @@ TEST(LagInjector, NetworkEmulationDropsABurstOfCommandsOnly) {
 TEST(ValidateLinkLag, NetworkEmulationOutOfRangeNamesTheField) {
   const auto message = [](const config::LinkLag& l) {
     try {
-      validate_link_lag(l, "nodes[0].receive_lag");
+      core::validate_link_lag(l, "nodes[0].receive_lag", true, "test");
     } catch (const std::invalid_argument& e) {
       return std::string(e.what());
     }

@@ -1,6 +1,6 @@
 // LatestBox: newest wins, nothing is taken twice, the taken value stays put, and a producer and a
 // consumer thread never see a torn value.
-#include "runtime/latest_box.h"
+#include "runtime/rt/latest_box.h"
 
 #include <gtest/gtest.h>
 

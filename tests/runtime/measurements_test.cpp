@@ -1,4 +1,4 @@
-#include "runtime/measurements.h"
+#include "runtime/record/measurements.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // run_node against a scripted transport: announce until assigned, wait -> take -> answer, the
 // final report on STOP, and the two ways a node leaves on its own (never assigned, orphaned).
-#include "runtime/node_loop.h"
+#include "runtime/node/node_loop.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <mutex>
 
 #include "actuator_emulator/actuator_service.h"
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 #include "substructure_nodes/substructure_service.h"
 #include "test_support.h"
 

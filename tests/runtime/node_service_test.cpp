@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "actuator_emulator/actuator_service.h"
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 #include "substructure_nodes/substructure_service.h"
 #include "test_support.h"
 

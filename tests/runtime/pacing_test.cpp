@@ -1,4 +1,4 @@
-#include "runtime/pacing.h"
+#include "runtime/rt/pacing.h"
 
 #include <gtest/gtest.h>
 

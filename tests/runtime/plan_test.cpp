@@ -1,4 +1,4 @@
-#include "runtime/plan.h"
+#include "runtime/node/plan.h"
 
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>

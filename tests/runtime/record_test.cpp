@@ -1,4 +1,4 @@
-#include "runtime/record.h"
+#include "runtime/record/record.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
-// Packing payloads into envelopes and back (runtime/schema.h).
-#include "runtime/schema.h"
+// Packing payloads into envelopes and back (runtime/node/schema.h).
+#include "runtime/node/schema.h"
 
 #include <gtest/gtest.h>
 

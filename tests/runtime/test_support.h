@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-#include "core/study.h"
+#include "study/study.h"
 
 namespace rths::test {
 
@@ -60,10 +60,10 @@ inline core::PreparedStudy prepare(const std::string& text) {
 #include <fstream>
 
 #include "core/simulation.h"
-#include "runtime/launch.h"
-#include "runtime/plan.h"
-#include "runtime/process.h"
-#include "runtime/record.h"
+#include "runtime/launch/launch.h"
+#include "runtime/node/plan.h"
+#include "runtime/record/record.h"
+#include "util/process.h"
 
 namespace rths::test {
 

@@ -3,7 +3,7 @@
 
 #include <thread>
 
-#include "runtime/launch.h"
+#include "runtime/launch/launch.h"
 #include "transport/dds.h"
 #include "transport/dds_endpoint.h"
 #include "transport/in_process.h"

@@ -1,11 +1,11 @@
-#include "runtime/validation.h"
+#include "runtime/node/validation.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 
 namespace rths::runtime {
 namespace {

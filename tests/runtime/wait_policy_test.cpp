@@ -1,10 +1,10 @@
-#include "runtime/wait_policy.h"
+#include "runtime/rt/wait_policy.h"
 
 #include <gtest/gtest.h>
 
 #include <vector>
 
-#include "runtime/pacing.h"
+#include "runtime/rt/pacing.h"
 
 namespace rths::runtime {
 namespace {

@@ -7,26 +7,26 @@
 #include <regex>
 
 #include "../runtime/test_support.h"
-#include "runtime/launch.h"
-#include "runtime/process.h"
-#include "runtime/record.h"
+#include "runtime/launch/launch.h"
+#include "runtime/record/record.h"
 #include "security/check.h"
 #include "support.h"
+#include "util/process.h"
 
 namespace rths {
 namespace {
 
 namespace fs = std::filesystem;
-using runtime::ChildProcess;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using util::ChildProcess;
 
 fs::path binary(const std::string& subdir, const std::string& name) {
   return fs::path(RTHS_BINARY_DIR) / subdir / name;
 }
 
 struct Probe {
-  ChildProcess process;
+  util::ChildProcess process;
   fs::path log;
 };
 
@@ -50,7 +50,7 @@ Probe probe(const fs::path& logs, const std::string& label, const std::string& m
   if (!node_dir.empty()) args.insert(args.end(), {"--security", node_dir.string()});
   if (identity >= 0) args.insert(args.end(), {"--identity", std::to_string(identity)});
   const fs::path log = logs / (label + ".log");
-  return {ChildProcess(binary("tests/security", "rths_dds_probe"), args, log), log};
+  return {util::ChildProcess(binary("tests/security", "rths_dds_probe"), args, log), log};
 }
 
 long count_in(const fs::path& log, const std::string& word) {
@@ -148,10 +148,10 @@ TEST_F(DdsSecurity, ANodesCertificateCannotPublishAsAnotherNode) {
 TEST_F(DdsSecurity, NodeProgramsRefuseBadCertificatesAtStartUp) {
   const auto run = [&](const std::string& label, const fs::path& program, int node_id,
                        const fs::path& folder) {
-    ChildProcess node(program,
-                      {"--node-id", std::to_string(node_id), "--domain", "176", "--assign-timeout",
-                       "3", "--security", folder.string()},
-                      logs_ / (label + ".log"));
+    util::ChildProcess node(program,
+                            {"--node-id", std::to_string(node_id), "--domain", "176",
+                             "--assign-timeout", "3", "--security", folder.string()},
+                            logs_ / (label + ".log"));
     const int code = node.wait();  // before the log is read
     return std::make_pair(code, test::slurp(logs_ / (label + ".log")));
   };
@@ -183,7 +183,7 @@ TEST_F(DdsSecurity, CoordinatorRefusesAMalformedGovernanceBeforeSendingAnything)
   const fs::path config = test::write_config(
       lab_, test::paper_frame_study(
                 0.2, "deployment { domain_id: 176 security_dir: \"" + lab_.string() + "\" }"));
-  ChildProcess coordinator(
+  util::ChildProcess coordinator(
       binary("coordinator", "rths-coordinator"),
       {"--config", config.string(), "--record", (lab_ / "run.rthsrec").string()},
       logs_ / "coordinator.log");

@@ -9,8 +9,8 @@
 #include <fstream>
 #include <string>
 
-#include "core/text_format.h"
 #include "security/pki.h"
+#include "study/text_format.h"
 
 namespace rths::test {
 

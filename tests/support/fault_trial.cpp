@@ -9,9 +9,9 @@
 #include <sstream>
 #include <thread>
 
-#include "runtime/process.h"
-#include "runtime/record.h"
+#include "runtime/record/record.h"
 #include "transport/transport.h"
+#include "util/process.h"
 
 namespace rths::test {
 namespace {
@@ -73,23 +73,23 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   const auto record = spec.dir / "run.rthsrec";
   const std::string run_id = "fault-trial-" + std::to_string(spec.domain);
   const auto node = [&](const std::string& program, const std::string& subdir, int id) {
-    return runtime::ChildProcess(spec.binary_dir / subdir / program,
-                                 {"--node-id", std::to_string(id), "--domain",
-                                  std::to_string(spec.domain), "--run-id", run_id},
-                                 spec.dir / ("node_" + std::to_string(id) + ".log"));
+    return util::ChildProcess(spec.binary_dir / subdir / program,
+                              {"--node-id", std::to_string(id), "--domain",
+                               std::to_string(spec.domain), "--run-id", run_id},
+                              spec.dir / ("node_" + std::to_string(id) + ".log"));
   };
-  runtime::ChildProcess substructure = node("rths-substructure-node", "substructure_nodes", 1);
-  runtime::ChildProcess emulator = node("rths-actuator-emulator", "actuator_emulator", 2);
+  util::ChildProcess substructure = node("rths-substructure-node", "substructure_nodes", 1);
+  util::ChildProcess emulator = node("rths-actuator-emulator", "actuator_emulator", 2);
   std::vector<std::string> coordinator_args{
       "--config", config.string(), "--run-id", run_id, "--domain", std::to_string(spec.domain),
       "--record", record.string()};
   coordinator_args.insert(coordinator_args.end(), spec.coordinator_extra.begin(),
                           spec.coordinator_extra.end());
-  runtime::ChildProcess coordinator(spec.binary_dir / "coordinator" / "rths-coordinator",
-                                    coordinator_args, spec.dir / "coordinator.log");
-  runtime::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator    ? coordinator
-                                  : spec.victim == FaultVictim::kSubstructure ? substructure
-                                                                              : emulator;
+  util::ChildProcess coordinator(spec.binary_dir / "coordinator" / "rths-coordinator",
+                                 coordinator_args, spec.dir / "coordinator.log");
+  util::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator    ? coordinator
+                               : spec.victim == FaultVictim::kSubstructure ? substructure
+                                                                           : emulator;
   FaultTrialResult out;
   // Wait for the fault step.
   const auto give_up = std::chrono::steady_clock::now() + 30s;
@@ -130,7 +130,7 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
     substructure.wait_for(10s);
   }
   if (spec.signal == SIGSTOP) victim.signal(SIGKILL);
-  for (runtime::ChildProcess* p : {&coordinator, &substructure, &emulator}) {
+  for (util::ChildProcess* p : {&coordinator, &substructure, &emulator}) {
     if (!p->wait_for(3s)) p->signal(SIGKILL);
     p->wait_for(3s);
   }

@@ -2,13 +2,13 @@
 
 #include <cstdio>
 
-#include "platform/check.h"
+#include "rt_check/check.h"
 
 namespace rths::test {
 
 MeasuredPlatform measure_platform(double rate_hz, double seconds) {
-  const std::vector<int> cpus = platform::allowed_cpus();
-  const platform::LatencyStats stats(platform::measure_wakeups(cpus, rate_hz, seconds));
+  const std::vector<int> cpus = rt_check::allowed_cpus();
+  const rt_check::LatencyStats stats(rt_check::measure_wakeups(cpus, rate_hz, seconds));
   MeasuredPlatform out;
   out.p99 = stats.quantile(0.99);
   out.max = stats.max();

@@ -1,5 +1,5 @@
 #pragma once
-// This machine's scheduling now, measured with the project's own check (platform/latency.h:
+// This machine's scheduling now, measured with the project's own check (rt_check/latency.h:
 // paced threads on every CPU this process may use, at the test's rate), so that a test of a
 // real-time property sizes its windows and tolerances from what the machine does, and skips,
 // printing what it measured, where the machine cannot hold the property at all. A busy machine
@@ -13,14 +13,14 @@
 #include <optional>
 #include <string>
 
-#include "platform/latency.h"
+#include "rt_check/latency.h"
 
 namespace rths::test {
 
 struct MeasuredPlatform {
   double p99 = 0.0;  // s
   double max = 0.0;  // s
-  std::optional<platform::LatencyStats> stalls;
+  std::optional<rt_check::LatencyStats> stalls;
   std::string text;
 };
 

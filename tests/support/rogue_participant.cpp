@@ -24,7 +24,7 @@
 #include <optional>
 #include <thread>
 
-#include "runtime/schema.h"
+#include "runtime/node/schema.h"
 #include "transport/dds_endpoint.h"
 
 namespace {

@@ -5,7 +5,7 @@
 #include <unistd.h>
 #include <filesystem>
 
-#include "runtime/plan.h"
+#include "runtime/node/plan.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
 

@@ -1,0 +1,22 @@
+#pragma once
+// Numbers in text, as rths reads and prints them in every message and file: one parse rule, one
+// print rule, and a safe echo of a bad token. Pure functions of their arguments.
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace rths::core {
+
+// The number rule: the whole token is one number in C strtod syntax ("1e-3", "-.5", "12") and
+// finite; nullopt otherwise ("1.2.3", "nan", "inf", "", "3 m").
+std::optional<double> parse_finite(std::string_view token);
+
+// A number as messages print it: %g (6 significant digits, no trailing zeros: "0.014", "1e-05").
+std::string format_number(double value);
+
+// A token as an error message may show it: bytes outside printable ASCII as \xNN, at most 40
+// characters ("..." after), so a binary file never reaches the terminal raw.
+std::string printable(std::string_view token);
+
+}  // namespace rths::core

@@ -1,0 +1,557 @@
+#include "identify/lab/report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "identify/fit/evidence.h"
+#include "identify/lab/bode.h"
+#include "util/plot.h"
+
+namespace rths::identify {
+namespace {
+
+const ChannelSignals& signals_of(const Identification& id, Channel channel) {
+  for (const auto& s : id.signals) {
+    if (s.channel == channel) return s;
+  }
+  throw std::invalid_argument("no signals for channel " + channel_name(channel));
+}
+
+nlohmann::json params_json(const FitResult& fit, const SignalScales& scales) {
+  nlohmann::json out = nlohmann::json::object();
+  const auto specs = fit.model.specs(scales);
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    out[specs[i].name] = {{"value", fit.model.params[i]},
+                          {"std_error", i < fit.std_errors.size() ? fit.std_errors[i] : 0.0},
+                          {"unit", specs[i].unit}};
+  }
+  return out;
+}
+
+// Parameters belonging to one effect of the model (for a step's `params`).
+nlohmann::json effect_params_json(const FitResult& fit, Effect effect, const SignalScales& scales) {
+  nlohmann::json out = nlohmann::json::object();
+  std::size_t index = base_params(fit.model.channel, scales).size();
+  for (Effect e : fit.model.effects) {
+    const auto specs = effect_params(e, fit.model.channel, scales);
+    if (e == effect) {
+      for (std::size_t i = 0; i < specs.size(); ++i) {
+        out[specs[i].name] = {{"value", fit.model.params[index + i]},
+                              {"std_error", fit.std_errors.at(index + i)},
+                              {"unit", specs[i].unit}};
+      }
+    }
+    index += specs.size();
+  }
+  return out;
+}
+
+nlohmann::json evidence_json(const Evidence& e) {
+  return {{"residual_rms", e.residual_rms},
+          {"corr_residual_displacement", e.corr_input},
+          {"corr_residual_velocity", e.corr_velocity},
+          {"corr_residual_velocity_sign", e.corr_velocity_sign},
+          {"corr_residual_displacement_cubed", e.corr_input_cubed},
+          {"corr_residual_acceleration", e.corr_acceleration},
+          {"xcorr_input_residual_peak", e.input_to_residual.peak},
+          {"xcorr_input_residual_lag_s", e.input_to_residual.lag},
+          {"residual_dominant_frequency_hz", e.dominant_frequency},
+          {"residual_power_below_1hz", e.low_frequency_share}};
+}
+
+nlohmann::json ranking_json(const std::vector<CandidateTrial>& ranking) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& t : ranking) {
+    out.push_back({{"effect", effect_name(t.effect)},
+                   {"added_params", t.added_params},
+                   {"train_error", t.train_error},
+                   {"heldout_error", t.heldout_error},
+                   {"score", t.score},
+                   {"pays", t.pays}});
+  }
+  return out;
+}
+
+nlohmann::json bound_hits_json(const std::vector<BoundHit>& hits) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& h : hits) {
+    out.push_back({{"param", h.name},
+                   {"bound", h.at_lower ? "lower" : "upper"},
+                   {"value", h.bound},
+                   {"message", h.message()}});
+  }
+  return out;
+}
+
+nlohmann::json model_json(const FitResult& fit, const SignalScales& scales) {
+  nlohmann::json effects = nlohmann::json::array();
+  for (Effect e : fit.model.effects) effects.push_back(effect_name(e));
+  return {{"effects", effects},
+          {"params", params_json(fit, scales)},
+          {"train_error", fit.train_error},
+          {"heldout_error", fit.heldout_error},
+          {"bound_hits", bound_hits_json(fit.bound_hits)}};
+}
+
+nlohmann::json kind_json(const KindProposal& kind) {
+  nlohmann::json ranking = nlohmann::json::array();
+  for (const auto& k : kind.ranking) {
+    ranking.push_back({{"kind", kind_name(k.kind)},
+                       {"heldout_error", k.fit.heldout_error},
+                       {"score", k.score},
+                       {"physical", k.physical},
+                       {"bound_hits", bound_hits_json(k.fit.bound_hits)}});
+  }
+  nlohmann::json out = {{"declared_bound_hits", bound_hits_json(kind.declared_hits)},
+                        {"ranking", ranking}};
+  out["proposed"] = kind.proposed ? nlohmann::json(kind_name(*kind.proposed)) : nlohmann::json();
+  out["hysteretic_damper"] = kind.proposed && is_hysteretic_damper(*kind.proposed);
+  return out;
+}
+
+nlohmann::json case_json(const CaseError& c) {
+  return {{"name", c.name},
+          {"nominal_delay_s", c.nominal_delay},
+          {"nrmse", c.nrmse},
+          {"paper_eq2", c.paper_eq2},
+          {"peak_displacement_m", c.peak_displacement},
+          {"diverged", c.diverged}};
+}
+
+std::string format_value(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.4g", v);
+  return buffer;
+}
+
+// The identified lag against the planned test's critical delay, as every pre-run check says it,
+// and the lag the test could take.
+std::string predicted_verdict(const core::CriticalDelayCheck& check) {
+  std::string text = check.describe();
+  if (const auto critical = check.critical()) {
+    text += "; the test could take up to ";
+    text += format_value(*critical * 1e3);
+    text += " ms";
+    if (check.past()) text += ": expect it to diverge without compensation (--design-compensator)";
+  }
+  return text;
+}
+
+std::string percent(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2f %%", 100.0 * v);
+  return buffer;
+}
+
+// Every `stride`-th sample of [begin, end) as x/y series.
+util::Series series(const std::string& title, std::span<const double> x, std::span<const double> y,
+                    std::size_t begin, std::size_t end, std::size_t max_points = 4000) {
+  util::Series s;
+  s.title = title;
+  const std::size_t stride = std::max<std::size_t>(1, (end - begin) / max_points);
+  for (std::size_t i = begin; i < end; i += stride) {
+    s.x.push_back(x[i]);
+    s.y.push_back(y[i]);
+  }
+  return s;
+}
+
+std::vector<double> residual(const ChannelSignals& s, const std::vector<double>& prediction) {
+  std::vector<double> r(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) r[i] = s.target[i] - prediction[i];
+  return r;
+}
+
+// A window of about `seconds` inside the held-out samples with the largest input motion.
+// `s` with x and y multiplied by their scales (m -> mm: 1e3), for plots in the units a lab reads.
+util::Series scaled(util::Series s, double x_scale, double y_scale) {
+  for (double& x : s.x) x *= x_scale;
+  for (double& y : s.y) y *= y_scale;
+  return s;
+}
+
+// About `cycles` cycles of the command's dominant frequency in [lo, hi), ending at hi: a window a
+// reader can follow (a whole held-out window of a 20 Hz test holds some 40 cycles).
+std::size_t zoom_start(const ChannelSignals& s, std::size_t lo, std::size_t hi, double cycles) {
+  const Spectrum spectrum =
+      amplitude_spectrum(std::span<const double>(s.input).subspan(lo, hi - lo), s.dt);
+  std::size_t peak = 1;
+  for (std::size_t k = 1; k < spectrum.amplitude.size(); ++k)
+    if (spectrum.amplitude[k] > spectrum.amplitude[peak]) peak = k;
+  if (peak >= spectrum.frequency.size() || !(spectrum.frequency[peak] > 0)) return lo;
+  const auto length = static_cast<std::size_t>(cycles / spectrum.frequency[peak] / s.dt);
+  return hi - lo > length ? hi - length : lo;
+}
+
+std::pair<std::size_t, std::size_t> heldout_window(const Identification& id,
+                                                   const ChannelSignals& s, double seconds) {
+  const auto width = static_cast<std::size_t>(std::max(10.0, seconds / s.dt));
+  std::size_t best_start = id.split.heldout.front();
+  double best = -1.0;
+  const auto& held = id.split.heldout;
+  for (std::size_t k = 0; k + width < held.size(); k += width / 2) {
+    if (held[k + width] - held[k] != width) continue;  // window must be contiguous
+    double sum = 0.0;
+    for (std::size_t i = held[k]; i < held[k] + width; ++i) sum += s.velocity[i] * s.velocity[i];
+    if (sum > best) {
+      best = sum;
+      best_start = held[k];
+    }
+  }
+  return {best_start, std::min(s.size(), best_start + width)};
+}
+
+// The time-varying delay of the final model against the delay refitted window by window, with
+// a band of two standard errors.
+void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
+                      const std::filesystem::path& png) {
+  const SignalScales scales = signal_scales(s);
+  const ChannelModel& model = c.final_fit.model;
+  const ChannelModel constant = without_effect(model, Effect::kTimeVaryingDelay, scales);
+  const auto delay_index = constant.index_of(Effect::kDelay, "delay", scales);
+  if (!delay_index) return;
+  const auto windows = windowed_estimate(constant, *delay_index, s, 16);
+  util::Series estimate{"delay per window (fit)", {}, {}, "linespoints"};
+  util::Series upper{"+2 std. error", {}, {}, "lines"}, lower{"-2 std. error", {}, {}, "lines"};
+  for (const auto& w : windows) {
+    estimate.x.push_back(w.time);
+    estimate.y.push_back(w.value * 1e3);
+    upper.x.push_back(w.time);
+    upper.y.push_back((w.value + 2.0 * w.std_error) * 1e3);
+    lower.x.push_back(w.time);
+    lower.y.push_back((w.value - 2.0 * w.std_error) * 1e3);
+  }
+  const std::size_t first = base_params(model.channel, scales).size();
+  std::size_t index = first;
+  std::vector<double> coefficients;
+  for (Effect e : model.effects) {
+    const std::size_t count = effect_params(e, model.channel, scales).size();
+    if (e == Effect::kTimeVaryingDelay) {
+      coefficients.assign(model.params.begin() + static_cast<std::ptrdiff_t>(index),
+                          model.params.begin() + static_cast<std::ptrdiff_t>(index + count));
+    }
+    index += count;
+  }
+  const double mean = model.param(Effect::kDelay, "delay", scales).value_or(0.0);
+  const double t_mid = 0.5 * (s.time.front() + s.time.back());
+  const double duration = std::max(s.time.back() - s.time.front(), s.dt);
+  util::Series curve{"identified model tau(t)", {}, {}, "lines"};
+  const std::size_t stride = std::max<std::size_t>(1, s.size() / 2000);
+  for (std::size_t i = 0; i < s.size(); i += stride) {
+    curve.x.push_back(s.time[i]);
+    curve.y.push_back(
+        std::max(0.0, mean + drift_profile(coefficients, (s.time[i] - t_mid) / duration)) * 1e3);
+  }
+  util::PlotSpec plot;
+  plot.title =
+      "actuator delay over the record: model and per-window estimate (band: +/- 2 std. error)";
+  plot.xlabel = "time (s)";
+  plot.ylabel = "delay (ms)";
+  plot.series = {curve, estimate, upper, lower};
+  util::write_png_plot(plot, png);
+}
+
+}  // namespace
+
+nlohmann::json to_json(const Identification& id, const ReportContext& context,
+                       const std::optional<StudyPrediction>& prediction) {
+  nlohmann::json out;
+  out["source"] = id.source;
+  out["samples"] = id.samples;
+  out["dt"] = id.dt;
+  out["search_decimation"] = id.search_decimation;
+  out["holdout"] = {{"mode", context.holdout_mode == HoldoutMode::kLast ? "last" : "blocks"},
+                    {"fraction", context.holdout_fraction},
+                    {"train_samples", id.split.train.size()},
+                    {"heldout_samples", id.split.heldout.size()}};
+  nlohmann::json steps = nlohmann::json::array();
+  nlohmann::json channels = nlohmann::json::array();
+  for (const auto& c : id.channels) {
+    const SignalScales scales = signal_scales(signals_of(id, c.channel));
+    for (const auto& s : c.steps) {
+      steps.push_back({{"channel", channel_name(s.channel)},
+                       {"effect", effect_name(s.effect)},
+                       {"params", effect_params_json(s.after, s.effect, scales)},
+                       {"all_params", params_json(s.after, scales)},
+                       {"train_error_before", s.before.train_error},
+                       {"train_error_after", s.after.train_error},
+                       {"heldout_error_before", s.before.heldout_error},
+                       {"heldout_error_after", s.after.heldout_error},
+                       {"own_error_removed", s.own_error_removed},
+                       {"own_share", s.own_share},
+                       {"evidence", evidence_json(s.evidence_before)},
+                       {"ranking", ranking_json(s.ranking)}});
+    }
+    nlohmann::json declared = nlohmann::json::array();
+    for (Effect e : c.declared) declared.push_back(effect_name(e));
+    channels.push_back({{"channel", channel_name(c.channel)},
+                        {"declared_effects", declared},
+                        {"declared", model_json(c.declared_fit, scales)},
+                        {"start", model_json(c.start_fit, scales)},
+                        {"kind", c.kind ? kind_json(*c.kind) : nlohmann::json()},
+                        {"noise_floor", c.noise_floor},
+                        // model.h make_signals: the specimen's input low-pass (0: none).
+                        {"input_lowpass_hz", signals_of(id, c.channel).input_cutoff},
+                        {"final", model_json(c.final_fit, scales)},
+                        {"final_evidence", evidence_json(c.final_evidence)},
+                        {"search_heldout_error", c.search_heldout_error},
+                        {"dropped_at_full_rate",
+                         [&] {
+                           nlohmann::json d = nlohmann::json::array();
+                           for (const auto& s : c.dropped_at_full_rate) {
+                             d.push_back({{"effect", effect_name(s.effect)},
+                                          {"heldout_error_before", s.before.heldout_error},
+                                          {"heldout_error_after", s.after.heldout_error}});
+                           }
+                           return d;
+                         }()},
+                        {"rejected", ranking_json(c.last_ranking)}});
+  }
+  out["steps"] = steps;
+  out["channels"] = channels;
+  if (prediction) {
+    nlohmann::json cases = nlohmann::json::array();
+    for (const auto& c : prediction->cases) cases.push_back(case_json(c));
+    out["prediction"] = {{"config", prediction->config},
+                         {"reference_case", prediction->reference_case},
+                         {"dt", prediction->dt},
+                         {"actuator", prediction->actuator},
+                         {"ignored", prediction->ignored},
+                         {"identified", case_json(prediction->identified)},
+                         {"cases", cases}};
+    if (const auto& st = prediction->stability) {
+      const auto critical = st->critical();
+      out["prediction"]["stability"] = {
+          {"lag_s", st->lag},
+          {"critical_delay_s", critical ? nlohmann::json(*critical) : nlohmann::json(nullptr)},
+          {"margin", critical ? nlohmann::json(st->margin()) : nlohmann::json(nullptr)},
+          {"past", st->past()},
+          {"verdict", predicted_verdict(*st)}};
+    }
+  }
+  return out;
+}
+
+std::string format_table(const Identification& id,
+                         const std::optional<StudyPrediction>& prediction) {
+  std::ostringstream out;
+  out << "rths identify: " << id.source << " (" << id.samples << " samples, dt " << id.dt
+      << " s; search decimated x" << id.search_decimation << ", errors at the full rate; "
+      << id.split.train.size() << " training / " << id.split.heldout.size()
+      << " held-out samples)\n";
+  out << "error = RMS(residual) / std(measured signal)\n\n";
+  for (const auto& c : id.channels) {
+    const SignalScales scales = signal_scales(signals_of(id, c.channel));
+    out << "channel " << channel_name(c.channel) << ": declared model {";
+    for (std::size_t i = 0; i < c.declared.size(); ++i) {
+      out << (i ? ", " : "") << effect_name(c.declared[i]);
+    }
+    out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
+        << percent(c.declared_fit.heldout_error) << "\n";
+    out << "  noise floor (estimated from the record): " << percent(c.noise_floor) << "\n";
+    if (const double cutoff = signals_of(id, c.channel).input_cutoff; cutoff > 0.0) {
+      out << "  the model runs on the measured displacement low-passed at " << format_value(cutoff)
+          << " Hz (zero phase)\n";
+    }
+    for (const auto& hit : c.declared_fit.bound_hits) {
+      out << "  declared fit ends at a bound: " << hit.message()
+          << (c.kind ? ": the declared model is the wrong kind" : "") << "\n";
+    }
+    if (c.kind) {
+      out << "  specimen kinds (held-out at the search rate):";
+      for (const auto& k : c.kind->ranking) {
+        out << " " << kind_name(k.kind) << " " << percent(k.fit.heldout_error)
+            << (k.physical ? "" : " (wrong kind: at a bound)") << ";";
+      }
+      out << "\n";
+      if (c.kind->proposed) {
+        out << "  proposed kind: " << kind_name(*c.kind->proposed)
+            << (is_hysteretic_damper(*c.kind->proposed) ? " (a damper with hysteresis)" : "")
+            << "; the search starts from it: held-out " << percent(c.start_fit.heldout_error)
+            << "\n";
+      } else {
+        out << "  no kind of the library fits without reaching a bound\n";
+      }
+    }
+    if (c.steps.empty()) out << "  nothing added: no candidate pays on held-out data\n";
+    int n = 1;
+    for (const auto& s : c.steps) {
+      out << "  step " << n++ << ": + " << effect_name(s.effect) << "   train "
+          << percent(s.before.train_error) << " -> " << percent(s.after.train_error)
+          << "   held-out " << percent(s.before.heldout_error) << " -> "
+          << percent(s.after.heldout_error) << "\n";
+      const auto p = effect_params_json(s.after, s.effect, scales);
+      for (auto it = p.begin(); it != p.end(); ++it) {
+        out << "      " << it.key() << " = " << format_value(it.value()["value"]) << " +/- "
+            << format_value(it.value()["std_error"]) << " " << it.value()["unit"].get<std::string>()
+            << "\n";
+      }
+      const auto& e = s.evidence_before;
+      out << "      evidence before: corr(res, disp) " << format_value(e.corr_input)
+          << ", corr(res, vel) " << format_value(e.corr_velocity) << ", corr(res, sgn vel) "
+          << format_value(e.corr_velocity_sign) << ", xcorr(input, res) "
+          << format_value(e.input_to_residual.peak) << " at "
+          << format_value(e.input_to_residual.lag * 1e3) << " ms, residual peak at "
+          << format_value(e.dominant_frequency) << " Hz\n";
+      out << "      ranking (held-out at the search rate):";
+      for (std::size_t k = 0; k < std::min<std::size_t>(4, s.ranking.size()); ++k) {
+        out << " " << effect_name(s.ranking[k].effect) << " " << percent(s.ranking[k].heldout_error)
+            << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
+      }
+      out << "\n";
+    }
+    for (const auto& d : c.dropped_at_full_rate) {
+      out << "  dropped: + " << effect_name(d.effect) << " paid at the search rate but not at the "
+          << "full rate (held-out " << percent(d.before.heldout_error) << " -> "
+          << percent(d.after.heldout_error) << ")\n";
+    }
+    if (c.steps.size() > 1) {
+      std::vector<const SelectionStep*> by_part;
+      for (const auto& st : c.steps) by_part.push_back(&st);
+      std::stable_sort(by_part.begin(), by_part.end(), [](const auto* a, const auto* b) {
+        return a->own_error_removed > b->own_error_removed;
+      });
+      out << "  effects by their own part (held-out error lost when each is left out):";
+      for (const auto* st : by_part) {
+        out << " " << effect_name(st->effect) << " " << percent(st->own_error_removed) << " ("
+            << format_value(100.0 * st->own_share) << " % of the parts);";
+      }
+      out << "\n";
+    }
+    out << "  final: " << c.final_fit.model.describe(scales) << "\n";
+    out << "  final held-out " << percent(c.final_fit.heldout_error) << " = "
+        << format_value(c.noise_floor > 0.0 ? c.final_fit.heldout_error / c.noise_floor : 0.0)
+        << " x the noise floor\n";
+    for (const auto& hit : c.final_fit.bound_hits) {
+      out << "  final fit ends at a bound: " << hit.message() << "\n";
+    }
+    if (!c.last_ranking.empty()) {
+      out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
+          << percent(c.last_ranking.front().heldout_error) << " vs "
+          << percent(c.search_heldout_error) << " without it, at the search rate)\n";
+    }
+    out << "\n";
+  }
+  if (prediction) {
+    out << "prediction with " << prediction->config << " (reference case '"
+        << prediction->reference_case << "', dt " << prediction->dt << " s)\n";
+    out << "  identified actuator: " << prediction->actuator << "\n";
+    for (const auto& ig : prediction->ignored) out << "  not transferred: " << ig << "\n";
+    const auto line = [&](const CaseError& c) {
+      out << "  " << c.name << ": nominal lag " << format_value(c.nominal_delay * 1e3)
+          << " ms, NRMSE " << percent(c.nrmse) << ", paper Eq. 2 " << format_value(c.paper_eq2)
+          << ", peak " << format_value(c.peak_displacement * 1e3) << " mm"
+          << (c.diverged ? " (DIVERGED)" : "") << "\n";
+    };
+    line(prediction->identified);
+    for (const auto& c : prediction->cases) line(c);
+    if (const auto& st = prediction->stability)
+      out << "  before booking the lab: the identified actuator's " << predicted_verdict(*st)
+          << "\n";
+  }
+  return out.str();
+}
+
+std::vector<std::filesystem::path> write_plots(const Identification& id,
+                                               const std::filesystem::path& directory) {
+  std::error_code ec;
+  std::filesystem::create_directories(directory, ec);
+  if (ec) throw std::runtime_error(directory.string() + ": cannot create: " + ec.message());
+  std::vector<std::filesystem::path> written;
+  for (const auto& c : id.channels) {
+    const ChannelSignals& s = signals_of(id, c.channel);
+    const std::string name = channel_name(c.channel);
+    const auto r0 = residual(s, c.declared_fit.prediction);
+    const auto r1 = residual(s, c.final_fit.prediction);
+    const bool displacement = c.channel == Channel::kMeasured;
+    const std::string unit = displacement ? "mm" : "N";
+    const double to_unit = displacement ? 1e3 : 1.0;  // displacements in mm on every plot
+
+    util::PlotSpec time_plot;
+    time_plot.title = name + ": residual before (declared) and after (final model)";
+    time_plot.xlabel = "time (s)";
+    time_plot.ylabel = "residual (" + unit + ")";
+    time_plot.series = {scaled(series("declared", s.time, r0, 0, s.size()), 1.0, to_unit),
+                        scaled(series("final", s.time, r1, 0, s.size()), 1.0, to_unit)};
+    written.push_back(directory / (name + "_residual_time.png"));
+    util::write_png_plot(time_plot, written.back());
+
+    const auto sp0 = amplitude_spectrum(r0, s.dt), sp1 = amplitude_spectrum(r1, s.dt);
+    util::PlotSpec spectrum_plot;
+    spectrum_plot.title = name + ": residual amplitude spectrum before and after";
+    spectrum_plot.xlabel = "frequency (Hz)";
+    spectrum_plot.ylabel = "amplitude (" + unit + ")";
+    spectrum_plot.log_y = true;
+    std::size_t cut = sp0.frequency.size();
+    for (std::size_t k = 0; k < sp0.frequency.size(); ++k) {
+      if (sp0.frequency[k] > std::min(50.0, 0.5 / s.dt)) {
+        cut = k;
+        break;
+      }
+    }
+    spectrum_plot.series = {
+        scaled(series("declared", sp0.frequency, sp0.amplitude, 1, cut), 1.0, to_unit),
+        scaled(series("final", sp1.frequency, sp1.amplitude, 1, cut), 1.0, to_unit)};
+    written.push_back(directory / (name + "_residual_spectrum.png"));
+    util::write_png_plot(spectrum_plot, written.back());
+
+    const auto [lo, hi] = heldout_window(id, s, 2.0);
+    if (c.channel == Channel::kForce) {
+      util::PlotSpec loops;
+      loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) + "-" +
+                    format_value(s.time[hi - 1]) + " s)";
+      loops.xlabel = "measured displacement (mm)";
+      loops.ylabel = "force (N)";
+      loops.series = {
+          scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
+          scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
+          scaled(series("final model", s.input, c.final_fit.prediction, lo, hi), 1e3, 1.0)};
+      written.push_back(directory / "force_loops.png");
+      util::write_png_plot(loops, written.back());
+    } else {
+      util::PlotSpec tracking;
+      tracking.title = "actuator tracking (held-out window " + format_value(s.time[lo]) + "-" +
+                       format_value(s.time[hi - 1]) + " s)";
+      tracking.xlabel = "time (s)";
+      tracking.ylabel = "displacement (mm)";
+      const auto tracking_series = [&](std::size_t from) {
+        return std::vector<util::Series>{
+            scaled(series("command", s.time, s.input, from, hi), 1.0, 1e3),
+            scaled(series("measured", s.time, s.target, from, hi), 1.0, 1e3),
+            scaled(series("declared model", s.time, c.declared_fit.prediction, from, hi), 1.0, 1e3),
+            scaled(series("final model", s.time, c.final_fit.prediction, from, hi), 1.0, 1e3)};
+      };
+      tracking.series = tracking_series(lo);
+      util::PlotSpec zoom = tracking;
+      const std::size_t from = zoom_start(s, lo, hi, 5.0);
+      zoom.title =
+          "zoom: the last " + format_value(s.time[hi - 1] - s.time[from]) + " s (about 5 cycles)";
+      zoom.series = tracking_series(from);
+      tracking.height = zoom.height = 420;
+      written.push_back(directory / "measured_tracking.png");
+      util::write_png_panels({tracking, zoom}, written.back());
+      // A record too short for Welch averaging, or without a coherent band, has no Bode plot.
+      std::optional<BodeData> bode;
+      try {
+        bode = actuator_bode(s, {{"identified model", &c.final_fit.model},
+                                 {"declared model", &c.declared_fit.model}});
+      } catch (const std::invalid_argument&) {
+        bode.reset();
+      }
+      if (bode) {
+        written.push_back(directory / "measured_bode.png");
+        write_bode_plot(*bode, written.back());
+      }
+    }
+  }
+  if (const auto* c = id.find(Channel::kMeasured);
+      c != nullptr && c->final_fit.model.has(Effect::kTimeVaryingDelay)) {
+    written.push_back(directory / "measured_time_varying_delay.png");
+    write_delay_plot(*c, signals_of(id, Channel::kMeasured), written.back());
+  }
+  return written;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,202 @@
+#include "identify/model/study_config.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rths::identify {
+namespace {
+
+std::string absolute_from(const std::filesystem::path& base_dir, const std::string& path) {
+  if (path.empty() || std::filesystem::path(path).is_absolute()) return path;
+  return std::filesystem::absolute(base_dir / path).lexically_normal().string();
+}
+
+void absolute_traces(google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
+                     const std::filesystem::path& base_dir) {
+  for (auto& stage : stages) {
+    if (stage.has_trace()) {
+      stage.mutable_trace()->set_path(absolute_from(base_dir, stage.trace().path()));
+    }
+  }
+}
+
+}  // namespace
+
+ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
+                           const std::string& name) {
+  if (actuator.channel != Channel::kMeasured) {
+    throw std::invalid_argument("actuator_case: needs the model of channel 'measured', got '" +
+                                channel_name(actuator.channel) + "'");
+  }
+  ActuatorCase out;
+  out.study_case.set_name(name);
+  const auto value = [&](std::optional<Effect> e, const char* param) {
+    return actuator.param(e, param, scales);
+  };
+  double delay = value(Effect::kDelay, "delay").value_or(0.0);
+  if (delay < 0.0) {
+    out.left_out.push_back("negative delay (lead) of " + std::to_string(delay) + " s, used as 0");
+    delay = 0.0;
+  }
+  const double gain = value(std::nullopt, "gain").value_or(1.0);
+  auto* shift = out.study_case.add_delay();
+  shift->mutable_shift()->set_delay(delay);
+  if (gain != 1.0) shift->set_amplitude_gain(gain);
+  for (Effect e : actuator.effects) {
+    switch (e) {
+      case Effect::kFirstOrder: {
+        const double t = value(e, "time_constant").value_or(0.0);
+        if (t > 0.0) out.study_case.add_delay()->mutable_first_order()->set_time_constant(t);
+        break;
+      }
+      case Effect::kSecondOrder: {
+        const double wn = value(e, "natural_frequency").value_or(0.0);
+        const double zeta = value(e, "damping_ratio").value_or(0.0);
+        if (!(wn > 0.0) || !(zeta > 0.0)) break;
+        auto* tf = out.study_case.add_delay()->mutable_transfer_function();
+        tf->add_numerator(wn * wn);
+        for (double c : {1.0, 2.0 * zeta * wn, wn * wn}) tf->add_denominator(c);
+        break;
+      }
+      case Effect::kTimeVaryingDelay:
+        out.left_out.push_back("time-varying delay: its mean is used");
+        break;
+      case Effect::kTimeVaryingGain:
+        out.left_out.push_back("time-varying gain: its mean is used");
+        break;
+      case Effect::kOffsetDrift:
+      case Effect::kBacklash:
+      case Effect::kVelocitySaturation:
+        out.left_out.push_back(effect_name(e) + ": lab-scale effect, left out");
+        break;
+      default: break;
+    }
+  }
+  return out;
+}
+
+SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& scales) {
+  if (specimen.channel != Channel::kForce) {
+    throw std::invalid_argument("specimen_model: needs the model of channel 'force', got '" +
+                                channel_name(specimen.channel) + "'");
+  }
+  SpecimenModel out;
+  const auto value = [&](Effect e, const char* param) {
+    return specimen.param(e, param, scales).value_or(0.0);
+  };
+  const double k = value(Effect::kStiffness, "stiffness");
+  std::ostringstream text;
+  text.precision(6);
+  if (specimen.has(Effect::kBoucWen)) {
+    const double f_bw = value(Effect::kBoucWen, "hysteretic_force");
+    const double d_y = value(Effect::kBoucWen, "yield_drift");
+    out.initial_stiffness = k + f_bw / d_y;
+    if (out.initial_stiffness > 0.0 && d_y > 0.0) {
+      config::RestoringForce model;
+      auto* bw = model.mutable_bouc_wen();
+      bw->set_yield_displacement(d_y);
+      bw->set_alpha(k / out.initial_stiffness);
+      bw->set_n(1.0);
+      bw->set_beta(0.5);
+      out.restoring_force = model;
+      text << "Bouc-Wen: k0 " << out.initial_stiffness << " N/m, yield displacement " << d_y
+           << " m, alpha " << bw->alpha();
+    }
+    if (specimen.has(Effect::kElastoPlastic)) {
+      out.left_out.push_back("elastoplastic: a storey model has one hysteresis, Bouc-Wen kept");
+    }
+  } else if (specimen.has(Effect::kElastoPlastic)) {
+    const double k_p = value(Effect::kElastoPlastic, "plastic_stiffness");
+    const double f_y = value(Effect::kElastoPlastic, "yield_force");
+    out.initial_stiffness = k + k_p;
+    if (k_p > 0.0 && f_y > 0.0) {
+      config::RestoringForce model;
+      auto* b = model.mutable_bilinear();
+      b->set_yield_displacement(f_y / k_p);
+      b->set_post_yield_ratio(k / out.initial_stiffness);
+      out.restoring_force = model;
+      text << "bilinear: k0 " << out.initial_stiffness << " N/m, yield displacement "
+           << b->yield_displacement() << " m, post-yield ratio " << b->post_yield_ratio();
+    }
+  } else if (k > 0.0) {
+    out.initial_stiffness = k;
+    config::RestoringForce model;
+    model.mutable_linear();
+    out.restoring_force = model;
+    text << "linear: k0 " << k << " N/m";
+  }
+  if (!out.restoring_force) text << "no displacement-dependent force: no storey model";
+  for (Effect e : specimen.effects) {
+    switch (e) {
+      case Effect::kDamping:
+      case Effect::kCoulomb:
+        out.left_out.push_back(
+            effect_name(e) +
+            ": a velocity force, not a storey restoring force (add it as damping)");
+        break;
+      case Effect::kInertia:
+      case Effect::kCubicStiffness:
+      case Effect::kTimeVaryingStiffness:
+      case Effect::kOffsetDrift:
+      case Effect::kDelay:
+        out.left_out.push_back(effect_name(e) + ": no place in a storey model, left out");
+        break;
+      default: break;
+    }
+  }
+  out.description = text.str();
+  return out;
+}
+
+config::Study study_fragment(const std::optional<ActuatorCase>& actuator,
+                             const std::optional<SpecimenModel>& specimen) {
+  config::Study fragment;
+  if (specimen && specimen->restoring_force) {
+    *fragment.mutable_substructuring()->mutable_model() = *specimen->restoring_force;
+  }
+  if (actuator) *fragment.add_cases() = actuator->study_case;
+  return fragment;
+}
+
+config::Study identified_study(const config::Study& base, const std::filesystem::path& base_dir,
+                               const config::Study& fragment) {
+  config::Study study = base;
+  study.set_name((base.name().empty() ? std::string("study") : base.name()) + "_identified");
+  study.mutable_output()->clear_directory();
+  if (study.has_motion()) {
+    study.mutable_motion()->set_path(absolute_from(base_dir, study.motion().path()));
+  }
+  for (auto& motion : *study.mutable_sweep()->mutable_motions()) {
+    motion.set_path(absolute_from(base_dir, motion.path()));
+  }
+  if (study.structure().has_matrices()) {
+    auto& m = *study.mutable_structure()->mutable_matrices();
+    const auto absolute_file = [&](config::Matrix& matrix) {
+      if (!matrix.file().empty()) matrix.set_file(absolute_from(base_dir, matrix.file()));
+    };
+    if (m.has_mass()) absolute_file(*m.mutable_mass());
+    if (m.has_stiffness()) absolute_file(*m.mutable_stiffness());
+    if (m.has_damping()) absolute_file(*m.mutable_damping());
+    if (m.has_influence()) absolute_file(*m.mutable_influence());
+  }
+  for (auto& c : *study.mutable_cases()) absolute_traces(*c.mutable_delay(), base_dir);
+  for (auto& node : *study.mutable_deployment()->mutable_nodes()) {
+    absolute_traces(*node.mutable_receive_delay(), base_dir);
+    absolute_traces(*node.mutable_send_delay(), base_dir);
+  }
+  if (fragment.has_substructuring() && fragment.substructuring().has_model()) {
+    *study.mutable_substructuring()->mutable_model() = fragment.substructuring().model();
+  }
+  for (const auto& c : fragment.cases()) {
+    for (const auto& existing : study.cases()) {
+      if (existing.name() == c.name()) {
+        throw std::invalid_argument("the study already has a case named '" + c.name() + "'");
+      }
+    }
+    *study.add_cases() = c;
+  }
+  return study;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,69 @@
+#pragma once
+// The identified model as study-config parts (proto/config.proto), so that `rths run` simulates
+// a planned test with this lab's actuator and specimen.
+//
+// Actuator (channel `measured`) -> a Case whose delay stages are, in order:
+//   shift { delay } with amplitude_gain = gain (omitted when 1), first_order { time_constant },
+//   transfer_function wn^2 / (s^2 + 2 zeta wn s + wn^2) for a second-order lag.
+//   A time-varying delay enters with its mean; offset/drift, backlash and velocity saturation are
+//   lab-scale effects (mm of this rig) that do not scale to another structure: listed in
+//   `left_out`.
+// Specimen (channel `force`) -> the storey RestoringForce that has the same shape (the study's
+// structure supplies the initial stiffness k0; the identified k0 is reported beside it):
+//   stiffness k alone                  linear {}                                   k0 = k
+//   k d + F_bw z (Bouc–Wen, n = 1)     bouc_wen { yield_displacement d_y, alpha k / k0, n 1,
+//                                                 beta 0.5 }                        k0 = k + F_bw /
+//                                                 d_y
+//   k d + p (elasto-plastic k_p, F_y)  bilinear { yield_displacement F_y / k_p,
+//                                                 post_yield_ratio k / k0 }        k0 = k + k_p
+//   (core/restoring_force.h: f = alpha k0 u + (1 - alpha) k0 z with z in m, which is the
+//   identified F_bw z' with z' = z / d_y.) Velocity terms (damping, friction), mass, cubic
+//   stiffness, drifts, offsets and the force delay have no place in a storey model: `left_out`.
+//   A specimen with no displacement-dependent force (a pure damper) gives no RestoringForce.
+// Fragment (study_fragment, written with core::write_text_format): a text-format Study holding only
+//   substructuring { model { ... } } and cases { name: "identified_actuator" ... },
+// the parts to copy into a study. identified_study() puts them into a whole study: the base's
+// model replaced, the case appended, relative paths of the base (motions, the cases' and the
+// nodes' traces) made absolute, so the result can
+// be written anywhere and run with `rths run`.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "identify/model/model.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::identify {
+
+inline constexpr const char* kIdentifiedCaseName = "identified_actuator";
+
+struct ActuatorCase {
+  config::Case study_case;
+  std::vector<std::string> left_out;
+};
+// @pre actuator.channel == Channel::kMeasured (throws std::invalid_argument otherwise).
+ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
+                           const std::string& name = kIdentifiedCaseName);
+
+struct SpecimenModel {
+  std::optional<config::RestoringForce> restoring_force;
+  double initial_stiffness = 0.0;  // N/m, k0 of the identified specimen
+  std::string description;
+  std::vector<std::string> left_out;
+};
+// @pre specimen.channel == Channel::kForce (throws std::invalid_argument otherwise).
+SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& scales);
+
+// A Study holding only the parts above (either may be absent).
+config::Study study_fragment(const std::optional<ActuatorCase>& actuator,
+                             const std::optional<SpecimenModel>& specimen);
+
+// `base` (read from a file in base_dir) with the fragment's storey model and cases: the model
+// replaces the base's, the cases are appended. Throws std::invalid_argument when a case name
+// is already in the base. Named "<base name>_identified", with no output directory of its own.
+config::Study identified_study(const config::Study& base, const std::filesystem::path& base_dir,
+                               const config::Study& fragment);
+
+}  // namespace rths::identify

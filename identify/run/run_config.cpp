@@ -1,0 +1,127 @@
+#include "identify/run/run_config.h"
+
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "identify/model/study_config.h"
+#include "study/text_format.h"
+#include "util/atomic_file.h"
+
+namespace rths::identify {
+namespace {
+
+std::filesystem::path trace_path(const std::filesystem::path& dir, int node_id) {
+  return std::filesystem::absolute(dir / ("lag_node_" + std::to_string(node_id) + ".csv"));
+}
+
+// The measured round trip as a fitted distribution, split evenly over both ways.
+void fit_link_lag(const NetworkPath& link, config::NodeSpec& node) {
+  const auto n = static_cast<double>(link.round_trip.size());
+  const double mean = std::accumulate(link.round_trip.begin(), link.round_trip.end(), 0.0) / n;
+  double var = 0.0;
+  for (double r : link.round_trip) var += (r - mean) * (r - mean) / n;
+  const double lost = static_cast<double>(link.lost) / (n + static_cast<double>(link.lost));
+  for (config::LinkLag* lag : {node.mutable_receive_lag(), node.mutable_send_lag()}) {
+    lag->set_one_way_delay(0.5 * mean);
+    lag->set_jitter(std::sqrt(var / 2.0));
+    lag->set_loss(1.0 - std::sqrt(1.0 - lost));
+  }
+}
+
+// The identified actuator cases: one when every actuator has the same stages, else one each.
+std::vector<config::Case> actuator_cases(const RunIdentification& run, const config::Case* run_case,
+                                         std::vector<std::string>& notes) {
+  std::vector<config::Case> out;
+  for (const auto& path : run.actuators) {
+    const auto* c = path.id.find(Channel::kMeasured);
+    if (!c) continue;
+    ActuatorCase part = actuator_case(c->final_fit.model, signal_scales(path.id.signals.front()));
+    for (const auto& l : part.left_out)
+      notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
+    config::Case study_case = part.study_case;
+    if (run_case) *study_case.mutable_compensation() = run_case->compensation();
+    out.push_back(study_case);
+  }
+  bool same = true;
+  for (const auto& c : out) same = same && c.SerializeAsString() == out.front().SerializeAsString();
+  if (same && out.size() > 1) out.resize(1);
+  if (out.size() > 1) {
+    for (std::size_t a = 0; a < out.size(); ++a) {
+      out[a].set_name(std::string(kIdentifiedCaseName) + "_" + std::to_string(a + 1));
+    }
+  }
+  return out;
+}
+
+const config::Case* find_case(const config::Study& study, const std::string& name) {
+  for (const auto& c : study.cases()) {
+    if (c.name() == name) return &c;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem::path& base_dir,
+                             const std::filesystem::path& trace_dir) {
+  IdentifiedRun out;
+  config::Study fragment;
+  for (const auto& c : actuator_cases(run, find_case(run.study, run.case_name), out.notes)) {
+    *fragment.add_cases() = c;
+  }
+  out.study = identified_study(run.study, base_dir, fragment);
+  for (auto& node : *out.study.mutable_deployment()->mutable_nodes()) {
+    if (node.kind() == config::NodeSpec::ACTUATOR_EMULATOR && fragment.cases_size() > 0) {
+      node.clear_receive_delay();  // held by the identified case
+    }
+    if (node.kind() != config::NodeSpec::SUBSTRUCTURE) continue;
+    for (const auto& link : run.links) {
+      if (link.node_id != node.id()) continue;
+      fit_link_lag(link, node);
+      if (run.clock == "real_time") {
+        node.add_receive_delay()->mutable_trace()->set_path(
+            trace_path(trace_dir, link.node_id).string());
+      }
+    }
+  }
+  if (run.clock != "real_time") {
+    out.notes.push_back(
+        "links: a lockstep record's lag did not reach the response; the fitted "
+        "receive_lag/send_lag apply to a real-time run");
+  }
+  return out;
+}
+
+std::vector<std::string> write_identified_run(const RunIdentification& run,
+                                              const std::filesystem::path& base_dir,
+                                              const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> written;
+  for (const auto& link : run.links) {
+    const auto path = trace_path(dir, link.node_id);
+    util::AtomicFile file(path);
+    file.stream() << "# measured round trip of the link to node " << link.node_id
+                  << ": time s, delay s\n";
+    file.stream().precision(17);
+    for (std::size_t i = 0; i < link.time.size(); ++i) {
+      file.stream() << link.time[i] << "," << link.round_trip[i] << "\n";
+    }
+    file.commit();
+    written.push_back("lag trace of the link to node " + std::to_string(link.node_id) + ": " +
+                      path.string());
+  }
+  const IdentifiedRun identified = identified_run(run, base_dir, dir);
+  std::vector<std::string> comment{
+      "Identified by `rths identify " + run.record + "`: the run's own study with the identified",
+      "actuator (case " + std::string(kIdentifiedCaseName) + ") and each link's measured lag.",
+      "Run it: rths run " + (dir / "identified_run.textproto").string() + " (or rths launch)"};
+  for (const auto& n : identified.notes) comment.push_back(n);
+  const auto study_path = dir / "identified_run.textproto";
+  core::write_text_format(identified.study, study_path, comment);
+  written.push_back("study with the identified links and actuators (rths run, rths launch): " +
+                    study_path.string());
+  return written;
+}
+
+}  // namespace rths::identify

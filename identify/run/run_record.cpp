@@ -1,0 +1,436 @@
+#include "identify/run/run_record.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "runtime/node/schema.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
+#include "study/study_inputs.h"
+
+namespace rths::identify {
+namespace {
+
+constexpr double kDivergenceBound = 1.0e3;  // m, the coordinator's default bound
+
+[[noreturn]] void bad(const std::filesystem::path& record, const std::string& entry,
+                      const std::string& problem) {
+  throw std::invalid_argument(record.string() + ": " + entry + ": " + problem);
+}
+
+runtime::RecordContents read_checked(const std::filesystem::path& record) {
+  runtime::RecordContents contents;
+  try {
+    contents = runtime::read_record(record);
+  } catch (const std::runtime_error& e) {
+    bad(record, "record", e.what());
+  }
+  if (contents.lost_entries()) bad(record, "damaged entries", contents.loss_report());
+  const runtime::RunHeader* header = contents.header();
+  if (header == nullptr)
+    bad(record, "entry 0", "no header: not a run record, or its start was lost");
+  if (header->schema_version() != runtime::kSchemaVersion) {
+    bad(record, "header",
+        "schema version " + std::to_string(header->schema_version()) +
+            ", this rths reads version " + std::to_string(runtime::kSchemaVersion));
+  }
+  return contents;
+}
+
+// Steps [0, end) whose response is finite and within the divergence bound.
+std::size_t usable_steps(const core::SimulationResult& steps) {
+  for (Eigen::Index k = 0; k < steps.displacement.rows(); ++k) {
+    const auto row = steps.displacement.row(k);
+    if (!row.allFinite() || row.cwiseAbs().maxCoeff() > kDivergenceBound) {
+      return static_cast<std::size_t>(k);
+    }
+  }
+  return static_cast<std::size_t>(steps.displacement.rows());
+}
+
+std::string held_note(const runtime::RecordContents& contents, const runtime::RunMeasurements& m,
+                      std::size_t usable) {
+  std::ostringstream out;
+  const auto recorded = static_cast<std::size_t>(m.steps.displacement.rows());
+  if (usable < recorded || (m.has_footer && m.footer.diverged())) {
+    out << "diverged: identified up to step " << usable << " of " << recorded << " recorded";
+  } else if (!m.has_footer || contents.truncated) {
+    out << "truncated: " << recorded << " steps held, no footer"
+        << (contents.truncated ? " (" + contents.warning + ")" : "");
+  } else {
+    out << "complete: " << recorded << " steps, " << m.footer.status();
+  }
+  return out.str();
+}
+
+DeclaredLink declared_link(const config::Deployment& deployment, int node_id) {
+  DeclaredLink out;
+  for (const auto& node : deployment.nodes()) {
+    if (node.id() != node_id) continue;
+    const auto& in = node.receive_lag();
+    const auto& send = node.send_lag();
+    out.round_trip = in.one_way_delay() + send.one_way_delay();
+    out.jitter = std::hypot(in.jitter(), send.jitter());
+    out.loss = 1.0 - (1.0 - in.loss()) * (1.0 - send.loss());
+    for (const auto* net : {&in.network(), &send.network()}) {
+      out.drift = out.drift || net->drift_rate() != 0.0;
+      out.spikes = out.spikes || (net->spike_delay() != 0.0 && net->spike_every() > 0);
+      out.drops = out.drops || net->drop_steps() > 0;
+    }
+  }
+  return out;
+}
+
+std::vector<NetworkPath> identify_links(const std::filesystem::path& record,
+                                        const runtime::RunHeader& header,
+                                        const runtime::RunMeasurements& m, double until) {
+  std::vector<NetworkPath> out;
+  for (int id : header.link_node_ids()) {
+    const auto found = m.links.find(id);
+    LinkAnswers answers;
+    answers.node_id = id;
+    if (found != m.links.end()) {
+      const runtime::LinkSeries& s = found->second;
+      for (std::size_t i = 0; i < s.time.size() && s.time[i] <= until; ++i) {
+        answers.time.push_back(s.time[i]);
+        answers.answered_step.push_back(s.answered_step[i]);
+        if (i < s.answers.size()) answers.answers.push_back(s.answers[i]);
+        answers.round_trip.push_back(s.round_trip[i]);
+        answers.injected.push_back(s.injected[i]);
+      }
+    }
+    if (answers.time.size() < 20) {
+      bad(record, "link to node " + std::to_string(id),
+          std::to_string(answers.time.size()) + " answers in the record, at least 20 are needed");
+    }
+    out.push_back(identify_network_path(answers, declared_link(header.study().deployment(), id),
+                                        header.dt()));
+  }
+  return out;
+}
+
+const config::Case* run_case(const config::Study& study, const std::string& name) {
+  for (const auto& c : study.cases()) {
+    if (c.name() == name) return &c;
+  }
+  return study.cases().empty() ? nullptr : &study.cases(0);
+}
+
+// The declared actuator (run_record.h): the case's stages, then the emulators' own receive
+// stages, as effects with the config's values as initial values.
+struct DeclaredActuator {
+  std::vector<Effect> effects;
+  std::vector<ParamDeclaration> parameters;
+  std::vector<std::string> names;
+  double gain = 1.0;
+};
+
+void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
+  const auto add = [&](Effect e, const std::string& param, double value, const std::string& text) {
+    for (Effect have : out.effects) {
+      if (have == e) return;  // one of each kind: the first stage's value seeds the fit
+    }
+    out.effects.push_back(e);
+    out.parameters.push_back({param, value, std::nullopt, std::nullopt, false});
+    out.names.push_back(text);
+  };
+  if (stage.amplitude_gain() != 0.0) out.gain *= stage.amplitude_gain();
+  if (stage.has_shift()) {
+    add(Effect::kDelay, "delay", stage.shift().delay(),
+        "shift " + std::to_string(stage.shift().delay()) + " s");
+  } else if (stage.has_first_order()) {
+    const double t = stage.first_order().time_constant();
+    add(Effect::kFirstOrder, "time_constant", t, "first_order " + std::to_string(t) + " s");
+  } else if (stage.has_transfer_function() && stage.transfer_function().denominator_size() == 3) {
+    const double wn = std::sqrt(stage.transfer_function().denominator(2));
+    add(Effect::kSecondOrder, "natural_frequency", wn,
+        "second_order " + std::to_string(wn) + " rad/s");
+  }
+}
+
+DeclaredActuator declared_actuator(const config::Study& study, const std::string& case_name) {
+  DeclaredActuator out;
+  if (const config::Case* c = run_case(study, case_name)) {
+    for (const auto& stage : c->delay()) declare_stage(stage, out);
+  }
+  for (const auto& node : study.deployment().nodes()) {
+    if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+    for (const auto& stage : node.receive_delay()) declare_stage(stage, out);
+  }
+  if (out.effects.empty()) out.effects.push_back(Effect::kDelay);
+  out.parameters.push_back({"gain", out.gain, std::nullopt, std::nullopt, false});
+  return out;
+}
+
+ActuatorPath identify_actuator(const std::filesystem::path& record,
+                               const runtime::RunHeader& header, const runtime::RunMeasurements& m,
+                               std::size_t steps, int a, const IdentifyOptions& base) {
+  MeasuredData data;
+  data.source = record.string() + " actuator " + std::to_string(a + 1);
+  for (std::size_t k = 0; k < steps; ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    data.time.push_back(m.steps.time[k]);
+    data.command.push_back(m.steps.command(row, a));
+    data.measured.push_back(m.steps.realised(row, a));
+    data.force.push_back(m.steps.measured_force(row, a));
+  }
+  validate(data, kDefaultMinSamples);
+  const DeclaredActuator declared = declared_actuator(header.study(), header.case_name());
+  IdentifyOptions options = base;
+  options.declared_actuator = declared.effects;
+  options.actuator_parameters = declared.parameters;
+  ActuatorPath out;
+  out.actuator = a + 1;
+  out.declared = declared.names;
+  out.declared_gain = declared.gain;
+  out.id = identify(data, options);
+  if (const auto* c = out.id.find(Channel::kMeasured)) {
+    const SignalScales scales = signal_scales(out.id.signals.front());
+    out.fitted_gain = c->final_fit.model.param(std::nullopt, "gain", scales).value_or(1.0);
+    for (const auto& step : c->steps) {
+      if (step.before.heldout_error - step.after.heldout_error > kMinErrorRemoved) {
+        out.undeclared.push_back(effect_name(step.effect));
+      }
+    }
+    if (std::abs(out.fitted_gain - declared.gain) > kGainTolerance * declared.gain) {
+      out.undeclared.push_back("gain error");
+    }
+    for (const auto& p : declared.parameters) {
+      if (p.name != "delay" || !p.initial) continue;
+      out.declared_delay = *p.initial;
+      out.fitted_delay = c->final_fit.model.param(Effect::kDelay, "delay", scales).value_or(0.0);
+      if (std::abs(out.fitted_delay - out.declared_delay) >
+          std::max(kDelayTolerance * out.declared_delay, 0.25 * header.dt())) {
+        out.undeclared.push_back("delay change");
+      }
+    }
+  }
+  return out;
+}
+
+// The study re-run over the identified steps from the record's ground acceleration.
+RunResidual residual(const std::filesystem::path& record, const runtime::RecordContents& contents,
+                     const runtime::RunHeader& header, const runtime::RunMeasurements& m,
+                     const RunIdentification& run) {
+  ResidualInput input;
+  input.study = contents.study_as_run();
+  input.case_name = header.case_name();
+  input.clock = m.clock;
+  input.base_dir = record.parent_path();
+  input.motion.name = record.stem().string();
+  input.motion.dt = header.dt();
+  for (const runtime::StepRecord* step : contents.steps()) {
+    if (input.motion.acceleration.size() == run.steps) break;
+    input.motion.acceleration.push_back(step->ground_acceleration());
+  }
+  const core::Mat recorded = m.steps.displacement.topRows(static_cast<Eigen::Index>(run.steps));
+  input.recorded = &recorded;
+  input.actuators = &run.actuators;
+  try {
+    return run_residual(input);
+  } catch (const std::invalid_argument& e) {
+    bad(record, "header", std::string("re-run of its study: ") + e.what());
+  }
+}
+
+}  // namespace
+
+std::string percent_text(double ratio) {
+  std::ostringstream out;
+  out.precision(3);
+  out << 100.0 * ratio << " %";
+  return out.str();
+}
+
+bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }
+
+RunIdentification identify_run_record(const std::filesystem::path& record,
+                                      const IdentifyOptions& options) {
+  const runtime::RecordContents contents = read_checked(record);
+  const runtime::RunHeader& header = *contents.header();
+  const runtime::RunMeasurements m = runtime::measure_run(contents);
+  RunIdentification out;
+  out.record = record.string();
+  out.clock = m.clock;
+  out.case_name = m.case_name;
+  out.study = *contents.study_as_run();
+  out.steps = usable_steps(m.steps);
+  out.held = held_note(contents, m, out.steps);
+  out.inputs = core::inputs_source(out.study, record.parent_path());
+  if (out.steps < kDefaultMinSamples) {
+    bad(record, "steps",
+        std::to_string(out.steps) + " usable steps, at least " +
+            std::to_string(kDefaultMinSamples) + " are needed");
+  }
+  out.duration = m.steps.time[out.steps - 1] - m.steps.time.front();
+  out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
+  for (int a = 0; a < header.actuators(); ++a) {
+    out.actuators.push_back(identify_actuator(record, header, m, out.steps, a, options));
+  }
+  const auto& channels = options.channels;
+  if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
+    if (options.progress) options.progress({0, 0, "re-run: declared and identified models"});
+    out.residual = residual(record, contents, header, m, out);
+  }
+  return out;
+}
+
+}  // namespace rths::identify
+
+namespace rths::identify {
+namespace {
+
+void link_text(const NetworkPath& l, std::ostream& out) {
+  out << "link to node " << l.node_id << ": " << l.answers << " answers; round trip beyond the"
+      << " injected lag: bias " << l.bias * 1e3 << " ms, jitter " << l.jitter * 1e3
+      << " ms, drift over the run " << l.drift_range * 1e3 << " ms; " << l.spikes
+      << " spikes; lost " << l.lost << " (longest burst " << l.longest_burst << "), superseded "
+      << l.superseded << ", late " << l.late << "; injected " << l.injected_mean * 1e3
+      << " ms (declared " << l.declared.round_trip * 1e3 << " ms)\n";
+  if (l.effects.empty()) out << "  undeclared effects: none\n";
+  for (const auto& e : l.effects) {
+    out << "  undeclared: " << e.name << ": " << e.detail;
+    if (e.heldout_before > 0.0) {
+      out << " (held-out RMS " << e.heldout_before * 1e3 << " -> " << e.heldout_after * 1e3
+          << " ms, share " << percent_text(e.share) << ")";
+    }
+    out << "\n";
+  }
+}
+
+void actuator_text(const ActuatorPath& a, std::ostream& out) {
+  out << "actuator " << a.actuator << ": declared";
+  for (const auto& d : a.declared) out << " " << d << ",";
+  out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")";
+  if (a.declared_delay > 0.0) {
+    out << ", delay " << a.declared_delay * 1e3 << " ms (fitted " << a.fitted_delay * 1e3 << " ms)";
+  }
+  out << "\n";
+  for (const auto& c : a.id.channels) {
+    out << "  " << channel_name(c.channel) << ": held-out "
+        << percent_text(c.declared_fit.heldout_error) << " declared -> "
+        << percent_text(c.final_fit.heldout_error) << " identified";
+    for (const auto& step : c.steps) {
+      out << "; + " << effect_name(step.effect) << " (share " << percent_text(step.own_share)
+          << ")";
+    }
+    out << "\n";
+  }
+  out << "  undeclared effects: ";
+  for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
+  out << (a.undeclared.empty() ? "none\n" : "\n");
+}
+
+void residual_text(const RunResidual& r, std::ostream& out) {
+  out << "response re-run in process over " << r.steps << " steps, NRMSE against the record "
+      << "(declared -> identified):";
+  for (const auto& f : r.floors) {
+    out << " floor " << f.dof << " " << percent_text(f.declared) << " -> "
+        << percent_text(f.identified) << ";";
+  }
+  out << (r.declared_diverged ? " the declared model diverges;" : "")
+      << (r.identified_diverged ? " the identified model diverges;" : "") << "\n";
+  for (const auto* kind : {&r.links, &r.effects}) {
+    for (const auto& s : *kind) {
+      out << "  " << s.link << (s.effect == "all" ? "" : ": " + s.effect) << " removes "
+          << percent_text(s.removed) << " of NRMSE from the worst floor (share "
+          << percent_text(s.share) << ")\n";
+    }
+  }
+  for (const auto& n : r.notes) out << "  note: " << n << "\n";
+}
+
+nlohmann::json residual_json(const RunResidual& r) {
+  nlohmann::json floors = nlohmann::json::array(), links = nlohmann::json::array(),
+                 effects = nlohmann::json::array();
+  for (const auto& f : r.floors) {
+    floors.push_back(
+        {{"dof", f.dof}, {"declared_nrmse", f.declared}, {"identified_nrmse", f.identified}});
+  }
+  for (const auto& [kind, list] : {std::pair{&r.links, &links}, std::pair{&r.effects, &effects}}) {
+    for (const auto& s : *kind) {
+      list->push_back({{"link", s.link},
+                       {"effect", s.effect},
+                       {"nrmse_removed", s.removed},
+                       {"share", s.share}});
+    }
+  }
+  return {{"steps", r.steps},
+          {"floors", floors},
+          {"declared_nrmse", r.declared},
+          {"identified_nrmse", r.identified},
+          {"declared_diverged", r.declared_diverged},
+          {"identified_diverged", r.identified_diverged},
+          {"links", links},
+          {"effects", effects},
+          {"notes", r.notes}};
+}
+
+}  // namespace
+
+std::string run_record_text(const RunIdentification& run) {
+  std::ostringstream out;
+  out << "record " << run.record << ": case '" << run.case_name << "', " << run.clock << ", "
+      << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
+  out << "inputs: " << run.inputs << "\n";
+  for (const auto& l : run.links) link_text(l, out);
+  for (const auto& a : run.actuators) actuator_text(a, out);
+  if (run.residual) residual_text(*run.residual, out);
+  return out.str();
+}
+
+nlohmann::json run_record_json(const RunIdentification& run) {
+  nlohmann::json links = nlohmann::json::array();
+  for (const auto& l : run.links) {
+    nlohmann::json effects = nlohmann::json::array();
+    for (const auto& e : l.effects) {
+      effects.push_back({{"name", e.name},
+                         {"detail", e.detail},
+                         {"heldout_rms_before_s", e.heldout_before},
+                         {"heldout_rms_after_s", e.heldout_after},
+                         {"share", e.share}});
+    }
+    links.push_back({{"node_id", l.node_id},
+                     {"answers", l.answers},
+                     {"bias_s", l.bias},
+                     {"jitter_s", l.jitter},
+                     {"drift_range_s", l.drift_range},
+                     {"spikes", l.spikes},
+                     {"spike_period_s", l.spike_period},
+                     {"lost", l.lost},
+                     {"longest_burst", l.longest_burst},
+                     {"superseded", l.superseded},
+                     {"late", l.late},
+                     {"injected_mean_s", l.injected_mean},
+                     {"declared_round_trip_s", l.declared.round_trip},
+                     {"heldout_rms_declared_s", l.heldout_declared},
+                     {"undeclared", effects}});
+  }
+  nlohmann::json actuators = nlohmann::json::array();
+  for (const auto& a : run.actuators) {
+    nlohmann::json channels = nlohmann::json::array();
+    for (const auto& c : a.id.channels) {
+      channels.push_back({{"channel", channel_name(c.channel)},
+                          {"declared_heldout_error", c.declared_fit.heldout_error},
+                          {"identified_heldout_error", c.final_fit.heldout_error}});
+    }
+    actuators.push_back({{"actuator", a.actuator},
+                         {"declared", a.declared},
+                         {"declared_gain", a.declared_gain},
+                         {"fitted_gain", a.fitted_gain},
+                         {"declared_delay_s", a.declared_delay},
+                         {"fitted_delay_s", a.fitted_delay},
+                         {"channels", channels},
+                         {"undeclared", a.undeclared}});
+  }
+  nlohmann::json out = {
+      {"record", run.record},       {"case", run.case_name}, {"clock", run.clock},
+      {"held", run.held},           {"inputs", run.inputs},  {"steps", run.steps},
+      {"duration_s", run.duration}, {"links", links},        {"actuators", actuators}};
+  if (run.residual) out["residual"] = residual_json(*run.residual);
+  return out;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,73 @@
+#pragma once
+// A distributed run identified from its record (`rths identify RECORD.rthsrec`), read through the
+// project's one record reader (runtime read_record + measure_run), against the run's own config
+// (the record header's study: the declared model).
+//
+// Per link (node): the network path (network_path.h), declared = the node's receive_lag +
+// send_lag in the header's deployment.
+// Per actuator a (1-based): the actuator path, command -> measured displacement, and the
+// specimen, measured displacement -> force, identified by identify.h with the effect library;
+// declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
+// transfer function -> second_order, each with the config's value as initial value), gain = the
+// stages' amplitude gain. Undeclared effects: the steps the search added that remove more than
+// kMinErrorRemoved of held-out error, and a fitted gain off the declared one by more than
+// kGainTolerance (an emulator gain error), and a fitted delay off the declared one
+// (kDelayTolerance). A run that diverged is identified up to the last step whose response is finite
+// and below the coordinator's divergence bound; a truncated record (no footer, or a cut last entry)
+// is identified from what it holds; both say so (`held`). The system-level residual re-runs the
+// study over the same steps, from the record's own ground acceleration (run_residual.h).
+// Bad input -> std::invalid_argument "RECORD: ENTRY: PROBLEM": a record that cannot be read or
+// has damaged entries (the reader's loss report names them), a header of another schema version, no
+// header, a link the header lists with no answer, fewer steps than identification needs.
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "identify/fit/identify.h"
+#include "identify/run/actuator_path.h"
+#include "identify/run/network_path.h"
+#include "identify/run/run_residual.h"
+
+namespace rths::identify {
+
+inline constexpr double kGainTolerance = 0.02;  // relative
+// A fitted delay off the declared one by more than this share of it, and by more than a quarter
+// of the run's step, is named "delay change" (e.g. a network lag that reached the actuator path
+// of a real-time run).
+inline constexpr double kDelayTolerance = 0.05;
+// An added effect is named only when it removes at least this much held-out error (a share of
+// the signal's std): the record of a simulated run has no sensor noise, and below this a relative
+// fall of the error is round-off, not an effect.
+inline constexpr double kMinErrorRemoved = 1.0e-4;
+
+struct RunIdentification {
+  std::string record, clock, case_name;
+  std::size_t steps = 0;  // identified
+  double duration = 0.0;  // s
+  std::string held;       // how much the record held: complete, truncated, diverged
+  std::string inputs;     // where the re-run's inputs came from (core::inputs_source)
+  config::Study study;    // the run's own config (the record header's)
+  std::vector<NetworkPath> links;
+  std::vector<ActuatorPath> actuators;
+  // The study re-run with the declared and the identified actuators (run_residual.h); absent
+  // when the actuator channel was not identified.
+  std::optional<RunResidual> residual;
+};
+
+RunIdentification identify_run_record(const std::filesystem::path& record,
+                                      const IdentifyOptions& options);
+
+std::string run_record_text(const RunIdentification& run);
+nlohmann::json run_record_json(const RunIdentification& run);
+
+// A ratio as the reports print it: 0.672 -> "67.2 %" (3 significant digits).
+std::string percent_text(double ratio);
+
+// True for a path named *.rthsrec (what `rths identify` reads as a run record).
+bool is_run_record(const std::filesystem::path& path);
+
+}  // namespace rths::identify

@@ -1,0 +1,78 @@
+#pragma once
+// The system-level residual of a distributed run: the study re-run in process (core::simulate)
+// with the record's own config, once with the declared model and once with the identified one,
+// each response against the recorded response.
+//
+// Inputs: the run's study and case (the record header), the ground acceleration of every step
+// the record holds (m/s^2, the coordinator's own samples, so the motion file is not needed), the
+// recorded displacement (m, steps x DOFs) and the actuator paths identified from the record
+// (run_record.h), in the order of the record's actuators.
+// Declared model of actuator a: the case's delay stages behind the actuator emulators' own
+// declared receive_delay stages (what the distributed run applies to a command), with the case's
+// compensation in front. Identified model: the identified actuator as study stages
+// (study_config.h actuator_case: shift with its gain, first order, second order) in place of
+// those delay stages, the compensation kept.
+// Errors, per floor (DOF) i: NRMSE_i = sqrt(mean (u_sim - u_rec)^2) / median |u_rec|
+// (core/metrics.h nrmse, the record as reference) over the steps both responses hold.
+// Which link explains how much: the error measure E is the worst floor's NRMSE.
+//   per actuator link a   E(declared) - E(only actuator a identified): the error it removes;
+//   per undeclared effect E(identified without the effect) - E(identified): the error the effect
+//                         removes on top of the rest ("gain error", "delay change": the gain or
+//                         delay set back to the declared one; any other: the effect taken out of
+//                         the model).
+// Each removal's share is its error removed over the sum of the positive ones of its kind.
+// The network paths' lag is not in the re-run: in simulated time (lockstep, in process) it does
+// not reach the response, and in real time what the actuator path saw of it (the answers the loop
+// used) is in the actuator path's fitted delay; `notes` says so for a real-time record.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/ground_motion.h"
+#include "core/simulation.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::identify {
+
+struct ActuatorPath;
+
+struct FloorError {
+  int dof = 0;                              // 1-based
+  double declared = 0.0, identified = 0.0;  // NRMSE against the record
+};
+
+struct ResidualShare {
+  std::string link;      // "actuator 1"
+  std::string effect;    // "all" (the link's whole identified model) or the effect's name
+  double removed = 0.0;  // NRMSE of the worst floor removed by it
+  double share = 0.0;    // of the removals of its kind
+};
+
+struct RunResidual {
+  std::size_t steps = 0;  // compared
+  std::vector<FloorError> floors;
+  double declared = 0.0, identified = 0.0;  // the worst floor's NRMSE
+  bool declared_diverged = false, identified_diverged = false;
+  std::vector<ResidualShare> links, effects;
+  std::vector<std::string> notes;  // stages left out of the re-run, network paths
+  // The responses compared (steps x DOFs, m) at `time` (s): for plots.
+  std::vector<double> time;
+  core::Mat recorded_response, declared_response, identified_response;
+};
+
+struct ResidualInput {
+  const config::Study* study = nullptr;
+  std::string case_name, clock;
+  // The record's folder: a study written before records carried their inputs names its matrix
+  // files relative to it (one rule: a file named is relative to the file that names it).
+  std::filesystem::path base_dir;
+  core::GroundMotion motion;            // at the run's dt, one sample per recorded step
+  const core::Mat* recorded = nullptr;  // m, steps x DOFs (at least motion's steps)
+  const std::vector<ActuatorPath>* actuators = nullptr;
+};
+
+// Throws std::invalid_argument when the study cannot be set up (naming the config's field).
+RunResidual run_residual(const ResidualInput& input);
+
+}  // namespace rths::identify

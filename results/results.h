@@ -1,0 +1,51 @@
+#pragma once
+// Every rths result as a Table (results/table.h): the one place that names the variables and
+// units of each command's output, for the CSV, MATLAB and HDF5 writers and the Python module.
+//
+//   study_table   `rths run`: step, time_s, then per case every floor and every actuator
+//                 (analysis/results_csv.h names). A case that stopped early (diverged) is NaN after
+//                 its last step.
+//   distributed_study_table  `rths launch` and `rths sites`: study_table's columns (the same as
+//                 `run`'s for the same cases), then the lag per link of each case:
+//                 <case>_lag_node<n>_injected_s and <case>_lag_node<n>_round_trip_s (s), filled at
+//                 the step that carried each answer (runtime/record/measurements.h: an answer
+//                 counts once) and NaN elsewhere (step 0; a real-time step that reused an older
+//                 answer). Attribute "reference": against what every case was compared.
+//   sweep_table   `rths sweep`: index, period (s), delay (s), alpha, stiffness (N/m; 0 = mass
+//                 1 kg), dt (s), motion and model (text), peak_ref, peak_delayed (m),
+//                 eq2_paper, nrmse, peak_error (m), diverged (0/1), as in the sweep CSV;
+//                 attributes grid_hash and grid_points.
+//   record_table  a run record (`rths launch`, `rths export`): step, time_s,
+//                 ground_acceleration_m_per_s2, u<i>_m, v<i>_m_per_s, a<i>_m_per_s2 per DOF,
+//                 command<j>_m, realised<j>_m, force<j>_N per actuator, then per link to node n:
+//                 node<n>_answered_step, node<n>_injected_lag_s, node<n>_round_trip_s,
+//                 node<n>_one_way_down_s, node<n>_one_way_up_s (NaN at step 0, which has no
+//                 exchange), then lateness_s and overrun (0/1); attributes run_id, case_name,
+//                 clock, status, integrity ("verified (CRC-32C per entry)", "damaged: <what
+//                 was lost>" or "unverified: ..." for an old record) and lost_steps (step
+//                 numbers missing from the rows, e.g. "1059-1061,2000"; empty when none).
+//   identify_table `rths identify`: time_s, then per channel c (measured, force):
+//                 c_input_m, c_target_<unit>, c_declared_<unit>, c_final_<unit> (the record, and
+//                 the declared and final model's predictions over the whole record); unit m for
+//                 `measured` (displacement), N for `force`.
+
+#include "analysis/study_run.h"
+#include "analysis/sweep_run.h"
+#include "identify/fit/identify.h"
+#include "results/table.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
+
+namespace rths::results {
+
+Table study_table(const analysis::StudyOutcome& outcome);
+// links[i]: the per-link series of outcome.cases[i] (runtime::measure_run); sizes must agree.
+Table distributed_study_table(const analysis::StudyOutcome& outcome,
+                              const std::vector<std::map<int, runtime::LinkSeries>>& links);
+Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::string& grid_hash,
+                  std::size_t grid_points);
+// Throws std::invalid_argument when the record has no header entry.
+Table record_table(const runtime::RecordContents& record);
+Table identify_table(const identify::Identification& identification);
+
+}  // namespace rths::results

@@ -1,0 +1,14 @@
+#include "runtime/node/in_process.h"
+
+#include "runtime/node/plan.h"
+
+namespace rths::runtime {
+
+core::HybridSetup in_process_setup(const core::PreparedStudy& prepared,
+                                   const config::Case& study_case) {
+  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  return with_node_compensation(
+      setup, make_plan(setup, with_default_nodes(prepared.config.deployment(), setup)));
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,279 @@
+#include "runtime/node/node_loop.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "runtime/node/lag.h"
+#include "runtime/node/plan.h"
+#include "runtime/node/schema.h"
+#include "runtime/rt/pacing.h"
+
+namespace rths::runtime {
+namespace {
+
+using transport::realtime_ns;
+
+std::int64_t seconds_to_ns(double s) { return static_cast<std::int64_t>(s * 1e9); }
+
+// A message waiting for its lag to pass: inbound (receive lag, then the service) or outbound
+// (send lag, then the wire).
+struct Delayed {
+  std::int64_t release_ns;
+  transport::Message message;
+  double injected;  // s, receive lag drawn for it
+};
+
+// What the assignment sets: timers and the lag injectors of the node's link.
+struct Assigned {
+  std::int64_t heartbeat_ns = seconds_to_ns(0.05), orphan_ns = seconds_to_ns(5.0);
+  std::int64_t watchdog_ns = 0;  // real-time actuator emulators only; 0 = off
+  std::unique_ptr<LagInjector> receive_lag, send_lag;
+};
+
+// The loop of one node process around its service (the contract is in node_loop.h).
+//   set-up     the constructor: nothing assigned, announcing.
+//   each pass  keep_time (announce, heartbeat, watchdog, orphan) -> write what is due ->
+//              apply what is due -> wait for a message or the next thing due, and take it.
+//   teardown   the destructor: the servo thread is stopped and joined, then the inline handler
+//              removed (waiting out a running call), before any state it touches goes.
+// `state` guards the service and the timers against the inline handler and the servo thread;
+// the loop holds it except while it waits.
+class NodeLoop {
+ public:
+  NodeLoop(transport::Endpoint& endpoint, NodeService& service, const NodeLoopOptions& options)
+      : endpoint_(endpoint), service_(service), options_(options), lock_(state_) {}
+  ~NodeLoop();
+
+  // The exit code when the node must leave now (never assigned, orphaned), else nullopt.
+  std::optional<int> keep_time();
+  void write_due();
+  // The exit code once a STOP was applied, else nullopt.
+  std::optional<int> apply_due();
+  void wait_and_take();
+
+ private:
+  // A message off the transport: stamps what the watchdogs watch, then waits its receive lag.
+  void take(transport::Message message);
+  void apply(Delayed item);
+  void on_assigned();
+  bool commands_stopped(std::int64_t now);
+  void start_servo(double period, const WaitPolicy& policy);
+  bool handle_inline(const transport::Message& m);
+
+  transport::Endpoint& endpoint_;
+  NodeService& service_;
+  const NodeLoopOptions options_;
+  std::mutex state_;
+  std::unique_lock<std::mutex> lock_;
+  std::deque<Delayed> inbound_, outbound_;
+  Assigned assigned_;
+  const std::int64_t started_ = realtime_ns();
+  std::int64_t next_announce_ = 0, next_heartbeat_ = 0;
+  std::int64_t last_from_coordinator_ = started_, last_command_ns_ = 0;
+  std::atomic<bool> stop_servo_{false};
+  std::thread servo_;
+};
+
+NodeLoop::~NodeLoop() {
+  stop_servo_ = true;
+  if (servo_.joinable()) {
+    if (lock_.owns_lock()) lock_.unlock();
+    servo_.join();
+  }
+  if (lock_.owns_lock()) lock_.unlock();
+  endpoint_.set_inline_handler(nullptr);
+}
+
+// Commands without injected lag are handled on the transport's receive thread (no thread switch
+// per step).
+bool NodeLoop::handle_inline(const transport::Message& m) {
+  if (m.kind != COMMAND) return false;
+  std::lock_guard guard(state_);
+  if (m.run_id == service_.run_id()) last_from_coordinator_ = last_command_ns_ = m.received_ns;
+  service_.set_injected_lag(0.0);
+  for (auto& r : service_.handle(m)) endpoint_.send(r);
+  return true;
+}
+
+// The servo loop of a streaming node (real time, servo faster than the integrator): its own
+// thread, paced on CLOCK_MONOTONIC with the deployment's wait policy, one servo_tick() per
+// period under `state_`.
+void NodeLoop::start_servo(double period, const WaitPolicy& policy) {
+  servo_ = std::thread([this, period, policy] {
+    MonotonicClock clock;
+    Pacer pacer(clock, period, policy);
+    pacer.start();
+    for (std::int64_t k = 1; !stop_servo_; ++k) {
+      const PaceResult pace = pacer.wait(k);
+      std::lock_guard guard(state_);
+      if (auto feedback = service_.servo_tick(pace.overrun)) endpoint_.send(*feedback);
+    }
+  });
+}
+
+void NodeLoop::take(transport::Message message) {
+  if (service_.assigned() && message.run_id == service_.run_id()) {
+    last_from_coordinator_ = message.received_ns;
+    if (message.kind == COMMAND) last_command_ns_ = message.received_ns;
+  }
+  if (!assigned_.receive_lag) {
+    inbound_.push_back({message.received_ns, std::move(message), 0.0});
+    return;
+  }
+  const auto release = assigned_.receive_lag->schedule(
+      message.received_ns, message.kind == COMMAND ? message.step : std::int64_t{-1});
+  if (!release) return;  // lost
+  inbound_.push_back({*release, std::move(message), assigned_.receive_lag->last_delay()});
+}
+
+// Whether no command has arrived for the watchdog's time. A node that was itself descheduled
+// wakes with commands waiting on its receive thread: it lets that thread deliver them (a grace
+// of kWatchdogGrace, lock released) and takes what is queued before it judges the coordinator
+// silent, so its own stall is not read as the coordinator's. A true silence holds at most the
+// grace later.
+bool NodeLoop::commands_stopped(std::int64_t now) {
+  const std::int64_t watchdog = assigned_.watchdog_ns;
+  if (watchdog <= 0 || last_command_ns_ <= 0 || service_.held() ||
+      now - last_command_ns_ <= watchdog)
+    return false;
+  lock_.unlock();
+  std::this_thread::sleep_for(kWatchdogGrace);
+  lock_.lock();
+  while (auto queued = endpoint_.receive(std::chrono::nanoseconds(0))) take(std::move(*queued));
+  return !service_.held() && realtime_ns() - last_command_ns_ > watchdog;
+}
+
+std::optional<int> NodeLoop::keep_time() {
+  const std::int64_t now = realtime_ns();
+  if (!service_.assigned()) {
+    if (now >= next_announce_) {
+      endpoint_.send(service_.announce());
+      next_announce_ = now + seconds_to_ns(options_.announce_period);
+    }
+    if (now - started_ <= seconds_to_ns(options_.assign_timeout)) return std::nullopt;
+    spdlog::error("{}: no coordinator assigned this node within {} s", service_.label(),
+                  options_.assign_timeout);
+    return 1;
+  }
+  if (now >= next_heartbeat_) {
+    endpoint_.send(service_.heartbeat());
+    next_heartbeat_ = now + assigned_.heartbeat_ns;
+  }
+  if (commands_stopped(now)) {
+    const double silent_ms = static_cast<double>(realtime_ns() - last_command_ns_) * 1e-6;
+    if (auto hold = service_.hold_on_own(
+            "command watchdog: no fresh command for " + std::to_string(silent_ms) + " ms (limit " +
+            std::to_string(static_cast<double>(assigned_.watchdog_ns) * 1e-6) + " ms)"))
+      endpoint_.send(*hold);
+  }
+  if (now - last_from_coordinator_ <= assigned_.orphan_ns) return std::nullopt;
+  spdlog::error("{}: coordinator silent for {:.3f} s; holding and leaving", service_.label(),
+                static_cast<double>(now - last_from_coordinator_) * 1e-9);
+  if (auto hold = service_.hold_on_own("coordinator silent")) endpoint_.send(*hold);
+  service_.settle_hold();
+  return 1;
+}
+
+void NodeLoop::write_due() {
+  const std::int64_t now = realtime_ns();
+  while (!outbound_.empty() && outbound_.front().release_ns <= now) {
+    endpoint_.send(outbound_.front().message);
+    outbound_.pop_front();
+  }
+}
+
+// The service handles the message; its replies leave now, or after the send lag.
+void NodeLoop::apply(Delayed item) {
+  if (!assigned_.send_lag) {
+    service_.set_injected_lag(item.injected);
+    for (auto& r : service_.handle(item.message)) endpoint_.send(r);
+    return;
+  }
+  const auto release = assigned_.send_lag->schedule(
+      realtime_ns(), item.message.kind == COMMAND ? item.message.step : std::int64_t{-1});
+  service_.set_injected_lag(item.injected + assigned_.send_lag->last_delay());
+  auto replies = service_.handle(item.message);
+  if (!release) return;  // the replies are lost on the way out
+  for (auto& r : replies) outbound_.push_back({*release, std::move(r), 0.0});
+}
+
+// Set-up of the run the node was just assigned: timers, the link's lag injectors, the command
+// watchdog, the servo thread, and the inline fast path when no lag is injected.
+void NodeLoop::on_assigned() {
+  const Assign& a = service_.assignment();
+  assigned_.heartbeat_ns = seconds_to_ns(a.heartbeat_period() > 0 ? a.heartbeat_period() : 0.05);
+  assigned_.orphan_ns = seconds_to_ns(a.orphan_timeout() > 0 ? a.orphan_timeout() : 5.0);
+  if (LagInjector in(a.node().receive_lag()); in.active())
+    assigned_.receive_lag = std::make_unique<LagInjector>(a.node().receive_lag(), a.dt());
+  if (LagInjector out(a.node().send_lag()); out.active())
+    assigned_.send_lag = std::make_unique<LagInjector>(a.node().send_lag(), a.dt());
+  last_from_coordinator_ = realtime_ns();
+  const config::Deployment& deployment = a.study().deployment();
+  if (a.node().kind() == config::NodeSpec::ACTUATOR_EMULATOR &&
+      deployment.clock() == config::Deployment::REAL_TIME)
+    assigned_.watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment, a.dt()) * a.dt());
+  spdlog::info("{}: assigned to run {}", service_.label(), service_.run_id());
+  if (service_.streaming()) {
+    const double period = service_.streaming_period();
+    spdlog::info("{}: servo loop at {:.0f} Hz ({} policy)", service_.label(), 1.0 / period,
+                 to_string(wait_policy(deployment).kind));
+    start_servo(period, wait_policy(deployment));
+  }
+  if (!assigned_.receive_lag && !assigned_.send_lag)
+    endpoint_.set_inline_handler([this](const transport::Message& m) { return handle_inline(m); });
+}
+
+std::optional<int> NodeLoop::apply_due() {
+  const std::int64_t now = realtime_ns();
+  while (!inbound_.empty() && inbound_.front().release_ns <= now) {
+    Delayed item = std::move(inbound_.front());
+    inbound_.pop_front();
+    const bool was_assigned = service_.assigned();
+    apply(std::move(item));
+    if (!was_assigned && service_.assigned()) on_assigned();
+    if (service_.stopped()) {
+      for (auto& d : outbound_) endpoint_.send(d.message);
+      service_.settle_hold();
+      spdlog::info("{}: stopped after step {} ({} messages rejected)", service_.label(),
+                   service_.last_step(), service_.rejected().total());
+      return 0;
+    }
+  }
+  service_.settle_hold();  // after a hold was reported (no-op otherwise, and after the first)
+  return std::nullopt;
+}
+
+// Sleeps until the next thing due, or a message, which it takes.
+void NodeLoop::wait_and_take() {
+  std::int64_t wake = service_.assigned() ? next_heartbeat_ : next_announce_;
+  if (assigned_.watchdog_ns > 0 && last_command_ns_ > 0 && !service_.held())
+    wake = std::min(wake, last_command_ns_ + assigned_.watchdog_ns + 1);
+  if (!inbound_.empty()) wake = std::min(wake, inbound_.front().release_ns);
+  if (!outbound_.empty()) wake = std::min(wake, outbound_.front().release_ns);
+  const auto timeout = std::chrono::nanoseconds(std::max<std::int64_t>(0, wake - realtime_ns()));
+  lock_.unlock();
+  auto message = endpoint_.receive(timeout);
+  lock_.lock();
+  if (message) take(std::move(*message));
+}
+
+}  // namespace
+
+int run_node(transport::Endpoint& endpoint, NodeService& service, const NodeLoopOptions& options) {
+  NodeLoop loop(endpoint, service, options);
+  for (;;) {
+    if (const auto code = loop.keep_time()) return *code;
+    loop.write_due();
+    if (const auto code = loop.apply_due()) return *code;
+    loop.wait_and_take();
+  }
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,73 @@
+#include "runtime/node/node_main.h"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "runtime/node/node_loop.h"
+#include "security/check.h"
+#include "security/pki.h"
+#include "study/study.h"
+#include "transport/dds_endpoint.h"
+
+namespace rths::runtime {
+
+int node_main(int argc, char** argv, const std::string& program, const ServiceFactory& factory) {
+  CLI::App app{program + ": an rths node; the coordinator assigns its part of the study"};
+  int node_id = 0;
+  int domain = -1;
+  std::string config_path, run_id, security_dir;
+  NodeLoopOptions loop;
+  app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
+  app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
+  app.add_option("--config", config_path,
+                 "study config, read only for its domain id and security_dir");
+  app.add_option("--run-id", run_id,
+                 "the run this node joins (default: the config's deployment.run_id); required");
+  app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
+  app.add_option("--security", security_dir,
+                 "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
+                 "the config's deployment.security_dir");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  transport::DdsEndpointOptions options;
+  try {
+    if (node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
+    if (domain < 0 && config_path.empty()) throw std::invalid_argument("give --domain or --config");
+    if (!config_path.empty()) {
+      const config::Deployment deployment = core::load_study(config_path).deployment();
+      if (domain < 0) domain = deployment.domain_id();
+      if (run_id.empty()) run_id = deployment.run_id();
+      if (security_dir.empty() && !deployment.security_dir().empty())
+        security_dir = security::node_dir(
+            std::filesystem::path(config_path).parent_path() / deployment.security_dir(), node_id);
+    }
+    if (!security_dir.empty())  // refused here, before the participant exists
+      options.participant_properties =
+          security::participant_properties(security::check_node_security(security_dir, node_id));
+    if (run_id.empty())
+      throw std::invalid_argument(
+          "give --run-id (or deployment.run_id in --config): the coordinator accepts only "
+          "announcements of its own run, and this node only that run's assignment");
+  } catch (const std::exception& e) {
+    std::cerr << program << ": " << e.what() << "\n";
+    return 2;
+  }
+  try {
+    options.domain_id = static_cast<std::uint32_t>(domain);
+    options.coordinator = false;
+    options.node_id = node_id;
+    transport::DdsEndpoint endpoint(options);
+    auto service = factory(node_id, run_id);
+    return run_node(endpoint, *service, loop);
+  } catch (const std::exception& e) {
+    std::cerr << program << " (node " << node_id << "): " << e.what() << "\n";
+    return 3;
+  }
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,245 @@
+#include "runtime/node/node_service.h"
+
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+#include "runtime/node/plan.h"
+#include "runtime/node/schema.h"
+#include "study/study.h"
+
+namespace rths::runtime {
+
+NodeService::NodeService(std::int32_t node_id, config::NodeSpec::Kind kind,
+                         std::string expected_run_id)
+    : node_id_(node_id), kind_(kind), expected_run_id_(std::move(expected_run_id)) {}
+
+std::string NodeService::label() const {
+  return "node " + std::to_string(node_id_) + " (" + node_kind_name(kind_) + ")";
+}
+
+transport::Message NodeService::announce() const {
+  Announce a;
+  a.set_schema_version(kSchemaVersion);
+  a.set_node_id(node_id_);
+  a.set_kind(kind_);
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  a.set_host(host);
+  a.set_pid(static_cast<int>(getpid()));
+  return pack(expected_run_id_, node_id_, ANNOUNCE, 0, a);
+}
+
+transport::Message NodeService::heartbeat() const { return heartbeat_message(false); }
+
+transport::Message NodeService::heartbeat_message(bool final) const {
+  Heartbeat h;
+  h.set_node_id(node_id_);
+  h.set_last_step(last_step_);
+  h.set_rejected(rejected_.total());
+  h.set_servo_ticks(static_cast<std::uint64_t>(servo_samples_));
+  h.set_servo_overruns(servo_overruns_);
+  rejected_.fill(*h.mutable_rejected_by_cause());
+  h.set_final(final);
+  return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);
+}
+
+bool NodeService::entitled(const transport::Message& message) {
+  const bool own_topic = message.topic_node == node_id_ && message.node_id == node_id_;
+  const bool own_writer =
+      coordinator_writer_ == 0 || message.writer == 0 || message.writer == coordinator_writer_;
+  if (own_topic && own_writer) return true;
+  rejected_.count(Verdict::kNotEntitled);
+  return false;
+}
+
+bool NodeService::in_range(const Command& command) const {
+  const config::SafetyLimits& limits = assignment_.study().deployment().limits();
+  return std::isfinite(command.time()) && command.time() >= 0.0 &&
+         finite_within(command.drift(), 2.0 * limits.max_displacement()) &&
+         finite_within(command.drift_velocity(), 2.0 * limits.max_velocity());
+}
+
+std::vector<transport::Message> NodeService::start() { return {announce()}; }
+
+std::vector<transport::Message> NodeService::on_assign(const transport::Message& message) {
+  if (!entitled(message)) return {};
+  Assign assign;
+  if (!unpack(message, assign)) {
+    rejected_.count(Verdict::kGarbage);
+    return {};
+  }
+  if (!assigned_) {
+    if (message.run_id.empty() ||
+        (!expected_run_id_.empty() && message.run_id != expected_run_id_)) {
+      rejected_.count(Verdict::kForeignRun);
+      return {};
+    }
+    run_id_ = message.run_id;
+    coordinator_writer_ = message.writer;
+    assignment_ = assign;
+    const auto& deployment = assign.study().deployment();
+    if (deployment.clock() == config::Deployment::REAL_TIME && assign.dt() > 0) {
+      const double window = liveliness_timeout(deployment) / assign.dt();
+      max_step_gap_ = static_cast<std::int64_t>(window) + 1;
+    }
+    assigned_ = true;
+    try {
+      if (assign.schema_version() != kSchemaVersion)
+        throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
+                                    ", this node speaks " + std::to_string(kSchemaVersion));
+      // The one lag rule (study/study.h), as the coordinator applied it at load: a node does not
+      // take the coordinator's word for the lags it injects.
+      for (const auto& [name, lag] : {std::pair{"receive_lag", &assign.node().receive_lag()},
+                                      std::pair{"send_lag", &assign.node().send_lag()}})
+        core::validate_link_lag(*lag, std::string("node.") + name, assign.study().allow_long_lag(),
+                                "the assigned study");
+      hosted_ = configure(assign);
+      const auto chains =
+          [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
+            std::vector<core::DelayChain> out;
+            if (stages.empty()) return out;
+            for (int i = 0; i < hosted_; ++i)
+              out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
+            return out;
+          };
+      receive_chains_ = chains(assign.node().receive_delay());
+      send_chains_ = chains(assign.node().send_delay());
+      stream_period_ = servo_period();
+      streaming_ = deployment.clock() == config::Deployment::REAL_TIME && stream_period_ > 0;
+      if (streaming_ && !send_chains_.empty())
+        throw std::invalid_argument(
+            "send_delay acts once per command, but a servo loop faster than the integrator "
+            "streams feedback every servo period; inject the lag with send_lag instead");
+    } catch (const std::exception& e) {
+      configure_error_ = label() + ": " + e.what();
+      spdlog::error("{}", configure_error_);
+    }
+  }
+  // A repeated ASSIGN (the coordinator re-sends until it hears READY) gets the same answer.
+  Ready ready;
+  ready.set_node_id(node_id_);
+  ready.set_storeys(hosted_);
+  ready.set_error(configure_error_);
+  return {pack(run_id_, node_id_, READY, 0, ready)};
+}
+
+std::optional<transport::Message> NodeService::hold_on_own(const std::string& reason) {
+  if (held_ || stopped_) return std::nullopt;
+  held_ = true;
+  on_hold();
+  spdlog::error("{}: holding on its own at step {} (realtime_ns {}): {}", label(), last_step_,
+                transport::realtime_ns(), reason);
+  Hold hold;
+  hold.set_reason(reason);
+  return pack(run_id_, node_id_, HOLD, last_step_, hold);
+}
+
+std::optional<transport::Message> NodeService::servo_tick(bool overrun) {
+  if (!streaming_ || held_ || stopped_ || stream_step_ == 0) return std::nullopt;
+  if (overrun) ++servo_overruns_;
+  feedback_.Clear();
+  tick(feedback_);
+  feedback_.set_command_received_ns(stream_received_ns_);
+  feedback_.set_injected_lag(stream_injected_lag_);
+  feedback_.set_servo_sample(++servo_samples_);
+  feedback_.set_sampled_ns(transport::realtime_ns());
+  transport::Message reply = pack(run_id_, node_id_, FEEDBACK, stream_step_, feedback_);
+  reply.echo_ns = stream_echo_ns_;
+  return reply;
+}
+
+std::vector<transport::Message> NodeService::handle(const transport::Message& message) {
+  if (!assigned_) {
+    if (message.kind == ASSIGN) return on_assign(message);
+    return {};  // nothing else concerns a node that is not part of a run yet
+  }
+  const Verdict envelope = check_envelope(message, run_id_);
+  if (envelope != Verdict::kAccept) {
+    rejected_.count(envelope);
+    return {};
+  }
+  switch (message.kind) {
+    case ASSIGN: return on_assign(message);
+    case COMMAND: return on_command(message);
+    case HOLD:
+      if (!entitled(message)) return {};
+      if (!held_) {
+        held_ = true;
+        on_hold();
+        Hold hold;
+        unpack(message, hold);
+        spdlog::warn("{}: HOLD at step {} (realtime_ns {}): {}", label(), last_step_,
+                     transport::realtime_ns(), hold.reason());
+      }
+      return {};
+    case STOP:
+      if (!entitled(message)) return {};
+      stopped_ = true;
+      return {heartbeat_message(true)};
+    default: return {};  // heartbeats only refresh liveliness, which the loop tracks
+  }
+}
+
+std::vector<transport::Message> NodeService::on_command(const transport::Message& message) {
+  if (!entitled(message) || held_ || stopped_ || !configure_error_.empty()) return {};
+  const Verdict order = check_step(message.step, last_step_, last_step_ + max_step_gap_);
+  if (order != Verdict::kAccept) {
+    rejected_.count(order);
+    return {};
+  }
+  if (!unpack(message, command_)) {
+    rejected_.count(Verdict::kGarbage);
+    return {};
+  }
+  if (!in_range(command_)) {
+    rejected_.count(Verdict::kOutOfRange);
+    return {};
+  }
+  if (const std::string why = refusal(command_); !why.empty()) {
+    auto hold =
+        hold_on_own("refused the command of step " + std::to_string(message.step) + ": " + why);
+    if (hold) return {std::move(*hold)};
+    return {};
+  }
+  feedback_.Clear();
+  if (!receive_chains_.empty() && command_.drift_size() == hosted_ &&
+      command_.drift_velocity_size() == hosted_) {
+    for (int i = 0; i < hosted_; ++i) {
+      const double velocity = command_.drift_velocity(i);
+      command_.set_drift(i,
+                         receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
+    }
+  }
+  try {
+    if (streaming_)
+      load(command_);
+    else
+      compute(command_, feedback_);  // checks sizes before it changes any state
+  } catch (const std::invalid_argument& e) {
+    spdlog::warn("{}: rejected command of step {}: {}", label(), message.step, e.what());
+    rejected_.count(Verdict::kGarbage);
+    return {};
+  }
+  if (streaming_) {
+    last_step_ = stream_step_ = message.step;
+    stream_echo_ns_ = message.sent_ns;
+    stream_received_ns_ = message.received_ns;
+    stream_injected_lag_ = injected_lag_;
+    return {};
+  }
+  if (!send_chains_.empty())
+    for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
+      feedback_.set_force(i, send_chains_[i].step({command_.time(), feedback_.force(i), 0.0}));
+  last_step_ = message.step;
+  feedback_.set_command_received_ns(message.received_ns);
+  feedback_.set_injected_lag(injected_lag_);
+  transport::Message reply = pack(run_id_, node_id_, FEEDBACK, message.step, feedback_);
+  reply.echo_ns = message.sent_ns;
+  return {std::move(reply)};
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,132 @@
+#pragma once
+// What every node does with messages, independent of transport and of its kind:
+//   before assignment   announce itself; accept the first ASSIGN (of the expected run, if given),
+//                       build its part (configure) and answer READY (or READY with an error).
+//   after assignment    COMMAND of the next step (lockstep: exactly last + 1; real time: newer,
+//                       at most a liveliness timeout of steps ahead) -> compute -> FEEDBACK echoing
+//                       the command's stamp; HOLD -> freeze (further commands ignored); STOP ->
+//                       stopped(), answered by the node's last heartbeat (final, with its rejects
+//                       by cause); a command the node refuses (refusal(): an emulator's rate limit)
+//                       -> it holds on its own and answers HOLD with the reason instead of
+//                       FEEDBACK. foreign-run, garbage, duplicate and stale messages are counted,
+//                       never applied.
+//   trust               ASSIGN, COMMAND, HOLD and STOP count only on the node's own command
+//                       topic (never the broadcast) and, after the first accepted ASSIGN, only
+//                       from the writer that sent it (transport::Message::writer; 0 = unknown,
+//                       not checked); anything else is counted not entitled. An empty run id is
+//                       never this run's. A command whose time, drifts or drift velocities are not
+//                       finite, or beyond twice the run's max_displacement / max_velocity (a
+//                       storey drift spans two DOFs, each within the limit), is counted out of
+//                       range and not acted on.
+//   node delay stages   the spec's receive_delay / send_delay stages (simulated time) act on
+//                       each received drift before compute() and on each force after it.
+//   streaming           real time with a servo loop faster than the integrator (servo_period() >
+//   0):
+//                       a COMMAND only loads the servo (load()); the node loop calls servo_tick()
+//                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
+//                       for the newest command, stamped with its servo sample. Held, stopped or
+//                       before the first command: no tick runs and nothing is sent.
+// Subclasses (substructure node, actuator emulator) supply configure() and compute().
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/delay.h"
+#include "rths/proto/runtime.pb.h"
+#include "runtime/node/validation.h"
+#include "transport/in_process.h"
+
+namespace rths::runtime {
+
+class NodeService : public transport::NodeHandler {
+ public:
+  // `expected_run_id` empty: adopt the run id of the first ASSIGN addressed to this node.
+  NodeService(std::int32_t node_id, config::NodeSpec::Kind kind, std::string expected_run_id);
+  std::vector<transport::Message> start() override;
+  std::vector<transport::Message> handle(const transport::Message& message) override;
+
+  transport::Message announce() const;
+  transport::Message heartbeat() const;
+  // Freezes the node (as a HOLD from the coordinator does) and returns the HOLD message that tells
+  // the coordinator why. Used by the node's own watchdog and limits. Idempotent: a second call
+  // returns nullopt.
+  std::optional<transport::Message> hold_on_own(const std::string& reason);
+  // Streaming only: one servo period. nullopt when not streaming, held, stopped or before the
+  // first command. Counts `overrun` (the period started past its deadline) for the heartbeat.
+  std::optional<transport::Message> servo_tick(bool overrun);
+  bool streaming() const { return streaming_; }
+  double streaming_period() const { return streaming_ ? stream_period_ : 0.0; }  // s
+  // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
+  void set_injected_lag(double seconds) { injected_lag_ = seconds; }
+
+  // Held and not yet settled: runs on_settle() once. The node loop calls it after a hold.
+  void settle_hold() {
+    if (held_ && !settled_) {
+      settled_ = true;
+      on_settle();
+    }
+  }
+
+  bool assigned() const { return assigned_; }
+  bool held() const { return held_; }
+  bool stopped() const { return stopped_; }
+  const std::string& run_id() const { return run_id_; }
+  const Assign& assignment() const { return assignment_; }
+  std::int32_t node_id() const { return node_id_; }
+  std::int64_t last_step() const { return last_step_; }
+  const RejectCounters& rejected() const { return rejected_; }
+  std::string label() const;
+
+ protected:
+  // Builds the node's part; returns how many storeys/actuators it hosts. Throws on a bad part.
+  virtual int configure(const Assign& assign) = 0;
+  // One step. Fills force (and realised for actuators), one entry per hosted storey.
+  virtual void compute(const Command& command, Feedback& feedback) = 0;
+  virtual void on_hold() {}
+  // Once per hold, after the HOLD has been reported (so its cost never delays the report):
+  // whatever the node does to come to rest (the emulator's rate-limited ramp).
+  virtual void on_settle() {}
+  // Real time: the servo period (s) when the node runs a servo loop faster than the integrator,
+  // else 0 (answer each command with compute()). Asked once, after configure().
+  virtual double servo_period() const { return 0.0; }
+  // Streaming: take the command (check sizes before changing state; throw invalid_argument).
+  virtual void load(const Command& /*command*/) {}
+  // Streaming: one servo period; fills force and realised as compute() does.
+  virtual void tick(Feedback& /*feedback*/) {}
+  // Non-empty: why this command must not be acted on (checked before any delay stage or block).
+  virtual std::string refusal(const Command& /*command*/) { return {}; }
+
+ private:
+  std::vector<transport::Message> on_assign(const transport::Message& message);
+  std::vector<transport::Message> on_command(const transport::Message& message);
+  // Whether a control message (ASSIGN, COMMAND, HOLD, STOP) came from the coordinator that
+  // assigned this node, on this node's own topic; counts it not entitled otherwise.
+  bool entitled(const transport::Message& message);
+  bool in_range(const Command& command) const;
+  transport::Message heartbeat_message(bool final) const;
+  std::uint64_t coordinator_writer_ = 0;  // the first accepted ASSIGN's writer
+  std::int32_t node_id_;
+  config::NodeSpec::Kind kind_;
+  std::string expected_run_id_, run_id_;
+  bool assigned_ = false, held_ = false, settled_ = false, stopped_ = false;
+  std::string configure_error_;
+  int hosted_ = 0;
+  Assign assignment_;
+  std::int64_t last_step_ = 0;  // commands start at step 1
+  std::int64_t max_step_gap_ = 1;
+  double injected_lag_ = 0.0;
+  RejectCounters rejected_;
+  Command command_;
+  Feedback feedback_;
+  bool streaming_ = false;
+  // Streaming: the newest loaded command's envelope (step 0 = none yet) and the servo counters.
+  std::int64_t stream_step_ = 0, stream_echo_ns_ = 0, stream_received_ns_ = 0;
+  double stream_injected_lag_ = 0.0, stream_period_ = 0.0;
+  std::int64_t servo_samples_ = 0;
+  std::uint64_t servo_overruns_ = 0;
+  // Simulated-time stages of the node's spec, one chain per hosted entry (empty: none).
+  std::vector<core::DelayChain> receive_chains_, send_chains_;
+};
+
+}  // namespace rths::runtime

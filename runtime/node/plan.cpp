@@ -1,0 +1,242 @@
+#include "runtime/node/plan.h"
+
+#include <cmath>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include "runtime/node/lag.h"
+#include "runtime/node/schema.h"
+
+namespace rths::runtime {
+
+std::string NodePlan::label() const {
+  return "node " + std::to_string(spec.id()) + " (" + node_kind_name(spec.kind()) + ")";
+}
+
+const NodePlan* DeploymentPlan::find(int node_id) const {
+  for (const NodePlan& n : nodes)
+    if (n.spec.id() == node_id) return &n;
+  return nullptr;
+}
+
+DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment) {
+  const auto& partition = base.partition;
+  const int storeys = static_cast<int>(partition.numerical.size());
+  std::set<int> numerical, experimental;
+  for (int s = 0; s < storeys; ++s)
+    if (partition.has_numerical(s)) numerical.insert(s);
+  for (int s : partition.actuator_storeys) experimental.insert(s);
+
+  check_failsafe_windows(deployment);
+  DeploymentPlan plan;
+  std::set<int> ids;
+  std::map<int, int> numerical_host, experimental_host;  // storey -> node id
+  bool any_substructure = false;
+  for (const config::NodeSpec& spec : deployment.nodes()) {
+    const std::string where = "deployment.nodes[id " + std::to_string(spec.id()) + "]";
+    if (spec.id() < 1)
+      throw std::invalid_argument(where + ": id must be >= 1 (0 is the coordinator)");
+    if (!ids.insert(spec.id()).second)
+      throw std::invalid_argument(where + ": id used by two nodes");
+    NodePlan node;
+    node.spec = spec;
+    const bool sub = spec.kind() == config::NodeSpec::SUBSTRUCTURE;
+    if (!sub && spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR)
+      throw std::invalid_argument(where + ": kind must be SUBSTRUCTURE or ACTUATOR_EMULATOR");
+    any_substructure |= sub;
+    if (sub && spec.compensation_size() > 0)
+      throw std::invalid_argument(where +
+                                  ": compensation shapes actuator commands; only an "
+                                  "ACTUATOR_EMULATOR carries it");
+    const std::set<int>& pool = sub ? numerical : experimental;
+    auto& host = sub ? numerical_host : experimental_host;
+    std::vector<int> hosted;
+    if (spec.storeys().empty()) {
+      hosted.assign(pool.begin(), pool.end());
+    } else {
+      for (int s1 : spec.storeys()) {
+        if (s1 < 1 || s1 > storeys)
+          throw std::invalid_argument(where + ": storey " + std::to_string(s1) +
+                                      " does not exist (1.." + std::to_string(storeys) + ")");
+        if (!pool.count(s1 - 1))
+          throw std::invalid_argument(where + ": storey " + std::to_string(s1) + " has no " +
+                                      (sub ? "numerical" : "experimental") + " part");
+        hosted.push_back(s1 - 1);
+      }
+      std::sort(hosted.begin(), hosted.end());
+    }
+    for (int s : hosted) {
+      const auto [it, fresh] = host.emplace(s, spec.id());
+      if (!fresh)
+        throw std::invalid_argument("storey " + std::to_string(s + 1) + " is hosted by nodes " +
+                                    std::to_string(it->second) + " and " +
+                                    std::to_string(spec.id()));
+    }
+    node.storeys = hosted;
+    if (sub && partition.coupled_to(hosted) != hosted)
+      throw std::invalid_argument(where +
+                                  ": the numerical stiffness matrix couples its DOFs to "
+                                  "others; one substructure node hosts every coupled DOF");
+    if (!sub) {
+      for (std::size_t a = 0; a < partition.actuator_storeys.size(); ++a)
+        if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
+          node.actuators.push_back(static_cast<int>(a));
+    }
+    plan.nodes.push_back(std::move(node));
+  }
+  plan.numerical_local = !any_substructure;
+  if (any_substructure)
+    for (int s : numerical)
+      if (!numerical_host.count(s))
+        throw std::invalid_argument("numerical storey " + std::to_string(s + 1) +
+                                    " is hosted by no substructure node");
+  for (int s : experimental)
+    if (!experimental_host.count(s))
+      throw std::invalid_argument("experimental storey " + std::to_string(s + 1) +
+                                  " is hosted by no actuator emulator (deployment.nodes)");
+  (void)with_node_compensation(base, plan);  // refuses bad blocks before any node is started
+  return plan;
+}
+
+core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan) {
+  for (const NodePlan& node : plan.nodes)
+    core::apply_compensation(setup, node.actuators, node.spec.compensation(),
+                             "deployment.nodes[id " + std::to_string(node.spec.id()) + "]");
+  return setup;
+}
+
+void check_node_stages(const DeploymentPlan& plan, double dt,
+                       const std::filesystem::path& base_dir) {
+  for (const NodePlan& node : plan.nodes) {
+    const std::string where = "deployment.nodes[id " + std::to_string(node.spec.id()) + "]";
+    for (const auto& [field, stages] : {std::pair{".receive_delay", &node.spec.receive_delay()},
+                                        std::pair{".send_delay", &node.spec.send_delay()}}) {
+      try {
+        (void)core::make_delay_chain(*stages, dt, base_dir);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(where + field + ": " + e.what());
+      }
+    }
+  }
+}
+
+config::Deployment with_default_nodes(config::Deployment deployment,
+                                      const core::HybridSetup& base) {
+  if (deployment.nodes_size() > 0) return deployment;
+  bool numerical = false;
+  for (int s = 0; s < static_cast<int>(base.partition.numerical.size()); ++s)
+    numerical = numerical || base.partition.has_numerical(s);
+  if (numerical) {
+    auto* node = deployment.add_nodes();
+    node->set_id(1);
+    node->set_kind(config::NodeSpec::SUBSTRUCTURE);
+  }
+  if (!base.partition.actuator_storeys.empty()) {
+    auto* node = deployment.add_nodes();
+    node->set_id(2);
+    node->set_kind(config::NodeSpec::ACTUATOR_EMULATOR);
+  }
+  return deployment;
+}
+
+const config::Case& find_case(const config::Study& study, const std::string& name) {
+  if (name.empty()) return core::reference_case(study);
+  for (const config::Case& c : study.cases())
+    if (c.name() == name) return c;
+  throw std::invalid_argument("case '" + name + "' is not among the study's cases");
+}
+
+core::HybridSetup setup_without_motion(const config::Study& study,
+                                       const std::filesystem::path& base_dir, double dt,
+                                       const config::Case& study_case) {
+  core::PreparedStudy prepared;
+  prepared.config = study;
+  prepared.base_dir = base_dir;
+  prepared.base = core::base_setup(study, dt, base_dir);
+  return core::setup_for_case(prepared, study_case);
+}
+
+namespace {
+double or_default(double value, double fallback) { return value > 0 ? value : fallback; }
+}  // namespace
+
+double start_timeout(const config::Deployment& d) { return or_default(d.start_timeout(), 10.0); }
+double heartbeat_period(const config::Deployment& d) {
+  return or_default(d.heartbeat_period(), 0.05);
+}
+double liveliness_timeout(const config::Deployment& d) {
+  return or_default(d.liveliness_timeout(), 1.0);
+}
+double judged_liveliness_timeout(const config::Deployment& d) {
+  if (d.clock() == config::Deployment::REAL_TIME) return liveliness_timeout(d);
+  return std::max(liveliness_timeout(d), kLockstepLivelinessFloor);
+}
+double step_timeout(const config::Deployment& d) { return or_default(d.step_timeout(), 2.0); }
+double feedback_wait_fraction(const config::Deployment& d) {
+  return or_default(d.feedback_wait_fraction(), 0.5);
+}
+bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt) {
+  const double round_trip = node.receive_lag().one_way_delay() + node.send_lag().one_way_delay();
+  return round_trip < feedback_wait_fraction(d) * dt;
+}
+WaitPolicy wait_policy(const config::Deployment& d) {
+  WaitPolicy policy;
+  switch (d.wait_policy()) {
+    case config::WAIT_SLEEP_THEN_SPIN: policy.kind = WaitPolicyKind::kSleepThenSpin; break;
+    case config::WAIT_SPIN: policy.kind = WaitPolicyKind::kSpin; break;
+    default: policy.kind = WaitPolicyKind::kSleep; break;
+  }
+  policy.spin_margin_ns = std::llround(or_default(d.spin_margin(), 200e-6) * 1e9);
+  return policy;
+}
+double max_overrun_fraction(const config::Deployment& d) {
+  return d.max_overrun_fraction() == 0 ? 0.001 : d.max_overrun_fraction();
+}
+double min_answer_fraction(const config::Deployment& d) {
+  return d.min_answer_fraction() == 0 ? 0.99 : d.min_answer_fraction();
+}
+namespace {
+constexpr int kDefaultWindowSteps = 3;
+constexpr double kMaxWindowMs = 60'000.0;
+
+int window_steps(double window_ms, int steps, double dt) {
+  if (window_ms > 0) {
+    // The tolerance keeps a window of exactly k steps at k (ms / dt in floating point).
+    const double exact = window_ms * 1e-3 / dt;
+    return std::max(1, static_cast<int>(std::ceil(exact - 1e-9)));
+  }
+  return steps > 0 ? steps : kDefaultWindowSteps;
+}
+
+void check_window(double window_ms, const char* ms_field, int steps, const char* steps_field) {
+  if (!std::isfinite(window_ms) || window_ms < 0 || window_ms > kMaxWindowMs)
+    throw std::invalid_argument("deployment." + std::string(ms_field) + " = " +
+                                std::to_string(window_ms) + " ms: must be in [0, 60000] ms");
+  if (window_ms > 0 && steps > 0)
+    throw std::invalid_argument("deployment." + std::string(ms_field) + " and deployment." +
+                                steps_field + " both given (" + std::to_string(window_ms) +
+                                " ms and " + std::to_string(steps) +
+                                " steps): give the window one way");
+}
+}  // namespace
+
+int max_missed_answers(const config::Deployment& d, double dt) {
+  return window_steps(d.answer_window_ms(), d.max_missed_answers(), dt);
+}
+int command_watchdog_periods(const config::Deployment& d, double dt) {
+  return window_steps(d.command_watchdog_ms(), d.command_watchdog_periods(), dt);
+}
+double window_ms_of_steps(int steps, double dt) {
+  return std::floor(static_cast<double>(steps) * dt * 1e6) / 1e3;
+}
+void check_failsafe_windows(const config::Deployment& d) {
+  check_window(d.answer_window_ms(), "answer_window_ms", d.max_missed_answers(),
+               "max_missed_answers");
+  check_window(d.command_watchdog_ms(), "command_watchdog_ms", d.command_watchdog_periods(),
+               "command_watchdog_periods");
+}
+
+}  // namespace rths::runtime

@@ -1,0 +1,95 @@
+#pragma once
+// Deployment plan: which node hosts which storeys, checked against the study's partition.
+//
+// Rules (errors name the node id and storey, 1-based):
+//   node ids unique and >= 1 (0 is the coordinator); kind set.
+//   A substructure node hosts numerical storeys (empty list = all of them). If no substructure node
+//   is declared the coordinator evaluates the numerical storeys itself; otherwise every numerical
+//   storey is hosted by exactly one node.
+//   An actuator emulator hosts experimental storeys (empty = all); every experimental storey is
+//   hosted by exactly one emulator.
+//   Only an actuator emulator carries `compensation`; its blocks are checked (count, fields, not
+//   also given by the case) against the setup's actuators.
+// Also: the node-side view of a study (what a node builds from its Assign without the motion file).
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "runtime/rt/wait_policy.h"
+
+#include "rths/proto/deployment.pb.h"
+#include "study/study.h"
+
+namespace rths::runtime {
+
+struct NodePlan {
+  config::NodeSpec spec;
+  std::vector<int> storeys;    // 0-based, ascending: numerical storeys or actuator storeys
+  std::vector<int> actuators;  // emulators: actuator indices (into partition.actuator_storeys)
+  std::string label() const;   // "node 2 (substructure)"
+};
+
+struct DeploymentPlan {
+  std::vector<NodePlan> nodes;
+  bool numerical_local = false;  // the coordinator evaluates the numerical storeys
+  const NodePlan* find(int node_id) const;
+};
+
+DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment);
+
+// The setup with each actuator emulator's `compensation` in front of the chains of the actuators it
+// hosts (core::apply_compensation): what the emulators run, so what an in-process run must use to
+// equal a lockstep distributed run. Throws std::invalid_argument naming the node.
+core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan);
+
+// Builds every node's receive_delay / send_delay chain once (at dt, Trace paths relative to
+// base_dir), so a bad stage is bad input before any node starts. Throws std::invalid_argument
+// naming the node and the field.
+void check_node_stages(const DeploymentPlan& plan, double dt,
+                       const std::filesystem::path& base_dir);
+
+// The deployment with default nodes when it declares none: node 1 a substructure node (if any
+// storey has a numerical part), node 2 an actuator emulator (if any has an experimental part).
+config::Deployment with_default_nodes(config::Deployment deployment, const core::HybridSetup& base);
+
+// The case with this name, or the reference case when empty. Throws naming the missing case.
+const config::Case& find_case(const config::Study& study, const std::string& name);
+
+// The setup of one case built without reading the motion (a node on another host may not have
+// it): the same structure, partition and delay chains as core::prepare_study + setup_for_case.
+core::HybridSetup setup_without_motion(const config::Study& study,
+                                       const std::filesystem::path& base_dir, double dt,
+                                       const config::Case& study_case);
+
+// Defaults of the deployment's timing fields (0 means default), in s.
+double start_timeout(const config::Deployment& d);
+double heartbeat_period(const config::Deployment& d);
+double liveliness_timeout(const config::Deployment& d);
+// How long a node may be silent before the coordinator declares it dead (and, doubled, how long
+// a node outlives a silent coordinator): liveliness_timeout in real time; in lockstep at least
+// kLockstepLivelinessFloor, because a lockstep result cannot depend on timing and a busy machine
+// starves a process for over a second (1.41 s seen with a browser on the run's two CPUs).
+inline constexpr double kLockstepLivelinessFloor = 5.0;  // s
+double judged_liveliness_timeout(const config::Deployment& d);
+double step_timeout(const config::Deployment& d);
+double feedback_wait_fraction(const config::Deployment& d);
+// Real time: whether the loop waits (feedback_wait_fraction x dt) for a node's answer to the step
+// it just commanded; not for a node whose link injects a round trip at least that long.
+bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt);
+WaitPolicy wait_policy(const config::Deployment& d);
+double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
+double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
+// The fail-safe windows in steps of dt (s): answer_window_ms / command_watchdog_ms when given
+// (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3.
+int max_missed_answers(const config::Deployment& d, double dt);
+int command_watchdog_periods(const config::Deployment& d, double dt);
+// The window of `steps` whole steps of dt (s) in ms, truncated to the microsecond below, so that
+// the steps derived from it (as above) are `steps` again: what a window is stated as when it was
+// found in steps.
+double window_ms_of_steps(int steps, double dt);
+// Throws std::invalid_argument naming the field, its value and the allowed range when a window
+// is given both in steps and in ms, or its ms value is not in [0, 60000] (0 = not given).
+void check_failsafe_windows(const config::Deployment& d);
+
+}  // namespace rths::runtime

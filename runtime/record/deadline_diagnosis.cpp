@@ -1,0 +1,97 @@
+#include "runtime/record/deadline_diagnosis.h"
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+#include "core/metrics.h"
+
+namespace rths::runtime {
+namespace {
+
+std::string ms(double seconds) {
+  std::ostringstream out;
+  out << std::setprecision(3) << seconds * 1e3 << " ms";
+  return out.str();
+}
+
+std::vector<std::string> advice_for(const DeadlineDiagnosis& d) {
+  if (d.stall_overruns >= d.work_overruns) {
+    return {
+        "measure the machine first: `rths rt-check CONFIG` reports its stalls and the fail-safe "
+        "and max_overrun_fraction it can keep",
+        "run nothing else on the machine during the test; `pin_loop: true loop_cpu: N` gives the "
+        "loop a CPU of its own (and isolcpus / a PREEMPT_RT kernel on a lab machine)",
+        "`wait_policy: WAIT_SLEEP_THEN_SPIN` wakes the loop early and spins to the deadline",
+        "if the stalls are what this machine does, accept them knowingly: raise "
+        "max_overrun_fraction (the record keeps every late step)"};
+  }
+  return {
+      "the step itself is too slow for dt: lower the rate (a larger dt) or host fewer nodes "
+      "in series",
+      "keep the nodes off the loop's CPU (`pin_loop: true loop_cpu: N`)",
+      "a node whose link injects a long lag is not waited for; check the slowest node's log"};
+}
+
+}  // namespace
+
+bool needs_deadline_diagnosis(const std::string& status, std::uint64_t overruns) {
+  return status.find("deadline misses") != std::string::npos ||
+         (overruns > 0 && status != "completed");
+}
+
+DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps, double dt,
+                                     std::uint64_t streak_window) {
+  DeadlineDiagnosis d;
+  d.period = dt;
+  std::vector<double> walls;
+  walls.reserve(steps.size());
+  std::uint64_t streak = 0;
+  for (const StepRecord* s : steps) {
+    ++d.steps;
+    walls.push_back(s->step_wall());
+    streak = s->overrun() ? streak + 1 : 0;
+    d.worst_streak = std::max(d.worst_streak, streak);
+    if (!s->overrun()) continue;
+    ++d.overruns;
+    d.worst_lateness = std::max(d.worst_lateness, s->lateness());
+    ++(s->step_wall() > dt ? d.work_overruns : d.stall_overruns);
+  }
+  if (!walls.empty()) {
+    std::sort(walls.begin(), walls.end());
+    d.step_wall_median = core::median(walls);
+    d.step_wall_p99 = walls[std::min(walls.size() - 1, walls.size() * 99 / 100)];
+  }
+  if (d.overruns == 0) {
+    d.cause = "none";
+    d.usability = "every step kept its deadline";
+    return d;
+  }
+  d.cause = d.stall_overruns >= d.work_overruns ? "platform stalls" : "the loop's own work";
+  d.advice = advice_for(d);
+  d.usability =
+      d.worst_streak <= streak_window
+          ? "usable as recorded: the overruns were isolated (worst streak " +
+                std::to_string(d.worst_streak) + " steps, within the fail-safe's " +
+                std::to_string(streak_window) +
+                "), every force is tied to the step it answers and the late steps are marked"
+          : "use with care: " + std::to_string(d.worst_streak) +
+                " steps in a row overran, so the integrator used stale forces that long; "
+                "the lag measurements stand, the response is not a real-time test's";
+  return d;
+}
+
+std::string DeadlineDiagnosis::describe() const {
+  std::ostringstream out;
+  out << "deadline misses: " << overruns << " of " << steps << " steps; cause: " << cause << " ("
+      << stall_overruns << " with the step's work inside the " << ms(period)
+      << " period, so the wake-up "
+      << "came late; " << work_overruns << " whose own work overran; step work median "
+      << ms(step_wall_median) << ", p99 " << ms(step_wall_p99) << "; worst lateness "
+      << ms(worst_lateness) << ")\n";
+  for (const std::string& a : advice) out << "  to do: " << a << "\n";
+  out << "  the record: " << usability << "\n";
+  return out.str();
+}
+
+}  // namespace rths::runtime

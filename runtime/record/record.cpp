@@ -1,0 +1,403 @@
+#include "runtime/record/record.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+
+#include "util/crc32c.h"
+
+namespace rths::runtime {
+namespace {
+
+constexpr char kPreamble[kRecordPreambleBytes] = {'R', 'T', 'H', 'S', 'R', 'E', 'C', '\x02'};
+constexpr unsigned char kSync[4] = {0xF3, 0x7A, 0x1C, 0xB5};
+
+std::uint32_t load_le32(const char* at) {
+  std::uint32_t value = 0;
+  for (int i = 3; i >= 0; --i) value = (value << 8) | static_cast<std::uint8_t>(at[i]);
+  return value;
+}
+
+void store_le32(char* at, std::uint32_t value) {
+  for (int i = 0; i < 4; ++i) at[i] = static_cast<char>((value >> (8 * i)) & 0xFFu);
+}
+
+// Serialises the entry's payload into `out` after room for the frame header, then seals it.
+void frame_into(const RecordEntry& entry, std::string& out) {
+  const std::size_t start = out.size();
+  const std::size_t size = entry.ByteSizeLong();
+  out.resize(start + kRecordFrameHeaderBytes + size);
+  entry.SerializeWithCachedSizesToArray(
+      reinterpret_cast<std::uint8_t*>(out.data() + start + kRecordFrameHeaderBytes));
+  seal_record_frame(out.data() + start, static_cast<std::uint32_t>(size));
+}
+
+}  // namespace
+
+std::string_view record_preamble() { return {kPreamble, sizeof kPreamble}; }
+
+void seal_record_frame(char* frame, std::uint32_t payload_size) {
+  std::memcpy(frame, kSync, sizeof kSync);
+  store_le32(frame + 4, payload_size);
+  store_le32(frame + 8, util::crc32c(frame + kRecordFrameHeaderBytes, payload_size));
+  store_le32(frame + 12, util::crc32c(frame, 12));
+}
+
+void append_record_frame(const RecordEntry& entry, std::string& out) { frame_into(entry, out); }
+
+RecordWriter::RecordWriter(const std::filesystem::path& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "wb");
+  if (!file_)
+    throw std::runtime_error("cannot create run record " + path.string() + ": " +
+                             std::strerror(errno));
+  if (std::fwrite(kPreamble, 1, sizeof kPreamble, file_) != sizeof kPreamble ||
+      std::fflush(file_) != 0)
+    throw std::runtime_error("cannot write run record " + path_.string() + ": " +
+                             std::strerror(errno));
+}
+
+RecordWriter::~RecordWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void RecordWriter::write(const RecordEntry& entry) {
+  buffer_.clear();
+  frame_into(entry, buffer_);
+  if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size() ||
+      std::fflush(file_) != 0)
+    throw std::runtime_error("cannot write run record " + path_.string() + ": " +
+                             std::strerror(errno));
+}
+
+AsyncRecordWriter::AsyncRecordWriter(const std::filesystem::path& path, std::size_t capacity,
+                                     std::size_t slot_bytes)
+    : path_(path), slots_(capacity) {
+  if (capacity == 0) throw std::invalid_argument("record queue capacity must be >= 1");
+  file_ = std::fopen(path.c_str(), "wb");
+  if (!file_)
+    throw std::runtime_error("cannot create run record " + path.string() + ": " +
+                             std::strerror(errno));
+  for (std::string& slot : slots_) slot.reserve(slot_bytes);
+  if (std::fwrite(kPreamble, 1, sizeof kPreamble, file_) != sizeof kPreamble) fail(errno);
+  sem_init(&wake_, 0, 0);
+  writer_ = std::thread([this] {
+    for (;;) {
+      while (sem_wait(&wake_) != 0 && errno == EINTR) {}
+      drain();
+      if (stopping_.load(std::memory_order_acquire)) {
+        drain();
+        return;
+      }
+    }
+  });
+}
+
+AsyncRecordWriter::~AsyncRecordWriter() {
+  try {
+    close();
+  } catch (const std::exception&) {
+    // A destructor cannot report; close() is where a caller learns of a write error.
+  }
+}
+
+bool AsyncRecordWriter::append(const RecordEntry& entry) {
+  const std::uint64_t tail = tail_.load(std::memory_order_relaxed);
+  if (tail - head_.load(std::memory_order_acquire) >= slots_.size()) {
+    dropped_.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  // The payload only: the writer thread seals the frame (checksums) off the loop.
+  std::string& slot = slots_[tail % slots_.size()];
+  slot.resize(kRecordFrameHeaderBytes + entry.ByteSizeLong());
+  entry.SerializeWithCachedSizesToArray(
+      reinterpret_cast<std::uint8_t*>(slot.data() + kRecordFrameHeaderBytes));
+  tail_.store(tail + 1, std::memory_order_release);
+  sem_post(&wake_);
+  return true;
+}
+
+void AsyncRecordWriter::drain() {
+  std::uint64_t head = head_.load(std::memory_order_relaxed);
+  const std::uint64_t tail = tail_.load(std::memory_order_acquire);
+  if (head == tail) return;
+  for (; head < tail; ++head) {
+    std::string& slot = slots_[head % slots_.size()];
+    if (!failed()) {
+      seal_record_frame(slot.data(),
+                        static_cast<std::uint32_t>(slot.size() - kRecordFrameHeaderBytes));
+      if (std::fwrite(slot.data(), 1, slot.size(), file_) != slot.size())
+        fail(errno);
+      else
+        written_.fetch_add(1, std::memory_order_relaxed);
+    }
+    if (observer_) observer_->on_entry(slot);
+    head_.store(head + 1, std::memory_order_release);
+  }
+  if (!failed() && std::fflush(file_) != 0) fail(errno);
+}
+
+void AsyncRecordWriter::fail(int error) {
+  if (failed()) return;
+  write_errno_ = error;
+  failed_.store(true, std::memory_order_release);
+}
+
+std::string AsyncRecordWriter::failure() const {
+  if (!failed()) return {};
+  return "cannot write run record " + path_.string() + ": " + std::strerror(write_errno_);
+}
+
+void AsyncRecordWriter::close() {
+  if (closed_) return;
+  closed_ = true;
+  stopping_.store(true, std::memory_order_release);
+  sem_post(&wake_);
+  writer_.join();
+  sem_destroy(&wake_);
+  if (file_ && std::fclose(file_) != 0) fail(errno);
+  file_ = nullptr;
+  if (failed()) throw std::runtime_error(failure());
+}
+
+// ---------------------------------------------------------------- reading
+
+namespace {
+
+// What starts at byte `at`.
+enum class Frame {
+  kNone,     // no frame header (sync and frame-header checksum) there
+  kIntact,   // a frame whose payload checksum holds
+  kDamaged,  // a genuine frame header whose payload is damaged
+  kCut,      // a genuine frame header whose payload runs past the end (a crash cut it)
+};
+
+Frame frame_at(std::string_view bytes, std::size_t at, std::uint32_t* size) {
+  if (bytes.size() - at < kRecordFrameHeaderBytes) return Frame::kNone;
+  const char* f = bytes.data() + at;
+  if (std::memcmp(f, kSync, sizeof kSync) != 0 || load_le32(f + 12) != util::crc32c(f, 12))
+    return Frame::kNone;
+  *size = load_le32(f + 4);
+  if (*size > bytes.size() - at - kRecordFrameHeaderBytes) return Frame::kCut;
+  return load_le32(f + 8) == util::crc32c(f + kRecordFrameHeaderBytes, *size) ? Frame::kIntact
+                                                                              : Frame::kDamaged;
+}
+
+// The first frame header at or after `from`; npos when there is none.
+std::size_t next_frame(std::string_view bytes, std::size_t from) {
+  const std::string_view sync(reinterpret_cast<const char*>(kSync), sizeof kSync);
+  std::uint32_t size = 0;
+  for (std::size_t at = bytes.find(sync, from); at != std::string_view::npos;
+       at = bytes.find(sync, at + 1))
+    if (frame_at(bytes, at, &size) != Frame::kNone) return at;
+  return std::string_view::npos;
+}
+
+void add_loss(RecordContents& contents, std::uint64_t first, std::uint64_t end) {
+  if (!contents.losses.empty() && contents.losses.back().end_byte == first)
+    contents.losses.back().end_byte = end;  // one region, however many frames it spans
+  else
+    contents.losses.push_back({first, end, -1, -1});
+}
+
+// Frames from `at` to the end: intact entries kept, damaged regions skipped and recorded, a frame
+// cut by the end of the file marks the record truncated.
+void parse_frames(std::string_view bytes, std::size_t at, RecordContents& contents) {
+  while (at < bytes.size()) {
+    std::uint32_t size = 0;
+    const Frame frame =
+        bytes.size() - at < kRecordFrameHeaderBytes ? Frame::kCut : frame_at(bytes, at, &size);
+    if (frame == Frame::kCut) {
+      contents.truncated = true;
+      contents.truncated_at = at;
+      return;
+    }
+    if (frame == Frame::kNone) {
+      const std::size_t next = next_frame(bytes, at + 1);
+      add_loss(contents, at, next == std::string_view::npos ? bytes.size() : next);
+      if (next == std::string_view::npos) return;
+      at = next;
+      continue;
+    }
+    const std::size_t end = at + kRecordFrameHeaderBytes + size;
+    RecordEntry entry;
+    if (frame == Frame::kIntact &&
+        entry.ParseFromArray(bytes.data() + at + kRecordFrameHeaderBytes, static_cast<int>(size))) {
+      contents.entries.push_back(std::move(entry));
+      contents.offsets.push_back(at);
+    } else {
+      add_loss(contents, at, end);
+    }
+    at = end;
+  }
+}
+
+// A record from before checksums: varint size, then the entry. Must start with its header.
+void parse_unchecksummed(std::string_view bytes, const std::string& source,
+                         RecordContents& contents) {
+  google::protobuf::io::ArrayInputStream raw(bytes.data(), static_cast<int>(bytes.size()));
+  google::protobuf::io::CodedInputStream coded(&raw);
+  coded.SetTotalBytesLimit(INT32_MAX);
+  for (;;) {
+    const int start = coded.CurrentPosition();
+    if (start == static_cast<int>(bytes.size())) break;
+    std::uint32_t size = 0;
+    if (!coded.ReadVarint32(&size) ||
+        static_cast<std::size_t>(coded.CurrentPosition()) + size > bytes.size()) {
+      contents.truncated = true;
+      contents.truncated_at = static_cast<std::uint64_t>(start);
+      break;
+    }
+    const auto limit = coded.PushLimit(static_cast<int>(size));
+    RecordEntry entry;
+    if (!entry.ParseFromCodedStream(&coded) || !coded.ConsumedEntireMessage() ||
+        (contents.entries.empty() && !entry.has_header()))
+      throw std::runtime_error(source +
+                               ": not a run record, or a corrupt one: no rths record "
+                               "preamble, no checksummed entry, and entry " +
+                               std::to_string(contents.entries.size()) + " at byte " +
+                               std::to_string(start) + " does not parse as an unchecksummed one");
+    coded.PopLimit(limit);
+    contents.entries.push_back(std::move(entry));
+    contents.offsets.push_back(static_cast<std::uint64_t>(start));
+  }
+  contents.checksummed = false;
+}
+
+// Each loss's intact neighbours, from the steps around it.
+void locate_losses(RecordContents& contents) {
+  for (RecordLoss& loss : contents.losses) {
+    for (std::size_t i = 0; i < contents.entries.size(); ++i) {
+      if (!contents.entries[i].has_step()) continue;
+      const std::int64_t step = contents.entries[i].step().step();
+      if (contents.offsets[i] < loss.first_byte) loss.last_step_before = step;
+      if (contents.offsets[i] >= loss.end_byte) {
+        loss.first_step_after = step;
+        break;
+      }
+    }
+  }
+}
+
+void compose_warning(RecordContents& contents, const std::string& source, std::size_t bytes) {
+  std::string& w = contents.warning;
+  const auto add = [&w](const std::string& text) { w += (w.empty() ? "" : "; ") + text; };
+  if (!contents.checksummed)
+    add(source + " was written without checksums (a record from before rths checked them): " +
+        "its entries are read unverified");
+  if (contents.lost_entries()) add(contents.loss_report());
+  if (contents.truncated)
+    add(source + ": truncated after " + std::to_string(contents.entries.size()) +
+        " complete entries (byte " + std::to_string(contents.truncated_at) + " of " +
+        std::to_string(bytes) + "); the rest was lost");
+}
+
+bool is_prefix_of_preamble(std::string_view bytes) {
+  return bytes.size() < kRecordPreambleBytes && record_preamble().substr(0, bytes.size()) == bytes;
+}
+
+}  // namespace
+
+RecordContents parse_record(std::string_view bytes, const std::string& source) {
+  RecordContents contents;
+  contents.source = source;
+  std::uint32_t size = 0;
+  if (bytes.substr(0, kRecordPreambleBytes) == record_preamble()) {
+    parse_frames(bytes, kRecordPreambleBytes, contents);
+  } else if (is_prefix_of_preamble(bytes)) {
+    contents.truncated = true;  // cut before its first entry
+  } else if (frame_at(bytes, kRecordPreambleBytes, &size) != Frame::kNone) {
+    add_loss(contents, 0, kRecordPreambleBytes);  // a damaged preamble
+    parse_frames(bytes, kRecordPreambleBytes, contents);
+  } else if (const std::size_t first = next_frame(bytes, 0); first != std::string_view::npos) {
+    add_loss(contents, 0, first);
+    parse_frames(bytes, first, contents);
+  } else {
+    parse_unchecksummed(bytes, source, contents);
+  }
+  locate_losses(contents);
+  compose_warning(contents, source, bytes.size());
+  return contents;
+}
+
+RecordContents read_record(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open run record " + path.string());
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return parse_record(bytes, path.string());
+}
+
+const RunHeader* RecordContents::header() const {
+  for (const auto& e : entries)
+    if (e.has_header()) return &e.header();
+  return nullptr;
+}
+
+const RunFooter* RecordContents::footer() const {
+  for (const auto& e : entries)
+    if (e.has_footer()) return &e.footer();
+  return nullptr;
+}
+
+const config::Study* RecordContents::study_as_run() const {
+  for (const RecordEntry& e : entries)
+    if (e.has_inputs()) return &e.inputs().study();
+  return header() ? &header()->study() : nullptr;
+}
+
+std::vector<const StepRecord*> RecordContents::steps() const {
+  std::vector<const StepRecord*> out;
+  for (const auto& e : entries)
+    if (e.has_step()) out.push_back(&e.step());
+  return out;
+}
+
+std::vector<std::pair<std::int64_t, std::int64_t>> RecordContents::missing_steps() const {
+  std::vector<std::pair<std::int64_t, std::int64_t>> out;
+  std::int64_t expected = 0;
+  for (const StepRecord* s : steps()) {
+    if (s->step() > expected) out.emplace_back(expected, s->step() - 1);
+    expected = std::max(expected, s->step() + 1);
+  }
+  // The footer counts the exchanges; the record holds one more step (step 0).
+  if (const RunFooter* f = footer(); f && f->has_counters()) {
+    const auto recorded = static_cast<std::int64_t>(f->counters().steps()) + 1;
+    if (recorded > expected) out.emplace_back(expected, recorded - 1);
+  }
+  return out;
+}
+
+std::string RecordLoss::describe() const {
+  std::string out = "bytes " + std::to_string(first_byte) + "-" + std::to_string(end_byte - 1) +
+                    " (" + std::to_string(end_byte - first_byte) + " bytes): ";
+  const auto range = [](std::int64_t a, std::int64_t b) {
+    return a == b ? "step " + std::to_string(a) + " lost"
+                  : "steps " + std::to_string(a) + "-" + std::to_string(b) + " lost";
+  };
+  if (last_step_before < 0 && first_step_after < 0) return out + "no intact step around it";
+  if (first_step_after < 0)
+    return out + "after step " + std::to_string(last_step_before) + " (every later step lost)";
+  if (first_step_after > last_step_before + 1)
+    return out + range(last_step_before + 1, first_step_after - 1);
+  if (last_step_before < 0) return out + "before step 0 (the preamble or the header)";
+  return out + "no step lost (an entry between step " + std::to_string(last_step_before) +
+         " and step " + std::to_string(first_step_after) + ")";
+}
+
+std::string RecordContents::loss_report() const {
+  if (losses.empty()) return {};
+  std::uint64_t bytes = 0;
+  for (const RecordLoss& loss : losses) bytes += loss.end_byte - loss.first_byte;
+  std::string out = source + ": " + std::to_string(losses.size()) + " damaged region" +
+                    (losses.size() == 1 ? "" : "s") + " (" + std::to_string(bytes) +
+                    " bytes) skipped: ";
+  for (std::size_t i = 0; i < losses.size(); ++i) out += (i ? "; " : "") + losses[i].describe();
+  return out;
+}
+
+}  // namespace rths::runtime

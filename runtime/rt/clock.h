@@ -1,0 +1,25 @@
+#pragma once
+// The clock a real-time loop paces and waits on: an interface, so that pacing and wait policies
+// are tested with a fake clock, and CLOCK_MONOTONIC for the real thing.
+// Times are integer nanoseconds on the clock's own monotonic time base. Real-time safe: no
+// allocation, no lock, no system call but the clock's.
+
+#include <cstdint>
+
+namespace rths::runtime {
+
+class PacingClock {
+ public:
+  virtual ~PacingClock() = default;
+  virtual std::int64_t now_ns() = 0;                       // monotonic
+  virtual void sleep_until_ns(std::int64_t deadline) = 0;  // absolute, same clock
+};
+
+// CLOCK_MONOTONIC with clock_nanosleep(TIMER_ABSTIME), retried on EINTR.
+class MonotonicClock final : public PacingClock {
+ public:
+  std::int64_t now_ns() override;
+  void sleep_until_ns(std::int64_t deadline) override;
+};
+
+}  // namespace rths::runtime

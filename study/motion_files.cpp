@@ -1,0 +1,243 @@
+#include "study/motion_files.h"
+
+#include "study/text_columns.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+
+namespace rths::core {
+namespace {
+
+// getline that also drops the '\r' of CRLF files (PEER NGA files are CRLF).
+bool read_line(std::istream& in, std::string& line) {
+  if (!std::getline(in, line)) return false;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  return true;
+}
+
+std::string upper(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return text;
+}
+
+// Parses one number at `p` (after optional spaces); returns false if none is there.
+bool parse_number(const char*& p, double& value) {
+  char* end = nullptr;
+  value = std::strtod(p, &end);
+  if (end == p) return false;
+  p = end;
+  return true;
+}
+
+// Every number on a line. strtod stops at the sign of the next value, so fixed-width fields that
+// touch ("-0.12345-0.23456", as 8F10.5 prints large values) split correctly. Fortran 'D'
+// exponents are read as 'E'. Anything else is an error naming file, line and text.
+void parse_values(std::string line, const std::filesystem::path& path, int line_number,
+                  std::vector<double>& out) {
+  for (char& c : line) {
+    if (c == 'D' || c == 'd') c = 'E';
+  }
+  const char* p = line.c_str();
+  while (true) {
+    while (*p != '\0' && std::isspace(static_cast<unsigned char>(*p))) ++p;
+    if (*p == '\0') return;
+    const char* start = p;
+    double value = 0.0;
+    if (!parse_number(p, value) || !std::isfinite(value)) {
+      std::string token(start);
+      token = token.substr(0, token.find_first_of(" \t"));
+      throw std::invalid_argument(text_position(path, line_number) + "'" + token +
+                                  "' is not a finite number");
+    }
+    out.push_back(value);
+  }
+}
+
+// Far above any real record (1e8 samples = 5.8 days at 5 ms), and small enough that the count
+// converts to long and the header alone cannot make the reader reserve gigabytes.
+constexpr long kMaxAt2Points = 100'000'000;
+// Samples reserved up front; a record with more grows the vector as values actually arrive.
+constexpr std::size_t kAt2Reserve = 1 << 20;
+
+struct At2Header {
+  long npts = 0;
+  double dt = 0.0;
+};
+
+// "NPTS=  1559, DT=   .0200 SEC" (PEER classic and NGA) or "7814    0.0050    NPTS, DT"
+// (NGA-West2 new format).
+At2Header parse_at2_header(const std::string& line, const std::filesystem::path& path) {
+  const std::string text = upper(line);
+  At2Header header;
+  const auto fail = [&](const std::string& why) {
+    return std::invalid_argument(text_position(path, 4) + why + " in AT2 header line '" + line +
+                                 "' (expected 'NPTS= n, DT= dt SEC' or 'n dt NPTS, DT')");
+  };
+  const std::size_t npts_at = text.find("NPTS");
+  if (npts_at == std::string::npos) throw fail("no NPTS");
+  std::size_t after = text.find_first_not_of(' ', npts_at + 4);
+  if (after != std::string::npos && text[after] == '=') {
+    const char* p = text.c_str() + after + 1;
+    double npts = 0.0;
+    if (!parse_number(p, npts)) throw fail("no number after NPTS=");
+    const std::size_t dt_at = text.find("DT", static_cast<std::size_t>(p - text.c_str()));
+    if (dt_at == std::string::npos) throw fail("no DT");
+    const std::size_t equals = text.find_first_not_of(' ', dt_at + 2);
+    if (equals == std::string::npos || text[equals] != '=') throw fail("no '=' after DT");
+    const char* q = text.c_str() + equals + 1;
+    if (!parse_number(q, header.dt)) throw fail("no number after DT=");
+    if (npts != std::floor(npts)) throw fail("NPTS is not a whole number");
+    if (!(npts <= kMaxAt2Points)) throw fail("NPTS above " + std::to_string(kMaxAt2Points));
+    header.npts = static_cast<long>(npts);
+  } else {
+    const char* p = text.c_str();
+    double npts = 0.0;
+    if (!parse_number(p, npts) || !parse_number(p, header.dt)) {
+      throw fail("no 'NPTS=' and no two leading numbers");
+    }
+    if (npts != std::floor(npts)) throw fail("NPTS is not a whole number");
+    if (!(npts <= kMaxAt2Points)) throw fail("NPTS above " + std::to_string(kMaxAt2Points));
+    header.npts = static_cast<long>(npts);
+  }
+  if (header.npts <= 0) throw fail("NPTS must be > 0");
+  if (!(header.dt > 0.0) || !std::isfinite(header.dt)) throw fail("DT must be > 0");
+  return header;
+}
+
+}  // namespace
+
+GroundMotion read_at2(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
+  std::string line;
+  for (int i = 1; i <= 3; ++i) {
+    if (!read_line(in, line)) {
+      throw std::invalid_argument(path.string() + ": AT2 header ends at line " + std::to_string(i) +
+                                  " (expected 4 header lines)");
+    }
+  }
+  if (!read_line(in, line)) {
+    throw std::invalid_argument(path.string() + ": AT2 header has no 4th line with NPTS and DT");
+  }
+  const At2Header header = parse_at2_header(line, path);
+
+  GroundMotion motion;
+  motion.name = path.stem().string();
+  motion.dt = header.dt;
+  motion.acceleration.reserve(std::min(static_cast<std::size_t>(header.npts), kAt2Reserve));
+  int line_number = 4;
+  int last_value_line = 4;
+  while (read_line(in, line)) {
+    ++line_number;
+    const std::size_t before = motion.acceleration.size();
+    parse_values(line, path, line_number, motion.acceleration);
+    if (motion.acceleration.size() != before) last_value_line = line_number;
+    if (motion.acceleration.size() > static_cast<std::size_t>(header.npts)) {
+      throw std::invalid_argument(text_position(path, line_number) + "more values than NPTS = " +
+                                  std::to_string(header.npts) + " declared on line 4");
+    }
+  }
+  if (motion.acceleration.size() < static_cast<std::size_t>(header.npts)) {
+    throw std::invalid_argument(
+        path.string() + ": found " + std::to_string(motion.acceleration.size()) +
+        " values but NPTS = " + std::to_string(header.npts) + " (line 4); " +
+        std::to_string(header.npts - static_cast<long>(motion.acceleration.size())) +
+        " missing after line " + std::to_string(last_value_line) + " — truncated file?");
+  }
+  for (double& a : motion.acceleration) a *= kGravity;
+  return motion;
+}
+
+GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si) {
+  if (!(to_si > 0.0) || !std::isfinite(to_si)) {
+    throw std::invalid_argument(path.string() + ": unit factor to m/s^2 must be > 0, got " +
+                                std::to_string(to_si));
+  }
+  const TextColumns text = read_text_columns(path, "ground-motion file", /*title_allowed=*/true);
+  std::vector<double> times, values;
+  std::size_t columns = 0;
+  int first_data_line = 0;
+  for (const TextRow& row : text.rows) {
+    const int line_number = row.line;
+    const std::vector<double>& fields = row.values;
+    if (columns == 0) {
+      columns = fields.size();
+      first_data_line = line_number;
+      if (columns != 1 && columns != 2) {
+        throw std::invalid_argument(text_position(path, line_number) +
+                                    "expected 1 column (acceleration) or "
+                                    "2 (time, acceleration), found " +
+                                    std::to_string(columns));
+      }
+    } else if (fields.size() != columns) {
+      throw std::invalid_argument(
+          text_position(path, line_number) + "found " + std::to_string(fields.size()) +
+          " columns, line " + std::to_string(first_data_line) + " had " + std::to_string(columns));
+    }
+    if (columns == 2) {
+      if (times.size() >= 2) {
+        const double first_step = times[1] - times[0];
+        const double step = fields[0] - times.back();
+        // 1e-3 relative: text files round their times, but a missing or doubled sample is caught.
+        if (std::abs(step - first_step) > 1e-3 * first_step) {
+          throw std::invalid_argument(text_position(path, line_number) + "time step " +
+                                      std::to_string(step) + " s differs from the first step " +
+                                      std::to_string(first_step) + " s (non-uniform time)");
+        }
+      } else if (times.size() == 1 && !(fields[0] > times[0])) {
+        throw std::invalid_argument(text_position(path, line_number) + "time does not increase");
+      }
+      times.push_back(fields[0]);
+      values.push_back(fields[1] * to_si);
+    } else {
+      values.push_back(fields[0] * to_si);
+    }
+  }
+  if (values.empty()) throw std::invalid_argument(path.string() + ": no acceleration values");
+  GroundMotion motion;
+  motion.name = path.stem().string();
+  if (columns == 2) {
+    if (times.size() < 2) {
+      throw std::invalid_argument(path.string() +
+                                  ": two-column file needs at least two samples to "
+                                  "define its time step");
+    }
+    motion.dt = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+    if (dt > 0.0 && std::abs(dt - motion.dt) > 1e-3 * motion.dt) {
+      throw std::invalid_argument(path.string() + ": given dt = " + std::to_string(dt) +
+                                  " s disagrees with the file's time column (" +
+                                  std::to_string(motion.dt) + " s)");
+    }
+  } else {
+    if (!(dt > 0.0) || !std::isfinite(dt)) {
+      throw std::invalid_argument(path.string() +
+                                  ": a one-column file has no time column: give its sample step, "
+                                  "motion.column_dt (--motion-dt), in s");
+    }
+    motion.dt = dt;
+  }
+  motion.acceleration = std::move(values);
+  return motion;
+}
+
+bool is_at2_file(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
+  std::string line;
+  for (int i = 0; i < 4 && read_line(in, line); ++i) {
+    if (i == 3 && upper(line).find("NPTS") != std::string::npos) return true;
+  }
+  return false;
+}
+
+GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
+                                double column_to_si) {
+  return is_at2_file(path) ? read_at2(path) : read_columns(path, column_dt, column_to_si);
+}
+
+}  // namespace rths::core

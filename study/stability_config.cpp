@@ -1,0 +1,33 @@
+#include "study/stability_config.h"
+
+#include <memory>
+#include <stdexcept>
+
+#include "study/compensation_config.h"
+#include "study/study.h"
+
+namespace rths::core {
+
+CompensatedStability compensated_stability(
+    IntegratorKind kind, double period, double zeta, double alpha, double dt,
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+    const config::Compensation* compensation, double max_extra_delay, int branches) {
+  if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
+  if (!(max_extra_delay >= 0))
+    throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
+  DelayChain loop = make_delay_chain(actuator, dt, {});
+  if (compensation) loop.set_compensator(make_compensator(*compensation, dt, "compensation"));
+  return compensated_stability(kind, period, zeta, alpha, dt, loop, max_extra_delay, branches);
+}
+
+double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,
+                        const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+                        const config::Compensation* compensation, double extra_delay,
+                        double duration) {
+  DelayChain chain = make_delay_chain(actuator, dt, {});
+  if (extra_delay > 0.0) chain.add(std::make_unique<TimeShift>(extra_delay, dt));
+  if (compensation) chain.set_compensator(make_compensator(*compensation, dt, "compensation"));
+  return simulated_growth(kind, period, zeta, alpha, dt, std::move(chain), duration);
+}
+
+}  // namespace rths::core

@@ -1,0 +1,26 @@
+#pragma once
+// The stability analyses of core/stability.h for a study case's delay stages and compensation
+// config messages.
+
+#include "core/stability.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::core {
+
+// compensated_stability (core/stability.h) for a study case's delay stages and compensation
+// (`compensation` may be null: uncompensated), built at dt. Throws std::invalid_argument naming
+// what cannot be analysed (an implicit integrator, a jitter or trace stage...) or what the blocks'
+// constructors refuse.
+CompensatedStability compensated_stability(
+    IntegratorKind kind, double period, double zeta, double alpha, double dt,
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+    const config::Compensation* compensation, double max_extra_delay, int branches = 3);
+
+// simulated_growth (core/stability.h) with the compensated actuator and `extra_delay` more: peak
+// |u| over the last third of the run divided by that over the first third (> 1 grows, < 1 decays).
+double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,
+                        const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
+                        const config::Compensation* compensation, double extra_delay,
+                        double duration);
+
+}  // namespace rths::core

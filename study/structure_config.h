@@ -1,0 +1,30 @@
+#pragma once
+// A structure given by its matrices, from a study's config, split at its experimental DOFs.
+//
+//   matrix_structure(structure, base_dir): M, C, K, iota read (study/structure_io.h) and checked;
+//     damping the matrix, or Structure.damping (modal ratio, Rayleigh) built from M and K.
+//   split_at_dofs(model, substructuring, servo_period): the experimental substructure at
+//     substructuring.experimental_dofs, each specimen f = m x'' + c x' + r(x) (InertialSpecimen
+//     over the restoring-force model of initial stiffness k; a bare model when m = c = 0); the
+//     numerical substructure is the rest: the model's mass and damping become M - M_e and
+//     C - C_e (what the integrator carries), K stays whole (the explicit integrators' K0), the
+//     partition's K_N = K - K_e, and the influence becomes (M - M_e)^-1 M iota, so the load
+//     -(M - M_e) iota' a_g is the whole structure's -M iota a_g (the specimen's m_e x'' is
+//     relative).
+// Errors throw std::invalid_argument naming the field (substructuring.experimental_dofs[i]...),
+// the value and the allowed range.
+
+#include <filesystem>
+
+#include "core/substructure.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::core {
+
+StructuralModel matrix_structure(const config::Structure& structure,
+                                 const std::filesystem::path& base_dir);
+
+HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuring& substructuring,
+                              double servo_period);
+
+}  // namespace rths::core

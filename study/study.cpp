@@ -1,0 +1,601 @@
+#include "study/study.h"
+
+#include "study/compensation_config.h"
+#include "study/delay_trace_file.h"
+#include "study/motion_files.h"
+#include "study/ranges.h"
+#include "study/restoring_force_config.h"
+#include "study/structure_config.h"
+#include "study/text_columns.h"
+#include "study/text_format.h"
+#include "study/tracking_config.h"
+#include "util/sha256.h"
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace rths::core {
+namespace {
+
+[[noreturn]] void fail(const std::string& source, const std::string& message) {
+  throw std::invalid_argument(source + ": " + message);
+}
+
+void require(bool ok, const std::string& source, const std::string& message) {
+  if (!ok) fail(source, message);
+}
+
+// A number against its range rule (study/ranges.h), the message prefixed with the source.
+void require_in(Quantity quantity, double value, const std::string& field,
+                const std::string& source) {
+  const std::string message = range_violation(quantity, value, field);
+  if (!message.empty()) fail(source, message);
+}
+
+// A lag in seconds (core::check_lag); a time constant must also be > 0.
+void require_lag(double value, const std::string& field, const std::string& source,
+                 bool zero_allowed, bool allow_long_lag) {
+  require(zero_allowed || value > 0, source, field + " must be > 0 s, got " + format_number(value));
+  require_in(allow_long_lag ? Quantity::kLongLag : Quantity::kLag, value, field, source);
+}
+
+void validate_delay_stage(const config::DelayStage& stage, const std::string& where,
+                          const std::string& source, bool long_lag) {
+  using K = config::DelayStage::KindCase;
+  require(stage.amplitude_gain() >= 0 && stage.amplitude_gain() <= 10, source,
+          where + ".amplitude_gain must be in [0, 10] (0 means 1), got " +
+              format_number(stage.amplitude_gain()));
+  switch (stage.kind_case()) {
+    case K::kShift:
+      require_lag(stage.shift().delay(), where + ".shift.delay", source, true, long_lag);
+      break;
+    case K::kEq1:
+      require_lag(stage.eq1().delay(), where + ".eq1.delay", source, true, long_lag);
+      break;
+    case K::kEq1Lag:
+      require_lag(stage.eq1_lag().delay(), where + ".eq1_lag.delay", source, true, long_lag);
+      break;
+    case K::kFirstOrder:
+      require_lag(stage.first_order().time_constant(), where + ".first_order.time_constant", source,
+                  false, long_lag);
+      break;
+    case K::kTransferFunction:
+      require(!stage.transfer_function().denominator().empty(), source,
+              where + ".transfer_function.denominator is empty");
+      break;
+    case K::kJitter:
+      require_lag(stage.jitter().mean_delay(), where + ".jitter.mean_delay", source, true,
+                  long_lag);
+      require_lag(stage.jitter().std_dev(), where + ".jitter.std_dev", source, true, long_lag);
+      break;
+    case K::kTrace:
+      require(!stage.trace().path().empty(), source, where + ".trace.path is empty");
+      break;
+    case K::kBenchmark: break;
+    case K::kTrackingLoop:
+      break;  // checked where it is built (core::TrackingLoop), naming the field
+    case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
+  }
+}
+
+double effective_gain(const config::DelayStage& stage) {
+  return stage.amplitude_gain() == 0.0 ? 1.0 : stage.amplitude_gain();
+}
+
+}  // namespace
+
+config::Study parse_study(const std::string& text, const std::string& source_name) {
+  config::Study study;
+  parse_text_format(text, source_name, study);
+  validate_study(study, source_name);
+  return study;
+}
+
+config::Study load_study(const std::filesystem::path& path) {
+  return parse_study(read_text_file(path, "config"), path.string());
+}
+
+namespace {
+
+void validate_structure(const config::Structure& structure, const std::string& source) {
+  if (structure.has_sdof()) {
+    const config::Sdof& sdof = structure.sdof();
+    require(sdof.mass() >= 0, source, "structure.sdof.mass must be > 0 kg");
+    require(sdof.stiffness() >= 0, source, "structure.sdof.stiffness must be > 0 N/m");
+    if (sdof.period() != 0)
+      require_in(Quantity::kPeriod, sdof.period(), "structure.sdof.period", source);
+    require(sdof.period() > 0 || (sdof.mass() > 0 && sdof.stiffness() > 0), source,
+            "structure.sdof needs a period, or both mass and stiffness");
+  } else if (structure.has_shear_building()) {
+    const auto& building = structure.shear_building();
+    require(building.storey_mass_size() > 0, source,
+            "structure.shear_building.storey_mass is empty");
+    require(building.storey_mass_size() == building.storey_stiffness_size(), source,
+            "structure.shear_building: storey_mass and storey_stiffness differ in length");
+  } else if (!structure.has_matrices()) {
+    fail(source, "structure needs sdof, shear_building or matrices");
+  }
+  const bool rayleigh = structure.damping().has_rayleigh();
+  require_in(Quantity::kDampingRatio,
+             rayleigh ? structure.damping().rayleigh().zeta() : structure.damping().modal_zeta(),
+             rayleigh ? "structure.damping.rayleigh.zeta" : "structure.damping.modal_zeta", source);
+}
+
+void validate_cases(const config::Study& study, const std::string& source) {
+  for (int i = 0; i < study.cases_size(); ++i) {
+    const config::Case& c = study.cases(i);
+    const std::string where = "cases[" + std::to_string(i) + "] '" + c.name() + "'";
+    for (int j = 0; j < i; ++j) {
+      require(study.cases(j).name() != c.name(), source,
+              "cases[" + std::to_string(i) + "] repeats the name '" + c.name() + "' of cases[" +
+                  std::to_string(j) + "]: case names must be unique");
+    }
+    for (int j = 0; j < c.delay_size(); ++j) {
+      validate_delay_stage(c.delay(j), where + " delay[" + std::to_string(j) + "]", source,
+                           study.allow_long_lag());
+    }
+    for (int j = 0; j < c.compensation_size(); ++j) {
+      try {
+        validate_compensation(c.compensation(j),
+                              where + " compensation[" + std::to_string(j) + "]");
+      } catch (const std::invalid_argument& e) {
+        fail(source, e.what());
+      }
+    }
+  }
+}
+
+void validate_sweep(const config::Study& study, const std::string& source) {
+  for (double period : study.sweep().periods())
+    require_in(Quantity::kPeriod, period, "sweep.periods", source);
+  for (double delay : study.sweep().delays())
+    require_lag(delay, "sweep.delays", source, true, study.allow_long_lag());
+  for (double dt : study.sweep().dts()) require_in(Quantity::kStep, dt, "sweep.dts", source);
+  for (double k : study.sweep().stiffnesses())
+    require(k > 0, source, "sweep.stiffnesses must be > 0 N/m");
+  for (double a : study.sweep().experimental_fractions()) {
+    require_in(Quantity::kFraction, a, "sweep.experimental_fractions", source);
+  }
+}
+
+// 0 means "the default" for these fields; any other value must be inside its range.
+void require_unset_or_in(Quantity quantity, double value, const std::string& field,
+                         const std::string& source) {
+  if (value != 0) require_in(quantity, value, field, source);
+}
+
+// 0 = off for each part; a spike lasts fewer steps than its period, a burst starts at step 1 or
+// later (step 0 sends no command).
+void validate_network_emulation(const config::NetworkEmulation& net, const std::string& where,
+                                bool allow_long_lag, const std::string& source) {
+  require_in(Quantity::kFraction, net.drift_rate(), where + ".drift_rate (s per s)", source);
+  require_lag(net.spike_delay(), where + ".spike_delay", source, true, allow_long_lag);
+  require_unset_or_in(Quantity::kCount, net.spike_every(), where + ".spike_every", source);
+  require_unset_or_in(Quantity::kCount, net.spike_steps(), where + ".spike_steps", source);
+  require(net.spike_steps() < net.spike_every() || net.spike_steps() == 0, source,
+          where + ".spike_steps = " + std::to_string(net.spike_steps()) +
+              " must be below spike_every = " + std::to_string(net.spike_every()) +
+              " (a spike shorter than its period)");
+  require_unset_or_in(Quantity::kCount, net.drop_first_step(), where + ".drop_first_step", source);
+  require_unset_or_in(Quantity::kCount, net.drop_steps(), where + ".drop_steps", source);
+  require(net.drop_steps() == 0 || net.drop_first_step() >= 1, source,
+          where + ".drop_first_step must be >= 1 with drop_steps (step 0 sends no command)");
+}
+
+void validate_deployment(const config::Deployment& d, bool allow_long_lag,
+                         const std::string& source) {
+  const std::string at = "deployment.";
+  require_in(Quantity::kDdsDomain, d.domain_id(), at + "domain_id", source);
+  for (int i = 0; i < d.nodes_size(); ++i) {
+    const std::string node = at + "nodes[" + std::to_string(i) + "].";
+    for (const auto& [name, lag] : {std::pair{"receive_lag", &d.nodes(i).receive_lag()},
+                                    std::pair{"send_lag", &d.nodes(i).send_lag()}}) {
+      validate_link_lag(*lag, node + name, allow_long_lag, source);
+    }
+  }
+  require_unset_or_in(Quantity::kTimeout, d.start_timeout(), at + "start_timeout", source);
+  require_unset_or_in(Quantity::kTimeout, d.heartbeat_period(), at + "heartbeat_period", source);
+  require_unset_or_in(Quantity::kTimeout, d.liveliness_timeout(), at + "liveliness_timeout",
+                      source);
+  require_unset_or_in(Quantity::kTimeout, d.step_timeout(), at + "step_timeout", source);
+  require_unset_or_in(Quantity::kFraction, d.feedback_wait_fraction(),
+                      at + "feedback_wait_fraction", source);
+  require_unset_or_in(Quantity::kLag, d.spin_margin(), at + "spin_margin", source);
+  if (d.max_overrun_fraction() >= 0)
+    require_in(Quantity::kFraction, d.max_overrun_fraction(),
+               at + "max_overrun_fraction (< 0: off)", source);
+  if (d.min_answer_fraction() >= 0)
+    require_in(Quantity::kFraction, d.min_answer_fraction(), at + "min_answer_fraction (< 0: off)",
+               source);
+  require_unset_or_in(Quantity::kCount, d.max_missed_answers(), at + "max_missed_answers", source);
+  require_unset_or_in(Quantity::kCount, d.command_watchdog_periods(),
+                      at + "command_watchdog_periods", source);
+  if (d.pin_loop() || d.loop_cpu() > 0)
+    require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);
+  require(d.limits().max_displacement() >= 0 && d.limits().max_velocity() >= 0, source,
+          "deployment.limits.max_displacement and max_velocity must be >= 0 (0 = no limit)");
+}
+
+}  // namespace
+
+void validate_link_lag(const config::LinkLag& lag, const std::string& where, bool allow_long_lag,
+                       const std::string& source) {
+  require_lag(lag.one_way_delay(), where + ".one_way_delay", source, true, allow_long_lag);
+  require_lag(lag.jitter(), where + ".jitter", source, true, allow_long_lag);
+  require(lag.loss() >= 0 && lag.loss() < 1, source,
+          where + ".loss = " + format_number(lag.loss()) + " is outside [0, 1) (a probability)");
+  validate_network_emulation(lag.network(), where + ".network", allow_long_lag, source);
+}
+
+void validate_study(const config::Study& study, const std::string& source) {
+  require(study.has_structure(), source, "structure is missing");
+  validate_structure(study.structure(), source);
+  require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
+          "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " +
+              format_number(study.servo().rate()));
+  require_unset_or_in(Quantity::kStep, study.integrator().dt(),
+                      "integrator.dt (0 = the record's step)", source);
+  const auto& sub = study.substructuring();
+  require_in(Quantity::kFraction, sub.experimental_fraction(),
+             "substructuring.experimental_fraction", source);
+  require(sub.experimental_storeys().empty() || sub.experimental_fraction() == 0, source,
+          "substructuring: give experimental_fraction or experimental_storeys, not both");
+  if (study.structure().has_matrices()) {
+    require(sub.experimental_storeys().empty() && sub.experimental_fraction() == 0, source,
+            "substructuring: a structure given by matrices is split at experimental_dofs, not by "
+            "storeys");
+  } else {
+    require(sub.experimental_dofs().empty(), source,
+            "substructuring.experimental_dofs needs structure.matrices (a shear building is split "
+            "by storeys)");
+  }
+  require_unset_or_in(Quantity::kMotionScale, study.motion().scale(), "motion.scale (0 means 1)",
+                      source);
+  require(study.motion().duration() >= 0, source, "motion.duration must be >= 0 s");
+  validate_cases(study, source);
+  validate_sweep(study, source);
+  validate_deployment(study.deployment(), study.allow_long_lag(), source);
+}
+
+std::string units_name(config::GroundMotion::Units units) {
+  switch (units) {
+    case config::GroundMotion::M_PER_S2: return "m/s2";
+    case config::GroundMotion::CM_PER_S2: return "cm/s2";
+    default: return "g";
+  }
+}
+
+config::GroundMotion::Units units_from_name(const std::string& name) {
+  if (name == "g") return config::GroundMotion::G;
+  if (name == "m/s2" || name == "m/s^2") return config::GroundMotion::M_PER_S2;
+  if (name == "cm/s2" || name == "cm/s^2" || name == "gal") return config::GroundMotion::CM_PER_S2;
+  throw std::invalid_argument("unknown motion units '" + name + "': use g, m/s2 or cm/s2");
+}
+
+std::string motion_units_name(const config::GroundMotion& motion) {
+  return motion.has_column_units() ? units_name(motion.column_units()) : "g";
+}
+
+namespace {
+
+// A motion carried by a run record's header: checked as a file's would be, read from nowhere.
+GroundMotion embedded_motion(const config::EmbeddedMotion& embedded) {
+  const std::string what = "motion.embedded ('" + embedded.name() + "')";
+  if (!(embedded.dt() > 0.0) || !std::isfinite(embedded.dt()))
+    throw std::invalid_argument(what + ": dt = " + format_number(embedded.dt()) +
+                                " s is not a positive step");
+  if (embedded.acceleration_size() == 0) throw std::invalid_argument(what + ": no samples");
+  GroundMotion record{embedded.name(),
+                      embedded.dt(),
+                      {embedded.acceleration().begin(), embedded.acceleration().end()}};
+  for (std::size_t i = 0; i < record.acceleration.size(); ++i)
+    if (!std::isfinite(record.acceleration[i]))
+      throw std::invalid_argument(what + ": sample " + std::to_string(i) + " is not finite");
+  if (!(record.peak_abs() <= kMaxPeakGroundAcceleration))
+    throw std::invalid_argument(what + ": peak " + format_number(record.peak_abs()) +
+                                " m/s^2 is beyond any recorded earthquake");
+  return record;
+}
+
+void check_sha256(const std::filesystem::path& path, const std::string& expected) {
+  const std::string actual = util::file_sha256(path);
+  if (actual != expected)
+    throw std::invalid_argument("motion '" + path.string() + "': sha256 " + actual + ", expected " +
+                                expected +
+                                " (motion.sha256): the file is not the record the study names");
+}
+
+// A delay trace carried by a run record's header, held to read_delay_trace's rules.
+DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
+  const std::string what = "delay trace (embedded, from '" + trace.path() + "')";
+  if (trace.time_size() != trace.delay_size())
+    throw std::invalid_argument(what + ": " + std::to_string(trace.time_size()) + " times but " +
+                                std::to_string(trace.delay_size()) + " delays");
+  DelayTrace out{{trace.time().begin(), trace.time().end()},
+                 {trace.delay().begin(), trace.delay().end()}};
+  for (std::size_t i = 0; i < out.time.size(); ++i) {
+    if (!(out.delay[i] >= 0.0) || !std::isfinite(out.delay[i]))
+      throw std::invalid_argument(what + ": sample " + std::to_string(i) + " has delay " +
+                                  format_number(out.delay[i]));
+    if (!std::isfinite(out.time[i]) || (i > 0 && !(out.time[i] > out.time[i - 1])))
+      throw std::invalid_argument(what + ": time of sample " + std::to_string(i) +
+                                  " does not increase");
+  }
+  return out;
+}
+
+}  // namespace
+
+GroundMotion load_motion(const config::GroundMotion& motion,
+                         const std::filesystem::path& base_dir) {
+  if (motion.has_embedded()) return embedded_motion(motion.embedded());
+  if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
+  std::filesystem::path path = motion.path();
+  if (path.is_relative()) path = base_dir / path;
+  if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
+    throw std::invalid_argument("motion: " + why);
+  if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
+  bool at2 = motion.format() == config::GroundMotion::AT2;
+  if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
+  const std::string what = "motion '" + path.string() + "'";
+  if (at2 && motion.has_column_units() && motion.column_units() != config::GroundMotion::G) {
+    throw std::invalid_argument(what +
+                                " is a PEER AT2 file, whose values are in g by its format; "
+                                "motion.column_units (--motion-units) " +
+                                units_name(motion.column_units()) + " contradicts it");
+  }
+  if (!at2 && !motion.has_column_units()) {
+    throw std::invalid_argument(
+        what +
+        " is a columns file, whose numbers carry no unit: give "
+        "motion.column_units (G, M_PER_S2 or CM_PER_S2; --motion-units g|m/s2|cm/s2)");
+  }
+  double to_si = kGravity;
+  if (motion.column_units() == config::GroundMotion::M_PER_S2) to_si = 1.0;
+  if (motion.column_units() == config::GroundMotion::CM_PER_S2) to_si = 0.01;
+  GroundMotion record = at2 ? read_at2(path) : read_columns(path, motion.column_dt(), to_si);
+  const double peak = record.peak_abs();
+  if (!(peak <= kMaxPeakGroundAcceleration)) {
+    std::ostringstream message;
+    message << what << ": peak acceleration " << peak / kGravity << " g read as "
+            << (at2 ? std::string("g") : units_name(motion.column_units()))
+            << " is beyond any recorded earthquake (under 4 g); are the units right "
+               "(motion.column_units, --motion-units)?";
+    throw std::invalid_argument(message.str());
+  }
+  if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
+  if (motion.scale() > 0 && motion.scale() != 1.0)
+    record = scaled(std::move(record), motion.scale());
+  return truncated(std::move(record), motion.duration());
+}
+
+std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
+                                             const std::filesystem::path& base_dir) {
+  using K = config::DelayStage::KindCase;
+  std::unique_ptr<DelayStage> block;
+  switch (stage.kind_case()) {
+    case K::kShift: block = std::make_unique<TimeShift>(stage.shift().delay(), dt); break;
+    case K::kEq1: block = std::make_unique<Eq1Lead>(stage.eq1().delay()); break;
+    case K::kEq1Lag: block = std::make_unique<Eq1Lag>(stage.eq1_lag().delay()); break;
+    case K::kFirstOrder:
+      block = std::make_unique<FirstOrderActuator>(stage.first_order().time_constant(), dt);
+      break;
+    case K::kBenchmark: block = make_benchmark_actuator(dt); break;
+    case K::kTransferFunction: {
+      const auto& tf = stage.transfer_function();
+      block = std::make_unique<TransferFunctionStage>(
+          std::vector<double>(tf.numerator().begin(), tf.numerator().end()),
+          std::vector<double>(tf.denominator().begin(), tf.denominator().end()), dt);
+      break;
+    }
+    case K::kJitter:
+      block = std::make_unique<JitterShift>(stage.jitter().mean_delay(), stage.jitter().std_dev(),
+                                            stage.jitter().seed(), dt);
+      break;
+    case K::kTrace: {
+      if (stage.trace().time_size() > 0) {
+        block = std::make_unique<TraceShift>(embedded_trace(stage.trace()), dt);
+        break;
+      }
+      std::filesystem::path path = stage.trace().path();
+      if (path.is_relative()) path = base_dir / path;
+      block = std::make_unique<TraceShift>(read_delay_trace(path), dt);
+      break;
+    }
+    case K::kTrackingLoop:
+      block = std::make_unique<TrackingLoop>(
+          make_tracking_loop(stage.tracking_loop(), dt, "tracking_loop"));
+      break;
+    case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
+  }
+  block->set_gain(effective_gain(stage));
+  return block;
+}
+
+DelayChain make_delay_chain(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
+                            double dt, const std::filesystem::path& base_dir) {
+  DelayChain chain;
+  for (const config::DelayStage& stage : stages) chain.add(make_delay_stage(stage, dt, base_dir));
+  return chain;
+}
+
+StructuralModel make_structure(const config::Structure& structure,
+                               const std::filesystem::path& base_dir) {
+  if (structure.has_matrices()) return matrix_structure(structure, base_dir);
+  StructuralModel model;
+  if (structure.has_sdof()) {
+    const config::Sdof& sdof = structure.sdof();
+    double mass = sdof.mass() > 0 ? sdof.mass() : 1.0;
+    double stiffness = 0.0;
+    if (sdof.period() > 0 && sdof.stiffness() > 0) {
+      stiffness = sdof.stiffness();
+      mass =
+          stiffness * sdof.period() * sdof.period() / (4.0 * std::numbers::pi * std::numbers::pi);
+    } else if (sdof.period() > 0) {
+      const double omega = 2.0 * std::numbers::pi / sdof.period();
+      stiffness = mass * omega * omega;
+    } else {
+      stiffness = sdof.stiffness();
+    }
+    model = make_shear_building({mass}, {stiffness});
+  } else {
+    const auto& b = structure.shear_building();
+    model = make_shear_building({b.storey_mass().begin(), b.storey_mass().end()},
+                                {b.storey_stiffness().begin(), b.storey_stiffness().end()});
+  }
+  const config::Damping& damping = structure.damping();
+  if (damping.has_rayleigh()) {
+    const auto& r = damping.rayleigh();
+    model.damping =
+        rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
+                         r.mode_j() == 0 ? 2 : r.mode_j());
+  } else if (model.dofs() == 1) {
+    // 2 zeta m omega written out, so an SDOF from a config equals make_sdof() to the last bit.
+    const double omega = std::sqrt(model.stiffness(0, 0) / model.mass(0, 0));
+    model.damping(0, 0) = 2.0 * damping.modal_zeta() * model.mass(0, 0) * omega;
+  } else {
+    model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
+  }
+  return model;
+}
+
+namespace {
+// The one map between the config's integrator kinds and core's, read both ways.
+constexpr std::pair<config::Integrator::Kind, IntegratorKind> kIntegratorKinds[] = {
+    {config::Integrator::EXPLICIT_NEWMARK, IntegratorKind::kExplicitNewmark},
+    {config::Integrator::CENTRAL_DIFFERENCE, IntegratorKind::kCentralDifference},
+    {config::Integrator::CHEN_RICLES, IntegratorKind::kChenRicles},
+    {config::Integrator::NEWMARK_AVERAGE_ACCELERATION, IntegratorKind::kNewmarkAverageAcceleration},
+    {config::Integrator::ALPHA_OS, IntegratorKind::kAlphaOS},
+    {config::Integrator::KR_ALPHA, IntegratorKind::kKRAlpha}};
+}  // namespace
+
+IntegratorKind integrator_kind(const config::Integrator& integrator) {
+  for (const auto& [config_kind, kind] : kIntegratorKinds)
+    if (config_kind == integrator.kind()) return kind;
+  return IntegratorKind::kExplicitNewmark;
+}
+
+config::Integrator::Kind config_integrator_kind(IntegratorKind kind) {
+  for (const auto& [config_kind, core_kind] : kIntegratorKinds)
+    if (core_kind == kind) return config_kind;
+  throw std::invalid_argument("integrator " + to_string(kind) + " has no config kind");
+}
+
+int servo_substeps(const config::Study& study, double dt) {
+  const double rate = study.servo().rate();
+  if (rate == 0) return 1;
+  const double per_step = rate * dt;
+  const double whole = std::round(per_step);
+  require(std::isfinite(rate) && rate > 0 && whole >= 1 && whole <= kMaxServoSubsteps &&
+              std::abs(per_step - whole) <= 1e-6 * whole,
+          "servo",
+          "servo.rate = " + format_number(rate) + " Hz must be an integer multiple (1 to " +
+              std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " +
+              format_number(1.0 / dt) + " Hz (dt = " + format_number(dt) + " s)");
+  return static_cast<int>(whole);
+}
+
+HybridSetup base_setup(const config::Study& study, double dt,
+                       const std::filesystem::path& base_dir) {
+  HybridSetup base;
+  base.model = make_structure(study.structure(), base_dir);
+  base.integrator = integrator_kind(study.integrator());
+  base.dt = dt;
+  base.allow_unstable = study.integrator().allow_unstable();
+  base.servo_substeps = servo_substeps(study, dt);
+  const auto& sub = study.substructuring();
+  if (study.structure().has_matrices()) {
+    base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps);
+    return base;
+  }
+  const StoreyModelFactory factory = make_storey_factory(sub.model());
+  if (!sub.experimental_storeys().empty()) {
+    std::vector<int> storeys;
+    for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
+    base.partition = partition_by_storeys(base.model.storey_stiffness, storeys, factory);
+  } else {
+    base.partition =
+        partition_by_fraction(base.model.storey_stiffness, sub.experimental_fraction(), factory);
+  }
+  return base;
+}
+
+PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir) {
+  PreparedStudy prepared;
+  prepared.config = study;
+  prepared.base_dir = base_dir;
+  GroundMotion record = load_motion(study.motion(), base_dir);
+  const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : record.dt;
+  require(dt < record.duration(), "motion",
+          "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
+              format_number(record.duration()) + " s)");
+  prepared.motion =
+      std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
+  for (const config::Case& c : study.cases()) {
+    const double lag = make_delay_chain(c.delay(), dt, base_dir).nominal_delay();
+    require(lag < prepared.motion.duration(), "case '" + c.name() + "'",
+            "its delay of " + format_number(lag) + " s is not shorter than the record (" +
+                format_number(prepared.motion.duration()) + " s)");
+  }
+  prepared.base = base_setup(study, dt, base_dir);
+  return prepared;
+}
+
+HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case) {
+  HybridSetup setup = prepared.base;
+  setup.delays.clear();
+  const std::size_t actuators = setup.partition.actuator_storeys.size();
+  const double servo_period = setup.dt / setup.servo_substeps;
+  for (std::size_t a = 0; a < actuators; ++a)
+    setup.delays.push_back(make_delay_chain(study_case.delay(), servo_period, prepared.base_dir));
+  std::vector<int> all(actuators);
+  for (std::size_t a = 0; a < actuators; ++a) all[a] = static_cast<int>(a);
+  apply_compensation(setup, all, study_case.compensation(), "case '" + study_case.name() + "'");
+  return setup;
+}
+
+void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
+                        const google::protobuf::RepeatedPtrField<config::Compensation>& blocks,
+                        const std::string& where) {
+  if (blocks.empty()) return;
+  const auto count = static_cast<std::size_t>(blocks.size());
+  if (count > 1 && count != actuators.size()) {
+    throw std::invalid_argument(where + ": " + std::to_string(count) + " compensation blocks for " +
+                                std::to_string(actuators.size()) +
+                                " actuators; give one (for every actuator) or one per actuator");
+  }
+  const double servo_period = setup.dt / setup.servo_substeps;
+  for (std::size_t i = 0; i < actuators.size(); ++i) {
+    const int a = actuators[i];
+    if (a < 0 || a >= static_cast<int>(setup.delays.size()))
+      throw std::invalid_argument(where + ": actuator " + std::to_string(a + 1) +
+                                  " does not exist");
+    const std::size_t b = count == 1 ? 0 : i;
+    const std::string block_name = where + " compensation[" + std::to_string(b) + "]";
+    if (setup.delays[static_cast<std::size_t>(a)].compensator())
+      throw std::invalid_argument(
+          block_name + ": actuator " + std::to_string(a + 1) +
+          " already has a compensator (from its case); give it in one place");
+    setup.delays[static_cast<std::size_t>(a)].set_compensator(
+        make_compensator(blocks[static_cast<int>(b)], servo_period, block_name));
+  }
+}
+
+const config::Case& reference_case(const config::Study& study) {
+  if (study.cases_size() == 0) throw std::invalid_argument("the study has no cases");
+  if (!study.reference_case().empty()) {
+    for (const config::Case& c : study.cases()) {
+      if (c.name() == study.reference_case()) return c;
+    }
+    throw std::invalid_argument("reference_case '" + study.reference_case() +
+                                "' is not among the cases");
+  }
+  return study.cases(0);
+}
+
+}  // namespace rths::core

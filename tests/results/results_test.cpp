@@ -1,0 +1,163 @@
+// results/results: every result's table has the CSV's variable names, SI units and NaN where a
+// value is missing.
+#include "results/results.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "analysis/sweep_csv.h"
+#include "analysis/sweep_grid.h"
+#include "study/study.h"
+
+namespace rths::results {
+namespace {
+
+const std::string kMotion =
+    std::string(RTHS_SOURCE_DIR) + "/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+
+std::vector<std::string> names(const Table& t) {
+  std::vector<std::string> out;
+  for (const auto& c : t.columns()) out.push_back(c.name);
+  return out;
+}
+
+analysis::CaseOutcome make_case(const std::string& name, std::size_t steps, bool actuator) {
+  analysis::CaseOutcome c;
+  c.name = name;
+  c.simulation.dt = 0.01;
+  c.simulation.time.resize(steps);
+  for (std::size_t k = 0; k < steps; ++k) {
+    c.simulation.time[k] = 0.01 * static_cast<double>(k);
+    c.response.push_back(0.001 * static_cast<double>(k));
+  }
+  c.simulation.displacement =
+      Eigen::Map<const Eigen::VectorXd>(c.response.data(), static_cast<Eigen::Index>(steps));
+  const auto n = static_cast<Eigen::Index>(actuator ? steps : 0);
+  c.simulation.command = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 0.5);
+  c.simulation.realised = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 0.25);
+  c.simulation.measured_force = Eigen::MatrixXd::Constant(n, actuator ? 1 : 0, 100.0);
+  return c;
+}
+
+TEST(ResultsTest, StudyTableNamesEachCaseAndPadsAStoppedCaseWithNan) {
+  analysis::StudyOutcome outcome;
+  outcome.study_name = "frame";
+  outcome.cases = {make_case("reference", 5, false), make_case("lag 14ms", 3, true)};
+  const Table t = study_table(outcome);
+  EXPECT_EQ(names(t),
+            (std::vector<std::string>{"step", "time_s", "reference_u_floor1_m",
+                                      "lag_14ms_u_floor1_m", "lag_14ms_command_act1_m",
+                                      "lag_14ms_measured_act1_m", "lag_14ms_force_act1_N"}));
+  EXPECT_EQ(t.rows(), 5u);
+  EXPECT_DOUBLE_EQ(t.column("time_s").numbers[4], 0.04);
+  EXPECT_DOUBLE_EQ(t.column("step").numbers[4], 4.0);
+  EXPECT_DOUBLE_EQ(t.column("lag_14ms_u_floor1_m").numbers[2], 0.002);
+  EXPECT_TRUE(std::isnan(t.column("lag_14ms_u_floor1_m").numbers[3]));
+  EXPECT_TRUE(std::isnan(t.column("lag_14ms_force_act1_N").numbers[4]));
+  EXPECT_EQ(t.column("lag_14ms_force_act1_N").unit, "N");
+  EXPECT_EQ(t.attributes().at("reference_case"), "reference");
+}
+
+TEST(ResultsTest, DistributedTableIsTheStudyTablePlusLagPerLinkAtTheCarryingStep) {
+  analysis::StudyOutcome outcome;
+  outcome.study_name = "frame";
+  outcome.cases = {make_case("lag 14ms", 4, true)};
+  std::map<int, runtime::LinkSeries> links;
+  runtime::LinkSeries& s = links[2];
+  s.node_id = 2;
+  s.time = {0.01, 0.03};  // answers carried by steps 1 and 3; step 2 reused an older one
+  s.answered_step = {1, 3};
+  s.round_trip = {0.0021, 0.0023};
+  s.injected = {0.014, 0.014};
+  const Table t = distributed_study_table(outcome, {links});
+  std::vector<std::string> expected = names(study_table(outcome));
+  expected.push_back("lag_14ms_lag_node2_injected_s");
+  expected.push_back("lag_14ms_lag_node2_round_trip_s");
+  EXPECT_EQ(names(t), expected);
+  const auto& rtt = t.column("lag_14ms_lag_node2_round_trip_s").numbers;
+  ASSERT_EQ(rtt.size(), 4u);
+  EXPECT_TRUE(std::isnan(rtt[0]));
+  EXPECT_DOUBLE_EQ(rtt[1], 0.0021);
+  EXPECT_TRUE(std::isnan(rtt[2]));
+  EXPECT_DOUBLE_EQ(rtt[3], 0.0023);
+  EXPECT_EQ(t.column("lag_14ms_lag_node2_injected_s").unit, "s");
+  EXPECT_THROW(distributed_study_table(outcome, {}), std::invalid_argument);
+}
+
+TEST(ResultsTest, RecordTableHasTheExportColumnsAndNanForStepZerosLink) {
+  runtime::RecordContents record;
+  runtime::RecordEntry header_entry;
+  auto* header = header_entry.mutable_header();
+  header->set_dofs(1);
+  header->set_actuators(1);
+  header->add_link_node_ids(2);
+  header->set_case_name("lag");
+  record.entries.push_back(header_entry);
+  for (int k = 0; k < 2; ++k) {
+    runtime::RecordEntry e;
+    auto* s = e.mutable_step();
+    s->set_step(k);
+    s->set_time(0.001 * k);
+    s->add_displacement(0.5 * k);
+    s->add_velocity(1);
+    s->add_acceleration(2);
+    s->add_command(3);
+    s->add_realised(4);
+    s->add_measured_force(5);
+    if (k > 0) {
+      auto* link = s->add_links();
+      link->set_answered_step(k);
+      link->set_round_trip(0.0002);
+    }
+    s->set_overrun(k == 1);
+    record.entries.push_back(e);
+  }
+  const Table t = record_table(record);
+  EXPECT_EQ(names(t), (std::vector<std::string>{
+                          "step", "time_s", "ground_acceleration_m_per_s2", "u1_m", "v1_m_per_s",
+                          "a1_m_per_s2", "command1_m", "realised1_m", "force1_N",
+                          "node2_answered_step", "node2_injected_lag_s", "node2_round_trip_s",
+                          "node2_one_way_down_s", "node2_one_way_up_s", "lateness_s", "overrun"}));
+  EXPECT_EQ(t.rows(), 2u);
+  EXPECT_TRUE(std::isnan(t.column("node2_round_trip_s").numbers[0]));
+  EXPECT_DOUBLE_EQ(t.column("node2_round_trip_s").numbers[1], 0.0002);
+  EXPECT_EQ(t.column("node2_round_trip_s").unit, "s");
+  EXPECT_EQ(t.column("a1_m_per_s2").unit, "m/s^2");
+  EXPECT_DOUBLE_EQ(t.column("u1_m").numbers[1], 0.5);
+  EXPECT_EQ(t.column("overrun").numbers, (std::vector<double>{0, 1}));
+  EXPECT_EQ(t.attributes().at("status"), "no footer: the run was cut short");
+  EXPECT_THROW(record_table(runtime::RecordContents{}), std::invalid_argument);
+}
+
+TEST(ResultsTest, SweepTableHasTheSweepCsvsColumnsInOrder) {
+  const config::Study study = core::parse_study(
+      "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } }\n"
+      "integrator { kind: EXPLICIT_NEWMARK dt: 0.005 }\n"
+      "sweep { periods: [0.4, 0.8] delays: [0.01] motions { path: \"" +
+          kMotion + "\" duration: 2 } }\n",
+      "test");
+  const analysis::SweepGrid grid(study, RTHS_SOURCE_DIR, "test");
+  const auto rows = analysis::run_sweep(grid, {});
+  const auto csv = std::filesystem::temp_directory_path() /
+                   ("rths_tables_sweep_" + std::to_string(getpid()) + ".csv");
+  analysis::write_sweep_csv(csv, grid, {}, rows);
+  std::ifstream in(csv);
+  std::string header;
+  std::getline(in, header);
+  std::filesystem::remove(csv);
+
+  const Table t = sweep_table(analysis::to_table(grid, rows), grid.hash_hex(), grid.size());
+  std::string joined;
+  for (const auto& n : names(t)) joined += (joined.empty() ? "" : ",") + n;
+  EXPECT_EQ(joined, header);
+  EXPECT_EQ(t.rows(), 2u);
+  EXPECT_DOUBLE_EQ(t.column("period_s").numbers[1], 0.8);
+  EXPECT_TRUE(t.column("motion").is_text);
+  EXPECT_EQ(t.attributes().at("grid_hash"), grid.hash_hex());
+}
+
+}  // namespace
+}  // namespace rths::results

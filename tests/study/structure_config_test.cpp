@@ -1,0 +1,146 @@
+#include "study/structure_config.h"
+
+#include <gtest/gtest.h>
+
+#include "study/study.h"
+
+namespace rths::core {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string motion() {
+  return std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+}
+
+// Two storeys as matrices: K of storeys 3e6 and 2e6 N/m, floors 2000 and 1500 kg.
+std::string two_storey_matrices(const std::string& substructuring, const std::string& cases = "") {
+  return "name: \"m\" structure { matrices { mass { rows: 2 values: [2000, 0, 0, 1500] }"
+         " stiffness { rows: 2 values: [5e6, -2e6, -2e6, 2e6] } } damping { modal_zeta: 0.05 } }"
+         " motion { path: \"" +
+         motion() + "\" duration: 4 } integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } " +
+         substructuring + " " + cases;
+}
+
+PreparedStudy prepare(const std::string& text) {
+  return prepare_study(parse_study(text, "test"), fs::temp_directory_path());
+}
+
+template <typename F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StructureConfig, SplitTakesTheSpecimensMassDampingAndStiffnessOutOfTheNumericalPart) {
+  const PreparedStudy p = prepare(two_storey_matrices(
+      "substructuring { experimental_dofs { dof: 2 mass: 100 stiffness: 1e6 damping: 500 } }"));
+  const StructuralModel whole = make_structure(p.config.structure());
+  EXPECT_EQ(p.base.model.mass(1, 1), 1400.0);
+  EXPECT_EQ(p.base.model.mass(0, 0), 2000.0);
+  EXPECT_DOUBLE_EQ(p.base.model.damping(1, 1), whole.damping(1, 1) - 500.0);
+  EXPECT_EQ(p.base.model.stiffness, whole.stiffness);  // the integrators' K0 stays whole
+  EXPECT_EQ(p.base.partition.numerical_matrix(1, 1), 1e6);
+  EXPECT_EQ(p.base.partition.numerical_matrix(0, 1), -2e6);
+  ASSERT_EQ(p.base.partition.actuator_storeys, std::vector<int>{1});
+  EXPECT_TRUE(p.base.partition.by_dofs);
+  EXPECT_EQ(p.base.partition.experimental_stiffness()(1, 1), 1e6);
+  EXPECT_EQ(p.base.partition.experimental_stiffness()(0, 1), 0.0);
+}
+
+TEST(StructureConfig, BadExperimentalDofsAreRefusedNamingTheField) {
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 3 stiffness: 1e6 } }"));
+            }).find("substructuring.experimental_dofs[0].dof: 3 is outside 1..2"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 1 stiffness: 1e6 } "
+                  "experimental_dofs { dof: 1 stiffness: 1e6 } }"));
+            }).find("experimental_dofs[1].dof: 1 is listed twice"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 2 stiffness: 3e6 } }"));
+            }).find("experimental_dofs[0].stiffness: 3e+06 N/m must be in (0, K(2, 2) = 2e+06]"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices(
+                  "substructuring { experimental_dofs { dof: 2 stiffness: 1e6 mass: 1500 } }"));
+            }).find("experimental_dofs[0].mass"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              prepare(two_storey_matrices("substructuring { experimental_fraction: 0.5 }"));
+            }).find("split at experimental_dofs"),
+            std::string::npos);
+}
+
+TEST(StructureConfig, DampingMatrixAndRatiosAreExclusive) {
+  const std::string both =
+      "name: \"m\" structure { matrices { mass { rows: 1 values: 1 } stiffness { rows: 1 values: 1 "
+      "}"
+      " damping { rows: 1 values: 0.1 } } damping { modal_zeta: 0.05 } }";
+  EXPECT_NE(error_of([&] { make_structure(parse_study(both, "t").structure()); }).find("not both"),
+            std::string::npos);
+}
+
+// A shear building given as matrices and split at DOF 1 is the shear building split at storey 1
+// (the storey between the ground and floor 1): the same response up to rounding.
+TEST(StructureConfig, ShearBuildingAsMatricesRunsAsTheShearBuilding) {
+  const std::string cases = "cases { name: \"lag\" delay { shift { delay: 0.006 } } }";
+  const PreparedStudy matrices = prepare(
+      two_storey_matrices("substructuring { experimental_dofs { dof: 1 stiffness: 3e6 } }", cases));
+  const PreparedStudy storeys = prepare(
+      "name: \"s\" structure { shear_building { storey_mass: [2000, 1500] storey_stiffness: [3e6, "
+      "2e6] }"
+      " damping { modal_zeta: 0.05 } } motion { path: \"" +
+      motion() +
+      "\" duration: 4 }"
+      " integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } substructuring { experimental_storeys: [1] "
+      "} " +
+      cases);
+  const SimulationResult a =
+      simulate(setup_for_case(matrices, matrices.config.cases(0)), matrices.motion);
+  const SimulationResult b =
+      simulate(setup_for_case(storeys, storeys.config.cases(0)), storeys.motion);
+  ASSERT_EQ(a.steps(), b.steps());
+  const double peak = b.displacement.cwiseAbs().maxCoeff();
+  EXPECT_GT(peak, 1e-4);
+  EXPECT_LT((a.displacement - b.displacement).cwiseAbs().maxCoeff(), 1e-9 * peak);
+  EXPECT_LT((a.measured_force - b.measured_force).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+// Without lag, a specimen of stiffness only and the numerical rest sum to the whole structure:
+// the hybrid run equals the 20-DOF frame integrated whole, for every integrator.
+TEST(StructureConfig, UndelayedSplitOfTheTwentyDofFrameEqualsTheWholeFrame) {
+  const std::string frame =
+      "name: \"f\" structure { matrices { mass { file: \"matrices/frame20_mass.mtx\" }"
+      " stiffness { file: \"matrices/frame20_stiffness.mtx\" } } damping { modal_zeta: 0.05 } }"
+      " motion { path: \"" +
+      motion() + "\" duration: 3 } ";
+  for (const char* kind : {"EXPLICIT_NEWMARK", "CENTRAL_DIFFERENCE", "CHEN_RICLES",
+                           "NEWMARK_AVERAGE_ACCELERATION", "ALPHA_OS", "KR_ALPHA"}) {
+    const std::string integrator = std::string("integrator { kind: ") + kind + " dt: 0.002 } ";
+    const fs::path configs = fs::path(RTHS_SOURCE_DIR) / "configs";
+    const PreparedStudy split = prepare_study(
+        parse_study(
+            frame + integrator + "substructuring { experimental_dofs { dof: 1 stiffness: 2e6 } }",
+            "t"),
+        configs);
+    const PreparedStudy whole = prepare_study(parse_study(frame + integrator, "t"), configs);
+    EXPECT_TRUE(whole.base.partition.actuator_storeys.empty());
+    const SimulationResult a = simulate(split.base, split.motion);
+    const SimulationResult b = simulate(whole.base, whole.motion);
+    const double peak = b.displacement.cwiseAbs().maxCoeff();
+    EXPECT_GT(peak, 1e-3) << kind;
+    EXPECT_LT((a.displacement - b.displacement).cwiseAbs().maxCoeff(), 1e-9 * peak) << kind;
+  }
+}
+
+}  // namespace
+}  // namespace rths::core

@@ -1,0 +1,202 @@
+#include "study/structure_io.h"
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+#include <fstream>
+
+namespace rths::core {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path scratch() {
+  const fs::path dir =
+      fs::temp_directory_path() / ("rths_structure_io_" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+fs::path write(const std::string& name, const std::string& text) {
+  const fs::path path = scratch() / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+config::Matrix file_spec(const std::string& name, const std::string& variable = "") {
+  config::Matrix spec;
+  spec.set_file(name);
+  spec.set_variable(variable);
+  return spec;
+}
+
+config::Matrix inline_spec(int rows, std::vector<double> values) {
+  config::Matrix spec;
+  spec.set_rows(rows);
+  for (double v : values) spec.add_values(v);
+  return spec;
+}
+
+// The message of the std::invalid_argument `f` throws ("" if none).
+template <typename F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+fs::path benchmark_dir() { return fs::path(RTHS_SOURCE_DIR) / "configs" / "benchmark"; }
+
+TEST(StructureIo, InlineValuesAreRowMajor) {
+  const Mat m = read_matrix(inline_spec(2, {1, 2, 3, 4}), {}, "f");
+  EXPECT_EQ(m(0, 1), 2.0);
+  EXPECT_EQ(m(1, 0), 3.0);
+  const Mat column = read_matrix(inline_spec(0, {1, 1, 1}), {}, "f");
+  EXPECT_EQ(column.rows(), 3);
+  EXPECT_NE(error_of([] {
+              read_matrix(inline_spec(2, {1, 2, 3}), {}, "mass");
+            }).find("mass: 3 values"),
+            std::string::npos);
+}
+
+TEST(StructureIo, MatrixMarketCoordinateSymmetricFillsBothTriangles) {
+  write("sym.mtx",
+        "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 4\n1 1 2\n2 1 -1\n2 2 "
+        "2\n3 3 1.5\n");
+  const Mat m = read_matrix(file_spec("sym.mtx"), scratch(), "f");
+  EXPECT_EQ(m(0, 1), -1.0);
+  EXPECT_EQ(m(1, 0), -1.0);
+  EXPECT_EQ(m(2, 2), 1.5);
+  EXPECT_EQ(m(0, 2), 0.0);
+}
+
+TEST(StructureIo, MatrixMarketArrayIsColumnMajorAndSymmetricIsTheLowerTriangle) {
+  write("general.mtx", "%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n");
+  const Mat g = read_matrix(file_spec("general.mtx"), scratch(), "f");
+  EXPECT_EQ(g(1, 0), 2.0);
+  EXPECT_EQ(g(0, 1), 3.0);
+  write("lower.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n1\n2\n3\n4\n5\n6\n");
+  const Mat s = read_matrix(file_spec("lower.mtx"), scratch(), "f");
+  Mat expected(3, 3);
+  expected << 1, 2, 3, 2, 4, 5, 3, 5, 6;
+  EXPECT_EQ(s, expected);
+}
+
+TEST(StructureIo, MatrixMarketErrorsNameTheFileAndLine) {
+  write("bad_index.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 1\n3 1 1.0\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("bad_index.mtx"), scratch(), "structure.matrices.mass");
+            }).find("bad_index.mtx:3: index 3 is outside 1..2"),
+            std::string::npos);
+  write("short.mtx", "%%MatrixMarket matrix coordinate real general\n2 2 2\n1 1 1.0\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("short.mtx"), scratch(), "f");
+            }).find("declares 2 entries but holds 1"),
+            std::string::npos);
+  write("complex.mtx", "%%MatrixMarket matrix coordinate complex general\n1 1 1\n1 1 1 0\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("complex.mtx"), scratch(), "f");
+            }).find("field 'complex'"),
+            std::string::npos);
+}
+
+TEST(StructureIo, CsvRowsAndRaggedRowsRefused) {
+  write("k.csv", "# stiffness\n2,-1\n-1,2\n");
+  EXPECT_EQ(read_matrix(file_spec("k.csv"), scratch(), "f")(1, 0), -1.0);
+  write("ragged.csv", "2,-1\n-1\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("ragged.csv"), scratch(), "f");
+            }).find("row has 1 values"),
+            std::string::npos);
+}
+
+TEST(StructureIo, MatFileVariablesIncludingMatlabsUint16Mass) {
+  // The RTHS benchmark's case 1 (configs/benchmark/README.md): M saved by MATLAB as uint16.
+  const Mat m = read_matrix(file_spec("case_1.mat", "M"), benchmark_dir(), "f");
+  EXPECT_EQ(m, 1000.0 * Mat::Identity(3, 3));
+  const Mat k = read_matrix(file_spec("case_1.mat", "K"), benchmark_dir(), "f");
+  EXPECT_NEAR(k(0, 0), 26054883.87960384, 1e-6);
+  EXPECT_NEAR(k(1, 2), -14419970.77723698, 1e-6);
+  const std::string unknown = error_of([] {
+    read_matrix(file_spec("case_1.mat", "Kx"), benchmark_dir(), "structure.matrices.stiffness");
+  });
+  EXPECT_NE(unknown.find("structure.matrices.stiffness: "), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("case_1.mat: no variable 'Kx' (variables: "), std::string::npos)
+      << unknown;
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("case_1.mat"), benchmark_dir(), "f");
+            }).find("needs `variable`"),
+            std::string::npos);
+}
+
+TEST(StructureIo, MissingFileAndUnknownExtension) {
+  EXPECT_NE(
+      error_of([] { read_matrix(file_spec("none.mtx"), scratch(), "f"); }).find("no such file"),
+      std::string::npos);
+  write("m.txt", "1\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("m.txt"), scratch(), "f");
+            }).find("unknown extension '.txt'"),
+            std::string::npos);
+}
+
+StructuralModel two_dof() {
+  StructuralModel model;
+  model.mass = Mat::Identity(2, 2);
+  model.stiffness = (Mat(2, 2) << 2, -1, -1, 1).finished();
+  model.damping = Mat::Zero(2, 2);
+  model.influence = Vec::Ones(2);
+  return model;
+}
+
+TEST(StructureIo, ChecksNameTheMatrixAndTheProblem) {
+  EXPECT_EQ(error_of([] { check_structural_matrices(two_dof(), "s"); }), "");
+  StructuralModel m = two_dof();
+  m.stiffness(0, 1) = -1.5;
+  EXPECT_NE(error_of([&] {
+              check_structural_matrices(m, "s");
+            }).find("s.stiffness: is not symmetric: (1, 2) = -1.5"),
+            std::string::npos);
+  m = two_dof();
+  m.stiffness(0, 0) = -2;
+  EXPECT_NE(error_of([&] {
+              check_structural_matrices(m, "s");
+            }).find("s.stiffness: is not positive semi-definite"),
+            std::string::npos);
+  m = two_dof();
+  m.mass(1, 1) = 0;
+  EXPECT_NE(
+      error_of([&] { check_structural_matrices(m, "s"); }).find("s.mass: is not positive definite"),
+      std::string::npos);
+  m = two_dof();
+  m.damping = Mat::Zero(2, 3);
+  EXPECT_NE(
+      error_of([&] { check_structural_matrices(m, "s"); }).find("s.damping: is 2 x 3, not square"),
+      std::string::npos);
+  m = two_dof();
+  m.damping = Mat::Zero(3, 3);
+  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("the structure has 2 DOFs"),
+            std::string::npos);
+  m = two_dof();
+  m.influence = Vec::Ones(3);
+  EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.influence: has 3 entries"),
+            std::string::npos);
+}
+
+TEST(StructureIo, MatrixStructureFromFilesWithDefaultInfluence) {
+  config::MatrixStructure spec;
+  *spec.mutable_mass() = file_spec("frame20_mass.mtx");
+  *spec.mutable_stiffness() = file_spec("frame20_stiffness.mtx");
+  const StructuralModel model = read_matrix_structure(
+      spec, fs::path(RTHS_SOURCE_DIR) / "configs" / "matrices", "structure.matrices");
+  EXPECT_EQ(model.dofs(), 20);
+  EXPECT_EQ(model.influence, Vec::Ones(20));
+  EXPECT_EQ(model.mass(0, 1), 100.0);  // the mass matrix is not diagonal
+  EXPECT_EQ(model.damping, Mat::Zero(20, 20));
+}
+
+}  // namespace
+}  // namespace rths::core

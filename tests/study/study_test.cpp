@@ -1,0 +1,354 @@
+#include "study/study.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <unistd.h>
+
+#include "study/text_format.h"
+
+namespace rths::core {
+namespace {
+
+const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_study(text, "test.textproto");
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StudyTest, PaperFrameConfigPreparesAtOneMillisecond) {
+  const config::Study study = load_study(kConfigs / "paper_frame.textproto");
+  const PreparedStudy prepared = prepare_study(study, kConfigs);
+  EXPECT_DOUBLE_EQ(prepared.base.dt, 0.001);
+  EXPECT_NEAR(prepared.motion.duration(), 7814 * 0.005, 0.01);
+  EXPECT_EQ(prepared.base.partition.actuator_storeys.size(), 1u);
+  EXPECT_NEAR(
+      2 * M_PI / std::sqrt(prepared.base.model.stiffness(0, 0) / prepared.base.model.mass(0, 0)),
+      0.5, 1e-12);
+  ASSERT_GE(study.cases_size(), 2);
+  const HybridSetup lagged = setup_for_case(prepared, study.cases(1));
+  ASSERT_EQ(lagged.delays.size(), 1u);
+  EXPECT_DOUBLE_EQ(lagged.delays[0].nominal_delay(), 0.014);
+  EXPECT_EQ(reference_case(study).name(), "reference");
+}
+
+TEST(StudyTest, UnknownFieldIsReportedWithLineAndColumn) {
+  const std::string error =
+      error_of("name: \"x\"\nstructure { sdof { period: 0.5 periodd: 2 } }\n");
+  EXPECT_NE(error.find("test.textproto:2:"), std::string::npos) << error;
+  EXPECT_NE(error.find("periodd"), std::string::npos) << error;
+}
+
+TEST(StudyTest, WrongTypeIsReported) {
+  const std::string error = error_of("structure { sdof { period: \"half\" } }\n");
+  EXPECT_NE(error.find("test.textproto:1:"), std::string::npos) << error;
+}
+
+TEST(StudyTest, SemanticErrorsNameTheField) {
+  EXPECT_NE(error_of("structure { sdof { period: -0.5 } }").find("structure.sdof.period"),
+            std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { "
+                     "delay: -0.01 } } }")
+                .find("delay[0].shift.delay"),
+            std::string::npos);
+  EXPECT_NE(error_of("structure { shear_building { storey_mass: 1 storey_stiffness: 1 } } "
+                     "substructuring { experimental_fraction: 0.5 experimental_storeys: 1 }")
+                .find("not both"),
+            std::string::npos);
+  EXPECT_NE(error_of("motion { path: \"x\" }").find("structure is missing"), std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } cases { name: \"a\" delay { } }")
+                .find("has no kind"),
+            std::string::npos);
+}
+
+TEST(StudyTest, MissingMotionFileIsNamed) {
+  const config::Study study =
+      parse_study("structure { sdof { period: 0.5 } } motion { path: \"nowhere.AT2\" }", "t");
+  try {
+    prepare_study(study, "/tmp");
+    FAIL();
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("nowhere.AT2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(StudyTest, SdofFromPeriodAndStiffnessDerivesMass) {
+  config::Structure s;
+  s.mutable_sdof()->set_period(0.5);
+  s.mutable_sdof()->set_stiffness(2e6);
+  s.mutable_damping()->set_modal_zeta(0.05);
+  const StructuralModel model = make_structure(s);
+  EXPECT_NEAR(model.mass(0, 0), 2e6 * 0.25 / (4 * M_PI * M_PI), 1e-9);
+  const StructuralModel unit = make_structure([] {
+    config::Structure u;
+    u.mutable_sdof()->set_period(0.5);
+    u.mutable_damping()->set_modal_zeta(0.05);
+    return u;
+  }());
+  EXPECT_EQ(unit.damping(0, 0), make_sdof(0.5, 0.05).damping(0, 0));
+}
+
+TEST(StudyTest, EveryDelayKindBuildsAStage) {
+  const config::Study study =
+      parse_study(R"pb(
+                    structure { sdof { period: 0.5 } }
+                    cases {
+                      name: "all"
+                      delay { shift { delay: 0.01 } }
+                      delay { eq1 { delay: 0.01 } }
+                      delay {
+                        eq1_lag { delay: 0.01 }
+                        amplitude_gain: 0.9
+                      }
+                      delay { first_order { time_constant: 0.01 } }
+                      delay { benchmark {} }
+                      delay {
+                        transfer_function {
+                          numerator: 1
+                          denominator: [ 0.01, 1 ]
+                        }
+                      }
+                      delay { jitter { mean_delay: 0.01 std_dev: 0.001 seed: 7 } }
+                    })pb",
+                  "all");
+  const DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
+  EXPECT_FALSE(chain.empty());
+  EXPECT_NE(chain.describe().find("shift"), std::string::npos) << chain.describe();
+}
+
+}  // namespace
+}  // namespace rths::core
+
+namespace rths::core {
+namespace {
+
+TEST(StudyTest, ThreeStoreyBuildingConfigRunsEveryCase) {
+  const config::Study study = load_study(kConfigs / "three_storey_building.textproto");
+  const PreparedStudy prepared = prepare_study(study, kConfigs);
+  EXPECT_EQ(prepared.base.model.dofs(), 3);
+  EXPECT_EQ(prepared.base.partition.actuator_storeys, (std::vector<int>{0}));
+  EXPECT_NEAR(prepared.motion.duration(), 15.0, 1e-9);
+  double reference_peak = 0;
+  for (const config::Case& c : study.cases()) {
+    const SimulationResult r = simulate(setup_for_case(prepared, c), prepared.motion);
+    EXPECT_FALSE(r.diverged) << c.name();
+    const double peak = r.displacement.col(2).cwiseAbs().maxCoeff();
+    if (c.name() == "reference") reference_peak = peak;
+    EXPECT_GT(peak, 0.0);
+    // The first storey yields: its drift exceeds the yield drift somewhere.
+    EXPECT_GT(r.displacement.col(0).cwiseAbs().maxCoeff(), 0.004) << c.name();
+  }
+  EXPECT_GT(reference_peak, 0.0);
+}
+
+}  // namespace
+}  // namespace rths::core
+
+namespace rths::core {
+namespace {
+
+TEST(StudyBounds, AbsurdValuesAreRefusedNamingTheField) {
+  // zeta = 5 is 500 % of critical: a ratio was meant (0.05).
+  const std::string zeta = error_of("structure { sdof { period: 0.5 } damping { modal_zeta: 5 } }");
+  EXPECT_NE(zeta.find("structure.damping.modal_zeta"), std::string::npos) << zeta;
+  EXPECT_NE(zeta.find("0.05 = 5 %"), std::string::npos) << zeta;
+  // delay: 14 is 14 s: milliseconds were meant.
+  const std::string delay = error_of(
+      "structure { sdof { period: 0.5 } } cases { name: \"a\" delay { shift { delay: 14 } } }");
+  EXPECT_NE(delay.find("delay[0].shift.delay"), std::string::npos) << delay;
+  EXPECT_NE(delay.find("14 ms is 0.014"), std::string::npos) << delay;
+  EXPECT_NE(
+      error_of("structure { sdof { period: 0.5 } } integrator { dt: 2 }").find("integrator.dt"),
+      std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 500 } }").find("structure.sdof.period"),
+            std::string::npos);
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } sweep { delays: [0.01, 12] }")
+                .find("sweep.delays"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("structure { sdof { period: 0.5 } } deployment { limits { max_displacement: -1 } }")
+          .find("deployment.limits"),
+      std::string::npos);
+}
+
+TEST(StudyServo, TheServoRateIsAWholeMultipleOfTheIntegratorRate) {
+  const auto study = [](const std::string& servo) {
+    return parse_study("structure { sdof { period: 0.5 } } " + servo, "t");
+  };
+  EXPECT_EQ(servo_substeps(study(""), 1.0 / 1024), 1);
+  EXPECT_EQ(servo_substeps(study("servo { rate: 4096 }"), 1.0 / 1024), 4);
+  EXPECT_EQ(servo_substeps(study("servo { rate: 1024 }"), 1.0 / 1024), 1);
+  const HybridSetup base = base_setup(
+      study("servo { rate: 4000 } substructuring { experimental_fraction: 0.5 }"), 0.001);
+  EXPECT_EQ(base.servo_substeps, 4);
+  for (const char* bad : {"servo { rate: 3000 }", "servo { rate: 500 }", "servo { rate: 1e6 }"}) {
+    try {
+      servo_substeps(study(bad), 1.0 / 1024);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("servo.rate"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 } } servo { rate: -4096 }").find("servo.rate"),
+            std::string::npos);
+}
+
+TEST(StudyServo, ACaseChainRunsAtTheServoPeriod) {
+  const config::Study study = load_study(kConfigs / "paper_frame.textproto");
+  config::Study fast = study;
+  fast.mutable_servo()->set_rate(4000);
+  const PreparedStudy prepared = prepare_study(fast, kConfigs);
+  EXPECT_EQ(prepared.base.servo_substeps, 4);
+  const HybridSetup lagged = setup_for_case(prepared, fast.cases(1));
+  ASSERT_EQ(lagged.delays.size(), 1u);
+  // 14 ms is 56 servo periods of 0.25 ms: the same lag in seconds.
+  EXPECT_DOUBLE_EQ(lagged.delays[0].nominal_delay(), 0.014);
+}
+
+TEST(StudyBounds, DuplicateCaseNamesAreRefused) {
+  const std::string error = error_of(
+      "structure { sdof { period: 0.5 } } cases { name: \"a\" } cases { name: \"b\" } cases { "
+      "name: \"a\" }");
+  EXPECT_NE(error.find("cases[2] repeats the name 'a'"), std::string::npos) << error;
+}
+
+TEST(StudyBounds, ADelayLongerThanTheRecordIsRefused) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rths_study_long_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "short.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
+  const config::Study study = parse_study(
+      "structure { sdof { period: 0.5 } } motion { path: \"short.txt\" column_units: G } "
+      "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
+      "cases { name: \"late\" delay { shift { delay: 0.2 } } }",
+      "t");
+  try {
+    prepare_study(study, dir);
+    FAIL() << "a 0.2 s delay on a 0.05 s record was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("case 'late'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not shorter than the record"), std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+class MotionUnits : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        std::filesystem::temp_directory_path() / ("rths_motion_units_" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir_);
+    // 0.35 g written in three units.
+    std::ofstream(dir_ / "g.txt") << "0 0\n0.01 0.35\n0.02 0\n";
+    std::ofstream(dir_ / "ms2.txt") << "0 0\n0.01 3.4323275\n0.02 0\n";
+    std::ofstream(dir_ / "cms2.txt") << "0 0\n0.01 343.23275\n0.02 0\n";
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  GroundMotion load(const std::string& text) {
+    config::GroundMotion motion;
+    parse_text_format(text, "t", motion);
+    return load_motion(motion, dir_);
+  }
+  std::string error(const std::string& text) {
+    try {
+      load(text);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(MotionUnits, EveryUnitGivesTheSameRecordInSi) {
+  const double expected = 0.35 * kGravity;
+  EXPECT_NEAR(load("path: \"g.txt\" column_units: G").peak_abs(), expected, 1e-9);
+  EXPECT_NEAR(load("path: \"ms2.txt\" column_units: M_PER_S2").peak_abs(), expected, 1e-6);
+  EXPECT_NEAR(load("path: \"cms2.txt\" column_units: CM_PER_S2").peak_abs(), expected, 1e-6);
+}
+
+TEST_F(MotionUnits, AColumnsFileWithoutUnitsIsRefused) {
+  const std::string e = error("path: \"ms2.txt\"");
+  EXPECT_NE(e.find("column_units"), std::string::npos) << e;
+  EXPECT_NE(e.find("--motion-units"), std::string::npos) << e;
+}
+
+TEST_F(MotionUnits, AnImplausiblePeakNamesTheUnits) {
+  // 343 cm/s^2 read as m/s^2 is 35 g.
+  const std::string e = error("path: \"cms2.txt\" column_units: M_PER_S2");
+  EXPECT_NE(e.find("beyond any recorded earthquake"), std::string::npos) << e;
+}
+
+TEST_F(MotionUnits, AnAt2FileIsInGAndRefusesAnotherUnit) {
+  const std::filesystem::path at2 =
+      kConfigs / "../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  config::GroundMotion motion;
+  motion.set_path(at2.string());
+  EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * kGravity,
+              0.01 * kGravity);  // El Centro #12
+  motion.set_column_units(config::GroundMotion::M_PER_S2);
+  EXPECT_THROW(load_motion(motion, dir_), std::invalid_argument);
+  EXPECT_EQ(units_name(units_from_name("cm/s2")), "cm/s2");
+  EXPECT_THROW(units_from_name("ft/s2"), std::invalid_argument);
+}
+
+// The config's integrator kinds and core's map one to one, both ways (the `sdof` command builds
+// its study through the inverse).
+TEST(StudyTest, EveryIntegratorKindMapsToTheConfigAndBack) {
+  for (int k = config::Integrator::Kind_MIN; k <= config::Integrator::Kind_MAX; ++k) {
+    config::Integrator integrator;
+    integrator.set_kind(static_cast<config::Integrator::Kind>(k));
+    EXPECT_EQ(config_integrator_kind(integrator_kind(integrator)), integrator.kind()) << k;
+  }
+  EXPECT_EQ(integrator_kind(config::Integrator{}), IntegratorKind::kExplicitNewmark);
+}
+
+// Every number of the deployment is checked when the study is parsed, by the range rules.
+TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
+  const std::string base = "structure { sdof { period: 0.5 } } ";
+  const std::string lag = error_of(
+      base +
+      "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR send_lag { one_way_delay: 7 } } }");
+  EXPECT_NE(lag.find("deployment.nodes[0].send_lag.one_way_delay = 7 s is outside [0, 1] s"),
+            std::string::npos)
+      << lag;
+  EXPECT_NE(lag.find("allow_long_lag"), std::string::npos) << lag;
+  EXPECT_EQ(
+      error_of(base + "allow_long_lag: true deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR "
+                      "send_lag { one_way_delay: 7 } } }"),
+      "");
+  EXPECT_NE(
+      error_of(base +
+               "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { jitter: 5 } } }")
+          .find("receive_lag.jitter = 5 s"),
+      std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { max_missed_answers: -3 }")
+                .find("deployment.max_missed_answers = -3"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { min_answer_fraction: 1.5 }")
+                .find("deployment.min_answer_fraction"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { pin_loop: true loop_cpu: 99999 }")
+                .find("deployment.loop_cpu = 99999"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of(base + "cases { name: \"a\" delay { shift { delay: 2 } } }").find("allow_long_lag"),
+      std::string::npos);
+  EXPECT_EQ(
+      error_of(base + "allow_long_lag: true cases { name: \"a\" delay { shift { delay: 2 } } }"),
+      "");
+  EXPECT_NE(error_of(base + "integrator { dt: 1e-9 }").find("integrator.dt"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rths::core

@@ -1,0 +1,77 @@
+// The one reader of plain-text numeric columns (ground-motion columns and delay traces use it).
+#include "study/text_columns.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace rths::core {
+namespace {
+
+std::filesystem::path write(const std::string& name, const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string error_of(const std::string& text, bool title_allowed) {
+  const auto path = write("rths_text_columns_bad.txt", text);
+  try {
+    read_text_columns(path, "test file", title_allowed);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+TEST(TextColumns, SpacesTabsCommasCommentsAndCrlfAreOneFormat) {
+  const auto path = write("rths_text_columns.txt",
+                          "# recorded 2026\r\n\r\n0, 1e-3\t# first\r\n0.5  -.25\r\n1,2\r\n");
+  const TextColumns t = read_text_columns(path, "test file");
+  ASSERT_EQ(t.rows.size(), 3u);
+  EXPECT_TRUE(t.title.empty());
+  EXPECT_EQ(t.rows[0].line, 3);
+  EXPECT_EQ(t.rows[0].values, (std::vector<double>{0.0, 1e-3}));
+  EXPECT_EQ(t.rows[1].values, (std::vector<double>{0.5, -0.25}));
+  EXPECT_EQ(t.rows[2].line, 5);
+  EXPECT_EQ(t.rows[2].values, (std::vector<double>{1.0, 2.0}));
+}
+
+TEST(TextColumns, ATitleLineOnlyWhereAllowedAndOnlyFirst) {
+  const auto path = write("rths_text_columns_title.txt", "time,accel\n0 1\n");
+  const TextColumns t = read_text_columns(path, "test file", /*title_allowed=*/true);
+  EXPECT_EQ(t.title, (std::vector<std::string>{"time", "accel"}));
+  ASSERT_EQ(t.rows.size(), 1u);
+  const std::string refused = error_of("time,accel\n0 1\n", false);
+  EXPECT_NE(refused.find(":1: 'time' is not a finite number"), std::string::npos) << refused;
+  const std::string late = error_of("time,accel\n0 1\n1 x\n", true);
+  EXPECT_NE(late.find(":3: 'x' is not a finite number"), std::string::npos) << late;
+}
+
+TEST(TextColumns, TheNumberRuleIsWholeAndFinite) {
+  EXPECT_EQ(parse_finite("12"), 12.0);
+  EXPECT_EQ(parse_finite("-.5"), -0.5);
+  EXPECT_EQ(parse_finite("1e-3"), 1e-3);
+  for (const char* bad : {"", "1.2.3", "nan", "inf", "-inf", "3m", "1e999", " 1"})
+    EXPECT_FALSE(parse_finite(bad).has_value()) << bad;
+  const std::string text = error_of("0 1\n0 nan\n", false);
+  EXPECT_NE(text.find("rths_text_columns_bad.txt:2: 'nan'"), std::string::npos) << text;
+}
+
+TEST(TextColumns, AFileThatCannotBeOpenedIsNamedWithWhatItWasFor) {
+  try {
+    read_text_columns("/nonexistent/x.txt", "delay trace");
+    ADD_FAILURE();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/x.txt: cannot open delay trace");
+  }
+}
+
+TEST(TextColumns, NumbersInMessagesAreShort) {
+  EXPECT_EQ(format_number(0.014), "0.014");
+  EXPECT_EQ(format_number(1e-5), "1e-05");
+  EXPECT_EQ(format_number(0.0), "0");
+}
+
+}  // namespace
+}  // namespace rths::core
