@@ -48,8 +48,11 @@
 // Shares: each fitted effect's held-out RMS removed over the sum of them.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "identify/run/clock_offset.h"
 
 namespace rths::identify {
 
@@ -76,7 +79,8 @@ struct LinkAnswers {
 };
 
 struct NetworkEffect {
-  std::string name;    // "drifting delay", "periodic spikes", "lost answers", "injection"
+  std::string name;    // "drifting delay", "periodic spikes", "lost answers", "injection",
+                       // "clock offset"
   std::string detail;  // what was measured, with units
   double heldout_before = 0.0, heldout_after = 0.0;  // s, RMS of x about the model (fitted ones)
   double share = 0.0;  // of the held-out RMS the fitted effects removed
@@ -89,6 +93,9 @@ struct NetworkPath {
   double bias = 0.0, jitter = 0.0, drift_range = 0.0, spike_period = 0.0;  // s
   double spike_height = 0.0;   // s, median excess of the spikes above the bias
   double injected_mean = 0.0;  // s
+  // The two hosts' clock offset from the answers' one-way stamps (clock_offset.h); absent when
+  // the record has too few. Named among `effects` as "clock offset" when it matters.
+  std::optional<ClockOffset> clock;
   DeclaredLink declared;
   double heldout_declared = 0.0;       // s, RMS of x about the bias over the held-out answers
   std::vector<NetworkEffect> effects;  // the undeclared effects named, fitted ones first

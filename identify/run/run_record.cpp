@@ -1,10 +1,13 @@
 #include "identify/run/run_record.h"
 
+#include "identify/fit/effect_parameters.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
+#include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
 #include "runtime/record/measurements.h"
 #include "runtime/record/record.h"
@@ -83,6 +86,22 @@ DeclaredLink declared_link(const config::Deployment& deployment, int node_id) {
   return out;
 }
 
+// The clock offset of a link's hosts from its one-way stamps, named among the link's effects
+// when it matters (clock_offset.h). The stamps cover the whole record (a diverged run's answers
+// tell the clocks as well as the others).
+void add_clock_offset(const runtime::LinkSeries& series, const config::Deployment& deployment,
+                      NetworkPath& path) {
+  double injected_down = 0.0, injected_up = 0.0;
+  for (const auto& node : deployment.nodes()) {
+    if (node.id() != path.node_id) continue;
+    injected_down = node.receive_lag().one_way_delay();
+    injected_up = node.send_lag().one_way_delay();
+  }
+  path.clock = clock_offset(series.one_way_down, series.one_way_up, injected_down, injected_up);
+  if (path.clock && path.clock->named)
+    path.effects.push_back({"clock offset", path.clock->detail, 0.0, 0.0, 0.0});
+}
+
 std::vector<NetworkPath> identify_links(const std::filesystem::path& record,
                                         const runtime::RunHeader& header,
                                         const runtime::RunMeasurements& m, double until) {
@@ -107,6 +126,8 @@ std::vector<NetworkPath> identify_links(const std::filesystem::path& record,
     }
     out.push_back(identify_network_path(answers, declared_link(header.study().deployment(), id),
                                         header.dt()));
+    if (found != m.links.end())
+      add_clock_offset(found->second, header.study().deployment(), out.back());
   }
   return out;
 }
@@ -265,6 +286,11 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
             std::to_string(kDefaultMinSamples) + " are needed");
   }
   out.duration = m.steps.time[out.steps - 1] - m.steps.time.front();
+  if (const config::Deployment& d = out.study.deployment();
+      d.clock() == config::Deployment::REAL_TIME)
+    out.platform = runtime::diagnose_deadlines(
+        contents.steps(), header.dt(),
+        static_cast<std::uint64_t>(runtime::max_missed_answers(d, header.dt())));
   out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
   for (int a = 0; a < header.actuators(); ++a) {
     out.actuators.push_back(identify_actuator(record, header, m, out.steps, a, options));
@@ -317,6 +343,10 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
           << ")";
     }
     out << "\n";
+    const SignalScales scales = signal_scales(identified_signals(a.id, c.channel));
+    for (const auto& step : c.steps)
+      for (const ParameterEstimate& p : effect_parameters(c.final_fit, step.effect, scales))
+        out << "    " << effect_name(step.effect) << ": " << p.describe() << "\n";
   }
   out << "  undeclared effects: ";
   for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
@@ -375,6 +405,10 @@ std::string run_record_text(const RunIdentification& run) {
   out << "record " << run.record << ": case '" << run.case_name << "', " << run.clock << ", "
       << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
   out << "inputs: " << run.inputs << "\n";
+  if (run.platform && run.platform->overruns > 0)
+    out << "platform: " << run.platform->overruns << " of " << run.platform->steps
+        << " steps overran their deadline (" << run.platform->cause
+        << "); the record: " << run.platform->usability << "\n";
   for (const auto& l : run.links) link_text(l, out);
   for (const auto& a : run.actuators) actuator_text(a, out);
   if (run.residual) residual_text(*run.residual, out);
@@ -392,29 +426,43 @@ nlohmann::json run_record_json(const RunIdentification& run) {
                          {"heldout_rms_after_s", e.heldout_after},
                          {"share", e.share}});
     }
-    links.push_back({{"node_id", l.node_id},
-                     {"answers", l.answers},
-                     {"bias_s", l.bias},
-                     {"jitter_s", l.jitter},
-                     {"drift_range_s", l.drift_range},
-                     {"spikes", l.spikes},
-                     {"spike_period_s", l.spike_period},
-                     {"lost", l.lost},
-                     {"longest_burst", l.longest_burst},
-                     {"superseded", l.superseded},
-                     {"late", l.late},
-                     {"injected_mean_s", l.injected_mean},
-                     {"declared_round_trip_s", l.declared.round_trip},
-                     {"heldout_rms_declared_s", l.heldout_declared},
-                     {"undeclared", effects}});
+    links.push_back(
+        {{"node_id", l.node_id},
+         {"answers", l.answers},
+         {"bias_s", l.bias},
+         {"jitter_s", l.jitter},
+         {"drift_range_s", l.drift_range},
+         {"spikes", l.spikes},
+         {"spike_period_s", l.spike_period},
+         {"lost", l.lost},
+         {"longest_burst", l.longest_burst},
+         {"superseded", l.superseded},
+         {"late", l.late},
+         {"injected_mean_s", l.injected_mean},
+         {"declared_round_trip_s", l.declared.round_trip},
+         {"clock_offset_s", l.clock ? nlohmann::json(l.clock->offset) : nlohmann::json()},
+         {"heldout_rms_declared_s", l.heldout_declared},
+         {"undeclared", effects}});
   }
   nlohmann::json actuators = nlohmann::json::array();
   for (const auto& a : run.actuators) {
     nlohmann::json channels = nlohmann::json::array();
     for (const auto& c : a.id.channels) {
+      const SignalScales scales = signal_scales(identified_signals(a.id, c.channel));
+      nlohmann::json effects = nlohmann::json::array();
+      for (const auto& step : c.steps) {
+        nlohmann::json parameters = nlohmann::json::array();
+        for (const ParameterEstimate& p : effect_parameters(c.final_fit, step.effect, scales))
+          parameters.push_back(
+              {{"name", p.name}, {"value", p.value}, {"std_error", p.std_error}, {"unit", p.unit}});
+        effects.push_back({{"effect", effect_name(step.effect)},
+                           {"share", step.own_share},
+                           {"parameters", parameters}});
+      }
       channels.push_back({{"channel", channel_name(c.channel)},
                           {"declared_heldout_error", c.declared_fit.heldout_error},
-                          {"identified_heldout_error", c.final_fit.heldout_error}});
+                          {"identified_heldout_error", c.final_fit.heldout_error},
+                          {"effects", effects}});
     }
     actuators.push_back({{"actuator", a.actuator},
                          {"declared", a.declared},
@@ -430,6 +478,15 @@ nlohmann::json run_record_json(const RunIdentification& run) {
       {"held", run.held},           {"inputs", run.inputs},  {"steps", run.steps},
       {"duration_s", run.duration}, {"links", links},        {"actuators", actuators}};
   if (run.residual) out["residual"] = residual_json(*run.residual);
+  if (const auto& p = run.platform)
+    out["platform"] = {
+        {"steps", p->steps},
+        {"overruns", p->overruns},
+        {"overrun_share", p->overrun_share()},
+        {"dominated_by_overruns", p->overrun_share() > runtime::DeadlineDiagnosis::kDominatedShare},
+        {"worst_streak", p->worst_streak},
+        {"cause", p->cause},
+        {"usability", p->usability}};
   return out;
 }
 

@@ -31,6 +31,7 @@
 #include "identify/run/actuator_path.h"
 #include "identify/run/network_path.h"
 #include "identify/run/run_residual.h"
+#include "runtime/record/deadline_diagnosis.h"
 
 namespace rths::identify {
 
@@ -51,6 +52,9 @@ struct RunIdentification {
   std::string held;       // how much the record held: complete, truncated, diverged
   std::string inputs;     // where the re-run's inputs came from (core::inputs_source)
   config::Study study;    // the run's own config (the record header's)
+  // Real time: why steps missed their deadlines and what the record is worth for it (said first:
+  // a response dominated by overruns is the platform's as much as the rig's); absent in lockstep.
+  std::optional<runtime::DeadlineDiagnosis> platform;
   std::vector<NetworkPath> links;
   std::vector<ActuatorPath> actuators;
   // The study re-run with the declared and the identified actuators (run_residual.h); absent

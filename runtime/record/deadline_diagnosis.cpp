@@ -33,7 +33,40 @@ std::vector<std::string> advice_for(const DeadlineDiagnosis& d) {
       "a node whose link injects a long lag is not waited for; check the slowest node's log"};
 }
 
+std::string percent(double share) {
+  std::ostringstream out;
+  out << std::setprecision(3) << 100.0 * share << " %";
+  return out.str();
+}
+
+// The record's worth, first by how many steps overran, then by the longest run of them.
+std::string usability_of(const DeadlineDiagnosis& d, std::uint64_t streak_window) {
+  const double share = d.overrun_share();
+  if (share > DeadlineDiagnosis::kDominatedShare)
+    return "dominated by overruns: " + percent(share) +
+           " of the steps overran, so the response shows the platform as much as the rig; the "
+           "lag measurements stand, the response and what is identified from it do not stand for "
+           "a real-time test";
+  if (d.worst_streak > streak_window)
+    return "use with care: " + std::to_string(d.worst_streak) +
+           " steps in a row overran, so the integrator used stale forces that long; "
+           "the lag measurements stand, the response is not a real-time test's";
+  if (share > DeadlineDiagnosis::kUsableShare)
+    return "use with care: " + percent(share) + " of the steps overran (isolated, worst streak " +
+           std::to_string(d.worst_streak) +
+           "); every force is tied to the step it answers, but the response carries that many "
+           "late steps";
+  return "usable as recorded: the overruns were isolated (worst streak " +
+         std::to_string(d.worst_streak) + " steps, within the fail-safe's " +
+         std::to_string(streak_window) + "), " + percent(share) +
+         " of the steps, every force is tied to the step it answers and the late steps are marked";
+}
+
 }  // namespace
+
+double DeadlineDiagnosis::overrun_share() const {
+  return steps ? static_cast<double>(overruns) / static_cast<double>(steps) : 0.0;
+}
 
 bool needs_deadline_diagnosis(const std::string& status, std::uint64_t overruns) {
   return status.find("deadline misses") != std::string::npos ||
@@ -69,15 +102,7 @@ DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps
   }
   d.cause = d.stall_overruns >= d.work_overruns ? "platform stalls" : "the loop's own work";
   d.advice = advice_for(d);
-  d.usability =
-      d.worst_streak <= streak_window
-          ? "usable as recorded: the overruns were isolated (worst streak " +
-                std::to_string(d.worst_streak) + " steps, within the fail-safe's " +
-                std::to_string(streak_window) +
-                "), every force is tied to the step it answers and the late steps are marked"
-          : "use with care: " + std::to_string(d.worst_streak) +
-                " steps in a row overran, so the integrator used stale forces that long; "
-                "the lag measurements stand, the response is not a real-time test's";
+  d.usability = usability_of(d, streak_window);
   return d;
 }
 

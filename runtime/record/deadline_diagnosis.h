@@ -22,6 +22,9 @@
 namespace rths::runtime {
 
 struct DeadlineDiagnosis {
+  // A record is usable as recorded only when at most kUsableShare of its steps overran (and no
+  // streak outlasted the fail-safe's window); past kDominatedShare the overruns dominate it.
+  static constexpr double kUsableShare = 0.1, kDominatedShare = 0.5;
   std::uint64_t steps = 0, overruns = 0;
   std::uint64_t work_overruns = 0;                     // step_wall > dt
   std::uint64_t stall_overruns = 0;                    // the rest
@@ -32,6 +35,7 @@ struct DeadlineDiagnosis {
   std::string cause;                // "platform stalls", "the loop's own work", "none"
   std::vector<std::string> advice;  // settings that would help, most useful first
   std::string usability;            // what the record is still good for
+  double overrun_share() const;     // overruns / steps, 0 without steps
   // Several lines for a summary: the cause with its figures, the advice, the usability.
   std::string describe() const;
 };

@@ -184,6 +184,16 @@ TEST_F(DdsRunRecord, ACleanRealTimeRecordLosesNoAnswersAndNamesNothingOnItsLinks
       actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(run.clock, "real_time") << text;
+  // The platform's part is stated whatever this busy machine did: a real-time record is judged
+  // by its overruns, and any it had lead the report.
+  ASSERT_TRUE(run.platform.has_value()) << text;
+  EXPECT_GT(run.platform->steps, 0u);
+  if (run.platform->overruns > 0)
+    EXPECT_NE(text.find("\nplatform: " + std::to_string(run.platform->overruns) + " of "),
+              std::string::npos)
+        << text;
+  EXPECT_EQ(run_record_json(run)["platform"]["overruns"].get<std::uint64_t>(),
+            run.platform->overruns);
   for (const NetworkPath& link : run.links) {
     std::printf("real time, clean: node %d lost %zu, superseded %zu, late %zu of %zu answers\n",
                 link.node_id, link.lost, link.superseded, link.late, link.answers);

@@ -77,5 +77,30 @@ TEST(DeadlineDiagnosis, AFailSafeStopAfterOverrunsIsDiagnosedToo) {
   EXPECT_FALSE(needs_deadline_diagnosis("completed", 3));
 }
 
+// Isolated overruns are still no real-time test when they are most of the steps: a record with
+// 59 % of its steps overrun, never two in a row, is dominated by them; 20 % is to be used with
+// care, and 3 % is usable, its share stated.
+TEST(DeadlineDiagnosis, ARecordIsJudgedByItsShareOfOverrunsAsWellAsByItsStreaks) {
+  const auto judged = [](std::size_t every, std::size_t of) {
+    auto s = steps(1000);
+    for (std::size_t k = 0; k < s.size(); ++k)
+      if (k % of < every && k % 2 == 0) overrun(s[k], 0.1e-3, 2e-3);
+    return diagnose_deadlines(pointers(s), kDt, 10);
+  };
+  const DeadlineDiagnosis dominated = judged(1, 1);  // every other step: 50 %
+  EXPECT_NEAR(dominated.overrun_share(), 0.5, 1e-12);
+  EXPECT_EQ(dominated.worst_streak, 1u);
+  EXPECT_EQ(dominated.usability.rfind("use with care: 50 %", 0), 0u) << dominated.usability;
+  auto s = steps(1000);
+  for (std::size_t k = 0; k < 590; ++k) overrun(s[k * 1000 / 590], 0.1e-3, 2e-3);
+  const DeadlineDiagnosis most = diagnose_deadlines(pointers(s), kDt, 10);
+  EXPECT_NEAR(most.overrun_share(), 0.59, 1e-12);
+  EXPECT_LE(most.worst_streak, 2u);
+  EXPECT_EQ(most.usability.rfind("dominated by overruns: 59 %", 0), 0u) << most.usability;
+  const DeadlineDiagnosis few = judged(1, 40);  // one step in 40: 2.5 %
+  EXPECT_EQ(few.usability.rfind("usable as recorded", 0), 0u) << few.usability;
+  EXPECT_NE(few.usability.find("2.5 % of the steps"), std::string::npos) << few.usability;
+}
+
 }  // namespace
 }  // namespace rths::runtime
