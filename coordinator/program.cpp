@@ -16,6 +16,7 @@
 #include "runtime/plan.h"
 #include "security/check.h"
 #include "security/pki.h"
+#include "security/run_secret.h"
 #include "transport/dds_endpoint.h"
 #include "view/context.h"
 #include "view/feed.h"
@@ -33,6 +34,17 @@ std::string reject_text(const runtime::Counters& c) {
          std::to_string(c.not_entitled()) + ", out-of-range " + std::to_string(c.out_of_range());
 }
 
+// Names the newest message dropped for want of a MAC, when one was.
+std::string unauthenticated_text(const RunOutcome& o) {
+  std::string text = ", unauthenticated ";
+  text += std::to_string(o.unauthenticated.count);
+  if (o.unauthenticated.count == 0) return text;
+  text += " (dropped unread; newest: ";
+  text += o.unauthenticated.last;
+  text += ")";
+  return text;
+}
+
 }  // namespace
 
 std::string summary_text(const RunOutcome& o) {
@@ -43,8 +55,9 @@ std::string summary_text(const RunOutcome& o) {
       // The record holds the initial state and one row per commanded step, as `rths run` counts.
       << "\nsteps: " << c.steps() + 1 << " recorded (" << c.steps() << " commanded) in "
       << o.wall_seconds << " s"
-      << "\nrejected: " << reject_text(c) << "\noverruns: " << c.overruns() << " (worst streak "
-      << c.worst_overrun_streak() << "), max lateness " << o.max_lateness * 1e3
+      << "\nrejected: " << reject_text(c) << unauthenticated_text(o)
+      << "\noverruns: " << c.overruns() << " (worst streak " << c.worst_overrun_streak()
+      << "), max lateness " << o.max_lateness * 1e3
       << " ms"
       // In real time a link whose round trip is longer than a step answers later by design; the
       // count says how often the integrator used an older answer, not that anything failed.
@@ -133,6 +146,7 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
 
 struct ProgramArgs {
   std::string config_path, case_name, run_id, record, security_dir;
+  security::SecretChoice secret;
   int domain = -1;
   PlatformArgs platform;
   std::string view_address;
@@ -157,6 +171,12 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
   app.add_option("--security", a.security_dir,
                  "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
                  "default: deployment.security_dir");
+  app.add_option("--secret-file", a.secret.file,
+                 "the run secret (`rths pki secret FILE`, mode 0600); default: $" +
+                     std::string(security::kSecretFileEnv) + " or $" + security::kSecretEnv);
+  app.add_flag("--insecure", a.secret.insecure,
+               "run without a run secret or DDS Security: any participant on the domain can then "
+               "speak as a node until it is pinned");
   app.add_option(
       "--view", a.view_address,
       "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
@@ -200,6 +220,8 @@ std::unique_ptr<transport::DdsEndpoint> open_endpoint(const config::Study& study
   if (!a.security_dir.empty())  // refused here (exit 2), before the participant exists
     options.participant_properties = security::participant_properties(
         security::check_node_security(a.security_dir, security::kCoordinatorNodeId));
+  a.secret.dds_security = !a.security_dir.empty();
+  options.run_secret = security::resolve_run_secret(a.secret);
   return std::make_unique<transport::DdsEndpoint>(options);
 }
 
@@ -228,6 +250,8 @@ void start_session(ProgramArgs& a, Session& session) {
     co.record_observer = session.feed.get();
     co.stop_request = &session.stop_request;
   }
+  transport::DdsEndpoint* endpoint = session.endpoint.get();
+  co.unauthenticated = [endpoint] { return endpoint->unauthenticated(); };
   session.coordinator = std::make_unique<Coordinator>(std::move(prepared), *session.endpoint, co);
 }
 

@@ -2,6 +2,9 @@
 // The coordinator program:
 //   rths-coordinator --config STUDY [--case NAME] [--run-id ID] [--record FILE] [--domain D]
 //                    [--security DIR/node_0]   (DDS Security; bad documents: exit 2, nothing sent)
+//                    [--secret-file FILE | --insecure]  (the run secret, security/run_secret.h:
+//                    else $RTHS_RUN_SECRET_FILE or $RTHS_RUN_SECRET; with none and neither DDS
+//                    Security nor --insecure: exit 2 naming why, before DDS starts)
 //                    [--platform FILE | --platform-seconds S] [--accept-platform]
 // A real-time run first checks the platform (platform/check.h: measured for S s, default 3, or
 // read from FILE), refuses with exit 3 naming the numbers and the fix when the deployment's

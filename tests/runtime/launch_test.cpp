@@ -1,11 +1,13 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74 and 18).
+// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18 and 165).
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdio>
+#include <regex>
 #include <sstream>
+#include <thread>
 
 #include "test_support.h"
 
@@ -55,6 +57,42 @@ TEST(Launch, RunsEveryCaseAndWritesRecordsResultsAndASummary) {
   EXPECT_TRUE(std::filesystem::exists(out / "results.csv"));
   EXPECT_TRUE(std::filesystem::exists(out / "summary.txt"));
   EXPECT_TRUE(std::filesystem::exists(out / "logs" / "reference" / "coordinator.log"));
+}
+
+// A stranger tries to take node 1's place from its announcement on (tests/support's rths_rogue,
+// takeover: ANNOUNCE and READY as node 1, then an answer to every command) while `rths launch`
+// runs a case with a delay stage. launch's run secret authenticates every message, so the
+// stranger's are dropped unread: the run completes equal to the in-process run, and the secret
+// appears in no log.
+TEST(Launch, AStrangersTakeoverIsDroppedAndTheSecretIsInNoLog) {
+  runtime::ensure_dds_config();  // the stranger on the loopback DDS the launched processes use
+  const auto dir = test::scratch_dir("launch_takeover");
+  // Long enough (about a second of lockstep) for the stranger to learn the run id and attack.
+  const auto config =
+      test::write_config(dir, test::paper_frame_study(10, "deployment { domain_id: 165 }"));
+  const auto out = dir / "out";
+  runtime::ChildProcess rogue(
+      test::program("rths_rogue", "tests/support"),
+      {"--domain", "165", "--seconds", "60", "--mode", "takeover", "--every", "1"},
+      dir / "rogue.log");
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // discovered before the nodes announce
+  const Output o = run(kRths + " launch " + config.string() + " --case lag_shift_14ms " +
+                       "--no-plots --bin-dir " + RTHS_BINARY_DIR + " --out " + out.string());
+  rogue.terminate();
+  const std::string rogue_log = test::read_file(dir / "rogue.log");
+  ASSERT_EQ(o.code, 0) << o.out << rogue_log;
+  EXPECT_NE(rogue_log.find("ANNOUNCE + READY as node 1: "), std::string::npos) << rogue_log;
+  const auto record = runtime::read_record(out / "lag_shift_14ms.rthsrec");
+  ASSERT_NE(record.footer(), nullptr);
+  EXPECT_EQ(record.footer()->status(), "completed");
+  test::expect_record_equals(record,
+                             test::reference_result(test::read_file(config), "lag_shift_14ms"));
+  const std::string log = test::read_file(out / "logs" / "lag_shift_14ms" / "coordinator.log");
+  EXPECT_NE(log.find("dropped unread; newest: kind "), std::string::npos) << log;
+  const std::regex secret("[0-9a-f]{64}");
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(out / "logs"))
+    if (entry.is_regular_file())
+      EXPECT_FALSE(std::regex_search(test::read_file(entry.path()), secret)) << entry.path();
 }
 
 std::vector<std::string> header_of(const std::filesystem::path& csv) {

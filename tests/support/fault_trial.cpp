@@ -11,6 +11,7 @@
 
 #include "runtime/process.h"
 #include "runtime/record.h"
+#include "security/run_secret.h"
 #include "transport/transport.h"
 
 namespace rths::test {
@@ -72,11 +73,14 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
       << spec.deployment_extra << " }\n";
   const auto record = spec.dir / "run.rthsrec";
   const std::string run_id = "fault-trial-" + std::to_string(spec.domain);
+  // Every process gets the run secret in its environment, as `rths launch` hands it down.
+  runtime::ChildOptions trusted;
+  trusted.environment = {{security::kSecretEnv, security::generate_run_secret()}};
   const auto node = [&](const std::string& program, const std::string& subdir, int id) {
     return runtime::ChildProcess(spec.binary_dir / subdir / program,
                                  {"--node-id", std::to_string(id), "--domain",
                                   std::to_string(spec.domain), "--run-id", run_id},
-                                 spec.dir / ("node_" + std::to_string(id) + ".log"));
+                                 spec.dir / ("node_" + std::to_string(id) + ".log"), trusted);
   };
   runtime::ChildProcess substructure = node("rths-substructure-node", "substructure_nodes", 1);
   runtime::ChildProcess emulator = node("rths-actuator-emulator", "actuator_emulator", 2);
@@ -86,7 +90,7 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   coordinator_args.insert(coordinator_args.end(), spec.coordinator_extra.begin(),
                           spec.coordinator_extra.end());
   runtime::ChildProcess coordinator(spec.binary_dir / "coordinator" / "rths-coordinator",
-                                    coordinator_args, spec.dir / "coordinator.log");
+                                    coordinator_args, spec.dir / "coordinator.log", trusted);
   runtime::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator    ? coordinator
                                   : spec.victim == FaultVictim::kSubstructure ? substructure
                                                                               : emulator;
