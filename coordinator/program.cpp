@@ -135,9 +135,11 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
   // The prediction runs the case in process here, before the run starts (never on its loop).
   view::describe_run(*feed, prepared, case_name);
   auto server = std::make_unique<view::ViewServer>(*feed, options);
+  // A token handed down by the launcher was printed there: this output may be a log file.
+  const bool token_made_here = !options.token.empty() && !(given && *given);
   std::cout << "rths-coordinator: live view at " << server->url()
             << (allow_stop ? " (stop button on)" : "")
-            << (options.token.empty() ? "" : "; stop token " + options.token) << std::endl;
+            << (token_made_here ? "; stop token " + options.token : std::string()) << std::endl;
   if (!options.address.loopback())
     std::cout << "rths-coordinator: the view listens beyond loopback: anyone who reaches "
               << server->url() << " sees the run" << std::endl;

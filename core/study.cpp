@@ -1,6 +1,7 @@
 #include "core/study.h"
 
 #include "core/compensation.h"
+#include "core/known_enums.h"
 #include "core/ranges.h"
 #include "core/structure_config.h"
 #include "core/text_columns.h"
@@ -229,6 +230,7 @@ void validate_link_lag(const config::LinkLag& lag, const std::string& where, boo
 }
 
 void validate_study(const config::Study& study, const std::string& source) {
+  require_known_enums(study, source);  // before anything switches over one
   require(study.has_structure(), source, "structure is missing");
   validate_structure(study.structure(), source);
   require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
@@ -496,7 +498,11 @@ constexpr std::pair<config::Integrator::Kind, IntegratorKind> kIntegratorKinds[]
 IntegratorKind integrator_kind(const config::Integrator& integrator) {
   for (const auto& [config_kind, kind] : kIntegratorKinds)
     if (config_kind == integrator.kind()) return kind;
-  return IntegratorKind::kExplicitNewmark;
+  // Never a default for a value nobody chose (a study is checked at load; this is for the rest).
+  std::string why = "integrator.kind ";
+  why += std::to_string(integrator.kind());
+  why += " is not a known integrator";
+  throw std::invalid_argument(why);
 }
 
 config::Integrator::Kind config_integrator_kind(IntegratorKind kind) {
