@@ -4,11 +4,14 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <regex>
 #include <sstream>
 #include <thread>
 
+#include "runtime/schema.h"
 #include "test_support.h"
 
 namespace rths {
@@ -274,6 +277,57 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   EXPECT_EQ(j["rows"].get<long>(), steps);  // only the footer was cut
 
   EXPECT_EQ(run(kRths + " export /nonexistent.rthsrec --csv " + csv.string()).code, 2);
+
+  // Cut exactly where the footer began: no entry is cut, and still it reads as truncated.
+  const auto& offsets = launched.record.offsets;
+  std::filesystem::resize_file(record, offsets.back());
+  o = run(kRths + " export " + record.string() + " --csv " + csv.string() + " --json");
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_TRUE(nlohmann::json::parse(o.out)["truncated"].get<bool>()) << o.out;
+}
+
+// Records whose checksums hold but whose meaning does not: each problem named with its entry,
+// exit 1; a header that cannot size a table writes nothing (never bad_alloc).
+TEST(Export, NamesImplausibleEntriesAndExits1) {
+  const auto dir = test::scratch_dir("export_implausible");
+  const auto write = [&dir](const std::string& name, int schema, int dofs, double u) {
+    std::string bytes(runtime::record_preamble());
+    runtime::RecordEntry entry;
+    entry.mutable_header()->set_schema_version(static_cast<std::uint32_t>(schema));
+    entry.mutable_header()->set_dofs(dofs);
+    runtime::append_record_frame(entry, bytes);
+    for (int k : {0, 1, 1}) {
+      entry.Clear();
+      entry.mutable_step()->set_step(k);
+      entry.mutable_step()->add_displacement(k == 1 ? u : 0.0);
+      runtime::append_record_frame(entry, bytes);
+    }
+    entry.Clear();
+    entry.mutable_footer()->set_status("completed");
+    runtime::append_record_frame(entry, bytes);
+    std::ofstream(dir / name, std::ios::binary) << bytes;
+    return dir / name;
+  };
+  const auto csv = (dir / "out.csv").string();
+  const Output nonsense =
+      run(kRths + " export " + write("nonsense.rthsrec", 999, 1, std::nan("")).string() +
+          " --csv " + csv + " --json");
+  EXPECT_EQ(nonsense.code, 1) << nonsense.out;
+  const auto j = nlohmann::json::parse(nonsense.out);
+  const std::string problems = j["problems"].dump();
+  EXPECT_NE(problems.find("entry 0 (header): schema version 999"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("entry 2 (step 1): displacement[0] is not finite"), std::string::npos)
+      << problems;
+  EXPECT_NE(problems.find("entry 3 (step 1): comes after step 1 (a duplicate)"), std::string::npos)
+      << problems;
+  for (int dofs : {-1, 100000}) {
+    std::filesystem::remove(csv);
+    const Output huge =
+        run(kRths + " export " + write("dofs.rthsrec", runtime::kSchemaVersion, dofs, 0).string() +
+            " --csv " + csv);
+    EXPECT_EQ(huge.code, 1) << dofs;
+    EXPECT_FALSE(std::filesystem::exists(csv)) << dofs;
+  }
 }
 
 }  // namespace
