@@ -220,6 +220,7 @@ void close_record(Coordinator::State& s, RunOutcome& outcome) {
             " messages dropped unread as unauthenticated (no valid MAC under the run secret); "
             "newest: " +
             outcome.unauthenticated.last);
+  if (s.header_entry.has_header()) s.append_waiting(s.header_entry);
   runtime::RecordEntry entry;
   runtime::RunFooter& f = *entry.mutable_footer();
   f.set_ok(outcome.ok);

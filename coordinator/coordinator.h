@@ -57,7 +57,8 @@
 // Start-up heartbeats keep the nodes already assigned alive while late ones join.
 // After the STOPs, each node's last heartbeat reports what it rejected, by cause
 // (RunOutcome::node_rejects, the footer's node_rejects).
-// Record: header, one StepRecord per step, events, footer, through runtime::AsyncRecordWriter:
+// Record: header, one StepRecord per step, events, the header again, footer (the second header
+// keeps the record whole when its first copy is damaged), through runtime::AsyncRecordWriter:
 // the loop only serialises into a preallocated ring slot; a writer thread does the I/O. A crash
 // loses at most the entries still queued (the ring's capacity, 4096; in practice the writer is
 // one or two entries behind). Every entry carries a CRC-32C (runtime/record.h). A record that

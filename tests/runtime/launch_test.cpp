@@ -1,4 +1,4 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18 and 165).
+// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18, 165, 167).
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -284,6 +284,32 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   o = run(kRths + " export " + record.string() + " --csv " + csv.string() + " --json");
   ASSERT_EQ(o.code, 0) << o.out;
   EXPECT_TRUE(nlohmann::json::parse(o.out)["truncated"].get<bool>()) << o.out;
+}
+
+// The header is written again before the footer: a flipped byte in the first copy loses no step
+// (the export still names the damage and exits 1).
+TEST(Export, AFlippedHeaderByteLosesNoStep) {
+  runtime::ensure_dds_config();
+  const auto launched =
+      test::launch("export_header", test::paper_frame_study(0.5, ""), "lag_shift_14ms", 167);
+  ASSERT_EQ(launched.launch.coordinator_exit, 0);
+  const auto& entries = launched.record.entries;
+  ASSERT_TRUE(entries.front().has_header());
+  ASSERT_TRUE(entries[entries.size() - 2].has_header()) << "the header again, before the footer";
+  const auto record = launched.dir / "run.rthsrec";
+  {
+    std::fstream bytes(record, std::ios::in | std::ios::out | std::ios::binary);
+    bytes.seekg(static_cast<std::streamoff>(launched.record.offsets.front() + 20));
+    const char c = static_cast<char>(bytes.get());
+    bytes.seekp(static_cast<std::streamoff>(launched.record.offsets.front() + 20));
+    bytes.put(static_cast<char>(c ^ 0x40));
+  }
+  const auto csv = launched.dir / "run.csv";
+  const Output o = run(kRths + " export " + record.string() + " --csv " + csv.string() + " --json");
+  EXPECT_EQ(o.code, 1) << o.out;
+  const auto j = nlohmann::json::parse(o.out);
+  EXPECT_EQ(j["rows"].get<long>(), static_cast<long>(launched.record.steps().size()));
+  EXPECT_EQ(j["damaged_regions"].get<long>(), 1);
 }
 
 // Records whose checksums hold but whose meaning does not: each problem named with its entry,
