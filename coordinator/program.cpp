@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
@@ -268,6 +269,10 @@ int coordinator_main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  // A file size limit (ulimit -f) must fail a record write (EFBIG), which holds the actuators,
+  // writes what it can and names the reason, as a full disk's ENOSPC does; its default signal
+  // would kill the coordinator with no HOLD, no footer and no reason.
+  std::signal(SIGXFSZ, SIG_IGN);
   // Log lines leave the loop thread through spdlog's queue; a full queue overwrites the oldest
   // line rather than block the loop.
   spdlog::init_thread_pool(8192, 1);

@@ -14,8 +14,9 @@
 //                    --record; the stop button HOLDs then STOPs the run, "stopped from the view";
 //                    beyond loopback it needs the token printed at start-up)
 // Loads the study, opens DDS (domain: --domain, else deployment.domain_id), runs one case and
-// prints a summary. Exit: 0 completed, 1 the run stopped (node lost, limit, start-up timeout),
-// 2 bad config or usage, 3 DDS or file error.
+// prints a summary. SIGXFSZ is ignored: a file size limit fails the record's write, which stops
+// the run as a full disk does (HOLD, what the record took, the reason). Exit: 0 completed, 1 the
+// run stopped (node lost, limit, start-up timeout), 2 bad config or usage, 3 DDS or file error.
 
 #include <string>
 

@@ -2,6 +2,7 @@
 
 #include "core/compensation.h"
 #include "core/known_enums.h"
+#include "core/memory_budget.h"
 #include "core/ranges.h"
 #include "core/structure_config.h"
 #include "core/text_columns.h"
@@ -98,6 +99,20 @@ config::Study load_study(const std::filesystem::path& path) {
 }
 
 namespace {
+
+constexpr std::uintmax_t kMaxMotionFileBytes = 256ull << 20;  // 256 MiB
+
+// A motion file is read whole, as text (and hashed, and scanned for binary bytes): one far beyond
+// any record (a 10^8-line file) is refused by its size before any of that.
+void refuse_huge_motion(const std::filesystem::path& path) {
+  std::error_code size_error;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
+  if (size_error || bytes <= kMaxMotionFileBytes) return;
+  std::ostringstream message;
+  message << "motion '" << path.string() << "': " << bytes << " bytes, more than the "
+          << kMaxMotionFileBytes << " a motion file may have";
+  throw std::invalid_argument(message.str());
+}
 
 void validate_structure(const config::Structure& structure, const std::string& source) {
   if (structure.has_sdof()) {
@@ -335,6 +350,7 @@ GroundMotion load_motion(const config::GroundMotion& motion,
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
+  refuse_huge_motion(path);
   if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
     throw std::invalid_argument("motion: " + why);
   if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
@@ -559,6 +575,16 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   require(dt < record.duration(), "motion",
           "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
               format_number(record.duration()) + " s)");
+  // What a run of this study keeps per step (motion, time, then per DOF and per actuator three
+  // series), for a run and its reference, checked before any of it is allocated.
+  prepared.base = base_setup(study, dt, base_dir);
+  const auto dofs = static_cast<std::uint64_t>(prepared.base.model.dofs());
+  const auto actuators =
+      static_cast<std::uint64_t>(prepared.base.partition.actuator_storeys.size());
+  require_memory(static_cast<std::uint64_t>(record.duration() / dt) + 2,
+                 2 * sizeof(double) * (2 + 3 * dofs + 3 * actuators),
+                 "integrator.dt = " + format_number(dt) + " s over the " +
+                     format_number(record.duration()) + " s record");
   prepared.motion =
       std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
   for (const config::Case& c : study.cases()) {
@@ -567,7 +593,6 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
             "its delay of " + format_number(lag) + " s is not shorter than the record (" +
                 format_number(prepared.motion.duration()) + " s)");
   }
-  prepared.base = base_setup(study, dt, base_dir);
   return prepared;
 }
 

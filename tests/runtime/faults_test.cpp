@@ -532,19 +532,18 @@ TEST(Faults, ALateJoinerWithinTheStartTimeoutIsWaitedFor) {
 }
 
 // The disk fills up under the record of a real-time run: the coordinator's file size is limited
-// (prlimit's RLIMIT_FSIZE, with SIGXFSZ ignored, so a write past it fails with EFBIG as a full
-// disk fails with ENOSPC; no root or mount needed). The run stops within 5 steps of the last
-// entry the disk took, holds and stops the nodes, names the reason, and the record reads up to
-// there.
+// (prlimit's RLIMIT_FSIZE, as `ulimit -f` would; the coordinator ignores SIGXFSZ itself, so a
+// write past it fails with EFBIG as a full disk fails with ENOSPC; no root or mount needed). The
+// run stops within 5 steps of the last entry the disk took, holds and stops the nodes, names the
+// reason, and the record reads up to there.
 TEST(Faults, ARecordThatCannotBeWrittenStopsTheRunWithinFiveSteps) {
   if (!runtime::tool_available("prlimit")) GTEST_SKIP() << "prlimit (util-linux) is not installed";
   runtime::ensure_dds_config();
   // About 1000 steps of this run's entries (header ~1.3 KB, a step ~190 bytes with two links).
   constexpr std::uintmax_t kLimit = 200'000;
   runtime::ChildOptions limited;
-  limited.prefix = {
-      "sh", "-c",
-      "trap '' XFSZ; exec prlimit --fsize=" + std::to_string(kLimit) + " \"$0\" \"$@\""};
+  limited.prefix = {"sh", "-c",
+                    "exec prlimit --fsize=" + std::to_string(kLimit) + " \"$0\" \"$@\""};
   // The nodes' own fail-safes are widened far beyond this loaded machine's stalls: the record is
   // what this test judges, and only the record may stop the run.
   const std::string text = test::paper_frame_study(
