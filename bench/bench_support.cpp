@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "study/study.h"
+#include "security/run_secret.h"
 
 namespace rths::bench {
 
@@ -35,12 +36,16 @@ DistributedRun::DistributedRun(const RunSpec& spec)
     : dir_(std::filesystem::temp_directory_path() / spec.directory),
       record_(dir_ / "run.rthsrec"),
       run_id_(spec.run_id),
+      secret_(security::generate_run_secret()),
       domain_(spec.domain) {
   std::filesystem::create_directories(dir_);
   const auto config = dir_ / "study.textproto";
   std::ofstream(config) << spec.study_text;
   study_ = core::load_study(config);
   if (spec.keep_off_loop_cpu) off_loop_cpu_ = runtime::keep_off_loop_cpu(study_.deployment());
+  // Measured as deployed: every message carries its MAC under the run's secret.
+  util::ChildOptions trusted;
+  trusted.environment = {{security::kSecretEnv, secret_}};
   const int count = spec.nodes.substructures + spec.nodes.emulators;
   for (int i = 0; i < count; ++i) {
     const bool substructure = i < spec.nodes.substructures;
@@ -50,15 +55,15 @@ DistributedRun::DistributedRun(const RunSpec& spec)
                                           : "actuator_emulator/rths-actuator-emulator"),
                         std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
                                                  std::to_string(domain_), "--run-id", run_id_},
-                        dir_ / ("node_" + std::to_string(id) + ".log"));
+                        dir_ / ("node_" + std::to_string(id) + ".log"), trusted);
   }
 }
 
 core::PreparedStudy DistributedRun::prepared() const { return core::prepare_study(study_, dir_); }
 
 coordinator::Coordinator& DistributedRun::start(coordinator::CoordinatorOptions options) {
-  endpoint_ = std::make_unique<transport::DdsEndpoint>(
-      transport::DdsEndpointOptions{static_cast<std::uint32_t>(domain_), true, 0, "rths", 64, {}});
+  endpoint_ = std::make_unique<transport::DdsEndpoint>(transport::DdsEndpointOptions{
+      static_cast<std::uint32_t>(domain_), true, 0, "rths", 64, {}, secret_});
   options.run_id = run_id_;
   options.record = record_;
   coordinator_ = std::make_unique<coordinator::Coordinator>(core::prepare_study(study_, dir_),

@@ -61,6 +61,7 @@ class DistributedRun {
  private:
   std::filesystem::path dir_, record_;
   std::string run_id_;
+  std::string secret_;  // the run secret the nodes get in their environment
   int domain_;
   config::Study study_;
   std::unique_ptr<util::ScopedCpuExclude> off_loop_cpu_;

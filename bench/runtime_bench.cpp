@@ -94,7 +94,8 @@ runtime::Command payload() {
 }
 
 int echo_main(int domain, int node_id) {
-  transport::DdsEndpoint node({static_cast<std::uint32_t>(domain), false, node_id, "rths", 64, {}});
+  transport::DdsEndpoint node(
+      {static_cast<std::uint32_t>(domain), false, node_id, "rths", 64, {}, {}});
   for (;;) {
     auto m = node.receive(5s);
     if (!m) return 0;
@@ -113,7 +114,8 @@ int echo_main(int domain, int node_id) {
 runtime::LagSummary ping_pong(int domain, int count, int peers, bool one_cpu) {
   std::unique_ptr<util::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<util::ScopedCpuPin>();
-  transport::DdsEndpoint coordinator({static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
+  transport::DdsEndpoint coordinator(
+      {static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}, {}});
   for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
   std::vector<util::ChildProcess> echoes;
   for (int p = 1; p <= peers; ++p)
@@ -195,7 +197,7 @@ CommandPathFigures command_path(transport::DdsEndpoint& coordinator, int peers, 
 void command_path_rows(int domain, int repeat, double seconds, double hz) {
   for (const int peers : {1, 2}) {
     transport::DdsEndpoint coordinator(
-        {static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}});
+        {static_cast<std::uint32_t>(domain), true, 0, "rths", 64, {}, {}});
     coordinator.set_inline_handler([](const transport::Message&) { return true; });
     for (int p = 1; p <= peers; ++p) coordinator.listen_to(p);
     std::vector<util::ChildProcess> echoes;

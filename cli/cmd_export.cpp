@@ -3,9 +3,14 @@
 // Every entry's checksum is verified (runtime::read_record). A damaged record is exported with
 // every intact entry (the reader resynchronises after each damaged region); what was lost (bytes,
 // step numbers) goes to stderr and to the outputs' attributes (integrity, lost_steps), and the
-// exit is 1. A truncated record (the writer crashed or its disk filled) is exported up to its
-// last complete entry with a warning on stderr; exit 0. An old record without checksums is
-// exported with a warning; exit 0. A missing file, or one that is no record, is exit 2.
+// exit is 1. A truncated record (the writer crashed or its disk filled), or one that stops
+// between two entries without its footer, is exported up to its last complete entry with a
+// warning on stderr; exit 0. An old record without checksums is exported with a warning; exit 0.
+// A record whose checksums hold but whose meaning does not (runtime/record/record_checks.h: schema
+// version, step order, entry sizes against the header's dofs, values not finite) is exported as
+// read, each problem named with its entry number on stderr, exit 1; one whose header cannot size
+// a table (dofs -1 or 100000) writes nothing, exit 1. A missing file, or one that is no record,
+// is exit 2.
 #include <nlohmann/json.hpp>
 
 #include <iostream>
@@ -13,6 +18,7 @@
 #include "cli/commands.h"
 #include "results/results.h"
 #include "results/write.h"
+#include "runtime/record/record_checks.h"
 #include "util/distinct_paths.h"
 
 namespace rths::cli {
@@ -47,6 +53,11 @@ void add_export_command(CLI::App& app) {
     }
     if (!contents.warning.empty())
       std::cerr << "rths export: warning: " << contents.warning << "\n";
+    const runtime::RecordChecks checks = runtime::check_record(contents);
+    if (checks.fatal)
+      throw ExitError(kExitRunFailed, std::string("export: ") + *record +
+                                          " is implausible, nothing written: " + checks.summary());
+    if (!checks.ok()) std::cerr << "rths export: warning: " << checks.summary() << "\n";
     results::Table table;
     try {
       table = results::record_table(contents);
@@ -65,7 +76,8 @@ void add_export_command(CLI::App& app) {
     if (*json) {
       nlohmann::json j{{"record", *record},
                        {"rows", table.rows()},
-                       {"truncated", contents.truncated},
+                       {"truncated", contents.truncated || checks.cut},
+                       {"problems", checks.problems},
                        {"status", status},
                        {"ok", footer && footer->ok()},
                        {"checksummed", contents.checksummed},
@@ -82,6 +94,9 @@ void add_export_command(CLI::App& app) {
     if (contents.lost_entries())
       throw ExitError(kExitRunFailed, "export: the record lost entries (intact ones exported): " +
                                           contents.loss_report());
+    if (!checks.problems.empty())
+      throw ExitError(kExitRunFailed,
+                      "export: the record is implausible (exported as read): " + checks.summary());
   });
   cmd->add_flag("--json", *json, "print a JSON summary on stdout");
 }

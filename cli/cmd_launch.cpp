@@ -13,6 +13,9 @@
 // first failing coordinator's status (1 run failed, 2 bad config, 3 environment); 1 for a diverged
 // case (unless --allow-unstable or expect_unstable); 2 for a bad config caught before starting
 // anything.
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
@@ -93,7 +96,15 @@ std::vector<std::string> view_arguments(const LaunchArgs& args) {
   return out;
 }
 
+// With --json, stdout carries the JSON document alone: log lines (a node that outlives the
+// coordinator, a CPU left unpinned) go to stderr.
+void keep_stdout_for_json(const LaunchArgs& args) {
+  if (!args.json) return;
+  spdlog::default_logger()->sinks() = {std::make_shared<spdlog::sinks::stderr_color_sink_mt>()};
+}
+
 void run_launch(const LaunchArgs& args) {
+  keep_stdout_for_json(args);
   const std::filesystem::path config_path = args.config;
   const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
   core::PreparedStudy prepared;

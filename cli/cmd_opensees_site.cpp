@@ -1,6 +1,6 @@
 // rths opensees-site CONFIG [--port 8090] [--listen 127.0.0.1] [--case NAME] [--out DIR]
-//   [--domain N] [--no-start-nodes] [--no-plots] [--accept-timeout S] [--security DIR] [--run-id
-//   ID]
+//   [--domain N] [--no-start-nodes [--secret-file F | --insecure]] [--no-plots]
+//   [--accept-timeout S] [--security DIR] [--run-id ID]
 // Serves one OpenSees genericClient element (opensees_site/site.h): the study's actuator
 // emulators over DDS, the record in OUT/run.rthsrec, node logs, results.csv and the plots of
 // opensees_site/outputs.h (unless --no-plots) beside it, the coordinator's summary on stdout.
@@ -25,6 +25,7 @@ struct SiteFlags {
   int port = 8090, domain = -1;
   bool no_start_nodes = false, no_plots = false;
   double accept_timeout = -1;
+  security::SecretChoice secret;
 };
 
 int serve(const SiteFlags& f) {
@@ -37,6 +38,7 @@ int serve(const SiteFlags& f) {
   options.log_dir = f.out;
   options.start_nodes = !f.no_start_nodes;
   options.security_dir = f.security;
+  options.secret = f.secret;
   options.accept_timeout = std::chrono::milliseconds(
       f.accept_timeout < 0 ? -1 : static_cast<long long>(f.accept_timeout * 1e3));
   std::unique_ptr<opensees::Site> site;
@@ -106,6 +108,11 @@ void add_opensees_site_command(CLI::App& app) {
   cmd->add_option("--security", f->security, "`rths pki init` directory (DDS Security)");
   cmd->add_flag("--no-start-nodes", f->no_start_nodes,
                 "the actuator emulators run elsewhere (started by hand with this run id)");
+  cmd->add_option("--secret-file", f->secret.file,
+                  "with --no-start-nodes: the run secret the emulators were given (`rths pki "
+                  "secret FILE`); default: $RTHS_RUN_SECRET_FILE");
+  cmd->add_flag("--insecure", f->secret.insecure,
+                "with --no-start-nodes: run without a run secret or DDS Security");
   cmd->add_flag("--no-plots", f->no_plots, "write results.csv but no plots");
   cmd->add_option("--accept-timeout", f->accept_timeout,
                   "s to wait for the client (default: forever)");

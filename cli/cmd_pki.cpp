@@ -3,6 +3,9 @@
 // its default nodes when it declares none) and/or --node ID:KIND; the coordinator (node 0) is
 // always included. Exit 2 for bad options, an existing CA in DIR or a bad config; 3 when files
 // cannot be written.
+// rths pki secret FILE: a run secret (security/run_secret.h) for processes started by hand,
+// written to a new file of mode 0600 (an existing file is refused, exit 3); the secret itself is
+// never printed.
 #include <iostream>
 
 #include "cli/commands.h"
@@ -10,6 +13,7 @@
 #include "runtime/node/plan.h"
 #include "security/pki.h"
 #include "study/study.h"
+#include "security/run_secret.h"
 
 namespace rths::cli {
 namespace {
@@ -82,6 +86,17 @@ void run_pki_init(const PkiArgs& args) {
             << " (rths launch / sites) or set deployment.security_dir\n";
 }
 
+void run_pki_secret(const std::string& file) {
+  try {
+    security::write_run_secret_file(file, security::generate_run_secret());
+  } catch (const std::exception& e) {
+    throw ExitError(kExitEnvironment, std::string("pki secret: ") + e.what());
+  }
+  std::cout << "run secret written to " << file
+            << " (mode 0600); give every process of the run --secret-file " << file
+            << " (or RTHS_RUN_SECRET_FILE), by a channel only the lab reads\n";
+}
+
 }  // namespace
 
 void add_pki_command(CLI::App& app) {
@@ -99,6 +114,11 @@ void add_pki_command(CLI::App& app) {
       ->check(in_range(core::Quantity::kDays));
   init->add_option("--organisation", args->organisation, "O= of every subject (default rths-lab)");
   init->callback([args] { run_pki_init(*args); });
+  auto* secret = pki->add_subcommand(
+      "secret", "Make a run secret for processes started by hand (without DDS Security)");
+  auto file = std::make_shared<std::string>();
+  secret->add_option("file", *file, "new file (mode 0600) for the secret")->required();
+  secret->callback([file] { run_pki_secret(*file); });
 }
 
 }  // namespace rths::cli

@@ -177,6 +177,8 @@ void report(const RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome)
   runtime::RejectCounters rejected = s.rejected;
   rejected.add(s.intake->rejected());
   rejected.fill(outcome.counters);
+  // Never seen by the coordinator's own checks: the transport dropped them before any handler.
+  if (s.options.unauthenticated) outcome.unauthenticated = s.options.unauthenticated();
   outcome.counters.set_overruns(pacer.overruns());
   outcome.counters.set_late_feedback(s.late_feedback);
   outcome.counters.set_worst_overrun_streak(pacer.worst_overrun_streak());
@@ -212,6 +214,12 @@ void close_record(RunState& s, RunOutcome& outcome) {
                       " entries (its writer fell more than " +
                       std::to_string(s.record->capacity()) + " entries behind)";
   }
+  if (outcome.unauthenticated.count > 0)
+    s.event(std::to_string(outcome.unauthenticated.count) +
+            " messages dropped unread as unauthenticated (no valid MAC under the run secret); "
+            "newest: " +
+            outcome.unauthenticated.last);
+  if (s.header_entry.has_header()) s.append_waiting(s.header_entry);
   runtime::RecordEntry entry;
   runtime::RunFooter& f = *entry.mutable_footer();
   f.set_ok(outcome.ok);

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <csignal>
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
@@ -16,6 +17,7 @@
 #include "runtime/node/plan.h"
 #include "security/check.h"
 #include "security/pki.h"
+#include "security/run_secret.h"
 #include "transport/dds_endpoint.h"
 #include "view/context.h"
 #include "view/feed.h"
@@ -33,6 +35,17 @@ std::string reject_text(const runtime::Counters& c) {
          std::to_string(c.not_entitled()) + ", out-of-range " + std::to_string(c.out_of_range());
 }
 
+// Names the newest message dropped for want of a MAC, when one was.
+std::string unauthenticated_text(const RunOutcome& o) {
+  std::string text = ", unauthenticated ";
+  text += std::to_string(o.unauthenticated.count);
+  if (o.unauthenticated.count == 0) return text;
+  text += " (dropped unread; newest: ";
+  text += o.unauthenticated.last;
+  text += ")";
+  return text;
+}
+
 }  // namespace
 
 std::string summary_text(const RunOutcome& o) {
@@ -43,8 +56,9 @@ std::string summary_text(const RunOutcome& o) {
       // The record holds the initial state and one row per commanded step, as `rths run` counts.
       << "\nsteps: " << c.steps() + 1 << " recorded (" << c.steps() << " commanded) in "
       << o.wall_seconds << " s"
-      << "\nrejected: " << reject_text(c) << "\noverruns: " << c.overruns() << " (worst streak "
-      << c.worst_overrun_streak() << "), max lateness " << o.max_lateness * 1e3
+      << "\nrejected: " << reject_text(c) << unauthenticated_text(o)
+      << "\noverruns: " << c.overruns() << " (worst streak " << c.worst_overrun_streak()
+      << "), max lateness " << o.max_lateness * 1e3
       << " ms"
       // In real time a link whose round trip is longer than a step answers later by design; the
       // count says how often the integrator used an older answer, not that anything failed.
@@ -122,9 +136,11 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
   // The prediction runs the case in process here, before the run starts (never on its loop).
   view::describe_run(*feed, prepared, case_name);
   auto server = std::make_unique<view::ViewServer>(*feed, options);
+  // A token handed down by the launcher was printed there: this output may be a log file.
+  const bool token_made_here = !options.token.empty() && !(given && *given);
   std::cout << "rths-coordinator: live view at " << server->url()
             << (allow_stop ? " (stop button on)" : "")
-            << (options.token.empty() ? "" : "; stop token " + options.token) << std::endl;
+            << (token_made_here ? "; stop token " + options.token : std::string()) << std::endl;
   if (!options.address.loopback())
     std::cout << "rths-coordinator: the view listens beyond loopback: anyone who reaches "
               << server->url() << " sees the run" << std::endl;
@@ -133,6 +149,7 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
 
 struct ProgramArgs {
   std::string config_path, case_name, run_id, record, security_dir;
+  security::SecretChoice secret;
   int domain = -1;
   PlatformArgs platform;
   std::string view_address;
@@ -157,6 +174,12 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
   app.add_option("--security", a.security_dir,
                  "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
                  "default: deployment.security_dir");
+  app.add_option("--secret-file", a.secret.file,
+                 "the run secret (`rths pki secret FILE`, mode 0600); default: $" +
+                     std::string(security::kSecretFileEnv) + " or $" + security::kSecretEnv);
+  app.add_flag("--insecure", a.secret.insecure,
+               "run without a run secret or DDS Security: any participant on the domain can then "
+               "speak as a node until it is pinned");
   app.add_option(
       "--view", a.view_address,
       "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
@@ -200,6 +223,8 @@ std::unique_ptr<transport::DdsEndpoint> open_endpoint(const config::Study& study
   if (!a.security_dir.empty())  // refused here (exit 2), before the participant exists
     options.participant_properties = security::participant_properties(
         security::check_node_security(a.security_dir, security::kCoordinatorNodeId));
+  a.secret.dds_security = !a.security_dir.empty();
+  options.run_secret = security::resolve_run_secret(a.secret);
   return std::make_unique<transport::DdsEndpoint>(options);
 }
 
@@ -228,6 +253,8 @@ void start_session(ProgramArgs& a, Session& session) {
     co.record_observer = session.feed.get();
     co.stop_request = &session.stop_request;
   }
+  transport::DdsEndpoint* endpoint = session.endpoint.get();
+  co.unauthenticated = [endpoint] { return endpoint->unauthenticated(); };
   session.coordinator = std::make_unique<Coordinator>(std::move(prepared), *session.endpoint, co);
 }
 
@@ -242,6 +269,10 @@ int coordinator_main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  // A file size limit (ulimit -f) must fail a record write (EFBIG), which holds the actuators,
+  // writes what it can and names the reason, as a full disk's ENOSPC does; its default signal
+  // would kill the coordinator with no HOLD, no footer and no reason.
+  std::signal(SIGXFSZ, SIG_IGN);
   // Log lines leave the loop thread through spdlog's queue; a full queue overwrites the oldest
   // line rather than block the loop.
   spdlog::init_thread_pool(8192, 1);

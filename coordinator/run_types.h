@@ -17,6 +17,7 @@
 #include "runtime/rt/pacing.h"
 #include "study/study.h"
 #include "transport/transport.h"
+#include "transport/unauthenticated.h"
 
 namespace rths::coordinator {
 
@@ -52,6 +53,9 @@ struct CoordinatorOptions {
   // Set from another thread (the view's stop button): the loop stops before its next step as for
   // any fault, HOLD then STOP, with the status kStoppedFromView. Read once per step (relaxed).
   const std::atomic<bool>* stop_request = nullptr;
+  // What the transport dropped unread for want of a MAC (DdsEndpoint::unauthenticated), read once
+  // after the run for the outcome and the record's last event; empty: nothing to read.
+  std::function<transport::Unauthenticated()> unauthenticated;
 };
 
 inline constexpr const char* kStoppedFromView = "stopped from the view";
@@ -70,6 +74,8 @@ struct RunOutcome {
   runtime::Counters counters;
   std::vector<LinkLagStats> links;
   std::vector<runtime::NodeRejects> node_rejects;  // per node, what it rejected (its last report)
+  // What the transport dropped unread for want of a MAC (CoordinatorOptions::unauthenticated).
+  transport::Unauthenticated unauthenticated;
   double wall_seconds = 0.0;
   double max_lateness = 0.0;  // s, real time
 };

@@ -108,6 +108,7 @@ void RunState::write_header() {
       "include the clock offset between hosts");
   if (options.platform) *h.mutable_platform() = *options.platform;
   append_waiting(entry);
+  header_entry = std::move(entry);
   // The record carries its inputs (motion as run, matrices, traces) in an entry of their own, so
   // it reads anywhere and a damaged inputs entry loses nothing else.
   runtime::RecordEntry inputs;

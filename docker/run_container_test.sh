@@ -43,9 +43,13 @@ ip -n "$tag" link set lo up
 
 in_ns podman network create --internal "$tag" >/dev/null
 dds="CYCLONEDDS_URI=file:///opt/rths/configs/dds_netns_containers.xml"
+# The run secret reaches each container from this shell's environment (`-e NAME` with no value),
+# never on a command line.
+RTHS_RUN_SECRET=$(openssl rand -hex 32)
+export RTHS_RUN_SECRET
 start_node() {  # service, program, node id
   in_ns podman run -d --name "$tag-$1" --network "$tag" --network-alias "$1" --hostname "$1" \
-    -e "$dds" "$image" "$2" --node-id "$3" --domain 140 --run-id "$tag" >/dev/null
+    -e "$dds" -e RTHS_RUN_SECRET "$image" "$2" --node-id "$3" --domain 140 --run-id "$tag" >/dev/null
 }
 start_node substructure rths-substructure-node 1
 start_node actuator rths-actuator-emulator 2
@@ -53,7 +57,7 @@ start_node actuator rths-actuator-emulator 2
 echo "running the coordinator (lockstep, 1 s of El Centro, $delay s each way on the actuator link)"
 set +e
 timeout 300 nsenter --net="/run/netns/$tag" podman run --name "$tag-coordinator" --network "$tag" \
-  --network-alias coordinator --hostname coordinator -e "$dds" -v "$out:/out" "$image" bash -c "
+  --network-alias coordinator --hostname coordinator -e "$dds" -e RTHS_RUN_SECRET -v "$out:/out" "$image" bash -c "
     sed -e 's/@CLOCK@/LOCKSTEP/' -e 's/@DURATION@/1/' -e 's/@DOMAIN@/140/' \
         -e 's/@ACTUATOR_ONE_WAY_DELAY@/$delay/g' -e 's/@ACTUATOR_JITTER@/0/g' \
         -e 's/@SUBSTRUCTURE_ONE_WAY_DELAY@/0/g' \

@@ -27,7 +27,11 @@ Session::Session(Connection& connection, const BasicMapping& mapping, SessionOpt
       drift_(core::Vec::Zero(mapping.actuators())),
       u_(core::Vec::Zero(options_.dofs)),
       v_(core::Vec::Zero(options_.dofs)),
-      a_(core::Vec::Zero(options_.dofs)) {}
+      a_(core::Vec::Zero(options_.dofs)) {
+  // A client that stops reading its answers is as lost as one that stops sending: the same
+  // window, then HOLD, rather than a site blocked in send().
+  connection_.set_send_timeout(options_.frame_timeout);
+}
 
 void Session::refuse(const std::string& why) const {
   // The connection ends now: a client that checks its reads learns at once that no answer will
@@ -72,7 +76,13 @@ void Session::store_trial() {
   have_trial_ = true;
 }
 
-void Session::answer() { connection_.write_all(out_.data(), out_.size() * sizeof(double)); }
+void Session::answer() {
+  try {
+    connection_.write_all(out_.data(), out_.size() * sizeof(double));
+  } catch (const std::runtime_error& e) {
+    refuse(e.what());  // named as the client's fault: HOLD, STOP, the record closed
+  }
+}
 
 void Session::answer_matrix(const core::Mat* matrix) {
   std::fill(out_.begin(), out_.end(), 0.0);

@@ -25,6 +25,7 @@ struct Site::Prepared {
   std::string case_name;
   std::unique_ptr<BasicMapping> mapping;
   std::filesystem::path security_dir;
+  std::string run_secret;  // resolved at construction when the emulators run elsewhere
 };
 
 namespace {
@@ -54,9 +55,10 @@ void require_site_study(const core::HybridSetup& setup, const config::Deployment
 }
 
 std::vector<util::ChildProcess> start_nodes(const config::Deployment& deployment,
-                                            const SiteOptions& options,
-                                            const std::filesystem::path& security_dir, int domain,
-                                            const std::string& run_id) {
+                                               const SiteOptions& options,
+                                               const std::filesystem::path& security_dir,
+                                               int domain, const std::string& run_id,
+                                               const std::string& secret) {
   const std::filesystem::path emulator =
       util::find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
   if (!options.log_dir.empty()) std::filesystem::create_directories(options.log_dir);
@@ -69,8 +71,10 @@ std::vector<util::ChildProcess> start_nodes(const config::Deployment& deployment
     args.insert(args.end(), security.begin(), security.end());
     const auto log = options.log_dir.empty() ? std::filesystem::path("/dev/null")
                                              : options.log_dir / ("node_" + id + ".log");
-    nodes.emplace_back(emulator, args, log,
-                       util::ChildOptions{"node " + id + " (actuator emulator)", {}, {}});
+    nodes.emplace_back(
+        emulator, args, log,
+        util::ChildOptions{
+            "node " + id + " (actuator emulator)", {}, {{security::kSecretEnv, secret}}});
   }
   return nodes;
 }
@@ -134,6 +138,10 @@ Site::Site(SiteOptions options)
                    : !p.deployment.security_dir().empty()
                        ? options_.config.parent_path() / p.deployment.security_dir()
                        : std::filesystem::path();
+  // Refused here, before any client is waited for: with start_nodes a fresh one is made per run.
+  security::SecretChoice secret = options_.secret;
+  secret.dds_security = !p.security_dir.empty();
+  if (!options_.start_nodes) p.run_secret = security::resolve_run_secret(secret);
   if (p.security_dir.empty()) return;
   std::vector<int> ids{security::kCoordinatorNodeId};
   for (const config::NodeSpec& node : p.deployment.nodes()) ids.push_back(node.id());
@@ -209,9 +217,10 @@ SiteOutcome Site::serve(Listener& listener) {
   co.case_name = p.case_name;
   co.record = options_.record;
   std::vector<util::ChildProcess> nodes;
-  if (options_.start_nodes)
-    nodes = start_nodes(p.deployment, options_, p.security_dir, domain, co.run_id);
   transport::DdsEndpointOptions dds;
+  dds.run_secret = options_.start_nodes ? security::generate_run_secret() : p.run_secret;
+  if (options_.start_nodes)
+    nodes = start_nodes(p.deployment, options_, p.security_dir, domain, co.run_id, dds.run_secret);
   dds.domain_id = static_cast<std::uint32_t>(domain);
   if (!p.security_dir.empty())
     dds.participant_properties = security::participant_properties(security::check_node_security(

@@ -27,6 +27,7 @@
 #include "coordinator/coordinator.h"
 #include "opensees_site/mapping.h"
 #include "opensees_site/tcp_channel.h"
+#include "security/run_secret.h"
 
 namespace rths::transport {
 struct DdsEndpointOptions;
@@ -45,6 +46,9 @@ struct SiteOptions {
       programs_dir;         // where rths-actuator-emulator is; empty: util::find_program's search
   bool start_nodes = true;  // false: the emulators were started elsewhere
   std::filesystem::path security_dir;  // `rths pki init` directory; empty: the deployment's
+  // The run secret when the emulators were started elsewhere (start_nodes false); with
+  // start_nodes a fresh one is made and handed to them in their environment.
+  security::SecretChoice secret;
   std::chrono::milliseconds accept_timeout{-1};  // < 0: wait for a client forever
 };
 

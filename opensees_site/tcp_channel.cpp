@@ -5,6 +5,7 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -44,7 +45,10 @@ Connection::Connection(int fd, std::string peer, Listener* listener)
     : fd_(fd), peer_(std::move(peer)), listener_(listener) {}
 
 Connection::Connection(Connection&& other) noexcept
-    : fd_(other.fd_), peer_(std::move(other.peer_)), listener_(other.listener_) {
+    : fd_(other.fd_),
+      peer_(std::move(other.peer_)),
+      listener_(other.listener_),
+      send_timeout_seconds_(other.send_timeout_seconds_) {
   other.fd_ = -1;
 }
 
@@ -99,11 +103,28 @@ void Connection::write_all(const void* data, std::size_t size) {
   while (sent < size) {
     const ssize_t n = ::send(fd_, in + sent, size - sent, MSG_NOSIGNAL);
     if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      std::string why = "the OpenSees client ";
+      why += peer_;
+      why += " read nothing for the send timeout (";
+      why += std::to_string(send_timeout_seconds_);
+      why += " s): it stopped reading its answers";
+      throw std::runtime_error(why);
+    }
     if (n <= 0)
       throw std::runtime_error("cannot write to the OpenSees client " + peer_ + ": " +
                                std::strerror(errno));
     sent += static_cast<std::size_t>(n);
   }
+}
+
+void Connection::set_send_timeout(std::chrono::nanoseconds timeout) {
+  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(timeout).count();
+  timeval tv{};
+  tv.tv_sec = static_cast<time_t>(us / 1'000'000);
+  tv.tv_usec = static_cast<suseconds_t>(us % 1'000'000);
+  ::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+  send_timeout_seconds_ = static_cast<double>(us) * 1e-6;
 }
 
 Listener::Listener(const std::string& address, int port) : address_(address) {

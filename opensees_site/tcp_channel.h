@@ -36,8 +36,13 @@ class Connection {
   // kClosed: the peer closed before the first byte; kTruncated: after some, before the last.
   // timeout < 0: no deadline. Allocates nothing.
   ReadResult read_exact(void* data, std::size_t size, std::chrono::nanoseconds timeout);
-  // Throws std::runtime_error when the peer is gone. Allocates nothing.
+  // Throws std::runtime_error when the peer is gone, or when it has read nothing for the send
+  // timeout (set_send_timeout) while the socket's buffers are full. Allocates nothing but the
+  // message of what it throws.
   void write_all(const void* data, std::size_t size);
+  // Bounds every write (SO_SNDTIMEO; 0: no bound, the default): a client that stops reading can
+  // no longer block the site in send() for as long as its buffers stay full.
+  void set_send_timeout(std::chrono::nanoseconds timeout);
   // Ends the exchange in both directions now (shutdown): a client blocked waiting for an answer
   // reads the close at once and fails its analysis, rather than wait for a force that will not
   // come. The descriptor is closed by the destructor. Allocates nothing.
@@ -48,6 +53,7 @@ class Connection {
   int fd_ = -1;
   std::string peer_;
   Listener* listener_ = nullptr;
+  double send_timeout_seconds_ = 0.0;  // for the message
 };
 
 class Listener {

@@ -9,6 +9,8 @@
 #include "study/text_columns.h"
 #include "study/text_format.h"
 #include "study/tracking_config.h"
+#include "study/known_enums.h"
+#include "study/memory_budget.h"
 #include "util/sha256.h"
 
 #include <cmath>
@@ -100,6 +102,20 @@ config::Study load_study(const std::filesystem::path& path) {
 }
 
 namespace {
+
+constexpr std::uintmax_t kMaxMotionFileBytes = 256ull << 20;  // 256 MiB
+
+// A motion file is read whole, as text (and hashed, and scanned for binary bytes): one far beyond
+// any record (a 10^8-line file) is refused by its size before any of that.
+void refuse_huge_motion(const std::filesystem::path& path) {
+  std::error_code size_error;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
+  if (size_error || bytes <= kMaxMotionFileBytes) return;
+  std::ostringstream message;
+  message << "motion '" << path.string() << "': " << bytes << " bytes, more than the "
+          << kMaxMotionFileBytes << " a motion file may have";
+  throw std::invalid_argument(message.str());
+}
 
 void validate_structure(const config::Structure& structure, const std::string& source) {
   if (structure.has_sdof()) {
@@ -232,6 +248,7 @@ void validate_link_lag(const config::LinkLag& lag, const std::string& where, boo
 }
 
 void validate_study(const config::Study& study, const std::string& source) {
+  require_known_enums(study, source);  // before anything switches over one
   require(study.has_structure(), source, "structure is missing");
   validate_structure(study.structure(), source);
   require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
@@ -336,6 +353,7 @@ GroundMotion load_motion(const config::GroundMotion& motion,
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
+  refuse_huge_motion(path);
   if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
     throw std::invalid_argument("motion: " + why);
   if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
@@ -477,7 +495,11 @@ constexpr std::pair<config::Integrator::Kind, IntegratorKind> kIntegratorKinds[]
 IntegratorKind integrator_kind(const config::Integrator& integrator) {
   for (const auto& [config_kind, kind] : kIntegratorKinds)
     if (config_kind == integrator.kind()) return kind;
-  return IntegratorKind::kExplicitNewmark;
+  // Never a default for a value nobody chose (a study is checked at load; this is for the rest).
+  std::string why = "integrator.kind ";
+  why += std::to_string(integrator.kind());
+  why += " is not a known integrator";
+  throw std::invalid_argument(why);
 }
 
 config::Integrator::Kind config_integrator_kind(IntegratorKind kind) {
@@ -534,6 +556,16 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   require(dt < record.duration(), "motion",
           "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
               format_number(record.duration()) + " s)");
+  // What a run of this study keeps per step (motion, time, then per DOF and per actuator three
+  // series), for a run and its reference, checked before any of it is allocated.
+  prepared.base = base_setup(study, dt, base_dir);
+  const auto dofs = static_cast<std::uint64_t>(prepared.base.model.dofs());
+  const auto actuators =
+      static_cast<std::uint64_t>(prepared.base.partition.actuator_storeys.size());
+  require_memory(static_cast<std::uint64_t>(record.duration() / dt) + 2,
+                 2 * sizeof(double) * (2 + 3 * dofs + 3 * actuators),
+                 "integrator.dt = " + format_number(dt) + " s over the " +
+                     format_number(record.duration()) + " s record");
   prepared.motion =
       std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
   for (const config::Case& c : study.cases()) {
@@ -542,7 +574,6 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
             "its delay of " + format_number(lag) + " s is not shorter than the record (" +
                 format_number(prepared.motion.duration()) + " s)");
   }
-  prepared.base = base_setup(study, dt, base_dir);
   return prepared;
 }
 

@@ -14,6 +14,7 @@
 
 #include "envelope.h"
 #include "transport/dds.h"
+#include "transport/message_mac.h"
 
 namespace rths::transport {
 
@@ -45,7 +46,10 @@ struct DdsEndpoint::TopicWriter {
 
 struct DdsEndpoint::Impl {
   Impl(const DdsEndpointOptions& o, const dds::QosSpec& qos)
-      : options(o), qos(qos), participant(o.domain_id, o.participant_properties) {
+      : options(o),
+        qos(qos),
+        mac(o.run_secret.empty() ? nullptr : std::make_unique<MessageMac>(o.run_secret)),
+        participant(o.domain_id, o.participant_properties) {
     if (o.coordinator) return;
     dds::EnvelopeTopic up(participant, node_topic_name(o.topic_prefix, o.node_id, "_up"), qos);
     dds::Writer w(participant, up, qos);
@@ -67,9 +71,14 @@ struct DdsEndpoint::Impl {
   void add_reader(const std::string& topic, std::int32_t node);
   // The node whose topic `reader` reads; nullopt for a reader this endpoint does not own.
   std::optional<std::int32_t> topic_node_of(dds::Handle reader);
+  // Without a run secret, true; with one, whether `mac` verifies, else counted and named.
+  bool authentic(const Message& m, const std::uint8_t* mac_bytes);
 
   const DdsEndpointOptions options;
   const dds::QosSpec qos;
+  const std::unique_ptr<MessageMac> mac;  // null without a run secret
+  mutable std::mutex unauthenticated_mutex;
+  Unauthenticated unauthenticated;
   // Shared between the receive thread and the caller; declared before the DDS entities so they
   // outlive the listener.
   std::mutex mutex;
@@ -156,6 +165,11 @@ void DdsEndpoint::send(const Message& m) {
   sample.payload._maximum = sample.payload._length;
   sample.payload._buffer = reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
   sample.payload._release = false;
+  if (impl_->mac) {
+    const Mac mac = impl_->mac->sign(m, sample.sent_ns,
+                                     options_.coordinator ? Direction::kDown : Direction::kUp);
+    std::copy(mac.begin(), mac.end(), sample.mac);
+  }
   if (!options_.coordinator) {
     dds::check(dds_write(impl_->own->writer.get(), &sample), "dds_write");
     return;
@@ -201,6 +215,7 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       m.received_ns = now;
       m.topic_node = *topic_node;
       m.writer = infos[i].publication_handle;
+      if (!authentic(m, s->mac)) continue;
       std::shared_ptr<const InlineHandler> h;
       {
         std::lock_guard lock(mutex);
@@ -229,6 +244,31 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
   if (!queued) return;
   std::lock_guard lock(mutex);
   arrived.notify_one();
+}
+
+bool DdsEndpoint::Impl::authentic(const Message& m, const std::uint8_t* mac_bytes) {
+  if (!mac) return true;
+  Mac received;
+  std::copy(mac_bytes, mac_bytes + kMacBytes, received.begin());
+  if (mac->verify(m, options.coordinator ? Direction::kUp : Direction::kDown, received))
+    return true;
+  std::string last = "kind ";
+  last += std::to_string(m.kind);
+  last += " as node ";
+  last += std::to_string(m.node_id);
+  last += " on node ";
+  last += std::to_string(m.topic_node);
+  last += "'s topic, writer ";
+  last += std::to_string(m.writer);
+  std::lock_guard lock(unauthenticated_mutex);
+  ++unauthenticated.count;
+  unauthenticated.last = std::move(last);
+  return false;
+}
+
+Unauthenticated DdsEndpoint::unauthenticated() const {
+  std::lock_guard lock(impl_->unauthenticated_mutex);
+  return impl_->unauthenticated;
 }
 
 std::optional<Message> DdsEndpoint::receive(std::chrono::nanoseconds timeout) {

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "transport/transport.h"
+#include "transport/unauthenticated.h"
 
 namespace rths::transport {
 
@@ -43,6 +44,11 @@ struct DdsEndpointOptions {
   // QoS properties of the participant: the DDS Security ones (security::participant_properties)
   // or none. A participant with security talks only to participants of the same lab's PKI.
   std::vector<std::pair<std::string, std::string>> participant_properties;
+  // The run secret (security/run_secret.h), or empty. Non-empty: every message sent carries a
+  // MAC under it (transport/message_mac.h), and every message received without a valid one is
+  // dropped on the receive thread before any handler or receive() sees it, counted and named
+  // (unauthenticated()).
+  std::string run_secret;
 };
 
 class DdsEndpoint final : public Endpoint {
@@ -54,6 +60,9 @@ class DdsEndpoint final : public Endpoint {
   void interrupt() override;
   int matched_peers() const override;
   void listen_to(std::int32_t node_id) override;
+  // Messages dropped unread for want of a valid MAC (none without a run secret). Thread safe;
+  // takes a mutex and copies a string.
+  Unauthenticated unauthenticated() const;
   // Remote writers feeding any of this endpoint's readers.
   int matched_writers() const;
   // Waits until at least `writers` remote writers feed this endpoint and `readers` remote

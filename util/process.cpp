@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <sched.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -179,10 +180,12 @@ ChildProcess::ChildProcess(const std::filesystem::path& program,
   argv.insert(argv.end(), args.begin(), args.end());
   const int fd = log_file.empty()
                      ? ::open("/dev/null", O_WRONLY | O_CLOEXEC)
-                     : ::open(log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+                     // Logs may name hosts, runs and tokens: for their owner alone.
+                     : ::open(log_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
   if (fd < 0)
     throw std::runtime_error("cannot create log " + log_file.string() + " for " + name_ + ": " +
                              std::strerror(errno));
+  if (!log_file.empty()) ::fchmod(fd, 0600);  // a log that existed keeps no wider mode
   try {
     pid_ = spawn(argv, options.environment, fd);
   } catch (...) {

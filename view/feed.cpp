@@ -42,18 +42,19 @@ void Feed::on_entry(std::string_view frame) {
 
 void Feed::add(const runtime::RecordEntry& entry) {
   std::lock_guard lock(mutex_);
-  if (entry.has_header())
-    on_header(entry.header());
-  else if (entry.has_step() && have_header_)
+  if (entry.has_header()) {
+    // The copy a record repeats before its footer must not start the page over.
+    if (!have_header_) on_header(entry.header());
+  } else if (entry.has_step() && have_header_) {
     on_step(entry.step());
-  else if (entry.has_event())
+  } else if (entry.has_event()) {
     on_event(entry.event());
-  else if (entry.has_footer())
+  } else if (entry.has_footer()) {
     on_footer(entry.footer());
-  else if (entry.has_inputs()) {
-    // the run's inputs: the context (view/context.h) reads them; the page has no use for them
-  } else
+  } else if (!entry.has_inputs()) {
+    // (the run's inputs: the context, view/context.h, reads them; the page has no use for them)
     ++unreadable_;  // a step before any header cannot be drawn
+  }
   changed();
 }
 

@@ -16,6 +16,7 @@
 #include "security/check.h"
 #include "security/pki.h"
 #include "study/study.h"
+#include "security/run_secret.h"
 #include "transport/transport.h"
 #include "util/process.h"
 
@@ -55,13 +56,19 @@ Placement local_placement(int /*node_id*/) {
   return {{}, {{"CYCLONEDDS_URI", uri && *uri ? uri : kLoopbackDdsConfig}}, "this host"};
 }
 
+// What every process of one run gets: the DDS Security folder and the run secret.
+struct Credentials {
+  std::filesystem::path security_dir;
+  std::string secret;  // handed down in the environment, never on the command line
+};
+
 util::ChildProcess start(const std::filesystem::path& program, std::vector<std::string> args,
-                         const std::filesystem::path& security_dir, int node_id,
-                         const std::filesystem::path& log, const std::string& label,
-                         const PlacementStrategy& placement) {
-  const auto security_args = security::security_arguments(security_dir, node_id);
+                   const Credentials& credentials, int node_id, const std::filesystem::path& log,
+                   const std::string& label, const PlacementStrategy& placement) {
+  const auto security_args = security::security_arguments(credentials.security_dir, node_id);
   args.insert(args.end(), security_args.begin(), security_args.end());
   Placement where = placement(node_id);
+  where.environment[security::kSecretEnv] = credentials.secret;
   std::vector<std::string> argv = where.prefix;
   argv.push_back(program.string());
   argv.insert(argv.end(), args.begin(), args.end());
@@ -193,7 +200,9 @@ LaunchResult launch_run(const LaunchOptions& options) {
   result.run_id =
       options.run_id.empty() ? make_run_id(study.name() + "-" + result.case_name) : options.run_id;
   const int domain = options.domain >= 0 ? options.domain : deployment.domain_id();
-  const std::filesystem::path security_dir = security_dir_of(options, deployment, domain);
+  // A fresh secret per run: only the processes started here learn it.
+  const Credentials credentials{security_dir_of(options, deployment, domain),
+                                security::generate_run_secret()};
   const util::NodePrograms programs = util::find_node_programs(options.programs_dir);
   const PlacementStrategy placement = options.placement ? options.placement : local_placement;
   std::filesystem::create_directories(options.log_dir);
@@ -208,14 +217,14 @@ LaunchResult launch_run(const LaunchOptions& options) {
     const std::string label = "node " + id + " (" + node_kind_name(node.kind()) + ")";
     result.node_labels.push_back(label);
     result.node_ids.push_back(node.id());
-    nodes.push_back(start(
-        sub ? programs.substructure : programs.actuator_emulator,
-        {"--node-id", id, "--domain", std::to_string(domain), "--run-id", result.run_id},
-        security_dir, node.id(), options.log_dir / ("node_" + id + ".log"), label, placement));
+    nodes.push_back(
+        start(sub ? programs.substructure : programs.actuator_emulator,
+              {"--node-id", id, "--domain", std::to_string(domain), "--run-id", result.run_id},
+              credentials, node.id(), options.log_dir / ("node_" + id + ".log"), label, placement));
   }
   result.coordinator_log = options.log_dir / "coordinator.log";
   util::ChildProcess coordinator =
-      start(programs.coordinator, coordinator_arguments(options, result, domain), security_dir,
+      start(programs.coordinator, coordinator_arguments(options, result, domain), credentials,
             security::kCoordinatorNodeId, result.coordinator_log, "coordinator", placement);
   pin.reset();
   off_loop_cpu.reset();

@@ -3,7 +3,9 @@
 // and `rths sites` (each process in its site's network namespace):
 //
 //   launch_run: load the study and refuse a bad deployment before starting anything; check every
-//   DDS Security document, and that the governance covers the run's domain; start the nodes
+//   DDS Security document, and that the governance covers the run's domain; make a fresh run
+//   secret (security/run_secret.h) and hand it to every process it starts in its environment
+//   (RTHS_RUN_SECRET; never on a command line, on DDS or in a log); start the nodes
 //   (--node-id, --domain, --run-id), then the coordinator
 //   (--config, --case, --run-id, --record, --domain), each where options.placement puts it, with
 //   its log in log_dir (node_<id>.log, coordinator.log); wait for the coordinator until it exits,

@@ -9,6 +9,7 @@
 #include "security/check.h"
 #include "security/pki.h"
 #include "study/study.h"
+#include "security/run_secret.h"
 #include "transport/dds_endpoint.h"
 
 namespace rths::runtime {
@@ -18,6 +19,7 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   int node_id = 0;
   int domain = -1;
   std::string config_path, run_id, security_dir;
+  security::SecretChoice secret;
   NodeLoopOptions loop;
   app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
   app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
@@ -29,6 +31,12 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   app.add_option("--security", security_dir,
                  "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
                  "the config's deployment.security_dir");
+  app.add_option("--secret-file", secret.file,
+                 "the run secret (`rths pki secret FILE`, mode 0600); default: $" +
+                     std::string(security::kSecretFileEnv) + " or $" + security::kSecretEnv);
+  app.add_flag("--insecure", secret.insecure,
+               "run without a run secret or DDS Security: any participant on the domain can then "
+               "speak as the coordinator to this node");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -49,6 +57,8 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     if (!security_dir.empty())  // refused here, before the participant exists
       options.participant_properties =
           security::participant_properties(security::check_node_security(security_dir, node_id));
+    secret.dds_security = !security_dir.empty();
+    options.run_secret = security::resolve_run_secret(secret);
     if (run_id.empty())
       throw std::invalid_argument(
           "give --run-id (or deployment.run_id in --config): the coordinator accepts only "
@@ -63,7 +73,12 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     options.node_id = node_id;
     transport::DdsEndpoint endpoint(options);
     auto service = factory(node_id, run_id);
-    return run_node(endpoint, *service, loop);
+    const int code = run_node(endpoint, *service, loop);
+    const transport::Unauthenticated dropped = endpoint.unauthenticated();
+    if (dropped.count > 0)
+      spdlog::warn("{}: {} messages dropped unread as unauthenticated (no valid MAC); newest: {}",
+                   service->label(), dropped.count, dropped.last);
+    return code;
   } catch (const std::exception& e) {
     std::cerr << program << " (node " << node_id << "): " << e.what() << "\n";
     return 3;

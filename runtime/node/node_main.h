@@ -6,6 +6,8 @@
 //   <program> --node-id N [--domain D | --config STUDY] --run-id ID [--assign-timeout S]
 //             (the run id may come from the config's deployment.run_id instead; none: exit 2)
 //             [--security DIR/node_N]   (DDS Security; bad documents: exit 2 before DDS starts)
+//             [--secret-file FILE | --insecure]  (the run secret, security/run_secret.h; none
+//             and neither DDS Security nor --insecure: exit 2 before DDS starts)
 
 #include <functional>
 #include <memory>

@@ -25,6 +25,9 @@ done
 podman info >/dev/null 2>&1 || skip "podman cannot run here: $(podman info 2>&1 | tail -1)"
 
 out="$(mktemp -d /tmp/rths-compose.XXXXXX)"
+# The run secret the compose file hands every service, from this shell's environment.
+RTHS_RUN_SECRET=$(openssl rand -hex 32)
+export RTHS_RUN_SECRET
 # podman-compose inside the namespace, with the compose file's RTHS_* settings for this test.
 compose=(nsenter --net="/run/netns/$tag" env RTHS_IMAGE="$image" RTHS_OUT="$out" RTHS_DOMAIN=152
          RTHS_DURATION=0.5 RTHS_ACTUATOR_ONE_WAY_DELAY=$delay

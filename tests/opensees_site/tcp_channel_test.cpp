@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "generic_client.h"
 
 namespace rths::opensees {
@@ -41,6 +43,26 @@ TEST(TcpChannel, ReadsExactlyAndTellsCloseTruncationAndTimeout) {
   EXPECT_EQ(r.bytes, 3u);
   r = server->read_exact(got, sizeof got, std::chrono::seconds(2));
   EXPECT_EQ(r.status, Connection::Read::kClosed);
+}
+
+// A client that never reads its answers: once the socket's buffers are full, a write fails after
+// the send timeout, naming the client, instead of blocking the site (65 s were measured).
+TEST(TcpChannel, AClientThatStopsReadingFailsTheWriteAfterTheSendTimeout) {
+  Listener listener("127.0.0.1", 0);
+  test::GenericClient client(listener.port(), 1, 8);
+  auto server = listener.accept(std::chrono::seconds(2));
+  ASSERT_TRUE(server.has_value());
+  server->set_send_timeout(std::chrono::milliseconds(100));
+  const std::vector<char> chunk(1 << 20, 'x');
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    for (int i = 0; i < 1024; ++i) server->write_all(chunk.data(), chunk.size());
+    FAIL() << "1 GiB written to a client that reads nothing";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("read nothing for the send timeout"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));
 }
 
 TEST(TcpChannel, FurtherClientsAreClosedWhileOneIsServed) {

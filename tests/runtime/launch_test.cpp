@@ -1,12 +1,17 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74 and 18).
+// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18, 165, 167).
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <regex>
 #include <sstream>
+#include <thread>
 
+#include "runtime/node/schema.h"
 #include "test_support.h"
 
 namespace rths {
@@ -55,6 +60,42 @@ TEST(Launch, RunsEveryCaseAndWritesRecordsResultsAndASummary) {
   EXPECT_TRUE(std::filesystem::exists(out / "results.csv"));
   EXPECT_TRUE(std::filesystem::exists(out / "summary.txt"));
   EXPECT_TRUE(std::filesystem::exists(out / "logs" / "reference" / "coordinator.log"));
+}
+
+// A stranger tries to take node 1's place from its announcement on (tests/support's rths_rogue,
+// takeover: ANNOUNCE and READY as node 1, then an answer to every command) while `rths launch`
+// runs a case with a delay stage. launch's run secret authenticates every message, so the
+// stranger's are dropped unread: the run completes equal to the in-process run, and the secret
+// appears in no log.
+TEST(Launch, AStrangersTakeoverIsDroppedAndTheSecretIsInNoLog) {
+  runtime::ensure_dds_config();  // the stranger on the loopback DDS the launched processes use
+  const auto dir = test::scratch_dir("launch_takeover");
+  // Long enough (about a second of lockstep) for the stranger to learn the run id and attack.
+  const auto config =
+      test::write_config(dir, test::paper_frame_study(10, "deployment { domain_id: 165 }"));
+  const auto out = dir / "out";
+  util::ChildProcess rogue(
+      test::program("rths_rogue", "tests/support"),
+      {"--domain", "165", "--seconds", "60", "--mode", "takeover", "--every", "1"},
+      dir / "rogue.log");
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // discovered before the nodes announce
+  const Output o = run(kRths + " launch " + config.string() + " --case lag_shift_14ms " +
+                       "--no-plots --bin-dir " + RTHS_BINARY_DIR + " --out " + out.string());
+  rogue.terminate();
+  const std::string rogue_log = test::read_file(dir / "rogue.log");
+  ASSERT_EQ(o.code, 0) << o.out << rogue_log;
+  EXPECT_NE(rogue_log.find("ANNOUNCE + READY as node 1: "), std::string::npos) << rogue_log;
+  const auto record = runtime::read_record(out / "lag_shift_14ms.rthsrec");
+  ASSERT_NE(record.footer(), nullptr);
+  EXPECT_EQ(record.footer()->status(), "completed");
+  test::expect_record_equals(record,
+                             test::reference_result(test::read_file(config), "lag_shift_14ms"));
+  const std::string log = test::read_file(out / "logs" / "lag_shift_14ms" / "coordinator.log");
+  EXPECT_NE(log.find("dropped unread; newest: kind "), std::string::npos) << log;
+  const std::regex secret("[0-9a-f]{64}");
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(out / "logs"))
+    if (entry.is_regular_file())
+      EXPECT_FALSE(std::regex_search(test::read_file(entry.path()), secret)) << entry.path();
 }
 
 std::vector<std::string> header_of(const std::filesystem::path& csv) {
@@ -236,6 +277,83 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   EXPECT_EQ(j["rows"].get<long>(), steps);  // only the footer was cut
 
   EXPECT_EQ(run(kRths + " export /nonexistent.rthsrec --csv " + csv.string()).code, 2);
+
+  // Cut exactly where the footer began: no entry is cut, and still it reads as truncated.
+  const auto& offsets = launched.record.offsets;
+  std::filesystem::resize_file(record, offsets.back());
+  o = run(kRths + " export " + record.string() + " --csv " + csv.string() + " --json");
+  ASSERT_EQ(o.code, 0) << o.out;
+  EXPECT_TRUE(nlohmann::json::parse(o.out)["truncated"].get<bool>()) << o.out;
+}
+
+// The header is written again before the footer: a flipped byte in the first copy loses no step
+// (the export still names the damage and exits 1).
+TEST(Export, AFlippedHeaderByteLosesNoStep) {
+  runtime::ensure_dds_config();
+  const auto launched =
+      test::launch("export_header", test::paper_frame_study(0.5, ""), "lag_shift_14ms", 167);
+  ASSERT_EQ(launched.launch.coordinator_exit, 0);
+  const auto& entries = launched.record.entries;
+  ASSERT_TRUE(entries.front().has_header());
+  ASSERT_TRUE(entries[entries.size() - 2].has_header()) << "the header again, before the footer";
+  const auto record = launched.dir / "run.rthsrec";
+  {
+    std::fstream bytes(record, std::ios::in | std::ios::out | std::ios::binary);
+    bytes.seekg(static_cast<std::streamoff>(launched.record.offsets.front() + 20));
+    const char c = static_cast<char>(bytes.get());
+    bytes.seekp(static_cast<std::streamoff>(launched.record.offsets.front() + 20));
+    bytes.put(static_cast<char>(c ^ 0x40));
+  }
+  const auto csv = launched.dir / "run.csv";
+  const Output o = run(kRths + " export " + record.string() + " --csv " + csv.string() + " --json");
+  EXPECT_EQ(o.code, 1) << o.out;
+  const auto j = nlohmann::json::parse(o.out);
+  EXPECT_EQ(j["rows"].get<long>(), static_cast<long>(launched.record.steps().size()));
+  EXPECT_EQ(j["damaged_regions"].get<long>(), 1);
+}
+
+// Records whose checksums hold but whose meaning does not: each problem named with its entry,
+// exit 1; a header that cannot size a table writes nothing (never bad_alloc).
+TEST(Export, NamesImplausibleEntriesAndExits1) {
+  const auto dir = test::scratch_dir("export_implausible");
+  const auto write = [&dir](const std::string& name, int schema, int dofs, double u) {
+    std::string bytes(runtime::record_preamble());
+    runtime::RecordEntry entry;
+    entry.mutable_header()->set_schema_version(static_cast<std::uint32_t>(schema));
+    entry.mutable_header()->set_dofs(dofs);
+    runtime::append_record_frame(entry, bytes);
+    for (int k : {0, 1, 1}) {
+      entry.Clear();
+      entry.mutable_step()->set_step(k);
+      entry.mutable_step()->add_displacement(k == 1 ? u : 0.0);
+      runtime::append_record_frame(entry, bytes);
+    }
+    entry.Clear();
+    entry.mutable_footer()->set_status("completed");
+    runtime::append_record_frame(entry, bytes);
+    std::ofstream(dir / name, std::ios::binary) << bytes;
+    return dir / name;
+  };
+  const auto csv = (dir / "out.csv").string();
+  const Output nonsense =
+      run(kRths + " export " + write("nonsense.rthsrec", 999, 1, std::nan("")).string() +
+          " --csv " + csv + " --json");
+  EXPECT_EQ(nonsense.code, 1) << nonsense.out;
+  const auto j = nlohmann::json::parse(nonsense.out);
+  const std::string problems = j["problems"].dump();
+  EXPECT_NE(problems.find("entry 0 (header): schema version 999"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("entry 2 (step 1): displacement[0] is not finite"), std::string::npos)
+      << problems;
+  EXPECT_NE(problems.find("entry 3 (step 1): comes after step 1 (a duplicate)"), std::string::npos)
+      << problems;
+  for (int dofs : {-1, 100000}) {
+    std::filesystem::remove(csv);
+    const Output huge =
+        run(kRths + " export " + write("dofs.rthsrec", runtime::kSchemaVersion, dofs, 0).string() +
+            " --csv " + csv);
+    EXPECT_EQ(huge.code, 1) << dofs;
+    EXPECT_FALSE(std::filesystem::exists(csv)) << dofs;
+  }
 }
 
 }  // namespace

@@ -24,7 +24,7 @@ DdsEndpointOptions node_options(std::int32_t id, const std::string& prefix) {
 }
 
 TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_exchange", 64, {}});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_exchange", 64, {}, {}});
   DdsEndpoint node1(node_options(1, "t_exchange")), node2(node_options(2, "t_exchange"));
   coordinator.listen_to(1);
   coordinator.listen_to(2);
@@ -66,7 +66,7 @@ TEST_F(DdsTransport, CoordinatorAndNodesExchangeMessagesAddressedByNodeId) {
 // The envelope's node id is a claim; the topic and the writer say who sent it. Node 1 claiming
 // to be node 2 arrives stamped as node 1's topic, from another writer than node 2's.
 TEST_F(DdsTransport, EachNodeSpeaksOnItsOwnTopicAndWriter) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_own", 64, {}});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_own", 64, {}, {}});
   DdsEndpoint node1(node_options(1, "t_own")), node2(node_options(2, "t_own"));
   coordinator.listen_to(1);
   coordinator.listen_to(2);
@@ -107,7 +107,7 @@ TEST_F(DdsTransport, EachNodeSpeaksOnItsOwnTopicAndWriter) {
 // One topic per addressee: a command for node 2 never reaches node 1's process at all (on a
 // shared topic it woke node 1 to be thrown away), while a broadcast reaches both.
 TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_addressed", 64, {}});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_addressed", 64, {}, {}});
   DdsEndpoint node1(node_options(1, "t_addressed")), node2(node_options(2, "t_addressed"));
   coordinator.listen_to(1);
   coordinator.listen_to(2);
@@ -141,8 +141,50 @@ TEST_F(DdsTransport, AnAddressedMessageReachesOnlyItsNodesProcess) {
   EXPECT_EQ(node2.samples_taken(), 21u);
 }
 
+// With a run secret, what a participant without it (or with another) sends is dropped on the
+// receive thread before the handler or receive() sees it, both ways, counted and named; what the
+// run's own processes send arrives as before.
+TEST_F(DdsTransport, WithARunSecretOnlyAuthenticatedMessagesArrive) {
+  const std::string secret(64, 'c');
+  DdsEndpoint coordinator({kDomain, true, 0, "t_mac", 64, {}, secret});
+  DdsEndpointOptions own = node_options(1, "t_mac");
+  own.run_secret = secret;
+  DdsEndpointOptions stranger = node_options(1, "t_mac");
+  stranger.run_secret = std::string(64, 'd');
+  DdsEndpoint node1(own), plain(node_options(1, "t_mac")), other_key(stranger);
+  coordinator.listen_to(1);
+  coordinator.wait_for_match(0, 3, 5000ms);
+  Message m;
+  m.run_id = "r";
+  m.node_id = 1;
+  m.kind = 3;
+  m.step = 4;
+  m.payload = "ready";
+  plain.send(m);
+  other_key.send(m);
+  node1.send(m);
+  const auto got = coordinator.receive(2s);
+  ASSERT_TRUE(got.has_value());
+  EXPECT_EQ(got->payload, "ready");
+  EXPECT_FALSE(coordinator.receive(200ms).has_value()) << "a stranger's message arrived";
+  const Unauthenticated dropped = coordinator.unauthenticated();
+  EXPECT_EQ(dropped.count, 2u);
+  EXPECT_NE(dropped.last.find("kind 3 as node 1 on node 1's topic, writer "), std::string::npos)
+      << dropped.last;
+  // Down: the coordinator's command reaches its node; a stranger coordinator's does not.
+  DdsEndpoint plain_coordinator({kDomain, true, 0, "t_mac", 64, {}, {}});
+  m.kind = 4;
+  plain_coordinator.send(m);
+  coordinator.send(m);
+  const auto command = node1.receive(2s);
+  ASSERT_TRUE(command.has_value());
+  EXPECT_NE(command->writer, 0u);
+  EXPECT_FALSE(node1.receive(200ms).has_value());
+  EXPECT_EQ(node1.unauthenticated().count, 1u);
+}
+
 TEST_F(DdsTransport, InterruptWakesABlockedReceive) {
-  DdsEndpoint coordinator({kDomain, true, 0, "t_interrupt", 64, {}});
+  DdsEndpoint coordinator({kDomain, true, 0, "t_interrupt", 64, {}, {}});
   const auto start = std::chrono::steady_clock::now();
   std::thread waker([&] {
     std::this_thread::sleep_for(100ms);
@@ -154,7 +196,7 @@ TEST_F(DdsTransport, InterruptWakesABlockedReceive) {
 }
 
 TEST_F(DdsTransport, WaitForMatchTimesOutWithCounts) {
-  DdsEndpoint lonely({kDomain, true, 0, "t_lonely", 64, {}});
+  DdsEndpoint lonely({kDomain, true, 0, "t_lonely", 64, {}, {}});
   try {
     lonely.wait_for_match(1, 1, 50ms);
     FAIL();

@@ -8,17 +8,23 @@
 //              echoing the command's stamp: the best forgery a stranger can make).
 //   first      as node 1: from the moment it learns the run id (node 1's ASSIGN), a FEEDBACK to
 //              step 1 every millisecond until it sees the command of step 1, then an echo of it.
+//   takeover   as node 1 before the coordinator pins it: from the moment it learns the run id
+//              (node 1's own ANNOUNCE on node 1's up topic, or its ASSIGN), an ANNOUNCE and a
+//              READY as node 1 every millisecond, then a FEEDBACK to every COMMAND of node 1.
+//   hold       as node 1, from the moment it learns the run id: a HOLD every millisecond.
+//   error      as node 1, from the moment it learns the run id: a READY carrying an error.
 //   control    never an answer; once the run's commands flow: as the coordinator, HOLD, STOP,
 //   ASSIGN and a COMMAND to nodes 1
 //              and 2 on their own command topics, addressed and as a broadcast; as node 2 on its
 //              own up topic, HOLD and ANNOUNCE (and an ANNOUNCE with an empty run id); garbage,
 //              another run's messages and replays of the commands it saw.
-// Stops after --seconds, or when it sees a STOP addressed to node 1 or 2.
+// Stops after --seconds, when it sees a STOP addressed to node 1 or 2, or on SIGTERM.
 // Prints "run <id>", then "sent <n>" and, per kind, what it sent. Exit 0 when it ran, 3 when DDS
 // refused (the reason on stderr), 2 for bad usage. (An insider with a lab certificate is
 // tests/security's dds_probe: DDS Security stops it before any message.)
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <csignal>
 #include <iostream>
 #include <map>
 #include <optional>
@@ -30,6 +36,10 @@
 namespace {
 
 using namespace rths;
+
+// SIGTERM ends the attack as --seconds would, so what was sent is still printed.
+volatile std::sig_atomic_t terminated = 0;
+void on_sigterm(int) { terminated = 1; }
 using Clock = std::chrono::steady_clock;
 
 struct Rogue {
@@ -70,8 +80,49 @@ void observe(Rogue& rogue, const transport::Message& m) {
     rogue.seen_commands.push_back(m);
 }
 
+// Node 1's own ANNOUNCE (read off its up topic) gives the run id before anything is assigned.
+void observe_announce(Rogue& rogue, const transport::Message& m) {
+  if (!rogue.run_id.empty() || m.kind != runtime::ANNOUNCE || m.run_id.empty()) return;
+  rogue.run_id = m.run_id;
+  std::cout << "run " << rogue.run_id << " (from node 1's announcement)" << std::endl;
+}
+
+// One round of the early forgeries (takeover, hold, error) as node 1 on its own up topic.
+void attack_early(Rogue& rogue, transport::DdsEndpoint& as_node1) {
+  const std::string& run = rogue.run_id;
+  if (rogue.mode == "takeover") {
+    runtime::Announce announce;
+    announce.set_schema_version(runtime::kSchemaVersion);
+    announce.set_node_id(1);
+    announce.set_kind(config::NodeSpec::SUBSTRUCTURE);
+    announce.set_host("rogue");
+    as_node1.send(runtime::pack(run, 1, runtime::ANNOUNCE, 0, announce));
+    runtime::Ready ready;
+    ready.set_node_id(1);
+    ready.set_storeys(1);
+    as_node1.send(runtime::pack(run, 1, runtime::READY, 0, ready));
+    rogue.count("ANNOUNCE + READY as node 1");
+  } else if (rogue.mode == "hold") {
+    runtime::Hold hold;
+    hold.set_reason("forged early hold");
+    as_node1.send(runtime::pack(run, 1, runtime::HOLD, 0, hold));
+    rogue.count("HOLD as node 1");
+  } else {
+    runtime::Ready ready;
+    ready.set_node_id(1);
+    ready.set_error("forged: cannot build");
+    as_node1.send(runtime::pack(run, 1, runtime::READY, 0, ready));
+    rogue.count("error READY as node 1");
+  }
+}
+
+bool early_mode(const std::string& mode) {
+  return mode == "takeover" || mode == "hold" || mode == "error";
+}
+
 void attack_answers(Rogue& rogue, transport::DdsEndpoint& as_node1, const transport::Message& m) {
   if (m.kind != runtime::COMMAND || m.run_id != rogue.run_id) return;
+  if (rogue.mode == "hold" || rogue.mode == "error") return;
   const bool first = rogue.mode == "first";
   if ((first && m.step == 1) || (!first && m.step % rogue.every == 0)) {
     as_node1.send(forged_answer(rogue.run_id, m.step, m.sent_ns));
@@ -127,17 +178,23 @@ int run(Rogue& rogue, int domain, double seconds) {
     return o;
   };
   const bool control = rogue.mode == "control";
+  const bool early = early_mode(rogue.mode);
   transport::DdsEndpoint watcher(options(false, control ? 2 : 1));
   std::optional<transport::DdsEndpoint> as_coordinator;
-  if (control) as_coordinator.emplace(options(true, 0));
+  if (control || early) as_coordinator.emplace(options(true, 0));
+  if (early) as_coordinator->listen_to(1);  // node 1's announcements: the run id, early
   const auto end = Clock::now() + std::chrono::duration<double>(seconds);
   auto next_round = Clock::now();
-  while (Clock::now() < end && !rogue.stop) {
+  while (Clock::now() < end && !rogue.stop && !terminated) {
     if (auto m = watcher.receive(std::chrono::milliseconds(1))) {
       observe(rogue, *m);
       if (!control) attack_answers(rogue, watcher, *m);
     }
+    if (early)
+      while (auto m = as_coordinator->receive(std::chrono::nanoseconds(0)))
+        observe_announce(rogue, *m);
     if (rogue.run_id.empty()) continue;
+    if (early) attack_early(rogue, watcher);
     if (rogue.mode == "first" && !rogue.running) {
       watcher.send(forged_answer(rogue.run_id, 1, 0));
       rogue.count("forged answer");
@@ -166,10 +223,11 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain)->required();
   app.add_option("--mode", rogue.mode)
       ->required()
-      ->check(CLI::IsMember({"answers", "first", "control"}));
+      ->check(CLI::IsMember({"answers", "first", "takeover", "hold", "error", "control"}));
   app.add_option("--every", rogue.every)->check(CLI::PositiveNumber);
   app.add_option("--seconds", seconds);
   CLI11_PARSE(app, argc, argv);
+  std::signal(SIGTERM, on_sigterm);
   try {
     return run(rogue, domain, seconds);
   } catch (const std::exception& e) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <sched.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -44,6 +45,20 @@ TEST(ChildProcessTest, ReportsTheExitCodeAndLogsStdoutAndStderrWithTheEnvironmen
   EXPECT_NE(log.find("out value-42"), std::string::npos) << log;
   EXPECT_NE(log.find("err"), std::string::npos) << log;
   EXPECT_NE(child.log_tail(6).find("err"), std::string::npos);
+}
+
+// A log may name runs, hosts and tokens: it is its owner's alone, also one that existed before.
+TEST(ChildProcessTest, TheLogIsReadableByItsOwnerAlone) {
+  const auto dir = scratch("log_mode");
+  std::ofstream(dir / "old.log") << "before";
+  std::filesystem::permissions(dir / "old.log", std::filesystem::perms::all);
+  for (const char* name : {"new.log", "old.log"}) {
+    ChildProcess child("/bin/sh", {"-c", "echo hello"}, dir / name);
+    EXPECT_EQ(child.wait(), 0);
+    struct stat st {};
+    ASSERT_EQ(::stat((dir / name).c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 0777, 0600u) << name;
+  }
 }
 
 TEST(ChildProcessTest, RunsUnderAPrefixAsANamespaceLauncherWould) {
