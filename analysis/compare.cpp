@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
+#include "core/envelope_growth.h"
 #include "core/metrics.h"
 
 namespace rths::analysis {
@@ -108,6 +110,12 @@ Comparison compare(const core::SimulationResult& reference, const core::Simulati
   }
   worst.response = response.describe();
   return worst;
+}
+
+bool diverging(std::span<const double> u, double dt, double period, bool past_critical_delay) {
+  if (!past_critical_delay || !(dt > 0.0) || !(period > 0.0)) return false;
+  const std::optional<core::EnvelopeGrowth> growth = core::envelope_growth(u, dt, period);
+  return growth && growth->grows();
 }
 
 }  // namespace rths::analysis

@@ -79,4 +79,10 @@ Comparison compare(std::span<const double> reference, std::span<const double> re
 Comparison compare(const core::SimulationResult& reference, const core::SimulationResult& result,
                    const ResponseSpec& response);
 
+// `rths run`'s verdict beyond the 10x rule of compare(): a run past its critical delay whose
+// envelope grows exponentially over its last cycles of `period` (s; the governing mode's), u
+// sampled at dt (s), is diverging (core::envelope_growth, EnvelopeGrowth::grows). False when not
+// past, or when the record is too short to fit.
+bool diverging(std::span<const double> u, double dt, double period, bool past_critical_delay);
+
 }  // namespace rths::analysis

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "analysis/compare.h"
+#include "analysis/study_run.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/stability.h"
@@ -388,12 +389,13 @@ double joint_lag_search_window(const JointLagStudy& config) {
 }
 
 void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& reference,
-                           const std::vector<double>& u, bool stopped_early) {
+                           const std::vector<double>& u, bool stopped_early, double dt,
+                           double growth_period) {
   const Comparison c = compare(reference, u, stopped_early);
   point.nrmse = c.nrmse_pct / 100.0;
   point.paper_eq2 = c.paper_eq2_as_printed;
   point.peak_error = c.peak_error_m;
-  point.diverged = c.diverged;
+  point.diverged = c.diverged || diverging(u, dt, growth_period, point.past_boundary);
 }
 
 JointLagStudy load_joint_lag(const std::filesystem::path& path) {
@@ -496,7 +498,11 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
       point.actuator_lag = actuator;
       if (const auto it = critical_at.find(actuator); it != critical_at.end() && it->second)
         point.past_boundary = round_trip >= *it->second;
-      fill_joint_lag_errors(point, u_ref, floor_history(run, 0), run.diverged);
+      // The growth is fitted at the governing mode's period, as `rths run` fits it.
+      const auto check =
+          point.past_boundary ? check_case_critical_delay(prepared, joint, 0.0) : std::nullopt;
+      fill_joint_lag_errors(point, u_ref, floor_history(run, 0), run.diverged, prepared.base.dt,
+                            check ? check->governing_period : 0.0);
       if (!point.diverged) {
         point.measured_total_lag = core::j1_delay(
             column_of(run.command, 0), column_of(run.realised, 0), prepared.base.dt, window);

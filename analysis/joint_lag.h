@@ -118,7 +118,7 @@ nlohmann::json to_json(const JointLagResult& result);
 // the in-process run of the lags its response sees (a lockstep run says plainly that it cannot
 // check the map's network axis).
 std::string to_text(const JointLagResult& result);
-// Grid and across-sites points that diverged (the one rule: analysis::compare).
+// Grid and across-sites points that diverged (fill_joint_lag_errors' verdict).
 std::size_t diverged_points(const JointLagResult& result);
 
 // --- shared with the across-sites runner -------------------------------------------------------
@@ -127,10 +127,13 @@ config::DelayStage joint_lag_actuator_stage(JointLagStudy::ActuatorModel model, 
 // The J1 search window (s): max_lag_search, or 2 x the largest injected total + 10 ms.
 double joint_lag_search_window(const JointLagStudy& config);
 // NRMSE, the paper's Eq. 2, the peak error of `u` against `reference` (m) over their common
-// length (a diverged run is shorter) and the verdict, into `point`: analysis::compare, the one
-// divergence rule of every command (stopped early, not finite, or grown past
-// core::kDivergenceGrowth times the reference's peak).
+// length (a diverged run is shorter) and the verdict, into `point`, as `rths run` judges a case:
+// analysis::compare (stopped early, not finite, or grown past core::kDivergenceGrowth times the
+// reference's peak), or past the stability boundary (point.past_boundary) with an envelope that
+// grows exponentially over its last cycles of `growth_period` (s; analysis::diverging, u sampled
+// at dt, s). growth_period 0: compare's rule alone.
 void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& reference,
-                           const std::vector<double>& u, bool stopped_early);
+                           const std::vector<double>& u, bool stopped_early, double dt = 0.0,
+                           double growth_period = 0.0);
 
 }  // namespace rths::analysis

@@ -2,8 +2,6 @@
 // Fig. 3, the force-displacement loops the integrator sees and the tracking of each actuator.
 #include <algorithm>
 #include <cmath>
-#include <exception>
-#include <future>
 #include <sstream>
 
 #include "analysis/study_run.h"
@@ -77,14 +75,14 @@ util::Series force_loop(const CaseOutcome& c, const std::string& label, const st
 // force_displacement.png: what the integrator sees of the experimental part, one panel per case
 // with the reference drawn over it, thin and dark. Without lag the reference's loop is a line
 // that every lagged case's ellipse would cover on a shared panel, and cases with near-equal
-// loops would cover each other. A diverged case has no loop worth drawing.
-void write_force_displacement(const std::string& study,
-                              const std::vector<const CaseOutcome*>& drawn,
-                              const CaseOutcome& reference, const std::filesystem::path& png) {
+// loops would cover each other. A diverged case has no loop worth drawing. No panel: no figure.
+std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
+                                                      const std::vector<const CaseOutcome*>& drawn,
+                                                      const CaseOutcome& reference) {
   const auto has_loop = [](const CaseOutcome& c) {
     return c.simulation.command.cols() > 0 && !c.diverged();
   };
-  if (!has_loop(reference)) return;
+  if (!has_loop(reference)) return {};
   const util::Series over =
       force_loop(reference, reference.name + " (drawn over)", "lines lc rgb '#222222' dt 1 lw 1.2");
   std::vector<util::PlotSpec> panels;
@@ -117,16 +115,17 @@ void write_force_displacement(const std::string& study,
     alone.series = {force_loop(reference, reference.name, "lines lw 2")};
     panels.push_back(std::move(alone));
   }
-  util::write_png_panels(panels, png);
+  return panels;
 }
 
 // tracking.png, the RTHS benchmark's tracking figure: per case that drives an actuator and stayed
 // bounded, x_t (the command of the first actuator) and x_m (what it measured there), mm, over the
 // record, then the same over `zoom` s from `zoom_start` (s), where the lag between them shows.
-// Nothing when no such case.
-void write_tracking(const std::string& study, const std::vector<const CaseOutcome*>& drawn,
-                    const CaseOutcome& reference, double zoom_start, double zoom,
-                    const std::filesystem::path& png) {
+// No panel when no such case.
+std::vector<util::PlotSpec> tracking_panels(const std::string& study,
+                                            const std::vector<const CaseOutcome*>& drawn,
+                                            const CaseOutcome& reference, double zoom_start,
+                                            double zoom) {
   std::vector<util::PlotSpec> panels;
   for (const CaseOutcome* c : drawn) {
     if (c == &reference || c->diverged() || c->simulation.command.cols() == 0 ||
@@ -165,7 +164,7 @@ void write_tracking(const std::string& study, const std::vector<const CaseOutcom
     panels.push_back(std::move(whole));
     panels.push_back(std::move(close));
   }
-  if (!panels.empty()) util::write_png_panels(panels, png);
+  return panels;
 }
 
 }  // namespace
@@ -230,29 +229,16 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   // A stale tracking figure must not stay beside a study that has none.
   std::filesystem::remove(directory / "tracking.png");
   std::filesystem::remove(directory / "tracking.svg");
-  // The three figures are independent (each its own gnuplot and files): drawn at once, so their
-  // wall-clock time is the slowest one's where there are cores for them. Any failure is rethrown.
-  std::vector<std::future<void>> figures;
-  figures.push_back(std::async(
-      std::launch::async, [&] { util::write_png_panels(panels, directory / "displacement.png"); }));
-  figures.push_back(std::async(std::launch::async, [&] {
-    write_force_displacement(outcome.study_name, drawn, reference,
-                             directory / "force_displacement.png");
-  }));
-  figures.push_back(std::async(std::launch::async, [&] {
-    write_tracking(outcome.study_name, drawn, reference,
-                   strongest_window_start(reference.response, reference.simulation.dt, 1.0), 1.0,
-                   directory / "tracking.png");
-  }));
-  std::exception_ptr failure;
-  for (std::future<void>& figure : figures) {
-    try {
-      figure.get();
-    } catch (...) {
-      if (!failure) failure = std::current_exception();
-    }
-  }
-  if (failure) std::rethrow_exception(failure);
+  // One gnuplot draws the three figures: its start-up costs more than a decimated figure.
+  std::vector<util::Figure> figures = {{panels, directory / "displacement.png"}};
+  if (auto loops = force_displacement_panels(outcome.study_name, drawn, reference); !loops.empty())
+    figures.push_back({std::move(loops), directory / "force_displacement.png"});
+  const double tracking_start =
+      strongest_window_start(reference.response, reference.simulation.dt, 1.0);
+  if (auto tracking = tracking_panels(outcome.study_name, drawn, reference, tracking_start, 1.0);
+      !tracking.empty())
+    figures.push_back({std::move(tracking), directory / "tracking.png"});
+  util::write_png_figures(figures);
 }
 
 }  // namespace rths::analysis

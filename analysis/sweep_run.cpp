@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
@@ -28,11 +30,13 @@ bool is_linear(const config::RestoringForce& model) {
 }
 
 // Error measures of one point from the two displacement histories (analysis::compare). A diverged
-// point keeps its peaks; its error measures are inf (they measure nothing once it has grown).
+// point (compare's rule, or `diverging` as `rths run` judges it: past its critical delay with an
+// exponentially growing envelope) keeps its peaks; its error measures are inf (they measure
+// nothing once it grows).
 void fill_metrics(SweepRow& row, const std::vector<double>& reference, bool reference_diverged,
-                  const std::vector<double>& delayed, bool delayed_diverged) {
+                  const std::vector<double>& delayed, bool delayed_diverged, bool diverging) {
   const Comparison c = compare(reference, delayed, delayed_diverged);
-  row.diverged = reference_diverged || c.diverged;
+  row.diverged = reference_diverged || c.diverged || diverging;
   row.peak_reference = reference_diverged ? kInf : c.peak_reference_m;
   row.peak_delayed = delayed_diverged ? kInf : c.peak_m;
   if (row.diverged) {
@@ -74,6 +78,11 @@ class SweepRunner {
     rows_.resize(last_ - first_);
     per_period_ = grid.alphas().size() * grid.delays().size();
     per_group_ = per_period_ * grid.periods().size();
+    const CriticalDelayOf critical_delay = critical_delay_of(grid);
+    for (double period : grid.periods())
+      for (double alpha : grid.alphas())
+        for (double dt : grid.dts())
+          if (alpha > 0.0) critical_[{period, alpha, dt}] = critical_delay(period, alpha, dt);
   }
 
   std::vector<SweepRow> run() {
@@ -138,6 +147,16 @@ class SweepRunner {
 
   SweepRow& row_at(std::size_t index) { return rows_[index - first_]; }
 
+  // The point's lag is past its critical delay and its envelope grows exponentially (at the SDOF's
+  // period): what `rths run` calls diverging. The paper's Eq. 1 as printed is a lead (lag -delay).
+  bool diverging(const SweepPoint& point, const std::vector<double>& u) const {
+    if (!(point.alpha > 0.0) || !(point.delay > 0.0)) return false;
+    const double lag = grid_.delay_model() == config::Sweep::EQ1 ? -point.delay : point.delay;
+    const auto it = critical_.find({point.period, point.alpha, point.dt});
+    const bool past = it != critical_.end() && it->second && lag >= *it->second;
+    return analysis::diverging(u, point.dt, point.period, past);
+  }
+
   std::size_t run_general(const Item& item) {
     const GroupKey key = group_key(item.group);
     const core::GroundMotion& motion = grid_.motion_at(key.motion, key.dt_index);
@@ -173,8 +192,9 @@ class SweepRunner {
           const core::SimulationResult result = core::simulate(delayed, motion);
           SweepRow& row = row_at(index);
           row.point = grid_.point(index);
-          fill_metrics(row, reference_u, reference.diverged, floor_history(result, 0),
-                       result.diverged);
+          const std::vector<double> u = floor_history(result, 0);
+          fill_metrics(row, reference_u, reference.diverged, u, result.diverged,
+                       diverging(row.point, u));
           ++done;
         }
       }
@@ -226,7 +246,7 @@ class SweepRunner {
         SweepRow& row = row_at(index);
         row.point = grid_.point(index);
         fill_metrics(row, reference[offset], reference_outcome[offset].diverged, delayed[l],
-                     outcome[l].diverged);
+                     outcome[l].diverged, diverging(row.point, delayed[l]));
         ++done;
       }
     }
@@ -237,6 +257,8 @@ class SweepRunner {
   const SweepOptions& options_;
   std::size_t first_ = 0, last_ = 0, per_period_ = 1, per_group_ = 1;
   std::vector<Item> items_;
+  // (period, alpha, dt) -> critical delay (s); empty: stable for every delay.
+  std::map<std::tuple<double, double, double>, std::optional<double>> critical_;
   std::vector<SweepRow> rows_;
   std::mutex progress_mutex_;
   std::size_t completed_ = 0;

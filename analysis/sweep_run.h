@@ -4,7 +4,9 @@
 // Per grid point (SI units): the reference is the purely numerical structure (alpha = 0) without
 // delay; the delayed run splits the storey into (1 - alpha) k numerical and alpha k experimental
 // behind the delay. Outputs: peak |u| of both (m), the paper's Eq. 2 as printed, NRMSE (%), peak
-// error (m), and whether the delayed run diverged (then the error measures are inf).
+// error (m), and whether the delayed run diverged (then the error measures are inf): stopped, grew
+// past 10x the reference, or past its critical delay with an exponentially growing envelope
+// (analysis::diverging, as `rths run` judges a case).
 //
 // Linear SDOF cases with explicit Newmark and a shift (or no) delay run on the SIMD batch kernel
 // (analysis/batch_kernel.h); everything else through core::simulate. Both agree to round-off,
@@ -24,7 +26,9 @@ struct SweepRow {
   SweepPoint point;
   double peak_reference = 0, peak_delayed = 0;          // m
   double eq2_paper = 0, nrmse_pct = 0, peak_error = 0;  // -, %, m (inf when diverged)
-  bool diverged = false;  // analysis::compare: stopped, not finite, or grew past 10x the reference
+  // analysis::compare: stopped, not finite, or grew past 10x the reference; or diverging as
+  // `rths run` judges it: past its critical delay, its envelope growing exponentially.
+  bool diverged = false;
 };
 
 struct SweepOptions {

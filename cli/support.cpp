@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <iostream>
 #include <memory>
 
@@ -297,12 +298,22 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
   std::filesystem::create_directories(out);
   const results::Format kind = results::parse_format(format);
   const std::filesystem::path results = out / ("results" + results::extension(kind));
-  results::write_table(results::study_table(outcome), results, kind);
   for (const std::string& file : analysis::study_plot_files()) {
     // A folder must not show plots of an earlier run beside this run's CSV.
     if (!plots) std::filesystem::remove(out / file);
   }
-  if (plots) analysis::write_study_plots(outcome, out);
+  // The figures are drawn (gnuplot processes, waited on by a thread) while this thread writes the
+  // results table, so their time overlaps; a failure of either leaves after both are done.
+  std::future<void> figures;
+  if (plots)
+    figures = std::async(std::launch::async, [&] { analysis::write_study_plots(outcome, out); });
+  try {
+    results::write_table(results::study_table(outcome), results, kind);
+  } catch (...) {
+    if (figures.valid()) figures.wait();
+    throw;
+  }
+  if (figures.valid()) figures.get();
   const nlohmann::json summary = analysis::study_summary_json(outcome);
   util::AtomicFile json_file(out / "summary.json");
   json_file.stream() << summary.dump(2) << "\n";

@@ -81,8 +81,8 @@ std::optional<std::string> closest(const std::string& word,
 // message, or empty when the words are known.
 std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv);
 
-// results.csv (removing stale plots when plots are off), plots, summary.json/.txt; prints the
-// summary (JSON or text).
+// results.csv and the plots (drawn at once; stale plots removed when plots are off), then
+// summary.json/.txt; prints the summary (JSON or text).
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format = "csv");
 // A study with a benchmark section: J1-J9 of its cases (analysis::evaluate_benchmark) written to

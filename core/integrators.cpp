@@ -1,5 +1,7 @@
 #include "core/integrators.h"
 
+#include "core/exact_zoh.h"
+
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -15,6 +17,7 @@ std::string to_string(IntegratorKind kind) {
     case IntegratorKind::kNewmarkAverageAcceleration: return "newmark-average-acceleration";
     case IntegratorKind::kAlphaOS: return "alpha-os";
     case IntegratorKind::kKRAlpha: return "kr-alpha";
+    case IntegratorKind::kExactZoh: return "exact-zoh";
   }
   return "unknown";
 }
@@ -30,9 +33,10 @@ IntegratorKind integrator_from_string(const std::string& name) {
   }
   if (name == "alpha-os" || name == "alphaos") return IntegratorKind::kAlphaOS;
   if (name == "kr-alpha" || name == "kralpha") return IntegratorKind::kKRAlpha;
+  if (name == "exact-zoh" || name == "zoh") return IntegratorKind::kExactZoh;
   throw std::invalid_argument("unknown integrator '" + name +
                               "': expected explicit-newmark, central-difference, chen-ricles, "
-                              "newmark-average-acceleration, alpha-os or kr-alpha");
+                              "newmark-average-acceleration, alpha-os, kr-alpha or exact-zoh");
 }
 
 double stability_limit(IntegratorKind kind) {
@@ -42,7 +46,8 @@ double stability_limit(IntegratorKind kind) {
     case IntegratorKind::kChenRicles:
     case IntegratorKind::kNewmarkAverageAcceleration:
     case IntegratorKind::kAlphaOS:
-    case IntegratorKind::kKRAlpha: return std::numeric_limits<double>::infinity();
+    case IntegratorKind::kKRAlpha:
+    case IntegratorKind::kExactZoh: return std::numeric_limits<double>::infinity();
   }
   return 0.0;
 }
@@ -343,6 +348,10 @@ std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const Structura
     case IntegratorKind::kChenRicles: return std::make_unique<ChenRicles>(model, dt);
     case IntegratorKind::kNewmarkAverageAcceleration:
       return std::make_unique<NewmarkAverageAcceleration>(model, dt);
+    case IntegratorKind::kExactZoh:
+      return make_exact_zoh_integrator(
+          model, dt,
+          parameters.exact_stiffness.size() > 0 ? parameters.exact_stiffness : model.stiffness);
   }
   throw std::invalid_argument("unknown integrator kind");
 }

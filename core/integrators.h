@@ -38,6 +38,11 @@
 //                       adds high-frequency dissipation. Neither needs a dt limit, so neither
 //                       refuses a dt: they refuse parameters outside those ranges instead, naming
 //                       the range.
+//   EXACT_ZOH           the structure's linear part K_x integrated exactly over the step (matrix
+//                       exponential), the rest of the restoring force (the measured
+//                       experimental force) held over it at its value of the step before, the
+//                       load linear between samples: core/exact_zoh.h. Exact for a linear
+//                       structure without a held part; no dt limit.
 // v~ is the velocity the integrator has computed when it sends u+; the paper's Eq. 1 uses it.
 
 #include <functional>
@@ -54,13 +59,17 @@ enum class IntegratorKind {
   kChenRicles,
   kNewmarkAverageAcceleration,
   kAlphaOS,
-  kKRAlpha
+  kKRAlpha,
+  kExactZoh
 };
 
 // Parameters of the dissipative schemes (defaults: no numerical dissipation).
 struct IntegratorParameters {
   double alpha_os = 1.0;      // ALPHA_OS alpha, in [2/3, 1]
   double rho_infinity = 1.0;  // KR_ALPHA spectral radius at infinite frequency, in [0, 1]
+  // EXACT_ZOH: the linear stiffness integrated exactly (N/m, n x n; a hybrid run's numerical
+  // part K - K_e); empty: the model's whole stiffness.
+  Mat exact_stiffness;
 };
 
 std::string to_string(IntegratorKind kind);

@@ -30,13 +30,26 @@ void require_motion_at_dt(const HybridSetup& setup, const GroundMotion& motion_a
   }
 }
 
+// EXACT_ZOH integrates the numerical part exactly and holds the experimental force: K_x is the
+// model's initial stiffness less the experimental parts' (the whole of it without any).
+IntegratorParameters integrator_parameters(const HybridSetup& setup) {
+  IntegratorParameters parameters;
+  if (setup.integrator != IntegratorKind::kExactZoh) return parameters;
+  const Mat experimental = setup.partition.experimental_stiffness();
+  parameters.exact_stiffness = setup.model.stiffness;
+  if (experimental.rows() == setup.model.stiffness.rows())
+    parameters.exact_stiffness -= experimental;
+  return parameters;
+}
+
 }  // namespace
 
 void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
                HybridEvaluator& restoring, StepHooks& hooks, const SimulationOptions& options,
                SimulationResult& result) {
   require_motion_at_dt(setup, motion_at_dt);
-  auto integrator = make_integrator(setup.integrator, setup.model, setup.dt);
+  auto integrator =
+      make_integrator(setup.integrator, setup.model, setup.dt, integrator_parameters(setup));
 
   const int dofs = setup.model.dofs();
   const int actuators = restoring.actuators();

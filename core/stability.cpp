@@ -77,6 +77,7 @@ Vec advance(IntegratorKind kind, const SdofParameters& p, double dt, int n, cons
       break;
     case IntegratorKind::kAlphaOS:
     case IntegratorKind::kKRAlpha:
+    case IntegratorKind::kExactZoh:
       throw std::invalid_argument("stability: the discrete delay analysis does not cover " +
                                   to_string(kind) + " yet");
     case IntegratorKind::kNewmarkAverageAcceleration: {
@@ -402,7 +403,8 @@ std::string CriticalDelayCheck::describe() const {
 }
 
 bool discrete_analysis_covers(IntegratorKind kind) {
-  return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha;
+  return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha &&
+         kind != IntegratorKind::kExactZoh;
 }
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,

@@ -135,7 +135,8 @@ struct CriticalDelayCheck {
   std::optional<double> discrete;    // s; empty: none found up to the searched steps
   int discrete_searched_steps = 0;   // n searched for the discrete limit
   // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
-  // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
+  // alpha-os, kr-alpha, exact-zoh); empty when it was. The run goes ahead on the continuous limit
+  // alone.
   std::string discrete_skipped;
   std::string assumed;              // what the check assumed (modal approximation...)
   int governing_mode = 1;           // 1-based mode with the smallest continuous delay
@@ -151,7 +152,8 @@ struct CriticalDelayCheck {
   std::string describe() const;
 };
 
-// False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha).
+// False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha,
+// exact-zoh).
 bool discrete_analysis_covers(IntegratorKind kind);
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,

@@ -489,7 +489,8 @@ constexpr std::pair<config::Integrator::Kind, IntegratorKind> kIntegratorKinds[]
     {config::Integrator::CHEN_RICLES, IntegratorKind::kChenRicles},
     {config::Integrator::NEWMARK_AVERAGE_ACCELERATION, IntegratorKind::kNewmarkAverageAcceleration},
     {config::Integrator::ALPHA_OS, IntegratorKind::kAlphaOS},
-    {config::Integrator::KR_ALPHA, IntegratorKind::kKRAlpha}};
+    {config::Integrator::KR_ALPHA, IntegratorKind::kKRAlpha},
+    {config::Integrator::EXACT_ZOH, IntegratorKind::kExactZoh}};
 }  // namespace
 
 IntegratorKind integrator_kind(const config::Integrator& integrator) {

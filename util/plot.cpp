@@ -118,7 +118,44 @@ std::vector<std::size_t> drawn_points(const PlotSpec& spec, const Series& s) {
   return simplify_path(s, lo, hi, y_lo, y_hi, spec.width, std::max(1, spec.height));
 }
 
-void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t title_width) {
+// The datablock holding series `series` of panel `panel` of figure `tag` (figure_data).
+std::string block_name(const std::string& tag, std::size_t panel, std::size_t series) {
+  std::string name = "$";
+  name += tag;
+  name += 'p';
+  name += std::to_string(panel);
+  name += 's';
+  name += std::to_string(series);
+  return name;
+}
+
+// Every series' drawn points as gnuplot datablocks, once for both terminals of a figure (each
+// terminal re-reading the points inline doubled gnuplot's parsing and the simplification).
+std::string figure_data(const std::vector<PlotSpec>& panels, const std::string& tag) {
+  std::ostringstream data;
+  data.precision(10);
+  for (std::size_t p = 0; p < panels.size(); ++p) {
+    const PlotSpec& spec = panels[p];
+    for (std::size_t i = 0; i < spec.series.size(); ++i) {
+      const Series& s = spec.series[i];
+      data << block_name(tag, p, i) << " << EOD\n";
+      for (std::size_t k : drawn_points(spec, s)) {
+        // gnuplot cannot draw non-finite points (and zero on a log axis); leave a gap instead.
+        if (std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(spec.log_y && s.y[k] <= 0) &&
+            !(spec.log_x && s.x[k] <= 0)) {
+          data << s.x[k] << ' ' << s.y[k] << '\n';
+        } else {
+          data << '\n';
+        }
+      }
+      data << "EOD\n";
+    }
+  }
+  return data.str();
+}
+
+void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::string& tag,
+                  std::size_t panel, std::size_t title_width) {
   script << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
          << "set ylabel " << quoted(spec.ylabel) << "\n"
@@ -150,31 +187,21 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, std::size_t 
     const auto has = [&](const char* option) {
       return (" " + style + " ").find(option) != std::string::npos;
     };
-    script << (i ? ", " : "") << "'-' using 1:2 with " << style;
+    script << (i ? ", " : "") << block_name(tag, panel, i) << " using 1:2 with " << style;
     if (!has(" lc ") && !has(" linecolor ")) script << " lc rgb '" << kPalette[colour] << "'";
     if (!has(" dt ") && !has(" dashtype ")) script << " dt " << dash;
     script << " title " << quoted(spec.series[i].title);
   }
   script << "\n";
-  for (const Series& s : spec.series) {
-    for (std::size_t k : drawn_points(spec, s)) {
-      // gnuplot cannot draw non-finite points (and zero on a log axis); leave a gap instead.
-      if (std::isfinite(s.x[k]) && std::isfinite(s.y[k]) && !(spec.log_y && s.y[k] <= 0) &&
-          !(spec.log_x && s.x[k] <= 0)) {
-        script << s.x[k] << ' ' << s.y[k] << '\n';
-      } else {
-        script << '\n';
-      }
-    }
-    script << "e\n";
-  }
 }
 
-std::string figure(const std::vector<PlotSpec>& panels, const std::string& terminal,
-                   const std::filesystem::path& file) {
+std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
+                   const std::string& terminal, const std::filesystem::path& file) {
   std::ostringstream script;
   const int height = panels.front().height * static_cast<int>(panels.size());
+  // One gnuplot may draw several figures: none inherits another's margins or ranges.
   script
+      << "reset\n"
       << "set terminal " << terminal << " size " << panels.front().width << "," << height
       << " font 'sans,10'\n"
       << "set output " << quoted(file.string()) << "\n"
@@ -189,11 +216,13 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& termi
            << "\n"
            << "set multiplot layout " << panels.size() << ",1\n";
   }
-  for (const PlotSpec& panel : panels) append_panel(script, panel, title_chars(panels));
+  for (std::size_t p = 0; p < panels.size(); ++p)
+    append_panel(script, panels[p], tag, p, title_chars(panels));
   if (panels.size() > 1) script << "unset multiplot\n";
   script << "set output\n";
   return script.str();
 }
+
 
 }  // namespace
 
@@ -205,28 +234,36 @@ constexpr std::chrono::seconds kGnuplotTimeout{300};
 }  // namespace
 
 void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure) {
-  // The script goes to a file of its own: gnuplot then runs through the one child-process unit
-  // (util/process.h, whose children read /dev/null), and its messages come back for the error.
-  char name[] = "/tmp/rths-plot-XXXXXX";
-  const int fd = ::mkstemp(name);
+  // gnuplot reads a script on its stdin one byte per read(2), a system call per byte of inline
+  // data (three quarters of its time for a figure of 10^5 points); from a file it reads buffered.
+  // So the script goes to a private temporary file, removed whatever happens, and gnuplot runs
+  // through the one child-process unit (util/process.h), its messages kept for the error.
+  std::string script_path =
+      (std::filesystem::temp_directory_path() / "rths-plot-XXXXXX.gp").string();
+  const int fd = mkstemps(script_path.data(), 3);
   if (fd < 0)
-    throw std::runtime_error(std::string("cannot write the gnuplot script: ") +
+    throw std::runtime_error("cannot write the gnuplot script for " + figure.string() + ": " +
                              std::strerror(errno));
-  const std::filesystem::path script_file = name;
-  const bool written =
-      ::write(fd, script.data(), script.size()) == static_cast<ssize_t>(script.size());
+  struct RemoveOnExit {
+    std::string path;
+    ~RemoveOnExit() { std::remove(path.c_str()); }
+  } remove_script{script_path};
+  std::size_t written = 0;
+  while (written < script.size()) {
+    const ssize_t n = ::write(fd, script.data() + written, script.size() - written);
+    if (n <= 0) break;
+    written += static_cast<std::size_t>(n);
+  }
   ::close(fd);
+  if (written != script.size())
+    throw std::runtime_error("cannot write the gnuplot script for " + figure.string());
   CommandResult result;
   try {
-    if (!written)
-      throw std::runtime_error("cannot write the gnuplot script " + script_file.string());
-    result = run_command({"gnuplot", script_file.string()}, kGnuplotTimeout);
+    result = run_command({"gnuplot", script_path}, kGnuplotTimeout);
   } catch (const std::exception& e) {
-    std::filesystem::remove(script_file);
     throw std::runtime_error("gnuplot could not draw " + figure.string() + ": " + e.what() +
                              " (is gnuplot-nox installed?)");
   }
-  std::filesystem::remove(script_file);
   if (!result.ok()) {
     constexpr std::size_t kTail = 600;
     const std::string& out = result.output;
@@ -339,29 +376,31 @@ std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi
   const double sx = width_px / (x_hi - x_lo), sy = height_px / (y_hi - y_lo);
   const auto px = [&](std::size_t k) { return (s.x[k] - x_lo) * sx; };
   const auto py = [&](std::size_t k) { return (s.y[k] - y_lo) * sy; };
-  // Distance (px) of point k from the segment a-b.
-  const auto distance = [&](std::size_t k, std::size_t a, std::size_t b) {
+  // Squared distance (px^2) of point k from the segment a-b.
+  const auto distance2 = [&](std::size_t k, std::size_t a, std::size_t b) {
     const double ax = px(a), ay = py(a), dx = px(b) - ax, dy = py(b) - ay;
     const double length2 = dx * dx + dy * dy;
     double t = length2 > 0.0 ? ((px(k) - ax) * dx + (py(k) - ay) * dy) / length2 : 0.0;
     t = std::clamp(t, 0.0, 1.0);
-    return std::hypot(px(k) - (ax + t * dx), py(k) - (ay + t * dy));
+    const double ex = px(k) - (ax + t * dx), ey = py(k) - (ay + t * dy);
+    return ex * ex + ey * ey;
   };
+  const double tolerance2 = tolerance_px * tolerance_px;
   std::vector<bool> keep(n, false);
-  // Each finite run between gaps simplified on its own; the gaps kept.
+  const auto finite = [&](std::size_t k) { return std::isfinite(s.x[k]) && std::isfinite(s.y[k]); };
+  std::vector<std::pair<std::size_t, std::size_t>> pending;
+  // Each finite run between gaps, cut into runs of kSimplifyRun points, simplified on its own
+  // (Ramer-Douglas-Peucker); the gaps and every run's ends kept.
   std::size_t begin = 0;
   while (begin < n) {
-    const auto finite = [&](std::size_t k) {
-      return std::isfinite(s.x[k]) && std::isfinite(s.y[k]);
-    };
     if (!finite(begin)) {
       keep[begin++] = true;
       continue;
     }
     std::size_t end = begin;
-    while (end + 1 < n && finite(end + 1)) ++end;
+    while (end + 1 < n && end + 1 - begin < kSimplifyRun && finite(end + 1)) ++end;
     keep[begin] = keep[end] = true;
-    std::vector<std::pair<std::size_t, std::size_t>> pending = {{begin, end}};
+    pending.assign(1, {begin, end});
     while (!pending.empty()) {
       const auto [a, b] = pending.back();
       pending.pop_back();
@@ -369,18 +408,19 @@ std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi
       std::size_t farthest = a + 1;
       double largest = -1.0;
       for (std::size_t k = a + 1; k < b; ++k) {
-        const double d = distance(k, a, b);
+        const double d = distance2(k, a, b);
         if (d > largest) {
           largest = d;
           farthest = k;
         }
       }
-      if (largest <= tolerance_px) continue;
+      if (largest <= tolerance2) continue;
       keep[farthest] = true;
       pending.push_back({a, farthest});
       pending.push_back({farthest, b});
     }
-    begin = end + 1;
+    // A run cut at its length goes on from its last point (kept), so the drawn line is joined.
+    begin = end > begin && end + 1 < n && finite(end + 1) ? end : end + 1;
   }
   std::vector<std::size_t> kept;
   for (std::size_t k = 0; k < n; ++k)
@@ -389,28 +429,41 @@ std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi
 }
 
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png) {
-  if (panels.empty()) throw std::invalid_argument("no panels to plot into " + png.string());
-  std::filesystem::path svg = png;
-  svg.replace_extension(".svg");
-  // Both figures from one gnuplot, each into its partial file; renamed only when gnuplot is done.
-  const std::filesystem::path png_partial = png.string() + ".partial",
-                              svg_partial = svg.string() + ".partial";
-  const auto discard = [&] {
-    std::error_code ignored;
-    std::filesystem::remove(png_partial, ignored);
-    std::filesystem::remove(svg_partial, ignored);
-  };
+  write_png_figures({{panels, png}});
+}
+
+void write_png_figures(const std::vector<Figure>& figures) {
+  if (figures.empty()) return;
+  // Every file from one gnuplot, each into its partial file; renamed only when gnuplot is done.
+  std::vector<std::filesystem::path> partial, final;
+  std::string script;
+  for (std::size_t f = 0; f < figures.size(); ++f) {
+    const Figure& figure_spec = figures[f];
+    if (figure_spec.panels.empty())
+      throw std::invalid_argument("no panels to plot into " + figure_spec.png.string());
+    std::filesystem::path svg = figure_spec.png;
+    svg.replace_extension(".svg");
+    std::string tag = "f";
+    tag += std::to_string(f);
+    for (const std::filesystem::path& file : {figure_spec.png, svg}) {
+      final.push_back(file);
+      partial.push_back(file.string() + ".partial");
+    }
+    script += figure_data(figure_spec.panels, tag) +
+              figure(figure_spec.panels, tag, "pngcairo", partial[partial.size() - 2]) +
+              figure(figure_spec.panels, tag, "svg dynamic", partial.back());
+  }
   try {
-    run_gnuplot_script(
-        figure(panels, "pngcairo", png_partial) + figure(panels, "svg dynamic", svg_partial), png);
-    if (!std::filesystem::exists(png_partial) || !std::filesystem::exists(svg_partial) ||
-        std::filesystem::file_size(png_partial) == 0 ||
-        std::filesystem::file_size(svg_partial) == 0)
-      throw std::runtime_error("gnuplot wrote no figure into " + png.string());
-    std::filesystem::rename(png_partial, png);
-    std::filesystem::rename(svg_partial, svg);
+    run_gnuplot_script(script, figures.front().png);
+    for (std::size_t i = 0; i < partial.size(); ++i)
+      if (!std::filesystem::exists(partial[i]) || std::filesystem::file_size(partial[i]) == 0)
+        throw std::runtime_error("gnuplot wrote no figure into " + final[i].string());
+    for (std::size_t i = 0; i < partial.size(); ++i) std::filesystem::rename(partial[i], final[i]);
   } catch (...) {
-    discard();
+    for (const std::filesystem::path& file : partial) {
+      std::error_code ignored;
+      std::filesystem::remove(file, ignored);
+    }
     throw;
   }
 }

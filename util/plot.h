@@ -2,7 +2,9 @@
 // Plots through gnuplot (Debian's gnuplot-nox, pngcairo and svg terminals): line series to a PNG
 // file and the same figure as SVG beside it (name.png -> name.svg), both drawn by one gnuplot
 // process.
-// Data is streamed inline to gnuplot's stdin; nothing but the PNG and the SVG is written, each
+// The script goes to gnuplot as a private temporary file, removed after (gnuplot reads its stdin a
+// byte per system call), the data in it once, as datablocks both terminals draw. Nothing but the
+// PNG and the SVG is left, each
 // first as "<name>.partial" and renamed into place once gnuplot succeeded: a figure is complete or
 // absent (a failed or interrupted plot leaves no file, and an earlier complete one stays).
 // A series longer than kPointsPerPixel points per pixel of its panel's width is drawn decimated
@@ -87,8 +89,10 @@ std::vector<std::size_t> decimate_min_max(const Series& s, double x_lo, double x
 // draw, ascending: the path simplified (Ramer-Douglas-Peucker) so that no dropped point lies more
 // than `tolerance_px` from the drawn line, in pixels of a panel `width_px` x `height_px` showing
 // [x_lo, x_hi] x [y_lo, y_hi]. Every turning point of the loop farther than that from its chord
-// stays. A point whose x or y is not finite is kept and ends a line. @pre the ranges are not
-// empty, the sizes > 0.
+// stays. A point whose x or y is not finite is kept and ends a line. The path is simplified in
+// runs of kSimplifyRun points (each run's ends kept), so a loop of many cycles costs
+// O(n kSimplifyRun) at worst, not O(n^2). @pre the ranges are not empty, the sizes > 0.
+inline constexpr std::size_t kSimplifyRun = 512;
 std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi, double y_lo,
                                        double y_hi, int width_px, int height_px,
                                        double tolerance_px = 0.5);
@@ -98,6 +102,16 @@ void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 
 // Several panels stacked vertically in one PNG (shared width), and the SVG beside it.
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png);
+
+// Several such figures drawn by one gnuplot process: each gnuplot start-up (cairo, pango, fonts)
+// costs about 0.1 s of CPU, more than drawing a decimated figure. Each figure is complete or
+// absent as above; when gnuplot fails, none is written (earlier complete ones stay) and the
+// message names the first figure.
+struct Figure {
+  std::vector<PlotSpec> panels;
+  std::filesystem::path png;  // the SVG goes beside it
+};
+void write_png_figures(const std::vector<Figure>& figures);
 
 // Runs a gnuplot script as given (it sets its own terminals and outputs), for figures a PlotSpec
 // does not describe (e.g. a heat map with contour lines), as a child process (util/process.h)

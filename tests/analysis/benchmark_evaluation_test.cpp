@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -16,27 +18,82 @@
 namespace rths::analysis {
 namespace {
 
-TEST(BenchmarkEvaluation, CaseOneMeetsThePublishedCriteria) {
+std::filesystem::path benchmark_config(const std::string& file) {
+  return std::filesystem::path(RTHS_SOURCE_DIR) / "configs" / "benchmark" / file;
+}
+
+std::optional<BenchmarkEvaluation> evaluate(const config::Study& study,
+                                            const std::filesystem::path& config) {
+  const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+  return evaluate_benchmark(prepared, run_study(prepared, {}));
+}
+
+// The published values of a case as shipped (sample controller, El Centro at 40 %, the
+// benchmark's model integrated as it integrates it: EXACT_ZOH): J1 within 0.1 ms, J2-J9 within
+// 2.5 % (J5, the peak of a noisy error, within 5 %). The published numbers are one draw of
+// MATLAB's sensor noise, which no other generator repeats; J3 and J5 are peaks of the noisy
+// x_m - x_t and x_m - d_ref and move by 1-2 % from one noise draw to another (case 2's J3 runs
+// 11.0-11.5 over seeds), so they are compared as the mean of the shipped draw and four more
+// seeds; the other criteria move by under 0.3 % and are compared draw by draw.
+class TableThree : public ::testing::TestWithParam<int> {};
+
+TEST_P(TableThree, CaseMeetsThePublishedCriteria) {
   const std::filesystem::path config =
-      std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
-  const core::PreparedStudy prepared =
-      core::prepare_study(core::load_study(config), config.parent_path());
-  const StudyOutcome outcome = run_study(prepared, {});
-  const std::optional<BenchmarkEvaluation> evaluation = evaluate_benchmark(prepared, outcome);
-  ASSERT_TRUE(evaluation.has_value());
-  ASSERT_EQ(evaluation->cases.size(), 1u);
-  ASSERT_EQ(evaluation->published.size(), 9u);
-  const core::BenchmarkCriteria& measured = evaluation->cases[0].criteria;
-  // J1 within one sample; J2-J9 within the relative tolerance this chain reaches (README).
-  EXPECT_NEAR(measured.J(1) * 1e3, evaluation->published[0], 1e3 / 4096) << "J1 (ms)";
-  constexpr double kRelative = 0.05;
-  for (int j = 2; j <= 9; ++j) {
-    const double published = evaluation->published[static_cast<std::size_t>(j - 1)];
-    EXPECT_NEAR(measured.J(j), published, kRelative * published) << "J" << j;
+      benchmark_config("case_" + std::to_string(GetParam()) + ".textproto");
+  config::Study study = core::load_study(config);
+  ASSERT_EQ(study.integrator().kind(), config::Integrator::EXACT_ZOH);
+  ASSERT_EQ(study.cases(1).name(), "sample_controller");
+  for (int seed = 1; seed <= 4; ++seed) {
+    config::Case draw = study.cases(1);
+    draw.set_name("sample_controller_seed_" + std::to_string(seed));
+    draw.mutable_delay(0)->mutable_tracking_loop()->set_seed(static_cast<std::uint64_t>(seed));
+    *study.add_cases() = draw;
   }
-  // The case and the motion are the published ones: compared, and said so in every report.
+  const std::optional<BenchmarkEvaluation> evaluation = evaluate(study, config);
+  ASSERT_TRUE(evaluation.has_value());
+  ASSERT_EQ(evaluation->cases.size(), 5u);
+  ASSERT_EQ(evaluation->published.size(), 9u);
   EXPECT_TRUE(evaluation->published_motion_matches);
   EXPECT_TRUE(evaluation->compared_with_published(evaluation->cases[0]));
+  const auto published = [&](int j) { return evaluation->published[std::size_t(j - 1)]; };
+  std::array<double, 9> mean{};
+  for (const BenchmarkCaseCriteria& draw : evaluation->cases) {
+    EXPECT_NEAR(draw.criteria.J(1) * 1e3, published(1), 0.1) << draw.name << " J1 (ms)";
+    for (int j = 2; j <= 9; ++j) {
+      mean[std::size_t(j - 1)] += draw.criteria.J(j) / 5.0;
+      if (j == 3 || j == 5) continue;
+      EXPECT_NEAR(draw.criteria.J(j), published(j), 0.025 * published(j)) << draw.name << " J" << j;
+    }
+  }
+  EXPECT_NEAR(mean[2], published(3), 0.025 * published(3)) << "J3, mean of 5 noise draws";
+  EXPECT_NEAR(mean[4], published(5), 0.05 * published(5)) << "J5, mean of 5 noise draws";
+  std::cout << benchmark_table(*evaluation);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, TableThree, ::testing::Values(1, 2, 3, 4));
+
+// A study that asks for explicit Newmark still gets it: case 1 lands 3-5 % under Table 3 in J4-J9,
+// the half sample of lag less that taking the force in the step's equilibrium gives.
+TEST(BenchmarkEvaluation, ExplicitNewmarkRunsTheCaseWithLessLag) {
+  const std::filesystem::path config = benchmark_config("case_1.textproto");
+  config::Study study = core::load_study(config);
+  const std::optional<BenchmarkEvaluation> exact = evaluate(study, config);
+  study.mutable_integrator()->set_kind(config::Integrator::EXPLICIT_NEWMARK);
+  const std::optional<BenchmarkEvaluation> newmark = evaluate(study, config);
+  ASSERT_TRUE(exact && newmark);
+  for (int j = 4; j <= 9; ++j) {
+    const double published = newmark->published[std::size_t(j - 1)];
+    EXPECT_LT(newmark->cases[0].criteria.J(j), exact->cases[0].criteria.J(j)) << "J" << j;
+    EXPECT_NEAR(newmark->cases[0].criteria.J(j), published, 0.05 * published) << "J" << j;
+  }
+}
+
+// Every criterion named, with its unit and definition, in the JSON.
+TEST(BenchmarkEvaluation, CaseOneJsonNamesEveryCriterion) {
+  const std::filesystem::path config = benchmark_config("case_1.textproto");
+  const std::optional<BenchmarkEvaluation> evaluation = evaluate(core::load_study(config), config);
+  ASSERT_TRUE(evaluation.has_value());
+  const core::BenchmarkCriteria& measured = evaluation->cases[0].criteria;
   const nlohmann::json json = benchmark_json(*evaluation);
   const nlohmann::json& j5 = json["cases"][0]["criteria"][4];
   EXPECT_EQ(j5["name"], "J5");
@@ -49,7 +106,29 @@ TEST(BenchmarkEvaluation, CaseOneMeetsThePublishedCriteria) {
   EXPECT_NEAR(json["cases"][0]["vs_published"][4]["value"].get<double>(),
               100.0 * (measured.J(5) - 19.0) / 19.0, 1e-9);
   EXPECT_FALSE(json.contains("units"));
-  std::cout << benchmark_table(*evaluation);
+}
+
+// The same model on the benchmark's other motions, Kobe and Morgan Hill at 40 %
+// (configs/benchmark/case_1_kobe, case_1_morgan_hill): it runs the whole record, stays stable,
+// and says Table 3 has no value for it.
+TEST(BenchmarkEvaluation, KobeAndMorganHillRunWithNoPublishedValue) {
+  for (const std::string motion : {"kobe", "morgan_hill"}) {
+    const std::filesystem::path config = benchmark_config("case_1_" + motion + ".textproto");
+    const config::Study study = core::load_study(config);
+    EXPECT_EQ(study.integrator().kind(), config::Integrator::EXACT_ZOH);
+    const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+    const StudyOutcome outcome = run_study(prepared, {});
+    for (const CaseOutcome& c : outcome.cases) EXPECT_EQ(c.status, "completed") << c.name;
+    const std::optional<BenchmarkEvaluation> evaluation = evaluate_benchmark(prepared, outcome);
+    ASSERT_TRUE(evaluation.has_value());
+    EXPECT_FALSE(evaluation->compared_with_published(evaluation->cases.at(0)));
+    const double j1_ms = evaluation->cases[0].criteria.J(1) * 1e3;
+    EXPECT_NEAR(j1_ms, 4.6, 0.1) << motion << ": the tracking loop's delay is the motion's too";
+    const std::string table = benchmark_table(*evaluation);
+    EXPECT_NE(table.find("no published value: this run's motion (" + motion + ".txt)"),
+              std::string::npos)
+        << table;
+  }
 }
 
 // The table's columns line up: the published row, each case and the header have their cells

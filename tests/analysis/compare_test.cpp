@@ -63,6 +63,24 @@ TEST(Compare, GrowthPastTheReferenceOrAnEarlyStopIsDivergence) {
   EXPECT_FALSE(compare(reference, std::vector<double>{0.0, 0.03, -0.02, 0.01}, false).diverged);
 }
 
+// `rths run`'s verdict beyond the 10x rule: past the critical delay, an envelope that grows
+// exponentially (here 9x over the record, under the 10x rule; 2.1x over the fitted last third)
+// is diverging; the same history inside the critical delay, or a decaying one past it, is not.
+TEST(Compare, PastTheCriticalDelayAGrowingEnvelopeIsDiverging) {
+  const double dt = 0.01, period = 0.5;
+  std::vector<double> growing, decaying;
+  for (int k = 0; k < 2000; ++k) {
+    const double t = k * dt, wave = std::sin(2.0 * M_PI * t / period);
+    growing.push_back(std::exp(std::log(9.0) * t / 20.0) * wave);
+    decaying.push_back(std::exp(-0.2 * t) * wave);
+  }
+  EXPECT_TRUE(diverging(growing, dt, period, true));
+  EXPECT_FALSE(diverging(growing, dt, period, false));
+  EXPECT_FALSE(diverging(decaying, dt, period, true));
+  EXPECT_FALSE(diverging(growing, dt, 0.0, true));  // no period to fit at
+  EXPECT_FALSE(compare(decaying, growing, false).diverged);
+}
+
 TEST(Compare, TheResponseIsNamed) {
   const auto reference = result_of({{0, 1, 0, -1}, {0, 2, 0, -2}});
   const auto lagged = result_of({{0, 1, 0, -1}, {0, 2.5, 0, -2}});

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -139,6 +140,25 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   // Every level labelled, the 1-2-5 steps between none left out.
   for (std::size_t i = 1; i < levels.size(); ++i)
     EXPECT_LE(levels[i] / levels[i - 1], 2.5 + 1e-9) << levels[i - 1] << " -> " << levels[i];
+}
+
+// A point past the stability boundary whose envelope grows exponentially is diverged even under
+// the 10x rule, as `rths run` calls such a case diverging; inside the boundary it is not.
+TEST(JointLag, PastTheBoundaryAGrowingEnvelopeIsDiverged) {
+  const double dt = 0.01, period = 0.5;
+  std::vector<double> reference, growing;
+  for (int k = 0; k < 2000; ++k) {
+    const double t = k * dt, wave = std::sin(2.0 * M_PI * t / period);
+    reference.push_back(wave);
+    growing.push_back(std::exp(std::log(9.0) * t / 20.0) * wave);
+  }
+  JointLagPoint past;
+  past.past_boundary = true;
+  fill_joint_lag_errors(past, reference, growing, false, dt, period);
+  EXPECT_TRUE(past.diverged);
+  JointLagPoint inside;
+  fill_joint_lag_errors(inside, reference, growing, false, dt, period);
+  EXPECT_FALSE(inside.diverged);
 }
 
 TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {

@@ -6,9 +6,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "analysis/sweep_report.h"
+#include "core/metrics.h"
 #include "sweep_study.h"
 
 namespace rths::analysis {
@@ -147,6 +149,29 @@ TEST(SweepRun, StabilityCheckFlagsTheDelaysPastTheCriticalOne) {
   ASSERT_TRUE(critical.has_value());
   EXPECT_GT(*critical, 0.002);
   EXPECT_LT(*critical, 0.03);
+}
+
+// A point past its critical delay (1.5x) whose envelope grows exponentially, yet stays under 10x
+// the reference's peak over the record (4.3x), is diverged, as `rths run` calls such a case
+// diverging (the 10x rule alone passed it); a point inside its critical delay is not. Both paths
+// judge alike.
+TEST(SweepRun, APointPastItsCriticalDelayWithAGrowingEnvelopeDiverges) {
+  const auto critical = critical_delay_of(
+      grid_for("periods: [0.5] delays: [0.001] experimental_fractions: [1.0]"))(0.5, 1.0, 0.002);
+  ASSERT_TRUE(critical.has_value());
+  std::ostringstream body;
+  body << "periods: [0.5] experimental_fractions: [1.0] delays: [" << 0.5 * *critical << ", "
+       << 1.5 * *critical << "]";
+  const SweepGrid grid = grid_for(body.str());
+  for (bool general_only : {true, false}) {
+    const auto rows = run_table(grid, general_only);
+    ASSERT_EQ(rows.size(), 2u);
+    EXPECT_FALSE(rows[0].diverged) << "inside: " << rows[0].delay;
+    EXPECT_TRUE(rows[1].diverged) << "past: " << rows[1].delay;
+    EXPECT_LT(rows[1].peak_delayed, core::kDivergenceGrowth * rows[1].peak_reference)
+        << "the 10x rule alone would have passed it";
+    EXPECT_TRUE(std::isinf(rows[1].nrmse_pct));
+  }
 }
 
 }  // namespace

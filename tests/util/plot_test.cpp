@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -114,11 +115,15 @@ TEST(Plot, ALoopIsSimplifiedWithinHalfAPixel) {
 }
 
 // A figure is complete or absent: gnuplot failing on the plot leaves neither the PNG nor the SVG
-// (nor a partial file), where it used to leave an empty PNG.
+// (nor a partial file), where it used to leave an empty PNG; nor is its temporary script left,
+// whether it failed or not (TMPDIR is the figure's folder here, so the check sees it).
 TEST(Plot, AFailedFigureLeavesNoFile) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("rths_plot_atomic_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
+  const char* tmpdir = std::getenv("TMPDIR");
+  const std::string saved = tmpdir ? tmpdir : "";
+  setenv("TMPDIR", dir.c_str(), 1);
   PlotSpec broken{"broken", "x", "y", {{"a", {0, 1, 2}, {0, 1, 4}, "no_such_style"}}};
   EXPECT_THROW(write_png_panels({broken}, dir / "broken.png"), std::runtime_error);
   EXPECT_TRUE(std::filesystem::is_empty(dir)) << "a failed figure left a file";
@@ -133,6 +138,16 @@ TEST(Plot, AFailedFigureLeavesNoFile) {
   std::ifstream in(dir / "long.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_LT(svg.size(), 2000000u);  // 200 000 points would take several MB
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_NE(entry.path().extension(), ".gp") << entry.path();
+  }
+  EXPECT_EQ(files, 2u);
+  if (tmpdir)
+    setenv("TMPDIR", saved.c_str(), 1);
+  else
+    unsetenv("TMPDIR");
   std::filesystem::remove_all(dir);
 }
 
