@@ -32,7 +32,7 @@
 
 #include <memory>
 
-#include "core/integrators.h"
+#include "core/integrator.h"
 
 namespace rths::core {
 
