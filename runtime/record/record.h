@@ -1,6 +1,7 @@
 #pragma once
-// Run record: a stream of rths.runtime.RecordEntry, one header, then steps and events, then a
-// footer when the run ended in an orderly way (a record without a footer was cut short). Each
+// Run record: a stream of rths.runtime.RecordEntry: the header, the inputs, then steps and events,
+// then the header again and a footer when the run ended in an orderly way (a record without a
+// footer was cut short; the second header keeps a record whose first copy is damaged whole). Each
 // entry is flushed to the OS at once, so a crash of the writer loses at most the entry being
 // written.
 //
