@@ -11,7 +11,8 @@
 namespace rths::core {
 namespace {
 
-// The rule and message of every delay stage's step (delay.cpp).
+// The same rule and message as delay.cpp's stages: a bad step reads alike whichever stage refuses
+// it.
 void require_positive_step(double dt, const char* who) {
   if (!(dt > 0.0) || !std::isfinite(dt)) {
     throw std::invalid_argument(std::string(who) + ": time step dt must be > 0 and finite, got " +
