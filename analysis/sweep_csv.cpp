@@ -143,6 +143,41 @@ SweepCsv read_sweep_csv(const std::filesystem::path& path) {
   return csv;
 }
 
+namespace {
+
+// Every point of the grid has a shard (owner: the shard holding each point, -1 for none); the
+// error names the missing points and, when the grid was sharded, the shards that hold them.
+void check_complete(const std::vector<int>& owner, std::size_t shard_count) {
+  const std::size_t total = owner.size();
+  std::vector<std::size_t> missing;
+  for (std::size_t i = 0; i < total; ++i) {
+    if (owner[i] < 0) missing.push_back(i);
+  }
+  if (!missing.empty()) {
+    std::string message = "merge: " + std::to_string(missing.size()) + " of " +
+                          std::to_string(total) + " points are missing (first index " +
+                          std::to_string(missing.front()) + ", last " +
+                          std::to_string(missing.back()) + ")";
+    const std::size_t count = shard_count;
+    if (count > 1) {
+      std::set<std::size_t> lacking;
+      for (std::size_t i : missing)
+        lacking.insert(std::min(count - 1, (i * count + count - 1) / total));
+      // Shard s holds [s T / N, (s+1) T / N); name the ones whose points are absent.
+      std::string names;
+      for (std::size_t s = 0; s < count; ++s) {
+        const std::size_t lo = total * s / count, hi = total * (s + 1) / count;
+        if (lo < hi && owner[lo] < 0)
+          names += (names.empty() ? "" : ", ") + std::to_string(s) + "/" + std::to_string(count);
+      }
+      if (!names.empty()) message += "; missing shard(s) " + names;
+    }
+    throw std::invalid_argument(message);
+  }
+}
+
+}  // namespace
+
 SweepCsv merge_sweep_csvs(const std::vector<std::filesystem::path>& shards,
                           const std::filesystem::path& out) {
   if (shards.empty()) throw std::invalid_argument("merge: no shard CSVs given");
@@ -177,31 +212,7 @@ SweepCsv merge_sweep_csvs(const std::vector<std::filesystem::path>& shards,
       line_of[index] = &parts[s].lines[r];
     }
   }
-  std::vector<std::size_t> missing;
-  for (std::size_t i = 0; i < total; ++i) {
-    if (owner[i] < 0) missing.push_back(i);
-  }
-  if (!missing.empty()) {
-    std::string message = "merge: " + std::to_string(missing.size()) + " of " +
-                          std::to_string(total) + " points are missing (first index " +
-                          std::to_string(missing.front()) + ", last " +
-                          std::to_string(missing.back()) + ")";
-    const std::size_t count = first.shard.count;
-    if (count > 1) {
-      std::set<std::size_t> lacking;
-      for (std::size_t i : missing)
-        lacking.insert(std::min(count - 1, (i * count + count - 1) / total));
-      // Shard s holds [s T / N, (s+1) T / N); name the ones whose points are absent.
-      std::string names;
-      for (std::size_t s = 0; s < count; ++s) {
-        const std::size_t lo = total * s / count, hi = total * (s + 1) / count;
-        if (lo < hi && owner[lo] < 0)
-          names += (names.empty() ? "" : ", ") + std::to_string(s) + "/" + std::to_string(count);
-      }
-      if (!names.empty()) message += "; missing shard(s) " + names;
-    }
-    throw std::invalid_argument(message);
-  }
+  check_complete(owner, first.shard.count);
   SweepCsv merged;
   merged.grid_hash = first.grid_hash;
   merged.points = total;

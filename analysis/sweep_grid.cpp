@@ -58,6 +58,97 @@ std::string model_name(const config::RestoringForce& model) {
   return cell_safe(name.str());
 }
 
+// The sweep's motions, or the study's own motion when the sweep lists none.
+std::vector<config::GroundMotion> motion_configs_of(const config::Study& study,
+                                                    const std::string& source) {
+  const config::Sweep& sweep = study.sweep();
+  std::vector<config::GroundMotion> motion_configs(sweep.motions().begin(), sweep.motions().end());
+  if (motion_configs.empty()) {
+    if (study.motion().path().empty())
+      fail(source, "sweep.motions is empty and motion.path is not set");
+    motion_configs.push_back(study.motion());
+  }
+  return motion_configs;
+}
+
+// Each model must build a storey; the names label the CSV rows.
+std::vector<std::string> checked_model_names(const std::vector<config::RestoringForce>& models,
+                                             const std::string& source) {
+  std::vector<std::string> names;
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    try {
+      (void)core::make_storey_factory(models[m]);
+    } catch (const std::invalid_argument& e) {
+      fail(source, "sweep.models[" + std::to_string(m) + "]: " + e.what());
+    }
+    names.push_back(model_name(models[m]));
+  }
+  return names;
+}
+
+void check_integrator(core::IntegratorKind kind, const std::vector<double>& delays,
+                      const std::vector<double>& alphas, const std::string& source) {
+  const bool any_delay = std::any_of(delays.begin(), delays.end(), [](double d) { return d > 0; });
+  const bool any_experimental =
+      std::any_of(alphas.begin(), alphas.end(), [](double a) { return a > 0; });
+  if (!core::is_explicit(kind) && any_delay && any_experimental) {
+    fail(source, "integrator " + core::to_string(kind) +
+                     " cannot run a delayed experimental part; use an explicit integrator");
+  }
+}
+
+// The study's text without its output section: where results go does not change them.
+std::uint64_t definition_hash(const config::Study& study) {
+  std::uint64_t hash = 14695981039346656037ULL;
+  config::Study defining = study;
+  defining.clear_output();
+  std::string text;
+  google::protobuf::TextFormat::PrintToString(defining, &text);
+  return fnv1a(hash, text.data(), text.size());
+}
+
+core::GroundMotion load_sweep_motion(const config::GroundMotion& motion,
+                                     const std::filesystem::path& base_dir, std::size_t m,
+                                     const std::string& source) {
+  try {
+    return core::load_motion(motion, base_dir);
+  } catch (const std::exception& e) {
+    fail(source, "sweep motion " + std::to_string(m) + " ('" + motion.path() + "'): " + e.what());
+  }
+}
+
+std::string motion_label(const config::GroundMotion& motion) {
+  std::string name = std::filesystem::path(motion.path()).stem().string();
+  const double scale = motion.scale();
+  if (scale > 0 && scale != 1.0) name += "_x" + format_number(scale);
+  return cell_safe(name);
+}
+
+// The record at each grid dt (its own dt for 0), each checked for the integrator's stability at
+// the shortest period; every step and record feeds the grid's hash.
+std::vector<core::GroundMotion> motion_at_dts(const core::GroundMotion& record,
+                                              const std::vector<double>& dts,
+                                              core::IntegratorKind kind, double shortest_period,
+                                              bool allow_unstable, const std::string& source,
+                                              std::uint64_t& hash) {
+  std::vector<core::GroundMotion> at_dts;
+  for (double dt : dts) {
+    const double step = dt > 0 ? dt : record.dt;
+    core::GroundMotion motion =
+        std::abs(step - record.dt) <= 1e-12 * step ? record : core::resampled(record, step);
+    try {
+      core::check_stability(kind, 2.0 * std::numbers::pi / shortest_period, step, allow_unstable);
+    } catch (const std::invalid_argument& e) {
+      fail(source, "sweep: the shortest period " + format_number(shortest_period) + " s at dt " +
+                       format_number(step) + " s: " + e.what());
+    }
+    hash = fnv1a(hash, &step, sizeof step);
+    hash = fnv1a(hash, motion.acceleration.data(), motion.acceleration.size() * sizeof(double));
+    at_dts.push_back(std::move(motion));
+  }
+  return at_dts;
+}
+
 }  // namespace
 
 // --- shards ------------------------------------------------------------------------------------
@@ -106,73 +197,24 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
   dts_.assign(sweep.dts().begin(), sweep.dts().end());
   if (dts_.empty()) dts_.push_back(study.integrator().dt());  // 0: each record's own dt
 
-  std::vector<config::GroundMotion> motion_configs(sweep.motions().begin(), sweep.motions().end());
-  if (motion_configs.empty()) {
-    if (study.motion().path().empty())
-      fail(source, "sweep.motions is empty and motion.path is not set");
-    motion_configs.push_back(study.motion());
-  }
+  const std::vector<config::GroundMotion> motion_configs = motion_configs_of(study, source);
 
   models_.assign(sweep.models().begin(), sweep.models().end());
   if (models_.empty()) models_.push_back(study.substructuring().model());
-  for (std::size_t m = 0; m < models_.size(); ++m) {
-    try {
-      (void)core::make_storey_factory(models_[m]);
-    } catch (const std::invalid_argument& e) {
-      fail(source, "sweep.models[" + std::to_string(m) + "]: " + e.what());
-    }
-    model_names_.push_back(model_name(models_[m]));
-  }
+  model_names_ = checked_model_names(models_, source);
 
   delay_model_ = sweep.delay_model();
 
   const core::IntegratorKind kind = core::integrator_kind(study.integrator());
-  const bool any_delay =
-      std::any_of(delays_.begin(), delays_.end(), [](double d) { return d > 0; });
-  const bool any_experimental =
-      std::any_of(alphas_.begin(), alphas_.end(), [](double a) { return a > 0; });
-  if (!core::is_explicit(kind) && any_delay && any_experimental) {
-    fail(source, "integrator " + core::to_string(kind) +
-                     " cannot run a delayed experimental part; use an explicit integrator");
-  }
+  check_integrator(kind, delays_, alphas_, source);
 
-  std::uint64_t hash = 14695981039346656037ULL;
-  config::Study defining = study;
-  defining.clear_output();  // where results go does not change them
-  std::string text;
-  google::protobuf::TextFormat::PrintToString(defining, &text);
-  hash = fnv1a(hash, text.data(), text.size());
-
+  std::uint64_t hash = definition_hash(study);
   const double shortest_period = *std::min_element(periods_.begin(), periods_.end());
   for (std::size_t m = 0; m < motion_configs.size(); ++m) {
-    core::GroundMotion record;
-    try {
-      record = core::load_motion(motion_configs[m], base_dir);
-    } catch (const std::exception& e) {
-      fail(source, "sweep motion " + std::to_string(m) + " ('" + motion_configs[m].path() +
-                       "'): " + e.what());
-    }
-    std::string name = std::filesystem::path(motion_configs[m].path()).stem().string();
-    const double scale = motion_configs[m].scale();
-    if (scale > 0 && scale != 1.0) name += "_x" + format_number(scale);
-    motion_names_.push_back(cell_safe(name));
-    std::vector<core::GroundMotion> at_dts;
-    for (double dt : dts_) {
-      const double step = dt > 0 ? dt : record.dt;
-      core::GroundMotion motion =
-          std::abs(step - record.dt) <= 1e-12 * step ? record : core::resampled(record, step);
-      try {
-        core::check_stability(kind, 2.0 * std::numbers::pi / shortest_period, step,
-                              study.integrator().allow_unstable());
-      } catch (const std::invalid_argument& e) {
-        fail(source, "sweep: the shortest period " + format_number(shortest_period) + " s at dt " +
-                         format_number(step) + " s: " + e.what());
-      }
-      hash = fnv1a(hash, &step, sizeof step);
-      hash = fnv1a(hash, motion.acceleration.data(), motion.acceleration.size() * sizeof(double));
-      at_dts.push_back(std::move(motion));
-    }
-    motions_.push_back(std::move(at_dts));
+    const core::GroundMotion record = load_sweep_motion(motion_configs[m], base_dir, m, source);
+    motion_names_.push_back(motion_label(motion_configs[m]));
+    motions_.push_back(motion_at_dts(record, dts_, kind, shortest_period,
+                                     study.integrator().allow_unstable(), source, hash));
   }
   hash_ = hash;
 }

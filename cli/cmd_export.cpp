@@ -23,6 +23,71 @@
 
 namespace rths::cli {
 
+namespace {
+
+// Reads the record, writes every requested output and says what was written. Throws ExitError:
+// kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
+// cannot be written, kExitRunFailed after exporting a record that lost entries.
+void run_export(const std::string& record, const std::map<results::Format, std::string>& outputs,
+                bool json) {
+  for (const auto& [format, path] : outputs)
+    util::refuse_output_over_input({"--" + results::extension(format).substr(1), path},
+                                   {{"record", record}});
+  runtime::RecordContents contents;
+  try {
+    contents = runtime::read_record(record);
+  } catch (const std::exception& e) {
+    throw ExitError(kExitBadInput, e.what());
+  }
+  if (!contents.warning.empty()) std::cerr << "rths export: warning: " << contents.warning << "\n";
+  const runtime::RecordChecks checks = runtime::check_record(contents);
+  if (checks.fatal)
+    throw ExitError(kExitRunFailed, std::string("export: ") + record +
+                                        " is implausible, nothing written: " + checks.summary());
+  if (!checks.ok()) std::cerr << "rths export: warning: " << checks.summary() << "\n";
+  results::Table table;
+  try {
+    table = results::record_table(contents);
+  } catch (const std::invalid_argument& e) {
+    throw ExitError(kExitBadInput, record + ": " + e.what());
+  }
+  for (const auto& [format, path] : outputs) {
+    try {
+      results::write_table(table, path, format);
+    } catch (const std::exception& e) {
+      throw ExitError(kExitEnvironment, e.what());
+    }
+  }
+  const auto* footer = contents.footer();
+  const std::string status = footer ? footer->status() : "no footer: the run was cut short";
+  if (json) {
+    nlohmann::json j{{"record", record},
+                     {"rows", table.rows()},
+                     {"truncated", contents.truncated || checks.cut},
+                     {"problems", checks.problems},
+                     {"status", status},
+                     {"ok", footer && footer->ok()},
+                     {"checksummed", contents.checksummed},
+                     {"integrity", table.attributes().at("integrity")},
+                     {"lost_steps", table.attributes().at("lost_steps")},
+                     {"damaged_regions", contents.losses.size()}};
+    for (const auto& [format, path] : outputs) j[results::extension(format).substr(1)] = path;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    for (const auto& [format, path] : outputs) {
+      std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status << ")\n";
+    }
+  }
+  if (contents.lost_entries())
+    throw ExitError(kExitRunFailed, "export: the record lost entries (intact ones exported): " +
+                                        contents.loss_report());
+  if (!checks.problems.empty())
+    throw ExitError(kExitRunFailed,
+                    "export: the record is implausible (exported as read): " + checks.summary());
+}
+
+}  // namespace
+
 void add_export_command(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("export", "Turn a run record into CSV, MATLAB (.mat) or HDF5 (.h5)");
@@ -42,61 +107,7 @@ void add_export_command(CLI::App& app) {
   cmd->callback([=] {
     if (csv->count() + mat->count() + h5->count() == 0)
       throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
-    for (const auto& [format, path] : *outputs)
-      util::refuse_output_over_input({"--" + results::extension(format).substr(1), path},
-                                     {{"record", *record}});
-    runtime::RecordContents contents;
-    try {
-      contents = runtime::read_record(*record);
-    } catch (const std::exception& e) {
-      throw ExitError(kExitBadInput, e.what());
-    }
-    if (!contents.warning.empty())
-      std::cerr << "rths export: warning: " << contents.warning << "\n";
-    const runtime::RecordChecks checks = runtime::check_record(contents);
-    if (checks.fatal)
-      throw ExitError(kExitRunFailed, std::string("export: ") + *record +
-                                          " is implausible, nothing written: " + checks.summary());
-    if (!checks.ok()) std::cerr << "rths export: warning: " << checks.summary() << "\n";
-    results::Table table;
-    try {
-      table = results::record_table(contents);
-    } catch (const std::invalid_argument& e) {
-      throw ExitError(kExitBadInput, *record + ": " + e.what());
-    }
-    for (const auto& [format, path] : *outputs) {
-      try {
-        results::write_table(table, path, format);
-      } catch (const std::exception& e) {
-        throw ExitError(kExitEnvironment, e.what());
-      }
-    }
-    const auto* footer = contents.footer();
-    const std::string status = footer ? footer->status() : "no footer: the run was cut short";
-    if (*json) {
-      nlohmann::json j{{"record", *record},
-                       {"rows", table.rows()},
-                       {"truncated", contents.truncated || checks.cut},
-                       {"problems", checks.problems},
-                       {"status", status},
-                       {"ok", footer && footer->ok()},
-                       {"checksummed", contents.checksummed},
-                       {"integrity", table.attributes().at("integrity")},
-                       {"lost_steps", table.attributes().at("lost_steps")},
-                       {"damaged_regions", contents.losses.size()}};
-      for (const auto& [format, path] : *outputs) j[results::extension(format).substr(1)] = path;
-      std::cout << j.dump(2) << "\n";
-    } else {
-      for (const auto& [format, path] : *outputs) {
-        std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status << ")\n";
-      }
-    }
-    if (contents.lost_entries())
-      throw ExitError(kExitRunFailed, "export: the record lost entries (intact ones exported): " +
-                                          contents.loss_report());
-    if (!checks.problems.empty())
-      throw ExitError(kExitRunFailed,
-                      "export: the record is implausible (exported as read): " + checks.summary());
+    run_export(*record, *outputs, *json);
   });
   cmd->add_flag("--json", *json, "print a JSON summary on stdout");
 }

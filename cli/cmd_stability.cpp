@@ -181,51 +181,43 @@ void run_compensated(const StabilityOptions& o) {
                     "the loop of case '" + o.case_name + "' is unstable as configured");
 }
 
-void run_stability(const StabilityOptions& o) {
-  if (!o.study.empty()) {
-    run_compensated(o);
-    return;
+nlohmann::json sdof_stability_json(const StabilityOptions& o, core::IntegratorKind kind,
+                                   const core::ContinuousStability& continuous,
+                                   const core::DiscreteStability& discrete) {
+  nlohmann::json out;
+  out["input"] = {{"period_s", o.period},
+                  {"zeta", o.zeta},
+                  {"experimental_fraction", o.alpha},
+                  {"integrator", core::to_string(kind)},
+                  {"dt_s", o.dt}};
+  nlohmann::json crossings = nlohmann::json::array();
+  for (const auto& c : continuous.crossings) {
+    crossings.push_back(
+        {{"crossing_omega_rad_per_s", c.omega}, {"delay_s", c.delay}, {"branch", c.branch}});
   }
-  const auto kind = core::integrator_from_string(o.integrator);
-  // Beyond the integrator's own limit every delay is unstable, so "first unstable delay = 0
-  // steps" would answer the wrong question: refuse the input instead.
-  core::check_stability(kind, 2.0 * std::numbers::pi / o.period, o.dt, false);
-  const core::ContinuousStability continuous =
-      core::continuous_critical_delay(o.period, o.zeta, o.alpha, o.branches);
-  const core::DiscreteStability discrete =
-      core::discrete_critical_delay(kind, o.period, o.zeta, o.alpha, o.dt, o.max_steps);
-  if (o.json) {
-    nlohmann::json out;
-    out["input"] = {{"period_s", o.period},
-                    {"zeta", o.zeta},
-                    {"experimental_fraction", o.alpha},
-                    {"integrator", core::to_string(kind)},
-                    {"dt_s", o.dt}};
-    nlohmann::json crossings = nlohmann::json::array();
-    for (const auto& c : continuous.crossings) {
-      crossings.push_back(
-          {{"crossing_omega_rad_per_s", c.omega}, {"delay_s", c.delay}, {"branch", c.branch}});
-    }
-    out["continuous"] = {
-        {"stable_without_delay", continuous.stable_without_delay},
-        {"stable_for_all_delays", continuous.stable_for_all_delays},
-        {"critical_delay_s",
-         continuous.critical_delay ? nlohmann::json(*continuous.critical_delay) : nlohmann::json()},
-        {"crossings", crossings}};
-    out["discrete"] = {
-        {"first_unstable_delay_steps", discrete.first_unstable_steps
-                                           ? nlohmann::json(*discrete.first_unstable_steps)
-                                           : nlohmann::json()},
-        {"first_unstable_delay_s", discrete.first_unstable_delay
-                                       ? nlohmann::json(*discrete.first_unstable_delay)
-                                       : nlohmann::json()},
-        {"searched_up_to_steps", o.max_steps},
-        {"spectral_radius_at_first_unstable",
-         discrete.spectral_radius.empty() ? nlohmann::json()
-                                          : nlohmann::json(discrete.spectral_radius.back())}};
-    std::cout << out.dump(2) << "\n";
-    return;
-  }
+  out["continuous"] = {
+      {"stable_without_delay", continuous.stable_without_delay},
+      {"stable_for_all_delays", continuous.stable_for_all_delays},
+      {"critical_delay_s",
+       continuous.critical_delay ? nlohmann::json(*continuous.critical_delay) : nlohmann::json()},
+      {"crossings", crossings}};
+  out["discrete"] = {
+      {"first_unstable_delay_steps", discrete.first_unstable_steps
+                                         ? nlohmann::json(*discrete.first_unstable_steps)
+                                         : nlohmann::json()},
+      {"first_unstable_delay_s", discrete.first_unstable_delay
+                                     ? nlohmann::json(*discrete.first_unstable_delay)
+                                     : nlohmann::json()},
+      {"searched_up_to_steps", o.max_steps},
+      {"spectral_radius_at_first_unstable", discrete.spectral_radius.empty()
+                                                ? nlohmann::json()
+                                                : nlohmann::json(discrete.spectral_radius.back())}};
+  return out;
+}
+
+void print_sdof_stability(const StabilityOptions& o, core::IntegratorKind kind,
+                          const core::ContinuousStability& continuous,
+                          const core::DiscreteStability& discrete) {
   std::cout << "SDOF T = " << o.period << " s, zeta = " << o.zeta
             << ", experimental fraction = " << o.alpha << "\n";
   if (continuous.stable_for_all_delays) {
@@ -246,6 +238,26 @@ void run_stability(const StabilityOptions& o) {
     std::cout << core::to_string(kind) << ", dt = " << o.dt * 1e3 << " ms: stable up to "
               << o.max_steps << " steps of delay\n";
   }
+}
+
+void run_stability(const StabilityOptions& o) {
+  if (!o.study.empty()) {
+    run_compensated(o);
+    return;
+  }
+  const auto kind = core::integrator_from_string(o.integrator);
+  // Beyond the integrator's own limit every delay is unstable, so "first unstable delay = 0
+  // steps" would answer the wrong question: refuse the input instead.
+  core::check_stability(kind, 2.0 * std::numbers::pi / o.period, o.dt, false);
+  const core::ContinuousStability continuous =
+      core::continuous_critical_delay(o.period, o.zeta, o.alpha, o.branches);
+  const core::DiscreteStability discrete =
+      core::discrete_critical_delay(kind, o.period, o.zeta, o.alpha, o.dt, o.max_steps);
+  if (o.json) {
+    std::cout << sdof_stability_json(o, kind, continuous, discrete).dump(2) << "\n";
+    return;
+  }
+  print_sdof_stability(o, kind, continuous, discrete);
 }
 
 }  // namespace

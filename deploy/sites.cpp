@@ -57,29 +57,9 @@ void absolutize_paths(config::Study& study, const std::filesystem::path& base_di
   }
 }
 
-}  // namespace
-
-Sites parse_sites(const std::string& text, const std::string& source_name) {
-  Sites sites;
-  core::parse_text_format(text, source_name, sites);
-  return sites;
-}
-
-SitesPlan load_sites(const std::filesystem::path& sites_file) {
-  const auto sites =
-      parse_sites(core::read_text_file(sites_file, "sites config"), sites_file.string());
-  auto plan = plan_sites(sites, sites_file.parent_path(), sites_file.string());
-  plan.sites_file = sites_file;
-  return plan;
-}
-
-SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
-                     const std::string& source) {
-  SitesPlan plan;
-  plan.sites = sites;
-  if (sites.study().empty()) throw std::invalid_argument(source + ": study is empty");
-  plan.study_file = base_dir / sites.study();
-  plan.study = core::load_study(plan.study_file);
+// Merges this file's deployment and its overrides (domain, case, clock, duration, timeout) into
+// the study.
+void apply_overrides(const Sites& sites, SitesPlan& plan, const std::string& source) {
   if (sites.has_deployment()) {
     if (plan.study.has_deployment()) {
       throw std::invalid_argument(source + ": deployment is given here and in " +
@@ -103,10 +83,11 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
   if (sites.duration() > 0.0) plan.study.mutable_motion()->set_duration(sites.duration());
   if (sites.timeout() < 0.0) throw std::invalid_argument(source + ": timeout must be >= 0");
   plan.timeout = sites.timeout() > 0.0 ? sites.timeout() : kDefaultTimeout;
+}
 
-  std::map<int, config::NodeSpec*> nodes;
-  for (auto& node : *deployment.mutable_nodes()) nodes[node.id()] = &node;
-
+// Every declared node and the coordinator sits at exactly one site.
+void place_nodes(const Sites& sites, const std::map<int, config::NodeSpec*>& nodes, SitesPlan& plan,
+                 const std::string& source) {
   if (sites.sites().empty()) throw std::invalid_argument(source + ": no sites");
   std::map<int, std::string> site_of;
   for (const auto& site : sites.sites()) {
@@ -134,7 +115,11 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
     }
     plan.placements.push_back({id, kind_name(node->kind()), site_of[id]});
   }
+}
 
+// Each link sets one node's lags, checked by the study's own lag rule.
+void apply_links(const Sites& sites, const std::map<int, config::NodeSpec*>& nodes,
+                 const SitesPlan& plan, const std::string& source) {
   std::set<int> linked;
   for (const auto& link : sites.links()) {
     const std::string where = source + ": link to node " + std::to_string(link.node_id());
@@ -147,9 +132,13 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
                             source);
     core::validate_link_lag(link.from_node(), where + " from_node", plan.study.allow_long_lag(),
                             source);
-    *nodes[link.node_id()]->mutable_receive_lag() = link.to_node();
-    *nodes[link.node_id()]->mutable_send_lag() = link.from_node();
+    *nodes.at(link.node_id())->mutable_receive_lag() = link.to_node();
+    *nodes.at(link.node_id())->mutable_send_lag() = link.from_node();
   }
+}
+
+// Under LOCKSTEP a lost message stops the run, so no lag may lose messages.
+void check_lockstep_loss(const config::Deployment& deployment, const std::string& source) {
   if (deployment.clock() == config::Deployment::LOCKSTEP) {
     for (const auto& node : deployment.nodes()) {
       if (node.receive_lag().loss() > 0.0 || node.send_lag().loss() > 0.0) {
@@ -159,8 +148,9 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
       }
     }
   }
-  absolutize_paths(plan.study, std::filesystem::absolute(plan.study_file).parent_path());
-  // The topology checks names and the subnet; check now so the error names this file.
+}
+
+void check_topology(const Sites& sites, const std::string& source) {
   TopologySpec topology;
   for (const auto& site : sites.sites()) topology.sites.push_back(site.name());
   topology.subnet = sites.subnet().empty() ? kDefaultSubnet : sites.subnet();
@@ -169,6 +159,42 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(source + ": " + e.what());
   }
+}
+
+}  // namespace
+
+Sites parse_sites(const std::string& text, const std::string& source_name) {
+  Sites sites;
+  core::parse_text_format(text, source_name, sites);
+  return sites;
+}
+
+SitesPlan load_sites(const std::filesystem::path& sites_file) {
+  const auto sites =
+      parse_sites(core::read_text_file(sites_file, "sites config"), sites_file.string());
+  auto plan = plan_sites(sites, sites_file.parent_path(), sites_file.string());
+  plan.sites_file = sites_file;
+  return plan;
+}
+
+SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
+                     const std::string& source) {
+  SitesPlan plan;
+  plan.sites = sites;
+  if (sites.study().empty()) throw std::invalid_argument(source + ": study is empty");
+  plan.study_file = base_dir / sites.study();
+  plan.study = core::load_study(plan.study_file);
+  apply_overrides(sites, plan, source);
+  auto& deployment = *plan.study.mutable_deployment();
+
+  std::map<int, config::NodeSpec*> nodes;
+  for (auto& node : *deployment.mutable_nodes()) nodes[node.id()] = &node;
+  place_nodes(sites, nodes, plan, source);
+  apply_links(sites, nodes, plan, source);
+  check_lockstep_loss(deployment, source);
+  absolutize_paths(plan.study, std::filesystem::absolute(plan.study_file).parent_path());
+  // The topology checks names and the subnet; check now so the error names this file.
+  check_topology(sites, source);
   return plan;
 }
 

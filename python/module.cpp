@@ -316,14 +316,9 @@ py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
   return out;
 }
 
-}  // namespace
-}  // namespace rths::python
-
-PYBIND11_MODULE(_rths, m) {
-  using namespace rths::python;
-  m.doc() =
-      "rths: real-time hybrid simulation with actuator and network lag (the C++ library from "
-      "Python)";
+// rths.Error (a RuntimeError) and rths.BadInputError (a ValueError): std::invalid_argument is bad
+// input, any other std::exception an error; Python's own exceptions pass through.
+void add_errors(py::module_& m) {
   static py::exception<std::runtime_error> error(m, "Error", PyExc_RuntimeError);
   static py::exception<std::invalid_argument> bad_input(m, "BadInputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
@@ -339,7 +334,9 @@ PYBIND11_MODULE(_rths, m) {
       error(e.what());
     }
   });
+}
 
+void add_study_functions(py::module_& m) {
   py::class_<Study>(m, "Study",
                     "A study config and the folder its relative paths are resolved against")
       .def_property_readonly("name", [](const Study& s) { return s.config.name(); })
@@ -373,6 +370,9 @@ PYBIND11_MODULE(_rths, m) {
         return out;
       },
       "The RTHS benchmark's criteria J1-J9: [{name, unit, definition}]");
+}
+
+void add_analysis_functions(py::module_& m) {
   m.def("sweep", &sweep, py::arg("study"), py::arg("shard") = "0/1", py::arg("threads") = 0,
         py::arg("general") = false, "The study's sweep grid (the paper's Fig. 4), as `rths sweep`");
   m.def("stability", &stability, py::arg("period_s"), py::arg("zeta"),
@@ -392,4 +392,17 @@ PYBIND11_MODULE(_rths, m) {
   m.def("read_record", &read_record, py::arg("path"), py::arg("allow_loss") = false,
         "A run record (.rthsrec), also a truncated one; checksums verified, a damaged record "
         "raises unless allow_loss=True (then its intact entries and 'losses')");
+}
+
+}  // namespace
+}  // namespace rths::python
+
+PYBIND11_MODULE(_rths, m) {
+  using namespace rths::python;
+  m.doc() =
+      "rths: real-time hybrid simulation with actuator and network lag (the C++ library from "
+      "Python)";
+  add_errors(m);
+  add_study_functions(m);
+  add_analysis_functions(m);
 }

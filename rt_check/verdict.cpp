@@ -73,6 +73,24 @@ void tuning_fixes(const PlatformFacts& facts, const FailSafeInput& in,
         "permission to hold /dev/cpu_dma_latency (run as root or give the group write access)");
 }
 
+// What to change in the deployment when the window or the overrun tolerance does not hold.
+void add_deployment_fixes(const LatencyStats& stats, FailSafeVerdict& v) {
+  if (!v.window_holds)
+    v.fixes.push_back(
+        fmt("answer_window_ms: %.3f command_watchdog_ms: %.3f in the deployment (a real "
+            "fault is then held within %.3f ms instead of %.2f ms, ",
+            v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms) +
+        fmt("plus any stall at that moment: up to %.2f ms measured here)", 1e3 * stats.max()));
+  if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
+    v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",
+                          2.0 * v.predicted_overrun_fraction));
+  else if (!v.overruns_hold)
+    v.fixes.push_back(
+        fmt("no overrun tolerance makes this a real-time test: %.1f %% of the steps "
+            "would overrun; run at a lower rate or on a quieter machine",
+            100.0 * v.predicted_overrun_fraction));
+}
+
 }  // namespace
 
 double stall_rate_per_minute(const LatencyStats& stats, double x) {
@@ -150,20 +168,7 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
       (in.overrun_tolerance < 0 ? "not checked"
        : v.overruns_hold        ? "holds"
                                 : "does NOT hold"));
-  if (!v.window_holds)
-    v.fixes.push_back(
-        fmt("answer_window_ms: %.3f command_watchdog_ms: %.3f in the deployment (a real "
-            "fault is then held within %.3f ms instead of %.2f ms, ",
-            v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms) +
-        fmt("plus any stall at that moment: up to %.2f ms measured here)", 1e3 * stats.max()));
-  if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
-    v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",
-                          2.0 * v.predicted_overrun_fraction));
-  else if (!v.overruns_hold)
-    v.fixes.push_back(
-        fmt("no overrun tolerance makes this a real-time test: %.1f %% of the steps "
-            "would overrun; run at a lower rate or on a quieter machine",
-            100.0 * v.predicted_overrun_fraction));
+  add_deployment_fixes(stats, v);
   if (v.refused()) tuning_fixes(facts, in, v.fixes);
   return v;
 }

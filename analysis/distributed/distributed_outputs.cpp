@@ -66,35 +66,48 @@ std::filesystem::path write_distributed_outputs(
   return table_file;
 }
 
-void write_lag_plot(const DistributedResults& results, std::size_t case_index,
-                    const std::filesystem::path& png) {
-  const analysis::CaseOutcome& c = results.outcome.cases.at(case_index);
-  const DistributedCaseFacts& facts = results.facts.at(case_index);
-  const std::map<int, runtime::LinkSeries>& links = results.links.at(case_index);
-  const ActuatorPathLag& path = results.actuator_path;
-  const auto label_of = [&](int node) {
-    const auto it = facts.link_labels.find(node);
-    return it != facts.link_labels.end() ? it->second : "node " + std::to_string(node);
-  };
+namespace {
+
+std::string link_label(const DistributedCaseFacts& facts, int node) {
+  const auto it = facts.link_labels.find(node);
+  return it != facts.link_labels.end() ? it->second : "node " + std::to_string(node);
+}
+
+// Each link's injected and measured round trip; actuator_link_colour is the colour of the
+// actuator's link's measured curve, which the stack panel repeats.
+util::PlotSpec network_panel(const analysis::CaseOutcome& c, const DistributedCaseFacts& facts,
+                             const std::map<int, runtime::LinkSeries>& links,
+                             const ActuatorPathLag& path, std::string& actuator_link_colour) {
   util::PlotSpec network;
   network.title = "network lag per link, case " + c.name + " (" +
                   (path.real_time ? "real time" : "lockstep") + ")";
   network.xlabel = "time (s)";
   network.ylabel = "round trip (ms)";
-  std::string actuator_link_colour = util::series_colour(0);
-  const double t0 = c.simulation.time.empty() ? 0.0 : c.simulation.time.front();
-  const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
   for (const auto& [node, series] : links) {
     // Injected first, so the measured round trip is drawn over it.
     // Thick and dashed: in lockstep it lies on zero, under the processes' own exchange times.
-    network.series.push_back({label_of(node) + ": round trip, injected", series.time,
+    network.series.push_back({link_label(facts, node) + ": round trip, injected", series.time,
                               in_ms(series.injected), "lines lw 3 dt 2"});
     if (node == path.node_id) actuator_link_colour = util::series_colour(network.series.size());
-    network.series.push_back(
-        {label_of(node) + ": round trip, measured", series.time, in_ms(series.round_trip)});
+    network.series.push_back({link_label(facts, node) + ": round trip, measured", series.time,
+                              in_ms(series.round_trip)});
   }
-  // The stack: the network round trip the test feels (real time only), the actuator's own lag
-  // on top of it; drawn as the total filled first, then the network part over its lower band.
+  if (!path.real_time)
+    network.title = "wall-clock round trip per link, case " + c.name +
+                    " (lockstep: simulated time carries no network lag; these are the processes' "
+                    "own exchange times)";
+  return network;
+}
+
+// The stack: the network round trip the test feels (real time only), the actuator's own lag
+// on top of it; drawn as the total filled first, then the network part over its lower band.
+// Colours continue from the network panel's, at colour.
+util::PlotSpec stack_panel(const analysis::CaseOutcome& c, const DistributedCaseFacts& facts,
+                           const std::map<int, runtime::LinkSeries>& links,
+                           const ActuatorPathLag& path, const std::string& actuator_link_colour,
+                           std::size_t colour) {
+  const double t0 = c.simulation.time.empty() ? 0.0 : c.simulation.time.front();
+  const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
   const double actuator = c.nominal_delay + path.node_stages;  // s
   const std::string actuator_label = "actuator lag, nominal " + ms(actuator) + ": " +
                                      c.delay_description +
@@ -108,15 +121,14 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
   stack.xlabel = "time (s)";
   stack.ylabel = "lag (ms)";
   const std::string fill = " fs solid 0.45 noborder";  // opaque: the lower band covers the upper's
-  std::size_t colour = network.series.size();
   const auto link = links.find(path.node_id);
   if (path.real_time && link != links.end()) {
     const runtime::LinkSeries& s = link->second;
     stack.series.push_back(
         {actuator_label, s.time, in_ms(s.round_trip, actuator),
          "filledcurves y1=0 lc rgb '" + util::series_colour(colour++) + "' dt 1" + fill});
-    stack.series.push_back({label_of(path.node_id) + ": network round trip, measured", s.time,
-                            in_ms(s.round_trip),
+    stack.series.push_back({link_label(facts, path.node_id) + ": network round trip, measured",
+                            s.time, in_ms(s.round_trip),
                             "filledcurves y1=0 lc rgb '" + actuator_link_colour + "' dt 1" + fill});
     stack.series.push_back({"injected total: network + actuator", s.time,
                             in_ms(s.injected, actuator),
@@ -141,10 +153,21 @@ void write_lag_plot(const DistributedResults& results, std::size_t case_index,
     level(c.stability->continuous, "continuous", "2");
     level(c.stability->discrete, "discrete", "3");
   }
-  if (!path.real_time)
-    network.title = "wall-clock round trip per link, case " + c.name +
-                    " (lockstep: simulated time carries no network lag; these are the processes' "
-                    "own exchange times)";
+  return stack;
+}
+
+}  // namespace
+
+void write_lag_plot(const DistributedResults& results, std::size_t case_index,
+                    const std::filesystem::path& png) {
+  const analysis::CaseOutcome& c = results.outcome.cases.at(case_index);
+  const DistributedCaseFacts& facts = results.facts.at(case_index);
+  const std::map<int, runtime::LinkSeries>& links = results.links.at(case_index);
+  const ActuatorPathLag& path = results.actuator_path;
+  std::string actuator_link_colour = util::series_colour(0);
+  util::PlotSpec network = network_panel(c, facts, links, path, actuator_link_colour);
+  util::PlotSpec stack =
+      stack_panel(c, facts, links, path, actuator_link_colour, network.series.size());
   // From zero, and high enough that the critical delays are never on the border; the network
   // panel a little below zero, so that an injected lag of zero is seen, not hidden in the axis.
   stack.y_min = 0.0;

@@ -133,6 +133,42 @@ std::map<int, std::string> link_roles(const config::Deployment& deployment,
   return labels;
 }
 
+namespace {
+
+// The case's status from the record's footer, overruled by a damaged record, then by the
+// launcher's word; the footer's counters go to the facts.
+void judge_status(const DistributedRun& run, const runtime::RecordContents& record,
+                  const runtime::RunMeasurements& measured, const core::PreparedStudy& prepared,
+                  analysis::RecordedCase& c, DistributedCaseFacts& facts) {
+  if (measured.has_footer) {
+    c.status = measured.footer.status();
+    const auto& k = measured.footer.counters();
+    facts.overruns = k.overruns();
+    facts.rejected = runtime::RejectCounters::from(k).total();
+    facts.node_rejects.assign(measured.footer.node_rejects().begin(),
+                              measured.footer.node_rejects().end());
+    if (runtime::needs_deadline_diagnosis(c.status, k.overruns()))
+      facts.deadline_diagnosis =
+          runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
+                                      static_cast<std::uint64_t>(runtime::max_missed_answers(
+                                          prepared.config.deployment(), record.header()->dt())))
+              .describe();
+  } else {
+    c.status = "cut short";
+    c.status_detail = "the record has no footer: the coordinator stopped abruptly";
+  }
+  if (record.lost_entries()) {  // checksums failed: its rows are not the run's
+    c.status = "record damaged";
+    c.status_detail = record.loss_report();
+  }
+  if (!run.launcher_status.empty()) {
+    c.status = run.launcher_status;
+    c.status_detail = run.launcher_status + "; see " + run.log_hint;
+  }
+}
+
+}  // namespace
+
 DistributedResults judge_distributed(const core::PreparedStudy& prepared,
                                      const std::vector<DistributedRun>& runs,
                                      const std::function<void(const std::string&)>& warn,
@@ -170,31 +206,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
           "stopped before step 1: " + measured.footer.status() + "; see " + run.log_hint);
       continue;
     }
-    if (measured.has_footer) {
-      c.status = measured.footer.status();
-      const auto& k = measured.footer.counters();
-      facts.overruns = k.overruns();
-      facts.rejected = runtime::RejectCounters::from(k).total();
-      facts.node_rejects.assign(measured.footer.node_rejects().begin(),
-                                measured.footer.node_rejects().end());
-      if (runtime::needs_deadline_diagnosis(c.status, k.overruns()))
-        facts.deadline_diagnosis =
-            runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
-                                        static_cast<std::uint64_t>(runtime::max_missed_answers(
-                                            prepared.config.deployment(), record.header()->dt())))
-                .describe();
-    } else {
-      c.status = "cut short";
-      c.status_detail = "the record has no footer: the coordinator stopped abruptly";
-    }
-    if (record.lost_entries()) {  // checksums failed: its rows are not the run's
-      c.status = "record damaged";
-      c.status_detail = record.loss_report();
-    }
-    if (!run.launcher_status.empty()) {
-      c.status = run.launcher_status;
-      c.status_detail = run.launcher_status + "; see " + run.log_hint;
-    }
+    judge_status(run, record, measured, prepared, c, facts);
     facts.link_labels = roles;
     if (comparable && run.coordinator_exit == 0)
       facts.difference_from_in_process =

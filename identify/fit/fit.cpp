@@ -107,6 +107,87 @@ double target_spread(const ChannelSignals& signals, const Split& split) {
   return spread > 0.0 ? spread : 1.0;
 }
 
+void set_bounds(ceres::Problem& problem, std::vector<double>& theta,
+                const std::vector<ParamSpec>& specs, const std::vector<double>& scales) {
+  const std::size_t p = specs.size();
+  for (std::size_t i = 0; i < p; ++i) {
+    if (specs[i].lower > -1e299) {
+      problem.SetParameterLowerBound(theta.data(), static_cast<int>(i), specs[i].lower / scales[i]);
+    }
+    if (specs[i].upper < 1e299) {
+      problem.SetParameterUpperBound(theta.data(), static_cast<int>(i), specs[i].upper / scales[i]);
+    }
+  }
+}
+
+ceres::Solver::Options solver_options_for(const FitOptions& options) {
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.function_tolerance = options.tolerance;
+  solver_options.parameter_tolerance = options.tolerance;
+  return solver_options;
+}
+
+// A free parameter ends at a bound when it sits there and the cost's gradient pushes past it.
+std::vector<BoundHit> bound_hits(const Eigen::VectorXd& gradient, double rss,
+                                 const std::vector<double>& theta,
+                                 const std::vector<ParamSpec>& specs,
+                                 const std::vector<double>& scales) {
+  std::vector<BoundHit> hits;
+  const std::size_t p = specs.size();
+  for (std::size_t i = 0; i < p; ++i) {
+    if (specs[i].fixed) continue;
+    const double value = theta[i] * scales[i];
+    const auto near = [&](double bound) {
+      return std::abs(value - bound) <= 1e-6 * std::max(std::abs(bound), scales[i]);
+    };
+    const double g = gradient(static_cast<Eigen::Index>(i));
+    const double tolerance = 1e-6 * std::max(rss, 1e-12);
+    if (specs[i].lower > -1e299 && near(specs[i].lower) && g > tolerance) {
+      hits.push_back({i, specs[i].name, true, specs[i].lower, specs[i].below_means});
+    } else if (specs[i].upper < 1e299 && near(specs[i].upper) && g < -tolerance) {
+      hits.push_back({i, specs[i].name, false, specs[i].upper, ""});
+    }
+  }
+  return hits;
+}
+
+// Standard errors from the Jacobian at the solution (fixed parameters have none), and the bounds
+// the solution ends at.
+void add_uncertainty(const ChannelCost& cost, const std::vector<double>& theta,
+                     const std::vector<ParamSpec>& specs, const std::vector<double>& scales,
+                     const std::vector<int>& constant, FitResult& result) {
+  const std::size_t p = specs.size();
+  const std::size_t m = static_cast<std::size_t>(cost.num_residuals());
+  std::vector<double> residuals(m), jacobian(m * p);
+  double* jac_ptr = jacobian.data();
+  const double* param_ptr = theta.data();
+  result.std_errors.assign(p, 0.0);
+  if (cost.Evaluate(&param_ptr, residuals.data(), &jac_ptr) && m > p) {
+    Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
+        jacobian.data(), static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(p));
+    double rss = 0.0;
+    for (double r : residuals) rss += r * r;
+    const std::size_t free = p - constant.size();
+    const double sigma2 = rss / static_cast<double>(std::max<std::size_t>(1, m - free));
+    Eigen::MatrixXd free_j = J;
+    for (int i : constant) free_j.col(i).setZero();
+    const Eigen::VectorXd gradient =
+        free_j.transpose() *
+        Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(m));
+    result.bound_hits = bound_hits(gradient, rss, theta, specs, scales);
+    const Eigen::MatrixXd jtj = free_j.transpose() * free_j;
+    const Eigen::MatrixXd cov = sigma2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
+    for (std::size_t i = 0; i < p; ++i) {
+      const double var = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+      result.std_errors[i] = var > 0.0 ? std::sqrt(var) * scales[i] : 0.0;
+    }
+  }
+}
+
 }  // namespace
 
 std::string BoundHit::message() const {
@@ -158,21 +239,8 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   if (!constant.empty()) {
     problem.SetManifold(theta.data(), new ceres::SubsetManifold(static_cast<int>(p), constant));
   }
-  for (std::size_t i = 0; i < p; ++i) {
-    if (specs[i].lower > -1e299) {
-      problem.SetParameterLowerBound(theta.data(), static_cast<int>(i), specs[i].lower / scales[i]);
-    }
-    if (specs[i].upper < 1e299) {
-      problem.SetParameterUpperBound(theta.data(), static_cast<int>(i), specs[i].upper / scales[i]);
-    }
-  }
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_QR;
-  solver_options.max_num_iterations = options.max_iterations;
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
-  solver_options.function_tolerance = options.tolerance;
-  solver_options.parameter_tolerance = options.tolerance;
+  set_bounds(problem, theta, specs, scales);
+  ceres::Solver::Options solver_options = solver_options_for(options);
   Heartbeat heartbeat(options.on_iteration);
   if (options.on_iteration) solver_options.callbacks.push_back(&heartbeat);
   ceres::Solver::Summary summary;
@@ -183,45 +251,7 @@ FitResult fit_channel(const ChannelModel& start, const ChannelSignals& signals, 
   for (std::size_t i = 0; i < p; ++i) result.model.params[i] = theta[i] * scales[i];
   result.cost = summary.final_cost;
 
-  // Covariance from the Jacobian at the solution.
-  const std::size_t m = static_cast<std::size_t>(cost->num_residuals());
-  std::vector<double> residuals(m), jacobian(m * p);
-  double* jac_ptr = jacobian.data();
-  const double* param_ptr = theta.data();
-  result.std_errors.assign(p, 0.0);
-  if (cost->Evaluate(&param_ptr, residuals.data(), &jac_ptr) && m > p) {
-    Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(
-        jacobian.data(), static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(p));
-    double rss = 0.0;
-    for (double r : residuals) rss += r * r;
-    const std::size_t free = p - constant.size();
-    const double sigma2 = rss / static_cast<double>(std::max<std::size_t>(1, m - free));
-    Eigen::MatrixXd free_j = J;
-    for (int i : constant) free_j.col(i).setZero();
-    const Eigen::VectorXd gradient =
-        free_j.transpose() *
-        Eigen::Map<const Eigen::VectorXd>(residuals.data(), static_cast<Eigen::Index>(m));
-    for (std::size_t i = 0; i < p; ++i) {
-      if (specs[i].fixed) continue;
-      const double value = theta[i] * scales[i];
-      const auto near = [&](double bound) {
-        return std::abs(value - bound) <= 1e-6 * std::max(std::abs(bound), scales[i]);
-      };
-      const double g = gradient(static_cast<Eigen::Index>(i));
-      const double tolerance = 1e-6 * std::max(rss, 1e-12);
-      if (specs[i].lower > -1e299 && near(specs[i].lower) && g > tolerance) {
-        result.bound_hits.push_back({i, specs[i].name, true, specs[i].lower, specs[i].below_means});
-      } else if (specs[i].upper < 1e299 && near(specs[i].upper) && g < -tolerance) {
-        result.bound_hits.push_back({i, specs[i].name, false, specs[i].upper, ""});
-      }
-    }
-    const Eigen::MatrixXd jtj = free_j.transpose() * free_j;
-    const Eigen::MatrixXd cov = sigma2 * jtj.completeOrthogonalDecomposition().pseudoInverse();
-    for (std::size_t i = 0; i < p; ++i) {
-      const double var = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
-      result.std_errors[i] = var > 0.0 ? std::sqrt(var) * scales[i] : 0.0;
-    }
-  }
+  add_uncertainty(*cost, theta, specs, scales, constant, result);
   result.prediction = predict(result.model, signals);
   result.train_error = normalised_error(signals.target, result.prediction, split.train);
   result.heldout_error = normalised_error(signals.target, result.prediction, split.heldout);

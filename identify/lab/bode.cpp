@@ -63,20 +63,10 @@ std::complex<double> actuator_response(const ChannelModel& model, double frequen
   return h;
 }
 
-BodeData actuator_bode(const ChannelSignals& signals, const std::vector<BodeModel>& models,
-                       double min_coherence) {
-  if (signals.channel != Channel::kMeasured) {
-    throw std::invalid_argument("Bode data: the measured (actuator) channel only");
-  }
-  if (signals.size() < 512) {
-    throw std::invalid_argument("Bode data: at least 512 samples needed, got " +
-                                std::to_string(signals.size()));
-  }
-  std::size_t segment = 64;
-  while (segment * 2 <= signals.size() / 8 && segment < 16384) segment *= 2;
-  const TransferEstimate h = transfer_estimate(signals.input, signals.target, signals.dt, segment);
+namespace {
 
-  // The longest run of bins with good coherence.
+// The longest run of bins [begin, end) whose coherence reaches min_coherence; empty when none.
+std::pair<std::size_t, std::size_t> coherent_band(const TransferEstimate& h, double min_coherence) {
   std::size_t best_begin = 0, best_end = 0;
   for (std::size_t k = 0; k < h.frequency.size();) {
     if (h.coherence[k] < min_coherence) {
@@ -91,6 +81,44 @@ BodeData actuator_bode(const ChannelSignals& signals, const std::vector<BodeMode
     }
     k = end;
   }
+  return {best_begin, best_end};
+}
+
+BodeCurve model_curve(const BodeModel& m, const std::vector<double>& frequency, double dt) {
+  BodeCurve curve;
+  curve.title = m.title;
+  curve.left_out = actuator_response_left_out(*m.model);
+  double previous = 0.0;
+  for (double f : frequency) {
+    const std::complex<double> r = actuator_response(*m.model, f, dt);
+    curve.amplitude.push_back(std::abs(r));
+    // Unwrapped: the step from the previous frequency taken within (-180, 180] degrees.
+    double phase = std::arg(r) * kDegrees;
+    if (!curve.phase_deg.empty()) {
+      phase = previous + std::remainder(phase - previous, 360.0);
+    }
+    curve.phase_deg.push_back(phase);
+    previous = phase;
+  }
+  return curve;
+}
+
+}  // namespace
+
+BodeData actuator_bode(const ChannelSignals& signals, const std::vector<BodeModel>& models,
+                       double min_coherence) {
+  if (signals.channel != Channel::kMeasured) {
+    throw std::invalid_argument("Bode data: the measured (actuator) channel only");
+  }
+  if (signals.size() < 512) {
+    throw std::invalid_argument("Bode data: at least 512 samples needed, got " +
+                                std::to_string(signals.size()));
+  }
+  std::size_t segment = 64;
+  while (segment * 2 <= signals.size() / 8 && segment < 16384) segment *= 2;
+  const TransferEstimate h = transfer_estimate(signals.input, signals.target, signals.dt, segment);
+
+  const auto [best_begin, best_end] = coherent_band(h, min_coherence);
   if (best_end == best_begin) {
     throw std::invalid_argument("Bode data: no frequency where the coherence reaches " +
                                 std::to_string(min_coherence));
@@ -107,24 +135,7 @@ BodeData actuator_bode(const ChannelSignals& signals, const std::vector<BodeMode
     out.phase_deg.push_back(h.phase[k] * kDegrees);
     out.coherence.push_back(h.coherence[k]);
   }
-  for (const auto& m : models) {
-    BodeCurve curve;
-    curve.title = m.title;
-    curve.left_out = actuator_response_left_out(*m.model);
-    double previous = 0.0;
-    for (double f : out.frequency) {
-      const std::complex<double> r = actuator_response(*m.model, f, signals.dt);
-      curve.amplitude.push_back(std::abs(r));
-      // Unwrapped: the step from the previous frequency taken within (-180, 180] degrees.
-      double phase = std::arg(r) * kDegrees;
-      if (!curve.phase_deg.empty()) {
-        phase = previous + std::remainder(phase - previous, 360.0);
-      }
-      curve.phase_deg.push_back(phase);
-      previous = phase;
-    }
-    out.models.push_back(std::move(curve));
-  }
+  for (const auto& m : models) out.models.push_back(model_curve(m, out.frequency, signals.dt));
   return out;
 }
 

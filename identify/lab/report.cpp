@@ -253,6 +253,277 @@ void write_delay_plot(const ChannelIdentification& c, const ChannelSignals& s,
   util::write_png_plot(plot, png);
 }
 
+nlohmann::json step_json(const SelectionStep& s, const SignalScales& scales) {
+  return {{"channel", channel_name(s.channel)},
+          {"effect", effect_name(s.effect)},
+          {"params", effect_params_json(s.after, s.effect, scales)},
+          {"all_params", params_json(s.after, scales)},
+          {"train_error_before", s.before.train_error},
+          {"train_error_after", s.after.train_error},
+          {"heldout_error_before", s.before.heldout_error},
+          {"heldout_error_after", s.after.heldout_error},
+          {"own_error_removed", s.own_error_removed},
+          {"own_share", s.own_share},
+          {"evidence", evidence_json(s.evidence_before)},
+          {"ranking", ranking_json(s.ranking)}};
+}
+
+nlohmann::json channel_json(const Identification& id, const ChannelIdentification& c,
+                            const SignalScales& scales) {
+  nlohmann::json declared = nlohmann::json::array();
+  for (Effect e : c.declared) declared.push_back(effect_name(e));
+  nlohmann::json dropped = nlohmann::json::array();
+  for (const auto& s : c.dropped_at_full_rate) {
+    dropped.push_back({{"effect", effect_name(s.effect)},
+                       {"heldout_error_before", s.before.heldout_error},
+                       {"heldout_error_after", s.after.heldout_error}});
+  }
+  return {{"channel", channel_name(c.channel)},
+          {"declared_effects", declared},
+          {"declared", model_json(c.declared_fit, scales)},
+          {"start", model_json(c.start_fit, scales)},
+          {"kind", c.kind ? kind_json(*c.kind) : nlohmann::json()},
+          {"noise_floor", c.noise_floor},
+          // model.h make_signals: the specimen's input low-pass (0: none).
+          {"input_lowpass_hz", signals_of(id, c.channel).input_cutoff},
+          {"final", model_json(c.final_fit, scales)},
+          {"final_evidence", evidence_json(c.final_evidence)},
+          {"search_heldout_error", c.search_heldout_error},
+          {"dropped_at_full_rate", dropped},
+          {"rejected", ranking_json(c.last_ranking)}};
+}
+
+nlohmann::json prediction_json(const StudyPrediction& prediction) {
+  nlohmann::json cases = nlohmann::json::array();
+  for (const auto& c : prediction.cases) cases.push_back(case_json(c));
+  nlohmann::json out = {{"config", prediction.config},
+                        {"reference_case", prediction.reference_case},
+                        {"dt", prediction.dt},
+                        {"actuator", prediction.actuator},
+                        {"ignored", prediction.ignored},
+                        {"identified", case_json(prediction.identified)},
+                        {"cases", cases}};
+  if (const auto& st = prediction.stability) {
+    const auto critical = st->critical();
+    out["stability"] = {
+        {"lag_s", st->lag},
+        {"critical_delay_s", critical ? nlohmann::json(*critical) : nlohmann::json(nullptr)},
+        {"margin", critical ? nlohmann::json(st->margin()) : nlohmann::json(nullptr)},
+        {"past", st->past()},
+        {"verdict", predicted_verdict(*st)}};
+  }
+  return out;
+}
+
+void write_channel_header(std::ostringstream& out, const Identification& id,
+                          const ChannelIdentification& c) {
+  out << "channel " << channel_name(c.channel) << ": declared model {";
+  for (std::size_t i = 0; i < c.declared.size(); ++i) {
+    out << (i ? ", " : "") << effect_name(c.declared[i]);
+  }
+  out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
+      << percent(c.declared_fit.heldout_error) << "\n";
+  out << "  noise floor (estimated from the record): " << percent(c.noise_floor) << "\n";
+  if (const double cutoff = signals_of(id, c.channel).input_cutoff; cutoff > 0.0) {
+    out << "  the model runs on the measured displacement low-passed at " << format_value(cutoff)
+        << " Hz (zero phase)\n";
+  }
+  for (const auto& hit : c.declared_fit.bound_hits) {
+    out << "  declared fit ends at a bound: " << hit.message()
+        << (c.kind ? ": the declared model is the wrong kind" : "") << "\n";
+  }
+}
+
+// The specimen-kind search: the ranking of the library's kinds and the one the search starts from.
+void write_kind_search(std::ostringstream& out, const ChannelIdentification& c) {
+  if (c.kind) {
+    out << "  specimen kinds (held-out at the search rate):";
+    for (const auto& k : c.kind->ranking) {
+      out << " " << kind_name(k.kind) << " " << percent(k.fit.heldout_error)
+          << (k.physical ? "" : " (wrong kind: at a bound)") << ";";
+    }
+    out << "\n";
+    if (c.kind->proposed) {
+      out << "  proposed kind: " << kind_name(*c.kind->proposed)
+          << (is_hysteretic_damper(*c.kind->proposed) ? " (a damper with hysteresis)" : "")
+          << "; the search starts from it: held-out " << percent(c.start_fit.heldout_error) << "\n";
+    } else {
+      out << "  no kind of the library fits without reaching a bound\n";
+    }
+  }
+}
+
+void write_step(std::ostringstream& out, const SelectionStep& s, int n,
+                const SignalScales& scales) {
+  out << "  step " << n << ": + " << effect_name(s.effect) << "   train "
+      << percent(s.before.train_error) << " -> " << percent(s.after.train_error) << "   held-out "
+      << percent(s.before.heldout_error) << " -> " << percent(s.after.heldout_error) << "\n";
+  const auto p = effect_params_json(s.after, s.effect, scales);
+  for (auto it = p.begin(); it != p.end(); ++it) {
+    out << "      " << it.key() << " = " << format_value(it.value()["value"]) << " +/- "
+        << format_value(it.value()["std_error"]) << " " << it.value()["unit"].get<std::string>()
+        << "\n";
+  }
+  const auto& e = s.evidence_before;
+  out << "      evidence before: corr(res, disp) " << format_value(e.corr_input)
+      << ", corr(res, vel) " << format_value(e.corr_velocity) << ", corr(res, sgn vel) "
+      << format_value(e.corr_velocity_sign) << ", xcorr(input, res) "
+      << format_value(e.input_to_residual.peak) << " at "
+      << format_value(e.input_to_residual.lag * 1e3) << " ms, residual peak at "
+      << format_value(e.dominant_frequency) << " Hz\n";
+  out << "      ranking (held-out at the search rate):";
+  for (std::size_t k = 0; k < std::min<std::size_t>(4, s.ranking.size()); ++k) {
+    out << " " << effect_name(s.ranking[k].effect) << " " << percent(s.ranking[k].heldout_error)
+        << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
+  }
+  out << "\n";
+}
+
+void write_channel_outcome(std::ostringstream& out, const ChannelIdentification& c,
+                           const SignalScales& scales) {
+  for (const auto& d : c.dropped_at_full_rate) {
+    out << "  dropped: + " << effect_name(d.effect) << " paid at the search rate but not at the "
+        << "full rate (held-out " << percent(d.before.heldout_error) << " -> "
+        << percent(d.after.heldout_error) << ")\n";
+  }
+  if (c.steps.size() > 1) {
+    std::vector<const SelectionStep*> by_part;
+    for (const auto& st : c.steps) by_part.push_back(&st);
+    std::stable_sort(by_part.begin(), by_part.end(), [](const auto* a, const auto* b) {
+      return a->own_error_removed > b->own_error_removed;
+    });
+    out << "  effects by their own part (held-out error lost when each is left out):";
+    for (const auto* st : by_part) {
+      out << " " << effect_name(st->effect) << " " << percent(st->own_error_removed) << " ("
+          << format_value(100.0 * st->own_share) << " % of the parts);";
+    }
+    out << "\n";
+  }
+  out << "  final: " << c.final_fit.model.describe(scales) << "\n";
+  out << "  final held-out " << percent(c.final_fit.heldout_error) << " = "
+      << format_value(c.noise_floor > 0.0 ? c.final_fit.heldout_error / c.noise_floor : 0.0)
+      << " x the noise floor\n";
+  for (const auto& hit : c.final_fit.bound_hits) {
+    out << "  final fit ends at a bound: " << hit.message() << "\n";
+  }
+  if (!c.last_ranking.empty()) {
+    out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
+        << percent(c.last_ranking.front().heldout_error) << " vs "
+        << percent(c.search_heldout_error) << " without it, at the search rate)\n";
+  }
+}
+
+void write_prediction(std::ostringstream& out, const StudyPrediction& prediction) {
+  out << "prediction with " << prediction.config << " (reference case '"
+      << prediction.reference_case << "', dt " << prediction.dt << " s)\n";
+  out << "  identified actuator: " << prediction.actuator << "\n";
+  for (const auto& ig : prediction.ignored) out << "  not transferred: " << ig << "\n";
+  const auto line = [&](const CaseError& c) {
+    out << "  " << c.name << ": nominal lag " << format_value(c.nominal_delay * 1e3)
+        << " ms, NRMSE " << percent(c.nrmse) << ", paper Eq. 2 " << format_value(c.paper_eq2)
+        << ", peak " << format_value(c.peak_displacement * 1e3) << " mm"
+        << (c.diverged ? " (DIVERGED)" : "") << "\n";
+  };
+  line(prediction.identified);
+  for (const auto& c : prediction.cases) line(c);
+  if (const auto& st = prediction.stability)
+    out << "  before booking the lab: the identified actuator's " << predicted_verdict(*st) << "\n";
+}
+
+// The residual over time and its amplitude spectrum, before (declared) and after (final model).
+void write_residual_plots(const ChannelIdentification& c, const ChannelSignals& s,
+                          const std::filesystem::path& directory,
+                          std::vector<std::filesystem::path>& written) {
+  const auto r0 = residual(s, c.declared_fit.prediction);
+  const auto r1 = residual(s, c.final_fit.prediction);
+  const std::string name = channel_name(c.channel);
+  const bool displacement = c.channel == Channel::kMeasured;
+  const std::string unit = displacement ? "mm" : "N";
+  const double to_unit = displacement ? 1e3 : 1.0;  // displacements in mm on every plot
+
+  util::PlotSpec time_plot;
+  time_plot.title = name + ": residual before (declared) and after (final model)";
+  time_plot.xlabel = "time (s)";
+  time_plot.ylabel = "residual (" + unit + ")";
+  time_plot.series = {scaled(series("declared", s.time, r0, 0, s.size()), 1.0, to_unit),
+                      scaled(series("final", s.time, r1, 0, s.size()), 1.0, to_unit)};
+  written.push_back(directory / (name + "_residual_time.png"));
+  util::write_png_plot(time_plot, written.back());
+
+  const auto sp0 = amplitude_spectrum(r0, s.dt), sp1 = amplitude_spectrum(r1, s.dt);
+  util::PlotSpec spectrum_plot;
+  spectrum_plot.title = name + ": residual amplitude spectrum before and after";
+  spectrum_plot.xlabel = "frequency (Hz)";
+  spectrum_plot.ylabel = "amplitude (" + unit + ")";
+  spectrum_plot.log_y = true;
+  std::size_t cut = sp0.frequency.size();
+  for (std::size_t k = 0; k < sp0.frequency.size(); ++k) {
+    if (sp0.frequency[k] > std::min(50.0, 0.5 / s.dt)) {
+      cut = k;
+      break;
+    }
+  }
+  spectrum_plot.series = {
+      scaled(series("declared", sp0.frequency, sp0.amplitude, 1, cut), 1.0, to_unit),
+      scaled(series("final", sp1.frequency, sp1.amplitude, 1, cut), 1.0, to_unit)};
+  written.push_back(directory / (name + "_residual_spectrum.png"));
+  util::write_png_plot(spectrum_plot, written.back());
+}
+
+void write_force_loops(const ChannelIdentification& c, const ChannelSignals& s, std::size_t lo,
+                       std::size_t hi, const std::filesystem::path& directory,
+                       std::vector<std::filesystem::path>& written) {
+  util::PlotSpec loops;
+  loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) + "-" +
+                format_value(s.time[hi - 1]) + " s)";
+  loops.xlabel = "measured displacement (mm)";
+  loops.ylabel = "force (N)";
+  loops.series = {
+      scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
+      scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
+      scaled(series("final model", s.input, c.final_fit.prediction, lo, hi), 1e3, 1.0)};
+  written.push_back(directory / "force_loops.png");
+  util::write_png_plot(loops, written.back());
+}
+
+void write_tracking_plots(const ChannelIdentification& c, const ChannelSignals& s, std::size_t lo,
+                          std::size_t hi, const std::filesystem::path& directory,
+                          std::vector<std::filesystem::path>& written) {
+  util::PlotSpec tracking;
+  tracking.title = "actuator tracking (held-out window " + format_value(s.time[lo]) + "-" +
+                   format_value(s.time[hi - 1]) + " s)";
+  tracking.xlabel = "time (s)";
+  tracking.ylabel = "displacement (mm)";
+  const auto tracking_series = [&](std::size_t from) {
+    return std::vector<util::Series>{
+        scaled(series("command", s.time, s.input, from, hi), 1.0, 1e3),
+        scaled(series("measured", s.time, s.target, from, hi), 1.0, 1e3),
+        scaled(series("declared model", s.time, c.declared_fit.prediction, from, hi), 1.0, 1e3),
+        scaled(series("final model", s.time, c.final_fit.prediction, from, hi), 1.0, 1e3)};
+  };
+  tracking.series = tracking_series(lo);
+  util::PlotSpec zoom = tracking;
+  const std::size_t from = zoom_start(s, lo, hi, 5.0);
+  zoom.title =
+      "zoom: the last " + format_value(s.time[hi - 1] - s.time[from]) + " s (about 5 cycles)";
+  zoom.series = tracking_series(from);
+  tracking.height = zoom.height = 420;
+  written.push_back(directory / "measured_tracking.png");
+  util::write_png_panels({tracking, zoom}, written.back());
+  // A record too short for Welch averaging, or without a coherent band, has no Bode plot.
+  std::optional<BodeData> bode;
+  try {
+    bode = actuator_bode(
+        s, {{"identified model", &c.final_fit.model}, {"declared model", &c.declared_fit.model}});
+  } catch (const std::invalid_argument&) {
+    bode.reset();
+  }
+  if (bode) {
+    written.push_back(directory / "measured_bode.png");
+    write_bode_plot(*bode, written.back());
+  }
+}
+
 }  // namespace
 
 nlohmann::json to_json(const Identification& id, const ReportContext& context,
@@ -270,67 +541,12 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
   nlohmann::json channels = nlohmann::json::array();
   for (const auto& c : id.channels) {
     const SignalScales scales = signal_scales(signals_of(id, c.channel));
-    for (const auto& s : c.steps) {
-      steps.push_back({{"channel", channel_name(s.channel)},
-                       {"effect", effect_name(s.effect)},
-                       {"params", effect_params_json(s.after, s.effect, scales)},
-                       {"all_params", params_json(s.after, scales)},
-                       {"train_error_before", s.before.train_error},
-                       {"train_error_after", s.after.train_error},
-                       {"heldout_error_before", s.before.heldout_error},
-                       {"heldout_error_after", s.after.heldout_error},
-                       {"own_error_removed", s.own_error_removed},
-                       {"own_share", s.own_share},
-                       {"evidence", evidence_json(s.evidence_before)},
-                       {"ranking", ranking_json(s.ranking)}});
-    }
-    nlohmann::json declared = nlohmann::json::array();
-    for (Effect e : c.declared) declared.push_back(effect_name(e));
-    channels.push_back({{"channel", channel_name(c.channel)},
-                        {"declared_effects", declared},
-                        {"declared", model_json(c.declared_fit, scales)},
-                        {"start", model_json(c.start_fit, scales)},
-                        {"kind", c.kind ? kind_json(*c.kind) : nlohmann::json()},
-                        {"noise_floor", c.noise_floor},
-                        // model.h make_signals: the specimen's input low-pass (0: none).
-                        {"input_lowpass_hz", signals_of(id, c.channel).input_cutoff},
-                        {"final", model_json(c.final_fit, scales)},
-                        {"final_evidence", evidence_json(c.final_evidence)},
-                        {"search_heldout_error", c.search_heldout_error},
-                        {"dropped_at_full_rate",
-                         [&] {
-                           nlohmann::json d = nlohmann::json::array();
-                           for (const auto& s : c.dropped_at_full_rate) {
-                             d.push_back({{"effect", effect_name(s.effect)},
-                                          {"heldout_error_before", s.before.heldout_error},
-                                          {"heldout_error_after", s.after.heldout_error}});
-                           }
-                           return d;
-                         }()},
-                        {"rejected", ranking_json(c.last_ranking)}});
+    for (const auto& s : c.steps) steps.push_back(step_json(s, scales));
+    channels.push_back(channel_json(id, c, scales));
   }
   out["steps"] = steps;
   out["channels"] = channels;
-  if (prediction) {
-    nlohmann::json cases = nlohmann::json::array();
-    for (const auto& c : prediction->cases) cases.push_back(case_json(c));
-    out["prediction"] = {{"config", prediction->config},
-                         {"reference_case", prediction->reference_case},
-                         {"dt", prediction->dt},
-                         {"actuator", prediction->actuator},
-                         {"ignored", prediction->ignored},
-                         {"identified", case_json(prediction->identified)},
-                         {"cases", cases}};
-    if (const auto& st = prediction->stability) {
-      const auto critical = st->critical();
-      out["prediction"]["stability"] = {
-          {"lag_s", st->lag},
-          {"critical_delay_s", critical ? nlohmann::json(*critical) : nlohmann::json(nullptr)},
-          {"margin", critical ? nlohmann::json(st->margin()) : nlohmann::json(nullptr)},
-          {"past", st->past()},
-          {"verdict", predicted_verdict(*st)}};
-    }
-  }
+  if (prediction) out["prediction"] = prediction_json(*prediction);
   return out;
 }
 
@@ -344,113 +560,15 @@ std::string format_table(const Identification& id,
   out << "error = RMS(residual) / std(measured signal)\n\n";
   for (const auto& c : id.channels) {
     const SignalScales scales = signal_scales(signals_of(id, c.channel));
-    out << "channel " << channel_name(c.channel) << ": declared model {";
-    for (std::size_t i = 0; i < c.declared.size(); ++i) {
-      out << (i ? ", " : "") << effect_name(c.declared[i]);
-    }
-    out << "}  train " << percent(c.declared_fit.train_error) << ", held-out "
-        << percent(c.declared_fit.heldout_error) << "\n";
-    out << "  noise floor (estimated from the record): " << percent(c.noise_floor) << "\n";
-    if (const double cutoff = signals_of(id, c.channel).input_cutoff; cutoff > 0.0) {
-      out << "  the model runs on the measured displacement low-passed at " << format_value(cutoff)
-          << " Hz (zero phase)\n";
-    }
-    for (const auto& hit : c.declared_fit.bound_hits) {
-      out << "  declared fit ends at a bound: " << hit.message()
-          << (c.kind ? ": the declared model is the wrong kind" : "") << "\n";
-    }
-    if (c.kind) {
-      out << "  specimen kinds (held-out at the search rate):";
-      for (const auto& k : c.kind->ranking) {
-        out << " " << kind_name(k.kind) << " " << percent(k.fit.heldout_error)
-            << (k.physical ? "" : " (wrong kind: at a bound)") << ";";
-      }
-      out << "\n";
-      if (c.kind->proposed) {
-        out << "  proposed kind: " << kind_name(*c.kind->proposed)
-            << (is_hysteretic_damper(*c.kind->proposed) ? " (a damper with hysteresis)" : "")
-            << "; the search starts from it: held-out " << percent(c.start_fit.heldout_error)
-            << "\n";
-      } else {
-        out << "  no kind of the library fits without reaching a bound\n";
-      }
-    }
+    write_channel_header(out, id, c);
+    write_kind_search(out, c);
     if (c.steps.empty()) out << "  nothing added: no candidate pays on held-out data\n";
     int n = 1;
-    for (const auto& s : c.steps) {
-      out << "  step " << n++ << ": + " << effect_name(s.effect) << "   train "
-          << percent(s.before.train_error) << " -> " << percent(s.after.train_error)
-          << "   held-out " << percent(s.before.heldout_error) << " -> "
-          << percent(s.after.heldout_error) << "\n";
-      const auto p = effect_params_json(s.after, s.effect, scales);
-      for (auto it = p.begin(); it != p.end(); ++it) {
-        out << "      " << it.key() << " = " << format_value(it.value()["value"]) << " +/- "
-            << format_value(it.value()["std_error"]) << " " << it.value()["unit"].get<std::string>()
-            << "\n";
-      }
-      const auto& e = s.evidence_before;
-      out << "      evidence before: corr(res, disp) " << format_value(e.corr_input)
-          << ", corr(res, vel) " << format_value(e.corr_velocity) << ", corr(res, sgn vel) "
-          << format_value(e.corr_velocity_sign) << ", xcorr(input, res) "
-          << format_value(e.input_to_residual.peak) << " at "
-          << format_value(e.input_to_residual.lag * 1e3) << " ms, residual peak at "
-          << format_value(e.dominant_frequency) << " Hz\n";
-      out << "      ranking (held-out at the search rate):";
-      for (std::size_t k = 0; k < std::min<std::size_t>(4, s.ranking.size()); ++k) {
-        out << " " << effect_name(s.ranking[k].effect) << " " << percent(s.ranking[k].heldout_error)
-            << (k + 1 < std::min<std::size_t>(4, s.ranking.size()) ? "," : "");
-      }
-      out << "\n";
-    }
-    for (const auto& d : c.dropped_at_full_rate) {
-      out << "  dropped: + " << effect_name(d.effect) << " paid at the search rate but not at the "
-          << "full rate (held-out " << percent(d.before.heldout_error) << " -> "
-          << percent(d.after.heldout_error) << ")\n";
-    }
-    if (c.steps.size() > 1) {
-      std::vector<const SelectionStep*> by_part;
-      for (const auto& st : c.steps) by_part.push_back(&st);
-      std::stable_sort(by_part.begin(), by_part.end(), [](const auto* a, const auto* b) {
-        return a->own_error_removed > b->own_error_removed;
-      });
-      out << "  effects by their own part (held-out error lost when each is left out):";
-      for (const auto* st : by_part) {
-        out << " " << effect_name(st->effect) << " " << percent(st->own_error_removed) << " ("
-            << format_value(100.0 * st->own_share) << " % of the parts);";
-      }
-      out << "\n";
-    }
-    out << "  final: " << c.final_fit.model.describe(scales) << "\n";
-    out << "  final held-out " << percent(c.final_fit.heldout_error) << " = "
-        << format_value(c.noise_floor > 0.0 ? c.final_fit.heldout_error / c.noise_floor : 0.0)
-        << " x the noise floor\n";
-    for (const auto& hit : c.final_fit.bound_hits) {
-      out << "  final fit ends at a bound: " << hit.message() << "\n";
-    }
-    if (!c.last_ranking.empty()) {
-      out << "  best rejected: " << effect_name(c.last_ranking.front().effect) << " (held-out "
-          << percent(c.last_ranking.front().heldout_error) << " vs "
-          << percent(c.search_heldout_error) << " without it, at the search rate)\n";
-    }
+    for (const auto& s : c.steps) write_step(out, s, n++, scales);
+    write_channel_outcome(out, c, scales);
     out << "\n";
   }
-  if (prediction) {
-    out << "prediction with " << prediction->config << " (reference case '"
-        << prediction->reference_case << "', dt " << prediction->dt << " s)\n";
-    out << "  identified actuator: " << prediction->actuator << "\n";
-    for (const auto& ig : prediction->ignored) out << "  not transferred: " << ig << "\n";
-    const auto line = [&](const CaseError& c) {
-      out << "  " << c.name << ": nominal lag " << format_value(c.nominal_delay * 1e3)
-          << " ms, NRMSE " << percent(c.nrmse) << ", paper Eq. 2 " << format_value(c.paper_eq2)
-          << ", peak " << format_value(c.peak_displacement * 1e3) << " mm"
-          << (c.diverged ? " (DIVERGED)" : "") << "\n";
-    };
-    line(prediction->identified);
-    for (const auto& c : prediction->cases) line(c);
-    if (const auto& st = prediction->stability)
-      out << "  before booking the lab: the identified actuator's " << predicted_verdict(*st)
-          << "\n";
-  }
+  if (prediction) write_prediction(out, *prediction);
   return out.str();
 }
 
@@ -462,88 +580,12 @@ std::vector<std::filesystem::path> write_plots(const Identification& id,
   std::vector<std::filesystem::path> written;
   for (const auto& c : id.channels) {
     const ChannelSignals& s = signals_of(id, c.channel);
-    const std::string name = channel_name(c.channel);
-    const auto r0 = residual(s, c.declared_fit.prediction);
-    const auto r1 = residual(s, c.final_fit.prediction);
-    const bool displacement = c.channel == Channel::kMeasured;
-    const std::string unit = displacement ? "mm" : "N";
-    const double to_unit = displacement ? 1e3 : 1.0;  // displacements in mm on every plot
-
-    util::PlotSpec time_plot;
-    time_plot.title = name + ": residual before (declared) and after (final model)";
-    time_plot.xlabel = "time (s)";
-    time_plot.ylabel = "residual (" + unit + ")";
-    time_plot.series = {scaled(series("declared", s.time, r0, 0, s.size()), 1.0, to_unit),
-                        scaled(series("final", s.time, r1, 0, s.size()), 1.0, to_unit)};
-    written.push_back(directory / (name + "_residual_time.png"));
-    util::write_png_plot(time_plot, written.back());
-
-    const auto sp0 = amplitude_spectrum(r0, s.dt), sp1 = amplitude_spectrum(r1, s.dt);
-    util::PlotSpec spectrum_plot;
-    spectrum_plot.title = name + ": residual amplitude spectrum before and after";
-    spectrum_plot.xlabel = "frequency (Hz)";
-    spectrum_plot.ylabel = "amplitude (" + unit + ")";
-    spectrum_plot.log_y = true;
-    std::size_t cut = sp0.frequency.size();
-    for (std::size_t k = 0; k < sp0.frequency.size(); ++k) {
-      if (sp0.frequency[k] > std::min(50.0, 0.5 / s.dt)) {
-        cut = k;
-        break;
-      }
-    }
-    spectrum_plot.series = {
-        scaled(series("declared", sp0.frequency, sp0.amplitude, 1, cut), 1.0, to_unit),
-        scaled(series("final", sp1.frequency, sp1.amplitude, 1, cut), 1.0, to_unit)};
-    written.push_back(directory / (name + "_residual_spectrum.png"));
-    util::write_png_plot(spectrum_plot, written.back());
-
+    write_residual_plots(c, s, directory, written);
     const auto [lo, hi] = heldout_window(id, s, 2.0);
     if (c.channel == Channel::kForce) {
-      util::PlotSpec loops;
-      loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) + "-" +
-                    format_value(s.time[hi - 1]) + " s)";
-      loops.xlabel = "measured displacement (mm)";
-      loops.ylabel = "force (N)";
-      loops.series = {
-          scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
-          scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
-          scaled(series("final model", s.input, c.final_fit.prediction, lo, hi), 1e3, 1.0)};
-      written.push_back(directory / "force_loops.png");
-      util::write_png_plot(loops, written.back());
+      write_force_loops(c, s, lo, hi, directory, written);
     } else {
-      util::PlotSpec tracking;
-      tracking.title = "actuator tracking (held-out window " + format_value(s.time[lo]) + "-" +
-                       format_value(s.time[hi - 1]) + " s)";
-      tracking.xlabel = "time (s)";
-      tracking.ylabel = "displacement (mm)";
-      const auto tracking_series = [&](std::size_t from) {
-        return std::vector<util::Series>{
-            scaled(series("command", s.time, s.input, from, hi), 1.0, 1e3),
-            scaled(series("measured", s.time, s.target, from, hi), 1.0, 1e3),
-            scaled(series("declared model", s.time, c.declared_fit.prediction, from, hi), 1.0, 1e3),
-            scaled(series("final model", s.time, c.final_fit.prediction, from, hi), 1.0, 1e3)};
-      };
-      tracking.series = tracking_series(lo);
-      util::PlotSpec zoom = tracking;
-      const std::size_t from = zoom_start(s, lo, hi, 5.0);
-      zoom.title =
-          "zoom: the last " + format_value(s.time[hi - 1] - s.time[from]) + " s (about 5 cycles)";
-      zoom.series = tracking_series(from);
-      tracking.height = zoom.height = 420;
-      written.push_back(directory / "measured_tracking.png");
-      util::write_png_panels({tracking, zoom}, written.back());
-      // A record too short for Welch averaging, or without a coherent band, has no Bode plot.
-      std::optional<BodeData> bode;
-      try {
-        bode = actuator_bode(s, {{"identified model", &c.final_fit.model},
-                                 {"declared model", &c.declared_fit.model}});
-      } catch (const std::invalid_argument&) {
-        bode.reset();
-      }
-      if (bode) {
-        written.push_back(directory / "measured_bode.png");
-        write_bode_plot(*bode, written.back());
-      }
+      write_tracking_plots(c, s, lo, hi, directory, written);
     }
   }
   if (const auto* c = id.find(Channel::kMeasured);

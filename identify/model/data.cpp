@@ -244,16 +244,13 @@ MeasuredData read_csv(const std::filesystem::path& path, const CsvUnits& units,
   return data;
 }
 
-MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map,
-                      std::size_t min_samples, double sample_rate, ForceColumn force) {
-  check_sample_rate(sample_rate, path);
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(path.string() + ": cannot open");
+namespace {
+
+// The first line of a raw DAQ export, "Header Size: N": the header's line count, column names
+// included.
+int read_header_size(std::istream& in, const std::filesystem::path& path) {
   std::string line;
-  std::size_t line_number = 0;
-  std::map<std::string, std::string> fields_by_key;
   if (!std::getline(in, line)) throw std::invalid_argument(path.string() + ": empty file");
-  ++line_number;
   const auto colon = line.find(':');
   if (colon == std::string::npos || trim(line.substr(0, colon)) != "Header Size") {
     throw std::invalid_argument(where(path, 1) + "expected 'Header Size: N' (raw DAQ export)");
@@ -265,16 +262,27 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
       header_value != std::floor(header_value))
     throw std::invalid_argument(where(path, 1) + "Header Size must be a whole number in 2.." +
                                 std::to_string(static_cast<int>(kMaxHeaderSize)));
-  const int header_size = static_cast<int>(header_value);
-  std::vector<std::string> header;
-  double interval = 0.0, rate = 0.0;
+  return static_cast<int>(header_value);
+}
+
+struct DaqHeader {
+  std::vector<std::string> columns;
+  double interval = 0.0;  // s, 0: not given
+  double rate = 0.0;      // Hz, 0: not given
+};
+
+// The header's lines after the first: sampling keys, then the column names on its last line.
+DaqHeader read_daq_header(std::istream& in, const std::filesystem::path& path, int header_size,
+                          std::size_t& line_number) {
+  DaqHeader h;
+  std::string line;
   while (line_number < static_cast<std::size_t>(header_size)) {
     if (!std::getline(in, line)) {
       throw std::invalid_argument(where(path, line_number) + "file ends inside the header");
     }
     ++line_number;
     if (line_number == static_cast<std::size_t>(header_size)) {
-      header = split_fields(trim(line), ',');
+      h.columns = split_fields(trim(line), ',');
     } else {
       const auto c = line.find(':');
       const std::string key = c == std::string::npos ? "" : trim(line.substr(0, c));
@@ -283,10 +291,17 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
         if (!(value > 0.0)) {
           throw std::invalid_argument(where(path, line_number) + key + " must be > 0");
         }
-        (key == "Sampling Interval" ? interval : rate) = value;
+        (key == "Sampling Interval" ? h.interval : h.rate) = value;
       }
     }
   }
+  return h;
+}
+
+// The sample interval from the header's Sampling Interval and/or Rate, which must agree with each
+// other and with --sample-rate; --sample-rate alone when the header has neither.
+double daq_interval(double interval, double rate, double sample_rate,
+                    const std::filesystem::path& path) {
   if (interval > 0.0 && rate > 0.0 && std::abs(interval * rate - 1.0) > 0.01) {
     throw std::invalid_argument(path.string() + ": header's Sampling Interval " +
                                 std::to_string(interval) + " s and Sampling Rate " +
@@ -302,6 +317,21 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
                                 ": header has no 'Sampling Interval' or 'Sampling Rate'; give the "
                                 "sampling rate with --sample-rate HZ");
   }
+  return interval;
+}
+
+}  // namespace
+
+MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map,
+                      std::size_t min_samples, double sample_rate, ForceColumn force) {
+  check_sample_rate(sample_rate, path);
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open");
+  const int header_size = read_header_size(in, path);
+  std::size_t line_number = 1;
+  const DaqHeader daq_header = read_daq_header(in, path, header_size, line_number);
+  const std::vector<std::string>& header = daq_header.columns;
+  const double interval = daq_interval(daq_header.interval, daq_header.rate, sample_rate, path);
   // Without a Sample Number column, samples are timed by their row.
   const std::optional<std::size_t> isample = find_column(header, "Sample Number");
   const std::size_t ic = column_index(header, map.command.column, path, line_number);
@@ -313,6 +343,7 @@ MeasuredData read_daq(const std::filesystem::path& path, const DaqColumnMap& map
 
   MeasuredData data;
   data.source = path.string();
+  std::string line;
   double first_sample = 0.0;
   while (std::getline(in, line)) {
     ++line_number;

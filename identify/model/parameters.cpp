@@ -43,6 +43,47 @@ ParamSpec non_negative(ParamSpec spec, const std::string& below_means) {
   return spec;
 }
 
+// The specimen effects' parameters, scaled by the force and displacement they relate.
+std::vector<ParamSpec> specimen_effect_params(Effect effect, const SignalScales& sc) {
+  const double k_scale = sc.target / sc.input;
+  switch (effect) {
+    case Effect::kStiffness:
+      return {non_negative(param_spec("stiffness", "N/m", k_scale, 0.0, 1e300, {0.0}),
+                           "a negative stiffness")};
+    case Effect::kDamping:
+      return {
+          non_negative(param_spec("damping", "N s/m", sc.target / sc.velocity, 0.0, 1e300, {0.0}),
+                       "a negative damping")};
+    case Effect::kCoulomb:
+      return {non_negative(param_spec("friction_force", "N", sc.target, 0.0, 1e300, {0.0}),
+                           "a negative friction force"),
+              param_spec("smoothing_velocity", "m/s", 0.1 * sc.velocity, 1e-4 * sc.velocity,
+                         10.0 * sc.velocity, {0.02 * sc.velocity, 0.2 * sc.velocity})};
+    case Effect::kBoucWen:
+      return {non_negative(param_spec("hysteretic_force", "N", sc.target, 0.0, 1e300, {0.0}),
+                           "a negative hysteretic force"),
+              param_spec("yield_drift", "m", 0.1 * sc.input, 1e-4 * sc.input, 10.0 * sc.input,
+                         {0.02 * sc.input, 0.2 * sc.input})};
+    case Effect::kCubicStiffness:
+      return {param_spec("cubic_stiffness", "N/m^3", sc.target / std::pow(sc.input, 3), -1e300,
+                         1e300, {0.0})};
+    case Effect::kTimeVaryingStiffness:
+      return drift_params("stiffness", "N/m", 0.05 * k_scale, 1e300);
+    case Effect::kInertia:
+      return {non_negative(param_spec("mass", "kg", sc.target / sc.acceleration, 0.0, 1e300, {0.0}),
+                           "a negative mass")};
+    case Effect::kElastoPlastic:
+      return {non_negative(param_spec("plastic_stiffness", "N/m", k_scale, 0.0, 1e300,
+                                      {k_scale, 5.0 * k_scale}),
+                           "a negative elastic stiffness"),
+              non_negative(param_spec("yield_force", "N", sc.target, 0.0, 1e300,
+                                      {0.3 * sc.target, 1.0 * sc.target}),
+                           "a negative yield force")};
+    default: break;
+  }
+  throw std::logic_error("unhandled effect");
+}
+
 }  // namespace
 
 std::vector<ParamSpec> base_params(Channel channel, const SignalScales&) {
@@ -57,7 +98,6 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
   }
   const bool measured = channel == Channel::kMeasured;
   const double out_scale = measured ? sc.input : sc.target;
-  const double k_scale = sc.target / sc.input;
   switch (effect) {
     case Effect::kDelay: {
       const double longest = std::min(1.0, 0.5 * sc.duration);
@@ -93,37 +133,13 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
     case Effect::kTimeVaryingDelay: return drift_params("delay", "s", 0.005, 0.1);
     case Effect::kTimeVaryingGain: return drift_params("gain", "-", 0.02, 0.5);
     case Effect::kStiffness:
-      return {non_negative(param_spec("stiffness", "N/m", k_scale, 0.0, 1e300, {0.0}),
-                           "a negative stiffness")};
     case Effect::kDamping:
-      return {
-          non_negative(param_spec("damping", "N s/m", sc.target / sc.velocity, 0.0, 1e300, {0.0}),
-                       "a negative damping")};
     case Effect::kCoulomb:
-      return {non_negative(param_spec("friction_force", "N", sc.target, 0.0, 1e300, {0.0}),
-                           "a negative friction force"),
-              param_spec("smoothing_velocity", "m/s", 0.1 * sc.velocity, 1e-4 * sc.velocity,
-                         10.0 * sc.velocity, {0.02 * sc.velocity, 0.2 * sc.velocity})};
     case Effect::kBoucWen:
-      return {non_negative(param_spec("hysteretic_force", "N", sc.target, 0.0, 1e300, {0.0}),
-                           "a negative hysteretic force"),
-              param_spec("yield_drift", "m", 0.1 * sc.input, 1e-4 * sc.input, 10.0 * sc.input,
-                         {0.02 * sc.input, 0.2 * sc.input})};
     case Effect::kCubicStiffness:
-      return {param_spec("cubic_stiffness", "N/m^3", sc.target / std::pow(sc.input, 3), -1e300,
-                         1e300, {0.0})};
     case Effect::kTimeVaryingStiffness:
-      return drift_params("stiffness", "N/m", 0.05 * k_scale, 1e300);
     case Effect::kInertia:
-      return {non_negative(param_spec("mass", "kg", sc.target / sc.acceleration, 0.0, 1e300, {0.0}),
-                           "a negative mass")};
-    case Effect::kElastoPlastic:
-      return {non_negative(param_spec("plastic_stiffness", "N/m", k_scale, 0.0, 1e300,
-                                      {k_scale, 5.0 * k_scale}),
-                           "a negative elastic stiffness"),
-              non_negative(param_spec("yield_force", "N", sc.target, 0.0, 1e300,
-                                      {0.3 * sc.target, 1.0 * sc.target}),
-                           "a negative yield force")};
+    case Effect::kElastoPlastic: return specimen_effect_params(effect, sc);
   }
   throw std::logic_error("unhandled effect");
 }

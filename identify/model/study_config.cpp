@@ -21,6 +21,28 @@ void absolute_traces(google::protobuf::RepeatedPtrField<config::DelayStage>& sta
   }
 }
 
+// The fitted effects a storey model has no place for, each with the reason.
+void note_left_out_specimen_effects(const ChannelModel& specimen,
+                                    std::vector<std::string>& left_out) {
+  for (Effect e : specimen.effects) {
+    switch (e) {
+      case Effect::kDamping:
+      case Effect::kCoulomb:
+        left_out.push_back(effect_name(e) +
+                           ": a velocity force, not a storey restoring force (add it as damping)");
+        break;
+      case Effect::kInertia:
+      case Effect::kCubicStiffness:
+      case Effect::kTimeVaryingStiffness:
+      case Effect::kOffsetDrift:
+      case Effect::kDelay:
+        left_out.push_back(effect_name(e) + ": no place in a storey model, left out");
+        break;
+      default: break;
+    }
+  }
+}
+
 }  // namespace
 
 ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
@@ -127,24 +149,7 @@ SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& s
     text << "linear: k0 " << k << " N/m";
   }
   if (!out.restoring_force) text << "no displacement-dependent force: no storey model";
-  for (Effect e : specimen.effects) {
-    switch (e) {
-      case Effect::kDamping:
-      case Effect::kCoulomb:
-        out.left_out.push_back(
-            effect_name(e) +
-            ": a velocity force, not a storey restoring force (add it as damping)");
-        break;
-      case Effect::kInertia:
-      case Effect::kCubicStiffness:
-      case Effect::kTimeVaryingStiffness:
-      case Effect::kOffsetDrift:
-      case Effect::kDelay:
-        out.left_out.push_back(effect_name(e) + ": no place in a storey model, left out");
-        break;
-      default: break;
-    }
-  }
+  note_left_out_specimen_effects(specimen, out.left_out);
   out.description = text.str();
   return out;
 }

@@ -22,6 +22,42 @@ const NodePlan* DeploymentPlan::find(int node_id) const {
   return nullptr;
 }
 
+namespace {
+
+// The storeys (from 0) a node hosts: those it names (from 1), each with a part of its kind, or
+// without names every storey of the pool.
+std::vector<int> hosted_storeys(const config::NodeSpec& spec, const std::set<int>& pool,
+                                int storeys, bool sub, const std::string& where) {
+  std::vector<int> hosted;
+  if (spec.storeys().empty()) {
+    hosted.assign(pool.begin(), pool.end());
+  } else {
+    for (int s1 : spec.storeys()) {
+      if (s1 < 1 || s1 > storeys)
+        throw std::invalid_argument(where + ": storey " + std::to_string(s1) +
+                                    " does not exist (1.." + std::to_string(storeys) + ")");
+      if (!pool.count(s1 - 1))
+        throw std::invalid_argument(where + ": storey " + std::to_string(s1) + " has no " +
+                                    (sub ? "numerical" : "experimental") + " part");
+      hosted.push_back(s1 - 1);
+    }
+    std::sort(hosted.begin(), hosted.end());
+  }
+  return hosted;
+}
+
+// Each storey has one host of a kind.
+void claim_storeys(const std::vector<int>& hosted, int node_id, std::map<int, int>& host) {
+  for (int s : hosted) {
+    const auto [it, fresh] = host.emplace(s, node_id);
+    if (!fresh)
+      throw std::invalid_argument("storey " + std::to_string(s + 1) + " is hosted by nodes " +
+                                  std::to_string(it->second) + " and " + std::to_string(node_id));
+  }
+}
+
+}  // namespace
+
 DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment) {
   const auto& partition = base.partition;
   const int storeys = static_cast<int>(partition.numerical.size());
@@ -52,29 +88,8 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
                                   ": compensation shapes actuator commands; only an "
                                   "ACTUATOR_EMULATOR carries it");
     const std::set<int>& pool = sub ? numerical : experimental;
-    auto& host = sub ? numerical_host : experimental_host;
-    std::vector<int> hosted;
-    if (spec.storeys().empty()) {
-      hosted.assign(pool.begin(), pool.end());
-    } else {
-      for (int s1 : spec.storeys()) {
-        if (s1 < 1 || s1 > storeys)
-          throw std::invalid_argument(where + ": storey " + std::to_string(s1) +
-                                      " does not exist (1.." + std::to_string(storeys) + ")");
-        if (!pool.count(s1 - 1))
-          throw std::invalid_argument(where + ": storey " + std::to_string(s1) + " has no " +
-                                      (sub ? "numerical" : "experimental") + " part");
-        hosted.push_back(s1 - 1);
-      }
-      std::sort(hosted.begin(), hosted.end());
-    }
-    for (int s : hosted) {
-      const auto [it, fresh] = host.emplace(s, spec.id());
-      if (!fresh)
-        throw std::invalid_argument("storey " + std::to_string(s + 1) + " is hosted by nodes " +
-                                    std::to_string(it->second) + " and " +
-                                    std::to_string(spec.id()));
-    }
+    const std::vector<int> hosted = hosted_storeys(spec, pool, storeys, sub, where);
+    claim_storeys(hosted, spec.id(), sub ? numerical_host : experimental_host);
     node.storeys = hosted;
     if (sub && partition.coupled_to(hosted) != hosted)
       throw std::invalid_argument(where +
