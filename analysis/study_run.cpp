@@ -107,6 +107,74 @@ std::vector<ModalSdof> loop_sdofs(const core::HybridSetup& setup, const core::Ma
   return out;
 }
 
+// The compensated loop of each modal SDOF, gathered: whether every mode is stable, the first
+// unstable one, and the smallest extra delay tolerated with the mode that governs it.
+struct ModalLoops {
+  bool stable = true, unbounded = true;  // unbounded: every mode stable up to the searched range
+  bool adaptive = false;                 // frozen coefficients: not judged before the run
+  double radius = 0.0;
+  int unstable_mode = 0, governing = 0;
+  std::optional<double> margin;
+  std::string linearised;
+};
+
+ModalLoops analyse_modal_loops(const core::HybridSetup& setup, const config::Case& study_case,
+                               const std::vector<ModalSdof>& sdofs, double max_extra_delay) {
+  ModalLoops m;
+  for (const ModalSdof& sdof : sdofs) {
+    const core::CompensatedStability loop = core::compensated_stability(
+        setup.integrator, sdof.period, sdof.zeta, sdof.alpha, setup.dt, study_case.delay(),
+        &study_case.compensation(0), max_extra_delay);
+    if (!loop.frozen_coefficients.empty()) {
+      m.adaptive = true;
+      return m;
+    }
+    if (!loop.linearised.empty()) m.linearised = loop.linearised;
+    if (!loop.stable) {
+      if (m.stable) {
+        m.radius = loop.spectral_radius;
+        m.unstable_mode = sdof.mode;
+      }
+      m.stable = false;
+      continue;
+    }
+    std::optional<double> mode_margin = loop.continuous_margin;
+    if (loop.discrete_margin)
+      mode_margin =
+          mode_margin ? std::min(*mode_margin, *loop.discrete_margin) : loop.discrete_margin;
+    if (mode_margin) {
+      m.unbounded = false;
+      if (!m.margin || *mode_margin < *m.margin) {
+        m.margin = mode_margin;
+        m.governing = sdof.mode;
+      }
+    }
+  }
+  return m;
+}
+
+std::string modal_loops_text(const ModalLoops& m, bool modal, std::size_t modes,
+                             double max_extra_delay) {
+  std::ostringstream text;
+  text << std::setprecision(3) << "compensated loop: ";
+  if (!m.stable) {
+    text << "UNSTABLE as configured (spectral radius " << m.radius;
+    if (modal) text << ", mode " << m.unstable_mode;
+    text << ")";
+  } else if (m.margin && !m.unbounded) {
+    text << "stable, tolerates " << *m.margin * 1e3 << " ms more lag";
+    if (modal) text << " (mode " << m.governing << " governs)";
+  } else {
+    text << "stable for up to " << max_extra_delay * 1e3 << " ms more lag (searched)";
+  }
+  if (modal)
+    text << " (modal approximation over the " << modes
+         << " modes with experimental stiffness, each an SDOF; the coupling the delayed force "
+            "adds between modes is ignored)";
+  if (!m.linearised.empty()) text << " (linearised: " << m.linearised << ")";
+  return text.str();
+}
+
 // The compensated loop of a case with one compensator (CompensatedVerdict): exact for one storey,
 // the modal approximation (each mode with experimental stiffness an SDOF, the smallest margin
 // kept, stated as such) for several. None for a case without compensation or experimental part.
@@ -126,69 +194,20 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
   }
   const std::vector<ModalSdof> sdofs =
       loop_sdofs(setup, k_experimental, uncompensated->governing_fraction);
-  const bool modal = setup.model.dofs() > 1;
   try {
-    bool stable = true;
-    double radius = 0.0;
-    int unstable_mode = 0, governing = 0;
-    std::optional<double> margin;
-    bool unbounded = true;  // every mode stable up to the searched range
-    std::string linearised;
-    for (const ModalSdof& sdof : sdofs) {
-      const core::CompensatedStability loop = core::compensated_stability(
-          setup.integrator, sdof.period, sdof.zeta, sdof.alpha, setup.dt, study_case.delay(),
-          &study_case.compensation(0), kMaxExtraDelay);
-      if (!loop.frozen_coefficients.empty()) {
-        verdict.text =
-            "adaptive compensation: its coefficients change during the run, so its loop cannot "
-            "be judged before it" +
-            beside;
-        return verdict;
-      }
-      if (!loop.linearised.empty()) linearised = loop.linearised;
-      if (!loop.stable) {
-        if (stable) {
-          radius = loop.spectral_radius;
-          unstable_mode = sdof.mode;
-        }
-        stable = false;
-        continue;
-      }
-      std::optional<double> mode_margin = loop.continuous_margin;
-      if (loop.discrete_margin)
-        mode_margin =
-            mode_margin ? std::min(*mode_margin, *loop.discrete_margin) : loop.discrete_margin;
-      if (mode_margin) {
-        unbounded = false;
-        if (!margin || *mode_margin < *margin) {
-          margin = mode_margin;
-          governing = sdof.mode;
-        }
-      }
+    const ModalLoops m = analyse_modal_loops(setup, study_case, sdofs, kMaxExtraDelay);
+    if (m.adaptive) {
+      verdict.text =
+          "adaptive compensation: its coefficients change during the run, so its loop cannot "
+          "be judged before it" +
+          beside;
+      return verdict;
     }
     verdict.analysed = true;
-    verdict.stable = stable;
-    std::ostringstream text;
-    text << std::setprecision(3) << "compensated loop: ";
-    if (!stable) {
-      text << "UNSTABLE as configured (spectral radius " << radius;
-      if (modal) text << ", mode " << unstable_mode;
-      text << ")";
-    } else {
-      verdict.extra_delay_tolerated = margin;
-      if (margin && !unbounded) {
-        text << "stable, tolerates " << *margin * 1e3 << " ms more lag";
-        if (modal) text << " (mode " << governing << " governs)";
-      } else {
-        text << "stable for up to " << kMaxExtraDelay * 1e3 << " ms more lag (searched)";
-      }
-    }
-    if (modal)
-      text << " (modal approximation over the " << sdofs.size()
-           << " modes with experimental stiffness, each an SDOF; the coupling the delayed force "
-              "adds between modes is ignored)";
-    if (!linearised.empty()) text << " (linearised: " << linearised << ")";
-    verdict.text = text.str() + beside;
+    verdict.stable = m.stable;
+    if (m.stable) verdict.extra_delay_tolerated = m.margin;
+    verdict.text =
+        modal_loops_text(m, setup.model.dofs() > 1, sdofs.size(), kMaxExtraDelay) + beside;
   } catch (const std::invalid_argument& e) {
     verdict.text =
         std::string("the compensated loop cannot be analysed (") + e.what() + ")" + beside;

@@ -4,8 +4,8 @@
 #include <cstdio>
 #include <fstream>
 
-#include "study/study.h"
 #include "security/run_secret.h"
+#include "study/study.h"
 
 namespace rths::bench {
 

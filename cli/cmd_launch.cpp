@@ -99,75 +99,82 @@ std::vector<std::string> view_arguments(const LaunchArgs& args) {
 // With --json, stdout carries the JSON document alone: log lines (a node that outlives the
 // coordinator, a CPU left unpinned) go to stderr.
 void keep_stdout_for_json(const LaunchArgs& args) {
-  if (!args.json) return;
+  if (!args.results.json) return;
   spdlog::default_logger()->sinks() = {std::make_shared<spdlog::sinks::stderr_color_sink_mt>()};
 }
 
-void run_launch(const LaunchArgs& args) {
-  keep_stdout_for_json(args);
-  const std::filesystem::path config_path = args.config;
-  const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
-  core::PreparedStudy prepared;
+core::PreparedStudy prepare_or_exit(const config::Study& study,
+                                    const std::filesystem::path& config_path) {
   try {
-    prepared = core::prepare_study(study, config_path.parent_path());
+    return core::prepare_study(study, config_path.parent_path());
   } catch (const std::invalid_argument& e) {
     throw ExitError(kExitBadInput, e.what());
   }
-  std::vector<std::string> names = args.cases;
-  if (names.empty())
-    for (const auto& c : study.cases()) names.push_back(c.name());
-  const std::filesystem::path out =
-      !args.results.out.empty() ? std::filesystem::path(args.results.out)
-      : !study.output().directory().empty()
-          ? std::filesystem::path(study.output().directory()) / "distributed"
-          : std::filesystem::path("rths_launch_" + study.name());
-  std::filesystem::create_directories(out);
-  // Checked before anything starts: the case's lag plus the network's on the actuator's path.
-  analysis::warn_past_critical_delay(prepared, names, print_warning);
-  const std::filesystem::path platform_file = check_platform_first(prepared, args, out);
+}
 
-  const std::vector<std::string> coordinator_args = view_arguments(args);
+std::filesystem::path output_folder(const LaunchArgs& args, const config::Study& study) {
+  if (!args.results.out.empty()) return args.results.out;
+  if (!study.output().directory().empty())
+    return std::filesystem::path(study.output().directory()) / "distributed";
+  return "rths_launch_" + study.name();
+}
+
+// The launch of one case as the flags and the run's folders say.
+runtime::LaunchOptions case_options(const LaunchArgs& args, const std::string& name,
+                                    const std::filesystem::path& out,
+                                    const std::filesystem::path& platform_file) {
+  runtime::LaunchOptions options;
+  options.config = args.config;
+  options.case_name = name;
+  options.domain = args.domain;
+  options.programs_dir = args.bin_dir;
+  options.record = out / (name + ".rthsrec");
+  options.log_dir = out / "logs" / name;
+  options.timeout = args.timeout;
+  options.security_dir = args.security;
+  options.platform_file = platform_file;
+  options.accept_platform = args.accept_platform;
+  options.cpu_placement = args.cpu_placement == "one-cpu"  ? runtime::CpuPlacement::kOneCpu
+                          : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
+                                                           : runtime::CpuPlacement::kAuto;
+  options.coordinator_args = view_arguments(args);
+  return options;
+}
+
+// Runs each case in turn (a Ctrl-C stops the children in order and ends the loop).
+std::vector<DistributedRun> run_cases(const LaunchArgs& args, const std::vector<std::string>& names,
+                                      const std::filesystem::path& out,
+                                      const std::filesystem::path& platform_file) {
   std::vector<DistributedRun> runs;
   ProgressReporter progress("launch", "cases", !args.results.json);
-  {
-    util::HeldStopSignals signals;  // Ctrl-C stops the children in order
-    for (const std::string& name : names) {
-      runtime::LaunchOptions options;
-      options.config = config_path;
-      options.case_name = name;
-      options.domain = args.domain;
-      options.programs_dir = args.bin_dir;
-      options.record = out / (name + ".rthsrec");
-      options.log_dir = out / "logs" / name;
-      options.timeout = args.timeout;
-      options.security_dir = args.security;
-      options.platform_file = platform_file;
-      options.accept_platform = args.accept_platform;
-      options.cpu_placement = args.cpu_placement == "one-cpu"  ? runtime::CpuPlacement::kOneCpu
-                              : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
-                                                               : runtime::CpuPlacement::kAuto;
-      options.stop_requested = [&signals] { return signals.stop_requested(); };
-      options.coordinator_args = coordinator_args;
-      std::filesystem::remove(options.record);
-      if (!args.results.json) std::cerr << "rths launch: case " << name << " ...\n";
-      runtime::LaunchResult result;
-      try {
-        result = runtime::launch_run(options);
-      } catch (const std::invalid_argument& e) {
-        throw ExitError(kExitBadInput, e.what());
-      } catch (const std::exception& e) {
-        throw ExitError(kExitEnvironment, e.what());
-      }
-      runs.push_back({result.case_name, result.coordinator_exit, result.status, options.record,
-                      options.log_dir.string()});
-      if (result.coordinator_exit != 0)
-        std::cerr << "rths launch: case " << name << " failed (exit " << result.coordinator_exit
-                  << (result.status.empty() ? "" : ", " + result.status) << "); logs in "
-                  << options.log_dir.string() << "\n";
-      progress.update(runs.size(), names.size());
-      if (result.status == "interrupted") break;
+  util::HeldStopSignals signals;
+  for (const std::string& name : names) {
+    runtime::LaunchOptions options = case_options(args, name, out, platform_file);
+    options.stop_requested = [&signals] { return signals.stop_requested(); };
+    std::filesystem::remove(options.record);
+    if (!args.results.json) std::cerr << "rths launch: case " << name << " ...\n";
+    runtime::LaunchResult result;
+    try {
+      result = runtime::launch_run(options);
+    } catch (const std::invalid_argument& e) {
+      throw ExitError(kExitBadInput, e.what());
+    } catch (const std::exception& e) {
+      throw ExitError(kExitEnvironment, e.what());
     }
+    runs.push_back({result.case_name, result.coordinator_exit, result.status, options.record,
+                    options.log_dir.string()});
+    if (result.coordinator_exit != 0)
+      std::cerr << "rths launch: case " << name << " failed (exit " << result.coordinator_exit
+                << (result.status.empty() ? "" : ", " + result.status) << "); logs in "
+                << options.log_dir.string() << "\n";
+    progress.update(runs.size(), names.size());
+    if (result.status == "interrupted") break;
   }
+  return runs;
+}
+
+void report(const LaunchArgs& args, const core::PreparedStudy& prepared,
+            const std::filesystem::path& out, const std::vector<DistributedRun>& runs) {
   const DistributedResults results = analysis::judge_distributed(prepared, runs, print_warning);
   const auto table = analysis::write_distributed_outputs(results, out, !args.results.no_plots,
                                                          args.results.format, print_warning);
@@ -186,6 +193,22 @@ void run_launch(const LaunchArgs& args) {
               << out.string() << "\n";
   }
   fail_if_distributed_failed(results, runs, args.results.allow_unstable);
+}
+
+void run_launch(const LaunchArgs& args) {
+  keep_stdout_for_json(args);
+  const std::filesystem::path config_path = args.config;
+  const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
+  const core::PreparedStudy prepared = prepare_or_exit(study, config_path);
+  std::vector<std::string> names = args.cases;
+  if (names.empty())
+    for (const auto& c : study.cases()) names.push_back(c.name());
+  const std::filesystem::path out = output_folder(args, study);
+  std::filesystem::create_directories(out);
+  // Checked before anything starts: the case's lag plus the network's on the actuator's path.
+  analysis::warn_past_critical_delay(prepared, names, print_warning);
+  const std::filesystem::path platform_file = check_platform_first(prepared, args, out);
+  report(args, prepared, out, run_cases(args, names, out, platform_file));
 }
 
 }  // namespace

@@ -12,8 +12,8 @@
 #include "cli/support.h"
 #include "runtime/node/plan.h"
 #include "security/pki.h"
-#include "study/study.h"
 #include "security/run_secret.h"
+#include "study/study.h"
 
 namespace rths::cli {
 namespace {

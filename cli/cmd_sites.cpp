@@ -29,51 +29,34 @@ struct SitesOptions {
   bool check = false, cleanup = false;
 };
 
-void run(const SitesOptions& o) {
+// --cleanup and --check-record: done without a config. Returns whether the command is done.
+bool run_maintenance(const SitesOptions& o) {
   if (o.cleanup) {
     const auto removed = deploy::remove_stale_namespaces();
     for (const auto& name : removed) std::cout << "removed stale namespace " << name << "\n";
-    if (o.config.empty()) return;
+    if (o.config.empty()) return true;
   }
-  if (!o.check_record.empty()) {
-    try {
-      std::cout << deploy::check_record(o.check_record, o.expect_steps, o.expect_injected);
-    } catch (const std::runtime_error& e) {
-      throw ExitError(kExitRunFailed, std::string("record check failed: ") + e.what());
-    }
-    return;
+  if (o.check_record.empty()) return false;
+  try {
+    std::cout << deploy::check_record(o.check_record, o.expect_steps, o.expect_injected);
+  } catch (const std::runtime_error& e) {
+    throw ExitError(kExitRunFailed, std::string("record check failed: ") + e.what());
   }
-  if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
-  auto plan = deploy::load_sites(o.config);
-  if (!o.security.empty())
-    plan.study.mutable_deployment()->set_security_dir(
-        std::filesystem::absolute(o.security).string());
-  if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
-  // Paths in plan.study are absolute. Checked before anything starts (and by --check): the
-  // case's lag plus the network's on the actuator's path against the critical delay.
-  const core::PreparedStudy prepared =
-      core::prepare_study(plan.study, plan.study_file.parent_path());
-  analysis::warn_past_critical_delay(prepared, {plan.study.deployment().case_name()},
-                                     print_warning);
-  if (o.check) {
-    std::cout << "sites config ok: " << plan.placements.size() << " processes on "
-              << plan.sites.sites_size() << " sites, DDS domain "
-              << plan.study.deployment().domain_id() << "\n";
-    return;
-  }
+  return true;
+}
+
+deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPlan& plan) {
   if (const auto reason = deploy::namespace_support()) {
     throw ExitError(kExitEnvironment, "sites: " + *reason);
   }
-  std::filesystem::path out = o.results.out;
-  if (out.empty()) {
-    out =
-        std::filesystem::path("out") / ("sites_" + std::filesystem::path(o.config).stem().string());
-  }
   deploy::SitesRunOptions options;
-  options.output_dir = out;
+  options.output_dir = !o.results.out.empty()
+                           ? std::filesystem::path(o.results.out)
+                           : std::filesystem::path("out") /
+                                 ("sites_" + std::filesystem::path(o.config).stem().string());
   if (!o.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.bin_dir);
-  deploy::SitesRunResult result;
   ProgressReporter progress("sites", "runs", !o.results.json);
+  deploy::SitesRunResult result;
   {
     util::HeldStopSignals signals;
     options.stop_requested = [&signals] { return signals.stop_requested(); };
@@ -84,8 +67,13 @@ void run(const SitesOptions& o) {
     }
   }
   progress.update(1, 1);
-  // The results as `rths run` and `rths launch` write them, against the lag-free in-process
-  // reference (cli/distributed.h), links labelled by role and site.
+  return result;
+}
+
+// The results as `rths run` and `rths launch` write them, against the lag-free in-process
+// reference (analysis/distributed), links labelled by role and site.
+void report(const SitesOptions& o, const deploy::SitesPlan& plan,
+            const core::PreparedStudy& prepared, const deploy::SitesRunResult& result) {
   std::map<int, std::string> site_of_node;
   for (const deploy::NodePlacement& p : plan.placements) site_of_node[p.node_id] = p.site;
   const std::vector<DistributedRun> runs{
@@ -109,6 +97,29 @@ void run(const SitesOptions& o) {
   }
   if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
   fail_if_distributed_failed(results, runs, o.results.allow_unstable);
+}
+
+void run(const SitesOptions& o) {
+  if (run_maintenance(o)) return;
+  if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
+  auto plan = deploy::load_sites(o.config);
+  if (!o.security.empty())
+    plan.study.mutable_deployment()->set_security_dir(
+        std::filesystem::absolute(o.security).string());
+  if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
+  // Paths in plan.study are absolute. Checked before anything starts (and by --check): the
+  // case's lag plus the network's on the actuator's path against the critical delay.
+  const core::PreparedStudy prepared =
+      core::prepare_study(plan.study, plan.study_file.parent_path());
+  analysis::warn_past_critical_delay(prepared, {plan.study.deployment().case_name()},
+                                     print_warning);
+  if (o.check) {
+    std::cout << "sites config ok: " << plan.placements.size() << " processes on "
+              << plan.sites.sites_size() << " sites, DDS domain "
+              << plan.study.deployment().domain_id() << "\n";
+    return;
+  }
+  report(o, plan, prepared, run_at_sites(o, plan));
 }
 
 }  // namespace

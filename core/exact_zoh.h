@@ -27,7 +27,8 @@
 //     r_{k+1} = restoring.trial(u_{k+1}, v_{k+1});  h_{k+1} = r_{k+1} - K_x u_{k+1}
 //     a_{k+1} = M^-1 (p_{k+1} - C v_{k+1} - r_{k+1})
 //   Exact, for any dt, when the whole restoring force is K_x u (h = 0); the held force lags by
-//   one step, a lag the loop's stability sees as a delay of dt. The restoring force is asked
+//   one step, a lag the loop's stability sees as a delay (core/stability.h models it: a stiff
+//   held part at a coarse dt is unstable without any other delay). The restoring force is asked
 //   once per step, so it runs with a delayed or remote experimental part.
 
 #include <memory>

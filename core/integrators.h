@@ -42,7 +42,8 @@
 //                       exponential), the rest of the restoring force (the measured
 //                       experimental force) held over it at its value of the step before, the
 //                       load linear between samples: core/exact_zoh.h. Exact for a linear
-//                       structure without a held part; no dt limit.
+//                       structure without a held part; no dt limit of its own (the held force
+//                       is a lag, which the critical-delay analysis judges with the loop).
 // v~ is the velocity the integrator has computed when it sends u+; the paper's Eq. 1 uses it.
 
 #include <functional>

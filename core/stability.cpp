@@ -1,6 +1,7 @@
 #include "core/stability.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -10,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/compensator.h"
+#include "core/exact_zoh.h"
 #include "core/simulation.h"
 
 namespace rths::core {
@@ -18,6 +20,20 @@ namespace {
 struct SdofParameters {
   double m = 1.0, c = 0.0, k_numerical = 0.0, k_experimental = 0.0;
 };
+
+// EXACT_ZOH's step matrices for the numerical part (m, c, k_numerical) at dt. The searches call
+// the step thousands of times with the same parameters: the last ones are kept (per thread).
+const ExactDiscretisation& exact_step(const SdofParameters& p, double dt) {
+  thread_local std::array<double, 4> key{-1.0, -1.0, -1.0, -1.0};
+  thread_local ExactDiscretisation step;
+  const std::array<double, 4> wanted{p.m, p.c, p.k_numerical, dt};
+  if (wanted != key) {
+    step = exact_discretisation(Mat::Constant(1, 1, p.m), Mat::Constant(1, 1, p.c),
+                                Mat::Constant(1, 1, p.k_numerical), dt);
+    key = wanted;
+  }
+  return step;
+}
 
 SdofParameters sdof_parameters(double period, double zeta, double alpha) {
   if (!(period > 0)) throw std::invalid_argument("stability: period must be > 0 s");
@@ -50,6 +66,15 @@ bool explicit_sdof_step(IntegratorKind kind, const SdofParameters& p, double dt,
       a_next = (-p.c * v_next - r(u_next)) / p.m;
       return true;
     }
+    case IntegratorKind::kExactZoh: {
+      // The force held over the step, r - k_numerical u of the step before, from its equilibrium.
+      const ExactDiscretisation& d = exact_step(p, dt);
+      const double held = -(p.m * a + p.c * v + p.k_numerical * u);
+      u_next = d.phi(0, 0) * u + d.phi(0, 1) * v - d.gamma0(0, 0) * held;
+      v_next = d.phi(1, 0) * u + d.phi(1, 1) * v - d.gamma0(1, 0) * held;
+      a_next = (-p.c * v_next - r(u_next)) / p.m;
+      return true;
+    }
     default: return false;
   }
 }
@@ -73,11 +98,11 @@ Vec advance(IntegratorKind kind, const SdofParameters& p, double dt, int n, cons
     case IntegratorKind::kExplicitNewmark:
     case IntegratorKind::kCentralDifference:
     case IntegratorKind::kChenRicles:
+    case IntegratorKind::kExactZoh:
       explicit_sdof_step(kind, p, dt, u, v, a, restoring, u_next, v_next, a_next);
       break;
     case IntegratorKind::kAlphaOS:
     case IntegratorKind::kKRAlpha:
-    case IntegratorKind::kExactZoh:
       throw std::invalid_argument("stability: the discrete delay analysis does not cover " +
                                   to_string(kind) + " yet");
     case IntegratorKind::kNewmarkAverageAcceleration: {
@@ -403,8 +428,7 @@ std::string CriticalDelayCheck::describe() const {
 }
 
 bool discrete_analysis_covers(IntegratorKind kind) {
-  return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha &&
-         kind != IntegratorKind::kExactZoh;
+  return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha;
 }
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,

@@ -31,7 +31,9 @@
 //
 // Discrete: the explicit/implicit integrator with the experimental force taken at the command of
 //   n steps earlier (a time shift of n dt); the first n whose amplification matrix has spectral
-//   radius > 1.
+//   radius > 1. EXACT_ZOH on the state [u, v, a]: the force it holds over the step is
+//   r - k_N u = -(m a + c v + k_N u) of the step before (its equilibrium), so its step is
+//   [u, v]+ = Phi [u, v] - Gamma0 (that force) (core/exact_zoh.h), then a+ from equilibrium.
 
 #include <complex>
 #include <optional>
@@ -135,8 +137,7 @@ struct CriticalDelayCheck {
   std::optional<double> discrete;    // s; empty: none found up to the searched steps
   int discrete_searched_steps = 0;   // n searched for the discrete limit
   // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
-  // alpha-os, kr-alpha, exact-zoh); empty when it was. The run goes ahead on the continuous limit
-  // alone.
+  // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
   std::string discrete_skipped;
   std::string assumed;              // what the check assumed (modal approximation...)
   int governing_mode = 1;           // 1-based mode with the smallest continuous delay
@@ -152,8 +153,7 @@ struct CriticalDelayCheck {
   std::string describe() const;
 };
 
-// False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha,
-// exact-zoh).
+// False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha).
 bool discrete_analysis_covers(IntegratorKind kind);
 
 CriticalDelayCheck check_critical_delay(const StructuralModel& model,

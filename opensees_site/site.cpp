@@ -55,10 +55,9 @@ void require_site_study(const core::HybridSetup& setup, const config::Deployment
 }
 
 std::vector<util::ChildProcess> start_nodes(const config::Deployment& deployment,
-                                               const SiteOptions& options,
-                                               const std::filesystem::path& security_dir,
-                                               int domain, const std::string& run_id,
-                                               const std::string& secret) {
+                                            const SiteOptions& options,
+                                            const std::filesystem::path& security_dir, int domain,
+                                            const std::string& run_id, const std::string& secret) {
   const std::filesystem::path emulator =
       util::find_program("rths-actuator-emulator", "actuator_emulator", options.programs_dir);
   if (!options.log_dir.empty()) std::filesystem::create_directories(options.log_dir);

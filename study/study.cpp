@@ -2,6 +2,8 @@
 
 #include "study/compensation_config.h"
 #include "study/delay_trace_file.h"
+#include "study/known_enums.h"
+#include "study/memory_budget.h"
 #include "study/motion_files.h"
 #include "study/ranges.h"
 #include "study/restoring_force_config.h"
@@ -9,8 +11,6 @@
 #include "study/text_columns.h"
 #include "study/text_format.h"
 #include "study/tracking_config.h"
-#include "study/known_enums.h"
-#include "study/memory_budget.h"
 #include "util/sha256.h"
 
 #include <cmath>

@@ -223,7 +223,6 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
   return script.str();
 }
 
-
 }  // namespace
 
 namespace {

@@ -398,24 +398,7 @@ nlohmann::json residual_json(const RunResidual& r) {
           {"notes", r.notes}};
 }
 
-}  // namespace
-
-std::string run_record_text(const RunIdentification& run) {
-  std::ostringstream out;
-  out << "record " << run.record << ": case '" << run.case_name << "', " << run.clock << ", "
-      << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
-  out << "inputs: " << run.inputs << "\n";
-  if (run.platform && run.platform->overruns > 0)
-    out << "platform: " << run.platform->overruns << " of " << run.platform->steps
-        << " steps overran their deadline (" << run.platform->cause
-        << "); the record: " << run.platform->usability << "\n";
-  for (const auto& l : run.links) link_text(l, out);
-  for (const auto& a : run.actuators) actuator_text(a, out);
-  if (run.residual) residual_text(*run.residual, out);
-  return out.str();
-}
-
-nlohmann::json run_record_json(const RunIdentification& run) {
+nlohmann::json links_json(const RunIdentification& run) {
   nlohmann::json links = nlohmann::json::array();
   for (const auto& l : run.links) {
     nlohmann::json effects = nlohmann::json::array();
@@ -444,6 +427,10 @@ nlohmann::json run_record_json(const RunIdentification& run) {
          {"heldout_rms_declared_s", l.heldout_declared},
          {"undeclared", effects}});
   }
+  return links;
+}
+
+nlohmann::json actuators_json(const RunIdentification& run) {
   nlohmann::json actuators = nlohmann::json::array();
   for (const auto& a : run.actuators) {
     nlohmann::json channels = nlohmann::json::array();
@@ -473,6 +460,28 @@ nlohmann::json run_record_json(const RunIdentification& run) {
                          {"channels", channels},
                          {"undeclared", a.undeclared}});
   }
+  return actuators;
+}
+
+}  // namespace
+
+std::string run_record_text(const RunIdentification& run) {
+  std::ostringstream out;
+  out << "record " << run.record << ": case '" << run.case_name << "', " << run.clock << ", "
+      << run.held << "; " << run.steps << " steps (" << run.duration << " s) identified\n";
+  out << "inputs: " << run.inputs << "\n";
+  if (run.platform && run.platform->overruns > 0)
+    out << "platform: " << run.platform->overruns << " of " << run.platform->steps
+        << " steps overran their deadline (" << run.platform->cause
+        << "); the record: " << run.platform->usability << "\n";
+  for (const auto& l : run.links) link_text(l, out);
+  for (const auto& a : run.actuators) actuator_text(a, out);
+  if (run.residual) residual_text(*run.residual, out);
+  return out.str();
+}
+
+nlohmann::json run_record_json(const RunIdentification& run) {
+  const nlohmann::json links = links_json(run), actuators = actuators_json(run);
   nlohmann::json out = {
       {"record", run.record},       {"case", run.case_name}, {"clock", run.clock},
       {"held", run.held},           {"inputs", run.inputs},  {"steps", run.steps},

@@ -15,8 +15,8 @@
 #include "runtime/node/schema.h"
 #include "security/check.h"
 #include "security/pki.h"
-#include "study/study.h"
 #include "security/run_secret.h"
+#include "study/study.h"
 #include "transport/transport.h"
 #include "util/process.h"
 
@@ -63,8 +63,9 @@ struct Credentials {
 };
 
 util::ChildProcess start(const std::filesystem::path& program, std::vector<std::string> args,
-                   const Credentials& credentials, int node_id, const std::filesystem::path& log,
-                   const std::string& label, const PlacementStrategy& placement) {
+                         const Credentials& credentials, int node_id,
+                         const std::filesystem::path& log, const std::string& label,
+                         const PlacementStrategy& placement) {
   const auto security_args = security::security_arguments(credentials.security_dir, node_id);
   args.insert(args.end(), security_args.begin(), security_args.end());
   Placement where = placement(node_id);

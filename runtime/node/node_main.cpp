@@ -8,8 +8,8 @@
 #include "runtime/node/node_loop.h"
 #include "security/check.h"
 #include "security/pki.h"
-#include "study/study.h"
 #include "security/run_secret.h"
+#include "study/study.h"
 #include "transport/dds_endpoint.h"
 
 namespace rths::runtime {

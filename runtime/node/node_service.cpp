@@ -12,6 +12,18 @@
 #include "study/study.h"
 
 namespace rths::runtime {
+namespace {
+
+// The one lag rule (study/study.h), as the coordinator applied it at load: a node does not take
+// the coordinator's word for the lags it injects. Throws std::invalid_argument naming the field.
+void validate_assigned_lags(const Assign& assign) {
+  for (const auto& [name, lag] : {std::pair{"receive_lag", &assign.node().receive_lag()},
+                                  std::pair{"send_lag", &assign.node().send_lag()}})
+    core::validate_link_lag(*lag, std::string("node.") + name, assign.study().allow_long_lag(),
+                            "the assigned study");
+}
+
+}  // namespace
 
 NodeService::NodeService(std::int32_t node_id, config::NodeSpec::Kind kind,
                          std::string expected_run_id)
@@ -91,12 +103,7 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
       if (assign.schema_version() != kSchemaVersion)
         throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
                                     ", this node speaks " + std::to_string(kSchemaVersion));
-      // The one lag rule (study/study.h), as the coordinator applied it at load: a node does not
-      // take the coordinator's word for the lags it injects.
-      for (const auto& [name, lag] : {std::pair{"receive_lag", &assign.node().receive_lag()},
-                                      std::pair{"send_lag", &assign.node().send_lag()}})
-        core::validate_link_lag(*lag, std::string("node.") + name, assign.study().allow_long_lag(),
-                                "the assigned study");
+      validate_assigned_lags(assign);
       hosted_ = configure(assign);
       const auto chains =
           [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {

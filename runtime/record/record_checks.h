@@ -1,6 +1,6 @@
 #pragma once
-// The meaning of a run record whose checksums hold (runtime/record/record.h checks the bytes; a record
-// can be intact and still nonsense: crafted, or written by a broken program).
+// The meaning of a run record whose checksums hold (runtime/record/record.h checks the bytes; a
+// record can be intact and still nonsense: crafted, or written by a broken program).
 //
 // check_record(contents) -> RecordChecks, every problem named with the entry number it was found
 // in (0-based, the order read_record returns; "entry 57 (step 12): ..."):

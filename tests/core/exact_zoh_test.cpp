@@ -1,4 +1,5 @@
 #include "core/exact_zoh.h"
+#include "core/integrators.h"
 
 #include <gtest/gtest.h>
 

@@ -112,6 +112,30 @@ TEST(DiscreteStabilityTest, EveryIntegratorHasAFiniteCriticalDelayAtFullExperime
   }
 }
 
+// EXACT_ZOH holds the measured force over the step after it was measured: its critical delay is
+// the continuous one less about a step (at dt = 0.1 ms, within two steps of it and not above it).
+// The hold is a lag of its own: at omega dt = 2.5 with 30 % of the stiffness held, it is unstable
+// without any delay, which the analysis reports (its numerical part alone has no dt limit).
+TEST(DiscreteStabilityTest, ExactZohIsTheContinuousLimitLessItsHold) {
+  const double dt = 1e-4;
+  const auto continuous = continuous_critical_delay(kPeriod, kZeta, 1.0).critical_delay;
+  ASSERT_TRUE(continuous.has_value());
+  const DiscreteStability d =
+      discrete_critical_delay(IntegratorKind::kExactZoh, kPeriod, kZeta, 1.0, dt, 200);
+  ASSERT_TRUE(d.first_unstable_delay.has_value());
+  EXPECT_LE(*d.first_unstable_delay, *continuous + dt);
+  EXPECT_GE(*d.first_unstable_delay, *continuous - 2 * dt);
+  const double omega = 2 * std::numbers::pi / kPeriod;
+  const DiscreteStability coarse =
+      discrete_critical_delay(IntegratorKind::kExactZoh, kPeriod, kZeta, 0.3, 2.5 / omega, 0);
+  ASSERT_TRUE(coarse.first_unstable_steps.has_value());
+  EXPECT_EQ(*coarse.first_unstable_steps, 0);
+  EXPECT_FALSE(
+      discrete_critical_delay(IntegratorKind::kExactZoh, kPeriod, kZeta, 0.0, 2.5 / omega, 0)
+          .first_unstable_steps.has_value());
+  EXPECT_TRUE(discrete_analysis_covers(IntegratorKind::kExactZoh));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Compensated loop.
 

@@ -497,11 +497,11 @@ TEST(Faults, WithoutASecretOrSecurityTheProgramsRefuseToStart) {
   util::ChildOptions clean;
   clean.environment = {{security::kSecretEnv, ""}, {security::kSecretFileEnv, ""}};
   util::ChildProcess node(test::program("rths-substructure-node", "substructure_nodes"),
-                    {"--node-id", "1", "--domain", "164", "--run-id", "no_secret"},
-                    dir / "node.log", clean);
+                          {"--node-id", "1", "--domain", "164", "--run-id", "no_secret"},
+                          dir / "node.log", clean);
   util::ChildProcess coordinator(test::program("rths-coordinator", "coordinator"),
-                           {"--config", config.string(), "--domain", "164"},
-                           dir / "coordinator.log", clean);
+                                 {"--config", config.string(), "--domain", "164"},
+                                 dir / "coordinator.log", clean);
   EXPECT_EQ(node.wait_for(20s).value_or(-1), 2);
   EXPECT_EQ(coordinator.wait_for(20s).value_or(-1), 2);
   for (const char* log : {"node.log", "coordinator.log"}) {

@@ -1,6 +1,6 @@
-// check_record (runtime/record/record_checks.h): records whose checksums hold but whose meaning does not
-// are named entry by entry; a header that cannot size a table is fatal; a record that stops
-// between two entries without its footer reads as cut.
+// check_record (runtime/record/record_checks.h): records whose checksums hold but whose meaning
+// does not are named entry by entry; a header that cannot size a table is fatal; a record that
+// stops between two entries without its footer reads as cut.
 #include "runtime/record/record_checks.h"
 
 #include <gmock/gmock.h>

@@ -11,7 +11,6 @@
 
 #include "runtime/record/record.h"
 #include "security/run_secret.h"
-#include "util/process.h"
 #include "transport/transport.h"
 #include "util/process.h"
 
@@ -79,9 +78,9 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   trusted.environment = {{security::kSecretEnv, security::generate_run_secret()}};
   const auto node = [&](const std::string& program, const std::string& subdir, int id) {
     return util::ChildProcess(spec.binary_dir / subdir / program,
-                                 {"--node-id", std::to_string(id), "--domain",
-                                  std::to_string(spec.domain), "--run-id", run_id},
-                                 spec.dir / ("node_" + std::to_string(id) + ".log"), trusted);
+                              {"--node-id", std::to_string(id), "--domain",
+                               std::to_string(spec.domain), "--run-id", run_id},
+                              spec.dir / ("node_" + std::to_string(id) + ".log"), trusted);
   };
   util::ChildProcess substructure = node("rths-substructure-node", "substructure_nodes", 1);
   util::ChildProcess emulator = node("rths-actuator-emulator", "actuator_emulator", 2);
@@ -91,10 +90,10 @@ FaultTrialResult run_fault_trial(const FaultTrialSpec& spec) {
   coordinator_args.insert(coordinator_args.end(), spec.coordinator_extra.begin(),
                           spec.coordinator_extra.end());
   util::ChildProcess coordinator(spec.binary_dir / "coordinator" / "rths-coordinator",
-                                    coordinator_args, spec.dir / "coordinator.log", trusted);
+                                 coordinator_args, spec.dir / "coordinator.log", trusted);
   util::ChildProcess& victim = spec.victim == FaultVictim::kCoordinator    ? coordinator
-                                  : spec.victim == FaultVictim::kSubstructure ? substructure
-                                                                              : emulator;
+                               : spec.victim == FaultVictim::kSubstructure ? substructure
+                                                                           : emulator;
   FaultTrialResult out;
   // Wait for the fault step.
   const auto give_up = std::chrono::steady_clock::now() + 30s;
