@@ -103,20 +103,6 @@ config::Study load_study(const std::filesystem::path& path) {
 
 namespace {
 
-constexpr std::uintmax_t kMaxMotionFileBytes = 256ull << 20;  // 256 MiB
-
-// A motion file is read whole, as text (and hashed, and scanned for binary bytes): one far beyond
-// any record (a 10^8-line file) is refused by its size before any of that.
-void refuse_huge_motion(const std::filesystem::path& path) {
-  std::error_code size_error;
-  const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
-  if (size_error || bytes <= kMaxMotionFileBytes) return;
-  std::ostringstream message;
-  message << "motion '" << path.string() << "': " << bytes << " bytes, more than the "
-          << kMaxMotionFileBytes << " a motion file may have";
-  throw std::invalid_argument(message.str());
-}
-
 void validate_structure(const config::Structure& structure, const std::string& source) {
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
@@ -278,55 +264,9 @@ void validate_study(const config::Study& study, const std::string& source) {
   validate_deployment(study.deployment(), study.allow_long_lag(), source);
 }
 
-std::string units_name(config::GroundMotion::Units units) {
-  switch (units) {
-    case config::GroundMotion::M_PER_S2: return "m/s2";
-    case config::GroundMotion::CM_PER_S2: return "cm/s2";
-    default: return "g";
-  }
-}
-
-config::GroundMotion::Units units_from_name(const std::string& name) {
-  if (name == "g") return config::GroundMotion::G;
-  if (name == "m/s2" || name == "m/s^2") return config::GroundMotion::M_PER_S2;
-  if (name == "cm/s2" || name == "cm/s^2" || name == "gal") return config::GroundMotion::CM_PER_S2;
-  throw std::invalid_argument("unknown motion units '" + name + "': use g, m/s2 or cm/s2");
-}
-
-std::string motion_units_name(const config::GroundMotion& motion) {
-  return motion.has_column_units() ? units_name(motion.column_units()) : "g";
-}
-
 namespace {
 
 // A motion carried by a run record's header: checked as a file's would be, read from nowhere.
-GroundMotion embedded_motion(const config::EmbeddedMotion& embedded) {
-  const std::string what = "motion.embedded ('" + embedded.name() + "')";
-  if (!(embedded.dt() > 0.0) || !std::isfinite(embedded.dt()))
-    throw std::invalid_argument(what + ": dt = " + format_number(embedded.dt()) +
-                                " s is not a positive step");
-  if (embedded.acceleration_size() == 0) throw std::invalid_argument(what + ": no samples");
-  GroundMotion record{embedded.name(),
-                      embedded.dt(),
-                      {embedded.acceleration().begin(), embedded.acceleration().end()}};
-  for (std::size_t i = 0; i < record.acceleration.size(); ++i)
-    if (!std::isfinite(record.acceleration[i]))
-      throw std::invalid_argument(what + ": sample " + std::to_string(i) + " is not finite");
-  if (!(record.peak_abs() <= kMaxPeakGroundAcceleration))
-    throw std::invalid_argument(what + ": peak " + format_number(record.peak_abs()) +
-                                " m/s^2 is beyond any recorded earthquake");
-  return record;
-}
-
-void check_sha256(const std::filesystem::path& path, const std::string& expected) {
-  const std::string actual = util::file_sha256(path);
-  if (actual != expected)
-    throw std::invalid_argument("motion '" + path.string() + "': sha256 " + actual + ", expected " +
-                                expected +
-                                " (motion.sha256): the file is not the record the study names");
-}
-
-// A delay trace carried by a run record's header, held to read_delay_trace's rules.
 DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
   const std::string what = "delay trace (embedded, from '" + trace.path() + "')";
   if (trace.time_size() != trace.delay_size())
@@ -346,50 +286,6 @@ DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
 }
 
 }  // namespace
-
-GroundMotion load_motion(const config::GroundMotion& motion,
-                         const std::filesystem::path& base_dir) {
-  if (motion.has_embedded()) return embedded_motion(motion.embedded());
-  if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
-  std::filesystem::path path = motion.path();
-  if (path.is_relative()) path = base_dir / path;
-  refuse_huge_motion(path);
-  if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
-    throw std::invalid_argument("motion: " + why);
-  if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
-  bool at2 = motion.format() == config::GroundMotion::AT2;
-  if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
-  const std::string what = "motion '" + path.string() + "'";
-  if (at2 && motion.has_column_units() && motion.column_units() != config::GroundMotion::G) {
-    throw std::invalid_argument(what +
-                                " is a PEER AT2 file, whose values are in g by its format; "
-                                "motion.column_units (--motion-units) " +
-                                units_name(motion.column_units()) + " contradicts it");
-  }
-  if (!at2 && !motion.has_column_units()) {
-    throw std::invalid_argument(
-        what +
-        " is a columns file, whose numbers carry no unit: give "
-        "motion.column_units (G, M_PER_S2 or CM_PER_S2; --motion-units g|m/s2|cm/s2)");
-  }
-  double to_si = kGravity;
-  if (motion.column_units() == config::GroundMotion::M_PER_S2) to_si = 1.0;
-  if (motion.column_units() == config::GroundMotion::CM_PER_S2) to_si = 0.01;
-  GroundMotion record = at2 ? read_at2(path) : read_columns(path, motion.column_dt(), to_si);
-  const double peak = record.peak_abs();
-  if (!(peak <= kMaxPeakGroundAcceleration)) {
-    std::ostringstream message;
-    message << what << ": peak acceleration " << peak / kGravity << " g read as "
-            << (at2 ? std::string("g") : units_name(motion.column_units()))
-            << " is beyond any recorded earthquake (under 4 g); are the units right "
-               "(motion.column_units, --motion-units)?";
-    throw std::invalid_argument(message.str());
-  }
-  if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
-  if (motion.scale() > 0 && motion.scale() != 1.0)
-    record = scaled(std::move(record), motion.scale());
-  return truncated(std::move(record), motion.duration());
-}
 
 std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
                                              const std::filesystem::path& base_dir) {

@@ -11,13 +11,12 @@
 #include "core/simulation.h"
 #include "core/substructure.h"
 #include "rths/proto/config.pb.h"
+#include "study/motion_config.h"
 #include "study/restoring_force_config.h"
 
 namespace rths::core {
 
 // Every number of a study is checked against its range rule (study/ranges.h) by validate_study.
-inline constexpr double kMaxPeakGroundAcceleration =
-    5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
 
 // Parses a text-format Study. Throws std::invalid_argument "FILE:LINE:COL: message" on unknown
 // fields, wrong types or syntax errors, and on semantic errors (negative period or delay, both
@@ -36,18 +35,6 @@ void validate_study(const config::Study& study, const std::string& source_name);
 // Throws std::invalid_argument "SOURCE: WHERE.field = ...".
 void validate_link_lag(const config::LinkLag& lag, const std::string& where, bool allow_long_lag,
                        const std::string& source);
-
-// Reads the record in SI. Throws std::invalid_argument when a columns file has no column_units,
-// an AT2 file is given a unit other than G, or the peak exceeds kMaxPeakGroundAcceleration (a
-// record in cm/s^2 read as g or m/s^2).
-GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir);
-// "g", "m/s2" or "cm/s2": what a record in these units is called on the command line and in
-// summaries.
-std::string units_name(config::GroundMotion::Units units);
-// Parses "g", "m/s2" or "cm/s2" (also "m/s^2", "cm/s^2"); throws naming the accepted forms.
-config::GroundMotion::Units units_from_name(const std::string& name);
-// The units of the study's record as read: its column_units, or g for an AT2 file.
-std::string motion_units_name(const config::GroundMotion& motion);
 
 std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
                                              const std::filesystem::path& base_dir);
