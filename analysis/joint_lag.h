@@ -31,51 +31,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/joint_lag_result.h"
 #include "rths/analysis/joint_lag.pb.h"
 #include "rths/proto/config.pb.h"
 
 namespace rths::analysis {
-
-struct JointLagPoint {
-  double network_round_trip = 0.0;  // s, injected
-  double actuator_lag = 0.0;        // s, injected (time shift or time constant)
-  double nrmse = 0.0;               // relative
-  double paper_eq2 = 0.0;
-  double peak_error = 0.0;          // m
-  double measured_total_lag = 0.0;  // s, J1 of realised behind command
-  bool diverged = false;
-  // Across sites only (zero otherwise):
-  double measured_round_trip = 0.0;    // s, record median
-  double measured_actuator_lag = 0.0;  // s, see deploy/joint_lag_sites.h
-  bool real_time = false;              // the clock of the across-sites run
-  double duration = 0.0;               // s of the record run across sites: its NRMSE covers only
-                                       // this stretch, so it is not comparable with the grid's
-  bool past_boundary = false;  // network round trip beyond the critical one at this actuator lag
-  // Across sites only: the in-process run of the lags the response can see, over the same
-  // stretch (relative NRMSE): network + actuator in real time; the actuator alone in lockstep,
-  // which waits for every answer, so the network lag never reaches the response.
-  double in_process_nrmse = 0.0;
-};
-
-// Continuous stability boundary of the grid: for each actuator lag A, the network round trip R at
-// which the loop (SDOF: m u'' + c u' + k_n u + k_e G_A(s) e^{-s R} u = 0, G_A the actuator model)
-// first goes unstable: core::compensated_stability's continuous margin with the actuator model as
-// the plant. Empty R: stable for every round trip.
-struct BoundaryPoint {
-  double actuator_lag = 0.0;                  // s
-  std::optional<double> critical_round_trip;  // s
-};
-
-struct JointLagResult {
-  std::string study_name;
-  std::string actuator_model;
-  std::vector<JointLagPoint> grid;      // network-major: all actuator lags for each round trip
-  std::vector<JointLagPoint> measured;  // across sites
-  std::string measured_skipped;         // why the across-sites part did not run, if it did not
-  std::vector<BoundaryPoint> boundary;  // 0 .. largest actuator lag, finely spaced
-  std::string boundary_skipped;         // why there is none (a structure with several storeys)
-  std::filesystem::path output_directory;
-};
 
 // Reads and checks a JointLagStudy (text format). Throws std::invalid_argument naming the file
 // and the field (an empty study or grid, a lag that is negative or not finite).

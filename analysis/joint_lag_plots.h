@@ -6,7 +6,7 @@
 
 #include <filesystem>
 
-#include "analysis/joint_lag.h"
+#include "analysis/joint_lag_result.h"
 
 namespace rths::analysis {
 
