@@ -6,19 +6,12 @@
 #include <sstream>
 
 #include "analysis/study_run.h"
+#include "core/time_text.h"
 #include "util/text_table.h"
 
 namespace rths::analysis {
 
-namespace {
-
-std::string ms(double seconds) {
-  std::ostringstream out;
-  out << std::setprecision(3) << seconds * 1e3 << " ms";
-  return out.str();
-}
-
-}  // namespace
+namespace {}  // namespace
 
 namespace {
 
@@ -136,8 +129,9 @@ std::string margin_cell(const CaseOutcome& c) {
     if (!v.analysed) return "n/a [comp.]";
     if (!v.stable) return "unstable [comp.]";
     if (!v.extra_delay_tolerated) return "stable";
-    std::string cell = "+";  // appended, not `"+" + ms(...)`: GCC 12 -O3 warns falsely on that
-    cell += ms(*v.extra_delay_tolerated);
+    std::string cell =
+        "+";  // appended, not `"+" + core::format_ms(...)`: GCC 12 -O3 warns falsely on that
+    cell += core::format_ms(*v.extra_delay_tolerated);
     return cell + " [comp.]";
   }
   if (c.stability && c.stability->critical()) return fixed(100.0 * c.stability->margin(), 1) + " %";
@@ -148,7 +142,8 @@ std::string margin_cell(const CaseOutcome& c) {
 // early has no error over the steps it did not run ("-", and a line below with the steps it did).
 std::vector<std::string> summary_row(const CaseOutcome& c) {
   std::string critical = "-";
-  if (c.stability) critical = c.stability->critical() ? ms(*c.stability->critical()) : "none";
+  if (c.stability)
+    critical = c.stability->critical() ? core::format_ms(*c.stability->critical()) : "none";
   const std::string margin = margin_cell(c);
   const bool measured = !c.diverged() && c.comparison.covers_reference();
   return {c.name,

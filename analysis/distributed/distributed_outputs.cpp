@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "core/time_text.h"
 #include "results/results.h"
 #include "results/write.h"
 #include "util/atomic_file.h"
@@ -10,12 +11,6 @@
 
 namespace rths::analysis {
 namespace {
-
-std::string ms(double seconds) {
-  std::ostringstream out;
-  out << std::setprecision(3) << seconds * 1e3 << " ms";
-  return out.str();
-}
 
 std::vector<double> in_ms(const std::vector<double>& seconds, double offset = 0.0) {
   std::vector<double> out;
@@ -109,7 +104,7 @@ util::PlotSpec stack_panel(const analysis::CaseOutcome& c, const DistributedCase
   const double t0 = c.simulation.time.empty() ? 0.0 : c.simulation.time.front();
   const double t1 = c.simulation.time.empty() ? 0.0 : c.simulation.time.back();
   const double actuator = c.nominal_delay + path.node_stages;  // s
-  const std::string actuator_label = "actuator lag, nominal " + ms(actuator) + ": " +
+  const std::string actuator_label = "actuator lag, nominal " + core::format_ms(actuator) + ": " +
                                      c.delay_description +
                                      (path.node_stages != 0.0 ? " + node stages" : "");
   util::PlotSpec stack;
@@ -144,7 +139,7 @@ util::PlotSpec stack_panel(const analysis::CaseOutcome& c, const DistributedCase
     const auto level = [&](const std::optional<double>& limit, const std::string& what,
                            const char* dash) {
       if (!limit) return;
-      stack.series.push_back({what + " critical delay " + ms(*limit),
+      stack.series.push_back({what + " critical delay " + core::format_ms(*limit),
                               {t0, t1},
                               {*limit * 1e3, *limit * 1e3},
                               std::string("lines lw 2 dt ") + dash + " lc rgb '" +

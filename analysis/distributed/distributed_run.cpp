@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/time_text.h"
 #include "runtime/node/in_process.h"
 #include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
@@ -60,12 +61,6 @@ std::string rejects_text(const runtime::Counters& c) {
   return text.empty() ? "none" : text;
 }
 
-std::string ms(double seconds) {
-  std::ostringstream out;
-  out << std::setprecision(3) << seconds * 1e3 << " ms";
-  return out.str();
-}
-
 }  // namespace
 
 ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
@@ -100,14 +95,15 @@ int warn_past_critical_delay(const core::PreparedStudy& prepared,
     ++past;
     std::string parts;
     if (path.real_time && path.link_round_trip != 0.0)
-      parts += "network round trip " + ms(path.link_round_trip) +
+      parts += "network round trip " + core::format_ms(path.link_round_trip) +
                " injected on the actuator lab's link + ";
     if (path.node_stages != 0.0)
-      parts += "the actuator node's delay stages " + ms(path.node_stages) + " + ";
-    parts += "actuator lag " + ms(check->lag - path.felt()) + " (the case's delay stages): ";
+      parts += "the actuator node's delay stages " + core::format_ms(path.node_stages) + " + ";
+    parts += "actuator lag " + core::format_ms(check->lag - path.felt()) +
+             " (the case's delay stages): ";
     if (!path.real_time && path.link_round_trip != 0.0)
-      parts = "(lockstep: the link's " + ms(path.link_round_trip) + " round trip does not enter) " +
-              parts;
+      parts = "(lockstep: the link's " + core::format_ms(path.link_round_trip) +
+              " round trip does not enter) " + parts;
     warn("case '" + study_case.name() + "': " + parts + check->describe() +
          (study_case.expect_unstable() ? " (expect_unstable: meant)" : "; expect it to diverge"));
   }

@@ -5,15 +5,10 @@
 #include <sstream>
 
 #include "core/metrics.h"
+#include "core/time_text.h"
 
 namespace rths::runtime {
 namespace {
-
-std::string ms(double seconds) {
-  std::ostringstream out;
-  out << std::setprecision(3) << seconds * 1e3 << " ms";
-  return out.str();
-}
 
 std::vector<std::string> advice_for(const DeadlineDiagnosis& d) {
   if (d.stall_overruns >= d.work_overruns) {
@@ -109,11 +104,11 @@ DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps
 std::string DeadlineDiagnosis::describe() const {
   std::ostringstream out;
   out << "deadline misses: " << overruns << " of " << steps << " steps; cause: " << cause << " ("
-      << stall_overruns << " with the step's work inside the " << ms(period)
+      << stall_overruns << " with the step's work inside the " << core::format_ms(period)
       << " period, so the wake-up "
       << "came late; " << work_overruns << " whose own work overran; step work median "
-      << ms(step_wall_median) << ", p99 " << ms(step_wall_p99) << "; worst lateness "
-      << ms(worst_lateness) << ")\n";
+      << core::format_ms(step_wall_median) << ", p99 " << core::format_ms(step_wall_p99)
+      << "; worst lateness " << core::format_ms(worst_lateness) << ")\n";
   for (const std::string& a : advice) out << "  to do: " << a << "\n";
   out << "  the record: " << usability << "\n";
   return out.str();
