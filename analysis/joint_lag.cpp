@@ -198,6 +198,42 @@ std::string why_not_across_sites(const JointLagStudy& config, const JointLagOpti
   return "";
 }
 
+// What every in-process grid point shares: the prepared study, its reference response, each
+// actuator lag's critical round trip (s) and the J1 search window (s).
+struct GridInputs {
+  const JointLagStudy& config;
+  const core::PreparedStudy& prepared;
+  const std::vector<double>& reference_response;
+  const std::map<double, std::optional<double>>& critical_at;
+  double window = 0.0;
+};
+
+// One in-process point: the study run with a network shift of `round_trip` (s) then the
+// actuator model at `actuator` (s), judged against the reference.
+JointLagPoint run_grid_point(const GridInputs& grid, double round_trip, double actuator) {
+  const core::PreparedStudy& prepared = grid.prepared;
+  config::Case joint;
+  joint.set_name("joint");
+  joint.add_delay()->mutable_shift()->set_delay(round_trip);
+  *joint.add_delay() = joint_lag_actuator_stage(grid.config.actuator_model(), actuator);
+  const auto run = core::simulate(core::setup_for_case(prepared, joint), prepared.motion);
+  JointLagPoint point;
+  point.network_round_trip = round_trip;
+  point.actuator_lag = actuator;
+  if (const auto it = grid.critical_at.find(actuator); it != grid.critical_at.end() && it->second)
+    point.past_boundary = round_trip >= *it->second;
+  // The growth is fitted at the governing mode's period, as `rths run` fits it.
+  const auto check =
+      point.past_boundary ? check_case_critical_delay(prepared, joint, 0.0) : std::nullopt;
+  fill_joint_lag_errors(point, grid.reference_response, floor_history(run, 0), run.diverged,
+                        prepared.base.dt, check ? check->governing_period : 0.0);
+  if (!point.diverged) {
+    point.measured_total_lag = core::j1_delay(column_of(run.command, 0), column_of(run.realised, 0),
+                                              prepared.base.dt, grid.window);
+  }
+  return point;
+}
+
 }  // namespace
 
 JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem::path& base_dir,
@@ -235,28 +271,10 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   const std::function<void()> one_done = [&] {
     if (options.progress) options.progress(++done, total);
   };
+  const GridInputs grid{config, prepared, u_ref, critical_at, window};
   for (const double round_trip : config.network_round_trips()) {
     for (const double actuator : config.actuator_lags()) {
-      config::Case joint;
-      joint.set_name("joint");
-      joint.add_delay()->mutable_shift()->set_delay(round_trip);
-      *joint.add_delay() = joint_lag_actuator_stage(config.actuator_model(), actuator);
-      const auto run = core::simulate(core::setup_for_case(prepared, joint), prepared.motion);
-      JointLagPoint point;
-      point.network_round_trip = round_trip;
-      point.actuator_lag = actuator;
-      if (const auto it = critical_at.find(actuator); it != critical_at.end() && it->second)
-        point.past_boundary = round_trip >= *it->second;
-      // The growth is fitted at the governing mode's period, as `rths run` fits it.
-      const auto check =
-          point.past_boundary ? check_case_critical_delay(prepared, joint, 0.0) : std::nullopt;
-      fill_joint_lag_errors(point, u_ref, floor_history(run, 0), run.diverged, prepared.base.dt,
-                            check ? check->governing_period : 0.0);
-      if (!point.diverged) {
-        point.measured_total_lag = core::j1_delay(
-            column_of(run.command, 0), column_of(run.realised, 0), prepared.base.dt, window);
-      }
-      result.grid.push_back(point);
+      result.grid.push_back(run_grid_point(grid, round_trip, actuator));
       one_done();
     }
   }

@@ -167,11 +167,19 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
   return panels;
 }
 
-}  // namespace
+// The y axis of `spec` padded around the series `setting_axes` (indices), when any has a value.
+void fit_y_axis(util::PlotSpec& spec, const std::vector<std::size_t>& setting_axes) {
+  if (const auto range = util::padded_y_range(spec.series, setting_axes)) {
+    std::tie(spec.y_min, spec.y_max) = *range;
+  }
+}
 
-void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
-  std::filesystem::create_directories(directory);
-  const CaseOutcome& reference = outcome.reference();
+// displacement.png: every case's response (mm) over the record, its difference from the
+// reference, and the strongest 5 s of the reference; the axes follow the cases that stayed
+// bounded, so a diverged case does not flatten the others.
+std::vector<util::PlotSpec> displacement_panels(const StudyOutcome& outcome,
+                                                const std::vector<const CaseOutcome*>& drawn,
+                                                const CaseOutcome& reference) {
   const std::string response = outcome.response.describe();
   util::PlotSpec displacement{outcome.study_name + ": " + response + " displacement, every case",
                               "time (s)",
@@ -182,9 +190,6 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
                             "case - reference (mm)",
                             {}};
   std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
-  std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
-  if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
-  for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
   for (std::size_t i = 0; i < drawn.size(); ++i) {
     const CaseOutcome& c = *drawn[i];
     const std::string label =
@@ -208,15 +213,8 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
       difference.series.push_back(std::move(d));
     }
   }
-  // A diverged case must not flatten the others: the axes follow the cases that stayed bounded.
-  if (const auto r = util::padded_y_range(displacement.series, bounded)) {
-    displacement.y_min = r->first;
-    displacement.y_max = r->second;
-  }
-  if (const auto r = util::padded_y_range(difference.series, bounded_difference)) {
-    difference.y_min = r->first;
-    difference.y_max = r->second;
-  }
+  fit_y_axis(displacement, bounded);
+  fit_y_axis(difference, bounded_difference);
   util::PlotSpec zoom = displacement;
   const double start = strongest_window_start(reference.response, reference.simulation.dt, 5.0);
   zoom.title = "zoom: the strongest 5 s of the reference";
@@ -226,6 +224,18 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   if (!difference.series.empty()) panels.push_back(difference);
   panels.push_back(zoom);
   for (util::PlotSpec& p : panels) p.height = 380;
+  return panels;
+}
+
+}  // namespace
+
+void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
+  std::filesystem::create_directories(directory);
+  const CaseOutcome& reference = outcome.reference();
+  std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
+  if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
+  for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
+  const std::vector<util::PlotSpec> panels = displacement_panels(outcome, drawn, reference);
   // A stale tracking figure must not stay beside a study that has none.
   std::filesystem::remove(directory / "tracking.png");
   std::filesystem::remove(directory / "tracking.svg");

@@ -34,7 +34,8 @@ namespace rths::cli {
 namespace {
 
 struct LaunchArgs {
-  std::string config, bin_dir, security;
+  std::string config;
+  NodeProgramOptions programs;
   ResultsOptions results;
   std::vector<std::string> cases;
   int domain = -1;
@@ -127,11 +128,11 @@ runtime::LaunchOptions case_options(const LaunchArgs& args, const std::string& n
   options.config = args.config;
   options.case_name = name;
   options.domain = args.domain;
-  options.programs_dir = args.bin_dir;
+  options.programs_dir = args.programs.bin_dir;
   options.record = out / (name + ".rthsrec");
   options.log_dir = out / "logs" / name;
   options.timeout = args.timeout;
-  options.security_dir = args.security;
+  options.security_dir = args.programs.security;
   options.platform_file = platform_file;
   options.accept_platform = args.accept_platform;
   options.cpu_placement = args.cpu_placement == "one-cpu"  ? runtime::CpuPlacement::kOneCpu
@@ -223,17 +224,13 @@ void add_launch_command(CLI::App& app) {
                       ", the columns of `rths run` plus lag per link");
   cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)")
       ->check(in_range(core::Quantity::kDdsDomain));
-  cmd->add_option("--bin-dir", args->bin_dir,
-                  "where rths-coordinator and the node programs are (default: beside rths)");
+  add_node_program_options(cmd, args->programs);
   cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is stopped")
       ->transform(seconds_in(core::Quantity::kTimeout));
   cmd->add_option("--cpu-placement", args->cpu_placement,
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")
       ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
-  cmd->add_option("--security", args->security,
-                  "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
-                  "each process uses its node_<id> folder");
   cmd->add_option("--view", args->view,
                   "serve the live view of each case at HOST:PORT (e.g. 127.0.0.1:8080); "
                   "`rths view RECORD` shows a finished one");

@@ -21,7 +21,8 @@ namespace rths::cli {
 namespace {
 
 struct SitesOptions {
-  std::string config, bin_dir, check_record, security;
+  std::string config, check_record;
+  NodeProgramOptions programs;
   ResultsOptions results;
   int domain = -1;  // -1: the sites config's / study's domain
   std::int64_t expect_steps = 1;
@@ -54,7 +55,7 @@ deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPl
                            ? std::filesystem::path(o.results.out)
                            : std::filesystem::path("out") /
                                  ("sites_" + std::filesystem::path(o.config).stem().string());
-  if (!o.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.bin_dir);
+  if (!o.programs.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.programs.bin_dir);
   ProgressReporter progress("sites", "runs", !o.results.json);
   deploy::SitesRunResult result;
   {
@@ -103,9 +104,9 @@ void run(const SitesOptions& o) {
   if (run_maintenance(o)) return;
   if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
   auto plan = deploy::load_sites(o.config);
-  if (!o.security.empty())
+  if (!o.programs.security.empty())
     plan.study.mutable_deployment()->set_security_dir(
-        std::filesystem::absolute(o.security).string());
+        std::filesystem::absolute(o.programs.security).string());
   if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
   // Paths in plan.study are absolute. Checked before anything starts (and by --check): the
   // case's lag plus the network's on the actuator's path against the critical delay.
@@ -136,11 +137,7 @@ void add_sites_command(CLI::App& app) {
                       "output folder: record, results, plots, summary, logs, DDS configs (default "
                       "out/sites_<config name>)",
                       ", the columns of `rths run` plus lag per link");
-  cmd->add_option("--bin-dir", options->bin_dir,
-                  "folder with rths-coordinator, rths-substructure-node, rths-actuator-emulator");
-  cmd->add_option("--security", options->security,
-                  "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
-                  "each process uses its node_<id> folder");
+  add_node_program_options(cmd, options->programs);
   cmd->add_option(
          "--domain", options->domain,
          "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")

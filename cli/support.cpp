@@ -373,4 +373,12 @@ void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::stri
   cmd->add_flag("--json", options.json, "print the summary as JSON");
 }
 
+void add_node_program_options(CLI::App* cmd, NodeProgramOptions& options) {
+  cmd->add_option("--bin-dir", options.bin_dir,
+                  "folder of rths-coordinator and the node programs (default: beside rths)");
+  cmd->add_option("--security", options.security,
+                  "DDS Security: the `rths pki init` folder (default deployment.security_dir); "
+                  "each process uses its node_<id> folder");
+}
+
 }  // namespace rths::cli

@@ -59,6 +59,14 @@ struct ResultsOptions {
 void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::string& out_help,
                          const std::string& table_note);
 
+// What starts a deployment's processes, for the commands that start them (launch, sites):
+// --bin-dir (the folder of rths-coordinator and the node programs) and --security (the `rths pki
+// init` folder; each process uses its node_<id> folder).
+struct NodeProgramOptions {
+  std::string bin_dir, security;
+};
+void add_node_program_options(CLI::App* cmd, NodeProgramOptions& options);
+
 // A CLI11 transform for a time flag: "14ms", "14 ms", "0.014s", "14000us" or a bare number (s)
 // become seconds; anything else is refused with a message naming the unit (s) and the forms.
 CLI::Validator seconds_value();

@@ -1,6 +1,7 @@
 #include "core/compensation.h"
 
 #include "core/number_text.h"
+#include "core/precondition.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,14 +15,6 @@
 namespace rths::core {
 namespace {
 
-[[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
-
-void require(bool ok, const std::string& message) {
-  if (!ok) fail(message);
-}
-
-bool finite(double x) { return std::isfinite(x); }
-
 // Second-order backward differences on x[0] (newest), x[1], x[2], x[3].
 double backward_velocity(const double* x, double dt) {
   return (3.0 * x[0] - 4.0 * x[1] + x[2]) / (2.0 * dt);
@@ -31,7 +24,7 @@ double backward_acceleration(const double* x, double dt) {
 }
 
 void require_step(double dt, const std::string& who) {
-  require(dt > 0.0 && finite(dt), who + ": dt must be > 0 s, got " + format_number(dt));
+  require(dt > 0.0 && std::isfinite(dt), who + ": dt must be > 0 s, got " + format_number(dt));
 }
 
 // The coefficients' bounds and starting values, which do not depend on dt: the one statement of
@@ -52,8 +45,9 @@ void require_identity_start(const AtsParameters& p, const std::string& label) {
     require(c.initial == c.identity, label + ": " + c.name + " must start at " +
                                          format_number(c.identity) + " (the nominal design), got " +
                                          format_number(c.initial));
-    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max &&
-                c.bounds.min <= c.identity && c.identity <= c.bounds.max,
+    require(std::isfinite(c.bounds.min) && std::isfinite(c.bounds.max) &&
+                c.bounds.min < c.bounds.max && c.bounds.min <= c.identity &&
+                c.identity <= c.bounds.max,
             label + ": " + c.name +
                 "_bounds must have min < max and "
                 "contain " +
@@ -70,9 +64,10 @@ void check_ats_coefficients(const AtsParameters& p, const std::string& label) {
   } coefficients[] = {
       {"a0", p.a0, p.a0_bounds}, {"a1", p.a1, p.a1_bounds}, {"a2", p.a2, p.a2_bounds}};
   for (const auto& c : coefficients) {
-    require(finite(c.bounds.min) && finite(c.bounds.max) && c.bounds.min < c.bounds.max,
-            label + ": " + c.name + "_bounds must have min < max, got [" +
-                format_number(c.bounds.min) + ", " + format_number(c.bounds.max) + "]");
+    require(
+        std::isfinite(c.bounds.min) && std::isfinite(c.bounds.max) && c.bounds.min < c.bounds.max,
+        label + ": " + c.name + "_bounds must have min < max, got [" + format_number(c.bounds.min) +
+            ", " + format_number(c.bounds.max) + "]");
     require(c.initial >= c.bounds.min && c.initial <= c.bounds.max,
             label + ": initial_" + c.name + " = " + format_number(c.initial) + " is outside " +
                 c.name + "_bounds [" + format_number(c.bounds.min) + ", " +
@@ -164,13 +159,13 @@ AdaptiveTimeSeries::AdaptiveTimeSeries(const AtsParameters& parameters, double d
                                        const std::string& label)
     : p_(parameters), dt_(dt), filter_decay_(0.0) {
   require_step(dt, label);
-  require(finite(p_.window) && p_.window >= 3.0 * dt, label + ": window must be >= 3 dt (" +
-                                                          format_number(3.0 * dt) + " s), got " +
-                                                          format_number(p_.window));
+  require(std::isfinite(p_.window) && p_.window >= 3.0 * dt,
+          label + ": window must be >= 3 dt (" + format_number(3.0 * dt) + " s), got " +
+              format_number(p_.window));
   require(p_.window / dt <= 1e6,
           label + ": window of " + format_number(p_.window) + " s is more than 1e6 steps");
   check_ats_coefficients(p_, label);
-  require(finite(p_.derivative_cutoff) && p_.derivative_cutoff >= 0.0 &&
+  require(std::isfinite(p_.derivative_cutoff) && p_.derivative_cutoff >= 0.0 &&
               p_.derivative_cutoff < 0.5 / dt,
           label + ": derivative_cutoff must be in [0, Nyquist = " + format_number(0.5 / dt) +
               " Hz), got " + format_number(p_.derivative_cutoff));
@@ -258,7 +253,7 @@ void AdaptiveTimeSeries::fit() {
   }
   for (double& s : scale) {
     s = std::sqrt(s / static_cast<double>(n));
-    if (!(s > 0.0) || !finite(s)) return;  // no excitation: keep the coefficients
+    if (!(s > 0.0) || !std::isfinite(s)) return;  // no excitation: keep the coefficients
   }
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
@@ -275,7 +270,7 @@ void AdaptiveTimeSeries::fit() {
   const CoefficientBounds bounds[3] = {p_.a0_bounds, p_.a1_bounds, p_.a2_bounds};
   for (int i = 0; i < 3; ++i) {
     const double value = solution[i] / scale[i];
-    if (!finite(value)) return;
+    if (!std::isfinite(value)) return;
     a_[i] = std::clamp(value, bounds[i].min, bounds[i].max);
   }
   ++updates_;
@@ -300,16 +295,16 @@ InverseDesign design_inverse(const PlantModel& plant, int lead_order, double rol
   require_step(dt, who);
   require(lead_order >= 1 && lead_order <= 3,
           who + ": lead_order must be 1, 2 or 3, got " + std::to_string(lead_order));
-  require(finite(rolloff_hz) && rolloff_hz > 0.0 && rolloff_hz < 0.25 / dt,
+  require(std::isfinite(rolloff_hz) && rolloff_hz > 0.0 && rolloff_hz < 0.25 / dt,
           who + ": rolloff_frequency must be in (0, " + format_number(0.25 / dt) +
               ") Hz (a quarter of the sampling rate), got " + format_number(rolloff_hz));
-  require(finite(plant.delay) && plant.delay >= 0.0,
+  require(std::isfinite(plant.delay) && plant.delay >= 0.0,
           who + ": plant delay must be >= 0 s, got " + format_number(plant.delay));
-  require(finite(plant.gain) && plant.gain != 0.0,
+  require(std::isfinite(plant.gain) && plant.gain != 0.0,
           who + ": plant gain must be finite and non-zero");
   const std::vector<double> num = trimmed(plant.numerator), den = trimmed(plant.denominator);
-  for (double c : num) require(finite(c), who + ": plant numerator is not finite");
-  for (double c : den) require(finite(c), who + ": plant denominator is not finite");
+  for (double c : num) require(std::isfinite(c), who + ": plant numerator is not finite");
+  for (double c : den) require(std::isfinite(c), who + ": plant denominator is not finite");
   require(num.front() != 0.0, who + ": plant numerator is zero");
   require(den.front() != 0.0, who + ": plant denominator is zero");
   require(num.size() <= den.size(), who + ": plant has more zeros than poles");

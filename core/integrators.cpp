@@ -89,6 +89,17 @@ class ExplicitBase : public Integrator {
   }
 
  protected:
+  // a_next_ = inverse (p_{k+1} - r(u_next_, v_next_) - C damping_velocity), the trial committed.
+  // `damping_velocity` is a stored vector (an expression would allocate a temporary).
+  void solve_acceleration(const Vec& load_next, RestoringEvaluator& restoring,
+                          const Vec& damping_velocity, const Mat& inverse) {
+    const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
+    restoring.commit();
+    rhs_ = load_next - r;
+    rhs_.noalias() -= c_ * damping_velocity;
+    a_next_.noalias() = inverse * rhs_;
+  }
+
   Vec u_next_, v_next_, a_next_, rhs_;
   Mat mass_inverse_;
 };
@@ -131,12 +142,8 @@ class CentralDifference final : public ExplicitBase {
     v_half_ += dt_ * a_;  // v_{k+1/2}
     u_next_ = u_ + dt_ * v_half_;
     v_next_ = v_half_ + (0.5 * dt_) * a_;
-    const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
-    restoring.commit();
     // Equilibrium at k+1 with v_{k+1} = v_{k+1/2} + dt/2 a_{k+1}.
-    rhs_ = load_next - r;
-    rhs_.noalias() -= c_ * v_half_;
-    a_next_.noalias() = effective_inverse_ * rhs_;
+    solve_acceleration(load_next, restoring, v_half_, effective_inverse_);
     u_ = u_next_;
     a_ = a_next_;
     v_ = v_half_ + (0.5 * dt_) * a_;
@@ -158,11 +165,7 @@ class ChenRicles final : public ExplicitBase {
     alpha_a_.noalias() = alpha_ * a_;
     v_next_ = v_ + dt_ * alpha_a_;
     u_next_ = u_ + dt_ * v_ + (dt_ * dt_) * alpha_a_;
-    const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
-    restoring.commit();
-    rhs_ = load_next - r;
-    rhs_.noalias() -= c_ * v_next_;
-    a_next_.noalias() = mass_inverse_ * rhs_;
+    solve_acceleration(load_next, restoring, v_next_, mass_inverse_);
     u_ = u_next_;
     v_ = v_next_;
     a_ = a_next_;

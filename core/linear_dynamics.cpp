@@ -8,10 +8,7 @@ namespace rths::core {
 
 LinearBlock series(const LinearBlock& first, const LinearBlock& second) {
   const int n1 = first.states(), n2 = second.states();
-  LinearBlock out;
-  out.a = Mat::Zero(n1 + n2, n1 + n2);
-  out.b = Vec::Zero(n1 + n2);
-  out.c = Eigen::RowVectorXd::Zero(n1 + n2);
+  LinearBlock out = zero_block(n1 + n2, second.d * first.d);
   if (n1 > 0) {
     out.a.topLeftCorner(n1, n1) = first.a;
     out.b.head(n1) = first.b;
@@ -23,18 +20,19 @@ LinearBlock series(const LinearBlock& first, const LinearBlock& second) {
     out.b.tail(n2) = second.b * first.d;
     out.c.tail(n2) = second.c;
   }
-  out.d = second.d * first.d;
   return out;
 }
 
-LinearBlock gain_block(double gain) {
-  LinearBlock g;
-  g.a = Mat::Zero(0, 0);
-  g.b = Vec::Zero(0);
-  g.c = Eigen::RowVectorXd::Zero(0);
-  g.d = gain;
-  return g;
+LinearBlock zero_block(int states, double d) {
+  LinearBlock block;
+  block.a = Mat::Zero(states, states);
+  block.b = Vec::Zero(states);
+  block.c = Eigen::RowVectorXd::Zero(states);
+  block.d = d;
+  return block;
 }
+
+LinearBlock gain_block(double gain) { return zero_block(0, gain); }
 
 LinearBlock fir_block(double d, const std::vector<double>& taps) {
   const int n = static_cast<int>(taps.size());

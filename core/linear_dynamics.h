@@ -48,6 +48,9 @@ struct LinearBlock {
   int states() const { return static_cast<int>(a.rows()); }
 };
 LinearBlock series(const LinearBlock& first, const LinearBlock& second);
+// A block of `states` states whose A, B and C are zero, with feedthrough `d`: the start of a
+// block whose parts are then placed.
+LinearBlock zero_block(int states, double d);
 LinearBlock gain_block(double gain);
 LinearBlock fir_block(double d, const std::vector<double>& taps);
 // @pre delay >= 0, dt > 0 (throws std::invalid_argument).

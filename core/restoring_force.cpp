@@ -1,5 +1,7 @@
 #include "core/restoring_force.h"
 
+#include "core/precondition.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,10 +15,6 @@ std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0
   char buffer[160];
   std::snprintf(buffer, sizeof buffer, pattern, a, b, c, d, e);
   return buffer;
-}
-
-void require(bool condition, const std::string& message) {
-  if (!condition) throw std::invalid_argument(message);
 }
 
 bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }

@@ -220,10 +220,7 @@ LinearBlock TrackingLoop::unscaled_state_space() const {
   // x+ = Ad x + Bd (Cc s + Dc e), state [s, x].
   const LinearBlock c = controller_.state_space(), p = plant_.state_space();
   const int nc = c.states(), np = p.states();
-  LinearBlock loop;
-  loop.a = Mat::Zero(nc + np, nc + np);
-  loop.b = Vec::Zero(nc + np);
-  loop.c = Eigen::RowVectorXd::Zero(nc + np);
+  LinearBlock loop = zero_block(nc + np, 0.0);
   if (nc > 0) {
     loop.a.topLeftCorner(nc, nc) = c.a;
     loop.a.topRightCorner(nc, np) = -c.b * p.c;
@@ -233,7 +230,6 @@ LinearBlock TrackingLoop::unscaled_state_space() const {
   loop.a.bottomRightCorner(np, np) = p.a - c.d * p.b * p.c;
   loop.b.tail(np) = c.d * p.b;
   loop.c.tail(np) = p.c;
-  loop.d = 0.0;
   std::vector<double> register_taps(force_queue_.size() - 1, 0.0);
   if (!register_taps.empty()) register_taps.back() = 1.0;
   const LinearBlock force_delay = fir_block(register_taps.empty() ? 1.0 : 0.0, register_taps);

@@ -4,17 +4,10 @@
 #include <stdexcept>
 
 #include "core/number_text.h"
+#include "core/precondition.h"
 
 namespace rths::core {
 namespace {
-
-[[noreturn]] void fail(const std::string& message) { throw std::invalid_argument(message); }
-
-void require(bool ok, const std::string& message) {
-  if (!ok) fail(message);
-}
-
-bool finite(double x) { return std::isfinite(x); }
 
 AtsParameters correction_parameters(const config::Compensation::AdaptiveCorrection& c) {
   AtsParameters p = adaptive_correction_defaults();
@@ -93,17 +86,17 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
               where + ".polynomial.order must be 1, 2 or 3, got " + std::to_string(p.order()));
       require(p.lead() > 0.0 && p.lead() <= 1.0,
               where + ".polynomial.lead must be in (0, 1] s, got " + format_number(p.lead()));
-      require(p.spacing() >= 0.0 && finite(p.spacing()),
+      require(p.spacing() >= 0.0 && std::isfinite(p.spacing()),
               where + ".polynomial.spacing must be >= 0 s, got " + format_number(p.spacing()));
       break;
     }
     case K::kAdaptiveTimeSeries: {
       const auto& a = c.adaptive_time_series();
       require(
-          a.window() > 0.0 && finite(a.window()),
+          a.window() > 0.0 && std::isfinite(a.window()),
           where + ".adaptive_time_series.window must be > 0 s, got " + format_number(a.window()));
       // Bounds and initial values do not depend on dt: checked here as the block checks them.
-      require(a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
+      require(a.derivative_cutoff() >= 0.0 && std::isfinite(a.derivative_cutoff()),
               where + ".adaptive_time_series.derivative_cutoff must be >= 0 Hz");
       check_ats_coefficients(ats_parameters(a), where + ".adaptive_time_series");
       break;
@@ -113,17 +106,17 @@ void validate_compensation(const config::Compensation& c, const std::string& whe
       require(m.lead_order() >= 1 && m.lead_order() <= 3,
               where + ".model_based.lead_order must be 1, 2 or 3, got " +
                   std::to_string(m.lead_order()));
-      require(m.rolloff_frequency() > 0.0 && finite(m.rolloff_frequency()),
+      require(m.rolloff_frequency() > 0.0 && std::isfinite(m.rolloff_frequency()),
               where + ".model_based.rolloff_frequency must be > 0 Hz, got " +
                   format_number(m.rolloff_frequency()));
       plant_from_stages(m.plant(), where + ".model_based.plant");
       if (m.has_adaptive_correction()) {
         const auto& a = m.adaptive_correction();
         const std::string at = where + ".model_based.adaptive_correction";
-        require(a.window() > 0.0 && finite(a.window()),
+        require(a.window() > 0.0 && std::isfinite(a.window()),
                 at + ".window must be > 0 s, got " + format_number(a.window()));
         require(
-            a.derivative_cutoff() >= 0.0 && finite(a.derivative_cutoff()),
+            a.derivative_cutoff() >= 0.0 && std::isfinite(a.derivative_cutoff()),
             at + ".derivative_cutoff must be >= 0 Hz, got " + format_number(a.derivative_cutoff()));
         const AtsParameters correction = correction_parameters(a);
         require_identity_start(correction, at);

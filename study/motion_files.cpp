@@ -153,6 +153,78 @@ GroundMotion read_at2(const std::filesystem::path& path) {
   return motion;
 }
 
+namespace {
+
+// The number of columns a ground-motion text file keeps: 1 (acceleration) or 2 (time,
+// acceleration), the same on every row.
+struct ColumnShape {
+  std::size_t columns = 0;
+  int first_data_line = 0;
+};
+
+void check_row_shape(ColumnShape& shape, const std::filesystem::path& path, const TextRow& row) {
+  if (shape.columns == 0) {
+    shape.columns = row.values.size();
+    shape.first_data_line = row.line;
+    if (shape.columns != 1 && shape.columns != 2) {
+      throw std::invalid_argument(text_position(path, row.line) +
+                                  "expected 1 column (acceleration) or "
+                                  "2 (time, acceleration), found " +
+                                  std::to_string(shape.columns));
+    }
+  } else if (row.values.size() != shape.columns) {
+    throw std::invalid_argument(text_position(path, row.line) + "found " +
+                                std::to_string(row.values.size()) + " columns, line " +
+                                std::to_string(shape.first_data_line) + " had " +
+                                std::to_string(shape.columns));
+  }
+}
+
+// A time column must increase by one step throughout; 1e-3 relative, since text files round
+// their times, but a missing or doubled sample is caught.
+void check_next_time(const std::vector<double>& times, double time,
+                     const std::filesystem::path& path, int line_number) {
+  if (times.size() >= 2) {
+    const double first_step = times[1] - times[0];
+    const double step = time - times.back();
+    if (std::abs(step - first_step) > 1e-3 * first_step) {
+      throw std::invalid_argument(text_position(path, line_number) + "time step " +
+                                  std::to_string(step) + " s differs from the first step " +
+                                  std::to_string(first_step) + " s (non-uniform time)");
+    }
+  } else if (times.size() == 1 && !(time > times[0])) {
+    throw std::invalid_argument(text_position(path, line_number) + "time does not increase");
+  }
+}
+
+// The sample step (s): from the time column when there is one (and `given_dt`, if > 0, must
+// agree with it), else `given_dt`, which a one-column file needs.
+double column_file_step(const std::vector<double>& times, std::size_t columns, double given_dt,
+                        const std::filesystem::path& path) {
+  if (columns != 2) {
+    if (!(given_dt > 0.0) || !std::isfinite(given_dt)) {
+      throw std::invalid_argument(path.string() +
+                                  ": a one-column file has no time column: give its sample step, "
+                                  "motion.column_dt (--motion-dt), in s");
+    }
+    return given_dt;
+  }
+  if (times.size() < 2) {
+    throw std::invalid_argument(path.string() +
+                                ": two-column file needs at least two samples to "
+                                "define its time step");
+  }
+  const double dt = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
+  if (given_dt > 0.0 && std::abs(given_dt - dt) > 1e-3 * dt) {
+    throw std::invalid_argument(path.string() + ": given dt = " + std::to_string(given_dt) +
+                                " s disagrees with the file's time column (" + std::to_string(dt) +
+                                " s)");
+  }
+  return dt;
+}
+
+}  // namespace
+
 GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si) {
   if (!(to_si > 0.0) || !std::isfinite(to_si)) {
     throw std::invalid_argument(path.string() + ": unit factor to m/s^2 must be > 0, got " +
@@ -160,67 +232,19 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
   }
   const TextColumns text = read_text_columns(path, "ground-motion file", /*title_allowed=*/true);
   std::vector<double> times, values;
-  std::size_t columns = 0;
-  int first_data_line = 0;
+  ColumnShape shape;
   for (const TextRow& row : text.rows) {
-    const int line_number = row.line;
-    const std::vector<double>& fields = row.values;
-    if (columns == 0) {
-      columns = fields.size();
-      first_data_line = line_number;
-      if (columns != 1 && columns != 2) {
-        throw std::invalid_argument(text_position(path, line_number) +
-                                    "expected 1 column (acceleration) or "
-                                    "2 (time, acceleration), found " +
-                                    std::to_string(columns));
-      }
-    } else if (fields.size() != columns) {
-      throw std::invalid_argument(
-          text_position(path, line_number) + "found " + std::to_string(fields.size()) +
-          " columns, line " + std::to_string(first_data_line) + " had " + std::to_string(columns));
+    check_row_shape(shape, path, row);
+    if (shape.columns == 2) {
+      check_next_time(times, row.values[0], path, row.line);
+      times.push_back(row.values[0]);
     }
-    if (columns == 2) {
-      if (times.size() >= 2) {
-        const double first_step = times[1] - times[0];
-        const double step = fields[0] - times.back();
-        // 1e-3 relative: text files round their times, but a missing or doubled sample is caught.
-        if (std::abs(step - first_step) > 1e-3 * first_step) {
-          throw std::invalid_argument(text_position(path, line_number) + "time step " +
-                                      std::to_string(step) + " s differs from the first step " +
-                                      std::to_string(first_step) + " s (non-uniform time)");
-        }
-      } else if (times.size() == 1 && !(fields[0] > times[0])) {
-        throw std::invalid_argument(text_position(path, line_number) + "time does not increase");
-      }
-      times.push_back(fields[0]);
-      values.push_back(fields[1] * to_si);
-    } else {
-      values.push_back(fields[0] * to_si);
-    }
+    values.push_back(row.values.back() * to_si);
   }
   if (values.empty()) throw std::invalid_argument(path.string() + ": no acceleration values");
   GroundMotion motion;
   motion.name = path.stem().string();
-  if (columns == 2) {
-    if (times.size() < 2) {
-      throw std::invalid_argument(path.string() +
-                                  ": two-column file needs at least two samples to "
-                                  "define its time step");
-    }
-    motion.dt = (times.back() - times.front()) / static_cast<double>(times.size() - 1);
-    if (dt > 0.0 && std::abs(dt - motion.dt) > 1e-3 * motion.dt) {
-      throw std::invalid_argument(path.string() + ": given dt = " + std::to_string(dt) +
-                                  " s disagrees with the file's time column (" +
-                                  std::to_string(motion.dt) + " s)");
-    }
-  } else {
-    if (!(dt > 0.0) || !std::isfinite(dt)) {
-      throw std::invalid_argument(path.string() +
-                                  ": a one-column file has no time column: give its sample step, "
-                                  "motion.column_dt (--motion-dt), in s");
-    }
-    motion.dt = dt;
-  }
+  motion.dt = column_file_step(times, shape.columns, dt, path);
   motion.acceleration = std::move(values);
   return motion;
 }

@@ -131,9 +131,7 @@ std::string format_value(double v) {
 std::string predicted_verdict(const core::CriticalDelayCheck& check) {
   std::string text = check.describe();
   if (const auto critical = check.critical()) {
-    text += "; the test could take up to ";
-    text += format_value(*critical * 1e3);
-    text += " ms";
+    text += "; the test could take up to " + format_value(*critical * 1e3) + " ms";
     if (check.past()) text += ": expect it to diverge without compensation (--design-compensator)";
   }
   return text;
@@ -164,7 +162,6 @@ std::vector<double> residual(const ChannelSignals& s, const std::vector<double>&
   return r;
 }
 
-// A window of about `seconds` inside the held-out samples with the largest input motion.
 // `s` with x and y multiplied by their scales (m -> mm: 1e3), for plots in the units a lab reads.
 util::Series scaled(util::Series s, double x_scale, double y_scale) {
   for (double& x : s.x) x *= x_scale;
@@ -185,6 +182,7 @@ std::size_t zoom_start(const ChannelSignals& s, std::size_t lo, std::size_t hi, 
   return hi - lo > length ? hi - length : lo;
 }
 
+// A window of about `seconds` inside the held-out samples with the largest input motion.
 std::pair<std::size_t, std::size_t> heldout_window(const Identification& id,
                                                    const ChannelSignals& s, double seconds) {
   const auto width = static_cast<std::size_t>(std::max(10.0, seconds / s.dt));
@@ -470,14 +468,18 @@ void write_residual_plots(const ChannelIdentification& c, const ChannelSignals& 
   util::write_png_plot(spectrum_plot, written.back());
 }
 
+// A figure of the held-out window [lo, hi) (samples): its title names the window in s.
+util::PlotSpec held_out_plot(const std::string& what, const ChannelSignals& s, std::size_t lo,
+                             std::size_t hi, const std::string& xlabel, const std::string& ylabel) {
+  const std::string window = format_value(s.time[lo]) + "-" + format_value(s.time[hi - 1]) + " s";
+  return {what + " (held-out window " + window + ")", xlabel, ylabel, {}};
+}
+
 void write_force_loops(const ChannelIdentification& c, const ChannelSignals& s, std::size_t lo,
                        std::size_t hi, const std::filesystem::path& directory,
                        std::vector<std::filesystem::path>& written) {
-  util::PlotSpec loops;
-  loops.title = "force-displacement loops (held-out window " + format_value(s.time[lo]) + "-" +
-                format_value(s.time[hi - 1]) + " s)";
-  loops.xlabel = "measured displacement (mm)";
-  loops.ylabel = "force (N)";
+  util::PlotSpec loops = held_out_plot("force-displacement loops", s, lo, hi,
+                                       "measured displacement (mm)", "force (N)");
   loops.series = {
       scaled(series("measured", s.input, s.target, lo, hi), 1e3, 1.0),
       scaled(series("declared model", s.input, c.declared_fit.prediction, lo, hi), 1e3, 1.0),
@@ -489,11 +491,8 @@ void write_force_loops(const ChannelIdentification& c, const ChannelSignals& s, 
 void write_tracking_plots(const ChannelIdentification& c, const ChannelSignals& s, std::size_t lo,
                           std::size_t hi, const std::filesystem::path& directory,
                           std::vector<std::filesystem::path>& written) {
-  util::PlotSpec tracking;
-  tracking.title = "actuator tracking (held-out window " + format_value(s.time[lo]) + "-" +
-                   format_value(s.time[hi - 1]) + " s)";
-  tracking.xlabel = "time (s)";
-  tracking.ylabel = "displacement (mm)";
+  util::PlotSpec tracking =
+      held_out_plot("actuator tracking", s, lo, hi, "time (s)", "displacement (mm)");
   const auto tracking_series = [&](std::size_t from) {
     return std::vector<util::Series>{
         scaled(series("command", s.time, s.input, from, hi), 1.0, 1e3),
