@@ -1,5 +1,6 @@
 #include "study/study.h"
 
+#include "core/rig_effects.h"
 #include "study/compensation_config.h"
 #include "study/delay_trace_file.h"
 #include "study/known_enums.h"
@@ -80,6 +81,25 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
     case K::kBenchmark: break;
     case K::kTrackingLoop:
       break;  // checked where it is built (core::TrackingLoop), naming the field
+    case K::kBacklash:
+      require(stage.backlash().width() >= 0.0 && stage.backlash().width() <= 1.0, source,
+              where + ".backlash.width must be in [0, 1] m, got " +
+                  format_number(stage.backlash().width()));
+      break;
+    case K::kVelocityLimit:
+      require(stage.velocity_limit().max_velocity() > 0.0 &&
+                  stage.velocity_limit().max_velocity() <= 100.0,
+              source,
+              where + ".velocity_limit.max_velocity must be in (0, 100] m/s, got " +
+                  format_number(stage.velocity_limit().max_velocity()));
+      break;
+    case K::kSensorDrift: {
+      const auto& d = stage.sensor_drift();
+      require(std::isfinite(d.displacement_offset()) && std::isfinite(d.displacement_drift()) &&
+                  std::isfinite(d.force_offset()) && std::isfinite(d.force_drift()),
+              source, where + ".sensor_drift: every offset and drift must be finite");
+      break;
+    }
     case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   }
 }
@@ -324,6 +344,16 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
       block = std::make_unique<TrackingLoop>(
           make_tracking_loop(stage.tracking_loop(), dt, "tracking_loop"));
       break;
+    case K::kBacklash: block = std::make_unique<Backlash>(stage.backlash().width()); break;
+    case K::kVelocityLimit:
+      block = std::make_unique<VelocityLimit>(stage.velocity_limit().max_velocity(), dt);
+      break;
+    case K::kSensorDrift: {
+      const auto& d = stage.sensor_drift();
+      block = std::make_unique<SensorDrift>(SensorErrors{
+          d.displacement_offset(), d.displacement_drift(), d.force_offset(), d.force_drift()});
+      break;
+    }
     case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
   }
   block->set_gain(effective_gain(stage));

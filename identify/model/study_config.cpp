@@ -43,28 +43,19 @@ void note_left_out_specimen_effects(const ChannelModel& specimen,
   }
 }
 
-}  // namespace
+// A fitted offset + drift s (s = (t - t_mid) / duration over the record) as offset + rate t.
+std::pair<double, double> drift_in_time(double offset, double drift, const RigRecord& rig) {
+  const double rate = drift / rig.duration;
+  return {offset - rate * (rig.start + 0.5 * rig.duration), rate};
+}
 
-ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
-                           const std::string& name) {
-  if (actuator.channel != Channel::kMeasured) {
-    throw std::invalid_argument("actuator_case: needs the model of channel 'measured', got '" +
-                                channel_name(actuator.channel) + "'");
-  }
-  ActuatorCase out;
-  out.study_case.set_name(name);
+// The actuator's linear stages after its shift (first order, second order), and what the study
+// cannot hold of the rest in `out.left_out` (the rig's own effects are held `with_rig`).
+void add_linear_stages(const ChannelModel& actuator, const SignalScales& scales, bool with_rig,
+                       ActuatorCase& out) {
   const auto value = [&](std::optional<Effect> e, const char* param) {
     return actuator.param(e, param, scales);
   };
-  double delay = value(Effect::kDelay, "delay").value_or(0.0);
-  if (delay < 0.0) {
-    out.left_out.push_back("negative delay (lead) of " + std::to_string(delay) + " s, used as 0");
-    delay = 0.0;
-  }
-  const double gain = value(std::nullopt, "gain").value_or(1.0);
-  auto* shift = out.study_case.add_delay();
-  shift->mutable_shift()->set_delay(delay);
-  if (gain != 1.0) shift->set_amplitude_gain(gain);
   for (Effect e : actuator.effects) {
     switch (e) {
       case Effect::kFirstOrder: {
@@ -90,12 +81,77 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
       case Effect::kOffsetDrift:
       case Effect::kBacklash:
       case Effect::kVelocitySaturation:
-        out.left_out.push_back(effect_name(e) + ": lab-scale effect, left out");
+        if (!with_rig) out.left_out.push_back(effect_name(e) + ": lab-scale effect, left out");
         break;
       default: break;
     }
   }
+}
+
+// Backlash and velocity limit in the model's order, then the displacement sensor's drift.
+void add_rig_stages(const ChannelModel& actuator, const SignalScales& scales, const RigRecord& rig,
+                    config::Case& study_case) {
+  const auto value = [&](Effect e, const char* param) {
+    return actuator.param(e, param, scales).value_or(0.0);
+  };
+  if (actuator.has(Effect::kBacklash))
+    study_case.add_delay()->mutable_backlash()->set_width(
+        std::abs(value(Effect::kBacklash, "width")));
+  if (actuator.has(Effect::kVelocitySaturation))
+    study_case.add_delay()->mutable_velocity_limit()->set_max_velocity(
+        std::abs(value(Effect::kVelocitySaturation, "max_velocity")));
+  if (actuator.has(Effect::kOffsetDrift)) {
+    const auto [offset, rate] = drift_in_time(value(Effect::kOffsetDrift, "offset"),
+                                              value(Effect::kOffsetDrift, "drift"), rig);
+    auto* sensor = study_case.add_delay()->mutable_sensor_drift();
+    sensor->set_displacement_offset(offset);
+    sensor->set_displacement_drift(rate);
+  }
+}
+
+}  // namespace
+
+ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
+                           const std::string& name, const std::optional<RigRecord>& rig) {
+  if (actuator.channel != Channel::kMeasured) {
+    throw std::invalid_argument("actuator_case: needs the model of channel 'measured', got '" +
+                                channel_name(actuator.channel) + "'");
+  }
+  ActuatorCase out;
+  out.study_case.set_name(name);
+  double delay = actuator.param(Effect::kDelay, "delay", scales).value_or(0.0);
+  if (delay < 0.0) {
+    out.left_out.push_back("negative delay (lead) of " + std::to_string(delay) + " s, used as 0");
+    delay = 0.0;
+  }
+  const double gain = actuator.param(std::nullopt, "gain", scales).value_or(1.0);
+  auto* shift = out.study_case.add_delay();
+  shift->mutable_shift()->set_delay(delay);
+  if (gain != 1.0 && !rig) shift->set_amplitude_gain(gain);
+  add_linear_stages(actuator, scales, rig.has_value(), out);
+  if (!rig) return out;
+  add_rig_stages(actuator, scales, *rig, out.study_case);
+  auto& stages = *out.study_case.mutable_delay();
+  for (int i = stages.size() - 1; i >= 0; --i) {
+    if (stages[i].has_sensor_drift()) continue;
+    if (gain != 1.0) stages[i].set_amplitude_gain(gain);
+    break;
+  }
   return out;
+}
+
+void add_load_cell_drift(const ChannelModel& specimen, const SignalScales& scales,
+                         const RigRecord& rig, config::Case& study_case) {
+  if (!specimen.has(Effect::kOffsetDrift)) return;
+  const auto [offset, rate] =
+      drift_in_time(specimen.param(Effect::kOffsetDrift, "offset", scales).value_or(0.0),
+                    specimen.param(Effect::kOffsetDrift, "drift", scales).value_or(0.0), rig);
+  config::DelayStage* sensor = nullptr;
+  for (auto& stage : *study_case.mutable_delay())
+    if (stage.has_sensor_drift()) sensor = &stage;
+  if (!sensor) sensor = study_case.add_delay();
+  sensor->mutable_sensor_drift()->set_force_offset(offset);
+  sensor->mutable_sensor_drift()->set_force_drift(rate);
 }
 
 SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& scales) {

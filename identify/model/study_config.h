@@ -7,7 +7,7 @@
 //   transfer_function wn^2 / (s^2 + 2 zeta wn s + wn^2) for a second-order lag.
 //   A time-varying delay enters with its mean; offset/drift, backlash and velocity saturation are
 //   lab-scale effects (mm of this rig) that do not scale to another structure: listed in
-//   `left_out`.
+//   `left_out`, unless the case is for the rig itself (`rig` below).
 // Specimen (channel `force`) -> the storey RestoringForce that has the same shape (the study's
 // structure supplies the initial stiffness k0; the identified k0 is reported beside it):
 //   stiffness k alone                  linear {}                                   k0 = k
@@ -44,8 +44,24 @@ struct ActuatorCase {
   std::vector<std::string> left_out;
 };
 // @pre actuator.channel == Channel::kMeasured (throws std::invalid_argument otherwise).
+// The record a rig was measured in, for re-running that rig as it was (identify/run): its
+// first sample's time and its length (s), the time base of a fitted offset drift
+// (offset + drift (t - t_mid) / duration, t_mid its middle).
+struct RigRecord {
+  double start = 0.0, duration = 1.0;
+};
+// With `rig`, the rig's own effects are stages too (core/rig_effects.h): backlash { width },
+// velocity_limit { max_velocity } after the linear stages, the gain on the last of them (the
+// model's order: gain after the non-linearities), and an offset drift of the displacement
+// sensor as sensor_drift { displacement_offset, displacement_drift } at the end.
 ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
-                           const std::string& name = kIdentifiedCaseName);
+                           const std::string& name = kIdentifiedCaseName,
+                           const std::optional<RigRecord>& rig = std::nullopt);
+// The load cell's offset drift of a fitted specimen (channel force) as a sensor_drift stage's
+// force fields (N, N/s of simulated time), merged into the case's sensor_drift stage (appended
+// when it has none). Nothing when the specimen has no offset drift.
+void add_load_cell_drift(const ChannelModel& specimen, const SignalScales& scales,
+                         const RigRecord& rig, config::Case& study_case);
 
 struct SpecimenModel {
   std::optional<config::RestoringForce> restoring_force;

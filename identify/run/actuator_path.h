@@ -16,6 +16,16 @@ struct ActuatorPath {
   double declared_delay = 0.0, fitted_delay = 0.0;  // s; both 0 when no delay was declared
   Identification id;                                // channels measured and force
   std::vector<std::string> undeclared;              // effects named beyond the declared model
+  // The specimen and the load cell behind this actuator (channel force), against the study's
+  // declared storey model: its restoring force's kind as effects (linear: stiffness; bouc_wen:
+  // + bouc_wen; bilinear: + elastoplastic) and its initial stiffness (N/m).
+  std::vector<std::string> declared_specimen;
+  double declared_stiffness = 0.0, fitted_stiffness = 0.0;  // N/m
+  // Effects the force channel needed beyond the declared specimen ("bouc_wen", "offset_drift",
+  // ...) and "stiffness change" (fitted off the declared one by more than kStiffnessTolerance).
+  std::vector<std::string> specimen_undeclared;
 };
+
+inline constexpr double kStiffnessTolerance = 0.05;  // relative
 
 }  // namespace rths::identify

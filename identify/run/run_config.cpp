@@ -4,6 +4,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
 #include "study/text_format.h"
 #include "util/atomic_file.h"
@@ -36,10 +37,20 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
   for (const auto& path : run.actuators) {
     const auto* c = path.id.find(Channel::kMeasured);
     if (!c) continue;
-    ActuatorCase part = actuator_case(c->final_fit.model, signal_scales(path.id.signals.front()));
+    const ChannelSignals& signals = identified_signals(path.id, Channel::kMeasured);
+    const SignalScales scales = signal_scales(signals);
+    ActuatorCase part = actuator_case(c->final_fit.model, scales, kIdentifiedCaseName,
+                                      RigRecord{signals.time.front(), scales.duration});
     for (const auto& l : part.left_out)
       notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
     config::Case study_case = part.study_case;
+    if (const auto* force = path.id.find(Channel::kForce);
+        force && !path.specimen_undeclared.empty()) {
+      const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
+      const SignalScales force_scales = signal_scales(f);
+      add_load_cell_drift(force->final_fit.model, force_scales,
+                          RigRecord{f.time.front(), force_scales.duration}, study_case);
+    }
     if (run_case) *study_case.mutable_compensation() = run_case->compensation();
     out.push_back(study_case);
   }
@@ -52,6 +63,19 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
     }
   }
   return out;
+}
+
+// The first actuator's identified specimen, when its force channel contradicted the declared
+// one and the fit has a storey model (a study holds one model for every storey).
+std::optional<SpecimenModel> contradicted_specimen(const RunIdentification& run) {
+  for (const auto& path : run.actuators) {
+    const auto* force = path.id.find(Channel::kForce);
+    if (!force || path.specimen_undeclared.empty()) continue;
+    SpecimenModel model = specimen_model(
+        force->final_fit.model, signal_scales(identified_signals(path.id, Channel::kForce)));
+    if (model.restoring_force) return model;
+  }
+  return std::nullopt;
 }
 
 const config::Case* find_case(const config::Study& study, const std::string& name) {
@@ -69,6 +93,11 @@ IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem
   config::Study fragment;
   for (const auto& c : actuator_cases(run, find_case(run.study, run.case_name), out.notes)) {
     *fragment.add_cases() = c;
+  }
+  if (const auto specimen = contradicted_specimen(run)) {
+    *fragment.mutable_substructuring()->mutable_model() = *specimen->restoring_force;
+    out.notes.push_back("specimen: " + specimen->description +
+                        " (the identified storey model; the structure keeps its stiffness)");
   }
   out.study = identified_study(run.study, base_dir, fragment);
   for (auto& node : *out.study.mutable_deployment()->mutable_nodes()) {

@@ -1,6 +1,8 @@
 #include "identify/run/run_record.h"
 
 #include "identify/fit/effect_parameters.h"
+#include "identify/model/study_config.h"
+#include "identify/run/findings.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include "runtime/node/schema.h"
 #include "runtime/record/measurements.h"
 #include "runtime/record/record.h"
+#include "study/study.h"
 #include "study/study_inputs.h"
 
 namespace rths::identify {
@@ -185,6 +188,41 @@ DeclaredActuator declared_actuator(const config::Study& study, const std::string
   return out;
 }
 
+// The study's storey model as force-channel effects (actuator_path.h).
+std::vector<Effect> declared_specimen(const config::Study& study) {
+  const config::RestoringForce& model = study.substructuring().model();
+  if (model.has_bouc_wen()) return {Effect::kStiffness, Effect::kBoucWen};
+  if (model.has_bilinear()) return {Effect::kStiffness, Effect::kElastoPlastic};
+  return {Effect::kStiffness};
+}
+
+// The force channel against the declared specimen: the effects its final model holds beyond the
+// declared ones (those a step added only when they removed held-out error), and a stiffness off
+// the declared one.
+void judge_specimen(const Identification& id, ActuatorPath& out) {
+  const auto* c = id.find(Channel::kForce);
+  if (!c) return;
+  const SignalScales scales = signal_scales(identified_signals(id, Channel::kForce));
+  // The initial stiffness, as the declared storey model's: a hysteretic fit's own stiffness term
+  // is its post-yield part.
+  const SpecimenModel fitted = specimen_model(c->final_fit.model, scales);
+  out.fitted_stiffness =
+      fitted.initial_stiffness > 0.0
+          ? fitted.initial_stiffness
+          : c->final_fit.model.param(Effect::kStiffness, "stiffness", scales).value_or(0.0);
+  for (Effect e : c->final_fit.model.effects) {
+    if (std::find(c->declared.begin(), c->declared.end(), e) != c->declared.end()) continue;
+    bool paid = true;
+    for (const auto& step : c->steps)
+      if (step.effect == e)
+        paid = step.before.heldout_error - step.after.heldout_error > kMinErrorRemoved;
+    if (paid) out.specimen_undeclared.push_back(effect_name(e));
+  }
+  if (out.declared_stiffness > 0.0 && std::abs(out.fitted_stiffness - out.declared_stiffness) >
+                                          kStiffnessTolerance * out.declared_stiffness)
+    out.specimen_undeclared.push_back("stiffness change");
+}
+
 ActuatorPath identify_actuator(const std::filesystem::path& record,
                                const runtime::RunHeader& header, const runtime::RunMeasurements& m,
                                std::size_t steps, int a, const IdentifyOptions& base) {
@@ -202,7 +240,9 @@ ActuatorPath identify_actuator(const std::filesystem::path& record,
   IdentifyOptions options = base;
   options.declared_actuator = declared.effects;
   options.actuator_parameters = declared.parameters;
+  options.declared_specimen = declared_specimen(header.study());
   ActuatorPath out;
+  for (Effect e : options.declared_specimen) out.declared_specimen.push_back(effect_name(e));
   out.actuator = a + 1;
   out.declared = declared.names;
   out.declared_gain = declared.gain;
@@ -227,6 +267,22 @@ ActuatorPath identify_actuator(const std::filesystem::path& record,
         out.undeclared.push_back("delay change");
       }
     }
+  }
+  return out;
+}
+
+// Each experimental part's declared initial stiffness (N/m), in actuator order; empty when the
+// study cannot be set up here (the comparison is then skipped).
+std::vector<double> declared_stiffnesses(const config::Study& study, double dt,
+                                         const std::filesystem::path& base_dir) {
+  std::vector<double> out;
+  try {
+    const core::HybridSetup setup = core::base_setup(study, dt, base_dir);
+    for (int storey : setup.partition.actuator_storeys)
+      out.push_back(
+          setup.partition.experimental.at(static_cast<std::size_t>(storey))->initial_stiffness());
+  } catch (const std::exception&) {
+    out.clear();
   }
   return out;
 }
@@ -258,13 +314,6 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
 
 }  // namespace
 
-std::string percent_text(double ratio) {
-  std::ostringstream out;
-  out.precision(3);
-  out << 100.0 * ratio << " %";
-  return out.str();
-}
-
 bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }
 
 RunIdentification identify_run_record(const std::filesystem::path& record,
@@ -292,8 +341,14 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
         contents.steps(), header.dt(),
         static_cast<std::uint64_t>(runtime::max_missed_answers(d, header.dt())));
   out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
+  const std::vector<double> stiffness =
+      declared_stiffnesses(out.study, header.dt(), record.parent_path());
   for (int a = 0; a < header.actuators(); ++a) {
     out.actuators.push_back(identify_actuator(record, header, m, out.steps, a, options));
+    ActuatorPath& path = out.actuators.back();
+    if (static_cast<std::size_t>(a) < stiffness.size())
+      path.declared_stiffness = stiffness[static_cast<std::size_t>(a)];
+    judge_specimen(path.id, path);
   }
   const auto& channels = options.channels;
   if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
@@ -351,6 +406,14 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "  undeclared effects: ";
   for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
   out << (a.undeclared.empty() ? "none\n" : "\n");
+  if (a.declared_specimen.empty()) return;
+  out << "  specimen: declared";
+  for (const auto& d : a.declared_specimen) out << " " << d;
+  if (a.declared_stiffness > 0.0) out << ", stiffness " << a.declared_stiffness << " N/m";
+  out << " (fitted " << a.fitted_stiffness << " N/m); undeclared: ";
+  for (std::size_t i = 0; i < a.specimen_undeclared.size(); ++i)
+    out << (i ? ", " : "") << a.specimen_undeclared[i];
+  out << (a.specimen_undeclared.empty() ? "none\n" : "\n");
 }
 
 void residual_text(const RunResidual& r, std::ostream& out) {
@@ -458,7 +521,11 @@ nlohmann::json actuators_json(const RunIdentification& run) {
                          {"declared_delay_s", a.declared_delay},
                          {"fitted_delay_s", a.fitted_delay},
                          {"channels", channels},
-                         {"undeclared", a.undeclared}});
+                         {"undeclared", a.undeclared},
+                         {"declared_specimen", a.declared_specimen},
+                         {"declared_stiffness_n_per_m", a.declared_stiffness},
+                         {"fitted_stiffness_n_per_m", a.fitted_stiffness},
+                         {"specimen_undeclared", a.specimen_undeclared}});
   }
   return actuators;
 }
@@ -477,6 +544,8 @@ std::string run_record_text(const RunIdentification& run) {
   for (const auto& l : run.links) link_text(l, out);
   for (const auto& a : run.actuators) actuator_text(a, out);
   if (run.residual) residual_text(*run.residual, out);
+  const RunResidual* residual = run.residual ? &*run.residual : nullptr;
+  out << findings_text(collect_findings(run.links, run.actuators, residual, run.clock), residual);
   return out.str();
 }
 
@@ -487,6 +556,8 @@ nlohmann::json run_record_json(const RunIdentification& run) {
       {"held", run.held},           {"inputs", run.inputs},  {"steps", run.steps},
       {"duration_s", run.duration}, {"links", links},        {"actuators", actuators}};
   if (run.residual) out["residual"] = residual_json(*run.residual);
+  out["undeclared"] = findings_json(collect_findings(
+      run.links, run.actuators, run.residual ? &*run.residual : nullptr, run.clock));
   if (const auto& p = run.platform)
     out["platform"] = {
         {"steps", p->steps},

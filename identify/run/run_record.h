@@ -68,9 +68,6 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
 std::string run_record_text(const RunIdentification& run);
 nlohmann::json run_record_json(const RunIdentification& run);
 
-// A ratio as the reports print it: 0.672 -> "67.2 %" (3 significant digits).
-std::string percent_text(double ratio);
-
 // True for a path named *.rthsrec (what `rths identify` reads as a run record).
 bool is_run_record(const std::filesystem::path& path);
 

@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <functional>
 #include <span>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/metrics.h"
+#include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
 #include "identify/run/actuator_path.h"
+#include "study/restoring_force_config.h"
 #include "study/study.h"
 
 namespace rths::identify {
@@ -34,10 +37,24 @@ config::Case declared_case(const config::Study& study, const config::Case& study
   return out;
 }
 
-// Actuator a's model as study stages, behind the declared case's compensation.
-config::Case model_case(const ChannelModel& model, const SignalScales& scales,
+// What one actuator's re-run uses in place of the declared: its actuator path's model
+// (channel measured) and its specimen's (channel force: the storey model and the load cell);
+// nullptr keeps the declared.
+struct RigModel {
+  const ChannelModel* actuator = nullptr;
+  const ChannelModel* specimen = nullptr;
+};
+
+// The record's time base of a channel's fitted drifts (study_config.h RigRecord).
+RigRecord rig_record(const ChannelSignals& signals, const SignalScales& scales) {
+  return {signals.time.empty() ? 0.0 : signals.time.front(), scales.duration};
+}
+
+// Actuator a's model as study stages with the rig's own effects, behind the declared case's
+// compensation.
+config::Case model_case(const ChannelModel& model, const SignalScales& scales, const RigRecord& rig,
                         const config::Case& declared, std::vector<std::string>* left_out) {
-  const ActuatorCase identified = actuator_case(model, scales, declared.name());
+  const ActuatorCase identified = actuator_case(model, scales, declared.name(), rig);
   if (left_out) *left_out = identified.left_out;
   config::Case out = declared;
   out.clear_delay();
@@ -87,6 +104,18 @@ ChannelModel without(const ActuatorPath& path, const std::string& effect,
   return without_effect(model, parse_effect(effect), scales);
 }
 
+// The identified specimen of `path` with one undeclared effect taken back out ("stiffness
+// change": the declared stiffness).
+ChannelModel specimen_without(const ActuatorPath& path, const std::string& effect,
+                              const SignalScales& scales) {
+  const ChannelModel& model = path.id.find(Channel::kForce)->final_fit.model;
+  if (effect != "stiffness change") return without_effect(model, parse_effect(effect), scales);
+  ChannelModel out = model;
+  if (const auto i = out.index_of(Effect::kStiffness, "stiffness", scales))
+    out.params[*i] = path.declared_stiffness;
+  return out;
+}
+
 // The declared setup and re-runs of it with some actuators' models in place.
 class Reruns {
  public:
@@ -104,22 +133,43 @@ class Reruns {
                                   std::to_string(input.actuators->size()));
     }
   }
-  // The models of the actuators in `models` (nullptr: declared) in place.
-  Rerun run(const std::vector<const ChannelModel*>& models) const {
+  // The rig models in `models` in place of the declared ones, actuator by actuator.
+  Rerun run(const std::vector<RigModel>& models) const {
     core::HybridSetup setup = setup_;
     for (std::size_t a = 0; a < models.size(); ++a) {
-      if (!models[a]) continue;
-      const config::Case c = model_case(*models[a], scales(a), declared_, nullptr);
+      const RigModel& m = models[a];
+      if (!m.actuator && !m.specimen) continue;
+      config::Case c = m.actuator ? model_case(*m.actuator, scales(a), rig(a, Channel::kMeasured),
+                                               declared_, nullptr)
+                                  : declared_;
+      if (m.specimen) {
+        add_load_cell_drift(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c);
+        place_specimen(*m.specimen, a, setup);
+      }
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
     }
     return compare(core::simulate(setup, prepared_.motion), *input_.recorded);
   }
-  SignalScales scales(std::size_t a) const {
-    return signal_scales((*input_.actuators)[a].id.signals.front());
+  SignalScales scales(std::size_t a, Channel channel = Channel::kMeasured) const {
+    return signal_scales(identified_signals((*input_.actuators)[a].id, channel));
+  }
+  RigRecord rig(std::size_t a, Channel channel) const {
+    return rig_record(identified_signals((*input_.actuators)[a].id, channel), scales(a, channel));
   }
   const config::Case& declared() const { return declared_; }
 
  private:
+  // The identified storey model of actuator a's specimen in place of the declared one, at its
+  // identified initial stiffness (study_config.h specimen_model); the declared one stays when
+  // the fit has no displacement-dependent force.
+  void place_specimen(const ChannelModel& specimen, std::size_t a, core::HybridSetup& setup) const {
+    const SpecimenModel model = specimen_model(specimen, scales(a, Channel::kForce));
+    if (!model.restoring_force || !(model.initial_stiffness > 0.0)) return;
+    const auto storey = static_cast<std::size_t>(setup.partition.actuator_storeys.at(a));
+    setup.partition.experimental.at(storey) =
+        core::make_storey_factory(*model.restoring_force)(model.initial_stiffness);
+  }
+
   const ResidualInput& input_;
   config::Case declared_;
   core::PreparedStudy prepared_;
@@ -128,18 +178,30 @@ class Reruns {
 
 // Per actuator link its whole model alone, and per undeclared effect the model without it.
 void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
-                const std::vector<const ChannelModel*>& all, RunResidual& out) {
-  const std::vector<const ChannelModel*> none(paths.size(), nullptr);
+                const std::vector<RigModel>& all, RunResidual& out) {
+  const std::vector<RigModel> none(paths.size());
   for (std::size_t a = 0; a < paths.size(); ++a) {
-    const std::string link = "actuator " + std::to_string(a + 1);
-    std::vector<const ChannelModel*> alone = none;
+    const std::string n = std::to_string(a + 1);
+    std::vector<RigModel> alone = none;
     alone[a] = all[a];
-    out.links.push_back({link, "all", out.declared - reruns.run(alone).worst, 0.0});
+    out.links.push_back({"actuator " + n, "all", out.declared - reruns.run(alone).worst, 0.0});
+    const auto removes = [&](const std::string& part, const std::string& effect,
+                             const RigModel& reduced) {
+      std::vector<RigModel> models = all;
+      models[a] = reduced;
+      out.effects.push_back({part, effect, reruns.run(models).worst - out.identified, 0.0});
+    };
     for (const auto& effect : paths[a].undeclared) {
       const ChannelModel reduced = without(paths[a], effect, reruns.scales(a));
-      std::vector<const ChannelModel*> models = all;
-      models[a] = &reduced;
-      out.effects.push_back({link, effect, reruns.run(models).worst - out.identified, 0.0});
+      removes(effect == "offset_drift" ? "displacement sensor " + n : "actuator " + n, effect,
+              {&reduced, all[a].specimen});
+    }
+    if (!all[a].specimen) continue;
+    for (const auto& effect : paths[a].specimen_undeclared) {
+      const ChannelModel reduced =
+          specimen_without(paths[a], effect, reruns.scales(a, Channel::kForce));
+      removes(effect == "offset_drift" ? "load cell " + n : "specimen " + n, effect,
+              {all[a].actuator, &reduced});
     }
   }
   set_shares(out.links);
@@ -152,20 +214,30 @@ RunResidual run_residual(const ResidualInput& input) {
   const auto& paths = *input.actuators;
   const Reruns reruns(input);
   RunResidual out;
-  std::vector<const ChannelModel*> all(paths.size(), nullptr);
+  std::vector<RigModel> all(paths.size());
   for (std::size_t a = 0; a < paths.size(); ++a) {
     const auto* c = paths[a].id.find(Channel::kMeasured);
     if (!c) {
       throw std::invalid_argument("actuator " + std::to_string(a + 1) +
                                   ": actuator path not identified");
     }
-    all[a] = &c->final_fit.model;
+    all[a].actuator = &c->final_fit.model;
+    // The declared specimen stays unless the force channel found it wrong: a re-run changes
+    // only what the record contradicts.
+    const auto* force = paths[a].id.find(Channel::kForce);
+    if (force && !paths[a].specimen_undeclared.empty()) all[a].specimen = &force->final_fit.model;
     std::vector<std::string> left_out;
-    model_case(*all[a], reruns.scales(a), reruns.declared(), &left_out);
+    model_case(*all[a].actuator, reruns.scales(a), reruns.rig(a, Channel::kMeasured),
+               reruns.declared(), &left_out);
     for (const auto& l : left_out)
       out.notes.push_back("actuator " + std::to_string(a + 1) + ": " + l);
+    if (all[a].specimen)
+      for (const auto& l :
+           specimen_model(*all[a].specimen, reruns.scales(a, Channel::kForce)).left_out)
+        if (l.rfind(effect_name(Effect::kOffsetDrift), 0) != 0)  // re-run by the load cell
+          out.notes.push_back("specimen " + std::to_string(a + 1) + ": " + l);
   }
-  const Rerun before = reruns.run(std::vector<const ChannelModel*>(paths.size(), nullptr));
+  const Rerun before = reruns.run(std::vector<RigModel>(paths.size()));
   const Rerun after = reruns.run(all);
   out.steps = std::min<std::size_t>({before.result.steps(), after.result.steps(),
                                      static_cast<std::size_t>(input.recorded->rows())});
@@ -188,6 +260,13 @@ RunResidual run_residual(const ResidualInput& input) {
         "fitted delay (the answers the loop used)");
   }
   return out;
+}
+
+std::string percent_text(double ratio) {
+  std::ostringstream out;
+  out.precision(3);
+  out << 100.0 * ratio << " %";
+  return out.str();
 }
 
 }  // namespace rths::identify

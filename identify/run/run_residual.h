@@ -10,16 +10,21 @@
 // Declared model of actuator a: the case's delay stages behind the actuator emulators' own
 // declared receive_delay stages (what the distributed run applies to a command), with the case's
 // compensation in front. Identified model: the identified actuator as study stages
-// (study_config.h actuator_case: shift with its gain, first order, second order) in place of
-// those delay stages, the compensation kept.
+// (study_config.h actuator_case with the rig: shift, first order, second order, backlash,
+// velocity limit with the gain, the displacement sensor's drift) in place of those delay stages,
+// the compensation kept; where the force channel contradicted the declared specimen
+// (ActuatorPath::specimen_undeclared), the identified storey model in place of the declared one
+// (specimen_model, at its identified initial stiffness) and the load cell's drift as a
+// sensor_drift stage.
 // Errors, per floor (DOF) i: NRMSE_i = sqrt(mean (u_sim - u_rec)^2) / median |u_rec|
 // (core/metrics.h nrmse, the record as reference) over the steps both responses hold.
 // Which link explains how much: the error measure E is the worst floor's NRMSE.
 //   per actuator link a   E(declared) - E(only actuator a identified): the error it removes;
 //   per undeclared effect E(identified without the effect) - E(identified): the error the effect
-//                         removes on top of the rest ("gain error", "delay change": the gain or
-//                         delay set back to the declared one; any other: the effect taken out of
-//                         the model).
+//                         removes on top of the rest ("gain error", "delay change", "stiffness
+//                         change": the value set back to the declared one; any other: the effect
+//                         taken out of the model), on its part: "actuator a", "displacement
+//                         sensor a", "specimen a" or "load cell a".
 // Each removal's share is its error removed over the sum of the positive ones of its kind.
 // The network paths' lag is not in the re-run: in simulated time (lockstep, in process) it does
 // not reach the response, and in real time what the actuator path saw of it (the answers the loop
@@ -43,7 +48,7 @@ struct FloorError {
 };
 
 struct ResidualShare {
-  std::string link;      // "actuator 1"
+  std::string link;      // "actuator 1", "specimen 1", "load cell 1", "displacement sensor 1"
   std::string effect;    // "all" (the link's whole identified model) or the effect's name
   double removed = 0.0;  // NRMSE of the worst floor removed by it
   double share = 0.0;    // of the removals of its kind
@@ -74,5 +79,8 @@ struct ResidualInput {
 
 // Throws std::invalid_argument when the study cannot be set up (naming the config's field).
 RunResidual run_residual(const ResidualInput& input);
+
+// A ratio as the run's reports print it: 0.672 -> "67.2 %" (3 significant digits).
+std::string percent_text(double ratio);
 
 }  // namespace rths::identify

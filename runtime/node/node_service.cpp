@@ -191,6 +191,17 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
   }
 }
 
+void NodeService::apply_receive_sensors() {
+  if (receive_chains_.empty() || command_.drift_size() != hosted_) return;
+  for (int i = 0; i < hosted_; ++i) {
+    auto& chain = receive_chains_[static_cast<std::size_t>(i)];
+    if (i < feedback_.force_size()) feedback_.set_force(i, chain.measure_force(feedback_.force(i)));
+    // The chain's output is the drift compute() acted on; its sensors read off it by this much.
+    if (i < feedback_.realised_size())
+      feedback_.set_realised(i, feedback_.realised(i) + chain.measured() - command_.drift(i));
+  }
+}
+
 std::vector<transport::Message> NodeService::on_command(const transport::Message& message) {
   if (!entitled(message) || held_ || stopped_ || !configure_error_.empty()) return {};
   const Verdict order = check_step(message.step, last_step_, last_step_ + max_step_gap_);
@@ -238,6 +249,7 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
     stream_injected_lag_ = injected_lag_;
     return {};
   }
+  apply_receive_sensors();
   if (!send_chains_.empty())
     for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
       feedback_.set_force(i, send_chains_[i].step({command_.time(), feedback_.force(i), 0.0}));

@@ -19,7 +19,10 @@
 //                       storey drift spans two DOFs, each within the limit), is counted out of
 //                       range and not acted on.
 //   node delay stages   the spec's receive_delay / send_delay stages (simulated time) act on
-//                       each received drift before compute() and on each force after it.
+//                       each received drift before compute() and on each force after it; the
+//                       receive chains' sensors (core::DelayStage sensor_error, measure_force:
+//                       a sensor_drift or a tracking loop's load cell) act on the answer's
+//                       realised drift and force, as a case's stages do in process.
 //   streaming           real time with a servo loop faster than the integrator (servo_period() >
 //   0):
 //                       a COMMAND only loads the servo (load()); the node loop calls servo_tick()
@@ -104,6 +107,8 @@ class NodeService : public transport::NodeHandler {
   // assigned this node, on this node's own topic; counts it not entitled otherwise.
   bool entitled(const transport::Message& message);
   bool in_range(const Command& command) const;
+  // The receive chains' sensor errors on the computed answer (see "node delay stages").
+  void apply_receive_sensors();
   transport::Message heartbeat_message(bool final) const;
   std::uint64_t coordinator_writer_ = 0;  // the first accepted ASSIGN's writer
   std::int32_t node_id_;

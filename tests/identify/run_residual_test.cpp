@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 
+#include "identify/run/findings.h"
 #include "identify/run/run_record.h"
 #include "tests/identify/undeclared_run.h"
 
@@ -87,6 +88,86 @@ TEST(RunResidual, AnUndeclaredExtraDelayIsNamedAsADelayChangeAndReproduced) {
   ASSERT_EQ(r.effects.size(), 1u) << run_record_text(run);
   EXPECT_EQ(r.effects[0].effect, "delay change");
   EXPECT_NEAR(r.effects[0].share, 1.0, 1e-12);
+}
+
+// The finding of `effect` on `part` in the one verdict over every part, or nullptr.
+const Finding* finding(const std::vector<Finding>& findings, const std::string& part,
+                       const std::string& effect) {
+  for (const auto& f : findings)
+    if (f.part == part && f.effect == effect) return &f;
+  return nullptr;
+}
+
+TEST(RunResidual, AVelocityLimitIsReRunAndRemovesTheErrorItCaused) {
+  const RunIdentification run = identify_run_record(
+      test::run_with_undeclared("residual_velocity_limit",
+                                "receive_delay { velocity_limit { max_velocity: 0.05 } }"),
+      actuator_only());
+  const RunResidual& r = residual_of(run);
+  print("velocity limit 50 mm/s", r);
+  EXPECT_GE(r.declared, 0.05) << run_record_text(run);
+  EXPECT_LE(r.identified, 0.02) << run_record_text(run);
+  const auto findings = collect_findings(run.links, run.actuators, &*run.residual, run.clock);
+  const Finding* f = finding(findings, "actuator 1", "velocity_saturation");
+  ASSERT_NE(f, nullptr) << run_record_text(run);
+  ASSERT_EQ(f->parameters.size(), 1u);
+  EXPECT_NEAR(f->parameters[0].value, 0.05, 0.005) << run_record_text(run);
+  ASSERT_TRUE(f->response_removed.has_value()) << f->not_rerun;
+  EXPECT_GT(*f->response_removed, 0.5 * (r.declared - r.identified)) << run_record_text(run);
+}
+
+TEST(RunResidual, BacklashIsReRun) {
+  const RunIdentification run = identify_run_record(
+      test::run_with_undeclared("residual_backlash", "receive_delay { backlash { width: 0.002 } }"),
+      actuator_only());
+  const RunResidual& r = residual_of(run);
+  print("backlash 2 mm", r);
+  EXPECT_LE(r.identified, 0.02) << run_record_text(run);
+  const auto findings = collect_findings(run.links, run.actuators, &*run.residual, run.clock);
+  const Finding* f = finding(findings, "actuator 1", "backlash");
+  ASSERT_NE(f, nullptr) << run_record_text(run);
+  EXPECT_NEAR(f->parameters.at(0).value, 0.002, 0.0002) << run_record_text(run);
+  EXPECT_TRUE(f->response_removed.has_value()) << f->not_rerun;
+}
+
+TEST(RunResidual, ALoadCellOffsetIsNamedOnTheLoadCellAndReRun) {
+  const RunIdentification run = identify_run_record(
+      test::run_with_undeclared("residual_load_cell",
+                                "receive_delay { sensor_drift { force_offset: 500 } }"),
+      IdentifyOptions{});
+  const RunResidual& r = residual_of(run);
+  print("load cell offset 500 N", r);
+  EXPECT_LE(r.identified, 0.02) << run_record_text(run);
+  const auto findings = collect_findings(run.links, run.actuators, &*run.residual, run.clock);
+  const Finding* f = finding(findings, "load cell 1", "offset_drift");
+  ASSERT_NE(f, nullptr) << run_record_text(run);
+  ASSERT_TRUE(f->response_removed.has_value()) << f->not_rerun;
+  EXPECT_GT(*f->response_removed, 0.0) << run_record_text(run);
+}
+
+TEST(RunResidual, AHystereticSpecimenDeclaredLinearIsNamedOnTheSpecimenAndReRun) {
+  // The whole storey is the specimen (no numerical part), so that only the rig differs from the
+  // declared study: a Bouc-Wen specimen where the header declares a linear one.
+  std::string declared =
+      test::paper_frame_study(10.0, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
+  const std::string fraction = "experimental_fraction: 0.3333333333333333";
+  declared.replace(declared.find(fraction), fraction.size(), "experimental_storeys: 1");
+  std::string actual = declared;
+  const std::string linear = "model { linear {} }";
+  actual.replace(actual.find(linear), linear.size(),
+                 "model { bouc_wen { yield_displacement: 0.004 alpha: 0.1 n: 1 beta: 0.5 } }");
+  const RunIdentification run = identify_run_record(
+      test::record_declaring("residual_bouc_wen", actual, declared, "lag_shift_14ms", true),
+      IdentifyOptions{});
+  const RunResidual& r = residual_of(run);
+  print("Bouc-Wen specimen", r);
+  const auto findings = collect_findings(run.links, run.actuators, &*run.residual, run.clock);
+  const Finding* f = finding(findings, "specimen 1", "bouc_wen");
+  ASSERT_NE(f, nullptr) << run_record_text(run);
+  ASSERT_TRUE(f->response_removed.has_value()) << f->not_rerun;
+  EXPECT_GE(r.declared, 0.20) << run_record_text(run);
+  EXPECT_LE(r.identified, 0.02) << run_record_text(run);
+  EXPECT_EQ(finding(findings, "specimen 1", "stiffness change"), nullptr) << run_record_text(run);
 }
 
 }  // namespace

@@ -38,31 +38,39 @@ void rewrite(const std::filesystem::path& record, Edit edit) {
   }
 }
 
-// A `duration` s paper-frame run of case `case_name` whose actuator emulator carries
-// `emulator_stages` (config text of DelayStage fields) that the declared config, written into the
-// record, lacks; `expect_ok` = false for a run meant to fail (e.g. diverge).
-inline std::filesystem::path run_with_undeclared(const std::string& name,
-                                                 const std::string& emulator_stages,
-                                                 const std::string& case_name = "lag_shift_14ms",
-                                                 double duration = 10.0, bool expect_ok = true) {
-  const std::string actual =
-      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
-      emulator_stages + " } }";
+// A run of study `actual` (config text), case `case_name`, whose record's header and inputs are
+// then given the study `declared`, as a lab's record holds the config it meant to run;
+// `expect_ok` = false for a run meant to fail (e.g. diverge).
+inline std::filesystem::path record_declaring(const std::string& name, const std::string& actual,
+                                              const std::string& declared_text,
+                                              const std::string& case_name, bool expect_ok) {
   coordinator::CoordinatorOptions options;
   options.run_id = name;
   options.case_name = case_name;
   options.record = scratch(name);
-  const auto outcome =
-      coordinator::run_in_process(prepare(paper_frame_study(duration, actual)), options);
+  const auto outcome = coordinator::run_in_process(prepare(actual), options);
   EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
-  // The header declares the model without the effect; the inputs entry carries it with the inputs
-  // as rths writes them.
-  const core::PreparedStudy declared = prepare(paper_frame_study(duration, kDeclared));
+  const core::PreparedStudy declared = prepare(declared_text);
   rewrite(options.record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared.config;
     if (e.has_inputs()) *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
   });
   return options.record;
+}
+
+// A `duration` s paper-frame run of case `case_name` whose actuator emulator carries
+// `emulator_stages` (config text of DelayStage fields) that the declared config lacks.
+inline std::filesystem::path run_with_undeclared(const std::string& name,
+                                                 const std::string& emulator_stages,
+                                                 const std::string& case_name = "lag_shift_14ms",
+                                                 double duration = 10.0, bool expect_ok = true) {
+  const std::string actual =
+      paper_frame_study(duration,
+                        "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
+                        "ACTUATOR_EMULATOR " +
+                            emulator_stages + " } }");
+  return record_declaring(name, actual, paper_frame_study(duration, kDeclared), case_name,
+                          expect_ok);
 }
 
 // The effects identified on the link to node `node`.

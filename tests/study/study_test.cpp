@@ -116,11 +116,15 @@ TEST(StudyTest, EveryDelayKindBuildsAStage) {
                         }
                       }
                       delay { jitter { mean_delay: 0.01 std_dev: 0.001 seed: 7 } }
+                      delay { backlash { width: 0.001 } }
+                      delay { velocity_limit { max_velocity: 0.2 } }
+                      delay { sensor_drift { force_offset: 10 } }
                     })pb",
                   "all");
   const DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
   EXPECT_FALSE(chain.empty());
-  EXPECT_NE(chain.describe().find("shift"), std::string::npos) << chain.describe();
+  for (const char* kind : {"shift", "jitter", "backlash", "velocity_limit", "sensor_drift"})
+    EXPECT_NE(chain.describe().find(kind), std::string::npos) << chain.describe();
 }
 
 }  // namespace

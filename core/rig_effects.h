@@ -1,0 +1,105 @@
+#pragma once
+// Effects of a physical rig that no linear actuator model holds, as delay stages
+// (core/delay.h), so that an identified rig can be re-run as it was measured (identify/run) and
+// a planned test can be tried against it.
+//
+// Input (CommandSample): t (s), u (m) from the stage before. Output: u_out (m). Initial state:
+// at rest at u_out = 0. Equations, per step k:
+//   Backlash       play of total width w (m) between the drive and the specimen:
+//                  u_out[k] = clamp(u_out[k-1], u[k] - w/2, u[k] + w/2).
+//   VelocityLimit  a servo valve's flow limit, v_max (m/s) at step dt (s):
+//                  u_out[k] = u_out[k-1] + clamp(u[k] - u_out[k-1], -v_max dt, v_max dt).
+//   SensorDrift    the displacement sensor and the load cell reading off the truth, each by an
+//                  offset and a drift over time: u_out = u (the specimen is not moved);
+//                  the displacement read = u + d0 + d1 t (m, m/s) (sensor_error), the force the
+//                  integrator receives = f + f0 + f1 t (N, N/s) (measure_force).
+// The identification's predictors (identify/model/model.cpp) apply the same recursions, so an
+// identified width or limit re-runs as it was fitted.
+// Linear dynamics: Backlash and VelocityLimit are the identity once their non-linearity is left
+// out (kLinearised: a small motion passes unchanged); SensorDrift is the identity.
+// Real-time safe: no allocation after construction.
+
+#include "core/delay.h"
+
+namespace rths::core {
+
+// What Backlash and VelocityLimit share: a state that is the last output, a nominal delay of 0,
+// and the identity as their linear dynamics.
+class MotionLimit : public DelayStage {
+ public:
+  void reset() override { output_ = 0.0; }
+  double nominal_delay() const override { return 0.0; }
+
+ protected:
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+  double output_ = 0.0;  // m, the last output
+};
+
+class Backlash final : public MotionLimit {
+ public:
+  // @pre width >= 0 and finite (m) (throws std::invalid_argument).
+  explicit Backlash(double width);
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  Linearity linearity() const override;
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  double half_width_;
+};
+
+class VelocityLimit final : public MotionLimit {
+ public:
+  // @pre max_velocity > 0 and finite (m/s), dt > 0 (s) (throws std::invalid_argument).
+  VelocityLimit(double max_velocity, double dt);
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  Linearity linearity() const override;
+
+ protected:
+  double step_unscaled(const CommandSample& in) override;
+
+ private:
+  double max_velocity_, max_step_;
+};
+
+struct SensorErrors {
+  double displacement_offset = 0.0;  // m
+  double displacement_drift = 0.0;   // m/s
+  double force_offset = 0.0;         // N
+  double force_drift = 0.0;          // N/s
+};
+
+class SensorDrift final : public DelayStage {
+ public:
+  // @pre every field finite (throws std::invalid_argument naming it).
+  explicit SensorDrift(const SensorErrors& errors);
+  void reset() override { time_ = 0.0; }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
+  double sensor_error() const override {
+    return errors_.displacement_offset + errors_.displacement_drift * time_;
+  }
+  double measure_force(double force) override {
+    return force + errors_.force_offset + errors_.force_drift * time_;
+  }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    time_ = in.time;
+    return in.displacement;
+  }
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+
+ private:
+  SensorErrors errors_;
+  double time_ = 0.0;  // s, of the last step
+};
+
+}  // namespace rths::core

@@ -1,0 +1,170 @@
+#include "identify/run/findings.h"
+
+#include <sstream>
+
+namespace rths::identify {
+namespace {
+
+std::string parameters_text(const std::vector<ParameterEstimate>& parameters) {
+  std::string out;
+  for (const auto& p : parameters) out += (out.empty() ? "" : ", ") + p.describe();
+  return out;
+}
+
+std::string number(double value) {
+  std::ostringstream out;
+  out.precision(4);
+  out << value;
+  return out.str();
+}
+
+void add_link_findings(const std::vector<NetworkPath>& links, const std::string& clock,
+                       std::vector<Finding>& out) {
+  const std::string why =
+      clock == "real_time"
+          ? "a link's lag reaches the response only through the actuator path's fitted delay, "
+            "which the re-run holds"
+          : "in lockstep a link's lag does not reach the response";
+  for (const auto& link : links)
+    for (const auto& e : link.effects) {
+      Finding f;
+      f.part = "link to node " + std::to_string(link.node_id);
+      f.effect = e.name;
+      f.magnitude = e.detail;
+      f.heldout_before = e.heldout_before;
+      f.heldout_after = e.heldout_after;
+      f.heldout_unit = "s RMS";
+      f.not_rerun = why;
+      out.push_back(std::move(f));
+    }
+}
+
+// The finding of `effect` on `channel` of `path`: its parameters and the held-out error of the
+// step that added it (the declared and the final model's for a changed value).
+Finding channel_finding(const ActuatorPath& path, Channel channel, const std::string& part,
+                        const std::string& effect) {
+  Finding f;
+  f.part = part;
+  f.effect = effect;
+  f.heldout_unit = "of the signal's std";
+  const ChannelIdentification* c = path.id.find(channel);
+  if (!c) return f;
+  f.heldout_before = c->declared_fit.heldout_error;
+  f.heldout_after = c->final_fit.heldout_error;
+  if (effect.find(' ') != std::string::npos) return f;  // a changed value, not a library effect
+  const std::optional<Effect> kind = parse_effect(effect);
+  const SignalScales scales = signal_scales(identified_signals(path.id, channel));
+  f.parameters = effect_parameters(c->final_fit, *kind, scales);
+  f.magnitude = parameters_text(f.parameters);
+  for (const auto& step : c->steps)
+    if (step.effect == *kind) {
+      f.heldout_before = step.before.heldout_error;
+      f.heldout_after = step.after.heldout_error;
+    }
+  return f;
+}
+
+void add_path_findings(const ActuatorPath& path, std::vector<Finding>& out) {
+  const std::string n = std::to_string(path.actuator);
+  for (const auto& effect : path.undeclared) {
+    Finding f = channel_finding(
+        path, Channel::kMeasured,
+        (effect == "offset_drift" ? "displacement sensor " : "actuator ") + n, effect);
+    if (effect == "gain error")
+      f.magnitude =
+          "gain " + number(path.fitted_gain) + " (declared " + number(path.declared_gain) + ")";
+    if (effect == "delay change")
+      f.magnitude = "delay " + number(path.fitted_delay * 1e3) + " ms (declared " +
+                    number(path.declared_delay * 1e3) + " ms)";
+    out.push_back(std::move(f));
+  }
+  for (const auto& effect : path.specimen_undeclared) {
+    Finding f = channel_finding(
+        path, Channel::kForce, (effect == "offset_drift" ? "load cell " : "specimen ") + n, effect);
+    if (effect == "stiffness change")
+      f.magnitude = "stiffness " + number(path.fitted_stiffness) + " N/m (declared " +
+                    number(path.declared_stiffness) + " N/m)";
+    out.push_back(std::move(f));
+  }
+}
+
+// Each finding's part of the re-run (run_residual.h effects), or why it has none.
+void add_response(const RunResidual* residual, std::vector<Finding>& findings) {
+  for (Finding& f : findings) {
+    if (!f.not_rerun.empty()) continue;
+    if (!residual) {
+      f.not_rerun = "the response was not re-run (the actuator channel was not identified)";
+      continue;
+    }
+    f.not_rerun = "the study cannot hold it (see the re-run's notes)";
+    for (const auto& s : residual->effects)
+      if (s.link == f.part && s.effect == f.effect) {
+        f.response_removed = s.removed;
+        f.response_share = s.share;
+        f.not_rerun.clear();
+      }
+  }
+}
+
+}  // namespace
+
+std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
+                                      const std::vector<ActuatorPath>& actuators,
+                                      const RunResidual* residual, const std::string& clock) {
+  std::vector<Finding> out;
+  add_link_findings(links, clock, out);
+  for (const auto& path : actuators) add_path_findings(path, out);
+  add_response(residual, out);
+  return out;
+}
+
+std::string findings_text(const std::vector<Finding>& findings, const RunResidual* residual) {
+  std::ostringstream out;
+  out << "undeclared effects, every part:" << (findings.empty() ? " none" : "") << "\n";
+  for (const Finding& f : findings) {
+    out << "  " << f.part << ": " << f.effect;
+    if (!f.magnitude.empty()) out << ": " << f.magnitude;
+    const bool seconds = f.heldout_unit == "s RMS";
+    if (f.heldout_before > 0.0)
+      out << "; held-out "
+          << (seconds ? number(f.heldout_before * 1e3) + " ms" : percent_text(f.heldout_before))
+          << " -> "
+          << (seconds ? number(f.heldout_after * 1e3) + " ms" : percent_text(f.heldout_after));
+    if (f.response_removed)
+      out << "; re-run: removes " << percent_text(*f.response_removed)
+          << " of the worst floor's NRMSE (share " << percent_text(f.response_share) << ")";
+    else
+      out << "; not re-run: " << f.not_rerun;
+    out << "\n";
+  }
+  if (residual)
+    out << "unexplained after the re-run: " << percent_text(residual->identified)
+        << " NRMSE on the worst floor (declared model: " << percent_text(residual->declared)
+        << ")\n";
+  return out.str();
+}
+
+nlohmann::json findings_json(const std::vector<Finding>& findings) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Finding& f : findings) {
+    nlohmann::json parameters = nlohmann::json::array();
+    for (const auto& p : f.parameters)
+      parameters.push_back(
+          {{"name", p.name}, {"value", p.value}, {"std_error", p.std_error}, {"unit", p.unit}});
+    out.push_back({{"part", f.part},
+                   {"effect", f.effect},
+                   {"magnitude", f.magnitude},
+                   {"parameters", parameters},
+                   {"heldout_before", f.heldout_before},
+                   {"heldout_after", f.heldout_after},
+                   {"heldout_unit", f.heldout_unit},
+                   {"rerun", f.not_rerun.empty()},
+                   {"nrmse_removed",
+                    f.response_removed ? nlohmann::json(*f.response_removed) : nlohmann::json()},
+                   {"share", f.response_share},
+                   {"not_rerun", f.not_rerun}});
+  }
+  return out;
+}
+
+}  // namespace rths::identify

@@ -1,0 +1,53 @@
+#pragma once
+// One verdict over every part of a run's loop: each difference between what the record shows
+// and what the header declared, in one list, whatever channel found it.
+//
+// Input: a run's parts identified from its record (run_record.h): its links, its actuator paths,
+// its re-run (absent when not made) and its clock ("lockstep", "real_time").
+// Output, one Finding per difference:
+//   part       "link to node N" (network), "actuator N" (lag, gain, backlash, velocity limit),
+//              "specimen N" (stiffness, damping, hysteresis), "displacement sensor N" and
+//              "load cell N" (offset and drift): N is the node id or the 1-based actuator;
+//   effect     the effect's name (identify/model/effects.h, or "gain error", "delay change",
+//              "stiffness change", the network's "drifting delay", "clock offset", ...);
+//   magnitude  its parameters with standard errors and units (effect_parameters.h), or the
+//              fitted value beside the declared one;
+//   evidence   the held-out error of its channel before and after the effect: a share of the
+//              signal's std for the actuator and force channels, s RMS for a link;
+//   response   the worst floor's NRMSE the re-run loses without it and its share of the removals
+//              (run_residual.h), or why the re-run cannot hold it (counted as unexplained).
+
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "identify/fit/effect_parameters.h"
+#include "identify/run/actuator_path.h"
+#include "identify/run/network_path.h"
+#include "identify/run/run_residual.h"
+
+namespace rths::identify {
+
+struct Finding {
+  std::string part, effect;
+  std::vector<ParameterEstimate> parameters;  // empty where `magnitude` says it in words
+  std::string magnitude;                      // the parameters as text
+  double heldout_before = 0.0, heldout_after = 0.0;
+  std::string heldout_unit;                // "of the signal's std" or "s RMS"
+  std::optional<double> response_removed;  // NRMSE of the worst floor, absent when not re-run
+  double response_share = 0.0;             // of the re-run's removals
+  std::string not_rerun;                   // why the re-run leaves it out; empty when re-run
+};
+
+std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
+                                      const std::vector<ActuatorPath>& actuators,
+                                      const RunResidual* residual, const std::string& clock);
+
+// "undeclared effects, every part: none" or a line per finding, then what the re-run leaves
+// unexplained.
+std::string findings_text(const std::vector<Finding>& findings, const RunResidual* residual);
+nlohmann::json findings_json(const std::vector<Finding>& findings);
+
+}  // namespace rths::identify

@@ -1,0 +1,71 @@
+// A rig's own effects as delay stages (core/rig_effects.h): each recursion as its header states
+// it, the sensors' errors on what is read and not on what moves, bad parameters refused, and the
+// stages as a study config builds them.
+#include "core/rig_effects.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "study/study.h"
+
+namespace rths::core {
+namespace {
+
+TEST(Backlash, TheOutputMovesOnlyOnceThePlayIsTakenUp) {
+  Backlash play(0.002);                                      // 1 mm each way
+  EXPECT_DOUBLE_EQ(play.step({0.001, 0.0008, 0.0}), 0.0);    // inside the play
+  EXPECT_DOUBLE_EQ(play.step({0.002, 0.003, 0.0}), 0.002);   // dragged at the far edge
+  EXPECT_DOUBLE_EQ(play.step({0.003, 0.0025, 0.0}), 0.002);  // reversal: the play again
+  EXPECT_DOUBLE_EQ(play.step({0.004, 0.0, 0.0}), 0.001);     // dragged back
+  play.reset();
+  EXPECT_DOUBLE_EQ(play.step({0.001, 0.0005, 0.0}), 0.0);
+  EXPECT_THROW(Backlash(-1e-3), std::invalid_argument);
+  EXPECT_THROW(Backlash(std::nan("")), std::invalid_argument);
+}
+
+TEST(VelocityLimit, TheOutputMovesAtMostTheLimitTimesTheStep) {
+  VelocityLimit valve(0.05, 0.01);  // 0.5 mm per step
+  EXPECT_DOUBLE_EQ(valve.step({0.01, 0.002, 0.0}), 0.0005);
+  EXPECT_DOUBLE_EQ(valve.step({0.02, 0.002, 0.0}), 0.001);
+  EXPECT_DOUBLE_EQ(valve.step({0.03, 0.0012, 0.0}), 0.0012);  // within reach: followed
+  EXPECT_DOUBLE_EQ(valve.step({0.04, -0.01, 0.0}), 0.0007);
+  EXPECT_THROW(VelocityLimit(0.0, 0.01), std::invalid_argument);
+  EXPECT_THROW(VelocityLimit(0.05, 0.0), std::invalid_argument);
+  // Linear analysis leaves the limit out and says so.
+  EXPECT_EQ(valve.linearity().kind, Linearity::Kind::kLinearised);
+  EXPECT_DOUBLE_EQ(std::abs(valve.frequency_response(10.0)), 1.0);
+}
+
+TEST(SensorDrift, TheSensorsReadOffTheTruthAndTheSpecimenIsNotMoved) {
+  SensorDrift sensors({0.001, 0.0002, 50.0, -4.0});
+  EXPECT_DOUBLE_EQ(sensors.step({2.0, 0.01, 0.0}), 0.01);
+  EXPECT_DOUBLE_EQ(sensors.sensor_error(), 0.001 + 0.0002 * 2.0);
+  EXPECT_DOUBLE_EQ(sensors.measure_force(1000.0), 1000.0 + 50.0 - 4.0 * 2.0);
+  DelayChain chain;
+  chain.add(sensors.clone());
+  EXPECT_DOUBLE_EQ(chain.step({2.0, 0.01, 0.0}), 0.01);
+  EXPECT_DOUBLE_EQ(chain.measured(), 0.01 + 0.001 + 0.0004);
+  EXPECT_THROW(SensorDrift({std::nan(""), 0.0, 0.0, 0.0}), std::invalid_argument);
+}
+
+TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
+  config::DelayStage stage;
+  stage.mutable_velocity_limit()->set_max_velocity(0.05);
+  stage.set_amplitude_gain(1.1);
+  const auto valve = make_delay_stage(stage, 0.01, ".");
+  EXPECT_DOUBLE_EQ(valve->step({0.01, 0.002, 0.0}), 1.1 * 0.0005);
+  const std::string bad =
+      "structure { sdof { period: 0.5 } } cases { name: \"c\" delay { velocity_limit {} } }";
+  try {
+    (void)parse_study(bad, "bad.textproto");
+    FAIL() << "a velocity limit of 0 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("velocity_limit.max_velocity"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace rths::core
