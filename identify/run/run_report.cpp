@@ -101,8 +101,8 @@ std::filesystem::path shares_plot(const RunResidual& r, const std::filesystem::p
   };
   for (const auto* kind : {&r.links, &r.effects}) {
     for (const auto& s : *kind) {
-      bar(s.link + (s.effect == "all" ? " (its whole model)" : ": " + s.effect) + ", share " +
-              percent_text(s.share),
+      bar(s.link + (s.effect == "all" ? " (its whole identified rig)" : ": " + s.effect) +
+              ", share " + percent_text(s.share),
           s.removed);
     }
   }

@@ -176,7 +176,8 @@ class Reruns {
   core::HybridSetup setup_;
 };
 
-// Per actuator link its whole model alone, and per undeclared effect the model without it.
+// Per actuator link its whole identified rig alone (actuator, sensors, specimen), and per
+// undeclared effect the model without it.
 void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
                 const std::vector<RigModel>& all, RunResidual& out) {
   const std::vector<RigModel> none(paths.size());

@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 
 #include "core/metrics.h"
@@ -339,6 +340,50 @@ TEST_F(CmdIdentifyTest, ARunRecordIsWrittenBackAsAStudyThatRunReproduces) {
   ASSERT_EQ(identified.size(), recorded.size());
   EXPECT_LE(core::nrmse(recorded, identified), 0.02);
   EXPECT_GE(core::nrmse(recorded, declared), 0.20);
+}
+
+// A rig with a velocity limit and a load cell offset that the header does not declare: the one
+// verdict names both on their parts, the written study carries them as stages, and `rths run`
+// of it reproduces the record.
+TEST_F(CmdIdentifyTest, TheWrittenStudyCarriesTheRigsOwnEffectsAndReproducesTheRecord) {
+  const fs::path record =
+      test::run_with_undeclared("written_rig",
+                                "receive_delay { velocity_limit { max_velocity: 0.05 } } "
+                                "receive_delay { sensor_drift { force_offset: 500 } }");
+  Outcome o = run("identify " + record.string() + " --json --out " + (dir_ / "rig").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto report = json_of(o);
+  std::set<std::string> parts;
+  for (const auto& f : report["undeclared"]) {
+    parts.insert(f["part"].get<std::string>() + ": " + f["effect"].get<std::string>());
+    EXPECT_TRUE(f["rerun"].get<bool>()) << f.dump();
+  }
+  EXPECT_TRUE(parts.count("actuator 1: velocity_saturation")) << report["undeclared"].dump(2);
+  EXPECT_TRUE(parts.count("load cell 1: offset_drift")) << report["undeclared"].dump(2);
+  const fs::path study = dir_ / "rig" / "identified_run.textproto";
+  const config::Study parsed = core::load_study(study);
+  const auto identified =
+      std::find_if(parsed.cases().begin(), parsed.cases().end(),
+                   [](const auto& c) { return c.name() == "identified_actuator"; });
+  ASSERT_NE(identified, parsed.cases().end());
+  std::set<std::string> stages;
+  for (const auto& stage : identified->delay()) {
+    if (stage.has_velocity_limit()) stages.insert("velocity_limit");
+    if (stage.has_sensor_drift() && stage.sensor_drift().force_offset() != 0.0)
+      stages.insert("load cell");
+  }
+  EXPECT_EQ(stages, (std::set<std::string>{"velocity_limit", "load cell"}))
+      << identified->DebugString();
+  o = run("run " + study.string() + " --no-plots --out " + (dir_ / "rig_rerun").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  const auto steps = runtime::measure_run(runtime::read_record(record)).steps;
+  std::vector<double> recorded(static_cast<std::size_t>(steps.displacement.rows()));
+  for (std::size_t k = 0; k < recorded.size(); ++k)
+    recorded[k] = steps.displacement(static_cast<Eigen::Index>(k), 0);
+  const auto rerun =
+      results_column(dir_ / "rig_rerun" / "results.csv", "identified_actuator_u_floor1_m");
+  ASSERT_EQ(rerun.size(), recorded.size());
+  EXPECT_LE(core::nrmse(recorded, rerun), 0.02);
 }
 
 // A record carries its inputs (the motion as run, the matrices, the traces): copied alone into an
