@@ -36,7 +36,7 @@ std::string LinearSpring::describe() const { return format("linear(k = %g N/m)",
 
 // ---------------------------------------------------------------------------------------------
 BilinearKinematic::BilinearKinematic(double k0, double yield_drift, double post_yield_ratio)
-    : k0_(k0), fy_(k0 * yield_drift), b_(post_yield_ratio) {
+    : HystereticModel(k0), fy_(k0 * yield_drift), b_(post_yield_ratio) {
   require(positive_finite(k0), format("BilinearKinematic: k0 must be > 0, got %g", k0));
   require(positive_finite(yield_drift),
           format("BilinearKinematic: yield drift must be > 0, got %g", yield_drift));
@@ -47,29 +47,20 @@ BilinearKinematic::BilinearKinematic(double k0, double yield_drift, double post_
 
 // Elastic predictor from the committed state, then return to the band b k0 u +/- (1 - b) fy.
 ForceState BilinearKinematic::trial(double drift) {
-  trial_drift_ = drift;
-  const double predictor = committed_force_ + k0_ * (drift - committed_drift_);
+  trial_.drift = drift;
+  const double predictor = committed_.internal + k0_ * (drift - committed_.drift);
   const double centre = b_ * k0_ * drift;
   const double half_width = (1.0 - b_) * fy_;
   if (predictor > centre + half_width) {
-    trial_force_ = centre + half_width;
-    return {trial_force_, b_ * k0_};
+    trial_.internal = centre + half_width;
+    return {trial_.internal, b_ * k0_};
   }
   if (predictor < centre - half_width) {
-    trial_force_ = centre - half_width;
-    return {trial_force_, b_ * k0_};
+    trial_.internal = centre - half_width;
+    return {trial_.internal, b_ * k0_};
   }
-  trial_force_ = predictor;
-  return {trial_force_, k0_};
-}
-
-void BilinearKinematic::commit() {
-  committed_drift_ = trial_drift_;
-  committed_force_ = trial_force_;
-}
-
-void BilinearKinematic::reset() {
-  committed_drift_ = committed_force_ = trial_drift_ = trial_force_ = 0.0;
+  trial_.internal = predictor;
+  return {trial_.internal, k0_};
 }
 
 std::unique_ptr<RestoringForceModel> BilinearKinematic::clone() const {
@@ -82,7 +73,7 @@ std::string BilinearKinematic::describe() const {
 
 // ---------------------------------------------------------------------------------------------
 BoucWen::BoucWen(double k0, double yield_drift, double alpha, double n, double beta_fraction)
-    : k0_(k0), uy_(yield_drift), alpha_(alpha), n_(n), beta_(0.0), gamma_(0.0) {
+    : HystereticModel(k0), uy_(yield_drift), alpha_(alpha), n_(n), beta_(0.0), gamma_(0.0) {
   require(positive_finite(k0), format("BoucWen: k0 must be > 0, got %g", k0));
   require(positive_finite(yield_drift),
           format("BoucWen: yield drift must be > 0, got %g", yield_drift));
@@ -104,9 +95,9 @@ double BoucWen::dz_du(double z, double du) const {
 }
 
 ForceState BoucWen::trial(double drift) {
-  trial_drift_ = drift;
-  const double du = drift - committed_drift_;
-  double z = committed_z_;
+  trial_.drift = drift;
+  const double du = drift - committed_.drift;
+  double z = committed_.internal;
   if (du != 0.0) {
     // RK4 in u with sub-steps of at most uy / 50: z changes by at most ~uy/50 per sub-step,
     // fine enough to follow the knee of the loop.
@@ -120,19 +111,12 @@ ForceState BoucWen::trial(double drift) {
       z += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
     }
   }
-  trial_z_ = z;
+  trial_.internal = z;
   const double force = alpha_ * k0_ * drift + (1.0 - alpha_) * k0_ * z;
   // The tangent continues the current loading direction; at rest (du = 0) sgn is taken as 0.
   const double tangent = alpha_ * k0_ + (1.0 - alpha_) * k0_ * dz_du(z, du);
   return {force, tangent};
 }
-
-void BoucWen::commit() {
-  committed_drift_ = trial_drift_;
-  committed_z_ = trial_z_;
-}
-
-void BoucWen::reset() { committed_drift_ = committed_z_ = trial_drift_ = trial_z_ = 0.0; }
 
 std::unique_ptr<RestoringForceModel> BoucWen::clone() const {
   return std::make_unique<BoucWen>(*this);

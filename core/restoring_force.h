@@ -50,44 +50,53 @@ class LinearSpring final : public RestoringForceModel {
   double k_;
 };
 
+// What a hysteretic model keeps: its initial stiffness k0 (N/m) and, committed and trial, the
+// drift (m) and one internal variable (the bilinear model's force in N, Bouc-Wen's z in m).
+// commit() accepts the trial pair; reset() zeroes both.
+class HystereticModel : public RestoringForceModel {
+ public:
+  void commit() override { committed_ = trial_; }
+  void reset() override { committed_ = trial_ = {}; }
+  double initial_stiffness() const override { return k0_; }
+
+ protected:
+  explicit HystereticModel(double k0) : k0_(k0) {}
+  struct State {
+    double drift = 0.0, internal = 0.0;
+  };
+  double k0_;
+  State committed_, trial_;
+};
+
 // Bilinear with kinematic hardening. Elastic stiffness k0, yield force fy = k0 * uy, post-yield
 // stiffness b * k0. The force stays within the band  b k0 u +/- (1 - b) fy  (return mapping), so
-// b < 1 is a softening response. @pre k0 > 0, uy > 0, 0 <= b <= 1.
-class BilinearKinematic final : public RestoringForceModel {
+// b < 1 is a softening response. @pre k0 > 0, uy > 0, 0 <= b <= 1. Internal variable: the force.
+class BilinearKinematic final : public HystereticModel {
  public:
   BilinearKinematic(double k0, double yield_drift, double post_yield_ratio);
   ForceState trial(double drift) override;
-  void commit() override;
-  void reset() override;
-  double initial_stiffness() const override { return k0_; }
   std::unique_ptr<RestoringForceModel> clone() const override;
   std::string describe() const override;
 
  private:
-  double k0_, fy_, b_;
-  double committed_drift_ = 0.0, committed_force_ = 0.0;
-  double trial_drift_ = 0.0, trial_force_ = 0.0;
+  double fy_, b_;
 };
 
 // Bouc–Wen: f = alpha k0 u + (1 - alpha) k0 z, with the hysteretic drift z (m) obeying
 //   dz/du = A - |z|^n (beta sgn(du z) + gamma),  A = 1,  beta + gamma = 1 / uy^n,
 // so z saturates at uy. `beta_fraction` = beta uy^n (0.5 gives the classic beta = gamma).
-// z is integrated over each drift increment with RK4 sub-steps of at most uy / 50.
-class BoucWen final : public RestoringForceModel {
+// z is integrated over each drift increment with RK4 sub-steps of at most uy / 50. Internal
+// variable: z.
+class BoucWen final : public HystereticModel {
  public:
   BoucWen(double k0, double yield_drift, double alpha, double n, double beta_fraction);
   ForceState trial(double drift) override;
-  void commit() override;
-  void reset() override;
-  double initial_stiffness() const override { return k0_; }
   std::unique_ptr<RestoringForceModel> clone() const override;
   std::string describe() const override;
 
  private:
   double dz_du(double z, double du) const;
-  double k0_, uy_, alpha_, n_, beta_, gamma_;
-  double committed_drift_ = 0.0, committed_z_ = 0.0;
-  double trial_drift_ = 0.0, trial_z_ = 0.0;
+  double uy_, alpha_, n_, beta_, gamma_;
 };
 
 // A specimen with inertia and damping, as a force transducer between actuator and specimen

@@ -8,47 +8,42 @@
 
 namespace rths::core {
 
-Backlash::Backlash(double width) : half_width_(0.5 * width) {
+MotionLimit::MotionLimit(Kind kind, double limit, double reach)
+    : kind_(kind), limit_(limit), reach_(reach) {}
+
+MotionLimit MotionLimit::backlash(double width) {
   require(width >= 0.0 && std::isfinite(width),
           "backlash: width must be >= 0 m, got " + format_number(width));
+  return MotionLimit(Kind::kBacklash, width, 0.5 * width);
 }
 
-std::unique_ptr<DelayStage> Backlash::clone() const { return std::make_unique<Backlash>(*this); }
-
-std::string Backlash::describe() const {
-  return "backlash(width " + format_number(2.0 * half_width_ * 1e3) + " mm)";
-}
-
-Linearity Backlash::linearity() const {
-  return {Linearity::Kind::kLinearised, "backlash left out (a small motion passes unchanged)"};
-}
-
-double Backlash::step_unscaled(const CommandSample& in) {
-  output_ = std::clamp(output_, in.displacement - half_width_, in.displacement + half_width_);
-  return output_;
-}
-
-VelocityLimit::VelocityLimit(double max_velocity, double dt)
-    : max_velocity_(max_velocity), max_step_(max_velocity * dt) {
+MotionLimit MotionLimit::velocity_limit(double max_velocity, double dt) {
   require(max_velocity > 0.0 && std::isfinite(max_velocity),
           "velocity_limit: max_velocity must be > 0 m/s, got " + format_number(max_velocity));
   require(dt > 0.0 && std::isfinite(dt), "velocity_limit: dt must be > 0 s");
+  return MotionLimit(Kind::kVelocityLimit, max_velocity, max_velocity * dt);
 }
 
-std::unique_ptr<DelayStage> VelocityLimit::clone() const {
-  return std::make_unique<VelocityLimit>(*this);
+std::unique_ptr<DelayStage> MotionLimit::clone() const {
+  return std::make_unique<MotionLimit>(*this);
 }
 
-std::string VelocityLimit::describe() const {
-  return "velocity_limit(" + format_number(max_velocity_ * 1e3) + " mm/s)";
+std::string MotionLimit::describe() const {
+  return kind_ == Kind::kBacklash ? "backlash(width " + format_number(limit_ * 1e3) + " mm)"
+                                  : "velocity_limit(" + format_number(limit_ * 1e3) + " mm/s)";
 }
 
-Linearity VelocityLimit::linearity() const {
-  return {Linearity::Kind::kLinearised, "velocity limit left out (below it motion is unchanged)"};
+Linearity MotionLimit::linearity() const {
+  return {Linearity::Kind::kLinearised,
+          kind_ == Kind::kBacklash ? "backlash left out (a small motion passes unchanged)"
+                                   : "velocity limit left out (below it motion is unchanged)"};
 }
 
-double VelocityLimit::step_unscaled(const CommandSample& in) {
-  output_ += std::clamp(in.displacement - output_, -max_step_, max_step_);
+double MotionLimit::step_unscaled(const CommandSample& in) {
+  if (kind_ == Kind::kBacklash)
+    output_ = std::clamp(output_, in.displacement - reach_, in.displacement + reach_);
+  else
+    output_ += std::clamp(in.displacement - output_, -reach_, reach_);
   return output_;
 }
 

@@ -5,9 +5,9 @@
 //
 // Input (CommandSample): t (s), u (m) from the stage before. Output: u_out (m). Initial state:
 // at rest at u_out = 0. Equations, per step k:
-//   Backlash       play of total width w (m) between the drive and the specimen:
+//   backlash       play of total width w (m) between the drive and the specimen:
 //                  u_out[k] = clamp(u_out[k-1], u[k] - w/2, u[k] + w/2).
-//   VelocityLimit  a servo valve's flow limit, v_max (m/s) at step dt (s):
+//   velocity_limit a servo valve's flow limit, v_max (m/s) at step dt (s):
 //                  u_out[k] = u_out[k-1] + clamp(u[k] - u_out[k-1], -v_max dt, v_max dt).
 //   SensorDrift    the displacement sensor and the load cell reading off the truth, each by an
 //                  offset and a drift over time: u_out = u (the specimen is not moved);
@@ -15,55 +15,41 @@
 //                  integrator receives = f + f0 + f1 t (N, N/s) (measure_force).
 // The identification's predictors (identify/model/model.cpp) apply the same recursions, so an
 // identified width or limit re-runs as it was fitted.
-// Linear dynamics: Backlash and VelocityLimit are the identity once their non-linearity is left
-// out (kLinearised: a small motion passes unchanged); SensorDrift is the identity.
+// Linear dynamics: a MotionLimit (backlash, velocity_limit) is the identity once its
+// non-linearity is left out (kLinearised: a small motion passes unchanged); SensorDrift is the
+// identity.
 // Real-time safe: no allocation after construction.
 
 #include "core/delay.h"
 
 namespace rths::core {
 
-// What Backlash and VelocityLimit share: a state that is the last output, a nominal delay of 0,
-// and the identity as their linear dynamics.
-class MotionLimit : public DelayStage {
- public:
-  void reset() override { output_ = 0.0; }
-  double nominal_delay() const override { return 0.0; }
-
- protected:
-  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
-  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
-  double output_ = 0.0;  // m, the last output
-};
-
-class Backlash final : public MotionLimit {
+// Backlash and VelocityLimit in one block (they differ only in the recursion): its state is the
+// last output; its linear dynamics are the identity.
+class MotionLimit final : public DelayStage {
  public:
   // @pre width >= 0 and finite (m) (throws std::invalid_argument).
-  explicit Backlash(double width);
-  std::unique_ptr<DelayStage> clone() const override;
-  std::string describe() const override;
-  Linearity linearity() const override;
-
- protected:
-  double step_unscaled(const CommandSample& in) override;
-
- private:
-  double half_width_;
-};
-
-class VelocityLimit final : public MotionLimit {
- public:
+  static MotionLimit backlash(double width);
   // @pre max_velocity > 0 and finite (m/s), dt > 0 (s) (throws std::invalid_argument).
-  VelocityLimit(double max_velocity, double dt);
+  static MotionLimit velocity_limit(double max_velocity, double dt);
+  void reset() override { output_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
+  double nominal_delay() const override { return 0.0; }
   Linearity linearity() const override;
 
  protected:
   double step_unscaled(const CommandSample& in) override;
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 
  private:
-  double max_velocity_, max_step_;
+  enum class Kind { kBacklash, kVelocityLimit };
+  MotionLimit(Kind kind, double limit, double step);
+  Kind kind_;
+  double limit_;  // m, the backlash's width; m/s, the velocity limit
+  double reach_;  // m: half the width, or the most the output moves in one step
+  double output_ = 0.0;
 };
 
 struct SensorErrors {

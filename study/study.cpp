@@ -344,9 +344,12 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
       block = std::make_unique<TrackingLoop>(
           make_tracking_loop(stage.tracking_loop(), dt, "tracking_loop"));
       break;
-    case K::kBacklash: block = std::make_unique<Backlash>(stage.backlash().width()); break;
+    case K::kBacklash:
+      block = std::make_unique<MotionLimit>(MotionLimit::backlash(stage.backlash().width()));
+      break;
     case K::kVelocityLimit:
-      block = std::make_unique<VelocityLimit>(stage.velocity_limit().max_velocity(), dt);
+      block = std::make_unique<MotionLimit>(
+          MotionLimit::velocity_limit(stage.velocity_limit().max_velocity(), dt));
       break;
     case K::kSensorDrift: {
       const auto& d = stage.sensor_drift();

@@ -14,25 +14,25 @@ namespace rths::core {
 namespace {
 
 TEST(Backlash, TheOutputMovesOnlyOnceThePlayIsTakenUp) {
-  Backlash play(0.002);                                      // 1 mm each way
+  MotionLimit play = MotionLimit::backlash(0.002);           // 1 mm each way
   EXPECT_DOUBLE_EQ(play.step({0.001, 0.0008, 0.0}), 0.0);    // inside the play
   EXPECT_DOUBLE_EQ(play.step({0.002, 0.003, 0.0}), 0.002);   // dragged at the far edge
   EXPECT_DOUBLE_EQ(play.step({0.003, 0.0025, 0.0}), 0.002);  // reversal: the play again
   EXPECT_DOUBLE_EQ(play.step({0.004, 0.0, 0.0}), 0.001);     // dragged back
   play.reset();
   EXPECT_DOUBLE_EQ(play.step({0.001, 0.0005, 0.0}), 0.0);
-  EXPECT_THROW(Backlash(-1e-3), std::invalid_argument);
-  EXPECT_THROW(Backlash(std::nan("")), std::invalid_argument);
+  EXPECT_THROW(MotionLimit::backlash(-1e-3), std::invalid_argument);
+  EXPECT_THROW(MotionLimit::backlash(std::nan("")), std::invalid_argument);
 }
 
 TEST(VelocityLimit, TheOutputMovesAtMostTheLimitTimesTheStep) {
-  VelocityLimit valve(0.05, 0.01);  // 0.5 mm per step
+  MotionLimit valve = MotionLimit::velocity_limit(0.05, 0.01);  // 0.5 mm per step
   EXPECT_DOUBLE_EQ(valve.step({0.01, 0.002, 0.0}), 0.0005);
   EXPECT_DOUBLE_EQ(valve.step({0.02, 0.002, 0.0}), 0.001);
   EXPECT_DOUBLE_EQ(valve.step({0.03, 0.0012, 0.0}), 0.0012);  // within reach: followed
   EXPECT_DOUBLE_EQ(valve.step({0.04, -0.01, 0.0}), 0.0007);
-  EXPECT_THROW(VelocityLimit(0.0, 0.01), std::invalid_argument);
-  EXPECT_THROW(VelocityLimit(0.05, 0.0), std::invalid_argument);
+  EXPECT_THROW(MotionLimit::velocity_limit(0.0, 0.01), std::invalid_argument);
+  EXPECT_THROW(MotionLimit::velocity_limit(0.05, 0.0), std::invalid_argument);
   // Linear analysis leaves the limit out and says so.
   EXPECT_EQ(valve.linearity().kind, Linearity::Kind::kLinearised);
   EXPECT_DOUBLE_EQ(std::abs(valve.frequency_response(10.0)), 1.0);
