@@ -1,0 +1,183 @@
+#pragma once
+// Records written by a closed-loop simulation of the paper frame that shares no model with rths's
+// nodes, for the identification tests: its own integrator (explicit Newmark), its own actuator
+// (a 14 ms shift, then whatever the rig adds), its own specimen and its own sensors with noise and
+// 16-bit converters. The record holds the declared study (the paper frame, linear specimen, a
+// 14 ms shift), whatever the rig truly did: as a lab's record made by another controller would.
+//
+// Paper frame: m = 1000 kg, T = 0.5 s, 5 % modal damping, the experimental part a third of the
+// storey stiffness (k_e = 52,638 N/m), dt = 1 ms, the 1979 Imperial Valley record (the motion is
+// read by rths, since it is an input, not a model). Per step k (Newmark, gamma = 1/2, beta = 0):
+//   u_k = u + dt v + dt^2/2 a; command x_c = u_k; the actuator: x = x_c(t - 14 ms) -> first order
+//   (tau) -> backlash (width) -> velocity limit (v_max) -> gain; specimen: f = k_e s x (linear) or
+//   Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x; sensors: x_m = AD(x + n_x),
+//   f_m = AD(f + f0 + f1 t + n_f), AD a 16-bit converter over +-range; then
+//   a_k = (p_k - c (v + dt/2 a) - k_n u_k - f_m) / (m + dt/2 c), v += dt/2 (a + a_k).
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <filesystem>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "runtime/node/schema.h"
+#include "runtime/record/record.h"
+#include "study/study.h"
+#include "study/study_inputs.h"
+#include "tests/runtime/test_support.h"
+
+namespace rths::test {
+
+// What the rig truly does beyond the declared 14 ms shift (0 = absent).
+struct RigTruth {
+  double time_constant = 0.0;        // s, an extra first-order lag
+  double gain = 1.0;                 // of the actuator
+  double backlash = 0.0;             // m, total width
+  double max_velocity = 0.0;         // m/s
+  double stiffness_scale = 1.0;      // of the specimen's (linear or initial) stiffness
+  bool bouc_wen = false;             // a hysteretic specimen: alpha 0.1, uy 4 mm
+  double force_offset = 0.0;         // N, on the load cell
+  double force_drift = 0.0;          // N/s
+  double displacement_noise = 2e-6;  // m RMS
+  double force_noise = 0.5;          // N RMS
+  double displacement_range = 0.2;   // m, 16-bit converter
+  double force_range = 20000.0;      // N
+  std::uint64_t seed = 7;
+};
+
+inline double converted(double x, double range) {
+  const double quantum = range / 32768.0;
+  return std::round(std::clamp(x, -range, range) / quantum) * quantum;
+}
+
+// The actuator's displacement from the delayed command, with the rig's own effects.
+class TrueActuator {
+ public:
+  TrueActuator(const RigTruth& rig, double dt) : rig_(rig), dt_(dt) {}
+  double step(double delayed_command) {
+    double x = delayed_command;
+    if (rig_.time_constant > 0.0) {
+      const double e = std::exp(-dt_ / rig_.time_constant);
+      x = lag_ = e * lag_ + (1.0 - e) * x;
+    }
+    if (rig_.backlash > 0.0)
+      x = play_ = std::clamp(play_, x - 0.5 * rig_.backlash, x + 0.5 * rig_.backlash);
+    if (rig_.max_velocity > 0.0)
+      x = valve_ += std::clamp(x - valve_, -rig_.max_velocity * dt_, rig_.max_velocity * dt_);
+    return rig_.gain * x;
+  }
+
+ private:
+  RigTruth rig_;
+  double dt_, lag_ = 0.0, play_ = 0.0, valve_ = 0.0;
+};
+
+// The specimen's force (N) at displacement x (m): linear, or Bouc-Wen integrated with RK4.
+class TrueSpecimen {
+ public:
+  TrueSpecimen(const RigTruth& rig, double k0) : rig_(rig), k0_(k0 * rig.stiffness_scale) {}
+  double force(double x) {
+    if (!rig_.bouc_wen) return k0_ * x;
+    const double du = x - last_, uy = 0.004, alpha = 0.1;
+    const auto rate = [&](double z) {
+      const double s = du * z > 0.0 ? 1.0 : (du * z < 0.0 ? -1.0 : 0.0);
+      return 1.0 - std::abs(z) / uy * (0.5 * s + 0.5);
+    };
+    const int n = std::max(1, static_cast<int>(std::ceil(std::abs(du) / (uy / 100.0))));
+    const double h = du / n;
+    for (int i = 0; i < n; ++i) {
+      const double k1 = rate(z_), k2 = rate(z_ + 0.5 * h * k1), k3 = rate(z_ + 0.5 * h * k2),
+                   k4 = rate(z_ + h * k3);
+      z_ += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    }
+    last_ = x;
+    return alpha * k0_ * x + (1.0 - alpha) * k0_ * z_;
+  }
+
+ private:
+  RigTruth rig_;
+  double k0_, last_ = 0.0, z_ = 0.0;
+};
+
+// The declared study: the paper frame with its 14 ms shift, as the record's header holds it.
+inline std::string independent_declared_study(double duration) {
+  return paper_frame_study(duration, "");
+}
+
+// Writes the record of a `duration` s run of the rig `rig` under the declared study; returns its
+// path.
+inline std::filesystem::path independent_record(const std::string& name, const RigTruth& rig,
+                                                double duration = 20.0) {
+  const core::PreparedStudy declared = prepare(independent_declared_study(duration));
+  const double dt = 0.001, m = 1000.0, omega = 2.0 * std::numbers::pi / 0.5;
+  const double k = m * omega * omega, c = 2.0 * 0.05 * m * omega;
+  const double k_e = k / 3.0, k_n = k - k_e;
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_independent_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const auto path = dir / (name + ".rthsrec");
+  runtime::RecordWriter writer(path);
+  runtime::RecordEntry entry;
+  runtime::RunHeader& header = *entry.mutable_header();
+  header.set_schema_version(runtime::kSchemaVersion);
+  header.set_run_id(name);
+  *header.mutable_study() = declared.config;
+  header.set_case_name("lag_shift_14ms");
+  header.set_clock("lockstep");
+  header.set_dt(dt);
+  header.set_dofs(1);
+  header.set_actuators(1);
+  writer.write(entry);
+  entry.Clear();
+  *entry.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
+  writer.write(entry);
+
+  const std::vector<double>& ground = declared.motion.acceleration;
+  TrueActuator actuator(rig, dt);
+  TrueSpecimen specimen(rig, k_e);
+  std::mt19937_64 rng(rig.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::deque<double> commands(14, 0.0);  // the 14 ms shift: 14 whole steps
+  double u = 0.0, v = 0.0, a = 0.0, x_m = 0.0, f_m = 0.0, command = 0.0;
+  for (std::size_t step = 0; step < ground.size(); ++step) {
+    const double t = static_cast<double>(step) * dt;
+    if (step > 0) {
+      u += dt * v + 0.5 * dt * dt * a;
+      command = u;
+      commands.push_back(command);
+      const double x = actuator.step(commands.front());
+      commands.pop_front();
+      const double f = specimen.force(x);
+      x_m = converted(x + rig.displacement_noise * normal(rng), rig.displacement_range);
+      f_m = converted(f + rig.force_offset + rig.force_drift * t + rig.force_noise * normal(rng),
+                      rig.force_range);
+      const double a_next =
+          (-m * ground[step] - c * (v + 0.5 * dt * a) - k_n * u - f_m) / (m + 0.5 * dt * c);
+      v += 0.5 * dt * (a + a_next);
+      a = a_next;
+    }
+    entry.Clear();
+    runtime::StepRecord& r = *entry.mutable_step();
+    r.set_step(static_cast<std::int64_t>(step));
+    r.set_time(t);
+    r.set_ground_acceleration(ground[step]);
+    r.add_displacement(u);
+    r.add_velocity(v);
+    r.add_acceleration(a);
+    r.add_command(command);
+    r.add_realised(x_m);
+    r.add_measured_force(f_m);
+    writer.write(entry);
+  }
+  entry.Clear();
+  entry.mutable_footer()->set_ok(true);
+  entry.mutable_footer()->set_status("completed");
+  writer.write(entry);
+  return path;
+}
+
+}  // namespace rths::test
