@@ -4,6 +4,8 @@
 // held-out error and the k-fold mean, from its JSON.
 //
 //   identify_bench [--repeat N] [--rths PATH] [--keep DIR] [RECORD ...]
+// A RECORD may be a run's record (*.rthsrec): its row then gives its steps, the undeclared effects
+// over every part and the re-run's worst floor NRMSE, declared -> identified.
 // Default records: data/measured/mts_mrdamper_chirp_0A.txt and a one-minute record at
 // 1 kHz of the same rig made by identify::generate_measured (a 15 Hz sinusoidal test with the MR
 // damper energised: 4.6 ms delay and a 21.8 ms first-order lag, Bouc-Wen + viscous + friction
@@ -101,6 +103,16 @@ void print_row(const fs::path& record, const std::vector<Run>& runs) {
             << seconds.front() << ", max " << seconds.back() << ")";
   try {
     const auto json = nlohmann::json::parse(last.output.substr(last.output.find('{')));
+    if (json.contains("undeclared")) {  // a run's record (*.rthsrec)
+      std::cout << "; " << json.at("steps").get<std::size_t>() << " steps, "
+                << json.at("undeclared").size() << " undeclared effect(s)";
+      if (json.contains("residual"))
+        std::cout << ", worst floor NRMSE "
+                  << 100.0 * json.at("residual").at("declared_nrmse").get<double>() << " % -> "
+                  << 100.0 * json.at("residual").at("identified_nrmse").get<double>() << " %";
+      std::cout << "  [load " << load_average() << "]\n";
+      return;
+    }
     for (const auto& c : json.at("channels")) {
       std::cout << "; " << c.at("channel").get<std::string>() << " held-out "
                 << 100.0 * c.at("final").at("heldout_error").get<double>() << " %";

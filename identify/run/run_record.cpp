@@ -188,6 +188,14 @@ DeclaredActuator declared_actuator(const config::Study& study, const std::string
   return out;
 }
 
+// An added effect is named only when it paid when added and still pays in the final model: the
+// final model refitted without it loses held-out error (a step taken on the way, whose work a
+// later refit does without, is not an effect of the rig).
+bool step_paid(const SelectionStep& step) {
+  return step.before.heldout_error - step.after.heldout_error > kMinErrorRemoved &&
+         step.own_error_removed > kMinErrorRemoved;
+}
+
 // The study's storey model as force-channel effects (actuator_path.h).
 std::vector<Effect> declared_specimen(const config::Study& study) {
   const config::RestoringForce& model = study.substructuring().model();
@@ -215,7 +223,7 @@ void judge_specimen(const Identification& id, ActuatorPath& out) {
     bool paid = true;
     for (const auto& step : c->steps)
       if (step.effect == e)
-        paid = step.before.heldout_error - step.after.heldout_error > kMinErrorRemoved;
+        paid = step_paid(step);
     if (paid) out.specimen_undeclared.push_back(effect_name(e));
   }
   if (out.declared_stiffness > 0.0 && std::abs(out.fitted_stiffness - out.declared_stiffness) >
@@ -251,7 +259,7 @@ ActuatorPath identify_actuator(const std::filesystem::path& record,
     const SignalScales scales = signal_scales(out.id.signals.front());
     out.fitted_gain = c->final_fit.model.param(std::nullopt, "gain", scales).value_or(1.0);
     for (const auto& step : c->steps) {
-      if (step.before.heldout_error - step.after.heldout_error > kMinErrorRemoved) {
+      if (step_paid(step)) {
         out.undeclared.push_back(effect_name(step.effect));
       }
     }

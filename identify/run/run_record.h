@@ -9,8 +9,9 @@
 // specimen, measured displacement -> force, identified by identify.h with the effect library;
 // declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
 // transfer function -> second_order, each with the config's value as initial value), gain = the
-// stages' amplitude gain. Undeclared effects: the steps the search added that remove more than
-// kMinErrorRemoved of held-out error, and a fitted gain off the declared one by more than
+// stages' amplitude gain. Undeclared effects: the steps the search added that removed more than
+// kMinErrorRemoved of held-out error when added and still do in the final model (refitted without
+// it), and a fitted gain off the declared one by more than
 // kGainTolerance (an emulator gain error), and a fitted delay off the declared one
 // (kDelayTolerance). A run that diverged is identified up to the last step whose response is finite
 // and below the coordinator's divergence bound; a truncated record (no footer, or a cut last entry)
