@@ -2,6 +2,7 @@
 
 #include <strings.h>
 #include <sys/epoll.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -32,11 +33,22 @@ std::size_t content_length(std::string_view headers) {
 
 }  // namespace
 
+bool set_thread_nice(int nice) {
+  return setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice) == 0;
+}
+
 RequestGate::RequestGate(GateOptions options, std::function<void(int fd)> serve)
     : options_(options), serve_(std::move(serve)), epoll_(epoll_create1(EPOLL_CLOEXEC)) {
   if (epoll_ < 0) throw std::runtime_error("the view cannot create its epoll set");
-  poller_ = std::thread([this] { poll_loop(); });
-  for (int i = 0; i < options_.workers; ++i) workers_.emplace_back([this] { worker_loop(); });
+  poller_ = std::thread([this] {
+    set_thread_nice(options_.nice);
+    poll_loop();
+  });
+  for (int i = 0; i < options_.workers; ++i)
+    workers_.emplace_back([this] {
+      set_thread_nice(options_.nice);
+      worker_loop();
+    });
 }
 
 RequestGate::~RequestGate() { stop(); }

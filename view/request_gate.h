@@ -18,7 +18,9 @@
 //     ("too_large"); one that closes before it is complete is just closed ("closed_early");
 //   - at most `max_queued` complete requests wait for a worker; more are answered 503 and closed
 //     ("queue_full").
-// Threads: one epoll thread (waiting connections, deadlines at a 20 ms tick) and `workers`.
+// Threads: one epoll thread (waiting connections, deadlines at a 20 ms tick) and `workers`, each
+// at `nice` (Linux's per-thread nice value): on a machine the loop shares, a flood of requests
+// takes CPU from the loop only where the loop leaves some.
 // Thread safety: admit() and counters() from any thread.
 
 #include <chrono>
@@ -42,7 +44,11 @@ struct GateOptions {
   std::chrono::milliseconds header_deadline{3000};
   std::size_t max_request_bytes = 8192 + 4096;  // headers (8 KiB) and a body (4 KiB)
   int workers = 8;
+  int nice = 10;  // 0-19; raising a thread's nice value needs no privilege
 };
+
+// Sets the calling thread's nice value (Linux: per thread). False when the kernel refused.
+bool set_thread_nice(int nice);
 
 class RequestGate {
  public:

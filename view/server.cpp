@@ -198,7 +198,10 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
     throw std::runtime_error("the view cannot listen on " + a.host + ":" + std::to_string(a.port) +
                              " (in use, or not an address of this host)");
   listener.widen_backlog();
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  thread_ = std::thread([this] {
+    set_thread_nice(options_.gate.nice);
+    server_->listen_after_bind();
+  });
 }
 
 void ViewServer::routes() {
