@@ -56,7 +56,7 @@ struct MessageMac::Context {
   // The fields in the documented order: tag, direction, run id (length-prefixed), node id, kind,
   // step, sent_ns, echo_ns, payload (length-prefixed); the fixed-width ones gathered in two
   // buffers, so four updates per message.
-  Mac compute(const Message& m, std::int64_t sent_ns, Direction direction) const {
+  Mac compute(const MacInput& m, Direction direction) const {
     unsigned char head[sizeof kTag + 1 + 4];
     std::memcpy(head, kTag, sizeof kTag);
     unsigned char* at = put(head + sizeof kTag, static_cast<std::uint8_t>(direction));
@@ -65,7 +65,7 @@ struct MessageMac::Context {
     at = put(middle, m.node_id);
     at = put(at, m.kind);
     at = put(at, m.step);
-    at = put(at, sent_ns);
+    at = put(at, m.sent_ns);
     at = put(at, m.echo_ns);
     put(at, static_cast<std::uint32_t>(m.payload.size()));
     SHA256_CTX c = inner;
@@ -89,11 +89,15 @@ MessageMac::MessageMac(const std::string& key) : keyed_(std::make_unique<Context
 MessageMac::~MessageMac() = default;
 
 Mac MessageMac::sign(const Message& message, std::int64_t sent_ns, Direction direction) const {
-  return keyed_->compute(message, sent_ns, direction);
+  return keyed_->compute(MacInput::of(message, sent_ns), direction);
 }
 
 bool MessageMac::verify(const Message& message, Direction direction, const Mac& mac) const {
-  const Mac expected = keyed_->compute(message, message.sent_ns, direction);
+  return verify(MacInput::of(message, message.sent_ns), direction, mac);
+}
+
+bool MessageMac::verify(const MacInput& fields, Direction direction, const Mac& mac) const {
+  const Mac expected = keyed_->compute(fields, direction);
   return CRYPTO_memcmp(expected.data(), mac.data(), mac.size()) == 0;
 }
 
