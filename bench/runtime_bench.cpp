@@ -24,8 +24,6 @@
 //
 //   rths_runtime_bench [--seconds S] [--skip-real-time] [--domain D] [--spread] [--lockstep-only]
 //                      [--memory-steps N [--memory-rate HZ]]
-//   rths_runtime_bench --secret-pairs [--repeat N] [--seconds S]: lockstep steps/s and 1024 Hz
-//                      wake-up to command without and with the run secret, alternating.
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
@@ -248,7 +246,7 @@ struct RunFigures {
 // one_cpu: this process (the coordinator, its DDS threads) and the nodes on one CPU, as
 // `rths launch` places lockstep runs by default (runtime::CpuPlacement).
 RunFigures distributed_run(int domain, const std::string& text, const std::string& name,
-                           NodeSet node_set = {}, bool one_cpu = false, bool run_secret = true) {
+                           NodeSet node_set = {}, bool one_cpu = false) {
   std::unique_ptr<util::ScopedCpuPin> pin;
   if (one_cpu) pin = std::make_unique<util::ScopedCpuPin>();
   // The nodes start off the loop CPU, as `rths launch` starts them.
@@ -257,8 +255,7 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
                              .study_text = text,
                              .domain = domain,
                              .nodes = node_set,
-                             .keep_off_loop_cpu = true,
-                             .run_secret = run_secret});
+                             .keep_off_loop_cpu = true});
   const auto outcome = run.start({}).run();
   if (!outcome.ok) throw std::runtime_error(name + ": " + outcome.status);
   run.wait_for_nodes();
@@ -486,7 +483,6 @@ struct BenchArgs {
   double memory_rate = 4096;
   bool scaling = false;
   bool command_path = false;
-  bool secret_pairs = false;
 };
 
 void add_arguments(CLI::App& app, BenchArgs& a) {
@@ -518,38 +514,8 @@ void add_arguments(CLI::App& app, BenchArgs& a) {
                "only the command path replayed with timestamps between its parts (pack, DDS "
                "write), paced at the first --rate and back to back, 1 and 2 echo peers "
                "(--seconds each)");
-  app.add_flag("--secret-pairs", a.secret_pairs,
-               "only pairs of runs without and with the run secret (MACs), alternating: "
-               "lockstep steps/s and 1024 Hz wake-up to command (--repeat pairs, --seconds)");
   app.add_option("--echo", a.echo_domain, "internal: run as the ping-pong echo peer");
   app.add_option("--echo-id", a.echo_id, "internal: the echo peer's node id");
-}
-
-// Pairs without and with the run secret, alternating, in one sitting: what the MACs cost a
-// lockstep step and a 1024 Hz step's wake-up to command.
-void secret_pairs(const BenchArgs& a) {
-  std::vector<double> lock_off, lock_on, command_off, command_on;
-  const std::string rt = study_text(
-      1.0 / 1024, a.seconds, std::string("deployment { clock: REAL_TIME ") + kUnjudged + "}");
-  for (int r = 0; r < a.repeat; ++r)
-    for (const bool secret : {false, true}) {
-      const std::string tag = std::string(secret ? "_mac" : "_plain") + std::to_string(r);
-      const auto lock = distributed_run(a.domain + 1, study_text(0.001, 39.0, ""), "lockstep" + tag,
-                                        {}, !a.spread, secret);
-      const auto paced = distributed_run(a.domain + 2, rt, "rt1024" + tag, {}, false, secret);
-      (secret ? lock_on : lock_off).push_back(lock.steps_per_second);
-      (secret ? command_on : command_off).push_back(paced.command_latency.median * 1e6);
-      std::printf("%s: lockstep %.0f steps/s; 1024 Hz wake-up to command median %.1f us\n",
-                  secret ? "run secret" : "no secret ", lock.steps_per_second,
-                  paced.command_latency.median * 1e6);
-      std::fflush(stdout);
-    }
-  const auto m = [](const std::vector<double>& v) { return runtime::summarize(v).median; };
-  std::printf(
-      "  => medians of %d pairs: lockstep %.0f steps/s without the secret, %.0f with it (ratio "
-      "%.3f); 1024 Hz wake-up to command %.1f us without, %.1f us with (ratio %.3f)\n",
-      a.repeat, m(lock_off), m(lock_on), m(lock_on) / m(lock_off), m(command_off), m(command_on),
-      m(command_on) / m(command_off));
 }
 
 void lockstep_only_row(const BenchArgs& a) {
@@ -691,10 +657,6 @@ int main(int argc, char** argv) {
   }
   if (a.memory_steps > 0) {
     memory_run(a.domain + 3, a.memory_steps, a.memory_rate, a.deployment_extra);
-    return 0;
-  }
-  if (a.secret_pairs) {
-    secret_pairs(a);
     return 0;
   }
   if (a.lockstep_only) {
