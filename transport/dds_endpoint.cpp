@@ -87,6 +87,13 @@ struct DdsEndpoint::Impl {
   };
   mutable std::mutex unauthenticated_mutex;
   Dropped dropped;
+  // Writers (publication handles) that sent a message whose MAC failed: the run's own processes
+  // never do, so their later samples are dropped by a lookup, before any hash. At most
+  // kMaxForgers remembered (a forger that keeps making writers pays one MAC per new writer).
+  static constexpr std::size_t kMaxForgers = 256;
+  std::vector<std::uint64_t> forgers;  // under unauthenticated_mutex
+  std::atomic<bool> any_forger{false};
+  bool known_forger(std::uint64_t writer);
   // Shared between the receive thread and the caller; declared before the DDS entities so they
   // outlive the listener.
   std::mutex mutex;
@@ -210,7 +217,9 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       const auto* s = static_cast<const rths_dds_Envelope*>(samples[i]);
       if (!options.coordinator && s->node_id != options.node_id && s->node_id != kBroadcastId)
         continue;
-      if (!authentic(*s, *topic_node, infos[i].publication_handle)) continue;
+      if (known_forger(infos[i].publication_handle) ||
+          !authentic(*s, *topic_node, infos[i].publication_handle))
+        continue;
       // Per receive thread, reused: assigning into its strings allocates nothing once they have
       // grown to the largest message (moved into the queue, it starts over).
       thread_local Message m;
@@ -271,12 +280,25 @@ bool DdsEndpoint::Impl::authentic(const rths_dds_Envelope& s, std::int32_t topic
   if (mac->verify(fields, options.coordinator ? Direction::kUp : Direction::kDown, received))
     return true;
   std::lock_guard lock(unauthenticated_mutex);
+  if (forgers.size() < kMaxForgers &&
+      std::find(forgers.begin(), forgers.end(), writer) == forgers.end()) {
+    forgers.push_back(writer);
+    any_forger.store(true, std::memory_order_release);
+  }
   ++dropped.count;
   dropped.kind = s.kind;
   dropped.node_id = s.node_id;
   dropped.topic_node = topic_node;
   dropped.writer = writer;
   return false;
+}
+
+bool DdsEndpoint::Impl::known_forger(std::uint64_t writer) {
+  if (!mac || !any_forger.load(std::memory_order_acquire)) return false;
+  std::lock_guard lock(unauthenticated_mutex);
+  if (std::find(forgers.begin(), forgers.end(), writer) == forgers.end()) return false;
+  ++dropped.count;  // the newest drop stays the one whose MAC was checked
+  return true;
 }
 
 Unauthenticated DdsEndpoint::unauthenticated() const {
