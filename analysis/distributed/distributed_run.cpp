@@ -45,15 +45,10 @@ std::optional<InProcessDifference> difference_from_in_process(
 }
 
 nlohmann::json rejects_json(const runtime::Counters& c) {
-  return {{"foreign_run", c.foreign_run()},
-          {"garbage", c.garbage()},
-          {"duplicate", c.duplicate()},
-          {"stale", c.stale()},
-          {"out_of_order", c.out_of_order()},
-          {"unknown_node", c.unknown_node()},
-          {"not_entitled", c.not_entitled()},
-          {"out_of_range", c.out_of_range()},
-          {"unauthenticated", c.unauthenticated()}};
+  return {{"foreign_run", c.foreign_run()},   {"garbage", c.garbage()},
+          {"duplicate", c.duplicate()},       {"stale", c.stale()},
+          {"out_of_order", c.out_of_order()}, {"unknown_node", c.unknown_node()},
+          {"not_entitled", c.not_entitled()}, {"out_of_range", c.out_of_range()}};
 }
 
 std::string rejects_text(const runtime::Counters& c) {
@@ -146,6 +141,7 @@ void judge_status(const DistributedRun& run, const runtime::RecordContents& reco
     const auto& k = measured.footer.counters();
     facts.overruns = k.overruns();
     facts.rejected = runtime::RejectCounters::from(k).total();
+    facts.unauthenticated = k.unauthenticated();
     facts.node_rejects.assign(measured.footer.node_rejects().begin(),
                               measured.footer.node_rejects().end());
     if (runtime::needs_deadline_diagnosis(c.status, k.overruns()))
@@ -233,6 +229,7 @@ std::string distributed_summary_text(const DistributedResults& results) {
     const auto& f = results.facts[i];
     text << c.name << ": " << c.simulation.steps() << " steps, coordinator exit "
          << f.coordinator_exit << ", overruns " << f.overruns << ", rejected " << f.rejected
+         << (f.unauthenticated ? ", unauthenticated " + std::to_string(f.unauthenticated) : "")
          << ", record " << f.record.string() << "\n";
     if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
     if (f.difference_from_in_process) {
@@ -283,6 +280,7 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     c["coordinator_exit"] = f.coordinator_exit;
     c["overruns"] = f.overruns;
     c["rejected"] = f.rejected;
+    c["unauthenticated"] = f.unauthenticated;
     c["links"] = links;
     c["record"] = f.record.string();
     c["deadline_diagnosis"] =
