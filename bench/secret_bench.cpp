@@ -9,6 +9,7 @@
 //     it can: overruns (%), wake-up to command, forged messages sent per second and dropped
 //     (the footer's unauthenticated count). Medians, the overruns' ratio.
 //   rths_secret_bench --secret-pairs|--flood-pairs [--repeat N] [--seconds S] [--domain D]
+//                     [--flood-rate PER_S]
 // Domains D (lockstep) and D + 1 (real time), default 195.
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
@@ -34,6 +35,7 @@ using namespace rths;
 struct Args {
   int repeat = 3, domain = 195;
   double seconds = 10;
+  double flood_rate = 0;  // forged messages per second; 0: as fast as the writer goes
 };
 
 constexpr const char* kUnjudged =
@@ -115,13 +117,15 @@ void secret_pairs(const Args& a) {
 }
 
 // A hostile writer on node 1's answer topic of `domain`: forged answers (no MAC: it has no run
-// secret) as fast as it can write them, at nice 19 (as from another machine: the measurement is
-// what the drops cost the coordinator, not the flooder's own CPU on this one), until destroyed.
+// secret) as fast as it can write them, or at `rate` per second (> 0: in bursts of 100), at
+// nice 19 (as from another machine: the measurement is what the drops cost the coordinator, not
+// the flooder's own CPU on this one), until destroyed.
 class Flood {
  public:
-  explicit Flood(int domain)
+  Flood(int domain, double rate)
       : writer_({static_cast<std::uint32_t>(domain), false, 1, "rths", 64, {}, {}}) {
-    thread_ = std::thread([this] {
+    thread_ = std::thread([this, rate] {
+      const auto start = std::chrono::steady_clock::now();
       setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 19);
       transport::Message m;
       m.run_id = "forged";
@@ -132,6 +136,9 @@ class Flood {
         m.step = k;
         writer_.send(m);
         ++sent_;
+        if (rate > 0 && k % 100 == 99)
+          std::this_thread::sleep_until(
+              start + std::chrono::duration<double>(static_cast<double>(k + 1) / rate));
       }
     });
   }
@@ -156,7 +163,7 @@ void flood_pairs(const Args& a) {
   for (int r = 0; r < a.repeat; ++r)
     for (const bool flood : {false, true}) {
       std::optional<Flood> hostile;
-      if (flood) hostile.emplace(a.domain + 1);
+      if (flood) hostile.emplace(a.domain + 1, a.flood_rate);
       const auto t0 = std::chrono::steady_clock::now();
       const auto f = run(a.domain + 1, rt, "flood" + std::to_string(r), false, true);
       const double seconds =
@@ -192,6 +199,9 @@ int main(int argc, char** argv) {
   app.add_option("--repeat", a.repeat, "pairs (medians over them)")->check(CLI::PositiveNumber);
   app.add_option("--seconds", a.seconds, "s of record of the real-time runs");
   app.add_option("--domain", a.domain, "DDS domain ids D and D + 1 (default 195)");
+  app.add_option("--flood-rate", a.flood_rate,
+                 "forged messages per second (default 0: as fast as the writer goes; the "
+                 "receiver's acknowledgements pace it, so a faster drop invites more)");
   CLI11_PARSE(app, argc, argv);
   if (secret == flood) {
     std::fprintf(stderr, "give one of --secret-pairs, --flood-pairs\n");
