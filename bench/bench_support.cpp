@@ -32,11 +32,23 @@ std::string sdof_study_text(const std::string& name, double dt, const std::strin
          deployment;
 }
 
+namespace {
+
+std::vector<std::string> node_arguments(int id, int domain, const std::string& run_id,
+                                        bool run_secret) {
+  std::vector<std::string> args{
+      "--node-id", std::to_string(id), "--domain", std::to_string(domain), "--run-id", run_id};
+  if (!run_secret) args.emplace_back("--insecure");
+  return args;
+}
+
+}  // namespace
+
 DistributedRun::DistributedRun(const RunSpec& spec)
     : dir_(std::filesystem::temp_directory_path() / spec.directory),
       record_(dir_ / "run.rthsrec"),
       run_id_(spec.run_id),
-      secret_(security::generate_run_secret()),
+      secret_(spec.run_secret ? security::generate_run_secret() : ""),
       domain_(spec.domain) {
   std::filesystem::create_directories(dir_);
   const auto config = dir_ / "study.textproto";
@@ -45,7 +57,7 @@ DistributedRun::DistributedRun(const RunSpec& spec)
   if (spec.keep_off_loop_cpu) off_loop_cpu_ = runtime::keep_off_loop_cpu(study_.deployment());
   // Measured as deployed: every message carries its MAC under the run's secret.
   util::ChildOptions trusted;
-  trusted.environment = {{security::kSecretEnv, secret_}};
+  if (spec.run_secret) trusted.environment = {{security::kSecretEnv, secret_}};
   const int count = spec.nodes.substructures + spec.nodes.emulators;
   for (int i = 0; i < count; ++i) {
     const bool substructure = i < spec.nodes.substructures;
@@ -53,8 +65,7 @@ DistributedRun::DistributedRun(const RunSpec& spec)
     nodes_.emplace_back(std::filesystem::path(RTHS_BINARY_DIR) /
                             (substructure ? "substructure_nodes/rths-substructure-node"
                                           : "actuator_emulator/rths-actuator-emulator"),
-                        std::vector<std::string>{"--node-id", std::to_string(id), "--domain",
-                                                 std::to_string(domain_), "--run-id", run_id_},
+                        node_arguments(id, domain_, run_id_, spec.run_secret),
                         dir_ / ("node_" + std::to_string(id) + ".log"), trusted);
   }
 }
@@ -64,6 +75,8 @@ core::PreparedStudy DistributedRun::prepared() const { return core::prepare_stud
 coordinator::Coordinator& DistributedRun::start(coordinator::CoordinatorOptions options) {
   endpoint_ = std::make_unique<transport::DdsEndpoint>(transport::DdsEndpointOptions{
       static_cast<std::uint32_t>(domain_), true, 0, "rths", 64, {}, secret_});
+  // As rths-coordinator does: the transport's drops for want of a MAC reach the footer.
+  options.unauthenticated = [endpoint = endpoint_.get()] { return endpoint->unauthenticated(); };
   options.run_id = run_id_;
   options.record = record_;
   coordinator_ = std::make_unique<coordinator::Coordinator>(core::prepare_study(study_, dir_),

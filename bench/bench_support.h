@@ -45,6 +45,9 @@ struct RunSpec {
   int domain = 0;
   NodeSet nodes;
   bool keep_off_loop_cpu = false;
+  // false: no run secret (the nodes started --insecure, no MAC on any message), to measure the
+  // MAC's cost against the same run with it.
+  bool run_secret = true;
 };
 
 class DistributedRun {

@@ -26,8 +26,15 @@
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
 //                   [--failsafe-periods N] [--page-query Q] [--browser-cpu N [--loop-cpu N]]
 //   rths_view_bench --rss-minutes 10 [--rss-every 10] [--rate HZ] [--domain D]
+// --hammer N instead pairs runs with the view served (no browser): without clients, then with N
+// clients looping on /api/snapshot as fast as they can plus 200 idle connections and 8 that drip
+// a header byte every 2 s; prints the overruns' ratio (with / without) and the snapshots served
+// against those built (SnapshotCache's cap).
+//   rths_view_bench --hammer 8 [--seconds S] [--repeat N]
+#include <netinet/in.h>
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
@@ -51,6 +58,9 @@
 #include "view/context.h"
 #include "view/feed.h"
 #include "view/server.h"
+
+// After Eigen (through the headers above): <resolv.h>, which httplib includes, defines _res.
+#include <httplib.h>
 
 namespace {
 
@@ -140,10 +150,12 @@ struct Spec {
   double rate = 1024, seconds = 20;
   int domain = 215, failsafe = 30;
   bool with_view = false, browser = false;
-  double rss_every = 0;    // s between RSS samples; 0: at 10, 50 and 95 % of the run
-  std::string page_query;  // appended to the page's URL after '?'
-  int browser_cpu = -1;    // >= 0: Chromium on this CPU alone (taskset)
-  int loop_cpu = -1;       // >= 0: the deployment's pin_loop on this CPU
+  double rss_every = 0;          // s between RSS samples; 0: at 10, 50 and 95 % of the run
+  std::string page_query;        // appended to the page's URL after '?'
+  int browser_cpu = -1;          // >= 0: Chromium on this CPU alone (taskset)
+  int loop_cpu = -1;             // >= 0: the deployment's pin_loop on this CPU
+  int hammer = 0;                // > 0: clients looping on /api/snapshot, and the idle crowd
+  int snapshot_period_ms = 200;  // the view's snapshot cap (0: rebuilt for every request)
 };
 
 struct Figures {
@@ -151,7 +163,8 @@ struct Figures {
   std::vector<std::pair<double, double>> rss;  // (s into the run, MB)
   std::string status;
   std::uint64_t streams_served = 0, updates_sent = 0;  // the view's, to the browser
-  double browser_cpu_s = 0, browser_window_s = 0;      // Chromium's CPU over that wall time
+  std::uint64_t snapshots_served = 0, snapshot_builds = 0;
+  double browser_cpu_s = 0, browser_window_s = 0;  // Chromium's CPU over that wall time
 };
 
 // Chromium's CPU from the run's start (its page already open) until `done`.
@@ -189,16 +202,66 @@ std::thread rss_sampler(const Spec& spec, std::vector<std::pair<double, double>>
   });
 }
 
+// Clients the view should shrug off, while the run goes: `clients` threads looping on
+// /api/snapshot, 200 idle connections and 8 that drip a header byte every 2 s.
+class Hammer {
+ public:
+  Hammer(int port, int clients) {
+    for (int i = 0; i < 200; ++i) idle_.push_back(connect_to(port));
+    for (int i = 0; i < 8; ++i) threads_.emplace_back([this, port] { drip(port); });
+    for (int i = 0; i < clients; ++i)
+      threads_.emplace_back([this, port] {
+        // At nice 19, as clients on another machine would be: what the view's serving costs the
+        // loop is then measured, not the clients' own CPU (they share this machine's cores).
+        view::set_thread_nice(19);
+        httplib::Client client("127.0.0.1", port);
+        while (!done_) client.Get("/api/snapshot");
+      });
+  }
+  ~Hammer() {
+    done_ = true;
+    for (auto& t : threads_) t.join();
+    for (const int fd : idle_) close(fd);
+  }
+
+ private:
+  static int connect_to(int port) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+    return fd;
+  }
+  void drip(int port) {
+    while (!done_) {
+      const int fd = connect_to(port);
+      for (int k = 0; k < 30 && !done_; ++k) {
+        if (send(fd, "G", 1, MSG_NOSIGNAL) != 1) break;  // closed by the view: connect again
+        for (int w = 0; w < 40 && !done_; ++w) std::this_thread::sleep_for(50ms);
+      }
+      close(fd);
+    }
+  }
+  std::atomic<bool> done_{false};
+  std::vector<int> idle_;
+  std::vector<std::thread> threads_;
+};
+
 // The view as the coordinator program serves it, and one headless Chromium on its page.
 struct View {
   view::Feed feed;
   std::unique_ptr<view::ViewServer> server;
   std::optional<util::ChildProcess> chromium;
+  std::optional<Hammer> hammer;
   View(const core::PreparedStudy& prepared, const std::filesystem::path& dir, const Spec& spec) {
     view::describe_run(feed, prepared, "");
     view::ServerOptions loopback_any_port;
     loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};
+    loopback_any_port.snapshot_period = std::chrono::milliseconds(spec.snapshot_period_ms);
     server = std::make_unique<view::ViewServer>(feed, std::move(loopback_any_port));
+    if (spec.hammer > 0) hammer.emplace(server->port(), spec.hammer);
     if (!spec.browser) return;
     const auto profile = dir / "chromium_profile";
     std::filesystem::remove_all(profile);
@@ -278,6 +341,9 @@ Figures run(const Spec& spec) {
     const nlohmann::json counters = view->server->counters();
     f.streams_served = counters["streams_served"];
     f.updates_sent = counters["updates_sent"];
+    f.snapshots_served = counters["snapshots_served"];
+    f.snapshot_builds = counters["snapshot_builds"];
+    view->hammer.reset();
     spdlog::info("{}: view counters {}", spec.name, counters.dump());
     view->server->shutdown();
     if (view->chromium) view->chromium->terminate();
@@ -355,6 +421,39 @@ void pairs(Spec spec, int repeat, bool browser) {
                 spec.page_query.c_str(), spec.browser_cpu >= 0 ? ", Chromium pinned" : "");
 }
 
+// Pairs of runs with the view: without clients, then with the hammer; medians and the ratio.
+void hammer_pairs(Spec spec, int repeat, int clients) {
+  std::vector<double> quiet_overruns, hammered_overruns, quiet_latency, hammered_latency;
+  for (int i = 0; i < repeat; ++i) {
+    spec.with_view = true;
+    spec.browser = false;
+    spec.name = "quiet_" + std::to_string(i);
+    spec.hammer = 0;
+    const Figures quiet = run(spec);
+    spec.name = "hammered_" + std::to_string(i);
+    spec.hammer = clients;
+    const Figures hammered = run(spec);
+    std::printf("pair %d (%g Hz, %g s, snapshot cap every %d ms, load average %s):\n", i + 1,
+                spec.rate, spec.seconds, spec.snapshot_period_ms, load_average().c_str());
+    print("quiet", quiet);
+    print("hammered", hammered);
+    std::printf("            %llu snapshots served from %llu builds\n",
+                static_cast<unsigned long long>(hammered.snapshots_served),
+                static_cast<unsigned long long>(hammered.snapshot_builds));
+    quiet_overruns.push_back(quiet.overrun_pct);
+    hammered_overruns.push_back(hammered.overrun_pct);
+    quiet_latency.push_back(quiet.latency_median_us);
+    hammered_latency.push_back(hammered.latency_median_us);
+    std::fflush(stdout);
+  }
+  const double quiet = median(quiet_overruns), hammered = median(hammered_overruns);
+  std::printf(
+      "=> medians of %d: overruns %.3f %% with the view alone, %.3f %% with %d clients looping on "
+      "/api/snapshot and the idle crowd (ratio %.2f); wake-up to command %.1f / %.1f us\n",
+      repeat, quiet, hammered, clients, quiet > 0 ? hammered / quiet : 0.0, median(quiet_latency),
+      median(hammered_latency));
+}
+
 double mean_between(const std::vector<std::pair<double, double>>& rss, double from, double to) {
   double sum = 0;
   int n = 0;
@@ -421,6 +520,15 @@ int main(int argc, char** argv) {
                  "with --browser-cpu: the deployment's loop_cpu (default 1 if the browser's is 0, "
                  "else 0)")
       ->check(CLI::Range(0, 1023));
+  int hammer = 0;
+  app.add_option("--hammer", hammer,
+                 "instead: pairs with the view, without and with N clients looping on "
+                 "/api/snapshot and an idle crowd")
+      ->check(CLI::Range(1, 64));
+  app.add_option("--snapshot-period-ms", spec.snapshot_period_ms,
+                 "the view's snapshot cap (0: rebuilt for every request, as before the cap)")
+      ->default_val(200)
+      ->check(CLI::Range(0, 10000));
   CLI11_PARSE(app, argc, argv);
   if (spec.browser_cpu >= 0 && spec.loop_cpu < 0) spec.loop_cpu = spec.browser_cpu == 0 ? 1 : 0;
   if (spec.loop_cpu >= 0 && spec.browser_cpu < 0) {
@@ -435,7 +543,9 @@ int main(int argc, char** argv) {
   runtime::ensure_dds_config();
   spdlog::set_level(spdlog::level::warn);
   const bool browser = !no_browser && std::filesystem::exists("/usr/bin/chromium");
-  if (rss_minutes > 0) {
+  if (hammer > 0) {
+    hammer_pairs(spec, repeat, hammer);
+  } else if (rss_minutes > 0) {
     spec.seconds = rss_minutes * 60;
     rss_run(spec, browser);
   } else {

@@ -28,6 +28,14 @@ namespace {
 // Reads the record, writes every requested output and says what was written. Throws ExitError:
 // kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
 // cannot be written, kExitRunFailed after exporting a record that lost entries.
+// ", N messages dropped unauthenticated" when the footer counted any (forged or foreign messages
+// the coordinator's transport dropped for want of a valid MAC), else "".
+std::string unauthenticated_note(const runtime::RunFooter* footer) {
+  if (!footer || footer->counters().unauthenticated() == 0) return "";
+  return "; " + std::to_string(footer->counters().unauthenticated()) +
+         " messages dropped unauthenticated";
+}
+
 void run_export(const std::string& record, const std::map<results::Format, std::string>& outputs,
                 bool json) {
   for (const auto& [format, path] : outputs)
@@ -61,21 +69,26 @@ void run_export(const std::string& record, const std::map<results::Format, std::
   const auto* footer = contents.footer();
   const std::string status = footer ? footer->status() : "no footer: the run was cut short";
   if (json) {
-    nlohmann::json j{{"record", record},
-                     {"rows", table.rows()},
-                     {"truncated", contents.truncated || checks.cut},
-                     {"problems", checks.problems},
-                     {"status", status},
-                     {"ok", footer && footer->ok()},
-                     {"checksummed", contents.checksummed},
-                     {"integrity", table.attributes().at("integrity")},
-                     {"lost_steps", table.attributes().at("lost_steps")},
-                     {"damaged_regions", contents.losses.size()}};
+    nlohmann::json j{
+        {"record", record},
+        {"rows", table.rows()},
+        {"truncated", contents.truncated || checks.cut},
+        {"problems", checks.problems},
+        {"status", status},
+        {"ok", footer && footer->ok()},
+        // The coordinator's drops for want of a MAC; null without a footer.
+        {"unauthenticated",
+         footer ? nlohmann::json(footer->counters().unauthenticated()) : nlohmann::json()},
+        {"checksummed", contents.checksummed},
+        {"integrity", table.attributes().at("integrity")},
+        {"lost_steps", table.attributes().at("lost_steps")},
+        {"damaged_regions", contents.losses.size()}};
     for (const auto& [format, path] : outputs) j[results::extension(format).substr(1)] = path;
     std::cout << j.dump(2) << "\n";
   } else {
     for (const auto& [format, path] : outputs) {
-      std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status << ")\n";
+      std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status
+                << unauthenticated_note(footer) << ")\n";
     }
   }
   if (contents.lost_entries())

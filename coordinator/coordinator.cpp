@@ -179,6 +179,7 @@ void report(const RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome)
   rejected.fill(outcome.counters);
   // Never seen by the coordinator's own checks: the transport dropped them before any handler.
   if (s.options.unauthenticated) outcome.unauthenticated = s.options.unauthenticated();
+  outcome.counters.set_unauthenticated(outcome.unauthenticated.count);
   outcome.counters.set_overruns(pacer.overruns());
   outcome.counters.set_late_feedback(s.late_feedback);
   outcome.counters.set_worst_overrun_streak(pacer.worst_overrun_streak());

@@ -333,7 +333,7 @@ const std::vector<Target>& targets() {
       {"sites_config", &sites_config},   {"at2_motion", &at2_motion},
       {"column_motion", &column_motion}, {"daq_export", &daq_export},
       {"run_record", &run_record},       {"envelope_payload", &envelope_payload},
-      {"record_flips", &record_flips},
+      {"record_flips", &record_flips},   {"study_values", &study_values},
   };
   return all;
 }

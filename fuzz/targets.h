@@ -6,6 +6,11 @@
 //
 //   study_config       core::parse_study + validate_study, then the hybrid setup of the reference
 //                      case without its motion (structure, partition, delay chains)
+//   study_values       core::parse_study (with its validation): a refusal must name a field of the
+//                      study or a line:column; an accepted study must hold no value that is not
+//                      finite, and no given value that must be > 0 (Sdof.mass, the benchmark
+//                      plant's mass and stiffness) that is not: a default stands only for an
+//                      omitted value (study_values.cpp; a violation throws std::logic_error)
 //   deployment_config  a config::Deployment in text format, its default nodes and plan against
 //                      the paper's frame (runtime::with_default_nodes, make_plan)
 //   sites_config       deploy::parse_sites (the `rths sites` config)
@@ -46,6 +51,7 @@ struct Target {
 };
 
 int study_config(const std::uint8_t* data, std::size_t size);
+int study_values(const std::uint8_t* data, std::size_t size);
 int deployment_config(const std::uint8_t* data, std::size_t size);
 int sites_config(const std::uint8_t* data, std::size_t size);
 int at2_motion(const std::uint8_t* data, std::size_t size);

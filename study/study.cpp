@@ -126,7 +126,13 @@ namespace {
 void validate_structure(const config::Structure& structure, const std::string& source) {
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
-    require(sdof.mass() >= 0, source, "structure.sdof.mass must be > 0 kg");
+    // Given, the mass must be one: an explicit 0 is not quietly run as 1 kg.
+    require(!sdof.has_mass() || sdof.mass() > 0, source,
+            "structure.sdof.mass must be > 0 kg, got " + format_number(sdof.mass()) +
+                " (omit it for 1 kg: at a fixed period the response does not depend on it)");
+    require(!(sdof.has_mass() && sdof.period() > 0 && sdof.stiffness() > 0), source,
+            "structure.sdof: mass, period and stiffness are all given; give two (the mass is "
+            "derived from period and stiffness)");
     require(sdof.stiffness() >= 0, source, "structure.sdof.stiffness must be > 0 N/m");
     if (sdof.period() != 0)
       require_in(Quantity::kPeriod, sdof.period(), "structure.sdof.period", source);
@@ -138,6 +144,10 @@ void validate_structure(const config::Structure& structure, const std::string& s
             "structure.shear_building.storey_mass is empty");
     require(building.storey_mass_size() == building.storey_stiffness_size(), source,
             "structure.shear_building: storey_mass and storey_stiffness differ in length");
+    for (int i = 0; i < building.storey_mass_size(); ++i)
+      require(building.storey_mass(i) > 0, source,
+              "structure.shear_building.storey_mass[" + std::to_string(i) +
+                  "] must be > 0 kg, got " + format_number(building.storey_mass(i)));
   } else if (!structure.has_matrices()) {
     fail(source, "structure needs sdof, shear_building or matrices");
   }
@@ -376,7 +386,7 @@ StructuralModel make_structure(const config::Structure& structure,
   StructuralModel model;
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
-    double mass = sdof.mass() > 0 ? sdof.mass() : 1.0;
+    double mass = sdof.has_mass() ? sdof.mass() : 1.0;  // validated > 0 at load
     double stiffness = 0.0;
     if (sdof.period() > 0 && sdof.stiffness() > 0) {
       stiffness = sdof.stiffness();

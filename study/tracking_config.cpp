@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "core/number_text.h"
+
 namespace rths::core {
 namespace {
 
@@ -107,8 +109,15 @@ BenchmarkPlantParameters benchmark_plant_parameters(
   p.beta1 = or_nominal(spec.beta1(), 425.0);
   p.beta2 = or_nominal(spec.beta2(), 9.9976e4);
   p.gain = or_nominal(spec.gain(), 1.0261);
-  p.mass = or_nominal(spec.mass(), 29.13);
-  p.stiffness = or_nominal(spec.stiffness(), 1.19e6);
+  // Given, they must be physical: an explicit 0 is refused, not run as the nominal value.
+  if (spec.has_mass() && !(spec.mass() > 0))
+    fail("benchmark_plant.mass",
+         format_number(spec.mass()) + " kg must be > 0 (omit it for 29.13)");
+  if (spec.has_stiffness() && !(spec.stiffness() > 0))
+    fail("benchmark_plant.stiffness",
+         format_number(spec.stiffness()) + " N/m must be > 0 (omit it for 1.19e6)");
+  p.mass = spec.has_mass() ? spec.mass() : 29.13;
+  p.stiffness = spec.has_stiffness() ? spec.stiffness() : 1.19e6;
   p.damping = or_nominal(spec.damping(), 2.0 * 0.0097 * std::sqrt(p.stiffness * p.mass));
   return p;
 }

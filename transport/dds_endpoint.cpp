@@ -71,14 +71,29 @@ struct DdsEndpoint::Impl {
   void add_reader(const std::string& topic, std::int32_t node);
   // The node whose topic `reader` reads; nullopt for a reader this endpoint does not own.
   std::optional<std::int32_t> topic_node_of(dds::Handle reader);
-  // Without a run secret, true; with one, whether `mac` verifies, else counted and named.
-  bool authentic(const Message& m, const std::uint8_t* mac_bytes);
+  // Without a run secret, true; with one, whether the sample's MAC verifies over its own fields
+  // (before anything is copied out of it), else counted and its newest kept, unformatted.
+  bool authentic(const rths_dds_Envelope& s, std::int32_t topic_node, std::uint64_t writer);
 
   const DdsEndpointOptions options;
   const dds::QosSpec qos;
   const std::unique_ptr<MessageMac> mac;  // null without a run secret
+  // The newest dropped sample's fields: a flood costs a count and four stores each, and the text
+  // is made only when asked for (unauthenticated()).
+  struct Dropped {
+    std::uint64_t count = 0;
+    std::int32_t kind = 0, node_id = 0, topic_node = 0;
+    std::uint64_t writer = 0;
+  };
   mutable std::mutex unauthenticated_mutex;
-  Unauthenticated unauthenticated;
+  Dropped dropped;
+  // Writers (publication handles) that sent a message whose MAC failed: the run's own processes
+  // never do, so their later samples are dropped by a lookup, before any hash. At most
+  // kMaxForgers remembered (a forger that keeps making writers pays one MAC per new writer).
+  static constexpr std::size_t kMaxForgers = 256;
+  std::vector<std::uint64_t> forgers;  // under unauthenticated_mutex
+  std::atomic<bool> any_forger{false};
+  bool known_forger(std::uint64_t writer);
   // Shared between the receive thread and the caller; declared before the DDS entities so they
   // outlive the listener.
   std::mutex mutex;
@@ -202,6 +217,9 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       const auto* s = static_cast<const rths_dds_Envelope*>(samples[i]);
       if (!options.coordinator && s->node_id != options.node_id && s->node_id != kBroadcastId)
         continue;
+      if (known_forger(infos[i].publication_handle) ||
+          !authentic(*s, *topic_node, infos[i].publication_handle))
+        continue;
       // Per receive thread, reused: assigning into its strings allocates nothing once they have
       // grown to the largest message (moved into the queue, it starts over).
       thread_local Message m;
@@ -215,7 +233,6 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       m.received_ns = now;
       m.topic_node = *topic_node;
       m.writer = infos[i].publication_handle;
-      if (!authentic(m, s->mac)) continue;
       std::shared_ptr<const InlineHandler> h;
       {
         std::lock_guard lock(mutex);
@@ -246,29 +263,57 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
   arrived.notify_one();
 }
 
-bool DdsEndpoint::Impl::authentic(const Message& m, const std::uint8_t* mac_bytes) {
+bool DdsEndpoint::Impl::authentic(const rths_dds_Envelope& s, std::int32_t topic_node,
+                                  std::uint64_t writer) {
   if (!mac) return true;
+  MacInput fields;
+  fields.run_id = s.run_id ? std::string_view(s.run_id) : std::string_view();
+  fields.node_id = s.node_id;
+  fields.kind = s.kind;
+  fields.step = s.step;
+  fields.sent_ns = s.sent_ns;
+  fields.echo_ns = s.echo_ns;
+  fields.payload =
+      std::string_view(reinterpret_cast<const char*>(s.payload._buffer), s.payload._length);
   Mac received;
-  std::copy(mac_bytes, mac_bytes + kMacBytes, received.begin());
-  if (mac->verify(m, options.coordinator ? Direction::kUp : Direction::kDown, received))
+  std::copy(s.mac, s.mac + kMacBytes, received.begin());
+  if (mac->verify(fields, options.coordinator ? Direction::kUp : Direction::kDown, received))
     return true;
-  std::string last = "kind ";
-  last += std::to_string(m.kind);
-  last += " as node ";
-  last += std::to_string(m.node_id);
-  last += " on node ";
-  last += std::to_string(m.topic_node);
-  last += "'s topic, writer ";
-  last += std::to_string(m.writer);
   std::lock_guard lock(unauthenticated_mutex);
-  ++unauthenticated.count;
-  unauthenticated.last = std::move(last);
+  if (forgers.size() < kMaxForgers &&
+      std::find(forgers.begin(), forgers.end(), writer) == forgers.end()) {
+    forgers.push_back(writer);
+    any_forger.store(true, std::memory_order_release);
+  }
+  ++dropped.count;
+  dropped.kind = s.kind;
+  dropped.node_id = s.node_id;
+  dropped.topic_node = topic_node;
+  dropped.writer = writer;
   return false;
 }
 
+bool DdsEndpoint::Impl::known_forger(std::uint64_t writer) {
+  if (!mac || !any_forger.load(std::memory_order_acquire)) return false;
+  std::lock_guard lock(unauthenticated_mutex);
+  if (std::find(forgers.begin(), forgers.end(), writer) == forgers.end()) return false;
+  ++dropped.count;  // the newest drop stays the one whose MAC was checked
+  return true;
+}
+
 Unauthenticated DdsEndpoint::unauthenticated() const {
-  std::lock_guard lock(impl_->unauthenticated_mutex);
-  return impl_->unauthenticated;
+  Impl::Dropped d;
+  {
+    std::lock_guard lock(impl_->unauthenticated_mutex);
+    d = impl_->dropped;
+  }
+  Unauthenticated u;
+  u.count = d.count;
+  if (d.count == 0) return u;
+  u.last = "kind " + std::to_string(d.kind) + " as node " + std::to_string(d.node_id) +
+           " on node " + std::to_string(d.topic_node) + "'s topic, writer " +
+           std::to_string(d.writer);
+  return u;
 }
 
 std::optional<Message> DdsEndpoint::receive(std::chrono::nanoseconds timeout) {

@@ -47,7 +47,8 @@ struct DdsEndpointOptions {
   // The run secret (security/run_secret.h), or empty. Non-empty: every message sent carries a
   // MAC under it (transport/message_mac.h), and every message received without a valid one is
   // dropped on the receive thread before any handler or receive() sees it, counted and named
-  // (unauthenticated()).
+  // (unauthenticated()); the writer that sent it is remembered, and its later messages are
+  // dropped (and counted) without computing their MAC.
   std::string run_secret;
 };
 

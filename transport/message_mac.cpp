@@ -1,11 +1,15 @@
 #include "transport/message_mac.h"
 
-#include <openssl/core_names.h>
+// The low-level SHA-256 API (deprecated in OpenSSL 3, still OpenSSL's own code, SHA-NI included):
+// its SHA256_CTX is a plain struct, so the keyed HMAC states are copied per message by assignment.
+// EVP_MAC re-initialised per message (what this was before) duplicates provider contexts (two
+// allocations) and walks the provider layers for each field: about 4x the cost once the loop's
+// cache is cold (bench/mac_bench.cpp, docs/security.md).
+#define OPENSSL_SUPPRESS_DEPRECATED
 #include <openssl/crypto.h>
-#include <openssl/evp.h>
-#include <openssl/params.h>
+#include <openssl/sha.h>
 
-#include <stdexcept>
+#include <cstring>
 
 namespace rths::transport {
 
@@ -13,81 +17,87 @@ namespace {
 
 // Little-endian, fixed width, so the encoding is the same on every host.
 template <class T>
-void put(EVP_MAC_CTX* ctx, T value) {
-  unsigned char bytes[sizeof(T)];
+unsigned char* put(unsigned char* at, T value) {
   auto u = static_cast<std::uint64_t>(value);
-  for (std::size_t i = 0; i < sizeof(T); ++i) bytes[i] = static_cast<unsigned char>(u >> (8 * i));
-  EVP_MAC_update(ctx, bytes, sizeof(T));
+  for (std::size_t i = 0; i < sizeof(T); ++i) at[i] = static_cast<unsigned char>(u >> (8 * i));
+  return at + sizeof(T);
 }
 
-void put_bytes(EVP_MAC_CTX* ctx, const std::string& bytes) {
-  put(ctx, static_cast<std::uint32_t>(bytes.size()));
-  EVP_MAC_update(ctx, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());
-}
-
-constexpr char kTag[] = "rths-mac-1";
+constexpr char kTag[] = "rths-mac-1";  // its terminating zero included, as always
+constexpr std::size_t kBlock = 64;     // SHA-256's block (bytes)
 
 }  // namespace
 
-// One keyed HMAC-SHA256 context; EVP_MAC_init with no key starts it over under the same key.
+// HMAC-SHA256 (RFC 2104) keyed once: the inner and outer states after the key's padded block.
 struct MessageMac::Context {
-  EVP_MAC* mac = nullptr;
-  EVP_MAC_CTX* ctx = nullptr;
+  SHA256_CTX inner{}, outer{};
 
   explicit Context(const std::string& key) {
-    mac = EVP_MAC_fetch(nullptr, "HMAC", nullptr);
-    ctx = mac ? EVP_MAC_CTX_new(mac) : nullptr;
-    char digest[] = "SHA256";
-    const OSSL_PARAM params[] = {OSSL_PARAM_construct_utf8_string(OSSL_MAC_PARAM_DIGEST, digest, 0),
-                                 OSSL_PARAM_END};
-    if (!ctx || EVP_MAC_init(ctx, reinterpret_cast<const unsigned char*>(key.data()), key.size(),
-                             params) != 1) {
-      release();
-      throw std::runtime_error("OpenSSL has no HMAC-SHA256 for the run secret");
-    }
+    unsigned char block[kBlock] = {};
+    if (key.size() > kBlock)
+      SHA256(reinterpret_cast<const unsigned char*>(key.data()), key.size(), block);
+    else
+      std::memcpy(block, key.data(), key.size());
+    unsigned char pad[kBlock];
+    for (std::size_t i = 0; i < kBlock; ++i) pad[i] = block[i] ^ 0x36;
+    SHA256_Init(&inner);
+    SHA256_Update(&inner, pad, kBlock);
+    for (std::size_t i = 0; i < kBlock; ++i) pad[i] = block[i] ^ 0x5c;
+    SHA256_Init(&outer);
+    SHA256_Update(&outer, pad, kBlock);
+    OPENSSL_cleanse(block, sizeof block);
+    OPENSSL_cleanse(pad, sizeof pad);
   }
-  ~Context() { release(); }
-  void release() {
-    EVP_MAC_CTX_free(ctx);
-    EVP_MAC_free(mac);
-    ctx = nullptr;
-    mac = nullptr;
+  ~Context() {
+    OPENSSL_cleanse(&inner, sizeof inner);
+    OPENSSL_cleanse(&outer, sizeof outer);
   }
 
-  Mac compute(const Message& m, std::int64_t sent_ns, Direction direction) {
+  // The fields in the documented order: tag, direction, run id (length-prefixed), node id, kind,
+  // step, sent_ns, echo_ns, payload (length-prefixed); the fixed-width ones gathered in two
+  // buffers, so four updates per message.
+  Mac compute(const MacInput& m, Direction direction) const {
+    unsigned char head[sizeof kTag + 1 + 4];
+    std::memcpy(head, kTag, sizeof kTag);
+    unsigned char* at = put(head + sizeof kTag, static_cast<std::uint8_t>(direction));
+    put(at, static_cast<std::uint32_t>(m.run_id.size()));
+    unsigned char middle[4 + 4 + 8 + 8 + 8 + 4];
+    at = put(middle, m.node_id);
+    at = put(at, m.kind);
+    at = put(at, m.step);
+    at = put(at, m.sent_ns);
+    at = put(at, m.echo_ns);
+    put(at, static_cast<std::uint32_t>(m.payload.size()));
+    SHA256_CTX c = inner;
+    SHA256_Update(&c, head, sizeof head);
+    SHA256_Update(&c, m.run_id.data(), m.run_id.size());
+    SHA256_Update(&c, middle, sizeof middle);
+    SHA256_Update(&c, m.payload.data(), m.payload.size());
+    unsigned char digest[SHA256_DIGEST_LENGTH];
+    SHA256_Final(digest, &c);
     Mac out{};
-    EVP_MAC_init(ctx, nullptr, 0, nullptr);
-    EVP_MAC_update(ctx, reinterpret_cast<const unsigned char*>(kTag), sizeof kTag);
-    put(ctx, static_cast<std::uint8_t>(direction));
-    put_bytes(ctx, m.run_id);
-    put(ctx, m.node_id);
-    put(ctx, m.kind);
-    put(ctx, m.step);
-    put(ctx, sent_ns);
-    put(ctx, m.echo_ns);
-    put_bytes(ctx, m.payload);
-    std::size_t length = 0;
-    EVP_MAC_final(ctx, out.data(), &length, out.size());
+    c = outer;
+    SHA256_Update(&c, digest, sizeof digest);
+    SHA256_Final(out.data(), &c);
+    OPENSSL_cleanse(&c, sizeof c);
     return out;
   }
 };
 
-MessageMac::MessageMac(const std::string& key)
-    : signer_(std::make_unique<Context>(key)), verifier_(std::make_unique<Context>(key)) {}
+MessageMac::MessageMac(const std::string& key) : keyed_(std::make_unique<Context>(key)) {}
 
 MessageMac::~MessageMac() = default;
 
-Mac MessageMac::sign(const Message& message, std::int64_t sent_ns, Direction direction) {
-  std::lock_guard lock(sign_mutex_);
-  return signer_->compute(message, sent_ns, direction);
+Mac MessageMac::sign(const Message& message, std::int64_t sent_ns, Direction direction) const {
+  return keyed_->compute(MacInput::of(message, sent_ns), direction);
 }
 
-bool MessageMac::verify(const Message& message, Direction direction, const Mac& mac) {
-  Mac expected;
-  {
-    std::lock_guard lock(verify_mutex_);
-    expected = verifier_->compute(message, message.sent_ns, direction);
-  }
+bool MessageMac::verify(const Message& message, Direction direction, const Mac& mac) const {
+  return verify(MacInput::of(message, message.sent_ns), direction, mac);
+}
+
+bool MessageMac::verify(const MacInput& fields, Direction direction, const Mac& mac) const {
+  const Mac expected = keyed_->compute(fields, direction);
   return CRYPTO_memcmp(expected.data(), mac.data(), mac.size()) == 0;
 }
 

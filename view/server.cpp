@@ -1,7 +1,10 @@
 #include "view/server.h"
 
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <httplib.h>
+#include <poll.h>
+#include <sys/socket.h>
 
 #include <fstream>
 #include <iterator>
@@ -35,6 +38,93 @@ bool same_token(const std::string& a, const std::string& b) {
     diff |= static_cast<unsigned char>(a[i] ^ b[i]);
   return diff == 0;
 }
+
+// One connection's socket as httplib's Stream: non-blocking, each read and write waiting at most
+// its timeout for the socket to be ready; reads buffered (httplib reads a request line by byte).
+class FdStream : public httplib::Stream {
+ public:
+  FdStream(int fd, int read_ms, int write_ms) : fd_(fd), read_ms_(read_ms), write_ms_(write_ms) {
+    fcntl(fd_, F_SETFL, fcntl(fd_, F_GETFL) | O_NONBLOCK);
+  }
+  bool is_readable() const override { return at_ < got_ || ready(POLLIN, read_ms_); }
+  bool is_writable() const override { return ready(POLLOUT, write_ms_); }
+  ssize_t read(char* out, std::size_t size) override {
+    if (at_ == got_) {
+      if (!ready(POLLIN, read_ms_)) return -1;
+      const ssize_t n = recv(fd_, buffer_, sizeof buffer_, 0);
+      if (n <= 0) return n;
+      at_ = 0;
+      got_ = static_cast<std::size_t>(n);
+    }
+    const std::size_t n = std::min(size, got_ - at_);
+    std::copy(buffer_ + at_, buffer_ + at_ + n, out);
+    at_ += n;
+    return static_cast<ssize_t>(n);
+  }
+  ssize_t write(const char* data, std::size_t size) override {
+    if (!ready(POLLOUT, write_ms_)) return -1;
+    return send(fd_, data, size, MSG_NOSIGNAL);
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    address(getpeername, ip, port);
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    address(getsockname, ip, port);
+  }
+  ::socket_t socket() const override { return fd_; }
+
+ private:
+  bool ready(short events, int ms) const {
+    pollfd p{fd_, events, 0};
+    return poll(&p, 1, ms) > 0 && (p.revents & events) != 0;
+  }
+  void address(int (*get)(int, sockaddr*, socklen_t*), std::string& ip, int& port) const {
+    sockaddr_in a{};
+    socklen_t length = sizeof a;
+    char text[INET_ADDRSTRLEN] = "";
+    if (get(fd_, reinterpret_cast<sockaddr*>(&a), &length) == 0 && a.sin_family == AF_INET)
+      inet_ntop(AF_INET, &a.sin_addr, text, sizeof text);
+    ip = text;
+    port = ntohs(a.sin_port);
+  }
+  int fd_, read_ms_, write_ms_;
+  char buffer_[4096];
+  std::size_t at_ = 0, got_ = 0;
+};
+
+// httplib's accepting thread hands each connection to the task queue; this one runs the hand-off
+// at once, and the hand-off (process_and_close_socket) gives the socket to the RequestGate.
+struct HandOver : httplib::TaskQueue {
+  void enqueue(std::function<void()> hand_off) override { hand_off(); }
+  void shutdown() override {}
+};
+
+// httplib's server with its connections behind a RequestGate: serve() answers one request on a
+// socket whose request has arrived (httplib's own parsing, routing and responses).
+class GatedServer : public httplib::Server {
+ public:
+  GatedServer(std::chrono::milliseconds read, std::chrono::milliseconds write)
+      : read_ms_(static_cast<int>(read.count())), write_ms_(static_cast<int>(write.count())) {
+    new_task_queue = [] { return new HandOver; };
+  }
+  void set_gate(RequestGate* gate) { gate_ = gate; }
+  // httplib listens with a backlog of 5: a crowd connecting at once would see SYNs dropped (a
+  // fresh client's connect then waits 1 s for its retry). Listening again widens it.
+  void widen_backlog() { ::listen(svr_sock_, 512); }
+  void serve(int fd) {
+    FdStream stream(fd, read_ms_, write_ms_);
+    bool closed = false;
+    process_request(stream, true, closed, nullptr);
+  }
+
+ private:
+  bool process_and_close_socket(::socket_t sock) override {
+    gate_->admit(sock);
+    return true;
+  }
+  int read_ms_, write_ms_;
+  RequestGate* gate_ = nullptr;
+};
 
 }  // namespace
 
@@ -74,7 +164,7 @@ std::string make_token() {
 }
 
 ViewServer::ViewServer(const Feed& feed, ServerOptions options)
-    : feed_(feed), options_(std::move(options)), server_(std::make_unique<httplib::Server>()) {
+    : feed_(feed), options_(std::move(options)) {
   const std::filesystem::path web = options_.web_dir.empty() ? RTHS_VIEW_WEB_DIR : options_.web_dir;
   const std::filesystem::path uplot =
       options_.uplot_dir.empty() ? RTHS_VIEW_UPLOT_DIR : options_.uplot_dir;
@@ -84,14 +174,22 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   files_["/uPlot.iife.min.js"] = {"text/javascript; charset=utf-8",
                                   read_whole(uplot / "uPlot.iife.min.js")};
   files_["/uPlot.min.css"] = {"text/css; charset=utf-8", read_whole(uplot / "uPlot.min.css")};
-  const int threads = options_.max_streams + 4;
-  server_->new_task_queue = [threads] {
-    return new httplib::ThreadPool(static_cast<std::size_t>(threads));
-  };
+  snapshots_ = std::make_unique<SnapshotCache>(
+      [this] {
+        FeedCursor cursor;
+        nlohmann::json j = feed_.since(cursor);
+        j["mode"] = options_.mode;
+        return j.dump();
+      },
+      options_.snapshot_period);
+  auto gated = std::make_unique<GatedServer>(std::chrono::seconds(2), options_.write_timeout);
+  GateOptions gate = options_.gate;
+  gate.workers = options_.max_streams + 4;
+  gate_ = std::make_unique<RequestGate>(gate, [g = gated.get()](int fd) { g->serve(fd); });
+  gated->set_gate(gate_.get());
+  GatedServer& listener = *gated;
+  server_ = std::move(gated);
   server_->set_payload_max_length(4096);
-  server_->set_read_timeout(std::chrono::seconds(5));
-  server_->set_write_timeout(options_.write_timeout);
-  server_->set_keep_alive_max_count(100);
   routes();
   const auto& a = options_.address;
   port_ = a.port == 0 ? server_->bind_to_any_port(a.host)
@@ -99,7 +197,11 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   if (port_ <= 0)
     throw std::runtime_error("the view cannot listen on " + a.host + ":" + std::to_string(a.port) +
                              " (in use, or not an address of this host)");
-  thread_ = std::thread([this] { server_->listen_after_bind(); });
+  listener.widen_backlog();
+  thread_ = std::thread([this] {
+    set_thread_nice(options_.gate.nice);
+    server_->listen_after_bind();
+  });
 }
 
 void ViewServer::routes() {
@@ -110,10 +212,12 @@ void ViewServer::routes() {
       res.set_header("Cache-Control", "no-store");
     });
   s.Get("/api/snapshot", [this](const httplib::Request&, httplib::Response& res) {
-    FeedCursor cursor;
-    nlohmann::json j = feed_.since(cursor);
-    j["mode"] = options_.mode;
-    res.set_content(j.dump(), "application/json");
+    const auto copy = snapshots_->get();
+    if (!copy) {  // the first build failed for every waiting client
+      res.status = 503;
+      return;
+    }
+    res.set_content(*copy, "application/json");
   });
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
     const nlohmann::json j = {{"mode", options_.mode},
@@ -210,7 +314,10 @@ nlohmann::json ViewServer::counters() const {
           {"streams_refused", streams_refused_.load()},
           {"streams_dropped", streams_dropped_.load()},
           {"updates_sent", updates_sent_.load()},
-          {"stop_requests", stop_requests_.load()}};
+          {"stop_requests", stop_requests_.load()},
+          {"snapshot_builds", snapshots_->builds()},
+          {"snapshots_served", snapshots_->served()},
+          {"connections", gate_->counters()}};
 }
 
 void ViewServer::shutdown(std::chrono::milliseconds linger) {
@@ -220,6 +327,7 @@ void ViewServer::shutdown(std::chrono::milliseconds linger) {
   stopping_.store(true);
   if (server_) server_->stop();
   if (thread_.joinable()) thread_.join();
+  if (gate_) gate_->stop();
 }
 
 }  // namespace rths::view

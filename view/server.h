@@ -10,12 +10,18 @@
 //                      the feed finished and its last state went out. At most max_streams at once
 //                      (more: 503, counted). A client that does not read for write_timeout is
 //                      dropped and counted; the feed never waits for a client.
-//   GET  /api/snapshot everything the feed holds, as one JSON (scripts, tests)
+//   GET  /api/snapshot everything the feed holds, as one JSON (scripts, tests): one copy shared
+//                      by every client, rebuilt at most once per snapshot_period (SnapshotCache),
+//                      so clients looping on it cannot take the feed's lock more often than that
 //   GET  /api/health   the counters below and the options the page needs (stop enabled, mode)
 //   POST /api/stop     only when allow_stop: calls on_stop once ("HOLD then STOP" is the caller's);
 //                      with a token, the request must carry it (header X-RTHS-Token); else 403.
 // Bad input: a malformed request line or header, a body over 4 KiB, an unknown path or method is
 // refused (4xx) and counted; none of it touches the feed.
+// Connections: a RequestGate (view/request_gate.h) holds each until its whole request has arrived
+// (header deadline, idle connections beyond its limit closed oldest first); only then does one of
+// max_streams + 4 threads serve it, one request per connection. Idle or dripping clients
+// therefore never hold the threads that serve the page and the stop button.
 
 #include <atomic>
 #include <chrono>
@@ -29,6 +35,8 @@
 #include <nlohmann/json.hpp>
 
 #include "view/feed.h"
+#include "view/request_gate.h"
+#include "view/snapshot_cache.h"
 
 namespace httplib {
 class Server;
@@ -59,6 +67,8 @@ struct ServerOptions {
   int max_streams = 4;
   std::chrono::milliseconds update_period{33};
   std::chrono::milliseconds write_timeout{1000};
+  std::chrono::milliseconds snapshot_period{200};  // /api/snapshot rebuilt at most this often
+  GateOptions gate;  // its workers: max_streams + 4, whatever is set here
 };
 
 class ViewServer {
@@ -84,6 +94,8 @@ class ViewServer {
   ServerOptions options_;
   std::map<std::string, std::pair<std::string, std::string>> files_;  // path -> (type, bytes)
   std::unique_ptr<httplib::Server> server_;
+  std::unique_ptr<RequestGate> gate_;  // after server_: stopped and destroyed before it
+  std::unique_ptr<SnapshotCache> snapshots_;
   std::thread thread_;
   int port_ = 0;
   std::atomic<bool> stopping_{false}, stop_requested_{false};

@@ -141,6 +141,7 @@ void judge_status(const DistributedRun& run, const runtime::RecordContents& reco
     const auto& k = measured.footer.counters();
     facts.overruns = k.overruns();
     facts.rejected = runtime::RejectCounters::from(k).total();
+    facts.unauthenticated = k.unauthenticated();
     facts.node_rejects.assign(measured.footer.node_rejects().begin(),
                               measured.footer.node_rejects().end());
     if (runtime::needs_deadline_diagnosis(c.status, k.overruns()))
@@ -228,6 +229,7 @@ std::string distributed_summary_text(const DistributedResults& results) {
     const auto& f = results.facts[i];
     text << c.name << ": " << c.simulation.steps() << " steps, coordinator exit "
          << f.coordinator_exit << ", overruns " << f.overruns << ", rejected " << f.rejected
+         << (f.unauthenticated ? ", unauthenticated " + std::to_string(f.unauthenticated) : "")
          << ", record " << f.record.string() << "\n";
     if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
     if (f.difference_from_in_process) {
@@ -278,6 +280,7 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     c["coordinator_exit"] = f.coordinator_exit;
     c["overruns"] = f.overruns;
     c["rejected"] = f.rejected;
+    c["unauthenticated"] = f.unauthenticated;
     c["links"] = links;
     c["record"] = f.record.string();
     c["deadline_diagnosis"] =

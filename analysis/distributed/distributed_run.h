@@ -89,6 +89,7 @@ struct InProcessDifference {
 struct DistributedCaseFacts {
   int coordinator_exit = -1;
   std::uint64_t overruns = 0, rejected = 0;  // rejected: the coordinator's, every cause
+  std::uint64_t unauthenticated = 0;         // the coordinator's drops for want of a MAC (footer)
   std::filesystem::path record;
   std::map<int, std::string> link_labels;  // node id -> link_roles' label
   std::optional<InProcessDifference> difference_from_in_process;

@@ -470,6 +470,8 @@ TEST_P(EarlyForgery, IsDroppedUnreadAndNeitherStopsTheRunNorBlamesANode) {
               (entry.has_event() &&
                entry.event().what().find("dropped unread as unauthenticated") != std::string::npos);
     EXPECT_TRUE(named) << "no record event names the unauthenticated messages";
+    // And the footer counts them, so `rths export` and the summaries show the flood.
+    EXPECT_GT(record.footer()->counters().unauthenticated(), 0u);
     completed += *code == 0 && record.footer()->status() == "completed" ? 1 : 0;
     for (auto& node : c.nodes) EXPECT_EQ(node.wait_for(5s).value_or(-1), 0);
   }

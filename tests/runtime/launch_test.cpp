@@ -92,6 +92,14 @@ TEST(Launch, AStrangersTakeoverIsDroppedAndTheSecretIsInNoLog) {
                              test::reference_result(test::read_file(config), "lag_shift_14ms"));
   const std::string log = test::read_file(out / "logs" / "lag_shift_14ms" / "coordinator.log");
   EXPECT_NE(log.find("dropped unread; newest: kind "), std::string::npos) << log;
+  // The footer counts the drops, and the summary and `rths export` say so.
+  EXPECT_GT(record.footer()->counters().unauthenticated(), 0u);
+  EXPECT_NE(o.out.find(", unauthenticated "), std::string::npos) << o.out;
+  const Output exported = run(kRths + " export " + (out / "lag_shift_14ms.rthsrec").string() +
+                              " --csv " + (dir / "exported.csv").string());
+  EXPECT_EQ(exported.code, 0) << exported.out;
+  EXPECT_NE(exported.out.find(" messages dropped unauthenticated)"), std::string::npos)
+      << exported.out;
   const std::regex secret("[0-9a-f]{64}");
   for (const auto& entry : std::filesystem::recursive_directory_iterator(out / "logs"))
     if (entry.is_regular_file())

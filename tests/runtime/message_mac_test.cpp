@@ -3,8 +3,12 @@
 #include "transport/message_mac.h"
 
 #include <gtest/gtest.h>
+#include <openssl/evp.h>
+#include <openssl/hmac.h>
 
+#include <atomic>
 #include <functional>
+#include <thread>
 #include <vector>
 
 namespace rths::transport {
@@ -72,6 +76,49 @@ TEST(MessageMac, TheSentStampGivenToSignIsTheOneCovered) {
   const Mac signed_at = mac.sign(m, 123, Direction::kDown);
   m.sent_ns = 123;
   EXPECT_TRUE(mac.verify(m, Direction::kDown, signed_at));
+}
+
+// Little-endian, `bytes` wide.
+std::string le(std::uint64_t value, int bytes) {
+  std::string out;
+  for (int i = 0; i < bytes; ++i) out += static_cast<char>((value >> (8 * i)) & 0xffu);
+  return out;
+}
+
+TEST(MessageMac, IsStandardHmacSha256OverTheDocumentedEncoding) {
+  const Message m = sample();
+  const std::string key = "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef";
+  // message_mac.h: tag (with its zero), direction, run id and payload length-prefixed (4 bytes),
+  // node id and kind 4 bytes, step, sent_ns and echo_ns 8 bytes, little-endian.
+  const std::string encoded = std::string("rths-mac-1", 11) + le(2, 1) + le(m.run_id.size(), 4) +
+                              m.run_id + le(2, 4) + le(5, 4) + le(17, 8) + le(1'000'000, 8) +
+                              le(999'000, 8) + le(m.payload.size(), 4) + m.payload;
+  for (const std::string& k : {key, std::string(100, 'k')}) {  // a key over one block is hashed
+    Mac expected{};
+    unsigned length = 0;
+    HMAC(EVP_sha256(), k.data(), static_cast<int>(k.size()),
+         reinterpret_cast<const unsigned char*>(encoded.data()), encoded.size(), expected.data(),
+         &length);
+    ASSERT_EQ(length, kMacBytes);
+    EXPECT_EQ(MessageMac(k).sign(m, m.sent_ns, Direction::kUp), expected) << k.size();
+  }
+}
+
+TEST(MessageMac, SignsAndVerifiesFromManyThreadsAtOnce) {
+  const MessageMac mac(kKey);
+  const Message m = sample();
+  const Mac genuine = mac.sign(m, m.sent_ns, Direction::kUp);
+  std::vector<std::thread> threads;
+  std::atomic<int> wrong{0};
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&] {
+      for (int i = 0; i < 20000; ++i) {
+        if (mac.sign(m, m.sent_ns, Direction::kUp) != genuine) ++wrong;
+        if (!mac.verify(m, Direction::kUp, genuine)) ++wrong;
+      }
+    });
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(wrong, 0);
 }
 
 }  // namespace

@@ -181,6 +181,16 @@ TEST_F(DdsTransport, WithARunSecretOnlyAuthenticatedMessagesArrive) {
   EXPECT_NE(command->writer, 0u);
   EXPECT_FALSE(node1.receive(200ms).has_value());
   EXPECT_EQ(node1.unauthenticated().count, 1u);
+  // Up again: the stranger's writer is now known as a forger and its messages are dropped
+  // unhashed, still counted; the run's own node (whose writer never failed) still arrives.
+  m.kind = 3;
+  for (int i = 0; i < 5; ++i) plain.send(m);
+  node1.send(m);
+  const auto again = coordinator.receive(2s);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->writer, got->writer);
+  EXPECT_FALSE(coordinator.receive(200ms).has_value()) << "a known forger's message arrived";
+  EXPECT_EQ(coordinator.unauthenticated().count, 2u + 5u);
 }
 
 TEST_F(DdsTransport, InterruptWakesABlockedReceive) {

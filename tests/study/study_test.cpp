@@ -95,6 +95,29 @@ TEST(StudyTest, SdofFromPeriodAndStiffnessDerivesMass) {
   EXPECT_EQ(unit.damping(0, 0), make_sdof(0.5, 0.05).damping(0, 0));
 }
 
+TEST(StudyTest, AZeroMassIsRefusedNamingItsFieldNotRunAsADefault) {
+  for (const char* text :
+       {"structure { sdof { period: 0.5 mass: 0 } }", "structure { sdof { period: 0.5 mass: -2 } }",
+        "structure { sdof { mass: 0 stiffness: 1000 } }"}) {
+    const std::string error = error_of(text);
+    EXPECT_NE(error.find("structure.sdof.mass must be > 0 kg"), std::string::npos) << text;
+  }
+  EXPECT_NE(error_of("structure { sdof { period: 0.5 mass: 5 stiffness: 1000 } }")
+                .find("mass, period and stiffness are all given"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("structure { shear_building { storey_mass: [1, 0] storey_stiffness: [1, 1] } }")
+          .find("structure.shear_building.storey_mass[1] must be > 0 kg"),
+      std::string::npos);
+  // Omitted, the mass is 1 kg (what the config reference says); given, it is used.
+  EXPECT_EQ(error_of("structure { sdof { period: 0.5 } }").find("mass"), std::string::npos);
+  config::Structure given;
+  given.mutable_sdof()->set_period(0.5);
+  given.mutable_sdof()->set_mass(250);
+  given.mutable_damping()->set_modal_zeta(0.05);
+  EXPECT_EQ(make_structure(given).mass(0, 0), 250);
+}
+
 TEST(StudyTest, EveryDelayKindBuildsAStage) {
   const config::Study study =
       parse_study(R"pb(

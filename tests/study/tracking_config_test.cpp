@@ -249,5 +249,23 @@ TEST(TrackingLoopTest, BenchmarkPlantIsTheNominalF1PlantUnlessOverridden) {
   EXPECT_THROW(make_tracking_loop(loop, 1.0 / 4096, "t"), std::invalid_argument);  // no plant
 }
 
+TEST(TrackingLoopTest, AnExplicitZeroMassOrStiffnessIsRefusedNotRunAsTheNominal) {
+  config::DelayStage::BenchmarkPlant spec;
+  spec.set_mass(0);
+  try {
+    benchmark_plant_parameters(spec);
+    FAIL() << "mass 0 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("benchmark_plant.mass"), std::string::npos) << e.what();
+  }
+  spec.clear_mass();
+  spec.set_stiffness(-1);
+  EXPECT_THROW(benchmark_plant_parameters(spec), std::invalid_argument);
+  spec.set_stiffness(2e6);
+  spec.set_mass(40);
+  EXPECT_EQ(benchmark_plant_parameters(spec).mass, 40);
+  EXPECT_EQ(benchmark_plant_parameters(spec).stiffness, 2e6);
+}
+
 }  // namespace
 }  // namespace rths::core

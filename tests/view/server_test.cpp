@@ -207,5 +207,104 @@ TEST(ViewServer, RefusesStreamsBeyondItsLimit) {
   first.join();
 }
 
+// A socket connected to the view (-1 when it cannot connect).
+int connect_to(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+TEST(ViewServer, IdleAndDrippingClientsLeaveThePageAndTheStopButtonReachable) {
+  Feed feed;
+  std::atomic<int> stops{0};
+  ServerOptions options;
+  options.allow_stop = true;
+  options.on_stop = [&] { ++stops; };
+  options.gate.header_deadline = 1000ms;
+  ViewServer server(feed, options);
+  std::vector<int> idle;
+  for (int i = 0; i < 200; ++i) idle.push_back(connect_to(server.port()));
+  // 8 clients that send one byte of a request every 2 s (each byte resets a per-read timeout).
+  std::atomic<bool> done{false};
+  std::vector<std::thread> drippers;
+  for (int i = 0; i < 8; ++i)
+    drippers.emplace_back([&] {
+      const int fd = connect_to(server.port());
+      const std::string request = "GET / HTTP/1.1\r\nHost: x\r\n\r\n";
+      for (std::size_t at = 0; at < request.size() && !done; ++at) {
+        if (send(fd, &request[at], 1, MSG_NOSIGNAL) != 1) break;
+        for (int w = 0; w < 40 && !done; ++w) std::this_thread::sleep_for(50ms);
+      }
+      close(fd);
+    });
+  const auto admitted = [&] { return server.counters()["connections"]["connections"].get<int>(); };
+  for (int i = 0; i < 1000 && admitted() < 208; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_EQ(admitted(), 208);  // the whole crowd is in before the fresh client comes
+  httplib::Client fresh("127.0.0.1", server.port());
+  fresh.set_connection_timeout(2s);
+  fresh.set_read_timeout(2s);
+  const auto page = fresh.Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("/view.js"), std::string::npos);
+  const auto stop = fresh.Post("/api/stop");
+  ASSERT_TRUE(stop);
+  EXPECT_EQ(stop->status, 202);
+  EXPECT_EQ(stops, 1);
+  // The crowd is let go: the oldest idle ones at once (64 wait at most; the fresh client's first
+  // connection made room for itself, its second found the room the first left), the rest and
+  // the drippers at the deadline; only the fresh client's two requests were served.
+  const nlohmann::json let_go = server.counters()["connections"];
+  EXPECT_GE(let_go["evicted_idle"].get<int>() + let_go["header_timeouts"].get<int>(),
+            200 + 8 + 1 - 64);
+  for (int i = 0; i < 300 && server.counters()["connections"]["waiting"] > 0; ++i)
+    std::this_thread::sleep_for(10ms);
+  const nlohmann::json c = server.counters()["connections"];
+  EXPECT_EQ(c["waiting"], 0);
+  EXPECT_EQ(c["requests_served"], 2);
+  EXPECT_EQ(c["evicted_idle"].get<int>() + c["header_timeouts"].get<int>(), 208);
+  done = true;
+  for (auto& d : drippers) d.join();
+  for (const int fd : idle) close(fd);
+}
+
+TEST(ViewServer, ClientsLoopingOnTheSnapshotBuildItAtMostOncePerPeriod) {
+  Feed feed;
+  feed.add(header());
+  for (int k = 0; k < 2000; ++k) feed.add(step(k));
+  ServerOptions options;
+  options.snapshot_period = 100ms;
+  ViewServer server(feed, options);
+  const auto start = std::chrono::steady_clock::now();
+  std::atomic<int> answers{0};
+  std::vector<std::thread> clients;
+  for (int t = 0; t < 4; ++t)
+    clients.emplace_back([&] {
+      httplib::Client client("127.0.0.1", server.port());
+      while (std::chrono::steady_clock::now() - start < 600ms) {
+        const auto r = client.Get("/api/snapshot");
+        ASSERT_TRUE(r);
+        ASSERT_EQ(r->status, 200);
+        const auto j = nlohmann::json::parse(r->body);
+        ASSERT_EQ(j["samples"]["step"].size(), 200u);
+        ++answers;
+      }
+    });
+  for (auto& c : clients) c.join();
+  const double elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const auto builds = server.counters()["snapshot_builds"].get<double>();
+  EXPECT_LE(builds, elapsed_ms / 100.0 + 1.0);
+  EXPECT_EQ(server.counters()["snapshots_served"], answers.load());
+  EXPECT_GT(answers.load(), 4 * builds);
+}
+
 }  // namespace
 }  // namespace rths::view

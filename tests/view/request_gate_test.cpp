@@ -1,0 +1,154 @@
+// The view's front door on real loopback sockets: a request reaches a worker only once whole
+// (headers and body), idle connections beyond the limit are closed oldest first, a connection
+// that does not finish its request in time is closed, an oversized header block is refused.
+#include "view/request_gate.h"
+
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <set>
+#include <thread>
+
+namespace rths::view {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A listening socket on loopback and connected pairs from it: (client side, server side).
+class Loopback {
+ public:
+  Loopback() {
+    listener_ = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    bind(listener_, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+    listen(listener_, 512);
+    socklen_t length = sizeof addr_;
+    getsockname(listener_, reinterpret_cast<sockaddr*>(&addr_), &length);
+  }
+  ~Loopback() { close(listener_); }
+  std::pair<int, int> pair() const {
+    const int client = socket(AF_INET, SOCK_STREAM, 0);
+    connect(client, reinterpret_cast<const sockaddr*>(&addr_), sizeof addr_);
+    return {client, accept(listener_, nullptr, nullptr)};
+  }
+
+ private:
+  int listener_ = -1;
+  sockaddr_in addr_{};
+};
+
+void send_text(int fd, const std::string& text) {
+  ASSERT_EQ(send(fd, text.data(), text.size(), MSG_NOSIGNAL), static_cast<ssize_t>(text.size()));
+}
+
+// Whether the server closed `fd` (read returns 0 or an answer, within 2 s).
+std::string read_until_closed(int fd) {
+  timeval tv{2, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  std::string out;
+  char buffer[512];
+  for (ssize_t n; (n = read(fd, buffer, sizeof buffer)) > 0;)
+    out.append(buffer, static_cast<std::size_t>(n));
+  return out;
+}
+
+// Served requests: what the worker read from each socket (the whole request, as sent).
+struct Served {
+  std::mutex mutex;
+  std::vector<std::string> requests;
+  std::function<void(int)> serve() {
+    return [this](int fd) {
+      char buffer[16384];
+      const ssize_t n = recv(fd, buffer, sizeof buffer, MSG_DONTWAIT);
+      std::lock_guard lock(mutex);
+      requests.emplace_back(buffer, n > 0 ? static_cast<std::size_t>(n) : 0);
+    };
+  }
+  std::size_t count() {
+    std::lock_guard lock(mutex);
+    return requests.size();
+  }
+};
+
+bool eventually(const std::function<bool()>& done) {
+  for (int i = 0; i < 300 && !done(); ++i) std::this_thread::sleep_for(10ms);
+  return done();
+}
+
+TEST(RequestGate, HandsOverARequestOnlyOnceItsHeadersAndBodyHaveArrived) {
+  Loopback net;
+  Served served;
+  RequestGate gate({}, served.serve());
+  const auto [client, server] = net.pair();
+  gate.admit(server);
+  send_text(client, "POST /api/stop HTTP/1.1\r\nHost: x\r\nContent-Length: 5\r\n\r\nab");
+  std::this_thread::sleep_for(100ms);
+  EXPECT_EQ(served.count(), 0u);  // the body is not all there
+  send_text(client, "cde");
+  ASSERT_TRUE(eventually([&] { return served.count() == 1; }));
+  EXPECT_EQ(served.requests[0].substr(served.requests[0].size() - 5), "abcde");
+  EXPECT_EQ(read_until_closed(client), "");  // closed by the gate after serve
+  close(client);
+  EXPECT_EQ(gate.counters()["requests_served"], 1);
+}
+
+TEST(RequestGate, ClosesTheOldestIdleConnectionsBeyondItsLimitAndServesAFreshOne) {
+  Loopback net;
+  Served served;
+  GateOptions options;
+  options.max_waiting = 8;
+  RequestGate gate(options, served.serve());
+  std::vector<int> idle;
+  for (int i = 0; i < 40; ++i) {
+    const auto [client, server] = net.pair();
+    gate.admit(server);
+    idle.push_back(client);
+  }
+  const auto [fresh, server] = net.pair();
+  gate.admit(server);
+  send_text(fresh, "GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+  ASSERT_TRUE(eventually([&] { return served.count() == 1; }));
+  EXPECT_EQ(gate.counters()["evicted_idle"], 40 + 1 - 8);
+  EXPECT_EQ(read_until_closed(idle.front()), "");  // the oldest were closed
+  for (const int fd : idle) close(fd);
+  close(fresh);
+}
+
+TEST(RequestGate, ClosesAConnectionThatDripsItsHeadersPastTheDeadline) {
+  Loopback net;
+  Served served;
+  GateOptions options;
+  options.header_deadline = 300ms;
+  RequestGate gate(options, served.serve());
+  const auto [client, server] = net.pair();
+  gate.admit(server);
+  send_text(client, "GET / HTTP/1.1\r\n");
+  std::this_thread::sleep_for(200ms);
+  send_text(client, "Host: x\r\n");  // still no end of headers
+  EXPECT_NE(read_until_closed(client).find(" 408 "), std::string::npos);
+  EXPECT_EQ(served.count(), 0u);
+  EXPECT_EQ(gate.counters()["header_timeouts"], 1);
+  close(client);
+}
+
+TEST(RequestGate, RefusesAHeaderBlockLargerThanItsLimit) {
+  Loopback net;
+  Served served;
+  RequestGate gate({}, served.serve());
+  const auto [client, server] = net.pair();
+  gate.admit(server);
+  send_text(client, "GET / HTTP/1.1\r\nX-Long: " + std::string(13000, 'x'));
+  EXPECT_NE(read_until_closed(client).find(" 431 "), std::string::npos);
+  EXPECT_EQ(gate.counters()["too_large"], 1);
+  EXPECT_EQ(served.count(), 0u);
+  close(client);
+}
+
+}  // namespace
+}  // namespace rths::view

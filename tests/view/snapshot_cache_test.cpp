@@ -1,0 +1,61 @@
+// The shared snapshot: however many callers loop on it, the build runs at most once per period
+// (plus the first), and every caller gets a whole copy.
+#include "view/snapshot_cache.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+#include <vector>
+
+namespace rths::view {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(SnapshotCache, CallersLoopingOnItBuildAtMostOncePerPeriod) {
+  std::atomic<int> built{0};
+  SnapshotCache cache(
+      [&] {
+        std::this_thread::sleep_for(2ms);  // a build that takes a while, as a big feed's does
+        return "copy " + std::to_string(++built);
+      },
+      100ms);
+  const auto start = std::chrono::steady_clock::now();
+  std::atomic<std::uint64_t> gets{0};
+  std::vector<std::thread> callers;
+  for (int t = 0; t < 6; ++t)
+    callers.emplace_back([&] {
+      while (std::chrono::steady_clock::now() - start < 600ms) {
+        const auto copy = cache.get();
+        ASSERT_TRUE(copy);
+        ASSERT_EQ(copy->rfind("copy ", 0), 0u);
+        ++gets;
+      }
+    });
+  for (auto& c : callers) c.join();
+  const double elapsed_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  // At most one build per started 100 ms, whatever the number of gets.
+  EXPECT_LE(static_cast<double>(cache.builds()), elapsed_ms / 100.0 + 1.0);
+  EXPECT_GE(cache.builds(), 2u);  // and it is rebuilt: the copy follows the feed
+  EXPECT_EQ(cache.builds(), static_cast<std::uint64_t>(built.load()));
+  EXPECT_EQ(cache.served(), gets.load());
+  EXPECT_GT(gets.load(), 10 * cache.builds());
+}
+
+TEST(SnapshotCache, AFailedBuildIsRetriedByTheNextCaller) {
+  int calls = 0;
+  SnapshotCache cache(
+      [&]() -> std::string {
+        if (++calls == 1) throw std::runtime_error("feed gone");
+        return "ok";
+      },
+      1000ms);
+  EXPECT_THROW(cache.get(), std::runtime_error);
+  EXPECT_EQ(*cache.get(), "ok");
+  EXPECT_EQ(cache.builds(), 2u);
+}
+
+}  // namespace
+}  // namespace rths::view

@@ -1,0 +1,96 @@
+#pragma once
+// RequestGate: the view's front door. A connection costs the server a thread only once its whole
+// request is in the socket's buffer, so idle or dripping clients cannot take the threads that
+// serve the page and the stop button.
+//
+// Inputs: accepted, connected TCP sockets (admit(), from the accepting thread); the gate owns each
+// from then on and closes it.
+// Outputs: `serve(fd)` called on one of `workers` threads with a socket whose request line, headers
+// and body (Content-Length bytes, when it fits `max_request_bytes`) are already received (read
+// with MSG_PEEK, so `serve` reads them as sent); the gate closes the socket after `serve` returns.
+// Rules, each counted (counters()):
+//   - a connection whose request is not complete within `header_deadline` of its arrival is
+//     closed ("timed_out"): a client dripping a byte every 2 s holds nothing for long;
+//   - at most `max_waiting` connections wait for their request; one more closes the oldest waiting
+//     ("evicted"), so a crowd of idle connections cannot keep a fresh client out: the fresh one
+//     sends its request at once and is served before it becomes the oldest;
+//   - a request whose headers exceed `max_request_bytes` is answered 431 and closed
+//     ("too_large"); one that closes before it is complete is just closed ("closed_early");
+//   - at most `max_queued` complete requests wait for a worker; more are answered 503 and closed
+//     ("queue_full").
+// Threads: one epoll thread (waiting connections, deadlines at a 20 ms tick) and `workers`, each
+// at `nice` (Linux's per-thread nice value): on a machine the loop shares, a flood of requests
+// takes CPU from the loop only where the loop leaves some.
+// Thread safety: admit() and counters() from any thread.
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <list>
+#include <mutex>
+#include <thread>
+#include <unordered_map>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rths::view {
+
+struct GateOptions {
+  std::size_t max_waiting = 64;  // connections whose request is not complete yet
+  std::size_t max_queued = 64;   // complete requests waiting for a worker
+  std::chrono::milliseconds header_deadline{3000};
+  std::size_t max_request_bytes = 8192 + 4096;  // headers (8 KiB) and a body (4 KiB)
+  int workers = 8;
+  int nice = 10;  // 0-19; raising a thread's nice value needs no privilege
+};
+
+// Sets the calling thread's nice value (Linux: per thread). False when the kernel refused.
+bool set_thread_nice(int nice);
+
+class RequestGate {
+ public:
+  // Starts the epoll thread and the workers. Throws std::runtime_error when epoll cannot start.
+  RequestGate(GateOptions options, std::function<void(int fd)> serve);
+  ~RequestGate();  // stop()
+  RequestGate(const RequestGate&) = delete;
+  RequestGate& operator=(const RequestGate&) = delete;
+
+  // Takes ownership of `fd` (a connected socket).
+  void admit(int fd);
+  // Closes every waiting and queued connection, lets running `serve` calls return, joins.
+  void stop();
+  nlohmann::json counters() const;
+
+ private:
+  struct Waiting {
+    int fd;
+    std::chrono::steady_clock::time_point deadline;
+  };
+  enum class Peek { kIncomplete, kComplete, kClosed, kTooLarge };
+  Peek peek(int fd) const;
+  void poll_loop();
+  void on_readable(int fd);
+  void expire(std::chrono::steady_clock::time_point now);
+  void forget(int fd);  // @pre mutex_ held: leaves the waiting list and epoll, not closed
+  void enqueue(int fd);
+  void worker_loop();
+
+  GateOptions options_;
+  std::function<void(int)> serve_;
+  int epoll_ = -1;
+  mutable std::mutex mutex_;
+  std::condition_variable queued_cv_;
+  std::list<Waiting> waiting_;  // oldest first (deadlines in arrival order)
+  std::unordered_map<int, std::list<Waiting>::iterator> waiting_at_;
+  std::deque<int> queue_;
+  bool stopping_ = false;
+  std::thread poller_;
+  std::vector<std::thread> workers_;
+  std::uint64_t admitted_ = 0, served_ = 0, timed_out_ = 0, evicted_ = 0, too_large_ = 0,
+                closed_early_ = 0, queue_full_ = 0;
+};
+
+}  // namespace rths::view

@@ -1,0 +1,52 @@
+#include "view/snapshot_cache.h"
+
+namespace rths::view {
+
+SnapshotCache::SnapshotCache(std::function<std::string()> build, std::chrono::milliseconds period)
+    : build_(std::move(build)), period_(period) {}
+
+std::shared_ptr<const std::string> SnapshotCache::get() {
+  std::unique_lock lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  const bool fresh = copy_ && now - built_at_ < period_;
+  if (fresh || (building_ && copy_)) {
+    ++served_;
+    return copy_;
+  }
+  if (building_) {  // the first copy is on its way
+    built_cv_.wait(lock, [this] { return !building_; });
+    ++served_;
+    return copy_;
+  }
+  building_ = true;
+  ++builds_;
+  lock.unlock();
+  std::shared_ptr<const std::string> made;
+  try {
+    made = std::make_shared<const std::string>(build_());
+  } catch (...) {
+    lock.lock();
+    building_ = false;
+    built_cv_.notify_all();
+    throw;
+  }
+  lock.lock();
+  copy_ = std::move(made);
+  built_at_ = std::chrono::steady_clock::now();
+  building_ = false;
+  ++served_;
+  built_cv_.notify_all();
+  return copy_;
+}
+
+std::uint64_t SnapshotCache::builds() const {
+  std::lock_guard lock(mutex_);
+  return builds_;
+}
+
+std::uint64_t SnapshotCache::served() const {
+  std::lock_guard lock(mutex_);
+  return served_;
+}
+
+}  // namespace rths::view
