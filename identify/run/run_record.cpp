@@ -222,8 +222,7 @@ void judge_specimen(const Identification& id, ActuatorPath& out) {
     if (std::find(c->declared.begin(), c->declared.end(), e) != c->declared.end()) continue;
     bool paid = true;
     for (const auto& step : c->steps)
-      if (step.effect == e)
-        paid = step_paid(step);
+      if (step.effect == e) paid = step_paid(step);
     if (paid) out.specimen_undeclared.push_back(effect_name(e));
   }
   if (out.declared_stiffness > 0.0 && std::abs(out.fitted_stiffness - out.declared_stiffness) >

@@ -90,8 +90,9 @@ TEST(RunReport, WritesEachFigureAsPngAndSvg) {
                             "error (mm)", "time (s)"})
     EXPECT_NE(response.find(entry), std::string::npos) << entry;
   const std::string shares = svg("record_shares.svg");
-  for (const char* entry : {"actuator 1 (its whole identified rig), share", "actuator 1: first_order, share",
-                            "remaining: the identified model's NRMSE", "NRMSE removed (%)"})
+  for (const char* entry :
+       {"actuator 1 (its whole identified rig), share", "actuator 1: first_order, share",
+        "remaining: the identified model's NRMSE", "NRMSE removed (%)"})
     EXPECT_NE(shares.find(entry), std::string::npos) << entry;
   fs::remove_all(dir);
 }
