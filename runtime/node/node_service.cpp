@@ -56,6 +56,7 @@ transport::Message NodeService::heartbeat_message(bool final) const {
   h.set_servo_overruns(servo_overruns_);
   rejected_.fill(*h.mutable_rejected_by_cause());
   h.set_final(final);
+  fill_heartbeat(h);
   return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);
 }
 
@@ -186,6 +187,7 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
     case STOP:
       if (!entitled(message)) return {};
       stopped_ = true;
+      on_stop();
       return {heartbeat_message(true)};
     default: return {};  // heartbeats only refresh liveliness, which the loop tracks
   }
@@ -238,6 +240,12 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
     stream_injected_lag_ = injected_lag_;
     return {};
   }
+  if (const std::string why = failure(); !why.empty()) {
+    auto hold = hold_on_own("step " + std::to_string(message.step) + ": " + why);
+    if (hold) return {std::move(*hold)};
+    return {};
+  }
+  if (!answered()) return {};
   if (!send_chains_.empty())
     for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
       feedback_.set_force(i, send_chains_[i].step({command_.time(), feedback_.force(i), 0.0}));
