@@ -18,10 +18,9 @@ namespace {
 using controller_node::FrameValues;
 
 std::string study_text() {
-  return test::paper_frame_study(
-      0.5, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
-               test::controller_link_text(47140, 47141) +
-               " } } limits { max_displacement: 0.5 } }");
+  return test::paper_frame_study(0.5, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
+                                          test::controller_link_text(47140, 47141) +
+                                          " } } limits { max_displacement: 0.5 } }");
 }
 
 struct Emulator {
@@ -41,9 +40,9 @@ struct Emulator {
     const auto answer = emulator.step(bytes.data(), bytes.size());
     if (!answer) return std::nullopt;
     FrameValues out;
-    EXPECT_EQ(controller_node::decode(emulator.link().feedback(), answer->data(), answer->size(),
-                                      1, out),
-              controller_node::FrameVerdict::kOk);
+    EXPECT_EQ(
+        controller_node::decode(emulator.link().feedback(), answer->data(), answer->size(), 1, out),
+        controller_node::FrameVerdict::kOk);
     return out;
   }
 };
@@ -53,8 +52,8 @@ TEST(ControllerEmulator, AnswersEachCommandFrameAsTheInProcessActuatorBitForBit)
   const core::PreparedStudy prepared = test::prepare(study_text());
   core::HybridSetup setup =
       core::setup_for_case(prepared, runtime::find_case(prepared.config, "lag_shift_14ms"));
-  core::Actuator actuator = core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt,
-                                                setup.servo_substeps);
+  core::Actuator actuator =
+      core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt, setup.servo_substeps);
   for (int k = 1; k <= 200; ++k) {
     const double t = k * setup.dt;
     const double drift = 0.01 * std::sin(2 * M_PI * 2 * t);

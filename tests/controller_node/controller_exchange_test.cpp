@@ -16,6 +16,7 @@ namespace rths::controller_node {
 namespace {
 
 using Outcome = ControllerExchange::Outcome;
+using Frames = std::vector<std::vector<std::uint8_t>>;
 
 // The controller's end of the link: reads one command frame, returns what it decoded, and sends
 // each of `answers(command)` (frames in order).
@@ -43,8 +44,7 @@ struct Controller {
     EXPECT_EQ(decode(link.command(), d->bytes.data(), d->size, 1, v), FrameVerdict::kOk);
     return v;
   }
-  std::future<FrameValues> answer(
-      std::function<std::vector<std::vector<std::uint8_t>>(const FrameValues&)> answers) {
+  std::future<FrameValues> answer(std::function<Frames(const FrameValues&)> answers) {
     return std::async(std::launch::async, [this, answers] {
       const FrameValues command = take();
       for (const auto& frame : answers(command)) udp.send(frame);
@@ -69,7 +69,7 @@ TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedWithItsRoundTrip) {
   ControllerExchange node(link, settings());
   Controller controller(link);
   auto seen = controller.answer([&](const FrameValues& c) {
-    return std::vector{controller.feedback(c.counter, c.target_displacement[0] * 0.5, 1234.5)};
+    return Frames{controller.feedback(c.counter, c.target_displacement[0] * 0.5, 1234.5)};
   });
   const auto a = node.exchange(0.25, {0.02}, {0.3});
   const FrameValues command = seen.get();
@@ -96,7 +96,7 @@ TEST(ControllerExchange, FramesFromAnyoneButThePeerAreCountedNamedAndNeverApplie
   auto seen = controller.answer([&](const FrameValues& c) {
     rogue.send(controller.feedback(c.counter, 0.09, 99999.0));
     rogue.send({1, 2, 3});
-    return std::vector{controller.feedback(c.counter, 0.001, 10.0)};
+    return Frames{controller.feedback(c.counter, 0.001, 10.0)};
   });
   const auto a = node.exchange(0.0, {0.001}, {0.0});
   seen.get();
@@ -123,9 +123,8 @@ ControllerExchange::Answer refused_answer(int port, const Refused& r, Controller
   keep = std::make_unique<ControllerExchange>(link, settings());
   out = keep.get();
   Controller controller(link);
-  auto seen = controller.answer([&](const FrameValues& c) {
-    return std::vector{r.frame(controller, c)};
-  });
+  auto seen =
+      controller.answer([&](const FrameValues& c) { return Frames{r.frame(controller, c)}; });
   const auto a = keep->exchange(0.0, {0.001}, {0.0});
   seen.get();
   return a;
@@ -141,11 +140,18 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
          return f;
        },
        "has 23 bytes, the feedback frame 24"},
-      {"not finite", [&](Controller& c, const FrameValues& v) { return c.feedback(v.counter, nan, 0.0); },
+      {"not finite",
+       [&](Controller& c, const FrameValues& v) {
+         auto f = c.feedback(v.counter, 0.0, 0.0);
+         std::memcpy(f.data() + 8, &nan, 8);  // the measured drift: the encoder refuses a NaN
+         return f;
+       },
        "not finite"},
-      {"repeated", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
+      {"repeated",
+       [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
        "repeats counter 0"},
-      {"never sent", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter + 5, 0, 0); },
+      {"never sent",
+       [](Controller& c, const FrameValues& v) { return c.feedback(v.counter + 5, 0, 0); },
        "echoes counter 6, never sent"},
       {"status", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter, 0, 0, 3); },
        "reports status 3"},
@@ -166,9 +172,9 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
 }
 
 TEST(ControllerExchange, CausesAreCountedApart) {
-  Refused repeated{"repeated",
-                   [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
-                   ""};
+  Refused repeated{
+      "repeated",
+      [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); }, ""};
   ControllerExchange* node = nullptr;
   std::unique_ptr<ControllerExchange> keep;
   refused_answer(47130, repeated, node, keep);
@@ -201,7 +207,7 @@ TEST(ControllerExchange, RealTimeLostFramesFaultAfterTheWindowAndLateAnswersAreC
   EXPECT_EQ(controller.take().counter, 1);
   // Frame 2: the late answer to frame 1 arrives first and is only counted; then frame 2's.
   auto seen = controller.answer([&](const FrameValues& c) {
-    return std::vector{controller.feedback(1, 0.5, 0.0), controller.feedback(c.counter, 0.003, 7)};
+    return Frames{controller.feedback(1, 0.5, 0.0), controller.feedback(c.counter, 0.003, 7)};
   });
   const auto a = node.exchange(0.001, {0.003}, {0.0});
   seen.get();

@@ -19,10 +19,10 @@ class DdsController : public testing::Test {
 };
 
 std::string study(int node_port, int peer_port, double duration, const std::string& extra = "") {
-  return test::paper_frame_study(
-      duration, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
-                    test::controller_link_text(node_port, peer_port, extra) +
-                    " } } limits { max_displacement: 0.5 } }");
+  return test::paper_frame_study(duration,
+                                 "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
+                                     test::controller_link_text(node_port, peer_port, extra) +
+                                     " } } limits { max_displacement: 0.5 } }");
 }
 
 // The controller emulator for `text`, started before the run (it waits for frames).
@@ -35,8 +35,8 @@ util::ChildProcess start_emulator(const std::string& name, const std::string& te
                                    "--case",         case_name,
                                    "--idle-timeout", "60"};
   args.insert(args.end(), extra.begin(), extra.end());
-  return util::ChildProcess(test::program("rths-controller-emulator", "controller_emulator"),
-                            args, dir / "controller_emulator.log");
+  return util::ChildProcess(test::program("rths-controller-emulator", "controller_emulator"), args,
+                            dir / "controller_emulator.log");
 }
 
 TEST_F(DdsController, LockstepThroughTheControllerEqualsInProcessBitForBitDespiteARogue) {

@@ -42,10 +42,10 @@ TEST(Frame, BadLayoutsAreRefusedNamingTheField) {
   EXPECT_NE(refusal(target, 1, Direction::kCommand).find("no COUNTER field"), std::string::npos);
   EXPECT_NE(refusal(counter, 1, Direction::kCommand).find("no TARGET_DISPLACEMENT field"),
             std::string::npos);
-  EXPECT_NE(refusal("fields { name: \"c\" role: COUNTER type: F64 } " + target, 1,
-                    Direction::kCommand)
-                .find("fields[0] (c): a COUNTER field is I32 or U32"),
-            std::string::npos);
+  EXPECT_NE(
+      refusal("fields { name: \"c\" role: COUNTER type: F64 } " + target, 1, Direction::kCommand)
+          .find("fields[0] (c): a COUNTER field is I32 or U32"),
+      std::string::npos);
   EXPECT_NE(refusal(counter + target + "fields { name: \"f\" role: MEASURED_FORCE }", 1,
                     Direction::kCommand)
                 .find("fields[2] (f): role MEASURED_FORCE belongs to the other direction"),
@@ -53,14 +53,14 @@ TEST(Frame, BadLayoutsAreRefusedNamingTheField) {
   EXPECT_NE(refusal(counter + target + target, 1, Direction::kCommand)
                 .find("a second TARGET_DISPLACEMENT field"),
             std::string::npos);
-  EXPECT_NE(refusal(counter + "fields { role: TARGET_DISPLACEMENT actuator: 1 }", 1,
-                    Direction::kCommand)
-                .find("actuator 1 is not among the node's 1"),
-            std::string::npos);
-  EXPECT_NE(refusal(counter + "fields { role: TARGET_DISPLACEMENT scale: -1 }", 1,
-                    Direction::kCommand)
-                .find("scale must be finite"),
-            std::string::npos);
+  EXPECT_NE(
+      refusal(counter + "fields { role: TARGET_DISPLACEMENT actuator: 1 }", 1, Direction::kCommand)
+          .find("actuator 1 is not among the node's 1"),
+      std::string::npos);
+  EXPECT_NE(
+      refusal(counter + "fields { role: TARGET_DISPLACEMENT scale: -1 }", 1, Direction::kCommand)
+          .find("scale must be finite"),
+      std::string::npos);
   EXPECT_NE(refusal(counter + target + "fields { name: \"t\" }", 1, Direction::kCommand)
                 .find("fields[2] (t): role not set"),
             std::string::npos);
@@ -127,13 +127,11 @@ TEST(Frame, WrongSizeAndNonFiniteValuesAreRefused) {
   EXPECT_EQ(decode(link.feedback(), bytes.data(), bytes.size() - 1, 1, back),
             FrameVerdict::kWrongSize);
   bytes.push_back(0);
-  EXPECT_EQ(decode(link.feedback(), bytes.data(), bytes.size(), 1, back),
-            FrameVerdict::kWrongSize);
+  EXPECT_EQ(decode(link.feedback(), bytes.data(), bytes.size(), 1, back), FrameVerdict::kWrongSize);
   bytes.pop_back();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   std::memcpy(bytes.data() + 16, &nan, 8);  // the force
-  EXPECT_EQ(decode(link.feedback(), bytes.data(), bytes.size(), 1, back),
-            FrameVerdict::kNonFinite);
+  EXPECT_EQ(decode(link.feedback(), bytes.data(), bytes.size(), 1, back), FrameVerdict::kNonFinite);
 }
 
 TEST(Frame, AValueThatDoesNotFitItsTypeIsNotEncoded) {
