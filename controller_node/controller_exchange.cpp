@@ -72,30 +72,11 @@ bool ControllerExchange::send_frame(std::int64_t status) {
 
 bool ControllerExchange::send_status(std::int64_t status) { return send_frame(status); }
 
-ControllerExchange::Answer ControllerExchange::judge(const Datagram& d, std::int64_t sent_ns) {
+// The decoded frame's counter: kAnswered when it is the awaited one, kLate for the answer to a
+// frame that went unanswered (counted; wait on), else kFault.
+ControllerExchange::Answer ControllerExchange::judge_counter(const std::string& from) {
   Answer a;
   a.outcome = Outcome::kFault;
-  const std::string from = "frame from " + d.source;
-  if (!d.from_peer) {
-    reject(Cause::kWrongSource, from + " (not the controller " + link_->peer() + "), " +
-                                    std::to_string(d.size) + " bytes");
-    a.outcome = Outcome::kLate;
-    return a;
-  }
-  const std::size_t expected = frame_size(config_.feedback());
-  const FrameVerdict verdict =
-      decode(config_.feedback(), d.bytes.data(), d.size, settings_.actuators, in_);
-  if (verdict == FrameVerdict::kWrongSize) {
-    a.fault = from + " has " + std::to_string(d.size) + " bytes, the feedback frame " +
-              std::to_string(expected);
-    reject(Cause::kWrongSize, a.fault);
-    return a;
-  }
-  if (verdict == FrameVerdict::kNonFinite) {
-    a.fault = from + " carries a value that is not finite (counter unread)";
-    reject(Cause::kNonFinite, a.fault);
-    return a;
-  }
   const std::int64_t c = in_.counter;
   if (c < counter_) {
     const auto lost = std::find(unanswered_.begin(), unanswered_.end(), c);
@@ -116,6 +97,36 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d, std::int
     reject(Cause::kUnexpected, a.fault);
     return a;
   }
+  a.outcome = Outcome::kAnswered;
+  return a;
+}
+
+ControllerExchange::Answer ControllerExchange::judge(const Datagram& d, std::int64_t sent_ns) {
+  Answer a;
+  a.outcome = Outcome::kFault;
+  const std::string from = "frame from " + d.source;
+  if (!d.from_peer) {
+    reject(Cause::kWrongSource, from + " (not the controller " + link_->peer() + "), " +
+                                    std::to_string(d.size) + " bytes");
+    a.outcome = Outcome::kLate;
+    return a;
+  }
+  const std::size_t expected = frame_size(config_.feedback());
+  const FrameVerdict verdict =
+      decode(config_.feedback(), d.bytes.data(), d.size, settings_.actuators, in_);
+  if (verdict == FrameVerdict::kWrongSize) {
+    a.fault = from + " has " + std::to_string(d.size) + " bytes, the feedback frame " +
+              std::to_string(expected);
+    reject(Cause::kWrongSize, a.fault);
+    return a;
+  }
+  if (verdict == FrameVerdict::kNonFinite) {
+    a.fault = from + " carries a value that is not finite";
+    reject(Cause::kNonFinite, a.fault);
+    return a;
+  }
+  if (Answer counter = judge_counter(from); counter.outcome != Outcome::kAnswered) return counter;
+  const std::int64_t c = in_.counter;
   report_.set_last_status(static_cast<std::int32_t>(in_.status));
   if (in_.has_status && in_.status != kStatusRun) {
     a.fault = "the controller reports status " + std::to_string(in_.status) + " (not running)";

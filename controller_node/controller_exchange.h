@@ -72,6 +72,7 @@ class ControllerExchange {
  private:
   // kAnswered, kFault, or kLate meaning "not this one, wait on".
   Answer judge(const Datagram& d, std::int64_t sent_ns);
+  Answer judge_counter(const std::string& from);
   enum class Cause {
     kWrongSource,
     kWrongSize,

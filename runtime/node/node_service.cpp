@@ -240,6 +240,12 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
     stream_injected_lag_ = injected_lag_;
     return {};
   }
+  return answer(message);
+}
+
+// After compute(): HOLD for a failed answer, nothing for none, else FEEDBACK through the send
+// stages, echoing the command's stamp.
+std::vector<transport::Message> NodeService::answer(const transport::Message& message) {
   if (const std::string why = failure(); !why.empty()) {
     auto hold = hold_on_own("step " + std::to_string(message.step) + ": " + why);
     if (hold) return {std::move(*hold)};

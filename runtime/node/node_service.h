@@ -112,6 +112,7 @@ class NodeService : public transport::NodeHandler {
  private:
   std::vector<transport::Message> on_assign(const transport::Message& message);
   std::vector<transport::Message> on_command(const transport::Message& message);
+  std::vector<transport::Message> answer(const transport::Message& message);
   // Whether a control message (ASSIGN, COMMAND, HOLD, STOP) came from the coordinator that
   // assigned this node, on this node's own topic; counts it not entitled otherwise.
   bool entitled(const transport::Message& message);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <csignal>
 #include <thread>
 
 #include "../runtime/test_support.h"
@@ -87,6 +88,33 @@ TEST_F(DdsController, ASilentControllerHoldsTheRunWithinItsReplyTimeoutAndTheRig
   const std::string emulator_log = test::read_file(emulator.log_file());
   EXPECT_NE(emulator_log.find("status HOLD received (frame 302)"), std::string::npos)
       << emulator_log;
+}
+
+TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
+  const std::string text = study(47155, 47156, 30.0, "reply_timeout_ms: 200");
+  util::ChildProcess emulator = start_emulator("controller_killed", text, "reference");
+  // Killed once the run is under way: its record has grown past a few hundred steps.
+  const auto record = std::filesystem::temp_directory_path() /
+                      ("rths_runtime_controller_killed_" + std::to_string(getpid())) /
+                      "run.rthsrec";
+  std::thread killer([&] {
+    for (int i = 0; i < 1200; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+      std::error_code error;
+      if (std::filesystem::file_size(record, error) > 100000 && !error) break;
+    }
+    emulator.signal(SIGKILL);
+  });
+  const auto run = test::launch("controller_killed", text, "reference", 197);
+  killer.join();
+  const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
+  EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
+  EXPECT_NE(coordinator_log.find("within 200.000000 ms (1 lost in a row)"), std::string::npos)
+      << coordinator_log;
+  const std::string node_log = test::read_file(run.dir / "node_2.log");
+  EXPECT_NE(node_log.find("HOLD sent to the controller"), std::string::npos) << node_log;
+  EXPECT_GT(run.record.steps().size(), 1u);
+  EXPECT_LT(run.record.steps().size(), 30000u);  // stopped before the motion's end
 }
 
 }  // namespace
