@@ -155,11 +155,11 @@ ControllerExchange::Answer ControllerExchange::exchange(double time,
   std::copy(drift.begin(), drift.end(), out_.target_displacement.begin());
   std::copy(velocity.begin(), velocity.end(), out_.target_velocity.begin());
   Answer a;
+  const std::int64_t sent_ns = monotonic_ns();  // before the send: the round trip includes it
   if (!send_frame(kStatusRun)) {
     a.fault = "cannot send command frame " + std::to_string(counter_) + " to " + link_->peer();
     return a;
   }
-  const std::int64_t sent_ns = monotonic_ns();
   const std::int64_t deadline =
       sent_ns + static_cast<std::int64_t>(std::llround(settings_.reply_timeout * 1e9));
   while (auto d = link_->receive(deadline)) {
