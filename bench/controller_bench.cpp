@@ -12,6 +12,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
+#include <thread>
 
 #include "actuator_emulator/actuator_service.h"
 #include "bench/bench_support.h"
@@ -92,6 +94,12 @@ int main(int argc, char** argv) {
       std::filesystem::path(RTHS_BINARY_DIR) / "controller_emulator/rths-controller-emulator",
       {"--config", config.string(), "--node-id", "2", "--case", "lag", "--idle-timeout", "10"},
       dir / "controller_emulator.log");
+  for (int i = 0; i < 400; ++i) {  // until it listens: a frame sent before is lost
+    std::ifstream log(dir / "controller_emulator.log");
+    const std::string text_of_log((std::istreambuf_iterator<char>(log)), {});
+    if (text_of_log.find("listening on") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
   const runtime::Assign assign = assign_for(study, dir);
   const auto assign_message = runtime::pack(kRunId, 2, runtime::ASSIGN, 0, assign);
   actuator_emulator::ActuatorService emulator_node(2, kRunId);

@@ -26,7 +26,8 @@ std::string study(int node_port, int peer_port, double duration, const std::stri
                                      " } } limits { max_displacement: 0.5 } }");
 }
 
-// The controller emulator for `text`, started before the run (it waits for frames).
+// The controller emulator for `text`, started before the run and waited for until it listens (a
+// frame sent before it binds would be lost, and a lockstep run holds on a lost frame).
 util::ChildProcess start_emulator(const std::string& name, const std::string& text,
                                   const std::string& case_name,
                                   const std::vector<std::string>& extra = {}) {
@@ -36,8 +37,13 @@ util::ChildProcess start_emulator(const std::string& name, const std::string& te
                                    "--case",         case_name,
                                    "--idle-timeout", "60"};
   args.insert(args.end(), extra.begin(), extra.end());
-  return util::ChildProcess(test::program("rths-controller-emulator", "controller_emulator"), args,
-                            dir / "controller_emulator.log");
+  util::ChildProcess emulator(test::program("rths-controller-emulator", "controller_emulator"),
+                              args, dir / "controller_emulator.log");
+  for (int i = 0; i < 400; ++i) {
+    if (test::read_file(emulator.log_file()).find("listening on") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  return emulator;
 }
 
 TEST_F(DdsController, LockstepThroughTheControllerEqualsInProcessBitForBitDespiteARogue) {
