@@ -64,6 +64,14 @@ TEST_F(DdsController, LockstepThroughTheControllerEqualsInProcessBitForBitDespit
   rogue.join();
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "lag_shift_14ms"));
+  // Every answered step records the frame's round trip to the controller and its status.
+  const auto steps = run.record.steps();
+  for (std::size_t k = 1; k < steps.size(); ++k) {
+    ASSERT_EQ(steps[k]->links_size(), 1) << "step " << k;
+    ASSERT_GT(steps[k]->links(0).controller_round_trip(), 0.0) << "step " << k;
+    ASSERT_LT(steps[k]->links(0).controller_round_trip(), 1.0) << "step " << k;
+    ASSERT_EQ(steps[k]->links(0).controller_status(), 0) << "step " << k;
+  }
   for (int code : run.launch.node_exits) EXPECT_EQ(code, 0);
   EXPECT_EQ(emulator.wait_for(std::chrono::seconds(10)), 0) << emulator.log_tail();
   const std::string node_log = test::read_file(run.dir / "node_2.log");
