@@ -21,11 +21,10 @@ constexpr const char* kRunId = "controller-service-test";
 
 runtime::Assign assign(int node_port, int peer_port, const std::string& deployment_extra) {
   const config::Study study = core::parse_study(
-      test::paper_frame_study(0.5, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
-                                       test::controller_link_text(node_port, peer_port,
-                                                                  "reply_timeout_ms: 100") +
-                                       " } } limits { max_displacement: 0.5 } " +
-                                       deployment_extra + " }"),
+      test::paper_frame_study(
+          0.5, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
+                   test::controller_link_text(node_port, peer_port, "reply_timeout_ms: 100") +
+                   " } } limits { max_displacement: 0.5 } " + deployment_extra + " }"),
       "test");
   runtime::Assign a;
   a.set_schema_version(runtime::kSchemaVersion);
