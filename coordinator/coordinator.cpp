@@ -40,7 +40,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
     s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
     s.endpoint.listen_to(n.spec.id());
     intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),
-                            n.spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR, node.awaited});
+                            runtime::drives_actuators(n.spec.kind()), node.awaited});
   }
   s.intake = std::make_unique<FeedbackIntake>(s.options.run_id, intake_nodes,
                                               s.deployment.limits().max_displacement());
@@ -148,7 +148,7 @@ void deactivate(RunState& s, bool failed, const std::string& status) {
     runtime::Hold hold;
     hold.set_reason(status);
     for (auto& [id, node] : s.nodes)
-      if (node.plan->spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR && node.announced)
+      if (runtime::drives_actuators(node.plan->spec.kind()) && node.announced)
         s.send(id, runtime::HOLD, s.step, hold);
     s.event("HOLD sent to the actuator emulators: " + status);
   }

@@ -236,7 +236,7 @@ const core::Vec& RunState::trial(const core::Vec& u, const core::Vec& v, core::M
   }
   const auto& storeys = setup.partition.actuator_storeys;
   for (auto& [id, node] : nodes) {
-    if (node.plan->spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+    if (!runtime::drives_actuators(node.plan->spec.kind())) continue;
     for (std::size_t i = 0; i < node.plan->actuators.size(); ++i) {
       const int a = node.plan->actuators[i];
       const int s = storeys[a];

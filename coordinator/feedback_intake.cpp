@@ -94,7 +94,8 @@ bool FeedbackIntake::values_in_range(const runtime::Feedback& f) const {
   return runtime::finite_within(f.force(), 0.0) &&
          runtime::finite_within(f.realised(), max_realised_) && std::isfinite(f.injected_lag()) &&
          f.injected_lag() >= 0.0 && f.command_received_ns() >= 0 && f.sampled_ns() >= 0 &&
-         f.servo_sample() >= 0;
+         f.servo_sample() >= 0 && std::isfinite(f.controller_round_trip()) &&
+         f.controller_round_trip() >= 0.0;
 }
 
 Verdict FeedbackIntake::judge_repeat(const transport::Message& message, Node& node,
@@ -123,6 +124,8 @@ void FeedbackIntake::record_answer(const transport::Message& message, Node& node
   link.set_one_way_down(static_cast<double>(feedback.command_received_ns() - message.echo_ns) *
                         1e-9);
   link.set_one_way_up(static_cast<double>(message.received_ns - message.sent_ns) * 1e-9);
+  link.set_controller_round_trip(feedback.controller_round_trip());
+  link.set_controller_status(feedback.controller_status());
 }
 
 bool FeedbackIntake::offer(const transport::Message& message) {

@@ -32,6 +32,7 @@ std::string kind_name(config::NodeSpec::Kind kind) {
   switch (kind) {
     case config::NodeSpec::SUBSTRUCTURE: return "substructure";
     case config::NodeSpec::ACTUATOR_EMULATOR: return "actuator_emulator";
+    case config::NodeSpec::CONTROLLER: return "controller";
     default: return "unspecified";
   }
 }

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "actuator_emulator/actuator_service.h"
+#include "controller_node/frame.h"
 #include "deploy/sites.h"
 #include "identify/model/data.h"
 #include "results/results.h"
@@ -327,6 +328,54 @@ int envelope_payload(const std::uint8_t* data, std::size_t size) {
   return 0;
 }
 
+namespace {
+
+bool same_values(const controller_node::FrameValues& a, const controller_node::FrameValues& b) {
+  return a.counter == b.counter && a.status == b.status && a.has_status == b.has_status &&
+         a.time == b.time && a.target_displacement == b.target_displacement &&
+         a.target_velocity == b.target_velocity &&
+         a.measured_displacement == b.measured_displacement && a.measured_force == b.measured_force;
+}
+
+}  // namespace
+
+int controller_frame(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return 0;
+  const int fields = 1 + (data[0] & 0x0F);
+  const auto direction = (data[0] & 0x80) ? controller_node::Direction::kFeedback
+                                          : controller_node::Direction::kCommand;
+  constexpr int kActuators = 2;
+  if (size < 1 + 2 * static_cast<std::size_t>(fields)) return 0;
+  config::FrameLayout layout;
+  for (int i = 0; i < fields; ++i) {
+    const std::uint8_t role = data[1 + 2 * i], bits = data[2 + 2 * i];
+    config::FrameField& f = *layout.add_fields();
+    f.set_role(static_cast<config::FrameField::Role>(role % 9));
+    f.set_type(static_cast<config::FrameField::Type>(bits & 3));
+    f.set_byte_order((bits & 4) ? config::FrameField::ORDER_BIG : config::FrameField::ORDER_LITTLE);
+    f.set_actuator((bits >> 3) & 1);
+  }
+  try {
+    controller_node::check_layout(layout, kActuators, direction, "fuzz");
+  } catch (const std::invalid_argument&) {
+    return 0;
+  }
+  const std::uint8_t* frame = data + 1 + 2 * fields;
+  const std::size_t frame_bytes = size - 1 - 2 * static_cast<std::size_t>(fields);
+  controller_node::FrameValues first, second;
+  if (controller_node::decode(layout, frame, frame_bytes, kActuators, first) !=
+      controller_node::FrameVerdict::kOk)
+    return 0;
+  std::vector<std::uint8_t> bytes;
+  if (!controller_node::encode(layout, first, bytes))
+    throw std::logic_error("a decoded frame does not encode again");
+  if (controller_node::decode(layout, bytes.data(), bytes.size(), kActuators, second) !=
+          controller_node::FrameVerdict::kOk ||
+      !same_values(first, second))
+    throw std::logic_error("a frame decoded, encoded and decoded again differs");
+  return 0;
+}
+
 const std::vector<Target>& targets() {
   static const std::vector<Target> all{
       {"study_config", &study_config},   {"deployment_config", &deployment_config},
@@ -334,6 +383,7 @@ const std::vector<Target>& targets() {
       {"column_motion", &column_motion}, {"daq_export", &daq_export},
       {"run_record", &run_record},       {"envelope_payload", &envelope_payload},
       {"record_flips", &record_flips},   {"study_values", &study_values},
+      {"controller_frame", &controller_frame},
   };
   return all;
 }

@@ -29,6 +29,13 @@
 //                      Input: byte 0 flags (bit 0: both nodes are first assigned the paper's frame;
 //                      bit 1: messages carry another run's id), then records of
 //                      [kind: 1 byte][step: int32 LE][payload size: uint16 LE][payload bytes].
+//   controller_frame   a controller's UDP frame layout and a frame (controller_node/frame.h):
+//                      check_layout, decode, and for a frame that decodes, encode and decode
+//                      again, which must give the same values (a difference throws
+//                      std::logic_error, which the fuzzer reports). Input: byte 0 = field count
+//                      (1 + value % 16) | bit 7: feedback (else command), then 2 bytes per field
+//                      [role % 9][type: bits 0-1, big endian: bit 2, actuator: bit 3 of 2],
+//                      every scale 1; the rest is the frame.
 //
 // File-based readers get the bytes through one scratch file per process (FuzzScratch).
 // libfuzzer_main.cpp wraps one entry as LLVMFuzzerTestOneInput; tests/fuzz runs every entry over
@@ -60,6 +67,7 @@ int daq_export(const std::uint8_t* data, std::size_t size);
 int run_record(const std::uint8_t* data, std::size_t size);
 int record_flips(const std::uint8_t* data, std::size_t size);
 int envelope_payload(const std::uint8_t* data, std::size_t size);
+int controller_frame(const std::uint8_t* data, std::size_t size);
 
 const std::vector<Target>& targets();
 

@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 seconds="${1:-75}"
 shift || true
 all=(study_config deployment_config sites_config at2_motion column_motion daq_export run_record
-     envelope_payload record_flips study_values)
+     envelope_payload record_flips study_values controller_frame)
 targets=("$@")
 ((${#targets[@]})) || targets=("${all[@]}")
 

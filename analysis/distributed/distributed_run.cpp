@@ -69,7 +69,7 @@ ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
   ActuatorPathLag worst;
   worst.real_time = deployment.clock() == config::Deployment::REAL_TIME;
   for (const config::NodeSpec& node : deployment.nodes()) {
-    if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+    if (!runtime::drives_actuators(node.kind())) continue;
     ActuatorPathLag lag;
     lag.node_id = node.id();
     lag.real_time = worst.real_time;
@@ -116,9 +116,10 @@ std::map<int, std::string> link_roles(const config::Deployment& deployment,
   for (const config::NodeSpec& node : deployment.nodes()) ++sharing[node.kind()];
   std::map<int, std::string> labels;
   for (const config::NodeSpec& node : deployment.nodes()) {
-    std::string label = node.kind() == config::NodeSpec::ACTUATOR_EMULATOR ? "actuator lab"
-                        : node.kind() == config::NodeSpec::SUBSTRUCTURE    ? "numerical site"
-                                                                           : "node";
+    std::string label = node.kind() == config::NodeSpec::CONTROLLER          ? "controller"
+                        : node.kind() == config::NodeSpec::ACTUATOR_EMULATOR ? "actuator lab"
+                        : node.kind() == config::NodeSpec::SUBSTRUCTURE      ? "numerical site"
+                                                                             : "node";
     const auto site = site_of_node.find(node.id());
     if (site != site_of_node.end() && !site->second.empty())
       label += " \"" + site->second + "\"";

@@ -62,6 +62,16 @@ struct Credentials {
   std::string secret;  // handed down in the environment, never on the command line
 };
 
+// The program of a node of this kind; the controller node's is looked up only when a deployment
+// has one, so a tree built without it still launches every other deployment.
+std::filesystem::path node_program(const util::NodePrograms& programs, config::NodeSpec::Kind kind,
+                                   const std::filesystem::path& programs_dir) {
+  if (kind == config::NodeSpec::SUBSTRUCTURE) return programs.substructure;
+  if (kind == config::NodeSpec::CONTROLLER)
+    return util::find_program("rths-controller-node", "controller_node", programs_dir);
+  return programs.actuator_emulator;
+}
+
 util::ChildProcess start(const std::filesystem::path& program, std::vector<std::string> args,
                          const Credentials& credentials, int node_id,
                          const std::filesystem::path& log, const std::string& label,
@@ -213,13 +223,12 @@ LaunchResult launch_run(const LaunchOptions& options) {
   const auto started = std::chrono::steady_clock::now();
   std::vector<util::ChildProcess> nodes;
   for (const config::NodeSpec& node : deployment.nodes()) {
-    const bool sub = node.kind() == config::NodeSpec::SUBSTRUCTURE;
     const std::string id = std::to_string(node.id());
     const std::string label = "node " + id + " (" + node_kind_name(node.kind()) + ")";
     result.node_labels.push_back(label);
     result.node_ids.push_back(node.id());
     nodes.push_back(
-        start(sub ? programs.substructure : programs.actuator_emulator,
+        start(node_program(programs, node.kind(), options.programs_dir),
               {"--node-id", id, "--domain", std::to_string(domain), "--run-id", result.run_id},
               credentials, node.id(), options.log_dir / ("node_" + id + ".log"), label, placement));
   }

@@ -216,8 +216,7 @@ void NodeLoop::on_assigned() {
     assigned_.send_lag = std::make_unique<LagInjector>(a.node().send_lag(), a.dt());
   last_from_coordinator_ = realtime_ns();
   const config::Deployment& deployment = a.study().deployment();
-  if (a.node().kind() == config::NodeSpec::ACTUATOR_EMULATOR &&
-      deployment.clock() == config::Deployment::REAL_TIME)
+  if (drives_actuators(a.node().kind()) && deployment.clock() == config::Deployment::REAL_TIME)
     assigned_.watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment, a.dt()) * a.dt());
   spdlog::info("{}: assigned to run {}", service_.label(), service_.run_id());
   if (service_.streaming()) {

@@ -56,6 +56,7 @@ transport::Message NodeService::heartbeat_message(bool final) const {
   h.set_servo_overruns(servo_overruns_);
   rejected_.fill(*h.mutable_rejected_by_cause());
   h.set_final(final);
+  fill_heartbeat(h);
   return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);
 }
 
@@ -186,6 +187,7 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
     case STOP:
       if (!entitled(message)) return {};
       stopped_ = true;
+      on_stop();
       return {heartbeat_message(true)};
     default: return {};  // heartbeats only refresh liveliness, which the loop tracks
   }
@@ -249,6 +251,18 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
     stream_injected_lag_ = injected_lag_;
     return {};
   }
+  return answer(message);
+}
+
+// After compute(): HOLD for a failed answer, nothing for none, else FEEDBACK through the send
+// stages, echoing the command's stamp.
+std::vector<transport::Message> NodeService::answer(const transport::Message& message) {
+  if (const std::string why = failure(); !why.empty()) {
+    auto hold = hold_on_own("step " + std::to_string(message.step) + ": " + why);
+    if (hold) return {std::move(*hold)};
+    return {};
+  }
+  if (!answered()) return {};
   apply_receive_sensors();
   if (!send_chains_.empty())
     for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)

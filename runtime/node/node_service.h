@@ -29,7 +29,9 @@
 //                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
 //                       for the newest command, stamped with its servo sample. Held, stopped or
 //                       before the first command: no tick runs and nothing is sent.
-// Subclasses (substructure node, actuator emulator) supply configure() and compute().
+// Subclasses (substructure node, actuator emulator, controller node) supply configure() and
+// compute(); a controller may also fail a computed answer (failure(): HOLD instead of FEEDBACK)
+// or have none (answered() false: nothing sent).
 
 #include <optional>
 #include <string>
@@ -99,10 +101,21 @@ class NodeService : public transport::NodeHandler {
   virtual void tick(Feedback& /*feedback*/) {}
   // Non-empty: why this command must not be acted on (checked before any delay stage or block).
   virtual std::string refusal(const Command& /*command*/) { return {}; }
+  // After compute(): non-empty = why its answer must not be used (a controller's frame refused);
+  // the node holds and answers HOLD with this reason instead of FEEDBACK.
+  virtual std::string failure() { return {}; }
+  // After compute(): false = nothing to answer this time (a controller's answer is late in real
+  // time); nothing is sent and the coordinator's answer window judges the node.
+  virtual bool answered() const { return true; }
+  // On STOP, before the final heartbeat (a controller passes STOP to the lab's controller).
+  virtual void on_stop() {}
+  // What a node adds to each heartbeat (a controller's link report).
+  virtual void fill_heartbeat(Heartbeat& /*heartbeat*/) const {}
 
  private:
   std::vector<transport::Message> on_assign(const transport::Message& message);
   std::vector<transport::Message> on_command(const transport::Message& message);
+  std::vector<transport::Message> answer(const transport::Message& message);
   // Whether a control message (ASSIGN, COMMAND, HOLD, STOP) came from the coordinator that
   // assigned this node, on this node's own topic; counts it not entitled otherwise.
   bool entitled(const transport::Message& message);

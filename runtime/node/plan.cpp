@@ -58,6 +58,21 @@ void claim_storeys(const std::vector<int>& hosted, int node_id, std::map<int, in
 
 }  // namespace
 
+namespace {
+// A controller node needs its link; only it carries one, and it carries no compensation (the
+// lab's controller runs its own).
+void check_controller_spec(const config::NodeSpec& spec, const std::string& where) {
+  const bool controller = spec.kind() == config::NodeSpec::CONTROLLER;
+  if (controller != spec.has_controller())
+    throw std::invalid_argument(where + (controller ? ": a CONTROLLER needs its `controller` link"
+                                                    : ": only a CONTROLLER carries `controller`"));
+  if (controller && spec.compensation_size() > 0)
+    throw std::invalid_argument(where +
+                                ": a CONTROLLER carries no compensation; the lab's controller "
+                                "runs its own");
+}
+}  // namespace
+
 DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment) {
   const auto& partition = base.partition;
   const int storeys = static_cast<int>(partition.numerical.size());
@@ -80,8 +95,10 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
     NodePlan node;
     node.spec = spec;
     const bool sub = spec.kind() == config::NodeSpec::SUBSTRUCTURE;
-    if (!sub && spec.kind() != config::NodeSpec::ACTUATOR_EMULATOR)
-      throw std::invalid_argument(where + ": kind must be SUBSTRUCTURE or ACTUATOR_EMULATOR");
+    if (!sub && !drives_actuators(spec.kind()))
+      throw std::invalid_argument(where +
+                                  ": kind must be SUBSTRUCTURE, ACTUATOR_EMULATOR or CONTROLLER");
+    check_controller_spec(spec, where);
     any_substructure |= sub;
     if (sub && spec.compensation_size() > 0)
       throw std::invalid_argument(where +
@@ -110,8 +127,9 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
                                     " is hosted by no substructure node");
   for (int s : experimental)
     if (!experimental_host.count(s))
-      throw std::invalid_argument("experimental storey " + std::to_string(s + 1) +
-                                  " is hosted by no actuator emulator (deployment.nodes)");
+      throw std::invalid_argument(
+          "experimental storey " + std::to_string(s + 1) +
+          " is hosted by no actuator emulator or controller (deployment.nodes)");
   (void)with_node_compensation(base, plan);  // refuses bad blocks before any node is started
   return plan;
 }

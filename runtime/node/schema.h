@@ -31,4 +31,11 @@ bool unpack(const transport::Message& message, T& payload) {
 std::string kind_name(std::int32_t kind);
 std::string node_kind_name(config::NodeSpec::Kind kind);
 
+// Whether a node of this kind drives the experimental storeys' actuators (an actuator emulator,
+// or a lab's controller): it answers Command with realised drift and measured force, holds on
+// HOLD and on its own watchdog. The coordinator treats both alike.
+inline bool drives_actuators(config::NodeSpec::Kind kind) {
+  return kind == config::NodeSpec::ACTUATOR_EMULATOR || kind == config::NodeSpec::CONTROLLER;
+}
+
 }  // namespace rths::runtime

@@ -122,7 +122,8 @@ def fresh_directory():
 
 
 def path_with_programs():
-    folders = ["cli", "coordinator", "substructure_nodes", "actuator_emulator"]
+    folders = ["cli", "coordinator", "substructure_nodes", "actuator_emulator", "controller_node",
+               "controller_emulator"]
     # `python3` in the README is the interpreter the suite runs (Debian's, with NumPy), not an
     # earlier one on PATH.
     return os.pathsep.join([os.path.dirname(sys.executable)] + [os.path.join(BINARY, f) for f in folders] +

@@ -1,0 +1,34 @@
+// rths-controller-emulator: stands in for a lab's real-time controller (controller_emulator.h).
+//   rths-controller-emulator --config STUDY --node-id N [--case NAME] [--answer-frames K]
+//                            [--idle-timeout S]
+// Exit: 0 after a STOP frame, 1 when no frame came for the idle timeout, 2 bad usage or config.
+#include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
+
+#include "controller_emulator/controller_emulator.h"
+#include "study/study.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"rths-controller-emulator: a lab's real-time controller, emulated over UDP frames"};
+  std::string config, case_name;
+  int node_id = 0;
+  std::int64_t answer_frames = -1;
+  double idle_timeout = 30.0;
+  app.add_option("--config", config, "the study whose deployment names the CONTROLLER node")
+      ->required();
+  app.add_option("--node-id", node_id, "the CONTROLLER node it answers")->required();
+  app.add_option("--case", case_name, "the case whose actuators it runs (default: reference)");
+  app.add_option("--answer-frames", answer_frames,
+                 "answer this many command frames, then go silent (a fault drill)");
+  app.add_option("--idle-timeout", idle_timeout, "s without a frame before it leaves (exit 1)");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const std::filesystem::path path = std::filesystem::absolute(config);
+    rths::controller_emulator::ControllerEmulator emulator(
+        rths::core::load_study(path), path.parent_path(), case_name, node_id, answer_frames);
+    return rths::controller_emulator::serve(emulator, idle_timeout);
+  } catch (const std::exception& e) {
+    spdlog::error("rths-controller-emulator: {}", e.what());
+    return 2;
+  }
+}

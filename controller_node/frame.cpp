@@ -1,0 +1,217 @@
+#include "controller_node/frame.h"
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <stdexcept>
+
+namespace rths::controller_node {
+namespace {
+
+using Field = config::FrameField;
+
+double scale_of(const Field& f) { return f.scale() == 0.0 ? 1.0 : f.scale(); }
+
+bool integer_type(Field::Type type) { return type == Field::I32 || type == Field::U32; }
+
+bool is_command_role(Field::Role role) {
+  return role == Field::TARGET_DISPLACEMENT || role == Field::TARGET_VELOCITY ||
+         role == Field::COMMAND_TIME;
+}
+bool is_feedback_role(Field::Role role) {
+  return role == Field::MEASURED_DISPLACEMENT || role == Field::MEASURED_FORCE;
+}
+bool per_actuator(Field::Role role) {
+  return role == Field::TARGET_DISPLACEMENT || role == Field::TARGET_VELOCITY ||
+         role == Field::MEASURED_DISPLACEMENT || role == Field::MEASURED_FORCE;
+}
+
+// Writes `n` bytes of `raw` (host order) in the field's byte order.
+void put(std::uint8_t* out, const std::uint8_t* raw, std::size_t n, Field::ByteOrder order) {
+  const bool swap = (order == Field::ORDER_BIG) == (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__);
+  for (std::size_t i = 0; i < n; ++i) out[i] = raw[swap ? n - 1 - i : i];
+}
+
+// The SI value of role `role` (actuator a) in `values`; nullptr for roles without one.
+template <class Values>
+auto slot(Values& values, Field::Role role, int a) -> decltype(&values.time) {
+  switch (role) {
+    case Field::TARGET_DISPLACEMENT: return &values.target_displacement.at(a);
+    case Field::TARGET_VELOCITY: return &values.target_velocity.at(a);
+    case Field::MEASURED_DISPLACEMENT: return &values.measured_displacement.at(a);
+    case Field::MEASURED_FORCE: return &values.measured_force.at(a);
+    case Field::COMMAND_TIME: return &values.time;
+    default: return nullptr;
+  }
+}
+
+// One field's value as a double in frame units (what encode writes).
+double frame_value(const Field& f, const FrameValues& values) {
+  switch (f.role()) {
+    case Field::COUNTER: return static_cast<double>(values.counter);
+    case Field::STATUS: return static_cast<double>(values.status);
+    case Field::PADDING: return 0.0;
+    default: {
+      const double* v = slot(values, f.role(), f.actuator());
+      return v ? *v / scale_of(f) : 0.0;
+    }
+  }
+}
+
+bool write_field(const Field& f, double value, std::uint8_t* out) {
+  if (!std::isfinite(value)) return false;
+  std::uint8_t raw[8];
+  switch (f.type()) {
+    case Field::F32: {
+      const float x = static_cast<float>(value);
+      if (!std::isfinite(x)) return false;
+      std::memcpy(raw, &x, 4);
+      break;
+    }
+    case Field::I32: {
+      const double r = std::nearbyint(value);
+      if (r < -2147483648.0 || r > 2147483647.0) return false;
+      const std::int32_t x = static_cast<std::int32_t>(r);
+      std::memcpy(raw, &x, 4);
+      break;
+    }
+    case Field::U32: {
+      const double r = std::nearbyint(value);
+      if (r < 0.0 || r > 4294967295.0) return false;
+      const std::uint32_t x = static_cast<std::uint32_t>(r);
+      std::memcpy(raw, &x, 4);
+      break;
+    }
+    default: std::memcpy(raw, &value, 8);
+  }
+  put(out, raw, field_size(f.type()), f.byte_order());
+  return true;
+}
+
+double read_field(const Field& f, const std::uint8_t* in) {
+  std::uint8_t raw[8];
+  put(raw, in, field_size(f.type()), f.byte_order());  // the swap is its own inverse
+  switch (f.type()) {
+    case Field::F32: {
+      float x;
+      std::memcpy(&x, raw, 4);
+      return x;
+    }
+    case Field::I32: {
+      std::int32_t x;
+      std::memcpy(&x, raw, 4);
+      return x;
+    }
+    case Field::U32: {
+      std::uint32_t x;
+      std::memcpy(&x, raw, 4);
+      return x;
+    }
+    default: {
+      double x;
+      std::memcpy(&x, raw, 8);
+      return x;
+    }
+  }
+}
+
+void check_field(const Field& f, int actuators, Direction direction, const std::string& where) {
+  if (!Field::Role_IsValid(f.role()) || f.role() == Field::ROLE_UNSPECIFIED)
+    throw std::invalid_argument(where + ": role not set");
+  if (!Field::Type_IsValid(f.type()) || !Field::ByteOrder_IsValid(f.byte_order()))
+    throw std::invalid_argument(where + ": type or byte_order unknown");
+  if (!std::isfinite(f.scale()) || f.scale() < 0.0)
+    throw std::invalid_argument(where + ": scale must be finite and > 0 (0 = 1)");
+  const bool wrong_way =
+      direction == Direction::kCommand ? is_feedback_role(f.role()) : is_command_role(f.role());
+  if (wrong_way)
+    throw std::invalid_argument(where + ": role " + Field::Role_Name(f.role()) +
+                                " belongs to the other direction's frame");
+  if ((f.role() == Field::COUNTER || f.role() == Field::STATUS) && !integer_type(f.type()))
+    throw std::invalid_argument(where + ": a " + Field::Role_Name(f.role()) +
+                                " field is I32 or U32");
+  if (per_actuator(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators))
+    throw std::invalid_argument(where + ": actuator " + std::to_string(f.actuator()) +
+                                " is not among the node's " + std::to_string(actuators));
+}
+
+}  // namespace
+
+std::string to_string(FrameVerdict verdict) {
+  switch (verdict) {
+    case FrameVerdict::kOk: return "ok";
+    case FrameVerdict::kWrongSize: return "wrong size";
+    default: return "not finite";
+  }
+}
+
+std::size_t field_size(config::FrameField::Type type) { return type == Field::F64 ? 8 : 4; }
+
+std::size_t frame_size(const config::FrameLayout& layout) {
+  std::size_t n = 0;
+  for (const Field& f : layout.fields()) n += field_size(f.type());
+  return n;
+}
+
+void check_layout(const config::FrameLayout& layout, int actuators, Direction direction,
+                  const std::string& where) {
+  std::map<std::pair<int, int>, int> seen;  // (role, actuator) -> count
+  for (int i = 0; i < layout.fields_size(); ++i) {
+    const Field& f = layout.fields(i);
+    const std::string at = where + ".fields[" + std::to_string(i) + "] (" + f.name() + ")";
+    check_field(f, actuators, direction, at);
+    if (f.role() == Field::PADDING) continue;
+    const int a = per_actuator(f.role()) ? f.actuator() : 0;
+    if (++seen[{f.role(), a}] > 1)
+      throw std::invalid_argument(at + ": a second " + Field::Role_Name(f.role()) + " field");
+  }
+  if (!seen.count({Field::COUNTER, 0})) throw std::invalid_argument(where + ": no COUNTER field");
+  const std::vector<Field::Role> needed =
+      direction == Direction::kCommand
+          ? std::vector<Field::Role>{Field::TARGET_DISPLACEMENT}
+          : std::vector<Field::Role>{Field::MEASURED_DISPLACEMENT, Field::MEASURED_FORCE};
+  for (int a = 0; a < actuators; ++a)
+    for (const Field::Role role : needed)
+      if (!seen.count({role, a}))
+        throw std::invalid_argument(where + ": no " + Field::Role_Name(role) +
+                                    " field for actuator " + std::to_string(a));
+}
+
+bool encode(const config::FrameLayout& layout, const FrameValues& values,
+            std::vector<std::uint8_t>& bytes) {
+  bytes.assign(frame_size(layout), 0);
+  std::size_t at = 0;
+  for (const Field& f : layout.fields()) {
+    if (!write_field(f, frame_value(f, values), bytes.data() + at)) return false;
+    at += field_size(f.type());
+  }
+  return true;
+}
+
+FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data, std::size_t size,
+                    int actuators, FrameValues& values) {
+  if (size != frame_size(layout)) return FrameVerdict::kWrongSize;
+  const auto n = static_cast<std::size_t>(actuators);
+  for (auto* v : {&values.target_displacement, &values.target_velocity,
+                  &values.measured_displacement, &values.measured_force})
+    v->assign(n, 0.0);
+  values.has_status = false;
+  std::size_t at = 0;
+  for (const Field& f : layout.fields()) {
+    const double x = read_field(f, data + at);
+    at += field_size(f.type());
+    if (!std::isfinite(x)) return FrameVerdict::kNonFinite;
+    if (f.role() == Field::COUNTER) {
+      values.counter = static_cast<std::int64_t>(x);
+    } else if (f.role() == Field::STATUS) {
+      values.status = static_cast<std::int64_t>(x);
+      values.has_status = true;
+    } else if (f.role() != Field::PADDING) {
+      if (per_actuator(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators)) continue;
+      if (double* v = slot(values, f.role(), f.actuator())) *v = x * scale_of(f);
+    }
+  }
+  return FrameVerdict::kOk;
+}
+
+}  // namespace rths::controller_node

@@ -1,0 +1,58 @@
+#pragma once
+// The fixed UDP frames a lab's real-time controller exchanges with a host, packed and unpacked
+// from a configured layout (config::FrameLayout: fields in order, no gaps; each f64, f32, i32 or
+// u32, little or big endian, with a scale). One codec serves both ends: the controller node
+// encodes commands and decodes feedback, the controller emulator the other way round.
+//
+// Values are SI (m, m/s, s, N); on the wire each is SI / scale (scale 0 = 1), integer types
+// rounded to the nearest. f64 with scale 1 carries a double's bits unchanged (a lockstep run over
+// a controller then equals the in-process run bit for bit); f32 keeps 24 bits of mantissa.
+//
+//   check_layout(layout, actuators, direction) -> throws std::invalid_argument naming the field:
+//     exactly one COUNTER (i32 or u32); at most one STATUS (integer) and COMMAND_TIME; every
+//     actuator in [0, actuators) has exactly one field of each role the direction needs
+//     (command: TARGET_DISPLACEMENT; feedback: MEASURED_DISPLACEMENT and
+//     MEASURED_FORCE) and at most one of the others;
+//     roles of the other direction refused; scale finite and not negative.
+//   encode(layout, values, bytes)  -> false when a value does not fit its type (not finite, or
+//                                     beyond an integer's range); bytes then unspecified.
+//   decode(layout, bytes, values)  -> kWrongSize (size != frame_size), kNonFinite (a float field
+//                                     NaN or infinite), or kOk with every role's value filled.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rths/proto/deployment.pb.h"
+
+namespace rths::controller_node {
+
+enum class Direction { kCommand, kFeedback };
+
+// Every role's value, SI; vectors indexed by actuator (sized by the caller or by decode()).
+struct FrameValues {
+  std::int64_t counter = 0;
+  std::int64_t status = 0;
+  bool has_status = false;  // decode: the layout has a STATUS field
+  double time = 0.0;        // s
+  std::vector<double> target_displacement, target_velocity;   // m, m/s
+  std::vector<double> measured_displacement, measured_force;  // m, N
+};
+
+enum class FrameVerdict { kOk, kWrongSize, kNonFinite };
+std::string to_string(FrameVerdict verdict);
+
+std::size_t field_size(config::FrameField::Type type);
+std::size_t frame_size(const config::FrameLayout& layout);
+
+void check_layout(const config::FrameLayout& layout, int actuators, Direction direction,
+                  const std::string& where);
+
+bool encode(const config::FrameLayout& layout, const FrameValues& values,
+            std::vector<std::uint8_t>& bytes);
+
+// `actuators` sizes the value vectors (fields beyond it are ignored: check_layout refuses them).
+FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data, std::size_t size,
+                    int actuators, FrameValues& values);
+
+}  // namespace rths::controller_node

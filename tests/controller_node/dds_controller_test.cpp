@@ -1,0 +1,139 @@
+// A run through a controller node: the coordinator and the controller node are processes over
+// Cyclone DDS on loopback (rths launch's sequence), the controller node talks UDP on 127.0.0.1 to
+// the controller emulator, another process. DDS domains 197-199, UDP ports 47150-47159.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <csignal>
+#include <thread>
+
+#include "../runtime/test_support.h"
+#include "controller_node/udp_link.h"
+#include "link_text.h"
+
+namespace rths {
+namespace {
+
+class DdsController : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { runtime::ensure_dds_config(); }
+};
+
+std::string study(int node_port, int peer_port, double duration, const std::string& extra = "") {
+  return test::paper_frame_study(duration,
+                                 "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
+                                     test::controller_link_text(node_port, peer_port, extra) +
+                                     " } } limits { max_displacement: 0.5 } }");
+}
+
+// The controller emulator for `text`, started before the run and waited for until it listens (a
+// frame sent before it binds would be lost, and a lockstep run holds on a lost frame).
+util::ChildProcess start_emulator(const std::string& name, const std::string& text,
+                                  const std::string& case_name,
+                                  const std::vector<std::string>& extra = {}) {
+  const auto dir = test::scratch_dir(name + "_controller");
+  std::vector<std::string> args = {"--config",       test::write_config(dir, text).string(),
+                                   "--node-id",      "2",
+                                   "--case",         case_name,
+                                   "--idle-timeout", "60"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  util::ChildProcess emulator(test::program("rths-controller-emulator", "controller_emulator"),
+                              args, dir / "controller_emulator.log");
+  for (int i = 0; i < 400; ++i) {
+    if (test::read_file(emulator.log_file()).find("listening on") != std::string::npos) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  return emulator;
+}
+
+TEST_F(DdsController, LockstepThroughTheControllerEqualsInProcessBitForBitDespiteARogue) {
+  const std::string text = study(47150, 47151, 2.0);
+  util::ChildProcess emulator = start_emulator("controller_lockstep", text, "lag_shift_14ms");
+  // A rogue on this host floods the node's port from another port for the whole run.
+  std::atomic<bool> done{false};
+  std::thread rogue([&] {
+    controller_node::UdpLink udp("127.0.0.1", 47152, "127.0.0.1", 47150);
+    const std::vector<std::uint8_t> frame(24, 0);
+    while (!done) {
+      udp.send(frame);
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  const auto run = test::launch("controller_lockstep", text, "lag_shift_14ms", 197);
+  done = true;
+  rogue.join();
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  test::expect_record_equals(run.record, test::reference_result(text, "lag_shift_14ms"));
+  // Every answered step records the frame's round trip to the controller and its status.
+  const auto steps = run.record.steps();
+  for (std::size_t k = 1; k < steps.size(); ++k) {
+    ASSERT_EQ(steps[k]->links_size(), 1) << "step " << k;
+    ASSERT_GT(steps[k]->links(0).controller_round_trip(), 0.0) << "step " << k;
+    ASSERT_LT(steps[k]->links(0).controller_round_trip(), 1.0) << "step " << k;
+    ASSERT_EQ(steps[k]->links(0).controller_status(), 0) << "step " << k;
+  }
+  for (int code : run.launch.node_exits) EXPECT_EQ(code, 0);
+  EXPECT_EQ(emulator.wait_for(std::chrono::seconds(10)), 0) << emulator.log_tail();
+  const std::string node_log = test::read_file(run.dir / "node_2.log");
+  EXPECT_NE(node_log.find("frame from 127.0.0.1:47152 (not the controller 127.0.0.1:47151)"),
+            std::string::npos)
+      << node_log;
+  const std::string accepted = std::to_string(run.record.steps().size() - 1) + " accepted";
+  EXPECT_NE(node_log.find(accepted + ", 0 late, 0 lost"), std::string::npos) << node_log;
+  EXPECT_NE(emulator.log_tail(4000).find("status STOP received"), std::string::npos);
+}
+
+TEST_F(DdsController, ASilentControllerHoldsTheRunWithinItsReplyTimeoutAndTheRigIsToldToHold) {
+  const std::string text = study(47153, 47154, 2.0, "reply_timeout_ms: 200");
+  util::ChildProcess emulator =
+      start_emulator("controller_silent", text, "reference", {"--answer-frames", "300"});
+  const auto run = test::launch("controller_silent", text, "reference", 198);
+  const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
+  EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
+  // The node's HOLD names the controller's silence: it came within the node's 200 ms, before the
+  // coordinator's own step timeout (2 s) could judge the step.
+  EXPECT_NE(coordinator_log.find("did not answer frame 301 within 200.000000 ms"),
+            std::string::npos)
+      << coordinator_log;
+  ASSERT_NE(run.record.footer(), nullptr);
+  EXPECT_FALSE(run.record.footer()->ok());
+  EXPECT_LE(run.record.steps().size(), 302u);  // nothing recorded past the silence
+  emulator.terminate();
+  const std::string emulator_log = test::read_file(emulator.log_file());
+  EXPECT_NE(emulator_log.find("status HOLD received (frame 302)"), std::string::npos)
+      << emulator_log;
+}
+
+TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
+  const std::string text = study(47155, 47156, 30.0, "reply_timeout_ms: 200");
+  util::ChildProcess emulator = start_emulator("controller_killed", text, "reference");
+  // Killed once the run is under way: its record has grown by a few hundred steps.
+  const auto record = std::filesystem::temp_directory_path() /
+                      ("rths_runtime_controller_killed_" + std::to_string(getpid())) /
+                      "run.rthsrec";
+  std::thread killer([&] {
+    std::uintmax_t first_size = 0;
+    for (int i = 0; i < 1200; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+      std::error_code error;
+      const auto size = std::filesystem::file_size(record, error);
+      if (error) continue;
+      if (first_size == 0) first_size = size;  // the header and the inputs (the motion)
+      if (size > first_size + 50000) break;    // and some hundreds of steps
+    }
+    emulator.signal(SIGKILL);
+  });
+  const auto run = test::launch("controller_killed", text, "reference", 199);
+  killer.join();
+  const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
+  EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
+  EXPECT_NE(coordinator_log.find("within 200.000000 ms (1 lost in a row)"), std::string::npos)
+      << coordinator_log;
+  const std::string node_log = test::read_file(run.dir / "node_2.log");
+  EXPECT_NE(node_log.find("HOLD sent to the controller"), std::string::npos) << node_log;
+  EXPECT_GT(run.record.steps().size(), 1u);
+  EXPECT_LT(run.record.steps().size(), 30000u);  // stopped before the motion's end
+}
+
+}  // namespace
+}  // namespace rths
