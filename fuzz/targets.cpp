@@ -378,11 +378,16 @@ int controller_frame(const std::uint8_t* data, std::size_t size) {
 
 const std::vector<Target>& targets() {
   static const std::vector<Target> all{
-      {"study_config", &study_config},   {"deployment_config", &deployment_config},
-      {"sites_config", &sites_config},   {"at2_motion", &at2_motion},
-      {"column_motion", &column_motion}, {"daq_export", &daq_export},
-      {"run_record", &run_record},       {"envelope_payload", &envelope_payload},
-      {"record_flips", &record_flips},   {"study_values", &study_values},
+      {"study_config", &study_config},
+      {"deployment_config", &deployment_config},
+      {"sites_config", &sites_config},
+      {"at2_motion", &at2_motion},
+      {"column_motion", &column_motion},
+      {"daq_export", &daq_export},
+      {"run_record", &run_record},
+      {"envelope_payload", &envelope_payload},
+      {"record_flips", &record_flips},
+      {"study_values", &study_values},
       {"controller_frame", &controller_frame},
   };
   return all;

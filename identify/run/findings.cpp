@@ -144,17 +144,21 @@ std::string findings_text(const std::vector<Finding>& findings, const RunResidua
   return out.str();
 }
 
+nlohmann::json parameters_json(const std::vector<ParameterEstimate>& parameters) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& p : parameters)
+    out.push_back(
+        {{"name", p.name}, {"value", p.value}, {"std_error", p.std_error}, {"unit", p.unit}});
+  return out;
+}
+
 nlohmann::json findings_json(const std::vector<Finding>& findings) {
   nlohmann::json out = nlohmann::json::array();
   for (const Finding& f : findings) {
-    nlohmann::json parameters = nlohmann::json::array();
-    for (const auto& p : f.parameters)
-      parameters.push_back(
-          {{"name", p.name}, {"value", p.value}, {"std_error", p.std_error}, {"unit", p.unit}});
     out.push_back({{"part", f.part},
                    {"effect", f.effect},
                    {"magnitude", f.magnitude},
-                   {"parameters", parameters},
+                   {"parameters", parameters_json(f.parameters)},
                    {"heldout_before", f.heldout_before},
                    {"heldout_after", f.heldout_after},
                    {"heldout_unit", f.heldout_unit},

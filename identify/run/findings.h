@@ -49,5 +49,7 @@ std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
 // unexplained.
 std::string findings_text(const std::vector<Finding>& findings, const RunResidual* residual);
 nlohmann::json findings_json(const std::vector<Finding>& findings);
+// Parameters as the run report's JSON gives them: [{name, value, std_error, unit}].
+nlohmann::json parameters_json(const std::vector<ParameterEstimate>& parameters);
 
 }  // namespace rths::identify

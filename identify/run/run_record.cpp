@@ -508,10 +508,8 @@ nlohmann::json actuators_json(const RunIdentification& run) {
       const SignalScales scales = signal_scales(identified_signals(a.id, c.channel));
       nlohmann::json effects = nlohmann::json::array();
       for (const auto& step : c.steps) {
-        nlohmann::json parameters = nlohmann::json::array();
-        for (const ParameterEstimate& p : effect_parameters(c.final_fit, step.effect, scales))
-          parameters.push_back(
-              {{"name", p.name}, {"value", p.value}, {"std_error", p.std_error}, {"unit", p.unit}});
+        const nlohmann::json parameters =
+            parameters_json(effect_parameters(c.final_fit, step.effect, scales));
         effects.push_back({{"effect", effect_name(step.effect)},
                            {"share", step.own_share},
                            {"parameters", parameters}});
