@@ -9,14 +9,17 @@
 // Default records: data/measured/mts_mrdamper_chirp_0A.txt and a one-minute record at
 // 1 kHz of the same rig made by identify::generate_measured (a 15 Hz sinusoidal test with the MR
 // damper energised: 4.6 ms delay and a 21.8 ms first-order lag, Bouc-Wen + viscous + friction
-// force, drifting delay, gain and stiffness, play, offsets, inertia, sensor noise). Each record is
-// run N times (default 1); the median time is printed.
+// force, drifting delay, gain and stiffness, play, offsets, inertia, sensor noise), and a
+// one-minute run record of the paper frame made by `rths launch` (lockstep on loopback DDS, an
+// emulator with a lag and a velocity limit; one_minute_run_record). Each record is run N times
+// (default 1); the median time is printed.
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -26,6 +29,7 @@
 
 #include "identify/lab/generator.h"
 #include "identify/model/data.h"
+#include "study/study.h"
 
 namespace {
 
@@ -93,6 +97,51 @@ fs::path one_minute_record(const fs::path& dir) {
   return path;
 }
 
+// A one-minute run record of the paper frame (a run's record, *.rthsrec): the 1979 Imperial
+// Valley record played twice (78 s, cut to 60), 1 kHz, lockstep over DDS on loopback through
+// `rths launch`, case lag_shift_14ms with the emulator adding a 8 ms first-order lag and a
+// 0.1 m/s velocity limit of its own. Empty when the launch fails (it says why on stderr).
+fs::path one_minute_run_record(const std::string& rths, const fs::path& dir) {
+  const fs::path motion_source =
+      fs::path(RTHS_DATA_DIR) / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
+  const core::PreparedStudy played = core::prepare_study(
+      core::parse_study("motion { path: \"" + motion_source.string() +
+                            "\" }\nintegrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+                            "structure { sdof { period: 0.5 mass: 1000 } }\n",
+                        "identify_bench"),
+      dir);
+  const fs::path motion = dir / "impvall_twice.txt";
+  {
+    std::ofstream out(motion);
+    out.precision(17);
+    for (int twice = 0; twice < 2; ++twice)
+      for (double a : played.motion.acceleration) out << a << "\n";
+  }
+  const fs::path study = dir / "paper_frame_one_minute.textproto";
+  std::ofstream(study)
+      << "name: \"paper_frame_one_minute\"\n"
+         "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
+         "motion { path: \""
+      << motion.string()
+      << "\" format: COLUMNS column_dt: 0.001 column_units: M_PER_S2 duration: 60 }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+         "cases { name: \"lag_shift_14ms\" delay { shift { delay: 0.014 } } }\n"
+         "deployment { domain_id: 86 nodes { id: 1 kind: ACTUATOR_EMULATOR receive_delay { "
+         "first_order { time_constant: 0.008 } } receive_delay { velocity_limit { max_velocity: "
+         "0.1 } } } }\n";
+  const fs::path out = dir / "one_minute_launch";
+  const std::string line =
+      rths + " launch '" + study.string() + "' --no-plots --out '" + out.string() + "' >/dev/null";
+  if (std::system(line.c_str()) != 0) {
+    std::cerr << "identify_bench: `" << line << "` failed; no one-minute run record\n";
+    return {};
+  }
+  for (const auto& entry : fs::recursive_directory_iterator(out))
+    if (entry.path().extension() == ".rthsrec") return entry.path();
+  return {};
+}
+
 void print_row(const fs::path& record, const std::vector<Run>& runs) {
   std::vector<double> seconds;
   for (const auto& r : runs) seconds.push_back(r.seconds);
@@ -156,6 +205,7 @@ int main(int argc, char** argv) {
     fs::create_directories(dir);
     records.push_back(fs::path(RTHS_DATA_DIR) / "measured/mts_mrdamper_chirp_0A.txt");
     records.push_back(one_minute_record(dir));
+    if (const fs::path run = one_minute_run_record(rths, dir); !run.empty()) records.push_back(run);
   }
   std::cout << "rths identify RECORD --json (both channels, defaults), " << rths
             << "; the time includes the 5-fold validation\n";

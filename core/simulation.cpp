@@ -104,11 +104,19 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
 }
 
 SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
-                          const SimulationOptions& options) {
+                          const SimulationOptions& options, const AnswerSchedule& answers) {
   require_motion_at_dt(setup, motion_at_dt);
   check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
 
   HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps);
+  const bool replayed = !answers.actuator_used.empty() || !answers.storey_used.empty();
+  if (replayed) {
+    if (!is_explicit(setup.integrator))
+      throw std::invalid_argument(to_string(setup.integrator) +
+                                  " cannot replay a distributed run's answers: it iterates on the "
+                                  "restoring force. Use an explicit integrator");
+    restoring.replay_answers(answers, motion_at_dt.acceleration.size());
+  }
   if (!is_explicit(setup.integrator) && !restoring.repeatable()) {
     throw std::invalid_argument(
         to_string(setup.integrator) +

@@ -80,8 +80,11 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
                SimulationResult& result);
 
 // Throws std::invalid_argument when dt is beyond the integrator's limit (unless allowed), when
-// the motion's dt differs from setup.dt, or when an implicit integrator meets a delay stage.
+// the motion's dt differs from setup.dt, or when an implicit integrator meets a delay stage or a
+// replay. `answers`: the answers a distributed run used, replayed (answer_replay.h); empty rows:
+// every step on its own answer.
 SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
-                          const SimulationOptions& options = {});
+                          const SimulationOptions& options = {},
+                          const AnswerSchedule& answers = {});
 
 }  // namespace rths::core

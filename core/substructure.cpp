@@ -328,7 +328,8 @@ HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<D
                                  double dt, int servo_substeps)
     : assembly_(partition.assembly()),
       numerical_(partition),
-      actuator_storeys_(partition.actuator_storeys) {
+      actuator_storeys_(partition.actuator_storeys),
+      dt_(dt) {
   const std::size_t actuators = partition.actuator_storeys.size();
   if (!chains.empty() && chains.size() != actuators) {
     throw std::invalid_argument(std::to_string(chains.size()) + " delay chains for " +
@@ -374,6 +375,9 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
       measured_[a] = out.force;
     }
   }
+  if (replay_ && !tangent)
+    replay_->step(static_cast<std::size_t>(std::llround(time_ / dt_)), shear_, realised_,
+                  measured_);
   assemble_storey_forces(assembly_, actuator_storeys_, measured_, shear_, force_);
   if (tangent) {
     assembly_.tangent(storey_tangent_, *tangent);
@@ -383,5 +387,9 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
 }
 
 void HybridRestoring::commit() { numerical_.commit(); }
+
+void HybridRestoring::replay_answers(AnswerSchedule schedule, std::size_t steps) {
+  replay_.emplace(std::move(schedule), assembly_.storeys(), actuators(), steps);
+}
 
 }  // namespace rths::core

@@ -17,8 +17,10 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
+#include "core/answer_replay.h"
 #include "core/delay.h"
 #include "core/integrators.h"
 #include "core/restoring_force.h"
@@ -220,6 +222,10 @@ class HybridRestoring final : public HybridEvaluator {
   void commit() override;
   bool repeatable() const override;
   void set_time(double t) override { time_ = t; }
+  // From now on each step k (= time / dt) hands the integrator the numerical shears and the
+  // actuators' outputs of the step `schedule` says the distributed loop used (answer_replay.h), as
+  // a real-time run on late answers did; `steps`: the run's. Explicit integrators only.
+  void replay_answers(AnswerSchedule schedule, std::size_t steps);
 
   // Last committed step, one entry per actuator.
   const Vec& command() const override { return command_; }
@@ -232,7 +238,8 @@ class HybridRestoring final : public HybridEvaluator {
   NumericalSubstructure numerical_;
   std::vector<Actuator> actuators_;
   std::vector<int> actuator_storeys_;
-  double time_ = 0.0;
+  double dt_ = 0.0, time_ = 0.0;
+  std::optional<AnswerReplay> replay_;
   Vec drift_, drift_velocity_, shear_, storey_tangent_, force_;
   Vec command_, realised_, measured_;
 };

@@ -22,8 +22,8 @@ void add_link_findings(const std::vector<NetworkPath>& links, const std::string&
                        std::vector<Finding>& out) {
   const std::string why =
       clock == "real_time"
-          ? "a link's lag reaches the response only through the actuator path's fitted delay, "
-            "which the re-run holds"
+          ? "a link's lag reaches the response only as the answers the loop used, which the "
+            "re-run replays (the platform's share)"
           : "in lockstep a link's lag does not reach the response";
   for (const auto& link : links)
     for (const auto& e : link.effects) {
@@ -88,6 +88,21 @@ void add_path_findings(const ActuatorPath& path, std::vector<Finding>& out) {
   }
 }
 
+// The platform's late answers, replayed in the re-run (run_residual.h links: "platform").
+void add_platform_finding(const RunResidual* residual, std::vector<Finding>& out) {
+  if (!residual) return;
+  for (const auto& s : residual->links) {
+    if (s.link != "platform") continue;
+    Finding f;
+    f.part = "platform";
+    f.effect = s.effect;
+    f.magnitude = residual->platform;
+    f.response_removed = s.removed;
+    f.response_share = s.share;
+    out.push_back(std::move(f));
+  }
+}
+
 // Each finding's part of the re-run (run_residual.h effects), or why it has none.
 void add_response(const RunResidual* residual, std::vector<Finding>& findings) {
   for (Finding& f : findings) {
@@ -115,6 +130,9 @@ std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
   add_link_findings(links, clock, out);
   for (const auto& path : actuators) add_path_findings(path, out);
   add_response(residual, out);
+  std::vector<Finding> platform;
+  add_platform_finding(residual, platform);
+  out.insert(out.begin(), platform.begin(), platform.end());
   return out;
 }
 

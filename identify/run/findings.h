@@ -5,7 +5,9 @@
 // Input: a run's parts identified from its record (run_record.h): its links, its actuator paths,
 // its re-run (absent when not made) and its clock ("lockstep", "real_time").
 // Output, one Finding per difference:
-//   part       "link to node N" (network), "actuator N" (lag, gain, backlash, velocity limit),
+//   part       "platform" (steps on late answers and overruns, first: what the platform did
+//              before what the rig did), "link to node N" (network), "actuator N" (lag, gain,
+//              backlash, velocity limit),
 //              "specimen N" (stiffness, damping, hysteresis), "displacement sensor N" and
 //              "load cell N" (offset and drift): N is the node id or the 1-based actuator;
 //   effect     the effect's name (identify/model/effects.h, or "gain error", "delay change",

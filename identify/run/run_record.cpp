@@ -230,19 +230,29 @@ void judge_specimen(const Identification& id, ActuatorPath& out) {
     out.specimen_undeclared.push_back("stiffness change");
 }
 
-ActuatorPath identify_actuator(const std::filesystem::path& record,
-                               const runtime::RunHeader& header, const runtime::RunMeasurements& m,
-                               std::size_t steps, int a, const IdentifyOptions& base) {
+// Actuator a's channels, each answer at the step whose command it answers (platform_replay.h
+// aligned: `used` is the actuator's row of the platform's schedule, empty when every step used
+// its own answer).
+MeasuredData actuator_data(const std::filesystem::path& record, const runtime::RunMeasurements& m,
+                           std::size_t steps, int a, const std::vector<std::int64_t>& used) {
   MeasuredData data;
   data.source = record.string() + " actuator " + std::to_string(a + 1);
+  std::vector<double> realised, force;
   for (std::size_t k = 0; k < steps; ++k) {
     const auto row = static_cast<Eigen::Index>(k);
     data.time.push_back(m.steps.time[k]);
     data.command.push_back(m.steps.command(row, a));
-    data.measured.push_back(m.steps.realised(row, a));
-    data.force.push_back(m.steps.measured_force(row, a));
+    realised.push_back(m.steps.realised(row, a));
+    force.push_back(m.steps.measured_force(row, a));
   }
+  data.measured = aligned(used, realised);
+  data.force = aligned(used, force);
   validate(data, kDefaultMinSamples);
+  return data;
+}
+
+ActuatorPath identify_actuator(const MeasuredData& data, const runtime::RunHeader& header, int a,
+                               const IdentifyOptions& base) {
   const DeclaredActuator declared = declared_actuator(header.study(), header.case_name());
   IdentifyOptions options = base;
   options.declared_actuator = declared.effects;
@@ -294,6 +304,23 @@ std::vector<double> declared_stiffnesses(const config::Study& study, double dt,
   return out;
 }
 
+// Which answer each step used, per actuator and numerical storey (platform_replay.h); absent
+// when the study's deployment cannot be planned here (the re-run then fails and says why).
+std::optional<PlatformReplay> replay_of(const std::filesystem::path& record,
+                                        const runtime::RecordContents& contents,
+                                        const runtime::RunHeader& header, std::size_t steps) {
+  try {
+    const config::Study& study = *contents.study_as_run();
+    const core::HybridSetup base = core::base_setup(study, header.dt(), record.parent_path());
+    const runtime::DeploymentPlan plan = runtime::make_plan(base, study.deployment());
+    return platform_replay(contents.steps(), steps, plan,
+                           static_cast<int>(base.partition.numerical.size()),
+                           static_cast<int>(base.partition.actuator_storeys.size()));
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
 // The study re-run over the identified steps from the record's ground acceleration.
 RunResidual residual(const std::filesystem::path& record, const runtime::RecordContents& contents,
                      const runtime::RunHeader& header, const runtime::RunMeasurements& m,
@@ -312,6 +339,7 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
   const core::Mat recorded = m.steps.displacement.topRows(static_cast<Eigen::Index>(run.steps));
   input.recorded = &recorded;
   input.actuators = &run.actuators;
+  input.platform = run.replay ? &*run.replay : nullptr;
   try {
     return run_residual(input);
   } catch (const std::invalid_argument& e) {
@@ -350,8 +378,12 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
   const std::vector<double> stiffness =
       declared_stiffnesses(out.study, header.dt(), record.parent_path());
+  out.replay = replay_of(record, contents, header, out.steps);
   for (int a = 0; a < header.actuators(); ++a) {
-    out.actuators.push_back(identify_actuator(record, header, m, out.steps, a, options));
+    const std::vector<std::int64_t> used =
+        out.replay ? actuator_row(out.replay->schedule, a) : std::vector<std::int64_t>{};
+    out.actuators.push_back(
+        identify_actuator(actuator_data(record, m, out.steps, a, used), header, a, options));
     ActuatorPath& path = out.actuators.back();
     if (static_cast<std::size_t>(a) < stiffness.size())
       path.declared_stiffness = stiffness[static_cast<std::size_t>(a)];
@@ -546,6 +578,9 @@ std::string run_record_text(const RunIdentification& run) {
     out << "platform: " << run.platform->overruns << " of " << run.platform->steps
         << " steps overran their deadline (" << run.platform->cause
         << "); the record: " << run.platform->usability << "\n";
+  if (run.replay && run.replay->late_steps > 0)
+    out << "answers the loop used: " << run.replay->text()
+        << "; the rig is identified on each answer at its own step, the re-run replays them\n";
   for (const auto& l : run.links) link_text(l, out);
   for (const auto& a : run.actuators) actuator_text(a, out);
   if (run.residual) residual_text(*run.residual, out);
@@ -572,6 +607,11 @@ nlohmann::json run_record_json(const RunIdentification& run) {
         {"worst_streak", p->worst_streak},
         {"cause", p->cause},
         {"usability", p->usability}};
+  if (const auto& r = run.replay)
+    out["answers_used"] = {{"late_steps", r->late_steps},
+                           {"mean_age_steps", r->mean_age},
+                           {"oldest_steps", r->oldest},
+                           {"replayed", r->late_steps > 0}};
   return out;
 }
 

@@ -31,6 +31,7 @@
 #include "identify/fit/identify.h"
 #include "identify/run/actuator_path.h"
 #include "identify/run/network_path.h"
+#include "identify/run/platform_replay.h"
 #include "identify/run/run_residual.h"
 #include "runtime/record/deadline_diagnosis.h"
 
@@ -56,6 +57,9 @@ struct RunIdentification {
   // Real time: why steps missed their deadlines and what the record is worth for it (said first:
   // a response dominated by overruns is the platform's as much as the rig's); absent in lockstep.
   std::optional<runtime::DeadlineDiagnosis> platform;
+  // Which answer each step used (platform_replay.h): the actuator paths are identified on the
+  // answers at the steps they answer, and the re-run replays the schedule.
+  std::optional<PlatformReplay> replay;
   std::vector<NetworkPath> links;
   std::vector<ActuatorPath> actuators;
   // The study re-run with the declared and the identified actuators (run_residual.h); absent

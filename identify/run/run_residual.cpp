@@ -133,8 +133,9 @@ class Reruns {
                                   std::to_string(input.actuators->size()));
     }
   }
-  // The rig models in `models` in place of the declared ones, actuator by actuator.
-  Rerun run(const std::vector<RigModel>& models) const {
+  // The rig models in `models` in place of the declared ones, actuator by actuator; `replayed`:
+  // on the answers the run's loop used (the platform's schedule), where it has one.
+  Rerun run(const std::vector<RigModel>& models, bool replayed = false) const {
     core::HybridSetup setup = setup_;
     for (std::size_t a = 0; a < models.size(); ++a) {
       const RigModel& m = models[a];
@@ -148,8 +149,11 @@ class Reruns {
       }
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
     }
-    return compare(core::simulate(setup, prepared_.motion), *input_.recorded);
+    const core::AnswerSchedule& answers =
+        replayed && replays() ? input_.platform->schedule : no_replay_;
+    return compare(core::simulate(setup, prepared_.motion, {}, answers), *input_.recorded);
   }
+  bool replays() const { return input_.platform && input_.platform->late_steps > 0; }
   SignalScales scales(std::size_t a, Channel channel = Channel::kMeasured) const {
     return signal_scales(identified_signals((*input_.actuators)[a].id, channel));
   }
@@ -171,6 +175,7 @@ class Reruns {
   }
 
   const ResidualInput& input_;
+  const core::AnswerSchedule no_replay_;
   config::Case declared_;
   core::PreparedStudy prepared_;
   core::HybridSetup setup_;
@@ -190,7 +195,7 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
                              const RigModel& reduced) {
       std::vector<RigModel> models = all;
       models[a] = reduced;
-      out.effects.push_back({part, effect, reruns.run(models).worst - out.identified, 0.0});
+      out.effects.push_back({part, effect, reruns.run(models, true).worst - out.identified, 0.0});
     };
     for (const auto& effect : paths[a].undeclared) {
       const ChannelModel reduced = without(paths[a], effect, reruns.scales(a));
@@ -205,6 +210,8 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
               {all[a].actuator, &reduced});
     }
   }
+  if (reruns.replays())
+    out.links.push_back({"platform", "late answers", reruns.run(all).worst - out.identified, 0.0});
   set_shares(out.links);
   set_shares(out.effects);
 }
@@ -239,7 +246,7 @@ RunResidual run_residual(const ResidualInput& input) {
           out.notes.push_back("specimen " + std::to_string(a + 1) + ": " + l);
   }
   const Rerun before = reruns.run(std::vector<RigModel>(paths.size()));
-  const Rerun after = reruns.run(all);
+  const Rerun after = reruns.run(all, true);
   out.steps = std::min<std::size_t>({before.result.steps(), after.result.steps(),
                                      static_cast<std::size_t>(input.recorded->rows())});
   out.declared = before.worst;
@@ -255,11 +262,14 @@ RunResidual run_residual(const ResidualInput& input) {
   out.declared_response = before.result.displacement.topRows(rows);
   out.identified_response = after.result.displacement.topRows(rows);
   add_shares(reruns, paths, all, out);
-  if (input.clock == "real_time") {
-    out.notes.push_back(
-        "network paths: their lag is in the re-run only as the actuator paths' "
-        "fitted delay (the answers the loop used)");
-  }
+  if (reruns.replays()) out.platform = input.platform->text();
+  if (input.clock == "real_time")
+    out.notes.push_back(reruns.replays()
+                            ? "network paths and overruns: in the re-run as the answers the "
+                              "loop used, replayed as recorded (" +
+                                  out.platform + ")"
+                            : "network paths and overruns: every step used its own answers, "
+                              "so their lag did not reach the response");
   return out;
 }
 

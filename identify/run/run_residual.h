@@ -26,9 +26,13 @@
 //                         taken out of the model), on its part: "actuator a", "displacement
 //                         sensor a", "specimen a" or "load cell a".
 // Each removal's share is its error removed over the sum of the positive ones of its kind.
-// The network paths' lag is not in the re-run: in simulated time (lockstep, in process) it does
-// not reach the response, and in real time what the actuator path saw of it (the answers the loop
-// used) is in the actuator path's fitted delay; `notes` says so for a real-time record.
+// The platform's share (a real-time record whose steps used older answers: platform_replay.h):
+// the identified re-run replays the answers the loop used (core::AnswerReplay), and
+//   platform              E(identified, every step on its own answer) - E(identified): the error
+//                         the late answers and overruns made, beside the actuator links in `links`.
+// The declared re-run and each link's "all" run are not replayed: the declared model is what the
+// lab planned, on time. A network path's lag reaches the response only through the answers the
+// loop used, so the replay is its part of the re-run; in lockstep it does not reach it.
 
 #include <filesystem>
 #include <string>
@@ -36,6 +40,7 @@
 
 #include "core/ground_motion.h"
 #include "core/simulation.h"
+#include "identify/run/platform_replay.h"
 #include "rths/proto/config.pb.h"
 
 namespace rths::identify {
@@ -48,7 +53,8 @@ struct FloorError {
 };
 
 struct ResidualShare {
-  std::string link;      // "actuator 1", "specimen 1", "load cell 1", "displacement sensor 1"
+  std::string link;      // "actuator 1", "specimen 1", "load cell 1", "displacement sensor 1",
+                         // "platform"
   std::string effect;    // "all" (the link's whole identified model) or the effect's name
   double removed = 0.0;  // NRMSE of the worst floor removed by it
   double share = 0.0;    // of the removals of its kind
@@ -61,6 +67,7 @@ struct RunResidual {
   bool declared_diverged = false, identified_diverged = false;
   std::vector<ResidualShare> links, effects;
   std::vector<std::string> notes;  // stages left out of the re-run, network paths
+  std::string platform;            // the replayed answers (PlatformReplay::text); empty: none
   // The responses compared (steps x DOFs, m) at `time` (s): for plots.
   std::vector<double> time;
   core::Mat recorded_response, declared_response, identified_response;
@@ -75,6 +82,7 @@ struct ResidualInput {
   core::GroundMotion motion;            // at the run's dt, one sample per recorded step
   const core::Mat* recorded = nullptr;  // m, steps x DOFs (at least motion's steps)
   const std::vector<ActuatorPath>* actuators = nullptr;
+  const PlatformReplay* platform = nullptr;  // null or no late step: every step on its own answer
 };
 
 // Throws std::invalid_argument when the study cannot be set up (naming the config's field).

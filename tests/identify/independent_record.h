@@ -10,7 +10,7 @@
 // read by rths, since it is an input, not a model). Per step k (Newmark, gamma = 1/2, beta = 0):
 //   u_k = u + dt v + dt^2/2 a; command x_c = u_k; the actuator: x = x_c(t - 14 ms) -> first order
 //   (tau) -> backlash (width) -> velocity limit (v_max) -> gain; specimen: f = k_e s x (linear) or
-//   Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x; sensors: x_m = AD(x + n_x),
+//   Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x, + c_s (x - x_prev) / dt; sensors: x_m = AD(x + n_x),
 //   f_m = AD(f + f0 + f1 t + n_f), AD a 16-bit converter over +-range; then
 //   a_k = (p_k - c (v + dt/2 a) - k_n u_k - f_m) / (m + dt/2 c), v += dt/2 (a + a_k).
 
@@ -23,6 +23,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "runtime/node/schema.h"
 #include "runtime/record/record.h"
@@ -32,6 +33,18 @@
 
 namespace rths::test {
 
+// What the platform did (0 = nothing): a real-time loop that went on with an older answer at
+// some steps. The answer used at step k was the one to step k - age_k: age 1 on a random
+// `late_share` of the steps (a link as slow as the step), and `burst_age` over `burst_steps`
+// steps every `burst_every` s (a stall: those steps overran). The node still answered every
+// command in turn. The record then says real time, with node 1 an actuator emulator.
+struct PlatformTruth {
+  double late_share = 0.0;
+  int burst_steps = 0, burst_age = 0;
+  double burst_every = 0.0;  // s
+  bool any() const { return late_share > 0.0 || (burst_steps > 0 && burst_age > 0); }
+};
+
 // What the rig truly does beyond the declared 14 ms shift (0 = absent).
 struct RigTruth {
   double time_constant = 0.0;        // s, an extra first-order lag
@@ -40,6 +53,7 @@ struct RigTruth {
   double max_velocity = 0.0;         // m/s
   double stiffness_scale = 1.0;      // of the specimen's (linear or initial) stiffness
   bool bouc_wen = false;             // a hysteretic specimen: alpha 0.1, uy 4 mm
+  double specimen_damping = 0.0;     // N s/m, a viscous force on the specimen's drift rate
   double force_offset = 0.0;         // N, on the load cell
   double force_drift = 0.0;          // N/s
   double displacement_noise = 2e-6;  // m RMS
@@ -47,6 +61,7 @@ struct RigTruth {
   double displacement_range = 0.2;   // m, 16-bit converter
   double force_range = 20000.0;      // N
   std::uint64_t seed = 7;
+  PlatformTruth platform;
 };
 
 inline double converted(double x, double range) {
@@ -80,8 +95,18 @@ class TrueActuator {
 class TrueSpecimen {
  public:
   TrueSpecimen(const RigTruth& rig, double k0) : rig_(rig), k0_(k0 * rig.stiffness_scale) {}
-  double force(double x) {
-    if (!rig_.bouc_wen) return k0_ * x;
+  // At displacement x (m) after `dt` s: the spring (or hysteresis) plus the viscous force.
+  double force(double x, double dt) {
+    const double viscous = rig_.specimen_damping * (x - last_) / dt;
+    return viscous + spring(x);
+  }
+
+ private:
+  double spring(double x) {
+    if (!rig_.bouc_wen) {
+      last_ = x;
+      return k0_ * x;
+    }
     const double du = x - last_, uy = 0.004, alpha = 0.1;
     const auto rate = [&](double z) {
       const double s = du * z > 0.0 ? 1.0 : (du * z < 0.0 ? -1.0 : 0.0);
@@ -98,21 +123,66 @@ class TrueSpecimen {
     return alpha * k0_ * x + (1.0 - alpha) * k0_ * z_;
   }
 
- private:
   RigTruth rig_;
   double k0_, last_ = 0.0, z_ = 0.0;
 };
 
-// The declared study: the paper frame with its 14 ms shift, as the record's header holds it.
-inline std::string independent_declared_study(double duration) {
-  return paper_frame_study(duration, "");
+// The declared study: the paper frame with its 14 ms shift, as the record's header holds it; a
+// record of a platform that was late declares a real-time run with node 1 its actuator emulator
+// (the numerical storey in the coordinator).
+inline std::string independent_declared_study(double duration, bool real_time = false) {
+  return paper_frame_study(
+      duration, real_time ? "deployment { clock: REAL_TIME max_overrun_fraction: -1 "
+                            "max_missed_answers: 40 command_watchdog_periods: 40 "
+                            "min_answer_fraction: -1 nodes { id: 1 kind: ACTUATOR_EMULATOR } }"
+                          : "");
+}
+
+// The step whose answer the loop used at each step (PlatformTruth), and whether the step overran.
+struct AnswerUsed {
+  std::int64_t step = 0;
+  bool overrun = false;
+};
+
+inline std::vector<AnswerUsed> answers_used(const PlatformTruth& platform, std::size_t steps,
+                                            double dt, std::uint64_t seed) {
+  std::vector<AnswerUsed> out(steps);
+  std::mt19937_64 rng(seed ^ 0x5eedULL);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const auto period = static_cast<std::size_t>(std::llround(platform.burst_every / dt));
+  for (std::size_t k = 0; k < steps; ++k) {
+    int age = uniform(rng) < platform.late_share ? 1 : 0;
+    const bool burst = period > 0 && k > period / 2 &&
+                       (k % period) < static_cast<std::size_t>(platform.burst_steps);
+    if (burst) age = std::max(age, platform.burst_age);
+    // An answer the loop already moved past is not taken again: never older than the last one.
+    const std::int64_t used =
+        std::max<std::int64_t>(k > 0 ? out[k - 1].step : 0, static_cast<std::int64_t>(k) - age);
+    out[k] = {k == 0 ? 0 : used, burst};
+  }
+  return out;
+}
+
+inline void add_link_sample(const AnswerUsed& used, std::size_t step, double dt,
+                            runtime::StepRecord& r) {
+  runtime::LinkSample& link = *r.add_links();
+  const double age = static_cast<double>(static_cast<std::int64_t>(step) - used.step);
+  link.set_node_id(1);
+  link.set_answered_step(used.step);
+  link.set_answers(static_cast<std::uint64_t>(used.step));  // every answer arrived, none lost
+  link.set_round_trip(0.0004 + age * dt);
+  link.set_one_way_down(0.5 * link.round_trip());
+  link.set_one_way_up(0.5 * link.round_trip());
+  r.set_overrun(used.overrun);
+  r.set_lateness(used.overrun ? 0.002 : -0.0005);
 }
 
 // Writes the record of a `duration` s run of the rig `rig` under the declared study; returns its
 // path.
 inline std::filesystem::path independent_record(const std::string& name, const RigTruth& rig,
                                                 double duration = 20.0) {
-  const core::PreparedStudy declared = prepare(independent_declared_study(duration));
+  const bool real_time = rig.platform.any();
+  const core::PreparedStudy declared = prepare(independent_declared_study(duration, real_time));
   const double dt = 0.001, m = 1000.0, omega = 2.0 * std::numbers::pi / 0.5;
   const double k = m * omega * omega, c = 2.0 * 0.05 * m * omega;
   const double k_e = k / 3.0, k_n = k - k_e;
@@ -127,7 +197,8 @@ inline std::filesystem::path independent_record(const std::string& name, const R
   header.set_run_id(name);
   *header.mutable_study() = declared.config;
   header.set_case_name("lag_shift_14ms");
-  header.set_clock("lockstep");
+  header.set_clock(real_time ? "real_time" : "lockstep");
+  if (real_time) header.add_link_node_ids(1);
   header.set_dt(dt);
   header.set_dofs(1);
   header.set_actuators(1);
@@ -142,6 +213,8 @@ inline std::filesystem::path independent_record(const std::string& name, const R
   std::mt19937_64 rng(rig.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::deque<double> commands(14, 0.0);  // the 14 ms shift: 14 whole steps
+  const std::vector<AnswerUsed> used = answers_used(rig.platform, ground.size(), dt, rig.seed);
+  std::vector<double> answered_x(ground.size(), 0.0), answered_f(ground.size(), 0.0);
   double u = 0.0, v = 0.0, a = 0.0, x_m = 0.0, f_m = 0.0, command = 0.0;
   for (std::size_t step = 0; step < ground.size(); ++step) {
     const double t = static_cast<double>(step) * dt;
@@ -151,10 +224,14 @@ inline std::filesystem::path independent_record(const std::string& name, const R
       commands.push_back(command);
       const double x = actuator.step(commands.front());
       commands.pop_front();
-      const double f = specimen.force(x);
-      x_m = converted(x + rig.displacement_noise * normal(rng), rig.displacement_range);
-      f_m = converted(f + rig.force_offset + rig.force_drift * t + rig.force_noise * normal(rng),
-                      rig.force_range);
+      const double f = specimen.force(x, dt);
+      answered_x[step] =
+          converted(x + rig.displacement_noise * normal(rng), rig.displacement_range);
+      answered_f[step] =
+          converted(f + rig.force_offset + rig.force_drift * t + rig.force_noise * normal(rng),
+                    rig.force_range);
+      x_m = answered_x[static_cast<std::size_t>(used[step].step)];
+      f_m = answered_f[static_cast<std::size_t>(used[step].step)];
       const double a_next =
           (-m * ground[step] - c * (v + 0.5 * dt * a) - k_n * u - f_m) / (m + 0.5 * dt * c);
       v += 0.5 * dt * (a + a_next);
@@ -171,6 +248,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
     r.add_command(command);
     r.add_realised(x_m);
     r.add_measured_force(f_m);
+    if (real_time) add_link_sample(used[step], step, dt, r);
     writer.write(entry);
   }
   entry.Clear();

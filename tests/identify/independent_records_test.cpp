@@ -120,6 +120,17 @@ TEST(IndependentRecords, AHystereticSpecimenIsNamedOnTheSpecimenWithItsYieldDrif
   expect_rerun_closes(id);
 }
 
+TEST(IndependentRecords, ADampedSpecimenIsNamedOnTheSpecimenWithItsDamping) {
+  test::RigTruth rig;
+  rig.specimen_damping = 2000.0;
+  const Identified id = identify_rig("specimen_damping", rig);
+  const Finding* f = named(id, "specimen 1", "damping");
+  ASSERT_NE(f, nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*f, "damping"), 2000.0, 200.0) << run_record_text(id.run);
+  EXPECT_EQ(named(id, "specimen 1", "stiffness change"), nullptr) << run_record_text(id.run);
+  expect_rerun_closes(id);
+}
+
 TEST(IndependentRecords, AStifferSpecimenIsNamedAsAStiffnessChange) {
   test::RigTruth rig;
   rig.stiffness_scale = 1.3;
@@ -141,6 +152,48 @@ TEST(IndependentRecords, TwoEffectsOnDifferentPartsAreBothNamedAndReRun) {
   ASSERT_NE(valve, nullptr) << run_record_text(id.run);
   ASSERT_NE(cell, nullptr) << run_record_text(id.run);
   EXPECT_TRUE(valve->not_rerun.empty() && cell->not_rerun.empty()) << run_record_text(id.run);
+  expect_rerun_closes(id);
+}
+
+// A loop as slow as its step (half the steps on the answer before) that also stalls for 40
+// steps every half second, 4 steps behind.
+test::PlatformTruth late_platform() {
+  test::PlatformTruth platform;
+  platform.late_share = 0.5;
+  platform.burst_steps = 40;
+  platform.burst_age = 4;
+  platform.burst_every = 0.5;
+  return platform;
+}
+
+TEST(IndependentRecords, LateAnswersAreThePlatformsAndNothingOfTheRig) {
+  test::RigTruth rig;
+  rig.platform = late_platform();
+  const Identified id = identify_rig("late_clean", rig);
+  ASSERT_FALSE(id.findings.empty()) << run_record_text(id.run);
+  EXPECT_EQ(id.findings.front().part, "platform") << run_record_text(id.run);
+  for (const auto& f : id.findings)
+    EXPECT_TRUE(f.part == "platform" || f.part.rfind("link to node", 0) == 0)
+        << f.part << ": " << f.effect << "\n"
+        << run_record_text(id.run);
+  EXPECT_LE(id.run.residual->identified, 0.02) << run_record_text(id.run);
+}
+
+// The rig's lag is found on the answers put back at their own steps, and the re-run on the
+// answers the loop used reproduces the response; without the replay it would not.
+TEST(IndependentRecords, LateAnswersAreReplayedAndTheRigsOwnLagIsFoundBesideThem) {
+  test::RigTruth rig;
+  rig.time_constant = 0.008;
+  rig.platform = late_platform();
+  const Identified id = identify_rig("late_first_order", rig);
+  const Finding* lag = named(id, "actuator 1", "first_order");
+  ASSERT_NE(lag, nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*lag, "time_constant"), 0.008, 0.0008) << run_record_text(id.run);
+  EXPECT_EQ(named(id, "actuator 1", "delay change"), nullptr) << run_record_text(id.run);
+  const Finding* platform = named(id, "platform", "late answers");
+  ASSERT_NE(platform, nullptr) << run_record_text(id.run);
+  ASSERT_TRUE(platform->response_removed.has_value());
+  EXPECT_GT(*platform->response_removed, 0.01) << run_record_text(id.run);
   expect_rerun_closes(id);
 }
 
