@@ -25,9 +25,6 @@ namespace rths::cli {
 
 namespace {
 
-// Reads the record, writes every requested output and says what was written. Throws ExitError:
-// kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
-// cannot be written, kExitRunFailed after exporting a record that lost entries.
 // "; N messages dropped unauthenticated: coordinator C, node 1 A, ..." when any side counted any
 // (forged, foreign or replayed messages a transport dropped for want of a valid MAC: the
 // coordinator's in the footer's counters, each node's as of its last heartbeat), else "".
@@ -53,6 +50,9 @@ nlohmann::json node_unauthenticated_json(const runtime::RunFooter* footer) {
   return nodes;
 }
 
+// Reads the record, writes every requested output and says what was written. Throws ExitError:
+// kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
+// cannot be written, kExitRunFailed after exporting a record that lost entries.
 void run_export(const std::string& record, const std::map<results::Format, std::string>& outputs,
                 bool json) {
   for (const auto& [format, path] : outputs)
