@@ -6,10 +6,12 @@
 // medians and the ratio MessageMac / EVP_MAC. Both must give the same MAC (checked each round).
 // Then the same cold, as a paced loop meets it once per period: before each message 16 MiB are
 // written (the caches and TLB filled with other data), and only the MAC is timed: the median ns
-// per sign over --cold messages each.
+// per sign over --cold messages each. Last, what the receiver adds per message to find the
+// sending writer's GUID for the MAC (transport/writer_guids.h): a lookup among --writers known
+// writers (the last one added, the worst case), median ns of --rounds rounds.
 //
 //   rths_mac_bench [--messages N (default 200000)] [--payload BYTES] [--rounds R (default 7)]
-//                  [--cold N (default 2000)]
+//                  [--cold N (default 2000)] [--writers W (default 4)]
 #include <openssl/core_names.h>
 #include <openssl/evp.h>
 #include <openssl/params.h>
@@ -24,6 +26,7 @@
 #include <vector>
 
 #include "transport/message_mac.h"
+#include "transport/writer_guids.h"
 
 namespace {
 
@@ -45,12 +48,14 @@ class EvpMac {
     EVP_MAC_CTX_free(ctx_);
     EVP_MAC_free(mac_);
   }
-  Mac compute(const Message& m, std::int64_t sent_ns, Direction direction) {
+  Mac compute(const Message& m, std::int64_t sent_ns, Direction direction,
+              const WriterGuid& writer) {
     Mac out{};
     EVP_MAC_init(ctx_, nullptr, 0, nullptr);
-    static constexpr char kTag[] = "rths-mac-1";
+    static constexpr char kTag[] = "rths-mac-2";
     EVP_MAC_update(ctx_, reinterpret_cast<const unsigned char*>(kTag), sizeof kTag);
     put(static_cast<std::uint8_t>(direction));
+    EVP_MAC_update(ctx_, writer.data(), writer.size());
     put(static_cast<std::uint32_t>(m.run_id.size()));
     EVP_MAC_update(ctx_, reinterpret_cast<const unsigned char*>(m.run_id.data()), m.run_id.size());
     put(m.node_id);
@@ -118,6 +123,20 @@ double cold_ns(int n, std::vector<unsigned char>& thrash, F&& f) {
   return ns[ns.size() / 2];
 }
 
+// ns per find() of the newest of `writers` known writers, the median of `rounds` rounds.
+double lookup_ns(int writers, int messages, int rounds) {
+  WriterGuids guids;
+  for (int w = 0; w < writers; ++w) guids.add(1000 + static_cast<std::uint64_t>(w), WriterGuid{});
+  volatile std::uint64_t newest = static_cast<std::uint64_t>(1000 + writers - 1);
+  std::vector<double> ns;
+  unsigned found = 0;
+  for (int r = 0; r < rounds; ++r)
+    ns.push_back(ns_per(messages, [&](int) { found += guids.find(newest) != nullptr; }));
+  if (found != static_cast<unsigned>(messages) * static_cast<unsigned>(rounds))
+    std::fprintf(stderr, "the newest writer was not always found\n");
+  return median(ns);
+}
+
 std::string load_average() {
   std::ifstream in("/proc/loadavg");
   std::string one, five, fifteen;
@@ -128,49 +147,53 @@ std::string load_average() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int messages = 200000, rounds = 7, cold = 2000;
+  int messages = 200000, rounds = 7, cold = 2000, writers = 4;
   std::size_t payload = 48;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--messages")) messages = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--payload")) payload = std::strtoul(argv[i + 1], nullptr, 10);
     if (!std::strcmp(argv[i], "--rounds")) rounds = std::atoi(argv[i + 1]);
     if (!std::strcmp(argv[i], "--cold")) cold = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--writers")) writers = std::max(1, std::atoi(argv[i + 1]));
   }
   const std::string key(64, 'c');
   MessageMac ours(key);
   EvpMac evp(key);
   Message m = command(payload);
+  WriterGuid guid{};
+  for (std::size_t b = 0; b < guid.size(); ++b) guid[b] = static_cast<std::uint8_t>(b * 17 + 1);
   std::vector<double> our_sign, our_verify, evp_sign, evp_verify;
   unsigned sink = 0;
   for (int r = 0; r < rounds; ++r) {
-    if (ours.sign(m, m.sent_ns, Direction::kDown) != evp.compute(m, m.sent_ns, Direction::kDown)) {
+    if (ours.sign(m, m.sent_ns, Direction::kDown, guid) !=
+        evp.compute(m, m.sent_ns, Direction::kDown, guid)) {
       std::fprintf(stderr, "MessageMac and EVP_MAC disagree\n");
       return 1;
     }
-    const Mac mac = ours.sign(m, m.sent_ns, Direction::kDown);
+    const Mac mac = ours.sign(m, m.sent_ns, Direction::kDown, guid);
     evp_sign.push_back(ns_per(messages, [&](int i) {
       m.step = i;
-      sink += evp.compute(m, m.sent_ns, Direction::kDown)[0];
+      sink += evp.compute(m, m.sent_ns, Direction::kDown, guid)[0];
     }));
     our_sign.push_back(ns_per(messages, [&](int i) {
       m.step = i;
-      sink += ours.sign(m, m.sent_ns, Direction::kDown)[0];
+      sink += ours.sign(m, m.sent_ns, Direction::kDown, guid)[0];
     }));
     m.step = 1000;
     our_verify.push_back(
-        ns_per(messages, [&](int) { sink += ours.verify(m, Direction::kDown, mac); }));
-    evp_verify.push_back(
-        ns_per(messages, [&](int) { sink += evp.compute(m, m.sent_ns, Direction::kDown) == mac; }));
+        ns_per(messages, [&](int) { sink += ours.verify(m, guid, Direction::kDown, mac); }));
+    evp_verify.push_back(ns_per(
+        messages, [&](int) { sink += evp.compute(m, m.sent_ns, Direction::kDown, guid) == mac; }));
     std::printf("round %d: sign %.0f ns (EVP_MAC %.0f), verify %.0f ns (EVP_MAC %.0f)\n", r + 1,
                 our_sign.back(), evp_sign.back(), our_verify.back(), evp_verify.back());
   }
   std::vector<unsigned char> thrash(16u << 20);
   std::vector<double> our_cold, evp_cold;
   for (int r = 0; r < 3; ++r) {
-    evp_cold.push_back(
-        cold_ns(cold, thrash, [&](int i) { sink += evp.compute(m, i, Direction::kDown)[0]; }));
+    evp_cold.push_back(cold_ns(
+        cold, thrash, [&](int i) { sink += evp.compute(m, i, Direction::kDown, guid)[0]; }));
     our_cold.push_back(
-        cold_ns(cold, thrash, [&](int i) { sink += ours.sign(m, i, Direction::kDown)[0]; }));
+        cold_ns(cold, thrash, [&](int i) { sink += ours.sign(m, i, Direction::kDown, guid)[0]; }));
   }
   std::printf(
       "=> cold (caches filled before each message), medians of 3 x %d: sign %.0f ns vs "
@@ -182,5 +205,7 @@ int main(int argc, char** argv) {
       rounds, messages, payload, load_average().c_str(), median(our_sign), median(evp_sign),
       median(our_sign) / median(evp_sign), median(our_verify), median(evp_verify),
       median(our_verify) / median(evp_verify), sink % 2);
+  std::printf("=> the writer's GUID found among %d known writers: %.1f ns a message\n", writers,
+              lookup_ns(writers, messages, rounds));
   return 0;
 }

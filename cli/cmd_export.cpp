@@ -25,17 +25,34 @@ namespace rths::cli {
 
 namespace {
 
+// "; N messages dropped unauthenticated: coordinator C, node 1 A, ..." when any side counted any
+// (forged, foreign or replayed messages a transport dropped for want of a valid MAC: the
+// coordinator's in the footer's counters, each node's as of its last heartbeat), else "".
+std::string unauthenticated_note(const runtime::RunFooter* footer) {
+  if (!footer) return "";
+  std::uint64_t total = footer->counters().unauthenticated();
+  std::string sides = "coordinator " + std::to_string(total);
+  for (const runtime::NodeRejects& n : footer->node_rejects()) {
+    total += n.rejected().unauthenticated();
+    sides += ", node " + std::to_string(n.node_id()) + " " +
+             std::to_string(n.rejected().unauthenticated());
+  }
+  if (total == 0) return "";
+  return "; " + std::to_string(total) + " messages dropped unauthenticated: " + sides;
+}
+
+// Each node's unauthenticated drops by node id (as of its last heartbeat); null without a footer.
+nlohmann::json node_unauthenticated_json(const runtime::RunFooter* footer) {
+  if (!footer) return nlohmann::json();
+  nlohmann::json nodes = nlohmann::json::object();
+  for (const runtime::NodeRejects& n : footer->node_rejects())
+    nodes[std::to_string(n.node_id())] = n.rejected().unauthenticated();
+  return nodes;
+}
+
 // Reads the record, writes every requested output and says what was written. Throws ExitError:
 // kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
 // cannot be written, kExitRunFailed after exporting a record that lost entries.
-// ", N messages dropped unauthenticated" when the footer counted any (forged or foreign messages
-// the coordinator's transport dropped for want of a valid MAC), else "".
-std::string unauthenticated_note(const runtime::RunFooter* footer) {
-  if (!footer || footer->counters().unauthenticated() == 0) return "";
-  return "; " + std::to_string(footer->counters().unauthenticated()) +
-         " messages dropped unauthenticated";
-}
-
 void run_export(const std::string& record, const std::map<results::Format, std::string>& outputs,
                 bool json) {
   for (const auto& [format, path] : outputs)
@@ -79,6 +96,7 @@ void run_export(const std::string& record, const std::map<results::Format, std::
         // The coordinator's drops for want of a MAC; null without a footer.
         {"unauthenticated",
          footer ? nlohmann::json(footer->counters().unauthenticated()) : nlohmann::json()},
+        {"node_unauthenticated", node_unauthenticated_json(footer)},
         {"checksummed", contents.checksummed},
         {"integrity", table.attributes().at("integrity")},
         {"lost_steps", table.attributes().at("lost_steps")},

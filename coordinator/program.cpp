@@ -69,8 +69,10 @@ std::string summary_text(const RunOutcome& o) {
         << " periods ("
         << 100.0 * static_cast<double>(c.servo_overruns()) / static_cast<double>(c.servo_ticks())
         << " %, as of each emulator's last heartbeat)\n";
+  // Each node's own transport drops (its heartbeat's count) beside its rejects.
   for (const runtime::NodeRejects& n : o.node_rejects)
-    out << n.label() << " rejected: " << reject_text(n.rejected())
+    out << n.label() << " rejected: " << reject_text(n.rejected()) << ", unauthenticated "
+        << n.rejected().unauthenticated()
         << (n.final() ? "" : " (as of its last heartbeat; no report on STOP)") << "\n";
   for (const LinkLagStats& l : o.links)
     out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "

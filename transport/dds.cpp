@@ -2,6 +2,7 @@
 
 #include <dds/dds.h>
 
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 
@@ -87,6 +88,15 @@ int Writer::matched_readers() const {
   return static_cast<int>(status.current_count);
 }
 
+Guid Writer::guid() const {
+  dds_guid_t g{};
+  check(dds_get_guid(entity_.get(), &g), "dds_get_guid");
+  Guid out{};
+  static_assert(sizeof g.v == sizeof(Guid));
+  std::memcpy(out.data(), g.v, out.size());
+  return out;
+}
+
 namespace {
 
 struct ListenerDeleter {
@@ -120,6 +130,15 @@ int Reader::matched_writers() const {
   check(dds_get_subscription_matched_status(entity_.get(), &status),
         "dds_get_subscription_matched_status");
   return static_cast<int>(status.current_count);
+}
+
+std::optional<Guid> publication_guid(Handle reader, std::uint64_t publication_handle) {
+  dds_builtintopic_endpoint_t* found = dds_get_matched_publication_data(reader, publication_handle);
+  if (!found) return std::nullopt;
+  Guid out{};
+  std::memcpy(out.data(), found->key.v, out.size());
+  dds_builtintopic_free_endpoint(found);
+  return out;
 }
 
 }  // namespace rths::transport::dds

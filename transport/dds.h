@@ -5,8 +5,10 @@
 // handles are released without double deletes). This header exposes no DDS type: handles are
 // plain int32 (dds_entity_t is int32_t) and the sample type is chosen inside dds.cpp.
 
+#include <array>
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +16,9 @@
 namespace rths::transport::dds {
 
 using Handle = std::int32_t;
+// A DDS entity's GUID: Cyclone's dds_guid_t, 16 bytes (the same bytes from dds_get_guid and as
+// the key of a matched publication).
+using Guid = std::array<std::uint8_t, 16>;
 
 // Throws std::runtime_error("<what>: <reason>") when rc < 0; returns rc otherwise.
 std::int32_t check(std::int32_t rc, const std::string& what);
@@ -69,6 +74,8 @@ class Writer {
   Writer(const Participant& participant, const EnvelopeTopic& topic, const QosSpec& qos);
   Handle get() const { return entity_.get(); }
   int matched_readers() const;
+  // This writer's GUID, as its readers see it.
+  Guid guid() const;
 
  private:
   Entity entity_;
@@ -91,5 +98,10 @@ class Reader {
  private:
   Entity entity_;
 };
+
+// The GUID of the writer matched to `reader` whose samples carry `publication_handle` (their
+// sample info's), or nullopt when it is not (or no longer) matched. Allocates (Cyclone copies the
+// writer's names and QoS out): look it up once per writer, not per sample. Any thread.
+std::optional<Guid> publication_guid(Handle reader, std::uint64_t publication_handle);
 
 }  // namespace rths::transport::dds

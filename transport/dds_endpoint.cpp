@@ -15,6 +15,7 @@
 #include "envelope.h"
 #include "transport/dds.h"
 #include "transport/message_mac.h"
+#include "transport/writer_guids.h"
 
 namespace rths::transport {
 
@@ -38,10 +39,12 @@ struct DdsEndpoint::NodeReader {
   std::int32_t node;
 };
 
-// One writer of one topic, owning the topic.
+// One writer of one topic, owning the topic; `guid` is the writer's, covered by the MAC of
+// everything it writes.
 struct DdsEndpoint::TopicWriter {
   dds::EnvelopeTopic topic;
   dds::Writer writer;
+  dds::Guid guid;
 };
 
 struct DdsEndpoint::Impl {
@@ -53,7 +56,8 @@ struct DdsEndpoint::Impl {
     if (o.coordinator) return;
     dds::EnvelopeTopic up(participant, node_topic_name(o.topic_prefix, o.node_id, "_up"), qos);
     dds::Writer w(participant, up, qos);
-    own.reset(new TopicWriter{std::move(up), std::move(w)});
+    const dds::Guid guid = w.guid();
+    own.reset(new TopicWriter{std::move(up), std::move(w), guid});
     add_reader(node_topic_name(o.topic_prefix, o.node_id, "_down"), o.node_id);
   }
   // No reader is added once destruction starts; the lock is not held while a running listener
@@ -66,14 +70,22 @@ struct DdsEndpoint::Impl {
   // Runs on Cyclone's receive thread.
   void drain(dds::Handle from);
   // The coordinator's writer of node_id's command topic, created (and matched) on first use.
-  dds::Handle addressed_writer(std::int32_t node_id);
+  const TopicWriter& addressed_writer(std::int32_t node_id);
+  // Writes `sample` (the fields of `m`) with `w`, its MAC first made for w's GUID when there is
+  // a run secret.
+  void write(const TopicWriter& w, const Message& m, rths_dds_Envelope& sample) const;
   // A reader of `topic`, whose messages are stamped as carried by `node`'s topic.
   void add_reader(const std::string& topic, std::int32_t node);
   // The node whose topic `reader` reads; nullopt for a reader this endpoint does not own.
   std::optional<std::int32_t> topic_node_of(dds::Handle reader);
   // Without a run secret, true; with one, whether the sample's MAC verifies over its own fields
-  // (before anything is copied out of it), else counted and its newest kept, unformatted.
-  bool authentic(const rths_dds_Envelope& s, std::int32_t topic_node, std::uint64_t writer);
+  // and the GUID of the writer it came from (`writer`, a publication handle matched to
+  // `reader`), before anything is copied out of it; else counted and its newest kept, unformatted.
+  bool authentic(const rths_dds_Envelope& s, std::int32_t topic_node, dds::Handle reader,
+                 std::uint64_t writer);
+  // The GUID of `writer` (matched to `reader`): from `guids` once its first message verified,
+  // else asked of DDS (an allocation). nullopt when DDS no longer knows the writer.
+  std::optional<WriterGuid> guid_of(dds::Handle reader, std::uint64_t writer) const;
 
   const DdsEndpointOptions options;
   const dds::QosSpec qos;
@@ -94,6 +106,8 @@ struct DdsEndpoint::Impl {
   std::vector<std::uint64_t> forgers;  // under unauthenticated_mutex
   std::atomic<bool> any_forger{false};
   bool known_forger(std::uint64_t writer);
+  // The GUIDs of the writers whose messages verified, by publication handle.
+  WriterGuids guids;
   // Shared between the receive thread and the caller; declared before the DDS entities so they
   // outlive the listener.
   std::mutex mutex;
@@ -130,19 +144,20 @@ std::optional<std::int32_t> DdsEndpoint::Impl::topic_node_of(dds::Handle reader)
   return std::nullopt;
 }
 
-dds::Handle DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
+const DdsEndpoint::TopicWriter& DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
   std::lock_guard lock(writers_mutex);
   auto& slot = addressed_writers[node_id];
   if (!slot) {
     dds::EnvelopeTopic topic(participant, node_topic_name(options.topic_prefix, node_id, "_down"),
                              qos);
     dds::Writer w(participant, topic, qos);
-    slot.reset(new TopicWriter{std::move(topic), std::move(w)});
+    const dds::Guid guid = w.guid();
+    slot.reset(new TopicWriter{std::move(topic), std::move(w), guid});
     const auto deadline = std::chrono::steady_clock::now() + kAddressedMatchTimeout;
     while (slot->writer.matched_readers() < 1 && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
-  return slot->writer.get();
+  return *slot;  // entries never move or go while the endpoint lives
 }
 
 void DdsEndpoint::listen_to(std::int32_t node_id) {
@@ -180,23 +195,22 @@ void DdsEndpoint::send(const Message& m) {
   sample.payload._maximum = sample.payload._length;
   sample.payload._buffer = reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
   sample.payload._release = false;
-  if (impl_->mac) {
-    const Mac mac = impl_->mac->sign(m, sample.sent_ns,
-                                     options_.coordinator ? Direction::kDown : Direction::kUp);
-    std::copy(mac.begin(), mac.end(), sample.mac);
-  }
-  if (!options_.coordinator) {
-    dds::check(dds_write(impl_->own->writer.get(), &sample), "dds_write");
-    return;
-  }
-  if (m.node_id != kBroadcastId) {
-    dds::check(dds_write(impl_->addressed_writer(m.node_id), &sample), "dds_write");
-    return;
-  }
-  // To each node addressed so far, without allocating (a heartbeat goes out from the loop).
+  if (!options_.coordinator) return impl_->write(*impl_->own, m, sample);
+  if (m.node_id != kBroadcastId) return impl_->write(impl_->addressed_writer(m.node_id), m, sample);
+  // To each node addressed so far, without allocating (a heartbeat goes out from the loop); each
+  // writer has its own GUID, so each copy its own MAC.
   std::lock_guard lock(impl_->writers_mutex);
-  for (const auto& [node, w] : impl_->addressed_writers)
-    dds::check(dds_write(w->writer.get(), &sample), "dds_write");
+  for (const auto& [node, w] : impl_->addressed_writers) impl_->write(*w, m, sample);
+}
+
+void DdsEndpoint::Impl::write(const TopicWriter& w, const Message& m,
+                              rths_dds_Envelope& sample) const {
+  if (mac) {
+    const Mac signed_mac = mac->sign(
+        m, sample.sent_ns, options.coordinator ? Direction::kDown : Direction::kUp, w.guid);
+    std::copy(signed_mac.begin(), signed_mac.end(), sample.mac);
+  }
+  dds::check(dds_write(w.writer.get(), &sample), "dds_write");
 }
 
 void DdsEndpoint::Impl::drain(dds::Handle from) {
@@ -218,7 +232,7 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       if (!options.coordinator && s->node_id != options.node_id && s->node_id != kBroadcastId)
         continue;
       if (known_forger(infos[i].publication_handle) ||
-          !authentic(*s, *topic_node, infos[i].publication_handle))
+          !authentic(*s, *topic_node, from, infos[i].publication_handle))
         continue;
       // Per receive thread, reused: assigning into its strings allocates nothing once they have
       // grown to the largest message (moved into the queue, it starts over).
@@ -263,10 +277,18 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
   arrived.notify_one();
 }
 
+std::optional<WriterGuid> DdsEndpoint::Impl::guid_of(dds::Handle reader,
+                                                     std::uint64_t writer) const {
+  if (const WriterGuid* known = guids.find(writer)) return *known;
+  return dds::publication_guid(reader, writer);
+}
+
 bool DdsEndpoint::Impl::authentic(const rths_dds_Envelope& s, std::int32_t topic_node,
-                                  std::uint64_t writer) {
+                                  dds::Handle reader, std::uint64_t writer) {
   if (!mac) return true;
+  const std::optional<WriterGuid> guid = guid_of(reader, writer);
   MacInput fields;
+  if (guid) fields.writer = *guid;
   fields.run_id = s.run_id ? std::string_view(s.run_id) : std::string_view();
   fields.node_id = s.node_id;
   fields.kind = s.kind;
@@ -277,10 +299,15 @@ bool DdsEndpoint::Impl::authentic(const rths_dds_Envelope& s, std::int32_t topic
       std::string_view(reinterpret_cast<const char*>(s.payload._buffer), s.payload._length);
   Mac received;
   std::copy(s.mac, s.mac + kMacBytes, received.begin());
-  if (mac->verify(fields, options.coordinator ? Direction::kUp : Direction::kDown, received))
+  // A writer DDS no longer knows (gone since its sample) is not verified against a guessed GUID:
+  // dropped and counted, never remembered as a forger.
+  if (guid &&
+      mac->verify(fields, options.coordinator ? Direction::kUp : Direction::kDown, received)) {
+    guids.add(writer, *guid);
     return true;
+  }
   std::lock_guard lock(unauthenticated_mutex);
-  if (forgers.size() < kMaxForgers &&
+  if (guid && forgers.size() < kMaxForgers &&
       std::find(forgers.begin(), forgers.end(), writer) == forgers.end()) {
     forgers.push_back(writer);
     any_forger.store(true, std::memory_order_release);
@@ -314,6 +341,11 @@ Unauthenticated DdsEndpoint::unauthenticated() const {
            " on node " + std::to_string(d.topic_node) + "'s topic, writer " +
            std::to_string(d.writer);
   return u;
+}
+
+std::uint64_t DdsEndpoint::unauthenticated_count() const {
+  std::lock_guard lock(impl_->unauthenticated_mutex);
+  return impl_->dropped.count;
 }
 
 std::optional<Message> DdsEndpoint::receive(std::chrono::nanoseconds timeout) {

@@ -45,10 +45,13 @@ struct DdsEndpointOptions {
   // or none. A participant with security talks only to participants of the same lab's PKI.
   std::vector<std::pair<std::string, std::string>> participant_properties;
   // The run secret (security/run_secret.h), or empty. Non-empty: every message sent carries a
-  // MAC under it (transport/message_mac.h), and every message received without a valid one is
-  // dropped on the receive thread before any handler or receive() sees it, counted and named
-  // (unauthenticated()); the writer that sent it is remembered, and its later messages are
-  // dropped (and counted) without computing their MAC.
+  // MAC under it (transport/message_mac.h) that covers the GUID of the writer sending it (a
+  // broadcast: one MAC per node's writer), and every message received without a valid one for
+  // the writer it came from (the GUID DDS reports for its publication handle, looked up once
+  // per writer and then kept) is dropped on the receive thread before any handler or receive()
+  // sees it, counted and named (unauthenticated()): a stranger's forgery, and a genuine message
+  // replayed byte for byte from another writer. The writer that sent it is remembered, and its
+  // later messages are dropped (and counted) without computing their MAC.
   std::string run_secret;
 };
 
@@ -64,6 +67,8 @@ class DdsEndpoint final : public Endpoint {
   // Messages dropped unread for want of a valid MAC (none without a run secret). Thread safe;
   // takes a mutex and copies a string.
   Unauthenticated unauthenticated() const;
+  // The count alone: a mutex, no allocation (a node's heartbeats carry it).
+  std::uint64_t unauthenticated_count() const;
   // Remote writers feeding any of this endpoint's readers.
   int matched_writers() const;
   // Waits until at least `writers` remote writers feed this endpoint and `readers` remote

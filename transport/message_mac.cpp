@@ -23,7 +23,7 @@ unsigned char* put(unsigned char* at, T value) {
   return at + sizeof(T);
 }
 
-constexpr char kTag[] = "rths-mac-1";  // its terminating zero included, as always
+constexpr char kTag[] = "rths-mac-2";  // its terminating zero included, as always (2: the GUID)
 constexpr std::size_t kBlock = 64;     // SHA-256's block (bytes)
 
 }  // namespace
@@ -53,14 +53,15 @@ struct MessageMac::Context {
     OPENSSL_cleanse(&outer, sizeof outer);
   }
 
-  // The fields in the documented order: tag, direction, run id (length-prefixed), node id, kind,
-  // step, sent_ns, echo_ns, payload (length-prefixed); the fixed-width ones gathered in two
-  // buffers, so four updates per message.
+  // The fields in the documented order: tag, direction, writer GUID (16 bytes), run id
+  // (length-prefixed), node id, kind, step, sent_ns, echo_ns, payload (length-prefixed); the
+  // fixed-width ones gathered in two buffers, so four updates per message.
   Mac compute(const MacInput& m, Direction direction) const {
-    unsigned char head[sizeof kTag + 1 + 4];
+    unsigned char head[sizeof kTag + 1 + sizeof(WriterGuid) + 4];
     std::memcpy(head, kTag, sizeof kTag);
     unsigned char* at = put(head + sizeof kTag, static_cast<std::uint8_t>(direction));
-    put(at, static_cast<std::uint32_t>(m.run_id.size()));
+    std::memcpy(at, m.writer.data(), m.writer.size());
+    put(at + m.writer.size(), static_cast<std::uint32_t>(m.run_id.size()));
     unsigned char middle[4 + 4 + 8 + 8 + 8 + 4];
     at = put(middle, m.node_id);
     at = put(at, m.kind);
@@ -88,12 +89,14 @@ MessageMac::MessageMac(const std::string& key) : keyed_(std::make_unique<Context
 
 MessageMac::~MessageMac() = default;
 
-Mac MessageMac::sign(const Message& message, std::int64_t sent_ns, Direction direction) const {
-  return keyed_->compute(MacInput::of(message, sent_ns), direction);
+Mac MessageMac::sign(const Message& message, std::int64_t sent_ns, Direction direction,
+                     const WriterGuid& writer) const {
+  return keyed_->compute(MacInput::of(message, sent_ns, writer), direction);
 }
 
-bool MessageMac::verify(const Message& message, Direction direction, const Mac& mac) const {
-  return verify(MacInput::of(message, message.sent_ns), direction, mac);
+bool MessageMac::verify(const Message& message, const WriterGuid& writer, Direction direction,
+                        const Mac& mac) const {
+  return verify(MacInput::of(message, message.sent_ns, writer), direction, mac);
 }
 
 bool MessageMac::verify(const MacInput& fields, Direction direction, const Mac& mac) const {

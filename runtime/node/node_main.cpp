@@ -73,6 +73,7 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     options.node_id = node_id;
     transport::DdsEndpoint endpoint(options);
     auto service = factory(node_id, run_id);
+    service->set_unauthenticated_source([&endpoint] { return endpoint.unauthenticated_count(); });
     const int code = run_node(endpoint, *service, loop);
     const transport::Unauthenticated dropped = endpoint.unauthenticated();
     if (dropped.count > 0)

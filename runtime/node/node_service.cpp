@@ -55,6 +55,7 @@ transport::Message NodeService::heartbeat_message(bool final) const {
   h.set_servo_ticks(static_cast<std::uint64_t>(servo_samples_));
   h.set_servo_overruns(servo_overruns_);
   rejected_.fill(*h.mutable_rejected_by_cause());
+  h.mutable_rejected_by_cause()->set_unauthenticated(unauthenticated_ ? unauthenticated_() : 0);
   h.set_final(final);
   fill_heartbeat(h);
   return pack(run_id_, node_id_, HEARTBEAT, last_step_, h);

@@ -9,7 +9,10 @@
 //                       by cause); a command the node refuses (refusal(): an emulator's rate limit)
 //                       -> it holds on its own and answers HOLD with the reason instead of
 //                       FEEDBACK. foreign-run, garbage, duplicate and stale messages are counted,
-//                       never applied.
+//                       never applied. Each heartbeat also carries, as rejected_by_cause's
+//                       unauthenticated, what the node's transport dropped unread for want of a
+//                       valid MAC (set_unauthenticated_source), so the coordinator's record
+//                       shows it.
 //   trust               ASSIGN, COMMAND, HOLD and STOP count only on the node's own command
 //                       topic (never the broadcast) and, after the first accepted ASSIGN, only
 //                       from the writer that sent it (transport::Message::writer; 0 = unknown,
@@ -33,6 +36,7 @@
 // compute(); a controller may also fail a computed answer (failure(): HOLD instead of FEEDBACK)
 // or have none (answered() false: nothing sent).
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,6 +66,12 @@ class NodeService : public transport::NodeHandler {
   std::optional<transport::Message> servo_tick(bool overrun);
   bool streaming() const { return streaming_; }
   double streaming_period() const { return streaming_ ? stream_period_ : 0.0; }  // s
+  // Where each heartbeat reads the count of messages the node's transport dropped unread for want
+  // of a valid MAC (DdsEndpoint::unauthenticated_count: a lock, no allocation); unset: 0 (no
+  // secret, in process). Set before start().
+  void set_unauthenticated_source(std::function<std::uint64_t()> count) {
+    unauthenticated_ = std::move(count);
+  }
   // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
   void set_injected_lag(double seconds) { injected_lag_ = seconds; }
 
@@ -135,6 +145,7 @@ class NodeService : public transport::NodeHandler {
   std::int64_t max_step_gap_ = 1;
   double injected_lag_ = 0.0;
   RejectCounters rejected_;
+  std::function<std::uint64_t()> unauthenticated_;
   Command command_;
   Feedback feedback_;
   bool streaming_ = false;

@@ -65,18 +65,21 @@ TEST(DistributedSummary, NamesTheFirstDifferingStepAndEveryNodesRejects) {
   node.set_label("node 2 (actuator emulator)");
   node.mutable_rejected()->set_not_entitled(5);
   node.mutable_rejected()->set_foreign_run(1);
+  node.mutable_rejected()->set_unauthenticated(7);  // its transport's drops, from its heartbeat
   node.set_final(true);
   results.facts[0].node_rejects.push_back(node);
   const std::string text = analysis::distributed_summary_text(results);
   EXPECT_NE(text.find("DIFFERS from the in-process run of the same case from step 17"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("node 2 (actuator emulator) rejected: foreign_run 1, not_entitled 5"),
+  EXPECT_NE(text.find("node 2 (actuator emulator) rejected: foreign_run 1, not_entitled 5, "
+                      "unauthenticated 7"),
             std::string::npos)
       << text;
   const nlohmann::json j = analysis::distributed_summary_json(results);
   EXPECT_EQ(j["cases"][0]["first_step_differing_from_in_process"], 17);
   EXPECT_EQ(j["cases"][0]["node_rejects"][0]["rejected"]["not_entitled"], 5);
+  EXPECT_EQ(j["cases"][0]["node_rejects"][0]["rejected"]["unauthenticated"], 7);
 }
 
 }  // namespace

@@ -326,5 +326,24 @@ TEST(Coordinator, SummaryCountsStepsAsTheRecordDoes) {
   EXPECT_NE(text.find("steps: 39070 recorded (39069 commanded)"), std::string::npos) << text;
 }
 
+// Each node's own unauthenticated drops (its heartbeat's count) are named on its line, apart
+// from the coordinator's own on the summary's rejected line.
+TEST(Coordinator, SummaryNamesEachSidesUnauthenticatedDrops) {
+  RunOutcome outcome;
+  outcome.status = "completed";
+  outcome.unauthenticated.count = 3;
+  outcome.unauthenticated.last = "kind 4 as node 1 on node 1's topic, writer 9";
+  runtime::NodeRejects& node = outcome.node_rejects.emplace_back();
+  node.set_node_id(1);
+  node.set_label("node 1 (substructure)");
+  node.mutable_rejected()->set_unauthenticated(11);
+  node.set_final(true);
+  const std::string text = coordinator::summary_text(outcome);
+  EXPECT_NE(text.find(", unauthenticated 3 (dropped unread; newest: kind 4"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("node 1 (substructure) rejected: foreign-run 0"), std::string::npos) << text;
+  EXPECT_NE(text.find("out-of-range 0, unauthenticated 11\n"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace rths

@@ -1,7 +1,7 @@
-// Faults on real processes over Cyclone DDS (domains 20-29, 53, 80-86, 90 and 160-164): a node
-// killed or stalled mid-run, the coordinator killed, a node that never comes or comes late, hostile
-// participants (a junk publisher, and tests/support's rths_rogue forging answers and control
-// messages), and a disk that fills up under the run record.
+// Faults on real processes over Cyclone DDS (domains 20-29, 53, 80-86, 90, 160-164 and 187-188): a
+// node killed or stalled mid-run, the coordinator killed, a node that never comes or comes late,
+// hostile participants (a junk publisher, and tests/support's rths_rogue forging answers and
+// control messages), and a disk that fills up under the run record.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -490,6 +490,88 @@ INSTANTIATE_TEST_SUITE_P(
                     std::make_tuple("answers", 163,
                                     std::vector<std::string>{"--mode", "answers", "--every", "1"})),
     [](const auto& info) { return std::string(std::get<0>(info.param)); });
+
+// Each node's own unauthenticated drops as the record's footer and the coordinator's summary
+// name them (its last heartbeat's, final on STOP): at least one, none counted not entitled.
+void expect_each_node_counted_unauthenticated(const runtime::RunFooter& footer,
+                                              const std::string& summary) {
+  ASSERT_EQ(footer.node_rejects_size(), 2);
+  for (const runtime::NodeRejects& n : footer.node_rejects()) {
+    EXPECT_TRUE(n.final()) << n.label();
+    EXPECT_GT(n.rejected().unauthenticated(), 0u) << n.label();
+    EXPECT_EQ(n.rejected().not_entitled(), 0u) << n.label();
+    EXPECT_THAT(summary, testing::HasSubstr(n.label() + " rejected: ")) << summary;
+    EXPECT_THAT(summary, testing::HasSubstr(", unauthenticated " +
+                                            std::to_string(n.rejected().unauthenticated()) + "\n"))
+        << summary;
+  }
+}
+
+// A stranger without the secret replays every genuine message it sees, byte for byte with its
+// MAC, from its own writers (rths_rogue --mode replay): the nodes' announcements, answers and
+// heartbeats to the coordinator, the coordinator's assignments and commands to the nodes. The MAC
+// covers the sending writer's GUID, so each replay fails it where it arrives and is dropped
+// unread: the run completes equal to the in-process run (before, a replayed answer stopped it as
+// an integrity fault naming node 1), and every side counts the replays unauthenticated, none as
+// not entitled.
+TEST(Faults, ReplayedGenuineMessagesAreDroppedUnreadAndTheRunCompletes) {
+  runtime::ensure_dds_config();
+  constexpr int kDomain = 187;
+  const std::string name = "replayed";
+  const std::string text = test::paper_frame_study(2, "");
+  const auto dir = test::scratch_dir(name + "_rogue");
+  util::ChildProcess attacker = rogue(dir / "rogue.log", kDomain, {"--mode", "replay"});
+  std::this_thread::sleep_for(1s);  // discovered before the nodes announce
+  Cluster c =
+      start(name, text, kDomain, {{1, true}, {2, false}}, "lag_shift_14ms", {}, Trust::kSecret);
+  const auto code = c.coordinator->wait_for(60s);
+  ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
+  for (auto& node : c.nodes) EXPECT_EQ(node.wait_for(5s).value_or(-1), 0) << node.name();
+  EXPECT_EQ(attacker.terminate(), 0);
+  const std::string log = test::read_file(c.dir / "coordinator.log");
+  const std::string rogue_log = test::read_file(dir / "rogue.log");
+  ASSERT_EQ(*code, 0) << log << rogue_log;
+  // Node 1's answers (FEEDBACK, 5) and the commands to each node (COMMAND, 4) were replayed.
+  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed rths_node1_up kind 5: [1-9]"))
+      << rogue_log;
+  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed rths_node1_down kind 4: [1-9]"));
+  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed rths_node2_down kind 4: [1-9]"));
+  const auto record = runtime::read_record(c.record);
+  ASSERT_NE(record.footer(), nullptr) << log;
+  EXPECT_EQ(record.footer()->status(), "completed") << log;
+  test::expect_record_equals(record, test::reference_result(text, "lag_shift_14ms"));
+  EXPECT_GT(record.footer()->counters().unauthenticated(), 0u);
+  EXPECT_EQ(record.footer()->counters().not_entitled(), 0u);
+  expect_each_node_counted_unauthenticated(*record.footer(), log);
+}
+
+// With a run secret, the control forgeries (rths_rogue --mode control: HOLD, STOP, ASSIGN and
+// COMMAND as the coordinator on each node's own command topic, through the run) carry no MAC:
+// each node drops them unread, reports how many in its heartbeats, and the record's footer and
+// the coordinator's summary name each node's count. The run completes unchanged.
+TEST(Faults, ANodesUnauthenticatedDropsReachTheRecordAndTheSummary) {
+  runtime::ensure_dds_config();
+  constexpr int kDomain = 188;
+  const std::string name = "node_unauthenticated";
+  const std::string text = test::paper_frame_study(3, "");
+  const auto dir = test::scratch_dir(name + "_rogue");
+  util::ChildProcess attacker = rogue(dir / "rogue.log", kDomain, {"--mode", "control"});
+  Cluster c =
+      start(name, text, kDomain, {{1, true}, {2, false}}, "lag_shift_14ms", {}, Trust::kSecret);
+  const auto code = c.coordinator->wait_for(60s);
+  ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
+  for (auto& node : c.nodes) EXPECT_EQ(node.wait_for(5s).value_or(-1), 0) << node.name();
+  attacker.terminate();
+  const std::string log = test::read_file(c.dir / "coordinator.log");
+  const std::string rogue_log = test::read_file(dir / "rogue.log");
+  ASSERT_EQ(*code, 0) << log << rogue_log;
+  EXPECT_THAT(rogue_log, testing::HasSubstr("HOLD/STOP/ASSIGN/COMMAND as the coordinator: "));
+  const auto record = runtime::read_record(c.record);
+  ASSERT_NE(record.footer(), nullptr) << log;
+  EXPECT_EQ(record.footer()->status(), "completed") << log;
+  test::expect_record_equals(record, test::reference_result(text, "lag_shift_14ms"));
+  expect_each_node_counted_unauthenticated(*record.footer(), log);
+}
 
 // Without a secret, DDS Security or --insecure, a node and the coordinator refuse to start (exit
 // 2, before DDS), saying why and how to give one.

@@ -1,4 +1,5 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18, 165, 167).
+// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18, 165, 167,
+// 231).
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -98,12 +99,57 @@ TEST(Launch, AStrangersTakeoverIsDroppedAndTheSecretIsInNoLog) {
   const Output exported = run(kRths + " export " + (out / "lag_shift_14ms.rthsrec").string() +
                               " --csv " + (dir / "exported.csv").string());
   EXPECT_EQ(exported.code, 0) << exported.out;
-  EXPECT_NE(exported.out.find(" messages dropped unauthenticated)"), std::string::npos)
+  EXPECT_NE(exported.out.find(" messages dropped unauthenticated: coordinator "), std::string::npos)
       << exported.out;
   const std::regex secret("[0-9a-f]{64}");
   for (const auto& entry : std::filesystem::recursive_directory_iterator(out / "logs"))
     if (entry.is_regular_file())
       EXPECT_FALSE(std::regex_search(test::read_file(entry.path()), secret)) << entry.path();
+}
+
+// A stranger replays every genuine message of a launched run byte for byte from its own writers
+// (tests/support's rths_rogue, replay): every side drops the replays unread (the MAC covers the
+// sending writer's GUID), and launch's summary names each node's count beside its rejects, and
+// `rths export` each side's.
+TEST(Launch, ReplaysAreDroppedAndCountedPerSideInTheSummaryAndTheExport) {
+  runtime::ensure_dds_config();
+  const auto dir = test::scratch_dir("launch_replay");
+  const auto config =
+      test::write_config(dir, test::paper_frame_study(3, "deployment { domain_id: 231 }"));
+  const auto out = dir / "out";
+  util::ChildProcess rogue(test::program("rths_rogue", "tests/support"),
+                           {"--domain", "231", "--seconds", "120", "--mode", "replay"},
+                           dir / "rogue.log");
+  std::this_thread::sleep_for(std::chrono::seconds(1));  // discovered before the nodes announce
+  const Output o = run(kRths + " launch " + config.string() + " --case lag_shift_14ms " +
+                       "--no-plots --bin-dir " + RTHS_BINARY_DIR + " --out " + out.string());
+  rogue.terminate();
+  ASSERT_EQ(o.code, 0) << o.out << test::read_file(dir / "rogue.log");
+  const std::filesystem::path record_path = out / "lag_shift_14ms.rthsrec";
+  const auto record = runtime::read_record(record_path);
+  ASSERT_NE(record.footer(), nullptr);
+  EXPECT_EQ(record.footer()->status(), "completed");
+  test::expect_record_equals(record,
+                             test::reference_result(test::read_file(config), "lag_shift_14ms"));
+  for (const char* node : {"node 1 \\(substructure\\)", "node 2 \\(actuator emulator\\)"})
+    EXPECT_TRUE(std::regex_search(
+        o.out, std::regex(std::string(node) + " rejected: [^\n]*unauthenticated [1-9]")))
+        << node << "\n"
+        << o.out;
+  const Output exported =
+      run(kRths + " export " + record_path.string() + " --csv " + (dir / "replay.csv").string());
+  EXPECT_EQ(exported.code, 0) << exported.out;
+  EXPECT_TRUE(std::regex_search(
+      exported.out, std::regex(" messages dropped unauthenticated: coordinator [1-9][0-9]*, node 1 "
+                               "[1-9][0-9]*, node 2 [1-9]")))
+      << exported.out;
+  const Output json = run(kRths + " export " + record_path.string() + " --csv " +
+                          (dir / "replay_json.csv").string() + " --json");
+  ASSERT_EQ(json.code, 0) << json.out;
+  const nlohmann::json j = nlohmann::json::parse(json.out);
+  EXPECT_GT(j["unauthenticated"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(j["node_unauthenticated"]["1"].get<std::uint64_t>(), 0u) << j.dump();
+  EXPECT_GT(j["node_unauthenticated"]["2"].get<std::uint64_t>(), 0u) << j.dump();
 }
 
 std::vector<std::string> header_of(const std::filesystem::path& csv) {

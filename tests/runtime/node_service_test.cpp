@@ -153,6 +153,28 @@ TEST(SubstructureService, AnswersStopWithItsFinalRejectCounts) {
   EXPECT_EQ(h.rejected(), 1u);
 }
 
+// Each heartbeat carries, as rejected_by_cause's unauthenticated, what the node's transport
+// counts at that moment (its source, asked anew each time), apart from its own rejects' total;
+// without a source, 0.
+TEST(SubstructureService, HeartbeatsCarryItsTransportsUnauthenticatedDrops) {
+  substructure_nodes::SubstructureService node(1, "");
+  node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {}));
+  runtime::Heartbeat h;
+  ASSERT_TRUE(runtime::unpack(node.heartbeat(), h));
+  EXPECT_EQ(h.rejected_by_cause().unauthenticated(), 0u);
+  std::uint64_t dropped = 5;
+  node.set_unauthenticated_source([&dropped] { return dropped; });
+  ASSERT_TRUE(runtime::unpack(node.heartbeat(), h));
+  EXPECT_EQ(h.rejected_by_cause().unauthenticated(), 5u);
+  EXPECT_EQ(h.rejected(), 0u);
+  dropped = 12;
+  const auto replies = node.handle(runtime::pack(kRun, 1, runtime::STOP, 1, runtime::Stop{}));
+  ASSERT_EQ(replies.size(), 1u);
+  ASSERT_TRUE(runtime::unpack(replies[0], h));
+  EXPECT_TRUE(h.final());
+  EXPECT_EQ(h.rejected_by_cause().unauthenticated(), 12u);
+}
+
 TEST(SubstructureService, IgnoresAnAssignmentOfAnotherRunWhenTold) {
   substructure_nodes::SubstructureService node(1, "expected-run");
   EXPECT_TRUE(node.handle(assign_message(1, config::NodeSpec::SUBSTRUCTURE, {0}, {})).empty());

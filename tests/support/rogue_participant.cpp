@@ -18,6 +18,9 @@
 //              and 2 on their own command topics, addressed and as a broadcast; as node 2 on its
 //              own up topic, HOLD and ANNOUNCE (and an ANNOUNCE with an empty run id); garbage,
 //              another run's messages and replays of the commands it saw.
+//   replay     never a message of its own: every message of nodes 1 and 2 and of the coordinator
+//              to them that it sees, re-published byte for byte, MAC included, from its own
+//              writers (rogue_replay.h); prints "replayed <topic> kind K: N" per topic and kind.
 // Stops after --seconds, when it sees a STOP addressed to node 1 or 2, or on SIGTERM.
 // Prints "run <id>", then "sent <n>" and, per kind, what it sent. Exit 0 when it ran, 3 when DDS
 // refused (the reason on stderr), 2 for bad usage. (An insider with a lab certificate is
@@ -31,6 +34,7 @@
 #include <thread>
 
 #include "runtime/node/schema.h"
+#include "tests/support/rogue_replay.h"
 #include "transport/dds_endpoint.h"
 
 namespace {
@@ -213,6 +217,16 @@ int run(Rogue& rogue, int domain, double seconds) {
   return 0;
 }
 
+int replay(int domain, double seconds) {
+  long total = 0;
+  for (const auto& [what, n] : rogue::replay(domain, seconds, terminated)) {
+    std::cout << "replayed " << what << ": " << n << "\n";
+    total += n;
+  }
+  std::cout << "sent " << total << std::endl;
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -223,12 +237,14 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain)->required();
   app.add_option("--mode", rogue.mode)
       ->required()
-      ->check(CLI::IsMember({"answers", "first", "takeover", "hold", "error", "control"}));
+      ->check(
+          CLI::IsMember({"answers", "first", "takeover", "hold", "error", "control", "replay"}));
   app.add_option("--every", rogue.every)->check(CLI::PositiveNumber);
   app.add_option("--seconds", seconds);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGTERM, on_sigterm);
   try {
+    if (rogue.mode == "replay") return replay(domain, seconds);
     return run(rogue, domain, seconds);
   } catch (const std::exception& e) {
     std::cerr << "rths_rogue: " << e.what() << "\n";
