@@ -85,6 +85,50 @@ void deliver_fault(const ControllerTrialSpec& spec, const std::filesystem::path&
   }
 }
 
+// The coordinator and the controller node at site "host", DDS on its loopback; no platform
+// measurement (recorded so).
+runtime::LaunchOptions launch_options(const ControllerTrialSpec& spec,
+                                      const std::filesystem::path& config,
+                                      const deploy::NamespaceTopology& topology) {
+  runtime::LaunchOptions launch;
+  launch.config = config;
+  launch.record = spec.dir / "run.rthsrec";
+  launch.log_dir = spec.dir;
+  launch.domain = spec.domain;
+  launch.timeout = spec.seconds + 60;
+  launch.programs_dir = spec.binary_dir;
+  launch.cpu_placement = runtime::CpuPlacement::kSpread;
+  launch.platform_seconds = 0;
+  launch.accept_platform = true;
+  launch.placement = [prefix = topology.exec_prefix("host")](int) {
+    return runtime::Placement{
+        prefix, {{"CYCLONEDDS_URI", runtime::kLoopbackDdsConfig}}, "site host"};
+  };
+  return launch;
+}
+
+// The run, with the spec's fault delivered to the emulator meanwhile (fault_ns: when; 0 = never).
+runtime::LaunchResult launch_with_fault(const ControllerTrialSpec& spec,
+                                        const runtime::LaunchOptions& launch,
+                                        const util::ChildProcess& emulator,
+                                        std::int64_t& fault_ns) {
+  std::atomic<bool> run_over{false};
+  std::thread fault;
+  if (spec.fault != ControllerFault::kNone)
+    fault = std::thread([&] { deliver_fault(spec, launch.record, emulator, run_over, fault_ns); });
+  runtime::LaunchResult launched;
+  try {
+    launched = runtime::launch_run(launch);
+  } catch (...) {
+    run_over = true;
+    if (fault.joinable()) fault.join();
+    throw;
+  }
+  run_over = true;
+  if (fault.joinable()) fault.join();
+  return launched;
+}
+
 // One sample per fresh answer of node 2 (its answered step advanced).
 void read_round_trips(const runtime::RecordContents& contents, ControllerTrialResult& out) {
   std::vector<double> controller, dds;
@@ -145,9 +189,9 @@ ControllerTrialResult run_controller_trial(const ControllerTrialSpec& spec) {
   std::filesystem::create_directories(spec.dir);
   deploy::remove_stale_namespaces();
   deploy::NamespaceTopology topology({{"host", "rig"}, spec.subnet});
-  const std::string host = topology.site("host").address, rig = topology.site("rig").address;
   const auto config = spec.dir / "study.textproto";
-  const std::string text = study_text(spec, host, rig);
+  const std::string text =
+      study_text(spec, topology.site("host").address, topology.site("rig").address);
   std::ofstream(config) << text;
   const config::Study study = core::parse_study(text, config.string());
   ControllerTrialResult out;
@@ -162,37 +206,9 @@ ControllerTrialResult run_controller_trial(const ControllerTrialSpec& spec) {
                               {"--config", config.string(), "--node-id", "2", "--answer-lag-ms",
                                lag.str(), "--idle-timeout", "30"},
                               spec.dir / "emulator.log", at_rig);
-
-  runtime::LaunchOptions launch;
-  launch.config = config;
-  launch.record = spec.dir / "run.rthsrec";
-  launch.log_dir = spec.dir;
-  launch.domain = spec.domain;
-  launch.timeout = spec.seconds + 60;
-  launch.programs_dir = spec.binary_dir;
-  launch.cpu_placement = runtime::CpuPlacement::kSpread;
-  launch.platform_seconds = 0;
-  launch.accept_platform = true;
-  launch.placement = [&](int) {
-    return runtime::Placement{topology.exec_prefix("host"),
-                              {{"CYCLONEDDS_URI", runtime::kLoopbackDdsConfig}},
-                              "site host"};
-  };
-  std::atomic<bool> run_over{false};
   std::int64_t fault_ns = 0;
-  std::thread fault;
-  if (spec.fault != ControllerFault::kNone)
-    fault = std::thread([&] { deliver_fault(spec, launch.record, emulator, run_over, fault_ns); });
-  runtime::LaunchResult launched;
-  try {
-    launched = runtime::launch_run(launch);
-  } catch (...) {
-    run_over = true;
-    if (fault.joinable()) fault.join();
-    throw;
-  }
-  run_over = true;
-  if (fault.joinable()) fault.join();
+  const runtime::LaunchResult launched =
+      launch_with_fault(spec, launch_options(spec, config, topology), emulator, fault_ns);
   out.coordinator_exit = launched.coordinator_exit;
   out.fault_delivered = fault_ns > 0;
   if (spec.fault != ControllerFault::kNone && !out.fault_delivered)
@@ -201,7 +217,7 @@ ControllerTrialResult run_controller_trial(const ControllerTrialSpec& spec) {
   if (spec.fault == ControllerFault::kStop) emulator.signal(SIGCONT);
   out.emulator_exit = emulator.wait_for(5s).value_or(-1);
   if (out.emulator_exit < 0) out.emulator_exit = emulator.terminate();
-  read_outcome(spec, launch.record, fault_ns, out);
+  read_outcome(spec, spec.dir / "run.rthsrec", fault_ns, out);
   return out;  // the namespaces are removed here, after every process has left
 }
 
