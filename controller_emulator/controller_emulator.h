@@ -86,8 +86,9 @@ class ControllerEmulator {
 // frame came for `idle_timeout` s (returns 1). Logs every HOLD and STOP frame it receives.
 // Paced: the plant runs on a thread of its own, one tick() per plant period on absolute
 // deadlines (runtime::Pacer); step() and tick() take turns under one lock. `answer_lag` (s, >= 0):
-// each answer leaves that long after its command frame arrived (the link's round-trip lag, as a
-// network would add it; kernel netem is not needed).
+// each answer leaves that long after serve() read its command frame (the link's round-trip lag,
+// as a network would add it; kernel netem is not needed). Frames queued while the emulator was
+// descheduled are read one after another, so their answers leave one lag apart.
 int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag = 0.0);
 
 }  // namespace rths::controller_emulator
