@@ -53,8 +53,9 @@ std::vector<security::NodeIdentity> study_nodes(const std::string& config,
   std::vector<security::NodeIdentity> nodes;
   const config::Deployment deployment = runtime::with_default_nodes(study.deployment(), setup);
   for (const config::NodeSpec& node : deployment.nodes())
-    nodes.push_back({node.id(), node.kind() == config::NodeSpec::SUBSTRUCTURE
-                                    ? "substructure"
+    nodes.push_back({node.id(), node.kind() == config::NodeSpec::SUBSTRUCTURE ? "substructure"
+                                : node.kind() == config::NodeSpec::CONTROLLER
+                                    ? "controller"
                                     : "actuator_emulator"});
   return nodes;
 }
@@ -108,7 +109,8 @@ void add_pki_command(CLI::App& app) {
   init->add_option("dir", args->dir, "new folder for the PKI")->required();
   init->add_option("--config", args->config, "study whose deployment names the nodes");
   init->add_option("--case", args->case_name, "case whose default nodes are used (with --config)");
-  init->add_option("--node", args->nodes, "ID:KIND (substructure | actuator_emulator), repeatable");
+  init->add_option("--node", args->nodes,
+                   "ID:KIND (substructure | actuator_emulator | controller), repeatable");
   init->add_option("--days", args->days,
                    "validity of certificates and grants in days (default 365)")
       ->check(in_range(core::Quantity::kDays));

@@ -1,14 +1,21 @@
 #include "controller_emulator/controller_emulator.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/prctl.h>
 
+#include <atomic>
+#include <cmath>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "controller_node/controller_exchange.h"
 #include "controller_node/frame.h"
 #include "controller_node/udp_link.h"
 #include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
+#include "runtime/rt/clock.h"
+#include "runtime/rt/pacing.h"
 
 namespace rths::controller_emulator {
 namespace {
@@ -20,8 +27,10 @@ using controller_node::FrameVerdict;
 const char* const kRunId = "controller-emulator";
 
 // The Assign the coordinator would send the node, as an actuator emulator's: the node's own
-// delay stages and link lags left out (the controller node applies those itself), and the clock
-// lockstep, so the actuators answer each command once (their servo periods in simulated time).
+// delay stages and link lags left out (the controller node applies those itself). The clock is
+// lockstep, so the actuators answer each command once (their servo periods in simulated time),
+// unless the deployment is real time with a servo faster than the integrator: then real time,
+// so that the actuators stream (load on a command, one servo period per tick) and are paced.
 runtime::Assign assignment(const config::Study& study, const std::filesystem::path& base_dir,
                            const std::string& case_name, int node_id) {
   const core::PreparedStudy prepared = core::prepare_study(study, base_dir);
@@ -36,7 +45,10 @@ runtime::Assign assignment(const config::Study& study, const std::filesystem::pa
   runtime::Assign assign;
   assign.set_schema_version(runtime::kSchemaVersion);
   *assign.mutable_study() = study;
-  assign.mutable_study()->mutable_deployment()->set_clock(config::Deployment::LOCKSTEP);
+  const bool paced =
+      study.deployment().clock() == config::Deployment::REAL_TIME && setup.servo_substeps > 1;
+  assign.mutable_study()->mutable_deployment()->set_clock(paced ? config::Deployment::REAL_TIME
+                                                                : config::Deployment::LOCKSTEP);
   assign.set_base_dir(base_dir.string());
   assign.set_case_name(study_case.name());
   config::NodeSpec& spec = *assign.mutable_node();
@@ -66,6 +78,9 @@ ControllerEmulator::ControllerEmulator(const config::Study& study,
   for (const auto* layout : {&link_.command(), &link_.feedback()})
     if (controller_node::frame_size(*layout) > controller_node::kMaxDatagram)
       throw std::invalid_argument("controller: a frame longer than a datagram is read");
+  wait_policy_ = runtime::wait_policy(study.deployment());
+  plant_realised_.assign(static_cast<std::size_t>(actuators_), 0.0);
+  plant_force_ = plant_realised_;
   service_ = std::make_unique<actuator_emulator::ActuatorService>(node_id, kRunId);
   const auto ready = service_->handle(runtime::pack(kRunId, node_id, runtime::ASSIGN, 0, assign));
   runtime::Ready r;
@@ -103,34 +118,21 @@ std::optional<std::vector<std::uint8_t>> ControllerEmulator::step(const std::uin
   ++counts_.commands;
   if (answer_frames_ >= 0 && static_cast<std::int64_t>(counts_.answered) >= answer_frames_)
     return std::nullopt;  // gone silent
-  runtime::Command command;
-  command.set_time(in.time);
-  for (int i = 0; i < actuators_; ++i) {
-    command.add_drift(in.target_displacement[i]);
-    command.add_drift_velocity(in.target_velocity[i]);
-  }
   FrameValues out = in;
   out.status = controller_node::kStatusRun;
   runtime::Feedback feedback;
-  if (!holding_) {
-    const auto replies =
-        service_->handle(runtime::pack(kRunId, id, runtime::COMMAND, ++step_, command));
-    if (replies.empty() || replies.front().kind != runtime::FEEDBACK ||
-        !runtime::unpack(replies.front(), feedback))
-      holding_ = true;  // the actuators refused it (their rate limit) and hold
-  }
-  if (holding_) {
-    out.status = controller_node::kStatusHold;
-    for (int i = 0; i < actuators_; ++i) {
+  if (!holding_ && !command_actuators(in, feedback))
+    holding_ = true;  // the actuators refused it (their rate limit) and hold
+  for (int i = 0; i < actuators_; ++i) {
+    if (holding_) {
       out.measured_displacement[i] = service_->held_position(i);
       out.measured_force[i] = 0.0;
-    }
-  } else {
-    for (int i = 0; i < actuators_; ++i) {
-      out.measured_displacement[i] = feedback.realised(i);
-      out.measured_force[i] = feedback.force(i);
+    } else {
+      out.measured_displacement[i] = paced() ? plant_realised_[i] : feedback.realised(i);
+      out.measured_force[i] = paced() ? plant_force_[i] : feedback.force(i);
     }
   }
+  if (holding_) out.status = controller_node::kStatusHold;
   std::vector<std::uint8_t> bytes;
   if (!controller_node::encode(link_.feedback(), out, bytes)) {
     ++counts_.rejected;
@@ -141,29 +143,120 @@ std::optional<std::vector<std::uint8_t>> ControllerEmulator::step(const std::uin
   return bytes;
 }
 
-int serve(ControllerEmulator& emulator, double idle_timeout) {
+bool ControllerEmulator::command_actuators(const FrameValues& in, runtime::Feedback& feedback) {
+  runtime::Command command;
+  command.set_time(in.time);
+  for (int i = 0; i < actuators_; ++i) {
+    command.add_drift(in.target_displacement[i]);
+    command.add_drift_velocity(in.target_velocity[i]);
+  }
+  const auto replies = service_->handle(
+      runtime::pack(kRunId, service_->node_id(), runtime::COMMAND, ++step_, command));
+  // Paced, a loaded command has no reply (its answers are the ticks); a reply is its HOLD.
+  if (paced()) return replies.empty() && service_->last_step() == step_;
+  return !replies.empty() && replies.front().kind == runtime::FEEDBACK &&
+         runtime::unpack(replies.front(), feedback);
+}
+
+void ControllerEmulator::tick(bool overrun) {
+  ++counts_.ticks;
+  if (overrun) ++counts_.overruns;
+  const auto sample = service_->servo_tick(overrun);
+  runtime::Feedback feedback;
+  if (!sample || !runtime::unpack(*sample, feedback)) return;  // at rest or holding
+  for (int i = 0; i < actuators_ && i < feedback.realised_size(); ++i) {
+    plant_realised_[i] = feedback.realised(i);
+    plant_force_[i] = feedback.force(i);
+  }
+}
+
+namespace {
+
+// The plant's own clock (paced only): one tick() per plant period on absolute deadlines until
+// `done`, each under `lock` so that a command frame never sees half a period.
+class PlantThread {
+ public:
+  PlantThread(ControllerEmulator& emulator, std::mutex& lock) {
+    if (!emulator.paced()) return;
+    thread_ = std::thread([this, &emulator, &lock] {
+      runtime::MonotonicClock clock;
+      runtime::Pacer pacer(clock, emulator.plant_period(), emulator.wait_policy());
+      pacer.start();
+      for (std::int64_t k = 1; !done_; ++k) {
+        const runtime::PaceResult pace = pacer.wait(k);
+        std::lock_guard guard(lock);
+        emulator.tick(pace.overrun);
+      }
+    });
+  }
+  ~PlantThread() {
+    done_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  PlantThread(const PlantThread&) = delete;
+  PlantThread& operator=(const PlantThread&) = delete;
+
+ private:
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+};
+
+void log_start(const ControllerEmulator& emulator, const controller_node::UdpLink& udp,
+               double answer_lag) {
+  spdlog::info("controller emulator: listening on {}, answering {}", udp.local(), udp.peer());
+  if (emulator.paced())
+    spdlog::info("controller emulator: plant paced at {:.0f} Hz (wait policy {})",
+                 1.0 / emulator.plant_period(), runtime::to_string(emulator.wait_policy().kind));
+  else
+    spdlog::info("controller emulator: each command frame is one step of the actuators");
+  if (answer_lag > 0)
+    spdlog::info("controller emulator: each answer leaves {:.3f} ms after its frame arrived",
+                 answer_lag * 1e3);
+}
+
+}  // namespace
+
+int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag) {
   const config::ControllerLink& link = emulator.link();
   controller_node::UdpLink udp(link.peer_address(), link.peer_port(), link.local_address(),
                                link.local_port());
-  spdlog::info("controller emulator: listening on {}, answering {}", udp.local(), udp.peer());
+  log_start(emulator, udp, answer_lag);
   const auto idle_ns = static_cast<std::int64_t>(idle_timeout * 1e9);
-  while (!emulator.stopped()) {
-    const auto d = udp.receive(controller_node::monotonic_ns() + idle_ns);
-    if (!d) {
-      spdlog::error("controller emulator: no frame for {} s; leaving", idle_timeout);
-      return 1;
+  const auto lag_ns = static_cast<std::int64_t>(std::llround(answer_lag * 1e9));
+  runtime::MonotonicClock clock;
+  // The lag's sleep ends on time, not up to the kernel's default 50 us of timer slack later.
+  if (lag_ns > 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  std::mutex lock;
+  int result = 0;
+  {
+    PlantThread plant(emulator, lock);
+    while (!emulator.stopped()) {
+      const auto d = udp.receive(controller_node::monotonic_ns() + idle_ns);
+      if (!d) {
+        spdlog::error("controller emulator: no frame for {} s; leaving", idle_timeout);
+        result = 1;
+        break;
+      }
+      if (!d->from_peer) {
+        spdlog::warn("controller emulator: frame from {} ignored (not the host {})", d->source,
+                     udp.peer());
+        continue;
+      }
+      std::unique_lock guard(lock);
+      auto answer = emulator.step(d->bytes.data(), d->size);
+      guard.unlock();
+      if (!answer) continue;
+      if (lag_ns > 0) clock.sleep_until_ns(d->received_ns + lag_ns);
+      udp.send(*answer);
     }
-    if (!d->from_peer) {
-      spdlog::warn("controller emulator: frame from {} ignored (not the host {})", d->source,
-                   udp.peer());
-      continue;
-    }
-    if (auto answer = emulator.step(d->bytes.data(), d->size)) udp.send(*answer);
   }
   const EmulatorCounts& c = emulator.counts();
-  spdlog::info("controller emulator: stopped; {} command frames, {} answered, {} HOLD, {} rejected",
-               c.commands, c.answered, c.holds, c.rejected);
-  return 0;
+  spdlog::info(
+      "controller emulator: {}; {} command frames, {} answered, {} HOLD, {} rejected; plant "
+      "periods {}, overruns {}",
+      result == 0 ? "stopped" : "left", c.commands, c.answered, c.holds, c.rejected, c.ticks,
+      c.overruns);
+  return result;
 }
 
 }  // namespace rths::controller_emulator

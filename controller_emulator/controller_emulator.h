@@ -15,9 +15,21 @@
 //                                     the frame is logged; no answer
 //   status STOP (2)                 -> stopped(); no answer
 //   wrong size, a value not finite  -> counted (rejected), no answer
-// Lockstep and real time alike answer each frame at once (the actuators' servo periods run in
-// simulated time inside the step). `answer_frames` >= 0: answer that many command frames, then
-// keep reading (HOLD and STOP are still logged) but never answer: a controller gone silent.
+// `answer_frames` >= 0: answer that many command frames, then keep reading (HOLD and STOP are
+// still logged) but never answer: a controller gone silent.
+//
+// Two clocks, chosen by the study (the same as an actuator emulator's servo loop):
+//   answer per frame (lockstep, or a servo no faster than the integrator): each command frame is
+//     one integrator step of the actuators, their servo periods run in simulated time inside it,
+//     and the frame is answered with that step's output. Deterministic: equals in process.
+//   paced (deployment REAL_TIME and study.servo.rate an integer N > 1 times the integrator's
+//     rate, e.g. 4096 Hz at dt = 1/1024 s): the plant runs on its own clock. A command frame only
+//     loads the actuators' servo targets and is answered at once with the plant's newest state;
+//     tick(overrun), called every plant_period() s (serve() paces it on CLOCK_MONOTONIC with the
+//     deployment's wait policy), steps every actuator one servo period (dt / N) and keeps the
+//     realised drift (m) and measured force (N) it reached. Before the first command and while
+//     holding the plant does not move (as the actuator emulator's servo loop). ticks and overruns
+//     (a period begun past its deadline) are counted.
 
 #include <cstdint>
 #include <filesystem>
@@ -27,12 +39,15 @@
 #include <vector>
 
 #include "actuator_emulator/actuator_service.h"
+#include "controller_node/frame.h"
 #include "rths/proto/config.pb.h"
+#include "runtime/rt/wait_policy.h"
 
 namespace rths::controller_emulator {
 
 struct EmulatorCounts {
   std::uint64_t commands = 0, answered = 0, holds = 0, stops = 0, rejected = 0;
+  std::uint64_t ticks = 0, overruns = 0;  // paced only: plant periods run, begun late
 };
 
 class ControllerEmulator {
@@ -44,6 +59,11 @@ class ControllerEmulator {
   ~ControllerEmulator();
 
   std::optional<std::vector<std::uint8_t>> step(const std::uint8_t* data, std::size_t size);
+  // Paced only: one plant period; `overrun`: it began past its deadline.
+  void tick(bool overrun);
+  bool paced() const { return service_->streaming(); }
+  double plant_period() const { return service_->streaming_period(); }  // s; 0 unless paced
+  const runtime::WaitPolicy& wait_policy() const { return wait_policy_; }
   bool stopped() const { return counts_.stops > 0; }
   const EmulatorCounts& counts() const { return counts_; }
   const config::ControllerLink& link() const { return link_; }
@@ -56,10 +76,19 @@ class ControllerEmulator {
   std::unique_ptr<actuator_emulator::ActuatorService> service_;
   EmulatorCounts counts_;
   bool holding_ = false;
+  runtime::WaitPolicy wait_policy_;
+  std::vector<double> plant_realised_, plant_force_;  // paced: m, N at the newest plant period
+  // Takes the command frame's targets as the actuators' next step; false when they refuse it.
+  bool command_actuators(const controller_node::FrameValues& in, runtime::Feedback& feedback);
 };
 
 // The socket loop: binds the link's peer end, answers frames until STOP (returns 0) or until no
 // frame came for `idle_timeout` s (returns 1). Logs every HOLD and STOP frame it receives.
-int serve(ControllerEmulator& emulator, double idle_timeout);
+// Paced: the plant runs on a thread of its own, one tick() per plant period on absolute
+// deadlines (runtime::Pacer); step() and tick() take turns under one lock. `answer_lag` (s, >= 0):
+// each answer leaves that long after serve() read its command frame (the link's round-trip lag,
+// as a network would add it; kernel netem is not needed). Frames queued while the emulator was
+// descheduled are read one after another, so their answers leave one lag apart.
+int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag = 0.0);
 
 }  // namespace rths::controller_emulator

@@ -138,6 +138,19 @@ void judge(RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   }
 }
 
+// Whom a HOLD went to, for its event: "actuator emulators", "controller nodes" or both (a run
+// with no node of either kind announced still says the emulators, as the plan has them).
+std::string hold_receivers(const RunState& s) {
+  bool emulators = false, controllers = false;
+  for (const auto& [id, node] : s.nodes) {
+    if (!node.announced) continue;
+    emulators = emulators || node.plan->spec.kind() == config::NodeSpec::ACTUATOR_EMULATOR;
+    controllers = controllers || node.plan->spec.kind() == config::NodeSpec::CONTROLLER;
+  }
+  if (controllers && emulators) return "actuator emulators and controller nodes";
+  return controllers ? "controller nodes" : "actuator emulators";
+}
+
 // HOLD to the emulators after a failure; STOP to every node that announced, addressed to it
 // after its HOLD on the same topic, so the STOP cannot overtake the HOLD (DDS orders per topic
 // only). A node that never announced was never assigned and ignores all but ASSIGN. Then waits
@@ -150,7 +163,7 @@ void deactivate(RunState& s, bool failed, const std::string& status) {
     for (auto& [id, node] : s.nodes)
       if (runtime::drives_actuators(node.plan->spec.kind()) && node.announced)
         s.send(id, runtime::HOLD, s.step, hold);
-    s.event("HOLD sent to the actuator emulators: " + status);
+    s.event("HOLD sent to the " + hold_receivers(s) + ": " + status);
   }
   runtime::Stop stop;
   stop.set_reason(status);

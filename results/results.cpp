@@ -141,14 +141,22 @@ void set_record_attributes(const runtime::RecordContents& record, Table& t) {
   t.set_attribute("lost_steps", lost);
 }
 
+// Whether the run's deployment has node `id` as a CONTROLLER (its links carry the frame's round
+// trip and the controller's status).
+bool is_controller(const runtime::RunHeader& header, int id) {
+  for (const auto& node : header.study().deployment().nodes())
+    if (node.id() == id) return node.kind() == config::NodeSpec::CONTROLLER;
+  return false;
+}
+
 // Per link of the header, its samples' columns (node<id>_...): a step without this link's sample
 // (step 0 has no exchange) is missing, not zero.
 void add_link_columns(Table& t, const runtime::RunHeader& header,
                       const std::vector<const runtime::StepRecord*>& steps) {
   const auto links = static_cast<std::size_t>(header.link_node_ids_size());
   for (std::size_t l = 0; l < links; ++l) {
-    const std::string prefix =
-        "node" + std::to_string(header.link_node_ids(static_cast<int>(l))) + "_";
+    const int id = header.link_node_ids(static_cast<int>(l));
+    const std::string prefix = "node" + std::to_string(id) + "_";
     const auto link = [&steps, l](auto field) {
       std::vector<double> out;
       out.reserve(steps.size());
@@ -168,6 +176,11 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
     t.add_numbers(prefix + "one_way_down_s", "s",
                   link([](const Link& x) { return x.one_way_down(); }));
     t.add_numbers(prefix + "one_way_up_s", "s", link([](const Link& x) { return x.one_way_up(); }));
+    if (!is_controller(header, id)) continue;
+    t.add_numbers(prefix + "controller_round_trip_s", "s",
+                  link([](const Link& x) { return x.controller_round_trip(); }));
+    t.add_numbers(prefix + "controller_status", "",
+                  link([](const Link& x) { return x.controller_status(); }));
   }
 }
 

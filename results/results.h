@@ -19,8 +19,11 @@
 //                 ground_acceleration_m_per_s2, u<i>_m, v<i>_m_per_s, a<i>_m_per_s2 per DOF,
 //                 command<j>_m, realised<j>_m, force<j>_N per actuator, then per link to node n:
 //                 node<n>_answered_step, node<n>_injected_lag_s, node<n>_round_trip_s,
-//                 node<n>_one_way_down_s, node<n>_one_way_up_s (NaN at step 0, which has no
-//                 exchange), then lateness_s and overrun (0/1); attributes run_id, case_name,
+//                 node<n>_one_way_down_s, node<n>_one_way_up_s and, for a CONTROLLER node of
+//                 the header's deployment, node<n>_controller_round_trip_s (s, the UDP frame's
+//                 round trip the node timed) and node<n>_controller_status (0 running) (NaN at
+//                 step 0, which has no exchange), then lateness_s and overrun (0/1);
+//                 attributes run_id, case_name,
 //                 clock, status, integrity ("verified (CRC-32C per entry)", "damaged: <what
 //                 was lost>" or "unverified: ..." for an old record) and lost_steps (step
 //                 numbers missing from the rows, e.g. "1059-1061,2000"; empty when none).

@@ -132,7 +132,7 @@ LabCa load_ca(const fs::path& dir) {
 }
 
 bool is_node_kind(const std::string& kind) {
-  return kind == "substructure" || kind == "actuator_emulator";
+  return kind == "substructure" || kind == "actuator_emulator" || kind == "controller";
 }
 
 }  // namespace
@@ -148,7 +148,7 @@ void check_identity(const NodeIdentity& node) {
     throw std::invalid_argument("node 0 is the coordinator, not '" + node.kind + "'");
   if (node.node_id != kCoordinatorNodeId && !is_node_kind(node.kind))
     throw std::invalid_argument("node " + std::to_string(node.node_id) + ": kind '" + node.kind +
-                                "' is not substructure or actuator_emulator");
+                                "' is not substructure, actuator_emulator or controller");
 }
 
 fs::path node_dir(const fs::path& pki_dir, int node_id) {

@@ -36,7 +36,7 @@ inline constexpr int kCoordinatorNodeId = 0;
 
 struct NodeIdentity {
   int node_id = 0;   // 0 = coordinator
-  std::string kind;  // "coordinator", "substructure" or "actuator_emulator"
+  std::string kind;  // "coordinator", "substructure", "actuator_emulator" or "controller"
 };
 
 struct PkiOptions {

@@ -279,7 +279,7 @@ void Feed::on_event(const runtime::RunEvent& event) {
   if (!events_.empty()) events_[events_total_ % events_.size()] = event;
   ++events_total_;
   const std::string& what = event.what();
-  if (what.rfind("HOLD", 0) == 0) {  // the coordinator's "HOLD sent to the actuator emulators: why"
+  if (what.rfind("HOLD", 0) == 0) {  // the coordinator's "HOLD sent to the <receivers>: why"
     if (state_ != "HOLD") reason_ = what;
     state_ = "HOLD";
   }

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <utility>
 
@@ -236,6 +237,19 @@ TEST(CliTest, NestedCommandsTakeAndSuggestTheirOwnFlags) {
           (kSource / "configs/paper_frame.textproto").string() + " --days 30 --organisation lab");
   ASSERT_EQ(o.exit_code, 0) << o.output;
   EXPECT_TRUE(std::filesystem::is_directory(dir / "pki" / "node_2")) << o.output;
+}
+
+// A CONTROLLER node gets an identity of its own kind (OU=controller), not an emulator's.
+TEST(CliTest, PkiGivesAControllerNodeAControllerIdentity) {
+  const auto dir = scratch("pki_controller");
+  const Outcome o = run("pki init " + (dir / "pki").string() + " --config " +
+                        (kSource / "configs/paper_frame_controller.textproto").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  std::ifstream permissions(dir / "pki" / "node_2" / "permissions.xml");
+  const std::string subjects((std::istreambuf_iterator<char>(permissions)),
+                             std::istreambuf_iterator<char>());
+  EXPECT_NE(subjects.find("CN=rths-node-2,OU=controller,"), std::string::npos) << subjects;
+  EXPECT_EQ(subjects.find("OU=actuator_emulator"), std::string::npos);
 }
 
 // An output that is one of the command's inputs is refused before anything is written.

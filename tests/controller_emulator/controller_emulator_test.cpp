@@ -1,6 +1,8 @@
 // The controller emulator answers command frames with the in-process actuator's outputs bit for
-// bit, holds on a HOLD status frame, refuses malformed frames and goes silent when told to. No
-// sockets: step() takes and returns frames.
+// bit, holds on a HOLD status frame, refuses malformed frames and goes silent when told to; paced
+// (real time, a servo faster than the integrator), a frame only loads the servo and is answered
+// with the newest plant period's state. No sockets: step() takes and returns frames, the test
+// calls tick() for the plant's clock.
 #include "controller_emulator/controller_emulator.h"
 
 #include <gtest/gtest.h>
@@ -17,14 +19,20 @@ namespace {
 
 using controller_node::FrameValues;
 
-std::string study_text() {
+std::string study_text(const std::string& deployment_extra = "") {
   return test::paper_frame_study(0.5, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
                                           test::controller_link_text(47140, 47141) +
-                                          " } } limits { max_displacement: 0.5 } }");
+                                          " } } limits { max_displacement: 0.5 } " +
+                                          deployment_extra + " }");
 }
 
+// Real time at dt = 1 ms with a 4000 Hz servo: the emulator's plant runs 4 periods per step.
+std::string paced_study_text() { return study_text("clock: REAL_TIME") + " servo { rate: 4000 }"; }
+
 struct Emulator {
-  config::Study study = core::parse_study(study_text(), "test");
+  explicit Emulator(const std::string& text = study_text())
+      : study(core::parse_study(text, "test")) {}
+  config::Study study;
   ControllerEmulator emulator{study, std::filesystem::temp_directory_path(), "lag_shift_14ms", 2};
 
   std::optional<FrameValues> send(std::int64_t counter, std::int64_t status, double time,
@@ -67,6 +75,60 @@ TEST(ControllerEmulator, AnswersEachCommandFrameAsTheInProcessActuatorBitForBit)
     ASSERT_EQ(answer->measured_force[0], expected.force) << "step " << k;
   }
   EXPECT_EQ(e.emulator.counts().answered, 200u);
+}
+
+TEST(ControllerEmulator, AnswersPerFrameInLockstepAndPacesItsPlantInRealTime) {
+  EXPECT_FALSE(Emulator().emulator.paced());
+  Emulator e(paced_study_text());
+  ASSERT_TRUE(e.emulator.paced());
+  EXPECT_DOUBLE_EQ(e.emulator.plant_period(), 0.001 / 4);
+}
+
+TEST(ControllerEmulator, PacedAnswersEachFrameWithTheNewestPlantPeriodOfTheInProcessServo) {
+  Emulator e(paced_study_text());
+  const core::PreparedStudy prepared = test::prepare(paced_study_text());
+  core::HybridSetup setup =
+      core::setup_for_case(prepared, runtime::find_case(prepared.config, "lag_shift_14ms"));
+  ASSERT_EQ(setup.servo_substeps, 4);
+  core::Actuator actuator =
+      core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt, setup.servo_substeps);
+  e.emulator.tick(false);  // before the first command the plant is at rest
+  core::ActuatorOutput newest{};
+  for (int k = 1; k <= 100; ++k) {
+    const double t = k * setup.dt;
+    const double drift = 0.01 * std::sin(2 * M_PI * 2 * t);
+    const double velocity = 0.01 * 2 * M_PI * 2 * std::cos(2 * M_PI * 2 * t);
+    const auto answer = e.send(k, controller_node::kStatusRun, t, drift, velocity);
+    ASSERT_TRUE(answer) << "frame " << k;
+    EXPECT_EQ(answer->counter, k);
+    ASSERT_EQ(answer->measured_displacement[0], newest.realised) << "frame " << k;
+    ASSERT_EQ(answer->measured_force[0], newest.force) << "frame " << k;
+    actuator.command({t, drift, velocity});
+    // A busy plant may fall behind by a period or run one more; the answer is whatever it reached.
+    const int periods = k % 10 == 0 ? 3 : 4;
+    for (int j = 0; j < periods; ++j) {
+      e.emulator.tick(j == 0 && k % 10 == 0);
+      newest = actuator.tick();
+    }
+  }
+  EXPECT_EQ(e.emulator.counts().answered, 100u);
+  EXPECT_EQ(e.emulator.counts().ticks, 1u + 90 * 4 + 10 * 3);
+  EXPECT_EQ(e.emulator.counts().overruns, 10u);
+}
+
+TEST(ControllerEmulator, PacedHoldsOnAHoldFrameAndItsPlantStaysAtTheHoldPosition) {
+  Emulator e(paced_study_text());
+  for (int k = 1; k <= 50; ++k) {
+    ASSERT_TRUE(e.send(k, 0, k * 0.001, 0.0002 * k, 0.2));
+    for (int j = 0; j < 4; ++j) e.emulator.tick(false);
+  }
+  EXPECT_FALSE(e.send(51, controller_node::kStatusHold, 0.051, 0.0102, 0.2));
+  for (int j = 0; j < 40; ++j) e.emulator.tick(false);
+  const auto answer = e.send(52, 0, 0.052, 0.0104, 0.2);
+  ASSERT_TRUE(answer);
+  EXPECT_EQ(answer->status, controller_node::kStatusHold);
+  EXPECT_GT(answer->measured_displacement[0], 0.0);
+  EXPECT_LT(answer->measured_displacement[0], 0.0102);
 }
 
 TEST(ControllerEmulator, HoldsOnAHoldFrameAndAnswersHoldingFromThen) {

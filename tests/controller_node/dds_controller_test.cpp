@@ -131,6 +131,11 @@ TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
       << coordinator_log;
   const std::string node_log = test::read_file(run.dir / "node_2.log");
   EXPECT_NE(node_log.find("HOLD sent to the controller"), std::string::npos) << node_log;
+  bool named = false;
+  for (const auto& e : run.record.entries)
+    named = named || (e.has_event() &&
+                      e.event().what().rfind("HOLD sent to the controller nodes: ", 0) == 0);
+  EXPECT_TRUE(named) << "the coordinator's HOLD event names whom it went to";
   EXPECT_GT(run.record.steps().size(), 1u);
   EXPECT_LT(run.record.steps().size(), 30000u);  // stopped before the motion's end
 }

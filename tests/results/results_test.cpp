@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -130,6 +131,55 @@ TEST(ResultsTest, RecordTableHasTheExportColumnsAndNanForStepZerosLink) {
   EXPECT_EQ(t.column("overrun").numbers, (std::vector<double>{0, 1}));
   EXPECT_EQ(t.attributes().at("status"), "no footer: the run was cut short");
   EXPECT_THROW(record_table(runtime::RecordContents{}), std::invalid_argument);
+}
+
+TEST(ResultsTest, RecordTableGivesAControllerNodesLinkItsFrameRoundTripAndStatus) {
+  runtime::RecordContents record;
+  runtime::RecordEntry header_entry;
+  auto* header = header_entry.mutable_header();
+  header->set_dofs(1);
+  header->set_actuators(1);
+  header->add_link_node_ids(1);
+  header->add_link_node_ids(2);
+  auto* controller = header->mutable_study()->mutable_deployment()->add_nodes();
+  controller->set_id(2);
+  controller->set_kind(config::NodeSpec::CONTROLLER);
+  record.entries.push_back(header_entry);
+  for (int k = 0; k < 3; ++k) {
+    runtime::RecordEntry e;
+    auto* s = e.mutable_step();
+    s->set_step(k);
+    s->add_displacement(0);
+    s->add_velocity(0);
+    s->add_acceleration(0);
+    s->add_command(0);
+    s->add_realised(0);
+    s->add_measured_force(0);
+    if (k > 0) {
+      s->add_links()->set_answered_step(k);
+      auto* link = s->add_links();
+      link->set_answered_step(k);
+      link->set_controller_round_trip(0.0001 * k);
+      link->set_controller_status(k == 2 ? 7 : 0);
+    }
+    record.entries.push_back(e);
+  }
+  const Table t = record_table(record);
+  const std::vector<std::string> all = names(t);
+  const auto at = [&all](const std::string& name) {
+    return std::find(all.begin(), all.end(), name) - all.begin();
+  };
+  EXPECT_EQ(at("node1_controller_round_trip_s"), static_cast<long>(all.size()))
+      << "node 1 is no controller";
+  ASSERT_LT(at("node2_controller_status"), static_cast<long>(all.size()));
+  EXPECT_EQ(at("node2_controller_round_trip_s"), at("node2_one_way_up_s") + 1);
+  EXPECT_EQ(at("node2_controller_status"), at("node2_one_way_up_s") + 2);
+  const auto& rtt = t.column("node2_controller_round_trip_s");
+  EXPECT_EQ(rtt.unit, "s");
+  EXPECT_TRUE(std::isnan(rtt.numbers[0]));
+  EXPECT_DOUBLE_EQ(rtt.numbers[2], 0.0002);
+  EXPECT_EQ(t.column("node2_controller_status").numbers[1], 0.0);
+  EXPECT_EQ(t.column("node2_controller_status").numbers[2], 7.0);
 }
 
 TEST(ResultsTest, SweepTableHasTheSweepCsvsColumnsInOrder) {
