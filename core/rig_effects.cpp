@@ -68,4 +68,18 @@ std::string SensorDrift::describe() const {
          " N/s t)";
 }
 
+ViscousForce::ViscousForce(double damping, double dt) : damping_(damping), dt_(dt) {
+  require(std::isfinite(damping) && damping >= 0.0,
+          "viscous_force: damping must be >= 0 N s/m and finite");
+  require(dt > 0.0, "viscous_force: dt must be > 0 s");
+}
+
+std::unique_ptr<DelayStage> ViscousForce::clone() const {
+  return std::make_unique<ViscousForce>(*this);
+}
+
+std::string ViscousForce::describe() const {
+  return "viscous_force(" + format_number(damping_) + " N s/m)";
+}
+
 }  // namespace rths::core

@@ -13,11 +13,15 @@
 //                  offset and a drift over time: u_out = u (the specimen is not moved);
 //                  the displacement read = u + d0 + d1 t (m, m/s) (sensor_error), the force the
 //                  integrator receives = f + f0 + f1 t (N, N/s) (measure_force).
+//   ViscousForce   a viscous force in parallel with the specimen (its own damping, a damper),
+//                  which the load cell reads with the spring's: u_out = u (the motion passes
+//                  unchanged), the force the integrator receives = f + c (u[k] - u[k-1]) / dt
+//                  (c in N s/m, dt the stage's step in s) (measure_force).
 // The identification's predictors (identify/model/model.cpp) apply the same recursions, so an
 // identified width or limit re-runs as it was fitted.
 // Linear dynamics: a MotionLimit (backlash, velocity_limit) is the identity once its
 // non-linearity is left out (kLinearised: a small motion passes unchanged); SensorDrift is the
-// identity.
+// identity, and so is ViscousForce on the displacement it passes.
 // Real-time safe: no allocation after construction.
 
 #include "core/delay.h"
@@ -86,6 +90,31 @@ class SensorDrift final : public DelayStage {
  private:
   SensorErrors errors_;
   double time_ = 0.0;  // s, of the last step
+};
+
+class ViscousForce final : public DelayStage {
+ public:
+  // @pre damping >= 0 and finite (N s/m), dt > 0 (s) (throws std::invalid_argument).
+  ViscousForce(double damping, double dt);
+  void reset() override { last_ = velocity_ = 0.0; }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
+  double measure_force(double force) override { return force + damping_ * velocity_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    velocity_ = (in.displacement - last_) / dt_;
+    last_ = in.displacement;
+    return in.displacement;
+  }
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+
+ private:
+  double damping_, dt_;
+  double last_ = 0.0, velocity_ = 0.0;  // m, m/s: of the last step
 };
 
 }  // namespace rths::core

@@ -100,6 +100,12 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
               source, where + ".sensor_drift: every offset and drift must be finite");
       break;
     }
+    case K::kViscousForce:
+      require(stage.viscous_force().damping() >= 0.0 && stage.viscous_force().damping() <= 1e9,
+              source,
+              where + ".viscous_force.damping must be in [0, 1e9] N s/m, got " +
+                  format_number(stage.viscous_force().damping()));
+      break;
     case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   }
 }
@@ -367,6 +373,9 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
           d.displacement_offset(), d.displacement_drift(), d.force_offset(), d.force_drift()});
       break;
     }
+    case K::kViscousForce:
+      block = std::make_unique<ViscousForce>(stage.viscous_force().damping(), dt);
+      break;
     case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
   }
   block->set_gain(effective_gain(stage));

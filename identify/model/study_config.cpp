@@ -27,6 +27,10 @@ void note_left_out_specimen_effects(const ChannelModel& specimen,
   for (Effect e : specimen.effects) {
     switch (e) {
       case Effect::kDamping:
+        left_out.push_back(effect_name(e) +
+                           ": a velocity force, not a storey restoring force (a viscous_force "
+                           "stage carries it: add_force_stages)");
+        break;
       case Effect::kCoulomb:
         left_out.push_back(effect_name(e) +
                            ": a velocity force, not a storey restoring force (add it as damping)");
@@ -133,15 +137,18 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
   add_rig_stages(actuator, scales, *rig, out.study_case);
   auto& stages = *out.study_case.mutable_delay();
   for (int i = stages.size() - 1; i >= 0; --i) {
-    if (stages[i].has_sensor_drift()) continue;
+    if (stages[i].has_sensor_drift() || stages[i].has_viscous_force()) continue;
     if (gain != 1.0) stages[i].set_amplitude_gain(gain);
     break;
   }
   return out;
 }
 
-void add_load_cell_drift(const ChannelModel& specimen, const SignalScales& scales,
-                         const RigRecord& rig, config::Case& study_case) {
+void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
+                      const RigRecord& rig, config::Case& study_case) {
+  if (specimen.has(Effect::kDamping))
+    study_case.add_delay()->mutable_viscous_force()->set_damping(
+        std::max(0.0, specimen.param(Effect::kDamping, "damping", scales).value_or(0.0)));
   if (!specimen.has(Effect::kOffsetDrift)) return;
   const auto [offset, rate] =
       drift_in_time(specimen.param(Effect::kOffsetDrift, "offset", scales).value_or(0.0),

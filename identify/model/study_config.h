@@ -57,11 +57,13 @@ struct RigRecord {
 ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
                            const std::string& name = kIdentifiedCaseName,
                            const std::optional<RigRecord>& rig = std::nullopt);
-// The load cell's offset drift of a fitted specimen (channel force) as a sensor_drift stage's
-// force fields (N, N/s of simulated time), merged into the case's sensor_drift stage (appended
-// when it has none). Nothing when the specimen has no offset drift.
-void add_load_cell_drift(const ChannelModel& specimen, const SignalScales& scales,
-                         const RigRecord& rig, config::Case& study_case);
+// What the load cell of a fitted specimen (channel force) reads beyond its storey model, as the
+// case's last stages: a viscous force beside the specimen (damping, N s/m) as a viscous_force
+// stage, and the load cell's offset drift as a sensor_drift stage's force fields (N, N/s of
+// simulated time), merged into the case's sensor_drift stage (appended when it has none).
+// Nothing for a specimen with neither.
+void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
+                      const RigRecord& rig, config::Case& study_case);
 
 struct SpecimenModel {
   std::optional<config::RestoringForce> restoring_force;

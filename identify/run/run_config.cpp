@@ -48,8 +48,8 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
         force && !path.specimen_undeclared.empty()) {
       const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
       const SignalScales force_scales = signal_scales(f);
-      add_load_cell_drift(force->final_fit.model, force_scales,
-                          RigRecord{f.time.front(), force_scales.duration}, study_case);
+      add_force_stages(force->final_fit.model, force_scales,
+                       RigRecord{f.time.front(), force_scales.duration}, study_case);
     }
     if (run_case) *study_case.mutable_compensation() = run_case->compensation();
     out.push_back(study_case);

@@ -121,7 +121,8 @@ std::filesystem::path shares_plot(const RunResidual& r, const std::filesystem::p
 std::vector<std::filesystem::path> write_run_plots(const RunIdentification& run,
                                                    const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  std::vector<std::filesystem::path> out{lag_plot(run, dir)};
+  std::vector<std::filesystem::path> out;
+  if (!run.links.empty()) out.push_back(lag_plot(run, dir));
   if (run.residual) {
     out.push_back(response_plot(*run.residual, dir));
     out.push_back(shares_plot(*run.residual, dir));

@@ -82,6 +82,14 @@ Rerun compare(core::SimulationResult result, const core::Mat& recorded) {
   return out;
 }
 
+// Whether a specimen effect the storey model leaves out (`note`, "effect: why") is re-run by the
+// force stages (study_config.h add_force_stages): the load cell's drift, the viscous force.
+bool re_run_by_force_stages(const std::string& note) {
+  for (Effect e : {Effect::kOffsetDrift, Effect::kDamping})
+    if (note.rfind(effect_name(e) + ":", 0) == 0) return true;
+  return false;
+}
+
 // Shares of each removal in the sum of the positive ones.
 void set_shares(std::vector<ResidualShare>& shares) {
   double sum = 0.0;
@@ -144,7 +152,7 @@ class Reruns {
                                                declared_, nullptr)
                                   : declared_;
       if (m.specimen) {
-        add_load_cell_drift(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c);
+        add_force_stages(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c);
         place_specimen(*m.specimen, a, setup);
       }
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
@@ -242,7 +250,7 @@ RunResidual run_residual(const ResidualInput& input) {
     if (all[a].specimen)
       for (const auto& l :
            specimen_model(*all[a].specimen, reruns.scales(a, Channel::kForce)).left_out)
-        if (l.rfind(effect_name(Effect::kOffsetDrift), 0) != 0)  // re-run by the load cell
+        if (!re_run_by_force_stages(l))
           out.notes.push_back("specimen " + std::to_string(a + 1) + ": " + l);
   }
   const Rerun before = reruns.run(std::vector<RigModel>(paths.size()));

@@ -14,8 +14,8 @@
 // velocity limit with the gain, the displacement sensor's drift) in place of those delay stages,
 // the compensation kept; where the force channel contradicted the declared specimen
 // (ActuatorPath::specimen_undeclared), the identified storey model in place of the declared one
-// (specimen_model, at its identified initial stiffness) and the load cell's drift as a
-// sensor_drift stage.
+// (specimen_model, at its identified initial stiffness), its viscous force as a viscous_force
+// stage and the load cell's drift as a sensor_drift stage (study_config.h add_force_stages).
 // Errors, per floor (DOF) i: NRMSE_i = sqrt(mean (u_sim - u_rec)^2) / median |u_rec|
 // (core/metrics.h nrmse, the record as reference) over the steps both responses hold.
 // Which link explains how much: the error measure E is the worst floor's NRMSE.

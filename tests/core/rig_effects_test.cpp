@@ -1,5 +1,6 @@
 // A rig's own effects as delay stages (core/rig_effects.h): each recursion as its header states
-// it, the sensors' errors on what is read and not on what moves, bad parameters refused, and the
+// it, the sensors' errors and a viscous force on what is read and not on what moves, bad
+// parameters refused, and the
 // stages as a study config builds them.
 #include "core/rig_effects.h"
 
@@ -50,6 +51,23 @@ TEST(SensorDrift, TheSensorsReadOffTheTruthAndTheSpecimenIsNotMoved) {
   EXPECT_THROW(SensorDrift({std::nan(""), 0.0, 0.0, 0.0}), std::invalid_argument);
 }
 
+TEST(ViscousForce, TheLoadCellReadsDampingTimesTheRateAndTheSpecimenIsNotMoved) {
+  ViscousForce damper(2000.0, 0.001);
+  EXPECT_DOUBLE_EQ(damper.step({0.001, 0.0001, 0.0}), 0.0001);
+  EXPECT_DOUBLE_EQ(damper.measure_force(500.0), 500.0 + 2000.0 * 0.1);  // 0.1 m/s
+  EXPECT_DOUBLE_EQ(damper.step({0.002, 0.0001, 0.0}), 0.0001);
+  EXPECT_DOUBLE_EQ(damper.measure_force(500.0), 500.0);  // at rest
+  DelayChain chain;
+  chain.add(std::make_unique<MotionLimit>(MotionLimit::backlash(0.0)));
+  chain.add(damper.clone());
+  chain.reset();
+  EXPECT_DOUBLE_EQ(chain.step({0.001, -0.0002, 0.0}), -0.0002);
+  EXPECT_DOUBLE_EQ(chain.measure_force(0.0), 2000.0 * -0.2);
+  EXPECT_DOUBLE_EQ(chain.measured(), -0.0002);
+  EXPECT_THROW(ViscousForce(-1.0, 0.001), std::invalid_argument);
+  EXPECT_THROW(ViscousForce(std::nan(""), 0.001), std::invalid_argument);
+}
+
 TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   config::DelayStage stage;
   stage.mutable_velocity_limit()->set_max_velocity(0.05);
@@ -64,6 +82,15 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("velocity_limit.max_velocity"), std::string::npos)
         << e.what();
+  }
+  try {
+    (void)parse_study(
+        "structure { sdof { period: 0.5 } } cases { name: \"c\" delay { "
+        "viscous_force { damping: -5 } } }",
+        "bad.textproto");
+    FAIL() << "a negative damping was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("viscous_force.damping"), std::string::npos) << e.what();
   }
 }
 

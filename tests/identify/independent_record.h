@@ -10,8 +10,8 @@
 // read by rths, since it is an input, not a model). Per step k (Newmark, gamma = 1/2, beta = 0):
 //   u_k = u + dt v + dt^2/2 a; command x_c = u_k; the actuator: x = x_c(t - 14 ms) -> first order
 //   (tau) -> backlash (width) -> velocity limit (v_max) -> gain; specimen: f = k_e s x (linear) or
-//   Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x, + c_s (x - x_prev) / dt; sensors: x_m = AD(x + n_x),
-//   f_m = AD(f + f0 + f1 t + n_f), AD a 16-bit converter over +-range; then
+//   Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x, + c_s (x - x_prev) / dt; sensors:
+//   x_m = AD(x + n_x), f_m = AD(f + f0 + f1 t + n_f), AD a 16-bit converter over +-range; then
 //   a_k = (p_k - c (v + dt/2 a) - k_n u_k - f_m) / (m + dt/2 c), v += dt/2 (a + a_k).
 
 #include <unistd.h>

@@ -62,6 +62,14 @@ TEST(RunReport, WritesEachFigureAsPngAndSvg) {
   run.residual = small_residual();
   written = write_run_plots(run, dir);
   ASSERT_EQ(written.size(), 3u);
+  // A lab's record made by another controller has no links: no lag figure, the others still.
+  RunIdentification without_links = run;
+  without_links.links.clear();
+  const fs::path bare = dir / "without_links";
+  const auto bare_written = write_run_plots(without_links, bare);
+  ASSERT_EQ(bare_written.size(), 2u);
+  EXPECT_EQ(bare_written[0].filename(), "record_response.png");
+  EXPECT_FALSE(fs::exists(bare / "record_lag.png"));
   for (const auto& png : written) {
     EXPECT_GT(fs::file_size(png), 1000u) << png;
     EXPECT_TRUE(fs::exists(fs::path(png).replace_extension(".svg"))) << png;

@@ -142,11 +142,13 @@ TEST(StudyTest, EveryDelayKindBuildsAStage) {
                       delay { backlash { width: 0.001 } }
                       delay { velocity_limit { max_velocity: 0.2 } }
                       delay { sensor_drift { force_offset: 10 } }
+                      delay { viscous_force { damping: 300 } }
                     })pb",
                   "all");
   const DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
   EXPECT_FALSE(chain.empty());
-  for (const char* kind : {"shift", "jitter", "backlash", "velocity_limit", "sensor_drift"})
+  for (const char* kind :
+       {"shift", "jitter", "backlash", "velocity_limit", "sensor_drift", "viscous_force"})
     EXPECT_NE(chain.describe().find(kind), std::string::npos) << chain.describe();
 }
 
