@@ -171,6 +171,13 @@ void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
     const double wn = std::sqrt(stage.transfer_function().denominator(2));
     add(Effect::kSecondOrder, "natural_frequency", wn,
         "second_order " + std::to_string(wn) + " rad/s");
+  } else if (stage.has_backlash()) {
+    const double w = stage.backlash().width();
+    add(Effect::kBacklash, "width", w, "backlash " + std::to_string(w) + " m");
+  } else if (stage.has_velocity_limit()) {
+    const double v = stage.velocity_limit().max_velocity();
+    add(Effect::kVelocitySaturation, "max_velocity", v,
+        "velocity_limit " + std::to_string(v) + " m/s");
   }
 }
 

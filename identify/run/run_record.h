@@ -8,7 +8,8 @@
 // Per actuator a (1-based): the actuator path, command -> measured displacement, and the
 // specimen, measured displacement -> force, identified by identify.h with the effect library;
 // declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
-// transfer function -> second_order, each with the config's value as initial value), gain = the
+// transfer function -> second_order, backlash -> backlash, velocity_limit ->
+// velocity_saturation, each with the config's value as initial value), gain = the
 // stages' amplitude gain. Undeclared effects: the steps the search added that removed more than
 // kMinErrorRemoved of held-out error when added and still do in the final model (refitted without
 // it), and a fitted gain off the declared one by more than
