@@ -30,12 +30,27 @@ std::size_t identify_units(const IdentifyOptions& options) {
 
 namespace {
 
-// Refits the search's models at the full rate, from the search's parameters; the ranking keeps
+// Refits the search's models at the full rate, from the search's parameters (the declared one
+// also from its declared values: full_rate_declared); the ranking keeps
 // the search's errors. A step that paid on the search data but not at the full rate is dropped,
 // with every step after it.
+// The declared model at the full rate, refitted from the search's parameters and from its
+// declared values (fit_declared at the full rate): a decimated search can carry a non-smooth
+// model (a velocity limit, backlash) into another minimum. The lower held-out error stands.
+FitResult full_rate_declared(const ChannelIdentification& id, const ChannelSignals& signals,
+                             const Split& split, const FitOptions& full_fit,
+                             const std::vector<ParamDeclaration>& declarations) {
+  FitResult from_search = fit_channel(id.declared_fit.model, signals, split, full_fit);
+  if (declarations.empty()) return from_search;
+  FitResult from_declared = fit_channel(
+      fit_declared(signals, split, id.declared, full_fit, declarations), signals, split, full_fit);
+  return from_declared.heldout_error < from_search.heldout_error ? from_declared : from_search;
+}
+
 void refit_at_full_rate(ChannelIdentification& id, const ChannelSignals& signals,
-                        const Split& split, const FitOptions& full_fit) {
-  id.declared_fit = fit_channel(id.declared_fit.model, signals, split, full_fit);
+                        const Split& split, const FitOptions& full_fit,
+                        const std::vector<ParamDeclaration>& declarations) {
+  id.declared_fit = full_rate_declared(id, signals, split, full_fit, declarations);
   id.start_fit = id.kind && id.kind->proposed
                      ? fit_channel(id.start_fit.model, signals, split, full_fit)
                      : id.declared_fit;
@@ -117,7 +132,7 @@ Identification identify(const MeasuredData& data, const IdentifyOptions& options
         identify_channel(search_signals, search_split, declared, selection, declarations);
     report(channel_start + search_units, name + ": full-rate refit");
     ChannelSignals signals = make_signals(data, channel);
-    if (factor > 1) refit_at_full_rate(id, signals, result.split, full_fit);
+    if (factor > 1) refit_at_full_rate(id, signals, result.split, full_fit, declarations);
     id.noise_floor = noise_floor(signals.input, signals.target, signals.dt);
     result.channels.push_back(std::move(id));
     result.signals.push_back(std::move(signals));

@@ -116,7 +116,9 @@ FitResult fit_with_effect(const ChannelModel& model, Effect effect, const Channe
                           const Split& split, const FitOptions& options);
 
 // The declared effects fitted one by one (each from its guesses, or from its declared initial
-// value), with `declarations` (model.h) carried by the model and every model grown from it.
+// value), with `declarations` (model.h) carried by the model and every model grown from it; where
+// the declarations give values, also every declared effect at them fitted jointly, and the lower
+// training cost of the two stands.
 ChannelModel fit_declared(const ChannelSignals& signals, const Split& split,
                           const std::vector<Effect>& declared, const FitOptions& options,
                           const std::vector<ParamDeclaration>& declarations = {});

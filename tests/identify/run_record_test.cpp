@@ -78,6 +78,24 @@ TEST(RunRecord, AnEmulatorGainErrorIsNamedOnTheActuator) {
   EXPECT_NEAR(run.actuators[0].fitted_gain, 1.08, 0.01);
 }
 
+// A velocity limit behind a first-order lag, both declared in the header, on a record long
+// enough that the search runs decimated: the declared model is fitted from the declared values
+// (jointly, and again at the full rate), so nothing is named. Before, the delay fitted alone
+// took up the lag and the limit, and a false delay change or gain error was named.
+TEST(RunRecord, ADeclaredVelocityLimitBehindALagIsNotNamedOnALongRecord) {
+  const std::string study = test::paper_frame_study(
+      30.0,
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+      "receive_delay { first_order { time_constant: 0.008 } } "
+      "receive_delay { velocity_limit { max_velocity: 0.05 } } } }");
+  const fs::path record =
+      test::record_declaring("declared_velocity_limit", study, study, "lag_shift_14ms", true);
+  const RunIdentification run = identify_run_record(record, actuator_only());
+  ASSERT_GT(run.actuators.at(0).id.search_decimation, 1u);
+  EXPECT_TRUE(undeclared(run, 1).empty()) << run_record_text(run);
+  EXPECT_NEAR(run.actuators.at(0).fitted_delay, 0.014, 1e-4) << run_record_text(run);
+}
+
 TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {
   const fs::path record = run_with_undeclared("truncated", "");
   fs::resize_file(record, fs::file_size(record) / 2 + 3);
