@@ -11,6 +11,7 @@
 
 #include "runtime/record/record.h"
 #include "security/run_secret.h"
+#include "tests/support/log_stamps.h"
 #include "transport/transport.h"
 #include "util/process.h"
 
@@ -18,25 +19,6 @@ namespace rths::test {
 namespace {
 
 using namespace std::chrono_literals;
-
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// realtime_ns of the first log line that holds `marker` and a "realtime_ns N" stamp.
-std::optional<std::int64_t> stamped_line(const std::string& log, const std::string& marker) {
-  static const std::regex stamp("realtime_ns ([0-9]+)");
-  std::istringstream lines(log);
-  for (std::string line; std::getline(lines, line);) {
-    std::smatch m;
-    if (line.find(marker) != std::string::npos && std::regex_search(line, m, stamp))
-      return std::stoll(m[1]);
-  }
-  return std::nullopt;
-}
 
 std::string label(FaultVictim v) {
   switch (v) {
