@@ -29,7 +29,6 @@ struct AnswerSchedule {
   std::vector<std::vector<std::int64_t>> storey_used;    // [storey][k]; an empty row: fresh
   // Steps at which any source used an older answer than the step's own.
   std::size_t late_steps() const;
-  bool empty() const { return late_steps() == 0; }
 };
 
 class AnswerReplay {
