@@ -24,30 +24,55 @@ MotionLimit MotionLimit::velocity_limit(double max_velocity, double dt) {
   return MotionLimit(Kind::kVelocityLimit, max_velocity, max_velocity * dt);
 }
 
+MotionLimit MotionLimit::stroke_limit(double stroke) {
+  require(stroke > 0.0 && std::isfinite(stroke),
+          "stroke_limit: stroke must be > 0 m, got " + format_number(stroke));
+  return MotionLimit(Kind::kStrokeLimit, stroke, stroke);
+}
+
 std::unique_ptr<DelayStage> MotionLimit::clone() const {
   return std::make_unique<MotionLimit>(*this);
 }
 
 std::string MotionLimit::describe() const {
-  return kind_ == Kind::kBacklash ? "backlash(width " + format_number(limit_ * 1e3) + " mm)"
-                                  : "velocity_limit(" + format_number(limit_ * 1e3) + " mm/s)";
+  switch (kind_) {
+    case Kind::kBacklash: return "backlash(width " + format_number(limit_ * 1e3) + " mm)";
+    case Kind::kVelocityLimit: return "velocity_limit(" + format_number(limit_ * 1e3) + " mm/s)";
+    case Kind::kStrokeLimit: return "stroke_limit(+-" + format_number(limit_ * 1e3) + " mm)";
+  }
+  return {};
 }
 
 Linearity MotionLimit::linearity() const {
-  return {Linearity::Kind::kLinearised,
-          kind_ == Kind::kBacklash ? "backlash left out (a small motion passes unchanged)"
-                                   : "velocity limit left out (below it motion is unchanged)"};
+  switch (kind_) {
+    case Kind::kBacklash:
+      return {Linearity::Kind::kLinearised, "backlash left out (a small motion passes unchanged)"};
+    case Kind::kVelocityLimit:
+      return {Linearity::Kind::kLinearised,
+              "velocity limit left out (below it motion is unchanged)"};
+    case Kind::kStrokeLimit:
+      return {Linearity::Kind::kLinearised,
+              "stroke limit left out (inside the stroke motion is unchanged)"};
+  }
+  return {};
 }
 
 double MotionLimit::step_unscaled(const CommandSample& in) {
-  if (kind_ == Kind::kBacklash)
-    output_ = std::clamp(output_, in.displacement - reach_, in.displacement + reach_);
-  else
-    output_ += std::clamp(in.displacement - output_, -reach_, reach_);
+  switch (kind_) {
+    case Kind::kBacklash:
+      output_ = std::clamp(output_, in.displacement - reach_, in.displacement + reach_);
+      break;
+    case Kind::kVelocityLimit:
+      output_ += std::clamp(in.displacement - output_, -reach_, reach_);
+      break;
+    case Kind::kStrokeLimit: output_ = std::clamp(in.displacement, -reach_, reach_); break;
+  }
   return output_;
 }
 
 SensorDrift::SensorDrift(const SensorErrors& errors) : errors_(errors) {
+  require(errors.displacement_scale > 0.0 && std::isfinite(errors.displacement_scale),
+          "sensor_drift: displacement_scale must be > 0 and finite");
   const std::pair<const char*, double> fields[] = {
       {"displacement_offset", errors.displacement_offset},
       {"displacement_drift", errors.displacement_drift},
@@ -62,8 +87,9 @@ std::unique_ptr<DelayStage> SensorDrift::clone() const {
 }
 
 std::string SensorDrift::describe() const {
-  return "sensor_drift(displacement " + format_number(errors_.displacement_offset * 1e3) +
-         " mm + " + format_number(errors_.displacement_drift * 1e3) + " mm/s t, force " +
+  return "sensor_drift(displacement " + format_number(errors_.displacement_scale) + " u + " +
+         format_number(errors_.displacement_offset * 1e3) + " mm + " +
+         format_number(errors_.displacement_drift * 1e3) + " mm/s t, force " +
          format_number(errors_.force_offset) + " N + " + format_number(errors_.force_drift) +
          " N/s t)";
 }

@@ -9,17 +9,22 @@
 //                  u_out[k] = clamp(u_out[k-1], u[k] - w/2, u[k] + w/2).
 //   velocity_limit a servo valve's flow limit, v_max (m/s) at step dt (s):
 //                  u_out[k] = u_out[k-1] + clamp(u[k] - u_out[k-1], -v_max dt, v_max dt).
-//   SensorDrift    the displacement sensor and the load cell reading off the truth, each by an
-//                  offset and a drift over time: u_out = u (the specimen is not moved);
-//                  the displacement read = u + d0 + d1 t (m, m/s) (sensor_error), the force the
-//                  integrator receives = f + f0 + f1 t (N, N/s) (measure_force).
+//   stroke_limit   the end of the actuator's stroke, s (m) either side of its centre:
+//                  u_out[k] = clamp(u[k], -s, s).
+//   SensorDrift    the displacement sensor and the load cell reading off the truth, the
+//                  displacement sensor by a scale, both by an offset and a drift over time:
+//                  u_out = u (the specimen is not moved); the displacement read =
+//                  g u + d0 + d1 t (-, m, m/s) (sensor_error adds (g - 1) u + d0 + d1 t, so it
+//                  reads the displacement this stage passes: place it after every stage that
+//                  moves the specimen), the force the integrator receives = f + f0 + f1 t
+//                  (N, N/s) (measure_force).
 //   ViscousForce   a viscous force in parallel with the specimen (its own damping, a damper),
 //                  which the load cell reads with the spring's: u_out = u (the motion passes
 //                  unchanged), the force the integrator receives = f + c (u[k] - u[k-1]) / dt
 //                  (c in N s/m, dt the stage's step in s) (measure_force).
 // The identification's predictors (identify/model/model.cpp) apply the same recursions, so an
 // identified width or limit re-runs as it was fitted.
-// Linear dynamics: a MotionLimit (backlash, velocity_limit) is the identity once its
+// Linear dynamics: a MotionLimit (backlash, velocity_limit, stroke_limit) is the identity once its
 // non-linearity is left out (kLinearised: a small motion passes unchanged); SensorDrift is the
 // identity, and so is ViscousForce on the displacement it passes.
 // Real-time safe: no allocation after construction.
@@ -28,14 +33,16 @@
 
 namespace rths::core {
 
-// Backlash and VelocityLimit in one block (they differ only in the recursion): its state is the
-// last output; its linear dynamics are the identity.
+// Backlash, VelocityLimit and StrokeLimit in one block (they differ only in the recursion): its
+// state is the last output; its linear dynamics are the identity.
 class MotionLimit final : public DelayStage {
  public:
   // @pre width >= 0 and finite (m) (throws std::invalid_argument).
   static MotionLimit backlash(double width);
   // @pre max_velocity > 0 and finite (m/s), dt > 0 (s) (throws std::invalid_argument).
   static MotionLimit velocity_limit(double max_velocity, double dt);
+  // @pre stroke > 0 and finite (m) (throws std::invalid_argument).
+  static MotionLimit stroke_limit(double stroke);
   void reset() override { output_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
@@ -48,11 +55,11 @@ class MotionLimit final : public DelayStage {
   LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 
  private:
-  enum class Kind { kBacklash, kVelocityLimit };
+  enum class Kind { kBacklash, kVelocityLimit, kStrokeLimit };
   MotionLimit(Kind kind, double limit, double step);
   Kind kind_;
-  double limit_;  // m, the backlash's width; m/s, the velocity limit
-  double reach_;  // m: half the width, or the most the output moves in one step
+  double limit_;  // m, the backlash's width or the stroke; m/s, the velocity limit
+  double reach_;  // m: half the width, the most the output moves in one step, or the stroke
   double output_ = 0.0;
 };
 
@@ -61,19 +68,21 @@ struct SensorErrors {
   double displacement_drift = 0.0;   // m/s
   double force_offset = 0.0;         // N
   double force_drift = 0.0;          // N/s
+  double displacement_scale = 1.0;   // -, multiplies the displacement read
 };
 
 class SensorDrift final : public DelayStage {
  public:
   // @pre every field finite (throws std::invalid_argument naming it).
   explicit SensorDrift(const SensorErrors& errors);
-  void reset() override { time_ = 0.0; }
+  void reset() override { time_ = passed_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override { return 0.0; }
   Linearity linearity() const override { return {}; }
   double sensor_error() const override {
-    return errors_.displacement_offset + errors_.displacement_drift * time_;
+    return (errors_.displacement_scale - 1.0) * passed_ + errors_.displacement_offset +
+           errors_.displacement_drift * time_;
   }
   double measure_force(double force) override {
     return force + errors_.force_offset + errors_.force_drift * time_;
@@ -82,6 +91,7 @@ class SensorDrift final : public DelayStage {
  protected:
   double step_unscaled(const CommandSample& in) override {
     time_ = in.time;
+    passed_ = in.displacement;
     return in.displacement;
   }
   std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
@@ -89,7 +99,8 @@ class SensorDrift final : public DelayStage {
 
  private:
   SensorErrors errors_;
-  double time_ = 0.0;  // s, of the last step
+  double time_ = 0.0;    // s, of the last step
+  double passed_ = 0.0;  // m, the displacement the last step passed
 };
 
 class ViscousForce final : public DelayStage {

@@ -93,11 +93,19 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
               where + ".velocity_limit.max_velocity must be in (0, 100] m/s, got " +
                   format_number(stage.velocity_limit().max_velocity()));
       break;
+    case K::kStrokeLimit:
+      require(stage.stroke_limit().stroke() > 0.0 && stage.stroke_limit().stroke() <= 10.0, source,
+              where + ".stroke_limit.stroke must be in (0, 10] m, got " +
+                  format_number(stage.stroke_limit().stroke()));
+      break;
     case K::kSensorDrift: {
       const auto& d = stage.sensor_drift();
       require(std::isfinite(d.displacement_offset()) && std::isfinite(d.displacement_drift()) &&
                   std::isfinite(d.force_offset()) && std::isfinite(d.force_drift()),
               source, where + ".sensor_drift: every offset and drift must be finite");
+      require(d.displacement_scale() >= 0.0 && d.displacement_scale() <= 10.0, source,
+              where + ".sensor_drift.displacement_scale must be in [0, 10] (0 = 1), got " +
+                  format_number(d.displacement_scale()));
       break;
     }
     case K::kViscousForce:
@@ -367,10 +375,16 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
       block = std::make_unique<MotionLimit>(
           MotionLimit::velocity_limit(stage.velocity_limit().max_velocity(), dt));
       break;
+    case K::kStrokeLimit:
+      block =
+          std::make_unique<MotionLimit>(MotionLimit::stroke_limit(stage.stroke_limit().stroke()));
+      break;
     case K::kSensorDrift: {
       const auto& d = stage.sensor_drift();
-      block = std::make_unique<SensorDrift>(SensorErrors{
-          d.displacement_offset(), d.displacement_drift(), d.force_offset(), d.force_drift()});
+      const double scale = d.displacement_scale() == 0.0 ? 1.0 : d.displacement_scale();
+      block = std::make_unique<SensorDrift>(SensorErrors{d.displacement_offset(),
+                                                         d.displacement_drift(), d.force_offset(),
+                                                         d.force_drift(), scale});
       break;
     }
     case K::kViscousForce:

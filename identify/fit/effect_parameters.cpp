@@ -11,9 +11,11 @@ std::string ParameterEstimate::describe() const {
   const bool milli = unit == "s" || unit == "m" || unit == "m/s";
   const double scale = milli ? 1e3 : 1.0;
   const std::string shown = milli ? "m" + unit : unit;
+  // A ratio's unit ("-") is not written.
+  const std::string suffix = unit == "-" || unit.empty() ? "" : " " + shown;
   std::ostringstream out;
-  out << std::setprecision(3) << name << " = " << value * scale << " " << shown << " +/- "
-      << std_error * scale << " " << shown;
+  out << std::setprecision(3) << name << " = " << value * scale << suffix << " +/- "
+      << std_error * scale << suffix;
   return out.str();
 }
 

@@ -31,7 +31,8 @@ std::string format_hz(double f) {
 
 std::vector<std::string> actuator_response_left_out(const ChannelModel& model) {
   std::vector<std::string> out;
-  for (Effect e : {Effect::kBacklash, Effect::kVelocitySaturation, Effect::kOffsetDrift}) {
+  for (Effect e : {Effect::kBacklash, Effect::kVelocitySaturation, Effect::kStrokeLimit,
+                   Effect::kOffsetDrift}) {
     if (model.has(e)) out.push_back(effect_name(e));
   }
   return out;

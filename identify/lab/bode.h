@@ -15,10 +15,10 @@
 //               B(w) = wn^2 / (wn^2 - v^2 + 2 i zeta wn v), v = (2 / dt) tan(w dt / 2)   (the
 //               Tustin
 //                      second-order lag, exact for the model's biquad; 1 when absent).
-//             A time-varying delay or gain enters at its mean (the constant part). Backlash and
-//             velocity saturation depend on the amplitude, not the frequency, and offsets do not
-//             pass the command: they are left out and named in `left_out`. The linear
-//             interpolation of a fractional delay is taken as exact.
+//             A time-varying delay or gain enters at its mean (the constant part). Backlash,
+//             velocity saturation and the stroke limit depend on the amplitude, not the frequency,
+//             and offsets do not pass the command: they are left out and named in `left_out`. The
+//             linear interpolation of a fractional delay is taken as exact.
 // Units: frequency Hz; amplitude ratio mm/mm (measured displacement per commanded, so 1 = the
 // command realised in full); phase degrees, negative = lag, unwrapped from the lowest frequency.
 

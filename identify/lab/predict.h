@@ -6,7 +6,7 @@
 // The actuator channel model becomes a core::DelayChain made (core::make_delay_chain) from the
 // stages study_config.h's actuator_case writes, the one translation of effects into stages: what
 // --predict simulates is what --out writes for `rths run`, and what a study cannot hold (offsets,
-// backlash, saturation, drifts' variation, a lead) is listed in `ignored`.
+// backlash, saturation, the stroke limit, drifts' variation, a lead) is listed in `ignored`.
 // Error measures (core/metrics.h) on the displacement of the top degree of freedom against the
 // reference case's: nrmse (sqrt(mean e^2) / median |u_ref|) and paper_eq2 (the paper's Eq. 2 as
 // printed).

@@ -18,13 +18,14 @@ struct EffectInfo {
   bool measured, force;
 };
 
-constexpr std::array<EffectInfo, 16> kEffects{{
+constexpr std::array<EffectInfo, 17> kEffects{{
     {Effect::kDelay, "delay", true, true},
     {Effect::kOffsetDrift, "offset_drift", true, true},
     {Effect::kFirstOrder, "first_order", true, false},
     {Effect::kSecondOrder, "second_order", true, false},
     {Effect::kBacklash, "backlash", true, false},
     {Effect::kVelocitySaturation, "velocity_saturation", true, false},
+    {Effect::kStrokeLimit, "stroke_limit", true, false},
     {Effect::kTimeVaryingDelay, "time_varying_delay", true, false},
     {Effect::kTimeVaryingGain, "time_varying_gain", true, false},
     {Effect::kStiffness, "stiffness", false, true},

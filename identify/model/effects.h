@@ -21,6 +21,7 @@ enum class Effect {
   kSecondOrder,
   kBacklash,
   kVelocitySaturation,
+  kStrokeLimit,
   kTimeVaryingDelay,
   kTimeVaryingGain,
   // specimen (channel force)

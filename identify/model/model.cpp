@@ -143,7 +143,7 @@ class SecondOrderLag {
 };
 
 // Channel measured (model.h): shift -> first order -> second order -> backlash -> saturation
-// -> gain (1 + D(s; gain_c)) + offset + drift s.
+// -> stroke -> gain (1 + D(s; gain_c)) + offset + drift s.
 void predict_actuator(const ParamValues& v, const ChannelSignals& sig, std::vector<double>& out) {
   const RecordClock clock(sig, v.at(Effect::kDelay, "delay", 0.0),
                           v.drift(Effect::kTimeVaryingDelay, "delay"));
@@ -153,6 +153,8 @@ void predict_actuator(const ParamValues& v, const ChannelSignals& sig, std::vect
   const std::span<const double> gain_c = v.drift(Effect::kTimeVaryingGain, "gain");
   const bool first = v.has(Effect::kFirstOrder), second = v.has(Effect::kSecondOrder);
   const bool play = v.has(Effect::kBacklash), saturate = v.has(Effect::kVelocitySaturation);
+  const bool stroke = v.has(Effect::kStrokeLimit);
+  const double end = std::abs(v.at(Effect::kStrokeLimit, "stroke", 0.0));
   const double time_constant = v.at(Effect::kFirstOrder, "time_constant", 0.0);
   const double decay = first ? std::exp(-sig.dt / std::max(time_constant, 1e-12)) : 0.0;
   const double x0 = clock.shifted(sig.input, 0);
@@ -167,6 +169,7 @@ void predict_actuator(const ParamValues& v, const ChannelSignals& sig, std::vect
     if (second) x = lag.step(x);
     if (play) x = play_out = std::clamp(play_out, x - half_width, x + half_width);
     if (saturate) x = sat_out += std::clamp(x - sat_out, -max_step, max_step);
+    if (stroke) x = std::clamp(x, -end, end);
     const double g = gain_c.empty() ? gain : gain * (1.0 + clock.drift(gain_c, j));
     out[j] = g * x + offset + drift * clock.s(j);
   }

@@ -8,6 +8,7 @@
 //        -> second-order lag   y'' + 2 zeta wn y' + wn^2 y = wn^2 x   (Tustin)
 //        -> backlash / dead band of total width b (play operator)
 //        -> velocity saturation |dy/dt| <= v_max
+//        -> stroke limit y = clamp(y, -s, s) (the rod's ends, s either side of its centre)
 //   u_m  = gain (1 + D(s(t); gain_c)) * y + offset + drift * s(t)
 // Channel `force` (the specimen): input measured displacement d, velocity v, acceleration a
 // (shifted by the force delay when present) -> force (N):

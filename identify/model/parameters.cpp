@@ -130,6 +130,10 @@ std::vector<ParamSpec> effect_params(Effect effect, Channel channel, const Signa
     case Effect::kVelocitySaturation:
       return {param_spec("max_velocity", "m/s", sc.velocity, 0.01 * sc.velocity, 1e300,
                          {0.8 * sc.velocity, 2.0 * sc.velocity})};
+    case Effect::kStrokeLimit:
+      // Started at the measured peak: a rod that reached its end shows the end as its peak.
+      return {param_spec("stroke", "m", sc.target_peak, 0.1 * sc.input, 1e300,
+                         {sc.target_peak, 0.95 * sc.target_peak})};
     case Effect::kTimeVaryingDelay: return drift_params("delay", "s", 0.005, 0.1);
     case Effect::kTimeVaryingGain: return drift_params("gain", "-", 0.02, 0.5);
     case Effect::kStiffness:

@@ -142,6 +142,9 @@ SignalScales signal_scales(const ChannelSignals& signals) {
   sc.velocity = positive(rms_about_mean(signals.velocity), sc.input);
   sc.acceleration = positive(rms_about_mean(signals.acceleration), sc.velocity);
   sc.target = positive(rms_about_mean(signals.target), 1.0);
+  double peak = 0.0;
+  for (double x : signals.target) peak = std::max(peak, std::abs(x));
+  sc.target_peak = positive(peak, sc.target);
   sc.dt = signals.dt;
   sc.duration = signals.size() > 1 ? signals.time.back() - signals.time.front() : 1.0;
   if (!(sc.duration > 0.0)) sc.duration = 1.0;

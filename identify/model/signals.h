@@ -66,6 +66,7 @@ std::vector<double> zero_phase_lowpass(std::span<const double> x, double dt, dou
 // Typical magnitudes of the signals: used to scale parameters and to seed guesses.
 struct SignalScales {
   double input = 1.0, velocity = 1.0, acceleration = 1.0, target = 1.0, duration = 1.0, dt = 1.0;
+  double target_peak = 1.0;  // max |target|
 };
 SignalScales signal_scales(const ChannelSignals& signals);
 

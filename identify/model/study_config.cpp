@@ -47,12 +47,6 @@ void note_left_out_specimen_effects(const ChannelModel& specimen,
   }
 }
 
-// A fitted offset + drift s (s = (t - t_mid) / duration over the record) as offset + rate t.
-std::pair<double, double> drift_in_time(double offset, double drift, const RigRecord& rig) {
-  const double rate = drift / rig.duration;
-  return {offset - rate * (rig.start + 0.5 * rig.duration), rate};
-}
-
 // The actuator's linear stages after its shift (first order, second order), and what the study
 // cannot hold of the rest in `out.left_out` (the rig's own effects are held `with_rig`).
 void add_linear_stages(const ChannelModel& actuator, const SignalScales& scales, bool with_rig,
@@ -85,6 +79,7 @@ void add_linear_stages(const ChannelModel& actuator, const SignalScales& scales,
       case Effect::kOffsetDrift:
       case Effect::kBacklash:
       case Effect::kVelocitySaturation:
+      case Effect::kStrokeLimit:
         if (!with_rig) out.left_out.push_back(effect_name(e) + ": lab-scale effect, left out");
         break;
       default: break;
@@ -92,7 +87,8 @@ void add_linear_stages(const ChannelModel& actuator, const SignalScales& scales,
   }
 }
 
-// Backlash and velocity limit in the model's order, then the displacement sensor's drift.
+// Backlash, velocity limit and stroke limit in the model's order, then the displacement sensor's
+// drift.
 void add_rig_stages(const ChannelModel& actuator, const SignalScales& scales, const RigRecord& rig,
                     config::Case& study_case) {
   const auto value = [&](Effect e, const char* param) {
@@ -104,6 +100,9 @@ void add_rig_stages(const ChannelModel& actuator, const SignalScales& scales, co
   if (actuator.has(Effect::kVelocitySaturation))
     study_case.add_delay()->mutable_velocity_limit()->set_max_velocity(
         std::abs(value(Effect::kVelocitySaturation, "max_velocity")));
+  if (actuator.has(Effect::kStrokeLimit))
+    study_case.add_delay()->mutable_stroke_limit()->set_stroke(
+        std::abs(value(Effect::kStrokeLimit, "stroke")));
   if (actuator.has(Effect::kOffsetDrift)) {
     const auto [offset, rate] = drift_in_time(value(Effect::kOffsetDrift, "offset"),
                                               value(Effect::kOffsetDrift, "drift"), rig);
@@ -114,6 +113,11 @@ void add_rig_stages(const ChannelModel& actuator, const SignalScales& scales, co
 }
 
 }  // namespace
+
+std::pair<double, double> drift_in_time(double offset, double drift, const RigRecord& rig) {
+  const double rate = drift / rig.duration;
+  return {offset - rate * (rig.start + 0.5 * rig.duration), rate};
+}
 
 ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
                            const std::string& name, const std::optional<RigRecord>& rig) {
@@ -144,6 +148,17 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
   return out;
 }
 
+namespace {
+
+// The case's sensor_drift stage, appended when it has none.
+config::DelayStage::SensorDrift& sensor_drift_stage(config::Case& study_case) {
+  for (auto& stage : *study_case.mutable_delay())
+    if (stage.has_sensor_drift()) return *stage.mutable_sensor_drift();
+  return *study_case.add_delay()->mutable_sensor_drift();
+}
+
+}  // namespace
+
 void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
                       const RigRecord& rig, config::Case& study_case) {
   if (specimen.has(Effect::kDamping))
@@ -153,12 +168,13 @@ void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
   const auto [offset, rate] =
       drift_in_time(specimen.param(Effect::kOffsetDrift, "offset", scales).value_or(0.0),
                     specimen.param(Effect::kOffsetDrift, "drift", scales).value_or(0.0), rig);
-  config::DelayStage* sensor = nullptr;
-  for (auto& stage : *study_case.mutable_delay())
-    if (stage.has_sensor_drift()) sensor = &stage;
-  if (!sensor) sensor = study_case.add_delay();
-  sensor->mutable_sensor_drift()->set_force_offset(offset);
-  sensor->mutable_sensor_drift()->set_force_drift(rate);
+  config::DelayStage::SensorDrift& sensor = sensor_drift_stage(study_case);
+  sensor.set_force_offset(offset);
+  sensor.set_force_drift(rate);
+}
+
+void add_displacement_scale(double scale, config::Case& study_case) {
+  if (scale != 1.0) sensor_drift_stage(study_case).set_displacement_scale(scale);
 }
 
 SpecimenModel specimen_model(const ChannelModel& specimen, const SignalScales& scales) {

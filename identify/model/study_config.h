@@ -5,9 +5,9 @@
 // Actuator (channel `measured`) -> a Case whose delay stages are, in order:
 //   shift { delay } with amplitude_gain = gain (omitted when 1), first_order { time_constant },
 //   transfer_function wn^2 / (s^2 + 2 zeta wn s + wn^2) for a second-order lag.
-//   A time-varying delay enters with its mean; offset/drift, backlash and velocity saturation are
-//   lab-scale effects (mm of this rig) that do not scale to another structure: listed in
-//   `left_out`, unless the case is for the rig itself (`rig` below).
+//   A time-varying delay enters with its mean; offset/drift, backlash, velocity saturation and the
+//   stroke limit are lab-scale effects (mm of this rig) that do not scale to another structure:
+//   listed in `left_out`, unless the case is for the rig itself (`rig` below).
 // Specimen (channel `force`) -> the storey RestoringForce that has the same shape (the study's
 // structure supplies the initial stiffness k0; the identified k0 is reported beside it):
 //   stiffness k alone                  linear {}                                   k0 = k
@@ -50,10 +50,13 @@ struct ActuatorCase {
 struct RigRecord {
   double start = 0.0, duration = 1.0;
 };
+// A fitted offset + drift s (s = (t - t_mid) / duration over the record) as offset + rate t:
+// {offset at t = 0, rate per second}.
+std::pair<double, double> drift_in_time(double offset, double drift, const RigRecord& rig);
 // With `rig`, the rig's own effects are stages too (core/rig_effects.h): backlash { width },
-// velocity_limit { max_velocity } after the linear stages, the gain on the last of them (the
-// model's order: gain after the non-linearities), and an offset drift of the displacement
-// sensor as sensor_drift { displacement_offset, displacement_drift } at the end.
+// velocity_limit { max_velocity }, stroke_limit { stroke } after the linear stages, the gain on the
+// last of them (the model's order: gain after the non-linearities), and an offset drift of the
+// displacement sensor as sensor_drift { displacement_offset, displacement_drift } at the end.
 ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& scales,
                            const std::string& name = kIdentifiedCaseName,
                            const std::optional<RigRecord>& rig = std::nullopt);
@@ -64,6 +67,10 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
 // Nothing for a specimen with neither.
 void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
                       const RigRecord& rig, config::Case& study_case);
+// A displacement sensor reading `scale` x the truth (identify/run/sensors.h) as the case's
+// sensor_drift stage's displacement_scale, merged into that stage (appended when it has none).
+// Nothing for a scale of 1.
+void add_displacement_scale(double scale, config::Case& study_case);
 
 struct SpecimenModel {
   std::optional<config::RestoringForce> restoring_force;

@@ -24,6 +24,12 @@ struct ActuatorPath {
   // Effects the force channel needed beyond the declared specimen ("bouc_wen", "offset_drift",
   // ...) and "stiffness change" (fitted off the declared one by more than kStiffnessTolerance).
   std::vector<std::string> specimen_undeclared;
+  // The sensors (sensors.h): each channel's noise (RMS, m and N) as the record shows it and as
+  // the case declared it, and the displacement sensor's scale (1: it reads the truth) with its
+  // standard error.
+  double displacement_noise = 0.0, force_noise = 0.0;
+  double declared_displacement_noise = 0.0, declared_force_noise = 0.0;
+  double displacement_scale = 1.0, displacement_scale_error = 0.0;
 };
 
 inline constexpr double kStiffnessTolerance = 0.05;  // relative

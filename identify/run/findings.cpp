@@ -1,6 +1,10 @@
 #include "identify/run/findings.h"
 
+#include <cmath>
 #include <sstream>
+
+#include "identify/model/study_config.h"
+#include "identify/run/sensors.h"
 
 namespace rths::identify {
 namespace {
@@ -39,6 +43,24 @@ void add_link_findings(const std::vector<NetworkPath>& links, const std::string&
     }
 }
 
+// An offset drift's parameters as the sensor_drift stage holds them (study_config.h
+// drift_in_time): the offset at t = 0 of the run and the drift per second.
+void in_run_time(const Identification& id, Channel channel,
+                 std::vector<ParameterEstimate>& parameters) {
+  if (parameters.size() != 2) return;
+  const ChannelSignals& signals = identified_signals(id, channel);
+  const RigRecord rig{signals.time.front(), signal_scales(signals).duration};
+  ParameterEstimate& offset = parameters[0];
+  ParameterEstimate& drift = parameters[1];
+  const auto [at_zero, rate] = drift_in_time(offset.value, drift.value, rig);
+  const double rate_error = drift.std_error / rig.duration;
+  offset.value = at_zero;
+  offset.std_error = std::hypot(offset.std_error, rate_error * (rig.start + 0.5 * rig.duration));
+  drift.value = rate;
+  drift.std_error = rate_error;
+  drift.unit += "/s";
+}
+
 // The finding of `effect` on `channel` of `path`: its parameters and the held-out error of the
 // step that added it (the declared and the final model's for a changed value).
 Finding channel_finding(const ActuatorPath& path, Channel channel, const std::string& part,
@@ -51,10 +73,12 @@ Finding channel_finding(const ActuatorPath& path, Channel channel, const std::st
   if (!c) return f;
   f.heldout_before = c->declared_fit.heldout_error;
   f.heldout_after = c->final_fit.heldout_error;
-  if (effect.find(' ') != std::string::npos) return f;  // a changed value, not a library effect
+  // A changed value or a sensor's reading, not a library effect.
+  if (effect.find(' ') != std::string::npos || effect == "noise" || effect == "scale") return f;
   const std::optional<Effect> kind = parse_effect(effect);
   const SignalScales scales = signal_scales(identified_signals(path.id, channel));
   f.parameters = effect_parameters(c->final_fit, *kind, scales);
+  if (*kind == Effect::kOffsetDrift) in_run_time(path.id, channel, f.parameters);
   f.magnitude = parameters_text(f.parameters);
   for (const auto& step : c->steps)
     if (step.effect == *kind) {
@@ -64,26 +88,49 @@ Finding channel_finding(const ActuatorPath& path, Channel channel, const std::st
   return f;
 }
 
+// A sensor's noise (sensors.h): its RMS beside the signal's and the declared; random, not re-run.
+void describe_noise(const ActuatorPath& path, Channel channel, Finding& f) {
+  const bool force = channel == Channel::kForce;
+  const double sigma = force ? path.force_noise : path.displacement_noise;
+  const double declared = force ? path.declared_force_noise : path.declared_displacement_noise;
+  f.parameters = {{"rms", force ? "N" : "m", sigma, noise_std_error(path, channel, sigma)}};
+  f.magnitude = parameters_text(f.parameters) + " (" +
+                percent_text(sigma / noise_spread(path.id, channel)) +
+                " of the signal's std; declared " +
+                (force ? number(declared) + " N" : number(declared * 1e3) + " mm") + ")";
+  f.heldout_before = f.heldout_after = 0.0;
+  f.not_rerun = "random: no re-run replays its samples, its share stays unexplained";
+}
+
 void add_path_findings(const ActuatorPath& path, std::vector<Finding>& out) {
-  const std::string n = std::to_string(path.actuator);
   for (const auto& effect : path.undeclared) {
-    Finding f = channel_finding(
-        path, Channel::kMeasured,
-        (effect == "offset_drift" ? "displacement sensor " : "actuator ") + n, effect);
+    Finding f = channel_finding(path, Channel::kMeasured,
+                                part_of(effect, Channel::kMeasured, path.actuator), effect);
     if (effect == "gain error")
       f.magnitude =
           "gain " + number(path.fitted_gain) + " (declared " + number(path.declared_gain) + ")";
     if (effect == "delay change")
       f.magnitude = "delay " + number(path.fitted_delay * 1e3) + " ms (declared " +
                     number(path.declared_delay * 1e3) + " ms)";
+    if (effect == "noise") describe_noise(path, Channel::kMeasured, f);
+    if (effect == "scale") {
+      f.parameters = {{"scale", "-", path.displacement_scale, path.displacement_scale_error}};
+      f.magnitude = parameters_text(f.parameters) + " (the actuator's gain " +
+                    number(path.fitted_gain) + " and the specimen's stiffness " +
+                    number(path.fitted_stiffness) + " N/m as read; their product is as declared)";
+      f.heldout_before = f.heldout_after = 0.0;  // the fit's own gain: no added effect's
+    }
     out.push_back(std::move(f));
   }
   for (const auto& effect : path.specimen_undeclared) {
-    Finding f = channel_finding(
-        path, Channel::kForce, (effect == "offset_drift" ? "load cell " : "specimen ") + n, effect);
+    Finding f = channel_finding(path, Channel::kForce,
+                                part_of(effect, Channel::kForce, path.actuator), effect);
     if (effect == "stiffness change")
       f.magnitude = "stiffness " + number(path.fitted_stiffness) + " N/m (declared " +
-                    number(path.declared_stiffness) + " N/m)";
+                    number(path.declared_stiffness) + " N/m; a load cell reading " +
+                    number(path.fitted_stiffness / path.declared_stiffness) +
+                    " x the truth reads the same)";
+    if (effect == "noise") describe_noise(path, Channel::kForce, f);
     out.push_back(std::move(f));
   }
 }

@@ -6,6 +6,7 @@
 
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
+#include "identify/run/sensors.h"
 #include "study/text_format.h"
 #include "util/atomic_file.h"
 
@@ -35,22 +36,22 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
                                          std::vector<std::string>& notes) {
   std::vector<config::Case> out;
   for (const auto& path : run.actuators) {
-    const auto* c = path.id.find(Channel::kMeasured);
-    if (!c) continue;
+    if (!path.id.find(Channel::kMeasured)) continue;
+    const RigModels rig = rig_models(path);
     const ChannelSignals& signals = identified_signals(path.id, Channel::kMeasured);
     const SignalScales scales = signal_scales(signals);
-    ActuatorCase part = actuator_case(c->final_fit.model, scales, kIdentifiedCaseName,
+    ActuatorCase part = actuator_case(rig.actuator, scales, kIdentifiedCaseName,
                                       RigRecord{signals.time.front(), scales.duration});
     for (const auto& l : part.left_out)
       notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
     config::Case study_case = part.study_case;
-    if (const auto* force = path.id.find(Channel::kForce);
-        force && !path.specimen_undeclared.empty()) {
+    if (rig.specimen) {
       const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
       const SignalScales force_scales = signal_scales(f);
-      add_force_stages(force->final_fit.model, force_scales,
+      add_force_stages(*rig.specimen, force_scales,
                        RigRecord{f.time.front(), force_scales.duration}, study_case);
     }
+    add_displacement_scale(rig.displacement_scale, study_case);
     if (run_case) *study_case.mutable_compensation() = run_case->compensation();
     out.push_back(study_case);
   }
@@ -69,10 +70,11 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
 // one and the fit has a storey model (a study holds one model for every storey).
 std::optional<SpecimenModel> contradicted_specimen(const RunIdentification& run) {
   for (const auto& path : run.actuators) {
-    const auto* force = path.id.find(Channel::kForce);
-    if (!force || path.specimen_undeclared.empty()) continue;
-    SpecimenModel model = specimen_model(
-        force->final_fit.model, signal_scales(identified_signals(path.id, Channel::kForce)));
+    if (!path.id.find(Channel::kMeasured)) continue;
+    const RigModels rig = rig_models(path);
+    if (!rig.specimen) continue;
+    SpecimenModel model =
+        specimen_model(*rig.specimen, signal_scales(identified_signals(path.id, Channel::kForce)));
     if (model.restoring_force) return model;
   }
   return std::nullopt;

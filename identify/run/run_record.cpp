@@ -3,6 +3,7 @@
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
 #include "identify/run/findings.h"
+#include "identify/run/sensors.h"
 
 #include <algorithm>
 #include <cmath>
@@ -149,7 +150,18 @@ struct DeclaredActuator {
   std::vector<ParamDeclaration> parameters;
   std::vector<std::string> names;
   double gain = 1.0;
+  // RMS (m, N) of a tracking loop's sensor noise with its converter's quantisation (sensors.h).
+  double displacement_noise = 0.0, force_noise = 0.0;
 };
+
+// A tracking loop's declared sensor noise: each channel's noise with the converter's
+// quantisation q / sqrt(12) (the loop's converter is on the displacement; the load cell's
+// noise is its own).
+void declare_noise(const config::DelayStage::TrackingLoop& loop, DeclaredActuator& out) {
+  const double q = loop.converter().quantum();
+  out.displacement_noise = std::hypot(loop.displacement_noise_rms(), q / std::sqrt(12.0));
+  out.force_noise = loop.force_noise_rms();
+}
 
 void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
   const auto add = [&](Effect e, const std::string& param, double value, const std::string& text) {
@@ -161,6 +173,7 @@ void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
     out.names.push_back(text);
   };
   if (stage.amplitude_gain() != 0.0) out.gain *= stage.amplitude_gain();
+  if (stage.has_tracking_loop()) declare_noise(stage.tracking_loop(), out);
   if (stage.has_shift()) {
     add(Effect::kDelay, "delay", stage.shift().delay(),
         "shift " + std::to_string(stage.shift().delay()) + " s");
@@ -178,6 +191,9 @@ void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
     const double v = stage.velocity_limit().max_velocity();
     add(Effect::kVelocitySaturation, "max_velocity", v,
         "velocity_limit " + std::to_string(v) + " m/s");
+  } else if (stage.has_stroke_limit()) {
+    const double s = stage.stroke_limit().stroke();
+    add(Effect::kStrokeLimit, "stroke", s, "stroke_limit " + std::to_string(s) + " m");
   }
 }
 
@@ -270,6 +286,8 @@ ActuatorPath identify_actuator(const MeasuredData& data, const runtime::RunHeade
   out.actuator = a + 1;
   out.declared = declared.names;
   out.declared_gain = declared.gain;
+  out.declared_displacement_noise = declared.displacement_noise;
+  out.declared_force_noise = declared.force_noise;
   out.id = identify(data, options);
   if (const auto* c = out.id.find(Channel::kMeasured)) {
     const SignalScales scales = signal_scales(out.id.signals.front());
@@ -395,6 +413,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     if (static_cast<std::size_t>(a) < stiffness.size())
       path.declared_stiffness = stiffness[static_cast<std::size_t>(a)];
     judge_specimen(path.id, path);
+    judge_sensors(path);
   }
   const auto& channels = options.channels;
   if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
@@ -427,6 +446,19 @@ void link_text(const NetworkPath& l, std::ostream& out) {
   }
 }
 
+// The sensors' noise (RMS, as estimated and as declared) and the displacement sensor's scale.
+void sensors_text(const ActuatorPath& a, std::ostream& out) {
+  const auto precision = out.precision(3);
+  out << "  sensors: displacement noise " << a.displacement_noise * 1e3 << " mm RMS (declared "
+      << a.declared_displacement_noise * 1e3 << " mm), load cell noise " << a.force_noise
+      << " N RMS (declared " << a.declared_force_noise << " N)";
+  if (a.displacement_scale != 1.0)
+    out << ", displacement sensor scale " << a.displacement_scale << " +/- "
+        << a.displacement_scale_error;
+  out << "\n";
+  out.precision(precision);
+}
+
 void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "actuator " << a.actuator << ": declared";
   for (const auto& d : a.declared) out << " " << d << ",";
@@ -452,6 +484,7 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "  undeclared effects: ";
   for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
   out << (a.undeclared.empty() ? "none\n" : "\n");
+  sensors_text(a, out);
   if (a.declared_specimen.empty()) return;
   out << "  specimen: declared";
   for (const auto& d : a.declared_specimen) out << " " << d;
@@ -569,7 +602,14 @@ nlohmann::json actuators_json(const RunIdentification& run) {
                          {"declared_specimen", a.declared_specimen},
                          {"declared_stiffness_n_per_m", a.declared_stiffness},
                          {"fitted_stiffness_n_per_m", a.fitted_stiffness},
-                         {"specimen_undeclared", a.specimen_undeclared}});
+                         {"specimen_undeclared", a.specimen_undeclared},
+                         {"sensors",
+                          {{"displacement_noise_m", a.displacement_noise},
+                           {"declared_displacement_noise_m", a.declared_displacement_noise},
+                           {"force_noise_n", a.force_noise},
+                           {"declared_force_noise_n", a.declared_force_noise},
+                           {"displacement_scale", a.displacement_scale},
+                           {"displacement_scale_std_error", a.displacement_scale_error}}}});
   }
   return actuators;
 }

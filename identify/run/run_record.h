@@ -9,18 +9,18 @@
 // specimen, measured displacement -> force, identified by identify.h with the effect library;
 // declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
 // transfer function -> second_order, backlash -> backlash, velocity_limit ->
-// velocity_saturation, each with the config's value as initial value), gain = the
-// stages' amplitude gain. Undeclared effects: the steps the search added that removed more than
-// kMinErrorRemoved of held-out error when added and still do in the final model (refitted without
-// it), and a fitted gain off the declared one by more than
-// kGainTolerance (an emulator gain error), and a fitted delay off the declared one
-// (kDelayTolerance). A run that diverged is identified up to the last step whose response is finite
-// and below the coordinator's divergence bound; a truncated record (no footer, or a cut last entry)
-// is identified from what it holds; both say so (`held`). The system-level residual re-runs the
-// study over the same steps, from the record's own ground acceleration (run_residual.h).
-// Bad input -> std::invalid_argument "RECORD: ENTRY: PROBLEM": a record that cannot be read or
-// has damaged entries (the reader's loss report names them), a header of another schema version, no
-// header, a link the header lists with no answer, fewer steps than identification needs.
+// velocity_saturation, stroke_limit -> stroke_limit, each with the config's value as initial
+// value), gain = the stages' amplitude gain. Undeclared effects: the steps the search added that
+// removed more than kMinErrorRemoved of held-out error when added and still do in the final model
+// (refitted without it), and a fitted gain off the declared one by more than kGainTolerance (an
+// emulator gain error), and a fitted delay off the declared one (kDelayTolerance). A run that
+// diverged is identified up to the last step whose response is finite and below the coordinator's
+// divergence bound; a truncated record (no footer, or a cut last entry) is identified from what it
+// holds; both say so (`held`). The system-level residual re-runs the study over the same steps,
+// from the record's own ground acceleration (run_residual.h). Bad input -> std::invalid_argument
+// "RECORD: ENTRY: PROBLEM": a record that cannot be read or has damaged entries (the reader's loss
+// report names them), a header of another schema version, no header, a link the header lists with
+// no answer, fewer steps than identification needs.
 
 #include <nlohmann/json.hpp>
 

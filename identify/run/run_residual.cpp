@@ -10,6 +10,7 @@
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
 #include "identify/run/actuator_path.h"
+#include "identify/run/sensors.h"
 #include "study/restoring_force_config.h"
 #include "study/study.h"
 
@@ -38,11 +39,12 @@ config::Case declared_case(const config::Study& study, const config::Case& study
 }
 
 // What one actuator's re-run uses in place of the declared: its actuator path's model
-// (channel measured) and its specimen's (channel force: the storey model and the load cell);
-// nullptr keeps the declared.
+// (channel measured), its specimen's (channel force: the storey model and the load cell) and its
+// displacement sensor's scale (sensors.h rig_models); nullptr keeps the declared.
 struct RigModel {
   const ChannelModel* actuator = nullptr;
   const ChannelModel* specimen = nullptr;
+  double displacement_scale = 1.0;
 };
 
 // The record's time base of a channel's fitted drifts (study_config.h RigRecord).
@@ -98,9 +100,8 @@ void set_shares(std::vector<ResidualShare>& shares) {
 }
 
 // The identified model of actuator path `path` with one undeclared effect taken back out.
-ChannelModel without(const ActuatorPath& path, const std::string& effect,
+ChannelModel without(const ChannelModel& model, const ActuatorPath& path, const std::string& effect,
                      const SignalScales& scales) {
-  const ChannelModel& model = path.id.find(Channel::kMeasured)->final_fit.model;
   if (effect == "gain error" || effect == "delay change") {
     ChannelModel out = model;
     const bool gain = effect == "gain error";
@@ -114,9 +115,8 @@ ChannelModel without(const ActuatorPath& path, const std::string& effect,
 
 // The identified specimen of `path` with one undeclared effect taken back out ("stiffness
 // change": the declared stiffness).
-ChannelModel specimen_without(const ActuatorPath& path, const std::string& effect,
-                              const SignalScales& scales) {
-  const ChannelModel& model = path.id.find(Channel::kForce)->final_fit.model;
+ChannelModel specimen_without(const ChannelModel& model, const ActuatorPath& path,
+                              const std::string& effect, const SignalScales& scales) {
   if (effect != "stiffness change") return without_effect(model, parse_effect(effect), scales);
   ChannelModel out = model;
   if (const auto i = out.index_of(Effect::kStiffness, "stiffness", scales))
@@ -155,6 +155,7 @@ class Reruns {
         add_force_stages(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c);
         place_specimen(*m.specimen, a, setup);
       }
+      add_displacement_scale(m.displacement_scale, c);
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
     }
     const core::AnswerSchedule& answers =
@@ -205,17 +206,24 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
       models[a] = reduced;
       out.effects.push_back({part, effect, reruns.run(models, true).worst - out.identified, 0.0});
     };
+    const int actuator = static_cast<int>(a) + 1;
     for (const auto& effect : paths[a].undeclared) {
-      const ChannelModel reduced = without(paths[a], effect, reruns.scales(a));
-      removes(effect == "offset_drift" ? "displacement sensor " + n : "actuator " + n, effect,
-              {&reduced, all[a].specimen});
+      if (effect == "noise") continue;  // random: not re-run (sensors.h)
+      const std::string part = part_of(effect, Channel::kMeasured, actuator);
+      if (effect == "scale") {  // the sensor reading true: the same loop, another reading
+        removes(part, effect, {all[a].actuator, all[a].specimen, 1.0});
+        continue;
+      }
+      const ChannelModel reduced = without(*all[a].actuator, paths[a], effect, reruns.scales(a));
+      removes(part, effect, {&reduced, all[a].specimen, all[a].displacement_scale});
     }
     if (!all[a].specimen) continue;
     for (const auto& effect : paths[a].specimen_undeclared) {
+      if (effect == "noise") continue;
       const ChannelModel reduced =
-          specimen_without(paths[a], effect, reruns.scales(a, Channel::kForce));
-      removes(effect == "offset_drift" ? "load cell " + n : "specimen " + n, effect,
-              {all[a].actuator, &reduced});
+          specimen_without(*all[a].specimen, paths[a], effect, reruns.scales(a, Channel::kForce));
+      removes(part_of(effect, Channel::kForce, actuator), effect,
+              {all[a].actuator, &reduced, all[a].displacement_scale});
     }
   }
   if (reruns.replays())
@@ -230,18 +238,15 @@ RunResidual run_residual(const ResidualInput& input) {
   const auto& paths = *input.actuators;
   const Reruns reruns(input);
   RunResidual out;
+  std::vector<RigModels> rigs;
+  for (const auto& path : paths) rigs.push_back(rig_models(path));
   std::vector<RigModel> all(paths.size());
   for (std::size_t a = 0; a < paths.size(); ++a) {
-    const auto* c = paths[a].id.find(Channel::kMeasured);
-    if (!c) {
-      throw std::invalid_argument("actuator " + std::to_string(a + 1) +
-                                  ": actuator path not identified");
-    }
-    all[a].actuator = &c->final_fit.model;
+    all[a].actuator = &rigs[a].actuator;
     // The declared specimen stays unless the force channel found it wrong: a re-run changes
     // only what the record contradicts.
-    const auto* force = paths[a].id.find(Channel::kForce);
-    if (force && !paths[a].specimen_undeclared.empty()) all[a].specimen = &force->final_fit.model;
+    if (rigs[a].specimen) all[a].specimen = &*rigs[a].specimen;
+    all[a].displacement_scale = rigs[a].displacement_scale;
     std::vector<std::string> left_out;
     model_case(*all[a].actuator, reruns.scales(a), reruns.rig(a, Channel::kMeasured),
                reruns.declared(), &left_out);

@@ -1,7 +1,7 @@
 // A rig's own effects as delay stages (core/rig_effects.h): each recursion as its header states
-// it, the sensors' errors and a viscous force on what is read and not on what moves, bad
-// parameters refused, and the
-// stages as a study config builds them.
+// it (backlash, velocity and stroke limits), the sensors' errors and a viscous force on what is
+// read and not on what moves, bad parameters refused, and the stages as a study config builds
+// them.
 #include "core/rig_effects.h"
 
 #include <gtest/gtest.h>
@@ -37,6 +37,34 @@ TEST(VelocityLimit, TheOutputMovesAtMostTheLimitTimesTheStep) {
   // Linear analysis leaves the limit out and says so.
   EXPECT_EQ(valve.linearity().kind, Linearity::Kind::kLinearised);
   EXPECT_DOUBLE_EQ(std::abs(valve.frequency_response(10.0)), 1.0);
+}
+
+TEST(StrokeLimit, TheOutputStopsAtEitherEndOfTheStroke) {
+  MotionLimit rod = MotionLimit::stroke_limit(0.01);  // +-10 mm
+  EXPECT_DOUBLE_EQ(rod.step({0.001, 0.004, 0.0}), 0.004);
+  EXPECT_DOUBLE_EQ(rod.step({0.002, 0.013, 0.0}), 0.01);
+  EXPECT_DOUBLE_EQ(rod.step({0.003, -0.02, 0.0}), -0.01);  // from one end to the other in a step
+  EXPECT_DOUBLE_EQ(rod.step({0.004, 0.009, 0.0}), 0.009);
+  EXPECT_THROW(MotionLimit::stroke_limit(0.0), std::invalid_argument);
+  EXPECT_THROW(MotionLimit::stroke_limit(std::nan("")), std::invalid_argument);
+  EXPECT_EQ(rod.linearity().kind, Linearity::Kind::kLinearised);
+  EXPECT_NE(rod.describe().find("10 mm"), std::string::npos) << rod.describe();
+}
+
+// A displacement sensor reading 5 % high: the read is off by 5 % of what the stage passed, the
+// force and the motion are not.
+TEST(SensorDrift, AScaledDisplacementSensorReadsOffByItsScaleOfTheDisplacement) {
+  SensorErrors errors;
+  errors.displacement_scale = 1.05;
+  errors.displacement_offset = 0.001;
+  DelayChain chain;
+  chain.add(std::make_unique<MotionLimit>(MotionLimit::stroke_limit(0.02)));
+  chain.add(std::make_unique<SensorDrift>(errors));
+  EXPECT_DOUBLE_EQ(chain.step({0.001, 0.01, 0.0}), 0.01);
+  EXPECT_DOUBLE_EQ(chain.measured(), 1.05 * 0.01 + 0.001);
+  EXPECT_DOUBLE_EQ(chain.measure_force(300.0), 300.0);
+  errors.displacement_scale = 0.0;
+  EXPECT_THROW(SensorDrift{errors}, std::invalid_argument);
 }
 
 TEST(SensorDrift, TheSensorsReadOffTheTruthAndTheSpecimenIsNotMoved) {
@@ -82,6 +110,28 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("velocity_limit.max_velocity"), std::string::npos)
         << e.what();
+  }
+  config::DelayStage rod;
+  rod.mutable_stroke_limit()->set_stroke(0.01);
+  EXPECT_DOUBLE_EQ(make_delay_stage(rod, 0.01, ".")->step({0.01, 0.02, 0.0}), 0.01);
+  config::DelayStage sensors;
+  sensors.mutable_sensor_drift()->set_displacement_scale(1.1);
+  DelayChain read;
+  read.add(make_delay_stage(sensors, 0.01, "."));
+  read.step({0.01, 0.002, 0.0});
+  EXPECT_DOUBLE_EQ(read.measured(), 1.1 * 0.002);
+  for (const auto& [text, field] :
+       {std::pair{"stroke_limit { stroke: 0 }", "stroke_limit.stroke"},
+        std::pair{"sensor_drift { displacement_scale: -1 }", "sensor_drift.displacement_scale"}}) {
+    try {
+      (void)parse_study(std::string("structure { sdof { period: 0.5 } } cases { name: \"c\" "
+                                    "delay { ") +
+                            text + " } }",
+                        "bad.textproto");
+      FAIL() << text << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
   }
   try {
     (void)parse_study(

@@ -9,10 +9,11 @@
 // storey stiffness (k_e = 52,638 N/m), dt = 1 ms, the 1979 Imperial Valley record (the motion is
 // read by rths, since it is an input, not a model). Per step k (Newmark, gamma = 1/2, beta = 0):
 //   u_k = u + dt v + dt^2/2 a; command x_c = u_k; the actuator: x = x_c(t - 14 ms) -> first order
-//   (tau) -> backlash (width) -> velocity limit (v_max) -> gain; specimen: f = k_e s x (linear) or
-//   Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x, + c_s (x - x_prev) / dt; sensors:
-//   x_m = AD(x + n_x), f_m = AD(f + f0 + f1 t + n_f), AD a 16-bit converter over +-range; then
-//   a_k = (p_k - c (v + dt/2 a) - k_n u_k - f_m) / (m + dt/2 c), v += dt/2 (a + a_k).
+//   (tau) -> backlash (width) -> velocity limit (v_max) -> stroke (the rod's ends at +-s) -> gain;
+//   specimen: f = k_e s x (linear) or Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x,
+//   + c_s (x - x_prev) / dt; sensors: x_m = AD(g_x x + x0 + n_x), f_m = AD(g_f f + f0 + f1 t +
+//   n_f), AD a 16-bit converter over +-range; then a_k = (p_k - c (v + dt/2 a) - k_n u_k - f_m) /
+//   (m + dt/2 c), v += dt/2 (a + a_k).
 
 #include <unistd.h>
 
@@ -51,9 +52,13 @@ struct RigTruth {
   double gain = 1.0;                 // of the actuator
   double backlash = 0.0;             // m, total width
   double max_velocity = 0.0;         // m/s
+  double stroke = 0.0;               // m, either side of the centre
   double stiffness_scale = 1.0;      // of the specimen's (linear or initial) stiffness
   bool bouc_wen = false;             // a hysteretic specimen: alpha 0.1, uy 4 mm
   double specimen_damping = 0.0;     // N s/m, a viscous force on the specimen's drift rate
+  double displacement_scale = 1.0;   // of the displacement sensor (g_x)
+  double displacement_offset = 0.0;  // m, on the displacement sensor
+  double force_scale = 1.0;          // of the load cell (g_f)
   double force_offset = 0.0;         // N, on the load cell
   double force_drift = 0.0;          // N/s
   double displacement_noise = 2e-6;  // m RMS
@@ -83,6 +88,7 @@ class TrueActuator {
       x = play_ = std::clamp(play_, x - 0.5 * rig_.backlash, x + 0.5 * rig_.backlash);
     if (rig_.max_velocity > 0.0)
       x = valve_ += std::clamp(x - valve_, -rig_.max_velocity * dt_, rig_.max_velocity * dt_);
+    if (rig_.stroke > 0.0) x = std::clamp(x, -rig_.stroke, rig_.stroke);
     return rig_.gain * x;
   }
 
@@ -225,11 +231,12 @@ inline std::filesystem::path independent_record(const std::string& name, const R
       const double x = actuator.step(commands.front());
       commands.pop_front();
       const double f = specimen.force(x, dt);
-      answered_x[step] =
-          converted(x + rig.displacement_noise * normal(rng), rig.displacement_range);
-      answered_f[step] =
-          converted(f + rig.force_offset + rig.force_drift * t + rig.force_noise * normal(rng),
-                    rig.force_range);
+      answered_x[step] = converted(rig.displacement_scale * x + rig.displacement_offset +
+                                       rig.displacement_noise * normal(rng),
+                                   rig.displacement_range);
+      answered_f[step] = converted(rig.force_scale * f + rig.force_offset + rig.force_drift * t +
+                                       rig.force_noise * normal(rng),
+                                   rig.force_range);
       x_m = answered_x[static_cast<std::size_t>(used[step].step)];
       f_m = answered_f[static_cast<std::size_t>(used[step].step)];
       const double a_next =

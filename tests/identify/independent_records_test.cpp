@@ -99,13 +99,15 @@ TEST(IndependentRecords, AGainErrorIsNamedOnTheActuator) {
   expect_rerun_closes(id);
 }
 
-TEST(IndependentRecords, ALoadCellOffsetIsNamedOnTheLoadCell) {
+TEST(IndependentRecords, ALoadCellsOffsetAndDriftAreNamedOnTheLoadCell) {
   test::RigTruth rig;
   rig.force_offset = 400.0;
+  rig.force_drift = 20.0;
   const Identified id = identify_rig("load_cell", rig);
   const Finding* f = named(id, "load cell 1", "offset_drift");
   ASSERT_NE(f, nullptr) << run_record_text(id.run);
   EXPECT_NEAR(parameter(*f, "offset"), 400.0, 40.0) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*f, "drift"), 20.0, 2.0) << run_record_text(id.run);
   expect_rerun_closes(id);
 }
 
@@ -152,6 +154,75 @@ TEST(IndependentRecords, TwoEffectsOnDifferentPartsAreBothNamedAndReRun) {
   ASSERT_NE(valve, nullptr) << run_record_text(id.run);
   ASSERT_NE(cell, nullptr) << run_record_text(id.run);
   EXPECT_TRUE(valve->not_rerun.empty() && cell->not_rerun.empty()) << run_record_text(id.run);
+  expect_rerun_closes(id);
+}
+
+TEST(IndependentRecords, AStrokeLimitIsNamedOnTheActuatorWithItsStroke) {
+  test::RigTruth rig;
+  rig.stroke = 0.008;  // the unlimited rig reaches about 14 mm
+  const Identified id = identify_rig("stroke_limit", rig);
+  const Finding* f = named(id, "actuator 1", "stroke_limit");
+  ASSERT_NE(f, nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*f, "stroke"), 0.008, 0.0008) << run_record_text(id.run);
+  EXPECT_TRUE(f->not_rerun.empty()) << run_record_text(id.run);
+  expect_rerun_closes(id);
+}
+
+TEST(IndependentRecords, EachSensorsNoiseIsNamedOnItsSensorWithItsRms) {
+  test::RigTruth rig;
+  rig.displacement_noise = 1e-4;  // about 2 % of the displacement's std
+  rig.force_noise = 10.0;         // about 4 % of the force's std
+  const Identified id = identify_rig("noisy_sensors", rig);
+  const Finding* displacement = named(id, "displacement sensor 1", "noise");
+  const Finding* force = named(id, "load cell 1", "noise");
+  ASSERT_NE(displacement, nullptr) << run_record_text(id.run);
+  ASSERT_NE(force, nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*displacement, "rms"), 1e-4, 1e-5) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*force, "rms"), 10.0, 1.0) << run_record_text(id.run);
+  EXPECT_FALSE(force->not_rerun.empty()) << "noise is random: not re-run";
+  for (const auto& f : id.findings)
+    EXPECT_EQ(f.effect, "noise") << f.part << ": " << f.effect << "\n" << run_record_text(id.run);
+}
+
+// A displacement sensor reading 10 % high shows as a gain error and a softer specimen whose
+// product is as declared: one effect on the sensor, and the response is the declared one.
+TEST(IndependentRecords, ADisplacementSensorsScaleIsNamedOnTheSensorNotTheActuator) {
+  test::RigTruth rig;
+  rig.displacement_scale = 1.1;
+  const Identified id = identify_rig("displacement_scale", rig);
+  const Finding* f = named(id, "displacement sensor 1", "scale");
+  ASSERT_NE(f, nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*f, "scale"), 1.1, 0.011) << run_record_text(id.run);
+  EXPECT_EQ(named(id, "actuator 1", "gain error"), nullptr) << run_record_text(id.run);
+  EXPECT_EQ(named(id, "specimen 1", "stiffness change"), nullptr) << run_record_text(id.run);
+  EXPECT_LE(id.run.residual->identified, 0.02) << run_record_text(id.run);
+}
+
+// A load cell reading 20 % high and a 20 % stiffer specimen give the same record: named as the
+// stiffness change, which says the load cell could be the cause, and re-run to the response.
+TEST(IndependentRecords, ALoadCellsScaleReadsAsAStiffnessChangeAndTheFindingSaysSo) {
+  test::RigTruth rig;
+  rig.force_scale = 1.2;
+  const Identified id = identify_rig("force_scale", rig);
+  const Finding* f = named(id, "specimen 1", "stiffness change");
+  ASSERT_NE(f, nullptr) << run_record_text(id.run);
+  EXPECT_NE(f->magnitude.find("a load cell reading 1.2"), std::string::npos) << f->magnitude;
+  expect_rerun_closes(id);
+}
+
+// A displacement sensor 2 mm off shows on the force channel too (the specimen's force against a
+// displacement read 2 mm off): named once, on the displacement sensor, and not on the load cell;
+// the re-run of the stiffer specimen beside it holds no load cell offset.
+TEST(IndependentRecords, ADisplacementSensorsOffsetIsNamedOnItAndNotOnTheLoadCell) {
+  test::RigTruth rig;
+  rig.displacement_offset = 0.002;
+  rig.stiffness_scale = 1.3;
+  const Identified id = identify_rig("displacement_offset", rig);
+  const Finding* f = named(id, "displacement sensor 1", "offset_drift");
+  ASSERT_NE(f, nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(parameter(*f, "offset"), 0.002, 0.0002) << run_record_text(id.run);
+  EXPECT_EQ(named(id, "load cell 1", "offset_drift"), nullptr) << run_record_text(id.run);
+  ASSERT_NE(named(id, "specimen 1", "stiffness change"), nullptr) << run_record_text(id.run);
   expect_rerun_closes(id);
 }
 

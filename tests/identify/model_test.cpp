@@ -8,6 +8,7 @@
 #include <random>
 
 #include "core/delay.h"
+#include "core/rig_effects.h"
 #include "identify/fit/evidence.h"
 
 namespace rths::identify {
@@ -39,7 +40,7 @@ TEST(ModelTest, EffectNamesRoundTripAndApply) {
   EXPECT_FALSE(effect_applies(Effect::kFirstOrder, Channel::kForce));
   EXPECT_THROW(parse_effect("magic"), std::invalid_argument);
   EXPECT_EQ(effect_library(Channel::kMeasured).size() + effect_library(Channel::kForce).size(),
-            18u);
+            19u);
 }
 
 TEST(ModelTest, FractionalDelayShiftsTheCommand) {
@@ -89,6 +90,21 @@ TEST(ModelTest, BacklashHoldsWithinItsWidth) {
     peak = std::max(peak, y[i]);
   }
   EXPECT_NEAR(peak, 0.002 - 0.0005, 1e-6);
+}
+
+// The rod's ends cut the sine's peaks (2 mm) at 1.5 mm and leave the rest; as the core's stage.
+TEST(ModelTest, AStrokeLimitCutsThePeaksAtItsEnds) {
+  const auto s = sine_signals(Channel::kMeasured);
+  ChannelModel m = with_effect(declared_model(Channel::kMeasured, {}, signal_scales(s)),
+                               Effect::kStrokeLimit, std::vector<double>{0.0015});
+  const auto y = predict(m, s);
+  core::MotionLimit rod = core::MotionLimit::stroke_limit(0.0015);
+  double peak = 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    EXPECT_DOUBLE_EQ(y[i], rod.step({s.time[i], s.input[i], 0.0})) << i;
+    peak = std::max(peak, std::abs(y[i]));
+  }
+  EXPECT_DOUBLE_EQ(peak, 0.0015);
 }
 
 TEST(ModelTest, ForceModelSumsItsTerms) {
