@@ -85,12 +85,14 @@ std::vector<std::size_t> spike_indices(const std::vector<double>& x, double thre
   return out;
 }
 
-// The starts of the bursts of spikes at `times` (spikes within 3 steps of a burst's start are
-// one burst).
+// The starts of the bursts of spikes at `times` (a spike within 3 steps of the one before is in
+// its burst: a stall longer than 3 steps is one burst, not several).
 std::vector<double> burst_starts(const std::vector<double>& times, double dt) {
   std::vector<double> starts;
+  double last = -1e300;
   for (double t : times) {
-    if (starts.empty() || t - starts.back() > 3.0 * dt) starts.push_back(t);
+    if (t - last > 3.0 * dt) starts.push_back(t);
+    last = t;
   }
   return starts;
 }
@@ -295,7 +297,8 @@ std::vector<std::size_t> without(const std::vector<std::size_t>& samples,
 
 // The spikes above `threshold` (count, median height above the bias) and their period
 // (network_path.h): found at the level, of `threshold` and the spikes' height quantiles 50, 75
-// and 90 %, whose grid covers the most of its slots over the run (a periodic spike above most of
+// and 90 %, whose grid covers the most of its slots over the run, at most all (ties: the grid
+// with the most starts on it) (a periodic spike above most of
 // a busy host's stray ones recurs at a level they rarely reach, and there fills its grid while a
 // grid among strays is half empty). Returns that level (`threshold` when none recurs).
 double recurring_spikes(const std::vector<double>& x, const std::vector<double>& time,
@@ -313,16 +316,20 @@ double recurring_spikes(const std::vector<double>& x, const std::vector<double>&
   out.spikes = spikes.size();
   out.spike_height = heights.empty() ? 0.0 : median_of(heights) - out.bias;
   double chosen = threshold, best = 0.0;
+  std::size_t best_on = 0;
   for (double level : levels) {
     std::vector<double> times;
     for (std::size_t i : spikes) {
       if (x[i] >= level) times.push_back(time[i]);
     }
     const SpikeGrid grid = regular_grid(times, dt);
+    // A full grid covers 1: three starts on a coarse grid (a multiple of the period, among the
+    // highest spikes) cover no more than twenty on the period's own, and the more starts win.
     const double coverage =
-        static_cast<double>(grid.on) * grid.period / (time.back() - time.front());
-    if (grid.period > 0.0 && coverage > best) {
-      best = coverage, chosen = level;
+        std::min(1.0, static_cast<double>(grid.on) * grid.period / (time.back() - time.front()));
+    if (grid.period > 0.0 &&
+        (coverage > best + 1e-9 || (coverage > best - 1e-9 && grid.on > best_on))) {
+      best = coverage, best_on = grid.on, chosen = level;
       out.spike_period = grid.period;
     }
   }

@@ -10,11 +10,11 @@
 //   bias        median(x)
 //   jitter      1.4826 MAD(x) (a standard deviation robust to spikes)
 //   spikes      answers with x_i > bias + max(6 jitter, kMinSpike): count, and their period when
-//               they recur: bursts (spikes within 3 steps) whose starts' pairwise spacings pile
-//               up at one spacing P (>= 3 pairs, 4 standard deviations above the spacings'
-//               mean density; P's whole fractions down to P/5 preferred when they hold half as
-//               many pairs), with at least 3 starts, and half the slots of the run, on the grid
-//               t0 + k P (within 3 steps or 2 % of P): a busy host's stray spikes spread
+//               they recur: bursts (each spike within 3 steps of the one before) whose starts'
+//               pairwise spacings pile up at one spacing P (>= 3 pairs, 4 standard deviations above
+//               the spacings' mean density; P's whole fractions down to P/5 preferred when they
+//               hold half as many pairs), with at least 3 starts, and half the slots of the run, on
+//               the grid t0 + k P (within 3 steps or 2 % of P): a busy host's stray spikes spread
 //               evenly and hide neither P nor t0. Looked for at the threshold and at the
 //               spikes' height quantiles 50, 75 and 90 % (on a loaded host the strays outnumber
 //               periodic spikes that stand above most of them), the level whose grid covers the

@@ -46,6 +46,21 @@ struct PlatformTruth {
   bool any() const { return late_share > 0.0 || (burst_steps > 0 && burst_age > 0); }
 };
 
+// What the network did on node 1's link (0 = nothing), in a record whose loop waited for every
+// answer (lockstep, so the lag reaches no response): a round trip of 0.4 ms that drifts linearly
+// by `drift` over the run, with a spike of `spike_height` over `spike_steps` steps every
+// `spike_every` s (a host's periodic task) and a Gaussian jitter, and the node's
+// clock `clock_offset` ahead of the coordinator's (the one-way stamps carry it).
+struct NetworkTruth {
+  double drift = 0.0;         // s, over the run
+  double spike_height = 0.0;  // s
+  double spike_every = 0.0;   // s
+  int spike_steps = 1;
+  double jitter = 0.0;        // s, standard deviation
+  double clock_offset = 0.0;  // s, node clock - coordinator clock
+  bool any() const { return drift != 0.0 || spike_height > 0.0 || clock_offset != 0.0; }
+};
+
 // What the rig truly does beyond the declared 14 ms shift (0 = absent).
 struct RigTruth {
   double time_constant = 0.0;        // s, an extra first-order lag
@@ -67,6 +82,7 @@ struct RigTruth {
   double force_range = 20000.0;      // N
   std::uint64_t seed = 7;
   PlatformTruth platform;
+  NetworkTruth network;  // in a lockstep record: give no platform beside it
 };
 
 inline double converted(double x, double range) {
@@ -135,13 +151,22 @@ class TrueSpecimen {
 
 // The declared study: the paper frame with its 14 ms shift, as the record's header holds it; a
 // record of a platform that was late declares a real-time run with node 1 its actuator emulator
-// (the numerical storey in the coordinator).
-inline std::string independent_declared_study(double duration, bool real_time = false) {
-  return paper_frame_study(
-      duration, real_time ? "deployment { clock: REAL_TIME max_overrun_fraction: -1 "
-                            "max_missed_answers: 40 command_watchdog_periods: 40 "
-                            "min_answer_fraction: -1 nodes { id: 1 kind: ACTUATOR_EMULATOR } }"
-                          : "");
+// (the numerical storey in the coordinator), one of a network a lockstep run with that node.
+enum class RecordClock { kNone, kLockstep, kRealTime };
+inline std::string independent_declared_study(double duration, RecordClock clock) {
+  switch (clock) {
+    case RecordClock::kNone: return paper_frame_study(duration, "");
+    case RecordClock::kLockstep:
+      return paper_frame_study(duration,
+                               "deployment { clock: LOCKSTEP nodes { id: 1 kind: "
+                               "ACTUATOR_EMULATOR } }");
+    case RecordClock::kRealTime:
+      return paper_frame_study(duration,
+                               "deployment { clock: REAL_TIME max_overrun_fraction: -1 "
+                               "max_missed_answers: 40 command_watchdog_periods: 40 "
+                               "min_answer_fraction: -1 nodes { id: 1 kind: ACTUATOR_EMULATOR } }");
+  }
+  return {};
 }
 
 // The step whose answer the loop used at each step (PlatformTruth), and whether the step overran.
@@ -169,16 +194,33 @@ inline std::vector<AnswerUsed> answers_used(const PlatformTruth& platform, std::
   return out;
 }
 
+// The network's lag at time t (s, on a 1 ms step) of a run of `duration` s (NetworkTruth), beyond
+// its 0.4 ms.
+inline double network_lag(const NetworkTruth& network, double t, double duration) {
+  double lag = network.drift * t / duration;
+  if (network.spike_every > 0.0) {
+    const auto period = static_cast<std::int64_t>(std::llround(network.spike_every * 1000.0));
+    const std::int64_t phase = static_cast<std::int64_t>(std::llround(t * 1000.0)) % period;
+    if (phase >= period / 2 && phase < period / 2 + network.spike_steps)
+      lag += network.spike_height;
+  }
+  return lag;
+}
+
 inline void add_link_sample(const AnswerUsed& used, std::size_t step, double dt,
+                            const NetworkTruth& network, double duration, std::mt19937_64& rng,
                             runtime::StepRecord& r) {
+  std::normal_distribution<double> jitter(0.0, 1.0);
   runtime::LinkSample& link = *r.add_links();
   const double age = static_cast<double>(static_cast<std::int64_t>(step) - used.step);
+  const double t = static_cast<double>(step) * dt;
   link.set_node_id(1);
   link.set_answered_step(used.step);
   link.set_answers(static_cast<std::uint64_t>(used.step));  // every answer arrived, none lost
-  link.set_round_trip(0.0004 + age * dt);
-  link.set_one_way_down(0.5 * link.round_trip());
-  link.set_one_way_up(0.5 * link.round_trip());
+  link.set_round_trip(0.0004 + age * dt + network_lag(network, t, duration) +
+                      std::abs(network.jitter * jitter(rng)));
+  link.set_one_way_down(0.5 * link.round_trip() + network.clock_offset);
+  link.set_one_way_up(0.5 * link.round_trip() - network.clock_offset);
   r.set_overrun(used.overrun);
   r.set_lateness(used.overrun ? 0.002 : -0.0005);
 }
@@ -187,8 +229,10 @@ inline void add_link_sample(const AnswerUsed& used, std::size_t step, double dt,
 // path.
 inline std::filesystem::path independent_record(const std::string& name, const RigTruth& rig,
                                                 double duration = 20.0) {
-  const bool real_time = rig.platform.any();
-  const core::PreparedStudy declared = prepare(independent_declared_study(duration, real_time));
+  const bool real_time = rig.platform.any(), linked = real_time || rig.network.any();
+  const core::PreparedStudy declared = prepare(independent_declared_study(
+      duration,
+      real_time ? RecordClock::kRealTime : (linked ? RecordClock::kLockstep : RecordClock::kNone)));
   const double dt = 0.001, m = 1000.0, omega = 2.0 * std::numbers::pi / 0.5;
   const double k = m * omega * omega, c = 2.0 * 0.05 * m * omega;
   const double k_e = k / 3.0, k_n = k - k_e;
@@ -204,7 +248,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
   *header.mutable_study() = declared.config;
   header.set_case_name("lag_shift_14ms");
   header.set_clock(real_time ? "real_time" : "lockstep");
-  if (real_time) header.add_link_node_ids(1);
+  if (linked) header.add_link_node_ids(1);
   header.set_dt(dt);
   header.set_dofs(1);
   header.set_actuators(1);
@@ -218,6 +262,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
   TrueSpecimen specimen(rig, k_e);
   std::mt19937_64 rng(rig.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
+  std::mt19937_64 link_rng(rig.seed + 1);
   std::deque<double> commands(14, 0.0);  // the 14 ms shift: 14 whole steps
   const std::vector<AnswerUsed> used = answers_used(rig.platform, ground.size(), dt, rig.seed);
   std::vector<double> answered_x(ground.size(), 0.0), answered_f(ground.size(), 0.0);
@@ -255,7 +300,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
     r.add_command(command);
     r.add_realised(x_m);
     r.add_measured_force(f_m);
-    if (real_time) add_link_sample(used[step], step, dt, r);
+    if (linked) add_link_sample(used[step], step, dt, rig.network, duration, link_rng, r);
     writer.write(entry);
   }
   entry.Clear();

@@ -226,6 +226,45 @@ TEST(IndependentRecords, ADisplacementSensorsOffsetIsNamedOnItAndNotOnTheLoadCel
   expect_rerun_closes(id);
 }
 
+// Only the link's parts name anything: the network's lag did not reach the response.
+void expect_only_the_link(const Identified& id) {
+  for (const auto& f : id.findings)
+    EXPECT_EQ(f.part, "link to node 1") << f.effect << "\n" << run_record_text(id.run);
+}
+
+// A round trip that drifts by 5 ms over the run on a node whose clock is 2 ms ahead of the
+// coordinator's: both named on the link with their magnitudes.
+TEST(IndependentRecords, ANetworksDriftAndAClockOffsetAreNamedOnTheLink) {
+  test::RigTruth rig;
+  rig.network.drift = 0.005;
+  rig.network.clock_offset = 0.002;
+  rig.network.jitter = 40e-6;
+  const Identified id = identify_rig("network_drift", rig);
+  ASSERT_EQ(id.run.links.size(), 1u);
+  const NetworkPath& link = id.run.links.front();
+  ASSERT_NE(named(id, "link to node 1", "drifting delay"), nullptr) << run_record_text(id.run);
+  ASSERT_NE(named(id, "link to node 1", "clock offset"), nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(link.drift_range, 0.005, 0.0005) << run_record_text(id.run);
+  ASSERT_TRUE(link.clock.has_value());
+  EXPECT_NEAR(link.clock->offset, 0.002, 0.0002) << run_record_text(id.run);
+  expect_only_the_link(id);
+}
+
+TEST(IndependentRecords, PeriodicSpikesAreNamedOnTheLinkWithTheirPeriodAndHeight) {
+  test::RigTruth rig;
+  rig.network.spike_height = 0.005;
+  rig.network.spike_every = 0.5;
+  rig.network.spike_steps = 10;  // a 10 ms stall: one burst, not three
+  rig.network.jitter = 40e-6;
+  const Identified id = identify_rig("network_spikes", rig);
+  ASSERT_EQ(id.run.links.size(), 1u);
+  const NetworkPath& link = id.run.links.front();
+  ASSERT_NE(named(id, "link to node 1", "periodic spikes"), nullptr) << run_record_text(id.run);
+  EXPECT_NEAR(link.spike_period, 0.5, 0.05) << run_record_text(id.run);
+  EXPECT_NEAR(link.spike_height, 0.005, 0.0005) << run_record_text(id.run);
+  expect_only_the_link(id);
+}
+
 // A loop as slow as its step (half the steps on the answer before) that also stalls for 40
 // steps every half second, 4 steps behind.
 test::PlatformTruth late_platform() {
