@@ -53,7 +53,7 @@ std::vector<double> normalised_time(const std::vector<double>& time) {
 std::vector<double> drift_model(const std::vector<double>& x, const std::vector<double>& s,
                                 const std::vector<std::size_t>& fit_on) {
   const auto rows = static_cast<Eigen::Index>(fit_on.size());
-  const auto cols = static_cast<Eigen::Index>(kDriftTerms + 1);
+  const auto cols = static_cast<Eigen::Index>(kDriftTerms + 2);
   Eigen::MatrixXd a(rows, cols);
   Eigen::VectorXd b(rows);
   std::vector<double> unit(kDriftTerms, 0.0);
@@ -65,14 +65,15 @@ std::vector<double> drift_model(const std::vector<double>& x, const std::vector<
   for (Eigen::Index r = 0; r < rows; ++r) {
     const std::size_t i = fit_on[static_cast<std::size_t>(r)];
     a(r, 0) = 1.0;
+    a(r, 1) = s[i];
     for (std::size_t k = 0; k < kDriftTerms; ++k)
-      a(r, static_cast<Eigen::Index>(k + 1)) = basis(s[i], k);
+      a(r, static_cast<Eigen::Index>(k + 2)) = basis(s[i], k);
     b(r) = x[i];
   }
   const Eigen::VectorXd c = a.colPivHouseholderQr().solve(b);
-  std::vector<double> coefficients(c.data() + 1, c.data() + cols);
+  std::vector<double> coefficients(c.data() + 2, c.data() + cols);
   std::vector<double> model;
-  for (double si : s) model.push_back(c(0) + drift_profile(coefficients, si));
+  for (double si : s) model.push_back(c(0) + c(1) * si + drift_profile(coefficients, si));
   return model;
 }
 

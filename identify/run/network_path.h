@@ -20,8 +20,9 @@
 //               periodic spikes that stand above most of them), the level whose grid covers the
 //               most of its slots kept; the candidate is judged on the held-out answers without
 //               the spikes off its slots (strays neither model explains)
-//   drift       x modelled as bias + D(s; c) (model.h: slow cosine series, kDriftTerms terms, least
-//               squares over the answers that are not spikes); its range over the run (s)
+//   drift       x modelled as bias + a s + D(s; c) (a linear trend and model.h's slow cosine
+//               series, kDriftTerms terms, whose zero-mean cosines alone round a ramp's ends off;
+//               least squares over the answers that are not spikes); its range over the run (s)
 //   lost        steps no answer ever came for: a gap of g steps in answered_step between two
 //               answers taken in a row, over which the coordinator's answer count (LinkSample
 //               answers) rose by r + 1, holds r answers superseded within a step (received, then
@@ -35,7 +36,7 @@
 // The declared model of x is the constant bias. Each candidate is judged on held-out answers
 // (data.h holdout_split, blocks, 30 %): the RMS of x about the model over the held-out answers,
 // declared vs with the candidate fitted on the training answers only:
-//   drifting delay   bias + D(s; c)                    pays when the held-out RMS falls by >= 20 %
+//   drifting delay   bias + a s + D(s; c)              pays when the held-out RMS falls by >= 20 %
 //   periodic spikes  bias + A at times t0 + k P        and the fall is above kMinEffect (s)
 //                    (P, t0, A from the training spikes)
 // and, judged by counting, not by a fit:

@@ -38,12 +38,18 @@ namespace rths::test {
 // some steps. The answer used at step k was the one to step k - age_k: age 1 on a random
 // `late_share` of the steps (a link as slow as the step), and `burst_age` over `burst_steps`
 // steps every `burst_every` s (a stall: those steps overran). The node still answered every
-// command in turn. The record then says real time, with node 1 an actuator emulator.
+// command in turn, but `lost_steps` answers in a row every `lost_every` s never arrived (the
+// network lost them): the loop went on with the last answer it had. The record then says real
+// time, with node 1 an actuator emulator.
 struct PlatformTruth {
   double late_share = 0.0;
   int burst_steps = 0, burst_age = 0;
   double burst_every = 0.0;  // s
-  bool any() const { return late_share > 0.0 || (burst_steps > 0 && burst_age > 0); }
+  int lost_steps = 0;
+  double lost_every = 0.0;  // s
+  bool any() const {
+    return late_share > 0.0 || (burst_steps > 0 && burst_age > 0) || lost_steps > 0;
+  }
 };
 
 // What the network did on node 1's link (0 = nothing), in a record whose loop waited for every
@@ -173,7 +179,15 @@ inline std::string independent_declared_study(double duration, RecordClock clock
 struct AnswerUsed {
   std::int64_t step = 0;
   bool overrun = false;
+  std::uint64_t answers = 0;  // the answers that arrived up to the one used
 };
+
+// Whether step k's answer is one the network lost (PlatformTruth lost_steps, lost_every).
+inline bool lost_answer(const PlatformTruth& platform, std::size_t k, double dt) {
+  const auto period = static_cast<std::size_t>(std::llround(platform.lost_every / dt));
+  return period > 0 && (k % period) >= period / 2 &&
+         (k % period) < period / 2 + static_cast<std::size_t>(platform.lost_steps);
+}
 
 inline std::vector<AnswerUsed> answers_used(const PlatformTruth& platform, std::size_t steps,
                                             double dt, std::uint64_t seed) {
@@ -186,10 +200,20 @@ inline std::vector<AnswerUsed> answers_used(const PlatformTruth& platform, std::
     const bool burst = period > 0 && k > period / 2 &&
                        (k % period) < static_cast<std::size_t>(platform.burst_steps);
     if (burst) age = std::max(age, platform.burst_age);
-    // An answer the loop already moved past is not taken again: never older than the last one.
-    const std::int64_t used =
+    // An answer the loop already moved past is not taken again: never older than the last one;
+    // a lost one is never taken.
+    std::int64_t used =
         std::max<std::int64_t>(k > 0 ? out[k - 1].step : 0, static_cast<std::int64_t>(k) - age);
-    out[k] = {k == 0 ? 0 : used, burst};
+    if (k > 0 && lost_answer(platform, static_cast<std::size_t>(used), dt)) used = out[k - 1].step;
+    out[k] = {k == 0 ? 0 : used, burst, 0};
+  }
+  // The answers that arrived up to each step's used one: those to steps 1 .. used not lost.
+  std::uint64_t count = 0;
+  std::int64_t counted = 1;
+  for (auto& u : out) {
+    for (; counted <= u.step; ++counted)
+      if (!lost_answer(platform, static_cast<std::size_t>(counted), dt)) ++count;
+    u.answers = count;
   }
   return out;
 }
@@ -216,7 +240,7 @@ inline void add_link_sample(const AnswerUsed& used, std::size_t step, double dt,
   const double t = static_cast<double>(step) * dt;
   link.set_node_id(1);
   link.set_answered_step(used.step);
-  link.set_answers(static_cast<std::uint64_t>(used.step));  // every answer arrived, none lost
+  link.set_answers(used.answers);
   link.set_round_trip(0.0004 + age * dt + network_lag(network, t, duration) +
                       std::abs(network.jitter * jitter(rng)));
   link.set_one_way_down(0.5 * link.round_trip() + network.clock_offset);

@@ -244,7 +244,7 @@ TEST(IndependentRecords, ANetworksDriftAndAClockOffsetAreNamedOnTheLink) {
   const NetworkPath& link = id.run.links.front();
   ASSERT_NE(named(id, "link to node 1", "drifting delay"), nullptr) << run_record_text(id.run);
   ASSERT_NE(named(id, "link to node 1", "clock offset"), nullptr) << run_record_text(id.run);
-  EXPECT_NEAR(link.drift_range, 0.005, 0.0005) << run_record_text(id.run);
+  EXPECT_NEAR(link.drift_range, 0.005, 0.00025) << run_record_text(id.run);  // a ramp to its ends
   ASSERT_TRUE(link.clock.has_value());
   EXPECT_NEAR(link.clock->offset, 0.002, 0.0002) << run_record_text(id.run);
   expect_only_the_link(id);
@@ -284,6 +284,24 @@ TEST(IndependentRecords, LateAnswersAreThePlatformsAndNothingOfTheRig) {
   EXPECT_EQ(id.findings.front().part, "platform") << run_record_text(id.run);
   for (const auto& f : id.findings)
     EXPECT_TRUE(f.part == "platform" || f.part.rfind("link to node", 0) == 0)
+        << f.part << ": " << f.effect << "\n"
+        << run_record_text(id.run);
+  EXPECT_LE(id.run.residual->identified, 0.02) << run_record_text(id.run);
+}
+
+// Five answers in a row lost every second on a real-time loop: named on the link with the
+// longest burst, the loop's older answers replayed, nothing named on the rig.
+TEST(IndependentRecords, ALostBurstIsNamedOnTheLinkAndTheOlderAnswersReplayed) {
+  test::RigTruth rig;
+  rig.platform.lost_steps = 5;
+  rig.platform.lost_every = 1.0;
+  const Identified id = identify_rig("lost_bursts", rig);
+  ASSERT_NE(named(id, "link to node 1", "lost answers"), nullptr) << run_record_text(id.run);
+  ASSERT_EQ(id.run.links.size(), 1u);
+  EXPECT_EQ(id.run.links.front().longest_burst, 5u) << run_record_text(id.run);
+  EXPECT_EQ(id.run.links.front().lost, 15u * 5u) << run_record_text(id.run);
+  for (const auto& f : id.findings)
+    EXPECT_TRUE(f.part == "platform" || f.part == "link to node 1")
         << f.part << ": " << f.effect << "\n"
         << run_record_text(id.run);
   EXPECT_LE(id.run.residual->identified, 0.02) << run_record_text(id.run);
