@@ -154,6 +154,23 @@ std::string figure_data(const std::vector<PlotSpec>& panels, const std::string& 
   return data.str();
 }
 
+// The x axis's ticks: the spec's labels at their x, with a bottom margin of their lines, or
+// gnuplot's numbers and margin.
+std::string x_tics(const PlotSpec& spec) {
+  if (spec.x_labels.empty()) return "set xtics autofreq\nset bmargin\n";
+  std::ostringstream out;
+  out.precision(10);
+  std::size_t lines = 1;
+  out << "set xtics (";
+  for (std::size_t i = 0; i < spec.x_labels.size(); ++i) {
+    const std::string& label = spec.x_labels[i].second;
+    lines = std::max<std::size_t>(lines, 1 + std::count(label.begin(), label.end(), '\n'));
+    out << (i ? ", " : "") << quoted(label) << " " << spec.x_labels[i].first;
+  }
+  out << ")\nset bmargin " << lines + 2 << "\n";
+  return out.str();
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::string& tag,
                   std::size_t panel, std::size_t title_width) {
   script << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
@@ -169,7 +186,7 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
                                       : "set autoscale y")
          << "\n"
          << "set format y " << quoted(spec.y_format.empty() ? "% h" : spec.y_format) << "\n"
-         << "unset arrow\nunset label\n";
+         << x_tics(spec) << "unset arrow\nunset label\n";
   script.precision(10);
   for (std::size_t i = 0; i < spec.markers.size(); ++i) {
     const VerticalMarker& m = spec.markers[i];

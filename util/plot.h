@@ -59,6 +59,9 @@ struct PlotSpec {
   std::vector<VerticalMarker> markers;
   // gnuplot format of the y tick labels (e.g. "%g": 1e-05 rather than 0.000010); empty = default.
   std::string y_format;
+  // Tick labels at these x (a bar chart's bars: "\n" breaks a label into lines); empty = the
+  // numbers of the x axis.
+  std::vector<std::pair<double, std::string>> x_labels;
 };
 
 // The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel

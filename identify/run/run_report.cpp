@@ -92,25 +92,28 @@ std::filesystem::path shares_plot(const RunResidual& r, const std::filesystem::p
   util::PlotSpec p("What explains the response error: NRMSE of the worst floor removed", "",
                    "NRMSE removed (%)");
   double x = 1.0;
-  const auto bar = [&](const std::string& title, double value) {
+  // Each bar is named under it (part, then effect) and in the legend with its share.
+  const auto bar = [&](const std::string& label, const std::string& title, double value) {
     // A bar as a filled band from 0 (a single-point "boxes" series has no width).
     p.series.emplace_back(title, std::vector<double>{x - 0.35, x + 0.35},
                           std::vector<double>{100.0 * value, 100.0 * value},
                           "filledcurves y1=0 fs solid 0.8");
+    p.x_labels.emplace_back(x, label);
     x += 1.0;
   };
   for (const auto* kind : {&r.links, &r.effects}) {
     for (const auto& s : *kind) {
-      bar(s.link + (s.effect == "all" ? " (its whole identified rig)" : ": " + s.effect) +
+      const std::string effect = s.effect == "all" ? "whole rig" : s.effect;
+      bar(s.link + "\n" + effect,
+          s.link + (s.effect == "all" ? " (its whole identified rig)" : ": " + s.effect) +
               ", share " + percent_text(s.share),
           s.removed);
     }
   }
-  bar("remaining: the identified model's NRMSE", r.identified);
+  bar("remaining\nunexplained", "remaining: the identified model's NRMSE", r.identified);
   p.x_min = 0.3;
   p.x_max = x - 0.3;
   p.y_min = 0.0;
-  p.xlabel = "one bar each (legend)";
   const auto png = dir / "record_shares.png";
   util::write_png_plot(p, png);
   return png;

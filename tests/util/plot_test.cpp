@@ -234,5 +234,24 @@ TEST(Plot, ALongTitleIsDrawnOnSeveralWholeLines) {
   std::filesystem::remove_all(dir);
 }
 
+// A bar chart names each bar under it, on as many lines as its label has.
+TEST(Plot, ABarChartNamesEachBarUnderItOnItsLines) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_bars_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  PlotSpec spec{"bars",
+                "",
+                "share (%)",
+                {{"first", {0.65, 1.35}, {3, 3}, "filledcurves y1=0"},
+                 {"second", {1.65, 2.35}, {5, 5}, "filledcurves y1=0"}}};
+  spec.x_labels = {{1.0, "actuator 1\nwhole rig"}, {2.0, "load cell 1\noffset_drift"}};
+  write_png_plot(spec, dir / "bars.png");
+  std::ifstream in(dir / "bars.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* line : {">actuator 1<", ">whole rig<", ">load cell 1<", ">offset_drift<"})
+    EXPECT_NE(svg.find(line), std::string::npos) << line;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace rths::util
