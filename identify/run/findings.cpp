@@ -126,10 +126,13 @@ void add_path_findings(const ActuatorPath& path, std::vector<Finding>& out) {
     Finding f = channel_finding(path, Channel::kForce,
                                 part_of(effect, Channel::kForce, path.actuator), effect);
     if (effect == "stiffness change")
-      f.magnitude = "stiffness " + number(path.fitted_stiffness) + " N/m (declared " +
-                    number(path.declared_stiffness) + " N/m; a load cell reading " +
-                    number(path.fitted_stiffness / path.declared_stiffness) +
-                    " x the truth reads the same)";
+      f.magnitude =
+          "stiffness " + number(path.fitted_stiffness) + " N/m (declared " +
+          number(path.declared_stiffness) + " N/m" +
+          (linear_specimen(path.id) ? "; a load cell reading " +
+                                          number(path.fitted_stiffness / path.declared_stiffness) +
+                                          " x the truth reads the same)"
+                                    : ")");
     if (effect == "noise") describe_noise(path, Channel::kForce, f);
     out.push_back(std::move(f));
   }

@@ -7,9 +7,10 @@
 // Output, one Finding per difference:
 //   part       "platform" (steps on late answers and overruns, first: what the platform did
 //              before what the rig did), "link to node N" (network), "actuator N" (lag, gain,
-//              backlash, velocity limit),
-//              "specimen N" (stiffness, damping, hysteresis), "displacement sensor N" and
-//              "load cell N" (offset and drift): N is the node id or the 1-based actuator;
+//              backlash, velocity and stroke limits), "specimen N" (stiffness, damping,
+//              hysteresis), "displacement sensor N" and "load cell N" (offset and drift, noise;
+//              the displacement sensor's scale: sensors.h): N is the node id or the 1-based
+//              actuator;
 //   effect     the effect's name (identify/model/effects.h, or "gain error", "delay change",
 //              "stiffness change", the network's "drifting delay", "clock offset", ...);
 //   magnitude  its parameters with standard errors and units (effect_parameters.h), or the
@@ -17,7 +18,8 @@
 //   evidence   the held-out error of its channel before and after the effect: a share of the
 //              signal's std for the actuator and force channels, s RMS for a link;
 //   response   the worst floor's NRMSE the re-run loses without it and its share of the removals
-//              (run_residual.h), or why the re-run cannot hold it (counted as unexplained).
+//              (run_residual.h), or why the re-run cannot hold it (counted as unexplained: a
+//              sensor's noise, whose samples no re-run replays).
 
 #include <nlohmann/json.hpp>
 

@@ -10,8 +10,9 @@
 // Declared model of actuator a: the case's delay stages behind the actuator emulators' own
 // declared receive_delay stages (what the distributed run applies to a command), with the case's
 // compensation in front. Identified model: the identified actuator as study stages
-// (study_config.h actuator_case with the rig: shift, first order, second order, backlash,
-// velocity limit with the gain, the displacement sensor's drift) in place of those delay stages,
+// (sensors.h rig_models as study_config.h actuator_case with the rig: shift, first order, second
+// order, backlash, velocity and stroke limits with the gain, the displacement sensor's drift and
+// scale) in place of those delay stages,
 // the compensation kept; where the force channel contradicted the declared specimen
 // (ActuatorPath::specimen_undeclared), the identified storey model in place of the declared one
 // (specimen_model, at its identified initial stiffness), its viscous force as a viscous_force
@@ -23,8 +24,9 @@
 //   per undeclared effect E(identified without the effect) - E(identified): the error the effect
 //                         removes on top of the rest ("gain error", "delay change", "stiffness
 //                         change": the value set back to the declared one; any other: the effect
-//                         taken out of the model), on its part: "actuator a", "displacement
-//                         sensor a", "specimen a" or "load cell a".
+//                         taken out of the model; "scale": the sensor reading true), on its part
+//                         (sensors.h part_of): "actuator a", "displacement sensor a", "specimen a"
+//                         or "load cell a". A sensor's noise is not re-run.
 // Each removal's share is its error removed over the sum of the positive ones of its kind.
 // The platform's share (a real-time record whose steps used older answers: platform_replay.h):
 // the identified re-run replays the answers the loop used (core::AnswerReplay), and

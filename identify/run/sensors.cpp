@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/model.h"
@@ -49,17 +52,6 @@ double channel_noise(const Identification& id, Channel channel) {
 bool noise_named(const Identification& id, Channel channel, double sigma, double declared) {
   return id.find(channel) && sigma > kNoiseShare * noise_spread(id, channel) &&
          sigma > kNoiseAboveDeclared * declared;
-}
-
-// Whether the fitted specimen's force is linear in the displacement (sensors.h).
-bool linear_specimen(const Identification& id) {
-  const ChannelIdentification* c = id.find(Channel::kForce);
-  if (!c) return false;
-  for (Effect e : c->final_fit.model.effects)
-    if (e != Effect::kStiffness && e != Effect::kDamping && e != Effect::kInertia &&
-        e != Effect::kOffsetDrift && e != Effect::kDelay)
-      return false;
-  return true;
 }
 
 void attribute_displacement_scale(ActuatorPath& path) {
@@ -125,6 +117,16 @@ void attribute_force_offset(ActuatorPath& path) {
 }
 
 }  // namespace
+
+bool linear_specimen(const Identification& id) {
+  const ChannelIdentification* c = id.find(Channel::kForce);
+  if (!c) return false;
+  for (Effect e : c->final_fit.model.effects)
+    if (e != Effect::kStiffness && e != Effect::kDamping && e != Effect::kInertia &&
+        e != Effect::kOffsetDrift && e != Effect::kDelay)
+      return false;
+  return true;
+}
 
 double noise_spread(const Identification& id, Channel channel) {
   return signal_scales(identified_signals(id, channel)).target;

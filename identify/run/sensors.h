@@ -62,6 +62,10 @@ std::string part_of(const std::string& effect, Channel channel, int actuator);
 // as above. Call after the specimen was judged (ActuatorPath::fitted_stiffness).
 void judge_sensors(ActuatorPath& path);
 
+// Whether the fitted specimen's force is linear in the displacement and its rates (stiffness,
+// damping, inertia, offset, delay): what a sensor's scale multiplies as a whole.
+bool linear_specimen(const Identification& id);
+
 // The std of `channel`'s target (m or N): what a noise is compared with.
 double noise_spread(const Identification& id, Channel channel);
 
