@@ -31,6 +31,15 @@ void fit_link_lag(const NetworkPath& link, config::NodeSpec& node) {
   }
 }
 
+// The stages the run applied to a command (run_residual.h declared_case), as the identified case:
+// what an actuator the record did not contradict keeps.
+config::Case declared_stages(const config::Study& study, const config::Case* run_case) {
+  config::Case out = declared_case(study, run_case ? *run_case : config::Case{});
+  out.clear_compensation();
+  out.set_name(kIdentifiedCaseName);
+  return out;
+}
+
 // The identified actuator cases: one when every actuator has the same stages, else one each.
 std::vector<config::Case> actuator_cases(const RunIdentification& run, const config::Case* run_case,
                                          std::vector<std::string>& notes) {
@@ -38,13 +47,16 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
   for (const auto& path : run.actuators) {
     if (!path.id.find(Channel::kMeasured)) continue;
     const RigModels rig = rig_models(path);
-    const ChannelSignals& signals = identified_signals(path.id, Channel::kMeasured);
-    const SignalScales scales = signal_scales(signals);
-    ActuatorCase part = actuator_case(rig.actuator, scales, kIdentifiedCaseName,
-                                      RigRecord{signals.time.front(), scales.duration});
-    for (const auto& l : part.left_out)
-      notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
-    config::Case study_case = part.study_case;
+    config::Case study_case = declared_stages(run.study, run_case);
+    if (rig.actuator) {
+      const ChannelSignals& signals = identified_signals(path.id, Channel::kMeasured);
+      const SignalScales scales = signal_scales(signals);
+      ActuatorCase part = actuator_case(*rig.actuator, scales, kIdentifiedCaseName,
+                                        RigRecord{signals.time.front(), scales.duration});
+      for (const auto& l : part.left_out)
+        notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
+      study_case = part.study_case;
+    }
     if (rig.specimen) {
       const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
       const SignalScales force_scales = signal_scales(f);

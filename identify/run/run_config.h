@@ -5,8 +5,10 @@
 //
 // The study is the run's own config (the record header's) with:
 //   case "identified_actuator"  actuator 1's identified model as delay stages (study_config.h
-//                               actuator_case), behind the run case's compensation; it holds what
-//                               the emulators' receive_delay stages did, which are cleared. A
+//                               actuator_case of sensors.h rig_models; the declared stages where
+//                               the record contradicted nothing of the actuator), behind the run
+//                               case's compensation; it holds what the emulators' receive_delay
+//                               stages did, which are cleared. A
 //                               record of several actuators whose models differ: one case each,
 //                               "identified_actuator_<a>" (a study case applies to every actuator).
 //   per substructure link       receive_lag and send_lag from the measured round trip r (s), as a

@@ -219,12 +219,31 @@ bool step_paid(const SelectionStep& step) {
          step.own_error_removed > kMinErrorRemoved;
 }
 
-// The study's storey model as force-channel effects (actuator_path.h).
-std::vector<Effect> declared_specimen(const config::Study& study) {
+// The study's storey model as force-channel effects (actuator_path.h), and what a declared
+// tracking loop adds to the force the integrator receives (core/tracking.h): the benchmark plant's
+// specimen inertia and damping, the load cell's delay of force_delay_periods servo periods.
+std::vector<Effect> declared_specimen(const config::Study& study, const std::string& case_name) {
   const config::RestoringForce& model = study.substructuring().model();
-  if (model.has_bouc_wen()) return {Effect::kStiffness, Effect::kBoucWen};
-  if (model.has_bilinear()) return {Effect::kStiffness, Effect::kElastoPlastic};
-  return {Effect::kStiffness};
+  std::vector<Effect> out{Effect::kStiffness};
+  if (model.has_bouc_wen()) out.push_back(Effect::kBoucWen);
+  if (model.has_bilinear()) out.push_back(Effect::kElastoPlastic);
+  const auto add = [&](Effect e) {
+    if (std::find(out.begin(), out.end(), e) == out.end()) out.push_back(e);
+  };
+  const auto declare = [&](const config::DelayStage& stage) {
+    if (!stage.has_tracking_loop()) return;
+    if (stage.tracking_loop().has_benchmark_plant()) {
+      add(Effect::kInertia);
+      add(Effect::kDamping);
+    }
+    if (stage.tracking_loop().force_delay_periods() > 0) add(Effect::kDelay);
+  };
+  if (const config::Case* c = run_case(study, case_name))
+    for (const auto& stage : c->delay()) declare(stage);
+  for (const auto& node : study.deployment().nodes())
+    if (node.kind() == config::NodeSpec::ACTUATOR_EMULATOR)
+      for (const auto& stage : node.receive_delay()) declare(stage);
+  return out;
 }
 
 // The force channel against the declared specimen: the effects its final model holds beyond the
@@ -280,7 +299,7 @@ ActuatorPath identify_actuator(const MeasuredData& data, const runtime::RunHeade
   IdentifyOptions options = base;
   options.declared_actuator = declared.effects;
   options.actuator_parameters = declared.parameters;
-  options.declared_specimen = declared_specimen(header.study());
+  options.declared_specimen = declared_specimen(header.study(), header.case_name());
   ActuatorPath out;
   for (Effect e : options.declared_specimen) out.declared_specimen.push_back(effect_name(e));
   out.actuator = a + 1;

@@ -25,19 +25,6 @@ const config::Case& run_case(const config::Study& study, const std::string& name
   return study.cases(0);
 }
 
-// The case as the distributed run applied it: the emulators' declared receive stages, then the
-// case's delay stages (run_residual.h).
-config::Case declared_case(const config::Study& study, const config::Case& study_case) {
-  config::Case out = study_case;
-  out.clear_delay();
-  for (const auto& node : study.deployment().nodes()) {
-    if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
-    for (const auto& stage : node.receive_delay()) *out.add_delay() = stage;
-  }
-  for (const auto& stage : study_case.delay()) *out.add_delay() = stage;
-  return out;
-}
-
 // What one actuator's re-run uses in place of the declared: its actuator path's model
 // (channel measured), its specimen's (channel force: the storey model and the load cell) and its
 // displacement sensor's scale (sensors.h rig_models); nullptr keeps the declared.
@@ -214,6 +201,7 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
         removes(part, effect, {all[a].actuator, all[a].specimen, 1.0});
         continue;
       }
+      if (!all[a].actuator) continue;  // the declared actuator stays: nothing to take out
       const ChannelModel reduced = without(*all[a].actuator, paths[a], effect, reruns.scales(a));
       removes(part, effect, {&reduced, all[a].specimen, all[a].displacement_scale});
     }
@@ -234,6 +222,17 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
 
 }  // namespace
 
+config::Case declared_case(const config::Study& study, const config::Case& study_case) {
+  config::Case out = study_case;
+  out.clear_delay();
+  for (const auto& node : study.deployment().nodes()) {
+    if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
+    for (const auto& stage : node.receive_delay()) *out.add_delay() = stage;
+  }
+  for (const auto& stage : study_case.delay()) *out.add_delay() = stage;
+  return out;
+}
+
 RunResidual run_residual(const ResidualInput& input) {
   const auto& paths = *input.actuators;
   const Reruns reruns(input);
@@ -242,14 +241,15 @@ RunResidual run_residual(const ResidualInput& input) {
   for (const auto& path : paths) rigs.push_back(rig_models(path));
   std::vector<RigModel> all(paths.size());
   for (std::size_t a = 0; a < paths.size(); ++a) {
-    all[a].actuator = &rigs[a].actuator;
+    if (rigs[a].actuator) all[a].actuator = &*rigs[a].actuator;
     // The declared specimen stays unless the force channel found it wrong: a re-run changes
     // only what the record contradicts.
     if (rigs[a].specimen) all[a].specimen = &*rigs[a].specimen;
     all[a].displacement_scale = rigs[a].displacement_scale;
     std::vector<std::string> left_out;
-    model_case(*all[a].actuator, reruns.scales(a), reruns.rig(a, Channel::kMeasured),
-               reruns.declared(), &left_out);
+    if (all[a].actuator)
+      model_case(*all[a].actuator, reruns.scales(a), reruns.rig(a, Channel::kMeasured),
+                 reruns.declared(), &left_out);
     for (const auto& l : left_out)
       out.notes.push_back("actuator " + std::to_string(a + 1) + ": " + l);
     if (all[a].specimen)

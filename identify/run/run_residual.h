@@ -75,6 +75,10 @@ struct RunResidual {
   core::Mat recorded_response, declared_response, identified_response;
 };
 
+// The case as the distributed run applied it to a command: the actuator emulators' declared
+// receive_delay stages, then the case's delay stages (its compensation and name kept).
+config::Case declared_case(const config::Study& study, const config::Case& study_case);
+
 struct ResidualInput {
   const config::Study* study = nullptr;
   std::string case_name, clock;

@@ -162,11 +162,16 @@ RigModels rig_models(const ActuatorPath& path) {
   if (!c)
     throw std::invalid_argument("actuator " + std::to_string(path.actuator) +
                                 ": actuator path not identified");
-  RigModels out{c->final_fit.model, std::nullopt, path.displacement_scale};
+  RigModels out{std::nullopt, std::nullopt, path.displacement_scale};
+  std::vector<std::string> contradicted = path.undeclared;
+  remove(contradicted, "noise");
   const double s = path.displacement_scale;
-  if (s != 1.0)
-    scale_param(out.actuator, std::nullopt, "gain", 1.0 / s,
-                signal_scales(identified_signals(path.id, Channel::kMeasured)));
+  if (!contradicted.empty()) {
+    out.actuator = c->final_fit.model;
+    if (s != 1.0)
+      scale_param(*out.actuator, std::nullopt, "gain", 1.0 / s,
+                  signal_scales(identified_signals(path.id, Channel::kMeasured)));
+  }
   const ChannelIdentification* force = path.id.find(Channel::kForce);
   std::vector<std::string> re_run = path.specimen_undeclared;
   remove(re_run, "noise");

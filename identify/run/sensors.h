@@ -37,10 +37,12 @@
 // kOwnOffsetShare of the force's std, the load cell's is not named.
 //
 // The rig's models (rig_models): what the re-run and the written study hold for one actuator path:
-// the fitted actuator with its gain divided by s, and, where the specimen is re-run (the force
-// channel contradicted the declared specimen), the fitted specimen with the load cell's own
-// offset drift only and its stiffness, damping and mass times s; the sensor's scale itself goes
-// into a sensor_drift stage.
+// where the record contradicted the declared actuator or its displacement sensor (an undeclared
+// effect other than noise), the fitted actuator with its gain divided by s, else the declared
+// stages stay (a fitted model of a declared tracking loop is no better than the loop); where the
+// specimen is re-run (the force channel contradicted the declared specimen), the fitted specimen
+// with the load cell's own offset drift only and its stiffness, damping and mass times s; the
+// sensor's scale itself goes into a sensor_drift stage.
 
 #include <optional>
 #include <string>
@@ -73,7 +75,7 @@ double noise_spread(const Identification& id, Channel channel);
 double noise_std_error(const ActuatorPath& path, Channel channel, double sigma);
 
 struct RigModels {
-  ChannelModel actuator;
+  std::optional<ChannelModel> actuator;  // absent: the declared actuator stays
   std::optional<ChannelModel> specimen;  // absent: the declared specimen stays
   double displacement_scale = 1.0;
 };

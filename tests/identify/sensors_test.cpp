@@ -69,7 +69,8 @@ TEST(Sensors, ADisplacementSensorsScaleLeavesTheActuatorAndTheSpecimenAsDeclared
   EXPECT_GT(path.displacement_scale_error, 0.0);
   const RigModels models = rig_models(path);
   const SignalScales scales = signal_scales(identified_signals(path.id, Channel::kMeasured));
-  EXPECT_NEAR(*models.actuator.param(std::nullopt, "gain", scales), 1.0, 0.005);
+  ASSERT_TRUE(models.actuator.has_value());
+  EXPECT_NEAR(*models.actuator->param(std::nullopt, "gain", scales), 1.0, 0.005);
   EXPECT_FALSE(models.specimen.has_value());
   const IdentifiedRun written = identified_run(run, ".", ".");
   double read_scale = 0.0;
