@@ -90,16 +90,6 @@ Cluster start(const std::string& name, const std::string& text, int domain,
 }
 
 // Waits until the record holds at least `steps` steps.
-void wait_for_steps(const std::filesystem::path& record, std::size_t steps) {
-  const auto deadline = std::chrono::steady_clock::now() + 20s;
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (std::filesystem::exists(record) && runtime::read_record(record).steps().size() >= steps)
-      return;
-    std::this_thread::sleep_for(20ms);
-  }
-  FAIL() << "the run never reached step " << steps;
-}
-
 // Steps 0..n-1 with no gap, as a record cut at a failure must be.
 void expect_contiguous(const runtime::RecordContents& record) {
   const auto steps = record.steps();
@@ -124,7 +114,7 @@ TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
   const std::string name = "kill_" + std::to_string(victim) + "_" + std::to_string(sig);
   const std::string text = test::paper_frame_study(8, kRealTime);
   Cluster c = start(name, text, domain, {{1, true}, {2, false}}, "lag_shift_14ms");
-  wait_for_steps(c.record, 300);
+  ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   const auto killed_at = std::chrono::steady_clock::now();
   const std::int64_t killed_ns = transport::realtime_ns();
   c.nodes[victim - 1].signal(sig);
@@ -193,7 +183,7 @@ TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
       "max_missed_answers: 120 command_watchdog_periods: " +
           std::to_string(watchdog) + " max_overrun_fraction: -1 }");
   Cluster c = start("own_stall", text, 53, {{1, true}, {2, false}}, "reference");
-  wait_for_steps(c.record, 300);
+  ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   for (int i = 0; i < 15; ++i) {
     c.nodes[1].signal(SIGSTOP);
     std::this_thread::sleep_for(30ms);
@@ -211,7 +201,7 @@ TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
   runtime::ensure_dds_config();
   const std::string text = test::paper_frame_study(8, kRealTime);
   Cluster c = start("kill_coordinator", text, 25, {{1, true}, {2, false}}, "reference");
-  wait_for_steps(c.record, 300);
+  ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   c.coordinator->signal(SIGKILL);
   EXPECT_EQ(c.coordinator->wait(), 128 + SIGKILL);
   for (auto& node : c.nodes) {

@@ -57,7 +57,9 @@ inline core::PreparedStudy prepare(const std::string& text) {
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <fstream>
+#include <thread>
 
 #include "core/simulation.h"
 #include "runtime/launch/launch.h"
@@ -123,6 +125,23 @@ inline void expect_record_equals(const runtime::RecordContents& record,
       ASSERT_EQ(s.measured_force(a), reference.measured_force(row, a)) << "step " << k;
     }
   }
+}
+
+// Polls the live record at `record` (a run still writing it) until it holds `steps` intact steps;
+// false when `timeout` passes first. A record's size is no measure of its steps: the header and
+// the inputs (the motion) may land in separate writes, and the inputs outgrow hundreds of steps.
+inline bool wait_for_steps(const std::filesystem::path& record, std::size_t steps,
+                           std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    try {
+      if (runtime::read_record(record).steps().size() >= steps) return true;
+    } catch (const std::exception&) {
+      // not yet created, or not yet past its preamble
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
 }
 
 struct LaunchedRun {
