@@ -89,7 +89,6 @@ Cluster start(const std::string& name, const std::string& text, int domain,
   return c;
 }
 
-// Waits until the record holds at least `steps` steps.
 // Steps 0..n-1 with no gap, as a record cut at a failure must be.
 void expect_contiguous(const runtime::RecordContents& record) {
   const auto steps = record.steps();
