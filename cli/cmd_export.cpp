@@ -18,6 +18,7 @@
 #include "cli/commands.h"
 #include "results/results.h"
 #include "results/write.h"
+#include "runtime/record/node_health.h"
 #include "runtime/record/record_checks.h"
 #include "util/distinct_paths.h"
 
@@ -48,6 +49,24 @@ nlohmann::json node_unauthenticated_json(const runtime::RunFooter* footer) {
   for (const runtime::NodeRejects& n : footer->node_rejects())
     nodes[std::to_string(n.node_id())] = n.rejected().unauthenticated();
   return nodes;
+}
+
+// Each node's health (runtime/record/node_health.h) by node id; null without a footer.
+nlohmann::json node_health_json(const runtime::RunFooter* footer) {
+  if (!footer) return nlohmann::json();
+  nlohmann::json nodes = nlohmann::json::object();
+  for (const runtime::NodeRejects& n : footer->node_rejects())
+    nodes[std::to_string(n.node_id())] = runtime::node_health_json(n);
+  return nodes;
+}
+
+// The controller links and answer ages, a line each, for the text output.
+std::string node_health_text(const runtime::RunFooter* footer) {
+  if (!footer) return "";
+  std::string text;
+  for (const runtime::NodeRejects& n : footer->node_rejects())
+    text += runtime::controller_link_text(n) + runtime::answer_age_text(n);
+  return text;
 }
 
 // Reads the record, writes every requested output and says what was written. Throws ExitError:
@@ -97,6 +116,7 @@ void run_export(const std::string& record, const std::map<results::Format, std::
         {"unauthenticated",
          footer ? nlohmann::json(footer->counters().unauthenticated()) : nlohmann::json()},
         {"node_unauthenticated", node_unauthenticated_json(footer)},
+        {"node_health", node_health_json(footer)},
         {"checksummed", contents.checksummed},
         {"integrity", table.attributes().at("integrity")},
         {"lost_steps", table.attributes().at("lost_steps")},
@@ -108,6 +128,7 @@ void run_export(const std::string& record, const std::map<results::Format, std::
       std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status
                 << unauthenticated_note(footer) << ")\n";
     }
+    std::cout << node_health_text(footer);
   }
   if (contents.lost_entries())
     throw ExitError(kExitRunFailed, "export: the record lost entries (intact ones exported): " +

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <deque>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -108,12 +109,13 @@ std::optional<std::vector<std::uint8_t>> ControllerEmulator::step(const std::uin
   }
   if (in.status == controller_node::kStatusHold) {
     ++counts_.holds;
-    spdlog::warn("controller emulator: status HOLD received (frame {}); actuators hold",
-                 in.counter);
+    if (!holding_ || counts_.holds == 1)
+      spdlog::warn("controller emulator: status HOLD received (frame {}); actuators hold",
+                   in.counter);
     service_->handle(runtime::pack(kRunId, id, runtime::HOLD, step_, runtime::Hold{}));
     service_->settle_hold();
     holding_ = true;
-    return std::nullopt;
+    return held_answer(in);
   }
   ++counts_.commands;
   if (answer_frames_ >= 0 && static_cast<std::int64_t>(counts_.answered) >= answer_frames_)
@@ -140,6 +142,19 @@ std::optional<std::vector<std::uint8_t>> ControllerEmulator::step(const std::uin
     return std::nullopt;
   }
   ++counts_.answered;
+  return bytes;
+}
+
+// A HOLD frame's answer: status HOLD (held) and where the actuators hold.
+std::optional<std::vector<std::uint8_t>> ControllerEmulator::held_answer(const FrameValues& in) {
+  FrameValues out = in;
+  out.status = controller_node::kStatusHold;
+  for (int i = 0; i < actuators_; ++i) {
+    out.measured_displacement[i] = service_->held_position(i);
+    out.measured_force[i] = 0.0;
+  }
+  std::vector<std::uint8_t> bytes;
+  if (!controller_node::encode(link_.feedback(), out, bytes)) return std::nullopt;
   return bytes;
 }
 
@@ -230,24 +245,46 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag) 
   int result = 0;
   {
     PlantThread plant(emulator, lock);
-    while (!emulator.stopped()) {
-      const auto d = udp.receive(controller_node::monotonic_ns() + idle_ns);
-      if (!d) {
+    // Answers waiting for their lag, in arrival order (a link does not reorder): each leaves
+    // answer_lag after its frame was read, however many are in flight.
+    std::deque<std::pair<std::int64_t, std::vector<std::uint8_t>>> pending;
+    controller_node::Datagram d;
+    std::int64_t last_frame_ns = controller_node::monotonic_ns();
+    while (!emulator.stopped() || !pending.empty()) {
+      const std::int64_t now = controller_node::monotonic_ns();
+      while (!pending.empty() && pending.front().first <= now) {
+        udp.send(pending.front().second.data(), pending.front().second.size());
+        pending.pop_front();
+      }
+      if (emulator.stopped()) {
+        if (!pending.empty()) clock.sleep_until_ns(pending.front().first);
+        continue;
+      }
+      if (now - last_frame_ns > idle_ns) {
         spdlog::error("controller emulator: no frame for {} s; leaving", idle_timeout);
         result = 1;
         break;
       }
-      if (!d->from_peer) {
-        spdlog::warn("controller emulator: frame from {} ignored (not the host {})", d->source,
-                     udp.peer());
-        continue;
+      const std::int64_t wake = pending.empty() ? last_frame_ns + idle_ns + 1
+                                                : pending.front().first;
+      if (!udp.wait(wake)) continue;
+      while (udp.try_receive(d)) {
+        last_frame_ns = d.received_ns;
+        if (!d.from_peer) {
+          spdlog::warn("controller emulator: frame from {} ignored (not the host {})",
+                       controller_node::source_text(d), udp.peer());
+          continue;
+        }
+        std::unique_lock guard(lock);
+        auto answer = emulator.step(d.bytes.data(), std::min(d.size, d.bytes.size()));
+        guard.unlock();
+        if (!answer) continue;
+        if (lag_ns <= 0) {
+          udp.send(answer->data(), answer->size());
+          continue;
+        }
+        pending.emplace_back(d.received_ns + lag_ns, std::move(*answer));
       }
-      std::unique_lock guard(lock);
-      auto answer = emulator.step(d->bytes.data(), d->size);
-      guard.unlock();
-      if (!answer) continue;
-      if (lag_ns > 0) clock.sleep_until_ns(d->received_ns + lag_ns);
-      udp.send(*answer);
     }
   }
   const EmulatorCounts& c = emulator.counts();

@@ -80,6 +80,7 @@ class ControllerEmulator {
   std::vector<double> plant_realised_, plant_force_;  // paced: m, N at the newest plant period
   // Takes the command frame's targets as the actuators' next step; false when they refuse it.
   bool command_actuators(const controller_node::FrameValues& in, runtime::Feedback& feedback);
+  std::optional<std::vector<std::uint8_t>> held_answer(const controller_node::FrameValues& in);
 };
 
 // The socket loop: binds the link's peer end, answers frames until STOP (returns 0) or until no

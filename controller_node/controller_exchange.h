@@ -1,32 +1,44 @@
 #pragma once
-// One command frame to a lab's real-time controller and its answer, judged. State: the frame
-// counter, the counters of the frames it never got an answer to, and the link report (runtime::
-// ControllerReport: frames by cause, round trips).
+// The frames to and from a lab's real-time controller, judged, with several frames in flight.
+// Nothing waits here: a command frame leaves when send_command() is called, answers are judged
+// as next() reads them, and a frame unanswered for the reply timeout counts lost (a staleness
+// limit, never a blocking wait).
 //
-// Input of exchange(): the step's command in SI (time s, drifts m, drift velocities m/s), one
-// entry per actuator the node hosts. It stamps the next counter (1, 2, ...), status RUN (0),
-// sends the frame and waits up to the reply timeout for the feedback frame that echoes it.
-// Output: kAnswered with the measured drifts (m) and forces (N) and the round trip (s), kLate (real
-// time: no answer in time, the step goes unanswered), or kFault with the reason.
+// State: the frame counter; the frames in flight (a fixed ring of kInFlight: counter, the step
+// it commands, its send time and targets); the newest accepted measurement (for the rate
+// checks); the hold (position, frames, held); the link report (runtime::ControllerReport).
 //
-// Every datagram while it waits is judged in this order; nothing rejected is ever applied:
-//   not from the configured peer (address and port)  -> wrong_source, named; waits on (an
-//                                                       outsider cannot stop the run)
-//   from the peer, size != the feedback frame's       -> wrong_size          -> kFault
-//   a float field NaN or infinite                      -> non_finite          -> kFault
-//   counter of a frame that went unanswered (real time) -> late; waits on
-//   counter already answered, or older                 -> repeated_counter    -> kFault
-//   counter never sent                                 -> unexpected_counter  -> kFault
-//   STATUS field not 0 (the controller is not running) -> bad_status          -> kFault
-//   |measured drift| > max_drift or |force| > max_force -> out_of_range       -> kFault
-//   (limits <= 0: not checked)
-// No answer within the timeout: lost. Lockstep -> kFault at once (a lockstep step cannot go on
-// without it); real time -> kLate, and `lost_window` lost in a row -> kFault.
-// send_status(1 = hold, 2 = stop): a frame with the next counter, the status, and the newest
-// targets (so a controller that ignores STATUS still sees no jump).
+// send_command(step, time s, drift m, velocity m/s) -> stamps the next counter (1, 2, ...),
+//   status RUN (0), sends it. False when it cannot be encoded or sent (fault() says why).
+// next(now_ns) -> the next accepted answer (kAnswered: the step its frame commanded, the
+//   measured drifts m and forces N, the frame's round trip s), a fault (kFault, named), or kNone
+//   once nothing is queued. Every datagram is judged in this order; nothing rejected is applied:
+//   not from the configured peer (only a spoofed or pre-connect one reaches here) -> wrong_source,
+//                                                        counted, named, ignored
+//   from the peer, size != the feedback frame's          -> wrong_size          -> kFault
+//   a float field NaN or infinite (padding never read)    -> non_finite          -> kFault
+//   counter never sent                                    -> unexpected_counter  -> kFault
+//   counter already answered                              -> repeated_counter    -> kFault
+//   counter of a frame past its reply timeout, or older than the newest answered one, or
+//   older than the ring holds                             -> late; ignored
+//   holding: status HOLD (1) -> held; anything else ignored (the rig is being held)
+//   STATUS field not 0 (the controller is not running)   -> bad_status          -> kFault
+//   |measured drift| > max_drift or |force| > max_force   -> out_of_range        -> kFault
+//   |d measured drift| / d t > max_measured_rate, |d force| / d t > max_force_rate (d t: between
+//   the two answered frames' command times), or |measured - target drift| > max_tracking_error
+//   for tracking_error_steps answers in a row            -> implausible         -> kFault
+//   (every limit <= 0: not checked)
+//   Then frames sent more than the reply timeout ago are lost: lockstep -> kFault at once (the
+//   step cannot go on without its answer); real time -> lost_window lost in a row -> kFault.
+// The hold: begin_hold(now) sends a HOLD frame (status 1) carrying the position to hold (the
+//   newest measured drift, else the newest target) and hold_step(now) repeats it every dt until
+//   the controller answers one with status HOLD, or hold_time passes; it returns true then.
+//   send_stop() sends the STOP frame (status 2) with the same position.
+// Threads: wait() may run on any thread (it only polls the socket); everything else on one
+// thread at a time (the node serialises them). No allocation per datagram or frame once built
+// (the fault texts allocate, once per fault).
 
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,38 +53,61 @@ inline constexpr std::int64_t kStatusRun = 0, kStatusHold = 1, kStatusStop = 2;
 
 struct ExchangeSettings {
   int actuators = 0;
-  double reply_timeout = 1.0;  // s
+  double dt = 0.0;             // s, the command period: HOLD frames repeat at it
+  double reply_timeout = 1.0;  // s, an unanswered frame is lost after it
   bool real_time = false;
-  int lost_window = 1;     // real time: lost answers in a row before kFault
-  double max_drift = 0.0;  // m; <= 0: not checked
-  double max_force = 0.0;  // N; <= 0: not checked
+  int lost_window = 1;              // real time: lost frames in a row before kFault
+  double max_drift = 0.0;           // m
+  double max_force = 0.0;           // N
+  double max_measured_rate = 0.0;   // m/s
+  double max_force_rate = 0.0;      // N/s
+  double max_tracking_error = 0.0;  // m
+  int tracking_error_steps = 3;
+  double hold_time = 0.5;  // s
 };
 
 class ControllerExchange {
  public:
-  enum class Outcome { kAnswered, kLate, kFault };
+  static constexpr std::size_t kInFlight = 256;  // frames judged by their counter
+  static constexpr std::size_t kRoundTrips = 4096;
+
+  enum class Outcome { kNone, kAnswered, kFault };
   struct Answer {
-    Outcome outcome = Outcome::kFault;
-    std::vector<double> displacement, force;  // m, N; kAnswered only
-    double round_trip = 0.0;                  // s
+    Outcome outcome = Outcome::kNone;
+    std::int64_t step = 0;                        // kAnswered: the step its frame commanded
+    const std::vector<double>* displacement = nullptr;  // m, valid until the next call
+    const std::vector<double>* force = nullptr;         // N
+    double round_trip = 0.0;                            // s
     std::int64_t status = 0;
     std::string fault;  // kFault: why
   };
 
-  // Throws std::invalid_argument naming the field for a bad layout, std::runtime_error when the
-  // socket cannot be bound.
+  // Throws std::invalid_argument naming the field for a bad layout or setting,
+  // std::runtime_error when the socket cannot be bound or connected.
   ControllerExchange(const config::ControllerLink& link, const ExchangeSettings& settings);
 
-  Answer exchange(double time, const std::vector<double>& drift,
-                  const std::vector<double>& velocity);
-  bool send_status(std::int64_t status);
-  const runtime::ControllerReport& report() const { return report_; }
+  bool send_command(std::int64_t step, double time, const std::vector<double>& drift,
+                    const std::vector<double>& velocity);
+  Answer next(std::int64_t now_ns);
+  bool wait(std::int64_t deadline_ns) const { return link_->wait(deadline_ns); }
+
+  void begin_hold(std::int64_t now_ns);
+  bool hold_step(std::int64_t now_ns);
+  bool send_stop();
+  bool holding() const { return holding_; }
+
+  const std::string& fault() const { return send_fault_; }
+  // The report with its round-trip median and p99 (sorts a preallocated copy).
+  const runtime::ControllerReport& report();
+  const runtime::ControllerReport& report_as_is() const { return report_; }
   std::string peer() const { return link_->peer(); }
 
  private:
-  // kAnswered, kFault, or kLate meaning "not this one, wait on".
-  Answer judge(const Datagram& d, std::int64_t sent_ns);
-  Answer judge_counter(const std::string& from);
+  struct InFlight {
+    std::int64_t counter = 0, step = 0, sent_ns = 0;
+    double time = 0.0;
+    enum class State { kFree, kPending, kAnswered, kLost } state = State::kFree;
+  };
   enum class Cause {
     kWrongSource,
     kWrongSize,
@@ -81,19 +116,46 @@ class ControllerExchange {
     kRepeated,
     kUnexpected,
     kBadStatus,
-    kOutOfRange
+    kOutOfRange,
+    kImplausible
   };
+  InFlight& slot(std::int64_t counter) {
+    return in_flight_[static_cast<std::size_t>(counter) % kInFlight];
+  }
+  const double* targets_of(std::int64_t counter) const {
+    return &targets_[(static_cast<std::size_t>(counter) % kInFlight) *
+                     static_cast<std::size_t>(settings_.actuators)];
+  }
+  Answer judge(const Datagram& d);
+  // The counter's frame, or why not (a fault, or kNone meaning late: ignored).
+  Answer judge_counter(InFlight*& frame);
+  std::string implausible(const InFlight& frame);
+  Answer expire(std::int64_t now_ns);
+  void accept(const InFlight& frame, double round_trip);
   void reject(Cause cause, const std::string& why);
-  bool send_frame(std::int64_t status);
+  bool send_frame(std::int64_t status, std::int64_t step);
+  void note_hold_answer(const Datagram& d);
+
   config::ControllerLink config_;
   ExchangeSettings settings_;
   std::unique_ptr<UdpLink> link_;
   FrameValues out_, in_;
   std::vector<std::uint8_t> bytes_;
-  std::int64_t counter_ = 0;
-  std::deque<std::int64_t> unanswered_;  // newest lost counters (at most kKeepLost)
-  static constexpr std::size_t kKeepLost = 256;
-  int lost_in_a_row_ = 0;
+  Datagram datagram_;
+  std::vector<InFlight> in_flight_;
+  std::vector<double> targets_;  // kInFlight x actuators, by counter
+  std::int64_t counter_ = 0, newest_answered_ = 0;
+  int lost_in_a_row_ = 0, tracking_streak_ = 0;
+  // The newest accepted measurement and its frame's command time (for the rate checks).
+  std::vector<double> last_displacement_, last_force_;
+  double last_time_ = 0.0;
+  bool measured_ = false;
+  // The hold.
+  bool holding_ = false, held_ = false;
+  std::int64_t hold_started_ns_ = 0, next_hold_frame_ns_ = 0;
+  std::string send_fault_;
+  std::vector<double> round_trips_, sorted_;  // ring of the newest kRoundTrips, and a scratch
+  std::size_t round_trip_next_ = 0;
   runtime::ControllerReport report_;
 };
 

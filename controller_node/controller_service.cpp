@@ -2,18 +2,45 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <stdexcept>
 
 #include "runtime/node/plan.h"
 
 namespace rths::controller_node {
+namespace {
+
+constexpr double kDefaultHoldTime = 0.5;       // s
+constexpr double kMaxHoldTime = 60.0;          // s
+constexpr double kLockstepReplyTimeout = 1.0;  // s
+
+// s: the reply timeout, bounded by the window within which an answer may still be applied.
+double reply_timeout(const config::ControllerLink& link, const config::Deployment& deployment,
+                     double dt) {
+  const bool real_time = deployment.clock() == config::Deployment::REAL_TIME;
+  const double window = real_time ? runtime::max_missed_answers(deployment, dt) * dt
+                                  : runtime::step_timeout(deployment);
+  const double asked = link.reply_timeout_ms() * 1e-3;
+  if (!std::isfinite(asked) || asked < 0)
+    throw std::invalid_argument("controller.reply_timeout_ms must be finite and >= 0");
+  if (asked > window * (1 + 1e-9))
+    throw std::invalid_argument(
+        "controller.reply_timeout_ms " + std::to_string(link.reply_timeout_ms()) +
+        " is longer than the " + (real_time ? "answer window" : "lockstep step_timeout") + " (" +
+        std::to_string(window * 1e3) +
+        " ms): an answer that late could never be applied, and a silent controller would get its "
+        "HOLD that late; lower it, or widen the window");
+  if (asked > 0) return asked;
+  return real_time ? window : std::min(kLockstepReplyTimeout, window);
+}
+
+}  // namespace
 
 ControllerService::ControllerService(std::int32_t node_id, std::string expected_run_id)
     : NodeService(node_id, config::NodeSpec::CONTROLLER, std::move(expected_run_id)) {}
 
-const runtime::ControllerReport& ControllerService::report() const {
-  static const runtime::ControllerReport none;
-  return exchange_ ? exchange_->report() : none;
+runtime::ControllerReport ControllerService::report() const {
+  return exchange_ ? exchange_->report() : runtime::ControllerReport{};
 }
 
 int ControllerService::configure(const runtime::Assign& assign) {
@@ -23,74 +50,133 @@ int ControllerService::configure(const runtime::Assign& assign) {
   const config::Deployment& deployment = assign.study().deployment();
   ExchangeSettings settings;
   settings.actuators = assign.actuators_size();
+  settings.dt = assign.dt();
   settings.real_time = deployment.clock() == config::Deployment::REAL_TIME;
-  settings.reply_timeout = link.reply_timeout_ms() > 0 ? link.reply_timeout_ms() * 1e-3
-                           : settings.real_time        ? assign.dt()
-                                                       : 1.0;
+  settings.reply_timeout = reply_timeout(link, deployment, assign.dt());
   settings.lost_window =
       settings.real_time ? runtime::max_missed_answers(deployment, assign.dt()) : 1;
   settings.max_drift = 2.0 * deployment.limits().max_displacement();
   settings.max_force = link.max_force();
+  settings.max_measured_rate = link.max_measured_rate() > 0
+                                   ? link.max_measured_rate()
+                                   : 2.0 * deployment.limits().max_velocity();
+  settings.max_force_rate = link.max_force_rate();
+  settings.max_tracking_error = link.max_tracking_error();
+  settings.tracking_error_steps =
+      link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3;
+  const double hold = link.hold_time_ms() * 1e-3;
+  if (!std::isfinite(hold) || hold < 0 || hold > kMaxHoldTime)
+    throw std::invalid_argument("controller.hold_time_ms must be in [0, 60000]");
+  settings.hold_time = hold > 0 ? hold : kDefaultHoldTime;
   exchange_ = std::make_unique<ControllerExchange>(link, settings);
   drift_.assign(static_cast<std::size_t>(settings.actuators), 0.0);
   velocity_ = drift_;
-  spdlog::info("{}: UDP {} -> controller {}, frames of {} and {} bytes, reply timeout {} ms",
-               label(), link.local_address() + ":" + std::to_string(link.local_port()),
-               exchange_->peer(), frame_size(link.command()), frame_size(link.feedback()),
-               settings.reply_timeout * 1e3);
+  spdlog::info(
+      "{}: UDP {} -> controller {}, frames of {} and {} bytes, reply timeout {} ms, hold time {} "
+      "ms",
+      label(), link.local_address() + ":" + std::to_string(link.local_port()), exchange_->peer(),
+      frame_size(link.command()), frame_size(link.feedback()), settings.reply_timeout * 1e3,
+      settings.hold_time * 1e3);
   return settings.actuators;
 }
 
-void ControllerService::compute(const runtime::Command& command, runtime::Feedback& feedback) {
+void ControllerService::compute(const runtime::Command& /*command*/,
+                                runtime::Feedback& /*feedback*/) {
+  // Never called: every command is dispatched (answers_asynchronously()).
+}
+
+void ControllerService::dispatch(std::int64_t step, const runtime::Command& command) {
   const int n = static_cast<int>(drift_.size());
-  if (command.drift_size() != n || command.drift_velocity_size() != n)
-    throw std::invalid_argument(label() + ": command has " + std::to_string(command.drift_size()) +
-                                " drifts for " + std::to_string(n) + " actuators");
-  for (int i = 0; i < n; ++i) {
-    drift_[i] = command.drift(i);
-    velocity_[i] = command.drift_velocity(i);
+  if (command.drift_size() != n || command.drift_velocity_size() != n) {
+    dispatch_fault_ = "command of step " + std::to_string(step) + " has " +
+                      std::to_string(command.drift_size()) + " drifts for " + std::to_string(n) +
+                      " actuators";
+    return;
   }
-  const ControllerExchange::Answer a = exchange_->exchange(command.time(), drift_, velocity_);
-  answered_ = a.outcome == ControllerExchange::Outcome::kAnswered;
-  fault_ = a.outcome == ControllerExchange::Outcome::kFault ? "controller: " + a.fault : "";
-  if (!answered_) return;
   for (int i = 0; i < n; ++i) {
-    feedback.add_realised(a.displacement[i]);
-    feedback.add_force(a.force[i]);
+    drift_[static_cast<std::size_t>(i)] = command.drift(i);
+    velocity_[static_cast<std::size_t>(i)] = command.drift_velocity(i);
+  }
+  if (!exchange_->send_command(step, command.time(), drift_, velocity_))
+    dispatch_fault_ = exchange_->fault();
+}
+
+void ControllerService::wait_for_answers(std::int64_t deadline_ns) {
+  if (exchange_) exchange_->wait(deadline_ns);
+}
+
+runtime::NodeService::Answered ControllerService::next_answer(runtime::Feedback& feedback) {
+  Answered out;
+  if (!exchange_) return out;
+  if (!dispatch_fault_.empty()) {
+    out.kind = Answered::Kind::kFault;
+    out.fault = "controller: " + dispatch_fault_;
+    dispatch_fault_.clear();
+    return out;
+  }
+  const std::int64_t now = monotonic_ns();
+  if (exchange_->holding()) {
+    hold_done_ = exchange_->hold_step(now);
+    if (hold_done_ && stop_requested_ && !stop_sent_) {
+      stop_sent_ = true;
+      exchange_->send_stop();
+    }
+    return out;
+  }
+  const ControllerExchange::Answer a = exchange_->next(now);
+  if (a.outcome == ControllerExchange::Outcome::kNone) return out;
+  if (a.outcome == ControllerExchange::Outcome::kFault) {
+    out.kind = Answered::Kind::kFault;
+    out.fault = "controller: " + a.fault;
+    return out;
+  }
+  for (std::size_t i = 0; i < drift_.size(); ++i) {
+    feedback.add_realised((*a.displacement)[i]);
+    feedback.add_force((*a.force)[i]);
   }
   feedback.set_controller_round_trip(a.round_trip);
   feedback.set_controller_status(static_cast<std::int32_t>(a.status));
+  out.kind = Answered::Kind::kAnswer;
+  out.step = a.step;
+  return out;
 }
 
-std::string ControllerService::failure() {
-  std::string why = std::move(fault_);
-  fault_.clear();
-  return why;
+bool ControllerService::rested() const {
+  if (!exchange_) return true;
+  return hold_done_ && (!stop_requested_ || stop_sent_);
 }
 
 void ControllerService::on_hold() {
-  if (!exchange_) return;
-  const bool sent = exchange_->send_status(kStatusHold);
-  spdlog::warn("{}: HOLD {} to the controller {} (status {} in a command frame)", label(),
-               sent ? "sent" : "could not be sent", exchange_->peer(), kStatusHold);
+  if (!exchange_ || exchange_->holding()) return;
+  exchange_->begin_hold(monotonic_ns());
+  spdlog::warn("{}: HOLD frames (status {}) to the controller {}, holding the measured position",
+               label(), kStatusHold, exchange_->peer());
 }
 
 void ControllerService::on_stop() {
   if (!exchange_) return;
-  exchange_->send_status(kStatusStop);
-  const runtime::ControllerReport& r = exchange_->report();
-  spdlog::info(
-      "{}: controller {}: {} frames sent, {} accepted, {} late, {} lost; rejected: wrong source "
-      "{}, wrong size {}, repeated counter {}, unexpected counter {}, not finite {}, out of range "
-      "{}, bad status {}; round trip last {:.3f} ms, max {:.3f} ms{}",
-      label(), exchange_->peer(), r.frames_sent(), r.frames_accepted(), r.late(), r.lost(),
-      r.wrong_source(), r.wrong_size(), r.repeated_counter(), r.unexpected_counter(),
-      r.non_finite(), r.out_of_range(), r.bad_status(), r.round_trip_last() * 1e3,
-      r.round_trip_max() * 1e3, r.last_reject().empty() ? "" : "; newest: " + r.last_reject());
+  stop_requested_ = true;
+  if (!exchange_->holding()) exchange_->begin_hold(monotonic_ns());
 }
 
 void ControllerService::fill_heartbeat(runtime::Heartbeat& heartbeat) const {
-  if (exchange_) *heartbeat.mutable_controller() = exchange_->report();
+  if (!exchange_) return;
+  const runtime::ControllerReport& r = exchange_->report();
+  *heartbeat.mutable_controller() = r;
+  if (!heartbeat.final()) return;
+  spdlog::info(
+      "{}: controller {}: {} frames sent, {} accepted, {} late, {} lost; rejected: wrong source "
+      "{}, wrong size {}, repeated counter {}, unexpected counter {}, not finite {}, out of range "
+      "{}, bad status {}, implausible {}; round trip median {:.3f} ms, p99 {:.3f} ms, max {:.3f} "
+      "ms; {} HOLD frames, held {}{}",
+      label(), exchange_->peer(), r.frames_sent(), r.frames_accepted(), r.late(), r.lost(),
+      r.wrong_source(), r.wrong_size(), r.repeated_counter(), r.unexpected_counter(),
+      r.non_finite(), r.out_of_range(), r.bad_status(), r.implausible(),
+      r.round_trip_median() * 1e3, r.round_trip_p99() * 1e3, r.round_trip_max() * 1e3,
+      r.hold_frames(),
+      r.held_after() >= 0 ? "after " + std::to_string(r.held_after() * 1e3) + " ms"
+                          : std::string("never reported"),
+      r.last_reject().empty() ? "" : "; newest: " + r.last_reject());
 }
 
 }  // namespace rths::controller_node

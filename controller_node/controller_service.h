@@ -5,19 +5,27 @@
 // (m/s), one per hosted actuator. Output: Feedback.realised (m, the controller's measured drift)
 // and force (N), same order, plus the frame's round trip (s) and the controller's status.
 //
-// Per COMMAND: one command frame (counter + 1, status RUN, the targets) and its answer, judged by
-// ControllerExchange (controller_exchange.h): a rejected or missing answer is never applied.
-//   the answer is refused (wrong size, counter repeated or never sent, not finite, beyond the
-//   limits, status not running) or, lockstep, it does not come within the reply timeout
-//       -> the node holds on its own and answers HOLD naming the cause instead of FEEDBACK.
-//   real time, no answer in time -> no FEEDBACK this step (lost); max_missed_answers lost in a
-//       row -> HOLD as above.
-//   a frame from anyone but the configured peer -> counted, named, ignored.
-// HOLD (from the coordinator, its own watchdog, or a refused answer) -> a command frame with
-// status HOLD (1) and the newest targets goes to the controller, so the rig holds. STOP -> one
-// with status STOP (2). The link report (ControllerReport) goes up in every heartbeat and is
-// logged on STOP. Limits: |measured drift| <= 2 x deployment.limits.max_displacement (a drift
-// spans two DOFs), |force| <= controller.max_force (0 = no limit).
+// Threads (an asynchronous NodeService: runtime/node/node_service.h):
+//   command   the DDS receive thread (or the node loop, behind a receive lag): dispatch() packs
+//             the step's command frame and sends it at once (a non-blocking send on a connected
+//             UDP socket); it never waits for an answer and allocates nothing once warm.
+//   answers   the node loop's answer thread: wait_for_answers() blocks in ppoll on the socket
+//             only (no lock, nothing else); next_answer(), under the node's lock, reads every
+//             queued datagram without blocking, judges it (ControllerExchange) and returns each
+//             accepted answer for the step its frame commanded, so several frames may be in
+//             flight and a controller 2 ms behind costs 2 ms, not a backlog. It also expires
+//             frames past the reply timeout (a staleness limit) and, once held or stopped,
+//             runs the hold.
+// A refused answer, or lost frames beyond the window -> the node holds on its own and answers
+// HOLD naming the cause (nothing refused is ever applied).
+// HOLD (from the coordinator, its own watchdog, or a refused answer) -> HOLD frames (status 1)
+// carrying the position to hold (the newest measured drift), repeated every dt until the
+// controller answers one with status 1 (held) or controller.hold_time_ms passes. STOP -> the same
+// hold first, then one STOP frame (status 2); the final heartbeat (the link report) follows.
+// Limits: |measured drift| <= 2 x deployment.limits.max_displacement (a drift spans two DOFs),
+// |force| <= controller.max_force (0 = no limit); rates and tracking error as configured
+// (controller_exchange.h). The reply timeout is at most the answer window in real time (a
+// frame older than it is never applied) and step_timeout in lockstep.
 
 #include <memory>
 
@@ -29,13 +37,16 @@ namespace rths::controller_node {
 class ControllerService final : public runtime::NodeService {
  public:
   ControllerService(std::int32_t node_id, std::string expected_run_id);
-  const runtime::ControllerReport& report() const;
+  runtime::ControllerReport report() const;
 
  protected:
   int configure(const runtime::Assign& assign) override;
   void compute(const runtime::Command& command, runtime::Feedback& feedback) override;
-  std::string failure() override;
-  bool answered() const override { return answered_; }
+  bool answers_asynchronously() const override { return true; }
+  void dispatch(std::int64_t step, const runtime::Command& command) override;
+  void wait_for_answers(std::int64_t deadline_ns) override;
+  Answered next_answer(runtime::Feedback& feedback) override;
+  bool rested() const override;
   void on_hold() override;
   void on_stop() override;
   void fill_heartbeat(runtime::Heartbeat& heartbeat) const override;
@@ -43,8 +54,8 @@ class ControllerService final : public runtime::NodeService {
  private:
   std::unique_ptr<ControllerExchange> exchange_;
   std::vector<double> drift_, velocity_;
-  std::string fault_;
-  bool answered_ = true;
+  std::string dispatch_fault_;
+  bool hold_done_ = false, stop_requested_ = false, stop_sent_ = false;
 };
 
 }  // namespace rths::controller_node

@@ -26,10 +26,12 @@ sockaddr_in address_of(const std::string& address, int port, const std::string& 
   return a;
 }
 
-std::string text_of(const sockaddr_in& a) {
+std::string text_of(std::uint32_t address, std::uint16_t port) {
+  in_addr a{};
+  a.s_addr = address;
   char host[INET_ADDRSTRLEN] = {};
-  inet_ntop(AF_INET, &a.sin_addr, host, sizeof host);
-  return std::string(host) + ":" + std::to_string(ntohs(a.sin_port));
+  inet_ntop(AF_INET, &a, host, sizeof host);
+  return std::string(host) + ":" + std::to_string(ntohs(port));
 }
 
 }  // namespace
@@ -40,20 +42,29 @@ std::int64_t monotonic_ns() {
   return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
 
+std::string source_text(const Datagram& datagram) {
+  return text_of(datagram.source_address, datagram.source_port);
+}
+
 UdpLink::UdpLink(const std::string& local_address, int local_port, const std::string& peer_address,
                  int peer_port) {
   const sockaddr_in local = address_of(local_address, local_port, "local");
   const sockaddr_in peer = address_of(peer_address, peer_port, "peer");
   peer_address_ = peer.sin_addr.s_addr;
   peer_port_ = peer.sin_port;
-  local_ = text_of(local);
-  peer_ = text_of(peer);
-  fd_ = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  local_ = text_of(local.sin_addr.s_addr, local.sin_port);
+  peer_ = text_of(peer_address_, peer_port_);
+  fd_ = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (fd_ < 0) throw std::runtime_error(std::string("socket: ") + std::strerror(errno));
   if (bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof local) != 0) {
     const std::string why = std::strerror(errno);
     close(fd_);
     throw std::runtime_error("cannot bind UDP " + local_ + ": " + why);
+  }
+  if (connect(fd_, reinterpret_cast<const sockaddr*>(&peer), sizeof peer) != 0) {
+    const std::string why = std::strerror(errno);
+    close(fd_);
+    throw std::runtime_error("cannot connect UDP " + local_ + " to " + peer_ + ": " + why);
   }
 }
 
@@ -61,41 +72,40 @@ UdpLink::~UdpLink() {
   if (fd_ >= 0) close(fd_);
 }
 
-std::string UdpLink::peer() const { return peer_; }
-std::string UdpLink::local() const { return local_; }
-
-bool UdpLink::send(const std::vector<std::uint8_t>& bytes) {
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_addr.s_addr = peer_address_;
-  to.sin_port = peer_port_;
-  const ssize_t n =
-      sendto(fd_, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof to);
-  return n == static_cast<ssize_t>(bytes.size());
+bool UdpLink::send(const std::uint8_t* bytes, std::size_t size) {
+  const ssize_t n = ::send(fd_, bytes, size, MSG_DONTWAIT);
+  return n == static_cast<ssize_t>(size);
 }
 
-std::optional<Datagram> UdpLink::receive(std::int64_t deadline_ns) {
+bool UdpLink::wait(std::int64_t deadline_ns) const {
   for (;;) {
     const std::int64_t left = deadline_ns - monotonic_ns();
-    if (left <= 0) return std::nullopt;
+    if (left <= 0) return false;
     pollfd p{fd_, POLLIN, 0};
-    const int ms = static_cast<int>((left + 999999) / 1000000);
-    const int ready = poll(&p, 1, ms);
+    timespec timeout{static_cast<time_t>(left / 1000000000), static_cast<long>(left % 1000000000)};
+    const int ready = ppoll(&p, 1, &timeout, nullptr);
     if (ready < 0 && errno == EINTR) continue;
-    if (ready <= 0) continue;  // the deadline is checked again above
-    Datagram d;
-    d.bytes.resize(kMaxDatagram);
+    return ready > 0;
+  }
+}
+
+bool UdpLink::try_receive(Datagram& d) {
+  for (;;) {
     sockaddr_in from{};
     socklen_t from_size = sizeof from;
-    const ssize_t n = recvfrom(fd_, d.bytes.data(), d.bytes.size(), MSG_TRUNC,
+    const ssize_t n = recvfrom(fd_, d.bytes.data(), d.bytes.size(), MSG_TRUNC | MSG_DONTWAIT,
                                reinterpret_cast<sockaddr*>(&from), &from_size);
-    if (n < 0) continue;  // e.g. ICMP port unreachable reported on the socket
+    if (n < 0 && errno == EINTR) continue;
+    // ECONNREFUSED: an ICMP port unreachable from the peer (its socket not yet open) is reported
+    // once on a connected socket; it is no datagram, and the next call reads on.
+    if (n < 0 && errno == ECONNREFUSED) continue;
+    if (n < 0) return false;
     d.received_ns = monotonic_ns();
     d.size = static_cast<std::size_t>(n);
-    d.bytes.resize(std::min(d.size, kMaxDatagram));
+    d.source_address = from.sin_addr.s_addr;
+    d.source_port = from.sin_port;
     d.from_peer = from.sin_addr.s_addr == peer_address_ && from.sin_port == peer_port_;
-    d.source = text_of(from);
-    return d;
+    return true;
   }
 }
 

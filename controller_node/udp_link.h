@@ -1,31 +1,38 @@
 #pragma once
 // One UDP socket between this host and one peer (IPv4), bound to a configured local address and
-// port only (never INADDR_ANY unless the config says 0.0.0.0). It is not connect()ed, so that a
-// datagram from anyone else is seen, counted and named rather than dropped unseen by the kernel;
-// receive() says whether each came from the configured peer.
+// port only (never INADDR_ANY unless the config says 0.0.0.0) and connect()ed to the peer, so
+// that the kernel drops every datagram from any other address or port before it takes room in
+// the socket's receive buffer: a flood from another port can neither fill the buffer nor push
+// the controller's answers out. (A sender that spoofs the peer's address and port still gets
+// through: only a private link or VLAN closes that; docs/controller.md.)
 //
 //   UdpLink(local, local_port, peer, peer_port)  throws std::runtime_error naming the address
-//                                                 when an address does not parse or bind fails.
-//   send(bytes)            one datagram to the peer; false when the kernel refused it.
-//   receive(deadline_ns)   the next datagram before the CLOCK_MONOTONIC deadline, or nullopt.
-//                          Datagrams longer than kMaxDatagram are reported with their true size
-//                          (truncated content).
+//                                                 when an address does not parse, or bind or
+//                                                 connect fails.
+//   send(bytes, size)      one datagram to the peer, never blocking; false when the kernel
+//                          refused it (buffer full, ICMP error pending).
+//   wait(deadline_ns)      true when a datagram is ready before the CLOCK_MONOTONIC deadline.
+//   try_receive(datagram)  the next queued datagram into a caller-owned Datagram, never
+//                          blocking (false: none); no allocation. Datagrams longer than
+//                          kMaxDatagram are reported with their true size (truncated content).
+// Thread contract: send() and wait() may run on different threads at once (the socket calls are
+// thread-safe); try_receive() on one thread at a time.
 
+#include <array>
 #include <cstdint>
-#include <optional>
 #include <string>
-#include <vector>
 
 namespace rths::controller_node {
 
 inline constexpr std::size_t kMaxDatagram = 2048;  // bytes read of one datagram
 
 struct Datagram {
-  std::vector<std::uint8_t> bytes;  // at most kMaxDatagram
-  std::size_t size = 0;             // the datagram's true size
-  bool from_peer = false;           // source address and port are the configured peer's
-  std::string source;               // "a.b.c.d:port"
-  std::int64_t received_ns = 0;     // CLOCK_MONOTONIC
+  std::array<std::uint8_t, kMaxDatagram> bytes{};  // the first min(size, kMaxDatagram) are valid
+  std::size_t size = 0;                             // the datagram's true size
+  bool from_peer = false;                           // source address and port are the peer's
+  std::uint32_t source_address = 0;                 // network order
+  std::uint16_t source_port = 0;                    // network order
+  std::int64_t received_ns = 0;                     // CLOCK_MONOTONIC
 };
 
 class UdpLink {
@@ -36,10 +43,11 @@ class UdpLink {
   UdpLink(const UdpLink&) = delete;
   UdpLink& operator=(const UdpLink&) = delete;
 
-  bool send(const std::vector<std::uint8_t>& bytes);
-  std::optional<Datagram> receive(std::int64_t deadline_ns);
-  std::string peer() const;   // "a.b.c.d:port"
-  std::string local() const;  // "a.b.c.d:port"
+  bool send(const std::uint8_t* bytes, std::size_t size);
+  bool wait(std::int64_t deadline_ns) const;
+  bool try_receive(Datagram& datagram);
+  std::string peer() const { return peer_; }    // "a.b.c.d:port"
+  std::string local() const { return local_; }  // "a.b.c.d:port"
 
  private:
   int fd_ = -1;
@@ -49,5 +57,7 @@ class UdpLink {
 };
 
 std::int64_t monotonic_ns();
+// "a.b.c.d:port" of a datagram's source.
+std::string source_text(const Datagram& datagram);
 
 }  // namespace rths::controller_node

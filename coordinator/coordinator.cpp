@@ -8,6 +8,7 @@
 #include "coordinator/answer_verdict.h"
 #include "coordinator/deadline_verdict.h"
 #include "coordinator/state.h"
+#include "runtime/record/node_health.h"
 
 namespace rths::coordinator {
 
@@ -37,6 +38,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
     node.plan = &n;
     node.awaited = s.awaits_answers_of(n.spec);
     if (s.real_time && node.awaited) node.wait_judge.emplace(s.answer_wait());
+    if (s.real_time) node.window.emplace(s.deployment, n.spec, s.setup.dt);
     s.lags.reserve(n.spec.id(), steps);  // no growth on the loop
     s.endpoint.listen_to(n.spec.id());
     intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),
@@ -169,7 +171,15 @@ void deactivate(RunState& s, bool failed, const std::string& status) {
   stop.set_reason(status);
   for (auto& [id, node] : s.nodes)
     if (node.announced) s.send(id, runtime::STOP, s.step, stop);
-  const auto until = Clock::now() + kFinalReportWait;
+  // A controller node holds its rig before its STOP frame and its final report.
+  auto wait = std::chrono::duration<double>(kFinalReportWait);
+  for (const auto& [id, node] : s.nodes)
+    if (node.plan->spec.kind() == config::NodeSpec::CONTROLLER)
+      wait = std::max(wait, std::chrono::duration<double>(
+                                kFinalReportWait + std::chrono::milliseconds(500)) +
+                                std::chrono::duration<double>(
+                                    node.plan->spec.controller().hold_time_ms() * 1e-3));
+  const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(wait);
   const auto all_reported = [&s] {
     for (const auto& [id, node] : s.nodes)
       if (node.announced && !node.final_report) return false;
@@ -207,6 +217,11 @@ void report(const RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome)
     node_rejects.set_label(node.plan->label());
     *node_rejects.mutable_rejected() = node.rejects;
     node_rejects.set_final(node.final_report);
+    if (node.plan->spec.kind() == config::NodeSpec::CONTROLLER)
+      *node_rejects.mutable_controller() = node.controller;
+    if (node.window)
+      *node_rejects.mutable_answer_age() =
+          node.ages.summary(static_cast<double>(node.window->steps(s.time)), s.setup.dt);
     LinkLagStats stats;
     stats.node_id = id;
     stats.label = node.plan->label();
@@ -216,6 +231,32 @@ void report(const RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome)
       stats.injected = series->second.injected_summary();
     }
     outcome.links.push_back(stats);
+  }
+}
+
+// The controller links, as their final reports say: a frame from a wrong source or a rejected
+// one fails the run (someone else speaks on the rig's network, or the rig sent what it must
+// not); lost and late frames fail it beyond the answer tolerance (1 - min_answer_fraction of the
+// frames sent), and are said in an event within it.
+void judge_links(RunState& s, RunOutcome& outcome) {
+  const double min_answers = runtime::min_answer_fraction(s.deployment);
+  for (const runtime::NodeRejects& n : outcome.node_rejects) {
+    const auto verdict = runtime::link_verdict(n);
+    if (!verdict) continue;
+    const runtime::ControllerReport& r = n.controller();
+    const bool rejected = runtime::controller_rejected(r) > 0;
+    const double missing = static_cast<double>(r.lost() + r.late());
+    const bool too_many =
+        min_answers >= 0 && missing > (1.0 - min_answers) * static_cast<double>(r.frames_sent());
+    if (!rejected && !too_many) {
+      s.event(*verdict + " (within the answer tolerance)");
+      continue;
+    }
+    outcome.ok = false;
+    outcome.status = "failed: " + *verdict;
+    outcome.failed_node = n.label();
+    s.event(outcome.status);
+    return;
   }
 }
 
@@ -281,6 +322,7 @@ RunOutcome Coordinator::run() {
   }
   deactivate(s, failed, outcome.status);
   report(s, pacer, outcome);
+  if (outcome.ok) judge_links(s, outcome);
   outcome.wall_seconds = seconds_since(wall_start);
   close_record(s, outcome);
   s.pacer = nullptr;

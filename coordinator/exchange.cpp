@@ -70,6 +70,7 @@ void RunState::apply(const transport::Message& message, Node& node) {
       node.last_seen = Clock::now();
       node.servo_ticks = heartbeat.servo_ticks();
       node.servo_overruns = heartbeat.servo_overruns();
+      if (heartbeat.has_controller()) node.controller = heartbeat.controller();
       node.rejects = heartbeat.rejected_by_cause();
       node.final_report = node.final_report || heartbeat.final();
       return;
@@ -277,30 +278,7 @@ void RunState::collect() {
     }
     while (pump(std::chrono::nanoseconds::zero())) {}
     absorb();
-    const int max_missed = runtime::max_missed_answers(deployment, setup.dt);
-    for (auto& [id, node] : nodes) {
-      if (node.last_answer != step) {
-        ++late_feedback;
-        if (static_cast<std::uint64_t>(++node.late_streak) > worst_late_streak)
-          worst_late_streak = static_cast<std::uint64_t>(node.late_streak);
-      } else {
-        node.late_streak = 0;
-      }
-      // Missing = no fresh answer at all this step (an answer to an older step, as a link
-      // slower than a step delivers, is fresh). Counted once the node has answered: before
-      // that, start-up and liveliness cover it.
-      const bool fresh = node.answers != node.answers_before_step;
-      node.fresh_steps += fresh ? 1 : 0;
-      ++node.judged_steps;
-      node.answers_before_step = node.answers;
-      node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
-      if (node.missed_streak >= max_missed)
-        throw RunAborted(
-            "no answer for " + std::to_string(node.missed_streak) + " consecutive steps (steps " +
-                std::to_string(step - node.missed_streak + 1) + " to " + std::to_string(step) +
-                "; its newest answers step " + std::to_string(node.last_answer) + ")",
-            node.plan->label());
-    }
+    judge_answers(runtime::max_missed_answers(deployment, setup.dt));
     check_liveliness();
     return;
   }
@@ -325,6 +303,51 @@ void RunState::collect() {
                            std::to_string(timeout) + " s from " + missing,
                        first);
     }
+  }
+}
+
+void RunState::judge_answer_age(Node& node) {
+  if (!node.window) return;
+  const std::int64_t age = step - node.last_answer;
+  node.ages.step(age);
+  const std::int64_t window = node.window->steps(time);
+  if (age <= window) return;
+  const auto ms = [this](std::int64_t steps) {
+    return std::to_string(static_cast<double>(steps) * setup.dt * 1e3) + " ms";
+  };
+  throw RunAborted(
+      (node.answers == 0 ? std::string("no answer yet")
+                         : "its newest answer is to step " + std::to_string(node.last_answer)) +
+          " at step " + std::to_string(step) + ": " + std::to_string(age) + " steps (" + ms(age) +
+          ") old, beyond its answer window of " + std::to_string(window) + " steps (" +
+          ms(window) + "); an answer that old is never applied",
+      node.plan->label());
+}
+
+void RunState::judge_answers(int max_missed) {
+  for (auto& [id, node] : nodes) {
+      if (node.last_answer != step) {
+        ++late_feedback;
+        if (static_cast<std::uint64_t>(++node.late_streak) > worst_late_streak)
+          worst_late_streak = static_cast<std::uint64_t>(node.late_streak);
+      } else {
+        node.late_streak = 0;
+      }
+      // Missing = no fresh answer at all this step (an answer to an older step, as a link
+      // slower than a step delivers, is fresh). Counted once the node has answered: before
+      // that, start-up and liveliness cover it.
+      const bool fresh = node.answers != node.answers_before_step;
+      node.fresh_steps += fresh ? 1 : 0;
+      ++node.judged_steps;
+      node.answers_before_step = node.answers;
+      node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
+      if (node.missed_streak >= max_missed)
+        throw RunAborted(
+            "no answer for " + std::to_string(node.missed_streak) + " consecutive steps (steps " +
+                std::to_string(step - node.missed_streak + 1) + " to " + std::to_string(step) +
+                "; its newest answers step " + std::to_string(node.last_answer) + ")",
+            node.plan->label());
+      judge_answer_age(node);
   }
 }
 

@@ -15,6 +15,7 @@
 #include "rt_check/check.h"
 #include "runtime/launch/launch.h"
 #include "runtime/node/plan.h"
+#include "runtime/record/node_health.h"
 #include "security/check.h"
 #include "security/pki.h"
 #include "security/run_secret.h"
@@ -74,6 +75,8 @@ std::string summary_text(const RunOutcome& o) {
     out << n.label() << " rejected: " << reject_text(n.rejected()) << ", unauthenticated "
         << n.rejected().unauthenticated()
         << (n.final() ? "" : " (as of its last heartbeat; no report on STOP)") << "\n";
+  for (const runtime::NodeRejects& n : o.node_rejects)
+    out << runtime::controller_link_text(n) << runtime::answer_age_text(n);
   for (const LinkLagStats& l : o.links)
     out << l.label << ": round trip median " << l.round_trip.median * 1e3 << " ms, p99 "
         << l.round_trip.p99 * 1e3 << " ms, max " << l.round_trip.max * 1e3 << " ms; injected mean "

@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "coordinator/answer_age.h"
 #include "coordinator/answer_wait.h"
 #include "coordinator/command_limits.h"
 #include "coordinator/feedback_intake.h"
@@ -70,6 +71,9 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
     std::uint64_t writer = 0;   // its announcement's writer: only it may speak as this node
     runtime::Counters rejects;  // what the node rejected, by cause, as of its last heartbeat
     bool final_report = false;  // that heartbeat was its last (sent on STOP)
+    runtime::ControllerReport controller;  // a CONTROLLER node's link, as of its last heartbeat
+    std::optional<AnswerWindow> window;     // real time: the oldest answer a step may apply
+    AnswerAgeTally ages;                    // real time: each step's applied answer's age
   };
   std::map<int, Node> nodes;
   // The nodes' feedback, filled by the transport's receive thread (or by pump() on a transport
@@ -173,6 +177,11 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   // Waits for the step's answers (lockstep: all, within step_timeout; real time: the awaited
   // ones, within feedback_wait_fraction of the step), takes what queued, judges missed answers.
   void collect();
+  // Real time, after collect's wait: counts the node's fresh and late steps, then stops the run
+  // (RunAborted naming the node) when it gave no fresh answer for max_missed_answers steps, or
+  // when its newest answer is older than its AnswerWindow: no answer that old is ever applied.
+  void judge_answers(int max_missed);
+  void judge_answer_age(Node& node);
 
   // ---- StepHooks: pacing before a step, record after it (step_hooks.cpp) ----
   runtime::Pacer* pacer = nullptr;

@@ -10,6 +10,7 @@
 #include "runtime/node/schema.h"
 #include "runtime/node/validation.h"
 #include "runtime/record/deadline_diagnosis.h"
+#include "runtime/record/node_health.h"
 #include "runtime/record/record.h"
 
 namespace rths::analysis {
@@ -248,9 +249,12 @@ std::string distributed_summary_text(const DistributedResults& results) {
              << *f.difference_from_in_process->first_step << ": max |du| = " << std::scientific
              << f.difference_from_in_process->max << std::fixed << " m\n";
     }
-    for (const runtime::NodeRejects& n : f.node_rejects)
+    for (const runtime::NodeRejects& n : f.node_rejects) {
       text << "  " << n.label() << " rejected: " << rejects_text(n.rejected())
            << (n.final() ? "" : " (as of its last heartbeat)") << "\n";
+      for (const std::string& line : {runtime::controller_link_text(n), runtime::answer_age_text(n)})
+        if (!line.empty()) text << "  " << line;
+    }
     for (const auto& [node, series] : results.links[i]) {
       const auto rt = series.round_trip_summary();
       const auto inj = series.injected_summary();
@@ -305,7 +309,8 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
       nodes.push_back({{"node_id", n.node_id()},
                        {"label", n.label()},
                        {"final", n.final()},
-                       {"rejected", rejects_json(n.rejected())}});
+                       {"rejected", rejects_json(n.rejected())},
+                       {"health", runtime::node_health_json(n)}});
     c["node_rejects"] = nodes;
   }
   nlohmann::json missing = nlohmann::json::array();

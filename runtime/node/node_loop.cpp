@@ -9,6 +9,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <ctime>
 
 #include "runtime/node/lag.h"
 #include "runtime/node/plan.h"
@@ -65,6 +66,10 @@ class NodeLoop {
   void on_assigned();
   bool commands_stopped(std::int64_t now);
   void start_servo(double period, const WaitPolicy& policy);
+  void start_answers();
+  // Stopped: an asynchronous node comes to rest on its answer thread (a controller holds until
+  // its rig says held); the loop waits for it, lock released, and sends its final heartbeat.
+  void wait_for_rest();
   bool handle_inline(const transport::Message& m);
 
   transport::Endpoint& endpoint_;
@@ -78,14 +83,15 @@ class NodeLoop {
   std::int64_t next_announce_ = 0, next_heartbeat_ = 0;
   std::int64_t last_from_coordinator_ = started_, last_command_ns_ = 0;
   std::atomic<bool> stop_servo_{false};
-  std::thread servo_;
+  std::thread servo_, answers_;
 };
 
 NodeLoop::~NodeLoop() {
   stop_servo_ = true;
-  if (servo_.joinable()) {
+  for (std::thread* t : {&servo_, &answers_}) {
+    if (!t->joinable()) continue;
     if (lock_.owns_lock()) lock_.unlock();
-    servo_.join();
+    t->join();
   }
   if (lock_.owns_lock()) lock_.unlock();
   endpoint_.set_inline_handler(nullptr);
@@ -116,6 +122,36 @@ void NodeLoop::start_servo(double period, const WaitPolicy& policy) {
       if (auto feedback = service_.servo_tick(pace.overrun)) endpoint_.send(*feedback);
     }
   });
+}
+
+// The answers of an asynchronous node: its own thread waits on the node's source (no lock),
+// then takes what came under `state_` and sends it at once. It wakes at least every
+// kAnswerPoll, which paces the node's own checks (a controller's lost frames, its HOLD frames).
+constexpr std::int64_t kAnswerPoll = 500000;  // ns
+
+void NodeLoop::start_answers() {
+  answers_ = std::thread([this] {
+    while (!stop_servo_) {
+      timespec ts{};
+      clock_gettime(CLOCK_MONOTONIC, &ts);
+      service_.await_answers(static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec +
+                             kAnswerPoll);
+      std::lock_guard guard(state_);
+      service_.take_answers([this](const transport::Message& m) { endpoint_.send(m); });
+    }
+  });
+}
+
+void NodeLoop::wait_for_rest() {
+  // The node's own hold time bounds its rest; this only keeps a faulty node from hanging here.
+  constexpr std::int64_t kRestLimit = 70'000'000'000;  // ns
+  const std::int64_t until = realtime_ns() + kRestLimit;
+  while (!service_.at_rest() && realtime_ns() < until) {
+    lock_.unlock();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    lock_.lock();
+  }
+  if (auto final = service_.final_heartbeat_due()) endpoint_.send(*final);
 }
 
 void NodeLoop::take(transport::Message message) {
@@ -178,6 +214,7 @@ std::optional<int> NodeLoop::keep_time() {
                 static_cast<double>(now - last_from_coordinator_) * 1e-9);
   if (auto hold = service_.hold_on_own("coordinator silent")) endpoint_.send(*hold);
   service_.settle_hold();
+  if (service_.asynchronous()) wait_for_rest();
   return 1;
 }
 
@@ -225,6 +262,7 @@ void NodeLoop::on_assigned() {
                  to_string(wait_policy(deployment).kind));
     start_servo(period, wait_policy(deployment));
   }
+  if (service_.asynchronous()) start_answers();
   if (!assigned_.receive_lag && !assigned_.send_lag)
     endpoint_.set_inline_handler([this](const transport::Message& m) { return handle_inline(m); });
 }
@@ -240,6 +278,7 @@ std::optional<int> NodeLoop::apply_due() {
     if (service_.stopped()) {
       for (auto& d : outbound_) endpoint_.send(d.message);
       service_.settle_hold();
+      if (service_.asynchronous()) wait_for_rest();
       spdlog::info("{}: stopped after step {} ({} messages rejected)", service_.label(),
                    service_.last_step(), service_.rejected().total());
       return 0;

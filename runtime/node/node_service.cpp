@@ -7,6 +7,7 @@
 #include <climits>
 #include <cmath>
 
+#include "runtime/node/lag.h"
 #include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
 #include "study/study.h"
@@ -117,6 +118,14 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
           };
       receive_chains_ = chains(assign.node().receive_delay());
       send_chains_ = chains(assign.node().send_delay());
+      asynchronous_ = answers_asynchronously();
+      if (asynchronous_ && (!receive_chains_.empty() || !send_chains_.empty() ||
+                            LagInjector(assign.node().send_lag()).active()))
+        throw std::invalid_argument(
+            "this node answers when its controller does, not once per command: receive_delay, "
+            "send_delay and send_lag cannot act on its answers (inject the controller link's lag "
+            "at the controller, or use receive_lag)");
+      if (asynchronous_) envelopes_.assign(kEnvelopes, Envelope{});
       stream_period_ = servo_period();
       streaming_ = deployment.clock() == config::Deployment::REAL_TIME && stream_period_ > 0;
       if (streaming_ && !send_chains_.empty())
@@ -189,6 +198,7 @@ std::vector<transport::Message> NodeService::handle(const transport::Message& me
       if (!entitled(message)) return {};
       stopped_ = true;
       on_stop();
+      if (asynchronous_) return {};  // final_heartbeat_due(), once at rest
       return {heartbeat_message(true)};
     default: return {};  // heartbeats only refresh liveliness, which the loop tracks
   }
@@ -235,6 +245,13 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
                          receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
     }
   }
+  if (asynchronous_) {
+    Envelope& e = envelopes_[static_cast<std::size_t>(message.step) % kEnvelopes];
+    e = Envelope{message.step, message.sent_ns, message.received_ns, injected_lag_};
+    last_step_ = message.step;
+    dispatch(message.step, command_);
+    return {};
+  }
   try {
     if (streaming_)
       load(command_);
@@ -274,6 +291,38 @@ std::vector<transport::Message> NodeService::answer(const transport::Message& me
   transport::Message reply = pack(run_id_, node_id_, FEEDBACK, message.step, feedback_);
   reply.echo_ns = message.sent_ns;
   return {std::move(reply)};
+}
+
+}  // namespace rths::runtime
+
+namespace rths::runtime {
+
+void NodeService::take_answers(const std::function<void(const transport::Message&)>& send) {
+  if (!asynchronous_) return;
+  for (;;) {
+    async_feedback_.Clear();
+    const Answered a = next_answer(async_feedback_);
+    if (a.kind == Answered::Kind::kNone) return;
+    if (a.kind == Answered::Kind::kFault) {
+      if (auto hold = hold_on_own("step " + std::to_string(last_step_) + ": " + a.fault))
+        send(*hold);
+      continue;  // held now: next_answer() brings the node to rest
+    }
+    if (held_ || stopped_) continue;
+    const Envelope& e = envelopes_[static_cast<std::size_t>(a.step) % kEnvelopes];
+    if (a.step <= 0 || e.step != a.step) continue;  // a step too old to echo
+    async_feedback_.set_command_received_ns(e.received_ns);
+    async_feedback_.set_injected_lag(e.injected_lag);
+    pack_into(async_reply_, run_id_, node_id_, FEEDBACK, a.step, async_feedback_);
+    async_reply_.echo_ns = e.echo_ns;
+    send(async_reply_);
+  }
+}
+
+std::optional<transport::Message> NodeService::final_heartbeat_due() {
+  if (!asynchronous_ || !stopped_ || final_heartbeat_sent_ || !rested()) return std::nullopt;
+  final_heartbeat_sent_ = true;
+  return heartbeat_message(true);
 }
 
 }  // namespace rths::runtime

@@ -32,6 +32,18 @@
 //                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
 //                       for the newest command, stamped with its servo sample. Held, stopped or
 //                       before the first command: no tick runs and nothing is sent.
+//   asynchronous        a node whose answers come from a source of their own (a controller's
+//                       UDP link: answers_asynchronously() true after configure()): a COMMAND
+//                       only dispatches (dispatch(); nothing waits), and the node loop's answer
+//                       thread calls await_answers(deadline) without the loop's lock (a
+//                       subclass may only wait on its own source there), then take_answers(send)
+//                       with it, which sends a FEEDBACK for each answer, echoing the envelope of
+//                       the step it answers (kept for kEnvelopes steps), or the HOLD a fault
+//                       makes. Held or stopped, answers are no longer forwarded, and the
+//                       subclass comes to rest on that thread (at_rest()); the final heartbeat
+//                       then waits until it is (final_heartbeat_due()). Simulated-time stages
+//                       (receive_delay, send_delay) and send_lag are refused: they act per
+//                       command, and such a node answers when its source does.
 // Subclasses (substructure node, actuator emulator, controller node) supply configure() and
 // compute(); a controller may also fail a computed answer (failure(): HOLD instead of FEEDBACK)
 // or have none (answered() false: nothing sent).
@@ -83,6 +95,14 @@ class NodeService : public transport::NodeHandler {
     }
   }
 
+  // Asynchronous answers (see the contract above).
+  bool asynchronous() const { return asynchronous_; }
+  void await_answers(std::int64_t deadline_ns) { wait_for_answers(deadline_ns); }
+  void take_answers(const std::function<void(const transport::Message&)>& send);
+  // Stopped, at rest, and its final heartbeat not yet sent: the loop sends it now (once).
+  std::optional<transport::Message> final_heartbeat_due();
+  bool at_rest() const { return !asynchronous_ || rested(); }
+
   bool assigned() const { return assigned_; }
   bool held() const { return held_; }
   bool stopped() const { return stopped_; }
@@ -121,6 +141,20 @@ class NodeService : public transport::NodeHandler {
   virtual void on_stop() {}
   // What a node adds to each heartbeat (a controller's link report).
   virtual void fill_heartbeat(Heartbeat& /*heartbeat*/) const {}
+  // Asynchronous nodes (see the contract above); asked once, after configure().
+  virtual bool answers_asynchronously() const { return false; }
+  virtual void dispatch(std::int64_t /*step*/, const Command& /*command*/) {}
+  virtual void wait_for_answers(std::int64_t /*deadline_ns*/) {}
+  struct Answered {
+    enum class Kind { kNone, kAnswer, kFault } kind = Kind::kNone;
+    std::int64_t step = 0;  // kAnswer: the step it answers
+    std::string fault;      // kFault: why
+  };
+  // The next answer (feedback filled: force, realised, and what else the node reports), a fault,
+  // or kNone when nothing more is ready; held or stopped, it brings the node to rest instead.
+  virtual Answered next_answer(Feedback& /*feedback*/) { return {}; }
+  // Held or stopped: whether it has come to rest (the controller holds until held, then STOP).
+  virtual bool rested() const { return true; }
 
  private:
   std::vector<transport::Message> on_assign(const transport::Message& message);
@@ -149,6 +183,16 @@ class NodeService : public transport::NodeHandler {
   Command command_;
   Feedback feedback_;
   bool streaming_ = false;
+  // Asynchronous: the envelope of each recent step's command, by step % kEnvelopes.
+  bool asynchronous_ = false, final_heartbeat_sent_ = false;
+  struct Envelope {
+    std::int64_t step = -1, echo_ns = 0, received_ns = 0;
+    double injected_lag = 0.0;
+  };
+  static constexpr std::size_t kEnvelopes = 1024;
+  std::vector<Envelope> envelopes_;
+  Feedback async_feedback_;
+  transport::Message async_reply_;
   // Streaming: the newest loaded command's envelope (step 0 = none yet) and the servo counters.
   std::int64_t stream_step_ = 0, stream_echo_ns_ = 0, stream_received_ns_ = 0;
   double stream_injected_lag_ = 0.0, stream_period_ = 0.0;

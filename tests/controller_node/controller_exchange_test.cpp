@@ -1,14 +1,15 @@
-// The judged exchange with a controller over real UDP sockets on 127.0.0.1: a controller thread
-// answers each command frame as told, and a rogue socket (another port) sends frames of its own.
-// Every rejected frame is counted by cause and named; none is applied. UDP ports 47100-47139.
+// The judged exchange with a controller over real UDP sockets on 127.0.0.1: the test plays the
+// controller (reads command frames, sends feedback frames as told) and a rogue socket on another
+// port. Several frames may be in flight; every rejected frame is counted by cause and named, none
+// is applied; the hold repeats HOLD frames at the measured position until the controller says
+// held. UDP ports 47100-47149.
 #include "controller_node/controller_exchange.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <functional>
-#include <future>
 #include <limits>
+#include <thread>
 
 #include "link_text.h"
 
@@ -16,10 +17,8 @@ namespace rths::controller_node {
 namespace {
 
 using Outcome = ControllerExchange::Outcome;
-using Frames = std::vector<std::vector<std::uint8_t>>;
 
-// The controller's end of the link: reads one command frame, returns what it decoded, and sends
-// each of `answers(command)` (frames in order).
+// The controller's end of the link.
 struct Controller {
   config::ControllerLink link;
   UdpLink udp;
@@ -37,98 +36,129 @@ struct Controller {
     EXPECT_TRUE(encode(link.feedback(), v, bytes));
     return bytes;
   }
-  FrameValues take() {
-    const auto d = udp.receive(monotonic_ns() + 2'000'000'000);
+  // The next command frame, or a frame with counter 0 when none came within `seconds`.
+  FrameValues take(double seconds = 2.0) {
     FrameValues v;
-    if (!d) return v;
-    EXPECT_EQ(decode(link.command(), d->bytes.data(), d->size, 1, v), FrameVerdict::kOk);
+    Datagram d;
+    const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
+    while (!udp.try_receive(d))
+      if (!udp.wait(until)) return v;
+    EXPECT_EQ(decode(link.command(), d.bytes.data(), d.size, 1, v), FrameVerdict::kOk);
     return v;
   }
-  std::future<FrameValues> answer(std::function<Frames(const FrameValues&)> answers) {
-    return std::async(std::launch::async, [this, answers] {
-      const FrameValues command = take();
-      for (const auto& frame : answers(command)) udp.send(frame);
-      return command;
-    });
-  }
+  void send(const std::vector<std::uint8_t>& frame) { udp.send(frame.data(), frame.size()); }
 };
 
 ExchangeSettings settings(double timeout = 0.5, bool real_time = false, int window = 1) {
   ExchangeSettings s;
   s.actuators = 1;
+  s.dt = 0.001;
   s.reply_timeout = timeout;
   s.real_time = real_time;
   s.lost_window = window;
   s.max_drift = 0.1;
   s.max_force = 1e5;
+  s.hold_time = 0.2;
   return s;
 }
 
-TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedWithItsRoundTrip) {
+// What the node makes of the link within `seconds`: the first answer or fault, else kNone.
+ControllerExchange::Answer await_answer(ControllerExchange& node, double seconds = 2.0) {
+  const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
+  for (;;) {
+    auto a = node.next(monotonic_ns());
+    if (a.outcome != Outcome::kNone || monotonic_ns() > until) return a;
+    node.wait(std::min(until, monotonic_ns() + 1'000'000));
+  }
+}
+
+TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedForItsStepWithItsRoundTrip) {
   const auto link = test::controller_link(47100, 47101);
   ControllerExchange node(link, settings());
   Controller controller(link);
-  auto seen = controller.answer([&](const FrameValues& c) {
-    return Frames{controller.feedback(c.counter, c.target_displacement[0] * 0.5, 1234.5)};
-  });
-  const auto a = node.exchange(0.25, {0.02}, {0.3});
-  const FrameValues command = seen.get();
+  ASSERT_TRUE(node.send_command(7, 0.25, {0.02}, {0.3}));
+  const FrameValues command = controller.take();
   EXPECT_EQ(command.counter, 1);
   EXPECT_EQ(command.status, kStatusRun);
   EXPECT_EQ(command.time, 0.25);
   EXPECT_EQ(command.target_displacement[0], 0.02);
   EXPECT_EQ(command.target_velocity[0], 0.3);
+  controller.send(controller.feedback(1, 0.01, 1234.5));
+  const auto a = await_answer(node);
   ASSERT_EQ(a.outcome, Outcome::kAnswered) << a.fault;
-  EXPECT_EQ(a.displacement[0], 0.01);
-  EXPECT_EQ(a.force[0], 1234.5);
+  EXPECT_EQ(a.step, 7);
+  EXPECT_EQ((*a.displacement)[0], 0.01);
+  EXPECT_EQ((*a.force)[0], 1234.5);
   EXPECT_GT(a.round_trip, 0.0);
   EXPECT_LT(a.round_trip, 0.5);
   EXPECT_EQ(node.report().frames_accepted(), 1u);
   EXPECT_EQ(node.report().round_trip_last(), a.round_trip);
+  EXPECT_EQ(node.report().round_trip_median(), a.round_trip);
 }
 
-TEST(ControllerExchange, FramesFromAnyoneButThePeerAreCountedNamedAndNeverApplied) {
+TEST(ControllerExchange, SeveralFramesInFlightAreAnsweredByTheirCounters) {
   const auto link = test::controller_link(47102, 47103);
   ControllerExchange node(link, settings());
   Controller controller(link);
-  // The rogue knows the layout and the counter, and sends from another port of the same host.
-  UdpLink rogue("127.0.0.1", 47104, "127.0.0.1", 47102);
-  auto seen = controller.answer([&](const FrameValues& c) {
-    rogue.send(controller.feedback(c.counter, 0.09, 99999.0));
-    rogue.send({1, 2, 3});
-    return Frames{controller.feedback(c.counter, 0.001, 10.0)};
-  });
-  const auto a = node.exchange(0.0, {0.001}, {0.0});
-  seen.get();
-  ASSERT_EQ(a.outcome, Outcome::kAnswered) << a.fault;
-  EXPECT_EQ(a.displacement[0], 0.001);
-  EXPECT_EQ(a.force[0], 10.0);
-  EXPECT_EQ(node.report().wrong_source(), 2u);
-  EXPECT_NE(node.report().last_reject().find("frame from 127.0.0.1:47104 (not the controller "
-                                             "127.0.0.1:47103)"),
-            std::string::npos)
-      << node.report().last_reject();
+  for (int step = 1; step <= 3; ++step)
+    ASSERT_TRUE(node.send_command(step, step * 0.001, {step * 1e-4}, {0.0}));
+  EXPECT_EQ(node.report_as_is().in_flight(), 3u);
+  for (int k = 1; k <= 3; ++k) {
+    const FrameValues c = controller.take();
+    controller.send(controller.feedback(c.counter, c.target_displacement[0], 10.0 * k));
+  }
+  for (int step = 1; step <= 3; ++step) {
+    const auto a = await_answer(node);
+    ASSERT_EQ(a.outcome, Outcome::kAnswered) << a.fault;
+    EXPECT_EQ(a.step, step);
+    EXPECT_EQ((*a.displacement)[0], step * 1e-4);
+  }
+  EXPECT_EQ(await_answer(node, 0.05).outcome, Outcome::kNone);
 }
 
-// The peer's frame is refused: the exchange faults naming why, and counts the cause.
+TEST(ControllerExchange, AnAnswerOlderThanTheNewestAnsweredIsLateAndNeverApplied) {
+  const auto link = test::controller_link(47104, 47105);
+  ControllerExchange node(link, settings());
+  Controller controller(link);
+  node.send_command(1, 0.001, {0.001}, {0.0});
+  node.send_command(2, 0.002, {0.002}, {0.0});
+  controller.take();
+  controller.take();
+  controller.send(controller.feedback(2, 0.002, 2.0));
+  controller.send(controller.feedback(1, 0.001, 1.0));
+  const auto a = await_answer(node);
+  ASSERT_EQ(a.outcome, Outcome::kAnswered) << a.fault;
+  EXPECT_EQ(a.step, 2);
+  EXPECT_EQ(await_answer(node, 0.05).outcome, Outcome::kNone);
+  EXPECT_EQ(node.report().late(), 1u);
+}
+
+TEST(ControllerExchange, TheKernelDropsFramesFromAnotherPortBeforeTheyTakeBufferRoom) {
+  const auto link = test::controller_link(47106, 47107);
+  ControllerExchange node(link, settings());
+  Controller controller(link);
+  // The rogue knows the layout and the counter, and sends from another port of the same host:
+  // a flood of the largest datagrams, then a frame that would be applied.
+  UdpLink rogue("127.0.0.1", 47108, "127.0.0.1", 47106);
+  std::vector<std::uint8_t> big(65000, 0xAB);
+  node.send_command(1, 0.0, {0.001}, {0.0});
+  controller.take();
+  for (int i = 0; i < 2000; ++i) rogue.send(big.data(), big.size());
+  const auto forged = controller.feedback(1, 0.09, 99999.0);
+  rogue.send(forged.data(), forged.size());
+  controller.send(controller.feedback(1, 0.001, 10.0));
+  const auto a = await_answer(node);
+  ASSERT_EQ(a.outcome, Outcome::kAnswered) << a.fault;
+  EXPECT_EQ((*a.displacement)[0], 0.001);
+  EXPECT_EQ((*a.force)[0], 10.0);
+  EXPECT_EQ(node.report().wrong_source(), 0u);
+}
+
 struct Refused {
   std::string name;
   std::function<std::vector<std::uint8_t>(Controller&, const FrameValues&)> frame;
   std::string named;
 };
-
-ControllerExchange::Answer refused_answer(int port, const Refused& r, ControllerExchange*& out,
-                                          std::unique_ptr<ControllerExchange>& keep) {
-  const auto link = test::controller_link(port, port + 1);
-  keep = std::make_unique<ControllerExchange>(link, settings());
-  out = keep.get();
-  Controller controller(link);
-  auto seen =
-      controller.answer([&](const FrameValues& c) { return Frames{r.frame(controller, c)}; });
-  const auto a = keep->exchange(0.0, {0.001}, {0.0});
-  seen.get();
-  return a;
-}
 
 TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -147,12 +177,11 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
          return f;
        },
        "not finite"},
-      {"repeated",
-       [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
-       "repeats counter 0"},
+      {"repeated", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
+       "repeats counter 1 (already answered)"},
       {"never sent",
        [](Controller& c, const FrameValues& v) { return c.feedback(v.counter + 5, 0, 0); },
-       "echoes counter 6, never sent"},
+       "echoes counter 7, never sent"},
       {"status", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter, 0, 0, 3); },
        "reports status 3"},
       {"range", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter, 0.2, 0); },
@@ -160,39 +189,101 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
   };
   int port = 47110;
   for (const Refused& r : cases) {
-    ControllerExchange* node = nullptr;
-    std::unique_ptr<ControllerExchange> keep;
-    const auto a = refused_answer(port, r, node, keep);
+    const auto link = test::controller_link(port, port + 1);
     port += 2;
+    ControllerExchange node(link, settings());
+    Controller controller(link);
+    // Frame 1 answered well, then frame 2 answered as the case says.
+    node.send_command(1, 0.001, {0.0}, {0.0});
+    controller.send(controller.feedback(controller.take().counter, 0.0, 0.0));
+    ASSERT_EQ(await_answer(node).outcome, Outcome::kAnswered) << r.name;
+    node.send_command(2, 0.002, {0.0}, {0.0});
+    controller.send(r.frame(controller, controller.take()));
+    const auto a = await_answer(node);
     EXPECT_EQ(a.outcome, Outcome::kFault) << r.name;
     EXPECT_NE(a.fault.find(r.named), std::string::npos) << r.name << ": " << a.fault;
-    EXPECT_EQ(node->report().last_reject(), a.fault) << r.name;
-    EXPECT_EQ(node->report().frames_accepted(), 0u) << r.name;
+    EXPECT_EQ(node.report().last_reject(), a.fault) << r.name;
+    EXPECT_EQ(node.report().frames_accepted(), 1u) << r.name;
   }
 }
 
-TEST(ControllerExchange, CausesAreCountedApart) {
-  Refused repeated{
-      "repeated",
-      [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); }, ""};
-  ControllerExchange* node = nullptr;
-  std::unique_ptr<ControllerExchange> keep;
-  refused_answer(47130, repeated, node, keep);
-  EXPECT_EQ(node->report().repeated_counter(), 1u);
-  EXPECT_EQ(node->report().wrong_size() + node->report().non_finite() +
-                node->report().unexpected_counter() + node->report().out_of_range(),
-            0u);
+// The rig answers plausibly for `good` frames, then with `last`; what the node makes of it.
+ControllerExchange::Answer after_good_answers(int port, ExchangeSettings s, int good,
+                                              double last_drift, double last_force,
+                                              ControllerExchange::Answer* last_good = nullptr) {
+  const auto link = test::controller_link(port, port + 1);
+  ControllerExchange node(link, s);
+  Controller controller(link);
+  for (int step = 1; step <= good + 1; ++step) {
+    const double target = 0.001 * step;
+    node.send_command(step, step * 0.001, {target}, {1.0});
+    const FrameValues c = controller.take();
+    const bool is_last = step == good + 1;
+    controller.send(controller.feedback(c.counter, is_last ? last_drift : target * 0.99,
+                                        is_last ? last_force : 1000.0 * target));
+    auto a = await_answer(node);
+    if (is_last || a.outcome != Outcome::kAnswered) return a;
+    if (last_good) *last_good = a;
+  }
+  return {};
 }
 
-TEST(ControllerExchange, ASilentControllerIsAFaultInLockstepAfterTheTimeout) {
-  const auto link = test::controller_link(47132, 47133);
+TEST(ControllerExchange, AMeasurementMovingFasterThanTheRigCouldIsImplausible) {
+  ExchangeSettings s = settings();
+  s.max_measured_rate = 2.0;  // m/s
+  s.max_force_rate = 2e4;     // N/s; the good answers move 1 N per ms = 1e3 N/s
+  // A rebooted controller: its echo is right, its state is lost (drift and force back to 0).
+  const auto force_jump = after_good_answers(47130, s, 5, 0.0059, 0.0);
+  EXPECT_EQ(force_jump.outcome, Outcome::kFault);
+  EXPECT_NE(force_jump.fault.find("implausible measurement: the measured force of actuator 1 "
+                                  "(frame 6, step 6) moved -5.000000 N in 1.000000 ms"),
+            std::string::npos)
+      << force_jump.fault;
+  const auto drift_jump = after_good_answers(47132, s, 5, 0.0, 6.0);
+  EXPECT_EQ(drift_jump.outcome, Outcome::kFault);
+  EXPECT_NE(drift_jump.fault.find("the measured drift of actuator 1 (frame 6, step 6) moved"),
+            std::string::npos)
+      << drift_jump.fault;
+  EXPECT_NE(drift_jump.fault.find("bound max_measured_rate 2.000000 m/s"), std::string::npos)
+      << drift_jump.fault;
+  // Within both bounds: answered.
+  EXPECT_EQ(after_good_answers(47134, s, 5, 0.0060, 6.0).outcome, Outcome::kAnswered);
+}
+
+TEST(ControllerExchange, ATrackingErrorBeyondItsBoundForItsStepsIsAFault) {
+  ExchangeSettings s = settings();
+  s.max_tracking_error = 0.0005;  // m
+  s.tracking_error_steps = 3;
+  const auto link = test::controller_link(47136, 47137);
+  ControllerExchange node(link, s);
+  Controller controller(link);
+  ControllerExchange::Answer a;
+  for (int step = 1; step <= 3; ++step) {
+    node.send_command(step, step * 0.001, {0.002}, {0.0});
+    controller.send(controller.feedback(controller.take().counter, 0.0, 0.0));  // stuck at 0
+    a = await_answer(node);
+    if (step < 3) EXPECT_EQ(a.outcome, Outcome::kAnswered) << step << ": " << a.fault;
+  }
+  EXPECT_EQ(a.outcome, Outcome::kFault);
+  EXPECT_NE(a.fault.find("tracking error: actuator 1 (frame 3, step 3) measured 0.000000 mm for "
+                         "a target of 2.000000 mm"),
+            std::string::npos)
+      << a.fault;
+  EXPECT_EQ(node.report().implausible(), 1u);
+}
+
+TEST(ControllerExchange, ASilentControllerIsAFaultInLockstepOnceTheFrameIsStale) {
+  const auto link = test::controller_link(47138, 47139);
   ControllerExchange node(link, settings(0.05));
   Controller controller(link);  // bound, never answers
   const std::int64_t start = monotonic_ns();
-  const auto a = node.exchange(0.0, {0.0}, {0.0});
+  node.send_command(1, 0.0, {0.0}, {0.0});
+  EXPECT_EQ(node.next(monotonic_ns()).outcome, Outcome::kNone);  // nothing waits
+  const auto a = await_answer(node);
   const double waited = static_cast<double>(monotonic_ns() - start) * 1e-9;
   EXPECT_EQ(a.outcome, Outcome::kFault);
-  EXPECT_NE(a.fault.find("did not answer frame 1 within 50.000000 ms"), std::string::npos)
+  EXPECT_NE(a.fault.find("did not answer frame 1 (step 1) within 50.000000 ms"),
+            std::string::npos)
       << a.fault;
   EXPECT_GE(waited, 0.05);
   EXPECT_LT(waited, 0.5);
@@ -200,52 +291,97 @@ TEST(ControllerExchange, ASilentControllerIsAFaultInLockstepAfterTheTimeout) {
 }
 
 TEST(ControllerExchange, RealTimeLostFramesFaultAfterTheWindowAndLateAnswersAreCounted) {
-  const auto link = test::controller_link(47134, 47135);
+  const auto link = test::controller_link(47140, 47141);
   ControllerExchange node(link, settings(0.02, true, 3));
   Controller controller(link);
-  EXPECT_EQ(node.exchange(0.0, {0.0}, {0.0}).outcome, Outcome::kLate);  // frame 1 lost
+  node.send_command(1, 0.001, {0.0}, {0.0});
   EXPECT_EQ(controller.take().counter, 1);
-  // Frame 2: the late answer to frame 1 arrives first and is only counted; then frame 2's.
-  auto seen = controller.answer([&](const FrameValues& c) {
-    return Frames{controller.feedback(1, 0.5, 0.0), controller.feedback(c.counter, 0.003, 7)};
-  });
-  const auto a = node.exchange(0.001, {0.003}, {0.0});
-  seen.get();
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  EXPECT_EQ(node.next(monotonic_ns()).outcome, Outcome::kNone);  // frame 1 lost, 1 in a row
+  // The late answer to frame 1 is only counted; frame 2's is applied.
+  node.send_command(2, 0.002, {0.003}, {0.0});
+  controller.take();
+  controller.send(controller.feedback(1, 0.05, 0.0));
+  controller.send(controller.feedback(2, 0.003, 7));
+  const auto a = await_answer(node);
   ASSERT_EQ(a.outcome, Outcome::kAnswered) << a.fault;
-  EXPECT_EQ(a.displacement[0], 0.003);
+  EXPECT_EQ((*a.displacement)[0], 0.003);
   EXPECT_EQ(node.report().late(), 1u);
-  EXPECT_EQ(node.exchange(0.0, {0.0}, {0.0}).outcome, Outcome::kLate);
-  EXPECT_EQ(node.exchange(0.0, {0.0}, {0.0}).outcome, Outcome::kLate);
-  const auto third = node.exchange(0.0, {0.0}, {0.0});
+  for (int step = 3; step <= 5; ++step) node.send_command(step, 0.001 * step, {0.0}, {0.0});
+  const auto third = await_answer(node);
   EXPECT_EQ(third.outcome, Outcome::kFault);
   EXPECT_NE(third.fault.find("(3 lost in a row)"), std::string::npos) << third.fault;
   EXPECT_EQ(node.report().lost(), 4u);
 }
 
-TEST(ControllerExchange, HoldAndStopReachTheControllerAsStatusInACommandFrame) {
-  const auto link = test::controller_link(47136, 47137);
+TEST(ControllerExchange, TheHoldRepeatsHoldFramesAtTheMeasuredPositionUntilHeldThenStops) {
+  const auto link = test::controller_link(47142, 47143);
   ControllerExchange node(link, settings());
   Controller controller(link);
-  ASSERT_TRUE(node.send_status(kStatusHold));
-  const FrameValues hold = controller.take();
-  EXPECT_EQ(hold.status, kStatusHold);
-  EXPECT_EQ(hold.counter, 1);
-  ASSERT_TRUE(node.send_status(kStatusStop));
-  const FrameValues stop = controller.take();
+  node.send_command(1, 0.001, {0.004}, {0.2});
+  controller.send(controller.feedback(controller.take().counter, 0.0035, 50.0));
+  ASSERT_EQ(await_answer(node).outcome, Outcome::kAnswered);
+  node.send_command(2, 0.002, {0.0045}, {0.2});  // the newest target, never reached
+  controller.take();
+  const std::int64_t start = monotonic_ns();
+  node.begin_hold(start);
+  for (int k = 0; k < 3; ++k) {
+    const FrameValues hold = controller.take(0.1);
+    EXPECT_EQ(hold.status, kStatusHold) << k;
+    EXPECT_EQ(hold.target_displacement[0], 0.0035) << k;  // where the specimen was measured
+    EXPECT_EQ(hold.target_velocity[0], 0.0) << k;
+    while (monotonic_ns() < start + (k + 1) * 1'100'000) node.hold_step(monotonic_ns());
+  }
+  EXPECT_GE(node.report().hold_frames(), 3u);
+  EXPECT_LT(node.report().held_after(), 0.0);
+  FrameValues held = controller.take(0.1);
+  controller.send(controller.feedback(held.counter, 0.0035, 0.0, kStatusHold));
+  bool done = false;
+  for (int i = 0; i < 1000 && !done; ++i) {
+    node.wait(monotonic_ns() + 1'000'000);
+    done = node.hold_step(monotonic_ns());
+  }
+  EXPECT_TRUE(done);
+  EXPECT_GT(node.report().held_after(), 0.0);
+  EXPECT_LT(node.report().held_after(), 0.2);
+  ASSERT_TRUE(node.send_stop());
+  FrameValues stop;
+  do stop = controller.take(0.5);
+  while (stop.counter != 0 && stop.status == kStatusHold);
   EXPECT_EQ(stop.status, kStatusStop);
-  EXPECT_EQ(stop.counter, 2);
-  EXPECT_EQ(node.report().frames_sent(), 2u);
+  EXPECT_EQ(stop.target_displacement[0], 0.0035);
+}
+
+TEST(ControllerExchange, AControllerThatNeverSaysHeldIsStoppedAfterTheHoldTime) {
+  const auto link = test::controller_link(47144, 47145);
+  ControllerExchange node(link, settings());  // hold_time 0.2 s
+  Controller controller(link);
+  const std::int64_t start = monotonic_ns();
+  node.begin_hold(start);
+  bool done = false;
+  while (!done) {
+    node.wait(monotonic_ns() + 1'000'000);
+    done = node.hold_step(monotonic_ns());
+  }
+  const double held_for = static_cast<double>(monotonic_ns() - start) * 1e-9;
+  EXPECT_GE(held_for, 0.2);
+  EXPECT_LT(held_for, 0.4);
+  EXPECT_GT(node.report().hold_frames(), 100u);  // one per dt (1 ms)
+  EXPECT_LT(node.report().held_after(), 0.0);
 }
 
 TEST(ControllerExchange, ABadLinkIsRefusedNamingIt) {
-  EXPECT_THROW(ControllerExchange(test::controller_link(47138, 70000), settings()),
+  EXPECT_THROW(ControllerExchange(test::controller_link(47146, 70000), settings()),
                std::runtime_error);
-  auto link = test::controller_link(47138, 47139);
+  auto link = test::controller_link(47146, 47147);
   link.set_local_address("10.0.0.300");
   EXPECT_THROW(ControllerExchange(link, settings()), std::runtime_error);
-  link = test::controller_link(47138, 47139);
+  link = test::controller_link(47146, 47147);
   link.mutable_feedback()->mutable_fields(0)->set_role(config::FrameField::MEASURED_FORCE);
   EXPECT_THROW(ControllerExchange(link, settings()), std::invalid_argument);
+  ExchangeSettings s = settings();
+  s.max_force_rate = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(ControllerExchange(test::controller_link(47146, 47147), s), std::invalid_argument);
 }
 
 }  // namespace
