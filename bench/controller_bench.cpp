@@ -4,7 +4,9 @@
 // rths-controller-emulator, another process running the same actuator, and its answer judged).
 // The difference is what a controller node adds to a step before any rig: frames, two UDP hops
 // and the other process's wake-up. DDS is left out (it is the same for both). Prints the median
-// and p99 of each (us) and of the difference; never a test.
+// and p99 of each (us) and of the difference; never a test. The controller node answers on its
+// answer thread (the node loop's); the bench runs that thread's two calls in its own loop, so a
+// step's time is from the command to its FEEDBACK, as the coordinator would see it.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -60,9 +62,16 @@ std::vector<double> time_steps(runtime::NodeService& service, int steps, double 
     command.add_drift_velocity(0.02 * M_PI * std::cos(2 * M_PI * t));
     const auto message = runtime::pack(kRunId, service.node_id(), runtime::COMMAND, k, command);
     const auto start = std::chrono::steady_clock::now();
-    const auto replies = service.handle(message);
+    auto replies = service.handle(message);
+    // An asynchronous node (the controller's) answers on its answer thread: the loop it runs.
+    const auto give_up = start + std::chrono::seconds(2);
+    while (service.asynchronous() && replies.empty() &&
+           std::chrono::steady_clock::now() < give_up) {
+      service.await_answers(controller_node::monotonic_ns() + 1'000'000);
+      service.take_answers([&replies](const transport::Message& m) { replies.push_back(m); });
+    }
     const auto end = std::chrono::steady_clock::now();
-    if (replies.empty() || replies.front().kind != runtime::FEEDBACK)
+    if (replies.empty() || replies.front().kind != runtime::FEEDBACK || replies.front().step != k)
       throw std::runtime_error("step " + std::to_string(k) + " not answered");
     us.push_back(std::chrono::duration<double, std::micro>(end - start).count());
   }

@@ -16,7 +16,7 @@
 //   hold_ms                fault -> the first HOLD: the node's own ("holding on its own", its log's
 //                          realtime_ns) or the coordinator's ("HOLD sent" event in the record).
 //   window_ms              the deployment's answer window in whole steps (ceil(ms / dt) x dt).
-//   hold_frame_sent        the node's log says its HOLD command frame (status 1) was sent.
+//   hold_frame_sent        the node's log says it sent HOLD frames (status 1) to the controller.
 //   hold_frame_received    the emulator's log says it received a status HOLD frame (a killed
 //                          emulator receives nothing: false).
 //   plant_periods, plant_overruns  the emulator's own count at its exit (paced loop).
