@@ -231,16 +231,19 @@ void log_start(const ControllerEmulator& emulator, const controller_node::UdpLin
 
 }  // namespace
 
-int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag) {
+int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
+          double answer_period) {
   const config::ControllerLink& link = emulator.link();
   controller_node::UdpLink udp(link.peer_address(), link.peer_port(), link.local_address(),
                                link.local_port());
   log_start(emulator, udp, answer_lag);
   const auto idle_ns = static_cast<std::int64_t>(idle_timeout * 1e9);
   const auto lag_ns = static_cast<std::int64_t>(std::llround(answer_lag * 1e9));
+  const auto period_ns = static_cast<std::int64_t>(std::llround(answer_period * 1e9));
+  std::int64_t last_release_ns = 0;
   runtime::MonotonicClock clock;
   // The lag's sleep ends on time, not up to the kernel's default 50 us of timer slack later.
-  if (lag_ns > 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  if (lag_ns > 0 || period_ns > 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   std::mutex lock;
   int result = 0;
   {
@@ -279,11 +282,14 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag) 
         auto answer = emulator.step(d.bytes.data(), std::min(d.size, d.bytes.size()));
         guard.unlock();
         if (!answer) continue;
-        if (lag_ns <= 0) {
+        const std::int64_t release =
+            std::max(d.received_ns + lag_ns, last_release_ns + period_ns);
+        last_release_ns = release;
+        if (release <= controller_node::monotonic_ns() && pending.empty()) {
           udp.send(answer->data(), answer->size());
           continue;
         }
-        pending.emplace_back(d.received_ns + lag_ns, std::move(*answer));
+        pending.emplace_back(release, std::move(*answer));
       }
     }
   }

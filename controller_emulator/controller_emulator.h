@@ -88,8 +88,11 @@ class ControllerEmulator {
 // Paced: the plant runs on a thread of its own, one tick() per plant period on absolute
 // deadlines (runtime::Pacer); step() and tick() take turns under one lock. `answer_lag` (s, >= 0):
 // each answer leaves that long after serve() read its command frame (the link's round-trip lag,
-// as a network would add it; kernel netem is not needed). Frames queued while the emulator was
-// descheduled are read one after another, so their answers leave one lag apart.
-int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag = 0.0);
+// as a network would add it; kernel netem is not needed); several answers may wait for their
+// lag at once (frames in flight), each leaving its lag after its own frame was read.
+// `answer_period` (s, >= 0): answers leave at least that far apart, in order (a controller
+// slower than the host: with a period longer than dt it falls further behind every frame).
+int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag = 0.0,
+          double answer_period = 0.0);
 
 }  // namespace rths::controller_emulator

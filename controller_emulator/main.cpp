@@ -1,6 +1,6 @@
 // rths-controller-emulator: stands in for a lab's real-time controller (controller_emulator.h).
 //   rths-controller-emulator --config STUDY --node-id N [--case NAME] [--answer-frames K]
-//                            [--idle-timeout S] [--answer-lag-ms MS]
+//                            [--idle-timeout S] [--answer-lag-ms MS] [--answer-period-ms MS]
 // Exit: 0 after a STOP frame, 1 when no frame came for the idle timeout, 2 bad usage or config.
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
   std::string config, case_name;
   int node_id = 0;
   std::int64_t answer_frames = -1;
-  double idle_timeout = 30.0, answer_lag_ms = 0.0;
+  double idle_timeout = 30.0, answer_lag_ms = 0.0, answer_period_ms = 0.0;
   app.add_option("--config", config, "the study whose deployment names the CONTROLLER node")
       ->required();
   app.add_option("--node-id", node_id, "the CONTROLLER node it answers")->required();
@@ -24,12 +24,17 @@ int main(int argc, char** argv) {
   app.add_option("--answer-lag-ms", answer_lag_ms,
                  "each answer leaves this many ms after its frame arrived (an injected link lag)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--answer-period-ms", answer_period_ms,
+                 "answer at most one frame per this many ms, in order: a controller slower than "
+                 "the host, which falls behind (a fault drill)")
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
   try {
     const std::filesystem::path path = std::filesystem::absolute(config);
     rths::controller_emulator::ControllerEmulator emulator(
         rths::core::load_study(path), path.parent_path(), case_name, node_id, answer_frames);
-    return rths::controller_emulator::serve(emulator, idle_timeout, answer_lag_ms * 1e-3);
+    return rths::controller_emulator::serve(emulator, idle_timeout, answer_lag_ms * 1e-3,
+                                            answer_period_ms * 1e-3);
   } catch (const std::exception& e) {
     spdlog::error("rths-controller-emulator: {}", e.what());
     return 2;

@@ -1,9 +1,10 @@
 // A run through a controller node: the coordinator and the controller node are processes over
 // Cyclone DDS on loopback (rths launch's sequence), the controller node talks UDP on 127.0.0.1 to
-// the controller emulator, another process. DDS domains 197-199, UDP ports 47150-47159.
+// the controller emulator, another process. DDS domains 197-199 and 232, UDP ports 47150-47159.
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <thread>
 
@@ -137,6 +138,44 @@ TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
   EXPECT_TRUE(named) << "the coordinator's HOLD event names whom it went to";
   EXPECT_GT(run.record.steps().size(), 300u);    // killed mid-run, not at the start
   EXPECT_LT(run.record.steps().size(), 30000u);  // stopped before the motion's end
+}
+
+// A controller slower than the host (one answer per 2 ms at dt = 1 ms, in order) falls further
+// behind every frame (the paper frame steps at dt = 1 ms). Before, the node waited for each answer on the DDS thread and the
+// coordinator applied answers seconds old. Now every applied answer is within the answer window,
+// and the run HOLDs within the window + 2 ms of the first answer that would be older, naming it.
+TEST_F(DdsController, AControllerThatFallsBehindHoldsWithinTheAnswerWindow) {
+  constexpr double kWindowMs = 20.0;
+  const std::string text = test::paper_frame_study(
+      4.0, "deployment { clock: REAL_TIME liveliness_timeout: 2 heartbeat_period: 0.02 "
+           "answer_window_ms: 20 max_overrun_fraction: -1 min_answer_fraction: -1 "
+           "nodes { id: 2 kind: CONTROLLER controller { " +
+               test::controller_link_text(47157, 47158, "reply_timeout_ms: 8") +
+               " } } limits { max_displacement: 0.5 } }");
+  util::ChildProcess emulator =
+      start_emulator("controller_behind", text, "reference", {"--answer-period-ms", "2"});
+  const auto run = test::launch("controller_behind", text, "reference", 232);
+  const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
+  EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
+  ASSERT_NE(run.record.footer(), nullptr);
+  EXPECT_FALSE(run.record.footer()->ok());
+  // Named: the node's own staleness limit, or the coordinator's window on the answer's age.
+  const std::string& status = run.record.footer()->status();
+  EXPECT_TRUE(status.find("did not answer frame") != std::string::npos ||
+              status.find("never applied") != std::string::npos)
+      << status;
+  // No applied answer older than the window, step by step on the record.
+  const double dt = 0.001;  // the paper frame study's
+  const auto window_steps = static_cast<std::int64_t>(std::ceil(kWindowMs * 1e-3 / dt));
+  std::int64_t oldest = 0;
+  const auto steps = run.record.steps();
+  for (const auto* step : steps)
+    for (const auto& link : step->links())
+      if (link.answered_step() > 0) oldest = std::max(oldest, step->step() - link.answered_step());
+  EXPECT_LE(oldest, window_steps);
+  // Stopped early: the motion is 4 s (4000 steps); the backlog passes the window within 0.1 s.
+  EXPECT_LT(steps.size(), 400u);
+  emulator.terminate();
 }
 
 }  // namespace
