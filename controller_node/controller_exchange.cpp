@@ -253,6 +253,7 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
     return a;
   }
   accept(*frame, round_trip);
+  a.outcome = Outcome::kAnswered;
   a.step = frame->step;
   a.displacement = &in_.measured_displacement;
   a.force = &in_.measured_force;
