@@ -9,6 +9,7 @@
 #include "coordinator/deadline_verdict.h"
 #include "coordinator/state.h"
 #include "runtime/record/node_health.h"
+#include "runtime/record/realtime_verdict.h"
 
 namespace rths::coordinator {
 
@@ -105,8 +106,9 @@ void loop(RunState& s, core::SimulationResult& result) {
     core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
 }
 
-// A loop that ran to its end: diverged, deadline misses (the loop's or a servo's), a node that
-// answered too few steps (answer_shortfall), or completed.
+// A loop that ran to its end: diverged, deadline misses (the loop's, by the one real-time verdict
+// that identify and the view apply to its record, or a servo's), a node that answered too few
+// steps (answer_shortfall), or completed.
 void judge(RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   const core::SimulationResult& result = outcome.result;
   if (result.diverged)
@@ -117,8 +119,9 @@ void judge(RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome) {
   const double tolerance = runtime::max_overrun_fraction(s.deployment);
   std::optional<std::string> misses;
   if (s.real_time && !result.diverged)
-    misses = loop_deadline_misses(pacer.overruns(), pacer.worst_overrun_streak(),
-                                  result.steps() > 0 ? result.steps() - 1 : 0, tolerance);
+    misses = runtime::deadline_verdict({result.steps() > 0 ? result.steps() - 1 : 0,
+                                        pacer.overruns(), pacer.worst_overrun_streak()},
+                                       runtime::deadline_rule(s.deployment, s.setup.dt));
   for (const auto& [id, node] : s.nodes)
     if (outcome.ok && !misses)
       misses = servo_deadline_misses(node.plan->label(), node.servo_overruns, node.servo_ticks,

@@ -12,10 +12,12 @@
 //          Lockstep waits for every answer (simulated time, equal to in process bit for bit);
 //          real time paces on absolute deadlines and uses the newest answer within
 //          feedback_wait_fraction * dt.
-// Outcome  ok only when the run did what it was for: not diverged, overruns within
-//          max_overrun_fraction, no fault (a silent, late or forged node, limits, a record that
-//          cannot be written, a stop request), no record entry lost. Every stop sends HOLD to
-//          the emulators and STOP to all, and closes the record naming the reason and the node.
+// Outcome  ok only when the run did what it was for: not diverged, the one real-time verdict
+//          passed (runtime::deadline_verdict: overruns within max_overrun_fraction, no streak
+//          of them past the answer window, not more than half the steps), no fault (a silent,
+//          late or forged node, limits, a record that cannot be written, a stop request), no
+//          record entry lost. Every stop sends HOLD to the emulators and STOP to all, and
+//          closes the record naming the reason and the node.
 // Threads  run() is the loop thread; feedback is decoded on the transport's receive thread into
 //          wait-free boxes; the record is written on its own writer thread. A step allocates
 //          nothing once warm except for non-feedback messages and rare events.

@@ -14,15 +14,6 @@ bool beyond(std::uint64_t overruns, std::uint64_t whole, double tolerance) {
 
 }  // namespace
 
-std::optional<std::string> loop_deadline_misses(std::uint64_t overruns, std::uint64_t worst_streak,
-                                                std::uint64_t steps, double tolerance) {
-  if (!beyond(overruns, steps, tolerance)) return std::nullopt;
-  return "completed with deadline misses: " + std::to_string(overruns) + " overruns in " +
-         std::to_string(steps) + " steps (" + std::to_string(percent(overruns, steps)) +
-         " %, tolerance " + std::to_string(100.0 * tolerance) + " %; worst streak " +
-         std::to_string(worst_streak) + ")";
-}
-
 std::optional<std::string> servo_deadline_misses(const std::string& node, std::uint64_t overruns,
                                                  std::uint64_t periods, double tolerance) {
   if (!beyond(overruns, periods, tolerance)) return std::nullopt;

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
+
+#include "runtime/record/realtime_verdict.h"
 
 namespace rths::view {
 namespace {
@@ -180,6 +183,8 @@ void Feed::on_step(const runtime::StepRecord& step) {
   track(step);
   ++steps_;
   if (step.overrun()) ++overruns_;
+  overrun_streak_ = step.overrun() ? overrun_streak_ + 1 : 0;
+  worst_overrun_streak_ = std::max(worst_overrun_streak_, overrun_streak_);
   for (const auto& link : step.links())
     if (link.answered_step() < step.step()) {
       ++late_;
@@ -288,8 +293,19 @@ void Feed::on_event(const runtime::RunEvent& event) {
 void Feed::on_footer(const runtime::RunFooter& footer) {
   footer_ = footer;
   have_footer_ = true;
-  state_ = footer.ok() ? "completed" : "stopped";
-  reason_ = footer.status();
+  // The record's own rows judged by the one real-time verdict, as the coordinator judged its run
+  // and identify judges the record: a run that failed it is never shown as completed.
+  std::optional<std::string> verdict;
+  if (header_.clock() == "real_time")
+    verdict = runtime::deadline_verdict(
+        {steps_ > 0 ? steps_ - 1 : 0, overruns_, worst_overrun_streak_},
+        runtime::deadline_rule(header_.study().deployment(), header_.dt()));
+  // A footer that is not ok names deadline misses (the loop's or a servo's) only for a run that
+  // ran to its end; one that is ok and fails the verdict is a record of an older coordinator.
+  const bool missed =
+      footer.ok() ? verdict.has_value() : footer.status().rfind(runtime::kDeadlineMisses, 0) == 0;
+  state_ = missed ? "failed" : footer.ok() ? "completed" : "stopped";
+  reason_ = footer.ok() && verdict ? *verdict : footer.status();
   node_ = footer.failed_node();
   overruns_ = std::max<std::uint64_t>(overruns_, footer.counters().overruns());
   finished_ = true;

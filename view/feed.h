@@ -24,9 +24,12 @@
 //             log-spaced f = f_0 10^(i / spectrum_per_decade), f_0 = 1 / (N dt), up to
 //             min(spectrum_max_hz, Nyquist): what a log frequency axis shows.
 //   status    fail-safe state: "starting" before the first step, "armed" while stepping, "HOLD"
-//             from a HOLD event on (its text is the reason), "stopped" / "completed" from the
-//             footer (its status and failed node); counters; the newest step and its CLOCK_REALTIME
-//             start, from which the page tells how far behind the test it is.
+//             from a HOLD event on (its text is the reason), then from the footer: "failed" for
+//             a real-time run that ran to its end but failed the one real-time verdict
+//             (runtime::deadline_verdict on the rows' overruns and worst streak under the
+//             header's deployment; the verdict is the reason), else "stopped" / "completed" (its
+//             status and failed node); counters; the newest step and its CLOCK_REALTIME start,
+//             from which the page tells how far behind the test it is.
 //             With a prediction, per DOF: the largest |u - predicted| and its root mean square
 //             over the samples compared so far (mm; the samples' steps, not every step).
 //   events    the newest `max_events` events.
@@ -160,6 +163,7 @@ class Feed : public runtime::RecordObserver {
 
   // Full-rate state.
   std::uint64_t steps_ = 0, overruns_ = 0, late_ = 0;
+  std::uint64_t overrun_streak_ = 0, worst_overrun_streak_ = 0;  // consecutive overrun rows
   double max_lateness_ = 0;
   std::int64_t last_step_ = -1, last_step_realtime_ns_ = 0;
   double last_time_ = 0;

@@ -143,8 +143,8 @@ namespace {
 // The case's status from the record's footer, overruled by a damaged record, then by the
 // launcher's word; the footer's counters go to the facts.
 void judge_status(const DistributedRun& run, const runtime::RecordContents& record,
-                  const runtime::RunMeasurements& measured, const core::PreparedStudy& prepared,
-                  analysis::RecordedCase& c, DistributedCaseFacts& facts) {
+                  const runtime::RunMeasurements& measured, analysis::RecordedCase& c,
+                  DistributedCaseFacts& facts) {
   if (measured.has_footer) {
     c.status = measured.footer.status();
     const auto& k = measured.footer.counters();
@@ -153,12 +153,10 @@ void judge_status(const DistributedRun& run, const runtime::RecordContents& reco
     facts.unauthenticated = k.unauthenticated();
     facts.node_rejects.assign(measured.footer.node_rejects().begin(),
                               measured.footer.node_rejects().end());
+    // Under the record's own deployment, the one the coordinator judged the run by.
     if (runtime::needs_deadline_diagnosis(c.status, k.overruns()))
-      facts.deadline_diagnosis =
-          runtime::diagnose_deadlines(record.steps(), record.header()->dt(),
-                                      static_cast<std::uint64_t>(runtime::max_missed_answers(
-                                          prepared.config.deployment(), record.header()->dt())))
-              .describe();
+      if (const auto d = runtime::diagnose_record_deadlines(record))
+        facts.deadline_diagnosis = d->describe();
   } else {
     c.status = "cut short";
     c.status_detail = "the record has no footer: the coordinator stopped abruptly";
@@ -212,7 +210,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
           "stopped before step 1: " + measured.footer.status() + "; see " + run.log_hint);
       continue;
     }
-    judge_status(run, record, measured, prepared, c, facts);
+    judge_status(run, record, measured, c, facts);
     facts.link_labels = roles;
     if (comparable && run.coordinator_exit == 0)
       facts.difference_from_in_process =

@@ -414,11 +414,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
             std::to_string(kDefaultMinSamples) + " are needed");
   }
   out.duration = m.steps.time[out.steps - 1] - m.steps.time.front();
-  if (const config::Deployment& d = out.study.deployment();
-      d.clock() == config::Deployment::REAL_TIME)
-    out.platform = runtime::diagnose_deadlines(
-        contents.steps(), header.dt(),
-        static_cast<std::uint64_t>(runtime::max_missed_answers(d, header.dt())));
+  out.platform = runtime::diagnose_record_deadlines(contents);
   out.links = identify_links(record, header, m, m.steps.time[out.steps - 1]);
   const std::vector<double> stiffness =
       declared_stiffnesses(out.study, header.dt(), record.parent_path());
@@ -644,6 +640,8 @@ std::string run_record_text(const RunIdentification& run) {
     out << "platform: " << run.platform->overruns << " of " << run.platform->steps
         << " steps overran their deadline (" << run.platform->cause
         << "); the record: " << run.platform->usability << "\n";
+  if (run.platform && run.platform->verdict)
+    out << "real-time verdict: " << *run.platform->verdict << "\n";
   if (run.replay && run.replay->late_steps > 0)
     out << "answers the loop used: " << run.replay->text()
         << "; the rig is identified on each answer at its own step, the re-run replays them\n";
@@ -672,7 +670,8 @@ nlohmann::json run_record_json(const RunIdentification& run) {
         {"dominated_by_overruns", p->overrun_share() > runtime::DeadlineDiagnosis::kDominatedShare},
         {"worst_streak", p->worst_streak},
         {"cause", p->cause},
-        {"usability", p->usability}};
+        {"usability", p->usability},
+        {"verdict", p->verdict ? nlohmann::json(*p->verdict) : nlohmann::json()}};
   if (const auto& r = run.replay)
     out["answers_used"] = {{"late_steps", r->late_steps},
                            {"mean_age_steps", r->mean_age},

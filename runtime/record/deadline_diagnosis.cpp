@@ -34,15 +34,18 @@ std::string percent(double share) {
   return out.str();
 }
 
-// The record's worth, first by how many steps overran, then by the longest run of them.
-std::string usability_of(const DeadlineDiagnosis& d, std::uint64_t streak_window) {
+// The record's worth, first by how many steps overran, then by the longest run of them; the
+// verdict's breach decides the two that say it is no real-time test's.
+std::string usability_of(const DeadlineDiagnosis& d, const DeadlineRule& rule) {
   const double share = d.overrun_share();
-  if (share > DeadlineDiagnosis::kDominatedShare)
+  const std::uint64_t streak_window = rule.max_streak;
+  const DeadlineBreach breach = deadline_breach(d.counts(), rule);
+  if (breach == DeadlineBreach::kDominated)
     return "dominated by overruns: " + percent(share) +
            " of the steps overran, so the response shows the platform as much as the rig; the "
            "lag measurements stand, the response and what is identified from it do not stand for "
            "a real-time test";
-  if (d.worst_streak > streak_window)
+  if (breach == DeadlineBreach::kStreak)
     return "use with care: " + std::to_string(d.worst_streak) +
            " steps in a row overran, so the integrator used stale forces that long; "
            "the lag measurements stand, the response is not a real-time test's";
@@ -59,6 +62,8 @@ std::string usability_of(const DeadlineDiagnosis& d, std::uint64_t streak_window
 
 }  // namespace
 
+DeadlineCounts DeadlineDiagnosis::counts() const { return {steps, overruns, worst_streak}; }
+
 double DeadlineDiagnosis::overrun_share() const {
   return steps ? static_cast<double>(overruns) / static_cast<double>(steps) : 0.0;
 }
@@ -69,14 +74,15 @@ bool needs_deadline_diagnosis(const std::string& status, std::uint64_t overruns)
 }
 
 DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps, double dt,
-                                     std::uint64_t streak_window) {
+                                     const DeadlineRule& rule) {
   DeadlineDiagnosis d;
   d.period = dt;
+  // The first row is the initial state, never paced: the coordinator judges the steps after it.
+  d.steps = steps.empty() ? 0 : steps.size() - 1;
   std::vector<double> walls;
   walls.reserve(steps.size());
   std::uint64_t streak = 0;
   for (const StepRecord* s : steps) {
-    ++d.steps;
     walls.push_back(s->step_wall());
     streak = s->overrun() ? streak + 1 : 0;
     d.worst_streak = std::max(d.worst_streak, streak);
@@ -90,6 +96,7 @@ DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps
     d.step_wall_median = core::median(walls);
     d.step_wall_p99 = walls[std::min(walls.size() - 1, walls.size() * 99 / 100)];
   }
+  d.verdict = deadline_verdict(d.counts(), rule);
   if (d.overruns == 0) {
     d.cause = "none";
     d.usability = "every step kept its deadline";
@@ -97,8 +104,16 @@ DeadlineDiagnosis diagnose_deadlines(const std::vector<const StepRecord*>& steps
   }
   d.cause = d.stall_overruns >= d.work_overruns ? "platform stalls" : "the loop's own work";
   d.advice = advice_for(d);
-  d.usability = usability_of(d, streak_window);
+  d.usability = usability_of(d, rule);
   return d;
+}
+
+std::optional<DeadlineDiagnosis> diagnose_record_deadlines(const RecordContents& record) {
+  const RunHeader* header = record.header();
+  if (header == nullptr || header->study().deployment().clock() != config::Deployment::REAL_TIME)
+    return std::nullopt;
+  return diagnose_deadlines(record.steps(), header->dt(),
+                            deadline_rule(header->study().deployment(), header->dt()));
 }
 
 std::string DeadlineDiagnosis::describe() const {

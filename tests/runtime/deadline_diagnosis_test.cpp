@@ -31,11 +31,11 @@ void overrun(StepRecord& s, double wall, double lateness) {
 }
 
 TEST(DeadlineDiagnosis, IsolatedLateWakeUpsArePlatformStallsAndTheRecordIsUsable) {
-  auto s = steps(1000);
+  auto s = steps(1001);  // the initial row and 1000 commanded steps
   overrun(s[100], 0.1e-3, 3e-3);
   overrun(s[101], 0.1e-3, 2e-3);
   overrun(s[600], 0.2e-3, 1e-3);
-  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, 10);
+  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, {0.001, 10});
   EXPECT_EQ(d.overruns, 3u);
   EXPECT_EQ(d.stall_overruns, 3u);
   EXPECT_EQ(d.work_overruns, 0u);
@@ -53,16 +53,23 @@ TEST(DeadlineDiagnosis, IsolatedLateWakeUpsArePlatformStallsAndTheRecordIsUsable
 TEST(DeadlineDiagnosis, StepsWhoseOwnWorkOutlastsThePeriodBlameTheLoopAndLongStreaksAreFlagged) {
   auto s = steps(100);
   for (std::size_t k = 10; k < 40; ++k) overrun(s[k], 1.4e-3, 0.5e-3);
-  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, 10);
+  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, {0.001, 10});
   EXPECT_EQ(d.work_overruns, 30u);
   EXPECT_EQ(d.cause, "the loop's own work");
   EXPECT_NE(d.advice.front().find("too slow for dt"), std::string::npos);
   EXPECT_EQ(d.usability.rfind("use with care", 0), 0u) << d.usability;
+  EXPECT_NE(d.usability.find("not a real-time test's"), std::string::npos) << d.usability;
+  // The run's verdict says the same, even with the fraction rule turned off.
+  EXPECT_EQ(d.verdict, deadline_verdict({99, 30, 30}, {0.001, 10}));
+  const DeadlineDiagnosis off = diagnose_deadlines(pointers(s), kDt, {-1, 10});
+  ASSERT_TRUE(off.verdict);
+  EXPECT_NE(off.verdict->find("30 steps in a row overran"), std::string::npos) << *off.verdict;
+  EXPECT_EQ(off.usability, d.usability);
 }
 
 TEST(DeadlineDiagnosis, ARunThatKeptItsDeadlinesHasNoCause) {
   const auto s = steps(10);
-  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, 3);
+  const DeadlineDiagnosis d = diagnose_deadlines(pointers(s), kDt, {0.001, 3});
   EXPECT_EQ(d.cause, "none");
   EXPECT_TRUE(d.advice.empty());
 }
@@ -82,18 +89,18 @@ TEST(DeadlineDiagnosis, AFailSafeStopAfterOverrunsIsDiagnosedToo) {
 // care, and 3 % is usable, its share stated.
 TEST(DeadlineDiagnosis, ARecordIsJudgedByItsShareOfOverrunsAsWellAsByItsStreaks) {
   const auto judged = [](std::size_t every, std::size_t of) {
-    auto s = steps(1000);
-    for (std::size_t k = 0; k < s.size(); ++k)
+    auto s = steps(1001);
+    for (std::size_t k = 1; k < s.size(); ++k)
       if (k % of < every && k % 2 == 0) overrun(s[k], 0.1e-3, 2e-3);
-    return diagnose_deadlines(pointers(s), kDt, 10);
+    return diagnose_deadlines(pointers(s), kDt, {0.001, 10});
   };
   const DeadlineDiagnosis dominated = judged(1, 1);  // every other step: 50 %
   EXPECT_NEAR(dominated.overrun_share(), 0.5, 1e-12);
   EXPECT_EQ(dominated.worst_streak, 1u);
   EXPECT_EQ(dominated.usability.rfind("use with care: 50 %", 0), 0u) << dominated.usability;
-  auto s = steps(1000);
-  for (std::size_t k = 0; k < 590; ++k) overrun(s[k * 1000 / 590], 0.1e-3, 2e-3);
-  const DeadlineDiagnosis most = diagnose_deadlines(pointers(s), kDt, 10);
+  auto s = steps(1001);
+  for (std::size_t k = 0; k < 590; ++k) overrun(s[1 + k * 1000 / 590], 0.1e-3, 2e-3);
+  const DeadlineDiagnosis most = diagnose_deadlines(pointers(s), kDt, {0.001, 10});
   EXPECT_NEAR(most.overrun_share(), 0.59, 1e-12);
   EXPECT_LE(most.worst_streak, 2u);
   EXPECT_EQ(most.usability.rfind("dominated by overruns: 59 %", 0), 0u) << most.usability;

@@ -186,6 +186,44 @@ TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
   EXPECT_TRUE(feed.finished());
 }
 
+// The badge is the one real-time verdict on the record's rows (the header's deployment: the
+// default 0.001 tolerance and 3-step answer window): a run whose rows hold a streak of 5 overruns
+// is `failed` with the verdict as its reason even when its footer says ok (an older coordinator's
+// record); a footer naming deadline misses is `failed` too; rows within the rule stay
+// `completed`; a lockstep record is never judged on deadlines.
+TEST(Feed, ARealTimeRunThatFailedItsVerdictIsShownFailedNeverCompleted) {
+  const auto finished = [](const std::string& clock, int streak, bool ok,
+                           const std::string& status) {
+    Feed feed;
+    runtime::RecordEntry h = header();
+    h.mutable_header()->set_clock(clock);
+    feed.add(h);
+    for (int k = 0; k < 10001; ++k) {
+      runtime::RecordEntry e = step(k);
+      e.mutable_step()->set_overrun(k >= 100 && k < 100 + streak);
+      feed.add(e);
+    }
+    runtime::RecordEntry footer;
+    footer.mutable_footer()->set_ok(ok);
+    footer.mutable_footer()->set_status(status);
+    feed.add(footer);
+    FeedCursor cursor;
+    return feed.since(cursor)["status"];
+  };
+  auto s = finished("real_time", 5, true, "completed");
+  EXPECT_EQ(s["state"], "failed");
+  EXPECT_EQ(s["reason"],
+            "completed with deadline misses: 5 steps in a row overran, more than the fail-safe's "
+            "window of 3 (5 overruns in 10000 steps, 0.050000 %): the integrator used stale "
+            "forces that long, the response is not a real-time test's");
+  s = finished("real_time", 3, true, "completed");
+  EXPECT_EQ(s["state"], "completed") << s["reason"];
+  s = finished("real_time", 0, false, "completed with deadline misses: the servo loop ...");
+  EXPECT_EQ(s["state"], "failed");
+  EXPECT_EQ(s["reason"], "completed with deadline misses: the servo loop ...");
+  EXPECT_EQ(finished("lockstep", 5, true, "completed")["state"], "completed");
+}
+
 // What the page receives: the JSON as written (NaN, no prediction, becomes null).
 nlohmann::json as_sent(const nlohmann::json& j) { return nlohmann::json::parse(j.dump()); }
 
