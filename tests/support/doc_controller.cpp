@@ -266,7 +266,7 @@ bool DocController::answer_for(const ReceivedFrame& frame, SentAnswer& answer,
   put_u32(out, 0xDEADBEEFu);  // padding: never read
   put_f32(out, mm);
   put_f32(out, kn);
-  put_f32(out, std::numeric_limits<float>::quiet_NaN());  // padding: never judged finite
+  put_f32(out, options_.f32_padding);  // padding: never judged finite
   if (longer) put_u32(out, 0);
 
   answer.counter = frame.counter;

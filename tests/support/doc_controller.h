@@ -10,8 +10,9 @@
 //                        spare2 PADDING F32
 //   feedback (24 bytes): counter U32 (echo) | status I32 | spare PADDING U32 |
 //                        displacement F32 mm | force F32 kN | spare2 PADDING F32
-// It writes a quiet NaN into its feedback's F32 padding and 0xDEADBEEF into the U32 one: the docs
-// say padding is never read, so a node that judged it would hold.
+// It writes 0xDEADBEEF into its feedback's U32 padding and `f32_padding` (a quiet NaN by default)
+// into the F32 one: the docs say padding is never read ("a float field NaN or infinite (padding is
+// never read)"), so a node that judged it would hold.
 //
 // Its plant, one step per command frame (each frame is one step of the host, dt apart): the
 // measured displacement follows the target with a pure lag of round(pure_lag / dt) frames, or a
@@ -37,6 +38,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -71,6 +73,7 @@ struct DocControllerOptions {
   DocFault fault = DocFault::kNone;
   std::uint32_t fault_frame = 0;
   double fault_value = 0.0;
+  float f32_padding = std::numeric_limits<float>::quiet_NaN();  // the feedback's F32 PADDING
 };
 
 // One command frame as it arrived.
