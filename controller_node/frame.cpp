@@ -198,15 +198,19 @@ FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data,
   values.has_status = false;
   std::size_t at = 0;
   for (const Field& f : layout.fields()) {
-    const double x = read_field(f, data + at);
+    const std::uint8_t* in = data + at;
     at += field_size(f.type());
+    // A PADDING field's bytes are the controller's spare words, never a value: whatever they
+    // hold (an F64 spare left NaN by its model included) must not refuse the frame.
+    if (f.role() == Field::PADDING) continue;
+    const double x = read_field(f, in);
     if (!std::isfinite(x)) return FrameVerdict::kNonFinite;
     if (f.role() == Field::COUNTER) {
       values.counter = static_cast<std::int64_t>(x);
     } else if (f.role() == Field::STATUS) {
       values.status = static_cast<std::int64_t>(x);
       values.has_status = true;
-    } else if (f.role() != Field::PADDING) {
+    } else {
       if (per_actuator(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators)) continue;
       if (double* v = slot(values, f.role(), f.actuator())) *v = x * scale_of(f);
     }

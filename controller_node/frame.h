@@ -15,9 +15,12 @@
 //     MEASURED_FORCE) and at most one of the others;
 //     roles of the other direction refused; scale finite and not negative.
 //   encode(layout, values, bytes)  -> false when a value does not fit its type (not finite, or
-//                                     beyond an integer's range); bytes then unspecified.
+//                                     beyond an integer's range); bytes then unspecified. PADDING
+//                                     fields are written 0.
 //   decode(layout, bytes, values)  -> kWrongSize (size != frame_size), kNonFinite (a float field
-//                                     NaN or infinite), or kOk with every role's value filled.
+//                                     of any role but PADDING NaN or infinite), or kOk with every
+//                                     role's value filled. PADDING fields are never read: their
+//                                     bytes are the controller's, whatever they hold.
 
 #include <cstdint>
 #include <string>

@@ -134,6 +134,37 @@ TEST(Frame, WrongSizeAndNonFiniteValuesAreRefused) {
   EXPECT_EQ(decode(link.feedback(), bytes.data(), bytes.size(), 1, back), FrameVerdict::kNonFinite);
 }
 
+// A controller's spare words are whatever its model leaves there: a NaN or an infinity in a
+// PADDING field is not a measured value, so the frame is accepted and its values read.
+TEST(Frame, PaddingIsNeverReadAsAValue) {
+  const config::FrameLayout l = layout(
+      "fields { role: COUNTER type: U32 } "
+      "fields { name: \"spare\" role: PADDING type: F64 } "
+      "fields { role: MEASURED_DISPLACEMENT type: F64 } "
+      "fields { name: \"spare2\" role: PADDING type: F32 byte_order: ORDER_BIG } "
+      "fields { role: MEASURED_FORCE type: F64 }");
+  ASSERT_NO_THROW(check_layout(l, 1, Direction::kFeedback, "feedback"));
+  FrameValues v;
+  v.counter = 9;
+  v.measured_displacement = {0.004};
+  v.measured_force = {-250.0};
+  std::vector<std::uint8_t> bytes;
+  ASSERT_TRUE(encode(l, v, bytes));
+  ASSERT_EQ(bytes.size(), 32u);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::memcpy(bytes.data() + 4, &nan, 8);  // spare
+  const std::uint8_t big_endian_infinity[4] = {0x7F, 0x80, 0x00, 0x00};
+  std::memcpy(bytes.data() + 20, big_endian_infinity, 4);  // spare2
+  FrameValues back;
+  ASSERT_EQ(decode(l, bytes.data(), bytes.size(), 1, back), FrameVerdict::kOk);
+  EXPECT_EQ(back.counter, 9);
+  EXPECT_EQ(back.measured_displacement[0], 0.004);
+  EXPECT_EQ(back.measured_force[0], -250.0);
+  // The same NaN in a field that carries a value still refuses the frame.
+  std::memcpy(bytes.data() + 12, &nan, 8);  // the measured displacement
+  EXPECT_EQ(decode(l, bytes.data(), bytes.size(), 1, back), FrameVerdict::kNonFinite);
+}
+
 TEST(Frame, AValueThatDoesNotFitItsTypeIsNotEncoded) {
   const config::FrameLayout l = layout(
       "fields { role: COUNTER type: U32 } fields { role: TARGET_DISPLACEMENT type: I32 "
