@@ -42,9 +42,10 @@ constexpr double kFraction = 0.3333333333333333;
 const double kSpecimenStiffness = kFraction * 1000.0 * std::pow(2.0 * std::numbers::pi / 0.5, 2.0);
 constexpr double kRealTimeDt = 1.0 / 1024.0;
 
-// The doc controller with this file's specimen. Its feedback's F32 PADDING carries a finite
-// junk value here, not its default NaN: rths judges that padding as a value (a finding, shown
-// by FeedbackPaddingIsNeverRead alone), and every other test would stop at step 1 on it.
+// The doc controller with this file's specimen. Its feedback's F32 PADDING carries finite junk
+// here and its default NaN only in FeedbackPaddingIsNeverRead: neither may stop a run, since a
+// PADDING field is never read (controller_node/frame.h), and that test alone is where a
+// regression would show.
 DocControllerOptions controller_options(int peer_port, int node_port, double dt) {
   DocControllerOptions options;
   options.port = peer_port;
