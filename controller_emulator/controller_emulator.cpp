@@ -268,8 +268,8 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
         result = 1;
         break;
       }
-      const std::int64_t wake = pending.empty() ? last_frame_ns + idle_ns + 1
-                                                : pending.front().first;
+      const std::int64_t wake =
+          pending.empty() ? last_frame_ns + idle_ns + 1 : pending.front().first;
       if (!udp.wait(wake)) continue;
       while (udp.try_receive(d)) {
         last_frame_ns = d.received_ns;
@@ -282,8 +282,7 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
         auto answer = emulator.step(d.bytes.data(), std::min(d.size, d.bytes.size()));
         guard.unlock();
         if (!answer) continue;
-        const std::int64_t release =
-            std::max(d.received_ns + lag_ns, last_release_ns + period_ns);
+        const std::int64_t release = std::max(d.received_ns + lag_ns, last_release_ns + period_ns);
         last_release_ns = release;
         if (release <= controller_node::monotonic_ns() && pending.empty()) {
           udp.send(answer->data(), answer->size());

@@ -11,8 +11,9 @@
 //   a command frame, status RUN    -> the actuators take it as the next step (answer each command
 //                                     frame once: realised drift, measured force, counter echoed,
 //                                     status 0; status 1 when the actuators hold)
-//   status HOLD (1)                 -> the actuators hold (ramping to rest at the rate limit) and
-//                                     the frame is logged; no answer
+//   status HOLD (1)                 -> the actuators hold (ramping to rest at the rate limit), the
+//                                     first is logged, and each is answered at once: status HOLD
+//                                     (held) and the held position, force 0
 //   status STOP (2)                 -> stopped(); no answer
 //   wrong size, a value not finite  -> counted (rejected), no answer
 // `answer_frames` >= 0: answer that many command frames, then keep reading (HOLD and STOP are

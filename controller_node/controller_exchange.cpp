@@ -19,7 +19,9 @@ bool beyond(const std::vector<double>& values, double limit) {
                      [limit](double x) { return std::abs(x) > limit; });
 }
 
-std::int64_t ns_of(double seconds) { return static_cast<std::int64_t>(std::llround(seconds * 1e9)); }
+std::int64_t ns_of(double seconds) {
+  return static_cast<std::int64_t>(std::llround(seconds * 1e9));
+}
 
 void check_setting(double value, const char* field) {
   if (!std::isfinite(value) || value < 0)
@@ -88,9 +90,9 @@ bool ControllerExchange::send_frame(std::int64_t status, std::int64_t step) {
   }
   frame = InFlight{counter_, step, monotonic_ns(), out_.time, InFlight::State::kPending};
   std::copy(out_.target_displacement.begin(), out_.target_displacement.end(),
-            targets_.begin() + static_cast<std::ptrdiff_t>((static_cast<std::size_t>(counter_) %
-                                                            kInFlight) *
-                                                           out_.target_displacement.size()));
+            targets_.begin() +
+                static_cast<std::ptrdiff_t>((static_cast<std::size_t>(counter_) % kInFlight) *
+                                            out_.target_displacement.size()));
   if (!encode(config_.command(), out_, bytes_)) {
     send_fault_ = "frame " + std::to_string(counter_) + " carries a value its layout cannot hold";
     return false;
@@ -152,8 +154,8 @@ std::string ControllerExchange::implausible(const InFlight& frame) {
     const auto k = static_cast<std::size_t>(i);
     const double x = in_.measured_displacement[k], f = in_.measured_force[k];
     const std::string who = "actuator " + std::to_string(i + 1) + " (frame " +
-                            std::to_string(frame.counter) + ", step " +
-                            std::to_string(frame.step) + ")";
+                            std::to_string(frame.counter) + ", step " + std::to_string(frame.step) +
+                            ")";
     if (measured_ && settings_.max_measured_rate > 0 && dt > 0) {
       const double rate = std::abs(x - last_displacement_[k]) / dt;
       if (rate > settings_.max_measured_rate)
@@ -224,8 +226,7 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
     return a;
   }
   InFlight* frame = nullptr;
-  if (Answer counter = judge_counter(frame); counter.outcome != Outcome::kAnswered)
-    return counter;
+  if (Answer counter = judge_counter(frame); counter.outcome != Outcome::kAnswered) return counter;
   const double round_trip = static_cast<double>(d.received_ns - frame->sent_ns) * 1e-9;
   if (round_trip > settings_.reply_timeout) {
     frame->state = InFlight::State::kLost;

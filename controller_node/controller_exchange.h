@@ -74,7 +74,7 @@ class ControllerExchange {
   enum class Outcome { kNone, kAnswered, kFault };
   struct Answer {
     Outcome outcome = Outcome::kNone;
-    std::int64_t step = 0;                        // kAnswered: the step its frame commanded
+    std::int64_t step = 0;                              // kAnswered: the step its frame commanded
     const std::vector<double>* displacement = nullptr;  // m, valid until the next call
     const std::vector<double>* force = nullptr;         // N
     double round_trip = 0.0;                            // s

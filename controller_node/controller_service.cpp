@@ -62,8 +62,7 @@ int ControllerService::configure(const runtime::Assign& assign) {
                                    : 2.0 * deployment.limits().max_velocity();
   settings.max_force_rate = link.max_force_rate();
   settings.max_tracking_error = link.max_tracking_error();
-  settings.tracking_error_steps =
-      link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3;
+  settings.tracking_error_steps = link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3;
   const double hold = link.hold_time_ms() * 1e-3;
   if (!std::isfinite(hold) || hold < 0 || hold > kMaxHoldTime)
     throw std::invalid_argument("controller.hold_time_ms must be in [0, 60000]");

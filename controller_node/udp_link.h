@@ -28,11 +28,11 @@ inline constexpr std::size_t kMaxDatagram = 2048;  // bytes read of one datagram
 
 struct Datagram {
   std::array<std::uint8_t, kMaxDatagram> bytes{};  // the first min(size, kMaxDatagram) are valid
-  std::size_t size = 0;                             // the datagram's true size
-  bool from_peer = false;                           // source address and port are the peer's
-  std::uint32_t source_address = 0;                 // network order
-  std::uint16_t source_port = 0;                    // network order
-  std::int64_t received_ns = 0;                     // CLOCK_MONOTONIC
+  std::size_t size = 0;                            // the datagram's true size
+  bool from_peer = false;                          // source address and port are the peer's
+  std::uint32_t source_address = 0;                // network order
+  std::uint16_t source_port = 0;                   // network order
+  std::int64_t received_ns = 0;                    // CLOCK_MONOTONIC
 };
 
 class UdpLink {

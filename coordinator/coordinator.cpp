@@ -178,10 +178,10 @@ void deactivate(RunState& s, bool failed, const std::string& status) {
   auto wait = std::chrono::duration<double>(kFinalReportWait);
   for (const auto& [id, node] : s.nodes)
     if (node.plan->spec.kind() == config::NodeSpec::CONTROLLER)
-      wait = std::max(wait, std::chrono::duration<double>(
-                                kFinalReportWait + std::chrono::milliseconds(500)) +
-                                std::chrono::duration<double>(
-                                    node.plan->spec.controller().hold_time_ms() * 1e-3));
+      wait = std::max(
+          wait,
+          std::chrono::duration<double>(kFinalReportWait + std::chrono::milliseconds(500)) +
+              std::chrono::duration<double>(node.plan->spec.controller().hold_time_ms() * 1e-3));
   const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(wait);
   const auto all_reported = [&s] {
     for (const auto& [id, node] : s.nodes)

@@ -319,35 +319,35 @@ void RunState::judge_answer_age(Node& node) {
       (node.answers == 0 ? std::string("no answer yet")
                          : "its newest answer is to step " + std::to_string(node.last_answer)) +
           " at step " + std::to_string(step) + ": " + std::to_string(age) + " steps (" + ms(age) +
-          ") old, beyond its answer window of " + std::to_string(window) + " steps (" +
-          ms(window) + "); an answer that old is never applied",
+          ") old, beyond its answer window of " + std::to_string(window) + " steps (" + ms(window) +
+          "); an answer that old is never applied",
       node.plan->label());
 }
 
 void RunState::judge_answers(int max_missed) {
   for (auto& [id, node] : nodes) {
-      if (node.last_answer != step) {
-        ++late_feedback;
-        if (static_cast<std::uint64_t>(++node.late_streak) > worst_late_streak)
-          worst_late_streak = static_cast<std::uint64_t>(node.late_streak);
-      } else {
-        node.late_streak = 0;
-      }
-      // Missing = no fresh answer at all this step (an answer to an older step, as a link
-      // slower than a step delivers, is fresh). Counted once the node has answered: before
-      // that, start-up and liveliness cover it.
-      const bool fresh = node.answers != node.answers_before_step;
-      node.fresh_steps += fresh ? 1 : 0;
-      ++node.judged_steps;
-      node.answers_before_step = node.answers;
-      node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
-      if (node.missed_streak >= max_missed)
-        throw RunAborted(
-            "no answer for " + std::to_string(node.missed_streak) + " consecutive steps (steps " +
-                std::to_string(step - node.missed_streak + 1) + " to " + std::to_string(step) +
-                "; its newest answers step " + std::to_string(node.last_answer) + ")",
-            node.plan->label());
-      judge_answer_age(node);
+    if (node.last_answer != step) {
+      ++late_feedback;
+      if (static_cast<std::uint64_t>(++node.late_streak) > worst_late_streak)
+        worst_late_streak = static_cast<std::uint64_t>(node.late_streak);
+    } else {
+      node.late_streak = 0;
+    }
+    // Missing = no fresh answer at all this step (an answer to an older step, as a link
+    // slower than a step delivers, is fresh). Counted once the node has answered: before
+    // that, start-up and liveliness cover it.
+    const bool fresh = node.answers != node.answers_before_step;
+    node.fresh_steps += fresh ? 1 : 0;
+    ++node.judged_steps;
+    node.answers_before_step = node.answers;
+    node.missed_streak = fresh || node.answers == 0 ? 0 : node.missed_streak + 1;
+    if (node.missed_streak >= max_missed)
+      throw RunAborted(
+          "no answer for " + std::to_string(node.missed_streak) + " consecutive steps (steps " +
+              std::to_string(step - node.missed_streak + 1) + " to " + std::to_string(step) +
+              "; its newest answers step " + std::to_string(node.last_answer) + ")",
+          node.plan->label());
+    judge_answer_age(node);
   }
 }
 

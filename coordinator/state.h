@@ -72,8 +72,8 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
     runtime::Counters rejects;  // what the node rejected, by cause, as of its last heartbeat
     bool final_report = false;  // that heartbeat was its last (sent on STOP)
     runtime::ControllerReport controller;  // a CONTROLLER node's link, as of its last heartbeat
-    std::optional<AnswerWindow> window;     // real time: the oldest answer a step may apply
-    AnswerAgeTally ages;                    // real time: each step's applied answer's age
+    std::optional<AnswerWindow> window;    // real time: the oldest answer a step may apply
+    AnswerAgeTally ages;                   // real time: each step's applied answer's age
   };
   std::map<int, Node> nodes;
   // The nodes' feedback, filled by the transport's receive thread (or by pump() on a transport

@@ -250,7 +250,8 @@ std::string distributed_summary_text(const DistributedResults& results) {
     for (const runtime::NodeRejects& n : f.node_rejects) {
       text << "  " << n.label() << " rejected: " << rejects_text(n.rejected())
            << (n.final() ? "" : " (as of its last heartbeat)") << "\n";
-      for (const std::string& line : {runtime::controller_link_text(n), runtime::answer_age_text(n)})
+      for (const std::string& line :
+           {runtime::controller_link_text(n), runtime::answer_age_text(n)})
         if (!line.empty()) text << "  " << line;
     }
     for (const auto& [node, series] : results.links[i]) {

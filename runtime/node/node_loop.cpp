@@ -4,12 +4,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <ctime>
 #include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
-#include <ctime>
 
 #include "runtime/node/lag.h"
 #include "runtime/node/plan.h"

@@ -9,8 +9,9 @@
 //                             ms, the node's clock) and the hold (HOLD frames, held after ms).
 //   answer_age_text(n)        "" when no step was judged (lockstep); else the applied answers'
 //                             age, median, p99 and max in steps and ms, against the window.
-//   node_health_json(n)       both as JSON: {"controller": {...} | null, "answer_age": {...} | null}
-//   link_verdict(n)           why the run cannot pass as clean: frames lost, late, or rejected
+//   node_health_json(n)       both as JSON: {"controller": {...} | null, "answer_age": {...} |
+//   null} link_verdict(n)           why the run cannot pass as clean: frames lost, late, or
+//   rejected
 //                             (any cause: a second sender, a damaged frame), named with counts;
 //                             nullopt when the link was clean (or the node has none).
 

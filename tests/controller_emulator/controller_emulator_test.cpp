@@ -122,7 +122,11 @@ TEST(ControllerEmulator, PacedHoldsOnAHoldFrameAndItsPlantStaysAtTheHoldPosition
     ASSERT_TRUE(e.send(k, 0, k * 0.001, 0.0002 * k, 0.2));
     for (int j = 0; j < 4; ++j) e.emulator.tick(false);
   }
-  EXPECT_FALSE(e.send(51, controller_node::kStatusHold, 0.051, 0.0102, 0.2));
+  // A HOLD frame is answered at once: status HOLD (held) at the position the plant holds.
+  const auto held = e.send(51, controller_node::kStatusHold, 0.051, 0.0102, 0.2);
+  ASSERT_TRUE(held);
+  EXPECT_EQ(held->status, controller_node::kStatusHold);
+  EXPECT_EQ(held->counter, 51);
   for (int j = 0; j < 40; ++j) e.emulator.tick(false);
   const auto answer = e.send(52, 0, 0.052, 0.0104, 0.2);
   ASSERT_TRUE(answer);
@@ -131,10 +135,13 @@ TEST(ControllerEmulator, PacedHoldsOnAHoldFrameAndItsPlantStaysAtTheHoldPosition
   EXPECT_LT(answer->measured_displacement[0], 0.0102);
 }
 
-TEST(ControllerEmulator, HoldsOnAHoldFrameAndAnswersHoldingFromThen) {
+TEST(ControllerEmulator, HoldsOnAHoldFrameAnswersItHeldAndAnswersHoldingFromThen) {
   Emulator e;
   for (int k = 1; k <= 50; ++k) ASSERT_TRUE(e.send(k, 0, k * 0.001, 0.0002 * k, 0.2));
-  EXPECT_FALSE(e.send(51, controller_node::kStatusHold, 0.051, 0.0102, 0.2));
+  const auto held = e.send(51, controller_node::kStatusHold, 0.051, 0.0102, 0.2);
+  ASSERT_TRUE(held);
+  EXPECT_EQ(held->status, controller_node::kStatusHold);
+  EXPECT_EQ(held->counter, 51);
   EXPECT_EQ(e.emulator.counts().holds, 1u);
   const auto answer = e.send(52, 0, 0.052, 0.0104, 0.2);
   ASSERT_TRUE(answer);

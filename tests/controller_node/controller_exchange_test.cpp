@@ -177,7 +177,8 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
          return f;
        },
        "not finite"},
-      {"repeated", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
+      {"repeated",
+       [](Controller& c, const FrameValues& v) { return c.feedback(v.counter - 1, 0, 0); },
        "repeats counter 1 (already answered)"},
       {"never sent",
        [](Controller& c, const FrameValues& v) { return c.feedback(v.counter + 5, 0, 0); },
@@ -231,7 +232,7 @@ ControllerExchange::Answer after_good_answers(int port, ExchangeSettings s, int 
 TEST(ControllerExchange, AMeasurementMovingFasterThanTheRigCouldIsImplausible) {
   ExchangeSettings s = settings();
   s.max_measured_rate = 2.0;  // m/s
-  s.max_force_rate = 2e4;     // N/s; the good answers move 1 N per ms = 1e3 N/s
+  s.max_force_rate = 2e3;     // N/s; the good answers move 1 N per ms = 1e3 N/s
   // A rebooted controller: its echo is right, its state is lost (drift and force back to 0).
   const auto force_jump = after_good_answers(47130, s, 5, 0.0059, 0.0);
   EXPECT_EQ(force_jump.outcome, Outcome::kFault);
@@ -282,8 +283,7 @@ TEST(ControllerExchange, ASilentControllerIsAFaultInLockstepOnceTheFrameIsStale)
   const auto a = await_answer(node);
   const double waited = static_cast<double>(monotonic_ns() - start) * 1e-9;
   EXPECT_EQ(a.outcome, Outcome::kFault);
-  EXPECT_NE(a.fault.find("did not answer frame 1 (step 1) within 50.000000 ms"),
-            std::string::npos)
+  EXPECT_NE(a.fault.find("did not answer frame 1 (step 1) within 50.000000 ms"), std::string::npos)
       << a.fault;
   EXPECT_GE(waited, 0.05);
   EXPECT_LT(waited, 0.5);

@@ -175,8 +175,8 @@ TEST(ControllerService, AnswersAsAnEmulatorAndHoldsTheRigOnARefusedFrame) {
 }
 
 TEST(ControllerService, RealTimeHoldsAfterTheWindowOfLostFrames) {
-  const runtime::Assign a = assign(
-      47162, 47163, "clock: REAL_TIME max_missed_answers: 3 max_overrun_fraction: -1", "");
+  const runtime::Assign a =
+      assign(47162, 47163, "clock: REAL_TIME max_missed_answers: 3 max_overrun_fraction: -1", "");
   ControllerService node(2, kRunId);
   Controller controller(a.node().controller());  // bound, never answers
   ASSERT_EQ(assigned(node, a).error(), "");
@@ -195,9 +195,9 @@ TEST(ControllerService, RealTimeHoldsAfterTheWindowOfLostFrames) {
 TEST(ControllerService, AReplyTimeoutBeyondTheAnswerWindowIsRefusedAtAssign) {
   ControllerService node(2, kRunId);
   const runtime::Ready r = assigned(
-      node, assign(47164, 47165, "clock: REAL_TIME answer_window_ms: 5", "reply_timeout_ms: 1e300"));
-  EXPECT_NE(r.error().find("is longer than the answer window (5.000000 ms)"),
-            std::string::npos)
+      node,
+      assign(47164, 47165, "clock: REAL_TIME answer_window_ms: 5", "reply_timeout_ms: 1e300"));
+  EXPECT_NE(r.error().find("is longer than the answer window (5.000000 ms)"), std::string::npos)
       << r.error();
 }
 

@@ -130,7 +130,8 @@ TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
   EXPECT_NE(coordinator_log.find("within 200.000000 ms (1 lost in a row)"), std::string::npos)
       << coordinator_log;
   const std::string node_log = test::read_file(run.dir / "node_2.log");
-  EXPECT_NE(node_log.find("HOLD frames (status 1) to the controller"), std::string::npos) << node_log;
+  EXPECT_NE(node_log.find("HOLD frames (status 1) to the controller"), std::string::npos)
+      << node_log;
   bool named = false;
   for (const auto& e : run.record.entries)
     named = named || (e.has_event() &&
@@ -141,17 +142,19 @@ TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
 }
 
 // A controller slower than the host (one answer per 2 ms at dt = 1 ms, in order) falls further
-// behind every frame (the paper frame steps at dt = 1 ms). Before, the node waited for each answer on the DDS thread and the
-// coordinator applied answers seconds old. Now every applied answer is within the answer window,
-// and the run HOLDs within the window + 2 ms of the first answer that would be older, naming it.
+// behind every frame (the paper frame steps at dt = 1 ms). Before, the node waited for each answer
+// on the DDS thread and the coordinator applied answers seconds old. Now every applied answer is
+// within the answer window, and the run HOLDs within the window + 2 ms of the first answer that
+// would be older, naming it.
 TEST_F(DdsController, AControllerThatFallsBehindHoldsWithinTheAnswerWindow) {
   constexpr double kWindowMs = 20.0;
   const std::string text = test::paper_frame_study(
-      4.0, "deployment { clock: REAL_TIME liveliness_timeout: 2 heartbeat_period: 0.02 "
-           "answer_window_ms: 20 max_overrun_fraction: -1 min_answer_fraction: -1 "
-           "nodes { id: 2 kind: CONTROLLER controller { " +
-               test::controller_link_text(47157, 47158, "reply_timeout_ms: 8") +
-               " } } limits { max_displacement: 0.5 } }");
+      4.0,
+      "deployment { clock: REAL_TIME liveliness_timeout: 2 heartbeat_period: 0.02 "
+      "answer_window_ms: 20 max_overrun_fraction: -1 min_answer_fraction: -1 "
+      "nodes { id: 2 kind: CONTROLLER controller { " +
+          test::controller_link_text(47157, 47158, "reply_timeout_ms: 8") +
+          " } } limits { max_displacement: 0.5 } }");
   util::ChildProcess emulator =
       start_emulator("controller_behind", text, "reference", {"--answer-period-ms", "2"});
   const auto run = test::launch("controller_behind", text, "reference", 232);

@@ -66,8 +66,7 @@ TEST(AnswerAgeTally, KeepsTheMaxBeyondItsBinsAndSaysNothingBeforeAStep) {
   EXPECT_EQ(tally.summary(3, 0.001).max_steps(), 0.0);
   tally.step(100000);
   EXPECT_EQ(tally.summary(3, 0.001).max_steps(), 100000.0);
-  EXPECT_EQ(tally.summary(3, 0.001).median_steps(),
-            static_cast<double>(AnswerAgeTally::kBins - 1));
+  EXPECT_EQ(tally.summary(3, 0.001).median_steps(), static_cast<double>(AnswerAgeTally::kBins - 1));
 }
 
 }  // namespace

@@ -145,7 +145,8 @@ void read_outcome(const ControllerTrialSpec& spec, const std::filesystem::path& 
   if (const auto own = stamped_line(node_log, "holding on its own"); own && (!hold || *own < *hold))
     hold = own;
   if (hold && fault_ns > 0) out.hold_ms = static_cast<double>(*hold - fault_ns) * 1e-6;
-  out.hold_frame_sent = node_log.find("HOLD frames (status 1) to the controller") != std::string::npos;
+  out.hold_frame_sent =
+      node_log.find("HOLD frames (status 1) to the controller") != std::string::npos;
   out.hold_frame_received = emulator_log.find("status HOLD received") != std::string::npos;
   std::smatch m;
   static const std::regex plant("plant periods ([0-9]+), overruns ([0-9]+)");
