@@ -41,12 +41,16 @@ void fail_if_distributed_failed(const DistributedResults& results,
                                           results.missing.front().second);
   for (std::size_t i = 0; i < results.facts.size(); ++i) {
     const auto& difference = results.facts[i].difference_from_in_process;
-    if (difference && difference->first_step)
+    if (difference && difference->differs())
       throw ExitError(kExitRunFailed,
                       "case " + results.outcome.cases[i].name +
                           ": the lockstep run differs from the in-process run from step " +
                           std::to_string(*difference->first_step) + " (max |du| " +
-                          std::to_string(difference->max) + " m)");
+                          std::to_string(difference->max) + " m" +
+                          (difference->tolerance > 0
+                               ? ", beyond the frames' resolution, " + difference->resolution
+                               : std::string()) +
+                          ")");
   }
   fail_if_unstable(results.outcome, allow_unstable);
 }

@@ -334,7 +334,11 @@ bool ControllerExchange::hold_step(std::int64_t now_ns) {
   if (done || now_ns < next_hold_frame_ns_) return done;
   send_frame(kStatusHold, -1);
   report_.set_hold_frames(report_.hold_frames() + 1);
-  next_hold_frame_ns_ = now_ns + std::max<std::int64_t>(ns_of(settings_.dt), 100000);
+  // Every dt at first; past kHoldBurst frames every kHoldSpacing dt, so a controller that
+  // stalled wakes to a short backlog with the STOP behind it, not a buffer full of HOLDs.
+  const std::int64_t period = std::max<std::int64_t>(ns_of(settings_.dt), 100000);
+  next_hold_frame_ns_ =
+      now_ns + (report_.hold_frames() < kHoldBurst ? period : kHoldSpacing * period);
   return false;
 }
 

@@ -31,8 +31,9 @@
 //   Then frames sent more than the reply timeout ago are lost: lockstep -> kFault at once (the
 //   step cannot go on without its answer); real time -> lost_window lost in a row -> kFault.
 // The hold: begin_hold(now) sends a HOLD frame (status 1) carrying the position to hold (the
-//   newest measured drift, else the newest target) and hold_step(now) repeats it every dt until
-//   the controller answers one with status HOLD, or hold_time passes; it returns true then.
+//   newest measured drift, else the newest target) and hold_step(now) repeats it every dt (the
+//   first kHoldBurst, then every kHoldSpacing dt: a stalled controller's buffer holds the STOP
+//   too) until the controller answers one with status HOLD, or hold_time passes; true then.
 //   send_stop() sends the STOP frame (status 2) with the same position.
 // Threads: wait() may run on any thread (it only polls the socket); everything else on one
 // thread at a time (the node serialises them). No allocation per datagram or frame once built
@@ -70,6 +71,8 @@ class ControllerExchange {
  public:
   static constexpr std::size_t kInFlight = 256;  // frames judged by their counter
   static constexpr std::size_t kRoundTrips = 4096;
+  static constexpr std::uint64_t kHoldBurst = 50;   // HOLD frames one dt apart, then
+  static constexpr std::int64_t kHoldSpacing = 10;  // this many dt apart
 
   enum class Outcome { kNone, kAnswered, kFault };
   struct Answer {

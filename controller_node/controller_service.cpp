@@ -25,7 +25,7 @@ double reply_timeout(const config::ControllerLink& link, const config::Deploymen
     throw std::invalid_argument("controller.reply_timeout_ms must be finite and >= 0");
   if (asked > window * (1 + 1e-9))
     throw std::invalid_argument(
-        "controller.reply_timeout_ms " + std::to_string(link.reply_timeout_ms()) +
+        "controller.reply_timeout_ms " + fmt::format("{:g}", link.reply_timeout_ms()) +
         " is longer than the " + (real_time ? "answer window" : "lockstep step_timeout") + " (" +
         std::to_string(window * 1e3) +
         " ms): an answer that late could never be applied, and a silent controller would get its "

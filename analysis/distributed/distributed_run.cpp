@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "core/time_text.h"
 #include "runtime/node/in_process.h"
@@ -40,10 +41,45 @@ std::optional<InProcessDifference> difference_from_in_process(
   if (expected.displacement.size() == 0) return difference;
   const core::Mat delta = (expected.displacement - recorded.displacement).cwiseAbs();
   difference.max = delta.maxCoeff();
+  std::tie(difference.tolerance, difference.resolution) = frame_rounding_tolerance(
+      prepared.config.deployment(), expected.displacement.cwiseAbs().maxCoeff());
   for (Eigen::Index k = 0; k < delta.rows() && !difference.first_step; ++k)
     if (delta.row(k).maxCoeff() != 0.0) difference.first_step = static_cast<std::int64_t>(k);
   return difference;
 }
+
+}  // namespace
+
+std::pair<double, std::string> frame_rounding_tolerance(const config::Deployment& deployment,
+                                                        double peak_displacement) {
+  double relative = 0.0;
+  std::string kind;
+  for (const auto& node : deployment.nodes()) {
+    if (!node.has_controller()) continue;
+    for (const auto* layout : {&node.controller().command(), &node.controller().feedback()})
+      for (const config::FrameField& f : layout->fields()) {
+        if (f.role() != config::FrameField::TARGET_DISPLACEMENT &&
+            f.role() != config::FrameField::MEASURED_DISPLACEMENT &&
+            f.role() != config::FrameField::MEASURED_FORCE)
+          continue;
+        const bool scaled = f.scale() != 0.0 && f.scale() != 1.0;
+        double r = 0.0;
+        std::string k;
+        if (f.type() == config::FrameField::F32) {
+          r = 1e-5, k = "f32 fields: 1e-5 x peak |u|";
+        } else if (f.type() == config::FrameField::I32 || f.type() == config::FrameField::U32) {
+          r = 1e-3, k = "integer fields: 1e-3 x peak |u|";
+        } else if (scaled) {
+          r = 1e-12, k = "scaled f64 fields: 1e-12 x peak |u|";
+        }
+        if (r > relative) relative = r, kind = k;
+      }
+  }
+  if (relative == 0.0) return {0.0, ""};
+  return {relative * peak_displacement, kind};
+}
+
+namespace {
 
 // A node's rejects by cause, with what its transport dropped unread for want of a MAC (never
 // seen by its checks, so not in `rejected`'s total).
@@ -240,8 +276,14 @@ std::string distributed_summary_text(const DistributedResults& results) {
          << ", record " << f.record.string() << "\n";
     if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
     if (f.difference_from_in_process) {
-      if (!f.difference_from_in_process->first_step)
+      const InProcessDifference& d = *f.difference_from_in_process;
+      if (!d.first_step)
         text << "  equals the in-process run of the same case bit for bit\n";
+      else if (!d.differs())
+        text << "  equals the in-process run of the same case within the controller frames' "
+                "resolution ("
+             << d.resolution << ": max |du| = " << std::scientific << d.max << " m, allowed "
+             << d.tolerance << std::fixed << " m)\n";
       else
         text << "  DIFFERS from the in-process run of the same case from step "
              << *f.difference_from_in_process->first_step << ": max |du| = " << std::scientific
@@ -299,6 +341,9 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     c["max_difference_from_in_process_m"] = f.difference_from_in_process
                                                 ? nlohmann::json(f.difference_from_in_process->max)
                                                 : nlohmann::json();
+    c["in_process_tolerance_m"] = f.difference_from_in_process
+                                      ? nlohmann::json(f.difference_from_in_process->tolerance)
+                                      : nlohmann::json();
     c["first_step_differing_from_in_process"] =
         f.difference_from_in_process && f.difference_from_in_process->first_step
             ? nlohmann::json(*f.difference_from_in_process->first_step)

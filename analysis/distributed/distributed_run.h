@@ -84,7 +84,22 @@ std::map<int, std::string> link_roles(const config::Deployment& deployment,
 struct InProcessDifference {
   double max = 0.0;                        // m, max |u_distributed - u_in_process|
   std::optional<std::int64_t> first_step;  // the first step that differs; none = bit for bit
+  // m: what the controller frames' rounding may move the run by (0: none rounds, bit for bit
+  // is the test), and how it was derived ("" when 0).
+  double tolerance = 0.0;
+  std::string resolution;
+  bool differs() const { return first_step && max > tolerance; }
 };
+
+// The tolerance of a lockstep run through controller frames against the in-process run, from
+// the frames' layouts: 0 when every field that carries a displacement or force crosses
+// unchanged (F64 at scale 1). A float field (F32, or F64 with a scale) rounds each value by
+// 2^-24 (F32) or 2^-52 of it, at most 3 roundings per step (target out, displacement and
+// force back), amplified by at most 1 / (2 zeta) ~ 10 on a lightly damped structure: allowed
+// 1e-5 x peak |u| (F32; 5x margin) or 1e-12 x peak |u|. An integer field rounds by half its
+// scale: allowed 1e-3 x peak |u|. Returns {tolerance in m, how it was derived}.
+std::pair<double, std::string> frame_rounding_tolerance(const config::Deployment& deployment,
+                                                        double peak_displacement);
 
 struct DistributedCaseFacts {
   int coordinator_exit = -1;
