@@ -13,12 +13,6 @@ constexpr std::uint64_t kLoggedRejects = 20;  // then every 1000th, so a flood c
 
 std::string ms(double seconds) { return std::to_string(seconds * 1e3) + " ms"; }
 
-bool beyond(const std::vector<double>& values, double limit) {
-  if (!(limit > 0)) return false;
-  return std::any_of(values.begin(), values.end(),
-                     [limit](double x) { return std::abs(x) > limit; });
-}
-
 std::int64_t ns_of(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e9));
 }
@@ -121,24 +115,33 @@ bool ControllerExchange::send_command(std::int64_t step, double time,
 ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame) {
   Answer a;
   const std::int64_t c = in_.counter;
-  const std::string from = "frame from " + link_->peer();
+  // Texts are built only on the way to a rejection: an accepted frame allocates nothing.
+  const auto from = [this] { return "frame from " + link_->peer(); };
   if (c > counter_ || c <= 0) {
     a.outcome = Outcome::kFault;
-    a.fault = from + " echoes counter " + std::to_string(c) + ", never sent (newest " +
+    a.fault = from() + " echoes counter " + std::to_string(c) + ", never sent (newest " +
               std::to_string(counter_) + ")";
     reject(Cause::kUnexpected, a.fault);
     return a;
   }
   InFlight& f = slot(c);
-  if (f.counter != c || f.state == InFlight::State::kLost || c < newest_answered_) {
-    reject(Cause::kLate, from + " answers frame " + std::to_string(c) + " after its timeout");
-    return a;  // kNone: ignored
-  }
-  if (f.state == InFlight::State::kAnswered) {
+  // An echo of a frame answered already, or older than any frame the ring holds (long answered
+  // or lost: no late answer comes kInFlight frames after its own): the controller repeats
+  // itself, or its counter was reset (a reboot).
+  if (f.counter != c || f.state == InFlight::State::kAnswered) {
     a.outcome = Outcome::kFault;
-    a.fault = from + " repeats counter " + std::to_string(c) + " (already answered)";
+    a.fault = from() + " repeats counter " + std::to_string(c) +
+              (f.counter != c
+                   ? " (older than every frame in flight; newest " + std::to_string(counter_) + ")"
+                   : " (already answered)");
     reject(Cause::kRepeated, a.fault);
     return a;
+  }
+  // The answer to a frame already lost, or overtaken by a newer answer: late, never applied.
+  if (f.state == InFlight::State::kLost || c < newest_answered_) {
+    f.state = InFlight::State::kLost;
+    reject(Cause::kLate, from() + " answers frame " + std::to_string(c) + " late");
+    return a;  // kNone: ignored
   }
   frame = &f;
   a.outcome = Outcome::kAnswered;
@@ -153,13 +156,14 @@ std::string ControllerExchange::implausible(const InFlight& frame) {
   for (int i = 0; i < settings_.actuators; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const double x = in_.measured_displacement[k], f = in_.measured_force[k];
-    const std::string who = "actuator " + std::to_string(i + 1) + " (frame " +
-                            std::to_string(frame.counter) + ", step " + std::to_string(frame.step) +
-                            ")";
+    const auto who = [&] {
+      return "actuator " + std::to_string(i + 1) + " (frame " + std::to_string(frame.counter) +
+             ", step " + std::to_string(frame.step) + ")";
+    };
     if (measured_ && settings_.max_measured_rate > 0 && dt > 0) {
       const double rate = std::abs(x - last_displacement_[k]) / dt;
       if (rate > settings_.max_measured_rate)
-        return "implausible measurement: the measured drift of " + who + " moved " +
+        return "implausible measurement: the measured drift of " + who() + " moved " +
                std::to_string((x - last_displacement_[k]) * 1e3) + " mm in " + ms(dt) + " (" +
                std::to_string(rate) + " m/s, bound max_measured_rate " +
                std::to_string(settings_.max_measured_rate) + " m/s)";
@@ -167,7 +171,7 @@ std::string ControllerExchange::implausible(const InFlight& frame) {
     if (measured_ && settings_.max_force_rate > 0 && dt > 0) {
       const double rate = std::abs(f - last_force_[k]) / dt;
       if (rate > settings_.max_force_rate)
-        return "implausible measurement: the measured force of " + who + " moved " +
+        return "implausible measurement: the measured force of " + who() + " moved " +
                std::to_string(f - last_force_[k]) + " N in " + ms(dt) + " (" +
                std::to_string(rate) + " N/s, bound max_force_rate " +
                std::to_string(settings_.max_force_rate) + " N/s)";
@@ -176,7 +180,7 @@ std::string ControllerExchange::implausible(const InFlight& frame) {
         std::abs(x - target[k]) > settings_.max_tracking_error) {
       tracking_off = true;
       if (tracking_streak_ + 1 >= settings_.tracking_error_steps)
-        return "tracking error: " + who + " measured " + std::to_string(x * 1e3) +
+        return "tracking error: " + who() + " measured " + std::to_string(x * 1e3) +
                " mm for a target of " + std::to_string(target[k] * 1e3) + " mm (|error| " +
                std::to_string(std::abs(x - target[k]) * 1e3) + " mm beyond max_tracking_error " +
                std::to_string(settings_.max_tracking_error * 1e3) + " mm for " +
@@ -184,6 +188,22 @@ std::string ControllerExchange::implausible(const InFlight& frame) {
     }
   }
   tracking_streak_ = tracking_off ? tracking_streak_ + 1 : 0;
+  return {};
+}
+
+// "" when every measurement is within the run's limits, else the first one beyond, named.
+std::string ControllerExchange::out_of_range() const {
+  for (int i = 0; i < settings_.actuators; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double x = in_.measured_displacement[k], f = in_.measured_force[k];
+    if (settings_.max_drift > 0 && std::abs(x) > settings_.max_drift)
+      return "a drift of " + std::to_string(x) + " m on actuator " + std::to_string(i + 1) +
+             ", beyond the run's limit of " + std::to_string(settings_.max_drift) +
+             " m (twice limits.max_displacement)";
+    if (settings_.max_force > 0 && std::abs(f) > settings_.max_force)
+      return "a force of " + std::to_string(f) + " N on actuator " + std::to_string(i + 1) +
+             ", beyond controller.max_force " + std::to_string(settings_.max_force) + " N";
+  }
   return {};
 }
 
@@ -201,9 +221,10 @@ void ControllerExchange::note_hold_answer(const Datagram& d) {
 
 ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
   Answer a;
-  const std::string from = "frame from " + source_text(d);
+  // Texts are built only on the way to a rejection: an accepted frame allocates nothing.
+  const auto from = [&d] { return "frame from " + source_text(d); };
   if (!d.from_peer) {
-    reject(Cause::kWrongSource, from + " (not the controller " + link_->peer() + "), " +
+    reject(Cause::kWrongSource, from() + " (not the controller " + link_->peer() + "), " +
                                     std::to_string(d.size) + " bytes");
     return a;
   }
@@ -215,13 +236,19 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
       decode(config_.feedback(), d.bytes.data(), d.size, settings_.actuators, in_);
   a.outcome = Outcome::kFault;
   if (verdict == FrameVerdict::kWrongSize) {
-    a.fault = from + " has " + std::to_string(d.size) + " bytes, the feedback frame " +
+    a.fault = from() + " has " + std::to_string(d.size) + " bytes, the feedback frame " +
               std::to_string(frame_size(config_.feedback()));
     reject(Cause::kWrongSize, a.fault);
     return a;
   }
   if (verdict == FrameVerdict::kNonFinite) {
-    a.fault = from + " carries a value that is not finite";
+    a.fault = from() + " carries a value that is not finite";
+    if (in_.non_finite_field >= 0) {
+      const config::FrameField& f = config_.feedback().fields(in_.non_finite_field);
+      a.fault += " in field " + std::to_string(in_.non_finite_field) + " (" +
+                 (f.name().empty() ? config::FrameField::Role_Name(f.role()) : f.name()) + ", " +
+                 config::FrameField::Role_Name(f.role()) + ")";
+    }
     reject(Cause::kNonFinite, a.fault);
     return a;
   }
@@ -230,7 +257,7 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
   const double round_trip = static_cast<double>(d.received_ns - frame->sent_ns) * 1e-9;
   if (round_trip > settings_.reply_timeout) {
     frame->state = InFlight::State::kLost;
-    reject(Cause::kLate, from + " answers frame " + std::to_string(frame->counter) + " after " +
+    reject(Cause::kLate, from() + " answers frame " + std::to_string(frame->counter) + " after " +
                              ms(round_trip) + " (reply timeout " + ms(settings_.reply_timeout) +
                              ")");
     return Answer{};
@@ -241,10 +268,8 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
     reject(Cause::kBadStatus, a.fault);
     return a;
   }
-  if (beyond(in_.measured_displacement, settings_.max_drift) ||
-      beyond(in_.measured_force, settings_.max_force)) {
-    a.fault = from + " (counter " + std::to_string(frame->counter) +
-              ") measures a drift or force beyond the run's limits";
+  if (std::string why = out_of_range(); !why.empty()) {
+    a.fault = from() + " (counter " + std::to_string(frame->counter) + ") measures " + why;
     reject(Cause::kOutOfRange, a.fault);
     return a;
   }

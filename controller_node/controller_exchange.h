@@ -18,9 +18,10 @@
 //   from the peer, size != the feedback frame's          -> wrong_size          -> kFault
 //   a float field NaN or infinite (padding never read)    -> non_finite          -> kFault
 //   counter never sent                                    -> unexpected_counter  -> kFault
-//   counter already answered                              -> repeated_counter    -> kFault
-//   counter of a frame past its reply timeout, or older than the newest answered one, or
-//   older than the ring holds                             -> late; ignored
+//   counter already answered, or older than the ring holds (a reset counter, a reboot)
+//                                                         -> repeated_counter    -> kFault
+//   counter of a frame past its reply timeout, or older than the newest answered one
+//                                                         -> late; ignored
 //   holding: status HOLD (1) -> held; anything else ignored (the rig is being held)
 //   STATUS field not 0 (the controller is not running)   -> bad_status          -> kFault
 //   |measured drift| > max_drift or |force| > max_force   -> out_of_range        -> kFault
@@ -69,7 +70,7 @@ struct ExchangeSettings {
 
 class ControllerExchange {
  public:
-  static constexpr std::size_t kInFlight = 256;  // frames judged by their counter
+  static constexpr std::size_t kInFlight = 4096;  // frames judged by their counter
   static constexpr std::size_t kRoundTrips = 4096;
   static constexpr std::uint64_t kHoldBurst = 50;   // HOLD frames one dt apart, then
   static constexpr std::int64_t kHoldSpacing = 10;  // this many dt apart
@@ -133,6 +134,7 @@ class ControllerExchange {
   // The counter's frame, or why not (a fault, or kNone meaning late: ignored).
   Answer judge_counter(InFlight*& frame);
   std::string implausible(const InFlight& frame);
+  std::string out_of_range() const;
   Answer expire(std::int64_t now_ns);
   void accept(const InFlight& frame, double round_trip);
   void reject(Cause cause, const std::string& why);

@@ -31,7 +31,17 @@ double reply_timeout(const config::ControllerLink& link, const config::Deploymen
         " ms): an answer that late could never be applied, and a silent controller would get its "
         "HOLD that late; lower it, or widen the window");
   if (asked > 0) return asked;
-  return real_time ? window : std::min(kLockstepReplyTimeout, window);
+  if (!real_time) return std::min(kLockstepReplyTimeout, window);
+  const int steps = runtime::max_missed_answers(deployment, dt);
+  return std::max(1, steps / 2) * dt;
+}
+
+// Real time: lost frames in a row before the node holds, so that it holds (naming the
+// controller's silence) a step before the coordinator's answer window passes: the first frame of
+// a silence is lost a reply timeout after it left, each later one a dt after the one before.
+int lost_window(const config::Deployment& deployment, double dt, double reply) {
+  const int window = runtime::max_missed_answers(deployment, dt);
+  return std::max(1, window - static_cast<int>(std::ceil(reply / dt - 1e-9)));
 }
 
 }  // namespace
@@ -54,7 +64,7 @@ int ControllerService::configure(const runtime::Assign& assign) {
   settings.real_time = deployment.clock() == config::Deployment::REAL_TIME;
   settings.reply_timeout = reply_timeout(link, deployment, assign.dt());
   settings.lost_window =
-      settings.real_time ? runtime::max_missed_answers(deployment, assign.dt()) : 1;
+      settings.real_time ? lost_window(deployment, assign.dt(), settings.reply_timeout) : 1;
   settings.max_drift = 2.0 * deployment.limits().max_displacement();
   settings.max_force = link.max_force();
   settings.max_measured_rate = link.max_measured_rate() > 0

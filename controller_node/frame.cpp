@@ -196,15 +196,21 @@ FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data,
                   &values.measured_displacement, &values.measured_force})
     v->assign(n, 0.0);
   values.has_status = false;
+  values.non_finite_field = -1;
   std::size_t at = 0;
+  int index = -1;
   for (const Field& f : layout.fields()) {
+    ++index;
     const std::uint8_t* in = data + at;
     at += field_size(f.type());
     // A PADDING field's bytes are the controller's spare words, never a value: whatever they
     // hold (an F64 spare left NaN by its model included) must not refuse the frame.
     if (f.role() == Field::PADDING) continue;
     const double x = read_field(f, in);
-    if (!std::isfinite(x)) return FrameVerdict::kNonFinite;
+    if (!std::isfinite(x)) {
+      values.non_finite_field = index;
+      return FrameVerdict::kNonFinite;
+    }
     if (f.role() == Field::COUNTER) {
       values.counter = static_cast<std::int64_t>(x);
     } else if (f.role() == Field::STATUS) {

@@ -40,6 +40,7 @@ struct FrameValues {
   double time = 0.0;        // s
   std::vector<double> target_displacement, target_velocity;   // m, m/s
   std::vector<double> measured_displacement, measured_force;  // m, N
+  int non_finite_field = -1;  // decode: kNonFinite names the field (index in the layout)
 };
 
 enum class FrameVerdict { kOk, kWrongSize, kNonFinite };

@@ -177,7 +177,7 @@ TEST(ControllerService, AnswersAsAnEmulatorAndHoldsTheRigOnARefusedFrame) {
   EXPECT_FALSE(node.final_heartbeat_due());  // once
 }
 
-TEST(ControllerService, RealTimeHoldsAfterTheWindowOfLostFrames) {
+TEST(ControllerService, RealTimeHoldsOnLostFramesAStepBeforeTheAnswerWindowPasses) {
   const runtime::Assign a =
       assign(47162, 47163, "clock: REAL_TIME max_missed_answers: 3 max_overrun_fraction: -1", "");
   ControllerService node(2, kRunId);
@@ -189,10 +189,13 @@ TEST(ControllerService, RealTimeHoldsAfterTheWindowOfLostFrames) {
   EXPECT_EQ(held[0].kind, runtime::HOLD);
   runtime::Hold hold;
   ASSERT_TRUE(runtime::unpack(held[0], hold));
-  EXPECT_NE(hold.reason().find("(3 lost in a row)"), std::string::npos) << hold.reason();
+  // A window of 3 steps: the reply timeout 1 dt (half the window), so 2 lost frames in a row
+  // (3 - 1) hold the node at 2 dt, a step before the coordinator's window passes.
+  EXPECT_NE(hold.reason().find("within 1.000000 ms (2 lost in a row)"), std::string::npos)
+      << hold.reason();
   runtime::Heartbeat h;
   ASSERT_TRUE(runtime::unpack(node.heartbeat(), h));
-  EXPECT_EQ(h.controller().lost(), 3u);
+  EXPECT_EQ(h.controller().lost(), 2u);
 }
 
 TEST(ControllerService, AReplyTimeoutBeyondTheAnswerWindowIsRefusedAtAssign) {
