@@ -8,8 +8,9 @@
 //                 + network.spike_delay + network.drift_rate t            (s; t simulated, s)
 // An answer older than window(t) counts as missing: the coordinator stops the run (HOLD) rather
 // than apply it, whatever the node kind, so no force older than the window reaches the
-// integrator. A link whose real lag is longer than the one injected (a real network) needs its
-// answer_window_ms to cover it.
+// integrator. Before a node's first answer (nothing old is applied: the specimen is at rest) the
+// coordinator allows the liveliness timeout instead, if longer (exchange.cpp). A link whose real
+// lag is longer than the one injected (a real network) needs its answer_window_ms to cover it.
 //
 // AnswerAgeTally: step(age) counts one real-time step's age (steps: the step commanded minus
 // the step its newest answer answers) in fixed bins (no allocation); summary() gives the median,

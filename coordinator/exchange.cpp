@@ -2,6 +2,7 @@
 #include "coordinator/state.h"
 
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace rths::coordinator {
@@ -310,7 +311,15 @@ void RunState::judge_answer_age(Node& node) {
   if (!node.window) return;
   const std::int64_t age = step - node.last_answer;
   node.ages.step(age);
-  const std::int64_t window = node.window->steps(time);
+  // Before a node's first answer nothing old is applied (the specimen is at rest): a start on a
+  // busy machine may take longer than the window, so the first answer gets the liveliness
+  // timeout; a node that never answers is stopped then, not only by the answer shortfall after
+  // the run.
+  const std::int64_t window =
+      node.answers > 0 ? node.window->steps(time)
+                       : std::max(node.window->steps(time),
+                                  static_cast<std::int64_t>(std::ceil(
+                                      runtime::judged_liveliness_timeout(deployment) / setup.dt)));
   if (age <= window) return;
   const auto ms = [this](std::int64_t steps) {
     return std::to_string(static_cast<double>(steps) * setup.dt * 1e3) + " ms";

@@ -286,8 +286,10 @@ void expect_real_time_run_healthy(const test::LaunchedRun& run, const DocControl
     if (f.status == 1) seen_hold = true;
     EXPECT_FALSE(seen_hold && f.status == 0) << "a run frame after a HOLD frame: the run held";
   }
+  // Quiet, no frame is lost; on a shared machine a few may be, said in an event, within the
+  // answer tolerance (counted below).
   for (const auto& e : run.record.entries)
-    if (e.has_event())
+    if (e.has_event() && timing_targets())
       EXPECT_EQ(e.event().what().find("lost"), std::string::npos) << e.event().what();
 
   // Frames every dt at the controller: the median interval of arrivals within 5 % of dt (25 %
