@@ -27,7 +27,7 @@
 // (controller_exchange.h). The reply timeout is at most the answer window in real time (a
 // frame older than it is never applied; by default half of it, at least one dt) and
 // step_timeout in lockstep (by default 1 s). Real time: the node holds after the lost frames that
-// fit in the window (window - reply timeout, in steps, at least 1), a step before the
+// fit in the window (window - reply timeout - window / 8, in steps, at least 1), before the
 // coordinator's own window on the answers' age passes, so the HOLD names the controller.
 
 #include <memory>

@@ -301,9 +301,9 @@ std::string distributed_summary_text(const DistributedResults& results) {
       const auto inj = series.injected_summary();
       text << "  "
            << (f.link_labels.count(node) ? f.link_labels.at(node) : "node " + std::to_string(node))
-           << " DDS round trip ms (coordinator <-> node): median " << rt.median * 1e3 << ", p99 " << rt.p99 * 1e3 << ", max "
-           << rt.max * 1e3 << " (injected median " << inj.median * 1e3 << ", " << rt.count
-           << " answers)\n";
+           << " DDS round trip ms (coordinator <-> node): median " << rt.median * 1e3 << ", p99 "
+           << rt.p99 * 1e3 << ", max " << rt.max * 1e3 << " (injected median " << inj.median * 1e3
+           << ", " << rt.count << " answers)\n";
     }
   }
   for (const auto& [name, why] : results.missing) text << name << ": FAILED, " << why << "\n";
