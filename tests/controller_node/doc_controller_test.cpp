@@ -267,12 +267,22 @@ std::string real_time_deployment(const std::string& extra = "") {
          extra;
 }
 
+// A real-time run that kept going to its end: completed, or (on a shared machine, not under
+// timing targets) failed only by the one real-time verdict for this machine's own stalls. Never
+// a HOLD, a node's fault or anything the link did.
+void expect_ran_to_the_end(const test::LaunchedRun& run) {
+  ASSERT_NE(run.record.footer(), nullptr) << test::read_file(run.launch.coordinator_log);
+  const std::string& status = run.record.footer()->status();
+  if (run.launch.coordinator_exit == 0 && run.record.footer()->ok()) return;
+  ASSERT_FALSE(timing_targets()) << status;
+  ASSERT_EQ(status.rfind("completed with deadline misses", 0), 0u) << status;
+}
+
 void expect_real_time_run_healthy(const test::LaunchedRun& run, const DocController& controller,
                                   double answer_lag) {
-  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  expect_ran_to_the_end(run);
   const runtime::RunFooter* footer = run.record.footer();
   ASSERT_NE(footer, nullptr);
-  EXPECT_TRUE(footer->ok()) << footer->status();
   const auto steps = run.record.steps();
 
   // No HOLD during the run: every step's frame went out as a run frame, and HOLD frames come
@@ -411,9 +421,7 @@ TEST_F(DocControllerTest, AFloodFromAnotherPortDoesNotStopARealTimeRun) {
     rogue.join();
     controller.stop();
     EXPECT_GT(flooded.load(), 1000) << "the flood must have been sent";
-    ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
-    ASSERT_NE(run.record.footer(), nullptr);
-    EXPECT_TRUE(run.record.footer()->ok()) << run.record.footer()->status();
+    expect_ran_to_the_end(run);
     const runtime::NodeRejects* rejects = node2(run.record);
     ASSERT_NE(rejects, nullptr);
     // Every frame answered and accepted on a quiet machine; a shared one's stalls may lose a
