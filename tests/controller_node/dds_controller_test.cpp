@@ -151,8 +151,8 @@ TEST_F(DdsController, AControllerThatFallsBehindHoldsWithinTheAnswerWindow) {
   const std::string text = test::paper_frame_study(
       4.0,
       "deployment { clock: REAL_TIME liveliness_timeout: 2 heartbeat_period: 0.02 "
-      "answer_window_ms: 20 max_overrun_fraction: -1 min_answer_fraction: -1 "
-      "nodes { id: 2 kind: CONTROLLER controller { " +
+      "answer_window_ms: 20 command_watchdog_ms: 20 max_overrun_fraction: -1 "
+      "min_answer_fraction: -1 nodes { id: 2 kind: CONTROLLER controller { " +
           test::controller_link_text(47157, 47158, "reply_timeout_ms: 8") +
           " } } limits { max_displacement: 0.5 } }");
   util::ChildProcess emulator =

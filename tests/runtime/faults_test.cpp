@@ -198,7 +198,12 @@ TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
 
 TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
   runtime::ensure_dds_config();
-  const std::string text = test::paper_frame_study(8, kRealTime);
+  // The nodes' answers are not what this test judges: a window of 200 steps keeps a node that a
+  // loaded machine holds back for 65 ms (its answers that old, never applied) from stopping the
+  // run before the coordinator is killed.
+  std::string deployment = kRealTime;
+  deployment.replace(deployment.find("max_missed_answers: 30"), 22, "max_missed_answers: 200");
+  const std::string text = test::paper_frame_study(8, deployment);
   Cluster c = start("kill_coordinator", text, 25, {{1, true}, {2, false}}, "reference");
   ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   c.coordinator->signal(SIGKILL);
