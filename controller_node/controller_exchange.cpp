@@ -80,9 +80,11 @@ bool ControllerExchange::send_frame(std::int64_t status, std::int64_t step) {
   InFlight& frame = slot(counter_);
   if (frame.state == InFlight::State::kPending) {
     // Overwritten before its timeout (more than kInFlight frames within it): lost.
+    settle(frame, InFlight::State::kLost);
     report_.set_lost(report_.lost() + 1);
   }
   frame = InFlight{counter_, step, monotonic_ns(), out_.time, InFlight::State::kPending};
+  ++pending_;
   std::copy(out_.target_displacement.begin(), out_.target_displacement.end(),
             targets_.begin() +
                 static_cast<std::ptrdiff_t>((static_cast<std::size_t>(counter_) % kInFlight) *
@@ -92,7 +94,7 @@ bool ControllerExchange::send_frame(std::int64_t status, std::int64_t step) {
     return false;
   }
   report_.set_frames_sent(report_.frames_sent() + 1);
-  if (status != kStatusRun) frame.state = InFlight::State::kLost;  // status frames await nothing
+  if (status != kStatusRun) settle(frame, InFlight::State::kLost);  // status frames await nothing
   if (link_->send(bytes_.data(), bytes_.size())) return true;
   send_fault_ = "cannot send frame " + std::to_string(counter_) + " to " + link_->peer();
   return false;
@@ -105,10 +107,13 @@ bool ControllerExchange::send_command(std::int64_t step, double time,
   std::copy(drift.begin(), drift.end(), out_.target_displacement.begin());
   std::copy(velocity.begin(), velocity.end(), out_.target_velocity.begin());
   const bool sent = send_frame(kStatusRun, step);
-  std::uint32_t pending = 0;
-  for (const InFlight& f : in_flight_) pending += f.state == InFlight::State::kPending ? 1 : 0;
-  report_.set_in_flight(pending);
+  report_.set_in_flight(pending_);
   return sent;
+}
+
+void ControllerExchange::settle(InFlight& frame, InFlight::State state) {
+  if (frame.state == InFlight::State::kPending) --pending_;
+  frame.state = state;
 }
 
 // The datagram's counter against the frames in flight.
@@ -139,7 +144,7 @@ ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame) {
   }
   // The answer to a frame already lost, or overtaken by a newer answer: late, never applied.
   if (f.state == InFlight::State::kLost || c < newest_answered_) {
-    f.state = InFlight::State::kLost;
+    settle(f, InFlight::State::kLost);
     reject(Cause::kLate, from() + " answers frame " + std::to_string(c) + " late");
     return a;  // kNone: ignored
   }
@@ -256,7 +261,7 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
   if (Answer counter = judge_counter(frame); counter.outcome != Outcome::kAnswered) return counter;
   const double round_trip = static_cast<double>(d.received_ns - frame->sent_ns) * 1e-9;
   if (round_trip > settings_.reply_timeout) {
-    frame->state = InFlight::State::kLost;
+    settle(*frame, InFlight::State::kLost);
     reject(Cause::kLate, from() + " answers frame " + std::to_string(frame->counter) + " after " +
                              ms(round_trip) + " (reply timeout " + ms(settings_.reply_timeout) +
                              ")");
@@ -289,7 +294,7 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
 }
 
 void ControllerExchange::accept(const InFlight& frame, double round_trip) {
-  slot(frame.counter).state = InFlight::State::kAnswered;
+  settle(slot(frame.counter), InFlight::State::kAnswered);
   newest_answered_ = frame.counter;
   lost_in_a_row_ = 0;
   std::copy(in_.measured_displacement.begin(), in_.measured_displacement.end(),
@@ -307,13 +312,17 @@ void ControllerExchange::accept(const InFlight& frame, double round_trip) {
   round_trip_next_ = (round_trip_next_ + 1) % kRoundTrips;
 }
 
-// Frames past their reply timeout: lost.
+// Frames past their reply timeout: lost. Frames leave in counter order, so the walk starts at the
+// oldest frame that may still be pending and stops at the first pending one still in time.
 ControllerExchange::Answer ControllerExchange::expire(std::int64_t now_ns) {
   Answer a;
   const std::int64_t timeout = ns_of(settings_.reply_timeout);
-  for (InFlight& f : in_flight_) {
-    if (f.state != InFlight::State::kPending || now_ns - f.sent_ns <= timeout) continue;
-    f.state = InFlight::State::kLost;
+  oldest_pending_ = std::max(oldest_pending_, counter_ - static_cast<std::int64_t>(kInFlight) + 1);
+  for (; oldest_pending_ <= counter_; ++oldest_pending_) {
+    InFlight& f = slot(oldest_pending_);
+    if (f.counter != oldest_pending_ || f.state != InFlight::State::kPending) continue;
+    if (now_ns - f.sent_ns <= timeout) break;
+    settle(f, InFlight::State::kLost);
     report_.set_lost(report_.lost() + 1);
     ++lost_in_a_row_;
     const std::string silent = "the controller " + link_->peer() + " did not answer frame " +

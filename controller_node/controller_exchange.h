@@ -136,6 +136,8 @@ class ControllerExchange {
   std::string implausible(const InFlight& frame);
   std::string out_of_range() const;
   Answer expire(std::int64_t now_ns);
+  // Leaves `state` (answered or lost) and keeps pending_ the count of kPending frames.
+  void settle(InFlight& frame, InFlight::State state);
   void accept(const InFlight& frame, double round_trip);
   void reject(Cause cause, const std::string& why);
   bool send_frame(std::int64_t status, std::int64_t step);
@@ -150,6 +152,8 @@ class ControllerExchange {
   std::vector<InFlight> in_flight_;
   std::vector<double> targets_;  // kInFlight x actuators, by counter
   std::int64_t counter_ = 0, newest_answered_ = 0;
+  std::int64_t oldest_pending_ = 1;  // no frame before it is still pending
+  std::uint32_t pending_ = 0;        // frames in flight (kPending)
   int lost_in_a_row_ = 0, tracking_streak_ = 0;
   // The newest accepted measurement and its frame's command time (for the rate checks).
   std::vector<double> last_displacement_, last_force_;
