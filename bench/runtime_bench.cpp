@@ -257,7 +257,10 @@ RunFigures distributed_run(int domain, const std::string& text, const std::strin
                              .nodes = node_set,
                              .keep_off_loop_cpu = true});
   const auto outcome = run.start({}).run();
-  if (!outcome.ok) throw std::runtime_error(name + ": " + outcome.status);
+  // Deadline misses are what the real-time figures measure: a run the one real-time verdict
+  // fails for them (a streak of overruns past the window) still gives its figures.
+  if (!outcome.ok && outcome.status.rfind("completed with deadline misses", 0) != 0)
+    throw std::runtime_error(name + ": " + outcome.status);
   run.wait_for_nodes();
   const auto contents = runtime::read_record(run.record());
   std::vector<double> walls, lateness, command_latency;
