@@ -343,6 +343,8 @@ std::string StudyOutcome::reference_description() const {
 
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options) {
   const config::Study& study = prepared.config;
+  if (options.warn)
+    for (const std::string& warning : prepared.warnings) options.warn(warning);
   config::Study with_cases = study;
   if (with_cases.cases_size() == 0) with_cases.add_cases()->set_name("reference");
   const config::Case& reference = core::reference_case(with_cases);

@@ -107,7 +107,9 @@ void keep_stdout_for_json(const LaunchArgs& args) {
 core::PreparedStudy prepare_or_exit(const config::Study& study,
                                     const std::filesystem::path& config_path) {
   try {
-    return core::prepare_study(study, config_path.parent_path());
+    core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
+    for (const std::string& warning : prepared.warnings) print_warning(warning);
+    return prepared;
   } catch (const std::invalid_argument& e) {
     throw ExitError(kExitBadInput, e.what());
   }

@@ -57,7 +57,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
                                              s.setup.partition.actuator_storeys, storeys);
   s.drift_velocity = core::Vec::Zero(storeys);
   s.shear = core::Vec::Zero(storeys);
-  s.force = core::Vec::Zero(storeys);
+  s.force = core::Vec::Zero(s.setup.partition.dofs());
   s.command_drift = core::Vec::Zero(actuators);
   s.realised_drift = core::Vec::Zero(actuators);
   s.measured = core::Vec::Zero(actuators);

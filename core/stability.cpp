@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/compensator.h"
+#include "core/coupled_stability.h"
 #include "core/exact_zoh.h"
 #include "core/simulation.h"
 
@@ -403,11 +404,12 @@ std::string CriticalDelayCheck::describe() const {
       !discrete_skipped.empty()
           ? "discrete check skipped: " + discrete_skipped
           : "discrete none up to " + std::to_string(discrete_searched_steps) + " steps";
+  const std::string continuous_text = coupled ? "continuous (coupled)" : "continuous";
   if (!limit) {
-    out << ": stable for every delay (continuous; " << discrete_text << ")";
+    out << ": stable for every delay (" << continuous_text << "; " << discrete_text << ")";
     return out.str();
   }
-  out << " against a critical delay of " << *limit * 1e3 << " ms (continuous ";
+  out << " against a critical delay of " << *limit * 1e3 << " ms (" << continuous_text << " ";
   if (continuous)
     out << *continuous * 1e3 << " ms";
   else
@@ -426,6 +428,31 @@ std::string CriticalDelayCheck::describe() const {
     out << m * 100.0 << " % below it";
   return out.str();
 }
+
+namespace {
+
+// Where the modes do not decouple K_e and C, the coupled analysis gives the continuous limit;
+// the governing mode is the one nearest the crossing's frequency.
+void apply_coupled(CriticalDelayCheck& check, const StructuralModel& model,
+                   const Mat& k_experimental, const Modes& modes) {
+  const CoupledStability coupled = coupled_critical_delay(model, k_experimental, modes);
+  check.coupled = true;
+  check.modal_continuous = check.continuous;
+  check.continuous = coupled.critical_delay;
+  check.assumed = coupled.assumed +
+                  "; the discrete limit by the modal approximation (each mode an SDOF with its "
+                  "modal damping and experimental fraction)";
+  if (!coupled.critical_delay) return;
+  Eigen::Index nearest = 0;
+  (modes.omega.array() - coupled.omega).abs().minCoeff(&nearest);
+  const double omega = modes.omega[nearest];
+  const Vec phi = modes.shapes.col(nearest);
+  check.governing_mode = static_cast<int>(nearest) + 1;
+  check.governing_period = 2.0 * std::numbers::pi / omega;
+  check.governing_fraction = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
+}
+
+}  // namespace
 
 bool discrete_analysis_covers(IntegratorKind kind) {
   return kind != IntegratorKind::kAlphaOS && kind != IntegratorKind::kKRAlpha;
@@ -499,6 +526,8 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
       check.discrete = discrete.first_unstable_delay;
     }
   }
+  if (dofs > 1 && !modes_decouple(model, k_experimental, modes))
+    apply_coupled(check, model, k_experimental, modes);
   return check;
 }
 

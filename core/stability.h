@@ -129,13 +129,21 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
 // phi). For an SDOF this is exact; for several storeys it is the modal approximation (it ignores
 // the coupling between modes that the delayed force adds). The critical delays are the smallest
 // over modes: continuous (continuous_critical_delay) and discrete, the integrator with the force
-// taken n steps late (discrete_critical_delay, searched up to kMaxDiscreteSteps).
+// taken n steps late (discrete_critical_delay, searched up to kMaxDiscreteSteps). Where the modes
+// do not diagonalise K_e and C (whole storeys, elements between DOFs, a specimen at one DOF), the
+// continuous limit is the coupled analysis' (core/coupled_stability.h: every experimental part at
+// the same lag, the delayed force's coupling between modes included) and modal_continuous keeps
+// the modal approximation's.
 struct CriticalDelayCheck {
   static constexpr int kMaxDiscreteSteps = 120;
   double lag = 0.0;                  // s, the tau checked
   std::optional<double> continuous;  // s; empty: stable for every delay
-  std::optional<double> discrete;    // s; empty: none found up to the searched steps
-  int discrete_searched_steps = 0;   // n searched for the discrete limit
+  // The continuous limit is the coupled analysis' (the modes do not decouple K_e and C), and
+  // modal_continuous (s) the modal approximation's it replaced.
+  bool coupled = false;
+  std::optional<double> modal_continuous;
+  std::optional<double> discrete;   // s; empty: none found up to the searched steps
+  int discrete_searched_steps = 0;  // n searched for the discrete limit
   // Why the discrete limit was not searched (the integrator is outside the discrete analysis:
   // alpha-os, kr-alpha); empty when it was. The run goes ahead on the continuous limit alone.
   std::string discrete_skipped;
@@ -148,8 +156,9 @@ struct CriticalDelayCheck {
   bool past() const { return critical() && lag >= *critical(); }
   // (critical - lag) / critical: 0.2 = 20 % below the limit; negative when past it.
   double margin() const;
-  // One line: "lag 14 ms against a critical delay of 7.97 ms (continuous; discrete 8 ms at dt =
-  // 1 ms): past it by 76 %" or "... 42 % below it".
+  // One line: "lag 14 ms against a critical delay of 7.97 ms (continuous 7.97 ms, discrete 8 ms;
+  // mode 1, ...): PAST it by 76 %" or "... 42 % below it"; "continuous (coupled) ..." where the
+  // coupled analysis gave it.
   std::string describe() const;
 };
 

@@ -5,6 +5,10 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+
+#include "core/number_text.h"
+
 namespace rths::core {
 namespace {
 
@@ -22,23 +26,45 @@ StoreyModelFactory linear_factory() {
   return [](double k) { return std::make_unique<LinearSpring>(k); };
 }
 
+std::string ElementRow::describe() const {
+  const auto dof_text = [](int j) { return "DOF " + std::to_string(j + 1); };
+  if (terms.size() == 2 && terms[0].second == -terms[1].second) {
+    const auto& [plus, minus] =
+        terms[0].second > 0 ? std::pair{terms[0], terms[1]} : std::pair{terms[1], terms[0]};
+    const std::string pair = dof_text(plus.first) + " - " + dof_text(minus.first);
+    return plus.second == 1.0 ? pair : format_number(plus.second) + " (" + pair + ")";
+  }
+  std::string out;
+  for (const auto& [j, c] : terms)
+    out += (out.empty() ? "" : " + ") + format_number(c) + " " + dof_text(j);
+  return out;
+}
+
 HybridPartition::HybridPartition(const HybridPartition& other)
     : numerical(clone_all(other.numerical)),
       experimental(clone_all(other.experimental)),
       actuator_storeys(other.actuator_storeys),
       by_dofs(other.by_dofs),
-      numerical_matrix(other.numerical_matrix) {}
+      numerical_matrix(other.numerical_matrix),
+      elements(other.elements) {}
+
+std::string HybridPartition::channel_name(int s) const {
+  if (s >= dofs())
+    return "element " + std::to_string(s - dofs() + 1) + " (" +
+           elements[static_cast<std::size_t>(s - dofs())].describe() + ")";
+  return (by_dofs ? "DOF " : "storey ") + std::to_string(s + 1);
+}
 
 bool HybridPartition::has_numerical(int s) const {
   if (numerical[static_cast<std::size_t>(s)]) return true;
-  return numerical_matrix.size() > 0 && numerical_matrix.row(s).cwiseAbs().maxCoeff() > 0;
+  return s < numerical_matrix.rows() && numerical_matrix.row(s).cwiseAbs().maxCoeff() > 0;
 }
 
 std::vector<int> HybridPartition::coupled_to(const std::vector<int>& hosted) const {
   std::vector<bool> needed(numerical.size(), false);
   for (int s : hosted) {
     needed[static_cast<std::size_t>(s)] = true;
-    if (numerical_matrix.size() == 0) continue;
+    if (s >= numerical_matrix.rows()) continue;
     for (Eigen::Index j = 0; j < numerical_matrix.cols(); ++j)
       if (numerical_matrix(s, j) != 0.0) needed[static_cast<std::size_t>(j)] = true;
   }
@@ -60,8 +86,68 @@ Mat HybridPartition::experimental_stiffness() const {
 }
 
 StoreyAssembly HybridPartition::assembly() const {
-  return StoreyAssembly(static_cast<int>(numerical.size()), by_dofs);
+  return StoreyAssembly(dofs(), by_dofs, elements);
 }
+
+namespace {
+
+// A grounded specimen at its DOF's channel: k_e in (0, K(d, d)] taken out of K_N at (d, d).
+void place_grounded(HybridPartition& partition, const Mat& stiffness, DofSpecimen& specimen) {
+  const int d = specimen.dof, n = static_cast<int>(stiffness.rows());
+  const std::string name = "experimental DOF " + std::to_string(d + 1);
+  if (d < 0 || d >= n) throw std::invalid_argument(name + " is outside 1.." + std::to_string(n));
+  if (partition.experimental[static_cast<std::size_t>(d)])
+    throw std::invalid_argument(name + " is listed twice");
+  const double k = specimen.model->initial_stiffness();
+  if (!(k > 0 && k <= stiffness(d, d)))
+    throw std::invalid_argument(name + ": stiffness " + format_number(k) +
+                                " N/m must be in (0, K(" + std::to_string(d + 1) + ", " +
+                                std::to_string(d + 1) + ") = " + format_number(stiffness(d, d)) +
+                                "]");
+  partition.numerical_matrix(d, d) -= k;
+  partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
+}
+
+// An element at the next channel: k_e b b^T taken out of K_N.
+void place_element(HybridPartition& partition, int n, DofSpecimen& specimen) {
+  const std::string name = "experimental element " + std::to_string(partition.elements.size() + 1);
+  bool nonzero = false;
+  for (const auto& [j, c] : specimen.element.terms) {
+    if (j < 0 || j >= n)
+      throw std::invalid_argument(name + ": DOF " + std::to_string(j + 1) + " is outside 1.." +
+                                  std::to_string(n));
+    if (!std::isfinite(c)) throw std::invalid_argument(name + ": a coefficient is not finite");
+    nonzero = nonzero || c != 0.0;
+  }
+  if (!nonzero) throw std::invalid_argument(name + ": its influence row is zero");
+  const double k = specimen.model->initial_stiffness();
+  if (!(k > 0 && std::isfinite(k)))
+    throw std::invalid_argument(name + ": stiffness " + format_number(k) + " N/m must be > 0");
+  for (const auto& [i, ci] : specimen.element.terms)
+    for (const auto& [j, cj] : specimen.element.terms)
+      partition.numerical_matrix(i, j) -= k * ci * cj;
+  partition.elements.push_back(specimen.element);
+  partition.numerical.push_back(nullptr);
+  partition.experimental.push_back(std::move(specimen.model));
+}
+
+// K_N = K - K_e positive semi-definite (relative to K's scale): no element stiffer than what it
+// replaces. Only checked with elements (a grounded k_e <= K(d, d) is its own bound).
+void check_numerical_semidefinite(const HybridPartition& partition, const Mat& stiffness) {
+  if (partition.elements.empty()) return;
+  const Eigen::SelfAdjointEigenSolver<Mat> solver(partition.numerical_matrix,
+                                                  Eigen::EigenvaluesOnly);
+  const double scale = stiffness.cwiseAbs().maxCoeff();
+  const double lowest = solver.eigenvalues()[0];
+  if (lowest < -1e-9 * scale)
+    throw std::invalid_argument(
+        "the experimental elements are stiffer than the structure they replace: K - K_e has a "
+        "negative eigenvalue " +
+        format_number(lowest) + " N/m (K's largest entry " + format_number(scale) +
+        " N/m); check each element's stiffness against the storey or member it sits in");
+}
+
+}  // namespace
 
 HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen> specimens) {
   const int n = static_cast<int>(stiffness.rows());
@@ -71,24 +157,16 @@ HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen>
   partition.experimental.resize(static_cast<std::size_t>(n));
   partition.numerical_matrix = stiffness;
   for (DofSpecimen& specimen : specimens) {
-    const int d = specimen.dof;
-    const std::string name = "experimental DOF " + std::to_string(d + 1);
-    if (d < 0 || d >= n) throw std::invalid_argument(name + " is outside 1.." + std::to_string(n));
-    if (partition.experimental[static_cast<std::size_t>(d)])
-      throw std::invalid_argument(name + " is listed twice");
-    if (!specimen.model) throw std::invalid_argument(name + " has no specimen model");
-    const double k = specimen.model->initial_stiffness();
-    if (!(k > 0 && k <= stiffness(d, d)))
-      throw std::invalid_argument(name + ": stiffness " + std::to_string(k) +
-                                  " N/m must be in (0, K(" + std::to_string(d + 1) + ", " +
-                                  std::to_string(d + 1) + ") = " + std::to_string(stiffness(d, d)) +
-                                  "]");
-    partition.numerical_matrix(d, d) -= k;
-    partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
+    if (!specimen.model) throw std::invalid_argument("an experimental part has no specimen model");
+    if (specimen.element.terms.empty())
+      place_grounded(partition, stiffness, specimen);
+    else
+      place_element(partition, n, specimen);
   }
-  for (int d = 0; d < n; ++d)
-    if (partition.experimental[static_cast<std::size_t>(d)])
-      partition.actuator_storeys.push_back(d);
+  check_numerical_semidefinite(partition, stiffness);
+  for (int s = 0; s < partition.channels(); ++s)
+    if (partition.experimental[static_cast<std::size_t>(s)])
+      partition.actuator_storeys.push_back(s);
   return partition;
 }
 
@@ -140,7 +218,12 @@ HybridPartition partition_by_storeys(const std::vector<double>& storey_stiffness
 
 void StoreyAssembly::drifts(const Vec& u, Vec& drift) const {
   if (by_dofs_) {
-    drift = u;
+    drift.head(n_) = u;
+    for (std::size_t e = 0; e < elements_.size(); ++e) {
+      double x = 0.0;
+      for (const auto& [j, c] : elements_[e].terms) x += c * u[j];
+      drift[n_ + static_cast<int>(e)] = x;
+    }
     return;
   }
   drift[0] = u[0];
@@ -149,7 +232,9 @@ void StoreyAssembly::drifts(const Vec& u, Vec& drift) const {
 
 void StoreyAssembly::dof_forces(const Vec& shear, Vec& force) const {
   if (by_dofs_) {
-    force = shear;
+    force = shear.head(n_);
+    for (std::size_t e = 0; e < elements_.size(); ++e)
+      for (const auto& [j, c] : elements_[e].terms) force[j] += c * shear[n_ + static_cast<int>(e)];
     return;
   }
   for (int i = 0; i + 1 < n_; ++i) force[i] = shear[i] - shear[i + 1];
@@ -165,6 +250,11 @@ void StoreyAssembly::tangent(const Vec& storey_tangent, Mat& k) const {
       k(s - 1, s) -= storey_tangent[s];
       k(s, s - 1) -= storey_tangent[s];
     }
+  }
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    const double ke = storey_tangent[n_ + static_cast<int>(e)];
+    for (const auto& [i, ci] : elements_[e].terms)
+      for (const auto& [j, cj] : elements_[e].terms) k(i, j) += ke * ci * cj;
   }
 }
 
@@ -186,7 +276,8 @@ void NumericalSubstructure::trial(const Vec& drift, Vec& shear, Vec* storey_tang
     if (storey_tangent) (*storey_tangent)[s] = state.tangent;
   }
   // Row by row, the same sums in every process (no allocation, no reordering by size).
-  for (Eigen::Index i = 0; i < matrix_.rows(); ++i) shear[i] += matrix_.row(i).dot(drift);
+  for (Eigen::Index i = 0; i < matrix_.rows(); ++i)
+    shear[i] += matrix_.row(i).dot(drift.head(matrix_.cols()));
 }
 
 void NumericalSubstructure::commit() {
@@ -344,7 +435,7 @@ HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<D
   drift_velocity_ = Vec::Zero(n);
   shear_ = Vec::Zero(n);
   storey_tangent_ = Vec::Zero(n);
-  force_ = Vec::Zero(n);
+  force_ = Vec::Zero(assembly_.dofs());
   command_ = Vec::Zero(static_cast<int>(actuators));
   realised_ = Vec::Zero(static_cast<int>(actuators));
   measured_ = Vec::Zero(static_cast<int>(actuators));

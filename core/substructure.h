@@ -3,11 +3,15 @@
 // and an experimental part (specimens behind actuators). A shear building is split by storeys;
 // a structure given by matrices by DOFs: its "storeys" are then its DOFs (B = I), each
 // experimental DOF's specimen acts between that DOF and the ground, and the numerical part is the
-// linear K_N = K - K_e as a matrix (plus no per-DOF model).
+// linear K_N = K - K_e as a matrix (plus no per-DOF model). An experimental element between DOFs
+// (a storey's damper or brace, OpenFresco's twoNodeLink) adds a row b_e to B after the n DOF rows:
+// its deformation is x_e = b_e . u (u_j - u_i for a storey, cos(theta) (u_j - u_i) for a brace at
+// theta, any influence row) and its force f_e enters every DOF by the same row, r += b_e f_e.
+// "Storeys" are thus channels: n DOFs (or storeys), then the elements, one actuator each.
 //
 // Blocks:
 //   StoreyAssembly            drifts d = B u  and DOF forces r = B^T V  (shear building B:
-//                             d_i = u_i - u_{i-1}; by DOFs B = I).
+//                             d_i = u_i - u_{i-1}; by DOFs B = [I; b_1; ...; b_m]).
 //   NumericalSubstructure     input storey drifts (m) -> storey shears (N); trial/commit.
 //   Actuator                  input CommandSample (commanded drift) -> {realised drift, measured
 //                             force}: delay chain, then the specimen's restoring-force model.
@@ -18,6 +22,8 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/answer_replay.h"
@@ -34,6 +40,14 @@ StoreyModelFactory linear_factory();
 
 class StoreyAssembly;
 
+// An experimental element's deformation x = sum over terms of coefficient * u[dof] (m; dof
+// 0-based): {{j, 1}, {i, -1}} for the storey between DOFs i and j.
+struct ElementRow {
+  std::vector<std::pair<int, double>> terms;
+  // "DOF 2 - DOF 1", "0.866 (DOF 3 - DOF 1)" or the row's terms, 1-based.
+  std::string describe() const;
+};
+
 struct HybridPartition {
   // One entry per storey; null where that storey has no numerical / experimental part.
   std::vector<std::unique_ptr<RestoringForceModel>> numerical;
@@ -44,6 +58,14 @@ struct HybridPartition {
   // stiffness K_N (N/m, n x n) acting on the DOF displacements; empty for a shear building.
   bool by_dofs = false;
   Mat numerical_matrix;
+  // By DOFs: the experimental elements between DOFs, channel n + e each (after the n DOFs).
+  std::vector<ElementRow> elements;
+
+  // Channels (storeys or DOFs, then elements) and DOFs of the structure.
+  int channels() const { return static_cast<int>(numerical.size()); }
+  int dofs() const { return channels() - static_cast<int>(elements.size()); }
+  // "storey 2", "DOF 2" or "element 1 (DOF 2 - DOF 1)" for channel s (0-based).
+  std::string channel_name(int s) const;
 
   // Whether storey (or DOF) s has a numerical part: a model, or a non-zero row of K_N.
   bool has_numerical(int s) const;
@@ -70,27 +92,39 @@ HybridPartition partition_by_storeys(const std::vector<double>& storey_stiffness
                                      const std::vector<int>& experimental_storeys,
                                      const StoreyModelFactory& factory);
 
-// The experimental DOFs of a structure given by matrices (0-based), each with its specimen model.
+// The experimental parts of a structure given by matrices, each with its specimen model: between
+// `dof` (0-based) and the ground when `element` is empty, else an element of that row.
 struct DofSpecimen {
   int dof = 0;
   std::unique_ptr<RestoringForceModel> model;
+  ElementRow element;
 };
-// By DOFs: every listed DOF experimental (its model's initial stiffness k_e taken out of K at
-// (dof, dof)), the numerical part K_N = K - K_e. Throws std::invalid_argument naming the DOF when
-// it is outside 1..n, listed twice, or k_e is not in (0, K(dof, dof)].
+// By DOFs: every grounded specimen at its DOF's channel (its model's initial stiffness k_e taken
+// out of K at (dof, dof)), every element at channel n + e (k_e b b^T taken out of K), the
+// numerical part K_N = K - K_e. Throws std::invalid_argument naming the part when a DOF is
+// outside 1..n, a grounded DOF is listed twice, a grounded k_e is not in (0, K(dof, dof)], an
+// element's row is empty or zero, or an element leaves K_N with negative stiffness (K - k_e b b^T
+// not positive semi-definite: the specimen is stiffer than what it replaces).
 HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen> specimens);
 
+// Sizes: u and force have dofs() entries, drift, shear and storey tangents storeys() (channels).
+// No allocation once the vectors are sized.
 class StoreyAssembly {
  public:
-  explicit StoreyAssembly(int storeys, bool by_dofs = false) : n_(storeys), by_dofs_(by_dofs) {}
-  void drifts(const Vec& u, Vec& drift) const;            // d_i = u_i - u_{i-1}  (by DOFs: u_i)
-  void dof_forces(const Vec& shear, Vec& force) const;    // r_i = V_i - V_{i+1}  (by DOFs: V_i)
-  void tangent(const Vec& storey_tangent, Mat& k) const;  // B^T diag(k) B
-  int storeys() const { return n_; }
+  // @pre elements only with by_dofs.
+  explicit StoreyAssembly(int storeys, bool by_dofs = false, std::vector<ElementRow> elements = {})
+      : n_(storeys), by_dofs_(by_dofs), elements_(std::move(elements)) {}
+  void drifts(const Vec& u, Vec& drift) const;  // d_i = u_i - u_{i-1}  (by DOFs: u_i, b_e . u)
+  void dof_forces(const Vec& shear, Vec& force) const;    // r_i = V_i - V_{i+1} (by DOFs: V_i +
+                                                          // sum_e b_e,i V_{n+e})
+  void tangent(const Vec& storey_tangent, Mat& k) const;  // B^T diag(k) B, n x n
+  int storeys() const { return n_ + static_cast<int>(elements_.size()); }
+  int dofs() const { return n_; }
 
  private:
   int n_;
   bool by_dofs_;
+  std::vector<ElementRow> elements_;
 };
 
 class NumericalSubstructure {

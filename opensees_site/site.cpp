@@ -36,6 +36,10 @@ using Seconds = std::chrono::duration<double>;
 
 void require_site_study(const core::HybridSetup& setup, const config::Deployment& deployment,
                         const std::string& case_name) {
+  if (!setup.partition.elements.empty())
+    throw std::invalid_argument("opensees-site: case '" + case_name +
+                                "' has experimental elements between DOFs; the site maps one "
+                                "actuator per storey of a shear building");
   for (std::size_t s = 0; s < setup.partition.numerical.size(); ++s)
     if (setup.partition.numerical[s])
       throw std::invalid_argument(

@@ -1,7 +1,15 @@
 #include "study/structure_config.h"
 
 #include <cmath>
+#include <iomanip>
+#include <numbers>
+#include <optional>
+#include <sstream>
 #include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "study/ranges.h"
 #include "study/restoring_force_config.h"
@@ -10,6 +18,10 @@
 
 namespace rths::core {
 namespace {
+
+// Above this many DOFs the warning of a grounded specimen that means a storey leaves out the
+// fractions (they need the dense modal analysis).
+constexpr int kMaxDofsForFractionHint = 500;
 
 [[noreturn]] void fail(const std::string& field, const std::string& problem) {
   throw std::invalid_argument(field + ": " + problem);
@@ -36,20 +48,60 @@ struct Specimen {
   std::unique_ptr<RestoringForceModel> model;
 };
 
-Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralModel& model,
-                       const std::string& field, double servo_period) {
-  const int n = model.dofs();
+// The row of an element (empty: grounded at `dof`), checked: DOFs in 1..n, |angle| < 90 degrees,
+// an influence row of n finite entries with nothing else set.
+ElementRow element_row(const config::ExperimentalDof& spec, int n, const std::string& field) {
+  ElementRow row;
+  if (!spec.influence().empty()) {
+    if (spec.dof() != 0 || spec.from_dof() != 0 || spec.angle_degrees() != 0)
+      fail(field + ".influence", "give the influence row or dof/from_dof/angle_degrees, not both");
+    if (spec.influence_size() != n)
+      fail(field + ".influence",
+           std::to_string(spec.influence_size()) + " entries for " + std::to_string(n) + " DOFs");
+    for (int j = 0; j < n; ++j) {
+      if (!std::isfinite(spec.influence(j)))
+        fail(field + ".influence", "entry " + std::to_string(j + 1) + " is not finite");
+      if (spec.influence(j) != 0) row.terms.emplace_back(j, spec.influence(j));
+    }
+    if (row.terms.empty()) fail(field + ".influence", "every entry is 0");
+    return row;
+  }
   if (spec.dof() < 1 || spec.dof() > n)
     fail(field + ".dof", std::to_string(spec.dof()) + " is outside 1.." + std::to_string(n));
-  const int d = spec.dof() - 1;
-  if (!(spec.stiffness() > 0 && spec.stiffness() <= model.stiffness(d, d)))
-    fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be in (0, K(" +
-                                   std::to_string(d + 1) + ", " + std::to_string(d + 1) +
-                                   ") = " + format_number(model.stiffness(d, d)) + "]");
-  if (!(spec.mass() >= 0 && spec.mass() < model.mass(d, d)))
-    fail(field + ".mass", format_number(spec.mass()) + " kg must be in [0, M(" +
-                              std::to_string(d + 1) + ", " + std::to_string(d + 1) +
-                              ") = " + format_number(model.mass(d, d)) + ")");
+  const double angle = spec.angle_degrees();
+  if (!(std::isfinite(angle) && std::abs(angle) < 90))
+    fail(field + ".angle_degrees", format_number(angle) + " must be in (-90, 90)");
+  if (spec.from_dof() != 0 && (spec.from_dof() < 1 || spec.from_dof() > n))
+    fail(field + ".from_dof", std::to_string(spec.from_dof()) + " is outside 1.." +
+                                  std::to_string(n) + " (0 = the ground)");
+  if (spec.from_dof() == spec.dof())
+    fail(field + ".from_dof",
+         "an element joins two different DOFs (both are " + std::to_string(spec.dof()) + ")");
+  if (spec.from_dof() == 0 && angle == 0) return row;  // grounded
+  const double c = std::cos(angle * std::numbers::pi / 180.0);
+  row.terms.emplace_back(spec.dof() - 1, c);
+  if (spec.from_dof() != 0) row.terms.emplace_back(spec.from_dof() - 1, -c);
+  return row;
+}
+
+Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralModel& model,
+                       const ElementRow& row, const std::string& field, double servo_period) {
+  if (row.terms.empty()) {
+    const int d = spec.dof() - 1;
+    if (!(spec.stiffness() > 0 && spec.stiffness() <= model.stiffness(d, d)))
+      fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be in (0, K(" +
+                                     std::to_string(d + 1) + ", " + std::to_string(d + 1) +
+                                     ") = " + format_number(model.stiffness(d, d)) + "]");
+    if (!(spec.mass() >= 0 && spec.mass() < model.mass(d, d)))
+      fail(field + ".mass", format_number(spec.mass()) + " kg must be in [0, M(" +
+                                std::to_string(d + 1) + ", " + std::to_string(d + 1) +
+                                ") = " + format_number(model.mass(d, d)) + ")");
+  } else {
+    if (!(spec.stiffness() > 0 && std::isfinite(spec.stiffness())))
+      fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be > 0");
+    if (!(spec.mass() >= 0 && std::isfinite(spec.mass())))
+      fail(field + ".mass", format_number(spec.mass()) + " kg must be >= 0");
+  }
   Specimen out;
   out.mass = spec.mass();
   if (spec.has_zeta()) {
@@ -69,6 +121,59 @@ Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralMode
   return out;
 }
 
+// x -= value b b^T over the row's terms (b = e_dof for a grounded specimen).
+void subtract_outer(Mat& x, const ElementRow& row, int dof, double value) {
+  if (row.terms.empty()) {
+    x(dof, dof) -= value;
+    return;
+  }
+  for (const auto& [i, ci] : row.terms)
+    for (const auto& [j, cj] : row.terms) x(i, j) -= value * ci * cj;
+}
+
+// The experimental fraction phi_1' K_e phi_1 / omega_1^2 of the first mode of (M, K) for K_e =
+// k b b^T.
+double first_mode_fraction(const StructuralModel& model, const Vec& b, double k) {
+  const Modes modes = modal_analysis(model.mass, model.stiffness);
+  const double along = b.dot(modes.shapes.col(0));
+  return k * along * along / (modes.omega[0] * modes.omega[0]);
+}
+
+std::string fraction_text(double fraction) {
+  std::ostringstream out;
+  out << std::setprecision(3) << fraction;
+  return out.str();
+}
+
+// A grounded specimen stiffer than what ties its DOF to the ground ((K iota)_d, the force at d
+// under a rigid translation) most likely means an element between DOFs (a storey): the warning
+// names both fractions and the DOF it would join (the one K couples most strongly).
+std::optional<std::string> storey_meant(const StructuralModel& model,
+                                        const config::ExperimentalDof& spec,
+                                        const std::string& field) {
+  const int d = spec.dof() - 1, n = model.dofs();
+  const double ground_tie = (model.stiffness * model.influence)[d];
+  if (n < 2 || spec.stiffness() <= ground_tie * (1 + 1e-9)) return std::nullopt;
+  int neighbour = d == 0 ? 1 : 0;
+  for (int j = 0; j < n; ++j)
+    if (j != d && model.stiffness(d, j) < model.stiffness(d, neighbour)) neighbour = j;
+  std::string text = field + ": a specimen of " + format_number(spec.stiffness()) +
+                     " N/m between DOF " + std::to_string(d + 1) +
+                     " and the ground, but K ties DOF " + std::to_string(d + 1) +
+                     " to the ground by only " + format_number(ground_tie) + " N/m (K iota)";
+  if (n <= kMaxDofsForFractionHint) {
+    const Vec grounded = Vec::Unit(n, d);
+    const Vec storey = grounded - Vec::Unit(n, neighbour);
+    text += ": as written it takes an experimental fraction of " +
+            fraction_text(first_mode_fraction(model, grounded, spec.stiffness())) +
+            " of mode 1; between DOF " + std::to_string(neighbour + 1) + " and DOF " +
+            std::to_string(d + 1) + " it would take " +
+            fraction_text(first_mode_fraction(model, storey, spec.stiffness()));
+  }
+  return text + ". If the specimen sits between two DOFs (a storey), say from_dof: " +
+         std::to_string(neighbour + 1);
+}
+
 }  // namespace
 
 StructuralModel matrix_structure(const config::Structure& structure,
@@ -80,20 +185,33 @@ StructuralModel matrix_structure(const config::Structure& structure,
 }
 
 HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuring& substructuring,
-                              double servo_period) {
+                              double servo_period, std::vector<std::string>* warnings) {
   std::vector<DofSpecimen> specimens;
   Mat mass = model.mass, damping = model.damping;
+  bool massive_element = false;
   for (int i = 0; i < substructuring.experimental_dofs_size(); ++i) {
     const std::string field = "substructuring.experimental_dofs[" + std::to_string(i) + "]";
     const config::ExperimentalDof& spec = substructuring.experimental_dofs(i);
-    Specimen specimen = make_specimen(spec, model, field, servo_period);
+    const ElementRow row = element_row(spec, model.dofs(), field);
+    Specimen specimen = make_specimen(spec, model, row, field, servo_period);
     const int d = spec.dof() - 1;
-    for (const DofSpecimen& earlier : specimens)
-      if (earlier.dof == d) fail(field + ".dof", std::to_string(spec.dof()) + " is listed twice");
-    mass(d, d) -= specimen.mass;
-    damping(d, d) -= specimen.damping;
-    specimens.push_back({d, std::move(specimen.model)});
+    if (row.terms.empty()) {
+      for (const DofSpecimen& earlier : specimens)
+        if (earlier.element.terms.empty() && earlier.dof == d)
+          fail(field + ".dof", std::to_string(spec.dof()) + " is listed twice");
+      if (warnings)
+        if (auto warning = storey_meant(model, spec, field)) warnings->push_back(*warning);
+    }
+    massive_element = massive_element || (!row.terms.empty() && specimen.mass > 0);
+    subtract_outer(mass, row, d, specimen.mass);
+    subtract_outer(damping, row, d, specimen.damping);
+    specimens.push_back({d, std::move(specimen.model), row});
   }
+  if (massive_element &&
+      Eigen::SelfAdjointEigenSolver<Mat>(mass, Eigen::EigenvaluesOnly).eigenvalues()[0] <= 0)
+    fail("substructuring.experimental_dofs",
+         "the elements' masses leave the numerical part without positive mass (M - m b b^T is "
+         "not positive definite)");
   HybridPartition partition = partition_by_dofs(model.stiffness, std::move(specimens));
   // The specimen's force holds m_e x'' of the relative acceleration only, so the numerical part
   // carries the ground motion's load on the whole mass, -M iota a_g = -M_N (M_N^-1 M iota) a_g.

@@ -296,9 +296,13 @@ void validate_study(const config::Study& study, const std::string& source) {
             "substructuring: a structure given by matrices is split at experimental_dofs, not by "
             "storeys");
   } else {
-    require(sub.experimental_dofs().empty(), source,
-            "substructuring.experimental_dofs needs structure.matrices (a shear building is split "
-            "by storeys)");
+    require(sub.experimental_dofs().empty() ||
+                (sub.experimental_storeys().empty() && sub.experimental_fraction() == 0 &&
+                 (sub.model().kind_case() == config::RestoringForce::KIND_NOT_SET ||
+                  sub.model().has_linear())),
+            source,
+            "substructuring.experimental_dofs on a shear building takes its matrices: it needs a "
+            "linear storey model and no experimental_fraction or experimental_storeys");
   }
   require_unset_or_in(Quantity::kMotionScale, study.motion().scale(), "motion.scale (0 means 1)",
                       source);
@@ -485,8 +489,8 @@ int servo_substeps(const config::Study& study, double dt) {
   return static_cast<int>(whole);
 }
 
-HybridSetup base_setup(const config::Study& study, double dt,
-                       const std::filesystem::path& base_dir) {
+HybridSetup base_setup(const config::Study& study, double dt, const std::filesystem::path& base_dir,
+                       std::vector<std::string>* warnings) {
   HybridSetup base;
   base.model = make_structure(study.structure(), base_dir);
   base.integrator = integrator_kind(study.integrator());
@@ -494,8 +498,8 @@ HybridSetup base_setup(const config::Study& study, double dt,
   base.allow_unstable = study.integrator().allow_unstable();
   base.servo_substeps = servo_substeps(study, dt);
   const auto& sub = study.substructuring();
-  if (study.structure().has_matrices()) {
-    base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps);
+  if (study.structure().has_matrices() || !sub.experimental_dofs().empty()) {
+    base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps, warnings);
     return base;
   }
   const StoreyModelFactory factory = make_storey_factory(sub.model());
@@ -521,7 +525,7 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
               format_number(record.duration()) + " s)");
   // What a run of this study keeps per step (motion, time, then per DOF and per actuator three
   // series), for a run and its reference, checked before any of it is allocated.
-  prepared.base = base_setup(study, dt, base_dir);
+  prepared.base = base_setup(study, dt, base_dir, &prepared.warnings);
   const auto dofs = static_cast<std::uint64_t>(prepared.base.model.dofs());
   const auto actuators =
       static_cast<std::uint64_t>(prepared.base.partition.actuator_storeys.size());

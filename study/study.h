@@ -54,6 +54,9 @@ struct PreparedStudy {
   std::filesystem::path base_dir;
   GroundMotion motion;  // at dt
   HybridSetup base;     // no delay stages
+  // What the config most likely did not mean but is allowed (a grounded specimen that reads as a
+  // storey): each program prints them before it runs.
+  std::vector<std::string> warnings;
 };
 PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir);
 
@@ -62,7 +65,8 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
 // files resolve against base_dir. A structure given by matrices is split at its experimental DOFs
 // (study/structure_config.h): the model's mass and damping are then the numerical part's.
 HybridSetup base_setup(const config::Study& study, double dt,
-                       const std::filesystem::path& base_dir = {});
+                       const std::filesystem::path& base_dir = {},
+                       std::vector<std::string>* warnings = nullptr);
 // Servo periods per integrator step from study.servo.rate (Hz) and dt (s): 1 when unset; throws
 // std::invalid_argument naming servo.rate unless rate * dt is a whole number in [1, 64].
 int servo_substeps(const config::Study& study, double dt);

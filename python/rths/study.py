@@ -263,11 +263,15 @@ class Study:
         self._substructuring = f"substructuring {{ experimental_fraction: {fraction!r} model {{ {model} }} }}"
         return self
 
-    def experimental_dof(self, dof, stiffness, mass=0.0, damping=None, zeta=None, model="linear {}"):
-        """Adds an experimental DOF to a structure given by matrices: the specimen between DOF
-        `dof` (1-based) and the ground, of stiffness (N/m), mass (kg) and damping (N s/m) or
-        damping ratio zeta, with the restoring-force model as config text. The numerical part is
-        the rest (M - M_e, C - C_e, K - K_e). Call once per experimental DOF."""
+    def experimental_dof(self, dof, stiffness, mass=0.0, damping=None, zeta=None, model="linear {}",
+                         from_dof=None, angle_degrees=None):
+        """Adds a specimen to a structure given by matrices (or a shear building, taken as its
+        matrices): between DOF `dof` (1-based) and the ground, or with `from_dof` an element
+        between the two DOFs (a storey's specimen: deformation u[dof] - u[from_dof]), with
+        `angle_degrees` a brace at that angle (deformation cos(angle) times that). Stiffness
+        (N/m), mass (kg) and damping (N s/m) or damping ratio zeta along the element, the
+        restoring-force model as config text. The numerical part is the rest (M - m b b^T,
+        C - c b b^T, K - k b b^T). Call once per specimen; each has its own actuator."""
         if isinstance(dof, bool) or not isinstance(dof, numbers.Integral):
             raise TypeError(f"experimental_dof: dof must be an int (1-based), got {_type_name(dof)}")
         if dof < 1:
@@ -275,6 +279,18 @@ class Study:
         fields = [f"dof: {int(dof)}",
                   f"mass: {_number(mass, 'experimental_dof: mass (kg)', 0.0, None)!r}",
                   f"stiffness: {_number(stiffness, 'experimental_dof: stiffness (N/m)', 0.0, None, True)!r}"]
+        if from_dof is not None:
+            if isinstance(from_dof, bool) or not isinstance(from_dof, numbers.Integral):
+                raise TypeError(f"experimental_dof: from_dof must be an int (1-based), got {_type_name(from_dof)}")
+            if from_dof < 1 or from_dof == dof:
+                raise _rths.BadInputError(
+                    f"experimental_dof: from_dof {from_dof} must be another DOF (1-based) than dof {dof}")
+            fields.append(f"from_dof: {int(from_dof)}")
+        if angle_degrees is not None:
+            angle = _number(angle_degrees, "experimental_dof: angle_degrees", -90.0, 90.0)
+            if abs(angle) >= 90.0:
+                raise _rths.BadInputError("experimental_dof: angle_degrees must be in (-90, 90)")
+            fields.append(f"angle_degrees: {angle!r}")
         if damping is not None and zeta is not None:
             raise _rths.BadInputError("experimental_dof: give damping or zeta, not both")
         if damping is not None:

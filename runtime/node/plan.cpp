@@ -123,12 +123,13 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
   if (any_substructure)
     for (int s : numerical)
       if (!numerical_host.count(s))
-        throw std::invalid_argument("numerical storey " + std::to_string(s + 1) +
+        throw std::invalid_argument("numerical " + partition.channel_name(s) +
                                     " is hosted by no substructure node");
   for (int s : experimental)
     if (!experimental_host.count(s))
       throw std::invalid_argument(
-          "experimental storey " + std::to_string(s + 1) +
+          "experimental " + partition.channel_name(s) +
+          (s >= partition.dofs() ? " (storeys: " + std::to_string(s + 1) + " in a node)" : "") +
           " is hosted by no actuator emulator or controller (deployment.nodes)");
   (void)with_node_compensation(base, plan);  // refuses bad blocks before any node is started
   return plan;

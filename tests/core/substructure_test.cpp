@@ -65,6 +65,95 @@ TEST(PartitionTest, ByDofsTakesEachSpecimenOutOfTheStiffnessMatrix) {
   EXPECT_THROW(partition_by_dofs(k, std::move(too_stiff)), std::invalid_argument);
 }
 
+TEST(StoreyAssemblyTest, ElementRowsFollowTheDofsAndAssembleByTheSameRow) {
+  // 3 DOFs and two elements: the storey between DOFs 1 and 2, a brace 0.5 (u3 - u2).
+  const StoreyAssembly assembly(3, true, {{{{1, 1.0}, {0, -1.0}}}, {{{2, 0.5}, {1, -0.5}}}});
+  ASSERT_EQ(assembly.storeys(), 5);
+  ASSERT_EQ(assembly.dofs(), 3);
+  Vec u(3), drift = Vec::Zero(5), force = Vec::Zero(3);
+  u << 0.1, 0.3, 0.7;
+  assembly.drifts(u, drift);
+  EXPECT_DOUBLE_EQ(drift[3], 0.2);
+  EXPECT_DOUBLE_EQ(drift[4], 0.2);
+  Vec shear(5);
+  shear << 1.0, 2.0, 3.0, 10.0, 20.0;
+  assembly.dof_forces(shear, force);
+  EXPECT_DOUBLE_EQ(force[0], 1.0 - 10.0);
+  EXPECT_DOUBLE_EQ(force[1], 2.0 + 10.0 - 10.0);
+  EXPECT_DOUBLE_EQ(force[2], 3.0 + 10.0);
+  // The tangent is B' diag(k) B, and the virtual work of the forces is that of the channels.
+  Vec k(5);
+  k << 0.0, 0.0, 0.0, 4.0, 8.0;
+  Mat tangent;
+  assembly.tangent(k, tangent);
+  Mat b = Mat::Zero(5, 3);
+  b.topRows(3).setIdentity();
+  b.row(3) << -1.0, 1.0, 0.0;
+  b.row(4) << 0.0, -0.5, 0.5;
+  EXPECT_LE((tangent - b.transpose() * k.asDiagonal() * b).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_NEAR(force.dot(u), shear.dot(drift), 1e-12);
+}
+
+TEST(PartitionTest, AnElementBetweenDofsTakesItsStiffnessOutAlongItsRow) {
+  Mat k(3, 3);
+  k << 4.0, -2.0, 0.0, -2.0, 3.5, -1.5, 0.0, -1.5, 1.5;
+  std::vector<DofSpecimen> specimens;
+  specimens.push_back({0, std::make_unique<LinearSpring>(0.5), {{{1, 1.0}, {0, -1.0}}}});
+  specimens.push_back({2, std::make_unique<LinearSpring>(0.25), {}});
+  const HybridPartition p = partition_by_dofs(k, std::move(specimens));
+  // The grounded specimen keeps its DOF's channel; the element comes after the DOFs.
+  EXPECT_EQ(p.actuator_storeys, (std::vector<int>{2, 3}));
+  EXPECT_EQ(p.channels(), 4);
+  EXPECT_EQ(p.dofs(), 3);
+  EXPECT_EQ(p.channel_name(3), "element 1 (DOF 2 - DOF 1)");
+  EXPECT_EQ(p.channel_name(1), "DOF 2");
+  EXPECT_FALSE(p.has_numerical(3));
+  EXPECT_DOUBLE_EQ(p.numerical_matrix(0, 0), 3.5);
+  EXPECT_DOUBLE_EQ(p.numerical_matrix(0, 1), -1.5);
+  EXPECT_DOUBLE_EQ(p.numerical_matrix(1, 1), 3.0);
+  EXPECT_DOUBLE_EQ(p.numerical_matrix(2, 2), 1.25);
+  // K_N + K_e is K again.
+  EXPECT_LE((p.numerical_matrix + p.experimental_stiffness() - k).cwiseAbs().maxCoeff(), 1e-15);
+  const HybridPartition copy(p);
+  EXPECT_EQ(copy.elements.size(), 1u);
+}
+
+TEST(PartitionTest, AnElementStifferThanWhatItReplacesIsRefused) {
+  Mat k(2, 2);
+  k << 4.0, -2.0, -2.0, 2.0;  // storeys 2 and 2
+  std::vector<DofSpecimen> too_stiff;
+  too_stiff.push_back({0, std::make_unique<LinearSpring>(2.5), {{{1, 1.0}, {0, -1.0}}}});
+  try {
+    partition_by_dofs(k, std::move(too_stiff));
+    FAIL() << "an element stiffer than its storey was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("stiffer than the structure"), std::string::npos)
+        << e.what();
+  }
+  std::vector<DofSpecimen> outside;
+  outside.push_back({0, std::make_unique<LinearSpring>(1.0), {{{5, 1.0}}}});
+  EXPECT_THROW(partition_by_dofs(k, std::move(outside)), std::invalid_argument);
+  std::vector<DofSpecimen> whole;
+  whole.push_back({0, std::make_unique<LinearSpring>(2.0), {{{1, 1.0}, {0, -1.0}}}});
+  EXPECT_NO_THROW(partition_by_dofs(k, std::move(whole)));
+}
+
+TEST(HybridRestoringTest, AnElementsForceEntersBothOfItsDofs) {
+  Mat k(2, 2);
+  k << 4.0, -2.0, -2.0, 2.0;
+  std::vector<DofSpecimen> specimens;
+  specimens.push_back({0, std::make_unique<LinearSpring>(2.0), {{{1, 1.0}, {0, -1.0}}}});
+  HybridRestoring restoring(partition_by_dofs(k, std::move(specimens)), {}, 0.01);
+  Vec u(2), v = Vec::Zero(2);
+  u << 0.1, 0.4;
+  const Vec& force = restoring.trial(u, v, nullptr);
+  ASSERT_EQ(force.size(), 2);
+  EXPECT_NEAR(force[0], (k * u)[0], 1e-15);
+  EXPECT_NEAR(force[1], (k * u)[1], 1e-15);
+  EXPECT_DOUBLE_EQ(restoring.command()[0], 0.3);
+  EXPECT_DOUBLE_EQ(restoring.measured_force()[0], 0.6);
+}
+
 TEST(PartitionTest, FractionSplitsEveryStoreyAndPlacesOneActuatorEach) {
   const HybridPartition p = partition_by_fraction({100.0, 50.0}, 0.25, linear_factory());
   ASSERT_EQ(p.actuator_storeys, (std::vector<int>{0, 1}));

@@ -146,6 +146,21 @@ def test_matrices_and_experimental_dofs_from_numpy_run_as_their_written_config(t
     assert frame("no_benchmark").run()["benchmark"] is None
 
 
+def test_a_storey_specimen_between_two_floors_is_the_whole_frame_without_lag():
+    storey = (rths.Study("frame3_storey")
+              .matrices(M3, C3, K3)
+              .motion(MOTION)
+              .integrator("explicit-newmark", dt=0.001)
+              .experimental_dof(2, stiffness=2e6, from_dof=1)
+              .case("reference"))
+    assert "experimental_dofs { dof: 2 mass: 0.0 stiffness: 2000000.0 from_dof: 1" in storey.text
+    hybrid = storey.run()["summary"]["cases"][0]["peak_displacement_m"]
+    whole = frame3("frame3_whole").run()["summary"]["cases"][0]["peak_displacement_m"]
+    assert hybrid == pytest.approx(whole, rel=1e-9)
+    with pytest.raises(rths.BadInputError, match="from_dof 2 must be another DOF"):
+        rths.Study("x").experimental_dof(2, stiffness=1e6, from_dof=2)
+
+
 def test_a_diverging_case_is_warned_with_its_verdict():
     with pytest.warns(RuntimeWarning, match=r"case 'lag_10ms': diverging: .*doubling every"):
         result = frame3("frame3_diverging", ("lag_10ms", 0.010)).run()

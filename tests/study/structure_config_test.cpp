@@ -142,5 +142,90 @@ TEST(StructureConfig, UndelayedSplitOfTheTwentyDofFrameEqualsTheWholeFrame) {
   }
 }
 
+TEST(StructureConfig, AnElementBetweenTwoDofsTakesItsRowOutOfTheNumericalPart) {
+  const PreparedStudy p = prepare(two_storey_matrices(
+      "substructuring { experimental_dofs { dof: 2 from_dof: 1 mass: 100 stiffness: 1e6 "
+      "damping: 500 } }"));
+  const StructuralModel whole = make_structure(p.config.structure());
+  const HybridPartition& partition = p.base.partition;
+  ASSERT_EQ(partition.elements.size(), 1u);
+  EXPECT_EQ(partition.actuator_storeys, std::vector<int>{2});
+  EXPECT_EQ(partition.numerical_matrix(0, 0), 4e6);
+  EXPECT_EQ(partition.numerical_matrix(0, 1), -1e6);
+  EXPECT_EQ(partition.numerical_matrix(1, 1), 1e6);
+  // m b b^T and c b b^T leave the numerical part too.
+  EXPECT_EQ(p.base.model.mass(0, 0), 1900.0);
+  EXPECT_EQ(p.base.model.mass(0, 1), 100.0);
+  EXPECT_EQ(p.base.model.mass(1, 1), 1400.0);
+  EXPECT_DOUBLE_EQ(p.base.model.damping(0, 1), whole.damping(0, 1) + 500.0);
+  EXPECT_TRUE(p.warnings.empty());
+}
+
+TEST(StructureConfig, ABraceAndAnInfluenceRowAreTheSameElement) {
+  const PreparedStudy brace = prepare(two_storey_matrices(
+      "substructuring { experimental_dofs { dof: 2 from_dof: 1 angle_degrees: 60 stiffness: 4e6 "
+      "} }"));
+  const PreparedStudy row = prepare(two_storey_matrices(
+      "substructuring { experimental_dofs { influence: [-0.5, 0.5] stiffness: 4e6 } }"));
+  EXPECT_LE((brace.base.partition.numerical_matrix - row.base.partition.numerical_matrix)
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-6);
+  EXPECT_NEAR(row.base.partition.numerical_matrix(1, 1), 1e6, 1e-6);
+}
+
+TEST(StructureConfig, BadElementsAreRefusedNamingTheField) {
+  const auto error = [](const std::string& spec) {
+    return error_of([&] {
+      prepare(two_storey_matrices("substructuring { experimental_dofs { " + spec + " } }"));
+    });
+  };
+  EXPECT_NE(error("dof: 2 from_dof: 2 stiffness: 1e6").find("from_dof: an element joins two"),
+            std::string::npos);
+  EXPECT_NE(error("dof: 2 from_dof: 4 stiffness: 1e6").find("from_dof: 4 is outside 1..2"),
+            std::string::npos);
+  EXPECT_NE(error("dof: 2 from_dof: 1 angle_degrees: 90 stiffness: 1e6").find("angle_degrees"),
+            std::string::npos);
+  EXPECT_NE(error("influence: [1] stiffness: 1e6").find("1 entries for 2 DOFs"), std::string::npos);
+  EXPECT_NE(error("dof: 1 influence: [1, 0] stiffness: 1e6").find("not both"), std::string::npos);
+  EXPECT_NE(error("influence: [0, 0] stiffness: 1e6").find("every entry is 0"), std::string::npos);
+  EXPECT_NE(error("dof: 2 from_dof: 1 stiffness: 3e6").find("stiffer than the structure"),
+            std::string::npos);
+}
+
+TEST(StructureConfig, AGroundedSpecimenThatMeansAStoreyIsWarnedOfWithBothFractions) {
+  // DOF 2 of the two-storey frame is tied to the ground by nothing of its own: a grounded
+  // specimen there is most likely storey 2.
+  const PreparedStudy p = prepare(
+      two_storey_matrices("substructuring { experimental_dofs { dof: 2 stiffness: 1e6 } }"));
+  ASSERT_EQ(p.warnings.size(), 1u);
+  const std::string& warning = p.warnings[0];
+  EXPECT_NE(warning.find("experimental_dofs[0]"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("by only 0 N/m"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("experimental fraction of"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("from_dof: 1"), std::string::npos) << warning;
+  // DOF 1 carries the first storey to the ground: no warning.
+  EXPECT_TRUE(
+      prepare(two_storey_matrices("substructuring { experimental_dofs { dof: 1 stiffness: 2e6 } }"))
+          .warnings.empty());
+}
+
+TEST(StructureConfig, AShearBuildingTakesElementsAsItsMatrices) {
+  const std::string building =
+      "name: \"s\" structure { shear_building { storey_mass: [2000, 1500] storey_stiffness: "
+      "[3e6, 2e6] } damping { modal_zeta: 0.05 } } motion { path: \"" +
+      motion() + "\" duration: 4 } integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } ";
+  const PreparedStudy p = prepare(
+      building + "substructuring { experimental_dofs { dof: 2 from_dof: 1 stiffness: 1e6 } }");
+  EXPECT_TRUE(p.base.partition.by_dofs);
+  EXPECT_EQ(p.base.partition.numerical_matrix(1, 1), 1e6);
+  EXPECT_NE(error_of([&] {
+              prepare(building +
+                      "substructuring { model { bilinear { yield_displacement: 0.01 } } "
+                      "experimental_dofs { dof: 2 from_dof: 1 stiffness: 1e6 } }");
+            }).find("needs a linear storey model"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace rths::core
