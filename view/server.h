@@ -84,7 +84,7 @@ struct ServerOptions {
 class ViewServer {
  public:
   // Loads the page's files and starts listening. Throws std::runtime_error naming the file or
-  // the address when it cannot.
+  // the address when it cannot, std::invalid_argument for a stop token under 16 characters.
   ViewServer(const Feed& feed, ServerOptions options);
   ~ViewServer();
   ViewServer(const ViewServer&) = delete;
