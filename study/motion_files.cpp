@@ -137,7 +137,8 @@ void require_motion_file_size(const std::filesystem::path& path) {
           << ", and reading one holds up to " << kMotionReadBytesPerFileByte
           << " bytes of memory per byte of it, within the memory limit of "
           << mib(memory_limit_bytes())
-          << " (half this machine's memory, or RTHS_MEMORY_LIMIT); refused before reading it";
+          << " (half this machine's memory, or RLIMIT_AS / RLIMIT_DATA when lower, or "
+             "RTHS_MEMORY_LIMIT); refused before reading it";
   throw std::invalid_argument(message.str());
 }
 
