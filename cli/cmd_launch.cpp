@@ -71,27 +71,26 @@ std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
   return file;
 }
 
-// --view / --view-stop as the coordinator's arguments; beyond loopback the stop token is made
-// here, handed down in the environment (never on a command line) and printed.
+// --view / --view-stop as the coordinator's arguments; with --view-stop the stop's token is made
+// here (loopback included: any web page may POST to 127.0.0.1), handed down in the environment
+// (never on a command line) and printed in the address to open, as Jupyter does.
 std::vector<std::string> view_arguments(const LaunchArgs& args) {
   if (args.view.empty()) {
     if (args.view_stop) throw ExitError(kExitBadInput, "--view-stop needs --view HOST:PORT");
     return {};
   }
-  view::ListenAddress address;
   try {
-    address = view::parse_listen_address(args.view);
+    view::parse_listen_address(args.view);  // refused here, before any case starts
   } catch (const std::invalid_argument& e) {
     throw ExitError(kExitBadInput, e.what());
   }
   std::string token;
-  if (args.view_stop && !address.loopback()) {
+  if (args.view_stop) {
     token = view::make_token();
     ::setenv("RTHS_VIEW_TOKEN", token.c_str(), 1);
   }
   std::cerr << "rths launch: live view of each case at http://" << args.view << "/"
-            << (args.view_stop ? " with a stop button" : "")
-            << (token.empty() ? "" : "; stop token " + token) << "\n";
+            << (args.view_stop ? "?token=" + token + " with a stop button" : "") << "\n";
   std::vector<std::string> out{"--view", args.view};
   if (args.view_stop) out.push_back("--view-stop");
   return out;
@@ -237,8 +236,8 @@ void add_launch_command(CLI::App& app) {
                   "serve the live view of each case at HOST:PORT (e.g. 127.0.0.1:8080); "
                   "`rths view RECORD` shows a finished one");
   cmd->add_flag("--view-stop", args->view_stop,
-                "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
-                "token printed here");
+                "the view gets a stop button (HOLD, then STOP), pressed only from the address "
+                "printed here (it carries the stop's token)");
   cmd->add_option("--platform-seconds", args->platform_seconds,
                   "real time: s of platform measurement before the runs (default 5)")
       ->check(CLI::Range(0.1, 600.0));

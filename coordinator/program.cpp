@@ -132,20 +132,20 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
   view::ServerOptions options;
   options.address = view::parse_listen_address(address_text);
   options.allow_stop = allow_stop;
-  // The launcher may hand the token down (RTHS_VIEW_TOKEN) to print it itself; never on argv.
+  // The stop's token, loopback included (any web page may POST to 127.0.0.1). The launcher may
+  // hand it down (RTHS_VIEW_TOKEN) to print it itself; never on argv.
   const char* given = std::getenv("RTHS_VIEW_TOKEN");
-  if (allow_stop && !options.address.loopback())
-    options.token = given && *given ? given : view::make_token();
+  if (allow_stop) options.token = given && *given ? given : view::make_token();
   options.on_stop = [&stop_request] { stop_request.store(true); };
   auto feed = std::make_unique<view::Feed>();
   // The prediction runs the case in process here, before the run starts (never on its loop).
   view::describe_run(*feed, prepared, case_name);
   auto server = std::make_unique<view::ViewServer>(*feed, options);
   // A token handed down by the launcher was printed there: this output may be a log file.
-  const bool token_made_here = !options.token.empty() && !(given && *given);
-  std::cout << "rths-coordinator: live view at " << server->url()
-            << (allow_stop ? " (stop button on)" : "")
-            << (token_made_here ? "; stop token " + options.token : std::string()) << std::endl;
+  const bool token_made_here = allow_stop && !(given && *given);
+  std::cout << "rths-coordinator: live view at "
+            << (token_made_here ? server->page_url() : server->url())
+            << (allow_stop ? " (stop button on)" : "") << std::endl;
   if (!options.address.loopback())
     std::cout << "rths-coordinator: the view listens beyond loopback: anyone who reaches "
               << server->url() << " sees the run" << std::endl;
@@ -189,8 +189,8 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
       "--view", a.view_address,
       "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");
   app.add_flag("--view-stop", a.view_stop,
-               "the view gets a stop button (HOLD, then STOP); beyond loopback it asks for the "
-               "token printed at start-up");
+               "the view gets a stop button (HOLD, then STOP), pressed only from the address "
+               "printed at start-up (it carries the stop's token)");
 }
 
 // Everything a run holds, in the order it is torn down: the coordinator first, then what it

@@ -12,7 +12,7 @@
 // /dev/cpu_dma_latency at 0 for the run when permitted, and records the check in the header.
 //                    [--view HOST:PORT [--view-stop]]  (the live view, view/server.h; needs
 //                    --record; the stop button HOLDs then STOPs the run, "stopped from the view";
-//                    beyond loopback it needs the token printed at start-up)
+//                    it needs the token in the address printed at start-up, loopback included)
 // Loads the study, opens DDS (domain: --domain, else deployment.domain_id), runs one case and
 // prints a summary. SIGXFSZ is ignored: a file size limit fails the record's write, which stops
 // the run as a full disk does (HOLD, what the record took, the reason). Exit: 0 completed, 1 the

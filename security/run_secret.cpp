@@ -6,11 +6,10 @@
 #include <unistd.h>
 
 #include <array>
-#include <cctype>
+#include <bitset>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <sstream>
 
 namespace rths::security {
@@ -26,11 +25,42 @@ std::string errno_text(const std::filesystem::path& file, const char* what) {
   return text;
 }
 
-bool is_hex_secret(const std::string& text) {
-  if (text.size() != kSecretHexChars) return false;
-  for (const char c : text)
-    if (!std::isxdigit(static_cast<unsigned char>(c))) return false;
-  return true;
+// Why `text` cannot be a run secret, or empty when it can. One case only: MessageMac keys on the
+// text, so "AB.." and "ab.." would be two keys and the processes given each would drop the
+// other's messages as forged; generate_run_secret writes lower case, so upper case is refused
+// (never silently folded: a secret typed by hand is what the entropy checks below are for).
+// A random secret uses about 16 different digits and never repeats a pattern of 32 or fewer
+// (either happens by chance with odds under 1e-18); one that does was typed, not drawn.
+std::string secret_flaw(const std::string& text) {
+  if (text.size() != kSecretHexChars ||
+      text.find_first_not_of("0123456789abcdefABCDEF") != std::string::npos)
+    return "does not hold one secret of 64 hex characters (`rths pki secret FILE` makes one)";
+  if (text.find_first_of("ABCDEF") != std::string::npos)
+    return "is in upper case: a run secret is written in lower case, as `rths pki secret` writes "
+           "it (the messages' MAC keys on the text, so an upper-case copy is another key); "
+           "lower-case it everywhere it is given";
+  std::bitset<128> seen;
+  for (const char c : text) seen.set(static_cast<unsigned char>(c));
+  if (seen.count() < 8)
+    return "uses " + std::to_string(seen.count()) +
+           " different hex digits (a random secret uses about 16): not a random secret; make one "
+           "with `rths pki secret FILE`";
+  for (std::size_t period = 1; period <= kSecretHexChars / 2; ++period)
+    if (text.compare(period, std::string::npos, text, 0, text.size() - period) == 0)
+      return "repeats its first " + std::to_string(period) +
+             " digits over and over: a pattern, not a random secret; make one with `rths pki "
+             "secret FILE`";
+  return "";
+}
+
+// What a file that is not a regular file is, in words.
+std::string file_kind(mode_t mode) {
+  if (S_ISFIFO(mode)) return "named pipe";
+  if (S_ISDIR(mode)) return "directory";
+  if (S_ISCHR(mode)) return "character device";
+  if (S_ISBLK(mode)) return "block device";
+  if (S_ISSOCK(mode)) return "socket";
+  return "special file";
 }
 
 std::string secret_file_error(const std::filesystem::path& file, const std::string& why) {
@@ -68,24 +98,58 @@ void write_run_secret_file(const std::filesystem::path& file, const std::string&
     throw std::runtime_error(errno_text(file, "cannot write"));
 }
 
-std::string read_run_secret_file(const std::filesystem::path& file) {
+namespace {
+
+// The file's metadata, refused unless a regular file that only its owner may read or write: a
+// named pipe would block the open or the read (start-up hangs), a device never ends.
+struct stat secret_file_status(const std::filesystem::path& file) {
   struct stat st {};
   if (::stat(file.c_str(), &st) != 0) throw SecretError(errno_text(file, "cannot read"));
+  if (!S_ISREG(st.st_mode))
+    throw SecretError(secret_file_error(
+        file, "is a " + file_kind(st.st_mode) +
+                  ", not a regular file; give the file `rths pki secret FILE` wrote"));
   if ((st.st_mode & (S_IRWXG | S_IRWXO)) != 0) {
     std::ostringstream mode;
     mode << std::oct << (st.st_mode & 0777);
-    std::string why = "mode ";
-    why += mode.str();
-    why += " lets others read it; chmod 600 it (or make a new one)";
-    throw SecretError(secret_file_error(file, why));
-  }
-  std::ifstream in(file);
-  std::string secret, rest;
-  std::getline(in, secret);
-  std::getline(in, rest, '\0');
-  if (!is_hex_secret(secret) || !rest.empty())
     throw SecretError(secret_file_error(
-        file, "does not hold one secret of 64 hex characters (`rths pki secret FILE` makes one)"));
+        file, "mode " + mode.str() + " lets others read it; chmod 600 it (or make a new one)"));
+  }
+  return st;
+}
+
+// The file's first bytes, at most `limit`, read without blocking from the file checked above
+// (a file swapped for another kind between the check and the open is refused).
+std::string read_head(const std::filesystem::path& file, const struct stat& checked,
+                      std::size_t limit) {
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) throw SecretError(errno_text(file, "cannot read"));
+  struct stat opened {};
+  std::string head(limit, '\0');
+  std::size_t got = 0;
+  ssize_t n = 0;
+  const bool same = ::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode) &&
+                    opened.st_dev == checked.st_dev && opened.st_ino == checked.st_ino;
+  while (same && got < limit && (n = ::read(fd, &head[got], limit - got)) > 0)
+    got += static_cast<std::size_t>(n);
+  const int saved = errno;
+  ::close(fd);
+  errno = saved;
+  if (!same) throw SecretError(secret_file_error(file, "changed while it was opened"));
+  if (n < 0) throw SecretError(errno_text(file, "cannot read"));
+  head.resize(got);
+  return head;
+}
+
+}  // namespace
+
+std::string read_run_secret_file(const std::filesystem::path& file) {
+  const struct stat st = secret_file_status(file);
+  // One secret and its newline; a byte more is refused below, so no more is read.
+  std::string secret = read_head(file, st, kSecretHexChars + 2);
+  if (!secret.empty() && secret.back() == '\n') secret.pop_back();
+  if (const std::string why = secret_flaw(secret); !why.empty())
+    throw SecretError(secret_file_error(file, why));
   return secret;
 }
 
@@ -96,8 +160,8 @@ std::string resolve_run_secret(const SecretChoice& choice) {
   if (const char* value = std::getenv(kSecretEnv); value && *value) {
     const std::string secret = value;
     ::unsetenv(kSecretEnv);
-    if (!is_hex_secret(secret))
-      throw SecretError(std::string(kSecretEnv) + " does not hold a secret of 64 hex characters");
+    if (const std::string why = secret_flaw(secret); !why.empty())
+      throw SecretError(std::string(kSecretEnv) + " " + why);
     return secret;
   }
   if (choice.dds_security || choice.insecure) return {};

@@ -34,8 +34,14 @@ std::string generate_run_secret();
 void write_run_secret_file(const std::filesystem::path& file, const std::string& secret);
 
 // The secret in `file`, refused (SecretError naming the file and why) when the file is missing,
-// readable or writable by its group or by others, or does not hold exactly one secret of
-// kSecretHexChars hex characters (a trailing newline allowed).
+// not a regular file (a named pipe, a device, a directory: named by its type, and never opened,
+// so start-up cannot block on it), readable or writable by its group or by others, or does not
+// hold exactly one well-formed secret (a trailing newline allowed). At most kSecretHexChars + 2
+// bytes are read.
+// Well-formed, here and for kSecretEnv: kSecretHexChars hex digits in lower case (upper case is
+// refused, not folded: the messages' MAC keys on the text, so it would be another key), using at
+// least 8 different digits and repeating no pattern of 32 digits or fewer (an all-zero secret, or
+// "deadbeef" eight times, is refused; a random one is, with odds under 1e-18).
 std::string read_run_secret_file(const std::filesystem::path& file);
 
 struct SecretError : std::invalid_argument {

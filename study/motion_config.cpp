@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 
@@ -13,20 +12,6 @@
 
 namespace rths::core {
 namespace {
-
-constexpr std::uintmax_t kMaxMotionFileBytes = 256ull << 20;  // 256 MiB
-
-// A motion file is read whole, as text (and hashed, and scanned for binary bytes): one far beyond
-// any record (a 10^8-line file) is refused by its size before any of that.
-void refuse_huge_motion(const std::filesystem::path& path) {
-  std::error_code size_error;
-  const std::uintmax_t bytes = std::filesystem::file_size(path, size_error);
-  if (size_error || bytes <= kMaxMotionFileBytes) return;
-  std::ostringstream message;
-  message << "motion '" << path.string() << "': " << bytes << " bytes, more than the "
-          << kMaxMotionFileBytes << " a motion file may have";
-  throw std::invalid_argument(message.str());
-}
 
 GroundMotion embedded_motion(const config::EmbeddedMotion& embedded) {
   const std::string what = "motion.embedded ('" + embedded.name() + "')";
@@ -83,7 +68,8 @@ GroundMotion load_motion(const config::GroundMotion& motion,
   if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
   std::filesystem::path path = motion.path();
   if (path.is_relative()) path = base_dir / path;
-  refuse_huge_motion(path);
+  // Sized before it is scanned, hashed or read (study/motion_files.h).
+  require_motion_file_size(path);
   if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
     throw std::invalid_argument("motion: " + why);
   if (!motion.sha256().empty()) check_sha256(path, motion.sha256());

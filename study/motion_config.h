@@ -1,7 +1,8 @@
 #pragma once
 // A study's ground motion (config::GroundMotion) as read: embedded in a record's inputs or from
-// its file (resolved against base_dir, checked against its sha256 pin, refused by size past
-// 256 MiB), in SI units, and the names of its units.
+// its file (resolved against base_dir, checked against its sha256 pin, refused by its size before
+// it is read: require_motion_file_size, study/motion_files.h), in SI units, and the names of its
+// units.
 
 #include <filesystem>
 #include <string>

@@ -1,5 +1,6 @@
 #include "study/motion_files.h"
 
+#include "study/memory_budget.h"
 #include "study/text_columns.h"
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace rths::core {
@@ -111,7 +113,37 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
 
 }  // namespace
 
+std::uintmax_t motion_file_limit_bytes() {
+  return std::min<std::uintmax_t>(kMaxMotionFileBytes,
+                                  memory_limit_bytes() / kMotionReadBytesPerFileByte);
+}
+
+void require_motion_file_size(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, error);
+  const std::uintmax_t limit = motion_file_limit_bytes();
+  if (error || bytes <= limit) return;
+  const auto mib = [](std::uintmax_t b) {
+    std::ostringstream text;
+    text.precision(1);
+    text << std::fixed << static_cast<double>(b) / (1024.0 * 1024.0) << " MiB";
+    return text.str();
+  };
+  std::ostringstream message;
+  message << "motion '" << path.string() << "': " << bytes << " bytes (" << mib(bytes)
+          << "), more than the " << limit << " bytes (" << mib(limit)
+          << ") a motion file may have: at most " << mib(kMaxMotionFileBytes)
+          << ", and reading one holds up to " << kMotionReadBytesPerFileByte
+          << " bytes of memory per byte of it, within the memory limit of "
+          << mib(memory_limit_bytes())
+          << " (half this machine's memory, or RLIMIT_AS / RLIMIT_DATA when lower, or "
+             "RTHS_MEMORY_LIMIT); refused before reading it";
+  throw std::invalid_argument(message.str());
+}
+
 GroundMotion read_at2(const std::filesystem::path& path) {
+  require_motion_file_size(path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
   std::string line;
@@ -230,6 +262,7 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
     throw std::invalid_argument(path.string() + ": unit factor to m/s^2 must be > 0, got " +
                                 std::to_string(to_si));
   }
+  require_motion_file_size(path);
   const TextColumns text = read_text_columns(path, "ground-motion file", /*title_allowed=*/true);
   std::vector<double> times, values;
   ColumnShape shape;
@@ -250,6 +283,7 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
 }
 
 bool is_at2_file(const std::filesystem::path& path) {
+  require_motion_file_size(path);  // its first lines may be the whole file
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
   std::string line;

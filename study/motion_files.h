@@ -3,11 +3,33 @@
 // text, into core::GroundMotion (time in s, acceleration in m/s^2; AT2 values, in g, are
 // multiplied by kGravity).
 
+#include <cstdint>
 #include <filesystem>
 
 #include "core/ground_motion.h"
 
 namespace rths::core {
+
+// A motion file is read whole, and its reader holds far more than its bytes while it parses:
+// read_text_columns keeps an object per line, so a file of one-character samples ("1\n", the
+// densest text) held 48.1 bytes of memory per byte of file at its peak (measured: 2^24 + 1 lines,
+// the row vector just doubled; 36 at 2^24). So every reader below sizes the file before it reads
+// a byte of it (stat), and refuses one over motion_file_limit_bytes(): kMaxMotionFileBytes, or
+// less when the memory budget (memory_limit_bytes(), study/memory_budget.h) cannot hold the
+// reading of a file that large at kMotionReadBytesPerFileByte. 128 MiB of text is 5 million
+// two-column samples of 25 bytes: 1.5 hours at 1 kHz, beyond any earthquake record.
+inline constexpr std::uintmax_t kMaxMotionFileBytes = 128ull << 20;
+inline constexpr std::uintmax_t kMotionReadBytesPerFileByte = 50;
+
+// min(kMaxMotionFileBytes, memory_limit_bytes() / kMotionReadBytesPerFileByte), in bytes.
+std::uintmax_t motion_file_limit_bytes();
+
+// Throws std::invalid_argument naming the file, its size and the limit (and what sets it) when
+// `path` is a regular file larger than motion_file_limit_bytes(); a file that is not there, or
+// not a regular file, is left to the reader's own refusal. Reads nothing of the file.
+void require_motion_file_size(const std::filesystem::path& path);
+
+// Each reader first calls require_motion_file_size.
 
 // Reads a PEER AT2 file: 4 header lines, the 4th holding NPTS and DT in either of the forms
 // "NPTS=  1559, DT=   .0200 SEC" or "7814    0.0050    NPTS, DT", then values in g in any

@@ -4,12 +4,17 @@
 #include <fcntl.h>
 #include <httplib.h>
 #include <poll.h>
+#include <sys/random.h>
 #include <sys/socket.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <iterator>
-#include <random>
 #include <stdexcept>
+#include <vector>
 
 #include "transport/transport.h"
 
@@ -37,6 +42,22 @@ bool same_token(const std::string& a, const std::string& b) {
   for (std::size_t i = 0; i < a.size() && i < b.size(); ++i)
     diff |= static_cast<unsigned char>(a[i] ^ b[i]);
   return diff == 0;
+}
+
+std::string lower(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+// Whether a Host header's value (lower case) names one of `names` with `port` (a browser leaves
+// out ":80" on port 80).
+bool names_served(const std::string& host, const std::vector<std::string>& names, int port) {
+  for (const std::string& name : names) {
+    if (name.empty()) continue;
+    if (host == name + ":" + std::to_string(port) || (port == 80 && host == name)) return true;
+  }
+  return false;
 }
 
 // One connection's socket as httplib's Stream: non-blocking, each read and write waiting at most
@@ -152,11 +173,13 @@ ListenAddress parse_listen_address(const std::string& text, const std::string& f
 }
 
 std::string make_token() {
-  std::random_device random;
+  unsigned char bytes[16];
+  if (getrandom(bytes, sizeof bytes, 0) != static_cast<ssize_t>(sizeof bytes))
+    throw std::runtime_error(std::string("no random bytes for the view's stop token: ") +
+                             std::strerror(errno));
   std::string token;
   const char* hex = "0123456789abcdef";
-  for (int i = 0; i < 16; ++i) {
-    const unsigned byte = random() & 0xffu;
+  for (const unsigned byte : bytes) {
     token += hex[byte >> 4];
     token += hex[byte & 0xfu];
   }
@@ -165,6 +188,9 @@ std::string make_token() {
 
 ViewServer::ViewServer(const Feed& feed, ServerOptions options)
     : feed_(feed), options_(std::move(options)) {
+  if (options_.allow_stop && options_.token.empty()) options_.token = make_token();
+  if (options_.allow_stop && options_.token.size() < 16)
+    throw std::invalid_argument("the view's stop token must have at least 16 characters");
   const std::filesystem::path web = options_.web_dir.empty() ? RTHS_VIEW_WEB_DIR : options_.web_dir;
   const std::filesystem::path uplot =
       options_.uplot_dir.empty() ? RTHS_VIEW_UPLOT_DIR : options_.uplot_dir;
@@ -204,8 +230,32 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   });
 }
 
+std::string ViewServer::foreign(const std::string& host_header, const std::string& origin,
+                                const std::string& local_address) {
+  const std::string host = lower(host_header);
+  const std::vector<std::string> names{"127.0.0.1", "localhost", "[::1]",
+                                       lower(options_.address.host), local_address};
+  if (!names_served(host, names, port_)) {
+    ++bad_host_;
+    return "Host '" + host_header + "' is not this view's address: open it as " + url();
+  }
+  if (!origin.empty() && lower(origin) != "http://" + host) {
+    ++cross_origin_;
+    return "a request from " + origin + " (another origin) is refused";
+  }
+  return "";
+}
+
 void ViewServer::routes() {
   httplib::Server& s = *server_;
+  s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    const std::string why =
+        foreign(req.get_header_value("Host"), req.get_header_value("Origin"), req.local_addr);
+    if (why.empty()) return httplib::Server::HandlerResponse::Unhandled;
+    res.status = 403;
+    res.set_content(why, "text/plain");
+    return httplib::Server::HandlerResponse::Handled;
+  });
   for (const auto& [path, file] : files_)
     s.Get(path, [this, &file = file](const httplib::Request&, httplib::Response& res) {
       res.set_content(file.second, file.first.c_str());
@@ -222,7 +272,7 @@ void ViewServer::routes() {
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
     const nlohmann::json j = {{"mode", options_.mode},
                               {"stop_enabled", options_.allow_stop},
-                              {"token_required", !options_.token.empty()},
+                              {"token_required", options_.allow_stop},
                               {"counters", counters()}};
     res.set_content(j.dump(), "application/json");
   });
@@ -232,12 +282,13 @@ void ViewServer::routes() {
       res.set_content("the stop button is off: start the view with --view-stop", "text/plain");
       return;
     }
-    if (!options_.token.empty() &&
-        !same_token(req.get_header_value("X-RTHS-Token"), options_.token)) {
+    if (!same_token(req.get_header_value("X-RTHS-Token"), options_.token)) {
       ++bad_token_;
       res.status = 403;
-      res.set_content("wrong or missing token (X-RTHS-Token; printed when the view started)",
-                      "text/plain");
+      res.set_content(
+          "wrong or missing token (X-RTHS-Token): open the address printed when the view started, "
+          "the one with ?token=",
+          "text/plain");
       return;
     }
     ++stop_requests_;
@@ -305,10 +356,16 @@ std::string ViewServer::url() const {
   return "http://" + options_.address.host + ":" + std::to_string(port_) + "/";
 }
 
+std::string ViewServer::page_url() const {
+  return options_.allow_stop ? url() + "?token=" + options_.token : url();
+}
+
 nlohmann::json ViewServer::counters() const {
   return {{"refused", refused_.load()},
           {"not_found", not_found_.load()},
           {"bad_token", bad_token_.load()},
+          {"bad_host", bad_host_.load()},
+          {"cross_origin", cross_origin_.load()},
           {"streams_open", streams_.load()},
           {"streams_served", streams_served_.load()},
           {"streams_refused", streams_refused_.load()},

@@ -14,8 +14,17 @@
 //                      by every client, rebuilt at most once per snapshot_period (SnapshotCache),
 //                      so clients looping on it cannot take the feed's lock more often than that
 //   GET  /api/health   the counters below and the options the page needs (stop enabled, mode)
-//   POST /api/stop     only when allow_stop: calls on_stop once ("HOLD then STOP" is the caller's);
-//                      with a token, the request must carry it (header X-RTHS-Token); else 403.
+//   POST /api/stop     only when allow_stop, and only with the run's token in the X-RTHS-Token
+//                      header (compared in constant time; else 403, counted bad_token): calls
+//                      on_stop once ("HOLD then STOP" is the caller's). The token is always
+//                      needed, loopback included: any web page the user visits may POST to
+//                      127.0.0.1, but only the person handed page_url() knows the token.
+// Every request, before its route: the Host header must name the address served with its port
+// (127.0.0.1, localhost, [::1], the bound host, or the address the connection reached when bound
+// to 0.0.0.0); an Origin header, when sent, must be http:// and that same host:port. Else 403,
+// counted (bad_host, cross_origin): a page of another origin, or a name of its own rebound to
+// 127.0.0.1 (DNS rebinding), can neither read the run nor press stop. So the view answers to its
+// address, never to a host name (http://lab-pc:8080/ is refused; http://10.0.0.5:8080/ is not).
 // Bad input: a malformed request line or header, a body over 4 KiB, an unknown path or method is
 // refused (4xx) and counted; none of it touches the feed.
 // Connections: a RequestGate (view/request_gate.h) holds each until its whole request has arrived
@@ -53,7 +62,8 @@ struct ListenAddress {
 // Throws std::invalid_argument naming `flag`, the value and what is allowed.
 ListenAddress parse_listen_address(const std::string& text, const std::string& flag = "--view");
 
-// 32 hex digits from the system's random source.
+// 32 hex digits (128 bits) from the kernel's random source (getrandom). Throws
+// std::runtime_error when it has none.
 std::string make_token();
 
 struct ServerOptions {
@@ -62,7 +72,7 @@ struct ServerOptions {
   std::filesystem::path uplot_dir;  // uPlot.iife.min.js, uPlot.min.css; empty: the build's npm copy
   std::string mode = "live";        // "live" (a running test) or "replay" (a finished record)
   bool allow_stop = false;
-  std::string token;  // required by /api/stop when non-empty
+  std::string token;  // what /api/stop needs; empty with allow_stop: one made here (make_token)
   std::function<void()> on_stop;
   int max_streams = 4;
   std::chrono::milliseconds update_period{33};
@@ -74,14 +84,17 @@ struct ServerOptions {
 class ViewServer {
  public:
   // Loads the page's files and starts listening. Throws std::runtime_error naming the file or
-  // the address when it cannot.
+  // the address when it cannot, std::invalid_argument for a stop token under 16 characters.
   ViewServer(const Feed& feed, ServerOptions options);
   ~ViewServer();
   ViewServer(const ViewServer&) = delete;
   ViewServer& operator=(const ViewServer&) = delete;
 
   int port() const { return port_; }
-  std::string url() const;
+  std::string url() const;  // http://HOST:PORT/
+  // What to open: url(), and with allow_stop its "?token=..." (the page sends it with a stop).
+  std::string page_url() const;
+  const std::string& token() const { return options_.token; }
   nlohmann::json counters() const;
   bool stop_requested() const { return stop_requested_.load(); }
   // Gives open streams up to `linger` to send the feed's last state, then stops.
@@ -90,6 +103,9 @@ class ViewServer {
  private:
   void routes();
   void stream(httplib::Server& server);
+  // Why a request is not for this server (its Host or Origin), or empty when it is.
+  std::string foreign(const std::string& host, const std::string& origin,
+                      const std::string& local_address);
   const Feed& feed_;
   ServerOptions options_;
   std::map<std::string, std::pair<std::string, std::string>> files_;  // path -> (type, bytes)
@@ -100,8 +116,9 @@ class ViewServer {
   int port_ = 0;
   std::atomic<bool> stopping_{false}, stop_requested_{false};
   std::atomic<int> streams_{0};
-  std::atomic<std::uint64_t> refused_{0}, not_found_{0}, bad_token_{0}, streams_refused_{0},
-      streams_dropped_{0}, streams_served_{0}, updates_sent_{0}, stop_requests_{0};
+  std::atomic<std::uint64_t> refused_{0}, not_found_{0}, bad_token_{0}, bad_host_{0},
+      cross_origin_{0}, streams_refused_{0}, streams_dropped_{0}, streams_served_{0},
+      updates_sent_{0}, stop_requests_{0};
 };
 
 }  // namespace rths::view

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <cctype>
 #include <cstdlib>
 #include <fstream>
 #include <set>
@@ -71,6 +72,58 @@ TEST(RunSecret, AFileOthersMayReadOrThatHoldsNoSecretIsRefusedByName) {
   write_run_secret_file(two_lines, generate_run_secret() + "\n" + generate_run_secret());
   EXPECT_THAT(message_of({two_lines, false, false}), HasSubstr("64 hex characters"));
   EXPECT_THAT(message_of({dir / "missing", false, false}), HasSubstr("cannot read"));
+}
+
+TEST(RunSecret, ANamedPipeOrADirectoryIsRefusedByItsTypeWithoutBeingOpened) {
+  const auto dir = test::fresh_dir("secret_kind");
+  std::filesystem::create_directories(dir);
+  const auto pipe = dir / "run.secret";
+  ASSERT_EQ(::mkfifo(pipe.c_str(), 0600), 0);
+  // Opened for reading, a pipe with no writer blocks: this returns only if it never is.
+  EXPECT_THAT(message_of({pipe, false, false}),
+              testing::AllOf(HasSubstr(pipe.string()), HasSubstr("named pipe"),
+                             HasSubstr("not a regular file")));
+  const auto folder = dir / "folder";
+  std::filesystem::create_directories(folder);
+  ::chmod(folder.c_str(), 0700);
+  EXPECT_THAT(message_of({folder, false, false}),
+              testing::AllOf(HasSubstr(folder.string()), HasSubstr("directory")));
+}
+
+// The secret `text` written to a fresh 0600 file, and what reading it says.
+std::string file_verdict(const std::string& name, const std::string& text) {
+  const auto dir = test::fresh_dir("secret_form_" + name);
+  std::filesystem::create_directories(dir);
+  write_run_secret_file(dir / "run.secret", text);
+  return message_of({dir / "run.secret", false, false});
+}
+
+TEST(RunSecret, UpperCaseAndLowEntropySecretsAreRefusedFromAFileAndFromTheEnvironment) {
+  const std::string drawn = generate_run_secret();
+  std::string upper = drawn, mixed = drawn, seven = drawn;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  mixed[drawn.find_first_of("abcdef")] = upper[drawn.find_first_of("abcdef")];
+  for (char& c : seven) c = static_cast<char>('0' + (c % 7));  // 0-6 only, no period
+  EXPECT_THAT(file_verdict("upper", upper), HasSubstr("upper case"));
+  EXPECT_THAT(file_verdict("mixed", mixed), HasSubstr("upper case"));
+  EXPECT_THAT(file_verdict("zero", std::string(64, '0')), HasSubstr("uses 1 different hex digits"));
+  EXPECT_THAT(file_verdict("seven", seven), HasSubstr("different hex digits"));
+  std::string beef, eight, counting;
+  for (int i = 0; i < 8; ++i) beef += "deadbeef";
+  for (int i = 0; i < 8; ++i) eight += "a1b2c3d4";
+  for (int i = 0; i < 4; ++i) counting += "0123456789abcdef";
+  EXPECT_THAT(file_verdict("beef", beef), HasSubstr("uses 5 different hex digits"));
+  EXPECT_THAT(file_verdict("eight", eight), HasSubstr("repeats its first 8 digits"));
+  EXPECT_THAT(file_verdict("counting", counting), HasSubstr("repeats its first 16 digits"));
+  EXPECT_THAT(file_verdict("half", drawn.substr(0, 32) + drawn.substr(0, 32)),
+              HasSubstr("repeats its first 32 digits"));
+  EXPECT_EQ(file_verdict("drawn", drawn), "(no error)");
+  clear_environment();
+  ::setenv(kSecretEnv, upper.c_str(), 1);
+  EXPECT_THAT(message_of({}), testing::AllOf(HasSubstr(kSecretEnv), HasSubstr("upper case")));
+  ::setenv(kSecretEnv, std::string(64, '0').c_str(), 1);
+  EXPECT_THAT(message_of({}), testing::AllOf(HasSubstr(kSecretEnv), HasSubstr("uses 1")));
+  clear_environment();
 }
 
 TEST(RunSecret, TheEnvironmentGivesItOnceAndTheFileOptionComesFirst) {

@@ -1,5 +1,6 @@
 // The memory a run keeps, checked before it is allocated (study/memory_budget.h), and a motion
-// file too large to be a record refused by its size, both named instead of std::bad_alloc.
+// file larger than its reading may hold refused by its size before it is read
+// (study/motion_files.h), both named instead of std::bad_alloc.
 #include "study/memory_budget.h"
 
 #include <gmock/gmock.h>
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <functional>
 
+#include "study/motion_files.h"
 #include "study/study.h"
 
 namespace rths::core {
@@ -30,7 +32,12 @@ std::string refusal(const std::function<void()>& f) {
 
 // Sets RTHS_MEMORY_LIMIT for one test and clears it after.
 struct MemoryLimit {
-  explicit MemoryLimit(const char* bytes) { ::setenv("RTHS_MEMORY_LIMIT", bytes, 1); }
+  explicit MemoryLimit(const char* bytes) {
+    if (*bytes)
+      ::setenv("RTHS_MEMORY_LIMIT", bytes, 1);
+    else
+      ::unsetenv("RTHS_MEMORY_LIMIT");
+  }
   ~MemoryLimit() { ::unsetenv("RTHS_MEMORY_LIMIT"); }
 };
 
@@ -62,18 +69,74 @@ TEST(MemoryBudget, AMicrosecondStepOverTheRecordIsRefusedBeforeAnythingIsAllocat
                              HasSubstr("more than the memory limit")));
 }
 
-TEST(MemoryBudget, AMotionFileFarBeyondAnyRecordIsRefusedByItsSize) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("rths_memory_budget_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  const auto huge = dir / "huge.AT2";
-  std::ofstream(huge) << "x";
-  std::filesystem::resize_file(huge, 300ull << 20);  // sparse: costs no disk
+// A fresh folder for one test's files, removed with it.
+struct Scratch {
+  explicit Scratch(const std::string& name)
+      : dir(std::filesystem::temp_directory_path() /
+            ("rths_memory_budget_" + name + "_" + std::to_string(getpid()))) {
+    std::filesystem::create_directories(dir);
+  }
+  ~Scratch() { std::filesystem::remove_all(dir); }
+  // A file of `bytes` holding "x" then zeros: sparse, so it costs no disk and no time to make,
+  // and read, it would be refused as binary data, not by its size.
+  std::filesystem::path sparse(const std::string& name, std::uintmax_t bytes) const {
+    std::ofstream(dir / name) << "x";
+    std::filesystem::resize_file(dir / name, bytes);
+    return dir / name;
+  }
+  std::filesystem::path dir;
+};
+
+TEST(MemoryBudget, A255MiBMotionFileIsRefusedByItsSizeBeforeAByteOfItIsRead) {
+  const Scratch scratch("motion_255");
+  const auto huge = scratch.sparse("huge.AT2", 255ull << 20);
   config::Study study = load_study(kConfigs / "paper_frame.textproto");
   study.mutable_motion()->set_path(huge.string());
-  EXPECT_THAT(refusal([&] { prepare_study(study, kConfigs); }),
-              HasSubstr("314572800 bytes, more than the 268435456 a motion file may have"));
-  std::filesystem::remove_all(dir);
+  for (const char* cap : {"4294967296", ""}) {  // a 4 GiB cap (82 MiB of file), none (128 MiB)
+    const MemoryLimit limit(cap);
+    const std::string limit_bytes = std::to_string(motion_file_limit_bytes());
+    const std::string why = refusal([&] { prepare_study(study, kConfigs); });
+    EXPECT_THAT(why, testing::AllOf(HasSubstr(huge.string()),
+                                    HasSubstr("267386880 bytes (255.0 MiB), more than the " +
+                                              limit_bytes + " bytes"),
+                                    HasSubstr("refused before reading it")))
+        << cap;
+    EXPECT_THAT(why, testing::Not(HasSubstr("binary"))) << "the file was read: " << why;
+    // Each reader sizes it itself, whoever calls it.
+    EXPECT_THAT(refusal([&] { read_at2(huge); }), HasSubstr("267386880 bytes"));
+    EXPECT_THAT(refusal([&] { read_columns(huge, 0.01, 1.0); }), HasSubstr("267386880 bytes"));
+    EXPECT_THAT(refusal([&] { is_at2_file(huge); }), HasSubstr("267386880 bytes"));
+  }
+  {
+    const MemoryLimit limit("4294967296");
+    EXPECT_EQ(motion_file_limit_bytes(), 4294967296ull / kMotionReadBytesPerFileByte);
+  }
+  EXPECT_LE(motion_file_limit_bytes(), kMaxMotionFileBytes);
+}
+
+TEST(MemoryBudget, AMotionFileIsHeldToWhatTheMemoryLimitCanReadAndANormalOneStillReads) {
+  const Scratch scratch("motion_budget");
+  const auto motion = scratch.dir / "long.txt";
+  {
+    std::ofstream out(motion);
+    for (int i = 0; i < 300000; ++i) out << (i % 7) * 0.001 << "\n";  // about 1.8 MiB
+  }
+  const auto bytes = std::filesystem::file_size(motion);
+  {
+    const MemoryLimit limit("52428800");  // 50 MiB: reading may take 1 MiB of file
+    EXPECT_EQ(motion_file_limit_bytes(), 1048576u);
+    EXPECT_THAT(refusal([&] { read_columns(motion, 0.01, 1.0); }),
+                testing::AllOf(HasSubstr(std::to_string(bytes) + " bytes"),
+                               HasSubstr("1048576 bytes (1.0 MiB)"),
+                               HasSubstr("memory limit of 50.0 MiB")));
+  }
+  const MemoryLimit limit("1073741824");  // 1 GiB
+  const GroundMotion read = read_columns(motion, 0.01, 1.0);
+  EXPECT_EQ(read.acceleration.size(), 300000u);
+  EXPECT_DOUBLE_EQ(read.acceleration[6], 0.006);
+  const GroundMotion record = read_at2(std::filesystem::path(RTHS_DATA_DIR) / "ground_motions" /
+                                       "elcentro_1940_ns_peknold.AT2");
+  EXPECT_EQ(record.acceleration.size(), 1559u);
 }
 
 }  // namespace

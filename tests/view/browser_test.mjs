@@ -326,8 +326,20 @@ test('real time over DDS: the stop button stops the run, HOLD then STOP, "stoppe
   const dir = path.join(OUT, 'stop');
   const { child, url, log, refused } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 214 }), 214, ['--view-stop']);
   if (refused) return t.skip(refused);
-  const page = await open(url + '?fps=2');
+  // The stop's token: made by rths launch and printed in the address to open (loopback too).
+  const token = (child.output.match(/live view of each case at \S+\?token=([0-9a-f]{32}) /) || [])[1];
+  assert.ok(token, 'rths launch printed no stop token: ' + child.output);
+  const page = await open(url + '?token=' + token + '&fps=2');
   await until('step 1000 on the page', async () => (await step(page)) > 1000);
+  assert.ok(!page.url().includes('token'), 'the token is taken out of the address bar: ' + page.url());
+  // Another origin (localhost is not 127.0.0.1 to the browser) posting to the stop, as any
+  // web page may: refused, and the run goes on.
+  const other = await open(url.replace('127.0.0.1', 'localhost'));
+  await view(other, target => fetch(target + 'api/stop', { method: 'POST', mode: 'no-cors' }).catch(() => null), url);
+  const health = await view(page, () => fetch('/api/health').then(r => r.json()));
+  assert.equal(health.counters.cross_origin, 1, JSON.stringify(health.counters));
+  assert.equal(health.counters.stop_requests, 0, JSON.stringify(health.counters));
+  await other.close();
   const slowdown = await checkDrawRate(page, 2);
   if (slowdown === null) return t.skip(endedFirst('the draw rate could be seen'));
   if (slowdown > kMaxSlowdown) return t.skip(starved(slowdown));

@@ -98,7 +98,7 @@ TEST(ViewServer, ServesThePageFromAFixedListAndCountsWhatItRefuses) {
   EXPECT_EQ(server.counters()["refused"], 2);
 }
 
-TEST(ViewServer, StopIsOffUnlessAskedAndThenNeedsTheTokenWhenOneIsSet) {
+TEST(ViewServer, StopIsOffUnlessAskedAndThenNeedsItsToken) {
   Feed feed;
   std::atomic<int> stops{0};
   ServerOptions options;
@@ -174,7 +174,8 @@ TEST(ViewServer, AClientThatNeverReadsIsDroppedAndCountedAndTheFeedNeverWaits) {
   addr.sin_port = htons(static_cast<std::uint16_t>(server.port()));
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-  const std::string get = "GET /api/stream HTTP/1.1\r\nHost: x\r\n\r\n";
+  const std::string get =
+      "GET /api/stream HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(server.port()) + "\r\n\r\n";
   ASSERT_EQ(write(fd, get.data(), get.size()), static_cast<ssize_t>(get.size()));
   const auto start = std::chrono::steady_clock::now();
   std::int64_t k = 0;
@@ -254,7 +255,7 @@ TEST(ViewServer, IdleAndDrippingClientsLeaveThePageAndTheStopButtonReachable) {
   ASSERT_TRUE(page);
   EXPECT_EQ(page->status, 200);
   EXPECT_NE(page->body.find("/view.js"), std::string::npos);
-  const auto stop = fresh.Post("/api/stop");
+  const auto stop = fresh.Post("/api/stop", {{"X-RTHS-Token", server.token()}}, "", "");
   ASSERT_TRUE(stop);
   EXPECT_EQ(stop->status, 202);
   EXPECT_EQ(stops, 1);

@@ -330,14 +330,30 @@ function connect() {
   };
 }
 
+// The stop's token comes in the address the program printed (?token=..., as Jupyter's does):
+// kept for this tab, so a reload still has it, and taken out of the address bar, so a screen
+// shared or a screenshot does not show it. Without one the page asks for it.
+function stopToken() {
+  const params = new URLSearchParams(location.search);
+  const given = params.get('token');
+  if (given) {
+    sessionStorage.setItem('rths-stop-token', given);
+    params.delete('token');
+    const rest = params.toString();
+    history.replaceState(null, '', location.pathname + (rest ? '?' + rest : '') + location.hash);
+  }
+  return sessionStorage.getItem('rths-stop-token') || '';
+}
+
 async function setupStop() {
+  const token = stopToken();
   V.health = await (await fetch('/api/health')).json();
   if (!V.health.stop_enabled) return;
   $('stop-box').hidden = false;
-  $('token').hidden = !V.health.token_required;
+  $('token').hidden = !V.health.token_required || token !== '';
   $('stop').onclick = async () => {
     if (!confirm('Stop the test? The actuators HOLD, then every node STOPs.')) return;
-    const r = await fetch('/api/stop', { method: 'POST', headers: { 'X-RTHS-Token': $('token').value } });
+    const r = await fetch('/api/stop', { method: 'POST', headers: { 'X-RTHS-Token': token || $('token').value } });
     $('reason').textContent = await r.text();
     if (r.ok) $('stop').disabled = true;
   };
