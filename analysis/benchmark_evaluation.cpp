@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/structure_response.h"
+#include "util/sha256.h"
 #include "util/text_table.h"
 
 namespace rths::analysis {
@@ -21,15 +22,6 @@ std::vector<double> column(const core::Mat& m, Eigen::Index c) {
 
 // Whether two loaded records are one motion: the same dt and the same samples (to 1e-9 of the
 // peak, what a text round trip of the same numbers keeps).
-bool same_motion(const core::GroundMotion& a, const core::GroundMotion& b) {
-  if (a.acceleration.size() != b.acceleration.size() || std::abs(a.dt - b.dt) > 1e-12 * a.dt)
-    return false;
-  const double tolerance = 1e-9 * std::max(a.peak_abs(), b.peak_abs());
-  for (std::size_t i = 0; i < a.acceleration.size(); ++i)
-    if (!(std::abs(a.acceleration[i] - b.acceleration[i]) <= tolerance)) return false;
-  return true;
-}
-
 std::string cell(double value, int decimals = 2) {
   if (std::isnan(value)) return "n/a";
   char buffer[48];
@@ -85,6 +77,57 @@ std::array<double, 9> against_published(const BenchmarkEvaluation& e,
   return out;
 }
 
+namespace {
+
+// Whether the run's motion and structure are those the published values were computed on, by
+// their keys (motion_key, structure_key); why not, naming this run's keys, when they are not.
+void judge_published_key(const config::BenchmarkEvaluation& spec, const config::Study& study,
+                         const std::filesystem::path& base_dir, const core::StructuralModel& whole,
+                         BenchmarkEvaluation& out) {
+  out.run_motion_key = motion_key(core::load_motion(study.motion(), base_dir));
+  out.run_structure_key = structure_key(whole);
+  const std::string keys = "this run's motion sha256 " + out.run_motion_key +
+                           ", structure sha256 " + out.run_structure_key;
+  if (spec.published_motion_sha256().empty() || spec.published_structure_sha256().empty()) {
+    out.published_note =
+        "benchmark.published_motion_sha256 and published_structure_sha256 are not both set: what "
+        "the published values were computed on is unknown, so no case is compared with them (" +
+        keys + ")";
+    return;
+  }
+  out.published_motion_matches = out.run_motion_key == spec.published_motion_sha256();
+  const bool structure = out.run_structure_key == spec.published_structure_sha256();
+  if (!out.published_motion_matches || !structure) {
+    const std::string what =
+        !out.published_motion_matches
+            ? "motion (" + study.motion().path() + ")" +
+                  (structure ? " is not the one" : " and structure are not the ones")
+            : std::string("structure is not the one");
+    out.published_note = "this run's " + what + " the published values were computed on (" + keys +
+                         "; published: motion " + spec.published_motion_sha256() + ", structure " +
+                         spec.published_structure_sha256() +
+                         "): the published values have none for it";
+    out.published_motion_matches = false;
+  }
+}
+
+}  // namespace
+
+std::string motion_key(const core::GroundMotion& motion) {
+  std::vector<double> values{motion.dt};
+  values.insert(values.end(), motion.acceleration.begin(), motion.acceleration.end());
+  return util::bytes_sha256(values.data(), values.size() * sizeof(double));
+}
+
+std::string structure_key(const core::StructuralModel& model) {
+  std::vector<double> values{static_cast<double>(model.dofs())};
+  for (const core::Mat* m : {&model.mass, &model.stiffness})
+    values.insert(values.end(), m->data(), m->data() + m->size());
+  values.insert(values.end(), model.influence.data(),
+                model.influence.data() + model.influence.size());
+  return util::bytes_sha256(values.data(), values.size() * sizeof(double));
+}
+
 std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy& prepared,
                                                       const StudyOutcome& outcome) {
   const config::Study& study = prepared.config;
@@ -104,23 +147,7 @@ std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy&
   out.published.assign(spec.published().begin(), spec.published().end());
   out.published_case = spec.published_case();
   out.published_source = spec.published_source();
-  if (!out.published.empty()) {
-    if (!spec.has_published_motion()) {
-      out.published_note =
-          "benchmark.published_motion is not set: the motion the published values belong to is "
-          "unknown, so no case is compared with them";
-    } else {
-      out.published_motion_matches =
-          same_motion(core::load_motion(study.motion(), prepared.base_dir),
-                      core::load_motion(spec.published_motion(), prepared.base_dir));
-      if (!out.published_motion_matches)
-        out.published_note = "this run's motion (" + study.motion().path() +
-                             ") is not the one the published values were computed with (" +
-                             spec.published_motion().path() +
-                             ", benchmark.published_motion): the published values have none for "
-                             "it";
-    }
-  }
+  if (!out.published.empty()) judge_published_key(spec, study, prepared.base_dir, whole, out);
   const core::LinearResponse reference = core::exact_linear_response(whole, prepared.motion);
   out.j1_search = spec.j1_search() > 0 ? spec.j1_search() : 49 * out.dt;
   // The study's reference case is not judged (in a distributed outcome, where every case is a
@@ -165,7 +192,7 @@ std::string benchmark_table(const BenchmarkEvaluation& e) {
   };
   const auto plain = [](double v) { return cell(v); };
   std::array<double, 9> published{};
-  if (!e.published.empty()) {
+  if (!e.published.empty() && e.published_motion_matches) {
     std::copy(e.published.begin(), e.published.end(), published.begin());
     add("published (" + e.published_case + ")", published, plain);
   }

@@ -6,10 +6,11 @@
 //   the numerical response (every DOF) against the exact linear response of the whole structure
 //   (core::exact_linear_response of M, C, K before the split, same motion and dt).
 // J1 is searched over +-j1_search (default 49 samples, as F4_evaluation.m searches 0..49).
-// Published values (benchmark.published, for benchmark.published_case on
-// benchmark.published_motion) are compared with only for that case, and only when the study's
-// motion is the published one (the same samples at the same dt once loaded and scaled): a
-// compensated case, or a run on another motion, has no published value, which the reports say.
+// Published values (benchmark.published, for benchmark.published_case) are compared with only
+// for that case, and only when the run's motion and structure are those they were computed on,
+// by content: motion_key and structure_key against benchmark.published_motion_sha256 and
+// published_structure_sha256. A compensated case, or a run on another motion or structure, has
+// no published value (no published row is printed), which the reports say, naming the keys.
 // Every criterion is named with its unit and definition (core::criterion_definitions).
 
 #include <array>
@@ -33,8 +34,9 @@ struct BenchmarkEvaluation {
   std::vector<BenchmarkCaseCriteria> cases;
   std::vector<double> published;  // J1 (ms), J2-J9 (%); empty when none
   std::string published_case, published_source;
-  // The study's motion is benchmark.published_motion (false without one).
+  // The run's motion and structure keys are the published ones (false without them).
   bool published_motion_matches = false;
+  std::string run_motion_key, run_structure_key;  // this run's (empty without published values)
   // Why the published values are compared with nowhere (empty when they are for published_case).
   std::string published_note;
   double dt = 0.0;         // s
@@ -42,6 +44,11 @@ struct BenchmarkEvaluation {
   // Whether case i's criteria have published values to be compared with.
   bool compared_with_published(const BenchmarkCaseCriteria& c) const;
 };
+
+// SHA-256 of a motion as run (dt then the samples, m/s^2, as IEEE doubles) and of a structure
+// (n, M, K, iota): what published values are keyed by.
+std::string motion_key(const core::GroundMotion& motion);
+std::string structure_key(const core::StructuralModel& model);
 
 // 100 (J - J_published) / J_published for J2-J9 (%), J1 - J1_published (ms) for J1.
 std::array<double, 9> against_published(const BenchmarkEvaluation& e,

@@ -341,6 +341,18 @@ std::string StudyOutcome::reference_description() const {
   return lag_free_reference ? std::string(kLagFreeReference) : "case '" + reference().name + "'";
 }
 
+namespace {
+
+// The units the record was read in (its file's, else the config's) and one line on it as read.
+void read_motion_facts(const core::PreparedStudy& prepared, StudyOutcome& outcome) {
+  outcome.motion_units = prepared.motion.read_units.empty()
+                             ? core::motion_units_name(prepared.config.motion())
+                             : prepared.motion.read_units;
+  outcome.motion_description = prepared.motion.description;
+}
+
+}  // namespace
+
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options) {
   const config::Study& study = prepared.config;
   if (options.warn)
@@ -352,7 +364,7 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
 
   StudyOutcome outcome;
   outcome.study_name = study.name();
-  outcome.motion_units = core::motion_units_name(study.motion());
+  read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
   const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion);
@@ -389,7 +401,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   const int floors = prepared.base.model.dofs();
   StudyOutcome outcome;
   outcome.study_name = prepared.config.name();
-  outcome.motion_units = core::motion_units_name(prepared.config.motion());
+  read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   CaseOutcome lag_free;
   lag_free.name = "lag_free_in_process";

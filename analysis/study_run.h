@@ -84,7 +84,9 @@ inline constexpr const char* kLagFreeReference = "the lag-free in-process refere
 
 struct StudyOutcome {
   std::string study_name;
-  std::string motion_units;  // units the record was read in: g, m/s2, cm/s2
+  std::string motion_units;  // units the record was read in: g, m/s2, cm/s2, in/s2, mm/s2
+  // The record as read: points, dt, duration, PGA in its units, where they came from.
+  std::string motion_description;
   ResponseSpec response = ResponseSpec::floor(1);
   std::size_t reference_index = 0;
   double lag_free_peak = 0.0;  // m, top floor of the run without any delay stage

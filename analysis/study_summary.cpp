@@ -103,6 +103,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
   return {{"study", outcome.study_name},
           {"measures", error_measures_json()},
           {"motion_units", outcome.motion_units},
+          {"motion", outcome.motion_description},
           {"response", outcome.response.describe()},
           {"reference_case", outcome.reference().name},
           {"reference", outcome.reference_description()},
@@ -164,6 +165,7 @@ std::string study_summary_text(const StudyOutcome& outcome) {
   out << "study: " << outcome.study_name << " (every case against "
       << outcome.reference_description() << "; response: " << outcome.response.describe()
       << " displacement; motion read in " << outcome.motion_units << ")\n";
+  if (!outcome.motion_description.empty()) out << "motion: " << outcome.motion_description << "\n";
   using Align = util::TextTable::Align;
   util::TextTable table({{"case", Align::kLeft, 40},
                          {"delay", Align::kLeft, 28},

@@ -206,7 +206,7 @@ void run_launch(const LaunchArgs& args) {
   if (names.empty())
     for (const auto& c : study.cases()) names.push_back(c.name());
   const std::filesystem::path out = output_folder(args, study);
-  std::filesystem::create_directories(out);
+  claim_output_folder(out, study.name(), args.results.force);
   // Checked before anything starts: the case's lag plus the network's on the actuator's path.
   analysis::warn_past_critical_delay(prepared, names, print_warning);
   const std::filesystem::path platform_file = check_platform_first(prepared, args, out);

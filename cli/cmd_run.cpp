@@ -99,12 +99,12 @@ void run(const RunOptions& o) {
   if (!o.motion_units.empty())
     study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   const core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
-  const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
-
   std::filesystem::path out = o.results.out;
   if (out.empty()) out = study.output().directory();
   if (out.empty())
     out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
+  claim_output_folder(out, study.name(), o.results.force);
+  const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
   write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
   write_benchmark_outputs(prepared, outcome, out, o.results.json);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
@@ -121,9 +121,10 @@ void add_run_command(CLI::App& app) {
                       "output folder (default: the config's output.directory, else out/<name>)",
                       "");
   cmd->add_option("--motion-units", options->motion_units,
-                  "units of the motion record: g | m/s2 | cm/s2 (overrides motion.column_units; "
-                  "AT2 files are in g)")
-      ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
+                  "units of the motion record: g | m/s2 | cm/s2 | in/s2 | mm/s2 (overrides "
+                  "motion.column_units; an AT2 file is read in its header's units, and one that "
+                  "disagrees is refused)")
+      ->check(CLI::IsMember({"g", "m/s2", "cm/s2", "in/s2", "mm/s2"}));
   cmd->add_option("--perturbed", options->perturbed,
                   "also run N perturbed benchmark plants (beta1, beta2, a3, k_e drawn as the "
                   "benchmark draws "

@@ -82,6 +82,7 @@ void run_sdof(const SdofOptions& o) {
                           {"experimental_fraction", o.alpha},
                           {"dt_s", prepared.base.dt},
                           {"motion_units", outcome.motion_units},
+                          {"motion", outcome.motion_description},
                           {"delay_model", o.delay_model},
                           {"delay_s", o.delay},
                           {"integrator", o.integrator},
@@ -117,9 +118,9 @@ void add_sdof_command(CLI::App& app) {
       ->check(in_range(core::Quantity::kDampingRatio));
   cmd->add_option("--motion", o->motion, "ground motion file (PEER AT2 or columns)")->required();
   cmd->add_option("--motion-units", o->motion_units,
-                  "units of the motion record: g | m/s2 | cm/s2 (required for a columns file; AT2 "
-                  "files are in g)")
-      ->check(CLI::IsMember({"g", "m/s2", "cm/s2"}));
+                  "units of the motion record: g | m/s2 | cm/s2 | in/s2 | mm/s2 (required for a "
+                  "columns file; an AT2 file is read in its header's units)")
+      ->check(CLI::IsMember({"g", "m/s2", "cm/s2", "in/s2", "mm/s2"}));
   cmd->add_option("--scale", o->scale, "scale factor on the motion")
       ->check(in_range(core::Quantity::kMotionScale));
   cmd->add_option("--motion-dt", o->motion_dt,

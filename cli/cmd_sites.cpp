@@ -56,6 +56,7 @@ deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPl
                            : std::filesystem::path("out") /
                                  ("sites_" + std::filesystem::path(o.config).stem().string());
   if (!o.programs.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.programs.bin_dir);
+  claim_output_folder(options.output_dir, plan.study.name(), o.results.force);
   ProgressReporter progress("sites", "runs", !o.results.json);
   deploy::SitesRunResult result;
   {

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <future>
 #include <iostream>
 #include <memory>
@@ -293,15 +294,46 @@ std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const
   return "";
 }
 
+namespace {
+
+// The study an output folder holds: its owner file's, else its summary.json's; empty for none.
+std::string folder_owner(const std::filesystem::path& out) {
+  std::ifstream owner(out / kOwnerFile);
+  std::string name;
+  if (owner && std::getline(owner, name)) return name;
+  std::ifstream summary(out / "summary.json");
+  if (!summary) return "";
+  const nlohmann::json j = nlohmann::json::parse(summary, nullptr, false);
+  return j.is_object() && j.contains("study") && j["study"].is_string()
+             ? j["study"].get<std::string>()
+             : "";
+}
+
+}  // namespace
+
+void claim_output_folder(const std::filesystem::path& out, const std::string& study, bool force) {
+  const std::string owner = folder_owner(out);
+  if (!owner.empty() && owner != study && !force)
+    throw ExitError(kExitBadInput, "output folder " + out.string() + " holds study '" + owner +
+                                       "' (its " + kOwnerFile + "), not '" + study +
+                                       "': give another --out, or --force to overwrite it");
+  std::filesystem::create_directories(out);
+  util::AtomicFile owner_file(out / kOwnerFile);
+  owner_file.stream() << study << "\n";
+  owner_file.commit();
+}
+
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format) {
   std::filesystem::create_directories(out);
   const results::Format kind = results::parse_format(format);
   const std::filesystem::path results = out / ("results" + results::extension(kind));
-  for (const std::string& file : analysis::study_plot_files()) {
-    // A folder must not show plots of an earlier run beside this run's CSV.
-    if (!plots) std::filesystem::remove(out / file);
-  }
+  // Plots of an earlier run stay (they may be all a user has of it), named as such.
+  std::string earlier_plots;
+  if (!plots)
+    for (const std::string& file : analysis::study_plot_files())
+      if (std::filesystem::exists(out / file))
+        earlier_plots += (earlier_plots.empty() ? "" : ", ") + file;
   // The figures are drawn (gnuplot processes, waited on by a thread) while this thread writes the
   // results table, so their time overlaps; a failure of either leaves after both are done.
   std::future<void> figures;
@@ -328,6 +360,8 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
               << (plots ? ", displacement.png/.svg, force_displacement.png/.svg, tracking.png/.svg"
                         : "")
               << ", summary.txt, summary.json\n";
+    if (!earlier_plots.empty())
+      std::cout << "not redrawn (--no-plots), from an earlier run: " << earlier_plots << "\n";
   }
 }
 
@@ -367,7 +401,9 @@ void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::stri
                   "results file: csv (results.csv), mat (MATLAB) or h5 (HDF5)" + table_note)
       ->check(CLI::IsMember({"csv", "mat", "h5"}));
   cmd->add_flag("--no-plots", options.no_plots,
-                "skip the PNG plots (and remove those of an earlier run)");
+                "skip the plots (those of an earlier run stay, named in the summary)");
+  cmd->add_flag("--force", options.force,
+                "write into an output folder that holds another study's results (overwriting)");
   cmd->add_flag("--allow-unstable", options.allow_unstable,
                 "a diverged case does not fail the run (exit 0); the summary still says diverged");
   cmd->add_flag("--json", options.json, "print the summary as JSON");

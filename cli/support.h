@@ -54,7 +54,7 @@ void print_warning(const std::string& message);
 struct ResultsOptions {
   std::string out;
   std::string format = "csv";
-  bool no_plots = false, json = false, allow_unstable = false;
+  bool no_plots = false, json = false, allow_unstable = false, force = false;
 };
 void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::string& out_help,
                          const std::string& table_note);
@@ -89,8 +89,15 @@ std::optional<std::string> closest(const std::string& word,
 // message, or empty when the words are known.
 std::string suggest_for_unknown(const CLI::App& app, int argc, const char* const* argv);
 
-// results.csv and the plots (drawn at once; stale plots removed when plots are off), then
-// summary.json/.txt; prints the summary (JSON or text).
+// An output folder belongs to the study that first wrote it: its OUTPUT_OWNER file (kOwnerFile)
+// names the study, or, in a folder written before that file, its summary.json's "study". Another
+// study's folder is refused (ExitError kExitBadInput naming both studies, the folder and
+// --force) unless `force`; then, or when the folder is new or this study's, the study claims it.
+inline constexpr const char* kOwnerFile = ".rths-study";
+void claim_output_folder(const std::filesystem::path& out, const std::string& study, bool force);
+
+// results.csv and the plots (drawn at once; with plots off, plots of an earlier run are left in
+// place and the summary names them), then summary.json/.txt; prints the summary (JSON or text).
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format = "csv");
 // A study with a benchmark section: J1-J9 of its cases (analysis::evaluate_benchmark) written to

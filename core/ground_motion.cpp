@@ -30,6 +30,8 @@ GroundMotion resampled(const GroundMotion& motion, double dt) {
   }
   GroundMotion out;
   out.name = motion.name;
+  out.read_units = motion.read_units;
+  out.description = motion.description;
   out.dt = dt;
   const std::size_t n = motion.acceleration.size();
   if (n == 0) return out;

@@ -15,6 +15,11 @@ struct GroundMotion {
   std::string name;                  // file stem or header title
   double dt = 0.0;                   // s, uniform sample spacing
   std::vector<double> acceleration;  // m/s^2, sample i at time i * dt
+  // As read, for reports (empty when made in code): the units its values were in ("g", "cm/s2",
+  // ...) and one line on the record as read: points, step, duration, PGA, where its units came
+  // from. Scaling, truncation and resampling keep both.
+  std::string read_units{};
+  std::string description{};
 
   double duration() const { return dt * static_cast<double>(acceleration.size()); }
   double peak_abs() const;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -47,7 +49,19 @@ std::string units_name(config::GroundMotion::Units units) {
   switch (units) {
     case config::GroundMotion::M_PER_S2: return "m/s2";
     case config::GroundMotion::CM_PER_S2: return "cm/s2";
+    case config::GroundMotion::IN_PER_S2: return "in/s2";
+    case config::GroundMotion::MM_PER_S2: return "mm/s2";
     default: return "g";
+  }
+}
+
+double units_to_si(config::GroundMotion::Units units) {
+  switch (units) {
+    case config::GroundMotion::M_PER_S2: return 1.0;
+    case config::GroundMotion::CM_PER_S2: return 0.01;
+    case config::GroundMotion::IN_PER_S2: return 0.0254;
+    case config::GroundMotion::MM_PER_S2: return 0.001;
+    default: return kGravity;
   }
 }
 
@@ -55,12 +69,65 @@ config::GroundMotion::Units units_from_name(const std::string& name) {
   if (name == "g") return config::GroundMotion::G;
   if (name == "m/s2" || name == "m/s^2") return config::GroundMotion::M_PER_S2;
   if (name == "cm/s2" || name == "cm/s^2" || name == "gal") return config::GroundMotion::CM_PER_S2;
-  throw std::invalid_argument("unknown motion units '" + name + "': use g, m/s2 or cm/s2");
+  if (name == "in/s2" || name == "in/s^2") return config::GroundMotion::IN_PER_S2;
+  if (name == "mm/s2" || name == "mm/s^2") return config::GroundMotion::MM_PER_S2;
+  throw std::invalid_argument("unknown motion units '" + name +
+                              "': use g, m/s2, cm/s2, in/s2 or mm/s2");
 }
 
 std::string motion_units_name(const config::GroundMotion& motion) {
   return motion.has_column_units() ? units_name(motion.column_units()) : "g";
 }
+
+namespace {
+
+// The units an AT2 file is read in: its header's, else the config's, else g by the format; a
+// header and a config that disagree are refused naming both.
+struct ReadUnits {
+  std::string name;
+  double to_si = kGravity;
+  std::string source;
+};
+
+ReadUnits at2_units(const config::GroundMotion& motion, const std::filesystem::path& path,
+                    const std::string& what) {
+  const std::optional<StatedUnits> stated = at2_stated_units(path);
+  if (stated) {
+    if (motion.has_column_units() && units_name(motion.column_units()) != stated->name)
+      throw std::invalid_argument(what + ": its AT2 header states " + stated->name + " ('" +
+                                  stated->line + "') but motion.column_units (--motion-units) " +
+                                  "says " + units_name(motion.column_units()) +
+                                  "; drop one or make them agree");
+    return {stated->name, stated->to_si, "the AT2 header: '" + stated->line + "'"};
+  }
+  if (motion.has_column_units())
+    return {units_name(motion.column_units()), units_to_si(motion.column_units()),
+            "motion.column_units; the AT2 header states none"};
+  return {"g", kGravity, "the AT2 format; its header states none"};
+}
+
+ReadUnits column_units(const config::GroundMotion& motion, const std::string& what) {
+  if (!motion.has_column_units())
+    throw std::invalid_argument(
+        what +
+        " is a columns file, whose numbers carry no unit: give "
+        "motion.column_units (G, M_PER_S2, CM_PER_S2, IN_PER_S2 or MM_PER_S2; --motion-units "
+        "g|m/s2|cm/s2|in/s2|mm/s2)");
+  return {units_name(motion.column_units()), units_to_si(motion.column_units()),
+          "motion.column_units"};
+}
+
+std::string describe_read(const GroundMotion& record, const ReadUnits& units) {
+  std::ostringstream out;
+  out << std::setprecision(4) << record.acceleration.size() << " points at dt " << record.dt
+      << " s (" << record.duration() << " s), PGA " << record.peak_abs() / units.to_si << " "
+      << units.name;
+  if (units.name != "g") out << " = " << record.peak_abs() / kGravity << " g";
+  out << "; values in " << units.name << " (" << units.source << ")";
+  return out.str();
+}
+
+}  // namespace
 
 GroundMotion load_motion(const config::GroundMotion& motion,
                          const std::filesystem::path& base_dir) {
@@ -76,34 +143,25 @@ GroundMotion load_motion(const config::GroundMotion& motion,
   bool at2 = motion.format() == config::GroundMotion::AT2;
   if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
   const std::string what = "motion '" + path.string() + "'";
-  if (at2 && motion.has_column_units() && motion.column_units() != config::GroundMotion::G) {
-    throw std::invalid_argument(what +
-                                " is a PEER AT2 file, whose values are in g by its format; "
-                                "motion.column_units (--motion-units) " +
-                                units_name(motion.column_units()) + " contradicts it");
-  }
-  if (!at2 && !motion.has_column_units()) {
-    throw std::invalid_argument(
-        what +
-        " is a columns file, whose numbers carry no unit: give "
-        "motion.column_units (G, M_PER_S2 or CM_PER_S2; --motion-units g|m/s2|cm/s2)");
-  }
-  double to_si = kGravity;
-  if (motion.column_units() == config::GroundMotion::M_PER_S2) to_si = 1.0;
-  if (motion.column_units() == config::GroundMotion::CM_PER_S2) to_si = 0.01;
-  GroundMotion record = at2 ? read_at2(path) : read_columns(path, motion.column_dt(), to_si);
+  const ReadUnits units = at2 ? at2_units(motion, path, what) : column_units(motion, what);
+  GroundMotion record =
+      at2 ? read_at2(path, units.to_si) : read_columns(path, motion.column_dt(), units.to_si);
   const double peak = record.peak_abs();
   if (!(peak <= kMaxPeakGroundAcceleration)) {
     std::ostringstream message;
-    message << what << ": peak acceleration " << peak / kGravity << " g read as "
-            << (at2 ? std::string("g") : units_name(motion.column_units()))
-            << " is beyond any recorded earthquake (under 4 g); are the units right "
+    message << what << ": peak acceleration " << peak / kGravity << " g read as " << units.name
+            << " (" << units.source
+            << ") is beyond any recorded earthquake (under 4 g); are the units right "
                "(motion.column_units, --motion-units)?";
     throw std::invalid_argument(message.str());
   }
+  record.read_units = units.name;
+  record.description = describe_read(record, units);
   if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
   if (motion.scale() > 0 && motion.scale() != 1.0)
     record = scaled(std::move(record), motion.scale());
+  if (motion.duration() > 0 && motion.duration() < record.duration())
+    record.description += "; the first " + format_number(motion.duration()) + " s used";
   return truncated(std::move(record), motion.duration());
 }
 

@@ -15,16 +15,21 @@ namespace rths::core {
 inline constexpr double kMaxPeakGroundAcceleration =
     5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
 
-// Reads the record in SI. Throws std::invalid_argument when a columns file has no column_units,
-// an AT2 file is given a unit other than G, or the peak exceeds kMaxPeakGroundAcceleration (a
-// record in cm/s^2 read as g or m/s^2).
+// Reads the record in SI, with its read_units and description (core/ground_motion.h). An AT2
+// file is read in the units its header states (at2_stated_units, study/motion_files.h), else
+// column_units, else g. Throws std::invalid_argument when a columns file has no column_units, an
+// AT2 header and column_units disagree (naming both), or the peak exceeds
+// kMaxPeakGroundAcceleration (a record in cm/s^2 read as g or m/s^2).
 GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir);
-// "g", "m/s2" or "cm/s2": what a record in these units is called on the command line and in
-// summaries.
+// "g", "m/s2", "cm/s2", "in/s2" or "mm/s2": what a record in these units is called on the
+// command line and in summaries.
 std::string units_name(config::GroundMotion::Units units);
-// Parses "g", "m/s2" or "cm/s2" (also "m/s^2", "cm/s^2"); throws naming the accepted forms.
+// m/s^2 per unit.
+double units_to_si(config::GroundMotion::Units units);
+// Parses those names (also "m/s^2", "cm/s^2", "gal", ...); throws naming the accepted forms.
 config::GroundMotion::Units units_from_name(const std::string& name);
-// The units of the study's record as read: its column_units, or g for an AT2 file.
+// The units the config names: its column_units, or g (a loaded record's read_units is what was
+// used).
 std::string motion_units_name(const config::GroundMotion& motion);
 
 }  // namespace rths::core

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -142,7 +143,69 @@ void require_motion_file_size(const std::filesystem::path& path) {
   throw std::invalid_argument(message.str());
 }
 
-GroundMotion read_at2(const std::filesystem::path& path) {
+namespace {
+
+struct UnitSpelling {
+  const char* text;
+  const char* name;
+  double to_si;
+};
+
+// Longer spellings first, so that "CM/SEC/SEC" is not read as its tail "M/SEC/SEC".
+constexpr UnitSpelling kUnitSpellings[] = {
+    {"CM/SEC/SEC", "cm/s2", 0.01}, {"CM/SEC^2", "cm/s2", 0.01},     {"CM/SEC**2", "cm/s2", 0.01},
+    {"CM/SEC2", "cm/s2", 0.01},    {"CM/S/S", "cm/s2", 0.01},       {"CM/S^2", "cm/s2", 0.01},
+    {"CM/S**2", "cm/s2", 0.01},    {"CM/S2", "cm/s2", 0.01},        {"MM/SEC/SEC", "mm/s2", 0.001},
+    {"MM/SEC^2", "mm/s2", 0.001},  {"MM/S/S", "mm/s2", 0.001},      {"MM/S^2", "mm/s2", 0.001},
+    {"MM/S2", "mm/s2", 0.001},     {"IN/SEC/SEC", "in/s2", 0.0254}, {"IN/SEC^2", "in/s2", 0.0254},
+    {"IN/S/S", "in/s2", 0.0254},   {"IN/S^2", "in/s2", 0.0254},     {"IN/S2", "in/s2", 0.0254},
+    {"M/SEC/SEC", "m/s2", 1.0},    {"M/SEC^2", "m/s2", 1.0},        {"M/SEC**2", "m/s2", 1.0},
+    {"M/SEC2", "m/s2", 1.0},       {"M/S/S", "m/s2", 1.0},          {"M/S^2", "m/s2", 1.0},
+    {"M/S**2", "m/s2", 1.0},       {"M/S2", "m/s2", 1.0},
+};
+
+bool word_at(const std::string& text, std::size_t at, std::size_t length) {
+  const auto letter = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; };
+  return (at == 0 || !letter(text[at - 1])) &&
+         (at + length >= text.size() || !letter(text[at + length]));
+}
+
+bool has_word(const std::string& text, const std::string& word) {
+  for (std::size_t at = text.find(word); at != std::string::npos; at = text.find(word, at + 1))
+    if (word_at(text, at, word.size())) return true;
+  return false;
+}
+
+// The unit one upper-case header line names, if any: a rate spelling anywhere, g or gal only on a
+// line that speaks of units or acceleration (a station's name may hold a lone G).
+std::optional<StatedUnits> units_in_line(const std::string& text, const std::string& line) {
+  for (const UnitSpelling& spelling : kUnitSpellings) {
+    const std::size_t at = text.find(spelling.text);
+    if (at == std::string::npos) continue;
+    if (at > 0 && std::isalpha(static_cast<unsigned char>(text[at - 1]))) continue;
+    return StatedUnits{spelling.name, spelling.to_si, line};
+  }
+  const bool about_units =
+      text.find("UNIT") != std::string::npos || text.find("ACCEL") != std::string::npos;
+  if (!about_units) return std::nullopt;
+  if (has_word(text, "GAL") || has_word(text, "GALS")) return StatedUnits{"cm/s2", 0.01, line};
+  if (has_word(text, "G")) return StatedUnits{"g", kGravity, line};
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<StatedUnits> at2_stated_units(const std::filesystem::path& path) {
+  require_motion_file_size(path);
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
+  std::string line;
+  for (int i = 1; i <= 3 && read_line(in, line); ++i)
+    if (auto units = units_in_line(upper(line), line)) return units;
+  return std::nullopt;
+}
+
+GroundMotion read_at2(const std::filesystem::path& path, double to_si) {
   require_motion_file_size(path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
@@ -181,7 +244,7 @@ GroundMotion read_at2(const std::filesystem::path& path) {
         std::to_string(header.npts - static_cast<long>(motion.acceleration.size())) +
         " missing after line " + std::to_string(last_value_line) + " — truncated file?");
   }
-  for (double& a : motion.acceleration) a *= kGravity;
+  for (double& a : motion.acceleration) a *= to_si;
   return motion;
 }
 
@@ -295,7 +358,9 @@ bool is_at2_file(const std::filesystem::path& path) {
 
 GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
                                 double column_to_si) {
-  return is_at2_file(path) ? read_at2(path) : read_columns(path, column_dt, column_to_si);
+  if (!is_at2_file(path)) return read_columns(path, column_dt, column_to_si);
+  const std::optional<StatedUnits> stated = at2_stated_units(path);
+  return read_at2(path, stated ? stated->to_si : kGravity);
 }
 
 }  // namespace rths::core

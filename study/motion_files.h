@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
+#include <string>
 
 #include "core/ground_motion.h"
 
@@ -32,11 +34,21 @@ void require_motion_file_size(const std::filesystem::path& path);
 // Each reader first calls require_motion_file_size.
 
 // Reads a PEER AT2 file: 4 header lines, the 4th holding NPTS and DT in either of the forms
-// "NPTS=  1559, DT=   .0200 SEC" or "7814    0.0050    NPTS, DT", then values in g in any
-// whitespace-separated layout (8F10.5, 5E15.7, ...). Throws std::invalid_argument (bad input)
-// naming the file and line when the header is malformed, a value does not parse, or fewer than NPTS
-// values are found.
-GroundMotion read_at2(const std::filesystem::path& path);
+// "NPTS=  1559, DT=   .0200 SEC" or "7814    0.0050    NPTS, DT", then values in any
+// whitespace-separated layout (8F10.5, 5E15.7, ...), each multiplied by `to_si` (the units'
+// m/s^2; g by the format). Throws std::invalid_argument (bad input) naming the file and line when
+// the header is malformed, a value does not parse, or fewer or more than NPTS values are found.
+GroundMotion read_at2(const std::filesystem::path& path, double to_si = kGravity);
+
+// The acceleration units an AT2 header states on its first 3 lines ("... IN UNITS OF G",
+// "UNITS: CM/S/S", "ACCEL (CM/SEC/SEC)", ...): the name (g, m/s2, cm/s2, in/s2, mm/s2), its m/s^2
+// and the header line that said it. Empty when no line names a unit. Reads those lines only.
+struct StatedUnits {
+  std::string name;
+  double to_si = kGravity;
+  std::string line;
+};
+std::optional<StatedUnits> at2_stated_units(const std::filesystem::path& path);
 
 // Reads plain text: one column (acceleration; needs dt > 0) or two (time, acceleration; uniform
 // spacing is checked). Lines starting with '#' or that are empty are skipped; a non-numeric first
@@ -46,7 +58,8 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
 // Whether the 4th line mentions NPTS (the AT2 header). Throws when the file cannot be opened.
 bool is_at2_file(const std::filesystem::path& path);
 
-// Chooses AT2 when the 4th line mentions NPTS, otherwise columns.
+// Chooses AT2 when the 4th line mentions NPTS (in the units its header states, else g), otherwise
+// columns.
 GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt = 0.0,
                                 double column_to_si = kGravity);
 

@@ -47,4 +47,12 @@ std::string file_sha256(const std::filesystem::path& path) {
   return hex(digest.data(), size);
 }
 
+std::string bytes_sha256(const void* data, std::size_t size) {
+  std::array<unsigned char, EVP_MAX_MD_SIZE> digest{};
+  unsigned digest_size = 0;
+  if (EVP_Digest(data, size, digest.data(), &digest_size, EVP_sha256(), nullptr) != 1)
+    throw std::runtime_error("SHA-256: libcrypto could not digest");
+  return hex(digest.data(), digest_size);
+}
+
 }  // namespace rths::util

@@ -5,12 +5,15 @@
 //
 //   file_sha256(path)  reads the file in 1 MiB blocks; throws std::invalid_argument naming the
 //                      file when it cannot be opened or read
+//   bytes_sha256(data, size)  of `size` bytes in memory
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
 namespace rths::util {
 
 std::string file_sha256(const std::filesystem::path& path);
+std::string bytes_sha256(const void* data, std::size_t size);
 
 }  // namespace rths::util

@@ -10,7 +10,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -280,6 +282,67 @@ TEST(CliTest, MotionUnitsAreExplicit) {
           " --motion-units m/s2 --exp-fraction 0.3333 --delay 0.002 --json");
   EXPECT_EQ(o.exit_code, 0) << o.output;
   EXPECT_EQ(json_of(o)["motion_units"], "m/s2");
+}
+
+// An output folder belongs to the study that wrote it: a renamed study that would write there is
+// refused unless --force, and --no-plots leaves an earlier run's plots where they are.
+TEST(CliTest, AnOutputFolderIsOwnedByItsStudy) {
+  const auto dir = scratch("owner");
+  const auto study = [&](const std::string& name) {
+    const auto path = dir / (name + ".textproto");
+    std::ofstream(path) << "name: \"" << name
+                        << "\" structure { sdof { period: 0.5 } } motion { path: \"" << kMotion
+                        << "\" duration: 2 } substructuring { experimental_fraction: 0.3 } "
+                           "cases { name: \"reference\" }\n";
+    return path.string();
+  };
+  const std::string out = " --no-plots --out " + (dir / "out").string();
+  ASSERT_EQ(run("run " + study("first") + out).exit_code, 0);
+  std::ofstream(dir / "out" / "displacement.png") << "an earlier run's plot";
+  const Outcome again = run("run " + study("first") + out);
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "displacement.png"));
+  EXPECT_NE(again.output.find("from an earlier run: displacement.png"), std::string::npos)
+      << again.output;
+  const Outcome other = run("run " + study("second") + out);
+  EXPECT_EQ(other.exit_code, 2) << other.output;
+  EXPECT_NE(other.output.find("holds study 'first'"), std::string::npos) << other.output;
+  EXPECT_NE(other.output.find("--force"), std::string::npos) << other.output;
+  EXPECT_EQ(run("run " + study("second") + out + " --force").exit_code, 0);
+  EXPECT_EQ(run("run " + study("first") + out).exit_code, 2);
+}
+
+// A lab's PEER file in cm/s^2 (its header says so) gives the response of its g original; a
+// --motion-units that contradicts the header is bad input, naming both.
+TEST(CliTest, APeerFileInCmPerS2RunsAsItsGOriginal) {
+  const auto dir = scratch("peer_cm");
+  std::ifstream in(kMotion);
+  std::ofstream cm(dir / "elcentro12_cm.AT2");
+  std::string line;
+  for (int i = 1; std::getline(in, line); ++i) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (i <= 4) {
+      cm << (i == 3 ? "ACCELERATION TIME SERIES IN UNITS OF CM/S/S" : line) << "\n";
+      continue;
+    }
+    std::istringstream values(line);
+    for (double g = 0.0; values >> g;) cm << std::setprecision(11) << g * 980.665 << " ";
+    cm << "\n";
+  }
+  cm.close();
+  const std::string sdof = "sdof --period 0.5 --exp-fraction 0.3333 --delay 0.002 --json --motion ";
+  const Outcome in_g = run(sdof + kMotion);
+  const Outcome in_cm = run(sdof + (dir / "elcentro12_cm.AT2").string());
+  ASSERT_EQ(in_g.exit_code, 0) << in_g.output;
+  ASSERT_EQ(in_cm.exit_code, 0) << in_cm.output;
+  EXPECT_EQ(json_of(in_cm)["motion_units"], "cm/s2");
+  const auto peak = [](const nlohmann::json& j) { return j["peak_delayed_m"].get<double>(); };
+  EXPECT_NEAR(peak(json_of(in_cm)), peak(json_of(in_g)), 1e-9 * peak(json_of(in_g)));
+  const Outcome contradicted =
+      run(sdof + (dir / "elcentro12_cm.AT2").string() + " --motion-units g");
+  EXPECT_EQ(contradicted.exit_code, 2) << contradicted.output;
+  EXPECT_NE(contradicted.output.find("header states cm/s2"), std::string::npos)
+      << contradicted.output;
 }
 
 // A motion that is not a text file of numbers is named for what it is, never as a unit problem,
