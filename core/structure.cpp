@@ -1,5 +1,7 @@
 #include "core/structure.h"
 
+#include "core/sparse_structure.h"
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -87,6 +89,7 @@ Mat modal_damping(const Mat& mass, const Mat& stiffness, double zeta) {
 }
 
 double max_omega(const StructuralModel& model) {
+  if (model.is_sparse()) return sparse_max_omega(model.sparse_mass, model.sparse_stiffness);
   return modal_analysis(model.mass, model.stiffness).omega.maxCoeff();
 }
 
