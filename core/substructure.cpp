@@ -31,7 +31,10 @@ HybridPartition::HybridPartition(const HybridPartition& other)
 
 bool HybridPartition::has_numerical(int s) const {
   if (numerical[static_cast<std::size_t>(s)]) return true;
-  return numerical_matrix.size() > 0 && numerical_matrix.row(s).cwiseAbs().maxCoeff() > 0;
+  if (numerical_matrix.size() == 0) return false;
+  for (RowSparseMat::InnerIterator it(numerical_matrix, s); it; ++it)
+    if (it.value() != 0.0) return true;
+  return false;
 }
 
 std::vector<int> HybridPartition::coupled_to(const std::vector<int>& hosted) const {
@@ -39,8 +42,8 @@ std::vector<int> HybridPartition::coupled_to(const std::vector<int>& hosted) con
   for (int s : hosted) {
     needed[static_cast<std::size_t>(s)] = true;
     if (numerical_matrix.size() == 0) continue;
-    for (Eigen::Index j = 0; j < numerical_matrix.cols(); ++j)
-      if (numerical_matrix(s, j) != 0.0) needed[static_cast<std::size_t>(j)] = true;
+    for (RowSparseMat::InnerIterator it(numerical_matrix, s); it; ++it)
+      if (it.value() != 0.0) needed[static_cast<std::size_t>(it.col())] = true;
   }
   std::vector<int> out;
   for (std::size_t s = 0; s < needed.size(); ++s)
@@ -69,7 +72,7 @@ HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen>
   partition.by_dofs = true;
   partition.numerical.resize(static_cast<std::size_t>(n));
   partition.experimental.resize(static_cast<std::size_t>(n));
-  partition.numerical_matrix = stiffness;
+  Mat numerical = stiffness;
   for (DofSpecimen& specimen : specimens) {
     const int d = specimen.dof;
     const std::string name = "experimental DOF " + std::to_string(d + 1);
@@ -83,12 +86,13 @@ HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen>
                                   " N/m must be in (0, K(" + std::to_string(d + 1) + ", " +
                                   std::to_string(d + 1) + ") = " + std::to_string(stiffness(d, d)) +
                                   "]");
-    partition.numerical_matrix(d, d) -= k;
+    numerical(d, d) -= k;
     partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
   }
   for (int d = 0; d < n; ++d)
     if (partition.experimental[static_cast<std::size_t>(d)])
       partition.actuator_storeys.push_back(d);
+  partition.numerical_matrix = numerical.sparseView();  // exact zeros dropped
   return partition;
 }
 
@@ -169,7 +173,7 @@ void StoreyAssembly::tangent(const Vec& storey_tangent, Mat& k) const {
 }
 
 NumericalSubstructure::NumericalSubstructure(
-    std::vector<std::unique_ptr<RestoringForceModel>> storey_models, Mat matrix)
+    std::vector<std::unique_ptr<RestoringForceModel>> storey_models, RowSparseMat matrix)
     : models_(std::move(storey_models)), matrix_(std::move(matrix)) {}
 
 NumericalSubstructure::NumericalSubstructure(const HybridPartition& partition)
@@ -186,7 +190,11 @@ void NumericalSubstructure::trial(const Vec& drift, Vec& shear, Vec* storey_tang
     if (storey_tangent) (*storey_tangent)[s] = state.tangent;
   }
   // Row by row, the same sums in every process (no allocation, no reordering by size).
-  for (Eigen::Index i = 0; i < matrix_.rows(); ++i) shear[i] += matrix_.row(i).dot(drift);
+  for (Eigen::Index i = 0; i < matrix_.outerSize(); ++i) {
+    double sum = 0.0;
+    for (RowSparseMat::InnerIterator it(matrix_, i); it; ++it) sum += it.value() * drift[it.col()];
+    shear[i] += sum;
+  }
 }
 
 void NumericalSubstructure::commit() {

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/sparse_structure.h"
 #include "study/text_columns.h"
 
 namespace rths::core {
@@ -273,6 +274,12 @@ void check_definite(const Mat& m, bool strictly, const std::string& where) {
   }
 }
 
+// A model held sparse: by the inertia of a shifted LDL^T (core/sparse_structure.h), not by a
+// dense eigenproblem.
+void check_definite(const SparseMat& m, bool strictly, const std::string& where) {
+  if (const auto why = check_sparse_definite(m, strictly)) fail(where, *why);
+}
+
 }  // namespace
 
 void check_structural_matrices(const StructuralModel& model, const std::string& field) {
@@ -284,10 +291,17 @@ void check_structural_matrices(const StructuralModel& model, const std::string& 
   check_symmetric(model.mass, field + ".mass");
   check_symmetric(model.stiffness, field + ".stiffness");
   check_symmetric(model.damping, field + ".damping");
-  check_definite(model.mass, true, field + ".mass");
-  check_definite(model.stiffness, false, field + ".stiffness");
-  if (model.damping.cwiseAbs().maxCoeff() > 0)
-    check_definite(model.damping, false, field + ".damping");
+  if (model.is_sparse()) {
+    check_definite(model.sparse_mass, true, field + ".mass");
+    check_definite(model.sparse_stiffness, false, field + ".stiffness");
+    if (model.sparse_damping.nonZeros() > 0)
+      check_definite(model.sparse_damping, false, field + ".damping");
+  } else {
+    check_definite(model.mass, true, field + ".mass");
+    check_definite(model.stiffness, false, field + ".stiffness");
+    if (model.damping.cwiseAbs().maxCoeff() > 0)
+      check_definite(model.damping, false, field + ".damping");
+  }
   if (model.influence.size() != n)
     fail(field + ".influence", "has " + std::to_string(model.influence.size()) +
                                    " entries, the structure " + std::to_string(n) + " DOFs");
@@ -313,6 +327,7 @@ StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
   } else {
     model.influence = Vec::Ones(n);
   }
+  hold_sparse_if_sparse(model);
   check_structural_matrices(model, field);
   return model;
 }
