@@ -11,8 +11,11 @@
 //     before its first step: Rayleigh damping, the stability limit and run_steps to step 0;
 //   N = 300 condensed: a full (dense) K = A A^T + diagonal, as a condensed frame's is, through the
 //     study's path (the fill rule keeps it dense).
-// Every figure is a median over `--repetitions` runs (default 3); the load average is printed
-// before and after, since this machine's cores are shared.
+// Columns: "loop step" is a step of core::run_steps (integrate, restoring force, and the row of
+// every history the loop keeps: u, v, a of every DOF, stored column-major, so a row is n strided
+// writes); "bare step" the integrator and restoring force alone (the coordinator's arithmetic).
+// Every figure is a median over `--repetitions` runs (default 3) of the per-step medians; the
+// load average is printed before and after, since this machine's cores are shared.
 // Usage: sparse_bench [--repetitions R]
 #include <unistd.h>
 
@@ -98,8 +101,30 @@ std::vector<Eigen::Triplet<double>> condensed_stiffness(int n) {
 
 struct Figures {
   double before_first_step = 0.0;  // s
-  double per_step = 0.0;           // s, median over the steps
+  double per_step = 0.0;           // s, median over the loop's steps (histories kept)
+  double bare_step = 0.0;          // s, median of integrate + restoring force alone
+  bool sparse = false;             // the model was held sparse
 };
+
+// The coordinator's step without the loop's histories: integrator and in-process restoring
+// force only, over the motion.
+double bare_step(const rths::core::HybridSetup& setup, const rths::core::GroundMotion& motion) {
+  auto integrator = rths::core::make_integrator(setup.integrator, setup.model, setup.dt);
+  rths::core::HybridRestoring restoring(setup.partition, {}, setup.dt);
+  const Vec mass_iota = rths::core::mass_times(setup.model, setup.model.influence);
+  const auto n = mass_iota.size();
+  Vec load = Vec::Zero(n);
+  integrator->initialize(Vec::Zero(n), Vec::Zero(n), Vec::Zero(n), load);
+  std::vector<double> steps;
+  for (std::size_t k = 1; k < motion.acceleration.size(); ++k) {
+    const auto start = Clock::now();
+    load = -mass_iota * motion.acceleration[k];
+    restoring.set_time(static_cast<double>(k) * setup.dt);
+    integrator->step(load, restoring);
+    steps.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+  }
+  return median(steps);
+}
 
 // Times before_step/after_step: step 0's end marks the first step's start.
 class Timer final : public rths::core::StepHooks {
@@ -114,7 +139,7 @@ class Timer final : public rths::core::StepHooks {
       steps_.push_back(std::chrono::duration<double>(now - step_start_).count());
     return true;
   }
-  Figures figures() const { return {first_, median(steps_)}; }
+  Figures figures() const { return {first_, median(steps_), 0.0, false}; }
 
  private:
   Clock::time_point start_, step_start_;
@@ -152,7 +177,10 @@ Figures study_path(const fs::path& dir) {
   Timer timer(start);
   rths::core::SimulationResult result;
   rths::core::run_steps(setup, prepared.motion, restoring, timer, {}, result);
-  return timer.figures();
+  Figures figures = timer.figures();
+  figures.bare_step = bare_step(setup, prepared.motion);
+  figures.sparse = setup.model.is_sparse();
+  return figures;
 }
 
 // The core path for a model too large to hold densely.
@@ -187,22 +215,28 @@ Figures core_path(int n) {
   Timer timer(start);
   rths::core::SimulationResult result;
   rths::core::run_steps(setup, motion, restoring, timer, {}, result);
-  return timer.figures();
+  Figures figures = timer.figures();
+  figures.bare_step = bare_step(setup, motion);
+  figures.sparse = setup.model.is_sparse();
+  return figures;
 }
 
 Figures repeat(int repetitions, const std::function<Figures()>& run) {
-  std::vector<double> first, step;
+  std::vector<double> first, step, bare;
+  bool sparse = false;
   for (int r = 0; r < repetitions; ++r) {
     const Figures f = run();
     first.push_back(f.before_first_step);
     step.push_back(f.per_step);
+    bare.push_back(f.bare_step);
+    sparse = f.sparse;
   }
-  return {median(first), median(step)};
+  return {median(first), median(step), median(bare), sparse};
 }
 
-void print_row(const char* model, int n, const char* held, const Figures& f) {
-  std::printf("%-26s %7d  %-7s %14.3f %14.2f\n", model, n, held, f.before_first_step * 1e3,
-              f.per_step * 1e6);
+void print_row(const char* model, int n, const Figures& f) {
+  std::printf("%-24s %6d  %-6s %13.1f %13.2f %13.2f\n", model, n, f.sparse ? "sparse" : "dense",
+              f.before_first_step * 1e3, f.per_step * 1e6, f.bare_step * 1e6);
 }
 
 }  // namespace
@@ -216,23 +250,21 @@ int main(int argc, char** argv) {
       fs::temp_directory_path() / ("rths_sparse_bench_" + std::to_string(getpid()));
   std::printf("load average before: %s (1, 5, 15 min; other processes share the cores)\n",
               load_average().c_str());
-  std::printf("%-26s %7s  %-7s %14s %14s\n", "model", "DOFs", "held", "before 1st ms",
-              "per step us");
+  std::printf("%-24s %6s  %-6s %13s %13s %13s\n", "model", "DOFs", "held", "before 1st ms",
+              "loop step us", "bare step us");
   for (int n : {10, 100, 1000}) {
     const fs::path dir = root / std::to_string(n);
     fs::create_directories(dir);
     write_market(dir / "mass.mtx", n, building_mass(n));
     write_market(dir / "stiffness.mtx", n, building_stiffness(n));
-    print_row("shear building (.mtx)", n, rths::core::prefer_sparse(n, 7 * n) ? "sparse" : "dense",
-              repeat(repetitions, [&] { return study_path(dir); }));
+    print_row("shear building (.mtx)", n, repeat(repetitions, [&] { return study_path(dir); }));
   }
-  print_row("shear building (core)", 10000, "sparse",
-            repeat(repetitions, [] { return core_path(10000); }));
+  print_row("shear building (core)", 10000, repeat(repetitions, [] { return core_path(10000); }));
   const fs::path dense_dir = root / "condensed300";
   fs::create_directories(dense_dir);
   write_market(dense_dir / "mass.mtx", 300, building_mass(300));
   write_market(dense_dir / "stiffness.mtx", 300, condensed_stiffness(300));
-  print_row("condensed frame (.mtx)", 300, "dense",
+  print_row("condensed frame (.mtx)", 300,
             repeat(repetitions, [&] { return study_path(dense_dir); }));
   fs::remove_all(root);
   std::printf("load average after: %s\n", load_average().c_str());
