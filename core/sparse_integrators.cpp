@@ -5,8 +5,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/integrators.h"
-
 namespace rths::core {
 namespace {
 
@@ -288,7 +286,9 @@ void require_dense_scheme_fits(IntegratorKind kind, const StructuralModel& model
   const std::string why = kind == IntegratorKind::kExactZoh
                               ? "the matrix exponential of its 2n x 2n state matrix"
                               : "a dense tangent factorised every iteration";
-  throw std::invalid_argument(to_string(kind) + " needs dense matrices (" + why +
+  const std::string name =
+      kind == IntegratorKind::kExactZoh ? "exact-zoh" : "newmark-average-acceleration";
+  throw std::invalid_argument(name + " needs dense matrices (" + why +
                               "): " + (dense_held ? "" : "the model is held sparse only, ") +
                               std::to_string(n) + " DOFs against its limit of " +
                               std::to_string(kDenseSchemeMaxDofs) +

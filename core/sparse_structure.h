@@ -1,7 +1,8 @@
 #pragma once
-// Large, sparse structural models: when a model is held sparse, its lowest and highest modes
-// from a sparse eigensolver (Spectra, Lanczos on Eigen sparse matrices), and the definiteness
-// checks of its matrices, all without an n x n dense problem. Units SI (kg, N s/m, N/m, rad/s).
+// Large, sparse structural models: when a model is held sparse, its lowest modes from a sparse
+// eigensolver (Spectra, Lanczos on Eigen sparse matrices; its highest: core::max_omega) and the
+// definiteness checks of its matrices, all without an n x n dense problem. Units SI (kg, N s/m,
+// N/m, rad/s).
 //
 // The fill rule (hold_sparse_if_sparse): a model is held sparse when n >= kSparseMinDofs and the
 // nonzeros of M + C + K fill at most kSparseMaxFill of n^2. Why:
@@ -16,11 +17,6 @@
 //     dense models: the full dense analysis (core::modal_analysis, every mode, as before); sparse:
 //     shift-invert Lanczos of K phi = lambda M phi about a shift just below 0 (so a free-floating
 //     K, semi-definite, factorises).
-//   sparse_max_omega: sqrt of the largest Ritz value of a plain Lanczos run on M^-1 K in the M
-//     inner product (O(nnz) a step, no n x n matrix), stopped when it moves by less than 1e-10
-//     relative over 50 steps (at most 4000 steps). A Ritz value never exceeds the largest
-//     eigenvalue, so a stable dt is never refused; a 10,000-DOF uniform chain, whose top
-//     eigenvalues are 1e-8 apart, gets omega_max to ~1e-8 (an unstable dt may pass by that).
 //   check_sparse_definite: symmetric positive (semi-)definite by Sylvester's law of inertia: the
 //     LDL^T of A - s I (strictly) or A + s I (semi) with s = 1e-9 ||A||_inf has only positive
 //     pivots. ||A||_inf >= the largest |eigenvalue|, so the tolerance is that of the dense check
@@ -52,7 +48,6 @@ double damping_quadratic(const StructuralModel& model, const Vec& phi);
 
 Modes lowest_modes(const StructuralModel& model, int count);
 Modes sparse_lowest_modes(const SparseMat& mass, const SparseMat& stiffness, int count);
-double sparse_max_omega(const SparseMat& mass, const SparseMat& stiffness);
 
 // Empty when A passes; else the problem ("is not positive definite: ...").
 std::optional<std::string> check_sparse_definite(const SparseMat& a, bool strictly);

@@ -59,7 +59,12 @@ Mat rayleigh_damping(const Mat& mass, const Mat& stiffness, double zeta, int mod
 Mat modal_damping(const Mat& mass, const Mat& stiffness, double zeta);
 
 // Highest natural circular frequency (rad/s); the explicit integrators' stability limit uses it.
-// A sparse model's comes from a Lanczos solve of K phi = omega^2 M phi (core/sparse_structure.h).
+// A dense model's from the dense analysis. A model held sparse: sqrt of the largest Ritz value of
+// a plain Lanczos run on M^-1 K in the M inner product (O(nnz) a step, no n x n matrix; the
+// tridiagonal's largest eigenvalue by bisection), stopped when it moves by less than 1e-10
+// relative over 50 steps (at most 4000 steps). A Ritz value never exceeds the largest
+// eigenvalue, so a stable dt is never refused; a 10,000-DOF uniform chain, whose top eigenvalues
+// are 1e-8 apart, gets omega_max to ~1e-8 (an unstable dt may pass by that).
 double max_omega(const StructuralModel& model);
 
 }  // namespace rths::core
