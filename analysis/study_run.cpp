@@ -12,6 +12,7 @@
 
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
+#include "core/sparse_structure.h"
 #include "study/stability_config.h"
 #include "util/atomic_file.h"
 
@@ -94,15 +95,17 @@ std::vector<ModalSdof> loop_sdofs(const core::HybridSetup& setup, const core::Ma
     const double omega = std::sqrt(k / m);
     return {{1, 2.0 * std::numbers::pi / omega, c / (2.0 * m * omega), sdof_alpha}};
   }
-  const core::Modes modes = core::modal_analysis(model.mass, model.stiffness);
+  // A model held sparse: its lowest modes, as core::check_modal_critical_delay takes them.
+  const int count = model.is_sparse() ? std::min(20, model.dofs() - 1) : model.dofs();
+  const core::Modes modes = core::lowest_modes(model, count);
   std::vector<ModalSdof> out;
-  for (int i = 0; i < model.dofs(); ++i) {
+  for (int i = 0; i < count; ++i) {
     const double omega = modes.omega[i];
     const core::Vec phi = modes.shapes.col(i);
     const double alpha = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
     if (!(alpha > 0.0)) continue;
     out.push_back({i + 1, 2.0 * std::numbers::pi / omega,
-                   phi.dot(model.damping * phi) / (2.0 * omega), alpha});
+                   core::damping_quadratic(model, phi) / (2.0 * omega), alpha});
   }
   return out;
 }

@@ -58,7 +58,8 @@ class Integrator {
   virtual IntegratorKind kind() const = 0;
 
  protected:
-  Integrator(const StructuralModel& model, double dt);
+  // keep_dense = false: m_, c_ and k0_ stay empty (a sparse scheme keeps its own M, C, K).
+  Integrator(const StructuralModel& model, double dt, bool keep_dense = true);
   Mat m_, c_, k0_;
   double dt_;
   Vec u_, v_, a_;

@@ -1,6 +1,7 @@
 #include "core/integrators.h"
 
 #include "core/exact_zoh.h"
+#include "core/sparse_integrators.h"
 
 #include <cmath>
 #include <limits>
@@ -332,6 +333,10 @@ std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const Structura
 
 std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const StructuralModel& model,
                                             double dt, const IntegratorParameters& parameters) {
+  if (model.is_sparse()) {
+    if (auto sparse = make_sparse_integrator(kind, model, dt, parameters)) return sparse;
+    require_dense_scheme_fits(kind, model);
+  }
   switch (kind) {
     case IntegratorKind::kAlphaOS:
       return std::make_unique<AlphaOperatorSplitting>(model, dt, parameters.alpha_os);

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/sparse_structure.h"
+
 namespace rths::core {
 
 void SimulationResult::truncate(std::size_t steps) {
@@ -72,7 +74,7 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
     ~TruncateOnExit() { result.truncate(completed); }
   } guard{result};
 
-  const Vec mass_iota = setup.model.mass * setup.model.influence;
+  const Vec mass_iota = mass_times(setup.model, setup.model.influence);
   Vec load = -mass_iota * motion_at_dt.acceleration[0];
   integrator->initialize(Vec::Zero(dofs), Vec::Zero(dofs), Vec::Zero(dofs), load);
   result.acceleration.row(0) = integrator->acceleration().transpose();

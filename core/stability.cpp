@@ -14,6 +14,7 @@
 #include "core/coupled_stability.h"
 #include "core/exact_zoh.h"
 #include "core/simulation.h"
+#include "core/sparse_structure.h"
 
 namespace rths::core {
 namespace {
@@ -481,7 +482,10 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
   if (k_experimental.rows() != dofs || k_experimental.cols() != dofs)
     throw std::invalid_argument(
         "critical delay check: K_e must be n x n for the structure's n DOFs");
-  const Modes modes = modal_analysis(model.mass, model.stiffness);
+  // A model held sparse: its lowest modes only, from the sparse eigensolver (no n x n problem).
+  constexpr int kSparseModes = 20;
+  const int count = model.is_sparse() ? std::min(kSparseModes, dofs - 1) : dofs;
+  const Modes modes = lowest_modes(model, count);
   CriticalDelayCheck check;
   check.lag = lag;
   const int lag_steps = lag > 0 ? static_cast<int>(std::ceil(lag / dt - 1e-9)) : 0;
@@ -492,12 +496,17 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
                                   "experimental fraction phi' K_e phi / omega^2; the coupling the "
                                   "delayed force adds between modes is ignored; the experimental "
                                   "part at its initial stiffness";
+  if (count < dofs)
+    check.assumed += "; the lowest " + std::to_string(count) +
+                     " modes only (the model is held "
+                     "sparse: a sparse eigensolver gives them; higher modes, damped the more by "
+                     "Rayleigh damping, are not checked)";
   if (!discrete_analysis_covers(kind))
     check.discrete_skipped = "the discrete delay analysis does not cover " + to_string(kind);
-  for (int i = 0; i < dofs; ++i) {
+  for (int i = 0; i < count; ++i) {
     const double omega = modes.omega[i];
     const Vec phi = modes.shapes.col(i);
-    const double zeta = phi.dot(model.damping * phi) / (2.0 * omega);
+    const double zeta = damping_quadratic(model, phi) / (2.0 * omega);
     const double alpha = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
     const double period = 2.0 * std::numbers::pi / omega;
     const ContinuousStability continuous = continuous_critical_delay(period, zeta, alpha);

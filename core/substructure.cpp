@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
 
 #include "core/number_text.h"
 
@@ -57,7 +57,10 @@ std::string HybridPartition::channel_name(int s) const {
 
 bool HybridPartition::has_numerical(int s) const {
   if (numerical[static_cast<std::size_t>(s)]) return true;
-  return s < numerical_matrix.rows() && numerical_matrix.row(s).cwiseAbs().maxCoeff() > 0;
+  if (s >= numerical_matrix.rows()) return false;
+  for (RowSparseMat::InnerIterator it(numerical_matrix, s); it; ++it)
+    if (it.value() != 0.0) return true;
+  return false;
 }
 
 std::vector<int> HybridPartition::coupled_to(const std::vector<int>& hosted) const {
@@ -65,8 +68,8 @@ std::vector<int> HybridPartition::coupled_to(const std::vector<int>& hosted) con
   for (int s : hosted) {
     needed[static_cast<std::size_t>(s)] = true;
     if (s >= numerical_matrix.rows()) continue;
-    for (Eigen::Index j = 0; j < numerical_matrix.cols(); ++j)
-      if (numerical_matrix(s, j) != 0.0) needed[static_cast<std::size_t>(j)] = true;
+    for (RowSparseMat::InnerIterator it(numerical_matrix, s); it; ++it)
+      if (it.value() != 0.0) needed[static_cast<std::size_t>(it.col())] = true;
   }
   std::vector<int> out;
   for (std::size_t s = 0; s < needed.size(); ++s)
@@ -92,7 +95,8 @@ StoreyAssembly HybridPartition::assembly() const {
 namespace {
 
 // A grounded specimen at its DOF's channel: k_e in (0, K(d, d)] taken out of K_N at (d, d).
-void place_grounded(HybridPartition& partition, const Mat& stiffness, DofSpecimen& specimen) {
+void place_grounded(HybridPartition& partition, Mat& numerical, const Mat& stiffness,
+                    DofSpecimen& specimen) {
   const int d = specimen.dof, n = static_cast<int>(stiffness.rows());
   const std::string name = "experimental DOF " + std::to_string(d + 1);
   if (d < 0 || d >= n) throw std::invalid_argument(name + " is outside 1.." + std::to_string(n));
@@ -104,12 +108,13 @@ void place_grounded(HybridPartition& partition, const Mat& stiffness, DofSpecime
                                 " N/m must be in (0, K(" + std::to_string(d + 1) + ", " +
                                 std::to_string(d + 1) + ") = " + format_number(stiffness(d, d)) +
                                 "]");
-  partition.numerical_matrix(d, d) -= k;
+  numerical(d, d) -= k;
   partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
 }
 
 // An element at the next channel: k_e b b^T taken out of K_N.
-void place_element(HybridPartition& partition, int n, DofSpecimen& specimen) {
+void place_element(HybridPartition& partition, Mat& numerical, DofSpecimen& specimen) {
+  const int n = static_cast<int>(numerical.rows());
   const std::string name = "experimental element " + std::to_string(partition.elements.size() + 1);
   bool nonzero = false;
   for (const auto& [j, c] : specimen.element.terms) {
@@ -132,18 +137,22 @@ void place_element(HybridPartition& partition, int n, DofSpecimen& specimen) {
 }
 
 // K_N = K - K_e positive semi-definite (relative to K's scale): no element stiffer than what it
-// replaces. Only checked with elements (a grounded k_e <= K(d, d) is its own bound).
-void check_numerical_semidefinite(const HybridPartition& partition, const Mat& stiffness) {
+// replaces. Only checked with elements (a grounded k_e <= K(d, d) is its own bound). Judged by the
+// pivots of a sparse LDL^T of K_N shifted by 1e-9 of K's scale (all positive exactly when the
+// shifted matrix is positive definite): O(nnz) for a large sparse model.
+void check_numerical_semidefinite(const HybridPartition& partition, const Mat& numerical,
+                                  const Mat& stiffness) {
   if (partition.elements.empty()) return;
-  const Eigen::SelfAdjointEigenSolver<Mat> solver(partition.numerical_matrix,
-                                                  Eigen::EigenvaluesOnly);
   const double scale = stiffness.cwiseAbs().maxCoeff();
-  const double lowest = solver.eigenvalues()[0];
-  if (lowest < -1e-9 * scale)
+  Eigen::SparseMatrix<double> shifted = numerical.sparseView();
+  for (Eigen::Index i = 0; i < shifted.rows(); ++i) shifted.coeffRef(i, i) += 1e-9 * scale;
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(shifted);
+  const double lowest = factor.info() == Eigen::Success ? factor.vectorD().minCoeff() : -scale;
+  if (!(lowest > 0))
     throw std::invalid_argument(
-        "the experimental elements are stiffer than the structure they replace: K - K_e has a "
-        "negative eigenvalue " +
-        format_number(lowest) + " N/m (K's largest entry " + format_number(scale) +
+        "the experimental elements are stiffer than the structure they replace: K - K_e is not "
+        "positive semi-definite (a pivot of its LDL^T is " +
+        format_number(lowest - 1e-9 * scale) + " N/m; K's largest entry " + format_number(scale) +
         " N/m); check each element's stiffness against the storey or member it sits in");
 }
 
@@ -155,18 +164,19 @@ HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen>
   partition.by_dofs = true;
   partition.numerical.resize(static_cast<std::size_t>(n));
   partition.experimental.resize(static_cast<std::size_t>(n));
-  partition.numerical_matrix = stiffness;
+  Mat numerical = stiffness;
   for (DofSpecimen& specimen : specimens) {
     if (!specimen.model) throw std::invalid_argument("an experimental part has no specimen model");
     if (specimen.element.terms.empty())
-      place_grounded(partition, stiffness, specimen);
+      place_grounded(partition, numerical, stiffness, specimen);
     else
-      place_element(partition, n, specimen);
+      place_element(partition, numerical, specimen);
   }
-  check_numerical_semidefinite(partition, stiffness);
+  check_numerical_semidefinite(partition, numerical, stiffness);
   for (int s = 0; s < partition.channels(); ++s)
     if (partition.experimental[static_cast<std::size_t>(s)])
       partition.actuator_storeys.push_back(s);
+  partition.numerical_matrix = numerical.sparseView();  // exact zeros dropped
   return partition;
 }
 
@@ -259,7 +269,7 @@ void StoreyAssembly::tangent(const Vec& storey_tangent, Mat& k) const {
 }
 
 NumericalSubstructure::NumericalSubstructure(
-    std::vector<std::unique_ptr<RestoringForceModel>> storey_models, Mat matrix)
+    std::vector<std::unique_ptr<RestoringForceModel>> storey_models, RowSparseMat matrix)
     : models_(std::move(storey_models)), matrix_(std::move(matrix)) {}
 
 NumericalSubstructure::NumericalSubstructure(const HybridPartition& partition)
@@ -276,8 +286,11 @@ void NumericalSubstructure::trial(const Vec& drift, Vec& shear, Vec* storey_tang
     if (storey_tangent) (*storey_tangent)[s] = state.tangent;
   }
   // Row by row, the same sums in every process (no allocation, no reordering by size).
-  for (Eigen::Index i = 0; i < matrix_.rows(); ++i)
-    shear[i] += matrix_.row(i).dot(drift.head(matrix_.cols()));
+  for (Eigen::Index i = 0; i < matrix_.outerSize(); ++i) {
+    double sum = 0.0;
+    for (RowSparseMat::InnerIterator it(matrix_, i); it; ++it) sum += it.value() * drift[it.col()];
+    shear[i] += sum;
+  }
 }
 
 void NumericalSubstructure::commit() {

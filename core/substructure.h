@@ -48,6 +48,8 @@ struct ElementRow {
   std::string describe() const;
 };
 
+using RowSparseMat = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
 struct HybridPartition {
   // One entry per storey; null where that storey has no numerical / experimental part.
   std::vector<std::unique_ptr<RestoringForceModel>> numerical;
@@ -56,8 +58,10 @@ struct HybridPartition {
   std::vector<int> actuator_storeys;
   // Split by DOFs (a structure given by matrices): B = I and the numerical part's linear
   // stiffness K_N (N/m, n x n) acting on the DOF displacements; empty for a shear building.
+  // Sparse (row-major, only its nonzeros stored): a large model's K_N is O(nnz) to hold and to
+  // apply; a condensed model's is as full as before, and applied in the same sums.
   bool by_dofs = false;
-  Mat numerical_matrix;
+  RowSparseMat numerical_matrix;
   // By DOFs: the experimental elements between DOFs, channel n + e each (after the n DOFs).
   std::vector<ElementRow> elements;
 
@@ -131,20 +135,23 @@ class NumericalSubstructure {
  public:
   // `matrix`: the linear K_N of a partition by DOFs (empty: none).
   explicit NumericalSubstructure(std::vector<std::unique_ptr<RestoringForceModel>> storey_models,
-                                 Mat matrix = {});
+                                 RowSparseMat matrix = {});
   explicit NumericalSubstructure(const HybridPartition& partition);
   NumericalSubstructure(const NumericalSubstructure& other);
   // Storey shears at trial drifts (0 where a storey has no numerical part): each storey's model,
   // then + (K_N drift)_s. `storey_tangent` gets the models' tangents only; matrix() is the rest.
+  // (K_N drift)_s sums row s's stored entries in column order, one after the other (the same
+  // sums in every process, no allocation): O(nnz), and equal to the dense row's sequential dot
+  // product for finite drifts (its zero terms add nothing).
   void trial(const Vec& drift, Vec& shear, Vec* storey_tangent);
   void commit();
   void reset();
   int storeys() const { return static_cast<int>(models_.size()); }
-  const Mat& matrix() const { return matrix_; }
+  const RowSparseMat& matrix() const { return matrix_; }
 
  private:
   std::vector<std::unique_ptr<RestoringForceModel>> models_;
-  Mat matrix_;
+  RowSparseMat matrix_;
 };
 
 struct ActuatorOutput {

@@ -10,7 +10,9 @@
 #include <vector>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
 
+#include "core/sparse_structure.h"
 #include "study/ranges.h"
 #include "study/restoring_force_config.h"
 #include "study/structure_io.h"
@@ -32,11 +34,18 @@ void apply_damping(StructuralModel& model, const config::Damping& damping, bool 
   if (has_matrix && ratio)
     fail("structure.damping",
          "structure.matrices.damping is given: give the matrix or the ratios, not both");
-  if (damping.has_rayleigh()) {
+  if (damping.has_rayleigh() && model.is_sparse()) {
+    const auto& r = damping.rayleigh();
+    sparse_rayleigh_damping(model, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
+                            r.mode_j() == 0 ? 2 : r.mode_j());
+  } else if (damping.has_rayleigh()) {
     const auto& r = damping.rayleigh();
     model.damping =
         rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
                          r.mode_j() == 0 ? 2 : r.mode_j());
+  } else if (!has_matrix && model.is_sparse() && damping.modal_zeta() == 0) {
+    model.damping.setZero();  // no modes needed for C = 0
+    model.sparse_damping.setZero();
   } else if (!has_matrix) {
     model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
   }
@@ -181,6 +190,7 @@ StructuralModel matrix_structure(const config::Structure& structure,
   const config::MatrixStructure& spec = structure.matrices();
   StructuralModel model = read_matrix_structure(spec, base_dir, "structure.matrices");
   apply_damping(model, structure.damping(), spec.has_damping());
+  if (model.is_sparse()) hold_sparse_if_sparse(model);  // modal damping fills C: dense again
   return model;
 }
 
@@ -215,7 +225,14 @@ HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuri
   HybridPartition partition = partition_by_dofs(model.stiffness, std::move(specimens));
   // The specimen's force holds m_e x'' of the relative acceleration only, so the numerical part
   // carries the ground motion's load on the whole mass, -M iota a_g = -M_N (M_N^-1 M iota) a_g.
-  model.influence = mass.ldlt().solve(model.mass * model.influence);
+  if (model.is_sparse()) {  // M_N sparse: its LDL^T, not a dense one
+    const Vec load = model.sparse_mass * model.influence;
+    model.sparse_mass = mass.sparseView();
+    model.sparse_damping = damping.sparseView();
+    model.influence = Eigen::SimplicialLDLT<SparseMat>(model.sparse_mass).solve(load);
+  } else {
+    model.influence = mass.ldlt().solve(model.mass * model.influence);
+  }
   model.mass = mass;
   model.damping = damping;
   return partition;

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/sparse_structure.h"
 #include "study/text_columns.h"
 
 namespace rths::core {
@@ -78,6 +79,25 @@ std::string mat_variables(mat_t* file) {
   return names.empty() ? "none" : names;
 }
 
+// A MATLAB sparse matrix (compressed columns: jc[j]..jc[j+1] index the rows ir and the values of
+// column j), real double.
+Mat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
+  const auto& sparse = *static_cast<const mat_sparse_t*>(var.data);
+  const auto rows = static_cast<Eigen::Index>(var.dims[0]);
+  const auto cols = static_cast<Eigen::Index>(var.dims[1]);
+  if (var.data_type != MAT_T_DOUBLE || sparse.njc != static_cast<mat_uint32_t>(cols) + 1)
+    fail(named, "is a sparse matrix that is not real double");
+  Mat m = Mat::Zero(rows, cols);
+  const auto* values = static_cast<const double*>(sparse.data);
+  for (Eigen::Index j = 0; j < cols; ++j)
+    for (mat_uint32_t k = sparse.jc[j]; k < sparse.jc[j + 1]; ++k) {
+      if (k >= sparse.ndata || k >= sparse.nir || sparse.ir[k] >= static_cast<mat_uint32_t>(rows))
+        fail(named, "is a sparse matrix whose indices run past its size");
+      m(sparse.ir[k], j) = values[k];
+    }
+  return m;
+}
+
 Mat mat_matrix(const std::filesystem::path& path, const std::string& variable,
                const std::string& where) {
   if (variable.empty()) fail(where, "a .mat file needs `variable`, the name of the matrix in it");
@@ -88,6 +108,8 @@ Mat mat_matrix(const std::filesystem::path& path, const std::string& variable,
     fail(where, "no variable '" + variable + "' (variables: " + mat_variables(file.get()) + ")");
   const std::string named = where + ": variable '" + variable + "'";
   if (var->rank != 2) fail(named, "has " + std::to_string(var->rank) + " dimensions, not 2");
+  if (var->class_type == MAT_C_SPARSE && !var->isComplex && var->data != nullptr)
+    return mat_sparse_matrix(*var, named);
   if (var->isComplex || var->data == nullptr)
     fail(named, "is not a real numeric matrix (complex, sparse, a struct, a cell or an object)");
   const auto rows = static_cast<Eigen::Index>(var->dims[0]);
@@ -273,6 +295,12 @@ void check_definite(const Mat& m, bool strictly, const std::string& where) {
   }
 }
 
+// A model held sparse: by the inertia of a shifted LDL^T (core/sparse_structure.h), not by a
+// dense eigenproblem.
+void check_definite(const SparseMat& m, bool strictly, const std::string& where) {
+  if (const auto why = check_sparse_definite(m, strictly)) fail(where, *why);
+}
+
 }  // namespace
 
 void check_structural_matrices(const StructuralModel& model, const std::string& field) {
@@ -284,10 +312,17 @@ void check_structural_matrices(const StructuralModel& model, const std::string& 
   check_symmetric(model.mass, field + ".mass");
   check_symmetric(model.stiffness, field + ".stiffness");
   check_symmetric(model.damping, field + ".damping");
-  check_definite(model.mass, true, field + ".mass");
-  check_definite(model.stiffness, false, field + ".stiffness");
-  if (model.damping.cwiseAbs().maxCoeff() > 0)
-    check_definite(model.damping, false, field + ".damping");
+  if (model.is_sparse()) {
+    check_definite(model.sparse_mass, true, field + ".mass");
+    check_definite(model.sparse_stiffness, false, field + ".stiffness");
+    if (model.sparse_damping.nonZeros() > 0)
+      check_definite(model.sparse_damping, false, field + ".damping");
+  } else {
+    check_definite(model.mass, true, field + ".mass");
+    check_definite(model.stiffness, false, field + ".stiffness");
+    if (model.damping.cwiseAbs().maxCoeff() > 0)
+      check_definite(model.damping, false, field + ".damping");
+  }
   if (model.influence.size() != n)
     fail(field + ".influence", "has " + std::to_string(model.influence.size()) +
                                    " entries, the structure " + std::to_string(n) + " DOFs");
@@ -313,6 +348,7 @@ StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
   } else {
     model.influence = Vec::Ones(n);
   }
+  hold_sparse_if_sparse(model);
   check_structural_matrices(model, field);
   return model;
 }

@@ -4,7 +4,7 @@
 //
 //   read_matrix(spec, base_dir, field) -> Mat
 //     inline:  `values` row-major with `rows` rows (a vector: one column of `values.size()`);
-//     `.mat`:  the MATLAB variable `variable` (v5, v7.3), real double, 2-D;
+//     `.mat`:  the MATLAB variable `variable` (v5, v7.3), real, 2-D, full or sparse (double);
 //     `.mtx`:  Matrix Market, `matrix coordinate|array real|integer general|symmetric`;
 //     `.csv`:  one matrix row per line, fields separated by commas or blanks ('#' comments).
 //   Relative paths resolve against base_dir. Every error throws std::invalid_argument naming the

@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
+#include "core/simulation.h"
+#include "core/sparse_structure.h"
+#include "core/stability.h"
 #include "study/study.h"
 
 namespace rths::core {
@@ -36,6 +41,81 @@ std::string error_of(F f) {
   return "";
 }
 
+// A shear building of n floors in Matrix Market files under `dir` (diagonal M, tridiagonal K,
+// storeys varying up the height), Rayleigh 5 %, floor 1 a third experimental, explicit Newmark.
+std::string market_building(const fs::path& dir, int n, double duration) {
+  fs::create_directories(dir);
+  std::ofstream mass(dir / "mass.mtx"), stiffness(dir / "stiffness.mtx");
+  mass << "%%MatrixMarket matrix coordinate real symmetric\n" << n << ' ' << n << ' ' << n << '\n';
+  stiffness << "%%MatrixMarket matrix coordinate real symmetric\n"
+            << n << ' ' << n << ' ' << 2 * n - 1 << '\n';
+  stiffness.precision(17);
+  const auto storey = [n](int i) { return 4e10 * (1.0 + 0.3 * (n - i) / n); };
+  for (int i = 0; i < n; ++i) {
+    mass << i + 1 << ' ' << i + 1 << ' ' << 1e5 * (1.0 + 0.1 * (i % 3)) << '\n';
+    stiffness << i + 1 << ' ' << i + 1 << ' ' << storey(i) + (i + 1 < n ? storey(i + 1) : 0.0)
+              << '\n';
+    if (i > 0) stiffness << i + 1 << ' ' << i << ' ' << -storey(i) << '\n';
+  }
+  return "name: \"sparse\" structure { matrices { mass { file: \"mass.mtx\" } stiffness { file: "
+         "\"stiffness.mtx\" } } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }"
+         " motion { path: \"" +
+         motion() + "\" duration: " + std::to_string(duration) +
+         " } integrator { kind: EXPLICIT_NEWMARK dt: 0.0009765625 }"
+         " substructuring { experimental_dofs { dof: 1 stiffness: 1e10 } }"
+         " cases { name: \"reference\" }";
+}
+
+// The same setup with its sparse matrices dropped: the dense path on the same M, C, K.
+HybridSetup dense_copy(const HybridSetup& setup) {
+  HybridSetup dense = setup;
+  dense.model.sparse_mass = dense.model.sparse_damping = dense.model.sparse_stiffness = {};
+  return dense;
+}
+
+TEST(StructureConfig, ALargeSparseModelIsHeldSparseAndRunsAsTheDensePathDoes) {
+  for (int n : {120, 160}) {
+    const fs::path dir = fs::temp_directory_path() / ("rths_sparse_study_" + std::to_string(n));
+    const PreparedStudy p = prepare_study(parse_study(market_building(dir, n, 2.0), "t"), dir);
+    ASSERT_TRUE(p.base.model.is_sparse()) << n;
+    EXPECT_EQ(p.base.partition.numerical_matrix.nonZeros(), 3 * n - 2);
+    const SimulationResult sparse = simulate(p.base, p.motion);
+    const SimulationResult dense = simulate(dense_copy(p.base), p.motion);
+    const double scale = dense.displacement.cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 0.0);
+    EXPECT_LE((sparse.displacement - dense.displacement).cwiseAbs().maxCoeff(), 1e-12 * scale);
+    EXPECT_LE((sparse.measured_force - dense.measured_force).cwiseAbs().maxCoeff(),
+              1e-12 * dense.measured_force.cwiseAbs().maxCoeff());
+    fs::remove_all(dir);
+  }
+}
+
+TEST(StructureConfig, ATwoThousandDofShearBuildingFromAMatrixMarketFileRuns) {
+  const fs::path dir = fs::temp_directory_path() / "rths_sparse_study_2000";
+  const PreparedStudy p = prepare_study(parse_study(market_building(dir, 2000, 0.25), "t"), dir);
+  ASSERT_TRUE(p.base.model.is_sparse());
+  EXPECT_EQ(p.base.partition.numerical_matrix.nonZeros(), 3 * 2000 - 2);
+  const CriticalDelayCheck check = check_modal_critical_delay(
+      p.base.model, p.base.partition.experimental_stiffness(), p.base.integrator, p.base.dt, 0.01);
+  EXPECT_NE(check.assumed.find("the lowest 20 modes only"), std::string::npos) << check.assumed;
+  const SimulationResult result = simulate(p.base, p.motion);
+  EXPECT_EQ(result.steps(), p.motion.acceleration.size());
+  EXPECT_FALSE(result.diverged);
+  EXPECT_TRUE(result.displacement.allFinite());
+  EXPECT_GT(result.displacement.cwiseAbs().maxCoeff(), 0.0);
+  // The lowest modes of the model held sparse are those of its dense matrices.
+  const Modes sparse = lowest_modes(p.base.model, 3);
+  const Mat mass = p.base.model.mass, stiffness = p.base.model.stiffness;
+  for (int i = 0; i < 3; ++i) {
+    const Vec phi = sparse.shapes.col(i);
+    const double rayleigh_quotient = phi.dot(stiffness * phi) / phi.dot(mass * phi);
+    EXPECT_NEAR(std::sqrt(rayleigh_quotient), sparse.omega[i], 1e-9 * sparse.omega[i]);
+    EXPECT_LE((stiffness * phi - rayleigh_quotient * (mass * phi)).norm(),
+              1e-7 * (stiffness * phi).norm());
+  }
+  fs::remove_all(dir);
+}
+
 TEST(StructureConfig, SplitTakesTheSpecimensMassDampingAndStiffnessOutOfTheNumericalPart) {
   const PreparedStudy p = prepare(two_storey_matrices(
       "substructuring { experimental_dofs { dof: 2 mass: 100 stiffness: 1e6 damping: 500 } }"));
@@ -44,8 +124,8 @@ TEST(StructureConfig, SplitTakesTheSpecimensMassDampingAndStiffnessOutOfTheNumer
   EXPECT_EQ(p.base.model.mass(0, 0), 2000.0);
   EXPECT_DOUBLE_EQ(p.base.model.damping(1, 1), whole.damping(1, 1) - 500.0);
   EXPECT_EQ(p.base.model.stiffness, whole.stiffness);  // the integrators' K0 stays whole
-  EXPECT_EQ(p.base.partition.numerical_matrix(1, 1), 1e6);
-  EXPECT_EQ(p.base.partition.numerical_matrix(0, 1), -2e6);
+  EXPECT_EQ(p.base.partition.numerical_matrix.coeff(1, 1), 1e6);
+  EXPECT_EQ(p.base.partition.numerical_matrix.coeff(0, 1), -2e6);
   ASSERT_EQ(p.base.partition.actuator_storeys, std::vector<int>{1});
   EXPECT_TRUE(p.base.partition.by_dofs);
   EXPECT_EQ(p.base.partition.experimental_stiffness()(1, 1), 1e6);
@@ -150,9 +230,9 @@ TEST(StructureConfig, AnElementBetweenTwoDofsTakesItsRowOutOfTheNumericalPart) {
   const HybridPartition& partition = p.base.partition;
   ASSERT_EQ(partition.elements.size(), 1u);
   EXPECT_EQ(partition.actuator_storeys, std::vector<int>{2});
-  EXPECT_EQ(partition.numerical_matrix(0, 0), 4e6);
-  EXPECT_EQ(partition.numerical_matrix(0, 1), -1e6);
-  EXPECT_EQ(partition.numerical_matrix(1, 1), 1e6);
+  EXPECT_EQ(partition.numerical_matrix.coeff(0, 0), 4e6);
+  EXPECT_EQ(partition.numerical_matrix.coeff(0, 1), -1e6);
+  EXPECT_EQ(partition.numerical_matrix.coeff(1, 1), 1e6);
   // m b b^T and c b b^T leave the numerical part too.
   EXPECT_EQ(p.base.model.mass(0, 0), 1900.0);
   EXPECT_EQ(p.base.model.mass(0, 1), 100.0);
@@ -167,11 +247,11 @@ TEST(StructureConfig, ABraceAndAnInfluenceRowAreTheSameElement) {
       "} }"));
   const PreparedStudy row = prepare(two_storey_matrices(
       "substructuring { experimental_dofs { influence: [-0.5, 0.5] stiffness: 4e6 } }"));
-  EXPECT_LE((brace.base.partition.numerical_matrix - row.base.partition.numerical_matrix)
+  EXPECT_LE((Mat(brace.base.partition.numerical_matrix) - Mat(row.base.partition.numerical_matrix))
                 .cwiseAbs()
                 .maxCoeff(),
             1e-6);
-  EXPECT_NEAR(row.base.partition.numerical_matrix(1, 1), 1e6, 1e-6);
+  EXPECT_NEAR(row.base.partition.numerical_matrix.coeff(1, 1), 1e6, 1e-6);
 }
 
 TEST(StructureConfig, BadElementsAreRefusedNamingTheField) {
@@ -218,7 +298,7 @@ TEST(StructureConfig, AShearBuildingTakesElementsAsItsMatrices) {
   const PreparedStudy p = prepare(
       building + "substructuring { experimental_dofs { dof: 2 from_dof: 1 stiffness: 1e6 } }");
   EXPECT_TRUE(p.base.partition.by_dofs);
-  EXPECT_EQ(p.base.partition.numerical_matrix(1, 1), 1e6);
+  EXPECT_EQ(p.base.partition.numerical_matrix.coeff(1, 1), 1e6);
   EXPECT_NE(error_of([&] {
               prepare(building +
                       "substructuring { model { bilinear { yield_displacement: 0.01 } } "

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <matio.h>
 #include <unistd.h>
+
 #include <fstream>
 
 namespace rths::core {
@@ -130,6 +132,35 @@ TEST(StructureIo, MatFileVariablesIncludingMatlabsUint16Mass) {
               read_matrix(file_spec("case_1.mat"), benchmark_dir(), "f");
             }).find("needs `variable`"),
             std::string::npos);
+}
+
+// A MATLAB sparse matrix (as `save` writes sparse(K)): compressed columns, read in full.
+TEST(StructureIo, MatFileSparseVariable) {
+  // K = [2 -1 0; -1 2 -1; 0 -1 1] by columns: rows ir, column starts jc, values.
+  mat_uint32_t ir[] = {0, 1, 0, 1, 2, 1, 2};
+  mat_uint32_t jc[] = {0, 2, 5, 7};
+  double values[] = {2, -1, -1, 2, -1, -1, 1};
+  mat_sparse_t sparse{};
+  sparse.nzmax = 7;
+  sparse.ir = ir;
+  sparse.nir = 7;
+  sparse.jc = jc;
+  sparse.njc = 4;
+  sparse.ndata = 7;
+  sparse.data = values;
+  const fs::path path = scratch() / "sparse.mat";
+  mat_t* file = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  ASSERT_NE(file, nullptr);
+  size_t dims[] = {3, 3};
+  matvar_t* var =
+      Mat_VarCreate("K", MAT_C_SPARSE, MAT_T_DOUBLE, 2, dims, &sparse, MAT_F_DONT_COPY_DATA);
+  ASSERT_NE(var, nullptr);
+  ASSERT_EQ(Mat_VarWrite(file, var, MAT_COMPRESSION_NONE), 0);
+  Mat_VarFree(var);
+  Mat_Close(file);
+  Mat expected(3, 3);
+  expected << 2, -1, 0, -1, 2, -1, 0, -1, 1;
+  EXPECT_EQ(read_matrix(file_spec("sparse.mat", "K"), scratch(), "f"), expected);
 }
 
 TEST(StructureIo, MissingFileAndUnknownExtension) {

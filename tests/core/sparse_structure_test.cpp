@@ -1,0 +1,102 @@
+#include "core/sparse_structure.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/structure.h"
+
+namespace rths::core {
+namespace {
+
+// A shear building whose storeys differ, so no two modes coincide.
+StructuralModel building(int n) {
+  std::vector<double> mass, stiffness;
+  for (int i = 0; i < n; ++i) {
+    mass.push_back(1e4 * (1.0 + 0.3 * std::sin(i)));
+    stiffness.push_back(2e7 * (1.0 + 0.5 * std::cos(0.7 * i)));
+  }
+  return make_shear_building(mass, stiffness);
+}
+
+TEST(SparseStructure, TheFillRuleHoldsLargeSparseModelsSparseAndKeepsTheRestDense) {
+  EXPECT_TRUE(prefer_sparse(100, 300));
+  EXPECT_FALSE(prefer_sparse(99, 300));         // small: dense, bit-identical to before
+  EXPECT_FALSE(prefer_sparse(300, 300 * 300));  // a condensed (full) model
+  EXPECT_FALSE(prefer_sparse(300, 300 * 16));   // above 5 % fill
+  StructuralModel large = building(200);
+  hold_sparse_if_sparse(large);
+  EXPECT_TRUE(large.is_sparse());
+  EXPECT_EQ(large.sparse_stiffness.nonZeros(), 3 * 200 - 2);
+  EXPECT_EQ(Mat(large.sparse_stiffness), large.stiffness);
+  StructuralModel small = building(50);
+  hold_sparse_if_sparse(small);
+  EXPECT_FALSE(small.is_sparse());
+  large.damping = modal_damping(large.mass, large.stiffness, 0.05);  // full C
+  hold_sparse_if_sparse(large);
+  EXPECT_FALSE(large.is_sparse());
+}
+
+TEST(SparseStructure, LowestModesMatchTheDenseAnalysis) {
+  StructuralModel model = building(400);
+  const Modes dense = modal_analysis(model.mass, model.stiffness);
+  hold_sparse_if_sparse(model);
+  ASSERT_TRUE(model.is_sparse());
+  const Modes sparse = lowest_modes(model, 6);
+  ASSERT_EQ(sparse.omega.size(), 6);
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_NEAR(sparse.omega[i], dense.omega[i], 1e-9 * dense.omega[i]) << "mode " << i + 1;
+    // Mass-normalised shapes equal up to sign.
+    const double sign = sparse.shapes.col(i).dot(dense.shapes.col(i)) > 0 ? 1.0 : -1.0;
+    EXPECT_LE((sign * sparse.shapes.col(i) - dense.shapes.col(i)).cwiseAbs().maxCoeff(),
+              1e-7 * dense.shapes.col(i).cwiseAbs().maxCoeff())
+        << "mode " << i + 1;
+  }
+}
+
+TEST(SparseStructure, HighestOmegaMatchesTheDenseOne) {
+  StructuralModel model = building(300);
+  const double dense = modal_analysis(model.mass, model.stiffness).omega.maxCoeff();
+  hold_sparse_if_sparse(model);
+  const double sparse = max_omega(model);
+  EXPECT_NEAR(sparse, dense, 1e-8 * dense);
+}
+
+TEST(SparseStructure, DenseModelsKeepTheirDenseModesBitForBit) {
+  const StructuralModel model = building(20);
+  const Modes direct = modal_analysis(model.mass, model.stiffness);
+  const Modes through = lowest_modes(model, 3);
+  EXPECT_EQ(through.omega, direct.omega);
+  EXPECT_EQ(max_omega(model), direct.omega.maxCoeff());
+}
+
+TEST(SparseStructure, RayleighDampingEqualsTheDenseOne) {
+  StructuralModel model = building(150);
+  const Mat dense = rayleigh_damping(model.mass, model.stiffness, 0.05, 1, 3);
+  hold_sparse_if_sparse(model);
+  sparse_rayleigh_damping(model, 0.05, 1, 3);
+  EXPECT_LE((model.damping - dense).cwiseAbs().maxCoeff(), 1e-9 * dense.cwiseAbs().maxCoeff());
+  EXPECT_LE((Mat(model.sparse_damping) - dense).cwiseAbs().maxCoeff(),
+            1e-9 * dense.cwiseAbs().maxCoeff());
+  EXPECT_THROW(sparse_rayleigh_damping(model, 0.05, 2, 2), std::invalid_argument);
+}
+
+TEST(SparseStructure, DefinitenessByInertia) {
+  StructuralModel model = building(120);
+  hold_sparse_if_sparse(model);
+  EXPECT_FALSE(check_sparse_definite(model.sparse_mass, true));
+  EXPECT_FALSE(check_sparse_definite(model.sparse_stiffness, true));
+  SparseMat indefinite = model.sparse_stiffness;
+  indefinite.coeffRef(5, 5) = -1e7;
+  const auto why = check_sparse_definite(indefinite, false);
+  ASSERT_TRUE(why);
+  EXPECT_NE(why->find("not positive semi-definite"), std::string::npos) << *why;
+  // A free-floating chain (no ground spring): singular, semi-definite, not definite.
+  SparseMat floating = model.sparse_stiffness;
+  floating.coeffRef(0, 0) -= model.storey_stiffness[0];
+  EXPECT_FALSE(check_sparse_definite(floating, false));
+  EXPECT_TRUE(check_sparse_definite(floating, true));
+}
+
+}  // namespace
+}  // namespace rths::core
