@@ -129,8 +129,7 @@ void place_element(HybridPartition& partition, Mat& numerical, DofSpecimen& spec
   if (!(k > 0 && std::isfinite(k)))
     throw std::invalid_argument(name + ": stiffness " + format_number(k) + " N/m must be > 0");
   for (const auto& [i, ci] : specimen.element.terms)
-    for (const auto& [j, cj] : specimen.element.terms)
-      partition.numerical_matrix(i, j) -= k * ci * cj;
+    for (const auto& [j, cj] : specimen.element.terms) numerical(i, j) -= k * ci * cj;
   partition.elements.push_back(specimen.element);
   partition.numerical.push_back(nullptr);
   partition.experimental.push_back(std::move(specimen.model));

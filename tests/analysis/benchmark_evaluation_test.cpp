@@ -199,6 +199,43 @@ TEST(BenchmarkEvaluation, AnotherMotionHasNoPublishedValue) {
   EXPECT_FALSE(evaluate_benchmark(cut, run_study(cut, {}))->published_motion_matches);
 }
 
+// The published values are keyed by what was run, not by a path: the same structure said another
+// way (its influence vector written out) keeps them; the structure changed (the ground load at
+// 90 %) loses them, and no published row is printed, naming this run's keys.
+TEST(BenchmarkEvaluation, ThePublishedValuesAreKeyedByContent) {
+  const std::filesystem::path config =
+      std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
+  config::Study study = core::load_study(config);
+  study.mutable_motion()->set_duration(2.0);
+  const core::PreparedStudy cut = core::prepare_study(study, config.parent_path());
+  const std::optional<BenchmarkEvaluation> as_cut = evaluate_benchmark(cut, run_study(cut, {}));
+  ASSERT_TRUE(as_cut.has_value());
+  EXPECT_FALSE(as_cut->published_motion_matches);
+  study = core::load_study(config);
+  const core::StructuralModel whole = core::make_structure(study.structure(), config.parent_path());
+  EXPECT_EQ(structure_key(whole), study.benchmark().published_structure_sha256());
+  EXPECT_EQ(motion_key(core::load_motion(study.motion(), config.parent_path())),
+            study.benchmark().published_motion_sha256());
+  auto* influence = study.mutable_structure()->mutable_matrices()->mutable_influence();
+  influence->set_rows(whole.dofs());
+  for (int i = 0; i < whole.dofs(); ++i) influence->add_values(1.0);
+  EXPECT_EQ(structure_key(core::make_structure(study.structure(), config.parent_path())),
+            structure_key(whole));
+  for (double& v : *influence->mutable_values()) v = 0.9;
+  EXPECT_NE(structure_key(core::make_structure(study.structure(), config.parent_path())),
+            structure_key(whole));
+  study.mutable_motion()->set_duration(2.0);
+  const core::PreparedStudy changed = core::prepare_study(study, config.parent_path());
+  const std::optional<BenchmarkEvaluation> evaluation =
+      evaluate_benchmark(changed, run_study(changed, {}));
+  ASSERT_TRUE(evaluation.has_value());
+  const std::string table = benchmark_table(*evaluation);
+  EXPECT_EQ(table.find("published (sample_controller)"), std::string::npos) << table;
+  EXPECT_NE(table.find("motion and structure are not the ones"), std::string::npos) << table;
+  EXPECT_NE(table.find("this run's motion sha256 " + evaluation->run_motion_key), std::string::npos)
+      << table;
+}
+
 // rths's compensators in front of the sample controller (configs/benchmark/case_1_compensated):
 // each takes the tracking error down to the sensor noise's floor (the noise alone gives J2 of
 // about 2.5 %) and J1 to within a sample of zero.
