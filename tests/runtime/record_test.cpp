@@ -108,7 +108,8 @@ std::string bytes_of(const std::filesystem::path& path) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-// The frame offsets of write_run's entries: header, steps 0..kSteps-1, footer.
+// The frame offsets of write_run's entries: header, its copy (before the first step), steps
+// 0..kSteps-1, footer.
 std::vector<std::size_t> frame_offsets(const std::string& bytes) {
   std::vector<std::size_t> out;
   for (std::size_t at = kRecordPreambleBytes; at < bytes.size();) {
@@ -125,7 +126,7 @@ TEST(Record, StartsWithItsPreambleAndFramesEachEntryWithItsChecksums) {
   write_run(path, true);
   const std::string bytes = bytes_of(path);
   EXPECT_EQ(bytes.substr(0, kRecordPreambleBytes), std::string(record_preamble()));
-  EXPECT_EQ(frame_offsets(bytes).size(), static_cast<std::size_t>(kSteps + 2));
+  EXPECT_EQ(frame_offsets(bytes).size(), static_cast<std::size_t>(kSteps + 3));
   const RecordContents contents = parse_record(bytes, "mem");
   EXPECT_TRUE(contents.checksummed);
   EXPECT_FALSE(contents.lost_entries());
@@ -141,14 +142,14 @@ TEST(Record, AFlippedByteLosesOnlyItsEntryAndTheReportNamesTheStep) {
   write_run(path, true);
   const std::string good = bytes_of(path);
   const auto frames = frame_offsets(good);
-  const int victim = 20;  // step 20: frame 21 (after the header)
-  for (std::size_t at = frames[victim + 1]; at < frames[victim + 2]; ++at) {
+  const int victim = 20;  // step 20: frame 22 (after the header and its copy)
+  for (std::size_t at = frames[victim + 2]; at < frames[victim + 3]; ++at) {
     std::string bytes = good;
     bytes[at] = static_cast<char>(bytes[at] ^ 0x5A);
     const RecordContents contents = parse_record(bytes, "mem");
     SCOPED_TRACE("byte " + std::to_string(at));
     ASSERT_EQ(contents.losses.size(), 1u);
-    EXPECT_EQ(contents.losses[0].first_byte, frames[victim + 1]);
+    EXPECT_EQ(contents.losses[0].first_byte, frames[victim + 2]);
     EXPECT_EQ(contents.losses[0].last_step_before, victim - 1);
     EXPECT_EQ(contents.losses[0].first_step_after, victim + 1);
     EXPECT_NE(contents.warning.find("step 20 lost"), std::string::npos) << contents.warning;
@@ -161,6 +162,7 @@ TEST(Record, AFlippedByteLosesOnlyItsEntryAndTheReportNamesTheStep) {
   }
 }
 
+// The first header damaged: its copy before step 0 reads, so the record keeps its header.
 TEST(Record, ADamagedHeaderOrFooterIsALossNotATruncation) {
   const auto path = temp_record("ends");
   write_run(path, true);
@@ -170,7 +172,10 @@ TEST(Record, ADamagedHeaderOrFooterIsALossNotATruncation) {
   bytes[frames.front() + 2] ^= 1;  // the header's sync
   bytes[frames.back() + 5] ^= 1;   // the footer's size
   const RecordContents contents = parse_record(bytes, "mem");
-  EXPECT_EQ(contents.header(), nullptr);
+  ASSERT_NE(contents.header(), nullptr);
+  EXPECT_EQ(contents.offsets.front(), frames[1]) << "the copy";
+  EXPECT_EQ(contents.header()->run_id(), "r1");
+  EXPECT_TRUE(contents.assumed.empty());
   EXPECT_EQ(contents.footer(), nullptr);
   EXPECT_FALSE(contents.truncated);
   ASSERT_EQ(contents.losses.size(), 2u);
