@@ -19,6 +19,7 @@ using testing::HasSubstr;
 RecordEntry header(int dofs = 2, int actuators = 1) {
   RecordEntry e;
   e.mutable_header()->set_schema_version(kSchemaVersion);
+  e.mutable_header()->set_dt(0.01);
   e.mutable_header()->set_dofs(dofs);
   e.mutable_header()->set_actuators(actuators);
   return e;
@@ -71,9 +72,11 @@ TEST(RecordChecks, AnUnknownSchemaVersionIsNamed) {
 TEST(RecordChecks, DuplicatedAndReversedStepsAreNamedWithTheirEntry) {
   const RecordChecks checks =
       check_record(record_of({header(), step(0), step(1), step(1), step(3), step(2), footer()}));
-  ASSERT_EQ(checks.problems.size(), 2u) << checks.summary();
+  ASSERT_EQ(checks.problems.size(), 4u) << checks.summary();
   EXPECT_THAT(checks.problems[0], HasSubstr("entry 3 (step 1): comes after step 1 (a duplicate)"));
-  EXPECT_THAT(checks.problems[1], HasSubstr("entry 5 (step 2): comes after step 3 (out of order)"));
+  EXPECT_THAT(checks.problems[1], HasSubstr("entry 4 (step 3): steps 2-2 are absent before it"));
+  EXPECT_THAT(checks.problems[2], HasSubstr("entry 5 (step 2): comes after step 3 (out of order)"));
+  EXPECT_THAT(checks.problems[3], HasSubstr("entry 5 (step 2): time 0.02 s is before"));
 }
 
 TEST(RecordChecks, ValuesNotFiniteAndSizesThatDisagreeWithTheHeaderAreNamed) {
@@ -94,7 +97,18 @@ TEST(RecordChecks, AHeaderThatCannotSizeATableIsFatal) {
     EXPECT_THAT(checks.summary(), HasSubstr("dofs " + std::to_string(dofs) + " outside [1, "));
   }
   EXPECT_TRUE(check_record(record_of({header(2, 3), footer()})).fatal);
-  EXPECT_TRUE(check_record(record_of({step(0), footer()})).fatal) << "no header";
+  EXPECT_TRUE(check_record(record_of({footer()})).fatal) << "no header, no step";
+}
+
+// Without a header the steps are read with one assumed from them, which is named.
+TEST(RecordChecks, ARecordWithoutHeaderIsReadWithTheAssumedOneNamed) {
+  const RecordChecks checks = check_record(record_of({step(0), step(1), step(2), footer()}));
+  EXPECT_FALSE(checks.fatal);
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0],
+              HasSubstr("no intact header entry: crafted.rthsrec: no intact header (every copy "
+                        "damaged or missing): read with one assumed from the steps: dofs 2 and "
+                        "actuators 1 (the step frames' sizes), dt 0.01 s (the step times)"));
 }
 
 TEST(RecordChecks, ARecordCutBetweenTwoEntriesReadsAsCut) {
