@@ -119,5 +119,78 @@ TEST(RecordChecks, ARecordCutBetweenTwoEntriesReadsAsCut) {
   EXPECT_FALSE(check_record(record_of({header(), step(0), footer()})).cut);
 }
 
+// The attack's CRC-valid nonsense, each written with valid checksums: each is named.
+RecordEntry header_dt(double dt) {
+  RecordEntry e = header();
+  e.mutable_header()->set_dt(dt);
+  return e;
+}
+
+TEST(RecordChecks, ADtThatIsNoTimeStepIsNamed) {
+  for (double dt : {std::numeric_limits<double>::quiet_NaN(), 0.0, -1.0}) {
+    const RecordChecks checks =
+        check_record(record_of({header_dt(dt), step(0), step(1), footer()}));
+    ASSERT_FALSE(checks.ok()) << dt;
+    EXPECT_THAT(checks.problems[0], HasSubstr("entry 0 (header): dt "));
+    EXPECT_THAT(checks.problems[0], HasSubstr(" s is not a time step (finite, > 0)"));
+  }
+}
+
+TEST(RecordChecks, AGapNoDamagedRegionExplainsIsNamed) {
+  const RecordChecks checks =
+      check_record(record_of({header(), step(0), step(1), step(1000000002), footer()}));
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0],
+              HasSubstr("entry 3 (step 1000000002): steps 2-1000000001 are absent before it with "
+                        "no damaged region where they would be (a gap in the sequence)"));
+}
+
+TEST(RecordChecks, TimeGoingBackOrOffStepTimesDtIsNamedAsOneRegion) {
+  std::vector<RecordEntry> entries{header()};
+  for (int k = 0; k < 10; ++k) {
+    entries.push_back(step(k));
+    if (k >= 3 && k <= 7) entries.back().mutable_step()->set_time(0.5 + 0.01 * k);
+  }
+  entries.push_back(step(10));
+  entries.back().mutable_step()->set_time(0.05);
+  entries.push_back(footer());
+  const RecordChecks checks = check_record(record_of(entries));
+  ASSERT_EQ(checks.problems.size(), 4u) << checks.summary();
+  EXPECT_THAT(checks.problems[0], HasSubstr("entries 4-8 (steps 3-7, 5 steps): time 0.53 s is not "
+                                            "step x dt (3 x 0.01 s = 0.03 s)"));
+  EXPECT_THAT(checks.problems[1], HasSubstr("entry 9 (step 8): time 0.08 s is before the step "
+                                            "before's 0.57 s (time goes back)"));
+  EXPECT_THAT(checks.problems[2], HasSubstr("entry 11 (step 10): time 0.05 s is before"));
+  EXPECT_THAT(checks.problems[3], HasSubstr("entry 11 (step 10): time 0.05 s is not step x dt"));
+}
+
+TEST(RecordChecks, ValuesBeyondPlausibleOrTheDeploymentsLimitsAreNamed) {
+  const RecordChecks wild = check_record(record_of({header(), step(0), step(1, 1e300), footer()}));
+  ASSERT_EQ(wild.problems.size(), 1u) << wild.summary();
+  EXPECT_THAT(
+      wild.problems[0],
+      HasSubstr("entry 2 (step 1): displacement[0] = 1e+300 m is beyond a plausible 1000 m"));
+  RecordEntry inputs;
+  inputs.mutable_inputs()
+      ->mutable_study()
+      ->mutable_deployment()
+      ->mutable_limits()
+      ->set_max_displacement(0.5);
+  const RecordChecks limited = check_record(
+      record_of({header(), inputs, step(0), step(1, 0.4), step(2, 0.6), step(3, 0.7), footer()}));
+  ASSERT_EQ(limited.problems.size(), 1u) << limited.summary();
+  EXPECT_THAT(limited.problems[0],
+              HasSubstr("entries 4-5 (steps 2-3, 2 steps): displacement[0] = 0.6 m is beyond the "
+                        "deployment's max_displacement 0.5 m"));
+}
+
+TEST(RecordChecks, HeaderCopiesThatDisagreeAreNamed) {
+  const RecordChecks checks =
+      check_record(record_of({header(), header(), step(0), header_dt(0.02), step(1), footer()}));
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0], HasSubstr("entry 3 (header copy): disagrees with the header in "
+                                            "entry 0: modified: dt: 0.01 -> 0.02"));
+}
+
 }  // namespace
 }  // namespace rths::runtime
