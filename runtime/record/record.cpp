@@ -254,6 +254,8 @@ void parse_frames(std::string_view bytes, std::size_t at, RecordContents& conten
     RecordEntry entry;
     if (frame == Frame::kIntact &&
         entry.ParseFromArray(bytes.data() + at + kRecordFrameHeaderBytes, static_cast<int>(size))) {
+      if (entry.has_inputs() && contents.inputs_crc32c == 0)
+        contents.inputs_crc32c = load_le32(bytes.data() + at + 8);
       contents.entries.push_back(std::move(entry));
       contents.offsets.push_back(at);
       at += kRecordFrameHeaderBytes + size;

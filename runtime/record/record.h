@@ -192,6 +192,9 @@ struct RecordContents {
   std::uint64_t truncated_at = 0;  // byte where that cut entry starts
   bool checksummed = true;         // false: an old record without checksums (read unverified)
   std::vector<RecordLoss> losses;  // damaged regions, in file order (each skipped)
+  // The payload CRC-32C of the first intact inputs entry (what RunHeader.inputs_crc32c names);
+  // 0 when there is none or the record has no checksums.
+  std::uint32_t inputs_crc32c = 0;
   std::string warning;  // what the reader has to say: truncation, no checksums, losses, assumed
   // No intact header: the one assumed from the steps (see above); `assumed` says what was
   // assumed and from what ("" when an intact header was read).

@@ -101,6 +101,19 @@ Bounds bounds_of(const RecordContents& contents) {
   return b;
 }
 
+// The inputs entry is the one the header names (when it names one and the entry is intact).
+void check_inputs(const RecordContents& contents, const RunHeader& h, RecordChecks& out) {
+  if (h.inputs_crc32c() == 0 || contents.inputs_crc32c == 0) return;
+  if (contents.inputs_crc32c == h.inputs_crc32c()) return;
+  std::size_t index = 0;
+  while (!contents.entries[index].has_inputs()) ++index;
+  std::ostringstream text;
+  text << entry_name(index) << " (inputs): its CRC-32C " << std::hex << contents.inputs_crc32c
+       << " is not the header's inputs_crc32c " << h.inputs_crc32c()
+       << " (inputs that are not the run's)";
+  out.problems.push_back(text.str());
+}
+
 // The first intact header (or the one assumed from the steps) is sound; its entry index, or
 // contents.entries.size() for an assumed one.
 std::size_t check_header(const RecordContents& contents, RecordChecks& out) {
@@ -129,6 +142,7 @@ std::size_t check_header(const RecordContents& contents, RecordChecks& out) {
                            " outside [0, dofs " + std::to_string(h->dofs()) + "]");
     out.fatal = true;
   }
+  check_inputs(contents, *h, out);
   return index;
 }
 

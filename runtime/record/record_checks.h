@@ -10,7 +10,8 @@
 //              schema_version not kSchemaVersion; dt not finite or not > 0; dofs outside
 //              [1, kMaxRecordDofs] or actuators outside [0, dofs]: `fatal` (no table should be
 //              sized from it); a header copy that differs from the first intact one (the field
-//              paths that differ are named)
+//              paths that differ are named); an intact inputs entry whose payload CRC-32C is not
+//              the header's inputs_crc32c (when it names one)
 //   steps      step 0 first; each step number greater than the one before (no duplicate, no
 //              reversal) and, unless a damaged region lies between them, exactly one greater (a
 //              gap no loss explains is named); time finite, never less than the step before's,

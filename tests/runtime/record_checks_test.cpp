@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "runtime/node/schema.h"
+#include "util/crc32c.h"
 
 namespace rths::runtime {
 namespace {
@@ -190,6 +191,21 @@ TEST(RecordChecks, HeaderCopiesThatDisagreeAreNamed) {
   ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
   EXPECT_THAT(checks.problems[0], HasSubstr("entry 3 (header copy): disagrees with the header in "
                                             "entry 0: modified: dt: 0.01 -> 0.02"));
+}
+
+// Each header copy names the run's inputs entry by its CRC-32C: another inputs entry is named.
+TEST(RecordChecks, AnInputsEntryThatIsNotTheOneTheHeaderNamesIsNamed) {
+  RecordEntry inputs;
+  inputs.mutable_inputs()->mutable_study()->set_name("the run's");
+  const std::string framed = inputs.SerializeAsString();
+  RecordEntry named = header();
+  named.mutable_header()->set_inputs_crc32c(util::crc32c(framed.data(), framed.size()));
+  EXPECT_TRUE(check_record(record_of({named, inputs, step(0), footer()})).ok());
+  inputs.mutable_inputs()->mutable_study()->set_name("another run's");
+  const RecordChecks swapped = check_record(record_of({named, inputs, step(0), footer()}));
+  ASSERT_EQ(swapped.problems.size(), 1u) << swapped.summary();
+  EXPECT_THAT(swapped.problems[0], HasSubstr("entry 1 (inputs): its CRC-32C "));
+  EXPECT_THAT(swapped.problems[0], HasSubstr("(inputs that are not the run's)"));
 }
 
 }  // namespace

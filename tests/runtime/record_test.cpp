@@ -307,6 +307,8 @@ TEST(RecordFaults, ARealRecordIsSoundAndRepeatsItsHeader) {
   std::size_t headers = 0;
   for (const RecordEntry& e : contents.entries) headers += e.has_header();
   EXPECT_EQ(headers, 8u) << "first, before steps 0, 1000, ..., 5000, before the footer";
+  EXPECT_NE(contents.inputs_crc32c, 0u);
+  EXPECT_EQ(contents.header()->inputs_crc32c(), contents.inputs_crc32c) << "names its inputs";
   const RecordChecks checks = check_record(contents);
   EXPECT_TRUE(checks.ok()) << checks.summary();
 }
