@@ -144,6 +144,7 @@ class AsyncRecordWriter {
   // write failed (at any time since the start).
   void close();
   std::uint64_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
+  // Entries appended and written (header copies the writer adds are not counted).
   std::uint64_t written() const { return written_.load(std::memory_order_relaxed); }
   // A write or flush failed; the writer writes nothing more.
   bool failed() const { return failed_.load(std::memory_order_acquire); }

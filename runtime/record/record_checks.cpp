@@ -61,7 +61,7 @@ class Regions {
       problems.push_back("entries " + std::to_string(r.first_entry) + "-" +
                          std::to_string(r.last_entry) + " (steps " + std::to_string(r.first_step) +
                          "-" + std::to_string(r.last_step) + ", " + std::to_string(r.count) +
-                         " steps): " + r.detail + " (the first of them; the same in each)");
+                         " steps): " + r.detail + " (so at the first of them)");
     }
   }
 
