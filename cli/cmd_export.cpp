@@ -7,10 +7,12 @@
 // between two entries without its footer, is exported up to its last complete entry with a
 // warning on stderr; exit 0. An old record without checksums is exported with a warning; exit 0.
 // A record whose checksums hold but whose meaning does not (runtime/record/record_checks.h: schema
-// version, step order, entry sizes against the header's dofs, values not finite) is exported as
-// read, each problem named with its entry number on stderr, exit 1; one whose header cannot size
-// a table (dofs -1 or 100000) writes nothing, exit 1. A missing file, or one that is no record,
-// is exit 2.
+// version, dt, step order and gaps, time against step x dt, entry sizes against the header's
+// dofs, values not finite or beyond the deployment's limits or plausible bounds, header copies
+// that disagree, no intact header) is exported as read, each problem named with its entries and
+// steps on stderr, exit 1; one whose header cannot size a table (dofs -1 or 100000) writes
+// nothing, exit 1. --strict: any warning is exit 1 too (a truncated record, one cut between two
+// entries, one without checksums). A missing file, or one that is no record, is exit 2.
 #include <nlohmann/json.hpp>
 
 #include <iostream>
@@ -73,7 +75,7 @@ std::string node_health_text(const runtime::RunFooter* footer) {
 // kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
 // cannot be written, kExitRunFailed after exporting a record that lost entries.
 void run_export(const std::string& record, const std::map<results::Format, std::string>& outputs,
-                bool json) {
+                bool json, bool strict) {
   for (const auto& [format, path] : outputs)
     util::refuse_output_over_input({"--" + results::extension(format).substr(1), path},
                                    {{"record", record}});
@@ -136,6 +138,10 @@ void run_export(const std::string& record, const std::map<results::Format, std::
   if (!checks.problems.empty())
     throw ExitError(kExitRunFailed,
                     "export: the record is implausible (exported as read): " + checks.summary());
+  if (strict && (!contents.warning.empty() || checks.cut))
+    throw ExitError(kExitRunFailed,
+                    "export: --strict: the record is not whole (exported as read): " +
+                        (contents.warning.empty() ? checks.summary() : contents.warning));
 }
 
 }  // namespace
@@ -146,6 +152,7 @@ void add_export_command(CLI::App& app) {
   auto record = std::make_shared<std::string>();
   auto outputs = std::make_shared<std::map<results::Format, std::string>>();
   auto json = std::make_shared<bool>(false);
+  auto strict = std::make_shared<bool>(false);
   cmd->add_option("record", *record, "run record (.rthsrec)")->required();
   auto* csv = cmd->add_option_function<std::string>(
       "--csv", [outputs](const std::string& p) { (*outputs)[results::Format::kCsv] = p; },
@@ -159,9 +166,12 @@ void add_export_command(CLI::App& app) {
   cmd->callback([=] {
     if (csv->count() + mat->count() + h5->count() == 0)
       throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");
-    run_export(*record, *outputs, *json);
+    run_export(*record, *outputs, *json, *strict);
   });
   cmd->add_flag("--json", *json, "print a JSON summary on stdout");
+  cmd->add_flag("--strict", *strict,
+                "exit 1 on any warning: also for a truncated record, one cut between two "
+                "entries or one without checksums");
 }
 
 }  // namespace rths::cli

@@ -97,8 +97,9 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   // Reused every step so that, after the first steps, building an entry allocates nothing.
   runtime::RecordEntry step_entry;
   runtime::StepRecord step_record;
-  // The header as written first; written again just before the footer, so that a record whose
-  // first copy is damaged still has one (readers take the first copy that reads).
+  // The header as written first; written again just before the footer (the record writer also
+  // copies it before the first step and every kHeaderRepeatSteps steps), so a record whose first
+  // copy is damaged still has one (readers take the first copy that reads).
   runtime::RecordEntry header_entry;
 
   // Off the loop (header, footer): waits for room rather than drop.

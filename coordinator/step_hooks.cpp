@@ -8,6 +8,7 @@
 #include <string>
 
 #include "study/study_inputs.h"
+#include "util/crc32c.h"
 #include "util/process.h"
 
 namespace rths::coordinator {
@@ -107,12 +108,14 @@ void RunState::write_header() {
       "CLOCK_REALTIME ns; round_trip uses the coordinator's clock only, one-way lags "
       "include the clock offset between hosts");
   if (options.platform) *h.mutable_platform() = *options.platform;
-  append_waiting(entry);
-  header_entry = std::move(entry);
   // The record carries its inputs (motion as run, matrices, traces) in an entry of their own, so
-  // it reads anywhere and a damaged inputs entry loses nothing else.
+  // it reads anywhere and a damaged inputs entry loses nothing else; each header copy names them.
   runtime::RecordEntry inputs;
   *inputs.mutable_inputs()->mutable_study() = core::with_embedded_inputs(prepared);
+  const std::string inputs_bytes = inputs.SerializeAsString();
+  h.set_inputs_crc32c(util::crc32c(inputs_bytes.data(), inputs_bytes.size()));
+  append_waiting(entry);
+  header_entry = std::move(entry);
   append_waiting(inputs);
 }
 

@@ -119,15 +119,16 @@ namespace {
 
 // The run's identity, outcome and integrity as table attributes.
 void set_record_attributes(const runtime::RecordContents& record, Table& t) {
-  const runtime::RunHeader* header = record.header();
+  const runtime::RunHeader* header = record.header_or_assumed();
   t.set_attribute("run_id", header->run_id());
   t.set_attribute("case_name", header->case_name());
   t.set_attribute("clock", header->clock());
   const runtime::RunFooter* footer = record.footer();
   t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
-  t.set_attribute("integrity", !record.checksummed     ? "unverified: written without checksums"
-                               : record.lost_entries() ? "damaged: " + record.loss_report()
-                                                       : "verified (CRC-32C per entry)");
+  t.set_attribute("integrity", (!record.checksummed     ? "unverified: written without checksums"
+                                : record.lost_entries() ? "damaged: " + record.loss_report()
+                                                        : "verified (CRC-32C per entry)") +
+                                   (record.assumed.empty() ? "" : "; " + record.assumed));
   std::string lost;
   // Appended piece by piece: GCC 12 misreads `"-" + std::to_string(...)` here (-Wrestrict).
   for (const auto& [first, last] : record.missing_steps()) {
@@ -187,8 +188,8 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
 }  // namespace
 
 Table record_table(const runtime::RecordContents& record) {
-  const runtime::RunHeader* header = record.header();
-  if (!header) throw std::invalid_argument("the run record has no header entry");
+  const runtime::RunHeader* header = record.header_or_assumed();
+  if (!header) throw std::invalid_argument("the run record has no header entry and no step");
   const std::vector<const runtime::StepRecord*> steps = record.steps();
   const auto dofs = static_cast<std::size_t>(header->dofs());
   const auto actuators = static_cast<std::size_t>(header->actuators());

@@ -25,8 +25,11 @@
 //                 step 0, which has no exchange), then lateness_s and overrun (0/1);
 //                 attributes run_id, case_name,
 //                 clock, status, integrity ("verified (CRC-32C per entry)", "damaged: <what
-//                 was lost>" or "unverified: ..." for an old record) and lost_steps (step
+//                 was lost>" or "unverified: ..." for an old record, then what was assumed
+//                 when every header copy was lost: the table is then sized and timed by the
+//                 header the reader assumed from the steps) and lost_steps (step
 //                 numbers missing from the rows, e.g. "1059-1061,2000"; empty when none).
+//                 Throws std::invalid_argument for a record with neither header nor step.
 //   identify_table `rths identify`: time_s, then per channel c (measured, force):
 //                 c_input_m, c_target_<unit>, c_declared_<unit>, c_final_<unit> (the record, and
 //                 the declared and final model's predictions over the whole record); unit m for

@@ -5,11 +5,15 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <sstream>
 #include <stdexcept>
 
+#include "runtime/node/schema.h"
 #include "util/crc32c.h"
 
 namespace rths::runtime {
@@ -51,6 +55,22 @@ void seal_record_frame(char* frame, std::uint32_t payload_size) {
 
 void append_record_frame(const RecordEntry& entry, std::string& out) { frame_into(entry, out); }
 
+std::string_view HeaderRepeat::copy_before(RecordEntry::EntryCase kind) const {
+  if (kind != RecordEntry::kStep || header_frame_.empty()) return {};
+  return copies_ == 1 || steps_since_ >= kHeaderRepeatSteps ? std::string_view(header_frame_)
+                                                            : std::string_view();
+}
+
+void HeaderRepeat::written(std::string_view frame, RecordEntry::EntryCase kind) {
+  if (kind == RecordEntry::kHeader) {
+    if (frame.data() != header_frame_.data()) header_frame_.assign(frame);
+    ++copies_;
+    steps_since_ = 0;
+  } else if (kind == RecordEntry::kStep) {
+    ++steps_since_;
+  }
+}
+
 RecordWriter::RecordWriter(const std::filesystem::path& path) : path_(path) {
   file_ = std::fopen(path.c_str(), "wb");
   if (!file_)
@@ -69,15 +89,23 @@ RecordWriter::~RecordWriter() {
 void RecordWriter::write(const RecordEntry& entry) {
   buffer_.clear();
   frame_into(entry, buffer_);
-  if (std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size() ||
-      std::fflush(file_) != 0)
+  const auto put = [this](std::string_view frame, RecordEntry::EntryCase kind) {
+    if (std::fwrite(frame.data(), 1, frame.size(), file_) != frame.size())
+      throw std::runtime_error("cannot write run record " + path_.string() + ": " +
+                               std::strerror(errno));
+    repeat_.written(frame, kind);
+  };
+  if (const std::string_view copy = repeat_.copy_before(entry.entry_case()); !copy.empty())
+    put(copy, RecordEntry::kHeader);
+  put(buffer_, entry.entry_case());
+  if (std::fflush(file_) != 0)
     throw std::runtime_error("cannot write run record " + path_.string() + ": " +
                              std::strerror(errno));
 }
 
 AsyncRecordWriter::AsyncRecordWriter(const std::filesystem::path& path, std::size_t capacity,
                                      std::size_t slot_bytes)
-    : path_(path), slots_(capacity) {
+    : path_(path), slots_(capacity), kinds_(capacity, RecordEntry::ENTRY_NOT_SET) {
   if (capacity == 0) throw std::invalid_argument("record queue capacity must be >= 1");
   file_ = std::fopen(path.c_str(), "wb");
   if (!file_)
@@ -117,6 +145,7 @@ bool AsyncRecordWriter::append(const RecordEntry& entry) {
   slot.resize(kRecordFrameHeaderBytes + entry.ByteSizeLong());
   entry.SerializeWithCachedSizesToArray(
       reinterpret_cast<std::uint8_t*>(slot.data() + kRecordFrameHeaderBytes));
+  kinds_[tail % slots_.size()] = entry.entry_case();
   tail_.store(tail + 1, std::memory_order_release);
   sem_post(&wake_);
   return true;
@@ -128,18 +157,26 @@ void AsyncRecordWriter::drain() {
   if (head == tail) return;
   for (; head < tail; ++head) {
     std::string& slot = slots_[head % slots_.size()];
+    const RecordEntry::EntryCase kind = kinds_[head % slots_.size()];
     if (!failed()) {
       seal_record_frame(slot.data(),
                         static_cast<std::uint32_t>(slot.size() - kRecordFrameHeaderBytes));
-      if (std::fwrite(slot.data(), 1, slot.size(), file_) != slot.size())
-        fail(errno);
-      else
-        written_.fetch_add(1, std::memory_order_relaxed);
+      write_frame(slot, kind);
     }
     if (observer_) observer_->on_entry(slot);
     head_.store(head + 1, std::memory_order_release);
   }
   if (!failed() && std::fflush(file_) != 0) fail(errno);
+}
+
+void AsyncRecordWriter::write_frame(std::string_view frame, RecordEntry::EntryCase kind) {
+  if (const std::string_view copy = repeat_.copy_before(kind); !copy.empty()) {
+    if (std::fwrite(copy.data(), 1, copy.size(), file_) != copy.size()) return fail(errno);
+    repeat_.written(copy, RecordEntry::kHeader);
+  }
+  if (std::fwrite(frame.data(), 1, frame.size(), file_) != frame.size()) return fail(errno);
+  repeat_.written(frame, kind);
+  written_.fetch_add(1, std::memory_order_relaxed);
 }
 
 void AsyncRecordWriter::fail(int error) {
@@ -206,34 +243,33 @@ void add_loss(RecordContents& contents, std::uint64_t first, std::uint64_t end) 
 }
 
 // Frames from `at` to the end: intact entries kept, damaged regions skipped and recorded, a frame
-// cut by the end of the file marks the record truncated.
+// cut by the end of the file (with no frame header after it) marks the record truncated. A frame
+// that does not read (damaged payload, or a size running past the end) is not trusted to say
+// where the next one starts: the next frame header after its own does.
 void parse_frames(std::string_view bytes, std::size_t at, RecordContents& contents) {
   while (at < bytes.size()) {
     std::uint32_t size = 0;
     const Frame frame =
         bytes.size() - at < kRecordFrameHeaderBytes ? Frame::kCut : frame_at(bytes, at, &size);
-    if (frame == Frame::kCut) {
+    RecordEntry entry;
+    if (frame == Frame::kIntact &&
+        entry.ParseFromArray(bytes.data() + at + kRecordFrameHeaderBytes, static_cast<int>(size))) {
+      if (entry.has_inputs() && contents.inputs_crc32c == 0)
+        contents.inputs_crc32c = load_le32(bytes.data() + at + 8);
+      contents.entries.push_back(std::move(entry));
+      contents.offsets.push_back(at);
+      at += kRecordFrameHeaderBytes + size;
+      continue;
+    }
+    const std::size_t next = next_frame(bytes, at + 1);
+    if (frame == Frame::kCut && next == std::string_view::npos) {
       contents.truncated = true;
       contents.truncated_at = at;
       return;
     }
-    if (frame == Frame::kNone) {
-      const std::size_t next = next_frame(bytes, at + 1);
-      add_loss(contents, at, next == std::string_view::npos ? bytes.size() : next);
-      if (next == std::string_view::npos) return;
-      at = next;
-      continue;
-    }
-    const std::size_t end = at + kRecordFrameHeaderBytes + size;
-    RecordEntry entry;
-    if (frame == Frame::kIntact &&
-        entry.ParseFromArray(bytes.data() + at + kRecordFrameHeaderBytes, static_cast<int>(size))) {
-      contents.entries.push_back(std::move(entry));
-      contents.offsets.push_back(at);
-    } else {
-      add_loss(contents, at, end);
-    }
-    at = end;
+    add_loss(contents, at, next == std::string_view::npos ? bytes.size() : next);
+    if (next == std::string_view::npos) return;
+    at = next;
   }
 }
 
@@ -284,6 +320,64 @@ void locate_losses(RecordContents& contents) {
   }
 }
 
+// The value most steps agree on (ties: the larger); 0 when none.
+template <class Count>
+int most_common(const std::vector<const StepRecord*>& steps, Count count) {
+  std::map<int, std::size_t> seen;
+  for (const StepRecord* s : steps) ++seen[count(*s)];
+  int best = 0;
+  std::size_t most = 0;
+  for (const auto& [value, n] : seen)
+    if (n >= most) best = value, most = n;
+  return best;
+}
+
+// dt as the median of (time difference / step difference) over consecutive intact steps whose
+// times rise; 0 when no two steps say.
+double dt_from_step_times(const std::vector<const StepRecord*>& steps) {
+  std::vector<double> dts;
+  for (std::size_t i = 1; i < steps.size(); ++i) {
+    const std::int64_t gap = steps[i]->step() - steps[i - 1]->step();
+    const double dt = (steps[i]->time() - steps[i - 1]->time()) / static_cast<double>(gap);
+    if (gap > 0 && std::isfinite(dt) && dt > 0) dts.push_back(dt);
+  }
+  if (dts.empty()) return 0.0;
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2),
+                   dts.end());
+  return dts[dts.size() / 2];
+}
+
+// No intact header but intact steps: the header the steps imply, and what was assumed.
+void assume_header(RecordContents& contents) {
+  const std::vector<const StepRecord*> steps = contents.steps();
+  if (contents.header() || steps.empty()) return;
+  RunHeader h;
+  h.set_schema_version(kSchemaVersion);
+  h.set_dofs(most_common(steps, [](const StepRecord& s) { return s.displacement_size(); }));
+  h.set_actuators(most_common(steps, [](const StepRecord& s) { return s.command_size(); }));
+  h.set_dt(dt_from_step_times(steps));
+  const StepRecord* widest = steps.front();
+  for (const StepRecord* s : steps)
+    if (s->links_size() > widest->links_size()) widest = s;
+  std::string links;
+  for (const LinkSample& link : widest->links()) {
+    h.add_link_node_ids(link.node_id());
+    if (!links.empty()) links += ',';  // piece by piece: GCC 12 misreads "," + ... (-Wrestrict)
+    links += std::to_string(link.node_id());
+  }
+  const config::Study* study = contents.study_as_run();
+  if (study) *h.mutable_study() = *study;
+  std::ostringstream text;
+  text << contents.source << ": no intact header (every copy damaged or missing): read with one "
+       << "assumed from the steps: dofs " << h.dofs() << " and actuators " << h.actuators()
+       << " (the step frames' sizes), dt " << h.dt() << " s (the step times), links [" << links
+       << "] (the link samples), "
+       << (study ? "the study from the inputs entry" : "no study (the inputs entry is lost too)")
+       << "; run id, case and clock unknown";
+  contents.assumed = text.str();
+  contents.assumed_header = std::move(h);
+}
+
 void compose_warning(RecordContents& contents, const std::string& source, std::size_t bytes) {
   std::string& w = contents.warning;
   const auto add = [&w](const std::string& text) { w += (w.empty() ? "" : "; ") + text; };
@@ -291,6 +385,7 @@ void compose_warning(RecordContents& contents, const std::string& source, std::s
     add(source + " was written without checksums (a record from before rths checked them): " +
         "its entries are read unverified");
   if (contents.lost_entries()) add(contents.loss_report());
+  if (!contents.assumed.empty()) add(contents.assumed);
   if (contents.truncated)
     add(source + ": truncated after " + std::to_string(contents.entries.size()) +
         " complete entries (byte " + std::to_string(contents.truncated_at) + " of " +
@@ -321,6 +416,7 @@ RecordContents parse_record(std::string_view bytes, const std::string& source) {
     parse_unchecksummed(bytes, source, contents);
   }
   locate_losses(contents);
+  assume_header(contents);
   compose_warning(contents, source, bytes.size());
   return contents;
 }
@@ -336,6 +432,11 @@ const RunHeader* RecordContents::header() const {
   for (const auto& e : entries)
     if (e.has_header()) return &e.header();
   return nullptr;
+}
+
+const RunHeader* RecordContents::header_or_assumed() const {
+  if (const RunHeader* h = header()) return h;
+  return assumed_header ? &*assumed_header : nullptr;
 }
 
 const RunFooter* RecordContents::footer() const {

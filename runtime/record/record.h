@@ -1,9 +1,14 @@
 #pragma once
 // Run record: a stream of rths.runtime.RecordEntry: the header, the inputs, then steps and events,
 // then the header again and a footer when the run ended in an orderly way (a record without a
-// footer was cut short; the second header keeps a record whose first copy is damaged whole). Each
-// entry is flushed to the OS at once, so a crash of the writer loses at most the entry being
-// written.
+// footer was cut short). Each entry is flushed to the OS at once, so a crash of the writer loses
+// at most the entry being written.
+// Header copies: both writers write the last header again (the same frame, byte for byte) before
+// the first step and then before every kHeaderRepeatSteps-th step, so a record cut anywhere after
+// its first step holds two copies, and a damaged copy costs nothing while another reads. A record
+// whose every copy is damaged is still read: the reader assumes a header from the steps (dofs and
+// actuators from the step frames' sizes, dt from the step times, links from the link samples, the
+// study from the inputs entry when it is intact) and says so (RecordContents::assumed).
 //
 // Format (version 2), every integer little-endian:
 //   file      preamble frame*
@@ -18,7 +23,11 @@
 // Reading (read_record, parse_record) verifies every checksum and salvages: after a damaged
 // region it resynchronises on the next frame whose sync and frame-header checksum hold, so every
 // intact entry around a damaged one is kept, and each damaged region is reported (bytes, and the
-// steps it held, from the intact steps around it). A record written before checksums (no
+// steps it held, from the intact steps around it). A frame whose size is impossible (its payload
+// would run past the end of the file, or its payload checksum fails) is not trusted to say where
+// the next frame starts: the reader looks for the next frame header after its own, so a forged or
+// damaged size never hides the intact frames behind it; only a frame with no frame header after
+// it is a truncation (a crash cut it). A record written before checksums (no
 // preamble; varint size, then the entry) still reads, unverified, with a warning.
 // The one reader of a record's content is runtime::measure_run (runtime/record/measurements.h),
 // over what read_record returns.
@@ -29,6 +38,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -41,6 +51,24 @@ namespace rths::runtime {
 
 inline constexpr std::size_t kRecordPreambleBytes = 8;
 inline constexpr std::size_t kRecordFrameHeaderBytes = 16;
+// Steps between two header copies (see above): about 1 % of a record's bytes for a header of a
+// few kB and steps of ~200 bytes.
+inline constexpr std::int64_t kHeaderRepeatSteps = 1000;
+
+// Where the writers put header copies: told of each frame as it is written, it says before which
+// step frame the last header goes again. Writer-side only; one thread.
+class HeaderRepeat {
+ public:
+  // The frame (as in the file) to write before a frame of this kind, empty for none.
+  std::string_view copy_before(RecordEntry::EntryCase kind) const;
+  // After `frame` (as in the file, a header copy included) was written.
+  void written(std::string_view frame, RecordEntry::EntryCase kind);
+
+ private:
+  std::string header_frame_;  // the last header written, sealed
+  int copies_ = 0;            // header frames written
+  std::int64_t steps_since_ = 0;
+};
 
 // The 8 bytes a record of this format starts with.
 std::string_view record_preamble();
@@ -60,7 +88,7 @@ class RecordWriter {
   ~RecordWriter();
   RecordWriter(const RecordWriter&) = delete;
   RecordWriter& operator=(const RecordWriter&) = delete;
-  // Appends and flushes one entry. Throws on a write error.
+  // Appends and flushes one entry (after a header copy when one is due). Throws on a write error.
   void write(const RecordEntry& entry);
   const std::filesystem::path& path() const { return path_; }
 
@@ -68,6 +96,7 @@ class RecordWriter {
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::string buffer_;
+  HeaderRepeat repeat_;
 };
 
 // Sees each entry after the writer thread wrote it, on that thread (never on the thread that
@@ -87,11 +116,12 @@ class RecordObserver {
 //                   blocks). Ring full (the writer is more than `capacity` entries behind): the
 //                   entry is dropped and counted (dropped()); the caller reports the gap, it is
 //                   never silent.
-//   writer thread   seals each slot's frame (checksums), writes it and flushes every time the ring
-//                   runs empty. The first failed write or flush (disk full, I/O error, file size
-//                   limit) is kept (failed(), failure()); nothing is written after it, so the
-//                   file stays a readable prefix. The loop polls failed() once a step and stops
-//                   the run: a record that cannot be written is a run that keeps nothing.
+//   writer thread   seals each slot's frame (checksums), writes it (after a header copy when one
+//                   is due: HeaderRepeat) and flushes every time the ring runs empty. The first
+//                   failed write or flush (disk full, I/O error, file size limit) is kept
+//                   (failed(), failure()); nothing is written after it, so the file stays a
+//                   readable prefix. The loop polls failed() once a step and stops the run: a
+//                   record that cannot be written is a run that keeps nothing.
 //   close()         (and the destructor) writes everything queued, then joins the writer.
 // Crash bound: kill -9 of the process loses at most the entries still in the ring, which is at
 // most `capacity` (entries are written in order, so the file is a prefix of what was appended:
@@ -114,6 +144,7 @@ class AsyncRecordWriter {
   // write failed (at any time since the start).
   void close();
   std::uint64_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
+  // Entries appended and written (header copies the writer adds are not counted).
   std::uint64_t written() const { return written_.load(std::memory_order_relaxed); }
   // A write or flush failed; the writer writes nothing more.
   bool failed() const { return failed_.load(std::memory_order_acquire); }
@@ -126,11 +157,15 @@ class AsyncRecordWriter {
 
  private:
   void drain();
+  // Writer thread: the header copy due before it, then the sealed frame; a failure is kept.
+  void write_frame(std::string_view frame, RecordEntry::EntryCase kind);
   void fail(int error);  // writer thread: keeps the first error
   RecordObserver* observer_ = nullptr;
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   std::vector<std::string> slots_;
+  std::vector<RecordEntry::EntryCase> kinds_;     // each slot's entry kind, set by append()
+  HeaderRepeat repeat_;                           // writer thread
   std::atomic<std::uint64_t> head_{0}, tail_{0};  // consumed, produced (monotonic counts)
   std::atomic<std::uint64_t> dropped_{0}, written_{0};
   std::atomic<bool> stopping_{false}, failed_{false};
@@ -158,8 +193,18 @@ struct RecordContents {
   std::uint64_t truncated_at = 0;  // byte where that cut entry starts
   bool checksummed = true;         // false: an old record without checksums (read unverified)
   std::vector<RecordLoss> losses;  // damaged regions, in file order (each skipped)
-  std::string warning;             // what the reader has to say: truncation, no checksums, losses
+  // The payload CRC-32C of the first intact inputs entry (what RunHeader.inputs_crc32c names);
+  // 0 when there is none or the record has no checksums.
+  std::uint32_t inputs_crc32c = 0;
+  std::string warning;  // what the reader has to say: truncation, no checksums, losses, assumed
+  // No intact header: the one assumed from the steps (see above); `assumed` says what was
+  // assumed and from what ("" when an intact header was read).
+  std::optional<RunHeader> assumed_header;
+  std::string assumed;
+  // The first intact header copy; nullptr when every copy is damaged.
   const RunHeader* header() const;
+  // header(), else the assumed one: what a table of the steps is sized and timed by.
+  const RunHeader* header_or_assumed() const;
   const RunFooter* footer() const;
   // The study as run: the inputs entry's (every file it read embedded), else, for a record
   // without one (older, or its inputs entry damaged), the header's; nullptr without a header.

@@ -1,12 +1,23 @@
 #include "runtime/record/record_checks.h"
 
+#include <google/protobuf/util/message_differencer.h>
+
 #include <cmath>
+#include <map>
+#include <sstream>
+#include <utility>
 
 #include "runtime/node/schema.h"
 
 namespace rths::runtime {
 
 namespace {
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
 
 std::string entry_name(std::size_t index, const StepRecord* step = nullptr) {
   std::string text = "entry ";
@@ -19,77 +30,256 @@ std::string entry_name(std::size_t index, const StepRecord* step = nullptr) {
   return text;
 }
 
-void check_header(const RecordContents& contents, RecordChecks& out) {
+// A problem found in one step: `kind` says which problems are the same (the same kind in
+// consecutive steps is one region), `detail` names it in that step.
+struct Finding {
+  std::string kind, detail;
+};
+
+// Findings merged into regions of consecutive steps, each named once.
+class Regions {
+ public:
+  // `ordinal`: the step's position among the record's steps (consecutive steps differ by one).
+  void add(const Finding& f, std::size_t ordinal, std::size_t entry, std::int64_t step) {
+    const auto open = open_.find(f.kind);
+    if (open != open_.end() && regions_[open->second].last_ordinal + 1 == ordinal) {
+      Region& r = regions_[open->second];
+      r.last_ordinal = ordinal, r.last_entry = entry, r.last_step = step, ++r.count;
+      return;
+    }
+    open_[f.kind] = regions_.size();
+    regions_.push_back({f.detail, ordinal, entry, entry, step, step, 1});
+  }
+  // Appends one problem per region, in entry order.
+  void name_into(std::vector<std::string>& problems) const {
+    for (const Region& r : regions_) {
+      if (r.count == 1) {
+        problems.push_back("entry " + std::to_string(r.first_entry) + " (step " +
+                           std::to_string(r.first_step) + "): " + r.detail);
+        continue;
+      }
+      problems.push_back("entries " + std::to_string(r.first_entry) + "-" +
+                         std::to_string(r.last_entry) + " (steps " + std::to_string(r.first_step) +
+                         "-" + std::to_string(r.last_step) + ", " + std::to_string(r.count) +
+                         " steps): " + r.detail + " (so at the first of them)");
+    }
+  }
+
+ private:
+  struct Region {
+    std::string detail;  // the first step's
+    std::size_t last_ordinal, first_entry, last_entry;
+    std::int64_t first_step, last_step;
+    std::size_t count;
+  };
+  std::vector<Region> regions_;
+  std::map<std::string, std::size_t> open_;  // kind -> its latest region
+};
+
+// The bound a value is checked against, and what sets it.
+struct Bound {
+  double limit;
+  std::string source;  // "the deployment's max_displacement", "a plausible"
+};
+
+struct Bounds {
+  Bound u{kPlausibleDisplacement, "a plausible"}, v{kPlausibleVelocity, "a plausible"},
+      a{kPlausibleAcceleration, "a plausible"}, drift{kPlausibleDisplacement, "a plausible"},
+      force{kPlausibleForce, "a plausible"};
+};
+
+Bounds bounds_of(const RecordContents& contents) {
+  Bounds b;
+  const config::Study* study = contents.study_as_run();
+  if (!study) return b;
+  const config::SafetyLimits& limits = study->deployment().limits();
+  if (limits.max_displacement() > 0) {
+    b.u = {limits.max_displacement(), "the deployment's max_displacement"};
+    b.drift = {2 * limits.max_displacement(), "twice the deployment's max_displacement"};
+  }
+  if (limits.max_velocity() > 0) b.v = {limits.max_velocity(), "the deployment's max_velocity"};
+  return b;
+}
+
+// The inputs entry is the one the header names (when it names one and the entry is intact).
+void check_inputs(const RecordContents& contents, const RunHeader& h, RecordChecks& out) {
+  if (h.inputs_crc32c() == 0 || contents.inputs_crc32c == 0) return;
+  if (contents.inputs_crc32c == h.inputs_crc32c()) return;
+  std::size_t index = 0;
+  while (!contents.entries[index].has_inputs()) ++index;
+  std::ostringstream text;
+  text << entry_name(index) << " (inputs): its CRC-32C " << std::hex << contents.inputs_crc32c
+       << " is not the header's inputs_crc32c " << h.inputs_crc32c()
+       << " (inputs that are not the run's)";
+  out.problems.push_back(text.str());
+}
+
+// The first intact header (or the one assumed from the steps) is sound; its entry index, or
+// contents.entries.size() for an assumed one.
+std::size_t check_header(const RecordContents& contents, RecordChecks& out) {
   std::size_t index = 0;
   while (index < contents.entries.size() && !contents.entries[index].has_header()) ++index;
-  if (index == contents.entries.size()) {
+  const RunHeader* h = contents.header_or_assumed();
+  if (!h) {
     out.problems.push_back("no intact header entry");
     out.fatal = true;
-    return;
+    return index;
   }
-  const RunHeader& h = contents.entries[index].header();
-  const std::string where = entry_name(index) + " (header): ";
-  if (h.schema_version() != kSchemaVersion)
-    out.problems.push_back(where + "schema version " + std::to_string(h.schema_version()) +
+  const bool assumed = index == contents.entries.size();
+  if (assumed) out.problems.push_back("no intact header entry: " + contents.assumed);
+  const std::string where = assumed ? "the assumed header: " : entry_name(index) + " (header): ";
+  if (h->schema_version() != kSchemaVersion)
+    out.problems.push_back(where + "schema version " + std::to_string(h->schema_version()) +
                            ", this reader knows " + std::to_string(kSchemaVersion));
-  if (h.dofs() < 1 || h.dofs() > kMaxRecordDofs) {
-    out.problems.push_back(where + "dofs " + std::to_string(h.dofs()) + " outside [1, " +
+  if (!(std::isfinite(h->dt()) && h->dt() > 0))
+    out.problems.push_back(where + "dt " + number(h->dt()) + " s is not a time step (finite, > 0)");
+  if (h->dofs() < 1 || h->dofs() > kMaxRecordDofs) {
+    out.problems.push_back(where + "dofs " + std::to_string(h->dofs()) + " outside [1, " +
                            std::to_string(kMaxRecordDofs) + "]");
     out.fatal = true;
-  } else if (h.actuators() < 0 || h.actuators() > h.dofs()) {
-    out.problems.push_back(where + "actuators " + std::to_string(h.actuators()) +
-                           " outside [0, dofs " + std::to_string(h.dofs()) + "]");
+  } else if (h->actuators() < 0 || h->actuators() > h->dofs()) {
+    out.problems.push_back(where + "actuators " + std::to_string(h->actuators()) +
+                           " outside [0, dofs " + std::to_string(h->dofs()) + "]");
     out.fatal = true;
   }
+  check_inputs(contents, *h, out);
+  return index;
 }
 
-// The first size or finiteness problem of one step's repeated field, or "".
-template <class Values>
-std::string field_problem(const char* name, const Values& values, int expected) {
-  if (!values.empty() && values.size() != expected)
-    return std::string(name) + " has " + std::to_string(values.size()) + " values, not " +
-           std::to_string(expected);
-  for (int i = 0; i < values.size(); ++i)
-    if (!std::isfinite(values.Get(i)))
-      return std::string(name) + "[" + std::to_string(i) + "] is not finite";
-  return {};
-}
-
-std::string step_problem(const StepRecord& s, int dofs, int actuators) {
-  if (!std::isfinite(s.time())) return "time is not finite";
-  if (!std::isfinite(s.ground_acceleration())) return "ground_acceleration is not finite";
-  for (const auto& [name, values, expected] :
-       {std::tuple{"displacement", &s.displacement(), dofs},
-        std::tuple{"velocity", &s.velocity(), dofs},
-        std::tuple{"acceleration", &s.acceleration(), dofs},
-        std::tuple{"command", &s.command(), actuators},
-        std::tuple{"realised", &s.realised(), actuators},
-        std::tuple{"measured_force", &s.measured_force(), actuators}}) {
-    std::string problem = field_problem(name, *values, expected);
-    if (!problem.empty()) return problem;
+// Every later header copy says what the first intact one says.
+void check_copies(const RecordContents& contents, std::size_t first, RecordChecks& out) {
+  if (first >= contents.entries.size()) return;
+  const RunHeader& reference = contents.entries[first].header();
+  for (std::size_t i = first + 1; i < contents.entries.size(); ++i) {
+    if (!contents.entries[i].has_header()) continue;
+    google::protobuf::util::MessageDifferencer differ;
+    std::string differences;
+    differ.ReportDifferencesToString(&differences);
+    if (differ.Compare(reference, contents.entries[i].header())) continue;
+    if (differences.size() > 300) differences = differences.substr(0, 300) + "...";
+    while (!differences.empty() && differences.back() == '\n') differences.pop_back();
+    for (char& c : differences)
+      if (c == '\n') c = ';';
+    out.problems.push_back(entry_name(i) + " (header copy): disagrees with the header in " +
+                           entry_name(first) + ": " + differences);
   }
-  return {};
+}
+
+}  // namespace
+
+namespace {
+
+// A repeated field sized as the header says, each value finite and within its bound (the first
+// value that is not is named).
+template <class Values>
+void check_field(const std::string& name, const Values& values, int expected, const Bound& bound,
+                 const char* unit, std::vector<Finding>& out) {
+  if (!values.empty() && values.size() != expected) {
+    out.push_back({name + " size", name + " has " + std::to_string(values.size()) +
+                                       " values, not " + std::to_string(expected)});
+    return;
+  }
+  for (int i = 0; i < values.size(); ++i) {
+    const double x = values.Get(i);
+    const std::string at = name + "[" + std::to_string(i) + "]";
+    if (!std::isfinite(x)) {
+      out.push_back({name + " finite", at + " is not finite"});
+      return;
+    }
+    if (std::abs(x) > bound.limit) {
+      out.push_back({name + " bound", at + " = " + number(x) + " " + unit + " is beyond " +
+                                          bound.source + " " + number(bound.limit) + " " + unit});
+      return;
+    }
+  }
+}
+
+std::vector<Finding> value_findings(const StepRecord& s, int dofs, int actuators, const Bounds& b) {
+  std::vector<Finding> out;
+  const double ground = s.ground_acceleration();
+  if (!std::isfinite(ground))
+    out.push_back({"ground finite", "ground_acceleration is not finite"});
+  else if (std::abs(ground) > kPlausibleAcceleration)
+    out.push_back({"ground bound", "ground_acceleration = " + number(ground) +
+                                       " m/s^2 is beyond a plausible " +
+                                       number(kPlausibleAcceleration) + " m/s^2"});
+  check_field("displacement", s.displacement(), dofs, b.u, "m", out);
+  check_field("velocity", s.velocity(), dofs, b.v, "m/s", out);
+  check_field("acceleration", s.acceleration(), dofs, b.a, "m/s^2", out);
+  check_field("command", s.command(), actuators, b.drift, "m", out);
+  check_field("realised", s.realised(), actuators, b.drift, "m", out);
+  check_field("measured_force", s.measured_force(), actuators, b.force, "N", out);
+  return out;
+}
+
+// The intact steps read so far: the highest step number, and the last step's time and entry.
+struct Sequence {
+  bool any = false;
+  std::int64_t highest = -1;
+  double time = 0;
+  std::size_t entry = 0;
+};
+
+// A damaged region lies between entries `a` and `b` (it may have held the steps between them).
+bool loss_between(const RecordContents& c, std::size_t a, std::size_t b) {
+  for (const RecordLoss& loss : c.losses)
+    if (loss.first_byte > c.offsets[a] && loss.first_byte < c.offsets[b]) return true;
+  return false;
+}
+
+// Where the step at entry `i` stands in the sequence and in time (dt 0: the header's dt is no
+// step, and time is checked for order only).
+std::vector<Finding> sequence_findings(const RecordContents& c, std::size_t i, const StepRecord& s,
+                                       const Sequence& before, double dt) {
+  std::vector<Finding> out;
+  const std::int64_t k = s.step();
+  if (!before.any) {
+    if (k != 0 && !c.lost_entries()) out.push_back({"first", "the first step is not step 0"});
+  } else if (k <= before.highest) {
+    out.push_back({"order", "comes after step " + std::to_string(before.highest) +
+                                (k == before.highest ? " (a duplicate)" : " (out of order)")});
+  } else if (k > before.highest + 1 && !loss_between(c, before.entry, i)) {
+    out.push_back({"gap", "steps " + std::to_string(before.highest + 1) + "-" +
+                              std::to_string(k - 1) +
+                              " are absent before it with no damaged region where they would "
+                              "be (a gap in the sequence)"});
+  }
+  if (!std::isfinite(s.time())) {
+    out.push_back({"time finite", "time is not finite"});
+    return out;
+  }
+  if (before.any && s.time() < before.time)
+    out.push_back({"time back", "time " + number(s.time()) + " s is before the step before's " +
+                                    number(before.time) + " s (time goes back)"});
+  const double expected = static_cast<double>(k) * dt;
+  if (dt > 0 && !(std::abs(s.time() - expected) <= dt / 2))
+    out.push_back({"time dt", "time " + number(s.time()) + " s is not step x dt (" +
+                                  std::to_string(k) + " x " + number(dt) +
+                                  " s = " + number(expected) + " s)"});
+  return out;
 }
 
 void check_steps(const RecordContents& contents, RecordChecks& out) {
-  const RunHeader* header = contents.header();
+  const RunHeader* header = contents.header_or_assumed();
   const int dofs = header && !out.fatal ? header->dofs() : 0;
   const int actuators = header && !out.fatal ? header->actuators() : 0;
-  std::int64_t previous = -1;
+  const double dt = header && std::isfinite(header->dt()) && header->dt() > 0 ? header->dt() : 0;
+  const Bounds bounds = bounds_of(contents);
+  Regions regions;
+  Sequence before;
+  std::size_t ordinal = 0;
   for (std::size_t i = 0; i < contents.entries.size(); ++i) {
     if (!contents.entries[i].has_step()) continue;
     const StepRecord& s = contents.entries[i].step();
-    const std::string where = entry_name(i, &s) + ": ";
-    if (previous < 0 && s.step() != 0 && !contents.lost_entries())
-      out.problems.push_back(where + "the first step is not step 0");
-    if (previous >= 0 && s.step() <= previous)
-      out.problems.push_back(where + "comes after step " + std::to_string(previous) +
-                             (s.step() == previous ? " (a duplicate)" : " (out of order)"));
-    previous = std::max(previous, s.step());
-    if (dofs == 0) continue;
-    const std::string problem = step_problem(s, dofs, actuators);
-    if (!problem.empty()) out.problems.push_back(where + problem);
+    for (const Finding& f : sequence_findings(contents, i, s, before, dt))
+      regions.add(f, ordinal, i, s.step());
+    if (dofs > 0)
+      for (const Finding& f : value_findings(s, dofs, actuators, bounds))
+        regions.add(f, ordinal, i, s.step());
+    before = {true, std::max(before.highest, s.step()), s.time(), i};
+    ++ordinal;
   }
+  regions.name_into(out.problems);
 }
 
 }  // namespace
@@ -112,7 +302,7 @@ std::string RecordChecks::summary(std::size_t shown) const {
 
 RecordChecks check_record(const RecordContents& contents) {
   RecordChecks out;
-  check_header(contents, out);
+  check_copies(contents, check_header(contents, out), out);
   check_steps(contents, out);
   out.cut = contents.footer() == nullptr && !contents.truncated;
   return out;

@@ -2,7 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include "runtime/node/schema.h"
+#include "runtime/record/record.h"
 #include "tests/support/run_command_line.h"
+#include "util/crc32c.h"
 
 #include <sys/wait.h>
 #include <array>
@@ -267,6 +270,112 @@ TEST(CliTest, ExportNeverOverwritesTheRecordItReads) {
   EXPECT_EQ(std::filesystem::file_size(record), size);
   o = run("export " + record.string() + " --csv " + (dir / "R.csv").string());
   EXPECT_EQ(o.exit_code, 0) << o.output;
+}
+
+rths::runtime::RecordEntry crafted_header(double dt) {
+  rths::runtime::RecordEntry e;
+  rths::runtime::RunHeader& h = *e.mutable_header();
+  h.set_schema_version(rths::runtime::kSchemaVersion);
+  h.set_dt(dt);
+  h.set_dofs(1);
+  h.set_actuators(1);
+  return e;
+}
+
+rths::runtime::RecordEntry crafted_step(std::int64_t k, double time, double u = 0.0) {
+  rths::runtime::RecordEntry e;
+  e.mutable_step()->set_step(k);
+  e.mutable_step()->set_time(time);
+  e.mutable_step()->add_displacement(u);
+  e.mutable_step()->add_command(0.0);
+  return e;
+}
+
+// A record of these entries, each framed with valid checksums as the writer frames them; `forged`
+// goes in raw before entry `forged_at`.
+std::string crafted_record(const std::vector<rths::runtime::RecordEntry>& entries,
+                           const std::string& forged = "", std::size_t forged_at = 0) {
+  std::string bytes(rths::runtime::record_preamble());
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    if (i == forged_at) bytes += forged;
+    rths::runtime::append_record_frame(entries[i], bytes);
+  }
+  return bytes;
+}
+
+// The attack's CRC-valid nonsense: each kind is named on stderr and `--strict` exits non-zero.
+TEST(CliTest, ExportNamesEachKindOfChecksummedNonsenseAndStrictExitsNonZero) {
+  const auto dir = scratch("export_sense");
+  rths::runtime::RecordEntry footer;
+  footer.mutable_footer()->set_status("completed");
+  // The header, steps 0-4 at 0.01 s, then the footer.
+  const auto steps = [&footer](const rths::runtime::RecordEntry& header) {
+    std::vector<rths::runtime::RecordEntry> e{header};
+    for (int k = 0; k < 5; ++k) e.push_back(crafted_step(k, k * 0.01));
+    e.push_back(footer);
+    return e;
+  };
+  rths::runtime::RecordEntry other_dt = crafted_header(0.02);
+  // A 16-byte frame header whose own checksum holds, claiming 4 GB.
+  std::string fake("\xF3\x7A\x1C\xB5\xF0\xFF\xFF\xFF\0\0\0\0", 12);
+  const std::uint32_t crc = rths::util::crc32c(fake.data(), 12);
+  for (int i = 0; i < 4; ++i) fake.push_back(static_cast<char>((crc >> (8 * i)) & 0xFFu));
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases{
+      {"dt_nan", crafted_record(steps(crafted_header(std::nan("")))),
+       "entry 0 (header): dt nan s is not a time step"},
+      {"dt_zero", crafted_record(steps(crafted_header(0))),
+       "entry 0 (header): dt 0 s is not a time step"},
+      {"dt_negative", crafted_record(steps(crafted_header(-1))),
+       "entry 0 (header): dt -1 s is not a time step"},
+      {"gap",
+       crafted_record(
+           {crafted_header(0.01), crafted_step(0, 0), crafted_step(1000000000, 1e7), footer}),
+       "entry 2 (step 1000000000): steps 1-999999999 are absent before it"},
+      {"backwards",
+       crafted_record({crafted_header(0.01), crafted_step(0, 0), crafted_step(1, 0.01),
+                       crafted_step(2, -5), footer}),
+       "entry 3 (step 2): time -5 s is before the step before's 0.01 s (time goes back)"},
+      {"huge_u",
+       crafted_record(
+           {crafted_header(0.01), crafted_step(0, 0), crafted_step(1, 0.01, 1e300), footer}),
+       "entry 2 (step 1): displacement[0] = 1e+300 m is beyond a plausible 1000 m"},
+      {"copies_disagree",
+       crafted_record(
+           {crafted_header(0.01), crafted_step(0, 0), other_dt, crafted_step(1, 0.01), footer}),
+       "entry 2 (header copy): disagrees with the header in entry 0: modified: dt: 0.01 -> 0.02"},
+      {"fake_frame", crafted_record(steps(crafted_header(0.01)), fake, 3), "bytes "},
+  };
+  for (const auto& [name, bytes, named] : cases) {
+    SCOPED_TRACE(name);
+    const auto record = dir / (name + ".rthsrec");
+    std::ofstream(record, std::ios::binary) << bytes;
+    const Outcome o = run("export " + record.string() + " --csv " +
+                          (dir / (name + ".csv")).string() + " --strict");
+    EXPECT_EQ(o.exit_code, 1) << o.output;
+    EXPECT_NE(o.output.find(named), std::string::npos) << o.output;
+    EXPECT_NE(o.output.find("rths export: warning: "), std::string::npos) << o.output;
+  }
+  // The fake frame hides none of the 5 steps behind it.
+  const Outcome fake_read =
+      run("export " + (dir / "fake_frame.rthsrec").string() + " --csv " + (dir / "f.csv").string());
+  EXPECT_NE(fake_read.output.find("wrote 5 steps"), std::string::npos) << fake_read.output;
+  EXPECT_NE(fake_read.output.find("(16 bytes): no step lost"), std::string::npos)
+      << fake_read.output;
+}
+
+// A sound record cut short exports with a warning and exit 0; `--strict` makes that exit 1.
+TEST(CliTest, ExportStrictRefusesARecordCutShort) {
+  const auto dir = scratch("export_strict");
+  const auto record = dir / "cut.rthsrec";
+  std::ofstream(record, std::ios::binary)
+      << crafted_record({crafted_header(0.01), crafted_step(0, 0), crafted_step(1, 0.01)});
+  const std::string csv = " --csv " + (dir / "cut.csv").string();
+  Outcome o = run("export " + record.string() + csv);
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("no footer"), std::string::npos) << o.output;
+  o = run("export " + record.string() + csv + " --strict");
+  EXPECT_EQ(o.exit_code, 1) << o.output;
+  EXPECT_NE(o.output.find("--strict: the record is not whole"), std::string::npos) << o.output;
 }
 
 TEST(CliTest, MotionUnitsAreExplicit) {

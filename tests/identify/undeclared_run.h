@@ -14,6 +14,7 @@
 #include "study/study_inputs.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
+#include "util/crc32c.h"
 
 namespace rths::test {
 
@@ -27,13 +28,22 @@ inline std::filesystem::path scratch(const std::string& name) {
   return dir / (name + ".rthsrec");
 }
 
-// Every entry of `record` written again, with `edit` applied to each first.
+// Every entry of `record` written again, with `edit` applied to each first; each header then
+// names the (edited) inputs entry by its CRC-32C, as the coordinator's headers do, so the record
+// stays one whose header and inputs agree.
 template <class Edit>
 void rewrite(const std::filesystem::path& record, Edit edit) {
   runtime::RecordContents contents = runtime::read_record(record);
-  runtime::RecordWriter writer(record);
+  std::uint32_t inputs_crc32c = 0;
   for (auto& entry : contents.entries) {
     edit(entry);
+    if (entry.has_inputs() && inputs_crc32c == 0)
+      inputs_crc32c = util::crc32c(entry.SerializeAsString());
+  }
+  runtime::RecordWriter writer(record);
+  for (auto& entry : contents.entries) {
+    if (entry.has_header() && inputs_crc32c != 0)
+      entry.mutable_header()->set_inputs_crc32c(inputs_crc32c);
     writer.write(entry);
   }
 }

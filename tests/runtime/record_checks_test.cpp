@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "runtime/node/schema.h"
+#include "util/crc32c.h"
 
 namespace rths::runtime {
 namespace {
@@ -19,6 +20,7 @@ using testing::HasSubstr;
 RecordEntry header(int dofs = 2, int actuators = 1) {
   RecordEntry e;
   e.mutable_header()->set_schema_version(kSchemaVersion);
+  e.mutable_header()->set_dt(0.01);
   e.mutable_header()->set_dofs(dofs);
   e.mutable_header()->set_actuators(actuators);
   return e;
@@ -71,9 +73,11 @@ TEST(RecordChecks, AnUnknownSchemaVersionIsNamed) {
 TEST(RecordChecks, DuplicatedAndReversedStepsAreNamedWithTheirEntry) {
   const RecordChecks checks =
       check_record(record_of({header(), step(0), step(1), step(1), step(3), step(2), footer()}));
-  ASSERT_EQ(checks.problems.size(), 2u) << checks.summary();
+  ASSERT_EQ(checks.problems.size(), 4u) << checks.summary();
   EXPECT_THAT(checks.problems[0], HasSubstr("entry 3 (step 1): comes after step 1 (a duplicate)"));
-  EXPECT_THAT(checks.problems[1], HasSubstr("entry 5 (step 2): comes after step 3 (out of order)"));
+  EXPECT_THAT(checks.problems[1], HasSubstr("entry 4 (step 3): steps 2-2 are absent before it"));
+  EXPECT_THAT(checks.problems[2], HasSubstr("entry 5 (step 2): comes after step 3 (out of order)"));
+  EXPECT_THAT(checks.problems[3], HasSubstr("entry 5 (step 2): time 0.02 s is before"));
 }
 
 TEST(RecordChecks, ValuesNotFiniteAndSizesThatDisagreeWithTheHeaderAreNamed) {
@@ -94,7 +98,18 @@ TEST(RecordChecks, AHeaderThatCannotSizeATableIsFatal) {
     EXPECT_THAT(checks.summary(), HasSubstr("dofs " + std::to_string(dofs) + " outside [1, "));
   }
   EXPECT_TRUE(check_record(record_of({header(2, 3), footer()})).fatal);
-  EXPECT_TRUE(check_record(record_of({step(0), footer()})).fatal) << "no header";
+  EXPECT_TRUE(check_record(record_of({footer()})).fatal) << "no header, no step";
+}
+
+// Without a header the steps are read with one assumed from them, which is named.
+TEST(RecordChecks, ARecordWithoutHeaderIsReadWithTheAssumedOneNamed) {
+  const RecordChecks checks = check_record(record_of({step(0), step(1), step(2), footer()}));
+  EXPECT_FALSE(checks.fatal);
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0],
+              HasSubstr("no intact header entry: crafted.rthsrec: no intact header (every copy "
+                        "damaged or missing): read with one assumed from the steps: dofs 2 and "
+                        "actuators 1 (the step frames' sizes), dt 0.01 s (the step times)"));
 }
 
 TEST(RecordChecks, ARecordCutBetweenTwoEntriesReadsAsCut) {
@@ -103,6 +118,94 @@ TEST(RecordChecks, ARecordCutBetweenTwoEntriesReadsAsCut) {
   EXPECT_FALSE(cut.ok());
   EXPECT_THAT(cut.summary(), HasSubstr("no footer"));
   EXPECT_FALSE(check_record(record_of({header(), step(0), footer()})).cut);
+}
+
+// The attack's CRC-valid nonsense, each written with valid checksums: each is named.
+RecordEntry header_dt(double dt) {
+  RecordEntry e = header();
+  e.mutable_header()->set_dt(dt);
+  return e;
+}
+
+TEST(RecordChecks, ADtThatIsNoTimeStepIsNamed) {
+  for (double dt : {std::numeric_limits<double>::quiet_NaN(), 0.0, -1.0}) {
+    const RecordChecks checks =
+        check_record(record_of({header_dt(dt), step(0), step(1), footer()}));
+    ASSERT_FALSE(checks.ok()) << dt;
+    EXPECT_THAT(checks.problems[0], HasSubstr("entry 0 (header): dt "));
+    EXPECT_THAT(checks.problems[0], HasSubstr(" s is not a time step (finite, > 0)"));
+  }
+}
+
+TEST(RecordChecks, AGapNoDamagedRegionExplainsIsNamed) {
+  const RecordChecks checks =
+      check_record(record_of({header(), step(0), step(1), step(1000000002), footer()}));
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0],
+              HasSubstr("entry 3 (step 1000000002): steps 2-1000000001 are absent before it with "
+                        "no damaged region where they would be (a gap in the sequence)"));
+}
+
+TEST(RecordChecks, TimeGoingBackOrOffStepTimesDtIsNamedAsOneRegion) {
+  std::vector<RecordEntry> entries{header()};
+  for (int k = 0; k < 10; ++k) {
+    entries.push_back(step(k));
+    if (k >= 3 && k <= 7) entries.back().mutable_step()->set_time(0.5 + 0.01 * k);
+  }
+  entries.push_back(step(10));
+  entries.back().mutable_step()->set_time(0.05);
+  entries.push_back(footer());
+  const RecordChecks checks = check_record(record_of(entries));
+  ASSERT_EQ(checks.problems.size(), 4u) << checks.summary();
+  EXPECT_THAT(checks.problems[0], HasSubstr("entries 4-8 (steps 3-7, 5 steps): time 0.53 s is not "
+                                            "step x dt (3 x 0.01 s = 0.03 s)"));
+  EXPECT_THAT(checks.problems[1], HasSubstr("entry 9 (step 8): time 0.08 s is before the step "
+                                            "before's 0.57 s (time goes back)"));
+  EXPECT_THAT(checks.problems[2], HasSubstr("entry 11 (step 10): time 0.05 s is before"));
+  EXPECT_THAT(checks.problems[3], HasSubstr("entry 11 (step 10): time 0.05 s is not step x dt"));
+}
+
+TEST(RecordChecks, ValuesBeyondPlausibleOrTheDeploymentsLimitsAreNamed) {
+  const RecordChecks wild = check_record(record_of({header(), step(0), step(1, 1e300), footer()}));
+  ASSERT_EQ(wild.problems.size(), 1u) << wild.summary();
+  EXPECT_THAT(
+      wild.problems[0],
+      HasSubstr("entry 2 (step 1): displacement[0] = 1e+300 m is beyond a plausible 1000 m"));
+  RecordEntry inputs;
+  inputs.mutable_inputs()
+      ->mutable_study()
+      ->mutable_deployment()
+      ->mutable_limits()
+      ->set_max_displacement(0.5);
+  const RecordChecks limited = check_record(
+      record_of({header(), inputs, step(0), step(1, 0.4), step(2, 0.6), step(3, 0.7), footer()}));
+  ASSERT_EQ(limited.problems.size(), 1u) << limited.summary();
+  EXPECT_THAT(limited.problems[0],
+              HasSubstr("entries 4-5 (steps 2-3, 2 steps): displacement[0] = 0.6 m is beyond the "
+                        "deployment's max_displacement 0.5 m"));
+}
+
+TEST(RecordChecks, HeaderCopiesThatDisagreeAreNamed) {
+  const RecordChecks checks =
+      check_record(record_of({header(), header(), step(0), header_dt(0.02), step(1), footer()}));
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0], HasSubstr("entry 3 (header copy): disagrees with the header in "
+                                            "entry 0: modified: dt: 0.01 -> 0.02"));
+}
+
+// Each header copy names the run's inputs entry by its CRC-32C: another inputs entry is named.
+TEST(RecordChecks, AnInputsEntryThatIsNotTheOneTheHeaderNamesIsNamed) {
+  RecordEntry inputs;
+  inputs.mutable_inputs()->mutable_study()->set_name("the run's");
+  const std::string framed = inputs.SerializeAsString();
+  RecordEntry named = header();
+  named.mutable_header()->set_inputs_crc32c(util::crc32c(framed.data(), framed.size()));
+  EXPECT_TRUE(check_record(record_of({named, inputs, step(0), footer()})).ok());
+  inputs.mutable_inputs()->mutable_study()->set_name("another run's");
+  const RecordChecks swapped = check_record(record_of({named, inputs, step(0), footer()}));
+  ASSERT_EQ(swapped.problems.size(), 1u) << swapped.summary();
+  EXPECT_THAT(swapped.problems[0], HasSubstr("entry 1 (inputs): its CRC-32C "));
+  EXPECT_THAT(swapped.problems[0], HasSubstr("(inputs that are not the run's)"));
 }
 
 }  // namespace

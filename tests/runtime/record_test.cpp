@@ -12,9 +12,17 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <iterator>
+#include <map>
+#include <random>
 #include <string_view>
 #include <thread>
+
+#include "runtime/record/record_checks.h"
+#include "test_support.h"
+#include "tests/support/in_process_run.h"
+#include "util/crc32c.h"
 
 namespace rths::runtime {
 namespace {
@@ -108,7 +116,8 @@ std::string bytes_of(const std::filesystem::path& path) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-// The frame offsets of write_run's entries: header, steps 0..kSteps-1, footer.
+// The frame offsets of write_run's entries: header, its copy (before the first step), steps
+// 0..kSteps-1, footer.
 std::vector<std::size_t> frame_offsets(const std::string& bytes) {
   std::vector<std::size_t> out;
   for (std::size_t at = kRecordPreambleBytes; at < bytes.size();) {
@@ -125,7 +134,7 @@ TEST(Record, StartsWithItsPreambleAndFramesEachEntryWithItsChecksums) {
   write_run(path, true);
   const std::string bytes = bytes_of(path);
   EXPECT_EQ(bytes.substr(0, kRecordPreambleBytes), std::string(record_preamble()));
-  EXPECT_EQ(frame_offsets(bytes).size(), static_cast<std::size_t>(kSteps + 2));
+  EXPECT_EQ(frame_offsets(bytes).size(), static_cast<std::size_t>(kSteps + 3));
   const RecordContents contents = parse_record(bytes, "mem");
   EXPECT_TRUE(contents.checksummed);
   EXPECT_FALSE(contents.lost_entries());
@@ -141,14 +150,14 @@ TEST(Record, AFlippedByteLosesOnlyItsEntryAndTheReportNamesTheStep) {
   write_run(path, true);
   const std::string good = bytes_of(path);
   const auto frames = frame_offsets(good);
-  const int victim = 20;  // step 20: frame 21 (after the header)
-  for (std::size_t at = frames[victim + 1]; at < frames[victim + 2]; ++at) {
+  const int victim = 20;  // step 20: frame 22 (after the header and its copy)
+  for (std::size_t at = frames[victim + 2]; at < frames[victim + 3]; ++at) {
     std::string bytes = good;
     bytes[at] = static_cast<char>(bytes[at] ^ 0x5A);
     const RecordContents contents = parse_record(bytes, "mem");
     SCOPED_TRACE("byte " + std::to_string(at));
     ASSERT_EQ(contents.losses.size(), 1u);
-    EXPECT_EQ(contents.losses[0].first_byte, frames[victim + 1]);
+    EXPECT_EQ(contents.losses[0].first_byte, frames[victim + 2]);
     EXPECT_EQ(contents.losses[0].last_step_before, victim - 1);
     EXPECT_EQ(contents.losses[0].first_step_after, victim + 1);
     EXPECT_NE(contents.warning.find("step 20 lost"), std::string::npos) << contents.warning;
@@ -161,6 +170,7 @@ TEST(Record, AFlippedByteLosesOnlyItsEntryAndTheReportNamesTheStep) {
   }
 }
 
+// The first header damaged: its copy before step 0 reads, so the record keeps its header.
 TEST(Record, ADamagedHeaderOrFooterIsALossNotATruncation) {
   const auto path = temp_record("ends");
   write_run(path, true);
@@ -170,7 +180,10 @@ TEST(Record, ADamagedHeaderOrFooterIsALossNotATruncation) {
   bytes[frames.front() + 2] ^= 1;  // the header's sync
   bytes[frames.back() + 5] ^= 1;   // the footer's size
   const RecordContents contents = parse_record(bytes, "mem");
-  EXPECT_EQ(contents.header(), nullptr);
+  ASSERT_NE(contents.header(), nullptr);
+  EXPECT_EQ(contents.offsets.front(), frames[1]) << "the copy";
+  EXPECT_EQ(contents.header()->run_id(), "r1");
+  EXPECT_TRUE(contents.assumed.empty());
   EXPECT_EQ(contents.footer(), nullptr);
   EXPECT_FALSE(contents.truncated);
   ASSERT_EQ(contents.losses.size(), 2u);
@@ -208,6 +221,192 @@ TEST(Record, EveryCutIsATruncationOfIntactEntries) {
     EXPECT_FALSE(contents.lost_entries()) << contents.warning;
     EXPECT_EQ(contents.entries.size(),
               size < kRecordPreambleBytes ? 0 : whole - 1);  // all but the cut one
+  }
+}
+
+// A real record: the paper frame for 6 s (6000 steps, its header 8 times), run in process by the
+// coordinator as `rths launch` runs it, under a displacement limit the response stays within.
+const std::string& real_record() {
+  static const std::string bytes = [] {
+    const auto path = temp_record("real");
+    coordinator::CoordinatorOptions options;
+    options.run_id = "real";
+    options.case_name = "reference";
+    options.record = path;
+    const auto outcome =
+        coordinator::run_in_process(test::prepare(test::paper_frame_study(
+                                        6, "deployment { limits { max_displacement: 0.5 } }")),
+                                    options);
+    EXPECT_TRUE(outcome.ok) << outcome.status;
+    return bytes_of(path);
+  }();
+  return bytes;
+}
+
+// How a damaged copy of a record reads against the original: each entry whose bytes are all
+// there unchanged must come back; each changed or cut one must not be read, and must lie in a
+// named damaged region (or be the truncated tail).
+struct Salvage {
+  std::size_t intact_steps = 0, exported_steps = 0, damaged = 0, silent = 0, assumed = 0;
+  bool exportable = true;  // a header (read or assumed) sizes the table as the original's does
+  Salvage& operator+=(const Salvage& o) {
+    intact_steps += o.intact_steps, exported_steps += o.exported_steps, damaged += o.damaged;
+    silent += o.silent, assumed += o.assumed, exportable = exportable && o.exportable;
+    return *this;
+  }
+};
+
+bool named(const RecordContents& read, std::uint64_t first, std::uint64_t end, std::size_t size) {
+  if (end > size && read.truncated && read.truncated_at <= first) return true;
+  for (const RecordLoss& loss : read.losses)
+    if (loss.first_byte <= first && std::min<std::uint64_t>(end, size) <= loss.end_byte)
+      return true;
+  return false;
+}
+
+Salvage salvage(const std::string& original, const std::string& damaged) {
+  const RecordContents truth = parse_record(original, "original");
+  const RecordContents read = parse_record(damaged, "damaged");
+  std::map<std::uint64_t, std::size_t> read_at;
+  for (std::size_t j = 0; j < read.offsets.size(); ++j) read_at[read.offsets[j]] = j;
+  Salvage v;
+  for (std::size_t i = 0; i < truth.offsets.size(); ++i) {
+    const std::uint64_t first = truth.offsets[i];
+    const std::uint64_t end = i + 1 < truth.offsets.size() ? truth.offsets[i + 1] : original.size();
+    const bool intact = end <= damaged.size() &&
+                        original.compare(first, end - first, damaged, first, end - first) == 0;
+    const auto found = read_at.find(first);
+    const bool back = found != read_at.end() && read.entries[found->second].SerializeAsString() ==
+                                                    truth.entries[i].SerializeAsString();
+    if (intact) {
+      v.intact_steps += truth.entries[i].has_step();
+      v.exported_steps += truth.entries[i].has_step() && back;
+    } else if (first < damaged.size()) {
+      ++v.damaged;
+      v.silent += found != read_at.end() || !named(read, first, end, damaged.size());
+    }
+  }
+  const RunHeader* h = read.header_or_assumed();
+  v.exportable = read.steps().empty() ||
+                 (h && h->dofs() == truth.header()->dofs() &&
+                  h->actuators() == truth.header()->actuators() && !check_record(read).fatal);
+  v.assumed = read.assumed.empty() ? 0 : 1;
+  return v;
+}
+
+// The first header's frame: [offsets[0], offsets[1]).
+std::pair<std::size_t, std::size_t> first_header(const std::string& record) {
+  const RecordContents contents = parse_record(record, "real");
+  return {contents.offsets[0], contents.offsets[1]};
+}
+
+TEST(RecordFaults, ARealRecordIsSoundAndRepeatsItsHeader) {
+  const RecordContents contents = parse_record(real_record(), "real");
+  EXPECT_TRUE(contents.warning.empty()) << contents.warning;
+  EXPECT_EQ(contents.steps().size(), 6000u);
+  std::size_t headers = 0;
+  for (const RecordEntry& e : contents.entries) headers += e.has_header();
+  EXPECT_EQ(headers, 8u) << "first, before steps 0, 1000, ..., 5000, before the footer";
+  EXPECT_NE(contents.inputs_crc32c, 0u);
+  EXPECT_EQ(contents.header()->inputs_crc32c(), contents.inputs_crc32c) << "names its inputs";
+  const RecordChecks checks = check_record(contents);
+  EXPECT_TRUE(checks.ok()) << checks.summary();
+}
+
+// The attack's trial: 200 copies with 1-100 random byte flips each and one byte of the first
+// header flipped too: every intact step is read, every damaged entry is in a named region.
+TEST(RecordFaults, FlippedCopiesWithTheirHeaderHitLoseNoIntactStepAndNothingSilently) {
+  const std::string& original = real_record();
+  const auto [header_at, header_end] = first_header(original);
+  std::mt19937 random(51);
+  Salvage total;
+  for (int r = 0; r < 200; ++r) {
+    std::string damaged = original;
+    damaged[header_at + random() % (header_end - header_at)] ^=
+        static_cast<char>(1 + random() % 255);
+    for (int flips = 1 + static_cast<int>(random() % 100); flips > 0; --flips)
+      damaged[random() % damaged.size()] ^= static_cast<char>(1 + random() % 255);
+    const Salvage v = salvage(original, damaged);
+    EXPECT_EQ(v.exported_steps, v.intact_steps) << "copy " << r;
+    EXPECT_EQ(v.silent, 0u) << "copy " << r;
+    EXPECT_TRUE(v.exportable) << "copy " << r;
+    total += v;
+  }
+  EXPECT_GT(total.damaged, 2000u);
+  std::cout << "200 flipped copies: " << total.damaged << " damaged entries, all named (0 silent); "
+            << total.exported_steps << " of " << total.intact_steps << " intact steps read; "
+            << total.assumed << " read with an assumed header\n";
+}
+
+// 60 cuts anywhere, each with one byte of the first header flipped: the header's copy before the
+// first step (or, for a cut before it, nothing to lose) keeps every intact step readable.
+TEST(RecordFaults, CutCopiesWithTheirHeaderHitLoseNoIntactStep) {
+  const std::string& original = real_record();
+  const auto [header_at, header_end] = first_header(original);
+  std::mt19937 random(5151);
+  Salvage total;
+  for (int r = 0; r < 60; ++r) {
+    std::string damaged =
+        original.substr(0, header_end + random() % (original.size() - header_end));
+    damaged[header_at + random() % (header_end - header_at)] ^=
+        static_cast<char>(1 + random() % 255);
+    const Salvage v = salvage(original, damaged);
+    EXPECT_EQ(v.exported_steps, v.intact_steps) << "cut " << r << " at " << damaged.size();
+    EXPECT_EQ(v.silent, 0u) << "cut " << r;
+    EXPECT_TRUE(v.exportable) << "cut " << r;
+    EXPECT_EQ(v.assumed, 0u) << "cut " << r << ": the copy before step 0 reads";
+    total += v;
+  }
+  std::cout << "60 cuts: " << total.exported_steps << " of " << total.intact_steps
+            << " intact steps read, " << total.silent << " silent\n";
+}
+
+// Every header copy damaged: the steps are still read, with the header they imply, named.
+TEST(RecordFaults, EveryHeaderCopyDamagedStillReadsTheStepsWithAnAssumedHeader) {
+  std::string damaged = real_record();
+  const RecordContents truth = parse_record(damaged, "real");
+  for (std::size_t i = 0; i < truth.entries.size(); ++i)
+    if (truth.entries[i].has_header()) damaged[truth.offsets[i] + kRecordFrameHeaderBytes + 3] ^= 1;
+  const RecordContents read = parse_record(damaged, "real");
+  EXPECT_EQ(read.header(), nullptr);
+  ASSERT_NE(read.header_or_assumed(), nullptr);
+  EXPECT_EQ(read.steps().size(), 6000u);
+  EXPECT_EQ(read.header_or_assumed()->dofs(), truth.header()->dofs());
+  EXPECT_EQ(read.header_or_assumed()->actuators(), truth.header()->actuators());
+  EXPECT_NEAR(read.header_or_assumed()->dt(), truth.header()->dt(), 1e-12);
+  EXPECT_EQ(read.header_or_assumed()->link_node_ids_size(), truth.header()->link_node_ids_size());
+  EXPECT_NE(read.warning.find("no intact header (every copy damaged or missing): read with one "
+                              "assumed from the steps: dofs 1 and actuators 1"),
+            std::string::npos)
+      << read.warning;
+}
+
+// A 16-byte frame header whose own checksum holds, claiming `size` payload bytes.
+std::string fake_frame(std::uint32_t size) {
+  std::string frame("\xF3\x7A\x1C\xB5", 4);
+  for (std::uint32_t v : {size, 0u})
+    for (int i = 0; i < 4; ++i) frame.push_back(static_cast<char>((v >> (8 * i)) & 0xFFu));
+  const std::uint32_t crc = util::crc32c(frame.data(), 12);
+  for (int i = 0; i < 4; ++i) frame.push_back(static_cast<char>((crc >> (8 * i)) & 0xFFu));
+  return frame;
+}
+
+// A forged frame in the middle claiming 4 GB (more than the file), or 100 kB (within it, payload
+// checksum false): a damaged region of its 16 bytes; every step after it is read.
+TEST(RecordFaults, AFrameWithAnImpossibleSizeHidesNoStepAfterIt) {
+  const std::string& original = real_record();
+  const RecordContents truth = parse_record(original, "real");
+  const std::size_t at = truth.offsets[truth.offsets.size() / 2];
+  for (std::uint32_t size : {0xFFFFFFF0u, 100000u}) {
+    SCOPED_TRACE("claimed size " + std::to_string(size));
+    const std::string forged = original.substr(0, at) + fake_frame(size) + original.substr(at);
+    const RecordContents read = parse_record(forged, "forged");
+    EXPECT_FALSE(read.truncated) << read.warning;
+    EXPECT_EQ(read.steps().size(), truth.steps().size());
+    ASSERT_NE(read.footer(), nullptr);
+    ASSERT_EQ(read.losses.size(), 1u);
+    EXPECT_EQ(read.losses[0].first_byte, at);
+    EXPECT_EQ(read.losses[0].end_byte, at + kRecordFrameHeaderBytes);
   }
 }
 
