@@ -80,7 +80,16 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
       break;
     case K::kBenchmark: break;
     case K::kTrackingLoop:
-      break;  // checked where it is built (core::TrackingLoop), naming the field
+      // The rest is checked where it is built (core::TrackingLoop), naming the field; a given
+      // plant value here, so that no study is accepted with an explicit 0 its default would hide.
+      if (stage.tracking_loop().has_benchmark_plant()) {
+        try {
+          (void)benchmark_plant_parameters(stage.tracking_loop().benchmark_plant());
+        } catch (const std::invalid_argument& e) {
+          fail(source, where + ".tracking_loop." + e.what());
+        }
+      }
+      break;
     case K::kBacklash:
       require(stage.backlash().width() >= 0.0 && stage.backlash().width() <= 1.0, source,
               where + ".backlash.width must be in [0, 1] m, got " +

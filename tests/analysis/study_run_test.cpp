@@ -182,7 +182,9 @@ TEST(StudyRun, AFramePastItsCriticalDelayWhoseEnvelopeGrowsIsDiverging) {
   const CaseOutcome& lagged = outcome.cases[1];
   ASSERT_TRUE(lagged.stability.has_value());
   ASSERT_TRUE(lagged.stability->critical().has_value());
-  EXPECT_NEAR(*lagged.stability->critical(), 8.54e-3, 0.05e-3);
+  // The coupled analysis; the characteristic equation solved apart gives 8.451 ms (the modal
+  // approximation said 8.54 ms).
+  EXPECT_NEAR(*lagged.stability->critical(), 8.451e-3, 0.05e-3);
   EXPECT_TRUE(lagged.stability->past());
   // The peak-ratio rule alone would have passed it.
   EXPECT_LT(lagged.comparison.peak_m, core::kDivergenceGrowth * outcome.lag_free_peak);

@@ -520,13 +520,14 @@ TEST(CliTest, AConfigOfAnotherKindIsNamed) {
   EXPECT_NE(reverse.output.find("rths run"), std::string::npos) << reverse.output;
 }
 
-TEST(CliTest, RunWithoutPlotsRemovesStalePlotsAndWritesEveryColumn) {
+TEST(CliTest, RunWithoutPlotsKeepsAnEarlierRunsPlotsAndWritesEveryColumn) {
   const auto dir = scratch("stale");
   std::ofstream(dir / "displacement.png") << "old";
   const Outcome o = run("run " + (kSource / "configs/three_storey_building.textproto").string() +
                         " --no-plots --out " + dir.string());
   ASSERT_EQ(o.exit_code, 0) << o.output;
-  EXPECT_FALSE(std::filesystem::exists(dir / "displacement.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "displacement.png"));  // named, not deleted
+  EXPECT_NE(o.output.find("from an earlier run: displacement.png"), std::string::npos) << o.output;
   std::ifstream csv(dir / "results.csv");
   std::string header;
   std::getline(csv, header);

@@ -32,6 +32,10 @@ struct StopView {
 int status_of(int port, const std::string& method, const std::string& path,
               const httplib::Headers& headers) {
   httplib::Client client("127.0.0.1", port);
+  // Bounded: a view that stops answering fails the test instead of holding it to ctest's limit.
+  client.set_connection_timeout(10);
+  client.set_read_timeout(20);
+  client.set_write_timeout(10);
   const auto answer =
       method == "POST" ? client.Post(path.c_str(), headers, "", "") : client.Get(path, headers);
   return answer ? answer->status : -1;
