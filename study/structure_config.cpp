@@ -142,8 +142,7 @@ void subtract_outer(Mat& x, const ElementRow& row, int dof, double value) {
 
 // The experimental fraction phi_1' K_e phi_1 / omega_1^2 of the first mode of (M, K) for K_e =
 // k b b^T.
-double first_mode_fraction(const StructuralModel& model, const Vec& b, double k) {
-  const Modes modes = modal_analysis(model.mass, model.stiffness);
+double first_mode_fraction(const Modes& modes, const Vec& b, double k) {
   const double along = b.dot(modes.shapes.col(0));
   return k * along * along / (modes.omega[0] * modes.omega[0]);
 }
@@ -161,7 +160,7 @@ std::optional<std::string> storey_meant(const StructuralModel& model,
                                         const config::ExperimentalDof& spec,
                                         const std::string& field) {
   const int d = spec.dof() - 1, n = model.dofs();
-  const double ground_tie = (model.stiffness * model.influence)[d];
+  const double ground_tie = model.stiffness.row(d).dot(model.influence);
   if (n < 2 || spec.stiffness() <= ground_tie * (1 + 1e-9)) return std::nullopt;
   int neighbour = d == 0 ? 1 : 0;
   for (int j = 0; j < n; ++j)
@@ -173,11 +172,12 @@ std::optional<std::string> storey_meant(const StructuralModel& model,
   if (n <= kMaxDofsForFractionHint) {
     const Vec grounded = Vec::Unit(n, d);
     const Vec storey = grounded - Vec::Unit(n, neighbour);
+    const Modes modes = modal_analysis(model.mass, model.stiffness);
     text += ": as written it takes an experimental fraction of " +
-            fraction_text(first_mode_fraction(model, grounded, spec.stiffness())) +
+            fraction_text(first_mode_fraction(modes, grounded, spec.stiffness())) +
             " of mode 1; between DOF " + std::to_string(neighbour + 1) + " and DOF " +
             std::to_string(d + 1) + " it would take " +
-            fraction_text(first_mode_fraction(model, storey, spec.stiffness()));
+            fraction_text(first_mode_fraction(modes, storey, spec.stiffness()));
   }
   return text + ". If the specimen sits between two DOFs (a storey), say from_dof: " +
          std::to_string(neighbour + 1);
