@@ -5,6 +5,7 @@
 #include <sys/prctl.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -25,14 +26,15 @@ void pin_to(int cpu) {
     throw std::runtime_error("measuring on CPU " + std::to_string(cpu) + ": " + std::strerror(err));
 }
 
-void sample(double rate_hz, double seconds, std::int64_t start_ns, std::vector<double>& out) {
+// Until `end_ns`, or until `stop` is set where one is given.
+void sample(double rate_hz, std::int64_t start_ns, std::int64_t end_ns,
+            const std::atomic<bool>* stop, std::vector<double>& out) {
   runtime::MonotonicClock clock;
   prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
   const double period_ns = 1e9 / rate_hz;
-  const std::int64_t end_ns = start_ns + static_cast<std::int64_t>(seconds * 1e9);
   for (std::int64_t k = 1;; ++k) {
     const auto deadline = start_ns + static_cast<std::int64_t>(std::llround(k * period_ns));
-    if (deadline > end_ns) return;
+    if (deadline > end_ns || (stop != nullptr && stop->load(std::memory_order_relaxed))) return;
     clock.sleep_until_ns(deadline);
     const std::int64_t now = clock.now_ns();
     out.push_back(1e-9 * static_cast<double>(now - deadline));
@@ -41,28 +43,27 @@ void sample(double rate_hz, double seconds, std::int64_t start_ns, std::vector<d
   }
 }
 
-}  // namespace
-
-WakeupSamples measure_wakeups(const std::vector<int>& cpus, double rate_hz, double seconds) {
-  if (cpus.empty() || !(rate_hz > 0) || !(seconds > 0))
-    throw std::invalid_argument("measure_wakeups: needs CPUs, a rate > 0 and seconds > 0");
+// One pinned thread per CPU from a common start 20 ms ahead (every thread pinned by then).
+WakeupSamples measure(const std::vector<int>& cpus, double rate_hz, double seconds,
+                      const std::atomic<bool>* stop) {
   WakeupSamples samples;
   samples.cpus = cpus;
   samples.rate_hz = rate_hz;
-  samples.seconds = seconds;
   samples.lateness.resize(cpus.size());
-  for (auto& l : samples.lateness) l.reserve(static_cast<std::size_t>(rate_hz * seconds) + 2);
+  if (stop == nullptr)
+    for (auto& l : samples.lateness) l.reserve(static_cast<std::size_t>(rate_hz * seconds) + 2);
   DmaLatencyHold dma;
   samples.dma_latency_held = dma.held();
   runtime::MonotonicClock clock;
-  const std::int64_t start_ns = clock.now_ns() + 20'000'000;  // every thread pinned by then
+  const std::int64_t start_ns = clock.now_ns() + 20'000'000;
+  const std::int64_t end_ns = start_ns + static_cast<std::int64_t>(seconds * 1e9);
   std::vector<std::string> errors(cpus.size());
   std::vector<std::thread> threads;
   for (std::size_t i = 0; i < cpus.size(); ++i)
     threads.emplace_back([&, i] {
       try {
         pin_to(cpus[i]);
-        sample(rate_hz, seconds, start_ns, samples.lateness[i]);
+        sample(rate_hz, start_ns, end_ns, stop, samples.lateness[i]);
       } catch (const std::exception& e) {
         errors[i] = e.what();
       }
@@ -70,7 +71,27 @@ WakeupSamples measure_wakeups(const std::vector<int>& cpus, double rate_hz, doub
   for (auto& t : threads) t.join();
   for (const std::string& e : errors)
     if (!e.empty()) throw std::runtime_error(e);
+  samples.seconds =
+      std::max(0.0, 1e-9 * static_cast<double>(std::min(clock.now_ns(), end_ns) - start_ns));
   return samples;
+}
+
+}  // namespace
+
+WakeupSamples measure_wakeups(const std::vector<int>& cpus, double rate_hz, double seconds) {
+  if (cpus.empty() || !(rate_hz > 0) || !(seconds > 0))
+    throw std::invalid_argument("measure_wakeups: needs CPUs, a rate > 0 and seconds > 0");
+  WakeupSamples samples = measure(cpus, rate_hz, seconds, nullptr);
+  samples.seconds = seconds;
+  return samples;
+}
+
+WakeupSamples measure_wakeups_until(const std::vector<int>& cpus, double rate_hz,
+                                    const std::atomic<bool>& stop, double max_seconds) {
+  if (cpus.empty() || !(rate_hz > 0) || !(max_seconds > 0))
+    throw std::invalid_argument(
+        "measure_wakeups_until: needs CPUs, a rate > 0 and max_seconds > 0");
+  return measure(cpus, rate_hz, max_seconds, &stop);
 }
 
 LatencyStats::LatencyStats(const WakeupSamples& samples)

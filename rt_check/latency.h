@@ -15,6 +15,7 @@
 //                    sum over wake-ups of floor((lateness + work) / period) deadlines passed,
 //                    over the deadlines of one CPU's measurement times the CPUs.
 
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -31,6 +32,12 @@ struct WakeupSamples {
 // @pre rate_hz > 0, seconds > 0, cpus non-empty. Throws std::runtime_error naming a CPU that
 // cannot be had (not online, not allowed).
 WakeupSamples measure_wakeups(const std::vector<int>& cpus, double rate_hz, double seconds);
+
+// The same, measured while something else runs: until `stop` is set (or max_seconds passed);
+// the samples' seconds is then the time measured. For a witness of the machine's stalls during
+// a run, beside it.
+WakeupSamples measure_wakeups_until(const std::vector<int>& cpus, double rate_hz,
+                                    const std::atomic<bool>& stop, double max_seconds);
 
 class LatencyStats {
  public:

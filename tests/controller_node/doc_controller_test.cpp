@@ -29,6 +29,7 @@
 
 #include "../runtime/test_support.h"
 #include "doc_controller_harness.h"
+#include "tests/support/platform_gate.h"
 #include "tests/support/run_command_line.h"
 
 namespace rths {
@@ -162,18 +163,28 @@ TEST_F(DocControllerTest, RthsLaunchAcceptsALockstepRunThroughF32Frames) {
 
 // A real-time run that kept going to its end: completed, or (on a shared machine, not under
 // timing targets) failed only by the one real-time verdict for this machine's own stalls. Never
-// a HOLD, a node's fault or anything the link did.
-void expect_ran_to_the_end(const test::LaunchedRun& run) {
+// a HOLD, a node's fault or anything the link did, unless the machine itself stopped the loop:
+// a command watchdog that fired while the witness saw a stall of at least half its limit held
+// rightly (the witness sleeps most of the time, so the scheduler favours it and it sees less of
+// a stall than a busy loop does). The test is then skipped, naming both figures.
+void expect_ran_to_the_end(const test::LaunchedRun& run, const test::MeasuredPlatform& machine) {
   ASSERT_NE(run.record.footer(), nullptr) << test::read_file(run.launch.coordinator_log);
   const std::string& status = run.record.footer()->status();
   if (run.launch.coordinator_exit == 0 && run.record.footer()->ok()) return;
   ASSERT_FALSE(timing_targets()) << status;
-  ASSERT_EQ(status.rfind("completed with deadline misses", 0), 0u) << status;
+  if (status.rfind("completed with deadline misses", 0) == 0) return;
+  const bool watchdog = status.find("command watchdog") != std::string::npos;
+  if (watchdog && machine.max >= 0.5 * kWatchdogMs * 1e-3)
+    GTEST_SKIP() << "this machine stalled during the run (" << machine.text << ") for at least "
+                 << "half the " << kWatchdogMs << " ms command watchdog, which held the run "
+                 << "rightly: " << status;
+  FAIL() << status << "\nthe machine meanwhile: " << machine.text;
 }
 
 void expect_real_time_run_healthy(const test::LaunchedRun& run, const DocController& controller,
-                                  double answer_lag) {
-  expect_ran_to_the_end(run);
+                                  double answer_lag, const test::MeasuredPlatform& machine) {
+  expect_ran_to_the_end(run, machine);
+  if (testing::Test::IsSkipped() || testing::Test::HasFatalFailure()) return;
   const runtime::RunFooter* footer = run.record.footer();
   ASSERT_NE(footer, nullptr);
   const auto steps = run.record.steps();
@@ -260,9 +271,12 @@ TEST_F(DocControllerTest, RealTimeAController2msBehindCostsAnswerAgeNotAHold) {
     DocControllerOptions options = controller_options(47307, 47306, kRealTimeDt);
     options.answer_lag = 0.002;
     DocController controller(options);
+    test::StallWitness witness;
     const auto run = test::launch("doc_real_time", text, "reference", 156);
+    const test::MeasuredPlatform machine = witness.finish();
     controller.stop();
-    expect_real_time_run_healthy(run, controller, options.answer_lag);
+    expect_real_time_run_healthy(run, controller, options.answer_lag, machine);
+    if (IsSkipped()) return;
   }
 }
 
@@ -309,12 +323,15 @@ TEST_F(DocControllerTest, AFloodFromAnotherPortDoesNotStopARealTimeRun) {
       }
       ::close(s);
     });
+    test::StallWitness witness;
     const auto run = test::launch("doc_flood", text, "reference", 157);
+    const test::MeasuredPlatform machine = witness.finish();
     done = true;
     rogue.join();
     controller.stop();
     EXPECT_GT(flooded.load(), 1000) << "the flood must have been sent";
-    expect_ran_to_the_end(run);
+    expect_ran_to_the_end(run, machine);
+    if (IsSkipped() || HasFatalFailure()) return;
     const runtime::NodeRejects* rejects = node2(run.record);
     ASSERT_NE(rejects, nullptr);
     // Every frame answered and accepted on a quiet machine; a shared one's stalls may lose a

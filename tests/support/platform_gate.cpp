@@ -6,9 +6,12 @@
 
 namespace rths::test {
 
-MeasuredPlatform measure_platform(double rate_hz, double seconds) {
-  const std::vector<int> cpus = rt_check::allowed_cpus();
-  const rt_check::LatencyStats stats(rt_check::measure_wakeups(cpus, rate_hz, seconds));
+namespace {
+
+MeasuredPlatform summarise(const rt_check::WakeupSamples& samples) {
+  const rt_check::LatencyStats stats(samples);
+  const double rate_hz = samples.rate_hz, seconds = samples.seconds;
+  const std::vector<int>& cpus = samples.cpus;
   MeasuredPlatform out;
   out.p99 = stats.quantile(0.99);
   out.max = stats.max();
@@ -20,6 +23,28 @@ MeasuredPlatform measure_platform(double rate_hz, double seconds) {
   out.text = text;
   std::printf("platform: %s\n", out.text.c_str());
   return out;
+}
+
+}  // namespace
+
+MeasuredPlatform measure_platform(double rate_hz, double seconds) {
+  return summarise(rt_check::measure_wakeups(rt_check::allowed_cpus(), rate_hz, seconds));
+}
+
+StallWitness::StallWitness(double rate_hz, double max_seconds) : rate_hz_(rate_hz) {
+  samples_ = std::async(std::launch::async, [this, max_seconds] {
+    return rt_check::measure_wakeups_until(rt_check::allowed_cpus(), rate_hz_, stop_, max_seconds);
+  });
+}
+
+StallWitness::~StallWitness() {
+  stop_ = true;
+  if (samples_.valid()) samples_.wait();
+}
+
+MeasuredPlatform StallWitness::finish() {
+  stop_ = true;
+  return summarise(samples_.get());
 }
 
 }  // namespace rths::test

@@ -9,7 +9,13 @@
 //     p99, max   wake-up lateness (s) pooled over the CPUs; max is the longest stall seen
 //     stalls     the statistics themselves (stalls_per_minute(x): wake-ups later than x s)
 //     text       "wake-up lateness at 1000 Hz over 0.5 s on 2 CPUs: p99 0.08 ms, max 3.9 ms"
+//
+//   StallWitness   the same measurement beside a run: started before it, finish() after it
+//                  gives what the machine did meanwhile. A run's timing failure is the machine's
+//                  when the witness saw a stall of that size; without one it is the code's.
 
+#include <atomic>
+#include <future>
 #include <optional>
 #include <string>
 
@@ -25,5 +31,20 @@ struct MeasuredPlatform {
 };
 
 MeasuredPlatform measure_platform(double rate_hz, double seconds = 0.5);
+
+class StallWitness {
+ public:
+  // At most `max_seconds` of measurement (a run that outlives it is judged on what was seen).
+  explicit StallWitness(double rate_hz = 1000.0, double max_seconds = 120.0);
+  ~StallWitness();
+  StallWitness(const StallWitness&) = delete;
+  StallWitness& operator=(const StallWitness&) = delete;
+  MeasuredPlatform finish();  // once
+
+ private:
+  double rate_hz_;
+  std::atomic<bool> stop_{false};
+  std::future<rt_check::WakeupSamples> samples_;
+};
 
 }  // namespace rths::test
