@@ -17,6 +17,7 @@
 #include "core/benchmark_criteria.h"
 #include "results/results.h"
 #include "results/write.h"
+#include "runtime/node/plan.h"
 #include "study/study.h"
 #include "util/atomic_file.h"
 
@@ -99,6 +100,7 @@ void run(const RunOptions& o) {
   if (!o.motion_units.empty())
     study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
   const core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
+  runtime::check_deployment(prepared);  // the deployment `launch` would run is refused here too
   std::filesystem::path out = o.results.out;
   if (out.empty()) out = study.output().directory();
   if (out.empty())

@@ -14,6 +14,7 @@
 #include "cli/support.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
+#include "runtime/node/plan.h"
 #include "study/study.h"
 #include "util/process.h"
 
@@ -113,6 +114,7 @@ void run(const SitesOptions& o) {
   // case's lag plus the network's on the actuator's path against the critical delay.
   const core::PreparedStudy prepared =
       core::prepare_study(plan.study, plan.study_file.parent_path());
+  runtime::check_deployment(prepared);
   analysis::warn_past_critical_delay(prepared, {plan.study.deployment().case_name()},
                                      print_warning);
   if (o.check) {

@@ -72,10 +72,10 @@ ControllerEmulator::ControllerEmulator(const config::Study& study,
     if (spec.id() == node_id) link_ = spec.controller();
   const runtime::Assign assign = assignment(study, base_dir, case_name, node_id);
   actuators_ = assign.actuators_size();
-  controller_node::check_layout(link_.command(), actuators_, Direction::kCommand,
-                                "controller.command");
-  controller_node::check_layout(link_.feedback(), actuators_, Direction::kFeedback,
-                                "controller.feedback");
+  runtime::check_frame_layout(link_.command(), actuators_, Direction::kCommand,
+                              "controller.command");
+  runtime::check_frame_layout(link_.feedback(), actuators_, Direction::kFeedback,
+                              "controller.feedback");
   for (const auto* layout : {&link_.command(), &link_.feedback()})
     if (controller_node::frame_size(*layout) > controller_node::kMaxDatagram)
       throw std::invalid_argument("controller: a frame longer than a datagram is read");

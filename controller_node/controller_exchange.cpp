@@ -27,8 +27,10 @@ void check_setting(double value, const char* field) {
 ControllerExchange::ControllerExchange(const config::ControllerLink& link,
                                        const ExchangeSettings& settings)
     : config_(link), settings_(settings) {
-  check_layout(link.command(), settings.actuators, Direction::kCommand, "controller.command");
-  check_layout(link.feedback(), settings.actuators, Direction::kFeedback, "controller.feedback");
+  runtime::check_frame_layout(link.command(), settings.actuators, Direction::kCommand,
+                              "controller.command");
+  runtime::check_frame_layout(link.feedback(), settings.actuators, Direction::kFeedback,
+                              "controller.feedback");
   for (const auto* layout : {&link.command(), &link.feedback()})
     if (frame_size(*layout) > kMaxDatagram)
       throw std::invalid_argument("controller: a frame of " + std::to_string(frame_size(*layout)) +

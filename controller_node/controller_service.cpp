@@ -10,32 +10,6 @@
 namespace rths::controller_node {
 namespace {
 
-constexpr double kDefaultHoldTime = 0.5;       // s
-constexpr double kMaxHoldTime = 60.0;          // s
-constexpr double kLockstepReplyTimeout = 1.0;  // s
-
-// s: the reply timeout, bounded by the window within which an answer may still be applied.
-double reply_timeout(const config::ControllerLink& link, const config::Deployment& deployment,
-                     double dt) {
-  const bool real_time = deployment.clock() == config::Deployment::REAL_TIME;
-  const double window = real_time ? runtime::max_missed_answers(deployment, dt) * dt
-                                  : runtime::step_timeout(deployment);
-  const double asked = link.reply_timeout_ms() * 1e-3;
-  if (!std::isfinite(asked) || asked < 0)
-    throw std::invalid_argument("controller.reply_timeout_ms must be finite and >= 0");
-  if (asked > window * (1 + 1e-9))
-    throw std::invalid_argument(
-        "controller.reply_timeout_ms " + fmt::format("{:g}", link.reply_timeout_ms()) +
-        " is longer than the " + (real_time ? "answer window" : "lockstep step_timeout") + " (" +
-        std::to_string(window * 1e3) +
-        " ms): an answer that late could never be applied, and a silent controller would get its "
-        "HOLD that late; lower it, or widen the window");
-  if (asked > 0) return asked;
-  if (!real_time) return std::min(kLockstepReplyTimeout, window);
-  const int steps = runtime::max_missed_answers(deployment, dt);
-  return std::max(1, steps / 2) * dt;
-}
-
 // Real time: lost frames in a row before the node holds, so that it holds (naming the
 // controller's silence) before the coordinator's answer window passes: the first frame of a
 // silence is lost a reply timeout after it left, each later one a dt after the one before. A
@@ -60,11 +34,13 @@ int ControllerService::configure(const runtime::Assign& assign) {
     throw std::invalid_argument("a CONTROLLER node needs its `controller` link");
   const config::ControllerLink& link = assign.node().controller();
   const config::Deployment& deployment = assign.study().deployment();
+  const runtime::AnswerWindow answers = runtime::answer_window(deployment, assign.dt());
+  runtime::check_controller_link(link, answers, assign.actuators_size(), "");
   ExchangeSettings settings;
   settings.actuators = assign.actuators_size();
   settings.dt = assign.dt();
   settings.real_time = deployment.clock() == config::Deployment::REAL_TIME;
-  settings.reply_timeout = reply_timeout(link, deployment, assign.dt());
+  settings.reply_timeout = runtime::controller_reply_timeout(link, answers);
   settings.lost_window =
       settings.real_time ? lost_window(deployment, assign.dt(), settings.reply_timeout) : 1;
   settings.max_drift = 2.0 * deployment.limits().max_displacement();
@@ -75,10 +51,7 @@ int ControllerService::configure(const runtime::Assign& assign) {
   settings.max_force_rate = link.max_force_rate();
   settings.max_tracking_error = link.max_tracking_error();
   settings.tracking_error_steps = link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3;
-  const double hold = link.hold_time_ms() * 1e-3;
-  if (!std::isfinite(hold) || hold < 0 || hold > kMaxHoldTime)
-    throw std::invalid_argument("controller.hold_time_ms must be in [0, 60000]");
-  settings.hold_time = hold > 0 ? hold : kDefaultHoldTime;
+  settings.hold_time = runtime::controller_hold_time(link);
   exchange_ = std::make_unique<ControllerExchange>(link, settings);
   drift_.assign(static_cast<std::size_t>(settings.actuators), 0.0);
   velocity_ = drift_;

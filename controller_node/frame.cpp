@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <stdexcept>
 
 namespace rths::controller_node {
@@ -11,20 +10,6 @@ namespace {
 using Field = config::FrameField;
 
 double scale_of(const Field& f) { return f.scale() == 0.0 ? 1.0 : f.scale(); }
-
-bool integer_type(Field::Type type) { return type == Field::I32 || type == Field::U32; }
-
-bool is_command_role(Field::Role role) {
-  return role == Field::TARGET_DISPLACEMENT || role == Field::TARGET_VELOCITY ||
-         role == Field::COMMAND_TIME;
-}
-bool is_feedback_role(Field::Role role) {
-  return role == Field::MEASURED_DISPLACEMENT || role == Field::MEASURED_FORCE;
-}
-bool per_actuator(Field::Role role) {
-  return role == Field::TARGET_DISPLACEMENT || role == Field::TARGET_VELOCITY ||
-         role == Field::MEASURED_DISPLACEMENT || role == Field::MEASURED_FORCE;
-}
 
 // Writes `n` bytes of `raw` (host order) in the field's byte order.
 void put(std::uint8_t* out, const std::uint8_t* raw, std::size_t n, Field::ByteOrder order) {
@@ -84,13 +69,13 @@ bool write_field(const Field& f, double value, std::uint8_t* out) {
     }
     default: std::memcpy(raw, &value, 8);
   }
-  put(out, raw, field_size(f.type()), f.byte_order());
+  put(out, raw, runtime::frame_field_size(f.type()), f.byte_order());
   return true;
 }
 
 double read_field(const Field& f, const std::uint8_t* in) {
   std::uint8_t raw[8];
-  put(raw, in, field_size(f.type()), f.byte_order());  // the swap is its own inverse
+  put(raw, in, runtime::frame_field_size(f.type()), f.byte_order());  // the swap is its own inverse
   switch (f.type()) {
     case Field::F32: {
       float x;
@@ -115,26 +100,6 @@ double read_field(const Field& f, const std::uint8_t* in) {
   }
 }
 
-void check_field(const Field& f, int actuators, Direction direction, const std::string& where) {
-  if (!Field::Role_IsValid(f.role()) || f.role() == Field::ROLE_UNSPECIFIED)
-    throw std::invalid_argument(where + ": role not set");
-  if (!Field::Type_IsValid(f.type()) || !Field::ByteOrder_IsValid(f.byte_order()))
-    throw std::invalid_argument(where + ": type or byte_order unknown");
-  if (!std::isfinite(f.scale()) || f.scale() < 0.0)
-    throw std::invalid_argument(where + ": scale must be finite and > 0 (0 = 1)");
-  const bool wrong_way =
-      direction == Direction::kCommand ? is_feedback_role(f.role()) : is_command_role(f.role());
-  if (wrong_way)
-    throw std::invalid_argument(where + ": role " + Field::Role_Name(f.role()) +
-                                " belongs to the other direction's frame");
-  if ((f.role() == Field::COUNTER || f.role() == Field::STATUS) && !integer_type(f.type()))
-    throw std::invalid_argument(where + ": a " + Field::Role_Name(f.role()) +
-                                " field is I32 or U32");
-  if (per_actuator(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators))
-    throw std::invalid_argument(where + ": actuator " + std::to_string(f.actuator()) +
-                                " is not among the node's " + std::to_string(actuators));
-}
-
 }  // namespace
 
 std::string to_string(FrameVerdict verdict) {
@@ -145,45 +110,13 @@ std::string to_string(FrameVerdict verdict) {
   }
 }
 
-std::size_t field_size(config::FrameField::Type type) { return type == Field::F64 ? 8 : 4; }
-
-std::size_t frame_size(const config::FrameLayout& layout) {
-  std::size_t n = 0;
-  for (const Field& f : layout.fields()) n += field_size(f.type());
-  return n;
-}
-
-void check_layout(const config::FrameLayout& layout, int actuators, Direction direction,
-                  const std::string& where) {
-  std::map<std::pair<int, int>, int> seen;  // (role, actuator) -> count
-  for (int i = 0; i < layout.fields_size(); ++i) {
-    const Field& f = layout.fields(i);
-    const std::string at = where + ".fields[" + std::to_string(i) + "] (" + f.name() + ")";
-    check_field(f, actuators, direction, at);
-    if (f.role() == Field::PADDING) continue;
-    const int a = per_actuator(f.role()) ? f.actuator() : 0;
-    if (++seen[{f.role(), a}] > 1)
-      throw std::invalid_argument(at + ": a second " + Field::Role_Name(f.role()) + " field");
-  }
-  if (!seen.count({Field::COUNTER, 0})) throw std::invalid_argument(where + ": no COUNTER field");
-  const std::vector<Field::Role> needed =
-      direction == Direction::kCommand
-          ? std::vector<Field::Role>{Field::TARGET_DISPLACEMENT}
-          : std::vector<Field::Role>{Field::MEASURED_DISPLACEMENT, Field::MEASURED_FORCE};
-  for (int a = 0; a < actuators; ++a)
-    for (const Field::Role role : needed)
-      if (!seen.count({role, a}))
-        throw std::invalid_argument(where + ": no " + Field::Role_Name(role) +
-                                    " field for actuator " + std::to_string(a));
-}
-
 bool encode(const config::FrameLayout& layout, const FrameValues& values,
             std::vector<std::uint8_t>& bytes) {
   bytes.assign(frame_size(layout), 0);
   std::size_t at = 0;
   for (const Field& f : layout.fields()) {
     if (!write_field(f, frame_value(f, values), bytes.data() + at)) return false;
-    at += field_size(f.type());
+    at += runtime::frame_field_size(f.type());
   }
   return true;
 }
@@ -202,7 +135,7 @@ FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data,
   for (const Field& f : layout.fields()) {
     ++index;
     const std::uint8_t* in = data + at;
-    at += field_size(f.type());
+    at += runtime::frame_field_size(f.type());
     // A PADDING field's bytes are the controller's spare words, never a value: whatever they
     // hold (an F64 spare left NaN by its model included) must not refuse the frame.
     if (f.role() == Field::PADDING) continue;
@@ -217,7 +150,8 @@ FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data,
       values.status = static_cast<std::int64_t>(x);
       values.has_status = true;
     } else {
-      if (per_actuator(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators)) continue;
+      if (runtime::per_actuator_role(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators))
+        continue;
       if (double* v = slot(values, f.role(), f.actuator())) *v = x * scale_of(f);
     }
   }

@@ -8,12 +8,8 @@
 // rounded to the nearest. f64 with scale 1 carries a double's bits unchanged (a lockstep run over
 // a controller then equals the in-process run bit for bit); f32 keeps 24 bits of mantissa.
 //
-//   check_layout(layout, actuators, direction) -> throws std::invalid_argument naming the field:
-//     exactly one COUNTER (i32 or u32); at most one STATUS (integer) and COMMAND_TIME; every
-//     actuator in [0, actuators) has exactly one field of each role the direction needs
-//     (command: TARGET_DISPLACEMENT; feedback: MEASURED_DISPLACEMENT and
-//     MEASURED_FORCE) and at most one of the others;
-//     roles of the other direction refused; scale finite and not negative.
+//   The layout's own check, its size and each field's: runtime/node/controller_link.h, where
+//   every command that reads a study checks a controller block the same way.
 //   encode(layout, values, bytes)  -> false when a value does not fit its type (not finite, or
 //                                     beyond an integer's range); bytes then unspecified. PADDING
 //                                     fields are written 0.
@@ -27,10 +23,11 @@
 #include <vector>
 
 #include "rths/proto/deployment.pb.h"
+#include "runtime/node/controller_link.h"
 
 namespace rths::controller_node {
 
-enum class Direction { kCommand, kFeedback };
+using Direction = runtime::FrameDirection;
 
 // Every role's value, SI; vectors indexed by actuator (sized by the caller or by decode()).
 struct FrameValues {
@@ -46,16 +43,13 @@ struct FrameValues {
 enum class FrameVerdict { kOk, kWrongSize, kNonFinite };
 std::string to_string(FrameVerdict verdict);
 
-std::size_t field_size(config::FrameField::Type type);
-std::size_t frame_size(const config::FrameLayout& layout);
-
-void check_layout(const config::FrameLayout& layout, int actuators, Direction direction,
-                  const std::string& where);
+using runtime::frame_size;
 
 bool encode(const config::FrameLayout& layout, const FrameValues& values,
             std::vector<std::uint8_t>& bytes);
 
-// `actuators` sizes the value vectors (fields beyond it are ignored: check_layout refuses them).
+// `actuators` sizes the value vectors (fields beyond it are ignored: runtime::check_frame_layout
+// refuses them).
 FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data, std::size_t size,
                     int actuators, FrameValues& values);
 

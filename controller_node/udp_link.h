@@ -22,9 +22,12 @@
 #include <cstdint>
 #include <string>
 
+#include "runtime/node/controller_link.h"
+
 namespace rths::controller_node {
 
-inline constexpr std::size_t kMaxDatagram = 2048;  // bytes read of one datagram
+inline constexpr std::size_t kMaxDatagram =
+    runtime::kMaxControllerFrameBytes;  // bytes read of one datagram
 
 struct Datagram {
   std::array<std::uint8_t, kMaxDatagram> bytes{};  // the first min(size, kMaxDatagram) are valid

@@ -7,6 +7,7 @@
 
 #include "coordinator/answer_verdict.h"
 #include "coordinator/deadline_verdict.h"
+#include "coordinator/flood_blame.h"
 #include "coordinator/state.h"
 #include "runtime/record/node_health.h"
 #include "runtime/record/realtime_verdict.h"
@@ -263,6 +264,20 @@ void judge_links(RunState& s, RunOutcome& outcome) {
   }
 }
 
+// A real-time run that failed (not by diverging: that is the physics) names an unauthenticated
+// flood its receivers dropped meanwhile.
+void blame_flood(RunState& s, RunOutcome& outcome) {
+  std::vector<std::pair<std::string, std::uint64_t>> receivers{
+      {"coordinator", outcome.unauthenticated.count}};
+  for (const runtime::NodeRejects& n : outcome.node_rejects)
+    receivers.emplace_back(n.label(), n.rejected().unauthenticated());
+  const auto flood =
+      unauthenticated_flood(receivers, outcome.wall_seconds, outcome.unauthenticated.last);
+  if (!flood) return;
+  outcome.status += *flood;
+  s.event("failed" + *flood);
+}
+
 // A record that lost entries fails the run; the footer closes it.
 void close_record(RunState& s, RunOutcome& outcome) {
   if (!s.record) return;
@@ -327,6 +342,7 @@ RunOutcome Coordinator::run() {
   report(s, pacer, outcome);
   if (outcome.ok) judge_links(s, outcome);
   outcome.wall_seconds = seconds_since(wall_start);
+  if (!outcome.ok && s.real_time && !outcome.result.diverged) blame_flood(s, outcome);
   close_record(s, outcome);
   s.pacer = nullptr;
   return outcome;

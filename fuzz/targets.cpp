@@ -356,7 +356,7 @@ int controller_frame(const std::uint8_t* data, std::size_t size) {
     f.set_actuator((bits >> 3) & 1);
   }
   try {
-    controller_node::check_layout(layout, kActuators, direction, "fuzz");
+    runtime::check_frame_layout(layout, kActuators, direction, "fuzz");
   } catch (const std::invalid_argument&) {
     return 0;
   }

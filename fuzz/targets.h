@@ -30,7 +30,7 @@
 //                      bit 1: messages carry another run's id), then records of
 //                      [kind: 1 byte][step: int32 LE][payload size: uint16 LE][payload bytes].
 //   controller_frame   a controller's UDP frame layout and a frame (controller_node/frame.h):
-//                      check_layout, decode, and for a frame that decodes, encode and decode
+//                      check_frame_layout, decode, and for a frame that decodes, encode and decode
 //                      again, which must give the same values (a difference throws
 //                      std::logic_error, which the fuzzer reports). Input: byte 0 = field count
 //                      (1 + value % 16) | bit 7: feedback (else command), then 2 bytes per field

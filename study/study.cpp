@@ -184,6 +184,8 @@ void validate_cases(const config::Study& study, const std::string& source) {
   for (int i = 0; i < study.cases_size(); ++i) {
     const config::Case& c = study.cases(i);
     const std::string where = "cases[" + std::to_string(i) + "] '" + c.name() + "'";
+    require(!c.name().empty(), source,
+            "cases[" + std::to_string(i) + "] has no name: every case is named (--case NAME)");
     for (int j = 0; j < i; ++j) {
       require(study.cases(j).name() != c.name(), source,
               "cases[" + std::to_string(i) + "] repeats the name '" + c.name() + "' of cases[" +

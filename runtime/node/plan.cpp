@@ -117,6 +117,9 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
         if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
           node.actuators.push_back(static_cast<int>(a));
     }
+    if (spec.kind() == config::NodeSpec::CONTROLLER)
+      check_controller_link(spec.controller(), answer_window(deployment, base.dt),
+                            static_cast<int>(node.actuators.size()), where);
     plan.nodes.push_back(std::move(node));
   }
   plan.numerical_local = !any_substructure;
@@ -174,6 +177,19 @@ config::Deployment with_default_nodes(config::Deployment deployment,
     node->set_kind(config::NodeSpec::ACTUATOR_EMULATOR);
   }
   return deployment;
+}
+
+void check_deployment(const core::PreparedStudy& prepared) {
+  for (const config::Case& study_case : prepared.config.cases()) {
+    try {
+      const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+      const DeploymentPlan plan =
+          make_plan(setup, with_default_nodes(prepared.config.deployment(), setup));
+      check_node_stages(plan, setup.dt, prepared.base_dir);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("case '" + study_case.name() + "': " + e.what());
+    }
+  }
 }
 
 const config::Case& find_case(const config::Study& study, const std::string& name) {
@@ -266,6 +282,15 @@ int command_watchdog_periods(const config::Deployment& d, double dt) {
 double window_ms_of_steps(int steps, double dt) {
   return std::floor(static_cast<double>(steps) * dt * 1e6) / 1e3;
 }
+AnswerWindow answer_window(const config::Deployment& d, double dt) {
+  AnswerWindow window;
+  window.real_time = d.clock() == config::Deployment::REAL_TIME;
+  window.dt = dt;
+  window.steps = max_missed_answers(d, dt);
+  window.step_timeout = step_timeout(d);
+  return window;
+}
+
 void check_failsafe_windows(const config::Deployment& d) {
   check_window(d.answer_window_ms(), "answer_window_ms", d.max_missed_answers(),
                "max_missed_answers");

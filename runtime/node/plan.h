@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/node/controller_link.h"
 #include "runtime/rt/wait_policy.h"
 
 #include "rths/proto/deployment.pb.h"
@@ -53,6 +54,12 @@ void check_node_stages(const DeploymentPlan& plan, double dt,
 // storey has a numerical part), node 2 an actuator emulator (if any has an experimental part).
 config::Deployment with_default_nodes(config::Deployment deployment, const core::HybridSetup& base);
 
+// The deployment of every case of the study planned as `launch` plans its case (the default
+// nodes, make_plan, check_node_stages). Every command that reads a study calls it (`rths run`,
+// `launch`, `sites`, the coordinator), so they refuse the same configs with the same message.
+// Throws std::invalid_argument naming the case, the node and the field.
+void check_deployment(const core::PreparedStudy& prepared);
+
 // The case with this name, or the reference case when empty. Throws naming the missing case.
 const config::Case& find_case(const config::Study& study, const std::string& name);
 
@@ -84,6 +91,8 @@ double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
 // (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3.
 int max_missed_answers(const config::Deployment& d, double dt);
 int command_watchdog_periods(const config::Deployment& d, double dt);
+// The window a controller's answers must arrive within (the reply timeout's bound).
+AnswerWindow answer_window(const config::Deployment& d, double dt);
 // The window of `steps` whole steps of dt (s) in ms, truncated to the microsecond below, so that
 // the steps derived from it (as above) are `steps` again: what a window is stated as when it was
 // found in steps.

@@ -145,3 +145,44 @@ TEST(CliTest, RunWithoutPlotsKeepsAnEarlierRunsPlotsAndWritesEveryColumn) {
 }
 
 }  // namespace
+
+namespace {
+
+// One check for a study, whichever command runs it: a controller block `launch` refuses is
+// refused by `run` and `sites --check` too, with the same message, before anything runs or is
+// written; and a case without a name is refused by each.
+TEST(CliTest, EveryCommandRefusesTheSameBadStudyWithTheSameMessage) {
+  const auto dir = scratch("one_check");
+  std::ifstream in(kSource / "configs/paper_frame_controller.textproto");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string study = text.str();
+  const std::string motion = "\"../data/ground_motions/";
+  study.replace(study.find(motion), motion.size(), "\"" + (kData / "ground_motions/").string());
+  const std::string port = "peer_port: 47211";
+  std::string bad_port = study;
+  bad_port.replace(bad_port.find(port), port.size(), "peer_port: 0");
+  std::ofstream(dir / "bad_port.textproto") << bad_port;
+  const std::string expected =
+      "deployment.nodes[id 2]: controller.peer_port 0 is not in [1, 65535]";
+  for (const std::string command : {"run", "launch"}) {
+    const Outcome o = run(command + " " + (dir / "bad_port.textproto").string() +
+                          " --no-plots --out " + (dir / ("out_" + command)).string());
+    EXPECT_EQ(o.exit_code, 2) << command << ": " << o.output;
+    EXPECT_NE(o.output.find(expected), std::string::npos) << command << ": " << o.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / ("out_" + command) / "results.csv")) << command;
+  }
+  std::string unnamed = study;
+  const std::string reference = "name: \"reference\"";
+  ASSERT_NE(unnamed.find(reference), std::string::npos);
+  unnamed.replace(unnamed.find(reference), reference.size(), "name: \"\"");
+  std::ofstream(dir / "unnamed.textproto") << unnamed;
+  for (const std::string command : {"run", "launch"}) {
+    const Outcome o = run(command + " " + (dir / "unnamed.textproto").string() +
+                          " --no-plots --out " + (dir / ("unnamed_" + command)).string());
+    EXPECT_EQ(o.exit_code, 2) << command << ": " << o.output;
+    EXPECT_NE(o.output.find("has no name"), std::string::npos) << command << ": " << o.output;
+  }
+}
+
+}  // namespace

@@ -323,14 +323,24 @@ TEST(ControllerExchange, TheHoldRepeatsHoldFramesAtTheMeasuredPositionUntilHeldT
   ASSERT_EQ(await_answer(node).outcome, Outcome::kAnswered);
   node.send_command(2, 0.002, {0.0045}, {0.2});  // the newest target, never reached
   controller.take();
-  const std::int64_t start = monotonic_ns();
-  node.begin_hold(start);
+  node.begin_hold(monotonic_ns());
+  // The node is stepped while the controller waits for each HOLD frame: a late wake-up of this
+  // test must not skip the steps that send the frame it waits for.
+  const auto next_frame = [&] {
+    FrameValues v;
+    const std::int64_t until = monotonic_ns() + 100'000'000;
+    while (v.target_displacement.empty() && monotonic_ns() < until) {
+      node.hold_step(monotonic_ns());
+      v = controller.take(0.0005);
+    }
+    return v;
+  };
   for (int k = 0; k < 3; ++k) {
-    const FrameValues hold = controller.take(0.1);
+    const FrameValues hold = next_frame();
+    ASSERT_EQ(hold.target_displacement.size(), 1u) << "no HOLD frame " << k << " in 100 ms";
     EXPECT_EQ(hold.status, kStatusHold) << k;
     EXPECT_EQ(hold.target_displacement[0], 0.0035) << k;  // where the specimen was measured
     EXPECT_EQ(hold.target_velocity[0], 0.0) << k;
-    while (monotonic_ns() < start + (k + 1) * 1'100'000) node.hold_step(monotonic_ns());
   }
   EXPECT_GE(node.report().hold_frames(), 3u);
   EXPECT_LT(node.report().held_after(), 0.0);

@@ -21,7 +21,7 @@ config::FrameLayout layout(const std::string& text) {
 
 std::string refusal(const std::string& text, int actuators, Direction direction) {
   try {
-    check_layout(layout(text), actuators, direction, "controller.command");
+    runtime::check_frame_layout(layout(text), actuators, direction, "controller.command");
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -30,8 +30,9 @@ std::string refusal(const std::string& text, int actuators, Direction direction)
 
 TEST(Frame, TheTestLayoutsAreValidAndSized) {
   const config::ControllerLink link = test::controller_link(1, 2);
-  EXPECT_NO_THROW(check_layout(link.command(), 1, Direction::kCommand, "command"));
-  EXPECT_NO_THROW(check_layout(link.feedback(), 1, Direction::kFeedback, "feedback"));
+  EXPECT_NO_THROW(runtime::check_frame_layout(link.command(), 1, Direction::kCommand, "command"));
+  EXPECT_NO_THROW(
+      runtime::check_frame_layout(link.feedback(), 1, Direction::kFeedback, "feedback"));
   EXPECT_EQ(frame_size(link.command()), 32u);
   EXPECT_EQ(frame_size(link.feedback()), 24u);
 }
@@ -143,7 +144,7 @@ TEST(Frame, PaddingIsNeverReadAsAValue) {
       "fields { role: MEASURED_DISPLACEMENT type: F64 } "
       "fields { name: \"spare2\" role: PADDING type: F32 byte_order: ORDER_BIG } "
       "fields { role: MEASURED_FORCE type: F64 }");
-  ASSERT_NO_THROW(check_layout(l, 1, Direction::kFeedback, "feedback"));
+  ASSERT_NO_THROW(runtime::check_frame_layout(l, 1, Direction::kFeedback, "feedback"));
   FrameValues v;
   v.counter = 9;
   v.measured_displacement = {0.004};

@@ -6,7 +6,9 @@
 #include "coordinator/program.h"
 
 #include <gtest/gtest.h>
+
 #include <sched.h>
+#include <functional>
 
 #include <filesystem>
 #include <limits>
@@ -90,7 +92,8 @@ struct Cluster {
 
 RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
                std::int64_t mute_after = 0, runtime::PacingClock* clock = nullptr,
-               const std::string& case_name = "reference", double seconds = 0.5) {
+               const std::string& case_name = "reference", double seconds = 0.5,
+               std::function<transport::Unauthenticated()> unauthenticated = {}) {
   const core::PreparedStudy prepared = test::prepare(
       test::paper_frame_study(seconds,
                               "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
@@ -100,6 +103,7 @@ RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
   options.run_id = "run";
   options.case_name = case_name;
   options.clock = clock;
+  options.unauthenticated = std::move(unauthenticated);
   Cluster c;
   coordinator::Coordinator coordinator(prepared, c.transport, options);
   runtime::NodeService& victim =
@@ -259,6 +263,28 @@ TEST(Coordinator, DeadlineMissesBeyondTheToleranceFailTheRun) {
   EXPECT_EQ(o.counters.overruns(), o.counters.steps());
   EXPECT_EQ(o.counters.worst_overrun_streak(), o.counters.steps());
   EXPECT_EQ(o.result.steps(), 500u);  // it ran to the end: the outcome, not the run, is judged
+}
+
+// A real-time run that failed while its receivers dropped unauthenticated messages names the
+// flood and its rate after its verdict; one that kept its deadlines under the same drops is not
+// blamed on them, and lockstep never is.
+TEST(Coordinator, AFailedRealTimeRunNamesTheUnauthenticatedFloodAndItsRate) {
+  const auto flood = [] {
+    return transport::Unauthenticated{5000, "kind 4 as node 1 on node 1's topic, writer 9"};
+  };
+  FakeClock late(2'000'000);
+  const RunOutcome failed = run("clock: REAL_TIME", 0, 0, &late, "reference", 0.5, flood);
+  EXPECT_FALSE(failed.ok);
+  EXPECT_EQ(failed.status.rfind("completed with deadline misses", 0), 0u) << failed.status;
+  EXPECT_NE(failed.status.find("; meanwhile 5000 unauthenticated messages ("), std::string::npos)
+      << failed.status;
+  EXPECT_NE(failed.status.find("a second) were dropped unread (coordinator 5000; newest: kind 4"),
+            std::string::npos)
+      << failed.status;
+  FakeClock on_time(10'000);
+  const RunOutcome kept = run("clock: REAL_TIME", 0, 0, &on_time, "reference", 0.5, flood);
+  EXPECT_TRUE(kept.ok) << kept.status;
+  EXPECT_EQ(kept.status, "completed");
 }
 
 // The fraction is the deployment's: 450 of 500 answers pass a stated 0.8, and fail a stated 0.95.
