@@ -32,8 +32,10 @@ void fail_if_distributed_failed(const DistributedResults& results,
           status = results.outcome.cases[i].status;
       for (const auto& [name, why] : results.missing)
         if (name == run.case_name && status.empty()) status = why;
-      throw ExitError(exit_code_of(run.coordinator_exit),
-                      "case " + run.case_name + ": " + status + "; see " + run.log_hint);
+      const bool hinted = status.find("; see " + run.log_hint) != std::string::npos;
+      throw ExitError(
+          exit_code_of(run.coordinator_exit),
+          "case " + run.case_name + ": " + status + (hinted ? "" : "; see " + run.log_hint));
     }
   }
   if (!results.missing.empty())

@@ -307,8 +307,10 @@ void close_record(RunState& s, RunOutcome& outcome) {
     s.record->close();
   } catch (const std::runtime_error& e) {  // a write failed: the run kept nothing after it
     outcome.ok = false;
+    outcome.environment_fault = true;
     if (!s.record_failed) outcome.status += std::string("; ") + e.what();
   }
+  outcome.environment_fault |= s.record_failed;
 }
 
 }  // namespace

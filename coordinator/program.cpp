@@ -302,7 +302,7 @@ int coordinator_main(int argc, char** argv) {
     if (!outcome.ok)
       std::cerr << "rths-coordinator: run failed: " << outcome.status
                 << (outcome.failed_node.empty() ? "" : " (" + outcome.failed_node + ")") << "\n";
-    return outcome.ok ? 0 : 1;
+    return outcome.ok ? 0 : outcome.environment_fault ? 3 : 1;
   } catch (const std::exception& e) {
     std::cerr << "rths-coordinator: " << e.what() << "\n";
     return 3;

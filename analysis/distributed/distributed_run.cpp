@@ -239,11 +239,16 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
     DistributedCaseFacts facts;
     facts.coordinator_exit = run.coordinator_exit;
     facts.record = run.record;
-    if (measured.has_footer && measured.steps.steps() < 2) {
-      // Stopped before step 1: nothing to compare, the footer says why.
-      results.missing.emplace_back(
-          run.case_name,
-          "stopped before step 1: " + measured.footer.status() + "; see " + run.log_hint);
+    if (measured.steps.steps() < 2) {
+      // Stopped before step 1, or a record cut before its first step (a full disk, a file size
+      // limit): nothing to compare; the footer, or the launcher and the reader, say why.
+      const std::string why =
+          measured.has_footer
+              ? measured.footer.status()
+              : (run.launcher_status.empty() ? "" : run.launcher_status + "; ") +
+                    (record.warning.empty() ? "the record has no footer" : record.warning);
+      results.missing.emplace_back(run.case_name,
+                                   "stopped before step 1: " + why + "; see " + run.log_hint);
       continue;
     }
     judge_status(run, record, measured, c, facts);

@@ -185,4 +185,20 @@ TEST(CliTest, EveryCommandRefusesTheSameBadStudyWithTheSameMessage) {
   }
 }
 
+// A file size limit that cuts every record before its first step is the machine's fault: exit 3,
+// each case named as stopped before step 1 with the reader's account of the cut record, never
+// "compare: an empty history".
+TEST(CliTest, LaunchUnderAFileSizeLimitIsAnEnvironmentFault) {
+  const auto dir = scratch("fsize");
+  const std::string launch =
+      kRths + " launch " + (kSource / "configs/paper_frame.textproto").string() +
+      " --case reference --domain 75 --no-plots --out " + (dir / "out").string();
+  const Outcome o = rths::test::run_command_line("sh -c 'ulimit -f 4; exec " + launch + "'");
+  EXPECT_EQ(o.exit_code, 3) << o.output;
+  EXPECT_EQ(o.output.find("empty history"), std::string::npos) << o.output;
+  EXPECT_NE(o.output.find("reference: FAILED, stopped before step 1: "), std::string::npos)
+      << o.output;
+  EXPECT_NE(o.output.find("truncated after"), std::string::npos) << o.output;
+}
+
 }  // namespace
