@@ -26,8 +26,8 @@
 //     The coefficients are the least-squares fit of the actuator's inverse over a moving window of
 //     W samples of past commands and measurements:  u_c ~ a0 x_m + a1 x_m' + a2 x_m'' (the same
 //     difference operators as on the target, so a1 and a2 are the ones the command law needs).
-//     Before the fit both u_c and x_m pass the same first-order low-pass (cut-off f_c; the filter
-//     on the derivatives): a linear relation with constant coefficients survives an identical
+//     Before the fit both u_c and x_m pass the same first-order low-pass (cut-off f_c; the filter on
+//     the derivatives): a linear relation with constant coefficients survives an identical
 //     filter on both sides, so the filter does not bias the coefficients. The fit is refreshed
 //     every step once the window is full and its (column-scaled) normal matrix is well conditioned;
 //     each coefficient is then clamped into its bounds [min_i, max_i].

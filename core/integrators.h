@@ -26,18 +26,18 @@
 //                       Unconditionally stable for linear elastic (K = K0) and softening
 //                       (K_t <= K0) systems; second-order accurate; alpha < 1 adds dissipation.
 //   KR_ALPHA            KR-alpha (Kolay & Ricles 2014, Earthquake Engng Struct. Dyn. 43(9); as
-//                       OpenSees KRAlphaExplicit), rho_inf in [0, 1]: alpha_m = (2 - rho)/(1 +
-//                       rho), alpha_f = 1/(1 + rho), beta = 1/(1 + rho)^2, gamma = (3 - rho)/(2 (1
-//                       + rho)) (OpenSees' weights on the new state). D = M + gamma dt C + beta
-//                       dt^2 K0, A1 = D^-1 M, A3 = D^-1 [(1 - alpha_m) M + (1 - alpha_f)(gamma dt C
-//                       + beta dt^2 K0)], M^ = M (I - A3): v+ = v + dt A1 a;  u+ = u + dt v + (1/2
-//                       + gamma) dt^2 A1 a; M^ a+ = f_af - M A3 a - C v_af - r_af,  x_af = (1 -
-//                       alpha_f) x + alpha_f x+ (r+ measured at u+, so r_af = (1 - alpha_f) r +
-//                       alpha_f r+: equal to r(u_af) for a linear part). Unconditionally stable for
-//                       linear elastic and softening systems; second-order accurate; rho_inf < 1
-//                       adds high-frequency dissipation. Neither needs a dt limit, so neither
-//                       refuses a dt: they refuse parameters outside those ranges instead, naming
-//                       the range.
+//                       OpenSees KRAlphaExplicit), rho_inf in [0, 1]: alpha_m = (2 - rho)/(1 + rho),
+//                       alpha_f = 1/(1 + rho), beta = 1/(1 + rho)^2, gamma = (3 - rho)/(2 (1 + rho))
+//                       (OpenSees' weights on the new state). D = M + gamma dt C + beta dt^2 K0,
+//                       A1 = D^-1 M, A3 = D^-1 [(1 - alpha_m) M + (1 - alpha_f)(gamma dt C +
+//                       beta dt^2 K0)], M^ = M (I - A3):
+//                       v+ = v + dt A1 a;  u+ = u + dt v + (1/2 + gamma) dt^2 A1 a;
+//                       M^ a+ = f_af - M A3 a - C v_af - r_af,  x_af = (1 - alpha_f) x + alpha_f x+
+//                       (r+ measured at u+, so r_af = (1 - alpha_f) r + alpha_f r+: equal to r(u_af)
+//                       for a linear part). Unconditionally stable for linear elastic and softening
+//                       systems; second-order accurate; rho_inf < 1 adds high-frequency dissipation.
+//                       Neither needs a dt limit, so neither refuses a dt: they refuse parameters
+//                       outside those ranges instead, naming the range.
 //   EXACT_ZOH           the structure's linear part K_x integrated exactly over the step (matrix
 //                       exponential), the rest of the restoring force (the measured
 //                       experimental force) held over it at its value of the step before, the

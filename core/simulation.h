@@ -2,16 +2,16 @@
 // The one stepping loop of a hybrid simulation, and the in-process run built on it.
 //
 // run_steps() is the only loop that integrates a hybrid test: in process (simulate(), with
-// HybridRestoring), lockstep over a transport and real time (the coordinator, with an evaluator
-// that exchanges commands and feedback with nodes, and hooks that pace and record). So "lockstep
-// equals in process" holds by construction: both run this code with the same doubles.
+// HybridRestoring), lockstep over a transport and real time (the coordinator, with an evaluator that
+// exchanges commands and feedback with nodes, and hooks that pace and record). So "lockstep equals
+// in process" holds by construction: both run this code with the same doubles.
 //
 //   k = 0       p_0 = -M iota a_g[0]; integrator initialised at rest (u = v = 0, r = 0);
 //               hooks.after_step(0)
 //   k = 1..N-1  hooks.before_step(k)            (real time: wait for deadline k)
 //               restoring.set_time(k dt); p_k = -M iota a_g[k]; integrator.step(p_k, restoring)
-//               row k of the result <- u, v, a (DOFs), command, realised, measured force
-//               (actuators) stop, diverged, when any |u| > options.divergence_bound (or NaN)
+//               row k of the result <- u, v, a (DOFs), command, realised, measured force (actuators)
+//               stop, diverged, when any |u| > options.divergence_bound (or NaN)
 //               hooks.after_step(k)             (record, limits; false stops the run)
 // Input: a ground motion already at the integration step dt (m/s^2).
 // Output: histories at t_k = k dt, k = 0..N-1 (N = number of motion samples), SI units.

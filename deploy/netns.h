@@ -3,8 +3,8 @@
 // bridge in a private hub namespace through veth pairs, on one IPv4 subnet.
 //
 //      site "coordinator" (ns rths-<pid>-<tag>-coordinator)  eth0 10.231.0.1/24 ─┐
-//      site "lab_a"       (ns rths-<pid>-<tag>-lab_a)        eth0 10.231.0.2/24 ─┼─ br0 (ns
-//      ...-hub) site "lab_b"       (ns rths-<pid>-<tag>-lab_b)        eth0 10.231.0.3/24 ─┘
+//      site "lab_a"       (ns rths-<pid>-<tag>-lab_a)        eth0 10.231.0.2/24 ─┼─ br0 (ns ...-hub)
+//      site "lab_b"       (ns rths-<pid>-<tag>-lab_b)        eth0 10.231.0.3/24 ─┘
 //
 // Every topology has its own hub, so concurrent topologies (tests side by side) share no link and
 // may reuse the same addresses. The host's own namespaces and routes are never touched.

@@ -7,8 +7,8 @@
 // the site that runs that node; the CA key never leaves DIR/ca):
 //   ca/ca_cert.pem ca/ca_key.pem (0600)                lab CA, EC P-256, self-signed
 //   governance.xml                                      readable copy of the signed governance
-//   node_<id>/identity_ca.pem                           the CA certificate (identity + permissions
-//   CA) node_<id>/cert.pem node_<id>/key.pem (0600)         the node's identity, subject
+//   node_<id>/identity_ca.pem                           the CA certificate (identity + permissions CA)
+//   node_<id>/cert.pem node_<id>/key.pem (0600)         the node's identity, subject
 //                                                       "CN=rths-node-<id>,OU=<kind>,O=<organisation>"
 //   node_<id>/governance.p7s                            the domain's governance, signed
 //   node_<id>/permissions.xml node_<id>/permissions.p7s one grant: the node's subject, its topics

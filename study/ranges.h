@@ -5,18 +5,17 @@
 // e.g. "--dt = 1e-09 s is outside [1e-06, 1] s (an integration step)".
 //
 // Quantity         allowed                      unit  why
-// kLag             [0, 1]                       s     actuator and network lags are ms to tens of
-// ms;
-//                                                     a larger number is almost always ms typed as
-//                                                     s
+// kLag             [0, 1]                       s     actuator and network lags are ms to tens of ms;
+//                                                     a larger number is almost always ms typed as s
 // kLongLag         [0, 3600]                    s     a lag with allow_long_lag: true
 // kStep            [1e-6, 1]                    s     integration and sampling steps (1 us .. 1 s)
-// kPeriod          (0, 50]                      s     natural periods (tall buildings are under 10
-// s) kDampingRatio    [0, 1]                       -     0.05 = 5 % of critical kFraction [0, 1] -
-// shares, probabilities and fractions of a step kCount           [1, 2^31 - 1]                - how
-// many of something (steps, folds, answers) kTimeout         (0, 86400]                   s     how
-// long to wait (a day at most) kCpu             [0, CPUs of this machine - 1] -    a CPU index that
-// exists here kMotionScale     [0, 100]                     -     a factor on a ground motion
+// kPeriod          (0, 50]                      s     natural periods (tall buildings are under 10 s)
+// kDampingRatio    [0, 1]                       -     0.05 = 5 % of critical
+// kFraction        [0, 1]                       -     shares, probabilities and fractions of a step
+// kCount           [1, 2^31 - 1]                -     how many of something (steps, folds, answers)
+// kTimeout         (0, 86400]                   s     how long to wait (a day at most)
+// kCpu             [0, CPUs of this machine - 1] -    a CPU index that exists here
+// kMotionScale     [0, 100]                     -     a factor on a ground motion
 // kDdsDomain       [0, 232]                     -     Cyclone DDS domain ids
 // kDays            [1, 36500]                   d     certificate validity
 // kFrequency       (0, 1e7]                     Hz    sample and servo rates

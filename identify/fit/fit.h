@@ -9,10 +9,9 @@
 // Uncertainty: covariance = sigma^2 (J^T J)^+, sigma^2 = RSS / (m - p); reported as one standard
 // deviation per parameter. Residuals of real records are coloured, so these are lower bounds.
 // Fixed parameters (ChannelModel::fixed, or declared fixed: ParamSpec::fixed) are held (Ceres
-// SubsetManifold) and have no uncertainty. Bounds are the specs' (physical, narrowed by
-// declarations). A bound hit: a free parameter that ends within 1e-6 (relative) of a bound while
-// the gradient of the cost, J^T r, still points beyond it, i.e. the data want a value the bounds
-// forbid.
+// SubsetManifold) and have no uncertainty. Bounds are the specs' (physical, narrowed by declarations).
+// A bound hit: a free parameter that ends within 1e-6 (relative) of a bound while the gradient of
+// the cost, J^T r, still points beyond it, i.e. the data want a value the bounds forbid.
 
 #include <functional>
 #include <string>

@@ -5,19 +5,19 @@
 //                   is refitted on the other k-1 blocks, every fold from the same starting point
 //                   (the identified parameters), and its error measured on the block left out.
 //                   Every fold's error is normalised by the same scale, the standard deviation of
-//                   the target over the whole record:  e_f = RMS_f(target - prediction) /
-//                   std(target) (as the in-record held-out error, whose held-out blocks span the
-//                   record). A fold's own std would not do: on a chirp the actuator realises a
-//                   third of the command at the fast end, so the same residual would count three
-//                   times as much there, and the spread would measure the signal's envelope, not
-//                   the model. Reported: the k held-out errors, their mean and spread (the sample
-//                   standard deviation, k - 1 in the denominator), each fold's error also by its
-//                   block's own std (block_errors, for comparison), and each parameter's mean and
-//                   spread over the folds (an uncertainty that, unlike the Jacobian's, sees the
-//                   coloured residuals of a real record). Beside each fold's error, the noise floor
-//                   of its block (evidence.h noise_floor), normalised the same way (by the record's
-//                   std): no fold can go below it, whatever the model; 0 when the block has no band
-//                   free of signal to estimate it from.
+//                   the target over the whole record:  e_f = RMS_f(target - prediction) / std(target)
+//                   (as the in-record held-out error, whose held-out blocks span the record). A
+//                   fold's own std would not do: on a chirp the actuator realises a third of the
+//                   command at the fast end, so the same residual would count three times as much
+//                   there, and the spread would measure the signal's envelope, not the model.
+//                   Reported: the k held-out errors, their mean and spread (the sample standard
+//                   deviation, k - 1 in the denominator), each fold's error also by its block's own
+//                   std (block_errors, for comparison), and each parameter's mean and spread over
+//                   the folds (an uncertainty that, unlike the Jacobian's, sees the coloured
+//                   residuals of a real record). Beside each fold's error, the noise floor of its
+//                   block (evidence.h noise_floor), normalised the same way (by the record's std):
+//                   no fold can go below it, whatever the model; 0 when the block has no band free
+//                   of signal to estimate it from.
 //   validate_on     the model carried to another record of the same rig: physical parameters
 //                   fixed, record-specific ones (offset, drift, drift coefficients; ParamSpec::
 //                   record_specific) re-estimated on it; error over the whole other record.

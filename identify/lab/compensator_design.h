@@ -9,9 +9,8 @@
 //   polynomial    order 2, lead L = delay + T + 2 zeta / wn (the plant's low-frequency lag),
 //                 spacing = L / 2 rounded to whole steps (keeps the Lagrange weights O(1)).
 //   ats           initial a0 = 1 / gain, a1 = L, a2 = delay T + delay^2 / 2 (the first-order-plus-
-//                 delay inverse), bounds a0 [0.5/gain, 2/gain], a1 [0, 3 L], a2 [-3|a2|-1e-6,
-//                 3|a2|+1e-6], window 1 s, no derivative filter (simulation data are noise free;
-//                 set it for a lab).
+//                 delay inverse), bounds a0 [0.5/gain, 2/gain], a1 [0, 3 L], a2 [-3|a2|-1e-6, 3|a2|+1e-6],
+//                 window 1 s, no derivative filter (simulation data are noise free; set it for a lab).
 //   model-based   the plant's inverse with lead order 2 and roll-off min(50 Hz, fs / 8).
 //   model-based-adaptive  the same inverse with an adaptive correction in front (window 1 s,
 //                 a0 [0.5, 2], a1 [-L, L], a2 [-L^2, L^2]: the model may be off by up to its own

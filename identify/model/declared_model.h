@@ -1,8 +1,8 @@
 #pragma once
 // The declared model as a config file (proto/identify.proto, text format like the studies):
 // reading and checking it, and writing an identified model back in the same form, so that
-// `rths identify DATA --out DIR` followed by `rths identify DATA2 --model
-// DIR/identified_model.textproto` starts the second identification where the first ended.
+// `rths identify DATA --out DIR` followed by `rths identify DATA2 --model DIR/identified_model.textproto`
+// starts the second identification where the first ended.
 //
 // Checks on reading (std::invalid_argument "FILE: FIELD: message", the CLI's exit 2):
 //   syntax, unknown fields and wrong types (study/text_format.h, with line and column);

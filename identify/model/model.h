@@ -2,9 +2,8 @@
 // Parametric models of the two measured channels and the library of effects they may contain.
 //
 // Channel `measured` (the actuator): input command u_c(t) (m) -> measured displacement (m):
-//   x(t)  = u_c(t - tau(t))                 tau(t) = max(0, delay + D(s(t); delay_c))
-//   (interpolated) x    -> first-order lag    T dy/dt = x - y                  (exact for a held
-//   sample)
+//   x(t)  = u_c(t - tau(t))                 tau(t) = max(0, delay + D(s(t); delay_c))   (interpolated)
+//   x    -> first-order lag    T dy/dt = x - y                  (exact for a held sample)
 //        -> second-order lag   y'' + 2 zeta wn y' + wn^2 y = wn^2 x   (Tustin)
 //        -> backlash / dead band of total width b (play operator)
 //        -> velocity saturation |dy/dt| <= v_max

@@ -113,9 +113,8 @@ class RecordObserver {
 // bounded single-producer single-consumer ring of preallocated slots, so append() neither blocks
 // nor does I/O, and, once every slot has grown to the largest entry, allocates nothing.
 //   append(entry)   serialises into the next free slot and wakes the writer (sem_post, which never
-//                   blocks). Ring full (the writer is more than `capacity` entries behind): the
-//                   entry is dropped and counted (dropped()); the caller reports the gap, it is
-//                   never silent.
+//                   blocks). Ring full (the writer is more than `capacity` entries behind): the entry
+//                   is dropped and counted (dropped()); the caller reports the gap, it is never silent.
 //   writer thread   seals each slot's frame (checksums), writes it (after a header copy when one
 //                   is due: HeaderRepeat) and flushes every time the ring runs empty. The first
 //                   failed write or flush (disk full, I/O error, file size limit) is kept
