@@ -325,10 +325,8 @@ std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
 }
 
 CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {
-  for (const config::Case& c : prepared.config.cases())
-    if (c.name() == case_name)
-      return describe_case(prepared, core::setup_for_case(prepared, c), c, c.name(), {});
-  throw std::invalid_argument("case '" + case_name + "' is not among the study's cases");
+  const config::Case& c = core::find_case(prepared.config, case_name);
+  return describe_case(prepared, core::setup_for_case(prepared, c), c, c.name(), {});
 }
 
 bool CaseOutcome::judged_past() const {

@@ -45,7 +45,7 @@ std::vector<security::NodeIdentity> study_nodes(const std::string& config,
                                                 const std::string& case_name) {
   const config::Study study = core::load_study(config);
   const config::Case& study_case =
-      runtime::find_case(study, case_name.empty() ? study.deployment().case_name() : case_name);
+      core::find_case(study, case_name.empty() ? study.deployment().case_name() : case_name);
   // Which nodes a study has depends on its partition, not on dt (0 = the record's, unread here).
   const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : 0.01;
   const core::HybridSetup setup = runtime::setup_without_motion(

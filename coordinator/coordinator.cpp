@@ -21,7 +21,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   if (s.options.run_id.empty()) throw std::invalid_argument("coordinator: empty run id");
   s.deployment = s.prepared.config.deployment();
   s.case_name = !s.options.case_name.empty() ? s.options.case_name : s.deployment.case_name();
-  const config::Case& study_case = runtime::find_case(s.prepared.config, s.case_name);
+  const config::Case& study_case = core::find_case(s.prepared.config, s.case_name);
   s.case_name = study_case.name();
   s.setup = core::setup_for_case(s.prepared, study_case);
   if (!core::is_explicit(s.setup.integrator))

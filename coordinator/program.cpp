@@ -243,11 +243,11 @@ void start_session(ProgramArgs& a, Session& session) {
   if (study.deployment().clock() == config::Deployment::REAL_TIME)
     prepare_real_time(prepared, a.platform, co, session);
   session.endpoint = open_endpoint(study, a);
-  co.run_id = !a.run_id.empty() ? a.run_id
-              : !study.deployment().run_id().empty()
-                  ? study.deployment().run_id()
-                  : runtime::make_run_id(study.name() + "-" +
-                                         runtime::find_case(study, a.case_name).name());
+  co.run_id =
+      !a.run_id.empty() ? a.run_id
+      : !study.deployment().run_id().empty()
+          ? study.deployment().run_id()
+          : runtime::make_run_id(study.name() + "-" + core::find_case(study, a.case_name).name());
   co.case_name = a.case_name;
   co.record = a.record;
   if (!a.view_address.empty()) {

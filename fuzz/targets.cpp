@@ -123,8 +123,7 @@ int study_config(const std::uint8_t* data, std::size_t size) {
     const config::Study study = core::parse_study(as_text(data, size), "fuzz");
     core::validate_study(study, "fuzz");
     const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : 0.01;
-    runtime::setup_without_motion(study, fs::temp_directory_path(), dt,
-                                  runtime::find_case(study, ""));
+    runtime::setup_without_motion(study, fs::temp_directory_path(), dt, core::find_case(study, ""));
   });
 }
 

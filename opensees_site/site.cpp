@@ -123,7 +123,7 @@ Site::Site(SiteOptions options)
   // OpenSees' `analyze N dt` over an N-sample record ends at t = N dt, one step past the record's
   // last sample, where its Path time series gives 0: the site's motion has that sample too.
   p.prepared.motion.acceleration.push_back(0.0);
-  const config::Case& study_case = runtime::find_case(
+  const config::Case& study_case = core::find_case(
       study, options_.case_name.empty() ? study.deployment().case_name() : options_.case_name);
   p.case_name = study_case.name();
   p.setup = core::setup_for_case(p.prepared, study_case);

@@ -607,4 +607,16 @@ const config::Case& reference_case(const config::Study& study) {
   return study.cases(0);
 }
 
+const config::Case* case_named(const config::Study& study, const std::string& name) {
+  if (name.empty()) return &reference_case(study);
+  for (const config::Case& c : study.cases())
+    if (c.name() == name) return &c;
+  return nullptr;
+}
+
+const config::Case& find_case(const config::Study& study, const std::string& name) {
+  if (const config::Case* c = case_named(study, name)) return *c;
+  throw std::invalid_argument("case '" + name + "' is not among the study's cases");
+}
+
 }  // namespace rths::core

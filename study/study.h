@@ -86,5 +86,10 @@ void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
 
 // The case named `reference_case`, else the first. Throws if there are none.
 const config::Case& reference_case(const config::Study& study);
+// The case named `name`, or the reference case when `name` is empty: nullptr when no case has
+// that name (case_named), std::invalid_argument naming it (find_case). Every command, node and
+// reader finds a study's case this one way.
+const config::Case* case_named(const config::Study& study, const std::string& name);
+const config::Case& find_case(const config::Study& study, const std::string& name);
 
 }  // namespace rths::core

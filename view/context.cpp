@@ -10,7 +10,7 @@ namespace rths::view {
 nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name) {
   nlohmann::json critical;
   try {
-    const config::Case& study_case = runtime::find_case(prepared.config, case_name);
+    const config::Case& study_case = core::find_case(prepared.config, case_name);
     const auto check = analysis::check_case_critical_delay(prepared, study_case);
     if (!check || !check->critical()) {
       critical["text"] =
@@ -35,7 +35,7 @@ nlohmann::json run_context(const core::PreparedStudy& prepared, const std::strin
 
 core::SimulationResult predict_case(const core::PreparedStudy& prepared,
                                     const std::string& case_name) {
-  const config::Case& study_case = runtime::find_case(prepared.config, case_name);
+  const config::Case& study_case = core::find_case(prepared.config, case_name);
   return core::simulate(runtime::in_process_setup(prepared, study_case), prepared.motion);
 }
 
@@ -48,7 +48,7 @@ void describe(Feed& feed, const core::PreparedStudy& prepared, const std::string
   try {
     const core::SimulationResult prediction = predict_case(prepared, case_name);
     feed.set_prediction(prediction);
-    const std::string name = runtime::find_case(prepared.config, case_name).name();
+    const std::string name = core::find_case(prepared.config, case_name).name();
     context["prediction"] = {{"text", "in-process run of case " + name +
                                           " (its delays and compensation; not the links' lag)" +
                                           motion_text + (prediction.diverged ? ": diverged" : "")},

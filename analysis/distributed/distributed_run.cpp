@@ -32,7 +32,7 @@ std::optional<InProcessDifference> difference_from_in_process(
     const core::PreparedStudy& prepared, const std::string& case_name,
     const core::SimulationResult& recorded) {
   const core::SimulationResult expected = core::simulate(
-      runtime::in_process_setup(prepared, runtime::find_case(prepared.config, case_name)),
+      runtime::in_process_setup(prepared, core::find_case(prepared.config, case_name)),
       prepared.motion);
   if (expected.displacement.rows() != recorded.displacement.rows() ||
       expected.displacement.cols() != recorded.displacement.cols())
@@ -133,7 +133,7 @@ int warn_past_critical_delay(const core::PreparedStudy& prepared,
   const ActuatorPathLag path = actuator_path_lag(prepared);
   int past = 0;
   for (const std::string& name : case_names) {
-    const config::Case& study_case = runtime::find_case(prepared.config, name);
+    const config::Case& study_case = core::find_case(prepared.config, name);
     const auto check = analysis::check_case_critical_delay(prepared, study_case, path.felt());
     if (!check || !check->past()) continue;
     ++past;

@@ -7,6 +7,7 @@
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
 #include "identify/run/sensors.h"
+#include "study/study.h"
 #include "study/text_format.h"
 #include "util/atomic_file.h"
 
@@ -92,20 +93,13 @@ std::optional<SpecimenModel> contradicted_specimen(const RunIdentification& run)
   return std::nullopt;
 }
 
-const config::Case* find_case(const config::Study& study, const std::string& name) {
-  for (const auto& c : study.cases()) {
-    if (c.name() == name) return &c;
-  }
-  return nullptr;
-}
-
 }  // namespace
 
 IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem::path& base_dir,
                              const std::filesystem::path& trace_dir) {
   IdentifiedRun out;
   config::Study fragment;
-  for (const auto& c : actuator_cases(run, find_case(run.study, run.case_name), out.notes)) {
+  for (const auto& c : actuator_cases(run, core::case_named(run.study, run.case_name), out.notes)) {
     *fragment.add_cases() = c;
   }
   if (const auto specimen = contradicted_specimen(run)) {

@@ -136,11 +136,11 @@ std::vector<NetworkPath> identify_links(const std::filesystem::path& record,
   return out;
 }
 
+// As run_residual.cpp's: the record's case, else its first; nullptr for a study without cases.
 const config::Case* run_case(const config::Study& study, const std::string& name) {
-  for (const auto& c : study.cases()) {
-    if (c.name() == name) return &c;
-  }
-  return study.cases().empty() ? nullptr : &study.cases(0);
+  if (study.cases().empty()) return nullptr;
+  const config::Case* named = core::case_named(study, name);
+  return named ? named : &study.cases(0);
 }
 
 // The declared actuator (run_record.h): the case's stages, then the emulators' own receive

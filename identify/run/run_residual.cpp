@@ -17,10 +17,9 @@
 namespace rths::identify {
 namespace {
 
+// The record's case; a record whose study lost that case's name is read with its first case.
 const config::Case& run_case(const config::Study& study, const std::string& name) {
-  for (const auto& c : study.cases()) {
-    if (c.name() == name) return c;
-  }
+  if (const config::Case* c = core::case_named(study, name)) return *c;
   if (study.cases().empty()) throw std::invalid_argument("study: no cases");
   return study.cases(0);
 }

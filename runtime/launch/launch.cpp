@@ -201,7 +201,7 @@ LaunchResult launch_run(const LaunchOptions& options) {
   const config::Study study = core::load_study(options.config);
   const core::PreparedStudy prepared = core::prepare_study(study, options.config.parent_path());
   check_deployment(prepared);  // every case, as `rths run` checks them
-  const config::Case& study_case = find_case(
+  const config::Case& study_case = core::find_case(
       study, options.case_name.empty() ? study.deployment().case_name() : options.case_name);
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
   const config::Deployment deployment = with_default_nodes(study.deployment(), setup);

@@ -192,13 +192,6 @@ void check_deployment(const core::PreparedStudy& prepared) {
   }
 }
 
-const config::Case& find_case(const config::Study& study, const std::string& name) {
-  if (name.empty()) return core::reference_case(study);
-  for (const config::Case& c : study.cases())
-    if (c.name() == name) return c;
-  throw std::invalid_argument("case '" + name + "' is not among the study's cases");
-}
-
 core::HybridSetup setup_without_motion(const config::Study& study,
                                        const std::filesystem::path& base_dir, double dt,
                                        const config::Case& study_case) {

@@ -60,9 +60,6 @@ config::Deployment with_default_nodes(config::Deployment deployment, const core:
 // Throws std::invalid_argument naming the case, the node and the field.
 void check_deployment(const core::PreparedStudy& prepared);
 
-// The case with this name, or the reference case when empty. Throws naming the missing case.
-const config::Case& find_case(const config::Study& study, const std::string& name);
-
 // The setup of one case built without reading the motion (a node on another host may not have
 // it): the same structure, partition and delay chains as core::prepare_study + setup_for_case.
 core::HybridSetup setup_without_motion(const config::Study& study,

@@ -59,7 +59,7 @@ TEST(ControllerEmulator, AnswersEachCommandFrameAsTheInProcessActuatorBitForBit)
   Emulator e;
   const core::PreparedStudy prepared = test::prepare(study_text());
   core::HybridSetup setup =
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, "lag_shift_14ms"));
+      core::setup_for_case(prepared, core::find_case(prepared.config, "lag_shift_14ms"));
   core::Actuator actuator =
       core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt, setup.servo_substeps);
   for (int k = 1; k <= 200; ++k) {
@@ -88,7 +88,7 @@ TEST(ControllerEmulator, PacedAnswersEachFrameWithTheNewestPlantPeriodOfTheInPro
   Emulator e(paced_study_text());
   const core::PreparedStudy prepared = test::prepare(paced_study_text());
   core::HybridSetup setup =
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, "lag_shift_14ms"));
+      core::setup_for_case(prepared, core::find_case(prepared.config, "lag_shift_14ms"));
   ASSERT_EQ(setup.servo_substeps, 4);
   core::Actuator actuator =
       core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt, setup.servo_substeps);

@@ -26,7 +26,7 @@ class InProcessSite {
  public:
   InProcessSite(const std::string& text, const std::string& case_name)
       : prepared_(core::prepare_study(core::parse_study(text, "test"), "/")),
-        setup_(core::setup_for_case(prepared_, runtime::find_case(prepared_.config, case_name))),
+        setup_(core::setup_for_case(prepared_, core::find_case(prepared_.config, case_name))),
         mapping_(prepared_.config.deployment().opensees(),
                  {setup_.partition.experimental[0]->initial_stiffness()},
                  setup_.partition.actuator_storeys, 1),
@@ -146,7 +146,7 @@ TEST(Session, FourteenMsOfLagGrowsThePeakAsRthsOwnPaperFrameRunDoes) {
   const core::PreparedStudy p = core::prepare_study(core::parse_study(paper, "paper"), "/");
   const auto peak = [&](const char* name) {
     const auto r =
-        core::simulate(core::setup_for_case(p, runtime::find_case(p.config, name)), p.motion);
+        core::simulate(core::setup_for_case(p, core::find_case(p.config, name)), p.motion);
     return r.displacement.cwiseAbs().maxCoeff();
   };
   const double rths_growth = peak("lag") / peak("reference");

@@ -129,7 +129,7 @@ TEST_F(OpenSeesSite, FourteenMsOnTheActuatorLinkGrowsThePeakAsThePaperFrameRun) 
       "cases { name: \"reference\" }\ncases { name: \"lag\" delay { shift { delay: 0.014 } } }\n";
   const core::PreparedStudy p = core::prepare_study(core::parse_study(paper, "paper"), "/");
   const auto peak = [&](const char* name) {
-    return core::simulate(core::setup_for_case(p, runtime::find_case(p.config, name)), p.motion)
+    return core::simulate(core::setup_for_case(p, core::find_case(p.config, name)), p.motion)
         .displacement.cwiseAbs()
         .maxCoeff();
   };

@@ -38,7 +38,7 @@ TEST_F(DdsCompensation, AdaptiveAndModelBasedPerActuatorEqualInProcessBitForBit)
   // The compensators act: the realised drift differs from what the same actuator realises bare.
   const core::PreparedStudy prepared = test::prepare(text);
   core::HybridSetup bare =
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, "compensated"));
+      core::setup_for_case(prepared, core::find_case(prepared.config, "compensated"));
   for (auto& chain : bare.delays) chain.set_compensator(nullptr);
   const core::SimulationResult uncompensated = core::simulate(bare, prepared.motion);
   EXPECT_NE(uncompensated.realised(500, 0), in_process.realised(500, 0));

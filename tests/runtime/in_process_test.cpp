@@ -41,7 +41,7 @@ TEST_P(InProcessEqualsSimulate, BitForBit) {
   options.case_name = GetParam().case_name;
   const coordinator::RunOutcome outcome = coordinator::run_in_process(prepared, options);
   ASSERT_TRUE(outcome.ok) << outcome.status;
-  const auto& study_case = runtime::find_case(prepared.config, GetParam().case_name);
+  const auto& study_case = core::find_case(prepared.config, GetParam().case_name);
   const core::SimulationResult reference =
       core::simulate(core::setup_for_case(prepared, study_case), prepared.motion);
   expect_identical(outcome.result, reference);
@@ -87,7 +87,7 @@ TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
   const auto outcome = coordinator::run_in_process(prepared, options);
   ASSERT_TRUE(outcome.ok) << outcome.status;
   const auto delayed = core::simulate(
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, "lag_shift_14ms")),
+      core::setup_for_case(prepared, core::find_case(prepared.config, "lag_shift_14ms")),
       prepared.motion);
   expect_identical(outcome.result, delayed);
 }

@@ -100,9 +100,8 @@ inline std::string read_file(const std::filesystem::path& path) {
 inline core::SimulationResult reference_result(const std::string& text,
                                                const std::string& case_name) {
   const core::PreparedStudy prepared = prepare(text);
-  return core::simulate(
-      core::setup_for_case(prepared, runtime::find_case(prepared.config, case_name)),
-      prepared.motion);
+  return core::simulate(core::setup_for_case(prepared, core::find_case(prepared.config, case_name)),
+                        prepared.motion);
 }
 
 // Every recorded step equals the reference row exactly (the doubles went over the wire as bits).

@@ -40,6 +40,16 @@ TEST(StudyTest, PaperFrameConfigPreparesAtOneMillisecond) {
   ASSERT_EQ(lagged.delays.size(), 1u);
   EXPECT_DOUBLE_EQ(lagged.delays[0].nominal_delay(), 0.014);
   EXPECT_EQ(reference_case(study).name(), "reference");
+  // One way to find a case: by name, the reference when the name is empty, else named as absent.
+  EXPECT_EQ(find_case(study, "").name(), "reference");
+  EXPECT_EQ(find_case(study, study.cases(1).name()).name(), study.cases(1).name());
+  EXPECT_EQ(case_named(study, "no such case"), nullptr);
+  try {
+    find_case(study, "no such case");
+    ADD_FAILURE() << "an absent case was found";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "case 'no such case' is not among the study's cases");
+  }
 }
 
 TEST(StudyTest, UnknownFieldIsReportedWithLineAndColumn) {

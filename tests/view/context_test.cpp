@@ -58,7 +58,7 @@ TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
   const core::SimulationResult lagged = predict_case(prepared, "lag_shift_14ms");
   const core::SimulationResult reference = predict_case(prepared, "reference");
   ASSERT_EQ(lagged.steps(), prepared.motion.acceleration.size());
-  const auto& study_case = runtime::find_case(prepared.config, "lag_shift_14ms");
+  const auto& study_case = core::find_case(prepared.config, "lag_shift_14ms");
   EXPECT_TRUE(
       lagged.displacement ==
       core::simulate(core::setup_for_case(prepared, study_case), prepared.motion).displacement);
