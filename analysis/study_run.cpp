@@ -10,10 +10,10 @@
 #include <sstream>
 #include <tuple>
 
-#include "analysis/benchmark_evaluation.h"
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
 #include "core/sparse_structure.h"
+#include "study/motion_key.h"
 #include "study/stability_config.h"
 #include "util/atomic_file.h"
 #include "util/sha256.h"
@@ -367,7 +367,7 @@ void read_motion_facts(const core::PreparedStudy& prepared, StudyOutcome& outcom
                              : prepared.motion.read_units;
   outcome.motion_description = prepared.motion.description;
   outcome.motion_name = prepared.motion.name;
-  outcome.motion_sha256 = motion_key(prepared.motion);
+  outcome.motion_sha256 = core::motion_key(prepared.motion);
   outcome.motion_file_sha256 = motion_file_sha256(prepared);
 }
 

@@ -5,9 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include "analysis/benchmark_evaluation.h"
 #include "analysis/results_csv.h"
 #include "core/ground_motion.h"
+#include "study/motion_key.h"
 
 namespace rths::results {
 namespace {
@@ -198,7 +198,7 @@ void set_run_facts(const runtime::RecordContents& record, Table& t) {
         .name = e.name(),
         .dt = e.dt(),
         .acceleration = {e.acceleration().begin(), e.acceleration().end()}};
-    set_motion_attributes(t, e.name(), analysis::motion_key(as_run), e.source_sha256());
+    set_motion_attributes(t, e.name(), core::motion_key(as_run), e.source_sha256());
   } else {
     set_motion_attributes(t, "", "", motion.sha256());
   }
