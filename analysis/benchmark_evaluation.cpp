@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/structure_response.h"
+#include "study/motion_key.h"
 #include "util/sha256.h"
 #include "util/text_table.h"
 
@@ -84,7 +85,7 @@ namespace {
 void judge_published_key(const config::BenchmarkEvaluation& spec, const config::Study& study,
                          const std::filesystem::path& base_dir, const core::StructuralModel& whole,
                          BenchmarkEvaluation& out) {
-  out.run_motion_key = motion_key(core::load_motion(study.motion(), base_dir));
+  out.run_motion_key = core::motion_key(core::load_motion(study.motion(), base_dir));
   out.run_structure_key = structure_key(whole);
   const std::string keys = "this run's motion sha256 " + out.run_motion_key +
                            ", structure sha256 " + out.run_structure_key;
@@ -112,12 +113,6 @@ void judge_published_key(const config::BenchmarkEvaluation& spec, const config::
 }
 
 }  // namespace
-
-std::string motion_key(const core::GroundMotion& motion) {
-  std::vector<double> values{motion.dt};
-  values.insert(values.end(), motion.acceleration.begin(), motion.acceleration.end());
-  return util::bytes_sha256(values.data(), values.size() * sizeof(double));
-}
 
 std::string structure_key(const core::StructuralModel& model) {
   std::vector<double> values{static_cast<double>(model.dofs())};

@@ -45,9 +45,8 @@ struct BenchmarkEvaluation {
   bool compared_with_published(const BenchmarkCaseCriteria& c) const;
 };
 
-// SHA-256 of a motion as run (dt then the samples, m/s^2, as IEEE doubles) and of a structure
-// (n, M, K, iota): what published values are keyed by.
-std::string motion_key(const core::GroundMotion& motion);
+// SHA-256 of a structure (n, M, K, iota): with core::motion_key (study/motion_key.h), what
+// published values are keyed by.
 std::string structure_key(const core::StructuralModel& model);
 
 // 100 (J - J_published) / J_published for J2-J9 (%), J1 - J1_published (ms) for J1.

@@ -13,8 +13,10 @@
 #include "analysis/results_csv.h"
 #include "core/metrics.h"
 #include "core/sparse_structure.h"
+#include "study/motion_key.h"
 #include "study/stability_config.h"
 #include "util/atomic_file.h"
+#include "util/sha256.h"
 
 namespace rths::analysis {
 namespace {
@@ -344,12 +346,27 @@ std::string StudyOutcome::reference_description() const {
 
 namespace {
 
-// The units the record was read in (its file's, else the config's) and one line on it as read.
+// SHA-256 of the file the motion was read from: the one a record carries with its embedded
+// motion, else the file's (relative to the study's folder); "" for a motion from no file.
+std::string motion_file_sha256(const core::PreparedStudy& prepared) {
+  const config::GroundMotion& motion = prepared.config.motion();
+  if (motion.has_embedded()) return motion.embedded().source_sha256();
+  if (motion.path().empty()) return "";
+  std::filesystem::path path = motion.path();
+  if (path.is_relative()) path = prepared.base_dir / path;
+  return util::file_sha256(path);
+}
+
+// The units the record was read in (its file's, else the config's), one line on it as read, and
+// which motion it is (name and checksums).
 void read_motion_facts(const core::PreparedStudy& prepared, StudyOutcome& outcome) {
   outcome.motion_units = prepared.motion.read_units.empty()
                              ? core::motion_units_name(prepared.config.motion())
                              : prepared.motion.read_units;
   outcome.motion_description = prepared.motion.description;
+  outcome.motion_name = prepared.motion.name;
+  outcome.motion_sha256 = core::motion_key(prepared.motion);
+  outcome.motion_file_sha256 = motion_file_sha256(prepared);
 }
 
 }  // namespace

@@ -87,6 +87,10 @@ struct StudyOutcome {
   std::string motion_units;  // units the record was read in: g, m/s2, cm/s2, in/s2, mm/s2
   // The record as read: points, dt, duration, PGA in its units, where they came from.
   std::string motion_description;
+  // Which motion ran: its name (file stem or header title), the SHA-256 of the motion as run
+  // (motion_key: dt, then the samples in m/s^2 as IEEE doubles; the same for a run and its
+  // record) and of the file it was read from ("" when it came from no file).
+  std::string motion_name, motion_sha256, motion_file_sha256;
   ResponseSpec response = ResponseSpec::floor(1);
   std::size_t reference_index = 0;
   double lag_free_peak = 0.0;  // m, top floor of the run without any delay stage

@@ -159,10 +159,12 @@ void add_export_command(CLI::App& app) {
       "CSV file to write");
   auto* mat = cmd->add_option_function<std::string>(
       "--mat", [outputs](const std::string& p) { (*outputs)[results::Format::kMat] = p; },
-      "MATLAB 5 file to write (one variable per CSV column, units in the struct `units`)");
+      "MATLAB 5 file to write (one variable per CSV column, units in the struct `units`, the "
+      "study, dt_s, motion and verdict in the struct `attributes`)");
   auto* h5 = cmd->add_option_function<std::string>(
       "--h5", [outputs](const std::string& p) { (*outputs)[results::Format::kH5] = p; },
-      "HDF5 file to write (one dataset per CSV column, each with a `units` attribute)");
+      "HDF5 file to write (one dataset per CSV column, each with a `units` attribute; the "
+      "study, dt_s, motion and verdict as the root's attributes)");
   cmd->callback([=] {
     if (csv->count() + mat->count() + h5->count() == 0)
       throw ExitError(kExitBadInput, "export: give --csv, --mat or --h5 (or several)");

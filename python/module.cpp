@@ -17,9 +17,10 @@
 //                               `rths export`); a record that lost entries raises rths.Error
 //                               naming the lost steps, unless allow_loss=True, which returns the
 //                               intact entries and "losses" (one description per damaged
-//                               region); attributes integrity and lost_steps as results/results.h.
+//                               region); attributes (study, dt_s, the motion, status, ok,
+//                               integrity, lost_steps, ...) as results/results.h.
 //
-// "series" maps a name with its unit (time_s, u1_m, force1_N, node2_round_trip_s, a1_m_per_s2)
+// "series" maps a name with its unit (time_s, u_floor1_m, force_act1_N, node2_round_trip_s)
 // to a 1-D NumPy float64 array (text columns: a list of str); the names and units are those of
 // results/results.h, the same the CSV, MATLAB and HDF5 files carry (one naming rule,
 // results/table.h). "units" maps the same names to the unit.
@@ -119,6 +120,14 @@ py::dict table_dict(const results::Table& table) {
   return out;
 }
 
+// A table's attributes, text as str and numbers (dt_s, ok) as float (needs the GIL).
+py::dict attributes_dict(const results::Table& table) {
+  py::dict out;
+  for (const auto& [key, text] : table.attributes()) out[py::str(key)] = text;
+  for (const auto& [key, number] : table.number_attributes()) out[py::str(key)] = number;
+  return out;
+}
+
 Study load_study(const std::filesystem::path& path) {
   return {core::load_study(path), path.parent_path(), path.string()};
 }
@@ -161,7 +170,7 @@ py::dict run(const Study& study, const std::optional<std::vector<std::string>>& 
   // As `rths run` writes benchmark.json: each criterion {name, value, unit, definition}.
   out["benchmark"] =
       benchmark ? to_python(analysis::benchmark_json(*benchmark)) : py::object(py::none());
-  out["attributes"] = py::cast(table.attributes());
+  out["attributes"] = attributes_dict(table);
   return out;
 }
 
@@ -196,7 +205,7 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
   t["nonlinear_to_linear_nrmse_median_ratio"] = number(trends.nonlinear_to_linear_median_ratio);
   t["diverged_points"] = trends.diverged_points;
   out["trends"] = t;
-  out["attributes"] = py::cast(table.attributes());
+  out["attributes"] = attributes_dict(table);
   return out;
 }
 
@@ -306,7 +315,7 @@ py::dict read_record(const std::filesystem::path& path, bool allow_loss) {
     table = results::record_table(contents);
   }
   py::dict out = table_dict(table);
-  out["attributes"] = py::cast(table.attributes());
+  out["attributes"] = attributes_dict(table);
   out["truncated"] = contents.truncated;
   out["warning"] = contents.warning;
   out["checksummed"] = contents.checksummed;

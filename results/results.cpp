@@ -2,16 +2,54 @@
 
 #include <algorithm>
 #include <cmath>
-
-#include "analysis/results_csv.h"
-
 #include <limits>
 #include <stdexcept>
+
+#include "analysis/results_csv.h"
+#include "core/ground_motion.h"
+#include "study/motion_key.h"
 
 namespace rths::results {
 namespace {
 
 constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();
+
+// "node<n>_<quantity>": a link's column, the same in a record and in a study's table.
+std::string link_column(int node, const std::string& quantity) {
+  std::string name = "node";  // appended: GCC 12 misreads `"node" + std::to_string` (-Wrestrict)
+  name += std::to_string(node);
+  name += '_';
+  name += quantity;
+  return name;
+}
+
+// Which motion ran, as every table names it (analysis::StudyOutcome's motion fields).
+void set_motion_attributes(Table& t, const std::string& name, const std::string& sha256,
+                           const std::string& file_sha256) {
+  t.set_attribute("motion_name", name);
+  t.set_attribute("motion_sha256", sha256);
+  t.set_attribute("motion_file_sha256", file_sha256);
+}
+
+// A case ran as meant: it completed, or diverged as its expect_unstable said it would.
+bool case_ok(const analysis::CaseOutcome& c) {
+  return c.status == "completed" || (c.diverged() && c.expect_unstable);
+}
+
+// The study's verdict over its cases: status "completed" when every case completed, else
+// "<case>: <status>" of each case that did not; ok 1 when every case ran as meant, else 0.
+void set_study_verdict(Table& t, const analysis::StudyOutcome& outcome) {
+  std::string status;
+  bool ok = true;
+  for (const analysis::CaseOutcome& c : outcome.cases) {
+    ok = ok && case_ok(c);
+    if (c.status == "completed") continue;
+    if (!status.empty()) status += "; ";
+    status += c.name + ": " + c.status;
+  }
+  t.set_attribute("status", status.empty() ? "completed" : status);
+  t.set_number_attribute("ok", ok ? 1.0 : 0.0);
+}
 
 }  // namespace
 
@@ -48,6 +86,10 @@ Table study_table(const analysis::StudyOutcome& outcome) {
     }
   }
   table.set_attribute("study", outcome.study_name);
+  table.set_number_attribute("dt_s", dt);
+  set_motion_attributes(table, outcome.motion_name, outcome.motion_sha256,
+                        outcome.motion_file_sha256);
+  set_study_verdict(table, outcome);
   table.set_attribute("reference_case", outcome.reference().name);
   table.set_attribute("reference", outcome.reference_description());
   return table;
@@ -63,7 +105,7 @@ Table distributed_study_table(const analysis::StudyOutcome& outcome,
   const std::size_t rows = table.rows();
   for (std::size_t i = 0; i < links.size(); ++i) {
     const core::SimulationResult& r = outcome.cases[i].simulation;
-    const std::string prefix = analysis::result_column_prefix(outcome.cases[i].name) + "lag_node";
+    const std::string prefix = analysis::result_column_prefix(outcome.cases[i].name);
     for (const auto& [node, series] : links[i]) {
       std::vector<double> injected(rows, kMissing), round_trip(rows, kMissing);
       for (std::size_t a = 0; a < series.time.size(); ++a) {
@@ -73,9 +115,8 @@ Table distributed_study_table(const analysis::StudyOutcome& outcome,
         injected[static_cast<std::size_t>(k)] = series.injected[a];
         round_trip[static_cast<std::size_t>(k)] = series.round_trip[a];
       }
-      const std::string name = prefix + std::to_string(node);
-      table.add_numbers(name + "_injected_s", "s", std::move(injected));
-      table.add_numbers(name + "_round_trip_s", "s", std::move(round_trip));
+      table.add_numbers(prefix + link_column(node, "injected_lag_s"), "s", std::move(injected));
+      table.add_numbers(prefix + link_column(node, "round_trip_s"), "s", std::move(round_trip));
     }
   }
   return table;
@@ -117,14 +158,12 @@ Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::s
 
 namespace {
 
-// The run's identity, outcome and integrity as table attributes.
+// The run's identity and integrity as table attributes.
 void set_record_attributes(const runtime::RecordContents& record, Table& t) {
   const runtime::RunHeader* header = record.header_or_assumed();
   t.set_attribute("run_id", header->run_id());
   t.set_attribute("case_name", header->case_name());
   t.set_attribute("clock", header->clock());
-  const runtime::RunFooter* footer = record.footer();
-  t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
   t.set_attribute("integrity", (!record.checksummed     ? "unverified: written without checksums"
                                 : record.lost_entries() ? "damaged: " + record.loss_report()
                                                         : "verified (CRC-32C per entry)") +
@@ -142,6 +181,32 @@ void set_record_attributes(const runtime::RecordContents& record, Table& t) {
   t.set_attribute("lost_steps", lost);
 }
 
+// What the run ran and its verdict, named as a study's table names them: study, dt_s, the motion
+// (from the inputs entry, where the record carries it as run; a record without one names only
+// the file checksum its config required, if any), status and ok (1: the footer says the run
+// succeeded; 0: it failed or has no footer).
+void set_run_facts(const runtime::RecordContents& record, Table& t) {
+  const runtime::RunHeader* header = record.header_or_assumed();
+  const config::Study* study = record.study_as_run();
+  if (!study) study = &header->study();
+  t.set_attribute("study", study->name());
+  t.set_number_attribute("dt_s", header->dt());
+  const config::GroundMotion& motion = study->motion();
+  if (motion.has_embedded()) {
+    const config::EmbeddedMotion& e = motion.embedded();
+    const core::GroundMotion as_run{
+        .name = e.name(),
+        .dt = e.dt(),
+        .acceleration = {e.acceleration().begin(), e.acceleration().end()}};
+    set_motion_attributes(t, e.name(), core::motion_key(as_run), e.source_sha256());
+  } else {
+    set_motion_attributes(t, "", "", motion.sha256());
+  }
+  const runtime::RunFooter* footer = record.footer();
+  t.set_attribute("status", footer ? footer->status() : "no footer: the run was cut short");
+  t.set_number_attribute("ok", footer && footer->ok() ? 1.0 : 0.0);
+}
+
 // Whether the run's deployment has node `id` as a CONTROLLER (its links carry the frame's round
 // trip and the controller's status).
 bool is_controller(const runtime::RunHeader& header, int id) {
@@ -157,7 +222,7 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
   const auto links = static_cast<std::size_t>(header.link_node_ids_size());
   for (std::size_t l = 0; l < links; ++l) {
     const int id = header.link_node_ids(static_cast<int>(l));
-    const std::string prefix = "node" + std::to_string(id) + "_";
+    const auto column = [id](const std::string& quantity) { return link_column(id, quantity); };
     const auto link = [&steps, l](auto field) {
       std::vector<double> out;
       out.reserve(steps.size());
@@ -169,18 +234,18 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
       return out;
     };
     using Link = runtime::LinkSample;
-    t.add_numbers(prefix + "answered_step", "",
+    t.add_numbers(column("answered_step"), "",
                   link([](const Link& x) { return x.answered_step(); }));
-    t.add_numbers(prefix + "injected_lag_s", "s",
+    t.add_numbers(column("injected_lag_s"), "s",
                   link([](const Link& x) { return x.injected_lag(); }));
-    t.add_numbers(prefix + "round_trip_s", "s", link([](const Link& x) { return x.round_trip(); }));
-    t.add_numbers(prefix + "one_way_down_s", "s",
+    t.add_numbers(column("round_trip_s"), "s", link([](const Link& x) { return x.round_trip(); }));
+    t.add_numbers(column("one_way_down_s"), "s",
                   link([](const Link& x) { return x.one_way_down(); }));
-    t.add_numbers(prefix + "one_way_up_s", "s", link([](const Link& x) { return x.one_way_up(); }));
+    t.add_numbers(column("one_way_up_s"), "s", link([](const Link& x) { return x.one_way_up(); }));
     if (!is_controller(header, id)) continue;
-    t.add_numbers(prefix + "controller_round_trip_s", "s",
+    t.add_numbers(column("controller_round_trip_s"), "s",
                   link([](const Link& x) { return x.controller_round_trip(); }));
-    t.add_numbers(prefix + "controller_status", "",
+    t.add_numbers(column("controller_status"), "",
                   link([](const Link& x) { return x.controller_status(); }));
   }
 }
@@ -217,34 +282,35 @@ Table record_table(const runtime::RecordContents& record) {
   t.add_numbers("time_s", "s", scalar([](const Step& s) { return s.time(); }));
   t.add_numbers("ground_acceleration_m_per_s2", "m/s^2",
                 scalar([](const Step& s) { return s.ground_acceleration(); }));
-  const auto add_indexed = [&t](const std::string& name, const std::string& unit,
+  // Column i (0-based) of each quantity, named by analysis/results_csv.h (1-based).
+  const auto add_indexed = [&t](std::string (*name)(std::size_t), const std::string& unit,
                                 std::vector<std::vector<double>> columns) {
     for (std::size_t i = 0; i < columns.size(); ++i)
-      t.add_numbers(name + std::to_string(i + 1) + "_" + unit_suffix(unit), unit,
-                    std::move(columns[i]));
+      t.add_numbers(name(i + 1), unit, std::move(columns[i]));
   };
-  add_indexed("u", "m",
+  add_indexed(analysis::displacement_column, "m",
               per_index(
                   [](const Step& s) -> const auto& { return s.displacement(); }, dofs));
-  add_indexed("v", "m/s",
+  add_indexed(analysis::velocity_column, "m/s",
               per_index(
                   [](const Step& s) -> const auto& { return s.velocity(); }, dofs));
-  add_indexed("a", "m/s^2",
+  add_indexed(analysis::acceleration_column, "m/s^2",
               per_index(
                   [](const Step& s) -> const auto& { return s.acceleration(); }, dofs));
-  add_indexed("command", "m",
+  add_indexed(analysis::command_column, "m",
               per_index(
                   [](const Step& s) -> const auto& { return s.command(); }, actuators));
-  add_indexed("realised", "m",
+  add_indexed(analysis::measured_column, "m",
               per_index(
                   [](const Step& s) -> const auto& { return s.realised(); }, actuators));
-  add_indexed("force", "N",
+  add_indexed(analysis::force_column, "N",
               per_index(
                   [](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
   add_link_columns(t, *header, steps);
   t.add_numbers("lateness_s", "s", scalar([](const Step& s) { return s.lateness(); }));
   t.add_numbers("overrun", "", scalar([](const Step& s) { return s.overrun() ? 1 : 0; }));
   set_record_attributes(record, t);
+  set_run_facts(record, t);
   return t;
 }
 

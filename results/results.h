@@ -1,13 +1,27 @@
 #pragma once
 // Every rths result as a Table (results/table.h): the one place that names the variables and
 // units of each command's output, for the CSV, MATLAB and HDF5 writers and the Python module.
+// A run's history has one naming (analysis/results_csv.h) in every table that holds it: a table
+// of several cases (run, launch, sites) puts "<case>_" in front of each of a case's columns; a
+// record (export, read_record) is one case, named in its attribute case_name, without prefix.
+//
+// Every table of a run (study_table, distributed_study_table, record_table) has the attributes
+//   study (text), dt_s (number, s), motion_name, motion_sha256 (SHA-256 of the motion as run:
+//   dt, then the samples in m/s^2 as IEEE doubles, core::motion_key; the same in a run's
+//   table and in its records' exports), motion_file_sha256 (of the file it was read from), the
+//   verdict status (text) and ok (number: 1 the run(s) went as meant, 0 not).
+// Numbers are number attributes (Table::set_number_attribute), the rest text.
 //
 //   study_table   `rths run`: step, time_s, then per case every floor and every actuator
-//                 (analysis/results_csv.h names). A case that stopped early (diverged) is NaN after
-//                 its last step.
+//                 (<case>_u_floor<i>_m, <case>_command_act<j>_m, <case>_measured_act<j>_m,
+//                 <case>_force_act<j>_N). A case that stopped early (diverged) is NaN after
+//                 its last step. status: "completed" when every case completed, else
+//                 "<case>: <status>" of each case that did not, joined by "; "; ok 1 when every
+//                 case completed or diverged as its expect_unstable said. Also reference_case
+//                 and reference.
 //   distributed_study_table  `rths launch` and `rths sites`: study_table's columns (the same as
 //                 `run`'s for the same cases), then the lag per link of each case:
-//                 <case>_lag_node<n>_injected_s and <case>_lag_node<n>_round_trip_s (s), filled at
+//                 <case>_node<n>_injected_lag_s and <case>_node<n>_round_trip_s (s), filled at
 //                 the step that carried each answer (runtime/record/measurements.h: an answer
 //                 counts once) and NaN elsewhere (step 0; a real-time step that reused an older
 //                 answer). Attribute "reference": against what every case was compared.
@@ -16,15 +30,20 @@
 //                 eq2_paper, nrmse, peak_error (m), diverged (0/1), as in the sweep CSV;
 //                 attributes grid_hash and grid_points.
 //   record_table  a run record (`rths launch`, `rths export`): step, time_s,
-//                 ground_acceleration_m_per_s2, u<i>_m, v<i>_m_per_s, a<i>_m_per_s2 per DOF,
-//                 command<j>_m, realised<j>_m, force<j>_N per actuator, then per link to node n:
+//                 ground_acceleration_m_per_s2, u_floor<i>_m, v_floor<i>_m_per_s,
+//                 a_floor<i>_m_per_s2 per DOF, command_act<j>_m, measured_act<j>_m,
+//                 force_act<j>_N per actuator, then per link to node n:
 //                 node<n>_answered_step, node<n>_injected_lag_s, node<n>_round_trip_s,
 //                 node<n>_one_way_down_s, node<n>_one_way_up_s and, for a CONTROLLER node of
 //                 the header's deployment, node<n>_controller_round_trip_s (s, the UDP frame's
 //                 round trip the node timed) and node<n>_controller_status (0 running) (NaN at
 //                 step 0, which has no exchange), then lateness_s and overrun (0/1);
-//                 attributes run_id, case_name,
-//                 clock, status, integrity ("verified (CRC-32C per entry)", "damaged: <what
+//                 attributes run_id, case_name, clock, status (the footer's, or "no footer:
+//                 the run was cut short"), ok (the footer's ok; 0 without a footer), the motion
+//                 from the record's inputs entry (motion_name and motion_sha256 empty for a
+//                 record that does not carry it: older, or its inputs entry lost; then
+//                 motion_file_sha256 is the checksum its config required, if any),
+//                 integrity ("verified (CRC-32C per entry)", "damaged: <what
 //                 was lost>" or "unverified: ..." for an old record, then what was assumed
 //                 when every header copy was lost: the table is then sized and timed by the
 //                 header the reader assumed from the steps) and lost_steps (step

@@ -91,6 +91,16 @@ void Table::add_texts(const std::string& name, const std::string& unit,
   add(std::move(c));
 }
 
+void Table::set_attribute(const std::string& key, const std::string& value) {
+  number_attributes_.erase(key);
+  attributes_[key] = value;
+}
+
+void Table::set_number_attribute(const std::string& key, double value) {
+  attributes_.erase(key);
+  number_attributes_[key] = value;
+}
+
 const Column& Table::column(const std::string& name) const {
   for (const Column& c : columns_) {
     if (c.name == name) return c;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <stdexcept>
 
@@ -57,6 +58,13 @@ matvar_t* mat_char(const char* name, const std::string& text) {
                        MAT_F_DONT_COPY_DATA);
 }
 
+// A 1 x 1 double that points at `value` (which must outlive it).
+matvar_t* mat_scalar(const double& value) {
+  std::size_t dims[2] = {1, 1};
+  return Mat_VarCreate(nullptr, MAT_C_DOUBLE, MAT_T_DOUBLE, 2, dims, const_cast<double*>(&value),
+                       MAT_F_DONT_COPY_DATA);
+}
+
 MatVar mat_column(const Column& column) {
   std::size_t dims[2] = {column.size(), 1};
   if (!column.is_text) {
@@ -83,6 +91,27 @@ MatVar mat_text_struct(const char* name,
   return s;
 }
 
+// The struct `attributes`: a char field per text attribute, a double per number, by name.
+MatVar mat_attributes(const Table& table) {
+  std::map<std::string, matvar_t*> fields;
+  for (const auto& [key, text] : table.attributes()) fields[key] = mat_char(nullptr, text);
+  for (const auto& [key, number] : table.number_attributes()) fields[key] = mat_scalar(number);
+  std::vector<const char*> names;
+  for (const auto& field : fields) names.push_back(field.first.c_str());
+  std::size_t dims[2] = {1, 1};
+  MatVar s(Mat_VarCreateStruct("attributes", 2, dims, names.data(),
+                               static_cast<unsigned>(names.size())));
+  // Each field is owned by the struct once set; freed here when there is no struct to own it.
+  for (const auto& [key, value] : fields) {
+    if (s) {
+      Mat_VarSetStructFieldByName(s.get(), key.c_str(), 0, value);
+    } else {
+      Mat_VarFree(value);
+    }
+  }
+  return s;
+}
+
 void write_mat(const Table& table, const std::filesystem::path& path, const std::string& target) {
   for (const Column& c : table.columns()) {
     if (c.name == "units" || c.name == "attributes") {
@@ -90,7 +119,10 @@ void write_mat(const Table& table, const std::filesystem::path& path, const std:
                                   c.name + "' (the name holds the units / attributes struct)");
     }
   }
-  for (const auto& [key, value] : table.attributes()) {
+  std::vector<std::string> keys;
+  for (const auto& attribute : table.attributes()) keys.push_back(attribute.first);
+  for (const auto& attribute : table.number_attributes()) keys.push_back(attribute.first);
+  for (const std::string& key : keys) {
     if (!is_identifier(key))
       throw std::invalid_argument("MATLAB file " + target + ": attribute '" + key +
                                   "' is not a valid field name");
@@ -106,10 +138,7 @@ void write_mat(const Table& table, const std::filesystem::path& path, const std:
   std::vector<std::pair<std::string, std::string>> units;
   for (const Column& c : table.columns()) units.emplace_back(c.name, c.unit);
   if (!units.empty()) put(mat_text_struct("units", units), "units");
-  if (!table.attributes().empty()) {
-    put(mat_text_struct("attributes", {table.attributes().begin(), table.attributes().end()}),
-        "attributes");
-  }
+  if (!keys.empty()) put(mat_attributes(table), "attributes");
 }
 
 // --- HDF5 --------------------------------------------------------------------------------------
@@ -178,6 +207,15 @@ class H5Writer {
     attribute(file_.get(), key, value);
   }
 
+  void root_attribute(const std::string& key, double value) {
+    H5Handle scalar(H5Screate(H5S_SCALAR), H5Sclose);
+    H5Handle attr(H5Acreate2(file_.get(), key.c_str(), H5T_IEEE_F64LE, scalar.get(), H5P_DEFAULT,
+                             H5P_DEFAULT),
+                  H5Aclose);
+    check(attr.ok() && H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, &value) >= 0,
+          "cannot write attribute " + key);
+  }
+
   void close() { check(H5Fflush(file_.get(), H5F_SCOPE_GLOBAL) >= 0, "cannot flush"); }
 
  private:
@@ -209,6 +247,7 @@ void write_h5(const Table& table, const std::filesystem::path& path, const std::
   }
   writer.root_attribute("columns", order);
   for (const auto& [key, value] : table.attributes()) writer.root_attribute(key, value);
+  for (const auto& [key, value] : table.number_attributes()) writer.root_attribute(key, value);
   writer.close();
 }
 

@@ -7,10 +7,13 @@
 //        or a quote. Units and attributes are not written (the names carry them where needed).
 //   mat  MATLAB 5 (zlib-compressed, readable by MATLAB, Octave and scipy.io.loadmat): one
 //        rows x 1 double (or cell of char) variable per column, a struct `units` with one char
-//        field per column, and a struct `attributes` when the table has any.
+//        field per column, and a struct `attributes` when the table has any (a char field per
+//        text attribute, a 1 x 1 double per number: scipy.io.loadmat(f, simplify_cells=True)
+//        ["attributes"]["dt_s"] is a float).
 //   h5   HDF5: one 1-D dataset per column at the root (float64, gzip; text as variable-length
 //        UTF-8 strings), each with a string attribute `units`; the root has the table's
-//        attributes and `columns`, the column names comma-separated in table order.
+//        attributes (text as variable-length UTF-8 strings, numbers as float64 scalars) and
+//        `columns`, the column names comma-separated in table order.
 
 #include <filesystem>
 #include <string>

@@ -10,11 +10,12 @@ case "$mode" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
 cd "$(dirname "$0")/.."
 
 # What the build and the demo need: compilers, the libraries rths links, gnuplot for the figures,
-# Debian's python3 with NumPy for the installed module, and npm for the view's page library.
+# Debian's python3 with NumPy for the installed module (and venv, for a venv of it that
+# scripts/install_python_module.py serves), and npm for the view's page library.
 packages=(cmake ninja-build g++ pkg-config git libeigen3-dev libspectra-dev libprotobuf-dev
   protobuf-compiler libspdlog-dev cyclonedds-dev cyclonedds-tools libcli11-dev gnuplot-nox
   libceres-dev libfftw3-dev nlohmann-json3-dev iproute2 procps util-linux libmatio-dev libhdf5-dev
-  pybind11-dev python3-dev python3-numpy openssl libssl-dev libxml2-dev libcpp-httplib-dev nodejs)
+  pybind11-dev python3-dev python3-numpy python3-venv openssl libssl-dev libxml2-dev libcpp-httplib-dev nodejs)
 # What only the suite needs: the test and bench frameworks, Python's test tools, Slurm, containers,
 # a browser for the view's tests and clang-format for the style check.
 if [ "$mode" = test ]; then

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "study/motion_key.h"
 #include "study/study.h"
 
 namespace rths::analysis {

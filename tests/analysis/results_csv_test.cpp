@@ -34,5 +34,12 @@ TEST(ResultsCsv, EveryFloorAndEveryActuatorWithUnitsInTheNames) {
   EXPECT_EQ(names, expected);
 }
 
+TEST(ResultsCsv, ARecordsVelocityAndAccelerationAreNamedAsItsDisplacement) {
+  EXPECT_EQ(displacement_column(2), "u_floor2_m");
+  EXPECT_EQ(velocity_column(2), "v_floor2_m_per_s");
+  EXPECT_EQ(acceleration_column(2), "a_floor2_m_per_s2");
+  EXPECT_EQ(measured_column(12), "measured_act12_m");
+}
+
 }  // namespace
 }  // namespace rths::analysis

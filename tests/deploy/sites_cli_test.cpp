@@ -146,7 +146,7 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
   ASSERT_EQ(ran.exit_code, 0) << ran.output;
   std::vector<std::string> sites_header, lag_columns;
   for (const auto& cell : header_of(dir / "sites" / "results.csv"))
-    (cell.find("_lag_node") == std::string::npos ? sites_header : lag_columns).push_back(cell);
+    (cell.find("_node") == std::string::npos ? sites_header : lag_columns).push_back(cell);
   EXPECT_EQ(sites_header, header_of(dir / "run" / "results.csv"));
   EXPECT_EQ(lag_columns.size(), 4u);  // injected and round trip, two links
   const auto summary = nlohmann::json::parse(read(dir / "sites" / "summary.json"));

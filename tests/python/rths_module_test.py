@@ -172,9 +172,13 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     assert not got["truncated"] and got["attributes"]["case_name"] == "lag_shift_14ms"
     # One naming rule: Python's names are the CSV's (results/table.h).
     assert list(got["series"]) == list(expected)
-    np.testing.assert_array_equal(got["series"]["u1_m"], numbers(expected["u1_m"]))
+    np.testing.assert_array_equal(got["series"]["u_floor1_m"], numbers(expected["u_floor1_m"]))
     np.testing.assert_array_equal(got["series"]["time_s"], numbers(expected["time_s"]))
-    np.testing.assert_array_equal(got["series"]["a1_m_per_s2"], numbers(expected["a1_m_per_s2"]))
+    np.testing.assert_array_equal(got["series"]["a_floor1_m_per_s2"], numbers(expected["a_floor1_m_per_s2"]))
+    # The record names its study, step and motion as the run's table does, numbers as floats.
+    assert got["attributes"]["dt_s"] == 0.001 and got["attributes"]["ok"] == 1.0
+    assert got["attributes"]["study"] == rths.load_study(config).name
+    assert len(got["attributes"]["motion_sha256"]) == 64
     round_trip = [k for k in got["series"] if k.endswith("_round_trip_s")][0]
     assert math.isnan(got["series"][round_trip][0]) and np.all(got["series"][round_trip][1:] > 0)
     cut = tmp_path / "cut.rthsrec"
@@ -197,7 +201,7 @@ def test_read_record_gives_the_exported_columns(config, tmp_path):
     assert len(salvaged["losses"]) == 1 and f"step {lost} lost" in salvaged["losses"][0]
     kept = got["series"]["step"] != lost
     np.testing.assert_array_equal(salvaged["series"]["step"], got["series"]["step"][kept])
-    np.testing.assert_array_equal(salvaged["series"]["u1_m"], got["series"]["u1_m"][kept])
+    np.testing.assert_array_equal(salvaged["series"]["u_floor1_m"], got["series"]["u_floor1_m"][kept])
 
 
 def test_errors_carry_the_cli_messages(tmp_path):

@@ -1,8 +1,9 @@
-import json
 """The MATLAB and HDF5 files rths writes, read back by independent readers (scipy.io.loadmat and
 h5py) and compared value for value with the CSV the same command writes. Run from ctest
 (tables_readback) with RTHS_EXECUTABLE, RTHS_SOURCE_DIR and RTHS_DATA_DIR set."""
 import csv
+import hashlib
+import json
 import math
 import os
 import subprocess
@@ -77,6 +78,27 @@ def study(tmp_path):
     return config
 
 
+def motion_file_sha256():
+    return hashlib.sha256(MOTION.read_bytes()).hexdigest()
+
+
+def assert_carries_the_run(mat, h5, study, ok=1.0):
+    """The .mat's `attributes` struct and the .h5's root attributes name the study, dt (s), the
+    motion (name and checksums) and the verdict, alike; returns the motion-as-run checksum."""
+    attributes = mat["attributes"]
+    for key in ("study", "motion_name", "motion_sha256", "motion_file_sha256", "status"):
+        assert attributes[key] == h5.attrs[key], key
+    assert attributes["study"] == study
+    assert attributes["dt_s"] == h5.attrs["dt_s"] == 0.001
+    assert isinstance(attributes["dt_s"], float) and isinstance(h5.attrs["dt_s"], np.float64)
+    assert attributes["motion_name"] == "RSN175_IMPVALL.H_H-E12140"
+    assert attributes["motion_file_sha256"] == motion_file_sha256()
+    assert len(attributes["motion_sha256"]) == 64 and attributes["motion_sha256"] != motion_file_sha256()
+    assert attributes["status"] == "completed"
+    assert attributes["ok"] == h5.attrs["ok"] == ok
+    return attributes["motion_sha256"]
+
+
 def test_run_writes_the_same_table_as_csv_mat_and_h5(study, tmp_path):
     for fmt in ("csv", "mat", "h5"):
         out = rths("run", study, "--no-plots", "--format", fmt, "--out", tmp_path / fmt).stdout
@@ -90,6 +112,8 @@ def test_run_writes_the_same_table_as_csv_mat_and_h5(study, tmp_path):
     with h5py.File(tmp_path / "h5/results.h5", "r") as h5:
         lag, ref = h5["lag_shift_14ms_u_floor1_m"][()], h5["reference_u_floor1_m"][()]
         assert np.max(np.abs(lag)) > np.max(np.abs(ref))  # the lag enlarges the response
+        assert_carries_the_run(mat, h5, "frame")
+        assert h5["lag_shift_14ms_measured_act1_m"].attrs["units"] == "m"
 
 
 def test_sweep_mat_and_h5_hold_the_sweep_csv_with_text_columns(study, tmp_path):
@@ -114,15 +138,29 @@ def test_launch_and_export_write_the_record_in_every_format(study, tmp_path):
     out.mkdir()
     rths("export", record, "--csv", out / "r.csv", "--mat", out / "r.mat", "--h5", out / "r.h5")
     header, columns = read_csv(out / "r.csv")
-    assert header[:4] == ["step", "time_s", "ground_acceleration_m_per_s2", "u1_m"]
+    assert header[:4] == ["step", "time_s", "ground_acceleration_m_per_s2", "u_floor1_m"]
     mat = assert_same_as_csv(header, columns, out / "r.mat", out / "r.h5")
-    assert mat["units"]["node2_round_trip_s"] == "s" and mat["units"]["force1_N"] == "N"
-    link = [n for n in header if n.endswith("_round_trip_s")][0]
-    # launch writes run's results table (every case's columns, SI names) beside the record.
-    with h5py.File(out / "r.h5", "r") as exported, h5py.File(tmp_path / "launch/results.h5", "r") as launched:
-        assert math.isnan(exported[link][0])  # step 0 has no exchange
-        assert np.all(exported[link][1:] > 0)
-        np.testing.assert_array_equal(exported["u1_m"][()], launched["lag_shift_14ms_u_floor1_m"][()])
+    assert mat["units"]["node2_round_trip_s"] == "s" and mat["units"]["force_act1_N"] == "N"
+    assert mat["units"]["a_floor1_m_per_s2"] == "m/s^2"
+    # launch writes run's results table beside the record: each case's columns named as the
+    # record's, with the case in front.
+    launched_table = tmp_path / "launch/results.h5"
+    with h5py.File(out / "r.h5", "r") as exported, h5py.File(launched_table, "r") as launched:
+        for name in ("u_floor1_m", "command_act1_m", "measured_act1_m", "force_act1_N",
+                     "node2_round_trip_s", "node2_injected_lag_s"):
+            launched_column = launched["lag_shift_14ms_" + name][()]
+            assert exported[name].attrs["units"] == launched["lag_shift_14ms_" + name].attrs["units"]
+            if name.startswith("node2_"):  # NaN where a step reused an older answer
+                launched_column = launched_column[~np.isnan(launched_column)]
+                assert set(launched_column) <= set(exported[name][()])
+                continue
+            np.testing.assert_array_equal(exported[name][()], launched_column, err_msg=name)
+        assert math.isnan(exported["node2_round_trip_s"][0])  # step 0 has no exchange
+        assert np.all(exported["node2_round_trip_s"][1:] > 0)
+        # The record's export and the launch's table name the same run: study, dt, motion.
+        assert assert_carries_the_run(mat, exported, "frame") == launched.attrs["motion_sha256"]
+        assert exported.attrs["motion_file_sha256"] == launched.attrs["motion_file_sha256"]
+        assert exported.attrs["dt_s"] == launched.attrs["dt_s"] and launched.attrs["ok"] == 1.0
         assert exported.attrs["case_name"] == "lag_shift_14ms"
         assert exported.attrs["integrity"] == "verified (CRC-32C per entry)"
         assert exported.attrs["lost_steps"] == ""
@@ -144,7 +182,7 @@ def test_launch_and_export_write_the_record_in_every_format(study, tmp_path):
     assert mat["attributes"]["lost_steps"] == lost
     _, kept = read_csv(out / "d.csv")
     assert kept["step"] == [s for s in columns["step"] if s != lost]
-    assert kept["u1_m"] == [u for s, u in zip(columns["step"], columns["u1_m"]) if s != lost]
+    assert kept["u_floor1_m"] == [u for s, u in zip(columns["step"], columns["u_floor1_m"]) if s != lost]
 
 
 def test_identify_writes_the_record_and_both_models_predictions(tmp_path):

@@ -11,6 +11,7 @@
 
 #include "analysis/sweep_csv.h"
 #include "analysis/sweep_grid.h"
+#include "study/motion_key.h"
 #include "study/study.h"
 
 namespace rths::results {
@@ -62,6 +63,32 @@ TEST(ResultsTest, StudyTableNamesEachCaseAndPadsAStoppedCaseWithNan) {
   EXPECT_EQ(t.attributes().at("reference_case"), "reference");
 }
 
+TEST(ResultsTest, StudyTableCarriesTheStudyStepMotionAndVerdict) {
+  analysis::StudyOutcome outcome;
+  outcome.study_name = "frame";
+  outcome.motion_name = "RSN175";
+  outcome.motion_sha256 = std::string(64, 'a');
+  outcome.motion_file_sha256 = std::string(64, 'b');
+  outcome.cases = {make_case("reference", 5, false), make_case("lag 40ms", 5, true)};
+  outcome.cases[1].status = "diverged";
+  outcome.cases[1].expect_unstable = true;
+  const Table expected_divergence = study_table(outcome);
+  EXPECT_EQ(expected_divergence.attributes().at("study"), "frame");
+  EXPECT_DOUBLE_EQ(expected_divergence.number_attributes().at("dt_s"), 0.01);
+  EXPECT_EQ(expected_divergence.attributes().at("motion_name"), "RSN175");
+  EXPECT_EQ(expected_divergence.attributes().at("motion_sha256"), std::string(64, 'a'));
+  EXPECT_EQ(expected_divergence.attributes().at("motion_file_sha256"), std::string(64, 'b'));
+  EXPECT_EQ(expected_divergence.attributes().at("status"), "lag 40ms: diverged");
+  EXPECT_EQ(expected_divergence.number_attributes().at("ok"), 1.0) << "the divergence was meant";
+
+  outcome.cases[1].expect_unstable = false;
+  EXPECT_EQ(study_table(outcome).number_attributes().at("ok"), 0.0);
+  outcome.cases[1].status = "completed";
+  const Table completed = study_table(outcome);
+  EXPECT_EQ(completed.attributes().at("status"), "completed");
+  EXPECT_EQ(completed.number_attributes().at("ok"), 1.0);
+}
+
 TEST(ResultsTest, DistributedTableIsTheStudyTablePlusLagPerLinkAtTheCarryingStep) {
   analysis::StudyOutcome outcome;
   outcome.study_name = "frame";
@@ -75,16 +102,16 @@ TEST(ResultsTest, DistributedTableIsTheStudyTablePlusLagPerLinkAtTheCarryingStep
   s.injected = {0.014, 0.014};
   const Table t = distributed_study_table(outcome, {links});
   std::vector<std::string> expected = names(study_table(outcome));
-  expected.push_back("lag_14ms_lag_node2_injected_s");
-  expected.push_back("lag_14ms_lag_node2_round_trip_s");
+  expected.push_back("lag_14ms_node2_injected_lag_s");
+  expected.push_back("lag_14ms_node2_round_trip_s");
   EXPECT_EQ(names(t), expected);
-  const auto& rtt = t.column("lag_14ms_lag_node2_round_trip_s").numbers;
+  const auto& rtt = t.column("lag_14ms_node2_round_trip_s").numbers;
   ASSERT_EQ(rtt.size(), 4u);
   EXPECT_TRUE(std::isnan(rtt[0]));
   EXPECT_DOUBLE_EQ(rtt[1], 0.0021);
   EXPECT_TRUE(std::isnan(rtt[2]));
   EXPECT_DOUBLE_EQ(rtt[3], 0.0023);
-  EXPECT_EQ(t.column("lag_14ms_lag_node2_injected_s").unit, "s");
+  EXPECT_EQ(t.column("lag_14ms_node2_injected_lag_s").unit, "s");
   EXPECT_THROW(distributed_study_table(outcome, {}), std::invalid_argument);
 }
 
@@ -117,20 +144,67 @@ TEST(ResultsTest, RecordTableHasTheExportColumnsAndNanForStepZerosLink) {
     record.entries.push_back(e);
   }
   const Table t = record_table(record);
-  EXPECT_EQ(names(t), (std::vector<std::string>{
-                          "step", "time_s", "ground_acceleration_m_per_s2", "u1_m", "v1_m_per_s",
-                          "a1_m_per_s2", "command1_m", "realised1_m", "force1_N",
-                          "node2_answered_step", "node2_injected_lag_s", "node2_round_trip_s",
-                          "node2_one_way_down_s", "node2_one_way_up_s", "lateness_s", "overrun"}));
+  EXPECT_EQ(names(t),
+            (std::vector<std::string>{
+                "step", "time_s", "ground_acceleration_m_per_s2", "u_floor1_m", "v_floor1_m_per_s",
+                "a_floor1_m_per_s2", "command_act1_m", "measured_act1_m", "force_act1_N",
+                "node2_answered_step", "node2_injected_lag_s", "node2_round_trip_s",
+                "node2_one_way_down_s", "node2_one_way_up_s", "lateness_s", "overrun"}));
   EXPECT_EQ(t.rows(), 2u);
   EXPECT_TRUE(std::isnan(t.column("node2_round_trip_s").numbers[0]));
   EXPECT_DOUBLE_EQ(t.column("node2_round_trip_s").numbers[1], 0.0002);
   EXPECT_EQ(t.column("node2_round_trip_s").unit, "s");
-  EXPECT_EQ(t.column("a1_m_per_s2").unit, "m/s^2");
-  EXPECT_DOUBLE_EQ(t.column("u1_m").numbers[1], 0.5);
+  EXPECT_EQ(t.column("a_floor1_m_per_s2").unit, "m/s^2");
+  EXPECT_DOUBLE_EQ(t.column("u_floor1_m").numbers[1], 0.5);
+  EXPECT_DOUBLE_EQ(t.column("measured_act1_m").numbers[1], 4.0);
   EXPECT_EQ(t.column("overrun").numbers, (std::vector<double>{0, 1}));
   EXPECT_EQ(t.attributes().at("status"), "no footer: the run was cut short");
+  EXPECT_EQ(t.number_attributes().at("ok"), 0.0);
   EXPECT_THROW(record_table(runtime::RecordContents{}), std::invalid_argument);
+}
+
+TEST(ResultsTest, RecordTableCarriesTheStudyStepMotionAsRunAndTheFootersVerdict) {
+  runtime::RecordContents record;
+  runtime::RecordEntry header_entry;
+  auto* header = header_entry.mutable_header();
+  header->set_dofs(1);
+  header->set_actuators(0);
+  header->set_dt(0.002);
+  header->mutable_study()->set_name("frame");
+  header->mutable_study()->mutable_motion()->set_path("/data/RSN175.AT2");
+  header->mutable_study()->mutable_motion()->set_sha256(std::string(64, 'c'));
+  record.entries.push_back(header_entry);
+  runtime::RecordEntry step;
+  step.mutable_step()->add_displacement(0);
+  record.entries.push_back(step);
+  const Table without_inputs = record_table(record);
+  EXPECT_EQ(without_inputs.attributes().at("study"), "frame");
+  EXPECT_DOUBLE_EQ(without_inputs.number_attributes().at("dt_s"), 0.002);
+  EXPECT_EQ(without_inputs.attributes().at("motion_name"), "") << "the record has no motion";
+  EXPECT_EQ(without_inputs.attributes().at("motion_sha256"), "");
+  EXPECT_EQ(without_inputs.attributes().at("motion_file_sha256"), std::string(64, 'c'));
+
+  runtime::RecordEntry inputs;
+  *inputs.mutable_inputs()->mutable_study() = header->study();
+  auto* embedded = inputs.mutable_inputs()->mutable_study()->mutable_motion()->mutable_embedded();
+  embedded->set_name("RSN175");
+  embedded->set_dt(0.002);
+  embedded->add_acceleration(0.5);
+  embedded->add_acceleration(-0.25);
+  embedded->set_source_sha256(std::string(64, 'd'));
+  record.entries.insert(record.entries.begin() + 1, inputs);
+  runtime::RecordEntry footer;
+  footer.mutable_footer()->set_ok(true);
+  footer.mutable_footer()->set_status("completed");
+  record.entries.push_back(footer);
+  const Table t = record_table(record);
+  EXPECT_EQ(t.attributes().at("motion_name"), "RSN175");
+  const core::GroundMotion as_run{.name = "RSN175", .dt = 0.002, .acceleration = {0.5, -0.25}};
+  EXPECT_EQ(t.attributes().at("motion_sha256"), core::motion_key(as_run));
+  EXPECT_EQ(t.attributes().at("motion_sha256").size(), 64u);
+  EXPECT_EQ(t.attributes().at("motion_file_sha256"), std::string(64, 'd'));
+  EXPECT_EQ(t.attributes().at("status"), "completed");
+  EXPECT_EQ(t.number_attributes().at("ok"), 1.0);
 }
 
 TEST(ResultsTest, RecordTableGivesAControllerNodesLinkItsFrameRoundTripAndStatus) {

@@ -1,4 +1,4 @@
-// results::Table: names, lengths, NaN padding.
+// results::Table: names, lengths, attributes, NaN padding.
 #include "results/table.h"
 
 #include <gtest/gtest.h>
@@ -41,7 +41,7 @@ TEST(TableTest, RejectsBadNamesDuplicatesAndUnequalLengths) {
 TEST(TableTest, EveryNameEndsInItsUnit) {
   Table t;
   t.add_numbers("lag_shift_14ms_u_floor1_m", "m", {0});
-  t.add_numbers("a1_m_per_s2", "m/s^2", {0});
+  t.add_numbers("a_floor1_m_per_s2", "m/s^2", {0});
   t.add_numbers("nrmse_pct", "%", {0});
   t.add_numbers("step", "", {0});
   EXPECT_EQ(unit_suffix("N/m"), "N_per_m");
@@ -51,8 +51,20 @@ TEST(TableTest, EveryNameEndsInItsUnit) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("must end in '_s'"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(t.add_numbers("u1_mm", "m", {0}), std::invalid_argument);
+  EXPECT_THROW(t.add_numbers("u_floor1_mm", "m", {0}), std::invalid_argument);
   EXPECT_THROW(t.add_numbers("_m", "m", {0}), std::invalid_argument);
+}
+
+// A key names one attribute: text or number, whichever was set last.
+TEST(TableTest, AnAttributeIsTextOrANumberNeverBoth) {
+  Table t;
+  t.set_attribute("dt_s", "0.001");
+  t.set_number_attribute("dt_s", 0.001);
+  EXPECT_EQ(t.attributes().count("dt_s"), 0u);
+  EXPECT_DOUBLE_EQ(t.number_attributes().at("dt_s"), 0.001);
+  t.set_attribute("dt_s", "one millisecond");
+  EXPECT_EQ(t.number_attributes().count("dt_s"), 0u);
+  EXPECT_EQ(t.attributes().at("dt_s"), "one millisecond");
 }
 
 TEST(TableTest, PadWithNanFillsShortColumns) {

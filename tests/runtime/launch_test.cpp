@@ -181,14 +181,13 @@ TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
   const auto run_header = header_of(dir / "run" / "results.csv");
   std::vector<std::string> launch_header, lag_columns;
   for (const auto& cell : header_of(dir / "launch" / "results.csv"))
-    (cell.find("_lag_node") == std::string::npos ? launch_header : lag_columns).push_back(cell);
+    (cell.find("_node") == std::string::npos ? launch_header : lag_columns).push_back(cell);
   EXPECT_EQ(launch_header, run_header);
   for (const std::string c : {"reference", "lag_shift_14ms", "jitter"})
     for (const std::string link : {"1", "2"})
-      for (const std::string what : {"injected_s", "round_trip_s"})
+      for (const std::string what : {"injected_lag_s", "round_trip_s"})
         EXPECT_EQ(
-            std::count(lag_columns.begin(), lag_columns.end(), c + "_lag_node" + link + "_" + what),
-            1)
+            std::count(lag_columns.begin(), lag_columns.end(), c + "_node" + link + "_" + what), 1)
             << c << " node " << link << " " << what;
 
   EXPECT_EQ(rows_of(dir / "launch" / "results.csv"), rows_of(dir / "run" / "results.csv"));
@@ -314,11 +313,10 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   ASSERT_GT(steps, 100);
   EXPECT_EQ(nlohmann::json::parse(o.out)["rows"].get<long>(), steps);
   const std::string table = test::read_file(csv);
-  EXPECT_EQ(
-      table.rfind("step,time_s,ground_acceleration_m_per_s2,u1_m,v1_m_per_s,a1_m_per_s2,command1_m,"
-                  "realised1_m,force1_N,",
-                  0),
-      0u)
+  EXPECT_EQ(table.rfind("step,time_s,ground_acceleration_m_per_s2,u_floor1_m,v_floor1_m_per_s,"
+                        "a_floor1_m_per_s2,command_act1_m,measured_act1_m,force_act1_N,",
+                        0),
+            0u)
       << table.substr(0, 200);
   EXPECT_NE(table.find("node2_round_trip_s"), std::string::npos);
   EXPECT_EQ(std::count(table.begin(), table.end(), '\n'), steps + 1);  // + header

@@ -134,7 +134,7 @@ test('lockstep over DDS: the step counter advances and the plotted series are th
   const ex = start(['export', path.join(dir, 'lag_shift_14ms.rthsrec'), '--csv', exported]);
   assert.equal(await ex.done, 0, ex.output);
   const csv = csvColumns(exported);
-  const command = csv.command1_m, measured = csv.realised1_m;  // m, the record's columns
+  const command = csv.command_act1_m, measured = csv.measured_act1_m;  // m, the record's columns
   assert.ok(command && measured, 'record columns: ' + Object.keys(csv).join(','));
   const plotted = await view(page, () => ({ steps: window.rthsView.drawn.steps, data: window.rthsView.plots.act[0].cmd.data,
     window: window.rthsView.drawn.i1 - window.rthsView.drawn.i0, width: window.rthsView.plots.act[0].cmd.width,
@@ -180,14 +180,14 @@ async function checkPrediction(page, dir, csv, row, lockstep) {
   const inRow = Object.fromEntries(inProcess.step.map((s, i) => [s, i]));
   p.steps.forEach((s, i) => {
     near(p.data[2][i], predicted[inRow[s]] * 1e3, `predicted at step ${s}`);
-    near(p.data[1][i], csv.u1_m[row[s]] * 1e3, `measured at step ${s}`);
+    near(p.data[1][i], csv.u_floor1_m[row[s]] * 1e3, `measured at step ${s}`);
   });
   assert.deepEqual(p.axes, ['time (s)', 'displacement (mm)']);
   assert.match(p.text, /in-process run of case lag_shift_14ms/);
   let largest = 0, compared = 0;
   csv.step.forEach((s, i) => {
     if (s % p.stride !== 0 || inRow[s] === undefined || Number.isNaN(predicted[inRow[s]])) return;
-    largest = Math.max(largest, Math.abs(csv.u1_m[i] * 1e3 - predicted[inRow[s]] * 1e3));
+    largest = Math.max(largest, Math.abs(csv.u_floor1_m[i] * 1e3 - predicted[inRow[s]] * 1e3));
     compared++;
   });
   assert.equal(p.stats.compared_samples, compared, JSON.stringify(p.stats));
@@ -215,7 +215,7 @@ async function checkSpectrum(page, csv, row) {
   const e = [], w = [];
   for (let i = 0; i < sp.n; i++) {
     const k = row[sp.step - sp.n + 1 + i];
-    e.push(csv.command1_m[k] * 1e3 - csv.realised1_m[k] * 1e3);
+    e.push(csv.command_act1_m[k] * 1e3 - csv.measured_act1_m[k] * 1e3);
     w.push(0.5 - 0.5 * Math.cos(2 * Math.PI * i / sp.n));
   }
   const sum = w.reduce((a, b) => a + b, 0);

@@ -1,0 +1,15 @@
+#include "study/motion_key.h"
+
+#include <vector>
+
+#include "util/sha256.h"
+
+namespace rths::core {
+
+std::string motion_key(const GroundMotion& motion) {
+  std::vector<double> values{motion.dt};
+  values.insert(values.end(), motion.acceleration.begin(), motion.acceleration.end());
+  return util::bytes_sha256(values.data(), values.size() * sizeof(double));
+}
+
+}  // namespace rths::core
