@@ -28,9 +28,10 @@
 // Bad input: a malformed request line or header, a body over 4 KiB, an unknown path or method is
 // refused (4xx) and counted; none of it touches the feed.
 // Connections: a RequestGate (view/request_gate.h) holds each until its whole request has arrived
-// (header deadline, idle connections beyond its limit closed oldest first); only then does one of
-// max_streams + 4 threads serve it, one request per connection. Idle or dripping clients
-// therefore never hold the threads that serve the page and the stop button.
+// (header deadline; beyond its limits the connection idle longest is closed, never one whose
+// request has begun, and one address displaces only its own); only then does one of
+// max_streams + 4 threads serve it, one request per connection. Idle, dripping or churning
+// clients therefore never hold the threads that serve the page and the stop button.
 
 #include <atomic>
 #include <chrono>
