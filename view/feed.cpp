@@ -73,6 +73,11 @@ void Feed::set_deadline_diagnosis(std::string text) {
   changed();
 }
 
+void Feed::set_judged(JudgedCase judged) {
+  std::lock_guard lock(mutex_);
+  judged_ = std::move(judged);
+}
+
 void Feed::set_prediction(const core::SimulationResult& prediction) {
   std::lock_guard lock(mutex_);
   const double dt = prediction.dt > 0 ? prediction.dt : 1e-3;
@@ -308,6 +313,7 @@ void Feed::on_footer(const runtime::RunFooter& footer) {
   run.rule = runtime::deadline_rule(header_.study().deployment(), header_.dt());
   run.platform_overridden = header_.platform().accepted_override();
   run.platform_verdict = header_.platform().verdict();
+  run.judged = judged_;
   verdict_ = shown_verdict(run);
   state_ = verdict_.state;
   reason_ = footer.ok() && verdict_.state == "failed" ? verdict_.text : footer.status();

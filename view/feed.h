@@ -43,6 +43,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -93,6 +94,9 @@ class Feed : public runtime::RecordObserver {
   // describe(), as `rths launch` prints it), shown with the verdict. A finished record's only:
   // the diagnosis needs every step's work time, which a live feed does not keep.
   void set_deadline_diagnosis(std::string text);
+  // How `rths launch` judged the case (view/verdict.h), before the footer arrives: the badge
+  // then says it when the record's own verdict does not fail first.
+  void set_judged(JudgedCase judged);
   // The record is complete (footer seen, or a finished record fully read): readers stop waiting.
   void finish();
 
@@ -186,6 +190,7 @@ class Feed : public runtime::RecordObserver {
   runtime::RunFooter footer_;
   ShownVerdict verdict_;
   std::string deadline_diagnosis_;
+  std::optional<JudgedCase> judged_;
 };
 
 }  // namespace rths::view

@@ -37,9 +37,13 @@ ShownVerdict not_ok(const runtime::RunFooter& footer) {
 
 ShownVerdict shown_verdict(const FinishedRun& run) {
   if (!run.footer.ok()) return not_ok(run.footer);
+  const std::optional<std::string> missed =
+      run.real_time ? runtime::deadline_verdict(run.counts, run.rule) : std::nullopt;
+  if (missed) return {"failed", "failed", std::string(runtime::kDeadlineMisses), *missed};
+  if (run.judged && run.judged->status.rfind("completed", 0) != 0)
+    return {"completed", run.judged->fails ? "failed" : "warning", run.judged->status,
+            run.judged->detail};
   if (run.real_time) {
-    if (const auto missed = runtime::deadline_verdict(run.counts, run.rule))
-      return {"failed", "failed", std::string(runtime::kDeadlineMisses), *missed};
     if (run.counts.overruns > 0)
       return {"completed", "warning",
               "completed with " + std::to_string(run.counts.overruns) + " overruns",

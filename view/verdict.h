@@ -4,8 +4,10 @@
 // `rths launch` use for the same record.
 //
 // Input  FinishedRun: the record's footer (ok, status, failed node), its clock, the deadline
-//        counts of its rows and the rule of its deployment (runtime::deadline_rule), and whether
-//        its platform check was refused and run anyway (--accept-platform).
+//        counts of its rows and the rule of its deployment (runtime::deadline_rule), whether
+//        its platform check was refused and run anyway (--accept-platform), and, when `rths
+//        launch` serves the record after the run, how it judged the case against the lag-free
+//        run (JudgedCase).
 // Rules, the first that holds:
 //   footer not ok      "failed"; badge "completed with deadline misses" when its status begins
 //                      so (the loop's or a servo's), "diverged" for a diverged run, else
@@ -14,6 +16,10 @@
 //   verdict breached   a real-time run whose footer is ok but whose rows fail the one real-time
 //                      verdict (runtime::deadline_verdict; a record of an older coordinator):
 //                      "failed", badge "completed with deadline misses", the verdict as text.
+//   judged otherwise   `rths launch` judged the case other than "completed" ("diverging",
+//                      "diverged (expected)", "limit tripped", ...: its summary table's status):
+//                      that status on the badge, the text why; "failed" when launch fails on
+//                      it, "warning" when it does not (expect_unstable, --allow-unstable).
 //   overruns           a real-time run within the verdict that overran at all: "warning", badge
 //                      "completed with N overruns", the text their share against the tolerance
 //                      and the worst streak against the fail-safe's window: a test that kept its
@@ -22,12 +28,21 @@
 //   otherwise          "ok", badge "completed", no text.
 // state is what the feed's status has always carried: "failed", "stopped" or "completed".
 
+#include <optional>
 #include <string>
 
 #include "runtime/record/realtime_verdict.h"
 #include "runtime/record/record.h"
 
 namespace rths::view {
+
+// How `rths launch` judged a case from its record (analysis::CaseOutcome): its status as its
+// summary table shows it, why, and whether launch exits non-zero for it.
+struct JudgedCase {
+  std::string status = "completed";
+  std::string detail;
+  bool fails = false;
+};
 
 struct FinishedRun {
   runtime::RunFooter footer;
@@ -36,6 +51,7 @@ struct FinishedRun {
   runtime::DeadlineRule rule;
   bool platform_overridden = false;
   std::string platform_verdict;  // the check's words, when overridden
+  std::optional<JudgedCase> judged;
 };
 
 struct ShownVerdict {

@@ -67,6 +67,27 @@ TEST(ShownVerdict, AStoppedOrDivergedRunIsFailedWithItsStatus) {
   EXPECT_EQ(shown_verdict(diverged).state, "stopped");
 }
 
+// `rths launch` judged the case against the lag-free run: a case whose coordinator completed
+// every step but whose response grows is shown as launch's table shows it, red when launch fails
+// on it; the record's own deadline verdict still comes first.
+TEST(ShownVerdict, HowLaunchJudgedTheCaseIsShownWhenItIsNotCompleted) {
+  FinishedRun run = real_time(0, 0);
+  run.judged = JudgedCase{"diverging", "past its critical delay and its envelope grows", true};
+  ShownVerdict v = shown_verdict(run);
+  EXPECT_EQ(v.state, "completed");
+  EXPECT_EQ(v.level, "failed");
+  EXPECT_EQ(v.badge, "diverging");
+  EXPECT_EQ(v.text, "past its critical delay and its envelope grows");
+  run.judged = JudgedCase{"diverged (expected)", "peak 40 mm", false};
+  EXPECT_EQ(shown_verdict(run).level, "warning");
+  EXPECT_EQ(shown_verdict(run).badge, "diverged (expected)");
+  run.judged = JudgedCase{"completed", "", false};
+  EXPECT_EQ(shown_verdict(run).badge, "completed");
+  FinishedRun late = real_time(2626, 2);
+  late.judged = JudgedCase{"diverging", "", true};
+  EXPECT_EQ(shown_verdict(late).badge, "completed with deadline misses");
+}
+
 TEST(ShownVerdict, APlatformRefusedAndRunAnywayIsAWarning) {
   FinishedRun run = real_time(0, 0);
   run.platform_overridden = true;
