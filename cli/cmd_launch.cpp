@@ -246,19 +246,25 @@ std::unique_ptr<view::RecordView> keep_view(const LaunchArgs& args,
   if (last.launcher_status == "interrupted" || !std::filesystem::exists(last.record))
     return nullptr;
   try {
-    auto kept = std::make_unique<view::RecordView>(
+    return std::make_unique<view::RecordView>(
         last.record, live_view_address(args, out, last.case_name), kPortHandOver,
         judged_case(results, last.case_name, args.results.allow_unstable));
-    std::ostringstream how_long;
-    how_long << "for " << args.view_for << " s (or until Ctrl-C)";
-    std::cerr << "rths launch: the view stays on the finished run of case " << last.case_name
-              << " at " << kept->url() << " "
-              << (args.view_for > 0 ? how_long.str() : "until Ctrl-C") << "\n";
-    return kept;
   } catch (const std::exception& e) {
     print_warning(std::string("the view cannot stay after the run: ") + e.what());
     return nullptr;
   }
+}
+
+// Serves the kept view until `until` (nothing: for ever) or a Ctrl-C, saying so last, after the
+// summary: why the command has not returned yet.
+void hold_kept_view(view::RecordView& kept, const std::string& case_name, double seconds,
+                    std::optional<std::chrono::steady_clock::time_point> until,
+                    const util::HeldStopSignals& signals) {
+  std::ostringstream how_long;
+  how_long << "for " << seconds << " s from the run's end (or until Ctrl-C)";
+  std::cerr << "rths launch: the view stays on the finished run of case " << case_name << " at "
+            << kept.url() << " " << (until ? how_long.str() : "until Ctrl-C") << std::endl;
+  kept.serve_until(until, [&signals] { return signals.stop_requested(); });
 }
 
 void report(const LaunchArgs& args, const core::PreparedStudy& prepared,
@@ -309,7 +315,7 @@ void run_launch(const LaunchArgs& args) {
   } catch (...) {
     failed = std::current_exception();
   }
-  if (kept) kept->serve_until(until, [&signals] { return signals.stop_requested(); });
+  if (kept) hold_kept_view(*kept, runs.back().case_name, args.view_for, until, signals);
   if (failed) std::rethrow_exception(failed);
 }
 

@@ -167,7 +167,7 @@ TEST(LaunchView, ARealTimeRunsPageStaysForViewForSecondsThenLaunchExitsWithTheRu
   EXPECT_LT(*s.last_replay_s - *s.first_replay_s, 60.0);  // then it went, and launch with it
   EXPECT_NE(log.find("rths launch: the view stays on the finished run of case reference at "
                      "http://127.0.0.1:" +
-                     std::to_string(port) + "/ for 10 s (or until Ctrl-C)"),
+                     std::to_string(port) + "/ for 10 s from the run's end (or until Ctrl-C)"),
             std::string::npos)
       << log;
   const Probe& finished =
