@@ -276,12 +276,12 @@ function stateText(st) { return isHeld(st) && st.state !== 'HOLD' ? 'HOLD · ' +
 function badgeClass(st) { return isHeld(st) ? 'HOLD' : st.verdict ? st.verdict.level : st.state; }
 
 // Beneath the badge: the reason of a HOLD or a stop, or the verdict of a run that ended (its
-// text, its failed node, and for a finished record the deadline diagnosis), coloured as it.
+// text and failed node), coloured as it; below that, for a finished record, the deadline
+// diagnosis.
 function reasonText(st) {
   const node = st.node ? ' [' + st.node + ']' : '';
   if (!st.verdict) return st.state === 'completed' ? '' : (st.reason || '') + node;
-  const v = st.verdict;
-  return [v.text ? v.text + node : '', v.diagnosis || ''].filter(t => t).join('\n');
+  return st.verdict.text ? st.verdict.text + node : '';
 }
 
 // Writes the status line: at each draw, and at once when the state changes (see onUpdate).
@@ -296,6 +296,7 @@ function showStatus(st) {
   $('late').textContent = st.late_feedback;
   $('reason').textContent = reasonText(st);
   $('reason').className = st.verdict ? st.verdict.level : '';
+  $('diagnosis').textContent = st.verdict ? st.verdict.diagnosis || '' : '';
   if (V.header) showPrediction(st);
   const behind = $('behind');
   if (V.mode === 'replay') { $('behind-box').hidden = true; return; }
