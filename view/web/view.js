@@ -330,8 +330,11 @@ function onUpdate(u) {
   V.status = u.status;
   if (stateText(u.status) !== V.shownState || u.status.finished) showStatus(u.status);
   if (u.events && u.events.length) showEvents();
-  // A finished run, live or replayed, is shown whole, with the slider.
-  if (u.status.finished && V.source) { V.source.close(); V.source = null; V.mode = 'replay'; setupReplay(); }
+  // A finished run, live or replayed, is shown whole, with the slider; there is nothing to stop.
+  if (u.status.finished && V.source) {
+    V.source.close(); V.source = null; V.mode = 'replay'; setupReplay();
+    $('stop').disabled = true;
+  }
   scheduleDraw();
 }
 
