@@ -26,12 +26,20 @@
 //   rths_view_bench [--seconds S] [--rate HZ] [--repeat N] [--domain D] [--no-browser]
 //                   [--failsafe-periods N] [--page-query Q] [--browser-cpu N [--loop-cpu N]]
 //   rths_view_bench --rss-minutes 10 [--rss-every 10] [--rate HZ] [--domain D]
-// --hammer N instead pairs runs with the view served (no browser): without clients, then with N
-// clients looping on /api/snapshot as fast as they can plus 200 idle connections and 8 that drip
-// a header byte every 2 s; prints the overruns' ratio (with / without) and the snapshots served
-// against those built (SnapshotCache's cap).
-//   rths_view_bench --hammer 8 [--seconds S] [--repeat N]
+// --hammer N instead runs triples: the loop without the view (bare), with the view served and no
+// client (quiet), then with N clients looping on /api/snapshot as fast as they can, 200 idle
+// connections kept open (each one the view closes is reopened at once), 8 that drip a
+// header byte every 2 s and --churn C new connections a second (each held 1 s, every other one
+// never sending; default 15); meanwhile a fresh client asks for GET / every 0.5 s (2 s
+// timeouts) as a browser would. Prints the overruns of each run and their medians, the ratio
+// hammered / quiet and hammered / bare, the fresh client's answers (served within 2 s / asked,
+// slowest) and the snapshots served against those built (SnapshotCache's cap).
+// --loop-cpu N with it pins the loop alone on CPU N (pin_loop) in all three runs: the view's
+// threads and the clients, on the other CPUs, then take from the loop only what the kernel does
+// for them on its CPU, as with clients on another machine.
+//   rths_view_bench --hammer 8 [--churn C] [--loop-cpu N] [--seconds S] [--repeat N]
 #include <netinet/in.h>
+#include <poll.h>
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
@@ -42,8 +50,10 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -155,6 +165,7 @@ struct Spec {
   int browser_cpu = -1;          // >= 0: Chromium on this CPU alone (taskset)
   int loop_cpu = -1;             // >= 0: the deployment's pin_loop on this CPU
   int hammer = 0;                // > 0: clients looping on /api/snapshot, and the idle crowd
+  int churn = 15;                // with hammer: new connections a second
   int snapshot_period_ms = 200;  // the view's snapshot cap (0: rebuilt for every request)
 };
 
@@ -164,6 +175,8 @@ struct Figures {
   std::string status;
   std::uint64_t streams_served = 0, updates_sent = 0;  // the view's, to the browser
   std::uint64_t snapshots_served = 0, snapshot_builds = 0;
+  int fresh_asked = 0, fresh_served = 0;  // the fresh client's GET / (served within 2 s)
+  double fresh_slowest_ms = 0;
   double browser_cpu_s = 0, browser_window_s = 0;  // Chromium's CPU over that wall time
 };
 
@@ -203,12 +216,15 @@ std::thread rss_sampler(const Spec& spec, std::vector<std::pair<double, double>>
 }
 
 // Clients the view should shrug off, while the run goes: `clients` threads looping on
-// /api/snapshot, 200 idle connections and 8 that drip a header byte every 2 s.
+// /api/snapshot, 200 idle connections kept open (each one closed is reopened at once), 8
+// that drip a header byte every 2 s and `churn` new connections a second; and a fresh client
+// asking for the page every 0.5 s, whose answers are counted (fresh()).
 class Hammer {
  public:
-  Hammer(int port, int clients) {
-    for (int i = 0; i < 200; ++i) idle_.push_back(connect_to(port));
+  Hammer(int port, int clients, int churn) {
+    threads_.emplace_back([this, port] { hold_idle(port); });
     for (int i = 0; i < 8; ++i) threads_.emplace_back([this, port] { drip(port); });
+    if (churn > 0) threads_.emplace_back([this, port, churn] { churn_connections(port, churn); });
     for (int i = 0; i < clients; ++i)
       threads_.emplace_back([this, port] {
         // At nice 19, as clients on another machine would be: what the view's serving costs the
@@ -217,11 +233,18 @@ class Hammer {
         httplib::Client client("127.0.0.1", port);
         while (!done_) client.Get("/api/snapshot");
       });
+    threads_.emplace_back([this, port] { ask_as_a_browser(port); });
   }
   ~Hammer() {
     done_ = true;
     for (auto& t : threads_) t.join();
-    for (const int fd : idle_) close(fd);
+  }
+  // The fresh client's GET /: asked, answered 200 within 2 s, the slowest answer (ms).
+  void fresh(Figures& f) const {
+    std::lock_guard lock(mutex_);
+    f.fresh_asked = asked_;
+    f.fresh_served = served_;
+    f.fresh_slowest_ms = slowest_ms_;
   }
 
  private:
@@ -234,6 +257,20 @@ class Hammer {
     connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
     return fd;
   }
+  void hold_idle(int port) {
+    view::set_thread_nice(19);
+    std::vector<pollfd> crowd;
+    for (int i = 0; i < 200; ++i) crowd.push_back({connect_to(port), POLLIN, 0});
+    while (!done_) {
+      poll(crowd.data(), crowd.size(), 50);
+      for (pollfd& c : crowd) {
+        if (c.revents == 0) continue;
+        close(c.fd);  // closed by the view (displaced, or a 408 at its deadline)
+        c = {connect_to(port), POLLIN, 0};
+      }
+    }
+    for (const pollfd& c : crowd) close(c.fd);
+  }
   void drip(int port) {
     while (!done_) {
       const int fd = connect_to(port);
@@ -244,9 +281,48 @@ class Hammer {
       close(fd);
     }
   }
+  // `per_second` new connections, each held 1 s; every other one sends a whole request.
+  void churn_connections(int port, int per_second) {
+    view::set_thread_nice(19);
+    const std::string request =
+        "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n\r\n";
+    std::deque<int> open;
+    for (int k = 0; !done_; ++k) {
+      const int fd = connect_to(port);
+      if (k % 2 == 1) (void)!send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+      open.push_back(fd);
+      if (open.size() > static_cast<std::size_t>(per_second)) {
+        close(open.front());
+        open.pop_front();
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(1000000 / per_second));
+    }
+    for (const int fd : open) close(fd);
+  }
+  void ask_as_a_browser(int port) {
+    while (!done_) {
+      const auto start = std::chrono::steady_clock::now();
+      httplib::Client client("127.0.0.1", port);
+      client.set_connection_timeout(2s);
+      client.set_read_timeout(2s);
+      const auto page = client.Get("/");
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count();
+      {
+        std::lock_guard lock(mutex_);
+        ++asked_;
+        if (page && page->status == 200 && ms <= 2000) ++served_;
+        slowest_ms_ = std::max(slowest_ms_, ms);
+      }
+      for (int w = 0; w < 10 && !done_; ++w) std::this_thread::sleep_for(50ms);
+    }
+  }
   std::atomic<bool> done_{false};
-  std::vector<int> idle_;
   std::vector<std::thread> threads_;
+  mutable std::mutex mutex_;
+  int asked_ = 0, served_ = 0;
+  double slowest_ms_ = 0;
 };
 
 // The view as the coordinator program serves it, and one headless Chromium on its page.
@@ -261,7 +337,7 @@ struct View {
     loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};
     loopback_any_port.snapshot_period = std::chrono::milliseconds(spec.snapshot_period_ms);
     server = std::make_unique<view::ViewServer>(feed, std::move(loopback_any_port));
-    if (spec.hammer > 0) hammer.emplace(server->port(), spec.hammer);
+    if (spec.hammer > 0) hammer.emplace(server->port(), spec.hammer, spec.churn);
     if (!spec.browser) return;
     const auto profile = dir / "chromium_profile";
     std::filesystem::remove_all(profile);
@@ -343,6 +419,7 @@ Figures run(const Spec& spec) {
     f.updates_sent = counters["updates_sent"];
     f.snapshots_served = counters["snapshots_served"];
     f.snapshot_builds = counters["snapshot_builds"];
+    if (view->hammer) view->hammer->fresh(f);
     view->hammer.reset();
     spdlog::info("{}: view counters {}", spec.name, counters.dump());
     view->server->shutdown();
@@ -421,37 +498,57 @@ void pairs(Spec spec, int repeat, bool browser) {
                 spec.page_query.c_str(), spec.browser_cpu >= 0 ? ", Chromium pinned" : "");
 }
 
-// Pairs of runs with the view: without clients, then with the hammer; medians and the ratio.
-void hammer_pairs(Spec spec, int repeat, int clients) {
-  std::vector<double> quiet_overruns, hammered_overruns, quiet_latency, hammered_latency;
+// Triples of runs: the bare loop, with the view and no client, with the view hammered; medians
+// and the ratios.
+void hammer_triples(Spec spec, int repeat, int clients) {
+  std::vector<double> bare_overruns, quiet_overruns, hammered_overruns, bare_latency, quiet_latency,
+      hammered_latency;
+  int asked = 0, served = 0;
+  double slowest = 0;
   for (int i = 0; i < repeat; ++i) {
-    spec.with_view = true;
     spec.browser = false;
-    spec.name = "quiet_" + std::to_string(i);
     spec.hammer = 0;
+    spec.name = "bare_" + std::to_string(i);
+    spec.with_view = false;
+    const Figures bare = run(spec);
+    spec.name = "quiet_" + std::to_string(i);
+    spec.with_view = true;
     const Figures quiet = run(spec);
     spec.name = "hammered_" + std::to_string(i);
     spec.hammer = clients;
     const Figures hammered = run(spec);
-    std::printf("pair %d (%g Hz, %g s, snapshot cap every %d ms, load average %s):\n", i + 1,
+    std::printf("triple %d (%g Hz, %g s, snapshot cap every %d ms, load average %s):\n", i + 1,
                 spec.rate, spec.seconds, spec.snapshot_period_ms, load_average().c_str());
+    print("bare", bare);
     print("quiet", quiet);
     print("hammered", hammered);
-    std::printf("            %llu snapshots served from %llu builds\n",
-                static_cast<unsigned long long>(hammered.snapshots_served),
-                static_cast<unsigned long long>(hammered.snapshot_builds));
+    std::printf(
+        "            %llu snapshots served from %llu builds; a fresh GET / served within "
+        "2 s %d of %d times (slowest %.0f ms)\n",
+        static_cast<unsigned long long>(hammered.snapshots_served),
+        static_cast<unsigned long long>(hammered.snapshot_builds), hammered.fresh_served,
+        hammered.fresh_asked, hammered.fresh_slowest_ms);
+    bare_overruns.push_back(bare.overrun_pct);
     quiet_overruns.push_back(quiet.overrun_pct);
     hammered_overruns.push_back(hammered.overrun_pct);
+    bare_latency.push_back(bare.latency_median_us);
     quiet_latency.push_back(quiet.latency_median_us);
     hammered_latency.push_back(hammered.latency_median_us);
+    asked += hammered.fresh_asked;
+    served += hammered.fresh_served;
+    slowest = std::max(slowest, hammered.fresh_slowest_ms);
     std::fflush(stdout);
   }
-  const double quiet = median(quiet_overruns), hammered = median(hammered_overruns);
+  const double bare = median(bare_overruns), quiet = median(quiet_overruns),
+               hammered = median(hammered_overruns);
   std::printf(
-      "=> medians of %d: overruns %.3f %% with the view alone, %.3f %% with %d clients looping on "
-      "/api/snapshot and the idle crowd (ratio %.2f); wake-up to command %.1f / %.1f us\n",
-      repeat, quiet, hammered, clients, quiet > 0 ? hammered / quiet : 0.0, median(quiet_latency),
-      median(hammered_latency));
+      "=> medians of %d: overruns %.3f %% bare, %.3f %% with the view alone, %.3f %% with %d "
+      "clients looping on /api/snapshot, the idle crowd and %d connections a second (ratio to "
+      "the view alone %.2f, to the bare loop %.2f); wake-up to command %.1f / %.1f / %.1f us; a "
+      "fresh GET / served within 2 s %d of %d times (slowest %.0f ms)\n",
+      repeat, bare, quiet, hammered, clients, spec.churn, quiet > 0 ? hammered / quiet : 0.0,
+      bare > 0 ? hammered / bare : 0.0, median(bare_latency), median(quiet_latency),
+      median(hammered_latency), served, asked, slowest);
 }
 
 double mean_between(const std::vector<std::pair<double, double>>& rss, double from, double to) {
@@ -518,21 +615,26 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1023));
   app.add_option("--loop-cpu", spec.loop_cpu,
                  "with --browser-cpu: the deployment's loop_cpu (default 1 if the browser's is 0, "
-                 "else 0)")
+                 "else 0); with --hammer: the loop alone on this CPU, the view's threads and the "
+                 "clients off it, as clients on another machine would be")
       ->check(CLI::Range(0, 1023));
   int hammer = 0;
   app.add_option("--hammer", hammer,
                  "instead: pairs with the view, without and with N clients looping on "
                  "/api/snapshot and an idle crowd")
       ->check(CLI::Range(1, 64));
+  app.add_option("--churn", spec.churn,
+                 "with --hammer: new connections a second, every other one never sending")
+      ->default_val(15)
+      ->check(CLI::Range(0, 1000));
   app.add_option("--snapshot-period-ms", spec.snapshot_period_ms,
                  "the view's snapshot cap (0: rebuilt for every request, as before the cap)")
       ->default_val(200)
       ->check(CLI::Range(0, 10000));
   CLI11_PARSE(app, argc, argv);
   if (spec.browser_cpu >= 0 && spec.loop_cpu < 0) spec.loop_cpu = spec.browser_cpu == 0 ? 1 : 0;
-  if (spec.loop_cpu >= 0 && spec.browser_cpu < 0) {
-    std::fprintf(stderr, "--loop-cpu %d needs --browser-cpu\n", spec.loop_cpu);
+  if (spec.loop_cpu >= 0 && spec.browser_cpu < 0 && hammer == 0) {
+    std::fprintf(stderr, "--loop-cpu %d needs --browser-cpu or --hammer\n", spec.loop_cpu);
     return 2;
   }
   if (spec.loop_cpu >= 0 && spec.loop_cpu == spec.browser_cpu) {
@@ -544,7 +646,7 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::warn);
   const bool browser = !no_browser && std::filesystem::exists("/usr/bin/chromium");
   if (hammer > 0) {
-    hammer_pairs(spec, repeat, hammer);
+    hammer_triples(spec, repeat, hammer);
   } else if (rss_minutes > 0) {
     spec.seconds = rss_minutes * 60;
     rss_run(spec, browser);

@@ -9,16 +9,24 @@
 // written to OUT/platform.json and handed to every case's coordinator): when its fail-safe or
 // overrun tolerance will not hold, nothing starts (exit 3, the numbers and the fix named) unless
 // --accept-platform. A study with a benchmark section also gets benchmark.txt/.json (J1-J9 of every
-// recorded case but the study's reference, as `rths run`). Exit: 0 all runs completed; else the
-// first failing coordinator's status (1 run failed, 2 bad config, 3 environment); 1 for a diverged
-// case (unless --allow-unstable or expect_unstable); 2 for a bad config caught before starting
-// anything.
+// recorded case but the study's reference, as `rths run`). With --view, each case's coordinator
+// serves its live view; once the last has exited, launch serves that case's finished record on
+// the same address (view::RecordView, as `rths view` does; its badge as launch judged the case),
+// from the run's end until Ctrl-C or --view-for, and exits with the runs' status only then.
+// Exit: 0 all runs completed; else the first failing coordinator's status (1 run failed, 2 bad
+// config, 3 environment); 1 for a diverged case (unless --allow-unstable or expect_unstable); 2
+// for a bad config caught before starting anything.
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
 #include <iostream>
+#include <optional>
+#include <regex>
+#include <sstream>
 
 #include "analysis/distributed/distributed_outputs.h"
 #include "cli/commands.h"
@@ -28,6 +36,7 @@
 #include "runtime/launch/launch.h"
 #include "study/study.h"
 #include "util/process.h"
+#include "view/record_view.h"
 #include "view/server.h"
 
 namespace rths::cli {
@@ -45,7 +54,18 @@ struct LaunchArgs {
   bool accept_platform = false;
   std::string view;  // HOST:PORT of the live view, empty: none
   bool view_stop = false;
+  double view_for =
+      -1;  // s the finished run stays on the view after the last case; < 0: until Ctrl-C
 };
+
+// How long the port of a coordinator's live view, just exited, may stay held before launch can
+// listen on it: a process's sockets close as it exits, before its parent learns of the exit, so
+// this only covers a machine too busy to finish the close at once.
+constexpr std::chrono::milliseconds kPortHandOver{2000};
+
+std::filesystem::path case_log_dir(const std::filesystem::path& out, const std::string& name) {
+  return out / "logs" / name;
+}
 
 // Real time: the platform check once for every case; its summary file, or empty in lockstep.
 std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
@@ -77,6 +97,7 @@ std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
 std::vector<std::string> view_arguments(const LaunchArgs& args) {
   if (args.view.empty()) {
     if (args.view_stop) throw ExitError(kExitBadInput, "--view-stop needs --view HOST:PORT");
+    if (args.view_for >= 0) throw ExitError(kExitBadInput, "--view-for needs --view HOST:PORT");
     return {};
   }
   try {
@@ -131,7 +152,7 @@ runtime::LaunchOptions case_options(const LaunchArgs& args, const std::string& n
   options.domain = args.domain;
   options.programs_dir = args.programs.bin_dir;
   options.record = out / (name + ".rthsrec");
-  options.log_dir = out / "logs" / name;
+  options.log_dir = case_log_dir(out, name);
   options.timeout = args.timeout;
   options.security_dir = args.programs.security;
   options.platform_file = platform_file;
@@ -146,10 +167,10 @@ runtime::LaunchOptions case_options(const LaunchArgs& args, const std::string& n
 // Runs each case in turn (a Ctrl-C stops the children in order and ends the loop).
 std::vector<DistributedRun> run_cases(const LaunchArgs& args, const std::vector<std::string>& names,
                                       const std::filesystem::path& out,
-                                      const std::filesystem::path& platform_file) {
+                                      const std::filesystem::path& platform_file,
+                                      const util::HeldStopSignals& signals) {
   std::vector<DistributedRun> runs;
   ProgressReporter progress("launch", "cases", !args.results.json);
-  util::HeldStopSignals signals;
   for (const std::string& name : names) {
     runtime::LaunchOptions options = case_options(args, name, out, platform_file);
     options.stop_requested = [&signals] { return signals.stop_requested(); };
@@ -175,9 +196,80 @@ std::vector<DistributedRun> run_cases(const LaunchArgs& args, const std::vector<
   return runs;
 }
 
+// The address the live view of a case listened on: --view's, with the port its coordinator
+// printed ("live view at http://HOST:PORT/") when --view asked for any free one (port 0); port 0
+// still when the log names none.
+view::ListenAddress live_view_address(const LaunchArgs& args, const std::filesystem::path& out,
+                                      const std::string& case_name) {
+  view::ListenAddress address = view::parse_listen_address(args.view);
+  if (address.port != 0) return address;
+  std::ifstream log(case_log_dir(out, case_name) / "coordinator.log");
+  const std::regex printed(R"(live view at http://\S+:(\d+)/)");
+  std::smatch found;
+  for (std::string line; std::getline(log, line);)
+    if (std::regex_search(line, found, printed)) address.port = std::stoi(found[1]);
+  return address;
+}
+
+// How launch judged the case `name` against the lag-free run: its summary table's status, why,
+// and whether launch fails on it (fail_if_distributed_failed's rules); nothing when it has no
+// record to judge.
+std::optional<view::JudgedCase> judged_case(const DistributedResults& results,
+                                            const std::string& name, bool allow_unstable) {
+  for (std::size_t i = 0; i < results.outcome.cases.size(); ++i) {
+    const analysis::CaseOutcome& c = results.outcome.cases[i];
+    if (c.name != name) continue;
+    view::JudgedCase judged{
+        c.status + (c.diverged() && c.expect_unstable ? " (expected)" : ""), c.status_detail,
+        c.status != "completed" && !(c.diverged() && (c.expect_unstable || allow_unstable))};
+    const auto& difference = results.facts[i].difference_from_in_process;
+    if (!judged.fails && difference && difference->differs())
+      judged = {"differs from the in-process run",
+                "the lockstep run differs from the in-process run from step " +
+                    std::to_string(*difference->first_step),
+                true};
+    return judged;
+  }
+  return std::nullopt;
+}
+
+// With --view, once the runs are over: the last case's finished record served where its live
+// view was, so an open page stays (and a reload shows the whole run), its badge saying how
+// launch judged it. Nothing without --view, with --view-for 0, after a Ctrl-C (which means:
+// leave now) or without a record to show.
+std::unique_ptr<view::RecordView> keep_view(const LaunchArgs& args,
+                                            const std::filesystem::path& out,
+                                            const std::vector<DistributedRun>& runs,
+                                            const DistributedResults& results) {
+  if (args.view.empty() || args.view_for == 0 || runs.empty()) return nullptr;
+  const DistributedRun& last = runs.back();
+  if (last.launcher_status == "interrupted" || !std::filesystem::exists(last.record))
+    return nullptr;
+  try {
+    return std::make_unique<view::RecordView>(
+        last.record, live_view_address(args, out, last.case_name), kPortHandOver,
+        judged_case(results, last.case_name, args.results.allow_unstable));
+  } catch (const std::exception& e) {
+    print_warning(std::string("the view cannot stay after the run: ") + e.what());
+    return nullptr;
+  }
+}
+
+// Serves the kept view until `until` (nothing: for ever) or a Ctrl-C, saying so last, after the
+// summary: why the command has not returned yet.
+void hold_kept_view(view::RecordView& kept, const std::string& case_name, double seconds,
+                    std::optional<std::chrono::steady_clock::time_point> until,
+                    const util::HeldStopSignals& signals) {
+  std::ostringstream how_long;
+  how_long << "for " << seconds << " s from the run's end (or until Ctrl-C)";
+  std::cerr << "rths launch: the view stays on the finished run of case " << case_name << " at "
+            << kept.url() << " " << (until ? how_long.str() : "until Ctrl-C") << std::endl;
+  kept.serve_until(until, [&signals] { return signals.stop_requested(); });
+}
+
 void report(const LaunchArgs& args, const core::PreparedStudy& prepared,
-            const std::filesystem::path& out, const std::vector<DistributedRun>& runs) {
-  const DistributedResults results = analysis::judge_distributed(prepared, runs, print_warning);
+            const std::filesystem::path& out, const std::vector<DistributedRun>& runs,
+            const DistributedResults& results) {
   const auto table = analysis::write_distributed_outputs(results, out, !args.results.no_plots,
                                                          args.results.format, print_warning);
   // J1-J9 of the recorded cases, as `rths run` gives them (before the summary: the JSON summary
@@ -210,7 +302,21 @@ void run_launch(const LaunchArgs& args) {
   // Checked before anything starts: the case's lag plus the network's on the actuator's path.
   analysis::warn_past_critical_delay(prepared, names, print_warning);
   const std::filesystem::path platform_file = check_platform_first(prepared, args, out);
-  report(args, prepared, out, run_cases(args, names, out, platform_file));
+  // Ctrl-C stops the runs in order, or ends the view kept after them.
+  util::HeldStopSignals signals;
+  const std::vector<DistributedRun> runs = run_cases(args, names, out, platform_file, signals);
+  const DistributedResults results = analysis::judge_distributed(prepared, runs, print_warning);
+  std::unique_ptr<view::RecordView> kept = keep_view(args, out, runs, results);
+  std::optional<std::chrono::steady_clock::time_point> until;
+  if (args.view_for >= 0) until = seconds_from_now(args.view_for);
+  std::exception_ptr failed;  // the runs' exit status (ExitError), given once the view is gone
+  try {
+    report(args, prepared, out, runs, results);
+  } catch (...) {
+    failed = std::current_exception();
+  }
+  if (kept) hold_kept_view(*kept, runs.back().case_name, args.view_for, until, signals);
+  if (failed) std::rethrow_exception(failed);
 }
 
 }  // namespace
@@ -233,8 +339,13 @@ void add_launch_command(CLI::App& app) {
                   "left to the scheduler; one-cpu; spread")
       ->check(CLI::IsMember({"auto", "one-cpu", "spread"}));
   cmd->add_option("--view", args->view,
-                  "serve the live view of each case at HOST:PORT (e.g. 127.0.0.1:8080); "
-                  "`rths view RECORD` shows a finished one");
+                  "serve the live view of each case at HOST:PORT (e.g. 127.0.0.1:8080), then the "
+                  "last case's finished run (--view-for); `rths view RECORD` shows any record");
+  cmd->add_option("--view-for", args->view_for,
+                  "with --view: after the last case, keep serving its finished run at the same "
+                  "address for this many seconds (default: until Ctrl-C; 0: not at all)")
+      ->transform(seconds_value())
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--view-stop", args->view_stop,
                 "the view gets a stop button (HOLD, then STOP), pressed only from the address "
                 "printed here (it carries the stop's token)");

@@ -1,19 +1,14 @@
 // rths view RECORD: serves the live view's page over a finished (or truncated) run record, with a
-// time slider, until Ctrl-C (or --for SECONDS). The record is read whole (runtime::read_record,
-// which keeps every complete entry of a cut record and says where it was cut) and fed through the
-// same view::Feed a running coordinator feeds, so the page shows a record as it showed the run.
+// time slider, until Ctrl-C (or --for SECONDS): view::RecordView, which `rths launch --view` also
+// serves a run's record with once the run has ended.
 // Exit: 2 a record that cannot be read or a bad --listen; 3 the address cannot be bound.
 #include <chrono>
 #include <iostream>
-#include <thread>
 
 #include "cli/commands.h"
 #include "cli/support.h"
-#include "runtime/record/record.h"
 #include "util/process.h"
-#include "view/context.h"
-#include "view/feed.h"
-#include "view/server.h"
+#include "view/record_view.h"
 
 namespace rths::cli {
 namespace {
@@ -25,40 +20,26 @@ struct ViewArgs {
 
 void run_view(const ViewArgs& args) {
   view::ListenAddress address;
-  runtime::RecordContents contents;
   try {
     address = view::parse_listen_address(args.listen, "--listen");
-    contents = runtime::read_record(args.record);
   } catch (const std::exception& e) {
     throw ExitError(kExitBadInput, e.what());
   }
-  if (!contents.header())
-    throw ExitError(kExitBadInput, args.record + ": no run header: not a run record");
-  view::Feed feed;
-  // The critical delay and the in-process prediction from the record's study (relative paths
-  // beside the record; the record's own motion when the study's file is not here), before the
-  // steps, which then carry it.
-  view::describe_record(feed, contents, std::filesystem::path(args.record).parent_path());
-  for (const auto& entry : contents.entries) feed.add(entry);
-  feed.finish();
-  view::ServerOptions options;
-  options.address = address;
-  options.mode = "replay";
-  std::unique_ptr<view::ViewServer> server;
   util::HeldStopSignals signals;
+  std::unique_ptr<view::RecordView> served;
   try {
-    server = std::make_unique<view::ViewServer>(feed, options);
+    served = std::make_unique<view::RecordView>(args.record, address);
+  } catch (const std::invalid_argument& e) {
+    throw ExitError(kExitBadInput, e.what());
   } catch (const std::exception& e) {
     throw ExitError(kExitEnvironment, e.what());
   }
-  std::cout << "rths view: " << args.record << " (" << feed.steps_seen() << " steps"
-            << (contents.truncated ? ", cut short" : "") << ") at " << server->url()
+  std::cout << "rths view: " << args.record << " (" << served->steps() << " steps"
+            << (served->truncated() ? ", cut short" : "") << ") at " << served->url()
             << "  (Ctrl-C to stop)" << std::endl;
-  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(args.seconds);
-  while (!signals.stop_requested() &&
-         (args.seconds <= 0 || std::chrono::steady_clock::now() < until))
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  server->shutdown(std::chrono::milliseconds(0));
+  std::optional<std::chrono::steady_clock::time_point> until;
+  if (args.seconds > 0) until = seconds_from_now(args.seconds);
+  served->serve_until(until, [&signals] { return signals.stop_requested(); });
 }
 
 }  // namespace

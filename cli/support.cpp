@@ -160,6 +160,12 @@ double parse_seconds(const std::string& text) {
   return value * factor;
 }
 
+std::chrono::steady_clock::time_point seconds_from_now(double seconds) {
+  return std::chrono::steady_clock::now() +
+         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+             std::chrono::duration<double>(seconds));
+}
+
 CLI::Validator seconds_value() {
   return CLI::Validator(
       [](std::string& input) -> std::string {

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -72,6 +73,8 @@ void add_node_program_options(CLI::App* cmd, NodeProgramOptions& options);
 CLI::Validator seconds_value();
 // The same parse as a function: seconds from text. Throws std::invalid_argument.
 double parse_seconds(const std::string& text);
+// The steady clock's now plus `seconds` (a time flag's value): when a command's --for ends.
+std::chrono::steady_clock::time_point seconds_from_now(double seconds);
 // A time flag checked against its quantity's range rule (study/ranges.h): seconds_value() then
 // the rule; attach with ->transform (it rewrites "14ms" to seconds); CLI11 refuses a value as
 // "--dt: 1e-09 s is outside [1e-06, 1] s (...)", exit 2.

@@ -3,6 +3,7 @@
 #include "analysis/study_run.h"
 #include "runtime/node/in_process.h"
 #include "runtime/node/plan.h"
+#include "runtime/record/deadline_diagnosis.h"
 #include "study/study_inputs.h"
 
 namespace rths::view {
@@ -79,8 +80,12 @@ core::GroundMotion recorded_motion(const runtime::RecordContents& contents) {
   return motion;
 }
 
-void describe_record(Feed& feed, const runtime::RecordContents& contents,
-                     const std::filesystem::path& base_dir) {
+namespace {
+
+// The context of a record from its study: prepared here, else over the record's own motion, else
+// the reason neither could be.
+void describe_record_study(Feed& feed, const runtime::RecordContents& contents,
+                           const std::filesystem::path& base_dir) {
   const runtime::RunHeader& header = *contents.header();
   const config::Study& study = *contents.study_as_run();
   const std::string note = contents.warning;
@@ -110,6 +115,15 @@ void describe_record(Feed& feed, const runtime::RecordContents& contents,
     if (!note.empty()) context["note"] = note;
     feed.set_context(std::move(context));
   }
+}
+
+}  // namespace
+
+void describe_record(Feed& feed, const runtime::RecordContents& contents,
+                     const std::filesystem::path& base_dir) {
+  describe_record_study(feed, contents, base_dir);
+  const auto deadlines = runtime::diagnose_record_deadlines(contents);
+  if (deadlines && deadlines->overruns > 0) feed.set_deadline_diagnosis(deadlines->describe());
 }
 
 }  // namespace rths::view

@@ -46,7 +46,8 @@ core::GroundMotion recorded_motion(const runtime::RecordContents& contents);
 // read here (a record carried away from the lab), the record's own motion (recorded_motion)
 // stands in, so the prediction covers the recorded steps and the page says so; when the study
 // cannot be set up at all, the context says why. The record's warning (cut short, damaged) is
-// the note.
+// the note. A real-time record that overran gets its deadline diagnosis
+// (runtime::diagnose_record_deadlines, the lines `rths launch` prints) beneath its badge.
 void describe_record(Feed& feed, const runtime::RecordContents& contents,
                      const std::filesystem::path& base_dir);
 

@@ -67,6 +67,17 @@ void Feed::set_context(nlohmann::json context) {
   changed();
 }
 
+void Feed::set_deadline_diagnosis(std::string text) {
+  std::lock_guard lock(mutex_);
+  deadline_diagnosis_ = std::move(text);
+  changed();
+}
+
+void Feed::set_judged(JudgedCase judged) {
+  std::lock_guard lock(mutex_);
+  judged_ = std::move(judged);
+}
+
 void Feed::set_prediction(const core::SimulationResult& prediction) {
   std::lock_guard lock(mutex_);
   const double dt = prediction.dt > 0 ? prediction.dt : 1e-3;
@@ -295,17 +306,17 @@ void Feed::on_footer(const runtime::RunFooter& footer) {
   have_footer_ = true;
   // The record's own rows judged by the one real-time verdict, as the coordinator judged its run
   // and identify judges the record: a run that failed it is never shown as completed.
-  std::optional<std::string> verdict;
-  if (header_.clock() == "real_time")
-    verdict = runtime::deadline_verdict(
-        {steps_ > 0 ? steps_ - 1 : 0, overruns_, worst_overrun_streak_},
-        runtime::deadline_rule(header_.study().deployment(), header_.dt()));
-  // A footer that is not ok names deadline misses (the loop's or a servo's) only for a run that
-  // ran to its end; one that is ok and fails the verdict is a record of an older coordinator.
-  const bool missed =
-      footer.ok() ? verdict.has_value() : footer.status().rfind(runtime::kDeadlineMisses, 0) == 0;
-  state_ = missed ? "failed" : footer.ok() ? "completed" : "stopped";
-  reason_ = footer.ok() && verdict ? *verdict : footer.status();
+  FinishedRun run;
+  run.footer = footer;
+  run.real_time = header_.clock() == "real_time";
+  run.counts = {steps_ > 0 ? steps_ - 1 : 0, overruns_, worst_overrun_streak_};
+  run.rule = runtime::deadline_rule(header_.study().deployment(), header_.dt());
+  run.platform_overridden = header_.platform().accepted_override();
+  run.platform_verdict = header_.platform().verdict();
+  run.judged = judged_;
+  verdict_ = shown_verdict(run);
+  state_ = verdict_.state;
+  reason_ = footer.ok() && verdict_.state == "failed" ? verdict_.text : footer.status();
   node_ = footer.failed_node();
   overruns_ = std::max<std::uint64_t>(overruns_, footer.counters().overruns());
   finished_ = true;
@@ -349,6 +360,10 @@ nlohmann::json Feed::status_json() const {
                       {"finished", finished_},
                       {"unreadable_entries", unreadable_}};
   if (have_footer_) {
+    s["verdict"] = {{"level", verdict_.level},
+                    {"badge", verdict_.badge},
+                    {"text", verdict_.text},
+                    {"diagnosis", deadline_diagnosis_}};
     const auto& c = footer_.counters();
     s["footer"] = {{"ok", footer_.ok()},
                    {"status", footer_.status()},

@@ -28,8 +28,11 @@
 //             a real-time run that ran to its end but failed the one real-time verdict
 //             (runtime::deadline_verdict on the rows' overruns and worst streak under the
 //             header's deployment; the verdict is the reason), else "stopped" / "completed" (its
-//             status and failed node); counters; the newest step and its CLOCK_REALTIME start,
-//             from which the page tells how far behind the test it is.
+//             status and failed node); once finished, "verdict": the badge's words, colour
+//             (level) and text (view/verdict.h: a real-time run that overran within its verdict
+//             is a "warning", never a plain "completed") and the deadline diagnosis when one was
+//             set (set_deadline_diagnosis); counters; the newest step and its CLOCK_REALTIME
+//             start, from which the page tells how far behind the test it is.
 //             With a prediction, per DOF: the largest |u - predicted| and its root mean square
 //             over the samples compared so far (mm; the samples' steps, not every step).
 //   events    the newest `max_events` events.
@@ -40,6 +43,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -48,6 +52,7 @@
 
 #include "core/simulation.h"
 #include "runtime/record/record.h"
+#include "view/verdict.h"
 
 namespace rths::view {
 
@@ -85,6 +90,13 @@ class Feed : public runtime::RecordObserver {
   // and the difference statistics restart over the kept samples. A step the prediction does not
   // reach (it diverged) has none.
   void set_prediction(const core::SimulationResult& prediction);
+  // Why a real-time record overran and what it is still good for (runtime::DeadlineDiagnosis's
+  // describe(), as `rths launch` prints it), shown with the verdict. A finished record's only:
+  // the diagnosis needs every step's work time, which a live feed does not keep.
+  void set_deadline_diagnosis(std::string text);
+  // How `rths launch` judged the case (view/verdict.h), before the footer arrives: the badge
+  // then says it when the record's own verdict does not fail first.
+  void set_judged(JudgedCase judged);
   // The record is complete (footer seen, or a finished record fully read): readers stop waiting.
   void finish();
 
@@ -176,6 +188,9 @@ class Feed : public runtime::RecordObserver {
   std::string state_ = "starting", reason_, node_;
   bool have_footer_ = false;
   runtime::RunFooter footer_;
+  ShownVerdict verdict_;
+  std::string deadline_diagnosis_;
+  std::optional<JudgedCase> judged_;
 };
 
 }  // namespace rths::view

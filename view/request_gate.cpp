@@ -1,5 +1,6 @@
 #include "view/request_gate.h"
 
+#include <netinet/in.h>
 #include <strings.h>
 #include <sys/epoll.h>
 #include <sys/resource.h>
@@ -31,6 +32,16 @@ std::size_t content_length(std::string_view headers) {
   return 0;
 }
 
+// The peer's IPv4 address (host order); 0 for anything else (one bucket for those).
+std::uint32_t peer_address(int fd) {
+  sockaddr_in peer{};
+  socklen_t length = sizeof peer;
+  if (getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &length) != 0 ||
+      peer.sin_family != AF_INET)
+    return 0;
+  return ntohl(peer.sin_addr.s_addr);
+}
+
 }  // namespace
 
 bool set_thread_nice(int nice) {
@@ -38,7 +49,10 @@ bool set_thread_nice(int nice) {
 }
 
 RequestGate::RequestGate(GateOptions options, std::function<void(int fd)> serve)
-    : options_(options), serve_(std::move(serve)), epoll_(epoll_create1(EPOLL_CLOEXEC)) {
+    : options_(options),
+      serve_(std::move(serve)),
+      epoll_(epoll_create1(EPOLL_CLOEXEC)),
+      waiting_({options.max_waiting, options.max_per_address}) {
   if (epoll_ < 0) throw std::runtime_error("the view cannot create its epoll set");
   poller_ = std::thread([this] {
     set_thread_nice(options_.nice);
@@ -54,48 +68,69 @@ RequestGate::RequestGate(GateOptions options, std::function<void(int fd)> serve)
 RequestGate::~RequestGate() { stop(); }
 
 void RequestGate::admit(int fd) {
-  std::lock_guard lock(mutex_);
-  if (stopping_) {
-    close(fd);
-    return;
+  std::vector<std::pair<int, Peek>> found;
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_) {
+      close(fd);
+      return;
+    }
+    ++admitted_;
+    const std::uint32_t address = peer_address(fd);
+    make_room(address, found);
+    waiting_.add(fd, address, std::chrono::steady_clock::now());
+    // Edge-triggered: woken when bytes arrive (and once at once if some already have).
+    epoll_event event{};
+    event.events = EPOLLIN | EPOLLRDHUP | EPOLLET;
+    event.data.fd = fd;
+    epoll_ctl(epoll_, EPOLL_CTL_ADD, fd, &event);
   }
-  ++admitted_;
-  if (waiting_.size() >= options_.max_waiting) {
-    const int oldest = waiting_.front().fd;
-    forget(oldest);
-    close(oldest);
+  for (const auto& [ready, state] : found) finish(ready, state);
+}
+
+void RequestGate::make_room(std::uint32_t address, std::vector<std::pair<int, Peek>>& found) {
+  const auto now = std::chrono::steady_clock::now();
+  // Each pass displaces one, finds one gone from the table, or learns of new bytes in one (which
+  // then ranks after every idle one); the bound only guards against bytes arriving without end.
+  for (std::size_t pass = 0; pass <= options_.max_waiting + 1; ++pass) {
+    const std::optional<int> victim = waiting_.displaced_by(address);
+    if (!victim) return;
+    const Peeked seen = peek(*victim);
+    if (seen.state != Peek::kIncomplete) {
+      forget(*victim);
+      found.emplace_back(*victim, seen.state);
+      continue;
+    }
+    if (waiting_.saw_bytes(*victim, seen.bytes, now) && pass <= options_.max_waiting) continue;
+    forget(*victim);
+    close(*victim);
     ++evicted_;
   }
-  waiting_.push_back({fd, std::chrono::steady_clock::now() + options_.header_deadline});
-  waiting_at_[fd] = std::prev(waiting_.end());
-  // Edge-triggered: woken when bytes arrive (and once at once if some already have).
-  epoll_event event{};
-  event.events = EPOLLIN | EPOLLRDHUP | EPOLLET;
-  event.data.fd = fd;
-  epoll_ctl(epoll_, EPOLL_CTL_ADD, fd, &event);
 }
 
 void RequestGate::forget(int fd) {
-  const auto at = waiting_at_.find(fd);
-  if (at == waiting_at_.end()) return;
-  waiting_.erase(at->second);
-  waiting_at_.erase(at);
+  if (!waiting_.remove(fd)) return;
   epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
 }
 
-RequestGate::Peek RequestGate::peek(int fd) const {
+RequestGate::Peeked RequestGate::peek(int fd) const {
+  char first = 0;  // an idle socket (the common case when displacing) costs no buffer
+  const ssize_t any = recv(fd, &first, 1, MSG_PEEK | MSG_DONTWAIT);
+  if (any < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return {Peek::kIncomplete, 0};
   std::string buffer(options_.max_request_bytes, '\0');
   const ssize_t n = recv(fd, buffer.data(), buffer.size(), MSG_PEEK | MSG_DONTWAIT);
-  if (n == 0) return Peek::kClosed;
-  if (n < 0) return (errno == EAGAIN || errno == EWOULDBLOCK) ? Peek::kIncomplete : Peek::kClosed;
+  if (n == 0) return {Peek::kClosed, 0};
+  if (n < 0)
+    return {(errno == EAGAIN || errno == EWOULDBLOCK) ? Peek::kIncomplete : Peek::kClosed, 0};
   const std::string_view got(buffer.data(), static_cast<std::size_t>(n));
   const auto end = got.find("\r\n\r\n");
   if (end == std::string_view::npos)
-    return got.size() >= options_.max_request_bytes ? Peek::kTooLarge : Peek::kIncomplete;
+    return {got.size() >= options_.max_request_bytes ? Peek::kTooLarge : Peek::kIncomplete,
+            got.size()};
   const std::size_t body = content_length(got.substr(0, end + 2));
   // A body larger than the buffer is the server's to refuse (413) at once, unread.
-  if (end + 4 + body > options_.max_request_bytes) return Peek::kComplete;
-  return got.size() >= end + 4 + body ? Peek::kComplete : Peek::kIncomplete;
+  if (end + 4 + body > options_.max_request_bytes) return {Peek::kComplete, got.size()};
+  return {got.size() >= end + 4 + body ? Peek::kComplete : Peek::kIncomplete, got.size()};
 }
 
 void RequestGate::on_readable(int fd) {
@@ -103,27 +138,40 @@ void RequestGate::on_readable(int fd) {
   {
     // Under the lock, so that an fd evicted and reused meanwhile is judged by its own bytes.
     std::lock_guard lock(mutex_);
-    if (!waiting_at_.count(fd)) return;  // evicted or expired meanwhile
-    state = peek(fd);
-    if (state == Peek::kIncomplete) return;
+    if (!waiting_.contains(fd)) return;  // evicted or expired meanwhile
+    const Peeked seen = peek(fd);
+    state = seen.state;
+    if (state == Peek::kIncomplete) {
+      waiting_.saw_bytes(fd, seen.bytes, std::chrono::steady_clock::now());
+      return;
+    }
     forget(fd);
-    if (state == Peek::kClosed) ++closed_early_;
-    if (state == Peek::kTooLarge) ++too_large_;
   }
-  if (state == Peek::kClosed) close(fd);
-  if (state == Peek::kTooLarge) answer_and_close(fd, "431 Request Header Fields Too Large");
-  if (state == Peek::kComplete) enqueue(fd);
+  finish(fd, state);
+}
+
+void RequestGate::finish(int fd, Peek state) {
+  if (state == Peek::kComplete) {
+    enqueue(fd);
+    return;
+  }
+  {
+    std::lock_guard lock(mutex_);
+    ++(state == Peek::kTooLarge ? too_large_ : closed_early_);
+  }
+  if (state == Peek::kTooLarge)
+    answer_and_close(fd, "431 Request Header Fields Too Large");
+  else
+    close(fd);
 }
 
 void RequestGate::expire(std::chrono::steady_clock::time_point now) {
   std::vector<int> late;
   {
     std::lock_guard lock(mutex_);
-    while (!waiting_.empty() && waiting_.front().deadline <= now) {
-      late.push_back(waiting_.front().fd);
-      forget(late.back());
-      ++timed_out_;
-    }
+    late = waiting_.take_arrived_by(now - options_.header_deadline);
+    for (const int fd : late) epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
+    timed_out_ += late.size();
   }
   for (const int fd : late) answer_and_close(fd, "408 Request Timeout");
 }
@@ -176,10 +224,11 @@ void RequestGate::stop() {
     std::lock_guard lock(mutex_);
     if (stopping_) return;
     stopping_ = true;
-    for (const auto& w : waiting_) close(w.fd);
+    for (const int fd : waiting_.fds()) {
+      waiting_.remove(fd);
+      close(fd);
+    }
     for (const int fd : queue_) close(fd);
-    waiting_.clear();
-    waiting_at_.clear();
     queue_.clear();
   }
   queued_cv_.notify_all();

@@ -11,9 +11,15 @@
 // Rules, each counted (counters()):
 //   - a connection whose request is not complete within `header_deadline` of its arrival is
 //     closed ("timed_out"): a client dripping a byte every 2 s holds nothing for long;
-//   - at most `max_waiting` connections wait for their request; one more closes the oldest waiting
-//     ("evicted"), so a crowd of idle connections cannot keep a fresh client out: the fresh one
-//     sends its request at once and is served before it becomes the oldest;
+//   - at most `max_waiting` connections wait for their request, at most `max_per_address` of them
+//     from one peer address; a new one beyond either limit displaces the waiting one idle longest
+//     ("evicted"; the rule is view/admission.h's): those that have sent nothing go first, oldest
+//     first, never the newest; one address at its share displaces only its own, so the slots
+//     above it stay free for other hosts. Before a connection is displaced its socket is looked
+//     at: one whose request has begun meanwhile is not idle (the rule is asked again), one whose
+//     request is complete is served. So a client that churns connections, or holds a crowd of
+//     idle ones and reopens each one closed, displaces only its own idle ones: a browser's
+//     request, in its socket within a round trip of connecting, is never displaced;
 //   - a request whose headers exceed `max_request_bytes` is answered 431 and closed
 //     ("too_large"); one that closes before it is complete is just closed ("closed_early");
 //   - at most `max_queued` complete requests wait for a worker; more are answered 503 and closed
@@ -28,19 +34,20 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
-#include <list>
 #include <mutex>
 #include <thread>
-#include <unordered_map>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "view/admission.h"
+
 namespace rths::view {
 
 struct GateOptions {
-  std::size_t max_waiting = 64;  // connections whose request is not complete yet
-  std::size_t max_queued = 64;   // complete requests waiting for a worker
+  std::size_t max_waiting = 64;      // connections whose request is not complete yet
+  std::size_t max_per_address = 56;  // of them from one peer address
+  std::size_t max_queued = 64;       // complete requests waiting for a worker
   std::chrono::milliseconds header_deadline{3000};
   std::size_t max_request_bytes = 8192 + 4096;  // headers (8 KiB) and a body (4 KiB)
   int workers = 8;
@@ -65,16 +72,21 @@ class RequestGate {
   nlohmann::json counters() const;
 
  private:
-  struct Waiting {
-    int fd;
-    std::chrono::steady_clock::time_point deadline;
-  };
   enum class Peek { kIncomplete, kComplete, kClosed, kTooLarge };
-  Peek peek(int fd) const;
+  struct Peeked {
+    Peek state = Peek::kIncomplete;
+    std::size_t bytes = 0;  // request bytes in the socket
+  };
+  Peeked peek(int fd) const;
   void poll_loop();
   void on_readable(int fd);
+  // @pre mutex_ held. Displaces waiting connections until a new one from `address` fits; those
+  // found complete (or closed) meanwhile leave the table into `found`, to be finished unlocked.
+  void make_room(std::uint32_t address, std::vector<std::pair<int, Peek>>& found);
+  // A connection out of the table with its request `state`: served, refused or closed.
+  void finish(int fd, Peek state);
   void expire(std::chrono::steady_clock::time_point now);
-  void forget(int fd);  // @pre mutex_ held: leaves the waiting list and epoll, not closed
+  void forget(int fd);  // @pre mutex_ held: leaves the table and epoll, not closed
   void enqueue(int fd);
   void worker_loop();
 
@@ -83,8 +95,7 @@ class RequestGate {
   int epoll_ = -1;
   mutable std::mutex mutex_;
   std::condition_variable queued_cv_;
-  std::list<Waiting> waiting_;  // oldest first (deadlines in arrival order)
-  std::unordered_map<int, std::list<Waiting>::iterator> waiting_at_;
+  Admission waiting_;  // connections whose request is not complete yet
   std::deque<int> queue_;
   bool stopping_ = false;
   std::thread poller_;

@@ -147,6 +147,20 @@ class GatedServer : public httplib::Server {
   RequestGate* gate_ = nullptr;
 };
 
+// The port bound (`address`'s, or any free one for port 0), trying every 50 ms for `patience`;
+// -1 when it could not be.
+int bind_within(httplib::Server& server, const ListenAddress& address,
+                std::chrono::milliseconds patience) {
+  const auto give_up = std::chrono::steady_clock::now() + patience;
+  for (;;) {
+    const int port = address.port == 0 ? server.bind_to_any_port(address.host)
+                     : server.bind_to_port(address.host, address.port) ? address.port
+                                                                       : -1;
+    if (port > 0 || std::chrono::steady_clock::now() >= give_up) return port;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
 }  // namespace
 
 bool ListenAddress::loopback() const { return host == "localhost" || host.rfind("127.", 0) == 0; }
@@ -217,9 +231,12 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   server_ = std::move(gated);
   server_->set_payload_max_length(4096);
   routes();
+  server_->set_socket_options([](::socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
+  port_ = bind_within(*server_, options_.address, options_.bind_for);
   const auto& a = options_.address;
-  port_ = a.port == 0 ? server_->bind_to_any_port(a.host)
-                      : (server_->bind_to_port(a.host, a.port) ? a.port : -1);
   if (port_ <= 0)
     throw std::runtime_error("the view cannot listen on " + a.host + ":" + std::to_string(a.port) +
                              " (in use, or not an address of this host)");

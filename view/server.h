@@ -27,10 +27,14 @@
 // address, never to a host name (http://lab-pc:8080/ is refused; http://10.0.0.5:8080/ is not).
 // Bad input: a malformed request line or header, a body over 4 KiB, an unknown path or method is
 // refused (4xx) and counted; none of it touches the feed.
+// Listening: SO_REUSEADDR (a port whose last connections wait in TIME_WAIT can be bound at once)
+// and never SO_REUSEPORT (which would let two views share a port, each answering some of its
+// connections): a port another live view holds is refused.
 // Connections: a RequestGate (view/request_gate.h) holds each until its whole request has arrived
-// (header deadline, idle connections beyond its limit closed oldest first); only then does one of
-// max_streams + 4 threads serve it, one request per connection. Idle or dripping clients
-// therefore never hold the threads that serve the page and the stop button.
+// (header deadline; beyond its limits the connection idle longest is closed, never one whose
+// request has begun, and one address displaces only its own); only then does one of
+// max_streams + 4 threads serve it, one request per connection. Idle, dripping or churning
+// clients therefore never hold the threads that serve the page and the stop button.
 
 #include <atomic>
 #include <chrono>
@@ -79,6 +83,10 @@ struct ServerOptions {
   std::chrono::milliseconds write_timeout{1000};
   std::chrono::milliseconds snapshot_period{200};  // /api/snapshot rebuilt at most this often
   GateOptions gate;  // its workers: max_streams + 4, whatever is set here
+  // How long to keep trying an address that is in use (every 50 ms): a port a process that just
+  // exited listened on (a coordinator's live view, which `rths launch` takes over) may be held
+  // for a moment. 0: one try.
+  std::chrono::milliseconds bind_for{0};
 };
 
 class ViewServer {

@@ -1,8 +1,9 @@
 // The view in a real browser (Debian's Chromium driven by playwright-core) over real runs:
 // `rths launch --view` of a lockstep and of real-time runs over Cyclone DDS (domains 212-214),
-// and `rths view RECORD`. Skipped, with the reason printed, where Chromium cannot start.
-// Screenshots go to RTHS_VIEW_TEST_OUT (view_lockstep.png, view_live.png, view_hold.png,
-// view_replay_early.png, view_replay.png). The page's drawing: ?fps=N caps its draws, none while
+// the page that stays on the finished run after it, and `rths view RECORD`. Skipped, with the
+// reason printed, where Chromium cannot start.
+// Screenshots go to RTHS_VIEW_TEST_OUT (view_lockstep.png, view_stays.png, view_live.png,
+// view_hold.png, view_replay_early.png, view_replay.png). The page's drawing: ?fps=N caps its draws, none while
 // hidden, decimated series are whole samples of the record, the spectrum's note before its first.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -121,14 +122,28 @@ function csvColumns(file) {
   return cols;
 }
 
-test('lockstep over DDS: the step counter advances and the plotted series are the record\'s', { timeout: 300000 }, async t => {
+test('lockstep over DDS: the step counter advances, the plotted series are the record\'s, the page stays on the finished run', { timeout: 300000 }, async t => {
   if (skip) return t.skip(skip);
   const dir = path.join(OUT, 'lockstep');
-  const { child, url } = await launchWithView(dir, study(dir, { clock: 'LOCKSTEP', duration: 25, domain: 212 }), 212);
+  const { child, url } = await launchWithView(dir, study(dir, { clock: 'LOCKSTEP', duration: 25, domain: 212 }), 212, ['--view-for', '120']);
   const page = await open(url);
   const first = await until('a first step on the page', () => step(page));
   await until('the step counter to advance', async () => (await step(page)) > first);
   await until('the run\'s last state on the page', () => view(page, () => window.rthsView.status && window.rthsView.status.finished), 240000);
+  // The finished run, whole, with its slider and its verdict; after the coordinator has exited,
+  // launch serves it at the same address, and a reload shows it again.
+  await until('the whole run on the page', () => page.isVisible('#slider'), 10000);
+  assert.equal(await view(page, () => window.rthsView.mode), 'replay');
+  assert.equal(await page.textContent('#state'), 'completed');
+  await until('launch to keep the view', () => child.output.includes('rths launch: the view stays on the finished run of case lag_shift_14ms at ' + url), 60000);
+  await page.reload();
+  await until('the finished run after a reload', async () => (await view(page, () => window.rthsView.status && window.rthsView.status.finished)) && page.isVisible('#slider'), 30000);
+  assert.equal(await view(page, () => window.rthsView.mode), 'replay');
+  assert.equal(await page.textContent('#state'), 'completed');
+  await until('the whole record drawn', () => view(page, () => window.rthsView.drawn &&
+    window.rthsView.drawn.i1 === window.rthsView.cols.time_s.length), 10000);
+  await page.screenshot({ path: path.join(OUT, 'view_stays.png'), fullPage: true });
+  child.kill('SIGINT');  // Ctrl-C ends the kept view; launch exits with the run's status
   assert.equal(await child.done, 0, child.output);
   const exported = path.join(dir, 'record.csv');
   const ex = start(['export', path.join(dir, 'lag_shift_14ms.rthsrec'), '--csv', exported]);
@@ -291,7 +306,7 @@ function nodePid(domain, program) {
 test('real time over DDS: a HOLD after a node is killed is on the page within 1 s', { timeout: 300000 }, async t => {
   if (skip) return t.skip(skip);
   const dir = path.join(OUT, 'hold');
-  const { child, url, refused } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 213 }), 213);
+  const { child, url, refused } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 213 }), 213, ['--view-for', '0']);
   if (refused) return t.skip(refused);
   const page = await open(url);
   await until('step 3000 on the page', async () => (await step(page)) > 3000);
@@ -324,7 +339,7 @@ test('real time over DDS: a HOLD after a node is killed is on the page within 1 
 test('real time over DDS: the stop button stops the run, HOLD then STOP, "stopped from the view"', { timeout: 300000 }, async t => {
   if (skip) return t.skip(skip);
   const dir = path.join(OUT, 'stop');
-  const { child, url, log, refused } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 214 }), 214, ['--view-stop']);
+  const { child, url, log, refused } = await launchWithView(dir, study(dir, { clock: 'REAL_TIME', duration: 30, domain: 214 }), 214, ['--view-stop', '--view-for', '0']);
   if (refused) return t.skip(refused);
   // The stop's token: made by rths launch and printed in the address to open (loopback too).
   const token = (child.output.match(/live view of each case at \S+\?token=([0-9a-f]{32}) /) || [])[1];

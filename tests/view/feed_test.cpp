@@ -190,7 +190,8 @@ TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
 // default 0.001 tolerance and 3-step answer window): a run whose rows hold a streak of 5 overruns
 // is `failed` with the verdict as its reason even when its footer says ok (an older coordinator's
 // record); a footer naming deadline misses is `failed` too; rows within the rule stay
-// `completed`; a lockstep record is never judged on deadlines.
+// `completed`, their badge a warning naming the overruns (view/verdict.h); a lockstep record is
+// never judged on deadlines.
 TEST(Feed, ARealTimeRunThatFailedItsVerdictIsShownFailedNeverCompleted) {
   const auto finished = [](const std::string& clock, int streak, bool ok,
                            const std::string& status) {
@@ -212,16 +213,21 @@ TEST(Feed, ARealTimeRunThatFailedItsVerdictIsShownFailedNeverCompleted) {
   };
   auto s = finished("real_time", 5, true, "completed");
   EXPECT_EQ(s["state"], "failed");
+  EXPECT_EQ(s["verdict"]["badge"], "completed with deadline misses");
+  EXPECT_EQ(s["verdict"]["level"], "failed");
   EXPECT_EQ(s["reason"],
             "completed with deadline misses: 5 steps in a row overran, more than the fail-safe's "
             "window of 3 (5 overruns in 10000 steps, 0.050000 %): the integrator used stale "
             "forces that long, the response is not a real-time test's");
   s = finished("real_time", 3, true, "completed");
   EXPECT_EQ(s["state"], "completed") << s["reason"];
+  EXPECT_EQ(s["verdict"]["badge"], "completed with 3 overruns");
+  EXPECT_EQ(s["verdict"]["level"], "warning");
   s = finished("real_time", 0, false, "completed with deadline misses: the servo loop ...");
   EXPECT_EQ(s["state"], "failed");
   EXPECT_EQ(s["reason"], "completed with deadline misses: the servo loop ...");
   EXPECT_EQ(finished("lockstep", 5, true, "completed")["state"], "completed");
+  EXPECT_EQ(finished("lockstep", 5, true, "completed")["verdict"]["level"], "ok");
 }
 
 // What the page receives: the JSON as written (NaN, no prediction, becomes null).

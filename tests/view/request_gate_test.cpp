@@ -1,6 +1,8 @@
 // The view's front door on real loopback sockets: a request reaches a worker only once whole
-// (headers and body), idle connections beyond the limit are closed oldest first, a connection
-// that does not finish its request in time is closed, an oversized header block is refused.
+// (headers and body), idle connections beyond the limit are closed oldest first, one whose
+// request has begun is kept over idle ones, one address at its share displaces only its own, a
+// connection that does not finish its request in time is closed, an oversized header block is
+// refused.
 #include "view/request_gate.h"
 
 #include <arpa/inet.h>
@@ -32,8 +34,13 @@ class Loopback {
     getsockname(listener_, reinterpret_cast<sockaddr*>(&addr_), &length);
   }
   ~Loopback() { close(listener_); }
-  std::pair<int, int> pair() const {
+  // `from`: the client's own loopback address (all of 127.0.0.0/8 is this host's).
+  std::pair<int, int> pair(const char* from = "127.0.0.1") const {
     const int client = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    inet_pton(AF_INET, from, &local.sin_addr);
+    bind(client, reinterpret_cast<sockaddr*>(&local), sizeof local);
     connect(client, reinterpret_cast<const sockaddr*>(&addr_), sizeof addr_);
     return {client, accept(listener_, nullptr, nullptr)};
   }
@@ -118,6 +125,54 @@ TEST(RequestGate, ClosesTheOldestIdleConnectionsBeyondItsLimitAndServesAFreshOne
   EXPECT_EQ(read_until_closed(idle.front()), "");  // the oldest were closed
   for (const int fd : idle) close(fd);
   close(fresh);
+}
+
+// Admitted one after another at once, faster than the epoll thread may see the first's bytes:
+// the connection whose request has begun is displaced by none of them.
+TEST(RequestGate, KeepsAConnectionWhoseRequestHasBegunOverIdleOnes) {
+  Loopback net;
+  Served served;
+  GateOptions options;
+  options.max_waiting = 4;
+  RequestGate gate(options, served.serve());
+  const auto [browser, server] = net.pair();
+  send_text(browser, "GET / HTTP/1.1\r\nHo");  // the rest comes later
+  gate.admit(server);
+  std::vector<int> idle;
+  for (int i = 0; i < 40; ++i) {
+    const auto [client, accepted] = net.pair();
+    gate.admit(accepted);
+    idle.push_back(client);
+  }
+  EXPECT_EQ(gate.counters()["evicted_idle"], 40 + 1 - 4);
+  send_text(browser, "st: x\r\n\r\n");
+  ASSERT_TRUE(eventually([&] { return served.count() == 1; }));
+  EXPECT_EQ(served.requests[0], "GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+  for (const int fd : idle) close(fd);
+  close(browser);
+}
+
+TEST(RequestGate, OneAddressAtItsShareClosesOnlyItsOwnIdleConnections) {
+  Loopback net;
+  Served served;
+  GateOptions options;
+  options.max_waiting = 8;
+  options.max_per_address = 6;
+  RequestGate gate(options, served.serve());
+  const auto [other, other_server] = net.pair("127.0.0.2");  // another host, idle the longest
+  gate.admit(other_server);
+  std::vector<int> crowd;
+  for (int i = 0; i < 40; ++i) {
+    const auto [client, accepted] = net.pair("127.0.0.1");
+    gate.admit(accepted);
+    crowd.push_back(client);
+  }
+  EXPECT_EQ(gate.counters()["evicted_idle"], 40 - 6);
+  EXPECT_EQ(gate.counters()["waiting"], 1 + 6);  // the slot above the crowd's share stays free
+  send_text(other, "GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+  ASSERT_TRUE(eventually([&] { return served.count() == 1; }));
+  for (const int fd : crowd) close(fd);
+  close(other);
 }
 
 TEST(RequestGate, ClosesAConnectionThatDripsItsHeadersPastTheDeadline) {

@@ -1,15 +1,18 @@
 // The view's server on loopback: pages from a fixed list, refusals counted, the stop button's
-// rules, the event stream, and a client that never reads.
+// rules, the event stream, a client that never reads, and a fresh client admitted beside idle,
+// dripping and churning ones.
 #include "view/server.h"
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <deque>
 #include <thread>
 
 namespace rths::view {
@@ -274,6 +277,75 @@ TEST(ViewServer, IdleAndDrippingClientsLeaveThePageAndTheStopButtonReachable) {
   done = true;
   for (auto& d : drippers) d.join();
   for (const int fd : idle) close(fd);
+}
+
+// 200 idle connections kept open: each one the view closes (displaced, or past its header
+// deadline) is opened again at once, a storm of thousands of connections a second that never
+// lets up (a gate that displaced the oldest waiting connection, whatever it held, lost a fresh
+// client's request in it nearly every time). Runs until `done`.
+void hold_idle_crowd(int port, const std::atomic<bool>& done) {
+  std::vector<pollfd> crowd;
+  for (int i = 0; i < 200; ++i) crowd.push_back({connect_to(port), POLLIN, 0});
+  while (!done) {
+    poll(crowd.data(), crowd.size(), 50);
+    for (pollfd& c : crowd) {
+      if (c.fd >= 0 && c.revents == 0) continue;
+      close(c.fd);  // closed by the view (EOF, or a 408 before it)
+      c.fd = connect_to(port);
+      c.revents = 0;
+    }
+  }
+  for (const pollfd& c : crowd) close(c.fd);
+}
+
+// 15 new connections a second, each held 1 s: every other one never sends a byte, the rest send
+// a whole request (and never read the answer).
+void churn(int port, const std::atomic<bool>& done) {
+  std::deque<int> open;
+  const std::string request =
+      "GET /api/health HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n\r\n";
+  for (int k = 0; !done; ++k) {
+    const int fd = connect_to(port);
+    if (fd >= 0 && k % 2 == 1) (void)!send(fd, request.data(), request.size(), MSG_NOSIGNAL);
+    open.push_back(fd);
+    if (open.size() > 15) {
+      close(open.front());
+      open.pop_front();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000 / 15));
+  }
+  for (const int fd : open) close(fd);
+}
+
+TEST(ViewServer, AFreshClientIsServedBesideAChurningClientAndAnIdleCrowdThatReopens) {
+  Feed feed;
+  ViewServer server(feed, {});
+  std::atomic<bool> done{false};
+  std::thread crowd([&] { hold_idle_crowd(server.port(), done); });
+  std::thread churner([&] { churn(server.port(), done); });
+  std::this_thread::sleep_for(1s);  // the crowd in, the first idle ones displaced and reopened
+  int served = 0;
+  std::vector<double> waits_ms;
+  for (int attempt = 0; attempt < 20; ++attempt) {
+    const auto start = std::chrono::steady_clock::now();
+    httplib::Client fresh("127.0.0.1", server.port());
+    fresh.set_connection_timeout(2s);
+    fresh.set_read_timeout(2s);
+    const auto page = fresh.Get("/");
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    waits_ms.push_back(ms);
+    if (page && page->status == 200 && ms <= 2000) ++served;
+    std::this_thread::sleep_for(100ms);
+  }
+  const nlohmann::json c = server.counters()["connections"];
+  done = true;
+  crowd.join();
+  churner.join();
+  std::string waits;
+  for (const double ms : waits_ms) waits += std::to_string(static_cast<int>(ms)) + " ";
+  EXPECT_EQ(served, 20) << "ms per try: " << waits << "; connections " << c.dump();
+  EXPECT_GT(c["evicted_idle"].get<int>(), 200) << c.dump();  // the crowd did press on the door
 }
 
 TEST(ViewServer, ClientsLoopingOnTheSnapshotBuildItAtMostOncePerPeriod) {

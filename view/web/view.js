@@ -1,6 +1,7 @@
 // The rths view: reads /api/stream (server-sent events, each a JSON of what is new: header once,
 // samples, spectra, events, status) and draws it with uPlot. Live: the last WINDOW_S seconds.
-// Replay (a finished record): a time slider; every chart shows the record up to the slider.
+// Replay (a finished record, or a live run once it has finished): a time slider; every chart
+// shows the run up to the slider.
 // Units: displacement mm, force N, lag and lateness ms, time s, frequency Hz (log axis), TI mm^2.
 // The response (per floor or DOF) is drawn against the in-process prediction when the view was
 // given one (null where there is none), with their running difference.
@@ -267,21 +268,35 @@ function scheduleDraw() {
 document.addEventListener('visibilitychange', scheduleDraw);
 
 // The state badge's text: a HOLD stays on it after the run stopped (the footer often follows it
-// within an update).
+// within an update). A run that ended shows its verdict's words (status.verdict.badge, e.g.
+// "completed with deadline misses"), coloured by its level (ok, warning, failed).
 function isHeld(st) { return st.state === 'HOLD' || V.events.some(e => e.what.startsWith('HOLD')); }
-function stateText(st) { return isHeld(st) && st.state !== 'HOLD' ? 'HOLD · ' + st.state : st.state; }
+function badgeText(st) { return st.verdict ? st.verdict.badge : st.state; }
+function stateText(st) { return isHeld(st) && st.state !== 'HOLD' ? 'HOLD · ' + badgeText(st) : badgeText(st); }
+function badgeClass(st) { return isHeld(st) ? 'HOLD' : st.verdict ? st.verdict.level : st.state; }
+
+// Beneath the badge: the reason of a HOLD or a stop, or the verdict of a run that ended (its
+// text and failed node), coloured as it; below that, for a finished record, the deadline
+// diagnosis.
+function reasonText(st) {
+  const node = st.node ? ' [' + st.node + ']' : '';
+  if (!st.verdict) return st.state === 'completed' ? '' : (st.reason || '') + node;
+  return st.verdict.text ? st.verdict.text + node : '';
+}
 
 // Writes the status line: at each draw, and at once when the state changes (see onUpdate).
 function showStatus(st) {
   const held = isHeld(st), state = $('state');
   state.textContent = V.shownState = stateText(st);
-  state.className = 'state ' + (held ? 'HOLD' : st.state);
+  state.className = 'state ' + badgeClass(st);
   if (held && V.holdSeenMs === null) V.holdSeenMs = Date.now();
   $('step').textContent = st.latest_step < 0 ? '–' : st.latest_step;
   $('time').textContent = st.latest_time_s.toFixed(3);
   $('overruns').textContent = st.overruns;
   $('late').textContent = st.late_feedback;
-  $('reason').textContent = st.state === 'completed' ? '' : (st.reason ? st.reason : '') + (st.node ? ' [' + st.node + ']' : '');
+  $('reason').textContent = reasonText(st);
+  $('reason').className = st.verdict ? st.verdict.level : '';
+  $('diagnosis').textContent = st.verdict ? st.verdict.diagnosis || '' : '';
   if (V.header) showPrediction(st);
   const behind = $('behind');
   if (V.mode === 'replay') { $('behind-box').hidden = true; return; }
@@ -315,7 +330,11 @@ function onUpdate(u) {
   V.status = u.status;
   if (stateText(u.status) !== V.shownState || u.status.finished) showStatus(u.status);
   if (u.events && u.events.length) showEvents();
-  if (u.status.finished && V.source) { V.source.close(); V.source = null; if (V.mode === 'replay') setupReplay(); }
+  // A finished run, live or replayed, is shown whole, with the slider; there is nothing to stop.
+  if (u.status.finished && V.source) {
+    V.source.close(); V.source = null; V.mode = 'replay'; setupReplay();
+    $('stop').disabled = true;
+  }
   scheduleDraw();
 }
 

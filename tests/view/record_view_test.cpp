@@ -1,0 +1,161 @@
+// A finished record served as the page: the whole run in replay mode with its verdict (and, for a
+// real-time record that overran, the deadline diagnosis `rths launch` prints), and the address
+// handed over from a view that has just stopped, never shared with one still listening.
+#include "view/record_view.h"
+
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <httplib.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <thread>
+
+#include "tests/runtime/test_support.h"
+#include "tests/support/in_process_run.h"
+
+namespace rths::view {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::filesystem::path record_path(const std::string& name) {
+  return std::filesystem::temp_directory_path() /
+         ("rths_record_view_" + name + "_" + std::to_string(::getpid()) + ".rthsrec");
+}
+
+// The paper frame's lag_shift_14ms run in lockstep, recorded; its contents.
+runtime::RecordContents recorded_run(const std::string& name) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "record-view-" + name;
+  options.case_name = "lag_shift_14ms";
+  options.record = record_path(name);
+  const auto outcome = coordinator::run_in_process(prepared, options);
+  EXPECT_TRUE(outcome.ok) << outcome.status;
+  runtime::RecordContents contents = runtime::read_record(options.record);
+  std::filesystem::remove(options.record);
+  return contents;
+}
+
+// `entries` framed as the writer frames them, into the file `path`.
+void write_record(const std::vector<runtime::RecordEntry>& entries,
+                  const std::filesystem::path& path) {
+  std::string bytes;
+  for (const auto& entry : entries) runtime::append_record_frame(entry, bytes);
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+nlohmann::json snapshot(const std::string& url) {
+  httplib::Client client(url.substr(0, url.size() - 1));  // http://HOST:PORT
+  client.set_read_timeout(10s);
+  const auto answer = client.Get("/api/snapshot");
+  EXPECT_TRUE(answer);
+  return answer ? nlohmann::json::parse(answer->body) : nlohmann::json::object();
+}
+
+TEST(RecordView, ServesTheWholeFinishedRunWithItsVerdict) {
+  const runtime::RecordContents contents = recorded_run("lockstep");
+  const auto path = record_path("lockstep_served");
+  write_record(contents.entries, path);
+  RecordView view(path, {"127.0.0.1", 0});
+  const auto j = snapshot(view.url());
+  std::filesystem::remove(path);
+  EXPECT_EQ(j["mode"], "replay");
+  EXPECT_TRUE(j["status"]["finished"]);
+  EXPECT_EQ(j["status"]["steps"], contents.steps().size());
+  EXPECT_EQ(view.steps(), contents.steps().size());
+  EXPECT_EQ(j["status"]["verdict"]["badge"], "completed");
+  EXPECT_EQ(j["status"]["verdict"]["level"], "ok");
+  EXPECT_EQ(j["status"]["verdict"]["diagnosis"], "");
+  EXPECT_FALSE(view.truncated());
+}
+
+// The same run as a real-time record whose rows overran 7 times (2 in a row at most) under a
+// tolerance of 5 %: within the verdict, so a warning naming them, with the diagnosis beneath.
+TEST(RecordView, ARealTimeRecordThatOverranShowsTheWarningAndTheDiagnosis) {
+  runtime::RecordContents contents = recorded_run("overran");
+  auto& header = *contents.entries.front().mutable_header();
+  header.set_clock("real_time");
+  header.mutable_study()->mutable_deployment()->set_clock(config::Deployment::REAL_TIME);
+  header.mutable_study()->mutable_deployment()->set_max_overrun_fraction(0.05);
+  int overran = 0;
+  for (auto& entry : contents.entries) {
+    if (!entry.has_step()) continue;
+    const std::int64_t k = entry.step().step();
+    entry.mutable_step()->set_step_wall(0.2e-3);
+    if (k == 100 || k == 101 || (k >= 300 && k < 800 && k % 100 == 0)) {
+      entry.mutable_step()->set_overrun(true);
+      entry.mutable_step()->set_lateness(0.5e-3);
+      ++overran;
+    }
+  }
+  ASSERT_EQ(overran, 7);
+  const auto path = record_path("overran_served");
+  write_record(contents.entries, path);
+  RecordView view(path, {"127.0.0.1", 0});
+  const auto verdict = snapshot(view.url())["status"]["verdict"];
+  std::filesystem::remove(path);
+  EXPECT_EQ(verdict["level"], "warning");
+  EXPECT_EQ(verdict["badge"], "completed with 7 overruns");
+  const std::string diagnosis = verdict["diagnosis"];
+  EXPECT_EQ(diagnosis.rfind("deadline misses: 7 of ", 0), 0u) << diagnosis;
+  EXPECT_NE(diagnosis.find("the record: usable as recorded"), std::string::npos) << diagnosis;
+}
+
+TEST(RecordView, ARecordThatCannotBeReadOrHasNoHeaderIsRefused) {
+  EXPECT_THROW(RecordView(record_path("missing"), {"127.0.0.1", 0}), std::invalid_argument);
+  const auto path = record_path("no_header");
+  runtime::RecordEntry step;
+  step.mutable_step()->set_step(0);
+  write_record({step}, path);
+  EXPECT_THROW(RecordView(path, {"127.0.0.1", 0}), std::invalid_argument);
+  std::filesystem::remove(path);
+}
+
+// Whether a socket with SO_REUSEPORT can bind 127.0.0.1:`port` (closed again at once).
+bool binds_beside(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  int yes = 1;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &yes, sizeof yes);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const bool bound = bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+  close(fd);
+  return bound;
+}
+
+// A live view on a port: a second server is refused it (never shared: SO_REUSEPORT is off);
+// once the first stops, after a page was served (its connection in TIME_WAIT on that port), the
+// record's view takes the port within its bind_for.
+TEST(RecordView, TakesOverThePortOfAViewThatHasJustStoppedButNeverSharesALiveOne) {
+  const runtime::RecordContents contents = recorded_run("handover");
+  const auto path = record_path("handover_served");
+  write_record(contents.entries, path);
+  Feed live_feed;
+  auto live = std::make_unique<ViewServer>(live_feed, ServerOptions{});
+  const ListenAddress address{"127.0.0.1", live->port()};
+  ASSERT_EQ(httplib::Client(live->url().substr(0, live->url().size() - 1)).Get("/")->status, 200);
+  // A socket asking for SO_REUSEPORT binds a port only when its listener asked for it too.
+  ASSERT_FALSE(binds_beside(address.port)) << "the live view listens with SO_REUSEPORT";
+  EXPECT_THROW(RecordView(path, address), std::runtime_error);
+  std::thread stop_live([&] {
+    std::this_thread::sleep_for(300ms);
+    live.reset();
+  });
+  const auto start = std::chrono::steady_clock::now();
+  RecordView view(path, address, 5s);
+  const auto waited = std::chrono::steady_clock::now() - start;
+  stop_live.join();
+  EXPECT_GE(waited, 250ms);
+  EXPECT_LT(waited, 5s);
+  EXPECT_EQ(snapshot(view.url())["mode"], "replay");
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace rths::view

@@ -1,0 +1,54 @@
+#pragma once
+// A finished (or cut-short) run record served as the view's page. The record is read whole
+// (runtime::read_record keeps every complete entry of a cut record and says where it was cut),
+// described (view/context.h: the critical delay, the in-process prediction, the deadline
+// diagnosis) and fed through the same view::Feed a running coordinator feeds, then served in
+// "replay" mode: the page shows the whole run with a time slider, its badge the run's verdict.
+//   `rths view RECORD`           serves one until Ctrl-C or --for;
+//   `rths launch ... --view`     serves the last case's once its coordinator has exited, on the
+//                                address that coordinator's live view had (bind_for covers the
+//                                moment the port may still be held), until Ctrl-C or --view-for,
+//                                with how it judged the case on the badge (JudgedCase).
+// No stop button: the run is over.
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "view/feed.h"
+#include "view/server.h"
+#include "view/verdict.h"
+
+namespace rths::view {
+
+class RecordView {
+ public:
+  // Throws std::invalid_argument for a record that cannot be read or holds no run header,
+  // std::runtime_error when `address` cannot be listened on within `bind_for`.
+  // `judged`: how `rths launch` judged the case, for its badge (view/verdict.h).
+  RecordView(const std::filesystem::path& record, const ListenAddress& address,
+             std::chrono::milliseconds bind_for = std::chrono::milliseconds(0),
+             const std::optional<JudgedCase>& judged = std::nullopt);
+  ~RecordView();
+  RecordView(const RecordView&) = delete;
+  RecordView& operator=(const RecordView&) = delete;
+
+  std::string url() const { return server_->url(); }
+  std::uint64_t steps() const { return feed_.steps_seen(); }
+  bool truncated() const { return truncated_; }
+  // Serves until `until` (nothing: for ever) or until stop_requested() says so (polled every
+  // 50 ms), then stops listening.
+  void serve_until(std::optional<std::chrono::steady_clock::time_point> until,
+                   const std::function<bool()>& stop_requested);
+
+ private:
+  Feed feed_;  // before server_: it outlives the server that reads it
+  std::unique_ptr<ViewServer> server_;
+  bool truncated_ = false;
+};
+
+}  // namespace rths::view
