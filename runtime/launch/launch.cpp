@@ -200,7 +200,7 @@ void reap_nodes(std::vector<util::ChildProcess>& nodes, LaunchResult& result) {
 LaunchResult launch_run(const LaunchOptions& options) {
   const config::Study study = core::load_study(options.config);
   const core::PreparedStudy prepared = core::prepare_study(study, options.config.parent_path());
-  check_deployment(prepared);  // every case, as `rths run` checks them
+  check_deployment(prepared);  // as `rths run` checks it; then the case's own plan below
   const config::Case& study_case = core::find_case(
       study, options.case_name.empty() ? study.deployment().case_name() : options.case_name);
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);

@@ -180,16 +180,11 @@ config::Deployment with_default_nodes(config::Deployment deployment,
 }
 
 void check_deployment(const core::PreparedStudy& prepared) {
-  for (const config::Case& study_case : prepared.config.cases()) {
-    try {
-      const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-      const DeploymentPlan plan =
-          make_plan(setup, with_default_nodes(prepared.config.deployment(), setup));
-      check_node_stages(plan, setup.dt, prepared.base_dir);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("case '" + study_case.name() + "': " + e.what());
-    }
-  }
+  const core::HybridSetup setup =
+      core::setup_for_case(prepared, core::reference_case(prepared.config));
+  const DeploymentPlan plan =
+      make_plan(setup, with_default_nodes(prepared.config.deployment(), setup));
+  check_node_stages(plan, setup.dt, prepared.base_dir);
 }
 
 core::HybridSetup setup_without_motion(const config::Study& study,

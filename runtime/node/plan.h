@@ -54,10 +54,12 @@ void check_node_stages(const DeploymentPlan& plan, double dt,
 // storey has a numerical part), node 2 an actuator emulator (if any has an experimental part).
 config::Deployment with_default_nodes(config::Deployment deployment, const core::HybridSetup& base);
 
-// The deployment of every case of the study planned as `launch` plans its case (the default
-// nodes, make_plan, check_node_stages). Every command that reads a study calls it (`rths run`,
-// `launch`, `sites`, the coordinator), so they refuse the same configs with the same message.
-// Throws std::invalid_argument naming the case, the node and the field.
+// The study's deployment planned for its reference case (the default nodes, make_plan,
+// check_node_stages), as `launch` plans it for a case: the nodes, their links, windows and
+// compensation. Every command that reads a study calls it (`rths run`, `launch`, `sites`), so
+// they refuse the same deployments with the same message. Other cases may be meant for
+// in-process runs only (a case's own compensator where a node carries one): `launch` plans the
+// case it runs again. Throws std::invalid_argument naming the node and the field.
 void check_deployment(const core::PreparedStudy& prepared);
 
 // The setup of one case built without reading the motion (a node on another host may not have

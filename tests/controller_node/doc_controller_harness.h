@@ -126,6 +126,7 @@ inline void expect_counters_and_padding(const std::vector<test::ReceivedFrame>& 
 // then; overruns are the platform's and are judged by rt-check, not here. The answer window
 // (20 ms) is the docs' own example and far above such stalls' usual length.
 inline constexpr int kWatchdogMs = 20;
+inline constexpr int kReplyTimeoutMs = 8;  // the real-time tests' controller link
 inline std::string real_time_deployment(const std::string& extra = "") {
   return "clock: REAL_TIME answer_window_ms: 20 command_watchdog_ms: " +
          std::to_string(kWatchdogMs) + " max_overrun_fraction: -1 " + extra;

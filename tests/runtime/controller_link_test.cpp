@@ -93,8 +93,8 @@ TEST(ControllerLink, AReplyTimeoutPastTheAnswerWindowIsRefusedAndTheDefaultsReso
   EXPECT_DOUBLE_EQ(controller_hold_time(link), 0.5);
 }
 
-// The one check every command runs: a case's plan refuses the block, naming case and node.
-TEST(ControllerLink, CheckDeploymentNamesTheCaseAndTheNode) {
+// The one check every command runs: the deployment's plan refuses the block, naming the node.
+TEST(ControllerLink, CheckDeploymentNamesTheNodeAndTheField) {
   config::Study study = shipped_controller_study();
   const std::string configs = std::string(RTHS_SOURCE_DIR) + "/configs";
   const core::PreparedStudy good = core::prepare_study(study, configs);
@@ -106,8 +106,7 @@ TEST(ControllerLink, CheckDeploymentNamesTheCaseAndTheNode) {
     FAIL() << "a peer port of 70000 passed";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()),
-              "case '" + study.cases(0).name() +
-                  "': deployment.nodes[id 2]: controller.peer_port 70000 is not in [1, 65535]");
+              "deployment.nodes[id 2]: controller.peer_port 70000 is not in [1, 65535]");
   }
 }
 
