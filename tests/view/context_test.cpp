@@ -8,6 +8,7 @@
 #include "runtime/node/plan.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
+#include "tests/view/recorded_run.h"
 
 namespace rths::view {
 namespace {
@@ -69,15 +70,7 @@ TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
 // The paper frame's lag_shift_14ms run, recorded, read back and removed from disk.
 runtime::RecordContents recorded_paper_frame(const core::PreparedStudy& prepared,
                                              const std::string& name) {
-  coordinator::CoordinatorOptions options;
-  options.run_id = "view-record-" + name;
-  options.case_name = "lag_shift_14ms";
-  options.record = record_path(name);
-  const auto outcome = coordinator::run_in_process(prepared, options);
-  EXPECT_TRUE(outcome.ok) << outcome.status;
-  runtime::RecordContents contents = runtime::read_record(options.record);
-  std::filesystem::remove(options.record);
-  return contents;
+  return test::recorded_paper_frame(prepared, "view-record-" + name, record_path(name));
 }
 
 // The page's data after describing the record, its header's motion file renamed away.

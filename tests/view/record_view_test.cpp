@@ -15,6 +15,7 @@
 
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
+#include "tests/view/recorded_run.h"
 
 namespace rths::view {
 namespace {
@@ -28,16 +29,8 @@ std::filesystem::path record_path(const std::string& name) {
 
 // The paper frame's lag_shift_14ms run in lockstep, recorded; its contents.
 runtime::RecordContents recorded_run(const std::string& name) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
-  coordinator::CoordinatorOptions options;
-  options.run_id = "record-view-" + name;
-  options.case_name = "lag_shift_14ms";
-  options.record = record_path(name);
-  const auto outcome = coordinator::run_in_process(prepared, options);
-  EXPECT_TRUE(outcome.ok) << outcome.status;
-  runtime::RecordContents contents = runtime::read_record(options.record);
-  std::filesystem::remove(options.record);
-  return contents;
+  return test::recorded_paper_frame(test::prepare(test::paper_frame_study(1.0, "")),
+                                    "record-view-" + name, record_path(name));
 }
 
 // `entries` framed as the writer frames them, into the file `path`.
