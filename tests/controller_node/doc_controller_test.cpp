@@ -30,6 +30,7 @@
 #include "../runtime/test_support.h"
 #include "doc_controller_harness.h"
 #include "tests/support/platform_gate.h"
+#include "tests/support/real_time_run.h"
 #include "tests/support/run_command_line.h"
 
 namespace rths {
@@ -163,25 +164,16 @@ TEST_F(DocControllerTest, RthsLaunchAcceptsALockstepRunThroughF32Frames) {
 
 // A real-time run that kept going to its end: completed, or (on a shared machine, not under
 // timing targets) failed only by the one real-time verdict for this machine's own stalls. Never
-// a HOLD, a node's fault or anything the link did, unless the machine itself stopped the loop:
-// a command watchdog that fired, or a link that lost frames or had them answered late (none
-// rejected), while the witness saw a stall of at least half that window (the watchdog; the
-// reply timeout) failed rightly. The witness sleeps most of the time, so the scheduler favours
-// it and it sees less of a stall than a busy loop does. The test is then skipped, naming both.
+// a HOLD, a node's fault or anything the link did, unless the machine itself stopped the loop
+// (tests/support/real_time_run.h): the test is then skipped, naming both.
 void expect_ran_to_the_end(const test::LaunchedRun& run, const test::MeasuredPlatform& machine) {
   ASSERT_NE(run.record.footer(), nullptr) << test::read_file(run.launch.coordinator_log);
   const std::string& status = run.record.footer()->status();
   if (run.launch.coordinator_exit == 0 && run.record.footer()->ok()) return;
   ASSERT_FALSE(timing_targets()) << status;
   if (status.rfind("completed with deadline misses", 0) == 0) return;
-  const bool watchdog = status.find("command watchdog") != std::string::npos;
-  const bool link_timing = status.find("controller link was not clean") != std::string::npos &&
-                           status.find(", 0 rejected") != std::string::npos;
-  const double window_ms = watchdog ? kWatchdogMs : link_timing ? kReplyTimeoutMs : 0.0;
-  if (window_ms > 0 && machine.max >= 0.5 * window_ms * 1e-3)
-    GTEST_SKIP() << "this machine stalled during the run (" << machine.text << ") for at least "
-                 << "half the " << window_ms << " ms window that fired, which failed the run "
-                 << "rightly: " << status;
+  if (const auto why = test::machine_stalled(status, *run.record.header(), machine))
+    GTEST_SKIP() << *why;
   FAIL() << status << "\nthe machine meanwhile: " << machine.text;
 }
 

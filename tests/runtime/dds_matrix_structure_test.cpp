@@ -5,6 +5,7 @@
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/real_time_run.h"
 
 namespace rths {
 namespace {
@@ -65,8 +66,9 @@ TEST_F(DdsMatrixStructure, RealTimeRunIsPacedAndCompletes) {
       frame20_study(1.0,
                     "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
                     "command_watchdog_periods: 30 }");
-  const auto run = test::launch("matrix_real_time", text, "reference", 194);
-  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto witnessed = test::launch_witnessed("matrix_real_time", text, "reference", 194);
+  RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
+  const auto& run = witnessed.run;
   const auto* footer = run.record.footer();
   ASSERT_NE(footer, nullptr);
   EXPECT_TRUE(footer->ok());

@@ -6,6 +6,7 @@
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/real_time_run.h"
 
 namespace rths {
 namespace {
@@ -47,8 +48,9 @@ TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
       "servo { rate: 4000 } deployment { clock: REAL_TIME max_overrun_fraction: -1 "
       "max_missed_answers: 30 command_watchdog_periods: 30 min_answer_fraction: -1 }");
   // The streaming's mechanics are judged here, not whether this machine keeps a 4 kHz servo.
-  const auto run = test::launch("servo_real_time", text, "reference", 52);
-  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto witnessed = test::launch_witnessed("servo_real_time", text, "reference", 52);
+  RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
+  const auto& run = witnessed.run;
   const auto* footer = run.record.footer();
   ASSERT_NE(footer, nullptr);
   const double steps = static_cast<double>(footer->counters().steps());
@@ -136,8 +138,9 @@ TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
       1.0,
       "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
       "command_watchdog_periods: 30 }");
-  const auto run = test::launch("real_time", text, "reference", 16);
-  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto witnessed = test::launch_witnessed("real_time", text, "reference", 16);
+  RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
+  const auto& run = witnessed.run;
   const auto* footer = run.record.footer();
   ASSERT_NE(footer, nullptr);
   EXPECT_GE(footer->wall_seconds(), 0.99);  // 1000 steps of 1 ms cannot finish sooner
@@ -162,8 +165,9 @@ TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
       "command_watchdog_periods: 30 nodes { id: 1 kind: SUBSTRUCTURE } "
       "nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { one_way_delay: 0.003 } "
       "send_lag { one_way_delay: 0.003 } } }");
-  const auto run = test::launch("slow_link", text, "reference", 10);
-  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto witnessed = test::launch_witnessed("slow_link", text, "reference", 10);
+  RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
+  const auto& run = witnessed.run;
   std::vector<double> behind;
   for (const runtime::StepRecord* s : run.record.steps())
     for (const runtime::LinkSample& link : s->links())
@@ -187,8 +191,9 @@ TEST_F(DdsRun, RealTimeStopsWaitingForAnswersThatCannotComeWithinTheWait) {
       // run whose loop overran longer than its window (a stall of this shared machine).
       "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 100 "
       "command_watchdog_periods: 100 feedback_wait_fraction: 0.02 }");
-  const auto run = test::launch("answer_wait", text, "reference", 17);
-  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const auto witnessed = test::launch_witnessed("answer_wait", text, "reference", 17);
+  RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
+  const auto& run = witnessed.run;
   std::vector<std::string> stopped;
   for (const runtime::RecordEntry& e : run.record.entries)
     if (e.has_event() && e.event().what().find("not waiting for the answers of") == 0) {

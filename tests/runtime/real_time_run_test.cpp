@@ -1,0 +1,83 @@
+// The rule by which the suite puts a real-time run's failure down to this machine
+// (tests/support/real_time_run.h): only a window a stall can pass, only beside a stall of at
+// least half of it.
+#include "tests/support/real_time_run.h"
+
+#include <gtest/gtest.h>
+
+namespace rths {
+namespace {
+
+runtime::RunHeader header(double dt, const std::string& controller_block = "") {
+  runtime::RunHeader h;
+  h.set_dt(dt);
+  config::Deployment* d = h.mutable_study()->mutable_deployment();
+  d->set_clock(config::Deployment::REAL_TIME);
+  d->set_answer_window_ms(20);
+  if (!controller_block.empty()) {
+    config::NodeSpec* node = d->add_nodes();
+    node->set_id(2);
+    node->set_kind(config::NodeSpec::CONTROLLER);
+    node->mutable_controller()->set_reply_timeout_ms(8);
+  }
+  return h;
+}
+
+test::MeasuredPlatform stalled_for(double seconds) {
+  test::MeasuredPlatform m;
+  m.max = seconds;
+  m.text = "max " + std::to_string(seconds * 1e3) + " ms";
+  return m;
+}
+
+TEST(StallRule, EachWindowAStallCanPassIsReadFromItsStatus) {
+  const runtime::RunHeader h = header(1.0 / 1024, "controller");
+  EXPECT_NEAR(*test::stall_window(
+                  "node 2: no answer for 21 consecutive steps (steps 1727 to 1747; its newest "
+                  "answers step 1726)",
+                  h),
+              21.0 / 1024, 1e-12);
+  EXPECT_NEAR(*test::stall_window("node 2: its newest answer is to step 9 at step 40: 31 steps "
+                                  "(30.273438 ms) old, beyond its answer window of 20 steps "
+                                  "(19.531250 ms); an answer that old is never applied",
+                                  h),
+              0.01953125, 1e-12);
+  EXPECT_NEAR(*test::stall_window("node 2 held the rig: command watchdog: no fresh command for "
+                                  "21.000000 ms (limit 20.500000 ms)",
+                                  h),
+              0.0205, 1e-12);
+  EXPECT_NEAR(*test::stall_window("node 2's controller link was not clean: 9 frames lost, 15 "
+                                  "answered late, 0 rejected",
+                                  h),
+              0.008, 1e-12);
+}
+
+TEST(StallRule, FailuresNoStallCausesAreNeverTheMachines) {
+  const runtime::RunHeader h = header(0.001, "controller");
+  for (const char* status :
+       {"node 2's controller link was not clean: 0 frames lost, 0 answered late, 3 rejected",
+        "node 2: the run's state left its limits: |u| 0.3 m > 0.2 m", "diverged at step 40",
+        "start-up timed out after 10 s: node 2"}) {
+    EXPECT_FALSE(test::stall_window(status, h).has_value()) << status;
+    EXPECT_FALSE(test::machine_stalled(status, h, stalled_for(10.0)).has_value()) << status;
+  }
+  // Without a controller node there is no reply timeout to have passed.
+  EXPECT_FALSE(test::stall_window("node 2's controller link was not clean: 1 frames lost, 0 "
+                                  "answered late, 0 rejected",
+                                  header(0.001))
+                   .has_value());
+}
+
+TEST(StallRule, AWindowsFailureIsTheMachinesOnlyBesideAStallOfHalfIt) {
+  const runtime::RunHeader h = header(0.001);
+  const std::string status = "node 2: no answer for 30 consecutive steps (steps 1 to 30)";
+  EXPECT_FALSE(test::machine_stalled(status, h, stalled_for(0.0149)).has_value());
+  const auto why = test::machine_stalled(status, h, stalled_for(0.015));
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("max 15.0"), std::string::npos) << *why;
+  EXPECT_NE(why->find("30.0 ms window"), std::string::npos) << *why;
+  EXPECT_NE(why->find(status), std::string::npos) << *why;
+}
+
+}  // namespace
+}  // namespace rths

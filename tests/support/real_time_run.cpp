@@ -1,0 +1,81 @@
+#include "tests/support/real_time_run.h"
+
+#include <cstdio>
+#include <regex>
+
+#include "runtime/node/controller_link.h"
+#include "runtime/node/plan.h"
+
+namespace rths::test {
+namespace {
+
+std::optional<double> number_after(const std::string& status, const std::regex& pattern) {
+  std::smatch match;
+  if (!std::regex_search(status, match, pattern)) return std::nullopt;
+  return std::stod(match[1].str());
+}
+
+// The shortest reply timeout of the study's controller links (s), nullopt without one.
+std::optional<double> reply_timeout(const runtime::RunHeader& header) {
+  const config::Deployment& deployment = header.study().deployment();
+  std::optional<double> shortest;
+  for (const config::NodeSpec& node : deployment.nodes())
+    if (node.kind() == config::NodeSpec::CONTROLLER) {
+      const double s = runtime::controller_reply_timeout(
+          node.controller(), runtime::answer_window(deployment, header.dt()));
+      shortest = shortest ? std::min(*shortest, s) : s;
+    }
+  return shortest;
+}
+
+}  // namespace
+
+std::optional<double> stall_window(const std::string& status, const runtime::RunHeader& header) {
+  static const std::regex missed("no answer for ([0-9]+) consecutive steps");
+  static const std::regex answer_window("beyond its answer window of [0-9]+ steps \\(([0-9.]+) ms");
+  static const std::regex watchdog("command watchdog: .*\\(limit ([0-9.]+) ms\\)");
+  if (auto steps = number_after(status, missed)) return *steps * header.dt();
+  if (auto ms = number_after(status, answer_window)) return *ms * 1e-3;
+  if (auto ms = number_after(status, watchdog)) return *ms * 1e-3;
+  if (status.find("controller link was not clean") != std::string::npos &&
+      status.find(", 0 rejected") != std::string::npos)
+    return reply_timeout(header);
+  return std::nullopt;
+}
+
+std::optional<std::string> machine_stalled(const std::string& status,
+                                           const runtime::RunHeader& header,
+                                           const MeasuredPlatform& machine) {
+  const std::optional<double> window = stall_window(status, header);
+  if (!window || machine.max < 0.5 * *window) return std::nullopt;
+  char figures[96];
+  std::snprintf(figures, sizeof figures, "half the %.1f ms window that passed", *window * 1e3);
+  return "this machine stalled during the run (" + machine.text + ") for at least " + figures +
+         ", which failed the run rightly: " + status;
+}
+
+WitnessedRun launch_witnessed(const std::string& name, const std::string& text,
+                              const std::string& case_name, int domain, double timeout) {
+  StallWitness witness;
+  WitnessedRun out;
+  out.run = launch(name, text, case_name, domain, timeout);
+  out.machine = witness.finish();
+  return out;
+}
+
+RealTimeVerdict real_time_verdict(const WitnessedRun& witnessed) {
+  const LaunchedRun& run = witnessed.run;
+  const runtime::RunFooter* footer = run.record.footer();
+  if (run.launch.coordinator_exit == 0 && footer != nullptr && footer->ok())
+    return {RealTimeVerdict::kCompleted, ""};
+  const std::string status = footer != nullptr ? footer->status() : "no footer in the record";
+  if (run.record.header() != nullptr)
+    if (auto why = machine_stalled(status, *run.record.header(), witnessed.machine))
+      return {RealTimeVerdict::kMachineStalled, *why};
+  return {RealTimeVerdict::kFailed,
+          "coordinator exit " + std::to_string(run.launch.coordinator_exit) + ": " + status +
+              "\nthe machine meanwhile: " + witnessed.machine.text + "\n" +
+              read_file(run.launch.coordinator_log)};
+}
+
+}  // namespace rths::test

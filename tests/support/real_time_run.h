@@ -1,0 +1,59 @@
+#pragma once
+// A real-time run of the suite launched beside a StallWitness (platform_gate.h), and the one rule
+// by which its failure is put down to this machine rather than to the code.
+//
+// A real-time run fails rightly when one of its windows passes: the answer window ("no answer for
+// N consecutive steps" of dt; "... beyond its answer window of N steps (X ms)"), a node's command
+// watchdog ("... (limit X ms)"), a controller link's reply timeout (frames lost or answered late,
+// none rejected). A stall of the machine passes them as surely as a fault of the code does. The
+// failure is the machine's when the witness saw a stall of at least half that window: the witness
+// sleeps most of the time, so the scheduler favours it and it sees less of a stall than a busy
+// loop does. Any other failure, or one beside a quiet machine, is the code's.
+//
+//   stall_window(status, header) -> s: the window `status` names that a stall can pass, the reply
+//     timeout read from the study's controller nodes; nullopt for any other status.
+//   machine_stalled(status, header, machine) -> why the failure is the machine's, or nullopt.
+//   launch_witnessed(name, text, case, domain, timeout) -> {run, machine}: test::launch beside a
+//     witness.
+//   real_time_verdict(witnessed) -> {kCompleted | kMachineStalled | kFailed, why (status, the
+//     machine's figures and the coordinator's log)}.
+//   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed): returns from the test on a failure, skipping
+//     it (naming both) when the machine stalled, failing it otherwise.
+
+#include <optional>
+#include <string>
+
+#include "rths/proto/runtime.pb.h"
+#include "tests/runtime/test_support.h"
+#include "tests/support/platform_gate.h"
+
+namespace rths::test {
+
+std::optional<double> stall_window(const std::string& status, const runtime::RunHeader& header);
+std::optional<std::string> machine_stalled(const std::string& status,
+                                           const runtime::RunHeader& header,
+                                           const MeasuredPlatform& machine);
+
+struct WitnessedRun {
+  LaunchedRun run;
+  MeasuredPlatform machine;
+};
+WitnessedRun launch_witnessed(const std::string& name, const std::string& text,
+                              const std::string& case_name, int domain, double timeout = 60);
+
+struct RealTimeVerdict {
+  enum Kind { kCompleted, kMachineStalled, kFailed } kind = kFailed;
+  std::string why;
+};
+RealTimeVerdict real_time_verdict(const WitnessedRun& witnessed);
+
+}  // namespace rths::test
+
+#define RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed)                                             \
+  do {                                                                                             \
+    const ::rths::test::RealTimeVerdict rths_verdict_ =                                            \
+        ::rths::test::real_time_verdict(witnessed);                                                \
+    if (rths_verdict_.kind == ::rths::test::RealTimeVerdict::kMachineStalled)                      \
+      GTEST_SKIP() << rths_verdict_.why;                                                           \
+    ASSERT_EQ(rths_verdict_.kind, ::rths::test::RealTimeVerdict::kCompleted) << rths_verdict_.why; \
+  } while (false)
