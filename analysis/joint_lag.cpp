@@ -85,15 +85,15 @@ std::optional<double> critical_round_trip_at(const JointLagStudy& config,
 void write_csv(const std::vector<JointLagPoint>& points, const std::filesystem::path& file) {
   std::ofstream out(file);
   out << "network_round_trip_s,actuator_lag_s,injected_total_s,measured_total_s,"
-         "measured_round_trip_s,measured_actuator_lag_s,nrmse_pct,paper_eq2,peak_error_m,diverged,"
-         "past_stability_boundary\n";
+         "measured_round_trip_s,measured_actuator_lag_s,peak_error_pct,rms_error_pct,"
+         "peak_error_m,nrmse_pct,paper_eq2,diverged,past_stability_boundary\n";
   out.precision(10);
   for (const auto& p : points) {
     out << p.network_round_trip << ',' << p.actuator_lag << ','
         << p.network_round_trip + p.actuator_lag << ',' << p.measured_total_lag << ','
-        << p.measured_round_trip << ',' << p.measured_actuator_lag << ',' << 100.0 * p.nrmse << ','
-        << p.paper_eq2 << ',' << p.peak_error << ',' << (p.diverged ? 1 : 0) << ','
-        << (p.past_boundary ? 1 : 0) << "\n";
+        << p.measured_round_trip << ',' << p.measured_actuator_lag << ',' << p.peak_error_pct << ','
+        << p.rms_error_pct << ',' << p.peak_error << ',' << 100.0 * p.nrmse << ',' << p.paper_eq2
+        << ',' << (p.diverged ? 1 : 0) << ',' << (p.past_boundary ? 1 : 0) << "\n";
   }
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
@@ -105,14 +105,19 @@ nlohmann::json point_json(const JointLagPoint& p) {
                           {"measured_total_s", p.measured_total_lag},
                           {"measured_round_trip_s", p.measured_round_trip},
                           {"measured_actuator_lag_s", p.measured_actuator_lag},
-                          {"nrmse_pct", 100.0 * p.nrmse},
-                          {"past_stability_boundary", p.past_boundary},
-                          {"paper_eq2", p.paper_eq2},
+                          {"peak_error_pct", p.peak_error_pct},
+                          {"rms_error_pct", p.rms_error_pct},
                           {"peak_error_m", p.peak_error},
+                          {"nrmse_pct", 100.0 * p.nrmse},
+                          {"paper_eq2", p.paper_eq2},
+                          {"past_stability_boundary", p.past_boundary},
                           {"diverged", p.diverged},
                           {"real_time", p.real_time}};
   // Across sites (a run of `duration` s): its in-process counterpart over the same stretch.
-  if (p.duration > 0.0) point["in_process_nrmse_pct"] = 100.0 * p.in_process_nrmse;
+  if (p.duration > 0.0) {
+    point["in_process_rms_error_pct"] = p.in_process_rms_error_pct;
+    point["in_process_nrmse_pct"] = 100.0 * p.in_process_nrmse;
+  }
   return point;
 }
 
@@ -141,6 +146,8 @@ void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& refe
                            const std::vector<double>& u, bool stopped_early, double dt,
                            double growth_period) {
   const Comparison c = compare(reference, u, stopped_early);
+  point.peak_error_pct = c.peak_error_pct;
+  point.rms_error_pct = c.rms_error_pct;
   point.nrmse = c.nrmse_pct / 100.0;
   point.paper_eq2 = c.paper_eq2_as_printed;
   point.peak_error = c.peak_error_m;
@@ -329,7 +336,7 @@ std::string to_text(const JointLagResult& result) {
   out.setf(std::ios::fixed);
   out.precision(2);
   out << "joint lag study of " << result.study_name << " (actuator " << result.actuator_model
-      << "): NRMSE % [measured total lag ms]\n";
+      << "): E_rms % [measured total lag ms]\n";
   out << "  network RT \\ actuator";
   std::vector<double> actuators;
   for (const auto& p : result.grid) {
@@ -350,7 +357,7 @@ std::string to_text(const JointLagResult& result) {
       std::ostringstream cell;
       cell.setf(std::ios::fixed);
       cell.precision(2);
-      cell << 100 * p.nrmse << " [" << p.measured_total_lag * 1e3 << "]";
+      cell << p.rms_error_pct << " [" << p.measured_total_lag * 1e3 << "]";
       out << "  " << std::setw(17) << cell.str();
     }
   }
@@ -364,8 +371,8 @@ std::string to_text(const JointLagResult& result) {
         << " ms actuator = " << (p.network_round_trip + p.actuator_lag) * 1e3
         << " ms; measured total " << p.measured_total_lag * 1e3 << " ms = round trip "
         << p.measured_round_trip * 1e3 << " ms + actuator " << p.measured_actuator_lag * 1e3
-        << " ms; NRMSE " << 100 * p.nrmse << " % over the first " << p.duration << " s against "
-        << 100 * p.in_process_nrmse << " % in process for "
+        << " ms; E_rms " << p.rms_error_pct << " % over the first " << p.duration << " s against "
+        << p.in_process_rms_error_pct << " % in process for "
         << (p.real_time ? "the same lags" : "the actuator lag alone") << " over the same "
         << p.duration << " s" << (p.diverged ? " (diverged)" : "") << "\n";
     if (!p.real_time && p.network_round_trip > 0.0)

@@ -8,7 +8,8 @@
 // the paper's frame) delaying the force by the up-link equals delaying the displacement by it, so
 // down-link + up-link enter as one shift by their sum R.
 // Per point:
-//   error            nrmse(u_ref, u) = sqrt(mean e^2) / median|u_ref|, and the paper's Eq. 2
+//   error            E_peak and E_rms (%, analysis/compare.h) lead; the paper's NRMSE
+//                    sqrt(mean e^2) / median|u_ref| and its Eq. 2 follow
 //   measured total   J1 delay of the realised behind the commanded displacement (cross-correlation
 //                    peak, s), compared with injected = R + A.
 // Measured across sites (optional, needs namespaces): selected points run across network-namespace
@@ -18,8 +19,9 @@
 // Stability (SDOF studies): before the grid runs, the continuous boundary R*(A) (BoundaryPoint);
 // grid points past it are flagged (past_boundary) and a warning names how many.
 //
-// Outputs (in the output directory): grid.csv, measured.csv (nrmse_pct: the one NRMSE convention,
-// a percentage), error_map.png and .svg (2-D heat map of NRMSE %, log colour scale, contour lines,
+// Outputs (in the output directory): grid.csv, measured.csv (peak_error_pct, rms_error_pct first,
+// then the paper's nrmse_pct), error_map.png and .svg (2-D heat map of E_rms %, log colour scale,
+// contour lines,
 // the stability boundary, diverged points marked), total_lag.png and .svg (measured vs injected),
 // summary.json.
 
@@ -74,7 +76,7 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
 void write_joint_lag_outputs(const JointLagResult& result, bool plots);
 
 nlohmann::json to_json(const JointLagResult& result);
-// The grid as a table, then each across-sites run with its measured lags and its NRMSE beside
+// The grid as a table (E_rms), then each across-sites run with its measured lags and its E_rms beside
 // the in-process run of the lags its response sees (a lockstep run says plainly that it cannot
 // check the map's network axis).
 std::string to_text(const JointLagResult& result);
@@ -86,7 +88,7 @@ std::size_t diverged_points(const JointLagResult& result);
 config::DelayStage joint_lag_actuator_stage(JointLagStudy::ActuatorModel model, double lag);
 // The J1 search window (s): max_lag_search, or 2 x the largest injected total + 10 ms.
 double joint_lag_search_window(const JointLagStudy& config);
-// NRMSE, the paper's Eq. 2, the peak error of `u` against `reference` (m) over their common
+// E_peak, E_rms, the paper's NRMSE and Eq. 2, the peak error of `u` against `reference` (m) over their common
 // length (a diverged run is shorter) and the verdict, into `point`, as `rths run` judges a case:
 // analysis::compare (stopped early, not finite, or grown past core::kDivergenceGrowth times the
 // reference's peak), or past the stability boundary (point.past_boundary) with an envelope that

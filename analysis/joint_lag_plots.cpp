@@ -32,13 +32,13 @@ MapFiles write_map_data(const JointLagResult& result, const std::filesystem::pat
                        out / "error_map_past_boundary.dat", out / "error_map_boundary.dat"};
   {
     std::ofstream file(files.grid);
-    file << "# network_round_trip_ms actuator_lag_ms nrmse_pct (blocks of equal round trip)\n";
+    file << "# network_round_trip_ms actuator_lag_ms rms_error_pct (blocks of equal round trip)\n";
     double previous = std::nan("");
     for (const auto& p : result.grid) {
       if (!std::isnan(previous) && p.network_round_trip != previous) file << "\n";
       previous = p.network_round_trip;
       file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << ' '
-           << (p.diverged ? std::nan("") : std::max(100.0 * p.nrmse, kMapFloorPercent)) << "\n";
+           << (p.diverged ? std::nan("") : std::max(p.rms_error_pct, kMapFloorPercent)) << "\n";
     }
   }
   {
@@ -65,15 +65,15 @@ MapFiles write_map_data(const JointLagResult& result, const std::filesystem::pat
   return files;
 }
 
-// Contour levels of the map: the 1-2-5 series over the grid's bounded non-zero NRMSE, from the
+// Contour levels of the map: the 1-2-5 series over the grid's bounded non-zero E_rms, from the
 // largest step below its smallest value (a line inside the cells next to the lag-free corner,
 // where the interpolation from zero would squeeze any lower one) to its largest value.
 std::vector<double> contour_levels(const JointLagResult& result) {
   double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
   for (const auto& p : result.grid) {
-    if (p.diverged || !(p.nrmse > 0.0)) continue;
-    lo = std::min(lo, 100.0 * p.nrmse);
-    hi = std::max(hi, 100.0 * p.nrmse);
+    if (p.diverged || !(p.rms_error_pct > 0.0)) continue;
+    lo = std::min(lo, p.rms_error_pct);
+    hi = std::max(hi, p.rms_error_pct);
   }
   std::vector<double> levels;
   double below = 0.0;
@@ -134,7 +134,7 @@ void write_contour_labels(const std::filesystem::path& contours,
   }
   close_piece();
   std::ofstream out(labels);
-  out << "# network_round_trip_ms actuator_lag_ms nrmse_pct: a label per contour piece\n";
+  out << "# network_round_trip_ms actuator_lag_ms rms_error_pct: a label per contour piece\n";
   for (const auto& [point, length] : pieces)
     if (length >= 0.5 * longest[point[2]])
       out << point[0] << ' ' << point[1] << ' ' << point[2] << "\n";
@@ -161,9 +161,9 @@ std::string map_settings(const JointLagResult& result) {
   std::ostringstream out;
   out << "set bmargin 9\nset title \"Joint lag (" << result.study_name << ", actuator "
       << result.actuator_model
-      << ")\\nNRMSE of the displacement against the lag-free reference, %\"\n"
+      << ")\\nE_rms of the displacement against the lag-free reference, %\"\n"
       << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
-      << "set cblabel 'NRMSE (%), log scale'\nset logscale cb\nset format cb '%g'\n"
+      << "set cblabel 'E_rms (%), log scale'\nset logscale cb\nset format cb '%g'\n"
       << "set cbrange [" << kMapFloorPercent
       << ":*]\n"
       // viridis: perceptually uniform and readable in grey, unlike a rainbow.
@@ -188,7 +188,7 @@ std::string map_plot(const JointLagResult& result, const MapFiles& files,
   std::string plot = "plot '" + files.grid.string() + "' using 1:2:3 with image pixels notitle";
   if (std::filesystem::file_size(contours) > 0)
     plot += ", '" + contours.string() +
-            "' using 1:2 with lines lc rgb 'black' lw 1 title 'NRMSE contours (%, labelled)', '" +
+            "' using 1:2 with lines lc rgb 'black' lw 1 title 'E_rms contours (%, labelled)', '" +
             labels.string() +
             "' using 1:2:(sprintf('%g %%', $3)) with labels boxed font 'sans,9' tc rgb 'black' "
             "notitle";
@@ -208,7 +208,7 @@ std::string map_plot(const JointLagResult& result, const MapFiles& files,
   return plot;
 }
 
-// The 2-D heat map: NRMSE % over (network round trip, actuator lag), labelled contour lines,
+// The 2-D heat map: E_rms % over (network round trip, actuator lag), labelled contour lines,
 // the continuous stability boundary, the points past it and the diverged ones marked. PNG and
 // SVG; the scripts are kept beside them, so the map can be redrawn or restyled by hand.
 }  // namespace

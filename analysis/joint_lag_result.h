@@ -12,7 +12,10 @@ namespace rths::analysis {
 struct JointLagPoint {
   double network_round_trip = 0.0;  // s, injected
   double actuator_lag = 0.0;        // s, injected (time shift or time constant)
-  double nrmse = 0.0;               // relative
+  // The errors against the lag-free reference (analysis/compare.h): E_peak and E_rms (%) lead,
+  // the paper's NRMSE (relative) and Eq. 2 follow.
+  double peak_error_pct = 0.0, rms_error_pct = 0.0;
+  double nrmse = 0.0;  // relative
   double paper_eq2 = 0.0;
   double peak_error = 0.0;          // m
   double measured_total_lag = 0.0;  // s, J1 of realised behind command
@@ -21,12 +24,14 @@ struct JointLagPoint {
   double measured_round_trip = 0.0;    // s, record median
   double measured_actuator_lag = 0.0;  // s, see deploy/joint_lag_sites.h
   bool real_time = false;              // the clock of the across-sites run
-  double duration = 0.0;               // s of the record run across sites: its NRMSE covers only
-                                       // this stretch, so it is not comparable with the grid's
+  double duration = 0.0;               // s of the record run across sites: its errors cover only
+                                       // this stretch, so they are not comparable with the grid's
   bool past_boundary = false;  // network round trip beyond the critical one at this actuator lag
   // Across sites only: the in-process run of the lags the response can see, over the same
-  // stretch (relative NRMSE): network + actuator in real time; the actuator alone in lockstep,
-  // which waits for every answer, so the network lag never reaches the response.
+  // stretch (E_rms %, and the paper's relative NRMSE): network + actuator in real time; the
+  // actuator alone in lockstep, which waits for every answer, so the network lag never reaches
+  // the response.
+  double in_process_rms_error_pct = 0.0;
   double in_process_nrmse = 0.0;
 };
 

@@ -17,7 +17,13 @@ namespace {
 using sweep_internal::format_number;
 using sweep_internal::parse_index;
 
+// The errors lead (E_peak, E_rms, max|e|); the paper's NRMSE and Eq. 2 follow, for its Fig. 4.
 constexpr const char* kCsvHeader =
+    "index,period_s,delay_s,alpha,stiffness_N_per_m,dt_s,motion,model,peak_ref_m,peak_delayed_m,"
+    "peak_error_pct,rms_error_pct,peak_error_m,nrmse_pct,eq2_paper,diverged";
+// What rths wrote before E_peak and E_rms joined the CSV: named, so that an old shard is not
+// merged with a new one nor read as a broken file.
+constexpr const char* kNrmseOnlyHeader =
     "index,period_s,delay_s,alpha,stiffness_N_per_m,dt_s,motion,model,peak_ref_m,peak_delayed_m,"
     "eq2_paper,nrmse_pct,peak_error_m,diverged";
 constexpr const char* kSidecarFormat = "rths-sweep";
@@ -85,9 +91,9 @@ void write_sweep_csv(const std::filesystem::path& path, const SweepGrid& grid, c
     for (double x : {t.period, t.delay, t.alpha, t.stiffness, t.dt}) field(format_number(x));
     field(t.motion);
     field(t.model);
-    for (double x : {t.peak_reference, t.peak_delayed, t.eq2_paper, t.nrmse_pct, t.peak_error}) {
+    for (double x : {t.peak_reference, t.peak_delayed, t.peak_error_pct, t.rms_error_pct,
+                     t.peak_error, t.nrmse_pct, t.eq2_paper})
       field(format_number(x));
-    }
     line += t.diverged ? ",1" : ",0";
     lines.push_back(std::move(line));
   }
@@ -121,7 +127,12 @@ SweepCsv read_sweep_csv(const std::filesystem::path& path) {
         sidecar_name + ": not a sweep CSV's metadata (format, grid, points, shard): " + e.what());
   }
   if (csv.grid_hash.empty()) throw std::invalid_argument(sidecar_name + ": empty grid hash");
-  if (!std::getline(in, line) || line != kCsvHeader) {
+  const bool has_header = static_cast<bool>(std::getline(in, line));
+  if (has_header && line == kNrmseOnlyHeader)
+    throw std::invalid_argument(name +
+                                ":1: a sweep CSV of an earlier rths (NRMSE only, no "
+                                "peak_error_pct and rms_error_pct): run its sweep again");
+  if (!has_header || line != kCsvHeader) {
     throw std::invalid_argument(name + ":1: expected the column header '" +
                                 std::string(kCsvHeader) + "'");
   }
@@ -234,7 +245,7 @@ std::vector<SweepTableRow> parse_sweep_rows(const SweepCsv& csv, const std::stri
   for (std::size_t r = 0; r < csv.lines.size(); ++r) {
     const std::vector<std::string> c = split_csv(csv.lines[r]);
     const std::string where = source + " row " + std::to_string(r + 1);
-    if (c.size() != 14) throw std::invalid_argument(where + ": expected 14 columns");
+    if (c.size() != 16) throw std::invalid_argument(where + ": expected 16 columns");
     SweepTableRow t;
     t.index = parse_index(c[0], where);
     t.period = parse_double(c[1], where + " period");
@@ -246,10 +257,12 @@ std::vector<SweepTableRow> parse_sweep_rows(const SweepCsv& csv, const std::stri
     t.model = c[7];
     t.peak_reference = parse_double(c[8], where + " peak_ref");
     t.peak_delayed = parse_double(c[9], where + " peak_delayed");
-    t.eq2_paper = parse_double(c[10], where + " eq2_paper");
-    t.nrmse_pct = parse_double(c[11], where + " nrmse_pct");
+    t.peak_error_pct = parse_double(c[10], where + " peak_error_pct");
+    t.rms_error_pct = parse_double(c[11], where + " rms_error_pct");
     t.peak_error = parse_double(c[12], where + " peak_error");
-    t.diverged = c[13] == "1";
+    t.nrmse_pct = parse_double(c[13], where + " nrmse_pct");
+    t.eq2_paper = parse_double(c[14], where + " eq2_paper");
+    t.diverged = c[15] == "1";
     rows.push_back(std::move(t));
   }
   return rows;

@@ -1,5 +1,6 @@
 #pragma once
-// Sweep CSVs: a header (SI, the unit in every column name; NRMSE in percent) and the rows; what the
+// Sweep CSVs: a header (SI, the unit in every column name; errors in percent, E_peak and E_rms
+// first, the paper's NRMSE and Eq. 2 after) and the rows; what the
 // rows are (grid hash, points, shard i/N) goes in a sidecar JSON, sweep_sidecar_path(csv), so the
 // CSV itself is plain for any CSV reader. Numbers are written with 17 significant digits so
 // merged shards equal an unsharded run byte for byte. Both files are written to a temporary file

@@ -79,35 +79,45 @@ struct SweepAxes {
   }
 };
 
-struct CurvePoint {
-  double period, nrmse_pct, eq2;
-  bool diverged;
+// One error measure of a row, as a figure names it.
+struct Measure {
+  const char* title;  // "E_rms = 100 sqrt(sum e^2 / sum u_ref^2)"
+  const char* axis;   // "E_rms (%, log)"
+  double SweepTableRow::*value;
 };
+const Measure kErms{"E_rms = 100 sqrt(sum e^2 / sum u_ref^2)", "E_rms (%, log)",
+                    &SweepTableRow::rms_error_pct};
+const Measure kPaperNrmse{"the paper's Fig. 4: NRMSE = 100 sqrt(mean e^2) / median|u_ref|",
+                          "NRMSE (%, log)", &SweepTableRow::nrmse_pct};
+const Measure kPaperEq2{"the paper's Eq. 2 as printed (depends on N)", "Eq. 2 (log)",
+                        &SweepTableRow::eq2_paper};
 
-// The rows at the figure's stiffness with a delay, one sorted curve per series key.
-std::map<SeriesKey, std::vector<CurvePoint>> curves_by_key(const std::vector<SweepTableRow>& rows,
-                                                           double stiffness) {
-  std::map<SeriesKey, std::vector<CurvePoint>> curves;
+// The rows at the figure's stiffness with a delay, one curve sorted by period per series key.
+std::map<SeriesKey, std::vector<const SweepTableRow*>> curves_by_key(
+    const std::vector<SweepTableRow>& rows, double stiffness) {
+  std::map<SeriesKey, std::vector<const SweepTableRow*>> curves;
   for (const auto& r : rows) {
     if (r.stiffness != stiffness || !(r.delay > 0)) continue;
-    curves[series_key(r)].push_back({r.period, r.nrmse_pct, r.eq2_paper, r.diverged});
+    curves[series_key(r)].push_back(&r);
   }
   for (auto& [key, points] : curves)
     std::sort(points.begin(), points.end(),
-              [](const CurvePoint& l, const CurvePoint& r) { return l.period < r.period; });
+              [](const SweepTableRow* l, const SweepTableRow* r) { return l->period < r->period; });
   return curves;
 }
 
-// Smallest and largest bounded NRMSE (%) > 0; {inf, 0} when there is none.
+// Smallest and largest bounded value > 0 of a measure; {inf, 0} when there is none.
 std::pair<double, double> bounded_range(
-    const std::map<SeriesKey, std::vector<CurvePoint>>& curves) {
+    const std::map<SeriesKey, std::vector<const SweepTableRow*>>& curves, const Measure& measure) {
   double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
   for (const auto& [key, points] : curves)
-    for (const CurvePoint& p : points)
-      if (!p.diverged && std::isfinite(p.nrmse_pct) && p.nrmse_pct > 0) {
-        smallest = std::min(smallest, p.nrmse_pct);
-        largest = std::max(largest, p.nrmse_pct);
+    for (const SweepTableRow* p : points) {
+      const double value = p->*measure.value;
+      if (!p->diverged && std::isfinite(value) && value > 0) {
+        smallest = std::min(smallest, value);
+        largest = std::max(largest, value);
       }
+    }
   return {smallest, largest};
 }
 
@@ -145,24 +155,24 @@ void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& perio
     plot.title += " (critical delays beyond the swept range not drawn)";
 }
 
-// NRMSE against delay, one curve per drawn period and model (colour by period, dash by model), at
+// E_rms against delay, one curve per drawn period and model (colour by period, dash by model), at
 // the first fraction, dt and record; diverged points on a row above the curves.
 void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows,
                             const std::filesystem::path& png, const std::string& title,
                             const CriticalDelayOf& critical_delay, const SweepAxes& axes,
-                            const util::PlotSpec& period_panel) {
+                            const util::PlotSpec& by_period) {
   const SweepTableRow& first = rows.front();
   const std::vector<double> periods = periods_drawn(rows);
-  util::PlotSpec plot{title + ": NRMSE against delay, one curve per period" +
+  util::PlotSpec plot{title + ": E_rms against delay, one curve per period" +
                           (axes.models.size() > 1 ? " and model" : ""),
                       "delay (ms)",
-                      "NRMSE (%, log)",
+                      kErms.axis,
                       {},
                       true};
-  plot.y_min = period_panel.y_min;
-  plot.y_max = period_panel.y_max;
+  plot.y_min = by_period.y_min;
+  plot.y_max = by_period.y_max;
   plot.y_format = "%g";
-  const double row = period_panel.y_max ? *period_panel.y_max / 1.5 / kRowStep : 1.0;
+  const double row = by_period.y_max ? *by_period.y_max / 1.5 / kRowStep : 1.0;
   util::Series diverged{
       "diverged (marked above the curves)", {}, {}, "points pt 2 ps 1.6 lw 2 lc rgb 'black'"};
   double largest_delay = 0.0;
@@ -185,7 +195,7 @@ void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows,
                              std::to_string(m % 4 + 1) + " pt " + std::to_string(m % 6 + 5)};
       for (const SweepTableRow* r : points) {
         curve.x.push_back(r->delay * 1e3);
-        curve.y.push_back(r->diverged ? std::nan("") : r->nrmse_pct);
+        curve.y.push_back(r->diverged ? std::nan("") : r->*kErms.value);
         largest_delay = std::max(largest_delay, r->delay);
         if (r->diverged) {
           diverged.x.push_back(r->delay * 1e3);
@@ -201,6 +211,46 @@ void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows,
   plot.x_max = largest_delay * 1e3 * 1.15;
   mark_critical_delays(plot, periods, first, critical_delay);
   util::write_png_plot(plot, png);
+}
+
+// One measure against period on a log axis, one curve per series key; each curve's diverged
+// points on a row of its own above every bounded value, so they are seen but set no scale.
+util::PlotSpec period_panel(const std::map<SeriesKey, std::vector<const SweepTableRow*>>& curves,
+                            const SweepAxes& axes, const std::string& title,
+                            const Measure& measure) {
+  util::PlotSpec panel{title + ": " + measure.title, "period T (s)", measure.axis, {}, true};
+  panel.height = 420;
+  panel.y_format = "%g";
+  const auto [smallest, largest] = bounded_range(curves, measure);
+  const double first_row = largest > 0 ? largest * 3.0 : 1.0;
+  std::vector<util::Series> marks;
+  for (const auto& [key, points] : curves) {
+    const std::string label = axes.label(key);
+    util::Series curve{
+        label, {}, {}, axes.style(std::get<4>(key), std::get<0>(key), "linespoints")};
+    util::Series diverged{
+        label + ": diverged",
+        {},
+        {},
+        axes.style(std::get<4>(key), std::get<0>(key), "points") + " lw 2 ps 1.6"};
+    const double row = first_row * std::pow(kRowStep, static_cast<double>(marks.size()));
+    for (const SweepTableRow* p : points) {
+      curve.x.push_back(p->period);
+      curve.y.push_back(p->diverged ? std::nan("") : p->*measure.value);
+      if (p->diverged) {
+        diverged.x.push_back(p->period);
+        diverged.y.push_back(row);
+      }
+    }
+    panel.series.push_back(std::move(curve));
+    if (!diverged.x.empty()) marks.push_back(std::move(diverged));
+  }
+  if (largest > 0) {
+    panel.y_min = smallest / 2.0;
+    panel.y_max = first_row * std::pow(kRowStep, static_cast<double>(marks.size())) * 1.5;
+  }
+  for (util::Series& m : marks) panel.series.push_back(std::move(m));
+  return panel;
 }
 
 }  // namespace
@@ -236,58 +286,17 @@ void write_sweep_plot(const std::vector<SweepTableRow>& rows, const std::filesys
   const SweepAxes axes(rows);
   const auto curves = curves_by_key(rows, axes.stiffness);
   if (curves.empty()) throw std::invalid_argument("sweep plot: no delay > 0 in the rows");
-  const auto [smallest, largest] = bounded_range(curves);
-  util::PlotSpec nrmse_panel{
-      title + ": NRMSE = 100 sqrt(mean e^2) / median|u_ref| (the paper's Fig. 4)",
-      "period T (s)",
-      "NRMSE (%, log)",
-      {},
-      true};
-  util::PlotSpec eq2_panel{title + ": the paper's Eq. 2 as printed (depends on N)",
-                           "period T (s)",
-                           "Eq. 2 (log)",
-                           {},
-                           true};
-  nrmse_panel.height = eq2_panel.height = 500;
-  nrmse_panel.y_format = eq2_panel.y_format = "%g";
-  // Diverged points sit on rows above every bounded value, so they are seen but set no scale.
-  const double first_row = largest > 0 ? largest * 3.0 : 1.0;
-  std::vector<util::Series> marks;
-  for (const auto& [key, points] : curves) {
-    const std::string label = axes.label(key);
-    const std::string style = axes.style(std::get<4>(key), std::get<0>(key), "linespoints");
-    util::Series nrmse{label, {}, {}, style}, eq2{label, {}, {}, style};
-    util::Series diverged{
-        label + ": diverged",
-        {},
-        {},
-        axes.style(std::get<4>(key), std::get<0>(key), "points") + " lw 2 ps 1.6"};
-    const double row = first_row * std::pow(kRowStep, static_cast<double>(marks.size()));
-    for (const CurvePoint& p : points) {
-      nrmse.x.push_back(p.period);
-      nrmse.y.push_back(p.diverged ? std::nan("") : p.nrmse_pct);
-      eq2.x.push_back(p.period);
-      eq2.y.push_back(p.diverged ? std::nan("") : p.eq2);
-      if (p.diverged) {
-        diverged.x.push_back(p.period);
-        diverged.y.push_back(row);
-      }
-    }
-    nrmse_panel.series.push_back(std::move(nrmse));
-    eq2_panel.series.push_back(std::move(eq2));
-    if (!diverged.x.empty()) marks.push_back(std::move(diverged));
-  }
-  if (largest > 0) {
-    nrmse_panel.y_min = smallest / 2.0;
-    nrmse_panel.y_max = first_row * std::pow(kRowStep, static_cast<double>(marks.size())) * 1.5;
-  }
-  for (util::Series& m : marks) nrmse_panel.series.push_back(std::move(m));
-  util::write_png_panels({nrmse_panel, eq2_panel}, png);
+  std::vector<util::PlotSpec> panels;
+  for (const Measure* measure : {&kErms, &kPaperNrmse, &kPaperEq2})
+    panels.push_back(period_panel(curves, axes, title, *measure));
+  util::write_png_panels(panels, png);
   write_sweep_delay_plot(rows, sweep_delay_plot_path(png), title, critical_delay, axes,
-                         nrmse_panel);
+                         panels.front());
 }
 
-SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
+SweepTrends measure_trends(const std::vector<SweepTableRow>& rows, SweepMeasure measure) {
+  const double SweepTableRow::*value =
+      measure == SweepMeasure::kErms ? &SweepTableRow::rms_error_pct : &SweepTableRow::nrmse_pct;
   SweepTrends trends;
   // Stiffness: same point but stiffness.
   std::map<std::tuple<SeriesKey, double>, std::vector<double>> by_point;
@@ -298,8 +307,8 @@ SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
       continue;
     }
     if (!(r.delay > 0)) continue;  // a zero delay leaves only round-off to compare
-    by_point[{series_key(r), r.period}].push_back(r.nrmse_pct);
-    by_series[{series_key(r), r.stiffness}].push_back({r.period, r.nrmse_pct});
+    by_point[{series_key(r), r.period}].push_back(r.*value);
+    by_series[{series_key(r), r.stiffness}].push_back({r.period, r.*value});
   }
   for (const auto& [key, values] : by_point) {
     if (values.size() < 2) continue;
@@ -321,18 +330,36 @@ SweepTrends measure_trends(const std::vector<SweepTableRow>& rows) {
   std::map<std::tuple<double, double, std::string, double, double, double>, double> linear;
   for (const auto& r : rows) {
     if (r.model == "linear" && !r.diverged && r.delay > 0) {
-      linear[{r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness}] = r.nrmse_pct;
+      linear[{r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness}] = r.*value;
     }
   }
   std::vector<double> ratios;
   for (const auto& r : rows) {
     if (r.model == "linear" || r.diverged || !(r.delay > 0)) continue;
     const auto it = linear.find({r.alpha, r.dt, r.motion, r.delay, r.period, r.stiffness});
-    if (it != linear.end() && it->second > 0) ratios.push_back(r.nrmse_pct / it->second);
+    if (it != linear.end() && it->second > 0) ratios.push_back(r.*value / it->second);
   }
   trends.nonlinear_to_linear_median_ratio =
       ratios.empty() ? std::nan("") : core::median(std::move(ratios));
   return trends;
+}
+
+nlohmann::json sweep_trends_json(const std::vector<SweepTableRow>& rows) {
+  const auto number = [](double x) {
+    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
+  };
+  const auto measured = [&](SweepMeasure measure, const std::string& name) {
+    const SweepTrends t = measure_trends(rows, measure);
+    return nlohmann::json{
+        {"measure", name},
+        {"stiffness_max_relative_difference", number(t.stiffness_max_relative_difference)},
+        {"period_falling_pair_fraction", number(t.period_falling_fraction)},
+        {"nonlinear_to_linear_median_ratio", number(t.nonlinear_to_linear_median_ratio)},
+        {"diverged_points", t.diverged_points}};
+  };
+  return {{"trends", measured(SweepMeasure::kErms, "E_rms (%)")},
+          {"paper_trends", measured(SweepMeasure::kPaperNrmse,
+                                    "NRMSE (%), the paper's median normalisation (its Fig. 4)")}};
 }
 
 }  // namespace rths::analysis

@@ -40,12 +40,15 @@ void fill_metrics(SweepRow& row, const std::vector<double>& reference, bool refe
   row.peak_reference = reference_diverged ? kInf : c.peak_reference_m;
   row.peak_delayed = delayed_diverged ? kInf : c.peak_m;
   if (row.diverged) {
-    row.eq2_paper = row.nrmse_pct = row.peak_error = kInf;
+    row.peak_error_pct = row.rms_error_pct = row.peak_error = kInf;
+    row.nrmse_pct = row.eq2_paper = kInf;
     return;
   }
-  row.eq2_paper = c.paper_eq2_as_printed;
-  row.nrmse_pct = c.nrmse_pct;
+  row.peak_error_pct = c.peak_error_pct;
+  row.rms_error_pct = c.rms_error_pct;
   row.peak_error = c.peak_error_m;
+  row.nrmse_pct = c.nrmse_pct;
+  row.eq2_paper = c.paper_eq2_as_printed;
 }
 
 struct GroupKey {
@@ -330,9 +333,11 @@ std::vector<SweepTableRow> to_table(const SweepGrid& grid, const std::vector<Swe
     t.model = grid.model_names()[row.point.model];
     t.peak_reference = row.peak_reference;
     t.peak_delayed = row.peak_delayed;
-    t.eq2_paper = row.eq2_paper;
-    t.nrmse_pct = row.nrmse_pct;
+    t.peak_error_pct = row.peak_error_pct;
+    t.rms_error_pct = row.rms_error_pct;
     t.peak_error = row.peak_error;
+    t.nrmse_pct = row.nrmse_pct;
+    t.eq2_paper = row.eq2_paper;
     t.diverged = row.diverged;
     table.push_back(std::move(t));
   }

@@ -145,7 +145,8 @@ void add_sdof_command(CLI::App& app) {
   cmd->add_option("--out", o->out,
                   "CSV of both runs (results.csv columns: every floor and actuator, SI)");
   cmd->add_flag("--json", o->json,
-                "print peaks, Eq. 2, NRMSE (%), status and the critical delay as JSON");
+                "print peaks, E_peak and E_rms (%), the paper's NRMSE (%) and Eq. 2, status and "
+                "the critical delay as JSON");
   cmd->callback([o] { run_sdof(*o); });
 }
 

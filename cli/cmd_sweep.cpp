@@ -41,24 +41,15 @@ struct MergeOptions {
   bool json = false, no_plots = false;
 };
 
-nlohmann::json trends_json(const analysis::SweepTrends& t) {
-  const auto number = [](double x) {
-    return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json();
-  };
-  return {{"stiffness_max_relative_difference_nrmse", number(t.stiffness_max_relative_difference)},
-          {"period_falling_pair_fraction", number(t.period_falling_fraction)},
-          {"nonlinear_to_linear_nrmse_median_ratio", number(t.nonlinear_to_linear_median_ratio)},
-          {"diverged_points", t.diverged_points}};
-}
-
-void print_trends(const analysis::SweepTrends& t) {
-  std::cout << "stiffness at fixed period: max relative NRMSE difference "
+void print_trends(const std::vector<analysis::SweepTableRow>& table) {
+  const analysis::SweepTrends t = analysis::measure_trends(table, analysis::SweepMeasure::kErms);
+  std::cout << "stiffness at fixed period: max relative E_rms difference "
             << t.stiffness_max_relative_difference << "\n"
-            << "error vs period: NRMSE falls between "
+            << "error vs period: E_rms falls between "
             << (std::isfinite(t.period_falling_fraction) ? 100 * t.period_falling_fraction : 0.0)
             << " % of consecutive periods\n";
   if (std::isfinite(t.nonlinear_to_linear_median_ratio)) {
-    std::cout << "non-linear / linear NRMSE at the same initial period (median): "
+    std::cout << "non-linear / linear E_rms at the same initial period (median): "
               << t.nonlinear_to_linear_median_ratio << "\n";
   }
   if (t.diverged_points) std::cout << "diverged points: " << t.diverged_points << "\n";
@@ -130,7 +121,7 @@ struct SweepOutcome {
 
 void report_sweep(const SweepOptions& o, const analysis::SweepGrid& grid,
                   const analysis::Shard& shard, const SweepOutcome& r,
-                  const analysis::SweepTrends& trends) {
+                  const std::vector<analysis::SweepTableRow>& table) {
   if (o.json) {
     nlohmann::json summary = {{"csv", r.csv.string()},
                               {"plot", r.plot ? nlohmann::json(r.png.string()) : nlohmann::json()},
@@ -139,14 +130,14 @@ void report_sweep(const SweepOptions& o, const analysis::SweepGrid& grid,
                               {"shard", shard.to_string()},
                               {"points_run", r.points_run},
                               {"threads", util::resolve_threads(o.threads)},
-                              {"seconds", r.seconds},
-                              {"trends", trends_json(trends)}};
+                              {"seconds", r.seconds}};
+    summary.update(analysis::sweep_trends_json(table));
     std::cout << summary.dump(2) << "\n";
     return;
   }
   std::cout << "sweep " << shard.to_string() << ": " << r.points_run << " of " << grid.size()
             << " points in " << r.seconds << " s (grid " << grid.hash_hex() << ")\n";
-  if (shard.count <= 1) print_trends(trends);
+  if (shard.count <= 1) print_trends(table);
   std::cout << "written: " << r.csv.string() << ", " << analysis::sweep_sidecar_path(r.csv).string()
             << (r.plot ? ", " + r.png.string() + "/.svg, " +
                              analysis::sweep_delay_plot_path(r.png).string() + "/.svg"
@@ -184,7 +175,7 @@ void run_sweep_command(const SweepOptions& o) {
   if (r.plot)
     write_plot(table, r.png, study.name().empty() ? "sweep" : study.name(),
                analysis::critical_delay_of(grid));
-  report_sweep(o, grid, options.shard, r, analysis::measure_trends(table));
+  report_sweep(o, grid, options.shard, r, table);
   const std::size_t diverged = static_cast<std::size_t>(std::count_if(
       rows.begin(), rows.end(), [](const analysis::SweepRow& row) { return row.diverged; }));
   if (diverged > 0 && !o.allow_unstable && !study.sweep().expect_unstable()) {
@@ -236,21 +227,19 @@ void run_merge_command(const MergeOptions& o) {
   png.replace_extension(".png");
   const bool plot = !o.no_plots && !table.empty();
   if (plot) write_plot(table, png, "sweep " + merged.grid_hash);
-  const analysis::SweepTrends trends = analysis::measure_trends(table);
   if (o.json) {
-    std::cout << nlohmann::json{{"csv", o.out},
-                                {"plot", plot ? nlohmann::json(png.string()) : nlohmann::json()},
-                                {"grid_hash", merged.grid_hash},
-                                {"grid_points", merged.points},
-                                {"shards", o.shards.size()},
-                                {"trends", trends_json(trends)}}
-                     .dump(2)
-              << "\n";
+    nlohmann::json summary{{"csv", o.out},
+                           {"plot", plot ? nlohmann::json(png.string()) : nlohmann::json()},
+                           {"grid_hash", merged.grid_hash},
+                           {"grid_points", merged.points},
+                           {"shards", o.shards.size()}};
+    summary.update(analysis::sweep_trends_json(table));
+    std::cout << summary.dump(2) << "\n";
     return;
   }
   std::cout << "merged " << o.shards.size() << " shards: " << merged.points << " points (grid "
             << merged.grid_hash << ")\n";
-  print_trends(trends);
+  print_trends(table);
   std::cout << "written: " << o.out << (plot ? ", " + png.string() + "/.svg" : std::string())
             << "\n";
 }

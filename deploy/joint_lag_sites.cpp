@@ -63,10 +63,10 @@ void judge_run(const JointLagStudy& config, const SitesPlan& plan, const config:
         analysis::joint_lag_actuator_stage(config.actuator_model(), point.actuator_lag);
   }
   const auto in_process = simulate(seen);
-  point.in_process_nrmse =
-      analysis::compare(u_ref, analysis::floor_history(in_process, 0), in_process.diverged)
-          .nrmse_pct /
-      100.0;
+  const analysis::Comparison c =
+      analysis::compare(u_ref, analysis::floor_history(in_process, 0), in_process.diverged);
+  point.in_process_rms_error_pct = c.rms_error_pct;
+  point.in_process_nrmse = c.nrmse_pct / 100.0;
 }
 
 void run_measured(const JointLagStudy& config, const std::filesystem::path& base_dir,

@@ -8,7 +8,8 @@
 //                               benchmark section, else None
 //   benchmark_criteria()        [{name, unit, definition}] of J1-J9
 //   sweep(study, shard="0/1", threads=0, general=False)      -> {"series", "units", "grid_hash",
-//                                                                "grid_points", "shard", "trends"}
+//                                                                "grid_points", "shard", "trends"
+//                                                                (E_rms), "paper_trends" (NRMSE)}
 //   stability(period_s, zeta, experimental_fraction=1, dt_s=0.001, integrator=..., ...) -> dict
 //   identify(path, channels=..., ...)                         -> {"report", "series", "units"}
 //   read_record(path, allow_loss=False)  a run record (.rthsrec) -> {"series", "units",
@@ -180,14 +181,14 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
   options.threads = threads;
   options.general_path_only = general;
   results::Table table;
-  analysis::SweepTrends trends;
+  nlohmann::json trends;
   std::string hash;
   std::size_t points = 0;
   {
     py::gil_scoped_release release;
     const analysis::SweepGrid grid(study.config, study.base_dir, study.source);
     const auto rows = analysis::to_table(grid, analysis::run_sweep(grid, options));
-    trends = analysis::measure_trends(rows);
+    trends = analysis::sweep_trends_json(rows);
     hash = grid.hash_hex();
     points = grid.size();
     table = results::sweep_table(rows, hash, points);
@@ -196,15 +197,8 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
   out["grid_hash"] = hash;
   out["grid_points"] = points;
   out["shard"] = options.shard.to_string();
-  const auto number = [](double x) {
-    return std::isfinite(x) ? py::object(py::float_(x)) : py::object(py::none());
-  };
-  py::dict t;
-  t["stiffness_max_relative_difference_nrmse"] = number(trends.stiffness_max_relative_difference);
-  t["period_falling_pair_fraction"] = number(trends.period_falling_fraction);
-  t["nonlinear_to_linear_nrmse_median_ratio"] = number(trends.nonlinear_to_linear_median_ratio);
-  t["diverged_points"] = trends.diverged_points;
-  out["trends"] = t;
+  out["trends"] = to_python(trends["trends"]);
+  out["paper_trends"] = to_python(trends["paper_trends"]);
   out["attributes"] = attributes_dict(table);
   return out;
 }

@@ -147,9 +147,11 @@ Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::s
   t.add_texts("model", "", texts([](const Row& r) { return r.model; }));
   t.add_numbers("peak_ref_m", "m", numbers([](const Row& r) { return r.peak_reference; }));
   t.add_numbers("peak_delayed_m", "m", numbers([](const Row& r) { return r.peak_delayed; }));
-  t.add_numbers("eq2_paper", "", numbers([](const Row& r) { return r.eq2_paper; }));
-  t.add_numbers("nrmse_pct", "%", numbers([](const Row& r) { return r.nrmse_pct; }));
+  t.add_numbers("peak_error_pct", "%", numbers([](const Row& r) { return r.peak_error_pct; }));
+  t.add_numbers("rms_error_pct", "%", numbers([](const Row& r) { return r.rms_error_pct; }));
   t.add_numbers("peak_error_m", "m", numbers([](const Row& r) { return r.peak_error; }));
+  t.add_numbers("nrmse_pct", "%", numbers([](const Row& r) { return r.nrmse_pct; }));
+  t.add_numbers("eq2_paper", "", numbers([](const Row& r) { return r.eq2_paper; }));
   t.add_numbers("diverged", "", numbers([](const Row& r) { return r.diverged ? 1 : 0; }));
   t.set_attribute("grid_hash", grid_hash);
   t.set_attribute("grid_points", std::to_string(grid_points));

@@ -27,7 +27,8 @@
 //                 answer). Attribute "reference": against what every case was compared.
 //   sweep_table   `rths sweep`: index, period (s), delay (s), alpha, stiffness (N/m; 0 = mass
 //                 1 kg), dt (s), motion and model (text), peak_ref, peak_delayed (m),
-//                 eq2_paper, nrmse, peak_error (m), diverged (0/1), as in the sweep CSV;
+//                 peak_error_pct (E_peak), rms_error_pct (E_rms), peak_error (m), the
+//                 paper's nrmse_pct and eq2_paper, diverged (0/1), as in the sweep CSV;
 //                 attributes grid_hash and grid_points.
 //   record_table  a run record (`rths launch`, `rths export`): step, time_s,
 //                 ground_acceleration_m_per_s2, u_floor<i>_m, v_floor<i>_m_per_s,

@@ -33,6 +33,8 @@ CaseError compare(const std::string& name, const std::vector<double>& reference,
   // A diverged run stops early: compare over the common part, and say so via `diverged`.
   const std::size_t n = std::min(reference.size(), compared.size());
   const std::span<const double> ref(reference.data(), n), cmp(compared.data(), n);
+  e.peak_error_pct = core::relative_peak_error_pct(ref, cmp);
+  e.rms_error_pct = core::relative_rms_error_pct(ref, cmp);
   e.nrmse = core::nrmse(ref, cmp);
   e.paper_eq2 = core::paper_eq2(ref, cmp);
   e.peak_displacement = core::peak_abs(cmp);

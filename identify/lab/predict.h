@@ -8,8 +8,9 @@
 // --predict simulates is what --out writes for `rths run`, and what a study cannot hold (offsets,
 // backlash, saturation, the stroke limit, drifts' variation, a lead) is listed in `ignored`.
 // Error measures (core/metrics.h) on the displacement of the top degree of freedom against the
-// reference case's: nrmse (sqrt(mean e^2) / median |u_ref|) and paper_eq2 (the paper's Eq. 2 as
-// printed).
+// reference case's, e = u - u_ref: E_peak = 100 max|e| / max|u_ref| and E_rms = 100
+// sqrt(sum e^2 / sum u_ref^2) (%), which every rths output leads with; the paper's nrmse
+// (sqrt(mean e^2) / median |u_ref|, relative) and paper_eq2 (its Eq. 2 as printed).
 
 #include <filesystem>
 #include <optional>
@@ -33,6 +34,7 @@ ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scal
 struct CaseError {
   std::string name;
   double nominal_delay = 0.0;                                    // s, the chain's low-frequency lag
+  double peak_error_pct = 0.0, rms_error_pct = 0.0;              // E_peak, E_rms (%)
   double nrmse = 0.0, paper_eq2 = 0.0, peak_displacement = 0.0;  // -, -, m
   bool diverged = false;
 };

@@ -114,7 +114,9 @@ nlohmann::json kind_json(const KindProposal& kind) {
 nlohmann::json case_json(const CaseError& c) {
   return {{"name", c.name},
           {"nominal_delay_s", c.nominal_delay},
-          {"nrmse", c.nrmse},
+          {"peak_error_pct", c.peak_error_pct},
+          {"rms_error_pct", c.rms_error_pct},
+          {"paper_nrmse", c.nrmse},
           {"paper_eq2", c.paper_eq2},
           {"peak_displacement_m", c.peak_displacement},
           {"diverged", c.diverged}};
@@ -418,9 +420,10 @@ void write_prediction(std::ostringstream& out, const StudyPrediction& prediction
   for (const auto& ig : prediction.ignored) out << "  not transferred: " << ig << "\n";
   const auto line = [&](const CaseError& c) {
     out << "  " << c.name << ": nominal lag " << format_value(c.nominal_delay * 1e3)
-        << " ms, NRMSE " << percent(c.nrmse) << ", paper Eq. 2 " << format_value(c.paper_eq2)
-        << ", peak " << format_value(c.peak_displacement * 1e3) << " mm"
-        << (c.diverged ? " (DIVERGED)" : "") << "\n";
+        << " ms, E_peak " << percent(c.peak_error_pct / 100) << ", E_rms "
+        << percent(c.rms_error_pct / 100) << ", peak " << format_value(c.peak_displacement * 1e3)
+        << " mm (the paper's NRMSE " << percent(c.nrmse) << ", Eq. 2 " << format_value(c.paper_eq2)
+        << ")" << (c.diverged ? " (DIVERGED)" : "") << "\n";
   };
   line(prediction.identified);
   for (const auto& c : prediction.cases) line(c);

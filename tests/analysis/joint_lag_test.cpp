@@ -91,13 +91,15 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   const auto result = run_joint_lag(config, kConfigs, options);
   const JointLagPoint& past = at(result, 0.016, 0.014);
   EXPECT_TRUE(past.past_boundary);
-  EXPECT_TRUE(past.diverged) << "NRMSE " << past.nrmse * 100 << " %, peak error "
+  EXPECT_TRUE(past.diverged) << "E_rms " << past.rms_error_pct << " %, peak error "
                              << past.peak_error;
   EXPECT_FALSE(at(result, 0.016, 0.0).diverged);
   write_joint_lag_outputs(result, true);
   std::ifstream in(result.output_directory / "error_map.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(svg.find("diverged"), std::string::npos);
+  EXPECT_NE(svg.find("E_rms (%), log scale"), std::string::npos) << "the map's colour is E_rms";
+  EXPECT_EQ(svg.find("NRMSE"), std::string::npos);
   EXPECT_NE(svg.find("network round trip (ms)"), std::string::npos);
   EXPECT_NE(svg.find("actuator lag (ms)"), std::string::npos);
   std::ifstream gp(result.output_directory / "error_map.gp");
@@ -106,7 +108,7 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   EXPECT_EQ(script.find("rgbformulae"), std::string::npos);
   EXPECT_NE(script.find("with labels"), std::string::npos) << "contours carry their value";
   // Every layer in the legend; every cell whole (the axes reach half a cell past the grid).
-  for (const char* entry : {"NRMSE contours (%, labelled)", "stability boundary (continuous)",
+  for (const char* entry : {"E_rms contours (%, labelled)", "stability boundary (continuous)",
                             "diverged (no colour: its error measures nothing)"})
     EXPECT_NE(svg.find(entry), std::string::npos) << entry;
   EXPECT_NE(script.find("set xrange [-4:20]"), std::string::npos) << script;
@@ -127,9 +129,9 @@ TEST(JointLag, APointPastTheBoundaryIsDivergedByTheOneRuleAndMarkedOnTheMap) {
   }
   double smallest = 1e300, largest = 0.0;
   for (const auto& p : result.grid)
-    if (!p.diverged && p.nrmse > 0.0) {
-      smallest = std::min(smallest, 100.0 * p.nrmse);
-      largest = std::max(largest, 100.0 * p.nrmse);
+    if (!p.diverged && p.rms_error_pct > 0.0) {
+      smallest = std::min(smallest, p.rms_error_pct);
+      largest = std::max(largest, p.rms_error_pct);
     }
   std::sort(levels.begin(), levels.end());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
@@ -199,7 +201,9 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
     std::getline(in, header);
     return header;
   }();
-  EXPECT_NE(csv.find(",nrmse_pct,"), std::string::npos) << csv;
+  // E_peak and E_rms lead; the paper's NRMSE follows them.
+  EXPECT_NE(csv.find(",peak_error_pct,rms_error_pct,"), std::string::npos) << csv;
+  EXPECT_LT(csv.find(",rms_error_pct,"), csv.find(",nrmse_pct,")) << csv;
   EXPECT_NE(csv.find("past_stability_boundary"), std::string::npos) << csv;
   // The map draws the boundary and marks the diverged points.
   std::ifstream boundary(result.output_directory / "error_map_boundary.dat");
@@ -209,7 +213,7 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   EXPECT_EQ(rows, static_cast<int>(result.boundary.size()));
 }
 
-// An across-sites point's NRMSE covers only its shorter run: it is printed beside the in-process
+// An across-sites point's E_rms covers only its shorter run: it is printed beside the in-process
 // run of the same stretch. A lockstep run with network lag says plainly that the lag never reaches
 // its response, so it cannot check the map's network axis; a real-time one compares both lags.
 TEST(JointLag, TheAcrossSitesLineComparesLikeWithLikeAndSaysWhatLockstepCannotCheck) {
@@ -218,23 +222,23 @@ TEST(JointLag, TheAcrossSitesLineComparesLikeWithLikeAndSaysWhatLockstepCannotCh
   JointLagPoint p;
   p.network_round_trip = 0.014;
   p.actuator_lag = 0.008;
-  p.nrmse = 0.0735;
-  p.in_process_nrmse = 0.0735;
+  p.rms_error_pct = 7.35;
+  p.in_process_rms_error_pct = 7.35;
   p.duration = 1.0;
   result.measured.push_back(p);
   p.real_time = true;
-  p.nrmse = 0.52;
-  p.in_process_nrmse = 0.50;
+  p.rms_error_pct = 52.0;
+  p.in_process_rms_error_pct = 50.0;
   result.measured.push_back(p);
   const std::string text = to_text(result);
   EXPECT_NE(text.find("across sites (lockstep): injected 14.00 ms network + 8.00 ms actuator"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("NRMSE 7.35 % over the first 1.00 s against 7.35 % in process for the "
+  EXPECT_NE(text.find("E_rms 7.35 % over the first 1.00 s against 7.35 % in process for the "
                       "actuator lag alone over the same 1.00 s"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("NRMSE 52.00 % over the first 1.00 s against 50.00 % in process for the "
+  EXPECT_NE(text.find("E_rms 52.00 % over the first 1.00 s against 50.00 % in process for the "
                       "same lags over the same 1.00 s"),
             std::string::npos)
       << text;

@@ -123,6 +123,18 @@ TEST_F(SweepCsvFiles, ReadingRefusesATruncatedCsv) {
   EXPECT_THROW(read_sweep_csv(dir_ / "cut.csv"), std::invalid_argument);
   std::ofstream(dir_ / "other.csv") << "time,u\n0,0\n";
   EXPECT_THROW(read_sweep_csv(dir_ / "other.csv"), std::invalid_argument);
+  // A shard an earlier rths wrote (NRMSE only) is named as such, not read as a broken file.
+  fs::copy_file(sweep_sidecar_path(a), sweep_sidecar_path(dir_ / "old.csv"));
+  std::ofstream(dir_ / "old.csv")
+      << "index,period_s,delay_s,alpha,stiffness_N_per_m,dt_s,motion,model,peak_ref_m,"
+         "peak_delayed_m,eq2_paper,nrmse_pct,peak_error_m,diverged\n";
+  try {
+    read_sweep_csv(dir_ / "old.csv");
+    FAIL() << "read a sweep CSV of the earlier format";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("an earlier rths (NRMSE only"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(SweepCsvFiles, CsvIsPlainWithUnitsAndItsMetadataIsInASidecar) {
@@ -133,7 +145,10 @@ TEST_F(SweepCsvFiles, CsvIsPlainWithUnitsAndItsMetadataIsInASidecar) {
   std::getline(in, header);
   // A naive CSV reader sees the column names first: no comment line, units in the names.
   EXPECT_EQ(header.rfind("index,period_s,delay_s,", 0), 0u) << header;
-  EXPECT_NE(header.find(",nrmse_pct,"), std::string::npos) << header;
+  // E_peak and E_rms lead the errors; the paper's NRMSE and Eq. 2 follow.
+  EXPECT_NE(header.find(",peak_error_pct,rms_error_pct,peak_error_m,nrmse_pct,eq2_paper,"),
+            std::string::npos)
+      << header;
   EXPECT_NE(header.find(",peak_delayed_m,"), std::string::npos) << header;
   const nlohmann::json meta = nlohmann::json::parse(slurp(sweep_sidecar_path(a)));
   EXPECT_EQ(meta["shard"], "1/2");
@@ -167,6 +182,8 @@ TEST_F(SweepCsvFiles, RowsReadBackEqualTheRowsWritten) {
     EXPECT_EQ(read[i].dt, written[i].dt);
     EXPECT_EQ(read[i].motion, written[i].motion);
     EXPECT_EQ(read[i].model, written[i].model);
+    EXPECT_EQ(read[i].peak_error_pct, written[i].peak_error_pct);
+    EXPECT_EQ(read[i].rms_error_pct, written[i].rms_error_pct);
     EXPECT_EQ(read[i].nrmse_pct, written[i].nrmse_pct);
     EXPECT_EQ(read[i].eq2_paper, written[i].eq2_paper);
     EXPECT_EQ(read[i].peak_error, written[i].peak_error);

@@ -19,7 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-SweepTableRow row(double period, double delay, double nrmse_pct, double stiffness = 1e3,
+// `error_pct` is the row's E_rms; its paper's NRMSE is made to rise where E_rms falls (x period^2),
+// so that a trend measured with the wrong one is seen.
+SweepTableRow row(double period, double delay, double error_pct, double stiffness = 1e3,
                   const std::string& model = "linear") {
   SweepTableRow r;
   r.period = period;
@@ -29,8 +31,10 @@ SweepTableRow row(double period, double delay, double nrmse_pct, double stiffnes
   r.dt = 0.002;
   r.motion = "record";
   r.model = model;
-  r.nrmse_pct = nrmse_pct;
-  r.eq2_paper = nrmse_pct / 1000;
+  r.rms_error_pct = error_pct;
+  r.peak_error_pct = 1.5 * error_pct;
+  r.nrmse_pct = error_pct * period * period * 100;
+  r.eq2_paper = r.nrmse_pct / 1000;
   return r;
 }
 
@@ -44,6 +48,13 @@ TEST(SweepTrends, FallingFractionCountsConsecutivePeriodPairsPerSeries) {
   EXPECT_EQ(trends.stiffness_max_relative_difference, 0.0);          // one stiffness
   EXPECT_TRUE(std::isnan(trends.nonlinear_to_linear_median_ratio));  // one model
   EXPECT_EQ(trends.diverged_points, 0u);
+  // The paper's own NRMSE (kept for its Fig. 4) rises with period in these rows.
+  EXPECT_LT(measure_trends(rows, SweepMeasure::kPaperNrmse).period_falling_fraction, 0.75);
+  const nlohmann::json j = sweep_trends_json(rows);
+  EXPECT_EQ(j["trends"]["measure"], "E_rms (%)");
+  EXPECT_DOUBLE_EQ(j["trends"]["period_falling_pair_fraction"].get<double>(), 0.75);
+  EXPECT_NE(j["paper_trends"]["measure"].get<std::string>().find("the paper's"), std::string::npos);
+  EXPECT_TRUE(j["trends"]["nonlinear_to_linear_median_ratio"].is_null());
 }
 
 TEST(SweepTrends, StiffnessDifferenceIsRelativeToTheLargerError) {
@@ -87,7 +98,7 @@ TEST(SweepPlot, WritesBothFiguresAsPngAndSvg) {
     fs::path svg = file;
     EXPECT_GT(fs::file_size(svg.replace_extension(".svg")), 1000u) << svg;
   }
-  // The NRMSE-against-period figure's curves say what their number is (one curve per delay).
+  // The error-against-period figure's curves say what their number is (one curve per delay).
   std::ifstream in(dir / "sweep.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(svg.find("delay 4 ms"), std::string::npos);
@@ -127,15 +138,17 @@ TEST(SweepPlot, EveryDivergedPointIsSeenWithItsDelayAndModel) {
   for (const char* entry :
        {"delay 30 ms, linear: diverged", "delay 30 ms, bilinear (uy = 5 mm, b = 0.1): diverged",
         "delay 4 ms, linear", "delay 4 ms, bilinear (uy = 5 mm, b = 0.1)", "period T (s)",
-        "NRMSE (%, log)"}) {
+        "E_rms (%, log)", "NRMSE (%, log)", "the paper's Fig. 4"}) {
     EXPECT_NE(svg.find(entry), std::string::npos) << entry;
   }
+  // E_rms leads: its panel is drawn first, the paper's after it.
+  EXPECT_LT(svg.find("E_rms (%, log)"), svg.find("NRMSE (%, log)"));
   EXPECT_EQ(svg.find("delay 4 ms, linear: diverged"), std::string::npos);
   std::ifstream by_delay_in(dir / "sweep_vs_delay.svg");
   const std::string by_delay((std::istreambuf_iterator<char>(by_delay_in)),
                              std::istreambuf_iterator<char>());
-  for (const char* entry :
-       {"T = 0.2 s, linear", "T = 0.2 s, bilinear (uy = 5 mm, b = 0.1)", "delay (ms)"}) {
+  for (const char* entry : {"T = 0.2 s, linear", "T = 0.2 s, bilinear (uy = 5 mm, b = 0.1)",
+                            "delay (ms)", "E_rms (%, log)"}) {
     EXPECT_NE(by_delay.find(entry), std::string::npos) << entry;
   }
   fs::remove_all(dir);

@@ -23,6 +23,9 @@ def test_example_notebook_runs_clean_from_any_folder_and_draws_inline(tmp_path, 
                for out in cell.get("outputs", [])]
     printed = "".join(out.get("text", "") for out in outputs)
     assert "completed: peak" in printed
+    # The paper frame's 14 ms lag reads as `rths run` reads it (README): E_rms 57.50 %.
+    assert "E_rms 57.5 %" in printed, printed
+    assert "NRMSE" not in printed
     assert "DIVERGED" in printed
     figures = [out for out in outputs if "image/png" in out.get("data", {})]
     assert len(figures) >= 2, "the notebook's figures were not drawn inline"
