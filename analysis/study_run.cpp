@@ -10,7 +10,6 @@
 #include <sstream>
 #include <tuple>
 
-#include "analysis/results_csv.h"
 #include "core/metrics.h"
 #include "core/sparse_structure.h"
 #include "study/motion_key.h"
@@ -68,14 +67,6 @@ double nominal_delay_of(const core::HybridSetup& setup) {
   for (const core::DelayChain& chain : setup.delays)
     nominal = std::max(nominal, chain.nominal_delay());
   return nominal;
-}
-
-std::optional<core::CriticalDelayCheck> check_setup(const core::PreparedStudy& prepared,
-                                                    const core::HybridSetup& setup, double lag) {
-  if (prepared.base.partition.actuator_storeys.empty()) return std::nullopt;
-  return core::check_modal_critical_delay(setup.model,
-                                          prepared.base.partition.experimental_stiffness(),
-                                          setup.integrator, setup.dt, lag);
 }
 
 // One mode of the structure taken as an SDOF for the compensated loop's analysis.
@@ -245,7 +236,8 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   result.nominal_delay = nominal_delay_of(setup);
   result.delay_description =
       setup.delays.empty() ? "no experimental substructure" : setup.delays.front().describe();
-  result.stability = check_setup(prepared, setup, result.nominal_delay + options.extra_lag);
+  result.stability =
+      core::check_setup_critical_delay(prepared, setup, result.nominal_delay + options.extra_lag);
   if (study_case.compensation_size() > 0) {
     // Beside the compensated loop's verdict: the same case without its compensators.
     config::Case bare = study_case;
@@ -253,7 +245,8 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
     const core::HybridSetup bare_setup = core::setup_for_case(prepared, bare);
     result.compensated = judge_compensated_loop(
         setup, prepared.base.partition.experimental_stiffness(), study_case,
-        check_setup(prepared, bare_setup, nominal_delay_of(bare_setup) + options.extra_lag));
+        core::check_setup_critical_delay(prepared, bare_setup,
+                                         nominal_delay_of(bare_setup) + options.extra_lag));
   }
   if (const auto warning = pre_run_warning(result); warning && options.warn)
     options.warn("case '" + result.name + "': " + *warning);
@@ -318,12 +311,7 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
     const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag) {
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-  return check_setup(prepared, setup, nominal_delay_of(setup) + extra_lag);
-}
-
-std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
-    const core::PreparedStudy& prepared, double lag) {
-  return check_setup(prepared, prepared.base, lag);
+  return core::check_setup_critical_delay(prepared, setup, nominal_delay_of(setup) + extra_lag);
 }
 
 CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {

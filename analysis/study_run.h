@@ -126,11 +126,6 @@ std::optional<core::CriticalDelayCheck> check_case_critical_delay(
 // std::invalid_argument for a case the study lacks.
 CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name);
 
-// The same check for a lag given directly (s; e.g. an identified actuator's nominal delay) on
-// the study's base setup. Empty when the structure has no experimental part.
-std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
-    const core::PreparedStudy& prepared, double lag);
-
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
 
 // A case that ran elsewhere (`rths launch`, `rths sites`), as its record tells it.
@@ -151,7 +146,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
                                   std::vector<RecordedCase> cases,
                                   const RunStudyOptions& options = {});
 
-// The results file (csv, mat, h5) is results::study_table: analysis/results_csv.h columns.
+// The results file (csv, mat, h5) is analysis::study_table: results/column_names.h columns.
 // displacement.png/.svg, three panels (mm): every case with the reference (the paper's Fig. 3),
 // each case minus the reference, and a zoom on the reference's strongest 5 s; the axes follow the
 // cases that stayed bounded (a diverged case is clipped and labelled). force_displacement.png/.svg:

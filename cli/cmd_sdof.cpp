@@ -7,6 +7,7 @@
 #include <map>
 #include <memory>
 
+#include "analysis/result_tables.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
@@ -75,7 +76,7 @@ void run_sdof(const SdofOptions& o) {
   const analysis::CaseOutcome& reference = outcome.cases[0];
   const analysis::CaseOutcome& delayed = outcome.cases[1];
   if (!o.out.empty())
-    results::write_table(results::study_table(outcome), o.out, results::Format::kCsv);
+    results::write_table(analysis::study_table(outcome), o.out, results::Format::kCsv);
   if (o.json) {
     nlohmann::json out = {{"period_s", o.period},
                           {"zeta", o.zeta},

@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 
+#include "analysis/result_tables.h"
 #include "analysis/sweep_csv.h"
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
@@ -105,7 +106,8 @@ void write_sweep_table(const std::filesystem::path& path, results::Format format
     if (format == results::Format::kCsv) {
       analysis::write_sweep_csv(path, grid, shard, rows);
     } else {
-      results::write_table(results::sweep_table(table, grid.hash_hex(), grid.size()), path, format);
+      results::write_table(analysis::sweep_table(table, grid.hash_hex(), grid.size()), path,
+                           format);
     }
   } catch (const std::exception& e) {
     throw ExitError(kExitEnvironment, e.what());

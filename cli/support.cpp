@@ -1,5 +1,6 @@
 #include "cli/support.h"
 
+#include "analysis/result_tables.h"
 #include "results/results.h"
 #include "results/write.h"
 
@@ -346,7 +347,7 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
   if (plots)
     figures = std::async(std::launch::async, [&] { analysis::write_study_plots(outcome, out); });
   try {
-    results::write_table(results::study_table(outcome), results, kind);
+    results::write_table(analysis::study_table(outcome), results, kind);
   } catch (...) {
     if (figures.valid()) figures.wait();
     throw;

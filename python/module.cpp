@@ -42,6 +42,7 @@
 #include <optional>
 
 #include "analysis/benchmark_evaluation.h"
+#include "analysis/result_tables.h"
 #include "analysis/study_run.h"
 #include "analysis/sweep_grid.h"
 #include "analysis/sweep_report.h"
@@ -163,7 +164,7 @@ py::dict run(const Study& study, const std::optional<std::vector<std::string>>& 
     py::gil_scoped_release release;
     const core::PreparedStudy prepared = core::prepare_study(chosen, study.base_dir);
     outcome = analysis::run_study(prepared);
-    table = results::study_table(outcome);
+    table = analysis::study_table(outcome);
     benchmark = analysis::evaluate_benchmark(prepared, outcome);
   }
   py::dict out = table_dict(table);
@@ -191,7 +192,7 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
     trends = analysis::sweep_trends_json(rows);
     hash = grid.hash_hex();
     points = grid.size();
-    table = results::sweep_table(rows, hash, points);
+    table = analysis::sweep_table(rows, hash, points);
   }
   py::dict out = table_dict(table);
   out["grid_hash"] = hash;

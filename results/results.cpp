@@ -5,8 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "analysis/results_csv.h"
 #include "core/ground_motion.h"
+#include "results/column_names.h"
 #include "study/motion_key.h"
 
 namespace rths::results {
@@ -14,7 +14,8 @@ namespace {
 
 constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();
 
-// "node<n>_<quantity>": a link's column, the same in a record and in a study's table.
+}  // namespace
+
 std::string link_column(int node, const std::string& quantity) {
   std::string name = "node";  // appended: GCC 12 misreads `"node" + std::to_string` (-Wrestrict)
   name += std::to_string(node);
@@ -23,139 +24,11 @@ std::string link_column(int node, const std::string& quantity) {
   return name;
 }
 
-// Which motion ran, as every table names it (analysis::StudyOutcome's motion fields).
 void set_motion_attributes(Table& t, const std::string& name, const std::string& sha256,
                            const std::string& file_sha256) {
   t.set_attribute("motion_name", name);
   t.set_attribute("motion_sha256", sha256);
   t.set_attribute("motion_file_sha256", file_sha256);
-}
-
-// A case ran as meant: it completed, or diverged as its expect_unstable said it would.
-bool case_ok(const analysis::CaseOutcome& c) {
-  return c.status == "completed" || (c.diverged() && c.expect_unstable);
-}
-
-// The study's verdict over its cases: status "completed" when every case completed, else
-// "<case>: <status>" of each case that did not; ok 1 when every case ran as meant, else 0.
-void set_study_verdict(Table& t, const analysis::StudyOutcome& outcome) {
-  std::string status;
-  bool ok = true;
-  for (const analysis::CaseOutcome& c : outcome.cases) {
-    ok = ok && case_ok(c);
-    if (c.status == "completed") continue;
-    if (!status.empty()) status += "; ";
-    status += c.name + ": " + c.status;
-  }
-  t.set_attribute("status", status.empty() ? "completed" : status);
-  t.set_number_attribute("ok", ok ? 1.0 : 0.0);
-}
-
-}  // namespace
-
-Table study_table(const analysis::StudyOutcome& outcome) {
-  Table table;
-  if (outcome.cases.empty()) return table;
-  std::size_t rows = 0;
-  for (const auto& c : outcome.cases) rows = std::max(rows, c.simulation.steps());
-  const double dt = outcome.cases.front().simulation.dt;
-  std::vector<double> step(rows), time(rows);
-  for (std::size_t k = 0; k < rows; ++k) {
-    step[k] = static_cast<double>(k);
-    time[k] = static_cast<double>(k) * dt;
-  }
-  table.add_numbers("step", "", std::move(step));
-  table.add_numbers("time_s", "s", std::move(time));
-  // Every floor and every actuator of every case (analysis/results_csv.h names); a case that
-  // stopped early is NaN (an empty CSV cell) after its last step.
-  for (const auto& c : outcome.cases) {
-    const core::SimulationResult& r = c.simulation;
-    const std::vector<std::string> names = analysis::result_column_names(c.name, r);
-    const auto column = [&](const core::Mat& m, Eigen::Index j) {
-      std::vector<double> v(rows, kMissing);
-      for (Eigen::Index k = 0; k < m.rows(); ++k) v[static_cast<std::size_t>(k)] = m(k, j);
-      return v;
-    };
-    std::size_t n = 0;
-    for (Eigen::Index i = 0; i < r.displacement.cols(); ++i)
-      table.add_numbers(names[n++], "m", column(r.displacement, i));
-    for (Eigen::Index j = 0; j < r.command.cols(); ++j) {
-      table.add_numbers(names[n++], "m", column(r.command, j));
-      table.add_numbers(names[n++], "m", column(r.realised, j));
-      table.add_numbers(names[n++], "N", column(r.measured_force, j));
-    }
-  }
-  table.set_attribute("study", outcome.study_name);
-  table.set_number_attribute("dt_s", dt);
-  set_motion_attributes(table, outcome.motion_name, outcome.motion_sha256,
-                        outcome.motion_file_sha256);
-  set_study_verdict(table, outcome);
-  table.set_attribute("reference_case", outcome.reference().name);
-  table.set_attribute("reference", outcome.reference_description());
-  return table;
-}
-
-Table distributed_study_table(const analysis::StudyOutcome& outcome,
-                              const std::vector<std::map<int, runtime::LinkSeries>>& links) {
-  if (links.size() != outcome.cases.size())
-    throw std::invalid_argument("distributed_study_table: " + std::to_string(links.size()) +
-                                " link sets for " + std::to_string(outcome.cases.size()) +
-                                " cases");
-  Table table = study_table(outcome);
-  const std::size_t rows = table.rows();
-  for (std::size_t i = 0; i < links.size(); ++i) {
-    const core::SimulationResult& r = outcome.cases[i].simulation;
-    const std::string prefix = analysis::result_column_prefix(outcome.cases[i].name);
-    for (const auto& [node, series] : links[i]) {
-      std::vector<double> injected(rows, kMissing), round_trip(rows, kMissing);
-      for (std::size_t a = 0; a < series.time.size(); ++a) {
-        // The carrying step's index from its simulated time t_k = k dt.
-        const auto k = r.dt > 0 ? std::llround(series.time[a] / r.dt) : -1;
-        if (k < 0 || static_cast<std::size_t>(k) >= rows) continue;
-        injected[static_cast<std::size_t>(k)] = series.injected[a];
-        round_trip[static_cast<std::size_t>(k)] = series.round_trip[a];
-      }
-      table.add_numbers(prefix + link_column(node, "injected_lag_s"), "s", std::move(injected));
-      table.add_numbers(prefix + link_column(node, "round_trip_s"), "s", std::move(round_trip));
-    }
-  }
-  return table;
-}
-
-Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::string& grid_hash,
-                  std::size_t grid_points) {
-  const auto numbers = [&rows](auto field) {
-    std::vector<double> out;
-    out.reserve(rows.size());
-    for (const auto& r : rows) out.push_back(static_cast<double>(field(r)));
-    return out;
-  };
-  const auto texts = [&rows](auto field) {
-    std::vector<std::string> out;
-    for (const auto& r : rows) out.push_back(field(r));
-    return out;
-  };
-  using Row = analysis::SweepTableRow;
-  Table t;
-  t.add_numbers("index", "", numbers([](const Row& r) { return r.index; }));
-  t.add_numbers("period_s", "s", numbers([](const Row& r) { return r.period; }));
-  t.add_numbers("delay_s", "s", numbers([](const Row& r) { return r.delay; }));
-  t.add_numbers("alpha", "", numbers([](const Row& r) { return r.alpha; }));
-  t.add_numbers("stiffness_N_per_m", "N/m", numbers([](const Row& r) { return r.stiffness; }));
-  t.add_numbers("dt_s", "s", numbers([](const Row& r) { return r.dt; }));
-  t.add_texts("motion", "", texts([](const Row& r) { return r.motion; }));
-  t.add_texts("model", "", texts([](const Row& r) { return r.model; }));
-  t.add_numbers("peak_ref_m", "m", numbers([](const Row& r) { return r.peak_reference; }));
-  t.add_numbers("peak_delayed_m", "m", numbers([](const Row& r) { return r.peak_delayed; }));
-  t.add_numbers("peak_error_pct", "%", numbers([](const Row& r) { return r.peak_error_pct; }));
-  t.add_numbers("rms_error_pct", "%", numbers([](const Row& r) { return r.rms_error_pct; }));
-  t.add_numbers("peak_error_m", "m", numbers([](const Row& r) { return r.peak_error; }));
-  t.add_numbers("nrmse_pct", "%", numbers([](const Row& r) { return r.nrmse_pct; }));
-  t.add_numbers("eq2_paper", "", numbers([](const Row& r) { return r.eq2_paper; }));
-  t.add_numbers("diverged", "", numbers([](const Row& r) { return r.diverged ? 1 : 0; }));
-  t.set_attribute("grid_hash", grid_hash);
-  t.set_attribute("grid_points", std::to_string(grid_points));
-  return t;
 }
 
 namespace {
@@ -284,28 +157,28 @@ Table record_table(const runtime::RecordContents& record) {
   t.add_numbers("time_s", "s", scalar([](const Step& s) { return s.time(); }));
   t.add_numbers("ground_acceleration_m_per_s2", "m/s^2",
                 scalar([](const Step& s) { return s.ground_acceleration(); }));
-  // Column i (0-based) of each quantity, named by analysis/results_csv.h (1-based).
+  // Column i (0-based) of each quantity, named by results/column_names.h (1-based).
   const auto add_indexed = [&t](std::string (*name)(std::size_t), const std::string& unit,
                                 std::vector<std::vector<double>> columns) {
     for (std::size_t i = 0; i < columns.size(); ++i)
       t.add_numbers(name(i + 1), unit, std::move(columns[i]));
   };
-  add_indexed(analysis::displacement_column, "m",
+  add_indexed(displacement_column, "m",
               per_index(
                   [](const Step& s) -> const auto& { return s.displacement(); }, dofs));
-  add_indexed(analysis::velocity_column, "m/s",
+  add_indexed(velocity_column, "m/s",
               per_index(
                   [](const Step& s) -> const auto& { return s.velocity(); }, dofs));
-  add_indexed(analysis::acceleration_column, "m/s^2",
+  add_indexed(acceleration_column, "m/s^2",
               per_index(
                   [](const Step& s) -> const auto& { return s.acceleration(); }, dofs));
-  add_indexed(analysis::command_column, "m",
+  add_indexed(command_column, "m",
               per_index(
                   [](const Step& s) -> const auto& { return s.command(); }, actuators));
-  add_indexed(analysis::measured_column, "m",
+  add_indexed(measured_column, "m",
               per_index(
                   [](const Step& s) -> const auto& { return s.realised(); }, actuators));
-  add_indexed(analysis::force_column, "N",
+  add_indexed(force_column, "N",
               per_index(
                   [](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
   add_link_columns(t, *header, steps);

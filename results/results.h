@@ -1,35 +1,19 @@
 #pragma once
 // Every rths result as a Table (results/table.h): the one place that names the variables and
 // units of each command's output, for the CSV, MATLAB and HDF5 writers and the Python module.
-// A run's history has one naming (analysis/results_csv.h) in every table that holds it: a table
+// A run's history has one naming (results/column_names.h) in every table that holds it: a table
 // of several cases (run, launch, sites) puts "<case>_" in front of each of a case's columns; a
 // record (export, read_record) is one case, named in its attribute case_name, without prefix.
 //
-// Every table of a run (study_table, distributed_study_table, record_table) has the attributes
+// The tables of a study's outcome (study_table, distributed_study_table, sweep_table) are built
+// where the outcome is, in analysis/result_tables.h, on this naming.
+// Every table of a run (those and record_table) has the attributes
 //   study (text), dt_s (number, s), motion_name, motion_sha256 (SHA-256 of the motion as run:
 //   dt, then the samples in m/s^2 as IEEE doubles, core::motion_key; the same in a run's
 //   table and in its records' exports), motion_file_sha256 (of the file it was read from), the
 //   verdict status (text) and ok (number: 1 the run(s) went as meant, 0 not).
 // Numbers are number attributes (Table::set_number_attribute), the rest text.
 //
-//   study_table   `rths run`: step, time_s, then per case every floor and every actuator
-//                 (<case>_u_floor<i>_m, <case>_command_act<j>_m, <case>_measured_act<j>_m,
-//                 <case>_force_act<j>_N). A case that stopped early (diverged) is NaN after
-//                 its last step. status: "completed" when every case completed, else
-//                 "<case>: <status>" of each case that did not, joined by "; "; ok 1 when every
-//                 case completed or diverged as its expect_unstable said. Also reference_case
-//                 and reference.
-//   distributed_study_table  `rths launch` and `rths sites`: study_table's columns (the same as
-//                 `run`'s for the same cases), then the lag per link of each case:
-//                 <case>_node<n>_injected_lag_s and <case>_node<n>_round_trip_s (s), filled at
-//                 the step that carried each answer (runtime/record/measurements.h: an answer
-//                 counts once) and NaN elsewhere (step 0; a real-time step that reused an older
-//                 answer). Attribute "reference": against what every case was compared.
-//   sweep_table   `rths sweep`: index, period (s), delay (s), alpha, stiffness (N/m; 0 = mass
-//                 1 kg), dt (s), motion and model (text), peak_ref, peak_delayed (m),
-//                 peak_error_pct (E_peak), rms_error_pct (E_rms), peak_error (m), the
-//                 paper's nrmse_pct and eq2_paper, diverged (0/1), as in the sweep CSV;
-//                 attributes grid_hash and grid_points.
 //   record_table  a run record (`rths launch`, `rths export`): step, time_s,
 //                 ground_acceleration_m_per_s2, u_floor<i>_m, v_floor<i>_m_per_s,
 //                 a_floor<i>_m_per_s2 per DOF, command_act<j>_m, measured_act<j>_m,
@@ -55,8 +39,6 @@
 //                 the declared and final model's predictions over the whole record); unit m for
 //                 `measured` (displacement), N for `force`.
 
-#include "analysis/study_run.h"
-#include "analysis/sweep_run.h"
 #include "identify/fit/identify.h"
 #include "results/table.h"
 #include "runtime/record/measurements.h"
@@ -64,12 +46,12 @@
 
 namespace rths::results {
 
-Table study_table(const analysis::StudyOutcome& outcome);
-// links[i]: the per-link series of outcome.cases[i] (runtime::measure_run); sizes must agree.
-Table distributed_study_table(const analysis::StudyOutcome& outcome,
-                              const std::vector<std::map<int, runtime::LinkSeries>>& links);
-Table sweep_table(const std::vector<analysis::SweepTableRow>& rows, const std::string& grid_hash,
-                  std::size_t grid_points);
+// "node<n>_<quantity>": a link's column, the same in a record and in a study's table.
+std::string link_column(int node, const std::string& quantity);
+// Which motion ran, as every table of a run names it: motion_name, motion_sha256 and
+// motion_file_sha256 (text attributes, above).
+void set_motion_attributes(Table& t, const std::string& name, const std::string& sha256,
+                           const std::string& file_sha256);
 // Throws std::invalid_argument when the record has no header entry.
 Table record_table(const runtime::RecordContents& record);
 Table identify_table(const identify::Identification& identification);

@@ -30,4 +30,16 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
   return simulated_growth(kind, period, zeta, alpha, dt, std::move(chain), duration);
 }
 
+std::optional<CriticalDelayCheck> check_setup_critical_delay(const PreparedStudy& prepared,
+                                                             const HybridSetup& setup, double lag) {
+  if (prepared.base.partition.actuator_storeys.empty()) return std::nullopt;
+  return check_modal_critical_delay(setup.model, prepared.base.partition.experimental_stiffness(),
+                                    setup.integrator, setup.dt, lag);
+}
+
+std::optional<CriticalDelayCheck> check_lag_critical_delay(const PreparedStudy& prepared,
+                                                           double lag) {
+  return check_setup_critical_delay(prepared, prepared.base, lag);
+}
+
 }  // namespace rths::core

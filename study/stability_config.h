@@ -2,10 +2,25 @@
 // The stability analyses of core/stability.h for a study case's delay stages and compensation
 // config messages.
 
+#include <optional>
+
 #include "core/stability.h"
 #include "rths/proto/config.pb.h"
 
 namespace rths::core {
+
+struct HybridSetup;
+struct PreparedStudy;
+
+// The one pre-run judgement of a lag (s) on a study: check_modal_critical_delay of `setup`'s
+// model, integrator and dt with the study's experimental stiffness (exact on one DOF, the modal
+// approximation on several). Empty when the structure has no experimental part.
+std::optional<CriticalDelayCheck> check_setup_critical_delay(const PreparedStudy& prepared,
+                                                             const HybridSetup& setup, double lag);
+// The same on the study's base setup, for a lag given directly (e.g. an identified actuator's
+// nominal delay).
+std::optional<CriticalDelayCheck> check_lag_critical_delay(const PreparedStudy& prepared,
+                                                           double lag);
 
 // compensated_stability (core/stability.h) for a study case's delay stages and compensation
 // (`compensation` may be null: uncompensated), built at dt. Throws std::invalid_argument naming

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "analysis/result_tables.h"
 #include "core/time_text.h"
 #include "results/results.h"
 #include "results/write.h"
@@ -35,7 +36,7 @@ std::filesystem::path write_distributed_outputs(
   const results::Format kind = results::parse_format(format);
   const std::filesystem::path table_file = out / ("results" + results::extension(kind));
   if (!results.outcome.cases.empty())
-    results::write_table(results::distributed_study_table(results.outcome, results.links),
+    results::write_table(analysis::distributed_study_table(results.outcome, results.links),
                          table_file, kind);
   if (!plots) {
     // A folder must not show plots of an earlier run beside this run's results.

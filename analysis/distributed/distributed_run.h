@@ -10,7 +10,7 @@
 //                       analysis::compare on the top floor, nrmse_pct). A case whose process ran
 //                       without leaving a record is listed in `missing` with why.
 //   write_distributed_outputs  (distributed_outputs.h) into `out`: results.<csv|mat|h5>
-//   (results::distributed_study_table:
+//   (analysis::distributed_study_table:
 //                       `rths run`'s columns for the same cases, plus lag per link), the plots of
 //                       `rths run` (analysis::write_study_plots, the lag-free reference drawn
 //                       beside the cases), lag_<case>.png/.svg (see write_lag_plot), summary.json

@@ -5,10 +5,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "analysis/study_run.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "identify/model/study_config.h"
+#include "study/stability_config.h"
 #include "study/study.h"
 
 namespace rths::identify {
@@ -102,7 +102,7 @@ StudyPrediction predict_study(const std::filesystem::path& config, const Channel
   setup.delays.assign(setup.partition.actuator_storeys.size(), chain.chain);
   out.identified = compare("identified_actuator", reference, core::simulate(setup, prepared.motion),
                            chain.chain.nominal_delay());
-  out.stability = analysis::check_lag_critical_delay(prepared, chain.chain.nominal_delay());
+  out.stability = core::check_lag_critical_delay(prepared, chain.chain.nominal_delay());
   return out;
 }
 

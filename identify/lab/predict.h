@@ -46,7 +46,7 @@ struct StudyPrediction {
   std::vector<CaseError> cases;  // the config's own cases, for comparison
   std::string actuator;          // description of the chain
   std::vector<std::string> ignored;
-  // The identified actuator's lag against the study's critical delay (analysis/study_run.h's one
+  // The identified actuator's lag against the study's critical delay (study/stability_config.h, the one
   // pre-run judgement): the margin, the verdict and the lag the test could take. Empty when the
   // study has no experimental part.
   std::optional<core::CriticalDelayCheck> stability;

@@ -1,6 +1,6 @@
 #pragma once
 // The per-step columns of one or more runs: the names every command that writes a run's history
-// uses (run, sdof, launch, sites: results::study_table; export and read_record: results::
+// uses (run, sdof, launch, sites: analysis::study_table; export and read_record: results::
 // record_table, the same names without the case prefix; written as CSV, MATLAB or HDF5 by
 // results::write_table).
 //
@@ -22,7 +22,7 @@
 
 #include "core/simulation.h"
 
-namespace rths::analysis {
+namespace rths::results {
 
 struct NamedResult {
   std::string name;
@@ -45,4 +45,4 @@ std::string force_column(std::size_t actuator);
 std::vector<std::string> result_column_names(const std::string& run_name,
                                              const core::SimulationResult& result);
 
-}  // namespace rths::analysis
+}  // namespace rths::results

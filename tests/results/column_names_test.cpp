@@ -1,4 +1,4 @@
-#include "analysis/results_csv.h"
+#include "results/column_names.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 
 #include <unistd.h>
 
-namespace rths::analysis {
+namespace rths::results {
 namespace {
 
 core::SimulationResult three_floors_two_actuators(std::size_t steps) {
@@ -42,4 +42,4 @@ TEST(ResultsCsv, ARecordsVelocityAndAccelerationAreNamedAsItsDisplacement) {
 }
 
 }  // namespace
-}  // namespace rths::analysis
+}  // namespace rths::results

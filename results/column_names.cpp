@@ -1,11 +1,11 @@
-#include "analysis/results_csv.h"
+#include "results/column_names.h"
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <stdexcept>
 
-namespace rths::analysis {
+namespace rths::results {
 namespace {
 
 std::string safe_name(const std::string& name) {
@@ -54,4 +54,4 @@ std::vector<std::string> result_column_names(const std::string& run_name,
   return names;
 }
 
-}  // namespace rths::analysis
+}  // namespace rths::results
