@@ -5,6 +5,8 @@
    or util/ header or any room above it, and core's library links Eigen alone (no file format).
 2. No two units include each other anywhere (a unit is a .h with its .cpp): rooms form layers.
 3. Every folder with sources has one library target of its own (its CMakeLists.txt adds one).
+4. Arrows point down: results/ (tables and their writers) and identify/ do not include analysis/,
+   which builds on both.
 
 Exit 0 when all hold; 1 naming each break."""
 import os
@@ -13,6 +15,8 @@ import sys
 
 SOURCE = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__))))
+# (room, room it must not include): the studies build on the tables and on identification.
+DOWNWARD_ONLY = [("results/", "analysis/"), ("identify/", "analysis/")]
 SKIP = {"build", "tests", "fuzz", "bench", "docs", "data", "configs", "examples", "docker",
         "scripts", "node_modules", "python"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
@@ -42,6 +46,9 @@ def main():
         for target in includes(path):
             if path.startswith("core/") and not target.startswith("core/"):
                 problems.append(f"{path} includes {target}: core/ includes only core/")
+            for room, above in DOWNWARD_ONLY:
+                if path.startswith(room) and target.startswith(above):
+                    problems.append(f"{path} includes {target}: {room} is below {above}")
             target_unit = os.path.splitext(target)[0]
             if target_unit != unit and os.path.exists(os.path.join(SOURCE, target)):
                 graph.setdefault(unit, set()).add(target_unit)
