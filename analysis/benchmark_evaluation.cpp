@@ -145,6 +145,8 @@ std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy&
   if (!out.published.empty()) judge_published_key(spec, study, prepared.base_dir, whole, out);
   const core::LinearResponse reference = core::exact_linear_response(whole, prepared.motion);
   out.j1_search = spec.j1_search() > 0 ? spec.j1_search() : 49 * out.dt;
+  out.experimental_dof = dof;
+  out.reference_displacement = reference.displacement;
   // The study's reference case is not judged (in a distributed outcome, where every case is a
   // recorded one, by its name).
   const std::string reference_name =

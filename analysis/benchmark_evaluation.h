@@ -39,8 +39,12 @@ struct BenchmarkEvaluation {
   std::string run_motion_key, run_structure_key;  // this run's (empty without published values)
   // Why the published values are compared with nowhere (empty when they are for published_case).
   std::string published_note;
-  double dt = 0.0;         // s
-  double j1_search = 0.0;  // s, J1's lag range (+-)
+  double dt = 0.0;           // s
+  double j1_search = 0.0;    // s, J1's lag range (+-)
+  int experimental_dof = 0;  // 0-based
+  // The exact response of the whole structure every case is judged against (m, relative to
+  // the ground; a row per step of dt, a column per floor).
+  core::Mat reference_displacement;
   // Whether case i's criteria have published values to be compared with.
   bool compared_with_published(const BenchmarkCaseCriteria& c) const;
 };

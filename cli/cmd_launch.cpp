@@ -275,7 +275,8 @@ void report(const LaunchArgs& args, const core::PreparedStudy& prepared,
   // J1-J9 of the recorded cases, as `rths run` gives them (before the summary: the JSON summary
   // must stay the last thing printed).
   if (!results.outcome.cases.empty())
-    write_benchmark_outputs(prepared, results.outcome, out, args.results.json);
+    write_benchmark_outputs(prepared, results.outcome, out, !args.results.no_plots,
+                            args.results.json);
   if (args.results.json) {
     auto j = analysis::distributed_summary_json(results);
     j["output"] = out.string();

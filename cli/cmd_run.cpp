@@ -108,7 +108,7 @@ void run(const RunOptions& o) {
   claim_output_folder(out, study.name(), o.results.force);
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
   write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
-  write_benchmark_outputs(prepared, outcome, out, o.results.json);
+  write_benchmark_outputs(prepared, outcome, out, !o.results.no_plots, o.results.json);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
   fail_if_unstable(outcome, o.results.allow_unstable);
 }

@@ -1,5 +1,6 @@
 #include "cli/support.h"
 
+#include "analysis/benchmark_plots.h"
 #include "analysis/result_tables.h"
 #include "results/results.h"
 #include "results/write.h"
@@ -374,7 +375,7 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
 
 void write_benchmark_outputs(const core::PreparedStudy& prepared,
                              const analysis::StudyOutcome& outcome,
-                             const std::filesystem::path& out, bool quiet) {
+                             const std::filesystem::path& out, bool plots, bool quiet) {
   const auto benchmark = analysis::evaluate_benchmark(prepared, outcome);
   if (!benchmark) return;
   const std::string table = analysis::benchmark_table(*benchmark);
@@ -384,7 +385,18 @@ void write_benchmark_outputs(const core::PreparedStudy& prepared,
   util::AtomicFile json(out / "benchmark.json");
   json.stream() << analysis::benchmark_json(*benchmark).dump(2) << "\n";
   json.commit();
-  if (!quiet) std::cout << table << "written: benchmark.txt, benchmark.json\n";
+  std::string figures;
+  if (plots) {
+    try {
+      for (const auto& png : analysis::write_benchmark_plots(*benchmark, outcome, out))
+        figures += ", " + png.filename().string() + "/.svg";
+    } catch (const std::runtime_error& e) {
+      throw ExitError(
+          kExitEnvironment,
+          std::string("benchmark.txt and .json are written, the figures failed: ") + e.what());
+    }
+  }
+  if (!quiet) std::cout << table << "written: benchmark.txt, benchmark.json" << figures << "\n";
 }
 
 void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable) {

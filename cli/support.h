@@ -104,11 +104,12 @@ void claim_output_folder(const std::filesystem::path& out, const std::string& st
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format = "csv");
 // A study with a benchmark section: J1-J9 of its cases (analysis::evaluate_benchmark) written to
-// out/benchmark.txt and out/benchmark.json, and the table printed unless `quiet`. Nothing without
-// one. The same after `rths run` and `rths launch`.
+// out/benchmark.txt and out/benchmark.json, with `plots` its figures (analysis/benchmark_plots.h),
+// and the table printed unless `quiet`. Nothing without one. The same after `rths run` and
+// `rths launch`.
 void write_benchmark_outputs(const core::PreparedStudy& prepared,
                              const analysis::StudyOutcome& outcome,
-                             const std::filesystem::path& out, bool quiet);
+                             const std::filesystem::path& out, bool plots, bool quiet);
 // Throws ExitError(1) listing every case that failed the run (analysis::StudyOutcome::failures).
 void fail_if_unstable(const analysis::StudyOutcome& outcome, bool allow_unstable);
 
