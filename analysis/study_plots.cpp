@@ -94,7 +94,7 @@ std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
         "commanded displacement (mm)", "measured force (kN)"};
     panel.series = {
         force_loop(c, c.name, "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw 2"), over};
-    panel.height = 340;
+    panel.square = true;
     panels.push_back(std::move(panel));
   }
   // One scale on every panel, so that the loops compare at a glance.
@@ -113,6 +113,7 @@ std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
     util::PlotSpec alone{study + ": what the integrator sees (experimental part)",
                          "commanded displacement (mm)", "measured force (kN)"};
     alone.series = {force_loop(reference, reference.name, "lines lw 2")};
+    alone.square = true;
     panels.push_back(std::move(alone));
   }
   return panels;

@@ -173,7 +173,9 @@ std::string x_tics(const PlotSpec& spec) {
 
 void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::string& tag,
                   std::size_t panel, std::size_t title_width) {
-  script << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
+  script << (spec.square ? "set size square\nset key inside bottom right Left reverse opaque box\n"
+                         : "set size nosquare\nset key outside right top vertical Left reverse\n")
+         << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
          << "set ylabel " << quoted(spec.ylabel) << "\n"
          << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
@@ -212,17 +214,39 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
   script << "\n";
 }
 
+// Square panels (PlotSpec::square) in a grid of at most three columns: each width / columns
+// pixels square, the title wrapped to that width.
+std::string square_grid(const std::vector<PlotSpec>& panels, const std::string& tag,
+                        const std::string& terminal, const std::filesystem::path& file) {
+  const int columns = static_cast<int>(std::min<std::size_t>(3, panels.size()));
+  const int rows = static_cast<int>((panels.size() + 2) / 3);
+  const int width = panels.front().width, side = width / columns;
+  std::ostringstream script;
+  script << "reset\n"
+         << "set terminal " << terminal << " size " << width << "," << side * rows
+         << " font 'sans,10'\n"
+         << "set output " << quoted(file.string()) << "\n"
+         << "set termoption noenhanced\nset grid\n"
+         << "set multiplot layout " << rows << "," << columns << "\n";
+  const auto title_width = static_cast<std::size_t>(std::max(20.0, (side - 60.0) / 7.5));
+  for (std::size_t p = 0; p < panels.size(); ++p)
+    append_panel(script, panels[p], tag, p, title_width);
+  script << "unset multiplot\nset output\n";
+  return script.str();
+}
+
 std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
                    const std::string& terminal, const std::filesystem::path& file) {
+  if (std::all_of(panels.begin(), panels.end(), [](const PlotSpec& p) { return p.square; }))
+    return square_grid(panels, tag, terminal, file);
   std::ostringstream script;
   const int height = panels.front().height * static_cast<int>(panels.size());
   // One gnuplot may draw several figures: none inherits another's margins or ranges.
-  script
-      << "reset\n"
-      << "set terminal " << terminal << " size " << panels.front().width << "," << height
-      << " font 'sans,10'\n"
-      << "set output " << quoted(file.string()) << "\n"
-      << "set termoption noenhanced\nset grid\nset key outside right top vertical Left reverse\n";
+  script << "reset\n"
+         << "set terminal " << terminal << " size " << panels.front().width << "," << height
+         << " font 'sans,10'\n"
+         << "set output " << quoted(file.string()) << "\n"
+         << "set termoption noenhanced\nset grid\n";
   if (panels.size() > 1) {
     // Stacked panels share the time axis: the same margins on every panel, so their data areas
     // line up whatever each legend's width; the right margin fits the longest legend entry.

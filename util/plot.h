@@ -62,6 +62,10 @@ struct PlotSpec {
   // Tick labels at these x (a bar chart's bars: "\n" breaks a label into lines); empty = the
   // numbers of the x axis.
   std::vector<std::pair<double, std::string>> x_labels;
+  // A square data area with its legend inside, bottom right (a force-displacement loop, which
+  // runs from lower left to upper right, reads true only with equal axes lengths). A figure of square panels lays them out in a grid of at most three
+  // columns, each `width / columns` pixels square, instead of stacking them.
+  bool square = false;
 };
 
 // The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel
@@ -103,7 +107,8 @@ std::vector<std::size_t> simplify_path(const Series& s, double x_lo, double x_hi
 // Throws std::runtime_error naming the file when gnuplot is missing or fails.
 void write_png_plot(const PlotSpec& spec, const std::filesystem::path& png);
 
-// Several panels stacked vertically in one PNG (shared width), and the SVG beside it.
+// Several panels stacked vertically in one PNG (shared width), or square ones in a grid (above),
+// and the SVG beside it.
 void write_png_panels(const std::vector<PlotSpec>& panels, const std::filesystem::path& png);
 
 // Several such figures drawn by one gnuplot process: each gnuplot start-up (cairo, pango, fonts)
