@@ -17,6 +17,7 @@
 #include "runtime/launch/launch.h"
 #include "tests/identify/undeclared_run.h"
 #include "tests/support/platform_gate.h"
+#include "tests/support/real_time_run.h"
 
 namespace rths::identify {
 namespace {
@@ -33,17 +34,29 @@ class DdsRunRecord : public testing::Test {
 
 // A DDS run of case lag_shift_14ms whose node 1 and node 2 carry `node1` and `node2` (NodeSpec
 // fields the declared config lacks); `fields` (deployment fields, e.g. the clock) are declared.
-// The record's header then holds the declared config.
-fs::path launch_with_undeclared(const std::string& name, const std::string& node1,
+// The record's header then holds the declared config. A real-time run is launched beside a
+// stall witness: `machine_stalled` says why, when a stall of this machine failed it rightly
+// (tests/support/real_time_run.h), and the test is then skipped.
+struct UndeclaredRun {
+  fs::path record;
+  std::optional<std::string> machine_stalled;
+};
+UndeclaredRun launch_undeclared(const std::string& name, const std::string& node1,
                                 const std::string& node2, int domain,
                                 const std::string& fields = "", double duration = kDuration) {
   const auto deployment = [&](const std::string& n1, const std::string& n2) {
     return "deployment { " + fields + " nodes { id: 1 kind: SUBSTRUCTURE " + n1 +
            " } nodes { id: 2 kind: ACTUATOR_EMULATOR " + n2 + " } }";
   };
-  const auto run = test::launch(name, test::paper_frame_study(duration, deployment(node1, node2)),
-                                "lag_shift_14ms", domain);
-  EXPECT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const test::WitnessedRun witnessed = test::launch_witnessed(
+      name, test::paper_frame_study(duration, deployment(node1, node2)), "lag_shift_14ms", domain);
+  const test::RealTimeVerdict verdict = test::real_time_verdict(witnessed);
+  UndeclaredRun out;
+  if (verdict.kind == test::RealTimeVerdict::kMachineStalled)
+    out.machine_stalled = verdict.why;
+  else
+    EXPECT_EQ(verdict.kind, test::RealTimeVerdict::kCompleted) << verdict.why;
+  const test::LaunchedRun& run = witnessed.run;
   const fs::path record = run.dir / "run.rthsrec";
   const core::PreparedStudy declared =
       test::prepare(test::paper_frame_study(duration, deployment("", "")));
@@ -51,7 +64,14 @@ fs::path launch_with_undeclared(const std::string& name, const std::string& node
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared.config;
     if (e.has_inputs()) *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
   });
-  return record;
+  out.record = record;
+  return out;
+}
+
+fs::path launch_with_undeclared(const std::string& name, const std::string& node1,
+                                const std::string& node2, int domain,
+                                const std::string& fields = "", double duration = kDuration) {
+  return launch_undeclared(name, node1, node2, domain, fields, duration).record;
 }
 
 // A real-time run at the study's 1 kHz, with fail-safe windows wide enough that a loaded machine
@@ -184,9 +204,10 @@ TEST_F(DdsRunRecord, PeriodicSpikesAndAFirstOrderLagAreEachNamedWhereTheyAre) {
 // In real time the loop may take a newer answer before an older one it also received: the
 // record's answer count tells those apart from lost ones, so a clean run loses none.
 TEST_F(DdsRunRecord, ACleanRealTimeRecordLosesNoAnswersAndNamesNothingOnItsLinks) {
-  const RunIdentification run = identify_run_record(
-      launch_with_undeclared("identify_dds_rt_clean", "", "", 227, kRealTime, kRealTimeDuration),
-      actuator_only());
+  const UndeclaredRun launched =
+      launch_undeclared("identify_dds_rt_clean", "", "", 227, kRealTime, kRealTimeDuration);
+  if (launched.machine_stalled) GTEST_SKIP() << *launched.machine_stalled;
+  const RunIdentification run = identify_run_record(launched.record, actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(run.clock, "real_time") << text;
   // The platform's part is stated whatever this busy machine did: a real-time record is judged
@@ -209,11 +230,11 @@ TEST_F(DdsRunRecord, ACleanRealTimeRecordLosesNoAnswersAndNamesNothingOnItsLinks
 }
 
 TEST_F(DdsRunRecord, ARealTimeBurstOfDroppedCommandsIsNamedAsLostAnswersOnItsLink) {
-  const RunIdentification run =
-      identify_run_record(launch_with_undeclared("identify_dds_rt_burst",
-                                                 network("drop_first_step: 1000 drop_steps: 12"),
-                                                 "", 229, kRealTime, kRealTimeDuration),
-                          actuator_only());
+  const UndeclaredRun launched =
+      launch_undeclared("identify_dds_rt_burst", network("drop_first_step: 1000 drop_steps: 12"),
+                        "", 229, kRealTime, kRealTimeDuration);
+  if (launched.machine_stalled) GTEST_SKIP() << *launched.machine_stalled;
+  const RunIdentification run = identify_run_record(launched.record, actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"lost answers"}) << text;
   EXPECT_EQ(run.links.at(0).lost, 12u) << text;

@@ -54,8 +54,12 @@ TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
   const auto* footer = run.record.footer();
   ASSERT_NE(footer, nullptr);
   const double steps = static_cast<double>(footer->counters().steps());
-  // Ticks as of the emulator's last heartbeat (every 50 ms): about 4 per step.
-  EXPECT_GT(static_cast<double>(footer->counters().servo_ticks()), 0.7 * 4 * steps);
+  // Ticks as of the emulator's last heartbeat (every 50 ms): about 4 per step, on a machine that
+  // wakes the servo within its period (p99). A busier one runs late ticks back to back, behind
+  // the grid (runtime/rt/pacing.h), and its count trails: then at least a quarter of them.
+  const double kept = witnessed.machine.p99 < 0.25e-3 ? 0.7 : 0.25;
+  EXPECT_GT(static_cast<double>(footer->counters().servo_ticks()), kept * 4 * steps)
+      << witnessed.machine.text;
   EXPECT_LT(static_cast<double>(footer->counters().servo_ticks()), 1.2 * 4 * steps);
   // Later servo samples of an answered step replace the measurement without being "duplicates".
   EXPECT_EQ(footer->counters().duplicate(), 0u);
