@@ -22,8 +22,6 @@
 // report names them), a header of another schema version, no header, a link the header lists with
 // no answer, fewer steps than identification needs.
 
-#include <nlohmann/json.hpp>
-
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -31,6 +29,7 @@
 
 #include "identify/fit/identify.h"
 #include "identify/run/actuator_path.h"
+#include "identify/run/findings.h"
 #include "identify/run/network_path.h"
 #include "identify/run/platform_replay.h"
 #include "identify/run/run_residual.h"
@@ -66,13 +65,13 @@ struct RunIdentification {
   // The study re-run with the declared and the identified actuators (run_residual.h); absent
   // when the actuator channel was not identified.
   std::optional<RunResidual> residual;
+  // Every difference from the declared config, every part, computed once (findings.h): what the
+  // report (run_record_format.h) prints and the JSON holds.
+  std::vector<Finding> findings;
 };
 
 RunIdentification identify_run_record(const std::filesystem::path& record,
                                       const IdentifyOptions& options);
-
-std::string run_record_text(const RunIdentification& run);
-nlohmann::json run_record_json(const RunIdentification& run);
 
 // True for a path named *.rthsrec (what `rths identify` reads as a run record).
 bool is_run_record(const std::filesystem::path& path);

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "identify/run/run_record.h"
+#include "identify/run/run_record_format.h"
 #include "runtime/launch/launch.h"
 #include "tests/identify/undeclared_run.h"
 #include "tests/support/platform_gate.h"
