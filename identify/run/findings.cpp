@@ -161,6 +161,10 @@ void add_response(const RunResidual* residual, std::vector<Finding>& findings) {
       continue;
     }
     f.not_rerun = "the study cannot hold it (see the re-run's notes)";
+    for (const auto& note : residual->notes)
+      if (note.rfind(f.part + ": " + f.effect + ": ", 0) == 0)
+        f.not_rerun =
+            "the study cannot hold it: " + note.substr(f.part.size() + 2 + f.effect.size() + 2);
     for (const auto& s : residual->effects)
       if (s.link == f.part && s.effect == f.effect) {
         f.response_removed = s.removed;

@@ -62,7 +62,8 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
       const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
       const SignalScales force_scales = signal_scales(f);
       add_force_stages(*rig.specimen, force_scales,
-                       RigRecord{f.time.front(), force_scales.duration}, study_case);
+                       RigRecord{f.time.front(), force_scales.duration}, study_case,
+                       rig.held_by_declared);
     }
     add_displacement_scale(rig.displacement_scale, study_case);
     if (run_case) *study_case.mutable_compensation() = run_case->compensation();
