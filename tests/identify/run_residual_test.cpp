@@ -7,9 +7,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <span>
 #include <string>
 
+#include "core/metrics.h"
+#include "identify/model/study_config.h"
 #include "identify/run/findings.h"
+#include "identify/run/run_config.h"
 #include "identify/run/run_record.h"
 #include "identify/run/run_record_format.h"
 #include "tests/identify/undeclared_run.h"
@@ -178,7 +183,7 @@ TEST(RunResidual, AHystereticSpecimenDeclaredLinearIsNamedOnTheSpecimenAndReRun)
 // re-run closes the record to <= 1 % of the worst floor's NRMSE, and its share of the removals,
 // measured by re-running without it, is most of them (never 0 %).
 struct ForceEffect {
-  std::string name, stage, part, effect, parameter;
+  std::string name, stage, part, effect, parameter, stage_kind;
   double value = 0.0;
   bool smooth = false;  // test::smooth_frame_study, else the paper frame's record
 };
@@ -207,22 +212,42 @@ void expect_re_run_holds(const ForceEffect& c) {
   EXPECT_GT(f->response_share, 0.5) << text;
   for (const auto& note : r.notes)
     EXPECT_EQ(note.find(c.effect + ":"), std::string::npos) << note << "\n" << text;
+  // The written study (identified_run.textproto) holds it as its force stage and, run in process,
+  // closes the record as the re-run does.
+  const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
+  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  ASSERT_NE(identified, nullptr);
+  bool holds = false;
+  for (const auto& stage : identified->delay()) {
+    const auto* kind = stage.GetDescriptor()->FindFieldByNumber(stage.kind_case());
+    holds = holds || (kind && kind->name() == c.stage_kind);
+  }
+  EXPECT_TRUE(holds) << c.stage_kind << " not in " << identified->DebugString();
+  const core::PreparedStudy prepared = core::prepare_study(written.study, ".");
+  const core::SimulationResult rerun =
+      core::simulate(core::setup_for_case(prepared, *identified), prepared.motion);
+  const auto n = static_cast<Eigen::Index>(r.steps);
+  const Eigen::VectorXd recorded = r.recorded_response.col(0).head(n);
+  const Eigen::VectorXd simulated = rerun.displacement.col(0).head(n);
+  EXPECT_LE(core::nrmse(std::span<const double>(recorded.data(), r.steps),
+                        std::span<const double>(simulated.data(), r.steps)),
+            0.01);
 }
 
 TEST(RunResidual, ASpecimensOwnMassIsReRunAsAnInertiaForce) {
   expect_re_run_holds({"residual_inertia", "inertia_force { mass: 100 }", "specimen 1", "inertia",
-                       "mass", 100.0, true});
+                       "mass", "inertia_force", 100.0, true});
 }
 
 TEST(RunResidual, AFrictionForceBesideTheSpecimenIsReRun) {
-  expect_re_run_holds({"residual_friction",
-                       "friction_force { friction_force: 100 smoothing_velocity: 0.005 }",
-                       "specimen 1", "coulomb_friction", "friction_force", 100.0, true});
+  expect_re_run_holds(
+      {"residual_friction", "friction_force { friction_force: 100 smoothing_velocity: 0.005 }",
+       "specimen 1", "coulomb_friction", "friction_force", "friction_force", 100.0, true});
 }
 
 TEST(RunResidual, ALateLoadCellIsNamedOnTheLoadCellAndReRunAsAForceDelay) {
   expect_re_run_holds({"residual_force_delay", "force_delay { delay: 0.005 }", "load cell 1",
-                       "delay", "delay", 0.005});
+                       "delay", "delay", "force_delay", 0.005});
 }
 
 }  // namespace
