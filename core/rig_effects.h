@@ -29,9 +29,12 @@
 //                  difference (u[k] - 2 u[k-1] + u[k-2]) / dt^2 is step k-1's, a lag of one step
 //                  that an identification reads as a late load cell) (measure_force).
 //   FrictionForce  a friction force beside the specimen (a bearing, a seal), read by the load
-//                  cell: u_out = u, the force the integrator receives = f + F_c tanh(v / v_s),
-//                  v = (u[k] - u[k-1]) / dt (F_c in N, v_s the smoothing velocity in m/s; Coulomb
-//                  friction F_c sign(v) as v_s -> 0) (measure_force).
+//                  cell: u_out = u, the force the integrator receives = f + F_c tanh(v[k] / v_s),
+//                  v[k] = (3 u[k] - 4 u[k-1] + u[k-2]) / (2 dt), the backward difference exact for
+//                  a parabola: the rate at step k itself (the first difference is step k - 1/2's,
+//                  half a step late, which an identification reads as a late load cell) (F_c in N,
+//                  v_s the smoothing velocity in m/s; Coulomb friction F_c sign(v) as v_s -> 0)
+//                  (measure_force).
 //   ForceDelay     the load cell's channel late by tau (s): u_out = u, the force the integrator
 //                  receives = the force this stage was given at t - tau, interpolated linearly
 //                  between its steps (the first step's before it) (measure_force).
@@ -179,7 +182,7 @@ class FrictionForce final : public DelayStage {
   // @pre friction_force >= 0 and finite (N), smoothing_velocity > 0 and finite (m/s), dt > 0 (s)
   // (throws std::invalid_argument naming the field).
   FrictionForce(double friction_force, double smoothing_velocity, double dt);
-  void reset() override { last_ = velocity_ = 0.0; }
+  void reset() override { u1_ = u2_ = velocity_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
   double nominal_delay() const override { return 0.0; }
@@ -190,8 +193,9 @@ class FrictionForce final : public DelayStage {
 
  protected:
   double step_unscaled(const CommandSample& in) override {
-    velocity_ = (in.displacement - last_) / dt_;
-    last_ = in.displacement;
+    velocity_ = (3.0 * in.displacement - 4.0 * u1_ + u2_) / (2.0 * dt_);
+    u2_ = u1_;
+    u1_ = in.displacement;
     return in.displacement;
   }
   std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
@@ -199,7 +203,8 @@ class FrictionForce final : public DelayStage {
 
  private:
   double friction_force_, smoothing_velocity_, dt_;
-  double last_ = 0.0, velocity_ = 0.0;  // m, m/s: of the last step
+  double u1_ = 0.0, u2_ = 0.0;  // m: u[k-1], u[k-2]
+  double velocity_ = 0.0;       // m/s, of the last step
 };
 
 class ForceDelay final : public DelayStage {

@@ -122,14 +122,24 @@ TEST(InertiaForce, TheLoadCellReadsMassTimesTheAccelerationAtItsOwnStep) {
   EXPECT_THROW(InertiaForce(1.0, 0.0), std::invalid_argument);
 }
 
-TEST(FrictionForce, TheLoadCellReadsASmoothedCoulombForceAgainstTheRate) {
+TEST(FrictionForce, TheLoadCellReadsASmoothedCoulombForceAgainstTheRateAtItsOwnStep) {
+  // From rest, u = 0.25 t^2 (a rate of t / 2 m/s): from the second step on, the three samples
+  // the backward difference takes lie on the parabola, so it reads the rate at the step itself.
   FrictionForce friction(200.0, 0.001, 0.001);
-  EXPECT_DOUBLE_EQ(friction.step({0.001, 0.0001, 0.0}), 0.0001);  // 0.1 m/s
-  EXPECT_NEAR(friction.measure_force(500.0), 500.0 + 200.0 * std::tanh(100.0), 1e-9);
-  friction.step({0.002, 0.0001 - 5e-7, 0.0});  // -0.5 mm/s: half the smoothing velocity
-  EXPECT_NEAR(friction.measure_force(0.0), 200.0 * std::tanh(-0.5), 1e-6);
-  friction.step({0.003, 0.0001 - 5e-7, 0.0});  // at rest: no friction
-  EXPECT_DOUBLE_EQ(friction.measure_force(3.0), 3.0);
+  for (int k = 1; k <= 4; ++k) {
+    const double t = 0.001 * k;
+    EXPECT_DOUBLE_EQ(friction.step({t, 0.25 * t * t, 0.0}), 0.25 * t * t);
+    const double read = friction.measure_force(500.0);
+    if (k >= 2) EXPECT_NEAR(read, 500.0 + 200.0 * std::tanh(0.5 * t / 0.001), 1e-6) << "step " << k;
+  }
+  FrictionForce still(200.0, 0.001, 0.001);
+  for (int k = 1; k <= 3; ++k) {
+    still.step({0.001 * k, 0.002, 0.0});  // a step of 2 mm at the first step, then at rest
+    if (k >= 3) EXPECT_DOUBLE_EQ(still.measure_force(3.0), 3.0);
+  }
+  still.reset();
+  still.step({0.001, -0.0001, 0.0});  // -0.15 m/s from rest: full friction against it
+  EXPECT_NEAR(still.measure_force(0.0), -200.0, 1e-6);
   EXPECT_THROW(FrictionForce(-1.0, 0.001, 0.001), std::invalid_argument);
   try {
     FrictionForce(1.0, 0.0, 0.001);

@@ -242,7 +242,7 @@ TEST(RunResidual, ASpecimensOwnMassIsReRunAsAnInertiaForce) {
 TEST(RunResidual, AFrictionForceBesideTheSpecimenIsReRun) {
   expect_re_run_holds(
       {"residual_friction", "friction_force { friction_force: 100 smoothing_velocity: 0.005 }",
-       "specimen 1", "coulomb_friction", "friction_force", "friction_force", 100.0, true});
+       "specimen 1", "coulomb_friction", "friction_force", "friction_force", 100.0});
 }
 
 TEST(RunResidual, ALateLoadCellIsNamedOnTheLoadCellAndReRunAsAForceDelay) {
