@@ -17,7 +17,10 @@
 // diverged is identified up to the last step whose response is finite and below the coordinator's
 // divergence bound; a truncated record (no footer, or a cut last entry) is identified from what it
 // holds; both say so (`held`). The system-level residual re-runs the study over the same steps,
-// from the record's own ground acceleration (run_residual.h). Bad input -> std::invalid_argument
+// from the record's own ground acceleration (run_residual.h). The findings (findings.h) and each
+// channel's effect estimates are computed here once; run_record_format.h prints them. Which node
+// answered for which actuator or storey comes from runtime::answer_sources, the planning the
+// coordinator ran (platform_replay.h). Bad input -> std::invalid_argument
 // "RECORD: ENTRY: PROBLEM": a record that cannot be read or has damaged entries (the reader's loss
 // report names them), a header of another schema version, no header, a link the header lists with
 // no answer, fewer steps than identification needs.
