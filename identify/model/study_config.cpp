@@ -156,10 +156,7 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
   add_rig_stages(actuator, scales, *rig, out.study_case);
   auto& stages = *out.study_case.mutable_delay();
   for (int i = stages.size() - 1; i >= 0; --i) {
-    if (stages[i].has_sensor_drift() || stages[i].has_viscous_force() ||
-        stages[i].has_friction_force() || stages[i].has_inertia_force() ||
-        stages[i].has_force_delay())
-      continue;
+    if (stages[i].has_sensor_drift() || is_force_stage(stages[i])) continue;
     if (gain != 1.0) stages[i].set_amplitude_gain(gain);
     break;
   }
@@ -176,6 +173,38 @@ config::DelayStage::SensorDrift& sensor_drift_stage(config::Case& study_case) {
 }
 
 }  // namespace
+
+namespace {
+
+// `stages` after every stage of the case that moves the specimen, before the sensor_drift stages
+// that end it (if any), so that their force offset is read after the load cell's lag, as the
+// fitted model adds it (model.h: the offset is not shifted).
+void insert_force_stages(const std::vector<config::DelayStage>& stages, config::Case& study_case) {
+  auto& delay = *study_case.mutable_delay();
+  int at = delay.size();
+  while (at > 0 && delay[at - 1].has_sensor_drift()) --at;
+  google::protobuf::RepeatedPtrField<config::DelayStage> ordered;
+  for (int i = 0; i <= delay.size(); ++i) {
+    if (i == at)
+      for (const auto& s : stages) *ordered.Add() = s;
+    if (i < delay.size()) *ordered.Add() = delay[i];
+  }
+  delay.Swap(&ordered);
+}
+
+}  // namespace
+
+bool is_force_stage(const config::DelayStage& stage) {
+  return stage.has_viscous_force() || stage.has_friction_force() || stage.has_inertia_force() ||
+         stage.has_force_delay();
+}
+
+void keep_declared_force_stages(const config::Case& declared, config::Case& study_case) {
+  std::vector<config::DelayStage> stages;
+  for (const auto& stage : declared.delay())
+    if (is_force_stage(stage)) stages.push_back(stage);
+  insert_force_stages(stages, study_case);
+}
 
 bool held_by_force_stages(Effect effect) {
   switch (effect) {
@@ -212,19 +241,7 @@ void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
   if (wanted(Effect::kDelay))
     stages.emplace_back().mutable_force_delay()->set_delay(
         std::max(0.0, value(Effect::kDelay, "delay")));
-  // After every stage that moves the specimen, before the sensor_drift stages that end the case
-  // (if any), so that their force offset is read after the load cell's lag, as the fitted model
-  // adds it (model.h: the offset is not shifted).
-  auto& delay = *study_case.mutable_delay();
-  int at = delay.size();
-  while (at > 0 && delay[at - 1].has_sensor_drift()) --at;
-  google::protobuf::RepeatedPtrField<config::DelayStage> ordered;
-  for (int i = 0; i <= delay.size(); ++i) {
-    if (i == at)
-      for (const auto& s : stages) *ordered.Add() = s;
-    if (i < delay.size()) *ordered.Add() = delay[i];
-  }
-  delay.Swap(&ordered);
+  insert_force_stages(stages, study_case);
   if (!wanted(Effect::kOffsetDrift)) return;
   const auto [offset, rate] = drift_in_time(value(Effect::kOffsetDrift, "offset"),
                                             value(Effect::kOffsetDrift, "drift"), rig);

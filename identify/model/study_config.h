@@ -76,6 +76,12 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
 void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
                       const RigRecord& rig, config::Case& study_case,
                       const std::vector<Effect>& held = {});
+// Whether `stage` is one of the force stages above (it passes the displacement unchanged).
+bool is_force_stage(const config::DelayStage& stage);
+// The force stages of `declared` (a case whose stages the identified actuator replaces) put into
+// `study_case` as add_force_stages places them: what the record did not contradict of the
+// specimen's load cell stays when the actuator's stages are replaced.
+void keep_declared_force_stages(const config::Case& declared, config::Case& study_case);
 // Whether add_force_stages holds a specimen effect (damping, coulomb, inertia, the force
 // channel's delay, offset_drift): what a storey model leaves out but the re-run still holds.
 bool held_by_force_stages(Effect effect);

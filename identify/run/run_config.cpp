@@ -58,6 +58,8 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
         notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
       study_case = part.study_case;
     }
+    if (rig.actuator && !rig.specimen)
+      keep_declared_force_stages(declared_stages(run.study, run_case), study_case);
     if (rig.specimen) {
       const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
       const SignalScales force_scales = signal_scales(f);

@@ -218,9 +218,11 @@ bool step_paid(const SelectionStep& step) {
          step.own_error_removed > kMinErrorRemoved;
 }
 
-// The study's storey model as force-channel effects (actuator_path.h), and what a declared
-// tracking loop adds to the force the integrator receives (core/tracking.h): the benchmark plant's
-// specimen inertia and damping, the load cell's delay of force_delay_periods servo periods.
+// The study's storey model as force-channel effects (actuator_path.h), the force stages the case
+// and the emulators declare (viscous_force: damping, friction_force: coulomb_friction,
+// inertia_force: inertia, force_delay: delay), and what a declared tracking loop adds to the force
+// the integrator receives (core/tracking.h): the benchmark plant's specimen inertia and damping,
+// the load cell's delay of force_delay_periods servo periods.
 std::vector<Effect> declared_specimen(const config::Study& study, const std::string& case_name) {
   const config::RestoringForce& model = study.substructuring().model();
   std::vector<Effect> out{Effect::kStiffness};
@@ -230,6 +232,10 @@ std::vector<Effect> declared_specimen(const config::Study& study, const std::str
     if (std::find(out.begin(), out.end(), e) == out.end()) out.push_back(e);
   };
   const auto declare = [&](const config::DelayStage& stage) {
+    if (stage.has_viscous_force()) add(Effect::kDamping);
+    if (stage.has_friction_force()) add(Effect::kCoulomb);
+    if (stage.has_inertia_force()) add(Effect::kInertia);
+    if (stage.has_force_delay()) add(Effect::kDelay);
     if (!stage.has_tracking_loop()) return;
     if (stage.tracking_loop().has_benchmark_plant()) {
       add(Effect::kInertia);

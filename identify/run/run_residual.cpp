@@ -156,6 +156,8 @@ class Reruns {
         add_force_stages(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c,
                          m.actuator || !m.held ? std::vector<Effect>{} : *m.held);
         place_specimen(*m.specimen, a, setup);
+      } else if (m.actuator) {
+        keep_declared_force_stages(declared_, c);
       }
       add_displacement_scale(m.displacement_scale, c);
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];

@@ -250,5 +250,33 @@ TEST(RunResidual, ALateLoadCellIsNamedOnTheLoadCellAndReRunAsAForceDelay) {
                        "delay", "delay", "force_delay", 0.005});
 }
 
+// A specimen mass the header declares (inertia_force in its case) with a first-order lag it does
+// not: only the lag is named, and the re-run, whose identified actuator stages replace the
+// declared ones, keeps the declared mass and closes the record.
+TEST(RunResidual, ADeclaredSpecimenMassIsNotNamedAndStaysWhenTheActuatorIsReplaced) {
+  const std::string declared = test::behind_the_shift(test::smooth_frame_study(test::kDeclared),
+                                                      "inertia_force { mass: 100 }");
+  std::string actual = declared;
+  const std::string emulator = "kind: ACTUATOR_EMULATOR";
+  actual.insert(actual.find(emulator) + emulator.size(),
+                " receive_delay { first_order { time_constant: 0.008 } }");
+  const RunIdentification run = identify_run_record(
+      test::record_declaring("residual_declared_mass", actual, declared, "lag_shift_14ms", true),
+      IdentifyOptions{});
+  const RunResidual& r = residual_of(run);
+  print("declared mass, first order 8 ms", r);
+  const std::string text = run_record_text(run);
+  EXPECT_NE(finding(run.findings, "actuator 1", "first_order"), nullptr) << text;
+  EXPECT_EQ(finding(run.findings, "specimen 1", "inertia"), nullptr) << text;
+  EXPECT_GE(r.declared, 0.05) << text;
+  EXPECT_LE(r.identified, 0.01) << text;
+  const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
+  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  ASSERT_NE(identified, nullptr);
+  int masses = 0;
+  for (const auto& stage : identified->delay()) masses += stage.has_inertia_force() ? 1 : 0;
+  EXPECT_EQ(masses, 1) << identified->DebugString();
+}
+
 }  // namespace
 }  // namespace rths::identify
