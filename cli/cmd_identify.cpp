@@ -19,6 +19,7 @@
 #include "identify/lab/session.h"
 #include "identify/run/run_config.h"
 #include "identify/run/run_record.h"
+#include "identify/run/run_record_format.h"
 #include "identify/run/run_report.h"
 #include "results/results.h"
 #include "results/write.h"

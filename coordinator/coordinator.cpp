@@ -30,7 +30,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   core::check_stability(s.setup.integrator, core::max_omega(s.setup.model), s.setup.dt,
                         s.setup.allow_unstable);
   s.deployment = runtime::with_default_nodes(s.deployment, s.setup);
-  plan_ = runtime::make_plan(s.setup, s.deployment);
+  plan_ = runtime::plan_deployment(s.setup, s.deployment);
   runtime::check_node_stages(plan_, s.setup.dt, s.prepared.base_dir);
   s.real_time = s.deployment.clock() == config::Deployment::REAL_TIME;
   const std::size_t steps = s.prepared.motion.acceleration.size();

@@ -108,4 +108,52 @@ std::string ViscousForce::describe() const {
   return "viscous_force(" + format_number(damping_) + " N s/m)";
 }
 
+InertiaForce::InertiaForce(double mass, double dt) : mass_(mass), dt_(dt) {
+  require(std::isfinite(mass) && mass >= 0.0,
+          "inertia_force: mass must be >= 0 kg and finite, got " + format_number(mass));
+  require(dt > 0.0 && std::isfinite(dt), "inertia_force: dt must be > 0 s");
+}
+
+std::unique_ptr<DelayStage> InertiaForce::clone() const {
+  return std::make_unique<InertiaForce>(*this);
+}
+
+std::string InertiaForce::describe() const {
+  return "inertia_force(" + format_number(mass_) + " kg)";
+}
+
+FrictionForce::FrictionForce(double friction_force, double smoothing_velocity, double dt)
+    : friction_force_(friction_force), smoothing_velocity_(smoothing_velocity), dt_(dt) {
+  require(std::isfinite(friction_force) && friction_force >= 0.0,
+          "friction_force: friction_force must be >= 0 N and finite, got " +
+              format_number(friction_force));
+  require(std::isfinite(smoothing_velocity) && smoothing_velocity > 0.0,
+          "friction_force: smoothing_velocity must be > 0 m/s and finite, got " +
+              format_number(smoothing_velocity));
+  require(dt > 0.0 && std::isfinite(dt), "friction_force: dt must be > 0 s");
+}
+
+std::unique_ptr<DelayStage> FrictionForce::clone() const {
+  return std::make_unique<FrictionForce>(*this);
+}
+
+std::string FrictionForce::describe() const {
+  return "friction_force(" + format_number(friction_force_) + " N, smoothing " +
+         format_number(smoothing_velocity_ * 1e3) + " mm/s)";
+}
+
+ForceDelay::ForceDelay(double delay, double dt)
+    : delay_((require(std::isfinite(delay) && delay >= 0.0,
+                      "force_delay: delay must be >= 0 s and finite, got " + format_number(delay)),
+              delay)),
+      forces_(delay, dt) {}
+
+std::unique_ptr<DelayStage> ForceDelay::clone() const {
+  return std::make_unique<ForceDelay>(*this);
+}
+
+std::string ForceDelay::describe() const {
+  return "force_delay(" + format_number(delay_ * 1e3) + " ms)";
+}
+
 }  // namespace rths::core

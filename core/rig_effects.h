@@ -22,12 +22,33 @@
 //                  which the load cell reads with the spring's: u_out = u (the motion passes
 //                  unchanged), the force the integrator receives = f + c (u[k] - u[k-1]) / dt
 //                  (c in N s/m, dt the stage's step in s) (measure_force).
+//   InertiaForce   the specimen's own mass m (kg), moved with it, which the load cell reads with
+//                  its restoring force: u_out = u, the force the integrator receives = f + m a[k],
+//                  a[k] = (2 u[k] - 5 u[k-1] + 4 u[k-2] - u[k-3]) / dt^2, the backward
+//                  difference exact for a cubic: the acceleration at step k itself (the central
+//                  difference (u[k] - 2 u[k-1] + u[k-2]) / dt^2 is step k-1's, a lag of one step
+//                  that an identification reads as a late load cell) (measure_force).
+//   FrictionForce  a friction force beside the specimen (a bearing, a seal), read by the load
+//                  cell: u_out = u, the force the integrator receives = f + F_c tanh(v[k] / v_s),
+//                  v[k] = (3 u[k] - 4 u[k-1] + u[k-2]) / (2 dt), the backward difference exact for
+//                  a parabola: the rate at step k itself (the first difference is step k - 1/2's,
+//                  half a step late, which an identification reads as a late load cell) (F_c in N,
+//                  v_s the smoothing velocity in m/s; Coulomb friction F_c sign(v) as v_s -> 0)
+//                  (measure_force).
+//   ForceDelay     the load cell's channel late by tau (s): u_out = u, the force the integrator
+//                  receives = the force this stage was given at t - tau, interpolated linearly
+//                  between its steps (the first step's before it) (measure_force).
 // The identification's predictors (identify/model/model.cpp) apply the same recursions, so an
-// identified width or limit re-runs as it was fitted.
+// identified width or limit re-runs as it was fitted; its specimen model (mass times the
+// acceleration, friction_force tanh(v / smoothing_velocity), the force channel's delay) is the
+// force stages' with the same parameters.
 // Linear dynamics: a MotionLimit (backlash, velocity_limit, stroke_limit) is the identity once its
 // non-linearity is left out (kLinearised: a small motion passes unchanged); SensorDrift is the
-// identity, and so is ViscousForce on the displacement it passes.
+// identity, and so are ViscousForce, InertiaForce, FrictionForce and ForceDelay on the displacement
+// they pass.
 // Real-time safe: no allocation after construction.
+
+#include <cmath>
 
 #include "core/delay.h"
 
@@ -126,6 +147,96 @@ class ViscousForce final : public DelayStage {
  private:
   double damping_, dt_;
   double last_ = 0.0, velocity_ = 0.0;  // m, m/s: of the last step
+};
+
+class InertiaForce final : public DelayStage {
+ public:
+  // @pre mass >= 0 and finite (kg), dt > 0 (s) (throws std::invalid_argument).
+  InertiaForce(double mass, double dt);
+  void reset() override { u1_ = u2_ = u3_ = acceleration_ = 0.0; }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
+  double measure_force(double force) override { return force + mass_ * acceleration_; }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    acceleration_ = (2.0 * in.displacement - 5.0 * u1_ + 4.0 * u2_ - u3_) / (dt_ * dt_);
+    u3_ = u2_;
+    u2_ = u1_;
+    u1_ = in.displacement;
+    return in.displacement;
+  }
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+
+ private:
+  double mass_, dt_;
+  double u1_ = 0.0, u2_ = 0.0, u3_ = 0.0;  // m: u[k-1], u[k-2], u[k-3]
+  double acceleration_ = 0.0;              // m/s^2, of the last step
+};
+
+class FrictionForce final : public DelayStage {
+ public:
+  // @pre friction_force >= 0 and finite (N), smoothing_velocity > 0 and finite (m/s), dt > 0 (s)
+  // (throws std::invalid_argument naming the field).
+  FrictionForce(double friction_force, double smoothing_velocity, double dt);
+  void reset() override { u1_ = u2_ = velocity_ = 0.0; }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
+  double measure_force(double force) override {
+    return force + friction_force_ * std::tanh(velocity_ / smoothing_velocity_);
+  }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    velocity_ = (3.0 * in.displacement - 4.0 * u1_ + u2_) / (2.0 * dt_);
+    u2_ = u1_;
+    u1_ = in.displacement;
+    return in.displacement;
+  }
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+
+ private:
+  double friction_force_, smoothing_velocity_, dt_;
+  double u1_ = 0.0, u2_ = 0.0;  // m: u[k-1], u[k-2]
+  double velocity_ = 0.0;       // m/s, of the last step
+};
+
+class ForceDelay final : public DelayStage {
+ public:
+  // @pre delay >= 0 and finite (s), dt > 0 (s) (throws std::invalid_argument).
+  ForceDelay(double delay, double dt);
+  void reset() override {
+    forces_.clear();
+    time_ = 0.0;
+  }
+  std::unique_ptr<DelayStage> clone() const override;
+  std::string describe() const override;
+  // The displacement is not late: the lag is on the force channel only.
+  double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
+  double measure_force(double force) override {
+    forces_.push(time_, force);
+    return forces_.at(time_ - delay_);
+  }
+
+ protected:
+  double step_unscaled(const CommandSample& in) override {
+    time_ = in.time;
+    return in.displacement;
+  }
+  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+
+ private:
+  double delay_;
+  CommandHistory forces_;  // (t, force read) of the last steps
+  double time_ = 0.0;      // s, of the last step
 };
 
 }  // namespace rths::core

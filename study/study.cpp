@@ -123,6 +123,26 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
               where + ".viscous_force.damping must be in [0, 1e9] N s/m, got " +
                   format_number(stage.viscous_force().damping()));
       break;
+    case K::kInertiaForce:
+      require(stage.inertia_force().mass() >= 0.0 && stage.inertia_force().mass() <= 1e9, source,
+              where + ".inertia_force.mass must be in [0, 1e9] kg, got " +
+                  format_number(stage.inertia_force().mass()));
+      break;
+    case K::kFrictionForce: {
+      const auto& f = stage.friction_force();
+      require(f.friction_force() >= 0.0 && f.friction_force() <= 1e9, source,
+              where + ".friction_force.friction_force must be in [0, 1e9] N, got " +
+                  format_number(f.friction_force()));
+      require(f.smoothing_velocity() > 0.0 && f.smoothing_velocity() <= 100.0, source,
+              where + ".friction_force.smoothing_velocity must be in (0, 100] m/s, got " +
+                  format_number(f.smoothing_velocity()));
+      break;
+    }
+    case K::kForceDelay:
+      require(stage.force_delay().delay() >= 0.0 && stage.force_delay().delay() <= 1.0, source,
+              where + ".force_delay.delay must be in [0, 1] s, got " +
+                  format_number(stage.force_delay().delay()));
+      break;
     case K::KIND_NOT_SET: fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   }
 }
@@ -404,6 +424,16 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
     }
     case K::kViscousForce:
       block = std::make_unique<ViscousForce>(stage.viscous_force().damping(), dt);
+      break;
+    case K::kInertiaForce:
+      block = std::make_unique<InertiaForce>(stage.inertia_force().mass(), dt);
+      break;
+    case K::kFrictionForce:
+      block = std::make_unique<FrictionForce>(stage.friction_force().friction_force(),
+                                              stage.friction_force().smoothing_velocity(), dt);
+      break;
+    case K::kForceDelay:
+      block = std::make_unique<ForceDelay>(stage.force_delay().delay(), dt);
       break;
     case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
   }

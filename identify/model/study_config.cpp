@@ -1,5 +1,6 @@
 #include "identify/model/study_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -21,25 +22,39 @@ void absolute_traces(google::protobuf::RepeatedPtrField<config::DelayStage>& sta
   }
 }
 
-// The fitted effects a storey model has no place for, each with the reason.
+// The fitted effects a storey model has no place for, each with the reason; those a force stage
+// holds (add_force_stages) say which.
 void note_left_out_specimen_effects(const ChannelModel& specimen,
                                     std::vector<std::string>& left_out) {
   for (Effect e : specimen.effects) {
     switch (e) {
       case Effect::kDamping:
         left_out.push_back(effect_name(e) +
-                           ": a velocity force, not a storey restoring force (a viscous_force "
-                           "stage carries it: add_force_stages)");
+                           ": a velocity force beside the storey model (a viscous_force stage "
+                           "holds it: add_force_stages)");
         break;
       case Effect::kCoulomb:
         left_out.push_back(effect_name(e) +
-                           ": a velocity force, not a storey restoring force (add it as damping)");
+                           ": a friction force beside the storey model (a friction_force stage "
+                           "holds it: add_force_stages)");
         break;
       case Effect::kInertia:
+        left_out.push_back(effect_name(e) +
+                           ": the specimen's own mass beside the storey model (an inertia_force "
+                           "stage holds it: add_force_stages)");
+        break;
+      case Effect::kDelay:
+        left_out.push_back(effect_name(e) +
+                           ": the load cell's channel late (a force_delay stage holds it: "
+                           "add_force_stages)");
+        break;
+      case Effect::kOffsetDrift:
+        left_out.push_back(effect_name(e) +
+                           ": the load cell's offset drift (a sensor_drift stage holds it: "
+                           "add_force_stages)");
+        break;
       case Effect::kCubicStiffness:
       case Effect::kTimeVaryingStiffness:
-      case Effect::kOffsetDrift:
-      case Effect::kDelay:
         left_out.push_back(effect_name(e) + ": no place in a storey model, left out");
         break;
       default: break;
@@ -141,7 +156,7 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
   add_rig_stages(actuator, scales, *rig, out.study_case);
   auto& stages = *out.study_case.mutable_delay();
   for (int i = stages.size() - 1; i >= 0; --i) {
-    if (stages[i].has_sensor_drift() || stages[i].has_viscous_force()) continue;
+    if (stages[i].has_sensor_drift() || is_force_stage(stages[i])) continue;
     if (gain != 1.0) stages[i].set_amplitude_gain(gain);
     break;
   }
@@ -159,15 +174,77 @@ config::DelayStage::SensorDrift& sensor_drift_stage(config::Case& study_case) {
 
 }  // namespace
 
+namespace {
+
+// `stages` after every stage of the case that moves the specimen, before the sensor_drift stages
+// that end it (if any), so that their force offset is read after the load cell's lag, as the
+// fitted model adds it (model.h: the offset is not shifted).
+void insert_force_stages(const std::vector<config::DelayStage>& stages, config::Case& study_case) {
+  auto& delay = *study_case.mutable_delay();
+  int at = delay.size();
+  while (at > 0 && delay[at - 1].has_sensor_drift()) --at;
+  google::protobuf::RepeatedPtrField<config::DelayStage> ordered;
+  for (int i = 0; i <= delay.size(); ++i) {
+    if (i == at)
+      for (const auto& s : stages) *ordered.Add() = s;
+    if (i < delay.size()) *ordered.Add() = delay[i];
+  }
+  delay.Swap(&ordered);
+}
+
+}  // namespace
+
+bool is_force_stage(const config::DelayStage& stage) {
+  return stage.has_viscous_force() || stage.has_friction_force() || stage.has_inertia_force() ||
+         stage.has_force_delay();
+}
+
+void keep_declared_force_stages(const config::Case& declared, config::Case& study_case) {
+  std::vector<config::DelayStage> stages;
+  for (const auto& stage : declared.delay())
+    if (is_force_stage(stage)) stages.push_back(stage);
+  insert_force_stages(stages, study_case);
+}
+
+bool held_by_force_stages(Effect effect) {
+  switch (effect) {
+    case Effect::kDamping:
+    case Effect::kCoulomb:
+    case Effect::kInertia:
+    case Effect::kDelay:
+    case Effect::kOffsetDrift: return true;
+    default: return false;
+  }
+}
+
 void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
-                      const RigRecord& rig, config::Case& study_case) {
-  if (specimen.has(Effect::kDamping))
-    study_case.add_delay()->mutable_viscous_force()->set_damping(
-        std::max(0.0, specimen.param(Effect::kDamping, "damping", scales).value_or(0.0)));
-  if (!specimen.has(Effect::kOffsetDrift)) return;
-  const auto [offset, rate] =
-      drift_in_time(specimen.param(Effect::kOffsetDrift, "offset", scales).value_or(0.0),
-                    specimen.param(Effect::kOffsetDrift, "drift", scales).value_or(0.0), rig);
+                      const RigRecord& rig, config::Case& study_case,
+                      const std::vector<Effect>& held) {
+  const auto wanted = [&](Effect e) {
+    return specimen.has(e) && std::find(held.begin(), held.end(), e) == held.end();
+  };
+  const auto value = [&](Effect e, const char* param) {
+    return specimen.param(e, param, scales).value_or(0.0);
+  };
+  std::vector<config::DelayStage> stages;
+  if (wanted(Effect::kDamping))
+    stages.emplace_back().mutable_viscous_force()->set_damping(
+        std::max(0.0, value(Effect::kDamping, "damping")));
+  if (wanted(Effect::kCoulomb)) {
+    auto* friction = stages.emplace_back().mutable_friction_force();
+    friction->set_friction_force(std::abs(value(Effect::kCoulomb, "friction_force")));
+    friction->set_smoothing_velocity(std::abs(value(Effect::kCoulomb, "smoothing_velocity")));
+  }
+  if (wanted(Effect::kInertia))
+    stages.emplace_back().mutable_inertia_force()->set_mass(
+        std::max(0.0, value(Effect::kInertia, "mass")));
+  if (wanted(Effect::kDelay))
+    stages.emplace_back().mutable_force_delay()->set_delay(
+        std::max(0.0, value(Effect::kDelay, "delay")));
+  insert_force_stages(stages, study_case);
+  if (!wanted(Effect::kOffsetDrift)) return;
+  const auto [offset, rate] = drift_in_time(value(Effect::kOffsetDrift, "offset"),
+                                            value(Effect::kOffsetDrift, "drift"), rig);
   config::DelayStage::SensorDrift& sensor = sensor_drift_stage(study_case);
   sensor.set_force_offset(offset);
   sensor.set_force_drift(rate);

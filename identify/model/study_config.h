@@ -18,7 +18,8 @@
 //                                                 post_yield_ratio k / k0 }        k0 = k + k_p
 //   (core/restoring_force.h: f = alpha k0 u + (1 - alpha) k0 z with z in m, which is the
 //   identified F_bw z' with z' = z / d_y.) Velocity terms (damping, friction), mass, cubic
-//   stiffness, drifts, offsets and the force delay have no place in a storey model: `left_out`.
+//   stiffness, drifts, offsets and the force delay have no place in a storey model: `left_out`
+//   (each saying whether a force stage holds it: add_force_stages).
 //   A specimen with no displacement-dependent force (a pure damper) gives no RestoringForce.
 // Fragment (study_fragment, written with core::write_text_format): a text-format Study holding only
 //   substructuring { model { ... } } and cases { name: "identified_actuator" ... },
@@ -61,12 +62,29 @@ ActuatorCase actuator_case(const ChannelModel& actuator, const SignalScales& sca
                            const std::string& name = kIdentifiedCaseName,
                            const std::optional<RigRecord>& rig = std::nullopt);
 // What the load cell of a fitted specimen (channel force) reads beyond its storey model, as the
-// case's last stages: a viscous force beside the specimen (damping, N s/m) as a viscous_force
-// stage, and the load cell's offset drift as a sensor_drift stage's force fields (N, N/s of
-// simulated time), merged into the case's sensor_drift stage (appended when it has none).
-// Nothing for a specimen with neither.
+// case's force stages (core/rig_effects.h), each with the fitted value:
+//   damping (N s/m)                               viscous_force { damping }
+//   coulomb (friction_force N, smoothing_velocity  friction_force { friction_force,
+//   m/s: F_c tanh(v / v_s))                          smoothing_velocity }
+//   inertia (mass kg: m a)                         inertia_force { mass }
+//   delay (s: the force channel's shift)           force_delay { delay }
+// in that order, after every stage that moves the specimen and before the sensor_drift stages
+// that end the case (the fitted model adds the load cell's offset after the shift), and the load cell's offset drift as a sensor_drift stage's force
+// fields (N, N/s of simulated time), merged into the case's sensor_drift stage (appended when it
+// has none). `held`: effects the case's stages already hold (a declared tracking loop's specimen
+// inertia and damping, its load cell's delay), not added again. Nothing for a specimen with none.
 void add_force_stages(const ChannelModel& specimen, const SignalScales& scales,
-                      const RigRecord& rig, config::Case& study_case);
+                      const RigRecord& rig, config::Case& study_case,
+                      const std::vector<Effect>& held = {});
+// Whether `stage` is one of the force stages above (it passes the displacement unchanged).
+bool is_force_stage(const config::DelayStage& stage);
+// The force stages of `declared` (a case whose stages the identified actuator replaces) put into
+// `study_case` as add_force_stages places them: what the record did not contradict of the
+// specimen's load cell stays when the actuator's stages are replaced.
+void keep_declared_force_stages(const config::Case& declared, config::Case& study_case);
+// Whether add_force_stages holds a specimen effect (damping, coulomb, inertia, the force
+// channel's delay, offset_drift): what a storey model leaves out but the re-run still holds.
+bool held_by_force_stages(Effect effect);
 // A displacement sensor reading `scale` x the truth (identify/run/sensors.h) as the case's
 // sensor_drift stage's displacement_scale, merged into that stage (appended when it has none).
 // Nothing for a scale of 1.

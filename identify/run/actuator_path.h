@@ -2,12 +2,28 @@
 // One actuator's path as identified from a run's record: what the case declared, what the fit
 // found (gain, delay, the effects beyond the declared model), and the identification itself.
 
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "identify/fit/effect_parameters.h"
 #include "identify/fit/identify.h"
 
 namespace rths::identify {
+
+// One effect of a channel's final model with its parameters (effect_parameters.h; an offset
+// drift as the sensor_drift stage holds it: the offset at t = 0 of the run and the drift per
+// second), computed once (findings.h estimate_effects): the channel sections, the JSON and the
+// findings all print these.
+struct EffectEstimate {
+  Channel channel = Channel::kMeasured;
+  Effect effect = Effect::kDelay;
+  bool added = false;  // beyond the channel's declared model (a search step or its start)
+  // Its own part of the channel's held-out error, for one a search step added; absent for one the
+  // search started from (a proposed specimen kind) or the declared model held.
+  std::optional<double> share;
+  std::vector<ParameterEstimate> parameters;
+};
 
 struct ActuatorPath {
   int actuator = 0;                   // 1-based
@@ -30,6 +46,14 @@ struct ActuatorPath {
   double displacement_noise = 0.0, force_noise = 0.0;
   double declared_displacement_noise = 0.0, declared_force_noise = 0.0;
   double displacement_scale = 1.0, displacement_scale_error = 0.0;
+  // Every effect of each channel's final model: the search's steps first in their order, then the
+  // other effects beyond the declared model, then the declared ones.
+  std::vector<EffectEstimate> estimates;
+  const EffectEstimate* estimate(Channel channel, Effect effect) const {
+    for (const auto& e : estimates)
+      if (e.channel == channel && e.effect == effect) return &e;
+    return nullptr;
+  }
 };
 
 inline constexpr double kStiffnessTolerance = 0.05;  // relative

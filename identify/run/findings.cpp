@@ -1,5 +1,6 @@
 #include "identify/run/findings.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -75,13 +76,11 @@ Finding channel_finding(const ActuatorPath& path, Channel channel, const std::st
   f.heldout_after = c->final_fit.heldout_error;
   // A changed value or a sensor's reading, not a library effect.
   if (effect.find(' ') != std::string::npos || effect == "noise" || effect == "scale") return f;
-  const std::optional<Effect> kind = parse_effect(effect);
-  const SignalScales scales = signal_scales(identified_signals(path.id, channel));
-  f.parameters = effect_parameters(c->final_fit, *kind, scales);
-  if (*kind == Effect::kOffsetDrift) in_run_time(path.id, channel, f.parameters);
+  const Effect kind = parse_effect(effect);
+  if (const EffectEstimate* e = path.estimate(channel, kind)) f.parameters = e->parameters;
   f.magnitude = parameters_text(f.parameters);
   for (const auto& step : c->steps)
-    if (step.effect == *kind) {
+    if (step.effect == kind) {
       f.heldout_before = step.before.heldout_error;
       f.heldout_after = step.after.heldout_error;
     }
@@ -162,6 +161,10 @@ void add_response(const RunResidual* residual, std::vector<Finding>& findings) {
       continue;
     }
     f.not_rerun = "the study cannot hold it (see the re-run's notes)";
+    for (const auto& note : residual->notes)
+      if (note.rfind(f.part + ": " + f.effect + ": ", 0) == 0)
+        f.not_rerun =
+            "the study cannot hold it: " + note.substr(f.part.size() + 2 + f.effect.size() + 2);
     for (const auto& s : residual->effects)
       if (s.link == f.part && s.effect == f.effect) {
         f.response_removed = s.removed;
@@ -172,6 +175,27 @@ void add_response(const RunResidual* residual, std::vector<Finding>& findings) {
 }
 
 }  // namespace
+
+void estimate_effects(ActuatorPath& path) {
+  path.estimates.clear();
+  for (const auto& c : path.id.channels) {
+    const SignalScales scales = signal_scales(identified_signals(path.id, c.channel));
+    const auto add = [&](Effect effect, bool added, std::optional<double> share) {
+      if (path.estimate(c.channel, effect)) return;
+      EffectEstimate e{c.channel, effect, added, share,
+                       effect_parameters(c.final_fit, effect, scales)};
+      if (effect == Effect::kOffsetDrift) in_run_time(path.id, c.channel, e.parameters);
+      path.estimates.push_back(std::move(e));
+    };
+    const auto declared = [&](Effect e) {
+      return std::find(c.declared.begin(), c.declared.end(), e) != c.declared.end();
+    };
+    for (const auto& step : c.steps) add(step.effect, true, step.own_share);
+    for (Effect effect : c.final_fit.model.effects)
+      if (!declared(effect)) add(effect, true, std::nullopt);
+    for (Effect effect : c.final_fit.model.effects) add(effect, false, std::nullopt);
+  }
+}
 
 std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
                                       const std::vector<ActuatorPath>& actuators,

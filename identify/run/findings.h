@@ -45,6 +45,11 @@ struct Finding {
   std::string not_rerun;                   // why the re-run leaves it out; empty when re-run
 };
 
+// Every effect of each identified channel of `path` with its parameters (ActuatorPath::estimates),
+// once, after its channels were identified.
+void estimate_effects(ActuatorPath& path);
+
+// @pre estimate_effects ran on every actuator path.
 std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
                                       const std::vector<ActuatorPath>& actuators,
                                       const RunResidual* residual, const std::string& clock);

@@ -14,16 +14,21 @@ std::vector<std::int64_t> own_answers(std::size_t steps) {
 }
 
 // The rows of the sources `node` answers for.
-std::vector<std::vector<std::int64_t>*> rows_of(const runtime::NodePlan& node,
+std::vector<std::vector<std::int64_t>*> rows_of(const runtime::NodeSources& node,
                                                 core::AnswerSchedule& schedule) {
   std::vector<std::vector<std::int64_t>*> out;
-  const bool numerical = node.spec.kind() == config::NodeSpec::SUBSTRUCTURE;
-  for (int i : numerical ? node.storeys : node.actuators) {
-    auto& rows = numerical ? schedule.storey_used : schedule.actuator_used;
+  auto& rows = node.numerical ? schedule.storey_used : schedule.actuator_used;
+  for (int i : node.sources)
     if (i >= 0 && static_cast<std::size_t>(i) < rows.size())
       out.push_back(&rows[static_cast<std::size_t>(i)]);
-  }
   return out;
+}
+
+// The node of `id` among `nodes`, or nullptr.
+const runtime::NodeSources* find_node(const std::vector<runtime::NodeSources>& nodes, int id) {
+  for (const auto& node : nodes)
+    if (node.node_id == id) return &node;
+  return nullptr;
 }
 
 void drop_fresh_rows(core::AnswerSchedule& schedule, std::size_t steps) {
@@ -52,8 +57,8 @@ void measure_ages(PlatformReplay& out) {
 }  // namespace
 
 PlatformReplay platform_replay(const std::vector<const runtime::StepRecord*>& steps,
-                               std::size_t count, const runtime::DeploymentPlan& plan, int storeys,
-                               int actuators) {
+                               std::size_t count, const std::vector<runtime::NodeSources>& nodes,
+                               int storeys, int actuators) {
   PlatformReplay out;
   out.steps = std::min(count, steps.size());
   auto& schedule = out.schedule;
@@ -61,7 +66,7 @@ PlatformReplay platform_replay(const std::vector<const runtime::StepRecord*>& st
   schedule.actuator_used.assign(static_cast<std::size_t>(actuators), own_answers(out.steps));
   for (std::size_t k = 1; k < out.steps; ++k)
     for (const runtime::LinkSample& link : steps[k]->links()) {
-      const runtime::NodePlan* node = plan.find(link.node_id());
+      const runtime::NodeSources* node = find_node(nodes, link.node_id());
       if (!node) continue;
       // An answer to a command not yet sent cannot have been used: the step's own then.
       const std::int64_t used =

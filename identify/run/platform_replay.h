@@ -2,12 +2,13 @@
 // The platform's part of a run as its record tells it, for the re-run to replay
 // (core/answer_replay.h): at each step k, the step whose answer the coordinator's loop used from
 // each node (StepRecord.links[].answered_step), spread to what that node answers for: its
-// actuators (emulators, controllers) or its numerical storeys (substructure nodes), as
-// runtime::make_plan assigns them. In lockstep every step waits for its own answers; in real time
+// actuators (emulators, controllers) or its numerical storeys (substructure nodes), as the
+// coordinator's plan assigns them (runtime/node/answer_sources.h). In lockstep every step waits for its own answers; in real time
 // a late answer or an overrun leaves a step on an older one, which is the platform's doing, not
 // the rig's.
 //
-// Input: the record's steps (the first `steps` of them), the run's deployment plan.
+// Input: the record's steps (the first `steps` of them), which node answers for which sources
+// (runtime::answer_sources of the record's study).
 // Output (PlatformReplay): the schedule (a row left empty for a source always on its own
 // answer); the steps on an older answer (any source) with the mean and largest age of the
 // answers they used (steps: k - answered step).
@@ -24,7 +25,7 @@
 
 #include "core/answer_replay.h"
 #include "rths/proto/runtime.pb.h"
-#include "runtime/node/plan.h"
+#include "runtime/node/answer_sources.h"
 
 namespace rths::identify {
 
@@ -38,8 +39,8 @@ struct PlatformReplay {
 
 // `storeys`, `actuators`: the run's (the schedule's rows).
 PlatformReplay platform_replay(const std::vector<const runtime::StepRecord*>& steps,
-                               std::size_t count, const runtime::DeploymentPlan& plan, int storeys,
-                               int actuators);
+                               std::size_t count, const std::vector<runtime::NodeSources>& nodes,
+                               int storeys, int actuators);
 
 // Actuator a's row of `schedule` (0-based); empty when it has none.
 std::vector<std::int64_t> actuator_row(const core::AnswerSchedule& schedule, int a);

@@ -58,11 +58,14 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
         notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
       study_case = part.study_case;
     }
+    if (rig.actuator && !rig.specimen)
+      keep_declared_force_stages(declared_stages(run.study, run_case), study_case);
     if (rig.specimen) {
       const ChannelSignals& f = identified_signals(path.id, Channel::kForce);
       const SignalScales force_scales = signal_scales(f);
       add_force_stages(*rig.specimen, force_scales,
-                       RigRecord{f.time.front(), force_scales.duration}, study_case);
+                       RigRecord{f.time.front(), force_scales.duration}, study_case,
+                       rig.held_by_declared);
     }
     add_displacement_scale(rig.displacement_scale, study_case);
     if (run_case) *study_case.mutable_compensation() = run_case->compensation();

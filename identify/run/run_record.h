@@ -17,12 +17,13 @@
 // diverged is identified up to the last step whose response is finite and below the coordinator's
 // divergence bound; a truncated record (no footer, or a cut last entry) is identified from what it
 // holds; both say so (`held`). The system-level residual re-runs the study over the same steps,
-// from the record's own ground acceleration (run_residual.h). Bad input -> std::invalid_argument
+// from the record's own ground acceleration (run_residual.h). The findings (findings.h) and each
+// channel's effect estimates are computed here once; run_record_format.h prints them. Which node
+// answered for which actuator or storey comes from runtime::answer_sources, the planning the
+// coordinator ran (platform_replay.h). Bad input -> std::invalid_argument
 // "RECORD: ENTRY: PROBLEM": a record that cannot be read or has damaged entries (the reader's loss
 // report names them), a header of another schema version, no header, a link the header lists with
 // no answer, fewer steps than identification needs.
-
-#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <optional>
@@ -31,6 +32,7 @@
 
 #include "identify/fit/identify.h"
 #include "identify/run/actuator_path.h"
+#include "identify/run/findings.h"
 #include "identify/run/network_path.h"
 #include "identify/run/platform_replay.h"
 #include "identify/run/run_residual.h"
@@ -66,13 +68,13 @@ struct RunIdentification {
   // The study re-run with the declared and the identified actuators (run_residual.h); absent
   // when the actuator channel was not identified.
   std::optional<RunResidual> residual;
+  // Every difference from the declared config, every part, computed once (findings.h): what the
+  // report (run_record_format.h) prints and the JSON holds.
+  std::vector<Finding> findings;
 };
 
 RunIdentification identify_run_record(const std::filesystem::path& record,
                                       const IdentifyOptions& options);
-
-std::string run_record_text(const RunIdentification& run);
-nlohmann::json run_record_json(const RunIdentification& run);
 
 // True for a path named *.rthsrec (what `rths identify` reads as a run record).
 bool is_run_record(const std::filesystem::path& path);

@@ -31,6 +31,7 @@ struct RigModel {
   const ChannelModel* actuator = nullptr;
   const ChannelModel* specimen = nullptr;
   double displacement_scale = 1.0;
+  const std::vector<Effect>* held = nullptr;  // RigModels::held_by_declared
 };
 
 // The record's time base of a channel's fitted drifts (study_config.h RigRecord).
@@ -70,11 +71,25 @@ Rerun compare(core::SimulationResult result, const core::Mat& recorded) {
   return out;
 }
 
-// Whether a specimen effect the storey model leaves out (`note`, "effect: why") is re-run by the
-// force stages (study_config.h add_force_stages): the load cell's drift, the viscous force.
-bool re_run_by_force_stages(const std::string& note) {
-  for (Effect e : {Effect::kOffsetDrift, Effect::kDamping})
-    if (note.rfind(effect_name(e) + ":", 0) == 0) return true;
+// What the re-run cannot hold of an identified specimen: specimen_model's left-out notes
+// ("effect: why") that no force stage holds (study_config.h add_force_stages), e.g. a cubic
+// stiffness.
+std::vector<std::string> not_held(const ChannelModel& specimen, const SignalScales& scales) {
+  std::vector<std::string> out;
+  for (const auto& note : specimen_model(specimen, scales).left_out) {
+    bool held = false;
+    try {
+      held = held_by_force_stages(parse_effect(note.substr(0, note.find(':'))));
+    } catch (const std::invalid_argument&) {}
+    if (!held) out.push_back(note);
+  }
+  return out;
+}
+
+// Whether `notes` (not_held) name `effect`.
+bool names(const std::vector<std::string>& notes, const std::string& effect) {
+  for (const auto& n : notes)
+    if (n.rfind(effect + ":", 0) == 0) return true;
   return false;
 }
 
@@ -138,8 +153,11 @@ class Reruns {
                                                declared_, nullptr)
                                   : declared_;
       if (m.specimen) {
-        add_force_stages(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c);
+        add_force_stages(*m.specimen, scales(a, Channel::kForce), rig(a, Channel::kForce), c,
+                         m.actuator || !m.held ? std::vector<Effect>{} : *m.held);
         place_specimen(*m.specimen, a, setup);
+      } else if (m.actuator) {
+        keep_declared_force_stages(declared_, c);
       }
       add_displacement_scale(m.displacement_scale, c);
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
@@ -197,20 +215,23 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
       if (effect == "noise") continue;  // random: not re-run (sensors.h)
       const std::string part = part_of(effect, Channel::kMeasured, actuator);
       if (effect == "scale") {  // the sensor reading true: the same loop, another reading
-        removes(part, effect, {all[a].actuator, all[a].specimen, 1.0});
+        removes(part, effect, {all[a].actuator, all[a].specimen, 1.0, all[a].held});
         continue;
       }
       if (!all[a].actuator) continue;  // the declared actuator stays: nothing to take out
       const ChannelModel reduced = without(*all[a].actuator, paths[a], effect, reruns.scales(a));
-      removes(part, effect, {&reduced, all[a].specimen, all[a].displacement_scale});
+      removes(part, effect, {&reduced, all[a].specimen, all[a].displacement_scale, all[a].held});
     }
     if (!all[a].specimen) continue;
+    // An effect the re-run cannot hold has no share: it is named `not re-run` with the reason.
+    const std::vector<std::string> left_out =
+        not_held(*all[a].specimen, reruns.scales(a, Channel::kForce));
     for (const auto& effect : paths[a].specimen_undeclared) {
-      if (effect == "noise") continue;
+      if (effect == "noise" || names(left_out, effect)) continue;
       const ChannelModel reduced =
           specimen_without(*all[a].specimen, paths[a], effect, reruns.scales(a, Channel::kForce));
       removes(part_of(effect, Channel::kForce, actuator), effect,
-              {all[a].actuator, &reduced, all[a].displacement_scale});
+              {all[a].actuator, &reduced, all[a].displacement_scale, all[a].held});
     }
   }
   if (reruns.replays())
@@ -245,6 +266,7 @@ RunResidual run_residual(const ResidualInput& input) {
     // only what the record contradicts.
     if (rigs[a].specimen) all[a].specimen = &*rigs[a].specimen;
     all[a].displacement_scale = rigs[a].displacement_scale;
+    all[a].held = &rigs[a].held_by_declared;
     std::vector<std::string> left_out;
     if (all[a].actuator)
       model_case(*all[a].actuator, reruns.scales(a), reruns.rig(a, Channel::kMeasured),
@@ -252,10 +274,8 @@ RunResidual run_residual(const ResidualInput& input) {
     for (const auto& l : left_out)
       out.notes.push_back("actuator " + std::to_string(a + 1) + ": " + l);
     if (all[a].specimen)
-      for (const auto& l :
-           specimen_model(*all[a].specimen, reruns.scales(a, Channel::kForce)).left_out)
-        if (!re_run_by_force_stages(l))
-          out.notes.push_back("specimen " + std::to_string(a + 1) + ": " + l);
+      for (const auto& l : not_held(*all[a].specimen, reruns.scales(a, Channel::kForce)))
+        out.notes.push_back("specimen " + std::to_string(a + 1) + ": " + l);
   }
   const Rerun before = reruns.run(std::vector<RigModel>(paths.size()));
   const Rerun after = reruns.run(all, true);

@@ -15,8 +15,10 @@
 // scale) in place of those delay stages,
 // the compensation kept; where the force channel contradicted the declared specimen
 // (ActuatorPath::specimen_undeclared), the identified storey model in place of the declared one
-// (specimen_model, at its identified initial stiffness), its viscous force as a viscous_force
-// stage and the load cell's drift as a sensor_drift stage (study_config.h add_force_stages).
+// (specimen_model, at its identified initial stiffness), what its load cell reads beside it as
+// force stages (study_config.h add_force_stages: damping as viscous_force, coulomb_friction as
+// friction_force, inertia as inertia_force, the force channel's delay as force_delay) and the load
+// cell's drift as a sensor_drift stage.
 // Errors, per floor (DOF) i: NRMSE_i = sqrt(mean (u_sim - u_rec)^2) / median |u_rec|
 // (core/metrics.h nrmse, the record as reference) over the steps both responses hold.
 // Which link explains how much: the error measure E is the worst floor's NRMSE.
@@ -27,6 +29,8 @@
 //                         taken out of the model; "scale": the sensor reading true), on its part
 //                         (sensors.h part_of): "actuator a", "displacement sensor a", "specimen a"
 //                         or "load cell a". A sensor's noise is not re-run.
+// An undeclared specimen effect the re-run cannot hold (a cubic stiffness, a time-varying one:
+// no storey model or force stage holds them) has no removal: the notes name it with the reason.
 // Each removal's share is its error removed over the sum of the positive ones of its kind.
 // The platform's share (a real-time record whose steps used older answers: platform_replay.h):
 // the identified re-run replays the answers the loop used (core::AnswerReplay), and

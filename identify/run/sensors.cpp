@@ -9,6 +9,7 @@
 
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/model.h"
+#include "identify/model/study_config.h"
 
 namespace rths::identify {
 namespace {
@@ -133,7 +134,7 @@ double noise_spread(const Identification& id, Channel channel) {
 }
 
 std::string part_of(const std::string& effect, Channel channel, int actuator) {
-  const bool sensor = sensor_effect(effect);
+  const bool sensor = sensor_effect(effect) || (channel == Channel::kForce && effect == "delay");
   const std::string n = std::to_string(actuator);
   if (channel == Channel::kMeasured) return (sensor ? "displacement sensor " : "actuator ") + n;
   return (sensor ? "load cell " : "specimen ") + n;
@@ -162,7 +163,7 @@ RigModels rig_models(const ActuatorPath& path) {
   if (!c)
     throw std::invalid_argument("actuator " + std::to_string(path.actuator) +
                                 ": actuator path not identified");
-  RigModels out{std::nullopt, std::nullopt, path.displacement_scale};
+  RigModels out{std::nullopt, std::nullopt, path.displacement_scale, {}};
   std::vector<std::string> contradicted = path.undeclared;
   remove(contradicted, "noise");
   const double s = path.displacement_scale;
@@ -189,7 +190,12 @@ RigModels rig_models(const ActuatorPath& path) {
     scale_param(*out.specimen, Effect::kStiffness, "stiffness", s, scales);
     scale_param(*out.specimen, Effect::kDamping, "damping", s, scales);
     scale_param(*out.specimen, Effect::kInertia, "mass", s, scales);
+    scale_param(*out.specimen, Effect::kCoulomb, "smoothing_velocity", 1.0 / s, scales);
   }
+  if (!out.actuator)
+    for (const auto& name : path.declared_specimen)
+      if (held_by_force_stages(parse_effect(name)))
+        out.held_by_declared.push_back(parse_effect(name));
   return out;
 }
 

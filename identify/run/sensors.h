@@ -41,8 +41,9 @@
 // effect other than noise), the fitted actuator with its gain divided by s, else the declared
 // stages stay (a fitted model of a declared tracking loop is no better than the loop); where the
 // specimen is re-run (the force channel contradicted the declared specimen), the fitted specimen
-// with the load cell's own offset drift only and its stiffness, damping and mass times s; the
-// sensor's scale itself goes into a sensor_drift stage.
+// with the load cell's own offset drift only, its stiffness, damping and mass times s and its
+// friction's smoothing velocity over s (tanh(v_read / v_s) = tanh(v / (v_s / s))); the sensor's
+// scale itself goes into a sensor_drift stage.
 
 #include <optional>
 #include <string>
@@ -57,7 +58,8 @@ inline constexpr double kScaleMatch = 0.01;         // relative, of the declared
 inline constexpr double kOwnOffsetShare = 0.02;     // of the force's std
 
 // The part of the loop an effect of `channel` is on: "displacement sensor N" / "load cell N" for
-// a sensor's effects (offset_drift, noise, scale), else "actuator N" / "specimen N".
+// a sensor's effects (offset_drift, noise, scale, and on the force channel its delay: the load
+// cell's channel late), else "actuator N" / "specimen N".
 std::string part_of(const std::string& effect, Channel channel, int actuator);
 
 // The noise each channel's noise floor shows and the displacement sensor's scale, named on `path`
@@ -78,6 +80,10 @@ struct RigModels {
   std::optional<ChannelModel> actuator;  // absent: the declared actuator stays
   std::optional<ChannelModel> specimen;  // absent: the declared specimen stays
   double displacement_scale = 1.0;
+  // The specimen's force effects the declared stages hold where they stay (`actuator` absent):
+  // a declared tracking loop's specimen inertia and damping and its load cell's delay
+  // (study_config.h add_force_stages `held`), so that the re-run does not hold them twice.
+  std::vector<Effect> held_by_declared;
 };
 // @pre the path's measured channel was identified (throws std::invalid_argument otherwise).
 RigModels rig_models(const ActuatorPath& path);

@@ -7,8 +7,7 @@ namespace rths::runtime {
 core::HybridSetup in_process_setup(const core::PreparedStudy& prepared,
                                    const config::Case& study_case) {
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-  return with_node_compensation(
-      setup, make_plan(setup, with_default_nodes(prepared.config.deployment(), setup)));
+  return with_node_compensation(setup, plan_deployment(setup, prepared.config.deployment()));
 }
 
 }  // namespace rths::runtime

@@ -138,6 +138,11 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
   return plan;
 }
 
+DeploymentPlan plan_deployment(const core::HybridSetup& base,
+                               const config::Deployment& deployment) {
+  return make_plan(base, with_default_nodes(deployment, base));
+}
+
 core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan) {
   for (const NodePlan& node : plan.nodes)
     core::apply_compensation(setup, node.actuators, node.spec.compensation(),
@@ -182,8 +187,7 @@ config::Deployment with_default_nodes(config::Deployment deployment,
 void check_deployment(const core::PreparedStudy& prepared) {
   const core::HybridSetup setup =
       core::setup_for_case(prepared, core::reference_case(prepared.config));
-  const DeploymentPlan plan =
-      make_plan(setup, with_default_nodes(prepared.config.deployment(), setup));
+  const DeploymentPlan plan = plan_deployment(setup, prepared.config.deployment());
   check_node_stages(plan, setup.dt, prepared.base_dir);
 }
 

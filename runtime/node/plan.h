@@ -38,6 +38,10 @@ struct DeploymentPlan {
 };
 
 DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment);
+// The deployment as a run runs it: with_default_nodes (below), then make_plan. The one planning
+// the coordinator, the in-process wiring and the record's readers (answer_sources.h) use, so
+// they assign the same nodes. Throws as make_plan.
+DeploymentPlan plan_deployment(const core::HybridSetup& base, const config::Deployment& deployment);
 
 // The setup with each actuator emulator's `compensation` in front of the chains of the actuators it
 // hosts (core::apply_compensation): what the emulators run, so what an in-process run must use to

@@ -1,6 +1,6 @@
 // A rig's own effects as delay stages (core/rig_effects.h): each recursion as its header states
-// it (backlash, velocity and stroke limits), the sensors' errors and a viscous force on what is
-// read and not on what moves, bad parameters refused, and the stages as a study config builds
+// it (backlash, velocity and stroke limits), the sensors' errors, a viscous force, a friction
+// force, the specimen's mass and a late load cell on what is read and not on what moves, bad parameters refused, and the stages as a study config builds
 // them.
 #include "core/rig_effects.h"
 
@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "study/study.h"
 
@@ -96,6 +98,77 @@ TEST(ViscousForce, TheLoadCellReadsDampingTimesTheRateAndTheSpecimenIsNotMoved) 
   EXPECT_THROW(ViscousForce(std::nan(""), 0.001), std::invalid_argument);
 }
 
+TEST(InertiaForce, TheLoadCellReadsMassTimesTheAccelerationAtItsOwnStep) {
+  // From rest, u = t^2 (2 m/s^2): from the third step on, the four samples the backward difference
+  // takes lie on the parabola, and the load cell reads 50 kg x 2 m/s^2 on top of the spring.
+  InertiaForce mass(50.0, 0.001);
+  for (int k = 1; k <= 6; ++k) {
+    const double t = 0.001 * k;
+    EXPECT_DOUBLE_EQ(mass.step({t, t * t, 0.0}), t * t);  // the specimen is not moved
+    const double read = mass.measure_force(500.0);
+    if (k >= 3) EXPECT_NEAR(read, 500.0 + 50.0 * 2.0, 1e-6) << "step " << k;
+  }
+  // A constant rate: no acceleration once the samples are on the line.
+  InertiaForce steady(50.0, 0.001);
+  for (int k = 1; k <= 5; ++k) {
+    steady.step({0.001 * k, 1e-4 * k, 0.0});
+    if (k >= 3) EXPECT_NEAR(steady.measure_force(7.0), 7.0, 1e-6) << "step " << k;
+  }
+  mass.reset();
+  mass.step({0.001, 0.0, 0.0});
+  EXPECT_DOUBLE_EQ(mass.measure_force(7.0), 7.0);
+  EXPECT_THROW(InertiaForce(-1.0, 0.001), std::invalid_argument);
+  EXPECT_THROW(InertiaForce(std::nan(""), 0.001), std::invalid_argument);
+  EXPECT_THROW(InertiaForce(1.0, 0.0), std::invalid_argument);
+}
+
+TEST(FrictionForce, TheLoadCellReadsASmoothedCoulombForceAgainstTheRateAtItsOwnStep) {
+  // From rest, u = 0.25 t^2 (a rate of t / 2 m/s): from the second step on, the three samples
+  // the backward difference takes lie on the parabola, so it reads the rate at the step itself.
+  FrictionForce friction(200.0, 0.001, 0.001);
+  for (int k = 1; k <= 4; ++k) {
+    const double t = 0.001 * k;
+    EXPECT_DOUBLE_EQ(friction.step({t, 0.25 * t * t, 0.0}), 0.25 * t * t);
+    const double read = friction.measure_force(500.0);
+    if (k >= 2) EXPECT_NEAR(read, 500.0 + 200.0 * std::tanh(0.5 * t / 0.001), 1e-6) << "step " << k;
+  }
+  FrictionForce still(200.0, 0.001, 0.001);
+  for (int k = 1; k <= 3; ++k) {
+    still.step({0.001 * k, 0.002, 0.0});  // a step of 2 mm at the first step, then at rest
+    if (k >= 3) EXPECT_DOUBLE_EQ(still.measure_force(3.0), 3.0);
+  }
+  still.reset();
+  still.step({0.001, -0.0001, 0.0});  // -0.15 m/s from rest: full friction against it
+  EXPECT_NEAR(still.measure_force(0.0), -200.0, 1e-6);
+  EXPECT_THROW(FrictionForce(-1.0, 0.001, 0.001), std::invalid_argument);
+  try {
+    FrictionForce(1.0, 0.0, 0.001);
+    FAIL() << "a smoothing velocity of 0 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("smoothing_velocity"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ForceDelay, TheIntegratorReceivesTheForceReadDelaySecondsBefore) {
+  ForceDelay late(0.0015, 0.001);  // a step and a half
+  std::vector<double> received;
+  for (int k = 1; k <= 5; ++k) {
+    EXPECT_DOUBLE_EQ(late.step({0.001 * k, 0.0003, 0.0}), 0.0003);  // the motion is not late
+    received.push_back(late.measure_force(100.0 * k));
+  }
+  // Before the first step's force: the first's; then 1.5 steps back, interpolated.
+  EXPECT_DOUBLE_EQ(received[0], 100.0);
+  EXPECT_DOUBLE_EQ(received[1], 100.0);
+  EXPECT_NEAR(received[2], 150.0, 1e-9);
+  EXPECT_NEAR(received[3], 250.0, 1e-9);
+  EXPECT_NEAR(received[4], 350.0, 1e-9);
+  ForceDelay none(0.0, 0.001);
+  none.step({0.001, 0.0, 0.0});
+  EXPECT_DOUBLE_EQ(none.measure_force(42.0), 42.0);
+  EXPECT_DOUBLE_EQ(late.nominal_delay(), 0.0);  // the displacement's lag
+  EXPECT_THROW(ForceDelay(-0.001, 0.001), std::invalid_argument);
+}
+
 TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   config::DelayStage stage;
   stage.mutable_velocity_limit()->set_max_velocity(0.05);
@@ -133,6 +206,32 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
     }
   }
+  for (const auto& [text, field] :
+       {std::pair{"inertia_force { mass: -1 }", "inertia_force.mass"},
+        std::pair{"friction_force { friction_force: 100 }", "friction_force.smoothing_velocity"},
+        std::pair{"friction_force { friction_force: -1 smoothing_velocity: 0.001 }",
+                  "friction_force.friction_force"},
+        std::pair{"force_delay { delay: 2 }", "force_delay.delay"}}) {
+    try {
+      (void)parse_study(std::string("structure { sdof { period: 0.5 } } cases { name: \"c\" "
+                                    "delay { ") +
+                            text + " } }",
+                        "bad.textproto");
+      FAIL() << text << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+  config::DelayStage mass, friction, late;
+  mass.mutable_inertia_force()->set_mass(10.0);
+  friction.mutable_friction_force()->set_friction_force(100.0);
+  friction.mutable_friction_force()->set_smoothing_velocity(0.002);
+  late.mutable_force_delay()->set_delay(0.003);
+  DelayChain rig;
+  for (const auto* stage : {&mass, &friction, &late}) rig.add(make_delay_stage(*stage, 0.001, "."));
+  EXPECT_NE(rig.describe().find("inertia_force(10 kg)"), std::string::npos) << rig.describe();
+  EXPECT_NE(rig.describe().find("friction_force(100 N"), std::string::npos) << rig.describe();
+  EXPECT_NE(rig.describe().find("force_delay(3 ms)"), std::string::npos) << rig.describe();
   try {
     (void)parse_study(
         "structure { sdof { period: 0.5 } } cases { name: \"c\" delay { "

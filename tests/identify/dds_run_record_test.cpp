@@ -1,6 +1,6 @@
 // Records of rths's own distributed runs over Cyclone DDS (real coordinator and node processes on
-// loopback, DDS domains 220-221, 225-227, 229-230), identified from the record: the run is
-// launched with effects its config does not declare, injected by the nodes (their stages, and
+// loopback, DDS domains 220-221, 225-227, 229-230, 76 and 78), identified from the record: the run
+// is launched with effects its config does not declare, injected by the nodes (their stages, and
 // their links' network emulation: a drifting delay, periodic spikes, a burst of dropped commands),
 // then the record's header is given the declared config (as a lab's record holds the config it
 // meant to run). Each effect must be named on its own link, the clean records (lockstep and real
@@ -14,6 +14,7 @@
 #include <string>
 
 #include "identify/run/run_record.h"
+#include "identify/run/run_record_format.h"
 #include "runtime/launch/launch.h"
 #include "tests/identify/undeclared_run.h"
 #include "tests/support/platform_gate.h"
@@ -241,6 +242,58 @@ TEST_F(DdsRunRecord, ARealTimeBurstOfDroppedCommandsIsNamedAsLostAnswersOnItsLin
   EXPECT_EQ(run.links.at(0).longest_burst, 12u) << text;
   EXPECT_EQ(run.links.at(1).lost, 0u) << text;
   EXPECT_TRUE(link_effects(run, 2).count("lost answers") == 0) << text;
+}
+
+// The force stages (a specimen's own mass, a friction force beside it, a late load cell) in a
+// case the emulator process runs over DDS in lockstep: the record equals the in-process run of the
+// same config bit for bit, and the stages act (the run without them reads other forces).
+TEST_F(DdsRunRecord, ForceStagesOverDdsEqualTheInProcessRunBitForBit) {
+  const std::string stages =
+      "delay { shift { delay: 0.014 } } delay { inertia_force { mass: 100 } } "
+      "delay { friction_force { friction_force: 300 smoothing_velocity: 0.002 } } "
+      "delay { force_delay { delay: 0.005 } }";
+  const std::string text = test::paper_frame_study(
+      2.0, "cases { name: \"force_stages\" " + stages + " }\n" + test::kDeclared);
+  const core::SimulationResult in_process = test::reference_result(text, "force_stages");
+  const core::SimulationResult without = test::reference_result(text, "lag_shift_14ms");
+  EXPECT_NE(in_process.measured_force(1000, 0), without.measured_force(1000, 0));
+  const auto run = test::launch("identify_dds_force_stages", text, "force_stages", 76);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  ASSERT_FALSE(run.record.truncated);
+  test::expect_record_equals(run.record, in_process);
+}
+
+// A specimen's own mass, undeclared, behind the actuator's shift in the emulator process over DDS
+// (test::smooth_frame_study's motion): named on the specimen with its mass, and the re-run,
+// holding it as an inertia_force stage, closes the record to <= 1 %.
+TEST_F(DdsRunRecord, AnUndeclaredSpecimenMassIsNamedAndTheReRunClosesTheRecord) {
+  const std::string declared = test::smooth_frame_study(test::kDeclared);
+  const auto run = test::launch("identify_dds_inertia",
+                                test::behind_the_shift(declared, "inertia_force { mass: 100 }"),
+                                "lag_shift_14ms", 78);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  const fs::path record = run.dir / "run.rthsrec";
+  const core::PreparedStudy as_declared = test::prepare(declared);
+  test::rewrite(record, [&](runtime::RecordEntry& e) {
+    if (e.has_header()) *e.mutable_header()->mutable_study() = as_declared.config;
+    if (e.has_inputs())
+      *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(as_declared);
+  });
+  const RunIdentification id = identify_run_record(record, IdentifyOptions{});
+  const std::string text = run_record_text(id);
+  const Finding* inertia = nullptr;
+  for (const auto& f : id.findings)
+    if (f.part == "specimen 1" && f.effect == "inertia") inertia = &f;
+  ASSERT_NE(inertia, nullptr) << text;
+  ASSERT_EQ(inertia->parameters.size(), 1u);
+  EXPECT_NEAR(inertia->parameters[0].value, 100.0, 5.0) << text;
+  ASSERT_TRUE(id.residual.has_value());
+  std::printf("DDS specimen mass 100 kg: NRMSE declared %.4f -> identified %.6f\n",
+              id.residual->declared, id.residual->identified);
+  EXPECT_GE(id.residual->declared, 0.05) << text;
+  EXPECT_LE(id.residual->identified, 0.01) << text;
+  ASSERT_TRUE(inertia->response_removed.has_value()) << inertia->not_rerun;
+  EXPECT_GT(inertia->response_share, 0.5) << text;
 }
 
 }  // namespace

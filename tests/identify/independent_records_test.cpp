@@ -10,6 +10,7 @@
 
 #include "identify/run/findings.h"
 #include "identify/run/run_record.h"
+#include "identify/run/run_record_format.h"
 #include "tests/identify/independent_record.h"
 
 namespace rths::identify {

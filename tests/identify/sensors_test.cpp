@@ -11,6 +11,7 @@
 #include "identify/fit/effect_parameters.h"
 #include "identify/run/run_config.h"
 #include "identify/run/run_record.h"
+#include "identify/run/run_record_format.h"
 #include "tests/identify/independent_record.h"
 
 namespace rths::identify {

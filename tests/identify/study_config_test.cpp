@@ -186,3 +186,41 @@ TEST(StudyConfigTest, AStudyBuiltFromTheFragmentRunsTheIdentifiedCase) {
 
 }  // namespace
 }  // namespace rths::identify
+
+namespace rths::identify {
+namespace {
+
+// What the load cell reads beside the storey model, as force stages in the model's order, after
+// the stages that move the specimen and before the sensor_drift that ends the case; an effect
+// the case's stages already hold is not added again, and none is named as left out for want of a
+// place.
+TEST(StudyConfigTest, AFittedMassFrictionAndLateLoadCellBecomeForceStages) {
+  ChannelModel m;
+  m.channel = Channel::kForce;
+  m.effects = {Effect::kStiffness, Effect::kDelay, Effect::kCoulomb, Effect::kInertia};
+  m.params = {5.0e4, 0.004, 120.0, 0.003, 80.0};
+  config::Case c;
+  c.add_delay()->mutable_shift()->set_delay(0.014);
+  c.add_delay()->mutable_sensor_drift()->set_displacement_offset(0.001);
+  config::Case all = c;
+  add_force_stages(m, SignalScales{}, RigRecord{}, all);
+  ASSERT_EQ(all.delay_size(), 5);
+  EXPECT_DOUBLE_EQ(all.delay(0).shift().delay(), 0.014);
+  EXPECT_DOUBLE_EQ(all.delay(1).friction_force().friction_force(), 120.0);
+  EXPECT_DOUBLE_EQ(all.delay(1).friction_force().smoothing_velocity(), 0.003);
+  EXPECT_DOUBLE_EQ(all.delay(2).inertia_force().mass(), 80.0);
+  EXPECT_DOUBLE_EQ(all.delay(3).force_delay().delay(), 0.004);
+  EXPECT_TRUE(all.delay(4).has_sensor_drift());
+  config::Case held = c;
+  add_force_stages(m, SignalScales{}, RigRecord{}, held, {Effect::kInertia, Effect::kDelay});
+  ASSERT_EQ(held.delay_size(), 3);
+  EXPECT_TRUE(held.delay(1).has_friction_force());
+  for (const auto& note : specimen_model(m, SignalScales{}).left_out)
+    EXPECT_THAT(note, ::testing::Not(::testing::HasSubstr("no place"))) << note;
+  for (Effect e : {Effect::kDamping, Effect::kCoulomb, Effect::kInertia, Effect::kDelay})
+    EXPECT_TRUE(held_by_force_stages(e)) << effect_name(e);
+  EXPECT_FALSE(held_by_force_stages(Effect::kCubicStiffness));
+}
+
+}  // namespace
+}  // namespace rths::identify

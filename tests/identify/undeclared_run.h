@@ -5,6 +5,9 @@
 // record holds the config it meant to run.
 
 #include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -81,6 +84,41 @@ inline std::filesystem::path run_with_undeclared(const std::string& name,
                             emulator_stages + " } }");
   return record_declaring(name, actual, paper_frame_study(duration, kDeclared), case_name,
                           expect_ok);
+}
+
+// The paper frame, damped 20 %, driven by a ground motion whose band ends below 3 Hz: three
+// sines under a 1 s cosine ramp at each end for 6 s, then 4 s at rest (10 s at the integrator's
+// 1 ms, embedded in the study). A specimen moved by it has no acceleration above the band, which
+// the force model's acceleration (central differences of the displacement smoothed over 5 ms,
+// signals.h) would smooth away, and the record ends at rest: the force model's zero-phase
+// filters start their backward pass at the record's last sample as at rest, so a record that
+// ends moving reads a transient acceleration there that no mass explains.
+inline std::string smooth_frame_study(const std::string& deployment) {
+  std::string study = test::paper_frame_study(10.0, deployment);
+  const std::size_t from = study.find("motion {");
+  const std::size_t to = study.find("}\n", from) + 2;
+  std::string motion = "motion { embedded { name: \"three_sines\" dt: 0.001 acceleration: [";
+  constexpr double kPi = 3.14159265358979323846;
+  for (int i = 0; i < 10000; ++i) {
+    const double t = 0.001 * i;
+    const double ramp = std::clamp(std::min(t, 6.0 - t), 0.0, 1.0);
+    const double envelope = 0.5 - 0.5 * std::cos(kPi * ramp);
+    const double a = std::sin(2 * kPi * 1.3 * t) + 0.6 * std::sin(2 * kPi * 2.1 * t + 1.0) +
+                     0.4 * std::sin(2 * kPi * 0.7 * t + 2.0);
+    motion += (i ? ", " : "") + std::to_string(3.0 * envelope * a);
+  }
+  study.replace(from, to - from, motion + "] } }\n");
+  const std::string damping = "modal_zeta: 0.05";
+  study.replace(study.find(damping), damping.size(), "modal_zeta: 0.2");
+  return study;
+}
+
+// `study` (paper_frame_study or smooth_frame_study) whose case lag_shift_14ms carries `stage`
+// (DelayStage fields) behind its shift, where it acts on the specimen's motion.
+inline std::string behind_the_shift(std::string study, const std::string& stage) {
+  const std::string shift = "delay { shift { delay: 0.014 } }";
+  study.insert(study.find(shift) + shift.size(), " delay { " + stage + " }");
+  return study;
 }
 
 // The effects identified on the link to node `node`.

@@ -156,12 +156,15 @@ TEST(StudyTest, EveryDelayKindBuildsAStage) {
                       delay { velocity_limit { max_velocity: 0.2 } }
                       delay { sensor_drift { force_offset: 10 } }
                       delay { viscous_force { damping: 300 } }
+                      delay { inertia_force { mass: 20 } }
+                      delay { friction_force { friction_force: 50 smoothing_velocity: 0.001 } }
+                      delay { force_delay { delay: 0.002 } }
                     })pb",
                   "all");
   const DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
   EXPECT_FALSE(chain.empty());
-  for (const char* kind :
-       {"shift", "jitter", "backlash", "velocity_limit", "sensor_drift", "viscous_force"})
+  for (const char* kind : {"shift", "jitter", "backlash", "velocity_limit", "sensor_drift",
+                           "viscous_force", "inertia_force", "friction_force", "force_delay"})
     EXPECT_NE(chain.describe().find(kind), std::string::npos) << chain.describe();
 }
 
