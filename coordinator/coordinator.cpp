@@ -63,7 +63,8 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   s.realised_drift = core::Vec::Zero(actuators);
   s.measured = core::Vec::Zero(actuators);
   // The case's force predictors, the same blocks core::simulate builds (core/force_predictor.h).
-  s.predictors = core::PredictorSet(s.setup.predictors, s.setup.dt);
+  s.predictors = core::PredictorSet(s.setup.predictors, s.setup.dt,
+                                    core::actuator_specimens(s.setup.partition));
   s.used_force = core::Vec::Zero(actuators);
   s.command_rate = core::Vec::Zero(actuators);
   s.prediction_error_ = core::Vec::Zero(actuators);

@@ -17,8 +17,15 @@ void require(bool ok, const std::string& label, const std::string& what) {
 }  // namespace
 
 ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
-                               const std::string& label)
+                               const std::string& label, const RestoringForceModel* shape)
     : p_(parameters), dt_(dt) {
+  if (shape && p_.specimen_shape) {
+    shape_stiffness_ = shape->initial_stiffness();
+    require(std::isfinite(shape_stiffness_) && shape_stiffness_ > 0, label,
+            "the specimen's model (" + shape->describe() + ") has no positive initial stiffness");
+    command_shape_ = shape->clone();
+    measured_shape_ = shape->clone();
+  }
   require(dt > 0 && std::isfinite(dt), label, "dt must be > 0 s");
   require(std::isfinite(p_.stiffness) && p_.stiffness > 0, label,
           "stiffness must be > 0 N/m (the declared specimen's)");
@@ -38,7 +45,46 @@ ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
   reset();
 }
 
+ForcePredictor::ForcePredictor(const ForcePredictor& other)
+    : p_(other.p_),
+      dt_(other.dt_),
+      lambda_(other.lambda_),
+      k_(other.k_),
+      c_(other.c_),
+      offset_(other.offset_),
+      last_answer_(other.last_answer_),
+      last_x_(other.last_x_),
+      last_drift_(other.last_drift_),
+      last_v_(other.last_v_),
+      last_f_(other.last_f_),
+      error_(other.error_),
+      updates_(other.updates_),
+      error_sq_(other.error_sq_),
+      force_sq_(other.force_sq_),
+      head_(other.head_),
+      filled_(other.filled_),
+      sum_error_sq_(other.sum_error_sq_),
+      sum_force_sq_(other.sum_force_sq_),
+      command_shape_(other.command_shape_ ? other.command_shape_->clone() : nullptr),
+      measured_shape_(other.measured_shape_ ? other.measured_shape_->clone() : nullptr),
+      shape_stiffness_(other.shape_stiffness_) {
+  for (int i = 0; i < 3; ++i) {
+    b_[i] = other.b_[i];
+    for (int j = 0; j < 3; ++j) s_[i][j] = other.s_[i][j];
+  }
+}
+
+double ForcePredictor::command_basis(double x) {
+  return command_shape_ ? command_shape_->step(x) / shape_stiffness_ : x;
+}
+
+double ForcePredictor::measured_basis(double x) {
+  return measured_shape_ ? measured_shape_->step(x) / shape_stiffness_ : x;
+}
+
 void ForcePredictor::reset() {
+  if (command_shape_) command_shape_->reset();
+  if (measured_shape_) measured_shape_->reset();
   k_ = p_.stiffness;
   c_ = p_.damping;
   offset_ = 0.0;
@@ -47,7 +93,7 @@ void ForcePredictor::reset() {
     for (int j = 0; j < 3; ++j) s_[i][j] = 0.0;
   }
   last_answer_ = -1;
-  last_x_ = last_v_ = last_f_ = error_ = 0.0;
+  last_x_ = last_drift_ = last_v_ = last_f_ = error_ = 0.0;
   updates_ = 0;
   std::fill(error_sq_.begin(), error_sq_.end(), 0.0);
   std::fill(force_sq_.begin(), force_sq_.end(), 0.0);
@@ -105,10 +151,12 @@ PredictorOutput ForcePredictor::step(const PredictorInput& in) {
     const bool first = last_answer_ < 0;
     const long since = first ? 1 : in.answer_step - last_answer_;
     const double v_m =
-        first ? 0.0 : (in.measured_displacement - last_x_) / (static_cast<double>(since) * dt_);
-    learn(in.measured_displacement, v_m, in.measured_force, since);
+        first ? 0.0 : (in.measured_displacement - last_drift_) / (static_cast<double>(since) * dt_);
+    const double basis = measured_basis(in.measured_displacement);
+    learn(basis, v_m, in.measured_force, since);
     last_answer_ = in.answer_step;
-    last_x_ = in.measured_displacement;
+    last_x_ = basis;
+    last_drift_ = in.measured_displacement;
     last_v_ = v_m;
     last_f_ = in.measured_force;
   }
@@ -134,7 +182,7 @@ PredictorOutput ForcePredictor::step(const PredictorInput& in) {
     if (filled_ == error_sq_.size() && sum_force_sq_ > 0)
       out.relative_error = std::sqrt(std::max(sum_error_sq_, 0.0) / sum_force_sq_);
   }
-  out.predicted = k_ * in.command + c_ * in.command_velocity + offset_;
+  out.predicted = k_ * command_basis(in.command) + c_ * in.command_velocity + offset_;
   out.error = last_answer_ >= 0 ? error_ : 0.0;
   out.force = out.predicted + out.error;
   out.exceeded = p_.max_relative_error > 0 && out.relative_error > p_.max_relative_error;
@@ -154,7 +202,7 @@ std::string ForcePredictor::describe() const {
 }
 
 PredictorSet::PredictorSet(const std::vector<std::optional<PredictorParameters>>& parameters,
-                           double dt) {
+                           double dt, const std::vector<const RestoringForceModel*>& specimens) {
   bool any = false;
   for (const auto& p : parameters) any = any || p.has_value();
   if (!any) return;
@@ -162,8 +210,8 @@ PredictorSet::PredictorSet(const std::vector<std::optional<PredictorParameters>>
   last_.resize(parameters.size());
   for (std::size_t a = 0; a < parameters.size(); ++a)
     if (parameters[a])
-      blocks_[a].emplace(*parameters[a], dt,
-                         "force predictor of actuator " + std::to_string(a + 1));
+      blocks_[a].emplace(*parameters[a], dt, "force predictor of actuator " + std::to_string(a + 1),
+                         a < specimens.size() ? specimens[a] : nullptr);
 }
 
 void PredictorSet::reset() {

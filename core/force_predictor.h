@@ -42,6 +42,12 @@
 //     model keeps its last theta). Recursive least squares with forgetting, information form.
 //     e = f_m - (k x_m + c v_m + f0)                                    (N, the model's error)
 //   every step: f_hat = k u + c v + f0;  force = f_hat + e (e = 0 before the first answer).
+// With the specimen's shape (a declared non-linear specimen: Bouc-Wen, bilinear), x_m and u
+// above stand for r(x_m) / k_r and r(u) / k_r: r the declared restoring-force model (initial
+// stiffness k_r), one copy driven by the measured drift at each new answer and one by the
+// command at every step (a hysteretic model keeps its own path), so k is the fitted scale of
+// the declared specimen in N/m (k = k_r when the declaration is right). For a linear specimen
+// both are the drift itself.
 //   relative_error: sqrt(sum e^2 / sum f_m^2) over the last error_window of answers (one entry a
 //     step: a step without a new answer repeats the last pair), 0 until the window is full or
 //     while sum f_m^2 = 0; exceeded when it is above max_relative_error (> 0).
@@ -53,9 +59,12 @@
 // and lockstep distributed runs agree bit for bit.
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "core/restoring_force.h"
 
 namespace rths::core {
 
@@ -67,6 +76,9 @@ struct PredictorParameters {
   double min_displacement = 1e-4;   // m, RMS drift below which the fit is not trusted, >= 0
   double error_window = 1.0;        // s, window of relative_error, >= dt
   double max_relative_error = 0.0;  // -, bound on relative_error; 0: no bound
+  // The declared specimen's shape as the stiffness basis (equations above); false: the drift
+  // itself (an equivalent linear model, whatever the specimen).
+  bool specimen_shape = true;
 };
 
 struct PredictorInput {
@@ -92,8 +104,14 @@ class ForcePredictor {
  public:
   // Throws std::invalid_argument opening with `label` and naming the parameter when one is out
   // of its range above, or dt is not > 0.
+  // `shape`: the declared specimen's restoring-force model (used when specimen_shape; null: the
+  // drift itself). Its initial stiffness must be > 0.
   ForcePredictor(const PredictorParameters& parameters, double dt,
-                 const std::string& label = "force predictor");
+                 const std::string& label = "force predictor",
+                 const RestoringForceModel* shape = nullptr);
+  ForcePredictor(const ForcePredictor& other);
+  ForcePredictor& operator=(const ForcePredictor& other) = delete;
+  ForcePredictor(ForcePredictor&&) = default;
   PredictorOutput step(const PredictorInput& in);
   void reset();
   const PredictorParameters& parameters() const { return p_; }
@@ -105,6 +123,9 @@ class ForcePredictor {
 
  private:
   void learn(double x, double v, double f, long steps_since);
+  // r(x) / k_r along the command's and the measurements' paths (the drift without a shape).
+  double command_basis(double x);
+  double measured_basis(double x);
 
   PredictorParameters p_;
   double dt_, lambda_;
@@ -113,12 +134,14 @@ class ForcePredictor {
   // The forgetting's normal equations over phi = [x_m, v_m, 1]: s_ = sum phi phi^T, b_ = sum phi f.
   double s_[3][3] = {}, b_[3] = {};
   long last_answer_ = -1;
-  double last_x_ = 0.0, last_v_ = 0.0, last_f_ = 0.0, error_ = 0.0;
+  double last_x_ = 0.0, last_drift_ = 0.0, last_v_ = 0.0, last_f_ = 0.0, error_ = 0.0;
   std::size_t updates_ = 0;
   // Ring of the last error_window steps' e^2 and f_m^2, and their sums.
   std::vector<double> error_sq_, force_sq_;
   std::size_t head_ = 0, filled_ = 0;
   double sum_error_sq_ = 0.0, sum_force_sq_ = 0.0;
+  std::unique_ptr<RestoringForceModel> command_shape_, measured_shape_;
+  double shape_stiffness_ = 1.0;  // k_r, N/m
 };
 
 // The predictors of a run's actuators, one or none each, as every evaluator applies them (the
@@ -132,7 +155,9 @@ class PredictorSet {
  public:
   PredictorSet() = default;
   // @pre each parameter set valid (ForcePredictor's constructor throws otherwise).
-  PredictorSet(const std::vector<std::optional<PredictorParameters>>& parameters, double dt);
+  // `specimens`: each actuator's declared specimen model (null where none), for its shape.
+  PredictorSet(const std::vector<std::optional<PredictorParameters>>& parameters, double dt,
+               const std::vector<const RestoringForceModel*>& specimens = {});
   bool empty() const { return blocks_.empty(); }
   bool has(std::size_t a) const { return a < blocks_.size() && blocks_[a].has_value(); }
   const ForcePredictor& at(std::size_t a) const { return *blocks_[a]; }

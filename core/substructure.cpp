@@ -436,7 +436,7 @@ HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<D
       numerical_(partition),
       actuator_storeys_(partition.actuator_storeys),
       dt_(dt),
-      predictors_(predictors, dt) {
+      predictors_(predictors, dt, actuator_specimens(partition)) {
   if (!predictors.empty() && predictors.size() != partition.actuator_storeys.size())
     throw std::invalid_argument(std::to_string(predictors.size()) + " force predictors for " +
                                 std::to_string(partition.actuator_storeys.size()) + " actuators");
@@ -518,6 +518,13 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
 }
 
 void HybridRestoring::commit() { numerical_.commit(); }
+
+std::vector<const RestoringForceModel*> actuator_specimens(const HybridPartition& partition) {
+  std::vector<const RestoringForceModel*> out;
+  for (int s : partition.actuator_storeys)
+    out.push_back(partition.experimental[static_cast<std::size_t>(s)].get());
+  return out;
+}
 
 std::string predictor_hold_reason(const PredictorSet& predictors, int a, const std::string& link) {
   const auto i = static_cast<std::size_t>(a);

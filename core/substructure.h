@@ -303,6 +303,10 @@ class HybridRestoring final : public HybridEvaluator {
   std::string hold_;
 };
 
+// Each actuator's declared specimen model (null where a storey has none), in actuator order:
+// the shapes force predictors fit (core/force_predictor.h).
+std::vector<const RestoringForceModel*> actuator_specimens(const HybridPartition& partition);
+
 // The hold reason of actuator `a` (0-based) whose predictor passed its bound: "force predictor
 // of actuator 1 (link of storey 1): relative prediction error 31.2 % over the last 1 s is past
 // its bound of 20 %". `link`: how the caller names the actuator's link.

@@ -622,6 +622,7 @@ PredictorParameters predictor_parameters(const config::ForcePredictor& block,
   if (block.min_displacement() > 0) p.min_displacement = block.min_displacement();
   if (block.error_window() > 0) p.error_window = block.error_window();
   p.max_relative_error = block.max_relative_error();
+  p.specimen_shape = !block.linear_model();
   return p;
 }
 
@@ -649,7 +650,8 @@ void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& blo
                                   " has no declared specimen to start its model from");
     PredictorParameters p = predictor_parameters(block, specimen->initial_stiffness());
     // Built once here so that a parameter out of range is refused before any run, named.
-    ForcePredictor check(p, setup.dt, where + " (actuator " + std::to_string(a + 1) + ")");
+    ForcePredictor check(p, setup.dt, where + " (actuator " + std::to_string(a + 1) + ")",
+                         specimen.get());
     setup.predictors[static_cast<std::size_t>(a)] = p;
   }
 }

@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rths::core {
 namespace {
@@ -203,6 +205,52 @@ TEST(ForcePredictor, RefusesParametersOutOfRangeNamingThem) {
   bad.min_displacement = std::nan("");
   EXPECT_NE(message(bad).find("min_displacement"), std::string::npos);
   EXPECT_NE(message(p, 0.0).find("dt"), std::string::npos);
+}
+
+TEST(ForcePredictor, ADeclaredHystereticSpecimenIsPredictedAlongTheCommandsOwnPath) {
+  // A Bouc-Wen specimen answering 74 steps late, yielding (peak drift 1.75 x its yield drift):
+  // with its own shape the model's error is the shape's rounding only, with an equivalent linear
+  // model it is the hysteresis the line cannot follow.
+  const double k = 5.0e4;
+  const BoucWen specimen(k, 0.008, 0.1, 1.0, 0.5);
+  const PredictorParameters p = declared(k);
+  ForcePredictor shaped(p, kDt, "shaped", &specimen);
+  PredictorParameters linear = p;
+  linear.specimen_shape = false;
+  ForcePredictor equivalent(linear, kDt, "equivalent", &specimen);
+  auto remote = specimen.clone();
+  auto lag_free = specimen.clone();
+  std::vector<double> measured_force, measured_drift;
+  double shaped_worst = 0.0, linear_worst = 0.0, peak = 0.0;
+  for (long step = 0; step < 4000; ++step) {
+    const double t = static_cast<double>(step) * kDt;
+    const double u = 0.75 * drift(t) + 0.004 * std::sin(0.3 * kOmega * t);
+    measured_drift.push_back(u);
+    measured_force.push_back(remote->step(u));
+    PredictorInput in;
+    in.command = u;
+    in.answer_step = step - 74;
+    if (in.answer_step >= 0) {
+      in.measured_displacement = measured_drift[static_cast<std::size_t>(in.answer_step)];
+      in.measured_force = measured_force[static_cast<std::size_t>(in.answer_step)];
+    }
+    const double truth = lag_free->step(u);
+    peak = std::max(peak, std::abs(truth));
+    shaped_worst = std::max(shaped_worst, std::abs(shaped.step(in).force - truth));
+    linear_worst = std::max(linear_worst, std::abs(equivalent.step(in).force - truth));
+  }
+  EXPECT_LT(shaped_worst, 1e-6 * peak);
+  EXPECT_GT(linear_worst, 0.05 * peak);
+  // A copy carries its own shapes: stepping it leaves the original where it was.
+  ForcePredictor copy(shaped);
+  PredictorInput in;
+  in.command = 0.02;
+  in.answer_step = 5000;
+  in.measured_displacement = 0.02;
+  in.measured_force = 0.0;
+  const double before = ForcePredictor(shaped).step(in).force;
+  copy.step(in);
+  EXPECT_EQ(ForcePredictor(shaped).step(in).force, before);
 }
 
 }  // namespace
