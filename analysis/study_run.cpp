@@ -51,6 +51,7 @@ std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
   for (const CaseOutcome& c : cases) {
     if (c.status == "limit tripped")
       out.push_back("case '" + c.name + "': limit tripped: " + c.status_detail);
+    if (c.status == "held") out.push_back("case '" + c.name + "': held: " + c.status_detail);
     if (c.diverged() && !c.expect_unstable && !allow_unstable) {
       out.push_back("case '" + c.name +
                     (c.status == "diverging" ? "' is diverging: " : "' diverged: ") +
@@ -211,6 +212,52 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
   return verdict;
 }
 
+// The pre-run verdict of a case with a force predictor (core/force_predictor.h): its loop's
+// critical lag of the measured pair (core::predictor_critical_delay) for the model as it starts
+// (the declared specimen times stiffness_factor, its damping), against the case's lag. An SDOF
+// only: a structure of several DOFs is not analysed, and the text says so.
+CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const config::Case& c,
+                                        double lag) {
+  CompensatedVerdict verdict;
+  const config::ForcePredictor& block = c.force_predictor();
+  const double factor = block.stiffness_factor() > 0 ? block.stiffness_factor() : 1.0;
+  std::ostringstream text;
+  text << std::setprecision(3) << "force predictor (model stiffness " << std::showpos
+       << 100.0 * (factor - 1.0) << std::noshowpos << " %"
+       << (block.fixed_model() ? ", fixed" : ", fitted online") << "): ";
+  if (setup.model.dofs() != 1) {
+    verdict.text = text.str() + "its loop is analysed for an SDOF only; this structure has " +
+                   std::to_string(setup.model.dofs()) + " DOFs";
+    return verdict;
+  }
+  const double m = setup.model.mass(0, 0), k = setup.model.stiffness(0, 0);
+  const double omega = std::sqrt(k / m);
+  const double zeta = setup.model.damping(0, 0) / (2.0 * m * omega);
+  const core::Mat k_e = setup.partition.experimental_stiffness();
+  const double alpha = k_e.size() > 0 ? k_e(0, 0) / k : 0.0;
+  const core::ContinuousStability limit =
+      core::predictor_critical_delay(2.0 * std::numbers::pi / omega, zeta, alpha, factor - 1.0,
+                                     block.damping() / (2.0 * m * omega));
+  verdict.analysed = true;
+  if (limit.stable_for_all_delays) {
+    verdict.stable = true;
+    text << "stable for every lag";
+  } else {
+    const double critical = limit.critical_delay.value_or(0.0);
+    verdict.stable = lag < critical;
+    text << "critical lag " << 1e3 * critical << " ms against the case's " << 1e3 * lag << " ms: ";
+    if (verdict.stable) {
+      verdict.extra_delay_tolerated = critical - lag;
+      text << "stable, tolerates " << 1e3 * (critical - lag) << " ms more";
+    } else {
+      text << "PAST it";
+    }
+  }
+  if (!block.fixed_model()) text << " (the model as it starts; the online fit shrinks its error)";
+  verdict.text = text.str();
+  return verdict;
+}
+
 // The pre-run warning of a case, if any: the compensated loop's verdict when the case has
 // compensation, else the uncompensated lag past its critical delay.
 std::optional<std::string> pre_run_warning(const CaseOutcome& c) {
@@ -248,6 +295,11 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
         core::check_setup_critical_delay(prepared, bare_setup,
                                          nominal_delay_of(bare_setup) + options.extra_lag));
   }
+  for (std::size_t a = 0; a < setup.predictors.size(); ++a)
+    if (setup.predictors[a]) result.predicted_actuators.push_back(static_cast<int>(a));
+  if (study_case.has_force_predictor())
+    result.compensated =
+        judge_predicted_loop(setup, study_case, result.nominal_delay + options.extra_lag);
   if (const auto warning = pre_run_warning(result); warning && options.warn)
     options.warn("case '" + result.name + "': " + *warning);
   return result;
@@ -389,6 +441,10 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
       result.simulation.truncate(trip->first);  // the command of that step is never sent
       result.status = "limit tripped";
       result.status_detail = trip->second;
+    }
+    if (!result.simulation.held.empty()) {
+      result.status = "held";
+      result.status_detail = result.simulation.held;
     }
     judge_case(result, lag_free_response, floors);
     outcome.cases.push_back(std::move(result));

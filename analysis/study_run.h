@@ -63,14 +63,19 @@ struct CaseOutcome {
   // A case with compensation: the compensated loop's own verdict (judge_compensated_loop);
   // `stability` above stays the uncompensated lag's check, shown beside it.
   std::optional<CompensatedVerdict> compensated;
+  // The actuators (0-based) whose force a predictor compensates (core/force_predictor.h); their
+  // errors are in simulation.prediction_error and the summary (prediction_error_text/_json).
+  std::vector<int> predicted_actuators;
   // The top floor's envelope over the last cycles (core::envelope_growth at the check's governing
   // period); empty without a check or when the record is too short to fit.
   std::optional<core::EnvelopeGrowth> growth;
   core::SimulationResult simulation;
-  std::vector<double> response;      // m, top-floor displacement
-  Comparison comparison;             // against the reference case
-  std::string status = "completed";  // "completed", "diverged", "diverging", "limit tripped"
-  std::string status_detail;         // why, when not completed; a growth flag when completed
+  std::vector<double> response;  // m, top-floor displacement
+  Comparison comparison;         // against the reference case
+  // "completed", "diverged", "diverging", "limit tripped", "held" (a force predictor past its
+  // bound stopped it; status_detail names the link)
+  std::string status = "completed";
+  std::string status_detail;  // why, when not completed; a growth flag when completed
   // Diverged or diverging: the run failed its purpose unless expected, and its errors measure
   // nothing.
   bool diverged() const { return status == "diverged" || status == "diverging"; }

@@ -24,6 +24,42 @@ nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
           {"verdict", v->text}};
 }
 
+// Per predicted actuator: the RMS and peak of its prediction error (N) over the steps run, and
+// the RMS against the measured force's RMS (%).
+struct PredictionErrorSummary {
+  int actuator = 0;  // 1-based
+  double rms = 0.0, peak = 0.0, relative_pct = 0.0;
+};
+
+std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c) {
+  std::vector<PredictionErrorSummary> out;
+  const core::Mat& e = c.simulation.prediction_error;
+  const core::Mat& f = c.simulation.measured_force;
+  for (int a : c.predicted_actuators) {
+    if (a >= e.cols() || e.rows() == 0) continue;
+    PredictionErrorSummary s;
+    s.actuator = a + 1;
+    const double rows = static_cast<double>(e.rows());
+    s.rms = std::sqrt(e.col(a).squaredNorm() / rows);
+    s.peak = e.col(a).cwiseAbs().maxCoeff();
+    const double force_rms = std::sqrt(f.col(a).squaredNorm() / rows);
+    s.relative_pct = force_rms > 0 ? 100.0 * s.rms / force_rms : 0.0;
+    out.push_back(s);
+  }
+  return out;
+}
+
+nlohmann::json prediction_error_json(const CaseOutcome& c) {
+  if (c.predicted_actuators.empty()) return nullptr;
+  nlohmann::json out = nlohmann::json::array();
+  for (const PredictionErrorSummary& s : prediction_errors(c))
+    out.push_back({{"actuator", s.actuator},
+                   {"rms_n", s.rms},
+                   {"peak_n", s.peak},
+                   {"rms_of_measured_force_pct", s.relative_pct}});
+  return out;
+}
+
 nlohmann::json growth_json(const std::optional<core::EnvelopeGrowth>& g) {
   if (!g) return nullptr;
   return {{"grows", g->grows()},
@@ -87,6 +123,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                      {"expect_unstable", c.expect_unstable},
                      {"stability", stability},
                      {"compensated_loop", compensated_json(c.compensated)},
+                     {"prediction_error", prediction_error_json(c)},
                      {"envelope_growth", growth_json(c.growth)},
                      {"peak_displacement_m", c.comparison.peak_m},
                      {"peak_error_pct", whole(c.comparison.peak_error_pct)},
@@ -195,6 +232,10 @@ std::string study_summary_text(const StudyOutcome& outcome) {
   for (const CaseOutcome& c : outcome.cases) {
     if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
     if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";
+    for (const PredictionErrorSummary& p : prediction_errors(c))
+      out << c.name << ": prediction error of actuator " << p.actuator << ": RMS "
+          << fixed(p.rms, 2) << " N (" << fixed(p.relative_pct, 2)
+          << " % of the measured force's RMS), peak " << fixed(p.peak, 2) << " N\n";
   }
   return out.str();
 }

@@ -62,6 +62,13 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   s.command_drift = core::Vec::Zero(actuators);
   s.realised_drift = core::Vec::Zero(actuators);
   s.measured = core::Vec::Zero(actuators);
+  // The case's force predictors, the same blocks core::simulate builds (core/force_predictor.h).
+  s.predictors = core::PredictorSet(s.setup.predictors, s.setup.dt,
+                                    core::actuator_specimens(s.setup.partition));
+  s.used_force = core::Vec::Zero(actuators);
+  s.command_rate = core::Vec::Zero(actuators);
+  s.prediction_error_ = core::Vec::Zero(actuators);
+  s.answer_steps.assign(static_cast<std::size_t>(actuators), -1);
 }
 
 Coordinator::~Coordinator() = default;

@@ -245,9 +245,31 @@ const core::Vec& RunState::trial(const core::Vec& u, const core::Vec& v, core::M
       command_drift[a] = drift[s];
       realised_drift[a] = realised_of(node, i);
       measured[a] = force_of(node, i);
+      if (!predictors.empty()) {
+        const std::int64_t answered = intake->latest(id).answered_step;
+        answer_steps[static_cast<std::size_t>(a)] = answered > 0 ? static_cast<long>(answered) : -1;
+        command_rate[a] = drift_velocity[s];
+      }
     }
   }
-  core::assemble_storey_forces(assembly, storeys, measured, shear, force);
+  if (predictors.empty()) {
+    core::assemble_storey_forces(assembly, storeys, measured, shear, force);
+    return force;
+  }
+  const int exceeded = predictors.apply(command_drift, command_rate, answer_steps, realised_drift,
+                                        measured, used_force, prediction_error_);
+  if (exceeded >= 0) {
+    // The fail-safe HOLDs on RunAborted, naming the link the predictor sits on.
+    for (auto& [id, node] : nodes) {
+      if (!runtime::drives_actuators(node.plan->spec.kind())) continue;
+      for (int a : node.plan->actuators)
+        if (a == exceeded)
+          throw RunAborted(
+              core::predictor_hold_reason(predictors, exceeded, "link to " + node.plan->label()),
+              node.plan->label());
+    }
+  }
+  core::assemble_storey_forces(assembly, storeys, used_force, shear, force);
   return force;
 }
 

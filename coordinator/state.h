@@ -90,6 +90,12 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   core::StoreyAssembly assembly{1};
   std::unique_ptr<core::NumericalSubstructure> local_numerical;
   core::Vec drift, drift_velocity, shear, force, command_drift, realised_drift, measured;
+  // The case's force predictors (none: empty), the force they hand the integrator, the command
+  // rate and the answer step each reads, and each one's error (N) of the step.
+  core::PredictorSet predictors;
+  core::Vec used_force, command_rate, prediction_error_;
+  std::vector<long> answer_steps;
+  std::string hold_;
   std::int64_t step = 0;
   double time = 0.0;
   runtime::Command command_message;
@@ -164,6 +170,8 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   const core::Vec& realised() const override { return realised_drift; }
   const core::Vec& measured_force() const override { return measured; }
   int actuators() const override { return static_cast<int>(measured.size()); }
+  const core::Vec& prediction_error() const override { return prediction_error_; }
+  const std::string& hold() const override { return hold_; }
 
   // Before a node's first answer (real time, lag longer than the wait) the specimen is at rest.
   double force_of(const Node& node, std::size_t i);

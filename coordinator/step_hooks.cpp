@@ -138,7 +138,13 @@ void RunState::write_step(std::size_t k, const core::SimulationResult& result, d
     r.add_measured_force(result.measured_force(row, a));
   }
   if (k > 0)
-    for (auto& [id, node] : nodes) *r.add_links() = link_of(id);
+    for (auto& [id, node] : nodes) {
+      runtime::LinkSample* link = r.add_links();
+      *link = link_of(id);
+      if (!predictors.empty() && runtime::drives_actuators(node.plan->spec.kind()))
+        for (int a : node.plan->actuators)
+          link->add_prediction_error(result.prediction_error(row, a));
+    }
   r.set_lateness(pace.lateness);
   r.set_step_wall(step_wall);
   r.set_command_latency(

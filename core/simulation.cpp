@@ -12,8 +12,8 @@ void SimulationResult::truncate(std::size_t steps) {
   if (steps >= time.size()) return;
   const auto rows = static_cast<Eigen::Index>(steps);
   time.resize(steps);
-  for (Mat* history :
-       {&displacement, &velocity, &acceleration, &command, &realised, &measured_force}) {
+  for (Mat* history : {&displacement, &velocity, &acceleration, &command, &realised,
+                       &measured_force, &prediction_error}) {
     history->conservativeResize(rows, Eigen::NoChange);
   }
 }
@@ -66,6 +66,7 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
   result.command = Mat::Zero(rows, actuators);
   result.realised = Mat::Zero(rows, actuators);
   result.measured_force = Mat::Zero(rows, actuators);
+  result.prediction_error = Mat::Zero(rows, actuators);
 
   // Whatever stops the loop, the result keeps exactly the steps that completed.
   struct TruncateOnExit {
@@ -94,7 +95,13 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
     result.command.row(row) = restoring.command().transpose();
     result.realised.row(row) = restoring.realised().transpose();
     result.measured_force.row(row) = restoring.measured_force().transpose();
+    result.prediction_error.row(row) = restoring.prediction_error().transpose();
     guard.completed = k + 1;
+    if (!restoring.hold().empty()) {
+      result.held = restoring.hold();
+      hooks.after_step(k, result);
+      return;
+    }
     const double peak = integrator->displacement().cwiseAbs().maxCoeff();
     if (!(peak <= options.divergence_bound)) {  // also catches NaN
       result.diverged = true;
@@ -110,7 +117,8 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
   require_motion_at_dt(setup, motion_at_dt);
   check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
 
-  HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps);
+  HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps,
+                            setup.predictors);
   const bool replayed = !answers.actuator_used.empty() || !answers.storey_used.empty();
   if (replayed) {
     if (!is_explicit(setup.integrator))

@@ -12,6 +12,8 @@
 //               restoring.set_time(k dt); p_k = -M iota a_g[k]; integrator.step(p_k, restoring)
 //               row k of the result <- u, v, a (DOFs), command, realised, measured force (actuators)
 //               stop, diverged, when any |u| > options.divergence_bound (or NaN)
+//               stop, held (result.held), when the evaluator's hold() names a reason (a force
+//               predictor past its bound)
 //               hooks.after_step(k)             (record, limits; false stops the run)
 // Input: a ground motion already at the integration step dt (m/s^2).
 // Output: histories at t_k = k dt, k = 0..N-1 (N = number of motion samples), SI units.
@@ -19,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "core/force_predictor.h"
 #include "core/ground_motion.h"
 #include "core/integrators.h"
 #include "core/substructure.h"
@@ -34,6 +37,8 @@ struct HybridSetup {
   std::vector<DelayChain> delays;  // one per actuator (partition.actuator_storeys); may be empty,
                                    // built for the servo period dt / servo_substeps
   int servo_substeps = 1;          // servo periods per integrator step (core::Actuator)
+  // A force predictor per actuator (core/force_predictor.h), or none; empty: none at all.
+  std::vector<std::optional<PredictorParameters>> predictors;
 };
 
 struct SimulationResult {
@@ -44,6 +49,10 @@ struct SimulationResult {
   Mat acceleration;                       // m/s^2 (relative)
   Mat command, realised, measured_force;  // per actuator: m, m, N
   bool diverged = false;                  // stopped early: |u| exceeded the divergence bound
+  // Per actuator (N): the force predictor's error e at each step (0 without one).
+  Mat prediction_error;
+  // Stopped early by a force predictor past its bound: which link and why; empty otherwise.
+  std::string held;
   std::size_t steps() const { return time.size(); }
   // Keeps the first `steps` rows of every history (a run that stopped early).
   void truncate(std::size_t steps);

@@ -188,6 +188,58 @@ ContinuousStability continuous_critical_delay(double period, double zeta, double
   return result;
 }
 
+ContinuousStability predictor_critical_delay(double period, double zeta, double alpha,
+                                             double stiffness_error, double damping_error,
+                                             int branches) {
+  if (!(1.0 + stiffness_error >= 0) || !std::isfinite(stiffness_error))
+    throw std::invalid_argument("stability: the model's stiffness error must be >= -1, got " +
+                                std::to_string(stiffness_error));
+  if (!(damping_error >= 0) || !std::isfinite(damping_error))
+    throw std::invalid_argument("stability: the model's damping ratio must be >= 0, got " +
+                                std::to_string(damping_error));
+  const SdofParameters p = sdof_parameters(period, zeta, alpha);
+  const double omega_n = 2.0 * std::numbers::pi / period;
+  const double k_model = (1.0 + stiffness_error) * p.k_experimental;
+  const double c_model = 2.0 * damping_error * omega_n * p.m;
+  const double k_fast = p.k_numerical + k_model, c_fast = p.c + c_model;
+  const double dk = p.k_experimental - k_model, dc = -c_model;
+  ContinuousStability result;
+  result.stable_without_delay = p.c > 0 && p.k_numerical + p.k_experimental > 0;
+  if (dk == 0.0 && dc == 0.0) {
+    result.stable_for_all_delays = result.stable_without_delay;
+    return result;
+  }
+  const double qa = p.m * p.m;
+  const double qb = c_fast * c_fast - dc * dc - 2.0 * p.m * k_fast;
+  const double qc = k_fast * k_fast - dk * dk;
+  const double discriminant = qb * qb - 4.0 * qa * qc;
+  std::vector<double> omega_squared;
+  if (discriminant >= 0) {
+    const double root = std::sqrt(discriminant);
+    for (double x : {(-qb + root) / (2.0 * qa), (-qb - root) / (2.0 * qa)})
+      if (x > 0 && std::find(omega_squared.begin(), omega_squared.end(), x) == omega_squared.end())
+        omega_squared.push_back(x);
+  }
+  for (double x : omega_squared) {
+    const double w = std::sqrt(x);
+    const std::complex<double> z =
+        -std::complex<double>(k_fast - p.m * x, c_fast * w) / std::complex<double>(dk, dc * w);
+    double phase = std::fmod(-std::arg(z), 2.0 * std::numbers::pi);
+    if (phase < 0) phase += 2.0 * std::numbers::pi;
+    for (int j = 0; j < branches; ++j)
+      result.crossings.push_back({w, (phase + 2.0 * std::numbers::pi * j) / w, j});
+  }
+  std::sort(result.crossings.begin(), result.crossings.end(),
+            [](const DelayCrossing& l, const DelayCrossing& r) { return l.delay < r.delay; });
+  result.stable_for_all_delays = result.stable_without_delay && result.crossings.empty();
+  if (!result.crossings.empty() && result.stable_without_delay) {
+    result.critical_delay = result.crossings.front().delay;
+  } else if (!result.stable_without_delay) {
+    result.critical_delay = 0.0;
+  }
+  return result;
+}
+
 DiscreteStability discrete_critical_delay(IntegratorKind kind, double period, double zeta,
                                           double alpha, double dt, int max_steps) {
   if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");

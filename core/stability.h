@@ -162,6 +162,23 @@ struct CriticalDelayCheck {
   std::string describe() const;
 };
 
+// The loop compensated by a Smith predictor on the force (core/force_predictor.h) whose model is
+// off: with a model k_m = (1 + stiffness_error) k_e, c_m = damping_error 2 omega_n m (the
+// specimen's own damping taken as 0, as the studies declare it; omega_n = 2 pi / period, m = 1),
+// the integrator sees k_m u + c_m v + (k_e - k_m) u(t - D) - c_m v(t - D), D the lag of the
+// measured pair (round trip plus actuator lag), so the loop is
+//   m s^2 + (c + c_m) s + k_n + k_m + (dk + dc s) e^{-s D} = 0,  dk = k_e - k_m, dc = -c_m.
+// A root crosses at s = i w when |k_n + k_m - m w^2 + i (c + c_m) w| = |dk + i dc w|:
+//   m^2 x^2 + ((c + c_m)^2 - dc^2 - 2 m (k_n + k_m)) x + (k_n + k_m)^2 - dk^2 = 0,  x = w^2,
+// then e^{-i w D} = -(k_n + k_m - m w^2 + i (c + c_m) w) / (dk + i dc w) gives D_j. The right
+// model (dk = dc = 0) is stable for every lag; so is any model whose error's magnitude stays
+// below the loop's own dynamic stiffness at every frequency (about |dk| < c omega_n for light
+// damping). The model is frozen at its error: the online fit only shrinks dk with time.
+// Continuous time: the integrator's own discretisation is not in it (it is small at dt << T).
+ContinuousStability predictor_critical_delay(double period, double zeta, double alpha,
+                                             double stiffness_error, double damping_error,
+                                             int branches = 3);
+
 // False for the integrators the discrete delay analysis does not model (alpha-os, kr-alpha).
 bool discrete_analysis_covers(IntegratorKind kind);
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -428,11 +430,16 @@ Actuator make_actuator(const HybridPartition& partition, int a, DelayChain chain
 }
 
 HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains,
-                                 double dt, int servo_substeps)
+                                 double dt, int servo_substeps,
+                                 const std::vector<std::optional<PredictorParameters>>& predictors)
     : assembly_(partition.assembly()),
       numerical_(partition),
       actuator_storeys_(partition.actuator_storeys),
-      dt_(dt) {
+      dt_(dt),
+      predictors_(predictors, dt, actuator_specimens(partition)) {
+  if (!predictors.empty() && predictors.size() != partition.actuator_storeys.size())
+    throw std::invalid_argument(std::to_string(predictors.size()) + " force predictors for " +
+                                std::to_string(partition.actuator_storeys.size()) + " actuators");
   const std::size_t actuators = partition.actuator_storeys.size();
   if (!chains.empty() && chains.size() != actuators) {
     throw std::invalid_argument(std::to_string(chains.size()) + " delay chains for " +
@@ -451,6 +458,11 @@ HybridRestoring::HybridRestoring(const HybridPartition& partition, std::vector<D
   command_ = Vec::Zero(static_cast<int>(actuators));
   realised_ = Vec::Zero(static_cast<int>(actuators));
   measured_ = Vec::Zero(static_cast<int>(actuators));
+  used_ = Vec::Zero(static_cast<int>(actuators));
+  command_rate_ = Vec::Zero(static_cast<int>(actuators));
+  prediction_error_ = Vec::Zero(static_cast<int>(actuators));
+  answer_step_.assign(actuators, -1);
+  for (int s : actuator_storeys_) channel_names_.push_back(partition.channel_name(s));
 }
 
 bool HybridRestoring::repeatable() const {
@@ -478,10 +490,26 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
       measured_[a] = out.force;
     }
   }
-  if (replay_ && !tangent)
-    replay_->step(static_cast<std::size_t>(std::llround(time_ / dt_)), shear_, realised_,
-                  measured_);
-  assemble_storey_forces(assembly_, actuator_storeys_, measured_, shear_, force_);
+  const auto step = static_cast<std::size_t>(std::llround(time_ / dt_));
+  if (replay_ && !tangent) replay_->step(step, shear_, realised_, measured_);
+  if (predictors_.empty() || tangent) {
+    assemble_storey_forces(assembly_, actuator_storeys_, measured_, shear_, force_);
+  } else {
+    // The answer each actuator's pair describes: this step's, or the one a replay used (0 there:
+    // none yet, as the coordinator's intake reports it).
+    for (std::size_t a = 0; a < answer_step_.size(); ++a) {
+      answer_step_[a] = static_cast<long>(step);
+      if (replay_ && a < replay_used_.size() && !replay_used_[a].empty())
+        answer_step_[a] = replay_used_[a][step] > 0 ? static_cast<long>(replay_used_[a][step]) : -1;
+      command_rate_[static_cast<Eigen::Index>(a)] = drift_velocity_[actuator_storeys_[a]];
+    }
+    const int exceeded = predictors_.apply(command_, command_rate_, answer_step_, realised_,
+                                           measured_, used_, prediction_error_);
+    if (exceeded >= 0 && hold_.empty())
+      hold_ = predictor_hold_reason(
+          predictors_, exceeded, "link of " + channel_names_[static_cast<std::size_t>(exceeded)]);
+    assemble_storey_forces(assembly_, actuator_storeys_, used_, shear_, force_);
+  }
   if (tangent) {
     assembly_.tangent(storey_tangent_, *tangent);
     if (numerical_.matrix().size() > 0) *tangent += numerical_.matrix();
@@ -491,7 +519,27 @@ const Vec& HybridRestoring::trial(const Vec& u, const Vec& v, Mat* tangent) {
 
 void HybridRestoring::commit() { numerical_.commit(); }
 
+std::vector<const RestoringForceModel*> actuator_specimens(const HybridPartition& partition) {
+  std::vector<const RestoringForceModel*> out;
+  for (int s : partition.actuator_storeys)
+    out.push_back(partition.experimental[static_cast<std::size_t>(s)].get());
+  return out;
+}
+
+std::string predictor_hold_reason(const PredictorSet& predictors, int a, const std::string& link) {
+  const auto i = static_cast<std::size_t>(a);
+  const PredictorParameters& p = predictors.at(i).parameters();
+  std::ostringstream text;
+  text << std::setprecision(3) << "force predictor of actuator " << a + 1 << " (" << link
+       << "): relative prediction error " << 100.0 * predictors.last(i).relative_error
+       << " % over the last " << p.error_window << " s is past its bound of "
+       << 100.0 * p.max_relative_error << " % (model k " << predictors.last(i).stiffness
+       << " N/m, c " << predictors.last(i).damping << " N s/m)";
+  return text.str();
+}
+
 void HybridRestoring::replay_answers(AnswerSchedule schedule, std::size_t steps) {
+  replay_used_ = schedule.actuator_used;
   replay_.emplace(std::move(schedule), assembly_.storeys(), actuators(), steps);
 }
 

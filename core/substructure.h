@@ -28,6 +28,7 @@
 
 #include "core/answer_replay.h"
 #include "core/delay.h"
+#include "core/force_predictor.h"
 #include "core/integrators.h"
 #include "core/restoring_force.h"
 #include "core/structure.h"
@@ -242,6 +243,13 @@ class HybridEvaluator : public RestoringEvaluator {
   virtual const Vec& realised() const = 0;
   virtual const Vec& measured_force() const = 0;
   virtual int actuators() const = 0;
+  // Of the last step, per actuator: the force predictor's error (N, core/force_predictor.h; 0
+  // without one). The force the integrator used is the prediction, measured_force() the
+  // measurement.
+  virtual const Vec& prediction_error() const = 0;
+  // Non-empty when a force predictor's error passed its bound on the last step: the link and
+  // the numbers. The loop stops (run_steps), the coordinator's fail-safe HOLDs.
+  virtual const std::string& hold() const = 0;
 };
 
 // Storey shear = numerical + experimental, in that order, then DOF forces: the one assembly every
@@ -257,8 +265,10 @@ void assemble_storey_forces(const StoreyAssembly& assembly,
 class HybridRestoring final : public HybridEvaluator {
  public:
   // chains: one per actuator (or none), built for the servo period dt / servo_substeps.
+  // predictors: one per actuator or none (core/force_predictor.h); empty: none.
   HybridRestoring(const HybridPartition& partition, std::vector<DelayChain> chains, double dt,
-                  int servo_substeps = 1);
+                  int servo_substeps = 1,
+                  const std::vector<std::optional<PredictorParameters>>& predictors = {});
   const Vec& trial(const Vec& u, const Vec& v, Mat* tangent) override;
   void commit() override;
   bool repeatable() const override;
@@ -273,6 +283,8 @@ class HybridRestoring final : public HybridEvaluator {
   const Vec& realised() const override { return realised_; }
   const Vec& measured_force() const override { return measured_; }
   int actuators() const override { return static_cast<int>(actuators_.size()); }
+  const Vec& prediction_error() const override { return prediction_error_; }
+  const std::string& hold() const override { return hold_; }
 
  private:
   StoreyAssembly assembly_;
@@ -283,6 +295,21 @@ class HybridRestoring final : public HybridEvaluator {
   std::optional<AnswerReplay> replay_;
   Vec drift_, drift_velocity_, shear_, storey_tangent_, force_;
   Vec command_, realised_, measured_;
+  PredictorSet predictors_;
+  std::vector<long> answer_step_;
+  std::vector<std::vector<std::int64_t>> replay_used_;  // the replay's actuator rows
+  std::vector<std::string> channel_names_;              // per actuator
+  Vec used_, command_rate_, prediction_error_;
+  std::string hold_;
 };
+
+// Each actuator's declared specimen model (null where a storey has none), in actuator order:
+// the shapes force predictors fit (core/force_predictor.h).
+std::vector<const RestoringForceModel*> actuator_specimens(const HybridPartition& partition);
+
+// The hold reason of actuator `a` (0-based) whose predictor passed its bound: "force predictor
+// of actuator 1 (link of storey 1): relative prediction error 31.2 % over the last 1 s is past
+// its bound of 20 %". `link`: how the caller names the actuator's link.
+std::string predictor_hold_reason(const PredictorSet& predictors, int a, const std::string& link);
 
 }  // namespace rths::core

@@ -223,6 +223,14 @@ void validate_cases(const config::Study& study, const std::string& source) {
         fail(source, e.what());
       }
     }
+    if (c.has_force_predictor()) {
+      try {
+        validate_force_predictor(c.force_predictor(), study.integrator().dt(),
+                                 where + " force_predictor");
+      } catch (const std::invalid_argument& e) {
+        fail(source, e.what());
+      }
+    }
   }
 }
 
@@ -595,7 +603,87 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
   std::vector<int> all(actuators);
   for (std::size_t a = 0; a < actuators; ++a) all[a] = static_cast<int>(a);
   apply_compensation(setup, all, study_case.compensation(), "case '" + study_case.name() + "'");
+  if (study_case.has_force_predictor())
+    apply_force_predictor(setup, study_case.force_predictor(),
+                          "case '" + study_case.name() + "' force_predictor");
   return setup;
+}
+
+void validate_force_predictor(const config::ForcePredictor& block, double dt,
+                              const std::string& where) {
+  for (int i = 0; i < block.actuators_size(); ++i) {
+    const std::string field = where + ".actuators[" + std::to_string(i) + "]";
+    if (block.actuators(i) < 1)
+      throw std::invalid_argument(field + " = " + std::to_string(block.actuators(i)) +
+                                  " must be >= 1 (actuators are 1-based)");
+    for (int j = 0; j < i; ++j)
+      if (block.actuators(j) == block.actuators(i))
+        throw std::invalid_argument(field + " repeats actuator " +
+                                    std::to_string(block.actuators(i)));
+  }
+  const auto finite_at_least = [&](double value, double least, bool strict, const char* name,
+                                   const std::string& unit) {
+    const bool ok = std::isfinite(value) && (strict ? value > least : value >= least);
+    if (!ok)
+      throw std::invalid_argument(where + "." + name + " = " + format_number(value) + unit +
+                                  " must be " + (strict ? "> " : ">= ") + format_number(least) +
+                                  unit);
+  };
+  finite_at_least(block.stiffness_factor(), 0.0, false, "stiffness_factor", "");
+  finite_at_least(block.damping(), 0.0, false, "damping", " N s/m");
+  finite_at_least(block.forgetting_time(), 0.0, false, "forgetting_time", " s");
+  finite_at_least(block.min_displacement(), 0.0, false, "min_displacement", " m");
+  finite_at_least(block.error_window(), 0.0, false, "error_window", " s");
+  finite_at_least(block.max_relative_error(), 0.0, false, "max_relative_error", "");
+  if (block.error_window() > 0 && dt > 0 && block.error_window() < dt)
+    throw std::invalid_argument(
+        where + ".error_window = " + format_number(block.error_window()) +
+        " s is shorter than one step (integrator.dt = " + format_number(dt) + " s)");
+}
+
+PredictorParameters predictor_parameters(const config::ForcePredictor& block,
+                                         double declared_stiffness) {
+  PredictorParameters p;
+  p.stiffness =
+      declared_stiffness * (block.stiffness_factor() > 0 ? block.stiffness_factor() : 1.0);
+  p.damping = block.damping();
+  p.adapt = !block.fixed_model();
+  if (block.forgetting_time() > 0) p.forgetting_time = block.forgetting_time();
+  if (block.min_displacement() > 0) p.min_displacement = block.min_displacement();
+  if (block.error_window() > 0) p.error_window = block.error_window();
+  p.max_relative_error = block.max_relative_error();
+  p.specimen_shape = !block.linear_model();
+  return p;
+}
+
+void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& block,
+                           const std::string& where) {
+  validate_force_predictor(block, setup.dt, where);
+  const auto& storeys = setup.partition.actuator_storeys;
+  const int actuators = static_cast<int>(storeys.size());
+  std::vector<int> chosen;
+  for (int a : block.actuators()) {
+    if (a > actuators)
+      throw std::invalid_argument(where + ".actuators names actuator " + std::to_string(a) +
+                                  " but the study has " + std::to_string(actuators));
+    chosen.push_back(a - 1);
+  }
+  if (chosen.empty())
+    for (int a = 0; a < actuators; ++a) chosen.push_back(a);
+  setup.predictors.assign(static_cast<std::size_t>(actuators), std::nullopt);
+  for (int a : chosen) {
+    const auto& specimen =
+        setup.partition
+            .experimental[static_cast<std::size_t>(storeys[static_cast<std::size_t>(a)])];
+    if (!specimen)
+      throw std::invalid_argument(where + ": actuator " + std::to_string(a + 1) +
+                                  " has no declared specimen to start its model from");
+    PredictorParameters p = predictor_parameters(block, specimen->initial_stiffness());
+    // Built once here so that a parameter out of range is refused before any run, named.
+    ForcePredictor check(p, setup.dt, where + " (actuator " + std::to_string(a + 1) + ")",
+                         specimen.get());
+    setup.predictors[static_cast<std::size_t>(a)] = p;
+  }
 }
 
 void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,

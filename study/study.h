@@ -80,6 +80,17 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
 // order. No blocks: nothing changes. Throws std::invalid_argument naming `where` when the count
 // fits neither rule, a block is bad, or an actuator already has a compensator (one compensator per
 // actuator, given in one place: the case's or its emulator node's).
+// The case's force predictor (core/force_predictor.h) on the actuators it names, each started at
+// its specimen's initial stiffness times stiffness_factor. Throws std::invalid_argument opening
+// with `where` and naming the field when out of range or an actuator does not exist.
+void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& block,
+                           const std::string& where);
+// The one range rule of a ForcePredictor block (dt: the integrator's step, 0 when not yet known).
+void validate_force_predictor(const config::ForcePredictor& block, double dt,
+                              const std::string& where);
+// The block's parameters for a specimen whose declared initial stiffness is `declared_stiffness`.
+PredictorParameters predictor_parameters(const config::ForcePredictor& block,
+                                         double declared_stiffness);
 void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
                         const google::protobuf::RepeatedPtrField<config::Compensation>& blocks,
                         const std::string& where);

@@ -122,5 +122,78 @@ TEST(SimulationTest, ShearBuildingWithOneExperimentalStorey) {
   EXPECT_GT(nrmse(column(reference.displacement, 1), column(delayed.displacement, 1)), 1e-3);
 }
 
+// The network's round trip (60 ms) and the actuator's lag (14 ms) as one shift on the command:
+// the pair the link answers with (the specimen's drift and force) is 74 ms old.
+HybridSetup remote_setup(double stiffness_factor, bool adapt, double bound = 0.0) {
+  HybridSetup setup = sdof_setup(1.0 / 3, 0.074);
+  PredictorParameters p;
+  p.stiffness = stiffness_factor * setup.partition.experimental[0]->initial_stiffness();
+  p.adapt = adapt;
+  p.max_relative_error = bound;
+  setup.predictors = {p};
+  return setup;
+}
+
+// RMS of (run - reference) over steps [from, to) against the reference's RMS over them.
+double relative_rms(const SimulationResult& run, const SimulationResult& reference,
+                    std::size_t from, std::size_t to) {
+  double e = 0.0, r = 0.0;
+  for (std::size_t k = from; k < to; ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    const double d = run.displacement(row, 0) - reference.displacement(row, 0);
+    e += d * d;
+    r += reference.displacement(row, 0) * reference.displacement(row, 0);
+  }
+  return std::sqrt(e / r);
+}
+
+TEST(SimulationTest, ForcePredictorHoldsA74msLoopThatDivergesWithoutIt) {
+  const GroundMotion motion = sine_motion(kDt, 10.0, 2.0);
+  const SimulationResult lag_free = simulate(sdof_setup(1.0 / 3, 0.0), motion);
+  const SimulationResult bare = simulate(sdof_setup(1.0 / 3, 0.074), motion);
+  const double reference_peak = peak_abs(column(lag_free.displacement, 0));
+  EXPECT_TRUE(bare.diverged || peak_abs(column(bare.displacement, 0)) > 10 * reference_peak);
+  const SimulationResult compensated = simulate(remote_setup(1.0, true), motion);
+  ASSERT_FALSE(compensated.diverged);
+  ASSERT_EQ(compensated.steps(), lag_free.steps());
+  // The right model: the loop's lag acts on an error of rounding size only.
+  EXPECT_LT(relative_rms(compensated, lag_free, 0, lag_free.steps()), 1e-9);
+  const double k_e =
+      compensated.measured_force.cwiseAbs().maxCoeff() / compensated.realised.cwiseAbs().maxCoeff();
+  EXPECT_LT(compensated.prediction_error.cwiseAbs().maxCoeff(), 1e-9 * k_e * reference_peak);
+  EXPECT_TRUE(compensated.held.empty());
+}
+
+TEST(SimulationTest, ForcePredictorLearnsAModelThirtyPercentSoftWithinFiveSeconds) {
+  const GroundMotion motion = sine_motion(kDt, 10.0, 2.0);
+  const SimulationResult lag_free = simulate(sdof_setup(1.0 / 3, 0.0), motion);
+  const SimulationResult fixed = simulate(remote_setup(0.7, false), motion);
+  const SimulationResult adapted = simulate(remote_setup(0.7, true), motion);
+  ASSERT_FALSE(adapted.diverged);
+  const std::size_t five_s = static_cast<std::size_t>(5.0 / kDt);
+  const double fixed_error = relative_rms(fixed, lag_free, five_s, lag_free.steps());
+  const double adapted_error = relative_rms(adapted, lag_free, five_s, lag_free.steps());
+  EXPECT_LT(adapted_error, 0.01);
+  EXPECT_GT(fixed_error, 10 * adapted_error);
+}
+
+TEST(SimulationTest, ForcePredictorPastItsBoundStopsTheRunNamingTheLink) {
+  const GroundMotion motion = sine_motion(kDt, 10.0, 2.0);
+  const SimulationResult held = simulate(remote_setup(0.5, false, 0.2), motion);
+  ASSERT_FALSE(held.held.empty());
+  EXPECT_NE(held.held.find("force predictor of actuator 1 (link of storey 1)"), std::string::npos)
+      << held.held;
+  EXPECT_NE(held.held.find("past its bound of 20 %"), std::string::npos) << held.held;
+  EXPECT_LT(held.steps(), motion.acceleration.size());
+  // The same bound with the model fitted online never trips.
+  EXPECT_TRUE(simulate(remote_setup(0.5, true, 0.2), motion).held.empty());
+}
+
+TEST(SimulationTest, ForcePredictorsMustMatchTheActuators) {
+  HybridSetup setup = remote_setup(1.0, true);
+  setup.predictors.push_back(std::nullopt);
+  EXPECT_THROW(simulate(setup, sine_motion(kDt, 1.0)), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace rths::core

@@ -73,6 +73,71 @@ TEST(ContinuousStabilityTest, SimulationDecaysJustBelowAndGrowsJustAboveTheCriti
   EXPECT_GT(late_over_early_peak(1.1 * critical, kAlpha, kDt), 1.0);
 }
 
+TEST(PredictorStabilityTest, RightModelIsStableForEveryLagAndAWrongOneHasALimit) {
+  constexpr double kAlpha = 1.0 / 3;
+  EXPECT_TRUE(predictor_critical_delay(kPeriod, kZeta, kAlpha, 0.0, 0.0).stable_for_all_delays);
+  // Errors below the loop's own dynamic stiffness (about c w_n, 2 zeta / alpha = 30 % here):
+  // stable for every lag; past it a finite limit that shrinks as the error grows.
+  EXPECT_TRUE(predictor_critical_delay(kPeriod, kZeta, kAlpha, -0.2, 0.0).stable_for_all_delays);
+  EXPECT_TRUE(predictor_critical_delay(kPeriod, kZeta, kAlpha, 0.3, 0.0).stable_for_all_delays);
+  // The model's damping is added undelayed and taken away late: 2 % of critical makes the 30 %
+  // soft model stable for every lag.
+  EXPECT_TRUE(predictor_critical_delay(kPeriod, kZeta, kAlpha, -0.3, 0.02).stable_for_all_delays);
+  const auto soft30 = predictor_critical_delay(kPeriod, kZeta, kAlpha, -0.3, 0.0);
+  const auto soft50 = predictor_critical_delay(kPeriod, kZeta, kAlpha, -0.5, 0.0);
+  ASSERT_TRUE(soft30.critical_delay && soft50.critical_delay);
+  EXPECT_GT(*soft30.critical_delay, *soft50.critical_delay);
+  // Each crossing solves the characteristic equation at s = i w.
+  const double w_n = 2 * std::numbers::pi / kPeriod, k = w_n * w_n, c = 2 * kZeta * w_n;
+  for (const DelayCrossing& x : soft30.crossings) {
+    const std::complex<double> s(0.0, x.omega);
+    const double k_e = kAlpha * k, k_m = 0.7 * k_e;
+    const std::complex<double> value =
+        s * s + c * s + (1 - kAlpha) * k + k_m + (k_e - k_m) * std::exp(-s * x.delay);
+    EXPECT_LT(std::abs(value), 1e-9 * k) << "w " << x.omega;
+  }
+  EXPECT_THROW(predictor_critical_delay(kPeriod, kZeta, kAlpha, -1.5, 0.0), std::invalid_argument);
+  EXPECT_THROW(predictor_critical_delay(kPeriod, kZeta, kAlpha, 0.0, -0.1), std::invalid_argument);
+}
+
+// The fixed-model predictor's loop, simulated from a pulse: late over early peak.
+double predicted_late_over_early(double lag, double stiffness_error, double damping_ratio) {
+  constexpr double kAlpha = 1.0 / 3, kDt = 1e-4;
+  HybridSetup setup;
+  setup.model = make_sdof(kPeriod, kZeta);
+  setup.dt = kDt;
+  setup.partition = partition_by_fraction(setup.model.storey_stiffness, kAlpha, linear_factory());
+  DelayChain chain;
+  chain.add(std::make_unique<TimeShift>(lag, kDt));
+  setup.delays.push_back(std::move(chain));
+  PredictorParameters p;
+  p.stiffness = (1 + stiffness_error) * setup.partition.experimental[0]->initial_stiffness();
+  p.damping = 2 * damping_ratio * (2 * std::numbers::pi / kPeriod) * setup.model.mass(0, 0);
+  p.adapt = false;
+  setup.predictors = {p};
+  GroundMotion pulse{"pulse", kDt, std::vector<double>(static_cast<std::size_t>(8.0 / kDt), 0.0)};
+  pulse.acceleration[1] = 100.0;
+  const SimulationResult r = simulate(setup, pulse);
+  const auto n = r.displacement.rows();
+  return r.displacement.bottomRows(n / 3).cwiseAbs().maxCoeff() /
+         r.displacement.topRows(n / 3).cwiseAbs().maxCoeff();
+}
+
+TEST(PredictorStabilityTest, SimulationDecaysJustBelowAndGrowsJustAboveTheLimit) {
+  for (const auto& [stiffness_error, damping_ratio] :
+       {std::pair{-0.5, 0.0}, std::pair{-0.3, 0.0}, std::pair{-0.5, 0.02}}) {
+    const auto limit =
+        predictor_critical_delay(kPeriod, kZeta, 1.0 / 3, stiffness_error, damping_ratio);
+    ASSERT_TRUE(limit.critical_delay) << stiffness_error << " " << damping_ratio;
+    EXPECT_LT(
+        predicted_late_over_early(0.9 * *limit.critical_delay, stiffness_error, damping_ratio), 1.0)
+        << stiffness_error << " " << damping_ratio;
+    EXPECT_GT(
+        predicted_late_over_early(1.1 * *limit.critical_delay, stiffness_error, damping_ratio), 1.0)
+        << stiffness_error << " " << damping_ratio;
+  }
+}
+
 TEST(DiscreteStabilityTest, FirstUnstableStepCountApproachesContinuousDelayAsDtShrinks) {
   const double critical = *continuous_critical_delay(kPeriod, kZeta, 1.0).critical_delay;
   for (double dt : {1e-3, 2e-4}) {

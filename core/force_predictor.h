@@ -1,0 +1,191 @@
+#pragma once
+// Network-delay compensation on the force path: a Smith predictor with an online-updated model
+// of a remote experimental part (one per actuator of a remote link).
+//
+// Why this scheme. A remote link delays the force coming back by its round trip; every
+// compensator of core/compensation.h shapes the command for the actuator's lag and cannot see
+// it. Three families exist in the distributed-RTHS literature:
+//   - force prediction by extrapolation (polynomial or ATS on the force history): the lead it
+//     must supply grows with the round trip, its gain at high frequency grows as (w T)^order, and
+//     at 60 ms on a 2 Hz structure (w T ~ 0.75 rad) it amplifies noise and jitter into the loop;
+//   - two-loop schemes (a fast local loop around a local model, a slow loop that re-synchronises
+//     the sites): they need a model of the remote part anyway, plus a second integrator state to
+//     reconcile, and they change what the coordinator integrates, which would break "lockstep
+//     equals in process" unless both run the same two loops;
+//   - a Smith predictor (chosen): the integrator uses a local model of the remote part now, and
+//     corrects it by what the model got wrong at the step the newest answer describes. The loop's
+//     delay then acts on the model's error only (the error term below), never on the whole force.
+// The correction compares the measured force with the model evaluated at the displacement the
+// remote sensor measured in the same answer, not at a delayed copy of the command: the pair is
+// consistent whatever the lag, jitter, drift or loss of the link (no delay estimate is needed),
+// and the actuator's own lag leaves the error too, since the model is of the specimen alone. A
+// model fitted against the command would learn the actuator's lag as negative damping
+// (c ~ -k tau) and feed it back undelayed.
+//
+// Input (PredictorInput), once per integrator step k, dt apart:
+//   u, v        m, m/s: the drift the integrator computed for this step and its velocity;
+//   answer_step the step the link's newest answer answers (-1: none has arrived yet);
+//   x_m, f_m    m, N: that answer's measured drift and force (ignored while answer_step < 0).
+// Output (PredictorOutput): the force (N) the integrator uses, and the diagnostics below.
+// Equations, with theta = [k, c, f0] the model's stiffness (N/m), damping (N s/m) and force
+// offset (N; a yielded specimen carries one at zero drift, which a line through the origin
+// cannot follow; 0 for a linear specimen):
+//   on a new answer (answer_step greater than the last one seen):
+//     v_m = (x_m - x_m,prev) / ((answer_step - answer_step_prev) dt)   (0 for the first answer)
+//     phi = [x_m, v_m, 1];  S <- lambda^n S + phi phi^T;  b <- lambda^n b + phi f_m
+//     (n the steps since the last answer, lambda = exp(-dt / forgetting_time): exponential
+//     forgetting in time, so a burst of late answers weighs as the steps they describe; S_33 is
+//     the samples' weight N);
+//     theta <- S^-1 b when adapting, the RMS drift sqrt(S_11 / N) >= min_displacement and the
+//     column-scaled S is well conditioned (its smallest eigenvalue > 1e-3); a fit with c < 0 is
+//     redone with c = 0 (a passive specimen dissipates) and a fit with k <= 0 is refused (the
+//     model keeps its last theta). Recursive least squares with forgetting, information form.
+//     e = f_m - (k x_m + c v_m + f0)                                    (N, the model's error)
+//   every step: f_hat = k u + c v + f0;  force = f_hat + e (e = 0 before the first answer).
+// With the specimen's shape (a declared non-linear specimen: Bouc-Wen, bilinear), x_m and u
+// above stand for r(x_m) / k_r and r(u) / k_r: r the declared restoring-force model (initial
+// stiffness k_r), one copy driven by the measured drift at each new answer and one by the
+// command at every step (a hysteretic model keeps its own path), so k is the fitted scale of
+// the declared specimen in N/m (k = k_r when the declaration is right). For a linear specimen
+// both are the drift itself.
+//   relative_error: sqrt(sum e^2 / sum f_m^2) over the last error_window of answers (one entry a
+//     step: a step without a new answer repeats the last pair), 0 until the window is full or
+//     while sum f_m^2 = 0; exceeded when it is above max_relative_error (> 0).
+// Initial state: theta = the declared specimen's (k0, c0, 0), S = b = 0, no answer seen.
+// Linear dynamics of the compensated loop (core/stability.h predictor_critical_delay): with a
+// specimen k_e, c_e realised D late (round trip plus actuator lag), the integrator sees
+//   (k u + c v) + (k_e - k) x(t - D) + (c_e - c) v(t - D).
+// step() allocates nothing (buffers sized at construction) and is deterministic, so in-process
+// and lockstep distributed runs agree bit for bit.
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/restoring_force.h"
+
+namespace rths::core {
+
+struct PredictorParameters {
+  double stiffness = 0.0;           // N/m, k0: the declared specimen's initial stiffness, > 0
+  double damping = 0.0;             // N s/m, c0 >= 0
+  bool adapt = true;                // update theta online; false: a fixed-model Smith predictor
+  double forgetting_time = 1.0;     // s, time constant of the forgetting, > 0
+  double min_displacement = 1e-4;   // m, RMS drift below which the fit is not trusted, >= 0
+  double error_window = 1.0;        // s, window of relative_error, >= dt
+  double max_relative_error = 0.0;  // -, bound on relative_error; 0: no bound
+  // The declared specimen's shape as the stiffness basis (equations above); false: the drift
+  // itself (an equivalent linear model, whatever the specimen).
+  bool specimen_shape = true;
+};
+
+struct PredictorInput {
+  double command = 0.0;                // m, u
+  double command_velocity = 0.0;       // m/s, v
+  long answer_step = -1;               // step the newest answer answers; -1: none yet
+  double measured_displacement = 0.0;  // m, x_m
+  double measured_force = 0.0;         // N, f_m
+};
+
+struct PredictorOutput {
+  double force = 0.0;           // N, f_hat + e: what the integrator uses
+  double predicted = 0.0;       // N, f_hat = k u + c v
+  double error = 0.0;           // N, e
+  double relative_error = 0.0;  // -, windowed (above)
+  bool exceeded = false;        // relative_error > max_relative_error (> 0)
+  double stiffness = 0.0;       // N/m, the model's k now
+  double damping = 0.0;         // N s/m, the model's c now
+  double offset = 0.0;          // N, the model's f0 now
+};
+
+class ForcePredictor {
+ public:
+  // Throws std::invalid_argument opening with `label` and naming the parameter when one is out
+  // of its range above, or dt is not > 0.
+  // `shape`: the declared specimen's restoring-force model (used when specimen_shape; null: the
+  // drift itself). Its initial stiffness must be > 0.
+  ForcePredictor(const PredictorParameters& parameters, double dt,
+                 const std::string& label = "force predictor",
+                 const RestoringForceModel* shape = nullptr);
+  ForcePredictor(const ForcePredictor& other);
+  ForcePredictor& operator=(const ForcePredictor& other) = delete;
+  ForcePredictor(ForcePredictor&&) = default;
+  PredictorOutput step(const PredictorInput& in);
+  void reset();
+  const PredictorParameters& parameters() const { return p_; }
+  double stiffness() const { return k_; }
+  double damping() const { return c_; }
+  double offset() const { return offset_; }
+  std::size_t updates() const { return updates_; }  // fits accepted so far
+  std::string describe() const;
+
+ private:
+  void learn(double x, double v, double f, long steps_since);
+  // r(x) / k_r along the command's and the measurements' paths (the drift without a shape).
+  double command_basis(double x);
+  double measured_basis(double x);
+
+  PredictorParameters p_;
+  double dt_, lambda_;
+  double k_ = 0.0, c_ = 0.0;
+  double offset_ = 0.0;
+  // The forgetting's normal equations over phi = [x_m, v_m, 1]: s_ = sum phi phi^T, b_ = sum phi f.
+  double s_[3][3] = {}, b_[3] = {};
+  long last_answer_ = -1;
+  double last_x_ = 0.0, last_drift_ = 0.0, last_v_ = 0.0, last_f_ = 0.0, error_ = 0.0;
+  std::size_t updates_ = 0;
+  // Ring of the last error_window steps' e^2 and f_m^2, and their sums.
+  std::vector<double> error_sq_, force_sq_;
+  std::size_t head_ = 0, filled_ = 0;
+  double sum_error_sq_ = 0.0, sum_force_sq_ = 0.0;
+  std::unique_ptr<RestoringForceModel> command_shape_, measured_shape_;
+  double shape_stiffness_ = 1.0;  // k_r, N/m
+};
+
+// The predictors of a run's actuators, one or none each, as every evaluator applies them (the
+// in-process HybridRestoring and the coordinator's exchange), so both use the same doubles.
+// apply(): for each actuator a with a predictor, given its command (m), command rate (m/s), the
+// step its newest answer answers (-1: none yet) and that answer's measured drift (m) and force
+// (N), writes the force the integrator uses into used[a] and the model's error into error[a]
+// (N); without one, used[a] = the measured force and error[a] = 0. Returns the first actuator
+// (0-based) whose relative error is past its bound, or -1. No allocation.
+class PredictorSet {
+ public:
+  PredictorSet() = default;
+  // @pre each parameter set valid (ForcePredictor's constructor throws otherwise).
+  // `specimens`: each actuator's declared specimen model (null where none), for its shape.
+  PredictorSet(const std::vector<std::optional<PredictorParameters>>& parameters, double dt,
+               const std::vector<const RestoringForceModel*>& specimens = {});
+  bool empty() const { return blocks_.empty(); }
+  bool has(std::size_t a) const { return a < blocks_.size() && blocks_[a].has_value(); }
+  const ForcePredictor& at(std::size_t a) const { return *blocks_[a]; }
+  const PredictorOutput& last(std::size_t a) const { return last_[a]; }
+  template <class Vector>
+  int apply(const Vector& command, const Vector& command_rate, const std::vector<long>& answer,
+            const Vector& realised, const Vector& measured, Vector& used, Vector& error) {
+    int exceeded = -1;
+    for (std::size_t a = 0; a < static_cast<std::size_t>(measured.size()); ++a) {
+      const auto i = static_cast<decltype(measured.size())>(a);
+      if (!has(a)) {
+        used[i] = measured[i];
+        error[i] = 0.0;
+        continue;
+      }
+      last_[a] =
+          blocks_[a]->step({command[i], command_rate[i], answer[a], realised[i], measured[i]});
+      used[i] = last_[a].force;
+      error[i] = last_[a].error;
+      if (last_[a].exceeded && exceeded < 0) exceeded = static_cast<int>(a);
+    }
+    return exceeded;
+  }
+  void reset();
+
+ private:
+  std::vector<std::optional<ForcePredictor>> blocks_;
+  std::vector<PredictorOutput> last_;
+};
+
+}  // namespace rths::core

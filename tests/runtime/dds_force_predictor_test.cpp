@@ -1,0 +1,74 @@
+// The force predictor (core/force_predictor.h) over Cyclone DDS: the coordinator applies the same
+// blocks to the emulator's answers as core::simulate applies in process, so a lockstep run of a
+// case with a predictor equals the in-process run bit for bit, and the record's link samples
+// carry the prediction error of every step. Real processes on loopback, DDS domains 89 and 91.
+#include <gtest/gtest.h>
+
+#include "runtime/node/lag.h"
+#include "test_support.h"
+
+namespace rths {
+namespace {
+
+class DdsForcePredictor : public testing::Test {
+ protected:
+  static void SetUpTestSuite() { runtime::ensure_dds_config(); }
+};
+
+// 74 ms in all between command and answer (a 60 ms round trip and the actuator's 14 ms), with a
+// model 30 % soft at the start: the online fit moves it, so the record checks the fit too.
+constexpr const char* kPredicted =
+    "cases { name: \"predicted\" delay { shift { delay: 0.060 } } delay { shift { delay: 0.014 } "
+    "} force_predictor { stiffness_factor: 0.7 forgetting_time: 0.5 } }";
+
+TEST_F(DdsForcePredictor, LockstepEqualsInProcessBitForBitAndRecordsThePredictionError) {
+  const std::string text = test::paper_frame_study(2, kPredicted);
+  const core::SimulationResult in_process = test::reference_result(text, "predicted");
+  // The predictor acts: its error is recorded, and it departs from the run without it.
+  const core::PreparedStudy prepared = test::prepare(text);
+  core::HybridSetup bare =
+      core::setup_for_case(prepared, core::find_case(prepared.config, "predicted"));
+  ASSERT_EQ(bare.predictors.size(), 1u);
+  bare.predictors.clear();
+  const core::SimulationResult without = core::simulate(bare, prepared.motion);
+  EXPECT_NE(without.displacement(1500, 0), in_process.displacement(1500, 0));
+  EXPECT_GT(in_process.prediction_error.cwiseAbs().maxCoeff(), 0.0);
+
+  const auto run = test::launch("force_predictor_lockstep", text, "predicted", 89);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  ASSERT_FALSE(run.record.truncated);
+  test::expect_record_equals(run.record, in_process);
+  const auto steps = run.record.steps();
+  std::size_t checked = 0;
+  for (std::size_t k = 1; k < steps.size(); ++k) {
+    for (const runtime::LinkSample& link : steps[k]->links()) {
+      if (link.prediction_error_size() == 0) continue;
+      ASSERT_EQ(link.prediction_error_size(), 1) << "node " << link.node_id();
+      ASSERT_EQ(link.prediction_error(0),
+                in_process.prediction_error(static_cast<Eigen::Index>(k), 0))
+          << "step " << k;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, steps.size() - 1);  // one actuator link, every step after the first
+}
+
+// A fixed model 50 % soft with a 20 % bound: the coordinator's fail-safe HOLDs the run at the
+// step core::simulate stops at, naming the emulator's link.
+TEST_F(DdsForcePredictor, BoundPastHoldsNamingTheLink) {
+  const std::string text = test::paper_frame_study(
+      4,
+      "cases { name: \"held\" delay { shift { delay: 0.074 } } force_predictor { "
+      "stiffness_factor: 0.5 fixed_model: true error_window: 0.2 max_relative_error: 0.2 } }");
+  const core::SimulationResult in_process = test::reference_result(text, "held");
+  ASSERT_FALSE(in_process.held.empty());
+  const auto run = test::launch("force_predictor_hold", text, "held", 91);
+  EXPECT_NE(run.launch.coordinator_exit, 0);
+  const std::string log = test::read_file(run.launch.coordinator_log);
+  EXPECT_NE(log.find("force predictor of actuator 1 (link to"), std::string::npos) << log;
+  EXPECT_NE(log.find("past its bound of 20 %"), std::string::npos) << log;
+  EXPECT_LT(run.record.steps().size(), in_process.steps() + 2);
+}
+
+}  // namespace
+}  // namespace rths
