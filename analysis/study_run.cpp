@@ -373,6 +373,14 @@ std::optional<core::CriticalDelayCheck> check_case_critical_delay(
   return check_setup(prepared, setup, nominal_delay_of(setup) + extra_lag);
 }
 
+std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStudy& prepared,
+                                                         const config::Case& study_case,
+                                                         double extra_lag) {
+  if (!study_case.has_force_predictor()) return std::nullopt;
+  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  return judge_predicted_loop(setup, study_case, nominal_delay_of(setup) + extra_lag);
+}
+
 std::optional<core::CriticalDelayCheck> check_lag_critical_delay(
     const core::PreparedStudy& prepared, double lag) {
   return check_setup(prepared, prepared.base, lag);
