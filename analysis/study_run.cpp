@@ -366,6 +366,14 @@ std::optional<core::CriticalDelayCheck> check_case_critical_delay(
   return core::check_setup_critical_delay(prepared, setup, nominal_delay_of(setup) + extra_lag);
 }
 
+std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStudy& prepared,
+                                                         const config::Case& study_case,
+                                                         double extra_lag) {
+  if (!study_case.has_force_predictor()) return std::nullopt;
+  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  return judge_predicted_loop(setup, study_case, nominal_delay_of(setup) + extra_lag);
+}
+
 CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {
   const config::Case& c = core::find_case(prepared.config, case_name);
   return describe_case(prepared, core::setup_for_case(prepared, c), c, c.name(), {});

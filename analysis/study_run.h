@@ -122,6 +122,11 @@ struct RunStudyOptions {
 // make: core::check_critical_delay on the structure, the integrator and the lag tau = the case's
 // delay chain's nominal delay (s, the largest over actuators; negative = lead) + extra_lag (s).
 // Empty when the structure has no experimental part.
+// A case with a force predictor: its loop's verdict (core::predictor_critical_delay for the model
+// as it starts) at the case's lag plus `extra_lag` (s, a link's round trip); empty without one.
+std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStudy& prepared,
+                                                         const config::Case& study_case,
+                                                         double extra_lag);
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
     const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag = 0.0);
 

@@ -134,6 +134,17 @@ int warn_past_critical_delay(const core::PreparedStudy& prepared,
   int past = 0;
   for (const std::string& name : case_names) {
     const config::Case& study_case = core::find_case(prepared.config, name);
+    // A force predictor leaves only its model's error to the lag: its own verdict decides.
+    if (const auto predicted =
+            analysis::predicted_loop_verdict(prepared, study_case, path.felt())) {
+      if (predicted->analysed && !predicted->stable) {
+        ++past;
+        warn("case '" + study_case.name() + "': " + predicted->text +
+             (study_case.expect_unstable() ? " (expect_unstable: meant)"
+                                           : "; expect it to diverge"));
+      }
+      continue;
+    }
     const auto check = analysis::check_case_critical_delay(prepared, study_case, path.felt());
     if (!check || !check->past()) continue;
     ++past;

@@ -285,6 +285,49 @@ TEST(StudyBounds, ADelayLongerThanTheRecordIsRefused) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(StudyBounds, AForcePredictorOutOfRangeIsRefusedNamingTheField) {
+  const auto refusal = [](const std::string& block) {
+    return error_of(
+        "structure { sdof { period: 0.5 } } motion { path: \"m.txt\" column_units: G } "
+        "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.5 } "
+        "cases { name: \"ref\" } cases { name: \"remote\" force_predictor { " +
+        block + " } }");
+  };
+  EXPECT_EQ(refusal("max_relative_error: 0.5"), "");
+  EXPECT_NE(refusal("actuators: 0").find("cases[1] 'remote' force_predictor.actuators[0] = 0"),
+            std::string::npos)
+      << refusal("actuators: 0");
+  EXPECT_NE(refusal("actuators: 1 actuators: 1").find("repeats actuator 1"), std::string::npos);
+  EXPECT_NE(refusal("stiffness_factor: -0.3").find("force_predictor.stiffness_factor"),
+            std::string::npos);
+  EXPECT_NE(refusal("forgetting_time: -1").find("force_predictor.forgetting_time"),
+            std::string::npos);
+  EXPECT_NE(refusal("max_relative_error: -0.1").find("force_predictor.max_relative_error"),
+            std::string::npos);
+  EXPECT_NE(refusal("error_window: 0.0001").find("shorter than one step"), std::string::npos);
+  // An actuator the study does not have is named when the case is set up.
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rths_study_pred_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "m.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
+  const PreparedStudy prepared = prepare_study(
+      parse_study("structure { sdof { period: 0.5 } } motion { path: \"m.txt\" column_units: G } "
+                  "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
+                  "cases { name: \"remote\" force_predictor { actuators: 2 } }",
+                  "t"),
+      dir);
+  try {
+    setup_for_case(prepared, find_case(prepared.config, "remote"));
+    FAIL() << "a predictor on actuator 2 of a study with one was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("force_predictor.actuators names actuator 2 but the "
+                                         "study has 1"),
+              std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 class MotionUnits : public ::testing::Test {
  protected:
   void SetUp() override {
