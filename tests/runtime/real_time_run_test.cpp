@@ -46,6 +46,11 @@ TEST(StallRule, EachWindowAStallCanPassIsReadFromItsStatus) {
                                   "21.000000 ms (limit 20.500000 ms)",
                                   h),
               0.0205, 1e-12);
+  EXPECT_NEAR(*test::stall_window("held on its own at its step 50: step 50: controller: the "
+                                  "controller 127.0.0.1:47307 did not answer frame 42 (step 42) "
+                                  "within 8.000000 ms (10 lost in a row)",
+                                  h),
+              0.008, 1e-12);
   EXPECT_NEAR(*test::stall_window("node 2's controller link was not clean: 9 frames lost, 15 "
                                   "answered late, 0 rejected",
                                   h),

@@ -34,9 +34,12 @@ std::optional<double> stall_window(const std::string& status, const runtime::Run
   static const std::regex missed("no answer for ([0-9]+) consecutive steps");
   static const std::regex answer_window("beyond its answer window of [0-9]+ steps \\(([0-9.]+) ms");
   static const std::regex watchdog("command watchdog: .*\\(limit ([0-9.]+) ms\\)");
+  static const std::regex unanswered(
+      "did not answer frame [0-9]+ \\(step [0-9]+\\) within ([0-9.]+) ms");
   if (auto steps = number_after(status, missed)) return *steps * header.dt();
   if (auto ms = number_after(status, answer_window)) return *ms * 1e-3;
   if (auto ms = number_after(status, watchdog)) return *ms * 1e-3;
+  if (auto ms = number_after(status, unanswered)) return *ms * 1e-3;
   if (status.find("controller link was not clean") != std::string::npos &&
       status.find(", 0 rejected") != std::string::npos)
     return reply_timeout(header);

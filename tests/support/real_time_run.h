@@ -5,7 +5,7 @@
 // A real-time run fails rightly when one of its windows passes: the answer window ("no answer for
 // N consecutive steps" of dt; "... beyond its answer window of N steps (X ms)"), a node's command
 // watchdog ("... (limit X ms)"), a controller link's reply timeout (frames lost or answered late,
-// none rejected). A stall of the machine passes them as surely as a fault of the code does. The
+// none rejected; or the node's own hold: "did not answer frame N (step N) within X ms"). A stall of the machine passes them as surely as a fault of the code does. The
 // failure is the machine's when the witness saw a stall of at least half that window: the witness
 // sleeps most of the time, so the scheduler favours it and it sees less of a stall than a busy
 // loop does. Any other failure, or one beside a quiet machine, is the code's.
