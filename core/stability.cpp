@@ -142,6 +142,32 @@ double spectral_radius(IntegratorKind kind, const SdofParameters& p, double dt, 
 
 }  // namespace
 
+namespace {
+
+// The delays at which a characteristic root crosses the imaginary axis at frequency w (rad/s),
+// where e^{-i w tau} = z: w tau = -arg(z) mod 2 pi, on `branches` branches.
+void add_crossings(ContinuousStability& result, double w, std::complex<double> z, int branches) {
+  double phase = std::fmod(-std::arg(z), 2.0 * std::numbers::pi);
+  if (phase < 0) phase += 2.0 * std::numbers::pi;
+  for (int j = 0; j < branches; ++j)
+    result.crossings.push_back({w, (phase + 2.0 * std::numbers::pi * j) / w, j});
+}
+
+// Crossings sorted by delay; the critical delay is the first when the loop is stable without
+// delay, 0 when it is not.
+void settle_critical_delay(ContinuousStability& result) {
+  std::sort(result.crossings.begin(), result.crossings.end(),
+            [](const DelayCrossing& l, const DelayCrossing& r) { return l.delay < r.delay; });
+  result.stable_for_all_delays = result.stable_without_delay && result.crossings.empty();
+  if (!result.crossings.empty() && result.stable_without_delay) {
+    result.critical_delay = result.crossings.front().delay;
+  } else if (!result.stable_without_delay) {
+    result.critical_delay = 0.0;
+  }
+}
+
+}  // namespace
+
 ContinuousStability continuous_critical_delay(double period, double zeta, double alpha,
                                               int branches) {
   const SdofParameters p = sdof_parameters(period, zeta, alpha);
@@ -170,21 +196,9 @@ ContinuousStability continuous_critical_delay(double period, double zeta, double
     const double w = std::sqrt(x);
     const std::complex<double> z =
         -std::complex<double>(p.k_numerical - p.m * x, p.c * w) / p.k_experimental;
-    // e^{-i w tau} = z  =>  w tau = -arg(z) mod 2 pi.
-    double phase = std::fmod(-std::arg(z), 2.0 * std::numbers::pi);
-    if (phase < 0) phase += 2.0 * std::numbers::pi;
-    for (int j = 0; j < branches; ++j) {
-      result.crossings.push_back({w, (phase + 2.0 * std::numbers::pi * j) / w, j});
-    }
+    add_crossings(result, w, z, branches);
   }
-  std::sort(result.crossings.begin(), result.crossings.end(),
-            [](const DelayCrossing& l, const DelayCrossing& r) { return l.delay < r.delay; });
-  result.stable_for_all_delays = result.stable_without_delay && result.crossings.empty();
-  if (!result.crossings.empty() && result.stable_without_delay) {
-    result.critical_delay = result.crossings.front().delay;
-  } else if (!result.stable_without_delay) {
-    result.critical_delay = 0.0;
-  }
+  settle_critical_delay(result);
   return result;
 }
 
@@ -224,19 +238,9 @@ ContinuousStability predictor_critical_delay(double period, double zeta, double 
     const double w = std::sqrt(x);
     const std::complex<double> z =
         -std::complex<double>(k_fast - p.m * x, c_fast * w) / std::complex<double>(dk, dc * w);
-    double phase = std::fmod(-std::arg(z), 2.0 * std::numbers::pi);
-    if (phase < 0) phase += 2.0 * std::numbers::pi;
-    for (int j = 0; j < branches; ++j)
-      result.crossings.push_back({w, (phase + 2.0 * std::numbers::pi * j) / w, j});
+    add_crossings(result, w, z, branches);
   }
-  std::sort(result.crossings.begin(), result.crossings.end(),
-            [](const DelayCrossing& l, const DelayCrossing& r) { return l.delay < r.delay; });
-  result.stable_for_all_delays = result.stable_without_delay && result.crossings.empty();
-  if (!result.crossings.empty() && result.stable_without_delay) {
-    result.critical_delay = result.crossings.front().delay;
-  } else if (!result.stable_without_delay) {
-    result.critical_delay = 0.0;
-  }
+  settle_critical_delay(result);
   return result;
 }
 
