@@ -114,6 +114,8 @@ double Feed::predicted(std::int64_t step, int dof) const {
 void Feed::Difference::reset(int dofs) {
   max_abs.assign(static_cast<std::size_t>(dofs), 0.0);
   sum_squares.assign(static_cast<std::size_t>(dofs), 0.0);
+  max_abs_predicted.assign(static_cast<std::size_t>(dofs), 0.0);
+  sum_squares_predicted.assign(static_cast<std::size_t>(dofs), 0.0);
   samples = 0;
 }
 
@@ -122,12 +124,33 @@ void Feed::Difference::add(const double* u, const double* predicted, int dofs) {
   for (int d = 0; d < dofs; ++d)
     if (std::isnan(predicted[d])) return;
   for (int d = 0; d < dofs; ++d) {
+    const auto i = static_cast<std::size_t>(d);
     const double e = u[d] - predicted[d];
-    max_abs[static_cast<std::size_t>(d)] =
-        std::max(max_abs[static_cast<std::size_t>(d)], std::abs(e));
-    sum_squares[static_cast<std::size_t>(d)] += e * e;
+    max_abs[i] = std::max(max_abs[i], std::abs(e));
+    sum_squares[i] += e * e;
+    max_abs_predicted[i] = std::max(max_abs_predicted[i], std::abs(predicted[d]));
+    sum_squares_predicted[i] += predicted[d] * predicted[d];
   }
   ++samples;
+}
+
+nlohmann::json Feed::Difference::json() const {
+  const auto n = static_cast<double>(samples);
+  nlohmann::json peak = nlohmann::json::array(), rms = nlohmann::json::array(),
+                 rms_mm = nlohmann::json::array();
+  for (std::size_t d = 0; d < max_abs.size(); ++d) {
+    const auto percent = [](double error, double scale) {
+      return scale > 0.0 ? 100.0 * error / scale : 0.0;
+    };
+    peak.push_back(percent(max_abs[d], max_abs_predicted[d]));
+    rms.push_back(percent(std::sqrt(sum_squares[d]), std::sqrt(sum_squares_predicted[d])));
+    rms_mm.push_back(std::sqrt(sum_squares[d] / n));
+  }
+  return {{"compared_samples", samples},
+          {"peak_error_pct", peak},
+          {"rms_error_pct", rms},
+          {"max_abs_difference_mm", max_abs},
+          {"rms_difference_mm", rms_mm}};
 }
 
 void Feed::finish() {
@@ -374,14 +397,7 @@ nlohmann::json Feed::status_json() const {
                    {"late_feedback", c.late_feedback()},
                    {"steps", c.steps()}};
   }
-  if (difference_.samples > 0) {
-    nlohmann::json rms = nlohmann::json::array();
-    for (double sum : difference_.sum_squares)
-      rms.push_back(std::sqrt(sum / static_cast<double>(difference_.samples)));
-    s["prediction"] = {{"compared_samples", difference_.samples},
-                       {"max_abs_difference_mm", difference_.max_abs},
-                       {"rms_difference_mm", rms}};
-  }
+  if (difference_.samples > 0) s["prediction"] = difference_.json();
   return s;
 }
 

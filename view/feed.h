@@ -33,8 +33,11 @@
 //             is a "warning", never a plain "completed") and the deadline diagnosis when one was
 //             set (set_deadline_diagnosis); counters; the newest step and its CLOCK_REALTIME
 //             start, from which the page tells how far behind the test it is.
-//             With a prediction, per DOF: the largest |u - predicted| and its root mean square
-//             over the samples compared so far (mm; the samples' steps, not every step).
+//             With a prediction, per DOF, over the samples compared so far (the samples' steps,
+//             not every step): the error measures `rths run` leads with, against the prediction
+//             p, E_peak = 100 max|u - p| / max|p| and E_rms = 100 sqrt(sum (u - p)^2 / sum p^2)
+//             (%, core/metrics.h; 0 while p is all 0), then the largest |u - p| and its root mean
+//             square (mm).
 //   events    the newest `max_events` events.
 // Memory: every buffer is sized when the header arrives (rings), so a long run keeps a flat RSS.
 // Thread safety: every member may be called from any thread.
@@ -121,10 +124,12 @@ class Feed : public runtime::RecordObserver {
   };
   // Measured minus predicted at the compared samples, per DOF, mm.
   struct Difference {
-    std::vector<double> max_abs, sum_squares;
+    std::vector<double> max_abs, sum_squares;                      // of u - predicted
+    std::vector<double> max_abs_predicted, sum_squares_predicted;  // of predicted
     std::uint64_t samples = 0;
     void reset(int dofs);
     void add(const double* u, const double* predicted, int dofs);
+    nlohmann::json json() const;  // status "prediction" (header)
   };
   struct Spectrum {
     std::int64_t step = 0;

@@ -192,6 +192,7 @@ async function checkPrediction(page, dir, csv, row, lockstep) {
     steps: window.rthsView.drawn.steps, data: window.rthsView.plots.resp[0].data,
     axes: window.rthsView.plots.resp[0].axes.map(a => a.label),
     stats: window.rthsView.status.prediction, text: document.querySelector('#prediction-text').textContent,
+    statsText: document.querySelector('#prediction-stats').textContent,
     stride: window.rthsView.header.stride_steps,
   }));
   assert.ok(p.steps.length > 100, 'plotted points: ' + p.steps.length);
@@ -212,6 +213,15 @@ async function checkPrediction(page, dir, csv, row, lockstep) {
   near(p.stats.max_abs_difference_mm[0], largest, 'largest |measured - predicted|');
   if (lockstep) assert.equal(p.stats.max_abs_difference_mm[0], 0, 'lockstep equals the in-process run bit for bit');
   else assert.ok(largest > 0, 'real time differs from the in-process run');
+  // The page leads with the measures `rths run` leads with: E_peak over the same samples.
+  let peakPredicted = 0;
+  csv.step.forEach((s) => {
+    if (s % p.stride === 0 && inRow[s] !== undefined && !Number.isNaN(predicted[inRow[s]]))
+      peakPredicted = Math.max(peakPredicted, Math.abs(predicted[inRow[s]] * 1e3));
+  });
+  near(p.stats.peak_error_pct[0], 100 * largest / peakPredicted, 'E_peak against the prediction');
+  assert.match(p.statsText, /^floor 1: E_peak [0-9.]+ %, E_rms [0-9.]+ %/, p.statsText);
+  assert.doesNotMatch(p.statsText, /NRMSE/, p.statsText);
 }
 
 // The tracking error's running spectrum on a log frequency axis: the plotted amplitudes are the

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <numbers>
 #include <thread>
+#include <vector>
+
+#include "core/metrics.h"
 
 namespace rths::view {
 namespace {
@@ -285,6 +288,18 @@ TEST(Feed, DrawsTheResponseAgainstThePredictionAtTheSamplesStepsWithItsRunningDi
   EXPECT_EQ(stats["compared_samples"], 100);  // steps 0, 10, ..., 990
   EXPECT_NEAR(stats["max_abs_difference_mm"][0].get<double>(), 0.5, 1e-9);
   EXPECT_NEAR(stats["rms_difference_mm"][0].get<double>(), 0.5 * std::sqrt(0.5), 1e-9);
+  // E_peak and E_rms against the prediction over the same samples, as core/metrics.h defines
+  // them for `rths run`.
+  std::vector<double> measured, predicted;
+  for (int k = 0; k < 1000; k += 10) {
+    predicted.push_back(p.displacement(k, 0) * 1e3);
+    measured.push_back(predicted.back() + (k >= 500 ? 0.5 : 0.0));
+  }
+  EXPECT_NEAR(stats["peak_error_pct"][0].get<double>(),
+              core::relative_peak_error_pct(predicted, measured), 1e-9);
+  EXPECT_NEAR(stats["rms_error_pct"][0].get<double>(),
+              core::relative_rms_error_pct(predicted, measured), 1e-9);
+  EXPECT_GT(stats["rms_error_pct"][0].get<double>(), 0.0);
 }
 
 TEST(Feed, APredictionGivenAfterTheStepsFillsTheKeptSamples) {

@@ -218,12 +218,15 @@ function drawResponse(t, idx) {
   V.plots.diff.setData([t, ...c.difference_mm.map(col => at(col, idx))]);
 }
 
-// Max and RMS of measured − predicted so far, per floor (the feed's, over the samples compared).
+// Per floor, the measures `rths run` leads with, E_peak and E_rms of measured against predicted
+// (%), then the largest and RMS difference (mm), so far (the feed's, over the samples compared).
 function showPrediction(st) {
   const p = st.prediction;
   if (!p) { $('prediction-stats').textContent = ''; return; }
-  $('prediction-stats').textContent = p.max_abs_difference_mm.map((m, d) => dofLabel(d) + ': max |measured − predicted| ' +
-    (m === 0 ? '0 mm (identical)' : m.toFixed(3) + ' mm, rms ' + p.rms_difference_mm[d].toFixed(3) + ' mm')).join(' · ') +
+  $('prediction-stats').textContent = p.max_abs_difference_mm.map((m, d) => dofLabel(d) + ': ' +
+    (m === 0 ? 'E_peak 0 %, E_rms 0 % (identical)'
+      : 'E_peak ' + p.peak_error_pct[d].toFixed(2) + ' %, E_rms ' + p.rms_error_pct[d].toFixed(2) +
+        ' % (max |measured − predicted| ' + m.toFixed(3) + ' mm, rms ' + p.rms_difference_mm[d].toFixed(3) + ' mm)')).join(' · ') +
     ' (over ' + p.compared_samples + ' samples)';
 }
 
