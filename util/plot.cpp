@@ -16,6 +16,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "util/plot_layout.h"
 #include "util/process.h"
 
 namespace rths::util {
@@ -41,24 +42,62 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
-// The share of the figure's width the legend takes (outside right), from its longest entry at
-// about 8 px a character.
-double key_fraction(const std::vector<PlotSpec>& panels) {
+// How one figure's text and legends are laid out (util/plot_layout.h): its font, the data
+// area's pixels of each panel, and whether every legend fits inside its panel; where one does
+// not, every legend of the figure goes below its panel, and each panel grows by the legend's
+// lines, so its data area keeps its size.
+struct Layout {
+  int font = kMinimumPoints;                   // pt
+  double left = 0.0, right = 0.0;              // px from the figure's edges to a panel's data area
+  double data_width = 0.0, data_height = 0.0;  // px of one panel's data area
+  bool legends_inside = true;
+  int legend_below_px = 0;  // px each panel grows by, its legend below it
+};
+
+// A legend's box as a share of the data area: its longest entry and line sample (4 characters)
+// with a border, one line per series.
+std::pair<double, double> legend_share(const PlotSpec& spec, const Layout& layout) {
   std::size_t longest = 0;
-  for (const PlotSpec& panel : panels)
-    for (const Series& s : panel.series) longest = std::max(longest, s.title.size());
-  const double width = panels.front().width;
-  return std::clamp((8.0 * static_cast<double>(longest) + 80.0) / width, 0.15, 0.5);
+  for (const Series& s : spec.series) longest = std::max(longest, s.title.size());
+  const double ch = character_pixels(layout.font), line = line_pixels(layout.font);
+  const double width = (static_cast<double>(longest) + 7.0) * ch;
+  const double height = (static_cast<double>(spec.series.size()) + 0.6) * line;
+  return {width / layout.data_width, height / layout.data_height};
 }
 
-// How many characters of a title fit the figure: gnuplot centres the title over the data area
-// (85 px from the left edge to the legend), so a longer one runs off the left edge. About 7.5 px
-// a character at the figures' 10 pt sans, with a margin.
-std::size_t title_chars(const std::vector<PlotSpec>& panels) {
-  const double width = panels.front().width;
-  const double data_right = width * (1.0 - key_fraction(panels));
-  const double centre = (85.0 + data_right) / 2.0;
-  return static_cast<std::size_t>(std::max(20.0, (2.0 * centre - 40.0) / 7.5));
+// A legend inside may take at most this share of its panel's width and height.
+constexpr double kInsideWidthShare = 0.6, kInsideHeightShare = 0.45;
+
+Layout figure_layout(const std::vector<PlotSpec>& panels, bool grid, int columns) {
+  Layout l;
+  const PlotSpec& first = panels.front();
+  l.font = figure_font_points(first.width, grid);
+  const double ch = character_pixels(l.font), line = line_pixels(l.font);
+  const double panel_width = static_cast<double>(first.width) / columns;
+  const double panel_height = grid ? panel_width : first.height;
+  // Left: the y tick labels (about 7 characters) and the y label; right: a character's gap.
+  l.left = 9.0 * ch + line;
+  l.right = 2.0 * ch;
+  l.data_width = std::max(1.0, panel_width - l.left - l.right);
+  // Above: a two-line title; below: tick labels and the x label.
+  l.data_height = std::max(1.0, (grid ? l.data_width : panel_height) - 5.0 * line);
+  std::size_t most_series = 0;
+  for (const PlotSpec& p : panels) {
+    const auto [w, h] = legend_share(p, l);
+    if (!p.series.empty() && (w > kInsideWidthShare || h > kInsideHeightShare))
+      l.legends_inside = false;
+    most_series = std::max(most_series, p.series.size());
+  }
+  if (!l.legends_inside)
+    l.legend_below_px =
+        static_cast<int>(std::ceil((static_cast<double>(most_series) + 1.0) * line));
+  return l;
+}
+
+// How many characters of a title fit over the data area, with a margin.
+std::size_t title_chars(const Layout& layout) {
+  return static_cast<std::size_t>(
+      std::max(20.0, (layout.data_width - 20.0) / character_pixels(layout.font)));
 }
 
 std::string range(const std::optional<double>& lo, const std::optional<double>& hi) {
@@ -171,11 +210,26 @@ std::string x_tics(const PlotSpec& spec) {
   return out.str();
 }
 
+// The legend's command and the y range for `spec`: inside at its emptiest corner (with room made
+// for it where it needs some), or outside on the right where the figure's layout says so.
+std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec, const Layout& layout) {
+  std::string y_range = spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
+                                                 : std::string("set autoscale y");
+  if (!layout.legends_inside)
+    return {"set key outside below left vertical Left reverse\n", y_range + "\n"};
+  std::vector<std::vector<std::size_t>> drawn;
+  for (const Series& s : spec.series) drawn.push_back(drawn_points(spec, s));
+  const auto [width, height] = legend_share(spec, layout);
+  const LegendPlacement place = place_legend(spec, drawn, width, height);
+  if (place.y_range) y_range = "set yrange " + range(place.y_range->first, place.y_range->second);
+  return {key_command(place.corner), y_range + "\n"};
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::string& tag,
-                  std::size_t panel, std::size_t title_width) {
-  script << (spec.square ? "set size square\nset key inside bottom right Left reverse opaque box\n"
-                         : "set size nosquare\nset key outside right top vertical Left reverse\n")
-         << "set title " << quoted(wrap_title(spec.title, title_width)) << "\n"
+                  std::size_t panel, const Layout& layout) {
+  const auto [key, y_range] = legend_and_y_range(spec, layout);
+  script << (spec.square ? "set size square\n" : "set size nosquare\n") << key << "set title "
+         << quoted(wrap_title(spec.title, title_chars(layout))) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
          << "set ylabel " << quoted(spec.ylabel) << "\n"
          << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
@@ -184,10 +238,8 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
          << (spec.x_min || spec.x_max ? "set xrange " + range(spec.x_min, spec.x_max)
                                       : "set autoscale x")
          << "\n"
-         << (spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
-                                      : "set autoscale y")
+         << y_range << "set format y " << quoted(spec.y_format.empty() ? "% h" : spec.y_format)
          << "\n"
-         << "set format y " << quoted(spec.y_format.empty() ? "% h" : spec.y_format) << "\n"
          << x_tics(spec) << "unset arrow\nunset label\n";
   script.precision(10);
   for (std::size_t i = 0; i < spec.markers.size(); ++i) {
@@ -195,7 +247,8 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
     script << "set arrow from first " << m.x << ", graph 0 to first " << m.x
            << ", graph 1 nohead dt 2 lw 1.5 lc rgb '#444444'\n"
            << "set label " << quoted(m.label) << " at first " << m.x << ", graph "
-           << 0.97 - 0.05 * static_cast<double>(i % 6) << " left offset 0.5,0 font 'sans,9'\n";
+           << 0.97 - 0.05 * static_cast<double>(i % 6) << " left offset 0.5,0 font 'sans,"
+           << layout.font - 1 << "'\n";
   }
   script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
@@ -214,23 +267,29 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
   script << "\n";
 }
 
+// The terminal, output and common settings of a figure `width` x `height` px in `layout`'s font.
+void start_figure(std::ostringstream& script, const std::string& terminal,
+                  const std::filesystem::path& file, int width, int height, const Layout& layout) {
+  // One gnuplot may draw several figures: none inherits another's margins or ranges.
+  script << "reset\n"
+         << "set terminal " << terminal << " size " << width << "," << height << " font 'sans,"
+         << layout.font << "'\n"
+         << "set output " << quoted(file.string()) << "\n"
+         << "set termoption noenhanced\nset grid\n";
+}
+
 // Square panels (PlotSpec::square) in a grid of at most three columns: each width / columns
-// pixels square, the title wrapped to that width.
+// pixels square, printed at the full text width.
 std::string square_grid(const std::vector<PlotSpec>& panels, const std::string& tag,
                         const std::string& terminal, const std::filesystem::path& file) {
   const int columns = static_cast<int>(std::min<std::size_t>(3, panels.size()));
   const int rows = static_cast<int>((panels.size() + 2) / 3);
   const int width = panels.front().width, side = width / columns;
+  const Layout layout = figure_layout(panels, true, columns);
   std::ostringstream script;
-  script << "reset\n"
-         << "set terminal " << terminal << " size " << width << "," << side * rows
-         << " font 'sans,10'\n"
-         << "set output " << quoted(file.string()) << "\n"
-         << "set termoption noenhanced\nset grid\n"
-         << "set multiplot layout " << rows << "," << columns << "\n";
-  const auto title_width = static_cast<std::size_t>(std::max(20.0, (side - 60.0) / 7.5));
-  for (std::size_t p = 0; p < panels.size(); ++p)
-    append_panel(script, panels[p], tag, p, title_width);
+  start_figure(script, terminal, file, width, (side + layout.legend_below_px) * rows, layout);
+  script << "set multiplot layout " << rows << "," << columns << "\n";
+  for (std::size_t p = 0; p < panels.size(); ++p) append_panel(script, panels[p], tag, p, layout);
   script << "unset multiplot\nset output\n";
   return script.str();
 }
@@ -239,26 +298,19 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
                    const std::string& terminal, const std::filesystem::path& file) {
   if (std::all_of(panels.begin(), panels.end(), [](const PlotSpec& p) { return p.square; }))
     return square_grid(panels, tag, terminal, file);
+  const Layout layout = figure_layout(panels, false, 1);
   std::ostringstream script;
-  const int height = panels.front().height * static_cast<int>(panels.size());
-  // One gnuplot may draw several figures: none inherits another's margins or ranges.
-  script << "reset\n"
-         << "set terminal " << terminal << " size " << panels.front().width << "," << height
-         << " font 'sans,10'\n"
-         << "set output " << quoted(file.string()) << "\n"
-         << "set termoption noenhanced\nset grid\n";
-  if (panels.size() > 1) {
-    // Stacked panels share the time axis: the same margins on every panel, so their data areas
-    // line up whatever each legend's width; the right margin fits the longest legend entry.
-    const double width = panels.front().width;
-    const double key = key_fraction(panels);
-    script.precision(4);
-    script << "set lmargin at screen " << 85.0 / width << "\nset rmargin at screen " << 1.0 - key
-           << "\n"
-           << "set multiplot layout " << panels.size() << ",1\n";
-  }
-  for (std::size_t p = 0; p < panels.size(); ++p)
-    append_panel(script, panels[p], tag, p, title_chars(panels));
+  const int width = panels.front().width;
+  const int panel_height = panels.front().height + layout.legend_below_px;
+  start_figure(script, terminal, file, width, panel_height * static_cast<int>(panels.size()),
+               layout);
+  // Every panel has the same margins, so stacked panels' data areas line up whatever their
+  // tick labels.
+  script.precision(4);
+  script << "set lmargin at screen " << layout.left / width << "\nset rmargin at screen "
+         << 1.0 - layout.right / width << "\n";
+  if (panels.size() > 1) script << "set multiplot layout " << panels.size() << ",1\n";
+  for (std::size_t p = 0; p < panels.size(); ++p) append_panel(script, panels[p], tag, p, layout);
   if (panels.size() > 1) script << "unset multiplot\n";
   script << "set output\n";
   return script.str();
@@ -506,23 +558,6 @@ void write_png_figures(const std::vector<Figure>& figures) {
     }
     throw;
   }
-}
-
-std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,
-                                                        const std::vector<std::size_t>& include,
-                                                        double margin) {
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (std::size_t i = 0; i < series.size(); ++i) {
-    if (!include.empty() && std::find(include.begin(), include.end(), i) == include.end()) continue;
-    for (double y : series[i].y) {
-      if (!std::isfinite(y)) continue;
-      lo = std::min(lo, y);
-      hi = std::max(hi, y);
-    }
-  }
-  if (!(lo <= hi)) return std::nullopt;
-  const double pad = std::max(hi - lo, std::abs(hi) * 1e-9 + 1e-300) * margin;
-  return std::make_pair(lo - pad, hi + pad);
 }
 
 }  // namespace rths::util

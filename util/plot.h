@@ -10,8 +10,10 @@
 // A series longer than kPointsPerPixel points per pixel of its panel's width is drawn decimated
 // (decimate_min_max; a path whose x is not ascending, simplify_path): no peak is lost, and
 // gnuplot's time no longer grows with the record.
-// Every figure: the legend outside the data (right), one colour per series from a 12-colour
-// qualitative palette, then the same colours dashed, so no two of the first 48 series look alike.
+// Every figure: fonts legible when printed at a journal's width and each legend inside its panel
+// at the corner its data leave emptiest, below the panel only where a legend would take more than
+// about half of it (util/plot_layout.h); one colour per series from a 12-colour qualitative
+// palette, then the same colours dashed, so no two of the first 48 series look alike.
 
 #include <filesystem>
 #include <optional>
@@ -19,54 +21,9 @@
 #include <utility>
 #include <vector>
 
+#include "util/plot_spec.h"
+
 namespace rths::util {
-
-// Series and PlotSpec take their leading fields by constructor (not as aggregates), so a figure
-// names what it sets and -Wmissing-field-initializers has nothing to say about the rest.
-struct Series {
-  Series() = default;
-  Series(std::string title, std::vector<double> x, std::vector<double> y,
-         std::string style = "lines")
-      : title(std::move(title)), x(std::move(x)), y(std::move(y)), style(std::move(style)) {}
-  std::string title;
-  std::vector<double> x, y;
-  std::string style = "lines";  // gnuplot "with" clause: lines, points, linespoints ...
-};
-
-// A labelled vertical line across the panel at x (e.g. a critical delay).
-struct VerticalMarker {
-  double x = 0.0;
-  std::string label;
-};
-
-struct PlotSpec {
-  PlotSpec() = default;
-  PlotSpec(std::string title, std::string xlabel, std::string ylabel,
-           std::vector<Series> series = {}, bool log_y = false)
-      : title(std::move(title)),
-        xlabel(std::move(xlabel)),
-        ylabel(std::move(ylabel)),
-        series(std::move(series)),
-        log_y(log_y) {}
-  std::string title, xlabel, ylabel;
-  std::vector<Series> series;
-  bool log_y = false;
-  int width = 1100, height = 600;  // pixels
-  bool log_x = false;
-  // Axis range; empty = gnuplot's autoscale. Set it so one diverged series cannot flatten the rest
-  // (points outside are clipped, not dropped from the legend).
-  std::optional<double> x_min, x_max, y_min, y_max;
-  std::vector<VerticalMarker> markers;
-  // gnuplot format of the y tick labels (e.g. "%g": 1e-05 rather than 0.000010); empty = default.
-  std::string y_format;
-  // Tick labels at these x (a bar chart's bars: "\n" breaks a label into lines); empty = the
-  // numbers of the x axis.
-  std::vector<std::pair<double, std::string>> x_labels;
-  // A square data area with its legend inside, bottom right (a force-displacement loop, which
-  // runs from lower left to upper right, reads true only with equal axes lengths). A figure of square panels lays them out in a grid of at most three
-  // columns, each `width / columns` pixels square, instead of stacking them.
-  bool square = false;
-};
 
 // The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel
 // of the same figure can name the same colour for the same thing (style "lines lc rgb '...'").
@@ -127,11 +84,5 @@ void write_png_figures(const std::vector<Figure>& figures);
 // `figure` names what it draws, for the message. Throws std::runtime_error naming the figure
 // when gnuplot is missing, times out or fails, with the end of gnuplot's own messages.
 void run_gnuplot_script(const std::string& script, const std::filesystem::path& figure);
-
-// The range [lo, hi] padded by `margin` of its span on each side, over the finite y of the series
-// (all when `include` is empty, else those whose index is listed). Empty when nothing is finite.
-std::optional<std::pair<double, double>> padded_y_range(const std::vector<Series>& series,
-                                                        const std::vector<std::size_t>& include,
-                                                        double margin = 0.08);
 
 }  // namespace rths::util

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -162,11 +163,12 @@ TEST(Plot, PaddedRangeFollowsOnlyTheIncludedFiniteSeries) {
   EXPECT_FALSE(padded_y_range({{"empty", {}, {}}}, {}).has_value());
 }
 
-// Stacked panels share an x axis: their data areas line up whatever each legend's width, and
-// every legend sits right of the data. Read from the SVG: each panel's border is a closed black
-// path "M left,top L left,bottom L right,bottom L right,top"; each series' path starts with its
-// legend sample "M x,y L x2,y".
-TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
+// Stacked panels share an x axis: their data areas line up whatever each legend's width; a
+// legend too long for its panel puts every legend of the figure below its panel, outside every
+// data area. Read from the SVG: each panel's border is a closed black path "M left,top L
+// left,bottom L right,bottom L right,top"; each series' path starts with its legend sample
+// "M x,y L x2,y".
+TEST(Plot, StackedPanelsLineUpAndALegendTooLongForItsPanelGoesBelow) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("rths_plot_stack_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
@@ -183,19 +185,56 @@ TEST(Plot, StackedPanelsLineUpWithTheLegendOutsideTheData) {
   const std::regex border(
       R"(stroke='black'\s+d='M([0-9.]+),([0-9.]+) L\1,([0-9.]+) L([0-9.]+),\3 L\4,\2)");
   std::set<std::pair<std::string, std::string>> edges;
-  double right = 0.0;
+  std::set<std::array<double, 4>> areas;  // left, top, bottom, right (each drawn once or twice)
   for (auto it = std::sregex_iterator(svg.begin(), svg.end(), border); it != std::sregex_iterator();
        ++it) {
     edges.insert({(*it)[1], (*it)[4]});
-    right = std::stod((*it)[4]);
+    areas.insert(
+        {std::stod((*it)[1]), std::stod((*it)[2]), std::stod((*it)[3]), std::stod((*it)[4])});
   }
   ASSERT_EQ(edges.size(), 1u) << "the panels' data areas differ";
-  const std::regex sample(R"(stroke='rgb\([^)]*\)'\s+d='M([0-9.]+),[0-9.]+ L[0-9.]+,[0-9.]+ M)");
+  ASSERT_EQ(areas.size(), 2u);
+  const std::regex sample(R"(stroke='rgb\([^)]*\)'\s+d='M([0-9.]+),([0-9.]+) L[0-9.]+,[0-9.]+ M)");
   int samples = 0;
   for (auto it = std::sregex_iterator(svg.begin(), svg.end(), sample); it != std::sregex_iterator();
-       ++it, ++samples)
-    EXPECT_GT(std::stod((*it)[1]), right) << "a legend sample inside the data";
+       ++it, ++samples) {
+    const double x = std::stod((*it)[1]), y = std::stod((*it)[2]);
+    for (const auto& a : areas)
+      EXPECT_FALSE(x > a[0] && x < a[3] && y > a[1] && y < a[2])
+          << "a legend sample inside the data at " << x << "," << y;
+  }
   EXPECT_EQ(samples, 3);
+  std::filesystem::remove_all(dir);
+}
+
+// A legend that fits goes inside the data area, at the corner the data leave empty: a line
+// rising from lower left to upper right leaves the top left (SVG y grows downwards).
+TEST(Plot, ALegendThatFitsIsInsideAtTheEmptyCorner) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_inside_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::vector<double> x, y;
+  for (int k = 0; k <= 100; ++k) {
+    x.push_back(k);
+    y.push_back(k);
+  }
+  write_png_plot({"rising", "x (m)", "y (m)", {{"rising line", x, y}}}, dir / "inside.png");
+  std::ifstream in(dir / "inside.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::smatch box;
+  ASSERT_TRUE(std::regex_search(
+      svg, box,
+      std::regex(
+          R"(stroke='black'\s+d='M([0-9.]+),([0-9.]+) L\1,([0-9.]+) L([0-9.]+),\3 L\4,\2)")));
+  const double left = std::stod(box[1]), top = std::stod(box[2]), bottom = std::stod(box[3]),
+               right = std::stod(box[4]);
+  std::smatch sample;
+  ASSERT_TRUE(std::regex_search(
+      svg, sample, std::regex(R"(stroke='rgb\([^)]*\)'\s+d='M([0-9.]+),([0-9.]+) L[0-9.]+,\2 )")));
+  const double sx = std::stod(sample[1]), sy = std::stod(sample[2]);
+  EXPECT_GT(sx, left);
+  EXPECT_LT(sx, (left + right) / 2) << "the legend's sample is not on the left half";
+  EXPECT_LT(sy, (top + bottom) / 2) << "the legend's sample is not on the upper half";
   std::filesystem::remove_all(dir);
 }
 

@@ -1,0 +1,63 @@
+#pragma once
+// How a figure is laid out for print (util/plot.h draws it): the font size that stays legible
+// when the figure is printed at a journal's width, and where each panel's legend goes inside
+// its data area.
+//
+// Fonts. A figure is printed at a journal's single column (89 mm = 252 pt) when it is one column
+// of panels, and at the full text width (183 mm = 519 pt) when it is a grid of square panels.
+// Text must read at least kPrintPoints there. gnuplot's pngcairo draws a font of F pt with an em
+// of kPixelsPerPoint F px (measured: a 10 pt sans 'H' is 10 px tall, cap height 0.72 em), so a
+// figure W px wide needs
+//   F = kPrintPoints W / (print width in pt) / kPixelsPerPoint,  at least kMinimumPoints.
+// For the figures' 1100 px: 22 pt in one column, 11 pt in a grid.
+//
+// Legends. Inside the data area, in the corner the panel's drawn points leave emptiest: each
+// corner's box, the legend's size as a share of the data area's width and height, counts the
+// points inside it, and the least crowded corner wins (ties in the order top right, top left,
+// bottom right, bottom left). Where even that corner holds points and the panel's y range is not
+// fixed (no y_min/y_max, linear y), the y range is widened on the legend's side so that the
+// legend covers none: with the data spanning [lo, hi] (padded as util::padded_y_range pads) and
+// the legend h of the height, the range becomes [lo, lo + (hi - lo) / (1 - h)] for a top corner,
+// [hi - (hi - lo) / (1 - h), hi] for a bottom one.
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "util/plot_spec.h"
+
+namespace rths::util {
+
+inline constexpr double kPrintPoints = 7.0;      // pt: the smallest text a journal accepts
+inline constexpr double kPixelsPerPoint = 1.39;  // px of em per pt in pngcairo's 96-dpi-like scale
+inline constexpr int kMinimumPoints = 10;
+
+// The font size (pt) of a figure `width_px` wide, printed at one column (false) or the full text
+// width (`page_width`, a grid of square panels).
+int figure_font_points(int width_px, bool page_width);
+
+// Approximate sizes of text in that font, in px: an average character's width and a line's
+// height (1.2 em).
+double character_pixels(int font_points);
+double line_pixels(int font_points);
+
+enum class LegendCorner { top_right, top_left, bottom_right, bottom_left };
+
+struct LegendPlacement {
+  LegendCorner corner = LegendCorner::top_right;
+  // The y range to draw with, set only where the legend needed room (header); else the panel's.
+  std::optional<std::pair<double, double>> y_range;
+};
+
+// The legend's corner for `spec`, whose legend box takes `width_share` of the data area's width
+// and `height_share` of its height (each in (0, 1)). Counts the points drawn (decimated as
+// drawn, `drawn` the indices per series, in series order).
+LegendPlacement place_legend(const PlotSpec& spec,
+                             const std::vector<std::vector<std::size_t>>& drawn, double width_share,
+                             double height_share);
+
+// gnuplot's "set key inside <corner> ..." for a placement.
+std::string key_command(LegendCorner corner);
+
+}  // namespace rths::util
