@@ -72,6 +72,43 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
   }
 }
 
+// The compensated loop's boundary (JointLagResult::compensated_boundary) at the plain boundary's
+// actuator lags; nothing without a predictor or a plain boundary (an SDOF study).
+void fill_compensated_boundary(const JointLagStudy& config, const core::PreparedStudy& prepared,
+                               JointLagResult& result) {
+  if (!config.has_force_predictor() || result.boundary.empty()) return;
+  const core::StructuralModel& model = prepared.base.model;
+  const auto& experimental = prepared.base.partition.experimental;
+  const double k = model.stiffness(0, 0), m = model.mass(0, 0);
+  const double k_e =
+      experimental.empty() || !experimental[0] ? 0.0 : experimental[0]->initial_stiffness();
+  const double omega = std::sqrt(k / m), period = 2.0 * std::numbers::pi / omega;
+  const double zeta = model.damping(0, 0) / (2.0 * m * omega);
+  const config::ForcePredictor& p = config.force_predictor();
+  const double factor = p.stiffness_factor() > 0.0 ? p.stiffness_factor() : 1.0;
+  // predictor_critical_delay's model damping is c_m = damping_error 2 omega_n (m = 1).
+  const double damping_error = p.damping() / (2.0 * m * omega);
+  const core::ContinuousStability s =
+      core::predictor_critical_delay(period, zeta, k_e / k, factor - 1.0, damping_error);
+  std::ostringstream note;
+  note.precision(3);
+  note << "with the predictor, its model's stiffness " << std::showpos << 100.0 * (factor - 1.0)
+       << std::noshowpos << " % and damping " << p.damping()
+       << " N s/m off the specimen's, frozen there ("
+       << (p.fixed_model() ? "as configured" : "its online fit only shrinks the error")
+       << "), the actuator a shift of its lag: ";
+  if (s.critical_delay)
+    note << "critical lag of the measured pair " << *s.critical_delay * 1e3 << " ms";
+  else
+    note << "stable at every lag";
+  result.compensated_boundary_note = note.str();
+  for (const BoundaryPoint& b : result.boundary) {
+    std::optional<double> r;
+    if (s.critical_delay) r = std::max(0.0, *s.critical_delay - b.actuator_lag);
+    result.compensated_boundary.push_back({b.actuator_lag, r});
+  }
+}
+
 std::optional<double> critical_round_trip_at(const JointLagStudy& config,
                                              const core::PreparedStudy& prepared, double a) {
   JointLagResult one;
@@ -79,7 +116,9 @@ std::optional<double> critical_round_trip_at(const JointLagStudy& config,
   single.clear_actuator_lags();
   single.add_actuator_lags(a);
   fill_boundary(single, prepared, one);
-  return one.boundary.empty() ? std::nullopt : one.boundary.back().critical_round_trip;
+  fill_compensated_boundary(single, prepared, one);
+  const auto& boundary = config.has_force_predictor() ? one.compensated_boundary : one.boundary;
+  return boundary.empty() ? std::nullopt : boundary.back().critical_round_trip;
 }
 
 void write_csv(const std::vector<JointLagPoint>& points, const std::filesystem::path& file) {
@@ -223,6 +262,8 @@ JointLagPoint run_grid_point(const GridInputs& grid, double round_trip, double a
   joint.set_name("joint");
   joint.add_delay()->mutable_shift()->set_delay(round_trip);
   *joint.add_delay() = joint_lag_actuator_stage(grid.config.actuator_model(), actuator);
+  if (grid.config.has_force_predictor())
+    *joint.mutable_force_predictor() = grid.config.force_predictor();
   const auto run = core::simulate(core::setup_for_case(prepared, joint), prepared.motion);
   JointLagPoint point;
   point.network_round_trip = round_trip;
@@ -262,6 +303,7 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   const auto u_ref = floor_history(reference, 0);
   const double window = joint_lag_search_window(config);
   fill_boundary(config, prepared, result);
+  fill_compensated_boundary(config, prepared, result);
   std::map<double, std::optional<double>> critical_at;  // actuator lag -> critical round trip
   if (result.boundary_skipped.empty())
     for (const double a : config.actuator_lags())
@@ -308,20 +350,28 @@ nlohmann::json to_json(const JointLagResult& result) {
   nlohmann::json grid = nlohmann::json::array(), measured = nlohmann::json::array();
   for (const auto& p : result.grid) grid.push_back(point_json(p));
   for (const auto& p : result.measured) measured.push_back(point_json(p));
-  nlohmann::json boundary = nlohmann::json::array();
-  for (const auto& b : result.boundary)
-    boundary.push_back(
-        {{"actuator_lag_s", b.actuator_lag},
-         {"critical_network_round_trip_s",
-          b.critical_round_trip ? nlohmann::json(*b.critical_round_trip) : nlohmann::json()}});
-  return {{"study", result.study_name},
-          {"actuator_model", result.actuator_model},
-          {"output_directory", result.output_directory.string()},
-          {"grid", grid},
-          {"measured", measured},
-          {"measured_skipped", result.measured_skipped},
-          {"stability_boundary", boundary},
-          {"stability_boundary_skipped", result.boundary_skipped}};
+  const auto boundary_json = [](const std::vector<BoundaryPoint>& points) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& b : points)
+      out.push_back(
+          {{"actuator_lag_s", b.actuator_lag},
+           {"critical_network_round_trip_s",
+            b.critical_round_trip ? nlohmann::json(*b.critical_round_trip) : nlohmann::json()}});
+    return out;
+  };
+  nlohmann::json out = {{"study", result.study_name},
+                        {"actuator_model", result.actuator_model},
+                        {"output_directory", result.output_directory.string()},
+                        {"grid", grid},
+                        {"measured", measured},
+                        {"measured_skipped", result.measured_skipped},
+                        {"stability_boundary", boundary_json(result.boundary)},
+                        {"stability_boundary_skipped", result.boundary_skipped}};
+  if (!result.compensated_boundary_note.empty()) {
+    out["compensated_stability_boundary"] = boundary_json(result.compensated_boundary);
+    out["compensated_stability_boundary_note"] = result.compensated_boundary_note;
+  }
+  return out;
 }
 
 std::size_t diverged_points(const JointLagResult& result) {
@@ -362,6 +412,9 @@ std::string to_text(const JointLagResult& result) {
     }
   }
   out << "\n";
+  if (!result.compensated_boundary_note.empty())
+    out << "every grid point runs with a force predictor; " << result.compensated_boundary_note
+        << "\n";
   if (result.measured.empty()) {
     out << "across sites: skipped (" << result.measured_skipped << ")\n";
   }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "util/plot.h"
+#include "util/plot_layout.h"
 
 namespace rths::analysis {
 namespace {
@@ -20,16 +21,34 @@ namespace {
 // Log colour scale (the error spans decades towards instability); zero error is drawn at this
 // floor.
 constexpr double kMapFloorPercent = 0.01;
+constexpr int kMapWidth = 1200;  // px
 
 // The map's data files beside the figures: the grid (blocks of equal round trip), the diverged
 // points, the bounded points past the boundary, and the continuous boundary; all in ms and %.
+// The map is printed across a page's width (util/plot_layout.h).
+int map_font() { return util::figure_font_points(kMapWidth, true); }
+
 struct MapFiles {
-  std::filesystem::path grid, diverged, past, boundary;
+  std::filesystem::path grid, diverged, past, boundary, compensated_boundary;
 };
+
+void write_boundary(const std::vector<BoundaryPoint>& boundary, const std::filesystem::path& file) {
+  std::ofstream out(file);
+  out << "# critical_network_round_trip_ms actuator_lag_ms\n";
+  for (const auto& b : boundary)
+    if (b.critical_round_trip)
+      out << *b.critical_round_trip * 1e3 << ' ' << b.actuator_lag * 1e3 << "\n";
+}
+
+bool has_crossing(const std::vector<BoundaryPoint>& boundary) {
+  return std::any_of(boundary.begin(), boundary.end(),
+                     [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); });
+}
 
 MapFiles write_map_data(const JointLagResult& result, const std::filesystem::path& out) {
   const MapFiles files{out / "error_map.dat", out / "error_map_diverged.dat",
-                       out / "error_map_past_boundary.dat", out / "error_map_boundary.dat"};
+                       out / "error_map_past_boundary.dat", out / "error_map_boundary.dat",
+                       out / "error_map_compensated_boundary.dat"};
   {
     std::ofstream file(files.grid);
     file << "# network_round_trip_ms actuator_lag_ms rms_error_pct (blocks of equal round trip)\n";
@@ -55,13 +74,9 @@ MapFiles write_map_data(const JointLagResult& result, const std::filesystem::pat
       if (p.past_boundary && !p.diverged)
         file << p.network_round_trip * 1e3 << ' ' << p.actuator_lag * 1e3 << "\n";
   }
-  {
-    std::ofstream file(files.boundary);
-    file << "# critical_network_round_trip_ms actuator_lag_ms\n";
-    for (const auto& b : result.boundary)
-      if (b.critical_round_trip)
-        file << *b.critical_round_trip * 1e3 << ' ' << b.actuator_lag * 1e3 << "\n";
-  }
+  write_boundary(result.boundary, files.boundary);
+  if (!result.compensated_boundary.empty())
+    write_boundary(result.compensated_boundary, files.compensated_boundary);
   return files;
 }
 
@@ -159,9 +174,14 @@ std::string map_settings(const JointLagResult& result) {
   }
   const double dr = cell_size(r) / 2, da = cell_size(a) / 2;
   std::ostringstream out;
-  out << "set bmargin 9\nset title \"Joint lag (" << result.study_name << ", actuator "
-      << result.actuator_model
-      << ")\\nE_rms of the displacement against the lag-free reference, %\"\n"
+  out << "set bmargin 11\nset title \"Joint lag (" << result.study_name << ", actuator "
+      << result.actuator_model << ")"
+      << (result.compensated_boundary_note.empty() ? "" : ", every point with a force predictor")
+      << "\\nE_rms of the displacement against the lag-free reference, %"
+      << (!result.compensated_boundary_note.empty() && !has_crossing(result.compensated_boundary)
+              ? "\\nwith the predictor: stable at every lag for its model's error"
+              : "")
+      << "\"\n"
       << "set xlabel 'network round trip (ms)'\nset ylabel 'actuator lag (ms)'\n"
       << "set cblabel 'E_rms (%), log scale'\nset logscale cb\nset format cb '%g'\n"
       << "set cbrange [" << kMapFloorPercent
@@ -174,7 +194,7 @@ std::string map_settings(const JointLagResult& result) {
       << *std::max_element(r.begin(), r.end()) + dr << "]\n"
       << "set yrange [" << *std::min_element(a.begin(), a.end()) - da << ":"
       << *std::max_element(a.begin(), a.end()) + da << "]\n"
-      << "set key outside below center vertical maxrows 4 box width 2\n";
+      << "set key outside below center vertical maxrows 5 box width 2\n";
   return out.str();
 }
 
@@ -189,18 +209,23 @@ std::string map_plot(const JointLagResult& result, const MapFiles& files,
   if (std::filesystem::file_size(contours) > 0)
     plot += ", '" + contours.string() +
             "' using 1:2 with lines lc rgb 'black' lw 1 title 'E_rms contours (%, labelled)', '" +
-            labels.string() +
-            "' using 1:2:(sprintf('%g %%', $3)) with labels boxed font 'sans,9' tc rgb 'black' "
+            labels.string() + "' using 1:2:(sprintf('%g %%', $3)) with labels boxed font 'sans," +
+            std::to_string(map_font() - 1) +
+            "' tc rgb 'black' "
             "notitle";
   if (any([](const JointLagPoint& p) { return p.past_boundary && !p.diverged; }))
     plot += ", '" + files.past.string() +
             "' using 1:2 with points pt 6 ps 3 lw 2 lc rgb 'black' title 'past the stability "
             "boundary, bounded in this record'";
-  if (std::any_of(result.boundary.begin(), result.boundary.end(),
-                  [](const BoundaryPoint& b) { return b.critical_round_trip.has_value(); }))
+  const bool compensated = !result.compensated_boundary_note.empty();
+  if (has_crossing(result.boundary))
     plot += ", '" + files.boundary.string() +
-            "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary "
-            "(continuous)'";
+            "' using 1:2 with lines lc rgb 'magenta' lw 4 dt 2 title 'stability boundary" +
+            (compensated ? " without the predictor" : "") + " (continuous)'";
+  if (has_crossing(result.compensated_boundary))
+    plot += ", '" + files.compensated_boundary.string() +
+            "' using 1:2 with lines lc rgb '#E66100' lw 4 title 'stability boundary with the "
+            "predictor (its model frozen at its initial error)'";
   if (any([](const JointLagPoint& p) { return p.diverged; }))
     plot += ", '" + files.diverged.string() +
             "' using 1:2 with points pt 2 ps 3 lw 2 lc rgb 'black' title 'diverged (no colour: "
@@ -233,7 +258,7 @@ void write_error_map(const JointLagResult& result, const std::filesystem::path& 
   const std::string plot = map_plot(result, files, contours, labels);
   for (const char* terminal : {"pngcairo size 1200,820", "svg size 1200,820 dynamic"}) {
     const bool png = std::string(terminal).rfind("png", 0) == 0;
-    figure << "set terminal " << terminal << " noenhanced\n"
+    figure << "set terminal " << terminal << " noenhanced font 'sans," << map_font() << "'\n"
            << "set output '" << (out / (png ? "error_map.png" : "error_map.svg")).string() << "'\n"
            << plot << "\n";
   }

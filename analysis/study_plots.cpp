@@ -1,5 +1,7 @@
 // The study's figures (analysis/study_run.h: study_plot_files, write_study_plots): the paper's
-// Fig. 3, the force-displacement loops the integrator sees and the tracking of each actuator.
+// Fig. 3, the force-displacement loops the integrator sees, the tracking of each actuator and,
+// for a case with a force predictor, the force each predicted link measured against the
+// predictor's model of it.
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -11,8 +13,9 @@
 namespace rths::analysis {
 
 std::vector<std::string> study_plot_files() {
-  return {"displacement.png",       "displacement.svg", "force_displacement.png",
-          "force_displacement.svg", "tracking.png",     "tracking.svg"};
+  return {"displacement.png",       "displacement.svg",    "force_displacement.png",
+          "force_displacement.svg", "tracking.png",        "tracking.svg",
+          "force_prediction.png",   "force_prediction.svg"};
 }
 
 namespace {
@@ -168,6 +171,41 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
   return panels;
 }
 
+// force_prediction.png: per case with a force predictor (core/force_predictor.h) and per link it
+// predicts, the force f_m the link's answer measured (kN, as it arrived, the link's lag late)
+// against the model's prediction of it at the displacement measured with it, f_m - e, and the
+// prediction error e = f_m - model (kN) below: where they part, the loop carries the model's
+// error that late. No panel when no case has a predictor.
+std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const CaseOutcome*>& drawn) {
+  std::vector<util::PlotSpec> panels;
+  for (const CaseOutcome* c : drawn)
+    for (const int a : c->predicted_actuators) {
+      const core::SimulationResult& r = c->simulation;
+      if (a >= r.measured_force.cols() || a >= r.prediction_error.cols()) continue;
+      const std::string link = "actuator " + std::to_string(a + 1);
+      util::PlotSpec forces{
+          c->name + ": force measured at " + link + " and the predictor's model of it", "time (s)",
+          "force (kN)"};
+      util::Series measured{"measured (as it arrived)", r.time, {}, "lines lw 2"};
+      util::Series model{"the model's prediction", r.time, {}, "lines lw 1"};
+      util::PlotSpec error{c->name + ": prediction error at " + link + ", measured - model",
+                           "time (s)", "error (kN)"};
+      util::Series e{"prediction error", r.time, {}, "lines lw 1"};
+      for (Eigen::Index k = 0; k < r.measured_force.rows(); ++k) {
+        measured.y.push_back(r.measured_force(k, a) * 1e-3);
+        model.y.push_back((r.measured_force(k, a) - r.prediction_error(k, a)) * 1e-3);
+        e.y.push_back(r.prediction_error(k, a) * 1e-3);
+      }
+      for (util::Series* s : {&measured, &model, &e}) s->x.resize(s->y.size());
+      forces.series = {measured, model};
+      error.series = {e};
+      forces.height = error.height = 340;
+      panels.push_back(std::move(forces));
+      panels.push_back(std::move(error));
+    }
+  return panels;
+}
+
 // The y axis of `spec` padded around the series `setting_axes` (indices), when any has a value.
 void fit_y_axis(util::PlotSpec& spec, const std::vector<std::size_t>& setting_axes) {
   if (const auto range = util::padded_y_range(spec.series, setting_axes)) {
@@ -240,6 +278,8 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   // A stale tracking figure must not stay beside a study that has none.
   std::filesystem::remove(directory / "tracking.png");
   std::filesystem::remove(directory / "tracking.svg");
+  std::filesystem::remove(directory / "force_prediction.png");
+  std::filesystem::remove(directory / "force_prediction.svg");
   // One gnuplot draws the three figures: its start-up costs more than a decimated figure.
   std::vector<util::Figure> figures = {{panels, directory / "displacement.png"}};
   if (auto loops = force_displacement_panels(outcome.study_name, drawn, reference); !loops.empty())
@@ -249,6 +289,8 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   if (auto tracking = tracking_panels(outcome.study_name, drawn, reference, tracking_start, 1.0);
       !tracking.empty())
     figures.push_back({std::move(tracking), directory / "tracking.png"});
+  if (auto predicted = force_prediction_panels(drawn); !predicted.empty())
+    figures.push_back({std::move(predicted), directory / "force_prediction.png"});
   util::write_png_figures(figures);
 }
 

@@ -8,6 +8,8 @@
 #include <iostream>
 #include <memory>
 #include <numbers>
+#include <optional>
+#include <sstream>
 
 #include "analysis/study_run.h"
 #include "cli/commands.h"
@@ -26,7 +28,35 @@ struct StabilityOptions {
   bool json = false;
   std::string study, case_name;
   double max_extra_delay = 0.1;
+  // A Smith predictor on the force whose model is off by these (core::predictor_critical_delay):
+  // stiffness as a fraction of the specimen's (-0.3: 30 % soft), damping as a fraction of the
+  // critical 2 m omega_n. Unset: no predictor.
+  std::optional<double> predictor_stiffness_error, predictor_damping_error;
+  bool predicted() const { return predictor_stiffness_error || predictor_damping_error; }
 };
+
+// The compensated loop of the SDOF options, when a predictor is asked for.
+std::optional<core::ContinuousStability> predictor_stability(const StabilityOptions& o) {
+  if (!o.predicted()) return std::nullopt;
+  return core::predictor_critical_delay(o.period, o.zeta, o.alpha,
+                                        o.predictor_stiffness_error.value_or(0.0),
+                                        o.predictor_damping_error.value_or(0.0), o.branches);
+}
+
+std::string predictor_text(const StabilityOptions& o, const core::ContinuousStability& p) {
+  std::ostringstream out;
+  out.precision(4);
+  out << "with a force predictor whose model's stiffness is " << std::showpos
+      << 100.0 * o.predictor_stiffness_error.value_or(0.0) << " %" << std::noshowpos
+      << " and damping " << 100.0 * o.predictor_damping_error.value_or(0.0)
+      << " % of critical off the specimen's (frozen): ";
+  if (p.critical_delay)
+    out << "critical lag of the measured pair (round trip + actuator) = " << *p.critical_delay * 1e3
+        << " ms";
+  else
+    out << "stable at every lag";
+  return out.str();
+}
 
 // The SDOF loop of a study case: period, zeta, alpha, dt and integrator from the config, the
 // case's delay stages as the actuator and its compensation (at most one block: one actuator).
@@ -183,7 +213,8 @@ void run_compensated(const StabilityOptions& o) {
 
 nlohmann::json sdof_stability_json(const StabilityOptions& o, core::IntegratorKind kind,
                                    const core::ContinuousStability& continuous,
-                                   const core::DiscreteStability& discrete) {
+                                   const core::DiscreteStability& discrete,
+                                   const std::optional<core::ContinuousStability>& predicted) {
   nlohmann::json out;
   out["input"] = {{"period_s", o.period},
                   {"zeta", o.zeta},
@@ -212,6 +243,14 @@ nlohmann::json sdof_stability_json(const StabilityOptions& o, core::IntegratorKi
       {"spectral_radius_at_first_unstable", discrete.spectral_radius.empty()
                                                 ? nlohmann::json()
                                                 : nlohmann::json(discrete.spectral_radius.back())}};
+  if (predicted)
+    out["predictor"] = {
+        {"stiffness_error", o.predictor_stiffness_error.value_or(0.0)},
+        {"damping_error", o.predictor_damping_error.value_or(0.0)},
+        {"stable_for_all_delays", !predicted->critical_delay.has_value()},
+        {"critical_delay_s",
+         predicted->critical_delay ? nlohmann::json(*predicted->critical_delay) : nlohmann::json()},
+        {"text", predictor_text(o, *predicted)}};
   return out;
 }
 
@@ -253,11 +292,13 @@ void run_stability(const StabilityOptions& o) {
       core::continuous_critical_delay(o.period, o.zeta, o.alpha, o.branches);
   const core::DiscreteStability discrete =
       core::discrete_critical_delay(kind, o.period, o.zeta, o.alpha, o.dt, o.max_steps);
+  const std::optional<core::ContinuousStability> predicted = predictor_stability(o);
   if (o.json) {
-    std::cout << sdof_stability_json(o, kind, continuous, discrete).dump(2) << "\n";
+    std::cout << sdof_stability_json(o, kind, continuous, discrete, predicted).dump(2) << "\n";
     return;
   }
   print_sdof_stability(o, kind, continuous, discrete);
+  if (predicted) std::cout << predictor_text(o, *predicted) << "\n";
 }
 
 }  // namespace
@@ -290,11 +331,22 @@ void add_stability_command(CLI::App& app) {
   cmd->add_option("--max-extra-delay", options->max_extra_delay,
                   "largest extra delay searched with --study (s)")
       ->transform(seconds_in(core::Quantity::kLag));
+  cmd->add_option("--predictor-stiffness-error", options->predictor_stiffness_error,
+                  "with a force predictor whose model's stiffness is off by this fraction of the "
+                  "specimen's (-0.3: 30 % soft): its loop's critical lag")
+      ->check(CLI::Range(-0.99, 10.0));
+  cmd->add_option("--predictor-damping-error", options->predictor_damping_error,
+                  "the predictor model's damping error, a fraction of the critical damping")
+      ->check(CLI::Range(-10.0, 10.0));
   cmd->add_flag("--json", options->json, "print JSON");
   cmd->callback([options] {
     if (options->study.empty() != options->case_name.empty()) {
       throw std::invalid_argument("--study and --case go together");
     }
+    if (!options->study.empty() && options->predicted())
+      throw std::invalid_argument(
+          "--predictor-stiffness-error and --predictor-damping-error are for the SDOF loop "
+          "(--period ...); a study's case states its own predictor's verdict (rths run)");
     run_stability(*options);
   });
 }

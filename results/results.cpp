@@ -92,6 +92,33 @@ bool is_controller(const runtime::RunHeader& header, int id) {
 
 // Per link of the header, its samples' columns (node<id>_...): a step without this link's sample
 // (step 0 has no exchange) is missing, not zero.
+// A force predictor's error on link `l` (to node `id`), one column per actuator of the node
+// (LinkSample.prediction_error, N); none when no step carries one (no predictor on the link).
+void add_prediction_error_columns(Table& t, int id, std::size_t l,
+                                  const std::vector<const runtime::StepRecord*>& steps) {
+  std::size_t actuators = 0;
+  for (const auto* s : steps)
+    if (l < static_cast<std::size_t>(s->links_size()))
+      actuators = std::max<std::size_t>(
+          actuators,
+          static_cast<std::size_t>(s->links(static_cast<int>(l)).prediction_error_size()));
+  for (std::size_t a = 0; a < actuators; ++a) {
+    std::vector<double> out;
+    out.reserve(steps.size());
+    for (const auto* s : steps) {
+      const bool has =
+          l < static_cast<std::size_t>(s->links_size()) &&
+          a < static_cast<std::size_t>(s->links(static_cast<int>(l)).prediction_error_size());
+      out.push_back(has ? s->links(static_cast<int>(l)).prediction_error(static_cast<int>(a))
+                        : kMissing);
+    }
+    std::string quantity = "prediction_error";
+    quantity += std::to_string(a + 1);
+    quantity += "_N";
+    t.add_numbers(link_column(id, quantity), "N", std::move(out));
+  }
+}
+
 void add_link_columns(Table& t, const runtime::RunHeader& header,
                       const std::vector<const runtime::StepRecord*>& steps) {
   const auto links = static_cast<std::size_t>(header.link_node_ids_size());
@@ -117,6 +144,7 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
     t.add_numbers(column("one_way_down_s"), "s",
                   link([](const Link& x) { return x.one_way_down(); }));
     t.add_numbers(column("one_way_up_s"), "s", link([](const Link& x) { return x.one_way_up(); }));
+    add_prediction_error_columns(t, id, l, steps);
     if (!is_controller(header, id)) continue;
     t.add_numbers(column("controller_round_trip_s"), "s",
                   link([](const Link& x) { return x.controller_round_trip(); }));

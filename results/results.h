@@ -19,7 +19,9 @@
 //                 a_floor<i>_m_per_s2 per DOF, command_act<j>_m, measured_act<j>_m,
 //                 force_act<j>_N per actuator, then per link to node n:
 //                 node<n>_answered_step, node<n>_injected_lag_s, node<n>_round_trip_s,
-//                 node<n>_one_way_down_s, node<n>_one_way_up_s and, for a CONTROLLER node of
+//                 node<n>_one_way_down_s, node<n>_one_way_up_s, with a force predictor on the
+//                 link node<n>_prediction_error<j>_N (N, the error of its j-th actuator's
+//                 model, core/force_predictor.h) and, for a CONTROLLER node of
 //                 the header's deployment, node<n>_controller_round_trip_s (s, the UDP frame's
 //                 round trip the node timed) and node<n>_controller_status (0 running) (NaN at
 //                 step 0, which has no exchange), then lateness_s and overrun (0/1);

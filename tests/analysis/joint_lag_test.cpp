@@ -213,6 +213,48 @@ TEST(JointLag, TheStabilityBoundaryIsTheCriticalDelayLessTheActuatorShift) {
   EXPECT_EQ(rows, static_cast<int>(result.boundary.size()));
 }
 
+// With a force predictor whose model is 40 % soft and never fitted, the compensated loop's
+// critical lag of the measured pair is about 67 ms (core::predictor_critical_delay): the map's
+// points inside that boundary stay bounded far past the plain loop's 24 ms, those beyond it
+// diverge, and the map draws both boundaries.
+TEST(JointLag, APredictorMovesTheBoundaryToItsModelsCriticalLag) {
+  JointLagStudy config;
+  config.set_study("paper_frame.textproto");
+  for (double r : {0.0, 0.040, 0.090}) config.add_network_round_trips(r);
+  for (double a : {0.0, 0.014}) config.add_actuator_lags(a);
+  config.mutable_force_predictor()->set_stiffness_factor(0.6);
+  config.mutable_force_predictor()->set_fixed_model(true);
+  JointLagOptions options;
+  options.output_directory = kOut / "predictor";
+  options.measure = false;
+  std::vector<std::string> warnings;
+  options.warn = [&warnings](const std::string& w) { warnings.push_back(w); };
+  const auto result = run_joint_lag(config, kConfigs, options);
+  ASSERT_EQ(result.compensated_boundary.size(), result.boundary.size());
+  const double compensated = *result.compensated_boundary.front().critical_round_trip;
+  EXPECT_NEAR(compensated, 0.067, 0.003);
+  for (const auto& b : result.compensated_boundary)
+    EXPECT_NEAR(*b.critical_round_trip, std::max(0.0, compensated - b.actuator_lag), 1e-12);
+  EXPECT_NE(result.compensated_boundary_note.find("-40 %"), std::string::npos)
+      << result.compensated_boundary_note;
+  // 54 ms of lag in all: past the plain loop's boundary, inside the predictor's.
+  const JointLagPoint& inside = at(result, 0.040, 0.014);
+  EXPECT_FALSE(inside.past_boundary);
+  EXPECT_FALSE(inside.diverged) << "E_rms " << inside.rms_error_pct << " %";
+  EXPECT_TRUE(at(result, 0.090, 0.0).past_boundary);
+  EXPECT_TRUE(at(result, 0.090, 0.014).diverged);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].rfind("2 of 6 grid points", 0), 0u) << warnings[0];
+  EXPECT_NE(to_text(result).find("every grid point runs with a force predictor"),
+            std::string::npos);
+  EXPECT_TRUE(to_json(result).contains("compensated_stability_boundary"));
+  write_joint_lag_outputs(result, true);
+  std::ifstream in(result.output_directory / "error_map.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(svg.find("stability boundary with the predictor"), std::string::npos);
+  EXPECT_NE(svg.find("stability boundary without the predictor (continuous)"), std::string::npos);
+}
+
 // An across-sites point's E_rms covers only its shorter run: it is printed beside the in-process
 // run of the same stretch. A lockstep run with network lag says plainly that the lag never reaches
 // its response, so it cannot check the map's network axis; a real-time one compares both lags.

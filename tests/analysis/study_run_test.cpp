@@ -171,6 +171,35 @@ core::PreparedStudy three_dof_frame(const std::string& cases) {
   return core::prepare_study(core::parse_study(text, "test"), kConfigs);
 }
 
+// A case with a force predictor gets force_prediction.png: per predicted link, the force it
+// measured and the model's prediction of it, then the prediction error, whose values are the
+// run's own (kN); a study without a predictor leaves no such figure.
+TEST(StudyRun, APredictedCaseDrawsItsMeasuredForceAgainstTheModel) {
+  const StudyOutcome outcome = run_study(
+      frame(1.0 / 3.0,
+            "cases { name: \"reference\" } cases { name: \"predicted_60ms\" delay { shift { "
+            "delay: 0.060 } } delay { shift { delay: 0.014 } } force_predictor { "
+            "stiffness_factor: 0.7 } }",
+            "", 6.0));
+  const CaseOutcome& predicted = outcome.cases[1];
+  ASSERT_EQ(predicted.predicted_actuators, std::vector<int>{0});
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_force_plots_" + std::to_string(::getpid()));
+  write_study_plots(outcome, dir);
+  std::ifstream in(dir / "force_prediction.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(count(svg, ">measured (as it arrived)<"), 1u);
+  EXPECT_EQ(count(svg, ">the model's prediction<"), 1u);
+  EXPECT_EQ(count(svg, ">prediction error<"), 1u);
+  EXPECT_EQ(count(svg, "force (kN)"), 1u);
+  // The 30 % soft model is wrong before its fit: the error is not zero.
+  EXPECT_GT(predicted.simulation.prediction_error.cwiseAbs().maxCoeff(), 1.0);
+  const StudyOutcome plain = run_study(frame(1.0 / 3.0, "cases { name: \"reference\" }", "", 2.0));
+  write_study_plots(plain, dir);
+  EXPECT_FALSE(std::filesystem::exists(dir / "force_prediction.png"));
+  std::filesystem::remove_all(dir);
+}
+
 // 10 ms of lag, 17 % past its 8.54 ms critical delay: the response grows exponentially to the end
 // of the record, yet its peak stays under 10x the lag-free run's. It is diverging, with its growth
 // rate and doubling time stated, and fails the run; 7 ms (inside) completes without a flag.

@@ -113,6 +113,47 @@ TEST(ResultsTest, RecordTableCarriesTheStudyStepMotionAsRunAndTheFootersVerdict)
   EXPECT_EQ(t.number_attributes().at("ok"), 1.0);
 }
 
+// A link with a force predictor carries its model's error per step: the export gives it a
+// column per actuator of the node, after the link's one-way lags; a link without one has none.
+TEST(ResultsTest, RecordTableGivesAPredictedLinkItsPredictionError) {
+  runtime::RecordContents record;
+  runtime::RecordEntry header_entry;
+  auto* header = header_entry.mutable_header();
+  header->set_dofs(1);
+  header->set_actuators(1);
+  header->add_link_node_ids(1);
+  header->add_link_node_ids(2);
+  record.entries.push_back(header_entry);
+  for (int k = 0; k < 3; ++k) {
+    runtime::RecordEntry e;
+    auto* s = e.mutable_step();
+    s->set_step(k);
+    s->add_displacement(0);
+    s->add_velocity(0);
+    s->add_acceleration(0);
+    s->add_command(0);
+    s->add_realised(0);
+    s->add_measured_force(0);
+    if (k > 0) {
+      s->add_links()->add_prediction_error(12.5 * k);
+      s->add_links()->set_answered_step(k);
+    }
+    record.entries.push_back(e);
+  }
+  const Table t = record_table(record);
+  const std::vector<std::string> all = names(t);
+  const auto at = [&all](const std::string& name) {
+    return std::find(all.begin(), all.end(), name) - all.begin();
+  };
+  ASSERT_LT(at("node1_prediction_error1_N"), static_cast<long>(all.size()));
+  EXPECT_EQ(at("node1_prediction_error1_N"), at("node1_one_way_up_s") + 1);
+  EXPECT_EQ(at("node2_prediction_error1_N"), static_cast<long>(all.size()));
+  const auto& error = t.column("node1_prediction_error1_N");
+  EXPECT_EQ(error.unit, "N");
+  EXPECT_TRUE(std::isnan(error.numbers[0]));
+  EXPECT_DOUBLE_EQ(error.numbers[2], 25.0);
+}
+
 TEST(ResultsTest, RecordTableGivesAControllerNodesLinkItsFrameRoundTripAndStatus) {
   runtime::RecordContents record;
   runtime::RecordEntry header_entry;
