@@ -9,8 +9,9 @@
 //          --duration S        seconds of the motion to run (default 15)
 //          --case NAME         write one case only (default: every case of the set)
 // Outputs: DIR/<case>.rthsrec  a lockstep run record (format version 2)
-//          DIR/truth.json      per case: seed, parameters and the truth (part, kinds, frequency Hz,
-//                              library effects named by identify's docs)
+//          DIR/truth.json      per case: seed, what the rig does and the truth: part, description
+//                              kinds, frequency (Hz), the library effects in the rig (to be named)
+//                              and names that describe the effect itself (accepted, not required)
 // Exit 0 when every record was written, 2 on a usage or input error.
 //
 // The rig (SI units: m, s, N, kg), the paper's frame (configs/paper_frame.textproto):
@@ -169,6 +170,8 @@ struct Truth {
   // Library effects (identify's docs) in the rig: {"part", "effect"}.
   std::vector<std::pair<std::string, std::string>> library;
   std::string what;  // for people
+  // Names identify's docs give that describe the effect itself (not required, never wrong).
+  std::vector<std::pair<std::string, std::string>> accepted = {};
 };
 
 struct Case {
@@ -278,7 +281,14 @@ std::vector<Case> all_cases() {
       r.softening = p.softening;
       std::ostringstream w;
       w << "specimen softening by " << p.softening * 100 << " % over the run (damage)";
-      add(s, tag("softening"), seed++, r, Truth{"specimen 1", {"time_varying"}, 0.0, {}, w.str()});
+      // docs/identify.md: a time-varying stiffness is named, though no stage re-runs it.
+      add(s, tag("softening"), seed++, r,
+          Truth{"specimen 1",
+                {"time_varying"},
+                0.0,
+                {},
+                w.str(),
+                {{"specimen 1", "time_varying_stiffness"}}});
     }
     {
       Rig r;
@@ -559,6 +569,10 @@ void write_truth(const fs::path& path, const std::vector<Case>& cases, double du
     for (std::size_t j = 0; j < c.truth.library.size(); ++j)
       out << (j ? ", " : "") << "{\"part\": " << quoted(c.truth.library[j].first)
           << ", \"effect\": " << quoted(c.truth.library[j].second) << "}";
+    out << "], \"accepted\": [";
+    for (std::size_t j = 0; j < c.truth.accepted.size(); ++j)
+      out << (j ? ", " : "") << "{\"part\": " << quoted(c.truth.accepted[j].first)
+          << ", \"effect\": " << quoted(c.truth.accepted[j].second) << "}";
     out << "]}}" << (i + 1 < cases.size() ? "," : "") << "\n";
   }
   out << "  ]\n}\n";

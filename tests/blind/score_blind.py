@@ -19,8 +19,10 @@ Scoring, per record, against its truth (truth.json: part, kinds, frequency_hz, l
   right description  an `unexplained` entry on the truth's part whose kinds include one of the
                      truth's kinds; a periodic truth needs the entry's periodic frequency within
                      5 % of the truth's (a time_varying match needs no frequency)
-  wrong names        named effects that are not among the truth's library effects (a clean or
-                     unexplained-only record should name nothing)
+  wrong names        named effects that are neither among the truth's library effects nor its
+                     accepted names (a name that describes the effect itself, e.g.
+                     time_varying_stiffness for a softening specimen); a clean record should
+                     name nothing
   library found      the truth's library effects that were named on their part
   other descriptions `unexplained` entries on parts the truth does not name (shown, not scored)
   re-run             the residual's worst floor NRMSE before (declared) and after (identified)
@@ -71,8 +73,9 @@ def _numbers(value):
 def rerun_errors(doc):
     """(before %, after %) of the worst floor from the `residual` object, or (None, None).
 
-    Reads, per floor, the pairs named declared/identified (or before/after) under `residual`,
-    whatever their nesting, and takes the worst floor of each."""
+    identify writes per floor `declared_nrmse` and `identified_nrmse` as fractions under
+    `residual.floors` (the worst also at `residual`'s top); a key ending in `_pct` is taken as a
+    percentage. Other nestings are walked for the same names (declared/before, identified/after)."""
     residual = doc.get("residual")
     if not isinstance(residual, (dict, list)):
         return None, None
@@ -87,17 +90,16 @@ def rerun_errors(doc):
                 walk(value, path)
         else:
             key = path[-1].lower() if path else ""
-            if "nrmse" not in key and "nrmse" not in " ".join(path).lower():
+            if "nrmse" not in key or "removed" in key:
                 return
-            values = _numbers(node)
-            if not values:
-                return
+            values = [v if key.endswith("_pct") else 100.0 * v for v in _numbers(node)]
             if re.search(r"declared|before", key):
                 before.extend(values)
             elif re.search(r"identified|after", key):
                 after.extend(values)
 
-    walk(residual, [])
+    floors = residual.get("floors") if isinstance(residual, dict) else None
+    walk(floors if floors else residual, [])
     return (max(before) if before else None), (max(after) if after else None)
 
 
@@ -125,6 +127,7 @@ def score_record(case, doc):
     truth = case["truth"]
     part = truth.get("part")
     library = {(l["part"], l["effect"]) for l in truth.get("library") or []}
+    accepted = {(l["part"], l["effect"]) for l in truth.get("accepted") or []}
     named = named_effects(doc)
     described = unexplained_entries(doc)
     on_part = [e for e in (described or []) if e.get("part") == part]
@@ -150,7 +153,8 @@ def score_record(case, doc):
     else:
         score["right_part"] = None
         score["right_description"] = None
-    score["wrong_names"] = [f"{p}: {e}" for p, e in named if (p, e) not in library]
+    score["wrong_names"] = [f"{p}: {e}" for p, e in named
+                            if (p, e) not in library and (p, e) not in accepted]
     score["library_found"] = sorted(f"{p}: {e}" for p, e in library if (p, e) in set(named))
     score["library_missed"] = sorted(f"{p}: {e}" for p, e in library if (p, e) not in set(named))
     score["other_descriptions"] = [f"{e.get('part')}: {'+'.join(e.get('kinds') or [])}"

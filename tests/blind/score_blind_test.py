@@ -12,10 +12,11 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import score_blind  # noqa: E402
 
 
-def case(part=None, kinds=(), frequency=None, library=()):
+def case(part=None, kinds=(), frequency=None, library=(), accepted=()):
     return {"name": "c", "what": "", "truth": {
         "part": part, "kinds": list(kinds), "frequency_hz": frequency,
-        "library": [{"part": p, "effect": e} for p, e in library]}}
+        "library": [{"part": p, "effect": e} for p, e in library],
+        "accepted": [{"part": p, "effect": e} for p, e in accepted]}}
 
 
 def entry(part, kinds, frequency=None):
@@ -66,6 +67,14 @@ class ScoreBlind(unittest.TestCase):
         self.assertEqual(s["wrong_names"], ["specimen 1: stiffness change"])
         self.assertFalse(s["has_unexplained_key"])
 
+    def test_accepted_name_is_not_wrong(self):
+        s = score_blind.score_record(
+            case("specimen 1", ["time_varying"], accepted=[("specimen 1", "time_varying_stiffness")]),
+            {"undeclared": [{"part": "specimen 1", "effect": "time_varying_stiffness"},
+                            {"part": "specimen 1", "effect": "stiffness change"}]})
+        self.assertTrue(s["right_part"])
+        self.assertEqual(s["wrong_names"], ["specimen 1: stiffness change"])
+
     def test_clean_record_naming_anything_is_wrong(self):
         s = score_blind.score_record(case(), {"undeclared": [
             {"part": "actuator 1", "effect": "backlash"}], "unexplained": []})
@@ -97,6 +106,11 @@ class ScoreBlind(unittest.TestCase):
             {"floor": 2, "declared_nrmse_pct": 30.0, "identified_nrmse_pct": 0.2}]}}
         self.assertEqual(score_blind.rerun_errors(doc), (30.0, 0.5))
         self.assertEqual(score_blind.rerun_errors({}), (None, None))
+        # As identify writes it: fractions per floor, the worst at the top too.
+        doc = {"residual": {"declared_nrmse": 0.5, "identified_nrmse": 0.001, "floors": [
+            {"dof": 1, "declared_nrmse": 0.5, "identified_nrmse": 0.001}],
+            "links": [{"link": "actuator 1", "nrmse_removed": 0.4}]}}
+        self.assertEqual(score_blind.rerun_errors(doc), (50.0, 0.1))
 
     def test_table_states_a_missing_unexplained_key(self):
         s = score_blind.score_record(case("load cell 1", ["periodic"], 13.0), {"undeclared": []})
