@@ -25,7 +25,8 @@ Scoring, per record, against its truth (truth.json: part, kinds, frequency_hz, l
                      name nothing
   library found      the truth's library effects that were named on their part
   other descriptions `unexplained` entries on parts the truth does not name (shown, not scored)
-  re-run             the residual's worst floor NRMSE before (declared) and after (identified)
+  re-run             the residual's worst floor NRMSE before (declared) and after (identified);
+                     in total, the records whose identified re-run is worse than the declared
 The `unexplained` key may be absent (identify before the description work): every unexplained
 truth then scores "no description".
 Exit 0, or 1 with --require-reads when a record did not read or identify failed; 2 on bad usage.
@@ -179,6 +180,11 @@ def totals(scores):
         "library_found": sum(len(s["library_found"]) for s in with_library),
         "library_effects": sum(len(s["truth_library"]) for s in with_library),
         "has_unexplained_key": any(s["has_unexplained_key"] for s in scores),
+        # The identified re-run further from the record than the declared one (beyond 5 % of it
+        # and 0.01 point): identify put into the study something the rig does not do.
+        "rerun_worse": sum(1 for s in scores if s["rerun_before_pct"] is not None and
+                           s["rerun_after_pct"] is not None and
+                           s["rerun_after_pct"] > 1.05 * s["rerun_before_pct"] + 0.01),
     }
 
 
@@ -231,13 +237,26 @@ def pct(value):
     return "?" if value is None else f"{value:.3g}"
 
 
+def wrap(text, width):
+    """text in lines of at most width characters, broken after ', ' where it can be."""
+    lines, current = [], ""
+    for piece in text.split(", "):
+        candidate = f"{current}, {piece}" if current else piece
+        if len(candidate) <= width or not current:
+            current = candidate
+        else:
+            lines.append(current + ",")
+            current = piece
+    return lines + [current]
+
+
 def table(set_name, scores, total):
     lines = [f"blind records, set {set_name}: {total['records']} records"]
     if not total["has_unexplained_key"]:
         lines.append("  (identify's JSON has no `unexplained` key: every unexplained truth scores "
                      "no description)")
-    header = f"{'case':<28} {'truth':<32} {'part':>4} {'desc':>4} {'wrong names':<44} " \
-             f"{'library':<9} {'re-run %':>17}"
+    header = f"{'case':<28} {'truth':<42} {'part':>4} {'desc':>4} {'wrong names':<44} " \
+             f"{'library':<7} {'re-run %':>17}"
     lines += [header, "-" * len(header)]
     for s in scores:
         truth = s["truth_part"] or "(none)"
@@ -250,20 +269,21 @@ def table(set_name, scores, total):
         if not s.get("read", True):
             wrong = "NOT READ: " + s.get("problem", "")
         rerun = f"{pct(s['rerun_before_pct'])} -> {pct(s['rerun_after_pct'])}"
-        lines.append(f"{s['case']:<28} {truth:<32} {yes(s['right_part']):>4} "
-                     f"{yes(s['right_description']):>4} {wrong[:44]:<44} {lib:<9} {rerun:>17}")
-        if len(wrong) > 44:
-            lines.append(f"{'':<72}{wrong[44:]}")
+        names = wrap(wrong, 44)
+        lines.append(f"{s['case']:<28} {truth:<42} {yes(s['right_part']):>4} "
+                     f"{yes(s['right_description']):>4} {names[0]:<44} {lib:<7} {rerun:>17}")
+        lines += [f"{'':<82}{more}" for more in names[1:]]
         if s.get("other_descriptions"):
             lines.append(f"{'':<28} other descriptions: {', '.join(s['other_descriptions'])}")
     lines.append("-" * len(header))
     n = total["with_unexplained_truth"]
+    lines.append("re-run %: the worst floor's NRMSE against the record, declared -> identified")
     lines.append(f"total: right part {total['right_part']}/{n}, right description "
                  f"{total['right_description']}/{n}, records with wrong names "
                  f"{total['records_with_wrong_names']}/{total['records']} "
                  f"({total['wrong_names']} names), library effects found "
-                 f"{total['library_found']}/{total['library_effects']}, read "
-                 f"{total['read']}/{total['records']}")
+                 f"{total['library_found']}/{total['library_effects']}, re-run worse than "
+                 f"declared {total['rerun_worse']}, read {total['read']}/{total['records']}")
     return "\n".join(lines)
 
 

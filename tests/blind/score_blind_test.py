@@ -111,6 +111,9 @@ class ScoreBlind(unittest.TestCase):
             {"dof": 1, "declared_nrmse": 0.5, "identified_nrmse": 0.001}],
             "links": [{"link": "actuator 1", "nrmse_removed": 0.4}]}}
         self.assertEqual(score_blind.rerun_errors(doc), (50.0, 0.1))
+        worse = score_blind.score_record(case("displacement sensor 1", ["amplitude"]), {
+            "residual": {"floors": [{"declared_nrmse": 0.001, "identified_nrmse": 0.06}]}})
+        self.assertEqual(score_blind.totals([worse])["rerun_worse"], 1)
 
     def test_table_states_a_missing_unexplained_key(self):
         s = score_blind.score_record(case("load cell 1", ["periodic"], 13.0), {"undeclared": []})
