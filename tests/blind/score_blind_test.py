@@ -2,10 +2,17 @@
 """The blind scorer's own logic (score_blind.py) on fabricated identify JSON: it must credit a
 right part and description, refuse a periodic frequency off by more than 5 %, count a wrong name
 (on a clean record, and a library effect the truth lacks), score "no description" when the
-`unexplained` key is absent, and read the re-run's worst floor before -> after. Exit 0 when all
+`unexplained` key is absent, and read the re-run's worst floor before -> after. With
+BLIND_RTHS, BLIND_WRITER and BLIND_DATA set (ctest sets them) also end to end: a record of the
+writer's reads, and the same record with 8 bytes overwritten fails --require-reads. Exit 0 when all
 hold (unittest)."""
+import contextlib
+import io
 import os
+import shutil
+import subprocess
 import sys
+import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -120,6 +127,32 @@ class ScoreBlind(unittest.TestCase):
         text = score_blind.table("tune", [s], score_blind.totals([s]))
         self.assertIn("no `unexplained` key", text)
         self.assertIn("right part 0/1", text)
+
+
+@unittest.skipUnless(os.environ.get("BLIND_RTHS") and os.environ.get("BLIND_WRITER"),
+                     "BLIND_RTHS and BLIND_WRITER not set")
+class RequireReads(unittest.TestCase):
+    def setUp(self):
+        self.folder = tempfile.mkdtemp(prefix="blind_self_check_")
+        subprocess.run([os.environ["BLIND_WRITER"], "--set", "tune", "--case", "tune_clean",
+                        "--duration", "3", "--out", self.folder, "--data",
+                        os.environ["BLIND_DATA"]], check=True, capture_output=True)
+
+    def tearDown(self):
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+    def score(self):
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            return score_blind.main(["--rths", os.environ["BLIND_RTHS"], "--records", self.folder,
+                                     "--require-reads"])
+
+    def test_intact_record_reads_and_damaged_one_fails(self):
+        self.assertEqual(self.score(), 0)
+        record = os.path.join(self.folder, "tune_clean.rthsrec")
+        with open(record, "r+b") as f:
+            f.seek(os.path.getsize(record) // 2)
+            f.write(b"XXXXXXXX")
+        self.assertEqual(self.score(), 1)
 
 
 if __name__ == "__main__":
