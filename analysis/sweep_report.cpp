@@ -228,8 +228,10 @@ util::PlotSpec period_panel(const std::map<SeriesKey, std::vector<const SweepTab
     const std::string label = axes.label(key);
     util::Series curve{
         label, {}, {}, axes.style(std::get<4>(key), std::get<0>(key), "linespoints")};
+    // One legend entry speaks for every curve's diverged points (each in its curve's colour and
+    // point type): an entry per curve doubled a legend that already names every curve.
     util::Series diverged{
-        label + ": diverged",
+        marks.empty() ? "diverged: above the curves, in its curve's colour" : "",
         {},
         {},
         axes.style(std::get<4>(key), std::get<0>(key), "points") + " lw 2 ps 1.6"};

@@ -136,14 +136,20 @@ TEST(SweepPlot, EveryDivergedPointIsSeenWithItsDelayAndModel) {
   std::ifstream in(dir / "sweep.svg");
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const char* entry :
-       {"delay 30 ms, linear: diverged", "delay 30 ms, bilinear (uy = 5 mm, b = 0.1): diverged",
+       {"diverged: above the curves, in its curve's colour", "delay 30 ms, linear",
         "delay 4 ms, linear", "delay 4 ms, bilinear (uy = 5 mm, b = 0.1)", "period T (s)",
         "E_rms (%, log)", "NRMSE (%, log)", "the paper's Fig. 4"}) {
     EXPECT_NE(svg.find(entry), std::string::npos) << entry;
   }
   // E_rms leads: its panel is drawn first, the paper's after it.
   EXPECT_LT(svg.find("E_rms (%, log)"), svg.find("NRMSE (%, log)"));
-  EXPECT_EQ(svg.find("delay 4 ms, linear: diverged"), std::string::npos);
+  // One legend entry for every curve's diverged points, on each of the three panels.
+  std::size_t entries = 0;
+  for (auto at = svg.find(">diverged: above the curves"); at != std::string::npos;
+       at = svg.find(">diverged: above the curves", at + 1))
+    ++entries;
+  EXPECT_EQ(entries, 3u);
+  EXPECT_EQ(svg.find(": diverged<"), std::string::npos);
   std::ifstream by_delay_in(dir / "sweep_vs_delay.svg");
   const std::string by_delay((std::istreambuf_iterator<char>(by_delay_in)),
                              std::istreambuf_iterator<char>());
