@@ -444,7 +444,9 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     judge_sensors(path);
     estimate_effects(path);
     judge_named(path);
-    for (auto& u : describe_unexplained(path)) out.unexplained.push_back(std::move(u));
+    std::vector<Unexplained> described = describe_unexplained(path);
+    judge_noise_beside(path, described);
+    for (auto& u : described) out.unexplained.push_back(std::move(u));
   }
   const auto& channels = options.channels;
   if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {

@@ -213,18 +213,22 @@ double side_gain(std::span<const double> r, std::span<const double> p, const Sam
   return pp > 0.0 ? rp / pp : 0.0;
 }
 
-// The map's odd and even parts' power over the held-out samples (the even part's mean removed:
-// a constant is no signature).
+// The power, over the held-out samples, of the map's odd part less its line through 0 (a gain,
+// which the model holds) and of its even part less its mean (a constant is no signature).
 std::pair<double, double> odd_even_power(const StaticMap& map, std::span<const double> p,
                                          const Samples& heldout) {
-  std::vector<double> even(p.size(), 0.0);
-  double odd = 0.0;
+  std::vector<double> even(p.size(), 0.0), odd(p.size(), 0.0);
+  double op = 0.0, pp = 0.0;
   for (std::size_t j : heldout) {
     even[j] = 0.5 * (map(p[j]) + map(-p[j]));
-    const double o = 0.5 * (map(p[j]) - map(-p[j]));
-    odd += o * o;
+    odd[j] = 0.5 * (map(p[j]) - map(-p[j]));
+    op += odd[j] * p[j];
+    pp += p[j] * p[j];
   }
-  return {odd, spread_over(even, heldout)};
+  const double gain = pp > 0.0 ? op / pp : 0.0;
+  double curved = 0.0;
+  for (std::size_t j : heldout) curved += (odd[j] - gain * p[j]) * (odd[j] - gain * p[j]);
+  return {curved, spread_over(even, heldout)};
 }
 
 // The periodic test on r; its part is subtracted from r when accepted.
@@ -262,8 +266,8 @@ void map_test(std::span<const double> p, std::vector<double>& r, const Halves& h
   const double e_split = explained(r, split, h.heldout);
   const bool hysteretic = e_split - std::max(e, 0.0) >= kMinExplained;
   if (e < kMinExplained && !hysteretic) return;
-  const auto [odd, even] = odd_even_power(map, p, h.heldout);
-  if (hysteretic || even >= odd) {
+  const auto [curved, even] = odd_even_power(map, p, h.heldout);
+  if (hysteretic || even >= curved) {
     const double g_up = side_gain(r, p, h.train, true), g_down = side_gain(r, p, h.train, false);
     out.direction = DirectionSignature{
         hysteretic ? e_split : e, 100.0 * (g_up - g_down),
@@ -593,6 +597,24 @@ nlohmann::json Unexplained::json() const {
       {"residual_rms", d.residual_rms},
       {"unit", unit},
       {"text", text()}};
+}
+
+void judge_noise_beside(ActuatorPath& path, const std::vector<Unexplained>& described) {
+  for (const Unexplained& u : described) {
+    if (u.actuator != path.actuator) continue;
+    const ChannelSignals& s = identified_signals(path.id, u.channel);
+    const std::vector<double> left =
+        minus(minus(s.target, reference_prediction(path, u.channel, not_named_on(path, u.channel))),
+              u.description.described);
+    const bool force = u.channel == Channel::kForce;
+    double& sigma = force ? path.force_noise : path.displacement_noise;
+    sigma = white_noise(left);
+    if (noise_named(path.id, u.channel, sigma,
+                    force ? path.declared_force_noise : path.declared_displacement_noise))
+      continue;
+    auto& list = force ? path.specimen_undeclared : path.undeclared;
+    list.erase(std::remove(list.begin(), list.end(), "noise"), list.end());
+  }
 }
 
 std::string unexplained_text(const std::vector<Unexplained>& unexplained) {
