@@ -63,6 +63,12 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "  undeclared effects: ";
   for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
   out << (a.undeclared.empty() ? "none\n" : "\n");
+  if (!a.not_named.empty()) {
+    out << "  described, not named (the description beat the fit held out):";
+    for (const auto& n : a.not_named)
+      out << " " << n.effect << " (" << channel_name(n.channel) << ")";
+    out << "\n";
+  }
   sensors_text(a, out);
   if (a.declared_specimen.empty()) return;
   out << "  specimen: declared";
@@ -151,6 +157,14 @@ nlohmann::json links_json(const RunIdentification& run) {
   return links;
 }
 
+// The effects the description beat (unexplained.h judge_named): [{channel, effect}].
+nlohmann::json not_named_json(const ActuatorPath& a) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& n : a.not_named)
+    out.push_back({{"channel", channel_name(n.channel)}, {"effect", n.effect}});
+  return out;
+}
+
 nlohmann::json actuators_json(const RunIdentification& run) {
   nlohmann::json actuators = nlohmann::json::array();
   for (const auto& a : run.actuators) {
@@ -180,6 +194,7 @@ nlohmann::json actuators_json(const RunIdentification& run) {
                          {"declared_stiffness_n_per_m", a.declared_stiffness},
                          {"fitted_stiffness_n_per_m", a.fitted_stiffness},
                          {"specimen_undeclared", a.specimen_undeclared},
+                         {"not_named", not_named_json(a)},
                          {"sensors",
                           {{"displacement_noise_m", a.displacement_noise},
                            {"declared_displacement_noise_m", a.declared_displacement_noise},

@@ -10,7 +10,8 @@
 //   per link: the round trip beyond the injected lag (ms) and its undeclared effects;
 //   per actuator: declared and fitted gain and delay, each channel's held-out error (a share of
 //   the signal's std) with its added effects and their parameters, the sensors' noise, the
-//   specimen against the declared storey model;
+//   specimen against the declared storey model, and the effects the form-free description of
+//   their channel's residual beat on held-out data (named nowhere: "described, not named");
 //   the re-run's NRMSE per floor (declared -> identified) with what each link and effect removes;
 //   the findings, every part (findings.h), and what the re-run leaves unexplained;
 //   what each channel's model leaves, described without presuming an effect (unexplained.h):

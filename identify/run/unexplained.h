@@ -10,34 +10,40 @@
 //              description, odd ones judge it (held-out). explained(d) = 1 - var_h(r - d) /
 //              var_h(r) over the held-out samples (variances about their means: a constant is an
 //              offset, the library's offset_drift, not a signature).
-//   periodic   the amplitude spectrum of r (Hann, FFTW: spectra.h) above kMinPeriodicFrequency;
-//              its highest peak, when at least kPeakOverFloor x the median amplitude within
-//              kFloorBand Hz of it, is refined on a grid of a tenth of a bin (the largest
-//              |sum r_j exp(-2 pi i f t_j)|) and fitted as a sinusoid a cos + b sin on the train
-//              samples: frequency (Hz) and amplitude sqrt(a^2 + b^2) (the channel's unit).
-//   amplitude  a static map M(p) of the residual (after the periodic part) against the model's
-//   direction  output p, the channel's input as the model carries it to the output, with no form:
-//              kMapBins bins at quantiles of p on the train samples, each the mean residual at
-//              the mean p of its bin, linear between bins and constant beyond the ends. Its odd
-//              part (M(p) - M(-p)) / 2 is a reading that changes with the input's amplitude
-//              ("amplitude": ratio_change_pct = 100 (M_odd(p_98) / p_98 - M_odd(p_50) / p_50), the
-//              measured / model ratio from the median to the 98th percentile of |p|); its even part
-//              a reading that depends on the input's sign ("direction": asymmetry_pct = 100 (g+ -
-//              g-), g+- = sum r p / sum p^2 over the samples with p of that sign: how much more the
-//              positive side reads than the negative, relative to the model). A second map per
-//              sign of dp/dt (loading, unloading) is "direction" too when it explains kMinExplained
-//              more than the one map: hysteresis_width = the RMS of M+(p) - M-(p) (unit).
-//              The kind is the part holding most of the map's held-out power.
-//   time_varying the gain of the residual on the model, rho_w = sum r p / sum p^2, in each window
-//              (after the periodic part and the map): the measured / model ratio tracked over the
-//              record, described as linear between the train windows' values (no form); reported
-//              when that explains kMinExplained and the line through every window's rho has a
-//              slope at least kTrendSigmas standard errors from 0: change_pct = 100 x the slope x
-//              the record's duration (start to end).
+//   amplitude  a static map M(p) of the residual against the model's output p, the channel's
+//   direction  input as the model carries it to the output, with no form: kMapBins bins at
+//              quantiles of p on the train samples, each the mean residual at the mean p of its
+//              bin, linear between bins and along the end segments beyond them. Its odd part
+//              (M(p) - M(-p)) / 2 less its line through 0 (a gain, the model's) is a reading that
+//              changes with the input's amplitude ("amplitude": ratio_change_pct = 100 (M_odd(p_98)
+//              / p_98 - M_odd(p_50) / p_50), the measured / model ratio from the median to the
+//              98th percentile of |p|); its even part, less its mean, a reading that depends on the
+//              input's sign ("direction": asymmetry_pct = 100 (g+ - g-), g+- = sum r p / sum p^2
+//              over the train samples with p of that sign: how much more the positive side reads
+//              than the negative, relative to the model). The kind is the larger of the two
+//              powers over the held-out samples. A second map per sign of dp/dt (loading,
+//              unloading) is "direction" too when it explains kMinExplained more than the one
+//              map: hysteresis_width = the RMS of M+(p) - M-(p) (unit).
+//   time_varying the gain of the residual on the model, rho_w = sum r p / sum p^2, in each window:
+//              the measured / model ratio tracked over the record, described as linear between
+//              the train windows' values (no form); reported when that explains kMinExplained
+//              and the line through every window's rho has a slope at least kTrendSigmas standard
+//              errors from 0: change_pct = 100 x the slope x the record's duration (start to end).
+//              The map and the trend are tried in both orders (a residual of the amplitude on a
+//              record whose amplitude changes over time shows in both); the order that leaves the
+//              smaller held-out variance is kept.
+//   periodic   on what they leave: the amplitude spectrum (Hann, FFTW: spectra.h) above
+//              kMinPeriodicFrequency of its train samples; its highest peak, when at least
+//              kPeakOverFloor x the median amplitude within kFloorBand Hz of it and where p's own
+//              spectrum is below kInputPeakShare of its largest amplitude (a period of the
+//              input's own is the model's error on the input, the maps' to judge), is refined on
+//              a grid of a tenth of a bin (the largest |sum r_j exp(-2 pi i f t_j)|) and fitted as
+//              a sinusoid a cos + b sin on the train samples: frequency (Hz) and amplitude
+//              sqrt(a^2 + b^2) (the channel's unit).
 // A test counts only when it explains at least kMinExplained of the residual's held-out variance
 // (on what the tests before it left); a channel is reported only when what the accepted tests
-// describe together has an RMS of at least kMinSignalShare of the channel's target std (a clean
-// record, sensor noise and 16-bit converters, leaves noise no test explains). Its part: the force
+// describe together has an RMS (about its mean) of at least kMinSignalShare of the channel's
+// target std (a clean record, sensor noise and 16-bit converters, leaves noise no test explains). Its part: the force
 // channel's is "load cell N" when its periodic part holds most of the description (a ripple the
 // load cell reads), else "specimen N"; the measured channel's is "actuator N".
 //
