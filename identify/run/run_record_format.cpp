@@ -65,8 +65,9 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << (a.undeclared.empty() ? "none\n" : "\n");
   if (!a.not_named.empty()) {
     out << "  described, not named (the description beat the fit held out):";
-    for (const auto& n : a.not_named)
-      out << " " << n.effect << " (" << channel_name(n.channel) << ")";
+    for (std::size_t i = 0; i < a.not_named.size(); ++i)
+      out << (i ? ", " : " ") << a.not_named[i].effect << " ("
+          << channel_name(a.not_named[i].channel) << ")";
     out << "\n";
   }
   sensors_text(a, out);

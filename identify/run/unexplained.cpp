@@ -584,7 +584,7 @@ nlohmann::json Unexplained::json() const {
        or_null(d.direction.has_value(),
                d.direction ? nlohmann::json{{"explained_pct", pct(d.direction->explained)},
                                             {"asymmetry", d.direction->asymmetry_pct},
-                                            {"asymmetry_pct", d.direction->asymmetry_pct},
+
                                             {"hysteresis_width", d.direction->hysteresis_width},
                                             {"unit", unit}}
                            : nlohmann::json())},

@@ -134,6 +134,11 @@ struct Unexplained {
   std::vector<double> time;     // s, the channel's samples (what `described` is at)
   std::optional<double> share;  // of the re-run's remaining error; absent when not re-run
   std::string text() const;     // "unexplained on load cell 1 (force): ...; share 83 %"
+  // {part, channel, share_pct (null when not re-run), kinds, periodic {frequency_hz, amplitude,
+  // unit, explained_pct}, amplitude {explained_pct, ratio_change_pct, at_input, unit}, direction
+  // {explained_pct, asymmetry (asymmetry_pct, %), hysteresis_width, unit}, time_varying
+  // {explained_pct, change_pct}, each null when its test found nothing, explained_pct,
+  // residual_rms, unit, text}: the figures text() prints, unrounded.
   nlohmann::json json() const;
 };
 
