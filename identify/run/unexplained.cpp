@@ -555,7 +555,9 @@ std::vector<Unexplained> describe_unexplained(const ActuatorPath& path) {
 
 std::string Unexplained::text() const {
   std::string out = "unexplained on " + part + " (" + channel_word + "): " + signature_text(*this);
-  return out + "; share " + (share ? fixed(100.0 * *share, 0) + " %" : "not re-run");
+  // Without a re-run (the actuator channel not identified) there is no response error to share.
+  return out + (share ? std::string("; share ") + fixed(100.0 * *share, 0) + " %"
+                      : "; not re-run, no share");
 }
 
 nlohmann::json Unexplained::json() const {
