@@ -49,6 +49,13 @@ struct ActuatorPath {
   // Every effect of each channel's final model: the search's steps first in their order, then the
   // other effects beyond the declared model, then the declared ones.
   std::vector<EffectEstimate> estimates;
+  // Effects a channel's search added or its fit implied that the form-free description of the
+  // residual beat on held-out data (unexplained.h judge_named): named nowhere, described instead.
+  struct NotNamed {
+    Channel channel = Channel::kMeasured;
+    std::string effect;
+  };
+  std::vector<NotNamed> not_named;
   const EffectEstimate* estimate(Channel channel, Effect effect) const {
     for (const auto& e : estimates)
       if (e.channel == channel && e.effect == effect) return &e;

@@ -247,18 +247,19 @@ nlohmann::json parameters_json(const std::vector<ParameterEstimate>& parameters)
 nlohmann::json findings_json(const std::vector<Finding>& findings) {
   nlohmann::json out = nlohmann::json::array();
   for (const Finding& f : findings) {
-    out.push_back({{"part", f.part},
-                   {"effect", f.effect},
-                   {"magnitude", f.magnitude},
-                   {"parameters", parameters_json(f.parameters)},
-                   {"heldout_before", f.heldout_before},
-                   {"heldout_after", f.heldout_after},
-                   {"heldout_unit", f.heldout_unit},
-                   {"rerun", f.not_rerun.empty()},
-                   {"nrmse_removed",
-                    f.response_removed ? nlohmann::json(*f.response_removed) : nlohmann::json()},
-                   {"share", f.response_share},
-                   {"not_rerun", f.not_rerun}});
+    out.push_back(
+        {{"part", f.part},
+         {"effect", f.effect},
+         {"magnitude", f.magnitude},
+         {"parameters", parameters_json(f.parameters)},
+         {"heldout_before", f.heldout_before},
+         {"heldout_after", f.heldout_after},
+         {"heldout_unit", f.heldout_unit},
+         {"rerun", f.not_rerun.empty()},
+         {"nrmse_removed",
+          f.response_removed ? nlohmann::json(*f.response_removed) : nlohmann::json()},
+         {"share", f.response_removed ? nlohmann::json(f.response_share) : nlohmann::json()},
+         {"not_rerun", f.not_rerun}});
   }
   return out;
 }

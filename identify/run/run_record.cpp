@@ -389,11 +389,19 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
   input.recorded = &recorded;
   input.actuators = &run.actuators;
   input.platform = run.replay ? &*run.replay : nullptr;
+  input.unexplained = &run.unexplained;
   try {
     return run_residual(input);
   } catch (const std::invalid_argument& e) {
     bad(record, "header", std::string("re-run of its study: ") + e.what());
   }
+}
+
+// Each description's share of the re-run's remaining error (run_residual.h described).
+void set_shares(const RunResidual& residual, std::vector<Unexplained>& unexplained) {
+  for (Unexplained& u : unexplained)
+    for (const ResidualShare& s : residual.described)
+      if (s.link == u.part && s.effect == u.channel_word) u.share = s.share;
 }
 
 }  // namespace
@@ -435,11 +443,16 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     judge_specimen(path.id, path);
     judge_sensors(path);
     estimate_effects(path);
+    judge_named(path);
+    std::vector<Unexplained> described = describe_unexplained(path);
+    judge_noise_beside(path, described);
+    for (auto& u : described) out.unexplained.push_back(std::move(u));
   }
   const auto& channels = options.channels;
   if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
     if (options.progress) options.progress({0, 0, "re-run: declared and identified models"});
     out.residual = residual(record, contents, header, m, out);
+    set_shares(*out.residual, out.unexplained);
   }
   out.findings = collect_findings(out.links, out.actuators, out.residual ? &*out.residual : nullptr,
                                   out.clock);

@@ -18,7 +18,10 @@
 // divergence bound; a truncated record (no footer, or a cut last entry) is identified from what it
 // holds; both say so (`held`). The system-level residual re-runs the study over the same steps,
 // from the record's own ground acceleration (run_residual.h). The findings (findings.h) and each
-// channel's effect estimates are computed here once; run_record_format.h prints them. Which node
+// channel's effect estimates are computed here once; run_record_format.h prints them. An effect
+// the form-free description of its channel's residual beats on held-out data is not named, and
+// what each channel's model leaves is described (unexplained.h) before the re-run, which gives
+// each description its share of the response error. Which node
 // answered for which actuator or storey comes from runtime::answer_sources, the planning the
 // coordinator ran (platform_replay.h). Bad input -> std::invalid_argument
 // "RECORD: ENTRY: PROBLEM": a record that cannot be read or has damaged entries (the reader's loss
@@ -36,6 +39,7 @@
 #include "identify/run/network_path.h"
 #include "identify/run/platform_replay.h"
 #include "identify/run/run_residual.h"
+#include "identify/run/unexplained.h"
 #include "runtime/record/deadline_diagnosis.h"
 
 namespace rths::identify {
@@ -71,6 +75,9 @@ struct RunIdentification {
   // Every difference from the declared config, every part, computed once (findings.h): what the
   // report (run_record_format.h) prints and the JSON holds.
   std::vector<Finding> findings;
+  // What each channel's identified model leaves, described without presuming an effect
+  // (unexplained.h), with its share of the re-run's remaining error: one line each.
+  std::vector<Unexplained> unexplained;
 };
 
 RunIdentification identify_run_record(const std::filesystem::path& record,

@@ -19,7 +19,7 @@ void link_text(const NetworkPath& l, std::ostream& out) {
     out << "  undeclared: " << e.name << ": " << e.detail;
     if (e.heldout_before > 0.0) {
       out << " (held-out RMS " << e.heldout_before * 1e3 << " -> " << e.heldout_after * 1e3
-          << " ms, share " << percent_text(e.share) << ")";
+          << " ms, held-out share " << percent_text(e.share) << ")";
     }
     out << "\n";
   }
@@ -53,7 +53,7 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
     for (const auto& e : a.estimates)
       if (e.channel == c.channel && e.added)
         out << "; + " << effect_name(e.effect)
-            << (e.share ? " (share " + percent_text(*e.share) + ")" : "");
+            << (e.share ? " (held-out share " + percent_text(*e.share) + ")" : "");
     out << "\n";
     for (const auto& e : a.estimates)
       if (e.channel == c.channel && e.added)
@@ -63,6 +63,13 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "  undeclared effects: ";
   for (std::size_t i = 0; i < a.undeclared.size(); ++i) out << (i ? ", " : "") << a.undeclared[i];
   out << (a.undeclared.empty() ? "none\n" : "\n");
+  if (!a.not_named.empty()) {
+    out << "  described, not named (the description beat the fit held out):";
+    for (std::size_t i = 0; i < a.not_named.size(); ++i)
+      out << (i ? ", " : " ") << a.not_named[i].effect << " ("
+          << channel_name(a.not_named[i].channel) << ")";
+    out << "\n";
+  }
   sensors_text(a, out);
   if (a.declared_specimen.empty()) return;
   out << "  specimen: declared";
@@ -128,7 +135,7 @@ nlohmann::json links_json(const RunIdentification& run) {
                          {"detail", e.detail},
                          {"heldout_rms_before_s", e.heldout_before},
                          {"heldout_rms_after_s", e.heldout_after},
-                         {"share", e.share}});
+                         {"heldout_share", e.share}});
     }
     links.push_back(
         {{"node_id", l.node_id},
@@ -151,6 +158,14 @@ nlohmann::json links_json(const RunIdentification& run) {
   return links;
 }
 
+// The effects the description beat (unexplained.h judge_named): [{channel, effect}].
+nlohmann::json not_named_json(const ActuatorPath& a) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& n : a.not_named)
+    out.push_back({{"channel", channel_name(n.channel)}, {"effect", n.effect}});
+  return out;
+}
+
 nlohmann::json actuators_json(const RunIdentification& run) {
   nlohmann::json actuators = nlohmann::json::array();
   for (const auto& a : run.actuators) {
@@ -159,9 +174,10 @@ nlohmann::json actuators_json(const RunIdentification& run) {
       nlohmann::json effects = nlohmann::json::array();
       for (const auto& e : a.estimates)
         if (e.channel == c.channel && e.added)
-          effects.push_back({{"effect", effect_name(e.effect)},
-                             {"share", e.share ? nlohmann::json(*e.share) : nlohmann::json()},
-                             {"parameters", parameters_json(e.parameters)}});
+          effects.push_back(
+              {{"effect", effect_name(e.effect)},
+               {"heldout_share", e.share ? nlohmann::json(*e.share) : nlohmann::json()},
+               {"parameters", parameters_json(e.parameters)}});
       channels.push_back({{"channel", channel_name(c.channel)},
                           {"declared_heldout_error", c.declared_fit.heldout_error},
                           {"identified_heldout_error", c.final_fit.heldout_error},
@@ -179,6 +195,7 @@ nlohmann::json actuators_json(const RunIdentification& run) {
                          {"declared_stiffness_n_per_m", a.declared_stiffness},
                          {"fitted_stiffness_n_per_m", a.fitted_stiffness},
                          {"specimen_undeclared", a.specimen_undeclared},
+                         {"not_named", not_named_json(a)},
                          {"sensors",
                           {{"displacement_noise_m", a.displacement_noise},
                            {"declared_displacement_noise_m", a.declared_displacement_noise},
@@ -210,6 +227,7 @@ std::string run_record_text(const RunIdentification& run) {
   for (const auto& a : run.actuators) actuator_text(a, out);
   if (run.residual) residual_text(*run.residual, out);
   out << findings_text(run.findings, run.residual ? &*run.residual : nullptr);
+  out << unexplained_text(run.unexplained);
   return out.str();
 }
 
@@ -221,6 +239,7 @@ nlohmann::json run_record_json(const RunIdentification& run) {
       {"duration_s", run.duration}, {"links", links},        {"actuators", actuators}};
   if (run.residual) out["residual"] = residual_json(*run.residual);
   out["undeclared"] = findings_json(run.findings);
+  out["unexplained"] = unexplained_json(run.unexplained);
   if (const auto& p = run.platform)
     out["platform"] = {
         {"steps", p->steps},

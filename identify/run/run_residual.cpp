@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <memory>
 #include <span>
 #include <sstream>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 #include "identify/model/study_config.h"
 #include "identify/run/actuator_path.h"
 #include "identify/run/sensors.h"
+#include "identify/run/unexplained.h"
 #include "study/restoring_force_config.h"
 #include "study/study.h"
 
@@ -50,6 +52,44 @@ config::Case model_case(const ChannelModel& model, const SignalScales& scales, c
   for (const auto& stage : identified.study_case.delay()) *out.add_delay() = stage;
   return out;
 }
+
+// A channel's described residual put back where the channel reads it (run_residual.h described):
+// added to the force the integrator receives (force channel) or to the motion (measured channel),
+// linear in time between the record's samples, 0 outside them.
+class DescribedResidual final : public core::DelayStage {
+ public:
+  explicit DescribedResidual(const Unexplained& u)
+      : time_(&u.time), values_(&u.description.described), force_(u.channel == Channel::kForce) {}
+  void reset() override { now_ = 0.0; }
+  std::unique_ptr<core::DelayStage> clone() const override {
+    return std::make_unique<DescribedResidual>(*this);
+  }
+  std::string describe() const override { return "described residual"; }
+  double nominal_delay() const override { return 0.0; }
+  double measure_force(double force) override { return force_ ? force + at(now_) : force; }
+
+ protected:
+  double step_unscaled(const core::CommandSample& in) override {
+    now_ = in.time;
+    return force_ ? in.displacement : in.displacement + at(in.time);
+  }
+
+ private:
+  double at(double t) const {
+    const std::vector<double>& time = *time_;
+    const std::vector<double>& values = *values_;
+    if (time.size() < 2 || t < time.front() || t > time.back()) return 0.0;
+    const auto i =
+        static_cast<std::size_t>(std::upper_bound(time.begin(), time.end(), t) - time.begin());
+    if (i >= time.size()) return values.back();
+    const double s = (t - time[i - 1]) / (time[i] - time[i - 1]);
+    return values[i - 1] + s * (values[i] - values[i - 1]);
+  }
+  const std::vector<double>* time_;
+  const std::vector<double>* values_;
+  bool force_ = false;
+  double now_ = 0.0;
+};
 
 struct Rerun {
   core::SimulationResult result;
@@ -144,7 +184,9 @@ class Reruns {
   }
   // The rig models in `models` in place of the declared ones, actuator by actuator; `replayed`:
   // on the answers the run's loop used (the platform's schedule), where it has one.
-  Rerun run(const std::vector<RigModel>& models, bool replayed = false) const {
+  // `described`: a channel's described residual put back (DescribedResidual), or none.
+  Rerun run(const std::vector<RigModel>& models, bool replayed = false,
+            const Unexplained* described = nullptr) const {
     core::HybridSetup setup = setup_;
     for (std::size_t a = 0; a < models.size(); ++a) {
       const RigModel& m = models[a];
@@ -161,6 +203,11 @@ class Reruns {
       }
       add_displacement_scale(m.displacement_scale, c);
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
+    }
+    if (described) {
+      const auto a = static_cast<std::size_t>(described->actuator - 1);
+      if (a < setup.delays.size())
+        setup.delays[a].add(std::make_unique<DescribedResidual>(*described));
     }
     const core::AnswerSchedule& answers =
         replayed && replays() ? input_.platform->schedule : no_replay_;
@@ -240,6 +287,17 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
   set_shares(out.effects);
 }
 
+// Per described channel: what putting its described residual back removes from the identified
+// re-run's error, and its share of that error.
+void add_described(const Reruns& reruns, const std::vector<RigModel>& all,
+                   const std::vector<Unexplained>& unexplained, RunResidual& out) {
+  for (const Unexplained& u : unexplained) {
+    const double removed = out.identified - reruns.run(all, true, &u).worst;
+    const double share = out.identified > 0.0 ? std::max(0.0, removed) / out.identified : 0.0;
+    out.described.push_back({u.part, u.channel_word, removed, std::min(1.0, share)});
+  }
+}
+
 }  // namespace
 
 config::Case declared_case(const config::Study& study, const config::Case& study_case) {
@@ -294,6 +352,7 @@ RunResidual run_residual(const ResidualInput& input) {
   out.declared_response = before.result.displacement.topRows(rows);
   out.identified_response = after.result.displacement.topRows(rows);
   add_shares(reruns, paths, all, out);
+  if (input.unexplained) add_described(reruns, all, *input.unexplained, out);
   if (reruns.replays()) out.platform = input.platform->text();
   if (input.clock == "real_time")
     out.notes.push_back(reruns.replays()

@@ -36,6 +36,12 @@
 // the identified re-run replays the answers the loop used (core::AnswerReplay), and
 //   platform              E(identified, every step on its own answer) - E(identified): the error
 //                         the late answers and overruns made, beside the actuator links in `links`.
+// What a channel's described residual accounts for (unexplained.h): the identified re-run with the
+// residual the description gives put back where the channel reads it (the force channel's added
+// to the force the integrator receives, the measured channel's to the actuator's motion, linear
+// in time between the record's samples):
+//   described             E(identified) - E(identified + the channel's described residual), and
+//                         its share of E(identified) (not of the removals).
 // The declared re-run and each link's "all" run are not replayed: the declared model is what the
 // lab planned, on time. A network path's lag reaches the response only through the answers the
 // loop used, so the replay is its part of the re-run; in lockstep it does not reach it.
@@ -52,6 +58,7 @@
 namespace rths::identify {
 
 struct ActuatorPath;
+struct Unexplained;
 
 struct FloorError {
   int dof = 0;                              // 1-based
@@ -72,6 +79,8 @@ struct RunResidual {
   double declared = 0.0, identified = 0.0;  // the worst floor's NRMSE
   bool declared_diverged = false, identified_diverged = false;
   std::vector<ResidualShare> links, effects;
+  // Per described channel (link: its part, effect: its channel word); share of `identified`.
+  std::vector<ResidualShare> described;
   std::vector<std::string> notes;  // stages left out of the re-run, network paths
   std::string platform;            // the replayed answers (PlatformReplay::text); empty: none
   // The responses compared (steps x DOFs, m) at `time` (s): for plots.
@@ -93,6 +102,7 @@ struct ResidualInput {
   const core::Mat* recorded = nullptr;  // m, steps x DOFs (at least motion's steps)
   const std::vector<ActuatorPath>* actuators = nullptr;
   const PlatformReplay* platform = nullptr;  // null or no late step: every step on its own answer
+  const std::vector<Unexplained>* unexplained = nullptr;  // null: none described
 };
 
 // Throws std::invalid_argument when the study cannot be set up (naming the config's field).

@@ -38,21 +38,9 @@ double channel_noise(const Identification& id, Channel channel) {
   const ChannelSignals& signals = identified_signals(id, channel);
   if (signals.size() < 2) return 0.0;
   const std::vector<double> prediction = predict(c->final_fit.model, signals);
-  std::vector<double> squared_steps(signals.size() - 1);
-  for (std::size_t j = 1; j < signals.size(); ++j) {
-    const double step =
-        (signals.target[j] - prediction[j]) - (signals.target[j - 1] - prediction[j - 1]);
-    squared_steps[j - 1] = step * step;
-  }
-  const auto middle = squared_steps.begin() + static_cast<std::ptrdiff_t>(squared_steps.size() / 2);
-  std::nth_element(squared_steps.begin(), middle, squared_steps.end());
-  return std::sqrt(*middle / (2.0 * kMedianOfChiSquare1));
-}
-
-// Named when above kNoiseShare of the signal's std and kNoiseAboveDeclared x the declared.
-bool noise_named(const Identification& id, Channel channel, double sigma, double declared) {
-  return id.find(channel) && sigma > kNoiseShare * noise_spread(id, channel) &&
-         sigma > kNoiseAboveDeclared * declared;
+  std::vector<double> residual(signals.size());
+  for (std::size_t j = 0; j < signals.size(); ++j) residual[j] = signals.target[j] - prediction[j];
+  return white_noise(residual);
 }
 
 void attribute_displacement_scale(ActuatorPath& path) {
@@ -118,6 +106,23 @@ void attribute_force_offset(ActuatorPath& path) {
 }
 
 }  // namespace
+
+double white_noise(std::span<const double> residual) {
+  if (residual.size() < 2) return 0.0;
+  std::vector<double> squared_steps(residual.size() - 1);
+  for (std::size_t j = 1; j < residual.size(); ++j) {
+    const double step = residual[j] - residual[j - 1];
+    squared_steps[j - 1] = step * step;
+  }
+  const auto middle = squared_steps.begin() + static_cast<std::ptrdiff_t>(squared_steps.size() / 2);
+  std::nth_element(squared_steps.begin(), middle, squared_steps.end());
+  return std::sqrt(*middle / (2.0 * kMedianOfChiSquare1));
+}
+
+bool noise_named(const Identification& id, Channel channel, double sigma, double declared) {
+  return id.find(channel) && sigma > kNoiseShare * noise_spread(id, channel) &&
+         sigma > kNoiseAboveDeclared * declared;
+}
 
 bool linear_specimen(const Identification& id) {
   const ChannelIdentification* c = id.find(Channel::kForce);

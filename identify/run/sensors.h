@@ -17,7 +17,8 @@
 // "displacement sensor N" or "load cell N") when it is above kNoiseShare of the signal's std (a
 // signal-to-noise ratio below 40 dB, where a lab would look at the sensor) and above
 // kNoiseAboveDeclared x the declared. It is random: no re-run replays its samples, so its share of
-// the response stays unexplained.
+// the response stays unexplained. Where the channel's residual is described (unexplained.h), the
+// noise is judged again on what the description leaves: a ripple's steps are not noise.
 //
 // Displacement sensor scale. A sensor reading s x the truth shows on both channels: the actuator's
 // fitted gain is s g0 (the declared gain g0) and the specimen's fitted stiffness k0 / s, so that
@@ -46,6 +47,7 @@
 // scale itself goes into a sensor_drift stage.
 
 #include <optional>
+#include <span>
 #include <string>
 
 #include "identify/run/actuator_path.h"
@@ -65,6 +67,13 @@ std::string part_of(const std::string& effect, Channel channel, int actuator);
 // The noise each channel's noise floor shows and the displacement sensor's scale, named on `path`
 // as above. Call after the specimen was judged (ActuatorPath::fitted_stiffness).
 void judge_sensors(ActuatorPath& path);
+
+// sigma (m or N) of the white part of a residual: the median of its squared steps, as above.
+double white_noise(std::span<const double> residual);
+
+// Whether a noise of sigma (m or N) on `channel` is named: above kNoiseShare of the signal's std
+// and kNoiseAboveDeclared x the declared `declared`.
+bool noise_named(const Identification& id, Channel channel, double sigma, double declared);
 
 // Whether the fitted specimen's force is linear in the displacement and its rates (stiffness,
 // damping, inertia, offset, delay): what a sensor's scale multiplies as a whole.

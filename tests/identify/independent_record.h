@@ -10,8 +10,9 @@
 // read by rths, since it is an input, not a model). Per step k (Newmark, gamma = 1/2, beta = 0):
 //   u_k = u + dt v + dt^2/2 a; command x_c = u_k; the actuator: x = x_c(t - 14 ms) -> first order
 //   (tau) -> backlash (width) -> velocity limit (v_max) -> stroke (the rod's ends at +-s) -> gain;
-//   specimen: f = k_e s x (linear) or Bouc-Wen (alpha, uy, n = 1, beta = gamma) on x,
-//   + c_s (x - x_prev) / dt; sensors: x_m = AD(g_x x + x0 + n_x), f_m = AD(g_f f + f0 + f1 t +
+//   -> x - c x^3 (a valve's flow gain); specimen: f = k_e s (1 - softening t / duration) x
+//   (linear; x compression_stiffness where x < 0) or Bouc-Wen (alpha, uy, n = 1, beta = gamma) on
+//   x, + c_s (x - x_prev) / dt + a pump's ripple F_r sin(2 pi f_r t); sensors: x_m = AD(g_x x + x0 + n_x), f_m = AD(g_f f + f0 + f1 t +
 //   n_f), AD a 16-bit converter over +-range; then a_k = (p_k - c (v + dt/2 a) - k_n u_k - f_m) /
 //   (m + dt/2 c), v += dt/2 (a + a_k).
 
@@ -82,10 +83,16 @@ struct RigTruth {
   double force_scale = 1.0;          // of the load cell (g_f)
   double force_offset = 0.0;         // N, on the load cell
   double force_drift = 0.0;          // N/s
-  double displacement_noise = 2e-6;  // m RMS
-  double force_noise = 0.5;          // N RMS
-  double displacement_range = 0.2;   // m, 16-bit converter
-  double force_range = 20000.0;      // N
+  // Effects identify has no stage for (unexplained.h describes them):
+  double force_ripple = 0.0;           // N, a pump's ripple on the specimen's force
+  double ripple_frequency = 0.0;       // Hz
+  double compression_stiffness = 1.0;  // x the stiffness where the drift is negative
+  double softening = 0.0;              // the stiffness's fall over the run, a share of it
+  double actuator_cubic = 0.0;         // 1/m^2: the stroke x - c x^3 (a valve's flow gain)
+  double displacement_noise = 2e-6;    // m RMS
+  double force_noise = 0.5;            // N RMS
+  double displacement_range = 0.2;     // m, 16-bit converter
+  double force_range = 20000.0;        // N
   std::uint64_t seed = 7;
   PlatformTruth platform;
   NetworkTruth network;  // in a lockstep record: give no platform beside it
@@ -111,7 +118,7 @@ class TrueActuator {
     if (rig_.max_velocity > 0.0)
       x = valve_ += std::clamp(x - valve_, -rig_.max_velocity * dt_, rig_.max_velocity * dt_);
     if (rig_.stroke > 0.0) x = std::clamp(x, -rig_.stroke, rig_.stroke);
-    return rig_.gain * x;
+    return rig_.gain * (x - rig_.actuator_cubic * x * x * x);
   }
 
  private:
@@ -122,18 +129,24 @@ class TrueActuator {
 // The specimen's force (N) at displacement x (m): linear, or Bouc-Wen integrated with RK4.
 class TrueSpecimen {
  public:
-  TrueSpecimen(const RigTruth& rig, double k0) : rig_(rig), k0_(k0 * rig.stiffness_scale) {}
-  // At displacement x (m) after `dt` s: the spring (or hysteresis) plus the viscous force.
-  double force(double x, double dt) {
+  TrueSpecimen(const RigTruth& rig, double k0, double duration)
+      : rig_(rig), k0_(k0 * rig.stiffness_scale), duration_(duration) {}
+  // At displacement x (m) at time t (s) after `dt` s: the spring (or hysteresis) plus the
+  // viscous force and the pump's ripple.
+  double force(double x, double t, double dt) {
     const double viscous = rig_.specimen_damping * (x - last_) / dt;
-    return viscous + spring(x);
+    const double ripple =
+        rig_.force_ripple * std::sin(2.0 * std::numbers::pi * rig_.ripple_frequency * t);
+    return viscous + spring(x, t) + ripple;
   }
 
  private:
-  double spring(double x) {
+  double spring(double x, double t) {
     if (!rig_.bouc_wen) {
       last_ = x;
-      return k0_ * x;
+      const double k = k0_ * (1.0 - rig_.softening * t / duration_) *
+                       (x < 0.0 ? rig_.compression_stiffness : 1.0);
+      return k * x;
     }
     const double du = x - last_, uy = 0.004, alpha = 0.1;
     const auto rate = [&](double z) {
@@ -152,7 +165,7 @@ class TrueSpecimen {
   }
 
   RigTruth rig_;
-  double k0_, last_ = 0.0, z_ = 0.0;
+  double k0_, duration_, last_ = 0.0, z_ = 0.0;
 };
 
 // The declared study: the paper frame with its 14 ms shift, as the record's header holds it; a
@@ -283,7 +296,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
 
   const std::vector<double>& ground = declared.motion.acceleration;
   TrueActuator actuator(rig, dt);
-  TrueSpecimen specimen(rig, k_e);
+  TrueSpecimen specimen(rig, k_e, duration);
   std::mt19937_64 rng(rig.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::mt19937_64 link_rng(rig.seed + 1);
@@ -299,7 +312,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
       commands.push_back(command);
       const double x = actuator.step(commands.front());
       commands.pop_front();
-      const double f = specimen.force(x, dt);
+      const double f = specimen.force(x, t, dt);
       answered_x[step] = converted(rig.displacement_scale * x + rig.displacement_offset +
                                        rig.displacement_noise * normal(rng),
                                    rig.displacement_range);

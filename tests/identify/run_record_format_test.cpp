@@ -8,6 +8,7 @@
 
 #include "identify/run/run_record.h"
 #include "identify/run/run_record_format.h"
+#include "tests/identify/independent_record.h"
 #include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {
@@ -87,6 +88,34 @@ TEST(RunRecordFormat, OneFindingHasOneMagnitudeInEverySectionAndInTheJson) {
       in_findings = true;
     }
   EXPECT_TRUE(in_findings) << json["undeclared"];
+}
+
+// A link's drift is not re-run (in lockstep its lag does not reach the response): its finding has
+// no share (null, not a 0 beside the link section's figure), and the link section's own part of
+// its held-out error is said to be a held-out share, in the text and in the JSON.
+TEST(RunRecordFormat, AShareIsTheReRunsAndAHeldOutShareIsSaidToBeOne) {
+  test::RigTruth rig;
+  rig.network.drift = 0.005;
+  rig.network.jitter = 40e-6;
+  const RunIdentification run = identify_run_record(
+      test::independent_record("format_link_drift", rig, 15.0), IdentifyOptions{});
+  const std::string text = run_record_text(run);
+  const nlohmann::json json = run_record_json(run);
+  EXPECT_NE(text.find("held-out share"), std::string::npos) << text;
+  EXPECT_EQ(text.find(", share "), std::string::npos) << text;
+  ASSERT_FALSE(json["links"][0]["undeclared"].empty()) << json["links"];
+  for (const auto& e : json["links"][0]["undeclared"]) {
+    EXPECT_TRUE(e.contains("heldout_share")) << e;
+    EXPECT_FALSE(e.contains("share")) << e;
+  }
+  bool found = false;
+  for (const auto& f : json["undeclared"])
+    if (f["part"] == "link to node 1") {
+      EXPECT_TRUE(f["share"].is_null()) << f;
+      EXPECT_FALSE(f["rerun"].get<bool>()) << f;
+      found = true;
+    }
+  EXPECT_TRUE(found) << json["undeclared"];
 }
 
 }  // namespace
