@@ -299,6 +299,10 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--require-reads", action="store_true")
     ap.add_argument("--timeout", type=float, default=900.0)
+    # Floors and ceilings on the totals (KEY=N, a key of the total: right_description=5), so a
+    # suite can hold identify to what it scored on the tune set; never set from the report set.
+    ap.add_argument("--at-least", action="append", default=[], metavar="KEY=N")
+    ap.add_argument("--at-most", action="append", default=[], metavar="KEY=N")
     args = ap.parse_args(argv)
     cleanup = []
     try:
@@ -353,7 +357,25 @@ def score(ap, args, cleanup):
         print("score_blind: records that did not read or identify:\n  " + "\n  ".join(failed),
               file=sys.stderr)
         return 1
+    missed = bounds_missed(total, args.at_least, args.at_most)
+    if missed:
+        print("score_blind: " + "; ".join(missed), file=sys.stderr)
+        return 1
     return 0
+
+
+def bounds_missed(total, at_least, at_most):
+    """The --at-least / --at-most bounds the totals miss, each named with its value."""
+    missed = []
+    for bounds, below in ((at_least, True), (at_most, False)):
+        for bound in bounds:
+            key, _, value = bound.partition("=")
+            if key not in total:
+                raise SystemExit(f"score_blind: no total named {key!r}")
+            limit = int(value)
+            if (total[key] < limit) if below else (total[key] > limit):
+                missed.append(f"{key} {total[key]}, {'at least' if below else 'at most'} {limit}")
+    return missed
 
 
 if __name__ == "__main__":

@@ -34,6 +34,15 @@ def entry(part, kinds, frequency=None):
 
 
 class ScoreBlind(unittest.TestCase):
+    def test_bounds_name_each_total_they_miss(self):
+        total = {"right_description": 4, "rerun_worse": 2, "right_part": 7}
+        missed = score_blind.bounds_missed(total, ["right_description=5", "right_part=7"],
+                                  ["rerun_worse=1"])
+        self.assertEqual(missed, ["right_description 4, at least 5", "rerun_worse 2, at most 1"])
+        self.assertEqual(score_blind.bounds_missed(total, ["right_part=7"], ["rerun_worse=2"]), [])
+        with self.assertRaises(SystemExit):
+            score_blind.bounds_missed(total, ["no_such_total=1"], [])
+
     def test_right_part_and_periodic_description(self):
         s = score_blind.score_record(case("load cell 1", ["periodic"], 13.0),
                                      {"undeclared": [], "unexplained": [
