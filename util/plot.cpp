@@ -68,12 +68,13 @@ std::pair<double, double> legend_share(const PlotSpec& spec, const Layout& layou
 // A legend inside may take at most this share of its panel's width and height.
 constexpr double kInsideWidthShare = 0.6, kInsideHeightShare = 0.45;
 
-Layout figure_layout(const std::vector<PlotSpec>& panels, bool grid, int columns) {
+Layout figure_layout(const std::vector<PlotSpec>& panels, bool grid, int columns,
+                     int figure_width) {
   Layout l;
   const PlotSpec& first = panels.front();
-  l.font = figure_font_points(first.width, grid);
+  l.font = figure_font_points(figure_width, grid);
   const double ch = character_pixels(l.font), line = line_pixels(l.font);
-  const double panel_width = static_cast<double>(first.width) / columns;
+  const double panel_width = static_cast<double>(figure_width) / columns;
   const double panel_height = grid ? panel_width : first.height;
   // Left: the y tick labels (about 7 characters) and the y label; right: a character's gap.
   l.left = 9.0 * ch + line;
@@ -81,16 +82,21 @@ Layout figure_layout(const std::vector<PlotSpec>& panels, bool grid, int columns
   l.data_width = std::max(1.0, panel_width - l.left - l.right);
   // Above: a two-line title; below: tick labels and the x label.
   l.data_height = std::max(1.0, (grid ? l.data_width : panel_height) - 5.0 * line);
-  std::size_t most_series = 0;
+  std::size_t most_series = 0, longest = 0;
   for (const PlotSpec& p : panels) {
     const auto [w, h] = legend_share(p, l);
     if (!p.series.empty() && (w > kInsideWidthShare || h > kInsideHeightShare))
       l.legends_inside = false;
     most_series = std::max(most_series, p.series.size());
+    for (const Series& s : p.series) longest = std::max(longest, s.title.size());
   }
-  if (!l.legends_inside)
-    l.legend_below_px =
-        static_cast<int>(std::ceil((static_cast<double>(most_series) + 1.0) * line));
+  if (!l.legends_inside) {
+    // Below, gnuplot sets the entries in as many columns as the panel's width holds.
+    const double entry = (static_cast<double>(longest) + 7.0) * ch;
+    const double columns = std::max(1.0, std::floor((panel_width - 2.0 * ch) / entry));
+    const double rows = std::ceil(static_cast<double>(most_series) / columns);
+    l.legend_below_px = static_cast<int>(std::ceil((rows + 1.0) * line));
+  }
   return l;
 }
 
@@ -216,7 +222,7 @@ std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec, con
   std::string y_range = spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
                                                  : std::string("set autoscale y");
   if (!layout.legends_inside)
-    return {"set key outside below left vertical Left reverse\n", y_range + "\n"};
+    return {"set key outside below center horizontal Left reverse\n", y_range + "\n"};
   std::vector<std::vector<std::size_t>> drawn;
   for (const Series& s : spec.series) drawn.push_back(drawn_points(spec, s));
   const auto [width, height] = legend_share(spec, layout);
@@ -278,14 +284,15 @@ void start_figure(std::ostringstream& script, const std::string& terminal,
          << "set termoption noenhanced\nset grid\n";
 }
 
-// Square panels (PlotSpec::square) in a grid of at most three columns: each width / columns
-// pixels square, printed at the full text width.
+// Square panels (PlotSpec::square) in a grid of at most two columns, each 5/8 of the panels'
+// width square (500 px of the default 800): a pair printed across a page's width is a column's
+// width each, and their legends fit inside.
 std::string square_grid(const std::vector<PlotSpec>& panels, const std::string& tag,
                         const std::string& terminal, const std::filesystem::path& file) {
-  const int columns = static_cast<int>(std::min<std::size_t>(3, panels.size()));
-  const int rows = static_cast<int>((panels.size() + 2) / 3);
-  const int width = panels.front().width, side = width / columns;
-  const Layout layout = figure_layout(panels, true, columns);
+  const int columns = static_cast<int>(std::min<std::size_t>(2, panels.size()));
+  const int rows = static_cast<int>((panels.size() + 1) / 2);
+  const int side = panels.front().width * 5 / 8, width = side * columns;
+  const Layout layout = figure_layout(panels, true, columns, width);
   std::ostringstream script;
   start_figure(script, terminal, file, width, (side + layout.legend_below_px) * rows, layout);
   script << "set multiplot layout " << rows << "," << columns << "\n";
@@ -298,7 +305,7 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
                    const std::string& terminal, const std::filesystem::path& file) {
   if (std::all_of(panels.begin(), panels.end(), [](const PlotSpec& p) { return p.square; }))
     return square_grid(panels, tag, terminal, file);
-  const Layout layout = figure_layout(panels, false, 1);
+  const Layout layout = figure_layout(panels, false, 1, panels.front().width);
   std::ostringstream script;
   const int width = panels.front().width;
   const int panel_height = panels.front().height + layout.legend_below_px;

@@ -55,7 +55,7 @@ struct PlotSpec {
   std::vector<std::pair<double, std::string>> x_labels;
   // A square data area (a force-displacement loop, which runs from lower left to upper right,
   // reads true only with equal axes lengths). A figure of square panels lays them out in a grid
-  // of at most three columns, each `width / columns` pixels square, instead of stacking them.
+  // of at most two columns, each 5/8 of `width` pixels square, instead of stacking them.
   bool square = false;
 };
 
