@@ -3,11 +3,13 @@
 #include "results/results.h"
 
 #include <gtest/gtest.h>
+
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 
 #include "study/motion_key.h"
 #include "study/study.h"
@@ -113,16 +115,19 @@ TEST(ResultsTest, RecordTableCarriesTheStudyStepMotionAsRunAndTheFootersVerdict)
   EXPECT_EQ(t.number_attributes().at("ok"), 1.0);
 }
 
-// A link with a force predictor carries its model's error per step: the export gives it a
-// column per actuator of the node, after the link's one-way lags; a link without one has none.
-TEST(ResultsTest, RecordTableGivesAPredictedLinkItsPredictionError) {
+// A record of one DOF and one actuator, links to nodes 1 and 2, three steps; `links` fills each
+// step after the first (step k) with its link samples. `header` may add to the header.
+runtime::RecordContents two_link_record(
+    const std::function<void(runtime::StepRecord&, int)>& links,
+    const std::function<void(runtime::RunHeader&)>& header = {}) {
   runtime::RecordContents record;
   runtime::RecordEntry header_entry;
-  auto* header = header_entry.mutable_header();
-  header->set_dofs(1);
-  header->set_actuators(1);
-  header->add_link_node_ids(1);
-  header->add_link_node_ids(2);
+  auto* h = header_entry.mutable_header();
+  h->set_dofs(1);
+  h->set_actuators(1);
+  h->add_link_node_ids(1);
+  h->add_link_node_ids(2);
+  if (header) header(*h);
   record.entries.push_back(header_entry);
   for (int k = 0; k < 3; ++k) {
     runtime::RecordEntry e;
@@ -134,12 +139,19 @@ TEST(ResultsTest, RecordTableGivesAPredictedLinkItsPredictionError) {
     s->add_command(0);
     s->add_realised(0);
     s->add_measured_force(0);
-    if (k > 0) {
-      s->add_links()->add_prediction_error(12.5 * k);
-      s->add_links()->set_answered_step(k);
-    }
+    if (k > 0) links(*s, k);
     record.entries.push_back(e);
   }
+  return record;
+}
+
+// A link with a force predictor carries its model's error per step: the export gives it a
+// column per actuator of the node, after the link's one-way lags; a link without one has none.
+TEST(ResultsTest, RecordTableGivesAPredictedLinkItsPredictionError) {
+  const runtime::RecordContents record = two_link_record([](runtime::StepRecord& s, int k) {
+    s.add_links()->add_prediction_error(12.5 * k);
+    s.add_links()->set_answered_step(k);
+  });
   const Table t = record_table(record);
   const std::vector<std::string> all = names(t);
   const auto at = [&all](const std::string& name) {
@@ -155,36 +167,19 @@ TEST(ResultsTest, RecordTableGivesAPredictedLinkItsPredictionError) {
 }
 
 TEST(ResultsTest, RecordTableGivesAControllerNodesLinkItsFrameRoundTripAndStatus) {
-  runtime::RecordContents record;
-  runtime::RecordEntry header_entry;
-  auto* header = header_entry.mutable_header();
-  header->set_dofs(1);
-  header->set_actuators(1);
-  header->add_link_node_ids(1);
-  header->add_link_node_ids(2);
-  auto* controller = header->mutable_study()->mutable_deployment()->add_nodes();
-  controller->set_id(2);
-  controller->set_kind(config::NodeSpec::CONTROLLER);
-  record.entries.push_back(header_entry);
-  for (int k = 0; k < 3; ++k) {
-    runtime::RecordEntry e;
-    auto* s = e.mutable_step();
-    s->set_step(k);
-    s->add_displacement(0);
-    s->add_velocity(0);
-    s->add_acceleration(0);
-    s->add_command(0);
-    s->add_realised(0);
-    s->add_measured_force(0);
-    if (k > 0) {
-      s->add_links()->set_answered_step(k);
-      auto* link = s->add_links();
-      link->set_answered_step(k);
-      link->set_controller_round_trip(0.0001 * k);
-      link->set_controller_status(k == 2 ? 7 : 0);
-    }
-    record.entries.push_back(e);
-  }
+  const runtime::RecordContents record = two_link_record(
+      [](runtime::StepRecord& s, int k) {
+        s.add_links()->set_answered_step(k);
+        auto* link = s.add_links();
+        link->set_answered_step(k);
+        link->set_controller_round_trip(0.0001 * k);
+        link->set_controller_status(k == 2 ? 7 : 0);
+      },
+      [](runtime::RunHeader& h) {
+        auto* controller = h.mutable_study()->mutable_deployment()->add_nodes();
+        controller->set_id(2);
+        controller->set_kind(config::NodeSpec::CONTROLLER);
+      });
   const Table t = record_table(record);
   const std::vector<std::string> all = names(t);
   const auto at = [&all](const std::string& name) {
