@@ -84,5 +84,26 @@ TEST(StallRule, AWindowsFailureIsTheMachinesOnlyBesideAStallOfHalfIt) {
   EXPECT_NE(why->find(status), std::string::npos) << *why;
 }
 
+// A failed real-time verdict is the machine's only where its p99 wake-up lateness reached half a
+// step; beside a machine that paces the loop it is the code's, however long one stall was.
+TEST(StallRule, MissedDeadlinesAreTheMachinesOnlyWhereItCouldNotPaceTheLoop) {
+  const runtime::RunHeader h = header(0.001);
+  const std::string status =
+      "completed with deadline misses: 818 overruns in 999 steps (81.9 %, more than half; worst "
+      "streak 496)";
+  test::MeasuredPlatform machine = stalled_for(0.050);
+  machine.p99 = 0.00049;
+  EXPECT_FALSE(test::machine_stalled(status, h, machine).has_value());
+  machine.p99 = 0.0005;
+  const auto why = test::machine_stalled(status, h, machine);
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("p99 wake-up lateness 0.50 ms is at least half the 1.00 ms step"),
+            std::string::npos)
+      << *why;
+  EXPECT_NE(why->find(status), std::string::npos) << *why;
+  // Another failure beside the same machine is not excused by its pacing.
+  EXPECT_FALSE(test::machine_cannot_pace("diverged at step 40", h, machine).has_value());
+}
+
 }  // namespace
 }  // namespace rths

@@ -46,9 +46,24 @@ std::optional<double> stall_window(const std::string& status, const runtime::Run
   return std::nullopt;
 }
 
+std::optional<std::string> machine_cannot_pace(const std::string& status,
+                                               const runtime::RunHeader& header,
+                                               const MeasuredPlatform& machine) {
+  if (status.rfind("completed with deadline misses", 0) != 0 || !(header.dt() > 0.0) ||
+      machine.p99 < 0.5 * header.dt())
+    return std::nullopt;
+  char figures[128];
+  std::snprintf(figures, sizeof figures,
+                "its p99 wake-up lateness %.2f ms is at least half the %.2f ms step",
+                machine.p99 * 1e3, header.dt() * 1e3);
+  return "this machine could not pace the loop during the run (" + machine.text + "; " + figures +
+         "), which failed the real-time verdict rightly: " + status;
+}
+
 std::optional<std::string> machine_stalled(const std::string& status,
                                            const runtime::RunHeader& header,
                                            const MeasuredPlatform& machine) {
+  if (auto why = machine_cannot_pace(status, header, machine)) return why;
   const std::optional<double> window = stall_window(status, header);
   if (!window || machine.max < 0.5 * *window) return std::nullopt;
   char figures[96];

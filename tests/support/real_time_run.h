@@ -8,11 +8,19 @@
 // none rejected; or the node's own hold: "did not answer frame N (step N) within X ms"). A stall of the machine passes them as surely as a fault of the code does. The
 // failure is the machine's when the witness saw a stall of at least half that window: the witness
 // sleeps most of the time, so the scheduler favours it and it sees less of a stall than a busy
-// loop does. Any other failure, or one beside a quiet machine, is the code's.
+// loop does. A run that failed the one real-time verdict ("completed with deadline misses") is the
+// machine's when the witness's p99 wake-up lateness was at least half a step: one step in a
+// hundred then starts half a step late, and a loop that the platform check would have refused to
+// start cannot keep its deadlines (on a quiet machine the p99 is tens of us, so a loop that
+// overruns there still fails the test). Any other failure, or one beside a quiet machine, is the
+// code's.
 //
 //   stall_window(status, header) -> s: the window `status` names that a stall can pass, the reply
 //     timeout read from the study's controller nodes; nullopt for any other status.
-//   machine_stalled(status, header, machine) -> why the failure is the machine's, or nullopt.
+//   machine_cannot_pace(status, header, machine) -> why a failed deadline verdict is the
+//     machine's (its p99 wake-up lateness >= dt / 2), or nullopt.
+//   machine_stalled(status, header, machine) -> why the failure is the machine's (either rule), or
+//     nullopt.
 //   launch_witnessed(name, text, case, domain, timeout) -> {run, machine}: test::launch beside a
 //     witness.
 //   real_time_verdict(witnessed) -> {kCompleted | kMachineStalled | kFailed, why (status, the
@@ -30,6 +38,9 @@
 namespace rths::test {
 
 std::optional<double> stall_window(const std::string& status, const runtime::RunHeader& header);
+std::optional<std::string> machine_cannot_pace(const std::string& status,
+                                               const runtime::RunHeader& header,
+                                               const MeasuredPlatform& machine);
 std::optional<std::string> machine_stalled(const std::string& status,
                                            const runtime::RunHeader& header,
                                            const MeasuredPlatform& machine);
