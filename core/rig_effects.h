@@ -92,15 +92,31 @@ struct SensorErrors {
   double displacement_scale = 1.0;   // -, multiplies the displacement read
 };
 
-class SensorDrift final : public DelayStage {
+// A stage that passes the motion unchanged and acts on what is read (SensorDrift and the force
+// stages): no delay, no non-linearity, the identity as its linear dynamics. Each step it hands the
+// sample it passes to observe(), where the stage keeps what its readings need.
+class PassThroughStage : public DelayStage {
+ public:
+  double nominal_delay() const override { return 0.0; }
+  Linearity linearity() const override { return {}; }
+
+ protected:
+  virtual void observe(const CommandSample& in) = 0;
+  double step_unscaled(const CommandSample& in) final {
+    observe(in);
+    return in.displacement;
+  }
+  std::optional<PlantModel> unscaled_transfer_function() const final { return PlantModel{}; }
+  LinearBlock unscaled_state_space() const final { return gain_block(1.0); }
+};
+
+class SensorDrift final : public PassThroughStage {
  public:
   // @pre every field finite (throws std::invalid_argument naming it).
   explicit SensorDrift(const SensorErrors& errors);
   void reset() override { time_ = passed_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
-  double nominal_delay() const override { return 0.0; }
-  Linearity linearity() const override { return {}; }
   double sensor_error() const override {
     return (errors_.displacement_scale - 1.0) * passed_ + errors_.displacement_offset +
            errors_.displacement_drift * time_;
@@ -110,13 +126,10 @@ class SensorDrift final : public DelayStage {
   }
 
  protected:
-  double step_unscaled(const CommandSample& in) override {
+  void observe(const CommandSample& in) override {
     time_ = in.time;
     passed_ = in.displacement;
-    return in.displacement;
   }
-  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
-  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 
  private:
   SensorErrors errors_;
@@ -124,52 +137,42 @@ class SensorDrift final : public DelayStage {
   double passed_ = 0.0;  // m, the displacement the last step passed
 };
 
-class ViscousForce final : public DelayStage {
+class ViscousForce final : public PassThroughStage {
  public:
   // @pre damping >= 0 and finite (N s/m), dt > 0 (s) (throws std::invalid_argument).
   ViscousForce(double damping, double dt);
   void reset() override { last_ = velocity_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
-  double nominal_delay() const override { return 0.0; }
-  Linearity linearity() const override { return {}; }
   double measure_force(double force) override { return force + damping_ * velocity_; }
 
  protected:
-  double step_unscaled(const CommandSample& in) override {
+  void observe(const CommandSample& in) override {
     velocity_ = (in.displacement - last_) / dt_;
     last_ = in.displacement;
-    return in.displacement;
   }
-  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
-  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 
  private:
   double damping_, dt_;
   double last_ = 0.0, velocity_ = 0.0;  // m, m/s: of the last step
 };
 
-class InertiaForce final : public DelayStage {
+class InertiaForce final : public PassThroughStage {
  public:
   // @pre mass >= 0 and finite (kg), dt > 0 (s) (throws std::invalid_argument).
   InertiaForce(double mass, double dt);
   void reset() override { u1_ = u2_ = u3_ = acceleration_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
-  double nominal_delay() const override { return 0.0; }
-  Linearity linearity() const override { return {}; }
   double measure_force(double force) override { return force + mass_ * acceleration_; }
 
  protected:
-  double step_unscaled(const CommandSample& in) override {
+  void observe(const CommandSample& in) override {
     acceleration_ = (2.0 * in.displacement - 5.0 * u1_ + 4.0 * u2_ - u3_) / (dt_ * dt_);
     u3_ = u2_;
     u2_ = u1_;
     u1_ = in.displacement;
-    return in.displacement;
   }
-  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
-  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 
  private:
   double mass_, dt_;
@@ -177,7 +180,7 @@ class InertiaForce final : public DelayStage {
   double acceleration_ = 0.0;              // m/s^2, of the last step
 };
 
-class FrictionForce final : public DelayStage {
+class FrictionForce final : public PassThroughStage {
  public:
   // @pre friction_force >= 0 and finite (N), smoothing_velocity > 0 and finite (m/s), dt > 0 (s)
   // (throws std::invalid_argument naming the field).
@@ -185,21 +188,16 @@ class FrictionForce final : public DelayStage {
   void reset() override { u1_ = u2_ = velocity_ = 0.0; }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
-  double nominal_delay() const override { return 0.0; }
-  Linearity linearity() const override { return {}; }
   double measure_force(double force) override {
     return force + friction_force_ * std::tanh(velocity_ / smoothing_velocity_);
   }
 
  protected:
-  double step_unscaled(const CommandSample& in) override {
+  void observe(const CommandSample& in) override {
     velocity_ = (3.0 * in.displacement - 4.0 * u1_ + u2_) / (2.0 * dt_);
     u2_ = u1_;
     u1_ = in.displacement;
-    return in.displacement;
   }
-  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
-  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
 
  private:
   double friction_force_, smoothing_velocity_, dt_;
@@ -207,7 +205,7 @@ class FrictionForce final : public DelayStage {
   double velocity_ = 0.0;       // m/s, of the last step
 };
 
-class ForceDelay final : public DelayStage {
+class ForceDelay final : public PassThroughStage {
  public:
   // @pre delay >= 0 and finite (s), dt > 0 (s) (throws std::invalid_argument).
   ForceDelay(double delay, double dt);
@@ -217,21 +215,14 @@ class ForceDelay final : public DelayStage {
   }
   std::unique_ptr<DelayStage> clone() const override;
   std::string describe() const override;
-  // The displacement is not late: the lag is on the force channel only.
-  double nominal_delay() const override { return 0.0; }
-  Linearity linearity() const override { return {}; }
+  // The displacement is not late (nominal_delay 0): the lag is on the force channel only.
   double measure_force(double force) override {
     forces_.push(time_, force);
     return forces_.at(time_ - delay_);
   }
 
  protected:
-  double step_unscaled(const CommandSample& in) override {
-    time_ = in.time;
-    return in.displacement;
-  }
-  std::optional<PlantModel> unscaled_transfer_function() const override { return PlantModel{}; }
-  LinearBlock unscaled_state_space() const override { return gain_block(1.0); }
+  void observe(const CommandSample& in) override { time_ = in.time; }
 
  private:
   double delay_;
