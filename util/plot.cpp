@@ -199,9 +199,10 @@ std::string figure_data(const std::vector<PlotSpec>& panels, const std::string& 
   return data.str();
 }
 
-// The x axis's ticks: the spec's labels at their x, with a bottom margin of their lines, or
-// gnuplot's numbers and margin.
-std::string x_tics(const PlotSpec& spec) {
+// The x axis's ticks: the spec's labels at their x, with a bottom margin of their lines and of
+// `legend_rows` (a legend below the panel, which a set margin must hold too), or gnuplot's numbers
+// and margin.
+std::string x_tics(const PlotSpec& spec, int legend_rows) {
   if (spec.x_labels.empty()) return "set xtics autofreq\nset bmargin\n";
   std::ostringstream out;
   out.precision(10);
@@ -212,12 +213,17 @@ std::string x_tics(const PlotSpec& spec) {
     lines = std::max<std::size_t>(lines, 1 + std::count(label.begin(), label.end(), '\n'));
     out << (i ? ", " : "") << quoted(label) << " " << spec.x_labels[i].first;
   }
-  out << ")\nset bmargin " << lines + 2 << "\n";
+  out << ")\nset bmargin " << lines + 2 + static_cast<std::size_t>(legend_rows) << "\n";
   return out.str();
 }
 
+// The lines a legend below the panel takes (0 for one inside).
+int legend_rows(const Layout& layout) {
+  return static_cast<int>(std::lround(layout.legend_below_px / line_pixels(layout.font)));
+}
+
 // The legend's command and the y range for `spec`: inside at its emptiest corner (with room made
-// for it where it needs some), or outside on the right where the figure's layout says so.
+// for it where it needs some), or below the panel where the figure's layout says so.
 std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec, const Layout& layout) {
   std::string y_range = spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
                                                  : std::string("set autoscale y");
@@ -246,7 +252,7 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
          << "\n"
          << y_range << "set format y " << quoted(spec.y_format.empty() ? "% h" : spec.y_format)
          << "\n"
-         << x_tics(spec) << "unset arrow\nunset label\n";
+         << x_tics(spec, legend_rows(layout)) << "unset arrow\nunset label\n";
   script.precision(10);
   for (std::size_t i = 0; i < spec.markers.size(); ++i) {
     const VerticalMarker& m = spec.markers[i];
