@@ -34,10 +34,14 @@
 // timeouts) as a browser would. Prints the overruns of each run and their medians, the ratio
 // hammered / quiet and hammered / bare, the fresh client's answers (served within 2 s / asked,
 // slowest) and the snapshots served against those built (SnapshotCache's cap).
+// --realtime-priority P puts, in every run, the loops and DDS receive threads of the run's
+// processes on SCHED_FIFO P (the deployment's realtime_priority): they then preempt the view's
+// threads and the clients whenever they wake, as on a lab machine set up for real time.
 // --loop-cpu N with it pins the loop alone on CPU N (pin_loop) in all three runs: the view's
 // threads and the clients, on the other CPUs, then take from the loop only what the kernel does
 // for them on its CPU, as with clients on another machine.
-//   rths_view_bench --hammer 8 [--churn C] [--loop-cpu N] [--seconds S] [--repeat N]
+//   rths_view_bench --hammer 8 [--churn C] [--loop-cpu N] [--realtime-priority P] [--seconds S]
+//                   [--repeat N]
 #include <netinet/in.h>
 #include <poll.h>
 #include <spdlog/spdlog.h>
@@ -78,11 +82,11 @@ using namespace rths;
 using namespace std::chrono_literals;
 
 // `motion`: a motion block; `failsafe`: the fail-safe windows in periods; `loop_cpu` >= 0: the
-// loop thread pinned there alone (pin_loop).
+// loop thread pinned there alone (pin_loop); `fifo` > 0: the deployment's realtime_priority.
 std::string study_text(double rate, const std::string& motion, int domain, int failsafe,
-                       int loop_cpu) {
-  const std::string pin =
-      loop_cpu >= 0 ? " pin_loop: true loop_cpu: " + std::to_string(loop_cpu) : "";
+                       int loop_cpu, int fifo) {
+  std::string pin = loop_cpu >= 0 ? " pin_loop: true loop_cpu: " + std::to_string(loop_cpu) : "";
+  if (fifo > 0) pin += " realtime_priority: " + std::to_string(fifo);
   return bench::sdof_study_text(
       "view_bench", 1.0 / rate, motion,
       "deployment { domain_id: " + std::to_string(domain) +
@@ -164,6 +168,7 @@ struct Spec {
   std::string page_query;        // appended to the page's URL after '?'
   int browser_cpu = -1;          // >= 0: Chromium on this CPU alone (taskset)
   int loop_cpu = -1;             // >= 0: the deployment's pin_loop on this CPU
+  int realtime_priority = 0;     // > 0: the deployment's realtime_priority (SCHED_FIFO)
   int hammer = 0;                // > 0: clients looping on /api/snapshot, and the idle crowd
   int churn = 15;                // with hammer: new connections a second
   int snapshot_period_ms = 200;  // the view's snapshot cap (0: rebuilt for every request)
@@ -392,7 +397,8 @@ Figures run(const Spec& spec) {
   bench::DistributedRun distributed(
       {.directory = directory,
        .run_id = "view-bench-" + spec.name,
-       .study_text = study_text(spec.rate, motion, spec.domain, spec.failsafe, spec.loop_cpu),
+       .study_text = study_text(spec.rate, motion, spec.domain, spec.failsafe, spec.loop_cpu,
+                                spec.realtime_priority),
        .domain = spec.domain,
        .nodes = {},
        .keep_off_loop_cpu = spec.loop_cpu >= 0});
@@ -623,6 +629,10 @@ int main(int argc, char** argv) {
                  "instead: pairs with the view, without and with N clients looping on "
                  "/api/snapshot and an idle crowd")
       ->check(CLI::Range(1, 64));
+  app.add_option("--realtime-priority", spec.realtime_priority,
+                 "the deployment's realtime_priority in every run: the loops and DDS receive "
+                 "threads of the run's processes on SCHED_FIFO at this priority (1-98)")
+      ->check(CLI::Range(1, 98));
   app.add_option("--churn", spec.churn,
                  "with --hammer: new connections a second, every other one never sending")
       ->default_val(15)

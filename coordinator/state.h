@@ -26,6 +26,7 @@
 #include "runtime/node/schema.h"
 #include "runtime/node/validation.h"
 #include "runtime/record/measurements.h"
+#include "runtime/rt/fifo.h"
 
 namespace rths::coordinator {
 
@@ -201,9 +202,11 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   void before_step(std::size_t k) override;
   bool after_step(std::size_t k, const core::SimulationResult& result) override;
 
-  // mlockall and the loop thread's CPU, as the deployment asks. Refusals are logged events, not
-  // failures: an unprivileged lab machine still runs, and the record says it was not locked.
+  // mlockall, the loop thread's CPU and SCHED_FIFO for the loop and the DDS receive threads
+  // (realtime_priority), as the deployment asks. Refusals are logged events, not failures: an
+  // unprivileged lab machine still runs, and the record says it was not locked or raised.
   void prepare_real_time_thread();
+  std::optional<runtime::FifoThreads> fifo;  // raised for the run, put back when it ends
 
   void write_header();
   void write_step(std::size_t k, const core::SimulationResult& result, double step_wall);

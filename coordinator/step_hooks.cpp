@@ -8,6 +8,7 @@
 #include <string>
 
 #include "study/study_inputs.h"
+#include "transport/dds_endpoint.h"
 #include "util/crc32c.h"
 #include "util/process.h"
 
@@ -87,6 +88,10 @@ void RunState::prepare_real_time_thread() {
     } catch (const std::runtime_error& e) {
       event(std::string("loop thread not isolated: ") + e.what());
     }
+  }
+  if (deployment.realtime_priority() > 0) {
+    fifo.emplace(deployment.realtime_priority(), "loop", transport::dds_receive_thread_names());
+    event(fifo->summary());
   }
 }
 

@@ -55,6 +55,8 @@ Range range_of(Quantity quantity) {
     case Quantity::kDdsDomain: return {0, 232, false, false, "", "a DDS domain id", true};
     case Quantity::kDays: return {1, 36500, false, false, "d", "a validity in days", true};
     case Quantity::kFrequency: return {0, 1e7, true, false, "Hz", "a rate"};
+    case Quantity::kFifoPriority:
+      return {1, 98, false, false, "", "a SCHED_FIFO priority below the kernel's 99", true};
   }
   throw std::logic_error("range_of: unknown quantity");
 }

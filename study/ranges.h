@@ -19,6 +19,8 @@
 // kDdsDomain       [0, 232]                     -     Cyclone DDS domain ids
 // kDays            [1, 36500]                   d     certificate validity
 // kFrequency       (0, 1e7]                     Hz    sample and servo rates
+// kFifoPriority    [1, 98]                      -     SCHED_FIFO priorities; 99 is the kernel's own
+//                                                     (migration, watchdog), which must preempt a run
 //
 // A value that is not finite (nan, inf) is outside every range. An empty name drops "<name> = "
 // (CLI11 puts the flag in front of a validator's message itself).
@@ -42,6 +44,7 @@ enum class Quantity {
   kDdsDomain,
   kDays,
   kFrequency,
+  kFifoPriority,
 };
 
 struct Range {

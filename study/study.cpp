@@ -301,6 +301,16 @@ void validate_deployment(const config::Deployment& d, bool allow_long_lag,
                       at + "command_watchdog_periods", source);
   if (d.pin_loop() || d.loop_cpu() > 0)
     require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);
+  if (d.realtime_priority() != 0) {
+    require_in(Quantity::kFifoPriority, d.realtime_priority(), at + "realtime_priority (0: off)",
+               source);
+    require(d.clock() == config::Deployment::REAL_TIME, source,
+            "deployment.realtime_priority applies to clock: REAL_TIME only (a lockstep run "
+            "has no deadline to keep)");
+    require(d.wait_policy() != config::WAIT_SPIN, source,
+            "deployment.realtime_priority with wait_policy: WAIT_SPIN would let the spinning "
+            "loop shut the DDS receive threads out of its CPU; use WAIT_SLEEP_THEN_SPIN");
+  }
   require(d.limits().max_displacement() >= 0 && d.limits().max_velocity() >= 0, source,
           "deployment.limits.max_displacement and max_velocity must be >= 0 (0 = no limit)");
 }

@@ -170,6 +170,11 @@ void DdsEndpoint::listen_to(std::int32_t node_id) {
   impl_->add_reader(node_topic_name(options_.topic_prefix, node_id, "_up"), node_id);
 }
 
+const std::vector<std::string>& dds_receive_thread_names() {
+  static const std::vector<std::string> names{"recv", "recvUC", "recvMC", "dq.user"};
+  return names;
+}
+
 std::int64_t realtime_ns() {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);

@@ -35,6 +35,14 @@
 
 namespace rths::transport {
 
+// The names of Cyclone DDS's threads that carry a run's messages into a process (its receive
+// threads and the user-data delivery queue): the listener above, and so the inline handler, runs
+// on them. A process that raises its loop to real-time priority raises these with it
+// (runtime/rt/fifo.h), or a message would wait behind every ordinary thread of the host.
+// Cyclone 0.10's config names only "recv" among them (recvUC and recvMC are refused), so the
+// threads are raised by name once the participant exists instead of through CYCLONEDDS_URI.
+const std::vector<std::string>& dds_receive_thread_names();
+
 struct DdsEndpointOptions {
   std::uint32_t domain_id = 0;
   bool coordinator = true;                // false: a node

@@ -14,7 +14,9 @@
 #include "runtime/node/lag.h"
 #include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
+#include "runtime/rt/fifo.h"
 #include "runtime/rt/pacing.h"
+#include "transport/dds_endpoint.h"
 
 namespace rths::runtime {
 namespace {
@@ -84,6 +86,7 @@ class NodeLoop {
   std::int64_t last_from_coordinator_ = started_, last_command_ns_ = 0;
   std::atomic<bool> stop_servo_{false};
   std::thread servo_, answers_;
+  std::optional<runtime::FifoThreads> fifo_;  // realtime_priority: the node's threads raised
 };
 
 NodeLoop::~NodeLoop() {
@@ -256,6 +259,12 @@ void NodeLoop::on_assigned() {
   if (drives_actuators(a.node().kind()) && deployment.clock() == config::Deployment::REAL_TIME)
     assigned_.watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment, a.dt()) * a.dt());
   spdlog::info("{}: assigned to run {}", service_.label(), service_.run_id());
+  // Before the servo and answer threads start, which inherit the loop's policy.
+  if (deployment.clock() == config::Deployment::REAL_TIME && deployment.realtime_priority() > 0)
+    spdlog::info(
+        "{}: {}", service_.label(),
+        fifo_.emplace(deployment.realtime_priority(), "loop", transport::dds_receive_thread_names())
+            .summary());
   if (service_.streaming()) {
     const double period = service_.streaming_period();
     spdlog::info("{}: servo loop at {:.0f} Hz ({} policy)", service_.label(), 1.0 / period,

@@ -66,6 +66,42 @@ TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
   EXPECT_NE(test::read_file(run.launch.coordinator_log).find("servo loops:"), std::string::npos);
 }
 
+// realtime_priority: every process of the run says, in its log, that its loop and its DDS
+// receive threads went on SCHED_FIFO (runtime/rt/fifo_test checks that such a line is true of
+// the threads), and the coordinator's record carries the line as an event. Where this process
+// may not use SCHED_FIFO, every log names the refusal instead and the run still completes.
+TEST_F(DdsRun, RealTimePriorityRaisesEveryProcesssLoopAndReceiveThreads) {
+  const std::string text = test::paper_frame_study(
+      0.5,
+      "deployment { clock: REAL_TIME realtime_priority: 20 max_overrun_fraction: -1 "
+      "max_missed_answers: 30 command_watchdog_periods: 30 }");
+  const auto witnessed = test::launch_witnessed("fifo", text, "reference", 79);
+  RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
+  const auto& run = witnessed.run;
+  std::vector<std::string> logs;
+  for (const auto& entry : std::filesystem::directory_iterator(run.dir))
+    if (entry.path().extension() == ".log") logs.push_back(test::read_file(entry.path()));
+  ASSERT_EQ(logs.size(), 3u) << "one log per process: the coordinator and two nodes";
+  const bool refused = logs[0].find("SCHED_FIFO 20 refused (") != std::string::npos;
+  for (const std::string& log : logs) {
+    if (refused) {
+      EXPECT_NE(log.find("SCHED_FIFO 20 refused ("), std::string::npos) << log;
+      continue;
+    }
+    const auto at = log.find("SCHED_FIFO 20: loop, ");
+    ASSERT_NE(at, std::string::npos) << log;
+    const std::string line = log.substr(at, log.find('\n', at) - at);
+    EXPECT_NE(line.find("recv"), std::string::npos) << line;
+    EXPECT_NE(line.find("dq.user"), std::string::npos) << line;
+  }
+  bool recorded = false;
+  for (const runtime::RecordEntry& entry : run.record.entries)
+    recorded = recorded || (entry.has_event() &&
+                            entry.event().what().find("SCHED_FIFO 20") != std::string::npos);
+  EXPECT_TRUE(recorded);
+  if (refused) GTEST_SKIP() << "this machine refuses SCHED_FIFO 20: " << logs[0].substr(0, 400);
+}
+
 TEST_F(DdsRun, SplitStoreysAcrossTwoSubstructureNodesEqualInProcess) {
   const std::string text = test::two_storey_study(
       2, "cases { name: \"lag\" delay { first_order { time_constant: 0.005 } } }",

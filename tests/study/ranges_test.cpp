@@ -58,6 +58,14 @@ TEST(Ranges, CpuMustExistOnThisMachine) {
   EXPECT_THROW(check_range(Quantity::kCpu, -1LL, "loop_cpu"), std::invalid_argument);
 }
 
+TEST(Ranges, FifoPrioritiesLeaveTheKernelsOwnToIt) {
+  EXPECT_EQ(check_range(Quantity::kFifoPriority, 80LL, "realtime_priority"), 80);
+  EXPECT_THROW(check_range(Quantity::kFifoPriority, 99LL, "realtime_priority"),
+               std::invalid_argument);
+  EXPECT_THROW(check_range(Quantity::kFifoPriority, -5LL, "realtime_priority"),
+               std::invalid_argument);
+}
+
 TEST(Ranges, TimeoutsArePositive) {
   EXPECT_THROW(check_range(Quantity::kTimeout, -1.0, "--timeout"), std::invalid_argument);
   EXPECT_THROW(check_range(Quantity::kTimeout, 0.0, "--timeout"), std::invalid_argument);

@@ -503,6 +503,16 @@ TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
             std::string::npos);
   EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"),
             std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { clock: REAL_TIME realtime_priority: 99 }")
+                .find("deployment.realtime_priority (0: off) = 99 is outside [1, 98]"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { realtime_priority: 80 }").find("clock: REAL_TIME only"),
+            std::string::npos);
+  EXPECT_NE(error_of(base + "deployment { clock: REAL_TIME realtime_priority: 80 "
+                            "wait_policy: WAIT_SPIN }")
+                .find("WAIT_SLEEP_THEN_SPIN"),
+            std::string::npos);
+  EXPECT_EQ(error_of(base + "deployment { clock: REAL_TIME realtime_priority: 80 }"), "");
   EXPECT_NE(
       error_of(base + "cases { name: \"a\" delay { shift { delay: 2 } } }").find("allow_long_lag"),
       std::string::npos);
