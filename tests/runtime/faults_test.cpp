@@ -21,6 +21,7 @@
 #include "security/run_secret.h"
 #include "test_support.h"
 #include "tests/support/platform_gate.h"
+#include "tests/support/real_time_run.h"
 #include "transport/dds_endpoint.h"
 
 namespace rths {
@@ -181,6 +182,7 @@ TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
       "deployment { clock: REAL_TIME liveliness_timeout: 0.5 heartbeat_period: 0.02 "
       "max_missed_answers: 120 command_watchdog_periods: " +
           std::to_string(watchdog) + " max_overrun_fraction: -1 }");
+  test::StallWitness witness;
   Cluster c = start("own_stall", text, 53, {{1, true}, {2, false}}, "reference");
   ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   for (int i = 0; i < 15; ++i) {
@@ -190,10 +192,30 @@ TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
     std::this_thread::sleep_for(100ms);
   }
   const auto code = c.coordinator->wait_for(20s);
+  const test::MeasuredPlatform during = witness.finish();
   ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
+  const runtime::RecordContents record = runtime::read_record(c.record);
+  ASSERT_NE(record.header(), nullptr);
+  ASSERT_NE(record.footer(), nullptr);
+  const std::string& status = record.footer()->status();
+  // This test judges the watchdog, not this machine's deadlines (max_overrun_fraction: -1). A run
+  // that completed every step but overran more than half of them still fails the deadline
+  // verdict, rightly, as under a loaded suite; here that verdict is reported, not judged.
+  const bool deadlines_only = *code != 0 && status.rfind("completed with deadline misses", 0) == 0;
+  // Any other failure is put down to the machine only by the suite's one rule
+  // (tests/support/real_time_run.h): a stall of half the window it passed.
+  if (*code != 0 && !deadlines_only)
+    if (const auto why = test::machine_stalled(status, *record.header(), during))
+      GTEST_SKIP() << *why;
   const std::string node_log = test::read_file(c.dir / "node_2.log");
   EXPECT_EQ(node_log.find("command watchdog"), std::string::npos) << node_log;
-  EXPECT_EQ(*code, 0) << test::read_file(c.dir / "coordinator.log");
+  if (deadlines_only) {
+    std::printf("the deadline verdict, not judged here: %s (the machine: %s)\n", status.c_str(),
+                during.text.c_str());
+    EXPECT_EQ(record.steps().size(), 6000u) << status;  // every step of the 6 s run
+  } else {
+    EXPECT_EQ(*code, 0) << test::read_file(c.dir / "coordinator.log");
+  }
 }
 
 TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
