@@ -84,6 +84,26 @@ TEST(StallRule, AWindowsFailureIsTheMachinesOnlyBesideAStallOfHalfIt) {
   EXPECT_NE(why->find(status), std::string::npos) << *why;
 }
 
+// Beside a machine that cannot pace the loop (p99 >= dt / 2) a window's failure is the machine's
+// with no single stall of half the window; beside one that can, it is the code's.
+TEST(StallRule, AWindowsFailureBesideAMachineThatCannotPaceIsTheMachines) {
+  const runtime::RunHeader h = header(1.0 / 1024);
+  const std::string status =
+      "its newest answer is to step 108 at step 130: 22 steps (21.484375 ms) old, beyond its "
+      "answer window of 21 steps (20.507812 ms); an answer that old is never applied";
+  test::MeasuredPlatform machine = stalled_for(0.0048);
+  machine.p99 = 0.00048;
+  EXPECT_FALSE(test::machine_stalled(status, h, machine).has_value());
+  machine.p99 = 0.0037;
+  const auto why = test::machine_stalled(status, h, machine);
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("p99 wake-up lateness 3.70 ms is at least half the 0.98 ms step"),
+            std::string::npos)
+      << *why;
+  EXPECT_NE(why->find("past the 20.5 ms window"), std::string::npos) << *why;
+  EXPECT_FALSE(test::machine_stalled("diverged at step 40", h, machine).has_value());
+}
+
 // A failed real-time verdict is the machine's only where its p99 wake-up lateness reached half a
 // step; beside a machine that paces the loop it is the code's, however long one stall was.
 TEST(StallRule, MissedDeadlinesAreTheMachinesOnlyWhereItCouldNotPaceTheLoop) {

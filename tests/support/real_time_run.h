@@ -12,8 +12,9 @@
 // machine's when the witness's p99 wake-up lateness was at least half a step: one step in a
 // hundred then starts half a step late, and a loop that the platform check would have refused to
 // start cannot keep its deadlines (on a quiet machine the p99 is tens of us, so a loop that
-// overruns there still fails the test). Any other failure, or one beside a quiet machine, is the
-// code's.
+// overruns there still fails the test). A window's failure beside such a machine is its too,
+// however short its longest stall: the lateness of successive wake-ups of the run's processes adds
+// up past the window. Any other failure, or one beside a quiet machine, is the code's.
 //
 //   stall_window(status, header) -> s: the window `status` names that a stall can pass, the reply
 //     timeout read from the study's controller nodes; nullopt for any other status.
