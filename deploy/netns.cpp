@@ -73,17 +73,20 @@ bool looks_like_permission_problem(const std::string& output) {
 
 }  // namespace
 
-std::vector<std::string> list_namespaces() {
-  const auto output = util::run_checked({"ip", "netns", "list"});
+std::vector<std::string> parse_namespace_list(const std::string& output) {
   std::vector<std::string> names;
   std::istringstream lines(output);
   std::string line;
+  static const std::regex name_line(R"(([A-Za-z0-9_.-]+)( \(id: [0-9]+\))?)");
   while (std::getline(lines, line)) {
-    const auto end = line.find(' ');
-    const auto name = line.substr(0, end);
-    if (!name.empty()) names.push_back(name);
+    std::smatch m;
+    if (std::regex_match(line, m, name_line)) names.push_back(m[1].str());
   }
   return names;
+}
+
+std::vector<std::string> list_namespaces() {
+  return parse_namespace_list(util::run_checked({"ip", "netns", "list"}));
 }
 
 std::optional<std::string> namespace_support() {

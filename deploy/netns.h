@@ -79,5 +79,9 @@ std::vector<std::string> remove_stale_namespaces();
 
 // Names of all namespaces currently on the host (`ip netns list`).
 std::vector<std::string> list_namespaces();
+// The names in `ip netns list`'s output: a line "name" or "name (id: N)" per namespace; any other
+// line (its stderr, interleaved: "Error: Peer netns reference is invalid." for a namespace being
+// deleted meanwhile) names none.
+std::vector<std::string> parse_namespace_list(const std::string& output);
 
 }  // namespace rths::deploy

@@ -14,6 +14,7 @@
 #include "opensees_site/outputs.h"
 #include "runtime/launch/launch.h"
 #include "runtime/record/record.h"
+#include "tests/support/real_time_run.h"
 
 namespace rths::opensees {
 namespace {
@@ -213,6 +214,7 @@ TEST_F(OpenSeesSite, RealTimeSilentClientIsStoppedWithinTheWatchdog) {
   const std::string text = test::site_study(2,
                                             "clock: REAL_TIME max_overrun_fraction: -1 "
                                             "max_missed_answers: 50 command_watchdog_periods: 50");
+  test::StallWitness witness;
   SiteRun run = start_site("real_time_silent", text, "reference", 209);
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();
@@ -222,11 +224,20 @@ TEST_F(OpenSeesSite, RealTimeSilentClientIsStoppedWithinTheWatchdog) {
     client.send_action(5);
   }
   const SiteOutcome outcome = run.outcome.get();
+  const test::MeasuredPlatform machine = witness.finish();
   EXPECT_FALSE(outcome.ok());
   // Either side's watchdog (50 periods = 50 ms) stops it: the site's or the emulator's own HOLD.
   const bool site = outcome.run.status.find("sent nothing for 0.05") != std::string::npos;
   const bool emulator = outcome.run.status.find("held on its own") != std::string::npos;
-  EXPECT_TRUE(site || emulator) << outcome.run.status;
+  if (!site && !emulator) {
+    // A stall of the machine may pass another window first (the emulator's answers, the one
+    // real-time verdict): the suite's rule then puts it down to the machine, naming its figures.
+    const runtime::RecordContents record = runtime::read_record(run.record());
+    ASSERT_NE(record.header(), nullptr) << outcome.run.status;
+    if (const auto why = test::machine_stalled(outcome.run.status, *record.header(), machine))
+      GTEST_SKIP() << *why;
+  }
+  EXPECT_TRUE(site || emulator) << outcome.run.status << " (" << machine.text << ")";
 }
 
 int rths_exit(const std::string& args) {
