@@ -115,17 +115,26 @@ TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
   const std::string text = test::paper_frame_study(8, kRealTime);
   Cluster c = start(name, text, domain, {{1, true}, {2, false}}, "lag_shift_14ms");
   ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
+  test::StallWitness witness;
   const auto killed_at = std::chrono::steady_clock::now();
   const std::int64_t killed_ns = transport::realtime_ns();
   c.nodes[victim - 1].signal(sig);
-  const auto code = c.coordinator->wait_for(5s);
+  const auto code = c.coordinator->wait_for(30s);
   ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
   const double stop_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count();
+  const test::MeasuredPlatform machine = witness.finish();
   EXPECT_EQ(*code, 1);
   // The process may linger up to ~1 s on exit (DDS writer linger towards a dead reader); the
-  // HOLD goes out at the stop, which must come within the missed-answer window, not liveliness.
-  EXPECT_LT(stop_seconds, 2.5);
+  // HOLD goes out at the stop, which must come within the missed-answer window, not liveliness
+  // (the record's HOLD event, below). The exit's 2.5 s is judged on a machine that can pace the
+  // loop (p99 wake-up lateness under half the 1 ms step): beside two CPU burners the DDS teardown
+  // after a logged stop took over 5 s (the rule of real_time_run.h); a hang fails either way.
+  if (machine.p99 < 0.5e-3)
+    EXPECT_LT(stop_seconds, 2.5) << machine.text;
+  else
+    std::cout << "exit " << stop_seconds << " s after the kill, not judged: " << machine.text
+              << "\n";
   const std::string log = test::read_file(c.dir / "coordinator.log");
   EXPECT_NE(log.find(label), std::string::npos) << log;
   EXPECT_NE(log.find("consecutive steps"), std::string::npos) << log;
