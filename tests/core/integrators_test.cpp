@@ -228,8 +228,8 @@ TEST_P(DissipativeSchemes, AgreesWithExplicitNewmarkAsDtShrinks) {
 TEST_P(DissipativeSchemes, BoundedFarBeyondTheExplicitLimit) {
   const auto& p = GetParam();
   // Without dissipation (rho_inf = 1) KR-alpha is only marginally stable as omega dt -> infinity
-  // (measured: the amplitude grows 1.4x over 2000 steps at omega dt = 1000, 6.6x at omega dt = 50); bounded at
-  // omega dt = 10 (IntegratorStabilityTest above).
+  // (measured: the amplitude grows 1.4x over 2000 steps at omega dt = 1000, 6.6x at
+  // omega dt = 50); bounded at omega dt = 10 (IntegratorStabilityTest above).
   if (p.kind == IntegratorKind::kKRAlpha && p.parameters.rho_infinity == 1.0)
     GTEST_SKIP() << "KR-alpha without dissipation (rho_inf = 1) is not bounded this far past the "
                     "explicit limit: measured 6.6x growth over 2000 steps at omega dt = 50";
