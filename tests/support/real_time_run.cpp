@@ -46,11 +46,15 @@ std::optional<double> stall_window(const std::string& status, const runtime::Run
   return std::nullopt;
 }
 
+bool machine_can_pace(const MeasuredPlatform& machine, double dt) {
+  return !(dt > 0.0) || machine.p99 < 0.5 * dt;
+}
+
 std::optional<std::string> machine_cannot_pace(const std::string& status,
                                                const runtime::RunHeader& header,
                                                const MeasuredPlatform& machine) {
-  if (status.rfind("completed with deadline misses", 0) != 0 || !(header.dt() > 0.0) ||
-      machine.p99 < 0.5 * header.dt())
+  if (status.rfind("completed with deadline misses", 0) != 0 ||
+      machine_can_pace(machine, header.dt()))
     return std::nullopt;
   char figures[128];
   std::snprintf(figures, sizeof figures,
@@ -69,7 +73,7 @@ std::optional<std::string> machine_stalled(const std::string& status,
   if (machine.max < 0.5 * *window) {
     // No one stall that long, but a machine that cannot pace the loop: the lateness of several
     // processes' wake-ups in a row (controller, node, coordinator) adds up past the window.
-    if (!(header.dt() > 0.0) || machine.p99 < 0.5 * header.dt()) return std::nullopt;
+    if (machine_can_pace(machine, header.dt())) return std::nullopt;
     char pace[160];
     std::snprintf(pace, sizeof pace,
                   "its p99 wake-up lateness %.2f ms is at least half the %.2f ms step, and "

@@ -18,6 +18,7 @@
 //
 //   stall_window(status, header) -> s: the window `status` names that a stall can pass, the reply
 //     timeout read from the study's controller nodes; nullopt for any other status.
+//   machine_can_pace(machine, dt) -> whether its p99 wake-up lateness stayed under dt / 2.
 //   machine_cannot_pace(status, header, machine) -> why a failed deadline verdict is the
 //     machine's (its p99 wake-up lateness >= dt / 2), or nullopt.
 //   machine_stalled(status, header, machine) -> why the failure is the machine's (either rule), or
@@ -39,6 +40,8 @@
 namespace rths::test {
 
 std::optional<double> stall_window(const std::string& status, const runtime::RunHeader& header);
+// Whether the machine could pace a loop of step `dt` (s): its p99 wake-up lateness under dt / 2.
+bool machine_can_pace(const MeasuredPlatform& machine, double dt);
 std::optional<std::string> machine_cannot_pace(const std::string& status,
                                                const runtime::RunHeader& header,
                                                const MeasuredPlatform& machine);
