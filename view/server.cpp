@@ -244,6 +244,7 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   thread_ = std::thread([this] {
     set_thread_nice(options_.gate.nice);
     server_->listen_after_bind();
+    listen_returned_.store(true);
   });
 }
 
@@ -394,12 +395,21 @@ nlohmann::json ViewServer::counters() const {
           {"connections", gate_->counters()}};
 }
 
+// httplib's stop() does nothing before its accept loop has begun (is_running): a view shut down
+// before its listening thread first ran would then join a thread that listens for ever. Stop is
+// called once: a second call on a stopping server asserts in httplib.
+void ViewServer::stop_listening() {
+  while (!server_->is_running() && !listen_returned_.load())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  server_->stop();
+}
+
 void ViewServer::shutdown(std::chrono::milliseconds linger) {
   const auto until = std::chrono::steady_clock::now() + linger;
   while (streams_.load() > 0 && std::chrono::steady_clock::now() < until)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   stopping_.store(true);
-  if (server_) server_->stop();
+  if (server_) stop_listening();
   if (thread_.joinable()) thread_.join();
   if (gate_) gate_->stop();
 }

@@ -111,6 +111,7 @@ class ViewServer {
  private:
   void routes();
   void stream(httplib::Server& server);
+  void stop_listening();
   // Why a request is not for this server (its Host or Origin), or empty when it is.
   std::string foreign(const std::string& host, const std::string& origin,
                       const std::string& local_address);
@@ -123,6 +124,7 @@ class ViewServer {
   std::thread thread_;
   int port_ = 0;
   std::atomic<bool> stopping_{false}, stop_requested_{false};
+  std::atomic<bool> listen_returned_{false};  // set by thread_ when httplib's loop has ended
   std::atomic<int> streams_{0};
   std::atomic<std::uint64_t> refused_{0}, not_found_{0}, bad_token_{0}, bad_host_{0},
       cross_origin_{0}, streams_refused_{0}, streams_dropped_{0}, streams_served_{0},

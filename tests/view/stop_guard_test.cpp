@@ -7,7 +7,11 @@
 #include <httplib.h>
 
 #include <atomic>
+#include <chrono>
+#include <future>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace rths::view {
@@ -57,6 +61,20 @@ TEST(ViewStopGuard, TheStopNeedsItsTokenOnLoopbackTooAndEachViewMakesItsOwn) {
   EXPECT_FALSE(view.server.stop_requested());
   EXPECT_EQ(status_of(port, "POST", "/api/stop", {{"X-RTHS-Token", token}}), 202);
   EXPECT_EQ(view.stops, 1);
+}
+
+// httplib's stop() does nothing until its accept loop has begun: a view destroyed before its
+// listening thread first ran would join a thread that listens for ever (a CI run's 300 s hang).
+TEST(ViewStopGuard, AViewDestroyedAtOnceAfterItsBirthStillStops) {
+  auto born_and_destroyed = std::make_shared<std::promise<void>>();
+  std::future<void> done = born_and_destroyed->get_future();
+  std::thread([born_and_destroyed] {
+    for (int i = 0; i < 300; ++i) StopView view;
+    born_and_destroyed->set_value();
+  }).detach();
+  // Bounded: a hang fails here with its cause instead of at ctest's limit.
+  ASSERT_EQ(done.wait_for(std::chrono::seconds(120)), std::future_status::ready)
+      << "a view destroyed right after its construction never stopped listening";
 }
 
 TEST(ViewStopGuard, ACrossOriginPostIsRefusedEvenWithTheTokenAndTheRunGoesOn) {
