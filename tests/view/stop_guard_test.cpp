@@ -64,7 +64,7 @@ TEST(ViewStopGuard, TheStopNeedsItsTokenOnLoopbackTooAndEachViewMakesItsOwn) {
 }
 
 // httplib's stop() does nothing until its accept loop has begun: a view destroyed before its
-// listening thread first ran would join a thread that listens for ever (a CI run's 300 s hang).
+// listening thread first ran would join a thread that listens for ever.
 TEST(ViewStopGuard, AViewDestroyedAtOnceAfterItsBirthStillStops) {
   auto born_and_destroyed = std::make_shared<std::promise<void>>();
   std::future<void> done = born_and_destroyed->get_future();
