@@ -29,9 +29,13 @@ struct ActuatorPath {
   int actuator = 0;                   // 1-based
   std::vector<std::string> declared;  // the case's stages, as effects
   double declared_gain = 1.0, fitted_gain = 1.0;
-  double declared_delay = 0.0, fitted_delay = 0.0;  // s; both 0 when no delay was declared
-  Identification id;                                // channels measured and force
-  std::vector<std::string> undeclared;              // effects named beyond the declared model
+  // The declared pure delay and the fitted one (s): a declared shift's, or 0 when the run declared
+  // no actuator stage at all (delay_declared); both 0 and delay_declared false when the declared
+  // stages hold no shift (a first-order lag, ...).
+  bool delay_declared = false;
+  double declared_delay = 0.0, fitted_delay = 0.0;
+  Identification id;                    // channels measured and force
+  std::vector<std::string> undeclared;  // effects named beyond the declared model
   // The specimen and the load cell behind this actuator (channel force), against the study's
   // declared storey model: its restoring force's kind as effects (linear: stiffness; bouc_wen:
   // + bouc_wen; bilinear: + elastoplastic) and its initial stiffness (N/m).
@@ -56,6 +60,21 @@ struct ActuatorPath {
     std::string effect;
   };
   std::vector<NotNamed> not_named;
+  // Effects a channel named that made the re-run worse (run_residual.h effects: the identified
+  // re-run without the effect has a lower worst-floor NRMSE, by `worsening`): taken out of the
+  // named effects, of the re-run and of the written study (sensors.h rig_models), and said as
+  // rejected (run_record.h).
+  struct Rejected {
+    Channel channel = Channel::kMeasured;
+    std::string part, effect;  // as the re-run named them ("specimen 1", "bouc_wen")
+    double worsening = 0.0;    // NRMSE of the worst floor the effect added, > 0
+  };
+  std::vector<Rejected> rejected;
+  bool was_rejected(Channel channel, const std::string& effect) const {
+    for (const auto& r : rejected)
+      if (r.channel == channel && r.effect == effect) return true;
+    return false;
+  }
   const EffectEstimate* estimate(Channel channel, Effect effect) const {
     for (const auto& e : estimates)
       if (e.channel == channel && e.effect == effect) return &e;

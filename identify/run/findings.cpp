@@ -109,8 +109,8 @@ void add_path_findings(const ActuatorPath& path, std::vector<Finding>& out) {
       f.magnitude =
           "gain " + number(path.fitted_gain) + " (declared " + number(path.declared_gain) + ")";
     if (effect == "delay change")
-      f.magnitude = "delay " + number(path.fitted_delay * 1e3) + " ms (declared " +
-                    number(path.declared_delay * 1e3) + " ms)";
+      f.magnitude = number(path.declared_delay * 1e3) + " -> " + number(path.fitted_delay * 1e3) +
+                    " ms (declared -> fitted)";
     if (effect == "noise") describe_noise(path, Channel::kMeasured, f);
     if (effect == "scale") {
       f.parameters = {{"scale", "-", path.displacement_scale, path.displacement_scale_error}};

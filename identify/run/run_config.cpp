@@ -110,6 +110,10 @@ IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem
     out.notes.push_back("specimen: " + specimen->description +
                         " (the identified storey model; the structure keeps its stiffness)");
   }
+  for (const auto& path : run.actuators)
+    for (const auto& r : path.rejected)
+      out.notes.push_back(r.part + ": " + r.effect + " left out: it made the re-run worse by " +
+                          percent_text(r.worsening) + " of the worst floor's NRMSE");
   out.study = identified_study(run.study, base_dir, fragment);
   for (auto& node : *out.study.mutable_deployment()->mutable_nodes()) {
     if (node.kind() == config::NodeSpec::ACTUATOR_EMULATOR && fragment.cases_size() > 0) {

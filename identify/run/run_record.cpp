@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -149,6 +150,10 @@ struct DeclaredActuator {
   std::vector<ParamDeclaration> parameters;
   std::vector<std::string> names;
   double gain = 1.0;
+  // The declared pure delay (s): the first shift stage's, or 0 when no stage is declared at all
+  // (a command then reaches the rig at once, so a fitted lag is a finding, "delay change");
+  // absent when the declared stages hold no shift (a lag the search adds is then its own effect).
+  std::optional<double> delay;
   // RMS (m, N) of a tracking loop's sensor noise with its converter's quantisation (sensors.h).
   double displacement_noise = 0.0, force_noise = 0.0;
 };
@@ -174,6 +179,7 @@ void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
   if (stage.amplitude_gain() != 0.0) out.gain *= stage.amplitude_gain();
   if (stage.has_tracking_loop()) declare_noise(stage.tracking_loop(), out);
   if (stage.has_shift()) {
+    if (!out.delay) out.delay = stage.shift().delay();
     add(Effect::kDelay, "delay", stage.shift().delay(),
         "shift " + std::to_string(stage.shift().delay()) + " s");
   } else if (stage.has_first_order()) {
@@ -205,7 +211,13 @@ DeclaredActuator declared_actuator(const config::Study& study, const std::string
     if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
     for (const auto& stage : node.receive_delay()) declare_stage(stage, out);
   }
-  if (out.effects.empty()) out.effects.push_back(Effect::kDelay);
+  if (out.effects.empty()) {
+    // Nothing declared between the command and the rig: a free delay whose declared value is 0.
+    // Its value stays undeclared to the fit (the library's starting guesses, 0 among them, are
+    // all tried) and is only what the fitted one is judged against.
+    out.effects.push_back(Effect::kDelay);
+    out.delay = 0.0;
+  }
   out.parameters.push_back({"gain", out.gain, std::nullopt, std::nullopt, false});
   return out;
 }
@@ -324,9 +336,9 @@ ActuatorPath identify_actuator(const MeasuredData& data, const runtime::RunHeade
     if (std::abs(out.fitted_gain - declared.gain) > kGainTolerance * declared.gain) {
       out.undeclared.push_back("gain error");
     }
-    for (const auto& p : declared.parameters) {
-      if (p.name != "delay" || !p.initial) continue;
-      out.declared_delay = *p.initial;
+    if (declared.delay) {
+      out.delay_declared = true;
+      out.declared_delay = *declared.delay;
       out.fitted_delay = c->final_fit.model.param(Effect::kDelay, "delay", scales).value_or(0.0);
       if (std::abs(out.fitted_delay - out.declared_delay) >
           std::max(kDelayTolerance * out.declared_delay, 0.25 * header.dt())) {
@@ -404,7 +416,33 @@ void set_shares(const RunResidual& residual, std::vector<Unexplained>& unexplain
       if (s.link == u.part && s.effect == u.channel_word) u.share = s.share;
 }
 
+// The named effect `worse` (a re-run removal, run_residual.h effects) moved from its path's named
+// effects to its rejected ones; false when no path names it (nothing to take out).
+bool reject(const ResidualShare& worse, std::vector<ActuatorPath>& paths) {
+  for (ActuatorPath& path : paths)
+    for (Channel channel : {Channel::kMeasured, Channel::kForce}) {
+      auto& named = channel == Channel::kMeasured ? path.undeclared : path.specimen_undeclared;
+      const auto at = std::find(named.begin(), named.end(), worse.effect);
+      if (at == named.end() || part_of(worse.effect, channel, path.actuator) != worse.link)
+        continue;
+      named.erase(at);
+      path.rejected.push_back({channel, worse.link, worse.effect, -worse.removed});
+      return true;
+    }
+  return false;
+}
+
 }  // namespace
+
+void keep_what_helps(RunIdentification& run, const std::function<RunResidual()>& rerun) {
+  while (run.residual) {
+    const ResidualShare* worst = nullptr;
+    for (const ResidualShare& s : run.residual->effects)
+      if (s.removed < -kMinErrorRemoved && (!worst || s.removed < worst->removed)) worst = &s;
+    if (!worst || !reject(*worst, run.actuators)) return;
+    run.residual = rerun();
+  }
+}
 
 bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }
 
@@ -452,6 +490,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   if (std::find(channels.begin(), channels.end(), Channel::kMeasured) != channels.end()) {
     if (options.progress) options.progress({0, 0, "re-run: declared and identified models"});
     out.residual = residual(record, contents, header, m, out);
+    keep_what_helps(out, [&] { return residual(record, contents, header, m, out); });
     set_shares(*out.residual, out.unexplained);
   }
   out.findings = collect_findings(out.links, out.actuators, out.residual ? &*out.residual : nullptr,

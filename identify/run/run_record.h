@@ -10,7 +10,8 @@
 // declared = the case's delay stages (shift -> delay, first_order -> first_order, a second-order
 // transfer function -> second_order, backlash -> backlash, velocity_limit ->
 // velocity_saturation, stroke_limit -> stroke_limit, each with the config's value as initial
-// value), gain = the stages' amplitude gain. Undeclared effects: the steps the search added that
+// value), gain = the stages' amplitude gain; no stage at all declares a delay of 0 (the commands
+// reach the rig at once). Undeclared effects: the steps the search added that
 // removed more than kMinErrorRemoved of held-out error when added and still do in the final model
 // (refitted without it), and a fitted gain off the declared one by more than kGainTolerance (an
 // emulator gain error), and a fitted delay off the declared one (kDelayTolerance). A run that
@@ -29,6 +30,7 @@
 // no answer, fewer steps than identification needs.
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -82,6 +84,15 @@ struct RunIdentification {
 
 RunIdentification identify_run_record(const std::filesystem::path& record,
                                       const IdentifyOptions& options);
+
+// The re-run keeps only what helps: while a named effect (ActuatorPath::undeclared,
+// specimen_undeclared) makes `run`'s re-run worse, its removal (run_residual.h effects) below
+// -kMinErrorRemoved, the worst one is rejected (moved to its path's `rejected` with the NRMSE it
+// added, so that rig_models leaves it out of the re-run and the written study) and
+// `run.residual` made again by `rerun` (the study re-run with the paths as they stand). One
+// effect per pass: it ends within as many passes as effects named. identify_run_record calls it
+// before the findings are collected; nothing to do without a residual.
+void keep_what_helps(RunIdentification& run, const std::function<RunResidual()>& rerun);
 
 // True for a path named *.rthsrec (what `rths identify` reads as a run record).
 bool is_run_record(const std::filesystem::path& path);

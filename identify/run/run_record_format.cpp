@@ -42,9 +42,8 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
   out << "actuator " << a.actuator << ": declared";
   for (const auto& d : a.declared) out << " " << d << ",";
   out << " gain " << a.declared_gain << " (fitted " << a.fitted_gain << ")";
-  if (a.declared_delay > 0.0) {
+  if (a.delay_declared)
     out << ", delay " << a.declared_delay * 1e3 << " ms (fitted " << a.fitted_delay * 1e3 << " ms)";
-  }
   out << "\n";
   for (const auto& c : a.id.channels) {
     out << "  " << channel_name(c.channel) << ": held-out "
@@ -98,6 +97,31 @@ void residual_text(const RunResidual& r, std::ostream& out) {
     }
   }
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
+}
+
+// The effects the re-run rejected (ActuatorPath::rejected), one line each; empty when none.
+std::string rejected_text(const std::vector<ActuatorPath>& paths) {
+  std::ostringstream out;
+  for (const auto& a : paths)
+    for (const auto& r : a.rejected)
+      out << "  " << r.part << ": " << r.effect << " rejected: makes the re-run's NRMSE worse by "
+          << percent_text(r.worsening) << " (worst floor)\n";
+  const std::string lines = out.str();
+  if (lines.empty()) return lines;
+  return "rejected, named by a channel but made the re-run worse (left out of it and of the "
+         "written study):\n" +
+         lines;
+}
+
+nlohmann::json rejected_json(const std::vector<ActuatorPath>& paths) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& a : paths)
+    for (const auto& r : a.rejected)
+      out.push_back({{"part", r.part},
+                     {"effect", r.effect},
+                     {"channel", channel_name(r.channel)},
+                     {"nrmse_added", r.worsening}});
+  return out;
 }
 
 nlohmann::json residual_json(const RunResidual& r) {
@@ -187,6 +211,7 @@ nlohmann::json actuators_json(const RunIdentification& run) {
                          {"declared", a.declared},
                          {"declared_gain", a.declared_gain},
                          {"fitted_gain", a.fitted_gain},
+                         {"delay_declared", a.delay_declared},
                          {"declared_delay_s", a.declared_delay},
                          {"fitted_delay_s", a.fitted_delay},
                          {"channels", channels},
@@ -227,6 +252,7 @@ std::string run_record_text(const RunIdentification& run) {
   for (const auto& a : run.actuators) actuator_text(a, out);
   if (run.residual) residual_text(*run.residual, out);
   out << findings_text(run.findings, run.residual ? &*run.residual : nullptr);
+  out << rejected_text(run.actuators);
   out << unexplained_text(run.unexplained);
   return out.str();
 }
@@ -239,6 +265,7 @@ nlohmann::json run_record_json(const RunIdentification& run) {
       {"duration_s", run.duration}, {"links", links},        {"actuators", actuators}};
   if (run.residual) out["residual"] = residual_json(*run.residual);
   out["undeclared"] = findings_json(run.findings);
+  out["rejected"] = rejected_json(run.actuators);
   out["unexplained"] = unexplained_json(run.unexplained);
   if (const auto& p = run.platform)
     out["platform"] = {

@@ -140,31 +140,6 @@ void set_shares(std::vector<ResidualShare>& shares) {
   for (auto& s : shares) s.share = sum > 0.0 ? std::max(0.0, s.removed) / sum : 0.0;
 }
 
-// The identified model of actuator path `path` with one undeclared effect taken back out.
-ChannelModel without(const ChannelModel& model, const ActuatorPath& path, const std::string& effect,
-                     const SignalScales& scales) {
-  if (effect == "gain error" || effect == "delay change") {
-    ChannelModel out = model;
-    const bool gain = effect == "gain error";
-    const auto i = gain ? out.index_of(std::nullopt, "gain", scales)
-                        : out.index_of(Effect::kDelay, "delay", scales);
-    if (i) out.params[*i] = gain ? path.declared_gain : path.declared_delay;
-    return out;
-  }
-  return without_effect(model, parse_effect(effect), scales);
-}
-
-// The identified specimen of `path` with one undeclared effect taken back out ("stiffness
-// change": the declared stiffness).
-ChannelModel specimen_without(const ChannelModel& model, const ActuatorPath& path,
-                              const std::string& effect, const SignalScales& scales) {
-  if (effect != "stiffness change") return without_effect(model, parse_effect(effect), scales);
-  ChannelModel out = model;
-  if (const auto i = out.index_of(Effect::kStiffness, "stiffness", scales))
-    out.params[*i] = path.declared_stiffness;
-  return out;
-}
-
 // The declared setup and re-runs of it with some actuators' models in place.
 class Reruns {
  public:
@@ -266,7 +241,8 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
         continue;
       }
       if (!all[a].actuator) continue;  // the declared actuator stays: nothing to take out
-      const ChannelModel reduced = without(*all[a].actuator, paths[a], effect, reruns.scales(a));
+      const ChannelModel reduced =
+          without_named(*all[a].actuator, paths[a], effect, reruns.scales(a));
       removes(part, effect, {&reduced, all[a].specimen, all[a].displacement_scale, all[a].held});
     }
     if (!all[a].specimen) continue;
@@ -276,7 +252,7 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
     for (const auto& effect : paths[a].specimen_undeclared) {
       if (effect == "noise" || names(left_out, effect)) continue;
       const ChannelModel reduced =
-          specimen_without(*all[a].specimen, paths[a], effect, reruns.scales(a, Channel::kForce));
+          without_named(*all[a].specimen, paths[a], effect, reruns.scales(a, Channel::kForce));
       removes(part_of(effect, Channel::kForce, actuator), effect,
               {all[a].actuator, &reduced, all[a].displacement_scale, all[a].held});
     }

@@ -163,17 +163,45 @@ double noise_std_error(const ActuatorPath& path, Channel channel, double sigma) 
   return n > 0.0 ? sigma * std::sqrt(2.0 / n) : 0.0;
 }
 
+ChannelModel without_named(const ChannelModel& model, const ActuatorPath& path,
+                           const std::string& effect, const SignalScales& scales) {
+  const auto set_back = [&](std::optional<Effect> e, const std::string& name, double declared) {
+    ChannelModel out = model;
+    if (const auto i = out.index_of(e, name, scales)) out.params[*i] = declared;
+    return out;
+  };
+  if (effect == "gain error") return set_back(std::nullopt, "gain", path.declared_gain);
+  if (effect == "delay change") return set_back(Effect::kDelay, "delay", path.declared_delay);
+  if (effect == "stiffness change")
+    return set_back(Effect::kStiffness, "stiffness", path.declared_stiffness);
+  return without_effect(model, parse_effect(effect), scales);
+}
+
+namespace {
+
+// `model` of `channel` without the effects the re-run rejected on it (a sensor's scale and noise
+// are no terms of the model: rig_models reads the scale true).
+void take_out_rejected(ChannelModel& model, const ActuatorPath& path, Channel channel) {
+  const SignalScales scales = signal_scales(identified_signals(path.id, channel));
+  for (const auto& r : path.rejected)
+    if (r.channel == channel && r.effect != "scale" && r.effect != "noise")
+      model = without_named(model, path, r.effect, scales);
+}
+
+}  // namespace
+
 RigModels rig_models(const ActuatorPath& path) {
   const ChannelIdentification* c = path.id.find(Channel::kMeasured);
   if (!c)
     throw std::invalid_argument("actuator " + std::to_string(path.actuator) +
                                 ": actuator path not identified");
-  RigModels out{std::nullopt, std::nullopt, path.displacement_scale, {}};
+  const double s = path.was_rejected(Channel::kMeasured, "scale") ? 1.0 : path.displacement_scale;
+  RigModels out{std::nullopt, std::nullopt, s, {}};
   std::vector<std::string> contradicted = path.undeclared;
   remove(contradicted, "noise");
-  const double s = path.displacement_scale;
   if (!contradicted.empty()) {
     out.actuator = c->final_fit.model;
+    take_out_rejected(*out.actuator, path, Channel::kMeasured);
     if (s != 1.0)
       scale_param(*out.actuator, std::nullopt, "gain", 1.0 / s,
                   signal_scales(identified_signals(path.id, Channel::kMeasured)));
@@ -183,6 +211,7 @@ RigModels rig_models(const ActuatorPath& path) {
   remove(re_run, "noise");
   if (!force || re_run.empty()) return out;
   out.specimen = force->final_fit.model;
+  take_out_rejected(*out.specimen, path, Channel::kForce);
   const SignalScales scales = signal_scales(identified_signals(path.id, Channel::kForce));
   if (out.specimen->has(Effect::kOffsetDrift)) {
     const auto [offset, drift] = load_cell_own_offset(path);

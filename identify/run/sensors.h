@@ -44,7 +44,9 @@
 // specimen is re-run (the force channel contradicted the declared specimen), the fitted specimen
 // with the load cell's own offset drift only, its stiffness, damping and mass times s and its
 // friction's smoothing velocity over s (tanh(v_read / v_s) = tanh(v / (v_s / s))); the sensor's
-// scale itself goes into a sensor_drift stage.
+// scale itself goes into a sensor_drift stage. An effect the re-run rejected
+// (ActuatorPath::rejected) is taken back out of either model (without_named), a rejected scale
+// reads the sensor true.
 
 #include <optional>
 #include <span>
@@ -84,6 +86,12 @@ double noise_spread(const Identification& id, Channel channel);
 
 // The statistical half-width of a noise estimate sigma from the channel's samples.
 double noise_std_error(const ActuatorPath& path, Channel channel, double sigma);
+
+// `model` of `channel` on `path` with one named effect taken back out: "gain error", "delay
+// change" and "stiffness change" set back to the declared value, any other effect removed
+// (parameters.h without_effect).
+ChannelModel without_named(const ChannelModel& model, const ActuatorPath& path,
+                           const std::string& effect, const SignalScales& scales);
 
 struct RigModels {
   std::optional<ChannelModel> actuator;  // absent: the declared actuator stays

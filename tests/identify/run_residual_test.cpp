@@ -17,6 +17,7 @@
 #include "identify/run/run_config.h"
 #include "identify/run/run_record.h"
 #include "identify/run/run_record_format.h"
+#include "runtime/record/record.h"
 #include "tests/identify/undeclared_run.h"
 
 namespace rths::identify {
@@ -95,6 +96,157 @@ TEST(RunResidual, AnUndeclaredExtraDelayIsNamedAsADelayChangeAndReproduced) {
   ASSERT_EQ(r.effects.size(), 1u) << run_record_text(run);
   EXPECT_EQ(r.effects[0].effect, "delay change");
   EXPECT_NEAR(r.effects[0].share, 1.0, 1e-12);
+}
+
+// A lag where the run declared none: case "reference" declares no actuator stage and the
+// emulator delays every command by 6 steps. The declared delay is 0, so the fitted one is a
+// finding ("delay change: 0 -> 6 ms") in the actuator section and the verdict, the re-run holds it
+// and closes the record, and the written study holds it as a shift.
+TEST(RunResidual, ALagWhereNoActuatorStageWasDeclaredIsADelayChangeFromZero) {
+  const RunIdentification run = identify_run_record(
+      test::run_with_undeclared("residual_undeclared_lag",
+                                "receive_delay { shift { delay: 0.006 } }", "reference"),
+      actuator_only());
+  const RunResidual& r = residual_of(run);
+  print("6 ms lag, none declared", r);
+  const std::string text = run_record_text(run);
+  const ActuatorPath& path = run.actuators.at(0);
+  EXPECT_TRUE(path.delay_declared) << text;
+  EXPECT_EQ(path.declared_delay, 0.0) << text;
+  EXPECT_NEAR(path.fitted_delay, 0.006, 2e-4) << text;
+  EXPECT_NE(text.find(", delay 0 ms (fitted 6"), std::string::npos) << text;
+  EXPECT_NE(text.find("actuator 1: delay change: 0 -> 6"), std::string::npos) << text;
+  ASSERT_EQ(r.effects.size(), 1u) << text;
+  EXPECT_EQ(r.effects[0].effect, "delay change");
+  EXPECT_GE(r.declared, 0.05) << text;
+  EXPECT_LE(r.identified, 0.1 * r.declared) << text;
+  const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
+  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  ASSERT_NE(identified, nullptr);
+  double shift = 0.0;
+  for (const auto& stage : identified->delay())
+    if (stage.has_shift()) shift += stage.shift().delay();
+  EXPECT_NEAR(shift, 0.006, 2e-4) << identified->DebugString();
+}
+
+// The same run without the lag: its fitted delay is the declared 0, nothing is named.
+TEST(RunResidual, ARunDeclaringNoActuatorStageWithoutALagNamesNoDelayChange) {
+  const RunIdentification run = identify_run_record(
+      test::run_with_undeclared("residual_no_lag", "", "reference"), actuator_only());
+  const std::string text = run_record_text(run);
+  EXPECT_TRUE(run.actuators.at(0).delay_declared) << text;
+  EXPECT_TRUE(run.actuators.at(0).undeclared.empty()) << text;
+  EXPECT_LT(residual_of(run).identified, 0.02) << text;
+}
+
+// The re-run keeps only what helps, the selection alone with the removals given: the most
+// negative removal is rejected first (its part, channel and the NRMSE it added), one per pass,
+// the study re-run after each rejection only; a removal within round-off (-kMinErrorRemoved) and
+// a positive one are kept.
+TEST(RunResidual, TheReRunKeepsOnlyTheEffectsThatHelp) {
+  RunIdentification run;
+  run.actuators.emplace_back();
+  ActuatorPath& path = run.actuators.back();
+  path.actuator = 1;
+  path.undeclared = {"first_order", "gain error"};
+  path.specimen_undeclared = {"bouc_wen", "damping"};
+  const double round_off = -0.5 * kMinErrorRemoved;
+  RunResidual first, second, third;
+  first.effects = {{"actuator 1", "first_order", 0.3, 0.0},
+                   {"actuator 1", "gain error", -0.2, 0.0},
+                   {"specimen 1", "bouc_wen", -0.994, 0.0},
+                   {"specimen 1", "damping", round_off, 0.0}};
+  second.effects = {{"actuator 1", "first_order", 0.3, 0.0},
+                    {"actuator 1", "gain error", -0.01, 0.0},
+                    {"specimen 1", "damping", round_off, 0.0}};
+  third.effects = {{"actuator 1", "first_order", 0.31, 0.0},
+                   {"specimen 1", "damping", round_off, 0.0}};
+  run.residual = first;
+  const std::vector<RunResidual> reruns{second, third};
+  std::size_t made = 0;
+  keep_what_helps(run, [&] { return reruns.at(made++); });
+  EXPECT_EQ(made, 2u);
+  EXPECT_EQ(path.undeclared, std::vector<std::string>{"first_order"});
+  EXPECT_EQ(path.specimen_undeclared, std::vector<std::string>{"damping"});
+  ASSERT_EQ(path.rejected.size(), 2u);
+  EXPECT_EQ(path.rejected[0].part, "specimen 1");
+  EXPECT_EQ(path.rejected[0].effect, "bouc_wen");
+  EXPECT_EQ(path.rejected[0].channel, Channel::kForce);
+  EXPECT_DOUBLE_EQ(path.rejected[0].worsening, 0.994);
+  EXPECT_EQ(path.rejected[1].effect, "gain error");
+  EXPECT_EQ(path.rejected[1].channel, Channel::kMeasured);
+  EXPECT_DOUBLE_EQ(path.rejected[1].worsening, 0.01);
+  EXPECT_NE(run_record_text(run).find(
+                "specimen 1: bouc_wen rejected: makes the re-run's NRMSE worse by 99.4 %"),
+            std::string::npos)
+      << run_record_text(run);
+}
+
+// The study of `record` re-run with `run`'s actuator paths as they stand (as identify_run_record
+// makes it: the record's own ground acceleration, its recorded response).
+RunResidual rerun_of(const std::filesystem::path& record, const RunIdentification& run,
+                     const core::Mat& recorded) {
+  const runtime::RecordContents contents = runtime::read_record(record);
+  ResidualInput input;
+  input.study = &run.study;
+  input.case_name = run.case_name;
+  input.clock = run.clock;
+  input.base_dir = record.parent_path();
+  input.motion.name = record.stem().string();
+  input.motion.dt = run.study.integrator().dt();
+  for (const runtime::StepRecord* step : contents.steps()) {
+    if (input.motion.acceleration.size() == run.steps) break;
+    input.motion.acceleration.push_back(step->ground_acceleration());
+  }
+  input.recorded = &recorded;
+  input.actuators = &run.actuators;
+  input.unexplained = &run.unexplained;
+  return run_residual(input);
+}
+
+// A named effect that makes the re-run worse is rejected with real re-runs: the record of an
+// 8 ms first-order lag, identified, then given a gain error of 1.3 in its fitted actuator as if
+// its channel had named one (a fit gone wrong). The re-run with it misses the response; it is
+// rejected, the lag kept, the re-run closes the record as before and the written study holds the
+// lag without the gain.
+TEST(RunResidual, ANamedEffectThatMakesTheReRunWorseIsRejected) {
+  const std::filesystem::path record = test::run_with_undeclared(
+      "residual_rejected", "receive_delay { first_order { time_constant: 0.008 } }");
+  RunIdentification run = identify_run_record(record, actuator_only());
+  const double closed = residual_of(run).identified;
+  const core::Mat recorded = run.residual->recorded_response;
+  ActuatorPath& path = run.actuators.at(0);
+  ASSERT_EQ(path.undeclared, std::vector<std::string>{"first_order"}) << run_record_text(run);
+  for (ChannelIdentification& c : path.id.channels) {
+    if (c.channel != Channel::kMeasured) continue;
+    const SignalScales scales = signal_scales(identified_signals(path.id, c.channel));
+    const auto gain = c.final_fit.model.index_of(std::nullopt, "gain", scales);
+    ASSERT_TRUE(gain.has_value());
+    c.final_fit.model.params[*gain] = 1.3 * path.declared_gain;
+  }
+  path.undeclared.push_back("gain error");
+  const auto rerun = [&] { return rerun_of(record, run, recorded); };
+  run.residual = rerun();
+  const double worse = run.residual->identified;
+  print("first order 8 ms, a wrong gain named", *run.residual);
+  ASSERT_GT(worse, closed + 0.05) << run_record_text(run);
+  keep_what_helps(run, rerun);
+  ASSERT_EQ(path.rejected.size(), 1u) << run_record_text(run);
+  EXPECT_EQ(path.rejected[0].part, "actuator 1");
+  EXPECT_EQ(path.rejected[0].effect, "gain error");
+  EXPECT_NEAR(path.rejected[0].worsening, worse - closed, 1e-3);
+  EXPECT_EQ(path.undeclared, std::vector<std::string>{"first_order"});
+  EXPECT_NEAR(run.residual->identified, closed, 1e-3) << run_record_text(run);
+  const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
+  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  ASSERT_NE(identified, nullptr);
+  bool lag = false;
+  for (const auto& stage : identified->delay()) {
+    lag = lag || stage.has_first_order();
+    const double gain = stage.amplitude_gain();  // 0: unset, a gain of 1
+    EXPECT_TRUE(gain == 0.0 || std::abs(gain - 1.0) < 0.02) << identified->DebugString();
+  }
+  EXPECT_TRUE(lag) << identified->DebugString();
 }
 
 // The finding of `effect` on `part` in the one verdict over every part, or nullptr.
