@@ -1,8 +1,11 @@
 #include "runtime/record/record_checks.h"
 
+#include <fmt/format.h>
 #include <google/protobuf/util/message_differencer.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <sstream>
 #include <utility>
@@ -101,9 +104,31 @@ Bounds bounds_of(const RecordContents& contents) {
   return b;
 }
 
+// A damaged region lies before the first intact step (or anywhere, without one): the inputs entry,
+// written after the header and before step 0, may have been in it.
+bool inputs_may_be_lost(const RecordContents& contents) {
+  std::uint64_t first_step = UINT64_MAX;
+  for (std::size_t i = 0; i < contents.entries.size(); ++i)
+    if (contents.entries[i].has_step()) {
+      first_step = contents.offsets[i];
+      break;
+    }
+  for (const RecordLoss& loss : contents.losses)
+    if (loss.first_byte < first_step) return true;
+  return contents.truncated && contents.truncated_at < first_step;
+}
+
 // The inputs entry is the one the header names (when it names one and the entry is intact).
 void check_inputs(const RecordContents& contents, const RunHeader& h, RecordChecks& out) {
-  if (h.inputs_crc32c() == 0 || contents.inputs_crc32c == 0) return;
+  if (h.inputs_crc32c() == 0 || !contents.checksummed) return;
+  if (contents.inputs_crc32c == 0) {
+    if (!inputs_may_be_lost(contents))
+      out.problems.push_back(fmt::format(
+          "no inputs entry: the header names one (CRC-32C {:x}) and no damaged region lies where "
+          "it would be (before the first step): the record lost the inputs it was run with",
+          h.inputs_crc32c()));
+    return;
+  }
   if (contents.inputs_crc32c == h.inputs_crc32c()) return;
   std::size_t index = 0;
   while (!contents.entries[index].has_inputs()) ++index;
@@ -212,6 +237,58 @@ std::vector<Finding> value_findings(const StepRecord& s, int dofs, int actuators
   return out;
 }
 
+// One lag of a link sample: finite, and not negative when `signed_ok` is false.
+void check_lag(const std::string& kind, const std::string& at, const char* name, double value,
+               bool signed_ok, std::vector<Finding>& out) {
+  if (!std::isfinite(value))
+    out.push_back({kind + name + " finite", fmt::format("{}{} is not finite", at, name)});
+  else if (!signed_ok && value < 0)
+    out.push_back({kind + name + " negative",
+                   fmt::format("{}{} {:g} s is negative (a lag or a time span)", at, name, value)});
+}
+
+// Each link sample in its range: the answered step neither negative nor after the step that
+// records it (an answer from the future); every lag finite; the spans one clock measures
+// (injected lag, round trip, the controller's round trip) not negative. One-way lags may be
+// negative across hosts (they carry the hosts' clock offset): finite only.
+std::vector<Finding> link_findings(const StepRecord& s) {
+  std::vector<Finding> out;
+  for (int j = 0; j < s.links_size(); ++j) {
+    const LinkSample& link = s.links(j);
+    const std::string kind = fmt::format("link {} ", link.node_id());
+    const std::string at = fmt::format("links[{}] (node {}): ", j, link.node_id());
+    if (link.answered_step() < 0 || link.answered_step() > s.step())
+      out.push_back(
+          {kind + "answered", fmt::format("{}answered_step {} {}", at, link.answered_step(),
+                                          link.answered_step() < 0
+                                              ? "is negative"
+                                              : "is after this step (an answer from the future)")});
+    check_lag(kind, at, "injected_lag", link.injected_lag(), false, out);
+    check_lag(kind, at, "round_trip", link.round_trip(), false, out);
+    check_lag(kind, at, "one_way_down", link.one_way_down(), true, out);
+    check_lag(kind, at, "one_way_up", link.one_way_up(), true, out);
+    check_lag(kind, at, "controller_round_trip", link.controller_round_trip(), false, out);
+    for (int a = 0; a < link.prediction_error_size(); ++a)
+      if (!std::isfinite(link.prediction_error(a)))
+        out.push_back({kind + "prediction finite",
+                       fmt::format("{}prediction_error[{}] is not finite", at, a)});
+  }
+  return out;
+}
+
+// The step's timing: lateness and command latency finite (either sign: early, or no command
+// written this step), the step's wall time finite and not negative.
+std::vector<Finding> timing_findings(const StepRecord& s) {
+  std::vector<Finding> out;
+  if (!std::isfinite(s.lateness())) out.push_back({"lateness", "lateness is not finite"});
+  if (!std::isfinite(s.command_latency()))
+    out.push_back({"command latency", "command_latency is not finite"});
+  if (!(std::isfinite(s.step_wall()) && s.step_wall() >= 0))
+    out.push_back({"step wall", fmt::format("step_wall {:g} s is not a time span (finite, >= 0)",
+                                            s.step_wall())});
+  return out;
+}
+
 // The intact steps read so far: the highest step number, and the last step's time and entry.
 struct Sequence {
   bool any = false;
@@ -276,10 +353,48 @@ void check_steps(const RecordContents& contents, RecordChecks& out) {
     if (dofs > 0)
       for (const Finding& f : value_findings(s, dofs, actuators, bounds))
         regions.add(f, ordinal, i, s.step());
+    for (const Finding& f : link_findings(s)) regions.add(f, ordinal, i, s.step());
+    for (const Finding& f : timing_findings(s)) regions.add(f, ordinal, i, s.step());
     before = {true, std::max(before.highest, s.step()), s.time(), i};
     ++ordinal;
   }
   regions.name_into(out.problems);
+}
+
+// A damaged region, or the cut of a truncated record, lies within [from, to) of the file.
+bool damage_within(const RecordContents& c, std::uint64_t from, std::uint64_t to) {
+  for (const RecordLoss& loss : c.losses)
+    if (loss.end_byte > from && loss.first_byte < to) return true;
+  return c.truncated && c.truncated_at >= from && c.truncated_at < to;
+}
+
+// The footer's count against the steps: it counts the exchanges, so the run recorded steps 0 to
+// that count. Steps after the highest intact one up to the count with no damaged region where
+// they would be (between that step and the footer) were lost without a trace; steps beyond the
+// count are steps the run did not make.
+void check_footer(const RecordContents& c, RecordChecks& out) {
+  std::size_t at = 0;
+  while (at < c.entries.size() && !c.entries[at].has_footer()) ++at;
+  if (at == c.entries.size() || !c.entries[at].footer().has_counters()) return;
+  const std::uint64_t counted = c.entries[at].footer().counters().steps();
+  const auto last = static_cast<std::int64_t>(std::min<std::uint64_t>(counted, INT64_MAX - 1));
+  std::int64_t highest = -1;
+  std::uint64_t after = 0;  // the byte after which the missing steps would lie
+  for (std::size_t i = 0; i < c.entries.size(); ++i)
+    if (c.entries[i].has_step() && c.entries[i].step().step() > highest)
+      highest = c.entries[i].step().step(), after = c.offsets[i] + 1;
+  const std::string where =
+      fmt::format("{} (footer): counts {} exchanges (steps 0-{})", entry_name(at), counted, last);
+  if (highest > last)
+    out.problems.push_back(
+        fmt::format("{} but the record holds step {}: steps the run did not "
+                    "make",
+                    where, highest));
+  else if (highest < last && !damage_within(c, after, c.offsets[at]))
+    out.problems.push_back(fmt::format(
+        "{} and the last intact step is {}: steps {}-{} are absent with no damaged region where "
+        "they would be (lost steps)",
+        where, highest, highest + 1, last));
 }
 
 }  // namespace
@@ -304,6 +419,7 @@ RecordChecks check_record(const RecordContents& contents) {
   RecordChecks out;
   check_copies(contents, check_header(contents, out), out);
   check_steps(contents, out);
+  check_footer(contents, out);
   out.cut = contents.footer() == nullptr && !contents.truncated;
   return out;
 }

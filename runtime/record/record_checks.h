@@ -11,7 +11,8 @@
 //              [1, kMaxRecordDofs] or actuators outside [0, dofs]: `fatal` (no table should be
 //              sized from it); a header copy that differs from the first intact one (the field
 //              paths that differ are named); an intact inputs entry whose payload CRC-32C is not
-//              the header's inputs_crc32c (when it names one)
+//              the header's inputs_crc32c (when it names one); no intact inputs entry while the
+//              header names one and no damaged region lies before the first step (where it was)
 //   steps      step 0 first; each step number greater than the one before (no duplicate, no
 //              reversal) and, unless a damaged region lies between them, exactly one greater (a
 //              gap no loss explains is named); time finite, never less than the step before's,
@@ -19,7 +20,14 @@
 //              dofs (or empty), command, realised and measured_force sized actuators (or empty);
 //              every value finite and within its bound: the study's deployment limits when set
 //              (|u| <= max_displacement, |v| <= max_velocity, |command|, |realised| <= twice
-//              max_displacement: a drift spans two DOFs), else the plausible bounds below
+//              max_displacement: a drift spans two DOFs), else the plausible bounds below;
+//              lateness and command_latency finite, step_wall finite and >= 0; each link sample's
+//              answered_step in [0, step] (never an answer from the future), every lag finite,
+//              injected_lag, round_trip and controller_round_trip >= 0 (one-way lags carry the
+//              hosts' clock offset: any sign), prediction errors finite
+//   footer     its counters.steps (the exchanges: steps 0 to it were recorded) against the steps:
+//              steps after the highest intact one up to the count with no damaged region or cut
+//              between it and the footer (lost steps), or steps beyond the count, are named
 //   ending     no footer while the record did not end inside an entry: the record was cut between
 //              two entries (`cut`), which a reader reports as it reports a truncation
 // Loading only; allocates; never throws for what it reads.

@@ -208,5 +208,123 @@ TEST(RecordChecks, AnInputsEntryThatIsNotTheOneTheHeaderNamesIsNamed) {
   EXPECT_THAT(swapped.problems[0], HasSubstr("(inputs that are not the run's)"));
 }
 
+RecordEntry counted_footer(std::uint64_t exchanges) {
+  RecordEntry e = footer();
+  e.mutable_footer()->mutable_counters()->set_steps(exchanges);
+  return e;
+}
+
+// Steps 0 to `last` (but those in [cut_from, cut_to]), then a footer counting `exchanges`.
+std::vector<RecordEntry> counted_run(std::int64_t last, std::uint64_t exchanges,
+                                     std::int64_t cut_from = -1, std::int64_t cut_to = -1) {
+  std::vector<RecordEntry> entries{header()};
+  for (std::int64_t k = 0; k <= last; ++k)
+    if (k < cut_from || k > cut_to) entries.push_back(step(k));
+  entries.push_back(counted_footer(exchanges));
+  return entries;
+}
+
+// The attack's record: steps 1000-1999 cut out cleanly (checksums intact) before the footer.
+TEST(RecordChecks, StepsTheFooterCountsThatAreAbsentAreNamedAsLost) {
+  EXPECT_TRUE(check_record(record_of(counted_run(1999, 1999))).ok());
+  const RecordChecks lost = check_record(record_of(counted_run(1999, 1999, 1000, 1999)));
+  ASSERT_EQ(lost.problems.size(), 1u) << lost.summary();
+  EXPECT_THAT(lost.problems[0],
+              HasSubstr("entry 1001 (footer): counts 1999 exchanges (steps 0-1999) and the last "
+                        "intact step is 999: steps 1000-1999 are absent with no damaged region "
+                        "where they would be (lost steps)"));
+  const RecordChecks beyond = check_record(record_of(counted_run(20, 9)));
+  ASSERT_EQ(beyond.problems.size(), 1u) << beyond.summary();
+  EXPECT_THAT(beyond.problems[0], HasSubstr("counts 9 exchanges (steps 0-9) but the record holds "
+                                            "step 20: steps the run did not make"));
+}
+
+// Steps a damaged region may have held are the reader's loss report, not a problem.
+TEST(RecordChecks, StepsADamagedRegionMayHaveHeldAreNotNamedAgain) {
+  const std::vector<RecordEntry> entries = counted_run(9, 9);
+  std::string bytes(record_preamble());
+  for (std::size_t i = 0; i + 1 < entries.size(); ++i) append_record_frame(entries[i], bytes);
+  bytes[bytes.size() - 3] ^= 0x40;  // step 9's payload
+  append_record_frame(entries.back(), bytes);
+  const RecordContents damaged = parse_record(bytes, "damaged.rthsrec");
+  ASSERT_TRUE(damaged.lost_entries());
+  EXPECT_TRUE(check_record(damaged).ok()) << check_record(damaged).summary();
+}
+
+TEST(RecordChecks, AnInputsEntryTheHeaderNamesThatIsAbsentIsNamed) {
+  RecordEntry named = header();
+  named.mutable_header()->set_inputs_crc32c(0x1234abcd);
+  const RecordChecks checks = check_record(record_of({named, step(0), footer()}));
+  ASSERT_EQ(checks.problems.size(), 1u) << checks.summary();
+  EXPECT_THAT(checks.problems[0],
+              HasSubstr("no inputs entry: the header names one (CRC-32C 1234abcd) and no damaged "
+                        "region lies where it would be (before the first step)"));
+}
+
+// Steps 0-2, then step 3 (entry 4) with `link` its only link sample.
+RecordChecks checks_with_link(const LinkSample& link) {
+  RecordEntry s = step(3);
+  *s.mutable_step()->add_links() = link;
+  return check_record(record_of({header(), step(0), step(1), step(2), s, footer()}));
+}
+
+LinkSample sound_link() {
+  LinkSample link;
+  link.set_node_id(7);
+  link.set_answered_step(2);
+  link.set_round_trip(1e-4);
+  link.set_one_way_down(-2e-5);  // across hosts: the clocks' offset
+  return link;
+}
+
+TEST(RecordChecks, LinkSamplesOutOfTheirRangeAreNamed) {
+  EXPECT_TRUE(checks_with_link(sound_link()).ok()) << checks_with_link(sound_link()).summary();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::pair<LinkSample, std::string>> cases;
+  LinkSample link = sound_link();
+  link.set_round_trip(nan);
+  cases.emplace_back(link, "links[0] (node 7): round_trip is not finite");
+  link = sound_link();
+  link.set_one_way_up(std::numeric_limits<double>::infinity());
+  cases.emplace_back(link, "links[0] (node 7): one_way_up is not finite");
+  link = sound_link();
+  link.set_injected_lag(-0.5);
+  cases.emplace_back(link, "links[0] (node 7): injected_lag -0.5 s is negative");
+  link = sound_link();
+  link.set_controller_round_trip(-1e-3);
+  cases.emplace_back(link, "links[0] (node 7): controller_round_trip -0.001 s is negative");
+  link = sound_link();
+  link.set_answered_step(4);
+  cases.emplace_back(
+      link, "links[0] (node 7): answered_step 4 is after this step (an answer from the future)");
+  link = sound_link();
+  link.set_answered_step(-1);
+  cases.emplace_back(link, "links[0] (node 7): answered_step -1 is negative");
+  link = sound_link();
+  link.add_prediction_error(nan);
+  cases.emplace_back(link, "links[0] (node 7): prediction_error[0] is not finite");
+  for (const auto& [bad, named] : cases) {
+    const RecordChecks checks = checks_with_link(bad);
+    ASSERT_EQ(checks.problems.size(), 1u) << named << ": " << checks.summary();
+    EXPECT_THAT(checks.problems[0], HasSubstr("entry 4 (step 3): " + named));
+  }
+}
+
+TEST(RecordChecks, TimingsThatAreNoTimeAreNamed) {
+  std::vector<RecordEntry> entries{header()};
+  for (int k = 0; k < 4; ++k) entries.push_back(step(k));
+  entries[2].mutable_step()->set_lateness(std::numeric_limits<double>::quiet_NaN());
+  entries[3].mutable_step()->set_lateness(std::numeric_limits<double>::quiet_NaN());
+  entries[4].mutable_step()->set_step_wall(-1e-3);
+  entries[4].mutable_step()->set_lateness(-2e-4);  // early: fine
+  entries.push_back(footer());
+  const RecordChecks checks = check_record(record_of(entries));
+  ASSERT_EQ(checks.problems.size(), 2u) << checks.summary();
+  EXPECT_THAT(checks.problems[0],
+              HasSubstr("entries 2-3 (steps 1-2, 2 steps): lateness is not finite"));
+  EXPECT_THAT(checks.problems[1],
+              HasSubstr("entry 4 (step 3): step_wall -0.001 s is not a time span (finite, >= 0)"));
+}
+
 }  // namespace
 }  // namespace rths::runtime
