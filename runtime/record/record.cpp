@@ -14,13 +14,13 @@
 #include <stdexcept>
 
 #include "runtime/node/schema.h"
+#include "runtime/record/frame_scan.h"
 #include "util/crc32c.h"
 
 namespace rths::runtime {
 namespace {
 
 constexpr char kPreamble[kRecordPreambleBytes] = {'R', 'T', 'H', 'S', 'R', 'E', 'C', '\x02'};
-constexpr unsigned char kSync[4] = {0xF3, 0x7A, 0x1C, 0xB5};
 
 std::uint32_t load_le32(const char* at) {
   std::uint32_t value = 0;
@@ -47,7 +47,7 @@ void frame_into(const RecordEntry& entry, std::string& out) {
 std::string_view record_preamble() { return {kPreamble, sizeof kPreamble}; }
 
 void seal_record_frame(char* frame, std::uint32_t payload_size) {
-  std::memcpy(frame, kSync, sizeof kSync);
+  std::memcpy(frame, kRecordFrameSync, sizeof kRecordFrameSync);
   store_le32(frame + 4, payload_size);
   store_le32(frame + 8, util::crc32c(frame + kRecordFrameHeaderBytes, payload_size));
   store_le32(frame + 12, util::crc32c(frame, 12));
@@ -206,35 +206,6 @@ void AsyncRecordWriter::close() {
 
 namespace {
 
-// What starts at byte `at`.
-enum class Frame {
-  kNone,     // no frame header (sync and frame-header checksum) there
-  kIntact,   // a frame whose payload checksum holds
-  kDamaged,  // a genuine frame header whose payload is damaged
-  kCut,      // a genuine frame header whose payload runs past the end (a crash cut it)
-};
-
-Frame frame_at(std::string_view bytes, std::size_t at, std::uint32_t* size) {
-  if (bytes.size() - at < kRecordFrameHeaderBytes) return Frame::kNone;
-  const char* f = bytes.data() + at;
-  if (std::memcmp(f, kSync, sizeof kSync) != 0 || load_le32(f + 12) != util::crc32c(f, 12))
-    return Frame::kNone;
-  *size = load_le32(f + 4);
-  if (*size > bytes.size() - at - kRecordFrameHeaderBytes) return Frame::kCut;
-  return load_le32(f + 8) == util::crc32c(f + kRecordFrameHeaderBytes, *size) ? Frame::kIntact
-                                                                              : Frame::kDamaged;
-}
-
-// The first frame header at or after `from`; npos when there is none.
-std::size_t next_frame(std::string_view bytes, std::size_t from) {
-  const std::string_view sync(reinterpret_cast<const char*>(kSync), sizeof kSync);
-  std::uint32_t size = 0;
-  for (std::size_t at = bytes.find(sync, from); at != std::string_view::npos;
-       at = bytes.find(sync, at + 1))
-    if (frame_at(bytes, at, &size) != Frame::kNone) return at;
-  return std::string_view::npos;
-}
-
 void add_loss(RecordContents& contents, std::uint64_t first, std::uint64_t end) {
   if (!contents.losses.empty() && contents.losses.back().end_byte == first)
     contents.losses.back().end_byte = end;  // one region, however many frames it spans
@@ -245,12 +216,14 @@ void add_loss(RecordContents& contents, std::uint64_t first, std::uint64_t end) 
 // Frames from `at` to the end: intact entries kept, damaged regions skipped and recorded, a frame
 // cut by the end of the file (with no frame header after it) marks the record truncated. A frame
 // that does not read (damaged payload, or a size running past the end) is not trusted to say
-// where the next one starts: the next frame header after its own does.
-void parse_frames(std::string_view bytes, std::size_t at, RecordContents& contents) {
+// where the next one starts: the next frame header after its own does. The scanner finds and
+// checks frames with work linear in the bytes (frame_scan.h).
+void parse_frames(std::string_view bytes, std::size_t at, FrameScanner& scanner,
+                  RecordContents& contents) {
   while (at < bytes.size()) {
     std::uint32_t size = 0;
     const Frame frame =
-        bytes.size() - at < kRecordFrameHeaderBytes ? Frame::kCut : frame_at(bytes, at, &size);
+        bytes.size() - at < kRecordFrameHeaderBytes ? Frame::kCut : scanner.frame_at(at, &size);
     RecordEntry entry;
     if (frame == Frame::kIntact &&
         entry.ParseFromArray(bytes.data() + at + kRecordFrameHeaderBytes, static_cast<int>(size))) {
@@ -261,7 +234,7 @@ void parse_frames(std::string_view bytes, std::size_t at, RecordContents& conten
       at += kRecordFrameHeaderBytes + size;
       continue;
     }
-    const std::size_t next = next_frame(bytes, at + 1);
+    const std::size_t next = scanner.next_frame(at + 1);
     if (frame == Frame::kCut && next == std::string_view::npos) {
       contents.truncated = true;
       contents.truncated_at = at;
@@ -401,20 +374,22 @@ bool is_prefix_of_preamble(std::string_view bytes) {
 RecordContents parse_record(std::string_view bytes, const std::string& source) {
   RecordContents contents;
   contents.source = source;
+  FrameScanner scanner(bytes);
   std::uint32_t size = 0;
   if (bytes.substr(0, kRecordPreambleBytes) == record_preamble()) {
-    parse_frames(bytes, kRecordPreambleBytes, contents);
+    parse_frames(bytes, kRecordPreambleBytes, scanner, contents);
   } else if (is_prefix_of_preamble(bytes)) {
     contents.truncated = true;  // cut before its first entry
-  } else if (frame_at(bytes, kRecordPreambleBytes, &size) != Frame::kNone) {
+  } else if (scanner.frame_at(kRecordPreambleBytes, &size) != Frame::kNone) {
     add_loss(contents, 0, kRecordPreambleBytes);  // a damaged preamble
-    parse_frames(bytes, kRecordPreambleBytes, contents);
-  } else if (const std::size_t first = next_frame(bytes, 0); first != std::string_view::npos) {
+    parse_frames(bytes, kRecordPreambleBytes, scanner, contents);
+  } else if (const std::size_t first = scanner.next_frame(0); first != std::string_view::npos) {
     add_loss(contents, 0, first);
-    parse_frames(bytes, first, contents);
+    parse_frames(bytes, first, scanner, contents);
   } else {
     parse_unchecksummed(bytes, source, contents);
   }
+  contents.examined_bytes = scanner.examined();
   locate_losses(contents);
   assume_header(contents);
   compose_warning(contents, source, bytes.size());

@@ -27,7 +27,8 @@
 // would run past the end of the file, or its payload checksum fails) is not trusted to say where
 // the next frame starts: the reader looks for the next frame header after its own, so a forged or
 // damaged size never hides the intact frames behind it; only a frame with no frame header after
-// it is a truncation (a crash cut it). A record written before checksums (no
+// it is a truncation (a crash cut it). The reader's work is linear in the record's size, whatever
+// its frame headers claim (runtime/record/frame_scan.h). A record written before checksums (no
 // preamble; varint size, then the entry) still reads, unverified, with a warning.
 // The one reader of a record's content is runtime::measure_run (runtime/record/measurements.h),
 // over what read_record returns.
@@ -195,6 +196,8 @@ struct RecordContents {
   // The payload CRC-32C of the first intact inputs entry (what RunHeader.inputs_crc32c names);
   // 0 when there is none or the record has no checksums.
   std::uint32_t inputs_crc32c = 0;
+  // Bytes the reader searched or checksummed (frame_scan.h): at most 16 x the record's size.
+  std::uint64_t examined_bytes = 0;
   std::string warning;  // what the reader has to say: truncation, no checksums, losses, assumed
   // No intact header: the one assumed from the steps (see above); `assumed` says what was
   // assumed and from what ("" when an intact header was read).
