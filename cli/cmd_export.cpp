@@ -1,5 +1,8 @@
 // rths export RECORD --csv OUT | --mat OUT | --h5 OUT: a run record (length-delimited protobuf)
 // to CSV, MATLAB or HDF5 (results/results.h names the variables and units); several at once.
+// A record whose controller nodes held gets their hold, frame by frame (results::hold_table),
+// beside each output in its format, as <stem>_hold<ext>; --json lists them in "hold_tables" and
+// node_health holds the same table per node.
 // Every entry's checksum is verified (runtime::read_record). A damaged record is exported with
 // every intact entry (the reader resynchronises after each damaged region); what was lost (bytes,
 // step numbers) goes to stderr and to the outputs' attributes (integrity, lost_steps), and the
@@ -8,13 +11,15 @@
 // warning on stderr; exit 0. An old record without checksums is exported with a warning; exit 0.
 // A record whose checksums hold but whose meaning does not (runtime/record/record_checks.h: schema
 // version, dt, step order and gaps, time against step x dt, entry sizes against the header's
-// dofs, values not finite or beyond the deployment's limits or plausible bounds, header copies
-// that disagree, no intact header) is exported as read, each problem named with its entries and
+// dofs, values not finite or beyond the deployment's limits or plausible bounds, link samples and
+// timings out of range, header copies that disagree, no intact header, a missing inputs entry,
+// steps the footer counts that are absent) is exported as read, "ok" false in --json, each problem named with its entries and
 // steps on stderr, exit 1; one whose header cannot size a table (dofs -1 or 100000) writes
 // nothing, exit 1. --strict: any warning is exit 1 too (a truncated record, one cut between two
 // entries, one without checksums). A missing file, or one that is no record, is exit 2.
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <iostream>
 
 #include "cli/commands.h"
@@ -71,6 +76,28 @@ std::string node_health_text(const runtime::RunFooter* footer) {
   return text;
 }
 
+// The controllers' hold (results::hold_table) beside each output, as <stem>_hold<ext> in the
+// same format; the paths written (none when no node held).
+std::vector<std::string> write_hold_tables(const runtime::RunFooter* footer,
+                                           const std::map<results::Format, std::string>& outputs) {
+  std::vector<std::string> written;
+  if (!footer) return written;
+  const results::Table hold = results::hold_table(*footer);
+  if (hold.rows() == 0) return written;
+  for (const auto& [format, path] : outputs) {
+    const std::filesystem::path p(path);
+    const std::filesystem::path beside =
+        p.parent_path() / (p.stem().string() + "_hold" + p.extension().string());
+    try {
+      results::write_table(hold, beside, format);
+    } catch (const std::exception& e) {
+      throw ExitError(kExitEnvironment, e.what());
+    }
+    written.push_back(beside.string());
+  }
+  return written;
+}
+
 // Reads the record, writes every requested output and says what was written. Throws ExitError:
 // kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
 // cannot be written, kExitRunFailed after exporting a record that lost entries.
@@ -105,6 +132,7 @@ void run_export(const std::string& record, const std::map<results::Format, std::
     }
   }
   const auto* footer = contents.footer();
+  const std::vector<std::string> hold_tables = write_hold_tables(footer, outputs);
   const std::string status = footer ? footer->status() : "no footer: the run was cut short";
   if (json) {
     nlohmann::json j{
@@ -113,7 +141,8 @@ void run_export(const std::string& record, const std::map<results::Format, std::
         {"truncated", contents.truncated || checks.cut},
         {"problems", checks.problems},
         {"status", status},
-        {"ok", footer && footer->ok()},
+        // The run ended well and the record says so whole: no damaged region, no problem.
+        {"ok", footer && footer->ok() && !contents.lost_entries() && checks.problems.empty()},
         // The coordinator's drops for want of a MAC; null without a footer.
         {"unauthenticated",
          footer ? nlohmann::json(footer->counters().unauthenticated()) : nlohmann::json()},
@@ -124,12 +153,15 @@ void run_export(const std::string& record, const std::map<results::Format, std::
         {"lost_steps", table.attributes().at("lost_steps")},
         {"damaged_regions", contents.losses.size()}};
     for (const auto& [format, path] : outputs) j[results::extension(format).substr(1)] = path;
+    j["hold_tables"] = hold_tables;
     std::cout << j.dump(2) << "\n";
   } else {
     for (const auto& [format, path] : outputs) {
       std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status
                 << unauthenticated_note(footer) << ")\n";
     }
+    for (const std::string& path : hold_tables)
+      std::cout << "wrote the controllers' hold, frame by frame, to " << path << "\n";
     std::cout << node_health_text(footer);
   }
   if (contents.lost_entries())

@@ -190,7 +190,7 @@ void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
                   "candidate effects (default: the whole library)")
       ->delimiter(',');
   cmd->add_option("--holdout", o.request.holdout, "held-out share of the record")
-      ->check(CLI::Range(0.01, 0.99));
+      ->check(finite_in(0.01, 0.99));
   cmd->add_option("--holdout-mode", o.request.holdout_mode, "blocks (segment-wise) | last")
       ->check(CLI::IsMember({"blocks", "last"}));
   cmd->add_option("--blocks", o.request.holdout_blocks,
@@ -198,7 +198,7 @@ void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
       ->check(CLI::Range(2, 1000));
   cmd->add_option("--min-improvement", o.request.min_improvement,
                   "relative fall of the held-out error an effect must bring")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_in(0.0, 1.0));
   cmd->add_option("--penalty", o.request.penalty, "relative penalty per added parameter")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--max-steps", o.request.max_steps, "at most this many effects per channel")
@@ -211,7 +211,7 @@ void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
   cmd->add_option("--search-tolerance", o.request.search_tolerance,
                   "relative change of cost or parameters at which a fit of the decimated search "
                   "stops (the full-rate refits stop at 1e-10)")
-      ->check(CLI::Range(1e-12, 1e-2));
+      ->check(finite_in(1e-12, 1e-2));
   cmd->add_option("--search-iterations", o.request.search_iterations,
                   "at most this many solver iterations per fit of the decimated search")
       ->check(CLI::Range(1, 1000));

@@ -352,7 +352,7 @@ void add_launch_command(CLI::App& app) {
                 "printed here (it carries the stop's token)");
   cmd->add_option("--platform-seconds", args->platform_seconds,
                   "real time: s of platform measurement before the runs (default 5)")
-      ->check(CLI::Range(0.1, 600.0));
+      ->check(finite_in(0.1, 600.0));
   cmd->add_flag("--accept-platform", args->accept_platform,
                 "real time: run even when the platform check says the fail-safe or the overrun "
                 "tolerance will not hold (the records say so)");

@@ -44,12 +44,12 @@ void add_rt_check_command(CLI::App& app) {
   auto args = std::make_shared<RtCheckArgs>();
   cmd->add_option("config", args->config, "study config whose deployment is judged (text format)");
   cmd->add_option("--seconds", args->seconds, "s of measurement (default 10)")
-      ->check(CLI::Range(0.1, 3600.0));
+      ->check(finite_in(0.1, 3600.0));
   cmd->add_option("--rate", args->rate, "Hz, without a config (default 1024)")
-      ->check(CLI::Range(1.0, 100000.0));
+      ->check(finite_in(1.0, 100000.0));
   cmd->add_option("--run-seconds", args->run_seconds,
                   "s of the run judged, without a config (default 60)")
-      ->check(CLI::Range(0.001, 86400.0));
+      ->check(finite_in(0.001, 86400.0));
   cmd->add_flag("--json", args->json, "print the report as JSON");
   cmd->callback([args, cmd] {
     rt_check::PlatformCheck check;

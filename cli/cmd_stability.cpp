@@ -334,10 +334,12 @@ void add_stability_command(CLI::App& app) {
   cmd->add_option("--predictor-stiffness-error", options->predictor_stiffness_error,
                   "with a force predictor whose model's stiffness is off by this fraction of the "
                   "specimen's (-0.3: 30 % soft): its loop's critical lag")
-      ->check(CLI::Range(-0.99, 10.0));
-  cmd->add_option("--predictor-damping-error", options->predictor_damping_error,
-                  "the predictor model's damping error, a fraction of the critical damping")
-      ->check(CLI::Range(-10.0, 10.0));
+      ->check(finite_in(-0.99, 10.0));
+  cmd->add_option(
+         "--predictor-damping-error", options->predictor_damping_error,
+         "the predictor model's damping error, a fraction of the critical damping (>= 0: the "
+         "specimen's own damping is taken as 0, so it is the model's damping ratio)")
+      ->check(finite_in(0.0, 10.0));
   cmd->add_flag("--json", options->json, "print JSON");
   cmd->callback([options] {
     if (options->study.empty() != options->case_name.empty()) {
