@@ -48,6 +48,13 @@ void validate_topology(const TopologySpec& spec) {
     throw std::invalid_argument("topology: subnet '" + spec.subnet +
                                 "' must be three octets, e.g. 10.231.0");
   }
+  // The bridge owns the /24: a loopback (127/8), "this network" (0/8) or multicast and reserved
+  // (224 and up) prefix is no subnet a site can be given.
+  const int first = std::stoi(m[1]);
+  if (first == 0 || first == 127 || first >= 224)
+    throw std::invalid_argument("topology: subnet '" + spec.subnet +
+                                "' is not a unicast network for the sites (0, 127 and 224-255 are "
+                                "this network, loopback, multicast and reserved), e.g. 10.231.0");
 }
 
 namespace {

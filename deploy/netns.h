@@ -68,7 +68,8 @@ class NamespaceTopology {
   std::vector<std::string> created_;  // in creation order
 };
 
-// Throws std::invalid_argument naming the bad site name, duplicate or subnet.
+// Throws std::invalid_argument naming the bad site name, duplicate or subnet (three octets of a
+// unicast network: not 0, 127 (loopback) or 224-255 (multicast, reserved)).
 void validate_topology(const TopologySpec& spec);
 
 // nullopt when this process can create and delete a network namespace, else the reason.

@@ -1,5 +1,6 @@
 #include "deploy/sites.h"
 
+#include <fmt/format.h>
 #include <google/protobuf/io/tokenizer.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -58,6 +59,14 @@ void absolutize_paths(config::Study& study, const std::filesystem::path& base_di
   }
 }
 
+// A time in s that is finite and >= 0 (0: the default); NaN fails every comparison, so it is
+// refused by name, never read as 0.
+void check_seconds(double value, const char* field, const std::string& source) {
+  if (!(std::isfinite(value) && value >= 0.0))
+    throw std::invalid_argument(fmt::format(
+        "{}: {} {} s is not a time (finite, >= 0; 0 = the default)", source, field, value));
+}
+
 // Merges this file's deployment and its overrides (domain, case, clock, duration, timeout) into
 // the study.
 void apply_overrides(const Sites& sites, SitesPlan& plan, const std::string& source) {
@@ -78,11 +87,15 @@ void apply_overrides(const Sites& sites, SitesPlan& plan, const std::string& sou
   }
   if (sites.domain_id() != 0) deployment.set_domain_id(sites.domain_id());
   if (!sites.case_name().empty()) deployment.set_case_name(sites.case_name());
+  if (!Sites::Clock_IsValid(sites.clock()))  // proto3 keeps an unknown number (clock: -1)
+    throw std::invalid_argument(
+        fmt::format("{}: clock {} is not STUDY (0), LOCKSTEP (1) or REAL_TIME (2)", source,
+                    static_cast<int>(sites.clock())));
   if (sites.clock() == Sites::LOCKSTEP) deployment.set_clock(config::Deployment::LOCKSTEP);
   if (sites.clock() == Sites::REAL_TIME) deployment.set_clock(config::Deployment::REAL_TIME);
-  if (sites.duration() < 0.0) throw std::invalid_argument(source + ": duration must be >= 0");
+  check_seconds(sites.duration(), "duration", source);
   if (sites.duration() > 0.0) plan.study.mutable_motion()->set_duration(sites.duration());
-  if (sites.timeout() < 0.0) throw std::invalid_argument(source + ": timeout must be >= 0");
+  check_seconds(sites.timeout(), "timeout", source);
   plan.timeout = sites.timeout() > 0.0 ? sites.timeout() : kDefaultTimeout;
 }
 

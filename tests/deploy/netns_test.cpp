@@ -111,5 +111,21 @@ TEST(NetnsSpec, RejectsBadSpecsNamingTheProblem) {
   EXPECT_THROW(NamespaceTopology({{"hub"}, "10.231.0"}), std::invalid_argument);
 }
 
+// A subnet the sites cannot be given is refused, named, before anything is made.
+TEST(NetnsSpec, RejectsALoopbackThisNetworkOrMulticastSubnet) {
+  for (const char* subnet : {"127.0.0", "0.1.2", "224.0.0", "255.255.255"}) {
+    try {
+      validate_topology({{"a"}, subnet});
+      ADD_FAILURE() << subnet << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a unicast network for the sites"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  for (const char* subnet : {"10.231.0", "192.168.7", "172.16.0", "1.2.3", "223.255.255"})
+    EXPECT_NO_THROW(validate_topology({{"a"}, subnet})) << subnet;
+}
+
 }  // namespace
 }  // namespace rths::deploy

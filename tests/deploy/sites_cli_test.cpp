@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -76,6 +79,37 @@ TEST(SitesCli, CheckWarnsWhenNetworkAndActuatorLagTogetherPassTheCriticalDelay) 
   const auto lockstep =
       util::run_command({kRths, "sites", (dir / "lockstep.textproto").string(), "--check"});
   EXPECT_EQ(lockstep.output.find("warning"), std::string::npos) << lockstep.output;
+  std::filesystem::remove_all(dir);
+}
+
+// `--check` refuses what no run could mean, each named, before anything runs: an unknown clock
+// (proto3 keeps the number), a duration or timeout that is no time (NaN fails every comparison,
+// so it once read as the default and the run went ahead), a subnet the sites cannot be given.
+TEST(SitesCli, CheckRefusesNonFiniteAndOutOfRangeFieldsAndALoopbackSubnet) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_sites_fields_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"clock: -1", "clock -1 is not STUDY (0), LOCKSTEP (1) or REAL_TIME (2)"},
+      {"duration: nan", "duration nan s is not a time (finite, >= 0; 0 = the default)"},
+      {"timeout: nan", "timeout nan s is not a time (finite, >= 0; 0 = the default)"},
+      {"timeout: inf", "timeout inf s is not a time"},
+      {"duration: -1", "duration -1 s is not a time"},
+      {"subnet: \"127.0.0\"", "subnet '127.0.0' is not a unicast network for the sites"},
+      {"subnet: \"224.1.2\"", "subnet '224.1.2' is not a unicast network for the sites"},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const auto path = dir / ("bad_" + std::to_string(i) + ".textproto");
+    std::ofstream(path) << "study: \"" << RTHS_SOURCE_DIR
+                        << "/configs/paper_frame_distributed.textproto\"\n"
+                        << cases[i].first << "\nsites { name: \"integrator\" node_ids: 0 }\n"
+                        << "sites { name: \"hpc\" node_ids: 1 }\nsites { name: \"lab_b\" "
+                        << "node_ids: 2 }\n";
+    const auto result = util::run_command({kRths, "sites", path.string(), "--check"});
+    EXPECT_EQ(result.exit_code, 2) << cases[i].first << ": " << result.output;
+    EXPECT_NE(result.output.find(cases[i].second), std::string::npos)
+        << cases[i].first << ": " << result.output;
+  }
   std::filesystem::remove_all(dir);
 }
 
