@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "runtime/node/node_loop.h"
+#include "runtime/node/plan.h"
 #include "security/check.h"
 #include "security/pki.h"
 #include "security/run_secret.h"
@@ -13,6 +14,19 @@
 #include "transport/dds_endpoint.h"
 
 namespace rths::runtime {
+
+namespace {
+
+// The study at `path` checked as `rths run` checks it (parsed and validated, prepared: its motion
+// read, its reference case's deployment planned), so a bad study is refused here at start with
+// the message `run` gives, never after waiting for a coordinator; then its deployment.
+config::Deployment checked_deployment(const std::string& path) {
+  const config::Study study = core::load_study(path);
+  check_deployment(core::prepare_study(study, std::filesystem::path(path).parent_path()));
+  return study.deployment();
+}
+
+}  // namespace
 
 int node_main(int argc, char** argv, const std::string& program, const ServiceFactory& factory) {
   CLI::App app{program + ": an rths node; the coordinator assigns its part of the study"};
@@ -24,7 +38,8 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
   app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
   app.add_option("--config", config_path,
-                 "study config, read only for its domain id and security_dir");
+                 "study config: checked as `rths run` checks it (a bad one: exit 2 at start), "
+                 "then read for its domain id, run id and security_dir");
   app.add_option("--run-id", run_id,
                  "the run this node joins (default: the config's deployment.run_id); required");
   app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
@@ -47,7 +62,7 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     if (node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
     if (domain < 0 && config_path.empty()) throw std::invalid_argument("give --domain or --config");
     if (!config_path.empty()) {
-      const config::Deployment deployment = core::load_study(config_path).deployment();
+      const config::Deployment deployment = checked_deployment(config_path);
       if (domain < 0) domain = deployment.domain_id();
       if (run_id.empty()) run_id = deployment.run_id();
       if (security_dir.empty() && !deployment.security_dir().empty())
