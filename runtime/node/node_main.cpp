@@ -1,8 +1,10 @@
 #include "runtime/node/node_main.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <iostream>
 
 #include "runtime/node/node_loop.h"
@@ -42,7 +44,8 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
                  "then read for its domain id, run id and security_dir");
   app.add_option("--run-id", run_id,
                  "the run this node joins (default: the config's deployment.run_id); required");
-  app.add_option("--assign-timeout", loop.assign_timeout, "s to wait for an assignment");
+  app.add_option("--assign-timeout", loop.assign_timeout,
+                 "s to wait for an assignment (finite, > 0)");
   app.add_option("--security", security_dir,
                  "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
                  "the config's deployment.security_dir");
@@ -60,6 +63,9 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   transport::DdsEndpointOptions options;
   try {
     if (node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
+    if (!(std::isfinite(loop.assign_timeout) && loop.assign_timeout > 0))  // NaN too
+      throw std::invalid_argument(
+          fmt::format("--assign-timeout {} s is not a time (finite, > 0)", loop.assign_timeout));
     if (domain < 0 && config_path.empty()) throw std::invalid_argument("give --domain or --config");
     if (!config_path.empty()) {
       const config::Deployment deployment = checked_deployment(config_path);

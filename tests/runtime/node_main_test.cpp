@@ -97,5 +97,17 @@ TEST(NodeMain, EveryNodeProgramRefusesABadStudyAtStartWithTheMessageRunGives) {
   std::filesystem::remove_all(dir);
 }
 
+// A wait that is no time (NaN passed every comparison: the node gave up at once) is refused.
+TEST(NodeMain, AnAssignTimeoutThatIsNoTimeIsRefused) {
+  for (const char* timeout : {"nan", "-1", "0", "inf"}) {
+    const util::CommandResult node = util::run_command(
+        {test::program("rths-actuator-emulator", "actuator_emulator").string(), "--node-id", "2",
+         "--domain", "173", "--run-id", "node_check", "--insecure", "--assign-timeout", timeout});
+    EXPECT_EQ(node.exit_code, 2) << timeout << ": " << node.output;
+    EXPECT_NE(node.output.find("s is not a time (finite, > 0)"), std::string::npos)
+        << timeout << ": " << node.output;
+  }
+}
+
 }  // namespace
 }  // namespace rths::runtime
