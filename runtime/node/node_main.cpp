@@ -28,33 +28,77 @@ config::Deployment checked_deployment(const std::string& path) {
   return study.deployment();
 }
 
-}  // namespace
-
-int node_main(int argc, char** argv, const std::string& program, const ServiceFactory& factory) {
-  CLI::App app{program + ": an rths node; the coordinator assigns its part of the study"};
+// What the command line gives a node program.
+struct NodeArgs {
   int node_id = 0;
   int domain = -1;
   std::string config_path, run_id, security_dir;
   security::SecretChoice secret;
   NodeLoopOptions loop;
-  app.add_option("--node-id", node_id, "this node's id in the deployment (>= 1)")->required();
-  app.add_option("--domain", domain, "DDS domain id (default: the config's deployment.domain_id)");
-  app.add_option("--config", config_path,
+};
+
+void add_node_options(CLI::App& app, NodeArgs& a) {
+  app.add_option("--node-id", a.node_id, "this node's id in the deployment (>= 1)")->required();
+  app.add_option("--domain", a.domain,
+                 "DDS domain id (default: the config's deployment.domain_id)");
+  app.add_option("--config", a.config_path,
                  "study config: checked as `rths run` checks it (a bad one: exit 2 at start), "
                  "then read for its domain id, run id and security_dir");
-  app.add_option("--run-id", run_id,
+  app.add_option("--run-id", a.run_id,
                  "the run this node joins (default: the config's deployment.run_id); required");
-  app.add_option("--assign-timeout", loop.assign_timeout,
+  app.add_option("--assign-timeout", a.loop.assign_timeout,
                  "s to wait for an assignment (finite, > 0)");
-  app.add_option("--security", security_dir,
+  app.add_option("--security", a.security_dir,
                  "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
                  "the config's deployment.security_dir");
-  app.add_option("--secret-file", secret.file,
+  app.add_option("--secret-file", a.secret.file,
                  "the run secret (`rths pki secret FILE`, mode 0600); default: $" +
                      std::string(security::kSecretFileEnv) + " or $" + security::kSecretEnv);
-  app.add_flag("--insecure", secret.insecure,
+  app.add_flag("--insecure", a.secret.insecure,
                "run without a run secret or DDS Security: any participant on the domain can then "
                "speak as the coordinator to this node");
+}
+
+// The arguments checked and completed from --config; the endpoint's options. Throws
+// std::invalid_argument (or what the study's check throws) for bad input, before DDS starts.
+transport::DdsEndpointOptions endpoint_options(NodeArgs& a) {
+  if (a.node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
+  if (!(std::isfinite(a.loop.assign_timeout) && a.loop.assign_timeout > 0))  // NaN too
+    throw std::invalid_argument(
+        fmt::format("--assign-timeout {} s is not a time (finite, > 0)", a.loop.assign_timeout));
+  if (a.domain < 0 && a.config_path.empty())
+    throw std::invalid_argument("give --domain or --config");
+  if (!a.config_path.empty()) {
+    const config::Deployment deployment = checked_deployment(a.config_path);
+    if (a.domain < 0) a.domain = deployment.domain_id();
+    if (a.run_id.empty()) a.run_id = deployment.run_id();
+    if (a.security_dir.empty() && !deployment.security_dir().empty())
+      a.security_dir = security::node_dir(
+          std::filesystem::path(a.config_path).parent_path() / deployment.security_dir(),
+          a.node_id);
+  }
+  transport::DdsEndpointOptions options;
+  if (!a.security_dir.empty())  // refused here, before the participant exists
+    options.participant_properties =
+        security::participant_properties(security::check_node_security(a.security_dir, a.node_id));
+  a.secret.dds_security = !a.security_dir.empty();
+  options.run_secret = security::resolve_run_secret(a.secret);
+  if (a.run_id.empty())
+    throw std::invalid_argument(
+        "give --run-id (or deployment.run_id in --config): the coordinator accepts only "
+        "announcements of its own run, and this node only that run's assignment");
+  options.domain_id = static_cast<std::uint32_t>(a.domain);
+  options.coordinator = false;
+  options.node_id = a.node_id;
+  return options;
+}
+
+}  // namespace
+
+int node_main(int argc, char** argv, const std::string& program, const ServiceFactory& factory) {
+  CLI::App app{program + ": an rths node; the coordinator assigns its part of the study"};
+  NodeArgs a;
+  add_node_options(app, a);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -62,47 +106,23 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
   }
   transport::DdsEndpointOptions options;
   try {
-    if (node_id < 1) throw std::invalid_argument("--node-id must be >= 1");
-    if (!(std::isfinite(loop.assign_timeout) && loop.assign_timeout > 0))  // NaN too
-      throw std::invalid_argument(
-          fmt::format("--assign-timeout {} s is not a time (finite, > 0)", loop.assign_timeout));
-    if (domain < 0 && config_path.empty()) throw std::invalid_argument("give --domain or --config");
-    if (!config_path.empty()) {
-      const config::Deployment deployment = checked_deployment(config_path);
-      if (domain < 0) domain = deployment.domain_id();
-      if (run_id.empty()) run_id = deployment.run_id();
-      if (security_dir.empty() && !deployment.security_dir().empty())
-        security_dir = security::node_dir(
-            std::filesystem::path(config_path).parent_path() / deployment.security_dir(), node_id);
-    }
-    if (!security_dir.empty())  // refused here, before the participant exists
-      options.participant_properties =
-          security::participant_properties(security::check_node_security(security_dir, node_id));
-    secret.dds_security = !security_dir.empty();
-    options.run_secret = security::resolve_run_secret(secret);
-    if (run_id.empty())
-      throw std::invalid_argument(
-          "give --run-id (or deployment.run_id in --config): the coordinator accepts only "
-          "announcements of its own run, and this node only that run's assignment");
+    options = endpoint_options(a);
   } catch (const std::exception& e) {
     std::cerr << program << ": " << e.what() << "\n";
     return 2;
   }
   try {
-    options.domain_id = static_cast<std::uint32_t>(domain);
-    options.coordinator = false;
-    options.node_id = node_id;
     transport::DdsEndpoint endpoint(options);
-    auto service = factory(node_id, run_id);
+    auto service = factory(a.node_id, a.run_id);
     service->set_unauthenticated_source([&endpoint] { return endpoint.unauthenticated_count(); });
-    const int code = run_node(endpoint, *service, loop);
+    const int code = run_node(endpoint, *service, a.loop);
     const transport::Unauthenticated dropped = endpoint.unauthenticated();
     if (dropped.count > 0)
       spdlog::warn("{}: {} messages dropped unread as unauthenticated (no valid MAC); newest: {}",
                    service->label(), dropped.count, dropped.last);
     return code;
   } catch (const std::exception& e) {
-    std::cerr << program << " (node " << node_id << "): " << e.what() << "\n";
+    std::cerr << program << " (node " << a.node_id << "): " << e.what() << "\n";
     return 3;
   }
 }
