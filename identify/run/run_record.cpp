@@ -150,10 +150,12 @@ struct DeclaredActuator {
   std::vector<ParamDeclaration> parameters;
   std::vector<std::string> names;
   double gain = 1.0;
-  // The declared pure delay (s): the first shift stage's, or 0 when no stage is declared at all
-  // (a command then reaches the rig at once, so a fitted lag is a finding, "delay change");
-  // absent when the declared stages hold no shift (a lag the search adds is then its own effect).
+  // The declared pure delay (s): the first shift stage's, or 0 when no stage of any kind is
+  // declared (a command then reaches the rig at once, so a fitted lag is a finding, "delay
+  // change"); absent when the declared stages hold no shift (a tracking loop, a first-order lag:
+  // their lag is the stage's, and one the search adds is its own effect).
   std::optional<double> delay;
+  std::size_t stages = 0;  // declared, of any kind
   // RMS (m, N) of a tracking loop's sensor noise with its converter's quantisation (sensors.h).
   double displacement_noise = 0.0, force_noise = 0.0;
 };
@@ -176,6 +178,7 @@ void declare_stage(const config::DelayStage& stage, DeclaredActuator& out) {
     out.parameters.push_back({param, value, std::nullopt, std::nullopt, false});
     out.names.push_back(text);
   };
+  ++out.stages;
   if (stage.amplitude_gain() != 0.0) out.gain *= stage.amplitude_gain();
   if (stage.has_tracking_loop()) declare_noise(stage.tracking_loop(), out);
   if (stage.has_shift()) {
@@ -211,13 +214,11 @@ DeclaredActuator declared_actuator(const config::Study& study, const std::string
     if (node.kind() != config::NodeSpec::ACTUATOR_EMULATOR) continue;
     for (const auto& stage : node.receive_delay()) declare_stage(stage, out);
   }
-  if (out.effects.empty()) {
-    // Nothing declared between the command and the rig: a free delay whose declared value is 0.
-    // Its value stays undeclared to the fit (the library's starting guesses, 0 among them, are
-    // all tried) and is only what the fitted one is judged against.
-    out.effects.push_back(Effect::kDelay);
-    out.delay = 0.0;
-  }
+  if (out.effects.empty()) out.effects.push_back(Effect::kDelay);
+  // Nothing declared between the command and the rig: the free delay's declared value is 0. It
+  // stays undeclared to the fit (the library's starting guesses, 0 among them, are all tried) and
+  // is only what the fitted one is judged against.
+  if (out.stages == 0) out.delay = 0.0;
   out.parameters.push_back({"gain", out.gain, std::nullopt, std::nullopt, false});
   return out;
 }
