@@ -485,6 +485,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     judge_named(path);
     std::vector<Unexplained> described = describe_unexplained(path);
     judge_noise_beside(path, described);
+    for (auto& f : channel_floors(path)) out.floors.push_back(std::move(f));
     for (auto& u : described) out.unexplained.push_back(std::move(u));
   }
   const auto& channels = options.channels;

@@ -40,6 +40,7 @@
 #include "identify/run/findings.h"
 #include "identify/run/network_path.h"
 #include "identify/run/platform_replay.h"
+#include "identify/run/residual_floor.h"
 #include "identify/run/run_residual.h"
 #include "identify/run/unexplained.h"
 #include "runtime/record/deadline_diagnosis.h"
@@ -80,6 +81,9 @@ struct RunIdentification {
   // What each channel's identified model leaves, described without presuming an effect
   // (unexplained.h), with its share of the re-run's remaining error: one line each.
   std::vector<Unexplained> unexplained;
+  // Every identified channel's held-out residual against its floor (residual_floor.h): where one
+  // is above it, where, when and at what frequencies; the report says "none" only at the floor.
+  std::vector<ChannelFloor> floors;
 };
 
 RunIdentification identify_run_record(const std::filesystem::path& record,

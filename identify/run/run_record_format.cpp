@@ -253,7 +253,7 @@ std::string run_record_text(const RunIdentification& run) {
   if (run.residual) residual_text(*run.residual, out);
   out << findings_text(run.findings, run.residual ? &*run.residual : nullptr);
   out << rejected_text(run.actuators);
-  out << unexplained_text(run.unexplained);
+  out << unexplained_section(run.unexplained, run.floors);
   return out.str();
 }
 
@@ -267,6 +267,7 @@ nlohmann::json run_record_json(const RunIdentification& run) {
   out["undeclared"] = findings_json(run.findings);
   out["rejected"] = rejected_json(run.actuators);
   out["unexplained"] = unexplained_json(run.unexplained);
+  out["residual_floor"] = floors_json(run.floors);
   if (const auto& p = run.platform)
     out["platform"] = {
         {"steps", p->steps},

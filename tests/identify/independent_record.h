@@ -93,10 +93,18 @@ struct RigTruth {
   double force_noise = 0.5;            // N RMS
   double displacement_range = 0.2;     // m, 16-bit converter
   double force_range = 20000.0;        // N
+  // A rattle on the load cell for a moment: rattle_force N at rattle_frequency Hz over
+  // [rattle_start, rattle_end) s (an event: no stage and no description holds it).
+  double rattle_force = 0.0, rattle_frequency = 0.0, rattle_start = 0.0, rattle_end = 0.0;
   std::uint64_t seed = 7;
   PlatformTruth platform;
   NetworkTruth network;  // in a lockstep record: give no platform beside it
 };
+
+inline double rattle(const RigTruth& rig, double t) {
+  if (t < rig.rattle_start || t >= rig.rattle_end) return 0.0;
+  return rig.rattle_force * std::sin(2.0 * std::numbers::pi * rig.rattle_frequency * t);
+}
 
 inline double converted(double x, double range) {
   const double quantum = range / 32768.0;
@@ -317,7 +325,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
                                        rig.displacement_noise * normal(rng),
                                    rig.displacement_range);
       answered_f[step] = converted(rig.force_scale * f + rig.force_offset + rig.force_drift * t +
-                                       rig.force_noise * normal(rng),
+                                       rattle(rig, t) + rig.force_noise * normal(rng),
                                    rig.force_range);
       x_m = answered_x[static_cast<std::size_t>(used[step].step)];
       f_m = answered_f[static_cast<std::size_t>(used[step].step)];

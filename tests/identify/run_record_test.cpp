@@ -113,6 +113,9 @@ TEST(RunRecord, ADeclaredTrackingLoopIsNotContradictedByItsOwnRecord) {
   EXPECT_NEAR(path.force_noise, path.declared_force_noise, 0.1 * path.declared_force_noise) << text;
   ASSERT_TRUE(run.residual.has_value());
   EXPECT_LT(run.residual->identified, 1e-9) << text;
+  // Nothing left above the floor its sensors' noise sets (residual_floor.h), on either channel.
+  ASSERT_EQ(run.floors.size(), 2u) << text;
+  for (const auto& f : run.floors) EXPECT_FALSE(f.above) << f.text() << "\n" << text;
 }
 
 TEST(RunRecord, ATruncatedRecordIdentifiesWhatItHoldsAndSaysSo) {

@@ -1,0 +1,103 @@
+#pragma once
+// Never silent: each identified channel's residual against the floor the record's own noise sets,
+// and where it stands above that floor by more than a stated factor, where and when it lies, at
+// what frequencies, how it relates to the signals and how much of the error it is, whether or not
+// a description (unexplained.h) or a name holds it.
+//
+// Per channel c of an actuator path (measured: command -> the displacement read, m; force: the
+// displacement read -> the load cell's force, N), with target y, the final model's prediction p
+// and the residual r = y - p:
+//   level     RMS of r over the record less kEdgeSeconds at either end / std(y) (sensors.h
+//             noise_spread). Not the fit's held-out error alone: an event in the fit's training
+//             samples (a rattle for two seconds) does not reach it, yet is in the record and in the
+//             response. The ends are left out because a correct model's error gathers there: the
+//             force model's zero-phase filters start each pass at rest (signals.h), and the RTHS
+//             benchmark's own 15 s record left 88 % of its force residual, 8.8 x its floor, in its
+//             last 0.75 s. Everything below is judged on the same samples.
+//   floor     the largest of, each / std(y):
+//             - the sensor's noise: the white part of r as the sensors were judged (ActuatorPath
+//               displacement_noise, force_noise: sensors.h white_noise, which a model error smooth
+//               over a sample hardly reaches) or the declared sensor noise, whichever is larger;
+//             - the band noise: r's RMS above the model's input band (ChannelSignals input_cutoff,
+//               the force channel's: above it the displacement read is its noise, signals.h, so no
+//               model fed by it holds what lies there; the RTHS benchmark's clean record leaves
+//               its sensor noise, passed through the tracking loop into real force, at 47-81 Hz,
+//               0.62 % against a white part of 0.20 %). An event wholly above that band is counted
+//               in the floor: the text states the band and its share;
+//             - kModelFloor, for a record with no noise at all (rths's own simulated runs), whose
+//               correct model still leaves its numerical resolution.
+//   above     level > kFloorFactor x floor. Records of the independent simulation with sensor
+//             noise and 16-bit converters and a correct model leave 1.0 x (displacement) and
+//             1.5 x (force) their floor.
+// Where above (ChannelFloor):
+//   windows   the record cut into kFloorWindows equal windows, each with its share of the
+//             residual's power (sum r^2); a window holds it when its share is at least
+//             kWindowOverUniform / kFloorWindows; adjacent ones merge; at most kMaxWindows, the
+//             largest first. None: "spread over the record".
+//   band      r's amplitude spectrum (spectra.h, mean removed, Hann): its peak frequency and the
+//             band holding the middle 80 % of its power (10th to 90th percentile), Hz.
+//   relation  r's Pearson correlation (spectra.h correlation) with the channel's input x, its rate
+//             v, sign(x) and sign(v): the largest |corr| is named when at least kMinCorrelation
+//             ("follows the rate of the displacement read, corr -0.93"), else none is.
+//   excess    the share of r's power above the floor: 1 - (floor / level)^2.
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+#include "identify/run/actuator_path.h"
+#include "identify/run/unexplained.h"
+
+namespace rths::identify {
+
+inline constexpr double kFloorFactor = 3.0;
+inline constexpr double kModelFloor = 1e-3;  // of std(y): a noise-free record's floor
+inline constexpr double kEdgeSeconds = 0.25;
+inline constexpr std::size_t kFloorWindows = 20;
+inline constexpr double kWindowOverUniform = 2.0;
+inline constexpr std::size_t kMaxWindows = 3;
+inline constexpr double kMinCorrelation = 0.3;
+
+struct ResidualWindow {
+  double start = 0.0, end = 0.0;  // s
+  double share = 0.0;             // of the residual's power
+};
+
+// What one channel's residual is against its floor.
+struct ChannelFloor {
+  int actuator = 0;  // 1-based
+  Channel channel = Channel::kMeasured;
+  std::string part, channel_word;   // "actuator 1", "displacement"
+  double level = 0.0, floor = 0.0;  // RMS of the residual and its floor, of std(y)
+  double noise = 0.0;               // of std(y): the record's own noise (white part or declared)
+  double band_noise = 0.0;          // of std(y): r above the model's input band
+  double band_hz = 0.0;  // the model's input band (Hz, ChannelSignals input_cutoff); 0: none
+  bool above = false;    // level > kFloorFactor x floor
+  // Where above: when, at what frequencies, how it relates to the signals, how much.
+  std::vector<ResidualWindow> windows;  // empty: spread over the record
+  double peak_hz = 0.0, band_low_hz = 0.0, band_high_hz = 0.0;
+  std::string relation;  // "the rate of the displacement read"; empty: none at kMinCorrelation
+  double correlation = 0.0;
+  double excess = 0.0;               // share of the residual's power above the floor
+  std::string floor_source() const;  // "the sensor's noise 0.2 %, the residual above ..."
+  std::string text() const;
+  nlohmann::json json() const;
+};
+
+// Each identified channel of `path` against its floor (above). Call after the sensors were
+// judged (ActuatorPath noise estimates).
+std::vector<ChannelFloor> channel_floors(const ActuatorPath& path);
+
+// The windows holding a residual's power (above), from its samples at `time` (s).
+// @pre time and residual of the same size, at least kFloorWindows samples.
+std::vector<ResidualWindow> residual_windows(const std::vector<double>& time,
+                                             const std::vector<double>& residual);
+
+// "unexplained, every part and channel:" with each description (Unexplained::text) and each
+// channel above its floor, or " none (every channel at its floor: ...)" stating each floor.
+std::string unexplained_section(const std::vector<Unexplained>& unexplained,
+                                const std::vector<ChannelFloor>& floors);
+nlohmann::json floors_json(const std::vector<ChannelFloor>& floors);
+
+}  // namespace rths::identify
