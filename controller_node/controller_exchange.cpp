@@ -1,9 +1,11 @@
 #include "controller_node/controller_exchange.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 namespace rths::controller_node {
@@ -47,10 +49,15 @@ ControllerExchange::ControllerExchange(const config::ControllerLink& link,
     v->assign(n, 0.0);
   in_flight_.assign(kInFlight, InFlight{});
   targets_.assign(kInFlight * n, 0.0);
+  speeds_.assign(kInFlight * n, 0.0);
+  restart_position_.assign(n, 0.0);
+  diagnostic_fields_ = diagnostic_fields(link.feedback());
+  in_.diagnostics.assign(diagnostic_fields_.size(), 0.0);
   round_trips_.reserve(kRoundTrips);
   sorted_.reserve(kRoundTrips);
   bytes_.reserve(frame_size(link.command()));
   report_.set_held_after(-1.0);
+  report_.mutable_diagnostics()->Resize(static_cast<int>(diagnostic_fields_.size()), 0.0);
   link_ = std::make_unique<UdpLink>(link.local_address(), link.local_port(), link.peer_address(),
                                     link.peer_port());
 }
@@ -85,20 +92,25 @@ bool ControllerExchange::send_frame(std::int64_t status, std::int64_t step) {
     settle(frame, InFlight::State::kLost);
     report_.set_lost(report_.lost() + 1);
   }
-  frame = InFlight{counter_, step, monotonic_ns(), out_.time, InFlight::State::kPending};
+  frame = InFlight{counter_, step, monotonic_ns(), status, out_.time, InFlight::State::kPending};
   ++pending_;
+  const auto at = static_cast<std::ptrdiff_t>((static_cast<std::size_t>(counter_) % kInFlight) *
+                                              out_.target_displacement.size());
   std::copy(out_.target_displacement.begin(), out_.target_displacement.end(),
-            targets_.begin() +
-                static_cast<std::ptrdiff_t>((static_cast<std::size_t>(counter_) % kInFlight) *
-                                            out_.target_displacement.size()));
+            targets_.begin() + at);
+  std::transform(out_.target_velocity.begin(), out_.target_velocity.end(), speeds_.begin() + at,
+                 [](double v) { return std::abs(v); });
   if (!encode(config_.command(), out_, bytes_)) {
     send_fault_ = "frame " + std::to_string(counter_) + " carries a value its layout cannot hold";
     return false;
   }
   report_.set_frames_sent(report_.frames_sent() + 1);
   if (status != kStatusRun) settle(frame, InFlight::State::kLost);  // status frames await nothing
-  if (link_->send(bytes_.data(), bytes_.size())) return true;
-  send_fault_ = "cannot send frame " + std::to_string(counter_) + " to " + link_->peer();
+  const int error = link_->send(bytes_.data(), bytes_.size());
+  if (error == 0 || icmp_errno(error))
+    return true;  // an ICMP error: counted, the frame may be lost
+  send_fault_ = "cannot send frame " + std::to_string(counter_) + " to " + link_->peer() + ": " +
+                std::strerror(error) + " (errno " + std::to_string(error) + ")";
   return false;
 }
 
@@ -119,7 +131,8 @@ void ControllerExchange::settle(InFlight& frame, InFlight::State state) {
 }
 
 // The datagram's counter against the frames in flight.
-ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame) {
+ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame,
+                                                             std::int64_t received_ns) {
   Answer a;
   const std::int64_t c = in_.counter;
   // Texts are built only on the way to a rejection: an accepted frame allocates nothing.
@@ -146,8 +159,11 @@ ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame) {
   }
   // The answer to a frame already lost, or overtaken by a newer answer: late, never applied.
   if (f.state == InFlight::State::kLost || c < newest_answered_) {
-    settle(f, InFlight::State::kLost);
-    reject(Cause::kLate, from() + " answers frame " + std::to_string(c) + " late");
+    const double round_trip = static_cast<double>(received_ns - f.sent_ns) * 1e-9;
+    late(f, round_trip,
+         from() + " answers frame " + std::to_string(c) + " (step " + std::to_string(f.step) +
+             ") late, after " + ms(round_trip) +
+             (c < newest_answered_ ? " (a newer frame was answered first)" : ""));
     return a;  // kNone: ignored
   }
   frame = &f;
@@ -155,44 +171,87 @@ ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame) {
   return a;
 }
 
-std::string ControllerExchange::implausible(const InFlight& frame) {
+// The peak |target velocity| of actuator `k` over the kSpeedWindow frames up to `counter`.
+double ControllerExchange::peak_speed(std::int64_t counter, int k) const {
+  double peak = 0.0;
+  const auto n = static_cast<std::size_t>(settings_.actuators);
+  for (std::int64_t c = std::max<std::int64_t>(1, counter - kSpeedWindow + 1); c <= counter; ++c)
+    peak = std::max(
+        peak, speeds_[(static_cast<std::size_t>(c) % kInFlight) * n + static_cast<std::size_t>(k)]);
+  return peak;
+}
+
+std::string ControllerExchange::jump(const InFlight& frame, std::int64_t received_ns, int i) const {
+  const auto k = static_cast<std::size_t>(i);
+  const double moved = in_.measured_displacement[k] - last_displacement_[k];
+  const double span =
+      std::max({frame.time - last_time_,
+                static_cast<double>(received_ns - last_received_ns_) * 1e-9, settings_.dt});
+  const double speed = peak_speed(frame.counter, i);
+  const double bound = 2.0 * speed * span + settings_.jump_floor;
+  if (std::abs(moved) <= bound) return {};
+  return fmt::format(
+      "implausible measurement: the measured drift of actuator {} (frame {}, step {}) jumped "
+      "{:.3f} mm in {:.3f} ms, beyond 2 x the peak target velocity {:.4f} m/s x {:.3f} ms + "
+      "jump_floor {:.3f} mm = {:.3f} mm (a restarted controller or a sensor fault)",
+      i + 1, frame.counter, frame.step, moved * 1e3, span * 1e3, speed, span * 1e3,
+      settings_.jump_floor * 1e3, bound * 1e3);
+}
+
+// The tracking check of actuator `i`: "" within its bound; `off` set when beyond it.
+std::string ControllerExchange::tracking(const InFlight& frame, int i, bool& off) const {
+  const auto k = static_cast<std::size_t>(i);
+  const double x = in_.measured_displacement[k], target = targets_of(frame.counter)[k];
+  double bound = settings_.max_tracking_error;
+  const bool adaptive = !(bound > 0) && settings_.tracking_lag > 0;
+  if (adaptive)
+    bound = 2.0 * peak_speed(frame.counter, i) * settings_.tracking_lag +
+            std::max(settings_.jump_floor, 0.0) + 1e-3;
+  if (!(bound > 0) || std::abs(x - target) <= bound) return {};
+  off = true;
+  if (tracking_streak_ + 1 < settings_.tracking_error_steps) return {};
+  return fmt::format(
+      "tracking error: actuator {} (frame {}, step {}) measured {:.3f} mm for a target of {:.3f} "
+      "mm (|error| {:.3f} mm beyond {} {:.3f} mm for {} answers in a row)",
+      i + 1, frame.counter, frame.step, x * 1e3, target * 1e3, std::abs(x - target) * 1e3,
+      adaptive ? "the tracking bound (2 x peak target velocity x expected lag + floor)"
+               : "max_tracking_error",
+      bound * 1e3, tracking_streak_ + 1);
+}
+
+std::string ControllerExchange::implausible(const InFlight& frame, std::int64_t received_ns,
+                                            bool& jumped) {
   const double span = measured_ ? frame.time - last_time_ : 0.0;
   const double dt = span > 0 ? span : settings_.dt;
-  const double* target = targets_of(frame.counter);
   bool tracking_off = false;
   for (int i = 0; i < settings_.actuators; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const double x = in_.measured_displacement[k], f = in_.measured_force[k];
-    const auto who = [&] {
-      return "actuator " + std::to_string(i + 1) + " (frame " + std::to_string(frame.counter) +
-             ", step " + std::to_string(frame.step) + ")";
-    };
     if (measured_ && settings_.max_measured_rate > 0 && dt > 0) {
       const double rate = std::abs(x - last_displacement_[k]) / dt;
-      if (rate > settings_.max_measured_rate)
-        return "implausible measurement: the measured drift of " + who() + " moved " +
-               std::to_string((x - last_displacement_[k]) * 1e3) + " mm in " + ms(dt) + " (" +
-               std::to_string(rate) + " m/s, bound max_measured_rate " +
-               std::to_string(settings_.max_measured_rate) + " m/s)";
+      jumped = rate > settings_.max_measured_rate;
+      if (jumped)
+        return fmt::format(
+            "implausible measurement: the measured drift of actuator {} (frame {}, step {}) "
+            "moved {:.3f} mm in {:.3f} ms ({:.3f} m/s, bound max_measured_rate {:.3f} m/s)",
+            i + 1, frame.counter, frame.step, (x - last_displacement_[k]) * 1e3, dt * 1e3, rate,
+            settings_.max_measured_rate);
     }
+    if (measured_ && settings_.jump_floor > 0)
+      if (std::string why = jump(frame, received_ns, i); !why.empty()) {
+        jumped = true;
+        return why;
+      }
     if (measured_ && settings_.max_force_rate > 0 && dt > 0) {
       const double rate = std::abs(f - last_force_[k]) / dt;
       if (rate > settings_.max_force_rate)
-        return "implausible measurement: the measured force of " + who() + " moved " +
-               std::to_string(f - last_force_[k]) + " N in " + ms(dt) + " (" +
-               std::to_string(rate) + " N/s, bound max_force_rate " +
-               std::to_string(settings_.max_force_rate) + " N/s)";
+        return fmt::format(
+            "implausible measurement: the measured force of actuator {} (frame {}, step {}) "
+            "moved {:.1f} N in {:.3f} ms ({:.1f} N/s, bound max_force_rate {:.1f} N/s)",
+            i + 1, frame.counter, frame.step, f - last_force_[k], dt * 1e3, rate,
+            settings_.max_force_rate);
     }
-    if (settings_.max_tracking_error > 0 &&
-        std::abs(x - target[k]) > settings_.max_tracking_error) {
-      tracking_off = true;
-      if (tracking_streak_ + 1 >= settings_.tracking_error_steps)
-        return "tracking error: " + who() + " measured " + std::to_string(x * 1e3) +
-               " mm for a target of " + std::to_string(target[k] * 1e3) + " mm (|error| " +
-               std::to_string(std::abs(x - target[k]) * 1e3) + " mm beyond max_tracking_error " +
-               std::to_string(settings_.max_tracking_error * 1e3) + " mm for " +
-               std::to_string(tracking_streak_ + 1) + " answers in a row)";
-    }
+    if (std::string why = tracking(frame, i, tracking_off); !why.empty()) return why;
   }
   tracking_streak_ = tracking_off ? tracking_streak_ + 1 : 0;
   return {};
@@ -211,34 +270,35 @@ std::string ControllerExchange::out_of_range() const {
       return "a force of " + std::to_string(f) + " N on actuator " + std::to_string(i + 1) +
              ", beyond controller.max_force " + std::to_string(settings_.max_force) + " N";
   }
+  for (std::size_t i = 0; i < diagnostic_fields_.size(); ++i) {
+    const FrameField& f = diagnostic_fields_[i];
+    const double v = in_.diagnostics[i];
+    if (f.min() < f.max() && (v < f.min() || v > f.max()))
+      return fmt::format("a diagnostic {} of {:g}{}, outside its bounds [{:g}, {:g}]", f.name(), v,
+                         f.unit().empty() ? "" : " (SI; frame unit " + f.unit() + ")", f.min(),
+                         f.max());
+  }
   return {};
 }
 
-void ControllerExchange::note_hold_answer(const Datagram& d) {
-  if (decode(config_.feedback(), d.bytes.data(), d.size, settings_.actuators, in_) !=
-      FrameVerdict::kOk)
-    return;
-  if (!in_.has_status || in_.status != kStatusHold || held_) return;
-  held_ = true;
-  report_.set_last_status(static_cast<std::int32_t>(in_.status));
-  report_.set_held_after(static_cast<double>(d.received_ns - hold_started_ns_) * 1e-9);
-  spdlog::info("controller {}: reports held {:.3f} ms after the first HOLD frame", link_->peer(),
-               report_.held_after() * 1e3);
+ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
+  if (!d.from_peer) {
+    reject(Cause::kWrongSource, "frame from " + source_text(d) + " (not the controller " +
+                                    link_->peer() + "), " + std::to_string(d.size) + " bytes");
+    return Answer{};
+  }
+  if (holding_) {
+    judge_hold_answer(d);
+    return Answer{};
+  }
+  return judge_decoded(d);
 }
 
-ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
+// A frame from the peer while running, judged in the order controller_exchange.h states.
+ControllerExchange::Answer ControllerExchange::judge_decoded(const Datagram& d) {
   Answer a;
   // Texts are built only on the way to a rejection: an accepted frame allocates nothing.
   const auto from = [&d] { return "frame from " + source_text(d); };
-  if (!d.from_peer) {
-    reject(Cause::kWrongSource, from() + " (not the controller " + link_->peer() + "), " +
-                                    std::to_string(d.size) + " bytes");
-    return a;
-  }
-  if (holding_) {
-    note_hold_answer(d);
-    return a;
-  }
   const FrameVerdict verdict =
       decode(config_.feedback(), d.bytes.data(), d.size, settings_.actuators, in_);
   a.outcome = Outcome::kFault;
@@ -251,22 +311,29 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
   if (verdict == FrameVerdict::kNonFinite) {
     a.fault = from() + " carries a value that is not finite";
     if (in_.non_finite_field >= 0) {
-      const config::FrameField& f = config_.feedback().fields(in_.non_finite_field);
+      const FrameField& f = config_.feedback().fields(in_.non_finite_field);
       a.fault += " in field " + std::to_string(in_.non_finite_field) + " (" +
-                 (f.name().empty() ? config::FrameField::Role_Name(f.role()) : f.name()) + ", " +
-                 config::FrameField::Role_Name(f.role()) + ")";
+                 (f.name().empty() ? FrameField::Role_Name(f.role()) : f.name()) + ", " +
+                 FrameField::Role_Name(f.role()) + ")";
     }
     reject(Cause::kNonFinite, a.fault);
     return a;
   }
+  if (std::string why = restarted_epoch(); !why.empty()) {
+    note_restart(why);
+    a.fault = std::move(why);
+    reject(Cause::kImplausible, a.fault);
+    return a;
+  }
   InFlight* frame = nullptr;
-  if (Answer counter = judge_counter(frame); counter.outcome != Outcome::kAnswered) return counter;
+  if (Answer counter = judge_counter(frame, d.received_ns); counter.outcome != Outcome::kAnswered)
+    return counter;
   const double round_trip = static_cast<double>(d.received_ns - frame->sent_ns) * 1e-9;
   if (round_trip > settings_.reply_timeout) {
-    settle(*frame, InFlight::State::kLost);
-    reject(Cause::kLate, from() + " answers frame " + std::to_string(frame->counter) + " after " +
-                             ms(round_trip) + " (reply timeout " + ms(settings_.reply_timeout) +
-                             ")");
+    late(*frame, round_trip,
+         from() + " answers frame " + std::to_string(frame->counter) + " (step " +
+             std::to_string(frame->step) + ") after " + ms(round_trip) + " (reply timeout " +
+             ms(settings_.reply_timeout) + ")");
     return Answer{};
   }
   report_.set_last_status(static_cast<std::int32_t>(in_.status));
@@ -280,25 +347,86 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
     reject(Cause::kOutOfRange, a.fault);
     return a;
   }
-  if (std::string why = implausible(*frame); !why.empty()) {
+  bool jumped = false;
+  if (std::string why = implausible(*frame, d.received_ns, jumped); !why.empty()) {
+    if (jumped) note_restart(why);
     a.fault = std::move(why);
     reject(Cause::kImplausible, a.fault);
     return a;
   }
-  accept(*frame, round_trip);
+  accept(*frame, round_trip, d.received_ns);
   a.outcome = Outcome::kAnswered;
   a.step = frame->step;
   a.displacement = &in_.measured_displacement;
   a.force = &in_.measured_force;
+  a.diagnostics = &in_.diagnostics;
   a.status = in_.status;
   a.round_trip = round_trip;
   return a;
 }
 
-void ControllerExchange::accept(const InFlight& frame, double round_trip) {
+// "" unless the frame's CONTROLLER_EPOCH differs from the one the controller answered with so far.
+std::string ControllerExchange::restarted_epoch() {
+  if (!in_.has_epoch) return {};
+  const bool changed = epoch_seen_ && in_.epoch != epoch_;
+  const std::int64_t before = epoch_;
+  epoch_ = in_.epoch;
+  epoch_seen_ = true;
+  if (!changed) return {};
+  return fmt::format("the controller {} restarted: its epoch went from {} to {} (frame {})",
+                     link_->peer(), before, in_.epoch, in_.counter);
+}
+
+// The decoded answer echoes a frame still awaited: its measurement is the rig's, now.
+bool ControllerExchange::echoes_frame_in_flight() const {
+  const std::int64_t c = in_.counter;
+  if (c <= 0 || c > counter_) return false;
+  const InFlight& f = in_flight_[static_cast<std::size_t>(c) % kInFlight];
+  return f.counter == c && f.state == InFlight::State::kPending;
+}
+
+// A restart: the hold must hold where the restarted rig is. Its measurement is taken only from an
+// answer to a frame in flight (not a replay of an old one) and within the run's drift limit.
+void ControllerExchange::note_restart(const std::string& why) {
+  restarted_ = true;
+  report_.set_restart(why);
+  bool usable = echoes_frame_in_flight();
+  for (const double x : in_.measured_displacement)
+    usable = usable && std::isfinite(x) &&
+             !(settings_.max_drift > 0 && std::abs(x) > settings_.max_drift);
+  if (!usable) return;
+  std::copy(in_.measured_displacement.begin(), in_.measured_displacement.end(),
+            restart_position_.begin());
+  restart_measured_ = true;
+}
+
+void ControllerExchange::late(InFlight& frame, double round_trip, const std::string& why) {
+  settle(frame, InFlight::State::kLost);
+  report_.set_round_trip_max(std::max(report_.round_trip_max(), round_trip));
+  locate(*report_.mutable_late_frames(), frame, round_trip);
+  ++late_since_accept_;
+  newest_late_ = why;
+  reject(Cause::kLate, why);
+}
+
+void ControllerExchange::locate(google::protobuf::RepeatedPtrField<runtime::FrameMiss>& list,
+                                const InFlight& frame, double round_trip) {
+  if (list.size() >= kLocated) return;
+  runtime::FrameMiss* miss = list.Add();
+  miss->set_counter(frame.counter);
+  miss->set_step(frame.step);
+  miss->set_round_trip(round_trip);
+}
+
+void ControllerExchange::accept(const InFlight& frame, double round_trip,
+                                std::int64_t received_ns) {
   settle(slot(frame.counter), InFlight::State::kAnswered);
   newest_answered_ = frame.counter;
   lost_in_a_row_ = 0;
+  late_since_accept_ = 0;
+  last_received_ns_ = received_ns;
+  for (int i = 0; i < report_.diagnostics_size(); ++i)
+    report_.set_diagnostics(i, in_.diagnostics[static_cast<std::size_t>(i)]);
   std::copy(in_.measured_displacement.begin(), in_.measured_displacement.end(),
             last_displacement_.begin());
   std::copy(in_.measured_force.begin(), in_.measured_force.end(), last_force_.begin());
@@ -326,18 +454,30 @@ ControllerExchange::Answer ControllerExchange::expire(std::int64_t now_ns) {
     if (now_ns - f.sent_ns <= timeout) break;
     settle(f, InFlight::State::kLost);
     report_.set_lost(report_.lost() + 1);
+    locate(*report_.mutable_lost_frames(), f, 0.0);
     ++lost_in_a_row_;
-    const std::string silent = "the controller " + link_->peer() + " did not answer frame " +
-                               std::to_string(f.counter) + " (step " + std::to_string(f.step) +
-                               ") within " + ms(settings_.reply_timeout);
-    report_.set_last_reject(silent);
+    const std::string why = silence(f);
+    report_.set_last_reject(why);
     if (!settings_.real_time || lost_in_a_row_ >= settings_.lost_window) {
       a.outcome = Outcome::kFault;
-      a.fault = silent + " (" + std::to_string(lost_in_a_row_) + " lost in a row)";
+      a.fault = why + " (" + std::to_string(lost_in_a_row_) + " lost in a row)";
       return a;
     }
   }
   return a;
+}
+
+// Why frame `f` went unanswered: the controller answers late (it falls behind), or is silent.
+std::string ControllerExchange::silence(const InFlight& f) const {
+  const std::string frame =
+      "frame " + std::to_string(f.counter) + " (step " + std::to_string(f.step) + ")";
+  if (late_since_accept_ > 0)
+    return "the controller " + link_->peer() + " answers late: " + frame + " unanswered within " +
+           ms(settings_.reply_timeout) + ", and " + std::to_string(late_since_accept_) +
+           " answers since the newest applied one came after their reply timeout (newest: " +
+           newest_late_ + ")";
+  return "the controller " + link_->peer() + " did not answer " + frame + " within " +
+         ms(settings_.reply_timeout);
 }
 
 ControllerExchange::Answer ControllerExchange::next(std::int64_t now_ns) {
@@ -349,38 +489,12 @@ ControllerExchange::Answer ControllerExchange::next(std::int64_t now_ns) {
   return expire(now_ns);
 }
 
-void ControllerExchange::begin_hold(std::int64_t now_ns) {
-  if (holding_) return;
-  holding_ = true;
-  hold_started_ns_ = now_ns;
-  // The position to hold: where the specimen was last measured (the newest target before any
-  // measurement); not moving.
-  if (measured_)
-    std::copy(last_displacement_.begin(), last_displacement_.end(),
-              out_.target_displacement.begin());
-  std::fill(out_.target_velocity.begin(), out_.target_velocity.end(), 0.0);
-  next_hold_frame_ns_ = now_ns;
-  hold_step(now_ns);
-}
-
-bool ControllerExchange::hold_step(std::int64_t now_ns) {
-  if (!holding_) return true;
-  while (link_->try_receive(datagram_)) judge(datagram_);
-  const bool done = held_ || now_ns - hold_started_ns_ >= ns_of(settings_.hold_time);
-  if (done || now_ns < next_hold_frame_ns_) return done;
-  send_frame(kStatusHold, -1);
-  report_.set_hold_frames(report_.hold_frames() + 1);
-  // Every dt at first; past kHoldBurst frames every kHoldSpacing dt, so a controller that
-  // stalled wakes to a short backlog with the STOP behind it, not a buffer full of HOLDs.
-  const std::int64_t period = std::max<std::int64_t>(ns_of(settings_.dt), 100000);
-  next_hold_frame_ns_ =
-      now_ns + (report_.hold_frames() < kHoldBurst ? period : kHoldSpacing * period);
-  return false;
-}
-
-bool ControllerExchange::send_stop() { return send_frame(kStatusStop, -1); }
-
 const runtime::ControllerReport& ControllerExchange::report() {
+  report_.set_icmp_errors(link_->icmp_errors());
+  if (link_->icmp_errors() > 0)
+    report_.set_last_icmp_error(fmt::format(
+        "{} (errno {})", std::strerror(link_->last_icmp_errno()), link_->last_icmp_errno()));
+  report_.set_drained_before_connect(link_->drained_before_connect());
   if (!round_trips_.empty()) {
     sorted_.assign(round_trips_.begin(), round_trips_.end());
     const auto at = [this](double q) {

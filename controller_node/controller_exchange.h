@@ -29,16 +29,35 @@
 //   the two answered frames' command times), or |measured - target drift| > max_tracking_error
 //   for tracking_error_steps answers in a row            -> implausible         -> kFault
 //   (every limit <= 0: not checked)
+//   measured jump (on by default: jump_floor > 0): |d measured drift| between two answered
+//   frames > 2 x the peak |target velocity| of the kSpeedWindow frames up to the answered one x
+//   the longer of the frames' command span, the answers' arrival span and dt, + jump_floor
+//                                                         -> implausible (a restart)  -> kFault
+//   tracking, adaptive (max_tracking_error 0, tracking_lag > 0): the bound is 2 x that peak
+//   velocity x tracking_lag + jump_floor + 1 mm          -> implausible              -> kFault
+//   a CONTROLLER_EPOCH field that changed                 -> restarted (a restart)    -> kFault
+//   a DIAGNOSTIC field outside its [min, max] (min < max) -> out_of_range             -> kFault
 //   Then frames sent more than the reply timeout ago are lost: lockstep -> kFault at once (the
-//   step cannot go on without its answer); real time -> lost_window lost in a row -> kFault.
+//   step cannot go on without its answer); real time -> lost_window lost in a row -> kFault, named
+//   "late" when answers to frames since the newest accepted one came after their timeout.
+//   Lost and late frames are located (counter, step) in the report, the first kLocated of each.
+// A restart (a measured drift beyond max_measured_rate or the jump bound, a changed epoch, on an
+//   answer echoing a frame in flight): its measured drifts are where the rebooted rig is; the
+//   hold holds there, never at a position measured before the restart, and then follows what the
+//   rig answers to the HOLD frames (so a single glitched sample is held for one frame at most).
 // The hold: begin_hold(now) sends a HOLD frame (status 1) carrying the position to hold (the
-//   newest measured drift, else the newest target) and hold_step(now) repeats it every dt (the
-//   first kHoldBurst, then every kHoldSpacing dt: a stalled controller's buffer holds the STOP
-//   too) until the controller answers one with status HOLD, or hold_time passes; true then.
-//   send_stop() sends the STOP frame (status 2) with the same position.
+//   restarted rig's measurement, else the newest accepted measured drift, else the newest
+//   target) and hold_step(now) repeats it every dt, never faster (the first kHoldBurst, then every
+//   kHoldSpacing dt: a stalled controller's buffer holds the STOP too), until the controller
+//   answers with status HOLD (1) an echo of a HOLD frame sent before that answer arrived, or
+//   hold_time passes; true then. Every other answer while holding (an echo of no frame, of a run
+//   frame, of a HOLD frame answered already, status 1 before any HOLD frame left) is counted,
+//   named (hold_rejected) and leaves the hold on. send_stop() sends the STOP frame (status 2)
+//   with the same position. Every HOLD frame, answer and the STOP go to the report's hold_log.
 // Threads: wait() may run on any thread (it only polls the socket); everything else on one
 // thread at a time (the node serialises them). No allocation per datagram or frame once built
-// (the fault texts allocate, once per fault).
+// (the fault texts allocate, once per fault; the hold log allocates its entries: the hold ends
+// the run).
 
 #include <cstdint>
 #include <memory>
@@ -50,6 +69,8 @@
 #include "rths/proto/runtime.pb.h"
 
 namespace rths::controller_node {
+
+using FrameField = config::FrameField;
 
 inline constexpr std::int64_t kStatusRun = 0, kStatusHold = 1, kStatusStop = 2;
 
@@ -65,7 +86,9 @@ struct ExchangeSettings {
   double max_force_rate = 0.0;      // N/s
   double max_tracking_error = 0.0;  // m
   int tracking_error_steps = 3;
-  double hold_time = 0.5;  // s
+  double jump_floor = 0.0;    // m, the measured-jump check's floor; <= 0: not checked
+  double tracking_lag = 0.0;  // s, the adaptive tracking bound's lag (max_tracking_error 0)
+  double hold_time = 0.5;     // s
 };
 
 class ControllerExchange {
@@ -74,6 +97,9 @@ class ControllerExchange {
   static constexpr std::size_t kRoundTrips = 4096;
   static constexpr std::uint64_t kHoldBurst = 50;   // HOLD frames one dt apart, then
   static constexpr std::int64_t kHoldSpacing = 10;  // this many dt apart
+  static constexpr std::int64_t kSpeedWindow = 64;  // frames whose peak target speed bounds a jump
+  static constexpr int kHoldLog = 1024;             // hold_log entries kept
+  static constexpr int kLocated = 64;               // lost and late frames located
 
   enum class Outcome { kNone, kAnswered, kFault };
   struct Answer {
@@ -83,7 +109,8 @@ class ControllerExchange {
     const std::vector<double>* force = nullptr;         // N
     double round_trip = 0.0;                            // s
     std::int64_t status = 0;
-    std::string fault;  // kFault: why
+    const std::vector<double>* diagnostics = nullptr;  // SI, the layout's DIAGNOSTIC fields
+    std::string fault;                                 // kFault: why
   };
 
   // Throws std::invalid_argument naming the field for a bad layout or setting,
@@ -108,7 +135,7 @@ class ControllerExchange {
 
  private:
   struct InFlight {
-    std::int64_t counter = 0, step = 0, sent_ns = 0;
+    std::int64_t counter = 0, step = 0, sent_ns = 0, status = 0;
     double time = 0.0;
     enum class State { kFree, kPending, kAnswered, kLost } state = State::kFree;
   };
@@ -131,17 +158,36 @@ class ControllerExchange {
                      static_cast<std::size_t>(settings_.actuators)];
   }
   Answer judge(const Datagram& d);
+  Answer judge_decoded(const Datagram& d);
   // The counter's frame, or why not (a fault, or kNone meaning late: ignored).
-  Answer judge_counter(InFlight*& frame);
-  std::string implausible(const InFlight& frame);
+  Answer judge_counter(InFlight*& frame, std::int64_t received_ns);
+  // `jumped`: the fault is a measured drift moving faster than a rig can (max_measured_rate or
+  // the jump check): a restart, or a sensor fault the answers to the HOLD frames then correct.
+  std::string implausible(const InFlight& frame, std::int64_t received_ns, bool& jumped);
+  std::string jump(const InFlight& frame, std::int64_t received_ns, int actuator) const;
+  std::string tracking(const InFlight& frame, int actuator, bool& off) const;
+  std::string restarted_epoch();
   std::string out_of_range() const;
+  double peak_speed(std::int64_t counter, int actuator) const;
+  bool echoes_frame_in_flight() const;
+  void note_restart(const std::string& why);
   Answer expire(std::int64_t now_ns);
+  std::string silence(const InFlight& frame) const;
+  void locate(google::protobuf::RepeatedPtrField<runtime::FrameMiss>& list, const InFlight& frame,
+              double round_trip);
+  void late(InFlight& frame, double round_trip, const std::string& why);
+  // The hold (controller_hold.cpp).
+  void judge_hold_answer(const Datagram& d);
+  std::string hold_echo_problem(std::int64_t received_ns) const;
+  void reject_hold_answer(const std::string& why);
+  void log_hold(runtime::HoldEntry::Kind kind, std::int64_t now_ns, std::int64_t counter,
+                std::int64_t status, const std::vector<double>& position,
+                const std::vector<double>* force, const std::string& verdict);
   // Leaves `state` (answered or lost) and keeps pending_ the count of kPending frames.
   void settle(InFlight& frame, InFlight::State state);
-  void accept(const InFlight& frame, double round_trip);
+  void accept(const InFlight& frame, double round_trip, std::int64_t received_ns);
   void reject(Cause cause, const std::string& why);
   bool send_frame(std::int64_t status, std::int64_t step);
-  void note_hold_answer(const Datagram& d);
 
   config::ControllerLink config_;
   ExchangeSettings settings_;
@@ -158,9 +204,22 @@ class ControllerExchange {
   // The newest accepted measurement and its frame's command time (for the rate checks).
   std::vector<double> last_displacement_, last_force_;
   double last_time_ = 0.0;
+  std::int64_t last_received_ns_ = 0;
   bool measured_ = false;
+  std::vector<double> speeds_;  // kInFlight x actuators: |target velocity| m/s, by counter
+  std::vector<FrameField> diagnostic_fields_;
+  std::int64_t epoch_ = 0;
+  bool epoch_seen_ = false;
+  // A restart detected: the restarted rig's measured drifts (restart_measured_: they are known).
+  bool restarted_ = false, restart_measured_ = false;
+  std::vector<double> restart_position_;
+  // Answers judged late since the newest accepted one, and the newest such, for naming a
+  // controller that falls behind.
+  std::uint64_t late_since_accept_ = 0;
+  std::string newest_late_;
   // The hold.
   bool holding_ = false, held_ = false;
+  std::int64_t first_hold_counter_ = 0;
   std::int64_t hold_started_ns_ = 0, next_hold_frame_ns_ = 0;
   std::string send_fault_;
   std::vector<double> round_trips_, sorted_;  // ring of the newest kRoundTrips, and a scratch

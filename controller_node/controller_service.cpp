@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "runtime/node/plan.h"
+#include "runtime/record/node_health.h"
 
 namespace rths::controller_node {
 namespace {
@@ -51,6 +52,8 @@ int ControllerService::configure(const runtime::Assign& assign) {
   settings.max_force_rate = link.max_force_rate();
   settings.max_tracking_error = link.max_tracking_error();
   settings.tracking_error_steps = link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3;
+  settings.jump_floor = runtime::controller_jump_floor(link);
+  settings.tracking_lag = runtime::controller_expected_lag(link);
   settings.hold_time = runtime::controller_hold_time(link);
   exchange_ = std::make_unique<ControllerExchange>(link, settings);
   drift_.assign(static_cast<std::size_t>(settings.actuators), 0.0);
@@ -61,6 +64,7 @@ int ControllerService::configure(const runtime::Assign& assign) {
       label(), link.local_address() + ":" + std::to_string(link.local_port()), exchange_->peer(),
       frame_size(link.command()), frame_size(link.feedback()), settings.reply_timeout * 1e3,
       settings.hold_time * 1e3);
+  spdlog::info("{}: {}", label(), runtime::controller_checks_text(link, deployment, assign.dt()));
   return settings.actuators;
 }
 
@@ -118,6 +122,7 @@ runtime::NodeService::Answered ControllerService::next_answer(runtime::Feedback&
     feedback.add_realised((*a.displacement)[i]);
     feedback.add_force((*a.force)[i]);
   }
+  for (const double v : *a.diagnostics) feedback.add_controller_diagnostics(v);
   feedback.set_controller_round_trip(a.round_trip);
   feedback.set_controller_status(static_cast<std::int32_t>(a.status));
   out.kind = Answered::Kind::kAnswer;
@@ -145,22 +150,12 @@ void ControllerService::on_stop() {
 
 void ControllerService::fill_heartbeat(runtime::Heartbeat& heartbeat) const {
   if (!exchange_) return;
-  const runtime::ControllerReport& r = exchange_->report();
-  *heartbeat.mutable_controller() = r;
+  *heartbeat.mutable_controller() = exchange_->report();
   if (!heartbeat.final()) return;
-  spdlog::info(
-      "{}: controller {}: {} frames sent, {} accepted, {} late, {} lost; rejected: wrong source "
-      "{}, wrong size {}, repeated counter {}, unexpected counter {}, not finite {}, out of range "
-      "{}, bad status {}, implausible {}; round trip median {:.3f} ms, p99 {:.3f} ms, max {:.3f} "
-      "ms; {} HOLD frames, held {}{}",
-      label(), exchange_->peer(), r.frames_sent(), r.frames_accepted(), r.late(), r.lost(),
-      r.wrong_source(), r.wrong_size(), r.repeated_counter(), r.unexpected_counter(),
-      r.non_finite(), r.out_of_range(), r.bad_status(), r.implausible(),
-      r.round_trip_median() * 1e3, r.round_trip_p99() * 1e3, r.round_trip_max() * 1e3,
-      r.hold_frames(),
-      r.held_after() >= 0 ? "after " + std::to_string(r.held_after() * 1e3) + " ms"
-                          : std::string("never reported"),
-      r.last_reject().empty() ? "" : "; newest: " + r.last_reject());
+  runtime::NodeRejects node;
+  node.set_label(label());
+  *node.mutable_controller() = heartbeat.controller();
+  spdlog::info("{}", runtime::controller_link_text(node));
 }
 
 }  // namespace rths::controller_node

@@ -35,6 +35,7 @@ double frame_value(const Field& f, const FrameValues& values) {
   switch (f.role()) {
     case Field::COUNTER: return static_cast<double>(values.counter);
     case Field::STATUS: return static_cast<double>(values.status);
+    case Field::CONTROLLER_EPOCH: return static_cast<double>(values.epoch);
     case Field::PADDING: return 0.0;
     default: {
       const double* v = slot(values, f.role(), f.actuator());
@@ -113,9 +114,14 @@ std::string to_string(FrameVerdict verdict) {
 bool encode(const config::FrameLayout& layout, const FrameValues& values,
             std::vector<std::uint8_t>& bytes) {
   bytes.assign(frame_size(layout), 0);
-  std::size_t at = 0;
+  std::size_t at = 0, diagnostic = 0;
   for (const Field& f : layout.fields()) {
-    if (!write_field(f, frame_value(f, values), bytes.data() + at)) return false;
+    double value = frame_value(f, values);
+    if (f.role() == Field::DIAGNOSTIC)  // in layout order; a channel not given is written 0
+      value = diagnostic < values.diagnostics.size() ? values.diagnostics[diagnostic] / scale_of(f)
+                                                     : 0.0;
+    diagnostic += f.role() == Field::DIAGNOSTIC ? 1 : 0;
+    if (!write_field(f, value, bytes.data() + at)) return false;
     at += runtime::frame_field_size(f.type());
   }
   return true;
@@ -129,7 +135,9 @@ FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data,
                   &values.measured_displacement, &values.measured_force})
     v->assign(n, 0.0);
   values.has_status = false;
+  values.has_epoch = false;
   values.non_finite_field = -1;
+  std::size_t diagnostic = 0;
   std::size_t at = 0;
   int index = -1;
   for (const Field& f : layout.fields()) {
@@ -149,13 +157,27 @@ FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data,
     } else if (f.role() == Field::STATUS) {
       values.status = static_cast<std::int64_t>(x);
       values.has_status = true;
+    } else if (f.role() == Field::CONTROLLER_EPOCH) {
+      values.epoch = static_cast<std::int64_t>(std::llround(x));
+      values.has_epoch = true;
+    } else if (f.role() == Field::DIAGNOSTIC) {
+      if (diagnostic == values.diagnostics.size()) values.diagnostics.push_back(0.0);
+      values.diagnostics[diagnostic++] = x * scale_of(f);
     } else {
       if (runtime::per_actuator_role(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators))
         continue;
       if (double* v = slot(values, f.role(), f.actuator())) *v = x * scale_of(f);
     }
   }
+  values.diagnostics.resize(diagnostic);
   return FrameVerdict::kOk;
+}
+
+std::vector<config::FrameField> diagnostic_fields(const config::FrameLayout& layout) {
+  std::vector<config::FrameField> out;
+  for (const Field& f : layout.fields())
+    if (f.role() == Field::DIAGNOSTIC) out.push_back(f);
+  return out;
 }
 
 }  // namespace rths::controller_node

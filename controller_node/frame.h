@@ -12,11 +12,14 @@
 //   every command that reads a study checks a controller block the same way.
 //   encode(layout, values, bytes)  -> false when a value does not fit its type (not finite, or
 //                                     beyond an integer's range); bytes then unspecified. PADDING
-//                                     fields are written 0.
+//                                     fields are written 0; DIAGNOSTIC fields take
+//                                     values.diagnostics in layout order (0 past its end).
 //   decode(layout, bytes, values)  -> kWrongSize (size != frame_size), kNonFinite (a float field
 //                                     of any role but PADDING NaN or infinite), or kOk with every
 //                                     role's value filled. PADDING fields are never read: their
 //                                     bytes are the controller's, whatever they hold.
+//   diagnostic_fields(layout)      -> the layout's DIAGNOSTIC fields, in order (their names,
+//                                     units and bounds).
 
 #include <cstdint>
 #include <string>
@@ -38,6 +41,11 @@ struct FrameValues {
   std::vector<double> target_displacement, target_velocity;   // m, m/s
   std::vector<double> measured_displacement, measured_force;  // m, N
   int non_finite_field = -1;  // decode: kNonFinite names the field (index in the layout)
+  // decode: the CONTROLLER_EPOCH field's value (has_epoch: the layout has one), and the
+  // DIAGNOSTIC fields' SI values in layout order (sized by decode, no allocation once sized).
+  std::int64_t epoch = 0;
+  bool has_epoch = false;
+  std::vector<double> diagnostics;
 };
 
 enum class FrameVerdict { kOk, kWrongSize, kNonFinite };
@@ -52,5 +60,7 @@ bool encode(const config::FrameLayout& layout, const FrameValues& values,
 // refuses them).
 FrameVerdict decode(const config::FrameLayout& layout, const std::uint8_t* data, std::size_t size,
                     int actuators, FrameValues& values);
+
+std::vector<config::FrameField> diagnostic_fields(const config::FrameLayout& layout);
 
 }  // namespace rths::controller_node

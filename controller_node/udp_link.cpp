@@ -1,6 +1,7 @@
 #include "controller_node/udp_link.h"
 
 #include <arpa/inet.h>
+#include <linux/filter.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -34,6 +35,27 @@ std::string text_of(std::uint32_t address, std::uint16_t port) {
   return std::string(host) + ":" + std::to_string(ntohs(port));
 }
 
+// A socket filter, attached before bind, that keeps only the peer's datagrams: connect() alone
+// leaves a window in which a datagram the kernel matched to the socket before the connect is
+// queued after it (a flood already running when the node starts).
+void accept_only_the_peer(int fd, const sockaddr_in& peer) {
+  // At the filter, the packet starts at the UDP header; the IPv4 header lies before it.
+  sock_filter code[] = {
+      BPF_STMT(BPF_LD | BPF_W | BPF_ABS, static_cast<__u32>(SKF_NET_OFF + 12)),  // IPv4 source
+      BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, ntohl(peer.sin_addr.s_addr), 0, 3),
+      BPF_STMT(BPF_LD | BPF_H | BPF_ABS, 0),  // UDP source port
+      BPF_JUMP(BPF_JMP | BPF_JEQ | BPF_K, ntohs(peer.sin_port), 0, 1),
+      BPF_STMT(BPF_RET | BPF_K, 0xFFFFFFFFu),
+      BPF_STMT(BPF_RET | BPF_K, 0),
+  };
+  const sock_fprog program{static_cast<unsigned short>(sizeof code / sizeof code[0]), code};
+  if (setsockopt(fd, SOL_SOCKET, SO_ATTACH_FILTER, &program, sizeof program) != 0) {
+    const std::string why = std::strerror(errno);
+    close(fd);
+    throw std::runtime_error("cannot filter the UDP socket to its peer: " + why);
+  }
+}
+
 }  // namespace
 
 std::int64_t monotonic_ns() {
@@ -56,6 +78,7 @@ UdpLink::UdpLink(const std::string& local_address, int local_port, const std::st
   peer_ = text_of(peer_address_, peer_port_);
   fd_ = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   if (fd_ < 0) throw std::runtime_error(std::string("socket: ") + std::strerror(errno));
+  accept_only_the_peer(fd_, peer);
   if (bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof local) != 0) {
     const std::string why = std::strerror(errno);
     close(fd_);
@@ -66,15 +89,41 @@ UdpLink::UdpLink(const std::string& local_address, int local_port, const std::st
     close(fd_);
     throw std::runtime_error("cannot connect UDP " + local_ + " to " + peer_ + ": " + why);
   }
+  std::array<std::uint8_t, 1> scrap{};
+  for (;;) {
+    const ssize_t n = recv(fd_, scrap.data(), scrap.size(), MSG_TRUNC | MSG_DONTWAIT);
+    if (n >= 0)
+      ++drained_;
+    else if (errno != EINTR && !icmp_errno(errno))
+      break;
+  }
+}
+
+bool icmp_errno(int error) {
+  return error == ECONNREFUSED || error == EHOSTUNREACH || error == ENETUNREACH ||
+         error == EHOSTDOWN || error == ENETDOWN || error == EPROTO || error == ENOPROTOOPT;
+}
+
+void UdpLink::note_icmp(int error) {
+  icmp_errors_.fetch_add(1, std::memory_order_relaxed);
+  last_icmp_errno_.store(error, std::memory_order_relaxed);
 }
 
 UdpLink::~UdpLink() {
   if (fd_ >= 0) close(fd_);
 }
 
-bool UdpLink::send(const std::uint8_t* bytes, std::size_t size) {
-  const ssize_t n = ::send(fd_, bytes, size, MSG_DONTWAIT);
-  return n == static_cast<ssize_t>(size);
+int UdpLink::send(const std::uint8_t* bytes, std::size_t size) {
+  // A pending ICMP error fails one send and is cleared by it: the second try carries the frame.
+  for (int attempt = 0;; ++attempt) {
+    const ssize_t n = ::send(fd_, bytes, size, MSG_DONTWAIT);
+    if (n == static_cast<ssize_t>(size)) return 0;
+    const int error = n < 0 ? errno : EMSGSIZE;
+    if (error == EINTR) continue;
+    if (!icmp_errno(error)) return error;
+    note_icmp(error);
+    if (attempt == 1) return error;
+  }
 }
 
 bool UdpLink::wait(std::int64_t deadline_ns) const {
@@ -96,9 +145,12 @@ bool UdpLink::try_receive(Datagram& d) {
     const ssize_t n = recvfrom(fd_, d.bytes.data(), d.bytes.size(), MSG_TRUNC | MSG_DONTWAIT,
                                reinterpret_cast<sockaddr*>(&from), &from_size);
     if (n < 0 && errno == EINTR) continue;
-    // ECONNREFUSED: an ICMP port unreachable from the peer (its socket not yet open) is reported
-    // once on a connected socket; it is no datagram, and the next call reads on.
-    if (n < 0 && errno == ECONNREFUSED) continue;
+    // An ICMP error (port unreachable from the peer whose socket is not yet open, or forged by
+    // anyone) is reported once on a connected socket: no datagram; counted, and reading goes on.
+    if (n < 0 && icmp_errno(errno)) {
+      note_icmp(errno);
+      continue;
+    }
     if (n < 0) return false;
     d.received_ns = monotonic_ns();
     d.size = static_cast<std::size_t>(n);

@@ -9,8 +9,14 @@
 //   UdpLink(local, local_port, peer, peer_port)  throws std::runtime_error naming the address
 //                                                 when an address does not parse, or bind or
 //                                                 connect fails.
-//   send(bytes, size)      one datagram to the peer, never blocking; false when the kernel
-//                          refused it (buffer full, ICMP error pending).
+//   send(bytes, size)      one datagram to the peer, never blocking: 0 when sent, else the
+//                          errno. An ICMP error pending on the socket (ECONNREFUSED and kin,
+//                          from the peer or forged by anyone) is counted and the datagram sent
+//                          again once: such an error is no fault of this frame.
+//   A socket filter (attached before bind) keeps only datagrams from the peer's address and
+//   port, and datagrams that reached the socket before the connect are drained unread and
+//   counted: a flood already running when the link opens never reaches try_receive().
+//   icmp_errors(), last_icmp_errno(), drained_before_connect(): those counts.
 //   wait(deadline_ns)      true when a datagram is ready before the CLOCK_MONOTONIC deadline.
 //   try_receive(datagram)  the next queued datagram into a caller-owned Datagram, never
 //                          blocking (false: none); no allocation. Datagrams longer than
@@ -19,6 +25,7 @@
 // thread-safe); try_receive() on one thread at a time.
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <string>
 
@@ -46,18 +53,29 @@ class UdpLink {
   UdpLink(const UdpLink&) = delete;
   UdpLink& operator=(const UdpLink&) = delete;
 
-  bool send(const std::uint8_t* bytes, std::size_t size);
+  int send(const std::uint8_t* bytes, std::size_t size);
   bool wait(std::int64_t deadline_ns) const;
   bool try_receive(Datagram& datagram);
   std::string peer() const { return peer_; }    // "a.b.c.d:port"
   std::string local() const { return local_; }  // "a.b.c.d:port"
+  std::uint64_t icmp_errors() const { return icmp_errors_.load(std::memory_order_relaxed); }
+  int last_icmp_errno() const { return last_icmp_errno_.load(std::memory_order_relaxed); }
+  std::uint64_t drained_before_connect() const { return drained_; }
 
  private:
   int fd_ = -1;
   std::uint32_t peer_address_ = 0;  // network order
   std::uint16_t peer_port_ = 0;     // network order
   std::string local_, peer_;
+  // send() and try_receive() may run on different threads: the counts are atomic.
+  std::atomic<std::uint64_t> icmp_errors_{0};
+  std::atomic<int> last_icmp_errno_{0};
+  std::uint64_t drained_ = 0;
+  void note_icmp(int error);
 };
+
+// An errno an ICMP error leaves on a connected UDP socket (port or host unreachable...).
+bool icmp_errno(int error);
 
 std::int64_t monotonic_ns();
 // "a.b.c.d:port" of a datagram's source.

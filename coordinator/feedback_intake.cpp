@@ -10,6 +10,10 @@ using runtime::Verdict;
 
 namespace {
 
+// A controller's diagnostic channels a feedback may carry: a frame of at most
+// runtime::kMaxControllerFrameBytes holds at most this many 4-byte fields.
+constexpr int kMaxDiagnostics = 512;
+
 // FNV-1a, 64 bit: tells two payloads apart. Not a defence against a chosen collision; the
 // writer check is (a forger cannot answer from the node's own writer).
 std::uint64_t hash_of(const std::string& bytes) {
@@ -95,7 +99,9 @@ bool FeedbackIntake::values_in_range(const runtime::Feedback& f) const {
          runtime::finite_within(f.realised(), max_realised_) && std::isfinite(f.injected_lag()) &&
          f.injected_lag() >= 0.0 && f.command_received_ns() >= 0 && f.sampled_ns() >= 0 &&
          f.servo_sample() >= 0 && std::isfinite(f.controller_round_trip()) &&
-         f.controller_round_trip() >= 0.0;
+         f.controller_round_trip() >= 0.0 &&
+         runtime::finite_within(f.controller_diagnostics(), 0.0) &&
+         f.controller_diagnostics_size() <= kMaxDiagnostics;
 }
 
 Verdict FeedbackIntake::judge_repeat(const transport::Message& message, Node& node,
@@ -126,6 +132,10 @@ void FeedbackIntake::record_answer(const transport::Message& message, Node& node
   link.set_one_way_up(static_cast<double>(message.received_ns - message.sent_ns) * 1e-9);
   link.set_controller_round_trip(feedback.controller_round_trip());
   link.set_controller_status(feedback.controller_status());
+  // Copied in place: the sample's field keeps its capacity from step to step.
+  link.mutable_controller_diagnostics()->Resize(feedback.controller_diagnostics_size(), 0.0);
+  for (int i = 0; i < feedback.controller_diagnostics_size(); ++i)
+    link.set_controller_diagnostics(i, feedback.controller_diagnostics(i));
 }
 
 bool FeedbackIntake::offer(const transport::Message& message) {

@@ -72,7 +72,7 @@ std::string summary_text(const RunOutcome& o) {
         << " %, as of each emulator's last heartbeat)\n";
   // Each node's own transport drops (its heartbeat's count) beside its rejects.
   for (const runtime::NodeRejects& n : o.node_rejects)
-    out << n.label() << " rejected: " << reject_text(n.rejected()) << ", unauthenticated "
+    out << n.label() << " DDS messages rejected: " << reject_text(n.rejected()) << ", unauthenticated "
         << n.rejected().unauthenticated()
         << (n.final() ? "" : " (as of its last heartbeat; no report on STOP)") << "\n";
   for (const runtime::NodeRejects& n : o.node_rejects)

@@ -84,10 +84,30 @@ void set_run_facts(const runtime::RecordContents& record, Table& t) {
 
 // Whether the run's deployment has node `id` as a CONTROLLER (its links carry the frame's round
 // trip and the controller's status).
-bool is_controller(const runtime::RunHeader& header, int id) {
+const config::NodeSpec* controller_node(const runtime::RunHeader& header, int id) {
   for (const auto& node : header.study().deployment().nodes())
-    if (node.id() == id) return node.kind() == config::NodeSpec::CONTROLLER;
-  return false;
+    if (node.id() == id) return node.kind() == config::NodeSpec::CONTROLLER ? &node : nullptr;
+  return nullptr;
+}
+
+// A controller's diagnostic channels on link `l` (LinkSample.controller_diagnostics, SI), one
+// column each, named by the layout's DIAGNOSTIC fields (node<id>_diag_<name>, no unit suffix).
+void add_diagnostic_columns(Table& t, const config::NodeSpec& node, std::size_t l,
+                            const std::vector<const runtime::StepRecord*>& steps) {
+  int channel = 0;
+  for (const auto& f : node.controller().feedback().fields()) {
+    if (f.role() != config::FrameField::DIAGNOSTIC) continue;
+    std::vector<double> out;
+    out.reserve(steps.size());
+    for (const auto* s : steps) {
+      const bool has = l < static_cast<std::size_t>(s->links_size()) &&
+                       channel < s->links(static_cast<int>(l)).controller_diagnostics_size();
+      out.push_back(has ? s->links(static_cast<int>(l)).controller_diagnostics(channel) : kMissing);
+    }
+    // SI values whose unit the layout states for people only: no unit suffix.
+    t.add_numbers(identifier(link_column(node.id(), "diag_" + f.name())), "", std::move(out));
+    ++channel;
+  }
 }
 
 // Per link of the header, its samples' columns (node<id>_...): a step without this link's sample
@@ -145,11 +165,13 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
                   link([](const Link& x) { return x.one_way_down(); }));
     t.add_numbers(column("one_way_up_s"), "s", link([](const Link& x) { return x.one_way_up(); }));
     add_prediction_error_columns(t, id, l, steps);
-    if (!is_controller(header, id)) continue;
+    const config::NodeSpec* controller = controller_node(header, id);
+    if (!controller) continue;
     t.add_numbers(column("controller_round_trip_s"), "s",
                   link([](const Link& x) { return x.controller_round_trip(); }));
     t.add_numbers(column("controller_status"), "",
                   link([](const Link& x) { return x.controller_status(); }));
+    add_diagnostic_columns(t, *controller, l, steps);
   }
 }
 

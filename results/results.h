@@ -40,6 +40,13 @@
 //                 c_input_m, c_target_<unit>, c_declared_<unit>, c_final_<unit> (the record, and
 //                 the declared and final model's predictions over the whole record); unit m for
 //                 `measured` (displacement), N for `force`.
+//   hold_table    the hold of every CONTROLLER node in a record's footer
+//                 (ControllerReport.hold_log), a row per frame: node, entry (0 sent HOLD,
+//                 1 answer, 2 sent STOP; the text in `kind`), time_s (since the node's first HOLD
+//                 frame), frame (its counter, or the answer's echo), status,
+//                 position<j>_m and force<j>_N per actuator of the node (force: answers only;
+//                 NaN otherwise), verdict (text: "held", "holding" or why the answer could
+//                 not end the hold). No rows when no node held.
 
 #include "identify/fit/identify.h"
 #include "results/table.h"
@@ -57,5 +64,6 @@ void set_motion_attributes(Table& t, const std::string& name, const std::string&
 // Throws std::invalid_argument when the record has no header entry.
 Table record_table(const runtime::RecordContents& record);
 Table identify_table(const identify::Identification& identification);
+Table hold_table(const runtime::RunFooter& footer);
 
 }  // namespace rths::results

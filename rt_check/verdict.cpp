@@ -104,6 +104,7 @@ FailSafeInput failsafe_input(const config::Deployment& d, double dt, double run_
   in.run_seconds = run_seconds;
   in.answer_steps = runtime::max_missed_answers(d, dt);
   in.watchdog_steps = runtime::command_watchdog_periods(d, dt);
+  in.watchdog_defaulted = !(d.command_watchdog_ms() > 0) && d.command_watchdog_periods() <= 0;
   in.overrun_tolerance = runtime::max_overrun_fraction(d);
   bool awaits = d.nodes().empty();  // default nodes inject no lag: their answers are awaited
   for (const config::NodeSpec& node : d.nodes()) {
@@ -151,6 +152,12 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
   const std::string source = stats.count_over(x) >= kSeen ? "measured"
                              : tail.fitted                ? "tail fit"
                                                           : "bound";
+  v.findings.push_back(
+      fmt("windows: the coordinator's answer window %.0f steps (%.2f ms); the command watchdog of "
+          "the actuator emulators and controller nodes %.0f periods (%.2f ms",
+          in.answer_steps, 1e3 * in.answer_steps * in.dt, in.watchdog_steps,
+          1e3 * in.watchdog_steps * in.dt) +
+      (in.watchdog_defaulted ? ", unset: the answer window)" : ")"));
   v.findings.push_back(
       fmt("fail-safe window %.2f ms (%.0f steps at %.0f Hz): stalls longer than %.2f ms come ",
           v.window_ms, steps, 1.0 / in.dt, 1e3 * x) +

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <optional>
 
+#include "runtime/record/node_health.h"
 #include "runtime/record/realtime_verdict.h"
 
 namespace rths::view {
@@ -24,6 +25,21 @@ std::size_t spectrum_length(double dt, double seconds) {
 // Steps between kept samples: max(1, round(1 / (dt * points_per_second))).
 std::int64_t sample_stride(double dt, double points_per_second) {
   return std::max<std::int64_t>(1, std::llround(1.0 / (dt * points_per_second)));
+}
+
+// Each controller node of the footer: its link line and its hold, frame by frame
+// (runtime/record/node_health.h), for the page's "Controller link and hold" section.
+nlohmann::json controllers_json(const runtime::RunFooter& footer) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const runtime::NodeRejects& n : footer.node_rejects()) {
+    if (!n.has_controller()) continue;
+    nlohmann::json health = runtime::node_health_json(n)["controller"];
+    out.push_back({{"node_id", n.node_id()},
+                   {"label", n.label()},
+                   {"link", runtime::controller_link_text(n)},
+                   {"hold", health["hold"]}});
+  }
+  return out;
 }
 
 }  // namespace
@@ -396,6 +412,7 @@ nlohmann::json Feed::status_json() const {
                    {"overruns", c.overruns()},
                    {"late_feedback", c.late_feedback()},
                    {"steps", c.steps()}};
+    s["controllers"] = controllers_json(footer_);
   }
   if (difference_.samples > 0) s["prediction"] = difference_.json();
   return s;

@@ -306,7 +306,7 @@ std::string distributed_summary_text(const DistributedResults& results) {
              << f.difference_from_in_process->max << std::fixed << " m\n";
     }
     for (const runtime::NodeRejects& n : f.node_rejects) {
-      text << "  " << n.label() << " rejected: " << rejects_text(n.rejected())
+      text << "  " << n.label() << " DDS messages rejected: " << rejects_text(n.rejected())
            << (n.final() ? "" : " (as of its last heartbeat)") << "\n";
       for (const std::string& line :
            {runtime::controller_link_text(n), runtime::answer_age_text(n)})

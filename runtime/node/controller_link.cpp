@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <vector>
 
@@ -17,6 +18,8 @@ using Field = config::FrameField;
 constexpr double kDefaultHoldTime = 0.5;       // s
 constexpr double kMaxHoldTime = 60.0;          // s
 constexpr double kLockstepReplyTimeout = 1.0;  // s
+constexpr double kDefaultJumpFloor = 2e-4;     // m, above an f32 mm frame's and a rig's noise
+constexpr double kDefaultExpectedLag = 0.05;   // s, a servo-hydraulic rig's lag, with margin
 
 bool integer_type(Field::Type type) { return type == Field::I32 || type == Field::U32; }
 
@@ -39,6 +42,14 @@ void check_field(const Field& f, int actuators, FrameDirection direction,
   if (per_actuator_role(f.role()) && (f.actuator() < 0 || f.actuator() >= actuators))
     throw std::invalid_argument(where + ": actuator " + std::to_string(f.actuator()) +
                                 " is not among the node's " + std::to_string(actuators));
+}
+
+// A diagnostic channel is named (the record's column), once, with finite bounds if any.
+void check_diagnostic(const Field& f, const std::string& where, std::set<std::string>& names) {
+  if (f.name().empty() || !names.insert(f.name()).second)
+    throw std::invalid_argument(where + ": a DIAGNOSTIC field needs a name of its own");
+  if (!std::isfinite(f.min()) || !std::isfinite(f.max()))
+    throw std::invalid_argument(where + ": min and max must be finite");
 }
 
 void check_endpoint(const std::string& address, int port, const std::string& where) {
@@ -73,17 +84,23 @@ bool command_role(Field::Role role) {
          role == Field::COMMAND_TIME;
 }
 bool feedback_role(Field::Role role) {
-  return role == Field::MEASURED_DISPLACEMENT || role == Field::MEASURED_FORCE;
+  return role == Field::MEASURED_DISPLACEMENT || role == Field::MEASURED_FORCE ||
+         role == Field::CONTROLLER_EPOCH || role == Field::DIAGNOSTIC;
 }
 
 void check_frame_layout(const config::FrameLayout& layout, int actuators, FrameDirection direction,
                         const std::string& where) {
   std::map<std::pair<int, int>, int> seen;  // (role, actuator) -> count
+  std::set<std::string> diagnostics;        // their names
   for (int i = 0; i < layout.fields_size(); ++i) {
     const Field& f = layout.fields(i);
     const std::string at = where + ".fields[" + std::to_string(i) + "] (" + f.name() + ")";
     check_field(f, actuators, direction, at);
     if (f.role() == Field::PADDING) continue;
+    if (f.role() == Field::DIAGNOSTIC) {
+      check_diagnostic(f, at, diagnostics);
+      continue;
+    }
     const int a = per_actuator_role(f.role()) ? f.actuator() : 0;
     if (++seen[{f.role(), a}] > 1)
       throw std::invalid_argument(at + ": a second " + Field::Role_Name(f.role()) + " field");
@@ -125,6 +142,15 @@ double controller_hold_time(const config::ControllerLink& link) {
   return hold > 0 ? hold : kDefaultHoldTime;
 }
 
+double controller_jump_floor(const config::ControllerLink& link) {
+  if (link.jump_floor() < 0) return 0.0;
+  return link.jump_floor() > 0 ? link.jump_floor() : kDefaultJumpFloor;
+}
+
+double controller_expected_lag(const config::ControllerLink& link) {
+  return link.expected_lag_ms() > 0 ? link.expected_lag_ms() * 1e-3 : kDefaultExpectedLag;
+}
+
 void check_controller_link(const config::ControllerLink& link, const AnswerWindow& window,
                            int actuators, const std::string& where) {
   try {
@@ -144,6 +170,9 @@ void check_controller_link(const config::ControllerLink& link, const AnswerWindo
     check_limit(link.max_measured_rate(), "controller.max_measured_rate");
     check_limit(link.max_force_rate(), "controller.max_force_rate");
     check_limit(link.max_tracking_error(), "controller.max_tracking_error");
+    check_limit(link.expected_lag_ms(), "controller.expected_lag_ms");
+    if (!std::isfinite(link.jump_floor()))
+      throw std::invalid_argument("controller.jump_floor must be finite (< 0: off)");
     if (link.tracking_error_steps() < 0)
       throw std::invalid_argument("controller.tracking_error_steps must be >= 0");
   } catch (const std::invalid_argument& e) {

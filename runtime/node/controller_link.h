@@ -13,6 +13,10 @@
 //     lockstep 1 s, or half the real-time answer window), never longer than the window within
 //     which an answer may still be applied.
 //   controller_hold_time(link) -> s: hold_time_ms in [0, 60000], 0 = 500 ms.
+//   controller_jump_floor(link) -> m: the measured-jump check's floor, jump_floor (0 = 0.2 mm;
+//     < 0: the check is off, returned as 0).
+//   controller_expected_lag(link) -> s: expected_lag_ms (0 = 50 ms), the adaptive tracking
+//     bound's lag.
 //   check_controller_link(link, window, actuators, where): both layouts, each frame at
 //     most kMaxControllerFrameBytes, IPv4 addresses and ports 1-65535, the timings above and the
 //     plausibility limits finite and >= 0.
@@ -49,6 +53,8 @@ void check_frame_layout(const config::FrameLayout& layout, int actuators, FrameD
                         const std::string& where);
 double controller_reply_timeout(const config::ControllerLink& link, const AnswerWindow& window);
 double controller_hold_time(const config::ControllerLink& link);
+double controller_jump_floor(const config::ControllerLink& link);
+double controller_expected_lag(const config::ControllerLink& link);
 void check_controller_link(const config::ControllerLink& link, const AnswerWindow& window,
                            int actuators, const std::string& where);
 

@@ -1,5 +1,7 @@
 #include "runtime/node/plan.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 
 #include <algorithm>
@@ -269,6 +271,10 @@ int max_missed_answers(const config::Deployment& d, double dt) {
   return window_steps(d.answer_window_ms(), d.max_missed_answers(), dt);
 }
 int command_watchdog_periods(const config::Deployment& d, double dt) {
+  // Unset, the watchdog is no shorter than the answer window: a lab that widened that window for
+  // its platform's stalls would otherwise see the same stalls trip a 3-period watchdog.
+  if (!(d.command_watchdog_ms() > 0) && d.command_watchdog_periods() <= 0)
+    return std::max(kDefaultWindowSteps, max_missed_answers(d, dt));
   return window_steps(d.command_watchdog_ms(), d.command_watchdog_periods(), dt);
 }
 double window_ms_of_steps(int steps, double dt) {
@@ -288,6 +294,36 @@ void check_failsafe_windows(const config::Deployment& d) {
                "max_missed_answers");
   check_window(d.command_watchdog_ms(), "command_watchdog_ms", d.command_watchdog_periods(),
                "command_watchdog_periods");
+}
+
+std::string controller_checks_text(const config::ControllerLink& link,
+                                   const config::Deployment& deployment, double dt) {
+  const AnswerWindow window = answer_window(deployment, dt);
+  const bool real_time = window.real_time;
+  const double floor = controller_jump_floor(link);
+  const double rate = link.max_measured_rate() > 0 ? link.max_measured_rate()
+                                                   : 2.0 * deployment.limits().max_velocity();
+  const auto on = [](double v, const std::string& text) { return v > 0 ? text : "off"; };
+  return fmt::format(
+      "controller checks: reply timeout {:.3f} ms; answer window {}; command watchdog {}; hold "
+      "time {:.0f} ms; measured rate {}; measured jump {}; tracking {}; force rate {}; max force "
+      "{}",
+      controller_reply_timeout(link, window) * 1e3,
+      real_time ? fmt::format("{} steps ({:.3f} ms)", window.steps, window.seconds() * 1e3)
+                : fmt::format("lockstep step timeout {:.3f} s", window.step_timeout),
+      real_time ? fmt::format("{} periods ({:.3f} ms)", command_watchdog_periods(deployment, dt),
+                              command_watchdog_periods(deployment, dt) * dt * 1e3)
+                : std::string("off (lockstep)"),
+      controller_hold_time(link) * 1e3, on(rate, fmt::format("<= {:.3f} m/s", rate)),
+      on(floor, fmt::format("<= 2 x peak target velocity x span + {:.3f} mm", floor * 1e3)),
+      link.max_tracking_error() > 0
+          ? fmt::format("<= {:.3f} mm for {} answers", link.max_tracking_error() * 1e3,
+                        link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3)
+          : fmt::format("<= 2 x peak target velocity x {:.1f} ms + {:.3f} mm for {} answers",
+                        controller_expected_lag(link) * 1e3, (floor + 1e-3) * 1e3,
+                        link.tracking_error_steps() > 0 ? link.tracking_error_steps() : 3),
+      on(link.max_force_rate(), fmt::format("<= {:g} N/s", link.max_force_rate())),
+      on(link.max_force(), fmt::format("<= {:g} N", link.max_force())));
 }
 
 }  // namespace rths::runtime

@@ -91,11 +91,18 @@ WaitPolicy wait_policy(const config::Deployment& d);
 double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
 double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
 // The fail-safe windows in steps of dt (s): answer_window_ms / command_watchdog_ms when given
-// (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3.
+// (ceil(ms / dt), at least 1), else max_missed_answers / command_watchdog_periods, else 3; the
+// command watchdog of an actuator emulator or controller node, when neither of its fields is
+// given, is the answer window (at least 3 periods).
 int max_missed_answers(const config::Deployment& d, double dt);
 int command_watchdog_periods(const config::Deployment& d, double dt);
 // The window a controller's answers must arrive within (the reply timeout's bound).
 AnswerWindow answer_window(const config::Deployment& d, double dt);
+// One line a person reads before the run (the controller node logs it when assigned): the
+// reply timeout, the answer window, the command watchdog, the hold time and every plausibility
+// check of the controller link with its bound (or "off").
+std::string controller_checks_text(const config::ControllerLink& link,
+                                   const config::Deployment& deployment, double dt);
 // The window of `steps` whole steps of dt (s) in ms, truncated to the microsecond below, so that
 // the steps derived from it (as above) are `steps` again: what a window is stated as when it was
 // found in steps.

@@ -1,5 +1,6 @@
 #include "runtime/record/node_health.h"
 
+#include <algorithm>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -18,11 +19,20 @@ std::vector<std::pair<const char*, std::uint64_t>> rejects_by_cause(const Contro
           {"implausible", r.implausible()}};
 }
 
+constexpr int kFramesNamed = 8;  // lost or late frames named in a line; the JSON has them all
+
 std::string ms(double seconds) {
   std::ostringstream out;
   out.precision(3);
   out << std::fixed << seconds * 1e3;
   return out.str();
+}
+
+nlohmann::json misses_json(const google::protobuf::RepeatedPtrField<FrameMiss>& frames) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const FrameMiss& m : frames)
+    out.push_back({{"frame", m.counter()}, {"step", m.step()}, {"round_trip_s", m.round_trip()}});
+  return out;
 }
 
 }  // namespace
@@ -33,24 +43,55 @@ std::uint64_t controller_rejected(const ControllerReport& r) {
   return n;
 }
 
+// "12 (step 11), 13 (step 12) and 3 more": frames located by counter and step.
+std::string located(const google::protobuf::RepeatedPtrField<FrameMiss>& frames,
+                    std::uint64_t total) {
+  std::string out;
+  const int shown = std::min(frames.size(), kFramesNamed);
+  for (int i = 0; i < shown; ++i)
+    out += (i ? ", " : "") + std::to_string(frames[i].counter()) + " (step " +
+           std::to_string(frames[i].step()) + ")";
+  if (total > static_cast<std::uint64_t>(shown))
+    out += " and " + std::to_string(total - static_cast<std::uint64_t>(shown)) + " more";
+  return out;
+}
+
+std::string hold_text(const ControllerReport& r) {
+  std::string out = std::to_string(r.hold_frames()) + " HOLD frames";
+  if (r.hold_frames() > 0)
+    out += r.held_after() >= 0 ? ", held after " + ms(r.held_after()) + " ms"
+                               : ", never reported held (stopped after its hold time)";
+  if (r.hold_rejected() > 0)
+    out += "; " + std::to_string(r.hold_rejected()) +
+           " answers while holding did not end the hold (newest: " + r.last_hold_reject() + ")";
+  if (!r.restart().empty()) out += "; restart detected: " + r.restart();
+  return out;
+}
+
 std::string controller_link_text(const NodeRejects& node) {
   if (!node.has_controller()) return "";
   const ControllerReport& r = node.controller();
   std::ostringstream out;
-  out << node.label() << " controller link: " << r.frames_sent() << " frames sent, "
-      << r.frames_accepted() << " accepted, " << r.late() << " late, " << r.lost()
-      << " lost; rejected: ";
+  out << node.label() << " controller link (UDP): " << r.frames_sent() << " frames sent, "
+      << r.frames_accepted() << " accepted, " << r.late() << " answered late, " << r.lost()
+      << " lost (no answer within the reply timeout); UDP frames rejected: ";
   std::string causes;
   for (const auto& [name, count] : rejects_by_cause(r))
     if (count > 0)
       causes += (causes.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(count);
   out << (causes.empty() ? "none" : causes) << "; UDP round trip ms: median "
-      << ms(r.round_trip_median()) << ", p99 " << ms(r.round_trip_p99()) << ", max "
-      << ms(r.round_trip_max()) << "; " << r.hold_frames() << " HOLD frames"
-      << (r.hold_frames() == 0  ? ""
-          : r.held_after() >= 0 ? ", held after " + ms(r.held_after()) + " ms"
-                                : ", never reported held (stopped after its hold time)")
-      << (r.last_reject().empty() ? "" : "; newest: " + r.last_reject()) << "\n";
+      << ms(r.round_trip_median()) << ", p99 " << ms(r.round_trip_p99())
+      << " (applied answers), max " << ms(r.round_trip_max()) << " (every answer); "
+      << hold_text(r);
+  if (r.lost() > 0) out << "; lost frames: " << located(r.lost_frames(), r.lost());
+  if (r.late() > 0) out << "; late frames: " << located(r.late_frames(), r.late());
+  if (r.icmp_errors() > 0)
+    out << "; " << r.icmp_errors() << " ICMP errors on the socket, never a fault by themselves ("
+        << r.last_icmp_error() << ")";
+  if (r.drained_before_connect() > 0)
+    out << "; " << r.drained_before_connect()
+        << " datagrams that came before the socket was connected, drained unread";
+  out << (r.last_reject().empty() ? "" : "; newest: " + r.last_reject()) << "\n";
   return out.str();
 }
 
@@ -63,6 +104,28 @@ std::string answer_age_text(const NodeRejects& node) {
   return node.label() + " answer age: median " + both(a.median_steps()) + ", p99 " +
          both(a.p99_steps()) + ", max " + both(a.max_steps()) + "; window " +
          both(a.window_steps()) + "\n";
+}
+
+const char* hold_kind_name(HoldEntry::Kind kind) {
+  switch (kind) {
+    case HoldEntry::SENT_HOLD: return "sent HOLD";
+    case HoldEntry::ANSWER: return "answer";
+    case HoldEntry::SENT_STOP: return "sent STOP";
+    default: return "unknown";
+  }
+}
+
+nlohmann::json hold_json(const ControllerReport& r) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const HoldEntry& e : r.hold_log())
+    rows.push_back({{"kind", hold_kind_name(e.kind())},
+                    {"time_s", e.time()},
+                    {"frame", e.counter()},
+                    {"status", e.status()},
+                    {"position_m", std::vector<double>(e.position().begin(), e.position().end())},
+                    {"force_N", std::vector<double>(e.force().begin(), e.force().end())},
+                    {"verdict", e.verdict()}});
+  return {{"entries", rows}, {"dropped", r.hold_log_dropped()}};
 }
 
 nlohmann::json node_health_json(const NodeRejects& node) {
@@ -83,7 +146,16 @@ nlohmann::json node_health_json(const NodeRejects& node) {
         {"round_trip_max_s", r.round_trip_max()},
         {"hold_frames", r.hold_frames()},
         {"held_after_s", r.held_after() >= 0 ? nlohmann::json(r.held_after()) : nlohmann::json()},
-        {"last_reject", r.last_reject()}};
+        {"last_reject", r.last_reject()},
+        {"hold_rejected", r.hold_rejected()},
+        {"last_hold_reject", r.last_hold_reject()},
+        {"restart", r.restart()},
+        {"icmp_errors", r.icmp_errors()},
+        {"last_icmp_error", r.last_icmp_error()},
+        {"drained_before_connect", r.drained_before_connect()},
+        {"lost_frames", misses_json(r.lost_frames())},
+        {"late_frames", misses_json(r.late_frames())},
+        {"hold", hold_json(r)}};
   } else {
     j["controller"] = nullptr;
   }

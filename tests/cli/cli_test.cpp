@@ -378,6 +378,45 @@ TEST(CliTest, ExportStrictRefusesARecordCutShort) {
   EXPECT_NE(o.output.find("--strict: the record is not whole"), std::string::npos) << o.output;
 }
 
+// A controller's hold, frame by frame, goes beside each output in its format, and into --json.
+TEST(CliTest, ExportWritesTheControllersHoldBesideEachOutput) {
+  const auto dir = scratch("export_hold");
+  rths::runtime::RecordEntry footer;
+  footer.mutable_footer()->set_status("controller: implausible measurement");
+  rths::runtime::NodeRejects& node = *footer.mutable_footer()->add_node_rejects();
+  node.set_node_id(2);
+  node.set_label("node 2 (controller)");
+  for (const auto kind : {rths::runtime::HoldEntry::SENT_HOLD, rths::runtime::HoldEntry::ANSWER,
+                          rths::runtime::HoldEntry::SENT_STOP}) {
+    rths::runtime::HoldEntry* e = node.mutable_controller()->add_hold_log();
+    e->set_kind(kind);
+    e->set_counter(40 + static_cast<int>(kind));
+    e->add_position(0.0021);
+    if (kind == rths::runtime::HoldEntry::ANSWER) e->add_force(12.5);
+    e->set_verdict(kind == rths::runtime::HoldEntry::ANSWER ? "held" : "");
+  }
+  const auto record = dir / "held.rthsrec";
+  std::ofstream(record, std::ios::binary) << crafted_record(
+      {crafted_header(0.01), crafted_step(0, 0), crafted_step(1, 0.01), footer});
+  const Outcome o = run("export " + record.string() + " --csv " + (dir / "held.csv").string() +
+                        " --h5 " + (dir / "held.h5").string() + " --json");
+  const std::size_t open = o.output.find('{');
+  ASSERT_NE(open, std::string::npos) << o.output;
+  const auto j = nlohmann::json::parse(o.output.substr(open, o.output.rfind('}') + 1 - open),
+                                       nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << o.output;
+  EXPECT_EQ(j["hold_tables"].size(), 2u) << o.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "held_hold.h5"));
+  std::ifstream csv(dir / "held_hold.csv");
+  std::string head, line;
+  std::getline(csv, head);
+  EXPECT_EQ(head, "node,entry,kind,time_s,frame,status,position1_m,force1_N,verdict") << head;
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 3);
+  EXPECT_EQ(j["node_health"]["2"]["controller"]["hold"]["entries"][1]["force_N"][0], 12.5);
+}
+
 // Integrators outside the discrete delay analysis run; the summary says the check was skipped.
 // For the others the discrete critical delay is found also below the lag (filled, not null).
 TEST(CliTest, AlphaOsRunsWithTheDiscreteCheckSkippedAndOthersReportTheirDiscreteLimit) {

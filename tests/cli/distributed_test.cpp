@@ -72,7 +72,8 @@ TEST(DistributedSummary, NamesTheFirstDifferingStepAndEveryNodesRejects) {
   EXPECT_NE(text.find("DIFFERS from the in-process run of the same case from step 17"),
             std::string::npos)
       << text;
-  EXPECT_NE(text.find("node 2 (actuator emulator) rejected: foreign_run 1, not_entitled 5, "
+  EXPECT_NE(text.find("node 2 (actuator emulator) DDS messages rejected: foreign_run 1, "
+                      "not_entitled 5, "
                       "unauthenticated 7"),
             std::string::npos)
       << text;

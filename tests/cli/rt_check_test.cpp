@@ -32,7 +32,10 @@ TEST(RtCheck, JsonHasThePlatformTheVerdictAndTheFixes) {
   EXPECT_DOUBLE_EQ(j["platform"]["rate_hz"].get<double>(), 100.0);
   EXPECT_EQ(j["holds"].get<bool>(), r.exit_code == 0);
   EXPECT_TRUE(j["fixes"].is_array());
-  EXPECT_EQ(j["findings"].size(), 3u);
+  ASSERT_EQ(j["findings"].size(), 4u);
+  // The first names each node kind's window, the watchdog following the answer window when unset.
+  EXPECT_THAT(j["findings"][0].get<std::string>(),
+              HasSubstr("the command watchdog of the actuator emulators and controller nodes"));
 }
 
 TEST(RtCheck, AConfigsDeploymentIsJudgedAndItsRateCannotBeOverridden) {

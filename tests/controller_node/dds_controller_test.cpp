@@ -80,7 +80,8 @@ TEST_F(DdsController, LockstepThroughTheControllerEqualsInProcessBitForBitDespit
   // before they took room in its buffer, so the link report is clean.
   const std::string node_log = test::read_file(run.dir / "node_2.log");
   const std::string accepted = std::to_string(run.record.steps().size() - 1) + " accepted";
-  EXPECT_NE(node_log.find(accepted + ", 0 late, 0 lost; rejected: wrong source 0"),
+  EXPECT_NE(node_log.find(accepted + ", 0 answered late, 0 lost (no answer within the reply "
+                                     "timeout); UDP frames rejected: none"),
             std::string::npos)
       << node_log;
   ASSERT_NE(run.record.footer(), nullptr);
@@ -164,10 +165,11 @@ TEST_F(DdsController, AControllerThatFallsBehindHoldsWithinTheAnswerWindow) {
   EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
   ASSERT_NE(run.record.footer(), nullptr);
   EXPECT_FALSE(run.record.footer()->ok());
-  // Named: the node's own staleness limit, or the coordinator's window on the answer's age; a
-  // stall of this machine may pass another window first.
+  // Named: the node's own staleness limit, calling the controller late (its answers come, after
+  // their timeout), or the coordinator's window on the answer's age; a stall of this machine may
+  // pass another window first.
   const std::string& status = run.record.footer()->status();
-  const bool named = status.find("did not answer frame") != std::string::npos ||
+  const bool named = status.find("answers late: frame") != std::string::npos ||
                      status.find("never applied") != std::string::npos;
   if (!named)
     if (const auto why = test::machine_stalled(status, *run.record.header(), witnessed.machine))

@@ -26,8 +26,9 @@ using namespace doc_test;
 // c. Fault drills. Each: the run fails (exit != 0), the footer (the record is complete) names the
 // cause and the link report counts it under the docs' name, nothing recorded applied the faulty
 // value, and the controller saw the docs' HOLD sequence: repeated HOLD frames (status 1) carrying
-// the last measured position, then STOP only after it answered held (or after hold_time_ms when it
-// never does).
+// the last measured position (a rebooted controller's: where it restarted), then STOP only after
+// it answered held (or after hold_time_ms when it never does); the record's footer holds the
+// whole hold (every HOLD frame, the answers, the STOP).
 struct Drill {
   std::string name;
   int domain = 0, node_port = 0, peer_port = 0;
@@ -40,6 +41,8 @@ struct Drill {
   std::uint64_t (runtime::ControllerReport::*count)() const = nullptr;
   bool controller_answers_hold = true;  // false: silent, STOP after hold_time_ms
   double hold_time_ms = 500;
+  bool default_checks = false;  // true: none of the plausibility bounds the docs ask a lab to set
+  std::string motion;           // inside the study's motion block (a scale)
 };
 
 // Reference peaks of the drills' run: where the fault goes and the plausibility bounds. A stuck
@@ -81,7 +84,8 @@ std::string plausibility(const Peaks& p) {
 void run_drill(Drill drill) {
   const double dt = drill.real_time ? kRealTimeDt : 0.001;
   const double duration = drill.real_time ? 1.5 : 1.0;
-  const std::string probe = study(duration, dt, drill.node_port, drill.peer_port, "", "");
+  const std::string probe =
+      study(duration, dt, drill.node_port, drill.peer_port, "", "", drill.motion);
   const Peaks peaks = lockstep_peaks(probe);
   ASSERT_GT(peaks.velocity_frame, 50u);
   ASSERT_GT(peaks.displacement_frame, 50u);
@@ -90,9 +94,11 @@ void run_drill(Drill drill) {
                                                                        : peaks.velocity_frame;
   const std::string link = "reply_timeout_ms: " + std::string(drill.real_time ? "8" : "200") +
                            " hold_time_ms: " + std::to_string(drill.hold_time_ms) + " " +
-                           plausibility(peaks) + " " + drill.link_extra;
-  const std::string text = study(duration, dt, drill.node_port, drill.peer_port, link,
-                                 drill.real_time ? real_time_deployment() : std::string(""));
+                           (drill.default_checks ? "" : plausibility(peaks)) + " " +
+                           drill.link_extra;
+  const std::string text =
+      study(duration, dt, drill.node_port, drill.peer_port, link,
+            drill.real_time ? real_time_deployment() : std::string(""), drill.motion);
   DocControllerOptions options = controller_options(drill.peer_port, drill.node_port, dt);
   options.answer_lag = drill.real_time ? 0.002 : 0.0;
   options.fault = drill.fault;
@@ -107,7 +113,8 @@ void run_drill(Drill drill) {
   controller.stop();
   const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
   const std::string node_log = test::read_file(run.dir / "node_2.log");
-  SCOPED_TRACE(drill.name + " at frame " + std::to_string(fault_frame));
+  SCOPED_TRACE(drill.name + " at frame " + std::to_string(fault_frame) + ", peak drift " +
+               std::to_string(peaks.peak_displacement * 1e3) + " mm");
 
   EXPECT_NE(run.launch.coordinator_exit, 0) << coordinator_log;
   const runtime::RunFooter* footer = run.record.footer();
@@ -172,6 +179,9 @@ void run_drill(Drill drill) {
   double last_measured = 0;
   for (const auto& a : sent)
     if (a.counter < fault_frame && a.status == 0) last_measured = a.displacement;
+  // A rebooted controller is held where it then is (0, its plant restarted), never sent back to
+  // where the rig was before the reboot.
+  if (drill.fault == DocFault::kReboot) last_measured = 0.0;
   int holds = 0;
   std::int64_t first_hold_ns = frames[first_hold].receive_ns, stop_ns = -1;
   for (std::size_t i = first_hold; i < frames.size(); ++i) {
@@ -186,6 +196,14 @@ void run_drill(Drill drill) {
   }
   EXPECT_GE(holds, 2) << "HOLD frames repeat every dt until the controller says held";
   ASSERT_GE(stop_ns, 0) << "no STOP frame reached the controller";
+  // The hold on the record: as many HOLD frames as the controller saw, ending in the STOP.
+  const runtime::ControllerReport& report = rejects->controller();
+  int logged_holds = 0;
+  for (const auto& e : report.hold_log())
+    if (e.kind() == runtime::HoldEntry::SENT_HOLD) ++logged_holds;
+  EXPECT_EQ(logged_holds, holds) << report.DebugString();
+  ASSERT_GT(report.hold_log_size(), 0);
+  EXPECT_EQ(report.hold_log(report.hold_log_size() - 1).kind(), runtime::HoldEntry::SENT_STOP);
   if (drill.controller_answers_hold) {
     std::int64_t held_ns = -1;
     for (const auto& a : sent)
@@ -281,6 +299,21 @@ TEST_F(DocControllerTest, DrillRebootWithCorrectEchoButStateLost) {
   d.fault = DocFault::kReboot;
   d.cause = {"max_measured_rate"};  // the first check the docs list for a drift's jump
   d.count = &runtime::ControllerReport::implausible;
+  run_drill(d);
+}
+
+// The same reboot with the node's default checks only (the measured jump, on by default), at a
+// drift of a few mm (the motion scaled 50 times: 2 mm at its peak): held, and held where the
+// rebooted rig is.
+TEST_F(DocControllerTest, DrillRebootCaughtByTheDefaultChecks) {
+  Drill d;
+  d.motion = "scale: 50";
+  d.name = "doc_drill_reboot_defaults";
+  d.domain = 96, d.node_port = 47332, d.peer_port = 47333;
+  d.fault = DocFault::kReboot;
+  d.cause = {"jumped", "a restarted controller"};
+  d.count = &runtime::ControllerReport::implausible;
+  d.default_checks = true;
   run_drill(d);
 }
 

@@ -57,15 +57,16 @@ inline int trials() {
 }
 
 // The paper frame at step `dt`, truncated to `duration`, with one CONTROLLER node (id 2) behind
-// the doc controller's link; `deployment` and `link` are appended inside their blocks.
+// the doc controller's link; `deployment`, `link` and `motion` are appended inside their blocks.
 inline std::string study(double duration, double dt, int node_port, int peer_port,
-                         const std::string& link, const std::string& deployment) {
+                         const std::string& link, const std::string& deployment,
+                         const std::string& motion = "") {
   char dt_text[64];
   std::snprintf(dt_text, sizeof dt_text, "%.17g", dt);
   return "name: \"paper_frame\"\n"
          "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
          "motion { path: \"" +
-         test::motion_path() + "\" duration: " + std::to_string(duration) +
+         test::motion_path() + "\" duration: " + std::to_string(duration) + " " + motion +
          " }\n"
          "integrator { kind: EXPLICIT_NEWMARK dt: " +
          dt_text +

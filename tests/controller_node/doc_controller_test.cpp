@@ -4,7 +4,7 @@
 // (controller.md, configuration.md ControllerLink/FrameLayout/FrameField/Deployment/
 // SafetyLimits, faults.md) promise; where rths does otherwise the test fails rather than bend.
 // The coordinator and the node are processes over Cyclone DDS on loopback (test::launch), the
-// controller a thread of this test. DDS domains 153-159, 166, 168, 175, 186, 189-191, 195-196
+// controller a thread of this test. DDS domains 96, 153-159, 166, 168, 175, 186, 189-191, 195-196
 // (175 lies in the range dds_security_test names, unused there; 190, 191, 195 and 196 are also the
 // defaults of bench/security_bench and bench/secret_bench, which the suite does not run); UDP
 // ports 47300-47399.

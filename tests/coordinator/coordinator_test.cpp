@@ -455,7 +455,9 @@ TEST(Coordinator, SummaryNamesEachSidesUnauthenticatedDrops) {
   const std::string text = coordinator::summary_text(outcome);
   EXPECT_NE(text.find(", unauthenticated 3 (dropped unread; newest: kind 4"), std::string::npos)
       << text;
-  EXPECT_NE(text.find("node 1 (substructure) rejected: foreign-run 0"), std::string::npos) << text;
+  EXPECT_NE(text.find("node 1 (substructure) DDS messages rejected: foreign-run 0"),
+            std::string::npos)
+      << text;
   EXPECT_NE(text.find("out-of-range 0, unauthenticated 11\n"), std::string::npos) << text;
 }
 

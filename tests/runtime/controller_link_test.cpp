@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -91,6 +92,16 @@ TEST(ControllerLink, AReplyTimeoutPastTheAnswerWindowIsRefusedAndTheDefaultsReso
   EXPECT_DOUBLE_EQ(controller_reply_timeout(link, answer_window(real_time, 0.001)), 0.010);
   EXPECT_DOUBLE_EQ(controller_reply_timeout(link, answer_window(config::Deployment{}, 0.001)), 1.0);
   EXPECT_DOUBLE_EQ(controller_hold_time(link), 0.5);
+}
+
+// A jump floor that is not a number is refused (< 0 turns the check off: controller_checks_text
+// in plan_test.cpp).
+TEST(ControllerLink, AJumpFloorThatIsNotANumberIsRefused) {
+  config::ControllerLink link = shipped_link();
+  link.set_jump_floor(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_NE(error_of(link).find("controller.jump_floor must be finite"), std::string::npos);
+  link.set_jump_floor(-1);
+  EXPECT_EQ(error_of(link), "");
 }
 
 // The one check every command runs: the deployment's plan refuses the block, naming the node.

@@ -526,7 +526,7 @@ void expect_each_node_counted_unauthenticated(const runtime::RunFooter& footer,
     EXPECT_TRUE(n.final()) << n.label();
     EXPECT_GT(n.rejected().unauthenticated(), 0u) << n.label();
     EXPECT_EQ(n.rejected().not_entitled(), 0u) << n.label();
-    EXPECT_THAT(summary, testing::HasSubstr(n.label() + " rejected: ")) << summary;
+    EXPECT_THAT(summary, testing::HasSubstr(n.label() + " DDS messages rejected: ")) << summary;
     EXPECT_THAT(summary, testing::HasSubstr(", unauthenticated " +
                                             std::to_string(n.rejected().unauthenticated()) + "\n"))
         << summary;

@@ -1,5 +1,5 @@
 // One reading of a node's health from its footer entry: the controller link's line says
-// "rejected: none" only when every cause is 0, names each cause that is not, and the link's
+// "UDP frames rejected: none" only when every cause is 0, names each cause that is not, and the link's
 // verdict fails a run fed by a wrong source or with lost frames; the answer age reads in steps
 // and ms.
 #include "runtime/record/node_health.h"
@@ -27,9 +27,11 @@ NodeRejects controller_node() {
 TEST(NodeHealth, ACleanLinkReadsRejectedNoneAndHasNoVerdict) {
   const NodeRejects n = controller_node();
   const std::string text = controller_link_text(n);
-  EXPECT_NE(text.find("node 2 (controller) controller link: 1000 frames sent, 1000 accepted, 0 "
-                      "late, 0 lost; rejected: none; UDP round trip ms: median 2.000, p99 2.500, "
-                      "max 4.000; 3 HOLD frames, held after 2.100 ms"),
+  EXPECT_NE(text.find("node 2 (controller) controller link (UDP): 1000 frames sent, 1000 "
+                      "accepted, 0 answered late, 0 lost (no answer within the reply timeout); "
+                      "UDP frames rejected: none; UDP round trip ms: median 2.000, p99 2.500 "
+                      "(applied answers), max 4.000 (every answer); 3 HOLD frames, held after "
+                      "2.100 ms"),
             std::string::npos)
       << text;
   EXPECT_FALSE(link_verdict(n));
@@ -41,7 +43,10 @@ TEST(NodeHealth, EveryCauseIsNamedAndAWrongSourceOrALostFrameIsAVerdict) {
   n.mutable_controller()->set_wrong_source(200);
   n.mutable_controller()->set_lost(19);
   const std::string text = controller_link_text(n);
-  EXPECT_NE(text.find("19 lost; rejected: wrong source 200;"), std::string::npos) << text;
+  EXPECT_NE(text.find("19 lost (no answer within the reply timeout); UDP frames rejected: wrong "
+                      "source 200;"),
+            std::string::npos)
+      << text;
   EXPECT_EQ(text.find("rejected: none"), std::string::npos) << text;
   const auto verdict = link_verdict(n);
   ASSERT_TRUE(verdict);
@@ -52,6 +57,63 @@ TEST(NodeHealth, EveryCauseIsNamedAndAWrongSourceOrALostFrameIsAVerdict) {
   const auto j = node_health_json(n);
   EXPECT_EQ(j["controller"]["rejected"]["wrong source"], 200);
   EXPECT_EQ(j["controller"]["lost"], 19);
+}
+
+TEST(NodeHealth, LostAndLateFramesAreLocatedAndTheHoldIsATable) {
+  NodeRejects n = controller_node();
+  ControllerReport& r = *n.mutable_controller();
+  r.set_lost(10);
+  for (int i = 0; i < 10; ++i) {
+    FrameMiss* m = r.add_lost_frames();
+    m->set_counter(100 + i);
+    m->set_step(99 + i);
+  }
+  r.set_late(1);
+  FrameMiss* late = r.add_late_frames();
+  late->set_counter(42);
+  late->set_step(41);
+  late->set_round_trip(0.0091);
+  r.set_round_trip_max(0.0091);
+  HoldEntry* sent = r.add_hold_log();
+  sent->set_kind(HoldEntry::SENT_HOLD);
+  sent->set_counter(111);
+  sent->set_status(1);
+  sent->add_position(0.0108);
+  HoldEntry* answer = r.add_hold_log();
+  answer->set_kind(HoldEntry::ANSWER);
+  answer->set_time(0.002);
+  answer->set_counter(9449);
+  answer->set_status(1);
+  answer->add_position(0.0);
+  answer->add_force(12.0);
+  answer->set_verdict("echoes frame 9449, never sent (newest 111)");
+  r.set_hold_rejected(1);
+  r.set_last_hold_reject(answer->verdict());
+  r.set_icmp_errors(3);
+  r.set_last_icmp_error("Connection refused (errno 111)");
+  const std::string text = controller_link_text(n);
+  EXPECT_NE(text.find("lost frames: 100 (step 99), 101 (step 100), 102 (step 101), 103 (step "
+                      "102), 104 (step 103), 105 (step 104), 106 (step 105), 107 (step 106) and 2 "
+                      "more"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("late frames: 42 (step 41)"), std::string::npos) << text;
+  EXPECT_NE(text.find("max 9.100 (every answer)"), std::string::npos) << text;
+  EXPECT_NE(text.find("1 answers while holding did not end the hold (newest: echoes frame 9449, "
+                      "never sent"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("3 ICMP errors on the socket, never a fault by themselves (Connection "
+                      "refused (errno 111))"),
+            std::string::npos)
+      << text;
+  const auto j = node_health_json(n)["controller"];
+  EXPECT_EQ(j["lost_frames"].size(), 10u);
+  EXPECT_EQ(j["late_frames"][0]["step"], 41);
+  ASSERT_EQ(j["hold"]["entries"].size(), 2u);
+  EXPECT_EQ(j["hold"]["entries"][0]["kind"], "sent HOLD");
+  EXPECT_DOUBLE_EQ(j["hold"]["entries"][0]["position_m"][0].get<double>(), 0.0108);
+  EXPECT_EQ(j["hold"]["entries"][1]["verdict"], "echoes frame 9449, never sent (newest 111)");
 }
 
 TEST(NodeHealth, ANodeWithoutAControllerHasNoLinkLineNorVerdict) {

@@ -111,6 +111,12 @@ TEST(FailSafeWindows, StepsFromMillisecondsOrTheStepFields) {
   EXPECT_EQ(command_watchdog_periods(deployment("command_watchdog_periods: 5"), dt), 5);
   EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 10"), dt), 11);  // ceil(10.24)
   EXPECT_EQ(command_watchdog_periods(deployment("command_watchdog_ms: 8"), dt), 9);
+  // Unset, the watchdog follows a widened answer window (20 ms: 21 periods), never under 3.
+  EXPECT_EQ(command_watchdog_periods(deployment("answer_window_ms: 20"), dt), 21);
+  EXPECT_EQ(command_watchdog_periods(deployment("max_missed_answers: 2"), dt), 3);
+  EXPECT_EQ(
+      command_watchdog_periods(deployment("answer_window_ms: 20 command_watchdog_periods: 4"), dt),
+      4);
   EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 3"), 0.001), 3);  // exactly 3 steps
   EXPECT_EQ(max_missed_answers(deployment("answer_window_ms: 0.1"), 0.001), 1);
 }
@@ -139,6 +145,34 @@ TEST(FailSafeWindows, BothWaysOrOutOfRangeIsBadInputNamingTheFields) {
   EXPECT_NE(error_of(setup, "answer_window_ms: 70000").find("[0, 60000]"), std::string::npos);
   EXPECT_NO_THROW(
       check_failsafe_windows(deployment("answer_window_ms: 10 command_watchdog_periods: 4")));
+}
+
+// What a person reads before the run: every window and plausibility check with its bound, the
+// checks on by default (jump 0.2 mm, tracking at 50 ms) and the watchdog following the answer
+// window when unset (20 ms at 1/1024 s: 21 periods).
+TEST(ControllerLink, TheChecksLineNamesEveryWindowAndBoundWithTheDefaultsOn) {
+  config::Deployment real_time;
+  real_time.set_clock(config::Deployment::REAL_TIME);
+  real_time.set_answer_window_ms(20);
+  real_time.mutable_limits()->set_max_velocity(2.0);
+  config::ControllerLink link;
+  ASSERT_TRUE(google::protobuf::TextFormat::ParseFromString("max_force: 20000", &link));
+  const std::string text = controller_checks_text(link, real_time, 1.0 / 1024);
+  for (const char* part :
+       {"answer window 21 steps (20.508 ms)", "command watchdog 21 periods (20.508 ms)",
+        "hold time 500 ms", "measured rate <= 4.000 m/s",
+        "measured jump <= 2 x peak target velocity x span + 0.200 mm",
+        "tracking <= 2 x peak target velocity x 50.0 ms + 1.200 mm for 3 answers", "force rate off",
+        "max force <= 20000 N"})
+    EXPECT_NE(text.find(part), std::string::npos) << part << " in: " << text;
+  link.set_jump_floor(-1);
+  link.set_expected_lag_ms(14);
+  const std::string off = controller_checks_text(link, real_time, 1.0 / 1024);
+  EXPECT_NE(off.find("measured jump off"), std::string::npos) << off;
+  EXPECT_NE(off.find("x 14.0 ms + 1.000 mm"), std::string::npos) << off;
+  EXPECT_NE(controller_checks_text(link, config::Deployment{}, 0.001)
+                .find("command watchdog off (lockstep)"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -189,6 +189,41 @@ TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
   EXPECT_TRUE(feed.finished());
 }
 
+// A controller node's hold reaches the page from the footer: its link line and each HOLD frame,
+// answer and STOP, in order.
+TEST(Feed, AControllersHoldIsShownFrameByFrame) {
+  Feed feed;
+  feed.add(header());
+  feed.add(step(0));
+  runtime::RecordEntry footer;
+  footer.mutable_footer()->set_ok(false);
+  footer.mutable_footer()->set_status("controller: implausible measurement");
+  runtime::NodeRejects& node = *footer.mutable_footer()->add_node_rejects();
+  node.set_node_id(2);
+  node.set_label("node 2 (controller)");
+  runtime::ControllerReport& r = *node.mutable_controller();
+  r.set_hold_frames(1);
+  r.set_held_after(0.003);
+  for (const auto kind :
+       {runtime::HoldEntry::SENT_HOLD, runtime::HoldEntry::ANSWER, runtime::HoldEntry::SENT_STOP}) {
+    runtime::HoldEntry* e = r.add_hold_log();
+    e->set_kind(kind);
+    e->add_position(0.0021);
+    e->set_verdict(kind == runtime::HoldEntry::ANSWER ? "held" : "");
+  }
+  feed.add(footer);
+  FeedCursor cursor;
+  const auto j = feed.since(cursor)["status"]["controllers"];
+  ASSERT_EQ(j.size(), 1u);
+  EXPECT_EQ(j[0]["label"], "node 2 (controller)");
+  EXPECT_NE(j[0]["link"].get<std::string>().find("1 HOLD frames, held after 3.000 ms"),
+            std::string::npos)
+      << j[0]["link"];
+  ASSERT_EQ(j[0]["hold"]["entries"].size(), 3u);
+  EXPECT_EQ(j[0]["hold"]["entries"][1]["verdict"], "held");
+  EXPECT_EQ(j[0]["hold"]["entries"][2]["kind"], "sent STOP");
+}
+
 // The badge is the one real-time verdict on the record's rows (the header's deployment: the
 // default 0.001 tolerance and 3-step answer window): a run whose rows hold a streak of 5 overruns
 // is `failed` with the verdict as its reason even when its footer says ok (an older coordinator's

@@ -300,6 +300,7 @@ function showStatus(st) {
   $('reason').textContent = reasonText(st);
   $('reason').className = st.verdict ? st.verdict.level : '';
   $('diagnosis').textContent = st.verdict ? st.verdict.diagnosis || '' : '';
+  showControllers(st);
   if (V.header) showPrediction(st);
   const behind = $('behind');
   if (V.mode === 'replay') { $('behind-box').hidden = true; return; }
@@ -308,6 +309,34 @@ function showStatus(st) {
     const ms = Date.now() - st.latest_step_realtime_ns / 1e6;
     behind.textContent = ms.toFixed(0) + ' ms';
     $('behind-box').className = ms > 500 ? 'late' : '';
+  }
+}
+
+// Each controller node's link line and its hold, a row per frame: every HOLD frame sent (the
+// position it carried), every answer while holding (what the rig measured, and whether it ended
+// the hold) and the STOP frame.
+function showControllers(st) {
+  const list = st.controllers || [], box = $('controllers');
+  $('controllers-box').hidden = list.length === 0;
+  box.innerHTML = '';
+  for (const c of list) {
+    const p = document.createElement('p'); p.className = 'note'; p.textContent = c.link;
+    box.appendChild(p);
+    const rows = (c.hold && c.hold.entries) || [];
+    if (!rows.length) continue;
+    const table = document.createElement('table'); table.className = 'hold';
+    const head = table.insertRow();
+    for (const h of ['t ms', 'frame', 'kind', 'status', 'position mm', 'force N', 'verdict'])
+      head.insertCell().textContent = h;
+    for (const e of rows) {
+      const r = table.insertRow();
+      r.className = e.verdict && e.verdict !== 'held' && e.verdict !== 'holding' ? 'rejected' : '';
+      for (const v of [(e.time_s * 1e3).toFixed(2), e.frame, e.kind, e.status,
+        e.position_m.map(x => (x * 1e3).toFixed(3)).join(' '),
+        e.force_N.map(x => x.toFixed(1)).join(' '), e.verdict])
+        r.insertCell().textContent = v;
+    }
+    box.appendChild(table);
   }
 }
 
