@@ -4,12 +4,14 @@
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
 
 #include "core/sparse_structure.h"
+#include "study/memory_budget.h"
 #include "study/text_columns.h"
 
 namespace rths::core {
@@ -163,7 +165,31 @@ int market_index(double value, Eigen::Index size, int line_no, const std::string
   return static_cast<int>(value) - 1;
 }
 
+// The size line against what the file can hold and the memory limit, before anything is
+// allocated: an 81-byte file that claims 1e9 entries, or a size whose dense matrix the machine
+// cannot hold, is refused at once. An entry line is at least "1 1 0\n" (coordinate) or "0\n"
+// (array).
+void check_market_size(const std::vector<double>& size, const MarketHeader& header,
+                       std::uintmax_t file_bytes, const std::string& at) {
+  const double rows = size[0], cols = size[1];
+  if (header.symmetric && rows != cols) fail(at, "a symmetric matrix must be square");
+  const double cells = header.symmetric ? rows * (rows + 1) / 2 : rows * cols;
+  const double entries = header.coordinate ? size[2] : cells;
+  if (header.coordinate && (entries != std::floor(entries) || entries < 0 || entries > cells))
+    fail(at, "declares " + format_number(entries) + " entries, more than its " +
+                 format_number(cells) + " cells (or not a count)");
+  const double line_bytes = header.coordinate ? 6.0 : 2.0;
+  if (entries * line_bytes > static_cast<double>(file_bytes))
+    fail(at, "declares " + format_number(entries) + " entries, more than its " +
+                 std::to_string(file_bytes) + " bytes can hold (at least " +
+                 format_number(line_bytes) + " bytes an entry)");
+  require_memory(static_cast<std::uint64_t>(rows), static_cast<std::uint64_t>(cols) * 8,
+                 at + ": the dense matrix its size line declares");
+}
+
 Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
+  std::error_code error;
+  const std::uintmax_t file_bytes = std::filesystem::file_size(path, error);
   std::ifstream in(path);
   if (!in) fail(where, "cannot be opened");
   std::string line;
@@ -184,6 +210,7 @@ Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
         fail(where + ":" + std::to_string(line_no),
              "the size line must be 'rows cols" +
                  std::string(header.coordinate ? " entries'" : "'") + " (each 1..100000)");
+      check_market_size(v, header, error ? 0 : file_bytes, where + ":" + std::to_string(line_no));
       size = v;
       m = Mat::Zero(static_cast<Eigen::Index>(v[0]), static_cast<Eigen::Index>(v[1]));
       entries = header.coordinate ? static_cast<Eigen::Index>(v[2])

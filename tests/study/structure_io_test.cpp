@@ -105,6 +105,34 @@ TEST(StructureIo, MatrixMarketErrorsNameTheFileAndLine) {
             std::string::npos);
 }
 
+TEST(StructureIo, AMatrixMarketSizeLineIsCheckedBeforeAnythingIsAllocated) {
+  // 81 bytes that claim 1e9 entries, a symmetric matrix that is not square, more entries than
+  // cells, and a dense matrix beyond the memory limit: each refused at the size line.
+  write("liar.mtx",
+        "%%MatrixMarket matrix coordinate real general\n30000 30000 1000000000\n1 1 1\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("liar.mtx"), scratch(), "f");
+            }).find("liar.mtx:2: declares 1e+09 entries, more than its"),
+            std::string::npos)
+      << error_of([] { read_matrix(file_spec("liar.mtx"), scratch(), "f"); });
+  write("oblong.mtx", "%%MatrixMarket matrix coordinate real symmetric\n2 3 1\n1 1 1\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("oblong.mtx"), scratch(), "f");
+            }).find("a symmetric matrix must be square"),
+            std::string::npos);
+  write("crowded.mtx", "%%MatrixMarket matrix coordinate real general\n1 1 2\n1 1 1\n1 1 2\n");
+  EXPECT_NE(error_of([] {
+              read_matrix(file_spec("crowded.mtx"), scratch(), "f");
+            }).find("declares 2 entries, more than its 1 cells"),
+            std::string::npos);
+  setenv("RTHS_MEMORY_LIMIT", "1000000", 1);  // 1 MB: a 1000 x 1000 dense matrix is 8 MB
+  write("big.mtx", "%%MatrixMarket matrix coordinate real general\n1000 1000 1\n1 1 1\n");
+  const std::string big = error_of([] { read_matrix(file_spec("big.mtx"), scratch(), "f"); });
+  unsetenv("RTHS_MEMORY_LIMIT");
+  EXPECT_NE(big.find("big.mtx:2: the dense matrix its size line declares"), std::string::npos)
+      << big;
+}
+
 TEST(StructureIo, CsvRowsAndRaggedRowsRefused) {
   write("k.csv", "# stiffness\n2,-1\n-1,2\n");
   EXPECT_EQ(read_matrix(file_spec("k.csv"), scratch(), "f")(1, 0), -1.0);
