@@ -294,31 +294,41 @@ ControllerExchange::Answer ControllerExchange::judge(const Datagram& d) {
   return judge_decoded(d);
 }
 
-// A frame from the peer while running, judged in the order controller_exchange.h states.
-ControllerExchange::Answer ControllerExchange::judge_decoded(const Datagram& d) {
+// The datagram decoded into in_, or the fault that it cannot be (wrong size, not finite).
+ControllerExchange::Answer ControllerExchange::decode_answer(const Datagram& d) {
   Answer a;
-  // Texts are built only on the way to a rejection: an accepted frame allocates nothing.
-  const auto from = [&d] { return "frame from " + source_text(d); };
   const FrameVerdict verdict =
       decode(config_.feedback(), d.bytes.data(), d.size, settings_.actuators, in_);
+  if (verdict == FrameVerdict::kOk) {
+    a.outcome = Outcome::kAnswered;
+    return a;
+  }
   a.outcome = Outcome::kFault;
+  const std::string from = "frame from " + source_text(d);
   if (verdict == FrameVerdict::kWrongSize) {
-    a.fault = from() + " has " + std::to_string(d.size) + " bytes, the feedback frame " +
+    a.fault = from + " has " + std::to_string(d.size) + " bytes, the feedback frame " +
               std::to_string(frame_size(config_.feedback()));
     reject(Cause::kWrongSize, a.fault);
     return a;
   }
-  if (verdict == FrameVerdict::kNonFinite) {
-    a.fault = from() + " carries a value that is not finite";
-    if (in_.non_finite_field >= 0) {
-      const FrameField& f = config_.feedback().fields(in_.non_finite_field);
-      a.fault += " in field " + std::to_string(in_.non_finite_field) + " (" +
-                 (f.name().empty() ? FrameField::Role_Name(f.role()) : f.name()) + ", " +
-                 FrameField::Role_Name(f.role()) + ")";
-    }
-    reject(Cause::kNonFinite, a.fault);
-    return a;
+  a.fault = from + " carries a value that is not finite";
+  if (in_.non_finite_field >= 0) {
+    const FrameField& f = config_.feedback().fields(in_.non_finite_field);
+    a.fault += " in field " + std::to_string(in_.non_finite_field) + " (" +
+               (f.name().empty() ? FrameField::Role_Name(f.role()) : f.name()) + ", " +
+               FrameField::Role_Name(f.role()) + ")";
   }
+  reject(Cause::kNonFinite, a.fault);
+  return a;
+}
+
+// A frame from the peer while running, judged in the order controller_exchange.h states.
+ControllerExchange::Answer ControllerExchange::judge_decoded(const Datagram& d) {
+  if (Answer decoded = decode_answer(d); decoded.outcome != Outcome::kAnswered) return decoded;
+  Answer a;
+  a.outcome = Outcome::kFault;
+  // Texts are built only on the way to a rejection: an accepted frame allocates nothing.
+  const auto from = [&d] { return "frame from " + source_text(d); };
   if (std::string why = restarted_epoch(); !why.empty()) {
     note_restart(why);
     a.fault = std::move(why);

@@ -159,6 +159,7 @@ class ControllerExchange {
   }
   Answer judge(const Datagram& d);
   Answer judge_decoded(const Datagram& d);
+  Answer decode_answer(const Datagram& d);
   // The counter's frame, or why not (a fault, or kNone meaning late: ignored).
   Answer judge_counter(InFlight*& frame, std::int64_t received_ns);
   // `jumped`: the fault is a measured drift moving faster than a rig can (max_measured_rate or
