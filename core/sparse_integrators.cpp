@@ -8,7 +8,32 @@
 namespace rths::core {
 namespace {
 
-// A symmetric positive definite sparse matrix factorised once; solve() allocates nothing.
+// s U diag(c) U^T, the model's low-rank damping (U = B, c its coefficients) scaled by s, never
+// formed: a product costs 2 n m. Empty when the model has none.
+class LowRank {
+ public:
+  LowRank(const LowRankDamping& term, double scale)
+      : basis_(term.basis), scale_(scale * term.coefficients), work_(Vec::Zero(scale_.size())) {}
+  bool empty() const { return scale_.size() == 0; }
+  const Mat& basis() const { return basis_; }
+  const Vec& scale() const { return scale_; }
+  // out += sign s U diag(c) U^T x; allocates nothing.
+  void add_times(const Vec& x, Vec& out, double sign = 1.0) {
+    if (empty()) return;
+    work_.noalias() = basis_.transpose() * x;
+    work_.array() *= sign * scale_.array();
+    out.noalias() += basis_ * work_;
+  }
+
+ private:
+  const Mat& basis_;
+  Vec scale_, work_;
+};
+
+// A symmetric positive definite matrix A + U S U^T (A sparse, U S U^T an optional low-rank term,
+// S >= 0 diagonal) factorised once: A by sparse LDL^T, the rest by Woodbury's identity
+//   (A + U S U^T)^-1 = A^-1 - Y W U^T A^-1,  Y = A^-1 U (n x m),  W = (I + S U^T Y)^-1 S (m x m),
+// valid for a singular S. A solve costs the LDL^T's O(nnz(L)) plus 2 n m; allocates nothing.
 class Factor {
  public:
   Factor(const SparseMat& a, const std::string& what) : ldlt_(a) {
@@ -17,21 +42,41 @@ class Factor {
     inverse_d_ = ldlt_.vectorD().cwiseInverse();
     work_ = Vec::Zero(a.rows());
   }
-  // out = A^-1 b (`out` sized, not `b`): P^T L^-T D^-1 L^-1 P b, as Eigen's solve, by hand.
+  Factor(const SparseMat& a, const std::string& what, const LowRank& low) : Factor(a, what) {
+    if (low.empty()) return;
+    const Eigen::Index m = low.scale().size();
+    y_.resize(a.rows(), m);
+    for (Eigen::Index i = 0; i < m; ++i) y_.col(i) = ldlt_.solve(Vec(low.basis().col(i)));
+    const Mat capacitance =
+        Mat::Identity(m, m) + low.scale().asDiagonal() * (low.basis().transpose() * y_);
+    w_ = capacitance.partialPivLu().solve(Mat(low.scale().asDiagonal()));
+    basis_ = &low.basis();
+    t_ = z_ = Vec::Zero(m);
+  }
+  // out = (A + U S U^T)^-1 b (`out` sized, not `b`): P^T L^-T D^-1 L^-1 P b, as Eigen's solve,
+  // by hand, then the Woodbury correction.
   void solve(const Vec& b, Vec& out) {
     work_.noalias() = ldlt_.permutationP() * b;
     ldlt_.matrixL().solveInPlace(work_);
     work_.array() *= inverse_d_.array();
     ldlt_.matrixU().solveInPlace(work_);
     out.noalias() = ldlt_.permutationPinv() * work_;
+    if (basis_ == nullptr) return;
+    t_.noalias() = basis_->transpose() * out;
+    z_.noalias() = w_ * t_;
+    out.noalias() -= y_ * z_;
   }
 
  private:
   Eigen::SimplicialLDLT<SparseMat> ldlt_;
   Vec inverse_d_, work_;
+  const Mat* basis_ = nullptr;
+  Mat y_, w_;
+  Vec t_, z_;
 };
 
-// What every sparse scheme holds: M, C, K0 compressed, M factorised, work vectors sized once.
+// What every sparse scheme holds: M, C, K0 compressed, C's low-rank part, M factorised, work
+// vectors sized once. C v is damping_ v plus the low-rank term (damping_low_).
 class SparseExplicit : public Integrator {
  public:
   SparseExplicit(const StructuralModel& model, double dt)
@@ -39,6 +84,8 @@ class SparseExplicit : public Integrator {
         mass_(model.sparse_mass),
         damping_(model.sparse_damping),
         stiffness_(model.sparse_stiffness),
+        low_rank_(model.low_rank_damping),
+        damping_low_(low_rank_, 1.0),
         mass_factor_(mass_, "M") {
     const int n = model.dofs();
     u_next_ = v_next_ = a_next_ = rhs_ = work_ = work2_ = Vec::Zero(n);
@@ -47,22 +94,31 @@ class SparseExplicit : public Integrator {
     u_ = u0;
     v_ = v0;
     rhs_ = p0 - r0;
-    rhs_.noalias() -= damping_ * v0;
+    subtract_damping_force(v0, rhs_);
     mass_factor_.solve(rhs_, a_);
   }
 
  protected:
+  // out -= C v, sparse and low-rank parts.
+  void subtract_damping_force(const Vec& v, Vec& out) {
+    out.noalias() -= damping_ * v;
+    damping_low_.add_times(v, out, -1.0);
+  }
+  // The low-rank part of C scaled by s, for an effective matrix's factor or product.
+  LowRank low_rank(double s) const { return LowRank(low_rank_, s); }
   // a_next_ = A^-1 (p+ - r(u_next_, v_next_) - C damping_velocity), the trial committed.
   void solve_acceleration(const Vec& load_next, RestoringEvaluator& restoring,
                           const Vec& damping_velocity, Factor& effective) {
     const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
     restoring.commit();
     rhs_ = load_next - r;
-    rhs_.noalias() -= damping_ * damping_velocity;
+    subtract_damping_force(damping_velocity, rhs_);
     effective.solve(rhs_, a_next_);
   }
 
   SparseMat mass_, damping_, stiffness_;
+  LowRankDamping low_rank_;
+  LowRank damping_low_;
   Factor mass_factor_;
   Vec u_next_, v_next_, a_next_, rhs_, work_, work2_;
 };
@@ -70,7 +126,8 @@ class SparseExplicit : public Integrator {
 class SparseExplicitNewmark final : public SparseExplicit {
  public:
   SparseExplicitNewmark(const StructuralModel& model, double dt)
-      : SparseExplicit(model, dt), effective_(mass_ + (0.5 * dt) * damping_, "M + dt/2 C") {}
+      : SparseExplicit(model, dt),
+        effective_(mass_ + (0.5 * dt) * damping_, "M + dt/2 C", low_rank(0.5 * dt)) {}
   IntegratorKind kind() const override { return IntegratorKind::kExplicitNewmark; }
   void step(const Vec& load_next, RestoringEvaluator& restoring) override {
     u_next_ = u_ + dt_ * v_ + (0.5 * dt_ * dt_) * a_;
@@ -89,7 +146,8 @@ class SparseExplicitNewmark final : public SparseExplicit {
 class SparseCentralDifference final : public SparseExplicit {
  public:
   SparseCentralDifference(const StructuralModel& model, double dt)
-      : SparseExplicit(model, dt), effective_(mass_ + (0.5 * dt) * damping_, "M + dt/2 C") {
+      : SparseExplicit(model, dt),
+        effective_(mass_ + (0.5 * dt) * damping_, "M + dt/2 C", low_rank(0.5 * dt)) {
     v_half_ = Vec::Zero(model.dofs());
   }
   IntegratorKind kind() const override { return IntegratorKind::kCentralDifference; }
@@ -116,7 +174,8 @@ class SparseChenRicles final : public SparseExplicit {
  public:
   SparseChenRicles(const StructuralModel& model, double dt)
       : SparseExplicit(model, dt),
-        d_(4.0 * mass_ + (2.0 * dt) * damping_ + (dt * dt) * stiffness_, "4M + 2dt C + dt^2 K0") {}
+        d_(4.0 * mass_ + (2.0 * dt) * damping_ + (dt * dt) * stiffness_, "4M + 2dt C + dt^2 K0",
+           low_rank(2.0 * dt)) {}
   IntegratorKind kind() const override { return IntegratorKind::kChenRicles; }
   void step(const Vec& load_next, RestoringEvaluator& restoring) override {
     work_.noalias() = mass_ * a_;
@@ -142,7 +201,7 @@ class SparseAlphaOS final : public SparseExplicit {
         beta_(beta),
         gamma_(gamma),
         effective_(mass_ + (alpha * gamma * dt) * damping_ + (alpha * beta * dt * dt) * stiffness_,
-                   "M + alpha gamma dt C + alpha beta dt^2 K0") {
+                   "M + alpha gamma dt C + alpha beta dt^2 K0", low_rank(alpha * gamma * dt)) {
     predictor_ = previous_predictor_ = previous_force_ = previous_load_ = Vec::Zero(model.dofs());
   }
   IntegratorKind kind() const override { return IntegratorKind::kAlphaOS; }
@@ -168,10 +227,12 @@ void SparseAlphaOS::step(const Vec& load_next, RestoringEvaluator& restoring) {
   rhs_ = (1.0 - alpha_) * previous_load_ + alpha_ * load_next;
   work_ = u_ - previous_predictor_;
   work2_.noalias() = stiffness_ * work_;  // C v + r~ + K0 (u - u~)
+  damping_low_.add_times(v_, work2_);
   work2_.noalias() += damping_ * v_;
   work2_ += previous_force_;
   rhs_ -= (1.0 - alpha_) * work2_;
   work2_.noalias() = damping_ * v_next_;  // C v~+ + r~+
+  damping_low_.add_times(v_next_, work2_);
   work2_ += r;
   rhs_ -= alpha_ * work2_;
   effective_.solve(rhs_, a_next_);
@@ -195,8 +256,11 @@ class SparseKRAlpha final : public SparseExplicit {
         s_((w.gamma * dt) * damping_ + (w.beta * dt * dt) * stiffness_),
         d_matrix_(mass_ + s_),
         b_((1.0 - w.alpha_m) * mass_ + (1.0 - w.alpha_f) * s_),
-        d_(d_matrix_, "M + gamma dt C + beta dt^2 K0"),
-        e_(w.alpha_m * mass_ + w.alpha_f * s_, "alpha_m M + alpha_f (gamma dt C + beta dt^2 K0)") {
+        d_low_(low_rank(w.gamma * dt)),
+        b_low_(low_rank((1.0 - w.alpha_f) * w.gamma * dt)),
+        d_(d_matrix_, "M + gamma dt C + beta dt^2 K0", d_low_),
+        e_(w.alpha_m * mass_ + w.alpha_f * s_, "alpha_m M + alpha_f (gamma dt C + beta dt^2 K0)",
+           low_rank(w.alpha_f * w.gamma * dt)) {
     previous_force_ = previous_load_ = increment_ = Vec::Zero(model.dofs());
   }
   IntegratorKind kind() const override { return IntegratorKind::kKRAlpha; }
@@ -209,7 +273,8 @@ class SparseKRAlpha final : public SparseExplicit {
 
  private:
   KRAlphaWeights w_;
-  SparseMat s_, d_matrix_, b_;
+  SparseMat s_, d_matrix_, b_;  // sparse parts; with C's low-rank part scaled: D, B
+  LowRank d_low_, b_low_;
   Factor d_, e_;
   Vec previous_force_, previous_load_, increment_;
 };
@@ -225,13 +290,15 @@ void SparseKRAlpha::step(const Vec& load_next, RestoringEvaluator& restoring) {
   const double keep = 1.0 - w_.alpha_f;
   rhs_ = keep * previous_load_ + w_.alpha_f * load_next;
   work_.noalias() = b_ * a_;  // M A3 a = M D^-1 B a
+  b_low_.add_times(a_, work_);
   d_.solve(work_, work2_);
   rhs_.noalias() -= mass_ * work2_;
   work_ = keep * v_ + w_.alpha_f * v_next_;
-  rhs_.noalias() -= damping_ * work_;
+  subtract_damping_force(work_, rhs_);
   rhs_ -= keep * previous_force_ + w_.alpha_f * r;
   mass_factor_.solve(rhs_, work_);  // E a+ = D M^-1 rhs
   work2_.noalias() = d_matrix_ * work_;
+  d_low_.add_times(work_, work2_);
   e_.solve(work2_, a_next_);
   u_ = u_next_;
   v_ = v_next_;
@@ -282,12 +349,20 @@ std::unique_ptr<Integrator> make_sparse_integrator(IntegratorKind kind,
 void require_dense_scheme_fits(IntegratorKind kind, const StructuralModel& model) {
   const int n = model.dofs();
   const bool dense_held = model.mass.rows() == n;
+  const std::string name =
+      kind == IntegratorKind::kExactZoh ? "exact-zoh" : "newmark-average-acceleration";
+  if (!model.low_rank_damping.empty())
+    throw std::invalid_argument(
+        name +
+        " needs C as one dense matrix, and this model's modal damping is kept as factors "
+        "through its lowest modes (structure.damping.modal_zeta on a model held sparse); "
+        "use an explicit integrator (explicit-newmark, central-difference, chen-ricles, "
+        "alpha-os, kr-alpha), or give Rayleigh damping or the matrix "
+        "structure.matrices.damping");
   if (dense_held && n <= kDenseSchemeMaxDofs) return;
   const std::string why = kind == IntegratorKind::kExactZoh
                               ? "the matrix exponential of its 2n x 2n state matrix"
                               : "a dense tangent factorised every iteration";
-  const std::string name =
-      kind == IntegratorKind::kExactZoh ? "exact-zoh" : "newmark-average-acceleration";
   throw std::invalid_argument(name + " needs dense matrices (" + why +
                               "): " + (dense_held ? "" : "the model is held sparse only, ") +
                               std::to_string(n) + " DOFs against its limit of " +

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <numbers>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -42,6 +44,9 @@ void hold_sparse_if_sparse(StructuralModel& model) {
   const Mat pattern = model.mass.cwiseAbs() + model.damping.cwiseAbs() + model.stiffness.cwiseAbs();
   const Eigen::Index nonzeros = (pattern.array() != 0.0).count();
   if (!prefer_sparse(n, nonzeros)) {
+    if (!model.low_rank_damping.empty())
+      throw std::logic_error(
+          "a model whose modal damping is kept as factors must stay held sparse");
     model.sparse_mass = model.sparse_damping = model.sparse_stiffness = SparseMat();
     return;
   }
@@ -72,7 +77,13 @@ Vec mass_times(const StructuralModel& model, const Vec& x) {
 }
 
 double damping_quadratic(const StructuralModel& model, const Vec& phi) {
-  if (model.is_sparse()) return phi.dot(model.sparse_damping * phi);
+  if (model.is_sparse()) {
+    const LowRankDamping& low = model.low_rank_damping;
+    const double low_part =
+        low.empty() ? 0.0
+                    : (low.basis.transpose() * phi).array().square().matrix().dot(low.coefficients);
+    return phi.dot(model.sparse_damping * phi) + low_part;
+  }
   return phi.dot(model.damping * phi);
 }
 
@@ -154,6 +165,70 @@ void sparse_rayleigh_damping(StructuralModel& model, double zeta, int mode_i, in
   const double a1 = 2.0 * zeta / (wi + wj);
   model.sparse_damping = a0 * model.sparse_mass + a1 * model.sparse_stiffness;
   if (model.mass.rows() == n) model.damping = a0 * model.mass + a1 * model.stiffness;
+}
+
+namespace {
+
+// The share of iota^T M iota that modes 1..m hold, (sum_i (phi_i^T M iota)^2) / iota^T M iota.
+double mass_share(const Modes& modes, int m, const Vec& mass_iota, double total) {
+  return (modes.shapes.leftCols(m).transpose() * mass_iota).squaredNorm() / total;
+}
+
+std::string modal_text(const SparseModalDamping& d, double zeta, int n) {
+  std::ostringstream out;
+  out << std::setprecision(3) << "structure.damping.modal_zeta on " << n
+      << " DOFs held sparse: zeta " << zeta << " in the lowest " << d.modes << " modes (up to "
+      << d.omega_kept / (2.0 * std::numbers::pi) << " Hz, " << 100.0 * d.mass_share
+      << " % of the mass along iota), kept as a rank-" << d.modes
+      << " term; the higher modes get stiffness-proportional damping " << d.stiffness_factor
+      << " K (zeta " << zeta << " at mode " << d.modes + 1 << ", "
+      << d.omega_next / (2.0 * std::numbers::pi)
+      << " Hz, growing with frequency); C is never formed dense";
+  return out.str();
+}
+
+}  // namespace
+
+SparseModalDamping sparse_modal_damping(StructuralModel& model, double zeta) {
+  const int n = model.dofs();
+  if (!model.is_sparse())
+    throw std::invalid_argument("structure.damping.modal_zeta: the model is not held sparse");
+  if (!(zeta > 0.0 && zeta <= 1.0))
+    throw std::invalid_argument("structure.damping.modal_zeta: " + std::to_string(zeta) +
+                                " must be in (0, 1]");
+  const int most = std::min(kModalMaxModes, n - 2);
+  const Vec mass_iota = model.sparse_mass * model.influence;
+  const double total = model.influence.dot(mass_iota);
+  SparseModalDamping d;
+  Modes modes;
+  for (int m = std::min(kModalMinModes, most);; m = std::min(2 * m, most)) {
+    try {
+      modes = sparse_lowest_modes(model.sparse_mass, model.sparse_stiffness, m + 1);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(
+          "structure.damping.modal_zeta: the lowest " + std::to_string(m + 1) +
+          " modes could not be found (" + e.what() +
+          "); give Rayleigh damping (damping { rayleigh { zeta: ... } }) or the matrix "
+          "structure.matrices.damping instead");
+    }
+    d.modes = m;
+    d.mass_share = total > 0 ? mass_share(modes, m, mass_iota, total) : 1.0;
+    if (d.mass_share >= kModalMassShare || m == most) break;
+  }
+  const int m = d.modes;
+  d.omega_kept = modes.omega[m - 1];
+  d.omega_next = modes.omega[m];
+  d.stiffness_factor = 2.0 * zeta / d.omega_next;
+  const Vec omega = modes.omega.head(m);
+  LowRankDamping& low = model.low_rank_damping;
+  low.basis = model.sparse_mass * modes.shapes.leftCols(m);
+  low.coefficients =
+      (2.0 * zeta * omega.array() - d.stiffness_factor * omega.array().square()).max(0.0);
+  model.sparse_damping = d.stiffness_factor * model.sparse_stiffness;
+  if (model.mass.rows() == n) model.damping = d.stiffness_factor * model.stiffness;
+  d.text = modal_text(d, zeta, n);
+  low.statement = d.text;
+  return d;
 }
 
 }  // namespace rths::core

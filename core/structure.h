@@ -15,6 +15,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <string>
 #include <vector>
 
 namespace rths::core {
@@ -23,14 +24,28 @@ using Vec = Eigen::VectorXd;
 using Mat = Eigen::MatrixXd;
 using SparseMat = Eigen::SparseMatrix<double>;
 
+// Modal damping of a model held sparse, kept as factors (core/sparse_structure.h,
+// sparse_modal_damping): B diag(c) B^T with B = M Phi (n x m, kg^1/2; Phi the m lowest
+// mass-normalised modes, Phi^T M Phi = I) and c (1/s) the modal damping 2 zeta_i omega_i less
+// what the sparse part already gives mode i. Never formed n x n; empty when the model has none.
+struct LowRankDamping {
+  Mat basis;              // B = M Phi, n x m
+  Vec coefficients;       // c, m entries >= 0, 1/s
+  std::string statement;  // the modes kept and what the others get, printed before a run
+  bool empty() const { return coefficients.size() == 0; }
+};
+
 struct StructuralModel {
   Mat mass;                              // kg
-  Mat damping;                           // N s/m
+  Mat damping;                           // N s/m (with low_rank_damping: its sparse part)
   Mat stiffness;                         // N/m (initial, linear)
   Vec influence;                         // iota: 1 for every floor under a horizontal ground motion
   std::vector<double> storey_stiffness;  // N/m, as given
   // The same M, C, K compressed; all three set or none (is_sparse()).
   SparseMat sparse_mass, sparse_damping, sparse_stiffness;
+  // Only on a model held sparse: C = sparse_damping + the low-rank term (modal damping through
+  // the lowest modes); the explicit sparse integrators step both, the dense schemes refuse it.
+  LowRankDamping low_rank_damping;
 
   bool is_sparse() const { return sparse_mass.rows() > 0; }
   int dofs() const { return static_cast<int>(is_sparse() ? sparse_mass.rows() : mass.rows()); }

@@ -2,10 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <new>
+#include <numbers>
+#include <vector>
 
 #include "core/integrators.h"
 #include "core/sparse_structure.h"
@@ -106,16 +109,37 @@ TEST(SparseIntegrators, EqualTheDenseSchemesToRoundingForTenToFiftyDofs) {
 }
 
 TEST(SparseIntegrators, StepWithoutAllocating) {
-  const StructuralModel model = sparse_copy(dense_building(300));
-  SparseLinearEvaluator evaluator(model.sparse_stiffness);
-  const Vec load = Vec::Constant(model.dofs(), 1e3);
-  for (IntegratorKind kind : kSparseKinds) {
-    auto integrator = make_integrator(kind, model, 1.0 / 1024);
-    integrator->initialize(Vec::Zero(300), Vec::Zero(300), Vec::Zero(300), load);
-    const long before = allocations.load();
-    for (int s = 0; s < 50; ++s) integrator->step(load, evaluator);
-    EXPECT_EQ(allocations.load() - before, 0) << to_string(kind);
-    EXPECT_TRUE(integrator->displacement().allFinite());
+  StructuralModel rayleigh = sparse_copy(dense_building(300)), modal = rayleigh;
+  sparse_modal_damping(modal, 0.05);  // C's low-rank part too
+  for (const StructuralModel& model : {rayleigh, modal})
+    for (IntegratorKind kind : kSparseKinds) {
+      SparseLinearEvaluator evaluator(model.sparse_stiffness);
+      const Vec load = Vec::Constant(model.dofs(), 1e3);
+      auto integrator = make_integrator(kind, model, 1.0 / 1024);
+      integrator->initialize(Vec::Zero(300), Vec::Zero(300), Vec::Zero(300), load);
+      const long before = allocations.load();
+      for (int s = 0; s < 50; ++s) integrator->step(load, evaluator);
+      EXPECT_EQ(allocations.load() - before, 0) << to_string(kind);
+      EXPECT_TRUE(integrator->displacement().allFinite());
+    }
+}
+
+TEST(SparseIntegrators, DenseOnlySchemesRefuseModalDampingKeptAsFactorsNamingTheFix) {
+  StructuralModel model = dense_building(150);  // dense copies held too
+  const StructuralModel sparse = sparse_copy(model);
+  model.sparse_mass = sparse.sparse_mass;
+  model.sparse_damping = sparse.sparse_damping;
+  model.sparse_stiffness = sparse.sparse_stiffness;
+  sparse_modal_damping(model, 0.05);
+  for (IntegratorKind kind :
+       {IntegratorKind::kExactZoh, IntegratorKind::kNewmarkAverageAcceleration}) {
+    try {
+      make_integrator(kind, model, 0.01);
+      FAIL() << to_string(kind) << " took modal damping kept as factors";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("kept as factors"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("explicit integrator"), std::string::npos) << e.what();
+    }
   }
 }
 
@@ -147,6 +171,76 @@ TEST(SparseIntegrators, ALargeHybridStepAllocatesNothing) {
   }
   EXPECT_EQ(allocations.load() - before, 0);
   EXPECT_GT(integrator->displacement().cwiseAbs().maxCoeff(), 0.0);
+}
+
+// A sparse-only building with modal damping through its lowest modes, and the same model held
+// dense with C = a1 K + B diag(c) B^T formed (only a test forms it).
+struct ModalPair {
+  StructuralModel sparse, dense;
+};
+ModalPair modal_pair(int n, double zeta) {
+  ModalPair pair;
+  pair.dense = dense_building(n);
+  pair.sparse = sparse_copy(pair.dense);
+  sparse_modal_damping(pair.sparse, zeta);
+  const LowRankDamping& low = pair.sparse.low_rank_damping;
+  pair.dense.damping = Mat(pair.sparse.sparse_damping) +
+                       low.basis * low.coefficients.asDiagonal() * low.basis.transpose();
+  return pair;
+}
+
+TEST(SparseIntegrators, StepModalDampingAsFactorsAsTheDenseSchemesStepItFormed) {
+  const ModalPair pair = modal_pair(150, 0.05);
+  ASSERT_FALSE(pair.sparse.low_rank_damping.empty());
+  for (IntegratorKind kind : kSparseKinds) {
+    const Mat expected = response(kind, pair.dense, 1.0 / 1024, 400);
+    const Mat got = response(kind, pair.sparse, 1.0 / 1024, 400);
+    const double scale = expected.cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 1e-6) << to_string(kind);
+    EXPECT_LE((got - expected).cwiseAbs().maxCoeff(), 1e-10 * scale) << to_string(kind);
+  }
+}
+
+// Free vibration in mode `mode` (1-based, kept): its modal coordinate q = phi^T M u decays as
+// exp(-zeta omega t); the ratio is read from successive positive peaks (logarithmic decrement).
+double measured_ratio(const StructuralModel& model, int mode, IntegratorKind kind) {
+  const Modes modes = lowest_modes(model, mode);
+  const Vec phi = modes.shapes.col(mode - 1);
+  const double omega = modes.omega[mode - 1];
+  // At least 200 steps a period, inside every explicit scheme's limit (omega_max dt <= 1 < 2).
+  const double period = 2.0 * std::numbers::pi / omega;
+  const double dt = std::min(period / 200, 1.0 / max_omega(model));
+  const int steps = static_cast<int>(6 * period / dt);
+  auto integrator = make_integrator(kind, model, dt);
+  SparseLinearEvaluator evaluator(model.sparse_stiffness);
+  const int n = model.dofs();
+  const Vec zero = Vec::Zero(n);
+  integrator->initialize(1e-3 * phi, zero, model.sparse_stiffness * (1e-3 * phi), zero);
+  const Vec m_phi = model.sparse_mass * phi;
+  std::vector<double> peaks;
+  double before = 1e-3, now = 1e-3;
+  for (int s = 0; s < steps && peaks.size() < 4; ++s) {
+    integrator->step(zero, evaluator);
+    const double next = m_phi.dot(integrator->displacement());
+    if (s > 0 && now > before && now >= next) peaks.push_back(now);
+    before = now;
+    now = next;
+  }
+  if (peaks.size() < 4) return -1.0;
+  const double delta = std::log(peaks.front() / peaks.back()) / (peaks.size() - 1);
+  return delta / std::sqrt(4.0 * std::numbers::pi * std::numbers::pi + delta * delta);
+}
+
+TEST(SparseIntegrators, AKeptModeDecaysAtTheModalRatioInFreeVibration) {
+  StructuralModel model = sparse_copy(dense_building(150));
+  sparse_modal_damping(model, 0.05);
+  for (int mode : {1, 5}) {
+    for (IntegratorKind kind : {IntegratorKind::kExplicitNewmark, IntegratorKind::kKRAlpha}) {
+      // 200 or more steps a period: the schemes' own error in the ratio is ~ (omega dt)^2 zeta.
+      EXPECT_NEAR(measured_ratio(model, mode, kind), 0.05, 5e-4)
+          << "mode " << mode << ", " << to_string(kind);
+    }
+  }
 }
 
 TEST(SparseIntegrators, DenseOnlySchemesRefuseAModelHeldSparseOnlyNamingTheLimit) {

@@ -81,6 +81,58 @@ TEST(SparseStructure, RayleighDampingEqualsTheDenseOne) {
   EXPECT_THROW(sparse_rayleigh_damping(model, 0.05, 2, 2), std::invalid_argument);
 }
 
+// C as one dense matrix: the sparse part plus B diag(c) B^T (formed here only to compare).
+Mat whole_damping(const StructuralModel& model) {
+  const LowRankDamping& low = model.low_rank_damping;
+  return Mat(model.sparse_damping) +
+         low.basis * low.coefficients.asDiagonal() * low.basis.transpose();
+}
+
+TEST(SparseStructure, ModalDampingThroughTheLowestModesEqualsTheDenseOneOnTheModesKept) {
+  StructuralModel model = building(150);
+  const Mat dense = modal_damping(model.mass, model.stiffness, 0.05);
+  const Modes modes = modal_analysis(model.mass, model.stiffness);
+  hold_sparse_if_sparse(model);
+  ASSERT_TRUE(model.is_sparse());
+  const SparseModalDamping chosen = sparse_modal_damping(model, 0.05);
+  const int m = chosen.modes;
+  ASSERT_GE(m, kModalMinModes);
+  ASSERT_LT(m, 150);
+  EXPECT_EQ(model.low_rank_damping.basis.cols(), m);  // factors, rank m, not n x n
+  EXPECT_TRUE(chosen.mass_share >= kModalMassShare || m == kModalMaxModes) << chosen.mass_share;
+  EXPECT_EQ(model.sparse_damping.nonZeros(), model.sparse_stiffness.nonZeros());  // a1 K
+  const Mat c = whole_damping(model);
+  // C phi_i = 2 zeta omega_i M phi_i for every mode kept, as the dense modal C gives it.
+  for (int i = 0; i < m; ++i) {
+    const Vec expected = dense * modes.shapes.col(i);
+    EXPECT_LE((c * modes.shapes.col(i) - expected).cwiseAbs().maxCoeff(),
+              1e-7 * expected.cwiseAbs().maxCoeff())
+        << "mode " << i + 1;
+    EXPECT_NEAR(damping_quadratic(model, modes.shapes.col(i)) / (2.0 * modes.omega[i]), 0.05, 1e-8)
+        << "mode " << i + 1;
+  }
+  // The modes above: stiffness-proportional, zeta omega_j / omega_{m+1} >= zeta, as stated.
+  for (int j = m; j < 150; j += 13) {
+    const double zeta_j = damping_quadratic(model, modes.shapes.col(j)) / (2.0 * modes.omega[j]);
+    EXPECT_NEAR(zeta_j, 0.05 * modes.omega[j] / modes.omega[m], 1e-6 * zeta_j) << "mode " << j + 1;
+    EXPECT_GE(zeta_j, 0.05 * (1 - 1e-6)) << "mode " << j + 1;
+  }
+  EXPECT_NE(chosen.text.find("lowest " + std::to_string(m) + " modes"), std::string::npos)
+      << chosen.text;
+  EXPECT_EQ(model.low_rank_damping.statement, chosen.text);
+  hold_sparse_if_sparse(model);  // C's sparse part a1 K fills no more than K: still sparse
+  EXPECT_TRUE(model.is_sparse());
+}
+
+TEST(SparseStructure, ModalDampingRefusesADenseModelAndARatioOutOfRange) {
+  StructuralModel dense = building(20);
+  EXPECT_THROW(sparse_modal_damping(dense, 0.05), std::invalid_argument);
+  StructuralModel model = building(120);
+  hold_sparse_if_sparse(model);
+  EXPECT_THROW(sparse_modal_damping(model, 0.0), std::invalid_argument);
+  EXPECT_THROW(sparse_modal_damping(model, 1.5), std::invalid_argument);
+}
+
 TEST(SparseStructure, DefinitenessByInertia) {
   StructuralModel model = building(120);
   hold_sparse_if_sparse(model);
