@@ -46,6 +46,10 @@ void apply_damping(StructuralModel& model, const config::Damping& damping, bool 
   } else if (!has_matrix && model.is_sparse() && damping.modal_zeta() == 0) {
     model.damping.setZero();  // no modes needed for C = 0
     model.sparse_damping.setZero();
+  } else if (!has_matrix && model.is_sparse()) {
+    // Through the lowest modes, kept as factors: a full C would make the model dense (seconds
+    // of set-up and n^2 a step at 1,000 DOFs); the choice is stated in the model's statement.
+    sparse_modal_damping(model, damping.modal_zeta());
   } else if (!has_matrix) {
     model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
   }
@@ -190,7 +194,8 @@ StructuralModel matrix_structure(const config::Structure& structure,
   const config::MatrixStructure& spec = structure.matrices();
   StructuralModel model = read_matrix_structure(spec, base_dir, "structure.matrices");
   apply_damping(model, structure.damping(), spec.has_damping());
-  if (model.is_sparse()) hold_sparse_if_sparse(model);  // modal damping fills C: dense again
+  // A C given as a matrix may be full: dense again (modal damping keeps its factors, sparse).
+  if (model.is_sparse() && model.low_rank_damping.empty()) hold_sparse_if_sparse(model);
   return model;
 }
 

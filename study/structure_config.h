@@ -2,7 +2,10 @@
 // A structure given by its matrices, from a study's config, split at its experimental DOFs.
 //
 //   matrix_structure(structure, base_dir): M, C, K, iota read (study/structure_io.h) and checked;
-//     damping the matrix, or Structure.damping (modal ratio, Rayleigh) built from M and K.
+//     damping the matrix, or Structure.damping (modal ratio, Rayleigh) built from M and K; on a
+//     model held sparse, a modal ratio goes through the lowest modes as a low-rank term
+//     (core::sparse_modal_damping: the modes kept and the others' damping stated in
+//     low_rank_damping.statement), never as a dense C.
 //   split_at_dofs(model, substructuring, servo_period, warnings): the experimental substructure at
 //     substructuring.experimental_dofs, each specimen f = m x'' + c x' + r(x) (InertialSpecimen
 //     over the restoring-force model of initial stiffness k; a bare model when m = c = 0) at its

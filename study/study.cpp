@@ -134,6 +134,8 @@ HybridSetup base_setup(const config::Study& study, double dt, const std::filesys
   base.servo_substeps = servo_substeps(study, dt);
   const auto& sub = study.substructuring();
   if (study.structure().has_matrices() || !sub.experimental_dofs().empty()) {
+    if (warnings && !base.model.low_rank_damping.empty())
+      warnings->push_back(base.model.low_rank_damping.statement);  // how modal damping is kept
     base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps, warnings);
     return base;
   }

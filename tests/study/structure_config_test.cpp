@@ -116,6 +116,33 @@ TEST(StructureConfig, ATwoThousandDofShearBuildingFromAMatrixMarketFileRuns) {
   fs::remove_all(dir);
 }
 
+TEST(StructureConfig, ModalDampingOnAThousandDofModelStaysSparseAsALowRankTerm) {
+  const int n = 1200;
+  const fs::path dir = fs::temp_directory_path() / "rths_sparse_modal_1200";
+  std::string text = market_building(dir, n, 0.1);
+  const std::string rayleigh = "rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 }";
+  text.replace(text.find(rayleigh), rayleigh.size(), "modal_zeta: 0.05");
+  const PreparedStudy p = prepare_study(parse_study(text, "t"), dir);
+  const StructuralModel& model = p.base.model;
+  ASSERT_TRUE(model.is_sparse());
+  const LowRankDamping& low = model.low_rank_damping;
+  ASSERT_FALSE(low.empty());
+  EXPECT_EQ(low.basis.rows(), n);
+  EXPECT_GE(low.basis.cols(), kModalMinModes);
+  EXPECT_LE(low.basis.cols(), kModalMaxModes);
+  EXPECT_EQ(low.coefficients.size(), low.basis.cols());
+  EXPECT_LE(model.sparse_damping.nonZeros(), 3 * n - 2);  // a1 K: C's sparse part, no fill
+  bool stated = false;
+  for (const std::string& line : p.warnings) stated = stated || line == low.statement;
+  EXPECT_TRUE(stated) << "the modes kept are printed before the run";
+  EXPECT_NE(low.statement.find("never formed dense"), std::string::npos) << low.statement;
+  const SimulationResult result = simulate(p.base, p.motion);
+  EXPECT_FALSE(result.diverged);
+  EXPECT_TRUE(result.displacement.allFinite());
+  EXPECT_GT(result.displacement.cwiseAbs().maxCoeff(), 0.0);
+  fs::remove_all(dir);
+}
+
 TEST(StructureConfig, SplitTakesTheSpecimensMassDampingAndStiffnessOutOfTheNumericalPart) {
   const PreparedStudy p = prepare(two_storey_matrices(
       "substructuring { experimental_dofs { dof: 2 mass: 100 stiffness: 1e6 damping: 500 } }"));
