@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <iostream>
@@ -15,6 +16,7 @@
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/benchmark_criteria.h"
+#include "core/number_text.h"
 #include "results/results.h"
 #include "results/write.h"
 #include "runtime/node/plan.h"
@@ -94,7 +96,26 @@ void run_perturbed(const config::Study& study, const std::filesystem::path& base
               << "written: benchmark_perturbed.json, benchmark_perturbed.csv (every draw)\n";
 }
 
+// The run's cost, one line after the summary: set-up (the config read, the structure built and
+// split, its damping, the motion: everything before the first case) in s, and the cases' run
+// (each case's checks, integrator set-up, steps and record, end to end) as its total over the
+// steps taken by every case: "timing: set-up S s; C cases, N steps in R s: P us a step end to end"
+// with P = R / N (1e6 us/s). steady_clock, wall time.
+void print_timing(double setup_s, double run_s, const analysis::StudyOutcome& outcome) {
+  std::size_t steps = 0;
+  for (const analysis::CaseOutcome& c : outcome.cases) steps += c.simulation.steps();
+  std::cout << "timing: set-up " << core::format_number(setup_s) << " s; " << outcome.cases.size()
+            << " cases, " << steps << " steps in " << core::format_number(run_s) << " s: "
+            << core::format_number(steps > 0 ? 1e6 * run_s / static_cast<double>(steps) : 0.0)
+            << " us a step end to end\n";
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 void run(const RunOptions& o) {
+  const auto started = std::chrono::steady_clock::now();
   const std::filesystem::path config_path = o.config;
   config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
   if (!o.motion_units.empty())
@@ -106,9 +127,13 @@ void run(const RunOptions& o) {
   if (out.empty())
     out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
   claim_output_folder(out, study.name(), o.results.force);
+  const double setup_s = seconds_since(started);
+  const auto cases_started = std::chrono::steady_clock::now();
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
+  const double run_s = seconds_since(cases_started);
   write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
   write_benchmark_outputs(prepared, outcome, out, !o.results.no_plots, o.results.json);
+  print_timing(setup_s, run_s, outcome);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
   fail_if_unstable(outcome, o.results.allow_unstable);
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -138,6 +139,61 @@ TEST(MatrixStructureCli, StabilityOfACompensatedLoopOnSeveralDofsIsModal) {
                 "uncompensated, lag 10 ms against a critical delay of 8.45 ms"),
             std::string::npos)
       << o.output;
+}
+
+// A chain of n floors in Matrix Market files under `dir` (diagonal M, tridiagonal K).
+void write_chain(const std::filesystem::path& dir, int n) {
+  std::ofstream mass(dir / "mass.mtx"), stiffness(dir / "stiffness.mtx");
+  mass << "%%MatrixMarket matrix coordinate real symmetric\n" << n << ' ' << n << ' ' << n << '\n';
+  stiffness << "%%MatrixMarket matrix coordinate real symmetric\n"
+            << n << ' ' << n << ' ' << 2 * n - 1 << '\n';
+  for (int i = 1; i <= n; ++i) {
+    mass << i << ' ' << i << ' ' << 1e5 << '\n';
+    stiffness << i << ' ' << i << ' ' << (i < n ? 8e10 : 4e10) << '\n';
+    if (i > 1) stiffness << i << ' ' << i - 1 << ' ' << -4e10 << '\n';
+  }
+}
+
+// `rths run` on a model held sparse with modal_zeta: the modes kept are stated before the run,
+// and the summary ends with the set-up time and the per-step cost, R / N of the cases' run.
+TEST(MatrixStructureCli, RunStatesSparseModalDampingAndPrintsItsSetUpAndPerStepCost) {
+  const auto dir = scratch() / "chain";
+  std::filesystem::create_directories(dir);
+  write_chain(dir, 150);
+  std::ofstream(dir / "chain.textproto")
+      << "name: \"chain\" structure { matrices { mass { file: \"mass.mtx\" } stiffness { file: "
+         "\"stiffness.mtx\" } } damping { modal_zeta: 0.05 } }\n motion { path: \""
+      << kMotion << "\" duration: 0.5 }\n integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+      << " substructuring { experimental_dofs { dof: 1 stiffness: 1e10 } }\n"
+         " cases { name: \"reference\" } cases { name: \"lag\" delay { shift { delay: 0.002 } } "
+         "}\n";
+  const auto o = run("run " + (dir / "chain.textproto").string() + " --no-plots --out " +
+                     (dir / "out").string());
+  ASSERT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("modal_zeta on 150 DOFs held sparse: zeta 0.05 in the lowest"),
+            std::string::npos)
+      << o.output;
+  const auto at = o.output.find("timing: set-up ");
+  ASSERT_NE(at, std::string::npos) << o.output;
+  double setup = 0, run_s = 0, per_step = 0;
+  int cases = 0;
+  long steps = 0;
+  ASSERT_EQ(std::sscanf(o.output.c_str() + at,
+                        "timing: set-up %lf s; %d cases, %ld steps in %lf s: %lf us a step", &setup,
+                        &cases, &steps, &run_s, &per_step),
+            5)
+      << o.output.substr(at);
+  EXPECT_GT(setup, 0.0);
+  EXPECT_GT(run_s, 0.0);
+  EXPECT_GT(per_step, 0.0);
+  EXPECT_EQ(cases, 2);
+  std::ifstream csv(dir / "out" / "results.csv");
+  std::string line;
+  long rows = -1;  // the header
+  while (std::getline(csv, line))
+    if (!line.empty()) ++rows;
+  EXPECT_EQ(steps, 2 * rows) << "every case's steps, one row each in results.csv";
+  EXPECT_NEAR(per_step, 1e6 * run_s / static_cast<double>(steps), 1e-4 * per_step);
 }
 
 // `rths run --help` names and defines the criteria a benchmark study is judged by.
