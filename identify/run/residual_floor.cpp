@@ -13,16 +13,22 @@
 namespace rths::identify {
 namespace {
 
-// The final model's residual r = y - p of `channel`, at every sample of its signals.
-std::vector<double> final_residual(const ActuatorPath& path, Channel channel) {
+// The prediction of the model the report stands by, at every sample: `channel`'s final model
+// without the effects the description beat (ActuatorPath::not_named: named nowhere), as
+// unexplained.h describes its residual.
+std::vector<double> reported_prediction(const ActuatorPath& path, Channel channel) {
   const ChannelIdentification* c = path.id.find(channel);
-  if (!c) return {};
   const ChannelSignals& s = identified_signals(path.id, channel);
-  std::vector<double> p = c->final_fit.prediction;
-  if (p.size() != s.size()) p = predict(c->final_fit.model, s);
-  std::vector<double> r(s.size());
-  for (std::size_t j = 0; j < r.size(); ++j) r[j] = s.target[j] - p[j];
-  return r;
+  const SignalScales scales = signal_scales(s);
+  ChannelModel model = c->final_fit.model;
+  bool reduced = false;
+  for (const auto& n : path.not_named)
+    if (n.channel == channel) {
+      model = without_named(model, path, n.effect, scales);
+      reduced = true;
+    }
+  if (!reduced && c->final_fit.prediction.size() == s.size()) return c->final_fit.prediction;
+  return predict(model, s);
 }
 
 // The peak of r's power spectrum and the band of the middle 80 % of its power (Hz, DC left out).
@@ -53,12 +59,6 @@ void set_band(const std::vector<double>& r, double dt, ChannelFloor& out) {
   }
 }
 
-std::vector<double> signs(const std::vector<double>& x) {
-  std::vector<double> out(x.size());
-  for (std::size_t j = 0; j < x.size(); ++j) out[j] = x[j] > 0.0 ? 1.0 : (x[j] < 0.0 ? -1.0 : 0.0);
-  return out;
-}
-
 // RMS of r above `cutoff` (Hz) from its spectrum's power share there; 0 without a cutoff.
 double rms_above(const std::vector<double>& r, double dt, double cutoff) {
   if (!(cutoff > 0.0) || r.size() < 16) return 0.0;
@@ -74,52 +74,70 @@ double rms_above(const std::vector<double>& r, double dt, double cutoff) {
   return total > 0.0 ? std::sqrt(mean_square * above / total) : 0.0;
 }
 
-// The signal r correlates with most (input, its rate, their signs), named when |corr| reaches
-// kMinCorrelation.
-void set_relation(const std::vector<double>& r, const ChannelSignals& s, ChannelFloor& out) {
-  const std::string input =
-      s.channel == Channel::kMeasured ? "the command" : "the displacement read";
-  const std::vector<std::pair<std::string, std::vector<double>>> candidates{
-      {input, s.input},
-      {"the rate of " + input, s.velocity},
-      {"the sign of " + input, signs(s.input)},
-      {"the sign of the rate of " + input, signs(s.velocity)}};
-  for (const auto& [name, x] : candidates) {
-    if (x.size() != r.size()) continue;
-    const double c = correlation(x, r);
-    if (std::abs(c) >= kMinCorrelation && std::abs(c) > std::abs(out.correlation)) {
-      out.relation = name;
-      out.correlation = c;
-    }
-  }
-}
-
-// The samples a channel is judged on (residual_floor.h): its residual and signals less
-// kEdgeSeconds at either end; all of them when too few would be left.
+// The samples a channel is judged on (residual_floor.h): the signals, the reported model's
+// prediction p and the residual r = y - p, less kEdgeSeconds at either end; all of them when
+// too few would be left.
 struct Judged {
-  ChannelSignals signals;  // channel, dt, time, input and velocity only
-  std::vector<double> residual;
+  std::vector<double> time, input, velocity, prediction, residual;
 };
 
-Judged judged(const ChannelSignals& s, const std::vector<double>& r) {
-  std::size_t first = 0, last = r.size();
+Judged judged(const ChannelSignals& s, const std::vector<double>& p) {
+  std::size_t first = 0, last = p.size();
   while (first < last && s.time[first] < s.time.front() + kEdgeSeconds) ++first;
   while (last > first && s.time[last - 1] > s.time.back() - kEdgeSeconds) --last;
-  if (last - first < 4 * kFloorWindows) first = 0, last = r.size();
+  if (last - first < 4 * kFloorWindows) first = 0, last = p.size();
   const auto cut = [&](const std::vector<double>& x) {
-    return x.size() == r.size()
+    return x.size() == p.size()
                ? std::vector<double>(x.begin() + static_cast<std::ptrdiff_t>(first),
                                      x.begin() + static_cast<std::ptrdiff_t>(last))
                : std::vector<double>{};
   };
-  Judged out;
-  out.signals.channel = s.channel;
-  out.signals.dt = s.dt;
-  out.signals.time = cut(s.time);
-  out.signals.input = cut(s.input);
-  out.signals.velocity = cut(s.velocity);
-  out.residual = cut(r);
+  Judged out{cut(s.time), cut(s.input), cut(s.velocity), cut(p), cut(s.target)};
+  for (std::size_t j = 0; j < out.residual.size(); ++j) out.residual[j] -= out.prediction[j];
   return out;
+}
+
+// The share of r's variance a function of x explains, with no form presumed: r's mean in
+// kRelationBins bins of equal count over x (the correlation ratio). A least-squares fit leaves r
+// uncorrelated with whatever its model holds linearly (a gain on the command), so a straight
+// correlation misses a dependence a map finds (the cubic part of a stroke).
+double explained_by(const std::vector<double>& x, const std::vector<double>& r) {
+  if (x.size() != r.size() || r.size() < 2 * kRelationBins) return 0.0;
+  std::vector<std::size_t> order(r.size());
+  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return x[a] < x[b]; });
+  double mean = 0.0, total = 0.0, left = 0.0;
+  for (double v : r) mean += v / static_cast<double>(r.size());
+  for (std::size_t bin = 0; bin < kRelationBins; ++bin) {
+    const std::size_t from = bin * r.size() / kRelationBins,
+                      to = (bin + 1) * r.size() / kRelationBins;
+    double bin_mean = 0.0;
+    for (std::size_t k = from; k < to; ++k)
+      bin_mean += r[order[k]] / static_cast<double>(to - from);
+    for (std::size_t k = from; k < to; ++k) {
+      total += (r[order[k]] - mean) * (r[order[k]] - mean);
+      left += (r[order[k]] - bin_mean) * (r[order[k]] - bin_mean);
+    }
+  }
+  return total > 0.0 ? 1.0 - left / total : 0.0;
+}
+
+// The signal r depends on most (the channel's input, its rate, the model's output), named when a
+// function of it explains at least kMinRelation of r's variance.
+void set_relation(const Judged& j, ChannelFloor& out) {
+  const std::string input =
+      out.channel == Channel::kMeasured ? "the command" : "the displacement read";
+  const std::vector<std::pair<std::string, const std::vector<double>*>> candidates{
+      {input, &j.input},
+      {"the rate of " + input, &j.velocity},
+      {"the model's output", &j.prediction}};
+  for (const auto& [name, x] : candidates) {
+    const double e = explained_by(*x, j.residual);
+    if (e >= kMinRelation && e > out.explained) {
+      out.relation = name;
+      out.explained = e;
+    }
+  }
 }
 
 std::string fixed(double value, int decimals) {
@@ -143,7 +161,7 @@ ChannelFloor channel_floor(const ActuatorPath& path, Channel channel) {
       std::max(force ? path.force_noise : path.displacement_noise,
                force ? path.declared_force_noise : path.declared_displacement_noise);
   out.noise = spread > 0.0 ? noise / spread : 0.0;
-  const Judged j = judged(s, final_residual(path, channel));
+  const Judged j = judged(s, reported_prediction(path, channel));
   double power = 0.0;
   for (double x : j.residual) power += x * x;
   out.level =
@@ -153,9 +171,11 @@ ChannelFloor channel_floor(const ActuatorPath& path, Channel channel) {
   out.floor = std::max({out.noise, out.band_noise, kModelFloor});
   out.above = out.level > kFloorFactor * out.floor;
   if (!out.above) return out;
-  out.windows = residual_windows(j.signals.time, j.residual);
+  out.windows = residual_windows(j.time, j.residual);
   set_band(j.residual, s.dt, out);
-  set_relation(j.residual, j.signals, out);
+  set_relation(j, out);
+  // A force that follows no motion is read, not done: the load cell's (residual_floor.h).
+  if (force && out.relation.empty()) out.part = "load cell " + std::to_string(path.actuator);
   out.excess = 1.0 - (out.floor / out.level) * (out.floor / out.level);
   return out;
 }
@@ -217,9 +237,10 @@ std::string ChannelFloor::text() const {
   out += "; at " + fixed(peak_hz, 2) + " Hz (80 % of its power within " + fixed(band_low_hz, 2) +
          "-" + fixed(band_high_hz, 2) + " Hz); ";
   return out + (relation.empty()
-                    ? "follows neither the input, its rate nor their signs (|corr| < " +
-                          fixed(kMinCorrelation, 1) + ")"
-                    : "follows " + relation + " (corr " + fixed(correlation, 2) + ")");
+                    ? "no function of the input, its rate or the model's output explains " +
+                          fixed(100.0 * kMinRelation, 0) + " % of it"
+                    : "a function of " + relation + " explains " + fixed(100.0 * explained, 0) +
+                          " % of it");
 }
 
 nlohmann::json ChannelFloor::json() const {
@@ -240,7 +261,7 @@ nlohmann::json ChannelFloor::json() const {
       {"peak_hz", above ? nlohmann::json(peak_hz) : nlohmann::json()},
       {"residual_band_hz", above ? nlohmann::json{band_low_hz, band_high_hz} : nlohmann::json()},
       {"relation", relation},
-      {"correlation", correlation},
+      {"relation_explained", explained},
       {"excess", excess},
       {"text", above ? text() : std::string()}};
 }

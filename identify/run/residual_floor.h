@@ -6,7 +6,8 @@
 //
 // Per channel c of an actuator path (measured: command -> the displacement read, m; force: the
 // displacement read -> the load cell's force, N), with target y, the final model's prediction p
-// and the residual r = y - p:
+// and the residual r = y - p (p of the model the report stands by: the final model without the
+// effects the description beat, ActuatorPath::not_named, as unexplained.h describes it):
 //   level     RMS of r over the record less kEdgeSeconds at either end / std(y) (sensors.h
 //             noise_spread). Not the fit's held-out error alone: an event in the fit's training
 //             samples (a rattle for two seconds) does not reach it, yet is in the record and in the
@@ -36,10 +37,18 @@
 //             largest first. None: "spread over the record".
 //   band      r's amplitude spectrum (spectra.h, mean removed, Hann): its peak frequency and the
 //             band holding the middle 80 % of its power (10th to 90th percentile), Hz.
-//   relation  r's Pearson correlation (spectra.h correlation) with the channel's input x, its rate
-//             v, sign(x) and sign(v): the largest |corr| is named when at least kMinCorrelation
-//             ("follows the rate of the displacement read, corr -0.93"), else none is.
+//   relation  the share of r's variance a function of the channel's input x, of its rate v or of
+//             the model's output p explains with no form presumed (r's mean in kRelationBins
+//             equal-count bins of the signal: the correlation ratio; p is the actuator's motion
+//             where the command leads it by the rig's lag; a straight correlation would miss what
+//             the fit left orthogonal to its own linear terms, a cubic stroke's residual); the
+//             largest is named when at least kMinRelation ("a function of the command explains
+//             94 % of it"): a map over a signal holds a dependence on its sign too.
 //   excess    the share of r's power above the floor: 1 - (floor / level)^2.
+//   part      the displacement channel's is "actuator N" (a rod's ripple and a sensor's read
+//             alike on it); the force channel's is "specimen N" when r depends on one of those
+//             signals (relation), else "load cell N": a force that follows no motion is the
+//             reading's (a ripple, a thermal drift, a rattle), not the specimen's.
 
 #include <nlohmann/json.hpp>
 
@@ -57,7 +66,8 @@ inline constexpr double kEdgeSeconds = 0.25;
 inline constexpr std::size_t kFloorWindows = 20;
 inline constexpr double kWindowOverUniform = 2.0;
 inline constexpr std::size_t kMaxWindows = 3;
-inline constexpr double kMinCorrelation = 0.3;
+inline constexpr std::size_t kRelationBins = 16;
+inline constexpr double kMinRelation = 0.3;  // of r's variance
 
 struct ResidualWindow {
   double start = 0.0, end = 0.0;  // s
@@ -77,9 +87,9 @@ struct ChannelFloor {
   // Where above: when, at what frequencies, how it relates to the signals, how much.
   std::vector<ResidualWindow> windows;  // empty: spread over the record
   double peak_hz = 0.0, band_low_hz = 0.0, band_high_hz = 0.0;
-  std::string relation;  // "the rate of the displacement read"; empty: none at kMinCorrelation
-  double correlation = 0.0;
-  double excess = 0.0;               // share of the residual's power above the floor
+  std::string relation;    // "the rate of the displacement read"; empty: none at kMinRelation
+  double explained = 0.0;  // of r's variance, by a function of `relation`
+  double excess = 0.0;     // share of the residual's power above the floor
   std::string floor_source() const;  // "the sensor's noise 0.2 %, the residual above ..."
   std::string text() const;
   nlohmann::json json() const;

@@ -1,8 +1,9 @@
 // Never silent (identify/run/residual_floor.h): a residual concentrated in time is located in its
 // windows and noise is spread over the record; on records of an independent closed-loop
 // simulation (independent_record.h), a clean record reads "none" with each channel's floor
-// stated, and a rattle on the load cell for a moment, which no stage and no description holds,
-// is reported on its channel above the floor, in its window and at its frequency.
+// stated, a rattle on the load cell for a moment, which no stage and no description holds, is
+// reported on the load cell above the floor, in its window and at its frequency, and a force
+// residual that follows the motion on the specimen.
 #include "identify/run/residual_floor.h"
 
 #include <gtest/gtest.h>
@@ -111,6 +112,7 @@ TEST(ResidualFloorRecords, ARattleForAMomentIsLocatedInTimeAndFrequency) {
     if (f.channel == Channel::kForce) force = &f;
   ASSERT_NE(force, nullptr) << text;
   ASSERT_TRUE(force->above) << text;
+  EXPECT_EQ(force->part, "load cell 1") << text;  // it follows no motion: the reading's
   ASSERT_FALSE(force->windows.empty()) << text;
   EXPECT_GE(force->windows[0].start, 6.0 - 0.75) << text;
   EXPECT_LE(force->windows[0].end, 8.0 + 0.75) << text;
@@ -119,6 +121,24 @@ TEST(ResidualFloorRecords, ARattleForAMomentIsLocatedInTimeAndFrequency) {
   EXPECT_NE(text.find("  " + force->text() + "\n"), std::string::npos) << text;
   EXPECT_EQ(text.find("unexplained, every part and channel: none"), std::string::npos) << text;
   EXPECT_TRUE(run_record_json(run)["residual_floor"][1]["above"].get<bool>()) << text;
+}
+
+// A specimen 1.4 x stiffer in compression: its force channel is above its floor, and a function
+// of the motion explains its residual (which the fitted stiffness left uncorrelated with the
+// displacement), so it is the specimen's, not its load cell's.
+TEST(ResidualFloorRecords, AForceThatFollowsTheMotionIsTheSpecimens) {
+  test::RigTruth rig;
+  rig.compression_stiffness = 1.4;
+  const RunIdentification run = identify_rig("floor_compression", rig);
+  const std::string text = run_record_text(run);
+  const ChannelFloor* force = nullptr;
+  for (const auto& f : run.floors)
+    if (f.channel == Channel::kForce) force = &f;
+  ASSERT_NE(force, nullptr) << text;
+  ASSERT_TRUE(force->above) << text;
+  EXPECT_EQ(force->part, "specimen 1") << text;
+  EXPECT_FALSE(force->relation.empty()) << text;
+  EXPECT_GE(force->explained, 0.5) << text;
 }
 
 }  // namespace
