@@ -9,6 +9,8 @@
 //   N = 10,000: the core path (a model held sparse only, core::make_sparse_model; the study's path
 //     holds dense copies, 2.4 GB at that size), the same building and loop, a synthetic 1 s motion;
 //     before its first step: Rayleigh damping, the stability limit and run_steps to step 0;
+//   N = 1000 again with damping { modal_zeta: 0.05 }: modal damping through the lowest modes,
+//     kept as a low-rank term (core::sparse_modal_damping), the model still held sparse;
 //   N = 300 condensed: a full (dense) K = A A^T + diagonal, as a condensed frame's is, through the
 //     study's path (the fill rule keeps it dense).
 // Columns: "loop step" is a step of core::run_steps (integrate, restoring force, and the row of
@@ -147,10 +149,15 @@ class Timer final : public rths::core::StepHooks {
   std::vector<double> steps_;
 };
 
-std::string study_text(const std::string& motion) {
+constexpr const char* kRayleigh = "rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 }";
+constexpr const char* kModal = "modal_zeta: 0.05";
+
+std::string study_text(const std::string& motion, const std::string& damping) {
   return "name: \"sparse_bench\"\n"
          "structure { matrices { mass { file: \"mass.mtx\" } stiffness { file: \"stiffness.mtx\" "
-         "} } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
+         "} } damping { " +
+         damping +
+         " } }\n"
          "motion { path: \"" +
          motion +
          "\" duration: 4 }\n"
@@ -162,11 +169,12 @@ std::string study_text(const std::string& motion) {
 }
 
 // The study's path: what `rths run` does before and during a case's loop.
-Figures study_path(const fs::path& dir) {
+Figures study_path(const fs::path& dir, const std::string& damping = kRayleigh) {
   const auto start = Clock::now();
   const std::string motion =
       std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
-  const rths::config::Study study = rths::core::parse_study(study_text(motion), "sparse_bench");
+  const rths::config::Study study =
+      rths::core::parse_study(study_text(motion, damping), "sparse_bench");
   const rths::core::PreparedStudy prepared = rths::core::prepare_study(study, dir);
   const rths::core::HybridSetup& setup = prepared.base;
   rths::core::check_modal_critical_delay(setup.model, setup.partition.experimental_stiffness(),
@@ -259,6 +267,8 @@ int main(int argc, char** argv) {
     write_market(dir / "stiffness.mtx", n, building_stiffness(n));
     print_row("shear building (.mtx)", n, repeat(repetitions, [&] { return study_path(dir); }));
   }
+  print_row("same, modal_zeta (.mtx)", 1000,
+            repeat(repetitions, [&] { return study_path(root / "1000", kModal); }));
   print_row("shear building (core)", 10000, repeat(repetitions, [] { return core_path(10000); }));
   const fs::path dense_dir = root / "condensed300";
   fs::create_directories(dense_dir);
