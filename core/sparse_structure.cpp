@@ -87,6 +87,17 @@ double damping_quadratic(const StructuralModel& model, const Vec& phi) {
   return phi.dot(model.damping * phi);
 }
 
+Mat damping_in_modes(const StructuralModel& model, const Mat& shapes) {
+  if (!model.is_sparse()) return shapes.transpose() * model.damping * shapes;
+  Mat out = shapes.transpose() * (model.sparse_damping * shapes);
+  const LowRankDamping& low = model.low_rank_damping;
+  if (!low.empty()) {
+    const Mat projected = low.basis.transpose() * shapes;  // m x q
+    out += projected.transpose() * low.coefficients.asDiagonal() * projected;
+  }
+  return out;
+}
+
 Modes sparse_lowest_modes(const SparseMat& mass, const SparseMat& stiffness, int count) {
   const Eigen::Index n = mass.rows();
   if (count < 1 || count >= n)

@@ -46,6 +46,10 @@ StructuralModel make_sparse_model(SparseMat mass, SparseMat damping, SparseMat s
 Vec mass_times(const StructuralModel& model, const Vec& x);
 // phi^T C phi for either representation (the low-rank term included).
 double damping_quadratic(const StructuralModel& model, const Vec& phi);
+// Phi^T C Phi (q x q, N s/m per unit modal mass) of the columns of `shapes`, for either
+// representation (the low-rank term included): what a modal analysis of C must use, since a
+// model whose modal damping is kept as factors holds only C's sparse part in `damping`.
+Mat damping_in_modes(const StructuralModel& model, const Mat& shapes);
 
 Modes lowest_modes(const StructuralModel& model, int count);
 Modes sparse_lowest_modes(const SparseMat& mass, const SparseMat& stiffness, int count);

@@ -117,6 +117,11 @@ TEST(SparseStructure, ModalDampingThroughTheLowestModesEqualsTheDenseOneOnTheMod
     EXPECT_NEAR(zeta_j, 0.05 * modes.omega[j] / modes.omega[m], 1e-6 * zeta_j) << "mode " << j + 1;
     EXPECT_GE(zeta_j, 0.05 * (1 - 1e-6)) << "mode " << j + 1;
   }
+  // Phi^T C Phi over the kept modes: diag(2 zeta omega), the low-rank term in it.
+  const Mat in_modes = damping_in_modes(model, modes.shapes.leftCols(m));
+  const Vec diagonal = 2.0 * 0.05 * modes.omega.head(m);
+  EXPECT_LE((in_modes - Mat(diagonal.asDiagonal())).cwiseAbs().maxCoeff(),
+            1e-8 * diagonal.maxCoeff());
   EXPECT_NE(chosen.text.find("lowest " + std::to_string(m) + " modes"), std::string::npos)
       << chosen.text;
   EXPECT_EQ(model.low_rank_damping.statement, chosen.text);
