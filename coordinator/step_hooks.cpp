@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string>
 
+#include "runtime/node/plan.h"
 #include "study/study_inputs.h"
 #include "transport/dds_endpoint.h"
 #include "util/crc32c.h"
@@ -89,8 +90,8 @@ void RunState::prepare_real_time_thread() {
       event(std::string("loop thread not isolated: ") + e.what());
     }
   }
-  if (deployment.realtime_priority() > 0) {
-    fifo.emplace(deployment.realtime_priority(), "loop", transport::dds_receive_thread_names());
+  if (const int priority = runtime::realtime_priority(deployment); priority > 0) {
+    fifo.emplace(priority, "loop", transport::dds_receive_thread_names());
     event(fifo->summary());
   }
 }

@@ -105,6 +105,7 @@ FailSafeInput failsafe_input(const config::Deployment& d, double dt, double run_
   in.answer_steps = runtime::max_missed_answers(d, dt);
   in.watchdog_steps = runtime::command_watchdog_periods(d, dt);
   in.watchdog_defaulted = !(d.command_watchdog_ms() > 0) && d.command_watchdog_periods() <= 0;
+  in.priority_text = runtime::realtime_priority_text(d);
   in.overrun_tolerance = runtime::max_overrun_fraction(d);
   bool awaits = d.nodes().empty();  // default nodes inject no lag: their answers are awaited
   for (const config::NodeSpec& node : d.nodes()) {
@@ -157,7 +158,8 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
           "the actuator emulators and controller nodes %.0f periods (%.2f ms",
           in.answer_steps, 1e3 * in.answer_steps * in.dt, in.watchdog_steps,
           1e3 * in.watchdog_steps * in.dt) +
-      (in.watchdog_defaulted ? ", unset: the answer window)" : ")"));
+      (in.watchdog_defaulted ? ", unset: the answer window)" : ")") +
+      "; real-time threads: " + in.priority_text);
   v.findings.push_back(
       fmt("fail-safe window %.2f ms (%.0f steps at %.0f Hz): stalls longer than %.2f ms come ",
           v.window_ms, steps, 1.0 / in.dt, 1e3 * x) +

@@ -38,6 +38,7 @@ struct FailSafeInput {
   int answer_steps = 3;              // coordinator: max consecutive steps without an answer
   int watchdog_steps = 3;            // emulator: command watchdog, periods
   bool watchdog_defaulted = false;   // neither watchdog field set: it follows the answer window
+  std::string priority_text;         // runtime::realtime_priority_text of the deployment
   double max_link_jitter = 0.0;      // s, largest jitter (sigma) of any node's link, either way
   double overrun_tolerance = 0.001;  // < 0: not checked
   double step_work = 0.0;            // s after the wake-up before the step's commands are out

@@ -260,11 +260,9 @@ void NodeLoop::on_assigned() {
     assigned_.watchdog_ns = seconds_to_ns(command_watchdog_periods(deployment, a.dt()) * a.dt());
   spdlog::info("{}: assigned to run {}", service_.label(), service_.run_id());
   // Before the servo and answer threads start, which inherit the loop's policy.
-  if (deployment.clock() == config::Deployment::REAL_TIME && deployment.realtime_priority() > 0)
-    spdlog::info(
-        "{}: {}", service_.label(),
-        fifo_.emplace(deployment.realtime_priority(), "loop", transport::dds_receive_thread_names())
-            .summary());
+  if (const int priority = realtime_priority(deployment); priority > 0)
+    spdlog::info("{}: {}", service_.label(),
+                 fifo_.emplace(priority, "loop", transport::dds_receive_thread_names()).summary());
   if (service_.streaming()) {
     const double period = service_.streaming_period();
     spdlog::info("{}: servo loop at {:.0f} Hz ({} policy)", service_.label(), 1.0 / period,

@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <cmath>
 
 #include <algorithm>
@@ -236,6 +239,39 @@ WaitPolicy wait_policy(const config::Deployment& d) {
   policy.spin_margin_ns = std::llround(or_default(d.spin_margin(), 200e-6) * 1e9);
   return policy;
 }
+namespace {
+bool may_raise_to(int priority) {
+  if (geteuid() == 0) return true;
+  rlimit limit{};
+  return getrlimit(RLIMIT_RTPRIO, &limit) == 0 &&
+         (limit.rlim_cur == RLIM_INFINITY || limit.rlim_cur >= static_cast<rlim_t>(priority));
+}
+}  // namespace
+
+int realtime_priority(const config::Deployment& d) {
+  if (d.realtime_priority() > 0) return d.realtime_priority();
+  if (d.realtime_priority() < 0 || d.clock() != config::Deployment::REAL_TIME ||
+      d.wait_policy() == config::WAIT_SPIN || !may_raise_to(kDefaultFifoPriority))
+    return 0;
+  return kDefaultFifoPriority;
+}
+
+std::string realtime_priority_text(const config::Deployment& d) {
+  if (d.realtime_priority() > 0) return fmt::format("SCHED_FIFO {} (set)", d.realtime_priority());
+  if (d.realtime_priority() < 0) return "off (realtime_priority: -1)";
+  if (d.clock() != config::Deployment::REAL_TIME) return "off (lockstep)";
+  if (d.wait_policy() == config::WAIT_SPIN)
+    return "off (WAIT_SPIN: a spinning FIFO loop would "
+           "shut out the DDS threads)";
+  if (!may_raise_to(kDefaultFifoPriority))
+    return fmt::format(
+        "off (this process may not raise itself to SCHED_FIFO {}: run as root, "
+        "with CAP_SYS_NICE or an RLIMIT_RTPRIO of at least {})",
+        kDefaultFifoPriority, kDefaultFifoPriority);
+  return fmt::format("SCHED_FIFO {} (the default; realtime_priority: -1 turns it off)",
+                     kDefaultFifoPriority);
+}
+
 double max_overrun_fraction(const config::Deployment& d) {
   return d.max_overrun_fraction() == 0 ? 0.001 : d.max_overrun_fraction();
 }

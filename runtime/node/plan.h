@@ -88,6 +88,17 @@ double feedback_wait_fraction(const config::Deployment& d);
 // it just commanded; not for a node whose link injects a round trip at least that long.
 bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt);
 WaitPolicy wait_policy(const config::Deployment& d);
+// The SCHED_FIFO priority a run's real-time threads take (runtime/rt/fifo.h), 0 = none:
+// realtime_priority when set (1-98); -1 none; unset (0), kDefaultFifoPriority in a real-time run
+// that does not spin where this process may raise itself (root, or RLIMIT_RTPRIO at least that),
+// none otherwise. A loaded host's other threads then cannot delay the loop: beside two builds a
+// real-time dry run missed its deadlines in 6 of 6 runs unprioritised and in 0 of 6 at 50
+// (bench/controller_flood.py, docs/controller.md).
+inline constexpr int kDefaultFifoPriority = 50;
+int realtime_priority(const config::Deployment& d);
+// "SCHED_FIFO 50 (the default; realtime_priority: -1 turns it off)", "SCHED_FIFO 20 (set)",
+// "off (...why)": how the run's threads will be scheduled, for the pre-run check.
+std::string realtime_priority_text(const config::Deployment& d);
 double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
 double min_answer_fraction(const config::Deployment& d);   // < 0: not checked
 // The fail-safe windows in steps of dt (s): answer_window_ms / command_watchdog_ms when given

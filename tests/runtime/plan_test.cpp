@@ -3,6 +3,8 @@
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 
 #include "test_support.h"
@@ -173,6 +175,33 @@ TEST(ControllerLink, TheChecksLineNamesEveryWindowAndBoundWithTheDefaultsOn) {
   EXPECT_NE(controller_checks_text(link, config::Deployment{}, 0.001)
                 .find("command watchdog off (lockstep)"),
             std::string::npos);
+}
+
+// The loop's priority by default where the process may raise itself, never in lockstep or with
+// a spinning loop, never when turned off; a set priority as set.
+TEST(RealtimePriority, DefaultWhereAllowedOffWhereNotAndAsSet) {
+  config::Deployment d;
+  d.set_clock(config::Deployment::REAL_TIME);
+  if (geteuid() == 0) {
+    EXPECT_EQ(realtime_priority(d), kDefaultFifoPriority);
+    EXPECT_EQ(realtime_priority_text(d),
+              "SCHED_FIFO 50 (the default; realtime_priority: -1 turns it off)");
+  } else {
+    EXPECT_NE(realtime_priority_text(d).find("off"), std::string::npos);
+  }
+  d.set_realtime_priority(20);
+  EXPECT_EQ(realtime_priority(d), 20);
+  EXPECT_EQ(realtime_priority_text(d), "SCHED_FIFO 20 (set)");
+  d.set_realtime_priority(-1);
+  EXPECT_EQ(realtime_priority(d), 0);
+  d.set_realtime_priority(0);
+  d.set_wait_policy(config::WAIT_SPIN);
+  EXPECT_EQ(realtime_priority(d), 0);
+  EXPECT_NE(realtime_priority_text(d).find("WAIT_SPIN"), std::string::npos);
+  d.set_wait_policy(config::WAIT_SLEEP);
+  d.set_clock(config::Deployment::LOCKSTEP);
+  EXPECT_EQ(realtime_priority(d), 0);
+  EXPECT_EQ(realtime_priority_text(d), "off (lockstep)");
 }
 
 }  // namespace
