@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -14,18 +15,36 @@ void require(bool ok, const std::string& label, const std::string& what) {
   if (!ok) throw std::invalid_argument(label + ": " + what);
 }
 
+// Three significant digits, as a HOLD's reason prints its figures.
+std::string three(double value) {
+  std::ostringstream text;
+  text << std::setprecision(3) << value;
+  return text.str();
+}
+
 }  // namespace
 
 ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
                                const std::string& label, const RestoringForceModel* shape)
     : p_(parameters), dt_(dt) {
-  if (shape && p_.specimen_shape) {
-    shape_stiffness_ = shape->initial_stiffness();
-    require(std::isfinite(shape_stiffness_) && shape_stiffness_ > 0, label,
+  // A dashpot and a mass declared with the specimen are not its shape (header: why).
+  const auto* inertial = dynamic_cast<const InertialSpecimen*>(shape);
+  const RestoringForceModel* restoring = inertial ? &inertial->restoring() : shape;
+  if (restoring) {
+    const double k_r = restoring->initial_stiffness();
+    require(std::isfinite(k_r) && k_r > 0, label,
             "the specimen's model (" + shape->describe() + ") has no positive initial stiffness");
-    command_shape_ = shape->clone();
-    measured_shape_ = shape->clone();
+    if (inertial) {
+      initial_damping_ = inertial->damping() * p_.stiffness / k_r;
+      declared_mass_ = inertial->mass();
+    }
+    if (p_.specimen_shape) {
+      shape_stiffness_ = k_r;
+      command_shape_ = restoring->clone();
+      measured_shape_ = restoring->clone();
+    }
   }
+  if (p_.damping > 0) initial_damping_ = p_.damping;
   require(dt > 0 && std::isfinite(dt), label, "dt must be > 0 s");
   require(std::isfinite(p_.stiffness) && p_.stiffness > 0, label,
           "stiffness must be > 0 N/m (the declared specimen's)");
@@ -52,6 +71,12 @@ ForcePredictor::ForcePredictor(const ForcePredictor& other)
       k_(other.k_),
       c_(other.c_),
       offset_(other.offset_),
+      initial_damping_(other.initial_damping_),
+      declared_mass_(other.declared_mass_),
+      free_damping_(other.free_damping_),
+      fit_residual_(other.fit_residual_),
+      refused_stiffness_(other.refused_stiffness_),
+      f_sq_(other.f_sq_),
       last_answer_(other.last_answer_),
       last_x_(other.last_x_),
       last_drift_(other.last_drift_),
@@ -86,8 +111,10 @@ void ForcePredictor::reset() {
   if (command_shape_) command_shape_->reset();
   if (measured_shape_) measured_shape_->reset();
   k_ = p_.stiffness;
-  c_ = p_.damping;
+  c_ = initial_damping_;
   offset_ = 0.0;
+  free_damping_ = fit_residual_ = f_sq_ = 0.0;
+  refused_stiffness_ = false;
   for (int i = 0; i < 3; ++i) {
     b_[i] = 0.0;
     for (int j = 0; j < 3; ++j) s_[i][j] = 0.0;
@@ -108,6 +135,7 @@ void ForcePredictor::learn(double x, double v, double f, long steps_since) {
     for (int j = 0; j < 3; ++j) s_[i][j] = decay * s_[i][j] + phi[i] * phi[j];
     b_[i] = decay * b_[i] + phi[i] * f;
   }
+  f_sq_ = decay * f_sq_ + f * f;
   if (!p_.adapt) return;
   // s_[2][2] is the forgetting's weight of the samples (their count, decayed).
   if (!(s_[0][0] > 0 && s_[1][1] > 0)) return;
@@ -135,15 +163,55 @@ void ForcePredictor::learn(double x, double v, double f, long steps_since) {
   double theta[3];
   const bool all[3] = {true, true, true};
   if (!solve(all, theta)) return;
+  free_damping_ = theta[1];
   if (theta[1] < 0) {  // a passive specimen: the best fit with c = 0
     const bool without_damping[3] = {true, false, true};
     if (!solve(without_damping, theta)) return;
   }
-  if (!(theta[0] > 0)) return;
+  refused_stiffness_ = !(theta[0] > 0);
+  if (refused_stiffness_) return;
   k_ = theta[0];
   c_ = theta[1];
   offset_ = theta[2];
+  // The least-squares residual over the columns used: F - theta^T b (theta is 0 off them).
+  const double explained = theta[0] * b_[0] + theta[1] * b_[1] + theta[2] * b_[2];
+  fit_residual_ = f_sq_ > 0 ? std::sqrt(std::max(f_sq_ - explained, 0.0) / f_sq_) : 0.0;
   ++updates_;
+}
+
+double ForcePredictor::windowed_error() const {
+  if (filled_ < error_sq_.size() || !(sum_force_sq_ > 0)) return 0.0;
+  return std::sqrt(std::max(sum_error_sq_, 0.0) / sum_force_sq_);
+}
+
+std::string ForcePredictor::rejection() const {
+  std::ostringstream text;
+  const auto add = [&text](const std::string& line) {
+    if (text.tellp() > 0) text << "; ";
+    text << line;
+  };
+  if (refused_stiffness_)
+    add("the force does not rise with the drift (a fit with k <= 0 was refused): the specimen "
+        "lost its stiffness, or the force or drift channel has the wrong sign");
+  if (free_damping_ < 0 && k_ > 0)
+    add("the measured force lags the measured drift by at least " +
+        three(1e3 * -free_damping_ / k_) + " ms beyond any dashpot (best fit c " +
+        three(free_damping_) +
+        " N s/m, held at 0): the model lacks the force "
+        "channel's lag (a load cell or filter)");
+  const double bound = p_.max_relative_error;
+  if (bound > 0 && fit_residual_ > 0.5 * bound)
+    add("the model's own best fit leaves " + three(100.0 * fit_residual_) +
+        " % of the force unexplained: its form (k x + c v + f0" +
+        std::string(command_shape_ ? " on the declared shape" : "") +
+        ") lacks a term the specimen has (hysteresis: declare its model; a lag)");
+  else if (bound > 0 && updates_ > 0 && windowed_error() > bound)
+    add("the model's own best fit leaves " + three(100.0 * fit_residual_) +
+        " %: the specimen changes faster than the forgetting time (" + three(p_.forgetting_time) +
+        " s) follows");
+  if (declared_mass_ > 0)
+    add("the declared specimen mass (" + three(declared_mass_) + " kg) is not in the model");
+  return text.str();
 }
 
 PredictorOutput ForcePredictor::step(const PredictorInput& in) {
@@ -179,8 +247,7 @@ PredictorOutput ForcePredictor::step(const PredictorInput& in) {
         sum_force_sq_ += force_sq_[i];
       }
     }
-    if (filled_ == error_sq_.size() && sum_force_sq_ > 0)
-      out.relative_error = std::sqrt(std::max(sum_error_sq_, 0.0) / sum_force_sq_);
+    out.relative_error = windowed_error();
   }
   out.predicted = k_ * command_basis(in.command) + c_ * in.command_velocity + offset_;
   out.error = last_answer_ >= 0 ? error_ : 0.0;

@@ -40,6 +40,14 @@
 //     column-scaled S is well conditioned (its smallest eigenvalue > 1e-3); a fit with c < 0 is
 //     redone with c = 0 (a passive specimen dissipates) and a fit with k <= 0 is refused (the
 //     model keeps its last theta). Recursive least squares with forgetting, information form.
+//     What the data said of the model (rejection(), named in a HOLD's reason):
+//       c_free, the fit's c before the c = 0 rule: c_free < 0 means the measured force lags the
+//         measured drift by at least -c_free / k s beyond any dashpot (a load cell's or a
+//         filter's lag the model lacks, or a rate that is not the specimen's);
+//       rho = sqrt(max(0, F - theta^T b) / F), F = the forgetting's sum of f_m^2: the accepted
+//         fit's own residual. rho near the relative error: the model's form cannot follow the
+//         force (a term is missing: hysteresis, a lag); rho small under a large relative error:
+//         the specimen changes faster than forgetting_time.
 //     e = f_m - (k x_m + c v_m + f0)                                    (N, the model's error)
 //   every step: f_hat = k u + c v + f0;  force = f_hat + e (e = 0 before the first answer).
 // With the specimen's shape (a declared non-linear specimen: Bouc-Wen, bilinear), x_m and u
@@ -47,11 +55,19 @@
 // stiffness k_r), one copy driven by the measured drift at each new answer and one by the
 // command at every step (a hysteretic model keeps its own path), so k is the fitted scale of
 // the declared specimen in N/m (k = k_r when the declaration is right). For a linear specimen
-// both are the drift itself.
+// both are the drift itself. A declared specimen with a dashpot or a mass (InertialSpecimen:
+// m x'' + c_s x' + r(x)) gives r alone as the shape: its dashpot is the model's c, fitted, and
+// starts at c_s k0 / k_r (the declared dashpot scaled as the stiffness is) unless damping > 0
+// is given; its mass is not in the model (its force m a is left to e). Why r alone: the shape's
+// copies are called once per new answer (whatever steps it spans) and once per step (whatever
+// the servo period), so a rate differenced over their calls is not the specimen's, and a
+// dashpot inside the stiffness basis is collinear with the c column: the fit then drives c to 0
+// and k far off (a damper behind a jittered 60 ms link: k 0.36 of the damper's, 70 % error).
 //   relative_error: sqrt(sum e^2 / sum f_m^2) over the last error_window of answers (one entry a
 //     step: a step without a new answer repeats the last pair), 0 until the window is full or
 //     while sum f_m^2 = 0; exceeded when it is above max_relative_error (> 0).
-// Initial state: theta = the declared specimen's (k0, c0, 0), S = b = 0, no answer seen.
+// Initial state: theta = the declared specimen's (k0, c0, 0) (c0 above), S = b = 0, no answer
+// seen.
 // Linear dynamics of the compensated loop (core/stability.h predictor_critical_delay): with a
 // specimen k_e, c_e realised D late (round trip plus actuator lag), the integrator sees
 //   (k u + c v) + (k_e - k) x(t - D) + (c_e - c) v(t - D).
@@ -70,7 +86,7 @@ namespace rths::core {
 
 struct PredictorParameters {
   double stiffness = 0.0;           // N/m, k0: the declared specimen's initial stiffness, > 0
-  double damping = 0.0;             // N s/m, c0 >= 0
+  double damping = 0.0;             // N s/m, c0 >= 0; 0: the declared dashpot's (above)
   bool adapt = true;                // update theta online; false: a fixed-model Smith predictor
   double forgetting_time = 1.0;     // s, time constant of the forgetting, > 0
   double min_displacement = 1e-4;   // m, RMS drift below which the fit is not trusted, >= 0
@@ -118,11 +134,19 @@ class ForcePredictor {
   double stiffness() const { return k_; }
   double damping() const { return c_; }
   double offset() const { return offset_; }
-  std::size_t updates() const { return updates_; }  // fits accepted so far
+  std::size_t updates() const { return updates_; }       // fits accepted so far
+  double free_damping() const { return free_damping_; }  // N s/m, c_free of the last fit
+  double fit_residual() const { return fit_residual_; }  // -, rho of the last accepted fit
+  // What the data say the model lacks (equations above), for a HOLD's reason (the bound passed):
+  // a refused k <= 0; c_free < 0, the force's lag it implies; rho above half the bound, a term
+  // missing from the model's form; else, fitted and past the bound, a specimen changing faster
+  // than the forgetting follows; a declared mass the model leaves out. Empty when none applies.
+  std::string rejection() const;
   std::string describe() const;
 
  private:
   void learn(double x, double v, double f, long steps_since);
+  double windowed_error() const;  // relative_error (equations above)
   // r(x) / k_r along the command's and the measurements' paths (the drift without a shape).
   double command_basis(double x);
   double measured_basis(double x);
@@ -131,8 +155,12 @@ class ForcePredictor {
   double dt_, lambda_;
   double k_ = 0.0, c_ = 0.0;
   double offset_ = 0.0;
+  double initial_damping_ = 0.0;  // N s/m, c0 (equations above)
+  double declared_mass_ = 0.0;    // kg, the declared specimen's, not in the model
+  double free_damping_ = 0.0, fit_residual_ = 0.0;
+  bool refused_stiffness_ = false;  // the last fit wanted k <= 0
   // The forgetting's normal equations over phi = [x_m, v_m, 1]: s_ = sum phi phi^T, b_ = sum phi f.
-  double s_[3][3] = {}, b_[3] = {};
+  double s_[3][3] = {}, b_[3] = {}, f_sq_ = 0.0;  // f_sq_: sum f^2, forgotten alike
   long last_answer_ = -1;
   double last_x_ = 0.0, last_drift_ = 0.0, last_v_ = 0.0, last_f_ = 0.0, error_ = 0.0;
   std::size_t updates_ = 0;

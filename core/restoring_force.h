@@ -115,6 +115,11 @@ class InertialSpecimen final : public RestoringForceModel {
   double initial_stiffness() const override { return model_->initial_stiffness(); }
   std::unique_ptr<RestoringForceModel> clone() const override;
   std::string describe() const override;
+  // r, m (kg) and c (N s/m) apart: a force predictor takes r as its shape and c as its damping
+  // (core/force_predictor.h), since its rates come from the integrator, not from calls h apart.
+  const RestoringForceModel& restoring() const { return *model_; }
+  double mass() const { return m_; }
+  double damping() const { return c_; }
 
  private:
   std::unique_ptr<RestoringForceModel> model_;

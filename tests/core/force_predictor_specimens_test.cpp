@@ -1,0 +1,222 @@
+// The force predictor (core/force_predictor.h) against specimens whose form it does not share
+// (issue 61): a damper (a spring and a dashpot, the dashpot declared as the experimental DOF's
+// damping) behind an actuator with its own lag and a load cell with its own, across a 60 ms
+// round trip whose answers arrive with jitter, out of order, or never. Two checks:
+//   - open loop: a known drift history through that rig and link, the predictor's force against
+//     the lag-free specimen's at the command, its fitted k and c, and its windowed error;
+//   - closed loop (core::simulate with the answers replayed as the link delivered them): a
+//     3-storey frame with the damper in storey 2, the predictor started 30 % soft; E_rms of
+//     every floor against the lag-free reference, with the shipped bound (50 %) in force.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/answer_replay.h"
+#include "core/delay.h"
+#include "core/force_predictor.h"
+#include "core/ground_motion.h"
+#include "core/metrics.h"
+#include "core/rig_effects.h"
+#include "core/simulation.h"
+#include "core/structure.h"
+#include "core/substructure.h"
+#include "study/motion_files.h"
+
+namespace rths::core {
+namespace {
+
+constexpr double kDt = 1e-3;            // s, the integrator's step
+constexpr double kRoundTrip = 0.060;    // s, 30 ms each way
+constexpr double kJitterSd = 0.0025;    // s, each way
+constexpr double kLoss = 0.01;          // of answers lost
+constexpr double kActuatorLag = 0.010;  // s, first-order time constant
+constexpr double kLoadCellLag = 0.003;  // s, the force channel's own lag
+constexpr double kDamperK = 3.0e5;      // N/m
+constexpr double kDamperC = 1.0e4;      // N s/m
+
+// The damper as a study declares it (experimental DOF with a damping): a spring with a dashpot
+// whose rate is the backward difference over the servo period.
+std::unique_ptr<RestoringForceModel> damper() {
+  return std::make_unique<InertialSpecimen>(std::make_unique<LinearSpring>(kDamperK), 0.0, kDamperC,
+                                            kDt);
+}
+
+// The rig between the command and what the lab reads: the actuator's lag, then the load cell's.
+DelayChain rig(double load_cell_lag = kLoadCellLag) {
+  DelayChain chain;
+  chain.add(std::make_unique<FirstOrderActuator>(kActuatorLag, kDt));
+  chain.add(std::make_unique<ForceDelay>(load_cell_lag, kDt));
+  return chain;
+}
+
+// The link's messages: the answer to step j arrives kRoundTrip plus one N(0, kJitterSd) draw each
+// way after step j (at least one step), a fraction kLoss never; at step k the loop uses the
+// newest answer arrived (0: none yet), as the coordinator's intake does. Seeded, deterministic.
+std::vector<std::int64_t> link_schedule(std::size_t steps, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::normal_distribution<double> jitter(0.0, kJitterSd);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<std::int64_t> used(steps, 0);
+  for (std::size_t j = 1; j < steps; ++j) {
+    const double late = std::max(kRoundTrip + jitter(random) + jitter(random), kDt);
+    if (uniform(random) < kLoss) continue;
+    const auto at = j + static_cast<std::size_t>(std::ceil(late / kDt - 1e-9));
+    if (at < steps) used[at] = std::max(used[at], static_cast<std::int64_t>(j));
+  }
+  for (std::size_t k = 1; k < steps; ++k) used[k] = std::max(used[k], used[k - 1]);
+  return used;
+}
+
+PredictorParameters started_30_percent_soft() {
+  PredictorParameters p;
+  p.stiffness = 0.7 * kDamperK;
+  p.max_relative_error = 0.5;  // the shipped configs' bound
+  return p;
+}
+
+double drift(double t) {
+  const double w = 4 * std::numbers::pi;
+  return 0.01 * std::sin(w * t) + 0.004 * std::sin(2.7 * w * t);
+}
+
+struct OpenLoop {
+  double force_error = 0.0;  // RMS (force - lag-free force) / RMS lag-free force, t >= 3 s
+  PredictorOutput last;
+};
+
+// The drift history through the rig and the link into a predictor with the damper's shape.
+OpenLoop open_loop(ForcePredictor& predictor, std::size_t steps,
+                   double load_cell_lag = kLoadCellLag) {
+  Actuator rig_actuator(rig(load_cell_lag), damper());
+  rig_actuator.set_servo(1, kDt);
+  auto lag_free = damper();
+  const std::vector<std::int64_t> used = link_schedule(steps, 61);
+  std::vector<double> realised(steps, 0.0), force(steps, 0.0);
+  double error = 0.0, truth = 0.0;
+  OpenLoop out;
+  for (std::size_t k = 0; k < steps; ++k) {
+    const double t = static_cast<double>(k) * kDt, u = drift(t);
+    const double v = (u - drift(t - kDt)) / kDt;
+    const ActuatorOutput measured = rig_actuator.step({t, u, v});
+    realised[k] = measured.realised;
+    force[k] = measured.force;
+    PredictorInput in{u, v, used[k] > 0 ? static_cast<long>(used[k]) : -1, 0.0, 0.0};
+    if (in.answer_step >= 0) {
+      in.measured_displacement = realised[static_cast<std::size_t>(used[k])];
+      in.measured_force = force[static_cast<std::size_t>(used[k])];
+    }
+    out.last = predictor.step(in);
+    const double f = lag_free->step(u);
+    if (t >= 3.0) {
+      error += (out.last.force - f) * (out.last.force - f);
+      truth += f * f;
+    }
+  }
+  out.force_error = std::sqrt(error / truth);
+  return out;
+}
+
+TEST(ForcePredictorSpecimens, ADamperBehindALaggingRigAndAJitteredLinkIsFittedWithItsDashpot) {
+  ForcePredictor predictor(started_30_percent_soft(), kDt, "damper", damper().get());
+  const OpenLoop run = open_loop(predictor, 8000);
+  // The force lags the drift by the load cell's 3 ms: a line k x + c v fits c - k 3 ms, and the
+  // link's span differences cost O(dt) more; the stiffness within 2 %.
+  EXPECT_NEAR(run.last.stiffness, kDamperK, 0.02 * kDamperK);
+  EXPECT_GT(run.last.damping, 0.8 * (kDamperC - kDamperK * kLoadCellLag));
+  EXPECT_LT(run.last.damping, 1.05 * kDamperC);
+  EXPECT_LT(run.last.relative_error, 0.10);
+  EXPECT_FALSE(run.last.exceeded);
+  // What is left is the load cell's lag (c low by k 3 ms) and the correction's 60 ms age.
+  EXPECT_LT(run.force_error, 0.08) << "k " << run.last.stiffness << " c " << run.last.damping
+                                   << " relative error " << run.last.relative_error;
+}
+
+TEST(ForcePredictorSpecimens, AForceLaggingPastTheDashpotIsNamedAsTheMissingLagBeforeTheHold) {
+  // 50 ms on the load cell: the force lags as a dashpot of 1e4 - 3e5 x 0.05 = -5e3 N s/m would
+  // lead, so the best c is negative and held at 0; the bound (5 % here) trips and its reason
+  // names the lag (at least 5e3 / 3e5 = 16.7 ms), not only the figure.
+  PredictorParameters p = started_30_percent_soft();
+  p.max_relative_error = 0.05;
+  ForcePredictor predictor(p, kDt, "damper", damper().get());
+  const OpenLoop run = open_loop(predictor, 8000, 0.050);
+  EXPECT_TRUE(run.last.exceeded);
+  EXPECT_EQ(run.last.damping, 0.0);
+  EXPECT_LT(predictor.free_damping(), -0.5 * (kDamperK * 0.050 - kDamperC));
+  const std::string reason = predictor.rejection();
+  EXPECT_NE(reason.find("the measured force lags the measured drift by at least"),
+            std::string::npos)
+      << reason;
+  EXPECT_NE(reason.find("the model lacks the force channel's lag"), std::string::npos) << reason;
+  // The 3 ms rig of the test above: the fit needs no c = 0 rule and names nothing.
+  ForcePredictor within(started_30_percent_soft(), kDt, "damper", damper().get());
+  open_loop(within, 8000);
+  EXPECT_GT(within.free_damping(), 0.0);
+  EXPECT_EQ(within.rejection(), "");
+}
+
+// A 3-storey frame (1000 kg a floor, 8e5 N/m a storey, 5 % Rayleigh) with the damper in storey 2
+// beside its columns, shaken by 12 s of the Imperial Valley record the shipped studies use.
+HybridSetup frame_with_damper() {
+  HybridSetup setup;
+  setup.model = make_shear_building({1000.0, 1000.0, 1000.0}, {8e5, 8e5 + kDamperK, 8e5});
+  setup.model.damping = rayleigh_damping(setup.model.mass, setup.model.stiffness, 0.05);
+  setup.dt = kDt;
+  for (int s = 0; s < 3; ++s) {
+    setup.partition.numerical.push_back(std::make_unique<LinearSpring>(8e5));
+    setup.partition.experimental.push_back(s == 1 ? damper() : nullptr);
+  }
+  setup.partition.actuator_storeys = {1};
+  return setup;
+}
+
+GroundMotion imperial_valley(double seconds) {
+  return truncated(
+      resampled(read_at2(RTHS_DATA_DIR "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"), kDt),
+      seconds);
+}
+
+// E_rms (%) of the worst floor against the reference, over the steps both ran.
+double worst_rms_error_pct(const SimulationResult& run, const SimulationResult& reference) {
+  double worst = 0.0;
+  const auto steps = static_cast<Eigen::Index>(std::min(run.steps(), reference.steps()));
+  for (Eigen::Index f = 0; f < reference.displacement.cols(); ++f) {
+    const Vec r = reference.displacement.col(f).head(steps),
+              x = run.displacement.col(f).head(steps);
+    worst = std::max(worst, relative_rms_error_pct(std::vector<double>(r.begin(), r.end()),
+                                                   std::vector<double>(x.begin(), x.end())));
+  }
+  return worst;
+}
+
+TEST(ForcePredictorSpecimens, AFrameWithTheDamperAcrossAJitteredSixtyMsLinkMatchesItsReference) {
+  const GroundMotion motion = imperial_valley(12.0);
+  const SimulationResult reference = simulate(frame_with_damper(), motion);
+  ASSERT_FALSE(reference.diverged);
+  AnswerSchedule link;
+  link.actuator_used = {link_schedule(motion.acceleration.size(), 2026)};
+  HybridSetup bare = frame_with_damper();
+  bare.delays.push_back(rig());
+  SimulationOptions options;
+  options.divergence_bound = 1.0;
+  const SimulationResult uncompensated = simulate(bare, motion, options, link);
+  // Without the predictor the round trip is far past the loop's critical delay.
+  EXPECT_TRUE(uncompensated.diverged || worst_rms_error_pct(uncompensated, reference) > 50.0);
+  HybridSetup predicted = frame_with_damper();
+  predicted.delays.push_back(rig());
+  predicted.predictors = {started_30_percent_soft()};
+  const SimulationResult run = simulate(predicted, motion, options, link);
+  EXPECT_TRUE(run.held.empty()) << run.held;
+  ASSERT_FALSE(run.diverged);
+  ASSERT_EQ(run.steps(), reference.steps());
+  EXPECT_LE(worst_rms_error_pct(run, reference), 5.0);
+}
+
+}  // namespace
+}  // namespace rths::core
