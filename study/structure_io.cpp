@@ -12,6 +12,7 @@
 
 #include "core/sparse_structure.h"
 #include "study/memory_budget.h"
+#include "study/motion_files.h"
 #include "study/text_columns.h"
 
 namespace rths::core {
@@ -121,6 +122,8 @@ Mat mat_matrix(const std::filesystem::path& path, const std::string& variable,
     fail(named, "is not a real numeric matrix (complex, sparse, a struct, a cell or an object)");
   return m;
 }
+
+constexpr std::uintmax_t kMaxCsvMatrixBytes = 32ull << 20;  // 32 MiB
 
 // Matrix Market header: "%%MatrixMarket matrix coordinate|array real|integer general|symmetric".
 struct MarketHeader {
@@ -246,7 +249,24 @@ Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
   return m;
 }
 
+// A CSV matrix is read whole through the text reader, which holds up to
+// kMotionReadBytesPerFileByte bytes per byte of file (study/motion_files.h): sized before a byte
+// is read, and refused past kMaxCsvMatrixBytes (a spreadsheet's matrix; a model's is .mtx or .mat,
+// read sparse) or past what the memory limit can hold.
+void require_csv_matrix_size(const std::filesystem::path& path, const std::string& where) {
+  std::error_code error;
+  const std::uintmax_t bytes = std::filesystem::file_size(path, error);
+  if (error) return;
+  if (bytes > kMaxCsvMatrixBytes)
+    fail(where, std::to_string(bytes) + " bytes, more than the " +
+                    std::to_string(kMaxCsvMatrixBytes) +
+                    " a .csv matrix may have: write a model this large as Matrix Market (.mtx) "
+                    "or MATLAB (.mat); refused before reading it");
+  require_memory(bytes, kMotionReadBytesPerFileByte, where + ": reading it as text");
+}
+
 Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
+  require_csv_matrix_size(path, where);
   const TextColumns columns = read_text_columns(path, "matrix");
   if (columns.rows.empty()) fail(where, "has no rows");
   const std::size_t cols = columns.rows.front().values.size();

@@ -133,6 +133,27 @@ TEST(StructureIo, AMatrixMarketSizeLineIsCheckedBeforeAnythingIsAllocated) {
       << big;
 }
 
+TEST(StructureIo, ACsvMatrixIsSizedBeforeItIsRead) {
+  // 33 MiB of zeros: past the 32 MiB a .csv matrix may have, refused before a byte is parsed.
+  {
+    std::ofstream big(scratch() / "huge.csv");
+    const std::string row(1 << 20, '0');
+    for (int i = 0; i < 33; ++i) big << row << "\n";
+  }
+  const std::string error = error_of([] { read_matrix(file_spec("huge.csv"), scratch(), "f"); });
+  EXPECT_NE(error.find("a .csv matrix may have: write a model this large as Matrix Market"),
+            std::string::npos)
+      << error;
+  fs::remove(scratch() / "huge.csv");
+  // Within the size, a memory limit that cannot hold its reading: refused naming the limit.
+  write("small.csv", "1,2\n3,4\n");
+  setenv("RTHS_MEMORY_LIMIT", "100", 1);
+  const std::string tight = error_of([] { read_matrix(file_spec("small.csv"), scratch(), "f"); });
+  unsetenv("RTHS_MEMORY_LIMIT");
+  EXPECT_NE(tight.find("small.csv: reading it as text"), std::string::npos) << tight;
+  EXPECT_EQ(error_of([] { read_matrix(file_spec("small.csv"), scratch(), "f"); }), "");
+}
+
 TEST(StructureIo, CsvRowsAndRaggedRowsRefused) {
   write("k.csv", "# stiffness\n2,-1\n-1,2\n");
   EXPECT_EQ(read_matrix(file_spec("k.csv"), scratch(), "f")(1, 0), -1.0);
