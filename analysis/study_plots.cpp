@@ -39,6 +39,25 @@ double strongest_window_start(const std::vector<double>& u, double dt, double wi
   return static_cast<double>(best_start) * dt;
 }
 
+// A case stopped before the record's end by a limit or its force predictor's bound (not diverged,
+// which is labelled and clipped apart): its figures end at its stop and say so.
+bool stopped_early(const CaseOutcome& c) { return !c.diverged() && c.status != "completed"; }
+
+// "limit tripped at t = 5.114 s", the stop's cause and time; "" for a case that did not stop.
+std::string stop_text(const CaseOutcome& c) {
+  if (!stopped_early(c) || c.simulation.time.empty()) return "";
+  char at[48];
+  std::snprintf(at, sizeof at, " at t = %.4g s", c.simulation.time.back());
+  return c.status + at;
+}
+
+// A dashed line where case c stopped, labelled with why (short: a label runs right of its line);
+// nothing when it did not stop.
+void mark_stop(util::PlotSpec& panel, const CaseOutcome& c) {
+  if (stopped_early(c) && !c.simulation.time.empty())
+    panel.markers.push_back({c.simulation.time.back(), c.status});
+}
+
 }  // namespace
 
 namespace {
@@ -124,8 +143,10 @@ std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
 
 // tracking.png, the RTHS benchmark's tracking figure: per case that drives an actuator and stayed
 // bounded, x_t (the command of the first actuator) and x_m (what it measured there), mm, over the
-// record, then the same over `zoom` s from `zoom_start` (s), where the lag between them shows.
-// No panel when no such case.
+// record, then the same over `zoom` s from `zoom_start` (s), where the lag between them shows. A
+// case stopped early (a limit, its predictor's bound) is drawn up to its stop, marked there, and
+// zoomed on its last `zoom` s when it stopped before the window's end (an empty window once made
+// gnuplot fail every figure). No panel when no such case.
 std::vector<util::PlotSpec> tracking_panels(const std::string& study,
                                             const std::vector<const CaseOutcome*>& drawn,
                                             const CaseOutcome& reference, double zoom_start,
@@ -133,9 +154,11 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
   std::vector<util::PlotSpec> panels;
   for (const CaseOutcome* c : drawn) {
     if (c == &reference || c->diverged() || c->simulation.command.cols() == 0 ||
-        c->simulation.realised.cols() == 0)
+        c->simulation.realised.cols() == 0 || c->simulation.time.size() < 2)
       continue;
-    util::PlotSpec whole{study + ": tracking of " + c->name + ", x_t (command) and x_m (measured)",
+    const std::string stop = stop_text(*c);
+    util::PlotSpec whole{study + ": tracking of " + c->name + ", x_t (command) and x_m (measured)" +
+                             (stop.empty() ? "" : ", " + stop),
                          "time (s)", "displacement at actuator 1 (mm)"};
     util::Series target{"x_t, command", c->simulation.time, {}, "lines lw 2"};
     util::Series measured{"x_m, measured", c->simulation.time, {}, "lines lw 1"};
@@ -146,17 +169,21 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
     target.x.resize(target.y.size());
     measured.x.resize(measured.y.size());
     whole.series = {target, measured};
+    mark_stop(whole, *c);
     util::PlotSpec close = whole;
-    char title[160];
-    std::snprintf(title, sizeof title, "zoom: %s over %g s at the reference's strongest",
-                  c->name.c_str(), zoom);
+    double start = zoom_start;
+    if (!target.x.empty() && target.x.back() < start + zoom)
+      start = std::max(0.0, target.x.back() - zoom);
+    char title[200];
+    std::snprintf(title, sizeof title, "zoom: %s over %g s %s", c->name.c_str(), zoom,
+                  start == zoom_start ? "at the reference's strongest" : "up to its stop");
     close.title = title;
-    close.x_min = zoom_start;
-    close.x_max = zoom_start + zoom;
+    close.x_min = start;
+    close.x_max = start + zoom;
     // The zoom's y range follows what is in its window.
     double lo = 0.0, hi = 0.0;
     for (std::size_t k = 0; k < target.x.size(); ++k) {
-      if (target.x[k] < zoom_start || target.x[k] > zoom_start + zoom) continue;
+      if (target.x[k] < start || target.x[k] > start + zoom) continue;
       lo = std::min({lo, target.y[k], measured.y[k]});
       hi = std::max({hi, target.y[k], measured.y[k]});
     }
@@ -175,7 +202,8 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
 // predicts, the force f_m the link's answer measured (kN, as it arrived, the link's lag late)
 // against the model's prediction of it at the displacement measured with it, f_m - e, and the
 // prediction error e = f_m - model (kN) below: where they part, the loop carries the model's
-// error that late. No panel when no case has a predictor.
+// error that late; a case stopped early ends at its stop, marked. No panel when no case has a
+// predictor.
 std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const CaseOutcome*>& drawn) {
   std::vector<util::PlotSpec> panels;
   for (const CaseOutcome* c : drawn)
@@ -183,9 +211,11 @@ std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const Case
       const core::SimulationResult& r = c->simulation;
       if (a >= r.measured_force.cols() || a >= r.prediction_error.cols()) continue;
       const std::string link = "actuator " + std::to_string(a + 1);
-      util::PlotSpec forces{
-          c->name + ": force measured at " + link + " and the predictor's model of it", "time (s)",
-          "force (kN)"};
+      const std::string stop = stop_text(*c);
+      util::PlotSpec forces{c->name + ": force measured at " + link +
+                                " and the predictor's model of it" +
+                                (stop.empty() ? "" : ", " + stop),
+                            "time (s)", "force (kN)"};
       util::Series measured{"measured (as it arrived)", r.time, {}, "lines lw 2"};
       util::Series model{"the model's prediction", r.time, {}, "lines lw 1"};
       util::PlotSpec error{c->name + ": prediction error at " + link + ", measured - model",
@@ -199,6 +229,8 @@ std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const Case
       for (util::Series* s : {&measured, &model, &e}) s->x.resize(s->y.size());
       forces.series = {measured, model};
       error.series = {e};
+      mark_stop(forces, *c);
+      mark_stop(error, *c);
       forces.height = error.height = 340;
       panels.push_back(std::move(forces));
       panels.push_back(std::move(error));
@@ -231,8 +263,12 @@ std::vector<util::PlotSpec> displacement_panels(const StudyOutcome& outcome,
   std::vector<std::size_t> bounded, bounded_difference;  // series that set the axes
   for (std::size_t i = 0; i < drawn.size(); ++i) {
     const CaseOutcome& c = *drawn[i];
+    // A case a limit stopped ran away (|u| or |v| past the bound): clipped, as a diverged one.
+    const bool clipped = c.diverged() || c.status == "limit tripped";
     const std::string label =
-        c.name + (c.diverged() ? " (" + c.status + ", clipped)" : coincides_with(drawn, i));
+        c.name + (c.diverged()       ? " (" + c.status + ", clipped)"
+                  : stopped_early(c) ? " (" + stop_text(c) + (clipped ? ", clipped)" : ")")
+                                     : coincides_with(drawn, i));
     // Each case keeps its colour on every panel and is drawn thinner than the case before it, so
     // that two cases whose responses coincide are both seen (solid: cairo draws a dashed line of
     // 10^4 points very slowly).
@@ -240,15 +276,16 @@ std::vector<util::PlotSpec> displacement_panels(const StudyOutcome& outcome,
                               std::to_string(std::max(0.7, 3.0 - 0.8 * static_cast<double>(i)));
     util::Series s{label, c.simulation.time, {}, style};
     for (double u : c.response) s.y.push_back(u * 1e3);
-    if (!c.diverged()) bounded.push_back(displacement.series.size());
+    if (!clipped) bounded.push_back(displacement.series.size());
     displacement.series.push_back(std::move(s));
+    mark_stop(displacement, c);
     if (&c != &reference) {
       // The reference against itself is a zero line that says nothing: it is left out.
       util::Series d{label, c.simulation.time, {}, style};
       for (std::size_t k = 0; k < c.response.size() && k < reference.response.size(); ++k) {
         d.y.push_back((c.response[k] - reference.response[k]) * 1e3);
       }
-      if (!c.diverged()) bounded_difference.push_back(difference.series.size());
+      if (!clipped) bounded_difference.push_back(difference.series.size());
       difference.series.push_back(std::move(d));
     }
   }
@@ -268,14 +305,17 @@ std::vector<util::PlotSpec> displacement_panels(const StudyOutcome& outcome,
 
 }  // namespace
 
-void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory) {
+std::vector<std::string> write_study_plots(const StudyOutcome& outcome,
+                                           const std::filesystem::path& directory) {
   std::filesystem::create_directories(directory);
   const CaseOutcome& reference = outcome.reference();
   std::vector<const CaseOutcome*> drawn;  // the lag-free reference first, when it is not a case
   if (outcome.lag_free_reference) drawn.push_back(&*outcome.lag_free_reference);
   for (const CaseOutcome& c : outcome.cases) drawn.push_back(&c);
   const std::vector<util::PlotSpec> panels = displacement_panels(outcome, drawn, reference);
-  // A stale tracking figure must not stay beside a study that has none.
+  // A stale figure must not stay beside a study that has none of its kind.
+  std::filesystem::remove(directory / "force_displacement.png");
+  std::filesystem::remove(directory / "force_displacement.svg");
   std::filesystem::remove(directory / "tracking.png");
   std::filesystem::remove(directory / "tracking.svg");
   std::filesystem::remove(directory / "force_prediction.png");
@@ -292,6 +332,9 @@ void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path&
   if (auto predicted = force_prediction_panels(drawn); !predicted.empty())
     figures.push_back({std::move(predicted), directory / "force_prediction.png"});
   util::write_png_figures(figures);
+  std::vector<std::string> written;
+  for (const util::Figure& f : figures) written.push_back(f.png.filename().string());
+  return written;
 }
 
 }  // namespace rths::analysis

@@ -163,8 +163,14 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
 // command vs measured force of the bounded cases (the loop the integrator sees, Figs. 1-2).
 // tracking.png/.svg (the RTHS benchmark's tracking figure): per bounded case with an actuator,
 // x_t (command) and x_m (measured) at actuator 1 (mm) over the record and over a 1 s zoom on the
-// reference's strongest second; absent when no case has an actuator.
-void write_study_plots(const StudyOutcome& outcome, const std::filesystem::path& directory);
+// reference's strongest second; absent when no case has an actuator. A case stopped early (a
+// limit, its predictor's bound) is drawn up to its stop, a dashed line there naming why, and its
+// tracking zoom is its last second when it stopped before the reference's strongest one ended.
+// Returns the PNG files written (names in `directory`, each with its SVG beside it); a figure the
+// study has nothing for is removed.
+// Throws std::runtime_error when gnuplot fails (no figure is then written).
+std::vector<std::string> write_study_plots(const StudyOutcome& outcome,
+                                           const std::filesystem::path& directory);
 // The files write_study_plots writes, so a run without plots can remove stale ones.
 std::vector<std::string> study_plot_files();
 // The errors each summary leads with (analysis::compare), defined where they are printed.

@@ -356,17 +356,24 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
       if (std::filesystem::exists(out / file))
         earlier_plots += (earlier_plots.empty() ? "" : ", ") + file;
   // The figures are drawn (gnuplot processes, waited on by a thread) while this thread writes the
-  // results table, so their time overlaps; a failure of either leaves after both are done.
-  std::future<void> figures;
+  // results table, so their time overlaps. A figure that fails costs only the figures: the table
+  // and summary are written, the failure is a warning, and the exit stays the cases'.
+  std::future<std::vector<std::string>> figures;
   if (plots)
-    figures = std::async(std::launch::async, [&] { analysis::write_study_plots(outcome, out); });
+    figures =
+        std::async(std::launch::async, [&] { return analysis::write_study_plots(outcome, out); });
   try {
     results::write_table(analysis::study_table(outcome), results, kind);
   } catch (...) {
     if (figures.valid()) figures.wait();
     throw;
   }
-  if (figures.valid()) figures.get();
+  std::string drawn, failed;
+  if (figures.valid()) try {
+      for (const std::string& png : figures.get()) drawn += ", " + png + "/.svg";
+    } catch (const std::runtime_error& e) {
+      failed = e.what();
+    }
   const nlohmann::json summary = analysis::study_summary_json(outcome);
   util::AtomicFile json_file(out / "summary.json");
   json_file.stream() << summary.dump(2) << "\n";
@@ -377,13 +384,13 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
   if (json) {
     std::cout << summary.dump(2) << "\n";
   } else {
-    std::cout << analysis::study_summary_text(outcome) << "written: " << results.string()
-              << (plots ? ", displacement.png/.svg, force_displacement.png/.svg, tracking.png/.svg"
-                        : "")
+    std::cout << analysis::study_summary_text(outcome) << "written: " << results.string() << drawn
               << ", summary.txt, summary.json\n";
     if (!earlier_plots.empty())
       std::cout << "not redrawn (--no-plots), from an earlier run: " << earlier_plots << "\n";
   }
+  if (!failed.empty())
+    print_warning("no figure drawn (the table and summary are written): " + failed);
 }
 
 void write_benchmark_outputs(const core::PreparedStudy& prepared,

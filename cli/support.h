@@ -104,7 +104,9 @@ inline constexpr const char* kOwnerFile = ".rths-study";
 void claim_output_folder(const std::filesystem::path& out, const std::string& study, bool force);
 
 // results.csv and the plots (drawn at once; with plots off, plots of an earlier run are left in
-// place and the summary names them), then summary.json/.txt; prints the summary (JSON or text).
+// place and the summary names them), then summary.json/.txt; prints the summary (JSON or text)
+// and "written:" with the files written. Figures that fail are a warning, not an error: the
+// table and summary are written whatever gnuplot does, and the exit is the cases'.
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format = "csv");
 // A study with a benchmark section: J1-J9 of its cases (analysis::evaluate_benchmark) written to

@@ -200,6 +200,40 @@ TEST(StudyRun, APredictedCaseDrawsItsMeasuredForceAgainstTheModel) {
   std::filesystem::remove_all(dir);
 }
 
+// A case stopped by a limit before the reference's strongest second is drawn up to its stop, a
+// dashed line there naming why, its tracking zoom on its own last second: the zoom once lay past
+// the case's end, gnuplot found no point in it ("all points y value undefined") and no figure of
+// the study was written.
+TEST(StudyRun, ACaseStoppedByALimitIsDrawnToItsStopAndMarked) {
+  const StudyOutcome outcome = run_study(
+      frame(1.0,
+            "cases { name: \"reference\" } cases { name: \"lag_30ms\" delay { shift { delay: "
+            "0.030 } } expect_unstable: true }",
+            "deployment { limits { max_displacement: 0.05 } }", 20.0));
+  const CaseOutcome& stopped = outcome.cases[1];
+  ASSERT_EQ(stopped.status, "limit tripped") << stopped.status_detail;
+  ASSERT_EQ(outcome.cases[0].status, "completed");
+  const double stop = stopped.simulation.time.back();
+  ASSERT_LT(stop, 10.0);  // before the reference's strongest second (16-17 s)
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_stopped_plots_" + std::to_string(::getpid()));
+  const std::vector<std::string> written = write_study_plots(outcome, dir);
+  EXPECT_EQ(written, (std::vector<std::string>{"displacement.png", "force_displacement.png",
+                                               "tracking.png"}));
+  for (const std::string& png : written) EXPECT_TRUE(std::filesystem::exists(dir / png)) << png;
+  std::ifstream tracking_in(dir / "tracking.svg");
+  const std::string tracking((std::istreambuf_iterator<char>(tracking_in)),
+                             std::istreambuf_iterator<char>());
+  EXPECT_EQ(count(tracking, "zoom: lag_30ms over 1 s up to its stop"), 1u);
+  EXPECT_EQ(count(tracking, ">limit tripped<"), 2u);  // the line at its stop, on both panels
+  std::ifstream displacement_in(dir / "displacement.svg");
+  const std::string displacement((std::istreambuf_iterator<char>(displacement_in)),
+                                 std::istreambuf_iterator<char>());
+  // Its legend on every panel says where it stopped; clipped, it does not set the axes.
+  EXPECT_EQ(count(displacement, ">lag_30ms (limit tripped at t = "), 3u);
+  std::filesystem::remove_all(dir);
+}
+
 // 10 ms of lag, 17 % past its 8.54 ms critical delay: the response grows exponentially to the end
 // of the record, yet its peak stays under 10x the lag-free run's. It is diverging, with its growth
 // rate and doubling time stated, and fails the run; 7 ms (inside) completes without a flag.
