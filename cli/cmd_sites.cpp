@@ -1,5 +1,8 @@
 // `rths sites CONFIG`: the distributed run across emulated sites (one network namespace per site,
-// DDS unicast between them, per-link lag injected by the nodes). See deploy/sites.h.
+// DDS unicast between them, per-link lag injected by the nodes). See deploy/sites.h. Its flags,
+// refusals and exit codes are `rths launch`'s: a real-time run's platform check comes first (exit 3
+// when refused, unless --accept-platform), the record is OUT/<case>.rthsrec, and the exit is the
+// coordinator's (2 config, 3 environment) before the run's verdict (1).
 #include <signal.h>
 
 #include <nlohmann/json.hpp>
@@ -14,8 +17,10 @@
 #include "cli/support.h"
 #include "deploy/netns.h"
 #include "deploy/sites.h"
+#include "rt_check/check.h"
 #include "runtime/node/plan.h"
 #include "study/study.h"
+#include "util/atomic_file.h"
 #include "util/process.h"
 
 namespace rths::cli {
@@ -28,7 +33,8 @@ struct SitesOptions {
   int domain = -1;  // -1: the sites config's / study's domain
   std::int64_t expect_steps = 1;
   double expect_injected = -1.0;
-  bool check = false, cleanup = false;
+  double platform_seconds = 5.0;
+  bool check = false, cleanup = false, accept_platform = false;
 };
 
 // --cleanup and --check-record: done without a config. Returns whether the command is done.
@@ -47,17 +53,52 @@ bool run_maintenance(const SitesOptions& o) {
   return true;
 }
 
-deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPlan& plan) {
+std::filesystem::path output_folder(const SitesOptions& o) {
+  if (!o.results.out.empty()) return o.results.out;
+  return std::filesystem::path("out") /
+         ("sites_" + std::filesystem::path(o.config).stem().string());
+}
+
+// Real time: the platform check `rths launch` makes, once, before any namespace or process:
+// refused (the deployment's fail-safe or overrun tolerance will not hold here) is exit 3 unless
+// --accept-platform. Its summary goes to OUT/platform.json and to the coordinator, which then
+// does not measure again. Empty path in lockstep.
+std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
+                                           const SitesOptions& o,
+                                           const std::filesystem::path& out) {
+  if (prepared.config.deployment().clock() != config::Deployment::REAL_TIME) return {};
+  rt_check::PlatformCheck check;
+  try {
+    check = rt_check::check_platform(prepared, o.platform_seconds);
+  } catch (const std::runtime_error& e) {
+    throw ExitError(kExitEnvironment, std::string("platform check: ") + e.what());
+  }
+  if (!o.results.json || check.verdict.refused())
+    std::cerr << rt_check::summary_text(check.summary);
+  if (check.verdict.refused() && !o.accept_platform)
+    throw ExitError(kExitEnvironment,
+                    "refusing to start: the deployment's fail-safe or overrun tolerance will not "
+                    "hold on this machine (numbers and fixes above; `rths rt-check` on the study "
+                    "repeats the check); --accept-platform runs anyway and the record says so");
+  const std::filesystem::path file = std::filesystem::absolute(out / "platform.json");
+  util::AtomicFile json(file);
+  json.stream() << nlohmann::json{{"platform", rt_check::summary_json(check.summary)}}.dump(2)
+                << "\n";
+  json.commit();
+  return file;
+}
+
+deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPlan& plan,
+                                    const std::filesystem::path& out,
+                                    const std::filesystem::path& platform_file) {
   if (const auto reason = deploy::namespace_support()) {
     throw ExitError(kExitEnvironment, "sites: " + *reason);
   }
   deploy::SitesRunOptions options;
-  options.output_dir = !o.results.out.empty()
-                           ? std::filesystem::path(o.results.out)
-                           : std::filesystem::path("out") /
-                                 ("sites_" + std::filesystem::path(o.config).stem().string());
+  options.output_dir = out;
+  options.platform_file = platform_file;
+  options.accept_platform = o.accept_platform;
   if (!o.programs.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.programs.bin_dir);
-  claim_output_folder(options.output_dir, plan.study.name(), o.results.force);
   ProgressReporter progress("sites", "runs", !o.results.json);
   deploy::SitesRunResult result;
   {
@@ -73,6 +114,21 @@ deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPl
   return result;
 }
 
+// The figures write_distributed_outputs drew into `out` (each PNG with its SVG beside it): none
+// when plots are off or failed (`failed`), as a failed gnuplot writes none.
+std::string drawn_figures(const std::filesystem::path& out, const std::string& case_name,
+                          bool plots, bool failed) {
+  if (!plots || failed) return "";
+  std::vector<std::string> pngs;
+  for (const std::string& file : analysis::study_plot_files())
+    if (file.ends_with(".png")) pngs.push_back(file);
+  pngs.push_back("links_" + case_name + ".png");
+  std::string drawn;
+  for (const std::string& png : pngs)
+    if (std::filesystem::exists(out / png)) drawn += ", " + png + "/.svg";
+  return drawn;
+}
+
 // The results as `rths run` and `rths launch` write them, against the lag-free in-process
 // reference (analysis/distributed), links labelled by role and site.
 void report(const SitesOptions& o, const deploy::SitesPlan& plan,
@@ -86,8 +142,13 @@ void report(const SitesOptions& o, const deploy::SitesPlan& plan,
        result.record, result.output_dir.string()}};
   const DistributedResults results =
       analysis::judge_distributed(prepared, runs, print_warning, site_of_node);
+  bool plots_failed = false;
   const auto table = analysis::write_distributed_outputs(
-      results, result.output_dir, !o.results.no_plots, o.results.format, print_warning);
+      results, result.output_dir, !o.results.no_plots, o.results.format,
+      [&plots_failed](const std::string& warning) {
+        plots_failed = plots_failed || warning.starts_with("plots not written");
+        print_warning(warning);
+      });
   if (o.results.json) {
     auto j = deploy::to_json(result);
     j["results"] = analysis::distributed_summary_json(results);
@@ -95,11 +156,15 @@ void report(const SitesOptions& o, const deploy::SitesPlan& plan,
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << deploy::to_text(result) << analysis::distributed_summary_text(results)
-              << "written: " << table.string() << ", summary.txt, summary.json"
-              << (o.results.no_plots ? "" : ", plots") << "\n";
+              << "written: " << table.string()
+              << drawn_figures(result.output_dir, result.case_name, !o.results.no_plots,
+                               plots_failed)
+              << ", summary.txt, summary.json\n";
   }
-  if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
+  // As `rths launch`: the coordinator's own exit (3: this machine, e.g. a refused platform; 2:
+  // the config) before the run's verdict.
   fail_if_distributed_failed(results, runs, o.results.allow_unstable);
+  if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
 }
 
 void run(const SitesOptions& o) {
@@ -123,7 +188,10 @@ void run(const SitesOptions& o) {
               << plan.study.deployment().domain_id() << "\n";
     return;
   }
-  report(o, plan, prepared, run_at_sites(o, plan));
+  const std::filesystem::path out = output_folder(o);
+  claim_output_folder(out, plan.study.name(), o.results.force);
+  const std::filesystem::path platform_file = check_platform_first(prepared, o, out);
+  report(o, plan, prepared, run_at_sites(o, plan, out, platform_file));
 }
 
 }  // namespace
@@ -145,6 +213,12 @@ void add_sites_command(CLI::App& app) {
          "--domain", options->domain,
          "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
       ->check(in_range(core::Quantity::kDdsDomain));
+  cmd->add_option("--platform-seconds", options->platform_seconds,
+                  "real time: s of platform measurement before the run (default 5)")
+      ->check(finite_in(0.1, 600.0));
+  cmd->add_flag("--accept-platform", options->accept_platform,
+                "real time: run even when the platform check says the fail-safe or the overrun "
+                "tolerance will not hold (the record says so)");
   cmd->add_flag("--check", options->check, "only load and check the config");
   cmd->add_flag("--cleanup", options->cleanup,
                 "remove namespaces left by killed `rths sites` runs (then run CONFIG, if given)");

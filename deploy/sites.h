@@ -11,6 +11,7 @@
 //                  the one launch sequence (runtime::launch_run) with each process placed in its
 //                  site's namespace (bounded by the timeout; stop_requested() is polled, e.g. for
 //                  Ctrl-C), then deletes every namespace -- on success, failure or exception.
+//                  The record is OUT/<case>.rthsrec, as `rths launch` names it.
 //                  The coordinator's record is summarised per link: injected lag and measured
 //                  round trip / one-way lags (s).
 // Errors: std::invalid_argument for bad configs (naming file and field), NamespacesUnavailable
@@ -78,6 +79,11 @@ struct SitesRunOptions {
   std::filesystem::path output_dir;  // records, logs, DDS configs, merged study; created
   std::optional<std::filesystem::path> bin_dir;  // else util::find_node_programs' search
   std::function<bool()> stop_requested;          // polled every few ms; true = stop now
+  // Real time: the platform check already made (`rths rt-check --json` output), handed to the
+  // coordinator as `rths launch` hands it; empty: the coordinator measures. accept_platform runs
+  // a deployment the check refuses (the record says so).
+  std::filesystem::path platform_file;
+  bool accept_platform = false;
 };
 
 SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options);

@@ -17,6 +17,7 @@
 #include "runtime/record/measurements.h"
 #include "runtime/record/record.h"
 #include "security/check.h"
+#include "study/study.h"
 
 namespace rths::deploy {
 namespace {
@@ -84,7 +85,10 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   SitesRunResult result;
   result.output_dir = std::filesystem::absolute(options.output_dir);
   std::filesystem::create_directories(result.output_dir);
-  result.record = result.output_dir / "record.pb";
+  // Named as `rths launch` names its records: the case that runs (launch_run finds it the same way).
+  result.record =
+      result.output_dir /
+      (core::find_case(plan.study, plan.study.deployment().case_name()).name() + ".rthsrec");
   std::filesystem::remove(result.record);
   const auto study_path = result.output_dir / "study.textproto";
   write_study_copy(plan, study_path);
@@ -111,6 +115,8 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   // The measured network lag is the point of a sites run: leave the processes to the scheduler.
   launch.cpu_placement = runtime::CpuPlacement::kSpread;
   launch.stop_requested = options.stop_requested;
+  launch.platform_file = options.platform_file;
+  launch.accept_platform = options.accept_platform;
   launch.placement = [&](int node_id) {
     const std::string& site = site_of.at(node_id);
     return runtime::Placement{

@@ -218,6 +218,23 @@ void judge_status(const DistributedRun& run, const runtime::RecordContents& reco
   }
 }
 
+// The counts behind a link's round trip: the answers it was measured on (each once, at the first
+// step that applied it), the answers the coordinator accepted (superseded ones included: a step
+// applies only the newest) and the steps, so "3369 answers" over 10,000 steps reads as what it
+// is. A record without the accepted count (an older one) gives the first and the last.
+std::string answer_counts(std::size_t measured, const runtime::LinkSeries& series,
+                          std::size_t steps) {
+  const std::int64_t accepted = series.answers.empty() ? 0 : series.answers.back();
+  std::ostringstream text;
+  text << "measured on " << measured << " answers, each at the first step that applied it";
+  if (accepted > 0) text << ", of " << accepted << " accepted";
+  if (accepted > static_cast<std::int64_t>(measured))
+    text << " (a step applies only the newest: " << accepted - static_cast<std::int64_t>(measured)
+         << " arrived behind a newer one)";
+  text << ", over " << steps << " steps";
+  return text.str();
+}
+
 }  // namespace
 
 DistributedResults judge_distributed(const core::PreparedStudy& prepared,
@@ -319,7 +336,8 @@ std::string distributed_summary_text(const DistributedResults& results) {
            << (f.link_labels.count(node) ? f.link_labels.at(node) : "node " + std::to_string(node))
            << " DDS round trip ms (coordinator <-> node): median " << rt.median * 1e3 << ", p99 "
            << rt.p99 * 1e3 << ", max " << rt.max * 1e3 << " (injected median " << inj.median * 1e3
-           << ", " << rt.count << " answers)\n";
+           << "; " << answer_counts(rt.count, series, results.outcome.cases[i].simulation.steps())
+           << ")\n";
     }
   }
   for (const auto& [name, why] : results.missing) text << name << ": FAILED, " << why << "\n";

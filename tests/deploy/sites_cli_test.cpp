@@ -43,6 +43,44 @@ TEST(SitesCli, DomainOverridesTheConfigsAndIsCheckedLikeLaunchs) {
 
 std::string read(const std::filesystem::path& path);
 
+// `rths sites` takes `rths launch`'s platform flags: once it printed "run anyway with
+// --accept-platform" and then refused that flag (exit 2).
+TEST(SitesCli, TakesLaunchsPlatformFlags) {
+  const auto result = util::run_command(
+      {kRths, "sites", kConfig, "--check", "--accept-platform", "--platform-seconds", "0.5"});
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.output.find("sites config ok"), std::string::npos) << result.output;
+}
+
+// A real-time deployment this machine cannot keep (a fail-safe window of one 1 ms step: any
+// stall passes it) is refused as `rths launch` refuses it: the platform check first, exit 3,
+// the fix named, nothing started (no namespace, no record, no platform.json). Once the
+// coordinator refused it at a site and `sites` called that a failed run (exit 1).
+TEST(SitesCli, APlatformRefusalExitsThreeBeforeAnythingStarts) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_sites_platform_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "sites.textproto")
+      << "study: \"" << RTHS_SOURCE_DIR << "/configs/paper_frame.textproto\"\n"
+      << "case_name: \"reference\"\nclock: REAL_TIME\nduration: 1\n"
+      << "sites { name: \"integrator\" node_ids: 0 }\nsites { name: \"hpc\" node_ids: 1 }\n"
+      << "sites { name: \"lab_b\" node_ids: 2 }\n"
+      << "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
+         "} answer_window_ms: 1 command_watchdog_ms: 1 }\n";
+  const auto refused =
+      util::run_command({kRths, "sites", (dir / "sites.textproto").string(), "--platform-seconds",
+                         "0.2", "--out", (dir / "out").string()});
+  EXPECT_EQ(refused.exit_code, 3) << refused.output;
+  EXPECT_NE(refused.output.find("refusing to start"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("--accept-platform runs anyway"), std::string::npos)
+      << refused.output;
+  EXPECT_NE(refused.output.find("answer_window_ms: "), std::string::npos) << refused.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "reference.rthsrec"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "platform.json"));
+  std::filesystem::remove_all(dir);
+}
+
 // Before a run (and with --check): the case's lag plus the network round trip on the actuator
 // lab's link, against the critical delay. The shipped distributed frame across sites in real
 // time: 7 ms each way + the 14 ms shift = 28 ms, past the frame's 24.2 ms.
@@ -165,6 +203,19 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
                         std::chrono::seconds(120));
   ASSERT_EQ(sites.exit_code, 0) << sites.output;
   EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos)
+      << sites.output;
+  // The record is named as `rths launch` names it; "written" names the figures drawn.
+  EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "lag_shift_14ms.rthsrec"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "sites" / "record.pb"));
+  EXPECT_NE(sites.output.find("displacement.png/.svg, force_displacement.png/.svg"),
+            std::string::npos)
+      << sites.output;
+  EXPECT_NE(sites.output.find("links_lag_shift_14ms.png/.svg, summary.txt"), std::string::npos)
+      << sites.output;
+  // The DDS line's counts say what they count: lockstep answers every step, once.
+  EXPECT_NE(sites.output.find("measured on 299 answers, each at the first step that applied it, "
+                              "of 299 accepted"),
+            std::string::npos)
       << sites.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "displacement.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sites" / "links_lag_shift_14ms.png"));

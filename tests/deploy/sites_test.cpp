@@ -138,11 +138,11 @@ const LinkMeasurement& link_of(const SitesRunResult& result, int node_id) {
 // of the slowest link's round trip, against which the record's per-message lags are checked.
 TEST_F(SitesRun, TenMillisecondsEachWayAddTwentyToTheRoundTripAndTheRecordAgrees) {
   const auto base_plan = plan_sites(three_sites(91, 0.0, 0.0), kConfigs, "base");
-  const auto base = run_sites(base_plan, {out("base"), std::nullopt, {}});
+  const auto base = run_sites(base_plan, {out("base"), std::nullopt, {}, {}, false});
   ASSERT_TRUE(base.ok) << base.status;
   const auto lag_plan = plan_sites(three_sites(92, 0.010, 0.010), kConfigs, "lag");
   test::StallWitness witness;
-  const auto lagged = run_sites(lag_plan, {out("lag_10ms"), std::nullopt, {}});
+  const auto lagged = run_sites(lag_plan, {out("lag_10ms"), std::nullopt, {}, {}, false});
   const test::MeasuredPlatform machine = witness.finish();
   ASSERT_TRUE(lagged.ok) << lagged.status;
   ASSERT_EQ(lagged.steps, base.steps);
@@ -193,7 +193,7 @@ TEST_F(SitesRun, AFailedRunStillTearsEverythingDown) {
   auto sites = three_sites(93, 0.05, 0.05);
   sites.set_timeout(2.0);
   const auto plan = plan_sites(sites, kConfigs, "timeout");
-  const auto result = run_sites(plan, {out("timeout"), std::nullopt, {}});
+  const auto result = run_sites(plan, {out("timeout"), std::nullopt, {}, {}, false});
   EXPECT_FALSE(result.ok);
   EXPECT_NE(result.status.find("timed out"), std::string::npos) << result.status;
   ASSERT_EQ(result.namespaces.size(), 4u);
