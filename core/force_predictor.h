@@ -63,6 +63,8 @@
 // the servo period), so a rate differenced over their calls is not the specimen's, and a
 // dashpot inside the stiffness basis is collinear with the c column: the fit then drives c to 0
 // and k far off (a damper behind a jittered 60 ms link: k 0.36 of the damper's, 70 % error).
+// For the same reason a shape must depend on the drift's path alone, never on time or on how
+// often it is called (a declared drift in time would advance at the answers' count).
 //   relative_error: sqrt(sum e^2 / sum f_m^2) over the last error_window of answers (one entry a
 //     step: a step without a new answer repeats the last pair), 0 until the window is full or
 //     while sum f_m^2 = 0; exceeded when it is above max_relative_error (> 0).
