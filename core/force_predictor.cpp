@@ -195,10 +195,10 @@ std::string ForcePredictor::rejection() const {
         "lost its stiffness, or the force or drift channel has the wrong sign");
   if (free_damping_ < 0 && k_ > 0)
     add("the measured force lags the measured drift by at least " +
-        three(1e3 * -free_damping_ / k_) + " ms beyond any dashpot (best fit c " +
+        three(1e3 * -free_damping_ / k_) + " ms (-c / k of the best fit, c " +
         three(free_damping_) +
-        " N s/m, held at 0): the model lacks the force "
-        "channel's lag (a load cell or filter)");
+        " N s/m, held at 0; a dashpot lengthens it): the model lacks the force channel's lag (a "
+        "load cell or filter)");
   const double bound = p_.max_relative_error;
   if (bound > 0 && fit_residual_ > 0.5 * bound)
     add("the model's own best fit leaves " + three(100.0 * fit_residual_) +

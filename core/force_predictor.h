@@ -42,8 +42,8 @@
 //     model keeps its last theta). Recursive least squares with forgetting, information form.
 //     What the data said of the model (rejection(), named in a HOLD's reason):
 //       c_free, the fit's c before the c = 0 rule: c_free < 0 means the measured force lags the
-//         measured drift by at least -c_free / k s beyond any dashpot (a load cell's or a
-//         filter's lag the model lacks, or a rate that is not the specimen's);
+//         measured drift by at least -c_free / k s, to first order (a dashpot c_s adds c_s / k):
+//         a load cell's or a filter's lag the model lacks, or a rate that is not the specimen's;
 //       rho = sqrt(max(0, F - theta^T b) / F), F = the forgetting's sum of f_m^2: the accepted
 //         fit's own residual. rho near the relative error: the model's form cannot follow the
 //         force (a term is missing: hysteresis, a lag); rho small under a large relative error:
