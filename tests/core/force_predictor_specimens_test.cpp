@@ -140,6 +140,21 @@ TEST(ForcePredictorSpecimens, ADamperBehindALaggingRigAndAJitteredLinkIsFittedWi
                                    << " relative error " << run.last.relative_error;
 }
 
+TEST(ForcePredictorSpecimens, ADeclaredDashpotIsTheModelsDampingNotPartOfItsShape) {
+  // Started where the declaration is, scaled as the stiffness is (30 % soft: c 0.7 c_s) ...
+  ForcePredictor soft(started_30_percent_soft(), kDt, "damper", damper().get());
+  EXPECT_NEAR(soft.damping(), 0.7 * kDamperC, 1e-9 * kDamperC);
+  // ... unless the predictor's damping is given.
+  PredictorParameters given = started_30_percent_soft();
+  given.damping = 500.0;
+  EXPECT_EQ(ForcePredictor(given, kDt, "damper", damper().get()).damping(), 500.0);
+  // The shape is the spring alone: the rate is the integrator's v, not a difference of calls.
+  PredictorInput in;
+  in.command = 0.01;
+  in.command_velocity = 0.2;
+  EXPECT_NEAR(soft.step(in).predicted, 0.7 * (kDamperK * 0.01 + kDamperC * 0.2), 1e-9 * kDamperK);
+}
+
 TEST(ForcePredictorSpecimens, AForceLaggingPastTheDashpotIsNamedAsTheMissingLagBeforeTheHold) {
   // 50 ms on the load cell: the force lags as a dashpot of 1e4 - 3e5 x 0.05 = -5e3 N s/m would
   // lead, so the best c is negative and held at 0; the bound (5 % here) trips and its reason
