@@ -200,6 +200,7 @@ void Feed::on_header(const runtime::RunHeader& header) {
     v->assign(history_ * static_cast<std::size_t>(actuators_), 0.0);
   for (auto* v : {&samples_.injected, &samples_.round_trip})
     v->assign(history_ * static_cast<std::size_t>(links_), 0.0);
+  setup_diagnostics(header);
   const std::size_t n = setup_spectrum(dt);
   error_ring_.assign(actuators_, std::vector<double>(n, 0.0));
   spectra_.assign(
@@ -210,6 +211,26 @@ void Feed::on_header(const runtime::RunHeader& header) {
   for (auto* v : {&prev_command_, &prev_measured_, &area_, &transposed_area_, &ti_})
     v->assign(actuators_, 0.0);
   events_.assign(std::max<std::size_t>(options_.max_events, 1), runtime::RunEvent{});
+}
+
+// Each link's controller diagnostic channels, from the header's deployment (a CONTROLLER node's
+// DIAGNOSTIC feedback fields), and their room in the sample ring.
+void Feed::setup_diagnostics(const runtime::RunHeader& header) {
+  diagnostic_names_.assign(static_cast<std::size_t>(links_), {});
+  diagnostic_offset_.assign(static_cast<std::size_t>(links_), 0);
+  diagnostics_ = 0;
+  for (int l = 0; l < links_; ++l) {
+    diagnostic_offset_[static_cast<std::size_t>(l)] = diagnostics_;
+    for (const auto& node : header.study().deployment().nodes()) {
+      if (node.id() != header.link_node_ids(l) || !node.has_controller()) continue;
+      for (const auto& f : node.controller().feedback().fields())
+        if (f.role() == config::FrameField::DIAGNOSTIC)
+          diagnostic_names_[static_cast<std::size_t>(l)].push_back(
+              f.name() + (f.unit().empty() ? "" : " (SI; frame " + f.unit() + ")"));
+    }
+    diagnostics_ += diagnostic_names_[static_cast<std::size_t>(l)].size();
+  }
+  samples_.diagnostics.assign(history_ * diagnostics_, 0.0);
 }
 
 // Full-rate tracking indicator and error ring, per actuator.
@@ -275,6 +296,14 @@ void Feed::keep_sample(const runtime::StepRecord& step) {
     const std::size_t i = r * static_cast<std::size_t>(links_) + static_cast<std::size_t>(l);
     s.injected[i] = l < step.links_size() ? step.links(l).injected_lag() * kMs : 0;
     s.round_trip[i] = l < step.links_size() ? step.links(l).round_trip() * kMs : 0;
+    const auto names = diagnostic_names_[static_cast<std::size_t>(l)].size();
+    for (std::size_t c = 0; c < names; ++c) {
+      const bool has = l < step.links_size() &&
+                       static_cast<int>(c) < step.links(l).controller_diagnostics_size();
+      s.diagnostics[r * diagnostics_ + diagnostic_offset_[static_cast<std::size_t>(l)] + c] =
+          has ? step.links(l).controller_diagnostics(static_cast<int>(c))
+              : std::numeric_limits<double>::quiet_NaN();
+    }
   }
   ++samples_total_;
 }
@@ -382,6 +411,7 @@ nlohmann::json Feed::header_json() const {
     h["dof_labels"].push_back((floors ? "floor " : "DOF ") + std::to_string(d + 1));
   for (const auto& node : header_.study().deployment().nodes())
     h["link_labels"][std::to_string(node.id())] = config::NodeSpec::Kind_Name(node.kind());
+  h["diagnostics"] = diagnostic_names_;  // per link: its controller's channel names
   return h;
 }
 
@@ -436,6 +466,12 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
   empty_columns(j, {"command_mm", "measured_mm", "error_mm", "force_N", "ti_mm2"}, actuators_);
   empty_columns(j, {"injected_ms", "round_trip_ms"}, links_);
   empty_columns(j, {"u_mm", "predicted_u_mm", "difference_mm"}, dofs_);
+  j["diagnostics"] = nlohmann::json::array();  // [link][channel]: SI, NaN (null) where absent
+  for (const auto& names : diagnostic_names_) {
+    nlohmann::json channels = nlohmann::json::array();
+    for (std::size_t c = 0; c < names.size(); ++c) channels.push_back(nlohmann::json::array());
+    j["diagnostics"].push_back(channels);
+  }
   const Samples& s = samples_;
   const auto A = static_cast<std::size_t>(actuators_), L = static_cast<std::size_t>(links_);
   const auto D = static_cast<std::size_t>(dofs_);
@@ -459,6 +495,10 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
       j["predicted_u_mm"][d].push_back(s.predicted[r * D + d]);
       j["difference_mm"][d].push_back(s.u[r * D + d] - s.predicted[r * D + d]);
     }
+    for (std::size_t l = 0; l < L; ++l)
+      for (std::size_t c = 0; c < diagnostic_names_[l].size(); ++c)
+        j["diagnostics"][l][c].push_back(
+            s.diagnostics[r * diagnostics_ + diagnostic_offset_[l] + c]);
     j["lateness_ms"].push_back(s.lateness[r]);
     j["overruns"].push_back(s.overruns[r]);
     j["late_feedback"].push_back(s.late[r]);

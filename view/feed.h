@@ -11,7 +11,9 @@
 //             time_s, command_mm, measured_mm, error_mm = (c - m), force_N, tracking indicator
 //             ti_mm2, per DOF the measured response u_mm, the in-process prediction
 //             predicted_u_mm and difference_mm = u - predicted (null where there is no
-//             prediction), injected_ms / round_trip_ms per link, lateness_ms, overruns and late
+//             prediction), injected_ms / round_trip_ms per link, diagnostics[link][channel]
+//             (a controller's DIAGNOSTIC channels, SI; header.diagnostics names them),
+//             lateness_ms, overruns and late
 //             feedback so far. A sample holds the record's values of its step unchanged (only
 //             scaled to mm/ms), so the page can be checked against the record step by step.
 //   ti        tracking indicator (Mercan & Ricles 2007) at full rate, sign chosen so that lag
@@ -121,6 +123,8 @@ class Feed : public runtime::RecordObserver {
     std::vector<std::uint64_t> overruns, late;
     std::vector<double> time, lateness, command, measured, force, ti, injected, round_trip;
     std::vector<double> u, predicted;  // per DOF, mm (predicted: NaN where there is none)
+    // A controller link's diagnostic channels (SI), r * diagnostics_ + diagnostic_offset_[l] + c.
+    std::vector<double> diagnostics;
   };
   // Measured minus predicted at the compared samples, per DOF, mm.
   struct Difference {
@@ -145,6 +149,7 @@ class Feed : public runtime::RecordObserver {
   // The prediction at `step` for `dof` (mm), NaN where there is none.
   double predicted(std::int64_t step, int dof) const;
   std::size_t setup_spectrum(double dt);
+  void setup_diagnostics(const runtime::RunHeader& header);
   void compute_spectrum(const runtime::StepRecord& step);
   nlohmann::json header_json() const;
   nlohmann::json status_json() const;
@@ -164,6 +169,11 @@ class Feed : public runtime::RecordObserver {
   nlohmann::json context_;
   std::int64_t stride_ = 1;
   int actuators_ = 0, links_ = 0, dofs_ = 0;
+  // Per link: its controller's DIAGNOSTIC channels (names, in layout order) and where they start
+  // in a sample row; diagnostics_: all links' channels.
+  std::vector<std::vector<std::string>> diagnostic_names_;
+  std::vector<std::size_t> diagnostic_offset_;
+  std::size_t diagnostics_ = 0;
 
   std::vector<double> prediction_;  // [row * prediction_dofs_ + dof], mm; row = step / stride
   std::int64_t prediction_stride_ = 1;

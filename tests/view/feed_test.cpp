@@ -189,6 +189,38 @@ TEST(Feed, AHoldEventAndTheFooterSetTheFailSafeState) {
   EXPECT_TRUE(feed.finished());
 }
 
+// A controller link's diagnostic channels are named in the header (from its layout) and drawn
+// from each kept step's link sample, unchanged.
+TEST(Feed, AControllersDiagnosticChannelsAreNamedAndSampled) {
+  Feed feed;
+  runtime::RecordEntry h = header();
+  auto& node = *h.mutable_header()->mutable_study()->mutable_deployment()->add_nodes();
+  node.set_id(2);
+  node.set_kind(config::NodeSpec::CONTROLLER);
+  for (const char* name : {"task_time", "supply_pressure"}) {
+    auto& f = *node.mutable_controller()->mutable_feedback()->add_fields();
+    f.set_name(name);
+    f.set_role(config::FrameField::DIAGNOSTIC);
+  }
+  feed.add(h);
+  for (std::int64_t k = 0; k < 30; ++k) {  // every 10th step kept: 0, 10, 20
+    runtime::RecordEntry e = step(k);
+    e.mutable_step()->mutable_links(1)->add_controller_diagnostics(0.0004 + 1e-5 * k);
+    e.mutable_step()->mutable_links(1)->add_controller_diagnostics(2.1e7);
+    feed.add(e);
+  }
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  ASSERT_EQ(j["header"]["diagnostics"].size(), 2u);  // per link: none on node 1
+  EXPECT_TRUE(j["header"]["diagnostics"][0].empty());
+  EXPECT_EQ(j["header"]["diagnostics"][1][1], "supply_pressure");
+  const auto& d = j["samples"]["diagnostics"];
+  ASSERT_EQ(d[1].size(), 2u);
+  ASSERT_EQ(d[1][0].size(), 3u);
+  EXPECT_DOUBLE_EQ(d[1][0][2].get<double>(), 0.0004 + 1e-5 * 20);
+  EXPECT_DOUBLE_EQ(d[1][1][0].get<double>(), 2.1e7);
+}
+
 // A controller node's hold reaches the page from the footer: its link line and each HOLD frame,
 // answer and STOP, in order.
 TEST(Feed, AControllersHoldIsShownFrameByFrame) {

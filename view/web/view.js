@@ -124,6 +124,11 @@ function buildCharts() {
   }
   h.links.forEach((id, l) => V.plots.link.push(timePlot(links, 'lag, ' + linkLabel(id),
     'lag (ms)', ['injected (ms)', 'measured round trip (ms)'], ['#2a8f2a', '#d1451b'])));
+  // A controller link's own diagnostics (task time, overruns, valve, pressure...), one chart each.
+  V.plots.diag = [];
+  (h.diagnostics || []).forEach((names, l) => names.forEach((name, ch) =>
+    V.plots.diag.push({ l, ch, plot: timePlot(links, 'controller diagnostic, ' + linkLabel(h.links[l]),
+      name, [name], [COLORS[ch % COLORS.length]]) })));
   V.plots.deadlines = timePlot(links, 'overruns and late feedback so far', 'steps (count)',
     ['overruns (count)', 'late feedback (count)'], ['#c0221b', '#8e44ad']);
   V.plots.lateness = timePlot(links, 'lateness of each step (> 0 = overrun)', 'lateness (ms)', ['lateness (ms)'], ['#555']);
@@ -138,6 +143,7 @@ function reset(header, context) {
     V.cols[k] = Array.from({ length: header.actuators }, () => []);
   for (const k of ['injected_ms', 'round_trip_ms'])
     V.cols[k] = Array.from({ length: header.links.length }, () => []);
+  V.cols.diagnostics = (header.diagnostics || []).map(names => names.map(() => []));
   $('run').textContent = header.study + ' · case ' + header.case + ' · ' + header.clock.replace('_', ' ') +
     ' · dt ' + (header.dt_s * 1e3) + ' ms · run ' + header.run_id;
   const cd = (context && context.critical_delay) || {};
@@ -154,8 +160,10 @@ function merge(u) {
   if (u.header) reset(u.header, u.context);
   if (!V.cols) return;
   const s = u.samples;
+  if (s && s.diagnostics)  // [link][channel][sample]: two levels deep
+    s.diagnostics.forEach((chs, l) => chs.forEach((col, ch) => append(V.cols.diagnostics[l][ch], col)));
   if (s) for (const k of Object.keys(V.cols)) {
-    if (!s[k]) continue;
+    if (!s[k] || k === 'diagnostics') continue;
     if (Array.isArray(V.cols[k][0]) || (V.cols[k].length && Array.isArray(s[k][0])))
       s[k].forEach((col, i) => append(V.cols[k][i], col));
     else append(V.cols[k], s[k]);
@@ -245,6 +253,7 @@ function draw() {
     V.plots.act.forEach((p, a) => drawActuator(a, p, t, idx, xy));
     drawResponse(t, idx);
     V.plots.link.forEach((p, l) => p.setData([t, at(c.injected_ms[l], idx), at(c.round_trip_ms[l], idx)]));
+    V.plots.diag.forEach(d => d.plot.setData([t, at(c.diagnostics[d.l][d.ch], idx)]));
     V.plots.deadlines.setData([t, at(c.overruns, idx), at(c.late_feedback, idx)]);
     V.plots.lateness.setData([t, at(c.lateness_ms, idx)]);
     V.drawn = { i0, i1, steps: at(c.step, idx) };
