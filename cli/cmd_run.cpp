@@ -100,14 +100,15 @@ void run_perturbed(const config::Study& study, const std::filesystem::path& base
 // split, its damping, the motion: everything before the first case) in s, and the cases' run
 // (each case's checks, integrator set-up, steps and record, end to end) as its total over the
 // steps taken by every case: "timing: set-up S s; C cases, N steps in R s: P us a step end to end"
-// with P = R / N (1e6 us/s). steady_clock, wall time.
-void print_timing(double setup_s, double run_s, const analysis::StudyOutcome& outcome) {
+// with P = R / N (1e6 us/s). steady_clock, wall time. With --json on stderr: stdout is the JSON.
+void print_timing(double setup_s, double run_s, const analysis::StudyOutcome& outcome,
+                  std::ostream& out) {
   std::size_t steps = 0;
   for (const analysis::CaseOutcome& c : outcome.cases) steps += c.simulation.steps();
-  std::cout << "timing: set-up " << core::format_number(setup_s) << " s; " << outcome.cases.size()
-            << " cases, " << steps << " steps in " << core::format_number(run_s) << " s: "
-            << core::format_number(steps > 0 ? 1e6 * run_s / static_cast<double>(steps) : 0.0)
-            << " us a step end to end\n";
+  out << "timing: set-up " << core::format_number(setup_s) << " s; " << outcome.cases.size()
+      << " cases, " << steps << " steps in " << core::format_number(run_s)
+      << " s: " << core::format_number(steps > 0 ? 1e6 * run_s / static_cast<double>(steps) : 0.0)
+      << " us a step end to end\n";
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -133,7 +134,7 @@ void run(const RunOptions& o) {
   const double run_s = seconds_since(cases_started);
   write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
   write_benchmark_outputs(prepared, outcome, out, !o.results.no_plots, o.results.json);
-  print_timing(setup_s, run_s, outcome);
+  print_timing(setup_s, run_s, outcome, o.results.json ? std::cerr : std::cout);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
   fail_if_unstable(outcome, o.results.allow_unstable);
 }
