@@ -100,7 +100,7 @@ void run_perturbed(const config::Study& study, const std::filesystem::path& base
 // split, its damping, the motion: everything before the first case) in s, and the cases' run
 // (each case's checks, integrator set-up, steps and record, end to end) as its total over the
 // steps taken by every case: "timing: set-up S s; C cases, N steps in R s: P us a step end to end"
-// with P = R / N (1e6 us/s). steady_clock, wall time. With --json on stderr: stdout is the JSON.
+// with P = R / N (1e6 us/s). steady_clock, wall time. Not with --json: its output is the JSON.
 void print_timing(double setup_s, double run_s, const analysis::StudyOutcome& outcome,
                   std::ostream& out) {
   std::size_t steps = 0;
@@ -134,7 +134,7 @@ void run(const RunOptions& o) {
   const double run_s = seconds_since(cases_started);
   write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
   write_benchmark_outputs(prepared, outcome, out, !o.results.no_plots, o.results.json);
-  print_timing(setup_s, run_s, outcome, o.results.json ? std::cerr : std::cout);
+  if (!o.results.json) print_timing(setup_s, run_s, outcome, std::cout);
   if (o.perturbed > 0) run_perturbed(study, config_path.parent_path(), o, out);
   fail_if_unstable(outcome, o.results.allow_unstable);
 }
