@@ -219,18 +219,6 @@ CLI::Validator range_validator(core::Quantity quantity, bool seconds) {
 CLI::Validator seconds_in(core::Quantity quantity) { return range_validator(quantity, true); }
 CLI::Validator in_range(core::Quantity quantity) { return range_validator(quantity, false); }
 
-CLI::Validator finite_in(double min, double max) {
-  return CLI::Validator(
-      [min, max](const std::string& input) -> std::string {
-        const auto number = core::parse_finite(input);
-        if (!number) return fmt::format("'{}' is not a finite number", core::printable(input));
-        if (*number < min || *number > max)
-          return fmt::format("{:g} is outside [{:g}, {:g}]", *number, min, max);
-        return "";
-      },
-      fmt::format("FLOAT in [{:g} - {:g}]", min, max));  // as CLI::Range says it
-}
-
 std::optional<std::string> closest(const std::string& word,
                                    const std::vector<std::string>& candidates) {
   std::optional<std::string> best;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "analysis/study_run.h"
+#include "runtime/node/node_main.h"
 #include "study/ranges.h"
 
 namespace rths::cli {
@@ -81,10 +82,8 @@ std::chrono::steady_clock::time_point seconds_from_now(double seconds);
 CLI::Validator seconds_in(core::Quantity quantity);
 // A plain number flag checked against its quantity's range rule (counts, fractions, CPUs...).
 CLI::Validator in_range(core::Quantity quantity);
-// A number flag in [min, max], finite: CLI::Range (and NonNegativeNumber) let "nan" through, as
-// every comparison with NaN is false; this refuses it at parse time, "--rate: 'nan' is not a
-// finite number", exit 2.
-CLI::Validator finite_in(double min, double max);
+// A number flag in [min, max], finite (runtime/node/node_main.h: every program's flags).
+using runtime::finite_in;
 
 // The candidate closest to `word` by edit distance, when close enough to be a slip (at most a
 // third of the word's length, and at least 1 edit allowed).

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "controller_emulator/controller_emulator.h"
+#include "runtime/node/node_main.h"
 #include "study/study.h"
 
 int main(int argc, char** argv) {
@@ -20,15 +21,20 @@ int main(int argc, char** argv) {
   app.add_option("--case", case_name, "the case whose actuators it runs (default: reference)");
   app.add_option("--answer-frames", answer_frames,
                  "answer this many command frames, then go silent (a fault drill)");
-  app.add_option("--idle-timeout", idle_timeout, "s without a frame before it leaves (exit 1)");
+  app.add_option("--idle-timeout", idle_timeout, "s without a frame before it leaves (exit 1)")
+      ->check(rths::runtime::finite_in(0.0, 86400.0));
   app.add_option("--answer-lag-ms", answer_lag_ms,
                  "each answer leaves this many ms after its frame arrived (an injected link lag)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(rths::runtime::finite_in(0.0, 60000.0));
   app.add_option("--answer-period-ms", answer_period_ms,
                  "answer at most one frame per this many ms, in order: a controller slower than "
                  "the host, which falls behind (a fault drill)")
-      ->check(CLI::NonNegativeNumber);
-  CLI11_PARSE(app, argc, argv);
+      ->check(rths::runtime::finite_in(0.0, 60000.0));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;  // bad usage is exit 2, as the header says
+  }
   try {
     const std::filesystem::path path = std::filesystem::absolute(config);
     rths::controller_emulator::ControllerEmulator emulator(

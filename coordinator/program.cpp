@@ -14,6 +14,7 @@
 
 #include "rt_check/check.h"
 #include "runtime/launch/launch.h"
+#include "runtime/node/node_main.h"
 #include "runtime/node/plan.h"
 #include "runtime/record/node_health.h"
 #include "security/check.h"
@@ -72,8 +73,8 @@ std::string summary_text(const RunOutcome& o) {
         << " %, as of each emulator's last heartbeat)\n";
   // Each node's own transport drops (its heartbeat's count) beside its rejects.
   for (const runtime::NodeRejects& n : o.node_rejects)
-    out << n.label() << " DDS messages rejected: " << reject_text(n.rejected()) << ", unauthenticated "
-        << n.rejected().unauthenticated()
+    out << n.label() << " DDS messages rejected: " << reject_text(n.rejected())
+        << ", unauthenticated " << n.rejected().unauthenticated()
         << (n.final() ? "" : " (as of its last heartbeat; no report on STOP)") << "\n";
   for (const runtime::NodeRejects& n : o.node_rejects)
     out << runtime::controller_link_text(n) << runtime::answer_age_text(n);
@@ -168,7 +169,7 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
   app.add_option("--platform-seconds", a.platform.seconds,
                  "real time: s of platform measurement before the run (default 3; 0 = none, "
                  "with --accept-platform)")
-      ->check(CLI::Range(0.0, 20.0));
+      ->check(runtime::finite_in(0.0, 20.0));
   app.add_flag("--accept-platform", a.platform.accept,
                "real time: run even when the platform check refuses the deployment (recorded)");
   app.add_option("--config", a.config_path, "study config (text format)")->required();

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "core/number_text.h"
 #include "runtime/node/node_loop.h"
 #include "runtime/node/plan.h"
 #include "security/check.h"
@@ -125,6 +126,18 @@ int node_main(int argc, char** argv, const std::string& program, const ServiceFa
     std::cerr << program << " (node " << a.node_id << "): " << e.what() << "\n";
     return 3;
   }
+}
+
+CLI::Validator finite_in(double min, double max) {
+  return CLI::Validator(
+      [min, max](const std::string& input) -> std::string {
+        const auto number = core::parse_finite(input);
+        if (!number) return fmt::format("'{}' is not a finite number", core::printable(input));
+        if (*number < min || *number > max)
+          return fmt::format("{:g} is outside [{:g}, {:g}]", *number, min, max);
+        return "";
+      },
+      fmt::format("FLOAT in [{:g} - {:g}]", min, max));  // as CLI::Range says it
 }
 
 }  // namespace rths::runtime

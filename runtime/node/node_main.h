@@ -11,6 +11,8 @@
 //             [--secret-file FILE | --insecure]  (the run secret, security/run_secret.h; none
 //             and neither DDS Security nor --insecure: exit 2 before DDS starts)
 
+#include <CLI/CLI.hpp>
+
 #include <functional>
 #include <memory>
 #include <string>
@@ -23,5 +25,10 @@ using ServiceFactory =
     std::function<std::unique_ptr<NodeService>(std::int32_t node_id, const std::string& run_id)>;
 
 int node_main(int argc, char** argv, const std::string& program, const ServiceFactory& factory);
+
+// A number flag in [min, max], finite, for every program's flags: CLI::Range (and
+// NonNegativeNumber) let "nan" through, as every comparison with NaN is false; this refuses it at
+// parse time, "--rate: 'nan' is not a finite number", exit 2.
+CLI::Validator finite_in(double min, double max);
 
 }  // namespace rths::runtime

@@ -38,6 +38,28 @@ TEST(FlagRanges, NonFiniteValuesAreRefusedAtParseTimeNamingTheFlag) {
   }
 }
 
+// The node-side programs take the same check: the coordinator's --platform-seconds and the
+// controller emulator's times refuse NaN and infinities at parse time too.
+TEST(FlagRanges, TheCoordinatorAndTheControllerEmulatorRefuseNonFiniteTimes) {
+  const std::string config = (kSource / "configs/paper_frame_controller.textproto").string();
+  const std::string emulator =
+      std::string(RTHS_CONTROLLER_EMULATOR) + " --config " + config + " --node-id 2 ";
+  const std::vector<std::pair<std::string, std::string>> commands{
+      {std::string(RTHS_COORDINATOR) + " --config " + config + " --platform-seconds nan",
+       "--platform-seconds"},
+      {emulator + "--answer-lag-ms nan", "--answer-lag-ms"},
+      {emulator + "--answer-period-ms inf", "--answer-period-ms"},
+      {emulator + "--idle-timeout nan", "--idle-timeout"},
+  };
+  for (const auto& [command, flag] : commands) {
+    const Outcome o = rths::test::run_command_line(command);
+    EXPECT_EQ(o.exit_code, 2) << command << ": " << o.output;
+    EXPECT_NE(o.output.find("is not a finite number"), std::string::npos)
+        << command << ": " << o.output;
+    EXPECT_NE(o.output.find(flag), std::string::npos) << command << ": " << o.output;
+  }
+}
+
 // The model's damping error is its damping ratio (the specimen's own is taken as 0), so >= 0:
 // the range says so at parse time, and what it allows the analysis takes.
 TEST(FlagRanges, StabilitysDampingErrorRangeAgreesWithItsLaterCheck) {
