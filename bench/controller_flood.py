@@ -77,6 +77,14 @@ def one_run(args, workdir, text, flood, index):
     return launch.returncode, launch.stdout + launch.stderr
 
 
+def hold_line(output):
+    """The summary's line naming the controller's HOLD."""
+    for line in output.splitlines():
+        if "controller:" in line:
+            return line.strip()[:400]
+    return "?"
+
+
 def judge(output):
     """(stopped by, overruns, wrong-source datagrams) from a launch's summary."""
     overruns = re.search(r"overruns (\d+)", output)
@@ -111,6 +119,9 @@ def main():
                     text = study(args.seconds, SETTINGS[name], args.domain, 47360)
                     code, output = one_run(args, workdir, text, flood, index)
                     tally[flood].append((code,) + judge(output))
+                    if tally[flood][-1][1] == "link HOLD":
+                        print("  %s run %d: %s" % ("flood" if flood else "quiet", index,
+                                                 hold_line(output)))
             for flood in (False, True):
                 runs = tally[flood]
                 stops = [r[1] for r in runs if r[1] != "completed"]
