@@ -295,7 +295,7 @@ void validate_deployment(const config::Deployment& d, bool allow_long_lag,
     require_in(Quantity::kCpu, d.loop_cpu(), at + "loop_cpu", source);
   if (d.realtime_priority() > 0 || d.realtime_priority() < -1) {
     require_in(Quantity::kFifoPriority, d.realtime_priority(),
-               at + "realtime_priority (0: the default where allowed, -1: off)", source);
+               at + "realtime_priority (0 or -1: off)", source);
     require(d.clock() == config::Deployment::REAL_TIME, source,
             "deployment.realtime_priority applies to clock: REAL_TIME only (a lockstep run "
             "has no deadline to keep)");

@@ -249,27 +249,25 @@ bool may_raise_to(int priority) {
 }  // namespace
 
 int realtime_priority(const config::Deployment& d) {
-  if (d.realtime_priority() > 0) return d.realtime_priority();
-  if (d.realtime_priority() < 0 || d.clock() != config::Deployment::REAL_TIME ||
-      d.wait_policy() == config::WAIT_SPIN || !may_raise_to(kDefaultFifoPriority))
-    return 0;
-  return kDefaultFifoPriority;
+  return d.realtime_priority() > 0 && d.clock() == config::Deployment::REAL_TIME &&
+                 d.wait_policy() != config::WAIT_SPIN
+             ? d.realtime_priority()
+             : 0;
 }
 
 std::string realtime_priority_text(const config::Deployment& d) {
+  if (d.clock() != config::Deployment::REAL_TIME) return "off (lockstep)";
   if (d.realtime_priority() > 0) return fmt::format("SCHED_FIFO {} (set)", d.realtime_priority());
   if (d.realtime_priority() < 0) return "off (realtime_priority: -1)";
-  if (d.clock() != config::Deployment::REAL_TIME) return "off (lockstep)";
-  if (d.wait_policy() == config::WAIT_SPIN)
-    return "off (WAIT_SPIN: a spinning FIFO loop would "
-           "shut out the DDS threads)";
-  if (!may_raise_to(kDefaultFifoPriority))
+  if (!may_raise_to(kRecommendedFifoPriority))
     return fmt::format(
-        "off (this process may not raise itself to SCHED_FIFO {}: run as root, "
-        "with CAP_SYS_NICE or an RLIMIT_RTPRIO of at least {})",
-        kDefaultFifoPriority, kDefaultFifoPriority);
-  return fmt::format("SCHED_FIFO {} (the default; realtime_priority: -1 turns it off)",
-                     kDefaultFifoPriority);
+        "off (unset; this process could not raise itself: it needs root, "
+        "CAP_SYS_NICE or an RLIMIT_RTPRIO of {})",
+        kRecommendedFifoPriority);
+  return fmt::format(
+      "off (unset: realtime_priority: {} keeps a loaded host's other work off the "
+      "loop, docs/realtime.md)",
+      kRecommendedFifoPriority);
 }
 
 double max_overrun_fraction(const config::Deployment& d) {

@@ -89,15 +89,16 @@ double feedback_wait_fraction(const config::Deployment& d);
 bool awaits_answers(const config::Deployment& d, const config::NodeSpec& node, double dt);
 WaitPolicy wait_policy(const config::Deployment& d);
 // The SCHED_FIFO priority a run's real-time threads take (runtime/rt/fifo.h), 0 = none:
-// realtime_priority when set (1-98); -1 none; unset (0), kDefaultFifoPriority in a real-time run
-// that does not spin where this process may raise itself (root, or RLIMIT_RTPRIO at least that),
-// none otherwise. A loaded host's other threads then cannot delay the loop: beside two builds a
-// real-time dry run missed its deadlines in 6 of 6 runs unprioritised and in 0 of 6 at 50
-// (bench/controller_flood.py, docs/controller.md).
-inline constexpr int kDefaultFifoPriority = 50;
+// realtime_priority when set (1-98) in a real-time run that does not spin; unset (0) or -1,
+// none. Opt-in, not a default: several runs raised on one small host (a test suite's, at -j2)
+// exhaust the kernel's real-time bandwidth (95 % a second) and are frozen together for tens of
+// ms, where ordinary threads would only have been delayed. kRecommendedFifoPriority is what the
+// pre-run check recommends: beside two builds a real-time dry run missed its deadlines in 6 of 6
+// runs unprioritised and in 0 of 6 at 50 (bench/controller_flood.py, docs/controller.md).
+inline constexpr int kRecommendedFifoPriority = 50;
 int realtime_priority(const config::Deployment& d);
-// "SCHED_FIFO 50 (the default; realtime_priority: -1 turns it off)", "SCHED_FIFO 20 (set)",
-// "off (...why)": how the run's threads will be scheduled, for the pre-run check.
+// "SCHED_FIFO 20 (set)", "off (unset: realtime_priority: 50 keeps ...)", "off (lockstep)": how
+// the run's threads will be scheduled, and the recommendation, for the pre-run check.
 std::string realtime_priority_text(const config::Deployment& d);
 double max_overrun_fraction(const config::Deployment& d);  // < 0: not checked
 double min_answer_fraction(const config::Deployment& d);   // < 0: not checked

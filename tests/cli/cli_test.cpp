@@ -396,14 +396,14 @@ TEST(CliTest, ExportWritesTheControllersHoldBesideEachOutput) {
     e->set_verdict(kind == rths::runtime::HoldEntry::ANSWER ? "held" : "");
   }
   const auto record = dir / "held.rthsrec";
-  std::ofstream(record, std::ios::binary) << crafted_record(
-      {crafted_header(0.01), crafted_step(0, 0), crafted_step(1, 0.01), footer});
+  std::ofstream(record, std::ios::binary)
+      << crafted_record({crafted_header(0.01), crafted_step(0, 0), crafted_step(1, 0.01), footer});
   const Outcome o = run("export " + record.string() + " --csv " + (dir / "held.csv").string() +
                         " --h5 " + (dir / "held.h5").string() + " --json");
   const std::size_t open = o.output.find('{');
   ASSERT_NE(open, std::string::npos) << o.output;
-  const auto j = nlohmann::json::parse(o.output.substr(open, o.output.rfind('}') + 1 - open),
-                                       nullptr, false);
+  const auto j =
+      nlohmann::json::parse(o.output.substr(open, o.output.rfind('}') + 1 - open), nullptr, false);
   ASSERT_FALSE(j.is_discarded()) << o.output;
   EXPECT_EQ(j["hold_tables"].size(), 2u) << o.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "held_hold.h5"));

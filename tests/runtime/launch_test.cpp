@@ -133,7 +133,8 @@ TEST(Launch, ReplaysAreDroppedAndCountedPerSideInTheSummaryAndTheExport) {
                              test::reference_result(test::read_file(config), "lag_shift_14ms"));
   for (const char* node : {"node 1 \\(substructure\\)", "node 2 \\(actuator emulator\\)"})
     EXPECT_TRUE(std::regex_search(
-        o.out, std::regex(std::string(node) + " DDS messages rejected: [^\n]*unauthenticated [1-9]")))
+        o.out,
+        std::regex(std::string(node) + " DDS messages rejected: [^\n]*unauthenticated [1-9]")))
         << node << "\n"
         << o.out;
   const Output exported =

@@ -504,8 +504,7 @@ TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
   EXPECT_NE(error_of(base + "deployment { step_timeout: -1 }").find("deployment.step_timeout"),
             std::string::npos);
   EXPECT_NE(error_of(base + "deployment { clock: REAL_TIME realtime_priority: 99 }")
-                .find("deployment.realtime_priority (0: the default where allowed, -1: off) = "
-                      "99 is outside [1, 98]"),
+                .find("deployment.realtime_priority (0 or -1: off) = 99 is outside [1, 98]"),
             std::string::npos);
   EXPECT_NE(error_of(base + "deployment { realtime_priority: 80 }").find("clock: REAL_TIME only"),
             std::string::npos);
@@ -514,7 +513,7 @@ TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
                 .find("WAIT_SLEEP_THEN_SPIN"),
             std::string::npos);
   EXPECT_EQ(error_of(base + "deployment { clock: REAL_TIME realtime_priority: 80 }"), "");
-  // -1 turns the default priority off, in any clock and wait policy; -2 is no priority.
+  // -1 is off too, in any clock and wait policy; -2 is no priority.
   EXPECT_EQ(error_of(base + "deployment { clock: REAL_TIME realtime_priority: -1 "
                             "wait_policy: WAIT_SPIN }"),
             "");
