@@ -12,42 +12,14 @@
 #include <thread>
 
 #include "link_text.h"
+#include "test_controller.h"
 
 namespace rths::controller_node {
 namespace {
 
 using Outcome = ControllerExchange::Outcome;
 
-// The controller's end of the link.
-struct Controller {
-  config::ControllerLink link;
-  UdpLink udp;
-  explicit Controller(const config::ControllerLink& l)
-      : link(l), udp(l.peer_address(), l.peer_port(), l.local_address(), l.local_port()) {}
-
-  std::vector<std::uint8_t> feedback(std::int64_t counter, double drift, double force,
-                                     std::int64_t status = 0) {
-    FrameValues v;
-    v.counter = counter;
-    v.status = status;
-    v.measured_displacement = {drift};
-    v.measured_force = {force};
-    std::vector<std::uint8_t> bytes;
-    EXPECT_TRUE(encode(link.feedback(), v, bytes));
-    return bytes;
-  }
-  // The next command frame, or a frame with counter 0 when none came within `seconds`.
-  FrameValues take(double seconds = 2.0) {
-    FrameValues v;
-    Datagram d;
-    const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
-    while (!udp.try_receive(d))
-      if (!udp.wait(until)) return v;
-    EXPECT_EQ(decode(link.command(), d.bytes.data(), d.size, 1, v), FrameVerdict::kOk);
-    return v;
-  }
-  void send(const std::vector<std::uint8_t>& frame) { udp.send(frame.data(), frame.size()); }
-};
+using Controller = test::TestController;
 
 ExchangeSettings settings(double timeout = 0.5, bool real_time = false, int window = 1) {
   ExchangeSettings s;

@@ -19,39 +19,14 @@
 
 #include "controller_node/controller_exchange.h"
 #include "link_text.h"
+#include "test_controller.h"
 
 namespace rths::controller_node {
 namespace {
 
 using Outcome = ControllerExchange::Outcome;
 
-// The controller's end of the link (a socket bound to the peer's port, connected to the node).
-struct Controller {
-  config::ControllerLink link;
-  UdpLink udp;
-  explicit Controller(const config::ControllerLink& l)
-      : link(l), udp(l.peer_address(), l.peer_port(), l.local_address(), l.local_port()) {}
-  void answer(std::int64_t counter, double drift, double force, std::int64_t status = 0) {
-    FrameValues v;
-    v.counter = counter;
-    v.status = status;
-    v.measured_displacement = {drift};
-    v.measured_force = {force};
-    std::vector<std::uint8_t> bytes;
-    ASSERT_TRUE(encode(link.feedback(), v, bytes));
-    udp.send(bytes.data(), bytes.size());
-  }
-  // The next command frame within `seconds`, or counter 0.
-  FrameValues take(double seconds = 2.0) {
-    FrameValues v;
-    Datagram d;
-    const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
-    while (!udp.try_receive(d))
-      if (!udp.wait(until)) return v;
-    EXPECT_EQ(decode(link.command(), d.bytes.data(), d.size, 1, v), FrameVerdict::kOk);
-    return v;
-  }
-};
+using Controller = test::TestController;
 
 ExchangeSettings settings(double jump_floor = 0.0) {
   ExchangeSettings s;
