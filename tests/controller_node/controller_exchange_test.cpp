@@ -34,15 +34,7 @@ ExchangeSettings settings(double timeout = 0.5, bool real_time = false, int wind
   return s;
 }
 
-// What the node makes of the link within `seconds`: the first answer or fault, else kNone.
-ControllerExchange::Answer await_answer(ControllerExchange& node, double seconds = 2.0) {
-  const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
-  for (;;) {
-    auto a = node.next(monotonic_ns());
-    if (a.outcome != Outcome::kNone || monotonic_ns() > until) return a;
-    node.wait(std::min(until, monotonic_ns() + 1'000'000));
-  }
-}
+using test::await_answer;
 
 TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedForItsStepWithItsRoundTrip) {
   const auto link = test::controller_link(47100, 47101);

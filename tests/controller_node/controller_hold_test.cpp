@@ -41,14 +41,7 @@ ExchangeSettings settings(double jump_floor = 0.0) {
   return s;
 }
 
-ControllerExchange::Answer await_answer(ControllerExchange& node, double seconds = 2.0) {
-  const std::int64_t until = monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
-  for (;;) {
-    auto a = node.next(monotonic_ns());
-    if (a.outcome != Outcome::kNone || monotonic_ns() > until) return a;
-    node.wait(std::min(until, monotonic_ns() + 1'000'000));
-  }
-}
+using test::await_answer;
 
 // Steps the hold until it ends or `seconds` pass; true when it ended.
 bool hold_for(ControllerExchange& node, double seconds) {

@@ -4,12 +4,16 @@
 //   feedback(counter, drift m, force N, status) -> a feedback frame's bytes
 //   send(bytes), answer(counter, drift, force, status): one datagram to the node
 //   take(seconds) -> the next command frame, or one with counter 0 when none came in time
+// await_answer(node, seconds): what the node makes of its link within `seconds`, the first answer
+// or fault, else kNone.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
+#include "controller_node/controller_exchange.h"
 #include "controller_node/frame.h"
 #include "controller_node/udp_link.h"
 
@@ -48,5 +52,18 @@ struct TestController {
     return v;
   }
 };
+
+inline controller_node::ControllerExchange::Answer await_answer(
+    controller_node::ControllerExchange& node, double seconds = 2.0) {
+  const std::int64_t until =
+      controller_node::monotonic_ns() + static_cast<std::int64_t>(seconds * 1e9);
+  for (;;) {
+    auto a = node.next(controller_node::monotonic_ns());
+    if (a.outcome != controller_node::ControllerExchange::Outcome::kNone ||
+        controller_node::monotonic_ns() > until)
+      return a;
+    node.wait(std::min(until, controller_node::monotonic_ns() + 1'000'000));
+  }
+}
 
 }  // namespace rths::test
