@@ -1,7 +1,8 @@
 // blind_record_writer: run records of a rig rths never modelled, written as a lab would write
 // them from docs/records.md ("Format") and proto/runtime.proto (RecordEntry) alone, to score
 // `rths identify` blind (docs/development.md, "Blind records"). It shares no code with identify/,
-// core/ or runtime/: its own integrator, actuator, specimen, sensors, framing and CRC-32C.
+// core/ or runtime/: its own integrator, actuator, specimen and sensors; the framing, CRC-32C,
+// record and truth.json in blind_record.h, shared with third_set_writer.
 //
 // Inputs:  --set tune|report   which held-apart set of cases to write (cases below)
 //          --out DIR           where <case>.rthsrec and truth.json go (created)
@@ -50,6 +51,7 @@
 #include <string>
 #include <vector>
 
+#include "blind_record.h"
 #include "rths/proto/config.pb.h"
 #include "rths/proto/deployment.pb.h"
 #include "rths/proto/runtime.pb.h"
@@ -58,90 +60,8 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kPi = std::numbers::pi;
-constexpr double kG = 9.80665;  // m/s^2 per g (AT2 files are in g)
-
-// ---------- CRC-32C (Castagnoli, reflected polynomial 0x82F63B78, init and final xor ~0) ----------
-
-std::array<std::uint32_t, 256> crc_table() {
-  std::array<std::uint32_t, 256> table{};
-  for (std::uint32_t i = 0; i < 256; ++i) {
-    std::uint32_t c = i;
-    for (int bit = 0; bit < 8; ++bit) c = (c & 1U) ? (c >> 1) ^ 0x82F63B78U : c >> 1;
-    table[i] = c;
-  }
-  return table;
-}
-
-std::uint32_t crc32c(const std::string& bytes) {
-  static const std::array<std::uint32_t, 256> table = crc_table();
-  std::uint32_t c = 0xFFFFFFFFU;
-  for (unsigned char b : bytes) c = table[(c ^ b) & 0xFFU] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFU;
-}
-
-void put_u32(std::string& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFFU));
-}
-
-// One frame per docs/records.md: sync F3 7A 1C B5 | size u32 | crc32c(payload) u32 |
-// crc32c(the 12 bytes before) u32 | payload (one serialised RecordEntry), little-endian.
-std::string frame(const std::string& payload) {
-  std::string head = "\xF3\x7A\x1C\xB5";
-  put_u32(head, static_cast<std::uint32_t>(payload.size()));
-  put_u32(head, crc32c(payload));
-  put_u32(head, crc32c(head));
-  return head + payload;
-}
-
-std::string serialise(const rths::runtime::RecordEntry& entry) {
-  std::string bytes;
-  if (!entry.SerializeToString(&bytes)) throw std::runtime_error("cannot serialise an entry");
-  return bytes;
-}
-
-// ---------- the ground motion ----------
-
-struct Motion {
-  std::string name;           // file stem
-  std::string path;           // absolute
-  std::string file_sha256;    // from data/SHA256SUMS
-  std::vector<double> accel;  // m/s^2 at the run's dt
-};
-
-// The AT2 file (NPTS, DT; values in g) linearly interpolated to dt for `steps` samples.
-Motion read_motion(const fs::path& data_dir, double dt, int steps) {
-  const std::string file = "RSN175_IMPVALL.H_H-E12140.AT2";
-  const fs::path path = fs::absolute(data_dir / "ground_motions" / file);
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path.string());
-  std::string line;
-  std::vector<double> g;
-  double file_dt = 0.0;
-  for (int i = 0; i < 4 && std::getline(in, line); ++i) {
-    const auto at = line.find("DT=");
-    if (at != std::string::npos) file_dt = std::stod(line.substr(at + 3));
-  }
-  double value = 0.0;
-  while (in >> value) g.push_back(value);
-  if (file_dt <= 0.0 || g.empty()) throw std::runtime_error("no DT or samples in " + path.string());
-  Motion motion;
-  motion.name = path.stem().string();
-  motion.path = path.string();
-  std::ifstream sums(data_dir / "SHA256SUMS");
-  while (std::getline(sums, line)) {
-    if (line.size() > 66 && line.find(file) != std::string::npos)
-      motion.file_sha256 = line.substr(0, 64);
-  }
-  if (motion.file_sha256.empty()) throw std::runtime_error("no checksum for " + file);
-  for (int k = 0; k < steps; ++k) {
-    const double s = k * dt / file_dt;
-    const auto i = static_cast<std::size_t>(s);
-    const double w = s - static_cast<double>(i);
-    const double a = i + 1 < g.size() ? (1.0 - w) * g[i] + w * g[i + 1] : g.back();
-    motion.accel.push_back(a * kG);
-  }
-  return motion;
-}
+using blind::Motion;
+using blind::read_motion;
 
 // ---------- the cases: effects, parameters and truths ----------
 
@@ -401,182 +321,31 @@ std::vector<Sample> simulate(const Frame& f, const Rig& rig, const std::vector<d
   return out;
 }
 
-// ---------- the record ----------
-
-rths::config::Study study_as_run(const Frame& f, const Motion& motion, double duration,
-                                 const std::string& run_id) {
-  // The paper's frame as configs/paper_frame.textproto states it, the case run declaring the
-  // 14 ms shift, lockstep over a substructure node (1) and an actuator emulator (2).
-  const std::string text = R"pb(
-    name: "paper_frame"
-    structure {
-      sdof { period: 0.5 mass: 1000 }
-      damping { modal_zeta: 0.05 }
-    }
-    integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }
-    substructuring {
-      experimental_fraction: 0.3333333333333333
-      model { linear {} }
-    }
-    cases { name: "reference" }
-    cases {
-      name: "lag_shift_14ms"
-      delay { shift { delay: 0.014 } }
-    }
-    deployment {
-      clock: LOCKSTEP
-      case_name: "lag_shift_14ms"
-      nodes { id: 1 kind: SUBSTRUCTURE }
-      nodes { id: 2 kind: ACTUATOR_EMULATOR }
-    }
-  )pb";
-  rths::config::Study study;
-  if (!google::protobuf::TextFormat::ParseFromString(text, &study))
-    throw std::runtime_error("the study text does not parse");
-  study.mutable_integrator()->set_dt(f.dt);
-  study.mutable_deployment()->set_run_id(run_id);
-  auto* m = study.mutable_motion();
-  m->set_path(motion.path);
-  m->set_sha256(motion.file_sha256);
-  m->set_duration(duration);
-  return study;
-}
+// ---------- the record and truth.json (blind_record.h) ----------
 
 void write_record(const fs::path& path, const Case& c, const Frame& f, const Motion& motion,
                   double duration) {
-  using rths::runtime::RecordEntry;
   const std::vector<Sample> run = simulate(f, c.rig, motion.accel, c.seed);
-  const std::string run_id = "blind-" + c.name;
-  const rths::config::Study study = study_as_run(f, motion, duration, run_id);
-
-  RecordEntry inputs_entry;
-  rths::config::Study* with_inputs = inputs_entry.mutable_inputs()->mutable_study();
-  *with_inputs = study;
-  auto* embedded = with_inputs->mutable_motion()->mutable_embedded();
-  embedded->set_name(motion.name);
-  embedded->set_dt(f.dt);
-  for (double a : motion.accel) embedded->add_acceleration(a);
-  embedded->set_source_sha256(motion.file_sha256);
-  const std::string inputs_bytes = serialise(inputs_entry);
-
-  const std::int64_t start_ns = 1796205600000000000LL + static_cast<std::int64_t>(c.seed) * 1000;
-  RecordEntry header_entry;
-  auto* h = header_entry.mutable_header();
-  h->set_schema_version(1);
-  h->set_run_id(run_id);
-  *h->mutable_study() = study;
-  h->set_case_name("lag_shift_14ms");
-  h->set_clock("lockstep");
-  h->set_dt(f.dt);
-  h->set_dofs(1);
-  h->set_actuators(1);
-  h->add_link_node_ids(1);
-  h->add_link_node_ids(2);
-  h->set_start_realtime_ns(start_ns);
-  h->set_timestamp_clock("CLOCK_REALTIME");
-  h->set_inputs_crc32c(crc32c(inputs_bytes));
-  const std::string header_frame = frame(serialise(header_entry));
-
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-  out.write("RTHSREC\x02", 8);
-  out << header_frame << frame(inputs_bytes);
-
-  std::mt19937_64 rng(c.seed ^ 0x9E3779B97F4A7C15ULL);
-  std::normal_distribution<double> jitter(0.0, 1.0);
-  const int n = static_cast<int>(run.size());
-  for (int k = 0; k < n; ++k) {
-    if (k % 1000 == 0) out << header_frame;  // before the first step and every 1000th
-    RecordEntry e;
-    auto* s = e.mutable_step();
-    const Sample& r = run[k];
-    const double t = k * f.dt;
-    s->set_step(k);
-    s->set_time(t);
-    s->set_ground_acceleration(motion.accel[k]);
-    s->add_displacement(r.u);
-    s->add_velocity(r.v);
-    s->add_acceleration(r.a);
-    s->add_command(r.command);
-    s->add_realised(r.realised);
-    s->add_measured_force(r.force);
-    const double wall = 2.0e-4 + 2.0e-5 * std::abs(jitter(rng));
-    for (int node = 1; node <= 2; ++node) {
-      auto* l = s->add_links();
-      l->set_node_id(node);
-      if (k == 0) continue;  // step 0 sends nothing: no answer yet
-      const double down = 6.0e-5 + 1.0e-5 * std::abs(jitter(rng));
-      const double up = 7.0e-5 + 1.0e-5 * std::abs(jitter(rng));
-      l->set_answered_step(k);
-      l->set_round_trip(down + up + 2.0e-5);
-      l->set_one_way_down(down);
-      l->set_one_way_up(up);
-      l->set_answers(static_cast<std::uint64_t>(k));
-    }
-    s->set_step_wall(wall);
-    s->set_start_realtime_ns(start_ns + static_cast<std::int64_t>(k) * 250000);
-    s->set_command_latency(1.0e-5);
-    out << frame(serialise(e));
-  }
-  out << header_frame;  // before the footer
-  RecordEntry footer_entry;
-  auto* ft = footer_entry.mutable_footer();
-  ft->set_ok(true);
-  ft->set_status("completed");
-  ft->mutable_counters()->set_steps(static_cast<std::uint64_t>(n - 1));
-  ft->set_wall_seconds(n * 2.5e-4);
-  const char* labels[] = {"node 1 (substructure)", "node 2 (actuator emulator)"};
-  for (int node = 1; node <= 2; ++node) {
-    auto* rej = ft->add_node_rejects();
-    rej->set_node_id(node);
-    rej->set_label(labels[node - 1]);
-    rej->mutable_rejected();
-    rej->set_final(true);
-  }
-  out << frame(serialise(footer_entry));
-  if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
-}
-
-// ---------- truth.json ----------
-
-std::string quoted(const std::string& s) {
-  std::string q = "\"";
-  for (char ch : s) {
-    if (ch == '"' || ch == '\\') q.push_back('\\');
-    q.push_back(ch);
-  }
-  q.push_back('"');
-  return q;
+  blind::RunToRecord to_record{"blind-" + c.name, c.seed, f.dt, duration, &motion, {}};
+  for (const Sample& r : run)
+    to_record.steps.push_back({r.u, r.v, r.a, r.command, r.realised, r.force});
+  blind::write_run_record(path, to_record);
 }
 
 void write_truth(const fs::path& path, const std::vector<Case>& cases, double duration) {
-  std::ofstream out(path);
-  out << std::setprecision(10) << "{\n  \"duration_s\": " << duration << ",\n  \"cases\": [\n";
-  for (std::size_t i = 0; i < cases.size(); ++i) {
-    const Case& c = cases[i];
-    out << "    {\"name\": " << quoted(c.name) << ", \"set\": " << quoted(c.set)
-        << ", \"seed\": " << c.seed << ", \"record\": " << quoted(c.name + ".rthsrec")
-        << ",\n     \"what\": " << quoted(c.truth.what) << ",\n     \"truth\": {\"part\": "
-        << (c.truth.part.empty() ? std::string("null") : quoted(c.truth.part)) << ", \"kinds\": [";
-    for (std::size_t j = 0; j < c.truth.kinds.size(); ++j)
-      out << (j ? ", " : "") << quoted(c.truth.kinds[j]);
-    out << "], \"frequency_hz\": ";
-    if (c.truth.frequency_hz > 0.0)
-      out << c.truth.frequency_hz;
-    else
-      out << "null";
-    out << ", \"library\": [";
-    for (std::size_t j = 0; j < c.truth.library.size(); ++j)
-      out << (j ? ", " : "") << "{\"part\": " << quoted(c.truth.library[j].first)
-          << ", \"effect\": " << quoted(c.truth.library[j].second) << "}";
-    out << "], \"accepted\": [";
-    for (std::size_t j = 0; j < c.truth.accepted.size(); ++j)
-      out << (j ? ", " : "") << "{\"part\": " << quoted(c.truth.accepted[j].first)
-          << ", \"effect\": " << quoted(c.truth.accepted[j].second) << "}";
-    out << "]}}" << (i + 1 < cases.size() ? "," : "") << "\n";
-  }
-  out << "  ]\n}\n";
-  if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
+  std::vector<blind::TruthCase> truths;
+  for (const Case& c : cases)
+    truths.push_back({c.name,
+                      c.set,
+                      c.seed,
+                      c.truth.what,
+                      c.truth.part,
+                      {c.truth.kinds.begin(), c.truth.kinds.end()},
+                      c.truth.frequency_hz,
+                      {c.truth.library.begin(), c.truth.library.end()},
+                      {c.truth.accepted.begin(), c.truth.accepted.end()},
+                      std::nullopt});
+  blind::write_truth(path, truths, duration);
 }
 
 }  // namespace
