@@ -1,28 +1,45 @@
 #pragma once
-// Critical delay of a structure whose experimental parts all lag by one delay tau, with the
-// coupling between modes that the delayed force adds (core/stability.h's modal check ignores it).
+// Critical lags of a structure whose experimental parts come back late, with the coupling between
+// modes that the delayed forces add (core/stability.h's modal check ignores it), with or without
+// a force predictor (core/force_predictor.h) on each part.
 //
-//   M u'' + C u' + K_N u + K_e u(t - tau) = 0,   K_N = K - K_e,  K_e = sum_e k_e b_e b_e^T
+// The loop. Part j (a link) is a specimen k_j, c_j, m_j (N/m, N s/m, kg) on the drift b_j' u,
+// whose measured pair comes back D_j late (round trip plus actuator lag). Uncompensated the
+// integrator gets its whole force late; with a predictor whose model is k^_j, c^_j it gets the
+// model now and the model's error late (core/force_predictor.h: f = k^ u + c^ v + e, e the
+// measured force less the model at the measured drift):
+//   M_N u'' + C_N u' + K_N u + sum_j b_j b_j' [p_j(s) u + h_j(s) e^{-s D_j} u] = 0 (Laplace s)
+//   p_j = k^_j + c^_j s (0 uncompensated),  h_j = (k_j - k^_j) + (c_j - c^_j) s + m_j s^2,
+// K_N = K - sum k_j b_j b_j'; M_N, C_N the numerical part's (study/structure_config.h: the
+// specimens' masses and dashpots are not in the model). At D = 0 this is the whole structure.
 //
-// Inputs: M, C, K (SI) of the whole structure and K_e (N/m, n x n, symmetric positive
-// semi-definite: the experimental parts at their initial stiffness). Output: the smallest tau (s)
-// at which a characteristic root crosses the imaginary axis, the frequency of that crossing, and
-// what was assumed.
-//
-// In the q lowest mass-normalised modes Phi of (M, K) (q = n up to kMaxModes; else the lowest
-// kMaxModes, a truncation the `assumed` text states), A(w) = Phi' (K_N - M w^2 + i w C) Phi.
-// A root crosses at s = i w when det(A(w) + z K~_e) = 0 with z = e^{-i w tau} on the unit circle.
-// With K~_e = Phi' K_e Phi = U S U' (rank m, one per independent experimental part),
-// det(A + z K~_e) = det(A) det(I + z G(w)), G = S^1/2 U' A^-1 U S^1/2 (m x m), so a crossing is
-// a w where an eigenvalue lambda of G has |lambda| = 1; then z = -1 / lambda and
-// tau = ((-arg z) mod 2 pi) / w (the first branch; later ones add 2 pi / w). Crossings are found
-// where the count of |lambda| > 1 changes on a log grid of kGridPoints w from 1e-3 omega_1 to
-// 10 omega_q, each refined by 60 bisections. Stability at tau = 0 is assumed (K_N + K_e = K
-// positive definite, C >= 0). For one DOF, or a K_e and C that the modes diagonalise, this is the
-// modal check's SDOF result.
+// The analysis. In the q lowest M_N-normalised modes Phi of (M_N, K) (q = n up to kMaxModes;
+// else the lowest kMaxModes, a truncation `assumed` states), w_j = Phi' b_j, C~ the modes'
+// damping (core::damping_in_modes: a sparse model's low-rank modal damping included) and
+//   A(w) = Omega^2 - sum k_j w_j w_j' - w^2 I + i w C~ + sum_j w_j w_j' p_j(i w)
+//          + sum_{j fixed} w_j w_j' h_j(i w) e^{-i w D_j}.
+// The parts in S share one varying lag tau (the others fixed at theirs): a root crosses at
+// s = i w when det(A + z W_S H_S W_S') = 0, z = e^{-i w tau}, i.e. (determinant lemma) when an
+// eigenvalue lambda of G(w) = H_S W_S' A(w)^-1 W_S (|S| x |S|) has |lambda| = 1; then
+// z = -1 / lambda and tau = ((-arg z) mod 2 pi) / w (first branch; later ones add 2 pi / w).
+// Crossings are found where the count of |lambda| > 1 changes on a log grid of kGridPoints w from
+// 1e-3 omega_1 to 10 omega_q, each refined by 60 bisections; the first crossing is the smallest
+// tau over them. A grid this fine misses a crossing only where |lambda| touches 1 and turns back.
+//   common lag (S = every part, none fixed): the critical lag when every link lags alike;
+//   per part l (S = {l}): the lag of link l at the first crossing with the others at their own
+//     lags. That start (l lag-free, the others at theirs) is judged by a staircase from the
+//     whole structure (D = 0, stable: K positive definite, C_N + sum c_j b_j b_j' >= 0): each
+//     other part's lag raised from 0 to its own in turn, the earlier ones at theirs, a crossing
+//     before its lag meaning a root has crossed; no root crosses on the way, none is in the right
+//     half-plane at the start. `stable` is the configured lags' verdict by the same staircase.
+// A specimen's mass makes the loop neutral (m_j s^2 delayed); the analysis holds while the
+// delayed inertia stays below the numerical part's (|m_j w_j' w_j| < 1), as for lab specimens.
+// For one DOF, or a K_e and C that the modes diagonalise, the common lag uncompensated is the
+// modal check's SDOF result; with a predictor on one DOF, core::predictor_critical_delay's.
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/structure.h"
 
@@ -38,13 +55,58 @@ struct CoupledStability {
   std::string assumed;
 };
 
-// `modes`: mass-normalised modes of (M, K), ascending (all n, or the lowest ones a sparse solver
-// found). @pre model.mass, damping, stiffness and k_experimental n x n; modes n x (at least 1).
+// Uncompensated, every part's stiffness k_j b_j b_j' summed in K_e (N/m, n x n, symmetric
+// positive semi-definite) at one common lag, no dashpot or mass: the parts are K_e's independent
+// directions. `modes`: M-normalised modes of (M, K), ascending (all n, or the lowest ones a sparse
+// solver found). @pre model.mass and stiffness n x n (damping, or the sparse one); modes n x >= 1.
 CoupledStability coupled_critical_delay(const StructuralModel& model, const Mat& k_experimental,
                                         const Modes& modes);
 
 // Whether the q lowest modes diagonalise K_e and C (to 1e-9 of their diagonals): then the modal
 // check is exact and the coupled analysis adds nothing.
 bool modes_decouple(const StructuralModel& model, const Mat& k_experimental, const Modes& modes);
+
+// One experimental part of the loop (a link), in the header's symbols.
+struct DelayedPart {
+  Vec row;                       // b, n entries: the part's drift is b' u
+  double stiffness = 0.0;        // N/m, k_j at its initial stiffness, > 0
+  double damping = 0.0;          // N s/m, c_j, its dashpot
+  double mass = 0.0;             // kg, m_j
+  bool predicted = false;        // a force predictor holds a model of it
+  double model_stiffness = 0.0;  // N/m, k^_j (predicted)
+  double model_damping = 0.0;    // N s/m, c^_j (predicted)
+  double lag = 0.0;              // s, D_j: the lag of its measured pair, >= 0
+};
+
+struct PartLimit {
+  // s: part l's lag at the first crossing, the others at their lags; empty: none (stable for
+  // every lag of this part), or `crossed_before` says the start already crossed.
+  std::optional<double> critical_lag;
+  double omega = 0.0;  // rad/s at that crossing
+  // >= 0 when the loop has crossed with this part lag-free and the others at their lags: the
+  // part (0-based) whose lag crossed on the staircase, and the lag (s) it crossed at.
+  int crossed_before = -1;
+  double crossed_at = 0.0;
+};
+
+struct CoupledLoopStability {
+  bool stable = false;  // at the parts' own lags
+  // When not stable: the part (0-based) whose lag crossed first on the staircase, and at what
+  // lag (s); -1 when stable.
+  int crossed = -1;
+  double crossed_at = 0.0;
+  std::optional<double> common_critical_lag;  // s, every part at one lag; empty: none
+  double common_omega = 0.0;                  // rad/s
+  std::vector<PartLimit> parts;               // one per part, in order
+  int modes_kept = 0;
+  std::string assumed;
+};
+
+// The header's analysis of `parts` on `model` (M_N, C_N, K). `modes`: M_N-normalised modes of
+// (M_N, K) as above. Throws std::invalid_argument when a part's row is not n long or zero, its
+// stiffness is not > 0, a value is not finite or a lag is negative.
+CoupledLoopStability coupled_loop_stability(const StructuralModel& model,
+                                            const std::vector<DelayedPart>& parts,
+                                            const Modes& modes);
 
 }  // namespace rths::core

@@ -120,12 +120,15 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
   HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps,
                             setup.predictors);
   const bool replayed = !answers.actuator_used.empty() || !answers.storey_used.empty();
-  if (replayed) {
+  const std::size_t steps = motion_at_dt.acceleration.size();
+  if (replayed || !setup.links.empty()) {
     if (!is_explicit(setup.integrator))
-      throw std::invalid_argument(to_string(setup.integrator) +
-                                  " cannot replay a distributed run's answers: it iterates on the "
-                                  "restoring force. Use an explicit integrator");
-    restoring.replay_answers(answers, motion_at_dt.acceleration.size());
+      throw std::invalid_argument(to_string(setup.integrator) + " cannot use " +
+                                  (replayed ? "a distributed run's answers" : "a case's link") +
+                                  ": it iterates on the restoring force. Use an explicit "
+                                  "integrator");
+    restoring.replay_answers(replayed ? answers : link_schedule(setup.links, setup.dt, steps),
+                             steps);
   }
   if (!is_explicit(setup.integrator) && !restoring.repeatable()) {
     throw std::invalid_argument(

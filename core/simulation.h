@@ -24,6 +24,7 @@
 #include "core/force_predictor.h"
 #include "core/ground_motion.h"
 #include "core/integrators.h"
+#include "core/link_answers.h"
 #include "core/substructure.h"
 
 namespace rths::core {
@@ -39,6 +40,9 @@ struct HybridSetup {
   int servo_substeps = 1;          // servo periods per integrator step (core::Actuator)
   // A force predictor per actuator (core/force_predictor.h), or none; empty: none at all.
   std::vector<std::optional<PredictorParameters>> predictors;
+  // The network between the integrator and each actuator's lab (core/link_answers.h), one per
+  // actuator, or none: which answer each step uses. simulate() applies it unless it replays.
+  std::vector<LinkModel> links;
 };
 
 struct SimulationResult {

@@ -1,6 +1,7 @@
 #include "study/study.h"
 
 #include "core/rig_effects.h"
+#include "study/case_link.h"
 #include "study/compensation_config.h"
 #include "study/delay_trace_file.h"
 #include "study/known_enums.h"
@@ -194,6 +195,7 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
   if (study_case.has_force_predictor())
     apply_force_predictor(setup, study_case.force_predictor(),
                           "case '" + study_case.name() + "' force_predictor");
+  apply_case_links(setup, study_case.link(), "case '" + study_case.name() + "' link");
   return setup;
 }
 

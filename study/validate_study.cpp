@@ -207,6 +207,11 @@ void validate_cases(const config::Study& study, const std::string& source) {
       validate_delay_stage(c.delay(j), where + " delay[" + std::to_string(j) + "]", source,
                            study.allow_long_lag());
     }
+    for (int j = 0; j < c.link_size(); ++j) {
+      const std::string link = where + " link[" + std::to_string(j) + "].";
+      validate_link_lag(c.link(j).to_node(), link + "to_node", study.allow_long_lag(), source);
+      validate_link_lag(c.link(j).from_node(), link + "from_node", study.allow_long_lag(), source);
+    }
     for (int j = 0; j < c.compensation_size(); ++j) {
       try {
         validate_compensation(c.compensation(j),

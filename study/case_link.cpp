@@ -1,0 +1,39 @@
+#include "study/case_link.h"
+
+#include <stdexcept>
+
+namespace rths::core {
+
+LinkWay link_way(const config::LinkLag& lag) {
+  LinkWay way;
+  way.one_way_delay = lag.one_way_delay();
+  way.jitter = lag.jitter();
+  way.seed = lag.seed();
+  way.loss = lag.loss();
+  const config::NetworkEmulation& net = lag.network();
+  way.drift_rate = net.drift_rate();
+  way.spike_delay = net.spike_delay();
+  way.spike_every = net.spike_every();
+  way.spike_steps = net.spike_steps();
+  way.drop_first_step = net.drop_first_step();
+  way.drop_steps = net.drop_steps();
+  return way;
+}
+
+void apply_case_links(HybridSetup& setup,
+                      const google::protobuf::RepeatedPtrField<config::CaseLink>& links,
+                      const std::string& where) {
+  setup.links.clear();
+  if (links.empty()) return;
+  const auto actuators = static_cast<int>(setup.partition.actuator_storeys.size());
+  if (links.size() != 1 && links.size() != actuators)
+    throw std::invalid_argument(where + ": " + std::to_string(links.size()) + " link blocks for " +
+                                std::to_string(actuators) +
+                                " actuators: give one for every actuator or one per actuator");
+  for (int a = 0; a < actuators; ++a) {
+    const config::CaseLink& link = links.size() == 1 ? links.Get(0) : links.Get(a);
+    setup.links.push_back({link_way(link.to_node()), link_way(link.from_node())});
+  }
+}
+
+}  // namespace rths::core
