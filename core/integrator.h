@@ -58,7 +58,7 @@ class Integrator {
   virtual IntegratorKind kind() const = 0;
 
  protected:
-  // keep_dense = false: m_, c_ and k0_ stay empty (a sparse scheme keeps its own M, C, K).
+  // keep_dense = false: m_, c_ and k0_ stay empty (an explicit scheme keeps its own algebra).
   Integrator(const StructuralModel& model, double dt, bool keep_dense = true);
   Mat m_, c_, k0_;
   double dt_;

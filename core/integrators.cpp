@@ -1,6 +1,7 @@
 #include "core/integrators.h"
 
 #include "core/exact_zoh.h"
+#include "core/explicit_schemes.h"
 #include "core/sparse_integrators.h"
 
 #include <cmath>
@@ -9,6 +10,8 @@
 #include <stdexcept>
 
 namespace rths::core {
+
+namespace schemes = explicit_schemes;
 
 std::string to_string(IntegratorKind kind) {
   switch (kind) {
@@ -71,110 +74,46 @@ void check_stability(IntegratorKind kind, double omega_max, double dt, bool allo
 
 namespace {
 
-// Shared state for the explicit schemes: every work vector is sized once, so step() does not
-// allocate (real-time safe).
-class ExplicitBase : public Integrator {
+// The explicit schemes' linear algebra on dense M, C, K0 (core/explicit_schemes.h): each matrix
+// formed once, each effective matrix inverted once, so a product or a solve is one dense
+// matrix-vector product (no allocation).
+class DenseAlgebra {
  public:
-  ExplicitBase(const StructuralModel& model, double dt) : Integrator(model, dt) {
-    const int n = model.dofs();
-    u_next_ = Vec::Zero(n);
-    v_next_ = Vec::Zero(n);
-    a_next_ = Vec::Zero(n);
-    rhs_ = Vec::Zero(n);
-    mass_inverse_ = m_.inverse();
-  }
-  void initialize(const Vec& u0, const Vec& v0, const Vec& r0, const Vec& p0) override {
-    u_ = u0;
-    v_ = v0;
-    a_.noalias() = mass_inverse_ * (p0 - c_ * v0 - r0);
-  }
+  explicit DenseAlgebra(const StructuralModel& model)
+      : mass_(model.mass), damping_(model.damping), stiffness_(model.stiffness) {}
 
- protected:
-  // a_next_ = inverse (p_{k+1} - r(u_next_, v_next_) - C damping_velocity), the trial committed.
-  // `damping_velocity` is a stored vector (an expression would allocate a temporary).
-  void solve_acceleration(const Vec& load_next, RestoringEvaluator& restoring,
-                          const Vec& damping_velocity, const Mat& inverse) {
-    const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
-    restoring.commit();
-    rhs_ = load_next - r;
-    rhs_.noalias() -= c_ * damping_velocity;
-    a_next_.noalias() = inverse * rhs_;
-  }
+  class Product {
+   public:
+    explicit Product(Mat matrix) : matrix_(std::move(matrix)) {}
+    void add_times(const Vec& x, Vec& out, double sign) const {
+      if (sign > 0)
+        out.noalias() += matrix_ * x;
+      else
+        out.noalias() -= matrix_ * x;
+    }
 
-  Vec u_next_, v_next_, a_next_, rhs_;
-  Mat mass_inverse_;
-};
+   private:
+    Mat matrix_;
+  };
+  class Solve {
+   public:
+    explicit Solve(const Mat& matrix) : inverse_(matrix.inverse()) {}
+    void solve(const Vec& b, Vec& out) const { out.noalias() = inverse_ * b; }
 
-class ExplicitNewmark final : public ExplicitBase {
- public:
-  ExplicitNewmark(const StructuralModel& model, double dt) : ExplicitBase(model, dt) {
-    effective_inverse_ = (m_ + 0.5 * dt_ * c_).inverse();
-  }
-  IntegratorKind kind() const override { return IntegratorKind::kExplicitNewmark; }
-  void step(const Vec& load_next, RestoringEvaluator& restoring) override {
-    u_next_ = u_ + dt_ * v_ + (0.5 * dt_ * dt_) * a_;
-    v_next_ = v_ + dt_ * a_;  // predicted velocity sent with the command
-    const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
-    restoring.commit();
-    rhs_ = load_next - r;
-    rhs_.noalias() -= c_ * (v_ + (0.5 * dt_) * a_);
-    a_next_.noalias() = effective_inverse_ * rhs_;
-    v_ += (0.5 * dt_) * (a_ + a_next_);
-    u_ = u_next_;
-    a_ = a_next_;
+   private:
+    Mat inverse_;
+  };
+
+  Product product(double m, double c, double k) const { return Product(combination(m, c, k)); }
+  Solve solve(double m, double c, double k, const char* /*what*/) const {
+    return Solve(combination(m, c, k));
   }
 
  private:
-  Mat effective_inverse_;
-};
-
-class CentralDifference final : public ExplicitBase {
- public:
-  CentralDifference(const StructuralModel& model, double dt) : ExplicitBase(model, dt) {
-    effective_inverse_ = (m_ + 0.5 * dt_ * c_).inverse();
-    v_half_ = Vec::Zero(model.dofs());
+  Mat combination(double m, double c, double k) const {
+    return m * mass_ + c * damping_ + k * stiffness_;
   }
-  IntegratorKind kind() const override { return IntegratorKind::kCentralDifference; }
-  void initialize(const Vec& u0, const Vec& v0, const Vec& r0, const Vec& p0) override {
-    ExplicitBase::initialize(u0, v0, r0, p0);
-    v_half_ = v_ - (0.5 * dt_) * a_;  // v at t = -dt/2
-  }
-  void step(const Vec& load_next, RestoringEvaluator& restoring) override {
-    v_half_ += dt_ * a_;  // v_{k+1/2}
-    u_next_ = u_ + dt_ * v_half_;
-    v_next_ = v_half_ + (0.5 * dt_) * a_;
-    // Equilibrium at k+1 with v_{k+1} = v_{k+1/2} + dt/2 a_{k+1}.
-    solve_acceleration(load_next, restoring, v_half_, effective_inverse_);
-    u_ = u_next_;
-    a_ = a_next_;
-    v_ = v_half_ + (0.5 * dt_) * a_;
-  }
-
- private:
-  Mat effective_inverse_;
-  Vec v_half_;
-};
-
-class ChenRicles final : public ExplicitBase {
- public:
-  ChenRicles(const StructuralModel& model, double dt) : ExplicitBase(model, dt) {
-    alpha_ = 4.0 * (4.0 * m_ + 2.0 * dt_ * c_ + dt_ * dt_ * k0_).inverse() * m_;
-    alpha_a_ = Vec::Zero(model.dofs());
-  }
-  IntegratorKind kind() const override { return IntegratorKind::kChenRicles; }
-  void step(const Vec& load_next, RestoringEvaluator& restoring) override {
-    alpha_a_.noalias() = alpha_ * a_;
-    v_next_ = v_ + dt_ * alpha_a_;
-    u_next_ = u_ + dt_ * v_ + (dt_ * dt_) * alpha_a_;
-    solve_acceleration(load_next, restoring, v_next_, mass_inverse_);
-    u_ = u_next_;
-    v_ = v_next_;
-    a_ = a_next_;
-  }
-
- private:
-  Mat alpha_;
-  Vec alpha_a_;
+  Mat mass_, damping_, stiffness_;
 };
 
 // Newton iteration on u_{k+1} with a_{k+1} = 4/dt^2 (u+ - u - dt v) - a and
@@ -225,105 +164,6 @@ class NewmarkAverageAcceleration final : public Integrator {
   }
 };
 
-class AlphaOperatorSplitting final : public ExplicitBase {
- public:
-  AlphaOperatorSplitting(const StructuralModel& model, double dt, double alpha)
-      : ExplicitBase(model, dt), alpha_(alpha) {
-    if (!(alpha >= 2.0 / 3.0 && alpha <= 1.0)) {
-      throw std::invalid_argument("alpha-os: alpha_os must be in [2/3, 1], got " +
-                                  std::to_string(alpha));
-    }
-    beta_ = 0.25 * (2.0 - alpha) * (2.0 - alpha);
-    gamma_ = 1.5 - alpha;
-    effective_inverse_ =
-        (m_ + (alpha_ * gamma_ * dt_) * c_ + (alpha_ * beta_ * dt_ * dt_) * k0_).inverse();
-    const int n = model.dofs();
-    predictor_ = previous_predictor_ = previous_force_ = previous_load_ = Vec::Zero(n);
-  }
-  IntegratorKind kind() const override { return IntegratorKind::kAlphaOS; }
-  void initialize(const Vec& u0, const Vec& v0, const Vec& r0, const Vec& p0) override {
-    ExplicitBase::initialize(u0, v0, r0, p0);
-    previous_predictor_ = u0;
-    previous_force_ = r0;
-    previous_load_ = p0;
-  }
-  void step(const Vec& load_next, RestoringEvaluator& restoring) override {
-    predictor_ = u_ + dt_ * v_ + ((0.5 - beta_) * dt_ * dt_) * a_;
-    v_next_ = v_ + ((1.0 - gamma_) * dt_) * a_;
-    const Vec& r = restoring.trial(predictor_, v_next_, nullptr);
-    restoring.commit();
-    rhs_ = (1.0 - alpha_) * previous_load_ + alpha_ * load_next;
-    rhs_.noalias() -=
-        (1.0 - alpha_) * (c_ * v_ + previous_force_ + k0_ * (u_ - previous_predictor_));
-    rhs_.noalias() -= alpha_ * (c_ * v_next_ + r);
-    a_next_.noalias() = effective_inverse_ * rhs_;
-    u_ = predictor_ + (beta_ * dt_ * dt_) * a_next_;
-    v_ = v_next_ + (gamma_ * dt_) * a_next_;
-    a_ = a_next_;
-    previous_predictor_ = predictor_;
-    previous_force_ = r;
-    previous_load_ = load_next;
-  }
-
- private:
-  double alpha_, beta_ = 0.25, gamma_ = 0.5;
-  Mat effective_inverse_;
-  Vec predictor_, previous_predictor_, previous_force_, previous_load_;
-};
-
-// At rho_inf = 1 KR-alpha is only marginally stable for omega dt >> 1 (measured: 1.4x growth
-// over 2000 steps at omega dt = 1000); rho_inf < 1 damps those modes.
-class KRAlphaExplicit final : public ExplicitBase {
- public:
-  KRAlphaExplicit(const StructuralModel& model, double dt, double rho) : ExplicitBase(model, dt) {
-    if (!(rho >= 0.0 && rho <= 1.0)) {
-      throw std::invalid_argument("kr-alpha: rho_infinity must be in [0, 1], got " +
-                                  std::to_string(rho));
-    }
-    alpha_m_ = (2.0 - rho) / (1.0 + rho);
-    alpha_f_ = 1.0 / (1.0 + rho);
-    const double beta = 1.0 / ((1.0 + rho) * (1.0 + rho));
-    gamma_ = 0.5 * (3.0 - rho) / (1.0 + rho);
-    const Mat stiff_damp = (gamma_ * dt_) * c_ + (beta * dt_ * dt_) * k0_;
-    const auto solver = (m_ + stiff_damp).partialPivLu();
-    alpha1_ = solver.solve(m_);
-    alpha3_ = solver.solve((1.0 - alpha_m_) * m_ + (1.0 - alpha_f_) * stiff_damp);
-    const int n = model.dofs();
-    effective_inverse_ = (m_ * (Mat::Identity(n, n) - alpha3_)).inverse();
-    m_alpha3_ = m_ * alpha3_;
-    previous_force_ = previous_load_ = work_ = Vec::Zero(n);
-  }
-  IntegratorKind kind() const override { return IntegratorKind::kKRAlpha; }
-  void initialize(const Vec& u0, const Vec& v0, const Vec& r0, const Vec& p0) override {
-    ExplicitBase::initialize(u0, v0, r0, p0);
-    previous_force_ = r0;
-    previous_load_ = p0;
-  }
-  void step(const Vec& load_next, RestoringEvaluator& restoring) override {
-    work_.noalias() = dt_ * (alpha1_ * a_);  // velocity increment
-    u_next_ = u_ + dt_ * v_ + ((0.5 + gamma_) * dt_) * work_;
-    v_next_ = v_ + work_;
-    const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
-    restoring.commit();
-    const double keep = 1.0 - alpha_f_;
-    rhs_ = keep * previous_load_ + alpha_f_ * load_next;
-    rhs_.noalias() -= m_alpha3_ * a_;
-    rhs_.noalias() -= c_ * (keep * v_ + alpha_f_ * v_next_);
-    rhs_.noalias() -= keep * previous_force_ + alpha_f_ * r;
-    a_next_.noalias() = effective_inverse_ * rhs_;
-    u_ = u_next_;
-    v_ = v_next_;
-    a_ = a_next_;
-    previous_force_ = r;
-    previous_load_ = load_next;
-  }
-
- private:
-  double alpha_m_ = 0.5, alpha_f_ = 0.5, gamma_ = 0.5;
-  Mat alpha1_, alpha3_, m_alpha3_, effective_inverse_;
-  Vec previous_force_, previous_load_, work_;
-};
-
 }  // namespace
 
 std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const StructuralModel& model,
@@ -339,12 +179,15 @@ std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const Structura
   }
   switch (kind) {
     case IntegratorKind::kAlphaOS:
-      return std::make_unique<AlphaOperatorSplitting>(model, dt, parameters.alpha_os);
+      return std::make_unique<schemes::AlphaOS<DenseAlgebra>>(model, dt, parameters.alpha_os);
     case IntegratorKind::kKRAlpha:
-      return std::make_unique<KRAlphaExplicit>(model, dt, parameters.rho_infinity);
-    case IntegratorKind::kExplicitNewmark: return std::make_unique<ExplicitNewmark>(model, dt);
-    case IntegratorKind::kCentralDifference: return std::make_unique<CentralDifference>(model, dt);
-    case IntegratorKind::kChenRicles: return std::make_unique<ChenRicles>(model, dt);
+      return std::make_unique<schemes::KRAlpha<DenseAlgebra>>(model, dt, parameters.rho_infinity);
+    case IntegratorKind::kExplicitNewmark:
+      return std::make_unique<schemes::ExplicitNewmark<DenseAlgebra>>(model, dt);
+    case IntegratorKind::kCentralDifference:
+      return std::make_unique<schemes::CentralDifference<DenseAlgebra>>(model, dt);
+    case IntegratorKind::kChenRicles:
+      return std::make_unique<schemes::ChenRicles<DenseAlgebra>>(model, dt);
     case IntegratorKind::kNewmarkAverageAcceleration:
       return std::make_unique<NewmarkAverageAcceleration>(model, dt);
     case IntegratorKind::kExactZoh:

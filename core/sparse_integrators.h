@@ -1,6 +1,6 @@
 #pragma once
 // The explicit integrators of core/integrators.h on a model held sparse (StructuralModel::
-// is_sparse(), core/sparse_structure.h): the same equations, with every matrix that the dense
+// is_sparse(), core/sparse_structure.h): the same recurrences (core/explicit_schemes.h), with every matrix that the dense
 // schemes invert factorised once (Eigen SimplicialLDLT, fill-reducing AMD ordering) and every
 // product taken in O(nnz). A step costs O(nnz(M) + nnz(C) + nnz(K) + nnz(L)) and allocates
 // nothing (the LDL^T solves are done by hand: Eigen's own solve permutes in place through a
