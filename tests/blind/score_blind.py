@@ -1,12 +1,13 @@
 #!/usr/bin/python3
 """Scores `rths identify` blind on records of a rig it never modelled (docs/development.md,
-"Blind records"; the records from tests/blind/blind_record_writer.cpp).
+"Blind records"; the records from tests/blind/blind_record_writer.cpp or third_set_writer.cpp).
 
 Inputs:
   --rths PATH            the rths program (`rths identify REC --json`, `rths export REC --csv`)
   --records DIR          a folder written by blind_record_writer (<case>.rthsrec, truth.json), or
   --writer PATH --set S --data DIR [--work DIR]
-                         write set S (tune|report) first, into --work (default a temp folder)
+                         write set S (tune|report with blind_record_writer, third with
+                         third_set_writer) first, into --work (default a temp folder)
   --json                 print the scores as JSON instead of the table
   --require-reads        exit 1 unless every record exports without a warning and identify exits 0
                          on every one (what the suite asserts; scores are never asserted here)
@@ -27,6 +28,10 @@ Scoring, per record, against its truth (truth.json: part, kinds, frequency_hz, l
   other descriptions `unexplained` entries on parts the truth does not name (shown, not scored)
   re-run             the residual's worst floor NRMSE before (declared) and after (identified);
                      in total, the records whose identified re-run is worse than the declared
+  when (reported, never scored)  for a truth with an event window (truth.json's "window_s":
+                     [t0, t1], s), whether a `when` that identify reports on the truth's part (an
+                     unexplained entry's or a named effect's, at its top or in its time_varying
+                     object: [t0, t1], a list of them, objects with start/end keys or an instant) overlaps it
 The `unexplained` key may be absent (identify before the description work): every unexplained
 truth then scores "no description".
 Exit 0, or 1 with --require-reads when a record did not read or identify failed; 2 on bad usage.
@@ -104,6 +109,56 @@ def rerun_errors(doc):
     return (max(before) if before else None), (max(after) if after else None)
 
 
+WINDOW_KEYS = (("start_s", "end_s"), ("start", "end"), ("from_s", "to_s"), ("from", "to"),
+               ("t0", "t1"), ("begin_s", "end_s"), ("begin", "end"))
+
+
+def _windows(value):
+    """[(t0, t1)] (s) of a `when` value: [t0, t1], a list of them, objects with start/end, or
+    one instant t (the window [t, t])."""
+    if _numbers(value) and not isinstance(value, list):
+        return [(float(value), float(value))]
+    if isinstance(value, dict):
+        for start, end in WINDOW_KEYS:
+            t0, t1 = value.get(start), value.get(end)
+            if _numbers(t0) and _numbers(t1):
+                return [(float(t0), float(t1))]
+        return []
+    if isinstance(value, list):
+        if len(value) == 2 and all(len(_numbers(v)) == 1 and not isinstance(v, list)
+                                   for v in value):
+            return [(float(value[0]), float(value[1]))]
+        return [w for v in value for w in _windows(v)]
+    return []
+
+
+def reported_windows(doc, part):
+    """[(t0, t1)] (s): every `when` identify reports on part, in an unexplained entry or a named
+    effect, at its top or inside its time_varying object."""
+    items = [e for e in (unexplained_entries(doc) or []) if e.get("part") == part]
+    items += [i for i in doc.get("undeclared") or [] if isinstance(i, dict) and
+              i.get("part") == part]
+    found = []
+    for item in items:
+        for holder in (item, item.get("time_varying")):
+            if isinstance(holder, dict) and "when" in holder:
+                found += _windows(holder["when"])
+    return found
+
+
+def window_overlap(truth, doc):
+    """(truth window, reported windows, overlaps): overlaps is None without a truth window or
+    without a reported `when` on the truth's part, else whether one of them overlaps it."""
+    window = truth.get("window_s")
+    if not (isinstance(window, list) and len(window) == 2):
+        return None, [], None
+    reported = reported_windows(doc, truth.get("part"))
+    if not reported:
+        return window, [], None
+    t0, t1 = float(window[0]), float(window[1])
+    return window, reported, any(a <= t1 and b >= t0 for a, b in reported)
+
+
 # ---------- scoring one record ----------
 
 def description_matches(entry, truth):
@@ -160,6 +215,10 @@ def score_record(case, doc):
     score["library_missed"] = sorted(f"{p}: {e}" for p, e in library if (p, e) not in set(named))
     score["other_descriptions"] = [f"{e.get('part')}: {'+'.join(e.get('kinds') or [])}"
                                    for e in (described or []) if e.get("part") != part]
+    window, reported, overlaps = window_overlap(truth, doc)
+    score["truth_window_s"] = window
+    score["reported_when_s"] = reported
+    score["when_overlaps"] = overlaps
     before, after = rerun_errors(doc)
     score["rerun_before_pct"] = before
     score["rerun_after_pct"] = after
@@ -185,6 +244,9 @@ def totals(scores):
         "rerun_worse": sum(1 for s in scores if s["rerun_before_pct"] is not None and
                            s["rerun_after_pct"] is not None and
                            s["rerun_after_pct"] > 1.05 * s["rerun_before_pct"] + 0.01),
+        # Reported, never scored: truths with an event window, and those a `when` overlaps.
+        "with_window": sum(1 for s in scores if s.get("truth_window_s")),
+        "when_overlaps": sum(1 for s in scores if s.get("when_overlaps")),
     }
 
 
@@ -275,6 +337,8 @@ def table(set_name, scores, total):
         lines += [f"{'':<82}{more}" for more in names[1:]]
         if s.get("other_descriptions"):
             lines.append(f"{'':<28} other descriptions: {', '.join(s['other_descriptions'])}")
+        if s.get("truth_window_s"):
+            lines.append(f"{'':<28} {when_text(s)}")
     lines.append("-" * len(header))
     n = total["with_unexplained_truth"]
     lines.append("re-run %: the worst floor's NRMSE against the record, declared -> identified")
@@ -284,7 +348,20 @@ def table(set_name, scores, total):
                  f"({total['wrong_names']} names), library effects found "
                  f"{total['library_found']}/{total['library_effects']}, re-run worse than "
                  f"declared {total['rerun_worse']}, read {total['read']}/{total['records']}")
+    if total.get("with_window"):
+        lines.append(f"when (reported, not scored): a reported window overlaps the event's in "
+                     f"{total['when_overlaps']}/{total['with_window']}")
     return "\n".join(lines)
+
+
+def when_text(s):
+    """The event's window beside what identify reported on its part, for the table."""
+    t0, t1 = s["truth_window_s"]
+    text = f"event at {t0:.3f}-{t1:.3f} s: "
+    if not s["reported_when_s"]:
+        return text + "no `when` reported on the part"
+    reported = ", ".join(f"{a:.3f}-{b:.3f} s" for a, b in s["reported_when_s"][:4])
+    return text + ("overlapped by " if s["when_overlaps"] else "not overlapped by ") + reported
 
 
 def main(argv=None):
@@ -292,7 +369,7 @@ def main(argv=None):
     ap.add_argument("--rths", required=True)
     ap.add_argument("--records")
     ap.add_argument("--writer")
-    ap.add_argument("--set", choices=["tune", "report"])
+    ap.add_argument("--set", choices=["tune", "report", "third"])
     ap.add_argument("--data")
     ap.add_argument("--work")
     ap.add_argument("--duration")

@@ -2,7 +2,8 @@
 """The blind scorer's own logic (score_blind.py) on fabricated identify JSON: it must credit a
 right part and description, refuse a periodic frequency off by more than 5 %, count a wrong name
 (on a clean record, and a library effect the truth lacks), score "no description" when the
-`unexplained` key is absent, and read the re-run's worst floor before -> after. With
+`unexplained` key is absent, read the re-run's worst floor before -> after, and report (never
+score) whether a `when` identify gives on the truth's part overlaps an event's window. With
 BLIND_RTHS, BLIND_WRITER and BLIND_DATA set (ctest sets them) also end to end: a record of the
 writer's reads, and the same record with 8 bytes overwritten fails --require-reads. Exit 0 when all
 hold (unittest)."""
@@ -19,11 +20,14 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import score_blind  # noqa: E402
 
 
-def case(part=None, kinds=(), frequency=None, library=(), accepted=()):
-    return {"name": "c", "what": "", "truth": {
+def case(part=None, kinds=(), frequency=None, library=(), accepted=(), window=None):
+    c = {"name": "c", "what": "", "truth": {
         "part": part, "kinds": list(kinds), "frequency_hz": frequency,
         "library": [{"part": p, "effect": e} for p, e in library],
         "accepted": [{"part": p, "effect": e} for p, e in accepted]}}
+    if window:
+        c["truth"]["window_s"] = list(window)
+    return c
 
 
 def entry(part, kinds, frequency=None):
@@ -130,6 +134,39 @@ class ScoreBlind(unittest.TestCase):
         worse = score_blind.score_record(case("displacement sensor 1", ["amplitude"]), {
             "residual": {"floors": [{"declared_nrmse": 0.001, "identified_nrmse": 0.06}]}})
         self.assertEqual(score_blind.totals([worse])["rerun_worse"], 1)
+
+    def test_when_overlapping_the_event_window_is_reported_not_scored(self):
+        crack = case("specimen 1", ["time_varying"], window=(8.95, 9.0))
+        described = entry("specimen 1", ["time_varying"])
+        plain = score_blind.score_record(crack, {"unexplained": [described]})
+        self.assertIsNone(plain["when_overlaps"])
+        timed = dict(described, time_varying={"when": [[8.9, 9.4], [12.0, 12.5]]})
+        s = score_blind.score_record(crack, {"unexplained": [timed]})
+        self.assertTrue(s["when_overlaps"])
+        self.assertEqual(s["reported_when_s"], [(8.9, 9.4), (12.0, 12.5)])
+        for key in ("right_part", "right_description", "wrong_names"):
+            self.assertEqual(s[key], plain[key])
+        apart = dict(described, when={"start_s": 2.0, "end_s": 3.0})
+        self.assertFalse(score_blind.score_record(crack, {"unexplained": [apart]})
+                         ["when_overlaps"])
+        named = {"part": "specimen 1", "effect": "stiffness change", "when": 8.97}
+        self.assertTrue(score_blind.score_record(crack, {"undeclared": [named]})["when_overlaps"])
+        elsewhere = dict(timed, part="load cell 1")
+        self.assertIsNone(score_blind.score_record(crack, {"unexplained": [elsewhere]})
+                          ["when_overlaps"])
+        total = score_blind.totals([s, plain])
+        self.assertEqual((total["with_window"], total["when_overlaps"]), (2, 1))
+        self.assertEqual(total["right_description"], 2)
+        text = score_blind.table("third", [s], score_blind.totals([s]))
+        self.assertIn("event at 8.950-9.000 s: overlapped by 8.900-9.400 s", text)
+        self.assertIn("overlaps the event's in 1/1", text)
+
+    def test_no_window_no_when_line(self):
+        s = score_blind.score_record(case("specimen 1", ["time_varying"]), {
+            "unexplained": [dict(entry("specimen 1", ["time_varying"]), when=[1.0, 2.0])]})
+        self.assertIsNone(s["when_overlaps"])
+        text = score_blind.table("tune", [s], score_blind.totals([s]))
+        self.assertNotIn("when", text)
 
     def test_table_states_a_missing_unexplained_key(self):
         s = score_blind.score_record(case("load cell 1", ["periodic"], 13.0), {"undeclared": []})
