@@ -126,6 +126,9 @@ class ControllerExchange {
   bool hold_step(std::int64_t now_ns);
   bool send_stop();
   bool holding() const { return holding_; }
+  int actuators() const { return settings_.actuators; }
+  // Now on the clock every stamp of this exchange is on (CLOCK_MONOTONIC ns).
+  std::int64_t now_ns() const { return monotonic_ns(); }
 
   const std::string& fault() const { return send_fault_; }
   // The report with its round-trip median and p99 (sorts a preallocated copy).

@@ -27,7 +27,7 @@ ControllerService::ControllerService(std::int32_t node_id, std::string expected_
     : NodeService(node_id, config::NodeSpec::CONTROLLER, std::move(expected_run_id)) {}
 
 runtime::ControllerReport ControllerService::report() const {
-  return exchange_ ? exchange_->report() : runtime::ControllerReport{};
+  return answers_ ? answers_->exchange().report() : runtime::ControllerReport{};
 }
 
 int ControllerService::configure(const runtime::Assign& assign) {
@@ -55,102 +55,21 @@ int ControllerService::configure(const runtime::Assign& assign) {
   settings.jump_floor = runtime::controller_jump_floor(link);
   settings.tracking_lag = runtime::controller_expected_lag(link);
   settings.hold_time = runtime::controller_hold_time(link);
-  exchange_ = std::make_unique<ControllerExchange>(link, settings);
-  drift_.assign(static_cast<std::size_t>(settings.actuators), 0.0);
-  velocity_ = drift_;
+  answers_ = std::make_unique<ControllerAnswers>(
+      std::make_unique<ControllerExchange>(link, settings), label());
   spdlog::info(
       "{}: UDP {} -> controller {}, frames of {} and {} bytes, reply timeout {} ms, hold time {} "
       "ms",
-      label(), link.local_address() + ":" + std::to_string(link.local_port()), exchange_->peer(),
-      frame_size(link.command()), frame_size(link.feedback()), settings.reply_timeout * 1e3,
-      settings.hold_time * 1e3);
+      label(), link.local_address() + ":" + std::to_string(link.local_port()),
+      answers_->exchange().peer(), frame_size(link.command()), frame_size(link.feedback()),
+      settings.reply_timeout * 1e3, settings.hold_time * 1e3);
   spdlog::info("{}: {}", label(), runtime::controller_checks_text(link, deployment, assign.dt()));
   return settings.actuators;
 }
 
-void ControllerService::compute(const runtime::Command& /*command*/,
-                                runtime::Feedback& /*feedback*/) {
-  // Never called: every command is dispatched (answers_asynchronously()).
-}
-
-void ControllerService::dispatch(std::int64_t step, const runtime::Command& command) {
-  const int n = static_cast<int>(drift_.size());
-  if (command.drift_size() != n || command.drift_velocity_size() != n) {
-    dispatch_fault_ = "command of step " + std::to_string(step) + " has " +
-                      std::to_string(command.drift_size()) + " drifts for " + std::to_string(n) +
-                      " actuators";
-    return;
-  }
-  for (int i = 0; i < n; ++i) {
-    drift_[static_cast<std::size_t>(i)] = command.drift(i);
-    velocity_[static_cast<std::size_t>(i)] = command.drift_velocity(i);
-  }
-  if (!exchange_->send_command(step, command.time(), drift_, velocity_))
-    dispatch_fault_ = exchange_->fault();
-}
-
-void ControllerService::wait_for_answers(std::int64_t deadline_ns) {
-  if (exchange_) exchange_->wait(deadline_ns);
-}
-
-runtime::NodeService::Answered ControllerService::next_answer(runtime::Feedback& feedback) {
-  Answered out;
-  if (!exchange_) return out;
-  if (!dispatch_fault_.empty()) {
-    out.kind = Answered::Kind::kFault;
-    out.fault = "controller: " + dispatch_fault_;
-    dispatch_fault_.clear();
-    return out;
-  }
-  const std::int64_t now = monotonic_ns();
-  if (exchange_->holding()) {
-    hold_done_ = exchange_->hold_step(now);
-    if (hold_done_ && stop_requested_ && !stop_sent_) {
-      stop_sent_ = true;
-      exchange_->send_stop();
-    }
-    return out;
-  }
-  const ControllerExchange::Answer a = exchange_->next(now);
-  if (a.outcome == ControllerExchange::Outcome::kNone) return out;
-  if (a.outcome == ControllerExchange::Outcome::kFault) {
-    out.kind = Answered::Kind::kFault;
-    out.fault = "controller: " + a.fault;
-    return out;
-  }
-  for (std::size_t i = 0; i < drift_.size(); ++i) {
-    feedback.add_realised((*a.displacement)[i]);
-    feedback.add_force((*a.force)[i]);
-  }
-  for (const double v : *a.diagnostics) feedback.add_controller_diagnostics(v);
-  feedback.set_controller_round_trip(a.round_trip);
-  feedback.set_controller_status(static_cast<std::int32_t>(a.status));
-  out.kind = Answered::Kind::kAnswer;
-  out.step = a.step;
-  return out;
-}
-
-bool ControllerService::rested() const {
-  if (!exchange_) return true;
-  return hold_done_ && (!stop_requested_ || stop_sent_);
-}
-
-void ControllerService::on_hold() {
-  if (!exchange_ || exchange_->holding()) return;
-  exchange_->begin_hold(monotonic_ns());
-  spdlog::warn("{}: HOLD frames (status {}) to the controller {}, holding the measured position",
-               label(), kStatusHold, exchange_->peer());
-}
-
-void ControllerService::on_stop() {
-  if (!exchange_) return;
-  stop_requested_ = true;
-  if (!exchange_->holding()) exchange_->begin_hold(monotonic_ns());
-}
-
 void ControllerService::fill_heartbeat(runtime::Heartbeat& heartbeat) const {
-  if (!exchange_) return;
-  *heartbeat.mutable_controller() = exchange_->report();
+  if (!answers_) return;
+  *heartbeat.mutable_controller() = answers_->exchange().report();
   if (!heartbeat.final()) return;
   runtime::NodeRejects node;
   node.set_label(label());

@@ -5,17 +5,9 @@
 // (m/s), one per hosted actuator. Output: Feedback.realised (m, the controller's measured drift)
 // and force (N), same order, plus the frame's round trip (s) and the controller's status.
 //
-// Threads (an asynchronous NodeService: runtime/node/node_service.h):
-//   command   the DDS receive thread (or the node loop, behind a receive lag): dispatch() packs
-//             the step's command frame and sends it at once (a non-blocking send on a connected
-//             UDP socket); it never waits for an answer and allocates nothing once warm.
-//   answers   the node loop's answer thread: wait_for_answers() blocks in ppoll on the socket
-//             only (no lock, nothing else); next_answer(), under the node's lock, reads every
-//             queued datagram without blocking, judges it (ControllerExchange) and returns each
-//             accepted answer for the step its frame commanded, so several frames may be in
-//             flight and a controller 2 ms behind costs 2 ms, not a backlog. It also expires
-//             frames past the reply timeout (a staleness limit) and, once held or stopped,
-//             runs the hold.
+// What the service adds to a node (runtime/node/node_service.h): configure() checks the
+// assignment's controller link and builds its answer source (controller_answers.h: the link,
+// its threads and its hold), and each heartbeat carries the link's report.
 // A refused answer, or lost frames beyond the window -> the node holds on its own and answers
 // HOLD naming the cause (nothing refused is ever applied).
 // HOLD (from the coordinator, its own watchdog, or a refused answer) -> HOLD frames (status 1)
@@ -32,7 +24,7 @@
 
 #include <memory>
 
-#include "controller_node/controller_exchange.h"
+#include "controller_node/controller_answers.h"
 #include "runtime/node/node_service.h"
 
 namespace rths::controller_node {
@@ -44,21 +36,11 @@ class ControllerService final : public runtime::NodeService {
 
  protected:
   int configure(const runtime::Assign& assign) override;
-  void compute(const runtime::Command& command, runtime::Feedback& feedback) override;
-  bool answers_asynchronously() const override { return true; }
-  void dispatch(std::int64_t step, const runtime::Command& command) override;
-  void wait_for_answers(std::int64_t deadline_ns) override;
-  Answered next_answer(runtime::Feedback& feedback) override;
-  bool rested() const override;
-  void on_hold() override;
-  void on_stop() override;
+  runtime::AnswerSource* answer_source() override { return answers_.get(); }
   void fill_heartbeat(runtime::Heartbeat& heartbeat) const override;
 
  private:
-  std::unique_ptr<ControllerExchange> exchange_;
-  std::vector<double> drift_, velocity_;
-  std::string dispatch_fault_;
-  bool hold_done_ = false, stop_requested_ = false, stop_sent_ = false;
+  std::unique_ptr<ControllerAnswers> answers_;
 };
 
 }  // namespace rths::controller_node

@@ -58,12 +58,6 @@ void accept_only_the_peer(int fd, const sockaddr_in& peer) {
 
 }  // namespace
 
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
-
 std::string source_text(const Datagram& datagram) {
   return text_of(datagram.source_address, datagram.source_port);
 }

@@ -30,6 +30,7 @@
 #include <string>
 
 #include "runtime/node/controller_link.h"
+#include "runtime/rt/clock.h"
 
 namespace rths::controller_node {
 
@@ -77,7 +78,8 @@ class UdpLink {
 // An errno an ICMP error leaves on a connected UDP socket (port or host unreachable...).
 bool icmp_errno(int error);
 
-std::int64_t monotonic_ns();
+// The house's one monotonic clock (datagram stamps, deadlines), named here for the link's users.
+using runtime::monotonic_ns;
 // "a.b.c.d:port" of a datagram's source.
 std::string source_text(const Datagram& datagram);
 

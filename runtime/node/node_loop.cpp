@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <ctime>
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -14,6 +13,7 @@
 #include "runtime/node/lag.h"
 #include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
+#include "runtime/rt/clock.h"
 #include "runtime/rt/fifo.h"
 #include "runtime/rt/pacing.h"
 #include "transport/dds_endpoint.h"
@@ -46,8 +46,8 @@ struct Assigned {
 //              apply what is due -> wait for a message or the next thing due, and take it.
 //   teardown   the destructor: the servo thread is stopped and joined, then the inline handler
 //              removed (waiting out a running call), before any state it touches goes.
-// `state` guards the service and the timers against the inline handler and the servo thread;
-// the loop holds it except while it waits.
+// `state` guards the service and the timers against the inline handler, the servo thread and the
+// answer thread; the loop holds it except while it waits (node_loop.h, Threads).
 class NodeLoop {
  public:
   NodeLoop(transport::Endpoint& endpoint, NodeService& service, const NodeLoopOptions& options)
@@ -55,23 +55,38 @@ class NodeLoop {
   ~NodeLoop();
 
   // The exit code when the node must leave now (never assigned, orphaned), else nullopt.
+  // Loop thread, lock held. Real time: no allocation unless it announces, holds or leaves; may
+  // release the lock for kWatchdogGrace before the watchdog judges.
   std::optional<int> keep_time();
+  // Loop thread, lock held: sends the replies whose send lag has passed.
   void write_due();
-  // The exit code once a STOP was applied, else nullopt.
+  // The exit code once a STOP was applied, else nullopt. Loop thread, lock held; a lagged
+  // message's replies are queued (allocates), an unlagged one's sent from the service's buffer.
   std::optional<int> apply_due();
+  // Loop thread: releases the lock while it waits for a message or the next thing due.
   void wait_and_take();
 
  private:
   // A message off the transport: stamps what the watchdogs watch, then waits its receive lag.
+  // Loop thread, lock held; queues the message (allocates).
   void take(transport::Message message);
+  // Loop thread, lock held: the service handles one released message.
   void apply(Delayed item);
+  // Loop thread, lock held, once per run (set-up: allocates, starts threads).
   void on_assigned();
+  // Loop thread, lock held; releases it for kWatchdogGrace when the watchdog is due.
   bool commands_stopped(std::int64_t now);
+  // Set-up; the servo thread's pass takes the lock once a period and allocates nothing.
   void start_servo(double period, const WaitPolicy& policy);
+  // Set-up; the answer thread waits unlocked and forwards under the lock, allocating nothing
+  // once warm (NodeService::take_answers).
   void start_answers();
   // Stopped: an asynchronous node comes to rest on its answer thread (a controller holds until
   // its rig says held); the loop waits for it, lock released, and sends its final heartbeat.
+  // Loop thread; teardown only, so it may sleep.
   void wait_for_rest();
+  // Receive thread, takes the lock: a COMMAND with no lag injected, handled and answered there
+  // (no allocation once warm). False: not handled (the loop takes it).
   bool handle_inline(const transport::Message& m);
 
   transport::Endpoint& endpoint_;
@@ -87,6 +102,8 @@ class NodeLoop {
   std::atomic<bool> stop_servo_{false};
   std::thread servo_, answers_;
   std::optional<runtime::FifoThreads> fifo_;  // realtime_priority: the node's threads raised
+  // The service's replies straight onto the wire (built once: no allocation per command).
+  const NodeService::Send send_ = [this](const transport::Message& m) { endpoint_.send(m); };
 };
 
 NodeLoop::~NodeLoop() {
@@ -107,7 +124,7 @@ bool NodeLoop::handle_inline(const transport::Message& m) {
   std::lock_guard guard(state_);
   if (m.run_id == service_.run_id()) last_from_coordinator_ = last_command_ns_ = m.received_ns;
   service_.set_injected_lag(0.0);
-  for (auto& r : service_.handle(m)) endpoint_.send(r);
+  service_.handle(m, send_);
   return true;
 }
 
@@ -135,12 +152,9 @@ constexpr std::int64_t kAnswerPoll = 500000;  // ns
 void NodeLoop::start_answers() {
   answers_ = std::thread([this] {
     while (!stop_servo_) {
-      timespec ts{};
-      clock_gettime(CLOCK_MONOTONIC, &ts);
-      service_.await_answers(static_cast<std::int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec +
-                             kAnswerPoll);
+      service_.await_answers(monotonic_ns() + kAnswerPoll);
       std::lock_guard guard(state_);
-      service_.take_answers([this](const transport::Message& m) { endpoint_.send(m); });
+      service_.take_answers(send_);
     }
   });
 }
@@ -233,7 +247,7 @@ void NodeLoop::write_due() {
 void NodeLoop::apply(Delayed item) {
   if (!assigned_.send_lag) {
     service_.set_injected_lag(item.injected);
-    for (auto& r : service_.handle(item.message)) endpoint_.send(r);
+    service_.handle(item.message, send_);
     return;
   }
   const auto release = assigned_.send_lag->schedule(

@@ -11,7 +11,23 @@
 //   an actuator emulator in real time holds on its own (command watchdog) when no command has
 //   arrived for command_watchdog_periods x dt; before it judges, it gives its receive thread
 //   kWatchdogGrace to deliver commands that waited while the process itself was descheduled.
-// Wall-clock stamps are CLOCK_REALTIME (transport::realtime_ns).
+// Wall-clock stamps are CLOCK_REALTIME (transport::realtime_ns); the servo and answer threads
+// pace and wait on CLOCK_MONOTONIC (runtime/rt/clock.h monotonic_ns).
+//
+// Threads: four, sharing one mutex (the loop's `state`) over the service, the timers and the
+// lag queues; each holds it only while it acts, never while it waits.
+//   loop      the caller's thread: keep time, write and apply what is due, wait for a message
+//             (lock released in the wait). Allocates per message it queues behind a lag, never
+//             on the paths below.
+//   receive   the transport's receive thread: with no lag injected, a COMMAND is handled inline
+//             there (no thread switch per step); the reply is packed in the service's buffer
+//             and sent at once (NodeService::handle(message, send): no allocation once warm).
+//   servo     a streaming node only (servo faster than the integrator): one servo_tick() per
+//             period, paced on CLOCK_MONOTONIC with the deployment's wait policy.
+//   answers   a node with an answer source only (runtime/node/answer_source.h): waits on the
+//             source without the lock (at most kAnswerPoll), then forwards what it answered.
+// realtime_priority raises the loop's thread before the servo and answer threads start (they
+// inherit it) and names the transport's receive threads.
 
 #include <chrono>
 

@@ -80,18 +80,23 @@ bool NodeService::in_range(const Command& command) const {
 
 std::vector<transport::Message> NodeService::start() { return {announce()}; }
 
-std::vector<transport::Message> NodeService::on_assign(const transport::Message& message) {
-  if (!entitled(message)) return {};
+void NodeService::compute(const Command& /*command*/, Feedback& /*feedback*/) {
+  throw std::logic_error(label() + ": compute() called on a node whose answers come from its " +
+                         "answer source");
+}
+
+std::optional<transport::Message> NodeService::on_assign(const transport::Message& message) {
+  if (!entitled(message)) return std::nullopt;
   Assign assign;
   if (!unpack(message, assign)) {
     rejected_.count(Verdict::kGarbage);
-    return {};
+    return std::nullopt;
   }
   if (!assigned_) {
     if (message.run_id.empty() ||
         (!expected_run_id_.empty() && message.run_id != expected_run_id_)) {
       rejected_.count(Verdict::kForeignRun);
-      return {};
+      return std::nullopt;
     }
     run_id_ = message.run_id;
     coordinator_writer_ = message.writer;
@@ -103,35 +108,7 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
     }
     assigned_ = true;
     try {
-      if (assign.schema_version() != kSchemaVersion)
-        throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
-                                    ", this node speaks " + std::to_string(kSchemaVersion));
-      validate_assigned_lags(assign);
-      hosted_ = configure(assign);
-      const auto chains =
-          [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
-            std::vector<core::DelayChain> out;
-            if (stages.empty()) return out;
-            for (int i = 0; i < hosted_; ++i)
-              out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
-            return out;
-          };
-      receive_chains_ = chains(assign.node().receive_delay());
-      send_chains_ = chains(assign.node().send_delay());
-      asynchronous_ = answers_asynchronously();
-      if (asynchronous_ && (!receive_chains_.empty() || !send_chains_.empty() ||
-                            LagInjector(assign.node().send_lag()).active()))
-        throw std::invalid_argument(
-            "this node answers when its controller does, not once per command: receive_delay, "
-            "send_delay and send_lag cannot act on its answers (inject the controller link's lag "
-            "at the controller, or use receive_lag)");
-      if (asynchronous_) envelopes_.assign(kEnvelopes, Envelope{});
-      stream_period_ = servo_period();
-      streaming_ = deployment.clock() == config::Deployment::REAL_TIME && stream_period_ > 0;
-      if (streaming_ && !send_chains_.empty())
-        throw std::invalid_argument(
-            "send_delay acts once per command, but a servo loop faster than the integrator "
-            "streams feedback every servo period; inject the lag with send_lag instead");
+      build_part(assign);
     } catch (const std::exception& e) {
       configure_error_ = label() + ": " + e.what();
       spdlog::error("{}", configure_error_);
@@ -142,13 +119,50 @@ std::vector<transport::Message> NodeService::on_assign(const transport::Message&
   ready.set_node_id(node_id_);
   ready.set_storeys(hosted_);
   ready.set_error(configure_error_);
-  return {pack(run_id_, node_id_, READY, 0, ready)};
+  return pack(run_id_, node_id_, READY, 0, ready);
+}
+
+void NodeService::build_part(const Assign& assign) {
+  if (assign.schema_version() != kSchemaVersion)
+    throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
+                                ", this node speaks " + std::to_string(kSchemaVersion));
+  validate_assigned_lags(assign);
+  hosted_ = configure(assign);
+  const auto chains = [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
+    std::vector<core::DelayChain> out;
+    if (stages.empty()) return out;
+    for (int i = 0; i < hosted_; ++i)
+      out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
+    return out;
+  };
+  receive_chains_ = chains(assign.node().receive_delay());
+  send_chains_ = chains(assign.node().send_delay());
+  source_ = answer_source();
+  if (source_ && (!receive_chains_.empty() || !send_chains_.empty() ||
+                  LagInjector(assign.node().send_lag()).active()))
+    throw std::invalid_argument(
+        "this node answers when its controller does, not once per command: receive_delay, "
+        "send_delay and send_lag cannot act on its answers (inject the controller link's lag "
+        "at the controller, or use receive_lag)");
+  if (source_) envelopes_.assign(kEnvelopes, Envelope{});
+  stream_period_ = servo_period();
+  streaming_ =
+      assign.study().deployment().clock() == config::Deployment::REAL_TIME && stream_period_ > 0;
+  if (streaming_ && !send_chains_.empty())
+    throw std::invalid_argument(
+        "send_delay acts once per command, but a servo loop faster than the integrator "
+        "streams feedback every servo period; inject the lag with send_lag instead");
+}
+
+void NodeService::enter_hold() {
+  held_ = true;
+  if (source_) source_->hold();
+  on_hold();
 }
 
 std::optional<transport::Message> NodeService::hold_on_own(const std::string& reason) {
   if (held_ || stopped_) return std::nullopt;
-  held_ = true;
-  on_hold();
+  enter_hold();
   spdlog::error("{}: holding on its own at step {} (realtime_ns {}): {}", label(), last_step_,
                 transport::realtime_ns(), reason);
   Hold hold;
@@ -171,36 +185,46 @@ std::optional<transport::Message> NodeService::servo_tick(bool overrun) {
 }
 
 std::vector<transport::Message> NodeService::handle(const transport::Message& message) {
+  std::vector<transport::Message> replies;
+  handle(message, [&replies](const transport::Message& m) { replies.push_back(m); });
+  return replies;
+}
+
+void NodeService::handle(const transport::Message& message, const Send& send) {
   if (!assigned_) {
-    if (message.kind == ASSIGN) return on_assign(message);
-    return {};  // nothing else concerns a node that is not part of a run yet
+    // Nothing but an ASSIGN concerns a node that is not part of a run yet.
+    if (message.kind == ASSIGN)
+      if (auto ready = on_assign(message)) send(*ready);
+    return;
   }
   const Verdict envelope = check_envelope(message, run_id_);
   if (envelope != Verdict::kAccept) {
     rejected_.count(envelope);
-    return {};
+    return;
   }
   switch (message.kind) {
-    case ASSIGN: return on_assign(message);
-    case COMMAND: return on_command(message);
+    case ASSIGN:
+      if (auto ready = on_assign(message)) send(*ready);
+      return;
+    case COMMAND: return on_command(message, send);
     case HOLD:
-      if (!entitled(message)) return {};
-      if (!held_) {
-        held_ = true;
-        on_hold();
+      if (!entitled(message) || held_) return;
+      enter_hold();
+      {
         Hold hold;
         unpack(message, hold);
         spdlog::warn("{}: HOLD at step {} (realtime_ns {}): {}", label(), last_step_,
                      transport::realtime_ns(), hold.reason());
       }
-      return {};
+      return;
     case STOP:
-      if (!entitled(message)) return {};
+      if (!entitled(message)) return;
       stopped_ = true;
+      if (source_) source_->stop();
       on_stop();
-      if (asynchronous_) return {};  // final_heartbeat_due(), once at rest
-      return {heartbeat_message(true)};
-    default: return {};  // heartbeats only refresh liveliness, which the loop tracks
+      if (!source_) send(heartbeat_message(true));  // else final_heartbeat_due(), once at rest
+      return;
+    default: return;  // heartbeats only refresh liveliness, which the loop tracks
   }
 }
 
@@ -215,26 +239,17 @@ void NodeService::apply_receive_sensors() {
   }
 }
 
-std::vector<transport::Message> NodeService::on_command(const transport::Message& message) {
-  if (!entitled(message) || held_ || stopped_ || !configure_error_.empty()) return {};
+void NodeService::on_command(const transport::Message& message, const Send& send) {
+  if (!entitled(message) || held_ || stopped_ || !configure_error_.empty()) return;
   const Verdict order = check_step(message.step, last_step_, last_step_ + max_step_gap_);
-  if (order != Verdict::kAccept) {
-    rejected_.count(order);
-    return {};
-  }
-  if (!unpack(message, command_)) {
-    rejected_.count(Verdict::kGarbage);
-    return {};
-  }
-  if (!in_range(command_)) {
-    rejected_.count(Verdict::kOutOfRange);
-    return {};
-  }
+  if (order != Verdict::kAccept) return rejected_.count(order);
+  if (!unpack(message, command_)) return rejected_.count(Verdict::kGarbage);
+  if (!in_range(command_)) return rejected_.count(Verdict::kOutOfRange);
   if (const std::string why = refusal(command_); !why.empty()) {
-    auto hold =
-        hold_on_own("refused the command of step " + std::to_string(message.step) + ": " + why);
-    if (hold) return {std::move(*hold)};
-    return {};
+    if (auto hold =
+            hold_on_own("refused the command of step " + std::to_string(message.step) + ": " + why))
+      send(*hold);
+    return;
   }
   feedback_.Clear();
   if (!receive_chains_.empty() && command_.drift_size() == hosted_ &&
@@ -245,12 +260,11 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
                          receive_chains_[i].step({command_.time(), command_.drift(i), velocity}));
     }
   }
-  if (asynchronous_) {
+  if (source_) {
     Envelope& e = envelopes_[static_cast<std::size_t>(message.step) % kEnvelopes];
     e = Envelope{message.step, message.sent_ns, message.received_ns, injected_lag_};
     last_step_ = message.step;
-    dispatch(message.step, command_);
-    return {};
+    return source_->dispatch(message.step, command_);
   }
   try {
     if (streaming_)
@@ -259,28 +273,18 @@ std::vector<transport::Message> NodeService::on_command(const transport::Message
       compute(command_, feedback_);  // checks sizes before it changes any state
   } catch (const std::invalid_argument& e) {
     spdlog::warn("{}: rejected command of step {}: {}", label(), message.step, e.what());
-    rejected_.count(Verdict::kGarbage);
-    return {};
+    return rejected_.count(Verdict::kGarbage);
   }
-  if (streaming_) {
-    last_step_ = stream_step_ = message.step;
-    stream_echo_ns_ = message.sent_ns;
-    stream_received_ns_ = message.received_ns;
-    stream_injected_lag_ = injected_lag_;
-    return {};
-  }
-  return answer(message);
+  if (!streaming_) return answer(message, send);
+  last_step_ = stream_step_ = message.step;
+  stream_echo_ns_ = message.sent_ns;
+  stream_received_ns_ = message.received_ns;
+  stream_injected_lag_ = injected_lag_;
 }
 
-// After compute(): HOLD for a failed answer, nothing for none, else FEEDBACK through the send
-// stages, echoing the command's stamp.
-std::vector<transport::Message> NodeService::answer(const transport::Message& message) {
-  if (const std::string why = failure(); !why.empty()) {
-    auto hold = hold_on_own("step " + std::to_string(message.step) + ": " + why);
-    if (hold) return {std::move(*hold)};
-    return {};
-  }
-  if (!answered()) return {};
+// After compute(): FEEDBACK through the send stages, echoing the command's stamp, packed into
+// reply_ (no allocation once warm).
+void NodeService::answer(const transport::Message& message, const Send& send) {
   apply_receive_sensors();
   if (!send_chains_.empty())
     for (int i = 0; i < hosted_ && i < feedback_.force_size(); ++i)
@@ -288,25 +292,25 @@ std::vector<transport::Message> NodeService::answer(const transport::Message& me
   last_step_ = message.step;
   feedback_.set_command_received_ns(message.received_ns);
   feedback_.set_injected_lag(injected_lag_);
-  transport::Message reply = pack(run_id_, node_id_, FEEDBACK, message.step, feedback_);
-  reply.echo_ns = message.sent_ns;
-  return {std::move(reply)};
+  pack_into(reply_, run_id_, node_id_, FEEDBACK, message.step, feedback_);
+  reply_.echo_ns = message.sent_ns;
+  send(reply_);
 }
 
 }  // namespace rths::runtime
 
 namespace rths::runtime {
 
-void NodeService::take_answers(const std::function<void(const transport::Message&)>& send) {
-  if (!asynchronous_) return;
+void NodeService::take_answers(const Send& send) {
+  if (!source_) return;
   for (;;) {
     async_feedback_.Clear();
-    const Answered a = next_answer(async_feedback_);
-    if (a.kind == Answered::Kind::kNone) return;
-    if (a.kind == Answered::Kind::kFault) {
+    const AnswerSource::Next a = source_->next(async_feedback_);
+    if (a.kind == AnswerSource::Next::Kind::kNone) return;
+    if (a.kind == AnswerSource::Next::Kind::kFault) {
       if (auto hold = hold_on_own("step " + std::to_string(last_step_) + ": " + a.fault))
         send(*hold);
-      continue;  // held now: next_answer() brings the node to rest
+      continue;  // held now: next() brings the source to rest
     }
     if (held_ || stopped_) continue;
     const Envelope& e = envelopes_[static_cast<std::size_t>(a.step) % kEnvelopes];
@@ -320,7 +324,7 @@ void NodeService::take_answers(const std::function<void(const transport::Message
 }
 
 std::optional<transport::Message> NodeService::final_heartbeat_due() {
-  if (!asynchronous_ || !stopped_ || final_heartbeat_sent_ || !rested()) return std::nullopt;
+  if (!source_ || !stopped_ || final_heartbeat_sent_ || !source_->rested()) return std::nullopt;
   final_heartbeat_sent_ = true;
   return heartbeat_message(true);
 }

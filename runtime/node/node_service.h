@@ -32,21 +32,23 @@
 //                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
 //                       for the newest command, stamped with its servo sample. Held, stopped or
 //                       before the first command: no tick runs and nothing is sent.
-//   asynchronous        a node whose answers come from a source of their own (a controller's
-//                       UDP link: answers_asynchronously() true after configure()): a COMMAND
-//                       only dispatches (dispatch(); nothing waits), and the node loop's answer
-//                       thread calls await_answers(deadline) without the loop's lock (a
-//                       subclass may only wait on its own source there), then take_answers(send)
-//                       with it, which sends a FEEDBACK for each answer, echoing the envelope of
-//                       the step it answers (kept for kEnvelopes steps), or the HOLD a fault
-//                       makes. Held or stopped, answers are no longer forwarded, and the
-//                       subclass comes to rest on that thread (at_rest()); the final heartbeat
-//                       then waits until it is (final_heartbeat_due()). Simulated-time stages
-//                       (receive_delay, send_delay) and send_lag are refused: they act per
-//                       command, and such a node answers when its source does.
+//   asynchronous        a node whose answers come from a source of their own (answer_source()
+//                       non-null after configure(): runtime/node/answer_source.h; a
+//                       controller's UDP link): a COMMAND only dispatches to it (nothing waits),
+//                       and the node loop's answer thread calls await_answers(deadline) without
+//                       the loop's lock, then take_answers(send) with it, which sends a FEEDBACK
+//                       for each answer, echoing the envelope of the step it answers (kept for
+//                       kEnvelopes steps), or the HOLD a fault makes. Held or stopped, answers
+//                       are no longer forwarded and the source comes to rest on that thread; the
+//                       final heartbeat then waits until it has (final_heartbeat_due()).
+//                       Simulated-time stages (receive_delay, send_delay) and send_lag are
+//                       refused: they act per command, and such a node answers when its source
+//                       does.
+//   real time           handle(message, send), servo_tick() and take_answers() allocate nothing
+//                       per command once warm: each reply is packed into a buffer the service
+//                       keeps (a HOLD, a refusal and a reject's log line aside).
 // Subclasses (substructure node, actuator emulator, controller node) supply configure() and
-// compute(); a controller may also fail a computed answer (failure(): HOLD instead of FEEDBACK)
-// or have none (answered() false: nothing sent).
+// either compute() or an answer source.
 
 #include <functional>
 #include <optional>
@@ -55,6 +57,7 @@
 
 #include "core/delay.h"
 #include "rths/proto/runtime.pb.h"
+#include "runtime/node/answer_source.h"
 #include "runtime/node/validation.h"
 #include "transport/in_process.h"
 
@@ -66,6 +69,11 @@ class NodeService : public transport::NodeHandler {
   NodeService(std::int32_t node_id, config::NodeSpec::Kind kind, std::string expected_run_id);
   std::vector<transport::Message> start() override;
   std::vector<transport::Message> handle(const transport::Message& message) override;
+  // Where the service's replies go, each valid only during the call.
+  using Send = std::function<void(const transport::Message&)>;
+  // handle() with each reply passed to `send` as it is made: the real-time path (see "real
+  // time"); the handler's vector copies them.
+  void handle(const transport::Message& message, const Send& send);
 
   transport::Message announce() const;
   transport::Message heartbeat() const;
@@ -96,12 +104,16 @@ class NodeService : public transport::NodeHandler {
   }
 
   // Asynchronous answers (see the contract above).
-  bool asynchronous() const { return asynchronous_; }
-  void await_answers(std::int64_t deadline_ns) { wait_for_answers(deadline_ns); }
-  void take_answers(const std::function<void(const transport::Message&)>& send);
+  bool asynchronous() const { return source_ != nullptr; }
+  // Without the node's lock: waits on the answer source alone (CLOCK_MONOTONIC ns).
+  void await_answers(std::int64_t deadline_ns) {
+    if (source_) source_->wait(deadline_ns);
+  }
+  // With the node's lock: forwards every answer ready now (or the HOLD a fault makes).
+  void take_answers(const Send& send);
   // Stopped, at rest, and its final heartbeat not yet sent: the loop sends it now (once).
   std::optional<transport::Message> final_heartbeat_due();
-  bool at_rest() const { return !asynchronous_ || rested(); }
+  bool at_rest() const { return !source_ || source_->rested(); }
 
   bool assigned() const { return assigned_; }
   bool held() const { return held_; }
@@ -116,8 +128,10 @@ class NodeService : public transport::NodeHandler {
  protected:
   // Builds the node's part; returns how many storeys/actuators it hosts. Throws on a bad part.
   virtual int configure(const Assign& assign) = 0;
-  // One step. Fills force (and realised for actuators), one entry per hosted storey.
-  virtual void compute(const Command& command, Feedback& feedback) = 0;
+  // One step. Fills force (and realised for actuators), one entry per hosted storey. Throws
+  // std::invalid_argument on a command of the wrong size before it changes any state. Never
+  // called on a node with an answer source (the default throws std::logic_error saying so).
+  virtual void compute(const Command& command, Feedback& feedback);
   virtual void on_hold() {}
   // Once per hold, after the HOLD has been reported (so its cost never delays the report):
   // whatever the node does to come to rest (the emulator's rate-limited ramp).
@@ -131,35 +145,23 @@ class NodeService : public transport::NodeHandler {
   virtual void tick(Feedback& /*feedback*/) {}
   // Non-empty: why this command must not be acted on (checked before any delay stage or block).
   virtual std::string refusal(const Command& /*command*/) { return {}; }
-  // After compute(): non-empty = why its answer must not be used (a controller's frame refused);
-  // the node holds and answers HOLD with this reason instead of FEEDBACK.
-  virtual std::string failure() { return {}; }
-  // After compute(): false = nothing to answer this time (a controller's answer is late in real
-  // time); nothing is sent and the coordinator's answer window judges the node.
-  virtual bool answered() const { return true; }
-  // On STOP, before the final heartbeat (a controller passes STOP to the lab's controller).
+  // On STOP, before the final heartbeat (after the answer source, if any, was told to stop).
   virtual void on_stop() {}
   // What a node adds to each heartbeat (a controller's link report).
   virtual void fill_heartbeat(Heartbeat& /*heartbeat*/) const {}
-  // Asynchronous nodes (see the contract above); asked once, after configure().
-  virtual bool answers_asynchronously() const { return false; }
-  virtual void dispatch(std::int64_t /*step*/, const Command& /*command*/) {}
-  virtual void wait_for_answers(std::int64_t /*deadline_ns*/) {}
-  struct Answered {
-    enum class Kind { kNone, kAnswer, kFault } kind = Kind::kNone;
-    std::int64_t step = 0;  // kAnswer: the step it answers
-    std::string fault;      // kFault: why
-  };
-  // The next answer (feedback filled: force, realised, and what else the node reports), a fault,
-  // or kNone when nothing more is ready; held or stopped, it brings the node to rest instead.
-  virtual Answered next_answer(Feedback& /*feedback*/) { return {}; }
-  // Held or stopped: whether it has come to rest (the controller holds until held, then STOP).
-  virtual bool rested() const { return true; }
+  // The source of the node's answers when they come on their own (see "asynchronous"), owned by
+  // the subclass and alive as long as it; nullptr: compute() answers each command. Asked once,
+  // after configure().
+  virtual AnswerSource* answer_source() { return nullptr; }
 
  private:
-  std::vector<transport::Message> on_assign(const transport::Message& message);
-  std::vector<transport::Message> on_command(const transport::Message& message);
-  std::vector<transport::Message> answer(const transport::Message& message);
+  std::optional<transport::Message> on_assign(const transport::Message& message);
+  // Throws std::invalid_argument naming what the assignment cannot be (configure_error_).
+  void build_part(const Assign& assign);
+  void on_command(const transport::Message& message, const Send& send);
+  void answer(const transport::Message& message, const Send& send);
+  // The node holds (HOLD, its own watchdog, a fault): its source and on_hold() are told.
+  void enter_hold();
   // Whether a control message (ASSIGN, COMMAND, HOLD, STOP) came from the coordinator that
   // assigned this node, on this node's own topic; counts it not entitled otherwise.
   bool entitled(const transport::Message& message);
@@ -182,9 +184,11 @@ class NodeService : public transport::NodeHandler {
   std::function<std::uint64_t()> unauthenticated_;
   Command command_;
   Feedback feedback_;
+  transport::Message reply_;  // the synchronous reply, packed in place
   bool streaming_ = false;
   // Asynchronous: the envelope of each recent step's command, by step % kEnvelopes.
-  bool asynchronous_ = false, final_heartbeat_sent_ = false;
+  AnswerSource* source_ = nullptr;
+  bool final_heartbeat_sent_ = false;
   struct Envelope {
     std::int64_t step = -1, echo_ns = 0, received_ns = 0;
     double injected_lag = 0.0;

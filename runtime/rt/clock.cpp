@@ -5,11 +5,13 @@
 
 namespace rths::runtime {
 
-std::int64_t MonotonicClock::now_ns() {
+std::int64_t monotonic_ns() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
+
+std::int64_t MonotonicClock::now_ns() { return monotonic_ns(); }
 
 void MonotonicClock::sleep_until_ns(std::int64_t deadline) {
   timespec ts{};

@@ -8,6 +8,10 @@
 
 namespace rths::runtime {
 
+// The house's one monotonic clock: CLOCK_MONOTONIC now, ns. Every deadline, wait and age the
+// runtime, the node loop and the controller link measure is on it.
+std::int64_t monotonic_ns();
+
 class PacingClock {
  public:
   virtual ~PacingClock() = default;

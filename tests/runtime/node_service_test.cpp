@@ -1,13 +1,29 @@
 // Node services driven message by message, without any transport.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <new>
 
 #include "actuator_emulator/actuator_service.h"
 #include "runtime/node/schema.h"
 #include "substructure_nodes/substructure_service.h"
 #include "test_support.h"
+
+// Counts every allocation of this test program, so a command can be shown to allocate nothing.
+namespace {
+std::atomic<long> allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  ++allocations;
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 namespace rths {
 namespace {
@@ -36,6 +52,37 @@ transport::Message command(int node, std::int64_t step, double drift, double vel
   auto m = runtime::pack(kRun, node, runtime::COMMAND, step, c);
   m.sent_ns = 1000 + step;
   return m;
+}
+
+// The synchronous path (node_service.h, "real time"): once warm, a command is checked, computed
+// and answered into the service's own buffer without one allocation, for both kinds of node
+// that answer with compute(). The messages are built before counting.
+TEST(NodeService, ASynchronousCommandAllocatesNothingOnceWarm) {
+  substructure_nodes::SubstructureService substructure(1, "");
+  actuator_emulator::ActuatorService emulator(2, "");
+  struct Case {
+    runtime::NodeService& node;
+    int id;
+    config::NodeSpec::Kind kind;
+  };
+  for (const Case& c : {Case{substructure, 1, config::NodeSpec::SUBSTRUCTURE},
+                        Case{emulator, 2, config::NodeSpec::ACTUATOR_EMULATOR}}) {
+    const bool numerical = c.kind == config::NodeSpec::SUBSTRUCTURE;
+    c.node.handle(assign_message(c.id, c.kind, numerical ? std::vector<int>{0} : std::vector<int>{},
+                                 numerical ? std::vector<int>{} : std::vector<int>{0}));
+    std::vector<transport::Message> commands;
+    for (std::int64_t step = 1; step <= 200; ++step)
+      commands.push_back(command(c.id, step, 1e-4 * static_cast<double>(step % 7), 0.0));
+    long answers = 0;
+    const runtime::NodeService::Send count_feedback = [&answers](const transport::Message& m) {
+      answers += m.kind == runtime::FEEDBACK;
+    };
+    for (std::size_t k = 0; k < 10; ++k) c.node.handle(commands[k], count_feedback);
+    const long before = allocations.load();
+    for (std::size_t k = 10; k < commands.size(); ++k) c.node.handle(commands[k], count_feedback);
+    EXPECT_EQ(allocations.load() - before, 0) << c.node.label();
+    EXPECT_EQ(answers, 200) << c.node.label();
+  }
 }
 
 TEST(SubstructureService, AnswersAssignThenCommandsWithStoreyShears) {
