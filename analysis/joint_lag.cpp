@@ -85,7 +85,7 @@ void fill_compensated_boundary(const JointLagStudy& config, const core::Prepared
   const double omega = std::sqrt(k / m), period = 2.0 * std::numbers::pi / omega;
   const double zeta = model.damping(0, 0) / (2.0 * m * omega);
   const config::ForcePredictor& p = config.force_predictor();
-  const double factor = p.stiffness_factor() > 0.0 ? p.stiffness_factor() : 1.0;
+  const double factor = core::predictor_stiffness_factor(p);
   // predictor_critical_delay's model damping is c_m = damping_error 2 omega_n (m = 1).
   const double damping_error = p.damping() / (2.0 * m * omega);
   const core::ContinuousStability s =

@@ -220,7 +220,7 @@ CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const co
                                         double lag) {
   CompensatedVerdict verdict;
   const config::ForcePredictor& block = c.force_predictor();
-  const double factor = block.stiffness_factor() > 0 ? block.stiffness_factor() : 1.0;
+  const double factor = core::predictor_stiffness_factor(block);
   std::ostringstream text;
   text << std::setprecision(3) << "force predictor (model stiffness " << std::showpos
        << 100.0 * (factor - 1.0) << std::noshowpos << " %"

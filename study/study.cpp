@@ -231,11 +231,14 @@ void validate_force_predictor(const config::ForcePredictor& block, double dt,
         " s is shorter than one step (integrator.dt = " + format_number(dt) + " s)");
 }
 
+double predictor_stiffness_factor(const config::ForcePredictor& block) {
+  return block.stiffness_factor() > 0 ? block.stiffness_factor() : 1.0;
+}
+
 PredictorParameters predictor_parameters(const config::ForcePredictor& block,
                                          double declared_stiffness) {
   PredictorParameters p;
-  p.stiffness =
-      declared_stiffness * (block.stiffness_factor() > 0 ? block.stiffness_factor() : 1.0);
+  p.stiffness = declared_stiffness * predictor_stiffness_factor(block);
   p.damping = block.damping();
   p.adapt = !block.fixed_model();
   if (block.forgetting_time() > 0) p.forgetting_time = block.forgetting_time();

@@ -88,6 +88,9 @@ void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& blo
 // The one range rule of a ForcePredictor block (dt: the integrator's step, 0 when not yet known).
 void validate_force_predictor(const config::ForcePredictor& block, double dt,
                               const std::string& where);
+// The predictor's starting model stiffness relative to the declared specimen's: the block's
+// stiffness_factor, unset (0) = 1. The one place its default is read.
+double predictor_stiffness_factor(const config::ForcePredictor& block);
 // The block's parameters for a specimen whose declared initial stiffness is `declared_stiffness`.
 PredictorParameters predictor_parameters(const config::ForcePredictor& block,
                                          double declared_stiffness);
