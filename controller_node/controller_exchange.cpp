@@ -19,6 +19,12 @@ std::int64_t ns_of(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e9));
 }
 
+// The default clock of every exchange: CLOCK_MONOTONIC (stateless, so one serves all).
+runtime::PacingClock& monotonic_clock() {
+  static runtime::MonotonicClock clock;
+  return clock;
+}
+
 void check_setting(double value, const char* field) {
   if (!std::isfinite(value) || value < 0)
     throw std::invalid_argument(std::string("controller.") + field + " must be finite and >= 0");
@@ -27,8 +33,10 @@ void check_setting(double value, const char* field) {
 }  // namespace
 
 ControllerExchange::ControllerExchange(const config::ControllerLink& link,
-                                       const ExchangeSettings& settings)
-    : config_(link), settings_(settings) {
+                                       const ExchangeSettings& settings,
+                                       std::unique_ptr<DatagramLink> datagrams,
+                                       runtime::PacingClock* clock)
+    : config_(link), settings_(settings), clock_(clock ? clock : &monotonic_clock()) {
   runtime::check_frame_layout(link.command(), settings.actuators, Direction::kCommand,
                               "controller.command");
   runtime::check_frame_layout(link.feedback(), settings.actuators, Direction::kFeedback,
@@ -58,8 +66,9 @@ ControllerExchange::ControllerExchange(const config::ControllerLink& link,
   bytes_.reserve(frame_size(link.command()));
   report_.set_held_after(-1.0);
   report_.mutable_diagnostics()->Resize(static_cast<int>(diagnostic_fields_.size()), 0.0);
-  link_ = std::make_unique<UdpLink>(link.local_address(), link.local_port(), link.peer_address(),
-                                    link.peer_port());
+  link_ = datagrams ? std::move(datagrams)
+                    : std::make_unique<UdpLink>(link.local_address(), link.local_port(),
+                                                link.peer_address(), link.peer_port());
 }
 
 void ControllerExchange::reject(Cause cause, const std::string& why) {
@@ -92,7 +101,7 @@ bool ControllerExchange::send_frame(std::int64_t status, std::int64_t step) {
     settle(frame, InFlight::State::kLost);
     report_.set_lost(report_.lost() + 1);
   }
-  frame = InFlight{counter_, step, monotonic_ns(), status, out_.time, InFlight::State::kPending};
+  frame = InFlight{counter_, step, clock_->now_ns(), status, out_.time, InFlight::State::kPending};
   ++pending_;
   const auto at = static_cast<std::ptrdiff_t>((static_cast<std::size_t>(counter_) % kInFlight) *
                                               out_.target_displacement.size());

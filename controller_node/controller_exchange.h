@@ -115,7 +115,12 @@ class ControllerExchange {
 
   // Throws std::invalid_argument naming the field for a bad layout or setting,
   // std::runtime_error when the socket cannot be bound or connected.
-  ControllerExchange(const config::ControllerLink& link, const ExchangeSettings& settings);
+  // `datagrams`: the link to the controller; null: a UdpLink from `link`'s addresses and ports.
+  // `clock`: what frames are stamped and aged on, the clock the link stamps its datagrams on and
+  // waits on (it must outlive the exchange); null: CLOCK_MONOTONIC, as UdpLink's.
+  ControllerExchange(const config::ControllerLink& link, const ExchangeSettings& settings,
+                     std::unique_ptr<DatagramLink> datagrams = nullptr,
+                     runtime::PacingClock* clock = nullptr);
 
   bool send_command(std::int64_t step, double time, const std::vector<double>& drift,
                     const std::vector<double>& velocity);
@@ -127,8 +132,8 @@ class ControllerExchange {
   bool send_stop();
   bool holding() const { return holding_; }
   int actuators() const { return settings_.actuators; }
-  // Now on the clock every stamp of this exchange is on (CLOCK_MONOTONIC ns).
-  std::int64_t now_ns() const { return monotonic_ns(); }
+  // Now on the clock every stamp of this exchange is on (ns).
+  std::int64_t now_ns() const { return clock_->now_ns(); }
 
   const std::string& fault() const { return send_fault_; }
   // The report with its round-trip median and p99 (sorts a preallocated copy).
@@ -195,7 +200,8 @@ class ControllerExchange {
 
   config::ControllerLink config_;
   ExchangeSettings settings_;
-  std::unique_ptr<UdpLink> link_;
+  std::unique_ptr<DatagramLink> link_;
+  runtime::PacingClock* clock_;
   FrameValues out_, in_;
   std::vector<std::uint8_t> bytes_;
   Datagram datagram_;

@@ -56,7 +56,7 @@ bool ControllerExchange::hold_step(std::int64_t now_ns) {
 
 bool ControllerExchange::send_stop() {
   const bool sent = send_frame(kStatusStop, -1);
-  log_hold(runtime::HoldEntry::SENT_STOP, monotonic_ns(), counter_, kStatusStop,
+  log_hold(runtime::HoldEntry::SENT_STOP, clock_->now_ns(), counter_, kStatusStop,
            out_.target_displacement, nullptr, sent ? "" : send_fault_);
   return sent;
 }

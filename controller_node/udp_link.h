@@ -23,6 +23,10 @@
 //                          kMaxDatagram are reported with their true size (truncated content).
 // Thread contract: send() and wait() may run on different threads at once (the socket calls are
 // thread-safe); try_receive() on one thread at a time.
+//
+// DatagramLink is what the controller exchange needs of a link (the calls above, same
+// contracts), so that its tests run on an in-process link with no ports
+// (tests/controller_node/in_process_link.h); UdpLink is the real one.
 
 #include <array>
 #include <atomic>
@@ -46,22 +50,39 @@ struct Datagram {
   std::int64_t received_ns = 0;                    // CLOCK_MONOTONIC
 };
 
-class UdpLink {
+class DatagramLink {
+ public:
+  virtual ~DatagramLink() = default;
+  // 0 when sent, else the errno; never blocks.
+  virtual int send(const std::uint8_t* bytes, std::size_t size) = 0;
+  // True when a datagram is ready before `deadline_ns` (CLOCK_MONOTONIC, or the link's clock).
+  virtual bool wait(std::int64_t deadline_ns) const = 0;
+  // The next queued datagram, never blocking; false: none.
+  virtual bool try_receive(Datagram& datagram) = 0;
+  virtual std::string peer() const = 0;  // "a.b.c.d:port"
+  virtual std::uint64_t icmp_errors() const { return 0; }
+  virtual int last_icmp_errno() const { return 0; }
+  virtual std::uint64_t drained_before_connect() const { return 0; }
+};
+
+class UdpLink final : public DatagramLink {
  public:
   UdpLink(const std::string& local_address, int local_port, const std::string& peer_address,
           int peer_port);
-  ~UdpLink();
+  ~UdpLink() override;
   UdpLink(const UdpLink&) = delete;
   UdpLink& operator=(const UdpLink&) = delete;
 
-  int send(const std::uint8_t* bytes, std::size_t size);
-  bool wait(std::int64_t deadline_ns) const;
-  bool try_receive(Datagram& datagram);
-  std::string peer() const { return peer_; }    // "a.b.c.d:port"
-  std::string local() const { return local_; }  // "a.b.c.d:port"
-  std::uint64_t icmp_errors() const { return icmp_errors_.load(std::memory_order_relaxed); }
-  int last_icmp_errno() const { return last_icmp_errno_.load(std::memory_order_relaxed); }
-  std::uint64_t drained_before_connect() const { return drained_; }
+  int send(const std::uint8_t* bytes, std::size_t size) override;
+  bool wait(std::int64_t deadline_ns) const override;
+  bool try_receive(Datagram& datagram) override;
+  std::string peer() const override { return peer_; }  // "a.b.c.d:port"
+  std::string local() const { return local_; }         // "a.b.c.d:port"
+  std::uint64_t icmp_errors() const override {
+    return icmp_errors_.load(std::memory_order_relaxed);
+  }
+  int last_icmp_errno() const override { return last_icmp_errno_.load(std::memory_order_relaxed); }
+  std::uint64_t drained_before_connect() const override { return drained_; }
 
  private:
   int fd_ = -1;

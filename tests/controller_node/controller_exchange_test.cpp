@@ -1,16 +1,18 @@
-// The judged exchange with a controller over real UDP sockets on 127.0.0.1: the test plays the
-// controller (reads command frames, sends feedback frames as told) and a rogue socket on another
-// port. Several frames may be in flight; every rejected frame is counted by cause and named, none
-// is applied; the hold repeats HOLD frames at the measured position until the controller says
-// held. UDP ports 47100-47149.
+// The judged exchange with a controller: the test plays the controller (reads command frames,
+// sends feedback frames as told) over an in-process link (no ports), on a manual clock where a
+// test is about time (a stale frame, lost frames, the hold time), so that it judges the exchange
+// and not the machine's scheduling. What needs the real socket runs on UDP on 127.0.0.1 (ports
+// 47100-47149): the first exchange again, a rogue socket on another port, and a bad address.
+// Several frames may be in flight; every rejected frame is counted by cause and named, none is
+// applied; the hold repeats HOLD frames at the measured position until the controller says held.
 #include "controller_node/controller_exchange.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <limits>
-#include <thread>
 
+#include "in_process_link.h"
 #include "link_text.h"
 #include "test_controller.h"
 
@@ -36,10 +38,33 @@ ExchangeSettings settings(double timeout = 0.5, bool real_time = false, int wind
 
 using test::await_answer;
 
-TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedForItsStepWithItsRoundTrip) {
-  const auto link = test::controller_link(47100, 47101);
-  ControllerExchange node(link, settings());
-  Controller controller(link);
+// A clock that moves only when told (ns).
+class ManualClock final : public runtime::PacingClock {
+ public:
+  std::int64_t now_ns() override { return now_; }
+  void sleep_until_ns(std::int64_t deadline) override { now_ = std::max(now_, deadline); }
+  void advance(double seconds) { now_ += static_cast<std::int64_t>(seconds * 1e9); }
+
+ private:
+  std::int64_t now_ = 1'000'000'000;
+};
+
+// An exchange and the test's controller on an in-process link, on `clock` (default: the real
+// CLOCK_MONOTONIC). The link's addresses are never bound.
+struct InProcess {
+  explicit InProcess(const ExchangeSettings& s, runtime::PacingClock& clock = test::real_clock())
+      : link(test::controller_link(47198, 47199)),
+        pair(clock),
+        node(link, s, pair.node_end(), &clock),
+        controller(link, pair.controller(), clock) {}
+  config::ControllerLink link;
+  test::InProcessLinkPair pair;
+  ControllerExchange node;
+  Controller controller;
+};
+
+// The same exchange on the in-process link and on real UDP sockets.
+void answer_echoing_the_counter(ControllerExchange& node, Controller& controller) {
   ASSERT_TRUE(node.send_command(7, 0.25, {0.02}, {0.3}));
   const FrameValues command = controller.take();
   EXPECT_EQ(command.counter, 1);
@@ -60,10 +85,19 @@ TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedForItsStepWithItsRoun
   EXPECT_EQ(node.report().round_trip_median(), a.round_trip);
 }
 
-TEST(ControllerExchange, SeveralFramesInFlightAreAnsweredByTheirCounters) {
-  const auto link = test::controller_link(47102, 47103);
+TEST(ControllerExchange, AnAnswerEchoingTheCounterIsAppliedForItsStepWithItsRoundTrip) {
+  InProcess in_process(settings());
+  answer_echoing_the_counter(in_process.node, in_process.controller);
+  const auto link = test::controller_link(47100, 47101);
   ControllerExchange node(link, settings());
   Controller controller(link);
+  answer_echoing_the_counter(node, controller);
+}
+
+TEST(ControllerExchange, SeveralFramesInFlightAreAnsweredByTheirCounters) {
+  InProcess bench(settings());
+  ControllerExchange& node = bench.node;
+  Controller& controller = bench.controller;
   for (int step = 1; step <= 3; ++step)
     ASSERT_TRUE(node.send_command(step, step * 0.001, {step * 1e-4}, {0.0}));
   EXPECT_EQ(node.report_as_is().in_flight(), 3u);
@@ -81,9 +115,9 @@ TEST(ControllerExchange, SeveralFramesInFlightAreAnsweredByTheirCounters) {
 }
 
 TEST(ControllerExchange, AnAnswerOlderThanTheNewestAnsweredIsLateAndNeverApplied) {
-  const auto link = test::controller_link(47104, 47105);
-  ControllerExchange node(link, settings());
-  Controller controller(link);
+  InProcess bench(settings());
+  ControllerExchange& node = bench.node;
+  Controller& controller = bench.controller;
   node.send_command(1, 0.001, {0.001}, {0.0});
   node.send_command(2, 0.002, {0.002}, {0.0});
   controller.take();
@@ -152,12 +186,10 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
       {"range", [](Controller& c, const FrameValues& v) { return c.feedback(v.counter, 0.2, 0); },
        "beyond the run's limit of 0.100000 m"},
   };
-  int port = 47110;
   for (const Refused& r : cases) {
-    const auto link = test::controller_link(port, port + 1);
-    port += 2;
-    ControllerExchange node(link, settings());
-    Controller controller(link);
+    InProcess bench(settings());
+    ControllerExchange& node = bench.node;
+    Controller& controller = bench.controller;
     // Frame 1 answered well, then frame 2 answered as the case says.
     node.send_command(1, 0.001, {0.0}, {0.0});
     controller.send(controller.feedback(controller.take().counter, 0.0, 0.0));
@@ -173,12 +205,12 @@ TEST(ControllerExchange, WrongSizeNonFiniteCountersStatusAndRangeAreFaults) {
 }
 
 // The rig answers plausibly for `good` frames, then with `last`; what the node makes of it.
-ControllerExchange::Answer after_good_answers(int port, ExchangeSettings s, int good,
-                                              double last_drift, double last_force,
+ControllerExchange::Answer after_good_answers(ExchangeSettings s, int good, double last_drift,
+                                              double last_force,
                                               ControllerExchange::Answer* last_good = nullptr) {
-  const auto link = test::controller_link(port, port + 1);
-  ControllerExchange node(link, s);
-  Controller controller(link);
+  InProcess bench(s);
+  ControllerExchange& node = bench.node;
+  Controller& controller = bench.controller;
   for (int step = 1; step <= good + 1; ++step) {
     const double target = 0.001 * step;
     node.send_command(step, step * 0.001, {target}, {1.0});
@@ -198,13 +230,13 @@ TEST(ControllerExchange, AMeasurementMovingFasterThanTheRigCouldIsImplausible) {
   s.max_measured_rate = 2.0;  // m/s
   s.max_force_rate = 2e3;     // N/s; the good answers move 1 N per ms = 1e3 N/s
   // A rebooted controller: its echo is right, its state is lost (drift and force back to 0).
-  const auto force_jump = after_good_answers(47130, s, 5, 0.0059, 0.0);
+  const auto force_jump = after_good_answers(s, 5, 0.0059, 0.0);
   EXPECT_EQ(force_jump.outcome, Outcome::kFault);
   EXPECT_NE(force_jump.fault.find("implausible measurement: the measured force of actuator 1 "
                                   "(frame 6, step 6) moved -5.0 N in 1.000 ms"),
             std::string::npos)
       << force_jump.fault;
-  const auto drift_jump = after_good_answers(47132, s, 5, 0.0, 6.0);
+  const auto drift_jump = after_good_answers(s, 5, 0.0, 6.0);
   EXPECT_EQ(drift_jump.outcome, Outcome::kFault);
   EXPECT_NE(drift_jump.fault.find("the measured drift of actuator 1 (frame 6, step 6) moved"),
             std::string::npos)
@@ -212,16 +244,16 @@ TEST(ControllerExchange, AMeasurementMovingFasterThanTheRigCouldIsImplausible) {
   EXPECT_NE(drift_jump.fault.find("bound max_measured_rate 2.000 m/s"), std::string::npos)
       << drift_jump.fault;
   // Within both bounds: answered.
-  EXPECT_EQ(after_good_answers(47134, s, 5, 0.0060, 6.0).outcome, Outcome::kAnswered);
+  EXPECT_EQ(after_good_answers(s, 5, 0.0060, 6.0).outcome, Outcome::kAnswered);
 }
 
 TEST(ControllerExchange, ATrackingErrorBeyondItsBoundForItsStepsIsAFault) {
   ExchangeSettings s = settings();
   s.max_tracking_error = 0.0005;  // m
   s.tracking_error_steps = 3;
-  const auto link = test::controller_link(47136, 47137);
-  ControllerExchange node(link, s);
-  Controller controller(link);
+  InProcess bench(s);
+  ControllerExchange& node = bench.node;
+  Controller& controller = bench.controller;
   ControllerExchange::Answer a;
   for (int step = 1; step <= 3; ++step) {
     node.send_command(step, step * 0.001, {0.002}, {0.0});
@@ -238,30 +270,30 @@ TEST(ControllerExchange, ATrackingErrorBeyondItsBoundForItsStepsIsAFault) {
 }
 
 TEST(ControllerExchange, ASilentControllerIsAFaultInLockstepOnceTheFrameIsStale) {
-  const auto link = test::controller_link(47138, 47139);
-  ControllerExchange node(link, settings(0.05));
-  Controller controller(link);  // bound, never answers
-  const std::int64_t start = monotonic_ns();
+  ManualClock clock;
+  InProcess bench(settings(0.05), clock);  // the controller never answers
+  ControllerExchange& node = bench.node;
   node.send_command(1, 0.0, {0.0}, {0.0});
-  EXPECT_EQ(node.next(monotonic_ns()).outcome, Outcome::kNone);  // nothing waits
-  const auto a = await_answer(node);
-  const double waited = static_cast<double>(monotonic_ns() - start) * 1e-9;
+  EXPECT_EQ(node.next(clock.now_ns()).outcome, Outcome::kNone);  // nothing waits
+  clock.advance(0.0499);
+  EXPECT_EQ(node.next(clock.now_ns()).outcome, Outcome::kNone);  // not stale yet
+  clock.advance(0.0002);
+  const auto a = node.next(clock.now_ns());
   EXPECT_EQ(a.outcome, Outcome::kFault);
   EXPECT_NE(a.fault.find("did not answer frame 1 (step 1) within 50.000000 ms"), std::string::npos)
       << a.fault;
-  EXPECT_GE(waited, 0.05);
-  EXPECT_LT(waited, 0.5);
   EXPECT_EQ(node.report().lost(), 1u);
 }
 
 TEST(ControllerExchange, RealTimeLostFramesFaultAfterTheWindowAndLateAnswersAreCounted) {
-  const auto link = test::controller_link(47140, 47141);
-  ControllerExchange node(link, settings(0.02, true, 3));
-  Controller controller(link);
+  ManualClock clock;
+  InProcess bench(settings(0.02, true, 3), clock);
+  ControllerExchange& node = bench.node;
+  Controller& controller = bench.controller;
   node.send_command(1, 0.001, {0.0}, {0.0});
   EXPECT_EQ(controller.take().counter, 1);
-  std::this_thread::sleep_for(std::chrono::milliseconds(30));
-  EXPECT_EQ(node.next(monotonic_ns()).outcome, Outcome::kNone);  // frame 1 lost, 1 in a row
+  clock.advance(0.03);
+  EXPECT_EQ(node.next(clock.now_ns()).outcome, Outcome::kNone);  // frame 1 lost, 1 in a row
   // The late answer to frame 1 is only counted; frame 2's is applied.
   node.send_command(2, 0.002, {0.003}, {0.0});
   controller.take();
@@ -272,16 +304,18 @@ TEST(ControllerExchange, RealTimeLostFramesFaultAfterTheWindowAndLateAnswersAreC
   EXPECT_EQ((*a.displacement)[0], 0.003);
   EXPECT_EQ(node.report().late(), 1u);
   for (int step = 3; step <= 5; ++step) node.send_command(step, 0.001 * step, {0.0}, {0.0});
-  const auto third = await_answer(node);
+  EXPECT_EQ(node.next(clock.now_ns()).outcome, Outcome::kNone);  // none stale yet
+  clock.advance(0.03);
+  const auto third = node.next(clock.now_ns());
   EXPECT_EQ(third.outcome, Outcome::kFault);
   EXPECT_NE(third.fault.find("(3 lost in a row)"), std::string::npos) << third.fault;
   EXPECT_EQ(node.report().lost(), 4u);
 }
 
 TEST(ControllerExchange, TheHoldRepeatsHoldFramesAtTheMeasuredPositionUntilHeldThenStops) {
-  const auto link = test::controller_link(47142, 47143);
-  ControllerExchange node(link, settings());
-  Controller controller(link);
+  InProcess bench(settings());
+  ControllerExchange& node = bench.node;
+  Controller& controller = bench.controller;
   node.send_command(1, 0.001, {0.004}, {0.2});
   controller.send(controller.feedback(controller.take().counter, 0.0035, 50.0));
   ASSERT_EQ(await_answer(node).outcome, Outcome::kAnswered);
@@ -330,22 +364,23 @@ TEST(ControllerExchange, TheHoldRepeatsHoldFramesAtTheMeasuredPositionUntilHeldT
 }
 
 TEST(ControllerExchange, AControllerThatNeverSaysHeldIsStoppedAfterTheHoldTime) {
-  const auto link = test::controller_link(47144, 47145);
-  ControllerExchange node(link, settings());  // hold_time 0.2 s
-  Controller controller(link);
-  const std::int64_t start = monotonic_ns();
+  ManualClock clock;
+  InProcess bench(settings(), clock);  // hold_time 0.2 s, dt 1 ms
+  ControllerExchange& node = bench.node;
+  const std::int64_t start = clock.now_ns();
   node.begin_hold(start);
   bool done = false;
-  while (!done) {
-    node.wait(monotonic_ns() + 1'000'000);
-    done = node.hold_step(monotonic_ns());
+  for (int ticks = 0; !done && ticks < 10000; ++ticks) {
+    clock.advance(0.0001);
+    done = node.hold_step(clock.now_ns());
   }
-  const double held_for = static_cast<double>(monotonic_ns() - start) * 1e-9;
+  ASSERT_TRUE(done);
+  const double held_for = static_cast<double>(clock.now_ns() - start) * 1e-9;
   EXPECT_GE(held_for, 0.2);
-  EXPECT_LT(held_for, 0.4);
+  EXPECT_LT(held_for, 0.2002);
   // One per dt (1 ms) for the first 50, then one per 10 dt: 50 + 15 in 200 ms.
-  EXPECT_GE(node.report().hold_frames(), 60u);
-  EXPECT_LE(node.report().hold_frames(), 70u);
+  EXPECT_GE(node.report().hold_frames(), 64u);
+  EXPECT_LE(node.report().hold_frames(), 66u);
   EXPECT_LT(node.report().held_after(), 0.0);
 }
 

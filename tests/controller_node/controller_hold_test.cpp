@@ -263,7 +263,7 @@ TEST(ControllerHold, ADiagnosticOutsideItsBoundsHoldsNamingTheChannel) {
   v.diagnostics = {9e6};  // 9 MPa: the supply dropped
   std::vector<std::uint8_t> bytes;
   ASSERT_TRUE(encode(link.feedback(), v, bytes));
-  rig.udp.send(bytes.data(), bytes.size());
+  rig.end.send(bytes.data(), bytes.size());
   const auto a = await_answer(node);
   ASSERT_EQ(a.outcome, Outcome::kFault);
   EXPECT_NE(a.fault.find("a diagnostic supply_pressure of 9e+06"), std::string::npos) << a.fault;
