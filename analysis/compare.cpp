@@ -47,7 +47,11 @@ nlohmann::json Comparison::to_json() const {
           {"diverged", diverged}};
 }
 
-std::vector<double> floor_history(const core::SimulationResult& result, int column) {
+std::vector<double> floor_history(const core::SimulationResult& result, int dof) {
+  const Eigen::Index column = result.column_of_dof(dof);
+  if (column < 0)
+    throw std::invalid_argument("the run kept no history of DOF " + std::to_string(dof + 1) +
+                                " (add it to a recorder)");
   std::vector<double> u(result.steps());
   for (std::size_t k = 0; k < u.size(); ++k)
     u[k] = result.displacement(static_cast<Eigen::Index>(k), column);
@@ -82,16 +86,21 @@ Comparison compare(std::span<const double> reference, std::span<const double> re
 
 Comparison compare(const core::SimulationResult& reference, const core::SimulationResult& result,
                    const ResponseSpec& response) {
-  if (reference.displacement.cols() != result.displacement.cols()) {
+  if (reference.displacement.cols() != result.displacement.cols() ||
+      reference.dofs != result.dofs) {
     throw std::invalid_argument("compare: the reference has " +
                                 std::to_string(reference.displacement.cols()) +
                                 " floors, the case " + std::to_string(result.displacement.cols()));
   }
   Comparison worst;
   bool first = true;
-  for (int column : response.columns(static_cast<int>(result.displacement.cols()))) {
+  // The model's DOFs: the top one is always kept (study/recorders.h).
+  const int dofs =
+      result.dofs.empty() ? static_cast<int>(result.displacement.cols()) : result.dofs.back() + 1;
+  for (int dof : response.columns(dofs)) {
+    if (result.column_of_dof(dof) < 0) continue;  // peak over floors: over the kept ones
     const Comparison c =
-        compare(floor_history(reference, column), floor_history(result, column), result.diverged);
+        compare(floor_history(reference, dof), floor_history(result, dof), result.diverged);
     if (first) {
       worst = c;
       first = false;

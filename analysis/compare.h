@@ -67,8 +67,9 @@ struct Comparison {
   nlohmann::json to_json() const;
 };
 
-// Displacement history of one floor (m), 0-based column.
-std::vector<double> floor_history(const core::SimulationResult& result, int column);
+// Displacement history of one floor (m), its DOF 0-based. Throws std::invalid_argument naming
+// the DOF when the run did not keep it (SimulationResult::dofs).
+std::vector<double> floor_history(const core::SimulationResult& result, int dof);
 // Column `column` (0-based) of any per-step history (one row a step), e.g. an actuator's command.
 std::vector<double> column_of(const core::Mat& history, int column);
 

@@ -35,38 +35,130 @@ void set_study_verdict(results::Table& t, const StudyOutcome& outcome) {
 
 }  // namespace
 
+namespace {
+
+using Channel = core::RecordedChannel;
+
+// The channels of a table: the recorders', or (an outcome without them) every DOF the case kept
+// and the actuators.
+std::vector<Channel> table_channels(const StudyOutcome& outcome) {
+  if (!outcome.recorders.channels.empty()) return outcome.recorders.channels;
+  std::vector<Channel> channels;
+  const core::SimulationResult& first = outcome.cases.front().simulation;
+  for (Eigen::Index c = 0; c < first.displacement.cols(); ++c)
+    channels.push_back({Channel::Kind::kDisplacement,
+                        first.dofs.empty() ? static_cast<int>(c) : first.dofs[c], -1, 1});
+  channels.push_back({Channel::Kind::kActuators, -1, -1, 1});
+  return channels;
+}
+
+// The steps (rows) some channel keeps, below `steps`.
+std::vector<std::size_t> kept_steps(const std::vector<Channel>& channels, std::size_t steps) {
+  std::vector<std::size_t> out;
+  for (std::size_t k = 0; k < steps; ++k)
+    if (std::any_of(channels.begin(), channels.end(), [k](const Channel& c) { return c.keeps(k); }))
+      out.push_back(k);
+  return out;
+}
+
+// One column at the table's rows: value(k) at the steps the channel keeps and the case ran,
+// NaN elsewhere.
+template <typename Value>
+std::vector<double> sampled(const std::vector<std::size_t>& rows, const Channel& channel,
+                            std::size_t steps, Value value) {
+  std::vector<double> out(rows.size(), kMissing);
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    if (rows[r] < steps && channel.keeps(rows[r])) out[r] = value(rows[r]);
+  return out;
+}
+
+// The history the case kept of `dof` (0-based); throws naming the DOF when it kept none.
+Eigen::Index kept_column(const core::SimulationResult& r, int dof, const std::string& name) {
+  const Eigen::Index column = r.column_of_dof(dof);
+  if (column < 0)
+    throw std::invalid_argument("case '" + name + "' kept no history of DOF " +
+                                std::to_string(dof + 1));
+  return column;
+}
+
+// The columns of one channel of one case.
+void add_channel_columns(results::Table& table, const CaseOutcome& c, const Channel& channel,
+                         const std::vector<std::size_t>& rows) {
+  const core::SimulationResult& r = c.simulation;
+  const std::string prefix = results::result_column_prefix(c.name);
+  const std::size_t steps = r.steps();
+  const auto at = [](const core::Mat& m, Eigen::Index column) {
+    return [&m, column](std::size_t k) { return m(static_cast<Eigen::Index>(k), column); };
+  };
+  const auto floor = static_cast<std::size_t>(channel.dof + 1);
+  switch (channel.kind) {
+    case Channel::Kind::kDisplacement:
+      table.add_numbers(
+          prefix + results::displacement_column(floor), "m",
+          sampled(rows, channel, steps, at(r.displacement, kept_column(r, channel.dof, c.name))));
+      return;
+    case Channel::Kind::kVelocity:
+      table.add_numbers(
+          prefix + results::velocity_column(floor), "m/s",
+          sampled(rows, channel, steps, at(r.velocity, kept_column(r, channel.dof, c.name))));
+      return;
+    case Channel::Kind::kAcceleration:
+      table.add_numbers(
+          prefix + results::acceleration_column(floor), "m/s^2",
+          sampled(rows, channel, steps, at(r.acceleration, kept_column(r, channel.dof, c.name))));
+      return;
+    case Channel::Kind::kDrift: {
+      const Eigen::Index upper = kept_column(r, channel.dof, c.name);
+      const Eigen::Index lower =
+          channel.from_dof < 0 ? -1 : kept_column(r, channel.from_dof, c.name);
+      table.add_numbers(
+          prefix + results::drift_column(floor, static_cast<std::size_t>(channel.from_dof + 1)),
+          "m", sampled(rows, channel, steps, [&](std::size_t k) {
+            const auto row = static_cast<Eigen::Index>(k);
+            return r.displacement(row, upper) - (lower < 0 ? 0.0 : r.displacement(row, lower));
+          }));
+      return;
+    }
+    case Channel::Kind::kBaseShear:
+      table.add_numbers(prefix + results::kBaseShearColumn, "N",
+                        sampled(rows, channel, std::min(steps, r.base_shear.size()),
+                                [&r](std::size_t k) { return r.base_shear[k]; }));
+      return;
+    case Channel::Kind::kActuators:
+      for (Eigen::Index j = 0; j < r.command.cols(); ++j) {
+        const auto actuator = static_cast<std::size_t>(j + 1);
+        table.add_numbers(prefix + results::command_column(actuator), "m",
+                          sampled(rows, channel, steps, at(r.command, j)));
+        table.add_numbers(prefix + results::measured_column(actuator), "m",
+                          sampled(rows, channel, steps, at(r.realised, j)));
+        table.add_numbers(prefix + results::force_column(actuator), "N",
+                          sampled(rows, channel, steps, at(r.measured_force, j)));
+      }
+      return;
+  }
+}
+
+}  // namespace
+
 results::Table study_table(const StudyOutcome& outcome) {
   results::Table table;
   if (outcome.cases.empty()) return table;
-  std::size_t rows = 0;
-  for (const auto& c : outcome.cases) rows = std::max(rows, c.simulation.steps());
+  std::size_t steps = 0;
+  for (const auto& c : outcome.cases) steps = std::max(steps, c.simulation.steps());
   const double dt = outcome.cases.front().simulation.dt;
-  std::vector<double> step(rows), time(rows);
-  for (std::size_t k = 0; k < rows; ++k) {
-    step[k] = static_cast<double>(k);
-    time[k] = static_cast<double>(k) * dt;
+  const std::vector<Channel> channels = table_channels(outcome);
+  const std::vector<std::size_t> rows = kept_steps(channels, steps);
+  std::vector<double> step(rows.size()), time(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    step[r] = static_cast<double>(rows[r]);
+    time[r] = static_cast<double>(rows[r]) * dt;
   }
   table.add_numbers("step", "", std::move(step));
   table.add_numbers("time_s", "s", std::move(time));
-  // Every floor and every actuator of every case (results/column_names.h names); a case that
-  // stopped early is NaN (an empty CSV cell) after its last step.
-  for (const auto& c : outcome.cases) {
-    const core::SimulationResult& r = c.simulation;
-    const std::vector<std::string> names = results::result_column_names(c.name, r);
-    const auto column = [&](const core::Mat& m, Eigen::Index j) {
-      std::vector<double> v(rows, kMissing);
-      for (Eigen::Index k = 0; k < m.rows(); ++k) v[static_cast<std::size_t>(k)] = m(k, j);
-      return v;
-    };
-    std::size_t n = 0;
-    for (Eigen::Index i = 0; i < r.displacement.cols(); ++i)
-      table.add_numbers(names[n++], "m", column(r.displacement, i));
-    for (Eigen::Index j = 0; j < r.command.cols(); ++j) {
-      table.add_numbers(names[n++], "m", column(r.command, j));
-      table.add_numbers(names[n++], "m", column(r.realised, j));
-      table.add_numbers(names[n++], "N", column(r.measured_force, j));
-    }
-  }
+  // Each case's channels (results/column_names.h names); a case that stopped early is NaN (an
+  // empty CSV cell) after its last step, a channel NaN at the steps it does not keep.
+  for (const auto& c : outcome.cases)
+    for (const Channel& channel : channels) add_channel_columns(table, c, channel, rows);
   table.set_attribute("study", outcome.study_name);
   table.set_number_attribute("dt_s", dt);
   results::set_motion_attributes(table, outcome.motion_name, outcome.motion_sha256,
@@ -77,6 +169,16 @@ results::Table study_table(const StudyOutcome& outcome) {
   return table;
 }
 
+TableShape study_table_shape(const core::RecorderPlan& plan, std::size_t steps, std::size_t cases,
+                             std::size_t actuators) {
+  std::size_t per_case = 0;
+  for (const Channel& c : plan.channels)
+    per_case += c.kind == Channel::Kind::kActuators ? 3 * actuators : 1;
+  std::size_t rows = 0;
+  for (std::size_t k = 0; k < steps; ++k) rows += plan.keeps(k) ? 1 : 0;
+  return {rows, 2 + cases * per_case};
+}
+
 results::Table distributed_study_table(
     const StudyOutcome& outcome, const std::vector<std::map<int, runtime::LinkSeries>>& links) {
   if (links.size() != outcome.cases.size())
@@ -85,6 +187,10 @@ results::Table distributed_study_table(
                                 " cases");
   results::Table table = study_table(outcome);
   const std::size_t rows = table.rows();
+  // The row of each step the table keeps (its recorders may keep every k-th).
+  std::map<long long, std::size_t> row_of_step;
+  const std::vector<double>& steps = table.column("step").numbers;
+  for (std::size_t r = 0; r < rows; ++r) row_of_step[std::llround(steps[r])] = r;
   for (std::size_t i = 0; i < links.size(); ++i) {
     const core::SimulationResult& r = outcome.cases[i].simulation;
     const std::string prefix = results::result_column_prefix(outcome.cases[i].name);
@@ -92,10 +198,10 @@ results::Table distributed_study_table(
       std::vector<double> injected(rows, kMissing), round_trip(rows, kMissing);
       for (std::size_t a = 0; a < series.time.size(); ++a) {
         // The carrying step's index from its simulated time t_k = k dt.
-        const auto k = r.dt > 0 ? std::llround(series.time[a] / r.dt) : -1;
-        if (k < 0 || static_cast<std::size_t>(k) >= rows) continue;
-        injected[static_cast<std::size_t>(k)] = series.injected[a];
-        round_trip[static_cast<std::size_t>(k)] = series.round_trip[a];
+        const auto row = row_of_step.find(r.dt > 0 ? std::llround(series.time[a] / r.dt) : -1);
+        if (row == row_of_step.end()) continue;
+        injected[row->second] = series.injected[a];
+        round_trip[row->second] = series.round_trip[a];
       }
       table.add_numbers(prefix + results::link_column(node, "injected_lag_s"), "s",
                         std::move(injected));

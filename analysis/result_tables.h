@@ -3,9 +3,13 @@
 // by results/write.h as CSV, MATLAB or HDF5. Their run attributes (study, dt_s, the motion,
 // status, ok) are those of every table of a run (results/results.h).
 //
-//   study_table   `rths run`: step, time_s, then per case every floor and every actuator
-//                 (<case>_u_floor<i>_m, <case>_command_act<j>_m, <case>_measured_act<j>_m,
-//                 <case>_force_act<j>_N). A case that stopped early (diverged) is NaN after
+//   study_table   `rths run`: step, time_s, then per case what the study's recorders keep
+//                 (study/recorders.h; by default every floor and every actuator up to 200 DOFs):
+//                 <case>_u_floor<i>_m, v_floor<i>_m_per_s, a_floor<i>_m_per_s2,
+//                 drift_floor<i>_floor<j>_m, base_shear_N, and per actuator
+//                 <case>_command_act<j>_m, <case>_measured_act<j>_m, <case>_force_act<j>_N. A row
+//                 per step some recorder keeps (`step` says which), a recorder's column NaN at
+//                 the steps it does not keep. A case that stopped early (diverged) is NaN after
 //                 its last step. status: "completed" when every case completed, else
 //                 "<case>: <status>" of each case that did not, joined by "; "; ok 1 when every
 //                 case completed or diverged as its expect_unstable said. Also reference_case
@@ -35,6 +39,13 @@
 namespace rths::analysis {
 
 results::Table study_table(const StudyOutcome& outcome);
+// study_table's rows and columns for `cases` cases of `steps` steps with `actuators` actuators
+// under `plan`, before any of it runs (a CSV past a spreadsheet is refused before the run).
+struct TableShape {
+  std::size_t rows = 0, columns = 0;
+};
+TableShape study_table_shape(const core::RecorderPlan& plan, std::size_t steps, std::size_t cases,
+                             std::size_t actuators);
 // links[i]: the per-link series of outcome.cases[i] (runtime::measure_run); sizes must agree.
 results::Table distributed_study_table(
     const StudyOutcome& outcome, const std::vector<std::map<int, runtime::LinkSeries>>& links);

@@ -20,28 +20,33 @@
 namespace rths::analysis {
 namespace {
 
-// The first step at which |u| or |v| of a floor passed a limit (0 = no limit), with why.
+// The first step at which |u| or |v| of a floor passed a limit (0 = no limit), with why, judged
+// on each step's peaks over every DOF (core::SimulationResult), which name the floor.
 std::optional<std::pair<std::size_t, std::string>> first_limit_trip(
     const core::SimulationResult& r, const config::SafetyLimits& limits) {
-  for (std::size_t k = 0; k < r.steps(); ++k) {
-    const auto row = static_cast<Eigen::Index>(k);
-    for (Eigen::Index i = 0; i < r.displacement.cols(); ++i) {
-      std::ostringstream why;
-      why << std::setprecision(4);
-      if (limits.max_displacement() > 0 &&
-          !(std::abs(r.displacement(row, i)) <= limits.max_displacement())) {
-        why << "|u| of floor " << i + 1 << " = " << std::abs(r.displacement(row, i))
-            << " m > limit " << limits.max_displacement() << " m at t = " << r.time[k] << " s";
-        return std::make_pair(k, why.str());
-      }
-      if (limits.max_velocity() > 0 && !(std::abs(r.velocity(row, i)) <= limits.max_velocity())) {
-        why << "|v| of floor " << i + 1 << " = " << std::abs(r.velocity(row, i)) << " m/s > limit "
-            << limits.max_velocity() << " m/s at t = " << r.time[k] << " s";
-        return std::make_pair(k, why.str());
-      }
+  for (std::size_t k = 0; k < r.steps() && k < r.peak_displacement.size(); ++k) {
+    std::ostringstream why;
+    why << std::setprecision(4);
+    if (limits.max_displacement() > 0 && !(r.peak_displacement[k] <= limits.max_displacement())) {
+      why << "|u| of floor " << r.peak_displacement_dof[k] + 1 << " = " << r.peak_displacement[k]
+          << " m > limit " << limits.max_displacement() << " m at t = " << r.time[k] << " s";
+      return std::make_pair(k, why.str());
+    }
+    if (limits.max_velocity() > 0 && !(r.peak_velocity[k] <= limits.max_velocity())) {
+      why << "|v| of floor " << r.peak_velocity_dof[k] + 1 << " = " << r.peak_velocity[k]
+          << " m/s > limit " << limits.max_velocity() << " m/s at t = " << r.time[k] << " s";
+      return std::make_pair(k, why.str());
     }
   }
   return std::nullopt;
+}
+
+// What each run of the study keeps per step: the DOFs and the base shear its recorders read.
+core::SimulationOptions kept_by_recorders(const core::PreparedStudy& prepared) {
+  core::SimulationOptions options;
+  options.kept_dofs = prepared.recorders.kept_dofs;
+  options.base_shear = prepared.recorders.base_shear;
+  return options;
 }
 
 }  // namespace
@@ -430,10 +435,12 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
 
   StudyOutcome outcome;
   outcome.study_name = study.name();
+  outcome.recorders = prepared.recorders;
   read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
-  const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion);
+  const core::SimulationOptions kept = kept_by_recorders(prepared);
+  const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion, kept);
   const std::vector<double> lag_free_response = floor_history(lag_free, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free_response);
 
@@ -444,7 +451,7 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
     CaseOutcome result = describe_case(
         prepared, setup, study_case,
         study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(), options);
-    result.simulation = core::simulate(setup, prepared.motion);
+    result.simulation = core::simulate(setup, prepared.motion, kept);
     if (const auto trip = first_limit_trip(result.simulation, study.deployment().limits())) {
       result.simulation.truncate(trip->first);  // the command of that step is never sent
       result.status = "limit tripped";
@@ -471,6 +478,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   const int floors = prepared.base.model.dofs();
   StudyOutcome outcome;
   outcome.study_name = prepared.config.name();
+  outcome.recorders = prepared.recorders;
   read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   CaseOutcome lag_free;

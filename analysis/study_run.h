@@ -97,6 +97,9 @@ struct StudyOutcome {
   // record) and of the file it was read from ("" when it came from no file).
   std::string motion_name, motion_sha256, motion_file_sha256;
   ResponseSpec response = ResponseSpec::floor(1);
+  // What the results table holds of each case (study/recorders.h); no channels: every DOF's
+  // displacement the case kept and every actuator.
+  core::RecorderPlan recorders;
   std::size_t reference_index = 0;
   double lag_free_peak = 0.0;  // m, top floor of the run without any delay stage
   std::vector<CaseOutcome> cases;

@@ -12,6 +12,7 @@
 
 #include "analysis/benchmark_evaluation.h"
 #include "analysis/benchmark_perturbation.h"
+#include "analysis/result_tables.h"
 #include "analysis/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
@@ -115,6 +116,19 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// Before any case runs: the default recorders' line (with --json on stderr, whose stdout is the
+// JSON), and a CSV past a spreadsheet's size refused (results/write.h).
+void require_table_fits(const core::PreparedStudy& prepared, const ResultsOptions& results) {
+  if (!prepared.recorders.defaults.empty())
+    (results.json ? std::cerr : std::cout) << prepared.recorders.defaults << "\n";
+  if (results::parse_format(results.format) != results::Format::kCsv) return;
+  const analysis::TableShape shape = analysis::study_table_shape(
+      prepared.recorders, prepared.motion.acceleration.size(),
+      static_cast<std::size_t>(std::max(1, prepared.config.cases_size())),
+      prepared.base.partition.actuator_storeys.size());
+  results::require_spreadsheet_size(shape.rows, shape.columns, "results.csv");
+}
+
 void run(const RunOptions& o) {
   const auto started = std::chrono::steady_clock::now();
   const std::filesystem::path config_path = o.config;
@@ -128,6 +142,7 @@ void run(const RunOptions& o) {
   if (out.empty())
     out = std::filesystem::path("out") / (study.name().empty() ? "study" : study.name());
   claim_output_folder(out, study.name(), o.results.force);
+  require_table_fits(prepared, o.results);
   const double setup_s = seconds_since(started);
   const auto cases_started = std::chrono::steady_clock::now();
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});

@@ -10,7 +10,8 @@
 //               hooks.after_step(0)
 //   k = 1..N-1  hooks.before_step(k)            (real time: wait for deadline k)
 //               restoring.set_time(k dt); p_k = -M iota a_g[k]; integrator.step(p_k, restoring)
-//               row k of the result <- u, v, a (DOFs), command, realised, measured force (actuators)
+//               row k of the result <- u, v, a (the kept DOFs), command, realised, measured force
+//               (actuators); max |u|, max |v| over every DOF; the base shear when asked
 //               stop, diverged, when any |u| > options.divergence_bound (or NaN)
 //               stop, held (result.held), when the evaluator's hold() names a reason (a force
 //               predictor past its bound)
@@ -47,10 +48,20 @@ struct HybridSetup {
 
 struct SimulationResult {
   double dt = 0.0;
-  std::vector<double> time;               // s
-  Mat displacement;                       // m, rows = steps, cols = DOFs (relative to ground)
-  Mat velocity;                           // m/s
-  Mat acceleration;                       // m/s^2 (relative)
+  std::vector<double> time;  // s
+  Mat displacement;          // m, rows = steps, cols = kept DOFs (relative to ground)
+  Mat velocity;              // m/s
+  Mat acceleration;          // m/s^2 (relative)
+  // The DOF (0-based) of each column of displacement, velocity and acceleration, ascending;
+  // empty: every DOF, column i DOF i.
+  std::vector<int> dofs;
+  // Per step, over every DOF (kept or not): the largest |u| (m) and |v| (m/s), and the first DOF
+  // (0-based) that holds it; what a limit is judged on without the history of every DOF.
+  std::vector<double> peak_displacement, peak_velocity;
+  std::vector<int> peak_displacement_dof, peak_velocity_dof;
+  // N per step when SimulationOptions::base_shear: iota^T M (a + iota a_g), the inertial forces'
+  // sum along the ground motion, equal and opposite to the ground's reaction; else empty.
+  std::vector<double> base_shear;
   Mat command, realised, measured_force;  // per actuator: m, m, N
   bool diverged = false;                  // stopped early: |u| exceeded the divergence bound
   // Per actuator (N): the force predictor's error e at each step (0 without one).
@@ -58,6 +69,8 @@ struct SimulationResult {
   // Stopped early by a force predictor past its bound: which link and why; empty otherwise.
   std::string held;
   std::size_t steps() const { return time.size(); }
+  // The column holding DOF `dof` (0-based), or -1 when the run did not keep it.
+  Eigen::Index column_of_dof(int dof) const;
   // Keeps the first `steps` rows of every history (a run that stopped early).
   void truncate(std::size_t steps);
 };
@@ -66,6 +79,11 @@ struct SimulationOptions {
   // Stop, marking the result diverged, when any |u| exceeds this (m). Protects sweeps from
   // unstable cases running to inf/NaN.
   double divergence_bound = 1.0e3;
+  // The DOFs (0-based, ascending, unique) whose u, v and a the result keeps at every step; empty:
+  // every DOF. A large model's run keeps what its recorders ask for (study/recorders.h), so
+  // memory and the loop's stores are O(kept), not O(n) a step.
+  std::vector<int> kept_dofs;
+  bool base_shear = false;  // fill SimulationResult::base_shear
 };
 
 // What a runtime adds around each step. Either hook may throw to abort the run; the loop then
@@ -86,8 +104,8 @@ class StepHooks {
 
 // Runs the loop. `result` is resized for every step of the motion on entry and truncated to the
 // steps completed on return, or when an exception leaves the loop. Throws std::invalid_argument
-// when dt is not > 0, the motion's dt differs from setup.dt, or the motion is empty. Allocates only
-// on entry (the result, the integrator).
+// when dt is not > 0, the motion's dt differs from setup.dt, the motion is empty, or a kept DOF is
+// outside the model or out of order. Allocates only on entry (the result, the integrator).
 void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
                HybridEvaluator& restoring, StepHooks& hooks, const SimulationOptions& options,
                SimulationResult& result);

@@ -39,6 +39,12 @@ std::string command_column(std::size_t actuator) { return indexed("command_act",
 std::string measured_column(std::size_t actuator) { return indexed("measured_act", actuator, "m"); }
 std::string force_column(std::size_t actuator) { return indexed("force_act", actuator, "N"); }
 
+std::string drift_column(std::size_t upper, std::size_t lower) {
+  std::string name = indexed("drift_floor", upper, "");  // "drift_floor<i>_"
+  name += lower == 0 ? std::string("ground_m") : indexed("floor", lower, "m");
+  return name;
+}
+
 std::vector<std::string> result_column_names(const std::string& run_name,
                                              const core::SimulationResult& result) {
   const std::string prefix = result_column_prefix(run_name);

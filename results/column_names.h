@@ -12,7 +12,10 @@
 //                  <run>_force_act<j>_N        its measured force
 // <run> is the case name with every character other than [A-Za-z0-9_] replaced by '_'.
 // A record (one run) also has v_floor<i>_m_per_s and a_floor<i>_m_per_s2 (velocity and
-// acceleration relative to the ground). "Floor" is the structure's i-th DOF.
+// acceleration relative to the ground). "Floor" is the structure's i-th DOF. A study's recorders
+// (study/recorders.h) choose which of these a run's table has, and add
+// <run>_drift_floor<i>_floor<j>_m (u_i - u_j; floor0 is written "ground") and
+// <run>_base_shear_N.
 // Row k is t_k = k dt, k = 0..N-1. A run that stopped early (diverged, a limit) leaves its cells
 // empty (NaN) after its last step.
 
@@ -40,6 +43,10 @@ std::string acceleration_column(std::size_t floor);
 std::string command_column(std::size_t actuator);
 std::string measured_column(std::size_t actuator);
 std::string force_column(std::size_t actuator);
+// A drift recorder's column, 1-based DOFs, 0 the ground: "drift_floor5_floor4_m",
+// "drift_floor1_ground_m" (u[upper] - u[lower], m).
+std::string drift_column(std::size_t upper, std::size_t lower);
+inline constexpr const char* kBaseShearColumn = "base_shear_N";
 
 // The header cells of one run, in the order above.
 std::vector<std::string> result_column_names(const std::string& run_name,

@@ -279,4 +279,14 @@ void write_table(const Table& table, const std::filesystem::path& path, Format f
   file.commit();
 }
 
+void require_spreadsheet_size(std::size_t rows, std::size_t columns, const std::string& what) {
+  if (rows + 1 <= kSpreadsheetRows && columns <= kSpreadsheetColumns) return;
+  throw std::invalid_argument(
+      what + ": a CSV of " + std::to_string(rows) + " rows x " + std::to_string(columns) +
+      " columns is past what a spreadsheet opens (" + std::to_string(kSpreadsheetRows - 1) +
+      " rows under the header, " + std::to_string(kSpreadsheetColumns) +
+      " columns): write it with --format h5 (or mat), or keep less with the study's recorders "
+      "(a DOF range's step, a recorder's every)");
+}
+
 }  // namespace rths::results

@@ -15,6 +15,7 @@
 //        attributes (text as variable-length UTF-8 strings, numbers as float64 scalars) and
 //        `columns`, the column names comma-separated in table order.
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
@@ -28,6 +29,13 @@ enum class Format { kCsv, kMat, kH5 };
 Format parse_format(const std::string& text);
 // ".csv" | ".mat" | ".h5"
 std::string extension(Format format);
+
+// What a spreadsheet opens (Excel, LibreOffice Calc): 1,048,576 rows, the header one of them, and
+// 16,384 columns. CSV is written for spreadsheets; a larger table belongs in h5 or mat.
+inline constexpr std::size_t kSpreadsheetRows = 1048576, kSpreadsheetColumns = 16384;
+// Throws std::invalid_argument when a CSV table of `rows` data rows and `columns` columns would
+// not open in a spreadsheet: "WHAT: a CSV of R rows x C columns is past a spreadsheet's ...".
+void require_spreadsheet_size(std::size_t rows, std::size_t columns, const std::string& what);
 
 // Throws std::invalid_argument when the table cannot be expressed in the format (a column named
 // `units` or `attributes` in MATLAB), std::runtime_error naming the file when it cannot be written.

@@ -12,6 +12,7 @@
 #include "core/substructure.h"
 #include "rths/proto/config.pb.h"
 #include "study/motion_config.h"
+#include "study/recorders.h"
 #include "study/restoring_force_config.h"
 
 namespace rths::core {
@@ -57,6 +58,8 @@ struct PreparedStudy {
   // What the config most likely did not mean but is allowed (a grounded specimen that reads as a
   // storey): each program prints them before it runs.
   std::vector<std::string> warnings;
+  // What each case keeps and writes (study/recorders.h), checked against the model.
+  RecorderPlan recorders;
 };
 PreparedStudy prepare_study(const config::Study& study, const std::filesystem::path& base_dir);
 

@@ -4,6 +4,7 @@
 #include "study/compensation_config.h"
 #include "study/known_enums.h"
 #include "study/ranges.h"
+#include "study/recorders.h"
 #include "study/tracking_config.h"
 
 #include <cmath>
@@ -356,6 +357,7 @@ void validate_study(const config::Study& study, const std::string& source) {
   validate_cases(study, source);
   validate_sweep(study, source);
   validate_deployment(study.deployment(), study.allow_long_lag(), source);
+  validate_recorders(study, source);
 }
 
 }  // namespace rths::core

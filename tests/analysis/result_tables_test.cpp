@@ -11,6 +11,7 @@
 
 #include "analysis/sweep_csv.h"
 #include "analysis/sweep_grid.h"
+#include "core/metrics.h"
 #include "study/motion_key.h"
 #include "study/study.h"
 
@@ -115,6 +116,98 @@ TEST(ResultTables, DistributedTableIsTheStudyTablePlusLagPerLinkAtTheCarryingSte
   EXPECT_DOUBLE_EQ(rtt[3], 0.0023);
   EXPECT_EQ(t.column("lag_14ms_node2_injected_lag_s").unit, "s");
   EXPECT_THROW(distributed_study_table(outcome, {}), std::invalid_argument);
+}
+
+// A shear building of `floors` floors of 1000 kg and 1e6 N/m, storey 1 experimental, two cases,
+// 0.5 s of the Imperial Valley record at its 5 ms step, with the given recorders blocks.
+core::PreparedStudy chain_study(int floors, const std::string& recorders) {
+  std::string masses, stiffnesses;
+  for (int i = 0; i < floors; ++i) {
+    masses += (i ? ", " : "") + std::string("1000");
+    stiffnesses += (i ? ", " : "") + std::string("1e6");
+  }
+  return core::prepare_study(
+      core::parse_study("name: \"chain\" structure { shear_building { storey_mass: [" + masses +
+                            "] storey_stiffness: [" + stiffnesses +
+                            "] } damping { modal_zeta: 0.05 } }\n"
+                            "motion { path: \"" +
+                            kMotion +
+                            "\" duration: 0.5 }\n"
+                            "substructuring { experimental_storeys: 1 }\n"
+                            "cases { name: \"reference\" }\n"
+                            "cases { name: \"lag\" delay { shift { delay: 0.01 } } }\n" +
+                            recorders,
+                        "test"),
+      RTHS_SOURCE_DIR);
+}
+
+// Column `dof` (0-based) of a full run's displacement.
+std::vector<double> full_column(const core::SimulationResult& r, int dof) {
+  return std::vector<double>(r.displacement.col(dof).data(),
+                             r.displacement.col(dof).data() + r.displacement.rows());
+}
+
+TEST(ResultTables, ALargeModelsTableHoldsTheDefaultRecordersColumnsAsAFullRunHasThem) {
+  const core::PreparedStudy prepared = chain_study(250, "");
+  const StudyOutcome outcome = run_study(prepared);
+  ASSERT_EQ(outcome.cases.front().simulation.displacement.cols(), 5);  // not 250
+  const Table t = study_table(outcome);
+  EXPECT_EQ(names(t),
+            (std::vector<std::string>{
+                "step", "time_s", "reference_command_act1_m", "reference_measured_act1_m",
+                "reference_force_act1_N", "reference_u_floor1_m", "reference_u_floor62_m",
+                "reference_u_floor125_m", "reference_u_floor187_m", "reference_u_floor250_m",
+                "lag_command_act1_m", "lag_measured_act1_m", "lag_force_act1_N", "lag_u_floor1_m",
+                "lag_u_floor62_m", "lag_u_floor125_m", "lag_u_floor187_m", "lag_u_floor250_m"}));
+  const core::SimulationResult full = core::simulate(prepared.base, prepared.motion);
+  ASSERT_EQ(t.rows(), full.steps());
+  EXPECT_EQ(t.column("reference_u_floor125_m").numbers, full_column(full, 124));
+  EXPECT_EQ(t.column("reference_u_floor250_m").numbers, full_column(full, 249));
+  EXPECT_GT(core::peak_abs(t.column("reference_u_floor250_m").numbers), 1e-4);  // m: it moved
+  const TableShape shape =
+      study_table_shape(prepared.recorders, prepared.motion.acceleration.size(), 2, 1);
+  EXPECT_EQ(shape.rows, t.rows());
+  EXPECT_EQ(shape.columns, t.columns().size());
+}
+
+TEST(ResultTables, DriftsBaseShearAndEveryKthStepAreWhatTheRecordersAskFor) {
+  const core::PreparedStudy prepared =
+      chain_study(3,
+                  "recorders { drifts { dof: 3 from_dof: 2 } every: 2 }\n"
+                  "recorders { base_shear: true dofs: 1 quantities: VELOCITY every: 3 }\n");
+  const StudyOutcome outcome = run_study(prepared);
+  const Table t = study_table(outcome);
+  EXPECT_EQ(names(t),
+            (std::vector<std::string>{"step", "time_s", "reference_drift_floor3_floor2_m",
+                                      "reference_v_floor1_m_per_s", "reference_base_shear_N",
+                                      "lag_drift_floor3_floor2_m", "lag_v_floor1_m_per_s",
+                                      "lag_base_shear_N"}));
+  const core::SimulationResult full = core::simulate(prepared.base, prepared.motion);
+  const std::vector<double>& step = t.column("step").numbers;
+  const std::vector<double>& drift = t.column("reference_drift_floor3_floor2_m").numbers;
+  const std::vector<double>& shear = t.column("reference_base_shear_N").numbers;
+  ASSERT_GE(step.size(), 6u);
+  EXPECT_EQ(std::vector<double>(step.begin(), step.begin() + 6),
+            (std::vector<double>{0, 2, 3, 4, 6, 8}));
+  double largest_shear = 0.0;
+  for (std::size_t r = 0; r < step.size(); ++r) {
+    const auto k = static_cast<Eigen::Index>(step[r]);
+    if (k % 2 == 0)
+      EXPECT_EQ(drift[r], full.displacement(k, 2) - full.displacement(k, 1)) << "step " << k;
+    else
+      EXPECT_TRUE(std::isnan(drift[r])) << "step " << k;
+    EXPECT_EQ(std::isnan(shear[r]), k % 3 != 0) << "step " << k;
+    if (k % 3 == 0) {
+      const double inertial =
+          (prepared.base.model.mass *
+           (full.acceleration.row(k).transpose() +
+            core::Vec::Ones(3) * prepared.motion.acceleration[static_cast<std::size_t>(k)]))
+              .sum();
+      EXPECT_NEAR(shear[r], inertial, 1e-9 * std::abs(inertial) + 1e-9) << "step " << k;
+      largest_shear = std::max(largest_shear, std::abs(shear[r]));
+    }
+  }
+  EXPECT_GT(largest_shear, 10.0);  // N: the check compared forces, not zeros
 }
 
 TEST(ResultTables, SweepTableHasTheSweepCsvsColumnsInOrder) {

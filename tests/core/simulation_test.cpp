@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "core/metrics.h"
 
@@ -120,6 +122,60 @@ TEST(SimulationTest, ShearBuildingWithOneExperimentalStorey) {
   // The actuator commands storey 1's drift, which is floor 1's displacement.
   EXPECT_EQ(column(reference.command, 0), column(reference.displacement, 0));
   EXPECT_GT(nrmse(column(reference.displacement, 1), column(delayed.displacement, 1)), 1e-3);
+}
+
+// A run that keeps some DOFs holds exactly the full run's columns of them, the same peaks over
+// every DOF, and a base shear equal to the inertial forces' sum iota^T M (a + iota a_g).
+TEST(SimulationTest, KeptDofsHoldTheFullRunsColumnsAndThePeaksOfEveryDof) {
+  HybridSetup setup;
+  setup.model = make_shear_building({1000.0, 1200.0, 800.0}, {4e5, 3e5, 2e5});
+  setup.model.damping = rayleigh_damping(setup.model.mass, setup.model.stiffness, 0.05);
+  setup.dt = kDt;
+  setup.partition = partition_by_storeys(setup.model.storey_stiffness, {0}, linear_factory());
+  const GroundMotion motion = sine_motion(kDt, 3.0);
+  const SimulationResult full = simulate(setup, motion);
+  SimulationOptions options;
+  options.kept_dofs = {0, 2};
+  options.base_shear = true;
+  const SimulationResult kept = simulate(setup, motion, options);
+  ASSERT_EQ(kept.displacement.cols(), 2);
+  EXPECT_EQ(kept.dofs, (std::vector<int>{0, 2}));
+  EXPECT_EQ(kept.column_of_dof(2), 1);
+  EXPECT_EQ(kept.column_of_dof(1), -1);
+  EXPECT_EQ(column(kept.displacement, 1), column(full.displacement, 2));
+  EXPECT_EQ(column(kept.velocity, 0), column(full.velocity, 0));
+  EXPECT_EQ(column(kept.acceleration, 1), column(full.acceleration, 2));
+  EXPECT_EQ(column(kept.measured_force, 0), column(full.measured_force, 0));
+  EXPECT_EQ(kept.peak_displacement, full.peak_displacement);
+  EXPECT_TRUE(full.base_shear.empty());
+  ASSERT_EQ(kept.base_shear.size(), kept.steps());
+  double largest = 0.0;
+  for (std::size_t k = 0; k < full.steps(); ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    EXPECT_DOUBLE_EQ(full.peak_displacement[k], full.displacement.row(row).cwiseAbs().maxCoeff());
+    EXPECT_DOUBLE_EQ(full.peak_velocity[k], full.velocity.row(row).cwiseAbs().maxCoeff());
+    EXPECT_DOUBLE_EQ(full.peak_velocity[k],
+                     std::abs(full.velocity(row, full.peak_velocity_dof[k])));
+    const Vec absolute =
+        full.acceleration.row(row).transpose() + Vec::Ones(3) * motion.acceleration[k];
+    const double inertial = (setup.model.mass * absolute).sum();
+    EXPECT_NEAR(kept.base_shear[k], inertial, 1e-9 * std::max(1.0, std::abs(inertial)));
+    largest = std::max(largest, std::abs(inertial));
+  }
+  EXPECT_GT(largest, 100.0);  // N: the check compared forces, not zeros
+}
+
+TEST(SimulationTest, RefusesKeptDofsOutsideTheModelOrOutOfOrder) {
+  const GroundMotion motion = sine_motion(kDt, 0.1);
+  SimulationOptions options;
+  options.kept_dofs = {1};
+  EXPECT_THROW(simulate(sdof_setup(0.5, 0.0), motion, options), std::invalid_argument);
+  HybridSetup two;
+  two.model = make_shear_building({1000.0, 1000.0}, {4e5, 3e5});
+  two.dt = kDt;
+  two.partition = partition_by_storeys(two.model.storey_stiffness, {0}, linear_factory());
+  options.kept_dofs = {1, 0};
+  EXPECT_THROW(simulate(two, motion, options), std::invalid_argument);
 }
 
 // The network's round trip (60 ms) and the actuator's lag (14 ms) as one shift on the command:
