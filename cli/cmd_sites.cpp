@@ -2,8 +2,10 @@
 // DDS unicast between them, per-link lag injected by the nodes). See deploy/sites.h. Its flags,
 // refusals and exit codes are `rths launch`'s: a real-time run's platform check comes first (exit 3
 // when refused, unless --accept-platform), the record is OUT/<case>.rthsrec, and the exit is the
-// coordinator's (2 config, 3 environment) before the run's verdict (1).
+// coordinator's (2 config, 3 environment) before the run's verdict (1). With --view the page is on
+// this host's HOST:PORT while the run goes on; --view-stop gives it the control room's roles.
 #include <signal.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +24,8 @@
 #include "study/study.h"
 #include "util/atomic_file.h"
 #include "util/process.h"
+#include "view/hand_down.h"
+#include "view/server.h"
 
 namespace rths::cli {
 namespace {
@@ -35,7 +39,55 @@ struct SitesOptions {
   double expect_injected = -1.0;
   double platform_seconds = 5.0;
   bool check = false, cleanup = false, accept_platform = false;
+  std::string view;  // HOST:PORT of the live view, empty: none
+  bool view_stop = false;
 };
+
+// --view: the page at HOST:PORT of this host (its socket made here, in the host's namespace, and
+// handed to the coordinator in site_a's: view/hand_down.h), every site by name with its nodes.
+// --view-stop adds the control room: a token per role, made here for this run and printed once,
+// each in the address its holder opens (the page takes it out of the address bar). Returns the
+// socket (-1 without --view), closed by the caller once the run is over.
+int hand_down_view(const SitesOptions& o, const deploy::SitesPlan& plan,
+                   deploy::SitesRunOptions& options) {
+  if (o.view.empty()) return -1;
+  view::HandDown down;
+  for (const auto& site : plan.sites.sites()) {
+    view::SiteLayout& layout = down.sites.emplace_back();
+    layout.name = site.name();
+    for (const deploy::NodePlacement& p : plan.placements) {
+      if (p.site != site.name()) continue;
+      layout.nodes.push_back(p.node_id);
+      if (p.kind == "actuator_emulator" || p.kind == "controller")
+        layout.lab_nodes.push_back(p.node_id);
+    }
+  }
+  std::vector<std::string> labs;
+  for (const auto& [lab, nodes] : down.labs()) labs.push_back(lab);
+  if (o.view_stop) down.crew = view::Crew::make(labs);
+  try {
+    down.listen_fd = view::open_listener(view::parse_listen_address(o.view));
+  } catch (const std::invalid_argument& e) {
+    throw ExitError(kExitBadInput, e.what());
+  } catch (const std::runtime_error& e) {
+    throw ExitError(kExitEnvironment, e.what());
+  }
+  view::set_hand_down(down);
+  const std::string url = "http://" + view::parse_listen_address(o.view).host + ":" +
+                          std::to_string(view::bound_port(down.listen_fd)) + "/";
+  options.coordinator_args = {"--view", o.view};
+  std::cerr << "rths sites: live view of every site at " << url << "\n";
+  if (!down.crew) return down.listen_fd;
+  std::cerr << "rths sites: the control room's addresses, for this run only (each carries its "
+               "role's token: hand each to its holder alone)\n"
+            << "  director (HOLD any lab, STOP): " << url << "?token=" << down.crew->director
+            << "\n";
+  for (const auto& [lab, token] : down.crew->operators)
+    std::cerr << "  operator of " << lab << " (HOLD " << lab << "'s actuators): " << url
+              << "?token=" << token << "\n";
+  std::cerr << "  viewer (sees only): " << url << "?token=" << down.crew->viewer << std::endl;
+  return down.listen_fd;
+}
 
 // --cleanup and --check-record: done without a config. Returns whether the command is done.
 bool run_maintenance(const SitesOptions& o) {
@@ -95,6 +147,12 @@ deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPl
     throw ExitError(kExitEnvironment, "sites: " + *reason);
   }
   deploy::SitesRunOptions options;
+  struct CloseAfterRun {
+    int fd;
+    ~CloseAfterRun() {
+      if (fd >= 0) ::close(fd);
+    }
+  } view_socket{hand_down_view(o, plan, options)};
   options.output_dir = out;
   options.platform_file = platform_file;
   options.accept_platform = o.accept_platform;
@@ -170,6 +228,8 @@ void report(const SitesOptions& o, const deploy::SitesPlan& plan,
 void run(const SitesOptions& o) {
   if (run_maintenance(o)) return;
   if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
+  if (o.view_stop && o.view.empty())
+    throw ExitError(kExitBadInput, "--view-stop needs --view HOST:PORT");
   auto plan = deploy::load_sites(o.config);
   if (!o.programs.security.empty())
     plan.study.mutable_deployment()->set_security_dir(
@@ -219,6 +279,21 @@ void add_sites_command(CLI::App& app) {
   cmd->add_flag("--accept-platform", options->accept_platform,
                 "real time: run even when the platform check says the fail-safe or the overrun "
                 "tolerance will not hold (the record says so)");
+  cmd->add_option("--view", options->view,
+                  "serve the live view of the run at HOST:PORT of this host (e.g. "
+                  "127.0.0.1:8080): every site by name, its nodes, actuators and links")
+      ->check([](const std::string& text) {
+        try {
+          view::parse_listen_address(text);
+          return std::string();
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+      });
+  cmd->add_flag("--view-stop", options->view_stop,
+                "with --view: the control room, a token per role printed once here (the director "
+                "HOLDs any lab and STOPs; each lab's operator HOLDs only that lab's actuators; a "
+                "viewer sees only); every press is in the record");
   cmd->add_flag("--check", options->check, "only load and check the config");
   cmd->add_flag("--cleanup", options->cleanup,
                 "remove namespaces left by killed `rths sites` runs (then run CONFIG, if given)");

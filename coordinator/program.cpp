@@ -23,6 +23,7 @@
 #include "transport/dds_endpoint.h"
 #include "view/context.h"
 #include "view/feed.h"
+#include "view/hand_down.h"
 #include "view/server.h"
 
 namespace rths::coordinator {
@@ -122,12 +123,19 @@ runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared,
   return summary;
 }
 
-// The live view (--view): a feed of the record and its server. Bad address or no record:
-// std::invalid_argument; an address that cannot be bound or page files missing: runtime_error.
-std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_view(
-    const std::string& address_text, bool allow_stop, const std::string& record,
-    const core::PreparedStudy& prepared, const std::string& case_name,
-    std::atomic<bool>& stop_request) {
+// The live view (--view): a feed of the record and its server, and what a launcher handed down
+// (view/hand_down.h: a listening socket, the sites, the crew's tokens and so the control room).
+// Bad address or no record: std::invalid_argument; an address that cannot be bound or page
+// files missing: runtime_error.
+struct LiveView {
+  std::unique_ptr<view::Feed> feed;
+  std::unique_ptr<view::ControlDesk> desk;
+  std::unique_ptr<view::ViewServer> server;
+};
+
+LiveView start_view(const std::string& address_text, bool allow_stop, const std::string& record,
+                    const core::PreparedStudy& prepared, const std::string& case_name,
+                    std::atomic<bool>& stop_request) {
   if (record.empty())
     throw std::invalid_argument("--view needs --record: the view follows the run record");
   view::ServerOptions options;
@@ -138,19 +146,30 @@ std::pair<std::unique_ptr<view::Feed>, std::unique_ptr<view::ViewServer>> start_
   const char* given = std::getenv("RTHS_VIEW_TOKEN");
   if (allow_stop) options.token = given && *given ? given : view::make_token();
   options.on_stop = [&stop_request] { stop_request.store(true); };
-  auto feed = std::make_unique<view::Feed>();
+  const view::HandDown down = view::handed_down();
+  options.listen_fd = down.listen_fd;
+  LiveView live;
+  if (down.crew) live.desk = std::make_unique<view::ControlDesk>(*down.crew, down.labs());
+  options.desk = live.desk.get();
+  live.feed = std::make_unique<view::Feed>();
   // The prediction runs the case in process here, before the run starts (never on its loop).
-  view::describe_run(*feed, prepared, case_name);
-  auto server = std::make_unique<view::ViewServer>(*feed, options);
+  view::describe_run(*live.feed, prepared, case_name);
+  if (!down.sites.empty()) {
+    nlohmann::json context = live.feed->context();
+    context["sites"] = down.sites_json();
+    live.feed->set_context(context);
+  }
+  live.server = std::make_unique<view::ViewServer>(*live.feed, options);
   // A token handed down by the launcher was printed there: this output may be a log file.
   const bool token_made_here = allow_stop && !(given && *given);
   std::cout << "rths-coordinator: live view at "
-            << (token_made_here ? server->page_url() : server->url())
-            << (allow_stop ? " (stop button on)" : "") << std::endl;
+            << (token_made_here ? live.server->page_url() : live.server->url())
+            << (allow_stop ? " (stop button on)" : "") << (live.desk ? " (control room)" : "")
+            << std::endl;
   if (!options.address.loopback())
     std::cout << "rths-coordinator: the view listens beyond loopback: anyone who reaches "
-              << server->url() << " sees the run" << std::endl;
-  return {std::move(feed), std::move(server)};
+              << live.server->url() << " sees the run" << std::endl;
+  return live;
 }
 
 struct ProgramArgs {
@@ -198,8 +217,7 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
 // uses (the record's writer feeds the view, so the view outlives it).
 struct Session {
   std::atomic<bool> stop_request{false};
-  std::unique_ptr<view::Feed> feed;
-  std::unique_ptr<view::ViewServer> server;
+  LiveView view;
   std::unique_ptr<rt_check::DmaLatencyHold> dma_latency;
   std::unique_ptr<transport::DdsEndpoint> endpoint;
   std::unique_ptr<Coordinator> coordinator;
@@ -254,10 +272,11 @@ void start_session(ProgramArgs& a, Session& session) {
   if (!a.view_address.empty()) {
     const std::string shown_case =
         a.case_name.empty() ? study.deployment().case_name() : a.case_name;
-    std::tie(session.feed, session.server) = start_view(a.view_address, a.view_stop, a.record,
-                                                        prepared, shown_case, session.stop_request);
-    co.record_observer = session.feed.get();
+    session.view = start_view(a.view_address, a.view_stop, a.record, prepared, shown_case,
+                              session.stop_request);
+    co.record_observer = session.view.feed.get();
     co.stop_request = &session.stop_request;
+    co.control = session.view.desk.get();
   }
   transport::DdsEndpoint* endpoint = session.endpoint.get();
   co.unauthenticated = [endpoint] { return endpoint->unauthenticated(); };
@@ -299,7 +318,8 @@ int coordinator_main(int argc, char** argv) {
   try {
     const RunOutcome outcome = session.coordinator->run();
     std::cout << summary_text(outcome) << std::flush;
-    if (session.server) session.server->shutdown();  // open pages get the run's last state first
+    if (session.view.server)
+      session.view.server->shutdown();  // open pages get the run's last state first
     if (!outcome.ok)
       std::cerr << "rths-coordinator: run failed: " << outcome.status
                 << (outcome.failed_node.empty() ? "" : " (" + outcome.failed_node + ")") << "\n";

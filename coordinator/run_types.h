@@ -18,6 +18,7 @@
 #include "study/study.h"
 #include "transport/transport.h"
 #include "transport/unauthenticated.h"
+#include "view/control_room.h"
 
 namespace rths::coordinator {
 
@@ -53,6 +54,10 @@ struct CoordinatorOptions {
   // Set from another thread (the view's stop button): the loop stops before its next step as for
   // any fault, HOLD then STOP, with the status kStoppedFromView. Read once per step (relaxed).
   const std::atomic<bool>* stop_request = nullptr;
+  // The view's control room (view/control_room.h), polled once per step as stop_request is: each
+  // press becomes a record event; an allowed HOLD goes to its nodes at once, then the run stops
+  // (HOLD, then STOP) naming who held it; an allowed STOP stops it as the view's stop does.
+  view::ControlDesk* control = nullptr;
   // What the transport dropped unread for want of a MAC (DdsEndpoint::unauthenticated), read once
   // after the run for the outcome and the record's last event; empty: nothing to read.
   std::function<transport::Unauthenticated()> unauthenticated;

@@ -128,6 +128,9 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
 
   // Logs what happened and appends it to the record as an event (a full ring drops and counts it).
   void event(const std::string& what);
+  // The control room's presses (options.control): recorded, an allowed HOLD sent to its nodes;
+  // throws RunAborted naming who, when one was allowed.
+  void apply_presses();
 
   // ---- Messages (exchange.cpp) ----
   // Takes one message off the transport and applies it if valid. False on timeout.

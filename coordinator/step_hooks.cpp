@@ -25,6 +25,28 @@ void RunState::event(const std::string& what) {
   record->append(entry);  // a full queue drops it and counts it, as for steps
 }
 
+void RunState::apply_presses() {
+  std::optional<RunAborted> stop;
+  for (const view::Press& press : options.control->take()) {
+    if (press.allowed && !press.hold_nodes.empty()) {
+      runtime::Hold hold;
+      hold.set_reason("HOLD from the view by " + press.who);
+      for (const int id : press.hold_nodes)
+        if (const auto node = nodes.find(id); node != nodes.end() && node->second.announced)
+          send(id, runtime::HOLD, step, hold);
+    }
+    // How long the press took to reach the loop (and an allowed HOLD its nodes): CLOCK_REALTIME
+    // of this host on both sides.
+    event(fmt::format("{} ({:.2f} ms after the press)", press.text(),
+                      static_cast<double>(transport::realtime_ns() - press.realtime_ns) * 1e-6));
+    if (press.allowed && !stop)
+      stop.emplace(press.stop ? std::string(kStoppedFromView) + " by " + press.who
+                              : "HOLD from the view by " + press.who,
+                   "");
+  }
+  if (stop) throw *stop;
+}
+
 void RunState::before_step(std::size_t k) {
   pace = {};
   // One timed wait per period, the pacer's: feedback is stamped and boxed on the receive thread
@@ -38,6 +60,7 @@ void RunState::before_step(std::size_t k) {
   step = static_cast<std::int64_t>(k);
   if (options.stop_request && options.stop_request->load(std::memory_order_relaxed))
     throw RunAborted(kStoppedFromView, "");
+  if (options.control && options.control->pending()) apply_presses();
   intake->await_step(step);
   step_start = Clock::now();
   step_start_realtime_ns = transport::realtime_ns();

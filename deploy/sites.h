@@ -84,6 +84,7 @@ struct SitesRunOptions {
   // a deployment the check refuses (the record says so).
   std::filesystem::path platform_file;
   bool accept_platform = false;
+  std::vector<std::string> coordinator_args;  // appended to the coordinator's (e.g. --view H:P)
 };
 
 SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options);

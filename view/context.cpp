@@ -8,6 +8,51 @@
 
 namespace rths::view {
 
+namespace {
+
+// The round trip a link may add before the loop goes unstable: the compensated loop's (a force
+// predictor as it starts, analysis::predicted_loop_verdict) where it is analysed, else the
+// uncompensated critical delay less the case's own lag (analysis::check_case_critical_delay);
+// "label" says which, "text" why there is none.
+nlohmann::json critical_round_trip(const core::PreparedStudy& prepared,
+                                   const config::Case& study_case) {
+  const auto compensated = analysis::predicted_loop_verdict(prepared, study_case, 0.0);
+  if (compensated && compensated->analysed && compensated->extra_delay_tolerated)
+    return {{"ms", *compensated->extra_delay_tolerated * 1e3},
+            {"label", "compensated (force predictor as it starts)"},
+            {"text", compensated->text}};
+  const auto check = analysis::check_case_critical_delay(prepared, study_case);
+  nlohmann::json j = {{"text", check ? check->describe() : "no experimental part"}};
+  if (compensated) j["compensated_text"] = compensated->text;
+  if (check && check->critical()) {
+    j["ms"] = (*check->critical() - check->lag) * 1e3;
+    j["label"] =
+        compensated ? "uncompensated (the compensated loop is not analysed here)" : "uncompensated";
+  }
+  return j;
+}
+
+}  // namespace
+
+nlohmann::json link_context(const core::PreparedStudy& prepared, const std::string& case_name) {
+  nlohmann::json j;
+  try {
+    j["critical_round_trip"] =
+        critical_round_trip(prepared, core::find_case(prepared.config, case_name));
+  } catch (const std::exception& e) {
+    j["critical_round_trip"] = {{"text", std::string("not known: ") + e.what()}};
+  }
+  const config::Deployment deployment =
+      runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
+  j["answer_window_steps"] = runtime::max_missed_answers(deployment, prepared.base.dt);
+  try {
+    for (const runtime::NodePlan& node : runtime::make_plan(prepared.base, deployment).nodes)
+      j["node_actuators"][std::to_string(node.spec.id())] = node.actuators;
+  } catch (const std::exception&) {  // a plan the run refuses has no actuators to show
+  }
+  return j;
+}
+
 nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name) {
   nlohmann::json critical;
   try {
@@ -25,7 +70,8 @@ nlohmann::json run_context(const core::PreparedStudy& prepared, const std::strin
   } catch (const std::exception& e) {
     critical["text"] = std::string("not known: ") + e.what();
   }
-  nlohmann::json context = {{"critical_delay", critical}};
+  nlohmann::json context = link_context(prepared, case_name);
+  context["critical_delay"] = critical;
   // The node behind each link: the deployment's default nodes when it declares none.
   const config::Deployment deployment =
       runtime::with_default_nodes(prepared.config.deployment(), prepared.base);

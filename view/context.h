@@ -5,7 +5,8 @@
 //                 {"lag_ms", "critical_delay_ms", "margin_pct", "text"}}, or {"text": why not}
 //                 when the structure has no experimental part or the study cannot be prepared;
 //                 "node_kinds": {"<node id>": "SUBSTRUCTURE" | "ACTUATOR_EMULATOR" | ...} of the
-//                 deployment (its default nodes when it declares none), to label the links.
+//                 deployment (its default nodes when it declares none), to label the links;
+//                 and link_context's facts.
 //   predict_case  the in-process prediction: core::simulate of the case's in-process setup
 //                 (runtime::in_process_setup: its delay stages and compensation, the emulators'
 //                 compensation), the response `rths run` computes for the case. A lockstep run
@@ -30,6 +31,12 @@
 namespace rths::view {
 
 nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name);
+// What the control room shows per link, in run_context: "critical_round_trip" {"ms": the round
+// trip a link may add before the loop is unstable, "label": compensated (a force predictor as it
+// starts, analysis::predicted_loop_verdict) or uncompensated (the critical delay less the case's
+// own lag), "text"}; "answer_window_steps" (runtime::max_missed_answers: an older answer stops
+// the run); "node_actuators" {"<node id>": [actuator indices]}.
+nlohmann::json link_context(const core::PreparedStudy& prepared, const std::string& case_name);
 
 // Throws std::invalid_argument naming the case or the block that cannot be built.
 core::SimulationResult predict_case(const core::PreparedStudy& prepared,

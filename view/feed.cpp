@@ -14,6 +14,7 @@ namespace {
 
 constexpr double kMm = 1e3;  // m -> mm
 constexpr double kMs = 1e3;  // s -> ms
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Largest power of two <= seconds / dt, at least 64.
 std::size_t spectrum_length(double dt, double seconds) {
@@ -198,7 +199,8 @@ void Feed::on_header(const runtime::RunHeader& header) {
   difference_.reset(dofs_);
   for (auto* v : {&samples_.command, &samples_.measured, &samples_.force, &samples_.ti})
     v->assign(history_ * static_cast<std::size_t>(actuators_), 0.0);
-  for (auto* v : {&samples_.injected, &samples_.round_trip})
+  for (auto* v : {&samples_.injected, &samples_.round_trip, &samples_.answer_age, &samples_.answers,
+                  &samples_.prediction_error})
     v->assign(history_ * static_cast<std::size_t>(links_), 0.0);
   setup_diagnostics(header);
   const std::size_t n = setup_spectrum(dt);
@@ -296,6 +298,8 @@ void Feed::keep_sample(const runtime::StepRecord& step) {
     const std::size_t i = r * static_cast<std::size_t>(links_) + static_cast<std::size_t>(l);
     s.injected[i] = l < step.links_size() ? step.links(l).injected_lag() * kMs : 0;
     s.round_trip[i] = l < step.links_size() ? step.links(l).round_trip() * kMs : 0;
+    s.answer_age[i] = s.answers[i] = s.prediction_error[i] = kNaN;
+    if (l < step.links_size()) link_sample(step, step.links(l), i);
     const auto names = diagnostic_names_[static_cast<std::size_t>(l)].size();
     for (std::size_t c = 0; c < names; ++c) {
       const bool has = l < step.links_size() &&
@@ -306,6 +310,20 @@ void Feed::keep_sample(const runtime::StepRecord& step) {
     }
   }
   ++samples_total_;
+}
+
+// A link's answer age (steps: the step minus the step its answer answered; NaN before the
+// first answer), the answers accepted so far (NaN when not counted) and the largest |error| of
+// its force predictors (N; NaN without one), into sample column i.
+void Feed::link_sample(const runtime::StepRecord& step, const runtime::LinkSample& link,
+                       std::size_t i) {
+  if (link.answered_step() > 0)
+    samples_.answer_age[i] = static_cast<double>(step.step() - link.answered_step());
+  if (link.answers() > 0) samples_.answers[i] = static_cast<double>(link.answers());
+  for (const double e : link.prediction_error())
+    samples_.prediction_error[i] = std::isnan(samples_.prediction_error[i])
+                                       ? std::abs(e)
+                                       : std::max(samples_.prediction_error[i], std::abs(e));
 }
 
 // The Hann window (normalised so that 2 |X(f)| is a sine's amplitude) and the log-spaced
@@ -464,7 +482,9 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
   nlohmann::json j;
   empty_columns(j, {"step", "time_s", "lateness_ms", "overruns", "late_feedback"}, 0);
   empty_columns(j, {"command_mm", "measured_mm", "error_mm", "force_N", "ti_mm2"}, actuators_);
-  empty_columns(j, {"injected_ms", "round_trip_ms"}, links_);
+  empty_columns(
+      j, {"injected_ms", "round_trip_ms", "answer_age_steps", "answers", "prediction_error_N"},
+      links_);
   empty_columns(j, {"u_mm", "predicted_u_mm", "difference_mm"}, dofs_);
   j["diagnostics"] = nlohmann::json::array();  // [link][channel]: SI, NaN (null) where absent
   for (const auto& names : diagnostic_names_) {
@@ -489,6 +509,9 @@ nlohmann::json Feed::samples_json(std::uint64_t from) const {
     for (std::size_t l = 0; l < L; ++l) {
       j["injected_ms"][l].push_back(s.injected[r * L + l]);
       j["round_trip_ms"][l].push_back(s.round_trip[r * L + l]);
+      j["answer_age_steps"][l].push_back(s.answer_age[r * L + l]);
+      j["answers"][l].push_back(s.answers[r * L + l]);
+      j["prediction_error_N"][l].push_back(s.prediction_error[r * L + l]);
     }
     for (std::size_t d = 0; d < D; ++d) {  // NaN (no prediction) is written as null
       j["u_mm"][d].push_back(s.u[r * D + d]);

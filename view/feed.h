@@ -11,7 +11,10 @@
 //             time_s, command_mm, measured_mm, error_mm = (c - m), force_N, tracking indicator
 //             ti_mm2, per DOF the measured response u_mm, the in-process prediction
 //             predicted_u_mm and difference_mm = u - predicted (null where there is no
-//             prediction), injected_ms / round_trip_ms per link, diagnostics[link][channel]
+//             prediction), injected_ms / round_trip_ms per link, per link answer_age_steps
+//             (the step minus the step its answer answered), answers (accepted so far) and
+//             prediction_error_N (its force predictors' largest |error|; null: none),
+//             diagnostics[link][channel]
 //             (a controller's DIAGNOSTIC channels, SI; header.diagnostics names them),
 //             lateness_ms, overruns and late
 //             feedback so far. A sample holds the record's values of its step unchanged (only
@@ -89,6 +92,10 @@ class Feed : public runtime::RecordObserver {
   // Facts about the run that are not in the record (critical-delay check, prediction), shown as
   // given; and a note (e.g. a truncated record's warning).
   void set_context(nlohmann::json context);
+  nlohmann::json context() const {
+    std::lock_guard lock(mutex_);
+    return context_;
+  }
   // The in-process prediction of the run (view/context.h): displacement per DOF (m) at
   // t_k = k dt. Kept at the samples' steps only (every stride-th, the stride from its dt as for
   // the samples) in mm: steps / stride x DOFs values. Samples kept before it was set get it too,
@@ -122,6 +129,8 @@ class Feed : public runtime::RecordObserver {
     std::vector<std::int64_t> step;
     std::vector<std::uint64_t> overruns, late;
     std::vector<double> time, lateness, command, measured, force, ti, injected, round_trip;
+    // Per link: answer age (steps), answers accepted, largest |predictor error| (N); NaN: none.
+    std::vector<double> answer_age, answers, prediction_error;
     std::vector<double> u, predicted;  // per DOF, mm (predicted: NaN where there is none)
     // A controller link's diagnostic channels (SI), r * diagnostics_ + diagnostic_offset_[l] + c.
     std::vector<double> diagnostics;
@@ -146,6 +155,7 @@ class Feed : public runtime::RecordObserver {
   void on_footer(const runtime::RunFooter& footer);
   void track(const runtime::StepRecord& step);
   void keep_sample(const runtime::StepRecord& step);
+  void link_sample(const runtime::StepRecord& step, const runtime::LinkSample& link, std::size_t i);
   // The prediction at `step` for `dof` (mm), NaN where there is none.
   double predicted(std::int64_t step, int dof) const;
   std::size_t setup_spectrum(double dt);

@@ -4,8 +4,8 @@
 #include <fcntl.h>
 #include <httplib.h>
 #include <poll.h>
-#include <sys/random.h>
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -132,6 +132,8 @@ class GatedServer : public httplib::Server {
   // httplib listens with a backlog of 5: a crowd connecting at once would see SYNs dropped (a
   // fresh client's connect then waits 1 s for its retry). Listening again widens it.
   void widen_backlog() { ::listen(svr_sock_, 512); }
+  // Serves `fd` (bound and listening) as if bind_to_port had made it.
+  void adopt(int fd) { svr_sock_ = fd; }
   void serve(int fd) {
     FdStream stream(fd, read_ms_, write_ms_);
     bool closed = false;
@@ -163,6 +165,33 @@ int bind_within(httplib::Server& server, const ListenAddress& address,
 
 }  // namespace
 
+int bound_port(int fd) {
+  sockaddr_in a{};
+  socklen_t length = sizeof a;
+  if (getsockname(fd, reinterpret_cast<sockaddr*>(&a), &length) != 0 || a.sin_family != AF_INET)
+    return -1;
+  return ntohs(a.sin_port);
+}
+
+int open_listener(const ListenAddress& address) {
+  const std::string where = address.host + ":" + std::to_string(address.port);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(address.port));
+  const std::string host = address.host == "localhost" ? "127.0.0.1" : address.host;
+  if (inet_pton(AF_INET, host.c_str(), &a.sin_addr) != 1)
+    throw std::runtime_error("the view cannot listen on " + where + ": not an IPv4 address");
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);  // no SOCK_CLOEXEC: it is handed down
+  int yes = 1;
+  if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes) != 0 ||
+      ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || ::listen(fd, 512) != 0) {
+    const std::string why = std::strerror(errno);
+    if (fd >= 0) ::close(fd);
+    throw std::runtime_error("the view cannot listen on " + where + ": " + why);
+  }
+  return fd;
+}
+
 bool ListenAddress::loopback() const { return host == "localhost" || host.rfind("127.", 0) == 0; }
 
 ListenAddress parse_listen_address(const std::string& text, const std::string& flag) {
@@ -186,20 +215,6 @@ ListenAddress parse_listen_address(const std::string& text, const std::string& f
   return a;
 }
 
-std::string make_token() {
-  unsigned char bytes[16];
-  if (getrandom(bytes, sizeof bytes, 0) != static_cast<ssize_t>(sizeof bytes))
-    throw std::runtime_error(std::string("no random bytes for the view's stop token: ") +
-                             std::strerror(errno));
-  std::string token;
-  const char* hex = "0123456789abcdef";
-  for (const unsigned byte : bytes) {
-    token += hex[byte >> 4];
-    token += hex[byte & 0xfu];
-  }
-  return token;
-}
-
 ViewServer::ViewServer(const Feed& feed, ServerOptions options)
     : feed_(feed), options_(std::move(options)) {
   if (options_.allow_stop && options_.token.empty()) options_.token = make_token();
@@ -211,6 +226,7 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   files_["/"] = {"text/html; charset=utf-8", read_whole(web / "index.html")};
   files_["/view.js"] = {"text/javascript; charset=utf-8", read_whole(web / "view.js")};
   files_["/view.css"] = {"text/css; charset=utf-8", read_whole(web / "view.css")};
+  files_["/sites.js"] = {"text/javascript; charset=utf-8", read_whole(web / "sites.js")};
   files_["/uPlot.iife.min.js"] = {"text/javascript; charset=utf-8",
                                   read_whole(uplot / "uPlot.iife.min.js")};
   files_["/uPlot.min.css"] = {"text/css; charset=utf-8", read_whole(uplot / "uPlot.min.css")};
@@ -235,7 +251,12 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
   });
-  port_ = bind_within(*server_, options_.address, options_.bind_for);
+  if (options_.listen_fd >= 0) {
+    port_ = bound_port(options_.listen_fd);
+    listener.adopt(options_.listen_fd);
+  } else {
+    port_ = bind_within(*server_, options_.address, options_.bind_for);
+  }
   const auto& a = options_.address;
   if (port_ <= 0)
     throw std::runtime_error("the view cannot listen on " + a.host + ":" + std::to_string(a.port) +
@@ -288,13 +309,17 @@ void ViewServer::routes() {
     res.set_content(*copy, "application/json");
   });
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
-    const nlohmann::json j = {{"mode", options_.mode},
-                              {"stop_enabled", options_.allow_stop},
-                              {"token_required", options_.allow_stop},
-                              {"counters", counters()}};
+    nlohmann::json j = {{"mode", options_.mode},
+                        {"stop_enabled", options_.allow_stop || options_.desk},
+                        {"token_required", options_.allow_stop || options_.desk},
+                        {"roles", options_.desk != nullptr},
+                        {"counters", counters()}};
+    if (options_.desk)
+      for (const auto& [lab, nodes] : options_.desk->labs()) j["labs"][lab] = nodes;
     res.set_content(j.dump(), "application/json");
   });
   s.Post("/api/stop", [this](const httplib::Request& req, httplib::Response& res) {
+    if (options_.desk) return control(req, res, "stop");
     if (!options_.allow_stop || !options_.on_stop) {
       res.status = 403;
       res.set_content("the stop button is off: start the view with --view-stop", "text/plain");
@@ -315,6 +340,7 @@ void ViewServer::routes() {
     res.set_content("stop requested: HOLD, then STOP (\"stopped from the view\")", "text/plain");
   });
   stream(s);
+  control_routes(s);
   s.set_error_handler(
       httplib::Server::HandlerWithResponse([this](const httplib::Request&, httplib::Response& res) {
         if (res.status == 404)
@@ -365,6 +391,56 @@ void ViewServer::stream(httplib::Server& s) {
           return true;
         },
         [this](bool) { streams_.fetch_sub(1); });
+  });
+}
+
+// The control room's presses (a desk only): the token's role judged by the desk, which queues
+// the press for the loop; the answer names what happens or why it is refused.
+void ViewServer::control(const httplib::Request& req, httplib::Response& res,
+                         const std::string& action) {
+  const auto press = options_.desk->press(req.get_header_value("X-RTHS-Token"), action,
+                                          req.get_header_value("X-RTHS-Lab"));
+  if (!press) {
+    ++bad_token_;
+    res.status = 403;
+    res.set_content("wrong or missing token (X-RTHS-Token): use the address printed for your role",
+                    "text/plain");
+    return;
+  }
+  if (press->stop) {
+    ++stop_requests_;
+    stop_requested_.store(true);
+  }
+  res.status = press->allowed ? 202 : 403;
+  res.set_content(press->text(), "text/plain");
+}
+
+void ViewServer::control_routes(httplib::Server& s) {
+  s.Post("/api/hold", [this](const httplib::Request& req, httplib::Response& res) {
+    if (!options_.desk) {
+      res.status = 403;
+      res.set_content("this view has no control room (roles): HOLD is the director's stop",
+                      "text/plain");
+      return;
+    }
+    control(req, res, "hold");
+  });
+  s.Post("/api/whoami", [this](const httplib::Request& req, httplib::Response& res) {
+    const auto role = options_.desk
+                          ? options_.desk->crew().identify(req.get_header_value("X-RTHS-Token"))
+                          : std::nullopt;
+    if (!role) {
+      ++bad_token_;
+      res.status = 403;
+      res.set_content("no role has this token", "text/plain");
+      return;
+    }
+    static const char* const kinds[] = {"director", "operator", "viewer"};
+    res.set_content(nlohmann::json{{"role", kinds[static_cast<int>(role->kind)]},
+                                   {"lab", role->lab},
+                                   {"name", role->name()}}
+                        .dump(),
+                    "application/json");
   });
 }
 

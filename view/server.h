@@ -2,7 +2,7 @@
 // The live view's HTTP server (cpp-httplib, Debian's libcpp-httplib-dev): the page and a
 // server-sent-events stream of a Feed, on threads of its own (never the loop's).
 //
-//   GET  /, /view.js, /view.css, /uPlot.iife.min.js, /uPlot.min.css
+//   GET  /, /view.js, /sites.js, /view.css, /uPlot.iife.min.js, /uPlot.min.css
 //                      the page; read into memory at start, served from a fixed list (no path is
 //                      ever mapped to the file system: anything else is 404, counted)
 //   GET  /api/stream   text/event-stream: first everything the feed holds, then what is new, at
@@ -14,11 +14,17 @@
 //                      by every client, rebuilt at most once per snapshot_period (SnapshotCache),
 //                      so clients looping on it cannot take the feed's lock more often than that
 //   GET  /api/health   the counters below and the options the page needs (stop enabled, mode)
-//   POST /api/stop     only when allow_stop, and only with the run's token in the X-RTHS-Token
+//   POST /api/stop     with a control room (desk, view/control_room.h): the token's role decides
+//                      (the director's: 202 and the run stops; an operator's or a viewer's: 403
+//                      naming why, and the press is recorded); a token of no role is 403,
+//                      counted bad_token. Without a desk: only when allow_stop, and only with the run's token in the X-RTHS-Token
 //                      header (compared in constant time; else 403, counted bad_token): calls
 //                      on_stop once ("HOLD then STOP" is the caller's). The token is always
 //                      needed, loopback included: any web page the user visits may POST to
 //                      127.0.0.1, but only the person handed page_url() knows the token.
+//   POST /api/hold     with a desk only: X-RTHS-Lab names the lab ("" or absent: every lab); the
+//                      director may HOLD any, an operator only their own lab (else 403, recorded)
+//   POST /api/whoami   with a desk: the role of X-RTHS-Token ({"role", "lab"}), 403 for none
 // Every request, before its route: the Host header must name the address served with its port
 // (127.0.0.1, localhost, [::1], the bound host, or the address the connection reached when bound
 // to 0.0.0.0); an Origin header, when sent, must be http:// and that same host:port. Else 403,
@@ -47,13 +53,16 @@
 
 #include <nlohmann/json.hpp>
 
+#include "view/control_room.h"
 #include "view/feed.h"
 #include "view/request_gate.h"
 #include "view/snapshot_cache.h"
 
 namespace httplib {
 class Server;
-}
+struct Request;
+struct Response;
+}  // namespace httplib
 
 namespace rths::view {
 
@@ -66,9 +75,15 @@ struct ListenAddress {
 // Throws std::invalid_argument naming `flag`, the value and what is allowed.
 ListenAddress parse_listen_address(const std::string& text, const std::string& flag = "--view");
 
-// 32 hex digits (128 bits) from the kernel's random source (getrandom). Throws
-// std::runtime_error when it has none.
-std::string make_token();
+// make_token: view/control_room.h.
+
+// A TCP socket bound to `address` and listening, without close-on-exec: a launcher makes it in
+// its own network namespace and a program it starts (in another namespace, e.g. `ip netns exec`)
+// serves it (ServerOptions::listen_fd), so a coordinator inside a site's namespace answers on
+// the host's address. Throws std::runtime_error naming the address when it cannot.
+int open_listener(const ListenAddress& address);
+// The port a bound IPv4 socket has, -1 when it is not one.
+int bound_port(int fd);
 
 struct ServerOptions {
   ListenAddress address{"127.0.0.1", 0};
@@ -78,6 +93,10 @@ struct ServerOptions {
   bool allow_stop = false;
   std::string token;  // what /api/stop needs; empty with allow_stop: one made here (make_token)
   std::function<void()> on_stop;
+  ControlDesk* desk = nullptr;  // roles (view/control_room.h): stop, hold and whoami ask it
+  // A listening socket to serve (open_listener) instead of binding `address`, whose host the
+  // Host checks still name; -1: bind `address`. The server owns it from then on.
+  int listen_fd = -1;
   int max_streams = 4;
   std::chrono::milliseconds update_period{33};
   std::chrono::milliseconds write_timeout{1000};
@@ -111,6 +130,8 @@ class ViewServer {
  private:
   void routes();
   void stream(httplib::Server& server);
+  void control_routes(httplib::Server& server);
+  void control(const httplib::Request& req, httplib::Response& res, const std::string& action);
   void stop_listening();
   // Why a request is not for this server (its Host or Origin), or empty when it is.
   std::string foreign(const std::string& host, const std::string& origin,

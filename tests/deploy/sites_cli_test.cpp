@@ -41,6 +41,21 @@ TEST(SitesCli, DomainOverridesTheConfigsAndIsCheckedLikeLaunchs) {
   EXPECT_NE(bad.output.find("--domain"), std::string::npos) << bad.output;
 }
 
+// --view takes launch's HOST:PORT and --view-stop needs it: both refused before anything starts.
+TEST(SitesCli, RefusesABadViewAddressAndAControlRoomWithoutAView) {
+  const auto bad = util::run_command({kRths, "sites", kConfig, "--check", "--view", "lab-pc:80"});
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("host 'lab-pc' is not an IPv4 address"), std::string::npos)
+      << bad.output;
+  const auto alone = util::run_command({kRths, "sites", kConfig, "--check", "--view-stop"});
+  EXPECT_EQ(alone.exit_code, 2) << alone.output;
+  EXPECT_NE(alone.output.find("--view-stop needs --view HOST:PORT"), std::string::npos)
+      << alone.output;
+  const auto ok = util::run_command(
+      {kRths, "sites", kConfig, "--check", "--view", "127.0.0.1:0", "--view-stop"});
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
 std::string read(const std::filesystem::path& path);
 
 // `rths sites` takes `rths launch`'s platform flags: once it printed "run anyway with

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <cmath>
 #include <filesystem>
 
+#include "analysis/study_run.h"
 #include "runtime/node/plan.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
@@ -52,6 +54,46 @@ TEST(Context, ALockstepRunEqualsItsPredictionOnThePageAtEverySample) {
   EXPECT_EQ(j["status"]["prediction"]["compared_samples"], (steps + 9) / 10);
   EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
   EXPECT_GT(outcome.result.displacement.cwiseAbs().maxCoeff(), 1e-4);  // a response to compare
+}
+
+// What the control room shows per link: the actuators of each node, the answer window, the
+// critical round trip (uncompensated here: the case has no predictor) less the case's own lag;
+// and per link in the samples, the answer age (0 in lockstep: each step applies its own
+// answer), the answers accepted (one per step) and no predictor error.
+TEST(Context, TheLinksFactsAndColumnsAreTheRunsOwn) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(0.5, ""));
+  Feed feed;
+  describe_run(feed, prepared, "lag_shift_14ms");
+  coordinator::CoordinatorOptions options;
+  options.run_id = "view-context-links";
+  options.case_name = "lag_shift_14ms";
+  options.record = record_path("links");
+  options.record_observer = &feed;
+  const auto outcome = coordinator::run_in_process(prepared, options);
+  std::filesystem::remove(options.record);
+  ASSERT_TRUE(outcome.ok) << outcome.status;
+  FeedCursor cursor;
+  const auto j = feed.since(cursor);
+  EXPECT_EQ(j["context"]["node_actuators"],
+            nlohmann::json({{"1", nlohmann::json::array()}, {"2", nlohmann::json::array({0})}}));
+  const config::Deployment deployment =
+      runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
+  EXPECT_EQ(j["context"]["answer_window_steps"],
+            runtime::max_missed_answers(deployment, prepared.base.dt));
+  const auto check = analysis::check_case_critical_delay(
+      prepared, core::find_case(prepared.config, "lag_shift_14ms"));
+  ASSERT_TRUE(check && check->critical());
+  const auto& critical = j["context"]["critical_round_trip"];
+  EXPECT_EQ(critical["label"], "uncompensated");
+  EXPECT_NEAR(critical["ms"].get<double>(), (*check->critical() - 0.014) * 1e3, 1e-9);
+  const auto& samples = j["samples"];
+  const std::size_t last = samples["step"].size() - 1;
+  for (std::size_t l = 0; l < 2; ++l) {
+    EXPECT_EQ(samples["answer_age_steps"][l][last].get<double>(), 0.0) << "link " << l;
+    EXPECT_EQ(samples["answers"][l][last].get<double>(), samples["step"][last].get<double>());
+    // NaN, which the page receives as null: the case has no predictor.
+    EXPECT_TRUE(std::isnan(samples["prediction_error_N"][l][last].get<double>()));
+  }
 }
 
 TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {

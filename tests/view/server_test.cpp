@@ -127,6 +127,60 @@ TEST(ViewServer, StopIsOffUnlessAskedAndThenNeedsItsToken) {
   EXPECT_TRUE(server.stop_requested());
 }
 
+// With a control room the token's role decides: an operator's HOLD of their lab is 202, of
+// another lab or a STOP 403 naming why; the director's STOP is 202; a token of no role is 403 and
+// counted; /api/whoami names the role. Every press of a role is queued for the loop.
+TEST(ViewServer, TheControlRoomAnswersEachRoleAsTheDeskJudgesIt) {
+  Feed feed;
+  ControlDesk desk(Crew::make({"lab_b", "lab_c"}), {{"lab_b", {2}}, {"lab_c", {3}}});
+  ServerOptions options;
+  options.desk = &desk;
+  ViewServer server(feed, options);
+  httplib::Client client("127.0.0.1", server.port());
+  const auto post = [&](const char* path, const std::string& token, const std::string& lab) {
+    return client.Post(path, {{"X-RTHS-Token", token}, {"X-RTHS-Lab", lab}}, "", "");
+  };
+  const std::string op = desk.crew().operators.at("lab_b");
+  const auto health = nlohmann::json::parse(client.Get("/api/health")->body);
+  EXPECT_TRUE(health["roles"].get<bool>());
+  EXPECT_EQ(health["labs"]["lab_c"], nlohmann::json::array({3}));
+  EXPECT_EQ(nlohmann::json::parse(post("/api/whoami", op, "")->body)["lab"], "lab_b");
+  EXPECT_EQ(post("/api/whoami", "0123456789abcdef0123456789abcdef", "")->status, 403);
+  const auto other = post("/api/hold", op, "lab_c");
+  EXPECT_EQ(other->status, 403);
+  EXPECT_NE(other->body.find("may HOLD only lab_b's actuators"), std::string::npos) << other->body;
+  EXPECT_EQ(post("/api/stop", op, "")->status, 403);
+  EXPECT_EQ(post("/api/stop", desk.crew().viewer, "")->status, 403);
+  EXPECT_FALSE(server.stop_requested());
+  EXPECT_EQ(post("/api/hold", op, "lab_b")->status, 202);
+  EXPECT_EQ(post("/api/stop", "", "")->status, 403);
+  EXPECT_EQ(server.counters()["bad_token"], 2);
+  EXPECT_EQ(post("/api/stop", desk.crew().director, "")->status, 202);
+  EXPECT_TRUE(server.stop_requested());
+  const auto presses = desk.take();
+  ASSERT_EQ(presses.size(), 5u);
+  EXPECT_EQ(presses[3].hold_nodes, std::vector<int>{2});
+  EXPECT_TRUE(presses[4].stop);
+}
+
+// A socket made by a launcher (open_listener) is served as given, at its port, with the Host
+// checks of the address named.
+TEST(ViewServer, ServesAListeningSocketHandedToIt) {
+  Feed feed;
+  const int fd = open_listener(parse_listen_address("127.0.0.1:0"));
+  const int port = bound_port(fd);
+  ASSERT_GT(port, 0);
+  ServerOptions options;
+  options.listen_fd = fd;
+  ViewServer server(feed, options);
+  EXPECT_EQ(server.port(), port);
+  httplib::Client client("127.0.0.1", port);
+  EXPECT_EQ(client.Get("/api/health")->status, 200);
+  EXPECT_EQ(client.Get("/api/health", {{"Host", "lab-pc:" + std::to_string(port)}})->status, 403);
+  EXPECT_THROW(open_listener(parse_listen_address("127.0.0.1:" + std::to_string(port))),
+               std::runtime_error);  // SO_REUSEADDR, never two listeners on one port
+}
+
 TEST(ViewServer, StreamsTheFeedAsEventsAndEndsAfterItFinished) {
   Feed feed;
   ViewServer server(feed, {});

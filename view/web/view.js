@@ -110,7 +110,7 @@ function buildCharts() {
   acts.innerHTML = ''; links.innerHTML = ''; V.plots = { act: [], link: [] };
   buildResponse();
   for (let a = 0; a < h.actuators; a++) {
-    const r = row(acts, 'Actuator ' + (a + 1));
+    const r = row(actuatorParent(a), 'Actuator ' + (a + 1));
     const c = COLORS[a % COLORS.length];
     V.plots.act.push({
       cmd: timePlot(r, 'command vs measured displacement', 'displacement (mm)', ['command (mm)', 'measured (mm)'], ['#1f5fbf', '#d1451b']),
@@ -141,7 +141,7 @@ function reset(header, context) {
     V.cols[k] = Array.from({ length: header.dofs }, () => []);
   for (const k of ['command_mm', 'measured_mm', 'error_mm', 'force_N', 'ti_mm2'])
     V.cols[k] = Array.from({ length: header.actuators }, () => []);
-  for (const k of ['injected_ms', 'round_trip_ms'])
+  for (const k of ['injected_ms', 'round_trip_ms', 'answer_age_steps', 'answers', 'prediction_error_N'])
     V.cols[k] = Array.from({ length: header.links.length }, () => []);
   V.cols.diagnostics = (header.diagnostics || []).map(names => names.map(() => []));
   $('run').textContent = header.study + ' · case ' + header.case + ' · ' + header.clock.replace('_', ' ') +
@@ -152,6 +152,7 @@ function reset(header, context) {
   $('critical').title = cd.text || '';
   if (context && context.note) $('run').textContent += ' · ' + context.note;
   buildCharts();
+  buildSites();
 }
 
 function append(dst, src) { for (let i = 0; i < src.length; i++) dst.push(src[i]); }
@@ -250,7 +251,7 @@ function draw() {
   if (key !== V.drawnKey) {
     V.drawnKey = key; drew = true;
     const idx = picks(i0, i1, chartWidth()), xy = picks(x0, x1, chartWidth()), t = at(c.time_s, idx);
-    V.plots.act.forEach((p, a) => drawActuator(a, p, t, idx, xy));
+    V.plots.act.forEach((p, a) => { if (actuatorShown(a)) drawActuator(a, p, t, idx, xy); });
     drawResponse(t, idx);
     V.plots.link.forEach((p, l) => p.setData([t, at(c.injected_ms[l], idx), at(c.round_trip_ms[l], idx)]));
     V.plots.diag.forEach(d => d.plot.setData([t, at(c.diagnostics[d.l][d.ch], idx)]));
@@ -259,7 +260,9 @@ function draw() {
     V.drawn = { i0, i1, steps: at(c.step, idx) };
   }
   const spec = spectrumUpTo(i1 ? c.time_s[i1 - 1] : 0);
+  showSites();
   V.plots.act.forEach((p, a) => {
+    if (!actuatorShown(a)) return;
     const before = p.specStep;
     drawSpectrum(a, p, spec);
     drew = drew || p.specStep !== before;
@@ -408,6 +411,7 @@ function stopToken() {
 async function setupStop() {
   const token = stopToken();
   V.health = await (await fetch('/api/health')).json();
+  if (V.health.roles) return setupRoles(token);
   if (!V.health.stop_enabled) return;
   $('stop-box').hidden = false;
   $('token').hidden = !V.health.token_required || token !== '';

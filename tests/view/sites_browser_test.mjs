@@ -1,0 +1,232 @@
+// The control room in a real browser (Debian's Chromium driven by playwright-core) over real
+// `rths sites --view --view-stop` runs: three sites in network namespaces (site_a: the coordinator
+// and the numerical storeys; lab_b and lab_c: two actuators each), lockstep over Cyclone DDS
+// (domains 1 and 2). The page names every site with its nodes, links and actuators; an operator's
+// HOLD of their lab reaches its actuators within the answer window and ends the run; an operator
+// cannot stop the run or HOLD another lab; a viewer's stop is refused; the director's stop ends
+// the run; the record (read back by `rths view`) names who pressed what. Skipped, with the reason
+// printed, where Chromium cannot start or network namespaces cannot be made.
+// Screenshots go to RTHS_VIEW_TEST_OUT (sites_operator.png, sites_hold.png, sites_viewer.png,
+// sites_director_stop.png).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn, spawnSync } from 'node:child_process';
+import { createRequire } from 'node:module';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+
+const RTHS = process.env.RTHS_BIN;
+const BIN_DIR = process.env.RTHS_BINARY_DIR;
+const OUT = process.env.RTHS_VIEW_TEST_OUT;
+const MOTION = path.resolve(process.env.RTHS_SOURCE_DIR, 'data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2');
+const CHROMIUM = '/usr/bin/chromium';
+const FLAGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+  '--disable-background-networking', '--disable-component-update', '--disable-sync'];
+
+let context = null, skip = null;
+const children = [];
+
+before(async () => {
+  fs.mkdirSync(OUT, { recursive: true });
+  if (process.getuid && process.getuid() !== 0) skip = 'network namespaces need root';
+  let chromium;
+  try {
+    ({ chromium } = createRequire(process.env.RTHS_VIEW_NODE_MODULES + '/')('playwright-core'));
+  } catch (e) { skip = skip || 'playwright-core is not installed (the rths_view_web target runs npm ci): ' + e.message; }
+  if (!skip && !fs.existsSync(CHROMIUM)) skip = CHROMIUM + ' is missing (apt-get install chromium)';
+  if (!skip) {
+    try {
+      context = await chromium.launchPersistentContext(fs.mkdtempSync(path.join(os.tmpdir(), 'rths_chromium_')),
+        { executablePath: CHROMIUM, headless: true, args: FLAGS, viewport: { width: 1500, height: 1000 }, timeout: 120000 });
+    } catch (e) { skip = 'Chromium cannot start: ' + e.message.split('\n')[0]; }
+  }
+  if (skip) console.log('# SKIP the browser tests of the control room: ' + skip);
+});
+
+after(async () => {
+  for (const c of children) if (c.exitCode === null && c.signalCode === null) c.kill('SIGINT');
+  if (context) await context.close();
+});
+
+// A 4-storey shear frame, a third of each storey experimental (four actuators); lab_b's emulator
+// hosts storeys 1-2, lab_c's 3-4; 1 ms each way on every link, with jitter; 20 s of El Centro,
+// longer than the test lets it run.
+function sites(dir, domain, subnet) {
+  fs.rmSync(dir, { recursive: true, force: true });
+  fs.mkdirSync(dir, { recursive: true });
+  fs.writeFileSync(path.join(dir, 'study.textproto'), `name: "control_room"
+structure {
+  shear_building { storey_mass: [1000, 1000, 1000, 1000] storey_stiffness: [4e5, 3.5e5, 3e5, 2.5e5] }
+  damping { modal_zeta: 0.05 }
+}
+motion { path: "${MOTION}" duration: 20 }
+integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }
+substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }
+cases { name: "lab_test" delay { shift { delay: 0.002 } } }
+`);
+  const link = (id, seed) => `links { node_id: ${id}
+  to_node { one_way_delay: 0.001 jitter: 0.0002 seed: ${seed} }
+  from_node { one_way_delay: 0.001 jitter: 0.0002 seed: ${seed + 1} } }\n`;
+  fs.writeFileSync(path.join(dir, 'sites.textproto'), `study: "study.textproto"
+case_name: "lab_test"
+domain_id: ${domain}
+subnet: "${subnet}"
+clock: LOCKSTEP
+timeout: 240
+sites { name: "site_a" node_ids: [0, 1] }
+sites { name: "lab_b" node_ids: 2 }
+sites { name: "lab_c" node_ids: 3 }
+${link(1, 11)}${link(2, 21)}${link(3, 31)}
+deployment {
+  nodes { id: 1 kind: SUBSTRUCTURE }
+  nodes { id: 2 kind: ACTUATOR_EMULATOR storeys: [1, 2] }
+  nodes { id: 3 kind: ACTUATOR_EMULATOR storeys: [3, 4] }
+  start_timeout: 30
+}
+`);
+  return path.join(dir, 'sites.textproto');
+}
+
+function start(args) {
+  const child = spawn(RTHS, args, { stdio: ['ignore', 'pipe', 'pipe'] });
+  child.output = '';
+  child.stdout.on('data', d => { child.output += d; });
+  child.stderr.on('data', d => { child.output += d; });
+  child.done = new Promise(resolve => child.on('exit', code => resolve(code)));
+  children.push(child);
+  return child;
+}
+
+async function until(what, probe, ms = 90000) {
+  const end = Date.now() + ms;
+  for (;;) {
+    const value = await probe();
+    if (value) return value;
+    if (Date.now() > end) throw new Error('timed out waiting for ' + what);
+    await new Promise(r => setTimeout(r, 100));
+  }
+}
+
+// `rths sites --view 127.0.0.1:0 --view-stop`: the role addresses it prints, once.
+async function startSites(dir, domain, subnet) {
+  const child = start(['sites', sites(dir, domain, subnet), '--view', '127.0.0.1:0', '--view-stop',
+    '--bin-dir', BIN_DIR, '--out', path.join(dir, 'out'), '--no-plots']);
+  const roles = await until('the control room\'s addresses', () => {
+    if (child.exitCode !== null) throw new Error('rths sites exited: ' + child.output);
+    const viewer = child.output.match(/viewer \(sees only\): (\S+)/);
+    if (!viewer) return null;
+    const r = { viewer: viewer[1], director: child.output.match(/director \(HOLD any lab, STOP\): (\S+)/)[1] };
+    for (const lab of ['lab_b', 'lab_c'])
+      r[lab] = child.output.match(new RegExp('operator of ' + lab + ' \\(HOLD ' + lab + "'s actuators\\): (\\S+)"))[1];
+    return r;
+  });
+  return { child, roles };
+}
+
+async function open(url) {
+  const page = await context.newPage();
+  page.on('dialog', d => d.accept());
+  await page.goto(url);
+  return page;
+}
+
+const view = (page, expr, arg) => page.evaluate(expr, arg);
+const step = async page => Number(await page.textContent('#step')) || 0;
+// A POST from the page itself, with the token the page holds (as its buttons send it).
+const post = (page, action, lab) => view(page, async ([a, l]) => {
+  const r = await fetch('/api/' + a, { method: 'POST', headers: { 'X-RTHS-Token': window.rthsView.token, 'X-RTHS-Lab': l } });
+  return { status: r.status, text: await r.text() };
+}, [action, lab]);
+
+// The page names every site, under it its nodes and actuators, and per link its figures.
+async function checkSites(page) {
+  await until('the sites on the page', async () => (await step(page)) > 300 &&
+    (await page.textContent('#site-lab_b table')).includes('round trip'));
+  const tables = await view(page, () => Object.fromEntries([...document.querySelectorAll('details.site')].map(d =>
+    [d.id, [...d.querySelectorAll('tr')].map(r => [...r.cells].map(c => c.textContent))])));
+  assert.deepEqual(Object.keys(tables), ['site-site_a', 'site-lab_b', 'site-lab_c']);
+  const names = rows => rows.slice(1).map(r => r[0].trim());
+  assert.deepEqual(names(tables['site-site_a']), ['coordinator (the integrator)', 'node 1 (substructure)']);
+  assert.deepEqual(names(tables['site-lab_b']), ['node 2 (actuator emulator)', 'actuator 1', 'actuator 2']);
+  assert.deepEqual(names(tables['site-lab_c']), ['node 3 (actuator emulator)', 'actuator 3', 'actuator 4']);
+  const link = tables['site-lab_b'][1];
+  // Round trip: the 2 ms the node injects and the exchange; the margin against the critical one.
+  assert.ok(Number(link[2]) >= 2 && Number(link[2]) < 50, 'round trip ' + link[2]);
+  assert.match(link[6], /ms \(\d+ %\) of \d/);
+  assert.match(tables['site-lab_b'][2][1], /^command -?\d+\.\d+ mm, measured -?\d+\.\d+ mm, error/);
+  assert.match(await page.textContent('#sites-note'), /critical round trip \d+\.\d ms, uncompensated/);
+}
+
+// The events of a finished record as `rths view` serves them.
+async function recordEvents(record) {
+  const child = start(['view', record, '--listen', '127.0.0.1:0', '--for', '60']);
+  const url = await until('rths view to listen', () => (child.output.match(/(http:\/\/127\.0\.0\.1:\d+\/)/) || [])[1]);
+  const snapshot = await (await fetch(url + 'api/snapshot')).json();
+  child.kill('SIGINT');
+  await child.done;
+  return { events: snapshot.events.map(e => e.what), context: snapshot.context, header: snapshot.header };
+}
+
+test('an operator HOLDs their own lab within the answer window; another lab and STOP are refused (403) and recorded', { timeout: 400000 }, async t => {
+  if (skip) return t.skip(skip);
+  const dir = path.join(OUT, 'sites_hold');
+  const { child, roles } = await startSites(dir, 1, '10.231.201');
+  const page = await open(roles.lab_b);
+  await checkSites(page);
+  assert.equal(new URL(page.url()).search, '', 'the token is out of the address bar');
+  assert.equal(await page.textContent('#role'), 'you are the operator of lab_b');
+  assert.equal(await page.isVisible('#stop'), false);
+  assert.equal(await page.isVisible('#hold-lab_c'), false);
+  assert.equal(await page.isVisible('#hold-lab_b'), true);
+  await page.screenshot({ path: path.join(OUT, 'sites_operator.png'), fullPage: true });
+  const other = await post(page, 'hold', 'lab_c');
+  assert.equal(other.status, 403, other.text);
+  assert.match(other.text, /may HOLD only lab_b's actuators/);
+  assert.equal((await post(page, 'stop', '')).status, 403);
+  await page.click('#hold-lab_b');
+  await until('the HOLD on the page', async () => (await page.textContent('#state')).startsWith('HOLD'));
+  await until('lab_b\'s actuators held on the page', async () =>
+    (await page.textContent('#site-lab_b table')).includes('HOLD: the operator of lab_b pressed HOLD of lab_b'));
+  await page.screenshot({ path: path.join(OUT, 'sites_hold.png'), fullPage: true });
+  assert.equal(await child.done, 1, child.output);  // a held run did not complete
+  assert.match(child.output, /HOLD from the view by the operator of lab_b/);
+  const { events, context } = await recordEvents(path.join(dir, 'out', 'lab_test.rthsrec'));
+  const held = events.find(e => e.startsWith('the operator of lab_b pressed HOLD of lab_b on the view: HOLD sent to node 2'));
+  assert.ok(held, events.join('\n'));
+  const ms = Number(held.match(/\(([\d.]+) ms after the press\)/)[1]);
+  const windowMs = context.answer_window_steps * 1;  // dt 1 ms
+  assert.ok(ms <= windowMs, `HOLD sent ${ms} ms after the press, window ${windowMs} ms`);
+  assert.ok(events.some(e => e.startsWith('the operator of lab_b pressed HOLD of lab_c on the view: refused (403)')), events.join('\n'));
+  assert.ok(events.some(e => e.startsWith('the operator of lab_b pressed STOP on the view: refused (403), only the director may stop the test')), events.join('\n'));
+  assert.ok(events.some(e => /^HOLD sent to the actuator emulators: HOLD from the view by the operator of lab_b/.test(e)), events.join('\n'));
+  await page.close();
+});
+
+test('a viewer\'s stop is refused (403) and recorded; the director\'s stop ends the run', { timeout: 400000 }, async t => {
+  if (skip) return t.skip(skip);
+  const dir = path.join(OUT, 'sites_stop');
+  const { child, roles } = await startSites(dir, 2, '10.231.202');
+  const viewer = await open(roles.viewer);
+  await checkSites(viewer);
+  assert.equal(await viewer.textContent('#role'), 'you are a viewer');
+  assert.equal(await viewer.isVisible('#stop'), false);
+  assert.equal(await viewer.locator('button.hold').count(), 0);
+  const refused = await post(viewer, 'stop', '');
+  assert.equal(refused.status, 403, refused.text);
+  assert.match(refused.text, /a viewer pressed STOP on the view: refused \(403\)/);
+  await viewer.screenshot({ path: path.join(OUT, 'sites_viewer.png'), fullPage: true });
+  const director = await open(roles.director);
+  await checkSites(director);
+  assert.equal(await director.textContent('#role'), 'you are the director');
+  assert.equal(await director.locator('button.hold').count(), 2);  // lab_b's and lab_c's
+  await director.click('#stop');
+  await until('the stop on the page', async () => (await director.textContent('#reason')).includes('stopped from the view by the director'), 60000);
+  await director.screenshot({ path: path.join(OUT, 'sites_director_stop.png'), fullPage: true });
+  assert.equal(await child.done, 1, child.output);
+  const { events } = await recordEvents(path.join(dir, 'out', 'lab_test.rthsrec'));
+  assert.ok(events.some(e => e.startsWith('a viewer pressed STOP on the view: refused (403)')), events.join('\n'));
+  assert.ok(events.some(e => e.startsWith('the director pressed STOP on the view: HOLD, then STOP')), events.join('\n'));
+  await viewer.close();
+  await director.close();
+});
