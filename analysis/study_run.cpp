@@ -7,9 +7,11 @@
 #include <future>
 #include <iomanip>
 #include <numbers>
+#include <span>
 #include <sstream>
 #include <tuple>
 
+#include "core/coupled_stability.h"
 #include "core/metrics.h"
 #include "core/sparse_structure.h"
 #include "study/motion_key.h"
@@ -217,12 +219,69 @@ std::optional<CompensatedVerdict> judge_compensated_loop(
   return verdict;
 }
 
-// The pre-run verdict of a case with a force predictor (core/force_predictor.h): its loop's
-// critical lag of the measured pair (core::predictor_critical_delay) for the model as it starts
-// (the declared specimen times stiffness_factor, its damping), against the case's lag. An SDOF
-// only: a structure of several DOFs is not analysed, and the text says so.
+// One link's limit in a verdict: "critical lag 107 ms against the case's 74 ms: stable, tolerates
+// 33.2 ms more", "... PAST it", or "stable for every lag"; `whose` names the lag compared.
+std::string link_limit_text(const std::optional<double>& critical, double lag,
+                            const std::string& whose) {
+  std::ostringstream text;
+  text << std::setprecision(3);
+  if (!critical) return "stable for every lag";
+  text << "critical lag " << 1e3 * *critical << " ms against " << whose << " " << 1e3 * lag
+       << " ms: ";
+  if (lag < *critical)
+    text << "stable, tolerates " << 1e3 * (*critical - lag) << " ms more";
+  else
+    text << "PAST it";
+  return text.str();
+}
+
+// The coupled verdict's text: one link alone, or every link alike and then each one with the
+// others at their lags (core::CoupledLoopStability).
+std::string coupled_links_text(const core::CoupledLoopStability& loop,
+                               const core::HybridSetup& setup, const std::vector<double>& lags) {
+  const auto& storeys = setup.partition.actuator_storeys;
+  if (lags.size() == 1) return link_limit_text(loop.parts[0].critical_lag, lags[0], "the case's");
+  std::ostringstream text;
+  text << std::setprecision(3);
+  const double largest = *std::max_element(lags.begin(), lags.end());
+  text << "every link alike, "
+       << link_limit_text(loop.common_critical_lag, largest, "the largest link's") << "; "
+       << (loop.stable ? "stable" : "UNSTABLE") << " at the links' own lags";
+  if (!loop.stable)
+    text << " (the link of "
+         << setup.partition.channel_name(storeys[static_cast<std::size_t>(loop.crossed)])
+         << " crosses at " << 1e3 * loop.crossed_at << " ms)";
+  text << "; each link, the others at theirs:";
+  for (std::size_t a = 0; a < lags.size(); ++a) {
+    const core::PartLimit& part = loop.parts[a];
+    text << (a ? "; " : " ") << setup.partition.channel_name(storeys[a]) << " ";
+    if (part.crossed_before >= 0)
+      text << "none (the loop crosses before it lags)";
+    else
+      text << link_limit_text(part.critical_lag, lags[a], "its");
+  }
+  return text.str();
+}
+
+// The smallest extra lag (s) the loop tolerates: every link's together beyond the largest, or one
+// link's beyond its own; empty when no limit exists.
+std::optional<double> tolerated_extra_lag(const core::CoupledLoopStability& loop,
+                                          const std::vector<double>& lags) {
+  std::optional<double> out;
+  const auto keep = [&out](double extra) { out = out ? std::min(*out, extra) : extra; };
+  if (loop.common_critical_lag)
+    keep(*loop.common_critical_lag - *std::max_element(lags.begin(), lags.end()));
+  for (std::size_t a = 0; a < lags.size(); ++a)
+    if (loop.parts[a].critical_lag) keep(*loop.parts[a].critical_lag - lags[a]);
+  return out;
+}
+
+// The pre-run verdict of a case with a force predictor (core/force_predictor.h): the coupled loop
+// of every link with its predictor's model as it starts (the declared specimen times
+// stiffness_factor, its dashpot; core::setup_loop_stability, any number of DOFs and links),
+// each link at its delay stages' lag plus `extra_lag` (s).
 CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const config::Case& c,
-                                        double lag) {
+                                        double extra_lag) {
   CompensatedVerdict verdict;
   const config::ForcePredictor& block = c.force_predictor();
   const double factor = core::predictor_stiffness_factor(block);
@@ -230,35 +289,20 @@ CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const co
   text << std::setprecision(3) << "force predictor (model stiffness " << std::showpos
        << 100.0 * (factor - 1.0) << std::noshowpos << " %"
        << (block.fixed_model() ? ", fixed" : ", fitted online") << "): ";
-  if (setup.model.dofs() != 1) {
-    verdict.text = text.str() + "its loop is analysed for an SDOF only; this structure has " +
-                   std::to_string(setup.model.dofs()) + " DOFs";
+  std::vector<double> lags;
+  for (std::size_t a = 0; a < setup.partition.actuator_storeys.size(); ++a)
+    lags.push_back((a < setup.delays.size() ? setup.delays[a].nominal_delay() : 0.0) + extra_lag);
+  if (lags.empty()) {
+    verdict.text = text.str() + "no experimental part: nothing comes back late";
     return verdict;
   }
-  const double m = setup.model.mass(0, 0), k = setup.model.stiffness(0, 0);
-  const double omega = std::sqrt(k / m);
-  const double zeta = setup.model.damping(0, 0) / (2.0 * m * omega);
-  const core::Mat k_e = setup.partition.experimental_stiffness();
-  const double alpha = k_e.size() > 0 ? k_e(0, 0) / k : 0.0;
-  const core::ContinuousStability limit =
-      core::predictor_critical_delay(2.0 * std::numbers::pi / omega, zeta, alpha, factor - 1.0,
-                                     block.damping() / (2.0 * m * omega));
+  const core::CoupledLoopStability loop = core::setup_loop_stability(setup, lags);
   verdict.analysed = true;
-  if (limit.stable_for_all_delays) {
-    verdict.stable = true;
-    text << "stable for every lag";
-  } else {
-    const double critical = limit.critical_delay.value_or(0.0);
-    verdict.stable = lag < critical;
-    text << "critical lag " << 1e3 * critical << " ms against the case's " << 1e3 * lag << " ms: ";
-    if (verdict.stable) {
-      verdict.extra_delay_tolerated = critical - lag;
-      text << "stable, tolerates " << 1e3 * (critical - lag) << " ms more";
-    } else {
-      text << "PAST it";
-    }
-  }
+  verdict.stable = loop.stable;
+  if (loop.stable) verdict.extra_delay_tolerated = tolerated_extra_lag(loop, lags);
+  text << coupled_links_text(loop, setup, lags);
   if (!block.fixed_model()) text << " (the model as it starts; the online fit shrinks its error)";
+  text << " [" << loop.assumed << "]";
   verdict.text = text.str();
   return verdict;
 }
@@ -303,8 +347,7 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   for (std::size_t a = 0; a < setup.predictors.size(); ++a)
     if (setup.predictors[a]) result.predicted_actuators.push_back(static_cast<int>(a));
   if (study_case.has_force_predictor())
-    result.compensated =
-        judge_predicted_loop(setup, study_case, result.nominal_delay + options.extra_lag);
+    result.compensated = judge_predicted_loop(setup, study_case, options.extra_lag);
   if (const auto warning = pre_run_warning(result); warning && options.warn)
     options.warn("case '" + result.name + "': " + *warning);
   return result;
@@ -322,14 +365,34 @@ std::string describe_growth(const core::EnvelopeGrowth& g) {
   return out.str();
 }
 
+// The verdict a case's lines cite: its compensated loop's where that was analysed (the
+// uncompensated check would contradict it), else its critical-delay check's.
+std::string governing_verdict(const CaseOutcome& c) {
+  if (c.compensated && c.compensated->analysed) return c.compensated->text;
+  return c.stability ? c.stability->describe() : std::string("no critical-delay check");
+}
+
+// Whether the case's envelope grows beyond the lag-free run's over the same windows: growth the
+// lag-free run shares (a short record ending in its strong motion) is the motion's, not the
+// loop's. It counts when the lag-free envelope does not grow, or when the case's outgrows it by
+// at least a doubling over the fitted span (the margin EnvelopeGrowth::grows() asks of growth).
+bool grows_beyond_lag_free(const CaseOutcome& result, const std::vector<double>& lag_free) {
+  if (!result.growth || !result.growth->grows()) return false;
+  const std::size_t steps = std::min(lag_free.size(), result.response.size());
+  const std::optional<core::EnvelopeGrowth> reference = core::envelope_growth(
+      std::span(lag_free).first(steps), result.simulation.dt, result.growth->period);
+  if (!reference || !(reference->rate > 0.0)) return true;
+  return (result.growth->rate - reference->rate) * result.growth->span >= std::log(2.0);
+}
+
 // The status of a case that ran, judged from its response against the lag-free run's and from
-// its envelope's growth.
+// its envelope's growth beyond the lag-free run's.
 void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_response, int floors) {
   result.response = floor_history(result.simulation, floors - 1);
   if (result.stability && result.stability->governing_period > 0.0 && result.simulation.dt > 0.0)
     result.growth = core::envelope_growth(result.response, result.simulation.dt,
                                           result.stability->governing_period);
-  const bool grows = result.growth && result.growth->grows();
+  const bool grows = grows_beyond_lag_free(result, lag_free_response);
   const Comparison growth = compare(lag_free_response, result.response, result.simulation.diverged);
   if (result.status != "completed") return;
   std::ostringstream why;
@@ -346,11 +409,15 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
     result.status = "diverging";
     why << "past its critical delay and " << describe_growth(*result.growth) << "; peak "
         << growth.peak_m / growth.peak_reference_m << "x the lag-free run's; "
-        << result.stability->describe();
+        << governing_verdict(result);
   } else if (grows) {
-    why << "inside its critical delay, yet " << describe_growth(*result.growth)
-        << " (forcing late in the record, or a limit the check does not see): "
-        << result.stability->describe();
+    why << (result.compensated && result.compensated->analysed
+                ? "its compensated loop analysed stable"
+                : "inside its critical delay")
+        << ", yet " << describe_growth(*result.growth)
+        << " beyond the lag-free run's (forcing late in the record, or a limit the check does not "
+           "see): "
+        << governing_verdict(result);
   } else if (result.judged_past() && !result.compensated) {
     why << std::setprecision(3) << "past its critical delay, but "
         << (result.growth ? describe_growth(*result.growth)
@@ -376,7 +443,7 @@ std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStu
                                                          double extra_lag) {
   if (!study_case.has_force_predictor()) return std::nullopt;
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-  return judge_predicted_loop(setup, study_case, nominal_delay_of(setup) + extra_lag);
+  return judge_predicted_loop(setup, study_case, extra_lag);
 }
 
 CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {

@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "core/simulation.h"
 #include "core/sparse_structure.h"
 
 namespace rths::core {
@@ -296,6 +297,58 @@ CoupledLoopStability coupled_loop_stability(const StructuralModel& model,
     out.crossed_at = *first.critical_lag;
   }
   return out;
+}
+
+std::vector<DelayedPart> setup_loop_parts(const HybridSetup& setup,
+                                          const std::vector<double>& lags) {
+  const HybridPartition& partition = setup.partition;
+  const std::size_t actuators = partition.actuator_storeys.size();
+  if (lags.size() != actuators)
+    throw std::invalid_argument("coupled loop: " + std::to_string(lags.size()) + " lags for " +
+                                std::to_string(actuators) + " actuators");
+  const int n = setup.model.dofs();
+  // Row s of B (drifts = B u), column by column from unit displacements.
+  const StoreyAssembly assembly = partition.assembly();
+  Mat rows(assembly.storeys(), n);
+  Vec drift(assembly.storeys());
+  for (int i = 0; i < n; ++i) {
+    assembly.drifts(Vec::Unit(n, i), drift);
+    rows.col(i) = drift;
+  }
+  std::vector<DelayedPart> parts;
+  for (std::size_t a = 0; a < actuators; ++a) {
+    const int s = partition.actuator_storeys[a];
+    const RestoringForceModel* specimen = partition.experimental[static_cast<std::size_t>(s)].get();
+    if (!specimen)
+      throw std::invalid_argument("coupled loop: actuator " + std::to_string(a + 1) +
+                                  " has no specimen");
+    DelayedPart part;
+    part.row = rows.row(s).transpose();
+    part.stiffness = specimen->initial_stiffness();
+    if (const auto* inertial = dynamic_cast<const InertialSpecimen*>(specimen)) {
+      part.damping = inertial->damping();
+      part.mass = inertial->mass();
+    }
+    if (a < setup.predictors.size() && setup.predictors[a]) {
+      const ForcePredictor model(*setup.predictors[a], setup.dt, "force predictor", specimen);
+      part.predicted = true;
+      // Its initial tangent: the parameters' stiffness, whatever terms share it.
+      part.model_stiffness = setup.predictors[a]->stiffness;
+      part.model_damping = model.damping();
+    }
+    part.lag = lags[a];
+    parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
+CoupledLoopStability setup_loop_stability(const HybridSetup& setup,
+                                          const std::vector<double>& lags) {
+  constexpr int kSparseModes = 20;  // as core::check_modal_critical_delay
+  const int n = setup.model.dofs();
+  const Modes modes =
+      lowest_modes(setup.model, setup.model.is_sparse() ? std::min(kSparseModes, n - 1) : n);
+  return coupled_loop_stability(setup.model, setup_loop_parts(setup, lags), modes);
 }
 
 }  // namespace rths::core

@@ -45,6 +45,8 @@
 
 namespace rths::core {
 
+struct HybridSetup;
+
 struct CoupledStability {
   static constexpr int kMaxModes = 24;
   static constexpr int kGridPoints = 3000;
@@ -108,5 +110,17 @@ struct CoupledLoopStability {
 CoupledLoopStability coupled_loop_stability(const StructuralModel& model,
                                             const std::vector<DelayedPart>& parts,
                                             const Modes& modes);
+
+// The links of a hybrid setup as parts of its loop: actuator a's row (its storey's, DOF's or
+// element's drift), its declared specimen's initial stiffness, dashpot and mass
+// (core::InertialSpecimen), its force predictor's model as it starts (the parameters' stiffness,
+// the model's initial tangent; core::ForcePredictor's damping() before any fit), and lags[a] (s). Throws std::invalid_argument when
+// lags is not one per actuator or an actuator has no specimen.
+std::vector<DelayedPart> setup_loop_parts(const HybridSetup& setup,
+                                          const std::vector<double>& lags);
+// coupled_loop_stability of a setup's model and its setup_loop_parts, in the modes
+// core::check_modal_critical_delay takes (all n; a model held sparse: its lowest 20).
+CoupledLoopStability setup_loop_stability(const HybridSetup& setup,
+                                          const std::vector<double>& lags);
 
 }  // namespace rths::core

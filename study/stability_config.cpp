@@ -3,6 +3,9 @@
 #include <memory>
 #include <stdexcept>
 
+#include "core/coupled_stability.h"
+#include "core/loop_critical_delay.h"
+#include "core/simulation.h"
 #include "study/compensation_config.h"
 #include "study/study.h"
 
@@ -33,8 +36,10 @@ double simulated_growth(IntegratorKind kind, double period, double zeta, double 
 std::optional<CriticalDelayCheck> check_setup_critical_delay(const PreparedStudy& prepared,
                                                              const HybridSetup& setup, double lag) {
   if (prepared.base.partition.actuator_storeys.empty()) return std::nullopt;
-  return check_modal_critical_delay(setup.model, prepared.base.partition.experimental_stiffness(),
-                                    setup.integrator, setup.dt, lag);
+  // Each link's specimen with its dashpot and mass, which come back late with its force.
+  const std::vector<DelayedPart> parts =
+      setup_loop_parts(setup, std::vector<double>(setup.partition.actuator_storeys.size(), 0.0));
+  return check_loop_critical_delay(setup.model, parts, setup.integrator, setup.dt, lag);
 }
 
 std::optional<CriticalDelayCheck> check_lag_critical_delay(const PreparedStudy& prepared,

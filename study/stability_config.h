@@ -12,9 +12,10 @@ namespace rths::core {
 struct HybridSetup;
 struct PreparedStudy;
 
-// The one pre-run judgement of a lag (s) on a study: check_modal_critical_delay of `setup`'s
-// model, integrator and dt with the study's experimental stiffness (exact on one DOF, the modal
-// approximation on several). Empty when the structure has no experimental part.
+// The one pre-run judgement of a lag (s) on a study: core::check_loop_critical_delay (core/loop_critical_delay.h) of `setup`'s
+// model, integrator and dt with its links' specimens (stiffness, dashpot, mass; exact on one DOF,
+// the coupled analysis where the modes do not decouple them). Empty when the structure has no
+// experimental part.
 std::optional<CriticalDelayCheck> check_setup_critical_delay(const PreparedStudy& prepared,
                                                              const HybridSetup& setup, double lag);
 // The same on the study's base setup, for a lag given directly (e.g. an identified actuator's

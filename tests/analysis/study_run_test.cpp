@@ -8,6 +8,7 @@
 #include <iostream>
 #include <iterator>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -192,6 +193,10 @@ TEST(StudyRun, APredictedCaseDrawsItsMeasuredForceAgainstTheModel) {
   EXPECT_EQ(count(svg, ">the model's prediction<"), 1u);
   EXPECT_EQ(count(svg, ">prediction error<"), 1u);
   EXPECT_EQ(count(svg, "force (kN)"), 1u);
+  // A link's pair side by side, the link named by its channel (no site in this study): a grid
+  // two panels wide, not one column.
+  EXPECT_NE(svg.find("viewBox=\"0 0 1600 "), std::string::npos);
+  EXPECT_EQ(count(svg, "storey 1 and the predictor's model of it"), 1u);
   // The 30 % soft model is wrong before its fit: the error is not zero.
   EXPECT_GT(predicted.simulation.prediction_error.cwiseAbs().maxCoeff(), 1.0);
   const StudyOutcome plain = run_study(frame(1.0 / 3.0, "cases { name: \"reference\" }", "", 2.0));
@@ -480,6 +485,92 @@ TEST(StudyRun, TheCriticalDelayCheckTakesTheLagTheCaseDoesNotHold) {
   ASSERT_TRUE(outcome.cases[0].stability.has_value());
   EXPECT_DOUBLE_EQ(outcome.cases[0].stability->lag, 0.028);
   EXPECT_DOUBLE_EQ(outcome.cases[0].nominal_delay, 0.014);  // the case's own lag stays its own
+}
+
+// The consortium's frame with its storey damper (k 3e5 N/m, c 1e4 N s/m between floors 1 and 2)
+// under a ground motion at its third mode (the one its delayed loop crosses at) whose amplitude
+// grows to the end of the 8 s record (e^{0.5 t}, embedded), with the cases given.
+core::PreparedStudy damper_frame(const std::string& cases) {
+  std::ostringstream motion;
+  motion.precision(10);
+  motion << "motion { embedded { name: \"growing_sine\" dt: 0.001 acceleration: [";
+  const double omega = 78.0111;  // rad/s, mode 3 of (M, K)
+  for (int k = 0; k < 8000; ++k)
+    motion << (k ? ", " : "") << 0.05 * std::exp(0.5e-3 * k) * std::sin(omega * 1e-3 * k);
+  motion << "] } } ";
+  const std::string text =
+      "name: \"damper_frame\" structure { matrices { "
+      "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
+      "stiffness { rows: 3 values: [4e6, -2e6, 0, -2e6, 3.5e6, -1.5e6, 0, -1.5e6, 1.5e6] } } "
+      "damping { rayleigh { zeta: 0.03 } } } " +
+      motion.str() +
+      "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 } "
+      "substructuring { experimental_dofs { dof: 2 from_dof: 1 stiffness: 3e5 damping: 1e4 } } " +
+      cases;
+  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+}
+
+// A predicted case on a structure of several DOFs is judged by the coupled loop of its link with
+// the predictor's model: an exact model is stable at every lag ("stable" in the margin column), a
+// model that misses the dashpot has a finite critical lag, tolerated at 5 ms and PAST at 60 ms,
+// where the run indeed grows without bound.
+TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
+  std::vector<std::string> warnings;
+  const StudyOutcome outcome =
+      run_study(damper_frame("cases { name: \"reference\" } "
+                             "cases { name: \"exact_60ms\" delay { shift { delay: 0.060 } } "
+                             "        force_predictor { fixed_model: true } } "
+                             "cases { name: \"no_dashpot_5ms\" delay { shift { delay: 0.005 } } "
+                             "        force_predictor { fixed_model: true damping: 1e-6 } } "
+                             "cases { name: \"no_dashpot_60ms\" delay { shift { delay: 0.060 } } "
+                             "        force_predictor { fixed_model: true damping: 1e-6 } "
+                             "        expect_unstable: true }"),
+                {.warn = [&](const std::string& w) { warnings.push_back(w); }});
+  const CaseOutcome& exact = outcome.cases[1];
+  const CaseOutcome& inside = outcome.cases[2];
+  const CaseOutcome& past = outcome.cases[3];
+  for (const CaseOutcome* c : {&exact, &inside, &past}) {
+    ASSERT_TRUE(c->compensated.has_value()) << c->name;
+    EXPECT_TRUE(c->compensated->analysed) << c->compensated->text;
+  }
+  EXPECT_TRUE(exact.compensated->stable);
+  EXPECT_NE(exact.compensated->text.find("stable for every lag"), std::string::npos)
+      << exact.compensated->text;
+  EXPECT_TRUE(inside.compensated->stable) << inside.compensated->text;
+  ASSERT_TRUE(inside.compensated->extra_delay_tolerated.has_value());
+  EXPECT_FALSE(past.compensated->stable) << past.compensated->text;
+  EXPECT_NE(past.compensated->text.find("against the case's 60 ms: PAST it"), std::string::npos)
+      << past.compensated->text;
+  // The critical lag both state is the same.
+  const double critical = 0.005 + *inside.compensated->extra_delay_tolerated;
+  EXPECT_GT(critical, 0.005);
+  EXPECT_LT(critical, 0.060);
+  EXPECT_EQ(exact.status, "completed") << exact.status_detail;
+  EXPECT_EQ(inside.status, "completed") << inside.status_detail;
+  EXPECT_TRUE(past.diverged()) << past.status << ": " << past.status_detail;
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("no_dashpot_60ms"), std::string::npos) << warnings[0];
+  const std::string table = study_summary_text(outcome);
+  EXPECT_EQ(table.find("n/a [comp.]"), std::string::npos) << table;
+  EXPECT_NE(table.find("unstable [comp.]"), std::string::npos) << table;
+  EXPECT_NE(table.find(" ms [comp.]"), std::string::npos) << table;
+  std::cout << "damper frame: " << inside.compensated->text << "\n";
+}
+
+// An envelope that grows as the lag-free run's does (the motion grows to the end of the record)
+// is the motion's: the compensated case analysed stable gets no "grows exponentially ... doubling
+// every" line beside its verdict.
+TEST(StudyRun, GrowthTheLagFreeRunSharesIsTheMotions) {
+  const StudyOutcome outcome =
+      run_study(damper_frame("cases { name: \"reference\" } "
+                             "cases { name: \"exact_60ms\" delay { shift { delay: 0.060 } } "
+                             "        force_predictor { fixed_model: true } }"));
+  const CaseOutcome& exact = outcome.cases[1];
+  ASSERT_TRUE(exact.growth.has_value());
+  EXPECT_TRUE(exact.growth->grows()) << "the motion's growth: " << exact.growth->rate << " /s";
+  EXPECT_TRUE(exact.compensated && exact.compensated->stable);
+  EXPECT_EQ(exact.status, "completed");
+  EXPECT_TRUE(exact.status_detail.empty()) << exact.status_detail;
 }
 
 }  // namespace

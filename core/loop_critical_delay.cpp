@@ -1,0 +1,82 @@
+#include "core/loop_critical_delay.h"
+
+#include <algorithm>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/sparse_structure.h"
+
+namespace rths::core {
+
+namespace {
+
+// value b b' as a sparse matrix (n x n) from b's nonzeros: no n x n dense copy of a large model.
+SparseMat sparse_outer(const Vec& b, double value) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index i = 0; i < b.size(); ++i)
+    for (Eigen::Index j = 0; j < b.size(); ++j)
+      if (b[i] != 0.0 && b[j] != 0.0) entries.emplace_back(i, j, value * b[i] * b[j]);
+  SparseMat out(b.size(), b.size());
+  out.setFromTriplets(entries.begin(), entries.end());
+  return out;
+}
+
+// The whole structure: the parts' dashpots and masses added back to C_N and M_N (both
+// representations the model holds).
+StructuralModel whole_structure(const StructuralModel& model,
+                                const std::vector<DelayedPart>& parts) {
+  StructuralModel whole = model;
+  for (const DelayedPart& p : parts) {
+    if (whole.damping.size() > 0) whole.damping += p.damping * p.row * p.row.transpose();
+    if (whole.mass.size() > 0) whole.mass += p.mass * p.row * p.row.transpose();
+    if (!whole.is_sparse()) continue;
+    whole.sparse_damping += sparse_outer(p.row, p.damping);
+    whole.sparse_mass += sparse_outer(p.row, p.mass);
+  }
+  return whole;
+}
+
+}  // namespace
+
+CriticalDelayCheck check_loop_critical_delay(const StructuralModel& model,
+                                             std::vector<DelayedPart> parts, IntegratorKind kind,
+                                             double dt, double lag) {
+  const int n = model.dofs();
+  Mat k_experimental = Mat::Zero(n, n);
+  bool dynamic = false;
+  for (std::size_t j = 0; j < parts.size(); ++j) {
+    if (parts[j].row.size() != n)
+      throw std::invalid_argument("critical delay check: part " + std::to_string(j + 1) +
+                                  "'s row b must hold " + std::to_string(n) + " entries");
+    k_experimental += parts[j].stiffness * parts[j].row * parts[j].row.transpose();
+    dynamic = dynamic || parts[j].damping != 0.0 || parts[j].mass != 0.0;
+    parts[j].predicted = false;
+    parts[j].lag = 0.0;
+  }
+  if (!dynamic) return check_modal_critical_delay(model, k_experimental, kind, dt, lag);
+  CriticalDelayCheck check =
+      check_modal_critical_delay(whole_structure(model, parts), k_experimental, kind, dt, lag);
+  constexpr int kSparseModes = 20;  // as core::check_modal_critical_delay
+  const Modes modes = lowest_modes(model, model.is_sparse() ? std::min(kSparseModes, n - 1) : n);
+  const CoupledLoopStability loop = coupled_loop_stability(model, parts, modes);
+  if (!check.coupled) check.modal_continuous = check.continuous;
+  check.coupled = true;
+  check.continuous = loop.common_critical_lag;
+  check.assumed = loop.assumed +
+                  " for the continuous limit, every link at the same lag; the discrete limit by "
+                  "the modal approximation of the whole structure (each mode an SDOF with its "
+                  "modal damping, the specimens' dashpots taken undelayed there)";
+  if (!loop.common_critical_lag) return check;
+  Eigen::Index nearest = 0;
+  (modes.omega.array() - loop.common_omega).abs().minCoeff(&nearest);
+  const double omega = modes.omega[nearest];
+  const Vec phi = modes.shapes.col(nearest);
+  check.governing_mode = static_cast<int>(nearest) + 1;
+  check.governing_period = 2.0 * std::numbers::pi / omega;
+  check.governing_fraction = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
+  return check;
+}
+
+}  // namespace rths::core
