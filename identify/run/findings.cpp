@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 #include "identify/model/study_config.h"
@@ -62,6 +63,38 @@ void in_run_time(const Identification& id, Channel channel,
   drift.unit += "/s";
 }
 
+// The moving parameter of a time-varying effect (findings.h): v + D(s; c) at the windows' centres
+// (gain: v (1 + D)), its shape, and the magnitude's words for it.
+void describe_moving(const ActuatorPath& path, Channel channel, Finding& f) {
+  const std::string prefix = f.effect == "time_varying_stiffness" ? "stiffness"
+                             : f.effect == "time_varying_gain"    ? "gain"
+                             : f.effect == "time_varying_delay"   ? "delay"
+                                                                  : "";
+  if (prefix.empty() || f.parameters.size() != kDriftTerms) return;
+  const ChannelSignals& signals = identified_signals(path.id, channel);
+  const double base = prefix == "stiffness" ? path.fitted_stiffness
+                      : prefix == "gain"    ? path.fitted_gain
+                                            : path.fitted_delay;
+  const double start = signals.time.front(), duration = signals.time.back() - start;
+  std::vector<double> time(kMovingWindows), value(kMovingWindows);
+  for (std::size_t w = 0; w < kMovingWindows; ++w) {
+    const double place = (static_cast<double>(w) + 0.5) / static_cast<double>(kMovingWindows);
+    double drift = 0.0;
+    for (std::size_t k = 0; k < kDriftTerms; ++k)
+      drift +=
+          f.parameters[k].value * std::cos(std::numbers::pi * static_cast<double>(k + 1) * place);
+    time[w] = start + place * duration;
+    value[w] = prefix == "gain" ? base * (1.0 + drift) : base + drift;
+  }
+  f.moving = fit_shape(time, value);
+  f.moving_unit = prefix == "stiffness" ? "N/m" : prefix == "gain" ? "" : "s";
+  const ShapeFit& m = *f.moving;
+  f.magnitude += "; moving, " + shape_name(m.shape) + ": " + number(m.start) + " " + f.moving_unit +
+                 " at the start, " + number(m.end) + " " + f.moving_unit + " at the end";
+  if (m.shape == DriftShape::kStep) f.magnitude += ", the step at " + number(m.at) + " s";
+  if (m.shape == DriftShape::kExponential) f.magnitude += ", time constant " + number(m.at) + " s";
+}
+
 // The finding of `effect` on `channel` of `path`: its parameters and the held-out error of the
 // step that added it (the declared and the final model's for a changed value).
 Finding channel_finding(const ActuatorPath& path, Channel channel, const std::string& part,
@@ -79,6 +112,7 @@ Finding channel_finding(const ActuatorPath& path, Channel channel, const std::st
   const Effect kind = parse_effect(effect);
   if (const EffectEstimate* e = path.estimate(channel, kind)) f.parameters = e->parameters;
   f.magnitude = parameters_text(f.parameters);
+  describe_moving(path, channel, f);
   for (const auto& step : c->steps)
     if (step.effect == kind) {
       f.heldout_before = step.before.heldout_error;
@@ -174,6 +208,17 @@ void add_response(const RunResidual* residual, std::vector<Finding>& findings) {
   }
 }
 
+// {shape, start, end, at_s (null for a line), unit} or null.
+nlohmann::json moving_json(const Finding& f) {
+  if (!f.moving) return nullptr;
+  return {{"shape", shape_name(f.moving->shape)},
+          {"start", f.moving->start},
+          {"end", f.moving->end},
+          {"at_s", f.moving->shape == DriftShape::kLinear ? nlohmann::json()
+                                                          : nlohmann::json(f.moving->at)},
+          {"unit", f.moving_unit}};
+}
+
 }  // namespace
 
 void estimate_effects(ActuatorPath& path) {
@@ -259,7 +304,8 @@ nlohmann::json findings_json(const std::vector<Finding>& findings) {
          {"nrmse_removed",
           f.response_removed ? nlohmann::json(*f.response_removed) : nlohmann::json()},
          {"share", f.response_removed ? nlohmann::json(f.response_share) : nlohmann::json()},
-         {"not_rerun", f.not_rerun}});
+         {"not_rerun", f.not_rerun},
+         {"moving", moving_json(f)}});
   }
   return out;
 }

@@ -14,7 +14,11 @@
 //   effect     the effect's name (identify/model/effects.h, or "gain error", "delay change",
 //              "stiffness change", the network's "drifting delay", "clock offset", ...);
 //   magnitude  its parameters with standard errors and units (effect_parameters.h), or the
-//              fitted value beside the declared one;
+//              fitted value beside the declared one; a parameter that moves over the run (a
+//              time-varying stiffness, gain or delay: the fitted value v plus the drift D(s; c),
+//              identify/model/model.h) as moving: v(t) at the centres of kMovingWindows windows
+//              fitted as a line, a step or an exponential (drift_shape.h), with its start and end
+//              value, the step's time or the time constant;
 //   evidence   the held-out error of its channel before and after the effect: a share of the
 //              signal's std for the actuator and force channels, s RMS for a link;
 //   response   the worst floor's NRMSE the re-run loses without it and its share of the removals
@@ -28,11 +32,14 @@
 #include <vector>
 
 #include "identify/fit/effect_parameters.h"
+#include "identify/residual/drift_shape.h"
 #include "identify/run/actuator_path.h"
 #include "identify/run/network_path.h"
 #include "identify/run/run_residual.h"
 
 namespace rths::identify {
+
+inline constexpr std::size_t kMovingWindows = 20;
 
 struct Finding {
   std::string part, effect;
@@ -43,6 +50,11 @@ struct Finding {
   std::optional<double> response_removed;  // NRMSE of the worst floor, absent when not re-run
   double response_share = 0.0;             // of the re-run's removals
   std::string not_rerun;                   // why the re-run leaves it out; empty when re-run
+  // A parameter that moves over the run (time_varying_stiffness, _gain, _delay): its path
+  // through the record's kMovingWindows windows fitted as a shape (drift_shape.h), in
+  // `moving_unit`; absent for a constant.
+  std::optional<ShapeFit> moving;
+  std::string moving_unit;
 };
 
 // Every effect of each identified channel of `path` with its parameters (ActuatorPath::estimates),

@@ -30,13 +30,11 @@
 //   above     level > kFloorFactor x floor. Records of the independent simulation with sensor
 //             noise and 16-bit converters and a correct model leave 1.0 x (displacement) and
 //             1.5 x (force) their floor.
-// Where above (ChannelFloor):
-//   windows   the record cut into kFloorWindows equal windows, each with its share of the
-//             residual's power (sum r^2); a window holds it when its share is at least
-//             kWindowOverUniform / kFloorWindows; adjacent ones merge; at most kMaxWindows, the
-//             largest first. None: "spread over the record".
-//   band      r's amplitude spectrum (spectra.h, mean removed, Hann): its peak frequency and the
-//             band holding the middle 80 % of its power (10th to 90th percentile), Hz.
+// Where above (ChannelFloor; the numerics are identify/residual/locate.h's):
+//   windows   kFloorWindows equal windows, those holding at least kWindowOverUniform /
+//             kFloorWindows of the residual's power, merged, the largest first. None: "spread
+//             over the record".
+//   band      r's spectral peak and the band of the middle 80 % of its power, Hz.
 //   relation  the share of r's variance a function of the channel's input x, of its rate v or of
 //             the model's output p explains with no form presumed (r's mean in kRelationBins
 //             equal-count bins of the signal: the correlation ratio; p is the actuator's motion
@@ -49,12 +47,21 @@
 //             alike on it); the force channel's is "specimen N" when r depends on one of those
 //             signals (relation), else "load cell N": a force that follows no motion is the
 //             reading's (a ripple, a thermal drift, a rattle), not the specimen's.
+// Whether above or not (a few spikes need not lift the whole record's RMS):
+//   events    identify/residual/events.h on the judged samples, sigma = the floor (in the channel's
+//             unit): held readings, spikes, bursts, step changes and capacity drops with their
+//             times. Their part: on the force channel a capacity drop alone is the specimen's,
+//             anything else the channel's part above where above, else the load cell's; on the
+//             displacement channel a held reading, a spike or a step change is the displacement
+//             sensor's, anything else the actuator's.
 
 #include <nlohmann/json.hpp>
 
 #include <string>
 #include <vector>
 
+#include "identify/residual/events.h"
+#include "identify/residual/locate.h"
 #include "identify/run/actuator_path.h"
 #include "identify/run/unexplained.h"
 
@@ -63,16 +70,7 @@ namespace rths::identify {
 inline constexpr double kFloorFactor = 3.0;
 inline constexpr double kModelFloor = 1e-3;  // of std(y): a noise-free record's floor
 inline constexpr double kEdgeSeconds = 0.25;
-inline constexpr std::size_t kFloorWindows = 20;
-inline constexpr double kWindowOverUniform = 2.0;
-inline constexpr std::size_t kMaxWindows = 3;
-inline constexpr std::size_t kRelationBins = 16;
 inline constexpr double kMinRelation = 0.3;  // of r's variance
-
-struct ResidualWindow {
-  double start = 0.0, end = 0.0;  // s
-  double share = 0.0;             // of the residual's power
-};
 
 // What one channel's residual is against its floor.
 struct ChannelFloor {
@@ -90,6 +88,11 @@ struct ChannelFloor {
   std::string relation;    // "the rate of the displacement read"; empty: none at kMinRelation
   double explained = 0.0;  // of r's variance, by a function of `relation`
   double excess = 0.0;     // share of the residual's power above the floor
+  // Whether above or not: what the residual holds for a moment (events.h), the largest first.
+  std::vector<ResidualEvent> events;
+  std::string events_part;  // the part the events are on ("load cell 1")
+  bool reported() const { return above || !events.empty(); }
+  std::string events_text() const;   // "located in time on load cell 1 (force): spike at ..."
   std::string floor_source() const;  // "the sensor's noise 0.2 %, the residual above ..."
   std::string text() const;
   nlohmann::json json() const;
@@ -99,15 +102,15 @@ struct ChannelFloor {
 // judged (ActuatorPath noise estimates).
 std::vector<ChannelFloor> channel_floors(const ActuatorPath& path);
 
-// The windows holding a residual's power (above), from its samples at `time` (s).
-// @pre time and residual of the same size, at least kFloorWindows samples.
-std::vector<ResidualWindow> residual_windows(const std::vector<double>& time,
-                                             const std::vector<double>& residual);
-
-// "unexplained, every part and channel:" with each description (Unexplained::text) and each
-// channel above its floor, or " none (every channel at its floor: ...)" stating each floor.
+// "unexplained, every part and channel:" with each description (Unexplained::text), each
+// channel above its floor and each channel's events, or " none (every channel at its floor:
+// ...)" stating each floor.
 std::string unexplained_section(const std::vector<Unexplained>& unexplained,
                                 const std::vector<ChannelFloor>& floors);
-nlohmann::json floors_json(const std::vector<ChannelFloor>& floors);
+// The report's `unexplained` list: each description's entry (Unexplained::json), then one entry
+// per channel with events: {part, channel, share_pct: null, kinds (the events' kinds, once each),
+// when [{kind, start_s, end_s, share, size, unit}], text}.
+nlohmann::json unexplained_json(const std::vector<Unexplained>& unexplained,
+                                const std::vector<ChannelFloor>& floors);
 
 }  // namespace rths::identify

@@ -266,8 +266,8 @@ nlohmann::json run_record_json(const RunIdentification& run) {
   if (run.residual) out["residual"] = residual_json(*run.residual);
   out["undeclared"] = findings_json(run.findings);
   out["rejected"] = rejected_json(run.actuators);
-  out["unexplained"] = unexplained_json(run.unexplained);
-  out["residual_floor"] = floors_json(run.floors);
+  out["unexplained"] = unexplained_json(run.unexplained, run.floors);
+  out["residual_floor"] = json_array(run.floors);
   if (const auto& p = run.platform)
     out["platform"] = {
         {"steps", p->steps},

@@ -96,6 +96,15 @@ struct RigTruth {
   // A rattle on the load cell for a moment: rattle_force N at rattle_frequency Hz over
   // [rattle_start, rattle_end) s (an event: no stage and no description holds it).
   double rattle_force = 0.0, rattle_frequency = 0.0, rattle_start = 0.0, rattle_end = 0.0;
+  // Events on the load cell's reading: it holds its value over [hold_start, hold_end) s; a spike
+  // of spike_force N on the one sample at each of spike_times s; its offset steps by step_force N
+  // at step_time s and stays.
+  double hold_start = 0.0, hold_end = 0.0;
+  double spike_force = 0.0;
+  std::vector<double> spike_times;
+  double step_force = 0.0, step_time = 0.0;
+  // A specimen that loses capacity_drop of its stiffness at drop_time s, for the rest of the run.
+  double capacity_drop = 0.0, drop_time = 0.0;
   std::uint64_t seed = 7;
   PlatformTruth platform;
   NetworkTruth network;  // in a lockstep record: give no platform beside it
@@ -104,6 +113,14 @@ struct RigTruth {
 inline double rattle(const RigTruth& rig, double t) {
   if (t < rig.rattle_start || t >= rig.rattle_end) return 0.0;
   return rig.rattle_force * std::sin(2.0 * std::numbers::pi * rig.rattle_frequency * t);
+}
+
+// What the load cell's reading adds at step k (t = k dt): a spike, an offset's step.
+inline double reading_events(const RigTruth& rig, double t, double dt) {
+  double out = t >= rig.step_time ? rig.step_force : 0.0;
+  for (double at : rig.spike_times)
+    if (std::abs(t - at) < 0.5 * dt) out += rig.spike_force;
+  return out;
 }
 
 inline double converted(double x, double range) {
@@ -153,7 +170,8 @@ class TrueSpecimen {
     if (!rig_.bouc_wen) {
       last_ = x;
       const double k = k0_ * (1.0 - rig_.softening * t / duration_) *
-                       (x < 0.0 ? rig_.compression_stiffness : 1.0);
+                       (x < 0.0 ? rig_.compression_stiffness : 1.0) *
+                       (t >= rig_.drop_time ? 1.0 - rig_.capacity_drop : 1.0);
       return k * x;
     }
     const double du = x - last_, uy = 0.004, alpha = 0.1;
@@ -324,9 +342,11 @@ inline std::filesystem::path independent_record(const std::string& name, const R
       answered_x[step] = converted(rig.displacement_scale * x + rig.displacement_offset +
                                        rig.displacement_noise * normal(rng),
                                    rig.displacement_range);
-      answered_f[step] = converted(rig.force_scale * f + rig.force_offset + rig.force_drift * t +
-                                       rattle(rig, t) + rig.force_noise * normal(rng),
-                                   rig.force_range);
+      answered_f[step] =
+          converted(rig.force_scale * f + rig.force_offset + rig.force_drift * t + rattle(rig, t) +
+                        reading_events(rig, t, dt) + rig.force_noise * normal(rng),
+                    rig.force_range);
+      if (t >= rig.hold_start && t < rig.hold_end) answered_f[step] = answered_f[step - 1];
       x_m = answered_x[static_cast<std::size_t>(used[step].step)];
       f_m = answered_f[static_cast<std::size_t>(used[step].step)];
       const double a_next =

@@ -1,17 +1,16 @@
-// Never silent (identify/run/residual_floor.h): a residual concentrated in time is located in its
-// windows and noise is spread over the record; on records of an independent closed-loop
+// Never silent (identify/run/residual_floor.h): on records of an independent closed-loop
 // simulation (independent_record.h), a clean record reads "none" with each channel's floor
-// stated, a rattle on the load cell for a moment, which no stage and no description holds, is
+// stated and no event, a held reading, spikes and an offset's step on the load cell are located
+// in time with their kind in the text and the JSON's `unexplained` list, a rattle on the load cell for a moment, which no stage and no description holds, is
 // reported on the load cell above the floor, in its window and at its frequency, and a force
 // residual that follows the motion on the specimen.
 #include "identify/run/residual_floor.h"
 
 #include <gtest/gtest.h>
 
-#include <cmath>
+#include <algorithm>
 #include <cstdio>
-#include <numbers>
-#include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -21,52 +20,6 @@
 
 namespace rths::identify {
 namespace {
-
-constexpr double kDt = 0.001;
-constexpr std::size_t kSamples = 15000;  // 15 s: windows of 0.75 s
-
-struct Series {
-  std::vector<double> time, residual;
-};
-
-Series noise(double sigma, std::uint64_t seed) {
-  Series out;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, sigma);
-  for (std::size_t j = 0; j < kSamples; ++j) {
-    out.time.push_back(static_cast<double>(j) * kDt);
-    out.residual.push_back(normal(rng));
-  }
-  return out;
-}
-
-TEST(ResidualFloor, NoiseAloneIsSpreadOverTheRecord) {
-  for (std::uint64_t seed : {1u, 2u, 3u, 4u}) {
-    const Series s = noise(0.05, seed);
-    EXPECT_TRUE(residual_windows(s.time, s.residual).empty()) << "seed " << seed;
-  }
-}
-
-// A 5 Hz burst over 6-9 s (windows 8 to 11) on noise: one window span, 6-9 s, holding most of
-// the power; a second, weaker burst at 12.0-12.75 s comes second.
-TEST(ResidualFloor, BurstsAreLocatedInTheirWindowsLargestFirst) {
-  Series s = noise(0.05, 5);
-  for (std::size_t j = 0; j < kSamples; ++j) {
-    const double t = s.time[j];
-    if (t >= 6.0 && t < 9.0) s.residual[j] += 0.5 * std::sin(2.0 * std::numbers::pi * 5.0 * t);
-    if (t >= 12.0 && t < 12.75) s.residual[j] += 0.4 * std::sin(2.0 * std::numbers::pi * 5.0 * t);
-  }
-  const std::vector<ResidualWindow> w = residual_windows(s.time, s.residual);
-  ASSERT_EQ(w.size(), 2u);
-  EXPECT_NEAR(w[0].start, 6.0, kDt);
-  EXPECT_NEAR(w[0].end, 9.0, kDt);
-  EXPECT_NEAR(w[1].start, 12.0, kDt);
-  EXPECT_NEAR(w[1].end, 12.75, kDt);
-  // Power: 3 s x 0.125 and 0.75 s x 0.08 against 15 s x 0.0025 of noise: 81 % and 13 %.
-  EXPECT_GT(w[0].share, 0.75);
-  EXPECT_GT(w[1].share, 0.1);
-  EXPECT_LT(w[1].share, w[0].share);
-}
 
 RunIdentification identify_rig(const std::string& name, const test::RigTruth& rig) {
   RunIdentification run =
@@ -89,7 +42,11 @@ TEST(ResidualFloorRecords, ACleanRecordIsAtItsFloorAndSaysSo) {
     const std::size_t line = text.find("unexplained, every part and channel:");
     std::printf("%s", text.substr(line, text.find('\n', line) + 1 - line).c_str());
     ASSERT_EQ(run.floors.size(), 2u) << text;
-    for (const auto& f : run.floors) EXPECT_FALSE(f.above) << f.part << "\n" << text;
+    for (const auto& f : run.floors) {
+      EXPECT_FALSE(f.above) << f.part << "\n" << text;
+      EXPECT_TRUE(f.events.empty()) << f.part << "\n" << text;
+    }
+    EXPECT_TRUE(run_record_json(run)["unexplained"].empty()) << text;
     EXPECT_NE(text.find("unexplained, every part and channel: none (every channel at its floor"),
               std::string::npos)
         << text;
@@ -139,6 +96,79 @@ TEST(ResidualFloorRecords, AForceThatFollowsTheMotionIsTheSpecimens) {
   EXPECT_EQ(force->part, "specimen 1") << text;
   EXPECT_FALSE(force->relation.empty()) << text;
   EXPECT_GE(force->explained, 0.5) << text;
+}
+
+const ChannelFloor& force_floor(const RunIdentification& run) {
+  for (const auto& f : run.floors)
+    if (f.channel == Channel::kForce) return f;
+  throw std::runtime_error("no force channel identified");
+}
+
+std::vector<ResidualEvent> of_kind(const ChannelFloor& f, EventKind kind) {
+  std::vector<ResidualEvent> out;
+  for (const auto& e : f.events)
+    if (e.kind == kind) out.push_back(e);
+  std::sort(out.begin(), out.end(),
+            [](const ResidualEvent& a, const ResidualEvent& b) { return a.start < b.start; });
+  return out;
+}
+
+// The JSON's `unexplained` entry on `part` whose kinds hold `kind`, or null.
+nlohmann::json entry_of(const RunIdentification& run, const std::string& part,
+                        const std::string& kind) {
+  const nlohmann::json report = run_record_json(run);
+  for (const auto& e : report["unexplained"]) {
+    const auto& kinds = e["kinds"];
+    if (e["part"] == part && std::find(kinds.begin(), kinds.end(), kind) != kinds.end()) return e;
+  }
+  return nullptr;
+}
+
+// The load cell's reading frozen over 7.0-7.4 s: a held sample there, on the load cell.
+TEST(ResidualFloorRecords, AHeldReadingIsLocatedInTime) {
+  test::RigTruth rig;
+  rig.hold_start = 7.0;
+  rig.hold_end = 7.4;
+  const RunIdentification run = identify_rig("floor_held", rig);
+  const std::string text = run_record_text(run);
+  const ChannelFloor& force = force_floor(run);
+  const auto held = of_kind(force, EventKind::kHeldSample);
+  ASSERT_EQ(held.size(), 1u) << text;
+  EXPECT_NEAR(held[0].start, 7.0, 0.002) << text;
+  EXPECT_NEAR(held[0].end, 7.4, 0.002) << text;
+  EXPECT_EQ(force.events_part, "load cell 1");
+  EXPECT_NE(text.find("  located in time on load cell 1 (force): "), std::string::npos) << text;
+  const nlohmann::json entry = entry_of(run, "load cell 1", "held_sample");
+  ASSERT_FALSE(entry.is_null()) << text;
+  EXPECT_NEAR(entry["when"][0]["start_s"].get<double>(), 7.0, 0.002);
+}
+
+// 400 N spikes on single samples of the load cell at 3.2, 8.6 and 11.3 s: each found at its time.
+TEST(ResidualFloorRecords, SpikesAreLocatedEachAtItsTime) {
+  test::RigTruth rig;
+  rig.spike_force = 400.0;
+  rig.spike_times = {3.2, 8.6, 11.3};
+  const RunIdentification run = identify_rig("floor_spikes", rig);
+  const std::string text = run_record_text(run);
+  const auto spikes = of_kind(force_floor(run), EventKind::kSpike);
+  ASSERT_EQ(spikes.size(), 3u) << text;
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(spikes[i].start, rig.spike_times[i], 0.002);
+  EXPECT_FALSE(entry_of(run, "load cell 1", "spike").is_null()) << text;
+}
+
+// The rattle above is a burst in its seconds too.
+TEST(ResidualFloorRecords, ARattleIsABurstInItsSeconds) {
+  test::RigTruth rig;
+  rig.rattle_force = 300.0;
+  rig.rattle_frequency = 25.0;
+  rig.rattle_start = 6.0;
+  rig.rattle_end = 8.0;
+  const RunIdentification run = identify_rig("floor_burst", rig);
+  const std::string text = run_record_text(run);
+  const auto bursts = of_kind(force_floor(run), EventKind::kBurst);
+  ASSERT_EQ(bursts.size(), 1u) << text;
+  EXPECT_NEAR(bursts[0].start, 6.0, 0.1) << text;
+  EXPECT_NEAR(bursts[0].end, 8.0, 0.1) << text;
 }
 
 }  // namespace

@@ -1,15 +1,13 @@
-// The description of what an identified model leaves (identify/run/unexplained.h): each test on
-// residuals made to hold one signature, then records of an independent closed-loop simulation
-// (independent_record.h) whose rig has an effect identify has no stage for: each is located on
-// its part and channel with the right kind and a plausible share, no effect is named in its place
-// with a magnitude, and a clean record reports nothing unexplained.
+// The description of what an identified model leaves (identify/run/unexplained.h), on records of
+// an independent closed-loop simulation (independent_record.h) whose rig has an effect identify
+// has no stage for: each is located on its part and channel with the right kind and a plausible
+// share, no effect is named in its place with a magnitude, and a clean record reports nothing
+// unexplained. The description's numerics on made residuals: description_test.cpp.
 #include "identify/run/unexplained.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
-#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -20,95 +18,6 @@
 
 namespace rths::identify {
 namespace {
-
-constexpr double kDt = 0.001;
-constexpr std::size_t kSamples = 15000;
-
-struct Synthetic {
-  std::vector<double> time, prediction, residual;
-};
-
-// A model's output like a storey's drift under a ground motion (mm, several frequencies and an
-// envelope), and Gaussian noise of `noise` as the residual.
-Synthetic synthetic(double noise, std::uint64_t seed = 3) {
-  Synthetic out;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (std::size_t j = 0; j < kSamples; ++j) {
-    const double t = static_cast<double>(j) * kDt, w = 2.0 * std::numbers::pi;
-    const double envelope = 0.5 + 0.5 * std::sin(w * 0.05 * t);
-    out.time.push_back(t);
-    out.prediction.push_back(envelope *
-                             (8.0 * std::sin(w * 1.9 * t) + 3.0 * std::sin(w * 0.7 * t + 1.0) +
-                              1.5 * std::sin(w * 3.3 * t + 2.0)));
-    out.residual.push_back(noise * normal(rng));
-  }
-  return out;
-}
-
-ResidualDescription described(const Synthetic& s) {
-  return describe_residual(s.time, s.residual, s.prediction, kDt);
-}
-
-TEST(DescribeResidual, NoiseAloneIsNotDescribed) {
-  for (std::uint64_t seed : {1u, 2u, 3u, 4u}) {
-    const ResidualDescription d = described(synthetic(0.05, seed));
-    EXPECT_FALSE(d.any()) << "seed " << seed << ": " << d.kinds().size() << " kinds";
-  }
-}
-
-TEST(DescribeResidual, ASinusoidIsPeriodicWithItsFrequencyAndAmplitude) {
-  Synthetic s = synthetic(0.05);
-  for (std::size_t j = 0; j < kSamples; ++j)
-    s.residual[j] += 0.3 * std::sin(2.0 * std::numbers::pi * 7.0 * s.time[j] + 0.4);
-  const ResidualDescription d = described(s);
-  ASSERT_TRUE(d.periodic.has_value());
-  EXPECT_NEAR(d.periodic->frequency, 7.0, 0.01);
-  EXPECT_NEAR(d.periodic->amplitude, 0.3, 0.015);
-  EXPECT_FALSE(d.amplitude || d.direction || d.time_varying);
-  EXPECT_GT(d.explained, 0.9);
-}
-
-// Stiffer on one side than on the other: a residual even in the input.
-TEST(DescribeResidual, AResidualOfTheInputsSignIsDirectionWithItsAsymmetry) {
-  Synthetic s = synthetic(0.05);
-  for (std::size_t j = 0; j < kSamples; ++j) s.residual[j] += 0.1 * std::abs(s.prediction[j]);
-  const ResidualDescription d = described(s);
-  ASSERT_TRUE(d.direction.has_value());
-  EXPECT_NEAR(d.direction->asymmetry_pct, 20.0, 2.0);  // +10 % on one side, -10 % on the other
-  EXPECT_FALSE(d.periodic || d.amplitude);
-}
-
-TEST(DescribeResidual, AReadingThatFallsShortAtLargeInputsIsAmplitude) {
-  Synthetic s = synthetic(0.05);
-  for (std::size_t j = 0; j < kSamples; ++j)
-    s.residual[j] -= 0.002 * s.prediction[j] * s.prediction[j] * s.prediction[j];
-  const ResidualDescription d = described(s);
-  ASSERT_TRUE(d.amplitude.has_value());
-  EXPECT_LT(d.amplitude->ratio_change_pct, -5.0);
-  EXPECT_FALSE(d.periodic || d.direction);
-}
-
-TEST(DescribeResidual, LoadingAndUnloadingApartIsDirectionWithItsWidth) {
-  Synthetic s = synthetic(0.05);
-  for (std::size_t j = 1; j < kSamples; ++j)
-    s.residual[j] += s.prediction[j] >= s.prediction[j - 1] ? 0.2 : -0.2;
-  const ResidualDescription d = described(s);
-  ASSERT_TRUE(d.direction.has_value());
-  EXPECT_NEAR(d.direction->hysteresis_width, 0.4, 0.05);
-}
-
-TEST(DescribeResidual, AGainThatFallsOverTheRecordIsTimeVaryingWithItsChange) {
-  Synthetic s = synthetic(0.05);
-  for (std::size_t j = 0; j < kSamples; ++j)
-    s.residual[j] += -0.2 * (s.time[j] / s.time.back() - 0.5) * s.prediction[j];
-  const ResidualDescription d = described(s);
-  ASSERT_TRUE(d.time_varying.has_value());
-  EXPECT_NEAR(d.time_varying->change_pct, -20.0, 2.0);
-  EXPECT_FALSE(d.periodic || d.amplitude || d.direction);
-}
-
-// --- records of an independent simulation ---
 
 RunIdentification identify_rig(const std::string& name, const test::RigTruth& rig) {
   RunIdentification run =
@@ -127,6 +36,15 @@ RunIdentification identify_rig(const std::string& name, const test::RigTruth& ri
 const Unexplained* on(const RunIdentification& run, const std::string& part) {
   for (const auto& u : run.unexplained)
     if (u.part == part) return &u;
+  return nullptr;
+}
+
+constexpr double kSpecimenStiffness = 52638.0;  // N/m, independent_record.h's k_e
+
+const Finding* moving_on(const RunIdentification& run, const std::string& part,
+                         const std::string& effect) {
+  for (const auto& f : run.findings)
+    if (f.part == part && f.effect == effect) return &f;
   return nullptr;
 }
 
@@ -218,13 +136,50 @@ TEST(UnexplainedRecords, ASofteningSpecimenIsTheLibrarysAndNotDescribedTwice) {
   test::RigTruth rig;
   rig.softening = 0.3;
   const RunIdentification run = identify_rig("softening", rig);
-  bool named = false;
-  for (const auto& f : run.findings)
-    named = named || (f.part == "specimen 1" && f.effect == "time_varying_stiffness" &&
-                      !f.parameters.empty());
-  EXPECT_TRUE(named) << run_record_text(run);
+  const Finding* named = moving_on(run, "specimen 1", "time_varying_stiffness");
+  ASSERT_NE(named, nullptr) << run_record_text(run);
+  EXPECT_FALSE(named->parameters.empty());
+  // Moving, not one constant: 52.6 kN/m falling steadily to 70 % of it over the 15 s.
+  ASSERT_TRUE(named->moving.has_value()) << run_record_text(run);
+  EXPECT_EQ(named->moving->shape, DriftShape::kLinear) << named->magnitude;
+  EXPECT_NEAR(named->moving->start, kSpecimenStiffness * (1.0 - 0.3 * 0.375 / 15.0), 2000.0)
+      << named->magnitude;
+  EXPECT_NEAR(named->moving->end, kSpecimenStiffness * (1.0 - 0.3 * 14.625 / 15.0), 2000.0)
+      << named->magnitude;
+  EXPECT_NE(run_record_text(run).find(named->magnitude), std::string::npos);
   EXPECT_EQ(on(run, "specimen 1"), nullptr) << run_record_text(run);
   EXPECT_EQ(on(run, "load cell 1"), nullptr) << run_record_text(run);
+}
+
+// A specimen that loses 30 % of its stiffness at 9 s of the 15 s run (a capacity drop): a step
+// there, from the declared stiffness to 70 % of it, whether the library's moving stiffness holds
+// it or the description does.
+TEST(UnexplainedRecords, ACapacityDropIsAStepAtItsTime) {
+  test::RigTruth rig;
+  rig.capacity_drop = 0.3;
+  rig.drop_time = 9.0;
+  const RunIdentification run = identify_rig("capacity_drop", rig);
+  const std::string text = run_record_text(run);
+  bool located = false;  // and located in time from 9 s on (events.h)
+  for (const auto& f : run.floors)
+    for (const auto& e : f.events)
+      located = located || (e.kind == EventKind::kCapacityDrop && std::abs(e.start - 9.0) < 0.2);
+  EXPECT_TRUE(located) << text;
+  if (const Finding* named = moving_on(run, "specimen 1", "time_varying_stiffness")) {
+    ASSERT_TRUE(named->moving.has_value()) << text;
+    EXPECT_EQ(named->moving->shape, DriftShape::kStep) << text;
+    EXPECT_NEAR(named->moving->at, 9.0, 0.75) << text;
+    EXPECT_NEAR(named->moving->end / named->moving->start, 0.7, 0.05) << text;
+    return;
+  }
+  const Unexplained* u = on(run, "specimen 1");
+  ASSERT_NE(u, nullptr) << text;
+  ASSERT_TRUE(u->description.time_varying.has_value()) << text;
+  const ShapeFit& shape = u->description.time_varying->shape;
+  EXPECT_EQ(shape.shape, DriftShape::kStep) << text;
+  EXPECT_NEAR(shape.at, 9.0, 0.75) << text;
+  EXPECT_NEAR(shape.end - shape.start, -0.3, 0.05) << text;
+  EXPECT_NE(text.find("(a capacity drop)"), std::string::npos) << text;
 }
 
 // Where a stage of the library holds what the rig did, its fit beats the description: the effect

@@ -1,0 +1,402 @@
+#include "identify/residual/description.h"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "identify/model/spectra.h"
+
+namespace rths::identify {
+namespace {
+
+using Samples = std::vector<std::size_t>;
+
+// The alternate windows: even ones train, odd ones are held out.
+struct Halves {
+  Samples train, heldout;
+  std::vector<std::size_t> window;  // of each sample
+};
+
+Halves alternate_windows(std::size_t n) {
+  Halves out;
+  out.window.resize(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    out.window[j] = std::min(kDescriptionWindows - 1, j * kDescriptionWindows / n);
+    (out.window[j] % 2 == 0 ? out.train : out.heldout).push_back(j);
+  }
+  return out;
+}
+
+double mean_over(std::span<const double> x, const Samples& at) {
+  double sum = 0.0;
+  for (std::size_t j : at) sum += x[j];
+  return at.empty() ? 0.0 : sum / static_cast<double>(at.size());
+}
+
+// Sum of squares about the mean over `at`.
+double spread_over(std::span<const double> x, const Samples& at) {
+  const double m = mean_over(x, at);
+  double sum = 0.0;
+  for (std::size_t j : at) sum += (x[j] - m) * (x[j] - m);
+  return sum;
+}
+
+// 1 - var_h(r - d) / var_h(r): the held-out share of r's variance d explains.
+double explained(std::span<const double> r, std::span<const double> d, const Samples& heldout) {
+  const double total = spread_over(r, heldout);
+  return total > 0.0 ? 1.0 - spread_over(minus(r, d), heldout) / total : 0.0;
+}
+
+// |sum r_j exp(-2 pi i f t_j)| over the train samples.
+double projection(std::span<const double> time, std::span<const double> r, double f) {
+  std::complex<double> sum = 0.0;
+  for (std::size_t j = 0; j < r.size(); ++j)
+    sum += r[j] * std::polar(1.0, -2.0 * std::numbers::pi * f * time[j]);
+  return std::abs(sum);
+}
+
+// The spectrum's highest peak above kMinPeriodicFrequency when it stands kPeakOverFloor above
+// the median of its neighbourhood, refined to a tenth of a bin; 0 when none stands out.
+double spectral_peak(std::span<const double> time, std::span<const double> r,
+                     std::span<const double> p, double dt) {
+  const Spectrum s = amplitude_spectrum(r, dt);
+  const Spectrum input = amplitude_spectrum(p, dt);
+  if (s.frequency.size() < 8) return 0.0;
+  const double bin = s.frequency[1] - s.frequency[0];
+  std::size_t peak = 0;
+  for (std::size_t k = 1; k < s.frequency.size(); ++k)
+    if (s.frequency[k] >= kMinPeriodicFrequency && s.amplitude[k] > s.amplitude[peak]) peak = k;
+  if (peak == 0) return 0.0;
+  std::vector<double> around;
+  const std::size_t guard = 3;  // bins beside the peak: a Hann window's main lobe
+  for (std::size_t k = 1; k < s.frequency.size(); ++k)
+    if (std::abs(s.frequency[k] - s.frequency[peak]) <= kFloorBand &&
+        (k + guard < peak || k > peak + guard))
+      around.push_back(s.amplitude[k]);
+  if (around.empty()) return 0.0;
+  std::nth_element(around.begin(), around.begin() + static_cast<long>(around.size() / 2),
+                   around.end());
+  if (s.amplitude[peak] < kPeakOverFloor * around[around.size() / 2]) return 0.0;
+  // A period of the input's own is the model's error on the input, which the maps judge.
+  const double input_peak = *std::max_element(input.amplitude.begin(), input.amplitude.end());
+  if (input.amplitude[peak] > kInputPeakShare * input_peak) return 0.0;
+  double best = s.frequency[peak], best_value = 0.0;
+  for (int i = -10; i <= 10; ++i) {
+    const double f = s.frequency[peak] + 0.1 * i * bin;
+    if (const double v = projection(time, r, f); v > best_value) {
+      best_value = v;
+      best = f;
+    }
+  }
+  return best;
+}
+
+// a cos + b sin at `frequency` by least squares over the train samples (means removed), at every
+// sample.
+std::vector<double> sinusoid(std::span<const double> time, std::span<const double> r,
+                             double frequency, const Samples& train, double& amplitude) {
+  const double w = 2.0 * std::numbers::pi * frequency, m = mean_over(r, train);
+  double cc = 0.0, ss = 0.0, cs = 0.0, rc = 0.0, rs = 0.0;
+  for (std::size_t j : train) {
+    const double c = std::cos(w * time[j]), s = std::sin(w * time[j]);
+    cc += c * c;
+    ss += s * s;
+    cs += c * s;
+    rc += (r[j] - m) * c;
+    rs += (r[j] - m) * s;
+  }
+  const double det = cc * ss - cs * cs;
+  const double a = det > 0.0 ? (rc * ss - rs * cs) / det : 0.0;
+  const double b = det > 0.0 ? (rs * cc - rc * cs) / det : 0.0;
+  amplitude = std::hypot(a, b);
+  std::vector<double> out(r.size());
+  for (std::size_t j = 0; j < r.size(); ++j)
+    out[j] = a * std::cos(w * time[j]) + b * std::sin(w * time[j]);
+  return out;
+}
+
+// A static map: bins at quantiles of the train samples' x, each the mean residual at the mean x
+// of its bin; linear between them and along the end segments beyond them.
+class StaticMap {
+ public:
+  // `offset`: what every bin's mean is taken from (the whole train set's mean residual: a map of
+  // a subset keeps what sets it apart).
+  StaticMap(std::span<const double> x, std::span<const double> r, const Samples& train,
+            double offset) {
+    Samples sorted = train;
+    std::sort(sorted.begin(), sorted.end(),
+              [&](std::size_t a, std::size_t b) { return x[a] < x[b]; });
+    const double m = offset;
+    for (std::size_t b = 0; b < kMapBins; ++b) {
+      const std::size_t from = b * sorted.size() / kMapBins,
+                        to = (b + 1) * sorted.size() / kMapBins;
+      if (to <= from) continue;
+      double sx = 0.0, sr = 0.0;
+      for (std::size_t i = from; i < to; ++i) {
+        sx += x[sorted[i]];
+        sr += r[sorted[i]] - m;
+      }
+      const auto count = static_cast<double>(to - from);
+      if (!centres_.empty() && sx / count <= centres_.back()) continue;  // repeated values
+      centres_.push_back(sx / count);
+      values_.push_back(sr / count);
+    }
+  }
+  double operator()(double x) const {
+    if (centres_.empty()) return 0.0;
+    if (centres_.size() == 1) return values_.front();
+    const auto i = std::clamp<std::size_t>(
+        static_cast<std::size_t>(std::upper_bound(centres_.begin(), centres_.end(), x) -
+                                 centres_.begin()),
+        1, centres_.size() - 1);
+    const double s = (x - centres_[i - 1]) / (centres_[i] - centres_[i - 1]);
+    return values_[i - 1] + s * (values_[i] - values_[i - 1]);
+  }
+
+ private:
+  std::vector<double> centres_, values_;
+};
+
+std::vector<double> evaluate(const StaticMap& map, std::span<const double> x) {
+  std::vector<double> out(x.size());
+  for (std::size_t j = 0; j < x.size(); ++j) out[j] = map(x[j]);
+  return out;
+}
+
+// The sign of dp/dt at every sample (central differences).
+std::vector<bool> rising(std::span<const double> p) {
+  std::vector<bool> out(p.size(), true);
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    const std::size_t a = j > 0 ? j - 1 : j, b = j + 1 < p.size() ? j + 1 : j;
+    out[j] = p[b] >= p[a];
+  }
+  return out;
+}
+
+Samples where(const Samples& from, const std::vector<bool>& rise, bool value) {
+  Samples out;
+  for (std::size_t j : from)
+    if (rise[j] == value) out.push_back(j);
+  return out;
+}
+
+// The percentile q (0..1) of |p| over `at`.
+double abs_percentile(std::span<const double> p, const Samples& at, double q) {
+  std::vector<double> a;
+  for (std::size_t j : at) a.push_back(std::abs(p[j]));
+  if (a.empty()) return 0.0;
+  const auto i = static_cast<std::size_t>(q * static_cast<double>(a.size() - 1));
+  std::nth_element(a.begin(), a.begin() + static_cast<long>(i), a.end());
+  return a[i];
+}
+
+// sum r p / sum p^2 over the samples of `at` with p on the side `positive`.
+double side_gain(std::span<const double> r, std::span<const double> p, const Samples& at,
+                 bool positive) {
+  double rp = 0.0, pp = 0.0;
+  for (std::size_t j : at)
+    if ((p[j] > 0.0) == positive) {
+      rp += r[j] * p[j];
+      pp += p[j] * p[j];
+    }
+  return pp > 0.0 ? rp / pp : 0.0;
+}
+
+// The power, over the held-out samples, of the map's odd part less its line through 0 (a gain,
+// which the model holds) and of its even part less its mean (a constant is no signature).
+std::pair<double, double> odd_even_power(const StaticMap& map, std::span<const double> p,
+                                         const Samples& heldout) {
+  std::vector<double> even(p.size(), 0.0), odd(p.size(), 0.0);
+  double op = 0.0, pp = 0.0;
+  for (std::size_t j : heldout) {
+    even[j] = 0.5 * (map(p[j]) + map(-p[j]));
+    odd[j] = 0.5 * (map(p[j]) - map(-p[j]));
+    op += odd[j] * p[j];
+    pp += p[j] * p[j];
+  }
+  const double gain = pp > 0.0 ? op / pp : 0.0;
+  double curved = 0.0;
+  for (std::size_t j : heldout) curved += (odd[j] - gain * p[j]) * (odd[j] - gain * p[j]);
+  return {curved, spread_over(even, heldout)};
+}
+
+// The periodic test on r; its part is subtracted from r when accepted.
+void periodic_test(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
+                   double dt, const Halves& h, ResidualDescription& out) {
+  std::vector<double> train_only(r.size(), 0.0);
+  for (std::size_t j : h.train) train_only[j] = r[j] - mean_over(r, h.train);
+  const double f = spectral_peak(time, train_only, p, dt);
+  if (f <= 0.0) return;
+  double amplitude = 0.0;
+  const std::vector<double> d = sinusoid(time, r, f, h.train, amplitude);
+  const double e = explained(r, d, h.heldout);
+  if (e < kMinExplained) return;
+  out.periodic = PeriodicSignature{f, amplitude, e};
+  for (std::size_t j = 0; j < r.size(); ++j) {
+    r[j] -= d[j];
+    out.described[j] += d[j];
+  }
+}
+
+// The static maps on r against p; the accepted one is subtracted from r.
+void map_test(std::span<const double> p, std::vector<double>& r, const Halves& h,
+              ResidualDescription& out) {
+  const double offset = mean_over(r, h.train);
+  const StaticMap map(p, r, h.train, offset);
+  std::vector<double> d = evaluate(map, p);
+  const double e = explained(r, d, h.heldout);
+  const std::vector<bool> rise = rising(p);
+  const StaticMap up(p, r, where(h.train, rise, true), offset),
+      down(p, r, where(h.train, rise, false), offset);
+  std::vector<double> split(p.size());
+  double width = 0.0;
+  for (std::size_t j = 0; j < p.size(); ++j) split[j] = rise[j] ? up(p[j]) : down(p[j]);
+  for (std::size_t j : h.heldout) width += (up(p[j]) - down(p[j])) * (up(p[j]) - down(p[j]));
+  const double e_split = explained(r, split, h.heldout);
+  const bool hysteretic = e_split - std::max(e, 0.0) >= kMinExplained;
+  if (e < kMinExplained && !hysteretic) return;
+  const auto [curved, even] = odd_even_power(map, p, h.heldout);
+  if (hysteretic || even >= curved) {
+    const double g_up = side_gain(r, p, h.train, true), g_down = side_gain(r, p, h.train, false);
+    out.direction = DirectionSignature{
+        hysteretic ? e_split : e, 100.0 * (g_up - g_down),
+        hysteretic ? std::sqrt(width / static_cast<double>(h.heldout.size())) : 0.0};
+  } else {
+    const double median = abs_percentile(p, h.train, 0.5), top = abs_percentile(p, h.train, 0.98);
+    const auto odd_ratio = [&](double x) { return x > 0.0 ? 0.5 * (map(x) - map(-x)) / x : 0.0; };
+    out.amplitude = AmplitudeSignature{e, 100.0 * (odd_ratio(top) - odd_ratio(median)), top};
+  }
+  if (hysteretic) d = split;
+  for (std::size_t j = 0; j < r.size(); ++j) {
+    r[j] -= d[j];
+    out.described[j] += d[j];
+  }
+}
+
+// Per window: rho = sum r p / sum p^2.
+std::vector<double> window_gains(std::span<const double> r, std::span<const double> p,
+                                 const Halves& h) {
+  std::vector<double> rp(kDescriptionWindows, 0.0), pp(kDescriptionWindows, 0.0);
+  for (std::size_t j = 0; j < r.size(); ++j) {
+    rp[h.window[j]] += r[j] * p[j];
+    pp[h.window[j]] += p[j] * p[j];
+  }
+  std::vector<double> out(kDescriptionWindows, 0.0);
+  for (std::size_t w = 0; w < out.size(); ++w) out[w] = pp[w] > 0.0 ? rp[w] / pp[w] : 0.0;
+  return out;
+}
+
+// The line through (w, rho_w): its slope per window and that slope's standard error.
+std::pair<double, double> trend_line(const std::vector<double>& rho) {
+  const auto n = static_cast<double>(rho.size());
+  double sw = 0.0, sr = 0.0;
+  for (std::size_t w = 0; w < rho.size(); ++w) {
+    sw += static_cast<double>(w);
+    sr += rho[w];
+  }
+  const double mw = sw / n, mr = sr / n;
+  double sww = 0.0, swr = 0.0;
+  for (std::size_t w = 0; w < rho.size(); ++w) {
+    sww += (static_cast<double>(w) - mw) * (static_cast<double>(w) - mw);
+    swr += (static_cast<double>(w) - mw) * (rho[w] - mr);
+  }
+  const double slope = swr / sww;
+  double sse = 0.0;
+  for (std::size_t w = 0; w < rho.size(); ++w) {
+    const double e = rho[w] - mr - slope * (static_cast<double>(w) - mw);
+    sse += e * e;
+  }
+  return {slope, std::sqrt(sse / (n - 2.0) / sww)};
+}
+
+// The time-varying test on r: rho tracked in windows.
+void trend_test(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
+                const Halves& h, ResidualDescription& out) {
+  const std::vector<double> rho = window_gains(r, p, h);
+  std::vector<double> d(r.size(), 0.0);
+  const std::size_t n = r.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    // Linear between the even (train) windows' centres, at the sample's place in the record.
+    const double place = (static_cast<double>(j) + 0.5) * kDescriptionWindows / n - 0.5;
+    const double below = std::clamp(2.0 * std::floor(place / 2.0), 0.0,
+                                    static_cast<double>(kDescriptionWindows - 2));
+    const double s = std::clamp((place - below) / 2.0, 0.0, 1.0);
+    const auto b = static_cast<std::size_t>(below);
+    const double above = b + 2 < kDescriptionWindows ? rho[b + 2] : rho[b];
+    d[j] = (rho[b] + s * (above - rho[b])) * p[j];
+  }
+  const double e = explained(r, d, h.heldout);
+  const auto [slope, error] = trend_line(rho);
+  if (e < kMinExplained || !(std::abs(slope) >= kTrendSigmas * error)) return;
+  std::vector<double> centres(kDescriptionWindows);
+  for (std::size_t w = 0; w < centres.size(); ++w)
+    centres[w] = time[std::min(n - 1, (2 * w + 1) * n / (2 * kDescriptionWindows))];
+  const ShapeFit shape = fit_shape(centres, rho);
+  out.time_varying = TrendSignature{e, 100.0 * (shape.end - shape.start), shape};
+  for (std::size_t j = 0; j < n; ++j) {
+    r[j] -= d[j];
+    out.described[j] += d[j];
+  }
+}
+
+// The map and the trend in both orders; the order that leaves less held out is kept (a residual
+// of the input's amplitude on a record whose amplitude changes over time shows in both).
+void input_tests(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
+                 const Halves& h, ResidualDescription& out) {
+  ResidualDescription map_first = out, trend_first = out;
+  std::vector<double> r_map = r, r_trend = r;
+  map_test(p, r_map, h, map_first);
+  trend_test(time, p, r_map, h, map_first);
+  trend_test(time, p, r_trend, h, trend_first);
+  map_test(p, r_trend, h, trend_first);
+  const bool map_wins = spread_over(r_map, h.heldout) <= spread_over(r_trend, h.heldout);
+  out = map_wins ? std::move(map_first) : std::move(trend_first);
+  r = map_wins ? std::move(r_map) : std::move(r_trend);
+}
+
+}  // namespace
+
+std::vector<double> minus(std::span<const double> a, std::span<const double> b) {
+  std::vector<double> out(a.size());
+  for (std::size_t j = 0; j < a.size(); ++j) out[j] = a[j] - b[j];
+  return out;
+}
+
+std::vector<std::string> ResidualDescription::kinds() const {
+  std::vector<std::string> out;
+  if (periodic) out.push_back("periodic");
+  if (amplitude) out.push_back("amplitude");
+  if (direction) out.push_back("direction");
+  if (time_varying) out.push_back("time_varying");
+  return out;
+}
+
+ResidualDescription describe_residual(std::span<const double> time,
+                                      std::span<const double> residual,
+                                      std::span<const double> prediction, double dt) {
+  ResidualDescription out;
+  const Halves h = alternate_windows(residual.size());
+  out.described.assign(residual.size(), 0.0);
+  std::vector<double> left(residual.begin(), residual.end());
+  input_tests(time, prediction, left, h, out);
+  periodic_test(time, prediction, left, dt, h, out);
+  Samples all(residual.size());
+  for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;
+  out.residual_rms = std::sqrt(spread_over(residual, all) / static_cast<double>(all.size()));
+  out.explained = explained(residual, out.described, h.heldout);
+  out.heldout_rms = std::sqrt(spread_over(minus(residual, out.described), h.heldout) /
+                              static_cast<double>(h.heldout.size()));
+  out.described_rms = std::sqrt(spread_over(out.described, all) / static_cast<double>(all.size()));
+  // What a re-run puts back holds the residual's mean too: the model left it, whatever holds it.
+  if (out.any())
+    for (double& d : out.described) d += mean_over(residual, h.train);
+  return out;
+}
+
+double heldout_rms(std::span<const double> residual) {
+  const Halves h = alternate_windows(residual.size());
+  return std::sqrt(spread_over(residual, h.heldout) / static_cast<double>(h.heldout.size()));
+}
+
+}  // namespace rths::identify
