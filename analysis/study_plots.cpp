@@ -84,38 +84,46 @@ std::string coincides_with(const std::vector<const CaseOutcome*>& drawn, std::si
   return "";
 }
 
-// The first actuator's measured force (kN) against its command (mm).
-util::Series force_loop(const CaseOutcome& c, const std::string& label, const std::string& style) {
+// Actuator a's measured force (kN) against its command (mm).
+util::Series force_loop(const CaseOutcome& c, int a, const std::string& label,
+                        const std::string& style) {
   util::Series loop{label, {}, {}, style};
   for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
-    loop.x.push_back(c.simulation.command(k, 0) * 1e3);
-    loop.y.push_back(c.simulation.measured_force(k, 0) * 1e-3);
+    loop.x.push_back(c.simulation.command(k, a) * 1e3);
+    loop.y.push_back(c.simulation.measured_force(k, a) * 1e-3);
   }
   return loop;
 }
 
-// force_displacement.png: what the integrator sees of the experimental part, one panel per case
+// The actuator the single-actuator figures draw: the config's first.
+int first_actuator(const ActuatorNames& names) {
+  return names.order.empty() ? 0 : names.order.front();
+}
+
+// force_displacement.png: what the integrator sees of the config's first actuator, one panel per case
 // with the reference drawn over it, thin and dark. Without lag the reference's loop is a line
 // that every lagged case's ellipse would cover on a shared panel, and cases with near-equal
 // loops would cover each other. A diverged case has no loop worth drawing. No panel: no figure.
 std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
                                                       const std::vector<const CaseOutcome*>& drawn,
-                                                      const CaseOutcome& reference) {
-  const auto has_loop = [](const CaseOutcome& c) {
-    return c.simulation.command.cols() > 0 && !c.diverged();
+                                                      const CaseOutcome& reference,
+                                                      const ActuatorNames& names) {
+  const int a = first_actuator(names);
+  const auto has_loop = [a](const CaseOutcome& c) {
+    return c.simulation.command.cols() > a && !c.diverged();
   };
   if (!has_loop(reference)) return {};
-  const util::Series over =
-      force_loop(reference, reference.name + " (drawn over)", "lines lc rgb '#222222' dt 1 lw 1.2");
+  const util::Series over = force_loop(reference, a, reference.name + " (drawn over)",
+                                       "lines lc rgb '#222222' dt 1 lw 1.2");
   std::vector<util::PlotSpec> panels;
   for (std::size_t i = 0; i < drawn.size(); ++i) {
     const CaseOutcome& c = *drawn[i];
     if (&c == &reference || !has_loop(c)) continue;
-    util::PlotSpec panel{
-        study + ": what the integrator sees, " + c.name + " against " + reference.name,
-        "commanded displacement (mm)", "measured force (kN)"};
+    util::PlotSpec panel{study + ": what the integrator sees at " + names.of(a) + ", " + c.name +
+                             " against " + reference.name,
+                         "commanded displacement (mm)", "measured force (kN)"};
     panel.series = {
-        force_loop(c, c.name, "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw 2"), over};
+        force_loop(c, a, c.name, "lines lc rgb '" + util::series_colour(i) + "' dt 1 lw 2"), over};
     panel.square = true;
     panels.push_back(std::move(panel));
   }
@@ -132,9 +140,9 @@ std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
     if (x) std::tie(p.x_min, p.x_max) = *x;
   }
   if (panels.empty()) {
-    util::PlotSpec alone{study + ": what the integrator sees (experimental part)",
+    util::PlotSpec alone{study + ": what the integrator sees at " + names.of(a),
                          "commanded displacement (mm)", "measured force (kN)"};
-    alone.series = {force_loop(reference, reference.name, "lines lw 2")};
+    alone.series = {force_loop(reference, a, reference.name, "lines lw 2")};
     alone.square = true;
     panels.push_back(std::move(alone));
   }
@@ -142,29 +150,31 @@ std::vector<util::PlotSpec> force_displacement_panels(const std::string& study,
 }
 
 // tracking.png, the RTHS benchmark's tracking figure: per case that drives an actuator and stayed
-// bounded, x_t (the command of the first actuator) and x_m (what it measured there), mm, over the
-// record, then the same over `zoom` s from `zoom_start` (s), where the lag between them shows. A
+// bounded, x_t (the command of the config's first actuator) and x_m (what it measured there), mm,
+// over the record, then beside it the same over `zoom` s from `zoom_start` (s), where the lag
+// between them shows: a grid, a case a row. A
 // case stopped early (a limit, its predictor's bound) is drawn up to its stop, marked there, and
 // zoomed on its last `zoom` s when it stopped before the window's end (an empty window once made
 // gnuplot fail every figure). No panel when no such case.
 std::vector<util::PlotSpec> tracking_panels(const std::string& study,
                                             const std::vector<const CaseOutcome*>& drawn,
                                             const CaseOutcome& reference, double zoom_start,
-                                            double zoom) {
+                                            double zoom, const ActuatorNames& names) {
   std::vector<util::PlotSpec> panels;
+  const int a = first_actuator(names);
   for (const CaseOutcome* c : drawn) {
-    if (c == &reference || c->diverged() || c->simulation.command.cols() == 0 ||
-        c->simulation.realised.cols() == 0 || c->simulation.time.size() < 2)
+    if (c == &reference || c->diverged() || c->simulation.command.cols() <= a ||
+        c->simulation.realised.cols() <= a || c->simulation.time.size() < 2)
       continue;
     const std::string stop = stop_text(*c);
     util::PlotSpec whole{study + ": tracking of " + c->name + ", x_t (command) and x_m (measured)" +
                              (stop.empty() ? "" : ", " + stop),
-                         "time (s)", "displacement at actuator 1 (mm)"};
+                         "time (s)", "displacement at " + names.of(a) + " (mm)"};
     util::Series target{"x_t, command", c->simulation.time, {}, "lines lw 2"};
     util::Series measured{"x_m, measured", c->simulation.time, {}, "lines lw 1"};
     for (Eigen::Index k = 0; k < c->simulation.command.rows(); ++k) {
-      target.y.push_back(c->simulation.command(k, 0) * 1e3);
-      measured.y.push_back(c->simulation.realised(k, 0) * 1e3);
+      target.y.push_back(c->simulation.command(k, a) * 1e3);
+      measured.y.push_back(c->simulation.realised(k, a) * 1e3);
     }
     target.x.resize(target.y.size());
     measured.x.resize(measured.y.size());
@@ -192,6 +202,7 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
       close.y_max = hi + 0.08 * (hi - lo);
     }
     whole.height = close.height = 340;
+    whole.columns = 2;
     panels.push_back(std::move(whole));
     panels.push_back(std::move(close));
   }
@@ -199,18 +210,22 @@ std::vector<util::PlotSpec> tracking_panels(const std::string& study,
 }
 
 // force_prediction.png: per case with a force predictor (core/force_predictor.h) and per link it
-// predicts, the force f_m the link's answer measured (kN, as it arrived, the link's lag late)
-// against the model's prediction of it at the displacement measured with it, f_m - e, and the
-// prediction error e = f_m - model (kN) below: where they part, the loop carries the model's
-// error that late; a case stopped early ends at its stop, marked. No panel when no case has a
-// predictor.
-std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const CaseOutcome*>& drawn) {
+// predicts (in config order, named by its site), the force f_m the link's answer measured (kN,
+// as it arrived, the link's lag late) against the model's prediction of it at the displacement
+// measured with it, f_m - e, and beside it the prediction error e = f_m - model (kN): a grid, a
+// link a row. Where they part, the loop carries the model's error that late; a case stopped
+// early ends at its stop, marked. No panel when no case has a predictor.
+std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const CaseOutcome*>& drawn,
+                                                    const ActuatorNames& names) {
   std::vector<util::PlotSpec> panels;
   for (const CaseOutcome* c : drawn)
-    for (const int a : c->predicted_actuators) {
+    for (const int a : names.order) {
       const core::SimulationResult& r = c->simulation;
-      if (a >= r.measured_force.cols() || a >= r.prediction_error.cols()) continue;
-      const std::string link = "actuator " + std::to_string(a + 1);
+      const auto& predicted = c->predicted_actuators;
+      if (std::find(predicted.begin(), predicted.end(), a) == predicted.end() ||
+          a >= r.measured_force.cols() || a >= r.prediction_error.cols())
+        continue;
+      const std::string link = names.of(a);
       const std::string stop = stop_text(*c);
       util::PlotSpec forces{c->name + ": force measured at " + link +
                                 " and the predictor's model of it" +
@@ -232,6 +247,7 @@ std::vector<util::PlotSpec> force_prediction_panels(const std::vector<const Case
       mark_stop(forces, *c);
       mark_stop(error, *c);
       forces.height = error.height = 340;
+      forces.columns = 2;
       panels.push_back(std::move(forces));
       panels.push_back(std::move(error));
     }
@@ -322,14 +338,17 @@ std::vector<std::string> write_study_plots(const StudyOutcome& outcome,
   std::filesystem::remove(directory / "force_prediction.svg");
   // One gnuplot draws the three figures: its start-up costs more than a decimated figure.
   std::vector<util::Figure> figures = {{panels, directory / "displacement.png"}};
-  if (auto loops = force_displacement_panels(outcome.study_name, drawn, reference); !loops.empty())
+  if (auto loops =
+          force_displacement_panels(outcome.study_name, drawn, reference, outcome.actuators);
+      !loops.empty())
     figures.push_back({std::move(loops), directory / "force_displacement.png"});
   const double tracking_start =
       strongest_window_start(reference.response, reference.simulation.dt, 1.0);
-  if (auto tracking = tracking_panels(outcome.study_name, drawn, reference, tracking_start, 1.0);
+  if (auto tracking = tracking_panels(outcome.study_name, drawn, reference, tracking_start, 1.0,
+                                      outcome.actuators);
       !tracking.empty())
     figures.push_back({std::move(tracking), directory / "tracking.png"});
-  if (auto predicted = force_prediction_panels(drawn); !predicted.empty())
+  if (auto predicted = force_prediction_panels(drawn, outcome.actuators); !predicted.empty())
     figures.push_back({std::move(predicted), directory / "force_prediction.png"});
   util::write_png_figures(figures);
   std::vector<std::string> written;

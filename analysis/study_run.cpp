@@ -70,11 +70,22 @@ std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
 
 namespace {
 
+// The largest lag an actuator's answer carries: its chain's, and its link's round trip.
 double nominal_delay_of(const core::HybridSetup& setup) {
   double nominal = 0.0;
-  for (const core::DelayChain& chain : setup.delays)
-    nominal = std::max(nominal, chain.nominal_delay());
+  for (std::size_t a = 0; a < setup.delays.size(); ++a)
+    nominal = std::max(
+        nominal, setup.delays[a].nominal_delay() +
+                     (a < setup.links.size() ? core::nominal_round_trip(setup.links[a]) : 0.0));
   return nominal;
+}
+
+// The first actuator's chain, and its link when the case has one.
+std::string delay_text(const core::HybridSetup& setup) {
+  if (setup.delays.empty()) return "no experimental substructure";
+  std::string text = setup.delays.front().describe();
+  if (!setup.links.empty()) text += "; " + core::describe_link(setup.links.front());
+  return text;
 }
 
 // One mode of the structure taken as an SDOF for the compensated loop's analysis.
@@ -330,8 +341,7 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   result.name = name;
   result.expect_unstable = study_case.expect_unstable();
   result.nominal_delay = nominal_delay_of(setup);
-  result.delay_description =
-      setup.delays.empty() ? "no experimental substructure" : setup.delays.front().describe();
+  result.delay_description = delay_text(setup);
   result.stability =
       core::check_setup_critical_delay(prepared, setup, result.nominal_delay + options.extra_lag);
   if (study_case.compensation_size() > 0) {
@@ -503,6 +513,7 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   StudyOutcome outcome;
   outcome.study_name = study.name();
   outcome.recorders = prepared.recorders;
+  outcome.actuators = actuator_names(prepared.config, prepared.base.partition);
   read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
@@ -546,6 +557,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   StudyOutcome outcome;
   outcome.study_name = prepared.config.name();
   outcome.recorders = prepared.recorders;
+  outcome.actuators = actuator_names(prepared.config, prepared.base.partition);
   read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   CaseOutcome lag_free;

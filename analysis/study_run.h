@@ -30,6 +30,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "analysis/actuator_names.h"
 #include "analysis/compare.h"
 #include "core/envelope_growth.h"
 #include "core/simulation.h"
@@ -100,6 +101,8 @@ struct StudyOutcome {
   // What the results table holds of each case (study/recorders.h); no channels: every DOF's
   // displacement the case kept and every actuator.
   core::RecorderPlan recorders;
+  // What the figures and the summary call each actuator, and their order (actuator_names.h).
+  ActuatorNames actuators;
   std::size_t reference_index = 0;
   double lag_free_peak = 0.0;  // m, top floor of the run without any delay stage
   std::vector<CaseOutcome> cases;

@@ -1,5 +1,6 @@
 // The study's summary as JSON and as text (analysis/study_run.h: error_measures_json,
 // study_summary_json, study_summary_text).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
@@ -24,21 +25,31 @@ nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
           {"verdict", v->text}};
 }
 
-// Per predicted actuator: the RMS and peak of its prediction error (N) over the steps run, and
-// the RMS against the measured force's RMS (%).
+// Per predicted actuator, in config order: the RMS and peak of its prediction error (N) over the
+// steps run, and the RMS against the measured force's RMS (%).
 struct PredictionErrorSummary {
-  int actuator = 0;  // 1-based
+  int actuator = 0;  // 1-based index (channel order, as a HOLD names it)
+  std::string name;  // its site, or its channel (actuator_names.h)
   double rms = 0.0, peak = 0.0, relative_pct = 0.0;
 };
 
-std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c) {
+std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c,
+                                                      const ActuatorNames& names) {
   std::vector<PredictionErrorSummary> out;
   const core::Mat& e = c.simulation.prediction_error;
   const core::Mat& f = c.simulation.measured_force;
-  for (int a : c.predicted_actuators) {
+  std::vector<int> predicted;
+  for (int a : names.order)
+    if (std::find(c.predicted_actuators.begin(), c.predicted_actuators.end(), a) !=
+        c.predicted_actuators.end())
+      predicted.push_back(a);
+  for (int a : c.predicted_actuators)
+    if (std::find(predicted.begin(), predicted.end(), a) == predicted.end()) predicted.push_back(a);
+  for (int a : predicted) {
     if (a >= e.cols() || e.rows() == 0) continue;
     PredictionErrorSummary s;
     s.actuator = a + 1;
+    s.name = names.of(a);
     const double rows = static_cast<double>(e.rows());
     s.rms = std::sqrt(e.col(a).squaredNorm() / rows);
     s.peak = e.col(a).cwiseAbs().maxCoeff();
@@ -49,11 +60,12 @@ std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c) {
   return out;
 }
 
-nlohmann::json prediction_error_json(const CaseOutcome& c) {
+nlohmann::json prediction_error_json(const CaseOutcome& c, const ActuatorNames& names) {
   if (c.predicted_actuators.empty()) return nullptr;
   nlohmann::json out = nlohmann::json::array();
-  for (const PredictionErrorSummary& s : prediction_errors(c))
+  for (const PredictionErrorSummary& s : prediction_errors(c, names))
     out.push_back({{"actuator", s.actuator},
+                   {"name", s.name},
                    {"rms_n", s.rms},
                    {"peak_n", s.peak},
                    {"rms_of_measured_force_pct", s.relative_pct}});
@@ -123,7 +135,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                      {"expect_unstable", c.expect_unstable},
                      {"stability", stability},
                      {"compensated_loop", compensated_json(c.compensated)},
-                     {"prediction_error", prediction_error_json(c)},
+                     {"prediction_error", prediction_error_json(c, outcome.actuators)},
                      {"envelope_growth", growth_json(c.growth)},
                      {"peak_displacement_m", c.comparison.peak_m},
                      {"peak_error_pct", whole(c.comparison.peak_error_pct)},
@@ -232,9 +244,9 @@ std::string study_summary_text(const StudyOutcome& outcome) {
   for (const CaseOutcome& c : outcome.cases) {
     if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
     if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";
-    for (const PredictionErrorSummary& p : prediction_errors(c))
-      out << c.name << ": prediction error of actuator " << p.actuator << ": RMS "
-          << fixed(p.rms, 2) << " N (" << fixed(p.relative_pct, 2)
+    for (const PredictionErrorSummary& p : prediction_errors(c, outcome.actuators))
+      out << c.name << ": prediction error at " << p.name << " (actuator " << p.actuator
+          << "): RMS " << fixed(p.rms, 2) << " N (" << fixed(p.relative_pct, 2)
           << " % of the measured force's RMS), peak " << fixed(p.peak, 2) << " N\n";
   }
   return out.str();

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
+
+#include "core/time_text.h"
 
 namespace rths::core {
 
@@ -50,6 +53,36 @@ std::vector<std::int64_t> link_answer_steps(const LinkModel& link, double dt, st
     used[k] = newest;
   }
   return used;
+}
+
+double nominal_round_trip(const LinkModel& link) {
+  return link.to_node.one_way_delay + link.from_node.one_way_delay;
+}
+
+namespace {
+
+// The terms of one way that are on: "30 ms, jitter 2.5 ms, loss 1 %, drift 0.1 ms/s".
+std::string describe_way(const LinkWay& way) {
+  std::ostringstream text;
+  text << format_ms(way.one_way_delay);
+  if (way.jitter > 0) text << ", jitter " << format_ms(way.jitter);
+  if (way.loss > 0) text << ", loss " << 100.0 * way.loss << " %";
+  if (way.drift_rate > 0) text << ", drift " << 1e3 * way.drift_rate << " ms/s";
+  if (way.spike_every > 0 && way.spike_steps > 0)
+    text << ", spikes " << format_ms(way.spike_delay) << " " << way.spike_steps << " of every "
+         << way.spike_every << " steps";
+  if (way.drop_steps > 0)
+    text << ", steps " << way.drop_first_step << ".." << way.drop_first_step + way.drop_steps - 1
+         << " dropped";
+  return text.str();
+}
+
+}  // namespace
+
+std::string describe_link(const LinkModel& link) {
+  const std::string to = describe_way(link.to_node), from = describe_way(link.from_node);
+  if (to == from) return "link " + to + " each way";
+  return "link to " + to + " / from " + from;
 }
 
 AnswerSchedule link_schedule(const std::vector<LinkModel>& links, double dt, std::size_t steps) {

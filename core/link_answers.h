@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/answer_replay.h"
@@ -64,6 +65,13 @@ class LinkWayLag {
 
 // used[k] for k in [0, steps) (schedule above); dt: s, > 0.
 std::vector<std::int64_t> link_answer_steps(const LinkModel& link, double dt, std::size_t steps);
+
+// The lag a link adds at least (s): both ways' one_way_delay, the round trip before jitter and
+// drift; what the loop's critical-delay check weighs.
+double nominal_round_trip(const LinkModel& link);
+// One line: "link 30 ms + 30 ms, jitter 2.5 ms, loss 1 %, drift 0.1 ms/s" (per way when they
+// differ: "link to 30 ms jitter 2.5 ms / from 20 ms").
+std::string describe_link(const LinkModel& link);
 
 // The schedule of a run of `steps` whose actuator a answers over links[a] (answer_replay.h).
 AnswerSchedule link_schedule(const std::vector<LinkModel>& links, double dt, std::size_t steps);

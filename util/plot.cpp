@@ -42,66 +42,8 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
-// How one figure's text and legends are laid out (util/plot_layout.h): its font, the data
-// area's pixels of each panel, and whether every legend fits inside its panel; where one does
-// not, every legend of the figure goes below its panel, and each panel grows by the legend's
-// lines, so its data area keeps its size.
-struct Layout {
-  int font = kMinimumPoints;                   // pt
-  double left = 0.0, right = 0.0;              // px from the figure's edges to a panel's data area
-  double data_width = 0.0, data_height = 0.0;  // px of one panel's data area
-  bool legends_inside = true;
-  int legend_below_px = 0;  // px each panel grows by, its legend below it
-};
-
-// A legend's box as a share of the data area: its longest entry and line sample (4 characters)
-// with a border, one line per series.
-std::pair<double, double> legend_share(const PlotSpec& spec, const Layout& layout) {
-  std::size_t longest = 0;
-  for (const Series& s : spec.series) longest = std::max(longest, s.title.size());
-  const double ch = character_pixels(layout.font), line = line_pixels(layout.font);
-  const double width = (static_cast<double>(longest) + 7.0) * ch;
-  const double height = (static_cast<double>(spec.series.size()) + 0.6) * line;
-  return {width / layout.data_width, height / layout.data_height};
-}
-
-// A legend inside may take at most this share of its panel's width and height.
-constexpr double kInsideWidthShare = 0.6, kInsideHeightShare = 0.45;
-
-Layout figure_layout(const std::vector<PlotSpec>& panels, bool grid, int columns,
-                     int figure_width) {
-  Layout l;
-  const PlotSpec& first = panels.front();
-  l.font = figure_font_points(figure_width, grid);
-  const double ch = character_pixels(l.font), line = line_pixels(l.font);
-  const double panel_width = static_cast<double>(figure_width) / columns;
-  const double panel_height = grid ? panel_width : first.height;
-  // Left: the y tick labels (about 7 characters) and the y label; right: a character's gap.
-  l.left = 9.0 * ch + line;
-  l.right = 2.0 * ch;
-  l.data_width = std::max(1.0, panel_width - l.left - l.right);
-  // Above: a two-line title; below: tick labels and the x label.
-  l.data_height = std::max(1.0, (grid ? l.data_width : panel_height) - 5.0 * line);
-  std::size_t most_series = 0, longest = 0;
-  for (const PlotSpec& p : panels) {
-    const auto [w, h] = legend_share(p, l);
-    if (!p.series.empty() && (w > kInsideWidthShare || h > kInsideHeightShare))
-      l.legends_inside = false;
-    most_series = std::max(most_series, p.series.size());
-    for (const Series& s : p.series) longest = std::max(longest, s.title.size());
-  }
-  if (!l.legends_inside) {
-    // Below, gnuplot sets the entries in as many columns as the panel's width holds.
-    const double entry = (static_cast<double>(longest) + 7.0) * ch;
-    const double columns = std::max(1.0, std::floor((panel_width - 2.0 * ch) / entry));
-    const double rows = std::ceil(static_cast<double>(most_series) / columns);
-    l.legend_below_px = static_cast<int>(std::ceil((rows + 1.0) * line));
-  }
-  return l;
-}
-
 // How many characters of a title fit over the data area, with a margin.
-std::size_t title_chars(const Layout& layout) {
+std::size_t title_chars(const FigureLayout& layout) {
   return static_cast<std::size_t>(
       std::max(20.0, (layout.data_width - 20.0) / character_pixels(layout.font)));
 }
@@ -218,17 +160,21 @@ std::string x_tics(const PlotSpec& spec, int legend_rows) {
 }
 
 // The lines a legend below the panel takes (0 for one inside).
-int legend_rows(const Layout& layout) {
+int legend_rows(const FigureLayout& layout) {
   return static_cast<int>(std::lround(layout.legend_below_px / line_pixels(layout.font)));
 }
 
 // The legend's command and the y range for `spec`: inside at its emptiest corner (with room made
 // for it where it needs some), or below the panel where the figure's layout says so.
-std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec, const Layout& layout) {
+std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec,
+                                                       const FigureLayout& layout) {
   std::string y_range = spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
                                                  : std::string("set autoscale y");
   if (!layout.legends_inside)
-    return {"set key outside below center horizontal Left reverse\n", y_range + "\n"};
+    return {layout.below_columns > 1
+                ? "set key outside below center horizontal Left reverse\n"
+                : "set key outside below center vertical Left reverse maxcols 1\n",
+            y_range + "\n"};
   std::vector<std::vector<std::size_t>> drawn;
   for (const Series& s : spec.series) drawn.push_back(drawn_points(spec, s));
   const auto [width, height] = legend_share(spec, layout);
@@ -237,13 +183,45 @@ std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec, con
   return {key_command(place.corner), y_range + "\n"};
 }
 
+// Whether marker m's label fits between its line and the data area's right edge; else it is set
+// left of the line, ending there.
+bool label_fits_right(const PlotSpec& spec, const VerticalMarker& m, const FigureLayout& layout) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Series& s : spec.series)
+    for (double x : s.x)
+      if (std::isfinite(x)) {
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
+      }
+  if (spec.x_min) lo = *spec.x_min;
+  if (spec.x_max) hi = *spec.x_max;
+  if (!(lo < hi) || spec.log_x) return true;
+  const double room = (hi - m.x) / (hi - lo) * layout.data_width;
+  return static_cast<double>(m.label.size() + 2) * character_pixels(layout.font - 1) <= room;
+}
+
+// " title ..." of a series: in a one-column legend below, an entry wider than the panel goes on
+// as entries of its own without a sample (gnuplot would draw a title's line break over the next
+// entry).
+void append_key_title(std::ostringstream& script, const std::string& title,
+                      const FigureLayout& layout) {
+  if (layout.legends_inside || layout.below_columns > 1) {
+    script << " title " << quoted(title);
+    return;
+  }
+  const std::vector<std::string> lines = split_key_title(title, layout.key_chars);
+  script << " title " << quoted(lines.front());
+  for (std::size_t i = 1; i < lines.size(); ++i)
+    script << ", keyentry with lines lc rgb '#FFFFFF' title " << quoted(lines[i]);
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::string& tag,
-                  std::size_t panel, const Layout& layout) {
+                  std::size_t panel, const FigureLayout& layout) {
   const auto [key, y_range] = legend_and_y_range(spec, layout);
   script << (spec.square ? "set size square\n" : "set size nosquare\n") << key << "set title "
          << quoted(wrap_title(spec.title, title_chars(layout))) << "\n"
          << "set xlabel " << quoted(spec.xlabel) << "\n"
-         << "set ylabel " << quoted(spec.ylabel) << "\n"
+         << "set ylabel " << quoted(wrap_title(spec.ylabel, layout.ylabel_chars)) << "\n"
          << (spec.log_y ? "set logscale y\n" : "unset logscale y\n")
          << (spec.log_x ? "set logscale x\n" : "unset logscale x\n")
          // "[:]" would keep the previous panel's range: autoscale instead.
@@ -259,8 +237,9 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
     script << "set arrow from first " << m.x << ", graph 0 to first " << m.x
            << ", graph 1 nohead dt 2 lw 1.5 lc rgb '#444444'\n"
            << "set label " << quoted(m.label) << " at first " << m.x << ", graph "
-           << 0.97 - 0.05 * static_cast<double>(i % 6) << " left offset 0.5,0 font 'sans,"
-           << layout.font - 1 << "'\n";
+           << 0.97 - 0.05 * static_cast<double>(i % 6)
+           << (label_fits_right(spec, m, layout) ? " left offset 0.5,0" : " right offset -0.5,0")
+           << " font 'sans," << layout.font - 1 << "'\n";
   }
   script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
@@ -274,14 +253,15 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
     script << (i ? ", " : "") << block_name(tag, panel, i) << " using 1:2 with " << style;
     if (!has(" lc ") && !has(" linecolor ")) script << " lc rgb '" << kPalette[colour] << "'";
     if (!has(" dt ") && !has(" dashtype ")) script << " dt " << dash;
-    script << " title " << quoted(spec.series[i].title);
+    append_key_title(script, spec.series[i].title, layout);
   }
   script << "\n";
 }
 
 // The terminal, output and common settings of a figure `width` x `height` px in `layout`'s font.
 void start_figure(std::ostringstream& script, const std::string& terminal,
-                  const std::filesystem::path& file, int width, int height, const Layout& layout) {
+                  const std::filesystem::path& file, int width, int height,
+                  const FigureLayout& layout) {
   // One gnuplot may draw several figures: none inherits another's margins or ranges.
   script << "reset\n"
          << "set terminal " << terminal << " size " << width << "," << height << " font 'sans,"
@@ -298,10 +278,27 @@ std::string square_grid(const std::vector<PlotSpec>& panels, const std::string& 
   const int columns = static_cast<int>(std::min<std::size_t>(2, panels.size()));
   const int rows = static_cast<int>((panels.size() + 1) / 2);
   const int side = panels.front().width * 5 / 8, width = side * columns;
-  const Layout layout = figure_layout(panels, true, columns, width);
+  const FigureLayout layout = figure_layout(panels, true, true, columns, width);
   std::ostringstream script;
   start_figure(script, terminal, file, width, (side + layout.legend_below_px) * rows, layout);
   script << "set multiplot layout " << rows << "," << columns << "\n";
+  for (std::size_t p = 0; p < panels.size(); ++p) append_panel(script, panels[p], tag, p, layout);
+  script << "unset multiplot\nset output\n";
+  return script.str();
+}
+
+// Panels in a grid of the first panel's `columns`, row by row, each its `width` x `height` px
+// (with its legend below where the layout puts it), printed at a page's width.
+std::string panel_grid(const std::vector<PlotSpec>& panels, const std::string& tag,
+                       const std::string& terminal, const std::filesystem::path& file) {
+  const int columns = std::min(panels.front().columns, static_cast<int>(panels.size()));
+  const int rows = static_cast<int>((panels.size() + columns - 1) / columns);
+  const int width = panels.front().width * columns;
+  const FigureLayout layout = figure_layout(panels, true, false, columns, width);
+  std::ostringstream script;
+  start_figure(script, terminal, file, width,
+               (panels.front().height + layout.legend_below_px) * rows, layout);
+  script << "set multiplot layout " << rows << "," << columns << " rowsfirst\n";
   for (std::size_t p = 0; p < panels.size(); ++p) append_panel(script, panels[p], tag, p, layout);
   script << "unset multiplot\nset output\n";
   return script.str();
@@ -311,7 +308,9 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
                    const std::string& terminal, const std::filesystem::path& file) {
   if (std::all_of(panels.begin(), panels.end(), [](const PlotSpec& p) { return p.square; }))
     return square_grid(panels, tag, terminal, file);
-  const Layout layout = figure_layout(panels, false, 1, panels.front().width);
+  if (panels.front().columns > 1 && panels.size() > 1)
+    return panel_grid(panels, tag, terminal, file);
+  const FigureLayout layout = figure_layout(panels, false, false, 1, panels.front().width);
   std::ostringstream script;
   const int width = panels.front().width;
   const int panel_height = panels.front().height + layout.legend_below_px;
@@ -376,39 +375,6 @@ void run_gnuplot_script(const std::string& script, const std::filesystem::path& 
                              std::to_string(result.exit_code) + "): " +
                              (out.size() > kTail ? "..." + out.substr(out.size() - kTail) : out));
   }
-}
-
-namespace {
-
-// Words into lines of at most `width` characters (a longer word alone on its line).
-std::vector<std::string> fill_lines(const std::vector<std::string>& words, std::size_t width) {
-  std::vector<std::string> lines(1);
-  for (const std::string& word : words) {
-    if (!lines.back().empty() && lines.back().size() + 1 + word.size() > width)
-      lines.emplace_back();
-    lines.back() += (lines.back().empty() ? "" : " ") + word;
-  }
-  return lines;
-}
-
-}  // namespace
-
-std::string wrap_title(const std::string& title, std::size_t max_chars) {
-  std::vector<std::string> words;
-  std::size_t total = 0;
-  std::istringstream in(title);
-  for (std::string word; in >> word; total += word.size() + 1) words.push_back(word);
-  std::vector<std::string> lines = fill_lines(words, max_chars);
-  // As many lines as needed, of even length: no last line of one word.
-  for (std::size_t width = total / lines.size(); lines.size() > 1 && width < max_chars; ++width) {
-    if (auto even = fill_lines(words, width); even.size() == lines.size()) {
-      lines = std::move(even);
-      break;
-    }
-  }
-  std::string out;
-  for (const std::string& line : lines) out += (out.empty() ? "" : "\n") + line;
-  return out;
 }
 
 std::string series_colour(std::size_t index) { return kPalette[index % kColours]; }

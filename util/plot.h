@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "util/plot_layout.h"
 #include "util/plot_spec.h"
 
 namespace rths::util {
@@ -28,12 +29,6 @@ namespace rths::util {
 // The colour ("#4477AA") that the index-th series of a panel takes, so a series on another panel
 // of the same figure can name the same colour for the same thing (style "lines lc rgb '...'").
 std::string series_colour(std::size_t index);
-
-// `title` broken at spaces into as few lines of at most `max_chars` characters as it needs, of
-// about even length (a longer word keeps a line of its own); runs of spaces become one. Every
-// figure's titles go through it, with the width its data area leaves, so that a long title is never
-// cut at the figure's left edge.
-std::string wrap_title(const std::string& title, std::size_t max_chars);
 
 // At most this many points per pixel of a panel's width are drawn of one series: columns of
 // 4 / kPointsPerPixel pixels, each drawn with at most 4 points (decimate_min_max).

@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <sstream>
+#include <string>
 
 namespace rths::util {
 namespace {
@@ -109,6 +111,123 @@ LegendPlacement place_legend(const PlotSpec& spec,
   const auto [lo, hi] = *padded;
   const double span = (hi - lo) / (1.0 - height_share);
   out.y_range = is_top(out.corner) ? std::make_pair(lo, lo + span) : std::make_pair(hi - span, hi);
+  return out;
+}
+
+std::pair<double, double> legend_share(const PlotSpec& spec, const FigureLayout& layout) {
+  std::size_t longest = 0;
+  for (const Series& s : spec.series) longest = std::max(longest, s.title.size());
+  const double ch = character_pixels(layout.font), line = line_pixels(layout.font);
+  const double width = (static_cast<double>(longest) + 7.0) * ch;
+  const double height = (static_cast<double>(spec.series.size()) + 0.6) * line;
+  return {width / layout.data_width, height / layout.data_height};
+}
+
+FigureLayout figure_layout(const std::vector<PlotSpec>& panels, bool page_width, bool square,
+                           int columns, int figure_width) {
+  FigureLayout l;
+  const PlotSpec& first = panels.front();
+  l.font = figure_font_points(figure_width, page_width);
+  const double ch = character_pixels(l.font), line = line_pixels(l.font);
+  l.panel_width = static_cast<double>(figure_width) / columns;
+  const double panel_height = square ? l.panel_width : first.height;
+  // Left: the y tick labels (about 7 characters) and the y label; right: a character's gap.
+  l.left = 9.0 * ch + line;
+  l.right = 2.0 * ch;
+  l.data_width = std::max(1.0, l.panel_width - l.left - l.right);
+  // Above: a two-line title; below: tick labels and the x label.
+  l.data_height = std::max(1.0, (square ? l.data_width : panel_height) - 5.0 * line);
+  // A y label runs along the panel's whole height, centred on its data area: a line of it may
+  // take that height less a line's margin.
+  l.ylabel_chars = static_cast<std::size_t>(
+      std::max(8.0, ((square ? l.panel_width : panel_height) - line) / ch));
+  std::size_t most_series = 0, longest = 0, ylabel_lines = 1;
+  for (const PlotSpec& p : panels) {
+    const auto [w, h] = legend_share(p, l);
+    if (!p.series.empty() && (w > kInsideWidthShare || h > kInsideHeightShare))
+      l.legends_inside = false;
+    most_series = std::max(most_series, p.series.size());
+    for (const Series& s : p.series) longest = std::max(longest, s.title.size());
+    const std::string wrapped = wrap_title(p.ylabel, l.ylabel_chars);
+    ylabel_lines = std::max<std::size_t>(
+        ylabel_lines,
+        1 + static_cast<std::size_t>(std::count(wrapped.begin(), wrapped.end(), '\n')));
+  }
+  l.left += static_cast<double>(ylabel_lines - 1) * line;
+  l.data_width = std::max(1.0, l.panel_width - l.left - l.right);
+  if (!l.legends_inside) {
+    // Entries as wide as the panel holds, in as many columns as fit; in one column, each entry's
+    // lines (split_key_title) are rows of their own.
+    const double entry = (static_cast<double>(longest) + 7.0) * ch;
+    l.below_columns =
+        static_cast<int>(std::max(1.0, std::floor((l.panel_width - 2.0 * ch) / entry)));
+    // A margin of two characters each side: the width of a character is an estimate.
+    l.key_chars = static_cast<std::size_t>(std::max(8.0, (l.panel_width - 4.0 * ch) / ch - 8.0));
+    double rows = 0.0;
+    if (l.below_columns > 1) {
+      rows = std::ceil(static_cast<double>(most_series) / l.below_columns);
+    } else {
+      for (const PlotSpec& p : panels) {
+        std::size_t lines = 0;
+        for (const Series& s : p.series) lines += split_key_title(s.title, l.key_chars).size();
+        rows = std::max(rows, static_cast<double>(lines));
+      }
+    }
+    l.legend_below_px = static_cast<int>(std::ceil((rows + 1.5) * line));
+  }
+  return l;
+}
+
+std::vector<std::string> split_key_title(const std::string& title, std::size_t max_chars) {
+  std::vector<std::string> lines;
+  std::string current;
+  std::size_t at = 0;
+  while (at < title.size()) {
+    const std::size_t space = title.find(' ', at);
+    const std::string word =
+        title.substr(at, space == std::string::npos ? std::string::npos : space - at);
+    at = space == std::string::npos ? title.size() : space + 1;
+    if (!current.empty() && current.size() + 1 + word.size() > max_chars) {
+      lines.push_back(current);
+      current = "  " + word;  // a continuation is indented under its entry
+    } else {
+      current += (current.empty() ? "" : " ") + word;
+    }
+  }
+  if (!current.empty() || lines.empty()) lines.push_back(current);
+  return lines;
+}
+
+namespace {
+
+// Words into lines of at most `width` characters (a longer word alone on its line).
+std::vector<std::string> fill_lines(const std::vector<std::string>& words, std::size_t width) {
+  std::vector<std::string> lines(1);
+  for (const std::string& word : words) {
+    if (!lines.back().empty() && lines.back().size() + 1 + word.size() > width)
+      lines.emplace_back();
+    lines.back() += (lines.back().empty() ? "" : " ") + word;
+  }
+  return lines;
+}
+
+}  // namespace
+
+std::string wrap_title(const std::string& title, std::size_t max_chars) {
+  std::vector<std::string> words;
+  std::size_t total = 0;
+  std::istringstream in(title);
+  for (std::string word; in >> word; total += word.size() + 1) words.push_back(word);
+  std::vector<std::string> lines = fill_lines(words, max_chars);
+  // As many lines as needed, of even length: no last line of one word.
+  for (std::size_t width = total / lines.size(); lines.size() > 1 && width < max_chars; ++width) {
+    if (auto even = fill_lines(words, width); even.size() == lines.size()) {
+      lines = std::move(even);
+      break;
+    }
+  }
+  std::string out;
+  for (const std::string& line : lines) out += (out.empty() ? "" : "\n") + line;
   return out;
 }
 

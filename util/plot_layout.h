@@ -57,7 +57,48 @@ LegendPlacement place_legend(const PlotSpec& spec,
                              const std::vector<std::vector<std::size_t>>& drawn, double width_share,
                              double height_share);
 
+// `title` broken at spaces into as few lines of at most `max_chars` characters as it needs, of
+// about even length (a longer word keeps a line of its own); runs of spaces become one. Every
+// figure's titles go through it, with the width its data area leaves, so that a long title is never
+// cut at the figure's left edge.
+std::string wrap_title(const std::string& title, std::size_t max_chars);
+
 // gnuplot's "set key inside <corner> ..." for a placement.
 std::string key_command(LegendCorner corner);
+
+// How one figure's text and legends are laid out: its font, the data area's pixels of each
+// panel, the y label's lines, and whether every legend fits inside its panel; where one does not,
+// every legend of the figure goes below its panel, and each panel grows by the legend's lines,
+// so its data area keeps its size. A legend below is set in as many columns as the panel's width
+// holds of its longest entry; one column (`below_columns` 1) is centred on the panel, and an
+// entry wider than the panel continues on lines of its own (split_key_title).
+struct FigureLayout {
+  int font = kMinimumPoints;                   // pt
+  double left = 0.0, right = 0.0;              // px from a panel's edges to its data area
+  double data_width = 0.0, data_height = 0.0;  // px of one panel's data area
+  double panel_width = 0.0;                    // px
+  bool legends_inside = true;
+  int legend_below_px = 0;    // px each panel grows by, its legend below it
+  int below_columns = 1;      // columns of a legend below
+  std::size_t key_chars = 0;  // characters of a line of an entry of a legend below, in one column
+  std::size_t ylabel_chars = 0;  // characters of a y label's line: the panel's height
+};
+
+// A legend's box as a share of the data area: its longest entry and line sample (4 characters)
+// with a border, one line per series.
+std::pair<double, double> legend_share(const PlotSpec& spec, const FigureLayout& layout);
+// A legend inside may take at most this share of its panel's width and height.
+inline constexpr double kInsideWidthShare = 0.6, kInsideHeightShare = 0.45;
+
+// A figure of `panels` `figure_width` px wide in `columns` columns of panels; `page_width`: printed
+// at a page's width (a grid), else a column's; `square`: square data areas. The y label takes as
+// many lines as the longest one needs at the data area's height (left grows by a line each).
+FigureLayout figure_layout(const std::vector<PlotSpec>& panels, bool page_width, bool square,
+                           int columns, int figure_width);
+
+// A legend entry's title cut at spaces into lines of at most `max_chars` characters (the first
+// line keeps as many words as fit): a legend below draws each further line as an entry of its own
+// without a sample, since gnuplot draws a title's line breaks over the next entry.
+std::vector<std::string> split_key_title(const std::string& title, std::size_t max_chars);
 
 }  // namespace rths::util

@@ -57,6 +57,11 @@ struct PlotSpec {
   // reads true only with equal axes lengths). A figure of square panels lays them out in a grid
   // of at most two columns, each 5/8 of `width` pixels square, instead of stacking them.
   bool square = false;
+  // The first panel's value lays out a figure of panels that are not square: 1, one column of
+  // them printed at a column's width; more, a grid of that many columns, row by row, each panel
+  // `width` x `height` px, printed at a page's width (a pair of panels per row: one thing's two
+  // views side by side).
+  int columns = 1;
 };
 
 // The range [lo, hi] padded by `margin` of its span on each side, over the finite y of the series

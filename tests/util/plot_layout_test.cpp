@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 namespace rths::util {
@@ -76,6 +78,41 @@ TEST(PlotLayout, ALegendOverDataMakesRoomAboveIt) {
 TEST(PlotLayout, TheKeyCommandNamesItsCorner) {
   EXPECT_EQ(key_command(LegendCorner::bottom_left),
             "set key inside bottom left vertical Left reverse opaque box\n");
+}
+
+// A legend entry wider than its panel goes on, indented, on lines of its own; no line is longer
+// than asked and no word is lost or cut.
+TEST(PlotLayout, ALongKeyTitleIsSplitAtSpacesIntoLinesThatFit) {
+  const std::string title = "network_60ms_uncompensated (limit tripped at t = 5.113 s, clipped)";
+  const std::vector<std::string> lines = split_key_title(title, 40);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "network_60ms_uncompensated (limit");
+  EXPECT_EQ(lines[1], "  tripped at t = 5.113 s, clipped)");
+  EXPECT_EQ(split_key_title("short", 40), std::vector<std::string>{"short"});
+  for (std::size_t width : {12u, 20u, 33u}) {
+    std::string joined;
+    for (const std::string& line : split_key_title(title, width)) {
+      EXPECT_LE(line.size(), std::max<std::size_t>(width, 28)) << line;  // a word longer stays
+      joined += (joined.empty() ? "" : " ") + line.substr(line.rfind("  ", 0) == 0 ? 2 : 0);
+    }
+    EXPECT_EQ(joined, title) << width;
+  }
+}
+
+// A y label longer than its panel is tall (a 340 px panel at 16 pt holds about 25 characters)
+// takes two lines, and the data area moves right by one line to hold them.
+TEST(PlotLayout, AYLabelLongerThanItsPanelTakesTwoLinesAndTheMarginGrows) {
+  PlotSpec short_label{"t", "time (s)", "x (mm)", {{"a", {0, 1}, {0, 1}}}};
+  PlotSpec long_label = short_label;
+  long_label.ylabel = "displacement at lab_b, element 1 (mm)";
+  short_label.height = long_label.height = 340;
+  const FigureLayout one = figure_layout({short_label}, false, false, 1, 800);
+  const FigureLayout two = figure_layout({long_label}, false, false, 1, 800);
+  EXPECT_EQ(one.ylabel_chars, two.ylabel_chars);
+  EXPECT_LT(long_label.ylabel.size(), 2 * one.ylabel_chars);
+  EXPECT_GT(long_label.ylabel.size(), one.ylabel_chars);
+  EXPECT_NEAR(two.left - one.left, line_pixels(one.font), 1e-9);
+  EXPECT_NE(wrap_title(long_label.ylabel, two.ylabel_chars).find('\n'), std::string::npos);
 }
 
 }  // namespace

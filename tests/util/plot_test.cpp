@@ -292,5 +292,68 @@ TEST(Plot, ABarChartNamesEachBarUnderItOnItsLines) {
   std::filesystem::remove_all(dir);
 }
 
+// The width and height (px) in a PNG's header.
+std::pair<std::uint32_t, std::uint32_t> png_size(const std::filesystem::path& png) {
+  std::ifstream in(png, std::ios::binary);
+  std::array<unsigned char, 24> head{};
+  in.read(reinterpret_cast<char*>(head.data()), head.size());
+  const auto be32 = [&](std::size_t at) {
+    return std::uint32_t{head[at]} << 24 | std::uint32_t{head[at + 1]} << 16 |
+           std::uint32_t{head[at + 2]} << 8 | std::uint32_t{head[at + 3]};
+  };
+  return {be32(16), be32(20)};
+}
+
+// Panels with columns = 2 are a grid, row by row: four 800 x 300 panels make a 1600 x 600 figure
+// (one column would be 800 x 1200); a marker near the right edge has its label end at its line.
+TEST(Plot, PanelsInColumnsAreAGridAndAMarkerAtTheRightEdgeIsLabelledLeftOfIt) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_grid_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::vector<PlotSpec> panels;
+  for (const char* name : {"one", "two", "three", "four"}) {
+    PlotSpec p{name, "time (s)", "x (mm)", {{"a", {0, 5, 10}, {0, 1, 0}}}};
+    p.height = 300;
+    p.columns = 2;
+    panels.push_back(p);
+  }
+  panels[1].markers.push_back({9.8, "limit tripped"});
+  panels[2].markers.push_back({1.0, "early stop"});
+  write_png_panels(panels, dir / "grid.png");
+  EXPECT_EQ(png_size(dir / "grid.png"), (std::pair<std::uint32_t, std::uint32_t>{1600, 600}));
+  std::ifstream in(dir / "grid.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto anchor_of = [&](const std::string& label) {
+    const auto text = svg.find(">" + label + "<");
+    const auto group = svg.rfind("<g ", text);
+    return svg.substr(group, text - group).find("text-anchor=\"end\"") != std::string::npos;
+  };
+  EXPECT_TRUE(anchor_of("limit tripped"));
+  EXPECT_FALSE(anchor_of("early stop"));
+  std::filesystem::remove_all(dir);
+}
+
+// A legend below whose entry is wider than the figure continues on a line of its own, so no
+// entry runs past the right edge (the entry's words all drawn, in order).
+TEST(Plot, ALegendEntryWiderThanTheFigureContinuesOnItsOwnLine) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_key_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string long_title =
+      "network_60ms_uncompensated (limit tripped at t = 5.113 s, clipped, and far more said)";
+  PlotSpec panel{"p", "time (s)", "x (mm)", {{long_title, {0, 1}, {0, 1}}}};
+  for (int i = 0; i < 6; ++i) panel.series.push_back({"case " + std::to_string(i), {0, 1}, {1, 0}});
+  write_png_panels({panel}, dir / "key.png");
+  std::ifstream in(dir / "key.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(svg.find(">" + long_title + "<"), std::string::npos);
+  const auto first = svg.find(">network_60ms_uncompensated (limit tripped at t =");
+  const auto rest = svg.find(">  5.113 s, clipped, and far more said)<");
+  ASSERT_NE(first, std::string::npos);
+  ASSERT_NE(rest, std::string::npos);
+  EXPECT_LT(first, rest);
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace rths::util
