@@ -24,27 +24,14 @@ std::string three(double value) {
 
 }  // namespace
 
+namespace {
+constexpr int kK = 0, kC = 1, kH = 2, kT = 3, kF0 = 4;  // theta's order
+constexpr double kLagExplains = 0.005;                  // the T hold's 0.5 % (header)
+}  // namespace
+
 ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
                                const std::string& label, const RestoringForceModel* shape)
     : p_(parameters), dt_(dt) {
-  // A dashpot and a mass declared with the specimen are not its shape (header: why).
-  const auto* inertial = dynamic_cast<const InertialSpecimen*>(shape);
-  const RestoringForceModel* restoring = inertial ? &inertial->restoring() : shape;
-  if (restoring) {
-    const double k_r = restoring->initial_stiffness();
-    require(std::isfinite(k_r) && k_r > 0, label,
-            "the specimen's model (" + shape->describe() + ") has no positive initial stiffness");
-    if (inertial) {
-      initial_damping_ = inertial->damping() * p_.stiffness / k_r;
-      declared_mass_ = inertial->mass();
-    }
-    if (p_.specimen_shape) {
-      shape_stiffness_ = k_r;
-      command_shape_ = restoring->clone();
-      measured_shape_ = restoring->clone();
-    }
-  }
-  if (p_.damping > 0) initial_damping_ = p_.damping;
   require(dt > 0 && std::isfinite(dt), label, "dt must be > 0 s");
   require(std::isfinite(p_.stiffness) && p_.stiffness > 0, label,
           "stiffness must be > 0 N/m (the declared specimen's)");
@@ -57,6 +44,11 @@ ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
           "error_window must be at least one step (" + std::to_string(dt) + " s)");
   require(std::isfinite(p_.max_relative_error) && p_.max_relative_error >= 0, label,
           "max_relative_error must be >= 0 (0: no bound)");
+  require(std::isfinite(p_.force_lag) && p_.force_lag >= 0, label, "force_lag must be >= 0 s");
+  initial_[kK] = p_.stiffness;
+  initial_[kT] = p_.force_lag;
+  adopt_shape(shape, label);
+  if (p_.damping > 0) initial_[kC] = p_.damping;
   lambda_ = std::exp(-dt / p_.forgetting_time);
   const auto window = static_cast<std::size_t>(std::llround(p_.error_window / dt));
   error_sq_.assign(std::max<std::size_t>(window, 1), 0.0);
@@ -64,23 +56,47 @@ ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
   reset();
 }
 
+// A dashpot and a mass declared with the specimen are not its shape (header: why); a hysteretic
+// shape gives the z column and splits k0 into k and h.
+void ForcePredictor::adopt_shape(const RestoringForceModel* declared, const std::string& label) {
+  const auto* inertial = dynamic_cast<const InertialSpecimen*>(declared);
+  const RestoringForceModel* restoring = inertial ? &inertial->restoring() : declared;
+  if (p_.shape) restoring = p_.shape.get();
+  if (!restoring) return;
+  const double k_r = restoring->initial_stiffness();
+  require(std::isfinite(k_r) && k_r > 0, label,
+          "the specimen's model (" + restoring->describe() + ") has no positive initial stiffness");
+  if (inertial) {
+    initial_[kC] = inertial->damping() * p_.stiffness / inertial->initial_stiffness();
+    declared_mass_ = inertial->mass();
+  }
+  if (!p_.specimen_shape) return;
+  if (const auto* hysteretic = dynamic_cast<const HystereticModel*>(restoring)) {
+    HystereticModel::Parts parts = hysteretic->parts();
+    present_[kH] = true;
+    initial_[kK] = parts.linear_ratio * p_.stiffness;
+    initial_[kH] = (1.0 - parts.linear_ratio) * p_.stiffness * parts.yield_drift;
+    command_z_ = parts.unit_hysteresis->clone();
+    measured_z_ = std::move(parts.unit_hysteresis);
+    return;
+  }
+  shape_stiffness_ = k_r;
+  command_shape_ = restoring->clone();
+  measured_shape_ = restoring->clone();
+}
+
 ForcePredictor::ForcePredictor(const ForcePredictor& other)
     : p_(other.p_),
       dt_(other.dt_),
       lambda_(other.lambda_),
-      k_(other.k_),
-      c_(other.c_),
-      offset_(other.offset_),
-      initial_damping_(other.initial_damping_),
       declared_mass_(other.declared_mass_),
       free_damping_(other.free_damping_),
       fit_residual_(other.fit_residual_),
       refused_stiffness_(other.refused_stiffness_),
+      lag_fitted_(other.lag_fitted_),
       f_sq_(other.f_sq_),
       last_answer_(other.last_answer_),
-      last_x_(other.last_x_),
       last_drift_(other.last_drift_),
-      last_v_(other.last_v_),
       last_f_(other.last_f_),
       error_(other.error_),
       updates_(other.updates_),
@@ -92,10 +108,17 @@ ForcePredictor::ForcePredictor(const ForcePredictor& other)
       sum_force_sq_(other.sum_force_sq_),
       command_shape_(other.command_shape_ ? other.command_shape_->clone() : nullptr),
       measured_shape_(other.measured_shape_ ? other.measured_shape_->clone() : nullptr),
+      command_z_(other.command_z_ ? other.command_z_->clone() : nullptr),
+      measured_z_(other.measured_z_ ? other.measured_z_->clone() : nullptr),
       shape_stiffness_(other.shape_stiffness_) {
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < kTerms; ++i) {
+    theta_[i] = other.theta_[i];
+    initial_[i] = other.initial_[i];
+    standard_error_[i] = other.standard_error_[i];
+    present_[i] = other.present_[i];
+    last_phi_[i] = other.last_phi_[i];
     b_[i] = other.b_[i];
-    for (int j = 0; j < 3; ++j) s_[i][j] = other.s_[i][j];
+    for (int j = 0; j < kTerms; ++j) s_[i][j] = other.s_[i][j];
   }
 }
 
@@ -107,20 +130,32 @@ double ForcePredictor::measured_basis(double x) {
   return measured_shape_ ? measured_shape_->step(x) / shape_stiffness_ : x;
 }
 
+double ForcePredictor::command_hysteresis(double x) {
+  return command_z_ ? command_z_->step(x) : 0.0;
+}
+
+double ForcePredictor::measured_hysteresis(double x) {
+  return measured_z_ ? measured_z_->step(x) : 0.0;
+}
+
+PredictorTerms ForcePredictor::terms(const double theta[kTerms]) {
+  return {theta[kK], theta[kC], theta[kH], theta[kT], theta[kF0]};
+}
+
 void ForcePredictor::reset() {
-  if (command_shape_) command_shape_->reset();
-  if (measured_shape_) measured_shape_->reset();
-  k_ = p_.stiffness;
-  c_ = initial_damping_;
-  offset_ = 0.0;
-  free_damping_ = fit_residual_ = f_sq_ = 0.0;
-  refused_stiffness_ = false;
-  for (int i = 0; i < 3; ++i) {
-    b_[i] = 0.0;
-    for (int j = 0; j < 3; ++j) s_[i][j] = 0.0;
+  for (auto* shape :
+       {command_shape_.get(), measured_shape_.get(), command_z_.get(), measured_z_.get()})
+    if (shape) shape->reset();
+  for (int i = 0; i < kTerms; ++i) {
+    theta_[i] = initial_[i];
+    standard_error_[i] = std::nan("");
+    last_phi_[i] = b_[i] = 0.0;
+    for (int j = 0; j < kTerms; ++j) s_[i][j] = 0.0;
   }
+  free_damping_ = fit_residual_ = f_sq_ = 0.0;
+  refused_stiffness_ = lag_fitted_ = false;
   last_answer_ = -1;
-  last_x_ = last_drift_ = last_v_ = last_f_ = error_ = 0.0;
+  last_drift_ = last_f_ = error_ = 0.0;
   updates_ = 0;
   std::fill(error_sq_.begin(), error_sq_.end(), 0.0);
   std::fill(force_sq_.begin(), force_sq_.end(), 0.0);
@@ -128,54 +163,119 @@ void ForcePredictor::reset() {
   sum_error_sq_ = sum_force_sq_ = 0.0;
 }
 
-void ForcePredictor::learn(double x, double v, double f, long steps_since) {
+double ForcePredictor::residual(const double theta[kTerms]) const {
+  double r = f_sq_;
+  for (int i = 0; i < kTerms; ++i) {
+    r -= 2.0 * theta[i] * b_[i];
+    for (int j = 0; j < kTerms; ++j) r += theta[i] * s_[i][j] * theta[j];
+  }
+  return r;
+}
+
+// From the column-scaled normal equations (unit-free, so one conditioning bound serves every
+// specimen): refused when the scaled free block's smallest eigenvalue is below 1e-3 (two
+// columns: |correlation| above 0.999).
+bool ForcePredictor::solve(const bool free[kTerms], double theta[kTerms], double* error) const {
+  using Matrix = Eigen::Matrix<double, kTerms, kTerms>;
+  using Vector = Eigen::Matrix<double, kTerms, 1>;
+  Matrix a = Matrix::Identity();
+  Vector rhs = Vector::Zero(), scale = Vector::Ones();
+  int count = 0;
+  for (int i = 0; i < kTerms; ++i) {
+    if (!free[i]) continue;
+    if (!(s_[i][i] > 0)) return false;
+    scale[i] = 1.0 / std::sqrt(s_[i][i]);
+    ++count;
+  }
+  for (int i = 0; i < kTerms; ++i) {
+    if (!free[i]) continue;
+    double b = b_[i];
+    for (int j = 0; j < kTerms; ++j)
+      if (!free[j]) b -= s_[i][j] * theta[j];
+    rhs[i] = scale[i] * b;
+    for (int j = 0; j < kTerms; ++j)
+      if (free[j]) a(i, j) = scale[i] * s_[i][j] * scale[j];
+  }
+  const Eigen::SelfAdjointEigenSolver<Matrix> eigen(a, Eigen::EigenvaluesOnly);
+  if (!(eigen.eigenvalues().minCoeff() > 1e-3)) return false;
+  const Eigen::LDLT<Matrix> factor(a);
+  const Vector y = factor.solve(rhs);
+  double out[kTerms];
+  for (int i = 0; i < kTerms; ++i) {
+    out[i] = free[i] ? scale[i] * y[i] : theta[i];
+    if (!std::isfinite(out[i])) return false;
+  }
+  std::copy(out, out + kTerms, theta);
+  if (!error) return true;
+  const double weight = s_[kF0][kF0];
+  const double variance = std::max(residual(theta), 0.0) / std::max(weight - count, 1.0);
+  const Matrix inverse = factor.solve(Matrix::Identity());
+  for (int i = 0; i < kTerms; ++i)
+    error[i] =
+        free[i] ? scale[i] * std::sqrt(variance * std::max(inverse(i, i), 0.0)) : std::nan("");
+  return true;
+}
+
+// The holds of the header, in its order; false when no set of free terms is well conditioned.
+bool ForcePredictor::fit(double theta[kTerms], bool free[kTerms]) {
+  bool negative_held[kTerms] = {};
+  for (int round = 0; round < kTerms; ++round) {
+    for (int i = 0; i < kTerms; ++i) {
+      free[i] = present_[i] && !negative_held[i];
+      theta[i] = negative_held[i] ? 0.0 : theta_[i];
+    }
+    bool ok = solve(free, theta, nullptr);
+    for (int weak : {kT, kH}) {
+      if (ok || !free[weak]) continue;
+      free[weak] = false;
+      ok = solve(free, theta, nullptr);
+    }
+    if (!ok) return false;
+    if (round == 0) free_damping_ = free[kC] ? theta[kC] : 0.0;
+    // k may be 0 beside a hysteresis (an MR damper has no spring); alone it must be > 0.
+    int negative = -1;
+    for (int i : {kC, kT, kH, kK})
+      if (negative < 0 && free[i] && theta[i] < 0 && (i != kK || present_[kH])) negative = i;
+    if (negative < 0) break;
+    negative_held[negative] = true;
+  }
+  for (int i : {kC, kT, kH})
+    if (free[i] && theta[i] < 0) return false;
+  if (!free[kT]) return true;
+  double held[kTerms];
+  bool without_lag[kTerms];
+  std::copy(theta, theta + kTerms, held);
+  std::copy(free, free + kTerms, without_lag);
+  held[kT] = initial_[kT];
+  without_lag[kT] = false;
+  if (!solve(without_lag, held, nullptr)) return true;
+  const double explained = (residual(held) - residual(theta)) / std::max(f_sq_, 1e-300);
+  if (explained >= kLagExplains * kLagExplains) return true;
+  std::copy(held, held + kTerms, theta);
+  free[kT] = false;
+  return true;
+}
+
+void ForcePredictor::learn(const double phi[kTerms], double f, long steps_since) {
   const double decay = std::pow(lambda_, static_cast<double>(steps_since));
-  const double phi[3] = {x, v, 1.0};
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) s_[i][j] = decay * s_[i][j] + phi[i] * phi[j];
+  for (int i = 0; i < kTerms; ++i) {
+    for (int j = 0; j < kTerms; ++j) s_[i][j] = decay * s_[i][j] + phi[i] * phi[j];
     b_[i] = decay * b_[i] + phi[i] * f;
   }
   f_sq_ = decay * f_sq_ + f * f;
   if (!p_.adapt) return;
-  // s_[2][2] is the forgetting's weight of the samples (their count, decayed).
-  if (!(s_[0][0] > 0 && s_[1][1] > 0)) return;
-  if (std::sqrt(s_[0][0] / s_[2][2]) < p_.min_displacement) return;
-  // theta over the columns in `use`, from the column-scaled normal equations (unit-free, so one
-  // conditioning bound serves every specimen): refused when the scaled matrix's smallest
-  // eigenvalue is below 1e-3 (two columns: |correlation| above 0.999).
-  const auto solve = [this](const bool use[3], double theta[3]) {
-    Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
-    Eigen::Vector3d rhs = Eigen::Vector3d::Zero(), scale = Eigen::Vector3d::Ones();
-    for (int i = 0; i < 3; ++i)
-      if (use[i]) scale[i] = 1.0 / std::sqrt(s_[i][i]);
-    for (int i = 0; i < 3; ++i) {
-      if (!use[i]) continue;
-      rhs[i] = scale[i] * b_[i];
-      for (int j = 0; j < 3; ++j)
-        if (use[j]) a(i, j) = scale[i] * s_[i][j] * scale[j];
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(a, Eigen::EigenvaluesOnly);
-    if (!(eigen.eigenvalues().minCoeff() > 1e-3)) return false;
-    const Eigen::Vector3d y = a.ldlt().solve(rhs);
-    for (int i = 0; i < 3; ++i) theta[i] = use[i] ? scale[i] * y[i] : 0.0;
-    return std::isfinite(theta[0]) && std::isfinite(theta[1]) && std::isfinite(theta[2]);
-  };
-  double theta[3];
-  const bool all[3] = {true, true, true};
-  if (!solve(all, theta)) return;
-  free_damping_ = theta[1];
-  if (theta[1] < 0) {  // a passive specimen: the best fit with c = 0
-    const bool without_damping[3] = {true, false, true};
-    if (!solve(without_damping, theta)) return;
-  }
-  refused_stiffness_ = !(theta[0] > 0);
+  // s_[kF0][kF0] is the forgetting's weight of the samples (their count, decayed).
+  if (!(s_[kK][kK] > 0 && s_[kC][kC] > 0)) return;
+  if (std::sqrt(s_[kK][kK] / s_[kF0][kF0]) < p_.min_displacement) return;
+  double theta[kTerms];
+  bool free[kTerms];
+  if (!fit(theta, free)) return;
+  refused_stiffness_ = !(theta[kK] > 0 || (present_[kH] && theta[kK] >= 0 && theta[kH] > 0));
   if (refused_stiffness_) return;
-  k_ = theta[0];
-  c_ = theta[1];
-  offset_ = theta[2];
-  // The least-squares residual over the columns used: F - theta^T b (theta is 0 off them).
-  const double explained = theta[0] * b_[0] + theta[1] * b_[1] + theta[2] * b_[2];
-  fit_residual_ = f_sq_ > 0 ? std::sqrt(std::max(f_sq_ - explained, 0.0) / f_sq_) : 0.0;
+  solve(free, theta, standard_error_);
+  std::copy(theta, theta + kTerms, theta_);
+  lag_fitted_ = free[kT];
+  fit_residual_ = f_sq_ > 0 ? std::sqrt(std::max(residual(theta_), 0.0) / f_sq_) : 0.0;
   ++updates_;
 }
 
@@ -184,31 +284,72 @@ double ForcePredictor::windowed_error() const {
   return std::sqrt(std::max(sum_error_sq_, 0.0) / sum_force_sq_);
 }
 
+double ForcePredictor::motion_rate() const {
+  return s_[kK][kK] > 0 ? std::sqrt(s_[kC][kC] / s_[kK][kK]) : 0.0;
+}
+
+std::string ForcePredictor::model_text() const {
+  std::ostringstream text;
+  const auto term = [&](const char* name, double value, double error, double unit_scale,
+                        const char* unit) {
+    if (text.tellp() > 0) text << ", ";
+    text << name << " " << three(unit_scale * value) << " +/- "
+         << (std::isfinite(error) ? three(unit_scale * error) : std::string("held")) << " " << unit;
+  };
+  term("k", theta_[kK], standard_error_[kK], 1.0, "N/m");
+  term("c", theta_[kC], standard_error_[kC], 1.0, "N s/m");
+  if (present_[kH]) term("h", theta_[kH], standard_error_[kH], 1.0, "N");
+  term("T", theta_[kT], standard_error_[kT], 1e3, "ms");
+  term("f0", theta_[kF0], standard_error_[kF0], 1.0, "N");
+  return text.str();
+}
+
 std::string ForcePredictor::rejection() const {
   std::ostringstream text;
   const auto add = [&text](const std::string& line) {
     if (text.tellp() > 0) text << "; ";
     text << line;
   };
+  const double k = theta_[kK], lag = theta_[kT], rate = motion_rate();
   if (refused_stiffness_)
     add("the force does not rise with the drift (a fit with k <= 0 was refused): the specimen "
         "lost its stiffness, or the force or drift channel has the wrong sign");
-  if (free_damping_ < 0 && k_ > 0)
+  const bool lags = free_damping_ < 0 && k > 0;  // the best c wanted negative: a lag left over
+  if (lags && !lag_fitted_)
     add("the measured force lags the measured drift by at least " +
-        three(1e3 * -free_damping_ / k_) + " ms (-c / k of the best fit, c " +
-        three(free_damping_) +
+        three(1e3 * -free_damping_ / k) + " ms (-c / k of the best fit, c " + three(free_damping_) +
         " N s/m, held at 0; a dashpot lengthens it): the model lacks the force channel's lag (a "
-        "load cell or filter)");
+        "load cell or filter), which its lag term could not be told from its dashpot");
+  if (lags && lag_fitted_)
+    add("the measured force lags the measured drift by more than the model's first-order lag "
+        "term follows (T " +
+        three(1e3 * lag) + " ms fitted, and still the best c is " + three(free_damping_) +
+        " N s/m, held at 0: at least " + three(1e3 * (lag - free_damping_ / k)) +
+        " ms in all): the model lacks the force channel's lag (a load cell or filter)");
   const double bound = p_.max_relative_error;
-  if (bound > 0 && fit_residual_ > 0.5 * bound)
+  if (bound > 0 && fit_residual_ > 0.5 * bound) {
+    std::string missing;
+    if (lags || (lag_fitted_ && lag * rate > 0.3))
+      missing = "the force's lag: T " + three(1e3 * lag) + " ms is " + three(lag * rate) +
+                " rad at the motion's RMS rate (" + three(rate) +
+                " rad/s), or more, past what a first-order lag term follows (shorten the "
+                "load cell's filter)";
+    else if (!present_[kH])
+      missing =
+          "hysteresis: declare the specimen's model or force_predictor.model (a Bouc-Wen rths "
+          "identify fits)";
+    else
+      missing =
+          "a shape the declared hysteresis does not have (its yield drift or sharpness), or a "
+          "rate term other than the dashpot";
     add("the model's own best fit leaves " + three(100.0 * fit_residual_) +
-        " % of the force unexplained: its form (k x + c v + f0" +
-        std::string(command_shape_ ? " on the declared shape" : "") +
-        ") lacks a term the specimen has (hysteresis: declare its model; a lag)");
-  else if (bound > 0 && updates_ > 0 && windowed_error() > bound)
+        " % of the force unexplained: its form (k x + c v" +
+        std::string(present_[kH] ? " + h z" : "") + " + f0, lag T) lacks " + missing);
+  } else if (bound > 0 && updates_ > 0 && windowed_error() > bound) {
     add("the model's own best fit leaves " + three(100.0 * fit_residual_) +
         " %: the specimen changes faster than the forgetting time (" + three(p_.forgetting_time) +
         " s) follows");
+  }
   if (declared_mass_ > 0)
     add("the declared specimen mass (" + three(declared_mass_) + " kg) is not in the model");
   return text.str();
@@ -218,19 +359,21 @@ PredictorOutput ForcePredictor::step(const PredictorInput& in) {
   if (in.answer_step >= 0 && in.answer_step > last_answer_) {
     const bool first = last_answer_ < 0;
     const long since = first ? 1 : in.answer_step - last_answer_;
-    const double v_m =
-        first ? 0.0 : (in.measured_displacement - last_drift_) / (static_cast<double>(since) * dt_);
-    const double basis = measured_basis(in.measured_displacement);
-    learn(basis, v_m, in.measured_force, since);
+    const double span = static_cast<double>(since) * dt_;
+    const double x = in.measured_displacement, f = in.measured_force;
+    const double phi[kTerms] = {measured_basis(x), first ? 0.0 : (x - last_drift_) / span,
+                                measured_hysteresis(x), first ? 0.0 : -(f - last_f_) / span, 1.0};
+    learn(phi, f, since);
     last_answer_ = in.answer_step;
-    last_x_ = basis;
-    last_drift_ = in.measured_displacement;
-    last_v_ = v_m;
-    last_f_ = in.measured_force;
+    std::copy(phi, phi + kTerms, last_phi_);
+    last_drift_ = x;
+    last_f_ = f;
   }
   PredictorOutput out;
   if (last_answer_ >= 0) {
-    error_ = last_f_ - (k_ * last_x_ + c_ * last_v_ + offset_);
+    double model = 0.0;
+    for (int i = 0; i < kTerms; ++i) model += theta_[i] * last_phi_[i];
+    error_ = last_f_ - model;
     // One window entry a step; the ring's sums are recomputed on every wrap so that rounding in
     // the running difference cannot accumulate.
     const double e2 = error_ * error_, f2 = last_f_ * last_f_;
@@ -249,19 +392,24 @@ PredictorOutput ForcePredictor::step(const PredictorInput& in) {
     }
     out.relative_error = windowed_error();
   }
-  out.predicted = k_ * command_basis(in.command) + c_ * in.command_velocity + offset_;
+  out.predicted = theta_[kK] * command_basis(in.command) + theta_[kC] * in.command_velocity +
+                  theta_[kH] * command_hysteresis(in.command) + theta_[kF0];
   out.error = last_answer_ >= 0 ? error_ : 0.0;
   out.force = out.predicted + out.error;
   out.exceeded = p_.max_relative_error > 0 && out.relative_error > p_.max_relative_error;
-  out.stiffness = k_;
-  out.damping = c_;
-  out.offset = offset_;
+  out.stiffness = theta_[kK];
+  out.damping = theta_[kC];
+  out.offset = theta_[kF0];
+  out.hysteretic = theta_[kH];
+  out.force_lag = theta_[kT];
   return out;
 }
 
 std::string ForcePredictor::describe() const {
   std::ostringstream text;
   text << "Smith predictor (k0 " << p_.stiffness << " N/m, c0 " << p_.damping << " N s/m"
+       << (present_[kH] ? ", hysteresis h0 " + three(initial_[kH]) + " N" : "") << ", force lag "
+       << 1e3 * p_.force_lag << " ms"
        << (p_.adapt ? ", fitted online, forgetting " + std::to_string(p_.forgetting_time) + " s"
                     : ", fixed")
        << ")";

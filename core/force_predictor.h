@@ -27,49 +27,70 @@
 //   answer_step the step the link's newest answer answers (-1: none has arrived yet);
 //   x_m, f_m    m, N: that answer's measured drift and force (ignored while answer_step < 0).
 // Output (PredictorOutput): the force (N) the integrator uses, and the diagnostics below.
-// Equations, with theta = [k, c, f0] the model's stiffness (N/m), damping (N s/m) and force
-// offset (N; a yielded specimen carries one at zero drift, which a line through the origin
-// cannot follow; 0 for a linear specimen):
-//   on a new answer (answer_step greater than the last one seen):
-//     v_m = (x_m - x_m,prev) / ((answer_step - answer_step_prev) dt)   (0 for the first answer)
-//     phi = [x_m, v_m, 1];  S <- lambda^n S + phi phi^T;  b <- lambda^n b + phi f_m
+// The model (what lab specimens do: a spring, a dashpot, a hysteresis, a force channel's lag),
+// with theta = [k, c, h, T, f0] (PredictorTerms):
+//   g(x, v)   = k x + c v + h z(x) + f0      (N)  the specimen's force at drift x, rate v
+//   f_m + T f_m' = g(x_m, v_m)                     the measured force lags it by T (to first order)
+//   k N/m, c N s/m, h N (the hysteretic force, rths identify's F_bw), T s, f0 N (an offset: a
+//   yielded specimen carries one at zero drift). z is the declared shape's dimensionless
+//   hysteretic variable (core::HystereticModel::Parts: Bouc-Wen's z / uy, the bilinear's
+//   elastic-perfectly-plastic drift / uy; |z| <= 1), one copy driven by the measured drift at
+//   each new answer and one by the command at every step (a hysteretic model keeps its own path,
+//   and its shape parameters uy, n, beta stay as declared: only the terms above are fitted).
+//   Without a hysteretic shape there is no h. A declared shape that is not hysteretic (any other
+//   RestoringForceModel) stands in for x as r(x) / k_r, its initial stiffness k_r; with
+//   specimen_shape false, x is the drift itself (an equivalent linear model).
+//   on a new answer (answer_step greater than the last one seen), over the span since the last:
+//     v_m = (x_m - x_m,prev) / ((answer_step - answer_step_prev) dt), f_m' alike (0 at the first)
+//     phi = [x_m, v_m, z_m, -f_m', 1];  S <- lambda^n S + phi phi^T;  b <- lambda^n b + phi f_m
 //     (n the steps since the last answer, lambda = exp(-dt / forgetting_time): exponential
-//     forgetting in time, so a burst of late answers weighs as the steps they describe; S_33 is
-//     the samples' weight N);
-//     theta <- S^-1 b when adapting, the RMS drift sqrt(S_11 / N) >= min_displacement and the
-//     column-scaled S is well conditioned (its smallest eigenvalue > 1e-3); a fit with c < 0 is
-//     redone with c = 0 (a passive specimen dissipates) and a fit with k <= 0 is refused (the
-//     model keeps its last theta). Recursive least squares with forgetting, information form.
+//     forgetting in time, so a burst of late answers weighs as the steps they describe; S_55 is
+//     the samples' weight N, F the forgetting's sum of f_m^2);
+//     when adapting and the RMS drift sqrt(S_11 / N) >= min_displacement, theta is the least
+//     squares fit over the free terms, each held term at its value (rhs b_i - S_ij theta_j),
+//     accepted when the column-scaled S of the free terms is well conditioned (its smallest
+//     eigenvalue > 1e-3). Terms are held, in this order, until it is:
+//       T, then h, at their current values when their columns cannot be told from the others
+//       (h while the specimen is elastic: z ~ x / uy; T for a spring alone: f_m' ~ k v_m);
+//       c, T or h at 0 when the fit wants it negative (a passive specimen dissipates; a lag is
+//       not a lead), and k beside a hysteresis (an MR damper has no spring), the conditioning
+//       then judged again;
+//       T at its declared value (force_lag) when freeing it explains less than 0.5 % of the
+//       force's RMS (sqrt(rho_declared^2 - rho^2) < 0.005): a lag term fitted to rounding
+//       would trade c for T.
+//     A fit whose force does not rise with the drift (k <= 0, and h <= 0 or absent) is refused
+//     (the model keeps its last theta). Recursive least squares
+//     with forgetting, information form.
+//     Uncertainty (PredictorTerms of standard errors; NaN for a term held or absent):
+//       se_i = sqrt(sigma^2 (S_free^-1)_ii), sigma^2 = (F - 2 theta^T b + theta^T S theta) /
+//       max(N - p, 1), p the free terms: the white-residual figure, a lower bound when the
+//       residual is correlated from step to step (a missing term's is).
 //     What the data said of the model (rejection(), named in a HOLD's reason):
-//       c_free, the fit's c before the c = 0 rule: c_free < 0 means the measured force lags the
-//         measured drift by at least -c_free / k s, to first order (a dashpot c_s adds c_s / k):
-//         a load cell's or a filter's lag the model lacks, or a rate that is not the specimen's;
-//       rho = sqrt(max(0, F - theta^T b) / F), F = the forgetting's sum of f_m^2: the accepted
-//         fit's own residual. rho near the relative error: the model's form cannot follow the
-//         force (a term is missing: hysteresis, a lag); rho small under a large relative error:
-//         the specimen changes faster than forgetting_time.
-//     e = f_m - (k x_m + c v_m + f0)                                    (N, the model's error)
-//   every step: f_hat = k u + c v + f0;  force = f_hat + e (e = 0 before the first answer).
-// With the specimen's shape (a declared non-linear specimen: Bouc-Wen, bilinear), x_m and u
-// above stand for r(x_m) / k_r and r(u) / k_r: r the declared restoring-force model (initial
-// stiffness k_r), one copy driven by the measured drift at each new answer and one by the
-// command at every step (a hysteretic model keeps its own path), so k is the fitted scale of
-// the declared specimen in N/m (k = k_r when the declaration is right). For a linear specimen
-// both are the drift itself. A declared specimen with a dashpot or a mass (InertialSpecimen:
-// m x'' + c_s x' + r(x)) gives r alone as the shape: its dashpot is the model's c, fitted, and
-// starts at c_s k0 / k_r (the declared dashpot scaled as the stiffness is) unless damping > 0
-// is given; its mass is not in the model (its force m a is left to e). Why r alone: the shape's
-// copies are called once per new answer (whatever steps it spans) and once per step (whatever
-// the servo period), so a rate differenced over their calls is not the specimen's, and a
-// dashpot inside the stiffness basis is collinear with the c column: the fit then drives c to 0
-// and k far off (a damper behind a jittered 60 ms link: k 0.36 of the damper's, 70 % error).
-// For the same reason a shape must depend on the drift's path alone, never on time or on how
-// often it is called (a declared drift in time would advance at the answers' count).
+//       c_free, the fit's c before the c >= 0 rule: c_free < 0 with T held means the measured
+//         force lags the measured drift by at least -c_free / k s, to first order;
+//       rho = sqrt(max(0, F - 2 theta^T b + theta^T S theta) / F): the accepted fit's own
+//         residual. rho near the relative error: the model's form cannot follow the force (a
+//         term is missing: hysteresis, a lag longer than the first-order term follows, T w > 0.3
+//         at w = sqrt(S_22 / S_11) the motion's RMS rate over its RMS drift); rho small under a
+//         large relative error: the specimen changes faster than forgetting_time.
+//     e = f_m + T f_m' - g(x_m, v_m)                               (N, the model's error)
+//   every step: f_hat = g(u, v) (z along the command's path);  force = f_hat + e (e = 0 before
+//   the first answer): the lag-free force, the force channel's lag removed with the rest.
+// A declared specimen with a dashpot or a mass (InertialSpecimen: m x'' + c_s x' + r(x)) gives
+// r alone as the shape: its dashpot is the model's c, fitted, and starts at c_s k0 / k_r (the
+// declared dashpot scaled as the stiffness is) unless damping > 0 is given; its mass is not in
+// the model (its force m a is left to e). Why r alone: the shape's copies are called once per
+// new answer (whatever steps it spans) and once per step (whatever the servo period), so a rate
+// differenced over their calls is not the specimen's, and a dashpot inside the stiffness basis
+// is collinear with the c column: the fit then drives c to 0 and k far off (a damper behind a
+// jittered 60 ms link: k 0.36 of the damper's, 70 % error). For the same reason a shape must
+// depend on the drift's path alone, never on time or on how often it is called.
 //   relative_error: sqrt(sum e^2 / sum f_m^2) over the last error_window of answers (one entry a
 //     step: a step without a new answer repeats the last pair), 0 until the window is full or
 //     while sum f_m^2 = 0; exceeded when it is above max_relative_error (> 0).
-// Initial state: theta = the declared specimen's (k0, c0, 0) (c0 above), S = b = 0, no answer
-// seen.
+// Initial state: k = alpha k0, h = (1 - alpha) k0 uy (k0 = parameters.stiffness, alpha and uy
+// the shape's; without one k = k0, h = 0), c = c0 (above), T = force_lag, f0 = 0; S = b = 0, no
+// answer seen.
 // Linear dynamics of the compensated loop (core/stability.h predictor_critical_delay): with a
 // specimen k_e, c_e realised D late (round trip plus actuator lag), the integrator sees
 //   (k u + c v) + (k_e - k) x(t - D) + (c_e - c) v(t - D).
@@ -97,6 +118,19 @@ struct PredictorParameters {
   // The declared specimen's shape as the stiffness basis (equations above); false: the drift
   // itself (an equivalent linear model, whatever the specimen).
   bool specimen_shape = true;
+  double force_lag = 0.0;  // s, T at the start, >= 0
+  // The shape when it is not the declared specimen's (a Bouc-Wen rths identify fitted), with
+  // k0 as its initial stiffness; null: the specimen's given to the constructor.
+  std::shared_ptr<const RestoringForceModel> shape;
+};
+
+// The model's terms (equations above), or their standard errors.
+struct PredictorTerms {
+  double stiffness = 0.0;   // N/m, k
+  double damping = 0.0;     // N s/m, c
+  double hysteretic = 0.0;  // N, h
+  double force_lag = 0.0;   // s, T
+  double offset = 0.0;      // N, f0
 };
 
 struct PredictorInput {
@@ -109,21 +143,24 @@ struct PredictorInput {
 
 struct PredictorOutput {
   double force = 0.0;           // N, f_hat + e: what the integrator uses
-  double predicted = 0.0;       // N, f_hat = k u + c v
+  double predicted = 0.0;       // N, f_hat = g(u, v)
   double error = 0.0;           // N, e
   double relative_error = 0.0;  // -, windowed (above)
   bool exceeded = false;        // relative_error > max_relative_error (> 0)
   double stiffness = 0.0;       // N/m, the model's k now
   double damping = 0.0;         // N s/m, the model's c now
   double offset = 0.0;          // N, the model's f0 now
+  double hysteretic = 0.0;      // N, the model's h now
+  double force_lag = 0.0;       // s, the model's T now
 };
 
 class ForcePredictor {
  public:
+  static constexpr int kTerms = 5;  // theta = [k, c, h, T, f0]
   // Throws std::invalid_argument opening with `label` and naming the parameter when one is out
   // of its range above, or dt is not > 0.
-  // `shape`: the declared specimen's restoring-force model (used when specimen_shape; null: the
-  // drift itself). Its initial stiffness must be > 0.
+  // `shape`: the declared specimen's restoring-force model (used when specimen_shape, unless
+  // parameters.shape is given; null: the drift itself). Its initial stiffness must be > 0.
   ForcePredictor(const PredictorParameters& parameters, double dt,
                  const std::string& label = "force predictor",
                  const RestoringForceModel* shape = nullptr);
@@ -133,44 +170,66 @@ class ForcePredictor {
   PredictorOutput step(const PredictorInput& in);
   void reset();
   const PredictorParameters& parameters() const { return p_; }
-  double stiffness() const { return k_; }
-  double damping() const { return c_; }
-  double offset() const { return offset_; }
-  std::size_t updates() const { return updates_; }       // fits accepted so far
+  double stiffness() const { return theta_[0]; }
+  double damping() const { return theta_[1]; }
+  double offset() const { return theta_[4]; }
+  bool hysteretic() const { return present_[2]; }  // the model has an h term
+  PredictorTerms model() const { return terms(theta_); }
+  PredictorTerms uncertainty() const { return terms(standard_error_); }  // NaN: not fitted
+  std::size_t updates() const { return updates_; }                       // fits accepted so far
   double free_damping() const { return free_damping_; }  // N s/m, c_free of the last fit
   double fit_residual() const { return fit_residual_; }  // -, rho of the last accepted fit
+  // The terms with their standard errors, for a HOLD's reason and the summary:
+  // "k 3.05e+05 +/- 210 N/m, c 9.08e+03 +/- 12 N s/m, h 91.3 +/- 0.4 N, T 3.01 +/- 0.02 ms,
+  // f0 -2.1 +/- 0.3 N" (a held term's error reads "held").
+  std::string model_text() const;
   // What the data say the model lacks (equations above), for a HOLD's reason (the bound passed):
-  // a refused k <= 0; c_free < 0, the force's lag it implies; rho above half the bound, a term
-  // missing from the model's form; else, fitted and past the bound, a specimen changing faster
-  // than the forgetting follows; a declared mass the model leaves out. Empty when none applies.
+  // a refused k <= 0; c_free < 0 with the lag held, the force's lag it implies; rho above half
+  // the bound, the term missing from the model's form (a lag past the first-order term, a
+  // hysteresis undeclared or of another shape); else, fitted and past the bound, a specimen
+  // changing faster than the forgetting follows; a declared mass the model leaves out. Empty
+  // when none applies.
   std::string rejection() const;
   std::string describe() const;
 
  private:
-  void learn(double x, double v, double f, long steps_since);
-  double windowed_error() const;  // relative_error (equations above)
-  // r(x) / k_r along the command's and the measurements' paths (the drift without a shape).
+  static PredictorTerms terms(const double theta[kTerms]);
+  void adopt_shape(const RestoringForceModel* declared, const std::string& label);
+  void learn(const double phi[kTerms], double f, long steps_since);
+  // The least-squares theta over `free` (held terms at `theta`'s values); false when the scaled
+  // free block is ill conditioned. `error` gets the standard errors (NaN off `free`) when given.
+  bool solve(const bool free[kTerms], double theta[kTerms], double* error) const;
+  bool fit(double theta[kTerms], bool free[kTerms]);  // the holds of the equations above
+  double residual(const double theta[kTerms]) const;  // F - 2 theta^T b + theta^T S theta
+  double windowed_error() const;                      // relative_error (equations above)
+  double motion_rate() const;                         // rad/s, w of the equations above
+  // The x and z columns along the command's and the measurements' paths.
   double command_basis(double x);
   double measured_basis(double x);
+  double command_hysteresis(double x);
+  double measured_hysteresis(double x);
 
   PredictorParameters p_;
   double dt_, lambda_;
-  double k_ = 0.0, c_ = 0.0;
-  double offset_ = 0.0;
-  double initial_damping_ = 0.0;  // N s/m, c0 (equations above)
-  double declared_mass_ = 0.0;    // kg, the declared specimen's, not in the model
+  double theta_[kTerms] = {}, initial_[kTerms] = {}, standard_error_[kTerms] = {};
+  bool present_[kTerms] = {true, true, false, true, true};
+  double declared_mass_ = 0.0;  // kg, the declared specimen's, not in the model
   double free_damping_ = 0.0, fit_residual_ = 0.0;
   bool refused_stiffness_ = false;  // the last fit wanted k <= 0
-  // The forgetting's normal equations over phi = [x_m, v_m, 1]: s_ = sum phi phi^T, b_ = sum phi f.
-  double s_[3][3] = {}, b_[3] = {}, f_sq_ = 0.0;  // f_sq_: sum f^2, forgotten alike
+  bool lag_fitted_ = false;         // T was free in the last accepted fit
+  // The forgetting's normal equations over phi: s_ = sum phi phi^T, b_ = sum phi f.
+  double s_[kTerms][kTerms] = {}, b_[kTerms] = {}, f_sq_ = 0.0;  // f_sq_: sum f^2, forgotten alike
   long last_answer_ = -1;
-  double last_x_ = 0.0, last_drift_ = 0.0, last_v_ = 0.0, last_f_ = 0.0, error_ = 0.0;
+  double last_phi_[kTerms] = {};
+  double last_drift_ = 0.0, last_f_ = 0.0, error_ = 0.0;
   std::size_t updates_ = 0;
   // Ring of the last error_window steps' e^2 and f_m^2, and their sums.
   std::vector<double> error_sq_, force_sq_;
   std::size_t head_ = 0, filled_ = 0;
   double sum_error_sq_ = 0.0, sum_force_sq_ = 0.0;
+  // r(x) / k_r for a shape that is not hysteretic (null: x itself), and z for one that is.
   std::unique_ptr<RestoringForceModel> command_shape_, measured_shape_;
+  std::unique_ptr<RestoringForceModel> command_z_, measured_z_;
   double shape_stiffness_ = 1.0;  // k_r, N/m
 };
 

@@ -67,6 +67,13 @@ std::unique_ptr<RestoringForceModel> BilinearKinematic::clone() const {
   return std::make_unique<BilinearKinematic>(*this);
 }
 
+// b k0 u + (1 - b) k0 p(u), p the elastic-perfectly-plastic drift within +/- uy: the return
+// mapping above clamps p exactly as it clamps the force to its band.
+HystereticModel::Parts BilinearKinematic::parts() const {
+  const double uy = fy_ / k0_;
+  return {b_, uy, std::make_unique<BilinearKinematic>(1.0 / uy, uy, 0.0)};
+}
+
 std::string BilinearKinematic::describe() const {
   return format("bilinear-kinematic(k0 = %g N/m, fy = %g N, b = %g)", k0_, fy_, b_);
 }
@@ -120,6 +127,11 @@ ForceState BoucWen::trial(double drift) {
 
 std::unique_ptr<RestoringForceModel> BoucWen::clone() const {
   return std::make_unique<BoucWen>(*this);
+}
+
+HystereticModel::Parts BoucWen::parts() const {
+  return {alpha_, uy_,
+          std::make_unique<BoucWen>(1.0 / uy_, uy_, 0.0, n_, beta_ * std::pow(uy_, n_))};
 }
 
 std::string BoucWen::describe() const {

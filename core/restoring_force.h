@@ -58,6 +58,15 @@ class HystereticModel : public RestoringForceModel {
   void commit() override { committed_ = trial_; }
   void reset() override { committed_ = trial_ = {}; }
   double initial_stiffness() const override { return k0_; }
+  // The model as r(u) = alpha k0 u + (1 - alpha) k0 uy z(u): its post-yield ratio alpha (-), its
+  // yield drift uy (m) and, at rest, a model whose force is the dimensionless hysteretic
+  // variable z (|z| <= 1; Bouc-Wen's z / uy, the bilinear's elastic-perfectly-plastic drift /
+  // uy). (1 - alpha) k0 uy is then the hysteretic force, as rths identify's F_bw.
+  struct Parts {
+    double linear_ratio = 0.0, yield_drift = 0.0;
+    std::unique_ptr<RestoringForceModel> unit_hysteresis;
+  };
+  virtual Parts parts() const = 0;
 
  protected:
   explicit HystereticModel(double k0) : k0_(k0) {}
@@ -77,6 +86,7 @@ class BilinearKinematic final : public HystereticModel {
   ForceState trial(double drift) override;
   std::unique_ptr<RestoringForceModel> clone() const override;
   std::string describe() const override;
+  Parts parts() const override;
 
  private:
   double fy_, b_;
@@ -93,6 +103,7 @@ class BoucWen final : public HystereticModel {
   ForceState trial(double drift) override;
   std::unique_ptr<RestoringForceModel> clone() const override;
   std::string describe() const override;
+  Parts parts() const override;
 
  private:
   double dz_du(double z, double du) const;

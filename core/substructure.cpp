@@ -533,8 +533,7 @@ std::string predictor_hold_reason(const PredictorSet& predictors, int a, const s
   text << std::setprecision(3) << "force predictor of actuator " << a + 1 << " (" << link
        << "): relative prediction error " << 100.0 * predictors.last(i).relative_error
        << " % over the last " << p.error_window << " s is past its bound of "
-       << 100.0 * p.max_relative_error << " % (model k " << predictors.last(i).stiffness
-       << " N/m, c " << predictors.last(i).damping << " N s/m)";
+       << 100.0 * p.max_relative_error << " % (model " << predictors.at(i).model_text() << ")";
   // What the fit says the model lacks, so the HOLD names the missing term, not only the figure.
   const std::string lacks = predictors.at(i).rejection();
   if (!lacks.empty()) text << ": " << lacks;

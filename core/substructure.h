@@ -309,7 +309,8 @@ std::vector<const RestoringForceModel*> actuator_specimens(const HybridPartition
 
 // The hold reason of actuator `a` (0-based) whose predictor passed its bound: "force predictor
 // of actuator 1 (link of storey 1): relative prediction error 31.2 % over the last 1 s is past
-// its bound of 20 % (model k .., c ..)", then ": " and what the fit says the model lacks
+// its bound of 20 % (model k .. +/- .. N/m, c .., ..: ForcePredictor::model_text)", then ": "
+// and what the fit says the model lacks
 // (ForcePredictor::rejection) when it names something. `link`: how the caller names the link.
 std::string predictor_hold_reason(const PredictorSet& predictors, int a, const std::string& link);
 

@@ -230,6 +230,18 @@ void validate_force_predictor(const config::ForcePredictor& block, double dt,
   finite_at_least(block.min_displacement(), 0.0, false, "min_displacement", " m");
   finite_at_least(block.error_window(), 0.0, false, "error_window", " s");
   finite_at_least(block.max_relative_error(), 0.0, false, "max_relative_error", "");
+  finite_at_least(block.force_lag(), 0.0, false, "force_lag", " s");
+  if (block.has_model()) {
+    if (block.linear_model())
+      throw std::invalid_argument(where +
+                                  ".model gives the model's shape and linear_model: true asks "
+                                  "for none: give one of them");
+    try {
+      make_storey_factory(block.model());
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(where + ".model." + e.what());
+    }
+  }
   if (block.error_window() > 0 && dt > 0 && block.error_window() < dt)
     throw std::invalid_argument(
         where + ".error_window = " + format_number(block.error_window()) +
@@ -251,6 +263,9 @@ PredictorParameters predictor_parameters(const config::ForcePredictor& block,
   if (block.error_window() > 0) p.error_window = block.error_window();
   p.max_relative_error = block.max_relative_error();
   p.specimen_shape = !block.linear_model();
+  p.force_lag = block.force_lag();
+  // The model's own shape at the declared specimen's initial stiffness (validated above).
+  if (block.has_model()) p.shape = make_storey_factory(block.model())(declared_stiffness);
   return p;
 }
 

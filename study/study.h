@@ -84,7 +84,8 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
 // fits neither rule, a block is bad, or an actuator already has a compensator (one compensator per
 // actuator, given in one place: the case's or its emulator node's).
 // The case's force predictor (core/force_predictor.h) on the actuators it names, each started at
-// its specimen's initial stiffness times stiffness_factor. Throws std::invalid_argument opening
+// its specimen's initial stiffness times stiffness_factor, its shape the block's model when
+// given (at that initial stiffness), else the specimen's. Throws std::invalid_argument opening
 // with `where` and naming the field when out of range or an actuator does not exist.
 void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& block,
                            const std::string& where);

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <iostream>
 #include <memory>
 #include <numbers>
 #include <random>
@@ -128,16 +129,23 @@ OpenLoop open_loop(ForcePredictor& predictor, std::size_t steps,
 TEST(ForcePredictorSpecimens, ADamperBehindALaggingRigAndAJitteredLinkIsFittedWithItsDashpot) {
   ForcePredictor predictor(started_30_percent_soft(), kDt, "damper", damper().get());
   const OpenLoop run = open_loop(predictor, 8000);
-  // The force lags the drift by the load cell's 3 ms: a line k x + c v fits c - k 3 ms, and the
-  // link's span differences cost O(dt) more; the stiffness within 2 %.
+  // The load cell's 3 ms is the model's lag term T (first order: a pure delay reads somewhat
+  // short), so c is the dashpot's, not c - k 3 ms; the link's span differences cost O(dt).
   EXPECT_NEAR(run.last.stiffness, kDamperK, 0.02 * kDamperK);
-  EXPECT_GT(run.last.damping, 0.8 * (kDamperC - kDamperK * kLoadCellLag));
-  EXPECT_LT(run.last.damping, 1.05 * kDamperC);
-  EXPECT_LT(run.last.relative_error, 0.10);
+  EXPECT_NEAR(run.last.damping, kDamperC, 0.05 * kDamperC);
+  EXPECT_GT(run.last.force_lag, 0.001);
+  EXPECT_LT(run.last.force_lag, 0.004);
+  EXPECT_LT(run.last.relative_error, 0.05);
   EXPECT_FALSE(run.last.exceeded);
-  // What is left is the load cell's lag (c low by k 3 ms) and the correction's 60 ms age.
-  EXPECT_LT(run.force_error, 0.08) << "k " << run.last.stiffness << " c " << run.last.damping
-                                   << " relative error " << run.last.relative_error;
+  // Each fitted term carries its standard error, positive and below the term.
+  const PredictorTerms error = predictor.uncertainty();
+  EXPECT_GT(error.stiffness, 0.0);
+  EXPECT_LT(error.stiffness, 0.05 * run.last.stiffness);
+  EXPECT_GT(error.force_lag, 0.0);
+  EXPECT_LT(error.force_lag, run.last.force_lag);
+  // What is left is the lag's second order and the correction's 60 ms age.
+  EXPECT_LT(run.force_error, 0.04)
+      << predictor.model_text() << ", relative error " << run.last.relative_error;
 }
 
 TEST(ForcePredictorSpecimens, ADeclaredDashpotIsTheModelsDampingNotPartOfItsShape) {
@@ -156,21 +164,24 @@ TEST(ForcePredictorSpecimens, ADeclaredDashpotIsTheModelsDampingNotPartOfItsShap
 }
 
 TEST(ForcePredictorSpecimens, AForceLaggingPastTheDashpotIsNamedAsTheMissingLagBeforeTheHold) {
-  // 50 ms on the load cell: the force lags as a dashpot of 1e4 - 3e5 x 0.05 = -5e3 N s/m would
-  // lead, so the best c is negative and held at 0; the bound (5 % here) trips and its reason
-  // names the lag (at least 5e3 / 3e5 = 16.7 ms), not only the figure.
+  // 50 ms on the load cell: the force lags its drift as a dashpot of 1e4 - 3e5 x 0.05 = -5e3 N s/m
+  // would lead. The first-order lag term takes what it can (T 0.86 rad at the motion's RMS rate
+  // is past first order), the best c is still negative and held at 0; the bound (5 % here) trips
+  // and its reason names the lag, not only the figure.
   PredictorParameters p = started_30_percent_soft();
   p.max_relative_error = 0.05;
   ForcePredictor predictor(p, kDt, "damper", damper().get());
   const OpenLoop run = open_loop(predictor, 8000, 0.050);
   EXPECT_TRUE(run.last.exceeded);
   EXPECT_EQ(run.last.damping, 0.0);
-  EXPECT_LT(predictor.free_damping(), -0.5 * (kDamperK * 0.050 - kDamperC));
+  EXPECT_GT(run.last.force_lag, 0.010);
+  EXPECT_LT(predictor.free_damping(), 0.0);
   const std::string reason = predictor.rejection();
-  EXPECT_NE(reason.find("the measured force lags the measured drift by at least"),
+  EXPECT_NE(reason.find("lags the measured drift by more than the model's first-order lag term"),
             std::string::npos)
       << reason;
   EXPECT_NE(reason.find("the model lacks the force channel's lag"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("lacks the force's lag"), std::string::npos) << reason;
   // The 3 ms rig of the test above: the fit needs no c = 0 rule and names nothing.
   ForcePredictor within(started_30_percent_soft(), kDt, "damper", damper().get());
   open_loop(within, 8000);
@@ -200,16 +211,22 @@ class DriftingSpring final : public RestoringForceModel {
   long calls_ = 0;
 };
 
-// A 3-storey frame (1000 kg a floor, 8e5 N/m a storey, 5 % Rayleigh) with `specimen` in storey 2
-// beside its columns (initial stiffness kDamperK), shaken by 12 s of the Imperial Valley record
-// the shipped studies use.
-HybridSetup frame_with(const RestoringForceModel& specimen) {
+// A 3-storey frame: `mass` kg a floor, `columns` N/m a storey, 5 % Rayleigh on the storeys'
+// stiffness with `specimen_stiffness` (N/m) added in storey 2.
+struct Frame {
+  double mass = 1000.0, columns = 8e5, specimen_stiffness = kDamperK;
+};
+
+// The frame with `specimen` in storey 2 beside its columns, shaken by 12 s of the Imperial Valley
+// record the shipped studies use.
+HybridSetup frame_with(const RestoringForceModel& specimen, const Frame& frame = {}) {
   HybridSetup setup;
-  setup.model = make_shear_building({1000.0, 1000.0, 1000.0}, {8e5, 8e5 + kDamperK, 8e5});
+  const double m = frame.mass, k = frame.columns;
+  setup.model = make_shear_building({m, m, m}, {k, k + frame.specimen_stiffness, k});
   setup.model.damping = rayleigh_damping(setup.model.mass, setup.model.stiffness, 0.05);
   setup.dt = kDt;
   for (int s = 0; s < 3; ++s) {
-    setup.partition.numerical.push_back(std::make_unique<LinearSpring>(8e5));
+    setup.partition.numerical.push_back(std::make_unique<LinearSpring>(k));
     setup.partition.experimental.push_back(s == 1 ? specimen.clone() : nullptr);
   }
   setup.partition.actuator_storeys = {1};
@@ -222,46 +239,55 @@ GroundMotion imperial_valley(double seconds) {
       seconds);
 }
 
-// E_rms (%) of the worst floor against the reference, over the steps both ran.
-double worst_rms_error_pct(const SimulationResult& run, const SimulationResult& reference) {
-  double worst = 0.0;
+// E_rms and E_peak (%) of the worst floor against the reference, over the steps both ran.
+struct FloorErrors {
+  double rms = 0.0, peak = 0.0;
+};
+FloorErrors worst_floor_errors_pct(const SimulationResult& run, const SimulationResult& reference) {
+  FloorErrors worst;
   const auto steps = static_cast<Eigen::Index>(std::min(run.steps(), reference.steps()));
   for (Eigen::Index f = 0; f < reference.displacement.cols(); ++f) {
     const Vec r = reference.displacement.col(f).head(steps),
               x = run.displacement.col(f).head(steps);
-    worst = std::max(worst, relative_rms_error_pct(std::vector<double>(r.begin(), r.end()),
-                                                   std::vector<double>(x.begin(), x.end())));
+    const std::vector<double> expected(r.begin(), r.end()), got(x.begin(), x.end());
+    worst.rms = std::max(worst.rms, relative_rms_error_pct(expected, got));
+    worst.peak = std::max(worst.peak, relative_peak_error_pct(expected, got));
   }
   return worst;
 }
 
-// The frame with `specimen` behind the rig and the jittered 60 ms link, uncompensated and with
-// the predictor started 30 % soft (the shipped bound in force): E_rms (%) of the worst floor
-// against the lag-free reference, or 1e9 when the run did not complete.
+// The frame with `specimen` behind the rig and the jittered link (`round_trip`), uncompensated
+// and with `predictor` (the shipped bound in force): E_rms and E_peak (%) of the worst floor
+// against the lag-free reference (1e9 when the run did not complete), and the HOLD's reason.
 struct FrameRuns {
-  double uncompensated = 0.0, predicted = 0.0;
+  double uncompensated = 0.0, predicted = 0.0, predicted_peak = 0.0;
   std::string held;
 };
 FrameRuns frame_runs(const RestoringForceModel& specimen, const PredictorParameters& predictor,
-                     double round_trip = kRoundTrip) {
+                     double round_trip = kRoundTrip, const Frame& frame = {}) {
   const GroundMotion motion = imperial_valley(12.0);
-  const SimulationResult reference = simulate(frame_with(specimen), motion);
+  const SimulationResult reference = simulate(frame_with(specimen, frame), motion);
   AnswerSchedule link;
   link.actuator_used = {link_schedule(motion.acceleration.size(), 2026, round_trip)};
   SimulationOptions options;
   options.divergence_bound = 1.0;
-  const auto error = [&reference](const SimulationResult& run) {
-    return run.diverged || run.steps() < reference.steps() ? 1e9
-                                                           : worst_rms_error_pct(run, reference);
+  const auto errors = [&reference](const SimulationResult& run) {
+    return run.diverged || run.steps() < reference.steps() ? FloorErrors{1e9, 1e9}
+                                                           : worst_floor_errors_pct(run, reference);
   };
-  HybridSetup setup = frame_with(specimen);
+  HybridSetup setup = frame_with(specimen, frame);
   setup.delays.push_back(rig());
   FrameRuns out;
-  out.uncompensated = error(simulate(setup, motion, options, link));
+  out.uncompensated = errors(simulate(setup, motion, options, link)).rms;
   setup.predictors = {predictor};
   const SimulationResult run = simulate(setup, motion, options, link);
-  out.predicted = error(run);
+  const FloorErrors predicted = errors(run);
+  out.predicted = predicted.rms;
+  out.predicted_peak = predicted.peak;
   out.held = run.held;
+  std::cout << specimen.describe() << " across " << 1e3 * round_trip << " ms: E_rms uncompensated "
+            << out.uncompensated << " %, predicted E_rms " << out.predicted << " %, E_peak "
+            << out.predicted_peak << " %" << std::endl;
   return out;
 }
 
@@ -285,6 +311,111 @@ TEST(ForcePredictorSpecimens, AFrameWhoseSpecimenLosesStiffnessThroughTheTestMat
   PredictorParameters line = started_30_percent_soft();
   line.specimen_shape = false;
   const FrameRuns drifting = frame_runs(DriftingSpring(kDamperK, 0.02, kDt), line);
+  EXPECT_GT(drifting.uncompensated, 50.0);
+  EXPECT_TRUE(drifting.held.empty()) << drifting.held;
+  EXPECT_LE(drifting.predicted, 5.0);
+}
+
+// The MR damper of data/measured (mts_mrdamper_chirp_0A.txt at 0 A) as rths identify fits it
+// (`rths identify data/measured/mts_mrdamper_chirp_0A.txt --channels force`, kind mr_damper plus
+// Coulomb friction, held-out 27.8 %): f = c v + F_c tanh(v / v_c) + F_bw z, z Bouc-Wen (n 1,
+// beta = gamma) of yield drift d_y; v the backward difference over calls h apart (the servo
+// period). Its friction is a term the predictor's model does not have.
+constexpr double kMrDamping = 1778.6;      // N s/m, c
+constexpr double kMrHysteretic = 91.32;    // N, F_bw
+constexpr double kMrYield = 4.769e-5;      // m, d_y
+constexpr double kMrFriction = 64.93;      // N, F_c
+constexpr double kMrSmoothing = 6.566e-3;  // m/s, v_c
+
+class MrDamper final : public RestoringForceModel {
+ public:
+  explicit MrDamper(double h) : h_(h), z_(kMrHysteretic / kMrYield, kMrYield, 0.0, 1.0, 0.5) {}
+  ForceState trial(double drift) override {
+    trial_ = drift;
+    const double v = (drift - x1_) / h_, slope = std::tanh(v / kMrSmoothing);
+    const ForceState hysteresis = z_.trial(drift);
+    return {
+        kMrDamping * v + kMrFriction * slope + hysteresis.force,
+        hysteresis.tangent + (kMrDamping + kMrFriction * (1 - slope * slope) / kMrSmoothing) / h_};
+  }
+  void commit() override {
+    z_.commit();
+    x1_ = trial_;
+  }
+  void reset() override {
+    z_.reset();
+    x1_ = trial_ = 0.0;
+  }
+  double initial_stiffness() const override { return z_.initial_stiffness(); }
+  std::unique_ptr<RestoringForceModel> clone() const override {
+    return std::make_unique<MrDamper>(*this);
+  }
+  std::string describe() const override { return "MR damper (identified, with friction)"; }
+
+ private:
+  double h_;
+  BoucWen z_;
+  double x1_ = 0.0, trial_ = 0.0;
+};
+
+// The damper as identify's fragment declares it (its Bouc-Wen; its dashpot as the predictor's
+// damping), the model 30 % off in every term. The damper yields at 0.05 mm: the fit is trusted
+// from 0.01 mm of RMS drift (the default 0.1 mm never starts it in this frame, and the bound
+// HOLDs the run at 2 s).
+PredictorParameters mr_damper_predictor() {
+  PredictorParameters p;
+  p.shape = std::make_shared<BoucWen>(kMrHysteretic / kMrYield, kMrYield, 0.0, 1.0, 0.5);
+  p.stiffness = 0.7 * kMrHysteretic / kMrYield;
+  p.damping = 0.7 * kMrDamping;
+  p.max_relative_error = 0.5;
+  p.min_displacement = 1e-5;
+  return p;
+}
+
+// A laboratory-scale frame the damper's hundreds of newtons move: 100 kg a floor, 5e4 N/m a
+// storey (peak drift 17 mm under the record); uncompensated, the delayed dashpot diverges it.
+constexpr Frame kSmallFrame{100.0, 5e4, 0.0};
+
+// The target at 60 ms (E_rms <= 5 %). What is left is the friction, which the model
+// does not have: without it (identify's mr_damper kind alone) the same runs read 0.40 % and
+// 0.55 %. At 100 ms the stale correction of the friction costs more (6.6 % measured).
+TEST(ForcePredictorSpecimens, TheIdentifiedMrDamperAcross60And100MsMatchesItsReference) {
+  const FrameRuns near = frame_runs(MrDamper(kDt), mr_damper_predictor(), 0.060, kSmallFrame);
+  EXPECT_GT(near.uncompensated, 100.0);
+  EXPECT_TRUE(near.held.empty()) << near.held;
+  EXPECT_LE(near.predicted, 5.0);
+  const FrameRuns far = frame_runs(MrDamper(kDt), mr_damper_predictor(), 0.100, kSmallFrame);
+  EXPECT_GT(far.uncompensated, 100.0);
+  EXPECT_TRUE(far.held.empty()) << far.held;
+  EXPECT_LE(far.predicted, 8.0);
+}
+
+// A column that yields sharply (bilinear, 2 % post-yield, at 2 mm of the 14 mm the frame
+// reaches) where the lab declared a smooth one (Bouc-Wen n 1 of the same yield drift and ratio):
+// the model's hysteresis is not the specimen's. Fitted as a line instead (no h term: what the
+// predictor held before it had one), the same column reads 7.3 % at 60 ms.
+TEST(ForcePredictorSpecimens, ASharplyYieldingColumnDeclaredSmoothMatchesItsReference) {
+  constexpr double kYield = 0.002, kRatio = 0.02;
+  const BilinearKinematic column(kDamperK, kYield, kRatio);
+  PredictorParameters smooth = started_30_percent_soft();
+  smooth.shape = std::make_shared<BoucWen>(kDamperK, kYield, kRatio, 1.0, 0.5);
+  const FrameRuns near = frame_runs(column, smooth);
+  EXPECT_GT(near.uncompensated, 30.0);
+  EXPECT_TRUE(near.held.empty()) << near.held;
+  EXPECT_LE(near.predicted, 5.0);
+  const FrameRuns far = frame_runs(column, smooth, 0.100);
+  EXPECT_TRUE(far.held.empty()) << far.held;
+  EXPECT_LE(far.predicted, 5.0);
+  PredictorParameters line = started_30_percent_soft();
+  line.specimen_shape = false;
+  EXPECT_GT(frame_runs(column, line).predicted, 5.0);
+}
+
+// The drifting specimen of the test above across the far round trip.
+TEST(ForcePredictorSpecimens, AFrameWhoseSpecimenLosesStiffnessAcross100MsMatchesItsReference) {
+  PredictorParameters line = started_30_percent_soft();
+  line.specimen_shape = false;
+  const FrameRuns drifting = frame_runs(DriftingSpring(kDamperK, 0.02, kDt), line, 0.100);
   EXPECT_GT(drifting.uncompensated, 50.0);
   EXPECT_TRUE(drifting.held.empty()) << drifting.held;
   EXPECT_LE(drifting.predicted, 5.0);

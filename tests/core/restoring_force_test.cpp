@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -229,6 +230,33 @@ TEST(InertialSpecimenTest, AddsInertiaAndDampingFromBackwardDifferences) {
                std::invalid_argument);
   EXPECT_THROW(InertialSpecimen(std::make_unique<LinearSpring>(1.0), 1.0, 0.0, 0.0),
                std::invalid_argument);
+}
+
+// A hysteretic model is alpha k0 u + (1 - alpha) k0 uy z(u) with z its parts' unit hysteresis
+// driven along the same path (what a force predictor fits as k and h): along a loop that yields
+// both ways, to rounding, and |z| stays within 1.
+TEST(HystereticModel, PartsRebuildTheForceAlongALoop) {
+  const std::vector<double> targets = {2.5 * kUy, -3 * kUy, 0.5 * kUy, -0.2 * kUy, 4 * kUy};
+  BilinearKinematic bilinear(kK0, kUy, kB);
+  BoucWen bouc_wen(kK0, kUy, 0.2, 2.0, 0.3);
+  for (HystereticModel* model : std::vector<HystereticModel*>{&bilinear, &bouc_wen}) {
+    const HystereticModel::Parts parts = model->parts();
+    EXPECT_EQ(parts.yield_drift, kUy) << model->describe();
+    const Path whole = drive(*model, targets, kUy / 7);
+    const Path z = drive(*parts.unit_hysteresis, targets, kUy / 7);
+    ASSERT_EQ(whole.force.size(), z.force.size());
+    double largest = 0.0;
+    for (std::size_t i = 0; i < z.force.size(); ++i) {
+      const double rebuilt = parts.linear_ratio * kK0 * whole.drift[i] +
+                             (1 - parts.linear_ratio) * kK0 * kUy * z.force[i];
+      EXPECT_NEAR(rebuilt, whole.force[i], 1e-9 * kFy) << model->describe() << " at " << i;
+      largest = std::max(largest, std::abs(z.force[i]));
+    }
+    EXPECT_LE(largest, 1.0 + 1e-12) << model->describe();
+    EXPECT_GT(largest, 0.9) << model->describe();
+  }
+  EXPECT_EQ(bilinear.parts().linear_ratio, kB);
+  EXPECT_EQ(bouc_wen.parts().linear_ratio, 0.2);
 }
 
 }  // namespace

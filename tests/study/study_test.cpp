@@ -305,6 +305,13 @@ TEST(StudyBounds, AForcePredictorOutOfRangeIsRefusedNamingTheField) {
   EXPECT_NE(refusal("max_relative_error: -0.1").find("force_predictor.max_relative_error"),
             std::string::npos);
   EXPECT_NE(refusal("error_window: 0.0001").find("shorter than one step"), std::string::npos);
+  EXPECT_NE(refusal("force_lag: -0.003").find("force_predictor.force_lag"), std::string::npos);
+  EXPECT_NE(refusal("model { bouc_wen { yield_displacement: 0 } }")
+                .find("force_predictor.model.bouc_wen.yield_displacement must be > 0 m"),
+            std::string::npos);
+  EXPECT_NE(refusal("linear_model: true model { bilinear { yield_displacement: 0.01 } }")
+                .find("linear_model: true asks for none"),
+            std::string::npos);
   // An actuator the study does not have is named when the case is set up.
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("rths_study_pred_" + std::to_string(getpid()));
@@ -325,6 +332,37 @@ TEST(StudyBounds, AForcePredictorOutOfRangeIsRefusedNamingTheField) {
               std::string::npos)
         << e.what();
   }
+  std::filesystem::remove_all(dir);
+}
+
+// force_predictor.model (a Bouc-Wen rths identify fitted) is the predictor's shape at the declared
+// specimen's initial stiffness, the declared (linear) specimen staying what runs; force_lag is
+// its lag term's start.
+TEST(StudyBounds, AForcePredictorsOwnModelIsItsShape) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("rths_study_shape_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "m.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
+  const PreparedStudy prepared = prepare_study(
+      parse_study("structure { sdof { period: 0.5 mass: 1000 } } "
+                  "motion { path: \"m.txt\" column_units: G } "
+                  "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
+                  "cases { name: \"remote\" force_predictor { force_lag: 0.003 model { "
+                  "bouc_wen { yield_displacement: 0.002 alpha: 0.1 } } } }",
+                  "t"),
+      dir);
+  const HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
+  ASSERT_EQ(setup.predictors.size(), 1u);
+  ASSERT_TRUE(setup.predictors[0].has_value());
+  const PredictorParameters& p = *setup.predictors[0];
+  ASSERT_NE(p.shape, nullptr);
+  EXPECT_EQ(p.shape->initial_stiffness(), p.stiffness);
+  EXPECT_EQ(p.force_lag, 0.003);
+  const ForcePredictor predictor(p, 0.001, "remote", setup.partition.experimental[0].get());
+  EXPECT_TRUE(predictor.hysteretic());
+  EXPECT_NEAR(predictor.model().stiffness, 0.1 * p.stiffness, 1e-9 * p.stiffness);
+  EXPECT_NEAR(predictor.model().hysteretic, 0.9 * p.stiffness * 0.002, 1e-9 * p.stiffness);
+  EXPECT_EQ(predictor.model().force_lag, 0.003);
   std::filesystem::remove_all(dir);
 }
 
