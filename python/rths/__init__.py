@@ -22,7 +22,8 @@ import os as _os
 from ._rths import (BadInputError, Error, identify, load_study, parse_study, read_record, run,
                     stability, sweep)
 from ._rths import Study as LoadedStudy
-from .study import Case, Study
+from .case import Case, Link
+from .study import Study
 
 __version__ = "@PROJECT_VERSION@"
 
@@ -40,7 +41,7 @@ def data_path(*parts):
             return candidate
     raise FileNotFoundError(f"{_os.path.join(*parts)}: not in rths's data ({', '.join(_DATA_DIRS)})")
 
-__all__ = ["BadInputError", "Case", "Error", "LoadedStudy", "Study", "data_path", "identify", "load_study",
+__all__ = ["BadInputError", "Case", "Error", "Link", "LoadedStudy", "Study", "data_path", "identify", "load_study",
            "parse_study", "read_record", "run", "sdof", "stability", "sweep", "__version__"]
 
 

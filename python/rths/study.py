@@ -18,14 +18,8 @@ import tempfile
 import warnings
 
 from . import _rths
+from .case import Case, Link
 
-_DELAY_MODELS = {
-    # name: (stage, field): u_r(t) = u(t - tau) and the paper's Eq. 1 forms; see the README.
-    "shift": ("shift", "delay"),
-    "eq1": ("eq1", "delay"),
-    "eq1-lag": ("eq1_lag", "delay"),
-    "first-order": ("first_order", "time_constant"),
-}
 _INTEGRATORS = {
     "explicit-newmark": "EXPLICIT_NEWMARK",
     "central-difference": "CENTRAL_DIFFERENCE",
@@ -109,35 +103,6 @@ def _warn_unexpected_divergence(study, summary):
         if case.get("diverged") and not case.get("expect_unstable"):
             warnings.warn(f"study '{study}', case '{case['name']}': {case['status']}: "
                           f"{case.get('status_detail', '')}", RuntimeWarning, stacklevel=3)
-
-
-class Case:
-    """One case of a study: a name, the actuator's delay stages (``shift``, ``eq1``, ``eq1-lag``,
-    ``first-order``; a lag in s) and optional compensation given as Protobuf text (the body of a
-    ``compensation { ... }`` block, e.g. ``"polynomial { order: 2 lead: 0.014 spacing: 0.001 }"``)."""
-
-    def __init__(self, name, delay=None, delay_model="shift", compensation=None, expect_unstable=False):
-        if not name:
-            raise _rths.BadInputError("case: the name is empty")
-        if delay_model not in _DELAY_MODELS:
-            raise _rths.BadInputError(f"case {name}: unknown delay_model '{delay_model}' "
-                                      f"({', '.join(_DELAY_MODELS)})")
-        self.name = name
-        self.delay = None if delay is None else _number(delay, f"case {name}: delay (s)", 0.0, 1.0)
-        self.delay_model = delay_model
-        self.compensation = compensation
-        self.expect_unstable = bool(expect_unstable)
-
-    def text(self):
-        body = [f"name: {_quoted(self.name)}"]
-        if self.delay is not None:
-            stage, field = _DELAY_MODELS[self.delay_model]
-            body.append(f"delay {{ {stage} {{ {field}: {self.delay!r} }} }}")
-        if self.compensation:
-            body.append(f"compensation {{ {self.compensation} }}")
-        if self.expect_unstable:
-            body.append("expect_unstable: true")
-        return "cases { " + " ".join(body) + " }"
 
 
 class Study:
@@ -324,11 +289,16 @@ class Study:
         return _rths.benchmark_criteria()
 
     # --- cases and deployment ----------------------------------------------------------------
-    def case(self, name, delay=None, delay_model="shift", compensation=None, expect_unstable=False):
-        """Adds a case; the first is the reference. See ``Case``."""
+    def case(self, name, delay=None, delay_model="shift", compensation=None, expect_unstable=False,
+             stages=None, force_predictor=None, link=None, text=None):
+        """Adds a case; the first is the reference. Stacked delays (``delay=[0.060, 0.014]``),
+        any delay stage as text (``stages``), compensation, a force predictor and the network
+        link in process (``link=rths.Link(0.030, jitter=0.0025, loss=0.01)``): see ``Case``
+        and ``Link``."""
         if any(c.name == name for c in self._cases):
             raise _rths.BadInputError(f"case: '{name}' is already a case of the study")
-        self._cases.append(Case(name, delay, delay_model, compensation, expect_unstable))
+        self._cases.append(Case(name, delay, delay_model, compensation, expect_unstable, stages,
+                                force_predictor, link, text))
         return self
 
     def deployment(self, text):
