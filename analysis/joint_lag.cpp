@@ -17,6 +17,7 @@
 #include "analysis/compare.h"
 #include "analysis/joint_lag_plots.h"
 #include "analysis/study_run.h"
+#include "core/coupled_stability.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "core/stability.h"
@@ -72,40 +73,46 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
   }
 }
 
-// The compensated loop's boundary (JointLagResult::compensated_boundary) at the plain boundary's
-// actuator lags; nothing without a predictor or a plain boundary (an SDOF study).
+// The compensated loop's boundary (JointLagResult::compensated_boundary): R*(A) = D_p - A, D_p
+// the critical lag of the measured pair with every link alike (core::setup_loop_stability: the
+// coupled loop of every link with its predictor's model frozen as it starts, any structure), at
+// the plain boundary's actuator lags, or at kPoints from 0 to the largest where the structure has
+// none (several storeys); nothing without a predictor.
 void fill_compensated_boundary(const JointLagStudy& config, const core::PreparedStudy& prepared,
                                JointLagResult& result) {
-  if (!config.has_force_predictor() || result.boundary.empty()) return;
-  const core::StructuralModel& model = prepared.base.model;
-  const auto& experimental = prepared.base.partition.experimental;
-  const double k = model.stiffness(0, 0), m = model.mass(0, 0);
-  const double k_e =
-      experimental.empty() || !experimental[0] ? 0.0 : experimental[0]->initial_stiffness();
-  const double omega = std::sqrt(k / m), period = 2.0 * std::numbers::pi / omega;
-  const double zeta = model.damping(0, 0) / (2.0 * m * omega);
+  if (!config.has_force_predictor()) return;
+  config::Case predicted;
+  predicted.set_name("predicted");
+  *predicted.mutable_force_predictor() = config.force_predictor();
+  const core::HybridSetup setup = core::setup_for_case(prepared, predicted);
+  const core::CoupledLoopStability loop = core::setup_loop_stability(
+      setup, std::vector<double>(setup.partition.actuator_storeys.size(), 0.0));
   const config::ForcePredictor& p = config.force_predictor();
   const double factor = core::predictor_stiffness_factor(p);
-  // predictor_critical_delay's model damping is c_m = damping_error 2 omega_n (m = 1).
-  const double damping_error = p.damping() / (2.0 * m * omega);
-  const core::ContinuousStability s =
-      core::predictor_critical_delay(period, zeta, k_e / k, factor - 1.0, damping_error);
   std::ostringstream note;
   note.precision(3);
   note << "with the predictor, its model's stiffness " << std::showpos << 100.0 * (factor - 1.0)
-       << std::noshowpos << " % and damping " << p.damping()
-       << " N s/m off the specimen's, frozen there ("
+       << std::noshowpos << " % off the specimen's, frozen there ("
        << (p.fixed_model() ? "as configured" : "its online fit only shrinks the error")
-       << "), the actuator a shift of its lag: ";
-  if (s.critical_delay)
-    note << "critical lag of the measured pair " << *s.critical_delay * 1e3 << " ms";
+       << "), every link at the same lag, the actuator a shift of its lag: ";
+  if (loop.common_critical_lag)
+    note << "critical lag of the measured pair " << *loop.common_critical_lag * 1e3 << " ms";
   else
     note << "stable at every lag";
+  note << " [" << loop.assumed << "]";
   result.compensated_boundary_note = note.str();
-  for (const BoundaryPoint& b : result.boundary) {
+  std::vector<double> actuator_lags;
+  for (const BoundaryPoint& b : result.boundary) actuator_lags.push_back(b.actuator_lag);
+  if (actuator_lags.empty()) {
+    constexpr int kPoints = 41;
+    double largest = 0.0;
+    for (const double a : config.actuator_lags()) largest = std::max(largest, a);
+    for (int i = 0; i < kPoints; ++i) actuator_lags.push_back(largest * i / (kPoints - 1));
+  }
+  for (const double a : actuator_lags) {
     std::optional<double> r;
-    if (s.critical_delay) r = std::max(0.0, *s.critical_delay - b.actuator_lag);
-    result.compensated_boundary.push_back({b.actuator_lag, r});
+    if (loop.common_critical_lag) r = std::max(0.0, *loop.common_critical_lag - a);
+    result.compensated_boundary.push_back({a, r});
   }
 }
 
@@ -305,7 +312,7 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   fill_boundary(config, prepared, result);
   fill_compensated_boundary(config, prepared, result);
   std::map<double, std::optional<double>> critical_at;  // actuator lag -> critical round trip
-  if (result.boundary_skipped.empty())
+  if (result.boundary_skipped.empty() || !result.compensated_boundary.empty())
     for (const double a : config.actuator_lags())
       critical_at[a] = critical_round_trip_at(config, prepared, a);
   warn_past_boundary(config, critical_at, options);

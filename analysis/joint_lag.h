@@ -16,7 +16,8 @@
 // sites by a JointLagAcrossSites runner (deploy/joint_lag_sites.h, which analysis/ does not link),
 // and the record's measured lags are compared with the injected parts; see there.
 //
-// Stability (SDOF studies): before the grid runs, the continuous boundary R*(A) (BoundaryPoint);
+// Stability: before the grid runs, the continuous boundary R*(A) (BoundaryPoint; SDOF studies),
+// with a force predictor the compensated one for any structure (core::setup_loop_stability);
 // grid points past it are flagged (past_boundary) and a warning names how many.
 //
 // Outputs (in the output directory): grid.csv, measured.csv (peak_error_pct, rms_error_pct first,

@@ -53,10 +53,11 @@ struct JointLagResult {
   std::vector<BoundaryPoint> boundary;  // 0 .. largest actuator lag, finely spaced
   std::string boundary_skipped;         // why there is none (a structure with several storeys)
   // With a force predictor (JointLagStudy.force_predictor): the compensated loop's boundary at
-  // the same actuator lags, R*(A) = D_p - A with D_p the critical lag of the measured pair
-  // (core::predictor_critical_delay, the model frozen at its initial error; an actuator taken as a
-  // shift of its lag), and what it assumed; both empty without a predictor. A boundary whose
-  // points all lack R: stable at every lag for that model error.
+  // the same actuator lags (from 0 to the largest where there is no plain boundary: several
+  // storeys), R*(A) = D_p - A with D_p the critical lag of the measured pair, every link alike
+  // (core::setup_loop_stability, the coupled loop with the model frozen at its initial error; an
+  // actuator taken as a shift of its lag), and what it assumed; both empty without a predictor.
+  // A boundary whose points all lack R: stable at every lag for that model error.
   std::vector<BoundaryPoint> compensated_boundary;
   std::string compensated_boundary_note;
   std::filesystem::path output_directory;

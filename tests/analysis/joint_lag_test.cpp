@@ -15,6 +15,9 @@
 #include <utility>
 #include <vector>
 
+#include "core/coupled_stability.h"
+#include "study/study.h"
+
 namespace rths::analysis {
 namespace {
 
@@ -388,6 +391,49 @@ TEST(JointLag, ConfigErrorsNameTheField) {
     EXPECT_NE(std::string(e.what()).find("network_round_trips"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(load_joint_lag(kConfigs / "joint_lag_study.textproto"));
+}
+
+// On a structure of several DOFs (the lab's frame with its storey specimen) the plain boundary is
+// not drawn, the predictor's is: the coupled loop's critical lag of the measured pair (its model
+// twice the specimen's stiffness, frozen; the part built by hand here) less the actuator lag, at
+// lags from 0 to the largest. Points past it are flagged; 60 ms in all (20 % past) diverges. (Far
+// past it, at 80 ms, this loop is stable again: the verdict calls every lag past the first
+// crossing unstable.)
+TEST(JointLag, APredictorsBoundaryIsDrawnForSeveralDofs) {
+  JointLagStudy config;
+  config.set_study("frame3_storey_specimen.textproto");
+  for (double r : {0.0, 0.030, 0.050}) config.add_network_round_trips(r);
+  for (double a : {0.0, 0.010}) config.add_actuator_lags(a);
+  config.mutable_force_predictor()->set_stiffness_factor(2.0);
+  config.mutable_force_predictor()->set_fixed_model(true);
+  JointLagOptions options;
+  options.output_directory = kOut / "predictor_frame3";
+  options.measure = false;
+  const auto result = run_joint_lag(config, kConfigs, options);
+  EXPECT_FALSE(result.boundary_skipped.empty());
+  const core::PreparedStudy prepared = core::prepare_study(
+      core::load_study(kConfigs / "frame3_storey_specimen.textproto"), kConfigs);
+  core::DelayedPart storey;
+  storey.row = core::Vec::Unit(3, 1) - core::Vec::Unit(3, 0);
+  storey.stiffness = 0.3e6;
+  storey.predicted = true;
+  storey.model_stiffness = 0.6e6;
+  const core::StructuralModel& model = prepared.base.model;
+  const auto loop = core::coupled_loop_stability(model, {storey},
+                                                 core::modal_analysis(model.mass, model.stiffness));
+  ASSERT_TRUE(loop.common_critical_lag.has_value());
+  ASSERT_EQ(result.compensated_boundary.size(), 41u);
+  EXPECT_DOUBLE_EQ(result.compensated_boundary.back().actuator_lag, 0.010);
+  for (const auto& b : result.compensated_boundary)
+    EXPECT_NEAR(*b.critical_round_trip, std::max(0.0, *loop.common_critical_lag - b.actuator_lag),
+                1e-12);
+  EXPECT_NE(result.compensated_boundary_note.find("critical lag of the measured pair"),
+            std::string::npos)
+      << result.compensated_boundary_note;
+  EXPECT_FALSE(at(result, 0.030, 0.010).past_boundary);
+  EXPECT_FALSE(at(result, 0.030, 0.010).diverged);
+  EXPECT_TRUE(at(result, 0.050, 0.010).past_boundary);
+  EXPECT_TRUE(at(result, 0.050, 0.010).diverged) << at(result, 0.050, 0.010).rms_error_pct;
 }
 
 }  // namespace
