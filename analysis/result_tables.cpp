@@ -171,9 +171,7 @@ results::Table study_table(const StudyOutcome& outcome) {
 
 TableShape study_table_shape(const core::RecorderPlan& plan, std::size_t steps, std::size_t cases,
                              std::size_t actuators) {
-  std::size_t per_case = 0;
-  for (const Channel& c : plan.channels)
-    per_case += c.kind == Channel::Kind::kActuators ? 3 * actuators : 1;
+  const std::size_t per_case = plan.columns_per_case(actuators);
   std::size_t rows = 0;
   for (std::size_t k = 0; k < steps; ++k) rows += plan.keeps(k) ? 1 : 0;
   return {rows, 2 + cases * per_case};

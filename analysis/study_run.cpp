@@ -48,6 +48,8 @@ core::SimulationOptions kept_by_recorders(const core::PreparedStudy& prepared) {
   core::SimulationOptions options;
   options.kept_dofs = prepared.recorders.kept_dofs;
   options.base_shear = prepared.recorders.base_shear;
+  const config::SafetyLimits& limits = prepared.config.deployment().limits();
+  options.peaks = limits.max_displacement() > 0 || limits.max_velocity() > 0;
   return options;
 }
 

@@ -72,10 +72,12 @@ void size_result(SimulationResult& result, const HybridSetup& setup, std::size_t
   result.realised = Mat::Zero(rows, actuators);
   result.measured_force = Mat::Zero(rows, actuators);
   result.prediction_error = Mat::Zero(rows, actuators);
-  result.peak_displacement.assign(steps, 0.0);
-  result.peak_velocity.assign(steps, 0.0);
-  result.peak_displacement_dof.assign(steps, 0);
-  result.peak_velocity_dof.assign(steps, 0);
+  if (options.peaks) {
+    result.peak_displacement.assign(steps, 0.0);
+    result.peak_velocity.assign(steps, 0.0);
+    result.peak_displacement_dof.assign(steps, 0);
+    result.peak_velocity_dof.assign(steps, 0);
+  }
   if (options.base_shear) result.base_shear.assign(steps, 0.0);
 }
 
@@ -107,6 +109,7 @@ void store_state(SimulationResult& result, std::size_t k, const Integrator& inte
       result.acceleration(row, column) = a[dof];
     }
   }
+  if (result.peak_displacement.empty()) return;
   Eigen::Index at = 0;
   result.peak_displacement[k] = u.size() > 0 ? u.cwiseAbs().maxCoeff(&at) : 0.0;
   result.peak_displacement_dof[k] = static_cast<int>(at);
@@ -173,7 +176,9 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
       hooks.after_step(k, result);
       return;
     }
-    if (!(result.peak_displacement[k] <= options.divergence_bound)) {  // also catches NaN
+    const double peak = options.peaks ? result.peak_displacement[k]
+                                      : integrator->displacement().cwiseAbs().maxCoeff();
+    if (!(peak <= options.divergence_bound)) {  // also catches NaN
       result.diverged = true;
       hooks.after_step(k, result);
       return;
@@ -209,6 +214,10 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
   StepHooks no_hooks;
   SimulationResult result;
   run_steps(setup, motion_at_dt, restoring, no_hooks, options, result);
+  const PredictorSet& predictors = restoring.predictors();
+  if (!predictors.empty())
+    for (std::size_t a = 0; a < setup.partition.actuator_storeys.size(); ++a)
+      result.predictor_models.push_back(predictors.has(a) ? predictors.at(a).model_text() : "");
   return result;
 }
 

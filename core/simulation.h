@@ -11,7 +11,7 @@
 //   k = 1..N-1  hooks.before_step(k)            (real time: wait for deadline k)
 //               restoring.set_time(k dt); p_k = -M iota a_g[k]; integrator.step(p_k, restoring)
 //               row k of the result <- u, v, a (the kept DOFs), command, realised, measured force
-//               (actuators); max |u|, max |v| over every DOF; the base shear when asked
+//               (actuators); max |u|, max |v| over every DOF and the base shear when asked
 //               stop, diverged, when any |u| > options.divergence_bound (or NaN)
 //               stop, held (result.held), when the evaluator's hold() names a reason (a force
 //               predictor past its bound)
@@ -55,8 +55,9 @@ struct SimulationResult {
   // The DOF (0-based) of each column of displacement, velocity and acceleration, ascending;
   // empty: every DOF, column i DOF i.
   std::vector<int> dofs;
-  // Per step, over every DOF (kept or not): the largest |u| (m) and |v| (m/s), and the first DOF
-  // (0-based) that holds it; what a limit is judged on without the history of every DOF.
+  // Per step when SimulationOptions::peaks, over every DOF (kept or not): the largest |u| (m) and
+  // |v| (m/s), and the first DOF (0-based) that holds it; what a limit is judged on without the
+  // history of every DOF. Empty otherwise.
   std::vector<double> peak_displacement, peak_velocity;
   std::vector<int> peak_displacement_dof, peak_velocity_dof;
   // N per step when SimulationOptions::base_shear: iota^T M (a + iota a_g), the inertial forces'
@@ -66,6 +67,9 @@ struct SimulationResult {
   bool diverged = false;                  // stopped early: |u| exceeded the divergence bound
   // Per actuator (N): the force predictor's error e at each step (0 without one).
   Mat prediction_error;
+  // Per actuator, its force predictor's model at the run's end with the terms' standard errors
+  // (ForcePredictor::model_text); empty where it has none. In-process runs only.
+  std::vector<std::string> predictor_models;
   // Stopped early by a force predictor past its bound: which link and why; empty otherwise.
   std::string held;
   std::size_t steps() const { return time.size(); }
@@ -84,6 +88,7 @@ struct SimulationOptions {
   // memory and the loop's stores are O(kept), not O(n) a step.
   std::vector<int> kept_dofs;
   bool base_shear = false;  // fill SimulationResult::base_shear
+  bool peaks = false;       // fill SimulationResult's per-step peaks over every DOF
 };
 
 // What a runtime adds around each step. Either hook may throw to abort the run; the loop then

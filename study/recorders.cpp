@@ -112,6 +112,23 @@ bool RecorderPlan::keeps(std::size_t step) const {
                      [step](const RecordedChannel& c) { return c.keeps(step); });
 }
 
+std::size_t RecorderPlan::columns_per_case(std::size_t actuators) const {
+  std::size_t columns = 0;
+  for (const RecordedChannel& c : channels)
+    columns += c.kind == Kind::kActuators ? 3 * actuators : 1;
+  return columns;
+}
+
+std::uint64_t run_bytes_per_step(const RecorderPlan& plan, int dofs, std::size_t actuators,
+                                 std::size_t cases, bool peaks) {
+  const std::uint64_t kept =
+      plan.kept_dofs.empty() ? static_cast<std::uint64_t>(dofs) : plan.kept_dofs.size();
+  const std::uint64_t simulation =
+      8 + 24 * kept + 32 * actuators + (peaks ? 24 : 0) + (plan.base_shear ? 8 : 0);
+  const std::uint64_t table = 8 * (2 + cases * plan.columns_per_case(actuators));
+  return (cases + 1) * simulation + 8 * cases + table + 16;
+}
+
 void validate_recorders(const config::Study& study, const std::string& source) {
   for (int i = 0; i < study.recorders_size(); ++i) {
     const config::Recorder& r = study.recorders(i);

@@ -19,6 +19,7 @@
 // A run keeps step k of a channel when k % every == 0 (every >= 1).
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,8 @@ struct RecorderPlan {
   std::string defaults;
   // Whether any channel keeps step k (a row of the results table).
   bool keeps(std::size_t step) const;
+  // The results table's columns of one case: one a channel, three per actuator for kActuators.
+  std::size_t columns_per_case(std::size_t actuators) const;
 };
 
 // The checks that need no model: each recorder asks for something, DOFs and range ends >= 1,
@@ -59,6 +62,16 @@ void validate_recorders(const config::Study& study, const std::string& source);
 // model ("recorders[0].dofs[2]: DOF 1001 is outside the model's 1..1000").
 RecorderPlan plan_recorders(const config::Study& study, int dofs,
                             const std::vector<int>& experimental_dofs);
+
+// Bytes a run of `cases` cases holds per step of the motion, at most (what prepare_study checks
+// against the memory limit before anything is allocated): per simulation (the lag-free run and
+// each case) 8 (time) + 24 a kept DOF (u, v, a; every DOF when the plan keeps all of the model's
+// `dofs`) + 32 an actuator (command, realised, force, prediction error) + 24 with peaks (limits
+// set) + 8 with the base shear; per case 8 (its response); the results table 8 a cell; the
+// motion 16 (as read and at dt). Against measured resident memory (docs/performance.md): an SDOF,
+// one actuator, two cases, 5.6 million steps held 262 bytes a step; this gives 304.
+std::uint64_t run_bytes_per_step(const RecorderPlan& plan, int dofs, std::size_t actuators,
+                                 std::size_t cases, bool peaks);
 
 // The DOFs (0-based, ascending) an experimental part moves: an actuator's storey or DOF and, for
 // a storey, the floor below it; an element's every term.

@@ -15,6 +15,7 @@
 #include "study/tracking_config.h"
 #include "util/sha256.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -161,19 +162,18 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   require(dt < record.duration(), "motion",
           "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
               format_number(record.duration()) + " s)");
-  // What a run of this study keeps per step (motion, time, the peaks over DOFs, the base shear,
-  // then per kept DOF and per actuator three series), for a run and its reference, checked
-  // before any of it is allocated.
+  // What a run of this study holds per step (study/recorders.h, run_bytes_per_step: its
+  // simulations, their responses, the results table and the motion), checked before any of it
+  // is allocated.
   prepared.base = base_setup(study, dt, base_dir, &prepared.warnings);
   prepared.recorders =
       plan_recorders(study, prepared.base.model.dofs(), experimental_dofs(prepared.base.partition));
-  const auto dofs = static_cast<std::uint64_t>(prepared.recorders.kept_dofs.empty()
-                                                   ? prepared.base.model.dofs()
-                                                   : prepared.recorders.kept_dofs.size());
-  const auto actuators =
-      static_cast<std::uint64_t>(prepared.base.partition.actuator_storeys.size());
+  const config::SafetyLimits& limits = study.deployment().limits();
   require_memory(static_cast<std::uint64_t>(record.duration() / dt) + 2,
-                 2 * sizeof(double) * (7 + 3 * dofs + 3 * actuators),
+                 run_bytes_per_step(prepared.recorders, prepared.base.model.dofs(),
+                                    prepared.base.partition.actuator_storeys.size(),
+                                    static_cast<std::size_t>(std::max(1, study.cases_size())),
+                                    limits.max_displacement() > 0 || limits.max_velocity() > 0),
                  "integrator.dt = " + format_number(dt) + " s over the " +
                      format_number(record.duration()) + " s record");
   prepared.motion =

@@ -129,6 +129,20 @@ TEST(RecordersTest, BadRecordersAreRefusedAtLoadNamingTheField) {
   EXPECT_EQ(load_error("recorders { dofs: 1 }"), "");
 }
 
+TEST(RecordersTest, ARunsBytesPerStepCountItsSimulationsTableAndMotion) {
+  // One DOF, one actuator, two cases: three simulations of 8 + 24 + 32 bytes, two responses,
+  // a table of step, time and four columns a case, the motion twice.
+  const RecorderPlan sdof = plan_recorders(study_with(""), 1, {0});
+  EXPECT_EQ(sdof.columns_per_case(1), 4u);
+  EXPECT_EQ(run_bytes_per_step(sdof, 1, 1, 2, false), 3u * 64 + 2 * 8 + 8 * (2 + 2 * 4) + 16);
+  EXPECT_EQ(run_bytes_per_step(sdof, 1, 1, 2, true) - run_bytes_per_step(sdof, 1, 1, 2, false),
+            3u * 24);
+  // 10,000 DOFs: the default recorders keep 6 DOFs, so a step costs hundreds of bytes, not the
+  // 240,000 a simulation of every DOF would.
+  const RecorderPlan large = plan_recorders(study_with(""), 10000, {0});
+  EXPECT_LT(run_bytes_per_step(large, 10000, 1, 2, false), 1000u);
+}
+
 TEST(RecordersTest, ExperimentalDofsAreTheStoreysFloorsOrTheElementsTerms) {
   HybridPartition storeys;
   storeys.numerical.resize(3);
