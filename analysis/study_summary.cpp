@@ -26,11 +26,13 @@ nlohmann::json compensated_json(const std::optional<CompensatedVerdict>& v) {
 }
 
 // Per predicted actuator, in config order: the RMS and peak of its prediction error (N) over the
-// steps run, and the RMS against the measured force's RMS (%).
+// steps run, the RMS against the measured force's RMS (%), and its model at the run's end with
+// the terms' standard errors (ForcePredictor::model_text; empty when the run did not keep it).
 struct PredictionErrorSummary {
   int actuator = 0;  // 1-based index (channel order, as a HOLD names it)
   std::string name;  // its site, or its channel (actuator_names.h)
   double rms = 0.0, peak = 0.0, relative_pct = 0.0;
+  std::string model;
 };
 
 std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c,
@@ -55,6 +57,8 @@ std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c,
     s.peak = e.col(a).cwiseAbs().maxCoeff();
     const double force_rms = std::sqrt(f.col(a).squaredNorm() / rows);
     s.relative_pct = force_rms > 0 ? 100.0 * s.rms / force_rms : 0.0;
+    const auto& models = c.simulation.predictor_models;
+    if (static_cast<std::size_t>(a) < models.size()) s.model = models[static_cast<std::size_t>(a)];
     out.push_back(s);
   }
   return out;
@@ -68,7 +72,8 @@ nlohmann::json prediction_error_json(const CaseOutcome& c, const ActuatorNames& 
                    {"name", s.name},
                    {"rms_n", s.rms},
                    {"peak_n", s.peak},
-                   {"rms_of_measured_force_pct", s.relative_pct}});
+                   {"rms_of_measured_force_pct", s.relative_pct},
+                   {"model", s.model.empty() ? nlohmann::json() : nlohmann::json(s.model)}});
   return out;
 }
 
@@ -247,7 +252,8 @@ std::string study_summary_text(const StudyOutcome& outcome) {
     for (const PredictionErrorSummary& p : prediction_errors(c, outcome.actuators))
       out << c.name << ": prediction error at " << p.name << " (actuator " << p.actuator
           << "): RMS " << fixed(p.rms, 2) << " N (" << fixed(p.relative_pct, 2)
-          << " % of the measured force's RMS), peak " << fixed(p.peak, 2) << " N\n";
+          << " % of the measured force's RMS), peak " << fixed(p.peak, 2) << " N"
+          << (p.model.empty() ? "" : "; its model at the end: " + p.model) << "\n";
   }
   return out.str();
 }

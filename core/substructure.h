@@ -284,6 +284,7 @@ class HybridRestoring final : public HybridEvaluator {
   const Vec& measured_force() const override { return measured_; }
   int actuators() const override { return static_cast<int>(actuators_.size()); }
   const Vec& prediction_error() const override { return prediction_error_; }
+  const PredictorSet& predictors() const { return predictors_; }
   const std::string& hold() const override { return hold_; }
 
  private:

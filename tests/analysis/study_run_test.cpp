@@ -200,6 +200,14 @@ TEST(StudyRun, APredictedCaseDrawsItsMeasuredForceAgainstTheModel) {
   EXPECT_EQ(svg.find("actuator 1"), std::string::npos);
   // The 30 % soft model is wrong before its fit: the error is not zero.
   EXPECT_GT(predicted.simulation.prediction_error.cwiseAbs().maxCoeff(), 1.0);
+  // Its model at the run's end, each term with its standard error, in the summary and its JSON.
+  ASSERT_EQ(predicted.simulation.predictor_models.size(), 1u);
+  EXPECT_NE(predicted.simulation.predictor_models[0].find("N/m, c "), std::string::npos);
+  EXPECT_NE(study_summary_text(outcome).find("its model at the end: " +
+                                             predicted.simulation.predictor_models[0]),
+            std::string::npos);
+  EXPECT_EQ(study_summary_json(outcome)["cases"][1]["prediction_error"][0]["model"],
+            predicted.simulation.predictor_models[0]);
   const StudyOutcome plain = run_study(frame(1.0 / 3.0, "cases { name: \"reference\" }", "", 2.0));
   write_study_plots(plain, dir);
   EXPECT_FALSE(std::filesystem::exists(dir / "force_prediction.png"));
