@@ -98,6 +98,48 @@ std::vector<std::string> write_hold_tables(const runtime::RunFooter* footer,
   return written;
 }
 
+// What --json prints: what was read and written, and whether the record is whole.
+nlohmann::json export_json(const std::string& record, const runtime::RecordContents& contents,
+                           const runtime::RecordChecks& checks, const results::Table& table,
+                           const std::map<results::Format, std::string>& outputs,
+                           const std::vector<std::string>& hold_tables) {
+  const auto* footer = contents.footer();
+  nlohmann::json j{
+      {"record", record},
+      {"rows", table.rows()},
+      {"truncated", contents.truncated || checks.cut},
+      {"problems", checks.problems},
+      {"status", footer ? footer->status() : "no footer: the run was cut short"},
+      // The run ended well and the record says so whole: no damaged region, no problem.
+      {"ok", footer && footer->ok() && !contents.lost_entries() && checks.problems.empty()},
+      // The coordinator's drops for want of a MAC; null without a footer.
+      {"unauthenticated",
+       footer ? nlohmann::json(footer->counters().unauthenticated()) : nlohmann::json()},
+      {"node_unauthenticated", node_unauthenticated_json(footer)},
+      {"node_health", node_health_json(footer)},
+      {"checksummed", contents.checksummed},
+      {"integrity", table.attributes().at("integrity")},
+      {"lost_steps", table.attributes().at("lost_steps")},
+      {"damaged_regions", contents.losses.size()}};
+  for (const auto& [format, path] : outputs) j[results::extension(format).substr(1)] = path;
+  j["hold_tables"] = hold_tables;
+  return j;
+}
+
+// What the text output says: each file written, and the nodes' health.
+void print_exported(const runtime::RecordContents& contents, const results::Table& table,
+                    const std::map<results::Format, std::string>& outputs,
+                    const std::vector<std::string>& hold_tables) {
+  const auto* footer = contents.footer();
+  const std::string status = footer ? footer->status() : "no footer: the run was cut short";
+  for (const auto& [format, path] : outputs)
+    std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status
+              << unauthenticated_note(footer) << ")\n";
+  for (const std::string& path : hold_tables)
+    std::cout << "wrote the controllers' hold, frame by frame, to " << path << "\n";
+  std::cout << node_health_text(footer);
+}
+
 // Reads the record, writes every requested output and says what was written. Throws ExitError:
 // kExitBadInput for a record that cannot be read or tabled, kExitEnvironment for an output that
 // cannot be written, kExitRunFailed after exporting a record that lost entries.
@@ -131,39 +173,11 @@ void run_export(const std::string& record, const std::map<results::Format, std::
       throw ExitError(kExitEnvironment, e.what());
     }
   }
-  const auto* footer = contents.footer();
-  const std::vector<std::string> hold_tables = write_hold_tables(footer, outputs);
-  const std::string status = footer ? footer->status() : "no footer: the run was cut short";
-  if (json) {
-    nlohmann::json j{
-        {"record", record},
-        {"rows", table.rows()},
-        {"truncated", contents.truncated || checks.cut},
-        {"problems", checks.problems},
-        {"status", status},
-        // The run ended well and the record says so whole: no damaged region, no problem.
-        {"ok", footer && footer->ok() && !contents.lost_entries() && checks.problems.empty()},
-        // The coordinator's drops for want of a MAC; null without a footer.
-        {"unauthenticated",
-         footer ? nlohmann::json(footer->counters().unauthenticated()) : nlohmann::json()},
-        {"node_unauthenticated", node_unauthenticated_json(footer)},
-        {"node_health", node_health_json(footer)},
-        {"checksummed", contents.checksummed},
-        {"integrity", table.attributes().at("integrity")},
-        {"lost_steps", table.attributes().at("lost_steps")},
-        {"damaged_regions", contents.losses.size()}};
-    for (const auto& [format, path] : outputs) j[results::extension(format).substr(1)] = path;
-    j["hold_tables"] = hold_tables;
-    std::cout << j.dump(2) << "\n";
-  } else {
-    for (const auto& [format, path] : outputs) {
-      std::cout << "wrote " << table.rows() << " steps to " << path << " (" << status
-                << unauthenticated_note(footer) << ")\n";
-    }
-    for (const std::string& path : hold_tables)
-      std::cout << "wrote the controllers' hold, frame by frame, to " << path << "\n";
-    std::cout << node_health_text(footer);
-  }
+  const std::vector<std::string> hold_tables = write_hold_tables(contents.footer(), outputs);
+  if (json)
+    std::cout << export_json(record, contents, checks, table, outputs, hold_tables).dump(2) << "\n";
+  else
+    print_exported(contents, table, outputs, hold_tables);
   if (contents.lost_entries())
     throw ExitError(kExitRunFailed, "export: the record lost entries (intact ones exported): " +
                                         contents.loss_report());

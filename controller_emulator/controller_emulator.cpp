@@ -229,6 +229,59 @@ void log_start(const ControllerEmulator& emulator, const controller_node::UdpLin
                  answer_lag * 1e3);
 }
 
+// Answers waiting for their lag, in arrival order (a link does not reorder): each leaves
+// answer_lag after its frame was read (ns, CLOCK_MONOTONIC), and at least answer_period after
+// the one before, however many are in flight.
+class DelayedAnswers {
+ public:
+  DelayedAnswers(controller_node::UdpLink& udp, std::int64_t lag_ns, std::int64_t period_ns)
+      : udp_(udp), lag_ns_(lag_ns), period_ns_(period_ns) {}
+  bool empty() const { return pending_.empty(); }
+  std::int64_t next_ns() const { return pending_.front().first; }
+  void send_due(std::int64_t now) {
+    while (!pending_.empty() && pending_.front().first <= now) {
+      udp_.send(pending_.front().second.data(), pending_.front().second.size());
+      pending_.pop_front();
+    }
+  }
+  // The answer to a frame read at `received_ns`: sent now when its time has come and none
+  // waits before it, else queued.
+  void add(std::int64_t received_ns, std::vector<std::uint8_t> answer) {
+    const std::int64_t release = std::max(received_ns + lag_ns_, last_release_ns_ + period_ns_);
+    last_release_ns_ = release;
+    if (release <= controller_node::monotonic_ns() && pending_.empty()) {
+      udp_.send(answer.data(), answer.size());
+      return;
+    }
+    pending_.emplace_back(release, std::move(answer));
+  }
+
+ private:
+  controller_node::UdpLink& udp_;
+  std::int64_t lag_ns_, period_ns_, last_release_ns_ = 0;
+  std::deque<std::pair<std::int64_t, std::vector<std::uint8_t>>> pending_;
+};
+
+// Every queued frame stepped through the emulator (under `lock`, shared with the plant thread)
+// and its answer handed to `answers`; a frame from any host but the peer is named and ignored.
+// `last_frame_ns`: when the newest frame was read.
+void answer_frames(ControllerEmulator& emulator, controller_node::UdpLink& udp, std::mutex& lock,
+                   DelayedAnswers& answers, std::int64_t& last_frame_ns) {
+  controller_node::Datagram d;
+  while (udp.try_receive(d)) {
+    last_frame_ns = d.received_ns;
+    if (!d.from_peer) {
+      spdlog::warn("controller emulator: frame from {} ignored (not the host {})",
+                   controller_node::source_text(d), udp.peer());
+      continue;
+    }
+    std::unique_lock guard(lock);
+    auto answer = emulator.step(d.bytes.data(), std::min(d.size, d.bytes.size()));
+    guard.unlock();
+    if (answer) answers.add(d.received_ns, std::move(*answer));
+  }
+}
+
 }  // namespace
 
 int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
@@ -240,7 +293,6 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
   const auto idle_ns = static_cast<std::int64_t>(idle_timeout * 1e9);
   const auto lag_ns = static_cast<std::int64_t>(std::llround(answer_lag * 1e9));
   const auto period_ns = static_cast<std::int64_t>(std::llround(answer_period * 1e9));
-  std::int64_t last_release_ns = 0;
   runtime::MonotonicClock clock;
   // The lag's sleep ends on time, not up to the kernel's default 50 us of timer slack later.
   if (lag_ns > 0 || period_ns > 0) prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
@@ -248,19 +300,13 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
   int result = 0;
   {
     PlantThread plant(emulator, lock);
-    // Answers waiting for their lag, in arrival order (a link does not reorder): each leaves
-    // answer_lag after its frame was read, however many are in flight.
-    std::deque<std::pair<std::int64_t, std::vector<std::uint8_t>>> pending;
-    controller_node::Datagram d;
+    DelayedAnswers answers(udp, lag_ns, period_ns);
     std::int64_t last_frame_ns = controller_node::monotonic_ns();
-    while (!emulator.stopped() || !pending.empty()) {
+    while (!emulator.stopped() || !answers.empty()) {
       const std::int64_t now = controller_node::monotonic_ns();
-      while (!pending.empty() && pending.front().first <= now) {
-        udp.send(pending.front().second.data(), pending.front().second.size());
-        pending.pop_front();
-      }
+      answers.send_due(now);
       if (emulator.stopped()) {
-        if (!pending.empty()) clock.sleep_until_ns(pending.front().first);
+        if (!answers.empty()) clock.sleep_until_ns(answers.next_ns());
         continue;
       }
       if (now - last_frame_ns > idle_ns) {
@@ -268,28 +314,8 @@ int serve(ControllerEmulator& emulator, double idle_timeout, double answer_lag,
         result = 1;
         break;
       }
-      const std::int64_t wake =
-          pending.empty() ? last_frame_ns + idle_ns + 1 : pending.front().first;
-      if (!udp.wait(wake)) continue;
-      while (udp.try_receive(d)) {
-        last_frame_ns = d.received_ns;
-        if (!d.from_peer) {
-          spdlog::warn("controller emulator: frame from {} ignored (not the host {})",
-                       controller_node::source_text(d), udp.peer());
-          continue;
-        }
-        std::unique_lock guard(lock);
-        auto answer = emulator.step(d.bytes.data(), std::min(d.size, d.bytes.size()));
-        guard.unlock();
-        if (!answer) continue;
-        const std::int64_t release = std::max(d.received_ns + lag_ns, last_release_ns + period_ns);
-        last_release_ns = release;
-        if (release <= controller_node::monotonic_ns() && pending.empty()) {
-          udp.send(answer->data(), answer->size());
-          continue;
-        }
-        pending.emplace_back(release, std::move(*answer));
-      }
+      const std::int64_t wake = answers.empty() ? last_frame_ns + idle_ns + 1 : answers.next_ns();
+      if (udp.wait(wake)) answer_frames(emulator, udp, lock, answers, last_frame_ns);
     }
   }
   const EmulatorCounts& c = emulator.counts();

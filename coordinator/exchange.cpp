@@ -205,24 +205,63 @@ void RunState::switch_answer_wait(int id, Node& node, const AnswerWait::Switch& 
                   "longer than the loop's " + wait + "; each step uses its newest answer");
 }
 
+namespace {
+
+// Each node's COMMAND of this step: its storeys' drifts (m) and drift velocities (m/s), stamped
+// so that its answer must echo the stamp. No allocation once warm (pack_into).
+void send_commands(RunState& run) {
+  for (auto& [id, node] : run.nodes) {
+    run.command_message.Clear();
+    run.command_message.set_time(run.time);
+    for (int s : node.plan->storeys) {
+      run.command_message.add_drift(run.drift[s]);
+      run.command_message.add_drift_velocity(run.drift_velocity[s]);
+    }
+    runtime::pack_into(run.outgoing, run.options.run_id, id, runtime::COMMAND, run.step,
+                       run.command_message);
+    run.outgoing.sent_ns = transport::realtime_ns();
+    run.intake->command_sent(id, run.outgoing.sent_ns);  // its answer must echo this stamp
+    run.endpoint.send(run.outgoing);
+  }
+}
+
+// Storey shear = numerical + experimental (the order core::HybridRestoring uses) from the
+// newest answers, and per actuator its command, realised and measured values and, with a
+// predictor, which step its answer answered.
+void take_answers(RunState& run) {
+  for (auto& [id, node] : run.nodes) {
+    if (node.plan->spec.kind() != config::NodeSpec::SUBSTRUCTURE) continue;
+    for (std::size_t i = 0; i < node.plan->storeys.size(); ++i)
+      run.shear[node.plan->storeys[i]] = run.force_of(node, i);
+  }
+  const auto& storeys = run.setup.partition.actuator_storeys;
+  for (auto& [id, node] : run.nodes) {
+    if (!runtime::drives_actuators(node.plan->spec.kind())) continue;
+    for (std::size_t i = 0; i < node.plan->actuators.size(); ++i) {
+      const int a = node.plan->actuators[i];
+      const int s = storeys[a];
+      run.command_drift[a] = run.drift[s];
+      run.realised_drift[a] = run.realised_of(node, i);
+      run.measured[a] = run.force_of(node, i);
+      if (!run.predictors.empty()) {
+        const std::int64_t answered = run.intake->latest(id).answered_step;
+        run.answer_steps[static_cast<std::size_t>(a)] =
+            answered > 0 ? static_cast<long>(answered) : -1;
+        run.command_rate[a] = run.drift_velocity[s];
+      }
+    }
+  }
+}
+
+}  // namespace
+
 const core::Vec& RunState::trial(const core::Vec& u, const core::Vec& v, core::Mat* tangent) {
   if (tangent) throw std::invalid_argument("the distributed runtime needs an explicit integrator");
   if (auto violation = limits->check_state(u, v)) throw RunAborted(*violation, "");
   assembly.drifts(u, drift);
   assembly.drifts(v, drift_velocity);
   if (auto violation = limits->check_rate(drift)) throw RunAborted(*violation, "");
-  for (auto& [id, node] : nodes) {
-    command_message.Clear();
-    command_message.set_time(time);
-    for (int s : node.plan->storeys) {
-      command_message.add_drift(drift[s]);
-      command_message.add_drift_velocity(drift_velocity[s]);
-    }
-    runtime::pack_into(outgoing, options.run_id, id, runtime::COMMAND, step, command_message);
-    outgoing.sent_ns = transport::realtime_ns();
-    intake->command_sent(id, outgoing.sent_ns);  // its answer must echo this stamp
-    endpoint.send(outgoing);
-  }
+  send_commands(*this);
   commands_written = Clock::now();
   if (local_numerical) {
     local_numerical->trial(drift, shear, nullptr);
@@ -230,28 +269,8 @@ const core::Vec& RunState::trial(const core::Vec& u, const core::Vec& v, core::M
     shear.setZero();
   }
   collect();
-  // Storey shear = numerical + experimental, the order core::HybridRestoring uses.
-  for (auto& [id, node] : nodes) {
-    if (node.plan->spec.kind() != config::NodeSpec::SUBSTRUCTURE) continue;
-    for (std::size_t i = 0; i < node.plan->storeys.size(); ++i)
-      shear[node.plan->storeys[i]] = force_of(node, i);
-  }
+  take_answers(*this);
   const auto& storeys = setup.partition.actuator_storeys;
-  for (auto& [id, node] : nodes) {
-    if (!runtime::drives_actuators(node.plan->spec.kind())) continue;
-    for (std::size_t i = 0; i < node.plan->actuators.size(); ++i) {
-      const int a = node.plan->actuators[i];
-      const int s = storeys[a];
-      command_drift[a] = drift[s];
-      realised_drift[a] = realised_of(node, i);
-      measured[a] = force_of(node, i);
-      if (!predictors.empty()) {
-        const std::int64_t answered = intake->latest(id).answered_step;
-        answer_steps[static_cast<std::size_t>(a)] = answered > 0 ? static_cast<long>(answered) : -1;
-        command_rate[a] = drift_velocity[s];
-      }
-    }
-  }
   if (predictors.empty()) {
     core::assemble_storey_forces(assembly, storeys, measured, shear, force);
     return force;

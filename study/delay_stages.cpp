@@ -37,6 +37,49 @@ DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
   return out;
 }
 
+// The stages that model a rig's effects (core/rig_effects.h): motion limits, sensor errors and
+// the specimen's parasitic forces; null for any other kind.
+std::unique_ptr<DelayStage> make_rig_effect(const config::DelayStage& stage, double dt) {
+  using K = config::DelayStage::KindCase;
+  std::unique_ptr<DelayStage> block;
+  switch (stage.kind_case()) {
+    case K::kBacklash:
+      block = std::make_unique<MotionLimit>(MotionLimit::backlash(stage.backlash().width()));
+      break;
+    case K::kVelocityLimit:
+      block = std::make_unique<MotionLimit>(
+          MotionLimit::velocity_limit(stage.velocity_limit().max_velocity(), dt));
+      break;
+    case K::kStrokeLimit:
+      block =
+          std::make_unique<MotionLimit>(MotionLimit::stroke_limit(stage.stroke_limit().stroke()));
+      break;
+    case K::kSensorDrift: {
+      const auto& d = stage.sensor_drift();
+      const double scale = d.displacement_scale() == 0.0 ? 1.0 : d.displacement_scale();
+      block = std::make_unique<SensorDrift>(SensorErrors{d.displacement_offset(),
+                                                         d.displacement_drift(), d.force_offset(),
+                                                         d.force_drift(), scale});
+      break;
+    }
+    case K::kViscousForce:
+      block = std::make_unique<ViscousForce>(stage.viscous_force().damping(), dt);
+      break;
+    case K::kInertiaForce:
+      block = std::make_unique<InertiaForce>(stage.inertia_force().mass(), dt);
+      break;
+    case K::kFrictionForce:
+      block = std::make_unique<FrictionForce>(stage.friction_force().friction_force(),
+                                              stage.friction_force().smoothing_velocity(), dt);
+      break;
+    case K::kForceDelay:
+      block = std::make_unique<ForceDelay>(stage.force_delay().delay(), dt);
+      break;
+    default: break;
+  }
+  return block;
+}
+
 }  // namespace
 
 std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
@@ -77,37 +120,13 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
           make_tracking_loop(stage.tracking_loop(), dt, "tracking_loop"));
       break;
     case K::kBacklash:
-      block = std::make_unique<MotionLimit>(MotionLimit::backlash(stage.backlash().width()));
-      break;
     case K::kVelocityLimit:
-      block = std::make_unique<MotionLimit>(
-          MotionLimit::velocity_limit(stage.velocity_limit().max_velocity(), dt));
-      break;
     case K::kStrokeLimit:
-      block =
-          std::make_unique<MotionLimit>(MotionLimit::stroke_limit(stage.stroke_limit().stroke()));
-      break;
-    case K::kSensorDrift: {
-      const auto& d = stage.sensor_drift();
-      const double scale = d.displacement_scale() == 0.0 ? 1.0 : d.displacement_scale();
-      block = std::make_unique<SensorDrift>(SensorErrors{d.displacement_offset(),
-                                                         d.displacement_drift(), d.force_offset(),
-                                                         d.force_drift(), scale});
-      break;
-    }
+    case K::kSensorDrift:
     case K::kViscousForce:
-      block = std::make_unique<ViscousForce>(stage.viscous_force().damping(), dt);
-      break;
     case K::kInertiaForce:
-      block = std::make_unique<InertiaForce>(stage.inertia_force().mass(), dt);
-      break;
     case K::kFrictionForce:
-      block = std::make_unique<FrictionForce>(stage.friction_force().friction_force(),
-                                              stage.friction_force().smoothing_velocity(), dt);
-      break;
-    case K::kForceDelay:
-      block = std::make_unique<ForceDelay>(stage.force_delay().delay(), dt);
-      break;
+    case K::kForceDelay: block = make_rig_effect(stage, dt); break;
     case K::KIND_NOT_SET: throw std::invalid_argument("delay stage has no kind");
   }
   block->set_gain(effective_gain(stage));

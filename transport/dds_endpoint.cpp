@@ -69,6 +69,9 @@ struct DdsEndpoint::Impl {
   static void on_data(dds::Handle reader, void* self) { static_cast<Impl*>(self)->drain(reader); }
   // Runs on Cyclone's receive thread.
   void drain(dds::Handle from);
+  // Receive thread: hands `m` to the inline handler, or queues it (moved) for receive() when
+  // there is none or it did not take it. True when queued.
+  bool deliver(Message& m);
   // The coordinator's writer of node_id's command topic, created (and matched) on first use.
   const TopicWriter& addressed_writer(std::int32_t node_id);
   // Writes `sample` (the fields of `m`) with `w`, its MAC first made for w's GUID when there is
@@ -252,27 +255,7 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
       m.received_ns = now;
       m.topic_node = *topic_node;
       m.writer = infos[i].publication_handle;
-      std::shared_ptr<const InlineHandler> h;
-      {
-        std::lock_guard lock(mutex);
-        h = handler;
-        if (h) ++handler_calls;
-      }
-      bool consumed = false;
-      if (h) {
-        try {
-          consumed = (*h)(m);
-        } catch (...) {
-          consumed = false;  // the caller's receive() sees it and handles (or throws) there
-        }
-        std::lock_guard lock(mutex);
-        if (--handler_calls == 0) handler_idle.notify_all();
-      }
-      if (!consumed) {
-        std::lock_guard lock(mutex);
-        pending.push_back(std::move(m));
-        queued = true;
-      }
+      queued |= deliver(m);
     }
     dds_return_loan(from, samples, n);
     if (n < kBatch) break;
@@ -280,6 +263,29 @@ void DdsEndpoint::Impl::drain(dds::Handle from) {
   if (!queued) return;
   std::lock_guard lock(mutex);
   arrived.notify_one();
+}
+
+bool DdsEndpoint::Impl::deliver(Message& m) {
+  std::shared_ptr<const InlineHandler> h;
+  {
+    std::lock_guard lock(mutex);
+    h = handler;
+    if (h) ++handler_calls;
+  }
+  bool consumed = false;
+  if (h) {
+    try {
+      consumed = (*h)(m);
+    } catch (...) {
+      consumed = false;  // the caller's receive() sees it and handles (or throws) there
+    }
+    std::lock_guard lock(mutex);
+    if (--handler_calls == 0) handler_idle.notify_all();
+  }
+  if (consumed) return false;
+  std::lock_guard lock(mutex);
+  pending.push_back(std::move(m));
+  return true;
 }
 
 std::optional<WriterGuid> DdsEndpoint::Impl::guid_of(dds::Handle reader,

@@ -76,15 +76,58 @@ void check_controller_spec(const config::NodeSpec& spec, const std::string& wher
                                 ": a CONTROLLER carries no compensation; the lab's controller "
                                 "runs its own");
 }
+
+// The hosted storeys of a partition, by the kind of node that may host them.
+struct StoreyPools {
+  int storeys = 0;
+  std::set<int> numerical, experimental;
+};
+
+// One node's plan from its spec: its kind, storeys and actuators checked against the pools and
+// claimed in `host` (storey -> node id). Throws std::invalid_argument naming `where`.
+NodePlan plan_node(const config::NodeSpec& spec, const core::HybridSetup& base,
+                   const config::Deployment& deployment, const StoreyPools& pools,
+                   std::map<int, int>& host, const std::string& where) {
+  const auto& partition = base.partition;
+  NodePlan node;
+  node.spec = spec;
+  const bool sub = spec.kind() == config::NodeSpec::SUBSTRUCTURE;
+  if (!sub && !drives_actuators(spec.kind()))
+    throw std::invalid_argument(where +
+                                ": kind must be SUBSTRUCTURE, ACTUATOR_EMULATOR or CONTROLLER");
+  check_controller_spec(spec, where);
+  if (sub && spec.compensation_size() > 0)
+    throw std::invalid_argument(where +
+                                ": compensation shapes actuator commands; only an "
+                                "ACTUATOR_EMULATOR carries it");
+  const std::set<int>& pool = sub ? pools.numerical : pools.experimental;
+  const std::vector<int> hosted = hosted_storeys(spec, pool, pools.storeys, sub, where);
+  claim_storeys(hosted, spec.id(), host);
+  node.storeys = hosted;
+  if (sub && partition.coupled_to(hosted) != hosted)
+    throw std::invalid_argument(where +
+                                ": the numerical stiffness matrix couples its DOFs to "
+                                "others; one substructure node hosts every coupled DOF");
+  if (!sub) {
+    for (std::size_t a = 0; a < partition.actuator_storeys.size(); ++a)
+      if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
+        node.actuators.push_back(static_cast<int>(a));
+  }
+  if (spec.kind() == config::NodeSpec::CONTROLLER)
+    check_controller_link(spec.controller(), answer_window(deployment, base.dt),
+                          static_cast<int>(node.actuators.size()), where);
+  return node;
+}
+
 }  // namespace
 
 DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment& deployment) {
   const auto& partition = base.partition;
-  const int storeys = static_cast<int>(partition.numerical.size());
-  std::set<int> numerical, experimental;
-  for (int s = 0; s < storeys; ++s)
-    if (partition.has_numerical(s)) numerical.insert(s);
-  for (int s : partition.actuator_storeys) experimental.insert(s);
+  StoreyPools pools;
+  pools.storeys = static_cast<int>(partition.numerical.size());
+  for (int s = 0; s < pools.storeys; ++s)
+    if (partition.has_numerical(s)) pools.numerical.insert(s);
+  for (int s : partition.actuator_storeys) pools.experimental.insert(s);
 
   check_failsafe_windows(deployment);
   DeploymentPlan plan;
@@ -97,43 +140,18 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
       throw std::invalid_argument(where + ": id must be >= 1 (0 is the coordinator)");
     if (!ids.insert(spec.id()).second)
       throw std::invalid_argument(where + ": id used by two nodes");
-    NodePlan node;
-    node.spec = spec;
     const bool sub = spec.kind() == config::NodeSpec::SUBSTRUCTURE;
-    if (!sub && !drives_actuators(spec.kind()))
-      throw std::invalid_argument(where +
-                                  ": kind must be SUBSTRUCTURE, ACTUATOR_EMULATOR or CONTROLLER");
-    check_controller_spec(spec, where);
     any_substructure |= sub;
-    if (sub && spec.compensation_size() > 0)
-      throw std::invalid_argument(where +
-                                  ": compensation shapes actuator commands; only an "
-                                  "ACTUATOR_EMULATOR carries it");
-    const std::set<int>& pool = sub ? numerical : experimental;
-    const std::vector<int> hosted = hosted_storeys(spec, pool, storeys, sub, where);
-    claim_storeys(hosted, spec.id(), sub ? numerical_host : experimental_host);
-    node.storeys = hosted;
-    if (sub && partition.coupled_to(hosted) != hosted)
-      throw std::invalid_argument(where +
-                                  ": the numerical stiffness matrix couples its DOFs to "
-                                  "others; one substructure node hosts every coupled DOF");
-    if (!sub) {
-      for (std::size_t a = 0; a < partition.actuator_storeys.size(); ++a)
-        if (std::count(hosted.begin(), hosted.end(), partition.actuator_storeys[a]))
-          node.actuators.push_back(static_cast<int>(a));
-    }
-    if (spec.kind() == config::NodeSpec::CONTROLLER)
-      check_controller_link(spec.controller(), answer_window(deployment, base.dt),
-                            static_cast<int>(node.actuators.size()), where);
-    plan.nodes.push_back(std::move(node));
+    plan.nodes.push_back(
+        plan_node(spec, base, deployment, pools, sub ? numerical_host : experimental_host, where));
   }
   plan.numerical_local = !any_substructure;
   if (any_substructure)
-    for (int s : numerical)
+    for (int s : pools.numerical)
       if (!numerical_host.count(s))
         throw std::invalid_argument("numerical " + partition.channel_name(s) +
                                     " is hosted by no substructure node");
-  for (int s : experimental)
+  for (int s : pools.experimental)
     if (!experimental_host.count(s))
       throw std::invalid_argument(
           "experimental " + partition.channel_name(s) +
