@@ -1,5 +1,6 @@
 #include "runtime/node/lag.h"
 
+#include "study/case_link.h"
 #include "study/study.h"
 
 #include <gtest/gtest.h>
@@ -125,6 +126,30 @@ TEST(Summarize, MedianPercentileAndMax) {
   EXPECT_DOUBLE_EQ(s.max, 0.100);
   EXPECT_NEAR(s.mean, 0.0505, 1e-12);
   EXPECT_EQ(summarize({}).count, 0u);
+}
+
+// A case's link in process (core/link_answers.h) draws what a node injecting the same LinkLag
+// draws: message for message, the same release or the same loss, so a case's `link` and a
+// node's lag mean one network.
+TEST(LagInjector, TheInProcessLinkReleasesWhatTheNodeInjects) {
+  config::LinkLag spec = lag(0.030, 0.0025, 0.05, 521);
+  spec.mutable_network()->set_drift_rate(0.0005);
+  spec.mutable_network()->set_spike_delay(0.004);
+  spec.mutable_network()->set_spike_every(200);
+  spec.mutable_network()->set_spike_steps(20);
+  spec.mutable_network()->set_drop_first_step(3000);
+  spec.mutable_network()->set_drop_steps(40);
+  constexpr double kDt = 0.001;
+  LagInjector node(spec, kDt);
+  core::LinkWayLag in_process(core::link_way(spec), kDt);
+  std::size_t lost = 0;
+  for (std::int64_t k = 1; k <= 10000; ++k) {
+    const std::int64_t sent = k * kMs;
+    const std::optional<std::int64_t> injected = node.schedule(sent, k);
+    ASSERT_EQ(injected, in_process.release(sent, k)) << "step " << k;
+    lost += injected ? 0 : 1;
+  }
+  EXPECT_GT(lost, 400u);  // 5 % of 10,000 and the 40 dropped: both paths were taken
 }
 
 }  // namespace
