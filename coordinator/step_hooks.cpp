@@ -35,10 +35,12 @@ void RunState::apply_presses() {
         if (const auto node = nodes.find(id); node != nodes.end() && node->second.announced)
           send(id, runtime::HOLD, step, hold);
     }
-    // How long the press took to reach the loop (and an allowed HOLD its nodes): CLOCK_REALTIME
-    // of this host on both sides.
-    event(fmt::format("{} ({:.2f} ms after the press)", press.text(),
-                      static_cast<double>(transport::realtime_ns() - press.realtime_ns) * 1e-6));
+    // How long the press took to reach the loop (and an allowed HOLD its nodes): in steps from the
+    // newest the view had seen (the loop was at least there), and in CLOCK_REALTIME of this host.
+    event(
+        fmt::format("{} (applied at step {}, the view had seen step {}; {:.2f} ms after the press)",
+                    press.text(), step, press.seen_step,
+                    static_cast<double>(transport::realtime_ns() - press.realtime_ns) * 1e-6));
     if (press.allowed && !stop)
       stop.emplace(press.stop ? std::string(kStoppedFromView) + " by " + press.who
                               : "HOLD from the view by " + press.who,

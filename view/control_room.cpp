@@ -137,10 +137,11 @@ Press ControlDesk::judge(const Role& role, const std::string& action,
 }
 
 std::optional<Press> ControlDesk::press(const std::string& token, const std::string& action,
-                                        const std::string& lab) {
+                                        const std::string& lab, std::int64_t seen_step) {
   const std::optional<Role> role = crew_.identify(token);
   if (!role) return std::nullopt;
   Press p = judge(*role, action, lab);
+  p.seen_step = seen_step;
   std::lock_guard lock(mutex_);
   queued_.push_back(p);
   pending_.store(true, std::memory_order_relaxed);

@@ -64,6 +64,9 @@ struct Press {
   std::vector<int> hold_nodes;  // an allowed HOLD: the nodes to HOLD
   bool stop = false;            // an allowed STOP
   std::int64_t realtime_ns = 0;
+  // The newest step the view had seen when it was pressed (-1: none): the loop's step then was
+  // at least this, so the steps from it to the one that applied the press bound the delay.
+  std::int64_t seen_step = -1;
   std::string text() const;  // the record event's words
 };
 
@@ -76,7 +79,7 @@ class ControlDesk {
   // Judges one press. No role (unknown token): nullopt, nothing queued. An unknown action or lab
   // is refused, naming it.
   std::optional<Press> press(const std::string& token, const std::string& action,
-                             const std::string& lab);
+                             const std::string& lab, std::int64_t seen_step = -1);
   bool pending() const { return pending_.load(std::memory_order_relaxed); }
   std::vector<Press> take();  // the queued presses, oldest first
   const std::map<std::string, std::vector<int>>& labs() const { return labs_; }

@@ -399,7 +399,8 @@ void ViewServer::stream(httplib::Server& s) {
 void ViewServer::control(const httplib::Request& req, httplib::Response& res,
                          const std::string& action) {
   const auto press = options_.desk->press(req.get_header_value("X-RTHS-Token"), action,
-                                          req.get_header_value("X-RTHS-Lab"));
+                                          req.get_header_value("X-RTHS-Lab"),
+                                          static_cast<std::int64_t>(feed_.steps_seen()) - 1);
   if (!press) {
     ++bad_token_;
     res.status = 403;

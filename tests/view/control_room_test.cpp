@@ -46,8 +46,9 @@ TEST(Crew, FromJsonRefusesAMissingOrShortToken) {
 TEST(ControlDesk, AnOperatorHoldsOnlyTheirOwnLabAndNeverStops) {
   ControlDesk d = desk();
   const std::string token = d.crew().operators.at("lab_b");
-  const auto own = d.press(token, "hold", "lab_b");
+  const auto own = d.press(token, "hold", "lab_b", 41);
   ASSERT_TRUE(own);
+  EXPECT_EQ(own->seen_step, 41);  // the newest step the view had seen, for the loop's event
   EXPECT_TRUE(own->allowed);
   EXPECT_EQ(own->hold_nodes, (std::vector<int>{2, 3}));
   EXPECT_FALSE(own->stop);

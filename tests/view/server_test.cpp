@@ -160,6 +160,7 @@ TEST(ViewServer, TheControlRoomAnswersEachRoleAsTheDeskJudgesIt) {
   const auto presses = desk.take();
   ASSERT_EQ(presses.size(), 5u);
   EXPECT_EQ(presses[3].hold_nodes, std::vector<int>{2});
+  EXPECT_EQ(presses[3].seen_step, -1);  // the feed had seen no step
   EXPECT_TRUE(presses[4].stop);
 }
 

@@ -4,7 +4,7 @@
 // buttons (the director: HOLD any lab, STOP; a lab's operator: HOLD that lab).
 // Per link, over the last STATS_S s of samples: round trip (median, ms), jitter (standard
 // deviation of the round trip, ms), loss (1 - answers accepted / steps, %), drift (least-squares
-// slope of the round trip over every kept sample, ms per s), against the critical round trip
+// slope of the round trip over the kept samples after the first DRIFT_SKIP_S s, ms per s), against the critical round trip
 // (context.critical_round_trip: compensated or uncompensated, as its label says) with the margin
 // left, 100 (critical - round trip) / critical %; the force predictor's largest |error| (N) and
 // the answer age (ms, the step minus the step its answer answered, times dt) against the answer
@@ -12,6 +12,7 @@
 // its cause (the record's events naming it).
 'use strict';
 const STATS_S = 2;
+const DRIFT_SKIP_S = 1;
 
 // [{name, nodes, lab_nodes}]: the sites config's, else one site holding every node.
 function siteList() {
@@ -102,13 +103,18 @@ function linkStats(l, i0, i1) {
   const c = V.cols, rt = c.round_trip_ms[l].slice(i0, i1).filter(x => x > 0);
   const sorted = rt.slice().sort((a, b) => a - b), mean = rt.reduce((s, x) => s + x, 0) / (rt.length || 1);
   const sd = Math.sqrt(rt.reduce((s, x) => s + (x - mean) ** 2, 0) / Math.max(1, rt.length - 1));
+  // Loss over the window from its first sample with an answer count (none before the first answer).
   const ans = c.answers[l], steps = c.step;
-  const loss = i1 - i0 > 1 && ans[i1 - 1] !== null && ans[i0] !== null
-    ? 100 * (1 - (ans[i1 - 1] - ans[i0]) / Math.max(1, steps[i1 - 1] - steps[i0])) : null;
-  // Least-squares slope of the round trip over every kept sample (ms per s of test time).
+  let a0 = i0; while (a0 < i1 && ans[a0] === null) a0++;
+  const loss = i1 - a0 > 1 && ans[i1 - 1] !== null
+    ? 100 * (1 - (ans[i1 - 1] - ans[a0]) / Math.max(1, steps[i1 - 1] - steps[a0])) : null;
+  // Least-squares slope of the round trip over the kept samples after the first DRIFT_SKIP_S s
+  // (the start-up's first answers would read as drift), ms per s of test time.
   let n = 0, st = 0, sr = 0, stt = 0, str = 0;
   c.round_trip_ms[l].forEach((r, i) => {
-    if (!(r > 0)) return; const x = c.time_s[i]; n++; st += x; sr += r; stt += x * x; str += x * r;
+    const x = c.time_s[i];
+    if (!(r > 0) || x < DRIFT_SKIP_S) return;
+    n++; st += x; sr += r; stt += x * x; str += x * r;
   });
   const drift = n > 2 && n * stt - st * st > 0 ? (n * str - st * sr) / (n * stt - st * st) : null;
   return { rt: sorted.length ? sorted[Math.floor(sorted.length / 2)] : null, jitter: rt.length > 1 ? sd : null, loss, drift };
@@ -141,6 +147,8 @@ function showSites() {
   for (const [a, cell] of Object.entries(V.siteCells.acts))
     cell.textContent = 'command ' + fmt(c.command_mm[a][i1 - 1], 3) + ' mm, measured ' +
       fmt(c.measured_mm[a][i1 - 1], 3) + ' mm, error ' + fmt(c.error_mm[a][i1 - 1], 4) + ' mm';
+  // A finished run has nothing left to HOLD.
+  if (V.status && V.status.finished) document.querySelectorAll('button.hold').forEach(b => { b.disabled = true; });
   for (const [n, cell] of Object.entries(V.siteCells.nodes)) {
     const text = nodeState(+n); cell.textContent = text || (V.status && V.status.finished ? V.status.state : 'armed');
     cell.className = text ? 'held' : '';
