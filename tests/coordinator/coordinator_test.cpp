@@ -170,6 +170,27 @@ RecordedRun run_recorded(const std::string& deployment, const std::string& recor
   return r;
 }
 
+// A case's link is the network in process: a distributed run of it is refused naming where its
+// network is given, before any step, rather than run without the link the case names.
+TEST(Coordinator, ACaseWithAnInProcessLinkIsRefusedNamingTheNodesLags) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      0.2,
+      "cases { name: \"linked\" link { to_node { one_way_delay: 0.01 } } }\n"
+      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
+  coordinator::CoordinatorOptions options;
+  options.run_id = "run";
+  options.case_name = "linked";
+  Cluster c;
+  try {
+    coordinator::Coordinator coordinator(prepared, c.transport, options);
+    FAIL() << "a case with a link ran distributed";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("case 'linked' has a link"), std::string::npos) << what;
+    EXPECT_NE(what.find("receive_lag and send_lag"), std::string::npos) << what;
+  }
+}
+
 TEST(Coordinator, TwoDifferentAnswersToOneStepStopTheRunNamingTheNode) {
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
       0.5,
