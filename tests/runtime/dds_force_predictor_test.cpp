@@ -1,8 +1,10 @@
 // The force predictor (core/force_predictor.h) over Cyclone DDS: the coordinator applies the same
 // blocks to the emulator's answers as core::simulate applies in process, so a lockstep run of a
 // case with a predictor equals the in-process run bit for bit, and the record's link samples
-// carry the prediction error of every step. Real processes on loopback, DDS domains 89 and 91.
+// carry the prediction error of every step. Real processes on loopback, DDS domains 89, 91 and 54.
 #include <gtest/gtest.h>
+
+#include <string>
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
@@ -51,6 +53,28 @@ TEST_F(DdsForcePredictor, LockstepEqualsInProcessBitForBitAndRecordsThePredictio
     }
   }
   EXPECT_EQ(checked, steps.size() - 1);  // one actuator link, every step after the first
+}
+
+// A column yielding sharply at the lab (bilinear, 0.5 mm) where the predictor's model is a smooth
+// Bouc-Wen (force_predictor.model) with a lag term started at 2 ms: the coordinator builds and fits
+// the same hysteretic model as core::simulate, so the lockstep run still equals it bit for bit.
+TEST_F(DdsForcePredictor, AModelWithHysteresisAndLagIsTheSameInLockstep) {
+  std::string text = test::paper_frame_study(
+      2,
+      "cases { name: \"hysteretic\" delay { shift { delay: 0.060 } } delay { shift { delay: "
+      "0.014 } } force_predictor { stiffness_factor: 0.7 force_lag: 0.002 model { bouc_wen { "
+      "yield_displacement: 0.0005 alpha: 0.02 } } } }");
+  const std::string linear = "model { linear {} }";
+  text.replace(text.find(linear), linear.size(),
+               "model { bilinear { yield_displacement: 0.0005 post_yield_ratio: 0.02 } }");
+  const core::SimulationResult in_process = test::reference_result(text, "hysteretic");
+  ASSERT_EQ(in_process.predictor_models.size(), 1u);
+  EXPECT_NE(in_process.predictor_models[0].find(", h "), std::string::npos)
+      << in_process.predictor_models[0];
+  const auto run = test::launch("force_predictor_hysteretic", text, "hysteretic", 54);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
+  ASSERT_FALSE(run.record.truncated);
+  test::expect_record_equals(run.record, in_process);
 }
 
 // A fixed model 50 % soft with a 20 % bound: the coordinator's fail-safe HOLDs the run at the
