@@ -358,6 +358,9 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   }
   for (std::size_t a = 0; a < setup.predictors.size(); ++a)
     if (setup.predictors[a]) result.predicted_actuators.push_back(static_cast<int>(a));
+  for (const core::LinkModel& link : setup.links)
+    result.link_answers.push_back(core::link_answer_stats(
+        core::link_answer_steps(link, setup.dt, prepared.motion.acceleration.size())));
   if (study_case.has_force_predictor())
     result.compensated = judge_predicted_loop(setup, study_case, options.extra_lag);
   if (const auto warning = pre_run_warning(result); warning && options.warn)

@@ -67,6 +67,9 @@ struct CaseOutcome {
   // The actuators (0-based) whose force a predictor compensates (core/force_predictor.h); their
   // errors are in simulation.prediction_error and the summary (prediction_error_text/_json).
   std::vector<int> predicted_actuators;
+  // Per actuator, when the case has a link (Case.link): what its answers did over the record
+  // (core/link_answers.h); empty without one.
+  std::vector<core::LinkAnswerStats> link_answers;
   // The top floor's envelope over the last cycles (core::envelope_growth at the check's governing
   // period); empty without a check or when the record is too short to fit.
   std::optional<core::EnvelopeGrowth> growth;

@@ -64,6 +64,41 @@ std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c,
   return out;
 }
 
+// Per linked actuator, in config order, what its answers did over the record (Case.link).
+nlohmann::json link_answers_json(const CaseOutcome& c, const ActuatorNames& names) {
+  if (c.link_answers.empty()) return nullptr;
+  nlohmann::json out = nlohmann::json::array();
+  for (int a : names.order) {
+    if (a >= static_cast<int>(c.link_answers.size())) continue;
+    const core::LinkAnswerStats& s = c.link_answers[static_cast<std::size_t>(a)];
+    out.push_back({{"actuator", a + 1},
+                   {"name", names.of(a)},
+                   {"used_answers", s.used_answers},
+                   {"unused_answers", s.unused_answers},
+                   {"repeated_steps", s.repeated_steps},
+                   {"median_age_steps", s.median_age},
+                   {"max_age_steps", s.max_age}});
+  }
+  return out;
+}
+
+// One line per linked actuator: the answers the integrator used, those it never used, and
+// their age, as the DDS run's line counts them.
+void write_link_lines(std::ostream& out, const CaseOutcome& c, const ActuatorNames& names) {
+  for (int a : names.order) {
+    if (a >= static_cast<int>(c.link_answers.size())) continue;
+    const core::LinkAnswerStats& s = c.link_answers[static_cast<std::size_t>(a)];
+    const auto ms = [&](std::int64_t steps) {
+      return core::format_ms(static_cast<double>(steps) * c.simulation.dt);
+    };
+    out << c.name << ": link to " << names.of(a) << ": " << s.used_answers
+        << " answers used (each step uses the newest arrived), " << s.unused_answers
+        << " never used (lost, or overtaken within a step), " << s.repeated_steps
+        << " steps kept the step before's; age median " << s.median_age << " steps ("
+        << ms(s.median_age) << "), max " << s.max_age << " (" << ms(s.max_age) << ")\n";
+  }
+}
+
 nlohmann::json prediction_error_json(const CaseOutcome& c, const ActuatorNames& names) {
   if (c.predicted_actuators.empty()) return nullptr;
   nlohmann::json out = nlohmann::json::array();
@@ -141,6 +176,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                      {"stability", stability},
                      {"compensated_loop", compensated_json(c.compensated)},
                      {"prediction_error", prediction_error_json(c, outcome.actuators)},
+                     {"link_answers", link_answers_json(c, outcome.actuators)},
                      {"envelope_growth", growth_json(c.growth)},
                      {"peak_displacement_m", c.comparison.peak_m},
                      {"peak_error_pct", whole(c.comparison.peak_error_pct)},
@@ -249,6 +285,7 @@ std::string study_summary_text(const StudyOutcome& outcome) {
   for (const CaseOutcome& c : outcome.cases) {
     if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
     if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";
+    write_link_lines(out, c, outcome.actuators);
     for (const PredictionErrorSummary& p : prediction_errors(c, outcome.actuators))
       out << c.name << ": prediction error at " << p.name << " (actuator " << p.actuator
           << "): RMS " << fixed(p.rms, 2) << " N (" << fixed(p.relative_pct, 2)

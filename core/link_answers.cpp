@@ -101,6 +101,7 @@ LinkAnswerStats link_answer_stats(const std::vector<std::int64_t>& used) {
     const std::int64_t age = static_cast<std::int64_t>(k) - used[k];
     ages.push_back(age);
     stats.max_age = std::max(stats.max_age, age);
+    if (used[k] != previous) ++stats.used_answers;
     if (previous > 0 && used[k] == previous) ++stats.repeated_steps;
     if (previous > 0 && used[k] > previous + 1)
       stats.unused_answers += static_cast<std::size_t>(used[k] - previous - 1);

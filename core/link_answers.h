@@ -76,11 +76,12 @@ std::string describe_link(const LinkModel& link);
 // The schedule of a run of `steps` whose actuator a answers over links[a] (answer_replay.h).
 AnswerSchedule link_schedule(const std::vector<LinkModel>& links, double dt, std::size_t steps);
 
-// What a schedule did, from the first step that used an answer: steps that used the same answer
-// as the step before (one late or lost: the integrator kept the last force), answers never used
-// (lost, or overtaken within one step), and the answers' age k - used[k], in steps.
+// What a schedule did, from the first step that used an answer: the answers used (each counted
+// once), steps that used the same answer as the step before (one late or lost: the integrator
+// kept the last force), answers never used (lost, or overtaken within one step), and the
+// answers' age k - used[k], in steps.
 struct LinkAnswerStats {
-  std::size_t repeated_steps = 0, unused_answers = 0;
+  std::size_t used_answers = 0, repeated_steps = 0, unused_answers = 0;
   std::int64_t median_age = 0, max_age = 0;  // steps
 };
 LinkAnswerStats link_answer_stats(const std::vector<std::int64_t>& used);

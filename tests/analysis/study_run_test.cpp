@@ -214,6 +214,31 @@ TEST(StudyRun, APredictedCaseDrawsItsMeasuredForceAgainstTheModel) {
   std::filesystem::remove_all(dir);
 }
 
+// A case with a link says what its answers did, as the DDS run's line does: how many the
+// integrator used, how many it never did, and their age, in the text and in summary.json.
+TEST(StudyRun, ACaseWithALinkSaysWhatItsAnswersDid) {
+  const StudyOutcome outcome = run_study(
+      frame(1.0 / 3.0,
+            "cases { name: \"reference\" } cases { name: \"linked\" link { to_node { "
+            "one_way_delay: 0.005 jitter: 0.001 loss: 0.02 seed: 1 } from_node { one_way_delay: "
+            "0.005 seed: 2 } } }",
+            "", 4.0));
+  const CaseOutcome& linked = outcome.cases[1];
+  ASSERT_EQ(linked.link_answers.size(), 1u);
+  const core::LinkAnswerStats& s = linked.link_answers[0];
+  EXPECT_GT(s.used_answers, 1000u);
+  EXPECT_LT(s.used_answers, 4000u);  // 2 % lost and the jitter's bursts
+  EXPECT_GE(s.median_age, 10);       // the 10 ms round trip at 1 ms steps, or more
+  const std::string text = study_summary_text(outcome);
+  EXPECT_NE(
+      text.find("linked: link to storey 1: " + std::to_string(s.used_answers) + " answers used"),
+      std::string::npos)
+      << text;
+  const nlohmann::json json = study_summary_json(outcome);
+  EXPECT_EQ(json["cases"][1]["link_answers"][0]["used_answers"], s.used_answers);
+  EXPECT_TRUE(json["cases"][0]["link_answers"].is_null());
+}
+
 // A case stopped by a limit before the reference's strongest second is drawn up to its stop, a
 // dashed line there naming why, its tracking zoom on its own last second: the zoom once lay past
 // the case's end, gnuplot found no point in it ("all points y value undefined") and no figure of

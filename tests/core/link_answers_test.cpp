@@ -48,6 +48,7 @@ TEST(LinkAnswers, AFixedRoundTripUsesTheAnswerThatManyStepsOld) {
   const LinkAnswerStats stats = link_answer_stats(used);
   EXPECT_EQ(stats.max_age, 60);
   EXPECT_EQ(stats.median_age, 60);
+  EXPECT_EQ(stats.used_answers, 500u - 61u);  // steps 61..499 use answers 1..439
   EXPECT_EQ(stats.repeated_steps, 0u);
   EXPECT_EQ(stats.unused_answers, 0u);
 }
@@ -85,6 +86,8 @@ TEST(LinkAnswers, JitterAndLossLoseAndDelayAnswersAsTheirDrawsSay) {
   EXPECT_GT(unused, 1.0 - 0.95 * 0.95);
   EXPECT_LT(unused, 0.95);
   EXPECT_GT(stats.repeated_steps, steps / 20);
+  // Every answer up to the last one used is either used or not.
+  EXPECT_EQ(stats.used_answers + stats.unused_answers, static_cast<std::size_t>(used.back()));
   EXPECT_GE(stats.median_age, 60);
   EXPECT_LE(stats.max_age, 60 + 2 * 6 * 3 + 1);
   for (std::size_t k = 1; k < steps; ++k) ASSERT_GE(used[k], used[k - 1]) << k;
