@@ -43,6 +43,15 @@ std::optional<std::pair<std::size_t, std::string>> first_limit_trip(
   return std::nullopt;
 }
 
+// Whether a case's setup is the base's: it sets nothing but its name and expect_unstable (no
+// delay stage, compensation, predictor or link, nor any field added later).
+bool adds_nothing(const config::Case& study_case) {
+  config::Case rest = study_case;
+  rest.clear_name();
+  rest.clear_expect_unstable();
+  return rest.ByteSizeLong() == 0;
+}
+
 // What each run of the study keeps per step: the DOFs and the base shear its recorders read.
 core::SimulationOptions kept_by_recorders(const core::PreparedStudy& prepared) {
   core::SimulationOptions options;
@@ -534,7 +543,10 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
     CaseOutcome result = describe_case(
         prepared, setup, study_case,
         study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(), options);
-    result.simulation = core::simulate(setup, prepared.motion, kept);
+    // A case that adds nothing to the base is the lag-free run itself: its steps are not
+    // integrated twice.
+    result.simulation =
+        adds_nothing(study_case) ? lag_free : core::simulate(setup, prepared.motion, kept);
     if (const auto trip = first_limit_trip(result.simulation, study.deployment().limits())) {
       result.simulation.truncate(trip->first);  // the command of that step is never sent
       result.status = "limit tripped";

@@ -55,6 +55,43 @@ TEST(StudyRun, ACasePastItsCriticalDelayIsWarnedAndJudgedDiverged) {
 // A compensated case is judged on its compensated loop: a linear compensator is analysed (and
 // then not warned about, though its uncompensated lag is past), an adaptive one is stated as not
 // judgeable, with the uncompensated margin beside and no "expect it to diverge".
+// A case that adds nothing to the base takes the lag-free run's steps: they are what its own
+// run gives, bit for bit, on one DOF and on a model past the recorders' default threshold.
+TEST(StudyRun, ACaseThatAddsNothingIsTheLagFreeRunBitForBit) {
+  std::string masses, stiffnesses;
+  for (int i = 0; i < 300; ++i) {
+    masses += (i ? "," : "") + std::string("1000");
+    stiffnesses += (i ? "," : "") + std::string("1e6");
+  }
+  const std::string building = "name: \"tall\" structure { shear_building { storey_mass: [" +
+                               masses + "] storey_stiffness: [" + stiffnesses +
+                               "] } damping { modal_zeta: 0.05 } } "
+                               "motion { path: \"../data/ground_motions/"
+                               "RSN175_IMPVALL.H_H-E12140.AT2\" duration: 1 } "
+                               "substructuring { experimental_storeys: 1 } "
+                               "cases { name: \"bare\" expect_unstable: true } "
+                               "cases { name: \"lag\" delay { shift { delay: 0.004 } } }";
+  for (const core::PreparedStudy& prepared :
+       {frame(0.5,
+              "cases { name: \"bare\" } cases { name: \"lag\" delay { shift { delay: "
+              "0.004 } } }",
+              "", 2.0),
+        core::prepare_study(core::parse_study(building, "test"), kConfigs)}) {
+    const StudyOutcome outcome = run_study(prepared);
+    core::SimulationOptions options;
+    options.kept_dofs = prepared.recorders.kept_dofs;
+    const core::SimulationResult own = core::simulate(
+        core::setup_for_case(prepared, prepared.config.cases(0)), prepared.motion, options);
+    const core::SimulationResult& taken = outcome.cases.at(0).simulation;
+    EXPECT_EQ(taken.displacement, own.displacement);
+    EXPECT_EQ(taken.velocity, own.velocity);
+    EXPECT_EQ(taken.command, own.command);
+    EXPECT_EQ(taken.measured_force, own.measured_force);
+    EXPECT_GT(core::peak_abs(outcome.cases.at(0).response), 1e-4);  // m: the structure moved
+    EXPECT_NE(outcome.cases.at(1).simulation.displacement, own.displacement);
+  }
+}
+
 TEST(StudyRun, ACompensatedCaseIsJudgedOnItsCompensatedLoop) {
   std::vector<std::string> warnings;
   const StudyOutcome outcome = run_study(
