@@ -58,6 +58,12 @@ void set_relation(const Judged& j, ChannelFloor& out) {
 void set_events(const Judged& j, double dt, double sigma, ChannelFloor& out) {
   if (j.reading.size() != j.prediction.size()) return;
   out.events = find_events(j.time, j.reading, j.prediction, dt, sigma);
+  out.time = j.time;
+  out.inside_events.assign(j.time.size(), 0.0);
+  for (const auto& e : out.events)
+    for (std::size_t k = 0; k < j.time.size(); ++k)
+      if (j.time[k] >= e.start - 0.5 * dt && j.time[k] <= e.end + 0.5 * dt)
+        out.inside_events[k] = j.residual[k];
   const std::string n = std::to_string(out.actuator);
   const bool moved_only = std::all_of(out.events.begin(), out.events.end(), [](const auto& e) {
     return e.kind == EventKind::kCapacityDrop;
@@ -205,7 +211,9 @@ std::string ChannelFloor::events_text() const {
     out += " s, " + event_size(e, channel == Channel::kForce ? "N" : "m") + " (" +
            fixed_text(100.0 * e.share, 1) + " % of the residual's power)";
   }
-  return out;
+  return out + (events_share ? "; the re-run with them put back: share " +
+                                   fixed_text(100.0 * *events_share, 0) + " %"
+                             : "; not re-run, no share");
 }
 
 std::string unexplained_section(const std::vector<Unexplained>& unexplained,
@@ -239,14 +247,39 @@ nlohmann::json unexplained_json(const std::vector<Unexplained>& unexplained,
     for (const auto& e : f.events)
       if (std::find(kinds.begin(), kinds.end(), event_name(e.kind)) == kinds.end())
         kinds.push_back(event_name(e.kind));
-    out.push_back({{"part", f.events_part},
-                   {"channel", f.channel_word},
-                   {"share_pct", nullptr},
-                   {"kinds", kinds},
-                   {"when", events_json(f)},
-                   {"text", f.events_text()}});
+    out.push_back(
+        {{"part", f.events_part},
+         {"channel", f.channel_word},
+         {"share_pct", f.events_share ? nlohmann::json(100.0 * *f.events_share) : nlohmann::json()},
+         {"kinds", kinds},
+         {"when", events_json(f)},
+         {"text", f.events_text()}});
   }
   return out;
+}
+
+std::vector<Unexplained> event_residuals(const std::vector<ChannelFloor>& floors) {
+  std::vector<Unexplained> out;
+  for (const auto& f : floors) {
+    if (f.events.empty()) continue;
+    Unexplained u;
+    u.actuator = f.actuator;
+    u.channel = f.channel;
+    u.part = f.events_part;
+    u.channel_word = f.channel_word + " events";
+    u.time = f.time;
+    u.description.described = f.inside_events;
+    out.push_back(std::move(u));
+  }
+  return out;
+}
+
+void set_event_shares(const std::vector<ResidualShare>& described,
+                      std::vector<ChannelFloor>& floors) {
+  for (auto& f : floors)
+    for (const auto& s : described)
+      if (!f.events.empty() && s.link == f.events_part && s.effect == f.channel_word + " events")
+        f.events_share = s.share;
 }
 
 }  // namespace rths::identify

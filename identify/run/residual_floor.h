@@ -53,16 +53,20 @@
 //             times. Their part: on the force channel a capacity drop alone is the specimen's,
 //             anything else the channel's part above where above, else the load cell's; on the
 //             displacement channel a held reading, a spike or a step change is the displacement
-//             sensor's, anything else the actuator's.
+//             sensor's, anything else the actuator's. The re-run models them: the residual
+//             inside them put back where the channel reads it (as a description's, unexplained.h),
+//             its share of what the re-run leaves stated beside them.
 
 #include <nlohmann/json.hpp>
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "identify/residual/events.h"
 #include "identify/residual/locate.h"
 #include "identify/run/actuator_path.h"
+#include "identify/run/run_residual.h"
 #include "identify/run/unexplained.h"
 
 namespace rths::identify {
@@ -91,6 +95,10 @@ struct ChannelFloor {
   // Whether above or not: what the residual holds for a moment (events.h), the largest first.
   std::vector<ResidualEvent> events;
   std::string events_part;  // the part the events are on ("load cell 1")
+  // The channel's samples (s) and its residual inside the events, 0 elsewhere (unit): what the
+  // re-run puts back to model them (event_residuals).
+  std::vector<double> time, inside_events;
+  std::optional<double> events_share;  // of the re-run's remaining error; absent when not re-run
   bool reported() const { return above || !events.empty(); }
   std::string events_text() const;   // "located in time on load cell 1 (force): spike at ..."
   std::string floor_source() const;  // "the sensor's noise 0.2 %, the residual above ..."
@@ -107,6 +115,14 @@ std::vector<ChannelFloor> channel_floors(const ActuatorPath& path);
 // ...)" stating each floor.
 std::string unexplained_section(const std::vector<Unexplained>& unexplained,
                                 const std::vector<ChannelFloor>& floors);
+// Each channel's events as a described residual for the re-run (run_residual.h described): the
+// residual inside its events put back where the channel reads it, on its events' part, named
+// "<channel> events" ("force events") so that its share is told from a description's.
+std::vector<Unexplained> event_residuals(const std::vector<ChannelFloor>& floors);
+// Each channel's events' share from the re-run (RunResidual::described).
+void set_event_shares(const std::vector<ResidualShare>& described,
+                      std::vector<ChannelFloor>& floors);
+
 // The report's `unexplained` list: each description's entry (Unexplained::json), then one entry
 // per channel with events: {part, channel, share_pct: null, kinds (the events' kinds, once each),
 // when [{kind, start_s, end_s, share, size, unit}], text}.

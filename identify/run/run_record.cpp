@@ -2,6 +2,7 @@
 
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
+#include "identify/run/residual_floor.h"
 #include "identify/run/sensors.h"
 
 #include <algorithm>
@@ -402,7 +403,10 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
   input.recorded = &recorded;
   input.actuators = &run.actuators;
   input.platform = run.replay ? &*run.replay : nullptr;
-  input.unexplained = &run.unexplained;
+  // The descriptions and each channel's events, each put back in its own re-run.
+  std::vector<Unexplained> described = run.unexplained;
+  for (auto& u : event_residuals(run.floors)) described.push_back(std::move(u));
+  input.unexplained = &described;
   try {
     return run_residual(input);
   } catch (const std::invalid_argument& e) {
@@ -494,6 +498,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     out.residual = residual(record, contents, header, m, out);
     keep_what_helps(out, [&] { return residual(record, contents, header, m, out); });
     set_shares(*out.residual, out.unexplained);
+    set_event_shares(out.residual->described, out.floors);
   }
   out.findings = collect_findings(out.links, out.actuators, out.residual ? &*out.residual : nullptr,
                                   out.clock);

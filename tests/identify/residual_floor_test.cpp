@@ -1,7 +1,8 @@
 // Never silent (identify/run/residual_floor.h): on records of an independent closed-loop
 // simulation (independent_record.h), a clean record reads "none" with each channel's floor
 // stated and no event, a held reading, spikes and an offset's step on the load cell are located
-// in time with their kind in the text and the JSON's `unexplained` list, a rattle on the load cell for a moment, which no stage and no description holds, is
+// in time with their kind in the text and the JSON's `unexplained` list (a held reading's share of
+// the re-run's error with it put back), a rattle on the load cell for a moment, which no stage and no description holds, is
 // reported on the load cell above the floor, in its window and at its frequency, and a force
 // residual that follows the motion on the specimen.
 #include "identify/run/residual_floor.h"
@@ -28,6 +29,8 @@ RunIdentification identify_rig(const std::string& name, const test::RigTruth& ri
     std::printf("%s: %s (%s) residual %.4f, floor %.4f (noise %.5f, band %.5f)%s\n", name.c_str(),
                 f.part.c_str(), f.channel_word.c_str(), f.level, f.floor, f.noise, f.band_noise,
                 f.above ? (":\n  " + f.text()).c_str() : "");
+  for (const auto& f : run.floors)
+    if (!f.events.empty()) std::printf("  %s\n", f.events_text().c_str());
   return run;
 }
 
@@ -137,6 +140,11 @@ TEST(ResidualFloorRecords, AHeldReadingIsLocatedInTime) {
   EXPECT_NEAR(held[0].start, 7.0, 0.002) << text;
   EXPECT_NEAR(held[0].end, 7.4, 0.002) << text;
   EXPECT_EQ(force.events_part, "load cell 1");
+  // Modelled in the re-run: the residual inside it put back removes most of what the re-run
+  // leaves (the frozen force drove the frame).
+  ASSERT_TRUE(force.events_share.has_value()) << text;
+  EXPECT_GT(*force.events_share, 0.5) << text;
+  EXPECT_NE(force.events_text().find("; the re-run with them put back: share "), std::string::npos);
   EXPECT_NE(text.find("  located in time on load cell 1 (force): "), std::string::npos) << text;
   const nlohmann::json entry = entry_of(run, "load cell 1", "held_sample");
   ASSERT_FALSE(entry.is_null()) << text;
