@@ -1,5 +1,6 @@
 #include "tests/support/platform_gate.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "rt_check/check.h"
@@ -31,20 +32,15 @@ MeasuredPlatform measure_platform(double rate_hz, double seconds) {
   return summarise(rt_check::measure_wakeups(rt_check::allowed_cpus(), rate_hz, seconds));
 }
 
-StallWitness::StallWitness(double rate_hz, double max_seconds) : rate_hz_(rate_hz) {
-  samples_ = std::async(std::launch::async, [this, max_seconds] {
-    return rt_check::measure_wakeups_until(rt_check::allowed_cpus(), rate_hz_, stop_, max_seconds);
-  });
-}
-
-StallWitness::~StallWitness() {
-  stop_ = true;
-  if (samples_.valid()) samples_.wait();
-}
+StallWitness::StallWitness(double rate_hz, double seconds)
+    : rate_hz_(rate_hz), seconds_(seconds), before_(measure_platform(rate_hz, seconds)) {}
 
 MeasuredPlatform StallWitness::finish() {
-  stop_ = true;
-  return summarise(samples_.get());
+  MeasuredPlatform after = measure_platform(rate_hz_, seconds_);
+  MeasuredPlatform& worse = after.max >= before_.max ? after : before_;
+  worse.p99 = std::max(before_.p99, after.p99);
+  worse.text = "before the run " + before_.text + "; after it " + after.text;
+  return worse;
 }
 
 }  // namespace rths::test

@@ -10,12 +10,14 @@
 //     stalls     the statistics themselves (stalls_per_minute(x): wake-ups later than x s)
 //     text       "wake-up lateness at 1000 Hz over 0.5 s on 2 CPUs: p99 0.08 ms, max 3.9 ms"
 //
-//   StallWitness   the same measurement beside a run: started before it, finish() after it
-//                  gives what the machine did meanwhile. A run's timing failure is the machine's
-//                  when the witness saw a stall of that size; without one it is the code's.
+//   StallWitness   the same measurement just before a run (the constructor, `seconds` long) and
+//                  just after it (finish(), as long), never during: the run's own processes then
+//                  cannot move it, so a regression that burns CPU is not read as a loaded
+//                  machine. finish() gives the worse of the two (by longest stall). A run's
+//                  timing failure is the machine's when the witness saw a stall of that size
+//                  around it (a load that came and went within the run is missed: then the
+//                  failure is the code's, which a rerun tells apart); without one it is the code's.
 
-#include <atomic>
-#include <future>
 #include <optional>
 #include <string>
 
@@ -34,17 +36,13 @@ MeasuredPlatform measure_platform(double rate_hz, double seconds = 0.5);
 
 class StallWitness {
  public:
-  // At most `max_seconds` of measurement (a run that outlives it is judged on what was seen).
-  explicit StallWitness(double rate_hz = 1000.0, double max_seconds = 120.0);
-  ~StallWitness();
-  StallWitness(const StallWitness&) = delete;
-  StallWitness& operator=(const StallWitness&) = delete;
-  MeasuredPlatform finish();  // once
+  // Measures the machine now, for `seconds` at `rate_hz`.
+  explicit StallWitness(double rate_hz = 1000.0, double seconds = 1.0);
+  MeasuredPlatform finish();  // once: measures again, the worse of the two
 
  private:
-  double rate_hz_;
-  std::atomic<bool> stop_{false};
-  std::future<rt_check::WakeupSamples> samples_;
+  double rate_hz_, seconds_;
+  MeasuredPlatform before_;
 };
 
 }  // namespace rths::test
