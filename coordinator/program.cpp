@@ -12,6 +12,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "coordinator/answer_age.h"
 #include "rt_check/check.h"
 #include "runtime/launch/launch.h"
 #include "runtime/node/node_main.h"
@@ -154,11 +155,17 @@ LiveView start_view(const std::string& address_text, bool allow_stop, const std:
   live.feed = std::make_unique<view::Feed>();
   // The prediction runs the case in process here, before the run starts (never on its loop).
   view::describe_run(*live.feed, prepared, case_name);
-  if (!down.sites.empty()) {
-    nlohmann::json context = live.feed->context();
-    context["sites"] = down.sites_json();
-    live.feed->set_context(context);
-  }
+  nlohmann::json context = live.feed->context();
+  if (!down.sites.empty()) context["sites"] = down.sites_json();
+  // Real time: each node's answer window as the loop judges it (its link's injected lag added),
+  // at the run's start, for the page's answer age.
+  const config::Deployment deployment =
+      runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
+  if (deployment.clock() == config::Deployment::REAL_TIME)
+    for (const config::NodeSpec& node : deployment.nodes())
+      context["answer_window_steps_by_node"][std::to_string(node.id())] =
+          AnswerWindow(deployment, node, prepared.base.dt).steps(0.0);
+  live.feed->set_context(context);
   live.server = std::make_unique<view::ViewServer>(*live.feed, options);
   // A token handed down by the launcher was printed there: this output may be a log file.
   const bool token_made_here = allow_stop && !(given && *given);

@@ -17,10 +17,15 @@ namespace {
 nlohmann::json critical_round_trip(const core::PreparedStudy& prepared,
                                    const config::Case& study_case) {
   const auto compensated = analysis::predicted_loop_verdict(prepared, study_case, 0.0);
-  if (compensated && compensated->analysed && compensated->extra_delay_tolerated)
-    return {{"ms", *compensated->extra_delay_tolerated * 1e3},
-            {"label", "compensated (force predictor as it starts)"},
-            {"text", compensated->text}};
+  if (compensated && compensated->analysed && compensated->stable) {
+    nlohmann::json j = {{"label", "compensated (force predictor as it starts)"},
+                        {"text", compensated->text}};
+    if (compensated->extra_delay_tolerated)
+      j["ms"] = *compensated->extra_delay_tolerated * 1e3;
+    else
+      j["unbounded"] = true;  // stable for every round trip
+    return j;
+  }
   const auto check = analysis::check_case_critical_delay(prepared, study_case);
   nlohmann::json j = {{"text", check ? check->describe() : "no experimental part"}};
   if (compensated) j["compensated_text"] = compensated->text;

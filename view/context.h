@@ -33,8 +33,9 @@ namespace rths::view {
 nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name);
 // What the control room shows per link, in run_context: "critical_round_trip" {"ms": the round
 // trip a link may add before the loop is unstable, "label": compensated (a force predictor as it
-// starts, analysis::predicted_loop_verdict) or uncompensated (the critical delay less the case's
-// own lag), "text"}; "answer_window_steps" (runtime::max_missed_answers: an older answer stops
+// starts, analysis::predicted_loop_verdict, where it finds the loop stable; "unbounded": true
+// and no "ms" when stable for every round trip) or uncompensated (the critical delay less the
+// case's own lag), "text"}; "answer_window_steps" (runtime::max_missed_answers: an older answer stops
 // the run); "node_actuators" {"<node id>": [actuator indices]}.
 nlohmann::json link_context(const core::PreparedStudy& prepared, const std::string& case_name);
 

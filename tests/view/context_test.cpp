@@ -96,6 +96,26 @@ TEST(Context, TheLinksFactsAndColumnsAreTheRunsOwn) {
   }
 }
 
+// A case with a force predictor: the critical round trip is the compensated loop's, as
+// analysis::predicted_loop_verdict finds it (here the exact model as it starts: stable for every
+// round trip, so no figure but "unbounded"), never the uncompensated one.
+TEST(Context, ThePredictedLoopsCriticalRoundTripIsTheCompensatedOne) {
+  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+      0.5, "cases { name: \"predicted\" delay { shift { delay: 0.014 } } force_predictor { } }\n"));
+  const auto verdict = analysis::predicted_loop_verdict(
+      prepared, core::find_case(prepared.config, "predicted"), 0.0);
+  ASSERT_TRUE(verdict && verdict->analysed && verdict->stable) << (verdict ? verdict->text : "");
+  const auto critical = link_context(prepared, "predicted")["critical_round_trip"];
+  EXPECT_EQ(critical["label"], "compensated (force predictor as it starts)");
+  EXPECT_EQ(critical["text"], verdict->text);
+  if (verdict->extra_delay_tolerated)
+    EXPECT_NEAR(critical["ms"].get<double>(), *verdict->extra_delay_tolerated * 1e3, 1e-9);
+  else
+    EXPECT_TRUE(critical["unbounded"].get<bool>());
+  EXPECT_EQ(link_context(prepared, "lag_shift_14ms")["critical_round_trip"]["label"],
+            "uncompensated");
+}
+
 TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
   const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
   const core::SimulationResult lagged = predict_case(prepared, "lag_shift_14ms");

@@ -5,10 +5,11 @@
 // Per link, over the last STATS_S s of samples: round trip (median, ms), jitter (standard
 // deviation of the round trip, ms), loss (1 - answers accepted / steps, %), drift (least-squares
 // slope of the round trip over the kept samples after the first DRIFT_SKIP_S s, ms per s), against the critical round trip
-// (context.critical_round_trip: compensated or uncompensated, as its label says) with the margin
-// left, 100 (critical - round trip) / critical %; the force predictor's largest |error| (N) and
+// (context.critical_round_trip: compensated or uncompensated, as its label says; none where the
+// compensated loop is stable for every round trip) with the margin left, 100 (critical - round
+// trip) / critical %; the force predictor's largest |error| (N) and
 // the answer age (ms, the step minus the step its answer answered, times dt) against the answer
-// window. Per actuator: command, measured, tracking error (mm, newest sample). Per node: HOLD and
+// window (a real-time run's per node, context.answer_window_steps_by_node, at the run's start). Per actuator: command, measured, tracking error (mm, newest sample). Per node: HOLD and
 // its cause (the record's events naming it).
 'use strict';
 const STATS_S = 2;
@@ -64,7 +65,8 @@ function buildSites() {
   const crit = (V.context || {}).critical_round_trip || {};
   $('sites-note').textContent = crit.ms !== undefined
     ? 'critical round trip ' + crit.ms.toFixed(1) + ' ms, ' + crit.label + ' (' + crit.text + ')'
-    : 'critical round trip: ' + (crit.text || 'not known');
+    : crit.unbounded ? 'no critical round trip, ' + crit.label + ': stable for every round trip (' + crit.text + ')'
+      : 'critical round trip: ' + (crit.text || 'not known');
   V.siteCells = { links: {}, acts: {}, nodes: {} };
   for (const site of siteList()) {
     const d = document.createElement('details'); d.open = true; d.className = 'site';
@@ -134,11 +136,14 @@ function nodeState(n) {
 function showSites() {
   if (!V.siteCells || !V.cols || !V.cols.time_s.length) return;
   const c = V.cols, ctx = V.context || {}, dt = V.header.dt_s * 1e3, [i0, i1] = lastWindow();
-  const crit = (ctx.critical_round_trip || {}).ms, window = ctx.answer_window_steps;
+  const crit = (ctx.critical_round_trip || {}).ms, unbounded = (ctx.critical_round_trip || {}).unbounded;
   V.header.links.forEach((id, l) => {
     const r = V.siteCells.links[id]; if (!r) return;
     const s = linkStats(l, i0, i1), age = c.answer_age_steps[l][i1 - 1];
-    const margin = crit !== undefined && s.rt !== null ? fmt(crit - s.rt, 1) + ' ms (' + fmt(100 * (crit - s.rt) / crit, 0) + ' %) of ' + fmt(crit, 1) : '–';
+    // A real-time run's window per node (its link's injected lag added), else the deployment's.
+    const window = (ctx.answer_window_steps_by_node || {})[String(id)] || ctx.answer_window_steps;
+    const margin = crit !== undefined && s.rt !== null ? fmt(crit - s.rt, 1) + ' ms (' + fmt(100 * (crit - s.rt) / crit, 0) + ' %) of ' + fmt(crit, 1)
+      : unbounded ? 'unbounded (stable for every round trip)' : '–';
     const values = [fmt(s.rt, 2), fmt(s.jitter, 2), fmt(s.loss, 1), fmt(s.drift, 3), margin,
       fmt(c.prediction_error_N[l][i1 - 1], 1), fmt(age === null ? null : age * dt, 0) + ' / ' + fmt(window * dt, 0)];
     values.forEach((v, k) => { r.cells[k + 2].textContent = v; });
