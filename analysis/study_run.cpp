@@ -14,6 +14,7 @@
 #include "core/coupled_stability.h"
 #include "core/metrics.h"
 #include "core/sparse_structure.h"
+#include "study/case_link.h"
 #include "study/motion_key.h"
 #include "study/stability_config.h"
 #include "util/atomic_file.h"
@@ -80,24 +81,6 @@ std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
 }
 
 namespace {
-
-// The largest lag an actuator's answer carries: its chain's, and its link's round trip.
-double nominal_delay_of(const core::HybridSetup& setup) {
-  double nominal = 0.0;
-  for (std::size_t a = 0; a < setup.delays.size(); ++a)
-    nominal = std::max(
-        nominal, setup.delays[a].nominal_delay() +
-                     (a < setup.links.size() ? core::nominal_round_trip(setup.links[a]) : 0.0));
-  return nominal;
-}
-
-// The first actuator's chain, and its link when the case has one.
-std::string delay_text(const core::HybridSetup& setup) {
-  if (setup.delays.empty()) return "no experimental substructure";
-  std::string text = setup.delays.front().describe();
-  if (!setup.links.empty()) text += "; " + core::describe_link(setup.links.front());
-  return text;
-}
 
 // One mode of the structure taken as an SDOF for the compensated loop's analysis.
 struct ModalSdof {
@@ -351,8 +334,8 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
   CaseOutcome result;
   result.name = name;
   result.expect_unstable = study_case.expect_unstable();
-  result.nominal_delay = nominal_delay_of(setup);
-  result.delay_description = delay_text(setup);
+  result.nominal_delay = core::answer_lag(setup);
+  result.delay_description = core::case_delay_text(setup);
   result.stability =
       core::check_setup_critical_delay(prepared, setup, result.nominal_delay + options.extra_lag);
   if (study_case.compensation_size() > 0) {
@@ -363,7 +346,7 @@ CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::Hybri
     result.compensated = judge_compensated_loop(
         setup, prepared.base.partition.experimental_stiffness(), study_case,
         core::check_setup_critical_delay(prepared, bare_setup,
-                                         nominal_delay_of(bare_setup) + options.extra_lag));
+                                         core::answer_lag(bare_setup) + options.extra_lag));
   }
   for (std::size_t a = 0; a < setup.predictors.size(); ++a)
     if (setup.predictors[a]) result.predicted_actuators.push_back(static_cast<int>(a));
@@ -459,7 +442,7 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
     const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag) {
   const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-  return core::check_setup_critical_delay(prepared, setup, nominal_delay_of(setup) + extra_lag);
+  return core::check_setup_critical_delay(prepared, setup, core::answer_lag(setup) + extra_lag);
 }
 
 std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStudy& prepared,

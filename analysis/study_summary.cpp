@@ -64,6 +64,24 @@ std::vector<PredictionErrorSummary> prediction_errors(const CaseOutcome& c,
   return out;
 }
 
+// The critical-delay check of a case in summary.json; null without an experimental part.
+nlohmann::json stability_json(const std::optional<core::CriticalDelayCheck>& check) {
+  if (!check) return nullptr;
+  const auto& s = *check;
+  const auto opt = [](const std::optional<double>& v) {
+    return v ? nlohmann::json(*v) : nlohmann::json();
+  };
+  return {
+      {"lag_s", s.lag},
+      {"continuous_critical_delay_s", opt(s.continuous)},
+      {"discrete_critical_delay_s", opt(s.discrete)},
+      {"discrete_check", s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
+      {"critical_delay_s", opt(s.critical())},
+      {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
+      {"past_critical_delay", s.past()},
+      {"assumed", s.assumed}};
+}
+
 // Per linked actuator, in config order, what its answers did over the record (Case.link).
 nlohmann::json link_answers_json(const CaseOutcome& c, const ActuatorNames& names) {
   if (c.link_answers.empty()) return nullptr;
@@ -140,23 +158,6 @@ nlohmann::json error_measures_json() {
 nlohmann::json study_summary_json(const StudyOutcome& outcome) {
   nlohmann::json cases = nlohmann::json::array();
   for (const CaseOutcome& c : outcome.cases) {
-    nlohmann::json stability = nullptr;
-    if (c.stability) {
-      const auto& s = *c.stability;
-      const auto opt = [](const std::optional<double>& v) {
-        return v ? nlohmann::json(*v) : nlohmann::json();
-      };
-      stability = {
-          {"lag_s", s.lag},
-          {"continuous_critical_delay_s", opt(s.continuous)},
-          {"discrete_critical_delay_s", opt(s.discrete)},
-          {"discrete_check",
-           s.discrete_skipped.empty() ? "made" : "skipped: " + s.discrete_skipped},
-          {"critical_delay_s", opt(s.critical())},
-          {"margin_pct", s.critical() ? nlohmann::json(100.0 * s.margin()) : nlohmann::json()},
-          {"past_critical_delay", s.past()},
-          {"assumed", s.assumed}};
-    }
     // A case that stopped early has no error over the steps it did not run: its errors are null,
     // and those over the steps it covered are given apart, named as such.
     const bool covers = c.comparison.covers_reference();
@@ -173,7 +174,7 @@ nlohmann::json study_summary_json(const StudyOutcome& outcome) {
                      {"status", c.status},
                      {"status_detail", c.status_detail},
                      {"expect_unstable", c.expect_unstable},
-                     {"stability", stability},
+                     {"stability", stability_json(c.stability)},
                      {"compensated_loop", compensated_json(c.compensated)},
                      {"prediction_error", prediction_error_json(c, outcome.actuators)},
                      {"link_answers", link_answers_json(c, outcome.actuators)},

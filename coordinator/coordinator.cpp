@@ -14,6 +14,21 @@
 
 namespace rths::coordinator {
 
+namespace {
+
+// A case's link is the network of an in-process run; across nodes the network is real or the
+// nodes' own lags. A run that dropped it silently would not be the case it names.
+void refuse_case_link(const core::HybridSetup& setup, const std::string& case_name) {
+  if (!setup.links.empty())
+    throw std::invalid_argument(
+        "case '" + case_name +
+        "' has a link (Case.link), the network of an in-process run (rths run); a distributed "
+        "run's network is its nodes' receive_lag and send_lag (rths sites: its links): give the "
+        "lag there, or run a case without a link");
+}
+
+}  // namespace
+
 Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endpoint,
                          CoordinatorOptions options)
     : state_(std::make_unique<RunState>(std::move(prepared), endpoint, std::move(options))) {
@@ -24,14 +39,7 @@ Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endp
   const config::Case& study_case = core::find_case(s.prepared.config, s.case_name);
   s.case_name = study_case.name();
   s.setup = core::setup_for_case(s.prepared, study_case);
-  // A case's link is the network of an in-process run; across nodes the network is real or the
-  // nodes' own lags. A run that dropped it silently would not be the case it names.
-  if (!s.setup.links.empty())
-    throw std::invalid_argument(
-        "case '" + s.case_name +
-        "' has a link (Case.link), the network of an in-process run (rths run); a distributed "
-        "run's network is its nodes' receive_lag and send_lag (rths sites: its links): give the "
-        "lag there, or run a case without a link");
+  refuse_case_link(s.setup, s.case_name);
   if (!core::is_explicit(s.setup.integrator))
     throw std::invalid_argument("integrator " + core::to_string(s.setup.integrator) +
                                 " is implicit; a distributed run needs an explicit integrator");

@@ -1,5 +1,6 @@
 #include "study/case_link.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace rths::core {
@@ -34,6 +35,21 @@ void apply_case_links(HybridSetup& setup,
     const config::CaseLink& link = links.size() == 1 ? links.Get(0) : links.Get(a);
     setup.links.push_back({link_way(link.to_node()), link_way(link.from_node())});
   }
+}
+
+double answer_lag(const HybridSetup& setup) {
+  double lag = 0.0;
+  for (std::size_t a = 0; a < setup.delays.size(); ++a)
+    lag = std::max(lag, setup.delays[a].nominal_delay() +
+                            (a < setup.links.size() ? nominal_round_trip(setup.links[a]) : 0.0));
+  return lag;
+}
+
+std::string case_delay_text(const HybridSetup& setup) {
+  if (setup.delays.empty()) return "no experimental substructure";
+  std::string text = setup.delays.front().describe();
+  if (!setup.links.empty()) text += "; " + describe_link(setup.links.front());
+  return text;
 }
 
 }  // namespace rths::core

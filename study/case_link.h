@@ -18,4 +18,13 @@ void apply_case_links(HybridSetup& setup,
                       const google::protobuf::RepeatedPtrField<config::CaseLink>& links,
                       const std::string& where);
 
+// The largest lag an actuator's answer carries (s): its chain's nominal delay (negative: a lead)
+// and its link's round trip (core::nominal_round_trip), over the actuators; what a case's
+// critical-delay check weighs.
+double answer_lag(const HybridSetup& setup);
+
+// What a case's delay column says: the first actuator's chain, and its link when it has one
+// ("shift(14 ms); link 30 ms, jitter 2.5 ms, loss 1 %, drift 0.1 ms/s each way").
+std::string case_delay_text(const HybridSetup& setup);
+
 }  // namespace rths::core

@@ -84,6 +84,21 @@ TEST(CaseLink, OneLinkServesEveryActuatorAndFieldsCarryOver) {
   EXPECT_TRUE(setup_for_case(prepared, prepared.config.cases(0)).links.empty());
 }
 
+// The lag a case's check weighs is its chain's and its link's round trip together, and its delay
+// column says both: a link of 30 ms each way behind a 14 ms actuator is 74 ms.
+TEST(CaseLink, TheCasesLagAndDelayTextHoldTheLinksRoundTrip) {
+  const PreparedStudy prepared = damper_frame(
+      "cases { name: \"sites\" delay { shift { delay: 0.014 } } link { to_node { one_way_delay: "
+      "0.030 jitter: 0.0025 loss: 0.01 } from_node { one_way_delay: 0.030 jitter: 0.0025 loss: "
+      "0.01 } } }");
+  const HybridSetup setup = setup_for_case(prepared, prepared.config.cases(1));
+  EXPECT_NEAR(answer_lag(setup), 0.074, 1e-12);
+  EXPECT_EQ(case_delay_text(setup), "shift(14 ms); link 30 ms, jitter 2.5 ms, loss 1 % each way");
+  const HybridSetup reference = setup_for_case(prepared, prepared.config.cases(0));
+  EXPECT_EQ(answer_lag(reference), 0.0);
+  EXPECT_EQ(case_delay_text(reference), "none");
+}
+
 TEST(CaseLink, TooManyLinksForTheActuatorsAreRefusedWithBothCounts) {
   const PreparedStudy prepared =
       damper_frame("cases { name: \"two\" link {} link { to_node { one_way_delay: 0.01 } } }");
