@@ -257,21 +257,21 @@ struct ColumnShape {
   int first_data_line = 0;
 };
 
-void check_row_shape(ColumnShape& shape, const std::filesystem::path& path, const TextRow& row) {
+void check_row_shape(ColumnShape& shape, const std::filesystem::path& path, int line,
+                     const std::vector<double>& values) {
   if (shape.columns == 0) {
-    shape.columns = row.values.size();
-    shape.first_data_line = row.line;
+    shape.columns = values.size();
+    shape.first_data_line = line;
     if (shape.columns != 1 && shape.columns != 2) {
-      throw std::invalid_argument(text_position(path, row.line) +
+      throw std::invalid_argument(text_position(path, line) +
                                   "expected 1 column (acceleration) or "
                                   "2 (time, acceleration), found " +
                                   std::to_string(shape.columns));
     }
-  } else if (row.values.size() != shape.columns) {
-    throw std::invalid_argument(text_position(path, row.line) + "found " +
-                                std::to_string(row.values.size()) + " columns, line " +
-                                std::to_string(shape.first_data_line) + " had " +
-                                std::to_string(shape.columns));
+  } else if (values.size() != shape.columns) {
+    throw std::invalid_argument(
+        text_position(path, line) + "found " + std::to_string(values.size()) + " columns, line " +
+        std::to_string(shape.first_data_line) + " had " + std::to_string(shape.columns));
   }
 }
 
@@ -326,17 +326,18 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
                                 std::to_string(to_si));
   }
   require_motion_file_size(path);
-  const TextColumns text = read_text_columns(path, "ground-motion file", /*title_allowed=*/true);
+  // Streamed: only the samples (and a two-column file's times) are kept.
   std::vector<double> times, values;
   ColumnShape shape;
-  for (const TextRow& row : text.rows) {
-    check_row_shape(shape, path, row);
-    if (shape.columns == 2) {
-      check_next_time(times, row.values[0], path, row.line);
-      times.push_back(row.values[0]);
-    }
-    values.push_back(row.values.back() * to_si);
-  }
+  for_each_text_row(path, "ground-motion file", /*title_allowed=*/true,
+                    [&](int line, const std::vector<double>& row) {
+                      check_row_shape(shape, path, line, row);
+                      if (shape.columns == 2) {
+                        check_next_time(times, row[0], path, line);
+                        times.push_back(row[0]);
+                      }
+                      values.push_back(row.back() * to_si);
+                    });
   if (values.empty()) throw std::invalid_argument(path.string() + ": no acceleration values");
   GroundMotion motion;
   motion.name = path.stem().string();

@@ -36,15 +36,16 @@ std::string text_position(const std::filesystem::path& path, int line) {
   return path.string() + ":" + std::to_string(line) + ": ";
 }
 
-TextColumns read_text_columns(const std::filesystem::path& path, const std::string& what,
-                              bool title_allowed) {
+void for_each_text_row(const std::filesystem::path& path, const std::string& what,
+                       bool title_allowed, const TextRowVisitor& visit,
+                       std::vector<std::string>* title) {
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open " + what);
-  TextColumns out;
   std::string line;
   int number = 0;
   bool first = true;
   std::vector<std::string> fields;
+  std::vector<double> values;
   while (std::getline(in, line)) {
     ++number;
     if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
@@ -58,8 +59,7 @@ TextColumns read_text_columns(const std::filesystem::path& path, const std::stri
       pos = end;
     }
     if (fields.empty()) continue;
-    TextRow row{number, {}};
-    row.values.reserve(fields.size());
+    values.clear();
     const std::string* bad = nullptr;
     for (const std::string& field : fields) {
       const auto value = parse_finite(field);
@@ -67,10 +67,10 @@ TextColumns read_text_columns(const std::filesystem::path& path, const std::stri
         bad = &field;
         break;
       }
-      row.values.push_back(*value);
+      values.push_back(*value);
     }
     if (bad && first && title_allowed) {
-      out.title = fields;
+      if (title) *title = fields;
       first = false;
       continue;
     }
@@ -78,8 +78,19 @@ TextColumns read_text_columns(const std::filesystem::path& path, const std::stri
       throw std::invalid_argument(text_position(path, number) + "'" + printable(*bad) +
                                   "' is not a finite number");
     first = false;
-    out.rows.push_back(std::move(row));
+    visit(number, values);
   }
+}
+
+TextColumns read_text_columns(const std::filesystem::path& path, const std::string& what,
+                              bool title_allowed) {
+  TextColumns out;
+  for_each_text_row(
+      path, what, title_allowed,
+      [&out](int line, const std::vector<double>& values) {
+        out.rows.push_back({line, values});
+      },
+      &out.title);
   return out;
 }
 

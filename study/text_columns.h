@@ -11,6 +11,7 @@
 // be opened (with `what` saying what it was meant to be: "delay trace", "ground-motion file").
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -32,6 +33,15 @@ struct TextColumns {
 
 TextColumns read_text_columns(const std::filesystem::path& path, const std::string& what,
                               bool title_allowed = false);
+
+// The same rows, one at a time, none kept: visit(line, values) for each (values valid during the
+// call only), the title's fields into `title` when given. A reader that keeps only what it needs
+// of each row holds its samples, not an object per line (read_text_columns' TextRow: about 78
+// bytes a one-column sample, where the sample is 8).
+using TextRowVisitor = std::function<void(int line, const std::vector<double>& values)>;
+void for_each_text_row(const std::filesystem::path& path, const std::string& what,
+                       bool title_allowed, const TextRowVisitor& visit,
+                       std::vector<std::string>* title = nullptr);
 
 // Why `path` cannot be a text file of numbers, or empty when it may be: it does not exist, is a
 // directory (not a regular file), is empty, or holds binary bytes (a NUL or a control character

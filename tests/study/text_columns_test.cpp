@@ -37,6 +37,34 @@ TEST(TextColumns, SpacesTabsCommasCommentsAndCrlfAreOneFormat) {
   EXPECT_EQ(t.rows[2].values, (std::vector<double>{1.0, 2.0}));
 }
 
+// The streaming form visits the rows read_text_columns keeps, with their lines, and the title;
+// an error stops it at the bad line as it stops the whole read.
+TEST(TextColumns, EachRowIsVisitedAsTheWholeReadKeepsIt) {
+  const auto path = write("rths_text_columns_visit.txt", "time,accel\n# c\n0 1\n\n0.5 -2 # x\n");
+  const TextColumns whole = read_text_columns(path, "test file", true);
+  std::vector<TextRow> visited;
+  std::vector<std::string> title;
+  for_each_text_row(
+      path, "test file", true,
+      [&](int line, const std::vector<double>& values) {
+        visited.push_back({line, values});
+      },
+      &title);
+  ASSERT_EQ(visited.size(), whole.rows.size());
+  for (std::size_t i = 0; i < visited.size(); ++i) {
+    EXPECT_EQ(visited[i].line, whole.rows[i].line);
+    EXPECT_EQ(visited[i].values, whole.rows[i].values);
+  }
+  EXPECT_EQ(visited.back().line, 5);
+  EXPECT_EQ(title, (std::vector<std::string>{"time", "accel"}));
+  const auto bad = write("rths_text_columns_visit_bad.txt", "1\n2\nx\n4\n");
+  int seen = 0;
+  EXPECT_THROW(
+      for_each_text_row(bad, "test file", false, [&](int, const std::vector<double>&) { ++seen; }),
+      std::invalid_argument);
+  EXPECT_EQ(seen, 2);
+}
+
 TEST(TextColumns, ATitleLineOnlyWhereAllowedAndOnlyFirst) {
   const auto path = write("rths_text_columns_title.txt", "time,accel\n0 1\n");
   const TextColumns t = read_text_columns(path, "test file", /*title_allowed=*/true);
