@@ -1,7 +1,8 @@
 // `rths stability`: the critical delay of a delayed SDOF hybrid system, continuous and discrete;
 // with --study/--case, the delay margin of that case's actuator and compensator in the loop (a
 // study of several DOFs: the verdict `rths run` gives before the run, by the modal
-// approximation, stated as such).
+// approximation, stated as such; a case with a force predictor, on any structure: the coupled
+// loop of every link with its predictor, each link's critical lag, core::setup_loop_stability).
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -154,8 +155,10 @@ void print_compensated(const StabilityOptions& o, const CompensatedLoop& loop,
   }
 }
 
-// A study of several DOFs (matrices, a shear building): the verdict `rths run` gives the case
-// before it runs it, by the modal approximation (analysis::pre_run_verdict), which it states.
+// A study of several DOFs (matrices, a shear building), or a case with a force predictor on any
+// structure: the verdict `rths run` gives the case before it runs it (analysis::pre_run_verdict): a
+// compensator's loop by the modal approximation, a force predictor's by the coupled loop of its
+// links, each stated as such.
 // Exit 1 when the compensated loop is analysed unstable.
 void run_modal(const StabilityOptions& o, const config::Study& study) {
   const std::filesystem::path path = o.study;
@@ -192,9 +195,17 @@ void run_modal(const StabilityOptions& o, const config::Study& study) {
                                         "' is past its critical delay: " + c.stability->describe());
 }
 
+// Whether --case names a case with a force predictor: its verdict is the coupled loop's, on any
+// structure (run_modal), not the SDOF actuator-and-compensator loop's.
+bool predicted_case(const config::Study& study, const std::string& name) {
+  for (const auto& c : study.cases())
+    if (c.name() == name && c.has_force_predictor()) return true;
+  return false;
+}
+
 void run_compensated(const StabilityOptions& o) {
   const config::Study study = core::load_study(o.study);
-  if (!study.structure().has_sdof()) {
+  if (!study.structure().has_sdof() || predicted_case(study, o.case_name)) {
     run_modal(o, study);
     return;
   }
@@ -325,7 +336,8 @@ void add_stability_command(CLI::App& app) {
   cmd->add_option(
       "--study", options->study,
       "study config: analyse the loop of --case, its actuator stages and compensation (an SDOF "
-      "exactly; several DOFs by the modal approximation, as `rths run` judges it before the run)");
+      "exactly; several DOFs by the modal approximation; a force predictor on any structure by "
+      "the coupled loop of its links; as `rths run` judges it before the run)");
   cmd->add_option("--case", options->case_name,
                   "case of --study whose actuator and compensator are analysed");
   cmd->add_option("--max-extra-delay", options->max_extra_delay,

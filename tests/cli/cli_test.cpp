@@ -101,6 +101,19 @@ TEST(CliTest, StabilityWithAPredictorGivesItsLoopsCriticalLag) {
   EXPECT_NE(o.output.find("are for the SDOF loop"), std::string::npos) << o.output;
 }
 
+// `rths stability --study --case` on an SDOF study's predicted case gives its predictor's verdict
+// (the coupled loop of its link, 107 ms for a model 30 % soft on the paper's frame, as `rths
+// stability --predictor-stiffness-error -0.3` above), not the uncompensated loop's UNSTABLE.
+TEST(CliTest, StabilityOfAStudysPredictedCaseIsThePredictorsVerdict) {
+  const std::string study = (kSource / "configs/paper_frame_60ms.textproto").string();
+  Outcome o = run("stability --study " + study + " --case predicted_60ms_model_30pct_soft");
+  EXPECT_EQ(o.exit_code, 0) << o.output;
+  EXPECT_NE(o.output.find("critical lag 107 ms against the case's 74 ms: stable, tolerates 33"),
+            std::string::npos)
+      << o.output;
+  EXPECT_EQ(o.output.find("UNSTABLE"), std::string::npos) << o.output;
+}
+
 TEST(CliTest, BadInputExitsTwoWithAMessageNamingTheProblem) {
   const auto dir = scratch("bad");
   std::ofstream(dir / "bad.textproto")

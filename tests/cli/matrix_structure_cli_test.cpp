@@ -141,6 +141,43 @@ TEST(MatrixStructureCli, StabilityOfACompensatedLoopOnSeveralDofsIsModal) {
       << o.output;
 }
 
+// `rths stability --study` on a predicted case of several DOFs (the consortium's frame, its storey
+// damper k 3e5 N/m, c 1e4 N s/m between floors 1 and 2): the coupled loop's verdict with the
+// link's critical lag, exit 1 when the case's lag is past it, 0 when the model holds every lag.
+TEST(MatrixStructureCli, StabilityOfAPredictedCaseOnSeveralDofsIsTheCoupledLoops) {
+  const auto path = scratch() / "frame3_damper.textproto";
+  std::ofstream(path)
+      << "name: \"frame3_damper\" structure { matrices { "
+         "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
+         "stiffness { rows: 3 values: [4e6, -2e6, 0, -2e6, 3.5e6, -1.5e6, 0, -1.5e6, 1.5e6] } } "
+         "damping { rayleigh { zeta: 0.03 } } }\n"
+      << "motion { path: \"" << kMotion << "\" }\n"
+      << "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+         "substructuring { experimental_dofs { dof: 2 from_dof: 1 stiffness: 3e5 damping: 1e4 } }\n"
+         "cases { name: \"reference\" }\n"
+         "cases { name: \"exact_60ms\" delay { shift { delay: 0.060 } } "
+         "force_predictor { fixed_model: true } }\n"
+         "cases { name: \"no_dashpot_60ms\" delay { shift { delay: 0.060 } } "
+         "force_predictor { fixed_model: true damping: 1e-6 } }\n";
+  const auto exact = run("stability --study " + path.string() + " --case exact_60ms");
+  EXPECT_EQ(exact.exit_code, 0) << exact.output;
+  EXPECT_NE(exact.output.find("stable for every lag"), std::string::npos) << exact.output;
+  EXPECT_EQ(exact.output.find("SDOF only"), std::string::npos) << exact.output;
+  const auto past = run("stability --study " + path.string() + " --case no_dashpot_60ms");
+  EXPECT_EQ(past.exit_code, 1) << past.output;
+  EXPECT_NE(past.output.find("critical lag 9.43 ms against the case's 60 ms: PAST it"),
+            std::string::npos)
+      << past.output;
+  const auto json = run("stability --study " + path.string() + " --case no_dashpot_60ms --json");
+  EXPECT_EQ(json.exit_code, 1) << json.output;
+  // The JSON, then the reason of the exit on the next line.
+  const std::size_t from = json.output.find('{'), to = json.output.rfind("\n}");
+  ASSERT_TRUE(from != std::string::npos && to != std::string::npos) << json.output;
+  const auto j = nlohmann::json::parse(json.output.substr(from, to + 2 - from));
+  EXPECT_TRUE(j["compensated_loop"]["analysed"].get<bool>()) << json.output;
+  EXPECT_FALSE(j["compensated_loop"]["stable"].get<bool>()) << json.output;
+}
+
 // A chain of n floors in Matrix Market files under `dir` (diagonal M, tridiagonal K).
 void write_chain(const std::filesystem::path& dir, int n) {
   std::ofstream mass(dir / "mass.mtx"), stiffness(dir / "stiffness.mtx");
