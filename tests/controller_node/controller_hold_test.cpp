@@ -1,10 +1,11 @@
-// The hold of the judged exchange (controller_node/controller_hold.cpp) over real UDP sockets on
-// 127.0.0.1, the test playing the controller: only a status-HOLD echo of a HOLD frame that left
+// The hold of the judged exchange (controller_node/controller_hold.cpp), the test playing the
+// controller over an in-process link (no ports), or over real UDP sockets on 127.0.0.1 where the
+// socket is what is tested (ICMP errors, a flood before the link opens, ports 47400-47449): only a status-HOLD echo of a HOLD frame that left
 // ends the hold (a wrong echo, a replayed one, the echo of a run frame, a status 1 sent before
 // any HOLD frame each leave it on, counted and named); a restarted controller is held where it
 // measures itself, never where the rig was before; every HOLD frame, answer and STOP is logged,
 // at most one HOLD frame per dt; ICMP errors on the socket are counted and never a fault; lost
-// and late frames are located. UDP ports 47400-47449.
+// and late frames are located.
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -18,6 +19,7 @@
 #include <google/protobuf/text_format.h>
 
 #include "controller_node/controller_exchange.h"
+#include "in_process_link.h"
 #include "link_text.h"
 #include "test_controller.h"
 
@@ -68,10 +70,14 @@ FrameValues next_hold_frame(ControllerExchange& node, Controller& controller) {
 // target ramping to `drift` m over 20 frames, then steady (target velocity 0).
 struct Drill {
   config::ControllerLink link;
+  test::InProcessLinkPair pair;
   ControllerExchange node;
   Controller controller;
-  Drill(int port, const ExchangeSettings& s)
-      : link(test::controller_link(port, port + 1)), node(link, s), controller(link) {}
+  explicit Drill(const ExchangeSettings& s)
+      : link(test::controller_link(47448, 47449)),
+        pair(test::real_clock()),
+        node(link, s, pair.node_end()),
+        controller(link, pair.controller(), test::real_clock()) {}
   void run(int frames, double drift) {
     for (int k = 1; k <= frames; ++k) {
       const double target = drift * std::min(1.0, static_cast<double>(k) / 20.0);
@@ -83,7 +89,7 @@ struct Drill {
 };
 
 TEST(ControllerHold, OnlyTheRigsStatusHoldEchoOfASentHoldFrameEndsTheHold) {
-  Drill d(47400, settings());
+  Drill d(settings());
   d.run(30, 0.005);
   // Sent before any HOLD frame: a status 1 echoing the counter the first HOLD frame will take.
   d.controller.answer(31, 0.005, 50.0, kStatusHold);
@@ -122,7 +128,7 @@ TEST(ControllerHold, OnlyTheRigsStatusHoldEchoOfASentHoldFrameEndsTheHold) {
 }
 
 TEST(ControllerHold, AStatusZeroEchoIsHoldingAndAHoldNeverEndedStopsAtTheHoldTime) {
-  Drill d(47402, settings());
+  Drill d(settings());
   d.run(5, 0.002);
   d.node.begin_hold(monotonic_ns());
   const FrameValues hold = next_hold_frame(d.node, d.controller);
@@ -152,8 +158,8 @@ TEST(ControllerHold, AStatusZeroEchoIsHoldingAndAHoldNeverEndedStopsAtTheHoldTim
 
 // A controller reboots at `drift`: its echo stays right, its state is lost (it measures 0). The
 // default jump check HOLDs; the HOLD frames carry 0 (where the rebooted rig is), not `drift`.
-void reboot_at(int port, double drift) {
-  Drill d(port, settings(2e-4));
+void reboot_at(double drift) {
+  Drill d(settings(2e-4));
   d.run(100, drift);  // at rest at `drift` for the last 80 frames
   d.node.send_command(101, 0.101, {drift}, {0.0});
   d.controller.answer(d.controller.take().counter, 0.0, 0.0);
@@ -172,13 +178,13 @@ void reboot_at(int port, double drift) {
 }
 
 TEST(ControllerHold, ARebootAtAnyDriftAboveTheFloorIsHeldWhereTheRebootedRigIs) {
-  reboot_at(47404, 0.001);
-  reboot_at(47406, 0.004);
-  reboot_at(47408, 0.010);
+  reboot_at(0.001);
+  reboot_at(0.004);
+  reboot_at(0.010);
 }
 
 TEST(ControllerHold, ARigFollowingItsTargetsIsNeverAJump) {
-  Drill d(47410, settings(2e-4));
+  Drill d(settings(2e-4));
   // 2 Hz, 20 mm: 0.25 m/s peak; answers lag by 14 frames (a 14 ms plant).
   const auto target = [](int k) { return 0.02 * std::sin(2 * M_PI * 2.0 * k * 0.001); };
   const auto speed = [](int k) {
@@ -199,11 +205,12 @@ TEST(ControllerHold, AChangedControllerEpochIsARestartHeldWhereItMeasures) {
       "fields { name: \"measured\" role: MEASURED_DISPLACEMENT } "
       "fields { name: \"force\" role: MEASURED_FORCE } "
       "fields { name: \"task_time\" role: DIAGNOSTIC unit: \"s\" min: 0 max: 0.0008 } }";
-  config::ControllerLink link = test::controller_link(47412, 47413);
+  config::ControllerLink link = test::controller_link(47448, 47449);
   link.clear_feedback();
   google::protobuf::TextFormat::MergeFromString(epoch_field, &link);
-  ControllerExchange node(link, settings());
-  UdpLink rig(link.peer_address(), link.peer_port(), link.local_address(), link.local_port());
+  test::InProcessLinkPair pair(test::real_clock());
+  ControllerExchange node(link, settings(), pair.node_end());
+  DatagramLink& rig = pair.controller();
   const auto answer = [&](std::int64_t counter, std::int64_t epoch, double drift, double task) {
     FrameValues v;
     v.counter = counter;
@@ -243,7 +250,7 @@ TEST(ControllerHold, AChangedControllerEpochIsARestartHeldWhereItMeasures) {
 }
 
 TEST(ControllerHold, ADiagnosticOutsideItsBoundsHoldsNamingTheChannel) {
-  config::ControllerLink link = test::controller_link(47414, 47415);
+  config::ControllerLink link = test::controller_link(47448, 47449);
   link.clear_feedback();
   google::protobuf::TextFormat::MergeFromString(
       "feedback { fields { name: \"counter\" role: COUNTER type: U32 } "
@@ -252,8 +259,9 @@ TEST(ControllerHold, ADiagnosticOutsideItsBoundsHoldsNamingTheChannel) {
       "fields { name: \"supply_pressure\" role: DIAGNOSTIC unit: \"MPa\" scale: 1e6 min: 1.5e7 "
       "max: 2.2e7 } }",
       &link);
-  ControllerExchange node(link, settings());
-  Controller rig(link);
+  test::InProcessLinkPair pair(test::real_clock());
+  ControllerExchange node(link, settings(), pair.node_end());
+  Controller rig(link, pair.controller(), test::real_clock());
   node.send_command(1, 0.001, {0.0}, {0.0});
   rig.take();
   FrameValues v;
@@ -320,7 +328,7 @@ TEST(ControllerHold, LostAndLateFramesAreLocatedAndALateControllerIsCalledLate) 
   s.reply_timeout = 0.01;
   s.real_time = true;
   s.lost_window = 1;
-  Drill d(47420, s);
+  Drill d(s);
   d.run(3, 0.001);
   for (int k = 4; k <= 6; ++k) {
     d.node.send_command(k, k * 0.001, {0.001}, {0.0});
