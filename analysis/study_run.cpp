@@ -284,7 +284,7 @@ std::optional<double> tolerated_extra_lag(const core::CoupledLoopStability& loop
 // The pre-run verdict of a case with a force predictor (core/force_predictor.h): the coupled loop
 // of every link with its predictor's model as it starts (the declared specimen times
 // stiffness_factor, its dashpot; core::setup_loop_stability, any number of DOFs and links),
-// each link at its delay stages' lag plus `extra_lag` (s).
+// each link at its delay stages' lag and its link's round trip plus `extra_lag` (s).
 CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const config::Case& c,
                                         double extra_lag) {
   CompensatedVerdict verdict;
@@ -294,9 +294,12 @@ CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const co
   text << std::setprecision(3) << "force predictor (model stiffness " << std::showpos
        << 100.0 * (factor - 1.0) << std::noshowpos << " %"
        << (block.fixed_model() ? ", fixed" : ", fitted online") << "): ";
+  // Each link's measured pair: its delay stages, its in-process link's round trip, extra_lag.
   std::vector<double> lags;
   for (std::size_t a = 0; a < setup.partition.actuator_storeys.size(); ++a)
-    lags.push_back((a < setup.delays.size() ? setup.delays[a].nominal_delay() : 0.0) + extra_lag);
+    lags.push_back((a < setup.delays.size() ? setup.delays[a].nominal_delay() : 0.0) +
+                   (a < setup.links.size() ? core::nominal_round_trip(setup.links[a]) : 0.0) +
+                   extra_lag);
   if (lags.empty()) {
     verdict.text = text.str() + "no experimental part: nothing comes back late";
     return verdict;

@@ -583,8 +583,8 @@ core::PreparedStudy damper_frame(const std::string& cases) {
 
 // A predicted case on a structure of several DOFs is judged by the coupled loop of its link with
 // the predictor's model: an exact model is stable at every lag ("stable" in the margin column), a
-// model that misses the dashpot has a finite critical lag, tolerated at 5 ms and PAST at 60 ms,
-// where the run indeed grows without bound.
+// model that misses the dashpot has a finite critical lag, tolerated at 5 ms and PAST at 60 ms
+// (of delay stages, or of an in-process link's round trip), where the run grows without bound.
 TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
   std::vector<std::string> warnings;
   const StudyOutcome outcome =
@@ -594,6 +594,10 @@ TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
                              "cases { name: \"no_dashpot_5ms\" delay { shift { delay: 0.005 } } "
                              "        force_predictor { fixed_model: true damping: 1e-6 } } "
                              "cases { name: \"no_dashpot_60ms\" delay { shift { delay: 0.060 } } "
+                             "        force_predictor { fixed_model: true damping: 1e-6 } "
+                             "        expect_unstable: true } "
+                             "cases { name: \"no_dashpot_link_60ms\" link { to_node { "
+                             "one_way_delay: 0.030 } from_node { one_way_delay: 0.030 } } "
                              "        force_predictor { fixed_model: true damping: 1e-6 } "
                              "        expect_unstable: true }"),
                 {.warn = [&](const std::string& w) { warnings.push_back(w); }});
@@ -612,6 +616,10 @@ TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
   EXPECT_FALSE(past.compensated->stable) << past.compensated->text;
   EXPECT_NE(past.compensated->text.find("against the case's 60 ms: PAST it"), std::string::npos)
       << past.compensated->text;
+  // An in-process link's round trip is the measured pair's lag as a delay stage's is.
+  const CaseOutcome& linked = outcome.cases[4];
+  ASSERT_TRUE(linked.compensated.has_value());
+  EXPECT_EQ(linked.compensated->text, past.compensated->text);
   // The critical lag both state is the same.
   const double critical = 0.005 + *inside.compensated->extra_delay_tolerated;
   EXPECT_GT(critical, 0.005);
@@ -619,7 +627,7 @@ TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
   EXPECT_EQ(exact.status, "completed") << exact.status_detail;
   EXPECT_EQ(inside.status, "completed") << inside.status_detail;
   EXPECT_TRUE(past.diverged()) << past.status << ": " << past.status_detail;
-  ASSERT_EQ(warnings.size(), 1u);
+  ASSERT_EQ(warnings.size(), 2u);
   EXPECT_NE(warnings[0].find("no_dashpot_60ms"), std::string::npos) << warnings[0];
   const std::string table = study_summary_text(outcome);
   EXPECT_EQ(table.find("n/a [comp.]"), std::string::npos) << table;
