@@ -8,6 +8,8 @@
 
 #include <unistd.h>
 
+#include "results/table.h"
+
 namespace rths::results {
 namespace {
 
@@ -39,6 +41,13 @@ TEST(ResultsCsv, ARecordsVelocityAndAccelerationAreNamedAsItsDisplacement) {
   EXPECT_EQ(velocity_column(2), "v_floor2_m_per_s");
   EXPECT_EQ(acceleration_column(2), "a_floor2_m_per_s2");
   EXPECT_EQ(measured_column(12), "measured_act12_m");
+}
+
+TEST(ResultsCsv, ADriftNamesBothEndsAndTheGroundAndEndsInItsUnit) {
+  EXPECT_EQ(drift_column(5, 4), "drift_floor5_floor4_m");
+  EXPECT_EQ(drift_column(1, 0), "drift_floor1_ground_m");
+  EXPECT_TRUE(is_identifier(drift_column(1000, 999)));
+  EXPECT_EQ(std::string(kBaseShearColumn), "base_shear_N");
 }
 
 }  // namespace

@@ -141,6 +141,23 @@ TEST(WriteTest, H5HoldsTextAttributesAsStringsNumbersAsFloatsAndEachColumnsUnit)
   EXPECT_EQ(h5_attribute(dir / "t.h5", "/", "columns").text, "time_s,u_floor1_m,label");
 }
 
+// A CSV is for a spreadsheet: one past its 1,048,576 rows (the header one) or 16,384 columns is
+// refused naming both sizes and the formats that hold it.
+TEST(WriteTest, ACsvPastWhatASpreadsheetOpensIsRefusedNamingTheFix) {
+  EXPECT_NO_THROW(require_spreadsheet_size(kSpreadsheetRows - 1, kSpreadsheetColumns, "t.csv"));
+  try {
+    require_spreadsheet_size(kSpreadsheetRows, 10, "results.csv");
+    ADD_FAILURE() << "1,048,576 rows under a header accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("results.csv: a CSV of 1048576 rows x 10 columns"), std::string::npos)
+        << why;
+    EXPECT_NE(why.find("--format h5"), std::string::npos) << why;
+  }
+  EXPECT_THROW(require_spreadsheet_size(10, kSpreadsheetColumns + 1, "t.csv"),
+               std::invalid_argument);
+}
+
 TEST(WriteTest, ErrorsNameTheProblemAndLeaveNoFile) {
   const auto dir = scratch("errors");
   Table clash;
