@@ -27,6 +27,7 @@ std::string three(double value) {
 namespace {
 constexpr int kK = 0, kC = 1, kH = 2, kT = 3, kF0 = 4;  // theta's order
 constexpr double kLagExplains = 0.005;                  // the T hold's 0.5 % (header)
+constexpr double kLagTrusted = 0.05;                    // and its 5 % residual (header)
 }  // namespace
 
 ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
@@ -216,13 +217,15 @@ bool ForcePredictor::solve(const bool free[kTerms], double theta[kTerms], double
   return true;
 }
 
-// The holds of the header, in its order; false when no set of free terms is well conditioned.
-bool ForcePredictor::fit(double theta[kTerms], bool free[kTerms]) {
+// The holds of the header, in its order, T held at its declared value unless `lag`; false when
+// no set of free terms is well conditioned. `c_free`: the first round's c.
+bool ForcePredictor::constrained_fit(double theta[kTerms], bool free[kTerms], bool lag,
+                                     double& c_free) const {
   bool negative_held[kTerms] = {};
   for (int round = 0; round < kTerms; ++round) {
     for (int i = 0; i < kTerms; ++i) {
-      free[i] = present_[i] && !negative_held[i];
-      theta[i] = negative_held[i] ? 0.0 : theta_[i];
+      free[i] = present_[i] && !negative_held[i] && (lag || i != kT);
+      theta[i] = negative_held[i] ? 0.0 : (i == kT && !lag ? initial_[kT] : theta_[i]);
     }
     bool ok = solve(free, theta, nullptr);
     for (int weak : {kT, kH}) {
@@ -231,28 +234,32 @@ bool ForcePredictor::fit(double theta[kTerms], bool free[kTerms]) {
       ok = solve(free, theta, nullptr);
     }
     if (!ok) return false;
-    if (round == 0) free_damping_ = free[kC] ? theta[kC] : 0.0;
+    if (round == 0) c_free = free[kC] ? theta[kC] : 0.0;
     // k may be 0 beside a hysteresis (an MR damper has no spring); alone it must be > 0.
     int negative = -1;
     for (int i : {kC, kT, kH, kK})
       if (negative < 0 && free[i] && theta[i] < 0 && (i != kK || present_[kH])) negative = i;
-    if (negative < 0) break;
+    if (negative < 0) return true;
     negative_held[negative] = true;
   }
-  for (int i : {kC, kT, kH})
-    if (free[i] && theta[i] < 0) return false;
-  if (!free[kT]) return true;
-  double held[kTerms];
-  bool without_lag[kTerms];
-  std::copy(theta, theta + kTerms, held);
-  std::copy(free, free + kTerms, without_lag);
-  held[kT] = initial_[kT];
-  without_lag[kT] = false;
-  if (!solve(without_lag, held, nullptr)) return true;
-  const double explained = (residual(held) - residual(theta)) / std::max(f_sq_, 1e-300);
-  if (explained >= kLagExplains * kLagExplains) return true;
-  std::copy(held, held + kTerms, theta);
-  free[kT] = false;
+  return false;
+}
+
+// The constrained fit with the lag term free, kept only where it earns its place (header).
+bool ForcePredictor::fit(double theta[kTerms], bool free[kTerms]) {
+  double c_free = 0.0, without[kTerms], c_without = 0.0;
+  bool without_free[kTerms];
+  if (!constrained_fit(theta, free, true, c_free)) return false;
+  free_damping_ = c_free;
+  if (!free[kT] || !constrained_fit(without, without_free, false, c_without)) return true;
+  const double scale = std::max(f_sq_, 1e-300);
+  const double explained = (residual(without) - residual(theta)) / scale;
+  if (explained >= kLagExplains * kLagExplains &&
+      residual(theta) <= kLagTrusted * kLagTrusted * scale)
+    return true;
+  std::copy(without, without + kTerms, theta);
+  std::copy(without_free, without_free + kTerms, free);
+  free_damping_ = c_without;
   return true;
 }
 
@@ -319,7 +326,8 @@ std::string ForcePredictor::rejection() const {
     add("the measured force lags the measured drift by at least " +
         three(1e3 * -free_damping_ / k) + " ms (-c / k of the best fit, c " + three(free_damping_) +
         " N s/m, held at 0; a dashpot lengthens it): the model lacks the force channel's lag (a "
-        "load cell or filter), which its lag term could not be told from its dashpot");
+        "load cell or filter): its first-order lag term was held, the answers telling it from "
+        "the dashpot too little or leaving more than 5 % with it");
   if (lags && lag_fitted_)
     add("the measured force lags the measured drift by more than the model's first-order lag "
         "term follows (T " +

@@ -57,7 +57,9 @@
 //       then judged again;
 //       T at its declared value (force_lag) when freeing it explains less than 0.5 % of the
 //       force's RMS (sqrt(rho_declared^2 - rho^2) < 0.005): a lag term fitted to rounding
-//       would trade c for T.
+//       would trade c for T; and when the fit with it still leaves rho > 5 %: the form is
+//       wrong (a hysteresis missing or of another shape), and a lag fitted then stands in for
+//       the shape's error (a line on a yielding column fits T ~ 16 ms) and feeds it back.
 //     A fit whose force does not rise with the drift (k <= 0, and h <= 0 or absent) is refused
 //     (the model keeps its last theta). Recursive least squares
 //     with forgetting, information form.
@@ -200,6 +202,7 @@ class ForcePredictor {
   // free block is ill conditioned. `error` gets the standard errors (NaN off `free`) when given.
   bool solve(const bool free[kTerms], double theta[kTerms], double* error) const;
   bool fit(double theta[kTerms], bool free[kTerms]);  // the holds of the equations above
+  bool constrained_fit(double theta[kTerms], bool free[kTerms], bool lag, double& c_free) const;
   double residual(const double theta[kTerms]) const;  // F - 2 theta^T b + theta^T S theta
   double windowed_error() const;                      // relative_error (equations above)
   double motion_rate() const;                         // rad/s, w of the equations above
