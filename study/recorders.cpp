@@ -82,11 +82,12 @@ void add_recorder(RecorderPlan& plan, const config::Recorder& r, int index, int 
 }
 
 // The defaults (the header's rule) and, past kAllDofsLimit, their line.
+// The DOFs first, then the actuators: the table every run wrote before recorders.
 void add_defaults(RecorderPlan& plan, int dofs, const std::vector<int>& experimental_dofs) {
-  add_channel(plan.channels, {Kind::kActuators, -1, -1, 1});
   if (dofs <= kAllDofsLimit) {
     for (int dof = 0; dof < dofs; ++dof)
       add_channel(plan.channels, {Kind::kDisplacement, dof, -1, 1});
+    add_channel(plan.channels, {Kind::kActuators, -1, -1, 1});
     return;
   }
   std::set<int> chosen(experimental_dofs.begin(), experimental_dofs.end());
@@ -103,6 +104,7 @@ void add_defaults(RecorderPlan& plan, int dofs, const std::vector<int>& experime
   }
   line << " (the experimental ones, 1, n/4, n/2, 3n/4 and the top); a recorders block keeps more";
   plan.defaults = line.str();
+  add_channel(plan.channels, {Kind::kActuators, -1, -1, 1});
 }
 
 }  // namespace

@@ -152,13 +152,14 @@ TEST(ResultTables, ALargeModelsTableHoldsTheDefaultRecordersColumnsAsAFullRunHas
   const StudyOutcome outcome = run_study(prepared);
   ASSERT_EQ(outcome.cases.front().simulation.displacement.cols(), 5);  // not 250
   const Table t = study_table(outcome);
-  EXPECT_EQ(names(t),
-            (std::vector<std::string>{
-                "step", "time_s", "reference_command_act1_m", "reference_measured_act1_m",
-                "reference_force_act1_N", "reference_u_floor1_m", "reference_u_floor62_m",
-                "reference_u_floor125_m", "reference_u_floor187_m", "reference_u_floor250_m",
-                "lag_command_act1_m", "lag_measured_act1_m", "lag_force_act1_N", "lag_u_floor1_m",
-                "lag_u_floor62_m", "lag_u_floor125_m", "lag_u_floor187_m", "lag_u_floor250_m"}));
+  EXPECT_EQ(
+      names(t),
+      (std::vector<std::string>{
+          "step", "time_s", "reference_u_floor1_m", "reference_u_floor62_m",
+          "reference_u_floor125_m", "reference_u_floor187_m", "reference_u_floor250_m",
+          "reference_command_act1_m", "reference_measured_act1_m", "reference_force_act1_N",
+          "lag_u_floor1_m", "lag_u_floor62_m", "lag_u_floor125_m", "lag_u_floor187_m",
+          "lag_u_floor250_m", "lag_command_act1_m", "lag_measured_act1_m", "lag_force_act1_N"}));
   const core::SimulationResult full = core::simulate(prepared.base, prepared.motion);
   ASSERT_EQ(t.rows(), full.steps());
   EXPECT_EQ(t.column("reference_u_floor125_m").numbers, full_column(full, 124));
