@@ -9,9 +9,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "analysis/distributed/distributed_outputs.h"
 #include "cli/commands.h"
@@ -21,9 +23,12 @@
 #include "deploy/sites.h"
 #include "rt_check/check.h"
 #include "runtime/node/plan.h"
+#include "runtime/record/measurements.h"
+#include "runtime/record/record.h"
 #include "study/study.h"
 #include "util/atomic_file.h"
 #include "util/process.h"
+#include "view/context.h"
 #include "view/hand_down.h"
 #include "view/server.h"
 
@@ -39,6 +44,7 @@ struct SitesOptions {
   double expect_injected = -1.0;
   double platform_seconds = 5.0;
   bool check = false, cleanup = false, accept_platform = false;
+  double probe = 0;  // s of the link check (--probe); 0: none
   std::string view;  // HOST:PORT of the live view, empty: none
   bool view_stop = false;
 };
@@ -225,6 +231,100 @@ void report(const SitesOptions& o, const deploy::SitesPlan& plan,
   if (!result.ok) throw ExitError(kExitRunFailed, "sites: run failed: " + result.status);
 }
 
+// --probe: each link as the run uses it (the namespaces, DDS with the run secret, the same nodes
+// and injected lag), in real time, for `seconds` of the study's steps on its motion scaled by kProbeScale (the
+// commands stay below a nanometre: no actuator moves), no platform measurement. Per link from
+// the record: round trip (median, p99, ms), jitter (p99 - median, ms), loss (1 - answers accepted
+// / answers due, %; the last ceil(round trip / dt) steps' answers are still on the wire), drift
+// (least-squares slope of the round trip against time, ms/s); the verdict: the p99 round trip
+// within the critical round trip of the loop as compensated (view::link_context) and the
+// largest answer age within the node's answer window (the footer's). Exit 1 when a link fails.
+constexpr double kProbeScale = 1e-9;
+
+std::string probe_link(const runtime::LinkSeries& link, std::int64_t steps, double dt,
+                       const nlohmann::json& critical, const runtime::AnswerAge& age, bool& ok) {
+  const runtime::LagSummary rt = link.round_trip_summary();
+  const double due = static_cast<double>(steps) - std::ceil(rt.median / dt);
+  const double answers = link.answers.empty() ? 0.0 : static_cast<double>(link.answers.back());
+  double n = 0, st = 0, sr = 0, stt = 0, str = 0;
+  for (std::size_t i = 0; i < link.round_trip.size(); ++i) {
+    const double t = link.time[i], r = link.round_trip[i] * 1e3;
+    n += 1, st += t, sr += r, stt += t * t, str += t * r;
+  }
+  const double drift =
+      n > 2 && n * stt - st * st > 0 ? (n * str - st * sr) / (n * stt - st * st) : 0;
+  const bool unbounded = critical.value("unbounded", false);
+  const double crit_ms = critical.value("ms", 0.0);
+  const bool rt_ok = unbounded || (critical.contains("ms") && rt.p99 * 1e3 <= crit_ms);
+  const bool age_ok = age.steps_judged() == 0 || age.max_steps() <= age.window_steps();
+  ok = ok && rt_ok && age_ok && rt.count > 0;
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(2);
+  out << "round trip median " << rt.median * 1e3 << " ms, p99 " << rt.p99 * 1e3 << " ms; jitter "
+      << (rt.p99 - rt.median) * 1e3 << " ms (p99 - median); loss "
+      << (due > 0 ? 100.0 * std::max(0.0, 1.0 - answers / due) : 100.0) << " %; drift " << drift
+      << " ms/s; critical round trip ";
+  if (unbounded)
+    out << "none (stable for every round trip)";
+  else if (critical.contains("ms"))
+    out << crit_ms << " ms";
+  else
+    out << "not known";
+  out << " [" << critical.value("label", std::string("")) << "]; answer age ";
+  if (age.steps_judged() == 0)
+    out << "not judged (a lockstep study waits for each answer)";
+  else
+    out << "max " << age.max_steps() * dt * 1e3 << " ms of a " << age.window_steps() * dt * 1e3
+        << " ms window";
+  out << ": " << (rt_ok && age_ok && rt.count > 0 ? "the study can take it" : "TOO SLOW");
+  return out.str();
+}
+
+void run_probe(const SitesOptions& o, deploy::SitesPlan plan, const core::PreparedStudy& prepared) {
+  if (const auto reason = deploy::namespace_support())
+    throw ExitError(kExitEnvironment, "sites: " + *reason);
+  config::GroundMotion& motion = *plan.study.mutable_motion();
+  motion.set_scale(kProbeScale * (motion.scale() == 0 ? 1.0 : motion.scale()));
+  motion.set_duration(o.probe);
+  // In real time, whatever the study's clock: SECONDS are then seconds of the clock, and each
+  // link carries an answer a step as a real-time run's does (in lockstep a step waits for them).
+  // A lockstep study's loop waits for every answer: its probe gets windows of a second (its
+  // answer age is then not judged), so a stalled answer is measured rather than stop the probe.
+  config::Deployment& deployment = *plan.study.mutable_deployment();
+  const bool lockstep = deployment.clock() != config::Deployment::REAL_TIME;
+  if (lockstep) {
+    deployment.set_answer_window_ms(1000);
+    deployment.set_command_watchdog_ms(1000);
+    deployment.set_max_overrun_fraction(-1);
+  }
+  deployment.set_clock(config::Deployment::REAL_TIME);
+  deploy::SitesRunOptions options;
+  options.output_dir = output_folder(o) / "probe";
+  options.accept_platform = true;
+  options.platform_seconds = 0;  // the links are measured here, not the machine
+  if (!o.programs.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.programs.bin_dir);
+  const deploy::SitesRunResult result = deploy::run_sites(plan, options);
+  const runtime::RunMeasurements measured =
+      runtime::measure_run(runtime::read_record(result.record));
+  const nlohmann::json critical =
+      view::link_context(prepared, plan.study.deployment().case_name())["critical_round_trip"];
+  std::map<int, runtime::AnswerAge> ages;
+  for (const runtime::NodeRejects& n : measured.footer.node_rejects())
+    ages[n.node_id()] = n.answer_age();
+  std::map<int, std::string> site_of;
+  for (const deploy::NodePlacement& p : plan.placements) site_of[p.node_id] = p.site;
+  bool ok = result.coordinator_exit == 0 || result.status.find("overrun") != std::string::npos;
+  std::cout << "probe: " << o.probe << " s of the study's steps on its links (" << result.status
+            << ")\n";
+  for (const auto& [id, link] : measured.links)
+    std::cout << "  link to node " << id << " (site " << site_of[id] << "): "
+              << probe_link(link, measured.steps.steps(), prepared.base.dt, critical,
+                            lockstep ? runtime::AnswerAge() : ages[id], ok)
+              << "\n";
+  if (!ok) throw ExitError(kExitRunFailed, "probe: a link is too slow for the study (above)");
+}
+
 void run(const SitesOptions& o) {
   if (run_maintenance(o)) return;
   if (o.config.empty()) throw ExitError(kExitBadInput, "sites: CONFIG is required");
@@ -250,6 +350,7 @@ void run(const SitesOptions& o) {
   }
   const std::filesystem::path out = output_folder(o);
   claim_output_folder(out, plan.study.name(), o.results.force);
+  if (o.probe > 0) return run_probe(o, plan, prepared);
   const std::filesystem::path platform_file = check_platform_first(prepared, o, out);
   report(o, plan, prepared, run_at_sites(o, plan, out, platform_file));
 }
@@ -294,6 +395,11 @@ void add_sites_command(CLI::App& app) {
                 "with --view: the control room, a token per role printed once here (the director "
                 "HOLDs any lab and STOPs; each lab's operator HOLDs only that lab's actuators; a "
                 "viewer sees only); every press is in the record");
+  cmd->add_option("--probe", options->probe,
+                  "only measure each link as the run would use it, for this many s of steps "
+                  "(the motion scaled by 1e-9: no actuator moves), and say whether the study, "
+                  "with its compensation, can take it")
+      ->check(finite_in(0.5, 600.0));
   cmd->add_flag("--check", options->check, "only load and check the config");
   cmd->add_flag("--cleanup", options->cleanup,
                 "remove namespaces left by killed `rths sites` runs (then run CONFIG, if given)");

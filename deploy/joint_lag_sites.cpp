@@ -94,7 +94,7 @@ void run_measured(const JointLagStudy& config, const std::filesystem::path& base
       }
       std::ostringstream name;
       name << "measured_R" << round_trip * 1e3 << "ms_A" << actuator * 1e3 << "ms";
-      const auto run = run_sites(plan, {out / name.str(), std::nullopt, {}, {}, false, {}});
+      const auto run = run_sites(plan, {out / name.str(), std::nullopt, {}, {}, false, -1.0, {}});
       if (!run.ok) throw std::runtime_error("across-sites run " + name.str() + ": " + run.status);
       JointLagPoint point;
       point.network_round_trip = round_trip;

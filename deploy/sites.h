@@ -84,6 +84,7 @@ struct SitesRunOptions {
   // a deployment the check refuses (the record says so).
   std::filesystem::path platform_file;
   bool accept_platform = false;
+  double platform_seconds = -1.0;  // the coordinator's own measurement when no file; < 0: default
   std::vector<std::string> coordinator_args;  // appended to the coordinator's (e.g. --view H:P)
 };
 

@@ -117,6 +117,7 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   launch.stop_requested = options.stop_requested;
   launch.platform_file = options.platform_file;
   launch.accept_platform = options.accept_platform;
+  launch.platform_seconds = options.platform_seconds;
   launch.coordinator_args = options.coordinator_args;
   launch.placement = [&](int node_id) {
     const std::string& site = site_of.at(node_id);

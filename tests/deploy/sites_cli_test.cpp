@@ -56,6 +56,48 @@ TEST(SitesCli, RefusesABadViewAddressAndAControlRoomWithoutAView) {
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
 }
 
+// --probe: each link measured over DDS in the namespaces for the given seconds (a lockstep
+// study's too, in real time), its figures and the verdict against the critical round trip; a
+// probe shorter than 0.5 s is refused.
+TEST(SitesCli, ProbeStatesEachLinksFiguresAndTheVerdict) {
+  if (const auto reason = deploy::namespace_support()) GTEST_SKIP() << *reason;
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_sites_probe_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "study.textproto")
+      << "name: \"probe\"\nstructure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 "
+         "} }\nmotion { path: \"" RTHS_SOURCE_DIR
+         "/data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: 5 }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+         "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
+         "cases { name: \"lag_shift_4ms\" delay { shift { delay: 0.004 } } }\n";
+  std::ofstream(dir / "sites.textproto")
+      << "study: \"study.textproto\"\ncase_name: \"lag_shift_4ms\"\nclock: LOCKSTEP\n"
+         "domain_id: 3\nsubnet: \"10.231.203\"\ntimeout: 60\n"
+         "sites { name: \"integrator\" node_ids: [0, 1] }\nsites { name: \"lab\" node_ids: 2 }\n"
+         "links { node_id: 2 to_node { one_way_delay: 0.002 } from_node { one_way_delay: 0.002 } "
+         "}\n"
+         "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
+         "start_timeout: 20 }\n";
+  const auto probe =
+      util::run_command({kRths, "sites", (dir / "sites.textproto").string(), "--probe", "1",
+                         "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "out").string()},
+                        std::chrono::seconds(60));
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  EXPECT_NE(probe.output.find("link to node 2 (site lab): round trip median 4."),
+            std::string::npos)
+      << probe.output;  // the 4 ms the node injects, and the exchange
+  EXPECT_NE(probe.output.find("[uncompensated]; answer age not judged (a lockstep study waits for "
+                              "each answer): the study can take it"),
+            std::string::npos)
+      << probe.output;
+  const auto short_probe =
+      util::run_command({kRths, "sites", (dir / "sites.textproto").string(), "--probe", "0.1"});
+  EXPECT_EQ(short_probe.exit_code, 2) << short_probe.output;
+  std::filesystem::remove_all(dir);
+}
+
 std::string read(const std::filesystem::path& path);
 
 // `rths sites` takes `rths launch`'s platform flags: once it printed "run anyway with

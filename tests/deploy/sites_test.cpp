@@ -193,7 +193,7 @@ TEST_F(SitesRun, AFailedRunStillTearsEverythingDown) {
   auto sites = three_sites(93, 0.05, 0.05);
   sites.set_timeout(2.0);
   const auto plan = plan_sites(sites, kConfigs, "timeout");
-  const auto result = run_sites(plan, {out("timeout"), std::nullopt, {}, {}, false, {}});
+  const auto result = run_sites(plan, {out("timeout"), std::nullopt, {}, {}, false, -1.0, {}});
   EXPECT_FALSE(result.ok);
   EXPECT_NE(result.status.find("timed out"), std::string::npos) << result.status;
   ASSERT_EQ(result.namespaces.size(), 4u);
