@@ -281,6 +281,21 @@ std::optional<double> tolerated_extra_lag(const core::CoupledLoopStability& loop
   return out;
 }
 
+// An online fit's loop whose starting model crosses: the same loop with each predictor fitted to
+// its declared specimen. Stable there, the verdict is the fitted loop's and relies on the fit.
+void judge_fitted_loop(const core::HybridSetup& setup, const std::vector<double>& lags,
+                       CompensatedVerdict& verdict, std::ostringstream& text) {
+  const core::CoupledLoopStability fitted =
+      core::setup_loop_stability(setup, lags, core::PredictorModels::kFittedToTheDeclaredSpecimen);
+  text << "; fitted to the declared specimen: " << coupled_links_text(fitted, setup, lags);
+  if (!fitted.stable) return;
+  verdict.stable = true;
+  verdict.relies_on_fit = true;
+  verdict.extra_delay_tolerated = tolerated_extra_lag(fitted, lags);
+  text << ", so the run relies on the online fit converging before the response grows (the "
+          "predictor's bound, max_relative_error, HOLDs it if not)";
+}
+
 // The pre-run verdict of a case with a force predictor (core/force_predictor.h): the coupled loop
 // of every link with its predictor's model as it starts (the declared specimen times
 // stiffness_factor, its dashpot; core::setup_loop_stability, any number of DOFs and links),
@@ -309,7 +324,10 @@ CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const co
   verdict.stable = loop.stable;
   if (loop.stable) verdict.extra_delay_tolerated = tolerated_extra_lag(loop, lags);
   text << coupled_links_text(loop, setup, lags);
-  if (!block.fixed_model()) text << " (the model as it starts; the online fit shrinks its error)";
+  if (!block.fixed_model()) {
+    text << " (the model as it starts; the online fit shrinks its error)";
+    if (!loop.stable) judge_fitted_loop(setup, lags, verdict, text);
+  }
   text << " [" << loop.assumed << "]";
   verdict.text = text.str();
   return verdict;

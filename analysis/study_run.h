@@ -51,6 +51,10 @@ struct CompensatedVerdict {
   bool analysed = false;  // false: adaptive, or a structure the analysis does not cover
   bool stable = false;    // analysed and stable as configured (meaningful when analysed)
   std::optional<double> extra_delay_tolerated;  // s, analysed and stable: the smaller margin
+  // A force predictor fitted online whose model as it starts makes the loop cross, where the
+  // model fitted to the declared specimen does not: `stable` is the fitted model's, and the run
+  // relies on the fit converging before the response grows (its bound HOLDs it if not).
+  bool relies_on_fit = false;
   std::string
       text;  // one line, e.g. "compensated loop (polynomial): stable, tolerates 9.1 ms more"
 };

@@ -220,6 +220,7 @@ std::string margin_cell(const CaseOutcome& c) {
     const CompensatedVerdict& v = *c.compensated;
     if (!v.analysed) return "n/a [comp.]";
     if (!v.stable) return "unstable [comp.]";
+    if (v.relies_on_fit) return "needs fit [comp.]";
     if (!v.extra_delay_tolerated) return "stable";
     std::string cell =
         "+";  // appended, not `"+" + core::format_ms(...)`: GCC 12 -O3 warns falsely on that
@@ -281,8 +282,9 @@ std::string study_summary_text(const StudyOutcome& outcome) {
   if (std::any_of(outcome.cases.begin(), outcome.cases.end(),
                   [](const CaseOutcome& c) { return c.compensated.has_value(); }))
     out << "margin [comp.]: the compensated loop's, as the lag it tolerates beyond its own (n/a: "
-           "not analysable before the run); each such case's line below gives it with the "
-           "uncompensated margin\n";
+           "not analysable before the run; needs fit: unstable with the predictor's model as it "
+           "starts, stable once fitted to the declared specimen); each such case's line below "
+           "gives it with the uncompensated margin\n";
   for (const CaseOutcome& c : outcome.cases) {
     if (!c.status_detail.empty()) out << c.name << ": " << c.status_detail << "\n";
     if (c.compensated) out << c.name << ": " << c.compensated->text << "\n";

@@ -342,13 +342,20 @@ std::vector<DelayedPart> setup_loop_parts(const HybridSetup& setup,
   return parts;
 }
 
-CoupledLoopStability setup_loop_stability(const HybridSetup& setup,
-                                          const std::vector<double>& lags) {
+CoupledLoopStability setup_loop_stability(const HybridSetup& setup, const std::vector<double>& lags,
+                                          PredictorModels models) {
   constexpr int kSparseModes = 20;  // as core::check_modal_critical_delay
   const int n = setup.model.dofs();
   const Modes modes =
       lowest_modes(setup.model, setup.model.is_sparse() ? std::min(kSparseModes, n - 1) : n);
-  return coupled_loop_stability(setup.model, setup_loop_parts(setup, lags), modes);
+  std::vector<DelayedPart> parts = setup_loop_parts(setup, lags);
+  if (models == PredictorModels::kFittedToTheDeclaredSpecimen)
+    for (DelayedPart& part : parts)
+      if (part.predicted) {
+        part.model_stiffness = part.stiffness;
+        part.model_damping = part.damping;
+      }
+  return coupled_loop_stability(setup.model, parts, modes);
 }
 
 }  // namespace rths::core

@@ -122,9 +122,16 @@ CoupledLoopStability coupled_loop_stability(const StructuralModel& model,
 // lags is not one per actuator or an actuator has no specimen.
 std::vector<DelayedPart> setup_loop_parts(const HybridSetup& setup,
                                           const std::vector<double>& lags);
-// coupled_loop_stability of a setup's model and its setup_loop_parts, in the modes
-// core::check_modal_critical_delay takes (all n; a model held sparse: its lowest 20).
-CoupledLoopStability setup_loop_stability(const HybridSetup& setup,
-                                          const std::vector<double>& lags);
+// Which model a predicted link's predictor holds in the analysis: as it starts (the parameters'
+// stiffness and dashpot, before any fit), or fitted to the declared specimen (what an online fit
+// reaches when the specimen behaves as declared: the model's stiffness and dashpot are the
+// specimen's, so nothing of that link comes back late).
+enum class PredictorModels { kAsTheyStart, kFittedToTheDeclaredSpecimen };
+
+// coupled_loop_stability of a setup's model and its setup_loop_parts (their predictors' models
+// as `models` says), in the modes core::check_modal_critical_delay takes (all n; a model held
+// sparse: its lowest 20).
+CoupledLoopStability setup_loop_stability(const HybridSetup& setup, const std::vector<double>& lags,
+                                          PredictorModels models = PredictorModels::kAsTheyStart);
 
 }  // namespace rths::core

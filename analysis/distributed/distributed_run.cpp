@@ -142,6 +142,8 @@ int warn_past_critical_delay(const core::PreparedStudy& prepared,
         warn("case '" + study_case.name() + "': " + predicted->text +
              (study_case.expect_unstable() ? " (expect_unstable: meant)"
                                            : "; expect it to diverge"));
+      } else if (predicted->relies_on_fit) {
+        warn("case '" + study_case.name() + "': " + predicted->text);
       }
       continue;
     }

@@ -636,6 +636,36 @@ TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
   std::cout << "damper frame: " << inside.compensated->text << "\n";
 }
 
+// A predictor fitted online and started 30 % soft (configs/consortium_frame.textproto: a damper
+// and a column behind 60 and 100 ms links) crosses with its starting model, but not once fitted
+// to the declared specimens: the verdict is the fitted loop's, says the run relies on the fit and
+// the run completes; the same model held fixed stays unstable.
+TEST(StudyRun, AnOnlineFitStartedOffIsJudgedOnItsFittedLoopAndSaysSo) {
+  config::Study study = core::load_study(kConfigs / "consortium_frame.textproto");
+  study.mutable_motion()->set_duration(8.0);
+  config::Case* fixed = study.add_cases();
+  *fixed = study.cases(1);
+  fixed->set_name("link_60ms_fixed_soft30");
+  fixed->mutable_force_predictor()->set_fixed_model(true);
+  fixed->set_expect_unstable(true);
+  const StudyOutcome outcome =
+      run_study(core::prepare_study(study, kConfigs), {.warn = [](const std::string&) {}});
+  const CaseOutcome& online = outcome.cases.at(1);
+  ASSERT_EQ(online.name, "link_60ms_predicted_soft30");
+  ASSERT_TRUE(online.compensated.has_value());
+  EXPECT_TRUE(online.compensated->stable) << online.compensated->text;
+  EXPECT_TRUE(online.compensated->relies_on_fit) << online.compensated->text;
+  EXPECT_NE(online.compensated->text.find("relies on the online fit"), std::string::npos);
+  EXPECT_EQ(online.status, "completed") << online.status_detail;
+  const CaseOutcome& held = outcome.cases.back();
+  ASSERT_TRUE(held.compensated.has_value());
+  EXPECT_FALSE(held.compensated->stable) << held.compensated->text;
+  EXPECT_FALSE(held.compensated->relies_on_fit);
+  const std::string table = study_summary_text(outcome);
+  EXPECT_NE(table.find("needs fit [comp.]"), std::string::npos) << table;
+  EXPECT_NE(table.find("unstable [comp.]"), std::string::npos) << table;
+}
+
 // An envelope that grows as the lag-free run's does (the motion grows to the end of the record)
 // is the motion's: the compensated case analysed stable gets no "grows exponentially ... doubling
 // every" line beside its verdict.
