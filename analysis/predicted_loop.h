@@ -11,8 +11,9 @@
 // its declared specimen (relies_on_fit when that loop is stable).
 #pragma once
 
-#include "analysis/study_run.h"
+#include "analysis/compensated_verdict.h"
 #include "core/simulation.h"
+#include "rths/proto/config.pb.h"
 
 namespace rths::analysis {
 
