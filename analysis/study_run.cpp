@@ -313,6 +313,9 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
   if (result.stability && result.stability->governing_period > 0.0 && result.simulation.dt > 0.0)
     result.growth = core::envelope_growth(result.response, result.simulation.dt,
                                           result.stability->governing_period);
+  // Past its critical delay, any growth is the loop's (the analysis expects it); inside it, only
+  // growth beyond the lag-free run's, which the motion alone does not explain.
+  const bool grows_at_all = result.growth && result.growth->grows();
   const bool grows = grows_beyond_lag_free(result, lag_free_response);
   const Comparison growth = compare(lag_free_response, result.response, result.simulation.diverged);
   if (result.status != "completed") return;
@@ -326,7 +329,7 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
       why << "; the simulation stopped at t = " << result.simulation.time.back() << " s";
     why << ")";
     if (result.stability) why << "; " << result.stability->describe();
-  } else if (grows && result.judged_past()) {
+  } else if (grows_at_all && result.judged_past()) {
     result.status = "diverging";
     why << "past its critical delay and " << describe_growth(*result.growth) << "; peak "
         << growth.peak_m / growth.peak_reference_m << "x the lag-free run's; "

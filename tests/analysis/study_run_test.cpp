@@ -666,6 +666,19 @@ TEST(StudyRun, AnOnlineFitStartedOffIsJudgedOnItsFittedLoopAndSaysSo) {
   EXPECT_NE(table.find("unstable [comp.]"), std::string::npos) << table;
 }
 
+// Past its critical delay, growth is the loop's even where the lag-free run also grows (3 s of El
+// Centro end in its strong motion): the 50 ms case is judged diverging, never completed.
+TEST(StudyRun, APastCaseGrowingWithTheMotionIsStillDiverging) {
+  const StudyOutcome outcome = run_study(
+      frame(1.0 / 3.0,
+            "cases { name: \"reference\" } cases { name: \"late\" delay { shift { delay: 0.05 } "
+            "} }",
+            "", 3.0),
+      {.warn = [](const std::string&) {}});
+  const CaseOutcome& late = outcome.cases.at(1);
+  EXPECT_TRUE(late.diverged()) << late.status << ": " << late.status_detail;
+}
+
 // An envelope that grows as the lag-free run's does (the motion grows to the end of the record)
 // is the motion's: the compensated case analysed stable gets no "grows exponentially ... doubling
 // every" line beside its verdict.
