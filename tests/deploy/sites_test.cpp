@@ -79,19 +79,19 @@ TEST(SitesConfig, ShippedConfigLoads) {
 // its links carry the same draws as the study's in-process link case.
 TEST(SitesConfig, TheConsortiumFrameLoadsWithItsSitesAndLinks) {
   const auto plan = load_sites(kConfigs / "sites_consortium_frame.textproto");
-  EXPECT_EQ(plan.placements.size(), 4u);
+  EXPECT_EQ(plan.placements.size(), 3u);  // the coordinator holds the frame: no numerical node
   const auto& deployment = plan.study.deployment();
   EXPECT_EQ(deployment.case_name(), "sites_predicted");
   EXPECT_EQ(deployment.clock(), config::Deployment::REAL_TIME);
-  for (int node : {1, 2}) {
+  for (int node : {0, 1}) {
     EXPECT_DOUBLE_EQ(deployment.nodes(node).receive_lag().one_way_delay(), 0.030);
     EXPECT_DOUBLE_EQ(deployment.nodes(node).send_lag().jitter(), 0.0025);
     EXPECT_DOUBLE_EQ(deployment.nodes(node).send_lag().loss(), 0.01);
   }
   // In process, one link per actuator in channel order: lab C's column (node 3) first.
   const auto& lab_c = plan.study.cases(1).link(0);
-  EXPECT_EQ(lab_c.to_node().seed(), deployment.nodes(2).receive_lag().seed());
-  EXPECT_EQ(lab_c.from_node().seed(), deployment.nodes(2).send_lag().seed());
+  EXPECT_EQ(lab_c.to_node().seed(), deployment.nodes(1).receive_lag().seed());
+  EXPECT_EQ(lab_c.from_node().seed(), deployment.nodes(1).send_lag().seed());
 }
 
 TEST(SitesConfig, ErrorsNameTheProblem) {
