@@ -20,12 +20,23 @@ std::optional<std::int64_t> LinkWayLag::release(std::int64_t arrival_ns, std::in
   if (way_.drop_steps > 0 && step >= way_.drop_first_step &&
       step < way_.drop_first_step + way_.drop_steps)
     return std::nullopt;
-  double extra = way_.drift_rate * static_cast<double>(step) * dt_;
-  if (way_.spike_every > 0 && step % way_.spike_every < way_.spike_steps) extra += way_.spike_delay;
+  // A message of no step (step < 0) gets the link's lag and jitter, not its emulated extra.
+  double extra = 0.0;
+  if (step >= 0) {
+    extra = way_.drift_rate * static_cast<double>(step) * dt_;
+    if (way_.spike_every > 0 && step % way_.spike_every < way_.spike_steps)
+      extra += way_.spike_delay;
+  }
   const std::int64_t release = std::max(
       arrival_ns + static_cast<std::int64_t>(std::llround((delay + extra) * 1e9)), last_release_);
   last_release_ = release;
+  last_delay_ = std::max(0.0, static_cast<double>(release - arrival_ns) * 1e-9 - extra);
   return release;
+}
+
+bool LinkWayLag::active() const {
+  return way_.one_way_delay > 0 || way_.jitter > 0 || way_.loss > 0 || way_.drift_rate > 0 ||
+         (way_.spike_delay > 0 && way_.spike_every > 0) || way_.drop_steps > 0;
 }
 
 std::vector<std::int64_t> link_answer_steps(const LinkModel& link, double dt, std::size_t steps) {

@@ -51,8 +51,13 @@ struct LinkModel {
 class LinkWayLag {
  public:
   LinkWayLag(const LinkWay& way, double dt);
-  // Release time (ns) of the message of `step` arriving at `arrival_ns`; nullopt: lost.
+  // Release time (ns) of the message of `step` arriving at `arrival_ns`; nullopt: lost. A
+  // message of no step (step < 0) is never dropped by step and carries no drift or spike.
   std::optional<std::int64_t> release(std::int64_t arrival_ns, std::int64_t step);
+  // s, of the last released message: its lag without the drift and spikes (what a node reports).
+  double last_delay() const { return last_delay_; }
+  // Whether any term is on.
+  bool active() const;
 
  private:
   LinkWay way_;
@@ -61,6 +66,7 @@ class LinkWayLag {
   std::normal_distribution<double> normal_{0.0, 1.0};
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   std::int64_t last_release_ = 0;
+  double last_delay_ = 0.0;
 };
 
 // used[k] for k in [0, steps) (schedule above); dt: s, > 0.

@@ -9,15 +9,16 @@
 //   extra   = drift_rate k dt + (spike_delay when k % spike_every < spike_steps), s
 //   dropped when drop_first_step <= k < drop_first_step + drop_steps
 // and unreported: last_delay() = release - t - extra (what goes into the answer's injected_lag).
+// Computed by core::LinkWayLag, the one lag algorithm the in-process link also runs.
 // Deterministic for a given seed and arrival sequence.
 //
 // LagStats: count, mean, median, p99, max of a set of lags (s).
 
 #include <cstdint>
 #include <optional>
-#include <random>
 #include <vector>
 
+#include "core/link_answers.h"
 #include "rths/proto/deployment.pb.h"
 
 namespace rths::runtime {
@@ -29,22 +30,17 @@ class LagInjector {
   // Release time (ns) for a message arriving at `arrival_ns`, or nullopt when it is lost.
   // command_step: the step of the command the message is (receive side) or answers (send side);
   // < 0 for any other message, which the network emulation leaves alone.
-  std::optional<std::int64_t> schedule(std::int64_t arrival_ns, std::int64_t command_step = -1);
+  std::optional<std::int64_t> schedule(std::int64_t arrival_ns, std::int64_t command_step = -1) {
+    return lag_.release(arrival_ns, command_step);
+  }
   // s, of the last scheduled message: the reported lag (without the network emulation's extra).
-  double last_delay() const { return last_delay_; }
-  bool active() const;
+  double last_delay() const { return lag_.last_delay(); }
+  bool active() const { return lag_.active(); }
 
  private:
-  // s, the network emulation's unreported extra for a command of `step`; nullopt: dropped.
-  std::optional<double> emulated_extra(std::int64_t step) const;
-
-  config::LinkLag spec_;
-  double dt_ = 0.0;
-  std::mt19937_64 rng_;
-  std::normal_distribution<double> normal_{0.0, 1.0};
-  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
-  std::int64_t last_release_ = 0;
-  double last_delay_ = 0.0;
+  // The one lag algorithm, shared with the in-process link (core/link_answers.h), so a case's
+  // link in process and a node injecting the same LinkLag draw the same sequence.
+  core::LinkWayLag lag_;
 };
 
 struct LagSummary {
