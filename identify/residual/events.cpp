@@ -1,5 +1,7 @@
 #include "identify/residual/events.h"
 
+#include "identify/residual/robust.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,19 +11,7 @@
 namespace rths::identify {
 namespace {
 
-double median_of(std::vector<double> x) {
-  if (x.empty()) return 0.0;
-  const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
-  std::nth_element(x.begin(), mid, x.end());
-  return *mid;
-}
-
-double mad_of(const std::vector<double>& x) {
-  const double m = median_of(x);
-  std::vector<double> a(x.size());
-  for (std::size_t j = 0; j < x.size(); ++j) a[j] = std::abs(x[j] - m);
-  return 1.4826 * median_of(std::move(a));
-}
+double mad_of(const std::vector<double>& x) { return robust_sigma(x, median_of(x)); }
 
 // The running median of r over kMedianSpan samples centred on each, fewer towards the ends (a
 // one-sided span would read a slope as a spike).

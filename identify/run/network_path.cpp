@@ -9,22 +9,10 @@
 
 #include "identify/model/data.h"
 #include "identify/model/model.h"
+#include "identify/residual/robust.h"
 
 namespace rths::identify {
 namespace {
-
-double median_of(std::vector<double> x) {
-  if (x.empty()) return 0.0;
-  const auto mid = x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2);
-  std::nth_element(x.begin(), mid, x.end());
-  return *mid;
-}
-
-double robust_sigma(const std::vector<double>& x, double centre) {
-  std::vector<double> deviation;
-  for (double v : x) deviation.push_back(std::abs(v - centre));
-  return 1.4826 * median_of(std::move(deviation));
-}
 
 double rms_about(const std::vector<double>& x, const std::vector<double>& model,
                  const std::vector<std::size_t>& samples) {
