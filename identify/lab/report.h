@@ -1,5 +1,6 @@
 #pragma once
-// Reports of an identification: a human-readable table, a JSON object and PNG plots.
+// Reports of an identification: a human-readable table and a JSON object (its plots:
+// report_plots.h).
 //
 // JSON (to_json): { "source", "samples", "dt", "search_decimation",
 //   "holdout": {"mode", "fraction", "train_samples", "heldout_samples"},
@@ -13,21 +14,7 @@
 //   "prediction": {...} when a study was predicted }
 // `steps` lists the effects added, in order, measured channel first; clean data gives [].
 // Errors are RMS(residual) / std(measured signal) over the training / held-out samples.
-//
-// Plots (write_plots), one set per channel into `directory`:
-//   <channel>_residual_time.png       residual of the declared and of the final model against time
-//   <channel>_residual_spectrum.png   their amplitude spectra (log scale)
-//   force_loops.png                   measured force against measured displacement, with the
-//                                     declared and the final model's force (a held-out window)
-//   measured_tracking.png             command, measured and modelled displacement (a window)
-//   measured_bode.png                 amplitude ratio (mm/mm) and phase (deg) against frequency
-//                                     (Hz, log axis): measured H1 by Welch averaging against the
-//                                     identified and the declared model's response, with the
-//                                     coherence, over the band where it is >= 0.9 (bode.h); left
-//                                     out when the record is too short or has no such band
-// Every PNG has an SVG of the same figure beside it (util/plot.h).
 
-#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -46,8 +33,7 @@ nlohmann::json to_json(const Identification& id, const ReportContext& context,
                        const std::optional<StudyPrediction>& prediction = std::nullopt);
 std::string format_table(const Identification& id,
                          const std::optional<StudyPrediction>& prediction = std::nullopt);
-// Returns the files written. Throws std::runtime_error naming the file (gnuplot missing, ...).
-std::vector<std::filesystem::path> write_plots(const Identification& id,
-                                               const std::filesystem::path& directory);
+// `v` with 4 significant digits ("0.01234"): how the table and the plots' titles print a value.
+std::string format_value(double v);
 
 }  // namespace rths::identify

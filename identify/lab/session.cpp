@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "identify/lab/report.h"
+#include "identify/lab/report_plots.h"
 #include "identify/model/declared_model.h"
 #include "identify/model/study_config.h"
 #include "study/study.h"

@@ -36,7 +36,6 @@ OVERSIZE = {
     ("view/server.cpp", "ViewServer::routes"): 66,
     ("core/stability.cpp", "check_modal_critical_delay"): 65,
     ("results/results.cpp", "record_table"): 61,
-    ("identify/lab/report.cpp", ""): 601,
 }
 
 
