@@ -58,9 +58,15 @@ void RunState::apply(const transport::Message& message, Node& node) {
       return;
     }
     case runtime::HOLD: {
-      // An emulator held on its own (its watchdog or limits): the test cannot go on.
+      // An emulator held on its own (its watchdog or limits): the test cannot go on. In a run held
+      // from the view, no command comes, so a watchdog's HOLD is expected and recorded.
       runtime::Hold hold;
       if (!unpack_or_count(message, hold, rejected)) return;
+      if (!held_from_view.empty()) {
+        event(node.plan->label() + " held on its own at its step " + std::to_string(message.step) +
+              " while the run is held: " + hold.reason());
+        return;
+      }
       throw RunAborted(
           "held on its own at its step " + std::to_string(message.step) + ": " + hold.reason(),
           node.plan->label());

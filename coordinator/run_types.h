@@ -55,8 +55,9 @@ struct CoordinatorOptions {
   // any fault, HOLD then STOP, with the status kStoppedFromView. Read once per step (relaxed).
   const std::atomic<bool>* stop_request = nullptr;
   // The view's control room (view/control_room.h), polled once per step as stop_request is: each
-  // press becomes a record event; an allowed HOLD goes to its nodes at once, then the run stops
-  // (HOLD, then STOP) naming who held it; an allowed STOP stops it as the view's stop does.
+  // press becomes a record event; an allowed HOLD goes to its nodes at once and holds the run (no
+  // further step, messages and liveliness go on) until an allowed STOP stops it as the view's
+  // stop does, its status naming who held it.
   view::ControlDesk* control = nullptr;
   // What the transport dropped unread for want of a MAC (DdsEndpoint::unauthenticated), read once
   // after the run for the outcome and the record's last event; empty: nothing to read.

@@ -128,9 +128,16 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
 
   // Logs what happened and appends it to the record as an event (a full ring drops and counts it).
   void event(const std::string& what);
-  // The control room's presses (options.control): recorded, an allowed HOLD sent to its nodes;
-  // throws RunAborted naming who, when one was allowed.
+  // The control room's presses (options.control): each recorded; an allowed HOLD sent to its
+  // nodes, then the run held (hold_run); an allowed STOP throws RunAborted naming who.
   void apply_presses();
+  // The run held from the view (`why`: who held it), at `step`: no further step is integrated (the
+  // loop cannot integrate past a held actuator), so no command leaves and every other lab's
+  // actuators stay at their last one (a real-time emulator's watchdog then holds it where it
+  // stands). Messages, liveliness and the heartbeat go on; a node's own HOLD is recorded, not a
+  // fault. Leaves only by RunAborted: the director's STOP (or the stop request) or a node's fault.
+  [[noreturn]] void hold_run(const std::string& why);
+  std::string held_from_view;  // while the run is held: why (hold_run's `why`)
 
   // ---- Messages (exchange.cpp) ----
   // Takes one message off the transport and applies it if valid. False on timeout.

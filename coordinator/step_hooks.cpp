@@ -26,14 +26,14 @@ void RunState::event(const std::string& what) {
 }
 
 void RunState::apply_presses() {
-  std::optional<RunAborted> stop;
+  std::optional<std::string> stop, hold;
   for (const view::Press& press : options.control->take()) {
     if (press.allowed && !press.hold_nodes.empty()) {
-      runtime::Hold hold;
-      hold.set_reason("HOLD from the view by " + press.who);
+      runtime::Hold hold_message;
+      hold_message.set_reason("HOLD from the view by " + press.who);
       for (const int id : press.hold_nodes)
         if (const auto node = nodes.find(id); node != nodes.end() && node->second.announced)
-          send(id, runtime::HOLD, step, hold);
+          send(id, runtime::HOLD, step, hold_message);
     }
     // How long the press took to reach the loop (and an allowed HOLD its nodes): in steps from the
     // newest the view had seen (the loop was at least there), and in CLOCK_REALTIME of this host.
@@ -41,12 +41,32 @@ void RunState::apply_presses() {
         fmt::format("{} (applied at step {}, the view had seen step {}; {:.2f} ms after the press)",
                     press.text(), step, press.seen_step,
                     static_cast<double>(transport::realtime_ns() - press.realtime_ns) * 1e-6));
-    if (press.allowed && !stop)
-      stop.emplace(press.stop ? std::string(kStoppedFromView) + " by " + press.who
-                              : "HOLD from the view by " + press.who,
-                   "");
+    if (!press.allowed) continue;
+    if (press.stop && !stop) stop = std::string(kStoppedFromView) + " by " + press.who;
+    if (!press.stop && !hold) hold = "HOLD from the view by " + press.who;
   }
-  if (stop) throw *stop;
+  if (stop)
+    throw RunAborted(held_from_view.empty() ? *stop : *stop + " (held: " + held_from_view + ")",
+                     "");
+  if (hold && held_from_view.empty()) hold_run(*hold);
+}
+
+void RunState::hold_run(const std::string& why) {
+  held_from_view = why;
+  // "HOLD ..." first: the view's state turns HOLD with this as its reason.
+  event(fmt::format(
+      "HOLD of the run at step {}: {}; no further step is integrated and no command leaves (the "
+      "held actuators hold where they stand, every other lab's stay at their last command) "
+      "until the director's STOP",
+      step, why));
+  for (;;) {
+    if (options.stop_request && options.stop_request->load(std::memory_order_relaxed))
+      throw RunAborted(std::string(kStoppedFromView) + " (held: " + why + ")", "");
+    if (options.control->pending()) apply_presses();
+    pump(std::chrono::milliseconds(10));
+    while (pump(std::chrono::nanoseconds::zero())) {}
+    check_liveliness();
+  }
 }
 
 void RunState::before_step(std::size_t k) {
@@ -133,6 +153,10 @@ void RunState::write_header() {
   h.set_dt(setup.dt);
   h.set_dofs(setup.model.dofs());
   h.set_actuators(static_cast<int>(setup.partition.actuator_storeys.size()));
+  // The DOFs each step keeps: the recorders' (coordinator.cpp, loop), or every DOF (none named)
+  // when an outside driver sizes the result.
+  if (!options.driver)
+    for (const int dof : prepared.recorders.kept_dofs) h.add_recorded_dofs(dof);
   for (auto& [id, node] : nodes) h.add_link_node_ids(id);
   h.set_start_realtime_ns(transport::realtime_ns());
   h.set_timestamp_clock(

@@ -91,7 +91,7 @@ std::string Press::text() const {
   t += hold_nodes.size() == 1 ? " " : "s ";
   for (std::size_t i = 0; i < hold_nodes.size(); ++i)
     t += (i ? ", " : "") + std::to_string(hold_nodes[i]);
-  return t + ", then the run stops";
+  return t + "; the run holds until the director stops it";
 }
 
 ControlDesk::ControlDesk(Crew crew, std::map<std::string, std::vector<int>> labs)

@@ -5,7 +5,8 @@
 // Roles, each with its own token (make_token: 128 random bits, made per run):
 //   director   HOLD every lab or any one, STOP the test
 //   operator   of one lab: HOLD that lab's actuators (the lab's nodes that drive actuators); never
-//              STOP, never another lab, never release (a HOLD ends the run: nothing releases it)
+//              STOP, never another lab, never release: nothing releases a HOLD (a node's HOLD
+//              freezes it for the rest of the run); the held run waits for the director's STOP
 //   viewer     sees, as everyone who reaches the view does; every press is refused
 // Inputs: the labs (site name -> the ids of its nodes that drive actuators, in the sites
 // config's order), a Crew of tokens, and presses: a token, an action ("stop" or "hold") and, for
@@ -14,8 +15,9 @@
 // STOP, CLOCK_REALTIME ns). A token of no role is refused and queues nothing (the server counts
 // it); every press of a known role, allowed or refused, queues for the loop, which polls
 // pending() once per step (one relaxed atomic load) and take()s them only when it is set: each
-// becomes a record event, an allowed HOLD is sent to its nodes at once and ends the run (HOLD,
-// then STOP), as an allowed STOP does.
+// becomes a record event; an allowed HOLD is sent to its nodes at once and holds the run (the
+// loop integrates no further step: it cannot integrate past a held actuator) until an allowed
+// STOP ends it (HOLD, then STOP).
 // Thread safety: press(), pending(), take() from any thread; Crew is a value.
 
 #include <atomic>

@@ -53,8 +53,8 @@ TEST(ControlDesk, AnOperatorHoldsOnlyTheirOwnLabAndNeverStops) {
   EXPECT_EQ(own->hold_nodes, (std::vector<int>{2, 3}));
   EXPECT_FALSE(own->stop);
   EXPECT_EQ(own->text(),
-            "the operator of lab_b pressed HOLD of lab_b on the view: HOLD sent to nodes 2, 3, "
-            "then the run stops");
+            "the operator of lab_b pressed HOLD of lab_b on the view: HOLD sent to nodes 2, 3; "
+            "the run holds until the director stops it");
   const auto other = d.press(token, "hold", "lab_c");
   EXPECT_FALSE(other->allowed);
   EXPECT_TRUE(other->hold_nodes.empty());

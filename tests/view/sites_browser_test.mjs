@@ -2,12 +2,15 @@
 // `rths sites --view --view-stop` runs: three sites in network namespaces (site_a: the coordinator
 // and the numerical storeys; lab_b and lab_c: two actuators each), lockstep over Cyclone DDS
 // (domains 1 and 2). The page names every site with its nodes, links and actuators; an operator's
-// HOLD of their lab reaches its actuators within the answer window and ends the run; an operator
-// cannot stop the run or HOLD another lab; a viewer's stop is refused; the director's stop ends
-// the run; the record (read back by `rths view`) names who pressed what. Skipped, with the reason
-// printed, where Chromium cannot start or network namespaces cannot be made.
+// HOLD of their lab reaches its actuators within the answer window and holds the run (no further
+// step, the process goes on, the page says HOLD, lab_c gets no HOLD and no command) until the
+// director's stop ends it (exit 1, the record complete); an operator cannot stop the run or HOLD
+// another lab; a viewer's stop is refused; the director's stop ends a running run; the record (read
+// back by `rths view`) names who pressed what. Skipped, with the reason printed, where Chromium
+// cannot start or network namespaces cannot be made.
 // Screenshots (the first 1000 px: the header and the sites) go to RTHS_VIEW_TEST_OUT
-// (sites_operator.png, sites_hold.png, sites_viewer.png, sites_director_stop.png).
+// (sites_operator.png, sites_hold.png, sites_held_director.png, sites_held_stop.png,
+// sites_viewer.png, sites_director_stop.png).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn, spawnSync } from 'node:child_process';
@@ -166,10 +169,11 @@ async function recordEvents(record) {
   const snapshot = await (await fetch(url + 'api/snapshot')).json();
   child.kill('SIGINT');
   await child.done;
-  return { events: snapshot.events.map(e => e.what), context: snapshot.context, header: snapshot.header };
+  return { events: snapshot.events.map(e => e.what), context: snapshot.context, header: snapshot.header,
+    status: snapshot.status };
 }
 
-test('an operator HOLDs their own lab within the answer window; another lab and STOP are refused (403) and recorded', { timeout: 400000 }, async t => {
+test('an operator HOLDs their own lab within the answer window and the run holds until the director stops it; another lab and STOP are refused (403) and recorded', { timeout: 400000 }, async t => {
   if (skip) return t.skip(skip);
   const dir = path.join(OUT, 'sites_hold');
   const { child, roles } = await startSites(dir, 1, '10.231.201');
@@ -187,23 +191,47 @@ test('an operator HOLDs their own lab within the answer window; another lab and 
   assert.equal((await post(page, 'stop', '')).status, 403);
   await page.click('#hold-lab_b');
   await until('the HOLD on the page', async () => (await page.textContent('#state')).startsWith('HOLD'));
+  assert.match(await page.textContent('#reason'), /^HOLD of the run at step \d+: HOLD from the view by the operator of lab_b/);
   await until('lab_b\'s actuators held on the page', async () =>
     (await page.textContent('#site-lab_b table')).includes('HOLD: the operator of lab_b pressed HOLD of lab_b'));
+  // Held: the run goes on without a step (the page's newest step stays) and the process stays.
+  const heldStep = await step(page);
+  await new Promise(r => setTimeout(r, 3000));
+  assert.equal(await step(page), heldStep, 'no step is integrated past the HOLD');
+  assert.equal(child.exitCode, null, 'the held run waits for the director: ' + child.output);
+  assert.match(await page.textContent('#site-lab_c table'), /at its last command: the run is held, no command leaves/);
   await page.screenshot({ path: path.join(OUT, 'sites_hold.png') });
-  assert.equal(await child.done, 1, child.output);  // a held run did not complete
-  assert.match(child.output, /HOLD from the view by the operator of lab_b/);
-  const { events, context } = await recordEvents(path.join(dir, 'out', 'lab_test.rthsrec'));
-  const held = events.find(e => e.startsWith('the operator of lab_b pressed HOLD of lab_b on the view: HOLD sent to node 2'));
+  const director = await open(roles.director);
+  await until('the HOLD on the director\'s page', async () => (await director.textContent('#state')).startsWith('HOLD'));
+  await director.screenshot({ path: path.join(OUT, 'sites_held_director.png') });
+  await director.click('#stop');
+  await until('the stop on the page', async () => (await director.textContent('#reason')).includes('stopped from the view by the director'), 60000);
+  await director.screenshot({ path: path.join(OUT, 'sites_held_stop.png') });
+  // A run that did not complete its purpose: exit 1, as for any stopped run.
+  assert.equal(await child.done, 1, child.output);
+  assert.match(child.output, /stopped from the view by the director \(held: HOLD from the view by the operator of lab_b\)/);
+  const { events, context, status } = await recordEvents(path.join(dir, 'out', 'lab_test.rthsrec'));
+  const held = events.find(e => e.startsWith('the operator of lab_b pressed HOLD of lab_b on the view: HOLD sent to node 2; the run holds until the director stops it'));
   assert.ok(held, events.join('\n'));
   // The HOLD left at the step that applied the press; the loop was at least at the newest step the
   // view had seen when it was pressed, so their difference bounds the delay in steps.
   const [, applied, seen, ms] = held.match(/applied at step (\d+), the view had seen step (\d+); ([\d.]+) ms after the press/).map(Number);
   assert.ok(applied - seen <= context.answer_window_steps,
     `HOLD sent at step ${applied}, pressed at step ${seen} or later (${ms} ms), answer window ${context.answer_window_steps} steps`);
+  // The record is complete (its footer read) and ends at the step before the one the HOLD stopped.
+  assert.equal(status.finished, true);
+  assert.equal(status.footer.status, 'stopped from the view by the director (held: HOLD from the view by the operator of lab_b)');
+  assert.equal(status.latest_step, applied - 1, 'no step integrated past the HOLD');
+  assert.ok(events.some(e => e.startsWith(`HOLD of the run at step ${applied}: HOLD from the view by the operator of lab_b`)), events.join('\n'));
+  // lab_c (node 3) stayed at its last command: no HOLD and no HOLD of its own until the director's STOP.
+  const stopAt = events.findIndex(e => e.startsWith('the director pressed STOP on the view: HOLD, then STOP'));
+  assert.ok(stopAt > 0, events.join('\n'));
+  assert.ok(!events.slice(0, stopAt).some(e => /node 3|HOLD sent to the actuator emulators/.test(e)), events.join('\n'));
   assert.ok(events.some(e => e.startsWith('the operator of lab_b pressed HOLD of lab_c on the view: refused (403)')), events.join('\n'));
   assert.ok(events.some(e => e.startsWith('the operator of lab_b pressed STOP on the view: refused (403), only the director may stop the test')), events.join('\n'));
-  assert.ok(events.some(e => /^HOLD sent to the actuator emulators: HOLD from the view by the operator of lab_b/.test(e)), events.join('\n'));
+  assert.ok(events.slice(stopAt).some(e => /^HOLD sent to the actuator emulators: stopped from the view by the director/.test(e)), events.join('\n'));
   await page.close();
+  await director.close();
 });
 
 test('a viewer\'s stop is refused (403) and recorded; the director\'s stop ends the run', { timeout: 400000 }, async t => {

@@ -122,14 +122,18 @@ function linkStats(l, i0, i1) {
   return { rt: sorted.length ? sorted[Math.floor(sorted.length / 2)] : null, jitter: rt.length > 1 ? sd : null, loss, drift };
 }
 
-// A node's HOLD: the first event that sent HOLD to it by its id, or to every actuator emulator
-// (a node with actuators), or the run's HOLD while it has actuators.
+// A node's HOLD: the first event that sent HOLD to it by its id (or that it sent itself), or to
+// every actuator emulator (a node with actuators), or the run's HOLD while it has actuators. A run
+// held from the view ("HOLD of the run ...") holds only the pressed lab's nodes: the others wait
+// at their last command.
 function nodeState(n) {
   const drives = actuatorsOf(n).length > 0;
-  const held = V.events.filter(e => /HOLD/.test(e.what) &&
+  const held = V.events.filter(e => /HOLD|held/.test(e.what) &&
     (new RegExp('nodes? [0-9, ]*\\b' + n + '\\b').test(e.what) || (drives && /HOLD sent to the actuator emulators/.test(e.what))));
-  if (!held.length) return V.status && V.status.state === 'HOLD' && drives ? 'HOLD: ' + V.status.reason : '';
-  return 'HOLD: ' + held[0].what;
+  if (held.length) return 'HOLD: ' + held[0].what;
+  if (!V.status || V.status.state !== 'HOLD' || !drives) return '';
+  if (/^HOLD of the run /.test(V.status.reason)) return 'at its last command: the run is held, no command leaves';
+  return 'HOLD: ' + V.status.reason;
 }
 
 // At each draw: the tables' cells from the newest samples.
@@ -181,7 +185,7 @@ function showHoldButtons() {
     if (V.role.role === 'director' || (V.role.role === 'operator' && V.role.lab === site.name)) {
       const b = document.createElement('button'); b.className = 'hold'; b.id = 'hold-' + site.name;
       b.textContent = 'HOLD ' + site.name;
-      b.onclick = e => { e.preventDefault(); press('hold', site.name, 'HOLD ' + site.name + "'s actuators? The run then stops; nothing releases a HOLD."); };
+      b.onclick = e => { e.preventDefault(); press('hold', site.name, 'HOLD ' + site.name + "'s actuators? The run then holds until the director stops it; nothing releases a HOLD."); };
       span.appendChild(b);
     }
   }
