@@ -86,6 +86,8 @@ ShapeFit fit_shape(std::span<const double> time, std::span<const double> value) 
   const Step step = fit_step(time, value);
   const Exponential exponential = fit_exponential(time, value);
   ShapeFit out;
+  out.first = time.front();
+  out.last = time.back();
   out.sse_linear = line.sse;
   out.sse_step = step.sse;
   out.sse_exponential = exponential.line.sse;
@@ -106,6 +108,18 @@ ShapeFit fit_shape(std::span<const double> time, std::span<const double> value) 
   out.end = exponential.line.a + exponential.line.b * decayed;
   out.at = exponential.tau;
   return out;
+}
+
+double ShapeFit::value_at(double t) const {
+  switch (shape) {
+    case DriftShape::kStep: return t < at ? start : end;
+    case DriftShape::kExponential: {
+      const double b = (start - end) / (1.0 - std::exp(-(last - first) / at));
+      return start - b + b * std::exp(-(t - first) / at);
+    }
+    case DriftShape::kLinear: break;
+  }
+  return start + (end - start) * (t - first) / (last - first);
 }
 
 std::string shape_name(DriftShape shape) {

@@ -72,6 +72,23 @@ TEST(DriftShape, AFlatValueIsALineWithNoChange) {
   EXPECT_EQ(shape_name(fit.shape), "linear");
 }
 
+// value_at gives each shape's fitted path between and beyond the windows' centres.
+TEST(DriftShape, ValueAtFollowsEachShape) {
+  const auto line = [](double t) { return 1.0 - 0.02 * t; };
+  const auto step = [](double t) { return t < 6.2 ? 1.0 : 0.7; };
+  const auto approach = [](double t) { return 0.6 + 0.4 * std::exp(-(t - 0.375) / 3.0); };
+  for (const auto& truth :
+       {std::function<double(double)>(line), std::function<double(double)>(step),
+        std::function<double(double)>(approach)}) {
+    const Windows w = windows(truth, 0.0005, 6);
+    const ShapeFit fit = fit_shape(w.time, w.value);
+    EXPECT_EQ(fit.first, 0.375);
+    EXPECT_EQ(fit.last, 14.625);
+    for (double t : {0.0, 2.0, 5.9, 6.5, 11.0, 15.0})
+      EXPECT_NEAR(fit.value_at(t), truth(t), 0.005) << shape_name(fit.shape) << " at " << t;
+  }
+}
+
 TEST(DriftShape, TooFewWindowsAreRefused) {
   const std::vector<double> t{0.0, 1.0, 2.0}, v{1.0, 1.0, 1.0};
   EXPECT_THROW(fit_shape(t, v), std::invalid_argument);
