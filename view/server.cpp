@@ -300,7 +300,8 @@ void ViewServer::routes() {
       res.set_content(file.second, file.first.c_str());
       res.set_header("Cache-Control", "no-store");
     });
-  s.Get("/api/snapshot", [this](const httplib::Request&, httplib::Response& res) {
+  s.Get("/api/snapshot", [this](const httplib::Request& req, httplib::Response& res) {
+    if (!admitted(req, res)) return;
     const auto copy = snapshots_->get();
     if (!copy) {  // the first build failed for every waiting client
       res.status = 503;
@@ -356,7 +357,8 @@ void ViewServer::routes() {
 // The provider runs on the connection's pool thread; a write that cannot go out within
 // write_timeout (a client that does not read) fails and drops the connection.
 void ViewServer::stream(httplib::Server& s) {
-  s.Get("/api/stream", [this](const httplib::Request&, httplib::Response& res) {
+  s.Get("/api/stream", [this](const httplib::Request& req, httplib::Response& res) {
+    if (!admitted(req, res)) return;
     if (streams_.fetch_add(1) >= options_.max_streams) {
       streams_.fetch_sub(1);
       ++streams_refused_;
@@ -414,6 +416,19 @@ void ViewServer::control(const httplib::Request& req, httplib::Response& res,
   }
   res.status = press->allowed ? 202 : 403;
   res.set_content(press->text(), "text/plain");
+}
+
+bool ViewServer::admitted(const httplib::Request& req, httplib::Response& res) {
+  if (!options_.desk) return true;
+  const std::string token = req.get_header_value("X-RTHS-Token");
+  if (options_.desk->crew().identify(token)) return true;
+  ++bad_token_;
+  res.status = token.empty() ? 401 : 403;
+  res.set_content(token.empty() ? "this run's view is for its crew: send your role's token "
+                                  "(X-RTHS-Token), as the address printed for your role does"
+                                : "no role has this token: use the address printed for your role",
+                  "text/plain");
+  return false;
 }
 
 void ViewServer::control_routes(httplib::Server& s) {

@@ -5,6 +5,10 @@
 //   GET  /, /view.js, /sites.js, /view.css, /uPlot.iife.min.js, /uPlot.min.css
 //                      the page; read into memory at start, served from a fixed list (no path is
 //                      ever mapped to the file system: anything else is 404, counted)
+// With a control room (desk) the run's data, /api/stream and /api/snapshot, is for its crew only:
+// X-RTHS-Token must be a role's token (any role; a viewer sees everything), else 401 when it is
+// missing, 403 when it is no role's, counted bad_token. The page's files and /api/health (whether
+// roles are on, the counters) stay open: the page reads them before it knows its role.
 //   GET  /api/stream   text/event-stream: first everything the feed holds, then what is new, at
 //                      most once per update_period (30 updates/s), each `data: {json}`; ends after
 //                      the feed finished and its last state went out. At most max_streams at once
@@ -132,6 +136,9 @@ class ViewServer {
   void stream(httplib::Server& server);
   void control_routes(httplib::Server& server);
   void control(const httplib::Request& req, httplib::Response& res, const std::string& action);
+  // Whether the request may read the run's data: always without a desk; with one, only with a
+  // role's token (else the 401 / 403 answer is set and counted).
+  bool admitted(const httplib::Request& req, httplib::Response& res);
   void stop_listening();
   // Why a request is not for this server (its Host or Origin), or empty when it is.
   std::string foreign(const std::string& host, const std::string& origin,

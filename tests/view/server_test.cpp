@@ -1,5 +1,5 @@
 // The view's server on loopback: pages from a fixed list, refusals counted, the stop button's
-// rules, the event stream, a client that never reads, and a fresh client admitted beside idle,
+// rules, the control room's roles (presses and who may read the run), the event stream, a client that never reads, and a fresh client admitted beside idle,
 // dripping and churning ones.
 #include "view/server.h"
 
@@ -162,6 +162,56 @@ TEST(ViewServer, TheControlRoomAnswersEachRoleAsTheDeskJudgesIt) {
   EXPECT_EQ(presses[3].hold_nodes, std::vector<int>{2});
   EXPECT_EQ(presses[3].seen_step, -1);  // the feed had seen no step
   EXPECT_TRUE(presses[4].stop);
+}
+
+// With a control room the run's data is for its crew: the snapshot and the stream refuse a
+// request without a token (401) or with a token of no role (403), counted; any role's token, a
+// viewer's included, reads them whole; the page's files and health stay open; the viewer's presses
+// are refused.
+TEST(ViewServer, WithRolesTheRunsDataIsServedOnlyToARolesToken) {
+  Feed feed;
+  feed.add(header());
+  feed.add(step(0));
+  feed.finish();
+  ControlDesk desk(Crew::make({"lab_b"}), {{"lab_b", {2}}});
+  ServerOptions options;
+  options.desk = &desk;
+  ViewServer server(feed, options);
+  httplib::Client client("127.0.0.1", server.port());
+  const auto get = [&](const char* path, const std::string& token) {
+    return token.empty() ? client.Get(path) : client.Get(path, {{"X-RTHS-Token", token}});
+  };
+  const std::string stranger = "0123456789abcdef0123456789abcdef";
+  for (const char* path : {"/api/snapshot", "/api/stream"}) {
+    const auto bare = get(path, "");
+    ASSERT_TRUE(bare) << path;
+    EXPECT_EQ(bare->status, 401) << path;
+    EXPECT_NE(bare->body.find("send your role's token"), std::string::npos) << bare->body;
+    EXPECT_EQ(bare->body.find("\"header\""), std::string::npos) << path;
+    const auto wrong = get(path, stranger);
+    EXPECT_EQ(wrong->status, 403) << path;
+    EXPECT_EQ(wrong->body.find("\"header\""), std::string::npos) << path;
+  }
+  EXPECT_EQ(server.counters()["bad_token"], 4);
+  EXPECT_EQ(server.counters()["streams_served"], 0);
+  for (const std::string& token :
+       {desk.crew().viewer, desk.crew().operators.at("lab_b"), desk.crew().director}) {
+    const auto snapshot = get("/api/snapshot", token);
+    ASSERT_EQ(snapshot->status, 200);
+    EXPECT_EQ(nlohmann::json::parse(snapshot->body)["header"]["run_id"], "r");
+    const auto stream = get("/api/stream", token);
+    ASSERT_EQ(stream->status, 200);
+    EXPECT_NE(stream->body.find("data: {"), std::string::npos);
+  }
+  EXPECT_EQ(get("/", "")->status, 200);
+  EXPECT_EQ(get("/api/health", "")->status, 200);
+  const auto viewer = [&](const char* path) {
+    return client.Post(path, {{"X-RTHS-Token", desk.crew().viewer}}, "", "")->status;
+  };
+  EXPECT_EQ(viewer("/api/stop"), 403);
+  EXPECT_EQ(viewer("/api/hold"), 403);
+  EXPECT_FALSE(server.stop_requested());
+  for (const Press& press : desk.take()) EXPECT_FALSE(press.allowed) << press.text();
 }
 
 // A socket made by a launcher (open_listener) is served as given, at its port, with the Host

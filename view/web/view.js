@@ -382,15 +382,33 @@ function onUpdate(u) {
   scheduleDraw();
 }
 
-function connect() {
-  const es = V.source = new EventSource('/api/stream');
-  es.onmessage = m => onUpdate(JSON.parse(m.data));
-  es.onerror = () => {
-    es.close(); V.source = null;
-    if (V.status && V.status.finished) return;
-    $('reason').textContent = 'connection to the view lost (the coordinator has exited?); retrying';
-    setTimeout(connect, 1000);
-  };
+// The stream is read with fetch, not EventSource, so that it can send this tab's role token
+// (X-RTHS-Token; a run with roles serves its data to its crew only) in a header, never in a URL.
+// Each event is `data: {json}` and a blank line. A refusal (401, 403) is shown and not retried.
+async function connect() {
+  const token = stopToken(), reader = { cancel: () => {} };
+  V.source = { close: () => reader.cancel() };
+  try {
+    const r = await fetch('/api/stream', { headers: token ? { 'X-RTHS-Token': token } : {} });
+    if (r.status === 401 || r.status === 403) { V.source = null; $('reason').textContent = await r.text(); return; }
+    if (!r.ok) throw new Error('HTTP ' + r.status);
+    const body = r.body.getReader(), decoder = new TextDecoder();
+    reader.cancel = () => body.cancel();
+    let text = '';
+    for (;;) {
+      const { value, done } = await body.read();
+      if (done) break;
+      text += decoder.decode(value, { stream: true });
+      for (let end; (end = text.indexOf('\n\n')) >= 0; text = text.slice(end + 2)) {
+        const event = text.slice(0, end);
+        if (event.startsWith('data: ')) onUpdate(JSON.parse(event.slice(6)));
+      }
+    }
+  } catch (e) { /* the connection ended: judged below */ }
+  V.source = null;
+  if (V.status && V.status.finished) return;
+  $('reason').textContent = 'connection to the view lost (the coordinator has exited?); retrying';
+  setTimeout(connect, 1000);
 }
 
 // The stop's token comes in the address the program printed (?token=..., as Jupyter's does):
