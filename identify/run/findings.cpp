@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "identify/model/study_config.h"
+#include "identify/run/moving_parameter.h"
 #include "identify/run/sensors.h"
 
 namespace rths::identify {
@@ -63,31 +64,13 @@ void in_run_time(const Identification& id, Channel channel,
   drift.unit += "/s";
 }
 
-// The moving parameter of a time-varying effect (findings.h): v + D(s; c) at the windows' centres
-// (gain: v (1 + D)), its shape, and the magnitude's words for it.
+// The moving parameter of a time-varying effect (findings.h, moving_parameter.h) and the
+// magnitude's words for it.
 void describe_moving(const ActuatorPath& path, Channel channel, Finding& f) {
-  const std::string prefix = f.effect == "time_varying_stiffness" ? "stiffness"
-                             : f.effect == "time_varying_gain"    ? "gain"
-                             : f.effect == "time_varying_delay"   ? "delay"
-                                                                  : "";
-  if (prefix.empty() || f.parameters.size() != kDriftTerms) return;
-  const ChannelSignals& signals = identified_signals(path.id, channel);
-  const double base = prefix == "stiffness" ? path.fitted_stiffness
-                      : prefix == "gain"    ? path.fitted_gain
-                                            : path.fitted_delay;
-  const double start = signals.time.front(), duration = signals.time.back() - start;
-  std::vector<double> time(kMovingWindows), value(kMovingWindows);
-  for (std::size_t w = 0; w < kMovingWindows; ++w) {
-    const double place = (static_cast<double>(w) + 0.5) / static_cast<double>(kMovingWindows);
-    double drift = 0.0;
-    for (std::size_t k = 0; k < kDriftTerms; ++k)
-      drift +=
-          f.parameters[k].value * std::cos(std::numbers::pi * static_cast<double>(k + 1) * place);
-    time[w] = start + place * duration;
-    value[w] = prefix == "gain" ? base * (1.0 + drift) : base + drift;
-  }
-  f.moving = fit_shape(time, value);
-  f.moving_unit = prefix == "stiffness" ? "N/m" : prefix == "gain" ? "" : "s";
+  const std::optional<MovingParameter> moving = moving_parameter(path, channel, f.effect);
+  if (!moving) return;
+  f.moving = moving->shape;
+  f.moving_unit = moving->unit;
   const ShapeFit& m = *f.moving;
   f.magnitude += "; moving, " + shape_name(m.shape) + ": " + number(m.start) + " " + f.moving_unit +
                  " at the start, " + number(m.end) + " " + f.moving_unit + " at the end";

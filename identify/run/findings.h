@@ -39,8 +39,6 @@
 
 namespace rths::identify {
 
-inline constexpr std::size_t kMovingWindows = 20;
-
 struct Finding {
   std::string part, effect;
   std::vector<ParameterEstimate> parameters;  // empty where `magnitude` says it in words

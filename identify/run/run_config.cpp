@@ -41,6 +41,18 @@ config::Case declared_stages(const config::Study& study, const config::Case* run
   return out;
 }
 
+// The moving parameters of actuator `actuator` the re-run held (run_residual.h moving): a delay
+// as its trace stage in `study_case`, a stiffness or a gain as its constant with a note saying so.
+void hold_moving(const RunIdentification& run, int actuator, config::Case& study_case,
+                 std::vector<std::string>& notes) {
+  if (!run.residual) return;
+  for (const MovingRerun& m : run.residual->moving) {
+    if (!m.kept || m.parameter.actuator != actuator) continue;
+    if (!hold_moving_delay(m.parameter, study_case))
+      notes.push_back(moving_not_written(m.parameter));
+  }
+}
+
 // The identified actuator cases: one when every actuator has the same stages, else one each.
 std::vector<config::Case> actuator_cases(const RunIdentification& run, const config::Case* run_case,
                                          std::vector<std::string>& notes) {
@@ -58,6 +70,7 @@ std::vector<config::Case> actuator_cases(const RunIdentification& run, const con
         notes.push_back("actuator " + std::to_string(path.actuator) + ": " + l);
       study_case = part.study_case;
     }
+    hold_moving(run, path.actuator, study_case, notes);
     if (rig.actuator && !rig.specimen)
       keep_declared_force_stages(declared_stages(run.study, run_case), study_case);
     if (rig.specimen) {

@@ -1,8 +1,9 @@
 #include "identify/run/run_record_format.h"
 
-#include "identify/run/findings.h"
-
 #include <sstream>
+
+#include "core/number_text.h"
+#include "identify/run/findings.h"
 
 namespace rths::identify {
 namespace {
@@ -96,7 +97,34 @@ void residual_text(const RunResidual& r, std::ostream& out) {
           << percent_text(s.share) << ")\n";
     }
   }
+  for (const auto& m : r.moving) {
+    const MovingParameter& p = m.parameter;
+    out << "  " << p.part << ": " << p.effect << " moving (" << shape_name(p.shape.shape) << ", "
+        << core::format_number(p.shape.start) << " -> " << core::format_number(p.shape.end)
+        << (p.unit.empty() ? "" : " " + p.unit) << "): held-out NRMSE " << percent_text(m.constant)
+        << " with its constant " << core::format_number(p.constant) << ", "
+        << percent_text(m.moving)
+        << " moving: " << (m.kept ? "held moving" : "held constant (moving does not help)") << "\n";
+  }
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
+}
+
+// The moving parameters tried in the re-run (run_residual.h moving).
+nlohmann::json moving_json(const std::vector<MovingRerun>& moving) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& m : moving)
+    out.push_back({{"part", m.parameter.part},
+                   {"effect", m.parameter.effect},
+                   {"shape", shape_name(m.parameter.shape.shape)},
+                   {"start", m.parameter.shape.start},
+                   {"end", m.parameter.shape.end},
+                   {"at_s", m.parameter.shape.at},
+                   {"unit", m.parameter.unit},
+                   {"constant", m.parameter.constant},
+                   {"heldout_nrmse_constant", m.constant},
+                   {"heldout_nrmse_moving", m.moving},
+                   {"kept", m.kept}});
+  return out;
 }
 
 // The effects the re-run rejected (ActuatorPath::rejected), one line each; empty when none.
@@ -147,6 +175,7 @@ nlohmann::json residual_json(const RunResidual& r) {
           {"identified_diverged", r.identified_diverged},
           {"links", links},
           {"effects", effects},
+          {"moving", moving_json(r.moving)},
           {"notes", r.notes}};
 }
 

@@ -34,7 +34,14 @@ struct RigModel {
   const ChannelModel* specimen = nullptr;
   double displacement_scale = 1.0;
   const std::vector<Effect>* held = nullptr;  // RigModels::held_by_declared
+  std::vector<MovingParameter> moving;        // held moving (run_residual.h)
 };
+
+// `model` without its moving parameter `effect`.
+RigModel without_moving(RigModel model, const std::string& effect) {
+  std::erase_if(model.moving, [&](const MovingParameter& m) { return m.effect == effect; });
+  return model;
+}
 
 // The record's time base of a channel's fitted drifts (study_config.h RigRecord).
 RigRecord rig_record(const ChannelSignals& signals, const SignalScales& scales) {
@@ -165,7 +172,7 @@ class Reruns {
     core::HybridSetup setup = setup_;
     for (std::size_t a = 0; a < models.size(); ++a) {
       const RigModel& m = models[a];
-      if (!m.actuator && !m.specimen) continue;
+      if (!m.actuator && !m.specimen && m.moving.empty()) continue;
       config::Case c = m.actuator ? model_case(*m.actuator, scales(a), rig(a, Channel::kMeasured),
                                                declared_, nullptr)
                                   : declared_;
@@ -177,7 +184,11 @@ class Reruns {
         keep_declared_force_stages(declared_, c);
       }
       add_displacement_scale(m.displacement_scale, c);
+      for (const MovingParameter& moving : m.moving) hold_moving_delay(moving, c);
       setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
+      for (const MovingParameter& moving : m.moving)
+        if (auto stage = moving_stage(moving, m.displacement_scale))
+          setup.delays[a].add(std::move(stage));
     }
     if (described) {
       const auto a = static_cast<std::size_t>(described->actuator - 1);
@@ -189,6 +200,23 @@ class Reruns {
     return compare(core::simulate(setup, prepared_.motion, {}, answers), *input_.recorded);
   }
   bool replays() const { return input_.platform && input_.platform->late_steps > 0; }
+  // The worst floor's NRMSE of `rerun` over `steps` (0-based) alone.
+  double worst_over(const Rerun& rerun, const std::vector<std::size_t>& steps) const {
+    const core::Mat& recorded = *input_.recorded;
+    const auto n =
+        std::min<Eigen::Index>(static_cast<Eigen::Index>(rerun.result.steps()), recorded.rows());
+    double worst = 0.0;
+    for (Eigen::Index i = 0; i < recorded.cols(); ++i) {
+      std::vector<double> rec, sim;
+      for (std::size_t j : steps) {
+        if (static_cast<Eigen::Index>(j) >= n) break;
+        rec.push_back(recorded(static_cast<Eigen::Index>(j), i));
+        sim.push_back(rerun.result.displacement(static_cast<Eigen::Index>(j), i));
+      }
+      worst = std::max(worst, core::nrmse(rec, sim));
+    }
+    return worst;
+  }
   SignalScales scales(std::size_t a, Channel channel = Channel::kMeasured) const {
     return signal_scales(identified_signals((*input_.actuators)[a].id, channel));
   }
@@ -233,34 +261,99 @@ void add_shares(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
       out.effects.push_back({part, effect, reruns.run(models, true).worst - out.identified, 0.0});
     };
     const int actuator = static_cast<int>(a) + 1;
+    for (const MovingParameter& moving : all[a].moving)
+      removes(moving.part, moving.effect, without_moving(all[a], moving.effect));
+    const auto held_moving = [&](const std::string& effect) {
+      return std::any_of(all[a].moving.begin(), all[a].moving.end(),
+                         [&](const MovingParameter& m) { return m.effect == effect; });
+    };
     for (const auto& effect : paths[a].undeclared) {
-      if (effect == "noise") continue;  // random: not re-run (sensors.h)
+      if (effect == "noise" || held_moving(effect)) continue;  // noise: random, not re-run
       const std::string part = part_of(effect, Channel::kMeasured, actuator);
+      RigModel reduced_rig = all[a];
       if (effect == "scale") {  // the sensor reading true: the same loop, another reading
-        removes(part, effect, {all[a].actuator, all[a].specimen, 1.0, all[a].held});
+        reduced_rig.displacement_scale = 1.0;
+        removes(part, effect, reduced_rig);
         continue;
       }
       if (!all[a].actuator) continue;  // the declared actuator stays: nothing to take out
       const ChannelModel reduced =
           without_named(*all[a].actuator, paths[a], effect, reruns.scales(a));
-      removes(part, effect, {&reduced, all[a].specimen, all[a].displacement_scale, all[a].held});
+      reduced_rig.actuator = &reduced;
+      removes(part, effect, reduced_rig);
     }
     if (!all[a].specimen) continue;
     // An effect the re-run cannot hold has no share: it is named `not re-run` with the reason.
     const std::vector<std::string> left_out =
         not_held(*all[a].specimen, reruns.scales(a, Channel::kForce));
     for (const auto& effect : paths[a].specimen_undeclared) {
-      if (effect == "noise" || names(left_out, effect)) continue;
+      if (effect == "noise" || held_moving(effect) || names(left_out, effect)) continue;
       const ChannelModel reduced =
           without_named(*all[a].specimen, paths[a], effect, reruns.scales(a, Channel::kForce));
-      removes(part_of(effect, Channel::kForce, actuator), effect,
-              {all[a].actuator, &reduced, all[a].displacement_scale, all[a].held});
+      RigModel reduced_rig = all[a];
+      reduced_rig.specimen = &reduced;
+      removes(part_of(effect, Channel::kForce, actuator), effect, reduced_rig);
     }
   }
   if (reruns.replays())
     out.links.push_back({"platform", "late answers", reruns.run(all).worst - out.identified, 0.0});
   set_shares(out.links);
   set_shares(out.effects);
+}
+
+// The moving parameters `path` names, then those its channels' described trends move where no
+// named one moves the same parameter (moving_parameter.h).
+std::vector<MovingParameter> candidates(const ActuatorPath& path,
+                                        const std::vector<Unexplained>* unexplained,
+                                        bool specimen_rerun) {
+  std::vector<MovingParameter> out = moving_parameters(path);
+  for (const Unexplained& u : unexplained ? *unexplained : std::vector<Unexplained>{}) {
+    if (u.actuator != path.actuator) continue;
+    std::optional<MovingParameter> moving = described_moving(u, path, specimen_rerun);
+    if (moving && std::none_of(out.begin(), out.end(), [&](const MovingParameter& m) {
+          return m.effect == moving->effect;
+        }))
+      out.push_back(std::move(*moving));
+  }
+  return out;
+}
+
+// Each moving parameter the paths name (or their descriptions move) tried in the re-run (run_residual.h moving): kept in `all`
+// where it lowers the worst floor's held-out NRMSE below its constant's by kMinMovingGain.
+void choose_moving(const Reruns& reruns, const std::vector<ActuatorPath>& paths,
+                   const std::vector<Unexplained>* unexplained, std::vector<RigModel>& all,
+                   RunResidual& out) {
+  for (std::size_t a = 0; a < paths.size(); ++a)
+    for (MovingParameter& moving : candidates(paths[a], unexplained, all[a].specimen != nullptr)) {
+      const std::vector<std::size_t>& heldout = paths[a].id.split.heldout;
+      std::vector<RigModel> with = all;
+      with[a].moving.push_back(moving);
+      MovingRerun tried{moving, reruns.worst_over(reruns.run(all, true), heldout),
+                        reruns.worst_over(reruns.run(with, true), heldout), false};
+      tried.kept = tried.moving < tried.constant - kMinMovingGain;
+      if (tried.kept) all[a] = with[a];
+      out.moving.push_back(std::move(tried));
+    }
+}
+
+// Whether `note` ("effect: why" or "time-varying gain: ...") is about `effect`, whichever of
+// '_', '-' and ' ' it spells the words with.
+bool about(const std::string& note, const std::string& effect) {
+  if (note.size() < effect.size()) return false;
+  for (std::size_t i = 0; i < effect.size(); ++i) {
+    const auto word = [](char c) { return c == '-' || c == '_' ? ' ' : c; };
+    if (word(note[i]) != word(effect[i])) return false;
+  }
+  return true;
+}
+
+// `notes` without those about a parameter `rig` holds moving.
+std::vector<std::string> unless_moving(std::vector<std::string> notes, const RigModel& rig) {
+  std::erase_if(notes, [&](const std::string& note) {
+    return std::any_of(rig.moving.begin(), rig.moving.end(),
+                       [&](const MovingParameter& m) { return about(note, m.effect); });
+  });
+  return notes;
 }
 
 // Per described channel: what putting its described residual back removes from the identified
@@ -301,14 +394,18 @@ RunResidual run_residual(const ResidualInput& input) {
     if (rigs[a].specimen) all[a].specimen = &*rigs[a].specimen;
     all[a].displacement_scale = rigs[a].displacement_scale;
     all[a].held = &rigs[a].held_by_declared;
+  }
+  choose_moving(reruns, paths, input.unexplained, all, out);
+  for (std::size_t a = 0; a < paths.size(); ++a) {
     std::vector<std::string> left_out;
     if (all[a].actuator)
       model_case(*all[a].actuator, reruns.scales(a), reruns.rig(a, Channel::kMeasured),
                  reruns.declared(), &left_out);
-    for (const auto& l : left_out)
+    for (const auto& l : unless_moving(left_out, all[a]))
       out.notes.push_back("actuator " + std::to_string(a + 1) + ": " + l);
     if (all[a].specimen)
-      for (const auto& l : not_held(*all[a].specimen, reruns.scales(a, Channel::kForce)))
+      for (const auto& l :
+           unless_moving(not_held(*all[a].specimen, reruns.scales(a, Channel::kForce)), all[a]))
         out.notes.push_back("specimen " + std::to_string(a + 1) + ": " + l);
   }
   const Rerun before = reruns.run(std::vector<RigModel>(paths.size()));

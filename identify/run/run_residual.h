@@ -42,6 +42,12 @@
 // in time between the record's samples):
 //   described             E(identified) - E(identified + the channel's described residual), and
 //                         its share of E(identified) (not of the removals).
+// A parameter that moved over the run (moving_parameter.h: a time-varying stiffness, gain or
+// delay a channel named) is held moving only where that helps on data the fit did not see: the
+// identified re-run with it and with its constant, each scored by the worst floor's NRMSE over
+// the steps its channel's identification held out (Identification::split.heldout), in the order
+// named, each on top of those kept before; kept when moving leaves less by kMinMovingGain
+// (moving). A kept one is in the identified re-run, and its removal is the re-run without it.
 // The declared re-run and each link's "all" run are not replayed: the declared model is what the
 // lab planned, on time. A network path's lag reaches the response only through the answers the
 // loop used, so the replay is its part of the re-run; in lockstep it does not reach it.
@@ -52,6 +58,7 @@
 
 #include "core/ground_motion.h"
 #include "core/simulation.h"
+#include "identify/run/moving_parameter.h"
 #include "identify/run/platform_replay.h"
 #include "rths/proto/config.pb.h"
 
@@ -59,6 +66,8 @@ namespace rths::identify {
 
 struct ActuatorPath;
 struct Unexplained;
+
+inline constexpr double kMinMovingGain = 1.0e-4;  // NRMSE of the worst floor, held-out steps
 
 struct FloorError {
   int dof = 0;                              // 1-based
@@ -73,6 +82,14 @@ struct ResidualShare {
   double share = 0.0;    // of the removals of its kind
 };
 
+// A moving parameter tried in the re-run: the worst floor's NRMSE over the held-out steps with
+// its constant and with it moving, and whether it was kept.
+struct MovingRerun {
+  MovingParameter parameter;
+  double constant = 0.0, moving = 0.0;
+  bool kept = false;
+};
+
 struct RunResidual {
   std::size_t steps = 0;  // compared
   std::vector<FloorError> floors;
@@ -81,8 +98,9 @@ struct RunResidual {
   std::vector<ResidualShare> links, effects;
   // Per described channel (link: its part, effect: its channel word); share of `identified`.
   std::vector<ResidualShare> described;
-  std::vector<std::string> notes;  // stages left out of the re-run, network paths
-  std::string platform;            // the replayed answers (PlatformReplay::text); empty: none
+  std::vector<MovingRerun> moving;  // every moving parameter named, kept or not
+  std::vector<std::string> notes;   // stages left out of the re-run, network paths
+  std::string platform;             // the replayed answers (PlatformReplay::text); empty: none
   // The responses compared (steps x DOFs, m) at `time` (s): for plots.
   std::vector<double> time;
   core::Mat recorded_response, declared_response, identified_response;
