@@ -36,10 +36,9 @@ void put_u32(std::string& out, std::uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xFFU));
 }
 
-rths::config::Study study_as_run(double dt, const Motion& motion, double duration,
-                                 const std::string& run_id) {
-  // The paper's frame as configs/paper_frame.textproto states it, the case run declaring the
-  // 14 ms shift, lockstep over a substructure node (1) and an actuator emulator (2).
+// The paper's frame as configs/paper_frame.textproto states it, the case run declaring the
+// 14 ms shift, lockstep over a substructure node (1) and an actuator emulator (2).
+DeclaredStudy paper_frame() {
   const std::string text = R"pb(
     name: "paper_frame"
     structure {
@@ -63,15 +62,23 @@ rths::config::Study study_as_run(double dt, const Motion& motion, double duratio
       nodes { id: 2 kind: ACTUATOR_EMULATOR }
     }
   )pb";
+  return {text, "lag_shift_14ms"};
+}
+
+rths::config::Study study_as_run(const RunToRecord& run, const DeclaredStudy& declared) {
   rths::config::Study study;
-  if (!google::protobuf::TextFormat::ParseFromString(text, &study))
+  if (!google::protobuf::TextFormat::ParseFromString(declared.study_text, &study))
     throw std::runtime_error("the study text does not parse");
-  study.mutable_integrator()->set_dt(dt);
-  study.mutable_deployment()->set_run_id(run_id);
+  if (study.deployment().case_name() != declared.case_name)
+    throw std::runtime_error("the study's deployment runs case \"" +
+                             study.deployment().case_name() + "\", the run declares \"" +
+                             declared.case_name + "\"");
+  study.mutable_integrator()->set_dt(run.dt);
+  study.mutable_deployment()->set_run_id(run.run_id);
   auto* m = study.mutable_motion();
-  m->set_path(motion.path);
-  m->set_sha256(motion.file_sha256);
-  m->set_duration(duration);
+  m->set_path(run.motion->path);
+  m->set_sha256(run.motion->file_sha256);
+  m->set_duration(run.duration);
   return study;
 }
 
@@ -158,13 +165,14 @@ std::string inputs_bytes_of(const rths::config::Study& study, const Motion& moti
 }
 
 std::string header_frame_of(const rths::config::Study& study, const RunToRecord& run,
-                            std::int64_t start_ns, const std::string& inputs_bytes) {
+                            const std::string& case_name, std::int64_t start_ns,
+                            const std::string& inputs_bytes) {
   rths::runtime::RecordEntry header_entry;
   auto* h = header_entry.mutable_header();
   h->set_schema_version(1);
   h->set_run_id(run.run_id);
   *h->mutable_study() = study;
-  h->set_case_name("lag_shift_14ms");
+  h->set_case_name(case_name);
   h->set_clock("lockstep");
   h->set_dt(run.dt);
   h->set_dofs(1);
@@ -232,13 +240,18 @@ std::string footer_frame(int steps) {
 }  // namespace
 
 void write_run_record(const fs::path& path, const RunToRecord& run) {
+  write_run_record(path, run, paper_frame());
+}
+
+void write_run_record(const fs::path& path, const RunToRecord& run, const DeclaredStudy& declared) {
   if (run.motion == nullptr || run.motion->accel.size() < run.steps.size())
     throw std::runtime_error("a run of " + std::to_string(run.steps.size()) +
                              " steps needs as many motion samples");
-  const rths::config::Study study = study_as_run(run.dt, *run.motion, run.duration, run.run_id);
+  const rths::config::Study study = study_as_run(run, declared);
   const std::string inputs_bytes = inputs_bytes_of(study, *run.motion, run.dt);
   const std::int64_t start_ns = 1796205600000000000LL + static_cast<std::int64_t>(run.seed) * 1000;
-  const std::string header_frame = header_frame_of(study, run, start_ns, inputs_bytes);
+  const std::string header_frame =
+      header_frame_of(study, run, declared.case_name, start_ns, inputs_bytes);
 
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error("cannot write " + path.string());

@@ -53,8 +53,8 @@ struct RecordedStep {
   double force = 0.0;
 };
 
-// A lockstep run of the paper's frame declaring a 14 ms shift (case "lag_shift_14ms") over a
-// substructure node (1) and an actuator emulator (2). The seed sets the run's start time and the
+// A lockstep run of the paper's frame declaring a 14 ms shift (case "lag_shift_14ms"), or of the
+// study write_run_record is given, over a substructure node (1) and an actuator emulator (2). The seed sets the run's start time and the
 // link timings' jitter (seconds, plausible for loopback), never the physics.
 struct RunToRecord {
   std::string run_id;
@@ -67,6 +67,19 @@ struct RunToRecord {
 
 // Writes the run as a record at path; throws std::runtime_error when it cannot.
 void write_run_record(const std::filesystem::path& path, const RunToRecord& run);
+
+// The study a run of another rig declares: its one-DOF, one-actuator study (text format, a
+// lockstep deployment over nodes 1 and 2 whose case_name is case_name); dt, motion and run id are
+// the run's.
+struct DeclaredStudy {
+  std::string study_text;
+  std::string case_name;
+};
+
+// As above, the run declaring `declared` instead of the paper's frame; throws
+// std::runtime_error when the study does not parse or its deployment runs another case.
+void write_run_record(const std::filesystem::path& path, const RunToRecord& run,
+                      const DeclaredStudy& declared);
 
 // One case of truth.json (tests/blind/score_blind.py reads it): part (empty: none), description
 // kinds, frequency (Hz; <= 0: none), the library effects in the rig and the names that describe
