@@ -335,6 +335,52 @@ TEST(StudyBounds, AForcePredictorOutOfRangeIsRefusedNamingTheField) {
   std::filesystem::remove_all(dir);
 }
 
+// A ForcePredictor block's defaults are read in one place (predictor_stiffness_factor,
+// predictor_parameters): unset fields give PredictorParameters' own, stiffness_factor unset is 1,
+// and the case's setup starts each predictor there.
+TEST(StudyBounds, AForcePredictorsDefaultsAreReadInOnePlace) {
+  const config::ForcePredictor unset;
+  const PredictorParameters defaults;
+  EXPECT_EQ(predictor_stiffness_factor(unset), 1.0);
+  const PredictorParameters plain = predictor_parameters(unset, 2.0e6);
+  EXPECT_EQ(plain.stiffness, 2.0e6);
+  EXPECT_EQ(plain.damping, 0.0);
+  EXPECT_TRUE(plain.adapt);
+  EXPECT_EQ(plain.forgetting_time, defaults.forgetting_time);
+  EXPECT_EQ(plain.min_displacement, defaults.min_displacement);
+  EXPECT_EQ(plain.error_window, defaults.error_window);
+  EXPECT_TRUE(plain.specimen_shape);
+  config::ForcePredictor set;
+  set.set_stiffness_factor(1.25);
+  set.set_damping(40.0);
+  set.set_fixed_model(true);
+  set.set_forgetting_time(0.5);
+  EXPECT_EQ(predictor_stiffness_factor(set), 1.25);
+  const PredictorParameters given = predictor_parameters(set, 2.0e6);
+  EXPECT_EQ(given.stiffness, 2.5e6);
+  EXPECT_EQ(given.damping, 40.0);
+  EXPECT_FALSE(given.adapt);
+  EXPECT_EQ(given.forgetting_time, 0.5);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("rths_study_pred_default_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "m.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
+  const PreparedStudy prepared = prepare_study(
+      parse_study("structure { sdof { period: 0.5 mass: 1000 } } "
+                  "motion { path: \"m.txt\" column_units: G } "
+                  "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
+                  "cases { name: \"remote\" force_predictor { stiffness_factor: 1.25 } }",
+                  "t"),
+      dir);
+  const HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
+  ASSERT_EQ(setup.predictors.size(), 1u);
+  ASSERT_TRUE(setup.predictors[0].has_value());
+  const double declared = setup.partition.experimental[0]->initial_stiffness();
+  EXPECT_GT(declared, 0.0);
+  EXPECT_DOUBLE_EQ(setup.predictors[0]->stiffness, 1.25 * declared);
+  std::filesystem::remove_all(dir);
+}
+
 // force_predictor.model (a Bouc-Wen rths identify fitted) is the predictor's shape at the declared
 // specimen's initial stiffness, the declared (linear) specimen staying what runs; force_lag is
 // its lag term's start.
