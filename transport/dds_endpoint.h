@@ -2,6 +2,7 @@
 // Endpoint over Cyclone DDS. Two topics per node, all reliable, KEEP_LAST 64, volatile:
 //   "rths_node<id>_down"  coordinator -> node <id>: everything addressed to that node
 //   "rths_node<id>_up"    node <id> -> coordinator: everything node <id> sends
+// ("rths" is the default prefix: RTHS_DDS_SCOPE scopes it per run, transport/topic_scope.h)
 // A coordinator's broadcast (node id -1) is written to the command topic of every node it has
 // addressed so far: no topic is shared, so a node's DDS Security permissions can allow it its
 // own two topics and nothing else (`rths pki init`). The coordinator reads the up topic of each
@@ -30,6 +31,7 @@
 #include <utility>
 #include <vector>
 
+#include "transport/topic_scope.h"
 #include "transport/transport.h"
 #include "transport/unauthenticated.h"
 
@@ -47,7 +49,9 @@ struct DdsEndpointOptions {
   std::uint32_t domain_id = 0;
   bool coordinator = true;                // false: a node
   std::int32_t node_id = kCoordinatorId;  // for a node, its id (messages to others are dropped)
-  std::string topic_prefix = "rths";      // topics <prefix>_node<id>_down and _up
+  // Topics <prefix>_node<id>_down and _up; by default "rths", scoped by RTHS_DDS_SCOPE
+  // (transport/topic_scope.h), so every endpoint of a run's processes agrees.
+  std::string topic_prefix = scoped_topic_prefix();
   int history_depth = 64;
   // QoS properties of the participant: the DDS Security ones (security::participant_properties)
   // or none. A participant with security talks only to participants of the same lab's PKI.
