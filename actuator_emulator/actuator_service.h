@@ -12,8 +12,8 @@
 // test). The emulator plays this ramp in simulated time once the HOLD has been reported (on_settle,
 // so it never delays the report) and logs it; hold_settles() has it.):
 //   HOLD from the coordinator                         -> hold at once (the next command is
-//   ignored). a command whose drift changes by more than        -> hold on its own before acting on
-//   it, and
+//                                                        ignored).
+//   a command whose drift changes by more than        -> hold on its own before acting on it, and
 //     deployment.limits.max_displacement_step            answer HOLD (with the reason) instead of
 //     from the previous one                              FEEDBACK; the coordinator stops the run.
 //   real time: no fresh command for                   -> hold on its own (the node loop's watchdog)

@@ -12,9 +12,8 @@
 //               H(f) = gain e^{-i w tau} F(w) B(w),   w = 2 pi f,
 //               F(w) = (1 - a) / (1 - a e^{-i w dt}), a = exp(-dt / T)   (first-order lag, exact
 //                      for the model's recursion; 1 when absent),
-//               B(w) = wn^2 / (wn^2 - v^2 + 2 i zeta wn v), v = (2 / dt) tan(w dt / 2)   (the
-//               Tustin
-//                      second-order lag, exact for the model's biquad; 1 when absent).
+//               B(w) = wn^2 / (wn^2 - v^2 + 2 i zeta wn v), v = (2 / dt) tan(w dt / 2)
+//                      (the Tustin second-order lag, exact for the model's biquad; 1 when absent).
 //             A time-varying delay or gain enters at its mean (the constant part). Backlash,
 //             velocity saturation and the stroke limit depend on the amplitude, not the frequency,
 //             and offsets do not pass the command: they are left out and named in `left_out`. The

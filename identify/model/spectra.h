@@ -8,8 +8,7 @@
 //                        |l dt| <= max_lag (mean removed, FFT-based), its largest |c| and that lag
 //                        (s, positive when b lags a), refined by a parabola through the peak.
 //   signal_band          f_s (Hz): the frequency below which 99.5 % of x's power lies (mean
-//   removed;
-//                        0 for fewer than 16 samples or no power).
+//                        removed; 0 for fewer than 16 samples or no power).
 //   transfer_estimate    H1(f) = S_xy(f) / S_xx(f) of output y against input x by Welch averaging:
 //                        segments of `segment` samples with 50 % overlap, each with its mean
 //                        removed and a Hann window, their FFTW r2c transforms' cross and auto

@@ -12,8 +12,7 @@
 // structure supplies the initial stiffness k0; the identified k0 is reported beside it):
 //   stiffness k alone                  linear {}                                   k0 = k
 //   k d + F_bw z (Bouc–Wen, n = 1)     bouc_wen { yield_displacement d_y, alpha k / k0, n 1,
-//                                                 beta 0.5 }                        k0 = k + F_bw /
-//                                                 d_y
+//                                                 beta 0.5 }                        k0 = k + F_bw / d_y
 //   k d + p (elasto-plastic k_p, F_y)  bilinear { yield_displacement F_y / k_p,
 //                                                 post_yield_ratio k / k0 }        k0 = k + k_p
 //   (core/restoring_force.h: f = alpha k0 u + (1 - alpha) k0 z with z in m, which is the

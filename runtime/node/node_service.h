@@ -26,8 +26,7 @@
 //                       receive chains' sensors (core::DelayStage sensor_error, measure_force:
 //                       a sensor_drift or a tracking loop's load cell) act on the answer's
 //                       realised drift and force, as a case's stages do in process.
-//   streaming           real time with a servo loop faster than the integrator (servo_period() >
-//   0):
+//   streaming           real time with a servo loop faster than the integrator (servo_period() > 0):
 //                       a COMMAND only loads the servo (load()); the node loop calls servo_tick()
 //                       every servo period, which steps the servo (tick()) and returns a FEEDBACK
 //                       for the newest command, stamped with its servo sample. Held, stopped or

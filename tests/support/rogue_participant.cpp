@@ -14,10 +14,10 @@
 //   hold       as node 1, from the moment it learns the run id: a HOLD every millisecond.
 //   error      as node 1, from the moment it learns the run id: a READY carrying an error.
 //   control    never an answer; once the run's commands flow: as the coordinator, HOLD, STOP,
-//   ASSIGN and a COMMAND to nodes 1
-//              and 2 on their own command topics, addressed and as a broadcast; as node 2 on its
-//              own up topic, HOLD and ANNOUNCE (and an ANNOUNCE with an empty run id); garbage,
-//              another run's messages and replays of the commands it saw.
+//              ASSIGN and a COMMAND to nodes 1 and 2 on their own command topics, addressed and
+//              as a broadcast; as node 2 on its own up topic, HOLD and ANNOUNCE (and an ANNOUNCE
+//              with an empty run id); garbage, another run's messages and replays of the commands
+//              it saw.
 //   replay     never a message of its own: every message of nodes 1 and 2 and of the coordinator
 //              to them that it sees, re-published byte for byte, MAC included, from its own
 //              writers (rogue_replay.h); prints "replayed <topic> kind K: N" per topic and kind.
