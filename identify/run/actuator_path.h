@@ -68,6 +68,9 @@ struct ActuatorPath {
     Channel channel = Channel::kMeasured;
     std::string part, effect;  // as the re-run named them ("specimen 1", "bouc_wen")
     double worsening = 0.0;    // NRMSE of the worst floor the effect added, > 0
+    // Why, when the magnitude fit badly (plausibility.h: "poorly determined: ..." or
+    // "implausible: ..."), judged before any re-run; empty for a re-run's rejection.
+    std::string reason;
   };
   std::vector<Rejected> rejected;
   bool was_rejected(Channel channel, const std::string& effect) const {

@@ -125,8 +125,11 @@ IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem
   }
   for (const auto& path : run.actuators)
     for (const auto& r : path.rejected)
-      out.notes.push_back(r.part + ": " + r.effect + " left out: it made the re-run worse by " +
-                          percent_text(r.worsening) + " of the worst floor's NRMSE");
+      out.notes.push_back(r.part + ": " + r.effect + " left out: " +
+                          (r.reason.empty()
+                               ? "it made the re-run worse by " + percent_text(r.worsening) +
+                                     " of the worst floor's NRMSE"
+                               : r.reason));
   out.study = identified_study(run.study, base_dir, fragment);
   for (auto& node : *out.study.mutable_deployment()->mutable_nodes()) {
     if (node.kind() == config::NodeSpec::ACTUATOR_EMULATOR && fragment.cases_size() > 0) {

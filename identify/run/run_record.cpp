@@ -2,6 +2,7 @@
 
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
+#include "identify/run/plausibility.h"
 #include "identify/run/residual_floor.h"
 #include "identify/run/sensors.h"
 
@@ -431,7 +432,7 @@ bool reject(const ResidualShare& worse, std::vector<ActuatorPath>& paths) {
       if (at == named.end() || part_of(worse.effect, channel, path.actuator) != worse.link)
         continue;
       named.erase(at);
-      path.rejected.push_back({channel, worse.link, worse.effect, -worse.removed});
+      path.rejected.push_back({channel, worse.link, worse.effect, -worse.removed, ""});
       return true;
     }
   return false;
@@ -487,6 +488,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     judge_sensors(path);
     estimate_effects(path);
     judge_named(path);
+    judge_plausible(path);
     std::vector<Unexplained> described = describe_unexplained(path);
     judge_noise_beside(path, described);
     for (auto& f : channel_floors(path)) out.floors.push_back(std::move(f));

@@ -131,13 +131,18 @@ nlohmann::json moving_json(const std::vector<MovingRerun>& moving) {
 std::string rejected_text(const std::vector<ActuatorPath>& paths) {
   std::ostringstream out;
   for (const auto& a : paths)
-    for (const auto& r : a.rejected)
-      out << "  " << r.part << ": " << r.effect << " rejected: makes the re-run's NRMSE worse by "
-          << percent_text(r.worsening) << " (worst floor)\n";
+    for (const auto& r : a.rejected) {
+      out << "  " << r.part << ": " << r.effect << " rejected: ";
+      if (r.reason.empty())
+        out << "makes the re-run's NRMSE worse by " << percent_text(r.worsening)
+            << " (worst floor)\n";
+      else
+        out << r.reason << "\n";
+    }
   const std::string lines = out.str();
   if (lines.empty()) return lines;
-  return "rejected, named by a channel but made the re-run worse (left out of it and of the "
-         "written study):\n" +
+  return "rejected, named by a channel but made the re-run worse or fitted badly (left out of it "
+         "and of the written study):\n" +
          lines;
 }
 
@@ -148,7 +153,8 @@ nlohmann::json rejected_json(const std::vector<ActuatorPath>& paths) {
       out.push_back({{"part", r.part},
                      {"effect", r.effect},
                      {"channel", channel_name(r.channel)},
-                     {"nrmse_added", r.worsening}});
+                     {"nrmse_added", r.worsening},
+                     {"reason", r.reason}});
   return out;
 }
 
