@@ -22,7 +22,10 @@
 // channel's effect estimates are computed here once; run_record_format.h prints them. An effect
 // the form-free description of its channel's residual beats on held-out data is not named, and
 // what each channel's model leaves is described (unexplained.h) before the re-run, which gives
-// each description its share of the response error. Which node
+// each description its share of the response error. A named effect whose magnitude fits badly
+// (plausibility.h: poorly determined, implausible) is rejected with its reason before the re-run,
+// which holds a parameter that moved by its fitted shape where that helps on held-out steps
+// (run_residual.h moving). Which node
 // answered for which actuator or storey comes from runtime::answer_sources, the planning the
 // coordinator ran (platform_replay.h). Bad input -> std::invalid_argument
 // "RECORD: ENTRY: PROBLEM": a record that cannot be read or has damaged entries (the reader's loss
