@@ -5,10 +5,12 @@
 
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <random>
 #include <stdexcept>
 
@@ -268,6 +270,55 @@ void write_run_record(const fs::path& path, const RunToRecord& run, const Declar
   if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
 }
 
+namespace {
+
+// Throws std::invalid_argument naming an unknown argument or one without its value.
+WriterArgs parse_writer_args(int argc, char** argv) {
+  WriterArgs args;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--set")
+      args.set = value();
+    else if (arg == "--out")
+      args.out_dir = value();
+    else if (arg == "--data")
+      args.data_dir = value();
+    else if (arg == "--duration")
+      args.duration = std::stod(value());
+    else if (arg == "--case")
+      args.only = value();
+    else
+      throw std::invalid_argument("unknown argument " + arg);
+  }
+  return args;
+}
+
+}  // namespace
+
+std::optional<WriterArgs> writer_args(int argc, char** argv, const std::string& program,
+                                      const std::vector<std::string>& sets) {
+  WriterArgs args;
+  try {
+    args = parse_writer_args(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << program << ": " << e.what() << "\n";
+    return std::nullopt;
+  }
+  const bool known_set = std::find(sets.begin(), sets.end(), args.set) != sets.end();
+  if (known_set && !args.out_dir.empty() && !args.data_dir.empty() && args.duration > 1.0 &&
+      args.duration <= 39.0)
+    return args;
+  std::string names;
+  for (const std::string& set : sets) names += (names.empty() ? "" : "|") + set;
+  std::cerr << "usage: " << program << " --set " << names
+            << " --out DIR --data DATA_DIR [--duration S (1-39, default 15)] [--case NAME]\n";
+  return std::nullopt;
+}
+
 void write_truth(const fs::path& path, const std::vector<TruthCase>& cases, double duration) {
   std::ofstream out(path);
   out << std::setprecision(10) << "{\n  \"duration_s\": " << duration << ",\n  \"cases\": [\n";
@@ -298,6 +349,20 @@ void write_truth(const fs::path& path, const std::vector<TruthCase>& cases, doub
   }
   out << "  ]\n}\n";
   if (!out.flush()) throw std::runtime_error("cannot write " + path.string());
+}
+
+void write_set(const WriterArgs& args, const std::vector<std::string>& names,
+               const std::function<TruthCase(std::size_t)>& write_case) {
+  std::vector<TruthCase> truths;
+  fs::create_directories(args.out_dir);
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (!args.only.empty() && names[i] != args.only) continue;
+    truths.push_back(write_case(i));
+    std::cout << "wrote " << (fs::path(args.out_dir) / (names[i] + ".rthsrec")).string() << ": "
+              << truths.back().what << "\n";
+  }
+  if (truths.empty()) throw std::runtime_error("no case " + args.only + " in set " + args.set);
+  write_truth(fs::path(args.out_dir) / "truth.json", truths, args.duration);
 }
 
 }  // namespace blind

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -80,6 +81,30 @@ struct DeclaredStudy {
 // std::runtime_error when the study does not parse or its deployment runs another case.
 void write_run_record(const std::filesystem::path& path, const RunToRecord& run,
                       const DeclaredStudy& declared);
+
+// A writer's command line: --set S --out DIR --data DIR [--duration S] [--case NAME] (only:
+// one case by name, empty for every case). Checking the values is the writer's.
+struct WriterArgs {
+  std::string set;
+  std::string out_dir;
+  std::string data_dir;
+  std::string only;
+  double duration = 15.0;  // s
+};
+
+// The writer's command line (program: its name in messages; sets: the sets it writes), or
+// nullopt after saying on stderr what is wrong: an unknown argument, one without its value, or
+// (with the usage) a set it does not write, no --out or --data, a duration outside (1, 39] s.
+std::optional<WriterArgs> writer_args(int argc, char** argv, const std::string& program,
+                                      const std::vector<std::string>& sets);
+
+struct TruthCase;
+
+// Writes a set's cases into args.out_dir (created), each by write_case(i) (its truth), or only
+// the one named args.only, printing each record's path and what it holds, then truth.json;
+// throws std::runtime_error when the set has no case named args.only.
+void write_set(const WriterArgs& args, const std::vector<std::string>& names,
+               const std::function<TruthCase(std::size_t)>& write_case);
 
 // One case of truth.json (tests/blind/score_blind.py reads it): part (empty: none), description
 // kinds, frequency (Hz; <= 0: none), the library effects in the rig and the names that describe

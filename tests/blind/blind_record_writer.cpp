@@ -45,6 +45,7 @@
 #include <iostream>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -351,38 +352,12 @@ void write_truth(const fs::path& path, const std::vector<Case>& cases, double du
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string set, out_dir, data_dir, only;
-  double duration = 15.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
-    try {
-      if (arg == "--set")
-        set = value();
-      else if (arg == "--out")
-        out_dir = value();
-      else if (arg == "--data")
-        data_dir = value();
-      else if (arg == "--duration")
-        duration = std::stod(value());
-      else if (arg == "--case")
-        only = value();
-      else
-        throw std::invalid_argument("unknown argument " + arg);
-    } catch (const std::exception& e) {
-      std::cerr << "blind_record_writer: " << e.what() << "\n";
-      return 2;
-    }
-  }
-  if ((set != "tune" && set != "report") || out_dir.empty() || data_dir.empty() ||
-      !(duration > 1.0 && duration <= 39.0)) {
-    std::cerr << "usage: blind_record_writer --set tune|report --out DIR --data DATA_DIR "
-                 "[--duration S (1-39, default 15)] [--case NAME]\n";
-    return 2;
-  }
+  const std::optional<blind::WriterArgs> args =
+      blind::writer_args(argc, argv, "blind_record_writer", {"tune", "report"});
+  if (!args) return 2;
+  const std::string &set = args->set, &out_dir = args->out_dir, &data_dir = args->data_dir,
+                    &only = args->only;
+  const double duration = args->duration;
   try {
     const Frame f;
     const int steps = static_cast<int>(std::lround(duration / f.dt));

@@ -71,8 +71,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kNominalDuration = 15.0;  // s
-
 // The declared study (the rig above as rths reads a study); dt, motion and run id are set by
 // blind::write_run_record.
 const char* const kStudy = R"pb(
@@ -424,58 +422,22 @@ blind::TruthCase write_case(const fs::path& out_dir, const Case& c, const Rig& r
   return effect.truth();
 }
 
-int usage() {
-  std::cerr << "usage: fourth_set_writer --set fourth --out DIR --data DATA_DIR "
-               "[--duration S (1-39, default 15)] [--case NAME]\n";
-  return 2;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string set, out_dir, data_dir, only;
-  double duration = kNominalDuration;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
-    try {
-      if (arg == "--set")
-        set = value();
-      else if (arg == "--out")
-        out_dir = value();
-      else if (arg == "--data")
-        data_dir = value();
-      else if (arg == "--duration")
-        duration = std::stod(value());
-      else if (arg == "--case")
-        only = value();
-      else
-        throw std::invalid_argument("unknown argument " + arg);
-    } catch (const std::exception& e) {
-      std::cerr << "fourth_set_writer: " << e.what() << "\n";
-      return 2;
-    }
-  }
-  if (set != "fourth" || out_dir.empty() || data_dir.empty() ||
-      !(duration > 1.0 && duration <= 39.0))
-    return usage();
+  const std::optional<blind::WriterArgs> args =
+      blind::writer_args(argc, argv, "fourth_set_writer", {"fourth"});
+  if (!args) return 2;
   try {
     const Rig rig;
-    const int steps = static_cast<int>(std::lround(duration / rig.dt));
-    const blind::Motion motion = blind::read_motion(data_dir, rig.dt, steps);
-    std::vector<blind::TruthCase> truths;
-    fs::create_directories(out_dir);
-    for (const Case& c : all_cases()) {
-      if (!only.empty() && c.name != only) continue;
-      truths.push_back(write_case(out_dir, c, rig, motion, duration));
-      std::cout << "wrote " << (fs::path(out_dir) / (c.name + ".rthsrec")).string() << ": "
-                << truths.back().what << "\n";
-    }
-    if (truths.empty()) throw std::runtime_error("no case " + only + " in set fourth");
-    blind::write_truth(fs::path(out_dir) / "truth.json", truths, duration);
+    const int steps = static_cast<int>(std::lround(args->duration / rig.dt));
+    const blind::Motion motion = blind::read_motion(args->data_dir, rig.dt, steps);
+    const std::vector<Case> cases = all_cases();
+    std::vector<std::string> names;
+    for (const Case& c : cases) names.push_back(c.name);
+    blind::write_set(*args, names, [&](std::size_t i) {
+      return write_case(args->out_dir, cases[i], rig, motion, args->duration);
+    });
   } catch (const std::exception& e) {
     std::cerr << "fourth_set_writer: " << e.what() << "\n";
     return 2;

@@ -9,22 +9,24 @@ the rod's lag grows from 0.5 to 3 ms, the load cell clips at 4 kN, impacts ring 
 2.5 s, the infill stiffens the bearing one way past 5 mm, the transducer's base slips 0.35 mm at
 its window and its gain dips 4 %. truth.json: 12 cases, 2 clean, 3 windows, every seed its own.
 Needs BLIND_RTHS, BLIND_FOURTH_WRITER and BLIND_DATA (ctest sets them). Exit 0 when all hold."""
-import csv
 import json
 import math
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import third_set_writer_test as third  # noqa: E402  (a record's signals, a window's steps)
 
 KS = 0.4 * 3000.0 * (2.0 * math.pi / 0.3) ** 2  # N/m, the bearing
 DT = 0.001  # s
 DELAY_STEPS = 5  # the declared 5 ms shift
 
 
-def fit_through_zero(x, y):
-    return sum(a * b for a, b in zip(x, y)) / sum(a * a for a in x)
+fit_through_zero = third.fit_through_zero
 
 
 def shifted(samples, k, shift):
@@ -58,21 +60,8 @@ class FourthSet(unittest.TestCase):
     def tearDownClass(cls):
         shutil.rmtree(cls.folder, ignore_errors=True)
 
-    def signals(self, name):
-        """{command, y, force, u} of the case's record, as `rths export --csv` reads it."""
-        out = os.path.join(self.folder, name + ".csv")
-        subprocess.run([os.environ["BLIND_RTHS"], "export",
-                        os.path.join(self.folder, name + ".rthsrec"), "--csv", out],
-                       check=True, capture_output=True)
-        with open(out) as f:
-            rows = list(csv.DictReader(f))
-        return {key: [float(r[column]) for r in rows] for key, column in (
-            ("command", "command_act1_m"), ("y", "measured_act1_m"), ("force", "force_act1_N"),
-            ("u", "u_floor1_m"))}
-
-    def window_steps(self, name):
-        t0, t1 = self.truth[name]["truth"]["window_s"]
-        return round(t0 / DT), round(t1 / DT)
+    signals = third.ThirdSet.signals  # {command, y, force, u} as `rths export --csv` reads them
+    window_steps = third.ThirdSet.window_steps  # the truth's window_s in steps of 1 ms
 
     def residual(self, s):
         return [f - KS * y for f, y in zip(s["force"], s["y"])]

@@ -419,52 +419,21 @@ blind::TruthCase write_case(const fs::path& out_dir, const Case& c, const Frame&
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string set, out_dir, data_dir, only;
-  double duration = kNominalDuration;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-      return argv[++i];
-    };
-    try {
-      if (arg == "--set")
-        set = value();
-      else if (arg == "--out")
-        out_dir = value();
-      else if (arg == "--data")
-        data_dir = value();
-      else if (arg == "--duration")
-        duration = std::stod(value());
-      else if (arg == "--case")
-        only = value();
-      else
-        throw std::invalid_argument("unknown argument " + arg);
-    } catch (const std::exception& e) {
-      std::cerr << "third_set_writer: " << e.what() << "\n";
-      return 2;
-    }
-  }
-  if (set != "third" || out_dir.empty() || data_dir.empty() ||
-      !(duration > 1.0 && duration <= 39.0)) {
-    std::cerr << "usage: third_set_writer --set third --out DIR --data DATA_DIR "
-                 "[--duration S (1-39, default 15)] [--case NAME]\n";
-    return 2;
-  }
+  const std::optional<blind::WriterArgs> args =
+      blind::writer_args(argc, argv, "third_set_writer", {"third"});
+  if (!args) return 2;
+  const std::string &out_dir = args->out_dir, &data_dir = args->data_dir;
+  const double duration = args->duration;
   try {
     const Frame f;
     const int steps = static_cast<int>(std::lround(duration / f.dt));
     const blind::Motion motion = blind::read_motion(data_dir, f.dt, steps);
-    std::vector<blind::TruthCase> truths;
-    fs::create_directories(out_dir);
-    for (const Case& c : all_cases(duration)) {
-      if (!only.empty() && c.name != only) continue;
-      truths.push_back(write_case(out_dir, c, f, motion, duration));
-      std::cout << "wrote " << (fs::path(out_dir) / (c.name + ".rthsrec")).string() << ": "
-                << truths.back().what << "\n";
-    }
-    if (truths.empty()) throw std::runtime_error("no case " + only + " in set third");
-    blind::write_truth(fs::path(out_dir) / "truth.json", truths, duration);
+    const std::vector<Case> cases = all_cases(duration);
+    std::vector<std::string> names;
+    for (const Case& c : cases) names.push_back(c.name);
+    blind::write_set(*args, names, [&](std::size_t i) {
+      return write_case(out_dir, cases[i], f, motion, duration);
+    });
   } catch (const std::exception& e) {
     std::cerr << "third_set_writer: " << e.what() << "\n";
     return 2;
