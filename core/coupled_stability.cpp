@@ -223,10 +223,15 @@ PartLimit part_limit(const ModalLoop& loop, int l) {
 
 CoupledStability coupled_critical_delay(const StructuralModel& model, const Mat& k_experimental,
                                         const Modes& modes) {
+  return coupled_critical_delay(model, SparseMat(k_experimental.sparseView()), modes);
+}
+
+CoupledStability coupled_critical_delay(const StructuralModel& model,
+                                        const SparseMat& k_experimental, const Modes& modes) {
   const int q = kept_count(modes);
   ModalLoop loop = modal_base(model, modes, q);
   const Mat phi = modes.shapes.leftCols(q);
-  const Mat k_e = phi.transpose() * k_experimental * phi;
+  const Mat k_e = phi.transpose() * (k_experimental * phi);
   loop.numerical -= k_e;
   // K~_e's independent directions, each a part of stiffness its eigenvalue.
   const Eigen::SelfAdjointEigenSolver<Mat> directions(0.5 * (k_e + k_e.transpose()));
@@ -254,8 +259,14 @@ CoupledStability coupled_critical_delay(const StructuralModel& model, const Mat&
 }
 
 bool modes_decouple(const StructuralModel& model, const Mat& k_experimental, const Modes& modes) {
+  return modes_decouple(model, SparseMat(k_experimental.sparseView()), modes);
+}
+
+bool modes_decouple(const StructuralModel& model, const SparseMat& k_experimental,
+                    const Modes& modes) {
   const Mat phi = modes.shapes.leftCols(kept_count(modes));
-  for (const Mat& x : {Mat(phi.transpose() * k_experimental * phi), damping_in_modes(model, phi)}) {
+  for (const Mat& x :
+       {Mat(phi.transpose() * (k_experimental * phi)), damping_in_modes(model, phi)}) {
     const double scale = x.diagonal().cwiseAbs().maxCoeff();
     Mat off = x;
     off.diagonal().setZero();
@@ -307,14 +318,10 @@ std::vector<DelayedPart> setup_loop_parts(const HybridSetup& setup,
     throw std::invalid_argument("coupled loop: " + std::to_string(lags.size()) + " lags for " +
                                 std::to_string(actuators) + " actuators");
   const int n = setup.model.dofs();
-  // Row s of B (drifts = B u), column by column from unit displacements.
+  // Row s of B (drifts = B u) is B' e_s, the DOF forces of a unit shear at channel s: O(n) an
+  // actuator, no storeys x n matrix.
   const StoreyAssembly assembly = partition.assembly();
-  Mat rows(assembly.storeys(), n);
-  Vec drift(assembly.storeys());
-  for (int i = 0; i < n; ++i) {
-    assembly.drifts(Vec::Unit(n, i), drift);
-    rows.col(i) = drift;
-  }
+  Vec row(n);
   std::vector<DelayedPart> parts;
   for (std::size_t a = 0; a < actuators; ++a) {
     const int s = partition.actuator_storeys[a];
@@ -323,7 +330,8 @@ std::vector<DelayedPart> setup_loop_parts(const HybridSetup& setup,
       throw std::invalid_argument("coupled loop: actuator " + std::to_string(a + 1) +
                                   " has no specimen");
     DelayedPart part;
-    part.row = rows.row(s).transpose();
+    assembly.dof_forces(Vec::Unit(assembly.storeys(), s), row);
+    part.row = row;
     part.stiffness = specimen->initial_stiffness();
     if (const auto* inertial = dynamic_cast<const InertialSpecimen*>(specimen)) {
       part.damping = inertial->damping();

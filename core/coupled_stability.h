@@ -67,10 +67,15 @@ struct CoupledStability {
 // solver found). @pre model.mass and stiffness n x n (damping, or the sparse one); modes n x >= 1.
 CoupledStability coupled_critical_delay(const StructuralModel& model, const Mat& k_experimental,
                                         const Modes& modes);
+// The same with K_e held sparse (a large model: no n x n matrix).
+CoupledStability coupled_critical_delay(const StructuralModel& model,
+                                        const SparseMat& k_experimental, const Modes& modes);
 
 // Whether the q lowest modes diagonalise K_e and C (to 1e-9 of their diagonals): then the modal
 // check is exact and the coupled analysis adds nothing.
 bool modes_decouple(const StructuralModel& model, const Mat& k_experimental, const Modes& modes);
+bool modes_decouple(const StructuralModel& model, const SparseMat& k_experimental,
+                    const Modes& modes);
 
 // One experimental part of the loop (a link), in the header's symbols.
 struct DelayedPart {

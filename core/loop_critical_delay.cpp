@@ -14,10 +14,12 @@ namespace {
 
 // value b b' as a sparse matrix (n x n) from b's nonzeros: no n x n dense copy of a large model.
 SparseMat sparse_outer(const Vec& b, double value) {
-  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<Eigen::Index> nonzero;
   for (Eigen::Index i = 0; i < b.size(); ++i)
-    for (Eigen::Index j = 0; j < b.size(); ++j)
-      if (b[i] != 0.0 && b[j] != 0.0) entries.emplace_back(i, j, value * b[i] * b[j]);
+    if (b[i] != 0.0) nonzero.push_back(i);
+  std::vector<Eigen::Triplet<double>> entries;
+  for (const Eigen::Index i : nonzero)
+    for (const Eigen::Index j : nonzero) entries.emplace_back(i, j, value * b[i] * b[j]);
   SparseMat out(b.size(), b.size());
   out.setFromTriplets(entries.begin(), entries.end());
   return out;
@@ -28,6 +30,7 @@ SparseMat sparse_outer(const Vec& b, double value) {
 StructuralModel whole_structure(const StructuralModel& model,
                                 const std::vector<DelayedPart>& parts) {
   StructuralModel whole = model;
+  whole.known_max_omega = 0.0;  // M and C change
   for (const DelayedPart& p : parts) {
     if (whole.damping.size() > 0) whole.damping += p.damping * p.row * p.row.transpose();
     if (whole.mass.size() > 0) whole.mass += p.mass * p.row * p.row.transpose();
@@ -44,13 +47,13 @@ CriticalDelayCheck check_loop_critical_delay(const StructuralModel& model,
                                              std::vector<DelayedPart> parts, IntegratorKind kind,
                                              double dt, double lag) {
   const int n = model.dofs();
-  Mat k_experimental = Mat::Zero(n, n);
+  SparseMat k_experimental(n, n);  // sum k_j b_j b_j', O(nnz of the rows): no n x n matrix
   bool dynamic = false;
   for (std::size_t j = 0; j < parts.size(); ++j) {
     if (parts[j].row.size() != n)
       throw std::invalid_argument("critical delay check: part " + std::to_string(j + 1) +
                                   "'s row b must hold " + std::to_string(n) + " entries");
-    k_experimental += parts[j].stiffness * parts[j].row * parts[j].row.transpose();
+    k_experimental += sparse_outer(parts[j].row, parts[j].stiffness);
     dynamic = dynamic || parts[j].damping != 0.0 || parts[j].mass != 0.0;
     parts[j].predicted = false;
     parts[j].lag = 0.0;

@@ -40,6 +40,7 @@ bool prefer_sparse(Eigen::Index n, Eigen::Index nonzeros) {
 }
 
 void hold_sparse_if_sparse(StructuralModel& model) {
+  if (model.is_sparse() && model.mass.rows() != model.dofs()) return;  // held sparse only
   const Eigen::Index n = model.mass.rows();
   const Mat pattern = model.mass.cwiseAbs() + model.damping.cwiseAbs() + model.stiffness.cwiseAbs();
   const Eigen::Index nonzeros = (pattern.array() != 0.0).count();

@@ -35,8 +35,9 @@ constexpr double kSparseMaxFill = 0.05;  // nnz(M + C + K) / n^2
 // Whether a model of n DOFs with `nonzeros` nonzero entries in M + C + K is held sparse.
 bool prefer_sparse(Eigen::Index n, Eigen::Index nonzeros);
 // Fills model.sparse_* from the dense M, C, K when prefer_sparse; clears them otherwise (a full
-// C from modal damping makes the model dense again). Throws std::logic_error when it would clear
-// a model whose low_rank_damping needs it held sparse.
+// C from modal damping makes the model dense again). A model held sparse only (no dense copies)
+// stays as it is. Throws std::logic_error when it would clear a model whose low_rank_damping
+// needs it held sparse.
 void hold_sparse_if_sparse(StructuralModel& model);
 // A model held sparse only (no dense copies): for models too large to hold densely.
 StructuralModel make_sparse_model(SparseMat mass, SparseMat damping, SparseMat stiffness,

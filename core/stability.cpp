@@ -491,7 +491,7 @@ namespace {
 // Where the modes do not decouple K_e and C, the coupled analysis gives the continuous limit;
 // the governing mode is the one nearest the crossing's frequency.
 void apply_coupled(CriticalDelayCheck& check, const StructuralModel& model,
-                   const Mat& k_experimental, const Modes& modes) {
+                   const SparseMat& k_experimental, const Modes& modes) {
   const CoupledStability coupled = coupled_critical_delay(model, k_experimental, modes);
   check.coupled = true;
   check.modal_continuous = check.continuous;
@@ -531,7 +531,7 @@ CriticalDelayCheck check_critical_delay(const StructuralModel& model,
 }
 
 CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
-                                              const Mat& k_experimental, IntegratorKind kind,
+                                              const SparseMat& k_experimental, IntegratorKind kind,
                                               double dt, double lag) {
   if (!(dt > 0)) throw std::invalid_argument("critical delay check: dt must be > 0 s");
   const int dofs = model.dofs();

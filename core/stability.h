@@ -187,8 +187,14 @@ CriticalDelayCheck check_critical_delay(const StructuralModel& model,
                                         IntegratorKind kind, double dt, double lag);
 // The same with K_e given as a matrix (N/m, n x n): a structure given by matrices, whose
 // experimental parts sit at DOFs (HybridPartition::experimental_stiffness()).
+// K_e held sparse: O(nnz) per mode, so a large model's check forms no n x n matrix.
 CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
-                                              const Mat& k_experimental, IntegratorKind kind,
+                                              const SparseMat& k_experimental, IntegratorKind kind,
                                               double dt, double lag);
+inline CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
+                                                     const Mat& k_experimental, IntegratorKind kind,
+                                                     double dt, double lag) {
+  return check_modal_critical_delay(model, SparseMat(k_experimental.sparseView()), kind, dt, lag);
+}
 
 }  // namespace rths::core

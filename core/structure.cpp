@@ -166,8 +166,14 @@ Mat modal_damping(const Mat& mass, const Mat& stiffness, double zeta) {
 }
 
 double max_omega(const StructuralModel& model) {
+  if (model.known_max_omega > 0.0) return model.known_max_omega;
   if (model.is_sparse()) return lanczos_max_omega(model.sparse_mass, model.sparse_stiffness);
   return modal_analysis(model.mass, model.stiffness).omega.maxCoeff();
+}
+
+void remember_max_omega(StructuralModel& model) {
+  model.known_max_omega = 0.0;
+  model.known_max_omega = max_omega(model);
 }
 
 }  // namespace rths::core

@@ -47,6 +47,11 @@ struct StructuralModel {
   // the lowest modes); the explicit sparse integrators step both, the dense schemes refuse it.
   LowRankDamping low_rank_damping;
 
+  // omega_max (rad/s) of this M and K once known (remember_max_omega), so that every simulation
+  // of a study reuses one estimate; 0: not known. Whoever changes M or K after it is set resets
+  // it to 0.
+  double known_max_omega = 0.0;
+
   bool is_sparse() const { return sparse_mass.rows() > 0; }
   int dofs() const { return static_cast<int>(is_sparse() ? sparse_mass.rows() : mass.rows()); }
 };
@@ -80,6 +85,9 @@ Mat modal_damping(const Mat& mass, const Mat& stiffness, double zeta);
 // relative over 50 steps (at most 4000 steps). A Ritz value never exceeds the largest
 // eigenvalue, so a stable dt is never refused; a 10,000-DOF uniform chain, whose top eigenvalues
 // are 1e-8 apart, gets omega_max to ~1e-8 (an unstable dt may pass by that).
+// model.known_max_omega when set (> 0), without a new estimate.
 double max_omega(const StructuralModel& model);
+// Sets model.known_max_omega to a fresh max_omega: once a study's model is final (its split done).
+void remember_max_omega(StructuralModel& model);
 
 }  // namespace rths::core

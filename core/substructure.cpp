@@ -97,7 +97,7 @@ StoreyAssembly HybridPartition::assembly() const {
 namespace {
 
 // A grounded specimen at its DOF's channel: k_e in (0, K(d, d)] taken out of K_N at (d, d).
-void place_grounded(HybridPartition& partition, Mat& numerical, const Mat& stiffness,
+void place_grounded(HybridPartition& partition, SparseMat& numerical, const SparseMat& stiffness,
                     DofSpecimen& specimen) {
   const int d = specimen.dof, n = static_cast<int>(stiffness.rows());
   const std::string name = "experimental DOF " + std::to_string(d + 1);
@@ -105,17 +105,17 @@ void place_grounded(HybridPartition& partition, Mat& numerical, const Mat& stiff
   if (partition.experimental[static_cast<std::size_t>(d)])
     throw std::invalid_argument(name + " is listed twice");
   const double k = specimen.model->initial_stiffness();
-  if (!(k > 0 && k <= stiffness(d, d)))
+  const double diagonal = stiffness.coeff(d, d);
+  if (!(k > 0 && k <= diagonal))
     throw std::invalid_argument(name + ": stiffness " + format_number(k) +
                                 " N/m must be in (0, K(" + std::to_string(d + 1) + ", " +
-                                std::to_string(d + 1) + ") = " + format_number(stiffness(d, d)) +
-                                "]");
-  numerical(d, d) -= k;
+                                std::to_string(d + 1) + ") = " + format_number(diagonal) + "]");
+  numerical.coeffRef(d, d) -= k;
   partition.experimental[static_cast<std::size_t>(d)] = std::move(specimen.model);
 }
 
 // An element at the next channel: k_e b b^T taken out of K_N.
-void place_element(HybridPartition& partition, Mat& numerical, DofSpecimen& specimen) {
+void place_element(HybridPartition& partition, SparseMat& numerical, DofSpecimen& specimen) {
   const int n = static_cast<int>(numerical.rows());
   const std::string name = "experimental element " + std::to_string(partition.elements.size() + 1);
   bool nonzero = false;
@@ -131,7 +131,7 @@ void place_element(HybridPartition& partition, Mat& numerical, DofSpecimen& spec
   if (!(k > 0 && std::isfinite(k)))
     throw std::invalid_argument(name + ": stiffness " + format_number(k) + " N/m must be > 0");
   for (const auto& [i, ci] : specimen.element.terms)
-    for (const auto& [j, cj] : specimen.element.terms) numerical(i, j) -= k * ci * cj;
+    for (const auto& [j, cj] : specimen.element.terms) numerical.coeffRef(i, j) -= k * ci * cj;
   partition.elements.push_back(specimen.element);
   partition.numerical.push_back(nullptr);
   partition.experimental.push_back(std::move(specimen.model));
@@ -141,11 +141,14 @@ void place_element(HybridPartition& partition, Mat& numerical, DofSpecimen& spec
 // replaces. Only checked with elements (a grounded k_e <= K(d, d) is its own bound). Judged by the
 // pivots of a sparse LDL^T of K_N shifted by 1e-9 of K's scale (all positive exactly when the
 // shifted matrix is positive definite): O(nnz) for a large sparse model.
-void check_numerical_semidefinite(const HybridPartition& partition, const Mat& numerical,
-                                  const Mat& stiffness) {
+void check_numerical_semidefinite(const HybridPartition& partition, const SparseMat& numerical,
+                                  const SparseMat& stiffness) {
   if (partition.elements.empty()) return;
-  const double scale = stiffness.cwiseAbs().maxCoeff();
-  Eigen::SparseMatrix<double> shifted = numerical.sparseView();
+  double scale = 0.0;
+  for (Eigen::Index j = 0; j < stiffness.outerSize(); ++j)
+    for (SparseMat::InnerIterator it(stiffness, j); it; ++it)
+      scale = std::max(scale, std::abs(it.value()));
+  Eigen::SparseMatrix<double> shifted = numerical;
   for (Eigen::Index i = 0; i < shifted.rows(); ++i) shifted.coeffRef(i, i) += 1e-9 * scale;
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(shifted);
   const double lowest = factor.info() == Eigen::Success ? factor.vectorD().minCoeff() : -scale;
@@ -160,12 +163,16 @@ void check_numerical_semidefinite(const HybridPartition& partition, const Mat& n
 }  // namespace
 
 HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen> specimens) {
+  return partition_by_dofs(SparseMat(stiffness.sparseView()), std::move(specimens));
+}
+
+HybridPartition partition_by_dofs(const SparseMat& stiffness, std::vector<DofSpecimen> specimens) {
   const int n = static_cast<int>(stiffness.rows());
   HybridPartition partition;
   partition.by_dofs = true;
   partition.numerical.resize(static_cast<std::size_t>(n));
   partition.experimental.resize(static_cast<std::size_t>(n));
-  Mat numerical = stiffness;
+  SparseMat numerical = stiffness;
   for (DofSpecimen& specimen : specimens) {
     if (!specimen.model) throw std::invalid_argument("an experimental part has no specimen model");
     if (specimen.element.terms.empty())
@@ -177,7 +184,8 @@ HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen>
   for (int s = 0; s < partition.channels(); ++s)
     if (partition.experimental[static_cast<std::size_t>(s)])
       partition.actuator_storeys.push_back(s);
-  partition.numerical_matrix = numerical.sparseView();  // exact zeros dropped
+  numerical.prune(0.0);  // exact zeros dropped
+  partition.numerical_matrix = numerical;
   return partition;
 }
 

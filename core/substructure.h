@@ -111,6 +111,8 @@ struct DofSpecimen {
 // element's row is empty or zero, or an element leaves K_N with negative stiffness (K - k_e b b^T
 // not positive semi-definite: the specimen is stiffer than what it replaces).
 HybridPartition partition_by_dofs(const Mat& stiffness, std::vector<DofSpecimen> specimens);
+// The same from K held sparse (O(nnz): no n x n copy of a large model).
+HybridPartition partition_by_dofs(const SparseMat& stiffness, std::vector<DofSpecimen> specimens);
 
 // Sizes: u and force have dofs() entries, drift, shear and storey tangents storeys() (channels).
 // No allocation once the vectors are sized.

@@ -1,5 +1,6 @@
 #include "study/structure_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <numbers>
@@ -7,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -97,18 +99,25 @@ ElementRow element_row(const config::ExperimentalDof& spec, int n, const std::st
   return row;
 }
 
+// Entry (i, j) of a matrix from whichever form the model holds (dense, or sparse only).
+double entry(const Mat& dense, const SparseMat& sparse, int i, int j) {
+  return dense.rows() > std::max(i, j) ? dense(i, j) : sparse.coeff(i, j);
+}
+
 Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralModel& model,
                        const ElementRow& row, const std::string& field, double servo_period) {
   if (row.terms.empty()) {
     const int d = spec.dof() - 1;
-    if (!(spec.stiffness() > 0 && spec.stiffness() <= model.stiffness(d, d)))
+    const double k_dd = entry(model.stiffness, model.sparse_stiffness, d, d);
+    const double m_dd = entry(model.mass, model.sparse_mass, d, d);
+    if (!(spec.stiffness() > 0 && spec.stiffness() <= k_dd))
       fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be in (0, K(" +
                                      std::to_string(d + 1) + ", " + std::to_string(d + 1) +
-                                     ") = " + format_number(model.stiffness(d, d)) + "]");
-    if (!(spec.mass() >= 0 && spec.mass() < model.mass(d, d)))
+                                     ") = " + format_number(k_dd) + "]");
+    if (!(spec.mass() >= 0 && spec.mass() < m_dd))
       fail(field + ".mass", format_number(spec.mass()) + " kg must be in [0, M(" +
                                 std::to_string(d + 1) + ", " + std::to_string(d + 1) +
-                                ") = " + format_number(model.mass(d, d)) + ")");
+                                ") = " + format_number(m_dd) + ")");
   } else {
     if (!(spec.stiffness() > 0 && std::isfinite(spec.stiffness())))
       fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be > 0");
@@ -134,15 +143,65 @@ Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralMode
   return out;
 }
 
-// x -= value b b^T over the row's terms (b = e_dof for a grounded specimen).
-void subtract_outer(Mat& x, const ElementRow& row, int dof, double value) {
-  if (row.terms.empty()) {
-    x(dof, dof) -= value;
-    return;
-  }
-  for (const auto& [i, ci] : row.terms)
-    for (const auto& [j, cj] : row.terms) x(i, j) -= value * ci * cj;
+// The row's terms, b (b = e_dof for a grounded specimen).
+std::vector<std::pair<int, double>> row_terms(const ElementRow& row, int dof) {
+  if (row.terms.empty()) return {{dof, 1.0}};
+  return row.terms;
 }
+
+// The specimens' masses and dashpots taken out of M and C (value b b^T each): from the dense
+// copies where the model holds them, else gathered and subtracted from the sparse forms at once
+// (apply), so that a model held sparse only never forms an n x n matrix.
+class TakenOut {
+ public:
+  explicit TakenOut(const StructuralModel& model)
+      : dense_(model.mass.rows() == model.dofs()), mass_(model.mass), damping_(model.damping) {}
+  void take(const ElementRow& row, int dof, double mass, double damping) {
+    for (const auto& [i, ci] : row_terms(row, dof))
+      for (const auto& [j, cj] : row_terms(row, dof)) {
+        if (dense_) {
+          mass_(i, j) -= mass * ci * cj;
+          damping_(i, j) -= damping * ci * cj;
+          continue;
+        }
+        mass_taken_.emplace_back(i, j, mass * ci * cj);
+        damping_taken_.emplace_back(i, j, damping * ci * cj);
+      }
+  }
+  // M - sum m b b^T positive definite (judged as the model is held).
+  bool mass_definite(const StructuralModel& model) const {
+    if (dense_)
+      return Eigen::SelfAdjointEigenSolver<Mat>(mass_, Eigen::EigenvaluesOnly).eigenvalues()[0] > 0;
+    return !check_sparse_definite(model.sparse_mass - taken(mass_taken_, model.dofs()), true);
+  }
+  // The model's M and C less what was taken (both forms it holds); returns M iota before.
+  Vec apply(StructuralModel& model) const {
+    const Vec load = mass_times(model, model.influence);
+    if (dense_) {
+      model.mass = mass_;
+      model.damping = damping_;
+      if (!model.is_sparse()) return load;
+      model.sparse_mass = mass_.sparseView();
+      model.sparse_damping = damping_.sparseView();
+      return load;
+    }
+    model.sparse_mass -= taken(mass_taken_, model.dofs());
+    model.sparse_damping -= taken(damping_taken_, model.dofs());
+    model.sparse_mass.prune(0.0);
+    model.sparse_damping.prune(0.0);
+    return load;
+  }
+
+ private:
+  static SparseMat taken(const std::vector<Eigen::Triplet<double>>& entries, int n) {
+    SparseMat out(n, n);
+    out.setFromTriplets(entries.begin(), entries.end());
+    return out;
+  }
+  bool dense_;
+  Mat mass_, damping_;
+  std::vector<Eigen::Triplet<double>> mass_taken_, damping_taken_;
+};
 
 // The experimental fraction phi_1' K_e phi_1 / omega_1^2 of the first mode of (M, K) for K_e =
 // k b b^T.
@@ -157,6 +216,20 @@ std::string fraction_text(double fraction) {
   return out.str();
 }
 
+// Row d of K (N/m): its nonzeros (column, value) in column order, from either form the model
+// holds (K symmetric: column d of the sparse form).
+std::vector<std::pair<int, double>> stiffness_row(const StructuralModel& model, int d) {
+  std::vector<std::pair<int, double>> row;
+  if (model.stiffness.rows() == model.dofs()) {
+    for (int j = 0; j < model.dofs(); ++j)
+      if (model.stiffness(d, j) != 0.0) row.emplace_back(j, model.stiffness(d, j));
+    return row;
+  }
+  for (SparseMat::InnerIterator it(model.sparse_stiffness, d); it; ++it)
+    row.emplace_back(static_cast<int>(it.row()), it.value());
+  return row;
+}
+
 // A grounded specimen stiffer than what ties its DOF to the ground ((K iota)_d, the force at d
 // under a rigid translation) most likely means an element between DOFs (a storey): the warning
 // names both fractions and the DOF it would join (the one K couples most strongly).
@@ -164,11 +237,17 @@ std::optional<std::string> storey_meant(const StructuralModel& model,
                                         const config::ExperimentalDof& spec,
                                         const std::string& field) {
   const int d = spec.dof() - 1, n = model.dofs();
-  const double ground_tie = model.stiffness.row(d).dot(model.influence);
+  const std::vector<std::pair<int, double>> row = stiffness_row(model, d);
+  double ground_tie = 0.0;
+  for (const auto& [j, k] : row) ground_tie += k * model.influence[j];
   if (n < 2 || spec.stiffness() <= ground_tie * (1 + 1e-9)) return std::nullopt;
   int neighbour = d == 0 ? 1 : 0;
-  for (int j = 0; j < n; ++j)
-    if (j != d && model.stiffness(d, j) < model.stiffness(d, neighbour)) neighbour = j;
+  double coupling = entry(model.stiffness, model.sparse_stiffness, d, neighbour);
+  for (const auto& [j, k] : row)
+    if (j != d && k < coupling) {
+      neighbour = j;
+      coupling = k;
+    }
   std::string text = field + ": a specimen of " + format_number(spec.stiffness()) +
                      " N/m between DOF " + std::to_string(d + 1) +
                      " and the ground, but K ties DOF " + std::to_string(d + 1) +
@@ -202,7 +281,7 @@ StructuralModel matrix_structure(const config::Structure& structure,
 HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuring& substructuring,
                               double servo_period, std::vector<std::string>* warnings) {
   std::vector<DofSpecimen> specimens;
-  Mat mass = model.mass, damping = model.damping;
+  TakenOut taken(model);
   bool massive_element = false;
   for (int i = 0; i < substructuring.experimental_dofs_size(); ++i) {
     const std::string field = "substructuring.experimental_dofs[" + std::to_string(i) + "]";
@@ -218,28 +297,23 @@ HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuri
         if (auto warning = storey_meant(model, spec, field)) warnings->push_back(*warning);
     }
     massive_element = massive_element || (!row.terms.empty() && specimen.mass > 0);
-    subtract_outer(mass, row, d, specimen.mass);
-    subtract_outer(damping, row, d, specimen.damping);
+    taken.take(row, d, specimen.mass, specimen.damping);
     specimens.push_back({d, std::move(specimen.model), row});
   }
-  if (massive_element &&
-      Eigen::SelfAdjointEigenSolver<Mat>(mass, Eigen::EigenvaluesOnly).eigenvalues()[0] <= 0)
+  if (massive_element && !taken.mass_definite(model))
     fail("substructuring.experimental_dofs",
          "the elements' masses leave the numerical part without positive mass (M - m b b^T is "
          "not positive definite)");
-  HybridPartition partition = partition_by_dofs(model.stiffness, std::move(specimens));
+  HybridPartition partition = model.stiffness.rows() == model.dofs()
+                                  ? partition_by_dofs(model.stiffness, std::move(specimens))
+                                  : partition_by_dofs(model.sparse_stiffness, std::move(specimens));
   // The specimen's force holds m_e x'' of the relative acceleration only, so the numerical part
   // carries the ground motion's load on the whole mass, -M iota a_g = -M_N (M_N^-1 M iota) a_g.
-  if (model.is_sparse()) {  // M_N sparse: its LDL^T, not a dense one
-    const Vec load = model.sparse_mass * model.influence;
-    model.sparse_mass = mass.sparseView();
-    model.sparse_damping = damping.sparseView();
-    model.influence = Eigen::SimplicialLDLT<SparseMat>(model.sparse_mass).solve(load);
-  } else {
-    model.influence = mass.ldlt().solve(model.mass * model.influence);
-  }
-  model.mass = mass;
-  model.damping = damping;
+  const Vec load = taken.apply(model);
+  model.influence = model.is_sparse()  // M_N sparse: its LDL^T, not a dense one
+                        ? Vec(Eigen::SimplicialLDLT<SparseMat>(model.sparse_mass).solve(load))
+                        : Vec(model.mass.ldlt().solve(load));
+  remember_max_omega(model);  // M_N final: one estimate for every simulation of the study
   return partition;
 }
 

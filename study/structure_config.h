@@ -14,7 +14,9 @@
 //     sum c b b^T: what the integrator carries), K stays whole (the explicit integrators' K0), the
 //     partition's K_N = K - K_e, and the influence becomes (M - M_e)^-1 M iota, so the load
 //     -(M - M_e) iota' a_g is the whole structure's -M iota a_g (the specimen's m_e x'' is
-//     relative).
+//     relative). A model held sparse only stays so (its M_N and C_N subtracted sparse, K_N split
+//     sparse); its omega_max is estimated once here (core::remember_max_omega) for every
+//     simulation of the study.
 //     A grounded specimen stiffer than what ties its DOF to the ground ((K iota)_dof) most likely
 //     means a storey: `warnings` (when given) gets a line naming the experimental fraction it
 //     implies and the one between that DOF and its most strongly coupled neighbour.

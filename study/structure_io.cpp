@@ -2,6 +2,7 @@
 
 #include <matio.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -9,7 +10,12 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
+#include <utility>
+#include <vector>
 
+#include "core/number_text.h"
+#include "core/sparse_integrators.h"
 #include "core/sparse_structure.h"
 #include "study/memory_budget.h"
 #include "study/motion_files.h"
@@ -25,6 +31,21 @@ namespace {
 std::string shape(Eigen::Index rows, Eigen::Index cols) {
   return std::to_string(rows) + " x " + std::to_string(cols);
 }
+
+// A matrix as its source holds it: sparse (Matrix Market coordinate, a MATLAB sparse variable),
+// read into triplets and never formed rows x cols, or dense (inline values, .csv, Matrix Market
+// array, a full MATLAB variable).
+struct MatrixData {
+  Mat dense;
+  SparseMat sparse;
+  bool sparse_held = false;
+  Eigen::Index rows() const { return sparse_held ? sparse.rows() : dense.rows(); }
+  Eigen::Index cols() const { return sparse_held ? sparse.cols() : dense.cols(); }
+};
+
+// Bytes an entry of a sparse matrix holds while it is read: its triplet (two indices and the
+// value, 16) and its compressed column entry (the value and its row, 12), both alive at once.
+constexpr std::uint64_t kSparseBytesPerEntry = 28;
 
 Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
   const int count = spec.values_size();
@@ -83,44 +104,64 @@ std::string mat_variables(mat_t* file) {
 }
 
 // A MATLAB sparse matrix (compressed columns: jc[j]..jc[j+1] index the rows ir and the values of
-// column j), real double.
-Mat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
+// column j), real double, held sparse: O(nnz), never rows x cols.
+SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
   const auto& sparse = *static_cast<const mat_sparse_t*>(var.data);
   const auto rows = static_cast<Eigen::Index>(var.dims[0]);
   const auto cols = static_cast<Eigen::Index>(var.dims[1]);
   if (var.data_type != MAT_T_DOUBLE || sparse.njc != static_cast<mat_uint32_t>(cols) + 1)
     fail(named, "is a sparse matrix that is not real double");
-  Mat m = Mat::Zero(rows, cols);
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(std::min<std::size_t>(sparse.ndata, sparse.nir));
   const auto* values = static_cast<const double*>(sparse.data);
   for (Eigen::Index j = 0; j < cols; ++j)
     for (mat_uint32_t k = sparse.jc[j]; k < sparse.jc[j + 1]; ++k) {
       if (k >= sparse.ndata || k >= sparse.nir || sparse.ir[k] >= static_cast<mat_uint32_t>(rows))
         fail(named, "is a sparse matrix whose indices run past its size");
-      m(sparse.ir[k], j) = values[k];
+      triplets.emplace_back(static_cast<Eigen::Index>(sparse.ir[k]), j, values[k]);
     }
+  SparseMat m(rows, cols);
+  m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
+  m.prune(0.0);
+  m.makeCompressed();
   return m;
 }
 
-Mat mat_matrix(const std::filesystem::path& path, const std::string& variable,
-               const std::string& where) {
+// A full MATLAB variable is sized from its header before its data is read: rows x cols doubles
+// (and as much again for the data in its own class while it is converted) against the limit.
+void require_mat_size(mat_t* file, const std::string& variable, const std::string& where) {
+  std::unique_ptr<matvar_t, MatVarFree> info(Mat_VarReadInfo(file, variable.c_str()));
+  if (!info || info->class_type == MAT_C_SPARSE || info->rank != 2) return;
+  require_memory(static_cast<std::uint64_t>(info->dims[0]),
+                 static_cast<std::uint64_t>(info->dims[1]) * 16,
+                 where + ": variable '" + variable + "' read as a dense matrix");
+}
+
+MatrixData mat_matrix(const std::filesystem::path& path, const std::string& variable,
+                      const std::string& where) {
   if (variable.empty()) fail(where, "a .mat file needs `variable`, the name of the matrix in it");
   std::unique_ptr<mat_t, MatFileCloser> file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) fail(where, "cannot be opened as a MATLAB file");
+  require_mat_size(file.get(), variable, where);
   std::unique_ptr<matvar_t, MatVarFree> var(Mat_VarRead(file.get(), variable.c_str()));
   if (!var)
     fail(where, "no variable '" + variable + "' (variables: " + mat_variables(file.get()) + ")");
   const std::string named = where + ": variable '" + variable + "'";
   if (var->rank != 2) fail(named, "has " + std::to_string(var->rank) + " dimensions, not 2");
-  if (var->class_type == MAT_C_SPARSE && !var->isComplex && var->data != nullptr)
-    return mat_sparse_matrix(*var, named);
+  MatrixData out;
+  if (var->class_type == MAT_C_SPARSE && !var->isComplex && var->data != nullptr) {
+    out.sparse = mat_sparse_matrix(*var, named);
+    out.sparse_held = true;
+    return out;
+  }
   if (var->isComplex || var->data == nullptr)
     fail(named, "is not a real numeric matrix (complex, sparse, a struct, a cell or an object)");
   const auto rows = static_cast<Eigen::Index>(var->dims[0]);
   const auto cols = static_cast<Eigen::Index>(var->dims[1]);
-  Mat m(rows, cols);  // column-major, as MATLAB stores it
-  if (!to_double(*var, m.data(), m.size()))
+  out.dense.resize(rows, cols);  // column-major, as MATLAB stores it
+  if (!to_double(*var, out.dense.data(), out.dense.size()))
     fail(named, "is not a real numeric matrix (complex, sparse, a struct, a cell or an object)");
-  return m;
+  return out;
 }
 
 constexpr std::uintmax_t kMaxCsvMatrixBytes = 32ull << 20;  // 32 MiB
@@ -148,30 +189,54 @@ MarketHeader market_header(const std::string& line, const std::string& where) {
   return {format == "coordinate", symmetry == "symmetric"};
 }
 
-std::vector<double> market_numbers(const std::string& line, int line_no, const std::string& where) {
-  std::vector<double> out;
-  std::istringstream in(line);
-  std::string token;
-  while (in >> token) {
-    const auto value = parse_finite(token);
-    if (!value)
-      fail(where + ":" + std::to_string(line_no), "'" + token + "' is not a finite number");
-    out.push_back(*value);
+// A Matrix Market file's data lines (comments and blank lines skipped), each as its numbers.
+class MarketLines {
+ public:
+  MarketLines(std::istream& in, std::string where) : in_(in), where_(std::move(where)) {}
+  bool next() {
+    while (std::getline(in_, line_)) {
+      ++line_no_;
+      const std::size_t first = line_.find_first_not_of(" \t\r");
+      if (first == std::string::npos || line_[first] == '%') continue;
+      split();
+      return true;
+    }
+    return false;
   }
-  return out;
-}
+  const std::vector<double>& numbers() const { return numbers_; }
+  std::string at() const { return where_ + ":" + std::to_string(line_no_); }
 
-int market_index(double value, Eigen::Index size, int line_no, const std::string& where) {
+ private:
+  void split() {
+    numbers_.clear();
+    const std::string_view text(line_);
+    std::size_t begin = text.find_first_not_of(" \t\r");
+    while (begin != std::string_view::npos) {
+      const std::size_t end = std::min(text.find_first_of(" \t\r", begin), text.size());
+      const std::string_view token = text.substr(begin, end - begin);
+      const auto value = parse_finite(token);
+      if (!value) fail(at(), printable(token).insert(0, 1, '\'') + "' is not a finite number");
+      numbers_.push_back(*value);
+      begin = text.find_first_not_of(" \t\r", end);
+    }
+  }
+  std::istream& in_;
+  std::string where_, line_;
+  std::vector<double> numbers_;
+  int line_no_ = 1;  // the header
+};
+
+int market_index(double value, Eigen::Index size, const MarketLines& lines) {
   if (value != std::floor(value) || value < 1 || value > static_cast<double>(size))
-    fail(where + ":" + std::to_string(line_no),
-         "index " + format_number(value) + " is outside 1.." + std::to_string(size));
+    fail(lines.at(), "index " + format_number(value) + " is outside 1.." + std::to_string(size));
   return static_cast<int>(value) - 1;
 }
 
 // The size line against what the file can hold and the memory limit, before anything is
-// allocated: an 81-byte file that claims 1e9 entries, or a size whose dense matrix the machine
-// cannot hold, is refused at once. An entry line is at least "1 1 0\n" (coordinate) or "0\n"
-// (array).
+// allocated: an 81-byte file that claims 1e9 entries is refused at once, and so is a size whose
+// storage the limit cannot hold: a coordinate file's kSparseBytesPerEntry an entry it declares
+// (twice for a symmetric one, both triangles), an array's 8 bytes a cell (it is dense). An entry
+// line is at least "1 1 0\n" (coordinate) or "0\n" (array).
 void check_market_size(const std::vector<double>& size, const MarketHeader& header,
                        std::uintmax_t file_bytes, const std::string& at) {
   const double rows = size[0], cols = size[1];
@@ -186,11 +251,69 @@ void check_market_size(const std::vector<double>& size, const MarketHeader& head
     fail(at, "declares " + format_number(entries) + " entries, more than its " +
                  std::to_string(file_bytes) + " bytes can hold (at least " +
                  format_number(line_bytes) + " bytes an entry)");
-  require_memory(static_cast<std::uint64_t>(rows), static_cast<std::uint64_t>(cols) * 8,
-                 at + ": the dense matrix its size line declares");
+  if (header.coordinate)
+    require_memory(static_cast<std::uint64_t>(entries) * (header.symmetric ? 2 : 1) +
+                       static_cast<std::uint64_t>(cols),
+                   kSparseBytesPerEntry, at + ": the sparse matrix its size line declares");
+  else
+    require_memory(static_cast<std::uint64_t>(rows), static_cast<std::uint64_t>(cols) * 8,
+                   at + ": the dense matrix its size line declares");
 }
 
-Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
+// Coordinate entries as triplets (both triangles of a symmetric file), into a sparse matrix: a
+// repeated entry keeps its last value, as a dense fill would; explicit zeros are dropped.
+SparseMat market_coordinate(MarketLines& lines, Eigen::Index rows, Eigen::Index cols,
+                            Eigen::Index entries, bool symmetric, const std::string& where) {
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(static_cast<std::size_t>(symmetric ? 2 * entries : entries));
+  Eigen::Index filled = 0;
+  while (lines.next()) {
+    if (filled >= entries) fail(lines.at(), "more entries than the size line declares");
+    const std::vector<double>& v = lines.numbers();
+    if (v.size() != 3) fail(lines.at(), "an entry is 'row col value'");
+    const int i = market_index(v[0], rows, lines), j = market_index(v[1], cols, lines);
+    triplets.emplace_back(i, j, v[2]);
+    if (symmetric && i != j) triplets.emplace_back(j, i, v[2]);
+    ++filled;
+  }
+  if (filled != entries)
+    fail(where,
+         "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
+  SparseMat m(rows, cols);
+  m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
+  m.prune(0.0);
+  m.makeCompressed();
+  return m;
+}
+
+// Array entries, column by column (a symmetric file: the lower triangle, column by column).
+Mat market_array(MarketLines& lines, Eigen::Index rows, Eigen::Index cols, bool symmetric,
+                 const std::string& where) {
+  Mat m = Mat::Zero(rows, cols);
+  const Eigen::Index entries = symmetric ? rows * (rows + 1) / 2 : m.size();
+  Eigen::Index filled = 0;
+  while (lines.next()) {
+    if (filled >= entries) fail(lines.at(), "more entries than the size line declares");
+    if (lines.numbers().size() != 1) fail(lines.at(), "an array entry is one value");
+    const double value = lines.numbers()[0];
+    Eigen::Index i = filled % rows, j = filled / rows;  // column-major
+    if (symmetric) {
+      j = 0;
+      Eigen::Index k = filled;
+      while (k >= rows - j) k -= rows - j++;
+      i = j + k;
+      m(j, i) = value;
+    }
+    m(i, j) = value;
+    ++filled;
+  }
+  if (filled != entries)
+    fail(where,
+         "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
+  return m;
+}
+
+MatrixData market_matrix(const std::filesystem::path& path, const std::string& where) {
   std::error_code error;
   const std::uintmax_t file_bytes = std::filesystem::file_size(path, error);
   std::ifstream in(path);
@@ -198,55 +321,23 @@ Mat market_matrix(const std::filesystem::path& path, const std::string& where) {
   std::string line;
   if (!std::getline(in, line)) fail(where, "is empty");
   const MarketHeader header = market_header(line, where);
-  int line_no = 1;
-  std::vector<double> size;
-  Mat m;
-  Eigen::Index filled = 0, entries = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty() || line[0] == '%' || line.find_first_not_of(" \t\r") == std::string::npos)
-      continue;
-    const std::vector<double> v = market_numbers(line, line_no, where);
-    if (size.empty()) {
-      if (v.size() != (header.coordinate ? 3u : 2u) || v[0] < 1 || v[1] < 1 || v[0] > 1e5 ||
-          v[1] > 1e5)
-        fail(where + ":" + std::to_string(line_no),
-             "the size line must be 'rows cols" +
-                 std::string(header.coordinate ? " entries'" : "'") + " (each 1..100000)");
-      check_market_size(v, header, error ? 0 : file_bytes, where + ":" + std::to_string(line_no));
-      size = v;
-      m = Mat::Zero(static_cast<Eigen::Index>(v[0]), static_cast<Eigen::Index>(v[1]));
-      entries = header.coordinate ? static_cast<Eigen::Index>(v[2])
-                                  : (header.symmetric ? m.rows() * (m.rows() + 1) / 2 : m.size());
-      continue;
-    }
-    if (filled >= entries)
-      fail(where + ":" + std::to_string(line_no), "more entries than the size line declares");
-    if (header.coordinate) {
-      if (v.size() != 3) fail(where + ":" + std::to_string(line_no), "an entry is 'row col value'");
-      const int i = market_index(v[0], m.rows(), line_no, where),
-                j = market_index(v[1], m.cols(), line_no, where);
-      m(i, j) = v[2];
-      if (header.symmetric) m(j, i) = v[2];
-    } else {
-      if (v.size() != 1) fail(where + ":" + std::to_string(line_no), "an array entry is one value");
-      Eigen::Index i = filled % m.rows(), j = filled / m.rows();  // column-major
-      if (header.symmetric) {  // lower triangle, column by column
-        j = 0;
-        Eigen::Index k = filled;
-        while (k >= m.rows() - j) k -= m.rows() - j++;
-        i = j + k;
-        m(j, i) = v[0];
-      }
-      m(i, j) = v[0];
-    }
-    ++filled;
-  }
-  if (size.empty()) fail(where, "has no size line");
-  if (filled != entries)
-    fail(where,
-         "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
-  return m;
+  MarketLines lines(in, where);
+  if (!lines.next()) fail(where, "has no size line");
+  const std::vector<double> v = lines.numbers();
+  if (v.size() != (header.coordinate ? 3u : 2u) || v[0] < 1 || v[1] < 1 || v[0] > 1e5 ||
+      v[1] > 1e5 || v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]))
+    fail(lines.at(), "the size line must be 'rows cols" +
+                         std::string(header.coordinate ? " entries'" : "'") + " (each 1..100000)");
+  check_market_size(v, header, error ? 0 : file_bytes, lines.at());
+  const auto rows = static_cast<Eigen::Index>(v[0]), cols = static_cast<Eigen::Index>(v[1]);
+  MatrixData out;
+  if (header.coordinate)
+    out.sparse = market_coordinate(lines, rows, cols, static_cast<Eigen::Index>(v[2]),
+                                   header.symmetric, where);
+  else
+    out.dense = market_array(lines, rows, cols, header.symmetric, where);
+  out.sparse_held = header.coordinate;
+  return out;
 }
 
 // A CSV matrix is read whole through the text reader, which holds up to
@@ -283,14 +374,14 @@ Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
   return m;
 }
 
-}  // namespace
-
-Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
-                const std::string& field) {
+MatrixData read_matrix_data(const config::Matrix& spec, const std::filesystem::path& base_dir,
+                            const std::string& field) {
+  MatrixData out;
   if (spec.file().empty()) {
     if (!spec.variable().empty())
       fail(field, "`variable` names a .mat variable but no file is given");
-    return inline_matrix(spec, field);
+    out.dense = inline_matrix(spec, field);
+    return out;
   }
   if (spec.values_size() > 0) fail(field, "give values or a file, not both");
   const std::filesystem::path path = base_dir / spec.file();
@@ -301,30 +392,68 @@ Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_di
     fail(where, "`variable` applies to .mat files only");
   if (ext == ".mat") return mat_matrix(path, spec.variable(), where);
   if (ext == ".mtx") return market_matrix(path, where);
-  if (ext == ".csv") return csv_matrix(path, where);
-  fail(where, "unknown extension '" + ext + "' (.mat, .mtx or .csv)");
+  if (ext != ".csv") fail(where, "unknown extension '" + ext + "' (.mat, .mtx or .csv)");
+  out.dense = csv_matrix(path, where);
+  return out;
 }
 
-namespace {
+// A sparse matrix made dense, its n x n doubles checked against the memory limit first.
+Mat dense_of(MatrixData&& m, const std::string& where) {
+  if (!m.sparse_held) return std::move(m.dense);
+  require_memory(static_cast<std::uint64_t>(m.rows()), static_cast<std::uint64_t>(m.cols()) * 8,
+                 where + ": held dense");
+  return Mat(m.sparse);
+}
+
+void check_square(Eigen::Index rows, Eigen::Index cols, Eigen::Index n, const std::string& where) {
+  if (rows != cols) fail(where, "is " + shape(rows, cols) + ", not square");
+  if (rows != n)
+    fail(where, "is " + shape(rows, cols) + ", the structure has " + std::to_string(n) + " DOFs");
+}
 
 void check_square(const Mat& m, Eigen::Index n, const std::string& where) {
-  if (m.rows() != m.cols()) fail(where, "is " + shape(m.rows(), m.cols()) + ", not square");
-  if (m.rows() != n)
-    fail(where,
-         "is " + shape(m.rows(), m.cols()) + ", the structure has " + std::to_string(n) + " DOFs");
+  check_square(m.rows(), m.cols(), n, where);
   if (!m.allFinite()) fail(where, "holds a value that is not finite");
+}
+
+void check_square(const SparseMat& m, Eigen::Index n, const std::string& where) {
+  check_square(m.rows(), m.cols(), n, where);
+  for (Eigen::Index j = 0; j < m.outerSize(); ++j)
+    for (SparseMat::InnerIterator it(m, j); it; ++it)
+      if (!std::isfinite(it.value())) fail(where, "holds a value that is not finite");
+}
+
+[[noreturn]] void fail_symmetric(Eigen::Index i, Eigen::Index j, double upper, double lower,
+                                 const std::string& where) {
+  std::ostringstream why;
+  why << "is not symmetric: (" << i + 1 << ", " << j + 1 << ") = " << upper << " but (" << j + 1
+      << ", " << i + 1 << ") = " << lower;
+  fail(where, why.str());
 }
 
 void check_symmetric(const Mat& m, const std::string& where) {
   const double scale = m.cwiseAbs().maxCoeff();
   for (Eigen::Index i = 0; i < m.rows(); ++i)
     for (Eigen::Index j = i + 1; j < m.cols(); ++j)
-      if (std::abs(m(i, j) - m(j, i)) > 1e-9 * scale) {
-        std::ostringstream why;
-        why << "is not symmetric: (" << i + 1 << ", " << j + 1 << ") = " << m(i, j) << " but ("
-            << j + 1 << ", " << i + 1 << ") = " << m(j, i);
-        fail(where, why.str());
+      if (std::abs(m(i, j) - m(j, i)) > 1e-9 * scale) fail_symmetric(i, j, m(i, j), m(j, i), where);
+}
+
+// A - A^T, sparse (O(nnz)), to the same 1e-9 of the largest entry as the dense check; the first
+// pair named is the dense check's (the lowest row, then column, of the upper triangle).
+void check_symmetric(const SparseMat& m, const std::string& where) {
+  double scale = 0.0;
+  for (Eigen::Index k = 0; k < m.nonZeros(); ++k)
+    scale = std::max(scale, std::abs(m.valuePtr()[k]));
+  const SparseMat difference = m - SparseMat(m.transpose());
+  Eigen::Index row = -1, col = -1;
+  for (Eigen::Index j = 0; j < difference.outerSize(); ++j)
+    for (SparseMat::InnerIterator it(difference, j); it; ++it)
+      if (it.row() < it.col() && std::abs(it.value()) > 1e-9 * scale &&
+          (row < 0 || it.row() < row || (it.row() == row && it.col() < col))) {
+        row = it.row();
+        col = it.col();
       }
+  if (row >= 0) fail_symmetric(row, col, m.coeff(row, col), m.coeff(col, row), where);
 }
 
 // Smallest eigenvalue against `floor` (relative to the largest |eigenvalue|).
@@ -348,17 +477,38 @@ void check_definite(const SparseMat& m, bool strictly, const std::string& where)
   if (const auto why = check_sparse_definite(m, strictly)) fail(where, *why);
 }
 
+// Shapes, finiteness and symmetry of M, C, K in the form the model holds them: the dense
+// matrices when it holds them (as every model up to kDenseSchemeMaxDofs does), else the sparse.
+void check_shapes_and_symmetry(const StructuralModel& model, Eigen::Index n,
+                               const std::string& field) {
+  const bool dense = model.mass.rows() == n;
+  const std::pair<const Mat*, const SparseMat*> matrices[] = {
+      {&model.mass, &model.sparse_mass},
+      {&model.stiffness, &model.sparse_stiffness},
+      {&model.damping, &model.sparse_damping}};
+  const char* names[] = {".mass", ".stiffness", ".damping"};
+  for (int pass = 0; pass < 6; ++pass) {  // every shape first, then every symmetry
+    const auto [held_dense, held_sparse] = matrices[pass % 3];
+    const std::string where = field + names[pass % 3];
+    if (pass < 3)
+      dense ? check_square(*held_dense, n, where) : check_square(*held_sparse, n, where);
+    else
+      dense ? check_symmetric(*held_dense, where) : check_symmetric(*held_sparse, where);
+  }
+}
+
 }  // namespace
 
+Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
+                const std::string& field) {
+  return dense_of(read_matrix_data(spec, base_dir, field),
+                  spec.file().empty() ? field : field + ": " + spec.file());
+}
+
 void check_structural_matrices(const StructuralModel& model, const std::string& field) {
-  const Eigen::Index n = model.mass.rows();
+  const Eigen::Index n = model.dofs();
   if (n < 1) fail(field + ".mass", "is empty");
-  check_square(model.mass, n, field + ".mass");
-  check_square(model.stiffness, n, field + ".stiffness");
-  check_square(model.damping, n, field + ".damping");
-  check_symmetric(model.mass, field + ".mass");
-  check_symmetric(model.stiffness, field + ".stiffness");
-  check_symmetric(model.damping, field + ".damping");
+  check_shapes_and_symmetry(model, n, field);
   if (model.is_sparse()) {
     check_definite(model.sparse_mass, true, field + ".mass");
     check_definite(model.sparse_stiffness, false, field + ".stiffness");
@@ -376,26 +526,71 @@ void check_structural_matrices(const StructuralModel& model, const std::string& 
   if (!model.influence.allFinite()) fail(field + ".influence", "holds a value that is not finite");
 }
 
+namespace {
+
+SparseMat sparse_of(const MatrixData& m) {
+  if (m.sparse_held) return m.sparse;
+  SparseMat out = m.dense.sparseView();
+  out.makeCompressed();
+  return out;
+}
+
+// M, C, K as the model holds them (core/sparse_structure.h's fill rule on the union of their
+// patterns): sparse, with dense copies too up to kDenseSchemeMaxDofs (the dense schemes and the
+// dense checks, as before), never dense above it; else dense, each n x n checked against the
+// memory limit before it is formed. @pre each is n x n.
+StructuralModel hold_matrices(MatrixData&& mass, MatrixData&& damping, MatrixData&& stiffness,
+                              Vec influence, const std::string& field) {
+  const Eigen::Index n = mass.rows();
+  SparseMat m = sparse_of(mass), c = sparse_of(damping), k = sparse_of(stiffness);
+  SparseMat pattern = SparseMat(m.cwiseAbs()) + SparseMat(c.cwiseAbs()) + SparseMat(k.cwiseAbs());
+  pattern.prune(0.0);
+  if (prefer_sparse(n, pattern.nonZeros())) {
+    StructuralModel model =
+        make_sparse_model(std::move(m), std::move(c), std::move(k), std::move(influence));
+    if (n > kDenseSchemeMaxDofs) return model;
+    model.mass = Mat(model.sparse_mass);
+    model.damping = Mat(model.sparse_damping);
+    model.stiffness = Mat(model.sparse_stiffness);
+    return model;
+  }
+  StructuralModel model;
+  model.mass = dense_of(std::move(mass), field + ".mass");
+  model.damping = dense_of(std::move(damping), field + ".damping");
+  model.stiffness = dense_of(std::move(stiffness), field + ".stiffness");
+  model.influence = std::move(influence);
+  return model;
+}
+
+}  // namespace
+
 StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
                                       const std::filesystem::path& base_dir,
                                       const std::string& field) {
   if (!spec.has_mass()) fail(field + ".mass", "is missing");
   if (!spec.has_stiffness()) fail(field + ".stiffness", "is missing");
-  StructuralModel model;
-  model.mass = read_matrix(spec.mass(), base_dir, field + ".mass");
-  const Eigen::Index n = model.mass.rows();
-  model.stiffness = read_matrix(spec.stiffness(), base_dir, field + ".stiffness");
-  model.damping = spec.has_damping() ? read_matrix(spec.damping(), base_dir, field + ".damping")
-                                     : Mat::Zero(n, n);
+  MatrixData mass = read_matrix_data(spec.mass(), base_dir, field + ".mass");
+  const Eigen::Index n = mass.rows();
+  check_square(mass.rows(), mass.cols(), n, field + ".mass");
+  MatrixData stiffness = read_matrix_data(spec.stiffness(), base_dir, field + ".stiffness");
+  check_square(stiffness.rows(), stiffness.cols(), n, field + ".stiffness");
+  MatrixData damping;
+  if (spec.has_damping()) {
+    damping = read_matrix_data(spec.damping(), base_dir, field + ".damping");
+    check_square(damping.rows(), damping.cols(), n, field + ".damping");
+  } else {
+    damping.sparse = SparseMat(n, n);
+    damping.sparse_held = true;
+  }
+  Vec influence = Vec::Ones(n);
   if (spec.has_influence()) {
     const Mat iota = read_matrix(spec.influence(), base_dir, field + ".influence");
     if (iota.cols() != 1 && iota.rows() != 1)
       fail(field + ".influence", "is " + shape(iota.rows(), iota.cols()) + ", not a vector");
-    model.influence = iota.reshaped();
-  } else {
-    model.influence = Vec::Ones(n);
+    influence = iota.reshaped();
   }
-  hold_sparse_if_sparse(model);
+  StructuralModel model = hold_matrices(std::move(mass), std::move(damping), std::move(stiffness),
+                                        std::move(influence), field);
   check_structural_matrices(model, field);
   return model;
 }

@@ -7,14 +7,25 @@
 //     `.mat`:  the MATLAB variable `variable` (v5, v7.3), real, 2-D, full or sparse (double);
 //     `.mtx`:  Matrix Market, `matrix coordinate|array real|integer general|symmetric`;
 //     `.csv`:  one matrix row per line, fields separated by commas or blanks ('#' comments).
-//   Relative paths resolve against base_dir. Every error throws std::invalid_argument naming the
+//   Relative paths resolve against base_dir. A Matrix Market coordinate file and a MATLAB sparse
+//   variable are read as triplets into a sparse matrix, never rows x cols: the size line's
+//   declared entries, at 28 bytes each (triplet and compressed entry), are checked against the
+//   memory limit (study/memory_budget.h) before an entry is read; read_matrix then forms the dense
+//   matrix only after checking its rows x cols x 8 bytes against the limit too. Every error throws std::invalid_argument naming the
 //   field, the file and (for .mat) the variable, and the problem: "structure.matrices.mass:
 //   frame.mat: no variable 'Mx' (variables: M, C, K)".
 //
 //   check_structural_matrices: M symmetric positive definite, K symmetric positive semi-definite
 //   and C symmetric positive semi-definite, each n x n; iota of length n. Symmetry is judged to a
-//   relative 1e-9 of the largest entry; definiteness by the eigenvalues (tolerance 1e-9 of the
-//   largest), so condensed models rounded on export still pass.
+//   relative 1e-9 of the largest entry (on a model held sparse only: A - A' sparse, O(nnz));
+//   definiteness by the eigenvalues (tolerance 1e-9 of the largest), or on a model held sparse by
+//   the pivots of a shifted sparse LDL^T (core::check_sparse_definite, tolerance 1e-9 ||A||_inf),
+//   so condensed models rounded on export still pass.
+//
+//   read_matrix_structure holds the model as core/sparse_structure.h's fill rule says, judged on
+//   the matrices as read: sparse (with dense copies too up to kDenseSchemeMaxDofs, for the dense
+//   schemes and checks), else dense; above kDenseSchemeMaxDofs a sparse model is never formed
+//   dense, from the first entry read to the last step.
 
 #include <filesystem>
 #include <string>

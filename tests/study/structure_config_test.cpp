@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <optional>
 
 #include "core/simulation.h"
 #include "core/sparse_structure.h"
 #include "core/stability.h"
+#include "study/stability_config.h"
 #include "study/study.h"
 
 namespace rths::core {
@@ -113,6 +115,41 @@ TEST(StructureConfig, ATwoThousandDofShearBuildingFromAMatrixMarketFileRuns) {
     EXPECT_LE((stiffness * phi - rayleigh_quotient * (mass * phi)).norm(),
               1e-7 * (stiffness * phi).norm());
   }
+  fs::remove_all(dir);
+}
+
+// Above kDenseSchemeMaxDofs the model is held sparse only, from the file to the split: the
+// specimen's mass and dashpot leave M and C sparse, K_N is split sparse, omega_max is estimated
+// once for the study, and the pre-run check and a run go through without an n x n matrix.
+TEST(StructureConfig, ASparseOnlyModelIsSplitSparse) {
+  const int n = 3000;
+  const fs::path dir = fs::temp_directory_path() / "rths_sparse_only_3000";
+  std::string text = market_building(dir, n, 0.05);
+  const std::string grounded = "dof: 1 stiffness: 1e10";
+  text.replace(text.find(grounded), grounded.size(),
+               "dof: 2 stiffness: 1e10 mass: 1000 damping: 500");
+  const PreparedStudy p = prepare_study(parse_study(text, "t"), dir);
+  const StructuralModel& model = p.base.model;
+  ASSERT_TRUE(model.is_sparse());
+  EXPECT_EQ(model.mass.size(), 0);
+  EXPECT_EQ(model.damping.size(), 0);
+  EXPECT_EQ(model.sparse_mass.coeff(1, 1), 1.1e5 - 1000.0);
+  EXPECT_EQ(model.sparse_mass.nonZeros(), n);
+  const double storey = [n](int i) { return 4e10 * (1.0 + 0.3 * (n - i) / n); }(1);
+  EXPECT_EQ(p.base.partition.numerical_matrix.coeff(1, 1),
+            model.sparse_stiffness.coeff(1, 1) - 1e10);
+  EXPECT_EQ(p.base.partition.numerical_matrix.coeff(1, 0), -storey);
+  ASSERT_GT(model.known_max_omega, 0.0);
+  StructuralModel fresh = model;
+  fresh.known_max_omega = 0.0;
+  EXPECT_EQ(max_omega(fresh), model.known_max_omega);
+  const std::optional<CriticalDelayCheck> check = check_lag_critical_delay(p, 0.002);
+  ASSERT_TRUE(check.has_value());
+  EXPECT_NE(check->assumed.find("in the lowest 20 of 3000 modes"), std::string::npos)
+      << check->assumed;
+  const SimulationResult result = simulate(p.base, p.motion);
+  EXPECT_FALSE(result.diverged);
+  EXPECT_GT(result.displacement.cwiseAbs().maxCoeff(), 0.0);
   fs::remove_all(dir);
 }
 

@@ -5,7 +5,9 @@
 #include <matio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
+#include <vector>
 
 namespace rths::core {
 namespace {
@@ -125,12 +127,23 @@ TEST(StructureIo, AMatrixMarketSizeLineIsCheckedBeforeAnythingIsAllocated) {
               read_matrix(file_spec("crowded.mtx"), scratch(), "f");
             }).find("declares 2 entries, more than its 1 cells"),
             std::string::npos);
-  setenv("RTHS_MEMORY_LIMIT", "1000000", 1);  // 1 MB: a 1000 x 1000 dense matrix is 8 MB
+  // 1 MB: a 1000 x 1000 dense matrix is 8 MB. Its one entry is read sparse; made dense (the
+  // dense reader) it is refused before it is formed.
+  setenv("RTHS_MEMORY_LIMIT", "1000000", 1);
   write("big.mtx", "%%MatrixMarket matrix coordinate real general\n1000 1000 1\n1 1 1\n");
   const std::string big = error_of([] { read_matrix(file_spec("big.mtx"), scratch(), "f"); });
+  // 100 bytes: the 4 entries a size line declares, held sparse (28 bytes each with the column
+  // starts), do not fit: refused at the size line.
+  setenv("RTHS_MEMORY_LIMIT", "100", 1);
+  write("four.mtx",
+        "%%MatrixMarket matrix coordinate real general\n2 2 4\n1 1 1\n1 2 1\n2 1 1\n2 2 1\n");
+  const std::string four = error_of([] { read_matrix(file_spec("four.mtx"), scratch(), "f"); });
   unsetenv("RTHS_MEMORY_LIMIT");
-  EXPECT_NE(big.find("big.mtx:2: the dense matrix its size line declares"), std::string::npos)
+  EXPECT_NE(big.find("f: big.mtx: held dense keeps 1000 rows x 8000 bytes"), std::string::npos)
       << big;
+  EXPECT_NE(four.find("four.mtx:2: the sparse matrix its size line declares keeps 6 rows x 28"),
+            std::string::npos)
+      << four;
 }
 
 TEST(StructureIo, ACsvMatrixIsSizedBeforeItIsRead) {
@@ -278,5 +291,135 @@ TEST(StructureIo, MatrixStructureFromFilesWithDefaultInfluence) {
   EXPECT_EQ(model.damping, Mat::Zero(20, 20));
 }
 
+namespace sparse_models {
+
+// A chain of n floors as Matrix Market (lower triangle): M = m I, K tridiagonal of storeys k.
+void write_chain(const std::string& prefix, int n, double m, double k) {
+  std::ofstream mass(scratch() / (prefix + "_mass.mtx"));
+  mass << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << n << "\n";
+  for (int i = 1; i <= n; ++i) mass << i << " " << i << " " << m << "\n";
+  std::ofstream stiffness(scratch() / (prefix + "_stiffness.mtx"));
+  stiffness << "%%MatrixMarket matrix coordinate real symmetric\n"
+            << n << " " << n << " " << 2 * n - 1 << "\n";
+  for (int i = 1; i <= n; ++i) {
+    stiffness << i << " " << i << " " << (i < n ? 2 * k : k) << "\n";
+    if (i > 1) stiffness << i << " " << i - 1 << " " << -k << "\n";
+  }
+}
+
+config::MatrixStructure chain_spec(const std::string& prefix) {
+  config::MatrixStructure spec;
+  *spec.mutable_mass() = file_spec(prefix + "_mass.mtx");
+  *spec.mutable_stiffness() = file_spec(prefix + "_stiffness.mtx");
+  return spec;
+}
+
+// A 3000-DOF chain under a 20 MB memory limit: one of its matrices held dense would be 72 MB,
+// so reading it dense anywhere (file, checks, damping) would be refused; held sparse it is
+// about 0.2 MB.
+TEST(StructureIo, ALargeSparseModelIsHeldSparseFromTheFileOn) {
+  write_chain("chain3000", 3000, 1e5, 4e10);
+  setenv("RTHS_MEMORY_LIMIT", "20000000", 1);
+  StructuralModel model;
+  const std::string error = error_of([&] {
+    model = read_matrix_structure(chain_spec("chain3000"), scratch(), "structure.matrices");
+  });
+  unsetenv("RTHS_MEMORY_LIMIT");
+  ASSERT_EQ(error, "");
+  EXPECT_EQ(model.dofs(), 3000);
+  ASSERT_TRUE(model.is_sparse());
+  EXPECT_EQ(model.mass.size(), 0);  // no dense copy above kDenseSchemeMaxDofs
+  EXPECT_EQ(model.stiffness.size(), 0);
+  EXPECT_EQ(model.sparse_stiffness.nonZeros(), 3 * 3000 - 2);  // both triangles
+  EXPECT_EQ(model.sparse_stiffness.coeff(1, 0), -4e10);
+  EXPECT_EQ(model.sparse_stiffness.coeff(0, 1), -4e10);
+  EXPECT_EQ(model.sparse_stiffness.coeff(2999, 2999), 4e10);
+  EXPECT_EQ(model.sparse_damping.nonZeros(), 0);
+  EXPECT_EQ(model.influence, Vec::Ones(3000));
+}
+
+// Up to kDenseSchemeMaxDofs a sparse model also holds its dense copies (the dense schemes and
+// checks), equal to the sparse form.
+TEST(StructureIo, ASmallSparseModelKeepsDenseCopiesEqualToItsSparseForm) {
+  write_chain("chain150", 150, 2.0, 300.0);
+  const StructuralModel model =
+      read_matrix_structure(chain_spec("chain150"), scratch(), "structure.matrices");
+  ASSERT_TRUE(model.is_sparse());
+  EXPECT_EQ(model.stiffness, Mat(model.sparse_stiffness));
+  EXPECT_EQ(model.mass, Mat(model.sparse_mass));
+  EXPECT_EQ(model.stiffness(149, 148), -300.0);
+  EXPECT_EQ(model.damping, Mat::Zero(150, 150));
+}
+
+// The checks on the sparse form name the matrix, the pair and the problem as the dense ones do.
+TEST(StructureIo, ASparseModelIsCheckedOnItsSparseForm) {
+  write_chain("asym", 2500, 1e5, 4e10);
+  {  // K(3, 2) = -4e10 but K(2, 3) = -3e10: not symmetric (a general file, both given)
+    std::ofstream k(scratch() / "asym_stiffness.mtx");
+    k << "%%MatrixMarket matrix coordinate real general\n2500 2500 " << 3 * 2500 - 2 << "\n";
+    for (int i = 1; i <= 2500; ++i) {
+      k << i << " " << i << " " << (i < 2500 ? 8e10 : 4e10) << "\n";
+      if (i > 1) k << i << " " << i - 1 << " " << -4e10 << "\n";
+      if (i > 1) k << i - 1 << " " << i << " " << (i == 3 ? -3e10 : -4e10) << "\n";
+    }
+  }
+  EXPECT_NE(error_of([] {
+              read_matrix_structure(chain_spec("asym"), scratch(), "s");
+            }).find("s.stiffness: is not symmetric: (2, 3) = -3e+10 but (3, 2) = -4e+10"),
+            std::string::npos)
+      << error_of([] { read_matrix_structure(chain_spec("asym"), scratch(), "s"); });
+  // 15000 DOFs whose M holds one entry (the 79-byte file): refused as not definite, on
+  // the sparse form, within a 100 MB limit (dense it would be 1.8 GB).
+  write("one_mass.mtx", "%%MatrixMarket matrix coordinate real general\n15000 15000 1\n1 1 1\n");
+  write_chain("wide", 15000, 1e5, 4e10);
+  config::MatrixStructure spec = chain_spec("wide");
+  *spec.mutable_mass() = file_spec("one_mass.mtx");
+  setenv("RTHS_MEMORY_LIMIT", "100000000", 1);
+  const std::string error = error_of([&] { read_matrix_structure(spec, scratch(), "s"); });
+  unsetenv("RTHS_MEMORY_LIMIT");
+  EXPECT_NE(error.find("s.mass: is not positive definite"), std::string::npos) << error;
+}
+
+// A MATLAB sparse variable (as `save` writes sparse(K)) is held sparse too: a 2500-DOF chain's
+// K given as compressed columns.
+TEST(StructureIo, AMatFileSparseVariableIsHeldSparse) {
+  const int n = 2500;
+  std::vector<mat_uint32_t> ir, jc{0};
+  std::vector<double> values;
+  for (int j = 0; j < n; ++j) {
+    for (int i = std::max(0, j - 1); i <= std::min(n - 1, j + 1); ++i) {
+      ir.push_back(static_cast<mat_uint32_t>(i));
+      values.push_back(i == j ? (j < n - 1 ? 2.0 : 1.0) : -1.0);
+    }
+    jc.push_back(static_cast<mat_uint32_t>(ir.size()));
+  }
+  mat_sparse_t sparse{};
+  sparse.nzmax = sparse.nir = sparse.ndata = static_cast<mat_uint32_t>(ir.size());
+  sparse.ir = ir.data();
+  sparse.jc = jc.data();
+  sparse.njc = static_cast<mat_uint32_t>(jc.size());
+  sparse.data = values.data();
+  const fs::path path = scratch() / "chain_k.mat";
+  mat_t* file = Mat_CreateVer(path.c_str(), nullptr, MAT_FT_MAT5);
+  ASSERT_NE(file, nullptr);
+  size_t dims[] = {static_cast<size_t>(n), static_cast<size_t>(n)};
+  matvar_t* var =
+      Mat_VarCreate("K", MAT_C_SPARSE, MAT_T_DOUBLE, 2, dims, &sparse, MAT_F_DONT_COPY_DATA);
+  ASSERT_NE(var, nullptr);
+  ASSERT_EQ(Mat_VarWrite(file, var, MAT_COMPRESSION_NONE), 0);
+  Mat_VarFree(var);
+  Mat_Close(file);
+  write_chain("matk", n, 1.0, 1.0);
+  config::MatrixStructure spec = chain_spec("matk");
+  *spec.mutable_stiffness() = file_spec("chain_k.mat", "K");
+  const StructuralModel model = read_matrix_structure(spec, scratch(), "s");
+  ASSERT_TRUE(model.is_sparse());
+  EXPECT_EQ(model.stiffness.size(), 0);
+  EXPECT_EQ(model.sparse_stiffness.nonZeros(), 3 * n - 2);
+  EXPECT_EQ(model.sparse_stiffness.coeff(n - 1, n - 2), -1.0);
+  EXPECT_EQ(model.sparse_stiffness.coeff(n - 1, n - 1), 1.0);
+}
+
+}  // namespace sparse_models
 }  // namespace
 }  // namespace rths::core
