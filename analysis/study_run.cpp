@@ -55,16 +55,6 @@ bool adds_nothing(const config::Case& study_case) {
   return rest.ByteSizeLong() == 0;
 }
 
-// What each run of the study keeps per step: the DOFs and the base shear its recorders read.
-core::SimulationOptions kept_by_recorders(const core::PreparedStudy& prepared) {
-  core::SimulationOptions options;
-  options.kept_dofs = prepared.recorders.kept_dofs;
-  options.base_shear = prepared.recorders.base_shear;
-  const config::SafetyLimits& limits = prepared.config.deployment().limits();
-  options.peaks = limits.max_displacement() > 0 || limits.max_velocity() > 0;
-  return options;
-}
-
 }  // namespace
 
 std::vector<std::string> StudyOutcome::failures(bool allow_unstable) const {
@@ -431,7 +421,8 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   read_motion_facts(prepared, outcome);
   outcome.response = ResponseSpec::top_floor(floors);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
-  const core::SimulationOptions kept = kept_by_recorders(prepared);
+  const core::SimulationOptions kept =
+      core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
   const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion, kept);
   const std::vector<double> lag_free_response = floor_history(lag_free, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free_response);
@@ -480,7 +471,10 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   CaseOutcome lag_free;
   lag_free.name = "lag_free_in_process";
   lag_free.delay_description = "none (in process, no delay stage)";
-  lag_free.simulation = core::simulate(prepared.base, prepared.motion);
+  // What the records keep: the recorders' DOFs (the coordinator's loop keeps the same).
+  lag_free.simulation = core::simulate(
+      prepared.base, prepared.motion,
+      core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
   lag_free.response = floor_history(lag_free.simulation, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free.response);
   for (RecordedCase& r : recorded) {

@@ -10,6 +10,11 @@ at dt = 1/1024 s, the Imperial Valley record cut to the seconds asked, two cases
 
     bench/chain_model.py 1000 /tmp/chain1000 --seconds 2 [--damping modal] [--recorders TEXT]
     build/cli/rths run /tmp/chain1000/chain.textproto --no-plots --out /tmp/chain1000/out
+
+--real-time DOMAIN adds a real-time deployment for `rths launch` (docs/performance.md): a
+substructure node holds the numerical model (every DOF), an actuator emulator the experimental
+DOF, at 1024 Hz, with the fail-safe windows and overrun tolerance of
+configs/paper_frame_distributed.textproto (sized for a stock 2-core VM) and the loop on CPU 1.
 """
 
 import argparse
@@ -18,6 +23,18 @@ import sys
 
 FLOOR_MASS = 1e5  # kg
 STOREY_STIFFNESS = 4e10  # N/m
+REAL_TIME = """deployment {{
+  domain_id: {domain}
+  clock: REAL_TIME
+  nodes {{ id: 1 kind: SUBSTRUCTURE }}
+  nodes {{ id: 2 kind: ACTUATOR_EMULATOR }}
+  answer_window_ms: 12
+  command_watchdog_ms: 12
+  max_overrun_fraction: 0.005
+  pin_loop: true
+  loop_cpu: 1
+}}
+"""
 DAMPING = {
     "rayleigh": "rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 }",
     "modal": "modal_zeta: 0.05",
@@ -39,6 +56,7 @@ def main():
     parser.add_argument("--seconds", type=float, default=2.0, help="record cut to (s)")
     parser.add_argument("--damping", choices=sorted(DAMPING), default="rayleigh")
     parser.add_argument("--recorders", default="", help="recorders blocks, text format")
+    parser.add_argument("--real-time", type=int, metavar="DOMAIN", help="add a real-time deployment")
     args = parser.parse_args()
     if args.dofs < 2 or not args.seconds > 0:
         sys.exit("chain_model.py: needs at least 2 DOFs and seconds > 0")
@@ -61,7 +79,10 @@ def main():
         "integrator { kind: EXPLICIT_NEWMARK dt: 0.0009765625 }\n"
         f"substructuring {{ experimental_dofs {{ dof: 1 stiffness: {STOREY_STIFFNESS / 3!r} }} }}\n"
         'cases { name: "reference" }\n'
-        'cases { name: "lag" delay { shift { delay: 0.002 } } }\n' + args.recorders + "\n",
+        'cases { name: "lag" delay { shift { delay: 0.002 } } }\n'
+        + args.recorders
+        + "\n"
+        + ("" if args.real_time is None else REAL_TIME.format(domain=args.real_time)),
         encoding="ascii",
     )
 

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "coordinator/answer_verdict.h"
 #include "coordinator/deadline_verdict.h"
@@ -108,12 +111,66 @@ void activate(RunState& s) {
               std::to_string(1e3 * s.answer_wait()) + " ms; each step uses its newest answer");
 }
 
+// The loop's set-up (the integrator factorised, the kept histories sized; an outside driver's
+// own, such as an OpenSees model's) runs after every node is assigned, and a node whose
+// coordinator is silent for its orphan timeout (from its Assign) holds and leaves. So while it
+// runs, a thread of its own sends the heartbeat every heartbeat period: the nodes wait however long
+// the set-up takes, and a coordinator that dies meanwhile sends none. Stopped (joined) before the
+// hook of step 0 runs, so from then on the loop thread is the only one that sends.
+class SetUpHeartbeat {
+ public:
+  explicit SetUpHeartbeat(RunState& s)
+      : thread_([this, &s] {
+          const auto period =
+              std::chrono::duration<double>(runtime::heartbeat_period(s.deployment));
+          std::unique_lock lock(mutex_);
+          while (!stop_) {
+            s.send_heartbeat_when_due();
+            stopped_.wait_for(lock, period, [this] { return stop_; });
+          }
+        }) {}
+  SetUpHeartbeat(const SetUpHeartbeat&) = delete;
+  SetUpHeartbeat& operator=(const SetUpHeartbeat&) = delete;
+  ~SetUpHeartbeat() { stop(); }
+  void stop() {
+    {
+      std::lock_guard guard(mutex_);
+      stop_ = true;
+    }
+    stopped_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable stopped_;
+  bool stop_ = false;
+  std::thread thread_;  // last: starts once the members it uses exist
+};
+
+// The run's hooks, with the set-up heartbeat stopped before step 0's (the set-up is over).
+class AfterSetUp final : public core::StepHooks {
+ public:
+  AfterSetUp(RunState& s, SetUpHeartbeat& heartbeat) : s_(s), heartbeat_(heartbeat) {}
+  void before_step(std::size_t k) override { s_.before_step(k); }
+  bool after_step(std::size_t k, const core::SimulationResult& result) override {
+    if (k == 0) heartbeat_.stop();
+    return s_.after_step(k, result);
+  }
+
+ private:
+  RunState& s_;
+  SetUpHeartbeat& heartbeat_;
+};
+
 // core::run_steps (or the options' outside StepDriver) with this run as its evaluator and hooks.
 // Feedback is judged and boxed on the transport's receive thread; the loop is woken once a step's
 // answers are all in (or a fault was raised). The handler is removed (waiting out a running call)
-// before this returns.
+// before this returns. Per step the loop keeps what the study's recorders ask for (the DOFs of
+// study/recorders.h kept_dofs), as rths run does: the record is O(recorded), not O(n), a step.
 void loop(RunState& s, core::SimulationResult& result) {
-  core::SimulationOptions options;
+  core::SimulationOptions options =
+      core::kept_by_recorders(s.prepared.recorders, s.deployment.limits());
   options.divergence_bound = s.options.divergence_bound;
   s.endpoint.set_inline_handler([&s](const transport::Message& m) {
     if (m.kind != runtime::FEEDBACK) return false;
@@ -124,10 +181,12 @@ void loop(RunState& s, core::SimulationResult& result) {
     transport::Endpoint& endpoint;
     ~RemoveHandler() { endpoint.set_inline_handler(nullptr); }
   } remove_handler{s.endpoint};
+  SetUpHeartbeat heartbeat(s);
+  AfterSetUp hooks(s, heartbeat);
   if (s.options.driver)
-    s.options.driver(s, s, result);
+    s.options.driver(s, hooks, result);
   else
-    core::run_steps(s.setup, s.prepared.motion, s, s, options, result);
+    core::run_steps(s.setup, s.prepared.motion, s, hooks, options, result);
 }
 
 // A loop that ran to its end: diverged, deadline misses (the loop's, by the one real-time verdict

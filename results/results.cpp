@@ -175,26 +175,34 @@ void add_link_columns(Table& t, const runtime::RunHeader& header,
   }
 }
 
+// Column i of one repeated field of every step (zero where a step carries fewer values), named by
+// results/column_names.h with numbers[i] (1-based): a DOF's is the one the header's recorded_dofs
+// gives it (every DOF when it names none), an actuator's its index.
+template <class Field>
+void add_numbered(Table& t, const std::vector<const runtime::StepRecord*>& steps,
+                  std::string (*name)(std::size_t), const std::string& unit,
+                  const std::vector<std::size_t>& numbers, Field field) {
+  for (std::size_t i = 0; i < numbers.size(); ++i) {
+    std::vector<double> column(steps.size(), 0.0);
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      const auto& values = field(*steps[k]);
+      if (static_cast<int>(i) < values.size()) column[k] = values.Get(static_cast<int>(i));
+    }
+    t.add_numbers(name(numbers[i]), unit, std::move(column));
+  }
+}
+
 }  // namespace
 
 Table record_table(const runtime::RecordContents& record) {
   const runtime::RunHeader* header = record.header_or_assumed();
   if (!header) throw std::invalid_argument("the run record has no header entry and no step");
   const std::vector<const runtime::StepRecord*> steps = record.steps();
-  const auto dofs = static_cast<std::size_t>(header->dofs());
-  const auto actuators = static_cast<std::size_t>(header->actuators());
+  std::vector<std::size_t> dofs, actuators;  // 1-based numbers of the columns
+  for (const int dof : runtime::recorded_dofs(*header))
+    dofs.push_back(static_cast<std::size_t>(dof) + 1);
+  for (int a = 1; a <= header->actuators(); ++a) actuators.push_back(static_cast<std::size_t>(a));
 
-  // Per-step values of one repeated field, zero where a step carries fewer entries.
-  const auto per_index = [&steps](auto field, std::size_t count) {
-    std::vector<std::vector<double>> out(count, std::vector<double>(steps.size(), 0.0));
-    for (std::size_t k = 0; k < steps.size(); ++k) {
-      const auto& values = field(*steps[k]);
-      for (std::size_t i = 0; i < count && static_cast<int>(i) < values.size(); ++i) {
-        out[i][k] = values.Get(static_cast<int>(i));
-      }
-    }
-    return out;
-  };
   const auto scalar = [&steps](auto field) {
     std::vector<double> out;
     out.reserve(steps.size());
@@ -207,30 +215,24 @@ Table record_table(const runtime::RecordContents& record) {
   t.add_numbers("time_s", "s", scalar([](const Step& s) { return s.time(); }));
   t.add_numbers("ground_acceleration_m_per_s2", "m/s^2",
                 scalar([](const Step& s) { return s.ground_acceleration(); }));
-  // Column i (0-based) of each quantity, named by results/column_names.h (1-based).
-  const auto add_indexed = [&t](std::string (*name)(std::size_t), const std::string& unit,
-                                std::vector<std::vector<double>> columns) {
-    for (std::size_t i = 0; i < columns.size(); ++i)
-      t.add_numbers(name(i + 1), unit, std::move(columns[i]));
-  };
-  add_indexed(displacement_column, "m",
-              per_index(
-                  [](const Step& s) -> const auto& { return s.displacement(); }, dofs));
-  add_indexed(velocity_column, "m/s",
-              per_index(
-                  [](const Step& s) -> const auto& { return s.velocity(); }, dofs));
-  add_indexed(acceleration_column, "m/s^2",
-              per_index(
-                  [](const Step& s) -> const auto& { return s.acceleration(); }, dofs));
-  add_indexed(command_column, "m",
-              per_index(
-                  [](const Step& s) -> const auto& { return s.command(); }, actuators));
-  add_indexed(measured_column, "m",
-              per_index(
-                  [](const Step& s) -> const auto& { return s.realised(); }, actuators));
-  add_indexed(force_column, "N",
-              per_index(
-                  [](const Step& s) -> const auto& { return s.measured_force(); }, actuators));
+  add_numbered(
+      t, steps, displacement_column, "m", dofs,
+      [](const Step& s) -> const auto& { return s.displacement(); });
+  add_numbered(
+      t, steps, velocity_column, "m/s", dofs,
+      [](const Step& s) -> const auto& { return s.velocity(); });
+  add_numbered(
+      t, steps, acceleration_column, "m/s^2", dofs,
+      [](const Step& s) -> const auto& { return s.acceleration(); });
+  add_numbered(
+      t, steps, command_column, "m", actuators,
+      [](const Step& s) -> const auto& { return s.command(); });
+  add_numbered(
+      t, steps, measured_column, "m", actuators,
+      [](const Step& s) -> const auto& { return s.realised(); });
+  add_numbered(
+      t, steps, force_column, "N", actuators,
+      [](const Step& s) -> const auto& { return s.measured_force(); });
   add_link_columns(t, *header, steps);
   t.add_numbers("lateness_s", "s", scalar([](const Step& s) { return s.lateness(); }));
   t.add_numbers("overrun", "", scalar([](const Step& s) { return s.overrun() ? 1 : 0; }));

@@ -121,6 +121,14 @@ std::size_t RecorderPlan::columns_per_case(std::size_t actuators) const {
   return columns;
 }
 
+SimulationOptions kept_by_recorders(const RecorderPlan& plan, const config::SafetyLimits& limits) {
+  SimulationOptions options;
+  options.kept_dofs = plan.kept_dofs;
+  options.base_shear = plan.base_shear;
+  options.peaks = limits.max_displacement() > 0 || limits.max_velocity() > 0;
+  return options;
+}
+
 std::uint64_t run_bytes_per_step(const RecorderPlan& plan, int dofs, std::size_t actuators,
                                  std::size_t cases, bool peaks) {
   const std::uint64_t kept =

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "core/simulation.h"
 #include "core/substructure.h"
 #include "rths/proto/config.pb.h"
 
@@ -62,6 +63,11 @@ void validate_recorders(const config::Study& study, const std::string& source);
 // model ("recorders[0].dofs[2]: DOF 1001 is outside the model's 1..1000").
 RecorderPlan plan_recorders(const config::Study& study, int dofs,
                             const std::vector<int>& experimental_dofs);
+
+// What each simulation of the study keeps per step (core::SimulationOptions), in process and in
+// the coordinator's loop alike: the plan's kept DOFs and base shear, and the per-step peaks over
+// every DOF when `limits` sets a displacement or velocity limit (what it is judged on).
+SimulationOptions kept_by_recorders(const RecorderPlan& plan, const config::SafetyLimits& limits);
 
 // Bytes a run of `cases` cases holds per step of the motion, at most (what prepare_study checks
 // against the memory limit before anything is allocated): per simulation (the lag-free run and

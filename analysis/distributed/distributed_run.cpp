@@ -26,14 +26,15 @@ bool comparable_in_process(const config::Study& study) {
   return true;
 }
 
-// max |u_distributed - u_in_process| over every floor and step, and the first step where they
-// differ; nullopt when the step counts differ.
+// max |u_distributed - u_in_process| over every recorded floor and step, and the first step where
+// they differ; nullopt when the step counts differ.
 std::optional<InProcessDifference> difference_from_in_process(
     const core::PreparedStudy& prepared, const std::string& case_name,
     const core::SimulationResult& recorded) {
   const core::SimulationResult expected = core::simulate(
       runtime::in_process_setup(prepared, core::find_case(prepared.config, case_name)),
-      prepared.motion);
+      prepared.motion,
+      core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
   if (expected.displacement.rows() != recorded.displacement.rows() ||
       expected.displacement.cols() != recorded.displacement.cols())
     return std::nullopt;

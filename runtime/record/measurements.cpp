@@ -44,9 +44,10 @@ RunMeasurements measure_run(const RecordContents& record) {
   m.case_name = header->case_name();
   const auto steps = record.steps();
   const auto rows = static_cast<Eigen::Index>(steps.size());
-  const int dofs = header->dofs(), actuators = header->actuators();
+  const int dofs = recorded_columns(*header), actuators = header->actuators();
   core::SimulationResult& r = m.steps;
   r.dt = header->dt();
+  r.dofs.assign(header->recorded_dofs().begin(), header->recorded_dofs().end());
   r.time.resize(steps.size());
   r.displacement = core::Mat::Zero(rows, dofs);
   r.velocity = core::Mat::Zero(rows, dofs);

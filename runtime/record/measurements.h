@@ -3,7 +3,8 @@
 // rths sites, joint-lag, the coordinator's own summary), so they cannot disagree.
 //
 //   per-step columns   a core::SimulationResult: time, displacement, velocity, acceleration (per
-//                      DOF), command, realised, measured force (per actuator); SI units.
+//                      recorded DOF: every DOF, or the header's recorded_dofs, which become the
+//                      result's `dofs`), command, realised, measured force (per actuator); SI.
 //   per link           one series per node, one entry per ANSWER, not per step. The rule for
 //                      repeated answers: an answer counts once, at the first step that carries it.
 //                      In real time a step with no newer answer reuses the previous one; those

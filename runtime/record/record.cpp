@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
@@ -474,6 +475,18 @@ std::string RecordContents::loss_report() const {
                     " bytes) skipped: ";
   for (std::size_t i = 0; i < losses.size(); ++i) out += (i ? "; " : "") + losses[i].describe();
   return out;
+}
+
+int recorded_columns(const RunHeader& header) {
+  return header.recorded_dofs_size() > 0 ? header.recorded_dofs_size() : header.dofs();
+}
+
+std::vector<int> recorded_dofs(const RunHeader& header) {
+  if (header.recorded_dofs_size() > 0)
+    return {header.recorded_dofs().begin(), header.recorded_dofs().end()};
+  std::vector<int> every(static_cast<std::size_t>(std::max(header.dofs(), 0)));
+  std::iota(every.begin(), every.end(), 0);
+  return every;
 }
 
 }  // namespace rths::runtime

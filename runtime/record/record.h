@@ -221,6 +221,13 @@ struct RecordContents {
   std::string loss_report() const;
 };
 
+// How many values each StepRecord's displacement, velocity and acceleration hold: one per DOF the
+// header names in recorded_dofs (what the recorders kept), or every DOF of the model when it names
+// none.
+int recorded_columns(const RunHeader& header);
+// The DOFs (0-based, ascending) of those columns: recorded_dofs, or 0..dofs-1.
+std::vector<int> recorded_dofs(const RunHeader& header);
+
 // Reads every intact entry (see the format above). Throws std::runtime_error naming the file
 // when it cannot be opened, or when it is neither a record of this format nor an old record that
 // starts with a header and parses to the end.

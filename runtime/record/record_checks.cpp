@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -139,6 +140,16 @@ void check_inputs(const RecordContents& contents, const RunHeader& h, RecordChec
   out.problems.push_back(text.str());
 }
 
+// The first entry of the header's recorded_dofs that is not a DOF of the model above the entry
+// before it (they name each StepRecord column's DOF, ascending); nullopt when all are.
+std::optional<int> unordered_recorded_dof(const RunHeader& h) {
+  for (int i = 0; i < h.recorded_dofs_size(); ++i) {
+    const int dof = h.recorded_dofs(i);
+    if (dof < 0 || dof >= h.dofs() || (i > 0 && dof <= h.recorded_dofs(i - 1))) return i;
+  }
+  return std::nullopt;
+}
+
 // The first intact header (or the one assumed from the steps) is sound; its entry index, or
 // contents.entries.size() for an assumed one.
 std::size_t check_header(const RecordContents& contents, RecordChecks& out) {
@@ -165,6 +176,11 @@ std::size_t check_header(const RecordContents& contents, RecordChecks& out) {
   } else if (h->actuators() < 0 || h->actuators() > h->dofs()) {
     out.problems.push_back(where + "actuators " + std::to_string(h->actuators()) +
                            " outside [0, dofs " + std::to_string(h->dofs()) + "]");
+    out.fatal = true;
+  } else if (const auto bad = unordered_recorded_dof(*h)) {
+    out.problems.push_back(where + "recorded_dofs[" + std::to_string(*bad) + "] " +
+                           std::to_string(h->recorded_dofs(*bad)) + " is not a DOF of 0.." +
+                           std::to_string(h->dofs() - 1) + " above the one before it");
     out.fatal = true;
   }
   check_inputs(contents, *h, out);
@@ -338,7 +354,7 @@ std::vector<Finding> sequence_findings(const RecordContents& c, std::size_t i, c
 
 void check_steps(const RecordContents& contents, RecordChecks& out) {
   const RunHeader* header = contents.header_or_assumed();
-  const int dofs = header && !out.fatal ? header->dofs() : 0;
+  const int dofs = header && !out.fatal ? recorded_columns(*header) : 0;
   const int actuators = header && !out.fatal ? header->actuators() : 0;
   const double dt = header && std::isfinite(header->dt()) && header->dt() > 0 ? header->dt() : 0;
   const Bounds bounds = bounds_of(contents);

@@ -13,6 +13,8 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <thread>
+#include <tuple>
 #include <vector>
 
 #include "actuator_emulator/actuator_service.h"
@@ -20,7 +22,9 @@
 #include "runtime/record/deadline_diagnosis.h"
 #include "substructure_nodes/substructure_service.h"
 #include "tests/runtime/test_support.h"
+#include "transport/dds_endpoint.h"
 #include "transport/in_process.h"
+#include "util/process.h"
 #include "view/feed.h"
 
 namespace rths {
@@ -480,6 +484,95 @@ TEST(Coordinator, SummaryNamesEachSidesUnauthenticatedDrops) {
             std::string::npos)
       << text;
   EXPECT_NE(text.find("out-of-range 0, unauthenticated 11\n"), std::string::npos) << text;
+}
+
+// The loop's set-up runs after every node is assigned, and a node whose coordinator is silent for
+// its orphan timeout (2 s here) from its Assign holds and leaves. Here the set-up takes 3 s (an
+// outside driver that waits before its step 0, as a large model's factorisation or an OpenSees
+// model's start can), with real node processes over DDS: the set-up heartbeat keeps the nodes,
+// and the real-time run completes, where before they left ("coordinator silent") before step 1.
+TEST(Coordinator, NodesOverDdsWaitOutASetUpLongerThanTheirOrphanTimeout) {
+  runtime::ensure_dds_config();
+  const std::string name = "long_set_up", domain = "98";
+  const std::string text = test::paper_frame_study(
+      0.3,
+      "deployment { clock: REAL_TIME liveliness_timeout: 0.3 heartbeat_period: 0.02 "
+      "max_missed_answers: 30 command_watchdog_periods: 30 max_overrun_fraction: -1 }");
+  const auto dir = test::scratch_dir(name);
+  std::vector<util::ChildProcess> nodes;
+  for (const auto& [id, program, folder] :
+       {std::tuple{"1", "rths-substructure-node", "substructure_nodes"},
+        std::tuple{"2", "rths-actuator-emulator", "actuator_emulator"}})
+    nodes.emplace_back(test::program(program, folder),
+                       std::vector<std::string>{"--node-id", id, "--domain", domain, "--run-id",
+                                                name, "--insecure"},
+                       dir / (std::string("node_") + id + ".log"));
+  core::PreparedStudy prepared = test::prepare(text);
+  const core::HybridSetup setup =
+      core::setup_for_case(prepared, core::find_case(prepared.config, "reference"));
+  const core::GroundMotion motion = prepared.motion;
+  transport::DdsEndpointOptions endpoint_options;
+  endpoint_options.domain_id = 98;
+  transport::DdsEndpoint endpoint(endpoint_options);
+  coordinator::CoordinatorOptions options;
+  options.run_id = name;
+  options.case_name = "reference";
+  options.record = dir / "run.rthsrec";
+  options.driver = [&setup, &motion](core::HybridEvaluator& evaluator, core::StepHooks& hooks,
+                                     core::SimulationResult& result) {
+    std::this_thread::sleep_for(std::chrono::seconds(3));
+    core::run_steps(setup, motion, evaluator, hooks, {}, result);
+  };
+  coordinator::Coordinator coordinator(std::move(prepared), endpoint, options);
+  const RunOutcome outcome = coordinator.run();
+  std::string logs;
+  for (util::ChildProcess& node : nodes) {
+    const int code = node.wait_for(std::chrono::seconds(10)).value_or(-1);
+    logs += node.name() + " exit " + std::to_string(code) + ": " + node.log_tail() + "\n";
+  }
+  EXPECT_TRUE(outcome.ok) << outcome.status << "\n" << logs;
+  EXPECT_EQ(outcome.result.steps(), motion.acceleration.size()) << logs;
+  EXPECT_EQ(logs.find("coordinator silent"), std::string::npos) << logs;
+}
+
+// A model past kAllDofsLimit, launched over DDS in lockstep: the record keeps the DOFs the
+// recorders' defaults keep (the header names them), each step holds those columns only, and they
+// equal the in-process run's bit for bit.
+TEST(Coordinator, ALargeModelsRecordOverDdsKeepsTheRecordedDofsOnly) {
+  runtime::ensure_dds_config();
+  constexpr int kStoreys = 250;
+  std::string masses, stiffnesses;
+  for (int i = 0; i < kStoreys; ++i) {
+    masses += std::string(i ? ", " : "") + "1e5";
+    stiffnesses += std::string(i ? ", " : "") + "4e8";
+  }
+  const std::string text =
+      "name: \"storeys250\"\n"
+      "structure { shear_building { storey_mass: [" +
+      masses + "] storey_stiffness: [" + stiffnesses +
+      "] } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
+      "motion { path: \"" +
+      test::motion_path() +
+      "\" duration: 0.1 }\n"
+      "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n"
+      "substructuring { experimental_storeys: [1] }\n"
+      "cases { name: \"reference\" }\n";
+  const test::LaunchedRun run = test::launch("storeys250", text, "reference", 8);
+  ASSERT_EQ(run.launch.coordinator_exit, 0) << run.launch.coordinator_log_tail;
+  const core::PreparedStudy prepared = test::prepare(text);
+  const std::vector<int>& kept = prepared.recorders.kept_dofs;
+  ASSERT_FALSE(kept.empty());
+  const runtime::RunHeader* header = run.record.header();
+  ASSERT_NE(header, nullptr);
+  EXPECT_EQ(std::vector<int>(header->recorded_dofs().begin(), header->recorded_dofs().end()), kept);
+  for (const runtime::StepRecord* step : run.record.steps())
+    ASSERT_EQ(step->displacement_size(), static_cast<int>(kept.size()));
+  test::expect_record_equals(
+      run.record,
+      core::simulate(
+          core::setup_for_case(prepared, core::find_case(prepared.config, "reference")),
+          prepared.motion,
+          core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits())));
 }
 
 }  // namespace

@@ -197,5 +197,31 @@ TEST(ResultsTest, RecordTableGivesAControllerNodesLinkItsFrameRoundTripAndStatus
   EXPECT_EQ(t.column("node2_controller_status").numbers[1], 0.0);
   EXPECT_EQ(t.column("node2_controller_status").numbers[2], 7.0);
 }
+
+// A record that keeps some DOFs (RunHeader.recorded_dofs) names each column by its DOF.
+TEST(ResultsTest, RecordTableNamesARecordedDofsColumnsByTheirDof) {
+  runtime::RecordContents record;
+  runtime::RecordEntry header_entry;
+  auto* header = header_entry.mutable_header();
+  header->set_dofs(2000);
+  header->set_actuators(0);
+  header->add_recorded_dofs(0);
+  header->add_recorded_dofs(1999);
+  record.entries.push_back(header_entry);
+  runtime::RecordEntry e;
+  auto* s = e.mutable_step();
+  for (double u : {0.25, 0.75}) {
+    s->add_displacement(u);
+    s->add_velocity(2 * u);
+    s->add_acceleration(4 * u);
+  }
+  record.entries.push_back(e);
+  const Table t = record_table(record);
+  EXPECT_EQ(t.column("u_floor1_m").numbers, (std::vector<double>{0.25}));
+  EXPECT_EQ(t.column("u_floor2000_m").numbers, (std::vector<double>{0.75}));
+  EXPECT_EQ(t.column("a_floor2000_m_per_s2").numbers, (std::vector<double>{3.0}));
+  EXPECT_THROW(t.column("u_floor2_m"), std::out_of_range);
+}
+
 }  // namespace
 }  // namespace rths::results

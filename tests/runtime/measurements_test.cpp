@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 namespace rths::runtime {
 namespace {
 
@@ -104,6 +106,24 @@ TEST(Measurements, ARecordCutShortSaysSo) {
   const RunMeasurements m = measure_run(r);
   EXPECT_FALSE(m.has_footer);
   EXPECT_EQ(m.steps.steps(), 6u);
+}
+
+// A large model's record keeps the DOFs its recorders asked for (RunHeader.recorded_dofs): the
+// measurements hold those columns and say which DOF each is.
+TEST(Measurements, RecordedDofsAreTheColumnsAndNameTheirDofs) {
+  RecordContents r = real_time_record();
+  RunHeader& h = *r.entries.front().mutable_header();
+  h.set_dofs(500);
+  h.add_recorded_dofs(0);
+  h.add_recorded_dofs(499);
+  for (RecordEntry& e : r.entries)
+    if (e.has_step()) e.mutable_step()->add_displacement(-e.step().displacement(0));
+  const RunMeasurements m = measure_run(r);
+  ASSERT_EQ(m.steps.displacement.cols(), 2);
+  EXPECT_EQ(m.steps.dofs, (std::vector<int>{0, 499}));
+  EXPECT_EQ(m.steps.column_of_dof(499), 1);
+  EXPECT_EQ(m.steps.column_of_dof(250), -1);
+  EXPECT_DOUBLE_EQ(m.steps.displacement(4, 1), -0.04);
 }
 
 }  // namespace

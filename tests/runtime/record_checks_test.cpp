@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "runtime/node/schema.h"
 #include "util/crc32c.h"
@@ -324,6 +325,26 @@ TEST(RecordChecks, TimingsThatAreNoTimeAreNamed) {
               HasSubstr("entries 2-3 (steps 1-2, 2 steps): lateness is not finite"));
   EXPECT_THAT(checks.problems[1],
               HasSubstr("entry 4 (step 3): step_wall -0.001 s is not a time span (finite, >= 0)"));
+}
+
+// recorded_dofs name each step's columns: a DOF outside the model or out of order is fatal, as a
+// header that cannot size a table is; a step with another count of values is named.
+TEST(RecordChecks, RecordedDofsOutsideTheModelOrOutOfOrderAreFatal) {
+  RecordEntry kept = header(500, 1);
+  kept.mutable_header()->add_recorded_dofs(0);
+  kept.mutable_header()->add_recorded_dofs(499);
+  EXPECT_TRUE(check_record(record_of({kept, step(0), step(1), footer()})).ok());
+  for (const std::vector<int>& bad : {std::vector<int>{0, 500}, {7, 3}, {-1, 2}, {4, 4}}) {
+    RecordEntry h = header(500, 1);
+    for (const int dof : bad) h.mutable_header()->add_recorded_dofs(dof);
+    const RecordChecks checks = check_record(record_of({h, step(0), footer()}));
+    EXPECT_TRUE(checks.fatal) << bad[0] << " " << bad[1];
+    EXPECT_THAT(checks.summary(), HasSubstr("is not a DOF of 0..499 above the one before it"));
+  }
+  RecordEntry three = header(500, 1);
+  for (const int dof : {0, 250, 499}) three.mutable_header()->add_recorded_dofs(dof);
+  EXPECT_THAT(check_record(record_of({three, step(0), footer()})).summary(),
+              HasSubstr("displacement has 2 values, not 3"));
 }
 
 }  // namespace

@@ -158,5 +158,26 @@ TEST(RecordersTest, ExperimentalDofsAreTheStoreysFloorsOrTheElementsTerms) {
   EXPECT_EQ(experimental_dofs(by_dofs), (std::vector<int>{0, 1, 2}));
 }
 
+// The coordinator's loop and rths run keep the same per-step state: what the plan keeps, and the
+// peaks over every DOF only where a limit is judged on them.
+TEST(RecordersTest, TheSimulationKeepsThePlansDofsAndBaseShearAndPeaksOnlyUnderALimit) {
+  const RecorderPlan plan =
+      plan_recorders(study_with("recorders { dofs: [300] base_shear: true }\n"), 1000, {0});
+  config::SafetyLimits limits;
+  SimulationOptions options = kept_by_recorders(plan, limits);
+  EXPECT_EQ(options.kept_dofs, (std::vector<int>{0, 299, 999}));
+  EXPECT_TRUE(options.base_shear);
+  EXPECT_FALSE(options.peaks);
+  limits.set_max_velocity(2.0);
+  EXPECT_TRUE(kept_by_recorders(plan, limits).peaks);
+  limits = {};
+  limits.set_max_displacement(0.1);
+  EXPECT_TRUE(kept_by_recorders(plan, limits).peaks);
+  const RecorderPlan small = plan_recorders(study_with(""), 3, {0});
+  options = kept_by_recorders(small, {});
+  EXPECT_TRUE(options.kept_dofs.empty());
+  EXPECT_FALSE(options.base_shear);
+}
+
 }  // namespace
 }  // namespace rths::core
