@@ -12,8 +12,8 @@ at dt = 1/1024 s, the Imperial Valley record cut to the seconds asked, two cases
     build/cli/rths run /tmp/chain1000/chain.textproto --no-plots --out /tmp/chain1000/out
 
 --real-time DOMAIN adds a real-time deployment for `rths launch` (docs/performance.md): a
-substructure node holds the numerical model (every DOF), an actuator emulator the experimental
-DOF, at 1024 Hz, with the fail-safe windows and overrun tolerance of
+substructure node holds the numerical model (every DOF; `--model-on coordinator`: the coordinator
+holds it), an actuator emulator the experimental DOF, at 1024 Hz, with the fail-safe windows and overrun tolerance of
 configs/paper_frame_distributed.textproto (sized for a stock 2-core VM) and the loop on CPU 1.
 """
 
@@ -26,8 +26,7 @@ STOREY_STIFFNESS = 4e10  # N/m
 REAL_TIME = """deployment {{
   domain_id: {domain}
   clock: REAL_TIME
-  nodes {{ id: 1 kind: SUBSTRUCTURE }}
-  nodes {{ id: 2 kind: ACTUATOR_EMULATOR }}
+{substructure}  nodes {{ id: 2 kind: ACTUATOR_EMULATOR }}
   answer_window_ms: 12
   command_watchdog_ms: 12
   max_overrun_fraction: 0.005
@@ -57,6 +56,7 @@ def main():
     parser.add_argument("--damping", choices=sorted(DAMPING), default="rayleigh")
     parser.add_argument("--recorders", default="", help="recorders blocks, text format")
     parser.add_argument("--real-time", type=int, metavar="DOMAIN", help="add a real-time deployment")
+    parser.add_argument("--model-on", choices=["node", "coordinator"], default="node")
     args = parser.parse_args()
     if args.dofs < 2 or not args.seconds > 0:
         sys.exit("chain_model.py: needs at least 2 DOFs and seconds > 0")
@@ -82,7 +82,10 @@ def main():
         'cases { name: "lag" delay { shift { delay: 0.002 } } }\n'
         + args.recorders
         + "\n"
-        + ("" if args.real_time is None else REAL_TIME.format(domain=args.real_time)),
+        + ("" if args.real_time is None else REAL_TIME.format(
+                domain=args.real_time,
+                substructure="  nodes { id: 1 kind: SUBSTRUCTURE }\n" if args.model_on == "node" else "",
+            )),
         encoding="ascii",
     )
 
