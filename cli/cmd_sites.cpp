@@ -54,12 +54,12 @@ struct SitesOptions {
 // --view-stop adds the control room: a token per role, made here for this run and printed once,
 // each in the address its holder opens (the page takes it out of the address bar). Returns the
 // socket (-1 without --view), closed by the caller once the run is over.
-int hand_down_view(const SitesOptions& o, const deploy::SitesPlan& plan,
-                   deploy::SitesRunOptions& options) {
-  if (o.view.empty()) return -1;
-  view::HandDown down;
+// The sites as the page groups them (view/hand_down.h): per site its nodes, and of those the ones
+// that drive actuators, in the sites config's order.
+std::vector<view::SiteLayout> site_layouts(const deploy::SitesPlan& plan) {
+  std::vector<view::SiteLayout> layouts;
   for (const auto& site : plan.sites.sites()) {
-    view::SiteLayout& layout = down.sites.emplace_back();
+    view::SiteLayout& layout = layouts.emplace_back();
     layout.name = site.name();
     for (const deploy::NodePlacement& p : plan.placements) {
       if (p.site != site.name()) continue;
@@ -68,6 +68,14 @@ int hand_down_view(const SitesOptions& o, const deploy::SitesPlan& plan,
         layout.lab_nodes.push_back(p.node_id);
     }
   }
+  return layouts;
+}
+
+int hand_down_view(const SitesOptions& o, const deploy::SitesPlan& plan,
+                   deploy::SitesRunOptions& options) {
+  if (o.view.empty()) return -1;
+  view::HandDown down;
+  down.sites = site_layouts(plan);
   std::vector<std::string> labs;
   for (const auto& [lab, nodes] : down.labs()) labs.push_back(lab);
   if (o.view_stop) down.crew = view::Crew::make(labs);
@@ -160,6 +168,13 @@ deploy::SitesRunResult run_at_sites(const SitesOptions& o, const deploy::SitesPl
     }
   } view_socket{hand_down_view(o, plan, options)};
   options.output_dir = out;
+  // OUT/sites.json: the sites as the live page groups them, for `rths view OUT` (the record alone
+  // names nodes, not sites).
+  std::filesystem::create_directories(out);
+  util::AtomicFile layout(out / view::kSitesLayoutFile);
+  layout.stream() << view::HandDown{-1, site_layouts(plan), std::nullopt}.sites_json().dump(2)
+                  << "\n";
+  layout.commit();
   options.platform_file = platform_file;
   options.accept_platform = o.accept_platform;
   if (!o.programs.bin_dir.empty()) options.bin_dir = std::filesystem::path(o.programs.bin_dir);

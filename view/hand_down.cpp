@@ -1,6 +1,8 @@
 #include "view/hand_down.h"
 
 #include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace rths::view {
@@ -24,15 +26,14 @@ nlohmann::json parsed(const char* name, const std::string& text) {
   }
 }
 
-std::vector<SiteLayout> sites_from(const nlohmann::json& j) {
+std::vector<SiteLayout> sites_from(const nlohmann::json& j, const std::string& source) {
   std::vector<SiteLayout> sites;
   try {
     for (const nlohmann::json& site : j)
       sites.push_back({site.at("name").get<std::string>(), site.at("nodes").get<std::vector<int>>(),
                        site.at("lab_nodes").get<std::vector<int>>()});
   } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument(std::string(kSites) +
-                                " is not a list of {name, nodes, lab_nodes}: " + e.what());
+    throw std::invalid_argument(source + " is not a list of {name, nodes, lab_nodes}: " + e.what());
   }
   return sites;
 }
@@ -66,9 +67,20 @@ HandDown handed_down() {
       throw std::invalid_argument(std::string(kFd) + " '" + *fd + "' is not a file descriptor");
     down.listen_fd = std::stoi(*fd);
   }
-  if (const auto sites = variable(kSites)) down.sites = sites_from(parsed(kSites, *sites));
+  if (const auto sites = variable(kSites)) down.sites = sites_from(parsed(kSites, *sites), kSites);
   if (const auto crew = variable(kCrew)) down.crew = Crew::from_json(parsed(kCrew, *crew));
   return down;
+}
+
+std::vector<SiteLayout> read_site_layouts(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::invalid_argument(file.string() + ": cannot be read");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string name = file.string();
+  const std::vector<SiteLayout> sites = sites_from(parsed(name.c_str(), text.str()), name);
+  if (sites.empty()) throw std::invalid_argument(name + " names no site");
+  return sites;
 }
 
 }  // namespace rths::view

@@ -12,6 +12,7 @@
 // children it starts), handed_down() reads it back (unset variables: none of it).
 // Errors: handed_down() throws std::invalid_argument naming the variable that does not parse.
 
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -40,5 +41,12 @@ struct HandDown {
 
 void set_hand_down(const HandDown& down);
 HandDown handed_down();
+
+// The file beside a sites run's record that holds its sites as RTHS_VIEW_SITES does (`rths sites`
+// writes it into its output folder; `rths view` of that folder reads it).
+inline constexpr const char* kSitesLayoutFile = "sites.json";
+// The sites in `file`, as sites_json() writes them. Throws std::invalid_argument naming the file
+// when it cannot be read or is not that list.
+std::vector<SiteLayout> read_site_layouts(const std::filesystem::path& file);
 
 }  // namespace rths::view

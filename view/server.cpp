@@ -230,14 +230,21 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
   files_["/uPlot.iife.min.js"] = {"text/javascript; charset=utf-8",
                                   read_whole(uplot / "uPlot.iife.min.js")};
   files_["/uPlot.min.css"] = {"text/css; charset=utf-8", read_whole(uplot / "uPlot.min.css")};
-  snapshots_ = std::make_unique<SnapshotCache>(
-      [this] {
-        FeedCursor cursor;
-        nlohmann::json j = feed_.since(cursor);
-        j["mode"] = options_.mode;
-        return j.dump();
-      },
-      options_.snapshot_period);
+  const auto snapshot_of = [this](const Feed* feed) {
+    return std::make_unique<SnapshotCache>(
+        [this, feed] {
+          FeedCursor cursor;
+          nlohmann::json j = feed->since(cursor);
+          j["mode"] = options_.mode;
+          return j.dump();
+        },
+        options_.snapshot_period);
+  };
+  snapshots_ = snapshot_of(&feed_);
+  if (options_.second) {
+    second_snapshots_ = snapshot_of(options_.second);
+    files_["/compare"] = {"text/html; charset=utf-8", read_whole(web / "compare.html")};
+  }
   auto gated = std::make_unique<GatedServer>(std::chrono::seconds(2), options_.write_timeout);
   GateOptions gate = options_.gate;
   gate.workers = options_.max_streams + 4;
@@ -300,15 +307,6 @@ void ViewServer::routes() {
       res.set_content(file.second, file.first.c_str());
       res.set_header("Cache-Control", "no-store");
     });
-  s.Get("/api/snapshot", [this](const httplib::Request& req, httplib::Response& res) {
-    if (!admitted(req, res)) return;
-    const auto copy = snapshots_->get();
-    if (!copy) {  // the first build failed for every waiting client
-      res.status = 503;
-      return;
-    }
-    res.set_content(*copy, "application/json");
-  });
   s.Get("/api/health", [this](const httplib::Request&, httplib::Response& res) {
     nlohmann::json j = {{"mode", options_.mode},
                         {"stop_enabled", options_.allow_stop || options_.desk},
@@ -340,7 +338,7 @@ void ViewServer::routes() {
     res.status = 202;
     res.set_content("stop requested: HOLD, then STOP (\"stopped from the view\")", "text/plain");
   });
-  stream(s);
+  data_routes(s);
   control_routes(s);
   s.set_error_handler(
       httplib::Server::HandlerWithResponse([this](const httplib::Request&, httplib::Response& res) {
@@ -353,12 +351,41 @@ void ViewServer::routes() {
       }));
 }
 
+const Feed* ViewServer::feed_named(const httplib::Request& req, httplib::Response& res) const {
+  const std::string run = req.has_param("run") ? req.get_param_value("run") : "a";
+  if (run == "a") return &feed_;
+  if (run == "b" && options_.second) return options_.second;
+  res.status = 404;
+  res.set_content("no run '" + run + "' in this view" + (options_.second ? " (a or b)" : " (a)"),
+                  "text/plain");
+  return nullptr;
+}
+
+// The run's data: its snapshot, its stream and, comparing two runs, both runs' summaries.
 // One server-sent-events stream per client: the feed's news at most once per update_period.
 // The provider runs on the connection's pool thread; a write that cannot go out within
 // write_timeout (a client that does not read) fails and drops the connection.
-void ViewServer::stream(httplib::Server& s) {
+void ViewServer::data_routes(httplib::Server& s) {
+  s.Get("/api/snapshot", [this](const httplib::Request& req, httplib::Response& res) {
+    if (!admitted(req, res)) return;
+    const Feed* feed = feed_named(req, res);
+    if (!feed) return;
+    const auto copy = (feed == &feed_ ? snapshots_ : second_snapshots_)->get();
+    if (!copy) {  // the first build failed for every waiting client
+      res.status = 503;
+      return;
+    }
+    res.set_content(*copy, "application/json");
+  });
+  if (options_.second)
+    s.Get("/api/compare", [this](const httplib::Request& req, httplib::Response& res) {
+      if (!admitted(req, res)) return;
+      res.set_content(options_.comparison.dump(), "application/json");
+    });
   s.Get("/api/stream", [this](const httplib::Request& req, httplib::Response& res) {
     if (!admitted(req, res)) return;
+    const Feed* feed = feed_named(req, res);
+    if (!feed) return;
     if (streams_.fetch_add(1) >= options_.max_streams) {
       streams_.fetch_sub(1);
       ++streams_refused_;
@@ -373,12 +400,12 @@ void ViewServer::stream(httplib::Server& s) {
     auto seen = std::make_shared<std::uint64_t>(0);
     res.set_chunked_content_provider(
         "text/event-stream",
-        [this, cursor, last, seen](std::size_t, httplib::DataSink& sink) {
+        [this, feed, cursor, last, seen](std::size_t, httplib::DataSink& sink) {
           if (stopping_.load()) return false;
           std::this_thread::sleep_until(*last + options_.update_period);
-          feed_.wait_change(*seen, options_.update_period);
-          const bool finished = feed_.finished();
-          nlohmann::json j = feed_.since(*cursor);
+          feed->wait_change(*seen, options_.update_period);
+          const bool finished = feed->finished();
+          nlohmann::json j = feed->since(*cursor);
           *seen = j["version"].get<std::uint64_t>();
           j["mode"] = options_.mode;
           j["server_realtime_ns"] = transport::realtime_ns();

@@ -17,6 +17,10 @@
 //   GET  /api/snapshot everything the feed holds, as one JSON (scripts, tests): one copy shared
 //                      by every client, rebuilt at most once per snapshot_period (SnapshotCache),
 //                      so clients looping on it cannot take the feed's lock more often than that
+//   ?run=a, ?run=b     on /api/snapshot and /api/stream: which run (a, the default: the feed; b:
+//                      ServerOptions::second, when two runs are compared); any other 404
+//   GET  /compare      comparing two runs only: both pages side by side under each run's
+//                      E_peak and E_rms, read from GET /api/compare (ServerOptions::comparison)
 //   GET  /api/health   the counters below and the options the page needs (stop enabled, mode)
 //   POST /api/stop     with a control room (desk, view/control_room.h): the token's role decides
 //                      (the director's: 202 and the run stops; an operator's or a viewer's: 403
@@ -98,6 +102,10 @@ struct ServerOptions {
   std::string token;  // what /api/stop needs; empty with allow_stop: one made here (make_token)
   std::function<void()> on_stop;
   ControlDesk* desk = nullptr;  // roles (view/control_room.h): stop, hold and whoami ask it
+  // Two runs compared (a replay): the second run's feed (?run=b) and both runs' summaries, served
+  // as /api/compare; null: one run.
+  const Feed* second = nullptr;
+  nlohmann::json comparison;
   // A listening socket to serve (open_listener) instead of binding `address`, whose host the
   // Host checks still name; -1: bind `address`. The server owns it from then on.
   int listen_fd = -1;
@@ -133,7 +141,9 @@ class ViewServer {
 
  private:
   void routes();
-  void stream(httplib::Server& server);
+  void data_routes(httplib::Server& server);
+  // The feed a data request names (?run=), or null with the 404 set.
+  const Feed* feed_named(const httplib::Request& req, httplib::Response& res) const;
   void control_routes(httplib::Server& server);
   void control(const httplib::Request& req, httplib::Response& res, const std::string& action);
   // Whether the request may read the run's data: always without a desk; with one, only with a
@@ -148,7 +158,7 @@ class ViewServer {
   std::map<std::string, std::pair<std::string, std::string>> files_;  // path -> (type, bytes)
   std::unique_ptr<httplib::Server> server_;
   std::unique_ptr<RequestGate> gate_;  // after server_: stopped and destroyed before it
-  std::unique_ptr<SnapshotCache> snapshots_;
+  std::unique_ptr<SnapshotCache> snapshots_, second_snapshots_;  // of the feed, of `second`
   std::thread thread_;
   int port_ = 0;
   std::atomic<bool> stopping_{false}, stop_requested_{false};

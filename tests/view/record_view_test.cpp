@@ -1,5 +1,6 @@
 // A finished record served as the page: the whole run in replay mode with its verdict (and, for a
-// real-time record that overran, the deadline diagnosis `rths launch` prints), and the address
+// real-time record that overran, the deadline diagnosis `rths launch` prints), a sites run's
+// folder with its sites, two runs compared side by side, and the address
 // handed over from a view that has just stopped, never shared with one still listening.
 #include "view/record_view.h"
 
@@ -106,6 +107,125 @@ TEST(RecordView, ARecordThatCannotBeReadOrHasNoHeaderIsRefused) {
   write_record({step}, path);
   EXPECT_THROW(RecordView(path, {"127.0.0.1", 0}), std::invalid_argument);
   std::filesystem::remove(path);
+}
+
+nlohmann::json get_json(const std::string& url, const std::string& path, int* status = nullptr) {
+  httplib::Client client(url.substr(0, url.size() - 1));
+  client.set_read_timeout(10s);
+  const auto answer = client.Get(path);
+  if (status) *status = answer ? answer->status : -1;
+  return answer && answer->status == 200 ? nlohmann::json::parse(answer->body)
+                                         : nlohmann::json::object();
+}
+
+// A fresh folder for a run's output.
+std::filesystem::path run_folder(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_record_view_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// A sites run's folder (its record and the sites.json `rths sites` writes beside it) is served
+// with its sites as the live page had them, and every actuator of every site on the record's
+// one time axis (each actuator's column one value per time).
+TEST(RecordView, ASitesRunsFolderShowsEverySitesActuatorsOnOneTimeAxis) {
+  const runtime::RecordContents contents = recorded_run("sites");
+  const auto dir = run_folder("sites");
+  write_record(contents.entries, dir / "lab_test.rthsrec");
+  const auto& links = contents.header()->link_node_ids();
+  ASSERT_GE(links.size(), 2);
+  const nlohmann::json sites = {
+      {{"name", "site_a"}, {"nodes", {0, links[0]}}, {"lab_nodes", nlohmann::json::array()}},
+      {{"name", "lab_b"},
+       {"nodes", std::vector<int>(links.begin() + 1, links.end())},
+       {"lab_nodes", std::vector<int>(links.begin() + 1, links.end())}}};
+  std::ofstream(dir / "sites.json") << sites.dump();
+  RecordView view(dir, {"127.0.0.1", 0});
+  const auto j = snapshot(view.url());
+  EXPECT_EQ(j["context"]["sites"], sites);
+  const int actuators = j["header"]["actuators"];
+  EXPECT_EQ(actuators, contents.header()->actuators());
+  ASSERT_GT(actuators, 0);
+  const auto& samples = j["samples"];
+  const std::size_t times = samples["time_s"].size();
+  EXPECT_GT(times, 10u);
+  ASSERT_EQ(samples["command_mm"].size(), static_cast<std::size_t>(actuators));
+  for (int a = 0; a < actuators; ++a) {
+    EXPECT_EQ(samples["command_mm"][a].size(), times) << a;
+    EXPECT_EQ(samples["measured_mm"][a].size(), times) << a;
+  }
+  EXPECT_EQ(samples["round_trip_ms"].size(), static_cast<std::size_t>(links.size()));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RecordView, AFolderWithNoneOrSeveralRecordsOrABadSitesFileIsRefusedNamingIt) {
+  const auto dir = run_folder("refused");
+  const auto refusal = [&] {
+    try {
+      RecordView view(dir, {"127.0.0.1", 0});
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("served");
+  };
+  EXPECT_NE(refusal().find("holds no run record (.rthsrec)"), std::string::npos) << refusal();
+  const runtime::RecordContents contents = recorded_run("refused");
+  write_record(contents.entries, dir / "a.rthsrec");
+  std::ofstream(dir / "sites.json") << R"({"name": "site_a"})";
+  EXPECT_NE(refusal().find("sites.json is not a list of {name, nodes, lab_nodes}"),
+            std::string::npos)
+      << refusal();
+  std::filesystem::remove(dir / "sites.json");
+  write_record(contents.entries, dir / "b.rthsrec");
+  EXPECT_NE(refusal().find("holds 2 run records (a.rthsrec, b.rthsrec): name the one to view"),
+            std::string::npos)
+      << refusal();
+  std::filesystem::remove_all(dir);
+}
+
+// Two runs compared: /api/compare holds both (run ids, records, E_peak and E_rms per DOF), each
+// run's data is served by name (?run=a, ?run=b; any other 404), /compare shows both pages.
+TEST(RecordView, TwoRunsAreServedSideBySideWithEachOnesErrorMeasures) {
+  runtime::RecordContents contents = recorded_run("compare");
+  const auto a = record_path("compare_a"), b = record_path("compare_b");
+  write_record(contents.entries, a);
+  contents.entries.front().mutable_header()->set_run_id("run-b");
+  for (auto& entry : contents.entries)  // run B's response 10 % larger than run A's
+    if (entry.has_step())
+      for (double& u : *entry.mutable_step()->mutable_displacement()) u *= 1.1;
+  write_record(contents.entries, b);
+  RecordView view(a, b, {"127.0.0.1", 0});
+  const auto runs = get_json(view.url(), "/api/compare")["runs"];
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0]["run_id"], "record-view-compare");
+  EXPECT_EQ(runs[1]["run_id"], "run-b");
+  EXPECT_EQ(runs[0]["record"], a.string());
+  EXPECT_EQ(runs[1]["record"], b.string());
+  const int dofs = contents.header()->dofs();
+  for (const auto& run : runs) {
+    ASSERT_EQ(run["e_peak_pct"].size(), static_cast<std::size_t>(dofs)) << run;
+    ASSERT_EQ(run["e_rms_pct"].size(), static_cast<std::size_t>(dofs)) << run;
+  }
+  // In lockstep run A equals its prediction; B is 10 % off it everywhere.
+  for (int d = 0; d < dofs; ++d) {
+    EXPECT_LT(runs[0]["e_rms_pct"][d].get<double>(), 1e-6) << d;
+    EXPECT_NEAR(runs[1]["e_rms_pct"][d].get<double>(), 10.0, 0.01) << d;
+    EXPECT_NEAR(runs[1]["e_peak_pct"][d].get<double>(), 10.0, 0.01) << d;
+  }
+  EXPECT_EQ(get_json(view.url(), "/api/snapshot?run=b")["header"]["run_id"], "run-b");
+  EXPECT_EQ(get_json(view.url(), "/api/snapshot?run=a")["header"]["run_id"], "record-view-compare");
+  int status = 0;
+  get_json(view.url(), "/api/snapshot?run=c", &status);
+  EXPECT_EQ(status, 404);
+  httplib::Client client(view.url().substr(0, view.url().size() - 1));
+  const auto page = client.Get("/compare");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("src=\"/?run=b\""), std::string::npos);
+  std::filesystem::remove(a);
+  std::filesystem::remove(b);
 }
 
 // Whether a socket with SO_REUSEPORT can bind 127.0.0.1:`port` (closed again at once).

@@ -382,6 +382,10 @@ function onUpdate(u) {
   scheduleDraw();
 }
 
+// Which run this page shows where two are compared (/compare frames /?run=a and /?run=b).
+const RUN_QUERY = new URLSearchParams(location.search).has('run')
+  ? '?run=' + encodeURIComponent(new URLSearchParams(location.search).get('run')) : '';
+
 // The stream is read with fetch, not EventSource, so that it can send this tab's role token
 // (X-RTHS-Token; a run with roles serves its data to its crew only) in a header, never in a URL.
 // Each event is `data: {json}` and a blank line. A refusal (401, 403) is shown and not retried.
@@ -389,7 +393,7 @@ async function connect() {
   const token = stopToken(), reader = { cancel: () => {} };
   V.source = { close: () => reader.cancel() };
   try {
-    const r = await fetch('/api/stream', { headers: token ? { 'X-RTHS-Token': token } : {} });
+    const r = await fetch('/api/stream' + RUN_QUERY, { headers: token ? { 'X-RTHS-Token': token } : {} });
     if (r.status === 401 || r.status === 403) { V.source = null; $('reason').textContent = await r.text(); return; }
     if (!r.ok) throw new Error('HTTP ' + r.status);
     const body = r.body.getReader(), decoder = new TextDecoder();
