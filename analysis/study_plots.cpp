@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "analysis/response_envelope_plots.h"
 #include "analysis/study_run.h"
 #include "core/metrics.h"
 #include "util/plot.h"
@@ -13,9 +14,10 @@
 namespace rths::analysis {
 
 std::vector<std::string> study_plot_files() {
-  return {"displacement.png",       "displacement.svg",    "force_displacement.png",
-          "force_displacement.svg", "tracking.png",        "tracking.svg",
-          "force_prediction.png",   "force_prediction.svg"};
+  return {"displacement.png",       "displacement.svg",     "force_displacement.png",
+          "force_displacement.svg", "tracking.png",         "tracking.svg",
+          "force_prediction.png",   "force_prediction.svg", "response_envelope.png",
+          "response_envelope.svg",  "floor_histories.png",  "floor_histories.svg"};
 }
 
 namespace {
@@ -82,17 +84,6 @@ std::string coincides_with(const std::vector<const CaseOutcome*>& drawn, std::si
     return text;
   }
   return "";
-}
-
-// Actuator a's measured force (kN) against its command (mm).
-util::Series force_loop(const CaseOutcome& c, int a, const std::string& label,
-                        const std::string& style) {
-  util::Series loop{label, {}, {}, style};
-  for (Eigen::Index k = 0; k < c.simulation.command.rows(); ++k) {
-    loop.x.push_back(c.simulation.command(k, a) * 1e3);
-    loop.y.push_back(c.simulation.measured_force(k, a) * 1e-3);
-  }
-  return loop;
 }
 
 // The actuator the single-actuator figures draw: the config's first.
@@ -336,6 +327,7 @@ std::vector<std::string> write_study_plots(const StudyOutcome& outcome,
   std::filesystem::remove(directory / "tracking.svg");
   std::filesystem::remove(directory / "force_prediction.png");
   std::filesystem::remove(directory / "force_prediction.svg");
+  remove_many_dof_figures(directory);
   // One gnuplot draws the three figures: its start-up costs more than a decimated figure.
   std::vector<util::Figure> figures = {{panels, directory / "displacement.png"}};
   if (auto loops =
@@ -350,6 +342,8 @@ std::vector<std::string> write_study_plots(const StudyOutcome& outcome,
     figures.push_back({std::move(tracking), directory / "tracking.png"});
   if (auto predicted = force_prediction_panels(drawn, outcome.actuators); !predicted.empty())
     figures.push_back({std::move(predicted), directory / "force_prediction.png"});
+  for (util::Figure& figure : many_dof_figures(outcome, drawn, directory))
+    figures.push_back(std::move(figure));
   util::write_png_figures(figures);
   std::vector<std::string> written;
   for (const util::Figure& f : figures) written.push_back(f.png.filename().string());

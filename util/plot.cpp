@@ -141,11 +141,40 @@ std::string figure_data(const std::vector<PlotSpec>& panels, const std::string& 
   return data.str();
 }
 
+// The x range `spec` draws: its own where set, else its series' finite x.
+std::pair<double, double> drawn_x_range(const PlotSpec& spec) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const Series& s : spec.series)
+    for (double x : s.x)
+      if (std::isfinite(x)) {
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
+      }
+  return {spec.x_min.value_or(lo), spec.x_max.value_or(hi)};
+}
+
+// A round step, 1, 2 or 5 x 10^k, that cuts `span` (> 0) into at most `most` intervals.
+double round_tic_step(double span, int most) {
+  const double raw = span / most;
+  const double decade = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0})
+    if (m * decade >= raw * (1.0 - 1e-9)) return m * decade;
+  return 10.0 * decade;
+}
+
 // The x axis's ticks: the spec's labels at their x, with a bottom margin of their lines and of
-// `legend_rows` (a legend below the panel, which a set margin must hold too), or gnuplot's numbers
-// and margin.
+// `legend_rows` (a legend below the panel, which a set margin must hold too), or numbers every
+// round step of at most max_x_tics intervals, else gnuplot's numbers; gnuplot's margin for both.
 std::string x_tics(const PlotSpec& spec, int legend_rows) {
-  if (spec.x_labels.empty()) return "set xtics autofreq\nset bmargin\n";
+  if (spec.x_labels.empty()) {
+    const auto [lo, hi] = drawn_x_range(spec);
+    if (spec.max_x_tics <= 0 || spec.log_x || !(lo < hi) || !std::isfinite(hi - lo))
+      return "set xtics autofreq\nset bmargin\n";
+    std::ostringstream out;
+    out.precision(10);
+    out << "set xtics " << round_tic_step(hi - lo, spec.max_x_tics) << "\nset bmargin\n";
+    return out.str();
+  }
   std::ostringstream out;
   out.precision(10);
   std::size_t lines = 1;
@@ -186,15 +215,7 @@ std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec,
 // Whether marker m's label fits between its line and the data area's right edge; else it is set
 // left of the line, ending there.
 bool label_fits_right(const PlotSpec& spec, const VerticalMarker& m, const FigureLayout& layout) {
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (const Series& s : spec.series)
-    for (double x : s.x)
-      if (std::isfinite(x)) {
-        lo = std::min(lo, x);
-        hi = std::max(hi, x);
-      }
-  if (spec.x_min) lo = *spec.x_min;
-  if (spec.x_max) hi = *spec.x_max;
+  const auto [lo, hi] = drawn_x_range(spec);
   if (!(lo < hi) || spec.log_x) return true;
   const double room = (hi - m.x) / (hi - lo) * layout.data_width;
   return static_cast<double>(m.label.size() + 2) * character_pixels(layout.font - 1) <= room;

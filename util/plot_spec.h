@@ -53,6 +53,10 @@ struct PlotSpec {
   // Tick labels at these x (a bar chart's bars: "\n" breaks a label into lines); empty = the
   // numbers of the x axis.
   std::vector<std::pair<double, std::string>> x_labels;
+  // At most this many intervals between labelled x tics, each a round step (1, 2 or 5 x 10^k)
+  // over the panel's x range (a narrow panel, whose labels gnuplot would run together); 0:
+  // gnuplot's own.
+  int max_x_tics = 0;
   // A square data area (a force-displacement loop, which runs from lower left to upper right,
   // reads true only with equal axes lengths). A figure of square panels lays them out in a grid
   // of at most two columns, each 5/8 of `width` pixels square, instead of stacking them.

@@ -16,8 +16,12 @@
 
 #include <unistd.h>
 
+#include "tests/support/png_size.h"
+
 namespace rths::util {
 namespace {
+
+using test::png_size;
 
 TEST(Plot, WritesThePngAndTheSvgBesideIt) {
   const auto dir =
@@ -274,6 +278,27 @@ TEST(Plot, ALongTitleIsDrawnOnSeveralWholeLines) {
 }
 
 // A bar chart names each bar under it, on as many lines as its label has.
+// A narrow panel with max_x_tics 4 over 2 s labels its x axis every 0.5 s (gnuplot's own choice
+// there, every 0.2 s, runs the labels together).
+TEST(Plot, MaxXTicsLabelsARoundStepThatFitsTheCount) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_tics_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  // y from 0 to 100: its tick labels share none of the x labels looked for.
+  PlotSpec spec{"tics", "time (s)", "y", {{"a", {0.0, 0.7, 2.0}, {0.0, 100.0, 50.0}}}};
+  spec.width = 450;
+  spec.max_x_tics = 4;
+  write_png_plot(spec, dir / "tics.png");
+  std::ifstream in(dir / "tics.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // gnuplot's "% h" sets a space before a positive number.
+  for (const char* label : {"> 0.5<", "> 1.5<"})
+    EXPECT_NE(svg.find(label), std::string::npos) << label;
+  for (const char* label : {"> 0.2<", "> 0.4<", "> 1.2<"})
+    EXPECT_EQ(svg.find(label), std::string::npos) << label;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Plot, ABarChartNamesEachBarUnderItOnItsLines) {
   const auto dir =
       std::filesystem::temp_directory_path() / ("rths_plot_bars_" + std::to_string(getpid()));
@@ -290,18 +315,6 @@ TEST(Plot, ABarChartNamesEachBarUnderItOnItsLines) {
   for (const char* line : {">actuator 1<", ">whole rig<", ">load cell 1<", ">offset_drift<"})
     EXPECT_NE(svg.find(line), std::string::npos) << line;
   std::filesystem::remove_all(dir);
-}
-
-// The width and height (px) in a PNG's header.
-std::pair<std::uint32_t, std::uint32_t> png_size(const std::filesystem::path& png) {
-  std::ifstream in(png, std::ios::binary);
-  std::array<unsigned char, 24> head{};
-  in.read(reinterpret_cast<char*>(head.data()), head.size());
-  const auto be32 = [&](std::size_t at) {
-    return std::uint32_t{head[at]} << 24 | std::uint32_t{head[at + 1]} << 16 |
-           std::uint32_t{head[at + 2]} << 8 | std::uint32_t{head[at + 3]};
-  };
-  return {be32(16), be32(20)};
 }
 
 // Panels with columns = 2 are a grid, row by row: four 800 x 300 panels make a 1600 x 600 figure
