@@ -5,12 +5,13 @@
 // HOLD of their lab reaches its actuators within the answer window and holds the run (no further
 // step, the process goes on, the page says HOLD, lab_c gets no HOLD and no command) until the
 // director's stop ends it (exit 1, the record complete); an operator cannot stop the run or HOLD
-// another lab; a viewer's stop is refused; the director's stop ends a running run; the record (read
-// back by `rths view`) names who pressed what. Skipped, with the reason printed, where Chromium
-// cannot start or network namespaces cannot be made.
+// another lab; a page without a role's token reads nothing; a viewer's stop is refused; the
+// director's stop ends a running run; the record (read back by `rths view` of the run's folder,
+// with its sites) names who pressed what; `rths view A --compare B` shows both runs. Skipped,
+// with the reason printed, where Chromium cannot start or network namespaces cannot be made.
 // Screenshots (the first 1000 px: the header and the sites) go to RTHS_VIEW_TEST_OUT
 // (sites_operator.png, sites_hold.png, sites_held_director.png, sites_held_stop.png,
-// sites_viewer.png, sites_director_stop.png).
+// sites_no_token.png, sites_viewer.png, sites_director_stop.png, sites_compare.png).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawn, spawnSync } from 'node:child_process';
@@ -180,7 +181,7 @@ test('an operator HOLDs their own lab within the answer window and the run holds
   const page = await open(roles.lab_b);
   await checkSites(page);
   assert.equal(new URL(page.url()).search, '', 'the token is out of the address bar');
-  assert.equal(await page.textContent('#role'), 'you are the operator of lab_b');
+  await until('the operator\'s role', async () => (await page.textContent('#role')) === 'you are the operator of lab_b', 10000);
   assert.equal(await page.isVisible('#stop'), false);
   assert.equal(await page.isVisible('#hold-lab_c'), false);
   assert.equal(await page.isVisible('#hold-lab_b'), true);
@@ -191,7 +192,6 @@ test('an operator HOLDs their own lab within the answer window and the run holds
   assert.equal((await post(page, 'stop', '')).status, 403);
   await page.click('#hold-lab_b');
   await until('the HOLD on the page', async () => (await page.textContent('#state')).startsWith('HOLD'));
-  assert.match(await page.textContent('#reason'), /^HOLD of the run at step \d+: HOLD from the view by the operator of lab_b/);
   await until('lab_b\'s actuators held on the page', async () =>
     (await page.textContent('#site-lab_b table')).includes('HOLD: the operator of lab_b pressed HOLD of lab_b'));
   // Held: the run goes on without a step (the page's newest step stays) and the process stays.
@@ -210,7 +210,10 @@ test('an operator HOLDs their own lab within the answer window and the run holds
   // A run that did not complete its purpose: exit 1, as for any stopped run.
   assert.equal(await child.done, 1, child.output);
   assert.match(child.output, /stopped from the view by the director \(held: HOLD from the view by the operator of lab_b\)/);
-  const { events, context, status } = await recordEvents(path.join(dir, 'out', 'lab_test.rthsrec'));
+  // `rths view OUT`: the run's folder, its sites as the live page had them (OUT/sites.json).
+  const { events, context, status } = await recordEvents(path.join(dir, 'out'));
+  assert.deepEqual(context.sites.map(site => [site.name, site.nodes, site.lab_nodes]),
+    [['site_a', [0, 1], []], ['lab_b', [2], [2]], ['lab_c', [3], [3]]]);
   const held = events.find(e => e.startsWith('the operator of lab_b pressed HOLD of lab_b on the view: HOLD sent to node 2; the run holds until the director stops it'));
   assert.ok(held, events.join('\n'));
   // The HOLD left at the step that applied the press; the loop was at least at the newest step the
@@ -238,9 +241,16 @@ test('a viewer\'s stop is refused (403) and recorded; the director\'s stop ends 
   if (skip) return t.skip(skip);
   const dir = path.join(OUT, 'sites_stop');
   const { child, roles } = await startSites(dir, 2, '10.231.202');
+  // Without a role's token the run's data is refused and the page says why.
+  const stranger = await open(new URL(roles.viewer).origin + '/');
+  await until('the refusal on a page without a token', async () => (await stranger.textContent('#reason')).includes('is for its crew'));
+  assert.equal(await step(stranger), 0);
+  await stranger.screenshot({ path: path.join(OUT, 'sites_no_token.png') });
+  await stranger.close();
   const viewer = await open(roles.viewer);
   await checkSites(viewer);
-  assert.equal(await viewer.textContent('#role'), 'you are a viewer');
+  // The role comes from its own request, which may answer after the stream's first samples.
+  await until('the viewer\'s role', async () => (await viewer.textContent('#role')) === 'you are a viewer', 10000);
   assert.equal(await viewer.isVisible('#stop'), false);
   assert.equal(await viewer.locator('button.hold').count(), 0);
   const refused = await post(viewer, 'stop', '');
@@ -249,7 +259,7 @@ test('a viewer\'s stop is refused (403) and recorded; the director\'s stop ends 
   await viewer.screenshot({ path: path.join(OUT, 'sites_viewer.png') });
   const director = await open(roles.director);
   await checkSites(director);
-  assert.equal(await director.textContent('#role'), 'you are the director');
+  await until('the director\'s role', async () => (await director.textContent('#role')) === 'you are the director', 10000);
   assert.equal(await director.locator('button.hold').count(), 2);  // lab_b's and lab_c's
   await director.click('#stop');
   await until('the stop on the page', async () => (await director.textContent('#reason')).includes('stopped from the view by the director'), 60000);
@@ -262,4 +272,29 @@ test('a viewer\'s stop is refused (403) and recorded; the director\'s stop ends 
   assert.ok(events.some(e => e.startsWith('the director pressed STOP on the view: HOLD, then STOP')), events.join('\n'));
   await viewer.close();
   await director.close();
+});
+
+// `rths view A --compare B`: the held run and the stopped run of the tests above side by side,
+// each run's E_peak and E_rms above its own page.
+test('rths view OUT_A --compare OUT_B shows both runs side by side with each one\'s E_peak and E_rms', { timeout: 120000 }, async t => {
+  if (skip) return t.skip(skip);
+  const [a, b] = ['sites_hold', 'sites_stop'].map(name => path.join(OUT, name, 'out'));
+  if (!fs.existsSync(a) || !fs.existsSync(b)) return t.skip('the runs of the tests above are missing');
+  const child = start(['view', a, '--compare', b, '--listen', '127.0.0.1:0', '--for', '60']);
+  const url = await until('rths view to listen', () => (child.output.match(/(http:\/\/127\.0\.0\.1:\d+\/)/) || [])[1]);
+  const page = await open(url + 'compare');
+  await until('both runs in the table', async () => (await page.locator('#runs tbody tr').count()) === 2);
+  const rows = await view(page, () => [...document.querySelectorAll('#runs tbody tr')].map(r => [...r.cells].map(c => c.textContent)));
+  assert.match(rows[0][1], /sites_hold\/out\/lab_test\.rthsrec$/);
+  assert.match(rows[1][1], /sites_stop\/out\/lab_test\.rthsrec$/);
+  assert.match(rows[0][3], /held: HOLD from the view by the operator of lab_b/);
+  for (const row of rows) assert.match(row[5], /^floor 1 \d+\.\d\d, floor 2 /, row.join(' | '));
+  for (const [frame, run] of [['#page-a', 'a'], ['#page-b', 'b']]) {
+    const inner = page.frameLocator(frame);
+    await until('run ' + run + "'s page", async () => (await inner.locator('details.site').count()) === 3);
+  }
+  await page.screenshot({ path: path.join(OUT, 'sites_compare.png') });
+  child.kill('SIGINT');
+  await child.done;
+  await page.close();
 });
