@@ -230,18 +230,69 @@ std::optional<std::string> pre_run_warning(const CaseOutcome& c) {
   return std::nullopt;
 }
 
+// Whether two loops' parts are the same specimens at the same places (their lags aside).
+bool same_parts(const std::vector<core::DelayedPart>& a, const std::vector<core::DelayedPart>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t j = 0; j < a.size(); ++j) {
+    const core::DelayedPart &p = a[j], &q = b[j];
+    if (p.row.size() != q.row.size() || p.row != q.row || p.stiffness != q.stiffness ||
+        p.damping != q.damping || p.mass != q.mass || p.predicted != q.predicted ||
+        p.model_stiffness != q.model_stiffness || p.model_damping != q.model_damping)
+      return false;
+  }
+  return true;
+}
+
+// Each setup's critical-delay check at its lag, answer_lag + extra_lag (s): setups whose loops
+// are the same share one check (core::check_setup_critical_delay), made at the largest of their
+// lags, whose discrete search reaches every smaller lag's; each copy then holds its own lag.
+std::vector<std::optional<core::CriticalDelayCheck>> shared_checks(
+    const core::PreparedStudy& prepared, const std::vector<core::HybridSetup>& setups,
+    double extra_lag) {
+  struct Loop {
+    std::vector<core::DelayedPart> parts;
+    std::size_t first = 0;  // the setup it is checked on
+    double lag = 0.0;       // s, the largest of its setups'
+  };
+  std::vector<Loop> loops;
+  std::vector<std::size_t> loop_of;
+  for (std::size_t i = 0; i < setups.size(); ++i) {
+    const double lag = core::answer_lag(setups[i]) + extra_lag;
+    std::vector<core::DelayedPart> parts = core::setup_loop_parts(
+        setups[i], std::vector<double>(setups[i].partition.actuator_storeys.size(), 0.0));
+    auto same = std::find_if(loops.begin(), loops.end(),
+                             [&](const Loop& l) { return same_parts(l.parts, parts); });
+    if (same == loops.end()) {
+      loops.push_back({std::move(parts), i, lag});
+      same = loops.end() - 1;
+    }
+    same->lag = std::max(same->lag, lag);
+    loop_of.push_back(static_cast<std::size_t>(same - loops.begin()));
+  }
+  std::vector<std::optional<core::CriticalDelayCheck>> checked, out;
+  for (const Loop& l : loops)
+    checked.push_back(core::check_setup_critical_delay(prepared, setups[l.first], l.lag));
+  for (std::size_t i = 0; i < setups.size(); ++i) {
+    std::optional<core::CriticalDelayCheck> check = checked[loop_of[i]];
+    if (check) check->lag = core::answer_lag(setups[i]) + extra_lag;
+    out.push_back(std::move(check));
+  }
+  return out;
+}
+
 // What is known of a case before it runs: its delay, and its critical-delay check (announced
 // through options.warn when past; for a compensated case, its compensated loop's verdict).
+// `check`: the case's critical-delay check at its lag (shared_checks).
 CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::HybridSetup& setup,
                           const config::Case& study_case, const std::string& name,
-                          const RunStudyOptions& options) {
+                          const RunStudyOptions& options,
+                          std::optional<core::CriticalDelayCheck> check) {
   CaseOutcome result;
   result.name = name;
   result.expect_unstable = study_case.expect_unstable();
   result.nominal_delay = core::answer_lag(setup);
   result.delay_description = core::case_delay_text(setup);
-  result.stability =
-      core::check_setup_critical_delay(prepared, setup, result.nominal_delay + options.extra_lag);
+  result.stability = std::move(check);
   if (study_case.compensation_size() > 0) {
     // Beside the compensated loop's verdict: the same case without its compensators.
     config::Case bare = study_case;
@@ -362,7 +413,9 @@ std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStu
 
 CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {
   const config::Case& c = core::find_case(prepared.config, case_name);
-  return describe_case(prepared, core::setup_for_case(prepared, c), c, c.name(), {});
+  const core::HybridSetup setup = core::setup_for_case(prepared, c);
+  return describe_case(prepared, setup, c, c.name(), {},
+                       core::check_setup_critical_delay(prepared, setup, core::answer_lag(setup)));
 }
 
 bool CaseOutcome::judged_past() const {
@@ -403,6 +456,31 @@ void read_motion_facts(const core::PreparedStudy& prepared, StudyOutcome& outcom
   outcome.motion_file_sha256 = motion_file_sha256(prepared);
 }
 
+// An outcome of no case yet: the study's name, recorders, actuators, motion and response.
+StudyOutcome empty_outcome(const core::PreparedStudy& prepared) {
+  StudyOutcome outcome;
+  outcome.study_name = prepared.config.name();
+  outcome.recorders = prepared.recorders;
+  outcome.actuators = actuator_names(prepared.config, prepared.base.partition);
+  read_motion_facts(prepared, outcome);
+  outcome.response = ResponseSpec::top_floor(prepared.base.model.dofs());
+  return outcome;
+}
+
+// A case's stop before the record's end: a limit tripped (its history cut before that step,
+// whose command is never sent) or its force predictor's hold.
+void apply_stops(CaseOutcome& result, const config::SafetyLimits& limits) {
+  if (const auto trip = first_limit_trip(result.simulation, limits)) {
+    result.simulation.truncate(trip->first);
+    result.status = "limit tripped";
+    result.status_detail = trip->second;
+  }
+  if (!result.simulation.held.empty()) {
+    result.status = "held";
+    result.status_detail = result.simulation.held;
+  }
+}
+
 }  // namespace
 
 StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options) {
@@ -414,39 +492,42 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   const config::Case& reference = core::reference_case(with_cases);
   const int floors = prepared.base.model.dofs();
 
-  StudyOutcome outcome;
-  outcome.study_name = study.name();
-  outcome.recorders = prepared.recorders;
-  outcome.actuators = actuator_names(prepared.config, prepared.base.partition);
-  read_motion_facts(prepared, outcome);
-  outcome.response = ResponseSpec::top_floor(floors);
+  StudyOutcome outcome = empty_outcome(prepared);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
-  const core::SimulationOptions kept =
+  core::SimulationOptions kept =
       core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
-  const core::SimulationResult lag_free = core::simulate(prepared.base, prepared.motion, kept);
+  kept.max_omega = core::max_omega(prepared.base.model);  // every case's model is the base's
+  std::vector<core::HybridSetup> setups;
+  std::size_t simulations = 1;  // the lag-free run and each case that adds to it
+  for (const config::Case& study_case : with_cases.cases()) {
+    setups.push_back(core::setup_for_case(prepared, study_case));
+    simulations += adds_nothing(study_case) ? 0 : 1;
+  }
+  const std::vector<std::optional<core::CriticalDelayCheck>> checks =
+      shared_checks(prepared, setups, options.extra_lag);
+  RunProgress progress(options.progress, simulations, prepared.motion.acceleration.size());
+  progress.start(0, "the lag-free run");
+  const core::SimulationResult lag_free =
+      core::simulate(prepared.base, prepared.motion, kept, {}, &progress);
   const std::vector<double> lag_free_response = floor_history(lag_free, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free_response);
 
+  std::size_t run = 1;
   for (int i = 0; i < with_cases.cases_size(); ++i) {
     const config::Case& study_case = with_cases.cases(i);
     if (&study_case == &reference) outcome.reference_index = static_cast<std::size_t>(i);
-    const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-    CaseOutcome result = describe_case(
-        prepared, setup, study_case,
-        study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(), options);
+    const core::HybridSetup& setup = setups[static_cast<std::size_t>(i)];
+    CaseOutcome result =
+        describe_case(prepared, setup, study_case,
+                      study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(),
+                      options, checks[static_cast<std::size_t>(i)]);
     // A case that adds nothing to the base is the lag-free run itself: its steps are not
     // integrated twice.
-    result.simulation =
-        adds_nothing(study_case) ? lag_free : core::simulate(setup, prepared.motion, kept);
-    if (const auto trip = first_limit_trip(result.simulation, study.deployment().limits())) {
-      result.simulation.truncate(trip->first);  // the command of that step is never sent
-      result.status = "limit tripped";
-      result.status_detail = trip->second;
-    }
-    if (!result.simulation.held.empty()) {
-      result.status = "held";
-      result.status_detail = result.simulation.held;
-    }
+    if (!adds_nothing(study_case)) progress.start(run++, "case '" + result.name + "'");
+    result.simulation = adds_nothing(study_case)
+                            ? lag_free
+                            : core::simulate(setup, prepared.motion, kept, {}, &progress);
+    apply_stops(result, study.deployment().limits());
     judge_case(result, lag_free_response, floors);
     outcome.cases.push_back(std::move(result));
   }
@@ -462,12 +543,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
                                   const RunStudyOptions& options) {
   if (recorded.empty()) throw std::invalid_argument("judge_recorded_cases: no cases");
   const int floors = prepared.base.model.dofs();
-  StudyOutcome outcome;
-  outcome.study_name = prepared.config.name();
-  outcome.recorders = prepared.recorders;
-  outcome.actuators = actuator_names(prepared.config, prepared.base.partition);
-  read_motion_facts(prepared, outcome);
-  outcome.response = ResponseSpec::top_floor(floors);
+  StudyOutcome outcome = empty_outcome(prepared);
   CaseOutcome lag_free;
   lag_free.name = "lag_free_in_process";
   lag_free.delay_description = "none (in process, no delay stage)";
@@ -477,14 +553,23 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
       core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
   lag_free.response = floor_history(lag_free.simulation, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free.response);
-  for (RecordedCase& r : recorded) {
+  std::vector<const config::Case*> study_cases;
+  std::vector<core::HybridSetup> setups;
+  for (const RecordedCase& r : recorded) {
     const config::Case* study_case = nullptr;
     for (const config::Case& c : prepared.config.cases())
       if (c.name() == r.name) study_case = &c;
     if (study_case == nullptr)
       throw std::invalid_argument("case '" + r.name + "' is not among the study's cases");
-    CaseOutcome result = describe_case(prepared, core::setup_for_case(prepared, *study_case),
-                                       *study_case, r.name, options);
+    study_cases.push_back(study_case);
+    setups.push_back(core::setup_for_case(prepared, *study_case));
+  }
+  const std::vector<std::optional<core::CriticalDelayCheck>> checks =
+      shared_checks(prepared, setups, options.extra_lag);
+  for (std::size_t i = 0; i < recorded.size(); ++i) {
+    RecordedCase& r = recorded[i];
+    CaseOutcome result =
+        describe_case(prepared, setups[i], *study_cases[i], r.name, options, checks[i]);
     result.simulation = std::move(r.simulation);
     result.status = r.status;
     if (result.status != "completed") result.status_detail = r.status_detail;

@@ -4,9 +4,12 @@
 //
 // Before each case: core::check_critical_delay on the structure, the case's lag (the delay
 // chain's nominal delay, the largest over actuators) and the integrator; a case past the limit
-// is announced through RunStudyOptions::warn with the margin. A case with compensation is judged
-// on its compensated loop instead (CompensatedVerdict): a linear one analysed, an adaptive one
-// stated as not analysable, with the uncompensated margin beside.
+// is announced through RunStudyOptions::warn with the margin. Cases whose loops are the same
+// (the same specimens on the same structure) share one check, made at the largest of their lags
+// (its discrete search reaches every smaller lag's), each case then judged at its own lag. A
+// case with compensation is judged on its compensated loop instead (CompensatedVerdict): a
+// linear one analysed, an adaptive one stated as not analysable, with the uncompensated margin
+// beside. A run lasting more than a few seconds reports its progress (RunStudyOptions::progress).
 // After each case, its status:
 //   "limit tripped"  |u| or |v| of a floor passed deployment.limits (applied in process as the
 //                    coordinator applies them distributed: the run stops before that step)
@@ -33,6 +36,7 @@
 #include "analysis/actuator_names.h"
 #include "analysis/compare.h"
 #include "analysis/compensated_verdict.h"
+#include "analysis/run_progress.h"
 #include "core/envelope_growth.h"
 #include "core/simulation.h"
 #include "core/stability.h"
@@ -110,6 +114,8 @@ struct RunStudyOptions {
   // s, lag on the actuator's path that the case's own delay stages do not hold (a distributed
   // run's network round trip and node delay stages), added to each case's lag in its check.
   double extra_lag = 0.0;
+  // Progress lines of a long run (analysis/run_progress.h); none without a print.
+  ProgressOptions progress = {};
 };
 
 // The critical-delay check of one case before it runs, the one run_study and judge_recorded_cases
@@ -160,6 +166,8 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
 // reference's strongest second; absent when no case has an actuator. A case stopped early (a
 // limit, its predictor's bound) is drawn up to its stop, a dashed line there naming why, and its
 // tracking zoom is its last second when it stopped before the reference's strongest one ended.
+// Then a model's envelope over height, its chosen floors and every actuator, a page of them at a
+// time (analysis/response_envelope_plots.h), where the study has several floors or actuators.
 // Returns the PNG files written (names in `directory`, each with its SVG beside it); a figure the
 // study has nothing for is removed.
 // Throws std::runtime_error when gnuplot fails (no figure is then written).

@@ -145,7 +145,11 @@ void run(const RunOptions& o) {
   require_table_fits(prepared, o.results);
   const double setup_s = seconds_since(started);
   const auto cases_started = std::chrono::steady_clock::now();
-  const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
+  // A run longer than a few seconds says how far it is on stderr (analysis/run_progress.h).
+  const analysis::StudyOutcome outcome = analysis::run_study(
+      prepared, {.warn = print_warning, .progress = {.print = [](const std::string& line) {
+                                          std::cerr << "rths: " << line << "\n";
+                                        }}});
   const double run_s = seconds_since(cases_started);
   write_study_outputs(outcome, out, !o.results.no_plots, o.results.json, o.results.format);
   write_benchmark_outputs(prepared, outcome, out, !o.results.no_plots, o.results.json);

@@ -188,9 +188,12 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
 }
 
 SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
-                          const SimulationOptions& options, const AnswerSchedule& answers) {
+                          const SimulationOptions& options, const AnswerSchedule& answers,
+                          StepHooks* hooks) {
   require_motion_at_dt(setup, motion_at_dt);
-  check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
+  check_stability(setup.integrator,
+                  options.max_omega > 0.0 ? options.max_omega : max_omega(setup.model), setup.dt,
+                  setup.allow_unstable);
 
   HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps,
                             setup.predictors);
@@ -213,7 +216,7 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
   }
   StepHooks no_hooks;
   SimulationResult result;
-  run_steps(setup, motion_at_dt, restoring, no_hooks, options, result);
+  run_steps(setup, motion_at_dt, restoring, hooks ? *hooks : no_hooks, options, result);
   const PredictorSet& predictors = restoring.predictors();
   if (!predictors.empty())
     for (std::size_t a = 0; a < setup.partition.actuator_storeys.size(); ++a)

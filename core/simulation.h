@@ -89,6 +89,10 @@ struct SimulationOptions {
   std::vector<int> kept_dofs;
   bool base_shear = false;  // fill SimulationResult::base_shear
   bool peaks = false;       // fill SimulationResult's per-step peaks over every DOF
+  // rad/s, the model's highest natural frequency (core::max_omega) where the caller has it: a
+  // study's cases share one model, so it is estimated once a study, not once a run. 0: simulate
+  // estimates it.
+  double max_omega = 0.0;
 };
 
 // What a runtime adds around each step. Either hook may throw to abort the run; the loop then
@@ -118,9 +122,10 @@ void run_steps(const HybridSetup& setup, const GroundMotion& motion_at_dt,
 // Throws std::invalid_argument when dt is beyond the integrator's limit (unless allowed), when
 // the motion's dt differs from setup.dt, or when an implicit integrator meets a delay stage or a
 // replay. `answers`: the answers a distributed run used, replayed (answer_replay.h); empty rows:
-// every step on its own answer.
+// every step on its own answer. `hooks`: what the loop does around each step (a run's progress),
+// none when null.
 SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_at_dt,
-                          const SimulationOptions& options = {},
-                          const AnswerSchedule& answers = {});
+                          const SimulationOptions& options = {}, const AnswerSchedule& answers = {},
+                          StepHooks* hooks = nullptr);
 
 }  // namespace rths::core

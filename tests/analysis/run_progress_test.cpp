@@ -1,0 +1,77 @@
+// A study's progress lines (analysis/run_progress.h): a run past its quiet time says which run,
+// which step and the time left, at the clock's rate; a short one prints nothing; run_study names
+// the lag-free run and each case that adds to it.
+#include "analysis/run_progress.h"
+
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "analysis/study_run.h"
+#include "study/study.h"
+
+namespace rths::analysis {
+namespace {
+
+const std::filesystem::path kConfigs = RTHS_SOURCE_DIR "/configs";
+
+// An SDOF, all of it experimental, `duration` s of El Centro at 1 ms: a reference that adds
+// nothing to the lag-free run and a case with 5 ms of lag.
+core::PreparedStudy sdof(double duration) {
+  const std::string text =
+      "name: \"sdof\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
+      "motion { path: \"../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
+      std::to_string(duration) +
+      " } integrator { dt: 0.001 } substructuring { experimental_fraction: 0.5 } "
+      "cases { name: \"reference\" } cases { name: \"lag_5ms\" delay { shift { delay: 0.005 } } }";
+  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+}
+
+TEST(RunProgress, PastItsQuietTimeALineEveryClockReadNamesTheRunTheStepAndTheTimeLeft) {
+  std::vector<std::string> lines;
+  RunProgress progress(
+      {.print = [&](const std::string& l) { lines.push_back(l); }, .quiet = 0.0, .every = 0.0}, 3,
+      4096);
+  progress.start(1, "case 'lag'");
+  const core::SimulationResult unused;
+  for (std::size_t k = 0; k < 4096; ++k) EXPECT_TRUE(progress.after_step(k, unused));
+  ASSERT_EQ(lines.size(), 3u);  // steps 1024, 2048 and 3072
+  EXPECT_EQ(progress.lines(), 3u);
+  EXPECT_EQ(lines[1].rfind("progress: run 2 of 3 (case 'lag'), step 2048 of 4096; ", 0), 0u)
+      << lines[1];
+  EXPECT_NE(lines[1].find(" s so far, about "), std::string::npos) << lines[1];
+  EXPECT_NE(lines[1].find(" s left"), std::string::npos) << lines[1];
+}
+
+TEST(RunProgress, ARunShorterThanItsQuietTimePrintsNothing) {
+  std::vector<std::string> lines;
+  RunProgress progress({.print = [&](const std::string& l) { lines.push_back(l); }}, 1, 8192);
+  progress.start(0, "the lag-free run");
+  const core::SimulationResult unused;
+  for (std::size_t k = 0; k < 8192; ++k) progress.after_step(k, unused);
+  EXPECT_TRUE(lines.empty()) << lines.front();
+}
+
+TEST(RunProgress, RunStudyReportsTheLagFreeRunAndEachCaseThatAddsToIt) {
+  std::vector<std::string> lines;
+  run_study(sdof(5.0), {.progress = {.print = [&](const std::string& l) { lines.push_back(l); },
+                                     .quiet = 0.0,
+                                     .every = 0.0}});
+  // 5000 steps each: lines at steps 1024, 2048, 3072 and 4096 of the lag-free run and of the
+  // lagged case; the reference adds nothing (it is the lag-free run) and runs no steps.
+  ASSERT_EQ(lines.size(), 8u);
+  EXPECT_EQ(lines[0].rfind("progress: run 1 of 2 (the lag-free run), step 1024 of 5000; ", 0), 0u)
+      << lines[0];
+  EXPECT_EQ(lines[7].rfind("progress: run 2 of 2 (case 'lag_5ms'), step 4096 of 5000; ", 0), 0u)
+      << lines[7];
+}
+
+TEST(RunProgress, AShortStudyWithTheDefaultsPrintsNothing) {
+  std::vector<std::string> lines;
+  run_study(sdof(2.0), {.progress = {.print = [&](const std::string& l) { lines.push_back(l); }}});
+  EXPECT_TRUE(lines.empty()) << lines.front();
+}
+
+}  // namespace
+}  // namespace rths::analysis
