@@ -161,6 +161,10 @@ runtime::LaunchOptions case_options(const LaunchArgs& args, const std::string& n
                           : args.cpu_placement == "spread" ? runtime::CpuPlacement::kSpread
                                                            : runtime::CpuPlacement::kAuto;
   options.coordinator_args = view_arguments(args);
+  // --format h5: each case's steps also in OUT/<case>.h5, written as the run goes.
+  if (args.results.format == "h5")
+    for (const std::string& a : {std::string("--h5"), (out / (name + ".h5")).string()})
+      options.coordinator_args.push_back(a);
   return options;
 }
 

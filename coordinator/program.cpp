@@ -10,9 +10,12 @@
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
+#include <string_view>
 #include <tuple>
+#include <vector>
 
 #include "coordinator/answer_age.h"
+#include "results/record_h5.h"
 #include "rt_check/check.h"
 #include "runtime/launch/launch.h"
 #include "runtime/node/node_main.h"
@@ -180,7 +183,7 @@ LiveView start_view(const std::string& address_text, bool allow_stop, const std:
 }
 
 struct ProgramArgs {
-  std::string config_path, case_name, run_id, record, security_dir;
+  std::string config_path, case_name, run_id, record, h5, security_dir;
   security::SecretChoice secret;
   int domain = -1;
   PlatformArgs platform;
@@ -202,6 +205,10 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
   app.add_option("--case", a.case_name, "case to run (default: deployment.case_name or reference)");
   app.add_option("--run-id", a.run_id, "run id (default: host-pid-time)");
   app.add_option("--record", a.record, "run record file (length-delimited protobuf)");
+  app.add_option("--h5", a.h5,
+                 "the record's steps also written to this HDF5 file as the run goes (compressed "
+                 "blocks of 1024 steps, each flushed: a run killed mid-way keeps them); needs "
+                 "--record");
   app.add_option("--domain", a.domain, "DDS domain id (default: deployment.domain_id)");
   app.add_option("--security", a.security_dir,
                  "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
@@ -220,11 +227,29 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
                "printed at start-up (it carries the stop's token)");
 }
 
+// Each entry of the record to the live view and to the HDF5 file (either may be absent), on the
+// record's writer thread.
+class RecordObservers final : public runtime::RecordObserver {
+ public:
+  void add(runtime::RecordObserver* observer) {
+    if (observer) observers_.push_back(observer);
+  }
+  void on_entry(std::string_view frame) override {
+    for (runtime::RecordObserver* o : observers_) o->on_entry(frame);
+  }
+  bool empty() const { return observers_.empty(); }
+
+ private:
+  std::vector<runtime::RecordObserver*> observers_;
+};
+
 // Everything a run holds, in the order it is torn down: the coordinator first, then what it
-// uses (the record's writer feeds the view, so the view outlives it).
+// uses (the record's writer feeds the view and the HDF5 file, so they outlive it).
 struct Session {
   std::atomic<bool> stop_request{false};
   LiveView view;
+  std::unique_ptr<results::RecordH5Writer> h5;
+  RecordObservers observers;
   std::unique_ptr<rt_check::DmaLatencyHold> dma_latency;
   std::unique_ptr<transport::DdsEndpoint> endpoint;
   std::unique_ptr<Coordinator> coordinator;
@@ -281,10 +306,17 @@ void start_session(ProgramArgs& a, Session& session) {
         a.case_name.empty() ? study.deployment().case_name() : a.case_name;
     session.view = start_view(a.view_address, a.view_stop, a.record, prepared, shown_case,
                               session.stop_request);
-    co.record_observer = session.view.feed.get();
+    session.observers.add(session.view.feed.get());
     co.stop_request = &session.stop_request;
     co.control = session.view.desk.get();
   }
+  if (!a.h5.empty()) {
+    if (a.record.empty())
+      throw std::invalid_argument("--h5 needs --record: the HDF5 file follows the run record");
+    session.h5 = std::make_unique<results::RecordH5Writer>(a.h5);
+    session.observers.add(session.h5.get());
+  }
+  if (!session.observers.empty()) co.record_observer = &session.observers;
   transport::DdsEndpoint* endpoint = session.endpoint.get();
   co.unauthenticated = [endpoint] { return endpoint->unauthenticated(); };
   session.coordinator = std::make_unique<Coordinator>(std::move(prepared), *session.endpoint, co);
@@ -330,6 +362,15 @@ int coordinator_main(int argc, char** argv) {
     if (!outcome.ok)
       std::cerr << "rths-coordinator: run failed: " << outcome.status
                 << (outcome.failed_node.empty() ? "" : " (" + outcome.failed_node + ")") << "\n";
+    if (session.h5) {
+      session.h5->close();
+      if (!session.h5->failure().empty()) {
+        // The record holds every step; the HDF5 file asked for is not whole: not a good run.
+        std::cerr << "rths-coordinator: " << session.h5->failure() << " (the record " << args.record
+                  << " holds every step)\n";
+        return outcome.ok || outcome.environment_fault ? 3 : 1;
+      }
+    }
     return outcome.ok ? 0 : outcome.environment_fault ? 3 : 1;
   } catch (const std::exception& e) {
     std::cerr << "rths-coordinator: " << e.what() << "\n";

@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "results/h5_handle.h"
 #include "util/atomic_file.h"
 
 namespace rths::results {
@@ -142,23 +143,6 @@ void write_mat(const Table& table, const std::filesystem::path& path, const std:
 }
 
 // --- HDF5 --------------------------------------------------------------------------------------
-// Owns one HDF5 identifier and closes it with the matching H5?close.
-class H5Handle {
- public:
-  H5Handle(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  ~H5Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  H5Handle(const H5Handle&) = delete;
-  H5Handle& operator=(const H5Handle&) = delete;
-  hid_t get() const { return id_; }
-  bool ok() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
 class H5Writer {
  public:
   H5Writer(const std::filesystem::path& path, std::string target)
