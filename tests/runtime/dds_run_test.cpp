@@ -1,15 +1,23 @@
 // Distributed runs over Cyclone DDS on loopback: real processes (coordinator, substructure node,
-// actuator emulator), each test in its own DDS domain (ids 10-19).
+// actuator emulator), all on the shared DDS domain, each test on topics of its own
+// (tests/support/dds_scope.h).
 #include <gtest/gtest.h>
 
-#include <future>
+#include <unistd.h>
+
+#include <chrono>
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/real_time_run.h"
+#include "transport/topic_scope.h"
+#include "util/process.h"
 
 namespace rths {
 namespace {
+
+using namespace std::chrono_literals;
 
 class DdsRun : public testing::Test {
  protected:
@@ -18,7 +26,8 @@ class DdsRun : public testing::Test {
 
 TEST_F(DdsRun, LockstepEqualsTheInProcessRunBitForBit) {
   const std::string text = test::paper_frame_study(3, "");
-  const auto run = test::launch("lockstep_equal", text, "lag_shift_14ms", 11);
+  const auto run =
+      test::launch("lockstep_equal", text, "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   ASSERT_NE(run.record.footer(), nullptr);
@@ -30,7 +39,8 @@ TEST_F(DdsRun, LockstepEqualsTheInProcessRunBitForBit) {
 // Multi-rate: the emulator's servo loop at 4x the integrator's rate, in simulated time.
 TEST_F(DdsRun, MultiRateLockstepEqualsTheInProcessMultiRateRunBitForBit) {
   const std::string text = test::paper_frame_study(2, "servo { rate: 4000 }");
-  const auto run = test::launch("multi_rate", text, "lag_shift_14ms", 51);
+  const auto run =
+      test::launch("multi_rate", text, "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const core::SimulationResult multi_rate = test::reference_result(text, "lag_shift_14ms");
   test::expect_record_equals(run.record, multi_rate);
@@ -48,7 +58,8 @@ TEST_F(DdsRun, RealTimeServoLoopStreamsFeedbackAtItsOwnRate) {
       "servo { rate: 4000 } deployment { clock: REAL_TIME max_overrun_fraction: -1 "
       "max_missed_answers: 30 command_watchdog_periods: 30 min_answer_fraction: -1 }");
   // The streaming's mechanics are judged here, not whether this machine keeps a 4 kHz servo.
-  const auto witnessed = test::launch_witnessed("servo_real_time", text, "reference", 52);
+  const auto witnessed =
+      test::launch_witnessed("servo_real_time", text, "reference", test::scope_dds_to_this_test());
   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
   const auto& run = witnessed.run;
   const auto* footer = run.record.footer();
@@ -75,7 +86,8 @@ TEST_F(DdsRun, RealTimePriorityRaisesEveryProcesssLoopAndReceiveThreads) {
       0.5,
       "deployment { clock: REAL_TIME realtime_priority: 20 max_overrun_fraction: -1 "
       "max_missed_answers: 30 command_watchdog_periods: 30 }");
-  const auto witnessed = test::launch_witnessed("fifo", text, "reference", 79);
+  const auto witnessed =
+      test::launch_witnessed("fifo", text, "reference", test::scope_dds_to_this_test());
   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
   const auto& run = witnessed.run;
   std::vector<std::string> logs;
@@ -109,7 +121,7 @@ TEST_F(DdsRun, SplitStoreysAcrossTwoSubstructureNodesEqualInProcess) {
       "nodes { id: 3 kind: SUBSTRUCTURE storeys: [2] } nodes { id: 2 kind: ACTUATOR_EMULATOR } }",
       "substructuring { experimental_fraction: 0.5 model { bilinear { yield_displacement: 0.004 "
       "post_yield_ratio: 0.1 } } }");
-  const auto run = test::launch("split", text, "lag", 12);
+  const auto run = test::launch("split", text, "lag", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "lag"));
   EXPECT_EQ(run.launch.node_exits.size(), 3u);
@@ -122,7 +134,8 @@ TEST_F(DdsRun, InjectedWallClockLagIsMeasuredAndLeavesTheLockstepResultUnchanged
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
       "receive_lag { one_way_delay: 0.001 } send_lag { one_way_delay: 0.001 jitter: 0.0002 seed: "
       "3 } } }");
-  const auto run = test::launch("injected_lag", text, "lag_shift_14ms", 13);
+  const auto run =
+      test::launch("injected_lag", text, "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "lag_shift_14ms"));
   std::vector<double> injected, round_trip, fast_round_trip;
@@ -151,25 +164,78 @@ TEST_F(DdsRun, DelayStageAtTheEmulatorsInputReproducesTheInProcessDelayedResult)
       2,
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
       "receive_delay { jitter { mean_delay: 0.01 std_dev: 0.003 seed: 5 } } } }");
-  const auto run = test::launch("node_delay", text, "reference", 19);
+  const auto run = test::launch("node_delay", text, "reference", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "jitter"));
 }
 
-TEST_F(DdsRun, TwoRunsSideBySideAreIsolated) {
+// `rths launch` of one case of the study at `config` on the shared domain, its topics scoped by
+// `scope` (transport/topic_scope.h), started now; it writes its record to `record`.
+struct ScopedLaunch {
+  util::ChildProcess process;
+  std::filesystem::path record;
+};
+
+ScopedLaunch launch_scoped(const std::filesystem::path& config, const std::string& case_name,
+                           const std::string& scope) {
+  const std::filesystem::path dir = config.parent_path();
+  const std::filesystem::path out = dir / ("out_" + case_name);
+  util::ChildOptions options;
+  options.environment[transport::kTopicScopeVariable] = scope;
+  util::ChildProcess process(std::filesystem::path(RTHS_BINARY_DIR) / "cli" / "rths",
+                             {"launch", config.string(), "--case", case_name, "--domain",
+                              std::to_string(test::kSharedDomain), "--no-plots", "--bin-dir",
+                              RTHS_BINARY_DIR, "--out", out.string()},
+                             dir / ("launch_" + case_name + ".log"), options);
+  return {std::move(process), out / (case_name + ".rthsrec")};
+}
+
+// Messages a run dropped unread (unauthenticated) or rejected as another run's (foreign run),
+// by its coordinator and by each node.
+std::uint64_t messages_of_another_run(const runtime::RecordContents& record) {
+  std::uint64_t count = record.footer()->counters().unauthenticated();
+  for (const runtime::NodeRejects& n : record.footer()->node_rejects())
+    count += n.rejected().unauthenticated() + n.rejected().foreign_run();
+  return count + record.footer()->counters().foreign_run();
+}
+
+// Two runs at once on one domain, each on its own topic scope: neither hears a message of the
+// other (nothing dropped or rejected), and each equals its own case's in-process run bit for bit.
+TEST_F(DdsRun, TwoRunsOnOneDomainWithTheirOwnScopesNeverHearEachOther) {
   const std::string text = test::paper_frame_study(2, "");
-  auto first =
-      std::async(std::launch::async, [&] { return test::launch("side_a", text, "reference", 14); });
-  auto second = std::async(std::launch::async,
-                           [&] { return test::launch("side_b", text, "lag_shift_14ms", 15); });
-  const auto a = first.get();
-  const auto b = second.get();
-  ASSERT_EQ(a.launch.coordinator_exit, 0) << test::read_file(a.launch.coordinator_log);
-  ASSERT_EQ(b.launch.coordinator_exit, 0) << test::read_file(b.launch.coordinator_log);
-  test::expect_record_equals(a.record, test::reference_result(text, "reference"));
-  test::expect_record_equals(b.record, test::reference_result(text, "lag_shift_14ms"));
-  EXPECT_EQ(a.record.footer()->counters().foreign_run(), 0u);
-  EXPECT_EQ(b.record.footer()->counters().foreign_run(), 0u);
+  const auto config = test::write_config(test::scratch_dir("own_scopes"), text);
+  const std::string scope = test::dds_scope_for("own_scopes", ::getpid());
+  ScopedLaunch a = launch_scoped(config, "reference", scope + "_a");
+  ScopedLaunch b = launch_scoped(config, "lag_shift_14ms", scope + "_b");
+  ASSERT_EQ(a.process.wait_for(120s).value_or(-1), 0) << a.process.log_tail();
+  ASSERT_EQ(b.process.wait_for(120s).value_or(-1), 0) << b.process.log_tail();
+  const auto record_a = runtime::read_record(a.record);
+  const auto record_b = runtime::read_record(b.record);
+  test::expect_record_equals(record_a, test::reference_result(text, "reference"));
+  test::expect_record_equals(record_b, test::reference_result(text, "lag_shift_14ms"));
+  EXPECT_EQ(messages_of_another_run(record_a), 0u);
+  EXPECT_EQ(messages_of_another_run(record_b), 0u);
+}
+
+// Two runs on one domain and one scope do hear each other: the second starts while the first is
+// under way, and each `rths launch` run's own secret (transport/message_mac.h) drops the other's
+// messages unread and counts them, so both still complete equal to their in-process runs.
+TEST_F(DdsRun, TwoRunsOnOneDomainAndOneScopeDropAndCountEachOthersMessages) {
+  const std::string text = test::paper_frame_study(6, "");
+  const auto config = test::write_config(test::scratch_dir("one_scope"), text);
+  const std::string scope = test::dds_scope_for("one_scope", ::getpid());
+  ScopedLaunch a = launch_scoped(config, "reference", scope);
+  // Under way once its record holds a step; a launch that ends first fails here, naming why.
+  while (!test::wait_for_steps(a.record, 1, 100ms))
+    ASSERT_TRUE(a.process.running()) << a.process.log_tail();
+  ScopedLaunch b = launch_scoped(config, "lag_shift_14ms", scope);
+  ASSERT_EQ(a.process.wait_for(120s).value_or(-1), 0) << a.process.log_tail();
+  ASSERT_EQ(b.process.wait_for(120s).value_or(-1), 0) << b.process.log_tail();
+  const auto record_a = runtime::read_record(a.record);
+  const auto record_b = runtime::read_record(b.record);
+  test::expect_record_equals(record_a, test::reference_result(text, "reference"));
+  test::expect_record_equals(record_b, test::reference_result(text, "lag_shift_14ms"));
+  EXPECT_GT(messages_of_another_run(record_a) + messages_of_another_run(record_b), 0u);
 }
 
 TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
@@ -178,7 +244,8 @@ TEST_F(DdsRun, RealTimeRunIsPacedAndRecordsLatenessAndAnsweredSteps) {
       1.0,
       "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
       "command_watchdog_periods: 30 }");
-  const auto witnessed = test::launch_witnessed("real_time", text, "reference", 16);
+  const auto witnessed =
+      test::launch_witnessed("real_time", text, "reference", test::scope_dds_to_this_test());
   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
   const auto& run = witnessed.run;
   const auto* footer = run.record.footer();
@@ -205,7 +272,8 @@ TEST_F(DdsRun, RealTimeUsesTheNewestAnswerWhenTheLinkIsSlowerThanAStep) {
       "command_watchdog_periods: 30 nodes { id: 1 kind: SUBSTRUCTURE } "
       "nodes { id: 2 kind: ACTUATOR_EMULATOR receive_lag { one_way_delay: 0.003 } "
       "send_lag { one_way_delay: 0.003 } } }");
-  const auto witnessed = test::launch_witnessed("slow_link", text, "reference", 10);
+  const auto witnessed =
+      test::launch_witnessed("slow_link", text, "reference", test::scope_dds_to_this_test());
   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
   const auto& run = witnessed.run;
   std::vector<double> behind;
@@ -231,7 +299,8 @@ TEST_F(DdsRun, RealTimeStopsWaitingForAnswersThatCannotComeWithinTheWait) {
       // run whose loop overran longer than its window (a stall of this shared machine).
       "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 100 "
       "command_watchdog_periods: 100 feedback_wait_fraction: 0.02 }");
-  const auto witnessed = test::launch_witnessed("answer_wait", text, "reference", 17);
+  const auto witnessed =
+      test::launch_witnessed("answer_wait", text, "reference", test::scope_dds_to_this_test());
   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
   const auto& run = witnessed.run;
   std::vector<std::string> stopped;

@@ -1,5 +1,5 @@
-// `rths launch` and `rths export` end to end (the real binary; domains 70-72, 74, 18, 165, 167,
-// 231).
+// `rths launch` and `rths export` end to end (the real binary; on the shared DDS domain, each test
+// on topics of its own: tests/support/dds_scope.h).
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -14,6 +14,7 @@
 
 #include "runtime/node/schema.h"
 #include "test_support.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -36,10 +37,14 @@ Output run(const std::string& command) {
 
 const std::string kRths = std::string(RTHS_BINARY_DIR) + "/cli/rths";
 
+// A launched study's deployment: the shared DDS domain, with this test's topics.
+std::string scoped_deployment() {
+  return "deployment { domain_id: " + std::to_string(test::scope_dds_to_this_test()) + " }";
+}
+
 TEST(Launch, RunsEveryCaseAndWritesRecordsResultsAndASummary) {
   const auto dir = test::scratch_dir("launch_cli");
-  const auto config =
-      test::write_config(dir, test::paper_frame_study(1.5, "deployment { domain_id: 70 }"));
+  const auto config = test::write_config(dir, test::paper_frame_study(1.5, scoped_deployment()));
   const auto out = dir / "out";
   const Output o = run(kRths + " launch " + config.string() + " --case reference --case " +
                        "lag_shift_14ms --no-plots --json --bin-dir " + RTHS_BINARY_DIR + " --out " +
@@ -72,13 +77,12 @@ TEST(Launch, AStrangersTakeoverIsDroppedAndTheSecretIsInNoLog) {
   runtime::ensure_dds_config();  // the stranger on the loopback DDS the launched processes use
   const auto dir = test::scratch_dir("launch_takeover");
   // Long enough (about a second of lockstep) for the stranger to learn the run id and attack.
-  const auto config =
-      test::write_config(dir, test::paper_frame_study(10, "deployment { domain_id: 165 }"));
+  const auto config = test::write_config(dir, test::paper_frame_study(10, scoped_deployment()));
   const auto out = dir / "out";
-  util::ChildProcess rogue(
-      test::program("rths_rogue", "tests/support"),
-      {"--domain", "165", "--seconds", "60", "--mode", "takeover", "--every", "1"},
-      dir / "rogue.log");
+  util::ChildProcess rogue(test::program("rths_rogue", "tests/support"),
+                           {"--domain", std::to_string(test::kSharedDomain), "--seconds", "60",
+                            "--mode", "takeover", "--every", "1"},
+                           dir / "rogue.log");
   std::this_thread::sleep_for(std::chrono::seconds(1));  // discovered before the nodes announce
   const Output o = run(kRths + " launch " + config.string() + " --case lag_shift_14ms " +
                        "--no-plots --bin-dir " + RTHS_BINARY_DIR + " --out " + out.string());
@@ -114,12 +118,12 @@ TEST(Launch, AStrangersTakeoverIsDroppedAndTheSecretIsInNoLog) {
 TEST(Launch, ReplaysAreDroppedAndCountedPerSideInTheSummaryAndTheExport) {
   runtime::ensure_dds_config();
   const auto dir = test::scratch_dir("launch_replay");
-  const auto config =
-      test::write_config(dir, test::paper_frame_study(3, "deployment { domain_id: 231 }"));
+  const auto config = test::write_config(dir, test::paper_frame_study(3, scoped_deployment()));
   const auto out = dir / "out";
-  util::ChildProcess rogue(test::program("rths_rogue", "tests/support"),
-                           {"--domain", "231", "--seconds", "120", "--mode", "replay"},
-                           dir / "rogue.log");
+  util::ChildProcess rogue(
+      test::program("rths_rogue", "tests/support"),
+      {"--domain", std::to_string(test::kSharedDomain), "--seconds", "120", "--mode", "replay"},
+      dir / "rogue.log");
   std::this_thread::sleep_for(std::chrono::seconds(1));  // discovered before the nodes announce
   const Output o = run(kRths + " launch " + config.string() + " --case lag_shift_14ms " +
                        "--no-plots --bin-dir " + RTHS_BINARY_DIR + " --out " + out.string());
@@ -169,8 +173,7 @@ std::size_t rows_of(const std::filesystem::path& csv) {
 // step count (launch used to report the coordinator's exchange counter: one fewer).
 TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
   const auto dir = test::scratch_dir("launch_columns");
-  const auto config =
-      test::write_config(dir, test::paper_frame_study(0.5, "deployment { domain_id: 71 }"));
+  const auto config = test::write_config(dir, test::paper_frame_study(0.5, scoped_deployment()));
   const Output ran =
       run(kRths + " run " + config.string() + " --no-plots --json --out " + (dir / "run").string());
   ASSERT_EQ(ran.code, 0) << ran.out;
@@ -206,7 +209,7 @@ TEST(Launch, WritesRunsColumnsPlusLagPerLinkAndTheSameStepCount) {
 // case is compared with the lag-free in-process run, and the summary says so.
 TEST(Launch, ComparesEveryCaseWithTheLagFreeInProcessReference) {
   const auto dir = test::scratch_dir("launch_reference");
-  const std::string lag_free_named = test::paper_frame_study(0.5, "deployment { domain_id: 72 }");
+  const std::string lag_free_named = test::paper_frame_study(0.5, scoped_deployment());
   const auto config =
       test::write_config(dir, "reference_case: \"lag_shift_14ms\"\n" + lag_free_named);
   const Output launched =
@@ -231,7 +234,7 @@ TEST(Launch, ComparesEveryCaseWithTheLagFreeInProcessReference) {
 }
 
 // A benchmark study gets J1-J9 after `rths launch` as after `rths run`: the benchmark's case 1 cut
-// to 7 s (lockstep, domain 74), its sample controller's criteria equal to the in-process run's,
+// to 7 s (lockstep), its sample controller's criteria equal to the in-process run's,
 // each named, and no published value (the cut motion is not the published one).
 TEST(Launch, ComputesTheBenchmarkCriteriaAsRunDoes) {
   const auto dir = test::scratch_dir("launch_benchmark");
@@ -242,7 +245,7 @@ TEST(Launch, ComputesTheBenchmarkCriteriaAsRunDoes) {
   std::string text = test::read_file(source / "case_1.textproto");
   const std::string scale = "scale: 0.4 }";
   text.replace(text.find(scale), scale.size(), "scale: 0.4 duration: 7 }");
-  text += "deployment { domain_id: 74 }\n";
+  text += scoped_deployment() + "\n";
   const auto config = test::write_config(dir, text);
   const Output launched = run(kRths + " launch " + config.string() + " --no-plots --bin-dir " +
                               RTHS_BINARY_DIR + " --out " + (dir / "launch").string());
@@ -304,7 +307,8 @@ TEST(Launch, BadDeploymentIsBadInputBeforeAnythingStarts) {
 TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
   runtime::ensure_dds_config();
   const std::string text = test::paper_frame_study(0.5, "");
-  const auto launched = test::launch("export", text, "lag_shift_14ms", 18);
+  const auto launched =
+      test::launch("export", text, "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(launched.launch.coordinator_exit, 0);
   const auto record = launched.dir / "run.rthsrec";
   const auto csv = launched.dir / "run.csv";
@@ -343,8 +347,8 @@ TEST(Export, WritesOneRowPerStepAndWarnsOnATruncatedRecord) {
 // (the export still names the damage and exits 1).
 TEST(Export, AFlippedHeaderByteLosesNoStep) {
   runtime::ensure_dds_config();
-  const auto launched =
-      test::launch("export_header", test::paper_frame_study(0.5, ""), "lag_shift_14ms", 167);
+  const auto launched = test::launch("export_header", test::paper_frame_study(0.5, ""),
+                                     "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(launched.launch.coordinator_exit, 0);
   const auto& entries = launched.record.entries;
   ASSERT_TRUE(entries.front().has_header());

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "envelope.h"
+#include "transport/topic_scope.h"
 
 namespace rths::rogue {
 
@@ -78,9 +79,10 @@ std::map<std::string, long> replay(int domain, double seconds,
   std::map<std::string, long> replayed;
   try {
     std::vector<Tap> taps;
-    for (const char* name :
-         {"rths_node1_up", "rths_node2_up", "rths_node1_down", "rths_node2_down"})
-      taps.push_back(tap(participant, name));
+    // The run's topics under this process's scope (RTHS_DDS_SCOPE), as its endpoints name them.
+    const std::string prefix = transport::scoped_topic_prefix();
+    for (const char* name : {"_node1_up", "_node2_up", "_node1_down", "_node2_down"})
+      taps.push_back(tap(participant, prefix + name));
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
     while (std::chrono::steady_clock::now() < end && !stop) {
       for (const Tap& t : taps) replay_taken(t, replayed);

@@ -2,8 +2,9 @@
 // The rogue's replay attack (rths_rogue --mode replay): a stranger without the run secret records
 // the run's genuine messages off the wire and re-publishes each one byte for byte (run id, stamps,
 // payload and MAC as they came) from its own writer on the topic it came from: node 1's and node
-// 2's announcements, answers and heartbeats (rths_node<N>_up) and the coordinator's assignments
-// and commands to them (rths_node<N>_down). Written against libddsc and the envelope type
+// 2's announcements, answers and heartbeats (<prefix>_node<N>_up) and the coordinator's
+// assignments and commands to them (<prefix>_node<N>_down), the prefix the process's topic scope
+// gives (transport/topic_scope.h: "rths" unscoped). Written against libddsc and the envelope type
 // directly, since rths's own endpoint would sign anew.
 //
 // Inputs: the DDS domain, how long (s), and a flag that ends it early (SIGTERM's).
