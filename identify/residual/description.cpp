@@ -56,6 +56,23 @@ double projection(std::span<const double> time, std::span<const double> r, doubl
   return std::abs(sum);
 }
 
+// Whether value(peak) is at least kPeakOverFloor x the median of value(k) over the bins within
+// kFloorBand Hz of the peak, leaving out the Hann window's main lobe beside it (a negative value
+// is no bin: an input with no amplitude there).
+template <class Value>
+bool stands_out(const std::vector<double>& frequency, std::size_t peak, const Value& value) {
+  constexpr std::size_t kGuard = 3;  // bins
+  std::vector<double> around;
+  for (std::size_t k = 1; k < frequency.size(); ++k)
+    if (std::abs(frequency[k] - frequency[peak]) <= kFloorBand &&
+        (k + kGuard < peak || k > peak + kGuard) && value(k) >= 0.0)
+      around.push_back(value(k));
+  if (around.empty()) return false;
+  std::nth_element(around.begin(), around.begin() + static_cast<long>(around.size() / 2),
+                   around.end());
+  return value(peak) >= kPeakOverFloor * around[around.size() / 2];
+}
+
 // The spectrum's highest peak above kMinPeriodicFrequency when it stands kPeakOverFloor above
 // the median of its neighbourhood, refined to a tenth of a bin; 0 when none stands out.
 double spectral_peak(std::span<const double> time, std::span<const double> r,
@@ -68,19 +85,17 @@ double spectral_peak(std::span<const double> time, std::span<const double> r,
   for (std::size_t k = 1; k < s.frequency.size(); ++k)
     if (s.frequency[k] >= kMinPeriodicFrequency && s.amplitude[k] > s.amplitude[peak]) peak = k;
   if (peak == 0) return 0.0;
-  std::vector<double> around;
-  const std::size_t guard = 3;  // bins beside the peak: a Hann window's main lobe
-  for (std::size_t k = 1; k < s.frequency.size(); ++k)
-    if (std::abs(s.frequency[k] - s.frequency[peak]) <= kFloorBand &&
-        (k + guard < peak || k > peak + guard))
-      around.push_back(s.amplitude[k]);
-  if (around.empty()) return 0.0;
-  std::nth_element(around.begin(), around.begin() + static_cast<long>(around.size() / 2),
-                   around.end());
-  if (s.amplitude[peak] < kPeakOverFloor * around[around.size() / 2]) return 0.0;
-  // A period of the input's own is the model's error on the input, which the maps judge.
+  const auto amplitude = [&](std::size_t k) { return s.amplitude[k]; };
+  const auto over_input = [&](std::size_t k) {
+    return input.amplitude[k] > 0.0 ? s.amplitude[k] / input.amplitude[k] : -1.0;
+  };
+  if (!stands_out(s.frequency, peak, amplitude)) return 0.0;
+  // A period of the input's own is the model's error on the input, which the maps judge, unless
+  // the residual stands out of the input's spectrum there too (another source's period).
   const double input_peak = *std::max_element(input.amplitude.begin(), input.amplitude.end());
-  if (input.amplitude[peak] > kInputPeakShare * input_peak) return 0.0;
+  if (input.amplitude[peak] > kInputPeakShare * input_peak &&
+      !(input.amplitude[peak] > 0.0 && stands_out(s.frequency, peak, over_input)))
+    return 0.0;
   double best = s.frequency[peak], best_value = 0.0;
   for (int i = -10; i <= 10; ++i) {
     const double f = s.frequency[peak] + 0.1 * i * bin;
@@ -239,8 +254,39 @@ void periodic_test(std::span<const double> time, std::span<const double> p, std:
   }
 }
 
-// The static maps on r against p; the accepted one is subtracted from r.
-void map_test(std::span<const double> p, std::vector<double>& r, const Halves& h,
+// The rate of p at every sample (central differences, unit/s).
+std::vector<double> rate_of(std::span<const double> p, double dt) {
+  std::vector<double> out(p.size(), 0.0);
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    const std::size_t a = j > 0 ? j - 1 : j, b = j + 1 < p.size() ? j + 1 : j;
+    if (b > a) out[j] = (p[b] - p[a]) / (static_cast<double>(b - a) * dt);
+  }
+  return out;
+}
+
+// The map over x (p or its rate) read as a signature: its even part (less its mean) a
+// dependence on x's sign, "direction", with g+ - g-; its odd part less its line through 0 one on
+// x's amplitude, "amplitude", with M_odd(x_98) / x_98 - M_odd(x_50) / x_50. Both in r / x: a
+// ratio for p, seconds (the measured's lead on the model) for its rate.
+void read_map(const StaticMap& map, std::span<const double> x, std::span<const double> r,
+              const Halves& h, double e, bool of_rate, ResidualDescription& out) {
+  const auto [curved, even] = odd_even_power(map, x, h.heldout);
+  if (even >= curved) {
+    const double g = side_gain(r, x, h.train, true) - side_gain(r, x, h.train, false);
+    out.direction =
+        DirectionSignature{e, of_rate ? 0.0 : 100.0 * g, 0.0, of_rate, of_rate ? g : 0.0};
+    return;
+  }
+  const double median = abs_percentile(x, h.train, 0.5), top = abs_percentile(x, h.train, 0.98);
+  const auto odd_ratio = [&](double v) { return v > 0.0 ? 0.5 * (map(v) - map(-v)) / v : 0.0; };
+  const double change = odd_ratio(top) - odd_ratio(median);
+  out.amplitude =
+      AmplitudeSignature{e, of_rate ? 0.0 : 100.0 * change, top, of_rate, of_rate ? change : 0.0};
+}
+
+// The static maps on r against p, per direction of p and against p's rate; the one accepted (the
+// one explaining most held out) is subtracted from r.
+void map_test(std::span<const double> p, std::vector<double>& r, double dt, const Halves& h,
               ResidualDescription& out) {
   const double offset = mean_over(r, h.train);
   const StaticMap map(p, r, h.train, offset);
@@ -255,19 +301,28 @@ void map_test(std::span<const double> p, std::vector<double>& r, const Halves& h
   for (std::size_t j : h.heldout) width += (up(p[j]) - down(p[j])) * (up(p[j]) - down(p[j]));
   const double e_split = explained(r, split, h.heldout);
   const bool hysteretic = e_split - std::max(e, 0.0) >= kMinExplained;
-  if (e < kMinExplained && !hysteretic) return;
-  const auto [curved, even] = odd_even_power(map, p, h.heldout);
-  if (hysteretic || even >= curved) {
+  const std::vector<double> v = rate_of(p, dt);
+  const StaticMap rate_map(v, r, h.train, offset);
+  const std::vector<double> d_rate = evaluate(rate_map, v);
+  const double e_rate = explained(r, d_rate, h.heldout);
+  // A line over the rate is a lag the fit holds: the rate's map counts only for its bends and
+  // its sides (the power of its odd part less the line and of its even part).
+  const auto [rate_curved, rate_even] = odd_even_power(rate_map, v, h.heldout);
+  const bool by_rate = e_rate >= kMinExplained &&
+                       e_rate > std::max(e, hysteretic ? e_split : 0.0) &&
+                       rate_curved + rate_even >= kMinExplained * spread_over(r, h.heldout);
+  if (e < kMinExplained && !hysteretic && !by_rate) return;
+  if (by_rate) {
+    read_map(rate_map, v, r, h, e_rate, true, out);
+    d = d_rate;
+  } else if (hysteretic) {
     const double g_up = side_gain(r, p, h.train, true), g_down = side_gain(r, p, h.train, false);
-    out.direction = DirectionSignature{
-        hysteretic ? e_split : e, 100.0 * (g_up - g_down),
-        hysteretic ? std::sqrt(width / static_cast<double>(h.heldout.size())) : 0.0};
+    out.direction = DirectionSignature{e_split, 100.0 * (g_up - g_down),
+                                       std::sqrt(width / static_cast<double>(h.heldout.size()))};
+    d = split;
   } else {
-    const double median = abs_percentile(p, h.train, 0.5), top = abs_percentile(p, h.train, 0.98);
-    const auto odd_ratio = [&](double x) { return x > 0.0 ? 0.5 * (map(x) - map(-x)) / x : 0.0; };
-    out.amplitude = AmplitudeSignature{e, 100.0 * (odd_ratio(top) - odd_ratio(median)), top};
+    read_map(map, p, r, h, e, false, out);
   }
-  if (hysteretic) d = split;
   for (std::size_t j = 0; j < r.size(); ++j) {
     r[j] -= d[j];
     out.described[j] += d[j];
@@ -343,13 +398,13 @@ void trend_test(std::span<const double> time, std::span<const double> p, std::ve
 // The map and the trend in both orders; the order that leaves less held out is kept (a residual
 // of the input's amplitude on a record whose amplitude changes over time shows in both).
 void input_tests(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
-                 const Halves& h, ResidualDescription& out) {
+                 double dt, const Halves& h, ResidualDescription& out) {
   ResidualDescription map_first = out, trend_first = out;
   std::vector<double> r_map = r, r_trend = r;
-  map_test(p, r_map, h, map_first);
+  map_test(p, r_map, dt, h, map_first);
   trend_test(time, p, r_map, h, map_first);
   trend_test(time, p, r_trend, h, trend_first);
-  map_test(p, r_trend, h, trend_first);
+  map_test(p, r_trend, dt, h, trend_first);
   const bool map_wins = spread_over(r_map, h.heldout) <= spread_over(r_trend, h.heldout);
   out = map_wins ? std::move(map_first) : std::move(trend_first);
   r = map_wins ? std::move(r_map) : std::move(r_trend);
@@ -379,7 +434,7 @@ ResidualDescription describe_residual(std::span<const double> time,
   const Halves h = alternate_windows(residual.size());
   out.described.assign(residual.size(), 0.0);
   std::vector<double> left(residual.begin(), residual.end());
-  input_tests(time, prediction, left, h, out);
+  input_tests(time, prediction, left, dt, h, out);
   periodic_test(time, prediction, left, dt, h, out);
   Samples all(residual.size());
   for (std::size_t j = 0; j < all.size(); ++j) all[j] = j;

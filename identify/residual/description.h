@@ -21,7 +21,15 @@
 //              than the negative, relative to the model). The kind is the larger of the two
 //              powers over the held-out samples. A second map per sign of dp/dt (loading,
 //              unloading) is "direction" too when it explains kMinExplained more than the one
-//              map: hysteresis_width = the RMS of M+(p) - M-(p) (unit).
+//              map: hysteresis_width = the RMS of M+(p) - M-(p) (unit). A third map, over p's
+//              rate v = dp/dt (central differences), is kept instead where it explains
+//              kMinExplained and more than the others: read the same way, its even part is
+//              "direction" (the direction of motion: lead_difference = g+ - g- over v, s: how much
+//              more the measured leads the model rising than falling, an actuator slower one way),
+//              its odd part less its line "amplitude" (the rate's amplitude: lead_change = M_odd(v)
+//              / v from the median to the 98th percentile of |v|, s: a flow or a damping that
+//              grows unlike the model's). A residual of the rate is no function of p (a lag's
+//              residual is a quarter period from it), so the maps over p miss it.
 //   time_varying the gain of the residual on the model, rho_w = sum r p / sum p^2, in each window:
 //              the measured / model ratio tracked over the record, described as linear between
 //              the train windows' values (no form); reported when that explains kMinExplained
@@ -33,11 +41,14 @@
 //   periodic   on what they leave: the amplitude spectrum (Hann, FFTW: spectra.h) above
 //              kMinPeriodicFrequency of its train samples; its highest peak, when at least
 //              kPeakOverFloor x the median amplitude within kFloorBand Hz of it and where p's own
-//              spectrum is below kInputPeakShare of its largest amplitude (a period of the
-//              input's own is the model's error on the input, the maps' to judge), is refined on
-//              a grid of a tenth of a bin (the largest |sum r_j exp(-2 pi i f t_j)|) and fitted as
-//              a sinusoid a cos + b sin on the train samples: frequency (Hz) and amplitude
-//              sqrt(a^2 + b^2) (the channel's unit).
+//              spectrum is below kInputPeakShare of its largest amplitude or, where it is not,
+//              the residual's spectrum over p's stands kPeakOverFloor x above its median within
+//              kFloorBand Hz (a model's error on the input follows the input's spectrum and is
+//              the maps' to judge; a period of another source, a neighbour's test at a frequency
+//              the motion holds too, stands out of it), is refined on a grid of a tenth of a bin
+//              (the largest |sum r_j exp(-2 pi i f t_j)|) and fitted as a sinusoid a cos + b sin
+//              on the train samples: frequency (Hz) and amplitude sqrt(a^2 + b^2) (the channel's
+//              unit).
 //   trend shape the windows' rho fitted as a line, a step and an exponential approach
 //              (drift_shape.h): the shape, the ratio at the start and at the end of the record.
 // A test counts only when it explains at least kMinExplained of the residual's held-out variance
@@ -69,12 +80,18 @@ struct PeriodicSignature {
 struct AmplitudeSignature {
   double explained = 0.0;
   double ratio_change_pct = 0.0;  // measured / model, from the median to the 98th percentile
-  double at_input = 0.0;          // the 98th percentile of |p| (unit)
+  double at_input = 0.0;          // the 98th percentile of |p| (unit), of |dp/dt| (unit/s) of_rate
+  bool of_rate = false;           // a function of the rate's amplitude, not of p's
+  double lead_change = 0.0;       // s, of_rate: the measured's lead on the model, median to 98th
 };
 struct DirectionSignature {
   double explained = 0.0;
   double asymmetry_pct = 0.0;     // positive side's measured / model less the negative side's
   double hysteresis_width = 0.0;  // unit; 0 when loading and unloading read alike
+  bool of_rate = false;  // a function of the rate's sign (the direction of motion), not of p's
+  // s, of_rate: the measured's lead on the model while p rises less its lead while p falls (a lag
+  // 8 ms shorter rising: +0.008).
+  double lead_difference = 0.0;
 };
 struct TrendSignature {
   double explained = 0.0;

@@ -36,22 +36,81 @@ Judged judged(const ChannelSignals& s, const std::vector<double>& p) {
   return out;
 }
 
-// The signal r depends on most (the channel's input, its rate, the model's output), named when a
-// function of it explains at least kMinRelation of r's variance.
-void set_relation(const Judged& j, ChannelFloor& out) {
-  const std::string input =
-      out.channel == Channel::kMeasured ? "the command" : "the displacement read";
+// The samples of `j` where `inside` holds (all of them where it is empty).
+Judged subset(const Judged& j, const std::vector<bool>& inside) {
+  if (inside.empty()) return j;
+  Judged out;
+  for (std::size_t k = 0; k < j.residual.size(); ++k) {
+    if (!inside[k]) continue;
+    for (auto [from, to] : {std::pair{&j.time, &out.time},
+                            {&j.input, &out.input},
+                            {&j.velocity, &out.velocity},
+                            {&j.prediction, &out.prediction},
+                            {&j.reading, &out.reading},
+                            {&j.residual, &out.residual}})
+      if (k < from->size()) to->push_back((*from)[k]);
+  }
+  return out;
+}
+
+// Whether one value holds more than a bin's share (1 / kRelationBins) of x: equal-count bins of x
+// would then split that value's samples by their order in time, not by x (a held reading, a
+// signal at rest), and any residual that moves in time would seem a function of x.
+bool mostly_one_value(std::vector<double> x) {
+  std::sort(x.begin(), x.end());
+  std::size_t longest = 0;
+  for (std::size_t a = 0, b = 0; a < x.size(); a = b) {
+    while (b < x.size() && x[b] == x[a]) ++b;
+    longest = std::max(longest, b - a);
+  }
+  return longest * kRelationBins > x.size();
+}
+
+struct Relation {
+  std::string signal;      // empty: none at kMinRelation
+  double explained = 0.0;  // of r's variance
+};
+
+// The signal r depends on most over the samples where `inside` holds (the channel's input, its
+// rate, the model's output), named when a function of it explains at least kMinRelation of r's
+// variance there.
+Relation relation(const Judged& all, Channel channel, const std::vector<bool>& inside) {
+  const Judged j = subset(all, inside);
+  const std::string input = channel == Channel::kMeasured ? "the command" : "the displacement read";
   const std::vector<std::pair<std::string, const std::vector<double>*>> candidates{
       {input, &j.input},
       {"the rate of " + input, &j.velocity},
       {"the model's output", &j.prediction}};
+  Relation out;
   for (const auto& [name, x] : candidates) {
+    if (mostly_one_value(*x)) continue;
     const double e = correlation_ratio(*x, j.residual);
-    if (e >= kMinRelation && e > out.explained) {
-      out.relation = name;
-      out.explained = e;
-    }
+    if (e >= kMinRelation && e > out.explained) out = {name, e};
   }
+  return out;
+}
+
+// Whether each judged sample lies inside one of `windows` (s).
+template <class Window>
+std::vector<bool> inside_windows(const Judged& j, const std::vector<Window>& windows, double dt) {
+  std::vector<bool> out(j.time.size(), false);
+  for (const auto& w : windows)
+    for (std::size_t k = 0; k < j.time.size(); ++k)
+      if (j.time[k] >= w.start - 0.5 * dt && j.time[k] <= w.end + 0.5 * dt) out[k] = true;
+  return out;
+}
+
+// The relation over the record, or over the windows that hold the residual where it is stronger
+// there (a residual of a few seconds relates to the signals inside them, not outside).
+void set_relation(const Judged& j, double dt, ChannelFloor& out) {
+  const Relation whole = relation(j, out.channel, {});
+  const Relation windowed = out.windows.empty()
+                                ? Relation{}
+                                : relation(j, out.channel, inside_windows(j, out.windows, dt));
+  const bool in_windows = windowed.explained > whole.explained;
+  out.relation = in_windows ? windowed.signal : whole.signal;
+  out.explained = in_windows ? windowed.explained : whole.explained;
+  out.relation_in_windows = in_windows && !windowed.signal.empty();
 }
 
 // The events on the judged samples (events.h) and the part they are on (residual_floor.h).
@@ -60,21 +119,36 @@ void set_events(const Judged& j, double dt, double sigma, ChannelFloor& out) {
   out.events = find_events(j.time, j.reading, j.prediction, dt, sigma);
   out.time = j.time;
   out.inside_events.assign(j.time.size(), 0.0);
-  for (const auto& e : out.events)
-    for (std::size_t k = 0; k < j.time.size(); ++k)
-      if (j.time[k] >= e.start - 0.5 * dt && j.time[k] <= e.end + 0.5 * dt)
-        out.inside_events[k] = j.residual[k];
+  const std::vector<bool> inside = inside_windows(j, out.events, dt);
+  for (std::size_t k = 0; k < j.time.size(); ++k)
+    if (inside[k]) out.inside_events[k] = j.residual[k];
   const std::string n = std::to_string(out.actuator);
   const bool moved_only = std::all_of(out.events.begin(), out.events.end(), [](const auto& e) {
     return e.kind == EventKind::kCapacityDrop;
   });
-  const bool read = std::any_of(out.events.begin(), out.events.end(), [](const auto& e) {
-    return e.kind != EventKind::kBurst && e.kind != EventKind::kCapacityDrop;
-  });
-  if (out.channel == Channel::kForce)
-    out.events_part = moved_only ? "specimen " + n : out.above ? out.part : "load cell " + n;
-  else
-    out.events_part = read ? "displacement sensor " + n : "actuator " + n;
+  // The reading's where held readings, spikes and step changes hold more of the residual's power
+  // than the motion's events (bursts, capacity drops).
+  double read_share = 0.0, moved_share = 0.0;
+  for (const auto& e : out.events)
+    (e.kind != EventKind::kBurst && e.kind != EventKind::kCapacityDrop ? read_share
+                                                                       : moved_share) += e.share;
+  const bool read = read_share > moved_share;
+  if (out.channel == Channel::kMeasured) {
+    out.events_part = (read ? "displacement sensor " : "actuator ") + n;
+    return;
+  }
+  // A reading that stood still or jumped follows the motion only by not moving with it: its
+  // residual is the model's output less a constant. Else, inside the events, a force that follows
+  // the motion is the specimen's (as above the floor).
+  if (read) {
+    out.events_part = "load cell " + n;
+    if (out.above) out.part = out.events_part;
+    return;
+  }
+  const bool follows = !out.events.empty() && !relation(j, out.channel, inside).signal.empty();
+  out.events_part = moved_only || follows ? "specimen " + n
+                    : out.above           ? out.part
+                                          : "load cell " + n;
 }
 
 void set_above(const Judged& j, double dt, ChannelFloor& out);
@@ -113,11 +187,23 @@ void set_above(const Judged& j, double dt, ChannelFloor& out) {
   out.peak_hz = band.peak_hz;
   out.band_low_hz = band.low_hz;
   out.band_high_hz = band.high_hz;
-  set_relation(j, out);
+  set_relation(j, dt, out);
   // A force that follows no motion is read, not done: the load cell's (residual_floor.h).
   if (out.channel == Channel::kForce && out.relation.empty())
     out.part = "load cell " + std::to_string(out.actuator);
   out.excess = 1.0 - (out.floor / out.level) * (out.floor / out.level);
+}
+
+// Whether the largest of `events` (by share) lies within a held reading of `displacement`.
+bool overlaps_held_reading(const std::vector<ResidualEvent>& events,
+                           const std::vector<ResidualEvent>& displacement) {
+  const auto largest = std::max_element(
+      events.begin(), events.end(), [](const auto& a, const auto& b) { return a.share < b.share; });
+  return largest != events.end() &&
+         std::any_of(displacement.begin(), displacement.end(), [&](const ResidualEvent& held) {
+           return held.kind == EventKind::kHeldSample && largest->start <= held.end &&
+                  largest->end >= held.start;
+         });
 }
 
 // "401 N", "12 N RMS", "25 N change", "measured / model -30 % from then on".
@@ -149,6 +235,10 @@ std::vector<ChannelFloor> channel_floors(const ActuatorPath& path) {
   std::vector<ChannelFloor> out;
   for (Channel channel : {Channel::kMeasured, Channel::kForce})
     if (path.id.find(channel)) out.push_back(channel_floor(path, channel));
+  // The force model runs on the displacement read: where that reading held, the force's events
+  // over the same time are the displacement sensor's.
+  if (out.size() == 2 && overlaps_held_reading(out[1].events, out[0].events))
+    out[1].events_part = "displacement sensor " + std::to_string(path.actuator);
   return out;
 }
 
@@ -171,11 +261,12 @@ std::string ChannelFloor::text() const {
            fixed_text(windows[i].end, 2) + " s (" + fixed_text(100.0 * windows[i].share, 0) + " %)";
   out += "; at " + fixed_text(peak_hz, 2) + " Hz (80 % of its power within " +
          fixed_text(band_low_hz, 2) + "-" + fixed_text(band_high_hz, 2) + " Hz); ";
-  return out + (relation.empty()
-                    ? "no function of the input, its rate or the model's output explains " +
-                          fixed_text(100.0 * kMinRelation, 0) + " % of it"
-                    : "a function of " + relation + " explains " +
-                          fixed_text(100.0 * explained, 0) + " % of it");
+  return out +
+         (relation.empty()
+              ? "no function of the input, its rate or the model's output explains " +
+                    fixed_text(100.0 * kMinRelation, 0) + " % of it"
+              : "a function of " + relation + " explains " + fixed_text(100.0 * explained, 0) +
+                    " % of it" + (relation_in_windows ? " inside those windows" : ""));
 }
 
 nlohmann::json ChannelFloor::json() const {
@@ -197,6 +288,7 @@ nlohmann::json ChannelFloor::json() const {
       {"residual_band_hz", above ? nlohmann::json{band_low_hz, band_high_hz} : nlohmann::json()},
       {"relation", relation},
       {"relation_explained", explained},
+      {"relation_in_windows", relation_in_windows},
       {"excess", excess},
       {"events", events_json(*this)},
       {"text", above ? text() : std::string()}};
@@ -243,7 +335,7 @@ nlohmann::json unexplained_json(const std::vector<Unexplained>& unexplained,
   nlohmann::json out = json_array(unexplained);
   for (const auto& f : floors) {
     if (f.events.empty()) continue;
-    std::vector<std::string> kinds;
+    std::vector<std::string> kinds{"time_varying"};
     for (const auto& e : f.events)
       if (std::find(kinds.begin(), kinds.end(), event_name(e.kind)) == kinds.end())
         kinds.push_back(event_name(e.kind));

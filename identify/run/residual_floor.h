@@ -41,7 +41,12 @@
 //             where the command leads it by the rig's lag; a straight correlation would miss what
 //             the fit left orthogonal to its own linear terms, a cubic stroke's residual); the
 //             largest is named when at least kMinRelation ("a function of the command explains
-//             94 % of it"): a map over a signal holds a dependence on its sign too.
+//             94 % of it"): a map over a signal holds a dependence on its sign too. Judged over
+//             the record and over the samples inside the windows that hold the residual, the
+//             stronger kept (a crack's residual follows the displacement after the crack and is
+//             noise before it: over the whole record no function of the displacement holds it).
+//             A signal one value of which holds more than a bin's share of the samples (a held
+//             reading, a signal at rest) is not tried: its bins would sort r by time, not by it.
 //   excess    the share of r's power above the floor: 1 - (floor / level)^2.
 //   part      the displacement channel's is "actuator N" (a rod's ripple and a sensor's read
 //             alike on it); the force channel's is "specimen N" when r depends on one of those
@@ -50,12 +55,18 @@
 // Whether above or not (a few spikes need not lift the whole record's RMS):
 //   events    identify/residual/events.h on the judged samples, sigma = the floor (in the channel's
 //             unit): held readings, spikes, bursts, step changes and capacity drops with their
-//             times. Their part: on the force channel a capacity drop alone is the specimen's,
-//             anything else the channel's part above where above, else the load cell's; on the
-//             displacement channel a held reading, a spike or a step change is the displacement
-//             sensor's, anything else the actuator's. The re-run models them: the residual
-//             inside them put back where the channel reads it (as a description's, unexplained.h),
-//             its share of what the re-run leaves stated beside them.
+//             times. Their part: the reading's (the load cell's, the displacement sensor's) where
+//             held readings, spikes and step changes hold more of the residual's power than
+//             bursts and capacity drops (on the force channel the channel's part above then too:
+//             a reading that stood still follows the motion only by not moving with it); else on
+//             the force channel the specimen's where they are capacity drops alone or the
+//             residual inside them relates to the signals (relation, on their samples), else the
+//             channel's part above where above, else the load cell's; on the displacement channel
+//             the actuator's. Force events whose largest lies within a held displacement reading
+//             are the displacement sensor's (the force model runs on that reading). The re-run
+//             models them: the residual inside them put back where the channel reads it (as a
+//             description's, unexplained.h), its share of what the re-run leaves stated beside
+//             them.
 
 #include <nlohmann/json.hpp>
 
@@ -91,7 +102,8 @@ struct ChannelFloor {
   double peak_hz = 0.0, band_low_hz = 0.0, band_high_hz = 0.0;
   std::string relation;    // "the rate of the displacement read"; empty: none at kMinRelation
   double explained = 0.0;  // of r's variance, by a function of `relation`
-  double excess = 0.0;     // share of the residual's power above the floor
+  bool relation_in_windows = false;  // judged on the samples inside `windows`, not the record's
+  double excess = 0.0;               // share of the residual's power above the floor
   // Whether above or not: what the residual holds for a moment (events.h), the largest first.
   std::vector<ResidualEvent> events;
   std::string events_part;  // the part the events are on ("load cell 1")
@@ -124,8 +136,9 @@ void set_event_shares(const std::vector<ResidualShare>& described,
                       std::vector<ChannelFloor>& floors);
 
 // The report's `unexplained` list: each description's entry (Unexplained::json), then one entry
-// per channel with events: {part, channel, share_pct: null, kinds (the events' kinds, once each),
-// when [{kind, start_s, end_s, share, size, unit}], text}.
+// per channel with events: {part, channel, share_pct, kinds ("time_varying", the class of every
+// residual located in time, then the events' kinds, once each), when [{kind, start_s, end_s,
+// share, size, unit}], text}.
 nlohmann::json unexplained_json(const std::vector<Unexplained>& unexplained,
                                 const std::vector<ChannelFloor>& floors);
 

@@ -42,6 +42,40 @@ void take_out(ActuatorPath& path, Channel channel, const std::string& effect) {
   path.not_named.push_back({channel, effect});
 }
 
+// The RMS (about the mean) of `r`, and of what one step of its level leaves (the step at the
+// sample that leaves least, at least kStepEdge of the record from either end).
+std::pair<double, double> rms_and_after_one_step(std::span<const double> r) {
+  const std::size_t n = r.size(), edge = std::max<std::size_t>(1, n / kStepEdge);
+  double total = 0.0, squares = 0.0;
+  for (double x : r) {
+    total += x;
+    squares += x * x;
+  }
+  const auto count = static_cast<double>(n);
+  double best = squares - total * total / count, before = 0.0;
+  const double spread = best;
+  for (std::size_t k = 1; k < n; ++k) {
+    before += r[k - 1];
+    if (k < edge || n - k < edge) continue;
+    const auto a = static_cast<double>(k), b = count - a;
+    best = std::min(best, squares - before * before / a - (total - before) * (total - before) / b);
+  }
+  return {std::sqrt(std::max(0.0, spread) / count), std::sqrt(std::max(0.0, best) / count)};
+}
+
+// Whether one step of the offset explains the channel without `effect` (an offset drift) better
+// than the drift does: what the step leaves below kDescriptionWins x what the drift leaves.
+bool a_step_beats_the_drift(const ActuatorPath& path, Channel channel,
+                            const std::vector<std::string>& kept,
+                            const std::vector<std::string>& without) {
+  const ChannelSignals& s = identified_signals(path.id, channel);
+  const double with_drift =
+      rms_and_after_one_step(minus(s.target, prediction_without(path, channel, kept))).first;
+  const double stepped =
+      rms_and_after_one_step(minus(s.target, prediction_without(path, channel, without))).second;
+  return stepped < kDescriptionWins * with_drift;
+}
+
 void judge_channel(ActuatorPath& path, Channel channel) {
   if (!path.id.find(channel)) return;
   const std::vector<std::string> named =
@@ -51,6 +85,10 @@ void judge_channel(ActuatorPath& path, Channel channel) {
     const std::vector<std::string> kept = not_named_on(path, channel);
     std::vector<std::string> without = kept;
     without.push_back(effect);
+    if (effect == "offset_drift" && a_step_beats_the_drift(path, channel, kept, without)) {
+      take_out(path, channel, effect);
+      continue;
+    }
     const ResidualDescription d = describe_channel(path, channel, without);
     if (d.any() && d.heldout_rms < kDescriptionWins * final_heldout_rms(path, channel, kept))
       take_out(path, channel, effect);
@@ -80,17 +118,31 @@ std::vector<std::string> kinds_of(const Unexplained& u) {
   return out;
 }
 
+// "+8 ms", "-0.3 ms": a change of the measured's lead on the model (s), in ms.
+std::string lead_text(double seconds) {
+  std::string out = number_text(1e3 * seconds) + " ms";
+  if (seconds >= 0.0) out.insert(out.begin(), '+');
+  return out;
+}
+
 std::string signature_text(const Unexplained& u) {
   const ResidualDescription& d = u.description;
   std::vector<std::string> parts;
   if (d.periodic)
     parts.push_back("periodic at " + fixed_text(d.periodic->frequency, 2) + " Hz, " +
                     number_text(d.periodic->amplitude) + " " + u.unit);
-  if (d.amplitude)
+  if (d.amplitude && d.amplitude->of_rate)
+    parts.push_back("a function of the rate's amplitude: the measured's lead on the model " +
+                    lead_text(d.amplitude->lead_change) + " from the median rate to " +
+                    number_text(d.amplitude->at_input) + " " + u.unit + "/s");
+  else if (d.amplitude)
     parts.push_back("a function of the input's amplitude: measured / model " +
                     number_text(d.amplitude->ratio_change_pct) + " % from the median to " +
                     number_text(d.amplitude->at_input) + " " + u.unit);
-  if (d.direction) {
+  if (d.direction && d.direction->of_rate) {
+    parts.push_back("a function of the direction of motion: the measured's lead on the model " +
+                    lead_text(d.direction->lead_difference) + " rising against falling");
+  } else if (d.direction) {
     std::string text = "a function of the input's direction: positive side " +
                        number_text(d.direction->asymmetry_pct) + " % against the negative";
     if (d.direction->hysteresis_width > 0.0)
@@ -216,12 +268,16 @@ nlohmann::json Unexplained::json() const {
                d.amplitude ? nlohmann::json{{"explained_pct", pct(d.amplitude->explained)},
                                             {"ratio_change_pct", d.amplitude->ratio_change_pct},
                                             {"at_input", d.amplitude->at_input},
+                                            {"of_rate", d.amplitude->of_rate},
+                                            {"lead_change_s", d.amplitude->lead_change},
                                             {"unit", unit}}
                            : nlohmann::json())},
       {"direction",
        or_null(d.direction.has_value(),
                d.direction ? nlohmann::json{{"explained_pct", pct(d.direction->explained)},
                                             {"asymmetry", d.direction->asymmetry_pct},
+                                            {"of_rate", d.direction->of_rate},
+                                            {"lead_difference_s", d.direction->lead_difference},
 
                                             {"hysteresis_width", d.direction->hysteresis_width},
                                             {"unit", unit}}

@@ -25,6 +25,11 @@
 // lists and estimates: no magnitude anywhere) and the channel is described against the model
 // without it.
 //
+// An offset drift is not named where one step of the channel's offset, at the moment that leaves
+// least (at least 1 / kStepEdge of the record from either end), leaves below kDescriptionWins x
+// the RMS the drift leaves: an offset that changed at one moment (a joint that slipped, a zero
+// that jumped) is no drift, and the events search locates it in time (residual_floor.h).
+//
 // Its share of the response error (RunResidual::described, run_residual.h): the re-run with the
 // identified models leaves E (the worst floor's NRMSE); the same re-run with the channel's
 // described residual put back where the channel reads it (the force channel's added to the force
@@ -46,6 +51,7 @@ namespace rths::identify {
 
 inline constexpr double kMinSignalShare = 0.01;  // described RMS / the target's std
 inline constexpr double kDescriptionWins = 0.8;  // x the identified model's held-out RMS error
+inline constexpr std::size_t kStepEdge = 100;    // a step lies 1 / kStepEdge of the record in
 
 struct Unexplained {
   int actuator = 0;  // 1-based
@@ -56,8 +62,9 @@ struct Unexplained {
   std::optional<double> share;  // of the re-run's remaining error; absent when not re-run
   std::string text() const;     // "unexplained on load cell 1 (force): ...; share 83 %"
   // {part, channel, share_pct (null when not re-run), kinds, periodic {frequency_hz, amplitude,
-  // unit, explained_pct}, amplitude {explained_pct, ratio_change_pct, at_input, unit}, direction
-  // {explained_pct, asymmetry (asymmetry_pct, %), hysteresis_width, unit}, time_varying
+  // unit, explained_pct}, amplitude {explained_pct, ratio_change_pct, at_input, of_rate,
+  // lead_change_s, unit}, direction {explained_pct, asymmetry (asymmetry_pct, %), of_rate,
+  // lead_difference_s, hysteresis_width, unit}, time_varying
   // {explained_pct, change_pct, shape, start_pct, end_pct (measured / model - 1 at the record's
   // start and end), at_s (a step's time, an exponential's time constant; null for a line)}, each
   // null when its test found nothing, explained_pct,

@@ -1,8 +1,10 @@
 // The description of a residual (identify/residual/description.h) on residuals made to hold one
 // signature each beside a model's output like a storey's drift: noise alone is not described, a
-// sinusoid is periodic at its frequency, a residual of the input's sign or amplitude or of its
-// direction is the map's, and a gain that moves over the record is time-varying with its change
-// and its shape (a line, a step with its time, an exponential approach).
+// sinusoid is periodic at its frequency (also at one a broadband motion holds, where a lag's
+// residual is not), a residual of the input's sign or amplitude or of its direction is the map's,
+// one of the rate's sign or amplitude the rate map's, and a gain that moves over the record is
+// time-varying with its change and its shape (a line, a step with its time, an exponential
+// approach).
 #include "identify/residual/description.h"
 
 #include <gtest/gtest.h>
@@ -116,6 +118,92 @@ TEST(DescribeResidual, AGainThatDropsAtAMomentIsAStepWithItsTime) {
   EXPECT_EQ(d.time_varying->shape.shape, DriftShape::kStep);
   EXPECT_NEAR(d.time_varying->shape.at, 9.0, 0.4);  // the windows are 0.75 s long
   EXPECT_NEAR(d.time_varying->shape.end - d.time_varying->shape.start, -0.3, 0.03);
+}
+
+// A motion like an earthquake's storey drift: 49 sinusoids of one amplitude every 0.1 Hz from
+// 0.2 to 5 Hz with random phases (mm), its spectrum broad where a test's spectrum is lines.
+Synthetic broadband(double noise) {
+  Synthetic out = synthetic(noise);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
+  std::vector<double> phases(49);
+  for (double& p : phases) p = phase(rng);
+  for (std::size_t j = 0; j < kSamples; ++j) {
+    out.prediction[j] = 0.0;
+    for (std::size_t k = 0; k < phases.size(); ++k)
+      out.prediction[j] +=
+          std::sin(2.0 * std::numbers::pi * (0.2 + 0.1 * k) * out.time[j] + phases[k]);
+  }
+  return out;
+}
+
+// p's rate at every sample (central differences, mm/s).
+std::vector<double> rate(const Synthetic& s) {
+  std::vector<double> out(kSamples, 0.0);
+  for (std::size_t j = 1; j + 1 < kSamples; ++j)
+    out[j] = (s.prediction[j + 1] - s.prediction[j - 1]) / (2.0 * kDt);
+  return out;
+}
+
+// A neighbour's 0.3 mm at 1.2 Hz, a frequency the motion holds as much as any: the residual
+// stands out of the motion's spectrum there, so it is another source's period, not the model's
+// error on the motion.
+TEST(DescribeResidual, APeriodAtAFrequencyTheMotionHoldsTooIsPeriodic) {
+  Synthetic s = broadband(0.05);
+  for (std::size_t j = 0; j < kSamples; ++j)
+    s.residual[j] += 0.3 * std::sin(2.0 * std::numbers::pi * 1.2 * s.time[j] + 0.4);
+  const ResidualDescription d = described(s);
+  ASSERT_TRUE(d.periodic.has_value());
+  EXPECT_NEAR(d.periodic->frequency, 1.2, 0.01);
+  EXPECT_NEAR(d.periodic->amplitude, 0.3, 0.015);
+}
+
+// A lag the model lacks leaves -tau dp/dt: the motion's own spectrum, no period, and a line over
+// the rate, which is the fit's to hold, not a signature of the rate (the loop it draws against p
+// is the maps' to read).
+TEST(DescribeResidual, AModelsLagOnTheMotionIsNoPeriodAndNoSignatureOfTheRate) {
+  Synthetic s = broadband(0.05);
+  const std::vector<double> v = rate(s);
+  for (std::size_t j = 0; j < kSamples; ++j) s.residual[j] -= 0.002 * v[j];
+  const ResidualDescription d = described(s);
+  EXPECT_FALSE(d.periodic.has_value());
+  EXPECT_FALSE(d.direction && d.direction->of_rate);
+  EXPECT_FALSE(d.amplitude && d.amplitude->of_rate);
+}
+
+// An actuator that lags 4 ms extending and 12 ms retracting, fitted with one 8 ms lag: the
+// residual 0.004 |dp/dt| is no function of p but of the direction of motion, the measured
+// leading the model by 8 ms more rising than falling.
+TEST(DescribeResidual, AnActuatorSlowerOneWayIsTheDirectionOfMotion) {
+  Synthetic s = broadband(0.05);
+  const std::vector<double> v = rate(s);
+  for (std::size_t j = 0; j < kSamples; ++j) s.residual[j] += 0.004 * std::abs(v[j]);
+  const ResidualDescription d = described(s);
+  ASSERT_TRUE(d.direction.has_value());
+  EXPECT_TRUE(d.direction->of_rate);
+  EXPECT_NEAR(d.direction->lead_difference, 0.008, 0.0008);
+  EXPECT_FALSE(d.periodic || d.amplitude);
+  EXPECT_GT(d.explained, 0.9);
+}
+
+// A flow limit: the reading falls short by 2e-5 s^2/mm v|v| at large rates, less the line over
+// v a fitted lag takes (least squares): the rate's amplitude, the measured lagging more at the
+// fastest.
+TEST(DescribeResidual, AReadingShortAtLargeRatesIsTheRatesAmplitude) {
+  Synthetic s = broadband(0.05);
+  const std::vector<double> v = rate(s);
+  double vq = 0.0, vv = 0.0;
+  for (double x : v) {
+    vq += x * x * std::abs(x);
+    vv += x * x;
+  }
+  for (std::size_t j = 0; j < kSamples; ++j)
+    s.residual[j] -= 2e-5 * (v[j] * std::abs(v[j]) - vq / vv * v[j]);
+  const ResidualDescription d = described(s);
+  ASSERT_TRUE(d.amplitude.has_value());
+  EXPECT_TRUE(d.amplitude->of_rate);
+  EXPECT_LT(d.amplitude->lead_change, 0.0);
+  EXPECT_FALSE(d.periodic || d.direction);
 }
 
 }  // namespace
