@@ -497,7 +497,8 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   core::SimulationOptions kept =
       core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
   kept.max_omega = core::max_omega(prepared.base.model);  // every case's model is the base's
-  std::vector<core::HybridSetup> setups;
+  std::vector<core::HybridSetup> setups;  // reserved: a setup is copied, not moved, on growth
+  setups.reserve(static_cast<std::size_t>(with_cases.cases_size()));
   std::size_t simulations = 1;  // the lag-free run and each case that adds to it
   for (const config::Case& study_case : with_cases.cases()) {
     setups.push_back(core::setup_for_case(prepared, study_case));
@@ -555,6 +556,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   outcome.lag_free_peak = core::peak_abs(lag_free.response);
   std::vector<const config::Case*> study_cases;
   std::vector<core::HybridSetup> setups;
+  setups.reserve(recorded.size());
   for (const RecordedCase& r : recorded) {
     const config::Case* study_case = nullptr;
     for (const config::Case& c : prepared.config.cases())
