@@ -108,6 +108,25 @@ std::string rejects_text(const runtime::Counters& c) {
 
 }  // namespace
 
+StepTiming step_timing(const runtime::RecordContents& record) {
+  std::vector<double> work;
+  const runtime::StepRecord* first = nullptr;
+  for (const runtime::StepRecord* s : record.steps()) {
+    if (s->step() < 1) continue;
+    work.push_back(s->step_wall());
+    if (!first) first = s;
+  }
+  StepTiming timing;
+  const runtime::LagSummary summary = runtime::summarize(std::move(work));
+  timing.work_median = summary.median;
+  timing.work_p99 = summary.p99;
+  const runtime::RunHeader* header = record.header();
+  if (header && first && header->start_realtime_ns() > 0 && first->start_realtime_ns() > 0)
+    timing.start_to_step1 =
+        1e-9 * static_cast<double>(first->start_realtime_ns() - header->start_realtime_ns());
+  return timing;
+}
+
 ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
   const config::Deployment deployment =
       runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
@@ -283,6 +302,7 @@ DistributedResults judge_distributed(const core::PreparedStudy& prepared,
       continue;
     }
     judge_status(run, record, measured, c, facts);
+    facts.timing = step_timing(record);
     facts.link_labels = roles;
     if (comparable && run.coordinator_exit == 0)
       facts.difference_from_in_process =
@@ -310,6 +330,10 @@ std::string distributed_summary_text(const DistributedResults& results) {
          << f.coordinator_exit << ", overruns " << f.overruns << ", rejected " << f.rejected
          << (f.unauthenticated ? ", unauthenticated " + std::to_string(f.unauthenticated) : "")
          << ", record " << f.record.string() << "\n";
+    text << "  step work median " << f.timing.work_median * 1e3 << " ms, p99 "
+         << f.timing.work_p99 * 1e3 << " ms (a step's exchange and integration; the step is "
+         << c.simulation.dt * 1e3 << " ms); step 1 began " << f.timing.start_to_step1
+         << " s after the coordinator started up (the nodes' start-up, the loop's set-up)\n";
     if (!f.deadline_diagnosis.empty()) text << "  " << f.deadline_diagnosis;
     if (f.difference_from_in_process) {
       const InProcessDifference& d = *f.difference_from_in_process;
@@ -369,6 +393,9 @@ nlohmann::json distributed_summary_json(const DistributedResults& results) {
     auto& c = j["cases"][i];
     c["coordinator_exit"] = f.coordinator_exit;
     c["overruns"] = f.overruns;
+    c["step_work_median_s"] = f.timing.work_median;
+    c["step_work_p99_s"] = f.timing.work_p99;
+    c["start_to_step1_s"] = f.timing.start_to_step1;
     c["rejected"] = f.rejected;
     c["unauthenticated"] = f.unauthenticated;
     c["links"] = links;

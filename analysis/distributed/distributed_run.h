@@ -101,6 +101,16 @@ struct InProcessDifference {
 std::pair<double, std::string> frame_rounding_tolerance(const config::Deployment& deployment,
                                                         double peak_displacement);
 
+// From a run record's steps: the step's own work (StepRecord.step_wall of the steps after step 0:
+// its exchange with the nodes and its integration, s), median and p99, and the time from the
+// header (written as the coordinator starts up) to step 1's start (s: the nodes' start-up and the
+// loop's set-up); 0 where the record has none.
+struct StepTiming {
+  double work_median = 0.0, work_p99 = 0.0;  // s
+  double start_to_step1 = 0.0;               // s
+};
+StepTiming step_timing(const runtime::RecordContents& record);
+
 struct DistributedCaseFacts {
   int coordinator_exit = -1;
   std::uint64_t overruns = 0, rejected = 0;  // rejected: the coordinator's, every cause
@@ -112,6 +122,7 @@ struct DistributedCaseFacts {
   // A real-time run that missed its deadlines: why, what to do, what the record is good for
   // (runtime::diagnose_deadlines); empty otherwise.
   std::string deadline_diagnosis;
+  StepTiming timing;  // the per-step cost and the start-up, from the record
 };
 
 struct DistributedResults {

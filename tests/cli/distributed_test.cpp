@@ -83,5 +83,34 @@ TEST(DistributedSummary, NamesTheFirstDifferingStepAndEveryNodesRejects) {
   EXPECT_EQ(j["cases"][0]["node_rejects"][0]["rejected"]["unauthenticated"], 7);
 }
 
+// The per-step cost and the start-up come from the record (each step's step_wall, and step 1's
+// start against the header's), and the summary prints them.
+TEST(DistributedSummary, SaysTheStepsWorkAndHowLongAfterStartUpStep1Began) {
+  runtime::RecordContents record;
+  runtime::RecordEntry header;
+  header.mutable_header()->set_start_realtime_ns(1'000'000'000);
+  record.entries.push_back(header);
+  for (int k = 0; k <= 100; ++k) {
+    runtime::RecordEntry e;
+    e.mutable_step()->set_step(k);
+    e.mutable_step()->set_step_wall(k == 0 ? 5.0 : 1e-5 * k);  // step 0 has no exchange
+    if (k > 0) e.mutable_step()->set_start_realtime_ns(3'500'000'000 + k * 1'000'000);
+    record.entries.push_back(e);
+  }
+  const analysis::StepTiming timing = analysis::step_timing(record);
+  EXPECT_NEAR(timing.work_median, 5e-4, 1.1e-5);
+  EXPECT_NEAR(timing.work_p99, 9.9e-4, 1.1e-5);
+  EXPECT_DOUBLE_EQ(timing.start_to_step1, 2.501);
+  DistributedResults results = one_case();
+  results.outcome.cases[0].simulation.dt = 0.001;
+  results.facts[0].timing = timing;
+  const std::string text = analysis::distributed_summary_text(results);
+  EXPECT_NE(text.find("step work median 0.50"), std::string::npos) << text;
+  EXPECT_NE(text.find("step 1 began 2.501 s after the coordinator started up"), std::string::npos)
+      << text;
+  EXPECT_DOUBLE_EQ(analysis::distributed_summary_json(results)["cases"][0]["start_to_step1_s"],
+                   2.501);
+}
+
 }  // namespace
 }  // namespace rths::cli
