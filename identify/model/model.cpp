@@ -92,7 +92,8 @@ class RecordClock {
         duration_(std::max(sig.time.back() - sig.time.front(), sig.dt)),
         has_basis_(sig.drift_basis.size() == sig.size() * kDriftTerms),
         delay_(delay),
-        delay_c_(delay_c) {}
+        delay_c_(delay_c),
+        constant_lag_(std::max(0.0, delay) / sig.dt) {}
   double s(std::size_t j) const { return (sig_.time[j] - t_mid_) / duration_; }
   // D(s_j; c), from the signals' precomputed basis when they carry one (same terms, same order).
   double drift(std::span<const double> c, std::size_t j) const {
@@ -104,8 +105,9 @@ class RecordClock {
   }
   double shifted(std::span<const double> x, std::size_t j) const {
     if (delay_ == 0.0 && delay_c_.empty()) return x[j];
-    const double tau = std::max(0.0, delay_ + (delay_c_.empty() ? 0.0 : drift(delay_c_, j)));
-    return interpolate(x, static_cast<double>(j) - tau / sig_.dt);
+    const double lag =
+        delay_c_.empty() ? constant_lag_ : std::max(0.0, delay_ + drift(delay_c_, j)) / sig_.dt;
+    return interpolate(x, static_cast<double>(j) - lag);
   }
 
  private:
@@ -114,6 +116,9 @@ class RecordClock {
   bool has_basis_;
   double delay_;
   std::span<const double> delay_c_;
+  // max(0, delay) / dt (samples) of a delay without a drift, divided once: the same value every
+  // sample would divide again, as shifted() needs it up to four times a sample.
+  double constant_lag_;
 };
 
 // Tustin biquad of wn^2 / (s^2 + 2 zeta wn s + wn^2) in direct form II transposed, pre-warp free
