@@ -300,6 +300,40 @@ TEST(CoupledStability, ASparseModelsModalDampingIsRead) {
   EXPECT_GT(*from_sparse.critical_delay, 1.5 * *without.critical_delay);
 }
 
+// Each link's row b is row s of B (drifts = B u): a storey's e_s - e_(s-1) in a shear building,
+// an element's terms by DOFs, e_d for a grounded specimen; formed O(n) a link, each equal to the
+// drift that unit displacements give.
+TEST(CoupledLoop, ALinksRowIsItsChannelsRowOfTheDriftMatrix) {
+  HybridSetup storeys;
+  storeys.model = lab_frame();
+  storeys.partition = partition_by_storeys({2e6, 2e6, 1.5e6}, {0, 2}, linear_factory());
+  const std::vector<DelayedPart> shear = setup_loop_parts(storeys, {0.0, 0.0});
+  ASSERT_EQ(shear.size(), 2u);
+  EXPECT_EQ(shear[0].row, Vec::Unit(3, 0));
+  EXPECT_EQ(shear[1].row, Vec::Unit(3, 2) - Vec::Unit(3, 1));
+  HybridSetup dofs;
+  dofs.model = lab_frame();
+  std::vector<DofSpecimen> specimens;
+  specimens.push_back({2, std::make_unique<LinearSpring>(1e5), ElementRow{}});
+  specimens.push_back({1, std::make_unique<LinearSpring>(3e5), ElementRow{{{0, -0.5}, {1, 0.5}}}});
+  dofs.partition = partition_by_dofs(dofs.model.stiffness, std::move(specimens));
+  const std::vector<DelayedPart> by_dofs = setup_loop_parts(dofs, {0.0, 0.0});
+  ASSERT_EQ(by_dofs.size(), 2u);
+  EXPECT_EQ(by_dofs[0].row, Vec::Unit(3, 2));
+  EXPECT_EQ(by_dofs[1].row, 0.5 * (Vec::Unit(3, 1) - Vec::Unit(3, 0)));
+  EXPECT_EQ(by_dofs[1].stiffness, 3e5);
+  for (const HybridSetup* setup : {&storeys, &dofs}) {  // against B from unit displacements
+    const StoreyAssembly assembly = setup->partition.assembly();
+    const std::vector<DelayedPart> parts = setup_loop_parts(*setup, {0.0, 0.0});
+    Vec drift(assembly.storeys());
+    for (std::size_t a = 0; a < parts.size(); ++a)
+      for (int i = 0; i < 3; ++i) {
+        assembly.drifts(Vec::Unit(3, i), drift);
+        EXPECT_EQ(parts[a].row[i], drift[setup->partition.actuator_storeys[a]]) << a << i;
+      }
+  }
+}
+
 // The frame with the damper behind a shift of `lag` and a frozen predictor (k^, c^; c^ = 1e-6 N
 // s/m stands for none: 0 would take the declared dashpot), run in process after a one-step
 // ground pulse: the growth rate (1/s) of its storey drift's envelope over the last third of 30 s
