@@ -1,9 +1,10 @@
-// The coordinator killed mid-run on real processes over Cyclone DDS (domain 25): the record reads
-// up to there and the nodes leave.
+// The coordinator killed mid-run on real processes over Cyclone DDS (the shared domain, on topics
+// of its own): the record reads up to there and the nodes leave.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fault_cluster.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -20,7 +21,8 @@ TEST(Faults, KilledCoordinatorLeavesAReadableRecordAndTheNodesLeave) {
   std::string deployment = kRealTime;
   deployment.replace(deployment.find("max_missed_answers: 30"), 22, "max_missed_answers: 200");
   const std::string text = test::paper_frame_study(8, deployment);
-  Cluster c = start("kill_coordinator", text, 25, {{1, true}, {2, false}}, "reference");
+  Cluster c = start("kill_coordinator", text, test::scope_dds_to_this_test(),
+                    {{1, true}, {2, false}}, "reference");
   ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   c.coordinator->signal(SIGKILL);
   EXPECT_EQ(c.coordinator->wait(), 128 + SIGKILL);

@@ -1,11 +1,12 @@
 // Strangers that publish other than answers on a run's topics, on real processes over Cyclone DDS
-// (domains 27, 83 and 188): a junk publisher, and tests/support's rths_rogue forging control
-// messages with and without a run secret. Everything is rejected or dropped and counted, and the
-// run is unchanged.
+// (the shared domain, each test on topics of its own): a junk publisher, and tests/support's
+// rths_rogue forging control messages with and without a run secret. Everything is rejected or
+// dropped and counted, and the run is unchanged.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fault_cluster.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -54,7 +55,7 @@ void hostile(int domain, const std::string& run_id, std::atomic<bool>& stop,
 
 TEST(Faults, HostileParticipantChangesNothingAndIsCounted) {
   runtime::ensure_dds_config();
-  constexpr int kDomain = 27;
+  const int kDomain = test::scope_dds_to_this_test();
   const std::string name = "hostile";
   const std::string text = test::paper_frame_study(6, "");
   std::atomic<bool> stop{false};
@@ -97,7 +98,7 @@ TEST(Faults, HostileParticipantChangesNothingAndIsCounted) {
 // coordinator and by each node, and the run equals the in-process run bit for bit.
 TEST(Faults, ForgedControlMessagesAreRejectedCountedAndChangeNothing) {
   runtime::ensure_dds_config();
-  constexpr int kDomain = 83;
+  const int kDomain = test::scope_dds_to_this_test();
   const std::string name = "forged_control";
   const std::string text = test::paper_frame_study(3, "");
   const auto dir = test::scratch_dir(name + "_rogue");
@@ -127,7 +128,7 @@ TEST(Faults, ForgedControlMessagesAreRejectedCountedAndChangeNothing) {
 // the coordinator's summary name each node's count. The run completes unchanged.
 TEST(Faults, ANodesUnauthenticatedDropsReachTheRecordAndTheSummary) {
   runtime::ensure_dds_config();
-  constexpr int kDomain = 188;
+  const int kDomain = test::scope_dds_to_this_test();
   const std::string name = "node_unauthenticated";
   const std::string text = test::paper_frame_study(3, "");
   const auto dir = test::scratch_dir(name + "_rogue");

@@ -1,10 +1,11 @@
-// A node lost mid-run on real processes over Cyclone DDS (domains 20-24 and 53): killed or
-// stopped, the coordinator stops, holds and keeps the record up to the failure; the emulator's own
-// short stalls do not trip its command watchdog.
+// A node lost mid-run on real processes over Cyclone DDS (the shared domain, each test on topics
+// of its own): killed or stopped, the coordinator stops, holds and keeps the record up to the
+// failure; the emulator's own short stalls do not trip its command watchdog.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fault_cluster.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -20,7 +21,7 @@ class KillNode : public testing::TestWithParam<std::tuple<int, int, const char*>
 
 TEST_P(KillNode, CoordinatorStopsHoldsAndKeepsTheRecordUpToTheFailure) {
   const auto [victim, sig, label] = GetParam();
-  const int domain = 20 + victim + (sig == SIGSTOP ? 2 : 0);
+  const int domain = test::scope_dds_to_this_test();
   const std::string name = "kill_" + std::to_string(victim) + "_" + std::to_string(sig);
   const std::string text = test::paper_frame_study(8, kRealTime);
   Cluster c = start(name, text, domain, {{1, true}, {2, false}}, "lag_shift_14ms");
@@ -103,7 +104,8 @@ TEST(Faults, TheEmulatorsOwnStallDoesNotTripItsCommandWatchdog) {
       "max_missed_answers: 120 command_watchdog_periods: " +
           std::to_string(watchdog) + " max_overrun_fraction: -1 }");
   test::StallWitness witness;
-  Cluster c = start("own_stall", text, 53, {{1, true}, {2, false}}, "reference");
+  Cluster c = start("own_stall", text, test::scope_dds_to_this_test(), {{1, true}, {2, false}},
+                    "reference");
   ASSERT_TRUE(test::wait_for_steps(c.record, 300)) << "the run never reached step 300";
   for (int i = 0; i < 15; ++i) {
     c.nodes[1].signal(SIGSTOP);

@@ -1,9 +1,11 @@
 // A disk that fills up under the run record of a real-time run on real processes over Cyclone DDS
-// (domain 90): the run stops within five steps and the record reads up to there.
+// (the shared domain, on topics of its own): the run stops within five steps and the record reads
+// up to there.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fault_cluster.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -31,7 +33,8 @@ TEST(Faults, ARecordThatCannotBeWrittenStopsTheRunWithinFiveSteps) {
       8,
       "deployment { clock: REAL_TIME liveliness_timeout: 5 heartbeat_period: 0.02 "
       "max_missed_answers: 5000 command_watchdog_periods: 5000 max_overrun_fraction: -1 }");
-  Cluster c = start("disk_full", text, 90, {{1, true}, {2, false}}, "lag_shift_14ms", limited);
+  Cluster c = start("disk_full", text, test::scope_dds_to_this_test(), {{1, true}, {2, false}},
+                    "lag_shift_14ms", limited);
   const auto code = c.coordinator->wait_for(20s);
   ASSERT_TRUE(code.has_value()) << "coordinator did not stop";
   const std::string log = test::read_file(c.dir / "coordinator.log");

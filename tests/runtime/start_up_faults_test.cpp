@@ -1,9 +1,11 @@
-// Faults at start-up on real processes over Cyclone DDS (domains 26, 84 and 164): a node that
-// never comes, one that comes late within the start timeout, and programs given no run secret.
+// Faults at start-up on real processes over Cyclone DDS (the shared domain, each test on topics of
+// its own; domain 164 for the programs refused before DDS): a node that never comes, one that
+// comes late within the start timeout, and programs given no run secret.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fault_cluster.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -15,7 +17,7 @@ using namespace faults;
 TEST(Faults, StartUpTimeoutNamesTheMissingNode) {
   runtime::ensure_dds_config();
   const std::string text = test::paper_frame_study(1, "deployment { start_timeout: 1 }");
-  Cluster c = start("missing_node", text, 26, {{1, true}}, "reference");
+  Cluster c = start("missing_node", text, test::scope_dds_to_this_test(), {{1, true}}, "reference");
   const auto code = c.coordinator->wait_for(10s);
   ASSERT_TRUE(code.has_value());
   EXPECT_EQ(*code, 1);
@@ -51,7 +53,7 @@ TEST(Faults, WithoutASecretOrSecurityTheProgramsRefuseToStart) {
 // assigned meanwhile (the start-up heartbeat), and the run completes.
 TEST(Faults, ALateJoinerWithinTheStartTimeoutIsWaitedFor) {
   runtime::ensure_dds_config();
-  constexpr int kDomain = 84;
+  const int kDomain = test::scope_dds_to_this_test();
   const std::string name = "late_joiner";
   const std::string text = test::paper_frame_study(0.5, "deployment { start_timeout: 10 }");
   Cluster c = start(name, text, kDomain, {{1, true}}, "reference");
