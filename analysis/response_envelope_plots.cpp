@@ -87,12 +87,13 @@ std::vector<util::PlotSpec> envelope_panels(const StudyOutcome& outcome,
                                             const std::vector<const CaseOutcome*>& drawn,
                                             const std::vector<int>& floors) {
   const CaseOutcome& reference = outcome.reference();
-  const std::string drift_label = floors_skip(floors)
-                                      ? "peak storey drift (mm), averaged between recorded floors"
-                                      : "peak inter-storey drift (mm)";
+  const bool averaged = floors_skip(floors);
   util::PlotSpec peak{outcome.study_name + ": peak displacement over height", "peak |u| (mm)",
                       "floor (DOF number)"};
-  util::PlotSpec drift{"peak storey drift over height", drift_label, "floor (DOF number)"};
+  util::PlotSpec drift{averaged ? "peak storey drift, averaged between recorded floors"
+                                : "peak inter-storey drift over height",
+                       averaged ? "peak drift per storey (mm)" : "peak inter-storey drift (mm)",
+                       "floor (DOF number)"};
   bool left_out = false;
   for (std::size_t i = 0; i < drawn.size(); ++i) {
     const CaseOutcome& c = *drawn[i];
@@ -126,9 +127,10 @@ std::vector<util::PlotSpec> history_panels(const StudyOutcome& outcome,
   const CaseOutcome& reference = outcome.reference();
   std::vector<util::PlotSpec> panels;
   for (int dof : chosen_floors(floors)) {
+    const std::string number = std::to_string(dof + 1);
     util::PlotSpec panel{
-        outcome.study_name + ": floor " + std::to_string(dof + 1) + " (DOF), every case",
-        "time (s)", "displacement (mm)"};
+        outcome.study_name + ": floor " + number + " (DOF " + number + "), every case", "time (s)",
+        "displacement (mm)"};
     const auto add = [&](const CaseOutcome& c, const std::string& label, const std::string& style) {
       const Eigen::Index column = c.simulation.column_of_dof(dof);
       if (column < 0) return;
