@@ -196,6 +196,18 @@ TEST(StructureIo, MatFileVariablesIncludingMatlabsUint16Mass) {
             std::string::npos);
 }
 
+// A full MATLAB variable is sized from its header (rows x cols, 16 bytes a cell while it is
+// converted) before its data is read: case 1's 3 x 3 K needs 144 bytes, refused under 100.
+TEST(StructureIo, AFullMatVariableIsSizedFromItsHeaderBeforeItIsRead) {
+  setenv("RTHS_MEMORY_LIMIT", "100", 1);
+  const std::string error =
+      error_of([] { read_matrix(file_spec("case_1.mat", "K"), benchmark_dir(), "f"); });
+  unsetenv("RTHS_MEMORY_LIMIT");
+  EXPECT_NE(error.find("case_1.mat: variable 'K' read as a dense matrix keeps 3 rows x 48 bytes"),
+            std::string::npos)
+      << error;
+}
+
 // A MATLAB sparse matrix (as `save` writes sparse(K)): compressed columns, read in full.
 TEST(StructureIo, MatFileSparseVariable) {
   // K = [2 -1 0; -1 2 -1; 0 -1 1] by columns: rows ir, column starts jc, values.
