@@ -335,6 +335,27 @@ TEST(StudyBounds, AForcePredictorOutOfRangeIsRefusedNamingTheField) {
   std::filesystem::remove_all(dir);
 }
 
+// The setup of case "remote" of an SDOF study (0.5 s, 1000 kg, half of it experimental) whose
+// force_predictor block is `block` (text format), prepared on a short motion in a directory of its
+// own (`tag`), removed again.
+HybridSetup predicted_sdof_setup(const std::string& block, const std::string& tag) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("rths_study_" + tag + "_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "m.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
+  const PreparedStudy prepared = prepare_study(
+      parse_study("structure { sdof { period: 0.5 mass: 1000 } } "
+                  "motion { path: \"m.txt\" column_units: G } "
+                  "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
+                  "cases { name: \"remote\" force_predictor { " +
+                      block + " } }",
+                  "t"),
+      dir);
+  HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
+  std::filesystem::remove_all(dir);
+  return setup;
+}
+
 // A ForcePredictor block's defaults are read in one place (predictor_stiffness_factor,
 // predictor_parameters): unset fields give PredictorParameters' own, stiffness_factor unset is 1,
 // and the case's setup starts each predictor there.
@@ -361,43 +382,20 @@ TEST(StudyBounds, AForcePredictorsDefaultsAreReadInOnePlace) {
   EXPECT_EQ(given.damping, 40.0);
   EXPECT_FALSE(given.adapt);
   EXPECT_EQ(given.forgetting_time, 0.5);
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("rths_study_pred_default_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir / "m.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
-  const PreparedStudy prepared = prepare_study(
-      parse_study("structure { sdof { period: 0.5 mass: 1000 } } "
-                  "motion { path: \"m.txt\" column_units: G } "
-                  "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
-                  "cases { name: \"remote\" force_predictor { stiffness_factor: 1.25 } }",
-                  "t"),
-      dir);
-  const HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
+  const HybridSetup setup = predicted_sdof_setup("stiffness_factor: 1.25", "pred_default");
   ASSERT_EQ(setup.predictors.size(), 1u);
   ASSERT_TRUE(setup.predictors[0].has_value());
   const double declared = setup.partition.experimental[0]->initial_stiffness();
   EXPECT_GT(declared, 0.0);
   EXPECT_DOUBLE_EQ(setup.predictors[0]->stiffness, 1.25 * declared);
-  std::filesystem::remove_all(dir);
 }
 
 // force_predictor.model (a Bouc-Wen rths identify fitted) is the predictor's shape at the declared
 // specimen's initial stiffness, the declared (linear) specimen staying what runs; force_lag is
 // its lag term's start.
 TEST(StudyBounds, AForcePredictorsOwnModelIsItsShape) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("rths_study_shape_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir / "m.txt") << "0 0\n0.01 0.1\n0.02 0\n0.03 -0.1\n0.04 0\n";
-  const PreparedStudy prepared = prepare_study(
-      parse_study("structure { sdof { period: 0.5 mass: 1000 } } "
-                  "motion { path: \"m.txt\" column_units: G } "
-                  "substructuring { experimental_fraction: 0.5 } cases { name: \"ref\" } "
-                  "cases { name: \"remote\" force_predictor { force_lag: 0.003 model { "
-                  "bouc_wen { yield_displacement: 0.002 alpha: 0.1 } } } }",
-                  "t"),
-      dir);
-  const HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
+  const HybridSetup setup = predicted_sdof_setup(
+      "force_lag: 0.003 model { bouc_wen { yield_displacement: 0.002 alpha: 0.1 } }", "shape");
   ASSERT_EQ(setup.predictors.size(), 1u);
   ASSERT_TRUE(setup.predictors[0].has_value());
   const PredictorParameters& p = *setup.predictors[0];
@@ -409,7 +407,6 @@ TEST(StudyBounds, AForcePredictorsOwnModelIsItsShape) {
   EXPECT_NEAR(predictor.model().stiffness, 0.1 * p.stiffness, 1e-9 * p.stiffness);
   EXPECT_NEAR(predictor.model().hysteretic, 0.9 * p.stiffness * 0.002, 1e-9 * p.stiffness);
   EXPECT_EQ(predictor.model().force_lag, 0.003);
-  std::filesystem::remove_all(dir);
 }
 
 class MotionUnits : public ::testing::Test {
