@@ -494,9 +494,8 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
 
   StudyOutcome outcome = empty_outcome(prepared);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
-  core::SimulationOptions kept =
+  const core::SimulationOptions kept =
       core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
-  kept.max_omega = core::max_omega(prepared.base.model);  // every case's model is the base's
   std::vector<core::HybridSetup> setups;  // reserved: a setup is copied, not moved, on growth
   setups.reserve(static_cast<std::size_t>(with_cases.cases_size()));
   std::size_t simulations = 1;  // the lag-free run and each case that adds to it

@@ -191,9 +191,7 @@ SimulationResult simulate(const HybridSetup& setup, const GroundMotion& motion_a
                           const SimulationOptions& options, const AnswerSchedule& answers,
                           StepHooks* hooks) {
   require_motion_at_dt(setup, motion_at_dt);
-  check_stability(setup.integrator,
-                  options.max_omega > 0.0 ? options.max_omega : max_omega(setup.model), setup.dt,
-                  setup.allow_unstable);
+  check_stability(setup.integrator, max_omega(setup.model), setup.dt, setup.allow_unstable);
 
   HybridRestoring restoring(setup.partition, setup.delays, setup.dt, setup.servo_substeps,
                             setup.predictors);

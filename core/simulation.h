@@ -89,10 +89,6 @@ struct SimulationOptions {
   std::vector<int> kept_dofs;
   bool base_shear = false;  // fill SimulationResult::base_shear
   bool peaks = false;       // fill SimulationResult's per-step peaks over every DOF
-  // rad/s, the model's highest natural frequency (core::max_omega) where the caller has it: a
-  // study's cases share one model, so it is estimated once a study, not once a run. 0: simulate
-  // estimates it.
-  double max_omega = 0.0;
 };
 
 // What a runtime adds around each step. Either hook may throw to abort the run; the loop then
