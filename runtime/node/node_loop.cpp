@@ -172,9 +172,11 @@ void NodeLoop::wait_for_rest() {
 }
 
 void NodeLoop::take(transport::Message message) {
+  // Never back in time: a message that queued while the node set itself up (its part built on
+  // the Assign, after which the orphan clock restarts) arrived before that restart.
   if (service_.assigned() && message.run_id == service_.run_id()) {
-    last_from_coordinator_ = message.received_ns;
-    if (message.kind == COMMAND) last_command_ns_ = message.received_ns;
+    last_from_coordinator_ = std::max(last_from_coordinator_, message.received_ns);
+    if (message.kind == COMMAND) last_command_ns_ = std::max(last_command_ns_, message.received_ns);
   }
   if (!assigned_.receive_lag) {
     inbound_.push_back({message.received_ns, std::move(message), 0.0});

@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <thread>
 
 #include "actuator_emulator/actuator_service.h"
 #include "runtime/node/schema.h"
@@ -18,7 +19,8 @@ namespace {
 
 constexpr char kRun[] = "run-loop";
 
-// Hands out the scripted messages (stamped on receipt) and keeps everything the node sends.
+// Hands out the scripted messages (stamped on receipt unless the script stamped them) and keeps
+// everything the node sends.
 class ScriptedEndpoint final : public transport::Endpoint {
  public:
   void push(transport::Message m) {
@@ -36,7 +38,7 @@ class ScriptedEndpoint final : public transport::Endpoint {
     transport::Message m = std::move(script_.front());
     script_.pop_front();
     m.sent_ns = m.sent_ns != 0 ? m.sent_ns : transport::realtime_ns();
-    m.received_ns = transport::realtime_ns();
+    m.received_ns = m.received_ns != 0 ? m.received_ns : transport::realtime_ns();
     return m;
   }
   void interrupt() override {}
@@ -133,6 +135,26 @@ TEST(NodeLoop, AnOrphanedEmulatorHoldsAndLeaves) {
   ASSERT_TRUE(unpack(holds[0], hold));
   EXPECT_EQ(hold.reason(), "coordinator silent");
   EXPECT_GE(of_kind(endpoint.sent(), HEARTBEAT).size(), 2u) << "heartbeats while assigned";
+}
+
+// A node's own set-up (its part built on the Assign: a large model takes seconds) must not count
+// as the coordinator's silence: the coordinator's heartbeats that queued meanwhile, stamped when
+// they arrived, before the set-up ended, do not turn the orphan clock back. Here one arrived 3 s
+// before it is taken, against a 2 s orphan timeout: the node stays and stops on STOP.
+TEST(NodeLoop, MessagesThatQueuedDuringItsSetUpDoNotOrphanTheNode) {
+  ScriptedEndpoint endpoint;
+  actuator_emulator::ActuatorService service(2, kRun);
+  endpoint.push(assign(2, config::NodeSpec::ACTUATOR_EMULATOR, 2.0));
+  transport::Message queued = pack(kRun, transport::kBroadcastId, HEARTBEAT, 0, Heartbeat{});
+  queued.received_ns = transport::realtime_ns() - 3'000'000'000;
+  endpoint.push(queued);
+  std::thread stop([&endpoint] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    endpoint.push(pack(kRun, 2, STOP, 0, Stop{}));
+  });
+  EXPECT_EQ(run_node(endpoint, service, {}), 0);
+  stop.join();
+  EXPECT_TRUE(of_kind(endpoint.sent(), HOLD).empty());
 }
 
 }  // namespace
