@@ -1,11 +1,13 @@
-// Strangers that answer as a node, on real processes over Cyclone DDS (domains 80-82, 160-163 and
-// 187): tests/support's rths_rogue forging node 1's answers (an integrity fault stops the run), its
-// forgeries before the coordinator pins node 1 and its byte-for-byte replays (dropped unread under
-// a run secret).
+// Strangers that answer as a node, on real processes over Cyclone DDS (the shared domain, each test
+// on topics of its own): tests/support's rths_rogue forging node 1's answers (an integrity fault
+// stops the run), its forgeries before the coordinator pins node 1 and its byte-for-byte replays
+// (dropped unread under a run secret).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fault_cluster.h"
+#include "tests/support/dds_scope.h"
+#include "transport/topic_scope.h"
 
 namespace rths {
 namespace {
@@ -18,13 +20,14 @@ using namespace faults;
 // at every 100th step, at every step, or at step 1 from before its command. Every trial must
 // stop with an integrity fault naming node 1, never `completed`.
 class ForgedAnswers
-    : public testing::TestWithParam<std::tuple<const char*, int, std::vector<std::string>>> {
+    : public testing::TestWithParam<std::tuple<const char*, std::vector<std::string>>> {
  protected:
   static void SetUpTestSuite() { runtime::ensure_dds_config(); }
 };
 
 TEST_P(ForgedAnswers, StopTheRunWithAnIntegrityFaultNamingNode1) {
-  const auto& [label, domain, attack] = GetParam();
+  const auto& [label, attack] = GetParam();
+  const int domain = test::scope_dds_to_this_test();
   const std::string text = test::paper_frame_study(2, "");
   const int trials = rogue_trials();
   int faulted = 0;
@@ -58,12 +61,12 @@ TEST_P(ForgedAnswers, StopTheRunWithAnIntegrityFaultNamingNode1) {
 
 INSTANTIATE_TEST_SUITE_P(
     Rogue, ForgedAnswers,
-    testing::Values(std::make_tuple("every_100th_step", 80,
+    testing::Values(std::make_tuple("every_100th_step",
                                     std::vector<std::string>{"--mode", "answers", "--every",
                                                              "100"}),
-                    std::make_tuple("every_step", 81,
+                    std::make_tuple("every_step",
                                     std::vector<std::string>{"--mode", "answers", "--every", "1"}),
-                    std::make_tuple("step_1", 82, std::vector<std::string>{"--mode", "first"})),
+                    std::make_tuple("step_1", std::vector<std::string>{"--mode", "first"})),
     [](const auto& info) { return std::string(std::get<0>(info.param)); });
 
 // Waits until the rogue says it learned the run id (its log's "run " line).
@@ -82,13 +85,14 @@ void wait_for_run_id(const std::filesystem::path& log) {
 // a READY carrying an error. None of it carries a MAC under the secret: every trial completes,
 // equal to the in-process run bit for bit, blames nobody, and the record names what was dropped.
 class EarlyForgery
-    : public testing::TestWithParam<std::tuple<const char*, int, std::vector<std::string>>> {
+    : public testing::TestWithParam<std::tuple<const char*, std::vector<std::string>>> {
  protected:
   static void SetUpTestSuite() { runtime::ensure_dds_config(); }
 };
 
 TEST_P(EarlyForgery, IsDroppedUnreadAndNeitherStopsTheRunNorBlamesANode) {
-  const auto& [label, domain, attack] = GetParam();
+  const auto& [label, attack] = GetParam();
+  const int domain = test::scope_dds_to_this_test();
   const std::string text = test::paper_frame_study(1, "");
   const core::SimulationResult reference = test::reference_result(text, "lag_shift_14ms");
   const int trials = rogue_trials();
@@ -134,13 +138,11 @@ TEST_P(EarlyForgery, IsDroppedUnreadAndNeitherStopsTheRunNorBlamesANode) {
 
 INSTANTIATE_TEST_SUITE_P(
     Rogue, EarlyForgery,
-    testing::Values(std::make_tuple("takeover", 160,
-                                    std::vector<std::string>{"--mode", "takeover", "--every", "1"}),
-                    std::make_tuple("hold", 161, std::vector<std::string>{"--mode", "hold"}),
-                    std::make_tuple("error_ready", 162,
-                                    std::vector<std::string>{"--mode", "error"}),
-                    std::make_tuple("answers", 163,
-                                    std::vector<std::string>{"--mode", "answers", "--every", "1"})),
+    testing::Values(
+        std::make_tuple("takeover", std::vector<std::string>{"--mode", "takeover", "--every", "1"}),
+        std::make_tuple("hold", std::vector<std::string>{"--mode", "hold"}),
+        std::make_tuple("error_ready", std::vector<std::string>{"--mode", "error"}),
+        std::make_tuple("answers", std::vector<std::string>{"--mode", "answers", "--every", "1"})),
     [](const auto& info) { return std::string(std::get<0>(info.param)); });
 
 // A stranger without the secret replays every genuine message it sees, byte for byte with its
@@ -152,7 +154,9 @@ INSTANTIATE_TEST_SUITE_P(
 // not entitled.
 TEST(Faults, ReplayedGenuineMessagesAreDroppedUnreadAndTheRunCompletes) {
   runtime::ensure_dds_config();
-  constexpr int kDomain = 187;
+  const int kDomain = test::scope_dds_to_this_test();
+  // The run's topics, as its endpoints and the rogue name them under this test's scope.
+  const std::string topics = transport::scoped_topic_prefix();
   const std::string name = "replayed";
   const std::string text = test::paper_frame_study(2, "");
   const auto dir = test::scratch_dir(name + "_rogue");
@@ -168,10 +172,12 @@ TEST(Faults, ReplayedGenuineMessagesAreDroppedUnreadAndTheRunCompletes) {
   const std::string rogue_log = test::read_file(dir / "rogue.log");
   ASSERT_EQ(*code, 0) << log << rogue_log;
   // Node 1's answers (FEEDBACK, 5) and the commands to each node (COMMAND, 4) were replayed.
-  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed rths_node1_up kind 5: [1-9]"))
+  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed " + topics + "_node1_up kind 5: [1-9]"))
       << rogue_log;
-  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed rths_node1_down kind 4: [1-9]"));
-  EXPECT_THAT(rogue_log, testing::ContainsRegex("replayed rths_node2_down kind 4: [1-9]"));
+  EXPECT_THAT(rogue_log,
+              testing::ContainsRegex("replayed " + topics + "_node1_down kind 4: [1-9]"));
+  EXPECT_THAT(rogue_log,
+              testing::ContainsRegex("replayed " + topics + "_node2_down kind 4: [1-9]"));
   const auto record = runtime::read_record(c.record);
   ASSERT_NE(record.footer(), nullptr) << log;
   EXPECT_EQ(record.footer()->status(), "completed") << log;
