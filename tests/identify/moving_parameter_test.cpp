@@ -150,6 +150,14 @@ TEST(MovingParameterRecords, AStiffnessThatStepsDownIsHeldAsItsStep) {
   expect_held_moving(run, *m);
 }
 
+// Sensor noise and converters only: nothing moved, so nothing is tried as moving.
+TEST(MovingParameterRecords, ACleanRecordHoldsNothingMoving) {
+  const RunIdentification run = identify_rig("moving_clean", test::RigTruth{});
+  ASSERT_TRUE(run.residual.has_value());
+  EXPECT_TRUE(run.residual->moving.empty()) << run_record_text(run);
+  EXPECT_EQ(run_record_text(run).find(" moving ("), std::string::npos);
+}
+
 // A record of rths's own run whose emulator's lag rose from 0 to 8 ms over the 10 s behind the
 // declared 14 ms shift (a trace the declared config lacks): the fit names a time-varying delay,
 // the re-run holds its line (measured: held-out NRMSE 38 % with the constant, 1.3 % moving), and
