@@ -69,7 +69,45 @@ bool mostly_one_value(std::vector<double> x) {
 struct Relation {
   std::string signal;      // empty: none at kMinRelation
   double explained = 0.0;  // of r's variance
+  std::string as;          // the line through r against the signal, in words; empty: no line
 };
+
+// r's least-squares line on x (about their means): (slope, share of r's variance it explains).
+std::pair<double, double> line_of(const std::vector<double>& x, const std::vector<double>& r) {
+  double mx = 0.0, mr = 0.0;
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    mx += x[k] / static_cast<double>(r.size());
+    mr += r[k] / static_cast<double>(r.size());
+  }
+  double xx = 0.0, xr = 0.0, rr = 0.0;
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    xx += (x[k] - mx) * (x[k] - mx);
+    xr += (x[k] - mx) * (r[k] - mr);
+    rr += (r[k] - mr) * (r[k] - mr);
+  }
+  return xx > 0.0 && rr > 0.0 ? std::pair{xr / xx, xr * xr / (xx * rr)} : std::pair{0.0, 0.0};
+}
+
+// "+35 %": a signed share.
+std::string signed_percent(double ratio) {
+  std::string out = number_text(100.0 * ratio) + " %";
+  if (ratio >= 0.0) out.insert(out.begin(), '+');
+  return out;
+}
+
+// The line of r on candidate `which` (0 the input, 1 its rate, 2 the model's output) in the
+// words a lab reads it by: a gain, a stiffness, a lead, a damping, measured / model.
+std::string line_words(Channel channel, int which, double slope) {
+  const bool force = channel == Channel::kForce;
+  if (which == 2) return "as measured / model " + signed_percent(slope);
+  if (which == 0)
+    return force ? "as a stiffness of " + number_text(slope) + " N/m"
+                 : "as a gain of " + signed_percent(slope) + " on the command";
+  if (force) return "as a damping of " + number_text(slope) + " N s/m";
+  std::string lead = number_text(1e3 * slope) + " ms";
+  if (slope >= 0.0) lead.insert(lead.begin(), '+');
+  return "as the reading ahead of the model by " + lead;
+}
 
 // The signal r depends on most over the samples where `inside` holds (the channel's input, its
 // rate, the model's output), named when a function of it explains at least kMinRelation of r's
@@ -82,10 +120,15 @@ Relation relation(const Judged& all, Channel channel, const std::vector<bool>& i
       {"the rate of " + input, &j.velocity},
       {"the model's output", &j.prediction}};
   Relation out;
-  for (const auto& [name, x] : candidates) {
+  for (int which = 0; which < 3; ++which) {
+    const auto& [name, x] = candidates[static_cast<std::size_t>(which)];
     if (mostly_one_value(*x)) continue;
     const double e = correlation_ratio(*x, j.residual);
-    if (e >= kMinRelation && e > out.explained) out = {name, e};
+    if (!(e >= kMinRelation && e > out.explained)) continue;
+    // The line is said where it holds half of what the map holds: else r depends on the signal's
+    // sign or size, not in proportion to it.
+    const auto [slope, line] = line_of(*x, j.residual);
+    out = {name, e, line >= 0.5 * e ? line_words(channel, which, slope) : ""};
   }
   return out;
 }
@@ -111,6 +154,7 @@ void set_relation(const Judged& j, double dt, ChannelFloor& out) {
   out.relation = in_windows ? windowed.signal : whole.signal;
   out.explained = in_windows ? windowed.explained : whole.explained;
   out.relation_in_windows = in_windows && !windowed.signal.empty();
+  out.relation_as = in_windows ? windowed.as : whole.as;
 }
 
 // The events on the judged samples (events.h) and the part they are on (residual_floor.h).
@@ -266,7 +310,9 @@ std::string ChannelFloor::text() const {
               ? "no function of the input, its rate or the model's output explains " +
                     fixed_text(100.0 * kMinRelation, 0) + " % of it"
               : "a function of " + relation + " explains " + fixed_text(100.0 * explained, 0) +
-                    " % of it" + (relation_in_windows ? " inside those windows" : ""));
+                    " % of it" + (relation_in_windows ? " inside those windows" : "") +
+                    (relation_as.empty() ? ", not in proportion (its sign or its size matter)"
+                                         : ", " + relation_as));
 }
 
 nlohmann::json ChannelFloor::json() const {
@@ -289,6 +335,7 @@ nlohmann::json ChannelFloor::json() const {
       {"relation", relation},
       {"relation_explained", explained},
       {"relation_in_windows", relation_in_windows},
+      {"relation_as", relation_as},
       {"excess", excess},
       {"events", events_json(*this)},
       {"text", above ? text() : std::string()}};

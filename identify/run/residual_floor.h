@@ -45,6 +45,11 @@
 //             the record and over the samples inside the windows that hold the residual, the
 //             stronger kept (a crack's residual follows the displacement after the crack and is
 //             noise before it: over the whole record no function of the displacement holds it).
+//             With it, r's least-squares line on that signal in the words a lab reads it by (its
+//             slope: on the model's output measured / model - 1, on the command a gain, on the
+//             displacement read a stiffness N/m, on the command's rate the reading's lead on the
+//             model s, on the displacement's rate a damping N s/m), where the line explains at
+//             least half of what the map does; else "not in proportion": its sign or size matter.
 //             A signal one value of which holds more than a bin's share of the samples (a held
 //             reading, a signal at rest) is not tried: its bins would sort r by time, not by it.
 //   excess    the share of r's power above the floor: 1 - (floor / level)^2.
@@ -103,7 +108,11 @@ struct ChannelFloor {
   std::string relation;    // "the rate of the displacement read"; empty: none at kMinRelation
   double explained = 0.0;  // of r's variance, by a function of `relation`
   bool relation_in_windows = false;  // judged on the samples inside `windows`, not the record's
-  double excess = 0.0;               // share of the residual's power above the floor
+  // The line of r on `relation`'s signal in a lab's words ("as measured / model -30 %", "as a
+  // damping of 420 N s/m", "as the reading ahead of the model by -5 ms"); empty where the line
+  // holds under half of what the map explains (r follows the signal's sign or size).
+  std::string relation_as;
+  double excess = 0.0;  // share of the residual's power above the floor
   // Whether above or not: what the residual holds for a moment (events.h), the largest first.
   std::vector<ResidualEvent> events;
   std::string events_part;  // the part the events are on ("load cell 1")

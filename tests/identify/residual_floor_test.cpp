@@ -4,7 +4,8 @@
 // in time with their kind in the text and the JSON's `unexplained` list (a held reading's share of
 // the re-run's error with it put back), a rattle on the load cell for a moment, which no stage and no description holds, is
 // reported on the load cell above the floor, in its window and at its frequency, and a force
-// residual that follows the motion on the specimen.
+// residual that follows the motion on the specimen, with its line in a lab's words (a damping the
+// model lacks as the damping it is).
 #include "identify/run/residual_floor.h"
 
 #include <gtest/gtest.h>
@@ -83,6 +84,12 @@ TEST(ResidualFloorRecords, ARattleForAMomentIsLocatedInTimeAndFrequency) {
   EXPECT_TRUE(run_record_json(run)["residual_floor"][1]["above"].get<bool>()) << text;
 }
 
+const ChannelFloor& force_floor(const RunIdentification& run) {
+  for (const auto& f : run.floors)
+    if (f.channel == Channel::kForce) return f;
+  throw std::runtime_error("no force channel identified");
+}
+
 // A specimen 1.4 x stiffer in compression: its force channel is above its floor, and a function
 // of the motion explains its residual (which the fitted stiffness left uncorrelated with the
 // displacement), so it is the specimen's, not its load cell's.
@@ -99,12 +106,29 @@ TEST(ResidualFloorRecords, AForceThatFollowsTheMotionIsTheSpecimens) {
   EXPECT_EQ(force->part, "specimen 1") << text;
   EXPECT_FALSE(force->relation.empty()) << text;
   EXPECT_GE(force->explained, 0.5) << text;
+  // Where the residual lies (the largest compressions) the specimen reads above the model fitted
+  // over both sides: a line on the model's output with its sign.
+  EXPECT_EQ(force->relation_as.rfind("as measured / model +", 0), 0u) << text;
 }
 
-const ChannelFloor& force_floor(const RunIdentification& run) {
-  for (const auto& f : run.floors)
-    if (f.channel == Channel::kForce) return f;
-  throw std::runtime_error("no force channel identified");
+// A viscous damper of 300 N s/m beside the specimen, identified with the damping left out of the
+// candidates: the force's residual is a line on the displacement's rate, said as the damping it
+// is, with the sign a lab reads it by.
+TEST(ResidualFloorRecords, AForceInProportionToTheRateIsSaidAsADamping) {
+  test::RigTruth rig;
+  rig.specimen_damping = 300.0;
+  IdentifyOptions options;
+  options.selection.candidates = {Effect::kFirstOrder};
+  const RunIdentification run =
+      identify_run_record(test::independent_record("floor_damper", rig, 15.0), options);
+  const std::string text = run_record_text(run);
+  const ChannelFloor& force = force_floor(run);
+  ASSERT_TRUE(force.above) << text;
+  EXPECT_EQ(force.relation, "the rate of the displacement read") << text;
+  EXPECT_EQ(force.relation_as.rfind("as a damping of ", 0), 0u) << text;
+  const double damping =
+      std::stod(force.relation_as.substr(std::string("as a damping of ").size()));
+  EXPECT_NEAR(damping, 300.0, 60.0) << text;
 }
 
 std::vector<ResidualEvent> of_kind(const ChannelFloor& f, EventKind kind) {
