@@ -184,9 +184,19 @@ std::int64_t realtime_ns() {
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
+namespace {
+
+// `options` with its topic prefix resolved: an empty one is the process's scoped prefix.
+DdsEndpointOptions with_topic_prefix(DdsEndpointOptions options) {
+  if (options.topic_prefix.empty()) options.topic_prefix = scoped_topic_prefix();
+  return options;
+}
+
+}  // namespace
+
 DdsEndpoint::DdsEndpoint(const DdsEndpointOptions& options)
-    : options_(options),
-      impl_(std::make_unique<Impl>(options, dds::QosSpec{options.history_depth, {}})) {}
+    : options_(with_topic_prefix(options)),
+      impl_(std::make_unique<Impl>(options_, dds::QosSpec{options_.history_depth, {}})) {}
 
 DdsEndpoint::~DdsEndpoint() = default;
 

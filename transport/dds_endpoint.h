@@ -49,9 +49,11 @@ struct DdsEndpointOptions {
   std::uint32_t domain_id = 0;
   bool coordinator = true;                // false: a node
   std::int32_t node_id = kCoordinatorId;  // for a node, its id (messages to others are dropped)
-  // Topics <prefix>_node<id>_down and _up; by default "rths", scoped by RTHS_DDS_SCOPE
-  // (transport/topic_scope.h), so every endpoint of a run's processes agrees.
-  std::string topic_prefix = scoped_topic_prefix();
+  // Topics <prefix>_node<id>_down and _up. Empty: scoped_topic_prefix() when the endpoint opens
+  // ("rths", or "rths_<scope>" under RTHS_DDS_SCOPE: transport/topic_scope.h), so every endpoint
+  // of a run's processes agrees; a bad scope makes the constructor throw std::invalid_argument
+  // naming it.
+  std::string topic_prefix;
   int history_depth = 64;
   // QoS properties of the participant: the DDS Security ones (security::participant_properties)
   // or none. A participant with security talks only to participants of the same lab's PKI.

@@ -43,16 +43,33 @@ TEST(TopicScope, ABadScopeIsRefusedNamingTheVariableAndTheProblem) {
                                      "' has 101 characters; a topic scope has at most 100");
 }
 
-TEST(TopicScope, EndpointsTakeTheirPrefixFromTheVariable) {
+TEST(TopicScope, TheScopedPrefixIsReadFromTheVariable) {
   ::setenv(kTopicScopeVariable, "from_the_variable", 1);
-  EXPECT_EQ(DdsEndpointOptions{}.topic_prefix, "rths_from_the_variable");
+  EXPECT_EQ(scoped_topic_prefix(), "rths_from_the_variable");
   ::setenv(kTopicScopeVariable, "", 1);
-  EXPECT_EQ(DdsEndpointOptions{}.topic_prefix, "rths");
+  EXPECT_EQ(scoped_topic_prefix(), "rths");
   ::unsetenv(kTopicScopeVariable);
-  EXPECT_EQ(DdsEndpointOptions{}.topic_prefix, "rths");
+  EXPECT_EQ(scoped_topic_prefix(), "rths");
   ::setenv(kTopicScopeVariable, "bad-scope", 1);
-  EXPECT_THROW(DdsEndpointOptions{}, std::invalid_argument);
+  EXPECT_THROW(scoped_topic_prefix(), std::invalid_argument);
   ::unsetenv(kTopicScopeVariable);
+}
+
+// An endpoint left to the default prefix under a bad scope opens nothing and says why.
+TEST(TopicScope, AnEndpointUnderABadScopeIsRefusedNamingIt) {
+  runtime::ensure_dds_config();
+  ::setenv(kTopicScopeVariable, "bad-scope", 1);
+  DdsEndpointOptions options;
+  options.domain_id = static_cast<std::uint32_t>(test::kSharedDomain);
+  std::string refused;
+  try {
+    DdsEndpoint endpoint(options);
+  } catch (const std::invalid_argument& e) {
+    refused = e.what();
+  }
+  ::unsetenv(kTopicScopeVariable);
+  EXPECT_EQ(refused,
+            "RTHS_DDS_SCOPE 'bad-scope' holds '-'; a topic scope is letters, digits and '_' only");
 }
 
 TEST(TopicScope, TheSuitesScopesAreValidAndDifferByTestAndByProcess) {
@@ -66,12 +83,12 @@ TEST(TopicScope, TheSuitesScopesAreValidAndDifferByTestAndByProcess) {
   EXPECT_EQ(test::dds_scope_for("Suite.Test/1", 7).substr(0, 13), "Suite_Test_1_");
 }
 
-// A coordinator and a node on one domain: the node hears the coordinator when both took the
-// scope of this test, and nothing when the coordinator took another.
+// A coordinator and a node on one domain: the node, on the default prefix, hears the coordinator
+// of this test's scope, and nothing from one of another scope.
 TEST(TopicScope, OnOneDomainOnlyEndpointsOfOneScopeHearEachOther) {
   runtime::ensure_dds_config();
   const int domain = test::scope_dds_to_this_test();
-  const std::string own = DdsEndpointOptions{}.topic_prefix;
+  const std::string own = scoped_topic_prefix();
   const auto options = [&](bool coordinator, const std::string& prefix) {
     DdsEndpointOptions o;
     o.domain_id = static_cast<std::uint32_t>(domain);
@@ -80,7 +97,7 @@ TEST(TopicScope, OnOneDomainOnlyEndpointsOfOneScopeHearEachOther) {
     o.topic_prefix = prefix;
     return o;
   };
-  DdsEndpoint node(options(false, own));
+  DdsEndpoint node(options(false, ""));
   DdsEndpoint stranger(options(true, own + "_other"));
   DdsEndpoint coordinator(options(true, own));
   Message command;
