@@ -6,7 +6,7 @@
 // Input:  the process's environment variable RTHS_DDS_SCOPE (kTopicScopeVariable). A launcher's
 //         children inherit it (util::ChildProcess), so a coordinator and its nodes agree; a node
 //         started elsewhere must be given the same value.
-// Output: the topic prefix of every DdsEndpoint the process opens (DdsEndpointOptions'
+// Output: the topic prefix of every DdsEndpoint the process opens with an empty one (the
 //         default): "rths" when the variable is unset or empty, else "rths_<scope>"; topics are
 //         then <prefix>_node<id>_down and <prefix>_node<id>_up (transport/dds_endpoint.h). The
 //         DDS Security permissions (`rths pki init`) grant "*_node<id>_...", so any scope is
