@@ -113,7 +113,7 @@ void Feed::set_prediction(const core::SimulationResult& prediction) {
   for (std::uint64_t i = first; i < samples_total_ && D > 0; ++i) {
     const std::size_t r = static_cast<std::size_t>(i % history_);
     for (std::size_t d = 0; d < D; ++d)
-      samples_.predicted[r * D + d] = predicted(samples_.step[r], static_cast<int>(d));
+      samples_.predicted[r * D + d] = predicted(samples_.step[r], column_dofs_[d]);
     difference_.add(&samples_.u[r * D], &samples_.predicted[r * D], dofs_);
   }
   changed();
@@ -186,7 +186,8 @@ void Feed::on_header(const runtime::RunHeader& header) {
   have_header_ = true;
   actuators_ = header.actuators();
   links_ = header.link_node_ids_size();
-  dofs_ = std::max(header.dofs(), 0);
+  column_dofs_ = runtime::recorded_dofs(header);
+  dofs_ = static_cast<int>(column_dofs_.size());
   const double dt = header.dt() > 0 ? header.dt() : 1e-3;
   stride_ = sample_stride(dt, options_.points_per_second);
   history_ = std::max<std::size_t>(options_.history, 1);
@@ -281,7 +282,7 @@ void Feed::keep_sample(const runtime::StepRecord& step) {
   for (std::size_t d = 0; d < D; ++d) {
     const int i = static_cast<int>(d);
     s.u[r * D + d] = i < step.displacement_size() ? step.displacement(i) * kMm : 0;
-    s.predicted[r * D + d] = predicted(step.step(), i);
+    s.predicted[r * D + d] = predicted(step.step(), column_dofs_[d]);
   }
   if (D > 0) difference_.add(&s.u[r * D], &s.predicted[r * D], dofs_);
   s.lateness[r] = step.lateness() * kMs;
@@ -426,7 +427,8 @@ nlohmann::json Feed::header_json() const {
                       {"spectrum_window_s", static_cast<double>(window_.size()) * header_.dt()}};
   const bool floors = !header_.study().structure().has_matrices();
   for (int d = 0; d < dofs_; ++d)
-    h["dof_labels"].push_back((floors ? "floor " : "DOF ") + std::to_string(d + 1));
+    h["dof_labels"].push_back((floors ? "floor " : "DOF ") +
+                              std::to_string(column_dofs_[static_cast<std::size_t>(d)] + 1));
   for (const auto& node : header_.study().deployment().nodes())
     h["link_labels"][std::to_string(node.id())] = config::NodeSpec::Kind_Name(node.kind());
   h["diagnostics"] = diagnostic_names_;  // per link: its controller's channel names

@@ -178,7 +178,8 @@ class Feed : public runtime::RecordObserver {
   runtime::RunHeader header_;
   nlohmann::json context_;
   std::int64_t stride_ = 1;
-  int actuators_ = 0, links_ = 0, dofs_ = 0;
+  int actuators_ = 0, links_ = 0, dofs_ = 0;  // dofs_: the record's displacement columns
+  std::vector<int> column_dofs_;              // the model DOF (0-based) of each displacement column
   // Per link: its controller's DIAGNOSTIC channels (names, in layout order) and where they start
   // in a sample row; diagnostics_: all links' channels.
   std::vector<std::vector<std::string>> diagnostic_names_;

@@ -384,6 +384,36 @@ TEST(Feed, APredictionGivenAfterTheStepsFillsTheKeptSamples) {
   EXPECT_EQ(j["status"]["prediction"]["max_abs_difference_mm"][0].get<double>(), 0.0);
 }
 
+// A large model's record keeps the DOFs its recorders name (RunHeader.recorded_dofs): each column
+// is labelled and compared with the prediction of its own DOF, not of the column's position.
+TEST(Feed, ARecordOfChosenDofsIsLabelledAndPredictedByThoseDofs) {
+  core::SimulationResult p;
+  p.dt = kDt;
+  p.displacement = Eigen::MatrixXd::Zero(100, 500);
+  p.displacement.col(4).setConstant(0.004);    // DOF 5: 4 mm
+  p.displacement.col(249).setConstant(0.249);  // DOF 250: 249 mm
+  Feed feed;
+  feed.set_prediction(p);
+  runtime::RecordEntry h = header();
+  h.mutable_header()->set_dofs(500);
+  h.mutable_header()->add_recorded_dofs(4);
+  h.mutable_header()->add_recorded_dofs(249);
+  feed.add(h);
+  for (int k = 0; k < 100; ++k) {
+    runtime::RecordEntry s = step(k);
+    s.mutable_step()->set_displacement(0, 0.004);
+    s.mutable_step()->add_displacement(0.250);  // 1 mm off its DOF's prediction
+    feed.add(s);
+  }
+  FeedCursor cursor;
+  const auto j = as_sent(feed.since(cursor));
+  EXPECT_EQ(j["header"]["dof_labels"], nlohmann::json({"floor 5", "floor 250"}));
+  ASSERT_EQ(j["samples"]["predicted_u_mm"].size(), 2u);
+  EXPECT_DOUBLE_EQ(j["samples"]["predicted_u_mm"][1][3].get<double>(), 249.0);
+  EXPECT_NEAR(j["samples"]["difference_mm"][0][3].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(j["samples"]["difference_mm"][1][3].get<double>(), 1.0, 1e-9);
+}
+
 TEST(Feed, WithoutAPredictionTheResponseIsDrawnAlone) {
   Feed feed;
   feed.add(header());
