@@ -76,6 +76,26 @@ bool a_step_beats_the_drift(const ActuatorPath& path, Channel channel,
   return stepped < kDescriptionWins * with_drift;
 }
 
+// Whether the named stroke limit holds the reading where it acts: over the samples where the
+// model with it and without it differ, what it leaves is below kFlatShare of what the model
+// without it leaves there (a rod at its end reads flat; a reading rounded at its largest
+// strokes is no end stop, however well a clip at its peak fits elsewhere).
+bool the_limit_holds_the_reading(const ActuatorPath& path, Channel channel,
+                                 const std::vector<std::string>& kept,
+                                 const std::vector<std::string>& without) {
+  const ChannelSignals& s = identified_signals(path.id, channel);
+  const std::vector<double> with_it = prediction_without(path, channel, kept),
+                            without_it = prediction_without(path, channel, without);
+  const double scale = signal_scales(s).target;
+  double left = 0.0, before = 0.0;
+  for (std::size_t j = 0; j < s.size(); ++j) {
+    if (!(std::abs(with_it[j] - without_it[j]) > 1e-9 * scale)) continue;
+    left += (s.target[j] - with_it[j]) * (s.target[j] - with_it[j]);
+    before += (s.target[j] - without_it[j]) * (s.target[j] - without_it[j]);
+  }
+  return before > 0.0 && left < kFlatShare * kFlatShare * before;
+}
+
 void judge_channel(ActuatorPath& path, Channel channel) {
   if (!path.id.find(channel)) return;
   const std::vector<std::string> named =
@@ -85,7 +105,8 @@ void judge_channel(ActuatorPath& path, Channel channel) {
     const std::vector<std::string> kept = not_named_on(path, channel);
     std::vector<std::string> without = kept;
     without.push_back(effect);
-    if (effect == "offset_drift" && a_step_beats_the_drift(path, channel, kept, without)) {
+    if ((effect == "offset_drift" && a_step_beats_the_drift(path, channel, kept, without)) ||
+        (effect == "stroke_limit" && !the_limit_holds_the_reading(path, channel, kept, without))) {
       take_out(path, channel, effect);
       continue;
     }

@@ -30,6 +30,10 @@
 // the RMS the drift leaves: an offset that changed at one moment (a joint that slipped, a zero
 // that jumped) is no drift, and the events search locates it in time (residual_floor.h).
 //
+// A stroke limit is not named where, over the samples it acts on, it leaves kFlatShare or more of
+// the RMS the model without it leaves there: a rod at its end stop reads flat, a reading that
+// rounds off at its largest strokes (a valve's gain, a pump that sags) is no end stop.
+//
 // Its share of the response error (RunResidual::described, run_residual.h): the re-run with the
 // identified models leaves E (the worst floor's NRMSE); the same re-run with the channel's
 // described residual put back where the channel reads it (the force channel's added to the force
@@ -51,7 +55,8 @@ namespace rths::identify {
 
 inline constexpr double kMinSignalShare = 0.01;  // described RMS / the target's std
 inline constexpr double kDescriptionWins = 0.8;  // x the identified model's held-out RMS error
-inline constexpr std::size_t kStepEdge = 100;    // a step lies 1 / kStepEdge of the record in
+inline constexpr double kFlatShare = 0.25;     // RMS, where a stroke limit acts: with / without it
+inline constexpr std::size_t kStepEdge = 100;  // a step lies 1 / kStepEdge of the record in
 
 struct Unexplained {
   int actuator = 0;  // 1-based
