@@ -6,7 +6,12 @@
 namespace rths::analysis {
 
 RunProgress::RunProgress(ProgressOptions options, std::size_t simulations, std::size_t steps)
-    : options_(std::move(options)), simulations_(simulations), steps_(steps) {}
+    : options_(std::move(options)), simulations_(simulations), steps_(steps), started_s_(now_s()) {}
+
+double RunProgress::now_s() const {
+  if (options_.clock_s) return options_.clock_s();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 void RunProgress::start(std::size_t index, std::string name) {
   index_ = index;
@@ -15,8 +20,7 @@ void RunProgress::start(std::size_t index, std::string name) {
 
 bool RunProgress::after_step(std::size_t k, const core::SimulationResult& /*result*/) {
   if (!options_.print || k == 0 || k % kClockSteps != 0) return true;
-  const double elapsed =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  const double elapsed = now_s() - started_s_;
   if (elapsed < options_.quiet) return true;
   if (last_line_ >= 0.0 && elapsed - last_line_ < options_.every) return true;
   print_line(k, elapsed);
