@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -44,8 +45,9 @@ struct MatrixData {
 };
 
 // Bytes an entry of a sparse matrix holds while it is read: its triplet (two indices and the
-// value, 16) and its compressed column entry (the value and its row, 12), both alive at once.
-constexpr std::uint64_t kSparseBytesPerEntry = 28;
+// value, 16), Eigen's transposed temporary in setFromTriplets (the value and its index, 12), the
+// compressed result (12) and the held model's own copy of it (12), all alive at once.
+constexpr std::uint64_t kSparseBytesPerEntry = 52;
 
 Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
   const int count = spec.values_size();
@@ -132,8 +134,11 @@ SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
 void require_mat_size(mat_t* file, const std::string& variable, const std::string& where) {
   std::unique_ptr<matvar_t, MatVarFree> info(Mat_VarReadInfo(file, variable.c_str()));
   if (!info || info->class_type == MAT_C_SPARSE || info->rank != 2) return;
-  require_memory(static_cast<std::uint64_t>(info->dims[0]),
-                 static_cast<std::uint64_t>(info->dims[1]) * 16,
+  const auto cols = static_cast<std::uint64_t>(info->dims[1]);
+  const std::uint64_t row_bytes = cols > std::numeric_limits<std::uint64_t>::max() / 16
+                                      ? std::numeric_limits<std::uint64_t>::max()
+                                      : cols * 16;
+  require_memory(static_cast<std::uint64_t>(info->dims[0]), row_bytes,
                  where + ": variable '" + variable + "' read as a dense matrix");
 }
 

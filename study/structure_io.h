@@ -8,9 +8,11 @@
 //     `.mtx`:  Matrix Market, `matrix coordinate|array real|integer general|symmetric`;
 //     `.csv`:  one matrix row per line, fields separated by commas or blanks ('#' comments).
 //   Relative paths resolve against base_dir. A Matrix Market coordinate file and a MATLAB sparse
-//   variable are read as triplets into a sparse matrix, never rows x cols: the size line's
-//   declared entries, at 28 bytes each (triplet and compressed entry), are checked against the
-//   memory limit (study/memory_budget.h) before an entry is read; read_matrix then forms the dense
+//   variable are read as triplets into a sparse matrix, never rows x cols: a coordinate file's
+//   declared entries, at 52 bytes each (triplet, Eigen's temporary, compressed entry, the held
+//   copy), are checked against the memory limit (study/memory_budget.h) before an entry is read
+//   (a sparse MATLAB variable is read by matio as stored, its file bounded by the file-size
+//   limit, and not sized before); read_matrix then forms the dense
 //   matrix only after checking its rows x cols x 8 bytes against the limit too. Every error throws std::invalid_argument naming the
 //   field, the file and (for .mat) the variable, and the problem: "structure.matrices.mass:
 //   frame.mat: no variable 'Mx' (variables: M, C, K)".

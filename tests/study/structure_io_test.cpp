@@ -132,7 +132,7 @@ TEST(StructureIo, AMatrixMarketSizeLineIsCheckedBeforeAnythingIsAllocated) {
   setenv("RTHS_MEMORY_LIMIT", "1000000", 1);
   write("big.mtx", "%%MatrixMarket matrix coordinate real general\n1000 1000 1\n1 1 1\n");
   const std::string big = error_of([] { read_matrix(file_spec("big.mtx"), scratch(), "f"); });
-  // 100 bytes: the 4 entries a size line declares, held sparse (28 bytes each with the column
+  // 100 bytes: the 4 entries a size line declares, held sparse (52 bytes each with the column
   // starts), do not fit: refused at the size line.
   setenv("RTHS_MEMORY_LIMIT", "100", 1);
   write("four.mtx",
@@ -141,7 +141,7 @@ TEST(StructureIo, AMatrixMarketSizeLineIsCheckedBeforeAnythingIsAllocated) {
   unsetenv("RTHS_MEMORY_LIMIT");
   EXPECT_NE(big.find("f: big.mtx: held dense keeps 1000 rows x 8000 bytes"), std::string::npos)
       << big;
-  EXPECT_NE(four.find("four.mtx:2: the sparse matrix its size line declares keeps 6 rows x 28"),
+  EXPECT_NE(four.find("four.mtx:2: the sparse matrix its size line declares keeps 6 rows x 52"),
             std::string::npos)
       << four;
 }
