@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include "runtime/node/hold_cause.h"
+
 namespace rths::coordinator {
 
 using runtime::Verdict;
@@ -58,18 +60,19 @@ void RunState::apply(const transport::Message& message, Node& node) {
       return;
     }
     case runtime::HOLD: {
-      // An emulator held on its own (its watchdog or limits): the test cannot go on. In a run held
-      // from the view, no command comes, so a watchdog's HOLD is expected and recorded.
+      // A node held on its own (its watchdog, limits or a fault): the test cannot go on. In a run
+      // held from the view no command leaves, so only a command watchdog's HOLD is expected and
+      // recorded there; any other ends the held run as it ends any run, naming the node.
       runtime::Hold hold;
       if (!unpack_or_count(message, hold, rejected)) return;
-      if (!held_from_view.empty()) {
-        event(node.plan->label() + " held on its own at its step " + std::to_string(message.step) +
-              " while the run is held: " + hold.reason());
+      const std::string held = "held on its own at its step " + std::to_string(message.step);
+      if (!held_from_view.empty() && runtime::is_command_watchdog_hold(hold.reason())) {
+        event(node.plan->label() + " " + held + " while the run is held: " + hold.reason());
         return;
       }
-      throw RunAborted(
-          "held on its own at its step " + std::to_string(message.step) + ": " + hold.reason(),
-          node.plan->label());
+      throw RunAborted(held + ": " + hold.reason() +
+                           (held_from_view.empty() ? "" : " (while held: " + held_from_view + ")"),
+                       node.plan->label());
     }
     case runtime::HEARTBEAT: {
       runtime::Heartbeat heartbeat;

@@ -134,8 +134,9 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   // The run held from the view (`why`: who held it), at `step`: no further step is integrated (the
   // loop cannot integrate past a held actuator), so no command leaves and every other lab's
   // actuators stay at their last one (a real-time emulator's watchdog then holds it where it
-  // stands). Messages, liveliness and the heartbeat go on; a node's own HOLD is recorded, not a
-  // fault. Leaves only by RunAborted: the director's STOP (or the stop request) or a node's fault.
+  // stands). Messages, liveliness and the heartbeat go on; a node's command-watchdog HOLD is
+  // recorded, not a fault; any other HOLD of a node's own is its fault. Leaves only by RunAborted:
+  // the director's STOP (or the stop request) or a node's fault, naming the node.
   [[noreturn]] void hold_run(const std::string& why);
   std::string held_from_view;  // while the run is held: why (hold_run's `why`)
 

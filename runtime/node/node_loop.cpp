@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "runtime/node/hold_cause.h"
 #include "runtime/node/lag.h"
 #include "runtime/node/plan.h"
 #include "runtime/node/schema.h"
@@ -224,7 +225,7 @@ std::optional<int> NodeLoop::keep_time() {
   if (commands_stopped(now)) {
     const double silent_ms = static_cast<double>(realtime_ns() - last_command_ns_) * 1e-6;
     if (auto hold = service_.hold_on_own(
-            "command watchdog: no fresh command for " + std::to_string(silent_ms) + " ms (limit " +
+            std::string(kCommandWatchdogCause) + std::to_string(silent_ms) + " ms (limit " +
             std::to_string(static_cast<double>(assigned_.watchdog_ns) * 1e-6) + " ms)"))
       endpoint_.send(*hold);
   }
