@@ -195,6 +195,21 @@ std::vector<util::Figure> actuator_pages(const StudyOutcome& outcome,
   return pages;
 }
 
+// The actuators_<p>.png / .svg pages `directory` holds, by page number (a longer number after a
+// shorter one), a page's PNG before its SVG.
+std::vector<std::string> actuator_page_files(const std::filesystem::path& directory) {
+  std::vector<std::string> pages;
+  if (!std::filesystem::is_directory(directory)) return pages;
+  const std::regex page("actuators_[0-9]+\\.(png|svg)");
+  for (const auto& entry : std::filesystem::directory_iterator(directory))
+    if (std::regex_match(entry.path().filename().string(), page))
+      pages.push_back(entry.path().filename().string());
+  std::sort(pages.begin(), pages.end(), [](const std::string& a, const std::string& b) {
+    return a.size() != b.size() ? a.size() < b.size() : a < b;
+  });
+  return pages;
+}
+
 }  // namespace
 
 std::vector<util::Figure> many_dof_figures(const StudyOutcome& outcome,
@@ -217,12 +232,14 @@ void remove_many_dof_figures(const std::filesystem::path& directory) {
   for (const char* stale : {"response_envelope.png", "response_envelope.svg", "floor_histories.png",
                             "floor_histories.svg"})
     std::filesystem::remove(directory / stale);
-  if (!std::filesystem::is_directory(directory)) return;
-  const std::regex page("actuators_[0-9]+\\.(png|svg)");
-  std::vector<std::filesystem::path> pages;
-  for (const auto& entry : std::filesystem::directory_iterator(directory))
-    if (std::regex_match(entry.path().filename().string(), page)) pages.push_back(entry.path());
-  for (const auto& p : pages) std::filesystem::remove(p);
+  for (const std::string& page : actuator_page_files(directory))
+    std::filesystem::remove(directory / page);
+}
+
+std::vector<std::string> study_plot_files(const std::filesystem::path& directory) {
+  std::vector<std::string> files = study_plot_files();
+  for (std::string& page : actuator_page_files(directory)) files.push_back(std::move(page));
+  return files;
 }
 
 }  // namespace rths::analysis

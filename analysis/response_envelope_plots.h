@@ -70,4 +70,9 @@ std::vector<util::Figure> many_dof_figures(const StudyOutcome& outcome,
 // not stay beside a study that has none of its kind.
 void remove_many_dof_figures(const std::filesystem::path& directory);
 
+// study_plot_files() and the actuators_<p>.png / .svg pages `directory` holds (by page number):
+// every figure write_study_plots may have left there, for a run without plots to remove and a
+// summary to list.
+std::vector<std::string> study_plot_files(const std::filesystem::path& directory);
+
 }  // namespace rths::analysis

@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "analysis/distributed/distributed_outputs.h"
+#include "analysis/response_envelope_plots.h"
 #include "cli/commands.h"
 #include "cli/distributed.h"
 #include "cli/support.h"
@@ -199,7 +200,7 @@ std::string drawn_figures(const std::filesystem::path& out, const std::string& c
                           bool plots, bool failed) {
   if (!plots || failed) return "";
   std::vector<std::string> pngs;
-  for (const std::string& file : analysis::study_plot_files())
+  for (const std::string& file : analysis::study_plot_files(out))
     if (file.ends_with(".png")) pngs.push_back(file);
   pngs.push_back("links_" + case_name + ".png");
   std::string drawn;

@@ -88,7 +88,9 @@ nlohmann::json run_context(const core::PreparedStudy& prepared, const std::strin
 core::SimulationResult predict_case(const core::PreparedStudy& prepared,
                                     const std::string& case_name) {
   const config::Case& study_case = core::find_case(prepared.config, case_name);
-  return core::simulate(runtime::in_process_setup(prepared, study_case), prepared.motion);
+  core::SimulationOptions recorded;  // the record's columns: what the recorders keep
+  recorded.kept_dofs = prepared.recorders.kept_dofs;
+  return core::simulate(runtime::in_process_setup(prepared, study_case), prepared.motion, recorded);
 }
 
 namespace {
@@ -156,6 +158,9 @@ void describe_record_study(Feed& feed, const runtime::RecordContents& contents,
     if (prepared.motion.acceleration.size() < 2)
       throw std::invalid_argument("the record has too few steps to carry the motion");
     prepared.base = core::base_setup(study, header.dt(), base_dir);
+    // The DOFs the record holds (none named: every DOF), as its recorders kept them.
+    prepared.recorders.kept_dofs.assign(header.recorded_dofs().begin(),
+                                        header.recorded_dofs().end());
     describe(feed, prepared, header.case_name(), note,
              ", over the motion of the record's " +
                  std::to_string(prepared.motion.acceleration.size()) + " steps (" + why + ")");

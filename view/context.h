@@ -9,10 +9,13 @@
 //                 and link_context's facts.
 //   predict_case  the in-process prediction: core::simulate of the case's in-process setup
 //                 (runtime::in_process_setup: its delay stages and compensation, the emulators'
-//                 compensation), the response `rths run` computes for the case. A lockstep run
-//                 without node delay stages equals it bit for bit; the links' lag and the nodes'
-//                 own delay stages are not in it, so in real time the measured response differs
-//                 from it by what they (and the actuator) did.
+//                 compensation), the response `rths run` computes for the case, keeping the
+//                 DOFs the study's recorders keep (prepared.recorders.kept_dofs: the record's
+//                 columns; empty: every DOF), so a large model's prediction is O(recorded) a
+//                 step as its record is. A lockstep run without node delay stages equals it bit
+//                 for bit; the links' lag and the nodes' own delay stages are not in it, so in
+//                 real time the measured response differs from it by what they (and the
+//                 actuator) did.
 //   describe_run  both into a Feed: its context (run_context plus "prediction": {"text", "steps",
 //                 "diverged"} or {"text": why there is none}) and its prediction. Called before
 //                 the run starts (the coordinator) or on the view's side (`rths view`), never on
@@ -52,9 +55,9 @@ core::GroundMotion recorded_motion(const runtime::RecordContents& contents);
 // describe_run for a record (`rths view`), its header required: the study prepared from the
 // header with `base_dir` resolving its relative paths. When the study's motion file cannot be
 // read here (a record carried away from the lab), the record's own motion (recorded_motion)
-// stands in, so the prediction covers the recorded steps and the page says so; when the study
-// cannot be set up at all, the context says why. The record's warning (cut short, damaged) is
-// the note. A real-time record that overran gets its deadline diagnosis
+// stands in, so the prediction covers the recorded steps (and the record's recorded DOFs) and
+// the page says so; when the study cannot be set up at all, the context says why. The record's
+// warning (cut short, damaged) is the note. A real-time record that overran gets its deadline diagnosis
 // (runtime::diagnose_record_deadlines, the lines `rths launch` prints) beneath its badge.
 void describe_record(Feed& feed, const runtime::RecordContents& contents,
                      const std::filesystem::path& base_dir);

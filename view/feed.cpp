@@ -8,6 +8,7 @@
 
 #include "runtime/record/node_health.h"
 #include "runtime/record/realtime_verdict.h"
+#include "view/record_limits.h"
 
 namespace rths::view {
 namespace {
@@ -100,6 +101,7 @@ void Feed::set_prediction(const core::SimulationResult& prediction) {
   const double dt = prediction.dt > 0 ? prediction.dt : 1e-3;
   prediction_stride_ = sample_stride(dt, options_.points_per_second);
   prediction_dofs_ = static_cast<int>(prediction.displacement.cols());
+  prediction_kept_ = prediction.dofs;
   const auto rows = static_cast<std::int64_t>(prediction.displacement.rows());
   prediction_.clear();
   prediction_.reserve(static_cast<std::size_t>((rows + prediction_stride_ - 1) /
@@ -120,19 +122,15 @@ void Feed::set_prediction(const core::SimulationResult& prediction) {
 }
 
 double Feed::predicted(std::int64_t step, int dof) const {
-  if (step < 0 || step % prediction_stride_ != 0 || dof >= prediction_dofs_)
-    return std::numeric_limits<double>::quiet_NaN();
-  const auto i = static_cast<std::size_t>(step / prediction_stride_) *
-                     static_cast<std::size_t>(prediction_dofs_) +
-                 static_cast<std::size_t>(dof);
-  return i < prediction_.size() ? prediction_[i] : std::numeric_limits<double>::quiet_NaN();
+  const int column = prediction_column(prediction_kept_, prediction_dofs_, dof);
+  if (step < 0 || step % prediction_stride_ != 0 || column < 0) return kNaN;
+  const auto i = static_cast<std::size_t>(step / prediction_stride_ * prediction_dofs_ + column);
+  return i < prediction_.size() ? prediction_[i] : kNaN;
 }
 
 void Feed::Difference::reset(int dofs) {
-  max_abs.assign(static_cast<std::size_t>(dofs), 0.0);
-  sum_squares.assign(static_cast<std::size_t>(dofs), 0.0);
-  max_abs_predicted.assign(static_cast<std::size_t>(dofs), 0.0);
-  sum_squares_predicted.assign(static_cast<std::size_t>(dofs), 0.0);
+  for (auto* v : {&max_abs, &sum_squares, &max_abs_predicted, &sum_squares_predicted})
+    v->assign(static_cast<std::size_t>(dofs), 0.0);
   samples = 0;
 }
 
@@ -182,6 +180,11 @@ void Feed::changed() {
 }
 
 void Feed::on_header(const runtime::RunHeader& header) {
+  if (const auto why = refused_header(header)) {  // nothing is sized from it: no page, the reason
+    state_ = "refused";
+    reason_ = *why;
+    return;
+  }
   header_ = header;
   have_header_ = true;
   actuators_ = header.actuators();

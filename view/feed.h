@@ -28,7 +28,9 @@
 //             e^{-2 pi i f dt k}| / sum_k w_k (a sine's amplitude at its frequency), at
 //             log-spaced f = f_0 10^(i / spectrum_per_decade), f_0 = 1 / (N dt), up to
 //             min(spectrum_max_hz, Nyquist): what a log frequency axis shows.
-//   status    fail-safe state: "starting" before the first step, "armed" while stepping, "HOLD"
+//   status    fail-safe state: "starting" before the first step ("refused" for a header whose
+//             counts the view will not size its rings by, view/record_limits.h: the reason names
+//             the field and its value), "armed" while stepping, "HOLD"
 //             from a HOLD event on (its text is the reason), then from the footer: "failed" for
 //             a real-time run that ran to its end but failed the one real-time verdict
 //             (runtime::deadline_verdict on the rows' overruns and worst streak under the
@@ -96,9 +98,10 @@ class Feed : public runtime::RecordObserver {
     std::lock_guard lock(mutex_);
     return context_;
   }
-  // The in-process prediction of the run (view/context.h): displacement per DOF (m) at
-  // t_k = k dt. Kept at the samples' steps only (every stride-th, the stride from its dt as for
-  // the samples) in mm: steps / stride x DOFs values. Samples kept before it was set get it too,
+  // The in-process prediction of the run (view/context.h): displacement per kept DOF (m) at
+  // t_k = k dt, its columns the DOFs prediction.dofs names (empty: every DOF); each record
+  // column is compared with the prediction of its DOF. Kept at the samples' steps only (every
+  // stride-th, the stride from its dt as for the samples) in mm: steps / stride x kept values. Samples kept before it was set get it too,
   // and the difference statistics restart over the kept samples. A step the prediction does not
   // reach (it diverged) has none.
   void set_prediction(const core::SimulationResult& prediction);
@@ -149,6 +152,8 @@ class Feed : public runtime::RecordObserver {
     double time = 0;
     std::vector<std::vector<double>> amplitude;  // [actuator][bin], mm
   };
+  // A header refused_header (view/record_limits.h) refuses sizes nothing: the state is
+  // "refused", the reason names its field, and no step is drawn.
   void on_header(const runtime::RunHeader& header);
   void on_step(const runtime::StepRecord& step);
   void on_event(const runtime::RunEvent& event);
@@ -186,7 +191,10 @@ class Feed : public runtime::RecordObserver {
   std::vector<std::size_t> diagnostic_offset_;
   std::size_t diagnostics_ = 0;
 
-  std::vector<double> prediction_;  // [row * prediction_dofs_ + dof], mm; row = step / stride
+  // [row * prediction_dofs_ + column], mm; row = step / stride; column: that of a DOF among
+  // prediction_kept_ (the DOFs the prediction kept, ascending; empty: every DOF, column = DOF).
+  std::vector<double> prediction_;
+  std::vector<int> prediction_kept_;
   std::int64_t prediction_stride_ = 1;
   int prediction_dofs_ = 0;
   Difference difference_;

@@ -7,6 +7,7 @@
 #include "runtime/record/record.h"
 #include "view/context.h"
 #include "view/hand_down.h"
+#include "view/record_limits.h"
 
 namespace rths::view {
 namespace {
@@ -23,6 +24,8 @@ bool load_run(Feed& feed, const std::filesystem::path& given,
   }
   if (!contents.header())
     throw std::invalid_argument(record.string() + ": no run header: not a run record");
+  if (const auto why = refused_header(*contents.header()))
+    throw std::invalid_argument(record.string() + ": " + *why);
   // The context (relative paths beside the record; the record's own motion when the study's file
   // is not here) before the steps, which then carry the prediction.
   describe_record(feed, contents, record.parent_path());

@@ -40,8 +40,9 @@ std::filesystem::path run_record_in(const std::filesystem::path& given);
 class RecordView {
  public:
   // `record`: a record or a run's folder (run_record_in). Throws std::invalid_argument for a
-  // record that cannot be read or holds no run header, or a sites.json that is not a list of
-  // sites, std::runtime_error when `address` cannot be listened on within `bind_for`.
+  // record that cannot be read, holds no run header or one the view refuses (refused_header,
+  // view/record_limits.h: the error names the field and its value), or a sites.json that is not
+  // a list of sites, std::runtime_error when `address` cannot be listened on within `bind_for`.
   // `judged`: how `rths launch` judged the case, for its badge (view/verdict.h).
   RecordView(const std::filesystem::path& record, const ListenAddress& address,
              std::chrono::milliseconds bind_for = std::chrono::milliseconds(0),

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "analysis/response_envelope_plots.h"
 #include "analysis/result_tables.h"
 #include "core/time_text.h"
 #include "results/results.h"
@@ -40,7 +41,7 @@ std::filesystem::path write_distributed_outputs(
                          table_file, kind);
   if (!plots) {
     // A folder must not show plots of an earlier run beside this run's results.
-    for (const std::string& file : analysis::study_plot_files())
+    for (const std::string& file : analysis::study_plot_files(out))
       std::filesystem::remove(out / file);
     for (const std::string& file : lag_plot_files(results)) std::filesystem::remove(out / file);
   } else if (!results.outcome.cases.empty()) {

@@ -53,6 +53,25 @@ double peak_abs_difference(const std::vector<double>& upper, const std::vector<d
   return peak;
 }
 
+// Every figure a study may have left in a folder, its actuator pages among them by page number:
+// what a run without plots removes (analysis/distributed) and what `rths sites` lists.
+TEST(ResponseEnvelopePlots, TheStudyPlotFilesOfAFolderNameItsActuatorPages) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("rths_study_plot_files_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const char* name : {"actuators_10.png", "actuators_2.svg", "actuators_2.png",
+                           "actuators_x.png", "actuators_3.pdf", "results.csv"})
+    std::ofstream(dir / name) << "x";
+  std::vector<std::string> expected = study_plot_files();
+  for (const char* name : {"actuators_2.png", "actuators_2.svg", "actuators_10.png"})
+    expected.push_back(name);
+  EXPECT_EQ(study_plot_files(dir), expected);
+  remove_many_dof_figures(dir);
+  EXPECT_EQ(study_plot_files(dir), study_plot_files());
+  EXPECT_TRUE(std::filesystem::exists(dir / "actuators_x.png"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(ResponseEnvelopePlots, ChosenFloorsAreEvenlySpacedFromTheFirstToTheTop) {
   std::vector<int> every(kStoreys);
   for (int i = 0; i < kStoreys; ++i) every[static_cast<std::size_t>(i)] = i;

@@ -129,6 +129,20 @@ TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
   EXPECT_THROW(predict_case(prepared, "no_such_case"), std::invalid_argument);
 }
 
+// The prediction keeps what the study's recorders keep (the record's columns), each kept DOF's
+// history the one a prediction of every DOF has.
+TEST(Context, APredictionKeepsTheDofsTheRecordersKeep) {
+  core::PreparedStudy prepared = test::prepare(
+      test::two_storey_study(1.0, "cases { name: \"lag\" delay { shift { delay: 0.01 } } }", ""));
+  ASSERT_EQ(prepared.base.model.dofs(), 2);
+  const core::SimulationResult every = predict_case(prepared, "lag");
+  prepared.recorders.kept_dofs = {1};
+  const core::SimulationResult kept = predict_case(prepared, "lag");
+  EXPECT_EQ(kept.dofs, std::vector<int>{1});
+  ASSERT_EQ(kept.displacement.cols(), 1);
+  EXPECT_TRUE(kept.displacement.col(0) == every.displacement.col(1));
+}
+
 // The paper frame's lag_shift_14ms run, recorded, read back and removed from disk.
 runtime::RecordContents recorded_paper_frame(const core::PreparedStudy& prepared,
                                              const std::string& name) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/metrics.h"
+#include "runtime/record/record_checks.h"
 
 namespace rths::view {
 namespace {
@@ -412,6 +413,67 @@ TEST(Feed, ARecordOfChosenDofsIsLabelledAndPredictedByThoseDofs) {
   EXPECT_DOUBLE_EQ(j["samples"]["predicted_u_mm"][1][3].get<double>(), 249.0);
   EXPECT_NEAR(j["samples"]["difference_mm"][0][3].get<double>(), 0.0, 1e-9);
   EXPECT_NEAR(j["samples"]["difference_mm"][1][3].get<double>(), 1.0, 1e-9);
+}
+
+// A large model's prediction keeps only the recorded DOFs (view/context.h predict_case): each
+// record column is looked up by its DOF among them, and a DOF it did not keep has none.
+TEST(Feed, APredictionOfTheRecordedDofsIsLookedUpByDof) {
+  core::SimulationResult p;
+  p.dt = kDt;
+  p.displacement = Eigen::MatrixXd::Zero(100, 2);
+  p.displacement.col(0).setConstant(0.004);  // DOF 5: 4 mm
+  p.displacement.col(1).setConstant(0.249);  // DOF 250: 249 mm
+  p.dofs = {4, 249};
+  Feed feed;
+  feed.set_prediction(p);
+  runtime::RecordEntry h = header();
+  h.mutable_header()->set_dofs(500);
+  for (const int dof : {4, 249, 299}) h.mutable_header()->add_recorded_dofs(dof);
+  feed.add(h);
+  for (int k = 0; k < 100; ++k) {
+    runtime::RecordEntry s = step(k);
+    s.mutable_step()->set_displacement(0, 0.004);
+    s.mutable_step()->add_displacement(0.250);
+    s.mutable_step()->add_displacement(0.0);
+    feed.add(s);
+  }
+  FeedCursor cursor;
+  const auto j = as_sent(feed.since(cursor));
+  ASSERT_EQ(j["samples"]["predicted_u_mm"].size(), 3u);
+  EXPECT_DOUBLE_EQ(j["samples"]["predicted_u_mm"][0][3].get<double>(), 4.0);
+  EXPECT_DOUBLE_EQ(j["samples"]["predicted_u_mm"][1][3].get<double>(), 249.0);
+  EXPECT_NEAR(j["samples"]["difference_mm"][1][3].get<double>(), 1.0, 1e-9);
+  EXPECT_TRUE(j["samples"]["predicted_u_mm"][2][3].is_null());
+}
+
+// A crafted header sizes nothing: the page says which field it refused (and its value), and no
+// step is drawn.
+TEST(Feed, AHeaderBeyondARecordsLimitsIsRefusedNamingTheField) {
+  struct Crafted {
+    int dofs;
+    std::vector<int> recorded;
+    std::string named;
+  };
+  for (const Crafted& c : std::vector<Crafted>{
+           {runtime::kMaxRecordDofs + 1, {}, "run header: dofs 10001 outside [0, 10000]"},
+           {500, {249, 4}, "run header: recorded_dofs[1] 4 is not a DOF of 0..499"},
+           {500, {4, 500}, "run header: recorded_dofs[1] 500 is not a DOF of 0..499"}}) {
+    FeedOptions options;
+    options.history = 100;  // a refused header must size nothing; so little if it did
+    Feed feed(options);
+    runtime::RecordEntry h = header();
+    h.mutable_header()->set_dofs(c.dofs);
+    for (const int dof : c.recorded) h.mutable_header()->add_recorded_dofs(dof);
+    feed.add(h);
+    feed.add(step(0));
+    FeedCursor cursor;
+    const auto j = as_sent(feed.since(cursor));
+    EXPECT_EQ(j["status"]["state"], "refused") << c.named;
+    EXPECT_EQ(j["status"]["reason"].get<std::string>().rfind(c.named, 0), 0u)
+        << j["status"]["reason"];
+    EXPECT_FALSE(j.contains("header"));
+    EXPECT_EQ(j["status"]["steps"], 0);
+  }
 }
 
 TEST(Feed, WithoutAPredictionTheResponseIsDrawnAlone) {

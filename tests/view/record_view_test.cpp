@@ -99,6 +99,28 @@ TEST(RecordView, ARealTimeRecordThatOverranShowsTheWarningAndTheDiagnosis) {
   EXPECT_NE(diagnosis.find("the record: usable as recorded"), std::string::npos) << diagnosis;
 }
 
+// A header whose recorded DOFs are not ascending DOFs of the model is refused before anything is
+// sized or predicted from it, the error naming the field and its value.
+TEST(RecordView, ARecordWhoseHeaderTheViewCannotSizeFromIsRefusedNamingTheField) {
+  runtime::RecordContents contents = recorded_run("crafted");
+  auto& header = *contents.entries.front().mutable_header();
+  ASSERT_EQ(header.dofs(), 1);
+  header.clear_recorded_dofs();
+  header.add_recorded_dofs(0);
+  header.add_recorded_dofs(0);
+  const auto path = record_path("crafted_served");
+  write_record(contents.entries, path);
+  try {
+    RecordView view(path, {"127.0.0.1", 0});
+    ADD_FAILURE() << "a header with recorded_dofs 0, 0 was served";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("run header: recorded_dofs[1] 0 is not a DOF of 0..0"),
+              std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove(path);
+}
+
 TEST(RecordView, ARecordThatCannotBeReadOrHasNoHeaderIsRefused) {
   EXPECT_THROW(RecordView(record_path("missing"), {"127.0.0.1", 0}), std::invalid_argument);
   const auto path = record_path("no_header");
