@@ -402,6 +402,7 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
   }
   const core::Mat recorded = m.steps.displacement.topRows(static_cast<Eigen::Index>(run.steps));
   input.recorded = &recorded;
+  input.recorded_dofs = m.steps.dofs;
   input.actuators = &run.actuators;
   input.platform = run.replay ? &*run.replay : nullptr;
   // The descriptions and each channel's events, each put back in its own re-run.

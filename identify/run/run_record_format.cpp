@@ -103,8 +103,8 @@ void residual_text(const RunResidual& r, std::ostream& out) {
         << core::format_number(p.shape.start) << " -> " << core::format_number(p.shape.end)
         << (p.unit.empty() ? "" : " " + p.unit) << "): held-out NRMSE " << percent_text(m.constant)
         << " with its constant " << core::format_number(p.constant) << ", "
-        << percent_text(m.moving)
-        << " moving: " << (m.kept ? "held moving" : "held constant (moving does not help)") << "\n";
+        << percent_text(m.moving) << " moving (chosen on these held-out steps): "
+        << (m.kept ? "held moving" : "held constant (moving does not help)") << "\n";
   }
   for (const auto& n : r.notes) out << "  note: " << n << "\n";
 }
@@ -123,6 +123,8 @@ nlohmann::json moving_json(const std::vector<MovingRerun>& moving) {
                    {"constant", m.parameter.constant},
                    {"heldout_nrmse_constant", m.constant},
                    {"heldout_nrmse_moving", m.moving},
+                   // the held-out NRMSEs above are the steps `kept` was decided on
+                   {"chosen_on_heldout", true},
                    {"kept", m.kept}});
   return out;
 }

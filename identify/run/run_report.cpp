@@ -49,8 +49,9 @@ std::filesystem::path lag_plot(const RunIdentification& run, const std::filesyst
 
 std::filesystem::path response_plot(const RunResidual& r, const std::filesystem::path& dir) {
   std::vector<util::PlotSpec> panels;
-  for (const auto& f : r.floors) {
-    const Eigen::Index i = f.dof - 1;
+  for (std::size_t c = 0; c < r.floors.size(); ++c) {
+    const FloorError& f = r.floors[c];
+    const auto i = static_cast<Eigen::Index>(c);  // the responses' column of f.dof
     const auto recorded = column(r.recorded_response, i, 1e3);
     const auto declared = column(r.declared_response, i, 1e3);
     const auto identified = column(r.identified_response, i, 1e3);

@@ -104,11 +104,33 @@ struct Rerun {
   double worst = 0.0;
 };
 
-Rerun compare(core::SimulationResult result, const core::Mat& recorded) {
+// The DOF (0-based) the record's column `i` holds (ResidualInput::recorded_dofs).
+int dof_of(const std::vector<int>& recorded_dofs, Eigen::Index i) {
+  return recorded_dofs.empty() ? static_cast<int>(i)
+                               : recorded_dofs.at(static_cast<std::size_t>(i));
+}
+
+// The column of `result` that holds the DOF of the record's column `i`; throws
+// std::invalid_argument when the re-run has no such DOF.
+Eigen::Index rerun_column(const core::SimulationResult& result,
+                          const std::vector<int>& recorded_dofs, Eigen::Index i) {
+  const int dof = dof_of(recorded_dofs, i);
+  const Eigen::Index column = result.column_of_dof(dof);
+  if (column < 0)
+    throw std::invalid_argument("the record holds DOF " + std::to_string(dof + 1) +
+                                ", the study's model has no such DOF");
+  return column;
+}
+
+// Each recorded column against the re-run's column of the same DOF.
+Rerun compare(core::SimulationResult result, const core::Mat& recorded,
+              const std::vector<int>& recorded_dofs) {
   Rerun out;
   const auto n = std::min<Eigen::Index>(static_cast<Eigen::Index>(result.steps()), recorded.rows());
   for (Eigen::Index i = 0; i < recorded.cols(); ++i) {
-    const Eigen::VectorXd rec = recorded.col(i).head(n), sim = result.displacement.col(i).head(n);
+    const Eigen::VectorXd rec = recorded.col(i).head(n),
+                          sim = result.displacement.col(rerun_column(result, recorded_dofs, i))
+                                    .head(n);
     const double e = core::nrmse(std::span<const double>(rec.data(), static_cast<std::size_t>(n)),
                                  std::span<const double>(sim.data(), static_cast<std::size_t>(n)));
     out.floors.push_back(e);
@@ -197,7 +219,10 @@ class Reruns {
     }
     const core::AnswerSchedule& answers =
         replayed && replays() ? input_.platform->schedule : no_replay_;
-    return compare(core::simulate(setup, prepared_.motion, {}, answers), *input_.recorded);
+    core::SimulationOptions options;
+    options.kept_dofs = input_.recorded_dofs;
+    return compare(core::simulate(setup, prepared_.motion, options, answers), *input_.recorded,
+                   input_.recorded_dofs);
   }
   bool replays() const { return input_.platform && input_.platform->late_steps > 0; }
   // The worst floor's NRMSE of `rerun` over `steps` (0-based) alone.
@@ -207,11 +232,12 @@ class Reruns {
         std::min<Eigen::Index>(static_cast<Eigen::Index>(rerun.result.steps()), recorded.rows());
     double worst = 0.0;
     for (Eigen::Index i = 0; i < recorded.cols(); ++i) {
+      const Eigen::Index column = rerun_column(rerun.result, input_.recorded_dofs, i);
       std::vector<double> rec, sim;
       for (std::size_t j : steps) {
         if (static_cast<Eigen::Index>(j) >= n) break;
         rec.push_back(recorded(static_cast<Eigen::Index>(j), i));
-        sim.push_back(rerun.result.displacement(static_cast<Eigen::Index>(j), i));
+        sim.push_back(rerun.result.displacement(static_cast<Eigen::Index>(j), column));
       }
       worst = std::max(worst, core::nrmse(rec, sim));
     }
@@ -417,7 +443,8 @@ RunResidual run_residual(const ResidualInput& input) {
   out.declared_diverged = before.result.diverged;
   out.identified_diverged = after.result.diverged;
   for (std::size_t i = 0; i < before.floors.size(); ++i) {
-    out.floors.push_back({static_cast<int>(i + 1), before.floors[i], after.floors[i]});
+    const int dof = dof_of(input.recorded_dofs, static_cast<Eigen::Index>(i));
+    out.floors.push_back({dof + 1, before.floors[i], after.floors[i]});
   }
   const auto rows = static_cast<Eigen::Index>(out.steps);
   out.time.assign(after.result.time.begin(), after.result.time.begin() + rows);

@@ -19,8 +19,10 @@
 // force stages (study_config.h add_force_stages: damping as viscous_force, coulomb_friction as
 // friction_force, inertia as inertia_force, the force channel's delay as force_delay) and the load
 // cell's drift as a sensor_drift stage.
-// Errors, per floor (DOF) i: NRMSE_i = sqrt(mean (u_sim - u_rec)^2) / median |u_rec|
-// (core/metrics.h nrmse, the record as reference) over the steps both responses hold.
+// Errors, per recorded DOF i (a column of the record: every DOF, or those the recorders kept,
+// RunHeader.recorded_dofs): NRMSE_i = sqrt(mean (u_sim - u_rec)^2) / median |u_rec| (core/metrics.h
+// nrmse, the record as reference) over the steps both responses hold, u_sim the re-run's u of the
+// same DOF; a re-run keeps the recorded DOFs only (core::SimulationOptions::kept_dofs).
 // Which link explains how much: the error measure E is the worst floor's NRMSE.
 //   per actuator link a   E(declared) - E(only actuator a identified): the error it removes;
 //   per undeclared effect E(identified without the effect) - E(identified): the error the effect
@@ -48,6 +50,8 @@
 // the steps its channel's identification held out (Identification::split.heldout), in the order
 // named, each on top of those kept before; kept when moving leaves less by kMinMovingGain
 // (moving). A kept one is in the identified re-run, and its removal is the re-run without it.
+// The figures reported for it are those same held-out steps' (the choice was made on them, so
+// they are not an independent test of it): the report and the JSON say so.
 // The declared re-run and each link's "all" run are not replayed: the declared model is what the
 // lab planned, on time. A network path's lag reaches the response only through the answers the
 // loop used, so the replay is its part of the re-run; in lockstep it does not reach it.
@@ -70,7 +74,7 @@ struct Unexplained;
 inline constexpr double kMinMovingGain = 1.0e-4;  // NRMSE of the worst floor, held-out steps
 
 struct FloorError {
-  int dof = 0;                              // 1-based
+  int dof = 0;                              // 1-based, the DOF the record's column holds
   double declared = 0.0, identified = 0.0;  // NRMSE against the record
 };
 
@@ -83,7 +87,7 @@ struct ResidualShare {
 };
 
 // A moving parameter tried in the re-run: the worst floor's NRMSE over the held-out steps with
-// its constant and with it moving, and whether it was kept.
+// its constant and with it moving, and whether it was kept (decided on those same steps).
 struct MovingRerun {
   MovingParameter parameter;
   double constant = 0.0, moving = 0.0;
@@ -91,8 +95,8 @@ struct MovingRerun {
 };
 
 struct RunResidual {
-  std::size_t steps = 0;  // compared
-  std::vector<FloorError> floors;
+  std::size_t steps = 0;                    // compared
+  std::vector<FloorError> floors;           // one per column of the record, in its order
   double declared = 0.0, identified = 0.0;  // the worst floor's NRMSE
   bool declared_diverged = false, identified_diverged = false;
   std::vector<ResidualShare> links, effects;
@@ -101,7 +105,8 @@ struct RunResidual {
   std::vector<MovingRerun> moving;  // every moving parameter named, kept or not
   std::vector<std::string> notes;   // stages left out of the re-run, network paths
   std::string platform;             // the replayed answers (PlatformReplay::text); empty: none
-  // The responses compared (steps x DOFs, m) at `time` (s): for plots.
+  // The responses compared (steps x recorded DOFs, m; column i is floors[i]'s DOF) at `time`
+  // (s): for plots.
   std::vector<double> time;
   core::Mat recorded_response, declared_response, identified_response;
 };
@@ -117,7 +122,10 @@ struct ResidualInput {
   // files relative to it (one rule: a file named is relative to the file that names it).
   std::filesystem::path base_dir;
   core::GroundMotion motion;            // at the run's dt, one sample per recorded step
-  const core::Mat* recorded = nullptr;  // m, steps x DOFs (at least motion's steps)
+  const core::Mat* recorded = nullptr;  // m, steps x recorded DOFs (at least motion's steps)
+  // The DOF (0-based, ascending) each column of `recorded` holds (runtime::recorded_dofs); empty:
+  // column i holds DOF i.
+  std::vector<int> recorded_dofs;
   const std::vector<ActuatorPath>* actuators = nullptr;
   const PlatformReplay* platform = nullptr;  // null or no late step: every step on its own answer
   const std::vector<Unexplained>* unexplained = nullptr;  // null: none described

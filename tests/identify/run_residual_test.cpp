@@ -53,6 +53,44 @@ TEST(RunResidual, ACleanRecordReRunsAsRecorded) {
   EXPECT_TRUE(r.effects.empty());
 }
 
+// A model past core::kAllDofsLimit: its record keeps the DOFs its recorders keep
+// (RunHeader.recorded_dofs; the defaults: DOFs 1, n/4, n/2, 3n/4 and the top). Each recorded
+// column is compared with the re-run's response of the DOF it holds and named by that DOF, so a
+// clean record re-runs as recorded on every floor it holds.
+TEST(RunResidual, ALargeModelsRecordIsComparedWithTheDofsItHolds) {
+  std::string masses, stiffnesses;
+  for (int i = 0; i < 250; ++i) {
+    masses += std::string(i ? ", " : "") + "1e5";
+    stiffnesses += std::string(i ? ", " : "") + "4e9";
+  }
+  const std::string study =
+      "name: \"storeys250\"\n"
+      "structure { shear_building { storey_mass: [" +
+      masses + "] storey_stiffness: [" + stiffnesses +
+      "] } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
+      "motion { path: \"" +
+      test::motion_path() +
+      "\" duration: 5 }\n"
+      "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n"
+      "substructuring { experimental_storeys: [1] }\n"
+      "cases { name: \"reference\" }\n" +
+      test::kDeclared;
+  const RunIdentification run = identify_run_record(
+      test::record_declaring("residual_storeys250", study, study, "reference", true),
+      actuator_only());
+  const RunResidual& r = residual_of(run);
+  print("250 DOFs, clean", r);
+  const std::vector<int> kept = test::prepare(study).recorders.kept_dofs;
+  ASSERT_GT(kept.size(), 2u);
+  ASSERT_EQ(r.floors.size(), kept.size()) << run_record_text(run);
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    EXPECT_EQ(r.floors[i].dof, kept[i] + 1) << run_record_text(run);
+    EXPECT_LT(r.floors[i].declared, 1e-9) << "DOF " << kept[i] + 1 << "\n" << run_record_text(run);
+  }
+  EXPECT_EQ(r.declared_response.cols(), static_cast<Eigen::Index>(kept.size()));
+  EXPECT_NE(run_record_text(run).find(" floor 250 "), std::string::npos) << run_record_text(run);
+}
+
 TEST(RunResidual, AnExtraFirstOrderLagIsReproducedByTheIdentifiedModel) {
   const RunIdentification run = identify_run_record(
       test::run_with_undeclared("residual_first_order",
