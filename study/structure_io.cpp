@@ -44,9 +44,8 @@ struct MatrixData {
   Eigen::Index cols() const { return sparse_held ? sparse.cols() : dense.cols(); }
 };
 
-// Bytes an entry of a sparse matrix holds while it is read: its triplet (two indices and the
-// value, 16), Eigen's transposed temporary in setFromTriplets (the value and its index, 12), the
-// compressed result (12) and the held model's own copy of it (12), all alive at once.
+// Bytes an entry of a sparse matrix holds while it is read, all alive at once: its triplet (16),
+// Eigen's transposed temporary in setFromTriplets (12), the result (12), the model's copy (12).
 constexpr std::uint64_t kSparseBytesPerEntry = 52;
 
 Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
@@ -134,11 +133,8 @@ SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
 void require_mat_size(mat_t* file, const std::string& variable, const std::string& where) {
   std::unique_ptr<matvar_t, MatVarFree> info(Mat_VarReadInfo(file, variable.c_str()));
   if (!info || info->class_type == MAT_C_SPARSE || info->rank != 2) return;
-  const auto cols = static_cast<std::uint64_t>(info->dims[1]);
-  const std::uint64_t row_bytes = cols > std::numeric_limits<std::uint64_t>::max() / 16
-                                      ? std::numeric_limits<std::uint64_t>::max()
-                                      : cols * 16;
-  require_memory(static_cast<std::uint64_t>(info->dims[0]), row_bytes,
+  const std::uint64_t cols = info->dims[1], most = std::numeric_limits<std::uint64_t>::max();
+  require_memory(static_cast<std::uint64_t>(info->dims[0]), cols > most / 16 ? most : cols * 16,
                  where + ": variable '" + variable + "' read as a dense matrix");
 }
 
