@@ -9,6 +9,7 @@
 
 #include "analysis/benchmark_evaluation.h"
 #include "analysis/benchmark_plots.h"
+#include "analysis/response_envelope_plots.h"
 #include "analysis/result_tables.h"
 #include "cli/commands.h"
 #include "cli/console.h"
@@ -55,7 +56,7 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
   // Plots of an earlier run stay (they may be all a user has of it), named as such.
   std::string earlier_plots;
   if (!plots)
-    for (const std::string& file : analysis::study_plot_files())
+    for (const std::string& file : analysis::study_plot_files(out))
       if (std::filesystem::exists(out / file))
         earlier_plots += (earlier_plots.empty() ? "" : ", ") + file;
   // The figures are drawn (gnuplot processes, waited on by a thread) while this thread writes the

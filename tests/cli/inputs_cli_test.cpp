@@ -45,11 +45,13 @@ TEST(CliTest, AnOutputFolderIsOwnedByItsStudy) {
   const std::string out = " --no-plots --out " + (dir / "out").string();
   ASSERT_EQ(run("run " + study("first") + out).exit_code, 0);
   std::ofstream(dir / "out" / "displacement.png") << "an earlier run's plot";
+  std::ofstream(dir / "out" / "actuators_2.png") << "an earlier run's second actuator page";
   const Outcome again = run("run " + study("first") + out);
   EXPECT_EQ(again.exit_code, 0) << again.output;
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "displacement.png"));
   EXPECT_NE(again.output.find("from an earlier run: displacement.png"), std::string::npos)
       << again.output;
+  EXPECT_NE(again.output.find("actuators_2.png"), std::string::npos) << again.output;
   const Outcome other = run("run " + study("second") + out);
   EXPECT_EQ(other.exit_code, 2) << other.output;
   EXPECT_NE(other.output.find("holds study 'first'"), std::string::npos) << other.output;
