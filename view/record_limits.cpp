@@ -12,6 +12,9 @@ std::optional<std::string> refused_header(const runtime::RunHeader& header) {
     return "run header: dofs " + std::to_string(header.dofs()) + bound;
   if (header.actuators() < 0 || header.actuators() > runtime::kMaxRecordDofs)
     return "run header: actuators " + std::to_string(header.actuators()) + bound;
+  if (header.link_node_ids_size() > runtime::kMaxRecordDofs)
+    return "run header: link_node_ids holds " + std::to_string(header.link_node_ids_size()) +
+           " links," + bound;
   for (int i = 0; i < header.recorded_dofs_size(); ++i) {
     const int dof = header.recorded_dofs(i);
     if (dof < 0 || dof >= header.dofs() || (i > 0 && dof <= header.recorded_dofs(i - 1)))

@@ -474,6 +474,15 @@ TEST(Feed, AHeaderBeyondARecordsLimitsIsRefusedNamingTheField) {
     EXPECT_FALSE(j.contains("header"));
     EXPECT_EQ(j["status"]["steps"], 0);
   }
+  Feed feed;
+  runtime::RecordEntry h = header();
+  for (int l = 0; l < runtime::kMaxRecordDofs; ++l) h.mutable_header()->add_link_node_ids(l);
+  feed.add(h);  // 10,002 links: each would size rings of the feed's whole history
+  FeedCursor cursor;
+  const auto j = as_sent(feed.since(cursor));
+  EXPECT_EQ(j["status"]["state"], "refused");
+  EXPECT_EQ(j["status"]["reason"],
+            "run header: link_node_ids holds 10002 links, outside [0, 10000]");
 }
 
 TEST(Feed, WithoutAPredictionTheResponseIsDrawnAlone) {
