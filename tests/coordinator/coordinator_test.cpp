@@ -18,7 +18,6 @@
 #include <vector>
 
 #include "actuator_emulator/actuator_service.h"
-#include "runtime/node/hold_cause.h"
 #include "runtime/node/schema.h"
 #include "runtime/record/deadline_diagnosis.h"
 #include "substructure_nodes/substructure_service.h"
@@ -26,7 +25,6 @@
 #include "transport/dds_endpoint.h"
 #include "transport/in_process.h"
 #include "util/process.h"
-#include "view/control_room.h"
 #include "view/feed.h"
 
 namespace rths {
@@ -542,23 +540,7 @@ TEST(Coordinator, NodesOverDdsWaitOutASetUpLongerThanTheirOrphanTimeout) {
 // equal the in-process run's bit for bit.
 TEST(Coordinator, ALargeModelsRecordOverDdsKeepsTheRecordedDofsOnly) {
   runtime::ensure_dds_config();
-  constexpr int kStoreys = 250;
-  std::string masses, stiffnesses;
-  for (int i = 0; i < kStoreys; ++i) {
-    masses += std::string(i ? ", " : "") + "1e5";
-    stiffnesses += std::string(i ? ", " : "") + "4e8";
-  }
-  const std::string text =
-      "name: \"storeys250\"\n"
-      "structure { shear_building { storey_mass: [" +
-      masses + "] storey_stiffness: [" + stiffnesses +
-      "] } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
-      "motion { path: \"" +
-      test::motion_path() +
-      "\" duration: 0.1 }\n"
-      "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n"
-      "substructuring { experimental_storeys: [1] }\n"
-      "cases { name: \"reference\" }\n";
+  const std::string text = test::uniform_storeys_study(250, 4e8, 0.1);
   const test::LaunchedRun run = test::launch("storeys250", text, "reference", 8);
   ASSERT_EQ(run.launch.coordinator_exit, 0) << run.launch.coordinator_log_tail;
   const core::PreparedStudy prepared = test::prepare(text);
@@ -576,98 +558,5 @@ TEST(Coordinator, ALargeModelsRecordOverDdsKeepsTheRecordedDofsOnly) {
           prepared.motion,
           core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits())));
 }
-
-// A run held from the view (lab_a's operator holds node 1 at step 20), seen from node 2 (lab_b's
-// emulator, not held): it answers each of the coordinator's heartbeats with its own (it stays
-// alive); at the first heartbeat after the run is held it holds on its own with `cause`, at the
-// next the director presses STOP.
-class HeldRunNode final : public transport::NodeHandler {
- public:
-  HeldRunNode(runtime::NodeService& service, view::ControlDesk& desk, bool* run_held,
-              std::string cause)
-      : service_(service), desk_(desk), run_held_(run_held), cause_(std::move(cause)) {}
-  std::vector<transport::Message> start() override { return service_.start(); }
-  std::vector<transport::Message> handle(const transport::Message& m) override {
-    auto replies = service_.handle(m);
-    if (m.kind == runtime::HOLD) *run_held_ = true;
-    if (m.kind == runtime::COMMAND && m.step == 20 && !cause_.empty())
-      desk_.press(desk_.crew().operators.at("lab_a"), "hold", "lab_a", m.step);
-    if (m.kind != runtime::HEARTBEAT) return replies;
-    replies.push_back(service_.heartbeat());
-    if (cause_.empty() || !*run_held_ || pressed_stop_) return replies;
-    if (const auto hold = service_.hold_on_own(cause_)) {
-      replies.push_back(*hold);
-    } else {
-      desk_.press(desk_.crew().director, "stop", "");
-      pressed_stop_ = true;
-    }
-    return replies;
-  }
-
- private:
-  runtime::NodeService& service_;
-  view::ControlDesk& desk_;
-  bool* run_held_;
-  std::string cause_;
-  bool pressed_stop_ = false;
-};
-
-RecordedRun held_run(const std::string& cause, const std::string& record_name) {
-  const auto record = std::filesystem::temp_directory_path() / record_name;
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
-      2.0,
-      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
-  view::ControlDesk desk(view::Crew::make({"lab_a", "lab_b"}), {{"lab_a", {1}}, {"lab_b", {2}}});
-  coordinator::CoordinatorOptions options;
-  options.run_id = "run";
-  options.case_name = "reference";
-  options.record = record;
-  options.control = &desk;
-  Cluster c;
-  bool run_held = false;
-  HeldRunNode node1(c.substructure, desk, &run_held, "");
-  HeldRunNode node2(c.emulator, desk, &run_held, cause);
-  coordinator::Coordinator coordinator(prepared, c.transport, options);
-  c.transport.attach(1, node1);
-  c.transport.attach(2, node2);
-  RecordedRun r;
-  r.outcome = coordinator.run();
-  for (const auto& entry : runtime::read_record(record).entries)
-    if (entry.has_event()) r.events += entry.event().what() + "\n";
-  return r;
-}
-
-// In a held run no command leaves: a node's command watchdog HOLD is expected there and only
-// recorded; the run ends by the director's STOP, naming who held it and no node.
-TEST(Coordinator, AHeldRunRecordsANodesCommandWatchdogHold) {
-  const RecordedRun r = held_run(
-      std::string(runtime::kCommandWatchdogCause) + "40.0 ms (limit 30.0 ms)", "held_watchdog.rec");
-  EXPECT_FALSE(r.outcome.ok);
-  EXPECT_EQ(r.outcome.status, std::string(coordinator::kStoppedFromView) +
-                                  " by the director (held: HOLD from the view by the operator "
-                                  "of lab_a)");
-  EXPECT_EQ(r.outcome.failed_node, "");
-  EXPECT_NE(r.events.find("node 2 (actuator emulator) held on its own at its step 20 while the "
-                          "run is held: command watchdog: no fresh command for 40.0 ms"),
-            std::string::npos)
-      << r.events;
-}
-
-// Any other HOLD of a node's own (its limits, its controller) is its fault, held run or not: the
-// run ends at once naming the node and the cause.
-TEST(Coordinator, AHeldRunEndsNamingANodesOwnHoldForAFault) {
-  const RecordedRun r =
-      held_run("step 20: force limit: |force| 2e+05 N beyond 1e+05 N", "held_fault.rec");
-  EXPECT_FALSE(r.outcome.ok);
-  EXPECT_EQ(r.outcome.failed_node, "node 2 (actuator emulator)");
-  EXPECT_NE(r.outcome.status.find("held on its own at its step 20: step 20: force limit: |force| "
-                                  "2e+05 N beyond 1e+05 N (while held: HOLD from the view by the "
-                                  "operator of lab_a)"),
-            std::string::npos)
-      << r.outcome.status;
-  EXPECT_EQ(r.outcome.status.find(coordinator::kStoppedFromView), std::string::npos)
-      << r.outcome.status;
-}
-
 }  // namespace
 }  // namespace rths

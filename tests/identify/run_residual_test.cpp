@@ -58,23 +58,7 @@ TEST(RunResidual, ACleanRecordReRunsAsRecorded) {
 // column is compared with the re-run's response of the DOF it holds and named by that DOF, so a
 // clean record re-runs as recorded on every floor it holds.
 TEST(RunResidual, ALargeModelsRecordIsComparedWithTheDofsItHolds) {
-  std::string masses, stiffnesses;
-  for (int i = 0; i < 250; ++i) {
-    masses += std::string(i ? ", " : "") + "1e5";
-    stiffnesses += std::string(i ? ", " : "") + "4e9";
-  }
-  const std::string study =
-      "name: \"storeys250\"\n"
-      "structure { shear_building { storey_mass: [" +
-      masses + "] storey_stiffness: [" + stiffnesses +
-      "] } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
-      "motion { path: \"" +
-      test::motion_path() +
-      "\" duration: 5 }\n"
-      "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n"
-      "substructuring { experimental_storeys: [1] }\n"
-      "cases { name: \"reference\" }\n" +
-      test::kDeclared;
+  const std::string study = test::uniform_storeys_study(250, 4e9, 5.0) + test::kDeclared;
   const RunIdentification run = identify_run_record(
       test::record_declaring("residual_storeys250", study, study, "reference", true),
       actuator_only());

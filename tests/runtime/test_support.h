@@ -48,6 +48,28 @@ inline std::string paper_frame_study(double duration, const std::string& deploym
          deployment;
 }
 
+// `storeys` storeys of 1e5 kg and `stiffness` N/m each, 5 % Rayleigh damping on modes 1 and 2,
+// storey 1 experimental, `duration` s of the 1979 record at 2 ms, one reference case: a model
+// past core::kAllDofsLimit, whose record keeps only its recorders' DOFs.
+inline std::string uniform_storeys_study(int storeys, double stiffness, double duration) {
+  std::ostringstream masses, stiffnesses;
+  for (int i = 0; i < storeys; ++i) {
+    masses << (i ? ", " : "") << "1e5";
+    stiffnesses << (i ? ", " : "") << stiffness;
+  }
+  return "name: \"storeys" + std::to_string(storeys) +
+         "\"\n"
+         "structure { shear_building { storey_mass: [" +
+         masses.str() + "] storey_stiffness: [" + stiffnesses.str() +
+         "] } damping { rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 } } }\n"
+         "motion { path: \"" +
+         motion_path() + "\" duration: " + std::to_string(duration) +
+         " }\n"
+         "integrator { kind: EXPLICIT_NEWMARK dt: 0.002 }\n"
+         "substructuring { experimental_storeys: [1] }\n"
+         "cases { name: \"reference\" }\n";
+}
+
 inline core::PreparedStudy prepare(const std::string& text) {
   return core::prepare_study(core::parse_study(text, "test"),
                              std::filesystem::temp_directory_path());
