@@ -1,11 +1,12 @@
 // Compensated cases over Cyclone DDS: the actuator emulator builds its actuators, compensator
 // included, from the same study case as the in-process run, so a lockstep run equals it bit for
-// bit. Real processes on loopback, DDS domains 200-203.
+// bit. Real processes on loopback, on the shared DDS domain, each test on topics of its own.
 #include <gtest/gtest.h>
 
 #include "core/compensation.h"
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -44,7 +45,8 @@ TEST_F(DdsCompensation, AdaptiveAndModelBasedPerActuatorEqualInProcessBitForBit)
   EXPECT_NE(uncompensated.realised(500, 0), in_process.realised(500, 0));
   EXPECT_NE(uncompensated.realised(500, 1), in_process.realised(500, 1));
 
-  const auto run = test::launch("compensated_lockstep", text, "compensated", 200);
+  const auto run =
+      test::launch("compensated_lockstep", text, "compensated", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_process);
@@ -55,7 +57,7 @@ TEST_F(DdsCompensation, PolynomialOnThePaperFrameEqualsInProcessBitForBit) {
   const std::string text = test::paper_frame_study(
       2, std::string("cases { name: \"poly\" ") + kMtsActuator +
              " compensation { polynomial { order: 2 lead: 0.0264 spacing: 0.008 } } }");
-  const auto run = test::launch("compensated_poly", text, "poly", 201);
+  const auto run = test::launch("compensated_poly", text, "poly", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "poly"));
 }
@@ -79,7 +81,8 @@ TEST_F(DdsCompensation, AdaptedModelBasedOnThePaperFrameEqualsInProcessBitForBit
   const core::SimulationResult fixed = test::reference_result(text, "fixed");
   EXPECT_EQ(fixed.realised(100, 0), in_process.realised(100, 0));
   EXPECT_NE(fixed.realised(1500, 0), in_process.realised(1500, 0));
-  const auto run = test::launch("compensated_adapted", text, "adapted", 202);
+  const auto run =
+      test::launch("compensated_adapted", text, "adapted", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_process);
@@ -106,7 +109,8 @@ TEST_F(DdsCompensation, CompensationOnTheEmulatorNodesEqualsTheCasesBitForBit) {
   const core::SimulationResult bare = test::reference_result(text, "mts");
   EXPECT_NE(bare.realised(500, 0), in_case.realised(500, 0));  // the blocks act
   EXPECT_NE(bare.realised(500, 1), in_case.realised(500, 1));
-  const auto run = test::launch("compensated_on_nodes", text, "mts", 203);
+  const auto run =
+      test::launch("compensated_on_nodes", text, "mts", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_case);

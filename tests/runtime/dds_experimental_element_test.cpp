@@ -1,11 +1,12 @@
 // Experimental elements between two DOFs (a storey's specimen, OpenFresco's twoNodeLink) on the
 // lab's 3-DOF frame: without lag the hybrid frame is the whole frame; in lockstep over DDS it is
 // the in-process run bit for bit, with one specimen and with two specimens on two actuator nodes.
-// DDS domain ids 222-223.
+// The shared DDS domain, each test on topics of its own.
 #include <gtest/gtest.h>
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -71,7 +72,7 @@ TEST_F(DdsExperimentalElement, ABraceAtAnAngleCarriesItsShareOfTheStorey) {
 
 TEST_F(DdsExperimentalElement, StoreySpecimenInLockstepEqualsTheInProcessRunBitForBit) {
   const std::string text = frame_study(kStoreyTwo);
-  const auto run = test::launch("element_lockstep", text, "lag", 222);
+  const auto run = test::launch("element_lockstep", text, "lag", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_NE(run.record.footer(), nullptr);
   EXPECT_TRUE(run.record.footer()->ok());
@@ -85,7 +86,7 @@ TEST_F(DdsExperimentalElement, TwoSpecimensOnTwoActuatorNodesInLockstepEqualTheI
                                        "deployment { nodes { id: 1 kind: SUBSTRUCTURE }"
                                        " nodes { id: 2 kind: ACTUATOR_EMULATOR storeys: 4 }"
                                        " nodes { id: 3 kind: ACTUATOR_EMULATOR storeys: 5 } }\n");
-  const auto run = test::launch("element_two_nodes", text, "lag", 223);
+  const auto run = test::launch("element_two_nodes", text, "lag", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_EQ(run.launch.node_exits.size(), 3u);
   const core::SimulationResult reference = test::reference_result(text, "lag");

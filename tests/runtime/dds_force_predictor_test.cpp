@@ -1,13 +1,15 @@
 // The force predictor (core/force_predictor.h) over Cyclone DDS: the coordinator applies the same
 // blocks to the emulator's answers as core::simulate applies in process, so a lockstep run of a
 // case with a predictor equals the in-process run bit for bit, and the record's link samples
-// carry the prediction error of every step. Real processes on loopback, DDS domains 89, 91 and 54.
+// carry the prediction error of every step. Real processes on loopback, on the
+// shared DDS domain, each test on topics of its own.
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths {
 namespace {
@@ -36,7 +38,8 @@ TEST_F(DdsForcePredictor, LockstepEqualsInProcessBitForBitAndRecordsThePredictio
   EXPECT_NE(without.displacement(1500, 0), in_process.displacement(1500, 0));
   EXPECT_GT(in_process.prediction_error.cwiseAbs().maxCoeff(), 0.0);
 
-  const auto run = test::launch("force_predictor_lockstep", text, "predicted", 89);
+  const auto run =
+      test::launch("force_predictor_lockstep", text, "predicted", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_process);
@@ -71,7 +74,8 @@ TEST_F(DdsForcePredictor, AModelWithHysteresisAndLagIsTheSameInLockstep) {
   ASSERT_EQ(in_process.predictor_models.size(), 1u);
   EXPECT_NE(in_process.predictor_models[0].find(", h "), std::string::npos)
       << in_process.predictor_models[0];
-  const auto run = test::launch("force_predictor_hysteretic", text, "hysteretic", 54);
+  const auto run = test::launch("force_predictor_hysteretic", text, "hysteretic",
+                                test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_process);
@@ -86,7 +90,8 @@ TEST_F(DdsForcePredictor, BoundPastHoldsNamingTheLink) {
       "stiffness_factor: 0.5 fixed_model: true error_window: 0.2 max_relative_error: 0.2 } }");
   const core::SimulationResult in_process = test::reference_result(text, "held");
   ASSERT_FALSE(in_process.held.empty());
-  const auto run = test::launch("force_predictor_hold", text, "held", 91);
+  const auto run =
+      test::launch("force_predictor_hold", text, "held", test::scope_dds_to_this_test());
   EXPECT_NE(run.launch.coordinator_exit, 0);
   const std::string log = test::read_file(run.launch.coordinator_log);
   EXPECT_NE(log.find("force predictor of actuator 1 (link to"), std::string::npos) << log;

@@ -1,10 +1,11 @@
 // A structure given by its matrices (the 20-DOF frame of configs/matrix_frame20.textproto, Matrix
 // Market files) in the three ways a study runs: in process, in lockstep over DDS (bit for bit
-// equal) and in real time. DDS domain ids 192-194.
+// equal) and in real time. The shared DDS domain, each test on topics of its own.
 #include <gtest/gtest.h>
 
 #include "runtime/node/lag.h"
 #include "test_support.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/real_time_run.h"
 
 namespace rths {
@@ -45,7 +46,7 @@ TEST_F(DdsMatrixStructure, InProcessRunHasEveryDofAndTheSpecimensForce) {
 
 TEST_F(DdsMatrixStructure, LockstepEqualsTheInProcessRunBitForBit) {
   const std::string text = frame20_study(3, "");
-  const auto run = test::launch("matrix_lockstep", text, "lag", 192);
+  const auto run = test::launch("matrix_lockstep", text, "lag", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_NE(run.record.footer(), nullptr);
   EXPECT_TRUE(run.record.footer()->ok());
@@ -56,7 +57,7 @@ TEST_F(DdsMatrixStructure, LockstepEqualsTheInProcessRunBitForBit) {
 TEST_F(DdsMatrixStructure, NumericalMatrixOnTheCoordinatorEqualsInProcessToo) {
   const std::string text =
       frame20_study(2, "deployment { nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
-  const auto run = test::launch("matrix_local", text, "lag", 193);
+  const auto run = test::launch("matrix_local", text, "lag", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   test::expect_record_equals(run.record, test::reference_result(text, "lag"));
 }
@@ -66,7 +67,8 @@ TEST_F(DdsMatrixStructure, RealTimeRunIsPacedAndCompletes) {
       frame20_study(1.0,
                     "deployment { clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 30 "
                     "command_watchdog_periods: 30 }");
-  const auto witnessed = test::launch_witnessed("matrix_real_time", text, "reference", 194);
+  const auto witnessed =
+      test::launch_witnessed("matrix_real_time", text, "reference", test::scope_dds_to_this_test());
   RTHS_ASSERT_REAL_TIME_RUN_COMPLETED(witnessed);
   const auto& run = witnessed.run;
   const auto* footer = run.record.footer();
