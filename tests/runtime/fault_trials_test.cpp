@@ -1,10 +1,12 @@
-// A short version of bench/fault_trials in the suite (DDS domains 45-50): one trial per victim,
-// on real processes over Cyclone DDS. The fail-safe's step counts are widened (this machine is
-// shared and loaded; a healthy node must not trip them) and the assertions follow them.
+// A short version of bench/fault_trials in the suite: one trial per victim, on real processes over
+// Cyclone DDS (the shared domain, each trial on topics of its own). The fail-safe's step counts
+// are widened (this machine is shared and loaded; a healthy node must not trip them) and the
+// assertions follow them.
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include "runtime/launch/launch.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/fault_trial.h"
 
 namespace rths {
@@ -37,12 +39,11 @@ TEST_P(FaultTrial, HoldsStopsNamesAndKeepsTheRecord) {
   spec.signal = sig;
   spec.fault_step = 400;
   spec.seconds = 2.0;
-  spec.domain = 45 + static_cast<int>(victim) * 2 + (sig == SIGSTOP ? 1 : 0);
+  spec.domain = test::scope_dds_to_this_test();
   spec.deployment_extra = "max_missed_answers: " + std::to_string(kMissed) +
                           " command_watchdog_periods: " + std::to_string(kMissed);
-  spec.dir =
-      std::filesystem::temp_directory_path() /
-      ("rths_fault_trial_test_" + std::to_string(spec.domain) + "_" + std::to_string(getpid()));
+  spec.dir = std::filesystem::temp_directory_path() /
+             ("rths_fault_trial_test_" + test::to_string(victim) + "_" + std::to_string(getpid()));
   spec.binary_dir = RTHS_BINARY_DIR;
   spec.motion_path = std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
   const test::FaultTrialResult r = test::run_fault_trial(spec);
