@@ -20,6 +20,7 @@
 #include "core/sparse_structure.h"
 #include "study/memory_budget.h"
 #include "study/motion_files.h"
+#include "study/sparse_triplets.h"
 #include "study/text_columns.h"
 
 namespace rths::core {
@@ -32,21 +33,6 @@ namespace {
 std::string shape(Eigen::Index rows, Eigen::Index cols) {
   return std::to_string(rows) + " x " + std::to_string(cols);
 }
-
-// A matrix as its source holds it: sparse (Matrix Market coordinate, a MATLAB sparse variable),
-// read into triplets and never formed rows x cols, or dense (inline values, .csv, Matrix Market
-// array, a full MATLAB variable).
-struct MatrixData {
-  Mat dense;
-  SparseMat sparse;
-  bool sparse_held = false;
-  Eigen::Index rows() const { return sparse_held ? sparse.rows() : dense.rows(); }
-  Eigen::Index cols() const { return sparse_held ? sparse.cols() : dense.cols(); }
-};
-
-// Bytes an entry of a sparse matrix holds while it is read, all alive at once: its triplet (16),
-// Eigen's transposed temporary in setFromTriplets (12), the result (12), the model's copy (12).
-constexpr std::uint64_t kSparseBytesPerEntry = 52;
 
 Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
   const int count = spec.values_size();
@@ -375,13 +361,19 @@ Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
   return m;
 }
 
+}  // namespace
+
 MatrixData read_matrix_data(const config::Matrix& spec, const std::filesystem::path& base_dir,
                             const std::string& field) {
   MatrixData out;
+  if (spec.has_sparse() && (spec.values_size() > 0 || !spec.file().empty()))
+    fail(field, "give one of values, file and sparse");
   if (spec.file().empty()) {
     if (!spec.variable().empty())
       fail(field, "`variable` names a .mat variable but no file is given");
-    out.dense = inline_matrix(spec, field);
+    out.sparse_held = spec.has_sparse();
+    if (out.sparse_held) out.sparse = read_sparse_triplets(spec.sparse(), field + ".sparse");
+    if (!out.sparse_held) out.dense = inline_matrix(spec, field);
     return out;
   }
   if (spec.values_size() > 0) fail(field, "give values or a file, not both");
@@ -397,6 +389,8 @@ MatrixData read_matrix_data(const config::Matrix& spec, const std::filesystem::p
   out.dense = csv_matrix(path, where);
   return out;
 }
+
+namespace {
 
 // A sparse matrix made dense, its n x n doubles checked against the memory limit first.
 Mat dense_of(MatrixData&& m, const std::string& where) {

@@ -3,7 +3,8 @@
 // file, and the checks every structural matrix must pass.
 //
 //   read_matrix(spec, base_dir, field) -> Mat
-//     inline:  `values` row-major with `rows` rows (a vector: one column of `values.size()`);
+//     inline:  `values` row-major with `rows` rows (a vector: one column of `values.size()`),
+//              or `sparse` triplets (study/sparse_triplets.h), held sparse;
 //     `.mat`:  the MATLAB variable `variable` (v5, v7.3), real, 2-D, full or sparse (double);
 //     `.mtx`:  Matrix Market, `matrix coordinate|array real|integer general|symmetric`;
 //     `.csv`:  one matrix row per line, fields separated by commas or blanks ('#' comments).
@@ -36,6 +37,22 @@
 #include "rths/proto/config.pb.h"
 
 namespace rths::core {
+
+// A matrix as its source holds it: sparse (Matrix Market coordinate, a MATLAB sparse variable,
+// inline `sparse` triplets), read into triplets and never formed rows x cols, or dense (inline
+// values, .csv, Matrix Market array, a full MATLAB variable).
+struct MatrixData {
+  Mat dense;
+  SparseMat sparse;
+  bool sparse_held = false;
+  Eigen::Index rows() const { return sparse_held ? sparse.rows() : dense.rows(); }
+  Eigen::Index cols() const { return sparse_held ? sparse.cols() : dense.cols(); }
+};
+
+// The matrix of `spec` as its source holds it, read and sized as read_matrix says; not formed
+// dense.
+MatrixData read_matrix_data(const config::Matrix& spec, const std::filesystem::path& base_dir,
+                            const std::string& field);
 
 Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
                 const std::string& field);

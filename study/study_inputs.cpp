@@ -1,6 +1,7 @@
 #include "study/study_inputs.h"
 
 #include "study/delay_trace_file.h"
+#include "study/sparse_triplets.h"
 #include "study/structure_io.h"
 #include "util/sha256.h"
 
@@ -17,8 +18,13 @@ std::string absolute_path(const std::filesystem::path& base_dir, const std::stri
 void embed_matrix(config::Matrix& matrix, const std::filesystem::path& base_dir,
                   const std::string& field) {
   if (matrix.file().empty()) return;
-  const Mat values = read_matrix(matrix, base_dir, field);
+  const MatrixData read = read_matrix_data(matrix, base_dir, field);
   matrix.Clear();
+  if (read.sparse_held) {
+    *matrix.mutable_sparse() = write_sparse_triplets(read.sparse);
+    return;
+  }
+  const Mat& values = read.dense;
   matrix.set_rows(static_cast<int>(values.rows()));
   for (Eigen::Index i = 0; i < values.rows(); ++i)
     for (Eigen::Index j = 0; j < values.cols(); ++j) matrix.add_values(values(i, j));

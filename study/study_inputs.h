@@ -6,8 +6,11 @@
 //     prepared.config with every file it reads replaced by what was read:
 //       motion      motion.embedded = the record as run (prepared.motion: at the run's dt, scaled
 //                   and cut, m/s^2) with the file's SHA-256; path kept, made absolute
-//       matrices    structure.matrices.{mass,stiffness,damping,influence}: a file (.mat, .mtx,
-//                   .csv) becomes inline rows + values (row-major), exactly the doubles read
+//       matrices    structure.matrices.{mass,stiffness,damping,influence}: a file read sparse
+//                   (.mtx coordinate, a sparse .mat variable) becomes inline `sparse` triplets
+//                   (study/sparse_triplets.h: O(nnz), the lower triangle of a symmetric one),
+//                   any other file (.csv, .mtx array, a full .mat variable) inline rows + values
+//                   (row-major); exactly the doubles read
 //       traces      every delay stage's trace (cases, and nodes' receive / send stages) gets its
 //                   time and delay samples; path kept, made absolute
 //     Loading the result needs no file: load_motion, make_structure and make_delay_stage take the

@@ -1,0 +1,41 @@
+#pragma once
+// A sparse matrix inline in a config (config::Matrix.sparse, proto/config.proto): 0-based
+// (row, col, value) triplets, never formed rows x cols. A run record embeds a matrix that was
+// read sparse in this form (study/study_inputs.h): O(nnz) bytes, where the dense form holds
+// rows x cols doubles (1.6 GB at 10,000 DOFs for a tridiagonal model).
+//
+//   read_sparse_triplets(triplets, field) -> SparseMat
+//     rows and cols 1..kMaxMatrixDimension (symmetric: square); row, col and value of one
+//     length; each index below rows (row) or cols (col); each value finite; symmetric: every
+//     entry on or below the diagonal (row >= col), mirrored above it. The entries' storage
+//     (kSparseBytesPerEntry each, twice an off-diagonal one of a symmetric matrix) is checked
+//     against the memory limit (study/memory_budget.h) before a triplet is allocated. As a
+//     Matrix Market coordinate file is read: an entry given twice keeps its last value, explicit
+//     zeros are dropped. Throws std::invalid_argument naming the field and entry:
+//     "structure.matrices.mass.sparse.row[3]: 12 is outside 0..9 (rows 10)".
+//   write_sparse_triplets(m) -> config::Matrix::SparseTriplets
+//     m's stored nonzeros, column by column; an exactly symmetric square m as its lower triangle
+//     with `symmetric` set (half the off-diagonal entries). read_sparse_triplets of the result
+//     equals m bit for bit (values, indices and pattern; explicit zeros aside).
+
+#include <cstdint>
+#include <string>
+
+#include "core/structure.h"
+#include "rths/proto/config.pb.h"
+
+namespace rths::core {
+
+// Rows or columns a matrix of a config may have (a Matrix Market size line's limit too).
+constexpr std::uint32_t kMaxMatrixDimension = 100000;
+
+// Bytes an entry of a sparse matrix holds while it is read, all alive at once: its triplet (16),
+// Eigen's transposed temporary in setFromTriplets (12), the result (12), the model's copy (12).
+constexpr std::uint64_t kSparseBytesPerEntry = 52;
+
+SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
+                               const std::string& field);
+
+config::Matrix::SparseTriplets write_sparse_triplets(const SparseMat& m);
+
+}  // namespace rths::core
