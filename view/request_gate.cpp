@@ -1,6 +1,8 @@
 #include "view/request_gate.h"
 
 #include <netinet/in.h>
+#include <pthread.h>
+#include <sched.h>
 #include <strings.h>
 #include <sys/epoll.h>
 #include <sys/resource.h>
@@ -48,6 +50,14 @@ bool set_thread_nice(int nice) {
   return setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), nice) == 0;
 }
 
+bool enter_view_thread(const char* name, int nice) {
+  const bool named = pthread_setname_np(pthread_self(), name) == 0;
+  const sched_param ordinary{};  // SCHED_OTHER takes priority 0
+  // Leaving a real-time policy needs no privilege; pid 0 is the calling thread on Linux.
+  const bool ordinary_set = sched_setscheduler(0, SCHED_OTHER, &ordinary) == 0;
+  return set_thread_nice(nice) && named && ordinary_set;
+}
+
 RequestGate::RequestGate(GateOptions options, std::function<void(int fd)> serve)
     : options_(options),
       serve_(std::move(serve)),
@@ -55,12 +65,12 @@ RequestGate::RequestGate(GateOptions options, std::function<void(int fd)> serve)
       waiting_({options.max_waiting, options.max_per_address}) {
   if (epoll_ < 0) throw std::runtime_error("the view cannot create its epoll set");
   poller_ = std::thread([this] {
-    set_thread_nice(options_.nice);
+    enter_view_thread("view-gate", options_.nice);
     poll_loop();
   });
   for (int i = 0; i < options_.workers; ++i)
     workers_.emplace_back([this] {
-      set_thread_nice(options_.nice);
+      enter_view_thread("view-serve", options_.nice);
       worker_loop();
     });
 }

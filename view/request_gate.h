@@ -24,9 +24,11 @@
 //     ("too_large"); one that closes before it is complete is just closed ("closed_early");
 //   - at most `max_queued` complete requests wait for a worker; more are answered 503 and closed
 //     ("queue_full").
-// Threads: one epoll thread (waiting connections, deadlines at a 20 ms tick) and `workers`, each
-// at `nice` (Linux's per-thread nice value): on a machine the loop shares, a flood of requests
-// takes CPU from the loop only where the loop leaves some.
+// Threads: one epoll thread "view-gate" (waiting connections, deadlines at a 20 ms tick) and
+// `workers` "view-serve", each on SCHED_OTHER at `nice` (enter_view_thread): on a machine the
+// loop shares, a flood of requests takes CPU from the loop only where the loop leaves some, even
+// when the gate is started from a thread already raised to SCHED_FIFO (whose policy new threads
+// would otherwise inherit).
 // Thread safety: admit() and counters() from any thread.
 
 #include <chrono>
@@ -56,6 +58,12 @@ struct GateOptions {
 
 // Sets the calling thread's nice value (Linux: per thread). False when the kernel refused.
 bool set_thread_nice(int nice);
+// What each of the view's threads does first: names itself `name` (at most 15 characters, as
+// /proc/PID/task/TID/comm and `top -H` show it, so its CPU time can be told from the loop's),
+// leaves any scheduling policy it inherited (SCHED_FIFO / RR from a raised creator, SCHED_BATCH,
+// SCHED_IDLE) for SCHED_OTHER, and sets `nice`: the view's threads run below every loop thread of
+// the run, never at a real-time priority. False when the kernel refused a step (the rest is done).
+bool enter_view_thread(const char* name, int nice);
 
 class RequestGate {
  public:

@@ -270,7 +270,7 @@ ViewServer::ViewServer(const Feed& feed, ServerOptions options)
                              " (in use, or not an address of this host)");
   listener.widen_backlog();
   thread_ = std::thread([this] {
-    set_thread_nice(options_.gate.nice);
+    enter_view_thread("view-accept", options_.gate.nice);
     server_->listen_after_bind();
     listen_returned_.store(true);
   });

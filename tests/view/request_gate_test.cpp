@@ -2,16 +2,22 @@
 // (headers and body), idle connections beyond the limit are closed oldest first, one whose
 // request has begun is kept over idle ones, one address at its share displaces only its own, a
 // connection that does not finish its request in time is closed, an oversized header block is
-// refused.
+// refused; its threads are the view's own (named, SCHED_OTHER at its nice) whoever starts it.
 #include "view/request_gate.h"
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <sched.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
+#include <filesystem>
+#include <fstream>
+#include <memory>
 #include <set>
 #include <thread>
 
@@ -203,6 +209,47 @@ TEST(RequestGate, RefusesAHeaderBlockLargerThanItsLimit) {
   EXPECT_EQ(gate.counters()["too_large"], 1);
   EXPECT_EQ(served.count(), 0u);
   close(client);
+}
+
+// This process's threads named `name`: (scheduling policy, nice value) of each.
+std::vector<std::pair<int, int>> threads_named(const std::string& name) {
+  std::vector<std::pair<int, int>> found;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream comm(task.path() / "comm");
+    std::string seen;
+    if (!std::getline(comm, seen) || seen != name) continue;
+    const auto tid = static_cast<pid_t>(std::stol(task.path().filename().string()));
+    errno = 0;
+    const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(tid));
+    if (errno == 0) found.emplace_back(sched_getscheduler(tid), nice);
+  }
+  return found;
+}
+
+// Started from a thread on SCHED_FIFO (a loop raised by realtime_priority; where this process may
+// not raise one, SCHED_BATCH: either is inherited by new threads), the gate's threads still run
+// as the view's own: named, on SCHED_OTHER, at the gate's nice value.
+TEST(RequestGate, ItsThreadsAreNamedAndOrdinaryAtItsNiceWhateverTheCreatorRunsAt) {
+  Served served;
+  GateOptions options;
+  options.workers = 3;
+  options.nice = 12;
+  std::unique_ptr<RequestGate> gate;
+  int creator_policy = -1;
+  std::thread creator([&] {
+    const sched_param fifo{.sched_priority = 1}, none{};
+    if (sched_setscheduler(0, SCHED_FIFO, &fifo) != 0) sched_setscheduler(0, SCHED_BATCH, &none);
+    creator_policy = sched_getscheduler(0);
+    gate = std::make_unique<RequestGate>(options, served.serve());
+  });
+  creator.join();
+  ASSERT_TRUE(creator_policy == SCHED_FIFO || creator_policy == SCHED_BATCH);
+  const std::pair<int, int> ordinary{SCHED_OTHER, 12};
+  const std::vector<std::pair<int, int>> workers(3, ordinary), poller(1, ordinary);
+  EXPECT_TRUE(eventually([&] { return threads_named("view-serve") == workers; }));
+  EXPECT_EQ(threads_named("view-gate"), poller);
+  gate->stop();
+  EXPECT_TRUE(threads_named("view-serve").empty());
 }
 
 }  // namespace
