@@ -15,8 +15,10 @@
 //                      (more: 503, counted). A client that does not read for write_timeout is
 //                      dropped and counted; the feed never waits for a client.
 //   GET  /api/snapshot everything the feed holds, as one JSON (scripts, tests): one copy shared
-//                      by every client, rebuilt at most once per snapshot_period (SnapshotCache),
-//                      so clients looping on it cannot take the feed's lock more often than that
+//                      by every client, rebuilt at most once per snapshot_period and no sooner
+//                      than 20 times its last build's duration (SnapshotCache), so clients looping
+//                      on it cannot take the feed's lock more often than that, nor more than 5 %
+//                      of a CPU however long the run
 //   ?run=a, ?run=b     on /api/snapshot and /api/stream: which run (a, the default: the feed; b:
 //                      ServerOptions::second, when two runs are compared); any other 404
 //   GET  /compare      comparing two runs only: both pages side by side under each run's

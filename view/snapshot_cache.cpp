@@ -1,14 +1,17 @@
 #include "view/snapshot_cache.h"
 
+#include <algorithm>
+
 namespace rths::view {
 
-SnapshotCache::SnapshotCache(std::function<std::string()> build, std::chrono::milliseconds period)
-    : build_(std::move(build)), period_(period) {}
+SnapshotCache::SnapshotCache(std::function<std::string()> build, std::chrono::milliseconds period,
+                             Clock now)
+    : build_(std::move(build)), period_(period), now_(std::move(now)), interval_(period) {}
 
 std::shared_ptr<const std::string> SnapshotCache::get() {
   std::unique_lock lock(mutex_);
-  const auto now = std::chrono::steady_clock::now();
-  const bool fresh = copy_ && now - built_at_ < period_;
+  const auto now = now_();
+  const bool fresh = copy_ && now - built_at_ < interval_;
   if (fresh || (building_ && copy_)) {
     ++served_;
     return copy_;
@@ -30,9 +33,11 @@ std::shared_ptr<const std::string> SnapshotCache::get() {
     built_cv_.notify_all();
     throw;
   }
+  const auto built = now_();
   lock.lock();
   copy_ = std::move(made);
-  built_at_ = std::chrono::steady_clock::now();
+  interval_ = std::max<std::chrono::steady_clock::duration>(period_, kCostRatio * (built - now));
+  built_at_ = built;
   building_ = false;
   ++served_;
   built_cv_.notify_all();

@@ -1,5 +1,6 @@
 // The shared snapshot: however many callers loop on it, the build runs at most once per period
-// (plus the first), and every caller gets a whole copy.
+// (plus the first), and no sooner than kCostRatio times its last duration; every caller gets a
+// whole copy.
 #include "view/snapshot_cache.h"
 
 #include <gtest/gtest.h>
@@ -55,6 +56,35 @@ TEST(SnapshotCache, AFailedBuildIsRetriedByTheNextCaller) {
   EXPECT_THROW(cache.get(), std::runtime_error);
   EXPECT_EQ(*cache.get(), "ok");
   EXPECT_EQ(cache.builds(), 2u);
+}
+
+// A feed whose snapshot takes long to build (a long run's) is rebuilt no sooner than kCostRatio
+// times its build's duration after it, however often callers ask: on a clock the test steps,
+// each build "taking" what the build function moves the clock by.
+TEST(SnapshotCache, ABuildThatTakesLongIsRepeatedOnlyAfterItsCostRatioTimesItsDuration) {
+  auto now = std::chrono::steady_clock::time_point{};
+  auto build_takes = 10ms;
+  int built = 0;
+  SnapshotCache cache(
+      [&] {
+        now += build_takes;
+        return "copy " + std::to_string(++built);
+      },
+      200ms, [&] { return now; });
+  EXPECT_EQ(*cache.get(), "copy 1");  // a 10 ms build: the period rules (20 x 10 ms = 200 ms)
+  now += 199ms;
+  EXPECT_EQ(*cache.get(), "copy 1");
+  now += 1ms;
+  build_takes = 50ms;  // the feed has grown: 20 x 50 ms = 1 s until the next build
+  EXPECT_EQ(*cache.get(), "copy 2");
+  for (int i = 0; i < 99; ++i) {
+    now += 10ms;
+    EXPECT_EQ(*cache.get(), "copy 2") << "at " << i;
+  }
+  now += 10ms;  // 1 s after the second build ended
+  EXPECT_EQ(*cache.get(), "copy 3");
+  EXPECT_EQ(cache.builds(), 3u);
+  EXPECT_EQ(cache.served(), 103u);
 }
 
 }  // namespace
