@@ -1,5 +1,5 @@
 // Records of rths's own distributed runs over Cyclone DDS (real coordinator and node processes on
-// loopback, DDS domains 220-221, 225-227, 229-230, 76 and 78), identified from the record: the run
+// loopback, the shared DDS domain, each test on topics of its own), identified from the record: the run
 // is launched with effects its config does not declare, injected by the nodes (their stages, and
 // their links' network emulation: a drifting delay, periodic spikes, a burst of dropped commands),
 // then the record's header is given the declared config (as a lab's record holds the config it
@@ -17,6 +17,7 @@
 #include "identify/run/run_record_format.h"
 #include "runtime/launch/launch.h"
 #include "tests/identify/undeclared_run.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/platform_gate.h"
 #include "tests/support/real_time_run.h"
 
@@ -116,7 +117,8 @@ IdentifyOptions actuator_only() {
 
 TEST_F(DdsRunRecord, ACleanRecordNamesNothingAndReRunsAsRecorded) {
   const RunIdentification run = identify_run_record(
-      launch_with_undeclared("identify_dds_clean", "", "", 220), actuator_only());
+      launch_with_undeclared("identify_dds_clean", "", "", test::scope_dds_to_this_test()),
+      actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(run.held.rfind("complete", 0), 0u) << text;
   EXPECT_TRUE(link_effects(run, 1).empty()) << text;
@@ -130,7 +132,8 @@ TEST_F(DdsRunRecord, ACleanRecordNamesNothingAndReRunsAsRecorded) {
 TEST_F(DdsRunRecord, ALagOnOneLinkAndAFirstOrderLagOnTheActuatorAreEachNamedWhereTheyAre) {
   const RunIdentification run = identify_run_record(
       launch_with_undeclared("identify_dds_two", "receive_lag { one_way_delay: 0.001 }",
-                             "receive_delay { first_order { time_constant: 0.008 } }", 221),
+                             "receive_delay { first_order { time_constant: 0.008 } }",
+                             test::scope_dds_to_this_test()),
       actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"injection"}) << text;
@@ -151,8 +154,8 @@ TEST_F(DdsRunRecord, ALagOnOneLinkAndAFirstOrderLagOnTheActuatorAreEachNamedWher
 TEST_F(DdsRunRecord, ADriftOnOneLinkAndPeriodicSpikesOnTheOtherAreEachNamedWhereTheyAre) {
   if (const auto why = machine_masks_the_spikes()) GTEST_SKIP() << *why;
   test::StallWitness witness;
-  const fs::path record =
-      launch_with_undeclared("identify_dds_drift_spikes", network(kDrift), network(kSpikes), 230);
+  const fs::path record = launch_with_undeclared("identify_dds_drift_spikes", network(kDrift),
+                                                 network(kSpikes), test::scope_dds_to_this_test());
   const test::MeasuredPlatform machine = witness.finish();
   const RunIdentification run = identify_run_record(record, actuator_only());
   const std::string text = run_record_text(run);
@@ -171,7 +174,8 @@ TEST_F(DdsRunRecord, ADriftOnOneLinkAndPeriodicSpikesOnTheOtherAreEachNamedWhere
 TEST_F(DdsRunRecord, ADriftingDelayAndAnEmulatorGainErrorAreEachNamedWhereTheyAre) {
   const RunIdentification run = identify_run_record(
       launch_with_undeclared("identify_dds_drift_gain", network(kDrift),
-                             "receive_delay { shift { delay: 0 } amplitude_gain: 1.08 }", 225),
+                             "receive_delay { shift { delay: 0 } amplitude_gain: 1.08 }",
+                             test::scope_dds_to_this_test()),
       actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_EQ(link_effects(run, 1), std::set<std::string>{"drifting delay"}) << text;
@@ -189,7 +193,8 @@ TEST_F(DdsRunRecord, PeriodicSpikesAndAFirstOrderLagAreEachNamedWhereTheyAre) {
   const RunIdentification run = identify_run_record(
       launch_with_undeclared(
           "identify_dds_spikes_lag", "",
-          network(kSpikes) + " receive_delay { first_order { time_constant: 0.008 } }", 226),
+          network(kSpikes) + " receive_delay { first_order { time_constant: 0.008 } }",
+          test::scope_dds_to_this_test()),
       actuator_only());
   const std::string text = run_record_text(run);
   EXPECT_TRUE(link_effects(run, 1).empty()) << text;
@@ -206,7 +211,8 @@ TEST_F(DdsRunRecord, PeriodicSpikesAndAFirstOrderLagAreEachNamedWhereTheyAre) {
 // record's answer count tells those apart from lost ones, so a clean run loses none.
 TEST_F(DdsRunRecord, ACleanRealTimeRecordLosesNoAnswersAndNamesNothingOnItsLinks) {
   const UndeclaredRun launched =
-      launch_undeclared("identify_dds_rt_clean", "", "", 227, kRealTime, kRealTimeDuration);
+      launch_undeclared("identify_dds_rt_clean", "", "", test::scope_dds_to_this_test(), kRealTime,
+                        kRealTimeDuration);
   if (launched.machine_stalled) GTEST_SKIP() << *launched.machine_stalled;
   const RunIdentification run = identify_run_record(launched.record, actuator_only());
   const std::string text = run_record_text(run);
@@ -233,7 +239,7 @@ TEST_F(DdsRunRecord, ACleanRealTimeRecordLosesNoAnswersAndNamesNothingOnItsLinks
 TEST_F(DdsRunRecord, ARealTimeBurstOfDroppedCommandsIsNamedAsLostAnswersOnItsLink) {
   const UndeclaredRun launched =
       launch_undeclared("identify_dds_rt_burst", network("drop_first_step: 1000 drop_steps: 12"),
-                        "", 229, kRealTime, kRealTimeDuration);
+                        "", test::scope_dds_to_this_test(), kRealTime, kRealTimeDuration);
   if (launched.machine_stalled) GTEST_SKIP() << *launched.machine_stalled;
   const RunIdentification run = identify_run_record(launched.record, actuator_only());
   const std::string text = run_record_text(run);
@@ -257,7 +263,8 @@ TEST_F(DdsRunRecord, ForceStagesOverDdsEqualTheInProcessRunBitForBit) {
   const core::SimulationResult in_process = test::reference_result(text, "force_stages");
   const core::SimulationResult without = test::reference_result(text, "lag_shift_14ms");
   EXPECT_NE(in_process.measured_force(1000, 0), without.measured_force(1000, 0));
-  const auto run = test::launch("identify_dds_force_stages", text, "force_stages", 76);
+  const auto run = test::launch("identify_dds_force_stages", text, "force_stages",
+                                test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_FALSE(run.record.truncated);
   test::expect_record_equals(run.record, in_process);
@@ -270,7 +277,7 @@ TEST_F(DdsRunRecord, AnUndeclaredSpecimenMassIsNamedAndTheReRunClosesTheRecord) 
   const std::string declared = test::smooth_frame_study(test::kDeclared);
   const auto run = test::launch("identify_dds_inertia",
                                 test::behind_the_shift(declared, "inertia_force { mass: 100 }"),
-                                "lag_shift_14ms", 78);
+                                "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const fs::path record = run.dir / "run.rthsrec";
   const core::PreparedStudy as_declared = test::prepare(declared);
