@@ -1,6 +1,7 @@
 // A run through a controller node: the coordinator and the controller node are processes over
 // Cyclone DDS on loopback (rths launch's sequence), the controller node talks UDP on 127.0.0.1 to
-// the controller emulator, another process. DDS domains 197-199 and 232, UDP ports 47150-47159.
+// the controller emulator, another process. The shared DDS domain, each test on topics of its
+// own; UDP ports 47150-47159.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -11,6 +12,7 @@
 #include "../runtime/test_support.h"
 #include "controller_node/udp_link.h"
 #include "link_text.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/real_time_run.h"
 
 namespace rths {
@@ -61,7 +63,8 @@ TEST_F(DdsController, LockstepThroughTheControllerEqualsInProcessBitForBitDespit
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
   });
-  const auto run = test::launch("controller_lockstep", text, "lag_shift_14ms", 197);
+  const auto run =
+      test::launch("controller_lockstep", text, "lag_shift_14ms", test::scope_dds_to_this_test());
   done = true;
   rogue.join();
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
@@ -97,7 +100,8 @@ TEST_F(DdsController, ASilentControllerHoldsTheRunWithinItsReplyTimeoutAndTheRig
   const std::string text = study(47153, 47154, 2.0, "reply_timeout_ms: 200");
   util::ChildProcess emulator =
       start_emulator("controller_silent", text, "reference", {"--answer-frames", "300"});
-  const auto run = test::launch("controller_silent", text, "reference", 198);
+  const auto run =
+      test::launch("controller_silent", text, "reference", test::scope_dds_to_this_test());
   const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
   EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
   // The node's HOLD names the controller's silence: it came within the node's 200 ms, before the
@@ -125,7 +129,8 @@ TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
     test::wait_for_steps(record, 301, std::chrono::seconds(30));
     emulator.signal(SIGKILL);
   });
-  const auto run = test::launch("controller_killed", text, "reference", 199);
+  const auto run =
+      test::launch("controller_killed", text, "reference", test::scope_dds_to_this_test());
   killer.join();
   const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
   EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
@@ -159,7 +164,8 @@ TEST_F(DdsController, AControllerThatFallsBehindHoldsWithinTheAnswerWindow) {
           " } } limits { max_displacement: 0.5 } }");
   util::ChildProcess emulator =
       start_emulator("controller_behind", text, "reference", {"--answer-period-ms", "2"});
-  const auto witnessed = test::launch_witnessed("controller_behind", text, "reference", 232);
+  const auto witnessed = test::launch_witnessed("controller_behind", text, "reference",
+                                                test::scope_dds_to_this_test());
   const auto& run = witnessed.run;
   const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
   EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;

@@ -3,8 +3,8 @@
 // lists, switched on at a chosen frame, must HOLD naming its cause, fail the run with its record
 // complete, apply nothing past the fault, and bring the rig to rest with repeated HOLD frames at
 // the last measured position before STOP. Processes over Cyclone DDS on loopback, the controller a
-// thread of this test; the DDS domains and UDP ports are each drill's own (doc_controller_test.cpp
-// lists the file pair's).
+// thread of this test; the shared DDS domain, each drill on topics of its own, and UDP ports of
+// its own (doc_controller_test.cpp lists the file pair's).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 
 #include "../runtime/test_support.h"
 #include "doc_controller_harness.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/real_time_run.h"
 #include "tests/support/run_command_line.h"
 
@@ -31,7 +32,7 @@ using namespace doc_test;
 // whole hold (every HOLD frame, the answers, the STOP).
 struct Drill {
   std::string name;
-  int domain = 0, node_port = 0, peer_port = 0;
+  int node_port = 0, peer_port = 0;
   DocFault fault = DocFault::kNone;
   double fault_value = 0.0;
   bool real_time = false;
@@ -106,7 +107,8 @@ void run_drill(Drill drill) {
   options.fault_value = drill.fault_value;
   options.held_after_hold_frames = 3;
   DocController controller(options);
-  const auto witnessed = test::launch_witnessed(drill.name, text, "reference", drill.domain);
+  const auto witnessed =
+      test::launch_witnessed(drill.name, text, "reference", test::scope_dds_to_this_test());
   const auto& run = witnessed.run;
   // The node's STOP frame follows the hold; give it time to land before the controller stops.
   std::this_thread::sleep_for(std::chrono::milliseconds(100));
@@ -220,7 +222,7 @@ void run_drill(Drill drill) {
 TEST_F(DocControllerTest, DrillSilentControllerRealTime) {
   Drill d;
   d.name = "doc_drill_silent";
-  d.domain = 158, d.node_port = 47310, d.peer_port = 47311;
+  d.node_port = 47310, d.peer_port = 47311;
   d.fault = DocFault::kSilent;
   d.real_time = true;
   d.cause = {"did not answer"};
@@ -233,7 +235,7 @@ TEST_F(DocControllerTest, DrillSilentControllerRealTime) {
 TEST_F(DocControllerTest, DrillBadStatus) {
   Drill d;
   d.name = "doc_drill_bad_status";
-  d.domain = 159, d.node_port = 47312, d.peer_port = 47313;
+  d.node_port = 47312, d.peer_port = 47313;
   d.fault = DocFault::kBadStatus;
   d.fault_value = 7;
   d.cause = {"status 7"};
@@ -244,7 +246,7 @@ TEST_F(DocControllerTest, DrillBadStatus) {
 TEST_F(DocControllerTest, DrillNanForce) {
   Drill d;
   d.name = "doc_drill_nan";
-  d.domain = 166, d.node_port = 47314, d.peer_port = 47315;
+  d.node_port = 47314, d.peer_port = 47315;
   d.fault = DocFault::kNanForce;
   d.cause = {"force"};
   d.count = &runtime::ControllerReport::non_finite;
@@ -254,7 +256,7 @@ TEST_F(DocControllerTest, DrillNanForce) {
 TEST_F(DocControllerTest, DrillWrongEcho) {
   Drill d;
   d.name = "doc_drill_wrong_echo";
-  d.domain = 168, d.node_port = 47316, d.peer_port = 47317;
+  d.node_port = 47316, d.peer_port = 47317;
   d.fault = DocFault::kWrongEcho;
   d.cause = {"counter"};
   d.count = &runtime::ControllerReport::unexpected_counter;
@@ -264,7 +266,7 @@ TEST_F(DocControllerTest, DrillWrongEcho) {
 TEST_F(DocControllerTest, DrillWrongSize) {
   Drill d;
   d.name = "doc_drill_wrong_size";
-  d.domain = 186, d.node_port = 47318, d.peer_port = 47319;
+  d.node_port = 47318, d.peer_port = 47319;
   d.fault = DocFault::kWrongSize;
   d.cause = {"28"};  // the frame's size, against the feedback frame's 24 bytes
   d.count = &runtime::ControllerReport::wrong_size;
@@ -274,7 +276,7 @@ TEST_F(DocControllerTest, DrillWrongSize) {
 TEST_F(DocControllerTest, DrillOutOfRange) {
   Drill d;
   d.name = "doc_drill_out_of_range";
-  d.domain = 189, d.node_port = 47320, d.peer_port = 47321;
+  d.node_port = 47320, d.peer_port = 47321;
   d.fault = DocFault::kOutOfRange;
   d.fault_value = 1.5;  // m: beyond twice limits.max_displacement (0.5 m)
   d.cause = {"1.5"};
@@ -285,7 +287,7 @@ TEST_F(DocControllerTest, DrillOutOfRange) {
 TEST_F(DocControllerTest, DrillCounterReset) {
   Drill d;
   d.name = "doc_drill_counter_reset";
-  d.domain = 190, d.node_port = 47322, d.peer_port = 47323;
+  d.node_port = 47322, d.peer_port = 47323;
   d.fault = DocFault::kCounterReset;
   d.cause = {"counter"};
   d.count = &runtime::ControllerReport::repeated_counter;
@@ -295,7 +297,7 @@ TEST_F(DocControllerTest, DrillCounterReset) {
 TEST_F(DocControllerTest, DrillRebootWithCorrectEchoButStateLost) {
   Drill d;
   d.name = "doc_drill_reboot";
-  d.domain = 191, d.node_port = 47324, d.peer_port = 47325;
+  d.node_port = 47324, d.peer_port = 47325;
   d.fault = DocFault::kReboot;
   d.cause = {"max_measured_rate"};  // the first check the docs list for a drift's jump
   d.count = &runtime::ControllerReport::implausible;
@@ -309,7 +311,7 @@ TEST_F(DocControllerTest, DrillRebootCaughtByTheDefaultChecks) {
   Drill d;
   d.motion = "scale: 50";
   d.name = "doc_drill_reboot_defaults";
-  d.domain = 96, d.node_port = 47332, d.peer_port = 47333;
+  d.node_port = 47332, d.peer_port = 47333;
   d.fault = DocFault::kReboot;
   d.cause = {"jumped", "a restarted controller"};
   d.count = &runtime::ControllerReport::implausible;
@@ -320,7 +322,7 @@ TEST_F(DocControllerTest, DrillRebootCaughtByTheDefaultChecks) {
 TEST_F(DocControllerTest, DrillForceJump) {
   Drill d;
   d.name = "doc_drill_force_jump";
-  d.domain = 195, d.node_port = 47326, d.peer_port = 47327;
+  d.node_port = 47326, d.peer_port = 47327;
   d.fault = DocFault::kForceJump;
   d.fault_value = 5000;  // N in one step: 5e6 N/s against a bound of a few 1e4 N/s
   d.cause = {"max_force_rate"};
@@ -331,7 +333,7 @@ TEST_F(DocControllerTest, DrillForceJump) {
 TEST_F(DocControllerTest, DrillTrackingErrorPastItsBound) {
   Drill d;
   d.name = "doc_drill_tracking";
-  d.domain = 196, d.node_port = 47328, d.peer_port = 47329;
+  d.node_port = 47328, d.peer_port = 47329;
   d.fault = DocFault::kStuckDisplacement;
   d.cause = {"max_tracking_error"};
   d.count = &runtime::ControllerReport::implausible;

@@ -4,14 +4,12 @@
 // (controller.md, configuration.md ControllerLink/FrameLayout/FrameField/Deployment/
 // SafetyLimits, faults.md) promise; where rths does otherwise the test fails rather than bend.
 // The coordinator and the node are processes over Cyclone DDS on loopback (test::launch), the
-// controller a thread of this test. DDS domains 96, 153-159, 166, 168, 175, 186, 189-191, 195-196
-// (175 lies in the range dds_security_test names, unused there; 190, 191, 195 and 196 are also the
-// defaults of bench/security_bench and bench/secret_bench, which the suite does not run); UDP
+// controller a thread of this test. The shared DDS domain, each test on topics of its own; UDP
 // ports 47300-47399.
 //
 // RTHS_DOC_CONTROLLER_TRIALS (default 1) repeats the real-time tests (b, d) for longer trials.
 // The fault drills (c) are in doc_controller_drills_test.cpp, the shared harness in
-// doc_controller_harness.h; the domains and ports above are the two files' together.
+// doc_controller_harness.h; the ports above are the two files' together.
 #include <gtest/gtest.h>
 
 #include <netinet/in.h>
@@ -29,6 +27,7 @@
 
 #include "../runtime/test_support.h"
 #include "doc_controller_harness.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/platform_gate.h"
 #include "tests/support/real_time_run.h"
 #include "tests/support/run_command_line.h"
@@ -49,13 +48,13 @@ using namespace doc_test;
 // |error| <= 3 x 2^-24 x 10 x peak|u| ~ 2e-6 peak|u|. Allowed: 1e-5 x peak |u| (5 x margin), on
 // every DOF, command and realised drift, and 1e-5 x peak |force| on the force.
 void lockstep_equals_in_process(const std::string& name, const std::string& case_name,
-                                double pure_lag, int domain, int node_port, int peer_port) {
+                                double pure_lag, int node_port, int peer_port) {
   const std::string text = study(2.0, 0.001, node_port, peer_port, "", "");
   const core::SimulationResult reference = test::reference_result(text, case_name);
   DocControllerOptions options = controller_options(peer_port, node_port, 0.001);
   options.pure_lag = pure_lag;
   DocController controller(options);
-  const auto run = test::launch(name, text, case_name, domain);
+  const auto run = test::launch(name, text, case_name, test::scope_dds_to_this_test());
   controller.stop();
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   ASSERT_NE(run.record.footer(), nullptr);
@@ -114,14 +113,14 @@ void lockstep_equals_in_process(const std::string& name, const std::string& case
 }
 
 TEST_F(DocControllerTest, LockstepThroughF32FramesEqualsInProcessWithinTheirResolution) {
-  lockstep_equals_in_process("doc_lockstep_reference", "reference", 0.0, 153, 47300, 47301);
+  lockstep_equals_in_process("doc_lockstep_reference", "reference", 0.0, 47300, 47301);
 }
 
 // The plant's pure lag of 14 frames is the case's 14 ms shift at dt = 1 ms: the rig's lag stands
 // in for the case's delay stage (a CONTROLLER node carries no delay stages of its own: the lab's
 // rig is the delay).
 TEST_F(DocControllerTest, LockstepWithTheRigsPureLagEqualsTheShiftCase) {
-  lockstep_equals_in_process("doc_lockstep_shift", "lag_shift_14ms", 0.014, 154, 47302, 47303);
+  lockstep_equals_in_process("doc_lockstep_shift", "lag_shift_14ms", 0.014, 47302, 47303);
 }
 
 // FrameField PADDING is "written 0, ignored when read" and controller.md's table says "a float
@@ -132,7 +131,7 @@ TEST_F(DocControllerTest, FeedbackPaddingIsNeverRead) {
   DocControllerOptions options = controller_options(47331, 47330, 0.001);
   options.f32_padding = std::numeric_limits<float>::quiet_NaN();
   DocController controller(options);
-  const auto run = test::launch("doc_padding", text, "reference", 175);
+  const auto run = test::launch("doc_padding", text, "reference", test::scope_dds_to_this_test());
   controller.stop();
   EXPECT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const runtime::NodeRejects* rejects = node2(run.record);
@@ -145,7 +144,8 @@ TEST_F(DocControllerTest, FeedbackPaddingIsNeverRead) {
 // resolution rather than fail as DIFFERS.
 TEST_F(DocControllerTest, RthsLaunchAcceptsALockstepRunThroughF32Frames) {
   const auto dir = test::scratch_dir("doc_cli");
-  const std::string text = study(1.0, 0.001, 47304, 47305, "", "domain_id: 155");
+  const std::string text = study(1.0, 0.001, 47304, 47305, "",
+                                 "domain_id: " + std::to_string(test::scope_dds_to_this_test()));
   const auto config = test::write_config(dir, text);
   const DocControllerOptions options = controller_options(47305, 47304, 0.001);
   DocController controller(options);
@@ -269,7 +269,8 @@ TEST_F(DocControllerTest, RealTimeAController2msBehindCostsAnswerAgeNotAHold) {
     options.answer_lag = 0.002;
     DocController controller(options);
     test::StallWitness witness;
-    const auto run = test::launch("doc_real_time", text, "reference", 156);
+    const auto run =
+        test::launch("doc_real_time", text, "reference", test::scope_dds_to_this_test());
     const test::MeasuredPlatform machine = witness.finish();
     controller.stop();
     expect_real_time_run_healthy(run, controller, options.answer_lag, machine);
@@ -322,7 +323,7 @@ TEST_F(DocControllerTest, AFloodFromAnotherPortDoesNotStopARealTimeRun) {
       ::close(s);
     });
     test::StallWitness witness;
-    const auto run = test::launch("doc_flood", text, "reference", 157);
+    const auto run = test::launch("doc_flood", text, "reference", test::scope_dds_to_this_test());
     const test::MeasuredPlatform machine = witness.finish();
     done = true;
     rogue.join();
