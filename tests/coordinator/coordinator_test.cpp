@@ -22,6 +22,7 @@
 #include "runtime/record/deadline_diagnosis.h"
 #include "substructure_nodes/substructure_service.h"
 #include "tests/runtime/test_support.h"
+#include "tests/support/dds_scope.h"
 #include "transport/dds_endpoint.h"
 #include "transport/in_process.h"
 #include "util/process.h"
@@ -493,7 +494,8 @@ TEST(Coordinator, SummaryNamesEachSidesUnauthenticatedDrops) {
 // and the real-time run completes, where before they left ("coordinator silent") before step 1.
 TEST(Coordinator, NodesOverDdsWaitOutASetUpLongerThanTheirOrphanTimeout) {
   runtime::ensure_dds_config();
-  const std::string name = "long_set_up", domain = "98";
+  const int domain = test::scope_dds_to_this_test();
+  const std::string name = "long_set_up";
   const std::string text = test::paper_frame_study(
       0.3,
       "deployment { clock: REAL_TIME liveliness_timeout: 0.3 heartbeat_period: 0.02 "
@@ -504,15 +506,15 @@ TEST(Coordinator, NodesOverDdsWaitOutASetUpLongerThanTheirOrphanTimeout) {
        {std::tuple{"1", "rths-substructure-node", "substructure_nodes"},
         std::tuple{"2", "rths-actuator-emulator", "actuator_emulator"}})
     nodes.emplace_back(test::program(program, folder),
-                       std::vector<std::string>{"--node-id", id, "--domain", domain, "--run-id",
-                                                name, "--insecure"},
+                       std::vector<std::string>{"--node-id", id, "--domain", std::to_string(domain),
+                                                "--run-id", name, "--insecure"},
                        dir / (std::string("node_") + id + ".log"));
   core::PreparedStudy prepared = test::prepare(text);
   const core::HybridSetup setup =
       core::setup_for_case(prepared, core::find_case(prepared.config, "reference"));
   const core::GroundMotion motion = prepared.motion;
   transport::DdsEndpointOptions endpoint_options;
-  endpoint_options.domain_id = 98;
+  endpoint_options.domain_id = static_cast<std::uint32_t>(domain);
   transport::DdsEndpoint endpoint(endpoint_options);
   coordinator::CoordinatorOptions options;
   options.run_id = name;
@@ -541,7 +543,8 @@ TEST(Coordinator, NodesOverDdsWaitOutASetUpLongerThanTheirOrphanTimeout) {
 TEST(Coordinator, ALargeModelsRecordOverDdsKeepsTheRecordedDofsOnly) {
   runtime::ensure_dds_config();
   const std::string text = test::uniform_storeys_study(250, 4e8, 0.1);
-  const test::LaunchedRun run = test::launch("storeys250", text, "reference", 8);
+  const test::LaunchedRun run =
+      test::launch("storeys250", text, "reference", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << run.launch.coordinator_log_tail;
   const core::PreparedStudy prepared = test::prepare(text);
   const std::vector<int>& kept = prepared.recorders.kept_dofs;
