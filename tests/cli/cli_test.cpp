@@ -6,6 +6,7 @@
 #include "runtime/node/schema.h"
 #include "runtime/record/record.h"
 #include "tests/cli/cli_support.h"
+#include "tests/support/dds_scope.h"
 
 #include <sys/wait.h>
 #include <array>
@@ -424,9 +425,10 @@ TEST(CliTest, LaunchChecksTheTotalLagBeforeItStartsAndPlotsTheLagByRole) {
     text.replace(at, from.size(), to);
   }
   std::ofstream(dir / "network_lag.textproto") << text;
-  const Outcome o = run("launch " + (dir / "network_lag.textproto").string() +
-                        " --domain 73 --bin-dir " + std::string(RTHS_BINARY_DIR) + " --out " +
-                        (dir / "out").string() + " --platform-seconds 0.2 --accept-platform");
+  const Outcome o = run("launch " + (dir / "network_lag.textproto").string() + " --domain " +
+                        std::to_string(rths::test::scope_dds_to_this_test()) + " --bin-dir " +
+                        std::string(RTHS_BINARY_DIR) + " --out " + (dir / "out").string() +
+                        " --platform-seconds 0.2 --accept-platform");
   EXPECT_TRUE(o.exit_code == 0 || o.exit_code == 1) << o.output;
   const std::string warning =
       "rths: warning: case 'lag_shift_14ms': network round trip 14 ms injected on the actuator "
@@ -471,8 +473,10 @@ TEST(CliTest, LaunchThatStopsBeforeStepOneWritesTheSummaryWithTheReason) {
              "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
              "cases { name: \"reference\" }\n"
              "deployment { start_timeout: 0.001 }\n";
-  const Outcome o = run("launch " + config.string() + " --domain 85 --no-plots --bin-dir " +
-                        std::string(RTHS_BINARY_DIR) + " --out " + (dir / "out").string());
+  const Outcome o =
+      run("launch " + config.string() + " --domain " +
+          std::to_string(rths::test::scope_dds_to_this_test()) + " --no-plots --bin-dir " +
+          std::string(RTHS_BINARY_DIR) + " --out " + (dir / "out").string());
   EXPECT_EQ(o.exit_code, 1) << o.output;
   const std::string summary = read_text(dir / "out" / "summary.txt");
   EXPECT_NE(summary.find("reference: FAILED, stopped before step 1: start-up timed out"),

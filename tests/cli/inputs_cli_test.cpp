@@ -10,6 +10,7 @@
 #include <string>
 
 #include "tests/cli/cli_support.h"
+#include "tests/support/dds_scope.h"
 
 using namespace rths::cli_test;
 
@@ -194,7 +195,8 @@ TEST(CliTest, LaunchUnderAFileSizeLimitIsAnEnvironmentFault) {
   const auto dir = scratch("fsize");
   const std::string launch =
       kRths + " launch " + (kSource / "configs/paper_frame.textproto").string() +
-      " --case reference --domain 75 --no-plots --out " + (dir / "out").string();
+      " --case reference --domain " + std::to_string(rths::test::scope_dds_to_this_test()) +
+      " --no-plots --out " + (dir / "out").string();
   const Outcome o = rths::test::run_command_line("sh -c 'ulimit -f 4; exec " + launch + "'");
   EXPECT_EQ(o.exit_code, 3) << o.output;
   EXPECT_EQ(o.output.find("empty history"), std::string::npos) << o.output;
