@@ -73,29 +73,22 @@ bool stands_out(const std::vector<double>& frequency, std::size_t peak, const Va
   return value(peak) >= kPeakOverFloor * around[around.size() / 2];
 }
 
-// The spectrum's highest peak above kMinPeriodicFrequency when it stands kPeakOverFloor above
-// the median of its neighbourhood, refined to a tenth of a bin; 0 when none stands out.
-double spectral_peak(std::span<const double> time, std::span<const double> r,
-                     std::span<const double> p, double dt) {
-  const Spectrum s = amplitude_spectrum(r, dt);
-  const Spectrum input = amplitude_spectrum(p, dt);
-  if (s.frequency.size() < 8) return 0.0;
-  const double bin = s.frequency[1] - s.frequency[0];
-  std::size_t peak = 0;
-  for (std::size_t k = 1; k < s.frequency.size(); ++k)
-    if (s.frequency[k] >= kMinPeriodicFrequency && s.amplitude[k] > s.amplitude[peak]) peak = k;
-  if (peak == 0) return 0.0;
-  const auto amplitude = [&](std::size_t k) { return s.amplitude[k]; };
+// Whether a residual's peak at bin `peak` is a period of another source: where the input's own
+// spectrum is large there, the residual must stand out of it too (a model's error on the input
+// follows the input's spectrum and is the maps' to judge).
+bool not_the_inputs(const Spectrum& s, const Spectrum& input, std::size_t peak) {
   const auto over_input = [&](std::size_t k) {
     return input.amplitude[k] > 0.0 ? s.amplitude[k] / input.amplitude[k] : -1.0;
   };
-  if (!stands_out(s.frequency, peak, amplitude)) return 0.0;
-  // A period of the input's own is the model's error on the input, which the maps judge, unless
-  // the residual stands out of the input's spectrum there too (another source's period).
   const double input_peak = *std::max_element(input.amplitude.begin(), input.amplitude.end());
-  if (input.amplitude[peak] > kInputPeakShare * input_peak &&
-      !(input.amplitude[peak] > 0.0 && stands_out(s.frequency, peak, over_input)))
-    return 0.0;
+  return input.amplitude[peak] <= kInputPeakShare * input_peak ||
+         (input.amplitude[peak] > 0.0 && stands_out(s.frequency, peak, over_input));
+}
+
+// The frequency of the largest projection within a bin of `peak`, on a tenth of a bin.
+double refined(std::span<const double> time, std::span<const double> r, const Spectrum& s,
+               std::size_t peak) {
+  const double bin = s.frequency[1] - s.frequency[0];
   double best = s.frequency[peak], best_value = 0.0;
   for (int i = -10; i <= 10; ++i) {
     const double f = s.frequency[peak] + 0.1 * i * bin;
@@ -105,6 +98,22 @@ double spectral_peak(std::span<const double> time, std::span<const double> r,
     }
   }
   return best;
+}
+
+// The spectrum's highest peak above kMinPeriodicFrequency when it stands kPeakOverFloor above
+// the median of its neighbourhood, refined to a tenth of a bin; 0 when none stands out.
+double spectral_peak(std::span<const double> time, std::span<const double> r,
+                     std::span<const double> p, double dt) {
+  const Spectrum s = amplitude_spectrum(r, dt);
+  const Spectrum input = amplitude_spectrum(p, dt);
+  if (s.frequency.size() < 8) return 0.0;
+  std::size_t peak = 0;
+  for (std::size_t k = 1; k < s.frequency.size(); ++k)
+    if (s.frequency[k] >= kMinPeriodicFrequency && s.amplitude[k] > s.amplitude[peak]) peak = k;
+  if (peak == 0) return 0.0;
+  const auto amplitude = [&](std::size_t k) { return s.amplitude[k]; };
+  if (!stands_out(s.frequency, peak, amplitude) || !not_the_inputs(s, input, peak)) return 0.0;
+  return refined(time, r, s, peak);
 }
 
 // a cos + b sin at `frequency` by least squares over the train samples (means removed), at every
@@ -129,6 +138,48 @@ std::vector<double> sinusoid(std::span<const double> time, std::span<const doubl
   for (std::size_t j = 0; j < r.size(); ++j)
     out[j] = a * std::cos(w * time[j]) + b * std::sin(w * time[j]);
   return out;
+}
+
+// The frequency within a bin of `peak`, on a twentieth of a bin, whose sinusoid fitted on the
+// train samples leaves the least of them: with the held-out windows out, a period of a few
+// cycles is no longer orthogonal to its neighbours, so the projection alone pulls it off.
+double fitted_frequency(std::span<const double> time, std::span<const double> r, const Spectrum& s,
+                        std::size_t peak, const Samples& train) {
+  const double bin = s.frequency[1] - s.frequency[0];
+  double best = s.frequency[peak], least = spread_over(r, train);
+  for (int i = -20; i <= 20; ++i) {
+    const double f = s.frequency[peak] + 0.05 * i * bin;
+    double amplitude = 0.0;
+    const double left = spread_over(minus(r, sinusoid(time, r, f, train, amplitude)), train);
+    if (f > 0.0 && left < least) {
+      least = left;
+      best = f;
+    }
+  }
+  return best;
+}
+
+// The slow band's peak (description.h periodic): r is the train samples less their line. The
+// highest bin from kMinPeriodicCycles in the record up to kMinPeriodicFrequency, taken only where
+// the spectrum rises to it from every bin below it (a drift's spectrum, of what a line leaves of
+// a curved drift too, falls from 0 Hz; a period's peaks at its frequency), stands out as the fast
+// band's does and is not the input's; 0 when none.
+double slow_peak(std::span<const double> time, std::span<const double> r, std::span<const double> p,
+                 double dt, const Samples& train) {
+  const Spectrum s = amplitude_spectrum(r, dt);
+  const Spectrum input = amplitude_spectrum(p, dt);
+  const double duration = time.empty() ? 0.0 : time.back() - time.front();
+  if (s.frequency.size() < 8 || !(duration > 0.0)) return 0.0;
+  const double lowest = kMinPeriodicCycles / duration;
+  std::size_t peak = 0;
+  for (std::size_t k = 1; k < s.frequency.size() && s.frequency[k] < kMinPeriodicFrequency; ++k)
+    if (s.frequency[k] >= lowest && s.amplitude[k] > s.amplitude[peak]) peak = k;
+  if (peak == 0) return 0.0;
+  for (std::size_t k = 1; k < peak; ++k)
+    if (s.amplitude[k] >= s.amplitude[peak]) return 0.0;
+  const auto amplitude = [&](std::size_t k) { return s.amplitude[k]; };
+  if (!stands_out(s.frequency, peak, amplitude) || !not_the_inputs(s, input, peak)) return 0.0;
+  return fitted_frequency(time, r, s, peak, train);
 }
 
 // A static map: bins at quantiles of the train samples' x, each the mean residual at the mean x
@@ -236,22 +287,48 @@ std::pair<double, double> odd_even_power(const StaticMap& map, std::span<const d
   return {curved, spread_over(even, heldout)};
 }
 
-// The periodic test on r; its part is subtracted from r when accepted.
-void periodic_test(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
-                   double dt, const Halves& h, ResidualDescription& out) {
-  std::vector<double> train_only(r.size(), 0.0);
-  for (std::size_t j : h.train) train_only[j] = r[j] - mean_over(r, h.train);
-  const double f = spectral_peak(time, train_only, p, dt);
-  if (f <= 0.0) return;
+// r on the train samples less their mean, or their line through time when `detrended` (0 on the
+// held-out samples).
+std::vector<double> train_part(std::span<const double> time, std::span<const double> r,
+                               const Samples& train, bool detrended) {
+  const double mt = mean_over(time, train), mr = mean_over(r, train);
+  double tt = 0.0, tr = 0.0;
+  for (std::size_t j : train) {
+    tt += (time[j] - mt) * (time[j] - mt);
+    tr += (time[j] - mt) * (r[j] - mr);
+  }
+  const double slope = detrended && tt > 0.0 ? tr / tt : 0.0;
+  std::vector<double> out(r.size(), 0.0);
+  for (std::size_t j : train) out[j] = r[j] - mr - slope * (time[j] - mt);
+  return out;
+}
+
+// The sinusoid at `f` (> 0) fitted on the train samples, accepted where it explains
+// kMinExplained of r's held-out variance: then subtracted from r.
+bool accept_periodic(std::span<const double> time, double f, std::vector<double>& r,
+                     const Halves& h, ResidualDescription& out) {
+  if (f <= 0.0) return false;
   double amplitude = 0.0;
   const std::vector<double> d = sinusoid(time, r, f, h.train, amplitude);
   const double e = explained(r, d, h.heldout);
-  if (e < kMinExplained) return;
+  if (e < kMinExplained) return false;
   out.periodic = PeriodicSignature{f, amplitude, e};
   for (std::size_t j = 0; j < r.size(); ++j) {
     r[j] -= d[j];
     out.described[j] += d[j];
   }
+  return true;
+}
+
+// The periodic test on r, the fast band first, then the slow one; its part is subtracted from r
+// when accepted.
+void periodic_test(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
+                   double dt, const Halves& h, ResidualDescription& out) {
+  if (accept_periodic(time, spectral_peak(time, train_part(time, r, h.train, false), p, dt), r, h,
+                      out))
+    return;
+  accept_periodic(time, slow_peak(time, train_part(time, r, h.train, true), p, dt, h.train), r, h,
+                  out);
 }
 
 // The rate of p at every sample (central differences, unit/s).

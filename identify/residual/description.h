@@ -48,7 +48,11 @@
 //              the motion holds too, stands out of it), is refined on a grid of a tenth of a bin
 //              (the largest |sum r_j exp(-2 pi i f t_j)|) and fitted as a sinusoid a cos + b sin
 //              on the train samples: frequency (Hz) and amplitude sqrt(a^2 + b^2) (the channel's
-//              unit).
+//              unit). Where the fast band holds none that explains kMinExplained, the slow band,
+//              from kMinPeriodicCycles / the record's duration up to kMinPeriodicFrequency, of the
+//              train samples less their line (a drift is the library's offset_drift): its highest
+//              bin, taken only where every bin below it is lower (a drift's spectrum falls from
+//              0 Hz, a period's rises to its frequency), standing out and not the input's as above.
 //   trend shape the windows' rho fitted as a line, a step and an exponential approach
 //              (drift_shape.h): the shape, the ratio at the start and at the end of the record.
 // A test counts only when it explains at least kMinExplained of the residual's held-out variance
@@ -65,11 +69,16 @@ namespace rths::identify {
 
 inline constexpr std::size_t kDescriptionWindows = 20;
 inline constexpr std::size_t kMapBins = 16;
-inline constexpr double kMinExplained = 0.3;          // of the residual's held-out variance
-inline constexpr double kPeakOverFloor = 8.0;         // spectral peak / its neighbourhood's median
-inline constexpr double kFloorBand = 2.0;             // Hz either side of the peak
-inline constexpr double kMinPeriodicFrequency = 0.5;  // Hz: slower is a drift, not a period
-inline constexpr double kInputPeakShare = 0.1;        // of the input's largest spectral amplitude
+inline constexpr double kMinExplained = 0.3;   // of the residual's held-out variance
+inline constexpr double kPeakOverFloor = 8.0;  // spectral peak / its neighbourhood's median
+inline constexpr double kFloorBand = 2.0;      // Hz either side of the peak
+// Hz: below it (the slow band) a period must show as one in the spectrum (slow_peak), since a
+// drift piles up there too.
+inline constexpr double kMinPeriodicFrequency = 0.5;
+// The slowest period searched: this many cycles in the record (a rise, a fall and half of the
+// next rise: a shape that comes back, which no single drift makes).
+inline constexpr double kMinPeriodicCycles = 1.5;
+inline constexpr double kInputPeakShare = 0.1;  // of the input's largest spectral amplitude
 inline constexpr double kTrendSigmas = 4.0;
 
 struct PeriodicSignature {

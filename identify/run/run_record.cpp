@@ -409,6 +409,7 @@ RunResidual residual(const std::filesystem::path& record, const runtime::RecordC
   std::vector<Unexplained> described = run.unexplained;
   for (auto& u : event_residuals(run.floors)) described.push_back(std::move(u));
   input.unexplained = &described;
+  input.hold_moving = run.hold_moving;
   try {
     return run_residual(input);
   } catch (const std::invalid_argument& e) {
@@ -439,6 +440,85 @@ bool reject(const ResidualShare& worse, std::vector<ActuatorPath>& paths) {
   return false;
 }
 
+// A named effect of one path, on its channel (ActuatorPath::undeclared or specimen_undeclared).
+struct NamedEffect {
+  std::size_t path = 0;
+  Channel channel = Channel::kMeasured;
+  std::string effect;
+};
+
+std::vector<std::string>& named_on(ActuatorPath& path, Channel channel) {
+  return channel == Channel::kMeasured ? path.undeclared : path.specimen_undeclared;
+}
+
+// Every effect the paths name but noise (random: never re-run), moved from the named lists to the
+// rejected ones (so that rig_models takes each out of the fitted models) with the reason `why`.
+std::vector<NamedEffect> take_out_named(std::vector<ActuatorPath>& paths, const std::string& why) {
+  std::vector<NamedEffect> out;
+  for (std::size_t p = 0; p < paths.size(); ++p)
+    for (Channel channel : {Channel::kMeasured, Channel::kForce}) {
+      std::vector<std::string>& named = named_on(paths[p], channel);
+      for (const std::string& effect : named) {
+        if (effect == "noise") continue;
+        out.push_back({p, channel, effect});
+        paths[p].rejected.push_back(
+            {channel, part_of(effect, channel, paths[p].actuator), effect, 0.0, why});
+      }
+      std::erase_if(named, [](const std::string& e) { return e != "noise"; });
+    }
+  return out;
+}
+
+// `n` named again: out of its path's rejected effects, back among the named ones.
+void put_back(const NamedEffect& n, std::vector<ActuatorPath>& paths) {
+  ActuatorPath& path = paths[n.path];
+  std::erase_if(path.rejected, [&](const ActuatorPath::Rejected& r) {
+    return r.channel == n.channel && r.effect == n.effect;
+  });
+  named_on(path, n.channel).push_back(n.effect);
+}
+
+// The re-run from the declared model (run_record.h keep_what_helps): each named effect put back
+// only where it lowers the whole record's worst-floor NRMSE, then the moving parameters.
+void fall_back_to_declared(RunIdentification& run, const std::function<RunResidual()>& rerun) {
+  const std::string why = "the re-run with every named effect left " +
+                          percent_text(run.residual->identified) + " over the whole record, " +
+                          "the declared model " + percent_text(run.residual->declared);
+  const std::vector<NamedEffect> named = take_out_named(run.actuators, why);
+  run.hold_moving = false;
+  run.residual = rerun();
+  std::string kept;
+  for (const NamedEffect& n : named) {
+    put_back(n, run.actuators);
+    RunResidual with = rerun();
+    ActuatorPath& path = run.actuators[n.path];
+    const std::string part = part_of(n.effect, n.channel, path.actuator);
+    if (with.identified < run.residual->identified - kMinErrorRemoved) {
+      run.residual = std::move(with);
+      kept += (kept.empty() ? "" : ", ") + part + ": " + n.effect;
+      continue;
+    }
+    named_on(path, n.channel).pop_back();
+    path.rejected.push_back({n.channel, part, n.effect,
+                             std::max(0.0, with.identified - run.residual->identified),
+                             why +
+                                 "; put back on the declared model it does not lower the "
+                                 "whole record's NRMSE (" +
+                                 percent_text(run.residual->identified) + " -> " +
+                                 percent_text(with.identified) + ")"});
+  }
+  run.hold_moving = true;
+  RunResidual moving = rerun();
+  if (moving.identified < run.residual->identified - kMinErrorRemoved)
+    run.residual = std::move(moving);
+  else
+    run.hold_moving = false;
+  run.residual->notes.push_back(why +
+                                ": re-run from the declared model with only what lowers it (" +
+                                (kept.empty() ? std::string("no named effect") : kept) +
+                                (run.hold_moving ? ", the moving parameters" : "") + ")");
+}
+
 }  // namespace
 
 void keep_what_helps(RunIdentification& run, const std::function<RunResidual()>& rerun) {
@@ -446,9 +526,12 @@ void keep_what_helps(RunIdentification& run, const std::function<RunResidual()>&
     const ResidualShare* worst = nullptr;
     for (const ResidualShare& s : run.residual->effects)
       if (s.removed < -kMinErrorRemoved && (!worst || s.removed < worst->removed)) worst = &s;
-    if (!worst || !reject(*worst, run.actuators)) return;
+    if (!worst || !reject(*worst, run.actuators)) break;
     run.residual = rerun();
   }
+  if (run.residual && !run.residual->declared_diverged &&
+      run.residual->identified > run.residual->declared + kMinErrorRemoved)
+    fall_back_to_declared(run, rerun);
 }
 
 bool is_run_record(const std::filesystem::path& path) { return path.extension() == ".rthsrec"; }

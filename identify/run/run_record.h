@@ -78,6 +78,8 @@ struct RunIdentification {
   // The study re-run with the declared and the identified actuators (run_residual.h); absent
   // when the actuator channel was not identified.
   std::optional<RunResidual> residual;
+  // Whether the re-run tries moving parameters (run_residual.h ResidualInput::hold_moving).
+  bool hold_moving = true;
   // Every difference from the declared config, every part, computed once (findings.h): what the
   // report (run_record_format.h) prints and the JSON holds.
   std::vector<Finding> findings;
@@ -99,6 +101,13 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
 // `run.residual` made again by `rerun` (the study re-run with the paths as they stand). One
 // effect per pass: it ends within as many passes as effects named. identify_run_record calls it
 // before the findings are collected; nothing to do without a residual.
+// The re-run never ends worse than the declared model: where the identified re-run's worst-floor
+// NRMSE over the whole record is still above the declared one's by more than kMinErrorRemoved,
+// every named effect is taken out (and no parameter held moving), then each is put back, in the
+// order named, only where it lowers that whole-record error by more than kMinErrorRemoved, and
+// the moving parameters last on the same rule; the ones left out are rejected with that reason
+// and the residual's notes say the re-run fell back (the held-out steps that choose a moving
+// parameter and the removals above can disagree with the whole record, which is what is reported).
 void keep_what_helps(RunIdentification& run, const std::function<RunResidual()>& rerun);
 
 // True for a path named *.rthsrec (what `rths identify` reads as a run record).

@@ -421,7 +421,7 @@ RunResidual run_residual(const ResidualInput& input) {
     all[a].displacement_scale = rigs[a].displacement_scale;
     all[a].held = &rigs[a].held_by_declared;
   }
-  choose_moving(reruns, paths, input.unexplained, all, out);
+  if (input.hold_moving) choose_moving(reruns, paths, input.unexplained, all, out);
   for (std::size_t a = 0; a < paths.size(); ++a) {
     std::vector<std::string> left_out;
     if (all[a].actuator)

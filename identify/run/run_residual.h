@@ -129,6 +129,9 @@ struct ResidualInput {
   const std::vector<ActuatorPath>* actuators = nullptr;
   const PlatformReplay* platform = nullptr;  // null or no late step: every step on its own answer
   const std::vector<Unexplained>* unexplained = nullptr;  // null: none described
+  // False: no parameter is tried moving (the re-run fell back to the declared model and adds a
+  // moving one back only where it lowers the whole record's error: run_record.h keep_what_helps).
+  bool hold_moving = true;
 };
 
 // Throws std::invalid_argument when the study cannot be set up (naming the config's field).

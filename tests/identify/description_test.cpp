@@ -66,6 +66,35 @@ TEST(DescribeResidual, ASinusoidIsPeriodicWithItsFrequencyAndAmplitude) {
 }
 
 // Stiffer on one side than on the other: a residual even in the input.
+// A load cell's slow thermal cycle, 1.95 cycles in the 15 s record (0.13 Hz, below
+// kMinPeriodicFrequency), is periodic at its frequency: the slow band starts at
+// kMinPeriodicCycles in the record.
+TEST(DescribeResidual, ASlowCycleUnderTwoInTheRecordIsPeriodic) {
+  Synthetic s = synthetic(0.05);
+  for (std::size_t j = 0; j < kSamples; ++j)
+    s.residual[j] += 0.3 * std::sin(2.0 * std::numbers::pi * 0.13 * s.time[j] + 0.4);
+  const ResidualDescription d = described(s);
+  ASSERT_TRUE(d.periodic.has_value());
+  EXPECT_NEAR(d.periodic->frequency, 0.13, 0.13 * 0.05);
+  EXPECT_NEAR(d.periodic->amplitude, 0.3, 0.03);
+}
+
+// Slow drifts are no period, though their spectra pile up in the slow band: an offset that
+// approaches its end value (time constant 4 s), one that grows as the square of time and one that
+// rises and settles back once (a single hump, under one cycle).
+TEST(DescribeResidual, ASlowDriftIsNotPeriodic) {
+  const std::vector<double (*)(double)> drifts{
+      [](double t) { return 0.4 * (1.0 - std::exp(-t / 4.0)); },
+      [](double t) { return 0.4 * (t / 15.0) * (t / 15.0); },
+      [](double t) { return 0.4 * std::sin(std::numbers::pi * t / 15.0); }};
+  for (std::size_t i = 0; i < drifts.size(); ++i) {
+    Synthetic s = synthetic(0.05);
+    for (std::size_t j = 0; j < kSamples; ++j) s.residual[j] += drifts[i](s.time[j]);
+    EXPECT_FALSE(described(s).periodic.has_value())
+        << "drift " << i << " at " << described(s).periodic->frequency << " Hz";
+  }
+}
+
 TEST(DescribeResidual, AResidualOfTheInputsSignIsDirectionWithItsAsymmetry) {
   Synthetic s = synthetic(0.05);
   for (std::size_t j = 0; j < kSamples; ++j) s.residual[j] += 0.1 * std::abs(s.prediction[j]);
