@@ -127,18 +127,40 @@ std::string describe_read(const GroundMotion& record, const ReadUnits& units) {
   return out.str();
 }
 
+// The motion's file, against base_dir when relative, sized and checked for text before it is
+// scanned, hashed or read (study/motion_files.h).
+std::filesystem::path checked_motion_path(const config::GroundMotion& motion,
+                                          const std::filesystem::path& base_dir) {
+  if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
+  std::filesystem::path path = motion.path();
+  if (path.is_relative()) path = base_dir / path;
+  require_motion_file_size(path);
+  if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
+    throw std::invalid_argument("motion: " + why);
+  return path;
+}
+
 }  // namespace
+
+std::optional<MotionFileExtent> motion_extent_before_reading(
+    const config::GroundMotion& motion, const std::filesystem::path& base_dir) {
+  if (motion.has_embedded()) return std::nullopt;
+  const std::filesystem::path path = checked_motion_path(motion, base_dir);
+  const bool at2 = motion.format() == config::GroundMotion::AT2 ||
+                   (motion.format() == config::GroundMotion::AUTO && is_at2_file(path));
+  std::optional<MotionFileExtent> extent = motion_file_extent(path, at2, motion.column_dt());
+  if (extent && motion.duration() > 0) {  // the samples truncated() keeps, at most
+    const double kept = std::ceil(motion.duration() / extent->dt);
+    if (kept < static_cast<double>(extent->samples))
+      extent->samples = static_cast<std::uint64_t>(kept);
+  }
+  return extent;
+}
 
 GroundMotion load_motion(const config::GroundMotion& motion,
                          const std::filesystem::path& base_dir) {
   if (motion.has_embedded()) return embedded_motion(motion.embedded());
-  if (motion.path().empty()) throw std::invalid_argument("motion.path is empty");
-  std::filesystem::path path = motion.path();
-  if (path.is_relative()) path = base_dir / path;
-  // Sized before it is scanned, hashed or read (study/motion_files.h).
-  require_motion_file_size(path);
-  if (const std::string why = not_a_text_file(path, "ground-motion file"); !why.empty())
-    throw std::invalid_argument("motion: " + why);
+  const std::filesystem::path path = checked_motion_path(motion, base_dir);
   if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
   bool at2 = motion.format() == config::GroundMotion::AT2;
   if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);

@@ -5,10 +5,12 @@
 // units.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "core/ground_motion.h"
 #include "rths/proto/config.pb.h"
+#include "study/motion_files.h"
 
 namespace rths::core {
 
@@ -21,6 +23,12 @@ inline constexpr double kMaxPeakGroundAcceleration =
 // AT2 header and column_units disagree (naming both), or the peak exceeds
 // kMaxPeakGroundAcceleration (a record in cm/s^2 read as g or m/s^2).
 GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir);
+// The record's extent from its file before a sample is parsed (motion_file_extent: a lower
+// bound on its samples, at most what motion.duration keeps), for sizing the run first. Empty
+// for an embedded motion or a column file without column_dt. Throws as load_motion does on a
+// file that is missing, too large, not text, or a malformed AT2 header.
+std::optional<MotionFileExtent> motion_extent_before_reading(const config::GroundMotion& motion,
+                                                             const std::filesystem::path& base_dir);
 // "g", "m/s2", "cm/s2", "in/s2" or "mm/s2": what a record in these units is called on the
 // command line and in summaries.
 std::string units_name(config::GroundMotion::Units units);

@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace rths::core {
 namespace {
@@ -112,7 +113,60 @@ At2Header parse_at2_header(const std::string& line, const std::filesystem::path&
   return header;
 }
 
+// Reads the 4 header lines of an AT2 file from `in` and parses the 4th (parse_at2_header).
+At2Header read_at2_header(std::istream& in, const std::filesystem::path& path) {
+  std::string line;
+  for (int i = 1; i <= 3; ++i) {
+    if (!read_line(in, line)) {
+      throw std::invalid_argument(path.string() + ": AT2 header ends at line " + std::to_string(i) +
+                                  " (expected 4 header lines)");
+    }
+  }
+  if (!read_line(in, line)) {
+    throw std::invalid_argument(path.string() + ": AT2 header has no 4th line with NPTS and DT");
+  }
+  return parse_at2_header(line, path);
+}
+
+// The lines of a text file holding anything but blanks (space, tab, CR, FF) whose first such
+// character is not '#': what a column reader takes as a title or a row. Scans bytes only.
+std::uint64_t count_data_lines(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
+  std::vector<char> block(1 << 20);
+  std::uint64_t lines = 0;
+  bool at_line_start = true;  // no character but blanks seen yet on this line
+  while (in) {
+    in.read(block.data(), static_cast<std::streamsize>(block.size()));
+    const std::streamsize got = in.gcount();
+    for (std::streamsize i = 0; i < got; ++i) {
+      const char c = block[static_cast<std::size_t>(i)];
+      if (c == '\n') {
+        at_line_start = true;
+      } else if (at_line_start && c != ' ' && c != '\t' && c != '\r' && c != '\f') {
+        at_line_start = false;
+        if (c != '#') ++lines;
+      }
+    }
+  }
+  return lines;
+}
+
 }  // namespace
+
+std::optional<MotionFileExtent> motion_file_extent(const std::filesystem::path& path, bool at2,
+                                                   double column_dt) {
+  require_motion_file_size(path);
+  if (at2) {
+    std::ifstream in(path);
+    if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
+    const At2Header header = read_at2_header(in, path);
+    return MotionFileExtent{static_cast<std::uint64_t>(header.npts), header.dt};
+  }
+  if (!(column_dt > 0.0)) return std::nullopt;
+  const std::uint64_t lines = count_data_lines(path);
+  return MotionFileExtent{lines > 0 ? lines - 1 : 0, column_dt};
+}
 
 std::uintmax_t motion_file_limit_bytes() {
   return std::min<std::uintmax_t>(kMaxMotionFileBytes,
@@ -209,17 +263,8 @@ GroundMotion read_at2(const std::filesystem::path& path, double to_si) {
   require_motion_file_size(path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
+  const At2Header header = read_at2_header(in, path);
   std::string line;
-  for (int i = 1; i <= 3; ++i) {
-    if (!read_line(in, line)) {
-      throw std::invalid_argument(path.string() + ": AT2 header ends at line " + std::to_string(i) +
-                                  " (expected 4 header lines)");
-    }
-  }
-  if (!read_line(in, line)) {
-    throw std::invalid_argument(path.string() + ": AT2 header has no 4th line with NPTS and DT");
-  }
-  const At2Header header = parse_at2_header(line, path);
 
   GroundMotion motion;
   motion.name = path.stem().string();

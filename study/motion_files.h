@@ -34,6 +34,24 @@ std::uintmax_t motion_file_limit_bytes();
 // not a regular file, is left to the reader's own refusal. Reads nothing of the file.
 void require_motion_file_size(const std::filesystem::path& path);
 
+// A motion file's extent before a sample of it is parsed, so that a run too long for the memory
+// budget is refused in the time it takes to scan the bytes, not to parse them (a 40 MiB column
+// file took over a second to parse only to be refused). `samples` is a lower bound on what the
+// reader finds: an AT2 header's NPTS (the reader refuses any other count), or a column file's
+// lines holding anything but blanks and not starting with '#', less one (a title line, which
+// the reader skips). `dt` (s): the AT2 header's DT, or the given column_dt.
+struct MotionFileExtent {
+  std::uint64_t samples = 0;
+  double dt = 0.0;  // s
+  double seconds() const { return dt * static_cast<double>(samples); }
+};
+// Sizes the file first (require_motion_file_size). A column file scanned as bytes in 1 MiB
+// blocks, holding nothing else. Empty for a column file without column_dt > 0 (its dt is in its
+// times, known once two rows are parsed). Throws std::invalid_argument on a malformed AT2 header
+// (as read_at2) or a file that cannot be opened.
+std::optional<MotionFileExtent> motion_file_extent(const std::filesystem::path& path, bool at2,
+                                                   double column_dt);
+
 // Each reader first calls require_motion_file_size.
 
 // Reads a PEER AT2 file: 4 header lines, the 4th holding NPTS and DT in either of the forms

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -126,6 +127,22 @@ int servo_substeps(const config::Study& study, double dt) {
   return static_cast<int>(whole);
 }
 
+// What a run of this study holds per step (study/recorders.h, run_bytes_per_step: its
+// simulations, their responses, the results table and the motion) over `seconds` of record at
+// dt (s), checked before any of it is allocated; `source` says where the seconds came from.
+void require_run_memory(const PreparedStudy& prepared, double dt, double seconds,
+                        const std::string& source) {
+  const config::Study& study = prepared.config;
+  const config::SafetyLimits& limits = study.deployment().limits();
+  require_memory(static_cast<std::uint64_t>(seconds / dt) + 2,
+                 run_bytes_per_step(prepared.recorders, prepared.base.model.dofs(),
+                                    prepared.base.partition.actuator_storeys.size(),
+                                    static_cast<std::size_t>(std::max(1, study.cases_size())),
+                                    limits.max_displacement() > 0 || limits.max_velocity() > 0),
+                 "integrator.dt = " + format_number(dt) + " s over the " + format_number(seconds) +
+                     " s record" + source);
+}
+
 HybridSetup base_setup(const config::Study& study, double dt, const std::filesystem::path& base_dir,
                        std::vector<std::string>* warnings) {
   HybridSetup base;
@@ -157,27 +174,33 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   PreparedStudy prepared;
   prepared.config = study;
   prepared.base_dir = base_dir;
-  GroundMotion record = load_motion(study.motion(), base_dir);
-  const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : record.dt;
-  require(dt < record.duration(), "motion",
-          "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
-              format_number(record.duration()) + " s)");
-  // What a run of this study holds per step (study/recorders.h, run_bytes_per_step: its
-  // simulations, their responses, the results table and the motion), checked before any of it
-  // is allocated.
+  // The run is sized from the motion file's extent before a sample of it is parsed, where the
+  // file states its dt (motion_extent_before_reading), and again from the record once read.
+  const std::optional<MotionFileExtent> extent =
+      motion_extent_before_reading(study.motion(), base_dir);
+  std::optional<GroundMotion> record;
+  if (!extent) record = load_motion(study.motion(), base_dir);
+  const bool dt_given = study.integrator().dt() > 0;
+  double dt = dt_given ? study.integrator().dt() : (extent ? extent->dt : record->dt);
   prepared.base = base_setup(study, dt, base_dir, &prepared.warnings);
   prepared.recorders =
       plan_recorders(study, prepared.base.model.dofs(), experimental_dofs(prepared.base.partition));
-  const config::SafetyLimits& limits = study.deployment().limits();
-  require_memory(static_cast<std::uint64_t>(record.duration() / dt) + 2,
-                 run_bytes_per_step(prepared.recorders, prepared.base.model.dofs(),
-                                    prepared.base.partition.actuator_storeys.size(),
-                                    static_cast<std::size_t>(std::max(1, study.cases_size())),
-                                    limits.max_displacement() > 0 || limits.max_velocity() > 0),
-                 "integrator.dt = " + format_number(dt) + " s over the " +
-                     format_number(record.duration()) + " s record");
+  if (extent) {
+    require_run_memory(prepared, dt, extent->seconds(),
+                       " (" + std::to_string(extent->samples) +
+                           " samples by the motion file's extent, before a sample is parsed)");
+    record = load_motion(study.motion(), base_dir);
+    if (!dt_given && std::abs(record->dt - dt) > 1e-12 * dt) {  // times unlike column_dt
+      dt = record->dt;
+      prepared.base = base_setup(study, dt, base_dir, nullptr);
+    }
+  }
+  require(dt < record->duration(), "motion",
+          "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
+              format_number(record->duration()) + " s)");
+  require_run_memory(prepared, dt, record->duration(), "");
   prepared.motion =
-      std::abs(dt - record.dt) <= 1e-12 * dt ? std::move(record) : resampled(record, dt);
+      std::abs(dt - record->dt) <= 1e-12 * dt ? std::move(*record) : resampled(*record, dt);
   for (const config::Case& c : study.cases()) {
     const double lag = make_delay_chain(c.delay(), dt, base_dir).nominal_delay();
     require(lag < prepared.motion.duration(), "case '" + c.name() + "'",

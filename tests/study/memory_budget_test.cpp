@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <optional>
 
 #include "study/motion_files.h"
 #include "study/study.h"
@@ -137,6 +138,38 @@ TEST(MemoryBudget, AMotionFileIsHeldToWhatTheMemoryLimitCanReadAndANormalOneStil
   const GroundMotion record = read_at2(std::filesystem::path(RTHS_DATA_DIR) / "ground_motions" /
                                        "elcentro_1940_ns_peknold.AT2");
   EXPECT_EQ(record.acceleration.size(), 1559u);
+}
+
+// The run is sized from the motion file's extent before a row of it is parsed: the file's last
+// line is not a number, so a reader that parsed first would refuse it for that instead.
+TEST(MemoryBudget, AMotionWhoseRunCannotFitIsRefusedByItsExtentBeforeARowIsParsed) {
+  const Scratch scratch("motion_extent");
+  const auto motion = scratch.dir / "long.txt";
+  {
+    std::ofstream out(motion);
+    out << "# acceleration, g\n  acceleration\n\n";
+    for (int i = 0; i < 200000; ++i) out << (i % 7) * 0.001 << "\n";
+    out << "not-a-number\n";
+  }
+  const std::optional<MotionFileExtent> extent = motion_file_extent(motion, false, 0.001);
+  ASSERT_TRUE(extent.has_value());
+  EXPECT_EQ(extent->samples, 200001u);  // the title, 200,000 rows and the last line, less one
+  EXPECT_FALSE(motion_file_extent(motion, false, 0.0).has_value());
+  config::Study study = load_study(kConfigs / "paper_frame.textproto");
+  study.mutable_motion()->set_path(motion.string());
+  study.mutable_motion()->clear_sha256();
+  study.mutable_motion()->set_column_dt(0.001);
+  study.mutable_motion()->set_column_units(config::GroundMotion::G);
+  const MemoryLimit limit("1000000000");  // 1 GB: 200 s at 1e-5 s holds 20 million rows
+  study.mutable_integrator()->set_dt(1e-5);
+  EXPECT_THAT(refusal([&] { prepare_study(study, kConfigs); }),
+              testing::AllOf(HasSubstr("integrator.dt = 1e-05 s over the 200.001 s record (200001 "
+                                       "samples by the motion file's extent"),
+                             HasSubstr("more than the memory limit"),
+                             testing::Not(HasSubstr("not-a-number"))));
+  study.mutable_integrator()->set_dt(0.001);  // fits: the file is then read, and its line refused
+  EXPECT_THAT(refusal([&] { prepare_study(study, kConfigs); }),
+              HasSubstr("'not-a-number' is not a finite number"));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -214,6 +215,18 @@ TEST(ScaledAndTruncated, Basics) {
   EXPECT_DOUBLE_EQ(cut.acceleration[499], motion.acceleration[499]);
   EXPECT_EQ(truncated(motion, 0.0).acceleration.size(), motion.acceleration.size());
   EXPECT_EQ(truncated(motion, 1e6).acceleration.size(), motion.acceleration.size());
+}
+
+// A file's extent before it is parsed (motion_file_extent): the AT2 header's NPTS and DT, as the
+// reader then finds them.
+TEST(MotionFileExtent, AnAt2FilesExtentIsItsHeadersCountAndStep) {
+  for (const char* name : {"elcentro_1940_ns_peknold.AT2", "RSN175_IMPVALL.H_H-E12140.AT2"}) {
+    const std::optional<MotionFileExtent> extent = motion_file_extent(kMotions / name, true, 0.0);
+    ASSERT_TRUE(extent.has_value()) << name;
+    const GroundMotion read = read_at2(kMotions / name);
+    EXPECT_EQ(extent->samples, read.acceleration.size()) << name;
+    EXPECT_DOUBLE_EQ(extent->dt, read.dt) << name;
+  }
 }
 
 }  // namespace
