@@ -173,6 +173,7 @@ std::vector<util::PlotSpec> actuator_panels(const std::vector<const CaseOutcome*
     p->height = kActuatorPanelHeight;
     p->columns = kActuatorColumns;
     p->max_x_tics = kActuatorTics;
+    p->one_legend_below = true;  // every panel draws the same cases in the same colours
   }
   return {tracking, loop};
 }

@@ -21,9 +21,11 @@
 //                          its tracking error x_m - x_t (mm, measured less command) over time and
 //                          its measured force (kN) against its command (mm), every bounded case in
 //                          its colour. A page is kActuatorColumns x 5 panels of kActuatorPanelWidth
-//                          x kActuatorPanelHeight px (1800 x 2000, each legend below its panel:
-//                          within an A4 page's proportions), printed at a page's width, at most
-//                          kActuatorTics x intervals a panel so that no tick labels run together.
+//                          x kActuatorPanelHeight px and one legend below them all, each case
+//                          once, in as many columns as the page's width holds (1800 x 2000 and
+//                          the legend's rows: within an A4 page's proportions), printed at a
+//                          page's width, at most kActuatorTics x intervals a panel so that no
+//                          tick labels run together.
 // A case's colour is its index among the drawn cases (util::series_colour), as in
 // displacement.png.
 

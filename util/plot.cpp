@@ -199,6 +199,7 @@ std::pair<std::string, std::string> legend_and_y_range(const PlotSpec& spec,
                                                        const FigureLayout& layout) {
   std::string y_range = spec.y_min || spec.y_max ? "set yrange " + range(spec.y_min, spec.y_max)
                                                  : std::string("set autoscale y");
+  if (spec.one_legend_below) return {"unset key\n", y_range + "\n"};  // the figure's, below
   if (!layout.legends_inside)
     return {layout.below_columns > 1
                 ? "set key outside below center horizontal Left reverse\n"
@@ -236,6 +237,21 @@ void append_key_title(std::ostringstream& script, const std::string& title,
     script << ", keyentry with lines lc rgb '#FFFFFF' title " << quoted(lines[i]);
 }
 
+// " with <style>" of series i of `spec`, in the palette's colour and dash of its index where its
+// style names neither (gnuplot refuses an option given twice).
+std::string with_style(const PlotSpec& spec, std::size_t i) {
+  const std::string& style = spec.series[i].style;
+  const auto has = [&](const char* option) {
+    return (" " + style + " ").find(option) != std::string::npos;
+  };
+  std::string out = " with " + style;
+  if (!has(" lc ") && !has(" linecolor "))
+    out += std::string(" lc rgb '") + kPalette[static_cast<int>(i) % kColours] + "'";
+  if (!has(" dt ") && !has(" dashtype "))
+    out += " dt " + std::to_string((static_cast<int>(i) / kColours) % kDashTypes + 1);
+  return out;
+}
+
 void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::string& tag,
                   std::size_t panel, const FigureLayout& layout) {
   const auto [key, y_range] = legend_and_y_range(spec, layout);
@@ -264,18 +280,25 @@ void append_panel(std::ostringstream& script, const PlotSpec& spec, const std::s
   }
   script << "plot ";
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
-    const int colour = static_cast<int>(i) % kColours;
-    const int dash = (static_cast<int>(i) / kColours) % kDashTypes + 1;
-    // A style that names its own colour or dash keeps it (gnuplot refuses an option given twice).
-    const std::string& style = spec.series[i].style;
-    const auto has = [&](const char* option) {
-      return (" " + style + " ").find(option) != std::string::npos;
-    };
-    script << (i ? ", " : "") << block_name(tag, panel, i) << " using 1:2 with " << style;
-    if (!has(" lc ") && !has(" linecolor ")) script << " lc rgb '" << kPalette[colour] << "'";
-    if (!has(" dt ") && !has(" dashtype ")) script << " dt " << dash;
+    script << (i ? ", " : "") << block_name(tag, panel, i) << " using 1:2" << with_style(spec, i);
     append_key_title(script, spec.series[i].title, layout);
   }
+  script << "\n";
+}
+
+// The figure's one legend (PlotSpec::one_legend_below) in the strip below its panels, of a
+// figure `height` px tall: each entry drawn as its series is.
+void append_page_legend(std::ostringstream& script, const std::vector<PlotSpec>& panels,
+                        const PageLegend& legend, int height) {
+  script << "set origin 0,0\nset size 1," << static_cast<double>(legend.height_px) / height
+         << "\nunset border\nunset tics\nunset grid\nunset title\nunset xlabel\nunset ylabel\n"
+         << "unset arrow\nunset label\nunset logscale\nset margins 0,0,0,0\n"
+         << "set xrange [0:1]\nset yrange [0:1]\nset key inside center center horizontal Left "
+         << "reverse maxcols " << legend.columns << "\n"
+         << "plot NaN notitle";  // gnuplot 5.4 fails an assertion on key entries alone
+  for (const auto& [p, i] : legend.entries)
+    script << ", keyentry" << with_style(panels[p], i) << " title "
+           << quoted(panels[p].series[i].title);
   script << "\n";
 }
 
@@ -309,18 +332,33 @@ std::string square_grid(const std::vector<PlotSpec>& panels, const std::string& 
 }
 
 // Panels in a grid of the first panel's `columns`, row by row, each its `width` x `height` px
-// (with its legend below where the layout puts it), printed at a page's width.
+// (with its legend below where the layout puts it, or the figure's one legend below them all),
+// printed at a page's width.
 std::string panel_grid(const std::vector<PlotSpec>& panels, const std::string& tag,
                        const std::string& terminal, const std::filesystem::path& file) {
-  const int columns = std::min(panels.front().columns, static_cast<int>(panels.size()));
-  const int rows = static_cast<int>((panels.size() + columns - 1) / columns);
-  const int width = panels.front().width * columns;
-  const FigureLayout layout = figure_layout(panels, true, false, columns, width);
+  const std::size_t columns = std::min<std::size_t>(panels.front().columns, panels.size());
+  const std::size_t rows = (panels.size() + columns - 1) / columns;
+  const int width = panels.front().width * static_cast<int>(columns);
+  FigureLayout layout = figure_layout(panels, true, false, static_cast<int>(columns), width);
+  PageLegend legend;
+  if (panels.front().one_legend_below) {
+    legend = page_legend(panels, width, layout.font);
+    layout.legends_inside = true;  // no panel draws one
+    layout.legend_below_px = 0;
+  }
+  const int panel_height = panels.front().height + layout.legend_below_px;
+  const int height = panel_height * static_cast<int>(rows) + legend.height_px;
   std::ostringstream script;
-  start_figure(script, terminal, file, width,
-               (panels.front().height + layout.legend_below_px) * rows, layout);
-  script << "set multiplot layout " << rows << "," << columns << " rowsfirst\n";
-  for (std::size_t p = 0; p < panels.size(); ++p) append_panel(script, panels[p], tag, p, layout);
+  start_figure(script, terminal, file, width, height, layout);
+  script << "set multiplot\n";
+  for (std::size_t p = 0; p < panels.size(); ++p) {
+    const double top = static_cast<double>(p / columns + 1) * panel_height;
+    script << "set origin " << static_cast<double>(p % columns) / columns << ","
+           << (height - top) / height << "\nset size " << 1.0 / columns << ","
+           << static_cast<double>(panel_height) / height << "\n";
+    append_panel(script, panels[p], tag, p, layout);
+  }
+  if (!legend.entries.empty()) append_page_legend(script, panels, legend, height);
   script << "unset multiplot\nset output\n";
   return script.str();
 }
@@ -348,10 +386,6 @@ std::string figure(const std::vector<PlotSpec>& panels, const std::string& tag,
   script << "set output\n";
   return script.str();
 }
-
-}  // namespace
-
-namespace {
 
 // A figure set that takes longer than this is stuck (a 1-minute record draws in seconds).
 constexpr std::chrono::seconds kGnuplotTimeout{300};

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -176,6 +177,26 @@ FigureLayout figure_layout(const std::vector<PlotSpec>& panels, bool page_width,
     l.legend_below_px = static_cast<int>(std::ceil((rows + 1.5) * line));
   }
   return l;
+}
+
+PageLegend page_legend(const std::vector<PlotSpec>& panels, int figure_width, int font_points) {
+  PageLegend legend;
+  std::set<std::string> shown;
+  std::size_t longest = 0;
+  for (std::size_t p = 0; p < panels.size(); ++p)
+    for (std::size_t i = 0; i < panels[p].series.size(); ++i)
+      if (shown.insert(panels[p].series[i].title).second) {
+        legend.entries.emplace_back(p, i);
+        longest = std::max(longest, panels[p].series[i].title.size());
+      }
+  const double ch = character_pixels(font_points);
+  const double entry = (static_cast<double>(longest) + 7.0) * ch;
+  legend.columns = static_cast<int>(std::max(1.0, std::floor((figure_width - 4.0 * ch) / entry)));
+  const auto rows = (legend.entries.size() + static_cast<std::size_t>(legend.columns) - 1) /
+                    static_cast<std::size_t>(legend.columns);
+  legend.height_px =
+      static_cast<int>(std::ceil((static_cast<double>(rows) + 1.5) * line_pixels(font_points)));
+  return legend;
 }
 
 std::vector<std::string> split_key_title(const std::string& title, std::size_t max_chars) {

@@ -96,6 +96,17 @@ inline constexpr double kInsideWidthShare = 0.6, kInsideHeightShare = 0.45;
 FigureLayout figure_layout(const std::vector<PlotSpec>& panels, bool page_width, bool square,
                            int columns, int figure_width);
 
+// One legend below a grid of panels (PlotSpec::one_legend_below): the series whose titles it
+// shows, each title once, in the order the panels first draw them; in as many columns as
+// `figure_width` holds of its longest entry (its sample, 4 characters, and gaps), and the px it
+// takes below the panels: its rows and a line's margin.
+struct PageLegend {
+  std::vector<std::pair<std::size_t, std::size_t>> entries;  // panel, series of each title
+  int columns = 1;
+  int height_px = 0;
+};
+PageLegend page_legend(const std::vector<PlotSpec>& panels, int figure_width, int font_points);
+
 // A legend entry's title cut at spaces into lines of at most `max_chars` characters (the first
 // line keeps as many words as fit): a legend below draws each further line as an entry of its own
 // without a sample, since gnuplot draws a title's line breaks over the next entry.

@@ -66,6 +66,11 @@ struct PlotSpec {
   // `width` x `height` px, printed at a page's width (a pair of panels per row: one thing's two
   // views side by side).
   int columns = 1;
+  // The first panel's value, in a grid of panels (columns > 1): one legend for the figure, below
+  // every panel, each title once (drawn as its first series of that title), and none in a panel;
+  // for panels that draw the same things in the same colours (a page of actuators, every case on
+  // each), whose legends would repeat and crowd the page.
+  bool one_legend_below = false;
 };
 
 // The range [lo, hi] padded by `margin` of its span on each side, over the finite y of the series

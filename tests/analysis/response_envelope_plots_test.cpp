@@ -144,6 +144,8 @@ TEST(ResponseEnvelopePlots, EveryActuatorIsDrawnOnPagesThatFitAPage) {
     EXPECT_EQ(count(a < kActuatorsPerPage ? first : second, title), 2u) << title;
     EXPECT_EQ(count(a < kActuatorsPerPage ? second : first, title), 0u) << title;
   }
+  for (const std::string* page : {&first, &second})  // one legend a page, not one a panel
+    for (const char* name : {">reference<", ">lag_2ms<"}) EXPECT_EQ(count(*page, name), 1u) << name;
   const std::string envelope = test::read_text(dir / "response_envelope.svg");
   EXPECT_NE(envelope.find("peak inter-storey drift (mm)"), std::string::npos);
   EXPECT_NE(envelope.find("reference: reference (drawn over)"), std::string::npos);

@@ -346,6 +346,57 @@ TEST(Plot, PanelsInColumnsAreAGridAndAMarkerAtTheRightEdgeIsLabelledLeftOfIt) {
   std::filesystem::remove_all(dir);
 }
 
+// A page of panels that draw the same cases (PlotSpec::one_legend_below, as the actuator pages)
+// has one legend below them all: each title once, every entry inside the page's width and below
+// the lowest panel; the page grows by the legend's rows.
+TEST(Plot, OneLegendBelowAGridNamesEachTitleOnceWithinThePage) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("rths_plot_page_key_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::vector<std::string> cases = {"reference",
+                                          "network_60ms_uncompensated",
+                                          "network_60ms_predicted",
+                                          "network_60ms_linear_model",
+                                          "network_60ms_model_30pct_soft",
+                                          "network_100ms_predicted",
+                                          "link_60ms_predicted",
+                                          "sites_predicted",
+                                          "sites_uncompensated"};
+  std::vector<PlotSpec> panels;
+  for (const char* name : {"lab_b: tracking", "lab_b: loop", "lab_c: tracking", "lab_c: loop"}) {
+    PlotSpec p{name, "time (s)", "x (mm)"};
+    for (std::size_t i = 0; i < cases.size(); ++i)
+      p.series.push_back({cases[i], {0, 5, 10}, {0, static_cast<double>(i), 0}});
+    p.width = 450;
+    p.height = 400;
+    p.columns = 4;
+    p.one_legend_below = true;
+    panels.push_back(p);
+  }
+  write_png_panels(panels, dir / "page.png");
+  const int font = figure_font_points(1800, true);
+  const PageLegend legend = page_legend(panels, 1800, font);
+  EXPECT_EQ(legend.entries.size(), cases.size());
+  const auto [width, height] = png_size(dir / "page.png");
+  EXPECT_EQ(width, 1800u);
+  EXPECT_EQ(height, static_cast<std::uint32_t>(400 + legend.height_px));
+  std::ifstream in(dir / "page.svg");
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const std::string& title : cases) {
+    const auto text = svg.find(">" + title + "<");
+    ASSERT_NE(text, std::string::npos) << title;
+    EXPECT_EQ(svg.find(">" + title + "<", text + 1), std::string::npos) << title << " twice";
+    const auto at = svg.rfind("translate(", text);
+    const double x = std::stod(svg.substr(at + 10));
+    const double y = std::stod(svg.substr(svg.find(',', at) + 1));
+    EXPECT_GE(x, 0.0) << title;
+    EXPECT_LE(x + static_cast<double>(title.size()) * character_pixels(font), 1800.0) << title;
+    EXPECT_GT(y, 400.0) << title << ": not below the panels";
+    EXPECT_LT(y, static_cast<double>(height)) << title;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // A legend below whose entry is wider than the figure continues on a line of its own, so no
 // entry runs past the right edge (the entry's words all drawn, in order).
 TEST(Plot, ALegendEntryWiderThanTheFigureContinuesOnItsOwnLine) {
