@@ -1,5 +1,5 @@
 // The OpenSees site over DDS: the actuator emulator as its own process, the test's client in the
-// place of OpenSees' genericClient element. Each test in its own DDS domain (204-209).
+// place of OpenSees' genericClient element. The shared DDS domain, each test on topics of its own.
 #include "opensees_site/site.h"
 
 #include <gtest/gtest.h>
@@ -14,6 +14,7 @@
 #include "opensees_site/outputs.h"
 #include "runtime/launch/launch.h"
 #include "runtime/record/record.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/real_time_run.h"
 
 namespace rths::opensees {
@@ -78,7 +79,7 @@ class OpenSeesSite : public testing::Test {
 TEST_F(OpenSeesSite, LockstepLagFreeEqualsTheElasticElementAndIsRecorded) {
   const std::string text = test::site_study(2, "");
   const auto ground = test::ground_motion(text);
-  SiteRun run = start_site("lockstep", text, "reference", 204);
+  SiteRun run = start_site("lockstep", text, "reference", test::scope_dds_to_this_test());
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();
   const test::FrameRun served = test::run_frame(frame(), ground, test::served_specimen(client));
@@ -114,7 +115,7 @@ TEST_F(OpenSeesSite, FourteenMsOnTheActuatorLinkGrowsThePeakAsThePaperFrameRun) 
   const std::string text = test::site_study(
       4, "nodes { id: 2 kind: ACTUATOR_EMULATOR receive_delay { shift { delay: 0.014 } } }");
   const auto ground = test::ground_motion(text);
-  SiteRun run = start_site("lag14", text, "reference", 205);
+  SiteRun run = start_site("lag14", text, "reference", test::scope_dds_to_this_test());
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();
   const test::FrameRun served = test::run_frame(frame(), ground, test::served_specimen(client));
@@ -142,7 +143,7 @@ TEST_F(OpenSeesSite, FourteenMsOnTheActuatorLinkGrowsThePeakAsThePaperFrameRun) 
 
 TEST_F(OpenSeesSite, ASilentClientIsAClearStopWithHoldAndAClosedRecord) {
   const std::string text = test::site_study(2, "step_timeout: 0.5");
-  SiteRun run = start_site("silent", text, "reference", 206);
+  SiteRun run = start_site("silent", text, "reference", test::scope_dds_to_this_test());
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();
   for (int k = 1; k <= 50; ++k) {
@@ -172,7 +173,8 @@ TEST_F(OpenSeesSite, ASilentClientIsAClearStopWithHoldAndAClosedRecord) {
 }
 
 TEST_F(OpenSeesSite, AWrongSizeMessageIsRefusedBeforeAnythingStarts) {
-  SiteRun run = start_site("sizes", test::site_study(1, ""), "reference", 207);
+  SiteRun run =
+      start_site("sizes", test::site_study(1, ""), "reference", test::scope_dds_to_this_test());
   test::GenericClient client(run.listener->port(), 1);  // an element with one basic DOF
   client.send_sizes();
   const SiteOutcome outcome = run.outcome.get();
@@ -191,7 +193,7 @@ TEST_F(OpenSeesSite, RealTimeRunCompletesAndRecordsEveryStep) {
                        "clock: REAL_TIME max_overrun_fraction: -1 max_missed_answers: 50 "
                        "command_watchdog_periods: 50");
   const auto ground = test::ground_motion(text);
-  SiteRun run = start_site("real_time", text, "reference", 208);
+  SiteRun run = start_site("real_time", text, "reference", test::scope_dds_to_this_test());
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();
   test::run_frame(frame(), ground, test::served_specimen(client));
@@ -215,7 +217,7 @@ TEST_F(OpenSeesSite, RealTimeSilentClientIsStoppedWithinTheWatchdog) {
                                             "clock: REAL_TIME max_overrun_fraction: -1 "
                                             "max_missed_answers: 50 command_watchdog_periods: 50");
   test::StallWitness witness;
-  SiteRun run = start_site("real_time_silent", text, "reference", 209);
+  SiteRun run = start_site("real_time_silent", text, "reference", test::scope_dds_to_this_test());
   test::GenericClient client(run.listener->port(), 2);
   client.send_sizes();
   for (int k = 1; k <= 100; ++k) {
