@@ -1,7 +1,7 @@
 // `rths launch --view` once the run is over: the page stays on the finished run, at the same
 // address, for --view-for seconds, and launch then exits with the run's own status (a failed
-// run never 0). Real processes over Cyclone DDS on loopback (domains 210 and 211), probed over
-// HTTP every 100 ms from the start of launch to its exit.
+// run never 0). Real processes over Cyclone DDS on loopback (the shared domain, each test on
+// topics of its own), probed over HTTP every 100 ms from the start of launch to its exit.
 // The run-record headers (and Eigen through them) come before httplib.h, whose <resolv.h> defines
 // _res, a parameter name in Eigen.
 #include "runtime/record/record.h"
@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "tests/cli/cli_support.h"
+#include "tests/support/dds_scope.h"
 #include "util/process.h"
 
 namespace rths::cli_test {
@@ -154,11 +155,13 @@ Story story_of(const std::vector<Probe>& probes) {
 TEST(LaunchView, ARealTimeRunsPageStaysForViewForSecondsThenLaunchExitsWithTheRunsStatus) {
   const auto dir = scratch("launch_view_stays");
   const int port = free_port();
+  const int domain = test::scope_dds_to_this_test();
   test::StallWitness witness;
-  const auto [exit, probes] = launch_and_probe(
-      study(dir, "REAL_TIME", 210, "cases { name: \"reference\" }\n"), port,
-      {"--domain", "210", "--view-for", "10", "--platform-seconds", "0.2", "--accept-platform"},
-      dir);
+  const auto [exit, probes] =
+      launch_and_probe(study(dir, "REAL_TIME", domain, "cases { name: \"reference\" }\n"), port,
+                       {"--domain", std::to_string(domain), "--view-for", "10",
+                        "--platform-seconds", "0.2", "--accept-platform"},
+                       dir);
   const test::MeasuredPlatform machine = witness.finish();
   const std::string log = read_file(dir / "launch.log");
   // A failed run is put down to this machine only by the suite's one rule
@@ -201,9 +204,10 @@ TEST(LaunchView, ARealTimeRunsPageStaysForViewForSecondsThenLaunchExitsWithTheRu
 TEST(LaunchView, AFailedRunsPageShowsItsVerdictAndLaunchStillExitsNonZero) {
   const auto dir = scratch("launch_view_failed");
   const int port = free_port();
+  const int domain = test::scope_dds_to_this_test();
   const auto [exit, probes] = launch_and_probe(
-      study(dir, "LOCKSTEP", 211, "cases { name: \"late\" delay { shift { delay: 0.05 } } }\n"),
-      port, {"--domain", "211", "--view-for", "2"}, dir);
+      study(dir, "LOCKSTEP", domain, "cases { name: \"late\" delay { shift { delay: 0.05 } } }\n"),
+      port, {"--domain", std::to_string(domain), "--view-for", "2"}, dir);
   const std::string log = read_file(dir / "launch.log");
   EXPECT_EQ(exit, 1) << log;
   const Story s = story_of(probes);
