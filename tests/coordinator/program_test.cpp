@@ -1,6 +1,6 @@
 // coordinator/program: a real-time run passes the platform gate before it joins DDS (refused:
 // exit 3, naming the numbers and the fix), --accept-platform overrides it, and the record's header
-// keeps the check and the override. DDS domains 180-181.
+// keeps the check and the override. The shared DDS domain, each test on topics of its own.
 #include "coordinator/program.h"
 
 #include <gmock/gmock.h>
@@ -10,6 +10,7 @@
 
 #include "rt_check/probe.h"
 #include "tests/runtime/test_support.h"
+#include "tests/support/dds_scope.h"
 #include "tests/support/real_time_run.h"
 #include "tests/support/run_command_line.h"
 
@@ -41,7 +42,9 @@ std::string coordinator_command(const std::filesystem::path& config, const std::
 TEST(PlatformGate, ARefusedCheckStopsARealTimeRunBeforeItStarts) {
   const auto dir = test::scratch_dir("gate_refused");
   const auto config = test::write_config(
-      dir, test::paper_frame_study(0.2, "deployment { domain_id: 180 clock: REAL_TIME }"));
+      dir, test::paper_frame_study(
+               0.2, "deployment { domain_id: " + std::to_string(test::scope_dds_to_this_test()) +
+                        " clock: REAL_TIME }"));
   const auto record = dir / "run.rthsrec";
   const auto refused = test::run_command_line(coordinator_command(
       config, "--platform " + refused_check(dir).string() + " --record " + record.string()));
@@ -74,7 +77,7 @@ TEST(PlatformGate, AcceptPlatformRunsAndTheRecordSaysSo) {
                                    "answer_window_ms: 30 command_watchdog_ms: 30 }"));
   options.case_name = "reference";
   options.run_id = "gate_accepted";
-  options.domain = 181;
+  options.domain = test::scope_dds_to_this_test();
   options.programs_dir = RTHS_BINARY_DIR;
   options.record = dir / "run.rthsrec";
   options.log_dir = dir;

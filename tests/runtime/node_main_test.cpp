@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "tests/runtime/test_support.h"
+#include "tests/support/dds_scope.h"
 #include "util/process.h"
 
 namespace rths::runtime {
@@ -21,8 +22,8 @@ namespace {
 const std::string kMotion =
     std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
 
-// A sound study with `swap` = {what, by} replaced (the first occurrence).
-std::string study_with(const std::pair<std::string, std::string>& swap) {
+// A sound study on DDS domain `domain` with `swap` = {what, by} replaced (the first occurrence).
+std::string study_with(const std::pair<std::string, std::string>& swap, int domain) {
   std::string text =
       "name: \"node_check\"\n"
       "structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }\n"
@@ -32,7 +33,9 @@ std::string study_with(const std::pair<std::string, std::string>& swap) {
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
       "substructuring { experimental_fraction: 0.3333 model { linear {} } }\n"
       "cases { name: \"reference\" }\n"
-      "deployment { domain_id: 173 nodes { id: 1 kind: SUBSTRUCTURE }\n"
+      "deployment { domain_id: " +
+      std::to_string(domain) +
+      " nodes { id: 1 kind: SUBSTRUCTURE }\n"
       "             nodes { id: 2 kind: ACTUATOR_EMULATOR } }\n";
   const auto at = swap.first.empty() ? std::string::npos : text.find(swap.first);
   if (at != std::string::npos) text.replace(at, swap.first.size(), swap.second);
@@ -52,6 +55,7 @@ std::string run_refusal(const std::filesystem::path& study, const std::filesyste
 }
 
 TEST(NodeMain, EveryNodeProgramRefusesABadStudyAtStartWithTheMessageRunGives) {
+  const int domain = test::scope_dds_to_this_test();
   const auto dir =
       std::filesystem::temp_directory_path() / ("rths_node_main_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -74,7 +78,7 @@ TEST(NodeMain, EveryNodeProgramRefusesABadStudyAtStartWithTheMessageRunGives) {
       {"rths-controller-node", "controller_node"}};
   // The sound study passes the check: the node then waits for its coordinator (none: exit 1).
   const auto sound = dir / "sound.textproto";
-  std::ofstream(sound) << study_with({"", ""});
+  std::ofstream(sound) << study_with({"", ""}, domain);
   const util::CommandResult waits =
       util::run_command({test::program("rths-substructure-node", "substructure_nodes").string(),
                          "--node-id", "1", "--config", sound.string(), "--run-id", "node_check",
@@ -83,7 +87,7 @@ TEST(NodeMain, EveryNodeProgramRefusesABadStudyAtStartWithTheMessageRunGives) {
   for (std::size_t i = 0; i < bad.size(); ++i) {
     SCOPED_TRACE(bad[i].second);
     const auto study = dir / ("bad_" + std::to_string(i) + ".textproto");
-    std::ofstream(study) << study_with(bad[i]);
+    std::ofstream(study) << study_with(bad[i], domain);
     const std::string refusal = run_refusal(study, dir / ("out_" + std::to_string(i)));
     for (const auto& [name, subdir] : programs) {
       const util::CommandResult node = util::run_command(
@@ -102,7 +106,8 @@ TEST(NodeMain, AnAssignTimeoutThatIsNoTimeIsRefused) {
   for (const char* timeout : {"nan", "-1", "0", "inf"}) {
     const util::CommandResult node = util::run_command(
         {test::program("rths-actuator-emulator", "actuator_emulator").string(), "--node-id", "2",
-         "--domain", "173", "--run-id", "node_check", "--insecure", "--assign-timeout", timeout});
+         "--domain", std::to_string(test::scope_dds_to_this_test()), "--run-id", "node_check",
+         "--insecure", "--assign-timeout", timeout});
     EXPECT_EQ(node.exit_code, 2) << timeout << ": " << node.output;
     EXPECT_NE(node.output.find("s is not a time (finite, > 0)"), std::string::npos)
         << timeout << ": " << node.output;

@@ -1,6 +1,6 @@
 // Faults at start-up on real processes over Cyclone DDS (the shared domain, each test on topics of
-// its own; domain 164 for the programs refused before DDS): a node that never comes, one that
-// comes late within the start timeout, and programs given no run secret.
+// its own): a node that never comes, one that comes late within the start timeout, and programs
+// given no run secret.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -31,14 +31,15 @@ TEST(Faults, StartUpTimeoutNamesTheMissingNode) {
 // 2, before DDS), saying why and how to give one.
 TEST(Faults, WithoutASecretOrSecurityTheProgramsRefuseToStart) {
   const auto dir = test::scratch_dir("no_secret");
+  const std::string domain = std::to_string(test::scope_dds_to_this_test());
   const auto config = test::write_config(dir, test::paper_frame_study(0.2, ""));
   util::ChildOptions clean;
   clean.environment = {{security::kSecretEnv, ""}, {security::kSecretFileEnv, ""}};
   util::ChildProcess node(test::program("rths-substructure-node", "substructure_nodes"),
-                          {"--node-id", "1", "--domain", "164", "--run-id", "no_secret"},
+                          {"--node-id", "1", "--domain", domain, "--run-id", "no_secret"},
                           dir / "node.log", clean);
   util::ChildProcess coordinator(test::program("rths-coordinator", "coordinator"),
-                                 {"--config", config.string(), "--domain", "164"},
+                                 {"--config", config.string(), "--domain", domain},
                                  dir / "coordinator.log", clean);
   EXPECT_EQ(node.wait_for(20s).value_or(-1), 2);
   EXPECT_EQ(coordinator.wait_for(20s).value_or(-1), 2);
