@@ -16,7 +16,7 @@
 //                      dropped and counted; the feed never waits for a client.
 //   GET  /api/snapshot everything the feed holds, as one JSON (scripts, tests): one copy shared
 //                      by every client, rebuilt at most once per snapshot_period and no sooner
-//                      than 20 times its last build's duration (SnapshotCache), so clients looping
+//                      than 20 times its last build's CPU time (SnapshotCache), so clients looping
 //                      on it cannot take the feed's lock more often than that, nor more than 5 %
 //                      of a CPU however long the run
 //   ?run=a, ?run=b     on /api/snapshot and /api/stream: which run (a, the default: the feed; b:

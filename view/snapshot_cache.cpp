@@ -1,12 +1,24 @@
 #include "view/snapshot_cache.h"
 
+#include <time.h>
+
 #include <algorithm>
 
 namespace rths::view {
 
 SnapshotCache::SnapshotCache(std::function<std::string()> build, std::chrono::milliseconds period,
-                             Clock now)
-    : build_(std::move(build)), period_(period), now_(std::move(now)), interval_(period) {}
+                             Clock now, CpuClock cpu)
+    : build_(std::move(build)),
+      period_(period),
+      now_(std::move(now)),
+      cpu_(std::move(cpu)),
+      interval_(period) {}
+
+std::chrono::nanoseconds SnapshotCache::thread_cpu_time() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return std::chrono::seconds(t.tv_sec) + std::chrono::nanoseconds(t.tv_nsec);
+}
 
 std::shared_ptr<const std::string> SnapshotCache::get() {
   std::unique_lock lock(mutex_);
@@ -24,6 +36,7 @@ std::shared_ptr<const std::string> SnapshotCache::get() {
   building_ = true;
   ++builds_;
   lock.unlock();
+  const std::chrono::nanoseconds cpu_before = cpu_();
   std::shared_ptr<const std::string> made;
   try {
     made = std::make_shared<const std::string>(build_());
@@ -33,11 +46,11 @@ std::shared_ptr<const std::string> SnapshotCache::get() {
     built_cv_.notify_all();
     throw;
   }
-  const auto built = now_();
+  const std::chrono::nanoseconds cost = cpu_() - cpu_before;
   lock.lock();
   copy_ = std::move(made);
-  interval_ = std::max<std::chrono::steady_clock::duration>(period_, kCostRatio * (built - now));
-  built_at_ = built;
+  interval_ = std::max<std::chrono::steady_clock::duration>(period_, kCostRatio * cost);
+  built_at_ = now_();
   building_ = false;
   ++served_;
   built_cv_.notify_all();

@@ -5,8 +5,10 @@
 // whatever their number or rate and however long the run.
 //
 // Inputs: `build` (the whole feed as JSON text; called on a server thread, never the loop's),
-// `period` (ms) between builds, `now` (the clock; steady_clock's unless a test steps its own).
-// Interval: max(period, kCostRatio x the last build's duration, wall clock). A feed's snapshot grows with the
+// `period` (ms) between builds, `now` (the clock) and `cpu` (the building thread's CPU time;
+// both the system's unless a test steps its own).
+// Interval: max(period, kCostRatio x the last build's CPU time). CPU time, not wall time: a build
+// preempted on a busy machine is not taken for a costly one. A feed's snapshot grows with the
 // run (about 0.5 MB and 4.5 ms to build per 10 s of samples at 1 kHz), so a fixed period alone
 // would let a 10-minute run's clients take a whole core; with the ratio the builds take at most
 // 1 / kCostRatio of one CPU and a copy is older only while a build costs more than period /
@@ -29,11 +31,15 @@ namespace rths::view {
 class SnapshotCache {
  public:
   using Clock = std::function<std::chrono::steady_clock::time_point()>;
-  static constexpr int kCostRatio = 20;  // interval / build duration, at least: 5 % of a CPU
+  using CpuClock = std::function<std::chrono::nanoseconds()>;  // the calling thread's CPU time
+  static constexpr int kCostRatio = 20;  // interval / a build's CPU time, at least: 5 % of a CPU
 
   SnapshotCache(
       std::function<std::string()> build, std::chrono::milliseconds period,
-      Clock now = [] { return std::chrono::steady_clock::now(); });
+      Clock now = [] { return std::chrono::steady_clock::now(); }, CpuClock cpu = thread_cpu_time);
+
+  // CLOCK_THREAD_CPUTIME_ID: what the calling thread has run, never the time it waited for a CPU.
+  static std::chrono::nanoseconds thread_cpu_time();
 
   std::shared_ptr<const std::string> get();
   std::uint64_t builds() const;
@@ -43,6 +49,7 @@ class SnapshotCache {
   std::function<std::string()> build_;
   std::chrono::milliseconds period_;
   Clock now_;
+  CpuClock cpu_;
   std::chrono::steady_clock::duration interval_;  // until the next build: max(period, ratio x cost)
   mutable std::mutex mutex_;
   std::condition_variable built_cv_;

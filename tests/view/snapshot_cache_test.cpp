@@ -59,18 +59,20 @@ TEST(SnapshotCache, AFailedBuildIsRetriedByTheNextCaller) {
 }
 
 // A feed whose snapshot takes long to build (a long run's) is rebuilt no sooner than kCostRatio
-// times its build's duration after it, however often callers ask: on a clock the test steps,
-// each build "taking" what the build function moves the clock by.
+// times its build's CPU time after it, however often callers ask: on clocks the test steps, each
+// build "taking" what the build function moves them by.
 TEST(SnapshotCache, ABuildThatTakesLongIsRepeatedOnlyAfterItsCostRatioTimesItsDuration) {
   auto now = std::chrono::steady_clock::time_point{};
-  auto build_takes = 10ms;
+  std::chrono::nanoseconds cpu{0};
+  std::chrono::milliseconds build_takes = 10ms;
   int built = 0;
   SnapshotCache cache(
       [&] {
         now += build_takes;
+        cpu += build_takes;
         return "copy " + std::to_string(++built);
       },
-      200ms, [&] { return now; });
+      200ms, [&] { return now; }, [&] { return cpu; });
   EXPECT_EQ(*cache.get(), "copy 1");  // a 10 ms build: the period rules (20 x 10 ms = 200 ms)
   now += 199ms;
   EXPECT_EQ(*cache.get(), "copy 1");
