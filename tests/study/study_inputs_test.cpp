@@ -8,6 +8,8 @@
 
 #include <unistd.h>
 
+#include "tests/support/chain_study.h"
+
 namespace rths::core {
 namespace {
 
@@ -82,40 +84,12 @@ TEST(StudyInputs, MatrixFilesBecomeTheValuesRead) {
   fs::remove_all(elsewhere);
 }
 
-// A chain of n floors (1e5 kg, storeys of 4e10/3 N/m, not a power of two so that any altered
-// bit shows) as Matrix Market symmetric coordinate files, and a study of it, in `folder`.
-config::Study chain_study(int n, const fs::path& folder) {
-  std::ofstream mass(folder / "mass.mtx"), stiffness(folder / "stiffness.mtx");
-  mass << "%%MatrixMarket matrix coordinate real symmetric\n" << n << " " << n << " " << n << "\n";
-  stiffness.precision(17);
-  stiffness << "%%MatrixMarket matrix coordinate real symmetric\n"
-            << n << " " << n << " " << 2 * n - 1 << "\n";
-  const double k = 4e10 / 3;
-  for (int i = 1; i <= n; ++i) {
-    mass << i << " " << i << " 1e5\n";
-    stiffness << i << " " << i << " " << (i < n ? 2 * k : k) << "\n";
-    if (i > 1) stiffness << i << " " << i - 1 << " " << -k << "\n";
-  }
-  const fs::path motion =
-      fs::path(RTHS_SOURCE_DIR) / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
-  return parse_study(
-      "structure { matrices { mass { file: \"mass.mtx\" } stiffness { file: \"stiffness.mtx\" } }"
-      " damping { modal_zeta: 0.05 } }\n"
-      "motion { path: \"" +
-          motion.string() +
-          "\" duration: 0.1 }\n"
-          "integrator { kind: EXPLICIT_NEWMARK dt: 0.0009765625 }\n"
-          "substructuring { experimental_dofs { dof: 1 stiffness: 1e10 } }\n"
-          "cases { name: \"reference\" }\n",
-      "chain.textproto");
-}
-
 // What a record of a lab-sized model embeds is O(nnz): the dense form held 2 n^2 doubles (1 MB
 // at 250 DOFs, 1.6 GB at 10,000), a tridiagonal model's triplets about 9 bytes a nonzero.
 TEST(StudyInputs, AModelReadSparseIsEmbeddedSparseAndReadBackBitForBit) {
   const int n = 250;
   const fs::path folder = empty_folder();
-  const PreparedStudy prepared = prepare_study(chain_study(n, folder), folder);
+  const PreparedStudy prepared = prepare_study(test::chain_study(n, folder), folder);
   const config::Study embedded = with_embedded_inputs(prepared);
   const config::MatrixStructure& m = embedded.structure().matrices();
   ASSERT_TRUE(m.mass().has_sparse());
