@@ -1,12 +1,14 @@
 """The `rths` Python module against the `rths` command line: same numbers, same names, same
 error messages. Run from ctest (python_module) with PYTHONPATH=build/python and RTHS_EXECUTABLE,
-RTHS_SOURCE_DIR set. DDS domain 151 (this suite's range: 150-169)."""
+RTHS_SOURCE_DIR set. Its launch on the shared DDS domain, on topics of its own
+(tests/support/dds_scope.py)."""
 import csv
 import json
 import math
 import os
 import shutil
 import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -19,7 +21,8 @@ import rths
 RTHS = os.environ["RTHS_EXECUTABLE"]
 SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
 MOTION = SOURCE / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"
-DOMAIN = 151
+sys.path.insert(0, str(SOURCE / "tests" / "support"))
+import dds_scope  # noqa: E402
 
 STUDY_TEXT = (
     'name: "frame"\n'
@@ -164,7 +167,8 @@ def test_identify_reads_a_record_without_force_for_the_actuator_alone(tmp_path):
 
 
 def test_read_record_gives_the_exported_columns(config, tmp_path):
-    cli("launch", config, "--case", "lag_shift_14ms", "--domain", DOMAIN, "--no-plots", "--out", tmp_path)
+    cli("launch", config, "--case", "lag_shift_14ms", "--domain", dds_scope.scope_dds_to_this_test(),
+        "--no-plots", "--out", tmp_path)
     record = tmp_path / "lag_shift_14ms.rthsrec"
     got = rths.read_record(record)
     cli("export", record, "--csv", tmp_path / "lag_shift_14ms.csv")

@@ -1,10 +1,12 @@
 """rths.sdof and rths.Study built in code against the command line: the same study gives the same
 numbers and the same verdict however it is entered. Run from ctest (python_study_builder) with
-PYTHONPATH=build/python, RTHS_EXECUTABLE and RTHS_SOURCE_DIR set. DDS domain 228."""
+PYTHONPATH=build/python, RTHS_EXECUTABLE and RTHS_SOURCE_DIR set. Its launch on the shared DDS
+domain, on topics of its own (tests/support/dds_scope.py)."""
 import json
 import os
 import re
 import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -16,7 +18,8 @@ import rths
 RTHS = os.environ["RTHS_EXECUTABLE"]
 SOURCE = Path(os.environ["RTHS_SOURCE_DIR"])
 MOTION = str(SOURCE / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2")
-DOMAIN = 228
+sys.path.insert(0, str(SOURCE / "tests" / "support"))
+import dds_scope  # noqa: E402
 
 
 def cli_json(*args, expect=0):
@@ -82,7 +85,8 @@ def test_a_study_built_in_code_runs_distributed_and_equals_its_in_process_run(tm
     study = frame("frame_distributed")
     study.deployment("nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR }")
     in_process = study.run()
-    summary = study.launch(tmp_path / "launch", domain=DOMAIN, cases=["lag_shift_14ms"], timeout=240)
+    summary = study.launch(tmp_path / "launch", domain=dds_scope.scope_dds_to_this_test(),
+                           cases=["lag_shift_14ms"], timeout=240)
     assert summary["exit_code"] == 0
     launched = {c["name"]: c for c in summary["cases"]}["lag_shift_14ms"]
     wanted = {c["name"]: c for c in in_process["summary"]["cases"]}["lag_shift_14ms"]

@@ -9,7 +9,8 @@ analysed, an adaptive one stated as not analysable with the uncompensated margin
 
 A 4 s motion (a 0.5 s pulse at the frame's period, then free vibration) keeps every run short.
 Run from ctest (python_verdicts) with PYTHONPATH=build/python, RTHS_EXECUTABLE and
-RTHS_SOURCE_DIR set. DDS domains 182 (launch) and 183 (sites).
+RTHS_SOURCE_DIR set. The launch on the shared DDS domain, on topics of its own
+(tests/support/dds_scope.py); `sites` on DDS domain 183 (docs/development.md).
 """
 import csv
 import json
@@ -17,6 +18,7 @@ import math
 import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -25,7 +27,9 @@ import rths
 
 RTHS = os.environ["RTHS_EXECUTABLE"]
 BIN_DIR = str(Path(RTHS).resolve().parent.parent)
-LAUNCH_DOMAIN, SITES_DOMAIN = 182, 183
+SITES_DOMAIN = 183
+sys.path.insert(0, str(Path(os.environ["RTHS_SOURCE_DIR"]) / "tests" / "support"))
+import dds_scope  # noqa: E402
 PERIOD, ZETA, DT = 0.5, 0.05, 0.001
 # (name, experimental fraction, shift lag in s, diverges): the frame's critical delay is 7.97 ms
 # at alpha = 1 and 24.2 ms at alpha = 1/3.
@@ -105,8 +109,8 @@ def test_one_divergence_verdict_and_exit_code_everywhere(name, fraction, lag, di
 
     study = built(motion, fraction, lag).deployment(
         "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR }")
-    launched = study.launch(tmp_path / "launch", domain=LAUNCH_DOMAIN, cases=["lagged"],
-                            timeout=240)
+    launched = study.launch(tmp_path / "launch", domain=dds_scope.scope_dds_to_this_test(),
+                            cases=["lagged"], timeout=240)
     case = {c["name"]: c for c in launched["cases"]}["lagged"]
     verdicts["launch (lockstep, via Python)"] = (case["diverged"], launched["exit_code"])
 
