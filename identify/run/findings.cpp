@@ -6,8 +6,10 @@
 #include <sstream>
 
 #include "identify/model/study_config.h"
+#include "identify/residual/delay_growth.h"
 #include "identify/run/moving_parameter.h"
 #include "identify/run/sensors.h"
+#include "identify/run/unexplained.h"
 
 namespace rths::identify {
 namespace {
@@ -202,6 +204,31 @@ nlohmann::json moving_json(const Finding& f) {
           {"unit", f.moving_unit}};
 }
 
+// A load cell whose lag grows over the run by at least its own mean (delay_growth.h on what the
+// force channel's model, holding that mean, leaves): the channel's time base drifts against the
+// loop's (a clock of its own), so its `delay` finding is named time_varying_delay, with the lag at
+// the start and at the end of the run; the re-run holds the mean lag as before.
+void name_time_base_drift(const ActuatorPath& path, std::vector<Finding>& findings) {
+  const std::string part = part_of("delay", Channel::kForce, path.actuator);
+  for (Finding& f : findings) {
+    if (f.part != part || f.effect != "delay" || f.parameters.empty()) continue;
+    const double mean = f.parameters.front().value;  // s
+    const ChannelSignals& s = identified_signals(path.id, Channel::kForce);
+    const std::vector<double> p =
+        prediction_without(path, Channel::kForce, not_named_on(path, Channel::kForce));
+    const auto g = delay_growth(s.time, minus(s.target, p), p, s.dt);
+    const double duration = s.time.back() - s.time.front();
+    if (!g || std::abs(g->growth) * duration < std::abs(mean)) continue;
+    const double start = mean + g->mean_miss - 0.5 * g->growth * duration;
+    const double end = start + g->growth * duration;
+    f.effect = "time_varying_delay";
+    f.magnitude = "lag " + number(start * 1e3) + " ms at the start -> " + number(end * 1e3) +
+                  " ms at the end (" + number(g->growth * 1e6) +
+                  " ppm: the channel's time base drifts against the loop's; a constant " +
+                  number(mean * 1e3) + " ms fitted, held in the re-run)";
+  }
+}
+
 }  // namespace
 
 void estimate_effects(ActuatorPath& path) {
@@ -232,10 +259,41 @@ std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
   add_link_findings(links, clock, out);
   for (const auto& path : actuators) add_path_findings(path, out);
   add_response(residual, out);
+  for (const auto& path : actuators) name_time_base_drift(path, out);
   std::vector<Finding> platform;
   add_platform_finding(residual, platform);
   out.insert(out.begin(), platform.begin(), platform.end());
   return out;
+}
+
+void describe_direction_delays(const std::vector<ActuatorPath>& actuators,
+                               std::vector<Unexplained>& unexplained,
+                               std::vector<Finding>& findings) {
+  for (const ActuatorPath& path : actuators) {
+    const double change = path.fitted_delay - path.declared_delay;  // s
+    const std::string part = part_of("delay change", Channel::kMeasured, path.actuator);
+    const auto finding = std::find_if(findings.begin(), findings.end(), [&](const Finding& f) {
+      return f.part == part && f.effect == "delay change";
+    });
+    if (finding == findings.end()) continue;
+    for (Unexplained& u : unexplained) {
+      const auto& direction = u.description.direction;
+      if (u.actuator != path.actuator || u.channel != Channel::kMeasured || !direction ||
+          !direction->of_rate ||
+          std::abs(direction->lead_difference) < kSplitDelayShare * std::abs(change))
+        continue;
+      // A lead larger rising is a delay shorter rising.
+      const double rising = path.fitted_delay - 0.5 * direction->lead_difference;
+      const double falling = path.fitted_delay + 0.5 * direction->lead_difference;
+      u.notes.push_back("a delay that differs by the direction of motion: about " +
+                        number(rising * 1e3) + " ms rising, " + number(falling * 1e3) +
+                        " ms falling (declared " + number(path.declared_delay * 1e3) +
+                        " ms; the re-run holds their mean " + number(path.fitted_delay * 1e3) +
+                        " ms), not one delay that changed");
+      findings.erase(finding);
+      break;
+    }
+  }
 }
 
 std::string findings_text(const std::vector<Finding>& findings, const RunResidual* residual) {

@@ -39,6 +39,8 @@
 
 namespace rths::identify {
 
+struct Unexplained;
+
 struct Finding {
   std::string part, effect;
   std::vector<ParameterEstimate> parameters;  // empty where `magnitude` says it in words
@@ -60,6 +62,17 @@ struct Finding {
 void estimate_effects(ActuatorPath& path);
 
 // @pre estimate_effects ran on every actuator path.
+// A delay longer one way of motion than the other: where a path's "delay change" finding has,
+// on its measured channel's described residual (unexplained.h), a lead that differs by the
+// direction of motion (of_rate) by at least kSplitDelayShare of the change, the change is the
+// mean of two delays, not one delay that changed: the finding leaves the named list and the
+// description says the delay rising and falling (the fitted mean -+ half the lead difference)
+// beside the declared one. The re-run keeps holding the fitted mean.
+void describe_direction_delays(const std::vector<ActuatorPath>& actuators,
+                               std::vector<Unexplained>& unexplained,
+                               std::vector<Finding>& findings);
+inline constexpr double kSplitDelayShare = 0.5;
+
 std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
                                       const std::vector<ActuatorPath>& actuators,
                                       const RunResidual* residual, const std::string& clock);

@@ -5,6 +5,7 @@
 
 #include "core/number_text.h"
 #include "identify/run/sensors.h"
+#include "identify/run/unexplained.h"
 
 namespace rths::identify {
 namespace {
@@ -44,6 +45,31 @@ double largest(const std::vector<double>& x) {
   double out = 0.0;
   for (double v : x) out = std::max(out, std::abs(v));
   return out;
+}
+
+// The energy a force does along the displacement over the record, sum F_j (x_j+1 - x_j-1) / 2
+// (J for N and m): the area its loops enclose.
+double loop_energy(const std::vector<double>& force, const std::vector<double>& x) {
+  double out = 0.0;
+  for (std::size_t j = 1; j + 1 < x.size() && j < force.size(); ++j)
+    out += force[j] * 0.5 * (x[j + 1] - x[j - 1]);
+  return out;
+}
+
+// "implausible: ..." where the force channel's elasto-plastic yield dissipates energy the record
+// does not (plausibility.h); nullopt otherwise.
+std::optional<std::string> no_yield_plateau(const ActuatorPath& path) {
+  const ChannelSignals& s = identified_signals(path.id, Channel::kForce);
+  const std::vector<double>& x = s.model_input.empty() ? s.input : s.model_input;
+  const std::vector<double> with = prediction_without(path, Channel::kForce, {});
+  const std::vector<double> without = prediction_without(path, Channel::kForce, {"elastoplastic"});
+  const double rest = loop_energy(without, x);
+  const double yield = loop_energy(with, x) - rest, measured = loop_energy(s.target, x) - rest;
+  if (!(yield > 0.0) || measured >= kMinYieldDissipation * yield) return std::nullopt;
+  return "implausible: its yield would dissipate " + core::format_number(yield) +
+         " J over the record, the force read dissipates " + core::format_number(measured) +
+         " J beyond the rest of the model: no yield plateau, the loops close (a stiffness that "
+         "changed is no yield)";
 }
 
 }  // namespace
@@ -88,7 +114,9 @@ void judge_plausible(ActuatorPath& path) {
       }
       const EffectEstimate* estimate = path.estimate(channel, effect);
       if (!estimate) return false;
-      const auto reason = implausible(effect, estimate->parameters, reach);
+      auto reason = implausible(effect, estimate->parameters, reach);
+      if (!reason && effect == Effect::kElastoPlastic && channel == Channel::kForce)
+        reason = no_yield_plateau(path);
       if (!reason) return false;
       path.rejected.push_back({channel, part_of(name, channel, path.actuator), name, 0.0, *reason});
       return true;

@@ -14,6 +14,14 @@
 //                      elasto-plastic yield_force / plastic_stiffness (m), at least
 //                      kYieldBeyondReach x the largest |displacement|: the specimen was elastic
 //                      throughout, so no window holds evidence of the yield the fit put there.
+//                      On the force channel, an elasto-plastic yield whose loops the record
+//                      does not close: what the force read dissipates beyond the rest of the
+//                      model, sum F dx over the record (sensors' force and the model's input
+//                      displacement), below kMinYieldDissipation x what the model's yield term
+//                      dissipates along the same path. A yield plateau dissipates its loop's area
+//                      every cycle; a specimen that cracked or softened stays elastic on either
+//                      side of the change and encloses none (its drop is a step change, named by
+//                      the stiffness).
 // Every other effect, and one with no parameters (a changed value: "gain error", ...), passes.
 
 #include <optional>
@@ -25,8 +33,9 @@
 
 namespace rths::identify {
 
-inline constexpr double kPoorlyDetermined = 1.0;  // standard error / |value|
-inline constexpr double kYieldBeyondReach = 1.0;  // x the largest |displacement|
+inline constexpr double kPoorlyDetermined = 1.0;     // standard error / |value|
+inline constexpr double kYieldBeyondReach = 1.0;     // x the largest |displacement|
+inline constexpr double kMinYieldDissipation = 0.5;  // x the yield term's own
 
 // "poorly determined: ..." or "implausible: ..." with the reason; nullopt when it fits well.
 std::optional<std::string> implausible(Effect effect,

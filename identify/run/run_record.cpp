@@ -588,6 +588,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   }
   out.findings = collect_findings(out.links, out.actuators, out.residual ? &*out.residual : nullptr,
                                   out.clock);
+  describe_direction_delays(out.actuators, out.unexplained, out.findings);
   return out;
 }
 

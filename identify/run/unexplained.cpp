@@ -264,6 +264,7 @@ std::vector<Unexplained> describe_unexplained(const ActuatorPath& path) {
 
 std::string Unexplained::text() const {
   std::string out = "unexplained on " + part + " (" + channel_word + "): " + signature_text(*this);
+  for (const std::string& note : notes) out += "; " + note;
   // Without a re-run (the actuator channel not identified) there is no response error to share.
   return out + (share ? std::string("; share ") + fixed_text(100.0 * *share, 0) + " %"
                       : "; not re-run, no share");
@@ -275,6 +276,7 @@ nlohmann::json Unexplained::json() const {
   return {
       {"part", part},
       {"channel", channel_word},
+      {"notes", notes},
       {"share_pct", share ? nlohmann::json(pct(*share)) : nlohmann::json()},
       {"kinds", kinds_of(*this)},
       {"periodic",

@@ -65,7 +65,10 @@ struct Unexplained {
   ResidualDescription description;
   std::vector<double> time;     // s, the channel's samples (what `described` is at)
   std::optional<double> share;  // of the re-run's remaining error; absent when not re-run
-  std::string text() const;     // "unexplained on load cell 1 (force): ...; share 83 %"
+  // What the description says of a fitted value (findings.h describe_direction_delays: the
+  // delay a direction of motion splits), after its signature; empty: nothing.
+  std::vector<std::string> notes;
+  std::string text() const;  // "unexplained on load cell 1 (force): ...; share 83 %"
   // {part, channel, share_pct (null when not re-run), kinds, periodic {frequency_hz, amplitude,
   // unit, explained_pct}, amplitude {explained_pct, ratio_change_pct, at_input, of_rate,
   // lead_change_s, unit}, direction {explained_pct, asymmetry (asymmetry_pct, %), of_rate,
@@ -73,7 +76,7 @@ struct Unexplained {
   // {explained_pct, change_pct, shape, start_pct, end_pct (measured / model - 1 at the record's
   // start and end), at_s (a step's time, an exponential's time constant; null for a line)}, each
   // null when its test found nothing, explained_pct,
-  // residual_rms, unit, text}: the figures text() prints, unrounded.
+  // residual_rms, unit, notes, text}: the figures text() prints, unrounded.
   nlohmann::json json() const;
 };
 

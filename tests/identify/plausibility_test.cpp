@@ -3,7 +3,9 @@
 // determines too, a yield beyond the largest displacement "implausible"; each with its reason.
 // On a record of an independent closed-loop simulation with a hysteretic specimen
 // (independent_record.h), the Bouc–Wen the fit names passes, and the same path with its yield
-// put beyond the record's reach is rejected with the reason and left out of the rig's models.
+// put beyond the record's reach is rejected with the reason and left out of the rig's models; a
+// specimen that loses a third of its stiffness at one instant (elastic on either side: its loops
+// close) is never left named elasto-plastic.
 #include "identify/run/plausibility.h"
 
 #include <gtest/gtest.h>
@@ -94,6 +96,23 @@ TEST(PlausibilityRecords, AFittedYieldPassesAndOneBeyondReachIsRejected) {
   const RigModels models = rig_models(path);
   if (models.specimen)
     EXPECT_FALSE(models.specimen->has(Effect::kBoucWen)) << "the re-run still holds it";
+}
+
+// A crack: 35 % of the stiffness lost at 9 s. A yield term the fit may take for the drop would
+// dissipate energy the record's loops do not: it is not named, and where the fit took it, it is
+// rejected as implausible with the energies.
+TEST(PlausibilityRecords, AStiffnessDropAtAnInstantIsNoYield) {
+  test::RigTruth rig;
+  rig.capacity_drop = 0.35;
+  rig.drop_time = 9.0;
+  const RunIdentification run =
+      identify_run_record(test::independent_record("plausible_crack", rig, 15.0), {});
+  const ActuatorPath& path = run.actuators.at(0);
+  const auto& named = path.specimen_undeclared;
+  EXPECT_EQ(std::find(named.begin(), named.end(), "elastoplastic"), named.end());
+  for (const auto& r : path.rejected)
+    if (r.effect == "elastoplastic")
+      EXPECT_EQ(r.reason.rfind("implausible: its yield would dissipate", 0), 0u) << r.reason;
 }
 
 }  // namespace
