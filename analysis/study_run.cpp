@@ -243,42 +243,57 @@ bool same_parts(const std::vector<core::DelayedPart>& a, const std::vector<core:
   return true;
 }
 
-// Each setup's critical-delay check at its lag, answer_lag + extra_lag (s): setups whose loops
-// are the same share one check (core::check_setup_critical_delay), made at the largest of their
-// lags, whose discrete search reaches every smaller lag's; each copy then holds its own lag.
-std::vector<std::optional<core::CriticalDelayCheck>> shared_checks(
-    const core::PreparedStudy& prepared, const std::vector<core::HybridSetup>& setups,
-    double extra_lag) {
+// A case's loop as the critical-delay check sees it: its parts (no lags), its lag (s).
+struct CaseLoop {
+  std::vector<core::DelayedPart> parts;
+  double lag = 0.0;  // s
+};
+
+CaseLoop case_loop(const core::HybridSetup& setup, double extra_lag) {
+  return {core::setup_loop_parts(setup,
+                                 std::vector<double>(setup.partition.actuator_storeys.size(), 0.0)),
+          core::answer_lag(setup) + extra_lag};
+}
+
+// Cases whose loops are the same share one critical-delay check, made at the largest of their
+// lags (its discrete search reaches every smaller lag's), each case's copy at its own lag. Asked
+// in case order (for_case: case i's, on its setup), so a loop is checked on its first case's.
+class SharedChecks {
+ public:
+  explicit SharedChecks(const std::vector<CaseLoop>& cases) {
+    for (const CaseLoop& c : cases) {
+      auto same = std::find_if(loops_.begin(), loops_.end(),
+                               [&](const Loop& l) { return same_parts(l.parts, c.parts); });
+      if (same == loops_.end())
+        same = loops_.insert(loops_.end(), Loop{c.parts, c.lag, std::nullopt, false});
+      same->lag = std::max(same->lag, c.lag);
+      loop_of_.push_back(static_cast<std::size_t>(same - loops_.begin()));
+      lag_of_.push_back(c.lag);
+    }
+  }
+  std::optional<core::CriticalDelayCheck> for_case(const core::PreparedStudy& prepared,
+                                                   std::size_t i, const core::HybridSetup& setup) {
+    Loop& loop = loops_[loop_of_[i]];
+    if (!loop.checked) {
+      loop.check = core::check_setup_critical_delay(prepared, setup, loop.lag);
+      loop.checked = true;
+    }
+    std::optional<core::CriticalDelayCheck> check = loop.check;
+    if (check) check->lag = lag_of_[i];
+    return check;
+  }
+
+ private:
   struct Loop {
     std::vector<core::DelayedPart> parts;
-    std::size_t first = 0;  // the setup it is checked on
-    double lag = 0.0;       // s, the largest of its setups'
+    double lag = 0.0;  // s, the largest of its cases'
+    std::optional<core::CriticalDelayCheck> check;
+    bool checked = false;
   };
-  std::vector<Loop> loops;
-  std::vector<std::size_t> loop_of;
-  for (std::size_t i = 0; i < setups.size(); ++i) {
-    const double lag = core::answer_lag(setups[i]) + extra_lag;
-    std::vector<core::DelayedPart> parts = core::setup_loop_parts(
-        setups[i], std::vector<double>(setups[i].partition.actuator_storeys.size(), 0.0));
-    auto same = std::find_if(loops.begin(), loops.end(),
-                             [&](const Loop& l) { return same_parts(l.parts, parts); });
-    if (same == loops.end()) {
-      loops.push_back({std::move(parts), i, lag});
-      same = loops.end() - 1;
-    }
-    same->lag = std::max(same->lag, lag);
-    loop_of.push_back(static_cast<std::size_t>(same - loops.begin()));
-  }
-  std::vector<std::optional<core::CriticalDelayCheck>> checked, out;
-  for (const Loop& l : loops)
-    checked.push_back(core::check_setup_critical_delay(prepared, setups[l.first], l.lag));
-  for (std::size_t i = 0; i < setups.size(); ++i) {
-    std::optional<core::CriticalDelayCheck> check = checked[loop_of[i]];
-    if (check) check->lag = core::answer_lag(setups[i]) + extra_lag;
-    out.push_back(std::move(check));
-  }
-  return out;
-}
+  std::vector<Loop> loops_;
+  std::vector<std::size_t> loop_of_;
+  std::vector<double> lag_of_;  // s
+};
 
 // What is known of a case before it runs: its delay, and its critical-delay check (announced
 // through options.warn when past; for a compensated case, its compensated loop's verdict).
@@ -496,15 +511,14 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
   const core::SimulationOptions kept =
       core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
-  std::vector<core::HybridSetup> setups;  // reserved: a setup is copied, not moved, on growth
-  setups.reserve(static_cast<std::size_t>(with_cases.cases_size()));
+  // Each case's setup (a copy of the model) is built and released in turn: its loop, its run.
+  std::vector<CaseLoop> loops;
   std::size_t simulations = 1;  // the lag-free run and each case that adds to it
   for (const config::Case& study_case : with_cases.cases()) {
-    setups.push_back(core::setup_for_case(prepared, study_case));
+    loops.push_back(case_loop(core::setup_for_case(prepared, study_case), options.extra_lag));
     simulations += adds_nothing(study_case) ? 0 : 1;
   }
-  const std::vector<std::optional<core::CriticalDelayCheck>> checks =
-      shared_checks(prepared, setups, options.extra_lag);
+  SharedChecks checks(loops);
   RunProgress progress(options.progress, simulations, prepared.motion.acceleration.size());
   progress.start(0, "the lag-free run");
   const core::SimulationResult lag_free =
@@ -516,11 +530,11 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   for (int i = 0; i < with_cases.cases_size(); ++i) {
     const config::Case& study_case = with_cases.cases(i);
     if (&study_case == &reference) outcome.reference_index = static_cast<std::size_t>(i);
-    const core::HybridSetup& setup = setups[static_cast<std::size_t>(i)];
+    const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
     CaseOutcome result =
         describe_case(prepared, setup, study_case,
                       study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(),
-                      options, checks[static_cast<std::size_t>(i)]);
+                      options, checks.for_case(prepared, static_cast<std::size_t>(i), setup));
     // A case that adds nothing to the base is the lag-free run itself: its steps are not
     // integrated twice.
     if (!adds_nothing(study_case)) progress.start(run++, "case '" + result.name + "'");
@@ -554,8 +568,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   lag_free.response = floor_history(lag_free.simulation, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free.response);
   std::vector<const config::Case*> study_cases;
-  std::vector<core::HybridSetup> setups;
-  setups.reserve(recorded.size());
+  std::vector<CaseLoop> loops;
   for (const RecordedCase& r : recorded) {
     const config::Case* study_case = nullptr;
     for (const config::Case& c : prepared.config.cases())
@@ -563,14 +576,14 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
     if (study_case == nullptr)
       throw std::invalid_argument("case '" + r.name + "' is not among the study's cases");
     study_cases.push_back(study_case);
-    setups.push_back(core::setup_for_case(prepared, *study_case));
+    loops.push_back(case_loop(core::setup_for_case(prepared, *study_case), options.extra_lag));
   }
-  const std::vector<std::optional<core::CriticalDelayCheck>> checks =
-      shared_checks(prepared, setups, options.extra_lag);
+  SharedChecks checks(loops);
   for (std::size_t i = 0; i < recorded.size(); ++i) {
     RecordedCase& r = recorded[i];
-    CaseOutcome result =
-        describe_case(prepared, setups[i], *study_cases[i], r.name, options, checks[i]);
+    const core::HybridSetup setup = core::setup_for_case(prepared, *study_cases[i]);
+    CaseOutcome result = describe_case(prepared, setup, *study_cases[i], r.name, options,
+                                       checks.for_case(prepared, i, setup));
     result.simulation = std::move(r.simulation);
     result.status = r.status;
     if (result.status != "completed") result.status_detail = r.status_detail;
