@@ -9,8 +9,8 @@ analysed, an adaptive one stated as not analysable with the uncompensated margin
 
 A 4 s motion (a 0.5 s pulse at the frame's period, then free vibration) keeps every run short.
 Run from ctest (python_verdicts) with PYTHONPATH=build/python, RTHS_EXECUTABLE and
-RTHS_SOURCE_DIR set. The launch on the shared DDS domain, on topics of its own
-(tests/support/dds_scope.py); `sites` on DDS domain 183 (docs/development.md).
+RTHS_SOURCE_DIR set. `launch` and `sites` on the shared DDS domain, each test on topics of its
+own (tests/support/dds_scope.py).
 """
 import csv
 import json
@@ -27,7 +27,6 @@ import rths
 
 RTHS = os.environ["RTHS_EXECUTABLE"]
 BIN_DIR = str(Path(RTHS).resolve().parent.parent)
-SITES_DOMAIN = 183
 sys.path.insert(0, str(Path(os.environ["RTHS_SOURCE_DIR"]) / "tests" / "support"))
 import dds_scope  # noqa: E402
 PERIOD, ZETA, DT = 0.5, 0.05, 0.001
@@ -127,7 +126,8 @@ def test_sites_gives_the_same_verdict(name, fraction, lag, diverges, motion, tmp
                      'sites { name: "lab" node_ids: [1, 2] }\n'
                      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } "
                      "nodes { id: 2 kind: ACTUATOR_EMULATOR } start_timeout: 20 }\n")
-    done = subprocess.run([RTHS, "sites", sites, "--domain", str(SITES_DOMAIN), "--bin-dir",
+    domain = dds_scope.scope_dds_to_this_test()
+    done = subprocess.run([RTHS, "sites", sites, "--domain", str(domain), "--bin-dir",
                            BIN_DIR, "--out", tmp_path / "sites", "--no-plots"],
                           capture_output=True, text=True, timeout=240)
     if done.returncode == 3:
