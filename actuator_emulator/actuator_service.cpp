@@ -14,12 +14,12 @@ ActuatorService::ActuatorService(std::int32_t node_id, std::string expected_run_
     : NodeService(node_id, config::NodeSpec::ACTUATOR_EMULATOR, std::move(expected_run_id)) {}
 
 int ActuatorService::configure(const runtime::Assign& assign) {
-  const config::Case& study_case = core::find_case(assign.study(), assign.case_name());
+  const config::Case& study_case = study::find_case(assign.study(), assign.case_name());
   core::HybridSetup setup =
       runtime::setup_without_motion(assign.study(), assign.base_dir(), assign.dt(), study_case);
   const std::vector<int> hosted(assign.actuators().begin(), assign.actuators().end());
-  core::apply_compensation(setup, hosted, assign.node().compensation(),
-                           "deployment.nodes[id " + std::to_string(assign.node().id()) + "]");
+  study::apply_compensation(setup, hosted, assign.node().compensation(),
+                            "deployment.nodes[id " + std::to_string(assign.node().id()) + "]");
   actuators_.clear();
   for (int a : assign.actuators()) {
     if (a < 0 || a >= static_cast<int>(setup.delays.size()))

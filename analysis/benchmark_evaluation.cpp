@@ -85,7 +85,7 @@ namespace {
 void judge_published_key(const config::BenchmarkEvaluation& spec, const config::Study& study,
                          const std::filesystem::path& base_dir, const core::StructuralModel& whole,
                          BenchmarkEvaluation& out) {
-  out.run_motion_key = core::motion_key(core::load_motion(study.motion(), base_dir));
+  out.run_motion_key = study::motion_key(study::load_motion(study.motion(), base_dir));
   out.run_structure_key = structure_key(whole);
   const std::string keys = "this run's motion sha256 " + out.run_motion_key +
                            ", structure sha256 " + out.run_structure_key;
@@ -123,12 +123,12 @@ std::string structure_key(const core::StructuralModel& model) {
   return util::bytes_sha256(values.data(), values.size() * sizeof(double));
 }
 
-std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy& prepared,
+std::optional<BenchmarkEvaluation> evaluate_benchmark(const study::PreparedStudy& prepared,
                                                       const StudyOutcome& outcome) {
   const config::Study& study = prepared.config;
   if (!study.has_benchmark()) return std::nullopt;
   const config::BenchmarkEvaluation& spec = study.benchmark();
-  const core::StructuralModel whole = core::make_structure(study.structure(), prepared.base_dir);
+  const core::StructuralModel whole = study::make_structure(study.structure(), prepared.base_dir);
   const int dof = spec.experimental_dof() == 0 ? 0 : spec.experimental_dof() - 1;
   if (dof < 0 || dof >= whole.dofs())
     throw std::invalid_argument(
@@ -151,7 +151,7 @@ std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy&
   // recorded one, by its name).
   const std::string reference_name =
       outcome.lag_free_reference
-          ? (study.cases_size() > 0 ? core::reference_case(study).name() : std::string())
+          ? (study.cases_size() > 0 ? study::reference_case(study).name() : std::string())
           : outcome.cases.at(outcome.reference_index).name;
   for (const CaseOutcome& c : outcome.cases) {
     if (c.name == reference_name || c.simulation.command.cols() == 0) continue;

@@ -49,7 +49,7 @@ struct BenchmarkEvaluation {
   bool compared_with_published(const BenchmarkCaseCriteria& c) const;
 };
 
-// SHA-256 of a structure (n, M, K, iota): with core::motion_key (study/motion_key.h), what
+// SHA-256 of a structure (n, M, K, iota): with study::motion_key (study/motion_key.h), what
 // published values are keyed by.
 std::string structure_key(const core::StructuralModel& model);
 
@@ -59,7 +59,7 @@ std::array<double, 9> against_published(const BenchmarkEvaluation& e,
 
 // Empty when the study has no `benchmark` section. Throws std::invalid_argument naming
 // benchmark.experimental_dof or benchmark.published when they do not fit the structure.
-std::optional<BenchmarkEvaluation> evaluate_benchmark(const core::PreparedStudy& prepared,
+std::optional<BenchmarkEvaluation> evaluate_benchmark(const study::PreparedStudy& prepared,
                                                       const StudyOutcome& outcome);
 
 // Aligned columns, one unit each (J1 (ms), J2-J9 (%)): the published row, each case; then, where

@@ -44,7 +44,7 @@ std::string model_name(JointLagStudy::ActuatorModel model) {
 }
 
 // The continuous boundary for an SDOF study; empty (with the reason) otherwise.
-void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepared,
+void fill_boundary(const JointLagStudy& config, const study::PreparedStudy& prepared,
                    JointLagResult& result) {
   const core::StructuralModel& model = prepared.base.model;
   if (model.mass.rows() != 1) {
@@ -66,9 +66,9 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
     const double a = largest * i / (kPoints - 1);
     google::protobuf::RepeatedPtrField<config::DelayStage> actuator;
     *actuator.Add() = joint_lag_actuator_stage(config.actuator_model(), a);
-    const core::CompensatedStability s =
-        core::compensated_stability(prepared.base.integrator, period, zeta, alpha, prepared.base.dt,
-                                    actuator, nullptr, 2.0 * largest_round_trip + 0.05);
+    const core::CompensatedStability s = study::compensated_stability(
+        prepared.base.integrator, period, zeta, alpha, prepared.base.dt, actuator, nullptr,
+        2.0 * largest_round_trip + 0.05);
     result.boundary.push_back({a, s.stable ? s.continuous_margin : std::optional<double>(0.0)});
   }
 }
@@ -78,17 +78,17 @@ void fill_boundary(const JointLagStudy& config, const core::PreparedStudy& prepa
 // coupled loop of every link with its predictor's model frozen as it starts, any structure), at
 // the plain boundary's actuator lags, or at kPoints from 0 to the largest where the structure has
 // none (several storeys); nothing without a predictor.
-void fill_compensated_boundary(const JointLagStudy& config, const core::PreparedStudy& prepared,
+void fill_compensated_boundary(const JointLagStudy& config, const study::PreparedStudy& prepared,
                                JointLagResult& result) {
   if (!config.has_force_predictor()) return;
   config::Case predicted;
   predicted.set_name("predicted");
   *predicted.mutable_force_predictor() = config.force_predictor();
-  const core::HybridSetup setup = core::setup_for_case(prepared, predicted);
+  const core::HybridSetup setup = study::setup_for_case(prepared, predicted);
   const core::CoupledLoopStability loop = core::setup_loop_stability(
       setup, std::vector<double>(setup.partition.actuator_storeys.size(), 0.0));
   const config::ForcePredictor& p = config.force_predictor();
-  const double factor = core::predictor_stiffness_factor(p);
+  const double factor = study::predictor_stiffness_factor(p);
   std::ostringstream note;
   note.precision(3);
   note << "with the predictor, its model's stiffness " << std::showpos << 100.0 * (factor - 1.0)
@@ -117,7 +117,7 @@ void fill_compensated_boundary(const JointLagStudy& config, const core::Prepared
 }
 
 std::optional<double> critical_round_trip_at(const JointLagStudy& config,
-                                             const core::PreparedStudy& prepared, double a) {
+                                             const study::PreparedStudy& prepared, double a) {
   JointLagResult one;
   JointLagStudy single = config;
   single.clear_actuator_lags();
@@ -202,7 +202,7 @@ void fill_joint_lag_errors(JointLagPoint& point, const std::vector<double>& refe
 
 JointLagStudy load_joint_lag(const std::filesystem::path& path) {
   JointLagStudy config;
-  core::parse_text_format(core::read_text_file(path, "joint lag config"), path.string(), config);
+  study::parse_text_format(study::read_text_file(path, "joint lag config"), path.string(), config);
   const auto source = path.string();
   if (config.study().empty()) throw std::invalid_argument(source + ": study is empty");
   check_lags(config.network_round_trips(), "network_round_trips", source, true);
@@ -255,7 +255,7 @@ std::string why_not_across_sites(const JointLagStudy& config, const JointLagOpti
 // actuator lag's critical round trip (s) and the J1 search window (s).
 struct GridInputs {
   const JointLagStudy& config;
-  const core::PreparedStudy& prepared;
+  const study::PreparedStudy& prepared;
   const std::vector<double>& reference_response;
   const std::map<double, std::optional<double>>& critical_at;
   double window = 0.0;
@@ -264,14 +264,14 @@ struct GridInputs {
 // One in-process point: the study run with a network shift of `round_trip` (s) then the
 // actuator model at `actuator` (s), judged against the reference.
 JointLagPoint run_grid_point(const GridInputs& grid, double round_trip, double actuator) {
-  const core::PreparedStudy& prepared = grid.prepared;
+  const study::PreparedStudy& prepared = grid.prepared;
   config::Case joint;
   joint.set_name("joint");
   joint.add_delay()->mutable_shift()->set_delay(round_trip);
   *joint.add_delay() = joint_lag_actuator_stage(grid.config.actuator_model(), actuator);
   if (grid.config.has_force_predictor())
     *joint.mutable_force_predictor() = grid.config.force_predictor();
-  const auto run = core::simulate(core::setup_for_case(prepared, joint), prepared.motion);
+  const auto run = core::simulate(study::setup_for_case(prepared, joint), prepared.motion);
   JointLagPoint point;
   point.network_round_trip = round_trip;
   point.actuator_lag = actuator;
@@ -294,7 +294,7 @@ JointLagPoint run_grid_point(const GridInputs& grid, double round_trip, double a
 JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem::path& base_dir,
                              const JointLagOptions& options) {
   JointLagResult result;
-  const auto study = core::load_study(base_dir / config.study());
+  const auto study = study::load_study(base_dir / config.study());
   result.study_name = study.name();
   result.actuator_model = model_name(config.actuator_model());
   result.output_directory = options.output_directory ? *options.output_directory
@@ -304,9 +304,9 @@ JointLagResult run_joint_lag(const JointLagStudy& config, const std::filesystem:
   std::filesystem::create_directories(result.output_directory);
 
   const auto study_dir = (base_dir / config.study()).parent_path();
-  const auto prepared = core::prepare_study(study, study_dir);
-  const auto reference =
-      core::simulate(core::setup_for_case(prepared, core::reference_case(study)), prepared.motion);
+  const auto prepared = study::prepare_study(study, study_dir);
+  const auto reference = core::simulate(
+      study::setup_for_case(prepared, study::reference_case(study)), prepared.motion);
   const auto u_ref = floor_history(reference, 0);
   const double window = joint_lag_search_window(config);
   fill_boundary(config, prepared, result);

@@ -93,7 +93,7 @@ CompensatedVerdict judge_predicted_loop(const core::HybridSetup& setup, const co
                                         double extra_lag) {
   CompensatedVerdict verdict;
   const config::ForcePredictor& block = c.force_predictor();
-  const double factor = core::predictor_stiffness_factor(block);
+  const double factor = study::predictor_stiffness_factor(block);
   std::ostringstream text;
   text << std::setprecision(3) << "force predictor (model stiffness " << std::showpos
        << 100.0 * (factor - 1.0) << std::noshowpos << " %"

@@ -2,7 +2,7 @@
 // Figures of a study of many DOFs and many actuators, drawn beside the study's others
 // (write_study_plots, analysis/study_plots.cpp) through util/plot.h. Floors are the DOFs the
 // reference case kept (core::SimulationResult::dofs: every DOF of a model of at most
-// core::kAllDofsLimit, else what the recorders asked for), numbered 1.. from the ground, ascending.
+// study::kAllDofsLimit, else what the recorders asked for), numbered 1.. from the ground, ascending.
 //
 //   response_envelope.png  (models of at least kEnvelopeFloors floors) two panels side by side,
 //                          height (floor number) on y: the peak |u_i| (mm) of each recorded floor,

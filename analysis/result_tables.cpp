@@ -37,7 +37,7 @@ void set_study_verdict(results::Table& t, const StudyOutcome& outcome) {
 
 namespace {
 
-using Channel = core::RecordedChannel;
+using Channel = study::RecordedChannel;
 
 // The channels of a table: the recorders', or (an outcome without them) every DOF the case kept
 // and the actuators.
@@ -169,7 +169,7 @@ results::Table study_table(const StudyOutcome& outcome) {
   return table;
 }
 
-TableShape study_table_shape(const core::RecorderPlan& plan, std::size_t steps, std::size_t cases,
+TableShape study_table_shape(const study::RecorderPlan& plan, std::size_t steps, std::size_t cases,
                              std::size_t actuators) {
   const std::size_t per_case = plan.columns_per_case(actuators);
   std::size_t rows = 0;

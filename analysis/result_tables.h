@@ -44,7 +44,7 @@ results::Table study_table(const StudyOutcome& outcome);
 struct TableShape {
   std::size_t rows = 0, columns = 0;
 };
-TableShape study_table_shape(const core::RecorderPlan& plan, std::size_t steps, std::size_t cases,
+TableShape study_table_shape(const study::RecorderPlan& plan, std::size_t steps, std::size_t cases,
                              std::size_t actuators);
 // links[i]: the per-link series of outcome.cases[i] (runtime::measure_run); sizes must agree.
 results::Table distributed_study_table(

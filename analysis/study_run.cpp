@@ -123,7 +123,7 @@ ModalLoops analyse_modal_loops(const core::HybridSetup& setup, const config::Cas
                                const std::vector<ModalSdof>& sdofs, double max_extra_delay) {
   ModalLoops m;
   for (const ModalSdof& sdof : sdofs) {
-    const core::CompensatedStability loop = core::compensated_stability(
+    const core::CompensatedStability loop = study::compensated_stability(
         setup.integrator, sdof.period, sdof.zeta, sdof.alpha, setup.dt, study_case.delay(),
         &study_case.compensation(0), max_extra_delay);
     if (!loop.frozen_coefficients.empty()) {
@@ -252,7 +252,7 @@ struct CaseLoop {
 CaseLoop case_loop(const core::HybridSetup& setup, double extra_lag) {
   return {core::setup_loop_parts(setup,
                                  std::vector<double>(setup.partition.actuator_storeys.size(), 0.0)),
-          core::answer_lag(setup) + extra_lag};
+          study::answer_lag(setup) + extra_lag};
 }
 
 // Cases whose loops are the same share one critical-delay check, made at the largest of their
@@ -271,11 +271,11 @@ class SharedChecks {
       lag_of_.push_back(c.lag);
     }
   }
-  std::optional<core::CriticalDelayCheck> for_case(const core::PreparedStudy& prepared,
+  std::optional<core::CriticalDelayCheck> for_case(const study::PreparedStudy& prepared,
                                                    std::size_t i, const core::HybridSetup& setup) {
     Loop& loop = loops_[loop_of_[i]];
     if (!loop.checked) {
-      loop.check = core::check_setup_critical_delay(prepared, setup, loop.lag);
+      loop.check = study::check_setup_critical_delay(prepared, setup, loop.lag);
       loop.checked = true;
     }
     std::optional<core::CriticalDelayCheck> check = loop.check;
@@ -298,25 +298,25 @@ class SharedChecks {
 // What is known of a case before it runs: its delay, and its critical-delay check (announced
 // through options.warn when past; for a compensated case, its compensated loop's verdict).
 // `check`: the case's critical-delay check at its lag (shared_checks).
-CaseOutcome describe_case(const core::PreparedStudy& prepared, const core::HybridSetup& setup,
+CaseOutcome describe_case(const study::PreparedStudy& prepared, const core::HybridSetup& setup,
                           const config::Case& study_case, const std::string& name,
                           const RunStudyOptions& options,
                           std::optional<core::CriticalDelayCheck> check) {
   CaseOutcome result;
   result.name = name;
   result.expect_unstable = study_case.expect_unstable();
-  result.nominal_delay = core::answer_lag(setup);
-  result.delay_description = core::case_delay_text(setup);
+  result.nominal_delay = study::answer_lag(setup);
+  result.delay_description = study::case_delay_text(setup);
   result.stability = std::move(check);
   if (study_case.compensation_size() > 0) {
     // Beside the compensated loop's verdict: the same case without its compensators.
     config::Case bare = study_case;
     bare.clear_compensation();
-    const core::HybridSetup bare_setup = core::setup_for_case(prepared, bare);
+    const core::HybridSetup bare_setup = study::setup_for_case(prepared, bare);
     result.compensated = judge_compensated_loop(
         setup, prepared.base.partition.experimental_stiffness(), study_case,
-        core::check_setup_critical_delay(prepared, bare_setup,
-                                         core::answer_lag(bare_setup) + options.extra_lag));
+        study::check_setup_critical_delay(prepared, bare_setup,
+                                          study::answer_lag(bare_setup) + options.extra_lag));
   }
   for (std::size_t a = 0; a < setup.predictors.size(); ++a)
     if (setup.predictors[a]) result.predicted_actuators.push_back(static_cast<int>(a));
@@ -413,24 +413,25 @@ void judge_case(CaseOutcome& result, const std::vector<double>& lag_free_respons
 }  // namespace
 
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
-    const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag) {
-  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
-  return core::check_setup_critical_delay(prepared, setup, core::answer_lag(setup) + extra_lag);
+    const study::PreparedStudy& prepared, const config::Case& study_case, double extra_lag) {
+  const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
+  return study::check_setup_critical_delay(prepared, setup, study::answer_lag(setup) + extra_lag);
 }
 
-std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStudy& prepared,
+std::optional<CompensatedVerdict> predicted_loop_verdict(const study::PreparedStudy& prepared,
                                                          const config::Case& study_case,
                                                          double extra_lag) {
   if (!study_case.has_force_predictor()) return std::nullopt;
-  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
   return judge_predicted_loop(setup, study_case, extra_lag);
 }
 
-CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name) {
-  const config::Case& c = core::find_case(prepared.config, case_name);
-  const core::HybridSetup setup = core::setup_for_case(prepared, c);
-  return describe_case(prepared, setup, c, c.name(), {},
-                       core::check_setup_critical_delay(prepared, setup, core::answer_lag(setup)));
+CaseOutcome pre_run_verdict(const study::PreparedStudy& prepared, const std::string& case_name) {
+  const config::Case& c = study::find_case(prepared.config, case_name);
+  const core::HybridSetup setup = study::setup_for_case(prepared, c);
+  return describe_case(
+      prepared, setup, c, c.name(), {},
+      study::check_setup_critical_delay(prepared, setup, study::answer_lag(setup)));
 }
 
 bool CaseOutcome::judged_past() const {
@@ -450,7 +451,7 @@ namespace {
 
 // SHA-256 of the file the motion was read from: the one a record carries with its embedded
 // motion, else the file's (relative to the study's folder); "" for a motion from no file.
-std::string motion_file_sha256(const core::PreparedStudy& prepared) {
+std::string motion_file_sha256(const study::PreparedStudy& prepared) {
   const config::GroundMotion& motion = prepared.config.motion();
   if (motion.has_embedded()) return motion.embedded().source_sha256();
   if (motion.path().empty()) return "";
@@ -461,18 +462,18 @@ std::string motion_file_sha256(const core::PreparedStudy& prepared) {
 
 // The units the record was read in (its file's, else the config's), one line on it as read, and
 // which motion it is (name and checksums).
-void read_motion_facts(const core::PreparedStudy& prepared, StudyOutcome& outcome) {
+void read_motion_facts(const study::PreparedStudy& prepared, StudyOutcome& outcome) {
   outcome.motion_units = prepared.motion.read_units.empty()
-                             ? core::motion_units_name(prepared.config.motion())
+                             ? study::motion_units_name(prepared.config.motion())
                              : prepared.motion.read_units;
   outcome.motion_description = prepared.motion.description;
   outcome.motion_name = prepared.motion.name;
-  outcome.motion_sha256 = core::motion_key(prepared.motion);
+  outcome.motion_sha256 = study::motion_key(prepared.motion);
   outcome.motion_file_sha256 = motion_file_sha256(prepared);
 }
 
 // An outcome of no case yet: the study's name, recorders, actuators, motion and response.
-StudyOutcome empty_outcome(const core::PreparedStudy& prepared) {
+StudyOutcome empty_outcome(const study::PreparedStudy& prepared) {
   StudyOutcome outcome;
   outcome.study_name = prepared.config.name();
   outcome.recorders = prepared.recorders;
@@ -498,24 +499,24 @@ void apply_stops(CaseOutcome& result, const config::SafetyLimits& limits) {
 
 }  // namespace
 
-StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options) {
+StudyOutcome run_study(const study::PreparedStudy& prepared, const RunStudyOptions& options) {
   const config::Study& study = prepared.config;
   if (options.warn)
     for (const std::string& warning : prepared.warnings) options.warn(warning);
   config::Study with_cases = study;
   if (with_cases.cases_size() == 0) with_cases.add_cases()->set_name("reference");
-  const config::Case& reference = core::reference_case(with_cases);
+  const config::Case& reference = study::reference_case(with_cases);
   const int floors = prepared.base.model.dofs();
 
   StudyOutcome outcome = empty_outcome(prepared);
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
   const core::SimulationOptions kept =
-      core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
+      study::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
   // Each case's setup (a copy of the model) is built and released in turn: its loop, its run.
   std::vector<CaseLoop> loops;
   std::size_t simulations = 1;  // the lag-free run and each case that adds to it
   for (const config::Case& study_case : with_cases.cases()) {
-    loops.push_back(case_loop(core::setup_for_case(prepared, study_case), options.extra_lag));
+    loops.push_back(case_loop(study::setup_for_case(prepared, study_case), options.extra_lag));
     simulations += adds_nothing(study_case) ? 0 : 1;
   }
   SharedChecks checks(loops);
@@ -530,7 +531,7 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   for (int i = 0; i < with_cases.cases_size(); ++i) {
     const config::Case& study_case = with_cases.cases(i);
     if (&study_case == &reference) outcome.reference_index = static_cast<std::size_t>(i);
-    const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+    const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
     CaseOutcome result =
         describe_case(prepared, setup, study_case,
                       study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(),
@@ -552,7 +553,7 @@ StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOption
   return outcome;
 }
 
-StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
+StudyOutcome judge_recorded_cases(const study::PreparedStudy& prepared,
                                   std::vector<RecordedCase> recorded,
                                   const RunStudyOptions& options) {
   if (recorded.empty()) throw std::invalid_argument("judge_recorded_cases: no cases");
@@ -564,7 +565,7 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
   // What the records keep: the recorders' DOFs (the coordinator's loop keeps the same).
   lag_free.simulation = core::simulate(
       prepared.base, prepared.motion,
-      core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
+      study::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
   lag_free.response = floor_history(lag_free.simulation, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free.response);
   std::vector<const config::Case*> study_cases;
@@ -576,12 +577,12 @@ StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
     if (study_case == nullptr)
       throw std::invalid_argument("case '" + r.name + "' is not among the study's cases");
     study_cases.push_back(study_case);
-    loops.push_back(case_loop(core::setup_for_case(prepared, *study_case), options.extra_lag));
+    loops.push_back(case_loop(study::setup_for_case(prepared, *study_case), options.extra_lag));
   }
   SharedChecks checks(loops);
   for (std::size_t i = 0; i < recorded.size(); ++i) {
     RecordedCase& r = recorded[i];
-    const core::HybridSetup setup = core::setup_for_case(prepared, *study_cases[i]);
+    const core::HybridSetup setup = study::setup_for_case(prepared, *study_cases[i]);
     CaseOutcome result = describe_case(prepared, setup, *study_cases[i], r.name, options,
                                        checks.for_case(prepared, i, setup));
     result.simulation = std::move(r.simulation);

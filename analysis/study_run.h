@@ -92,7 +92,7 @@ struct StudyOutcome {
   ResponseSpec response = ResponseSpec::floor(1);
   // What the results table holds of each case (study/recorders.h); no channels: every DOF's
   // displacement the case kept and every actuator.
-  core::RecorderPlan recorders;
+  study::RecorderPlan recorders;
   // What the figures and the summary call each actuator, and their order (actuator_names.h).
   ActuatorNames actuators;
   std::size_t reference_index = 0;
@@ -124,19 +124,19 @@ struct RunStudyOptions {
 // Empty when the structure has no experimental part.
 // A case with a force predictor: its loop's verdict (core::predictor_critical_delay for the model
 // as it starts) at the case's lag plus `extra_lag` (s, a link's round trip); empty without one.
-std::optional<CompensatedVerdict> predicted_loop_verdict(const core::PreparedStudy& prepared,
+std::optional<CompensatedVerdict> predicted_loop_verdict(const study::PreparedStudy& prepared,
                                                          const config::Case& study_case,
                                                          double extra_lag);
 std::optional<core::CriticalDelayCheck> check_case_critical_delay(
-    const core::PreparedStudy& prepared, const config::Case& study_case, double extra_lag = 0.0);
+    const study::PreparedStudy& prepared, const config::Case& study_case, double extra_lag = 0.0);
 
 // What run_study knows of a case before it runs it (nothing is announced): name, delay, its
 // critical-delay check (`stability`) and, with compensation, its compensated loop's verdict
 // (`compensated`: exact on one DOF, the modal approximation on several). Throws
 // std::invalid_argument for a case the study lacks.
-CaseOutcome pre_run_verdict(const core::PreparedStudy& prepared, const std::string& case_name);
+CaseOutcome pre_run_verdict(const study::PreparedStudy& prepared, const std::string& case_name);
 
-StudyOutcome run_study(const core::PreparedStudy& prepared, const RunStudyOptions& options = {});
+StudyOutcome run_study(const study::PreparedStudy& prepared, const RunStudyOptions& options = {});
 
 // A case that ran elsewhere (`rths launch`, `rths sites`), as its record tells it.
 struct RecordedCase {
@@ -152,7 +152,7 @@ struct RecordedCase {
 // with the lag-free in-process run of the same structure and motion (prepared.base: no delay
 // stage, no network), which the outcome keeps as lag_free_reference. A recorded case's status
 // other than "completed" is kept. Throws std::invalid_argument for a case the study lacks.
-StudyOutcome judge_recorded_cases(const core::PreparedStudy& prepared,
+StudyOutcome judge_recorded_cases(const study::PreparedStudy& prepared,
                                   std::vector<RecordedCase> cases,
                                   const RunStudyOptions& options = {});
 

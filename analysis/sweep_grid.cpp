@@ -77,7 +77,7 @@ std::vector<std::string> checked_model_names(const std::vector<config::Restoring
   std::vector<std::string> names;
   for (std::size_t m = 0; m < models.size(); ++m) {
     try {
-      (void)core::make_storey_factory(models[m]);
+      (void)study::make_storey_factory(models[m]);
     } catch (const std::invalid_argument& e) {
       fail(source, "sweep.models[" + std::to_string(m) + "]: " + e.what());
     }
@@ -111,7 +111,7 @@ core::GroundMotion load_sweep_motion(const config::GroundMotion& motion,
                                      const std::filesystem::path& base_dir, std::size_t m,
                                      const std::string& source) {
   try {
-    return core::load_motion(motion, base_dir);
+    return study::load_motion(motion, base_dir);
   } catch (const std::exception& e) {
     fail(source, "sweep motion " + std::to_string(m) + " ('" + motion.path() + "'): " + e.what());
   }
@@ -171,7 +171,7 @@ Shard parse_shard(const std::string& text) {
 SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& base_dir,
                      const std::string& source)
     : study_(study), base_dir_(base_dir) {
-  core::validate_study(study, source);
+  study::validate_study(study, source);
   const config::Sweep& sweep = study.sweep();
   if (!study.structure().has_sdof()) {
     fail(source, "sweep needs structure.sdof (the sweep varies an SDOF system's period)");
@@ -205,7 +205,7 @@ SweepGrid::SweepGrid(const config::Study& study, const std::filesystem::path& ba
 
   delay_model_ = sweep.delay_model();
 
-  const core::IntegratorKind kind = core::integrator_kind(study.integrator());
+  const core::IntegratorKind kind = study::integrator_kind(study.integrator());
   check_integrator(kind, delays_, alphas_, source);
 
   std::uint64_t hash = definition_hash(study);

@@ -60,7 +60,7 @@ core::StructuralModel structure_for(const SweepGrid& grid, double period, double
   config::Structure structure = grid.study().structure();
   structure.mutable_sdof()->set_period(period);
   structure.mutable_sdof()->set_stiffness(stiffness);
-  return core::make_structure(structure);
+  return study::make_structure(structure);
 }
 
 config::DelayStage stage_for(config::Sweep::DelayModel delay_model, double delay) {
@@ -129,7 +129,7 @@ class SweepRunner {
       const std::size_t period_begin = lo / per_period_, period_end = (hi - 1) / per_period_ + 1;
       const GroupKey key = group_key(g);
       const bool fast = !options_.general_path_only && is_linear(grid_.models()[key.model]) &&
-                        core::integrator_kind(grid_.study().integrator()) ==
+                        study::integrator_kind(grid_.study().integrator()) ==
                             core::IntegratorKind::kExplicitNewmark &&
                         grid_.delay_model() == config::Sweep::SHIFT;
       const std::size_t step = fast ? kPeriodsPerFastItem : 1;
@@ -164,12 +164,12 @@ class SweepRunner {
     const GroupKey key = group_key(item.group);
     const core::GroundMotion& motion = grid_.motion_at(key.motion, key.dt_index);
     const double stiffness = grid_.stiffnesses()[key.stiffness];
-    const core::StoreyModelFactory factory = core::make_storey_factory(grid_.models()[key.model]);
+    const core::StoreyModelFactory factory = study::make_storey_factory(grid_.models()[key.model]);
     std::size_t done = 0;
     for (std::size_t p = item.period_begin; p < item.period_end; ++p) {
       core::HybridSetup setup;
       setup.model = structure_for(grid_, grid_.periods()[p], stiffness);
-      setup.integrator = core::integrator_kind(grid_.study().integrator());
+      setup.integrator = study::integrator_kind(grid_.study().integrator());
       setup.dt = motion.dt;
       setup.allow_unstable = grid_.study().integrator().allow_unstable();
       setup.partition = core::partition_by_fraction(setup.model.storey_stiffness, 0.0, factory);
@@ -188,7 +188,7 @@ class SweepRunner {
             const config::DelayStage stage = stage_for(grid_.delay_model(), delay);
             for (std::size_t act = 0; act < delayed.partition.actuator_storeys.size(); ++act) {
               core::DelayChain chain;
-              chain.add(core::make_delay_stage(stage, motion.dt, grid_.base_dir()));
+              chain.add(study::make_delay_stage(stage, motion.dt, grid_.base_dir()));
               delayed.delays.push_back(std::move(chain));
             }
           }
@@ -271,7 +271,7 @@ class SweepRunner {
 
 SweepStabilityCheck check_sweep_stability(const SweepGrid& grid) {
   SweepStabilityCheck out;
-  const core::IntegratorKind kind = core::integrator_kind(grid.study().integrator());
+  const core::IntegratorKind kind = study::integrator_kind(grid.study().integrator());
   const double zeta = grid.study().structure().damping().modal_zeta();
   for (double period : grid.periods()) {
     const core::StructuralModel model = core::make_sdof(period, zeta, 1.0);
@@ -298,7 +298,7 @@ SweepStabilityCheck check_sweep_stability(const SweepGrid& grid) {
 }
 
 CriticalDelayOf critical_delay_of(const SweepGrid& grid) {
-  const core::IntegratorKind kind = core::integrator_kind(grid.study().integrator());
+  const core::IntegratorKind kind = study::integrator_kind(grid.study().integrator());
   const double zeta = grid.study().structure().damping().modal_zeta();
   return [kind, zeta](double period, double alpha, double dt) -> std::optional<double> {
     const core::StructuralModel model = core::make_sdof(period, zeta, 1.0);

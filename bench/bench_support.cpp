@@ -53,7 +53,7 @@ DistributedRun::DistributedRun(const RunSpec& spec)
   std::filesystem::create_directories(dir_);
   const auto config = dir_ / "study.textproto";
   std::ofstream(config) << spec.study_text;
-  study_ = core::load_study(config);
+  study_ = study::load_study(config);
   if (spec.keep_off_loop_cpu) off_loop_cpu_ = runtime::keep_off_loop_cpu(study_.deployment());
   // Measured as deployed: every message carries its MAC under the run's secret.
   util::ChildOptions trusted;
@@ -70,7 +70,7 @@ DistributedRun::DistributedRun(const RunSpec& spec)
   }
 }
 
-core::PreparedStudy DistributedRun::prepared() const { return core::prepare_study(study_, dir_); }
+study::PreparedStudy DistributedRun::prepared() const { return study::prepare_study(study_, dir_); }
 
 coordinator::Coordinator& DistributedRun::start(coordinator::CoordinatorOptions options) {
   endpoint_ = std::make_unique<transport::DdsEndpoint>(transport::DdsEndpointOptions{
@@ -79,7 +79,7 @@ coordinator::Coordinator& DistributedRun::start(coordinator::CoordinatorOptions 
   options.unauthenticated = [endpoint = endpoint_.get()] { return endpoint->unauthenticated(); };
   options.run_id = run_id_;
   options.record = record_;
-  coordinator_ = std::make_unique<coordinator::Coordinator>(core::prepare_study(study_, dir_),
+  coordinator_ = std::make_unique<coordinator::Coordinator>(study::prepare_study(study_, dir_),
                                                             *endpoint_, options);
   return *coordinator_;
 }

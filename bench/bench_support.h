@@ -57,7 +57,7 @@ class DistributedRun {
   const std::filesystem::path& record() const { return record_; }
   const config::Study& study() const { return study_; }
   // The study prepared as start() prepares it (for what must know the run before it starts).
-  core::PreparedStudy prepared() const;
+  study::PreparedStudy prepared() const;
   coordinator::Coordinator& start(coordinator::CoordinatorOptions options);
   void wait_for_nodes();
 

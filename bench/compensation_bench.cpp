@@ -97,8 +97,8 @@ void plots(const analysis::StudyOutcome& outcome, const std::filesystem::path& d
 }
 
 std::vector<Row> evaluate(const std::filesystem::path& config, const std::filesystem::path& out) {
-  const config::Study study = core::load_study(config);
-  const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+  const config::Study study = study::load_study(config);
+  const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
   const analysis::StudyOutcome outcome = analysis::run_study(prepared);
   const auto& reference = outcome.cases[outcome.reference_index].simulation;
   const int storey = prepared.base.partition.actuator_storeys.front();

@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
       std::string("deployment { nodes { id: 2 kind: CONTROLLER ") + kLink + " } }");
   const auto config = dir / "study.textproto";
   std::ofstream(config) << text;
-  const config::Study study = core::load_study(config);
+  const config::Study study = study::load_study(config);
   util::ChildProcess emulator(
       std::filesystem::path(RTHS_BINARY_DIR) / "controller_emulator/rths-controller-emulator",
       {"--config", config.string(), "--node-id", "2", "--case", "lag", "--idle-timeout", "10"},

@@ -104,11 +104,11 @@ fs::path one_minute_record(const fs::path& dir) {
 fs::path one_minute_run_record(const std::string& rths, const fs::path& dir) {
   const fs::path motion_source =
       fs::path(RTHS_DATA_DIR) / "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
-  const core::PreparedStudy played = core::prepare_study(
-      core::parse_study("motion { path: \"" + motion_source.string() +
-                            "\" }\nintegrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
-                            "structure { sdof { period: 0.5 mass: 1000 } }\n",
-                        "identify_bench"),
+  const study::PreparedStudy played = study::prepare_study(
+      study::parse_study("motion { path: \"" + motion_source.string() +
+                             "\" }\nintegrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
+                             "structure { sdof { period: 0.5 mass: 1000 } }\n",
+                         "identify_bench"),
       dir);
   const fs::path motion = dir / "impvall_twice.txt";
   {

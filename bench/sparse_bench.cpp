@@ -173,10 +173,10 @@ Figures study_path(const fs::path& dir, const std::string& damping = kRayleigh) 
   const std::string motion =
       std::string(RTHS_DATA_DIR) + "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
   const rths::config::Study study =
-      rths::core::parse_study(study_text(motion, damping), "sparse_bench");
-  const rths::core::PreparedStudy prepared = rths::core::prepare_study(study, dir);
+      rths::study::parse_study(study_text(motion, damping), "sparse_bench");
+  const rths::study::PreparedStudy prepared = rths::study::prepare_study(study, dir);
   const rths::core::HybridSetup& setup = prepared.base;
-  rths::core::check_lag_critical_delay(prepared, 0.01);
+  rths::study::check_lag_critical_delay(prepared, 0.01);
   rths::core::check_stability(setup.integrator, rths::core::max_omega(setup.model), setup.dt,
                               false);
   rths::core::HybridRestoring restoring(setup.partition, setup.delays, setup.dt);

@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  const rths::core::GroundMotion record = rths::core::read_at2(
+  const rths::core::GroundMotion record = rths::study::read_at2(
       std::string(RTHS_DATA_DIR) + "/ground_motions/elcentro_1940_ns_peknold.AT2");
   const rths::core::GroundMotion motion = rths::core::resampled(record, kDt);
   const double steps = static_cast<double>(motion.acceleration.size());

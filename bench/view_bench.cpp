@@ -100,7 +100,7 @@ std::string study_text(double rate, const std::string& motion, int domain, int f
 std::string repeated_motion(double seconds, const std::filesystem::path& dir) {
   config::GroundMotion spec;
   spec.set_path(bench::imperial_valley_path());
-  const core::GroundMotion record = core::load_motion(spec, {});
+  const core::GroundMotion record = study::load_motion(spec, {});
   const auto file = dir / "repeated_motion.txt";
   std::ofstream out(file);
   out.precision(17);
@@ -336,7 +336,7 @@ struct View {
   std::unique_ptr<view::ViewServer> server;
   std::optional<util::ChildProcess> chromium;
   std::optional<Hammer> hammer;
-  View(const core::PreparedStudy& prepared, const std::filesystem::path& dir, const Spec& spec) {
+  View(const study::PreparedStudy& prepared, const std::filesystem::path& dir, const Spec& spec) {
     view::describe_run(feed, prepared, "");
     view::ServerOptions loopback_any_port;
     loopback_any_port.address = view::ListenAddress{"127.0.0.1", 0};

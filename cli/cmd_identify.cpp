@@ -181,7 +181,7 @@ void add_input_options(CLI::App* cmd, IdentifyCliOptions& o) {
          "--sample-rate", o.sample_rate,
          "sampling rate (Hz) of a file without a time column (CSV without `time`, DAQ "
          "export without Sampling Interval/Rate); checked against the file's own when both")
-      ->check(in_range(core::Quantity::kFrequency));
+      ->check(in_range(study::Quantity::kFrequency));
 }
 
 // How the candidates are searched and the held-out error judged.
@@ -207,7 +207,7 @@ void add_search_options(CLI::App* cmd, IdentifyCliOptions& o) {
                   "decimation for the search (0: automatic)");
   cmd->add_option("--search-samples", o.request.search_samples,
                   "automatic decimation keeps at most about this many samples")
-      ->check(in_range(core::Quantity::kCount));
+      ->check(in_range(study::Quantity::kCount));
   cmd->add_option("--search-tolerance", o.request.search_tolerance,
                   "relative change of cost or parameters at which a fit of the decimated search "
                   "stops (the full-rate refits stop at 1e-10)")
@@ -244,7 +244,7 @@ void add_output_options(CLI::App* cmd, IdentifyCliOptions& o) {
                   "polynomial | ats | model-based | model-based-adaptive")
       ->check(CLI::IsMember({"polynomial", "ats", "model-based", "model-based-adaptive"}));
   cmd->add_option("--design-dt", o.design_dt, "integration step of the planned test (s, or 1ms)")
-      ->transform(seconds_in(core::Quantity::kStep));
+      ->transform(seconds_in(study::Quantity::kStep));
   cmd->add_option("--folds", o.folds,
                   "k-fold validation over contiguous blocks of the final model (0: off)");
   cmd->add_option("--validate", o.validate,

@@ -68,7 +68,7 @@ std::filesystem::path case_log_dir(const std::filesystem::path& out, const std::
 }
 
 // Real time: the platform check once for every case; its summary file, or empty in lockstep.
-std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
+std::filesystem::path check_platform_first(const study::PreparedStudy& prepared,
                                            const LaunchArgs& args,
                                            const std::filesystem::path& out) {
   if (prepared.config.deployment().clock() != config::Deployment::REAL_TIME) return {};
@@ -124,10 +124,10 @@ void keep_stdout_for_json(const LaunchArgs& args) {
   spdlog::default_logger()->sinks() = {std::make_shared<spdlog::sinks::stderr_color_sink_mt>()};
 }
 
-core::PreparedStudy prepare_or_exit(const config::Study& study,
-                                    const std::filesystem::path& config_path) {
+study::PreparedStudy prepare_or_exit(const config::Study& study,
+                                     const std::filesystem::path& config_path) {
   try {
-    core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
+    study::PreparedStudy prepared = study::prepare_study(study, config_path.parent_path());
     for (const std::string& warning : prepared.warnings) print_warning(warning);
     return prepared;
   } catch (const std::invalid_argument& e) {
@@ -271,7 +271,7 @@ void hold_kept_view(view::RecordView& kept, const std::string& case_name, double
   kept.serve_until(until, [&signals] { return signals.stop_requested(); });
 }
 
-void report(const LaunchArgs& args, const core::PreparedStudy& prepared,
+void report(const LaunchArgs& args, const study::PreparedStudy& prepared,
             const std::filesystem::path& out, const std::vector<DistributedRun>& runs,
             const DistributedResults& results) {
   const auto table = analysis::write_distributed_outputs(results, out, !args.results.no_plots,
@@ -297,8 +297,9 @@ void report(const LaunchArgs& args, const core::PreparedStudy& prepared,
 void run_launch(const LaunchArgs& args) {
   keep_stdout_for_json(args);
   const std::filesystem::path config_path = args.config;
-  const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
-  const core::PreparedStudy prepared = prepare_or_exit(study, config_path);
+  const config::Study study =
+      load_config_as<config::Study>(config_path, "study", study::load_study);
+  const study::PreparedStudy prepared = prepare_or_exit(study, config_path);
   std::vector<std::string> names = args.cases;
   if (names.empty())
     for (const auto& c : study.cases()) names.push_back(c.name());
@@ -335,10 +336,10 @@ void add_launch_command(CLI::App& app) {
   add_results_options(cmd, args->results, "output folder (records, results, plots, logs)",
                       ", the columns of `rths run` plus lag per link");
   cmd->add_option("--domain", args->domain, "DDS domain id (default deployment.domain_id)")
-      ->check(in_range(core::Quantity::kDdsDomain));
+      ->check(in_range(study::Quantity::kDdsDomain));
   add_node_program_options(cmd, args->programs);
   cmd->add_option("--timeout", args->timeout, "s per run before the coordinator is stopped")
-      ->transform(seconds_in(core::Quantity::kTimeout));
+      ->transform(seconds_in(study::Quantity::kTimeout));
   cmd->add_option("--cpu-placement", args->cpu_placement,
                   "auto: lockstep runs share one CPU (measured faster on 2 cores), real time is "
                   "left to the scheduler; one-cpu; spread")

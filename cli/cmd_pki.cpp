@@ -43,9 +43,9 @@ security::NodeIdentity parse_node(const std::string& text) {
 
 std::vector<security::NodeIdentity> study_nodes(const std::string& config,
                                                 const std::string& case_name) {
-  const config::Study study = core::load_study(config);
+  const config::Study study = study::load_study(config);
   const config::Case& study_case =
-      core::find_case(study, case_name.empty() ? study.deployment().case_name() : case_name);
+      study::find_case(study, case_name.empty() ? study.deployment().case_name() : case_name);
   // Which nodes a study has depends on its partition, not on dt (0 = the record's, unread here).
   const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : 0.01;
   const core::HybridSetup setup = runtime::setup_without_motion(
@@ -113,7 +113,7 @@ void add_pki_command(CLI::App& app) {
                    "ID:KIND (substructure | actuator_emulator | controller), repeatable");
   init->add_option("--days", args->days,
                    "validity of certificates and grants in days (default 365)")
-      ->check(in_range(core::Quantity::kDays));
+      ->check(in_range(study::Quantity::kDays));
   init->add_option("--organisation", args->organisation, "O= of every subject (default rths-lab)");
   init->callback([args] { run_pki_init(*args); });
   auto* secret = pki->add_subcommand(

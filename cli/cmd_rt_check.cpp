@@ -30,8 +30,8 @@ rt_check::PlatformCheck run_check(const RtCheckArgs& args, CLI::App& cmd) {
                                          " is for the default deployment; with a config, its "
                                          "integrator dt and motion length are used");
   const std::filesystem::path path = args.config;
-  const config::Study study = load_config_as<config::Study>(path, "study", core::load_study);
-  const core::PreparedStudy prepared = core::prepare_study(study, path.parent_path());
+  const config::Study study = load_config_as<config::Study>(path, "study", study::load_study);
+  const study::PreparedStudy prepared = study::prepare_study(study, path.parent_path());
   return rt_check::check_platform(prepared, args.seconds);
 }
 

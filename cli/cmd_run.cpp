@@ -81,8 +81,8 @@ void run_perturbed(const config::Study& study, const std::filesystem::path& base
       o.perturbed, o.perturbed_seed, analysis::experimental_stiffness(study));
   std::vector<analysis::BenchmarkEvaluation> evaluations;
   for (const analysis::PlantDraw& draw : draws) {
-    const core::PreparedStudy prepared =
-        core::prepare_study(analysis::perturbed_study(study, draw), base_dir);
+    const study::PreparedStudy prepared =
+        study::prepare_study(analysis::perturbed_study(study, draw), base_dir);
     const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
     evaluations.push_back(*analysis::evaluate_benchmark(prepared, outcome));
   }
@@ -118,7 +118,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 // Before any case runs: the default recorders' line (with --json on stderr, whose stdout is the
 // JSON), and a CSV past a spreadsheet's size refused (results/write.h).
-void require_table_fits(const core::PreparedStudy& prepared, const ResultsOptions& results) {
+void require_table_fits(const study::PreparedStudy& prepared, const ResultsOptions& results) {
   if (!prepared.recorders.defaults.empty())
     (results.json ? std::cerr : std::cout) << prepared.recorders.defaults << "\n";
   if (results::parse_format(results.format) != results::Format::kCsv) return;
@@ -132,10 +132,10 @@ void require_table_fits(const core::PreparedStudy& prepared, const ResultsOption
 void run(const RunOptions& o) {
   const auto started = std::chrono::steady_clock::now();
   const std::filesystem::path config_path = o.config;
-  config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
+  config::Study study = load_config_as<config::Study>(config_path, "study", study::load_study);
   if (!o.motion_units.empty())
-    study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
-  const core::PreparedStudy prepared = core::prepare_study(study, config_path.parent_path());
+    study.mutable_motion()->set_column_units(study::units_from_name(o.motion_units));
+  const study::PreparedStudy prepared = study::prepare_study(study, config_path.parent_path());
   runtime::check_deployment(prepared);  // the deployment `launch` would run is refused here too
   std::filesystem::path out = o.results.out;
   if (out.empty()) out = study.output().directory();
@@ -176,7 +176,7 @@ void add_run_command(CLI::App& app) {
                   "also run N perturbed benchmark plants (beta1, beta2, a3, k_e drawn as the "
                   "benchmark draws "
                   "them) and report J1-J9 as mean +- std; needs the study's benchmark section")
-      ->check(in_range(core::Quantity::kCount));
+      ->check(in_range(study::Quantity::kCount));
   cmd->add_option("--perturbed-seed", options->perturbed_seed,
                   "seed of the perturbed draws (default 1)");
   cmd->footer("A study with a benchmark section is also judged by the " +

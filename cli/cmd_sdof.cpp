@@ -36,11 +36,11 @@ config::Study study_from_flags(const SdofOptions& o) {
   study.mutable_motion()->set_scale(o.scale);
   study.mutable_motion()->set_column_dt(o.motion_dt);
   if (!o.motion_units.empty())
-    study.mutable_motion()->set_column_units(core::units_from_name(o.motion_units));
+    study.mutable_motion()->set_column_units(study::units_from_name(o.motion_units));
   study.mutable_integrator()->set_dt(o.dt);
   study.mutable_integrator()->set_allow_unstable(o.allow_unstable);
   study.mutable_integrator()->set_kind(
-      core::config_integrator_kind(core::integrator_from_string(o.integrator)));
+      study::config_integrator_kind(core::integrator_from_string(o.integrator)));
   study.mutable_substructuring()->set_experimental_fraction(o.alpha);
   study.add_cases()->set_name("reference");
   config::Case* delayed = study.add_cases();
@@ -60,7 +60,7 @@ config::Study study_from_flags(const SdofOptions& o) {
     else
       throw std::invalid_argument("unknown --delay-model '" + o.delay_model + "'");
   }
-  core::validate_study(study, "command line");
+  study::validate_study(study, "command line");
   return study;
 }
 
@@ -71,7 +71,8 @@ void run_sdof(const SdofOptions& o) {
   }
   util::refuse_output_over_input({"--out", o.out}, {{"--motion", o.motion}});
   const config::Study study = study_from_flags(o);
-  const core::PreparedStudy prepared = core::prepare_study(study, std::filesystem::current_path());
+  const study::PreparedStudy prepared =
+      study::prepare_study(study, std::filesystem::current_path());
   const analysis::StudyOutcome outcome = analysis::run_study(prepared, {.warn = print_warning});
   const analysis::CaseOutcome& reference = outcome.cases[0];
   const analysis::CaseOutcome& delayed = outcome.cases[1];
@@ -114,29 +115,29 @@ void add_sdof_command(CLI::App& app) {
   auto o = std::make_shared<SdofOptions>();
   CLI::App* cmd = app.add_subcommand("sdof", "One SDOF run from flags: reference vs delayed");
   cmd->add_option("--period", o->period, "natural period (s)")
-      ->transform(seconds_in(core::Quantity::kPeriod));
+      ->transform(seconds_in(study::Quantity::kPeriod));
   cmd->add_option("--zeta", o->zeta, "damping ratio, 0.05 = 5 % (at most 1)")
-      ->check(in_range(core::Quantity::kDampingRatio));
+      ->check(in_range(study::Quantity::kDampingRatio));
   cmd->add_option("--motion", o->motion, "ground motion file (PEER AT2 or columns)")->required();
   cmd->add_option("--motion-units", o->motion_units,
                   "units of the motion record: g | m/s2 | cm/s2 | in/s2 | mm/s2 (required for a "
                   "columns file; an AT2 file is read in its header's units)")
       ->check(CLI::IsMember({"g", "m/s2", "cm/s2", "in/s2", "mm/s2"}));
   cmd->add_option("--scale", o->scale, "scale factor on the motion")
-      ->check(in_range(core::Quantity::kMotionScale));
+      ->check(in_range(study::Quantity::kMotionScale));
   cmd->add_option("--motion-dt", o->motion_dt,
                   "sample step of a one-column motion file (s, or 5ms)")
-      ->transform(seconds_in(core::Quantity::kStep));
+      ->transform(seconds_in(study::Quantity::kStep));
   cmd->add_option("--dt", o->dt, "integration step (s, or 1ms); default: the record's step")
-      ->transform(seconds_in(core::Quantity::kStep));
+      ->transform(seconds_in(study::Quantity::kStep));
   cmd->add_option("--delay", o->delay,
                   "delay (s, or with a unit: 14ms), or the time constant for first-order")
-      ->transform(seconds_in(core::Quantity::kLag));
+      ->transform(seconds_in(study::Quantity::kLag));
   cmd->add_option("--delay-model", o->delay_model,
                   "none | shift | eq1 | eq1-lag | first-order | benchmark")
       ->check(CLI::IsMember({"none", "shift", "eq1", "eq1-lag", "first-order", "benchmark"}));
   cmd->add_option("--exp-fraction", o->alpha, "experimental fraction alpha of the stiffness")
-      ->check(in_range(core::Quantity::kFraction));
+      ->check(in_range(study::Quantity::kFraction));
   cmd->add_option(
       "--integrator", o->integrator,
       "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");

@@ -130,7 +130,7 @@ std::filesystem::path output_folder(const SitesOptions& o) {
 // refused (the deployment's fail-safe or overrun tolerance will not hold here) is exit 3 unless
 // --accept-platform. Its summary goes to OUT/platform.json and to the coordinator, which then
 // does not measure again. Empty path in lockstep.
-std::filesystem::path check_platform_first(const core::PreparedStudy& prepared,
+std::filesystem::path check_platform_first(const study::PreparedStudy& prepared,
                                            const SitesOptions& o,
                                            const std::filesystem::path& out) {
   if (prepared.config.deployment().clock() != config::Deployment::REAL_TIME) return {};
@@ -212,7 +212,7 @@ std::string drawn_figures(const std::filesystem::path& out, const std::string& c
 // The results as `rths run` and `rths launch` write them, against the lag-free in-process
 // reference (analysis/distributed), links labelled by role and site.
 void report(const SitesOptions& o, const deploy::SitesPlan& plan,
-            const core::PreparedStudy& prepared, const deploy::SitesRunResult& result) {
+            const study::PreparedStudy& prepared, const deploy::SitesRunResult& result) {
   std::map<int, std::string> site_of_node;
   for (const deploy::NodePlacement& p : plan.placements) site_of_node[p.node_id] = p.site;
   const std::vector<DistributedRun> runs{
@@ -297,7 +297,8 @@ std::string probe_link(const runtime::LinkSeries& link, std::int64_t steps, doub
   return out.str();
 }
 
-void run_probe(const SitesOptions& o, deploy::SitesPlan plan, const core::PreparedStudy& prepared) {
+void run_probe(const SitesOptions& o, deploy::SitesPlan plan,
+               const study::PreparedStudy& prepared) {
   if (const auto reason = deploy::namespace_support())
     throw ExitError(kExitEnvironment, "sites: " + *reason);
   config::GroundMotion& motion = *plan.study.mutable_motion();
@@ -353,8 +354,8 @@ void run(const SitesOptions& o) {
   if (o.domain >= 0) plan.study.mutable_deployment()->set_domain_id(o.domain);
   // Paths in plan.study are absolute. Checked before anything starts (and by --check): the
   // case's lag plus the network's on the actuator's path against the critical delay.
-  const core::PreparedStudy prepared =
-      core::prepare_study(plan.study, plan.study_file.parent_path());
+  const study::PreparedStudy prepared =
+      study::prepare_study(plan.study, plan.study_file.parent_path());
   runtime::check_deployment(prepared);
   analysis::warn_past_critical_delay(prepared, {plan.study.deployment().case_name()},
                                      print_warning);
@@ -389,7 +390,7 @@ void add_sites_command(CLI::App& app) {
   cmd->add_option(
          "--domain", options->domain,
          "DDS domain id (default: the sites config's domain_id, else deployment.domain_id)")
-      ->check(in_range(core::Quantity::kDdsDomain));
+      ->check(in_range(study::Quantity::kDdsDomain));
   cmd->add_option("--platform-seconds", options->platform_seconds,
                   "real time: s of platform measurement before the run (default 5)")
       ->check(finite_in(0.1, 600.0));
@@ -422,10 +423,10 @@ void add_sites_command(CLI::App& app) {
   cmd->add_option("--check-record", options->check_record,
                   "only check a record written elsewhere (e.g. by docker/run_container_test.sh)");
   cmd->add_option("--expect-steps", options->expect_steps, "with --check-record: minimum steps")
-      ->check(in_range(core::Quantity::kCount));
+      ->check(in_range(study::Quantity::kCount));
   cmd->add_option("--expect-injected", options->expect_injected,
                   "with --check-record: expected largest median injected lag (s)")
-      ->transform(seconds_in(core::Quantity::kLag));
+      ->transform(seconds_in(study::Quantity::kLag));
   cmd->callback([options] { run(*options); });
 }
 

@@ -76,7 +76,7 @@ CompensatedLoop compensated_loop_of(const config::Study& study, const StabilityO
   if (s.damping().has_rayleigh())
     throw std::invalid_argument(o.study + ": --study needs structure.damping.modal_zeta");
   CompensatedLoop loop;
-  const core::StructuralModel model = core::make_structure(s);
+  const core::StructuralModel model = study::make_structure(s);
   loop.period = 2.0 * std::numbers::pi * std::sqrt(model.mass(0, 0) / model.stiffness(0, 0));
   loop.zeta = s.damping().modal_zeta();
   loop.alpha = study.substructuring().experimental_fraction();
@@ -84,7 +84,7 @@ CompensatedLoop compensated_loop_of(const config::Study& study, const StabilityO
     throw std::invalid_argument(o.study + ": --study needs substructuring.experimental_fraction");
   loop.dt = study.integrator().dt();
   if (!(loop.dt > 0)) throw std::invalid_argument(o.study + ": --study needs integrator.dt > 0");
-  loop.kind = core::integrator_kind(study.integrator());
+  loop.kind = study::integrator_kind(study.integrator());
   for (const auto& c : study.cases())
     if (c.name() == o.case_name) loop.chosen = &c;
   if (!loop.chosen)
@@ -162,7 +162,7 @@ void print_compensated(const StabilityOptions& o, const CompensatedLoop& loop,
 // Exit 1 when the compensated loop is analysed unstable.
 void run_modal(const StabilityOptions& o, const config::Study& study) {
   const std::filesystem::path path = o.study;
-  const core::PreparedStudy prepared = core::prepare_study(study, path.parent_path());
+  const study::PreparedStudy prepared = study::prepare_study(study, path.parent_path());
   const analysis::CaseOutcome c = analysis::pre_run_verdict(prepared, o.case_name);
   analysis::StudyOutcome alone;
   alone.study_name = study.name();
@@ -204,13 +204,13 @@ bool predicted_case(const config::Study& study, const std::string& name) {
 }
 
 void run_compensated(const StabilityOptions& o) {
-  const config::Study study = core::load_study(o.study);
+  const config::Study study = study::load_study(o.study);
   if (!study.structure().has_sdof() || predicted_case(study, o.case_name)) {
     run_modal(o, study);
     return;
   }
   const CompensatedLoop loop = compensated_loop_of(study, o);
-  const core::CompensatedStability r = core::compensated_stability(
+  const core::CompensatedStability r = study::compensated_stability(
       loop.kind, loop.period, loop.zeta, loop.alpha, loop.dt, loop.chosen->delay(),
       loop.compensation, o.max_extra_delay, o.branches);
   if (o.json)
@@ -318,14 +318,14 @@ void add_stability_command(CLI::App& app) {
   auto options = std::make_shared<StabilityOptions>();
   CLI::App* cmd = app.add_subcommand("stability", "Critical delay of a delayed SDOF hybrid system");
   cmd->add_option("--period", options->period, "natural period T (s, or 500ms)")
-      ->transform(seconds_in(core::Quantity::kPeriod));
+      ->transform(seconds_in(study::Quantity::kPeriod));
   cmd->add_option("--zeta", options->zeta, "damping ratio")
-      ->check(in_range(core::Quantity::kDampingRatio));
+      ->check(in_range(study::Quantity::kDampingRatio));
   cmd->add_option("--exp-fraction", options->alpha, "experimental fraction alpha of the stiffness")
-      ->check(in_range(core::Quantity::kFraction));
+      ->check(in_range(study::Quantity::kFraction));
   cmd->add_option("--dt", options->dt,
                   "integration step (s, or 1ms); exit 2 beyond the integrator's limit")
-      ->transform(seconds_in(core::Quantity::kStep));
+      ->transform(seconds_in(study::Quantity::kStep));
   cmd->add_option(
       "--integrator", options->integrator,
       "explicit-newmark | central-difference | chen-ricles | newmark-average-acceleration");
@@ -342,7 +342,7 @@ void add_stability_command(CLI::App& app) {
                   "case of --study whose actuator and compensator are analysed");
   cmd->add_option("--max-extra-delay", options->max_extra_delay,
                   "largest extra delay searched with --study (s)")
-      ->transform(seconds_in(core::Quantity::kLag));
+      ->transform(seconds_in(study::Quantity::kLag));
   cmd->add_option("--predictor-stiffness-error", options->predictor_stiffness_error,
                   "with a force predictor whose model's stiffness is off by this fraction of the "
                   "specimen's (-0.3: 30 % soft): its loop's critical lag")

@@ -151,7 +151,8 @@ void run_sweep_command(const SweepOptions& o) {
   if (o.config.empty())
     throw ExitError(kExitBadInput, "sweep: give a CONFIG, or use `rths sweep merge`");
   const std::filesystem::path config_path = o.config;
-  const config::Study study = load_config_as<config::Study>(config_path, "study", core::load_study);
+  const config::Study study =
+      load_config_as<config::Study>(config_path, "study", study::load_study);
   const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
   analysis::SweepOptions options;
   if (!o.shard.empty()) options.shard = analysis::parse_shard(o.shard);
@@ -192,7 +193,7 @@ void run_sweep_command(const SweepOptions& o) {
 // fails here, not on the cluster.
 void write_slurm_job(const SweepOptions& o) {
   const std::filesystem::path config_path = std::filesystem::absolute(o.config);
-  const config::Study study = core::load_study(config_path);
+  const config::Study study = study::load_study(config_path);
   const analysis::SweepGrid grid(study, config_path.parent_path(), config_path.string());
   slurm::SweepJob job = o.job;
   job.rths = std::filesystem::read_symlink("/proc/self/exe");
@@ -274,7 +275,7 @@ void add_sweep_command(CLI::App& app) {
       "write a Slurm job into this folder instead of running: an sbatch array (one task per "
       "shard) and a merge job after it; submit with `bash FOLDER/submit.sh`");
   cmd->add_option("--shards", options->job.shards, "--slurm: array tasks (default 4)")
-      ->check(in_range(core::Quantity::kCount));
+      ->check(in_range(study::Quantity::kCount));
   cmd->add_option("--partition", options->job.partition,
                   "--slurm: partition (default: the cluster's)");
   cmd->add_option("--time", options->job.time,

@@ -31,7 +31,7 @@ bool parses_as(const std::string& text, google::protobuf::Message& message) {
 std::string config_kind_of(const std::filesystem::path& path) {
   std::string text;
   try {
-    text = core::read_text_file(path, "config");
+    text = study::read_text_file(path, "config");
   } catch (const std::invalid_argument&) {
     return "";
   }

@@ -61,7 +61,7 @@ CLI::Validator seconds_value() {
 
 namespace {
 // CLI11 prefixes a validator's message with the flag ("--dt: "), so the rule's message omits it.
-CLI::Validator range_validator(core::Quantity quantity, bool seconds) {
+CLI::Validator range_validator(study::Quantity quantity, bool seconds) {
   return CLI::Validator(
       [quantity, seconds](std::string& input) -> std::string {
         double value = 0;
@@ -76,7 +76,7 @@ CLI::Validator range_validator(core::Quantity quantity, bool seconds) {
         } else {
           return "'" + input + "' is not a number";
         }
-        const std::string violation = core::range_violation(quantity, value, "");
+        const std::string violation = study::range_violation(quantity, value, "");
         if (!violation.empty()) return violation;
         if (seconds) {
           std::ostringstream out;
@@ -86,12 +86,12 @@ CLI::Validator range_validator(core::Quantity quantity, bool seconds) {
         }
         return "";
       },
-      core::range_of(quantity).text());
+      study::range_of(quantity).text());
 }
 }  // namespace
 
-CLI::Validator seconds_in(core::Quantity quantity) { return range_validator(quantity, true); }
-CLI::Validator in_range(core::Quantity quantity) { return range_validator(quantity, false); }
+CLI::Validator seconds_in(study::Quantity quantity) { return range_validator(quantity, true); }
+CLI::Validator in_range(study::Quantity quantity) { return range_validator(quantity, false); }
 
 void add_results_options(CLI::App* cmd, ResultsOptions& options, const std::string& out_help,
                          const std::string& table_note) {

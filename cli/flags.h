@@ -42,9 +42,9 @@ std::chrono::steady_clock::time_point seconds_from_now(double seconds);
 // A time flag checked against its quantity's range rule (study/ranges.h): seconds_value() then
 // the rule; attach with ->transform (it rewrites "14ms" to seconds); CLI11 refuses a value as
 // "--dt: 1e-09 s is outside [1e-06, 1] s (...)", exit 2.
-CLI::Validator seconds_in(core::Quantity quantity);
+CLI::Validator seconds_in(study::Quantity quantity);
 // A plain number flag checked against its quantity's range rule (counts, fractions, CPUs...).
-CLI::Validator in_range(core::Quantity quantity);
+CLI::Validator in_range(study::Quantity quantity);
 // A number flag in [min, max], finite (runtime/node/node_main.h: every program's flags).
 using runtime::finite_in;
 

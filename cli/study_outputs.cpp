@@ -97,7 +97,7 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
     print_warning("no figure drawn (the table and summary are written): " + failed);
 }
 
-void write_benchmark_outputs(const core::PreparedStudy& prepared,
+void write_benchmark_outputs(const study::PreparedStudy& prepared,
                              const analysis::StudyOutcome& outcome,
                              const std::filesystem::path& out, bool plots, bool quiet) {
   const auto benchmark = analysis::evaluate_benchmark(prepared, outcome);

@@ -26,7 +26,7 @@ void write_study_outputs(const analysis::StudyOutcome& outcome, const std::files
 // out/benchmark.txt and out/benchmark.json, with `plots` its figures (analysis/benchmark_plots.h),
 // and the table printed unless `quiet`. Nothing without one. The same after `rths run` and
 // `rths launch`.
-void write_benchmark_outputs(const core::PreparedStudy& prepared,
+void write_benchmark_outputs(const study::PreparedStudy& prepared,
                              const analysis::StudyOutcome& outcome,
                              const std::filesystem::path& out, bool plots, bool quiet);
 // Throws ExitError(1) listing every case that failed the run (analysis::StudyOutcome::failures).

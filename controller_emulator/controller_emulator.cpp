@@ -34,9 +34,9 @@ const char* const kRunId = "controller-emulator";
 // so that the actuators stream (load on a command, one servo period per tick) and are paced.
 runtime::Assign assignment(const config::Study& study, const std::filesystem::path& base_dir,
                            const std::string& case_name, int node_id) {
-  const core::PreparedStudy prepared = core::prepare_study(study, base_dir);
-  const config::Case& study_case = core::find_case(study, case_name);
-  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  const study::PreparedStudy prepared = study::prepare_study(study, base_dir);
+  const config::Case& study_case = study::find_case(study, case_name);
+  const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
   const config::Deployment deployment = runtime::with_default_nodes(study.deployment(), setup);
   const runtime::DeploymentPlan plan = runtime::make_plan(setup, deployment);
   const runtime::NodePlan* node = plan.find(node_id);

@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
   try {
     const std::filesystem::path path = std::filesystem::absolute(config);
     rths::controller_emulator::ControllerEmulator emulator(
-        rths::core::load_study(path), path.parent_path(), case_name, node_id, answer_frames);
+        rths::study::load_study(path), path.parent_path(), case_name, node_id, answer_frames);
     return rths::controller_emulator::serve(emulator, idle_timeout, answer_lag_ms * 1e-3,
                                             answer_period_ms * 1e-3);
   } catch (const std::exception& e) {

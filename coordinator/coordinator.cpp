@@ -32,16 +32,16 @@ void refuse_case_link(const core::HybridSetup& setup, const std::string& case_na
 
 }  // namespace
 
-Coordinator::Coordinator(core::PreparedStudy prepared, transport::Endpoint& endpoint,
+Coordinator::Coordinator(study::PreparedStudy prepared, transport::Endpoint& endpoint,
                          CoordinatorOptions options)
     : state_(std::make_unique<RunState>(std::move(prepared), endpoint, std::move(options))) {
   RunState& s = *state_;
   if (s.options.run_id.empty()) throw std::invalid_argument("coordinator: empty run id");
   s.deployment = s.prepared.config.deployment();
   s.case_name = !s.options.case_name.empty() ? s.options.case_name : s.deployment.case_name();
-  const config::Case& study_case = core::find_case(s.prepared.config, s.case_name);
+  const config::Case& study_case = study::find_case(s.prepared.config, s.case_name);
   s.case_name = study_case.name();
-  s.setup = core::setup_for_case(s.prepared, study_case);
+  s.setup = study::setup_for_case(s.prepared, study_case);
   refuse_case_link(s.setup, s.case_name);
   if (!core::is_explicit(s.setup.integrator))
     throw std::invalid_argument("integrator " + core::to_string(s.setup.integrator) +
@@ -170,7 +170,7 @@ class AfterSetUp final : public core::StepHooks {
 // study/recorders.h kept_dofs), as rths run does: the record is O(recorded), not O(n), a step.
 void loop(RunState& s, core::SimulationResult& result) {
   core::SimulationOptions options =
-      core::kept_by_recorders(s.prepared.recorders, s.deployment.limits());
+      study::kept_by_recorders(s.prepared.recorders, s.deployment.limits());
   options.divergence_bound = s.options.divergence_bound;
   s.endpoint.set_inline_handler([&s](const transport::Message& m) {
     if (m.kind != runtime::FEEDBACK) return false;

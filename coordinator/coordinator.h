@@ -37,7 +37,7 @@ class Coordinator {
  public:
   // Throws std::invalid_argument for a deployment that does not fit the study, an implicit
   // integrator, or a dt beyond the stability limit.
-  Coordinator(core::PreparedStudy prepared, transport::Endpoint& endpoint,
+  Coordinator(study::PreparedStudy prepared, transport::Endpoint& endpoint,
               CoordinatorOptions options);
   ~Coordinator();
   // Runs the whole test on the calling thread (the loop thread) and returns how it ended; never

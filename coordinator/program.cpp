@@ -105,7 +105,7 @@ struct PlatformRefused : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-runtime::PlatformSummary platform_summary(const core::PreparedStudy& prepared,
+runtime::PlatformSummary platform_summary(const study::PreparedStudy& prepared,
                                           const PlatformArgs& args) {
   runtime::PlatformSummary summary;
   if (!args.file.empty()) {
@@ -138,7 +138,7 @@ struct LiveView {
 };
 
 LiveView start_view(const std::string& address_text, bool allow_stop, const std::string& record,
-                    const core::PreparedStudy& prepared, const std::string& case_name,
+                    const study::PreparedStudy& prepared, const std::string& case_name,
                     std::atomic<bool>& stop_request) {
   if (record.empty())
     throw std::invalid_argument("--view needs --record: the view follows the run record");
@@ -257,7 +257,7 @@ struct Session {
 
 // Real time: the platform gate (PlatformRefused) and /dev/cpu_dma_latency held for the run, so
 // CPUs stay out of deep idle states, whose exit adds to wake-ups.
-void prepare_real_time(const core::PreparedStudy& prepared, const PlatformArgs& args,
+void prepare_real_time(const study::PreparedStudy& prepared, const PlatformArgs& args,
                        CoordinatorOptions& co, Session& session) {
   runtime::check_failsafe_windows(prepared.config.deployment());
   co.platform = platform_summary(prepared, args);
@@ -287,9 +287,9 @@ std::unique_ptr<transport::DdsEndpoint> open_endpoint(const config::Study& study
 // Throws std::invalid_argument for bad input, PlatformRefused or another exception when this
 // machine cannot keep the run.
 void start_session(ProgramArgs& a, Session& session) {
-  const config::Study study = core::load_study(a.config_path);
-  core::PreparedStudy prepared =
-      core::prepare_study(study, std::filesystem::path(a.config_path).parent_path());
+  const config::Study study = study::load_study(a.config_path);
+  study::PreparedStudy prepared =
+      study::prepare_study(study, std::filesystem::path(a.config_path).parent_path());
   CoordinatorOptions co;
   if (study.deployment().clock() == config::Deployment::REAL_TIME)
     prepare_real_time(prepared, a.platform, co, session);
@@ -298,7 +298,7 @@ void start_session(ProgramArgs& a, Session& session) {
       !a.run_id.empty() ? a.run_id
       : !study.deployment().run_id().empty()
           ? study.deployment().run_id()
-          : runtime::make_run_id(study.name() + "-" + core::find_case(study, a.case_name).name());
+          : runtime::make_run_id(study.name() + "-" + study::find_case(study, a.case_name).name());
   co.case_name = a.case_name;
   co.record = a.record;
   if (!a.view_address.empty()) {

@@ -43,7 +43,7 @@ inline double seconds_since(Clock::time_point t) {
 // What the run is: the study, the case and the deployment, settled by the constructor and never
 // changed by the run (the run's state is RunState's own members).
 struct RunConfiguration {
-  core::PreparedStudy prepared;
+  study::PreparedStudy prepared;
   core::HybridSetup setup;
   std::string case_name;
   CoordinatorOptions options;
@@ -115,7 +115,7 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   }
   Clock::time_point last_heartbeat_sent;
 
-  RunState(core::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
+  RunState(study::PreparedStudy p, transport::Endpoint& e, CoordinatorOptions o)
       : RunConfiguration{std::move(p), {}, {}, std::move(o), {}, false}, endpoint(e) {}
 
   void send(int node_id, runtime::MessageKind kind, std::int64_t at_step,

@@ -166,7 +166,7 @@ void RunState::write_header() {
   // The record carries its inputs (motion as run, matrices, traces) in an entry of their own, so
   // it reads anywhere and a damaged inputs entry loses nothing else; each header copy names them.
   runtime::RecordEntry inputs;
-  *inputs.mutable_inputs()->mutable_study() = core::with_embedded_inputs(prepared);
+  *inputs.mutable_inputs()->mutable_study() = study::with_embedded_inputs(prepared);
   const std::string inputs_bytes = inputs.SerializeAsString();
   h.set_inputs_crc32c(util::crc32c(inputs_bytes.data(), inputs_bytes.size()));
   append_waiting(entry);

@@ -47,11 +47,11 @@ void judge_run(const JointLagStudy& config, const SitesPlan& plan, const config:
   point.measured_total_lag = point.real_time ? j1 : point.measured_round_trip + j1;
   point.measured_actuator_lag = point.real_time ? j1 - point.measured_round_trip : j1;
   auto study = plan.study;
-  const auto prepared = core::prepare_study(study, base_dir);
+  const auto prepared = study::prepare_study(study, base_dir);
   const auto simulate = [&](const config::Case& c) {
-    return core::simulate(core::setup_for_case(prepared, c), prepared.motion);
+    return core::simulate(study::setup_for_case(prepared, c), prepared.motion);
   };
-  const auto reference = simulate(core::reference_case(study));
+  const auto reference = simulate(study::reference_case(study));
   const std::vector<double> u_ref = analysis::floor_history(reference, 0);
   analysis::fill_joint_lag_errors(point, u_ref, u,
                                   measured.has_footer && measured.footer.diverged());

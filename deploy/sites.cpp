@@ -142,10 +142,10 @@ void apply_links(const Sites& sites, const std::map<int, config::NodeSpec*>& nod
     }
     if (!linked.insert(link.node_id()).second) throw std::invalid_argument(where + " given twice");
     // The one lag rule, with the study's allow_long_lag, as for the study's own deployment.
-    core::validate_link_lag(link.to_node(), where + " to_node", plan.study.allow_long_lag(),
-                            source);
-    core::validate_link_lag(link.from_node(), where + " from_node", plan.study.allow_long_lag(),
-                            source);
+    study::validate_link_lag(link.to_node(), where + " to_node", plan.study.allow_long_lag(),
+                             source);
+    study::validate_link_lag(link.from_node(), where + " from_node", plan.study.allow_long_lag(),
+                             source);
     *nodes.at(link.node_id())->mutable_receive_lag() = link.to_node();
     *nodes.at(link.node_id())->mutable_send_lag() = link.from_node();
   }
@@ -179,13 +179,13 @@ void check_topology(const Sites& sites, const std::string& source) {
 
 Sites parse_sites(const std::string& text, const std::string& source_name) {
   Sites sites;
-  core::parse_text_format(text, source_name, sites);
+  study::parse_text_format(text, source_name, sites);
   return sites;
 }
 
 SitesPlan load_sites(const std::filesystem::path& sites_file) {
   const auto sites =
-      parse_sites(core::read_text_file(sites_file, "sites config"), sites_file.string());
+      parse_sites(study::read_text_file(sites_file, "sites config"), sites_file.string());
   auto plan = plan_sites(sites, sites_file.parent_path(), sites_file.string());
   plan.sites_file = sites_file;
   return plan;
@@ -197,7 +197,7 @@ SitesPlan plan_sites(const Sites& sites, const std::filesystem::path& base_dir,
   plan.sites = sites;
   if (sites.study().empty()) throw std::invalid_argument(source + ": study is empty");
   plan.study_file = base_dir / sites.study();
-  plan.study = core::load_study(plan.study_file);
+  plan.study = study::load_study(plan.study_file);
   apply_overrides(sites, plan, source);
   auto& deployment = *plan.study.mutable_deployment();
 

@@ -88,7 +88,7 @@ SitesRunResult run_sites(const SitesPlan& plan, const SitesRunOptions& options) 
   // Named as `rths launch` names its records: the case that runs (launch_run finds it the same way).
   result.record =
       result.output_dir /
-      (core::find_case(plan.study, plan.study.deployment().case_name()).name() + ".rthsrec");
+      (study::find_case(plan.study, plan.study.deployment().case_name()).name() + ".rthsrec");
   std::filesystem::remove(result.record);
   const auto study_path = result.output_dir / "study.textproto";
   write_study_copy(plan, study_path);

@@ -103,7 +103,7 @@ int study_values(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   config::Study study;
   try {
-    study = core::parse_study(text, "fuzz");
+    study = study::parse_study(text, "fuzz");
   } catch (const std::invalid_argument& e) {
     check_refusal(e.what());
     return 0;

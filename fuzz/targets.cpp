@@ -84,7 +84,7 @@ int guarded(Body body) {
 }
 
 const config::Study& paper_frame() {
-  static const config::Study study = core::parse_study(kPaperFrame, "paper_frame");
+  static const config::Study study = study::parse_study(kPaperFrame, "paper_frame");
   return study;
 }
 
@@ -120,17 +120,18 @@ runtime::Assign paper_assign(int node_id, config::NodeSpec::Kind kind) {
 
 int study_config(const std::uint8_t* data, std::size_t size) {
   return guarded([&] {
-    const config::Study study = core::parse_study(as_text(data, size), "fuzz");
-    core::validate_study(study, "fuzz");
+    const config::Study study = study::parse_study(as_text(data, size), "fuzz");
+    study::validate_study(study, "fuzz");
     const double dt = study.integrator().dt() > 0 ? study.integrator().dt() : 0.01;
-    runtime::setup_without_motion(study, fs::temp_directory_path(), dt, core::find_case(study, ""));
+    runtime::setup_without_motion(study, fs::temp_directory_path(), dt,
+                                  study::find_case(study, ""));
   });
 }
 
 int deployment_config(const std::uint8_t* data, std::size_t size) {
   return guarded([&] {
     config::Deployment deployment;
-    core::parse_text_format(as_text(data, size), "fuzz", deployment);
+    study::parse_text_format(as_text(data, size), "fuzz", deployment);
     runtime::make_plan(paper_setup(), runtime::with_default_nodes(deployment, paper_setup()));
   });
 }
@@ -140,13 +141,13 @@ int sites_config(const std::uint8_t* data, std::size_t size) {
 }
 
 int at2_motion(const std::uint8_t* data, std::size_t size) {
-  return guarded([&] { core::read_at2(scratch().write(data, size)); });
+  return guarded([&] { study::read_at2(scratch().write(data, size)); });
 }
 
 int column_motion(const std::uint8_t* data, std::size_t size) {
   const fs::path& file = scratch().write(data, size);
-  guarded([&] { core::read_columns(file, 0.01, core::kGravity); });
-  return guarded([&] { core::read_columns(file, 0.0, 1.0); });
+  guarded([&] { study::read_columns(file, 0.01, core::kGravity); });
+  return guarded([&] { study::read_columns(file, 0.0, 1.0); });
 }
 
 int daq_export(const std::uint8_t* data, std::size_t size) {

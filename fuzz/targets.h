@@ -4,9 +4,9 @@
 // or std::runtime_error, caught here; anything else (a crash, an AddressSanitizer or UBSan report,
 // any other exception, a hang, a leak) is a bug the fuzzer reports.
 //
-//   study_config       core::parse_study + validate_study, then the hybrid setup of the reference
+//   study_config       study::parse_study + validate_study, then the hybrid setup of the reference
 //                      case without its motion (structure, partition, delay chains)
-//   study_values       core::parse_study (with its validation): a refusal must name a field of the
+//   study_values       study::parse_study (with its validation): a refusal must name a field of the
 //                      study or a line:column; an accepted study must hold no value that is not
 //                      finite, and no given value that must be > 0 (Sdof.mass, the benchmark
 //                      plant's mass and stiffness) that is not: a default stands only for an
@@ -14,8 +14,8 @@
 //   deployment_config  a config::Deployment in text format, its default nodes and plan against
 //                      the paper's frame (runtime::with_default_nodes, make_plan)
 //   sites_config       deploy::parse_sites (the `rths sites` config)
-//   at2_motion         core::read_at2 (PEER AT2, both header dialects)
-//   column_motion      core::read_columns, one column at dt = 0.01 s and two columns (dt = 0)
+//   at2_motion         study::read_at2 (PEER AT2, both header dialects)
+//   column_motion      study::read_columns, one column at dt = 0.01 s and two columns (dt = 0)
 //   daq_export         identify::read_measured (DAQ raw export or CSV), at least 2 samples
 //   run_record         runtime::read_record, then the CSV table `rths export` writes of it
 //   record_flips       a checksummed record built from the input, with bytes flipped as the

@@ -19,7 +19,7 @@
 namespace rths::opensees {
 
 struct Site::Prepared {
-  core::PreparedStudy prepared;
+  study::PreparedStudy prepared;
   core::HybridSetup setup;
   config::Deployment deployment;
   std::string case_name;
@@ -118,15 +118,15 @@ std::string read_size_message(Connection& client, int basic_dofs, int expected_f
 Site::Site(SiteOptions options)
     : prepared_(std::make_unique<Prepared>()), options_(std::move(options)) {
   Prepared& p = *prepared_;
-  const config::Study study = core::load_study(options_.config);
-  p.prepared = core::prepare_study(study, options_.config.parent_path());
+  const config::Study study = study::load_study(options_.config);
+  p.prepared = study::prepare_study(study, options_.config.parent_path());
   // OpenSees' `analyze N dt` over an N-sample record ends at t = N dt, one step past the record's
   // last sample, where its Path time series gives 0: the site's motion has that sample too.
   p.prepared.motion.acceleration.push_back(0.0);
-  const config::Case& study_case = core::find_case(
+  const config::Case& study_case = study::find_case(
       study, options_.case_name.empty() ? study.deployment().case_name() : options_.case_name);
   p.case_name = study_case.name();
-  p.setup = core::setup_for_case(p.prepared, study_case);
+  p.setup = study::setup_for_case(p.prepared, study_case);
   p.deployment = runtime::with_default_nodes(study.deployment(), p.setup);
   require_site_study(p.setup, p.deployment, p.case_name);
   runtime::check_node_stages(runtime::make_plan(p.setup, p.deployment), p.setup.dt,

@@ -131,12 +131,12 @@ py::dict attributes_dict(const results::Table& table) {
 }
 
 Study load_study(const std::filesystem::path& path) {
-  return {core::load_study(path), path.parent_path(), path.string()};
+  return {study::load_study(path), path.parent_path(), path.string()};
 }
 
 Study parse_study(const std::string& text, const std::filesystem::path& base_dir,
                   const std::string& source) {
-  return {core::parse_study(text, source), base_dir, source};
+  return {study::parse_study(text, source), base_dir, source};
 }
 
 py::dict run(const Study& study, const std::optional<std::vector<std::string>>& cases) {
@@ -162,7 +162,7 @@ py::dict run(const Study& study, const std::optional<std::vector<std::string>>& 
   std::optional<analysis::BenchmarkEvaluation> benchmark;
   {
     py::gil_scoped_release release;
-    const core::PreparedStudy prepared = core::prepare_study(chosen, study.base_dir);
+    const study::PreparedStudy prepared = study::prepare_study(chosen, study.base_dir);
     outcome = analysis::run_study(prepared);
     table = analysis::study_table(outcome);
     benchmark = analysis::evaluate_benchmark(prepared, outcome);
@@ -207,12 +207,12 @@ py::dict sweep(const Study& study, const std::string& shard, int threads, bool g
 py::dict stability(double period, double zeta, double alpha, double dt,
                    const std::string& integrator, int branches, int max_steps) {
   // The same range rules as `rths stability`'s flags (study/ranges.h), named as the arguments.
-  core::check_range(core::Quantity::kPeriod, period, "period_s");
-  core::check_range(core::Quantity::kDampingRatio, zeta, "zeta");
-  core::check_range(core::Quantity::kFraction, alpha, "experimental_fraction");
-  core::check_range(core::Quantity::kStep, dt, "dt_s");
-  core::check_range(core::Quantity::kCount, static_cast<long long>(branches), "branches");
-  core::check_range(core::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
+  study::check_range(study::Quantity::kPeriod, period, "period_s");
+  study::check_range(study::Quantity::kDampingRatio, zeta, "zeta");
+  study::check_range(study::Quantity::kFraction, alpha, "experimental_fraction");
+  study::check_range(study::Quantity::kStep, dt, "dt_s");
+  study::check_range(study::Quantity::kCount, static_cast<long long>(branches), "branches");
+  study::check_range(study::Quantity::kCount, static_cast<long long>(max_steps), "max_steps");
   const auto kind = core::integrator_from_string(integrator);
   const core::ContinuousStability continuous =
       core::continuous_critical_delay(period, zeta, alpha, branches);

@@ -73,7 +73,7 @@ void set_run_facts(const runtime::RecordContents& record, Table& t) {
         .name = e.name(),
         .dt = e.dt(),
         .acceleration = {e.acceleration().begin(), e.acceleration().end()}};
-    set_motion_attributes(t, e.name(), core::motion_key(as_run), e.source_sha256());
+    set_motion_attributes(t, e.name(), study::motion_key(as_run), e.source_sha256());
   } else {
     set_motion_attributes(t, "", "", motion.sha256());
   }

@@ -9,7 +9,7 @@
 // where the outcome is, in analysis/result_tables.h, on this naming.
 // Every table of a run (those and record_table) has the attributes
 //   study (text), dt_s (number, s), motion_name, motion_sha256 (SHA-256 of the motion as run:
-//   dt, then the samples in m/s^2 as IEEE doubles, core::motion_key; the same in a run's
+//   dt, then the samples in m/s^2 as IEEE doubles, study::motion_key; the same in a run's
 //   table and in its records' exports), motion_file_sha256 (of the file it was read from), the
 //   verdict status (text) and ok (number: 1 the run(s) went as meant, 0 not).
 // Numbers are number attributes (Table::set_number_attribute), the rest text.

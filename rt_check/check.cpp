@@ -38,7 +38,7 @@ std::vector<int> allowed_cpus() {
   return cpus;
 }
 
-PlatformCheck check_platform(const core::PreparedStudy& prepared, double seconds) {
+PlatformCheck check_platform(const study::PreparedStudy& prepared, double seconds) {
   const double dt = prepared.base.dt;
   return check_platform(prepared.config.deployment(), dt,
                         static_cast<double>(prepared.motion.acceleration.size()) * dt, seconds);

@@ -35,7 +35,7 @@ std::vector<int> allowed_cpus();
 
 // dt and run length from the study (integrator dt, motion length). Throws std::runtime_error
 // naming the CPU when a measuring thread cannot be placed.
-PlatformCheck check_platform(const core::PreparedStudy& prepared, double seconds);
+PlatformCheck check_platform(const study::PreparedStudy& prepared, double seconds);
 // The same for a deployment at dt (s) judged for a run of run_seconds.
 PlatformCheck check_platform(const config::Deployment& deployment, double dt, double run_seconds,
                              double seconds);

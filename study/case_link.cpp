@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <stdexcept>
 
-namespace rths::core {
+namespace rths::study {
 
-LinkWay link_way(const config::LinkLag& lag) {
-  LinkWay way;
+core::LinkWay link_way(const config::LinkLag& lag) {
+  core::LinkWay way;
   way.one_way_delay = lag.one_way_delay();
   way.jitter = lag.jitter();
   way.seed = lag.seed();
@@ -21,7 +21,7 @@ LinkWay link_way(const config::LinkLag& lag) {
   return way;
 }
 
-void apply_case_links(HybridSetup& setup,
+void apply_case_links(core::HybridSetup& setup,
                       const google::protobuf::RepeatedPtrField<config::CaseLink>& links,
                       const std::string& where) {
   setup.links.clear();
@@ -37,19 +37,20 @@ void apply_case_links(HybridSetup& setup,
   }
 }
 
-double answer_lag(const HybridSetup& setup) {
+double answer_lag(const core::HybridSetup& setup) {
   double lag = 0.0;
   for (std::size_t a = 0; a < setup.delays.size(); ++a)
-    lag = std::max(lag, setup.delays[a].nominal_delay() +
-                            (a < setup.links.size() ? nominal_round_trip(setup.links[a]) : 0.0));
+    lag = std::max(lag,
+                   setup.delays[a].nominal_delay() +
+                       (a < setup.links.size() ? core::nominal_round_trip(setup.links[a]) : 0.0));
   return lag;
 }
 
-std::string case_delay_text(const HybridSetup& setup) {
+std::string case_delay_text(const core::HybridSetup& setup) {
   if (setup.delays.empty()) return "no experimental substructure";
   std::string text = setup.delays.front().describe();
-  if (!setup.links.empty()) text += "; " + describe_link(setup.links.front());
+  if (!setup.links.empty()) text += "; " + core::describe_link(setup.links.front());
   return text;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

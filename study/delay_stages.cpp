@@ -11,7 +11,7 @@
 
 // make_delay_stage and make_delay_chain: the blocks of rths_core a validated study's delay
 // stages name, each at its amplitude gain.
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 double effective_gain(const config::DelayStage& stage) {
@@ -19,17 +19,17 @@ double effective_gain(const config::DelayStage& stage) {
 }
 
 // A motion carried by a run record's header: checked as a file's would be, read from nowhere.
-DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
+core::DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
   const std::string what = "delay trace (embedded, from '" + trace.path() + "')";
   if (trace.time_size() != trace.delay_size())
     throw std::invalid_argument(what + ": " + std::to_string(trace.time_size()) + " times but " +
                                 std::to_string(trace.delay_size()) + " delays");
-  DelayTrace out{{trace.time().begin(), trace.time().end()},
-                 {trace.delay().begin(), trace.delay().end()}};
+  core::DelayTrace out{{trace.time().begin(), trace.time().end()},
+                       {trace.delay().begin(), trace.delay().end()}};
   for (std::size_t i = 0; i < out.time.size(); ++i) {
     if (!(out.delay[i] >= 0.0) || !std::isfinite(out.delay[i]))
       throw std::invalid_argument(what + ": sample " + std::to_string(i) + " has delay " +
-                                  format_number(out.delay[i]));
+                                  core::format_number(out.delay[i]));
     if (!std::isfinite(out.time[i]) || (i > 0 && !(out.time[i] > out.time[i - 1])))
       throw std::invalid_argument(what + ": time of sample " + std::to_string(i) +
                                   " does not increase");
@@ -39,41 +39,42 @@ DelayTrace embedded_trace(const config::DelayStage::Trace& trace) {
 
 // The stages that model a rig's effects (core/rig_effects.h): motion limits, sensor errors and
 // the specimen's parasitic forces; null for any other kind.
-std::unique_ptr<DelayStage> make_rig_effect(const config::DelayStage& stage, double dt) {
+std::unique_ptr<core::DelayStage> make_rig_effect(const config::DelayStage& stage, double dt) {
   using K = config::DelayStage::KindCase;
-  std::unique_ptr<DelayStage> block;
+  std::unique_ptr<core::DelayStage> block;
   switch (stage.kind_case()) {
     case K::kBacklash:
-      block = std::make_unique<MotionLimit>(MotionLimit::backlash(stage.backlash().width()));
+      block = std::make_unique<core::MotionLimit>(
+          core::MotionLimit::backlash(stage.backlash().width()));
       break;
     case K::kVelocityLimit:
-      block = std::make_unique<MotionLimit>(
-          MotionLimit::velocity_limit(stage.velocity_limit().max_velocity(), dt));
+      block = std::make_unique<core::MotionLimit>(
+          core::MotionLimit::velocity_limit(stage.velocity_limit().max_velocity(), dt));
       break;
     case K::kStrokeLimit:
-      block =
-          std::make_unique<MotionLimit>(MotionLimit::stroke_limit(stage.stroke_limit().stroke()));
+      block = std::make_unique<core::MotionLimit>(
+          core::MotionLimit::stroke_limit(stage.stroke_limit().stroke()));
       break;
     case K::kSensorDrift: {
       const auto& d = stage.sensor_drift();
       const double scale = d.displacement_scale() == 0.0 ? 1.0 : d.displacement_scale();
-      block = std::make_unique<SensorDrift>(SensorErrors{d.displacement_offset(),
-                                                         d.displacement_drift(), d.force_offset(),
-                                                         d.force_drift(), scale});
+      block = std::make_unique<core::SensorDrift>(
+          core::SensorErrors{d.displacement_offset(), d.displacement_drift(), d.force_offset(),
+                             d.force_drift(), scale});
       break;
     }
     case K::kViscousForce:
-      block = std::make_unique<ViscousForce>(stage.viscous_force().damping(), dt);
+      block = std::make_unique<core::ViscousForce>(stage.viscous_force().damping(), dt);
       break;
     case K::kInertiaForce:
-      block = std::make_unique<InertiaForce>(stage.inertia_force().mass(), dt);
+      block = std::make_unique<core::InertiaForce>(stage.inertia_force().mass(), dt);
       break;
     case K::kFrictionForce:
-      block = std::make_unique<FrictionForce>(stage.friction_force().friction_force(),
-                                              stage.friction_force().smoothing_velocity(), dt);
+      block = std::make_unique<core::FrictionForce>(
+          stage.friction_force().friction_force(), stage.friction_force().smoothing_velocity(), dt);
       break;
     case K::kForceDelay:
-      block = std::make_unique<ForceDelay>(stage.force_delay().delay(), dt);
+      block = std::make_unique<core::ForceDelay>(stage.force_delay().delay(), dt);
       break;
     default: break;
   }
@@ -82,41 +83,41 @@ std::unique_ptr<DelayStage> make_rig_effect(const config::DelayStage& stage, dou
 
 }  // namespace
 
-std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
-                                             const std::filesystem::path& base_dir) {
+std::unique_ptr<core::DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
+                                                   const std::filesystem::path& base_dir) {
   using K = config::DelayStage::KindCase;
-  std::unique_ptr<DelayStage> block;
+  std::unique_ptr<core::DelayStage> block;
   switch (stage.kind_case()) {
-    case K::kShift: block = std::make_unique<TimeShift>(stage.shift().delay(), dt); break;
-    case K::kEq1: block = std::make_unique<Eq1Lead>(stage.eq1().delay()); break;
-    case K::kEq1Lag: block = std::make_unique<Eq1Lag>(stage.eq1_lag().delay()); break;
+    case K::kShift: block = std::make_unique<core::TimeShift>(stage.shift().delay(), dt); break;
+    case K::kEq1: block = std::make_unique<core::Eq1Lead>(stage.eq1().delay()); break;
+    case K::kEq1Lag: block = std::make_unique<core::Eq1Lag>(stage.eq1_lag().delay()); break;
     case K::kFirstOrder:
-      block = std::make_unique<FirstOrderActuator>(stage.first_order().time_constant(), dt);
+      block = std::make_unique<core::FirstOrderActuator>(stage.first_order().time_constant(), dt);
       break;
-    case K::kBenchmark: block = make_benchmark_actuator(dt); break;
+    case K::kBenchmark: block = core::make_benchmark_actuator(dt); break;
     case K::kTransferFunction: {
       const auto& tf = stage.transfer_function();
-      block = std::make_unique<TransferFunctionStage>(
+      block = std::make_unique<core::TransferFunctionStage>(
           std::vector<double>(tf.numerator().begin(), tf.numerator().end()),
           std::vector<double>(tf.denominator().begin(), tf.denominator().end()), dt);
       break;
     }
     case K::kJitter:
-      block = std::make_unique<JitterShift>(stage.jitter().mean_delay(), stage.jitter().std_dev(),
-                                            stage.jitter().seed(), dt);
+      block = std::make_unique<core::JitterShift>(
+          stage.jitter().mean_delay(), stage.jitter().std_dev(), stage.jitter().seed(), dt);
       break;
     case K::kTrace: {
       if (stage.trace().time_size() > 0) {
-        block = std::make_unique<TraceShift>(embedded_trace(stage.trace()), dt);
+        block = std::make_unique<core::TraceShift>(embedded_trace(stage.trace()), dt);
         break;
       }
       std::filesystem::path path = stage.trace().path();
       if (path.is_relative()) path = base_dir / path;
-      block = std::make_unique<TraceShift>(read_delay_trace(path), dt);
+      block = std::make_unique<core::TraceShift>(read_delay_trace(path), dt);
       break;
     }
     case K::kTrackingLoop:
-      block = std::make_unique<TrackingLoop>(
+      block = std::make_unique<core::TrackingLoop>(
           make_tracking_loop(stage.tracking_loop(), dt, "tracking_loop"));
       break;
     case K::kBacklash:
@@ -133,11 +134,12 @@ std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, do
   return block;
 }
 
-DelayChain make_delay_chain(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
-                            double dt, const std::filesystem::path& base_dir) {
-  DelayChain chain;
+core::DelayChain make_delay_chain(
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& stages, double dt,
+    const std::filesystem::path& base_dir) {
+  core::DelayChain chain;
   for (const config::DelayStage& stage : stages) chain.add(make_delay_stage(stage, dt, base_dir));
   return chain;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

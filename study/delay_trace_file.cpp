@@ -5,10 +5,10 @@
 
 #include "study/text_columns.h"
 
-namespace rths::core {
+namespace rths::study {
 
-DelayTrace read_delay_trace(const std::filesystem::path& path) {
-  DelayTrace trace;
+core::DelayTrace read_delay_trace(const std::filesystem::path& path) {
+  core::DelayTrace trace;
   for (const TextRow& row : read_text_columns(path, "delay trace").rows) {
     const std::string where = text_position(path, row.line);
     if (row.values.size() != 2) {
@@ -17,11 +17,11 @@ DelayTrace read_delay_trace(const std::filesystem::path& path) {
     }
     const double time = row.values[0], delay = row.values[1];
     if (delay < 0.0)
-      throw std::invalid_argument(where + "delay " + format_number(delay) + " is negative");
+      throw std::invalid_argument(where + "delay " + core::format_number(delay) + " is negative");
     if (!trace.time.empty() && !(time > trace.time.back())) {
-      throw std::invalid_argument(where + "time " + format_number(time) +
+      throw std::invalid_argument(where + "time " + core::format_number(time) +
                                   " does not increase (previous " +
-                                  format_number(trace.time.back()) + ")");
+                                  core::format_number(trace.time.back()) + ")");
     }
     trace.time.push_back(time);
     trace.delay.push_back(delay);
@@ -31,4 +31,4 @@ DelayTrace read_delay_trace(const std::filesystem::path& path) {
   return trace;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -7,8 +7,8 @@
 
 #include "core/delay.h"
 
-namespace rths::core {
+namespace rths::study {
 
-DelayTrace read_delay_trace(const std::filesystem::path& path);
+core::DelayTrace read_delay_trace(const std::filesystem::path& path);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace rths::core {
+namespace rths::study {
 
 namespace {
 
@@ -74,4 +74,4 @@ void require_known_enums(const Message& message, const std::string& source) {
   check(message, "", source);
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -14,8 +14,8 @@ namespace google::protobuf {
 class Message;
 }
 
-namespace rths::core {
+namespace rths::study {
 
 void require_known_enums(const google::protobuf::Message& message, const std::string& source);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace rths::core {
+namespace rths::study {
 
 namespace {
 
@@ -51,4 +51,4 @@ void require_memory(std::uint64_t rows, std::uint64_t bytes_per_row, const std::
   throw std::invalid_argument(why.str());
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

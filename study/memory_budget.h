@@ -13,10 +13,10 @@
 #include <cstdint>
 #include <string>
 
-namespace rths::core {
+namespace rths::study {
 
 std::uint64_t memory_limit_bytes();
 
 void require_memory(std::uint64_t rows, std::uint64_t bytes_per_row, const std::string& what);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -12,23 +12,23 @@
 #include "study/text_columns.h"
 #include "util/sha256.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
-GroundMotion embedded_motion(const config::EmbeddedMotion& embedded) {
+core::GroundMotion embedded_motion(const config::EmbeddedMotion& embedded) {
   const std::string what = "motion.embedded ('" + embedded.name() + "')";
   if (!(embedded.dt() > 0.0) || !std::isfinite(embedded.dt()))
-    throw std::invalid_argument(what + ": dt = " + format_number(embedded.dt()) +
+    throw std::invalid_argument(what + ": dt = " + core::format_number(embedded.dt()) +
                                 " s is not a positive step");
   if (embedded.acceleration_size() == 0) throw std::invalid_argument(what + ": no samples");
-  GroundMotion record{embedded.name(),
-                      embedded.dt(),
-                      {embedded.acceleration().begin(), embedded.acceleration().end()}};
+  core::GroundMotion record{embedded.name(),
+                            embedded.dt(),
+                            {embedded.acceleration().begin(), embedded.acceleration().end()}};
   for (std::size_t i = 0; i < record.acceleration.size(); ++i)
     if (!std::isfinite(record.acceleration[i]))
       throw std::invalid_argument(what + ": sample " + std::to_string(i) + " is not finite");
   if (!(record.peak_abs() <= kMaxPeakGroundAcceleration))
-    throw std::invalid_argument(what + ": peak " + format_number(record.peak_abs()) +
+    throw std::invalid_argument(what + ": peak " + core::format_number(record.peak_abs()) +
                                 " m/s^2 is beyond any recorded earthquake");
   return record;
 }
@@ -61,7 +61,7 @@ double units_to_si(config::GroundMotion::Units units) {
     case config::GroundMotion::CM_PER_S2: return 0.01;
     case config::GroundMotion::IN_PER_S2: return 0.0254;
     case config::GroundMotion::MM_PER_S2: return 0.001;
-    default: return kGravity;
+    default: return core::kGravity;
   }
 }
 
@@ -85,7 +85,7 @@ namespace {
 // header and a config that disagree are refused naming both.
 struct ReadUnits {
   std::string name;
-  double to_si = kGravity;
+  double to_si = core::kGravity;
   std::string source;
 };
 
@@ -103,7 +103,7 @@ ReadUnits at2_units(const config::GroundMotion& motion, const std::filesystem::p
   if (motion.has_column_units())
     return {units_name(motion.column_units()), units_to_si(motion.column_units()),
             "motion.column_units; the AT2 header states none"};
-  return {"g", kGravity, "the AT2 format; its header states none"};
+  return {"g", core::kGravity, "the AT2 format; its header states none"};
 }
 
 ReadUnits column_units(const config::GroundMotion& motion, const std::string& what) {
@@ -117,12 +117,12 @@ ReadUnits column_units(const config::GroundMotion& motion, const std::string& wh
           "motion.column_units"};
 }
 
-std::string describe_read(const GroundMotion& record, const ReadUnits& units) {
+std::string describe_read(const core::GroundMotion& record, const ReadUnits& units) {
   std::ostringstream out;
   out << std::setprecision(4) << record.acceleration.size() << " points at dt " << record.dt
       << " s (" << record.duration() << " s), PGA " << record.peak_abs() / units.to_si << " "
       << units.name;
-  if (units.name != "g") out << " = " << record.peak_abs() / kGravity << " g";
+  if (units.name != "g") out << " = " << record.peak_abs() / core::kGravity << " g";
   out << "; values in " << units.name << " (" << units.source << ")";
   return out.str();
 }
@@ -157,8 +157,8 @@ std::optional<MotionFileExtent> motion_extent_before_reading(
   return extent;
 }
 
-GroundMotion load_motion(const config::GroundMotion& motion,
-                         const std::filesystem::path& base_dir) {
+core::GroundMotion load_motion(const config::GroundMotion& motion,
+                               const std::filesystem::path& base_dir) {
   if (motion.has_embedded()) return embedded_motion(motion.embedded());
   const std::filesystem::path path = checked_motion_path(motion, base_dir);
   if (!motion.sha256().empty()) check_sha256(path, motion.sha256());
@@ -166,13 +166,13 @@ GroundMotion load_motion(const config::GroundMotion& motion,
   if (motion.format() == config::GroundMotion::AUTO) at2 = is_at2_file(path);
   const std::string what = "motion '" + path.string() + "'";
   const ReadUnits units = at2 ? at2_units(motion, path, what) : column_units(motion, what);
-  GroundMotion record =
+  core::GroundMotion record =
       at2 ? read_at2(path, units.to_si) : read_columns(path, motion.column_dt(), units.to_si);
   const double peak = record.peak_abs();
   if (!(peak <= kMaxPeakGroundAcceleration)) {
     std::ostringstream message;
-    message << what << ": peak acceleration " << peak / kGravity << " g read as " << units.name
-            << " (" << units.source
+    message << what << ": peak acceleration " << peak / core::kGravity << " g read as "
+            << units.name << " (" << units.source
             << ") is beyond any recorded earthquake (under 4 g); are the units right "
                "(motion.column_units, --motion-units)?";
     throw std::invalid_argument(message.str());
@@ -181,10 +181,10 @@ GroundMotion load_motion(const config::GroundMotion& motion,
   record.description = describe_read(record, units);
   if (motion.scale() < 0) throw std::invalid_argument("motion.scale must be >= 0");
   if (motion.scale() > 0 && motion.scale() != 1.0)
-    record = scaled(std::move(record), motion.scale());
+    record = core::scaled(std::move(record), motion.scale());
   if (motion.duration() > 0 && motion.duration() < record.duration())
-    record.description += "; the first " + format_number(motion.duration()) + " s used";
-  return truncated(std::move(record), motion.duration());
+    record.description += "; the first " + core::format_number(motion.duration()) + " s used";
+  return core::truncated(std::move(record), motion.duration());
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

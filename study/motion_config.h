@@ -12,17 +12,18 @@
 #include "rths/proto/config.pb.h"
 #include "study/motion_files.h"
 
-namespace rths::core {
+namespace rths::study {
 
 inline constexpr double kMaxPeakGroundAcceleration =
-    5.0 * kGravity;  // m/s^2; recorded peaks stay under 4 g
+    5.0 * core::kGravity;  // m/s^2; recorded peaks stay under 4 g
 
 // Reads the record in SI, with its read_units and description (core/ground_motion.h). An AT2
 // file is read in the units its header states (at2_stated_units, study/motion_files.h), else
 // column_units, else g. Throws std::invalid_argument when a columns file has no column_units, an
 // AT2 header and column_units disagree (naming both), or the peak exceeds
 // kMaxPeakGroundAcceleration (a record in cm/s^2 read as g or m/s^2).
-GroundMotion load_motion(const config::GroundMotion& motion, const std::filesystem::path& base_dir);
+core::GroundMotion load_motion(const config::GroundMotion& motion,
+                               const std::filesystem::path& base_dir);
 // The record's extent from its file before a sample is parsed (motion_file_extent: a lower
 // bound on its samples, at most what motion.duration keeps), for sizing the run first. Empty
 // for an embedded motion or a column file without column_dt. Throws as load_motion does on a
@@ -40,4 +41,4 @@ config::GroundMotion::Units units_from_name(const std::string& name);
 // used).
 std::string motion_units_name(const config::GroundMotion& motion);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 // getline that also drops the '\r' of CRLF files (PEER NGA files are CRLF).
@@ -243,7 +243,7 @@ std::optional<StatedUnits> units_in_line(const std::string& text, const std::str
       text.find("UNIT") != std::string::npos || text.find("ACCEL") != std::string::npos;
   if (!about_units) return std::nullopt;
   if (has_word(text, "GAL") || has_word(text, "GALS")) return StatedUnits{"cm/s2", 0.01, line};
-  if (has_word(text, "G")) return StatedUnits{"g", kGravity, line};
+  if (has_word(text, "G")) return StatedUnits{"g", core::kGravity, line};
   return std::nullopt;
 }
 
@@ -259,14 +259,14 @@ std::optional<StatedUnits> at2_stated_units(const std::filesystem::path& path) {
   return std::nullopt;
 }
 
-GroundMotion read_at2(const std::filesystem::path& path, double to_si) {
+core::GroundMotion read_at2(const std::filesystem::path& path, double to_si) {
   require_motion_file_size(path);
   std::ifstream in(path);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open AT2 file");
   const At2Header header = read_at2_header(in, path);
   std::string line;
 
-  GroundMotion motion;
+  core::GroundMotion motion;
   motion.name = path.stem().string();
   motion.dt = header.dt;
   motion.acceleration.reserve(std::min(static_cast<std::size_t>(header.npts), kAt2Reserve));
@@ -365,7 +365,7 @@ double column_file_step(const std::vector<double>& times, std::size_t columns, d
 
 }  // namespace
 
-GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si) {
+core::GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si) {
   if (!(to_si > 0.0) || !std::isfinite(to_si)) {
     throw std::invalid_argument(path.string() + ": unit factor to m/s^2 must be > 0, got " +
                                 std::to_string(to_si));
@@ -384,7 +384,7 @@ GroundMotion read_columns(const std::filesystem::path& path, double dt, double t
                       values.push_back(row.back() * to_si);
                     });
   if (values.empty()) throw std::invalid_argument(path.string() + ": no acceleration values");
-  GroundMotion motion;
+  core::GroundMotion motion;
   motion.name = path.stem().string();
   motion.dt = column_file_step(times, shape.columns, dt, path);
   motion.acceleration = std::move(values);
@@ -402,11 +402,11 @@ bool is_at2_file(const std::filesystem::path& path) {
   return false;
 }
 
-GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
-                                double column_to_si) {
+core::GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt,
+                                      double column_to_si) {
   if (!is_at2_file(path)) return read_columns(path, column_dt, column_to_si);
   const std::optional<StatedUnits> stated = at2_stated_units(path);
-  return read_at2(path, stated ? stated->to_si : kGravity);
+  return read_at2(path, stated ? stated->to_si : core::kGravity);
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -10,7 +10,7 @@
 
 #include "core/ground_motion.h"
 
-namespace rths::core {
+namespace rths::study {
 
 // A motion file's reading once held far more than its bytes: read_text_columns keeps an object
 // per line, so a file of one-character samples ("1\n", the densest text) held 48.1 bytes of
@@ -59,14 +59,14 @@ std::optional<MotionFileExtent> motion_file_extent(const std::filesystem::path& 
 // whitespace-separated layout (8F10.5, 5E15.7, ...), each multiplied by `to_si` (the units'
 // m/s^2; g by the format). Throws std::invalid_argument (bad input) naming the file and line when
 // the header is malformed, a value does not parse, or fewer or more than NPTS values are found.
-GroundMotion read_at2(const std::filesystem::path& path, double to_si = kGravity);
+core::GroundMotion read_at2(const std::filesystem::path& path, double to_si = core::kGravity);
 
 // The acceleration units an AT2 header states on its first 3 lines ("... IN UNITS OF G",
 // "UNITS: CM/S/S", "ACCEL (CM/SEC/SEC)", ...): the name (g, m/s2, cm/s2, in/s2, mm/s2), its m/s^2
 // and the header line that said it. Empty when no line names a unit. Reads those lines only.
 struct StatedUnits {
   std::string name;
-  double to_si = kGravity;
+  double to_si = core::kGravity;
   std::string line;
 };
 std::optional<StatedUnits> at2_stated_units(const std::filesystem::path& path);
@@ -74,14 +74,14 @@ std::optional<StatedUnits> at2_stated_units(const std::filesystem::path& path);
 // Reads plain text: one column (acceleration; needs dt > 0) or two (time, acceleration; uniform
 // spacing is checked). Lines starting with '#' or that are empty are skipped; a non-numeric first
 // line is taken as a header. `to_si` converts the file's acceleration units to m/s^2.
-GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si);
+core::GroundMotion read_columns(const std::filesystem::path& path, double dt, double to_si);
 
 // Whether the 4th line mentions NPTS (the AT2 header). Throws when the file cannot be opened.
 bool is_at2_file(const std::filesystem::path& path);
 
 // Chooses AT2 when the 4th line mentions NPTS (in the units its header states, else g), otherwise
 // columns.
-GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt = 0.0,
-                                double column_to_si = kGravity);
+core::GroundMotion read_ground_motion(const std::filesystem::path& path, double column_dt = 0.0,
+                                      double column_to_si = core::kGravity);
 
-}  // namespace rths::core
+}  // namespace rths::study

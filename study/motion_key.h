@@ -8,8 +8,8 @@
 
 #include "core/ground_motion.h"
 
-namespace rths::core {
+namespace rths::study {
 
-std::string motion_key(const GroundMotion& motion);
+std::string motion_key(const core::GroundMotion& motion);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -8,7 +8,7 @@
 
 #include "study/text_columns.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 double configured_cpus() {
@@ -32,8 +32,8 @@ bool Range::contains(double value) const {
 
 std::string Range::text() const {
   return with_unit(
-      std::string(min_open ? "(" : "[") + format_number(min) + ", " +
-          (integer ? std::to_string(static_cast<long long>(max)) : format_number(max)) +
+      std::string(min_open ? "(" : "[") + core::format_number(min) + ", " +
+          (integer ? std::to_string(static_cast<long long>(max)) : core::format_number(max)) +
           (max_open ? ")" : "]"),
       unit);
 }
@@ -65,13 +65,13 @@ std::string range_violation(Quantity quantity, double value, std::string_view na
   const Range range = range_of(quantity);
   if (range.contains(value)) return "";
   std::string message = (name.empty() ? "" : std::string(name) + " = ") +
-                        with_unit(format_number(value), range.unit) + " is outside " +
+                        with_unit(core::format_number(value), range.unit) + " is outside " +
                         range.text() + " (" + std::string(range.what) + ")";
   if (quantity == Quantity::kLag && value > range.max) {
     message +=
         "; lags are in seconds (14 ms is 0.014); allow_long_lag: true in the study allows "
         "up to " +
-        format_number(range_of(Quantity::kLongLag).max) + " s";
+        core::format_number(range_of(Quantity::kLongLag).max) + " s";
   }
   return message;
 }
@@ -92,4 +92,4 @@ double check_lag(double seconds, std::string_view name, bool allow_long_lag) {
   return check_range(allow_long_lag ? Quantity::kLongLag : Quantity::kLag, seconds, name);
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -28,7 +28,7 @@
 #include <string>
 #include <string_view>
 
-namespace rths::core {
+namespace rths::study {
 
 enum class Quantity {
   kLag,
@@ -73,4 +73,4 @@ std::string range_violation(Quantity quantity, double value, std::string_view na
 // A lag: kLongLag with `allow_long_lag`, else kLag (whose message then names allow_long_lag).
 double check_lag(double seconds, std::string_view name, bool allow_long_lag = false);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 using Kind = RecordedChannel::Kind;
@@ -121,8 +121,9 @@ std::size_t RecorderPlan::columns_per_case(std::size_t actuators) const {
   return columns;
 }
 
-SimulationOptions kept_by_recorders(const RecorderPlan& plan, const config::SafetyLimits& limits) {
-  SimulationOptions options;
+core::SimulationOptions kept_by_recorders(const RecorderPlan& plan,
+                                          const config::SafetyLimits& limits) {
+  core::SimulationOptions options;
   options.kept_dofs = plan.kept_dofs;
   options.base_shear = plan.base_shear;
   options.peaks = limits.max_displacement() > 0 || limits.max_velocity() > 0;
@@ -194,7 +195,7 @@ RecorderPlan plan_recorders(const config::Study& study, int dofs,
   return plan;
 }
 
-std::vector<int> experimental_dofs(const HybridPartition& partition) {
+std::vector<int> experimental_dofs(const core::HybridPartition& partition) {
   std::set<int> out;
   const int dofs = partition.dofs();
   for (int s : partition.actuator_storeys) {
@@ -210,4 +211,4 @@ std::vector<int> experimental_dofs(const HybridPartition& partition) {
   return {out.begin(), out.end()};
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -27,7 +27,7 @@
 #include "core/substructure.h"
 #include "rths/proto/config.pb.h"
 
-namespace rths::core {
+namespace rths::study {
 
 inline constexpr int kAllDofsLimit = 200;
 
@@ -67,7 +67,8 @@ RecorderPlan plan_recorders(const config::Study& study, int dofs,
 // What each simulation of the study keeps per step (core::SimulationOptions), in process and in
 // the coordinator's loop alike: the plan's kept DOFs and base shear, and the per-step peaks over
 // every DOF when `limits` sets a displacement or velocity limit (what it is judged on).
-SimulationOptions kept_by_recorders(const RecorderPlan& plan, const config::SafetyLimits& limits);
+core::SimulationOptions kept_by_recorders(const RecorderPlan& plan,
+                                          const config::SafetyLimits& limits);
 
 // Bytes a run of `cases` cases holds per step of the motion, at most (what prepare_study checks
 // against the memory limit before anything is allocated): per simulation (the lag-free run and
@@ -81,6 +82,6 @@ std::uint64_t run_bytes_per_step(const RecorderPlan& plan, int dofs, std::size_t
 
 // The DOFs (0-based, ascending) an experimental part moves: an actuator's storey or DOF and, for
 // a storey, the floor below it; an element's every term.
-std::vector<int> experimental_dofs(const HybridPartition& partition);
+std::vector<int> experimental_dofs(const core::HybridPartition& partition);
 
-}  // namespace rths::core
+}  // namespace rths::study

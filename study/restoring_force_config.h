@@ -6,8 +6,8 @@
 #include "core/substructure.h"
 #include "rths/proto/config.pb.h"
 
-namespace rths::core {
+namespace rths::study {
 
-StoreyModelFactory make_storey_factory(const config::RestoringForce& model);
+core::StoreyModelFactory make_storey_factory(const config::RestoringForce& model);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -9,7 +9,7 @@
 #include "core/number_text.h"
 #include "study/memory_budget.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 // Throws "<where>: <the parts, streamed>"; streamed, not concatenated, for GCC 12's -Wrestrict
@@ -53,14 +53,14 @@ void check_entry(const config::Matrix::SparseTriplets& t, int k, const std::stri
     fail(entry(field, "row", k), "(", i, ", ", j,
          ") is above the diagonal of a symmetric matrix, which gives its lower triangle only");
   if (!std::isfinite(t.value(k)))
-    fail(entry(field, "value", k), format_number(t.value(k)), " is not finite");
+    fail(entry(field, "value", k), core::format_number(t.value(k)), " is not finite");
 }
 
 // Whether m equals its transpose exactly (pattern and values): only then may its upper
 // triangle be left to the mirror without changing a bit. @pre m compressed.
-bool exactly_symmetric(const SparseMat& m) {
+bool exactly_symmetric(const core::SparseMat& m) {
   if (m.rows() != m.cols()) return false;
-  const SparseMat transposed = m.transpose();
+  const core::SparseMat transposed = m.transpose();
   const Eigen::Index n = m.nonZeros();
   return transposed.nonZeros() == n &&
          std::equal(m.outerIndexPtr(), m.outerIndexPtr() + m.outerSize() + 1,
@@ -71,8 +71,8 @@ bool exactly_symmetric(const SparseMat& m) {
 
 }  // namespace
 
-SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
-                               const std::string& field) {
+core::SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
+                                     const std::string& field) {
   check_sizes(triplets, field);
   std::vector<Eigen::Triplet<double>> entries;
   entries.reserve(static_cast<std::size_t>(triplets.row_size()) * (triplets.symmetric() ? 2 : 1));
@@ -83,16 +83,16 @@ SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
     entries.emplace_back(i, j, triplets.value(k));
     if (triplets.symmetric() && i != j) entries.emplace_back(j, i, triplets.value(k));
   }
-  SparseMat m(static_cast<Eigen::Index>(triplets.rows()),
-              static_cast<Eigen::Index>(triplets.cols()));
+  core::SparseMat m(static_cast<Eigen::Index>(triplets.rows()),
+                    static_cast<Eigen::Index>(triplets.cols()));
   m.setFromTriplets(entries.begin(), entries.end(), [](double, double last) { return last; });
   m.prune(0.0);
   m.makeCompressed();
   return m;
 }
 
-config::Matrix::SparseTriplets write_sparse_triplets(const SparseMat& m) {
-  SparseMat compressed = m;
+config::Matrix::SparseTriplets write_sparse_triplets(const core::SparseMat& m) {
+  core::SparseMat compressed = m;
   compressed.prune(0.0);
   compressed.makeCompressed();
   const bool symmetric = exactly_symmetric(compressed);
@@ -101,7 +101,7 @@ config::Matrix::SparseTriplets write_sparse_triplets(const SparseMat& m) {
   out.set_cols(static_cast<std::uint32_t>(m.cols()));
   out.set_symmetric(symmetric);
   for (Eigen::Index j = 0; j < compressed.outerSize(); ++j)
-    for (SparseMat::InnerIterator it(compressed, j); it; ++it) {
+    for (core::SparseMat::InnerIterator it(compressed, j); it; ++it) {
       if (symmetric && it.row() < it.col()) continue;
       out.add_row(static_cast<std::uint32_t>(it.row()));
       out.add_col(static_cast<std::uint32_t>(it.col()));
@@ -110,4 +110,4 @@ config::Matrix::SparseTriplets write_sparse_triplets(const SparseMat& m) {
   return out;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

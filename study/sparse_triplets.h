@@ -24,7 +24,7 @@
 #include "core/structure.h"
 #include "rths/proto/config.pb.h"
 
-namespace rths::core {
+namespace rths::study {
 
 // Rows or columns a matrix of a config may have (a Matrix Market size line's limit too).
 constexpr std::uint32_t kMaxMatrixDimension = 100000;
@@ -33,9 +33,9 @@ constexpr std::uint32_t kMaxMatrixDimension = 100000;
 // Eigen's transposed temporary in setFromTriplets (12), the result (12), the model's copy (12).
 constexpr std::uint64_t kSparseBytesPerEntry = 52;
 
-SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
-                               const std::string& field);
+core::SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
+                                     const std::string& field);
 
-config::Matrix::SparseTriplets write_sparse_triplets(const SparseMat& m);
+config::Matrix::SparseTriplets write_sparse_triplets(const core::SparseMat& m);
 
-}  // namespace rths::core
+}  // namespace rths::study

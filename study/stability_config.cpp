@@ -9,42 +9,45 @@
 #include "study/compensation_config.h"
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 
-CompensatedStability compensated_stability(
-    IntegratorKind kind, double period, double zeta, double alpha, double dt,
+core::CompensatedStability compensated_stability(
+    core::IntegratorKind kind, double period, double zeta, double alpha, double dt,
     const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
     const config::Compensation* compensation, double max_extra_delay, int branches) {
   if (!(dt > 0)) throw std::invalid_argument("stability: dt must be > 0 s");
   if (!(max_extra_delay >= 0))
     throw std::invalid_argument("stability: max_extra_delay must be >= 0 s");
-  DelayChain loop = make_delay_chain(actuator, dt, {});
+  core::DelayChain loop = make_delay_chain(actuator, dt, {});
   if (compensation) loop.set_compensator(make_compensator(*compensation, dt, "compensation"));
-  return compensated_stability(kind, period, zeta, alpha, dt, loop, max_extra_delay, branches);
+  return core::compensated_stability(kind, period, zeta, alpha, dt, loop, max_extra_delay,
+                                     branches);
 }
 
-double simulated_growth(IntegratorKind kind, double period, double zeta, double alpha, double dt,
+double simulated_growth(core::IntegratorKind kind, double period, double zeta, double alpha,
+                        double dt,
                         const google::protobuf::RepeatedPtrField<config::DelayStage>& actuator,
                         const config::Compensation* compensation, double extra_delay,
                         double duration) {
-  DelayChain chain = make_delay_chain(actuator, dt, {});
-  if (extra_delay > 0.0) chain.add(std::make_unique<TimeShift>(extra_delay, dt));
+  core::DelayChain chain = make_delay_chain(actuator, dt, {});
+  if (extra_delay > 0.0) chain.add(std::make_unique<core::TimeShift>(extra_delay, dt));
   if (compensation) chain.set_compensator(make_compensator(*compensation, dt, "compensation"));
-  return simulated_growth(kind, period, zeta, alpha, dt, std::move(chain), duration);
+  return core::simulated_growth(kind, period, zeta, alpha, dt, std::move(chain), duration);
 }
 
-std::optional<CriticalDelayCheck> check_setup_critical_delay(const PreparedStudy& prepared,
-                                                             const HybridSetup& setup, double lag) {
+std::optional<core::CriticalDelayCheck> check_setup_critical_delay(const PreparedStudy& prepared,
+                                                                   const core::HybridSetup& setup,
+                                                                   double lag) {
   if (prepared.base.partition.actuator_storeys.empty()) return std::nullopt;
   // Each link's specimen with its dashpot and mass, which come back late with its force.
-  const std::vector<DelayedPart> parts =
-      setup_loop_parts(setup, std::vector<double>(setup.partition.actuator_storeys.size(), 0.0));
-  return check_loop_critical_delay(setup.model, parts, setup.integrator, setup.dt, lag);
+  const std::vector<core::DelayedPart> parts = core::setup_loop_parts(
+      setup, std::vector<double>(setup.partition.actuator_storeys.size(), 0.0));
+  return core::check_loop_critical_delay(setup.model, parts, setup.integrator, setup.dt, lag);
 }
 
-std::optional<CriticalDelayCheck> check_lag_critical_delay(const PreparedStudy& prepared,
-                                                           double lag) {
+std::optional<core::CriticalDelayCheck> check_lag_critical_delay(const PreparedStudy& prepared,
+                                                                 double lag) {
   return check_setup_critical_delay(prepared, prepared.base, lag);
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

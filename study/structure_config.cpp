@@ -20,7 +20,7 @@
 #include "study/structure_io.h"
 #include "study/text_columns.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 // Above this many DOFs the warning of a grounded specimen that means a storey leaves out the
@@ -31,42 +31,42 @@ constexpr int kMaxDofsForFractionHint = 500;
   throw std::invalid_argument(field + ": " + problem);
 }
 
-void apply_damping(StructuralModel& model, const config::Damping& damping, bool has_matrix) {
+void apply_damping(core::StructuralModel& model, const config::Damping& damping, bool has_matrix) {
   const bool ratio = damping.has_rayleigh() || damping.modal_zeta() > 0;
   if (has_matrix && ratio)
     fail("structure.damping",
          "structure.matrices.damping is given: give the matrix or the ratios, not both");
   if (damping.has_rayleigh() && model.is_sparse()) {
     const auto& r = damping.rayleigh();
-    sparse_rayleigh_damping(model, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
-                            r.mode_j() == 0 ? 2 : r.mode_j());
+    core::sparse_rayleigh_damping(model, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
+                                  r.mode_j() == 0 ? 2 : r.mode_j());
   } else if (damping.has_rayleigh()) {
     const auto& r = damping.rayleigh();
     model.damping =
-        rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
-                         r.mode_j() == 0 ? 2 : r.mode_j());
+        core::rayleigh_damping(model.mass, model.stiffness, r.zeta(),
+                               r.mode_i() == 0 ? 1 : r.mode_i(), r.mode_j() == 0 ? 2 : r.mode_j());
   } else if (!has_matrix && model.is_sparse() && damping.modal_zeta() == 0) {
     model.damping.setZero();  // no modes needed for C = 0
     model.sparse_damping.setZero();
   } else if (!has_matrix && model.is_sparse()) {
     // Through the lowest modes, kept as factors: a full C would make the model dense (seconds
     // of set-up and n^2 a step at 1,000 DOFs); the choice is stated in the model's statement.
-    sparse_modal_damping(model, damping.modal_zeta());
+    core::sparse_modal_damping(model, damping.modal_zeta());
   } else if (!has_matrix) {
-    model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
+    model.damping = core::modal_damping(model.mass, model.stiffness, damping.modal_zeta());
   }
 }
 
 // The specimen of experimental_dofs[i] and the mass and damping it takes from the numerical part.
 struct Specimen {
   double mass = 0.0, damping = 0.0;
-  std::unique_ptr<RestoringForceModel> model;
+  std::unique_ptr<core::RestoringForceModel> model;
 };
 
 // The row of an element (empty: grounded at `dof`), checked: DOFs in 1..n, |angle| < 90 degrees,
 // an influence row of n finite entries with nothing else set.
-ElementRow element_row(const config::ExperimentalDof& spec, int n, const std::string& field) {
-  ElementRow row;
+core::ElementRow element_row(const config::ExperimentalDof& spec, int n, const std::string& field) {
+  core::ElementRow row;
   if (!spec.influence().empty()) {
     if (spec.dof() != 0 || spec.from_dof() != 0 || spec.angle_degrees() != 0)
       fail(field + ".influence", "give the influence row or dof/from_dof/angle_degrees, not both");
@@ -85,7 +85,7 @@ ElementRow element_row(const config::ExperimentalDof& spec, int n, const std::st
     fail(field + ".dof", std::to_string(spec.dof()) + " is outside 1.." + std::to_string(n));
   const double angle = spec.angle_degrees();
   if (!(std::isfinite(angle) && std::abs(angle) < 90))
-    fail(field + ".angle_degrees", format_number(angle) + " must be in (-90, 90)");
+    fail(field + ".angle_degrees", core::format_number(angle) + " must be in (-90, 90)");
   if (spec.from_dof() != 0 && (spec.from_dof() < 1 || spec.from_dof() > n))
     fail(field + ".from_dof", std::to_string(spec.from_dof()) + " is outside 1.." +
                                   std::to_string(n) + " (0 = the ground)");
@@ -100,51 +100,52 @@ ElementRow element_row(const config::ExperimentalDof& spec, int n, const std::st
 }
 
 // Entry (i, j) of a matrix from whichever form the model holds (dense, or sparse only).
-double entry(const Mat& dense, const SparseMat& sparse, int i, int j) {
+double entry(const core::Mat& dense, const core::SparseMat& sparse, int i, int j) {
   return dense.rows() > std::max(i, j) ? dense(i, j) : sparse.coeff(i, j);
 }
 
-Specimen make_specimen(const config::ExperimentalDof& spec, const StructuralModel& model,
-                       const ElementRow& row, const std::string& field, double servo_period) {
+Specimen make_specimen(const config::ExperimentalDof& spec, const core::StructuralModel& model,
+                       const core::ElementRow& row, const std::string& field, double servo_period) {
   if (row.terms.empty()) {
     const int d = spec.dof() - 1;
     const double k_dd = entry(model.stiffness, model.sparse_stiffness, d, d);
     const double m_dd = entry(model.mass, model.sparse_mass, d, d);
     if (!(spec.stiffness() > 0 && spec.stiffness() <= k_dd))
-      fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be in (0, K(" +
+      fail(field + ".stiffness", core::format_number(spec.stiffness()) + " N/m must be in (0, K(" +
                                      std::to_string(d + 1) + ", " + std::to_string(d + 1) +
-                                     ") = " + format_number(k_dd) + "]");
+                                     ") = " + core::format_number(k_dd) + "]");
     if (!(spec.mass() >= 0 && spec.mass() < m_dd))
-      fail(field + ".mass", format_number(spec.mass()) + " kg must be in [0, M(" +
+      fail(field + ".mass", core::format_number(spec.mass()) + " kg must be in [0, M(" +
                                 std::to_string(d + 1) + ", " + std::to_string(d + 1) +
-                                ") = " + format_number(m_dd) + ")");
+                                ") = " + core::format_number(m_dd) + ")");
   } else {
     if (!(spec.stiffness() > 0 && std::isfinite(spec.stiffness())))
-      fail(field + ".stiffness", format_number(spec.stiffness()) + " N/m must be > 0");
+      fail(field + ".stiffness", core::format_number(spec.stiffness()) + " N/m must be > 0");
     if (!(spec.mass() >= 0 && std::isfinite(spec.mass())))
-      fail(field + ".mass", format_number(spec.mass()) + " kg must be >= 0");
+      fail(field + ".mass", core::format_number(spec.mass()) + " kg must be >= 0");
   }
   Specimen out;
   out.mass = spec.mass();
   if (spec.has_zeta()) {
     if (!(spec.zeta() >= 0 && range_of(Quantity::kDampingRatio).contains(spec.zeta()) &&
           spec.mass() > 0))
-      fail(field + ".zeta", format_number(spec.zeta()) + " must be in [0, 1] with a mass > 0");
+      fail(field + ".zeta",
+           core::format_number(spec.zeta()) + " must be in [0, 1] with a mass > 0");
     out.damping = 2.0 * spec.zeta() * spec.mass() * std::sqrt(spec.stiffness() / spec.mass());
   } else {
     if (!(spec.damping() >= 0 && std::isfinite(spec.damping())))
-      fail(field + ".damping", format_number(spec.damping()) + " N s/m must be >= 0");
+      fail(field + ".damping", core::format_number(spec.damping()) + " N s/m must be >= 0");
     out.damping = spec.damping();
   }
   out.model = make_storey_factory(spec.model())(spec.stiffness());
   if (out.mass > 0 || out.damping > 0)
-    out.model = std::make_unique<InertialSpecimen>(std::move(out.model), out.mass, out.damping,
-                                                   servo_period);
+    out.model = std::make_unique<core::InertialSpecimen>(std::move(out.model), out.mass,
+                                                         out.damping, servo_period);
   return out;
 }
 
 // The row's terms, b (b = e_dof for a grounded specimen).
-std::vector<std::pair<int, double>> row_terms(const ElementRow& row, int dof) {
+std::vector<std::pair<int, double>> row_terms(const core::ElementRow& row, int dof) {
   if (row.terms.empty()) return {{dof, 1.0}};
   return row.terms;
 }
@@ -154,9 +155,9 @@ std::vector<std::pair<int, double>> row_terms(const ElementRow& row, int dof) {
 // (apply), so that a model held sparse only never forms an n x n matrix.
 class TakenOut {
  public:
-  explicit TakenOut(const StructuralModel& model)
+  explicit TakenOut(const core::StructuralModel& model)
       : dense_(model.mass.rows() == model.dofs()), mass_(model.mass), damping_(model.damping) {}
-  void take(const ElementRow& row, int dof, double mass, double damping) {
+  void take(const core::ElementRow& row, int dof, double mass, double damping) {
     for (const auto& [i, ci] : row_terms(row, dof))
       for (const auto& [j, cj] : row_terms(row, dof)) {
         if (dense_) {
@@ -169,14 +170,15 @@ class TakenOut {
       }
   }
   // M - sum m b b^T positive definite (judged as the model is held).
-  bool mass_definite(const StructuralModel& model) const {
+  bool mass_definite(const core::StructuralModel& model) const {
     if (dense_)
-      return Eigen::SelfAdjointEigenSolver<Mat>(mass_, Eigen::EigenvaluesOnly).eigenvalues()[0] > 0;
-    return !check_sparse_definite(model.sparse_mass - taken(mass_taken_, model.dofs()), true);
+      return Eigen::SelfAdjointEigenSolver<core::Mat>(mass_, Eigen::EigenvaluesOnly)
+                 .eigenvalues()[0] > 0;
+    return !core::check_sparse_definite(model.sparse_mass - taken(mass_taken_, model.dofs()), true);
   }
   // The model's M and C less what was taken (both forms it holds); returns M iota before.
-  Vec apply(StructuralModel& model) const {
-    const Vec load = mass_times(model, model.influence);
+  core::Vec apply(core::StructuralModel& model) const {
+    const core::Vec load = core::mass_times(model, model.influence);
     if (dense_) {
       model.mass = mass_;
       model.damping = damping_;
@@ -193,19 +195,19 @@ class TakenOut {
   }
 
  private:
-  static SparseMat taken(const std::vector<Eigen::Triplet<double>>& entries, int n) {
-    SparseMat out(n, n);
+  static core::SparseMat taken(const std::vector<Eigen::Triplet<double>>& entries, int n) {
+    core::SparseMat out(n, n);
     out.setFromTriplets(entries.begin(), entries.end());
     return out;
   }
   bool dense_;
-  Mat mass_, damping_;
+  core::Mat mass_, damping_;
   std::vector<Eigen::Triplet<double>> mass_taken_, damping_taken_;
 };
 
 // The experimental fraction phi_1' K_e phi_1 / omega_1^2 of the first mode of (M, K) for K_e =
 // k b b^T.
-double first_mode_fraction(const Modes& modes, const Vec& b, double k) {
+double first_mode_fraction(const core::Modes& modes, const core::Vec& b, double k) {
   const double along = b.dot(modes.shapes.col(0));
   return k * along * along / (modes.omega[0] * modes.omega[0]);
 }
@@ -218,14 +220,14 @@ std::string fraction_text(double fraction) {
 
 // Row d of K (N/m): its nonzeros (column, value) in column order, from either form the model
 // holds (K symmetric: column d of the sparse form).
-std::vector<std::pair<int, double>> stiffness_row(const StructuralModel& model, int d) {
+std::vector<std::pair<int, double>> stiffness_row(const core::StructuralModel& model, int d) {
   std::vector<std::pair<int, double>> row;
   if (model.stiffness.rows() == model.dofs()) {
     for (int j = 0; j < model.dofs(); ++j)
       if (model.stiffness(d, j) != 0.0) row.emplace_back(j, model.stiffness(d, j));
     return row;
   }
-  for (SparseMat::InnerIterator it(model.sparse_stiffness, d); it; ++it)
+  for (core::SparseMat::InnerIterator it(model.sparse_stiffness, d); it; ++it)
     row.emplace_back(static_cast<int>(it.row()), it.value());
   return row;
 }
@@ -233,7 +235,7 @@ std::vector<std::pair<int, double>> stiffness_row(const StructuralModel& model, 
 // A grounded specimen stiffer than what ties its DOF to the ground ((K iota)_d, the force at d
 // under a rigid translation) most likely means an element between DOFs (a storey): the warning
 // names both fractions and the DOF it would join (the one K couples most strongly).
-std::optional<std::string> storey_meant(const StructuralModel& model,
+std::optional<std::string> storey_meant(const core::StructuralModel& model,
                                         const config::ExperimentalDof& spec,
                                         const std::string& field) {
   const int d = spec.dof() - 1, n = model.dofs();
@@ -248,14 +250,14 @@ std::optional<std::string> storey_meant(const StructuralModel& model,
       neighbour = j;
       coupling = k;
     }
-  std::string text = field + ": a specimen of " + format_number(spec.stiffness()) +
+  std::string text = field + ": a specimen of " + core::format_number(spec.stiffness()) +
                      " N/m between DOF " + std::to_string(d + 1) +
                      " and the ground, but K ties DOF " + std::to_string(d + 1) +
-                     " to the ground by only " + format_number(ground_tie) + " N/m (K iota)";
+                     " to the ground by only " + core::format_number(ground_tie) + " N/m (K iota)";
   if (n <= kMaxDofsForFractionHint) {
-    const Vec grounded = Vec::Unit(n, d);
-    const Vec storey = grounded - Vec::Unit(n, neighbour);
-    const Modes modes = modal_analysis(model.mass, model.stiffness);
+    const core::Vec grounded = core::Vec::Unit(n, d);
+    const core::Vec storey = grounded - core::Vec::Unit(n, neighbour);
+    const core::Modes modes = core::modal_analysis(model.mass, model.stiffness);
     text += ": as written it takes an experimental fraction of " +
             fraction_text(first_mode_fraction(modes, grounded, spec.stiffness())) +
             " of mode 1; between DOF " + std::to_string(neighbour + 1) + " and DOF " +
@@ -268,29 +270,30 @@ std::optional<std::string> storey_meant(const StructuralModel& model,
 
 }  // namespace
 
-StructuralModel matrix_structure(const config::Structure& structure,
-                                 const std::filesystem::path& base_dir) {
+core::StructuralModel matrix_structure(const config::Structure& structure,
+                                       const std::filesystem::path& base_dir) {
   const config::MatrixStructure& spec = structure.matrices();
-  StructuralModel model = read_matrix_structure(spec, base_dir, "structure.matrices");
+  core::StructuralModel model = read_matrix_structure(spec, base_dir, "structure.matrices");
   apply_damping(model, structure.damping(), spec.has_damping());
   // A C given as a matrix may be full: dense again (modal damping keeps its factors, sparse).
-  if (model.is_sparse() && model.low_rank_damping.empty()) hold_sparse_if_sparse(model);
+  if (model.is_sparse() && model.low_rank_damping.empty()) core::hold_sparse_if_sparse(model);
   return model;
 }
 
-HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuring& substructuring,
-                              double servo_period, std::vector<std::string>* warnings) {
-  std::vector<DofSpecimen> specimens;
+core::HybridPartition split_at_dofs(core::StructuralModel& model,
+                                    const config::Substructuring& substructuring,
+                                    double servo_period, std::vector<std::string>* warnings) {
+  std::vector<core::DofSpecimen> specimens;
   TakenOut taken(model);
   bool massive_element = false;
   for (int i = 0; i < substructuring.experimental_dofs_size(); ++i) {
     const std::string field = "substructuring.experimental_dofs[" + std::to_string(i) + "]";
     const config::ExperimentalDof& spec = substructuring.experimental_dofs(i);
-    const ElementRow row = element_row(spec, model.dofs(), field);
+    const core::ElementRow row = element_row(spec, model.dofs(), field);
     Specimen specimen = make_specimen(spec, model, row, field, servo_period);
     const int d = spec.dof() - 1;
     if (row.terms.empty()) {
-      for (const DofSpecimen& earlier : specimens)
+      for (const core::DofSpecimen& earlier : specimens)
         if (earlier.element.terms.empty() && earlier.dof == d)
           fail(field + ".dof", std::to_string(spec.dof()) + " is listed twice");
       if (warnings)
@@ -304,17 +307,19 @@ HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuri
     fail("substructuring.experimental_dofs",
          "the elements' masses leave the numerical part without positive mass (M - m b b^T is "
          "not positive definite)");
-  HybridPartition partition = model.stiffness.rows() == model.dofs()
-                                  ? partition_by_dofs(model.stiffness, std::move(specimens))
-                                  : partition_by_dofs(model.sparse_stiffness, std::move(specimens));
+  core::HybridPartition partition =
+      model.stiffness.rows() == model.dofs()
+          ? core::partition_by_dofs(model.stiffness, std::move(specimens))
+          : core::partition_by_dofs(model.sparse_stiffness, std::move(specimens));
   // The specimen's force holds m_e x'' of the relative acceleration only, so the numerical part
   // carries the ground motion's load on the whole mass, -M iota a_g = -M_N (M_N^-1 M iota) a_g.
-  const Vec load = taken.apply(model);
-  model.influence = model.is_sparse()  // M_N sparse: its LDL^T, not a dense one
-                        ? Vec(Eigen::SimplicialLDLT<SparseMat>(model.sparse_mass).solve(load))
-                        : Vec(model.mass.ldlt().solve(load));
-  remember_max_omega(model);  // M_N final: one estimate for every simulation of the study
+  const core::Vec load = taken.apply(model);
+  model.influence =
+      model.is_sparse()  // M_N sparse: its LDL^T, not a dense one
+          ? core::Vec(Eigen::SimplicialLDLT<core::SparseMat>(model.sparse_mass).solve(load))
+          : core::Vec(model.mass.ldlt().solve(load));
+  core::remember_max_omega(model);  // M_N final: one estimate for every simulation of the study
   return partition;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -30,12 +30,14 @@
 #include "core/substructure.h"
 #include "rths/proto/config.pb.h"
 
-namespace rths::core {
+namespace rths::study {
 
-StructuralModel matrix_structure(const config::Structure& structure,
-                                 const std::filesystem::path& base_dir);
+core::StructuralModel matrix_structure(const config::Structure& structure,
+                                       const std::filesystem::path& base_dir);
 
-HybridPartition split_at_dofs(StructuralModel& model, const config::Substructuring& substructuring,
-                              double servo_period, std::vector<std::string>* warnings = nullptr);
+core::HybridPartition split_at_dofs(core::StructuralModel& model,
+                                    const config::Substructuring& substructuring,
+                                    double servo_period,
+                                    std::vector<std::string>* warnings = nullptr);
 
-}  // namespace rths::core
+}  // namespace rths::study

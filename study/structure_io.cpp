@@ -23,7 +23,7 @@
 #include "study/sparse_triplets.h"
 #include "study/text_columns.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 [[noreturn]] void fail(const std::string& where, const std::string& problem) {
@@ -34,7 +34,7 @@ std::string shape(Eigen::Index rows, Eigen::Index cols) {
   return std::to_string(rows) + " x " + std::to_string(cols);
 }
 
-Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
+core::Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
   const int count = spec.values_size();
   if (count == 0) fail(field, "no values and no file");
   const int rows = spec.rows() > 0 ? spec.rows() : count;
@@ -42,7 +42,7 @@ Mat inline_matrix(const config::Matrix& spec, const std::string& field) {
     fail(field,
          std::to_string(count) + " values do not fill " + std::to_string(spec.rows()) + " rows");
   const int cols = count / rows;
-  Mat m(rows, cols);
+  core::Mat m(rows, cols);
   for (int i = 0; i < rows; ++i)
     for (int j = 0; j < cols; ++j) m(i, j) = spec.values(i * cols + j);
   return m;
@@ -92,7 +92,7 @@ std::string mat_variables(mat_t* file) {
 
 // A MATLAB sparse matrix (compressed columns: jc[j]..jc[j+1] index the rows ir and the values of
 // column j), real double, held sparse: O(nnz), never rows x cols.
-SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
+core::SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
   const auto& sparse = *static_cast<const mat_sparse_t*>(var.data);
   const auto rows = static_cast<Eigen::Index>(var.dims[0]);
   const auto cols = static_cast<Eigen::Index>(var.dims[1]);
@@ -107,7 +107,7 @@ SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named) {
         fail(named, "is a sparse matrix whose indices run past its size");
       triplets.emplace_back(static_cast<Eigen::Index>(sparse.ir[k]), j, values[k]);
     }
-  SparseMat m(rows, cols);
+  core::SparseMat m(rows, cols);
   m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
   m.prune(0.0);
   m.makeCompressed();
@@ -201,8 +201,9 @@ class MarketLines {
     while (begin != std::string_view::npos) {
       const std::size_t end = std::min(text.find_first_of(" \t\r", begin), text.size());
       const std::string_view token = text.substr(begin, end - begin);
-      const auto value = parse_finite(token);
-      if (!value) fail(at(), printable(token).insert(0, 1, '\'') + "' is not a finite number");
+      const auto value = core::parse_finite(token);
+      if (!value)
+        fail(at(), core::printable(token).insert(0, 1, '\'') + "' is not a finite number");
       numbers_.push_back(*value);
       begin = text.find_first_not_of(" \t\r", end);
     }
@@ -215,7 +216,8 @@ class MarketLines {
 
 int market_index(double value, Eigen::Index size, const MarketLines& lines) {
   if (value != std::floor(value) || value < 1 || value > static_cast<double>(size))
-    fail(lines.at(), "index " + format_number(value) + " is outside 1.." + std::to_string(size));
+    fail(lines.at(),
+         "index " + core::format_number(value) + " is outside 1.." + std::to_string(size));
   return static_cast<int>(value) - 1;
 }
 
@@ -231,13 +233,13 @@ void check_market_size(const std::vector<double>& size, const MarketHeader& head
   const double cells = header.symmetric ? rows * (rows + 1) / 2 : rows * cols;
   const double entries = header.coordinate ? size[2] : cells;
   if (header.coordinate && (entries != std::floor(entries) || entries < 0 || entries > cells))
-    fail(at, "declares " + format_number(entries) + " entries, more than its " +
-                 format_number(cells) + " cells (or not a count)");
+    fail(at, "declares " + core::format_number(entries) + " entries, more than its " +
+                 core::format_number(cells) + " cells (or not a count)");
   const double line_bytes = header.coordinate ? 6.0 : 2.0;
   if (entries * line_bytes > static_cast<double>(file_bytes))
-    fail(at, "declares " + format_number(entries) + " entries, more than its " +
+    fail(at, "declares " + core::format_number(entries) + " entries, more than its " +
                  std::to_string(file_bytes) + " bytes can hold (at least " +
-                 format_number(line_bytes) + " bytes an entry)");
+                 core::format_number(line_bytes) + " bytes an entry)");
   if (header.coordinate)
     require_memory(static_cast<std::uint64_t>(entries) * (header.symmetric ? 2 : 1) +
                        static_cast<std::uint64_t>(cols),
@@ -249,8 +251,8 @@ void check_market_size(const std::vector<double>& size, const MarketHeader& head
 
 // Coordinate entries as triplets (both triangles of a symmetric file), into a sparse matrix: a
 // repeated entry keeps its last value, as a dense fill would; explicit zeros are dropped.
-SparseMat market_coordinate(MarketLines& lines, Eigen::Index rows, Eigen::Index cols,
-                            Eigen::Index entries, bool symmetric, const std::string& where) {
+core::SparseMat market_coordinate(MarketLines& lines, Eigen::Index rows, Eigen::Index cols,
+                                  Eigen::Index entries, bool symmetric, const std::string& where) {
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(static_cast<std::size_t>(symmetric ? 2 * entries : entries));
   Eigen::Index filled = 0;
@@ -266,7 +268,7 @@ SparseMat market_coordinate(MarketLines& lines, Eigen::Index rows, Eigen::Index 
   if (filled != entries)
     fail(where,
          "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
-  SparseMat m(rows, cols);
+  core::SparseMat m(rows, cols);
   m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
   m.prune(0.0);
   m.makeCompressed();
@@ -274,9 +276,9 @@ SparseMat market_coordinate(MarketLines& lines, Eigen::Index rows, Eigen::Index 
 }
 
 // Array entries, column by column (a symmetric file: the lower triangle, column by column).
-Mat market_array(MarketLines& lines, Eigen::Index rows, Eigen::Index cols, bool symmetric,
-                 const std::string& where) {
-  Mat m = Mat::Zero(rows, cols);
+core::Mat market_array(MarketLines& lines, Eigen::Index rows, Eigen::Index cols, bool symmetric,
+                       const std::string& where) {
+  core::Mat m = core::Mat::Zero(rows, cols);
   const Eigen::Index entries = symmetric ? rows * (rows + 1) / 2 : m.size();
   Eigen::Index filled = 0;
   while (lines.next()) {
@@ -343,12 +345,12 @@ void require_csv_matrix_size(const std::filesystem::path& path, const std::strin
   require_memory(bytes, kMotionReadBytesPerFileByte, where + ": reading it as text");
 }
 
-Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
+core::Mat csv_matrix(const std::filesystem::path& path, const std::string& where) {
   require_csv_matrix_size(path, where);
   const TextColumns columns = read_text_columns(path, "matrix");
   if (columns.rows.empty()) fail(where, "has no rows");
   const std::size_t cols = columns.rows.front().values.size();
-  Mat m(static_cast<Eigen::Index>(columns.rows.size()), static_cast<Eigen::Index>(cols));
+  core::Mat m(static_cast<Eigen::Index>(columns.rows.size()), static_cast<Eigen::Index>(cols));
   for (std::size_t i = 0; i < columns.rows.size(); ++i) {
     const TextRow& row = columns.rows[i];
     if (row.values.size() != cols)
@@ -393,11 +395,11 @@ MatrixData read_matrix_data(const config::Matrix& spec, const std::filesystem::p
 namespace {
 
 // A sparse matrix made dense, its n x n doubles checked against the memory limit first.
-Mat dense_of(MatrixData&& m, const std::string& where) {
+core::Mat dense_of(MatrixData&& m, const std::string& where) {
   if (!m.sparse_held) return std::move(m.dense);
   require_memory(static_cast<std::uint64_t>(m.rows()), static_cast<std::uint64_t>(m.cols()) * 8,
                  where + ": held dense");
-  return Mat(m.sparse);
+  return core::Mat(m.sparse);
 }
 
 void check_square(Eigen::Index rows, Eigen::Index cols, Eigen::Index n, const std::string& where) {
@@ -406,15 +408,15 @@ void check_square(Eigen::Index rows, Eigen::Index cols, Eigen::Index n, const st
     fail(where, "is " + shape(rows, cols) + ", the structure has " + std::to_string(n) + " DOFs");
 }
 
-void check_square(const Mat& m, Eigen::Index n, const std::string& where) {
+void check_square(const core::Mat& m, Eigen::Index n, const std::string& where) {
   check_square(m.rows(), m.cols(), n, where);
   if (!m.allFinite()) fail(where, "holds a value that is not finite");
 }
 
-void check_square(const SparseMat& m, Eigen::Index n, const std::string& where) {
+void check_square(const core::SparseMat& m, Eigen::Index n, const std::string& where) {
   check_square(m.rows(), m.cols(), n, where);
   for (Eigen::Index j = 0; j < m.outerSize(); ++j)
-    for (SparseMat::InnerIterator it(m, j); it; ++it)
+    for (core::SparseMat::InnerIterator it(m, j); it; ++it)
       if (!std::isfinite(it.value())) fail(where, "holds a value that is not finite");
 }
 
@@ -426,7 +428,7 @@ void check_square(const SparseMat& m, Eigen::Index n, const std::string& where) 
   fail(where, why.str());
 }
 
-void check_symmetric(const Mat& m, const std::string& where) {
+void check_symmetric(const core::Mat& m, const std::string& where) {
   const double scale = m.cwiseAbs().maxCoeff();
   for (Eigen::Index i = 0; i < m.rows(); ++i)
     for (Eigen::Index j = i + 1; j < m.cols(); ++j)
@@ -435,14 +437,14 @@ void check_symmetric(const Mat& m, const std::string& where) {
 
 // A - A^T, sparse (O(nnz)), to the same 1e-9 of the largest entry as the dense check; the first
 // pair named is the dense check's (the lowest row, then column, of the upper triangle).
-void check_symmetric(const SparseMat& m, const std::string& where) {
+void check_symmetric(const core::SparseMat& m, const std::string& where) {
   double scale = 0.0;
   for (Eigen::Index k = 0; k < m.nonZeros(); ++k)
     scale = std::max(scale, std::abs(m.valuePtr()[k]));
-  const SparseMat difference = m - SparseMat(m.transpose());
+  const core::SparseMat difference = m - core::SparseMat(m.transpose());
   Eigen::Index row = -1, col = -1;
   for (Eigen::Index j = 0; j < difference.outerSize(); ++j)
-    for (SparseMat::InnerIterator it(difference, j); it; ++it)
+    for (core::SparseMat::InnerIterator it(difference, j); it; ++it)
       if (it.row() < it.col() && std::abs(it.value()) > 1e-9 * scale &&
           (row < 0 || it.row() < row || (it.row() == row && it.col() < col))) {
         row = it.row();
@@ -452,9 +454,9 @@ void check_symmetric(const SparseMat& m, const std::string& where) {
 }
 
 // Smallest eigenvalue against `floor` (relative to the largest |eigenvalue|).
-void check_definite(const Mat& m, bool strictly, const std::string& where) {
-  const Eigen::SelfAdjointEigenSolver<Mat> solver(0.5 * (m + m.transpose()),
-                                                  Eigen::EigenvaluesOnly);
+void check_definite(const core::Mat& m, bool strictly, const std::string& where) {
+  const Eigen::SelfAdjointEigenSolver<core::Mat> solver(0.5 * (m + m.transpose()),
+                                                        Eigen::EigenvaluesOnly);
   const double largest = solver.eigenvalues().cwiseAbs().maxCoeff();
   const double smallest = solver.eigenvalues().minCoeff();
   const double floor = 1e-9 * largest;
@@ -468,16 +470,16 @@ void check_definite(const Mat& m, bool strictly, const std::string& where) {
 
 // A model held sparse: by the inertia of a shifted LDL^T (core/sparse_structure.h), not by a
 // dense eigenproblem.
-void check_definite(const SparseMat& m, bool strictly, const std::string& where) {
-  if (const auto why = check_sparse_definite(m, strictly)) fail(where, *why);
+void check_definite(const core::SparseMat& m, bool strictly, const std::string& where) {
+  if (const auto why = core::check_sparse_definite(m, strictly)) fail(where, *why);
 }
 
 // Shapes, finiteness and symmetry of M, C, K in the form the model holds them: the dense
 // matrices when it holds them (as every model up to kDenseSchemeMaxDofs does), else the sparse.
-void check_shapes_and_symmetry(const StructuralModel& model, Eigen::Index n,
+void check_shapes_and_symmetry(const core::StructuralModel& model, Eigen::Index n,
                                const std::string& field) {
   const bool dense = model.mass.rows() == n;
-  const std::pair<const Mat*, const SparseMat*> matrices[] = {
+  const std::pair<const core::Mat*, const core::SparseMat*> matrices[] = {
       {&model.mass, &model.sparse_mass},
       {&model.stiffness, &model.sparse_stiffness},
       {&model.damping, &model.sparse_damping}};
@@ -494,13 +496,13 @@ void check_shapes_and_symmetry(const StructuralModel& model, Eigen::Index n,
 
 }  // namespace
 
-Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
-                const std::string& field) {
+core::Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
+                      const std::string& field) {
   return dense_of(read_matrix_data(spec, base_dir, field),
                   spec.file().empty() ? field : field + ": " + spec.file());
 }
 
-void check_structural_matrices(const StructuralModel& model, const std::string& field) {
+void check_structural_matrices(const core::StructuralModel& model, const std::string& field) {
   const Eigen::Index n = model.dofs();
   if (n < 1) fail(field + ".mass", "is empty");
   check_shapes_and_symmetry(model, n, field);
@@ -523,9 +525,9 @@ void check_structural_matrices(const StructuralModel& model, const std::string& 
 
 namespace {
 
-SparseMat sparse_of(const MatrixData& m) {
+core::SparseMat sparse_of(const MatrixData& m) {
   if (m.sparse_held) return m.sparse;
-  SparseMat out = m.dense.sparseView();
+  core::SparseMat out = m.dense.sparseView();
   out.makeCompressed();
   return out;
 }
@@ -534,22 +536,23 @@ SparseMat sparse_of(const MatrixData& m) {
 // patterns): sparse, with dense copies too up to kDenseSchemeMaxDofs (the dense schemes and the
 // dense checks, as before), never dense above it; else dense, each n x n checked against the
 // memory limit before it is formed. @pre each is n x n.
-StructuralModel hold_matrices(MatrixData&& mass, MatrixData&& damping, MatrixData&& stiffness,
-                              Vec influence, const std::string& field) {
+core::StructuralModel hold_matrices(MatrixData&& mass, MatrixData&& damping, MatrixData&& stiffness,
+                                    core::Vec influence, const std::string& field) {
   const Eigen::Index n = mass.rows();
-  SparseMat m = sparse_of(mass), c = sparse_of(damping), k = sparse_of(stiffness);
-  SparseMat pattern = SparseMat(m.cwiseAbs()) + SparseMat(c.cwiseAbs()) + SparseMat(k.cwiseAbs());
+  core::SparseMat m = sparse_of(mass), c = sparse_of(damping), k = sparse_of(stiffness);
+  core::SparseMat pattern =
+      core::SparseMat(m.cwiseAbs()) + core::SparseMat(c.cwiseAbs()) + core::SparseMat(k.cwiseAbs());
   pattern.prune(0.0);
-  if (prefer_sparse(n, pattern.nonZeros())) {
-    StructuralModel model =
-        make_sparse_model(std::move(m), std::move(c), std::move(k), std::move(influence));
-    if (n > kDenseSchemeMaxDofs) return model;
-    model.mass = Mat(model.sparse_mass);
-    model.damping = Mat(model.sparse_damping);
-    model.stiffness = Mat(model.sparse_stiffness);
+  if (core::prefer_sparse(n, pattern.nonZeros())) {
+    core::StructuralModel model =
+        core::make_sparse_model(std::move(m), std::move(c), std::move(k), std::move(influence));
+    if (n > core::kDenseSchemeMaxDofs) return model;
+    model.mass = core::Mat(model.sparse_mass);
+    model.damping = core::Mat(model.sparse_damping);
+    model.stiffness = core::Mat(model.sparse_stiffness);
     return model;
   }
-  StructuralModel model;
+  core::StructuralModel model;
   model.mass = dense_of(std::move(mass), field + ".mass");
   model.damping = dense_of(std::move(damping), field + ".damping");
   model.stiffness = dense_of(std::move(stiffness), field + ".stiffness");
@@ -559,9 +562,9 @@ StructuralModel hold_matrices(MatrixData&& mass, MatrixData&& damping, MatrixDat
 
 }  // namespace
 
-StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
-                                      const std::filesystem::path& base_dir,
-                                      const std::string& field) {
+core::StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
+                                            const std::filesystem::path& base_dir,
+                                            const std::string& field) {
   if (!spec.has_mass()) fail(field + ".mass", "is missing");
   if (!spec.has_stiffness()) fail(field + ".stiffness", "is missing");
   MatrixData mass = read_matrix_data(spec.mass(), base_dir, field + ".mass");
@@ -574,20 +577,20 @@ StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
     damping = read_matrix_data(spec.damping(), base_dir, field + ".damping");
     check_square(damping.rows(), damping.cols(), n, field + ".damping");
   } else {
-    damping.sparse = SparseMat(n, n);
+    damping.sparse = core::SparseMat(n, n);
     damping.sparse_held = true;
   }
-  Vec influence = Vec::Ones(n);
+  core::Vec influence = core::Vec::Ones(n);
   if (spec.has_influence()) {
-    const Mat iota = read_matrix(spec.influence(), base_dir, field + ".influence");
+    const core::Mat iota = read_matrix(spec.influence(), base_dir, field + ".influence");
     if (iota.cols() != 1 && iota.rows() != 1)
       fail(field + ".influence", "is " + shape(iota.rows(), iota.cols()) + ", not a vector");
     influence = iota.reshaped();
   }
-  StructuralModel model = hold_matrices(std::move(mass), std::move(damping), std::move(stiffness),
-                                        std::move(influence), field);
+  core::StructuralModel model = hold_matrices(std::move(mass), std::move(damping),
+                                              std::move(stiffness), std::move(influence), field);
   check_structural_matrices(model, field);
   return model;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

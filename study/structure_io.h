@@ -36,14 +36,14 @@
 #include "core/structure.h"
 #include "rths/proto/config.pb.h"
 
-namespace rths::core {
+namespace rths::study {
 
 // A matrix as its source holds it: sparse (Matrix Market coordinate, a MATLAB sparse variable,
 // inline `sparse` triplets), read into triplets and never formed rows x cols, or dense (inline
 // values, .csv, Matrix Market array, a full MATLAB variable).
 struct MatrixData {
-  Mat dense;
-  SparseMat sparse;
+  core::Mat dense;
+  core::SparseMat sparse;
   bool sparse_held = false;
   Eigen::Index rows() const { return sparse_held ? sparse.rows() : dense.rows(); }
   Eigen::Index cols() const { return sparse_held ? sparse.cols() : dense.cols(); }
@@ -54,17 +54,17 @@ struct MatrixData {
 MatrixData read_matrix_data(const config::Matrix& spec, const std::filesystem::path& base_dir,
                             const std::string& field);
 
-Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
-                const std::string& field);
+core::Mat read_matrix(const config::Matrix& spec, const std::filesystem::path& base_dir,
+                      const std::string& field);
 
 // The structure of structure.matrices: M, K, damping (matrix, or from Structure.damping by the
 // caller when absent: returned zero), iota; checked. `field` prefixes every error.
-StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
-                                      const std::filesystem::path& base_dir,
-                                      const std::string& field);
+core::StructuralModel read_matrix_structure(const config::MatrixStructure& spec,
+                                            const std::filesystem::path& base_dir,
+                                            const std::string& field);
 
 // Throws std::invalid_argument "<field>.<name>: <problem>" when a matrix is not square, not n x n,
 // not symmetric, or not definite as required (see above); `where` names the matrices' source.
-void check_structural_matrices(const StructuralModel& model, const std::string& field);
+void check_structural_matrices(const core::StructuralModel& model, const std::string& field);
 
-}  // namespace rths::core
+}  // namespace rths::study

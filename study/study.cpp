@@ -24,7 +24,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 // A study that validated but cannot be prepared (its motion, its servo rate against dt).
@@ -45,10 +45,10 @@ config::Study load_study(const std::filesystem::path& path) {
   return parse_study(read_text_file(path, "config"), path.string());
 }
 
-StructuralModel make_structure(const config::Structure& structure,
-                               const std::filesystem::path& base_dir) {
+core::StructuralModel make_structure(const config::Structure& structure,
+                                     const std::filesystem::path& base_dir) {
   if (structure.has_matrices()) return matrix_structure(structure, base_dir);
-  StructuralModel model;
+  core::StructuralModel model;
   if (structure.has_sdof()) {
     const config::Sdof& sdof = structure.sdof();
     double mass = sdof.has_mass() ? sdof.mass() : 1.0;  // validated > 0 at load
@@ -63,41 +63,42 @@ StructuralModel make_structure(const config::Structure& structure,
     } else {
       stiffness = sdof.stiffness();
     }
-    model = make_shear_building({mass}, {stiffness});
+    model = core::make_shear_building({mass}, {stiffness});
   } else {
     const auto& b = structure.shear_building();
-    model = make_shear_building({b.storey_mass().begin(), b.storey_mass().end()},
-                                {b.storey_stiffness().begin(), b.storey_stiffness().end()});
+    model = core::make_shear_building({b.storey_mass().begin(), b.storey_mass().end()},
+                                      {b.storey_stiffness().begin(), b.storey_stiffness().end()});
   }
   const config::Damping& damping = structure.damping();
   if (damping.has_rayleigh()) {
     const auto& r = damping.rayleigh();
     model.damping =
-        rayleigh_damping(model.mass, model.stiffness, r.zeta(), r.mode_i() == 0 ? 1 : r.mode_i(),
-                         r.mode_j() == 0 ? 2 : r.mode_j());
+        core::rayleigh_damping(model.mass, model.stiffness, r.zeta(),
+                               r.mode_i() == 0 ? 1 : r.mode_i(), r.mode_j() == 0 ? 2 : r.mode_j());
   } else if (model.dofs() == 1) {
     // 2 zeta m omega written out, so an SDOF from a config equals make_sdof() to the last bit.
     const double omega = std::sqrt(model.stiffness(0, 0) / model.mass(0, 0));
     model.damping(0, 0) = 2.0 * damping.modal_zeta() * model.mass(0, 0) * omega;
   } else {
-    model.damping = modal_damping(model.mass, model.stiffness, damping.modal_zeta());
+    model.damping = core::modal_damping(model.mass, model.stiffness, damping.modal_zeta());
   }
   return model;
 }
 
 namespace {
 // The one map between the config's integrator kinds and core's, read both ways.
-constexpr std::pair<config::Integrator::Kind, IntegratorKind> kIntegratorKinds[] = {
-    {config::Integrator::EXPLICIT_NEWMARK, IntegratorKind::kExplicitNewmark},
-    {config::Integrator::CENTRAL_DIFFERENCE, IntegratorKind::kCentralDifference},
-    {config::Integrator::CHEN_RICLES, IntegratorKind::kChenRicles},
-    {config::Integrator::NEWMARK_AVERAGE_ACCELERATION, IntegratorKind::kNewmarkAverageAcceleration},
-    {config::Integrator::ALPHA_OS, IntegratorKind::kAlphaOS},
-    {config::Integrator::KR_ALPHA, IntegratorKind::kKRAlpha},
-    {config::Integrator::EXACT_ZOH, IntegratorKind::kExactZoh}};
+constexpr std::pair<config::Integrator::Kind, core::IntegratorKind> kIntegratorKinds[] = {
+    {config::Integrator::EXPLICIT_NEWMARK, core::IntegratorKind::kExplicitNewmark},
+    {config::Integrator::CENTRAL_DIFFERENCE, core::IntegratorKind::kCentralDifference},
+    {config::Integrator::CHEN_RICLES, core::IntegratorKind::kChenRicles},
+    {config::Integrator::NEWMARK_AVERAGE_ACCELERATION,
+     core::IntegratorKind::kNewmarkAverageAcceleration},
+    {config::Integrator::ALPHA_OS, core::IntegratorKind::kAlphaOS},
+    {config::Integrator::KR_ALPHA, core::IntegratorKind::kKRAlpha},
+    {config::Integrator::EXACT_ZOH, core::IntegratorKind::kExactZoh}};
 }  // namespace
 
-IntegratorKind integrator_kind(const config::Integrator& integrator) {
+core::IntegratorKind integrator_kind(const config::Integrator& integrator) {
   for (const auto& [config_kind, kind] : kIntegratorKinds)
     if (config_kind == integrator.kind()) return kind;
   // Never a default for a value nobody chose (a study is checked at load; this is for the rest).
@@ -107,10 +108,10 @@ IntegratorKind integrator_kind(const config::Integrator& integrator) {
   throw std::invalid_argument(why);
 }
 
-config::Integrator::Kind config_integrator_kind(IntegratorKind kind) {
+config::Integrator::Kind config_integrator_kind(core::IntegratorKind kind) {
   for (const auto& [config_kind, core_kind] : kIntegratorKinds)
     if (core_kind == kind) return config_kind;
-  throw std::invalid_argument("integrator " + to_string(kind) + " has no config kind");
+  throw std::invalid_argument("integrator " + core::to_string(kind) + " has no config kind");
 }
 
 int servo_substeps(const config::Study& study, double dt) {
@@ -121,9 +122,9 @@ int servo_substeps(const config::Study& study, double dt) {
   require(std::isfinite(rate) && rate > 0 && whole >= 1 && whole <= kMaxServoSubsteps &&
               std::abs(per_step - whole) <= 1e-6 * whole,
           "servo",
-          "servo.rate = " + format_number(rate) + " Hz must be an integer multiple (1 to " +
+          "servo.rate = " + core::format_number(rate) + " Hz must be an integer multiple (1 to " +
               std::to_string(kMaxServoSubsteps) + ") of the integrator's rate " +
-              format_number(1.0 / dt) + " Hz (dt = " + format_number(dt) + " s)");
+              core::format_number(1.0 / dt) + " Hz (dt = " + core::format_number(dt) + " s)");
   return static_cast<int>(whole);
 }
 
@@ -139,13 +140,14 @@ void require_run_memory(const PreparedStudy& prepared, double dt, double seconds
                                     prepared.base.partition.actuator_storeys.size(),
                                     static_cast<std::size_t>(std::max(1, study.cases_size())),
                                     limits.max_displacement() > 0 || limits.max_velocity() > 0),
-                 "integrator.dt = " + format_number(dt) + " s over the " + format_number(seconds) +
-                     " s record" + source);
+                 "integrator.dt = " + core::format_number(dt) + " s over the " +
+                     core::format_number(seconds) + " s record" + source);
 }
 
-HybridSetup base_setup(const config::Study& study, double dt, const std::filesystem::path& base_dir,
-                       std::vector<std::string>* warnings) {
-  HybridSetup base;
+core::HybridSetup base_setup(const config::Study& study, double dt,
+                             const std::filesystem::path& base_dir,
+                             std::vector<std::string>* warnings) {
+  core::HybridSetup base;
   base.model = make_structure(study.structure(), base_dir);
   base.integrator = integrator_kind(study.integrator());
   base.dt = dt;
@@ -158,14 +160,14 @@ HybridSetup base_setup(const config::Study& study, double dt, const std::filesys
     base.partition = split_at_dofs(base.model, sub, dt / base.servo_substeps, warnings);
     return base;
   }
-  const StoreyModelFactory factory = make_storey_factory(sub.model());
+  const core::StoreyModelFactory factory = make_storey_factory(sub.model());
   if (!sub.experimental_storeys().empty()) {
     std::vector<int> storeys;
     for (int s : sub.experimental_storeys()) storeys.push_back(s - 1);
-    base.partition = partition_by_storeys(base.model.storey_stiffness, storeys, factory);
+    base.partition = core::partition_by_storeys(base.model.storey_stiffness, storeys, factory);
   } else {
-    base.partition =
-        partition_by_fraction(base.model.storey_stiffness, sub.experimental_fraction(), factory);
+    base.partition = core::partition_by_fraction(base.model.storey_stiffness,
+                                                 sub.experimental_fraction(), factory);
   }
   return base;
 }
@@ -178,7 +180,7 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
   // file states its dt (motion_extent_before_reading), and again from the record once read.
   const std::optional<MotionFileExtent> extent =
       motion_extent_before_reading(study.motion(), base_dir);
-  std::optional<GroundMotion> record;
+  std::optional<core::GroundMotion> record;
   if (!extent) record = load_motion(study.motion(), base_dir);
   const bool dt_given = study.integrator().dt() > 0;
   double dt = dt_given ? study.integrator().dt() : (extent ? extent->dt : record->dt);
@@ -196,22 +198,22 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
     }
   }
   require(dt < record->duration(), "motion",
-          "integrator.dt = " + format_number(dt) + " s is not shorter than the record (" +
-              format_number(record->duration()) + " s)");
+          "integrator.dt = " + core::format_number(dt) + " s is not shorter than the record (" +
+              core::format_number(record->duration()) + " s)");
   require_run_memory(prepared, dt, record->duration(), "");
   prepared.motion =
-      std::abs(dt - record->dt) <= 1e-12 * dt ? std::move(*record) : resampled(*record, dt);
+      std::abs(dt - record->dt) <= 1e-12 * dt ? std::move(*record) : core::resampled(*record, dt);
   for (const config::Case& c : study.cases()) {
     const double lag = make_delay_chain(c.delay(), dt, base_dir).nominal_delay();
     require(lag < prepared.motion.duration(), "case '" + c.name() + "'",
-            "its delay of " + format_number(lag) + " s is not shorter than the record (" +
-                format_number(prepared.motion.duration()) + " s)");
+            "its delay of " + core::format_number(lag) + " s is not shorter than the record (" +
+                core::format_number(prepared.motion.duration()) + " s)");
   }
   return prepared;
 }
 
-HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case) {
-  HybridSetup setup = prepared.base;
+core::HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case) {
+  core::HybridSetup setup = prepared.base;
   setup.delays.clear();
   const std::size_t actuators = setup.partition.actuator_storeys.size();
   const double servo_period = setup.dt / setup.servo_substeps;
@@ -243,9 +245,9 @@ void validate_force_predictor(const config::ForcePredictor& block, double dt,
                                    const std::string& unit) {
     const bool ok = std::isfinite(value) && (strict ? value > least : value >= least);
     if (!ok)
-      throw std::invalid_argument(where + "." + name + " = " + format_number(value) + unit +
-                                  " must be " + (strict ? "> " : ">= ") + format_number(least) +
-                                  unit);
+      throw std::invalid_argument(where + "." + name + " = " + core::format_number(value) + unit +
+                                  " must be " + (strict ? "> " : ">= ") +
+                                  core::format_number(least) + unit);
   };
   finite_at_least(block.stiffness_factor(), 0.0, false, "stiffness_factor", "");
   finite_at_least(block.damping(), 0.0, false, "damping", " N s/m");
@@ -267,17 +269,17 @@ void validate_force_predictor(const config::ForcePredictor& block, double dt,
   }
   if (block.error_window() > 0 && dt > 0 && block.error_window() < dt)
     throw std::invalid_argument(
-        where + ".error_window = " + format_number(block.error_window()) +
-        " s is shorter than one step (integrator.dt = " + format_number(dt) + " s)");
+        where + ".error_window = " + core::format_number(block.error_window()) +
+        " s is shorter than one step (integrator.dt = " + core::format_number(dt) + " s)");
 }
 
 double predictor_stiffness_factor(const config::ForcePredictor& block) {
   return block.stiffness_factor() > 0 ? block.stiffness_factor() : 1.0;
 }
 
-PredictorParameters predictor_parameters(const config::ForcePredictor& block,
-                                         double declared_stiffness) {
-  PredictorParameters p;
+core::PredictorParameters predictor_parameters(const config::ForcePredictor& block,
+                                               double declared_stiffness) {
+  core::PredictorParameters p;
   p.stiffness = declared_stiffness * predictor_stiffness_factor(block);
   p.damping = block.damping();
   p.adapt = !block.fixed_model();
@@ -292,7 +294,7 @@ PredictorParameters predictor_parameters(const config::ForcePredictor& block,
   return p;
 }
 
-void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& block,
+void apply_force_predictor(core::HybridSetup& setup, const config::ForcePredictor& block,
                            const std::string& where) {
   validate_force_predictor(block, setup.dt, where);
   const auto& storeys = setup.partition.actuator_storeys;
@@ -314,15 +316,15 @@ void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& blo
     if (!specimen)
       throw std::invalid_argument(where + ": actuator " + std::to_string(a + 1) +
                                   " has no declared specimen to start its model from");
-    PredictorParameters p = predictor_parameters(block, specimen->initial_stiffness());
+    core::PredictorParameters p = predictor_parameters(block, specimen->initial_stiffness());
     // Built once here so that a parameter out of range is refused before any run, named.
-    ForcePredictor check(p, setup.dt, where + " (actuator " + std::to_string(a + 1) + ")",
-                         specimen.get());
+    core::ForcePredictor check(p, setup.dt, where + " (actuator " + std::to_string(a + 1) + ")",
+                               specimen.get());
     setup.predictors[static_cast<std::size_t>(a)] = p;
   }
 }
 
-void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
+void apply_compensation(core::HybridSetup& setup, const std::vector<int>& actuators,
                         const google::protobuf::RepeatedPtrField<config::Compensation>& blocks,
                         const std::string& where) {
   if (blocks.empty()) return;
@@ -373,4 +375,4 @@ const config::Case& find_case(const config::Study& study, const std::string& nam
   throw std::invalid_argument("case '" + name + "' is not among the study's cases");
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -15,7 +15,7 @@
 #include "study/recorders.h"
 #include "study/restoring_force_config.h"
 
-namespace rths::core {
+namespace rths::study {
 
 // Every number of a study is checked against its range rule (study/ranges.h) by validate_study.
 
@@ -37,24 +37,25 @@ void validate_study(const config::Study& study, const std::string& source_name);
 void validate_link_lag(const config::LinkLag& lag, const std::string& where, bool allow_long_lag,
                        const std::string& source);
 
-std::unique_ptr<DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
-                                             const std::filesystem::path& base_dir);
-DelayChain make_delay_chain(const google::protobuf::RepeatedPtrField<config::DelayStage>& stages,
-                            double dt, const std::filesystem::path& base_dir);
+std::unique_ptr<core::DelayStage> make_delay_stage(const config::DelayStage& stage, double dt,
+                                                   const std::filesystem::path& base_dir);
+core::DelayChain make_delay_chain(
+    const google::protobuf::RepeatedPtrField<config::DelayStage>& stages, double dt,
+    const std::filesystem::path& base_dir);
 
 // Relative matrix files (structure.matrices) resolve against base_dir.
-StructuralModel make_structure(const config::Structure& structure,
-                               const std::filesystem::path& base_dir = {});
-IntegratorKind integrator_kind(const config::Integrator& integrator);
+core::StructuralModel make_structure(const config::Structure& structure,
+                                     const std::filesystem::path& base_dir = {});
+core::IntegratorKind integrator_kind(const config::Integrator& integrator);
 // The inverse: the config kind of a core integrator (every core kind has one).
-config::Integrator::Kind config_integrator_kind(IntegratorKind kind);
+config::Integrator::Kind config_integrator_kind(core::IntegratorKind kind);
 
 // A study made ready to run: the motion resampled to the step, the structure and the partition.
 struct PreparedStudy {
   config::Study config;
   std::filesystem::path base_dir;
-  GroundMotion motion;  // at dt
-  HybridSetup base;     // no delay stages
+  core::GroundMotion motion;  // at dt
+  core::HybridSetup base;     // no delay stages
   // What the config most likely did not mean but is allowed (a grounded specimen that reads as a
   // storey): each program prints them before it runs.
   std::vector<std::string> warnings;
@@ -67,16 +68,16 @@ PreparedStudy prepare_study(const config::Study& study, const std::filesystem::p
 // servo loop. The one construction in-process runs and distributed nodes share. Relative matrix
 // files resolve against base_dir. A structure given by matrices is split at its experimental DOFs
 // (study/structure_config.h): the model's mass and damping are then the numerical part's.
-HybridSetup base_setup(const config::Study& study, double dt,
-                       const std::filesystem::path& base_dir = {},
-                       std::vector<std::string>* warnings = nullptr);
+core::HybridSetup base_setup(const config::Study& study, double dt,
+                             const std::filesystem::path& base_dir = {},
+                             std::vector<std::string>* warnings = nullptr);
 // Servo periods per integrator step from study.servo.rate (Hz) and dt (s): 1 when unset; throws
 // std::invalid_argument naming servo.rate unless rate * dt is a whole number in [1, 64].
 int servo_substeps(const config::Study& study, double dt);
 constexpr int kMaxServoSubsteps = 64;
 
 // The base setup with the case's delay stages on every actuator, behind the case's compensation.
-HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case);
+core::HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& study_case);
 
 // Puts compensation `blocks` in front of the delay chains of `actuators` (indices into
 // setup.delays), built at the servo period: one block for all of them, or one per actuator, in
@@ -87,7 +88,7 @@ HybridSetup setup_for_case(const PreparedStudy& prepared, const config::Case& st
 // its specimen's initial stiffness times stiffness_factor, its shape the block's model when
 // given (at that initial stiffness), else the specimen's. Throws std::invalid_argument opening
 // with `where` and naming the field when out of range or an actuator does not exist.
-void apply_force_predictor(HybridSetup& setup, const config::ForcePredictor& block,
+void apply_force_predictor(core::HybridSetup& setup, const config::ForcePredictor& block,
                            const std::string& where);
 // The one range rule of a ForcePredictor block (dt: the integrator's step, 0 when not yet known).
 void validate_force_predictor(const config::ForcePredictor& block, double dt,
@@ -96,9 +97,9 @@ void validate_force_predictor(const config::ForcePredictor& block, double dt,
 // stiffness_factor, unset (0) = 1. The one place its default is read.
 double predictor_stiffness_factor(const config::ForcePredictor& block);
 // The block's parameters for a specimen whose declared initial stiffness is `declared_stiffness`.
-PredictorParameters predictor_parameters(const config::ForcePredictor& block,
-                                         double declared_stiffness);
-void apply_compensation(HybridSetup& setup, const std::vector<int>& actuators,
+core::PredictorParameters predictor_parameters(const config::ForcePredictor& block,
+                                               double declared_stiffness);
+void apply_compensation(core::HybridSetup& setup, const std::vector<int>& actuators,
                         const google::protobuf::RepeatedPtrField<config::Compensation>& blocks,
                         const std::string& where);
 
@@ -110,4 +111,4 @@ const config::Case& reference_case(const config::Study& study);
 const config::Case* case_named(const config::Study& study, const std::string& name);
 const config::Case& find_case(const config::Study& study, const std::string& name);
 
-}  // namespace rths::core
+}  // namespace rths::study

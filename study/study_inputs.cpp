@@ -7,7 +7,7 @@
 
 #include <vector>
 
-namespace rths::core {
+namespace rths::study {
 
 namespace {
 
@@ -24,7 +24,7 @@ void embed_matrix(config::Matrix& matrix, const std::filesystem::path& base_dir,
     *matrix.mutable_sparse() = write_sparse_triplets(read.sparse);
     return;
   }
-  const Mat& values = read.dense;
+  const core::Mat& values = read.dense;
   matrix.set_rows(static_cast<int>(values.rows()));
   for (Eigen::Index i = 0; i < values.rows(); ++i)
     for (Eigen::Index j = 0; j < values.cols(); ++j) matrix.add_values(values(i, j));
@@ -47,13 +47,13 @@ void embed_traces(google::protobuf::RepeatedPtrField<config::DelayStage>& stages
     if (!stage.has_trace() || stage.trace().time_size() > 0) continue;
     config::DelayStage::Trace& trace = *stage.mutable_trace();
     trace.set_path(absolute_path(base_dir, trace.path()));
-    const DelayTrace samples = read_delay_trace(trace.path());
+    const core::DelayTrace samples = read_delay_trace(trace.path());
     trace.mutable_time()->Add(samples.time.begin(), samples.time.end());
     trace.mutable_delay()->Add(samples.delay.begin(), samples.delay.end());
   }
 }
 
-void embed_motion(config::GroundMotion& motion, const GroundMotion& as_run,
+void embed_motion(config::GroundMotion& motion, const core::GroundMotion& as_run,
                   const std::filesystem::path& base_dir) {
   if (motion.has_embedded()) return;
   config::EmbeddedMotion& embedded = *motion.mutable_embedded();
@@ -96,4 +96,4 @@ std::string inputs_source(const config::Study& study, const std::filesystem::pat
   return text;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -24,10 +24,10 @@
 
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 
 config::Study with_embedded_inputs(const PreparedStudy& prepared);
 
 std::string inputs_source(const config::Study& study, const std::filesystem::path& base_dir);
 
-}  // namespace rths::core
+}  // namespace rths::study

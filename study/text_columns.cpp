@@ -7,7 +7,7 @@
 #include <fstream>
 #include <stdexcept>
 
-namespace rths::core {
+namespace rths::study {
 
 std::string not_a_text_file(const std::filesystem::path& path, const std::string& what) {
   std::error_code error;
@@ -27,7 +27,7 @@ std::string not_a_text_file(const std::filesystem::path& path, const std::string
     const auto byte = static_cast<unsigned char>(head[i]);
     if (byte < 0x20 && byte != '\t' && byte != '\n' && byte != '\r' && byte != '\f')
       return path.string() + " holds binary data (byte " + std::to_string(i) + " is " +
-             printable(std::string_view(head + i, 1)) + "), not a " + what + " (text)";
+             core::printable(std::string_view(head + i, 1)) + "), not a " + what + " (text)";
   }
   return "";
 }
@@ -62,7 +62,7 @@ void for_each_text_row(const std::filesystem::path& path, const std::string& wha
     values.clear();
     const std::string* bad = nullptr;
     for (const std::string& field : fields) {
-      const auto value = parse_finite(field);
+      const auto value = core::parse_finite(field);
       if (!value) {
         bad = &field;
         break;
@@ -75,7 +75,7 @@ void for_each_text_row(const std::filesystem::path& path, const std::string& wha
       continue;
     }
     if (bad)
-      throw std::invalid_argument(text_position(path, number) + "'" + printable(*bad) +
+      throw std::invalid_argument(text_position(path, number) + "'" + core::printable(*bad) +
                                   "' is not a finite number");
     first = false;
     visit(number, values);
@@ -94,4 +94,4 @@ TextColumns read_text_columns(const std::filesystem::path& path, const std::stri
   return out;
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -19,7 +19,7 @@
 
 #include "core/number_text.h"
 
-namespace rths::core {
+namespace rths::study {
 
 struct TextRow {
   int line = 0;  // 1-based line number in the file
@@ -51,4 +51,4 @@ std::string not_a_text_file(const std::filesystem::path& path, const std::string
 // "PATH:LINE: ", how every error about a place in a text file starts.
 std::string text_position(const std::filesystem::path& path, int line);
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 // Keeps the first error: later ones are usually consequences of it.
@@ -64,4 +64,4 @@ void write_text_format(const google::protobuf::Message& message, const std::file
   if (!out) throw std::runtime_error(path.string() + ": cannot write " + message.GetTypeName());
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace rths::core {
+namespace rths::study {
 
 // Parses `text` into `message`. Throws std::invalid_argument "SOURCE:LINE:COL: message" on syntax
 // errors, unknown fields and wrong types.
@@ -25,4 +25,4 @@ std::string read_text_file(const std::filesystem::path& path, const std::string&
 void write_text_format(const google::protobuf::Message& message, const std::filesystem::path& path,
                        const std::vector<std::string>& comment = {});
 
-}  // namespace rths::core
+}  // namespace rths::study

@@ -14,7 +14,7 @@
 
 // validate_study and its parts: every rule a study must meet before anything is built from it,
 // each failure an std::invalid_argument naming the source and the field.
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 [[noreturn]] void fail(const std::string& source, const std::string& message) {
@@ -35,7 +35,8 @@ void require_in(Quantity quantity, double value, const std::string& field,
 // A lag in seconds (core::check_lag); a time constant must also be > 0.
 void require_lag(double value, const std::string& field, const std::string& source,
                  bool zero_allowed, bool allow_long_lag) {
-  require(zero_allowed || value > 0, source, field + " must be > 0 s, got " + format_number(value));
+  require(zero_allowed || value > 0, source,
+          field + " must be > 0 s, got " + core::format_number(value));
   require_in(allow_long_lag ? Quantity::kLongLag : Quantity::kLag, value, field, source);
 }
 
@@ -94,19 +95,19 @@ void validate_rig_effect_stage(const config::DelayStage& stage, const std::strin
     case K::kBacklash:
       require(stage.backlash().width() >= 0.0 && stage.backlash().width() <= 1.0, source,
               where + ".backlash.width must be in [0, 1] m, got " +
-                  format_number(stage.backlash().width()));
+                  core::format_number(stage.backlash().width()));
       break;
     case K::kVelocityLimit:
       require(stage.velocity_limit().max_velocity() > 0.0 &&
                   stage.velocity_limit().max_velocity() <= 100.0,
               source,
               where + ".velocity_limit.max_velocity must be in (0, 100] m/s, got " +
-                  format_number(stage.velocity_limit().max_velocity()));
+                  core::format_number(stage.velocity_limit().max_velocity()));
       break;
     case K::kStrokeLimit:
       require(stage.stroke_limit().stroke() > 0.0 && stage.stroke_limit().stroke() <= 10.0, source,
               where + ".stroke_limit.stroke must be in (0, 10] m, got " +
-                  format_number(stage.stroke_limit().stroke()));
+                  core::format_number(stage.stroke_limit().stroke()));
       break;
     case K::kSensorDrift: {
       const auto& d = stage.sensor_drift();
@@ -115,34 +116,34 @@ void validate_rig_effect_stage(const config::DelayStage& stage, const std::strin
               source, where + ".sensor_drift: every offset and drift must be finite");
       require(d.displacement_scale() >= 0.0 && d.displacement_scale() <= 10.0, source,
               where + ".sensor_drift.displacement_scale must be in [0, 10] (0 = 1), got " +
-                  format_number(d.displacement_scale()));
+                  core::format_number(d.displacement_scale()));
       break;
     }
     case K::kViscousForce:
       require(stage.viscous_force().damping() >= 0.0 && stage.viscous_force().damping() <= 1e9,
               source,
               where + ".viscous_force.damping must be in [0, 1e9] N s/m, got " +
-                  format_number(stage.viscous_force().damping()));
+                  core::format_number(stage.viscous_force().damping()));
       break;
     case K::kInertiaForce:
       require(stage.inertia_force().mass() >= 0.0 && stage.inertia_force().mass() <= 1e9, source,
               where + ".inertia_force.mass must be in [0, 1e9] kg, got " +
-                  format_number(stage.inertia_force().mass()));
+                  core::format_number(stage.inertia_force().mass()));
       break;
     case K::kFrictionForce: {
       const auto& f = stage.friction_force();
       require(f.friction_force() >= 0.0 && f.friction_force() <= 1e9, source,
               where + ".friction_force.friction_force must be in [0, 1e9] N, got " +
-                  format_number(f.friction_force()));
+                  core::format_number(f.friction_force()));
       require(f.smoothing_velocity() > 0.0 && f.smoothing_velocity() <= 100.0, source,
               where + ".friction_force.smoothing_velocity must be in (0, 100] m/s, got " +
-                  format_number(f.smoothing_velocity()));
+                  core::format_number(f.smoothing_velocity()));
       break;
     }
     case K::kForceDelay:
       require(stage.force_delay().delay() >= 0.0 && stage.force_delay().delay() <= 1.0, source,
               where + ".force_delay.delay must be in [0, 1] s, got " +
-                  format_number(stage.force_delay().delay()));
+                  core::format_number(stage.force_delay().delay()));
       break;
     default: break;  // a lag stage (validate_lag_stage) or none (validate_delay_stage)
   }
@@ -152,7 +153,7 @@ void validate_delay_stage(const config::DelayStage& stage, const std::string& wh
                           const std::string& source, bool long_lag) {
   require(stage.amplitude_gain() >= 0 && stage.amplitude_gain() <= 10, source,
           where + ".amplitude_gain must be in [0, 10] (0 means 1), got " +
-              format_number(stage.amplitude_gain()));
+              core::format_number(stage.amplitude_gain()));
   if (stage.kind_case() == config::DelayStage::KIND_NOT_SET)
     fail(source, where + " has no kind (shift, eq1, eq1_lag, ...)");
   if (!validate_lag_stage(stage, where, source, long_lag))
@@ -164,7 +165,7 @@ void validate_structure(const config::Structure& structure, const std::string& s
     const config::Sdof& sdof = structure.sdof();
     // Given, the mass must be one: an explicit 0 is not quietly run as 1 kg.
     require(!sdof.has_mass() || sdof.mass() > 0, source,
-            "structure.sdof.mass must be > 0 kg, got " + format_number(sdof.mass()) +
+            "structure.sdof.mass must be > 0 kg, got " + core::format_number(sdof.mass()) +
                 " (omit it for 1 kg: at a fixed period the response does not depend on it)");
     require(!(sdof.has_mass() && sdof.period() > 0 && sdof.stiffness() > 0), source,
             "structure.sdof: mass, period and stiffness are all given; give two (the mass is "
@@ -183,7 +184,7 @@ void validate_structure(const config::Structure& structure, const std::string& s
     for (int i = 0; i < building.storey_mass_size(); ++i)
       require(building.storey_mass(i) > 0, source,
               "structure.shear_building.storey_mass[" + std::to_string(i) +
-                  "] must be > 0 kg, got " + format_number(building.storey_mass(i)));
+                  "] must be > 0 kg, got " + core::format_number(building.storey_mass(i)));
   } else if (!structure.has_matrices()) {
     fail(source, "structure needs sdof, shear_building or matrices");
   }
@@ -319,8 +320,9 @@ void validate_link_lag(const config::LinkLag& lag, const std::string& where, boo
                        const std::string& source) {
   require_lag(lag.one_way_delay(), where + ".one_way_delay", source, true, allow_long_lag);
   require_lag(lag.jitter(), where + ".jitter", source, true, allow_long_lag);
-  require(lag.loss() >= 0 && lag.loss() < 1, source,
-          where + ".loss = " + format_number(lag.loss()) + " is outside [0, 1) (a probability)");
+  require(
+      lag.loss() >= 0 && lag.loss() < 1, source,
+      where + ".loss = " + core::format_number(lag.loss()) + " is outside [0, 1) (a probability)");
   validate_network_emulation(lag.network(), where + ".network", allow_long_lag, source);
 }
 
@@ -330,7 +332,7 @@ void validate_study(const config::Study& study, const std::string& source) {
   validate_structure(study.structure(), source);
   require(std::isfinite(study.servo().rate()) && study.servo().rate() >= 0, source,
           "servo.rate must be >= 0 Hz (0 = the integrator's rate), got " +
-              format_number(study.servo().rate()));
+              core::format_number(study.servo().rate()));
   require_unset_or_in(Quantity::kStep, study.integrator().dt(),
                       "integrator.dt (0 = the record's step)", source);
   const auto& sub = study.substructuring();
@@ -360,4 +362,4 @@ void validate_study(const config::Study& study, const std::string& source) {
   validate_recorders(study, source);
 }
 
-}  // namespace rths::core
+}  // namespace rths::study

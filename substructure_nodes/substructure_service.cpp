@@ -10,7 +10,7 @@ SubstructureService::SubstructureService(std::int32_t node_id, std::string expec
     : NodeService(node_id, config::NodeSpec::SUBSTRUCTURE, std::move(expected_run_id)) {}
 
 int SubstructureService::configure(const runtime::Assign& assign) {
-  const config::Case& study_case = core::find_case(assign.study(), assign.case_name());
+  const config::Case& study_case = study::find_case(assign.study(), assign.case_name());
   core::HybridSetup setup =
       runtime::setup_without_motion(assign.study(), assign.base_dir(), assign.dt(), study_case);
   const int n = static_cast<int>(setup.partition.numerical.size());

@@ -14,7 +14,7 @@ namespace {
 // predictor as it starts, analysis::predicted_loop_verdict) where it is analysed, else the
 // uncompensated critical delay less the case's own lag (analysis::check_case_critical_delay);
 // "label" says which, "text" why there is none.
-nlohmann::json critical_round_trip(const core::PreparedStudy& prepared,
+nlohmann::json critical_round_trip(const study::PreparedStudy& prepared,
                                    const config::Case& study_case) {
   const auto compensated = analysis::predicted_loop_verdict(prepared, study_case, 0.0);
   if (compensated && compensated->analysed && compensated->stable) {
@@ -39,11 +39,11 @@ nlohmann::json critical_round_trip(const core::PreparedStudy& prepared,
 
 }  // namespace
 
-nlohmann::json link_context(const core::PreparedStudy& prepared, const std::string& case_name) {
+nlohmann::json link_context(const study::PreparedStudy& prepared, const std::string& case_name) {
   nlohmann::json j;
   try {
     j["critical_round_trip"] =
-        critical_round_trip(prepared, core::find_case(prepared.config, case_name));
+        critical_round_trip(prepared, study::find_case(prepared.config, case_name));
   } catch (const std::exception& e) {
     j["critical_round_trip"] = {{"text", std::string("not known: ") + e.what()}};
   }
@@ -58,10 +58,10 @@ nlohmann::json link_context(const core::PreparedStudy& prepared, const std::stri
   return j;
 }
 
-nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name) {
+nlohmann::json run_context(const study::PreparedStudy& prepared, const std::string& case_name) {
   nlohmann::json critical;
   try {
-    const config::Case& study_case = core::find_case(prepared.config, case_name);
+    const config::Case& study_case = study::find_case(prepared.config, case_name);
     const auto check = analysis::check_case_critical_delay(prepared, study_case);
     if (!check || !check->critical()) {
       critical["text"] =
@@ -85,9 +85,9 @@ nlohmann::json run_context(const core::PreparedStudy& prepared, const std::strin
   return context;
 }
 
-core::SimulationResult predict_case(const core::PreparedStudy& prepared,
+core::SimulationResult predict_case(const study::PreparedStudy& prepared,
                                     const std::string& case_name) {
-  const config::Case& study_case = core::find_case(prepared.config, case_name);
+  const config::Case& study_case = study::find_case(prepared.config, case_name);
   core::SimulationOptions recorded;  // the record's columns: what the recorders keep
   recorded.kept_dofs = prepared.recorders.kept_dofs;
   return core::simulate(runtime::in_process_setup(prepared, study_case), prepared.motion, recorded);
@@ -96,13 +96,13 @@ core::SimulationResult predict_case(const core::PreparedStudy& prepared,
 namespace {
 
 // `motion_text`, when not empty, says where the motion came from (in the prediction's text).
-void describe(Feed& feed, const core::PreparedStudy& prepared, const std::string& case_name,
+void describe(Feed& feed, const study::PreparedStudy& prepared, const std::string& case_name,
               const std::string& note, const std::string& motion_text) {
   nlohmann::json context = run_context(prepared, case_name);
   try {
     const core::SimulationResult prediction = predict_case(prepared, case_name);
     feed.set_prediction(prediction);
-    const std::string name = core::find_case(prepared.config, case_name).name();
+    const std::string name = study::find_case(prepared.config, case_name).name();
     context["prediction"] = {{"text", "in-process run of case " + name +
                                           " (its delays and compensation; not the links' lag)" +
                                           motion_text + (prediction.diverged ? ": diverged" : "")},
@@ -117,7 +117,7 @@ void describe(Feed& feed, const core::PreparedStudy& prepared, const std::string
 
 }  // namespace
 
-void describe_run(Feed& feed, const core::PreparedStudy& prepared, const std::string& case_name,
+void describe_run(Feed& feed, const study::PreparedStudy& prepared, const std::string& case_name,
                   const std::string& note) {
   describe(feed, prepared, case_name, note, "");
 }
@@ -144,20 +144,20 @@ void describe_record_study(Feed& feed, const runtime::RecordContents& contents,
   const std::string note = contents.warning;
   std::string why;
   try {
-    describe(feed, core::prepare_study(study, base_dir), header.case_name(), note,
-             ", inputs " + core::inputs_source(study, base_dir));
+    describe(feed, study::prepare_study(study, base_dir), header.case_name(), note,
+             ", inputs " + study::inputs_source(study, base_dir));
     return;
   } catch (const std::exception& e) {
     why = e.what();
   }
   try {  // the study's motion file is not here: the record's steps carry the motion
-    core::PreparedStudy prepared;
+    study::PreparedStudy prepared;
     prepared.config = study;
     prepared.base_dir = base_dir;
     prepared.motion = recorded_motion(contents);
     if (prepared.motion.acceleration.size() < 2)
       throw std::invalid_argument("the record has too few steps to carry the motion");
-    prepared.base = core::base_setup(study, header.dt(), base_dir);
+    prepared.base = study::base_setup(study, header.dt(), base_dir);
     // The DOFs the record holds (none named: every DOF), as its recorders kept them.
     prepared.recorders.kept_dofs.assign(header.recorded_dofs().begin(),
                                         header.recorded_dofs().end());

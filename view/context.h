@@ -33,21 +33,21 @@
 
 namespace rths::view {
 
-nlohmann::json run_context(const core::PreparedStudy& prepared, const std::string& case_name);
+nlohmann::json run_context(const study::PreparedStudy& prepared, const std::string& case_name);
 // What the control room shows per link, in run_context: "critical_round_trip" {"ms": the round
 // trip a link may add before the loop is unstable, "label": compensated (a force predictor as it
 // starts, analysis::predicted_loop_verdict, where it finds the loop stable; "unbounded": true
 // and no "ms" when stable for every round trip) or uncompensated (the critical delay less the
 // case's own lag), "text"}; "answer_window_steps" (runtime::max_missed_answers: an older answer stops
 // the run); "node_actuators" {"<node id>": [actuator indices]}.
-nlohmann::json link_context(const core::PreparedStudy& prepared, const std::string& case_name);
+nlohmann::json link_context(const study::PreparedStudy& prepared, const std::string& case_name);
 
 // Throws std::invalid_argument naming the case or the block that cannot be built.
-core::SimulationResult predict_case(const core::PreparedStudy& prepared,
+core::SimulationResult predict_case(const study::PreparedStudy& prepared,
                                     const std::string& case_name);
 
 // `note` (e.g. a cut record's warning), when not empty, is shown as context["note"].
-void describe_run(Feed& feed, const core::PreparedStudy& prepared, const std::string& case_name,
+void describe_run(Feed& feed, const study::PreparedStudy& prepared, const std::string& case_name,
                   const std::string& note = "");
 // The motion a record's steps carry: their ground acceleration (m/s^2) at the header's dt, over
 // the steps 0, 1, ... up to the first one missing.

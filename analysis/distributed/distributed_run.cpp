@@ -29,12 +29,12 @@ bool comparable_in_process(const config::Study& study) {
 // max |u_distributed - u_in_process| over every recorded floor and step, and the first step where
 // they differ; nullopt when the step counts differ.
 std::optional<InProcessDifference> difference_from_in_process(
-    const core::PreparedStudy& prepared, const std::string& case_name,
+    const study::PreparedStudy& prepared, const std::string& case_name,
     const core::SimulationResult& recorded) {
   const core::SimulationResult expected = core::simulate(
-      runtime::in_process_setup(prepared, core::find_case(prepared.config, case_name)),
+      runtime::in_process_setup(prepared, study::find_case(prepared.config, case_name)),
       prepared.motion,
-      core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
+      study::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits()));
   if (expected.displacement.rows() != recorded.displacement.rows() ||
       expected.displacement.cols() != recorded.displacement.cols())
     return std::nullopt;
@@ -127,7 +127,7 @@ StepTiming step_timing(const runtime::RecordContents& record) {
   return timing;
 }
 
-ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
+ActuatorPathLag actuator_path_lag(const study::PreparedStudy& prepared) {
   const config::Deployment deployment =
       runtime::with_default_nodes(prepared.config.deployment(), prepared.base);
   ActuatorPathLag worst;
@@ -141,19 +141,19 @@ ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared) {
     for (const auto* stages : {&node.receive_delay(), &node.send_delay()})
       if (!stages->empty())
         lag.node_stages +=
-            core::make_delay_chain(*stages, prepared.base.dt, prepared.base_dir).nominal_delay();
+            study::make_delay_chain(*stages, prepared.base.dt, prepared.base_dir).nominal_delay();
     if (worst.node_id < 0 || lag.felt() > worst.felt()) worst = lag;
   }
   return worst;
 }
 
-int warn_past_critical_delay(const core::PreparedStudy& prepared,
+int warn_past_critical_delay(const study::PreparedStudy& prepared,
                              const std::vector<std::string>& case_names,
                              const std::function<void(const std::string&)>& warn) {
   const ActuatorPathLag path = actuator_path_lag(prepared);
   int past = 0;
   for (const std::string& name : case_names) {
-    const config::Case& study_case = core::find_case(prepared.config, name);
+    const config::Case& study_case = study::find_case(prepared.config, name);
     // A force predictor leaves only its model's error to the lag: its own verdict decides.
     if (const auto predicted =
             analysis::predicted_loop_verdict(prepared, study_case, path.felt())) {
@@ -259,7 +259,7 @@ std::string answer_counts(std::size_t measured, const runtime::LinkSeries& serie
 
 }  // namespace
 
-DistributedResults judge_distributed(const core::PreparedStudy& prepared,
+DistributedResults judge_distributed(const study::PreparedStudy& prepared,
                                      const std::vector<DistributedRun>& runs,
                                      const std::function<void(const std::string&)>& warn,
                                      const std::map<int, std::string>& site_of_node) {

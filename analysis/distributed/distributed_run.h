@@ -64,13 +64,13 @@ struct ActuatorPathLag {
   // s, what the test feels: node_stages + link_round_trip in real time, node_stages in lockstep.
   double felt() const { return node_stages + (real_time ? link_round_trip : 0.0); }
 };
-ActuatorPathLag actuator_path_lag(const core::PreparedStudy& prepared);
+ActuatorPathLag actuator_path_lag(const study::PreparedStudy& prepared);
 
 // Before a distributed run starts: each named case (empty name: the reference case) checked by
 // analysis::check_case_critical_delay with actuator_path_lag(prepared).felt() added to its own lag;
 // for each case past its continuous or discrete critical delay, `warn` names the network
 // and actuator parts of the lag, the critical delays and the margin. Returns how many are past.
-int warn_past_critical_delay(const core::PreparedStudy& prepared,
+int warn_past_critical_delay(const study::PreparedStudy& prepared,
                              const std::vector<std::string>& case_names,
                              const std::function<void(const std::string&)>& warn);
 
@@ -135,7 +135,7 @@ struct DistributedResults {
 
 // site_of_node: node id -> site name (`rths sites`), for the link labels.
 // A record's own warning (damaged entries) goes to `warn`.
-DistributedResults judge_distributed(const core::PreparedStudy& prepared,
+DistributedResults judge_distributed(const study::PreparedStudy& prepared,
                                      const std::vector<DistributedRun>& runs,
                                      const std::function<void(const std::string&)>& warn,
                                      const std::map<int, std::string>& site_of_node = {});

@@ -43,7 +43,7 @@ std::vector<Channel> parse_channels(const std::vector<std::string>& names,
 }  // namespace
 
 IdentifyOptions identify_options(const IdentifyRequest& request, const ArgumentName& argument) {
-  core::check_range(core::Quantity::kFraction, request.holdout, argument("holdout"));
+  study::check_range(study::Quantity::kFraction, request.holdout, argument("holdout"));
   if (request.max_steps > kMaxSteps)
     throw std::invalid_argument(argument("max_steps") + " = " + std::to_string(request.max_steps) +
                                 " is outside [0, " + std::to_string(kMaxSteps) + "]");

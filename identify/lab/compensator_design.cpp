@@ -167,7 +167,7 @@ CompensatorDesign design_compensator(const ChannelModel& actuator, const SignalS
       break;
   }
   // The block must build at this dt: a design that cannot run is an error here, not in the lab.
-  core::make_compensator(*c, dt, "designed compensation");
+  study::make_compensator(*c, dt, "designed compensation");
   design.summary = summary.str();
   return design;
 }

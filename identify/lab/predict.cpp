@@ -69,7 +69,7 @@ ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scal
   // The one translation of effects into stages is the study config's (study_config.h).
   const ActuatorCase study_case = actuator_case(model, scales);
   ActuatorChain out;
-  out.chain = core::make_delay_chain(study_case.study_case.delay(), dt, {});
+  out.chain = study::make_delay_chain(study_case.study_case.delay(), dt, {});
   out.description = describe_stages(study_case.study_case);
   out.ignored = study_case.left_out;
   return out;
@@ -77,19 +77,19 @@ ActuatorChain actuator_chain(const ChannelModel& model, const SignalScales& scal
 
 StudyPrediction predict_study(const std::filesystem::path& config, const ChannelModel& actuator,
                               const SignalScales& scales) {
-  const auto study = core::load_study(config);
-  const auto prepared = core::prepare_study(study, config.parent_path());
+  const auto study = study::load_study(config);
+  const auto prepared = study::prepare_study(study, config.parent_path());
   StudyPrediction out;
   out.config = config.string();
-  const auto& ref_case = core::reference_case(study);
+  const auto& ref_case = study::reference_case(study);
   out.reference_case = ref_case.name();
-  const core::HybridSetup reference_setup = core::setup_for_case(prepared, ref_case);
+  const core::HybridSetup reference_setup = study::setup_for_case(prepared, ref_case);
   out.dt = reference_setup.dt;
   const auto reference = top_displacement(core::simulate(reference_setup, prepared.motion));
 
   for (const auto& c : study.cases()) {
     if (c.name() == ref_case.name()) continue;
-    const core::HybridSetup setup = core::setup_for_case(prepared, c);
+    const core::HybridSetup setup = study::setup_for_case(prepared, c);
     const double nominal = setup.delays.empty() ? 0.0 : setup.delays.front().nominal_delay();
     out.cases.push_back(
         compare(c.name(), reference, core::simulate(setup, prepared.motion), nominal));
@@ -102,7 +102,7 @@ StudyPrediction predict_study(const std::filesystem::path& config, const Channel
   setup.delays.assign(setup.partition.actuator_storeys.size(), chain.chain);
   out.identified = compare("identified_actuator", reference, core::simulate(setup, prepared.motion),
                            chain.chain.nominal_delay());
-  out.stability = core::check_lag_critical_delay(prepared, chain.chain.nominal_delay());
+  out.stability = study::check_lag_critical_delay(prepared, chain.chain.nominal_delay());
   return out;
 }
 

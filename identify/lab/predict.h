@@ -3,7 +3,7 @@
 // record, replaces the declared delay stages of a study config, and the in-process hybrid
 // simulation (core::simulate) predicts how far the test will stray from the reference.
 //
-// The actuator channel model becomes a core::DelayChain made (core::make_delay_chain) from the
+// The actuator channel model becomes a core::DelayChain made (study::make_delay_chain) from the
 // stages study_config.h's actuator_case writes, the one translation of effects into stages: what
 // --predict simulates is what --out writes for `rths run`, and what a study cannot hold (offsets,
 // backlash, saturation, the stroke limit, drifts' variation, a lead) is listed in `ignored`.

@@ -88,7 +88,7 @@ std::vector<std::string> write_identified_configs(const Identification& id,
   }
   std::vector<std::string> written;
   const auto model_path = dir / "identified_model.textproto";
-  core::write_text_format(
+  study::write_text_format(
       to_config(actuator, specimen), model_path,
       {"Identified by `rths identify " + request.data + "`: fitted values as initial values.",
        "Start another identification from it: rths identify DATA --model " + model_path.string()});
@@ -101,17 +101,17 @@ std::vector<std::string> write_identified_configs(const Identification& id,
       "`rths identify DATA --predict STUDY --out DIR` writes the whole study."};
   for (const auto& n : notes) comment.push_back(n);
   const auto fragment_path = dir / "identified_study_fragment.textproto";
-  core::write_text_format(fragment, fragment_path, comment);
+  study::write_text_format(fragment, fragment_path, comment);
   written.push_back("study-config parts: " + fragment_path.string());
   if (!request.predict.empty()) {
     const std::filesystem::path base_path = request.predict;
     const config::Study study =
-        identified_study(core::load_study(base_path), base_path.parent_path(), fragment);
+        identified_study(study::load_study(base_path), base_path.parent_path(), fragment);
     const auto study_path = dir / "identified_study.textproto";
     comment[1] = base_path.string() + " with the identified specimen model and the case '" +
                  std::string(kIdentifiedCaseName) + "'.";
     comment[2] = "Run it: rths run " + study_path.string();
-    core::write_text_format(study, study_path, comment);
+    study::write_text_format(study, study_path, comment);
     written.push_back("study with the identified model (rths run): " + study_path.string());
   }
   return written;

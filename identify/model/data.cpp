@@ -35,7 +35,7 @@ std::string lower(std::string s) {
 }
 
 std::string where(const std::filesystem::path& path, std::size_t line) {
-  return core::text_position(path, static_cast<int>(line));
+  return study::text_position(path, static_cast<int>(line));
 }
 
 double parse_number(const std::string& text, const std::filesystem::path& path, std::size_t line,

@@ -125,7 +125,7 @@ void add_parameters(google::protobuf::RepeatedPtrField<config::ParameterDeclarat
 
 DeclaredModel parse_declared_model(const std::string& text, const std::string& source) {
   config::DeclaredModel proto;
-  core::parse_text_format(text, source, proto);
+  study::parse_text_format(text, source, proto);
   DeclaredModel out;
   out.source = source;
   if (proto.has_actuator()) {
@@ -169,7 +169,7 @@ DeclaredModel parse_declared_model(const std::string& text, const std::string& s
 }
 
 DeclaredModel load_declared_model(const std::filesystem::path& path) {
-  return parse_declared_model(core::read_text_file(path, "declared model"), path.string());
+  return parse_declared_model(study::read_text_file(path, "declared model"), path.string());
 }
 
 void check_physical_bounds(const DeclaredChannel& declared, Channel channel,

@@ -47,7 +47,7 @@ void check_physical_bounds(const DeclaredChannel& declared, Channel channel,
                            const SignalScales& scales, const std::string& source);
 
 // The identified models (either may be null) as a declared-model config (written with
-// core::write_text_format).
+// study::write_text_format).
 config::DeclaredModel to_config(const ChannelModel* actuator, const ChannelModel* specimen);
 
 }  // namespace rths::identify

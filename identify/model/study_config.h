@@ -20,7 +20,7 @@
 //   stiffness, drifts, offsets and the force delay have no place in a storey model: `left_out`
 //   (each saying whether a force stage holds it: add_force_stages).
 //   A specimen with no displacement-dependent force (a pure damper) gives no RestoringForce.
-// Fragment (study_fragment, written with core::write_text_format): a text-format Study holding only
+// Fragment (study_fragment, written with study::write_text_format): a text-format Study holding only
 //   substructuring { model { ... } } and cases { name: "identified_actuator" ... },
 // the parts to copy into a study. identified_study() puts them into a whole study: the base's
 // model replaced, the case appended, relative paths of the base (motions, the cases' and the

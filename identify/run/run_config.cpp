@@ -115,7 +115,8 @@ IdentifiedRun identified_run(const RunIdentification& run, const std::filesystem
                              const std::filesystem::path& trace_dir) {
   IdentifiedRun out;
   config::Study fragment;
-  for (const auto& c : actuator_cases(run, core::case_named(run.study, run.case_name), out.notes)) {
+  for (const auto& c :
+       actuator_cases(run, study::case_named(run.study, run.case_name), out.notes)) {
     *fragment.add_cases() = c;
   }
   if (const auto specimen = contradicted_specimen(run)) {
@@ -178,7 +179,7 @@ std::vector<std::string> write_identified_run(const RunIdentification& run,
       "Run it: rths run " + (dir / "identified_run.textproto").string() + " (or rths launch)"};
   for (const auto& n : identified.notes) comment.push_back(n);
   const auto study_path = dir / "identified_run.textproto";
-  core::write_text_format(identified.study, study_path, comment);
+  study::write_text_format(identified.study, study_path, comment);
   written.push_back("study with the identified links and actuators (rths run, rths launch): " +
                     study_path.string());
   return written;

@@ -141,7 +141,7 @@ std::vector<NetworkPath> identify_links(const std::filesystem::path& record,
 // As run_residual.cpp's: the record's case, else its first; nullptr for a study without cases.
 const config::Case* run_case(const config::Study& study, const std::string& name) {
   if (study.cases().empty()) return nullptr;
-  const config::Case* named = core::case_named(study, name);
+  const config::Case* named = study::case_named(study, name);
   return named ? named : &study.cases(0);
 }
 
@@ -358,7 +358,7 @@ std::vector<double> declared_stiffnesses(const config::Study& study, double dt,
                                          const std::filesystem::path& base_dir) {
   std::vector<double> out;
   try {
-    const core::HybridSetup setup = core::base_setup(study, dt, base_dir);
+    const core::HybridSetup setup = study::base_setup(study, dt, base_dir);
     for (int storey : setup.partition.actuator_storeys)
       out.push_back(
           setup.partition.experimental.at(static_cast<std::size_t>(storey))->initial_stiffness());
@@ -375,7 +375,7 @@ std::optional<PlatformReplay> replay_of(const std::filesystem::path& record,
                                         const runtime::RunHeader& header, std::size_t steps) {
   try {
     const config::Study& study = *contents.study_as_run();
-    const core::HybridSetup base = core::base_setup(study, header.dt(), record.parent_path());
+    const core::HybridSetup base = study::base_setup(study, header.dt(), record.parent_path());
     return platform_replay(contents.steps(), steps,
                            runtime::answer_sources(study, header.dt(), record.parent_path()),
                            static_cast<int>(base.partition.numerical.size()),
@@ -548,7 +548,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   out.study = *contents.study_as_run();
   out.steps = usable_steps(m.steps);
   out.held = held_note(contents, m, out.steps);
-  out.inputs = core::inputs_source(out.study, record.parent_path());
+  out.inputs = study::inputs_source(out.study, record.parent_path());
   if (out.steps < kDefaultMinSamples) {
     bad(record, "steps",
         std::to_string(out.steps) + " usable steps, at least " +

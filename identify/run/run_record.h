@@ -65,7 +65,7 @@ struct RunIdentification {
   std::size_t steps = 0;  // identified
   double duration = 0.0;  // s
   std::string held;       // how much the record held: complete, truncated, diverged
-  std::string inputs;     // where the re-run's inputs came from (core::inputs_source)
+  std::string inputs;     // where the re-run's inputs came from (study::inputs_source)
   config::Study study;    // the run's own config (the record header's)
   // Real time: why steps missed their deadlines and what the record is worth for it (said first:
   // a response dominated by overruns is the platform's as much as the rig's); absent in lockstep.

@@ -21,7 +21,7 @@ namespace {
 
 // The record's case; a record whose study lost that case's name is read with its first case.
 const config::Case& run_case(const config::Study& study, const std::string& name) {
-  if (const config::Case* c = core::case_named(study, name)) return *c;
+  if (const config::Case* c = study::case_named(study, name)) return *c;
   if (study.cases().empty()) throw std::invalid_argument("study: no cases");
   return study.cases(0);
 }
@@ -178,8 +178,8 @@ class Reruns {
     prepared_.config = *input.study;
     prepared_.base_dir = input.base_dir;
     prepared_.motion = input.motion;
-    prepared_.base = core::base_setup(*input.study, input.motion.dt, input.base_dir);
-    setup_ = core::setup_for_case(prepared_, declared_);
+    prepared_.base = study::base_setup(*input.study, input.motion.dt, input.base_dir);
+    setup_ = study::setup_for_case(prepared_, declared_);
     if (setup_.delays.size() != input.actuators->size()) {
       throw std::invalid_argument("study: " + std::to_string(setup_.delays.size()) +
                                   " actuators, the record has " +
@@ -207,7 +207,7 @@ class Reruns {
       }
       add_displacement_scale(m.displacement_scale, c);
       for (const MovingParameter& moving : m.moving) hold_moving_delay(moving, c);
-      setup.delays[a] = core::setup_for_case(prepared_, c).delays[a];
+      setup.delays[a] = study::setup_for_case(prepared_, c).delays[a];
       for (const MovingParameter& moving : m.moving)
         if (auto stage = moving_stage(moving, m.displacement_scale))
           setup.delays[a].add(std::move(stage));
@@ -260,13 +260,13 @@ class Reruns {
     if (!model.restoring_force || !(model.initial_stiffness > 0.0)) return;
     const auto storey = static_cast<std::size_t>(setup.partition.actuator_storeys.at(a));
     setup.partition.experimental.at(storey) =
-        core::make_storey_factory(*model.restoring_force)(model.initial_stiffness);
+        study::make_storey_factory(*model.restoring_force)(model.initial_stiffness);
   }
 
   const ResidualInput& input_;
   const core::AnswerSchedule no_replay_;
   config::Case declared_;
-  core::PreparedStudy prepared_;
+  study::PreparedStudy prepared_;
   core::HybridSetup setup_;
 };
 

@@ -198,12 +198,12 @@ void reap_nodes(std::vector<util::ChildProcess>& nodes, LaunchResult& result) {
 }  // namespace
 
 LaunchResult launch_run(const LaunchOptions& options) {
-  const config::Study study = core::load_study(options.config);
-  const core::PreparedStudy prepared = core::prepare_study(study, options.config.parent_path());
+  const config::Study study = study::load_study(options.config);
+  const study::PreparedStudy prepared = study::prepare_study(study, options.config.parent_path());
   check_deployment(prepared);  // as `rths run` checks it; then the case's own plan below
-  const config::Case& study_case = core::find_case(
+  const config::Case& study_case = study::find_case(
       study, options.case_name.empty() ? study.deployment().case_name() : options.case_name);
-  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
   const config::Deployment deployment = with_default_nodes(study.deployment(), setup);
   make_plan(setup, deployment);  // refuse a bad deployment before starting anything
 

@@ -6,7 +6,7 @@ namespace rths::runtime {
 
 std::vector<NodeSources> answer_sources(const config::Study& study, double dt,
                                         const std::filesystem::path& base_dir) {
-  const core::HybridSetup base = core::base_setup(study, dt, base_dir);
+  const core::HybridSetup base = study::base_setup(study, dt, base_dir);
   const DeploymentPlan plan = plan_deployment(base, study.deployment());
   std::vector<NodeSources> out;
   for (const NodePlan& node : plan.nodes) {

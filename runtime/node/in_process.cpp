@@ -4,9 +4,9 @@
 
 namespace rths::runtime {
 
-core::HybridSetup in_process_setup(const core::PreparedStudy& prepared,
+core::HybridSetup in_process_setup(const study::PreparedStudy& prepared,
                                    const config::Case& study_case) {
-  const core::HybridSetup setup = core::setup_for_case(prepared, study_case);
+  const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
   return with_node_compensation(setup, plan_deployment(setup, prepared.config.deployment()));
 }
 

@@ -11,7 +11,8 @@
 
 namespace rths::runtime {
 
-LagInjector::LagInjector(const config::LinkLag& spec, double dt) : lag_(core::link_way(spec), dt) {}
+LagInjector::LagInjector(const config::LinkLag& spec, double dt)
+    : lag_(study::link_way(spec), dt) {}
 
 LagSummary summarize(std::vector<double> lags) {
   LagSummary s;

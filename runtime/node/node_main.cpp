@@ -24,8 +24,8 @@ namespace {
 // read, its reference case's deployment planned), so a bad study is refused here at start with
 // the message `run` gives, never after waiting for a coordinator; then its deployment.
 config::Deployment checked_deployment(const std::string& path) {
-  const config::Study study = core::load_study(path);
-  check_deployment(core::prepare_study(study, std::filesystem::path(path).parent_path()));
+  const config::Study study = study::load_study(path);
+  check_deployment(study::prepare_study(study, std::filesystem::path(path).parent_path()));
   return study.deployment();
 }
 

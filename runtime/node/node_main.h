@@ -4,7 +4,7 @@
 // 0 stopped by the coordinator, 1 lost the coordinator / never assigned, 2 bad usage, 3 DDS error.
 //
 //   <program> --node-id N [--domain D | --config STUDY] --run-id ID [--assign-timeout S]
-//             (STUDY is checked at start as `rths run` checks it, core::load_study, prepare_study
+//             (STUDY is checked at start as `rths run` checks it, study::load_study, prepare_study
 //             and check_deployment: a bad one is exit 2 with the message `run` gives)
 //             (the run id may come from the config's deployment.run_id instead; none: exit 2)
 //             [--security DIR/node_N]   (DDS Security; bad documents: exit 2 before DDS starts)

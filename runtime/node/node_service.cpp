@@ -20,8 +20,8 @@ namespace {
 void validate_assigned_lags(const Assign& assign) {
   for (const auto& [name, lag] : {std::pair{"receive_lag", &assign.node().receive_lag()},
                                   std::pair{"send_lag", &assign.node().send_lag()}})
-    core::validate_link_lag(*lag, std::string("node.") + name, assign.study().allow_long_lag(),
-                            "the assigned study");
+    study::validate_link_lag(*lag, std::string("node.") + name, assign.study().allow_long_lag(),
+                             "the assigned study");
 }
 
 }  // namespace
@@ -132,7 +132,7 @@ void NodeService::build_part(const Assign& assign) {
     std::vector<core::DelayChain> out;
     if (stages.empty()) return out;
     for (int i = 0; i < hosted_; ++i)
-      out.push_back(core::make_delay_chain(stages, assign.dt(), assign.base_dir()));
+      out.push_back(study::make_delay_chain(stages, assign.dt(), assign.base_dir()));
     return out;
   };
   receive_chains_ = chains(assign.node().receive_delay());

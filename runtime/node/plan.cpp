@@ -168,8 +168,8 @@ DeploymentPlan plan_deployment(const core::HybridSetup& base,
 
 core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan) {
   for (const NodePlan& node : plan.nodes)
-    core::apply_compensation(setup, node.actuators, node.spec.compensation(),
-                             "deployment.nodes[id " + std::to_string(node.spec.id()) + "]");
+    study::apply_compensation(setup, node.actuators, node.spec.compensation(),
+                              "deployment.nodes[id " + std::to_string(node.spec.id()) + "]");
   return setup;
 }
 
@@ -180,7 +180,7 @@ void check_node_stages(const DeploymentPlan& plan, double dt,
     for (const auto& [field, stages] : {std::pair{".receive_delay", &node.spec.receive_delay()},
                                         std::pair{".send_delay", &node.spec.send_delay()}}) {
       try {
-        (void)core::make_delay_chain(*stages, dt, base_dir);
+        (void)study::make_delay_chain(*stages, dt, base_dir);
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(where + field + ": " + e.what());
       }
@@ -207,9 +207,9 @@ config::Deployment with_default_nodes(config::Deployment deployment,
   return deployment;
 }
 
-void check_deployment(const core::PreparedStudy& prepared) {
+void check_deployment(const study::PreparedStudy& prepared) {
   const core::HybridSetup setup =
-      core::setup_for_case(prepared, core::reference_case(prepared.config));
+      study::setup_for_case(prepared, study::reference_case(prepared.config));
   const DeploymentPlan plan = plan_deployment(setup, prepared.config.deployment());
   check_node_stages(plan, setup.dt, prepared.base_dir);
 }
@@ -217,11 +217,11 @@ void check_deployment(const core::PreparedStudy& prepared) {
 core::HybridSetup setup_without_motion(const config::Study& study,
                                        const std::filesystem::path& base_dir, double dt,
                                        const config::Case& study_case) {
-  core::PreparedStudy prepared;
+  study::PreparedStudy prepared;
   prepared.config = study;
   prepared.base_dir = base_dir;
-  prepared.base = core::base_setup(study, dt, base_dir);
-  return core::setup_for_case(prepared, study_case);
+  prepared.base = study::base_setup(study, dt, base_dir);
+  return study::setup_for_case(prepared, study_case);
 }
 
 namespace {

@@ -44,7 +44,7 @@ DeploymentPlan make_plan(const core::HybridSetup& base, const config::Deployment
 DeploymentPlan plan_deployment(const core::HybridSetup& base, const config::Deployment& deployment);
 
 // The setup with each actuator emulator's `compensation` in front of the chains of the actuators it
-// hosts (core::apply_compensation): what the emulators run, so what an in-process run must use to
+// hosts (study::apply_compensation): what the emulators run, so what an in-process run must use to
 // equal a lockstep distributed run. Throws std::invalid_argument naming the node.
 core::HybridSetup with_node_compensation(core::HybridSetup setup, const DeploymentPlan& plan);
 
@@ -64,10 +64,10 @@ config::Deployment with_default_nodes(config::Deployment deployment, const core:
 // they refuse the same deployments with the same message. Other cases may be meant for
 // in-process runs only (a case's own compensator where a node carries one): `launch` plans the
 // case it runs again. Throws std::invalid_argument naming the node and the field.
-void check_deployment(const core::PreparedStudy& prepared);
+void check_deployment(const study::PreparedStudy& prepared);
 
 // The setup of one case built without reading the motion (a node on another host may not have
-// it): the same structure, partition and delay chains as core::prepare_study + setup_for_case.
+// it): the same structure, partition and delay chains as study::prepare_study + setup_for_case.
 core::HybridSetup setup_without_motion(const config::Study& study,
                                        const std::filesystem::path& base_dir, double dt,
                                        const config::Case& study_case);

@@ -14,7 +14,7 @@ const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / 
 
 // A 3-DOF frame whose specimens the config lists as DOF 3, DOF 1, then the storey-2 element:
 // their channels (actuator indices) are DOF 1, DOF 3, element 1.
-core::PreparedStudy frame(const std::string& deployment) {
+study::PreparedStudy frame(const std::string& deployment) {
   const std::string text =
       "name: \"frame3\" structure { matrices { "
       "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
@@ -27,11 +27,11 @@ core::PreparedStudy frame(const std::string& deployment) {
       "experimental_dofs { dof: 2 from_dof: 1 stiffness: 1e5 } } "
       "cases { name: \"reference\" } " +
       deployment;
-  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+  return study::prepare_study(study::parse_study(text, "test"), kConfigs);
 }
 
 TEST(ActuatorNames, ActuatorsAreListedInConfigOrderAndNamedByTheirSite) {
-  const core::PreparedStudy prepared = frame(
+  const study::PreparedStudy prepared = frame(
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE site: \"site_a\" } "
       "nodes { id: 2 kind: ACTUATOR_EMULATOR storeys: 3 site: \"lab_c\" } "
       "nodes { id: 3 kind: ACTUATOR_EMULATOR storeys: 1 storeys: 4 site: \"lab_b\" } }");
@@ -46,7 +46,7 @@ TEST(ActuatorNames, ActuatorsAreListedInConfigOrderAndNamedByTheirSite) {
 }
 
 TEST(ActuatorNames, WithoutSitesTheChannelNamesEachActuator) {
-  const core::PreparedStudy prepared = frame("");
+  const study::PreparedStudy prepared = frame("");
   const ActuatorNames names = actuator_names(prepared.config, prepared.base.partition);
   EXPECT_EQ(names.order, (std::vector<int>{1, 0, 2}));
   EXPECT_EQ(names.of(0), "DOF 1");

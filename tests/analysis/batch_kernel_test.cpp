@@ -25,7 +25,7 @@ constexpr double kRelativeTolerance = 1e-10;
 
 core::GroundMotion test_motion() {
   core::GroundMotion record =
-      core::read_at2(std::string(RTHS_DATA_DIR) + "/ground_motions/elcentro_1940_ns_peknold.AT2");
+      study::read_at2(std::string(RTHS_DATA_DIR) + "/ground_motions/elcentro_1940_ns_peknold.AT2");
   return core::truncated(core::resampled(record, kDt), 8.0);
 }
 

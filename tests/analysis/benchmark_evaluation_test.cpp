@@ -25,7 +25,7 @@ std::filesystem::path benchmark_config(const std::string& file) {
 
 std::optional<BenchmarkEvaluation> evaluate(const config::Study& study,
                                             const std::filesystem::path& config) {
-  const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+  const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
   return evaluate_benchmark(prepared, run_study(prepared, {}));
 }
 
@@ -41,7 +41,7 @@ class TableThree : public ::testing::TestWithParam<int> {};
 TEST_P(TableThree, CaseMeetsThePublishedCriteria) {
   const std::filesystem::path config =
       benchmark_config("case_" + std::to_string(GetParam()) + ".textproto");
-  config::Study study = core::load_study(config);
+  config::Study study = study::load_study(config);
   ASSERT_EQ(study.integrator().kind(), config::Integrator::EXACT_ZOH);
   ASSERT_EQ(study.cases(1).name(), "sample_controller");
   for (int seed = 1; seed <= 4; ++seed) {
@@ -77,7 +77,7 @@ INSTANTIATE_TEST_SUITE_P(Cases, TableThree, ::testing::Values(1, 2, 3, 4));
 // the half sample of lag less that taking the force in the step's equilibrium gives.
 TEST(BenchmarkEvaluation, ExplicitNewmarkRunsTheCaseWithLessLag) {
   const std::filesystem::path config = benchmark_config("case_1.textproto");
-  config::Study study = core::load_study(config);
+  config::Study study = study::load_study(config);
   const std::optional<BenchmarkEvaluation> exact = evaluate(study, config);
   study.mutable_integrator()->set_kind(config::Integrator::EXPLICIT_NEWMARK);
   const std::optional<BenchmarkEvaluation> newmark = evaluate(study, config);
@@ -92,7 +92,7 @@ TEST(BenchmarkEvaluation, ExplicitNewmarkRunsTheCaseWithLessLag) {
 // Every criterion named, with its unit and definition, in the JSON.
 TEST(BenchmarkEvaluation, CaseOneJsonNamesEveryCriterion) {
   const std::filesystem::path config = benchmark_config("case_1.textproto");
-  const std::optional<BenchmarkEvaluation> evaluation = evaluate(core::load_study(config), config);
+  const std::optional<BenchmarkEvaluation> evaluation = evaluate(study::load_study(config), config);
   ASSERT_TRUE(evaluation.has_value());
   const core::BenchmarkCriteria& measured = evaluation->cases[0].criteria;
   const nlohmann::json json = benchmark_json(*evaluation);
@@ -115,9 +115,9 @@ TEST(BenchmarkEvaluation, CaseOneJsonNamesEveryCriterion) {
 TEST(BenchmarkEvaluation, KobeAndMorganHillRunWithNoPublishedValue) {
   for (const std::string motion : {"kobe", "morgan_hill"}) {
     const std::filesystem::path config = benchmark_config("case_1_" + motion + ".textproto");
-    const config::Study study = core::load_study(config);
+    const config::Study study = study::load_study(config);
     EXPECT_EQ(study.integrator().kind(), config::Integrator::EXACT_ZOH);
-    const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+    const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
     const StudyOutcome outcome = run_study(prepared, {});
     for (const CaseOutcome& c : outcome.cases) EXPECT_EQ(c.status, "completed") << c.name;
     const std::optional<BenchmarkEvaluation> evaluation = evaluate_benchmark(prepared, outcome);
@@ -177,10 +177,10 @@ TEST(BenchmarkEvaluation, TheTableIsAlignedWithOneUnitPerColumn) {
 TEST(BenchmarkEvaluation, AnotherMotionHasNoPublishedValue) {
   const std::filesystem::path config =
       std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
-  config::Study study = core::load_study(config);
+  config::Study study = study::load_study(config);
   study.mutable_motion()->set_path("kobe.txt");
   study.mutable_motion()->set_duration(4.0);
-  const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+  const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
   const std::optional<BenchmarkEvaluation> evaluation =
       evaluate_benchmark(prepared, run_study(prepared, {}));
   ASSERT_TRUE(evaluation.has_value());
@@ -196,7 +196,7 @@ TEST(BenchmarkEvaluation, AnotherMotionHasNoPublishedValue) {
   EXPECT_FALSE(json["published"]["motion_matches"].get<bool>());
   // The same motion cut short is not the published one either.
   study.mutable_motion()->set_path("el_centro.txt");
-  const core::PreparedStudy cut = core::prepare_study(study, config.parent_path());
+  const study::PreparedStudy cut = study::prepare_study(study, config.parent_path());
   EXPECT_FALSE(evaluate_benchmark(cut, run_study(cut, {}))->published_motion_matches);
 }
 
@@ -206,27 +206,28 @@ TEST(BenchmarkEvaluation, AnotherMotionHasNoPublishedValue) {
 TEST(BenchmarkEvaluation, ThePublishedValuesAreKeyedByContent) {
   const std::filesystem::path config =
       std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1.textproto";
-  config::Study study = core::load_study(config);
+  config::Study study = study::load_study(config);
   study.mutable_motion()->set_duration(2.0);
-  const core::PreparedStudy cut = core::prepare_study(study, config.parent_path());
+  const study::PreparedStudy cut = study::prepare_study(study, config.parent_path());
   const std::optional<BenchmarkEvaluation> as_cut = evaluate_benchmark(cut, run_study(cut, {}));
   ASSERT_TRUE(as_cut.has_value());
   EXPECT_FALSE(as_cut->published_motion_matches);
-  study = core::load_study(config);
-  const core::StructuralModel whole = core::make_structure(study.structure(), config.parent_path());
+  study = study::load_study(config);
+  const core::StructuralModel whole =
+      study::make_structure(study.structure(), config.parent_path());
   EXPECT_EQ(structure_key(whole), study.benchmark().published_structure_sha256());
-  EXPECT_EQ(motion_key(core::load_motion(study.motion(), config.parent_path())),
+  EXPECT_EQ(motion_key(study::load_motion(study.motion(), config.parent_path())),
             study.benchmark().published_motion_sha256());
   auto* influence = study.mutable_structure()->mutable_matrices()->mutable_influence();
   influence->set_rows(whole.dofs());
   for (int i = 0; i < whole.dofs(); ++i) influence->add_values(1.0);
-  EXPECT_EQ(structure_key(core::make_structure(study.structure(), config.parent_path())),
+  EXPECT_EQ(structure_key(study::make_structure(study.structure(), config.parent_path())),
             structure_key(whole));
   for (double& v : *influence->mutable_values()) v = 0.9;
-  EXPECT_NE(structure_key(core::make_structure(study.structure(), config.parent_path())),
+  EXPECT_NE(structure_key(study::make_structure(study.structure(), config.parent_path())),
             structure_key(whole));
   study.mutable_motion()->set_duration(2.0);
-  const core::PreparedStudy changed = core::prepare_study(study, config.parent_path());
+  const study::PreparedStudy changed = study::prepare_study(study, config.parent_path());
   const std::optional<BenchmarkEvaluation> evaluation =
       evaluate_benchmark(changed, run_study(changed, {}));
   ASSERT_TRUE(evaluation.has_value());
@@ -243,9 +244,9 @@ TEST(BenchmarkEvaluation, ThePublishedValuesAreKeyedByContent) {
 TEST(BenchmarkEvaluation, CompensatorsInFrontOfTheSampleControllerReachTheNoiseFloor) {
   const std::filesystem::path config =
       std::filesystem::path(RTHS_SOURCE_DIR) / "configs/benchmark/case_1_compensated.textproto";
-  config::Study study = core::load_study(config);
+  config::Study study = study::load_study(config);
   study.mutable_motion()->set_duration(20.0);  // the strong motion; ATS fits every step
-  const core::PreparedStudy prepared = core::prepare_study(study, config.parent_path());
+  const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
   const std::optional<BenchmarkEvaluation> evaluation =
       evaluate_benchmark(prepared, run_study(prepared, {}));
   ASSERT_TRUE(evaluation.has_value());

@@ -39,7 +39,7 @@ TEST(BenchmarkPerturbation, DrawsAreSeededAndSpreadAsTheBenchmarkDrawsThem) {
 }
 
 TEST(BenchmarkPerturbation, ADrawReachesThePlantAndTheSpecimenButNotTheReference) {
-  const config::Study study = core::load_study(kCase1);
+  const config::Study study = study::load_study(kCase1);
   EXPECT_EQ(experimental_stiffness(study), 1.19e6);
   const PlantDraw draw{430.0, 1.02e5, 2.5, 1.21e6};
   const config::Study perturbed = perturbed_study(study, draw);

@@ -24,8 +24,8 @@ std::string read(const fs::path& path) {
 
 TEST(BenchmarkPlots, CaseOneDrawsEveryCriterionAndBothOtherFloors) {
   const fs::path config = fs::path(RTHS_SOURCE_DIR) / "configs" / "benchmark" / "case_1.textproto";
-  const core::PreparedStudy prepared =
-      core::prepare_study(core::load_study(config), config.parent_path());
+  const study::PreparedStudy prepared =
+      study::prepare_study(study::load_study(config), config.parent_path());
   const StudyOutcome outcome = run_study(prepared, {});
   const std::optional<BenchmarkEvaluation> evaluation = evaluate_benchmark(prepared, outcome);
   ASSERT_TRUE(evaluation.has_value());

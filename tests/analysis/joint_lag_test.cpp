@@ -411,8 +411,8 @@ TEST(JointLag, APredictorsBoundaryIsDrawnForSeveralDofs) {
   options.measure = false;
   const auto result = run_joint_lag(config, kConfigs, options);
   EXPECT_FALSE(result.boundary_skipped.empty());
-  const core::PreparedStudy prepared = core::prepare_study(
-      core::load_study(kConfigs / "frame3_storey_specimen.textproto"), kConfigs);
+  const study::PreparedStudy prepared = study::prepare_study(
+      study::load_study(kConfigs / "frame3_storey_specimen.textproto"), kConfigs);
   core::DelayedPart storey;
   storey.row = core::Vec::Unit(3, 1) - core::Vec::Unit(3, 0);
   storey.stiffness = 0.3e6;

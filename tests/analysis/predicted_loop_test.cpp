@@ -23,7 +23,7 @@ const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / 
 // The consortium's frame with its storey damper (k 3e5 N/m, c 1e4 N s/m between floors 1 and 2)
 // under a ground motion at its third mode (the one its delayed loop crosses at) whose amplitude
 // grows to the end of the 8 s record (e^{0.5 t}, embedded), with the cases given.
-core::PreparedStudy damper_frame(const std::string& cases) {
+study::PreparedStudy damper_frame(const std::string& cases) {
   std::ostringstream motion;
   motion.precision(10);
   motion << "motion { embedded { name: \"growing_sine\" dt: 0.001 acceleration: [";
@@ -40,7 +40,7 @@ core::PreparedStudy damper_frame(const std::string& cases) {
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 } "
       "substructuring { experimental_dofs { dof: 2 from_dof: 1 stiffness: 3e5 damping: 1e4 } } " +
       cases;
-  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+  return study::prepare_study(study::parse_study(text, "test"), kConfigs);
 }
 
 // A predicted case on a structure of several DOFs is judged by the coupled loop of its link with
@@ -103,7 +103,7 @@ TEST(StudyRun, APredictedCaseOnSeveralDofsIsJudgedByItsCoupledLoop) {
 // to the declared specimens: the verdict is the fitted loop's, says the run relies on the fit and
 // the run completes; the same model held fixed stays unstable.
 TEST(StudyRun, AnOnlineFitStartedOffIsJudgedOnItsFittedLoopAndSaysSo) {
-  config::Study study = core::load_study(kConfigs / "consortium_frame.textproto");
+  config::Study study = study::load_study(kConfigs / "consortium_frame.textproto");
   study.mutable_motion()->set_duration(8.0);
   config::Case* fixed = study.add_cases();
   *fixed = study.cases(1);
@@ -111,7 +111,7 @@ TEST(StudyRun, AnOnlineFitStartedOffIsJudgedOnItsFittedLoopAndSaysSo) {
   fixed->mutable_force_predictor()->set_fixed_model(true);
   fixed->set_expect_unstable(true);
   const StudyOutcome outcome =
-      run_study(core::prepare_study(study, kConfigs), {.warn = [](const std::string&) {}});
+      run_study(study::prepare_study(study, kConfigs), {.warn = [](const std::string&) {}});
   const CaseOutcome& online = outcome.cases.at(1);
   ASSERT_EQ(online.name, "link_60ms_predicted_soft30");
   ASSERT_TRUE(online.compensated.has_value());

@@ -24,7 +24,7 @@ const std::filesystem::path kConfigs = RTHS_SOURCE_DIR "/configs";
 constexpr int kStoreys = 14;
 
 // A 14-storey shear building, half of every storey experimental (14 actuators), 2 s of El Centro.
-core::PreparedStudy tall_building() {
+study::PreparedStudy tall_building() {
   std::ostringstream masses, stiffnesses;
   for (int i = 0; i < kStoreys; ++i) {
     masses << (i ? ", " : "") << 2.0e5;
@@ -37,7 +37,7 @@ core::PreparedStudy tall_building() {
       "motion { path: \"../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: 2 } "
       "integrator { dt: 0.001 } substructuring { experimental_fraction: 0.5 } "
       "cases { name: \"reference\" } cases { name: \"lag_2ms\" delay { shift { delay: 0.002 } } }";
-  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+  return study::prepare_study(study::parse_study(text, "test"), kConfigs);
 }
 
 std::size_t count(const std::string& text, const std::string& what) {

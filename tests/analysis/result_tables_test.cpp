@@ -120,24 +120,24 @@ TEST(ResultTables, DistributedTableIsTheStudyTablePlusLagPerLinkAtTheCarryingSte
 
 // A shear building of `floors` floors of 1000 kg and 1e6 N/m, storey 1 experimental, two cases,
 // 0.5 s of the Imperial Valley record at its 5 ms step, with the given recorders blocks.
-core::PreparedStudy chain_study(int floors, const std::string& recorders) {
+study::PreparedStudy chain_study(int floors, const std::string& recorders) {
   std::string masses, stiffnesses;
   for (int i = 0; i < floors; ++i) {
     masses += (i ? ", " : "") + std::string("1000");
     stiffnesses += (i ? ", " : "") + std::string("1e6");
   }
-  return core::prepare_study(
-      core::parse_study("name: \"chain\" structure { shear_building { storey_mass: [" + masses +
-                            "] storey_stiffness: [" + stiffnesses +
-                            "] } damping { modal_zeta: 0.05 } }\n"
-                            "motion { path: \"" +
-                            kMotion +
-                            "\" duration: 0.5 }\n"
-                            "substructuring { experimental_storeys: 1 }\n"
-                            "cases { name: \"reference\" }\n"
-                            "cases { name: \"lag\" delay { shift { delay: 0.01 } } }\n" +
-                            recorders,
-                        "test"),
+  return study::prepare_study(
+      study::parse_study("name: \"chain\" structure { shear_building { storey_mass: [" + masses +
+                             "] storey_stiffness: [" + stiffnesses +
+                             "] } damping { modal_zeta: 0.05 } }\n"
+                             "motion { path: \"" +
+                             kMotion +
+                             "\" duration: 0.5 }\n"
+                             "substructuring { experimental_storeys: 1 }\n"
+                             "cases { name: \"reference\" }\n"
+                             "cases { name: \"lag\" delay { shift { delay: 0.01 } } }\n" +
+                             recorders,
+                         "test"),
       RTHS_SOURCE_DIR);
 }
 
@@ -148,7 +148,7 @@ std::vector<double> full_column(const core::SimulationResult& r, int dof) {
 }
 
 TEST(ResultTables, ALargeModelsTableHoldsTheDefaultRecordersColumnsAsAFullRunHasThem) {
-  const core::PreparedStudy prepared = chain_study(250, "");
+  const study::PreparedStudy prepared = chain_study(250, "");
   const StudyOutcome outcome = run_study(prepared);
   ASSERT_EQ(outcome.cases.front().simulation.displacement.cols(), 5);  // not 250
   const Table t = study_table(outcome);
@@ -172,7 +172,7 @@ TEST(ResultTables, ALargeModelsTableHoldsTheDefaultRecordersColumnsAsAFullRunHas
 }
 
 TEST(ResultTables, DriftsBaseShearAndEveryKthStepAreWhatTheRecordersAskFor) {
-  const core::PreparedStudy prepared =
+  const study::PreparedStudy prepared =
       chain_study(3,
                   "recorders { drifts { dof: 3 from_dof: 2 } every: 2 }\n"
                   "recorders { base_shear: true dofs: 1 quantities: VELOCITY every: 3 }\n");
@@ -212,7 +212,7 @@ TEST(ResultTables, DriftsBaseShearAndEveryKthStepAreWhatTheRecordersAskFor) {
 }
 
 TEST(ResultTables, SweepTableHasTheSweepCsvsColumnsInOrder) {
-  const config::Study study = core::parse_study(
+  const config::Study study = study::parse_study(
       "name: \"s\" structure { sdof { period: 0.5 } damping { modal_zeta: 0.05 } }\n"
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.005 }\n"
       "sweep { periods: [0.4, 0.8] delays: [0.01] motions { path: \"" +

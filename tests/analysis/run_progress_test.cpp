@@ -24,14 +24,14 @@ std::function<double()> ticking_clock(double step_s) {
 
 // An SDOF, all of it experimental, `duration` s of El Centro at 1 ms: a reference that adds
 // nothing to the lag-free run and a case with 5 ms of lag.
-core::PreparedStudy sdof(double duration) {
+study::PreparedStudy sdof(double duration) {
   const std::string text =
       "name: \"sdof\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
       "motion { path: \"../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
       std::to_string(duration) +
       " } integrator { dt: 0.001 } substructuring { experimental_fraction: 0.5 } "
       "cases { name: \"reference\" } cases { name: \"lag_5ms\" delay { shift { delay: 0.005 } } }";
-  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+  return study::prepare_study(study::parse_study(text, "test"), kConfigs);
 }
 
 TEST(RunProgress, PastItsQuietTimeALineEveryClockReadNamesTheRunTheStepAndTheTimeLeft) {

@@ -21,8 +21,8 @@ namespace {
 const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
 
 // The paper's frame (T = 0.5 s, 5 %, El Centro) with a case list and extras.
-core::PreparedStudy frame(double alpha, const std::string& cases, const std::string& extra = "",
-                          double duration = 0.0) {
+study::PreparedStudy frame(double alpha, const std::string& cases, const std::string& extra = "",
+                           double duration = 0.0) {
   const std::string text =
       "name: \"frame\" structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } } "
       "motion { path: \"../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2\" duration: " +
@@ -30,7 +30,7 @@ core::PreparedStudy frame(double alpha, const std::string& cases, const std::str
       " } "
       "integrator { dt: 0.001 } substructuring { experimental_fraction: " +
       std::to_string(alpha) + " } " + cases + " " + extra;
-  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+  return study::prepare_study(study::parse_study(text, "test"), kConfigs);
 }
 
 TEST(StudyRun, ACasePastItsCriticalDelayIsWarnedAndJudgedDiverged) {
@@ -71,17 +71,17 @@ TEST(StudyRun, ACaseThatAddsNothingIsTheLagFreeRunBitForBit) {
                                "substructuring { experimental_storeys: 1 } "
                                "cases { name: \"bare\" expect_unstable: true } "
                                "cases { name: \"lag\" delay { shift { delay: 0.004 } } }";
-  for (const core::PreparedStudy& prepared :
+  for (const study::PreparedStudy& prepared :
        {frame(0.5,
               "cases { name: \"bare\" } cases { name: \"lag\" delay { shift { delay: "
               "0.004 } } }",
               "", 2.0),
-        core::prepare_study(core::parse_study(building, "test"), kConfigs)}) {
+        study::prepare_study(study::parse_study(building, "test"), kConfigs)}) {
     const StudyOutcome outcome = run_study(prepared);
     core::SimulationOptions options;
     options.kept_dofs = prepared.recorders.kept_dofs;
     const core::SimulationResult own = core::simulate(
-        core::setup_for_case(prepared, prepared.config.cases(0)), prepared.motion, options);
+        study::setup_for_case(prepared, prepared.config.cases(0)), prepared.motion, options);
     const core::SimulationResult& taken = outcome.cases.at(0).simulation;
     EXPECT_EQ(taken.displacement, own.displacement);
     EXPECT_EQ(taken.velocity, own.velocity);
@@ -195,7 +195,7 @@ TEST(StudyRun, StudyPlotsShowEveryCaseAndLeaveTheReferenceOutOfTheDifference) {
 
 // The 3-DOF frame of issue 39 (SI): the experimental part at DOF 1 with 0.5e6 N/m, explicit
 // Newmark at 1 ms on the Imperial Valley record.
-core::PreparedStudy three_dof_frame(const std::string& cases) {
+study::PreparedStudy three_dof_frame(const std::string& cases) {
   const std::string text =
       "name: \"frame3\" structure { matrices { "
       "mass { rows: 3 values: [1000, 0, 0, 0, 1000, 0, 0, 0, 800] } "
@@ -206,7 +206,7 @@ core::PreparedStudy three_dof_frame(const std::string& cases) {
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 } "
       "substructuring { experimental_dofs { dof: 1 stiffness: 0.5e6 } } " +
       cases;
-  return core::prepare_study(core::parse_study(text, "test"), kConfigs);
+  return study::prepare_study(study::parse_study(text, "test"), kConfigs);
 }
 
 // A case with a force predictor gets force_prediction.png: per predicted link, the force it
@@ -377,11 +377,11 @@ TEST(StudyRun, ACompensatedLoopOnSeveralDofsIsJudgedModally) {
 // failed: here a recorded run of the paper frame's 14 ms case (42 % inside) whose response is an
 // oscillation at the frame's period growing at 0.5 /s, to 1.5x the lag-free peak.
 TEST(StudyRun, GrowthInsideTheCriticalDelayIsFlaggedWithItsRate) {
-  const core::PreparedStudy prepared = frame(1.0 / 3.0,
-                                             "cases { name: \"reference\" } cases { name: "
-                                             "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
+  const study::PreparedStudy prepared = frame(1.0 / 3.0,
+                                              "cases { name: \"reference\" } cases { name: "
+                                              "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
   core::SimulationResult grown =
-      core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
   const double end = grown.time.back();
   for (Eigen::Index k = 0; k < grown.displacement.rows(); ++k) {
     const double t = grown.time[static_cast<std::size_t>(k)];
@@ -431,11 +431,11 @@ TEST(StudyRun, TheSummaryLeadsWithPeakAndRmsErrors) {
 // A case held at step 26 has no error over the steps it did not run: "-" in the table with the
 // steps it covered on a line below, null in the JSON, never a perfect 0.
 TEST(StudyRun, ACaseThatStoppedEarlyShowsNoErrorForTheWholeRecord) {
-  const core::PreparedStudy prepared = frame(1.0 / 3.0,
-                                             "cases { name: \"reference\" } cases { name: "
-                                             "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
+  const study::PreparedStudy prepared = frame(1.0 / 3.0,
+                                              "cases { name: \"reference\" } cases { name: "
+                                              "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
   core::SimulationResult held =
-      core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
   held.truncate(26);
   const StudyOutcome outcome =
       judge_recorded_cases(prepared, {{"lag_14ms", held, "held at step 26", "the operator held"}});
@@ -495,12 +495,12 @@ TEST(StudyRun, DeploymentLimitsApplyInProcess) {
 // A distributed case is compared with the lag-free in-process run, not with the study's reference
 // case: here the study names the lagged case as its reference.
 TEST(StudyRun, RecordedCasesAreComparedWithTheLagFreeInProcessRun) {
-  const core::PreparedStudy prepared = frame(
+  const study::PreparedStudy prepared = frame(
       1.0 / 3.0,
       "cases { name: \"reference\" } cases { name: \"lag_14ms\" delay { shift { delay: 0.014 } } }",
       "reference_case: \"lag_14ms\"");
   const core::SimulationResult lagged =
-      core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
   const StudyOutcome outcome =
       judge_recorded_cases(prepared, {{"lag_14ms", lagged, "completed", ""}});
   ASSERT_TRUE(outcome.lag_free_reference.has_value());
@@ -532,9 +532,9 @@ TEST(StudyRun, RecordedCasesAreComparedWithTheLagFreeInProcessRun) {
 // actuator's path): the one check takes it as extra lag, before the run and in the judged outcome.
 // The paper's frame: 14 ms alone is 42 % below its 24.2 ms; 14 + 14 ms is past it.
 TEST(StudyRun, TheCriticalDelayCheckTakesTheLagTheCaseDoesNotHold) {
-  const core::PreparedStudy prepared = frame(1.0 / 3.0,
-                                             "cases { name: \"reference\" } cases { name: "
-                                             "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
+  const study::PreparedStudy prepared = frame(1.0 / 3.0,
+                                              "cases { name: \"reference\" } cases { name: "
+                                              "\"lag_14ms\" delay { shift { delay: 0.014 } } }");
   const auto alone = check_case_critical_delay(prepared, prepared.config.cases(1));
   ASSERT_TRUE(alone.has_value());
   EXPECT_DOUBLE_EQ(alone->lag, 0.014);
@@ -547,7 +547,7 @@ TEST(StudyRun, TheCriticalDelayCheckTakesTheLagTheCaseDoesNotHold) {
 
   std::vector<std::string> warnings;
   const core::SimulationResult lagged =
-      core::simulate(core::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, prepared.config.cases(1)), prepared.motion);
   const StudyOutcome outcome = judge_recorded_cases(
       prepared, {{"lag_14ms", lagged, "completed", ""}},
       {.warn = [&](const std::string& w) { warnings.push_back(w); }, .extra_lag = 0.014});

@@ -54,7 +54,7 @@ TEST(SweepShard, ParsesAndRejects) {
 
 void expect_bad_config(const std::string& text, const std::string& expected_fragment) {
   try {
-    const config::Study study = core::parse_study(text, "bad.textproto");
+    const config::Study study = study::parse_study(text, "bad.textproto");
     SweepGrid grid(study, kMotionDir, "bad.textproto");
     ADD_FAILURE() << "accepted a config that should fail with '" << expected_fragment << "'";
   } catch (const std::invalid_argument& e) {

@@ -32,7 +32,7 @@ sweep {
 }
 
 inline SweepGrid grid_for(const std::string& sweep_body, const std::string& integrator = "") {
-  return SweepGrid(core::parse_study(study_text(sweep_body, integrator), "test.textproto"),
+  return SweepGrid(study::parse_study(study_text(sweep_body, integrator), "test.textproto"),
                    kMotionDir, "test.textproto");
 }
 

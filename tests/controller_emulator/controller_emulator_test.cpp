@@ -31,7 +31,7 @@ std::string paced_study_text() { return study_text("clock: REAL_TIME") + " servo
 
 struct Emulator {
   explicit Emulator(const std::string& text = study_text())
-      : study(core::parse_study(text, "test")) {}
+      : study(study::parse_study(text, "test")) {}
   config::Study study;
   ControllerEmulator emulator{study, std::filesystem::temp_directory_path(), "lag_shift_14ms", 2};
 
@@ -57,9 +57,9 @@ struct Emulator {
 
 TEST(ControllerEmulator, AnswersEachCommandFrameAsTheInProcessActuatorBitForBit) {
   Emulator e;
-  const core::PreparedStudy prepared = test::prepare(study_text());
+  const study::PreparedStudy prepared = test::prepare(study_text());
   core::HybridSetup setup =
-      core::setup_for_case(prepared, core::find_case(prepared.config, "lag_shift_14ms"));
+      study::setup_for_case(prepared, study::find_case(prepared.config, "lag_shift_14ms"));
   core::Actuator actuator =
       core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt, setup.servo_substeps);
   for (int k = 1; k <= 200; ++k) {
@@ -86,9 +86,9 @@ TEST(ControllerEmulator, AnswersPerFrameInLockstepAndPacesItsPlantInRealTime) {
 
 TEST(ControllerEmulator, PacedAnswersEachFrameWithTheNewestPlantPeriodOfTheInProcessServo) {
   Emulator e(paced_study_text());
-  const core::PreparedStudy prepared = test::prepare(paced_study_text());
+  const study::PreparedStudy prepared = test::prepare(paced_study_text());
   core::HybridSetup setup =
-      core::setup_for_case(prepared, core::find_case(prepared.config, "lag_shift_14ms"));
+      study::setup_for_case(prepared, study::find_case(prepared.config, "lag_shift_14ms"));
   ASSERT_EQ(setup.servo_substeps, 4);
   core::Actuator actuator =
       core::make_actuator(setup.partition, 0, setup.delays.at(0), setup.dt, setup.servo_substeps);
@@ -174,7 +174,7 @@ TEST(ControllerEmulator, RefusesMalformedFramesAndGoesSilentWhenTold) {
 }
 
 TEST(ControllerEmulator, RefusesANodeThatIsNotAController) {
-  const config::Study study = core::parse_study(test::paper_frame_study(0.5, ""), "test");
+  const config::Study study = study::parse_study(test::paper_frame_study(0.5, ""), "test");
   EXPECT_THROW(ControllerEmulator(study, std::filesystem::temp_directory_path(), "", 2),
                std::invalid_argument);
 }

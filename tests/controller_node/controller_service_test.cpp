@@ -22,7 +22,7 @@ constexpr const char* kRunId = "controller-service-test";
 
 runtime::Assign assign(int node_port, int peer_port, const std::string& deployment_extra,
                        const std::string& link_extra = "reply_timeout_ms: 100") {
-  const config::Study study = core::parse_study(
+  const config::Study study = study::parse_study(
       test::paper_frame_study(
           0.5, "deployment { nodes { id: 2 kind: CONTROLLER controller { " +
                    test::controller_link_text(node_port, peer_port, link_extra) +

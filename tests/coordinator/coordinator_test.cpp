@@ -99,7 +99,7 @@ RunOutcome run(const std::string& deployment, std::int64_t mute_node = 0,
                std::int64_t mute_after = 0, runtime::PacingClock* clock = nullptr,
                const std::string& case_name = "reference", double seconds = 0.5,
                std::function<transport::Unauthenticated()> unauthenticated = {}) {
-  const core::PreparedStudy prepared = test::prepare(
+  const study::PreparedStudy prepared = test::prepare(
       test::paper_frame_study(seconds,
                               "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: "
                               "ACTUATOR_EMULATOR } " +
@@ -154,7 +154,7 @@ struct RecordedRun {
 RecordedRun run_recorded(const std::string& deployment, const std::string& record_name,
                          runtime::PacingClock* clock = nullptr, double seconds = 0.1) {
   const auto record = std::filesystem::temp_directory_path() / record_name;
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(
       seconds,
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR " +
           deployment + " }"));
@@ -178,7 +178,7 @@ RecordedRun run_recorded(const std::string& deployment, const std::string& recor
 // A case's link is the network in process: a distributed run of it is refused naming where its
 // network is given, before any step, rather than run without the link the case names.
 TEST(Coordinator, ACaseWithAnInProcessLinkIsRefusedNamingTheNodesLags) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(
       0.2,
       "cases { name: \"linked\" link { to_node { one_way_delay: 0.01 } } }\n"
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
@@ -197,7 +197,7 @@ TEST(Coordinator, ACaseWithAnInProcessLinkIsRefusedNamingTheNodesLags) {
 }
 
 TEST(Coordinator, TwoDifferentAnswersToOneStepStopTheRunNamingTheNode) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(
       0.5,
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
   coordinator::CoordinatorOptions options;
@@ -437,7 +437,7 @@ TEST(Coordinator, RateLimitStopsTheRunBeforeTheCommandLeaves) {
 }
 
 TEST(Coordinator, DivergedRunFailsAndKeepsTheStepsUpToIt) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
   coordinator::CoordinatorOptions options;
   options.run_id = "run";
   options.divergence_bound = 5e-5;  // m: the frame passes 0.05 mm within its first 2 s
@@ -509,9 +509,9 @@ TEST(Coordinator, NodesOverDdsWaitOutASetUpLongerThanTheirOrphanTimeout) {
                        std::vector<std::string>{"--node-id", id, "--domain", std::to_string(domain),
                                                 "--run-id", name, "--insecure"},
                        dir / (std::string("node_") + id + ".log"));
-  core::PreparedStudy prepared = test::prepare(text);
+  study::PreparedStudy prepared = test::prepare(text);
   const core::HybridSetup setup =
-      core::setup_for_case(prepared, core::find_case(prepared.config, "reference"));
+      study::setup_for_case(prepared, study::find_case(prepared.config, "reference"));
   const core::GroundMotion motion = prepared.motion;
   transport::DdsEndpointOptions endpoint_options;
   endpoint_options.domain_id = static_cast<std::uint32_t>(domain);
@@ -546,7 +546,7 @@ TEST(Coordinator, ALargeModelsRecordOverDdsKeepsTheRecordedDofsOnly) {
   const test::LaunchedRun run =
       test::launch("storeys250", text, "reference", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << run.launch.coordinator_log_tail;
-  const core::PreparedStudy prepared = test::prepare(text);
+  const study::PreparedStudy prepared = test::prepare(text);
   const std::vector<int>& kept = prepared.recorders.kept_dofs;
   ASSERT_FALSE(kept.empty());
   const runtime::RunHeader* header = run.record.header();
@@ -557,9 +557,9 @@ TEST(Coordinator, ALargeModelsRecordOverDdsKeepsTheRecordedDofsOnly) {
   test::expect_record_equals(
       run.record,
       core::simulate(
-          core::setup_for_case(prepared, core::find_case(prepared.config, "reference")),
+          study::setup_for_case(prepared, study::find_case(prepared.config, "reference")),
           prepared.motion,
-          core::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits())));
+          study::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits())));
 }
 }  // namespace
 }  // namespace rths

@@ -60,7 +60,7 @@ class HeldRunNode final : public transport::NodeHandler {
 
 RecordedRun held_run(const std::string& cause, const std::string& record_name) {
   const auto record = std::filesystem::temp_directory_path() / record_name;
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(
       2.0,
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } }"));
   view::ControlDesk desk(view::Crew::make({"lab_a", "lab_b"}), {{"lab_a", {1}}, {"lab_b", {2}}});

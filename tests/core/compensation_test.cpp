@@ -392,7 +392,7 @@ cases { name: "compensated" delay { shift { delay: 0.0046 } } delay { first_orde
 
 std::string error_of(const std::string& compensation) {
   try {
-    parse_study(study_with(compensation), "study.textproto");
+    study::parse_study(study_with(compensation), "study.textproto");
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -453,7 +453,7 @@ TEST(CompensationConfig, DtDependentFieldsAreNamedWhenBuilt) {
   c.mutable_polynomial()->set_lead(0.02);
   c.mutable_polynomial()->set_spacing(0.0025);
   try {
-    make_compensator(c, kDt, "case 'x' compensation[0]");
+    study::make_compensator(c, kDt, "case 'x' compensation[0]");
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("compensation[0].polynomial.spacing"), std::string::npos)
@@ -464,7 +464,7 @@ TEST(CompensationConfig, DtDependentFieldsAreNamedWhenBuilt) {
   m.mutable_model_based()->set_lead_order(2);
   m.mutable_model_based()->set_rolloff_frequency(400.0);  // above fs / 4 at 1 kHz
   try {
-    make_compensator(m, kDt, "case 'x' compensation[0]");
+    study::make_compensator(m, kDt, "case 'x' compensation[0]");
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("compensation[0].model_based: rolloff_frequency"),
@@ -481,14 +481,15 @@ TEST(CompensationConfig, AdaptiveCorrectionBuildsWithItsDefaultsAndNamesDtDepend
   m->set_lead_order(2);
   m->set_rolloff_frequency(40.0);
   m->mutable_adaptive_correction()->set_window(1.0);
-  const std::unique_ptr<Compensator> block = make_compensator(c, kDt, "case 'x' compensation[0]");
+  const std::unique_ptr<Compensator> block =
+      study::make_compensator(c, kDt, "case 'x' compensation[0]");
   const auto* adapted = dynamic_cast<const AdaptedModelBasedInverse*>(block.get());
   ASSERT_NE(adapted, nullptr) << block->describe();
   EXPECT_NE(block->describe().find("adaptive correction"), std::string::npos);
   EXPECT_NEAR(block->nominal_lead(), kShift + kTimeConstant, 1e-9);
   m->mutable_adaptive_correction()->set_window(0.002);  // < 3 dt
   try {
-    make_compensator(c, kDt, "case 'x' compensation[0]");
+    study::make_compensator(c, kDt, "case 'x' compensation[0]");
     FAIL() << "a window of two steps accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("compensation[0].model_based.adaptive_correction: window"),
@@ -498,7 +499,7 @@ TEST(CompensationConfig, AdaptiveCorrectionBuildsWithItsDefaultsAndNamesDtDepend
   m->mutable_adaptive_correction()->set_window(1.0);
   m->mutable_adaptive_correction()->set_derivative_cutoff(800.0);  // above Nyquist at 1 kHz
   try {
-    make_compensator(c, kDt, "case 'x' compensation[0]");
+    study::make_compensator(c, kDt, "case 'x' compensation[0]");
     FAIL() << "a cut-off above Nyquist accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("model_based.adaptive_correction: derivative_cutoff"),
@@ -514,7 +515,7 @@ TEST(CompensationConfig, PlantFromStagesMultipliesAndAddsDelays) {
   first->mutable_first_order()->set_time_constant(0.02);
   first->set_amplitude_gain(0.9);
   c.add_delay()->mutable_shift()->set_delay(0.001);
-  const PlantModel plant = plant_from_stages(c.delay(), "plant");
+  const PlantModel plant = study::plant_from_stages(c.delay(), "plant");
   EXPECT_DOUBLE_EQ(plant.delay, 0.004);
   EXPECT_DOUBLE_EQ(plant.gain, 0.9);
   EXPECT_EQ(plant.denominator, (std::vector<double>{0.02, 1.0}));
@@ -525,9 +526,9 @@ TEST(CompensationConfig, PlantFromStagesMultipliesAndAddsDelays) {
 TEST(PaperFrameCompensated, CompensatorsBringTheTestBackFromSevenHundredPercent) {
   const std::filesystem::path config =
       std::filesystem::path(RTHS_SOURCE_DIR) / "configs/paper_frame_compensated.textproto";
-  config::Study study = load_study(config);
+  config::Study study = study::load_study(config);
   study.mutable_motion()->set_duration(15.0);
-  const PreparedStudy prepared = prepare_study(study, config.parent_path());
+  const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
   const auto top = [](const SimulationResult& r) {
     std::vector<double> u(r.steps());
     for (std::size_t k = 0; k < u.size(); ++k)
@@ -536,7 +537,7 @@ TEST(PaperFrameCompensated, CompensatorsBringTheTestBackFromSevenHundredPercent)
   };
   const auto run = [&](const std::string& name) {
     for (const auto& c : study.cases())
-      if (c.name() == name) return simulate(setup_for_case(prepared, c), prepared.motion);
+      if (c.name() == name) return simulate(study::setup_for_case(prepared, c), prepared.motion);
     throw std::runtime_error("no case " + name);
   };
   const std::vector<double> reference = top(run("reference"));
@@ -562,12 +563,12 @@ TEST(PaperFrameCompensated, CompensatorsBringTheTestBackFromSevenHundredPercent)
 TEST(PaperFrameCompensated, AdaptedModelBasedStaysWithinFifteenPercentWithTheLagThirtyPercentOff) {
   const std::filesystem::path config =
       std::filesystem::path(RTHS_SOURCE_DIR) / "configs/paper_frame_compensated.textproto";
-  config::Study study = load_study(config);
+  config::Study study = study::load_study(config);
   study.mutable_motion()->set_duration(12.0);
-  const PreparedStudy prepared = prepare_study(study, config.parent_path());
+  const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
   const auto run = [&](const std::string& name) {
     for (const auto& c : study.cases())
-      if (c.name() == name) return simulate(setup_for_case(prepared, c), prepared.motion);
+      if (c.name() == name) return simulate(study::setup_for_case(prepared, c), prepared.motion);
     throw std::runtime_error("no case " + name);
   };
   const auto top = [](const SimulationResult& r) {

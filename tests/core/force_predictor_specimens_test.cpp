@@ -235,7 +235,8 @@ HybridSetup frame_with(const RestoringForceModel& specimen, const Frame& frame =
 
 GroundMotion imperial_valley(double seconds) {
   return truncated(
-      resampled(read_at2(RTHS_DATA_DIR "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"), kDt),
+      resampled(study::read_at2(RTHS_DATA_DIR "/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2"),
+                kDt),
       seconds);
 }
 

@@ -131,7 +131,7 @@ TEST(DelayStageDynamics, TrackingLoopIsItsClosedLoopThenTheForceDelay) {
   spec.mutable_plant()->add_denominator(1.0);
   spec.mutable_plant()->add_denominator(50.0);
   spec.set_force_delay_periods(2);
-  const TrackingLoop unity = make_tracking_loop(spec, h, "loop");
+  const TrackingLoop unity = study::make_tracking_loop(spec, h, "loop");
   const double p = std::exp(-50.0 * h);
   for (double w : {3.0, 300.0, 2500.0}) {
     const cd z = z_at(w, h);
@@ -148,7 +148,7 @@ TEST(DelayStageDynamics, TrackingLoopIsItsClosedLoopThenTheForceDelay) {
   lead->set_zero(100.0);
   lead->set_pole(500.0);
   spec.mutable_converter()->set_quantum(1e-6);
-  const TrackingLoop pi = make_tracking_loop(spec, h, "loop");
+  const TrackingLoop pi = study::make_tracking_loop(spec, h, "loop");
   for (double w : {3.0, 300.0, 2500.0})
     expect_near(realised(pi, w, h), pi.frequency_response(w), 1e-10, "PI loop");
   EXPECT_EQ(pi.linearity().kind, Linearity::Kind::kLinearised);

@@ -173,12 +173,12 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   config::DelayStage stage;
   stage.mutable_velocity_limit()->set_max_velocity(0.05);
   stage.set_amplitude_gain(1.1);
-  const auto valve = make_delay_stage(stage, 0.01, ".");
+  const auto valve = study::make_delay_stage(stage, 0.01, ".");
   EXPECT_DOUBLE_EQ(valve->step({0.01, 0.002, 0.0}), 1.1 * 0.0005);
   const std::string bad =
       "structure { sdof { period: 0.5 } } cases { name: \"c\" delay { velocity_limit {} } }";
   try {
-    (void)parse_study(bad, "bad.textproto");
+    (void)study::parse_study(bad, "bad.textproto");
     FAIL() << "a velocity limit of 0 was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("velocity_limit.max_velocity"), std::string::npos)
@@ -186,21 +186,21 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   }
   config::DelayStage rod;
   rod.mutable_stroke_limit()->set_stroke(0.01);
-  EXPECT_DOUBLE_EQ(make_delay_stage(rod, 0.01, ".")->step({0.01, 0.02, 0.0}), 0.01);
+  EXPECT_DOUBLE_EQ(study::make_delay_stage(rod, 0.01, ".")->step({0.01, 0.02, 0.0}), 0.01);
   config::DelayStage sensors;
   sensors.mutable_sensor_drift()->set_displacement_scale(1.1);
   DelayChain read;
-  read.add(make_delay_stage(sensors, 0.01, "."));
+  read.add(study::make_delay_stage(sensors, 0.01, "."));
   read.step({0.01, 0.002, 0.0});
   EXPECT_DOUBLE_EQ(read.measured(), 1.1 * 0.002);
   for (const auto& [text, field] :
        {std::pair{"stroke_limit { stroke: 0 }", "stroke_limit.stroke"},
         std::pair{"sensor_drift { displacement_scale: -1 }", "sensor_drift.displacement_scale"}}) {
     try {
-      (void)parse_study(std::string("structure { sdof { period: 0.5 } } cases { name: \"c\" "
-                                    "delay { ") +
-                            text + " } }",
-                        "bad.textproto");
+      (void)study::parse_study(std::string("structure { sdof { period: 0.5 } } cases { name: \"c\" "
+                                           "delay { ") +
+                                   text + " } }",
+                               "bad.textproto");
       FAIL() << text << " was accepted";
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
@@ -213,10 +213,10 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
                   "friction_force.friction_force"},
         std::pair{"force_delay { delay: 2 }", "force_delay.delay"}}) {
     try {
-      (void)parse_study(std::string("structure { sdof { period: 0.5 } } cases { name: \"c\" "
-                                    "delay { ") +
-                            text + " } }",
-                        "bad.textproto");
+      (void)study::parse_study(std::string("structure { sdof { period: 0.5 } } cases { name: \"c\" "
+                                           "delay { ") +
+                                   text + " } }",
+                               "bad.textproto");
       FAIL() << text << " was accepted";
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
@@ -228,12 +228,13 @@ TEST(RigEffects, AStudyBuildsThemAndRefusesBadValuesNamingTheField) {
   friction.mutable_friction_force()->set_smoothing_velocity(0.002);
   late.mutable_force_delay()->set_delay(0.003);
   DelayChain rig;
-  for (const auto* stage : {&mass, &friction, &late}) rig.add(make_delay_stage(*stage, 0.001, "."));
+  for (const auto* stage : {&mass, &friction, &late})
+    rig.add(study::make_delay_stage(*stage, 0.001, "."));
   EXPECT_NE(rig.describe().find("inertia_force(10 kg)"), std::string::npos) << rig.describe();
   EXPECT_NE(rig.describe().find("friction_force(100 N"), std::string::npos) << rig.describe();
   EXPECT_NE(rig.describe().find("force_delay(3 ms)"), std::string::npos) << rig.describe();
   try {
-    (void)parse_study(
+    (void)study::parse_study(
         "structure { sdof { period: 0.5 } } cases { name: \"c\" delay { "
         "viscous_force { damping: -5 } } }",
         "bad.textproto");

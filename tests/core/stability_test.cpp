@@ -470,7 +470,7 @@ TEST(LoopStabilityTest, ABlockChainIsAnalysedAsTheConfigThatBuildsIt) {
   DelayChain chain;
   chain.add(std::make_unique<TimeShift>(0.0046, kDt));
   chain.add(std::make_unique<FirstOrderActuator>(0.0218, kDt));
-  chain.set_compensator(make_compensator(inverse, kDt, "compensation"));
+  chain.set_compensator(study::make_compensator(inverse, kDt, "compensation"));
   const LoopDiscreteStability discrete = discrete_loop_stability(
       IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, chain, 0.05);
   const LoopContinuousStability continuous =

@@ -42,10 +42,10 @@ TEST(ExactLinearResponse, BenchmarkCasesEqualTheModalClosedFormSolution) {
   for (int c = 1; c <= 4; ++c) {
     const std::filesystem::path config = std::filesystem::path(RTHS_SOURCE_DIR) / "configs" /
                                          "benchmark" / ("case_" + std::to_string(c) + ".textproto");
-    config::Study study = load_study(config);
+    config::Study study = study::load_study(config);
     study.mutable_motion()->set_duration(12.0);
-    const PreparedStudy prepared = prepare_study(study, config.parent_path());
-    const StructuralModel whole = make_structure(study.structure(), config.parent_path());
+    const study::PreparedStudy prepared = study::prepare_study(study, config.parent_path());
+    const StructuralModel whole = study::make_structure(study.structure(), config.parent_path());
     const LinearResponse exact = exact_linear_response(whole, prepared.motion);
     ASSERT_NEAR(prepared.motion.dt, 1.0 / 4096, 1e-15);
 

@@ -300,7 +300,7 @@ namespace {
 
 // Column `name` of a `rths run` results.csv.
 std::vector<double> results_column(const fs::path& csv, const std::string& name) {
-  const core::TextColumns table = core::read_text_columns(csv, "results", true);
+  const study::TextColumns table = study::read_text_columns(csv, "results", true);
   const auto at = std::find(table.title.begin(), table.title.end(), name);
   if (at == table.title.end()) throw std::invalid_argument(csv.string() + ": no column " + name);
   std::vector<double> out;
@@ -319,7 +319,7 @@ TEST_F(CmdIdentifyTest, ARunRecordIsWrittenBackAsAStudyThatRunReproduces) {
   EXPECT_GE(residual["declared_nrmse"].get<double>(), 0.20) << residual;
   EXPECT_LE(residual["identified_nrmse"].get<double>(), 0.02) << residual;
   const fs::path study = dir_ / "id" / "identified_run.textproto";
-  const config::Study parsed = core::load_study(study);
+  const config::Study parsed = study::load_study(study);
   EXPECT_TRUE(std::any_of(parsed.cases().begin(), parsed.cases().end(),
                           [](const auto& c) { return c.name() == "identified_actuator"; }));
   EXPECT_TRUE(fs::exists(dir_ / "id" / "lag_node_1.csv"));
@@ -361,7 +361,7 @@ TEST_F(CmdIdentifyTest, TheWrittenStudyCarriesTheRigsOwnEffectsAndReproducesTheR
   EXPECT_TRUE(parts.count("actuator 1: velocity_saturation")) << report["undeclared"].dump(2);
   EXPECT_TRUE(parts.count("load cell 1: offset_drift")) << report["undeclared"].dump(2);
   const fs::path study = dir_ / "rig" / "identified_run.textproto";
-  const config::Study parsed = core::load_study(study);
+  const config::Study parsed = study::load_study(study);
   const auto identified =
       std::find_if(parsed.cases().begin(), parsed.cases().end(),
                    [](const auto& c) { return c.name() == "identified_actuator"; });

@@ -52,7 +52,7 @@ TEST(CompensatorDesign, ModelBasedAdaptiveAddsACorrectionBoundedByTheIdentifiedL
   EXPECT_NEAR(a.a1_bounds().max(), 0.0264, 1e-12);
   EXPECT_NEAR(a.a2_bounds().max(), 0.0264 * 0.0264, 1e-15);
   EXPECT_NE(d.summary.find("adaptive correction"), std::string::npos) << d.summary;
-  const auto block = core::make_compensator(d.study_case.compensation(0), kDt, "designed");
+  const auto block = study::make_compensator(d.study_case.compensation(0), kDt, "designed");
   EXPECT_NE(dynamic_cast<const core::AdaptedModelBasedInverse*>(block.get()), nullptr);
   // The plain model-based design has no correction.
   EXPECT_FALSE(design_compensator(mts(), SignalScales{}, CompensatorKind::kModelBased, kDt)
@@ -109,7 +109,7 @@ TEST(CompensatorDesign, WrittenCaseAppendsToAStudyAndRuns) {
       "substructuring { experimental_fraction: 0.3333333333333333 }\ncases { name: \"reference\" "
       "}\n" +
       fragment.str();
-  const config::Study parsed = core::parse_study(study, path.string());
+  const config::Study parsed = study::parse_study(study, path.string());
   ASSERT_EQ(parsed.cases_size(), 2);
   EXPECT_EQ(parsed.cases(1).name(), "identified_model-based");
   EXPECT_EQ(parsed.cases(1).compensation(0).model_based().plant_size(), 2);

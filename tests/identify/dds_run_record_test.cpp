@@ -60,11 +60,12 @@ UndeclaredRun launch_undeclared(const std::string& name, const std::string& node
     EXPECT_EQ(verdict.kind, test::RealTimeVerdict::kCompleted) << verdict.why;
   const test::LaunchedRun& run = witnessed.run;
   const fs::path record = run.dir / "run.rthsrec";
-  const core::PreparedStudy declared =
+  const study::PreparedStudy declared =
       test::prepare(test::paper_frame_study(duration, deployment("", "")));
   test::rewrite(record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared.config;
-    if (e.has_inputs()) *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
+    if (e.has_inputs())
+      *e.mutable_inputs()->mutable_study() = study::with_embedded_inputs(declared);
   });
   out.record = record;
   return out;
@@ -280,11 +281,11 @@ TEST_F(DdsRunRecord, AnUndeclaredSpecimenMassIsNamedAndTheReRunClosesTheRecord) 
                                 "lag_shift_14ms", test::scope_dds_to_this_test());
   ASSERT_EQ(run.launch.coordinator_exit, 0) << test::read_file(run.launch.coordinator_log);
   const fs::path record = run.dir / "run.rthsrec";
-  const core::PreparedStudy as_declared = test::prepare(declared);
+  const study::PreparedStudy as_declared = test::prepare(declared);
   test::rewrite(record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = as_declared.config;
     if (e.has_inputs())
-      *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(as_declared);
+      *e.mutable_inputs()->mutable_study() = study::with_embedded_inputs(as_declared);
   });
   const RunIdentification id = identify_run_record(record, IdentifyOptions{});
   const std::string text = run_record_text(id);

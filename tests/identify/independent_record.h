@@ -293,7 +293,7 @@ inline void add_link_sample(const AnswerUsed& used, std::size_t step, double dt,
 inline std::filesystem::path independent_record(const std::string& name, const RigTruth& rig,
                                                 double duration = 20.0) {
   const bool real_time = rig.platform.any(), linked = real_time || rig.network.any();
-  const core::PreparedStudy declared = prepare(independent_declared_study(
+  const study::PreparedStudy declared = prepare(independent_declared_study(
       duration,
       real_time ? RecordClock::kRealTime : (linked ? RecordClock::kLockstep : RecordClock::kNone)));
   const double dt = 0.001, m = 1000.0, omega = 2.0 * std::numbers::pi / 0.5;
@@ -317,7 +317,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
   header.set_actuators(1);
   writer.write(entry);
   entry.Clear();
-  *entry.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
+  *entry.mutable_inputs()->mutable_study() = study::with_embedded_inputs(declared);
   writer.write(entry);
 
   const std::vector<double>& ground = declared.motion.acceleration;

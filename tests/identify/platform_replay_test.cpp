@@ -39,7 +39,7 @@ std::vector<const runtime::StepRecord*> pointers(
 }
 
 TEST(PlatformReplay, AStudyWithoutNodesIsReplayedOnItsDefaultNodes) {
-  const config::Study study = core::parse_study(test::paper_frame_study(1.0, ""), "test");
+  const config::Study study = study::parse_study(test::paper_frame_study(1.0, ""), "test");
   const std::vector<runtime::NodeSources> nodes = runtime::answer_sources(study, 0.001, ".");
   ASSERT_EQ(nodes.size(), 2u);
   EXPECT_EQ(nodes[0].node_id, 1);

@@ -54,7 +54,7 @@ TEST(RunResidual, ACleanRecordReRunsAsRecorded) {
   EXPECT_TRUE(r.effects.empty());
 }
 
-// A model past core::kAllDofsLimit: its record keeps the DOFs its recorders keep
+// A model past study::kAllDofsLimit: its record keeps the DOFs its recorders keep
 // (RunHeader.recorded_dofs; the defaults: DOFs 1, n/4, n/2, 3n/4 and the top). Each recorded
 // column is compared with the re-run's response of the DOF it holds and named by that DOF, so a
 // clean record re-runs as recorded on every floor it holds.
@@ -144,7 +144,7 @@ TEST(RunResidual, ALagWhereNoActuatorStageWasDeclaredIsADelayChangeFromZero) {
   EXPECT_GE(r.declared, 0.05) << text;
   EXPECT_LE(r.identified, 0.1 * r.declared) << text;
   const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
-  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  const config::Case* identified = study::case_named(written.study, kIdentifiedCaseName);
   ASSERT_NE(identified, nullptr);
   double shift = 0.0;
   for (const auto& stage : identified->delay())
@@ -312,7 +312,7 @@ TEST(RunResidual, ANamedEffectThatMakesTheReRunWorseIsRejected) {
   EXPECT_EQ(path.undeclared, std::vector<std::string>{"first_order"});
   EXPECT_NEAR(run.residual->identified, closed, 1e-3) << run_record_text(run);
   const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
-  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  const config::Case* identified = study::case_named(written.study, kIdentifiedCaseName);
   ASSERT_NE(identified, nullptr);
   bool lag = false;
   for (const auto& stage : identified->delay()) {
@@ -441,7 +441,7 @@ void expect_re_run_holds(const ForceEffect& c) {
   // The written study (identified_run.textproto) holds it as its force stage and, run in process,
   // closes the record as the re-run does.
   const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
-  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  const config::Case* identified = study::case_named(written.study, kIdentifiedCaseName);
   ASSERT_NE(identified, nullptr);
   bool holds = false;
   for (const auto& stage : identified->delay()) {
@@ -449,9 +449,9 @@ void expect_re_run_holds(const ForceEffect& c) {
     holds = holds || (kind && kind->name() == c.stage_kind);
   }
   EXPECT_TRUE(holds) << c.stage_kind << " not in " << identified->DebugString();
-  const core::PreparedStudy prepared = core::prepare_study(written.study, ".");
+  const study::PreparedStudy prepared = study::prepare_study(written.study, ".");
   const core::SimulationResult rerun =
-      core::simulate(core::setup_for_case(prepared, *identified), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, *identified), prepared.motion);
   const auto n = static_cast<Eigen::Index>(r.steps);
   const Eigen::VectorXd recorded = r.recorded_response.col(0).head(n);
   const Eigen::VectorXd simulated = rerun.displacement.col(0).head(n);
@@ -497,7 +497,7 @@ TEST(RunResidual, ADeclaredSpecimenMassIsNotNamedAndStaysWhenTheActuatorIsReplac
   EXPECT_GE(r.declared, 0.05) << text;
   EXPECT_LE(r.identified, 0.01) << text;
   const IdentifiedRun written = identified_run(run, ".", std::filesystem::temp_directory_path());
-  const config::Case* identified = core::case_named(written.study, kIdentifiedCaseName);
+  const config::Case* identified = study::case_named(written.study, kIdentifiedCaseName);
   ASSERT_NE(identified, nullptr);
   int masses = 0;
   for (const auto& stage : identified->delay()) masses += stage.has_inertia_force() ? 1 : 0;

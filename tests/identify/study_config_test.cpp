@@ -38,7 +38,7 @@ ChannelSignals drift_history() {
 // The storey model of the restoring force at initial stiffness k0, stepped through the history.
 std::vector<double> storey_forces(const config::RestoringForce& model, double k0,
                                   const ChannelSignals& s) {
-  auto storey = core::make_storey_factory(model)(k0);
+  auto storey = study::make_storey_factory(model)(k0);
   std::vector<double> out;
   for (double d : s.input) out.push_back(storey->step(d));
   return out;
@@ -130,13 +130,13 @@ TEST(StudyConfigTest, AStudyBuiltFromTheFragmentRunsTheIdentifiedCase) {
   // The fragment reads back as a Study.
   const auto dir = std::filesystem::temp_directory_path() /
                    ("rths_study_config_test_" + std::to_string(getpid()));
-  core::write_text_format(fragment, dir / "fragment.textproto", {"a comment line"});
+  study::write_text_format(fragment, dir / "fragment.textproto", {"a comment line"});
   config::Study read_back;
-  core::parse_text_format(core::read_text_file(dir / "fragment.textproto", "fragment"), "fragment",
-                          read_back);
+  study::parse_text_format(study::read_text_file(dir / "fragment.textproto", "fragment"),
+                           "fragment", read_back);
   EXPECT_EQ(read_back.DebugString(), fragment.DebugString());
 
-  const config::Study base = core::parse_study(R"(
+  const config::Study base = study::parse_study(R"(
       name: "frame"
       structure { sdof { period: 0.5 mass: 1000 } damping { modal_zeta: 0.05 } }
       motion { path: "ground_motions/RSN175_IMPVALL.H_H-E12140.AT2" duration: 4 }
@@ -144,7 +144,7 @@ TEST(StudyConfigTest, AStudyBuiltFromTheFragmentRunsTheIdentifiedCase) {
       substructuring { experimental_fraction: 0.3 model { linear {} } }
       cases { name: "reference" }
       output { directory: "out/frame" })",
-                                               "base");
+                                                "base");
   const config::Study study = identified_study(base, kData, read_back);
   EXPECT_EQ(study.name(), "frame_identified");
   EXPECT_TRUE(study.output().directory().empty());
@@ -154,12 +154,12 @@ TEST(StudyConfigTest, AStudyBuiltFromTheFragmentRunsTheIdentifiedCase) {
   ASSERT_TRUE(study.substructuring().model().has_bouc_wen());
   EXPECT_DOUBLE_EQ(study.substructuring().experimental_fraction(), 0.3);
 
-  core::validate_study(study, "identified");
-  const core::PreparedStudy prepared = core::prepare_study(study, dir);
+  study::validate_study(study, "identified");
+  const study::PreparedStudy prepared = study::prepare_study(study, dir);
   const core::SimulationResult reference =
-      core::simulate(core::setup_for_case(prepared, study.cases(0)), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, study.cases(0)), prepared.motion);
   const core::SimulationResult identified =
-      core::simulate(core::setup_for_case(prepared, study.cases(1)), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, study.cases(1)), prepared.motion);
   EXPECT_FALSE(identified.diverged);
   ASSERT_EQ(identified.steps(), reference.steps());
   // The identified actuator's 7 ms of lag shows in the realised displacement.

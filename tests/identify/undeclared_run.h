@@ -63,10 +63,11 @@ inline std::filesystem::path record_declaring(const std::string& name, const std
   options.record = scratch(name);
   const auto outcome = coordinator::run_in_process(prepare(actual), options);
   EXPECT_EQ(outcome.ok, expect_ok) << outcome.status;
-  const core::PreparedStudy declared = prepare(declared_text);
+  const study::PreparedStudy declared = prepare(declared_text);
   rewrite(options.record, [&](runtime::RecordEntry& e) {
     if (e.has_header()) *e.mutable_header()->mutable_study() = declared.config;
-    if (e.has_inputs()) *e.mutable_inputs()->mutable_study() = core::with_embedded_inputs(declared);
+    if (e.has_inputs())
+      *e.mutable_inputs()->mutable_study() = study::with_embedded_inputs(declared);
   });
   return options.record;
 }

@@ -52,7 +52,7 @@ inline std::string site_study(double duration, const std::string& deployment) {
 
 // The ground motion of the study at its dt (m/s^2).
 inline std::vector<double> ground_motion(const std::string& study_text) {
-  return core::prepare_study(core::parse_study(study_text, "test"), "/").motion.acceleration;
+  return study::prepare_study(study::parse_study(study_text, "test"), "/").motion.acceleration;
 }
 
 }  // namespace rths::test

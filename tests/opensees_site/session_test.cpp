@@ -25,8 +25,8 @@ struct Served {
 class InProcessSite {
  public:
   InProcessSite(const std::string& text, const std::string& case_name)
-      : prepared_(core::prepare_study(core::parse_study(text, "test"), "/")),
-        setup_(core::setup_for_case(prepared_, core::find_case(prepared_.config, case_name))),
+      : prepared_(study::prepare_study(study::parse_study(text, "test"), "/")),
+        setup_(study::setup_for_case(prepared_, study::find_case(prepared_.config, case_name))),
         mapping_(prepared_.config.deployment().opensees(),
                  {setup_.partition.experimental[0]->initial_stiffness()},
                  setup_.partition.actuator_storeys, 1),
@@ -73,7 +73,7 @@ class InProcessSite {
   }
 
  private:
-  core::PreparedStudy prepared_;
+  study::PreparedStudy prepared_;
   core::HybridSetup setup_;
   BasicMapping mapping_;
   Listener listener_;
@@ -143,10 +143,10 @@ TEST(Session, FourteenMsOfLagGrowsThePeakAsRthsOwnPaperFrameRunDoes) {
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
       "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
       "cases { name: \"reference\" }\ncases { name: \"lag\" delay { shift { delay: 0.014 } } }\n";
-  const core::PreparedStudy p = core::prepare_study(core::parse_study(paper, "paper"), "/");
+  const study::PreparedStudy p = study::prepare_study(study::parse_study(paper, "paper"), "/");
   const auto peak = [&](const char* name) {
     const auto r =
-        core::simulate(core::setup_for_case(p, core::find_case(p.config, name)), p.motion);
+        core::simulate(study::setup_for_case(p, study::find_case(p.config, name)), p.motion);
     return r.displacement.cwiseAbs().maxCoeff();
   };
   const double rths_growth = peak("lag") / peak("reference");

@@ -129,9 +129,9 @@ TEST_F(OpenSeesSite, FourteenMsOnTheActuatorLinkGrowsThePeakAsThePaperFrameRun) 
       "integrator { kind: EXPLICIT_NEWMARK dt: 0.001 }\n"
       "substructuring { experimental_fraction: 0.3333333333333333 model { linear {} } }\n"
       "cases { name: \"reference\" }\ncases { name: \"lag\" delay { shift { delay: 0.014 } } }\n";
-  const core::PreparedStudy p = core::prepare_study(core::parse_study(paper, "paper"), "/");
+  const study::PreparedStudy p = study::prepare_study(study::parse_study(paper, "paper"), "/");
   const auto peak = [&](const char* name) {
-    return core::simulate(core::setup_for_case(p, core::find_case(p.config, name)), p.motion)
+    return core::simulate(study::setup_for_case(p, study::find_case(p.config, name)), p.motion)
         .displacement.cwiseAbs()
         .maxCoeff();
   };

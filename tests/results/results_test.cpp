@@ -108,7 +108,7 @@ TEST(ResultsTest, RecordTableCarriesTheStudyStepMotionAsRunAndTheFootersVerdict)
   const Table t = record_table(record);
   EXPECT_EQ(t.attributes().at("motion_name"), "RSN175");
   const core::GroundMotion as_run{.name = "RSN175", .dt = 0.002, .acceleration = {0.5, -0.25}};
-  EXPECT_EQ(t.attributes().at("motion_sha256"), core::motion_key(as_run));
+  EXPECT_EQ(t.attributes().at("motion_sha256"), study::motion_key(as_run));
   EXPECT_EQ(t.attributes().at("motion_sha256").size(), 64u);
   EXPECT_EQ(t.attributes().at("motion_file_sha256"), std::string(64, 'd'));
   EXPECT_EQ(t.attributes().at("status"), "completed");

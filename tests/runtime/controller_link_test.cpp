@@ -108,10 +108,10 @@ TEST(ControllerLink, AJumpFloorThatIsNotANumberIsRefused) {
 TEST(ControllerLink, CheckDeploymentNamesTheNodeAndTheField) {
   config::Study study = shipped_controller_study();
   const std::string configs = std::string(RTHS_SOURCE_DIR) + "/configs";
-  const core::PreparedStudy good = core::prepare_study(study, configs);
+  const study::PreparedStudy good = study::prepare_study(study, configs);
   EXPECT_NO_THROW(check_deployment(good));
   study.mutable_deployment()->mutable_nodes(0)->mutable_controller()->set_peer_port(70000);
-  const core::PreparedStudy bad = core::prepare_study(study, configs);
+  const study::PreparedStudy bad = study::prepare_study(study, configs);
   try {
     check_deployment(bad);
     FAIL() << "a peer port of 70000 passed";

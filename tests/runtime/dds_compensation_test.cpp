@@ -37,9 +37,9 @@ TEST_F(DdsCompensation, AdaptiveAndModelBasedPerActuatorEqualInProcessBitForBit)
   const core::SimulationResult in_process = test::reference_result(text, "compensated");
   ASSERT_EQ(in_process.command.cols(), 2);
   // The compensators act: the realised drift differs from what the same actuator realises bare.
-  const core::PreparedStudy prepared = test::prepare(text);
+  const study::PreparedStudy prepared = test::prepare(text);
   core::HybridSetup bare =
-      core::setup_for_case(prepared, core::find_case(prepared.config, "compensated"));
+      study::setup_for_case(prepared, study::find_case(prepared.config, "compensated"));
   for (auto& chain : bare.delays) chain.set_compensator(nullptr);
   const core::SimulationResult uncompensated = core::simulate(bare, prepared.motion);
   EXPECT_NE(uncompensated.realised(500, 0), in_process.realised(500, 0));

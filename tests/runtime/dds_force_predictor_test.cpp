@@ -29,9 +29,9 @@ TEST_F(DdsForcePredictor, LockstepEqualsInProcessBitForBitAndRecordsThePredictio
   const std::string text = test::paper_frame_study(2, kPredicted);
   const core::SimulationResult in_process = test::reference_result(text, "predicted");
   // The predictor acts: its error is recorded, and it departs from the run without it.
-  const core::PreparedStudy prepared = test::prepare(text);
+  const study::PreparedStudy prepared = test::prepare(text);
   core::HybridSetup bare =
-      core::setup_for_case(prepared, core::find_case(prepared.config, "predicted"));
+      study::setup_for_case(prepared, study::find_case(prepared.config, "predicted"));
   ASSERT_EQ(bare.predictors.size(), 1u);
   bare.predictors.clear();
   const core::SimulationResult without = core::simulate(bare, prepared.motion);

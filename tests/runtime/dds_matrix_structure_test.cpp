@@ -87,7 +87,7 @@ TEST_F(DdsMatrixStructure, ASubstructureNodeMustHostEveryCoupledDof) {
                     "nodes { id: 3 kind: SUBSTRUCTURE storeys: [3, 4, 5, 6, 7, 8, 9, 10, 11, 12, "
                     "13, 14, 15, 16, 17, 18, 19, 20] } "
                     "nodes { id: 2 kind: ACTUATOR_EMULATOR } }");
-  const core::PreparedStudy prepared = test::prepare(text);
+  const study::PreparedStudy prepared = test::prepare(text);
   try {
     runtime::make_plan(prepared.base, prepared.config.deployment());
     FAIL() << "a split of coupled DOFs was accepted";

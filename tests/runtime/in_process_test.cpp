@@ -35,15 +35,15 @@ void PrintTo(const Variant& v, std::ostream* os) {
 class InProcessEqualsSimulate : public testing::TestWithParam<Variant> {};
 
 TEST_P(InProcessEqualsSimulate, BitForBit) {
-  const core::PreparedStudy prepared = test::prepare(GetParam().text);
+  const study::PreparedStudy prepared = test::prepare(GetParam().text);
   coordinator::CoordinatorOptions options;
   options.run_id = "in-process";
   options.case_name = GetParam().case_name;
   const coordinator::RunOutcome outcome = coordinator::run_in_process(prepared, options);
   ASSERT_TRUE(outcome.ok) << outcome.status;
-  const auto& study_case = core::find_case(prepared.config, GetParam().case_name);
+  const auto& study_case = study::find_case(prepared.config, GetParam().case_name);
   const core::SimulationResult reference =
-      core::simulate(core::setup_for_case(prepared, study_case), prepared.motion);
+      core::simulate(study::setup_for_case(prepared, study_case), prepared.motion);
   expect_identical(outcome.result, reference);
   EXPECT_GT(outcome.result.measured_force.cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(outcome.counters.steps(), reference.steps() - 1);
@@ -80,14 +80,14 @@ TEST(InProcess, NodeReceiveDelayReproducesTheDelayedCase) {
       5,
       "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR "
       "receive_delay { shift { delay: 0.014 } } } }");
-  const core::PreparedStudy prepared = test::prepare(text);
+  const study::PreparedStudy prepared = test::prepare(text);
   coordinator::CoordinatorOptions options;
   options.run_id = "node-delay";
   options.case_name = "reference";
   const auto outcome = coordinator::run_in_process(prepared, options);
   ASSERT_TRUE(outcome.ok) << outcome.status;
   const auto delayed = core::simulate(
-      core::setup_for_case(prepared, core::find_case(prepared.config, "lag_shift_14ms")),
+      study::setup_for_case(prepared, study::find_case(prepared.config, "lag_shift_14ms")),
       prepared.motion);
   expect_identical(outcome.result, delayed);
 }

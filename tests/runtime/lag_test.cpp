@@ -49,12 +49,12 @@ TEST(LagInjector, InactiveWhenAllZero) { EXPECT_FALSE(LagInjector(config::LinkLa
 
 TEST(ValidateLinkLag, NamesTheBadField) {
   try {
-    core::validate_link_lag(lag(0, 0, 1.5, 0), "nodes[2].send_lag", false, "test");
+    study::validate_link_lag(lag(0, 0, 1.5, 0), "nodes[2].send_lag", false, "test");
     FAIL();
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("nodes[2].send_lag.loss"), std::string::npos);
   }
-  EXPECT_THROW(core::validate_link_lag(lag(-1, 0, 0, 0), "x", false, "test"),
+  EXPECT_THROW(study::validate_link_lag(lag(-1, 0, 0, 0), "x", false, "test"),
                std::invalid_argument);
 }
 
@@ -98,7 +98,7 @@ TEST(LagInjector, NetworkEmulationDropsABurstOfCommandsOnly) {
 TEST(ValidateLinkLag, NetworkEmulationOutOfRangeNamesTheField) {
   const auto message = [](const config::LinkLag& l) {
     try {
-      core::validate_link_lag(l, "nodes[0].receive_lag", true, "test");
+      study::validate_link_lag(l, "nodes[0].receive_lag", true, "test");
     } catch (const std::invalid_argument& e) {
       return std::string(e.what());
     }
@@ -141,7 +141,7 @@ TEST(LagInjector, TheInProcessLinkReleasesWhatTheNodeInjects) {
   spec.mutable_network()->set_drop_steps(40);
   constexpr double kDt = 0.001;
   LagInjector node(spec, kDt);
-  core::LinkWayLag in_process(core::link_way(spec), kDt);
+  core::LinkWayLag in_process(study::link_way(spec), kDt);
   std::size_t lost = 0;
   for (std::int64_t k = 1; k <= 10000; ++k) {
     const std::int64_t sent = k * kMs;

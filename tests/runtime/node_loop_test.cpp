@@ -58,7 +58,7 @@ class ScriptedEndpoint final : public transport::Endpoint {
 transport::Message assign(int node, config::NodeSpec::Kind kind, double orphan_timeout = 5.0) {
   Assign a;
   a.set_schema_version(kSchemaVersion);
-  *a.mutable_study() = core::parse_study(test::paper_frame_study(1, ""), "t");
+  *a.mutable_study() = study::parse_study(test::paper_frame_study(1, ""), "t");
   a.set_case_name("reference");
   a.mutable_node()->set_id(node);
   a.mutable_node()->set_kind(kind);

@@ -34,7 +34,7 @@ transport::Message assign_message(int node, config::NodeSpec::Kind kind, std::ve
                                   std::vector<int> actuators, const std::string& extra = "") {
   runtime::Assign a;
   a.set_schema_version(runtime::kSchemaVersion);
-  *a.mutable_study() = core::parse_study(test::paper_frame_study(1, extra), "t");
+  *a.mutable_study() = study::parse_study(test::paper_frame_study(1, extra), "t");
   a.set_case_name("lag_shift_14ms");
   a.mutable_node()->set_id(node);
   a.mutable_node()->set_kind(kind);

@@ -79,8 +79,8 @@ TEST(Plan, NodeSideSetupMatchesPrepareStudy) {
   const std::string text =
       test::two_storey_study(0.1, "cases { name: \"d\" delay { shift { delay: 0.01 } } }", "");
   const auto prepared = test::prepare(text);
-  const auto& c = core::find_case(prepared.config, "d");
-  const auto from_core = core::setup_for_case(prepared, c);
+  const auto& c = study::find_case(prepared.config, "d");
+  const auto from_core = study::setup_for_case(prepared, c);
   const auto node_side =
       setup_without_motion(prepared.config, prepared.base_dir, prepared.base.dt, c);
   EXPECT_EQ(from_core.partition.actuator_storeys, node_side.partition.actuator_storeys);

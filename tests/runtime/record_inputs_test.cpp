@@ -27,8 +27,8 @@ TEST(RecordInputs, A2000DofChainIsCarriedSparseAndReadBackBitForBit) {
       fs::temp_directory_path() / ("rths_record_inputs_" + std::to_string(getpid()));
   fs::remove_all(folder);
   fs::create_directories(folder);
-  const core::PreparedStudy prepared =
-      core::prepare_study(test::chain_study(n, folder, 0.05), folder);
+  const study::PreparedStudy prepared =
+      study::prepare_study(test::chain_study(n, folder, 0.05), folder);
   coordinator::CoordinatorOptions options;
   options.run_id = "chain";
   options.case_name = "reference";
@@ -51,7 +51,7 @@ TEST(RecordInputs, A2000DofChainIsCarriedSparseAndReadBackBitForBit) {
   const config::Study* as_run = record.study_as_run();
   ASSERT_NE(as_run, nullptr);
   ASSERT_TRUE(as_run->structure().matrices().stiffness().has_sparse());
-  const core::PreparedStudy again = core::prepare_study(*as_run, folder);
+  const study::PreparedStudy again = study::prepare_study(*as_run, folder);
   const core::StructuralModel &a = prepared.base.model, &b = again.base.model;
   expect_same(b.sparse_mass, a.sparse_mass);
   expect_same(b.sparse_stiffness, a.sparse_stiffness);

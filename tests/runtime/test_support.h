@@ -50,7 +50,7 @@ inline std::string paper_frame_study(double duration, const std::string& deploym
 
 // `storeys` storeys of 1e5 kg and `stiffness` N/m each, 5 % Rayleigh damping on modes 1 and 2,
 // storey 1 experimental, `duration` s of the 1979 record at 2 ms, one reference case: a model
-// past core::kAllDofsLimit, whose record keeps only its recorders' DOFs.
+// past study::kAllDofsLimit, whose record keeps only its recorders' DOFs.
 inline std::string uniform_storeys_study(int storeys, double stiffness, double duration) {
   std::ostringstream masses, stiffnesses;
   for (int i = 0; i < storeys; ++i) {
@@ -70,9 +70,9 @@ inline std::string uniform_storeys_study(int storeys, double stiffness, double d
          "cases { name: \"reference\" }\n";
 }
 
-inline core::PreparedStudy prepare(const std::string& text) {
-  return core::prepare_study(core::parse_study(text, "test"),
-                             std::filesystem::temp_directory_path());
+inline study::PreparedStudy prepare(const std::string& text) {
+  return study::prepare_study(study::parse_study(text, "test"),
+                              std::filesystem::temp_directory_path());
 }
 
 }  // namespace rths::test
@@ -121,9 +121,10 @@ inline std::string read_file(const std::filesystem::path& path) {
 // The in-process reference of one case.
 inline core::SimulationResult reference_result(const std::string& text,
                                                const std::string& case_name) {
-  const core::PreparedStudy prepared = prepare(text);
-  return core::simulate(core::setup_for_case(prepared, core::find_case(prepared.config, case_name)),
-                        prepared.motion);
+  const study::PreparedStudy prepared = prepare(text);
+  return core::simulate(
+      study::setup_for_case(prepared, study::find_case(prepared.config, case_name)),
+      prepared.motion);
 }
 
 // Every recorded step equals the reference row exactly (the doubles went over the wire as bits).

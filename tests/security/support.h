@@ -33,7 +33,7 @@ inline std::filesystem::path make_lab(const std::string& name,
 }
 
 inline std::string slurp(const std::filesystem::path& path) {
-  return core::read_text_file(path, "test output");
+  return study::read_text_file(path, "test output");
 }
 
 // Signs `xml` with the lab CA in `pki` into `out` with the openssl command line (S/MIME, text).

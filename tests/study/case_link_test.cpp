@@ -7,7 +7,7 @@
 
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
@@ -34,15 +34,15 @@ const char* const kJitteredLink =
     "from_node { one_way_delay: 0.005 jitter: 0.0015 loss: 0.02 seed: 4 "
     "network { drift_rate: 0.0005 } } }";
 
-double largest_step_change(const Mat& history) {
+double largest_step_change(const core::Mat& history) {
   double largest = 0.0;
   for (Eigen::Index k = 1; k < history.rows(); ++k)
     largest = std::max(largest, (history.row(k) - history.row(k - 1)).cwiseAbs().maxCoeff());
   return largest;
 }
 
-SimulationResult run_case(const PreparedStudy& prepared, int index) {
-  return simulate(setup_for_case(prepared, prepared.config.cases(index)), prepared.motion);
+core::SimulationResult run_case(const PreparedStudy& prepared, int index) {
+  return core::simulate(setup_for_case(prepared, prepared.config.cases(index)), prepared.motion);
 }
 
 // The link acts on which answer the integrator uses: the command the damper is driven through is
@@ -55,9 +55,9 @@ TEST(CaseLink, AJitteredLinkNeverJumpsTheSpecimensCommand) {
       std::string("cases { name: \"linked\" ") + kJitteredLink +
       " } cases { name: \"command_jitter\" delay { jitter { mean_delay: 0.01 std_dev: 0.0015 "
       "seed: 3 } } }");
-  const SimulationResult reference = run_case(prepared, 0);
-  const SimulationResult linked = run_case(prepared, 1);
-  const SimulationResult jittered = run_case(prepared, 2);
+  const core::SimulationResult reference = run_case(prepared, 0);
+  const core::SimulationResult linked = run_case(prepared, 1);
+  const core::SimulationResult jittered = run_case(prepared, 2);
   ASSERT_FALSE(linked.diverged);
   ASSERT_EQ(linked.steps(), reference.steps());
   const double reference_step = largest_step_change(reference.command);
@@ -75,7 +75,7 @@ TEST(CaseLink, AJitteredLinkNeverJumpsTheSpecimensCommand) {
 TEST(CaseLink, OneLinkServesEveryActuatorAndFieldsCarryOver) {
   const PreparedStudy prepared =
       damper_frame(std::string("cases { name: \"linked\" ") + kJitteredLink + " }");
-  const HybridSetup setup = setup_for_case(prepared, prepared.config.cases(1));
+  const core::HybridSetup setup = setup_for_case(prepared, prepared.config.cases(1));
   ASSERT_EQ(setup.links.size(), 1u);
   EXPECT_EQ(setup.links[0].to_node.one_way_delay, 0.005);
   EXPECT_EQ(setup.links[0].to_node.seed, 3u);
@@ -91,10 +91,10 @@ TEST(CaseLink, TheCasesLagAndDelayTextHoldTheLinksRoundTrip) {
       "cases { name: \"sites\" delay { shift { delay: 0.014 } } link { to_node { one_way_delay: "
       "0.030 jitter: 0.0025 loss: 0.01 } from_node { one_way_delay: 0.030 jitter: 0.0025 loss: "
       "0.01 } } }");
-  const HybridSetup setup = setup_for_case(prepared, prepared.config.cases(1));
+  const core::HybridSetup setup = setup_for_case(prepared, prepared.config.cases(1));
   EXPECT_NEAR(answer_lag(setup), 0.074, 1e-12);
   EXPECT_EQ(case_delay_text(setup), "shift(14 ms); link 30 ms, jitter 2.5 ms, loss 1 % each way");
-  const HybridSetup reference = setup_for_case(prepared, prepared.config.cases(0));
+  const core::HybridSetup reference = setup_for_case(prepared, prepared.config.cases(0));
   EXPECT_EQ(answer_lag(reference), 0.0);
   EXPECT_EQ(case_delay_text(reference), "none");
 }
@@ -125,4 +125,4 @@ TEST(CaseLink, ALossOutsideItsRangeNamesTheField) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

@@ -7,7 +7,7 @@
 
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 using testing::HasSubstr;
@@ -54,4 +54,4 @@ TEST(KnownEnums, KnownValuesPass) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

@@ -15,7 +15,7 @@
 #include "study/motion_files.h"
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 using testing::HasSubstr;
@@ -132,11 +132,11 @@ TEST(MemoryBudget, AMotionFileIsHeldToWhatTheMemoryLimitCanReadAndANormalOneStil
                                HasSubstr("memory limit of 50.0 MiB")));
   }
   const MemoryLimit limit("1073741824");  // 1 GiB
-  const GroundMotion read = read_columns(motion, 0.01, 1.0);
+  const core::GroundMotion read = read_columns(motion, 0.01, 1.0);
   EXPECT_EQ(read.acceleration.size(), 300000u);
   EXPECT_DOUBLE_EQ(read.acceleration[6], 0.006);
-  const GroundMotion record = read_at2(std::filesystem::path(RTHS_DATA_DIR) / "ground_motions" /
-                                       "elcentro_1940_ns_peknold.AT2");
+  const core::GroundMotion record = read_at2(std::filesystem::path(RTHS_DATA_DIR) /
+                                             "ground_motions" / "elcentro_1940_ns_peknold.AT2");
   EXPECT_EQ(record.acceleration.size(), 1559u);
 }
 
@@ -173,4 +173,4 @@ TEST(MemoryBudget, AMotionWhoseRunCannotFitIsRefusedByItsExtentBeforeARowIsParse
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

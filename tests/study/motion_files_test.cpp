@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 const std::filesystem::path kMotions = std::filesystem::path(RTHS_DATA_DIR) / "ground_motions";
@@ -29,11 +29,11 @@ class At2Record : public ::testing::TestWithParam<Record> {};
 
 TEST_P(At2Record, MatchesTheDataReadme) {
   const Record& r = GetParam();
-  const GroundMotion motion = read_at2(kMotions / r.file);
+  const core::GroundMotion motion = read_at2(kMotions / r.file);
   EXPECT_EQ(motion.acceleration.size(), r.npts);
   EXPECT_DOUBLE_EQ(motion.dt, r.dt);
   // The README quotes PGA to 4 digits in g; the reader returns m/s^2.
-  EXPECT_NEAR(motion.peak_abs(), r.pga_g * kGravity, 0.00005 * kGravity + 1e-12);
+  EXPECT_NEAR(motion.peak_abs(), r.pga_g * core::kGravity, 0.00005 * core::kGravity + 1e-12);
   std::size_t at = 0;
   for (std::size_t i = 0; i < motion.acceleration.size(); ++i) {
     if (std::abs(motion.acceleration[i]) > std::abs(motion.acceleration[at])) at = i;
@@ -120,11 +120,12 @@ TEST_F(At2Reader, ReadsTheNewNgaHeaderAndGluedFixedWidthFields) {
                           "5    0.0100    NPTS, DT\r\n"
                           "  .1000000E-01 -.2000000E-01\r\n"
                           "  -0.12345-10.54321   0.5D-01");
-  const GroundMotion motion = read_at2(path);
+  const core::GroundMotion motion = read_at2(path);
   ASSERT_EQ(motion.acceleration.size(), 5u);
   EXPECT_DOUBLE_EQ(motion.dt, 0.01);
   const double expected[] = {0.01, -0.02, -0.12345, -10.54321, 0.05};
-  for (int i = 0; i < 5; ++i) EXPECT_DOUBLE_EQ(motion.acceleration[i], expected[i] * kGravity);
+  for (int i = 0; i < 5; ++i)
+    EXPECT_DOUBLE_EQ(motion.acceleration[i], expected[i] * core::kGravity);
 }
 
 TEST_F(At2Reader, ErrorsNameFileLineAndProblem) {
@@ -148,11 +149,11 @@ using ColumnReader = TempDir;
 
 TEST_F(ColumnReader, OneColumnNeedsDtAndConvertsUnits) {
   const auto path = write("one.txt", "# acceleration in g\n0.1\n\n-0.2\n0.3\n");
-  const GroundMotion motion = read_columns(path, 0.02, kGravity);
+  const core::GroundMotion motion = read_columns(path, 0.02, core::kGravity);
   ASSERT_EQ(motion.acceleration.size(), 3u);
   EXPECT_DOUBLE_EQ(motion.dt, 0.02);
-  EXPECT_DOUBLE_EQ(motion.acceleration[1], -0.2 * kGravity);
-  expect_error<std::invalid_argument>([&] { read_columns(path, 0.0, kGravity); }, path,
+  EXPECT_DOUBLE_EQ(motion.acceleration[1], -0.2 * core::kGravity);
+  expect_error<std::invalid_argument>([&] { read_columns(path, 0.0, core::kGravity); }, path,
                                       {"give its sample step"});
   // Not AT2 (no NPTS on line 4): read_ground_motion takes the columns path.
   EXPECT_EQ(read_ground_motion(path, 0.02, 1.0).acceleration[2], 0.3);
@@ -160,7 +161,7 @@ TEST_F(ColumnReader, OneColumnNeedsDtAndConvertsUnits) {
 
 TEST_F(ColumnReader, TwoColumnsWithHeaderAndCommas) {
   const auto path = write("two.csv", "time,accel\n0.0,1.0\n0.005,2.0\n0.010,3.0\n0.015,4.0\n");
-  const GroundMotion motion = read_columns(path, 0.0, 1.0);
+  const core::GroundMotion motion = read_columns(path, 0.0, 1.0);
   ASSERT_EQ(motion.acceleration.size(), 4u);
   EXPECT_NEAR(motion.dt, 0.005, 1e-15);
   EXPECT_DOUBLE_EQ(motion.acceleration[3], 4.0);
@@ -186,20 +187,20 @@ TEST_F(ColumnReader, ErrorsNameFileAndLine) {
 }
 
 TEST(Resampled, LinearInterpolationAndHeldTail) {
-  GroundMotion ramp{"ramp", 0.02, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9}};
-  const GroundMotion fine = resampled(ramp, 0.005);
+  core::GroundMotion ramp{"ramp", 0.02, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9}};
+  const core::GroundMotion fine = core::resampled(ramp, 0.005);
   ASSERT_EQ(fine.acceleration.size(), 40u);  // same 0.2 s duration
   for (std::size_t j = 0; j <= 36; ++j) EXPECT_NEAR(fine.acceleration[j], j / 4.0, 1e-12) << j;
   for (std::size_t j = 37; j < 40; ++j) EXPECT_DOUBLE_EQ(fine.acceleration[j], 9.0) << j;
-  const GroundMotion coarse = resampled(ramp, 0.05);  // 0.2 s / 0.05 s = 4 samples
+  const core::GroundMotion coarse = core::resampled(ramp, 0.05);  // 0.2 s / 0.05 s = 4 samples
   ASSERT_EQ(coarse.acceleration.size(), 4u);
   EXPECT_NEAR(coarse.acceleration[1], 2.5, 1e-12);
-  EXPECT_THROW(resampled(ramp, 0.0), std::invalid_argument);
+  EXPECT_THROW(core::resampled(ramp, 0.0), std::invalid_argument);
 }
 
 TEST(Resampled, ElCentroAtOneMillisecondHas31180Steps) {
-  const GroundMotion motion = read_at2(kMotions / "elcentro_1940_ns_peknold.AT2");
-  const GroundMotion fine = resampled(motion, 0.001);
+  const core::GroundMotion motion = read_at2(kMotions / "elcentro_1940_ns_peknold.AT2");
+  const core::GroundMotion fine = core::resampled(motion, 0.001);
   EXPECT_EQ(fine.acceleration.size(), 31180u);
   EXPECT_DOUBLE_EQ(fine.acceleration[20], motion.acceleration[1]);  // grid points coincide
   EXPECT_LE(fine.peak_abs(), motion.peak_abs());  // interpolation cannot overshoot
@@ -207,14 +208,14 @@ TEST(Resampled, ElCentroAtOneMillisecondHas31180Steps) {
 }
 
 TEST(ScaledAndTruncated, Basics) {
-  const GroundMotion motion = read_at2(kMotions / "elcentro_1940_ns_peknold.AT2");
-  EXPECT_DOUBLE_EQ(scaled(motion, 2.0).peak_abs(), 2.0 * motion.peak_abs());
-  EXPECT_THROW(scaled(motion, std::nan("")), std::invalid_argument);
-  const GroundMotion cut = truncated(motion, 10.0);
+  const core::GroundMotion motion = read_at2(kMotions / "elcentro_1940_ns_peknold.AT2");
+  EXPECT_DOUBLE_EQ(core::scaled(motion, 2.0).peak_abs(), 2.0 * motion.peak_abs());
+  EXPECT_THROW(core::scaled(motion, std::nan("")), std::invalid_argument);
+  const core::GroundMotion cut = core::truncated(motion, 10.0);
   EXPECT_EQ(cut.acceleration.size(), 500u);
   EXPECT_DOUBLE_EQ(cut.acceleration[499], motion.acceleration[499]);
-  EXPECT_EQ(truncated(motion, 0.0).acceleration.size(), motion.acceleration.size());
-  EXPECT_EQ(truncated(motion, 1e6).acceleration.size(), motion.acceleration.size());
+  EXPECT_EQ(core::truncated(motion, 0.0).acceleration.size(), motion.acceleration.size());
+  EXPECT_EQ(core::truncated(motion, 1e6).acceleration.size(), motion.acceleration.size());
 }
 
 // A file's extent before it is parsed (motion_file_extent): the AT2 header's NPTS and DT, as the
@@ -223,11 +224,11 @@ TEST(MotionFileExtent, AnAt2FilesExtentIsItsHeadersCountAndStep) {
   for (const char* name : {"elcentro_1940_ns_peknold.AT2", "RSN175_IMPVALL.H_H-E12140.AT2"}) {
     const std::optional<MotionFileExtent> extent = motion_file_extent(kMotions / name, true, 0.0);
     ASSERT_TRUE(extent.has_value()) << name;
-    const GroundMotion read = read_at2(kMotions / name);
+    const core::GroundMotion read = read_at2(kMotions / name);
     EXPECT_EQ(extent->samples, read.acceleration.size()) << name;
     EXPECT_DOUBLE_EQ(extent->dt, read.dt) << name;
   }
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

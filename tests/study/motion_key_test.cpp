@@ -4,11 +4,11 @@
 
 #include <gtest/gtest.h>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 TEST(MotionKeyTest, MotionKeyIsTheSha256OfDtThenTheSamplesAsDoubles) {
-  GroundMotion motion{.name = "pulse", .dt = 0.01, .acceleration = {1.0, -2.5}};
+  core::GroundMotion motion{.name = "pulse", .dt = 0.01, .acceleration = {1.0, -2.5}};
   EXPECT_EQ(motion_key(motion), "ff8467ff882a8d40a8057e2023f4b453bba79df2a90602dc8e0d756986506a6c");
   motion.name = "another name";
   motion.description = "another description";
@@ -19,4 +19,4 @@ TEST(MotionKeyTest, MotionKeyIsTheSha256OfDtThenTheSamplesAsDoubles) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

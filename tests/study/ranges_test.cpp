@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 std::string message_of(Quantity quantity, double value, const std::string& name) {
@@ -87,4 +87,4 @@ TEST(Ranges, FractionsAndRatiosAreZeroToOne) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

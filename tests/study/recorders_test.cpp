@@ -8,7 +8,7 @@
 
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 using Kind = RecordedChannel::Kind;
@@ -144,12 +144,12 @@ TEST(RecordersTest, ARunsBytesPerStepCountItsSimulationsTableAndMotion) {
 }
 
 TEST(RecordersTest, ExperimentalDofsAreTheStoreysFloorsOrTheElementsTerms) {
-  HybridPartition storeys;
+  core::HybridPartition storeys;
   storeys.numerical.resize(3);
   storeys.experimental.resize(3);
   storeys.actuator_storeys = {2};
   EXPECT_EQ(experimental_dofs(storeys), (std::vector<int>{1, 2}));
-  HybridPartition by_dofs;
+  core::HybridPartition by_dofs;
   by_dofs.by_dofs = true;
   by_dofs.numerical.resize(4);
   by_dofs.experimental.resize(4);
@@ -164,7 +164,7 @@ TEST(RecordersTest, TheSimulationKeepsThePlansDofsAndBaseShearAndPeaksOnlyUnderA
   const RecorderPlan plan =
       plan_recorders(study_with("recorders { dofs: [300] base_shear: true }\n"), 1000, {0});
   config::SafetyLimits limits;
-  SimulationOptions options = kept_by_recorders(plan, limits);
+  core::SimulationOptions options = kept_by_recorders(plan, limits);
   EXPECT_EQ(options.kept_dofs, (std::vector<int>{0, 299, 999}));
   EXPECT_TRUE(options.base_shear);
   EXPECT_FALSE(options.peaks);
@@ -180,4 +180,4 @@ TEST(RecordersTest, TheSimulationKeepsThePlansDofsAndBaseShearAndPeaksOnlyUnderA
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

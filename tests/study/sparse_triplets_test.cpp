@@ -10,13 +10,13 @@
 
 #include "study/structure_io.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 using Triplets = config::Matrix::SparseTriplets;
 
 // A chain's stiffness (storeys of k N/m): tridiagonal, symmetric, n x n.
-SparseMat chain_stiffness(int n, double k) {
+core::SparseMat chain_stiffness(int n, double k) {
   std::vector<Eigen::Triplet<double>> entries;
   for (int i = 0; i < n; ++i) {
     entries.emplace_back(i, i, i + 1 < n ? 2 * k : k);
@@ -25,16 +25,16 @@ SparseMat chain_stiffness(int n, double k) {
       entries.emplace_back(i + 1, i, -k);
     }
   }
-  SparseMat m(n, n);
+  core::SparseMat m(n, n);
   m.setFromTriplets(entries.begin(), entries.end());
   m.makeCompressed();
   return m;
 }
 
 // Equal pattern and values (== on nonzero doubles: the same bits).
-void expect_same(const SparseMat& read, const SparseMat& written) {
+void expect_same(const core::SparseMat& read, const core::SparseMat& written) {
   EXPECT_EQ(read.nonZeros(), written.nonZeros());
-  EXPECT_EQ(Mat(read), Mat(written));
+  EXPECT_EQ(core::Mat(read), core::Mat(written));
 }
 
 Triplets triplets(std::uint32_t rows, std::uint32_t cols,
@@ -70,7 +70,7 @@ std::string refusal(const config::Matrix& spec) {
 
 TEST(SparseTriplets, ASymmetricChainRoundTripsBitForBitAsItsLowerTriangle) {
   // Storey stiffness not a power of two, so that a value altered in any bit would differ.
-  const SparseMat k = chain_stiffness(250, 4.0e10 / 3.0);
+  const core::SparseMat k = chain_stiffness(250, 4.0e10 / 3.0);
   const Triplets written = write_sparse_triplets(k);
   EXPECT_TRUE(written.symmetric());
   EXPECT_EQ(written.value_size(), 2 * 250 - 1);  // diagonal + subdiagonal
@@ -78,7 +78,7 @@ TEST(SparseTriplets, ASymmetricChainRoundTripsBitForBitAsItsLowerTriangle) {
 }
 
 TEST(SparseTriplets, ANearlySymmetricMatrixIsWrittenWholeSoNoBitChanges) {
-  SparseMat k = chain_stiffness(6, 1.0);
+  core::SparseMat k = chain_stiffness(6, 1.0);
   k.coeffRef(1, 0) = std::nextafter(-1.0, 0.0);  // within the 1e-9 symmetry check, not exact
   const Triplets written = write_sparse_triplets(k);
   EXPECT_FALSE(written.symmetric());
@@ -87,7 +87,7 @@ TEST(SparseTriplets, ANearlySymmetricMatrixIsWrittenWholeSoNoBitChanges) {
 }
 
 TEST(SparseTriplets, ARepeatedEntryKeepsItsLastValueAndZerosAreDropped) {
-  const SparseMat m =
+  const core::SparseMat m =
       read_sparse_triplets(triplets(2, 3, {{0, 2, 1.0}, {0, 2, 5.0}, {1, 0, 0.0}}), "m");
   EXPECT_EQ(m.nonZeros(), 1);
   EXPECT_EQ(m.coeff(0, 2), 5.0);
@@ -149,4 +149,4 @@ TEST(SparseTriplets, AConfigMatrixGivesSparseOrValuesOrAFileNotTwo) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

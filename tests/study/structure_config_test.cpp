@@ -11,7 +11,7 @@
 #include "study/stability_config.h"
 #include "study/study.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 namespace fs = std::filesystem;
@@ -69,8 +69,8 @@ std::string market_building(const fs::path& dir, int n, double duration) {
 }
 
 // The same setup with its sparse matrices dropped: the dense path on the same M, C, K.
-HybridSetup dense_copy(const HybridSetup& setup) {
-  HybridSetup dense = setup;
+core::HybridSetup dense_copy(const core::HybridSetup& setup) {
+  core::HybridSetup dense = setup;
   dense.model.sparse_mass = dense.model.sparse_damping = dense.model.sparse_stiffness = {};
   return dense;
 }
@@ -81,8 +81,8 @@ TEST(StructureConfig, ALargeSparseModelIsHeldSparseAndRunsAsTheDensePathDoes) {
     const PreparedStudy p = prepare_study(parse_study(market_building(dir, n, 2.0), "t"), dir);
     ASSERT_TRUE(p.base.model.is_sparse()) << n;
     EXPECT_EQ(p.base.partition.numerical_matrix.nonZeros(), 3 * n - 2);
-    const SimulationResult sparse = simulate(p.base, p.motion);
-    const SimulationResult dense = simulate(dense_copy(p.base), p.motion);
+    const core::SimulationResult sparse = core::simulate(p.base, p.motion);
+    const core::SimulationResult dense = core::simulate(dense_copy(p.base), p.motion);
     const double scale = dense.displacement.cwiseAbs().maxCoeff();
     ASSERT_GT(scale, 0.0);
     EXPECT_LE((sparse.displacement - dense.displacement).cwiseAbs().maxCoeff(), 1e-12 * scale);
@@ -97,19 +97,19 @@ TEST(StructureConfig, ATwoThousandDofShearBuildingFromAMatrixMarketFileRuns) {
   const PreparedStudy p = prepare_study(parse_study(market_building(dir, 2000, 0.25), "t"), dir);
   ASSERT_TRUE(p.base.model.is_sparse());
   EXPECT_EQ(p.base.partition.numerical_matrix.nonZeros(), 3 * 2000 - 2);
-  const CriticalDelayCheck check = check_modal_critical_delay(
+  const core::CriticalDelayCheck check = core::check_modal_critical_delay(
       p.base.model, p.base.partition.experimental_stiffness(), p.base.integrator, p.base.dt, 0.01);
   EXPECT_NE(check.assumed.find("the lowest 20 of 2000 modes"), std::string::npos) << check.assumed;
-  const SimulationResult result = simulate(p.base, p.motion);
+  const core::SimulationResult result = core::simulate(p.base, p.motion);
   EXPECT_EQ(result.steps(), p.motion.acceleration.size());
   EXPECT_FALSE(result.diverged);
   EXPECT_TRUE(result.displacement.allFinite());
   EXPECT_GT(result.displacement.cwiseAbs().maxCoeff(), 0.0);
   // The lowest modes of the model held sparse are those of its dense matrices.
-  const Modes sparse = lowest_modes(p.base.model, 3);
-  const Mat mass = p.base.model.mass, stiffness = p.base.model.stiffness;
+  const core::Modes sparse = core::lowest_modes(p.base.model, 3);
+  const core::Mat mass = p.base.model.mass, stiffness = p.base.model.stiffness;
   for (int i = 0; i < 3; ++i) {
-    const Vec phi = sparse.shapes.col(i);
+    const core::Vec phi = sparse.shapes.col(i);
     const double rayleigh_quotient = phi.dot(stiffness * phi) / phi.dot(mass * phi);
     EXPECT_NEAR(std::sqrt(rayleigh_quotient), sparse.omega[i], 1e-9 * sparse.omega[i]);
     EXPECT_LE((stiffness * phi - rayleigh_quotient * (mass * phi)).norm(),
@@ -129,7 +129,7 @@ TEST(StructureConfig, ASparseOnlyModelIsSplitSparse) {
   text.replace(text.find(grounded), grounded.size(),
                "dof: 2 stiffness: 1e10 mass: 1000 damping: 500");
   const PreparedStudy p = prepare_study(parse_study(text, "t"), dir);
-  const StructuralModel& model = p.base.model;
+  const core::StructuralModel& model = p.base.model;
   ASSERT_TRUE(model.is_sparse());
   EXPECT_EQ(model.mass.size(), 0);
   EXPECT_EQ(model.damping.size(), 0);
@@ -140,14 +140,14 @@ TEST(StructureConfig, ASparseOnlyModelIsSplitSparse) {
             model.sparse_stiffness.coeff(1, 1) - 1e10);
   EXPECT_EQ(p.base.partition.numerical_matrix.coeff(1, 0), -storey);
   ASSERT_GT(model.known_max_omega, 0.0);
-  StructuralModel fresh = model;
+  core::StructuralModel fresh = model;
   fresh.known_max_omega = 0.0;
-  EXPECT_EQ(max_omega(fresh), model.known_max_omega);
-  const std::optional<CriticalDelayCheck> check = check_lag_critical_delay(p, 0.002);
+  EXPECT_EQ(core::max_omega(fresh), model.known_max_omega);
+  const std::optional<core::CriticalDelayCheck> check = check_lag_critical_delay(p, 0.002);
   ASSERT_TRUE(check.has_value());
   EXPECT_NE(check->assumed.find("in the lowest 20 of 3000 modes"), std::string::npos)
       << check->assumed;
-  const SimulationResult result = simulate(p.base, p.motion);
+  const core::SimulationResult result = core::simulate(p.base, p.motion);
   EXPECT_FALSE(result.diverged);
   EXPECT_GT(result.displacement.cwiseAbs().maxCoeff(), 0.0);
   fs::remove_all(dir);
@@ -160,20 +160,20 @@ TEST(StructureConfig, ModalDampingOnAThousandDofModelStaysSparseAsALowRankTerm) 
   const std::string rayleigh = "rayleigh { zeta: 0.05 mode_i: 1 mode_j: 2 }";
   text.replace(text.find(rayleigh), rayleigh.size(), "modal_zeta: 0.05");
   const PreparedStudy p = prepare_study(parse_study(text, "t"), dir);
-  const StructuralModel& model = p.base.model;
+  const core::StructuralModel& model = p.base.model;
   ASSERT_TRUE(model.is_sparse());
-  const LowRankDamping& low = model.low_rank_damping;
+  const core::LowRankDamping& low = model.low_rank_damping;
   ASSERT_FALSE(low.empty());
   EXPECT_EQ(low.basis.rows(), n);
-  EXPECT_GE(low.basis.cols(), kModalMinModes);
-  EXPECT_LE(low.basis.cols(), kModalMaxModes);
+  EXPECT_GE(low.basis.cols(), core::kModalMinModes);
+  EXPECT_LE(low.basis.cols(), core::kModalMaxModes);
   EXPECT_EQ(low.coefficients.size(), low.basis.cols());
   EXPECT_LE(model.sparse_damping.nonZeros(), 3 * n - 2);  // a1 K: C's sparse part, no fill
   bool stated = false;
   for (const std::string& line : p.warnings) stated = stated || line == low.statement;
   EXPECT_TRUE(stated) << "the modes kept are printed before the run";
   EXPECT_NE(low.statement.find("never formed dense"), std::string::npos) << low.statement;
-  const SimulationResult result = simulate(p.base, p.motion);
+  const core::SimulationResult result = core::simulate(p.base, p.motion);
   EXPECT_FALSE(result.diverged);
   EXPECT_TRUE(result.displacement.allFinite());
   EXPECT_GT(result.displacement.cwiseAbs().maxCoeff(), 0.0);
@@ -183,7 +183,7 @@ TEST(StructureConfig, ModalDampingOnAThousandDofModelStaysSparseAsALowRankTerm) 
 TEST(StructureConfig, SplitTakesTheSpecimensMassDampingAndStiffnessOutOfTheNumericalPart) {
   const PreparedStudy p = prepare(two_storey_matrices(
       "substructuring { experimental_dofs { dof: 2 mass: 100 stiffness: 1e6 damping: 500 } }"));
-  const StructuralModel whole = make_structure(p.config.structure());
+  const core::StructuralModel whole = make_structure(p.config.structure());
   EXPECT_EQ(p.base.model.mass(1, 1), 1400.0);
   EXPECT_EQ(p.base.model.mass(0, 0), 2000.0);
   EXPECT_DOUBLE_EQ(p.base.model.damping(1, 1), whole.damping(1, 1) - 500.0);
@@ -248,10 +248,10 @@ TEST(StructureConfig, ShearBuildingAsMatricesRunsAsTheShearBuilding) {
       " integrator { kind: EXPLICIT_NEWMARK dt: 0.002 } substructuring { experimental_storeys: [1] "
       "} " +
       cases);
-  const SimulationResult a =
-      simulate(setup_for_case(matrices, matrices.config.cases(0)), matrices.motion);
-  const SimulationResult b =
-      simulate(setup_for_case(storeys, storeys.config.cases(0)), storeys.motion);
+  const core::SimulationResult a =
+      core::simulate(setup_for_case(matrices, matrices.config.cases(0)), matrices.motion);
+  const core::SimulationResult b =
+      core::simulate(setup_for_case(storeys, storeys.config.cases(0)), storeys.motion);
   ASSERT_EQ(a.steps(), b.steps());
   const double peak = b.displacement.cwiseAbs().maxCoeff();
   EXPECT_GT(peak, 1e-4);
@@ -278,8 +278,8 @@ TEST(StructureConfig, UndelayedSplitOfTheTwentyDofFrameEqualsTheWholeFrame) {
         configs);
     const PreparedStudy whole = prepare_study(parse_study(frame + integrator, "t"), configs);
     EXPECT_TRUE(whole.base.partition.actuator_storeys.empty());
-    const SimulationResult a = simulate(split.base, split.motion);
-    const SimulationResult b = simulate(whole.base, whole.motion);
+    const core::SimulationResult a = core::simulate(split.base, split.motion);
+    const core::SimulationResult b = core::simulate(whole.base, whole.motion);
     const double peak = b.displacement.cwiseAbs().maxCoeff();
     EXPECT_GT(peak, 1e-3) << kind;
     EXPECT_LT((a.displacement - b.displacement).cwiseAbs().maxCoeff(), 1e-9 * peak) << kind;
@@ -290,8 +290,8 @@ TEST(StructureConfig, AnElementBetweenTwoDofsTakesItsRowOutOfTheNumericalPart) {
   const PreparedStudy p = prepare(two_storey_matrices(
       "substructuring { experimental_dofs { dof: 2 from_dof: 1 mass: 100 stiffness: 1e6 "
       "damping: 500 } }"));
-  const StructuralModel whole = make_structure(p.config.structure());
-  const HybridPartition& partition = p.base.partition;
+  const core::StructuralModel whole = make_structure(p.config.structure());
+  const core::HybridPartition& partition = p.base.partition;
   ASSERT_EQ(partition.elements.size(), 1u);
   EXPECT_EQ(partition.actuator_storeys, std::vector<int>{2});
   EXPECT_EQ(partition.numerical_matrix.coeff(0, 0), 4e6);
@@ -311,7 +311,8 @@ TEST(StructureConfig, ABraceAndAnInfluenceRowAreTheSameElement) {
       "} }"));
   const PreparedStudy row = prepare(two_storey_matrices(
       "substructuring { experimental_dofs { influence: [-0.5, 0.5] stiffness: 4e6 } }"));
-  EXPECT_LE((Mat(brace.base.partition.numerical_matrix) - Mat(row.base.partition.numerical_matrix))
+  EXPECT_LE((core::Mat(brace.base.partition.numerical_matrix) -
+             core::Mat(row.base.partition.numerical_matrix))
                 .cwiseAbs()
                 .maxCoeff(),
             1e-6);
@@ -372,4 +373,4 @@ TEST(StructureConfig, AShearBuildingTakesElementsAsItsMatrices) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

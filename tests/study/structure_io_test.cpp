@@ -9,7 +9,7 @@
 #include <fstream>
 #include <vector>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 namespace fs = std::filesystem;
@@ -55,10 +55,10 @@ std::string error_of(F f) {
 fs::path benchmark_dir() { return fs::path(RTHS_SOURCE_DIR) / "configs" / "benchmark"; }
 
 TEST(StructureIo, InlineValuesAreRowMajor) {
-  const Mat m = read_matrix(inline_spec(2, {1, 2, 3, 4}), {}, "f");
+  const core::Mat m = read_matrix(inline_spec(2, {1, 2, 3, 4}), {}, "f");
   EXPECT_EQ(m(0, 1), 2.0);
   EXPECT_EQ(m(1, 0), 3.0);
-  const Mat column = read_matrix(inline_spec(0, {1, 1, 1}), {}, "f");
+  const core::Mat column = read_matrix(inline_spec(0, {1, 1, 1}), {}, "f");
   EXPECT_EQ(column.rows(), 3);
   EXPECT_NE(error_of([] {
               read_matrix(inline_spec(2, {1, 2, 3}), {}, "mass");
@@ -70,7 +70,7 @@ TEST(StructureIo, MatrixMarketCoordinateSymmetricFillsBothTriangles) {
   write("sym.mtx",
         "%%MatrixMarket matrix coordinate real symmetric\n% comment\n3 3 4\n1 1 2\n2 1 -1\n2 2 "
         "2\n3 3 1.5\n");
-  const Mat m = read_matrix(file_spec("sym.mtx"), scratch(), "f");
+  const core::Mat m = read_matrix(file_spec("sym.mtx"), scratch(), "f");
   EXPECT_EQ(m(0, 1), -1.0);
   EXPECT_EQ(m(1, 0), -1.0);
   EXPECT_EQ(m(2, 2), 1.5);
@@ -79,12 +79,12 @@ TEST(StructureIo, MatrixMarketCoordinateSymmetricFillsBothTriangles) {
 
 TEST(StructureIo, MatrixMarketArrayIsColumnMajorAndSymmetricIsTheLowerTriangle) {
   write("general.mtx", "%%MatrixMarket matrix array real general\n2 2\n1\n2\n3\n4\n");
-  const Mat g = read_matrix(file_spec("general.mtx"), scratch(), "f");
+  const core::Mat g = read_matrix(file_spec("general.mtx"), scratch(), "f");
   EXPECT_EQ(g(1, 0), 2.0);
   EXPECT_EQ(g(0, 1), 3.0);
   write("lower.mtx", "%%MatrixMarket matrix array real symmetric\n3 3\n1\n2\n3\n4\n5\n6\n");
-  const Mat s = read_matrix(file_spec("lower.mtx"), scratch(), "f");
-  Mat expected(3, 3);
+  const core::Mat s = read_matrix(file_spec("lower.mtx"), scratch(), "f");
+  core::Mat expected(3, 3);
   expected << 1, 2, 3, 2, 4, 5, 3, 5, 6;
   EXPECT_EQ(s, expected);
 }
@@ -179,9 +179,9 @@ TEST(StructureIo, CsvRowsAndRaggedRowsRefused) {
 
 TEST(StructureIo, MatFileVariablesIncludingMatlabsUint16Mass) {
   // The RTHS benchmark's case 1 (configs/benchmark/README.md): M saved by MATLAB as uint16.
-  const Mat m = read_matrix(file_spec("case_1.mat", "M"), benchmark_dir(), "f");
-  EXPECT_EQ(m, 1000.0 * Mat::Identity(3, 3));
-  const Mat k = read_matrix(file_spec("case_1.mat", "K"), benchmark_dir(), "f");
+  const core::Mat m = read_matrix(file_spec("case_1.mat", "M"), benchmark_dir(), "f");
+  EXPECT_EQ(m, 1000.0 * core::Mat::Identity(3, 3));
+  const core::Mat k = read_matrix(file_spec("case_1.mat", "K"), benchmark_dir(), "f");
   EXPECT_NEAR(k(0, 0), 26054883.87960384, 1e-6);
   EXPECT_NEAR(k(1, 2), -14419970.77723698, 1e-6);
   const std::string unknown = error_of([] {
@@ -232,7 +232,7 @@ TEST(StructureIo, MatFileSparseVariable) {
   ASSERT_EQ(Mat_VarWrite(file, var, MAT_COMPRESSION_NONE), 0);
   Mat_VarFree(var);
   Mat_Close(file);
-  Mat expected(3, 3);
+  core::Mat expected(3, 3);
   expected << 2, -1, 0, -1, 2, -1, 0, -1, 1;
   EXPECT_EQ(read_matrix(file_spec("sparse.mat", "K"), scratch(), "f"), expected);
 }
@@ -248,18 +248,18 @@ TEST(StructureIo, MissingFileAndUnknownExtension) {
             std::string::npos);
 }
 
-StructuralModel two_dof() {
-  StructuralModel model;
-  model.mass = Mat::Identity(2, 2);
-  model.stiffness = (Mat(2, 2) << 2, -1, -1, 1).finished();
-  model.damping = Mat::Zero(2, 2);
-  model.influence = Vec::Ones(2);
+core::StructuralModel two_dof() {
+  core::StructuralModel model;
+  model.mass = core::Mat::Identity(2, 2);
+  model.stiffness = (core::Mat(2, 2) << 2, -1, -1, 1).finished();
+  model.damping = core::Mat::Zero(2, 2);
+  model.influence = core::Vec::Ones(2);
   return model;
 }
 
 TEST(StructureIo, ChecksNameTheMatrixAndTheProblem) {
   EXPECT_EQ(error_of([] { check_structural_matrices(two_dof(), "s"); }), "");
-  StructuralModel m = two_dof();
+  core::StructuralModel m = two_dof();
   m.stiffness(0, 1) = -1.5;
   EXPECT_NE(error_of([&] {
               check_structural_matrices(m, "s");
@@ -277,16 +277,16 @@ TEST(StructureIo, ChecksNameTheMatrixAndTheProblem) {
       error_of([&] { check_structural_matrices(m, "s"); }).find("s.mass: is not positive definite"),
       std::string::npos);
   m = two_dof();
-  m.damping = Mat::Zero(2, 3);
+  m.damping = core::Mat::Zero(2, 3);
   EXPECT_NE(
       error_of([&] { check_structural_matrices(m, "s"); }).find("s.damping: is 2 x 3, not square"),
       std::string::npos);
   m = two_dof();
-  m.damping = Mat::Zero(3, 3);
+  m.damping = core::Mat::Zero(3, 3);
   EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("the structure has 2 DOFs"),
             std::string::npos);
   m = two_dof();
-  m.influence = Vec::Ones(3);
+  m.influence = core::Vec::Ones(3);
   EXPECT_NE(error_of([&] { check_structural_matrices(m, "s"); }).find("s.influence: has 3 entries"),
             std::string::npos);
 }
@@ -295,12 +295,12 @@ TEST(StructureIo, MatrixStructureFromFilesWithDefaultInfluence) {
   config::MatrixStructure spec;
   *spec.mutable_mass() = file_spec("frame20_mass.mtx");
   *spec.mutable_stiffness() = file_spec("frame20_stiffness.mtx");
-  const StructuralModel model = read_matrix_structure(
+  const core::StructuralModel model = read_matrix_structure(
       spec, fs::path(RTHS_SOURCE_DIR) / "configs" / "matrices", "structure.matrices");
   EXPECT_EQ(model.dofs(), 20);
-  EXPECT_EQ(model.influence, Vec::Ones(20));
+  EXPECT_EQ(model.influence, core::Vec::Ones(20));
   EXPECT_EQ(model.mass(0, 1), 100.0);  // the mass matrix is not diagonal
-  EXPECT_EQ(model.damping, Mat::Zero(20, 20));
+  EXPECT_EQ(model.damping, core::Mat::Zero(20, 20));
 }
 
 namespace sparse_models {
@@ -332,7 +332,7 @@ config::MatrixStructure chain_spec(const std::string& prefix) {
 TEST(StructureIo, ALargeSparseModelIsHeldSparseFromTheFileOn) {
   write_chain("chain3000", 3000, 1e5, 4e10);
   setenv("RTHS_MEMORY_LIMIT", "20000000", 1);
-  StructuralModel model;
+  core::StructuralModel model;
   const std::string error = error_of([&] {
     model = read_matrix_structure(chain_spec("chain3000"), scratch(), "structure.matrices");
   });
@@ -347,20 +347,20 @@ TEST(StructureIo, ALargeSparseModelIsHeldSparseFromTheFileOn) {
   EXPECT_EQ(model.sparse_stiffness.coeff(0, 1), -4e10);
   EXPECT_EQ(model.sparse_stiffness.coeff(2999, 2999), 4e10);
   EXPECT_EQ(model.sparse_damping.nonZeros(), 0);
-  EXPECT_EQ(model.influence, Vec::Ones(3000));
+  EXPECT_EQ(model.influence, core::Vec::Ones(3000));
 }
 
 // Up to kDenseSchemeMaxDofs a sparse model also holds its dense copies (the dense schemes and
 // checks), equal to the sparse form.
 TEST(StructureIo, ASmallSparseModelKeepsDenseCopiesEqualToItsSparseForm) {
   write_chain("chain150", 150, 2.0, 300.0);
-  const StructuralModel model =
+  const core::StructuralModel model =
       read_matrix_structure(chain_spec("chain150"), scratch(), "structure.matrices");
   ASSERT_TRUE(model.is_sparse());
-  EXPECT_EQ(model.stiffness, Mat(model.sparse_stiffness));
-  EXPECT_EQ(model.mass, Mat(model.sparse_mass));
+  EXPECT_EQ(model.stiffness, core::Mat(model.sparse_stiffness));
+  EXPECT_EQ(model.mass, core::Mat(model.sparse_mass));
   EXPECT_EQ(model.stiffness(149, 148), -300.0);
-  EXPECT_EQ(model.damping, Mat::Zero(150, 150));
+  EXPECT_EQ(model.damping, core::Mat::Zero(150, 150));
 }
 
 // The checks on the sparse form name the matrix, the pair and the problem as the dense ones do.
@@ -424,7 +424,7 @@ TEST(StructureIo, AMatFileSparseVariableIsHeldSparse) {
   write_chain("matk", n, 1.0, 1.0);
   config::MatrixStructure spec = chain_spec("matk");
   *spec.mutable_stiffness() = file_spec("chain_k.mat", "K");
-  const StructuralModel model = read_matrix_structure(spec, scratch(), "s");
+  const core::StructuralModel model = read_matrix_structure(spec, scratch(), "s");
   ASSERT_TRUE(model.is_sparse());
   EXPECT_EQ(model.stiffness.size(), 0);
   EXPECT_EQ(model.sparse_stiffness.nonZeros(), 3 * n - 2);
@@ -434,4 +434,4 @@ TEST(StructureIo, AMatFileSparseVariableIsHeldSparse) {
 
 }  // namespace sparse_models
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

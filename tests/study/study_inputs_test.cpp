@@ -10,7 +10,7 @@
 
 #include "tests/support/chain_study.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 namespace fs = std::filesystem;
@@ -37,15 +37,16 @@ PreparedStudy prepared_paper_frame_with_trace(const fs::path& trace_file) {
 TEST(StudyInputs, ARunFromTheEmbeddedStudyEqualsTheRunFromTheFilesBitForBit) {
   const fs::path elsewhere = empty_folder();
   const PreparedStudy from_files = prepared_paper_frame_with_trace(elsewhere / "trace.csv");
-  const SimulationResult a =
-      simulate(setup_for_case(from_files, from_files.config.cases(1)), from_files.motion);
+  const core::SimulationResult a =
+      core::simulate(setup_for_case(from_files, from_files.config.cases(1)), from_files.motion);
   const config::Study embedded = with_embedded_inputs(from_files);
   fs::remove(elsewhere / "trace.csv");  // nothing left to read
 
   const PreparedStudy from_record = prepare_study(embedded, elsewhere);
   ASSERT_EQ(from_record.motion.acceleration, from_files.motion.acceleration);
   const config::Case& lagged = embedded.cases(1);
-  const SimulationResult b = simulate(setup_for_case(from_record, lagged), from_record.motion);
+  const core::SimulationResult b =
+      core::simulate(setup_for_case(from_record, lagged), from_record.motion);
   EXPECT_EQ(a.displacement, b.displacement);
   EXPECT_EQ(a.measured_force, b.measured_force);
   EXPECT_EQ(inputs_source(embedded, elsewhere), "embedded in the record");
@@ -77,7 +78,7 @@ TEST(StudyInputs, MatrixFilesBecomeTheValuesRead) {
   EXPECT_EQ(m.stiffness().values_size(), 9);
   EXPECT_FALSE(m.has_influence());
   const fs::path elsewhere = empty_folder();
-  const HybridSetup again = base_setup(embedded, prepared.base.dt, elsewhere);
+  const core::HybridSetup again = base_setup(embedded, prepared.base.dt, elsewhere);
   EXPECT_EQ(again.model.mass, prepared.base.model.mass);
   EXPECT_EQ(again.model.stiffness, prepared.base.model.stiffness);
   EXPECT_EQ(again.model.damping, prepared.base.model.damping);
@@ -95,7 +96,7 @@ TEST(StudyInputs, AModelReadSparseIsEmbeddedSparseAndReadBackBitForBit) {
   ASSERT_TRUE(m.mass().has_sparse());
   ASSERT_TRUE(m.stiffness().has_sparse());
   EXPECT_EQ(m.stiffness().values_size(), 0);
-  const SparseMat& k = prepared.base.model.sparse_stiffness;
+  const core::SparseMat& k = prepared.base.model.sparse_stiffness;
   const Eigen::Index nonzeros = prepared.base.model.sparse_mass.nonZeros() + k.nonZeros();
   ASSERT_EQ(nonzeros, n + 3 * n - 2);
   EXPECT_LE(static_cast<double>(m.ByteSizeLong()) / static_cast<double>(nonzeros), 12.0)
@@ -103,10 +104,10 @@ TEST(StudyInputs, AModelReadSparseIsEmbeddedSparseAndReadBackBitForBit) {
 
   const fs::path elsewhere = empty_folder();  // the files gone: the record alone
   const PreparedStudy again = prepare_study(embedded, elsewhere);
-  const StructuralModel& a = prepared.base.model;
-  const StructuralModel& b = again.base.model;
-  EXPECT_EQ(Mat(b.sparse_mass), Mat(a.sparse_mass));
-  EXPECT_EQ(Mat(b.sparse_stiffness), Mat(a.sparse_stiffness));
+  const core::StructuralModel& a = prepared.base.model;
+  const core::StructuralModel& b = again.base.model;
+  EXPECT_EQ(core::Mat(b.sparse_mass), core::Mat(a.sparse_mass));
+  EXPECT_EQ(core::Mat(b.sparse_stiffness), core::Mat(a.sparse_stiffness));
   EXPECT_EQ(b.sparse_stiffness.nonZeros(), k.nonZeros());
   EXPECT_EQ(b.stiffness, a.stiffness);
   EXPECT_EQ(b.damping, a.damping);
@@ -144,4 +145,4 @@ TEST(StudyInputs, ABrokenEmbeddedMotionIsNamed) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

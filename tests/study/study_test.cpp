@@ -12,7 +12,7 @@
 #include "study/motion_files.h"
 #include "study/text_format.h"
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 const std::filesystem::path kConfigs = std::filesystem::path(RTHS_SOURCE_DIR) / "configs";
@@ -36,7 +36,7 @@ TEST(StudyTest, PaperFrameConfigPreparesAtOneMillisecond) {
       2 * M_PI / std::sqrt(prepared.base.model.stiffness(0, 0) / prepared.base.model.mass(0, 0)),
       0.5, 1e-12);
   ASSERT_GE(study.cases_size(), 2);
-  const HybridSetup lagged = setup_for_case(prepared, study.cases(1));
+  const core::HybridSetup lagged = setup_for_case(prepared, study.cases(1));
   ASSERT_EQ(lagged.delays.size(), 1u);
   EXPECT_DOUBLE_EQ(lagged.delays[0].nominal_delay(), 0.014);
   EXPECT_EQ(reference_case(study).name(), "reference");
@@ -97,15 +97,15 @@ TEST(StudyTest, SdofFromPeriodAndStiffnessDerivesMass) {
   s.mutable_sdof()->set_period(0.5);
   s.mutable_sdof()->set_stiffness(2e6);
   s.mutable_damping()->set_modal_zeta(0.05);
-  const StructuralModel model = make_structure(s);
+  const core::StructuralModel model = make_structure(s);
   EXPECT_NEAR(model.mass(0, 0), 2e6 * 0.25 / (4 * M_PI * M_PI), 1e-9);
-  const StructuralModel unit = make_structure([] {
+  const core::StructuralModel unit = make_structure([] {
     config::Structure u;
     u.mutable_sdof()->set_period(0.5);
     u.mutable_damping()->set_modal_zeta(0.05);
     return u;
   }());
-  EXPECT_EQ(unit.damping(0, 0), make_sdof(0.5, 0.05).damping(0, 0));
+  EXPECT_EQ(unit.damping(0, 0), core::make_sdof(0.5, 0.05).damping(0, 0));
 }
 
 TEST(StudyTest, AZeroMassIsRefusedNamingItsFieldNotRunAsADefault) {
@@ -161,7 +161,7 @@ TEST(StudyTest, EveryDelayKindBuildsAStage) {
                       delay { force_delay { delay: 0.002 } }
                     })pb",
                   "all");
-  const DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
+  const core::DelayChain chain = make_delay_chain(study.cases(0).delay(), 0.001, ".");
   EXPECT_FALSE(chain.empty());
   for (const char* kind : {"shift", "jitter", "backlash", "velocity_limit", "sensor_drift",
                            "viscous_force", "inertia_force", "friction_force", "force_delay"})
@@ -169,9 +169,9 @@ TEST(StudyTest, EveryDelayKindBuildsAStage) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 TEST(StudyTest, ThreeStoreyBuildingConfigRunsEveryCase) {
@@ -182,7 +182,7 @@ TEST(StudyTest, ThreeStoreyBuildingConfigRunsEveryCase) {
   EXPECT_NEAR(prepared.motion.duration(), 15.0, 1e-9);
   double reference_peak = 0;
   for (const config::Case& c : study.cases()) {
-    const SimulationResult r = simulate(setup_for_case(prepared, c), prepared.motion);
+    const core::SimulationResult r = core::simulate(setup_for_case(prepared, c), prepared.motion);
     EXPECT_FALSE(r.diverged) << c.name();
     const double peak = r.displacement.col(2).cwiseAbs().maxCoeff();
     if (c.name() == "reference") reference_peak = peak;
@@ -194,9 +194,9 @@ TEST(StudyTest, ThreeStoreyBuildingConfigRunsEveryCase) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 TEST(StudyBounds, AbsurdValuesAreRefusedNamingTheField) {
@@ -230,7 +230,7 @@ TEST(StudyServo, TheServoRateIsAWholeMultipleOfTheIntegratorRate) {
   EXPECT_EQ(servo_substeps(study(""), 1.0 / 1024), 1);
   EXPECT_EQ(servo_substeps(study("servo { rate: 4096 }"), 1.0 / 1024), 4);
   EXPECT_EQ(servo_substeps(study("servo { rate: 1024 }"), 1.0 / 1024), 1);
-  const HybridSetup base = base_setup(
+  const core::HybridSetup base = base_setup(
       study("servo { rate: 4000 } substructuring { experimental_fraction: 0.5 }"), 0.001);
   EXPECT_EQ(base.servo_substeps, 4);
   for (const char* bad : {"servo { rate: 3000 }", "servo { rate: 500 }", "servo { rate: 1e6 }"}) {
@@ -251,7 +251,7 @@ TEST(StudyServo, ACaseChainRunsAtTheServoPeriod) {
   fast.mutable_servo()->set_rate(4000);
   const PreparedStudy prepared = prepare_study(fast, kConfigs);
   EXPECT_EQ(prepared.base.servo_substeps, 4);
-  const HybridSetup lagged = setup_for_case(prepared, fast.cases(1));
+  const core::HybridSetup lagged = setup_for_case(prepared, fast.cases(1));
   ASSERT_EQ(lagged.delays.size(), 1u);
   // 14 ms is 56 servo periods of 0.25 ms: the same lag in seconds.
   EXPECT_DOUBLE_EQ(lagged.delays[0].nominal_delay(), 0.014);
@@ -338,7 +338,7 @@ TEST(StudyBounds, AForcePredictorOutOfRangeIsRefusedNamingTheField) {
 // The setup of case "remote" of an SDOF study (0.5 s, 1000 kg, half of it experimental) whose
 // force_predictor block is `block` (text format), prepared on a short motion in a directory of its
 // own (`tag`), removed again.
-HybridSetup predicted_sdof_setup(const std::string& block, const std::string& tag) {
+core::HybridSetup predicted_sdof_setup(const std::string& block, const std::string& tag) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                     ("rths_study_" + tag + "_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
@@ -351,7 +351,7 @@ HybridSetup predicted_sdof_setup(const std::string& block, const std::string& ta
                       block + " } }",
                   "t"),
       dir);
-  HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
+  core::HybridSetup setup = setup_for_case(prepared, find_case(prepared.config, "remote"));
   std::filesystem::remove_all(dir);
   return setup;
 }
@@ -361,9 +361,9 @@ HybridSetup predicted_sdof_setup(const std::string& block, const std::string& ta
 // and the case's setup starts each predictor there.
 TEST(StudyBounds, AForcePredictorsDefaultsAreReadInOnePlace) {
   const config::ForcePredictor unset;
-  const PredictorParameters defaults;
+  const core::PredictorParameters defaults;
   EXPECT_EQ(predictor_stiffness_factor(unset), 1.0);
-  const PredictorParameters plain = predictor_parameters(unset, 2.0e6);
+  const core::PredictorParameters plain = predictor_parameters(unset, 2.0e6);
   EXPECT_EQ(plain.stiffness, 2.0e6);
   EXPECT_EQ(plain.damping, 0.0);
   EXPECT_TRUE(plain.adapt);
@@ -377,12 +377,12 @@ TEST(StudyBounds, AForcePredictorsDefaultsAreReadInOnePlace) {
   set.set_fixed_model(true);
   set.set_forgetting_time(0.5);
   EXPECT_EQ(predictor_stiffness_factor(set), 1.25);
-  const PredictorParameters given = predictor_parameters(set, 2.0e6);
+  const core::PredictorParameters given = predictor_parameters(set, 2.0e6);
   EXPECT_EQ(given.stiffness, 2.5e6);
   EXPECT_EQ(given.damping, 40.0);
   EXPECT_FALSE(given.adapt);
   EXPECT_EQ(given.forgetting_time, 0.5);
-  const HybridSetup setup = predicted_sdof_setup("stiffness_factor: 1.25", "pred_default");
+  const core::HybridSetup setup = predicted_sdof_setup("stiffness_factor: 1.25", "pred_default");
   ASSERT_EQ(setup.predictors.size(), 1u);
   ASSERT_TRUE(setup.predictors[0].has_value());
   const double declared = setup.partition.experimental[0]->initial_stiffness();
@@ -394,15 +394,15 @@ TEST(StudyBounds, AForcePredictorsDefaultsAreReadInOnePlace) {
 // specimen's initial stiffness, the declared (linear) specimen staying what runs; force_lag is
 // its lag term's start.
 TEST(StudyBounds, AForcePredictorsOwnModelIsItsShape) {
-  const HybridSetup setup = predicted_sdof_setup(
+  const core::HybridSetup setup = predicted_sdof_setup(
       "force_lag: 0.003 model { bouc_wen { yield_displacement: 0.002 alpha: 0.1 } }", "shape");
   ASSERT_EQ(setup.predictors.size(), 1u);
   ASSERT_TRUE(setup.predictors[0].has_value());
-  const PredictorParameters& p = *setup.predictors[0];
+  const core::PredictorParameters& p = *setup.predictors[0];
   ASSERT_NE(p.shape, nullptr);
   EXPECT_EQ(p.shape->initial_stiffness(), p.stiffness);
   EXPECT_EQ(p.force_lag, 0.003);
-  const ForcePredictor predictor(p, 0.001, "remote", setup.partition.experimental[0].get());
+  const core::ForcePredictor predictor(p, 0.001, "remote", setup.partition.experimental[0].get());
   EXPECT_TRUE(predictor.hysteretic());
   EXPECT_NEAR(predictor.model().stiffness, 0.1 * p.stiffness, 1e-9 * p.stiffness);
   EXPECT_NEAR(predictor.model().hysteretic, 0.9 * p.stiffness * 0.002, 1e-9 * p.stiffness);
@@ -421,7 +421,7 @@ class MotionUnits : public ::testing::Test {
     std::ofstream(dir_ / "cms2.txt") << "0 0\n0.01 343.23275\n0.02 0\n";
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
-  GroundMotion load(const std::string& text) {
+  core::GroundMotion load(const std::string& text) {
     config::GroundMotion motion;
     parse_text_format(text, "t", motion);
     return load_motion(motion, dir_);
@@ -438,7 +438,7 @@ class MotionUnits : public ::testing::Test {
 };
 
 TEST_F(MotionUnits, EveryUnitGivesTheSameRecordInSi) {
-  const double expected = 0.35 * kGravity;
+  const double expected = 0.35 * core::kGravity;
   EXPECT_NEAR(load("path: \"g.txt\" column_units: G").peak_abs(), expected, 1e-9);
   EXPECT_NEAR(load("path: \"ms2.txt\" column_units: M_PER_S2").peak_abs(), expected, 1e-6);
   EXPECT_NEAR(load("path: \"cms2.txt\" column_units: CM_PER_S2").peak_abs(), expected, 1e-6);
@@ -461,8 +461,8 @@ TEST_F(MotionUnits, AnAt2FileIsInGAndRefusesAnotherUnit) {
       kConfigs / "../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
   config::GroundMotion motion;
   motion.set_path(at2.string());
-  EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * kGravity,
-              0.01 * kGravity);  // El Centro #12
+  EXPECT_NEAR(load_motion(motion, dir_).peak_abs(), 0.145 * core::kGravity,
+              0.01 * core::kGravity);  // El Centro #12
   motion.set_column_units(config::GroundMotion::M_PER_S2);
   EXPECT_THROW(load_motion(motion, dir_), std::invalid_argument);
   EXPECT_EQ(units_name(units_from_name("cm/s2")), "cm/s2");
@@ -495,7 +495,7 @@ TEST_F(MotionUnits, AnAt2HeaderInCmPerS2IsReadInItsUnits) {
   config::GroundMotion in_g, in_cm;
   in_g.set_path((kConfigs / "../data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2").string());
   in_cm.set_path(at2_in_cm(dir_, "ACCELERATION TIME SERIES IN UNITS OF CM/S/S").string());
-  const GroundMotion g = load_motion(in_g, dir_), cm = load_motion(in_cm, dir_);
+  const core::GroundMotion g = load_motion(in_g, dir_), cm = load_motion(in_cm, dir_);
   ASSERT_EQ(g.acceleration.size(), cm.acceleration.size());
   for (std::size_t i = 0; i < g.acceleration.size(); ++i)
     ASSERT_NEAR(cm.acceleration[i], g.acceleration[i], 1e-9 * g.peak_abs()) << i;
@@ -551,7 +551,7 @@ TEST(StudyTest, EveryIntegratorKindMapsToTheConfigAndBack) {
     integrator.set_kind(static_cast<config::Integrator::Kind>(k));
     EXPECT_EQ(config_integrator_kind(integrator_kind(integrator)), integrator.kind()) << k;
   }
-  EXPECT_EQ(integrator_kind(config::Integrator{}), IntegratorKind::kExplicitNewmark);
+  EXPECT_EQ(integrator_kind(config::Integrator{}), core::IntegratorKind::kExplicitNewmark);
 }
 
 // Every number of the deployment is checked when the study is parsed, by the range rules.
@@ -611,4 +611,4 @@ TEST(StudyTest, DeploymentNumbersAreRangeChecked) {
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

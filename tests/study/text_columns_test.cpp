@@ -5,7 +5,7 @@
 
 #include <fstream>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 std::filesystem::path write(const std::string& name, const std::string& text) {
@@ -77,11 +77,11 @@ TEST(TextColumns, ATitleLineOnlyWhereAllowedAndOnlyFirst) {
 }
 
 TEST(TextColumns, TheNumberRuleIsWholeAndFinite) {
-  EXPECT_EQ(parse_finite("12"), 12.0);
-  EXPECT_EQ(parse_finite("-.5"), -0.5);
-  EXPECT_EQ(parse_finite("1e-3"), 1e-3);
+  EXPECT_EQ(core::parse_finite("12"), 12.0);
+  EXPECT_EQ(core::parse_finite("-.5"), -0.5);
+  EXPECT_EQ(core::parse_finite("1e-3"), 1e-3);
   for (const char* bad : {"", "1.2.3", "nan", "inf", "-inf", "3m", "1e999", " 1"})
-    EXPECT_FALSE(parse_finite(bad).has_value()) << bad;
+    EXPECT_FALSE(core::parse_finite(bad).has_value()) << bad;
   const std::string text = error_of("0 1\n0 nan\n", false);
   EXPECT_NE(text.find("rths_text_columns_bad.txt:2: 'nan'"), std::string::npos) << text;
 }
@@ -96,10 +96,10 @@ TEST(TextColumns, AFileThatCannotBeOpenedIsNamedWithWhatItWasFor) {
 }
 
 TEST(TextColumns, NumbersInMessagesAreShort) {
-  EXPECT_EQ(format_number(0.014), "0.014");
-  EXPECT_EQ(format_number(1e-5), "1e-05");
-  EXPECT_EQ(format_number(0.0), "0");
+  EXPECT_EQ(core::format_number(0.014), "0.014");
+  EXPECT_EQ(core::format_number(1e-5), "1e-05");
+  EXPECT_EQ(core::format_number(0.0), "0");
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

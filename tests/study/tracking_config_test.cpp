@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-namespace rths::core {
+namespace rths::study {
 namespace {
 
 config::DelayStage::TrackingLoop first_order_loop(double kp, double ki) {
@@ -25,12 +25,12 @@ TEST(DiscreteFilterTest, TustinPiIsTrapezoidalIntegration) {
   spec.mutable_pid()->set_kp(2.0);
   spec.mutable_pid()->set_ki(10.0);
   const double h = 0.01;
-  DiscreteFilter pi = make_filter(spec, h, "c");
+  core::DiscreteFilter pi = make_filter(spec, h, "c");
   // A unit step: y_k = kp + ki h (k + 1/2) (trapezoids of the held input, the first a half).
   for (int k = 0; k < 5; ++k) EXPECT_NEAR(pi.step(1.0), 2.0 + 10.0 * h * (k + 0.5), 1e-12) << k;
   pi.reset();
   EXPECT_NEAR(pi.step(1.0), 2.0 + 10.0 * h * 0.5, 1e-12);
-  EXPECT_EQ(DiscreteFilter().step(3.5), 3.5);
+  EXPECT_EQ(core::DiscreteFilter().step(3.5), 3.5);
 }
 
 TEST(DiscreteFilterTest, PhaseLeadKeepsItsDcGainAndBadFiltersNameTheField) {
@@ -38,7 +38,7 @@ TEST(DiscreteFilterTest, PhaseLeadKeepsItsDcGainAndBadFiltersNameTheField) {
   spec.mutable_phase_lead()->set_gain(50.8);
   spec.mutable_phase_lead()->set_zero(168.6);
   spec.mutable_phase_lead()->set_pole(8570);
-  const DiscreteFilter lead = make_filter(spec, 1.0 / 4096, "feedforward");
+  const core::DiscreteFilter lead = make_filter(spec, 1.0 / 4096, "feedforward");
   EXPECT_NEAR(std::abs(lead.response(1.0)), 50.8 * 168.6 / 8570, 1e-12);
   spec.mutable_phase_lead()->set_pole(0.0);
   try {
@@ -65,7 +65,7 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
   ss->add_b(1.0);
   ss->add_c(95.0);
   ss->set_d(2.0);
-  DiscreteFilter named = make_filter(pi, h, "c"), realised = make_filter(space, h, "c");
+  core::DiscreteFilter named = make_filter(pi, h, "c"), realised = make_filter(space, h, "c");
   for (int k = 0; k < 50; ++k) {
     const double u = std::sin(0.3 * k);
     EXPECT_NEAR(realised.step(u), named.step(u), 1e-12) << k;
@@ -81,8 +81,8 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
   for (double v : {4.0, 0.0}) two->add_c(v);
   for (double v : {4.0}) continuous.mutable_continuous()->add_numerator(v);
   for (double v : {1.0, 0.4, 4.0}) continuous.mutable_continuous()->add_denominator(v);
-  const DiscreteFilter from_space = make_filter(oscillator, 0.01, "c"),
-                       from_tf = make_filter(continuous, 0.01, "c");
+  const core::DiscreteFilter from_space = make_filter(oscillator, 0.01, "c"),
+                             from_tf = make_filter(continuous, 0.01, "c");
   for (double w : {0.5, 2.0, 20.0}) {
     const std::complex<double> z = std::exp(std::complex<double>(0.0, w * 0.01));
     EXPECT_NEAR(std::abs(from_space.response(z) - from_tf.response(z)), 0.0, 1e-12) << w;
@@ -92,7 +92,7 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
   ss->set_c(0, 0.5);
   ss->set_d(1.0);
   ss->set_a(0, 1.0);
-  DiscreteFilter discrete = make_filter(space, h, "c"), expected({1.0, -0.5}, {1.0, -1.0});
+  core::DiscreteFilter discrete = make_filter(space, h, "c"), expected({1.0, -0.5}, {1.0, -1.0});
   for (int k = 0; k < 20; ++k) EXPECT_NEAR(discrete.step(1.0), expected.step(1.0), 1e-12) << k;
 
   ss->add_b(1.0);
@@ -109,13 +109,14 @@ TEST(DiscreteFilterTest, StateSpaceControllerIsTheTransferFunctionItRealises) {
 
 TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
   const double h = 0.002;
-  ZohPlant plant({50.0}, {1.0, 50.0}, h);
+  core::ZohPlant plant({50.0}, {1.0, 50.0}, h);
   for (int k = 1; k <= 20; ++k) {
     plant.advance(1.0);
     EXPECT_NEAR(plant.output(), 1.0 - std::exp(-50.0 * h * k), 1e-12) << k;
   }
-  EXPECT_NEAR(std::abs(plant.response(1.0)), 1.0, 1e-12);                     // DC gain
-  EXPECT_THROW(ZohPlant({1.0, 0.0}, {1.0, 50.0}, h), std::invalid_argument);  // not strictly proper
+  EXPECT_NEAR(std::abs(plant.response(1.0)), 1.0, 1e-12);  // DC gain
+  EXPECT_THROW(core::ZohPlant({1.0, 0.0}, {1.0, 50.0}, h),
+               std::invalid_argument);  // not strictly proper
 }
 
 // The benchmark plant's companion form spans twelve decades; its discretisation must still settle
@@ -123,24 +124,24 @@ TEST(ZohPlantTest, FirstOrderStepIsExactAtTheSamples) {
 TEST(ZohPlantTest, BenchmarkPlantSettlesAtItsDcGainWhenPerturbed) {
   config::DelayStage::BenchmarkPlant spec;
   spec.set_beta2(1.02e5);
-  const ContinuousTransferFunction tf =
-      benchmark_actuator_transfer_function(benchmark_plant_parameters(spec));
-  ZohPlant plant(tf.numerator, tf.denominator, 1.0 / 4096);
+  const core::ContinuousTransferFunction tf =
+      core::benchmark_actuator_transfer_function(benchmark_plant_parameters(spec));
+  core::ZohPlant plant(tf.numerator, tf.denominator, 1.0 / 4096);
   for (int k = 0; k < 3 * 4096; ++k) plant.advance(1.0);
   EXPECT_NEAR(plant.output(), tf.numerator.back() / tf.denominator.back(), 1e-3);
 }
 
 TEST(ConverterTest, SaturatesAndQuantises) {
-  const Converter c{3.8, 0.25};
+  const core::Converter c{3.8, 0.25};
   EXPECT_EQ(c.analog_to_digital(0.3), 0.25);
   EXPECT_EQ(c.analog_to_digital(-9.0), -3.75);  // saturated at -3.8, then quantised
   EXPECT_EQ(c.digital_to_analog(9.0), 3.8);     // quantised, then saturated
-  EXPECT_EQ(Converter{}.analog_to_digital(0.123), 0.123);
+  EXPECT_EQ(core::Converter{}.analog_to_digital(0.123), 0.123);
 }
 
 TEST(TrackingLoopTest, PiAroundAFirstOrderPlantTracksWithItsLoopsLag) {
   const double h = 0.001;
-  TrackingLoop loop = make_tracking_loop(first_order_loop(2.0, 100.0), h, "tracking_loop");
+  core::TrackingLoop loop = make_tracking_loop(first_order_loop(2.0, 100.0), h, "tracking_loop");
   // Closed loop ~ unity at DC; the lag at low frequency is positive and of a few ms.
   EXPECT_NEAR(std::abs(loop.response(0.1)), 1.0, 1e-6);
   EXPECT_GT(loop.nominal_delay(), 0.001);
@@ -158,7 +159,7 @@ TEST(TrackingLoopTest, SeededNoiseRepeatsAfterResetAndInACopy) {
   auto spec = first_order_loop(2.0, 100.0);
   spec.set_displacement_noise_rms(1e-4);
   spec.set_seed(7);
-  TrackingLoop a = make_tracking_loop(spec, 0.001, "t");
+  core::TrackingLoop a = make_tracking_loop(spec, 0.001, "t");
   std::vector<double> first;
   for (int k = 0; k < 50; ++k) first.push_back(a.step({k * 0.001, 0.0, 0.0}));
   EXPECT_NE(first.back(), 0.0);  // the noise moved the plant through the controller
@@ -175,7 +176,7 @@ TEST(TrackingLoopTest, SeededNoiseRepeatsAfterResetAndInACopy) {
 TEST(TrackingLoopTest, SensorsReportTheirReadingsAndTheLoadCellItsDelayedForce) {
   auto spec = first_order_loop(2.0, 100.0);
   spec.set_force_delay_periods(2);
-  TrackingLoop quiet = make_tracking_loop(spec, 0.001, "t");
+  core::TrackingLoop quiet = make_tracking_loop(spec, 0.001, "t");
   EXPECT_EQ(quiet.measure_force(10.0), 0.0);
   EXPECT_EQ(quiet.measure_force(20.0), 0.0);
   EXPECT_EQ(quiet.measure_force(30.0), 10.0);
@@ -189,7 +190,7 @@ TEST(TrackingLoopTest, SensorsReportTheirReadingsAndTheLoadCellItsDelayedForce) 
   spec.set_displacement_noise_rms(1e-4);
   spec.set_force_noise_rms(2.0);
   spec.set_seed(11);
-  TrackingLoop noisy = make_tracking_loop(spec, 0.001, "t");
+  core::TrackingLoop noisy = make_tracking_loop(spec, 0.001, "t");
   double displacement_square = 0.0, force_square = 0.0;
   constexpr int kDraws = 20000;
   for (int k = 0; k < kDraws; ++k) {
@@ -203,7 +204,7 @@ TEST(TrackingLoopTest, SensorsReportTheirReadingsAndTheLoadCellItsDelayedForce) 
 
   spec.set_force_delay_periods(65);
   try {
-    TrackingLoop bad = make_tracking_loop(spec, 0.001, "cases[1].delay[0].tracking_loop");
+    core::TrackingLoop bad = make_tracking_loop(spec, 0.001, "cases[1].delay[0].tracking_loop");
     FAIL() << "a force delay of 65 periods was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find(
@@ -221,9 +222,9 @@ TEST(TrackingLoopTest, ChainMeasuresWhatItsSensorReads) {
   auto spec = first_order_loop(2.0, 100.0);
   spec.set_displacement_noise_rms(1e-3);
   spec.set_seed(3);
-  DelayChain chain;
-  chain.add(std::make_unique<TrackingLoop>(make_tracking_loop(spec, 0.001, "t")));
-  TrackingLoop alone = make_tracking_loop(spec, 0.001, "t");
+  core::DelayChain chain;
+  chain.add(std::make_unique<core::TrackingLoop>(make_tracking_loop(spec, 0.001, "t")));
+  core::TrackingLoop alone = make_tracking_loop(spec, 0.001, "t");
   for (int k = 0; k < 20; ++k) {
     const double output = chain.step({k * 0.001, 0.01, 0.0});
     EXPECT_EQ(output, alone.step({k * 0.001, 0.01, 0.0}));
@@ -233,7 +234,7 @@ TEST(TrackingLoopTest, ChainMeasuresWhatItsSensorReads) {
 }
 
 TEST(TrackingLoopTest, BenchmarkPlantIsTheNominalF1PlantUnlessOverridden) {
-  const BenchmarkPlantParameters p = benchmark_plant_parameters({});
+  const core::BenchmarkPlantParameters p = benchmark_plant_parameters({});
   EXPECT_EQ(p.a1_beta0, 2.1283e13);
   EXPECT_EQ(p.beta2, 9.9976e4);
   EXPECT_EQ(p.gain, 1.0261);
@@ -242,7 +243,7 @@ TEST(TrackingLoopTest, BenchmarkPlantIsTheNominalF1PlantUnlessOverridden) {
   spec.set_a3(4.0);
   EXPECT_EQ(benchmark_plant_parameters(spec).a3, 4.0);
   // Its DC gain: gain a1b0 / (beta2 a3 k + a1b0).
-  const ContinuousTransferFunction tf = benchmark_actuator_transfer_function(p);
+  const core::ContinuousTransferFunction tf = core::benchmark_actuator_transfer_function(p);
   EXPECT_NEAR(tf.numerator[0] / tf.denominator.back(),
               1.0261 * 2.1283e13 / (9.9976e4 * 3.3 * 1.19e6 + 2.1283e13), 1e-12);
   config::DelayStage::TrackingLoop loop;
@@ -268,4 +269,4 @@ TEST(TrackingLoopTest, AnExplicitZeroMassOrStiffnessIsRefusedNotRunAsTheNominal)
 }
 
 }  // namespace
-}  // namespace rths::core
+}  // namespace rths::study

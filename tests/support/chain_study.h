@@ -28,7 +28,7 @@ inline config::Study chain_study(int n, const std::filesystem::path& folder, dou
   }
   const std::filesystem::path motion =
       std::filesystem::path(RTHS_SOURCE_DIR) / "data/ground_motions/RSN175_IMPVALL.H_H-E12140.AT2";
-  return core::parse_study(
+  return study::parse_study(
       "structure { matrices { mass { file: \"mass.mtx\" } stiffness { file: \"stiffness.mtx\" } }"
       " damping { modal_zeta: 0.05 } }\n"
       "motion { path: \"" +

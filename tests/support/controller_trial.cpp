@@ -176,7 +176,7 @@ ControllerTrialResult run_controller_trial(const ControllerTrialSpec& spec) {
   const std::string text =
       study_text(spec, topology.site("host").address, topology.site("rig").address);
   std::ofstream(config) << text;
-  const config::Study study = core::parse_study(text, config.string());
+  const config::Study study = study::parse_study(text, config.string());
   ControllerTrialResult out;
   const int window = runtime::max_missed_answers(study.deployment(), 1.0 / spec.rate_hz);
   out.window_ms = window * 1e3 / spec.rate_hz;

@@ -6,7 +6,7 @@
 
 namespace rths::coordinator {
 
-RunOutcome run_in_process(const core::PreparedStudy& prepared, CoordinatorOptions options) {
+RunOutcome run_in_process(const study::PreparedStudy& prepared, CoordinatorOptions options) {
   transport::InProcessTransport transport;
   Coordinator coordinator(prepared, transport, options);
   std::vector<std::unique_ptr<runtime::NodeService>> services;

@@ -9,6 +9,6 @@
 
 namespace rths::coordinator {
 
-RunOutcome run_in_process(const core::PreparedStudy& prepared, CoordinatorOptions options);
+RunOutcome run_in_process(const study::PreparedStudy& prepared, CoordinatorOptions options);
 
 }  // namespace rths::coordinator

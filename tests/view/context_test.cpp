@@ -24,7 +24,7 @@ std::filesystem::path record_path(const std::string& name) {
 // equals bit for bit), its record fed to a view given the prediction as the coordinator gives it:
 // measured and predicted are the same doubles at every sample.
 TEST(Context, ALockstepRunEqualsItsPredictionOnThePageAtEverySample) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(2.0, ""));
   Feed feed;
   describe_run(feed, prepared, "lag_shift_14ms");
   coordinator::CoordinatorOptions options;
@@ -61,7 +61,7 @@ TEST(Context, ALockstepRunEqualsItsPredictionOnThePageAtEverySample) {
 // and per link in the samples, the answer age (0 in lockstep: each step applies its own
 // answer), the answers accepted (one per step) and no predictor error.
 TEST(Context, TheLinksFactsAndColumnsAreTheRunsOwn) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(0.5, ""));
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(0.5, ""));
   Feed feed;
   describe_run(feed, prepared, "lag_shift_14ms");
   coordinator::CoordinatorOptions options;
@@ -81,7 +81,7 @@ TEST(Context, TheLinksFactsAndColumnsAreTheRunsOwn) {
   EXPECT_EQ(j["context"]["answer_window_steps"],
             runtime::max_missed_answers(deployment, prepared.base.dt));
   const auto check = analysis::check_case_critical_delay(
-      prepared, core::find_case(prepared.config, "lag_shift_14ms"));
+      prepared, study::find_case(prepared.config, "lag_shift_14ms"));
   ASSERT_TRUE(check && check->critical());
   const auto& critical = j["context"]["critical_round_trip"];
   EXPECT_EQ(critical["label"], "uncompensated");
@@ -100,10 +100,10 @@ TEST(Context, TheLinksFactsAndColumnsAreTheRunsOwn) {
 // analysis::predicted_loop_verdict finds it (here the exact model as it starts: stable for every
 // round trip, so no figure but "unbounded"), never the uncompensated one.
 TEST(Context, ThePredictedLoopsCriticalRoundTripIsTheCompensatedOne) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(
       0.5, "cases { name: \"predicted\" delay { shift { delay: 0.014 } } force_predictor { } }\n"));
   const auto verdict = analysis::predicted_loop_verdict(
-      prepared, core::find_case(prepared.config, "predicted"), 0.0);
+      prepared, study::find_case(prepared.config, "predicted"), 0.0);
   ASSERT_TRUE(verdict && verdict->analysed && verdict->stable) << (verdict ? verdict->text : "");
   const auto critical = link_context(prepared, "predicted")["critical_round_trip"];
   EXPECT_EQ(critical["label"], "compensated (force predictor as it starts)");
@@ -117,14 +117,14 @@ TEST(Context, ThePredictedLoopsCriticalRoundTripIsTheCompensatedOne) {
 }
 
 TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
   const core::SimulationResult lagged = predict_case(prepared, "lag_shift_14ms");
   const core::SimulationResult reference = predict_case(prepared, "reference");
   ASSERT_EQ(lagged.steps(), prepared.motion.acceleration.size());
-  const auto& study_case = core::find_case(prepared.config, "lag_shift_14ms");
+  const auto& study_case = study::find_case(prepared.config, "lag_shift_14ms");
   EXPECT_TRUE(
       lagged.displacement ==
-      core::simulate(core::setup_for_case(prepared, study_case), prepared.motion).displacement);
+      core::simulate(study::setup_for_case(prepared, study_case), prepared.motion).displacement);
   EXPECT_FALSE(lagged.displacement == reference.displacement);
   EXPECT_THROW(predict_case(prepared, "no_such_case"), std::invalid_argument);
 }
@@ -132,7 +132,7 @@ TEST(Context, APredictionIsTheInProcessRunOfTheCaseWithItsDelays) {
 // The prediction keeps what the study's recorders keep (the record's columns), each kept DOF's
 // history the one a prediction of every DOF has.
 TEST(Context, APredictionKeepsTheDofsTheRecordersKeep) {
-  core::PreparedStudy prepared = test::prepare(
+  study::PreparedStudy prepared = test::prepare(
       test::two_storey_study(1.0, "cases { name: \"lag\" delay { shift { delay: 0.01 } } }", ""));
   ASSERT_EQ(prepared.base.model.dofs(), 2);
   const core::SimulationResult every = predict_case(prepared, "lag");
@@ -144,7 +144,7 @@ TEST(Context, APredictionKeepsTheDofsTheRecordersKeep) {
 }
 
 // The paper frame's lag_shift_14ms run, recorded, read back and removed from disk.
-runtime::RecordContents recorded_paper_frame(const core::PreparedStudy& prepared,
+runtime::RecordContents recorded_paper_frame(const study::PreparedStudy& prepared,
                                              const std::string& name) {
   return test::recorded_paper_frame(prepared, "view-record-" + name, record_path(name));
 }
@@ -163,7 +163,7 @@ nlohmann::json described_away_from_its_motion(runtime::RecordContents& contents)
 // A record carries its inputs: its study's motion file gone, the prediction runs on the motion
 // its inputs entry carries, says so, and is the in-process run's, bit for bit.
 TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
   runtime::RecordContents contents = recorded_paper_frame(prepared, "embedded");
   ASSERT_TRUE(contents.entries.at(1).has_inputs());  // right after the header
   auto& motion = *contents.entries.at(1).mutable_inputs()->mutable_study()->mutable_motion();
@@ -178,7 +178,7 @@ TEST(Context, ARecordAwayFromItsMotionFilePredictsOverTheMotionItCarries) {
 // An older record, without embedded inputs, its study's motion file gone: the record's own steps
 // carry the motion, and the prediction over them is the in-process run's, bit for bit.
 TEST(Context, AnOlderRecordAwayFromItsMotionFilePredictsOverTheMotionItsStepsCarry) {
-  const core::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
+  const study::PreparedStudy prepared = test::prepare(test::paper_frame_study(1.0, ""));
   runtime::RecordContents contents = recorded_paper_frame(prepared, "away");
   ASSERT_TRUE(contents.entries.front().has_header());
   EXPECT_EQ(recorded_motion(contents).acceleration, prepared.motion.acceleration);
@@ -201,7 +201,7 @@ TEST(Context, WithoutAnyMotionThePageSaysWhyThereIsNoPrediction) {
   auto& header = *contents.entries.emplace_back().mutable_header();
   header.set_dt(0.001);
   header.set_dofs(1);
-  *header.mutable_study() = core::parse_study(
+  *header.mutable_study() = study::parse_study(
       "name: \"lost\"\nstructure { sdof { period: 0.5 } }\n"
       "motion { path: \"missing_motion.AT2\" }\nintegrator { dt: 0.001 }\n"
       "substructuring { experimental_fraction: 0.5 model { linear {} } }\n",

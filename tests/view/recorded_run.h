@@ -11,7 +11,7 @@
 
 namespace rths::test {
 
-inline runtime::RecordContents recorded_paper_frame(const core::PreparedStudy& prepared,
+inline runtime::RecordContents recorded_paper_frame(const study::PreparedStudy& prepared,
                                                     const std::string& run_id,
                                                     const std::filesystem::path& record) {
   coordinator::CoordinatorOptions options;
