@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "deploy/netns.h"
+#include "tests/support/dds_scope.h"
 
 #include "util/process.h"
 
@@ -74,7 +75,8 @@ TEST(SitesCli, ProbeStatesEachLinksFiguresAndTheVerdict) {
          "cases { name: \"lag_shift_4ms\" delay { shift { delay: 0.004 } } }\n";
   std::ofstream(dir / "sites.textproto")
       << "study: \"study.textproto\"\ncase_name: \"lag_shift_4ms\"\nclock: LOCKSTEP\n"
-         "domain_id: 3\nsubnet: \"10.231.203\"\ntimeout: 60\n"
+      << "domain_id: " << test::scope_dds_to_this_test() << "\n"
+      << "subnet: \"10.231.203\"\ntimeout: 60\n"
          "sites { name: \"integrator\" node_ids: [0, 1] }\nsites { name: \"lab\" node_ids: 2 }\n"
          "links { node_id: 2 to_node { one_way_delay: 0.002 } from_node { one_way_delay: 0.002 } "
          "}\n"
@@ -255,8 +257,9 @@ TEST(SitesCli, WritesRunsColumnsPlotsAndComparesWithTheLagFreeReference) {
          "deployment { nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR } "
          "start_timeout: 20 }\n";
   const auto sites =
-      util::run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain", "90",
-                         "--bin-dir", RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
+      util::run_command({kRths, "sites", (dir / "sites.textproto").string(), "--domain",
+                         std::to_string(test::scope_dds_to_this_test()), "--bin-dir",
+                         RTHS_BINARY_DIR, "--out", (dir / "sites").string()},
                         std::chrono::seconds(120));
   ASSERT_EQ(sites.exit_code, 0) << sites.output;
   EXPECT_NE(sites.output.find("against the lag-free in-process reference"), std::string::npos)
