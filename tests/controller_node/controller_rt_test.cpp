@@ -5,7 +5,8 @@
 // record's controller round trip is at least the lag the emulator injects and near it; a killed
 // emulator stops the run with a HOLD and the node sends its HOLD frame; a silenced one receives
 // that frame once it runs again. Skipped (with the reason) where namespaces cannot be made.
-// DDS domain 185, UDP ports 47170-47175.
+// The shared DDS domain, each test on topics of its own (`ip netns exec` keeps the environment);
+// UDP ports 47170-47175.
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -14,6 +15,7 @@
 #include "../runtime/test_support.h"
 #include "deploy/netns.h"
 #include "tests/support/controller_trial.h"
+#include "tests/support/dds_scope.h"
 
 namespace rths::test {
 namespace {
@@ -31,7 +33,7 @@ class ControllerRt : public ::testing::Test {
     s.seconds = 1.5;
     s.answer_lag_ms = kLagMs;
     s.answer_window_ms = 100;  // a busy machine's stalls must not stop a run before its fault
-    s.domain = 185;
+    s.domain = test::scope_dds_to_this_test();
     s.node_port = 47170 + 2 * index;
     s.peer_port = s.node_port + 1;
     s.subnet = "10.231.41";
