@@ -17,7 +17,7 @@ std::filesystem::path temp_file(const std::string& name, const std::string& text
   return path;
 }
 
-TEST(core::DelayTrace, ReadsCommentsCommasAndInterpolates) {
+TEST(DelayTrace, ReadsCommentsCommasAndInterpolates) {
   const auto path = temp_file("trace.txt", "# time delay\n0.0, 0.001\n\n1.0 0.003  # note\n");
   const core::DelayTrace trace = read_delay_trace(path);
   ASSERT_EQ(trace.time.size(), 2u);
@@ -41,7 +41,7 @@ void expect_trace_error(const std::string& text, const std::string& expected_fra
   std::filesystem::remove(path);
 }
 
-TEST(core::DelayTrace, ErrorsNameFileAndLine) {
+TEST(DelayTrace, ErrorsNameFileAndLine) {
   expect_trace_error("0 0.001\n0 0.002\n", ":2: time 0 does not increase");
   expect_trace_error("# c\n0 0.001\n1 abc\n", ":3: 'abc' is not a finite number");
   expect_trace_error("0 0.001 5\n", ":1: expected two columns");
