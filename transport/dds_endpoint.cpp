@@ -22,8 +22,9 @@ namespace rths::transport {
 namespace {
 
 // How long the first message to a node may wait for that node's command reader to match the
-// writer it creates (volatile data written before the match would be lost). Start-up only: the
-// first addressed message is the ASSIGN answering the node's announcement, so the node is there.
+// writer it creates (volatile data written before the match would be lost), and then for the
+// node to acknowledge it. Start-up only: the first addressed message is the ASSIGN answering the
+// node's announcement, so the node is there.
 constexpr auto kAddressedMatchTimeout = std::chrono::milliseconds(2000);
 
 std::string node_topic_name(const std::string& prefix, std::int32_t node_id, const char* way) {
@@ -72,8 +73,11 @@ struct DdsEndpoint::Impl {
   // Receive thread: hands `m` to the inline handler, or queues it (moved) for receive() when
   // there is none or it did not take it. True when queued.
   bool deliver(Message& m);
-  // The coordinator's writer of node_id's command topic, created (and matched) on first use.
-  const TopicWriter& addressed_writer(std::int32_t node_id);
+  // The coordinator's writer of node_id's command topic, created (and matched) on first use
+  // (`created` then true).
+  const TopicWriter& addressed_writer(std::int32_t node_id, bool& created);
+  // Whether every reader matched to `w` has acknowledged all `w` wrote, waiting up to `timeout`.
+  static bool acknowledged(const TopicWriter& w, std::chrono::nanoseconds timeout);
   // Writes `sample` (the fields of `m`) with `w`, its MAC first made for w's GUID when there is
   // a run secret.
   void write(const TopicWriter& w, const Message& m, rths_dds_Envelope& sample) const;
@@ -147,10 +151,12 @@ std::optional<std::int32_t> DdsEndpoint::Impl::topic_node_of(dds::Handle reader)
   return std::nullopt;
 }
 
-const DdsEndpoint::TopicWriter& DdsEndpoint::Impl::addressed_writer(std::int32_t node_id) {
+const DdsEndpoint::TopicWriter& DdsEndpoint::Impl::addressed_writer(std::int32_t node_id,
+                                                                    bool& created) {
   std::lock_guard lock(writers_mutex);
   auto& slot = addressed_writers[node_id];
-  if (!slot) {
+  created = !slot;
+  if (created) {
     dds::EnvelopeTopic topic(participant, node_topic_name(options.topic_prefix, node_id, "_down"),
                              qos);
     dds::Writer w(participant, topic, qos);
@@ -161,6 +167,22 @@ const DdsEndpoint::TopicWriter& DdsEndpoint::Impl::addressed_writer(std::int32_t
       std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
   return *slot;  // entries never move or go while the endpoint lives
+}
+
+bool DdsEndpoint::Impl::acknowledged(const TopicWriter& w, std::chrono::nanoseconds timeout) {
+  return dds_wait_for_acks(w.writer.get(), static_cast<dds_duration_t>(timeout.count())) ==
+         DDS_RETCODE_OK;
+}
+
+bool DdsEndpoint::acknowledged(std::int32_t node_id, std::chrono::nanoseconds timeout) const {
+  const TopicWriter* w = nullptr;
+  {
+    std::lock_guard lock(impl_->writers_mutex);
+    const auto it = impl_->addressed_writers.find(node_id);
+    if (it == impl_->addressed_writers.end()) return false;
+    w = it->second.get();
+  }
+  return Impl::acknowledged(*w, timeout);
 }
 
 void DdsEndpoint::listen_to(std::int32_t node_id) {
@@ -214,7 +236,18 @@ void DdsEndpoint::send(const Message& m) {
   sample.payload._buffer = reinterpret_cast<uint8_t*>(const_cast<char*>(m.payload.data()));
   sample.payload._release = false;
   if (!options_.coordinator) return impl_->write(*impl_->own, m, sample);
-  if (m.node_id != kBroadcastId) return impl_->write(impl_->addressed_writer(m.node_id), m, sample);
+  if (m.node_id != kBroadcastId) {
+    bool created = false;
+    const TopicWriter& w = impl_->addressed_writer(m.node_id, created);
+    impl_->write(w, m, sample);
+    // A new writer is matched on our side before the node's reader has discovered it (discovery
+    // runs each way on its own). Cyclone's reader drops what reaches it before then, and repairs
+    // the first such sample at once but a later one only after its NackDelay (100 ms), holding
+    // every command behind it: the node's first answers then come 100 ms late, past a 40 ms
+    // answer window. So nothing more is written to the node until it has acknowledged the first.
+    if (created) Impl::acknowledged(w, kAddressedMatchTimeout);
+    return;
+  }
   // To each node addressed so far, without allocating (a heartbeat goes out from the loop); each
   // writer has its own GUID, so each copy its own MAC.
   std::lock_guard lock(impl_->writers_mutex);

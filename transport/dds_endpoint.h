@@ -14,7 +14,9 @@
 // matched reader: on a shared topic each command woke every node process, to be thrown away by
 // all but one. The coordinator creates a node's writer on the first message addressed to it and
 // waits (up to 2 s, at start-up) for the node's reader to match, so that first message is not
-// lost. Order holds per topic only. A node endpoint also drops anything not addressed to it or
+// lost, and then (up to 2 s more) for the node to acknowledge it, so that nothing else is written
+// to the node before its reader is in step with the new writer (dds_endpoint.cpp, send()). Order
+// holds per topic only. A node endpoint also drops anything not addressed to it or
 // broadcast, before any payload is parsed.
 //
 // Receipt: a data-available listener takes the samples on Cyclone's receive thread, offers each to
@@ -83,6 +85,9 @@ class DdsEndpoint final : public Endpoint {
   Unauthenticated unauthenticated() const;
   // The count alone: a mutex, no allocation (a node's heartbeats carry it).
   std::uint64_t unauthenticated_count() const;
+  // Coordinator: whether node `node_id`'s readers have acknowledged every message addressed to
+  // it so far, waiting up to `timeout` (0: asks without waiting); false before the first.
+  bool acknowledged(std::int32_t node_id, std::chrono::nanoseconds timeout) const;
   // Remote writers feeding any of this endpoint's readers.
   int matched_writers() const;
   // Waits until at least `writers` remote writers feed this endpoint and `readers` remote
