@@ -11,6 +11,9 @@
 //   Solve solve(m, c, k, what)            b -> out = (m M + c C + k K0)^-1 b
 //                                         (Solve::solve(b, out); `what` names the matrix when it
 //                                         cannot be factorised: std::invalid_argument)
+//   Solve::solve_minus_damping(b, damping, x, out)
+//                                         out = (m M + c C + k K0)^-1 (b - C x), `damping` the
+//                                         product(0, 1, 0); b is overwritten
 // and neither add_times nor solve allocates. Units SI: m, m/s, m/s^2, N, s. Every scheme sizes
 // its work vectors once, so step() does not allocate (real-time safe).
 
@@ -56,8 +59,7 @@ class Base : public Integrator {
     const Vec& r = restoring.trial(u_next_, v_next_, nullptr);
     restoring.commit();
     rhs_ = load_next - r;
-    damping_.add_times(damping_velocity, rhs_, -1.0);
-    effective.solve(rhs_, a_next_);
+    effective.solve_minus_damping(rhs_, damping_, damping_velocity, a_next_);
   }
 
   Algebra algebra_;

@@ -99,6 +99,10 @@ class DenseAlgebra {
    public:
     explicit Solve(const Mat& matrix) : inverse_(matrix.inverse()) {}
     void solve(const Vec& b, Vec& out) const { out.noalias() = inverse_ * b; }
+    void solve_minus_damping(Vec& b, const Product& damping, const Vec& x, Vec& out) const {
+      damping.add_times(x, b, -1.0);
+      solve(b, out);
+    }
 
    private:
     Mat inverse_;

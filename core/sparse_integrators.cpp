@@ -26,14 +26,39 @@ class LowRank {
   // out += sign s U diag(c) U^T x; allocates nothing.
   void add_times(const Vec& x, Vec& out, double sign = 1.0) {
     if (empty()) return;
+    out.noalias() += basis_ * projection(x, sign);
+  }
+  // sign s diag(c) U^T x (m entries), held until the next call; allocates nothing.
+  const Vec& projection(const Vec& x, double sign = 1.0) {
     work_.noalias() = basis_.transpose() * x;
     work_.array() *= sign * scale_.array();
-    out.noalias() += basis_ * work_;
+    return work_;
   }
 
  private:
   const Mat& basis_;
   Vec scale_, work_;
+};
+
+// x -> out += sign (A + U S U^T) x: A sparse, U S U^T an optional low-rank term (LowRank).
+class SparseProduct {
+ public:
+  SparseProduct(SparseMat matrix, LowRank low) : matrix_(std::move(matrix)), low_(std::move(low)) {}
+  void add_times(const Vec& x, Vec& out, double sign) {
+    add_sparse_times(x, out, sign);
+    low_.add_times(x, out, sign);
+  }
+  void add_sparse_times(const Vec& x, Vec& out, double sign) const {
+    if (sign > 0)
+      out.noalias() += matrix_ * x;
+    else
+      out.noalias() -= matrix_ * x;
+  }
+  LowRank& low() { return low_; }
+
+ private:
+  SparseMat matrix_;
+  LowRank low_;
 };
 
 // A symmetric positive definite matrix A + U S U^T (A sparse, U S U^T an optional low-rank term,
@@ -56,28 +81,53 @@ class Factor {
     const Mat capacitance =
         Mat::Identity(m, m) + low.scale().asDiagonal() * (low.basis().transpose() * y_);
     w_ = capacitance.partialPivLu().solve(Mat(low.scale().asDiagonal()));
+    basis_ttimes_y_ = low.basis().transpose() * y_;
     basis_ = &low.basis();
     t_ = z_ = Vec::Zero(m);
   }
   // out = (A + U S U^T)^-1 b (`out` sized, not `b`): P^T L^-T D^-1 L^-1 P b, as Eigen's solve,
   // by hand, then the Woodbury correction.
   void solve(const Vec& b, Vec& out) {
-    work_.noalias() = ldlt_.permutationP() * b;
-    ldlt_.matrixL().solveInPlace(work_);
-    work_.array() *= inverse_d_.array();
-    ldlt_.matrixU().solveInPlace(work_);
-    out.noalias() = ldlt_.permutationPinv() * work_;
+    solve_sparse(b, out);
     if (basis_ == nullptr) return;
     t_.noalias() = basis_->transpose() * out;
     z_.noalias() = w_ * t_;
     out.noalias() -= y_ * z_;
   }
+  // out = (A + U S U^T)^-1 (b - C x), C = `damping`: C_s + U S_d U^T on the same U (b is
+  // overwritten). With g = A^-1 (b - C_s x) and s = S_d U^T x:
+  //   out = g - Y (s + W t),  t = U^T g - (U^T Y) s,
+  // 3 n m for the low-rank terms where the product then the solve took 4 n m.
+  void solve_minus_damping(Vec& b, SparseProduct& damping, const Vec& x, Vec& out) {
+    if (basis_ == nullptr || damping.low().empty()) {
+      damping.add_times(x, b, -1.0);
+      solve(b, out);
+      return;
+    }
+    damping.add_sparse_times(x, b, -1.0);
+    const Vec& s = damping.low().projection(x);
+    solve_sparse(b, out);
+    t_.noalias() = basis_->transpose() * out;
+    t_.noalias() -= basis_ttimes_y_ * s;
+    z_ = s;
+    z_.noalias() += w_ * t_;
+    out.noalias() -= y_ * z_;
+  }
 
  private:
+  // out = A^-1 b: P^T L^-T D^-1 L^-1 P b, as Eigen's solve, by hand.
+  void solve_sparse(const Vec& b, Vec& out) {
+    work_.noalias() = ldlt_.permutationP() * b;
+    ldlt_.matrixL().solveInPlace(work_);
+    work_.array() *= inverse_d_.array();
+    ldlt_.matrixU().solveInPlace(work_);
+    out.noalias() = ldlt_.permutationPinv() * work_;
+  }
+
   Eigen::SimplicialLDLT<SparseMat> ldlt_;
   Vec inverse_d_, work_;
   const Mat* basis_ = nullptr;
-  Mat y_, w_;
+  Mat y_, w_, basis_ttimes_y_;  // basis_ttimes_y_: U^T Y, m x m
   Vec t_, z_;
 };
 
@@ -92,21 +142,7 @@ class SparseAlgebra {
         stiffness_(model.sparse_stiffness),
         low_rank_(model.low_rank_damping) {}
 
-  class Product {
-   public:
-    Product(SparseMat matrix, LowRank low) : matrix_(std::move(matrix)), low_(std::move(low)) {}
-    void add_times(const Vec& x, Vec& out, double sign) {
-      if (sign > 0)
-        out.noalias() += matrix_ * x;
-      else
-        out.noalias() -= matrix_ * x;
-      low_.add_times(x, out, sign);
-    }
-
-   private:
-    SparseMat matrix_;
-    LowRank low_;
-  };
+  using Product = SparseProduct;
   using Solve = Factor;
 
   Product product(double m, double c, double k) const {
