@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "core/benchmark_criteria.h"
 #include "core/compensation.h"
 #include "study/study.h"

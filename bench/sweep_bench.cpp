@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/batch_kernel.h"
+#include "analysis/sweep/batch_kernel.h"
 #include "core/ground_motion.h"
 #include "core/structure.h"
 #include "study/motion_files.h"

@@ -1,4 +1,4 @@
-// `rths joint-lag CONFIG`: the network lag x actuator lag study (see analysis/joint_lag.h; its
+// `rths joint-lag CONFIG`: the network lag x actuator lag study (see analysis/joint_lag/joint_lag.h; its
 // across-sites runs: deploy/joint_lag_sites.h).
 #include <nlohmann/json.hpp>
 
@@ -6,7 +6,7 @@
 #include <iostream>
 #include <memory>
 
-#include "analysis/joint_lag.h"
+#include "analysis/joint_lag/joint_lag.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "deploy/joint_lag_sites.h"

@@ -10,10 +10,10 @@
 #include <memory>
 #include <vector>
 
-#include "analysis/benchmark_evaluation.h"
-#include "analysis/benchmark_perturbation.h"
-#include "analysis/result_tables.h"
-#include "analysis/study_run.h"
+#include "analysis/benchmark/benchmark_evaluation.h"
+#include "analysis/benchmark/benchmark_perturbation.h"
+#include "analysis/study_run/study_run.h"
+#include "analysis/tables/result_tables.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/benchmark_criteria.h"
@@ -69,7 +69,7 @@ results::Table draws_table(const std::vector<analysis::PlantDraw>& draws,
   return t;
 }
 
-// N perturbed-plant draws of the benchmark (analysis/benchmark_perturbation.h), each run in
+// N perturbed-plant draws of the benchmark (analysis/benchmark/benchmark_perturbation.h), each run in
 // process like the nominal one: J1-J9 per case as mean +- std, printed and in
 // benchmark_perturbed.json; every draw in benchmark_perturbed.csv (draws_table).
 void run_perturbed(const config::Study& study, const std::filesystem::path& base_dir,
@@ -145,7 +145,7 @@ void run(const RunOptions& o) {
   require_table_fits(prepared, o.results);
   const double setup_s = seconds_since(started);
   const auto cases_started = std::chrono::steady_clock::now();
-  // A run longer than a few seconds says how far it is on stderr (analysis/run_progress.h).
+  // A run longer than a few seconds says how far it is on stderr (analysis/study_run/run_progress.h).
   const analysis::StudyOutcome outcome = analysis::run_study(
       prepared, {.warn = print_warning, .progress = {.print = [](const std::string& line) {
                                           std::cerr << "rths: " << line << "\n";

@@ -7,8 +7,8 @@
 #include <map>
 #include <memory>
 
-#include "analysis/result_tables.h"
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
+#include "analysis/tables/result_tables.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "results/results.h"

@@ -16,7 +16,7 @@
 #include <sstream>
 
 #include "analysis/distributed/distributed_outputs.h"
-#include "analysis/response_envelope_plots.h"
+#include "analysis/study_run/response_envelope_plots.h"
 #include "cli/commands.h"
 #include "cli/distributed.h"
 #include "cli/support.h"

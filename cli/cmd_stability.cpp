@@ -12,7 +12,7 @@
 #include <optional>
 #include <sstream>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "core/stability.h"

@@ -10,11 +10,11 @@
 #include <memory>
 #include <sstream>
 
-#include "analysis/result_tables.h"
-#include "analysis/sweep_csv.h"
-#include "analysis/sweep_grid.h"
-#include "analysis/sweep_report.h"
-#include "analysis/sweep_run.h"
+#include "analysis/sweep/sweep_csv.h"
+#include "analysis/sweep/sweep_grid.h"
+#include "analysis/sweep/sweep_report.h"
+#include "analysis/sweep/sweep_run.h"
+#include "analysis/tables/result_tables.h"
 #include "cli/commands.h"
 #include "cli/support.h"
 #include "results/results.h"

@@ -7,10 +7,10 @@
 #include <future>
 #include <iostream>
 
-#include "analysis/benchmark_evaluation.h"
-#include "analysis/benchmark_plots.h"
-#include "analysis/response_envelope_plots.h"
-#include "analysis/result_tables.h"
+#include "analysis/benchmark/benchmark_evaluation.h"
+#include "analysis/benchmark/benchmark_plots.h"
+#include "analysis/study_run/response_envelope_plots.h"
+#include "analysis/tables/result_tables.h"
 #include "cli/commands.h"
 #include "cli/console.h"
 #include "results/results.h"

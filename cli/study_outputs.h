@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <string>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 
 namespace rths::cli {
 
@@ -23,7 +23,7 @@ void claim_output_folder(const std::filesystem::path& out, const std::string& st
 void write_study_outputs(const analysis::StudyOutcome& outcome, const std::filesystem::path& out,
                          bool plots, bool json, const std::string& format = "csv");
 // A study with a benchmark section: J1-J9 of its cases (analysis::evaluate_benchmark) written to
-// out/benchmark.txt and out/benchmark.json, with `plots` its figures (analysis/benchmark_plots.h),
+// out/benchmark.txt and out/benchmark.json, with `plots` its figures (analysis/benchmark/benchmark_plots.h),
 // and the table printed unless `quiet`. Nothing without one. The same after `rths run` and
 // `rths launch`.
 void write_benchmark_outputs(const study::PreparedStudy& prepared,

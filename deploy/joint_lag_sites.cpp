@@ -4,7 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "analysis/compare.h"
+#include "analysis/common/compare.h"
 #include "core/metrics.h"
 #include "core/simulation.h"
 #include "deploy/netns.h"

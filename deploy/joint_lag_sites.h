@@ -1,5 +1,5 @@
 #pragma once
-// The across-sites part of the joint network x actuator lag study (analysis/joint_lag.h): selected
+// The across-sites part of the joint network x actuator lag study (analysis/joint_lag/joint_lag.h): selected
 // points run across network-namespace sites (deploy/sites.h) with the clock of the study's sites
 // config, the network round trip R injected half each way on the actuator emulator's link (delay
 // only: no jitter, no loss), the actuator lag A as the case's delay stage, `measured_duration` s
@@ -12,7 +12,7 @@
 // Error against the in-process reference over the same duration. Each run writes its outputs to
 // <output directory>/measured_R<ms>ms_A<ms>ms.
 
-#include "analysis/joint_lag.h"
+#include "analysis/joint_lag/joint_lag.h"
 
 namespace rths::deploy {
 

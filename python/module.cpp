@@ -41,12 +41,12 @@
 
 #include <optional>
 
-#include "analysis/benchmark_evaluation.h"
-#include "analysis/result_tables.h"
-#include "analysis/study_run.h"
-#include "analysis/sweep_grid.h"
-#include "analysis/sweep_report.h"
-#include "analysis/sweep_run.h"
+#include "analysis/benchmark/benchmark_evaluation.h"
+#include "analysis/study_run/study_run.h"
+#include "analysis/sweep/sweep_grid.h"
+#include "analysis/sweep/sweep_report.h"
+#include "analysis/sweep/sweep_run.h"
+#include "analysis/tables/result_tables.h"
 #include "core/benchmark_criteria.h"
 #include "core/stability.h"
 #include "identify/fit/identify.h"

@@ -6,7 +6,7 @@
 // record (export, read_record) is one case, named in its attribute case_name, without prefix.
 //
 // The tables of a study's outcome (study_table, distributed_study_table, sweep_table) are built
-// where the outcome is, in analysis/result_tables.h, on this naming.
+// where the outcome is, in analysis/tables/result_tables.h, on this naming.
 // Every table of a run (those and record_table) has the attributes
 //   study (text), dt_s (number, s), motion_name, motion_sha256 (SHA-256 of the motion as run:
 //   dt, then the samples in m/s^2 as IEEE doubles, study::motion_key; the same in a run's

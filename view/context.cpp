@@ -1,6 +1,6 @@
 #include "view/context.h"
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "runtime/node/in_process.h"
 #include "runtime/node/plan.h"
 #include "runtime/record/deadline_diagnosis.h"

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <vector>
 
-#include "analysis/response_envelope_plots.h"
-#include "analysis/result_tables.h"
+#include "analysis/study_run/response_envelope_plots.h"
+#include "analysis/tables/result_tables.h"
 #include "core/time_text.h"
 #include "results/results.h"
 #include "results/write.h"

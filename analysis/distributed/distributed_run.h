@@ -34,7 +34,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "rths/proto/runtime.pb.h"
 #include "runtime/record/measurements.h"
 #include "study/study.h"

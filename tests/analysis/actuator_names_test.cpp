@@ -1,4 +1,4 @@
-#include "analysis/actuator_names.h"
+#include "analysis/study_run/actuator_names.h"
 
 #include <gtest/gtest.h>
 

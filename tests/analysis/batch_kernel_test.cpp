@@ -1,6 +1,6 @@
 // The SIMD batch kernel against core::simulate with the same setup (explicit Newmark, SDOF,
 // linear, time shift): the histories must agree to round-off, lane by lane.
-#include "analysis/batch_kernel.h"
+#include "analysis/sweep/batch_kernel.h"
 
 #include <gtest/gtest.h>
 

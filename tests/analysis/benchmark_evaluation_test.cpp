@@ -1,6 +1,6 @@
 // The RTHS benchmark's case 1 (configs/benchmark/case_1.textproto: El Centro at 40 %, nominal
 // plant, the sample controller, seeded sensor noise) against its published Table 3 values.
-#include "analysis/benchmark_evaluation.h"
+#include "analysis/benchmark/benchmark_evaluation.h"
 
 #include <gtest/gtest.h>
 
@@ -216,7 +216,7 @@ TEST(BenchmarkEvaluation, ThePublishedValuesAreKeyedByContent) {
   const core::StructuralModel whole =
       study::make_structure(study.structure(), config.parent_path());
   EXPECT_EQ(structure_key(whole), study.benchmark().published_structure_sha256());
-  EXPECT_EQ(motion_key(study::load_motion(study.motion(), config.parent_path())),
+  EXPECT_EQ(study::motion_key(study::load_motion(study.motion(), config.parent_path())),
             study.benchmark().published_motion_sha256());
   auto* influence = study.mutable_structure()->mutable_matrices()->mutable_influence();
   influence->set_rows(whole.dofs());

@@ -1,4 +1,4 @@
-#include "analysis/benchmark_perturbation.h"
+#include "analysis/benchmark/benchmark_perturbation.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
-// The RTHS benchmark's figures (analysis/benchmark_plots.h) for its case 1: J1-J9 with the
+// The RTHS benchmark's figures (analysis/benchmark/benchmark_plots.h) for its case 1: J1-J9 with the
 // published values, and the two floors other than the experimental one against the exact response.
-#include "analysis/benchmark_plots.h"
+#include "analysis/benchmark/benchmark_plots.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "analysis/compare.h"
+#include "analysis/common/compare.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The joint network x actuator lag study on the paper's frame (in process; no namespaces needed).
-#include "analysis/joint_lag.h"
+#include "analysis/joint_lag/joint_lag.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
-// The force predictor's coupled-loop verdict before a run (analysis/predicted_loop.h) and what
+// The force predictor's coupled-loop verdict before a run (analysis/study_run/predicted_loop.h) and what
 // study_run makes of it: the margin column, the warnings, the fitted-loop judgement and the
 // growth a predicted case shares with its motion.
-#include "analysis/predicted_loop.h"
+#include "analysis/study_run/predicted_loop.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "study/study.h"
 
 namespace rths::analysis {

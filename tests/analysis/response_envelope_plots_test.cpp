@@ -1,7 +1,7 @@
-// The figures of a study of many floors and actuators (analysis/response_envelope_plots.h): the
+// The figures of a study of many floors and actuators (analysis/study_run/response_envelope_plots.h): the
 // envelope's numbers against the histories they come from, the floors chosen, and a 14-storey
 // building with an actuator in every storey drawn as pages that fit a page, every actuator on one.
-#include "analysis/response_envelope_plots.h"
+#include "analysis/study_run/response_envelope_plots.h"
 
 #include <unistd.h>
 
@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "analysis/compare.h"
+#include "analysis/common/compare.h"
 #include "study/study.h"
 #include "tests/support/log_stamps.h"
 #include "tests/support/png_size.h"

@@ -1,6 +1,6 @@
 // analysis/result_tables: a study's, a distributed study's and a sweep's tables have the CSV's
 // variable names, SI units and NaN where a value is missing.
-#include "analysis/result_tables.h"
+#include "analysis/tables/result_tables.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -9,8 +9,8 @@
 #include <cmath>
 #include <fstream>
 
-#include "analysis/sweep_csv.h"
-#include "analysis/sweep_grid.h"
+#include "analysis/sweep/sweep_csv.h"
+#include "analysis/sweep/sweep_grid.h"
 #include "core/metrics.h"
 #include "study/motion_key.h"
 #include "study/study.h"

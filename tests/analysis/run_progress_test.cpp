@@ -1,7 +1,7 @@
-// A study's progress lines (analysis/run_progress.h): a run past its quiet time says which run,
+// A study's progress lines (analysis/study_run/run_progress.h): a run past its quiet time says which run,
 // which step and the time left, at the clock's rate; a short one prints nothing; run_study names
 // the lag-free run and each case that adds to it.
-#include "analysis/run_progress.h"
+#include "analysis/study_run/run_progress.h"
 
 #include <functional>
 #include <string>
@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "study/study.h"
 
 namespace rths::analysis {

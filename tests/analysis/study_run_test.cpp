@@ -1,4 +1,4 @@
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 
 #include <gtest/gtest.h>
 

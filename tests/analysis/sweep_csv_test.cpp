@@ -1,5 +1,5 @@
 // Sweep CSVs: shards written, read back and merged; what the file holds and its sidecar.
-#include "analysis/sweep_csv.h"
+#include "analysis/sweep/sweep_csv.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,5 +1,5 @@
 // The sweep grid: its order, its shards, and the configs it refuses.
-#include "analysis/sweep_grid.h"
+#include "analysis/sweep/sweep_grid.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The sweep's report: the paper's trends measured on hand-made rows (each claim on its own), and
 // the two figures written where the report says.
-#include "analysis/sweep_report.h"
+#include "analysis/sweep/sweep_report.h"
 
 #include <gtest/gtest.h>
 

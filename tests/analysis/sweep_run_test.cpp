@@ -1,6 +1,6 @@
 // Running the sweep: the paper's Fig. 4 trends on a small grid, the fast (batch kernel) path
 // against the general one, and the stability check before a run.
-#include "analysis/sweep_run.h"
+#include "analysis/sweep/sweep_run.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "analysis/sweep_report.h"
+#include "analysis/sweep/sweep_report.h"
 #include "core/metrics.h"
 #include "sweep_study.h"
 

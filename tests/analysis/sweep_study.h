@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/sweep_grid.h"
-#include "analysis/sweep_run.h"
+#include "analysis/sweep/sweep_grid.h"
+#include "analysis/sweep/sweep_run.h"
 #include "study/study.h"
 
 namespace rths::analysis::sweep_test {

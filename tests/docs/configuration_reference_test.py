@@ -24,7 +24,7 @@ import sys
 SOURCE = os.environ.get("RTHS_SOURCE_DIR",
                         os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 PROTOS = ["proto/config.proto", "proto/stages.proto", "proto/deployment.proto", "proto/opensees.proto",
-          "proto/identify.proto", "deploy/sites.proto", "analysis/joint_lag.proto"]
+          "proto/identify.proto", "deploy/sites.proto", "analysis/joint_lag/joint_lag.proto"]
 REFERENCE = "docs/configuration.md"
 TOKEN = re.compile(r'"(?:[^"\\]|\\.)*"|[A-Za-z_][\w.]*|-?\d[\w.+-]*|\S')
 

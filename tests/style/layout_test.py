@@ -6,7 +6,9 @@
 2. No two units include each other anywhere (a unit is a .h with its .cpp): rooms form layers.
 3. Every folder with sources has one library target of its own (its CMakeLists.txt adds one).
 4. Arrows point down: results/ (tables and their writers) and identify/ do not include analysis/,
-   which builds on both.
+   which builds on both; inside analysis/, common/ includes no other room, and study_run/ and
+   sweep/ include neither each other nor the rooms that build on them (tables/, joint_lag/,
+   benchmark/, distributed/).
 5. Sizes: no function longer than MAX_FUNCTION_LINES (its signature's first line to its closing
    brace) and no file longer than MAX_FILE_LINES, on the sources above (bench/ and tests/ are not
    checked). The ones that were longer when the rule came are listed in OVERSIZE with their
@@ -21,7 +23,12 @@ import sys
 SOURCE = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__))))
 # (room, room it must not include): the studies build on the tables and on identification.
-DOWNWARD_ONLY = [("results/", "analysis/"), ("identify/", "analysis/")]
+ANALYSIS_ABOVE = ["analysis/tables/", "analysis/joint_lag/", "analysis/benchmark/",
+                  "analysis/distributed/"]
+DOWNWARD_ONLY = [("results/", "analysis/"), ("identify/", "analysis/")] + [
+    ("analysis/common/", room) for room in ["analysis/study_run/", "analysis/sweep/"] + ANALYSIS_ABOVE
+] + [("analysis/study_run/", room) for room in ["analysis/sweep/"] + ANALYSIS_ABOVE] + [
+    ("analysis/sweep/", room) for room in ["analysis/study_run/"] + ANALYSIS_ABOVE]
 SKIP = {"build", "tests", "fuzz", "bench", "docs", "data", "configs", "examples", "docker",
         "scripts", "node_modules", "python"}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
@@ -31,7 +38,7 @@ MAX_FILE_LINES = 600
 # is a split left for later, for the reason given.
 OVERSIZE = {
     # The vectorised lane loop: one body, so that every target clone inlines it alike.
-    ("analysis/batch_kernel.cpp", "advance_block"): 77,
+    ("analysis/sweep/batch_kernel.cpp", "advance_block"): 77,
     # Rooms other work was reshaping when the rule came (issue 65).
     ("core/stability.cpp", "check_modal_critical_delay"): 65,
 }

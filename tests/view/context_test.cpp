@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "analysis/study_run.h"
+#include "analysis/study_run/study_run.h"
 #include "runtime/node/plan.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/in_process_run.h"
