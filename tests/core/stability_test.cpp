@@ -227,14 +227,14 @@ TEST(CompensatedStabilityTest, WithoutCompensatorItIsThePlainDelayedLoop) {
       discrete_critical_delay(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, 100);
   for (int n : {0, 3, 7}) {
     const CompensatedStability c =
-        compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
-                              shift_then_first_order(n * kDt, 0.0), nullptr, 0.0);
+        study::compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                     shift_then_first_order(n * kDt, 0.0), nullptr, 0.0);
     EXPECT_NEAR(c.spectral_radius, plain.spectral_radius[static_cast<std::size_t>(n)], 1e-12) << n;
   }
   // Continuous: the margin on top of a shift is the critical delay minus that shift.
   const CompensatedStability c =
-      compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
-                            shift_then_first_order(kShift, 0.0), nullptr, 0.1);
+      study::compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                   shift_then_first_order(kShift, 0.0), nullptr, 0.1);
   const double critical = *continuous_critical_delay(kPeriod, kZeta, kAlpha).critical_delay;
   ASSERT_TRUE(c.continuous_margin.has_value());
   EXPECT_NEAR(*c.continuous_margin, critical - kShift, 1e-9);
@@ -245,11 +245,11 @@ TEST(CompensatedStabilityTest, WithoutCompensatorItIsThePlainDelayedLoop) {
 TEST(CompensatedStabilityTest, CompensationMakesTheMtsActuatorLoopStableAtFullFraction) {
   // alpha = 1: the uncompensated critical delay is ~8 ms, the MTS actuator lags 26 ms.
   const auto mts = shift_then_first_order(0.0046, 0.0218);
-  const CompensatedStability bare = compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod,
-                                                          kZeta, 1.0, 1e-3, mts, nullptr, 0.05);
+  const CompensatedStability bare = study::compensated_stability(
+      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, 1e-3, mts, nullptr, 0.05);
   EXPECT_FALSE(bare.stable);
   const config::Compensation inverse = model_based(0.0046, 0.0218);
-  const CompensatedStability compensated = compensated_stability(
+  const CompensatedStability compensated = study::compensated_stability(
       IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, 1e-3, mts, &inverse, 0.05);
   EXPECT_TRUE(compensated.stable) << compensated.spectral_radius;
   ASSERT_TRUE(compensated.discrete_margin.has_value());
@@ -301,17 +301,17 @@ TEST_P(CompensatedMarginBySimulation, DecaysAtNinetyAndGrowsAtHundredTenPercent)
       a->mutable_a2_bounds()->set_max(0.00011 + 1e-12);
     }
   }
-  const CompensatedStability s = compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod,
-                                                       kZeta, kAlpha, kDt, mts, &c, 0.05);
+  const CompensatedStability s = study::compensated_stability(
+      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &c, 0.05);
   ASSERT_TRUE(s.stable) << s.spectral_radius;
   ASSERT_TRUE(s.discrete_margin.has_value());
   const double margin = *s.discrete_margin;
-  EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &c,
-                             0.9 * margin, 20.0),
+  EXPECT_LT(study::simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                    mts, &c, 0.9 * margin, 20.0),
             1.0)
       << "margin " << margin;
-  EXPECT_GT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &c,
-                             1.1 * margin, 20.0),
+  EXPECT_GT(study::simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                    mts, &c, 1.1 * margin, 20.0),
             1.0)
       << "margin " << margin;
 }
@@ -327,10 +327,10 @@ TEST(CompensatedStabilityTest, AdaptedModelBasedIsAnalysedFrozenAtItsStartAndSay
   const config::Compensation fixed = model_based(0.0046, 0.0218);
   config::Compensation adapted = fixed;
   adapted.mutable_model_based()->mutable_adaptive_correction()->set_window(1.0);
-  const CompensatedStability f = compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod,
-                                                       kZeta, kAlpha, kDt, mts, &fixed, 0.05);
-  const CompensatedStability a = compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod,
-                                                       kZeta, kAlpha, kDt, mts, &adapted, 0.05);
+  const CompensatedStability f = study::compensated_stability(
+      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &fixed, 0.05);
+  const CompensatedStability a = study::compensated_stability(
+      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &adapted, 0.05);
   EXPECT_TRUE(f.frozen_coefficients.empty()) << f.frozen_coefficients;
   EXPECT_NE(a.frozen_coefficients.find("time-varying"), std::string::npos) << a.frozen_coefficients;
   EXPECT_NE(a.frozen_coefficients.find("a1 = 0 ms"), std::string::npos) << a.frozen_coefficients;
@@ -342,23 +342,24 @@ TEST(CompensatedStabilityTest, AdaptedModelBasedIsAnalysedFrozenAtItsStartAndSay
   // on the stable side. At 1.1x it decays too (measured: growth 6e-4, and still 3e-3 at 3x): once
   // its 1 s window has filled, the correction learns the extra delay as model error, so the
   // frozen margin is conservative; it is the guarantee for the first window, before any fit.
-  EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts,
-                             &adapted, 0.9 * *a.discrete_margin, 20.0),
+  EXPECT_LT(study::simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                    mts, &adapted, 0.9 * *a.discrete_margin, 20.0),
             1.0);
-  EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts,
-                             &adapted, 1.1 * *a.discrete_margin, 20.0),
+  EXPECT_LT(study::simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                    mts, &adapted, 1.1 * *a.discrete_margin, 20.0),
             1.0);
 }
 
 TEST(CompensatedStabilityTest, RefusesWhatItCannotRepresent) {
   google::protobuf::RepeatedPtrField<config::DelayStage> jitter;
   jitter.Add()->mutable_jitter()->set_mean_delay(0.01);
-  EXPECT_THROW(compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, 1e-3,
-                                     jitter, nullptr, 0.05),
+  EXPECT_THROW(study::compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0,
+                                            1e-3, jitter, nullptr, 0.05),
                std::invalid_argument);
-  EXPECT_THROW(compensated_stability(IntegratorKind::kNewmarkAverageAcceleration, kPeriod, kZeta,
-                                     1.0, 1e-3, shift_then_first_order(0.004, 0.0), nullptr, 0.05),
-               std::invalid_argument);
+  EXPECT_THROW(
+      study::compensated_stability(IntegratorKind::kNewmarkAverageAcceleration, kPeriod, kZeta, 1.0,
+                                   1e-3, shift_then_first_order(0.004, 0.0), nullptr, 0.05),
+      std::invalid_argument);
 }
 
 }  // namespace
@@ -465,7 +466,7 @@ TEST(LoopStabilityTest, ABlockChainIsAnalysedAsTheConfigThatBuildsIt) {
   constexpr double kDt = 1e-3, kAlpha = 1.0;
   const auto mts = shift_then_first_order(0.0046, 0.0218);
   const config::Compensation inverse = model_based(0.0046, 0.0218);
-  const CompensatedStability from_config = compensated_stability(
+  const CompensatedStability from_config = study::compensated_stability(
       IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, mts, &inverse, 0.05);
   DelayChain chain;
   chain.add(std::make_unique<TimeShift>(0.0046, kDt));
@@ -493,23 +494,23 @@ TEST(LoopStabilityTest, ATrackingLoopsMarginIsTheSimulatedOne) {
   loop->mutable_plant()->add_denominator(1.0);
   loop->mutable_plant()->add_denominator(50.0);
   loop->set_force_delay_periods(1);
-  const CompensatedStability s = compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod,
-                                                       kZeta, kAlpha, kDt, stages, nullptr, 0.05);
+  const CompensatedStability s = study::compensated_stability(
+      IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, stages, nullptr, 0.05);
   ASSERT_TRUE(s.stable) << s.spectral_radius;
   EXPECT_TRUE(s.linearised.empty()) << s.linearised;
   ASSERT_TRUE(s.discrete_margin && s.continuous_margin);
   const double margin = *s.discrete_margin;
   EXPECT_NEAR(*s.continuous_margin, margin, 0.15 * margin);
-  EXPECT_LT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, stages,
-                             nullptr, 0.9 * margin, 20.0),
+  EXPECT_LT(study::simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                    stages, nullptr, 0.9 * margin, 20.0),
             1.0)
       << "margin " << margin;
-  EXPECT_GT(simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, stages,
-                             nullptr, 1.1 * margin, 20.0),
+  EXPECT_GT(study::simulated_growth(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt,
+                                    stages, nullptr, 1.1 * margin, 20.0),
             1.0)
       << "margin " << margin;
   loop->mutable_converter()->set_quantum(1e-9);
-  const CompensatedStability quantised = compensated_stability(
+  const CompensatedStability quantised = study::compensated_stability(
       IntegratorKind::kExplicitNewmark, kPeriod, kZeta, kAlpha, kDt, stages, nullptr, 0.05);
   EXPECT_NE(quantised.linearised.find("converters"), std::string::npos) << quantised.linearised;
   EXPECT_EQ(quantised.discrete_margin, s.discrete_margin);
@@ -519,8 +520,8 @@ TEST(LoopStabilityTest, RefusalNamesTheBlockThatCannotBeRepresented) {
   google::protobuf::RepeatedPtrField<config::DelayStage> stages = shift_then_first_order(0.004, 0);
   stages.Add()->mutable_eq1_lag()->set_delay(0.01);
   try {
-    compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, 1e-3, stages,
-                          nullptr, 0.05);
+    study::compensated_stability(IntegratorKind::kExplicitNewmark, kPeriod, kZeta, 1.0, 1e-3,
+                                 stages, nullptr, 0.05);
     FAIL() << "an Eq1 stage analysed";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("delay stage 2 eq1-lag("), std::string::npos) << e.what();
