@@ -89,5 +89,26 @@ TEST(SnapshotCache, ABuildThatTakesLongIsRepeatedOnlyAfterItsCostRatioTimesItsDu
   EXPECT_EQ(cache.served(), 103u);
 }
 
+// A build preempted on a busy machine (500 ms on the wall, 10 ms of its thread's CPU) is not taken
+// for a costly one: the next build comes at the 200 ms period, not 20 x 500 ms = 10 s later.
+TEST(SnapshotCache, ABuildThatWaitedForACpuIsSpacedByItsCpuTimeNotItsWallTime) {
+  auto now = std::chrono::steady_clock::time_point{};
+  std::chrono::nanoseconds cpu{0};
+  int built = 0;
+  SnapshotCache cache(
+      [&] {
+        now += 500ms;
+        cpu += 10ms;
+        return "copy " + std::to_string(++built);
+      },
+      200ms, [&] { return now; }, [&] { return cpu; });
+  EXPECT_EQ(*cache.get(), "copy 1");
+  now += 199ms;
+  EXPECT_EQ(*cache.get(), "copy 1");
+  now += 1ms;
+  EXPECT_EQ(*cache.get(), "copy 2");
+  EXPECT_EQ(cache.builds(), 2u);
+}
+
 }  // namespace
 }  // namespace rths::view
