@@ -65,7 +65,6 @@ TEST(DescribeResidual, ASinusoidIsPeriodicWithItsFrequencyAndAmplitude) {
   EXPECT_GT(d.explained, 0.9);
 }
 
-// Stiffer on one side than on the other: a residual even in the input.
 // A load cell's slow thermal cycle, 1.95 cycles in the 15 s record (0.13 Hz, below
 // kMinPeriodicFrequency), is periodic at its frequency: the slow band starts at
 // kMinPeriodicCycles in the record.
@@ -95,6 +94,7 @@ TEST(DescribeResidual, ASlowDriftIsNotPeriodic) {
   }
 }
 
+// Stiffer on one side than on the other: a residual even in the input.
 TEST(DescribeResidual, AResidualOfTheInputsSignIsDirectionWithItsAsymmetry) {
   Synthetic s = synthetic(0.05);
   for (std::size_t j = 0; j < kSamples; ++j) s.residual[j] += 0.1 * std::abs(s.prediction[j]);
