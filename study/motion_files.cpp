@@ -163,9 +163,16 @@ std::optional<MotionFileExtent> motion_file_extent(const std::filesystem::path& 
     const At2Header header = read_at2_header(in, path);
     return MotionFileExtent{static_cast<std::uint64_t>(header.npts), header.dt};
   }
-  if (!(column_dt > 0.0)) return std::nullopt;
-  const std::uint64_t lines = count_data_lines(path);
-  return MotionFileExtent{lines > 0 ? lines - 1 : 0, column_dt};
+  if (column_dt == 0.0) return std::nullopt;  // not given: the file's time column states it
+  const std::uint64_t lines = column_dt > 0.0 ? count_data_lines(path) : 0;
+  const MotionFileExtent extent{lines > 0 ? lines - 1 : 0, column_dt};
+  if (!(column_dt > 0.0) || !std::isfinite(extent.seconds())) {
+    throw std::invalid_argument(
+        path.string() + ": motion.column_dt = " + core::format_number(column_dt) + " s over " +
+        std::to_string(extent.samples) +
+        " samples: the step must be > 0 (or 0: the file's time column) and the record finite");
+  }
+  return extent;
 }
 
 std::uintmax_t motion_file_limit_bytes() {

@@ -46,9 +46,10 @@ struct MotionFileExtent {
   double seconds() const { return dt * static_cast<double>(samples); }
 };
 // Sizes the file first (require_motion_file_size). A column file scanned as bytes in 1 MiB
-// blocks, holding nothing else. Empty for a column file without column_dt > 0 (its dt is in its
+// blocks, holding nothing else. Empty for a column file with column_dt 0 (its dt is in its
 // times, known once two rows are parsed). Throws std::invalid_argument on a malformed AT2 header
-// (as read_at2) or a file that cannot be opened.
+// (as read_at2), a file that cannot be opened, or a column_dt that is negative, not a number, or
+// so large that dt x samples is not finite (naming motion.column_dt).
 std::optional<MotionFileExtent> motion_file_extent(const std::filesystem::path& path, bool at2,
                                                    double column_dt);
 

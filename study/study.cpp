@@ -135,7 +135,13 @@ void require_run_memory(const PreparedStudy& prepared, double dt, double seconds
                         const std::string& source) {
   const config::Study& study = prepared.config;
   const config::SafetyLimits& limits = study.deployment().limits();
-  require_memory(static_cast<std::uint64_t>(seconds / dt) + 2,
+  const double steps = seconds / dt;
+  // 1.8e19 steps is past what a uint64 holds (2^64 = 1.8447e19): refused before the cast.
+  require(std::isfinite(steps) && steps < 1.8e19, "integrator.dt",
+          "integrator.dt = " + core::format_number(dt) + " s over the " +
+              core::format_number(seconds) + " s record" + source + " is " +
+              core::format_number(steps) + " steps, not a count a run can keep");
+  require_memory(static_cast<std::uint64_t>(steps) + 2,
                  run_bytes_per_step(prepared.recorders, prepared.base.model.dofs(),
                                     prepared.base.partition.actuator_storeys.size(),
                                     static_cast<std::size_t>(std::max(1, study.cases_size())),

@@ -10,8 +10,10 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <optional>
 
+#include "core/number_text.h"
 #include "study/motion_files.h"
 #include "study/study.h"
 
@@ -170,6 +172,35 @@ TEST(MemoryBudget, AMotionWhoseRunCannotFitIsRefusedByItsExtentBeforeARowIsParse
   study.mutable_integrator()->set_dt(0.001);  // fits: the file is then read, and its line refused
   EXPECT_THAT(refusal([&] { prepare_study(study, kConfigs); }),
               HasSubstr("'not-a-number' is not a finite number"));
+}
+
+// A hostile column_dt is refused by name before it reaches a count of steps (a double past 2^64
+// cast to uint64 is undefined behaviour).
+TEST(MemoryBudget, AColumnDtWithoutAFiniteRecordIsRefusedNamingIt) {
+  const Scratch scratch("hostile_column_dt");
+  const auto motion = scratch.dir / "short.txt";
+  {
+    std::ofstream out(motion);
+    for (int i = 0; i < 1000; ++i) out << (i % 7) * 0.001 << "\n";
+  }
+  config::Study study = load_study(kConfigs / "paper_frame.textproto");
+  study.mutable_motion()->set_path(motion.string());
+  study.mutable_motion()->clear_sha256();
+  study.mutable_motion()->set_column_units(config::GroundMotion::G);
+  study.mutable_integrator()->set_dt(0.0);
+  for (const double hostile : {1e308, std::numeric_limits<double>::infinity(),
+                               std::numeric_limits<double>::quiet_NaN(), -0.01}) {
+    study.mutable_motion()->set_column_dt(hostile);
+    EXPECT_THAT(refusal([&] { prepare_study(study, kConfigs); }),
+                HasSubstr("motion.column_dt = " + core::format_number(hostile) + " s over"))
+        << hostile;
+  }
+  // A finite record whose steps at dt overflow a count: 1e12 s x 999 samples at 1e-6 s.
+  study.mutable_motion()->set_column_dt(1e12);
+  study.mutable_integrator()->set_dt(1e-6);
+  EXPECT_THAT(refusal([&] { prepare_study(study, kConfigs); }),
+              testing::AllOf(HasSubstr("integrator.dt = 1e-06 s over the 9.99e+14 s record"),
+                             HasSubstr("steps, not a count a run can keep")));
 }
 
 }  // namespace
