@@ -128,8 +128,9 @@ At2Header read_at2_header(std::istream& in, const std::filesystem::path& path) {
   return parse_at2_header(line, path);
 }
 
-// The lines of a text file holding anything but blanks (space, tab, CR, FF) whose first such
-// character is not '#': what a column reader takes as a title or a row. Scans bytes only.
+// The lines of a text file holding anything but field separators (is_field_separator) whose
+// first such character is not '#': what for_each_text_row takes as a title or a row. Scans bytes
+// only.
 std::uint64_t count_data_lines(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::invalid_argument(path.string() + ": cannot open ground-motion file");
@@ -143,7 +144,7 @@ std::uint64_t count_data_lines(const std::filesystem::path& path) {
       const char c = block[static_cast<std::size_t>(i)];
       if (c == '\n') {
         at_line_start = true;
-      } else if (at_line_start && c != ' ' && c != '\t' && c != '\r' && c != '\f') {
+      } else if (at_line_start && !is_field_separator(c)) {
         at_line_start = false;
         if (c != '#') ++lines;
       }

@@ -38,8 +38,8 @@ void require_motion_file_size(const std::filesystem::path& path);
 // budget is refused in the time it takes to scan the bytes, not to parse them (a 40 MiB column
 // file took over a second to parse only to be refused). `samples` is a lower bound on what the
 // reader finds: an AT2 header's NPTS (the reader refuses any other count), or a column file's
-// lines holding anything but blanks and not starting with '#', less one (a title line, which
-// the reader skips). `dt` (s): the AT2 header's DT, or the given column_dt.
+// lines holding anything but field separators (study/text_columns.h) and not starting with '#',
+// less one (a title line, which the reader skips). `dt` (s): the AT2 header's DT, or the given column_dt.
 struct MotionFileExtent {
   std::uint64_t samples = 0;
   double dt = 0.0;  // s

@@ -52,9 +52,9 @@ void for_each_text_row(const std::filesystem::path& path, const std::string& wha
     fields.clear();
     std::size_t pos = 0;
     for (;;) {
-      pos = line.find_first_not_of(" \t,\r", pos);
+      pos = line.find_first_not_of(kFieldSeparators, pos);
       if (pos == std::string::npos) break;
-      const std::size_t end = std::min(line.find_first_of(" \t,\r", pos), line.size());
+      const std::size_t end = std::min(line.find_first_of(kFieldSeparators, pos), line.size());
       fields.push_back(line.substr(pos, end - pos));
       pos = end;
     }

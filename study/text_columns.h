@@ -34,6 +34,13 @@ struct TextColumns {
 TextColumns read_text_columns(const std::filesystem::path& path, const std::string& what,
                               bool title_allowed = false);
 
+// What separates fields on a line: space, tab, comma, CR. A line holding only these (once its
+// comment is cut) has no row; every counter of rows (motion_file_extent) uses this one rule.
+inline constexpr std::string_view kFieldSeparators = " \t,\r";
+constexpr bool is_field_separator(char c) {
+  return kFieldSeparators.find(c) != std::string_view::npos;
+}
+
 // The same rows, one at a time, none kept: visit(line, values) for each (values valid during the
 // call only), the title's fields into `title` when given. A reader that keeps only what it needs
 // of each row holds its samples, not an object per line (read_text_columns' TextRow: about 78

@@ -230,5 +230,22 @@ TEST(MotionFileExtent, AnAt2FilesExtentIsItsHeadersCountAndStep) {
   }
 }
 
+// A column file's extent counts the rows the reader finds, less one for a possible title: a line
+// of separators only (",") is no row to either, nor a line whose first field is a comment.
+TEST(MotionFileExtent, AColumnFilesExtentCountsTheRowsTheReaderReads) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("rths_extent_" + std::to_string(getpid()) + ".txt");
+  {
+    std::ofstream out(path);
+    out << "0.1\n,\n0.2\n , \t\r\n0.3\n,# note\n0.4\n,,\n";
+  }
+  const std::optional<MotionFileExtent> extent = motion_file_extent(path, false, 0.01);
+  const core::GroundMotion read = read_columns(path, 0.01, 1.0);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(extent.has_value());
+  EXPECT_EQ(read.acceleration.size(), 4u);
+  EXPECT_EQ(extent->samples, read.acceleration.size() - 1);
+}
+
 }  // namespace
 }  // namespace rths::study
