@@ -12,17 +12,14 @@
 
 namespace rths::study {
 
-// A motion file's reading once held far more than its bytes: read_text_columns keeps an object
-// per line, so a file of one-character samples ("1\n", the densest text) held 48.1 bytes of
-// memory per byte of file at its peak (measured: 2^24 + 1 lines, the row vector just doubled; 36
-// at 2^24). read_columns now streams the lines (for_each_text_row) and keeps the samples only: a
-// one-column 40 MiB file of 5.6 million samples is read, and its too-long run refused, in 0.7 s
-// holding 89 MB, where it held 438 MB. kMotionReadBytesPerFileByte stays the text reader's worst
-// case, a bound for every reader. Every reader below sizes the file before it reads a byte of it
-// (stat), and refuses one over motion_file_limit_bytes(): kMaxMotionFileBytes, or
-// less when the memory budget (memory_limit_bytes(), study/memory_budget.h) cannot hold the
-// reading of a file that large at kMotionReadBytesPerFileByte. 128 MiB of text is 5 million
-// two-column samples of 25 bytes: 1.5 hours at 1 kHz, beyond any earthquake record.
+// Reading a motion file holds at most kMotionReadBytesPerFileByte bytes of memory per byte of
+// file: read_text_columns' worst case (one-character samples, "1\n", an object per line, 48.1
+// at its peak), a bound for every reader; read_columns streams the lines (for_each_text_row) and
+// keeps the samples only. Every reader below sizes the file before it reads a byte of it
+// (stat), and refuses one over motion_file_limit_bytes(): kMaxMotionFileBytes, or less when the
+// memory budget (memory_limit_bytes(), study/memory_budget.h) cannot hold the reading of a file
+// that large at kMotionReadBytesPerFileByte. 128 MiB of text is 5 million two-column samples of
+// 25 bytes: 1.5 hours at 1 kHz, beyond any earthquake record.
 inline constexpr std::uintmax_t kMaxMotionFileBytes = 128ull << 20;
 inline constexpr std::uintmax_t kMotionReadBytesPerFileByte = 50;
 
@@ -35,11 +32,11 @@ std::uintmax_t motion_file_limit_bytes();
 void require_motion_file_size(const std::filesystem::path& path);
 
 // A motion file's extent before a sample of it is parsed, so that a run too long for the memory
-// budget is refused in the time it takes to scan the bytes, not to parse them (a 40 MiB column
-// file took over a second to parse only to be refused). `samples` is a lower bound on what the
-// reader finds: an AT2 header's NPTS (the reader refuses any other count), or a column file's
-// lines holding anything but field separators (study/text_columns.h) and not starting with '#',
-// less one (a title line, which the reader skips). `dt` (s): the AT2 header's DT, or the given column_dt.
+// budget is refused in the time it takes to scan the bytes, not to parse them. `samples` is a
+// lower bound on what the reader finds: an AT2 header's NPTS (the reader refuses any other
+// count), or a column file's lines holding anything but field separators (study/text_columns.h)
+// and not starting with '#', less one (a title line, which the reader skips). `dt` (s): the AT2
+// header's DT, or the given column_dt.
 struct MotionFileExtent {
   std::uint64_t samples = 0;
   double dt = 0.0;  // s
