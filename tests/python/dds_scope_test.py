@@ -27,7 +27,7 @@ def test_the_domain_is_the_one_the_cpp_tests_share():
 
 def test_the_scope_names_this_test_and_process_in_the_alphabet_topics_accept(monkeypatch):
     monkeypatch.delenv(dds_scope.SCOPE_VARIABLE, raising=False)
-    assert dds_scope.scope_dds_to_this_test() == dds_scope.SHARED_DOMAIN
+    assert dds_scope.scope_dds_to_this_test(monkeypatch) == dds_scope.SHARED_DOMAIN
     scope = os.environ[dds_scope.SCOPE_VARIABLE]
     assert re.fullmatch(r"[A-Za-z0-9_]+", scope), scope
     assert len(scope) <= header_constant("transport/topic_scope.h", "kMaxScopeLength"), scope
@@ -46,4 +46,13 @@ def test_names_cut_alike_and_pids_stay_apart():
 def test_outside_a_test_it_is_refused_naming_why(monkeypatch):
     monkeypatch.delenv("PYTEST_CURRENT_TEST")
     with pytest.raises(RuntimeError, match="PYTEST_CURRENT_TEST"):
-        dds_scope.scope_dds_to_this_test()
+        dds_scope.scope_dds_to_this_test(monkeypatch)
+
+
+def test_the_scope_is_restored_when_the_test_ends(monkeypatch):
+    with monkeypatch.context() as this_test:
+        this_test.setenv(dds_scope.SCOPE_VARIABLE, "the_scope_before")
+        with monkeypatch.context() as inner_test:
+            dds_scope.scope_dds_to_this_test(inner_test)
+            assert os.environ[dds_scope.SCOPE_VARIABLE] != "the_scope_before"
+        assert os.environ[dds_scope.SCOPE_VARIABLE] == "the_scope_before"

@@ -166,8 +166,8 @@ def test_identify_reads_a_record_without_force_for_the_actuator_alone(tmp_path):
         rths.identify(data, candidates=[], max_steps=0)
 
 
-def test_read_record_gives_the_exported_columns(config, tmp_path):
-    cli("launch", config, "--case", "lag_shift_14ms", "--domain", dds_scope.scope_dds_to_this_test(),
+def test_read_record_gives_the_exported_columns(config, tmp_path, monkeypatch):
+    cli("launch", config, "--case", "lag_shift_14ms", "--domain", dds_scope.scope_dds_to_this_test(monkeypatch),
         "--no-plots", "--out", tmp_path)
     record = tmp_path / "lag_shift_14ms.rthsrec"
     got = rths.read_record(record)

@@ -81,11 +81,11 @@ def test_a_study_built_in_code_equals_its_written_config_run_by_the_cli(tmp_path
         assert mine["status"] == theirs["status"]
 
 
-def test_a_study_built_in_code_runs_distributed_and_equals_its_in_process_run(tmp_path):
+def test_a_study_built_in_code_runs_distributed_and_equals_its_in_process_run(tmp_path, monkeypatch):
     study = frame("frame_distributed")
     study.deployment("nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR }")
     in_process = study.run()
-    summary = study.launch(tmp_path / "launch", domain=dds_scope.scope_dds_to_this_test(),
+    summary = study.launch(tmp_path / "launch", domain=dds_scope.scope_dds_to_this_test(monkeypatch),
                            cases=["lag_shift_14ms"], timeout=240)
     assert summary["exit_code"] == 0
     launched = {c["name"]: c for c in summary["cases"]}["lag_shift_14ms"]

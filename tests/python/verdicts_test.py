@@ -69,7 +69,7 @@ def built(motion, fraction, lag):
 
 @pytest.mark.parametrize("name,fraction,lag,diverges", CASES)
 def test_one_divergence_verdict_and_exit_code_everywhere(name, fraction, lag, diverges, motion,
-                                                         tmp_path):
+                                                         tmp_path, monkeypatch):
     want_exit = 1 if diverges else 0
     config = tmp_path / "study.textproto"
     config.write_text(study_text(motion, fraction, lag))
@@ -108,7 +108,7 @@ def test_one_divergence_verdict_and_exit_code_everywhere(name, fraction, lag, di
 
     study = built(motion, fraction, lag).deployment(
         "nodes { id: 1 kind: SUBSTRUCTURE } nodes { id: 2 kind: ACTUATOR_EMULATOR }")
-    launched = study.launch(tmp_path / "launch", domain=dds_scope.scope_dds_to_this_test(),
+    launched = study.launch(tmp_path / "launch", domain=dds_scope.scope_dds_to_this_test(monkeypatch),
                             cases=["lagged"], timeout=240)
     case = {c["name"]: c for c in launched["cases"]}["lagged"]
     verdicts["launch (lockstep, via Python)"] = (case["diverged"], launched["exit_code"])
@@ -117,7 +117,8 @@ def test_one_divergence_verdict_and_exit_code_everywhere(name, fraction, lag, di
 
 
 @pytest.mark.parametrize("name,fraction,lag,diverges", CASES)
-def test_sites_gives_the_same_verdict(name, fraction, lag, diverges, motion, tmp_path):
+def test_sites_gives_the_same_verdict(name, fraction, lag, diverges, motion, tmp_path,
+                                      monkeypatch):
     config = tmp_path / "study.textproto"
     config.write_text(study_text(motion, fraction, lag))
     sites = tmp_path / "sites.textproto"
@@ -126,7 +127,7 @@ def test_sites_gives_the_same_verdict(name, fraction, lag, diverges, motion, tmp
                      'sites { name: "lab" node_ids: [1, 2] }\n'
                      "deployment { nodes { id: 1 kind: SUBSTRUCTURE } "
                      "nodes { id: 2 kind: ACTUATOR_EMULATOR } start_timeout: 20 }\n")
-    domain = dds_scope.scope_dds_to_this_test()
+    domain = dds_scope.scope_dds_to_this_test(monkeypatch)
     done = subprocess.run([RTHS, "sites", sites, "--domain", str(domain), "--bin-dir",
                            BIN_DIR, "--out", tmp_path / "sites", "--no-plots"],
                           capture_output=True, text=True, timeout=240)

@@ -133,8 +133,8 @@ def test_sweep_mat_and_h5_hold_the_sweep_csv_with_text_columns(study, tmp_path):
     rths("sweep", study, "--shard", "0/2", "--format", "mat", "--out", tmp_path / "shard", expect=2)
 
 
-def test_launch_and_export_write_the_record_in_every_format(study, tmp_path):
-    rths("launch", study, "--case", "lag_shift_14ms", "--domain", dds_scope.scope_dds_to_this_test(),
+def test_launch_and_export_write_the_record_in_every_format(study, tmp_path, monkeypatch):
+    rths("launch", study, "--case", "lag_shift_14ms", "--domain", dds_scope.scope_dds_to_this_test(monkeypatch),
          "--no-plots", "--format", "h5", "--out", tmp_path / "launch")
     record = tmp_path / "launch/lag_shift_14ms.rthsrec"
     out = tmp_path / "export"
