@@ -3,15 +3,19 @@
 #include <netinet/in.h>
 #include <pthread.h>
 #include <sched.h>
+#include <spdlog/spdlog.h>
 #include <strings.h>
 #include <sys/epoll.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
 #include <stdexcept>
+#include <string>
 #include <string_view>
+#include <system_error>
 
 namespace rths::view {
 namespace {
@@ -51,11 +55,22 @@ bool set_thread_nice(int nice) {
 }
 
 bool enter_view_thread(const char* name, int nice) {
-  const bool named = pthread_setname_np(pthread_self(), name) == 0;
+  std::string refused;  // each step the kernel refused, with its errno
+  const auto note = [&refused](const std::string& step, int error) {
+    refused += (refused.empty() ? "" : "; ") + step + " (errno " + std::to_string(error) + ", " +
+               std::system_category().message(error) + ")";
+  };
+  if (const int error = pthread_setname_np(pthread_self(), name); error != 0)
+    note("its name", error);
   const sched_param ordinary{};  // SCHED_OTHER takes priority 0
   // Leaving a real-time policy needs no privilege; pid 0 is the calling thread on Linux.
-  const bool ordinary_set = sched_setscheduler(0, SCHED_OTHER, &ordinary) == 0;
-  return set_thread_nice(nice) && named && ordinary_set;
+  if (sched_setscheduler(0, SCHED_OTHER, &ordinary) != 0) note("SCHED_OTHER", errno);
+  if (!set_thread_nice(nice)) note("nice " + std::to_string(nice), errno);
+  if (refused.empty()) return true;
+  // Once per thread, as it starts: a view thread left at the loop's priority competes with it.
+  spdlog::warn("view thread {} may serve at its creator's priority: the kernel refused {}", name,
+               refused);
+  return false;
 }
 
 RequestGate::RequestGate(GateOptions options, std::function<void(int fd)> serve)

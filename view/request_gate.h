@@ -62,7 +62,8 @@ bool set_thread_nice(int nice);
 // /proc/PID/task/TID/comm and `top -H` show it, so its CPU time can be told from the loop's),
 // leaves any scheduling policy it inherited (SCHED_FIFO / RR from a raised creator, SCHED_BATCH,
 // SCHED_IDLE) for SCHED_OTHER, and sets `nice`: the view's threads run below every loop thread of
-// the run, never at a real-time priority. False when the kernel refused a step (the rest is done).
+// the run, never at a real-time priority. False when the kernel refused a step (the rest is done),
+// after one spdlog warning naming the thread and each refused step with its errno.
 bool enter_view_thread(const char* name, int nice);
 
 class RequestGate {

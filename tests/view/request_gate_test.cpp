@@ -2,13 +2,16 @@
 // (headers and body), idle connections beyond the limit are closed oldest first, one whose
 // request has begun is kept over idle ones, one address at its share displaces only its own, a
 // connection that does not finish its request in time is closed, an oversized header block is
-// refused; its threads are the view's own (named, SCHED_OTHER at its nice) whoever starts it.
+// refused; its threads are the view's own (named, SCHED_OTHER at its nice) whoever starts it,
+// and warn when the kernel refuses a step of that.
 #include "view/request_gate.h"
 
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sched.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -19,6 +22,7 @@
 #include <fstream>
 #include <memory>
 #include <set>
+#include <sstream>
 #include <thread>
 
 namespace rths::view {
@@ -250,6 +254,24 @@ TEST(RequestGate, ItsThreadsAreNamedAndOrdinaryAtItsNiceWhateverTheCreatorRunsAt
   EXPECT_EQ(threads_named("view-gate"), poller);
   gate->stop();
   EXPECT_TRUE(threads_named("view-serve").empty());
+}
+
+// A step the kernel refuses is not silent: a name past 15 characters (ERANGE, refused without any
+// privilege) makes the thread warn once, naming itself and the errno, and answer false.
+TEST(RequestGate, AThreadWhoseSetUpTheKernelRefusesWarnsNamingItselfAndTheErrno) {
+  std::ostringstream log;
+  const auto previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+      "capture", std::make_shared<spdlog::sinks::ostream_sink_mt>(log)));
+  bool entered = true;
+  std::thread([&] { entered = enter_view_thread("view-name-too-long-for-comm", 10); }).join();
+  spdlog::set_default_logger(previous);
+  EXPECT_FALSE(entered);
+  const std::string text = log.str();
+  EXPECT_NE(text.find("[warning]"), std::string::npos) << text;
+  EXPECT_NE(text.find("view thread view-name-too-long-for-comm"), std::string::npos) << text;
+  EXPECT_NE(text.find("its name (errno " + std::to_string(ERANGE)), std::string::npos) << text;
+  EXPECT_EQ(text.find("SCHED_OTHER"), std::string::npos) << text;  // the other steps were done
 }
 
 }  // namespace
