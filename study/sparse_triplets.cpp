@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "core/number_text.h"
@@ -81,11 +82,29 @@ core::SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& tripl
     const auto i = static_cast<Eigen::Index>(triplets.row(k));
     const auto j = static_cast<Eigen::Index>(triplets.col(k));
     entries.emplace_back(i, j, triplets.value(k));
-    if (triplets.symmetric() && i != j) entries.emplace_back(j, i, triplets.value(k));
   }
-  core::SparseMat m(static_cast<Eigen::Index>(triplets.rows()),
-                    static_cast<Eigen::Index>(triplets.cols()));
-  m.setFromTriplets(entries.begin(), entries.end(), [](double, double last) { return last; });
+  return sparse_from_triplets(static_cast<Eigen::Index>(triplets.rows()),
+                              static_cast<Eigen::Index>(triplets.cols()), std::move(entries),
+                              triplets.symmetric());
+}
+
+core::SparseMat sparse_from_triplets(Eigen::Index rows, Eigen::Index cols,
+                                     std::vector<Eigen::Triplet<double>> triplets, bool symmetric) {
+  if (symmetric) {  // from the back, so that each mirror lands right after its entry
+    const std::size_t given = triplets.size();
+    std::size_t write = given + static_cast<std::size_t>(std::count_if(
+                                    triplets.begin(), triplets.end(),
+                                    [](const auto& t) { return t.row() != t.col(); }));
+    triplets.resize(write);
+    for (std::size_t read = given; read-- > 0;) {
+      const Eigen::Triplet<double> entry = triplets[read];
+      if (entry.row() != entry.col())
+        triplets[--write] = Eigen::Triplet<double>(entry.col(), entry.row(), entry.value());
+      triplets[--write] = entry;
+    }
+  }
+  core::SparseMat m(rows, cols);
+  m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
   m.prune(0.0);
   m.makeCompressed();
   return m;

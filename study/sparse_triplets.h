@@ -13,6 +13,12 @@
 //     Matrix Market coordinate file is read: an entry given twice keeps its last value, explicit
 //     zeros are dropped. Throws std::invalid_argument naming the field and entry:
 //     "structure.matrices.mass.sparse.row[3]: 12 is outside 0..9 (rows 10)".
+//   sparse_from_triplets(rows, cols, triplets, symmetric) -> SparseMat
+//     the one assembly of every sparse reader (config triplets, Matrix Market coordinate files,
+//     MATLAB sparse variables): symmetric mirrors each off-diagonal entry across the diagonal
+//     (in place, after the entry: `triplets` needs room for the mirrors to avoid a reallocation),
+//     an entry given twice keeps its last value, explicit zeros are dropped, the result is
+//     compressed. @pre every index inside rows x cols.
 //   write_sparse_triplets(m) -> config::Matrix::SparseTriplets
 //     m's stored nonzeros, column by column; an exactly symmetric square m as its lower triangle
 //     with `symmetric` set (half the off-diagonal entries). read_sparse_triplets of the result
@@ -20,6 +26,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/structure.h"
 #include "rths/proto/config.pb.h"
@@ -35,6 +42,9 @@ constexpr std::uint64_t kSparseBytesPerEntry = 52;
 
 core::SparseMat read_sparse_triplets(const config::Matrix::SparseTriplets& triplets,
                                      const std::string& field);
+
+core::SparseMat sparse_from_triplets(Eigen::Index rows, Eigen::Index cols,
+                                     std::vector<Eigen::Triplet<double>> triplets, bool symmetric);
 
 config::Matrix::SparseTriplets write_sparse_triplets(const core::SparseMat& m);
 

@@ -107,11 +107,7 @@ core::SparseMat mat_sparse_matrix(const matvar_t& var, const std::string& named)
         fail(named, "is a sparse matrix whose indices run past its size");
       triplets.emplace_back(static_cast<Eigen::Index>(sparse.ir[k]), j, values[k]);
     }
-  core::SparseMat m(rows, cols);
-  m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
-  m.prune(0.0);
-  m.makeCompressed();
-  return m;
+  return sparse_from_triplets(rows, cols, std::move(triplets), false);
 }
 
 // A full MATLAB variable is sized from its header before its data is read: rows x cols doubles
@@ -262,17 +258,12 @@ core::SparseMat market_coordinate(MarketLines& lines, Eigen::Index rows, Eigen::
     if (v.size() != 3) fail(lines.at(), "an entry is 'row col value'");
     const int i = market_index(v[0], rows, lines), j = market_index(v[1], cols, lines);
     triplets.emplace_back(i, j, v[2]);
-    if (symmetric && i != j) triplets.emplace_back(j, i, v[2]);
     ++filled;
   }
   if (filled != entries)
     fail(where,
          "declares " + std::to_string(entries) + " entries but holds " + std::to_string(filled));
-  core::SparseMat m(rows, cols);
-  m.setFromTriplets(triplets.begin(), triplets.end(), [](double, double last) { return last; });
-  m.prune(0.0);
-  m.makeCompressed();
-  return m;
+  return sparse_from_triplets(rows, cols, std::move(triplets), symmetric);
 }
 
 // Array entries, column by column (a symmetric file: the lower triangle, column by column).
@@ -313,10 +304,12 @@ MatrixData market_matrix(const std::filesystem::path& path, const std::string& w
   MarketLines lines(in, where);
   if (!lines.next()) fail(where, "has no size line");
   const std::vector<double> v = lines.numbers();
-  if (v.size() != (header.coordinate ? 3u : 2u) || v[0] < 1 || v[1] < 1 || v[0] > 1e5 ||
-      v[1] > 1e5 || v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]))
+  constexpr double kMaxSize = kMaxMatrixDimension;
+  if (v.size() != (header.coordinate ? 3u : 2u) || v[0] < 1 || v[1] < 1 || v[0] > kMaxSize ||
+      v[1] > kMaxSize || v[0] != std::floor(v[0]) || v[1] != std::floor(v[1]))
     fail(lines.at(), "the size line must be 'rows cols" +
-                         std::string(header.coordinate ? " entries'" : "'") + " (each 1..100000)");
+                         std::string(header.coordinate ? " entries'" : "'") + " (each 1.." +
+                         std::to_string(kMaxMatrixDimension) + ")");
   check_market_size(v, header, error ? 0 : file_bytes, lines.at());
   const auto rows = static_cast<Eigen::Index>(v[0]), cols = static_cast<Eigen::Index>(v[1]);
   MatrixData out;
