@@ -37,9 +37,6 @@ runtime::AnswerSource::Next ControllerAnswers::next(runtime::Feedback& feedback)
     dispatch_fault_.clear();
     return out;
   }
-  // The exchange ends at the STOP: a late answer after it is neither judged nor logged, so the
-  // hold log ends in the STOP that was sent.
-  if (stop_sent_) return out;
   const std::int64_t now = exchange_->now_ns();
   if (exchange_->holding()) {
     hold_done_ = exchange_->hold_step(now);

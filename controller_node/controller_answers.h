@@ -12,8 +12,8 @@
 // several frames may be in flight and a controller 2 ms behind costs 2 ms, not a backlog. It
 // also expires frames past the reply timeout (a staleness limit) and, once held or stopped, runs
 // the hold: HOLD frames until the controller answers held or the hold time passes, then (stopped)
-// one STOP frame, after which nothing more is read. A command of the wrong size, or a frame that
-// cannot be sent, is the next fault.
+// one STOP frame; after it nothing is sent, and whatever the controller still sends is read and
+// logged. A command of the wrong size, or a frame that cannot be sent, is the next fault.
 
 #include <memory>
 #include <string>
