@@ -58,9 +58,9 @@ inline int trials() {
 
 // The paper frame at step `dt`, truncated to `duration`, with one CONTROLLER node (id 2) behind
 // the doc controller's link; `deployment`, `link` and `motion` are appended inside their blocks.
-inline std::string study(double duration, double dt, int node_port, int peer_port,
-                         const std::string& link, const std::string& deployment,
-                         const std::string& motion = "") {
+inline std::string study_text(double duration, double dt, int node_port, int peer_port,
+                              const std::string& link, const std::string& deployment,
+                              const std::string& motion = "") {
   char dt_text[64];
   std::snprintf(dt_text, sizeof dt_text, "%.17g", dt);
   return "name: \"paper_frame\"\n"

@@ -49,7 +49,7 @@ using namespace doc_test;
 // every DOF, command and realised drift, and 1e-5 x peak |force| on the force.
 void lockstep_equals_in_process(const std::string& name, const std::string& case_name,
                                 double pure_lag, int node_port, int peer_port) {
-  const std::string text = study(2.0, 0.001, node_port, peer_port, "", "");
+  const std::string text = study_text(2.0, 0.001, node_port, peer_port, "", "");
   const core::SimulationResult reference = test::reference_result(text, case_name);
   DocControllerOptions options = controller_options(peer_port, node_port, 0.001);
   options.pure_lag = pure_lag;
@@ -127,7 +127,7 @@ TEST_F(DocControllerTest, LockstepWithTheRigsPureLagEqualsTheShiftCase) {
 // field NaN or infinite (padding is never read)": a NaN in the feedback's F32 padding must not
 // stop the run.
 TEST_F(DocControllerTest, FeedbackPaddingIsNeverRead) {
-  const std::string text = study(0.3, 0.001, 47330, 47331, "", "");
+  const std::string text = study_text(0.3, 0.001, 47330, 47331, "", "");
   DocControllerOptions options = controller_options(47331, 47330, 0.001);
   options.f32_padding = std::numeric_limits<float>::quiet_NaN();
   DocController controller(options);
@@ -144,8 +144,8 @@ TEST_F(DocControllerTest, FeedbackPaddingIsNeverRead) {
 // resolution rather than fail as DIFFERS.
 TEST_F(DocControllerTest, RthsLaunchAcceptsALockstepRunThroughF32Frames) {
   const auto dir = test::scratch_dir("doc_cli");
-  const std::string text = study(1.0, 0.001, 47304, 47305, "",
-                                 "domain_id: " + std::to_string(test::scope_dds_to_this_test()));
+  const std::string text = study_text(
+      1.0, 0.001, 47304, 47305, "", "domain_id: " + std::to_string(test::scope_dds_to_this_test()));
   const auto config = test::write_config(dir, text);
   const DocControllerOptions options = controller_options(47305, 47304, 0.001);
   DocController controller(options);
@@ -263,8 +263,8 @@ TEST_F(DocControllerTest, RealTimeAController2msBehindCostsAnswerAgeNotAHold) {
   for (int trial = 0; trial < trials(); ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     const std::string text =
-        study(2.0, kRealTimeDt, 47306, 47307,
-              "reply_timeout_ms: " + std::to_string(kReplyTimeoutMs), real_time_deployment());
+        study_text(2.0, kRealTimeDt, 47306, 47307,
+                   "reply_timeout_ms: " + std::to_string(kReplyTimeoutMs), real_time_deployment());
     DocControllerOptions options = controller_options(47307, 47306, kRealTimeDt);
     options.answer_lag = 0.002;
     DocController controller(options);
@@ -287,8 +287,8 @@ TEST_F(DocControllerTest, AFloodFromAnotherPortDoesNotStopARealTimeRun) {
   for (int trial = 0; trial < trials(); ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     const std::string text =
-        study(2.0, kRealTimeDt, 47308, 47309,
-              "reply_timeout_ms: " + std::to_string(kReplyTimeoutMs), real_time_deployment());
+        study_text(2.0, kRealTimeDt, 47308, 47309,
+                   "reply_timeout_ms: " + std::to_string(kReplyTimeoutMs), real_time_deployment());
     DocControllerOptions options = controller_options(47309, 47308, kRealTimeDt);
     options.answer_lag = 0.002;
     DocController controller(options);
