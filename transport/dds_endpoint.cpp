@@ -1,6 +1,7 @@
 #include "transport/dds_endpoint.h"
 
 #include <dds/dds.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <atomic>
@@ -245,7 +246,11 @@ void DdsEndpoint::send(const Message& m) {
     // the first such sample at once but a later one only after its NackDelay (100 ms), holding
     // every command behind it: the node's first answers then come 100 ms late, past a 40 ms
     // answer window. So nothing more is written to the node until it has acknowledged the first.
-    if (created) Impl::acknowledged(w, kAddressedMatchTimeout);
+    if (created && !Impl::acknowledged(w, kAddressedMatchTimeout))
+      spdlog::warn(
+          "DDS: node {} did not acknowledge the first message on its command topic within {} "
+          "ms; what follows may reach it only after the reader's repair delay (about 100 ms)",
+          m.node_id, kAddressedMatchTimeout.count());
     return;
   }
   // To each node addressed so far, without allocating (a heartbeat goes out from the loop); each
