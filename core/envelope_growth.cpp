@@ -1,5 +1,7 @@
 #include "core/envelope_growth.h"
 
+#include "core/metrics.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -40,11 +42,7 @@ std::optional<EnvelopeGrowth> envelope_growth(std::span<const double> u, double 
     y[w] = std::log(peak);
   }
   const double n = static_cast<double>(windows);
-  double mean_t = 0.0, mean_y = 0.0;
-  for (std::size_t w = 0; w < windows; ++w) {
-    mean_t += t[w] / n;
-    mean_y += y[w] / n;
-  }
+  const double mean_t = mean(t), mean_y = mean(y);
   double stt = 0.0, sty = 0.0, syy = 0.0;
   for (std::size_t w = 0; w < windows; ++w) {
     stt += (t[w] - mean_t) * (t[w] - mean_t);

@@ -32,6 +32,14 @@ double sum_squared_error(std::span<const double> a, std::span<const double> b) {
   return sum;
 }
 
+// sum_i (x_i - mean)^2 (units of x squared); x is not empty.
+double squared_deviation_sum(std::span<const double> x) {
+  const double centre = mean(x);
+  double sum = 0.0;
+  for (double value : x) sum += (value - centre) * (value - centre);
+  return sum;
+}
+
 }  // namespace
 
 // A diverged run must show as NaN, not as whatever std::max happens to keep.
@@ -55,6 +63,26 @@ double median(std::vector<double> values) {
   const double lower =
       *std::max_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle));
   return 0.5 * (lower + upper);
+}
+
+double mean(std::span<const double> x) {
+  if (x.empty()) throw std::invalid_argument("mean: empty input");
+  double sum = 0.0;
+  for (double value : x) sum += value;
+  return sum / static_cast<double>(x.size());
+}
+
+double standard_deviation(std::span<const double> x) {
+  if (x.empty()) throw std::invalid_argument("standard_deviation: empty input");
+  return std::sqrt(squared_deviation_sum(x) / static_cast<double>(x.size()));
+}
+
+double sample_standard_deviation(std::span<const double> x) {
+  if (x.size() < 2) {
+    throw std::invalid_argument("sample_standard_deviation: needs 2 values or more, got " +
+                                std::to_string(x.size()));
+  }
+  return std::sqrt(squared_deviation_sum(x) / static_cast<double>(x.size() - 1));
 }
 
 double median_abs(std::span<const double> x) {

@@ -16,6 +16,10 @@
 //   J2 (%)         100 sqrt(sum (x_m - x_t)^2 / sum x_t^2)  normalised RMS tracking error.
 //   J3 (%)         100 max|x_m - x_t| / max|x_t|           peak tracking error.
 //   median         the textbook median: the middle value, or the mean of the two middle values.
+//   mean           sum_i x_i / N                            (units of x)
+//   standard_deviation         sqrt(sum_i (x_i - mean)^2 / N)        population, units of x
+//   sample_standard_deviation  sqrt(sum_i (x_i - mean)^2 / (N - 1))  from a sample, units of x;
+//                  needs N >= 2.
 //   grew_past_reference  divergence judged from the response: |u| of a case beyond
 //                  kDivergenceGrowth times the peak of its lag-free reference (or not finite).
 // All throw std::invalid_argument on empty or different-length inputs.
@@ -33,6 +37,9 @@ double relative_rms_error_pct(std::span<const double> reference, std::span<const
 double peak_abs(std::span<const double> x);
 double median_abs(std::span<const double> x);
 double median(std::vector<double> values);
+double mean(std::span<const double> x);
+double standard_deviation(std::span<const double> x);
+double sample_standard_deviation(std::span<const double> x);
 
 // A lagged case whose peak response is more than this many times its lag-free reference's has
 // diverged. A stable case near its critical delay can amplify a resonant response a few times

@@ -1,39 +1,12 @@
 #include "identify/fit/validation.h"
 
+#include "core/metrics.h"
 #include "identify/fit/evidence.h"
 
 #include <cmath>
 #include <stdexcept>
 
 namespace rths::identify {
-namespace {
-
-double mean_of(const std::vector<double>& x) {
-  double sum = 0.0;
-  for (double v : x) sum += v;
-  return x.empty() ? 0.0 : sum / static_cast<double>(x.size());
-}
-
-double spread_of(const std::vector<double>& x) {
-  if (x.size() < 2) return 0.0;
-  const double m = mean_of(x);
-  double sum = 0.0;
-  for (double v : x) sum += (v - m) * (v - m);
-  return std::sqrt(sum / static_cast<double>(x.size() - 1));
-}
-
-// Population standard deviation of x[begin, end).
-double std_of(const std::vector<double>& x, std::size_t begin, std::size_t end) {
-  double mean = 0.0;
-  for (std::size_t i = begin; i < end; ++i) mean += x[i];
-  mean /= static_cast<double>(end - begin);
-  double sum = 0.0;
-  for (std::size_t i = begin; i < end; ++i) sum += (x[i] - mean) * (x[i] - mean);
-  return std::sqrt(sum / static_cast<double>(end - begin));
-}
-
-}  // namespace
-
 KFoldResult kfold(const ChannelModel& model, const ChannelSignals& signals, std::size_t folds,
                   const FitOptions& options,
                   const std::function<void(std::size_t folds_done)>& on_fold) {
@@ -47,7 +20,7 @@ KFoldResult kfold(const ChannelModel& model, const ChannelSignals& signals, std:
   const auto specs = model.specs(signal_scales(signals));
   for (const auto& s : specs) out.param_names.push_back(s.name);
   std::vector<std::vector<double>> values(specs.size());
-  const double record_std = std_of(signals.target, 0, n);
+  const double record_std = core::standard_deviation(signals.target);
   for (std::size_t f = 0; f < folds; ++f) {
     const std::size_t begin = f * n / folds, end = (f + 1) * n / folds;
     Split split;
@@ -56,7 +29,8 @@ KFoldResult kfold(const ChannelModel& model, const ChannelSignals& signals, std:
       (i >= begin && i < end ? split.heldout : split.train).push_back(i);
     const FitResult fit = fit_channel(model, signals, split, options);
     // fit.heldout_error is by the block's own std; rescaled to the record's (same residual).
-    const double block_std = std_of(signals.target, begin, end);
+    const double block_std = core::standard_deviation(
+        std::span<const double>(signals.target).subspan(begin, end - begin));
     const double to_record = record_std > 0.0 && block_std > 0.0 ? block_std / record_std : 1.0;
     out.block_errors.push_back(fit.heldout_error);
     out.heldout_errors.push_back(fit.heldout_error * to_record);
@@ -68,11 +42,11 @@ KFoldResult kfold(const ChannelModel& model, const ChannelSignals& signals, std:
     for (std::size_t p = 0; p < specs.size(); ++p) values[p].push_back(fit.model.params[p]);
     if (on_fold) on_fold(f + 1);
   }
-  out.mean = mean_of(out.heldout_errors);
-  out.spread = spread_of(out.heldout_errors);
+  out.mean = core::mean(out.heldout_errors);
+  out.spread = core::sample_standard_deviation(out.heldout_errors);
   for (const auto& v : values) {
-    out.param_mean.push_back(mean_of(v));
-    out.param_spread.push_back(spread_of(v));
+    out.param_mean.push_back(core::mean(v));
+    out.param_spread.push_back(core::sample_standard_deviation(v));
   }
   return out;
 }

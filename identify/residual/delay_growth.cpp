@@ -1,35 +1,27 @@
 #include "identify/residual/delay_growth.h"
 
+#include "core/metrics.h"
+
 #include <cmath>
 #include <vector>
 
 namespace rths::identify {
-namespace {
-
-double mean_of(const std::vector<double>& x) {
-  double sum = 0.0;
-  for (double v : x) sum += v;
-  return x.empty() ? 0.0 : sum / static_cast<double>(x.size());
-}
-
-}  // namespace
-
 std::optional<DelayGrowth> delay_growth(std::span<const double> time,
                                         std::span<const double> residual,
                                         std::span<const double> prediction, double dt) {
   const std::size_t n = residual.size();
   if (n < 3 || prediction.size() != n || time.size() != n || !(dt > 0.0)) return std::nullopt;
   const double mid = 0.5 * (time.front() + time.back());
-  std::vector<double> rate(n), growing(n), r(residual.begin(), residual.end());
+  std::vector<double> rate(n), growing(n);
   for (std::size_t j = 0; j < n; ++j) {
     const std::size_t lo = j == 0 ? 0 : j - 1, hi = j + 1 == n ? j : j + 1;
     rate[j] = (prediction[hi] - prediction[lo]) / (static_cast<double>(hi - lo) * dt);
     growing[j] = rate[j] * (time[j] - mid);
   }
-  const double mr = mean_of(r), ma = mean_of(rate), mg = mean_of(growing);
+  const double mr = core::mean(residual), ma = core::mean(rate), mg = core::mean(growing);
   double aa = 0.0, gg = 0.0, ag = 0.0, ra = 0.0, rg = 0.0, rr = 0.0;
   for (std::size_t j = 0; j < n; ++j) {
-    const double a = rate[j] - ma, g = growing[j] - mg, y = r[j] - mr;
+    const double a = rate[j] - ma, g = growing[j] - mg, y = residual[j] - mr;
     aa += a * a;
     gg += g * g;
     ag += a * g;

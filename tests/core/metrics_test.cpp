@@ -24,6 +24,17 @@ TEST(Median, TextbookMiddleOrMeanOfTheTwoMiddle) {
   EXPECT_THROW(median({}), std::invalid_argument);
 }
 
+TEST(MeanAndSpread, HandComputedValues) {
+  const std::vector<double> x = {2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0};
+  EXPECT_DOUBLE_EQ(mean(x), 5.0);
+  EXPECT_DOUBLE_EQ(standard_deviation(x), 2.0);
+  EXPECT_DOUBLE_EQ(sample_standard_deviation(x), std::sqrt(32.0 / 7.0));
+  EXPECT_DOUBLE_EQ(standard_deviation(std::vector<double>{-3.0}), 0.0);
+  EXPECT_THROW(mean(std::vector<double>{}), std::invalid_argument);
+  EXPECT_THROW(standard_deviation(std::vector<double>{}), std::invalid_argument);
+  EXPECT_THROW(sample_standard_deviation(std::vector<double>{1.0}), std::invalid_argument);
+}
+
 TEST(RelativeErrors, AgainstTheReferencesOwnPeakAndRms) {
   const std::vector<double> reference = {0.0, 2.0, -4.0, 2.0};
   const std::vector<double> compared = {0.0, 2.5, -4.0, 1.5};
