@@ -1,7 +1,6 @@
 #include "core/loop_critical_delay.h"
 
 #include <algorithm>
-#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -71,14 +70,8 @@ CriticalDelayCheck check_loop_critical_delay(const StructuralModel& model,
                   " for the continuous limit, every link at the same lag; the discrete limit by "
                   "the modal approximation of the whole structure (each mode an SDOF with its "
                   "modal damping, the specimens' dashpots taken undelayed there)";
-  if (!loop.common_critical_lag) return check;
-  Eigen::Index nearest = 0;
-  (modes.omega.array() - loop.common_omega).abs().minCoeff(&nearest);
-  const double omega = modes.omega[nearest];
-  const Vec phi = modes.shapes.col(nearest);
-  check.governing_mode = static_cast<int>(nearest) + 1;
-  check.governing_period = 2.0 * std::numbers::pi / omega;
-  check.governing_fraction = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
+  if (loop.common_critical_lag)
+    check.govern_by_mode_nearest(loop.common_omega, modes, k_experimental);
   return check;
 }
 

@@ -15,6 +15,7 @@
 #include "core/exact_zoh.h"
 #include "core/simulation.h"
 #include "core/sparse_structure.h"
+#include "core/time_text.h"
 
 namespace rths::core {
 namespace {
@@ -453,9 +454,6 @@ double CriticalDelayCheck::margin() const {
 }
 
 std::string CriticalDelayCheck::describe() const {
-  std::ostringstream out;
-  out.precision(3);
-  out << "lag " << lag * 1e3 << " ms";
   const auto limit = critical();
   const std::string discrete_text =
       !discrete_skipped.empty()
@@ -463,20 +461,15 @@ std::string CriticalDelayCheck::describe() const {
           : "discrete none up to " + std::to_string(discrete_searched_steps) + " steps";
   const std::string continuous_text = coupled ? "continuous (coupled)" : "continuous";
   if (!limit) {
-    out << ": stable for every delay (" << continuous_text << "; " << discrete_text << ")";
-    return out.str();
+    return "lag " + format_ms(lag) + ": stable for every delay (" + continuous_text + "; " +
+           discrete_text + ")";
   }
-  out << " against a critical delay of " << *limit * 1e3 << " ms (" << continuous_text << " ";
-  if (continuous)
-    out << *continuous * 1e3 << " ms";
-  else
-    out << "none";
-  out << ", ";
-  if (discrete)
-    out << "discrete " << *discrete * 1e3 << " ms";
-  else
-    out << discrete_text;
-  out << "; mode " << governing_mode << ", T = " << governing_period << " s, experimental fraction "
+  std::ostringstream out;
+  out.precision(3);
+  out << "lag " << format_ms(lag) << " against a critical delay of " << format_ms(*limit) << " ("
+      << continuous_text << " " << (continuous ? format_ms(*continuous) : "none") << ", "
+      << (discrete ? "discrete " + format_ms(*discrete) : discrete_text) << "; mode "
+      << governing_mode << ", T = " << governing_period << " s, experimental fraction "
       << governing_fraction << "): ";
   const double m = margin();
   if (m < 0)
@@ -484,6 +477,17 @@ std::string CriticalDelayCheck::describe() const {
   else
     out << m * 100.0 << " % below it";
   return out.str();
+}
+
+void CriticalDelayCheck::govern_by_mode_nearest(double omega, const Modes& modes,
+                                                const SparseMat& k_experimental) {
+  Eigen::Index nearest = 0;
+  (modes.omega.array() - omega).abs().minCoeff(&nearest);
+  const double omega_i = modes.omega[nearest];
+  const Vec phi = modes.shapes.col(nearest);
+  governing_mode = static_cast<int>(nearest) + 1;
+  governing_period = 2.0 * std::numbers::pi / omega_i;
+  governing_fraction = std::clamp(phi.dot(k_experimental * phi) / (omega_i * omega_i), 0.0, 1.0);
 }
 
 namespace {
@@ -499,14 +503,7 @@ void apply_coupled(CriticalDelayCheck& check, const StructuralModel& model,
   check.assumed = coupled.assumed +
                   "; the discrete limit by the modal approximation (each mode an SDOF with its "
                   "modal damping and experimental fraction)";
-  if (!coupled.critical_delay) return;
-  Eigen::Index nearest = 0;
-  (modes.omega.array() - coupled.omega).abs().minCoeff(&nearest);
-  const double omega = modes.omega[nearest];
-  const Vec phi = modes.shapes.col(nearest);
-  check.governing_mode = static_cast<int>(nearest) + 1;
-  check.governing_period = 2.0 * std::numbers::pi / omega;
-  check.governing_fraction = std::clamp(phi.dot(k_experimental * phi) / (omega * omega), 0.0, 1.0);
+  if (coupled.critical_delay) check.govern_by_mode_nearest(coupled.omega, modes, k_experimental);
 }
 
 }  // namespace

@@ -43,6 +43,7 @@
 #include "core/delay.h"
 #include "core/integrators.h"
 #include "core/linear_dynamics.h"
+#include "core/structure.h"
 
 namespace rths::core {
 
@@ -160,6 +161,10 @@ struct CriticalDelayCheck {
   // mode 1, ...): PAST it by 76 %" or "... 42 % below it"; "continuous (coupled) ..." where the
   // coupled analysis gave it.
   std::string describe() const;
+  // Sets the governing mode to the one of `modes` whose omega_i (rad/s) is nearest `omega`
+  // (rad/s), a coupled analysis' crossing: its 1-based index, period 2 pi / omega_i (s) and
+  // fraction alpha_i = phi_i' K_e phi_i / omega_i^2, clamped to [0, 1].
+  void govern_by_mode_nearest(double omega, const Modes& modes, const SparseMat& k_experimental);
 };
 
 // The loop compensated by a Smith predictor on the force (core/force_predictor.h) whose model is

@@ -396,6 +396,49 @@ TEST(CriticalDelayCheck, PaperFrameAtOneThirdIsBelowTheLimit) {
   EXPECT_NE(check.describe().find("below it"), std::string::npos) << check.describe();
 }
 
+TEST(CriticalDelayCheck, DescribeStatesEachLimitInMilliseconds) {
+  CriticalDelayCheck check;
+  check.lag = 0.014;
+  check.discrete_searched_steps = 15;
+  EXPECT_EQ(check.describe(),
+            "lag 14 ms: stable for every delay (continuous; discrete none up to 15 steps)");
+  check.continuous = 0.00797;
+  check.discrete = 0.008;
+  check.governing_period = 0.5;
+  check.governing_fraction = 1.0;
+  EXPECT_EQ(check.describe(),
+            "lag 14 ms against a critical delay of 7.97 ms (continuous 7.97 ms, discrete 8 ms; "
+            "mode 1, T = 0.5 s, experimental fraction 1): PAST it by 75.7 %");
+  check.coupled = true;
+  check.continuous.reset();
+  check.discrete_skipped = "the discrete delay analysis does not cover alpha-os";
+  check.discrete = 0.0235;
+  EXPECT_EQ(check.describe(),
+            "lag 14 ms against a critical delay of 23.5 ms (continuous (coupled) none, discrete "
+            "23.5 ms; mode 1, T = 0.5 s, experimental fraction 1): 40.4 % below it");
+}
+
+// The governing mode of a coupled crossing is the mode nearest its frequency, with that mode's
+// period and experimental fraction phi' K_e phi / omega^2 (clamped to 1).
+TEST(CriticalDelayCheck, ACrossingIsGovernedByTheModeNearestItsFrequency) {
+  Modes modes;
+  modes.omega = Vec{{1.0, 10.0, 100.0}};
+  modes.shapes = Mat::Identity(3, 3);
+  SparseMat k_experimental = Mat(Vec{{2.0, 30.0, 0.0}}.asDiagonal()).sparseView();
+  CriticalDelayCheck check;
+  check.govern_by_mode_nearest(12.0, modes, k_experimental);
+  EXPECT_EQ(check.governing_mode, 2);
+  EXPECT_DOUBLE_EQ(check.governing_period, 2.0 * std::numbers::pi / 10.0);
+  EXPECT_DOUBLE_EQ(check.governing_fraction, 0.3);
+  check.govern_by_mode_nearest(0.2, modes, k_experimental);
+  EXPECT_EQ(check.governing_mode, 1);
+  EXPECT_DOUBLE_EQ(check.governing_period, 2.0 * std::numbers::pi);
+  EXPECT_DOUBLE_EQ(check.governing_fraction, 1.0);
+  check.govern_by_mode_nearest(80.0, modes, k_experimental);
+  EXPECT_EQ(check.governing_mode, 3);
+  EXPECT_DOUBLE_EQ(check.governing_fraction, 0.0);
+}
+
 TEST(CriticalDelayCheck, ALeadIsNeverPast) {
   const StructuralModel sdof = make_sdof(0.5, 0.05, 1000.0);
   const CriticalDelayCheck check = check_critical_delay(
