@@ -1,12 +1,12 @@
 #include "core/delay.h"
 
 #include "core/number_text.h"
+#include "core/time_text.h"
 
 #include "core/compensator.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -15,11 +15,9 @@
 namespace rths::core {
 namespace {
 
-std::string format_ms(double seconds) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%g ms", seconds * 1e3);
-  return buffer;
-}
+// A block's description names its own parameters to 6 significant digits (%g), so that two
+// blocks whose parameters differ read apart.
+constexpr int kDescribedDigits = 6;
 
 void require_positive_step(double dt, const char* who) {
   if (!(dt > 0.0) || !std::isfinite(dt)) {
@@ -146,7 +144,9 @@ std::optional<PlantModel> TimeShift::unscaled_transfer_function() const {
 
 std::unique_ptr<DelayStage> TimeShift::clone() const { return std::make_unique<TimeShift>(*this); }
 
-std::string TimeShift::describe() const { return "shift(" + format_ms(delay_) + ")"; }
+std::string TimeShift::describe() const {
+  return "shift(" + format_ms(delay_, kDescribedDigits) + ")";
+}
 
 double TimeShift::step_unscaled(const CommandSample& in) {
   history_.push(in.time, in.displacement);
@@ -156,11 +156,13 @@ double TimeShift::step_unscaled(const CommandSample& in) {
 // ---------------------------------------------------------------------------------------------
 std::unique_ptr<DelayStage> Eq1Lead::clone() const { return std::make_unique<Eq1Lead>(*this); }
 std::string Eq1Lead::describe() const {
-  return "eq1(u + v*" + format_ms(delay_) + ", lead as printed)";
+  return "eq1(u + v*" + format_ms(delay_, kDescribedDigits) + ", lead as printed)";
 }
 
 std::unique_ptr<DelayStage> Eq1Lag::clone() const { return std::make_unique<Eq1Lag>(*this); }
-std::string Eq1Lag::describe() const { return "eq1-lag(u - v*" + format_ms(delay_) + ")"; }
+std::string Eq1Lag::describe() const {
+  return "eq1-lag(u - v*" + format_ms(delay_, kDescribedDigits) + ")";
+}
 
 namespace {
 constexpr const char* kReadsVelocity =
@@ -186,7 +188,7 @@ std::unique_ptr<DelayStage> FirstOrderActuator::clone() const {
 }
 
 std::string FirstOrderActuator::describe() const {
-  return "first-order(T = " + format_ms(time_constant_) + ")";
+  return "first-order(T = " + format_ms(time_constant_, kDescribedDigits) + ")";
 }
 
 std::optional<PlantModel> FirstOrderActuator::unscaled_transfer_function() const {
@@ -230,8 +232,8 @@ std::unique_ptr<DelayStage> JitterShift::clone() const {
 }
 
 std::string JitterShift::describe() const {
-  return "jitter(mean " + format_ms(mean_) + ", sd " + format_ms(std_dev_) + ", seed " +
-         std::to_string(seed_) + ")";
+  return "jitter(mean " + format_ms(mean_, kDescribedDigits) + ", sd " +
+         format_ms(std_dev_, kDescribedDigits) + ", seed " + std::to_string(seed_) + ")";
 }
 
 Linearity JitterShift::linearity() const {
@@ -276,7 +278,8 @@ std::unique_ptr<DelayStage> TraceShift::clone() const {
 
 std::string TraceShift::describe() const {
   return "trace(" + std::to_string(trace_.time.size()) + " samples, mean " +
-         format_ms(nominal_delay()) + ", max " + format_ms(trace_.max()) + ")";
+         format_ms(nominal_delay(), kDescribedDigits) + ", max " +
+         format_ms(trace_.max(), kDescribedDigits) + ")";
 }
 
 double TraceShift::nominal_delay() const {
@@ -352,9 +355,7 @@ std::string DelayChain::describe() const {
     if (!text.empty()) text += " -> ";
     text += stage->describe();
     if (stage->gain() != 1.0) {
-      char buffer[48];
-      std::snprintf(buffer, sizeof buffer, " x%g", stage->gain());
-      text += buffer;
+      text += " x" + format_number(stage->gain());
     }
   }
   return text;

@@ -1,9 +1,10 @@
 #include "core/force_predictor.h"
 
+#include "core/number_text.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -15,19 +16,13 @@ void require(bool ok, const std::string& label, const std::string& what) {
   if (!ok) throw std::invalid_argument(label + ": " + what);
 }
 
-// Three significant digits, as a HOLD's reason prints its figures.
-std::string three(double value) {
-  std::ostringstream text;
-  text << std::setprecision(3) << value;
-  return text.str();
-}
-
 }  // namespace
 
 namespace {
 constexpr int kK = 0, kC = 1, kH = 2, kT = 3, kF0 = 4;  // theta's order
 constexpr double kLagExplains = 0.005;                  // the T hold's 0.5 % (header)
 constexpr double kLagTrusted = 0.05;                    // and its 5 % residual (header)
+constexpr int kHoldDigits = 3;  // significant digits of the figures a HOLD's reason prints
 }  // namespace
 
 ForcePredictor::ForcePredictor(const PredictorParameters& parameters, double dt,
@@ -300,8 +295,10 @@ std::string ForcePredictor::model_text() const {
   const auto term = [&](const char* name, double value, double error, double unit_scale,
                         const char* unit) {
     if (text.tellp() > 0) text << ", ";
-    text << name << " " << three(unit_scale * value) << " +/- "
-         << (std::isfinite(error) ? three(unit_scale * error) : std::string("held")) << " " << unit;
+    text << name << " " << format_number(unit_scale * value, kHoldDigits) << " +/- "
+         << (std::isfinite(error) ? format_number(unit_scale * error, kHoldDigits)
+                                  : std::string("held"))
+         << " " << unit;
   };
   term("k", theta_[kK], standard_error_[kK], 1.0, "N/m");
   term("c", theta_[kC], standard_error_[kC], 1.0, "N s/m");
@@ -324,22 +321,25 @@ std::string ForcePredictor::rejection() const {
   const bool lags = free_damping_ < 0 && k > 0;  // the best c wanted negative: a lag left over
   if (lags && !lag_fitted_)
     add("the measured force lags the measured drift by at least " +
-        three(1e3 * -free_damping_ / k) + " ms (-c / k of the best fit, c " + three(free_damping_) +
+        format_number(1e3 * -free_damping_ / k, kHoldDigits) + " ms (-c / k of the best fit, c " +
+        format_number(free_damping_, kHoldDigits) +
         " N s/m, held at 0; a dashpot lengthens it): the model lacks the force channel's lag (a "
         "load cell or filter): its first-order lag term was held, the answers telling it from "
         "the dashpot too little or leaving more than 5 % with it");
   if (lags && lag_fitted_)
     add("the measured force lags the measured drift by more than the model's first-order lag "
         "term follows (T " +
-        three(1e3 * lag) + " ms fitted, and still the best c is " + three(free_damping_) +
-        " N s/m, held at 0: at least " + three(1e3 * (lag - free_damping_ / k)) +
+        format_number(1e3 * lag, kHoldDigits) + " ms fitted, and still the best c is " +
+        format_number(free_damping_, kHoldDigits) + " N s/m, held at 0: at least " +
+        format_number(1e3 * (lag - free_damping_ / k), kHoldDigits) +
         " ms in all): the model lacks the force channel's lag (a load cell or filter)");
   const double bound = p_.max_relative_error;
   if (bound > 0 && fit_residual_ > 0.5 * bound) {
     std::string missing;
     if (lags || (lag_fitted_ && lag * rate > 0.3))
-      missing = "the force's lag: T " + three(1e3 * lag) + " ms is " + three(lag * rate) +
-                " rad at the motion's RMS rate (" + three(rate) +
+      missing = "the force's lag: T " + format_number(1e3 * lag, kHoldDigits) + " ms is " +
+                format_number(lag * rate, kHoldDigits) + " rad at the motion's RMS rate (" +
+                format_number(rate, kHoldDigits) +
                 " rad/s), or more, past what a first-order lag term follows (shorten the "
                 "load cell's filter)";
     else if (!present_[kH])
@@ -350,16 +350,17 @@ std::string ForcePredictor::rejection() const {
       missing =
           "a shape the declared hysteresis does not have (its yield drift or sharpness), or a "
           "rate term other than the dashpot";
-    add("the model's own best fit leaves " + three(100.0 * fit_residual_) +
+    add("the model's own best fit leaves " + format_number(100.0 * fit_residual_, kHoldDigits) +
         " % of the force unexplained: its form (k x + c v" +
         std::string(present_[kH] ? " + h z" : "") + " + f0, lag T) lacks " + missing);
   } else if (bound > 0 && updates_ > 0 && windowed_error() > bound) {
-    add("the model's own best fit leaves " + three(100.0 * fit_residual_) +
-        " %: the specimen changes faster than the forgetting time (" + three(p_.forgetting_time) +
-        " s) follows");
+    add("the model's own best fit leaves " + format_number(100.0 * fit_residual_, kHoldDigits) +
+        " %: the specimen changes faster than the forgetting time (" +
+        format_number(p_.forgetting_time, kHoldDigits) + " s) follows");
   }
   if (declared_mass_ > 0)
-    add("the declared specimen mass (" + three(declared_mass_) + " kg) is not in the model");
+    add("the declared specimen mass (" + format_number(declared_mass_, kHoldDigits) +
+        " kg) is not in the model");
   return text.str();
 }
 
@@ -416,8 +417,8 @@ PredictorOutput ForcePredictor::step(const PredictorInput& in) {
 std::string ForcePredictor::describe() const {
   std::ostringstream text;
   text << "Smith predictor (k0 " << p_.stiffness << " N/m, c0 " << p_.damping << " N s/m"
-       << (present_[kH] ? ", hysteresis h0 " + three(initial_[kH]) + " N" : "") << ", force lag "
-       << 1e3 * p_.force_lag << " ms"
+       << (present_[kH] ? ", hysteresis h0 " + format_number(initial_[kH], kHoldDigits) + " N" : "")
+       << ", force lag " << 1e3 * p_.force_lag << " ms"
        << (p_.adapt ? ", fitted online, forgetting " + std::to_string(p_.forgetting_time) + " s"
                     : ", fixed")
        << ")";

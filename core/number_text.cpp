@@ -16,9 +16,11 @@ std::optional<double> parse_finite(std::string_view token) {
   return value;
 }
 
-std::string format_number(double value) {
+std::string format_number(double value) { return format_number(value, 6); }
+
+std::string format_number(double value, int significant_digits) {
   char buffer[48];
-  std::snprintf(buffer, sizeof buffer, "%g", value);
+  std::snprintf(buffer, sizeof buffer, "%.*g", significant_digits, value);
   return buffer;
 }
 

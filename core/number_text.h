@@ -14,6 +14,9 @@ std::optional<double> parse_finite(std::string_view token);
 
 // A number as messages print it: %g (6 significant digits, no trailing zeros: "0.014", "1e-05").
 std::string format_number(double value);
+// The same to `significant_digits` digits (%.*g): 3 gives "14.2", "0.586", "1.23e+03"; 17 gives
+// the text that reads back as the same double.
+std::string format_number(double value, int significant_digits);
 
 // A token as an error message may show it: bytes outside printable ASCII as \xNN, at most 40
 // characters ("..." after), so a binary file never reaches the terminal raw.

@@ -1,14 +1,11 @@
 #include "core/time_text.h"
 
-#include <iomanip>
-#include <sstream>
+#include "core/number_text.h"
 
 namespace rths::core {
 
-std::string format_ms(double seconds) {
-  std::ostringstream out;
-  out << std::setprecision(3) << seconds * 1e3 << " ms";
-  return out.str();
+std::string format_ms(double seconds, int significant_digits) {
+  return format_number(seconds * 1e3, significant_digits) + " ms";
 }
 
 }  // namespace rths::core

@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -14,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 
+#include "core/number_text.h"
 #include "core/sparse_structure.h"
 #include "study/ranges.h"
 #include "study/restoring_force_config.h"
@@ -212,12 +211,6 @@ double first_mode_fraction(const core::Modes& modes, const core::Vec& b, double 
   return k * along * along / (modes.omega[0] * modes.omega[0]);
 }
 
-std::string fraction_text(double fraction) {
-  std::ostringstream out;
-  out << std::setprecision(3) << fraction;
-  return out.str();
-}
-
 // Row d of K (N/m): its nonzeros (column, value) in column order, from either form the model
 // holds (K symmetric: column d of the sparse form).
 std::vector<std::pair<int, double>> stiffness_row(const core::StructuralModel& model, int d) {
@@ -259,10 +252,10 @@ std::optional<std::string> storey_meant(const core::StructuralModel& model,
     const core::Vec storey = grounded - core::Vec::Unit(n, neighbour);
     const core::Modes modes = core::modal_analysis(model.mass, model.stiffness);
     text += ": as written it takes an experimental fraction of " +
-            fraction_text(first_mode_fraction(modes, grounded, spec.stiffness())) +
+            core::format_number(first_mode_fraction(modes, grounded, spec.stiffness()), 3) +
             " of mode 1; between DOF " + std::to_string(neighbour + 1) + " and DOF " +
             std::to_string(d + 1) + " it would take " +
-            fraction_text(first_mode_fraction(modes, storey, spec.stiffness()));
+            core::format_number(first_mode_fraction(modes, storey, spec.stiffness()), 3);
   }
   return text + ". If the specimen sits between two DOFs (a storey), say from_dof: " +
          std::to_string(neighbour + 1);

@@ -236,5 +236,14 @@ TEST(DelayChain, ComposesCopiesDeeplyAndSumsDelays) {
   EXPECT_NE(copy.describe().find("shift"), std::string::npos);
 }
 
+// A description names the block's own parameters to six significant digits, so that two chains
+// whose lags differ by a fraction of a millisecond read apart.
+TEST(DelayChain, DescribeNamesEachLagToSixDigits) {
+  DelayChain chain;
+  chain.add(std::make_unique<TimeShift>(0.01425, kDt));
+  chain.add(std::make_unique<TimeShift>(0.0140001, kDt));
+  EXPECT_EQ(chain.describe(), "shift(14.25 ms) -> shift(14.0001 ms)");
+}
+
 }  // namespace
 }  // namespace rths::core
