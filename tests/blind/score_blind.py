@@ -1,15 +1,15 @@
 #!/usr/bin/python3
 """Scores `rths identify` blind on records of a rig it never modelled (docs/development.md,
-"Blind records"; the records from tests/blind/blind_record_writer.cpp, third_set_writer.cpp or
-fourth_set_writer.cpp).
+"Blind records"; the records from tests/blind/blind_record_writer.cpp, third_set_writer.cpp,
+fourth_set_writer.cpp or fifth_set_writer.cpp).
 
 Inputs:
   --rths PATH            the rths program (`rths identify REC --json`, `rths export REC --csv`)
   --records DIR          a folder written by blind_record_writer (<case>.rthsrec, truth.json), or
   --writer PATH --set S --data DIR [--work DIR]
                          write set S (tune|report with blind_record_writer, third with
-                         third_set_writer, fourth with fourth_set_writer) first, into --work
-                         (default a temp folder)
+                         third_set_writer, fourth with fourth_set_writer, fifth with
+                         fifth_set_writer) first, into --work (default a temp folder)
   --json                 print the scores as JSON instead of the table
   --require-reads        exit 1 unless every record exports without a warning and identify exits 0
                          on every one (what the suite asserts; scores are never asserted here)
@@ -371,7 +371,7 @@ def main(argv=None):
     ap.add_argument("--rths", required=True)
     ap.add_argument("--records")
     ap.add_argument("--writer")
-    ap.add_argument("--set", choices=["tune", "report", "third", "fourth"])
+    ap.add_argument("--set", choices=["tune", "report", "third", "fourth", "fifth"])
     ap.add_argument("--data")
     ap.add_argument("--work")
     ap.add_argument("--duration")
