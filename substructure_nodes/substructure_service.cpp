@@ -12,7 +12,8 @@ SubstructureService::SubstructureService(std::int32_t node_id, std::string expec
 int SubstructureService::configure(const runtime::Assign& assign) {
   const config::Case& study_case = study::find_case(assign.study(), assign.case_name());
   core::HybridSetup setup =
-      runtime::setup_without_motion(assign.study(), assign.base_dir(), assign.dt(), study_case);
+      runtime::setup_without_motion(assign.study(), assign.base_dir(), assign.dt(), study_case,
+                                    [this](const std::string& what) { setup_phase(what); });
   const int n = static_cast<int>(setup.partition.numerical.size());
   std::vector<std::unique_ptr<core::RestoringForceModel>> models(n);
   storeys_.assign(assign.storeys().begin(), assign.storeys().end());
@@ -22,6 +23,7 @@ int SubstructureService::configure(const runtime::Assign& assign) {
     if (setup.partition.numerical[s]) models[s] = setup.partition.numerical[s]->clone();
   }
   // A matrix part (a structure given by matrices): the plan has this node host every coupled DOF.
+  setup_phase("building its numerical part (" + std::to_string(storeys_.size()) + " storeys)");
   numerical_ = std::make_unique<core::NumericalSubstructure>(std::move(models),
                                                              setup.partition.numerical_matrix);
   drift_ = core::Vec::Zero(n);

@@ -6,14 +6,15 @@
 // Inputs: the simulations the study runs (the lag-free run and each case that adds to it), each
 // of `steps` steps. The time left is the steps left at the rate so far (steps a
 // second over every simulation run since start()), wall time by steady_clock. The clock is read
-// every kClockSteps steps, so the loop's cost is a counter's.
+// every kClockSteps steps, so the loop's cost is a counter's; when a line is due is
+// util::ProgressPace's rule.
 
-#include <chrono>
 #include <cstddef>
 #include <functional>
 #include <string>
 
 #include "core/simulation.h"
+#include "util/progress_pace.h"
 
 namespace rths::analysis {
 
@@ -43,14 +44,12 @@ class RunProgress : public core::StepHooks {
 
  private:
   void print_line(std::size_t k, double elapsed);
-  double now_s() const;
 
-  ProgressOptions options_;
+  std::function<void(const std::string&)> print_;
+  util::ProgressPace pace_;  // its clock starts at construction
   std::size_t simulations_, steps_;
   std::size_t index_ = 0;
   std::string name_;
-  double started_s_ = 0.0;   // clock at construction
-  double last_line_ = -1.0;  // s since start of the last line; < 0: none yet
   std::size_t lines_ = 0;
 };
 

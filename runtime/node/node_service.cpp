@@ -28,7 +28,10 @@ void validate_assigned_lags(const Assign& assign) {
 
 NodeService::NodeService(std::int32_t node_id, config::NodeSpec::Kind kind,
                          std::string expected_run_id)
-    : node_id_(node_id), kind_(kind), expected_run_id_(std::move(expected_run_id)) {}
+    : node_id_(node_id),
+      kind_(kind),
+      expected_run_id_(std::move(expected_run_id)),
+      setup_print_([](const std::string& line) { spdlog::info("{}", line); }) {}
 
 std::string NodeService::label() const {
   return "node " + std::to_string(node_id_) + " (" + node_kind_name(kind_) + ")";
@@ -113,6 +116,7 @@ std::optional<transport::Message> NodeService::on_assign(const transport::Messag
       configure_error_ = label() + ": " + e.what();
       spdlog::error("{}", configure_error_);
     }
+    setup_progress_.reset();  // built or failed, its watcher ends here
   }
   // A repeated ASSIGN (the coordinator re-sends until it hears READY) gets the same answer.
   Ready ready;
@@ -123,11 +127,14 @@ std::optional<transport::Message> NodeService::on_assign(const transport::Messag
 }
 
 void NodeService::build_part(const Assign& assign) {
+  setup_progress_.emplace(label(), setup_pacing_, setup_print_);
+  setup_progress_->watch(kSetupWatchSeconds);
   if (assign.schema_version() != kSchemaVersion)
     throw std::invalid_argument("schema version " + std::to_string(assign.schema_version()) +
                                 ", this node speaks " + std::to_string(kSchemaVersion));
   validate_assigned_lags(assign);
   hosted_ = configure(assign);
+  setup_phase("building its delay stages");
   const auto chains = [&](const google::protobuf::RepeatedPtrField<config::DelayStage>& stages) {
     std::vector<core::DelayChain> out;
     if (stages.empty()) return out;
@@ -152,6 +159,7 @@ void NodeService::build_part(const Assign& assign) {
     throw std::invalid_argument(
         "send_delay acts once per command, but a servo loop faster than the integrator "
         "streams feedback every servo period; inject the lag with send_lag instead");
+  setup_progress_->finish();
 }
 
 void NodeService::enter_hold() {

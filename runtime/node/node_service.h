@@ -57,6 +57,7 @@
 #include "core/delay.h"
 #include "rths/proto/runtime.pb.h"
 #include "runtime/node/answer_source.h"
+#include "runtime/node/setup_progress.h"
 #include "runtime/node/validation.h"
 #include "transport/in_process.h"
 
@@ -90,6 +91,12 @@ class NodeService : public transport::NodeHandler {
   // secret, in process). Set before start().
   void set_unauthenticated_source(std::function<std::uint64_t()> count) {
     unauthenticated_ = std::move(count);
+  }
+  // How the set-up of its part reports progress (setup_progress.h): when a line is due and where
+  // it goes; default: after 3 s, at most one every 5 s, to spdlog info. Set before the ASSIGN.
+  void set_setup_progress(util::ProgressPacing pacing, SetupProgress::Print print) {
+    setup_pacing_ = std::move(pacing);
+    setup_print_ = std::move(print);
   }
   // Receive + send lag injected for the message about to be handled (s); goes into its feedback.
   void set_injected_lag(double seconds) { injected_lag_ = seconds; }
@@ -127,6 +134,10 @@ class NodeService : public transport::NodeHandler {
  protected:
   // Builds the node's part; returns how many storeys/actuators it hosts. Throws on a bad part.
   virtual int configure(const Assign& assign) = 0;
+  // From configure(): the phase of the set-up starting now, named in its progress lines.
+  void setup_phase(std::string what) {
+    if (setup_progress_) setup_progress_->phase(std::move(what));
+  }
   // One step. Fills force (and realised for actuators), one entry per hosted storey. Throws
   // std::invalid_argument on a command of the wrong size before it changes any state. Never
   // called on a node with an answer source (the default throws std::logic_error saying so).
@@ -181,6 +192,11 @@ class NodeService : public transport::NodeHandler {
   double injected_lag_ = 0.0;
   RejectCounters rejected_;
   std::function<std::uint64_t()> unauthenticated_;
+  // The set-up's progress: its pacing, its lines' sink, and the one running (during build_part).
+  static constexpr double kSetupWatchSeconds = 0.5;  // s between the watcher's looks
+  util::ProgressPacing setup_pacing_;
+  SetupProgress::Print setup_print_;
+  std::optional<SetupProgress> setup_progress_;
   Command command_;
   Feedback feedback_;
   transport::Message reply_;  // the synchronous reply, packed in place

@@ -216,11 +216,16 @@ void check_deployment(const study::PreparedStudy& prepared) {
 
 core::HybridSetup setup_without_motion(const config::Study& study,
                                        const std::filesystem::path& base_dir, double dt,
-                                       const config::Case& study_case) {
+                                       const config::Case& study_case,
+                                       const std::function<void(const std::string&)>& phase) {
   study::PreparedStudy prepared;
   prepared.config = study;
   prepared.base_dir = base_dir;
+  if (phase) phase("reading and checking the study's structure");
   prepared.base = study::base_setup(study, dt, base_dir);
+  if (phase)
+    phase("building case '" + study_case.name() + "' on the " +
+          std::to_string(prepared.base.model.dofs()) + "-DOF structure");
   return study::setup_for_case(prepared, study_case);
 }
 

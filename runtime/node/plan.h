@@ -13,6 +13,7 @@
 // Also: the node-side view of a study (what a node builds from its Assign without the motion file).
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,9 +69,11 @@ void check_deployment(const study::PreparedStudy& prepared);
 
 // The setup of one case built without reading the motion (a node on another host may not have
 // it): the same structure, partition and delay chains as study::prepare_study + setup_for_case.
-core::HybridSetup setup_without_motion(const config::Study& study,
-                                       const std::filesystem::path& base_dir, double dt,
-                                       const config::Case& study_case);
+// `phase`, if given, is told each of its two phases as it starts (the structure read and checked,
+// then the case's setup on it), for a node's set-up progress (setup_progress.h).
+core::HybridSetup setup_without_motion(
+    const config::Study& study, const std::filesystem::path& base_dir, double dt,
+    const config::Case& study_case, const std::function<void(const std::string&)>& phase = nullptr);
 
 // Defaults of the deployment's timing fields (0 means default), in s.
 double start_timeout(const config::Deployment& d);
