@@ -160,8 +160,9 @@ blind::Motion read_el_centro_1940(const fs::path& data_dir, double dt, int steps
   return motion;
 }
 
-// The servo and the clevis: command c_k (m) -> the brace end x_k (m) and what the LVDT on it
-// reads before noise, y_k = x_k + creep(t) (the servo holds the reading to its target).
+// The servo and the clevis: command c_k (m) -> the brace end x_k (m). The LVDT on the brace reads
+// x_k + creep(t) before noise; the servo closes its loop on that reading, so the brace end falls
+// short of the target by the creep.
 class Servo {
  public:
   explicit Servo(const RigEffects& fx) : fx_(fx) {}
@@ -248,10 +249,10 @@ class Daq {
 
   double load_cell(double force, int k) {
     const double t = k * kDt;
-    if (fx_.force_held.holds(t) && k > 0) return held_;
+    if (fx_.force_held.holds(t) && k > 0) return last_reading_;
     const double hum = fx_.hum_amplitude * std::sin(2.0 * kPi * kHumHz * t + 0.7);
-    held_ = quantised(force + hum + kCellNoise * noise_(rng_), kCellQuantum);
-    return held_;
+    last_reading_ = quantised(force + hum + kCellNoise * noise_(rng_), kCellQuantum);
+    return last_reading_;
   }
 
  private:
@@ -259,7 +260,7 @@ class Daq {
   std::mt19937_64 rng_;
   std::normal_distribution<double> noise_{0.0, 1.0};
   std::vector<int> spike_steps_;
-  double held_ = 0.0;
+  double last_reading_ = 0.0;  // N, what a held channel repeats
 };
 
 // The closed loop over the motion (see the header's equations), one RecordedStep per sample.
