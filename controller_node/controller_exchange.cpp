@@ -8,12 +8,14 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "core/time_text.h"
+
 namespace rths::controller_node {
 namespace {
 
 constexpr std::uint64_t kLoggedRejects = 20;  // then every 1000th, so a flood cannot fill a log
-
-std::string ms(double seconds) { return std::to_string(seconds * 1e3) + " ms"; }
+// A configured limit is named as set (%g, 6 significant digits); a measured time to 3 (format_ms).
+constexpr int kSettingDigits = 6;
 
 std::int64_t ns_of(double seconds) {
   return static_cast<std::int64_t>(std::llround(seconds * 1e9));
@@ -171,7 +173,7 @@ ControllerExchange::Answer ControllerExchange::judge_counter(InFlight*& frame,
     const double round_trip = static_cast<double>(received_ns - f.sent_ns) * 1e-9;
     late(f, round_trip,
          from() + " answers frame " + std::to_string(c) + " (step " + std::to_string(f.step) +
-             ") late, after " + ms(round_trip) +
+             ") late, after " + core::format_ms(round_trip) +
              (c < newest_answered_ ? " (a newer frame was answered first)" : ""));
     return a;  // kNone: ignored
   }
@@ -351,8 +353,8 @@ ControllerExchange::Answer ControllerExchange::judge_decoded(const Datagram& d) 
   if (round_trip > settings_.reply_timeout) {
     late(*frame, round_trip,
          from() + " answers frame " + std::to_string(frame->counter) + " (step " +
-             std::to_string(frame->step) + ") after " + ms(round_trip) + " (reply timeout " +
-             ms(settings_.reply_timeout) + ")");
+             std::to_string(frame->step) + ") after " + core::format_ms(round_trip) +
+             " (reply timeout " + core::format_ms(settings_.reply_timeout, kSettingDigits) + ")");
     return Answer{};
   }
   report_.set_last_status(static_cast<std::int32_t>(in_.status));
@@ -492,11 +494,12 @@ std::string ControllerExchange::silence(const InFlight& f) const {
       "frame " + std::to_string(f.counter) + " (step " + std::to_string(f.step) + ")";
   if (late_since_accept_ > 0)
     return "the controller " + link_->peer() + " answers late: " + frame + " unanswered within " +
-           ms(settings_.reply_timeout) + ", and " + std::to_string(late_since_accept_) +
+           core::format_ms(settings_.reply_timeout, kSettingDigits) + ", and " +
+           std::to_string(late_since_accept_) +
            " answers since the newest applied one came after their reply timeout (newest: " +
            newest_late_ + ")";
   return "the controller " + link_->peer() + " did not answer " + frame + " within " +
-         ms(settings_.reply_timeout);
+         core::format_ms(settings_.reply_timeout, kSettingDigits);
 }
 
 ControllerExchange::Answer ControllerExchange::next(std::int64_t now_ns) {

@@ -1,29 +1,22 @@
 #include "view/verdict.h"
 
-#include <sstream>
+#include <fmt/format.h>
 
 namespace rths::view {
 namespace {
-
-std::string percent(double fraction) {
-  std::ostringstream out;
-  out.precision(3);
-  out << 100.0 * fraction << " %";
-  return out.str();
-}
 
 // The overruns of a run within the verdict, against the two limits it was judged by.
 std::string overruns_within(const runtime::DeadlineCounts& c, const runtime::DeadlineRule& rule) {
   const double share =
       c.steps ? static_cast<double>(c.overruns) / static_cast<double>(c.steps) : 0.0;
   const std::string tolerance =
-      rule.max_fraction < 0
-          ? "the overrun tolerance is off (max_overrun_fraction < 0)"
-          : "within the tolerance of " + percent(rule.max_fraction) + " (max_overrun_fraction)";
+      rule.max_fraction < 0 ? "the overrun tolerance is off (max_overrun_fraction < 0)"
+                            : fmt::format("within the tolerance of {:.3g} % (max_overrun_fraction)",
+                                          100.0 * rule.max_fraction);
   return std::to_string(c.overruns) + " overruns in " + std::to_string(c.steps) + " steps (" +
-         percent(share) + "), " + tolerance + "; worst streak " + std::to_string(c.worst_streak) +
-         " steps, within the fail-safe's window of " + std::to_string(rule.max_streak) +
-         "; each late step is marked in the record";
+         fmt::format("{:.3g} %", 100.0 * share) + "), " + tolerance + "; worst streak " +
+         std::to_string(c.worst_streak) + " steps, within the fail-safe's window of " +
+         std::to_string(rule.max_streak) + "; each late step is marked in the record";
 }
 
 ShownVerdict not_ok(const runtime::RunFooter& footer) {

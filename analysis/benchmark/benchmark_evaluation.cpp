@@ -1,9 +1,10 @@
 #include "analysis/benchmark/benchmark_evaluation.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
@@ -21,20 +22,14 @@ std::vector<double> column(const core::Mat& m, Eigen::Index c) {
   return out;
 }
 
-// Whether two loaded records are one motion: the same dt and the same samples (to 1e-9 of the
-// peak, what a text round trip of the same numbers keeps).
+// A table's cell: the value to `decimals` decimals, or n/a where a criterion has none (NaN).
 std::string cell(double value, int decimals = 2) {
-  if (std::isnan(value)) return "n/a";
-  char buffer[48];
-  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
-  return buffer;
+  return std::isnan(value) ? "n/a" : fmt::format("{:.{}f}", value, decimals);
 }
 
+// A difference's cell: signed, two decimals, n/a for NaN.
 std::string signed_cell(double value) {
-  if (std::isnan(value)) return "n/a";
-  char buffer[48];
-  std::snprintf(buffer, sizeof buffer, "%+.2f", value);
-  return buffer;
+  return std::isnan(value) ? "n/a" : fmt::format("{:+.2f}", value);
 }
 
 nlohmann::json number(double value) {

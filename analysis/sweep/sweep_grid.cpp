@@ -1,10 +1,10 @@
 #include "analysis/sweep/sweep_grid.h"
 
+#include <fmt/format.h>
 #include <google/protobuf/text_format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -256,11 +256,7 @@ std::pair<std::size_t, std::size_t> SweepGrid::shard_range(const Shard& shard) c
   return {total * shard.index / shard.count, total * (shard.index + 1) / shard.count};
 }
 
-std::string SweepGrid::hash_hex() const {
-  char buffer[20];
-  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(hash_));
-  return buffer;
-}
+std::string SweepGrid::hash_hex() const { return fmt::format("{:016x}", hash_); }
 
 const core::GroundMotion& SweepGrid::motion_at(std::size_t motion, std::size_t dt_index) const {
   return motions_.at(motion).at(dt_index);

@@ -2,20 +2,17 @@
 // Internal to the sweep's files (sweep_grid, sweep_csv, sweep_report): how they write and read
 // numbers, so a number written by one reads back the same in another.
 
+#include <fmt/format.h>
+
 #include <charconv>
 #include <cstddef>
-#include <cstdio>
 #include <stdexcept>
 #include <string>
 
 namespace rths::analysis::sweep_internal {
 
 // 17 significant digits: a double written and read back is the same double.
-inline std::string format_number(double x) {
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%.17g", x);
-  return buffer;
-}
+inline std::string format_number(double x) { return fmt::format("{:.17g}", x); }
 
 // A whole number (index or count) from `text`; throws std::invalid_argument naming `where`.
 inline std::size_t parse_index(const std::string& text, const std::string& where) {

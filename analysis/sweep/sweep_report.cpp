@@ -1,5 +1,7 @@
 #include "analysis/sweep/sweep_report.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,13 +25,6 @@ using SeriesKey = std::tuple<std::string, double, double, std::string,
                              double>;  // model, alpha, dt, motion, delay
 
 SeriesKey series_key(const SweepTableRow& r) { return {r.model, r.alpha, r.dt, r.motion, r.delay}; }
-
-std::string delay_label(double delay) {
-  std::ostringstream s;
-  s.precision(4);
-  s << "delay " << delay * 1e3 << " ms";
-  return s.str();
-}
 
 // What varies across the rows, so a label names only what tells curves apart, and each delay and
 // model keeps one colour and one dash on every figure.
@@ -70,7 +65,7 @@ struct SweepAxes {
   }
   std::string label(const SeriesKey& key) const {
     const auto& [model, alpha, dt, motion, delay] = key;
-    std::string text = delay_label(delay);
+    std::string text = fmt::format("delay {:.4g} ms", delay * 1e3);
     if (models.size() > 1) text += ", " + model_label(model);
     if (alphas.size() > 1) text += ", alpha " + format_number(alpha);
     if (dts.size() > 1) text += ", dt " + format_number(dt * 1e3) + " ms";
@@ -143,10 +138,8 @@ void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& perio
   if (!critical_delay) return;
   for (double period : periods) {
     if (const auto critical = critical_delay(period, at.alpha, at.dt)) {
-      std::ostringstream text;
-      text.precision(3);
-      text << "critical, T = " << period << " s: " << *critical * 1e3 << " ms";
-      plot.markers.push_back({*critical * 1e3, text.str()});
+      plot.markers.push_back({*critical * 1e3, fmt::format("critical, T = {:.3g} s: {:.3g} ms",
+                                                           period, *critical * 1e3)});
     }
   }
   const std::size_t before = plot.markers.size();
@@ -185,10 +178,9 @@ void write_sweep_delay_plot(const std::vector<SweepTableRow>& rows,
           points.push_back(&r);
       if (points.empty()) continue;
       std::sort(points.begin(), points.end(), [](auto* l, auto* r) { return l->delay < r->delay; });
-      std::ostringstream label;
-      label << "T = " << periods[p] << " s";
-      if (axes.models.size() > 1) label << ", " << model_label(axes.models[m]);
-      util::Series curve{label.str(),
+      std::string label = fmt::format("T = {:g} s", periods[p]);
+      if (axes.models.size() > 1) label += ", " + model_label(axes.models[m]);
+      util::Series curve{label,
                          {},
                          {},
                          "linespoints lc rgb '" + util::series_colour(p) + "' dt " +
@@ -267,9 +259,7 @@ std::string model_label(const std::string& model) {
     const std::string key = part.substr(0, equals), value = part.substr(equals + 1);
     std::string shown = value;
     if (key == "uy") {
-      std::ostringstream mm;
-      mm << std::stod(value) * 1e3 << " mm";
-      shown = mm.str();
+      shown = fmt::format("{:g} mm", std::stod(value) * 1e3);
     }
     out += (out.empty() ? "" : ", ") + key + " = " + shown;
   }

@@ -1,7 +1,8 @@
 #include "runtime/record/deadline_diagnosis.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
-#include <iomanip>
 #include <sstream>
 
 #include "core/metrics.h"
@@ -28,12 +29,6 @@ std::vector<std::string> advice_for(const DeadlineDiagnosis& d) {
       "a node whose link injects a long lag is not waited for; check the slowest node's log"};
 }
 
-std::string percent(double share) {
-  std::ostringstream out;
-  out << std::setprecision(3) << 100.0 * share << " %";
-  return out.str();
-}
-
 // The record's worth, first by how many steps overran, then by the longest run of them; the
 // verdict's breach decides the two that say it is no real-time test's.
 std::string usability_of(const DeadlineDiagnosis& d, const DeadlineRule& rule) {
@@ -41,7 +36,7 @@ std::string usability_of(const DeadlineDiagnosis& d, const DeadlineRule& rule) {
   const std::uint64_t streak_window = rule.max_streak;
   const DeadlineBreach breach = deadline_breach(d.counts(), rule);
   if (breach == DeadlineBreach::kDominated)
-    return "dominated by overruns: " + percent(share) +
+    return "dominated by overruns: " + fmt::format("{:.3g} %", 100.0 * share) +
            " of the steps overran, so the response shows the platform as much as the rig; the "
            "lag measurements stand, the response and what is identified from it do not stand for "
            "a real-time test";
@@ -50,13 +45,13 @@ std::string usability_of(const DeadlineDiagnosis& d, const DeadlineRule& rule) {
            " steps in a row overran, so the integrator used stale forces that long; "
            "the lag measurements stand, the response is not a real-time test's";
   if (share > DeadlineDiagnosis::kUsableShare)
-    return "use with care: " + percent(share) + " of the steps overran (isolated, worst streak " +
-           std::to_string(d.worst_streak) +
+    return "use with care: " + fmt::format("{:.3g} %", 100.0 * share) +
+           " of the steps overran (isolated, worst streak " + std::to_string(d.worst_streak) +
            "); every force is tied to the step it answers, but the response carries that many "
            "late steps";
   return "usable as recorded: the overruns were isolated (worst streak " +
          std::to_string(d.worst_streak) + " steps, within the fail-safe's " +
-         std::to_string(streak_window) + "), " + percent(share) +
+         std::to_string(streak_window) + "), " + fmt::format("{:.3g} %", 100.0 * share) +
          " of the steps, every force is tied to the step it answers and the late steps are marked";
 }
 

@@ -1,5 +1,7 @@
 #include "runtime/record/node_health.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <sstream>
 #include <utility>
@@ -20,13 +22,6 @@ std::vector<std::pair<const char*, std::uint64_t>> rejects_by_cause(const Contro
 }
 
 constexpr int kFramesNamed = 8;  // lost or late frames named in a line; the JSON has them all
-
-std::string ms(double seconds) {
-  std::ostringstream out;
-  out.precision(3);
-  out << std::fixed << seconds * 1e3;
-  return out.str();
-}
 
 nlohmann::json misses_json(const google::protobuf::RepeatedPtrField<FrameMiss>& frames) {
   nlohmann::json out = nlohmann::json::array();
@@ -59,7 +54,7 @@ std::string located(const google::protobuf::RepeatedPtrField<FrameMiss>& frames,
 std::string hold_text(const ControllerReport& r) {
   std::string out = std::to_string(r.hold_frames()) + " HOLD frames";
   if (r.hold_frames() > 0)
-    out += r.held_after() >= 0 ? ", held after " + ms(r.held_after()) + " ms"
+    out += r.held_after() >= 0 ? fmt::format(", held after {:.3f} ms", r.held_after() * 1e3)
                                : ", never reported held (stopped after its hold time)";
   if (r.hold_rejected() > 0)
     out += "; " + std::to_string(r.hold_rejected()) +
@@ -79,9 +74,11 @@ std::string controller_link_text(const NodeRejects& node) {
   for (const auto& [name, count] : rejects_by_cause(r))
     if (count > 0)
       causes += (causes.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(count);
-  out << (causes.empty() ? "none" : causes) << "; UDP round trip ms: median "
-      << ms(r.round_trip_median()) << ", p99 " << ms(r.round_trip_p99())
-      << " (applied answers), max " << ms(r.round_trip_max()) << " (every answer); "
+  out << (causes.empty() ? "none" : causes)
+      << fmt::format(
+             "; UDP round trip ms: median {:.3f}, p99 {:.3f} (applied answers), max {:.3f} "
+             "(every answer); ",
+             r.round_trip_median() * 1e3, r.round_trip_p99() * 1e3, r.round_trip_max() * 1e3)
       << hold_text(r);
   if (r.lost() > 0) out << "; lost frames: " << located(r.lost_frames(), r.lost());
   if (r.late() > 0) out << "; late frames: " << located(r.late_frames(), r.late());
@@ -99,7 +96,7 @@ std::string answer_age_text(const NodeRejects& node) {
   if (!node.has_answer_age() || node.answer_age().steps_judged() == 0) return "";
   const AnswerAge& a = node.answer_age();
   const auto both = [&a](double steps) {
-    return std::to_string(static_cast<long long>(steps)) + " steps (" + ms(steps * a.dt()) + " ms)";
+    return fmt::format("{} steps ({:.3f} ms)", static_cast<long long>(steps), steps * a.dt() * 1e3);
   };
   return node.label() + " answer age: median " + both(a.median_steps()) + ", p99 " +
          both(a.p99_steps()) + ", max " + both(a.max_steps()) + "; window " +

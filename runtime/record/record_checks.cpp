@@ -17,12 +17,6 @@ namespace rths::runtime {
 
 namespace {
 
-std::string number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
-
 std::string entry_name(std::size_t index, const StepRecord* step = nullptr) {
   std::string text = "entry ";
   text += std::to_string(index);
@@ -168,7 +162,8 @@ std::size_t check_header(const RecordContents& contents, RecordChecks& out) {
     out.problems.push_back(where + "schema version " + std::to_string(h->schema_version()) +
                            ", this reader knows " + std::to_string(kSchemaVersion));
   if (!(std::isfinite(h->dt()) && h->dt() > 0))
-    out.problems.push_back(where + "dt " + number(h->dt()) + " s is not a time step (finite, > 0)");
+    out.problems.push_back(where + "dt " + fmt::format("{:g}", h->dt()) +
+                           " s is not a time step (finite, > 0)");
   if (h->dofs() < 1 || h->dofs() > kMaxRecordDofs) {
     out.problems.push_back(where + "dofs " + std::to_string(h->dofs()) + " outside [1, " +
                            std::to_string(kMaxRecordDofs) + "]");
@@ -228,8 +223,9 @@ void check_field(const std::string& name, const Values& values, int expected, co
       return;
     }
     if (std::abs(x) > bound.limit) {
-      out.push_back({name + " bound", at + " = " + number(x) + " " + unit + " is beyond " +
-                                          bound.source + " " + number(bound.limit) + " " + unit});
+      out.push_back({name + " bound", at + " = " + fmt::format("{:g}", x) + " " + unit +
+                                          " is beyond " + bound.source + " " +
+                                          fmt::format("{:g}", bound.limit) + " " + unit});
       return;
     }
   }
@@ -241,9 +237,9 @@ std::vector<Finding> value_findings(const StepRecord& s, int dofs, int actuators
   if (!std::isfinite(ground))
     out.push_back({"ground finite", "ground_acceleration is not finite"});
   else if (std::abs(ground) > kPlausibleAcceleration)
-    out.push_back({"ground bound", "ground_acceleration = " + number(ground) +
+    out.push_back({"ground bound", "ground_acceleration = " + fmt::format("{:g}", ground) +
                                        " m/s^2 is beyond a plausible " +
-                                       number(kPlausibleAcceleration) + " m/s^2"});
+                                       fmt::format("{:g}", kPlausibleAcceleration) + " m/s^2"});
   check_field("displacement", s.displacement(), dofs, b.u, "m", out);
   check_field("velocity", s.velocity(), dofs, b.v, "m/s", out);
   check_field("acceleration", s.acceleration(), dofs, b.a, "m/s^2", out);
@@ -342,13 +338,14 @@ std::vector<Finding> sequence_findings(const RecordContents& c, std::size_t i, c
     return out;
   }
   if (before.any && s.time() < before.time)
-    out.push_back({"time back", "time " + number(s.time()) + " s is before the step before's " +
-                                    number(before.time) + " s (time goes back)"});
+    out.push_back({"time back", "time " + fmt::format("{:g}", s.time()) +
+                                    " s is before the step before's " +
+                                    fmt::format("{:g}", before.time) + " s (time goes back)"});
   const double expected = static_cast<double>(k) * dt;
   if (dt > 0 && !(std::abs(s.time() - expected) <= dt / 2))
-    out.push_back({"time dt", "time " + number(s.time()) + " s is not step x dt (" +
-                                  std::to_string(k) + " x " + number(dt) +
-                                  " s = " + number(expected) + " s)"});
+    out.push_back({"time dt", "time " + fmt::format("{:g}", s.time()) + " s is not step x dt (" +
+                                  std::to_string(k) + " x " + fmt::format("{:g}", dt) +
+                                  " s = " + fmt::format("{:g}", expected) + " s)"});
   return out;
 }
 

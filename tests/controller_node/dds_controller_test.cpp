@@ -106,7 +106,7 @@ TEST_F(DdsController, ASilentControllerHoldsTheRunWithinItsReplyTimeoutAndTheRig
   EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
   // The node's HOLD names the controller's silence: it came within the node's 200 ms, before the
   // coordinator's own step timeout (2 s) could judge the step.
-  EXPECT_NE(coordinator_log.find("did not answer frame 301 (step 301) within 200.000000 ms"),
+  EXPECT_NE(coordinator_log.find("did not answer frame 301 (step 301) within 200 ms"),
             std::string::npos)
       << coordinator_log;
   ASSERT_NE(run.record.footer(), nullptr);
@@ -134,7 +134,7 @@ TEST_F(DdsController, AKilledControllerHoldsTheRunWithinItsReplyTimeout) {
   killer.join();
   const std::string coordinator_log = test::read_file(run.launch.coordinator_log);
   EXPECT_EQ(run.launch.coordinator_exit, 1) << coordinator_log;
-  EXPECT_NE(coordinator_log.find("within 200.000000 ms (1 lost in a row)"), std::string::npos)
+  EXPECT_NE(coordinator_log.find("within 200 ms (1 lost in a row)"), std::string::npos)
       << coordinator_log;
   const std::string node_log = test::read_file(run.dir / "node_2.log");
   EXPECT_NE(node_log.find("HOLD frames (status 1) to the controller"), std::string::npos)
