@@ -65,6 +65,7 @@ Coordinator::Coordinator(study::PreparedStudy prepared, transport::Endpoint& end
     intake_nodes.push_back({n.spec.id(), static_cast<int>(n.storeys.size()),
                             runtime::drives_actuators(n.spec.kind()), node.awaited});
   }
+  s.step_cpu.reserve(steps);  // no growth on the loop
   s.intake = std::make_unique<FeedbackIntake>(s.options.run_id, intake_nodes,
                                               s.deployment.limits().max_displacement());
   const int storeys = static_cast<int>(s.setup.partition.numerical.size());
@@ -295,6 +296,7 @@ void report(const RunState& s, const runtime::Pacer& pacer, RunOutcome& outcome)
   outcome.counters.set_worst_late_streak(s.worst_late_streak);
   outcome.counters.set_steps(completed > 0 ? completed - 1 : 0);
   outcome.max_lateness = pacer.max_lateness();
+  outcome.step_cpu = runtime::summarize(s.step_cpu);
   for (const auto& [id, node] : s.nodes) {
     outcome.counters.set_servo_ticks(outcome.counters.servo_ticks() + node.servo_ticks);
     outcome.counters.set_servo_overruns(outcome.counters.servo_overruns() + node.servo_overruns);

@@ -71,6 +71,13 @@ std::string summary_text(const RunOutcome& o) {
       // count says how often the integrator used an older answer, not that anything failed.
       << "\nsteps on an older answer (by design where a link's round trip exceeds the step): "
       << c.late_feedback() << " (worst streak " << c.worst_late_streak() << ")\n";
+  // The loop thread's own CPU time per step: the load-independent figure the real-time tests
+  // bound (tests/support/real_time_run.h), since a loaded machine stretches the step's wall time
+  // but not the CPU time its code burns.
+  if (o.step_cpu.count > 0)
+    out << "loop CPU per step: median " << o.step_cpu.median * 1e3 << " ms, p99 "
+        << o.step_cpu.p99 * 1e3 << " ms, max " << o.step_cpu.max * 1e3 << " ms over "
+        << o.step_cpu.count << " steps\n";
   if (c.servo_ticks() > 0)
     out << "servo loops: " << c.servo_overruns() << " overruns in " << c.servo_ticks()
         << " periods ("

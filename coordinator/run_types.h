@@ -84,6 +84,8 @@ struct RunOutcome {
   transport::Unauthenticated unauthenticated;
   double wall_seconds = 0.0;
   double max_lateness = 0.0;  // s, real time
+  // The loop thread's CPU time per step (RunState::step_cpu): median, p99, max, s.
+  runtime::LagSummary step_cpu;
   // The run stopped for its machine, not for the test: its record could not be written (a full
   // disk, a file size limit, a writer left behind). The program exits 3 for it, as for any
   // environment fault.

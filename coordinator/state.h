@@ -209,6 +209,12 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   runtime::PaceResult pace;
   Clock::time_point step_start, commands_written;
   std::int64_t step_start_realtime_ns = 0;
+  // The loop thread's CPU time (CLOCK_THREAD_CPUTIME_ID) over each step's work, the span
+  // step_wall times: what the step itself ran, never the time it waited for a CPU or slept for
+  // answers, so a machine's load barely moves it while code that burns CPU in the step does.
+  // s, one per step after the first; reserved for the run's steps (no growth on the loop).
+  std::chrono::nanoseconds step_cpu_start{};
+  std::vector<double> step_cpu;
 
   void before_step(std::size_t k) override;
   bool after_step(std::size_t k, const core::SimulationResult& result) override;

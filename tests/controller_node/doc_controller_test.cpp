@@ -165,10 +165,13 @@ TEST_F(DocControllerTest, RthsLaunchAcceptsALockstepRunThroughF32Frames) {
 // A real-time run that kept going to its end: completed, or (on a shared machine, not under
 // timing targets) failed only by the one real-time verdict for this machine's own stalls. Never
 // a HOLD, a node's fault or anything the link did, unless the machine itself stopped the loop
-// (tests/support/real_time_run.h): the test is then skipped, naming both.
+// (tests/support/real_time_run.h): the test is then skipped, naming both. Whatever the machine,
+// the loop's CPU time per step stays under the suite's bound (never skipped).
 void expect_ran_to_the_end(const test::LaunchedRun& run, const test::MeasuredPlatform& machine) {
   ASSERT_NE(run.record.footer(), nullptr) << test::read_file(run.launch.coordinator_log);
   const std::string& status = run.record.footer()->status();
+  if (const auto why = test::loop_cpu_over_bound(test::read_file(run.launch.coordinator_log)))
+    FAIL() << *why;
   if (run.launch.coordinator_exit == 0 && run.record.footer()->ok()) return;
   ASSERT_FALSE(timing_targets()) << status;
   if (status.rfind("completed with deadline misses", 0) == 0) return;

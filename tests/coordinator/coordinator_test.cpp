@@ -23,6 +23,7 @@
 #include "substructure_nodes/substructure_service.h"
 #include "tests/runtime/test_support.h"
 #include "tests/support/dds_scope.h"
+#include "tests/support/real_time_run.h"
 #include "transport/dds_endpoint.h"
 #include "transport/in_process.h"
 #include "util/process.h"
@@ -238,6 +239,11 @@ TEST(Coordinator, RealTimeRunThatKeepsItsDeadlinesCompletes) {
   EXPECT_TRUE(o.ok) << o.status;
   EXPECT_EQ(o.status, "completed");
   EXPECT_EQ(o.counters.overruns(), 0u);
+  // The loop thread's CPU time of each step after the first, bounded as the real-time tests
+  // bound it (tests/support/real_time_run.h): a step that burns CPU fails whatever the load.
+  EXPECT_EQ(o.step_cpu.count, o.result.steps() - 1);
+  EXPECT_GT(o.step_cpu.median, 0.0);
+  EXPECT_LE(o.step_cpu.median, test::kLoopCpuMedianBound);
 }
 
 // pin_loop gives the loop its CPU alone, and the record says so (a lab reading it later knows how
@@ -464,6 +470,21 @@ TEST(Coordinator, SummaryCountsStepsAsTheRecordDoes) {
   outcome.counters.set_steps(39069);
   const std::string text = coordinator::summary_text(outcome);
   EXPECT_NE(text.find("steps: 39070 recorded (39069 commanded)"), std::string::npos) << text;
+}
+
+// The summary prints the loop's CPU time per step as the real-time tests read it back.
+TEST(Coordinator, SummaryNamesTheLoopsCpuTimePerStep) {
+  RunOutcome outcome;
+  outcome.status = "completed";
+  const std::string without = coordinator::summary_text(outcome);
+  EXPECT_EQ(without.find("loop CPU per step"), std::string::npos) << "no steps, no figure";
+  outcome.step_cpu = runtime::summarize({0.1e-3, 0.25e-3, 0.3e-3});
+  const std::string text = coordinator::summary_text(outcome);
+  EXPECT_NE(text.find("loop CPU per step: median 0.25 ms, p99 0.3 ms, max 0.3 ms over 3 steps\n"),
+            std::string::npos)
+      << text;
+  EXPECT_NEAR(test::loop_cpu_median(text).value_or(0.0), 0.25e-3, 1e-12);
+  EXPECT_TRUE(test::loop_cpu_over_bound(text).has_value()) << "0.25 ms is over the bound";
 }
 
 // Each node's own unauthenticated drops (its heartbeat's count) are named on its line, apart

@@ -1,9 +1,14 @@
 // The rule by which the suite puts a real-time run's failure down to this machine
 // (tests/support/real_time_run.h): only a window a stall can pass, only beside a stall of at
-// least half of it.
+// least half of it or a CPU share under the loaded mark; and the loop CPU bound that never skips.
 #include "tests/support/real_time_run.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <thread>
+#include <vector>
 
 namespace rths {
 namespace {
@@ -123,6 +128,66 @@ TEST(StallRule, MissedDeadlinesAreTheMachinesOnlyWhereItCouldNotPaceTheLoop) {
   EXPECT_NE(why->find(status), std::string::npos) << *why;
   // Another failure beside the same machine is not excused by its pacing.
   EXPECT_FALSE(test::machine_cannot_pace("diverged at step 40", h, machine).has_value());
+}
+
+// A timing failure (the deadline verdict or a window) beside a machine whose CPU share was under
+// kLoadedCpuShare is the machine's, naming the share; any other failure is not, nor one beside a
+// machine that gave its busy threads their CPUs.
+TEST(StallRule, ATimingFailureBesideALoadedMachineIsTheMachines) {
+  const runtime::RunHeader h = header(0.001);
+  const std::string missed = "completed with deadline misses: 211 overruns in 999 steps";
+  const std::string window = "node 2: no answer for 30 consecutive steps (steps 1 to 30)";
+  test::MeasuredPlatform machine = stalled_for(0.001);
+  machine.p99 = 0.0001;
+  machine.cpu_share = test::kLoadedCpuShare;
+  EXPECT_FALSE(test::machine_stalled(missed, h, machine).has_value());
+  EXPECT_FALSE(test::machine_stalled(window, h, machine).has_value());
+  machine.cpu_share = 0.51;
+  for (const std::string& status : {missed, window}) {
+    const auto why = test::machine_stalled(status, h, machine);
+    ASSERT_TRUE(why.has_value()) << status;
+    EXPECT_NE(why->find("a busy thread got 0.51 of its CPU, under the 0.70"), std::string::npos)
+        << *why;
+    EXPECT_NE(why->find(status), std::string::npos) << *why;
+  }
+  EXPECT_FALSE(test::machine_loaded("diverged at step 40", h, machine).has_value());
+}
+
+// The loop's CPU time per step bounds the code whatever the machine: over the bound, or a
+// completed run's summary without the figure, is a failure; a run that never printed a summary
+// is judged by its status instead.
+TEST(LoopCpuBound, AMedianOverTheBoundOrAMissingFigureFails) {
+  const auto line = [](double median_ms) {
+    return "status: completed\nloop CPU per step: median " + std::to_string(median_ms) +
+           " ms, p99 0.4 ms, max 0.9 ms over 999 steps\n";
+  };
+  EXPECT_NEAR(test::loop_cpu_median(line(0.087)).value_or(0.0), 0.087e-3, 1e-12);
+  EXPECT_FALSE(test::loop_cpu_over_bound(line(test::kLoopCpuMedianBound * 1e3)).has_value());
+  const auto over = test::loop_cpu_over_bound(line(0.55));
+  ASSERT_TRUE(over.has_value());
+  EXPECT_NE(over->find("median 0.550 ms of CPU per step, over the 0.200 ms bound"),
+            std::string::npos)
+      << *over;
+  EXPECT_TRUE(test::loop_cpu_over_bound("status: completed\nsteps: 1000\n").has_value());
+  EXPECT_FALSE(test::loop_cpu_over_bound("start-up timed out after 10 s").has_value());
+}
+
+// The CPU share is each busy thread's CPU time over its wall time: one extra busy thread per CPU
+// beside the measurement halves it, which is under the loaded mark however quiet the machine.
+TEST(CpuShare, BusyThreadsBesideTheMeasurementMarkTheMachineLoaded) {
+  const double alone = test::measure_cpu_share(0.1);
+  EXPECT_GT(alone, 0.0);
+  EXPECT_LE(alone, 1.01);
+  std::atomic<bool> stop{false};
+  std::vector<std::thread> burners;
+  for (unsigned i = 0; i < std::max(1u, std::thread::hardware_concurrency()); ++i)
+    burners.emplace_back([&stop] {
+      while (!stop.load(std::memory_order_relaxed)) {}
+    });
+  const double beside = test::measure_cpu_share(0.3);
+  stop = true;
+  for (std::thread& burner : burners) burner.join();
+  EXPECT_LT(beside, test::kLoadedCpuShare);
 }
 
 }  // namespace

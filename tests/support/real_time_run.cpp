@@ -64,10 +64,25 @@ std::optional<std::string> machine_cannot_pace(const std::string& status,
          "), which failed the real-time verdict rightly: " + status;
 }
 
+std::optional<std::string> machine_loaded(const std::string& status,
+                                          const runtime::RunHeader& header,
+                                          const MeasuredPlatform& machine) {
+  const bool timing = status.rfind("completed with deadline misses", 0) == 0 ||
+                      stall_window(status, header).has_value();
+  if (!timing || machine.cpu_share >= kLoadedCpuShare) return std::nullopt;
+  char figures[128];
+  std::snprintf(figures, sizeof figures,
+                "a busy thread got %.2f of its CPU, under the %.2f that marks a loaded machine",
+                machine.cpu_share, kLoadedCpuShare);
+  return "this machine was loaded around the run (" + machine.text + "; " + figures +
+         "), which failed the run's timing rightly: " + status;
+}
+
 std::optional<std::string> machine_stalled(const std::string& status,
                                            const runtime::RunHeader& header,
                                            const MeasuredPlatform& machine) {
   if (auto why = machine_cannot_pace(status, header, machine)) return why;
+  if (auto why = machine_loaded(status, header, machine)) return why;
   const std::optional<double> window = stall_window(status, header);
   if (!window) return std::nullopt;
   if (machine.max < 0.5 * *window) {
@@ -88,6 +103,28 @@ std::optional<std::string> machine_stalled(const std::string& status,
          ", which failed the run rightly: " + status;
 }
 
+std::optional<double> loop_cpu_median(const std::string& coordinator_log) {
+  static const std::regex line("loop CPU per step: median ([0-9.eE+-]+) ms");
+  if (auto ms = number_after(coordinator_log, line)) return *ms * 1e-3;
+  return std::nullopt;
+}
+
+std::optional<std::string> loop_cpu_over_bound(const std::string& coordinator_log) {
+  const std::optional<double> median = loop_cpu_median(coordinator_log);
+  if (!median) {
+    if (coordinator_log.find("status: completed") == std::string::npos) return std::nullopt;
+    return "the coordinator's summary of a completed run names no loop CPU per step:\n" +
+           coordinator_log;
+  }
+  if (*median <= kLoopCpuMedianBound) return std::nullopt;
+  char figures[160];
+  std::snprintf(figures, sizeof figures,
+                "the coordinator's loop burned a median %.3f ms of CPU per step, over the "
+                "%.3f ms bound (a figure the machine's load does not move)",
+                *median * 1e3, kLoopCpuMedianBound * 1e3);
+  return figures;
+}
+
 WitnessedRun launch_witnessed(const std::string& name, const std::string& text,
                               const std::string& case_name, int domain, double timeout) {
   StallWitness witness;
@@ -99,6 +136,8 @@ WitnessedRun launch_witnessed(const std::string& name, const std::string& text,
 
 RealTimeVerdict real_time_verdict(const WitnessedRun& witnessed) {
   const LaunchedRun& run = witnessed.run;
+  const std::string log = read_file(run.launch.coordinator_log);
+  if (auto why = loop_cpu_over_bound(log)) return {RealTimeVerdict::kFailed, *why + "\n" + log};
   const runtime::RunFooter* footer = run.record.footer();
   if (run.launch.coordinator_exit == 0 && footer != nullptr && footer->ok())
     return {RealTimeVerdict::kCompleted, ""};
@@ -108,8 +147,7 @@ RealTimeVerdict real_time_verdict(const WitnessedRun& witnessed) {
       return {RealTimeVerdict::kMachineStalled, *why};
   return {RealTimeVerdict::kFailed,
           "coordinator exit " + std::to_string(run.launch.coordinator_exit) + ": " + status +
-              "\nthe machine meanwhile: " + witnessed.machine.text + "\n" +
-              read_file(run.launch.coordinator_log)};
+              "\nthe machine meanwhile: " + witnessed.machine.text + "\n" + log};
 }
 
 }  // namespace rths::test
