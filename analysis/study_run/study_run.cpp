@@ -1,5 +1,6 @@
 #include "analysis/study_run/study_run.h"
 
+#include "analysis/study_run/case_setups.h"
 #include "analysis/study_run/predicted_loop.h"
 
 #include <algorithm>
@@ -241,18 +242,6 @@ bool same_parts(const std::vector<core::DelayedPart>& a, const std::vector<core:
       return false;
   }
   return true;
-}
-
-// A case's loop as the critical-delay check sees it: its parts (no lags), its lag (s).
-struct CaseLoop {
-  std::vector<core::DelayedPart> parts;
-  double lag = 0.0;  // s
-};
-
-CaseLoop case_loop(const core::HybridSetup& setup, double extra_lag) {
-  return {core::setup_loop_parts(setup,
-                                 std::vector<double>(setup.partition.actuator_storeys.size(), 0.0)),
-          study::answer_lag(setup) + extra_lag};
 }
 
 // Cases whose loops are the same share one critical-delay check, made at the largest of their
@@ -512,14 +501,15 @@ StudyOutcome run_study(const study::PreparedStudy& prepared, const RunStudyOptio
   // The lag-free run: what growth is judged against (a lagged reference case would hide it).
   const core::SimulationOptions kept =
       study::kept_by_recorders(prepared.recorders, prepared.config.deployment().limits());
-  // Each case's setup (a copy of the model) is built and released in turn: its loop, its run.
-  std::vector<CaseLoop> loops;
+  // Each case's setup built once, one model alive at a time: its loop, then its run.
+  std::vector<const config::Case*> cases;
   std::size_t simulations = 1;  // the lag-free run and each case that adds to it
   for (const config::Case& study_case : with_cases.cases()) {
-    loops.push_back(case_loop(study::setup_for_case(prepared, study_case), options.extra_lag));
+    cases.push_back(&study_case);
     simulations += adds_nothing(study_case) ? 0 : 1;
   }
-  SharedChecks checks(loops);
+  CaseSetups setups(prepared, cases, options.extra_lag);
+  SharedChecks checks(setups.loops());
   RunProgress progress(options.progress, simulations, prepared.motion.acceleration.size());
   progress.start(0, "the lag-free run");
   const core::SimulationResult lag_free =
@@ -531,7 +521,7 @@ StudyOutcome run_study(const study::PreparedStudy& prepared, const RunStudyOptio
   for (int i = 0; i < with_cases.cases_size(); ++i) {
     const config::Case& study_case = with_cases.cases(i);
     if (&study_case == &reference) outcome.reference_index = static_cast<std::size_t>(i);
-    const core::HybridSetup setup = study::setup_for_case(prepared, study_case);
+    const core::HybridSetup& setup = setups.lend(static_cast<std::size_t>(i));
     CaseOutcome result =
         describe_case(prepared, setup, study_case,
                       study_case.name().empty() ? "case" + std::to_string(i) : study_case.name(),
@@ -569,7 +559,6 @@ StudyOutcome judge_recorded_cases(const study::PreparedStudy& prepared,
   lag_free.response = floor_history(lag_free.simulation, floors - 1);
   outcome.lag_free_peak = core::peak_abs(lag_free.response);
   std::vector<const config::Case*> study_cases;
-  std::vector<CaseLoop> loops;
   for (const RecordedCase& r : recorded) {
     const config::Case* study_case = nullptr;
     for (const config::Case& c : prepared.config.cases())
@@ -577,12 +566,12 @@ StudyOutcome judge_recorded_cases(const study::PreparedStudy& prepared,
     if (study_case == nullptr)
       throw std::invalid_argument("case '" + r.name + "' is not among the study's cases");
     study_cases.push_back(study_case);
-    loops.push_back(case_loop(study::setup_for_case(prepared, *study_case), options.extra_lag));
   }
-  SharedChecks checks(loops);
+  CaseSetups setups(prepared, study_cases, options.extra_lag);
+  SharedChecks checks(setups.loops());
   for (std::size_t i = 0; i < recorded.size(); ++i) {
     RecordedCase& r = recorded[i];
-    const core::HybridSetup setup = study::setup_for_case(prepared, *study_cases[i]);
+    const core::HybridSetup& setup = setups.lend(i);
     CaseOutcome result = describe_case(prepared, setup, *study_cases[i], r.name, options,
                                        checks.for_case(prepared, i, setup));
     result.simulation = std::move(r.simulation);
