@@ -1,8 +1,9 @@
 #include "rt_check/verdict.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <set>
 
 #include "runtime/node/plan.h"
@@ -46,12 +47,6 @@ double rate_with(const LatencyStats& stats, const Tail& tail, double x) {
   return x < 2.0 * stats.max() ? seen / stats.minutes() : 0.0;
 }
 
-std::string fmt(const char* format, double a, double b = 0, double c = 0, double d = 0) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof buffer, format, a, b, c, d);
-  return buffer;
-}
-
 void tuning_fixes(const PlatformFacts& facts, const FailSafeInput& in,
                   std::vector<std::string>& fixes) {
   if (in.loop_cpu < 0 && in.cpus.size() > 1)
@@ -77,18 +72,20 @@ void tuning_fixes(const PlatformFacts& facts, const FailSafeInput& in,
 void add_deployment_fixes(const LatencyStats& stats, FailSafeVerdict& v) {
   if (!v.window_holds)
     v.fixes.push_back(
-        fmt("answer_window_ms: %.3f command_watchdog_ms: %.3f in the deployment (a real "
-            "fault is then held within %.3f ms instead of %.2f ms, ",
+        fmt::format(
+            "answer_window_ms: {:.3f} command_watchdog_ms: {:.3f} in the deployment (a real "
+            "fault is then held within {:.3f} ms instead of {:.2f} ms, ",
             v.required_window_ms, v.required_window_ms, v.required_window_ms, v.window_ms) +
-        fmt("plus any stall at that moment: up to %.2f ms measured here)", 1e3 * stats.max()));
+        fmt::format("plus any stall at that moment: up to {:.2f} ms measured here)",
+                    1e3 * stats.max()));
   if (!v.overruns_hold && v.predicted_overrun_fraction <= kMaxSensibleTolerance / 2)
-    v.fixes.push_back(fmt("max_overrun_fraction: %.4f (twice the predicted fraction)",
-                          2.0 * v.predicted_overrun_fraction));
+    v.fixes.push_back(fmt::format("max_overrun_fraction: {:.4f} (twice the predicted fraction)",
+                                  2.0 * v.predicted_overrun_fraction));
   else if (!v.overruns_hold)
     v.fixes.push_back(
-        fmt("no overrun tolerance makes this a real-time test: %.1f %% of the steps "
-            "would overrun; run at a lower rate or on a quieter machine",
-            100.0 * v.predicted_overrun_fraction));
+        fmt::format("no overrun tolerance makes this a real-time test: {:.1f} % of the steps "
+                    "would overrun; run at a lower rate or on a quieter machine",
+                    100.0 * v.predicted_overrun_fraction));
 }
 
 }  // namespace
@@ -154,26 +151,27 @@ FailSafeVerdict judge_failsafe(const LatencyStats& stats, const PlatformFacts& f
                              : tail.fitted                ? "tail fit"
                                                           : "bound";
   v.findings.push_back(
-      fmt("windows: the coordinator's answer window %.0f steps (%.2f ms); the command watchdog of "
-          "the actuator emulators and controller nodes %.0f periods (%.2f ms",
-          in.answer_steps, 1e3 * in.answer_steps * in.dt, in.watchdog_steps,
-          1e3 * in.watchdog_steps * in.dt) +
+      fmt::format("windows: the coordinator's answer window {} steps ({:.2f} ms); the command "
+                  "watchdog of the actuator emulators and controller nodes {} periods ({:.2f} "
+                  "ms",
+                  in.answer_steps, 1e3 * in.answer_steps * in.dt, in.watchdog_steps,
+                  1e3 * in.watchdog_steps * in.dt) +
       (in.watchdog_defaulted ? ", unset: the answer window)" : ")") +
       "; real-time threads: " + in.priority_text);
+  v.findings.push_back(fmt::format("fail-safe window {:.2f} ms ({} steps at {:.0f} Hz): stalls "
+                                   "longer than {:.2f} ms come ",
+                                   v.window_ms, steps, 1.0 / in.dt, 1e3 * x) +
+                       fmt::format("{:.3g} per minute (", rate_with(stats, tail, x)) + source +
+                       fmt::format("); a {:.1f} s run is stopped falsely with probability {:.3g} %",
+                                   in.run_seconds, 100.0 * v.false_stop_probability));
   v.findings.push_back(
-      fmt("fail-safe window %.2f ms (%.0f steps at %.0f Hz): stalls longer than %.2f ms come ",
-          v.window_ms, steps, 1.0 / in.dt, 1e3 * x) +
-      fmt("%.3g per minute (", rate_with(stats, tail, x)) + source +
-      fmt("); a %.1f s run is stopped falsely with probability %.3g %%", in.run_seconds,
-          100.0 * v.false_stop_probability));
-  v.findings.push_back(
-      fmt("required: %.3f ms (%.0f steps) for <= 1 %% false stops; the longest stall "
-          "measured was %.2f ms: ",
-          v.required_window_ms, v.required_steps, 1e3 * stats.max()) +
+      fmt::format("required: {:.3f} ms ({} steps) for <= 1 % false stops; the longest stall "
+                  "measured was {:.2f} ms: ",
+                  v.required_window_ms, v.required_steps, 1e3 * stats.max()) +
       (v.window_holds ? "the window holds" : "the window does NOT hold"));
   v.findings.push_back(
-      fmt("predicted overruns %.3f %% of steps against max_overrun_fraction %.3f %%: ",
-          100.0 * v.predicted_overrun_fraction, 100.0 * in.overrun_tolerance) +
+      fmt::format("predicted overruns {:.3f} % of steps against max_overrun_fraction {:.3f} %: ",
+                  100.0 * v.predicted_overrun_fraction, 100.0 * in.overrun_tolerance) +
       (in.overrun_tolerance < 0 ? "not checked"
        : v.overruns_hold        ? "holds"
                                 : "does NOT hold"));

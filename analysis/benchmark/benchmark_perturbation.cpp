@@ -1,7 +1,8 @@
 #include "analysis/benchmark/benchmark_perturbation.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
-#include <cstdio>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -105,11 +106,9 @@ std::string spread_table(const std::vector<CriteriaSpread>& spread, std::uint64_
                            {"mean", Align::kRight},
                            {"std", Align::kRight},
                            {"unit", Align::kLeft}});
-    char mean[32], sd[32];
     for (std::size_t j = 0; j < 9; ++j) {
-      std::snprintf(mean, sizeof mean, "%.2f", s.mean[j]);
-      std::snprintf(sd, sizeof sd, "%.2f", s.std[j]);
-      table.add_row({definitions[j].name, mean, sd, definitions[j].unit});
+      table.add_row({definitions[j].name, fmt::format("{:.2f}", s.mean[j]),
+                     fmt::format("{:.2f}", s.std[j]), definitions[j].unit});
     }
     out << table.render();
   }

@@ -46,6 +46,21 @@ PlatformFacts stock_vm() {
   return f;
 }
 
+// Each finding states its figures to the decimals it promises: steps whole, ms to 2 or 3
+// decimals, percentages with a plain % sign.
+TEST(Verdict, TheFindingsStateTheirFiguresExactly) {
+  const LatencyStats stats(minute(60, 3.5e-3));
+  const FailSafeVerdict v = judge_failsafe(stats, stock_vm(), input(3));
+  ASSERT_GE(v.findings.size(), 4u);
+  EXPECT_THAT(v.findings[0], HasSubstr("windows: the coordinator's answer window 3 steps (2.93 "
+                                       "ms); the command watchdog of the actuator emulators and "
+                                       "controller nodes 3 periods (2.93 ms)"));
+  EXPECT_THAT(v.findings[1], HasSubstr("fail-safe window 2.93 ms (3 steps at 1024 Hz)"));
+  EXPECT_THAT(v.findings[2], HasSubstr("required: 8.789 ms (9 steps) for <= 1 % false stops"));
+  EXPECT_THAT(v.findings[3], HasSubstr("% of steps against max_overrun_fraction"));
+  EXPECT_THAT(v.findings[3], Not(HasSubstr("%%")));
+}
+
 TEST(Verdict, AVmStallingOnceASecondRefusesThreeStepsAndNamesTheWindowThatHolds) {
   const LatencyStats stats(minute(60, 3.5e-3));
   const FailSafeVerdict v = judge_failsafe(stats, stock_vm(), input(3));
