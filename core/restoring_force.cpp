@@ -1,21 +1,15 @@
 #include "core/restoring_force.h"
 
+#include "core/number_text.h"
+
 #include "core/precondition.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 namespace rths::core {
 namespace {
-
-std::string format(const char* pattern, double a, double b = 0.0, double c = 0.0, double d = 0.0,
-                   double e = 0.0) {
-  char buffer[160];
-  std::snprintf(buffer, sizeof buffer, pattern, a, b, c, d, e);
-  return buffer;
-}
 
 bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
 
@@ -32,17 +26,17 @@ std::unique_ptr<RestoringForceModel> LinearSpring::clone() const {
   return std::make_unique<LinearSpring>(*this);
 }
 
-std::string LinearSpring::describe() const { return format("linear(k = %g N/m)", k_); }
+std::string LinearSpring::describe() const { return "linear(k = " + format_number(k_) + " N/m)"; }
 
 // ---------------------------------------------------------------------------------------------
 BilinearKinematic::BilinearKinematic(double k0, double yield_drift, double post_yield_ratio)
     : HystereticModel(k0), fy_(k0 * yield_drift), b_(post_yield_ratio) {
-  require(positive_finite(k0), format("BilinearKinematic: k0 must be > 0, got %g", k0));
+  require(positive_finite(k0), "BilinearKinematic: k0 must be > 0, got " + format_number(k0));
   require(positive_finite(yield_drift),
-          format("BilinearKinematic: yield drift must be > 0, got %g", yield_drift));
-  require(
-      post_yield_ratio >= 0.0 && post_yield_ratio <= 1.0,
-      format("BilinearKinematic: post-yield ratio b must be in [0, 1], got %g", post_yield_ratio));
+          "BilinearKinematic: yield drift must be > 0, got " + format_number(yield_drift));
+  require(post_yield_ratio >= 0.0 && post_yield_ratio <= 1.0,
+          "BilinearKinematic: post-yield ratio b must be in [0, 1], got " +
+              format_number(post_yield_ratio));
 }
 
 // Elastic predictor from the committed state, then return to the band b k0 u +/- (1 - b) fy.
@@ -75,22 +69,23 @@ HystereticModel::Parts BilinearKinematic::parts() const {
 }
 
 std::string BilinearKinematic::describe() const {
-  return format("bilinear-kinematic(k0 = %g N/m, fy = %g N, b = %g)", k0_, fy_, b_);
+  return "bilinear-kinematic(k0 = " + format_number(k0_) + " N/m, fy = " + format_number(fy_) +
+         " N, b = " + format_number(b_) + ")";
 }
 
 // ---------------------------------------------------------------------------------------------
 BoucWen::BoucWen(double k0, double yield_drift, double alpha, double n, double beta_fraction)
     : HystereticModel(k0), uy_(yield_drift), alpha_(alpha), n_(n), beta_(0.0), gamma_(0.0) {
-  require(positive_finite(k0), format("BoucWen: k0 must be > 0, got %g", k0));
+  require(positive_finite(k0), "BoucWen: k0 must be > 0, got " + format_number(k0));
   require(positive_finite(yield_drift),
-          format("BoucWen: yield drift must be > 0, got %g", yield_drift));
+          "BoucWen: yield drift must be > 0, got " + format_number(yield_drift));
   require(alpha >= 0.0 && alpha <= 1.0,
-          format("BoucWen: alpha (post-yield ratio) must be in [0, 1], got %g", alpha));
-  require(positive_finite(n), format("BoucWen: exponent n must be > 0, got %g", n));
+          "BoucWen: alpha (post-yield ratio) must be in [0, 1], got " + format_number(alpha));
+  require(positive_finite(n), "BoucWen: exponent n must be > 0, got " + format_number(n));
   // beta_fraction in [0, 1] keeps gamma >= 0 and beta >= 0: a stable, softening loop whose
   // hysteretic drift z stays within +/- uy.
   require(beta_fraction >= 0.0 && beta_fraction <= 1.0,
-          format("BoucWen: beta fraction must be in [0, 1], got %g", beta_fraction));
+          "BoucWen: beta fraction must be in [0, 1], got " + format_number(beta_fraction));
   const double scale = std::pow(yield_drift, n);
   beta_ = beta_fraction / scale;
   gamma_ = (1.0 - beta_fraction) / scale;
@@ -135,8 +130,9 @@ HystereticModel::Parts BoucWen::parts() const {
 }
 
 std::string BoucWen::describe() const {
-  return format("bouc-wen(k0 = %g N/m, uy = %g m, alpha = %g, n = %g, beta uy^n = %g)", k0_, uy_,
-                alpha_, n_, beta_ * std::pow(uy_, n_));
+  return "bouc-wen(k0 = " + format_number(k0_) + " N/m, uy = " + format_number(uy_) +
+         " m, alpha = " + format_number(alpha_) + ", n = " + format_number(n_) +
+         ", beta uy^n = " + format_number(beta_ * std::pow(uy_, n_)) + ")";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -182,8 +178,8 @@ std::unique_ptr<RestoringForceModel> InertialSpecimen::clone() const {
 }
 
 std::string InertialSpecimen::describe() const {
-  return format("specimen(m = %g kg, c = %g N s/m, h = %g s, ", m_, c_, h_) + model_->describe() +
-         ")";
+  return "specimen(m = " + format_number(m_) + " kg, c = " + format_number(c_) +
+         " N s/m, h = " + format_number(h_) + " s, " + model_->describe() + ")";
 }
 
 }  // namespace rths::core

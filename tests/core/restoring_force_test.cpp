@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace rths::core {
@@ -257,6 +259,23 @@ TEST(HystereticModel, PartsRebuildTheForceAlongALoop) {
   }
   EXPECT_EQ(bilinear.parts().linear_ratio, kB);
   EXPECT_EQ(bouc_wen.parts().linear_ratio, 0.2);
+}
+
+// A model's description and its refusals name each parameter as messages print numbers (%g).
+TEST(RestoringForceText, DescriptionsAndRefusalsNameTheirParameters) {
+  EXPECT_EQ(LinearSpring(2.5e6).describe(), "linear(k = 2.5e+06 N/m)");
+  EXPECT_EQ(BilinearKinematic(kK0, kUy, kB).describe(),
+            "bilinear-kinematic(k0 = 1000 N/m, fy = 10 N, b = 0.1)");
+  EXPECT_EQ(BoucWen(kK0, kUy, kB, 2.0, 0.5).describe(),
+            "bouc-wen(k0 = 1000 N/m, uy = 0.01 m, alpha = 0.1, n = 2, beta uy^n = 0.5)");
+  try {
+    BoucWen(kK0, kUy, kB, -1.5, 0.5);
+    FAIL() << "a negative exponent was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("BoucWen: exponent n must be > 0, got -1.5"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
