@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -225,22 +227,34 @@ TEST_P(DissipativeSchemes, AgreesWithExplicitNewmarkAsDtShrinks) {
             1e-6 * std::abs(forced_response(IntegratorKind::kExplicitNewmark, {}, 2.5e-4)) * 1e3);
 }
 
+// Far past the explicit limit (omega dt = 50), free vibration from 0.01 m: a dissipative scheme
+// ends within its start; KR-alpha without dissipation (rho_inf = 1) is only marginally stable
+// there: it keeps an oscillation larger than its start (measured: a peak of 25.02x in each 2000
+// steps of 8000), bounded, neither decaying nor growing from one 2000-step window to the next.
 TEST_P(DissipativeSchemes, BoundedFarBeyondTheExplicitLimit) {
   const auto& p = GetParam();
-  // Without dissipation (rho_inf = 1) KR-alpha is only marginally stable as omega dt -> infinity
-  // (measured: the amplitude grows 1.4x over 2000 steps at omega dt = 1000, 6.6x at
-  // omega dt = 50); bounded at omega dt = 10 (IntegratorStabilityTest above).
-  if (p.kind == IntegratorKind::kKRAlpha && p.parameters.rho_infinity == 1.0)
-    GTEST_SKIP() << "KR-alpha without dissipation (rho_inf = 1) is not bounded this far past the "
-                    "explicit limit: measured 6.6x growth over 2000 steps at omega dt = 50";
   const StructuralModel model = make_sdof(1.0, 0.0);
   const double dt = 50.0 / (2 * std::numbers::pi);  // omega dt = 50
   auto integrator = make_integrator(p.kind, model, dt, p.parameters);
   LinearEvaluator evaluator(model.stiffness);
   integrator->initialize(Vec::Constant(1, 0.01), Vec::Zero(1),
                          model.stiffness * Vec::Constant(1, 0.01), Vec::Zero(1));
-  for (int k = 0; k < 2000; ++k) integrator->step(Vec::Zero(1), evaluator);
+  constexpr int kWindow = 2000, kWindows = 4;
+  std::array<double, kWindows> peak{};  // m, the largest |u| in each window of steps
+  for (int k = 0; k < kWindow * kWindows; ++k) {
+    integrator->step(Vec::Zero(1), evaluator);
+    peak[k / kWindow] = std::max(peak[k / kWindow], std::abs(integrator->displacement()(0)));
+  }
+  if (p.kind == IntegratorKind::kKRAlpha && p.parameters.rho_infinity == 1.0) {
+    EXPECT_GT(peak[0], 0.01) << p.name << ": undamped, past the explicit limit";
+    for (int w = 1; w < kWindows; ++w) {
+      EXPECT_LE(peak[w], peak[0] * (1 + 1e-6)) << p.name << " window " << w << ": grew";
+      EXPECT_GE(peak[w], peak[0] * (1 - 1e-3)) << p.name << " window " << w << ": decayed";
+    }
+    return;
+  }
   EXPECT_LE(std::abs(integrator->displacement()(0)), 0.01 * (1 + 1e-6)) << p.name;
+  EXPECT_LE(peak[kWindows - 1], peak[0] * (1 + 1e-6)) << p.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -3,7 +3,10 @@
 A ctest JUnit file with two gtest skips (one with GTEST_SKIP's message, one a script's own line),
 a pass and a failure: both skips are printed with their reasons, the pass and failure are not,
 and the exit is 0 at --max-skips 2 and 1 at --max-skips 1; a file that is not JUnit is exit 2.
+Its skip history: a test that skipped in each of the last 3 runs fails the third, named; one
+that skipped in two of them does not; the history keeps 3 runs; a damaged history is exit 2.
 """
+import json
 import os
 import subprocess
 import sys
@@ -35,9 +38,34 @@ skipped: chromium is not installed
 """
 
 
-def run(path, bound):
-    return subprocess.run([sys.executable, SCRIPT, path, "--max-skips", str(bound)],
+def run(path, bound, history=None):
+    extra = ["--history", history] if history else []
+    return subprocess.run([sys.executable, SCRIPT, path, "--max-skips", str(bound)] + extra,
                           capture_output=True, text=True)
+
+
+def check_history(tmp, path):
+    """Three runs on the same file: the third fails naming both skips; a pass in between clears."""
+    history = os.path.join(tmp, "history.json")
+    assert run(path, 10, history).returncode == 0
+    assert run(path, 10, history).returncode == 0
+    third = run(path, 10, history)
+    assert third.returncode == 1, third.stdout + third.stderr
+    assert ("Faults.AStallIsJudged skipped on each of the last 3 runs" in third.stderr
+            and "view_browser skipped on each of the last 3 runs" in third.stderr), third.stderr
+    with open(history) as f:
+        assert json.load(f) == [["Faults.AStallIsJudged", "view_browser"]] * 3
+    passed = os.path.join(tmp, "passed.xml")
+    with open(passed, "w") as f:
+        f.write(JUNIT.replace("<skipped", "<passed"))
+    assert run(passed, 10, history).returncode == 0
+    assert run(path, 10, history).returncode == 0, "skipped in 2 of the last 3 runs"
+    with open(history) as f:
+        assert len(json.load(f)) == 3
+    with open(history, "w") as f:
+        f.write("{}")
+    damaged = run(path, 10, history)
+    assert damaged.returncode == 2 and "skip history" in damaged.stderr, damaged.stderr
 
 
 def main():
@@ -55,6 +83,7 @@ def main():
         over = run(path, 1)
         assert over.returncode == 1, over.stdout + over.stderr
         assert "2 tests skipped, more than 1" in over.stderr, over.stderr
+        check_history(tmp, path)
         with open(path, "w") as f:
             f.write("not xml")
         assert run(path, 2).returncode == 2
