@@ -5,21 +5,18 @@
 #include <atomic>
 #include <cmath>
 #include <numbers>
-#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
+#include "core/metrics.h"
 #include "identify/model/spectra.h"
 
 namespace rths::identify {
 namespace {
 
+// The population standard deviation (core/metrics.h), 0 for a signal the record lacks (empty).
 double rms_about_mean(std::span<const double> x) {
-  if (x.empty()) return 0.0;
-  const double mean = std::accumulate(x.begin(), x.end(), 0.0) / static_cast<double>(x.size());
-  double sum = 0.0;
-  for (double v : x) sum += (v - mean) * (v - mean);
-  return std::sqrt(sum / static_cast<double>(x.size()));
+  return x.empty() ? 0.0 : core::standard_deviation(x);
 }
 
 std::vector<double> moving_average(std::span<const double> x, std::size_t window) {

@@ -9,14 +9,15 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "core/metrics.h"
+
 namespace rths::identify {
 namespace {
 
 std::vector<double> centred(std::span<const double> x) {
   std::vector<double> out(x.begin(), x.end());
   if (out.empty()) return out;
-  const double mean =
-      std::accumulate(out.begin(), out.end(), 0.0) / static_cast<double>(out.size());
+  const double mean = core::mean(out);
   for (double& v : out) v -= mean;
   return out;
 }
