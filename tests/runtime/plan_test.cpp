@@ -94,6 +94,29 @@ TEST(Plan, NodeSideSetupMatchesPrepareStudy) {
   EXPECT_EQ(from_core.delays[0].describe(), node_side.delays[0].describe());
 }
 
+// The shipped 2,000-DOF real-time study (issue 63): its matrices read and checked, its deployment
+// accepted, every DOF on its substructure node, at 1024 Hz with the loop and DDS threads raised.
+TEST(Plan, TheShippedTwoThousandDofRealTimeStudyPutsEveryDofOnItsNode) {
+  const std::filesystem::path configs = RTHS_SOURCE_DIR "/configs";
+  const study::PreparedStudy prepared =
+      study::prepare_study(study::load_study(configs / "chain2000_realtime.textproto"), configs);
+  EXPECT_EQ(prepared.base.model.dofs(), 2000);
+  EXPECT_DOUBLE_EQ(prepared.base.dt, 1.0 / 1024);
+  EXPECT_EQ(prepared.motion.acceleration.size(), 20480u);
+  check_deployment(prepared);
+  const config::Deployment& d = prepared.config.deployment();
+  EXPECT_EQ(d.clock(), config::Deployment::REAL_TIME);
+  EXPECT_EQ(realtime_priority(d), 80);
+  const DeploymentPlan plan = make_plan(prepared.base, d);
+  EXPECT_FALSE(plan.numerical_local);
+  const NodePlan* node = plan.find(1);
+  ASSERT_NE(node, nullptr);
+  EXPECT_EQ(node->spec.kind(), config::NodeSpec::SUBSTRUCTURE);
+  EXPECT_EQ(node->storeys.size(), 2000u);
+  ASSERT_NE(plan.find(2), nullptr);
+  EXPECT_EQ(plan.find(2)->actuators, (std::vector<int>{0}));
+}
+
 TEST(Plan, LockstepJudgesANodeDeadOnlyAfterSecondsOfSilenceRealTimeAfterItsOwnTimeout) {
   config::Deployment d;
   d.set_liveliness_timeout(1.0);
