@@ -5,7 +5,6 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -13,6 +12,7 @@
 #include "core/compensator.h"
 #include "core/coupled_stability.h"
 #include "core/exact_zoh.h"
+#include "core/number_text.h"
 #include "core/simulation.h"
 #include "core/sparse_structure.h"
 #include "core/time_text.h"
@@ -464,19 +464,14 @@ std::string CriticalDelayCheck::describe() const {
     return "lag " + format_ms(lag) + ": stable for every delay (" + continuous_text + "; " +
            discrete_text + ")";
   }
-  std::ostringstream out;
-  out.precision(3);
-  out << "lag " << format_ms(lag) << " against a critical delay of " << format_ms(*limit) << " ("
-      << continuous_text << " " << (continuous ? format_ms(*continuous) : "none") << ", "
-      << (discrete ? "discrete " + format_ms(*discrete) : discrete_text) << "; mode "
-      << governing_mode << ", T = " << governing_period << " s, experimental fraction "
-      << governing_fraction << "): ";
   const double m = margin();
-  if (m < 0)
-    out << "PAST it by " << -m * 100.0 << " %";
-  else
-    out << m * 100.0 << " % below it";
-  return out.str();
+  return "lag " + format_ms(lag) + " against a critical delay of " + format_ms(*limit) + " (" +
+         continuous_text + " " + (continuous ? format_ms(*continuous) : "none") + ", " +
+         (discrete ? "discrete " + format_ms(*discrete) : discrete_text) + "; mode " +
+         std::to_string(governing_mode) + ", T = " + format_number(governing_period, 3) +
+         " s, experimental fraction " + format_number(governing_fraction, 3) + "): " +
+         (m < 0 ? "PAST it by " + format_number(-m * 100.0, 3) + " %"
+                : format_number(m * 100.0, 3) + " % below it");
 }
 
 void CriticalDelayCheck::govern_by_mode_nearest(double omega, const Modes& modes,
@@ -491,6 +486,22 @@ void CriticalDelayCheck::govern_by_mode_nearest(double omega, const Modes& modes
 }
 
 namespace {
+
+// What the modal check assumes for a model of `dofs` DOFs checked on its lowest `count` modes.
+std::string modal_assumption(int dofs, int count) {
+  std::string text = dofs == 1
+                         ? "exact for one DOF (the experimental part at its initial stiffness)"
+                         : "modal approximation over the " + std::to_string(dofs) +
+                               " modes of (M, K), each an SDOF with its modal damping and "
+                               "experimental fraction phi' K_e phi / omega^2; the coupling the "
+                               "delayed force adds between modes is ignored; the experimental "
+                               "part at its initial stiffness";
+  if (count < dofs)
+    text += "; the lowest " + std::to_string(count) +
+            " modes only (the model is held sparse: a sparse eigensolver gives them; higher "
+            "modes, damped the more by Rayleigh damping, are not checked)";
+  return text;
+}
 
 // Where the modes do not decouple K_e and C, the coupled analysis gives the continuous limit;
 // the governing mode is the one nearest the crossing's frequency.
@@ -543,17 +554,7 @@ CriticalDelayCheck check_modal_critical_delay(const StructuralModel& model,
   check.lag = lag;
   const int lag_steps = lag > 0 ? static_cast<int>(std::ceil(lag / dt - 1e-9)) : 0;
   check.discrete_searched_steps = std::min(lag_steps + 1, CriticalDelayCheck::kMaxDiscreteSteps);
-  check.assumed = dofs == 1 ? "exact for one DOF (the experimental part at its initial stiffness)"
-                            : "modal approximation over the " + std::to_string(dofs) +
-                                  " modes of (M, K), each an SDOF with its modal damping and "
-                                  "experimental fraction phi' K_e phi / omega^2; the coupling the "
-                                  "delayed force adds between modes is ignored; the experimental "
-                                  "part at its initial stiffness";
-  if (count < dofs)
-    check.assumed += "; the lowest " + std::to_string(count) +
-                     " modes only (the model is held "
-                     "sparse: a sparse eigensolver gives them; higher modes, damped the more by "
-                     "Rayleigh damping, are not checked)";
+  check.assumed = modal_assumption(dofs, count);
   if (!discrete_analysis_covers(kind))
     check.discrete_skipped = "the discrete delay analysis does not cover " + to_string(kind);
   for (int i = 0; i < count; ++i) {

@@ -39,8 +39,6 @@ MAX_FILE_LINES = 600
 OVERSIZE = {
     # The vectorised lane loop: one body, so that every target clone inlines it alike.
     ("analysis/sweep/batch_kernel.cpp", "advance_block"): 77,
-    # Rooms other work was reshaping when the rule came (issue 65).
-    ("core/stability.cpp", "check_modal_critical_delay"): 65,
 }
 
 
