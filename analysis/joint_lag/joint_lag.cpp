@@ -1,5 +1,7 @@
 #include "analysis/joint_lag/joint_lag.h"
 
+#include <fmt/format.h>
+
 #include <google/protobuf/io/tokenizer.h>
 #include <spdlog/spdlog.h>
 
@@ -411,11 +413,8 @@ std::string to_text(const JointLagResult& result) {
     if (p.diverged) {
       out << "  " << std::setw(17) << "diverged";
     } else {
-      std::ostringstream cell;
-      cell.setf(std::ios::fixed);
-      cell.precision(2);
-      cell << p.rms_error_pct << " [" << p.measured_total_lag * 1e3 << "]";
-      out << "  " << std::setw(17) << cell.str();
+      out << "  " << std::setw(17)
+          << fmt::format("{:.2f} [{:.2f}]", p.rms_error_pct, p.measured_total_lag * 1e3);
     }
   }
   out << "\n";

@@ -258,6 +258,24 @@ TEST(JointLag, APredictorMovesTheBoundaryToItsModelsCriticalLag) {
   EXPECT_NE(svg.find("stability boundary without the predictor (continuous)"), std::string::npos);
 }
 
+// The grid's table: a cell per point, E_rms (%) and the measured total lag (ms) to 2 decimals.
+TEST(JointLag, TheGridTableStatesEachCellToTwoDecimals) {
+  JointLagResult result;
+  result.study_name = "paper_frame";
+  JointLagPoint p;
+  p.network_round_trip = 0.014;
+  p.actuator_lag = 0.008;
+  p.rms_error_pct = 7.3512;
+  p.measured_total_lag = 0.02251;
+  result.grid.push_back(p);
+  p.actuator_lag = 0.016;
+  p.diverged = true;
+  result.grid.push_back(p);
+  const std::string text = to_text(result);
+  EXPECT_NE(text.find("7.35 [22.51]"), std::string::npos) << text;
+  EXPECT_NE(text.find("diverged"), std::string::npos) << text;
+}
+
 // An across-sites point's E_rms covers only its shorter run: it is printed beside the in-process
 // run of the same stretch. A lockstep run with network lag says plainly that the lag never reaches
 // its response, so it cannot check the map's network axis; a real-time one compares both lags.
