@@ -60,6 +60,24 @@ struct ActuatorPath {
     std::string effect;
   };
   std::vector<NotNamed> not_named;
+  // Effects whose term the record shows is not the library's form (unexplained.h judge_named:
+  // its coefficient differs between the smaller and the larger half of its own term) but whose
+  // fitted term the re-run holds as the nearest form it has: named nowhere, their words (`why`)
+  // said beside the channel's description; the re-run and the written study hold them
+  // (sensors.h rig_models).
+  struct HeldNotNamed {
+    Channel channel = Channel::kMeasured;
+    std::string effect, why;
+  };
+  std::vector<HeldNotNamed> held_not_named;
+  // Where a fitted delay off the declared one is two delays by the direction of motion
+  // (findings.h describe_direction_delays): what the description says of them (the delay rising
+  // and falling, the declared one); "delay change" is then among not_named, and the re-run and the
+  // written study hold the fitted mean (rig_models). Empty: one delay.
+  std::string delay_by_direction;
+  // Constant changes ("stiffness change", "gain error", "delay change") a moving parameter of the
+  // same quantity holds (moving_parameter.h merge_constant_changes): named by the moving one only.
+  std::vector<std::string> merged_constants;
   // Effects a channel named that made the re-run worse (run_residual.h effects: the identified
   // re-run without the effect has a lower worst-floor NRMSE, by `worsening`): taken out of the
   // named effects, of the re-run and of the written study (sensors.h rig_models), and said as

@@ -78,6 +78,10 @@ void describe_moving(const ActuatorPath& path, Channel channel, Finding& f) {
                  " at the start, " + number(m.end) + " " + f.moving_unit + " at the end";
   if (m.shape == DriftShape::kStep) f.magnitude += ", the step at " + number(m.at) + " s";
   if (m.shape == DriftShape::kExponential) f.magnitude += ", time constant " + number(m.at) + " s";
+  const auto& merged = path.merged_constants;
+  if (std::find(merged.begin(), merged.end(), constant_change_of(f.effect)) != merged.end())
+    f.magnitude += " (declared " + number(declared_constant(path, f.effect)) +
+                   (f.moving_unit.empty() ? "" : " " + f.moving_unit) + ")";
 }
 
 // The finding of `effect` on `channel` of `path`: its parameters and the held-out error of the
@@ -266,10 +270,10 @@ std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
   return out;
 }
 
-void describe_direction_delays(const std::vector<ActuatorPath>& actuators,
+void describe_direction_delays(std::vector<ActuatorPath>& actuators,
                                std::vector<Unexplained>& unexplained,
-                               std::vector<Finding>& findings) {
-  for (const ActuatorPath& path : actuators) {
+                               std::vector<Finding>& findings, RunResidual* residual) {
+  for (ActuatorPath& path : actuators) {
     const double change = path.fitted_delay - path.declared_delay;  // s
     const std::string part = part_of("delay change", Channel::kMeasured, path.actuator);
     const auto finding = std::find_if(findings.begin(), findings.end(), [&](const Finding& f) {
@@ -285,12 +289,18 @@ void describe_direction_delays(const std::vector<ActuatorPath>& actuators,
       // A lead larger rising is a delay shorter rising.
       const double rising = path.fitted_delay - 0.5 * direction->lead_difference;
       const double falling = path.fitted_delay + 0.5 * direction->lead_difference;
-      u.notes.push_back("a delay that differs by the direction of motion: about " +
-                        number(rising * 1e3) + " ms rising, " + number(falling * 1e3) +
-                        " ms falling (declared " + number(path.declared_delay * 1e3) +
-                        " ms; the re-run holds their mean " + number(path.fitted_delay * 1e3) +
-                        " ms), not one delay that changed");
+      path.delay_by_direction =
+          "a delay that differs by the direction of motion: about " + number(rising * 1e3) +
+          " ms rising, " + number(falling * 1e3) + " ms falling (declared " +
+          number(path.declared_delay * 1e3) + " ms; the re-run holds their mean " +
+          number(path.fitted_delay * 1e3) + " ms), not one delay that changed";
+      u.notes.push_back(path.delay_by_direction);
       findings.erase(finding);
+      std::erase(path.undeclared, std::string("delay change"));
+      path.not_named.push_back({Channel::kMeasured, "delay change"});
+      if (residual)
+        for (ResidualShare& s : residual->effects)
+          if (s.link == part && s.effect == "delay change") s.effect = kDelaysByDirection;
       break;
     }
   }

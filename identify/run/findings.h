@@ -67,11 +67,16 @@ void estimate_effects(ActuatorPath& path);
 // direction of motion (of_rate) by at least kSplitDelayShare of the change, the change is the
 // mean of two delays, not one delay that changed: the finding leaves the named list and the
 // description says the delay rising and falling (the fitted mean -+ half the lead difference)
-// beside the declared one. The re-run keeps holding the fitted mean.
-void describe_direction_delays(const std::vector<ActuatorPath>& actuators,
+// beside the declared one. Every section says the same: the path's named effects lose "delay
+// change" (ActuatorPath::not_named gains it, delay_by_direction holds the description's words)
+// and the re-run's share of it (`residual`, when re-run) reads kDelaysByDirection. The re-run and
+// the written study keep holding the fitted mean.
+void describe_direction_delays(std::vector<ActuatorPath>& actuators,
                                std::vector<Unexplained>& unexplained,
-                               std::vector<Finding>& findings);
+                               std::vector<Finding>& findings, RunResidual* residual);
 inline constexpr double kSplitDelayShare = 0.5;
+inline constexpr const char* kDelaysByDirection =
+    "the mean of two delays by the direction of motion";
 
 std::vector<Finding> collect_findings(const std::vector<NetworkPath>& links,
                                       const std::vector<ActuatorPath>& actuators,

@@ -174,4 +174,41 @@ std::string moving_not_written(const MovingParameter& moving) {
          ")";
 }
 
+std::string constant_change_of(const std::string& moving_effect) {
+  if (moving_effect == "time_varying_stiffness") return "stiffness change";
+  if (moving_effect == "time_varying_gain") return "gain error";
+  if (moving_effect == "time_varying_delay") return "delay change";
+  return "";
+}
+
+double declared_constant(const ActuatorPath& path, const std::string& moving_effect) {
+  if (moving_effect == "time_varying_stiffness") return path.declared_stiffness;
+  if (moving_effect == "time_varying_gain") return path.declared_gain;
+  return path.declared_delay;
+}
+
+void merge_constant_changes(ActuatorPath& path) {
+  for (auto* named : {&path.undeclared, &path.specimen_undeclared}) {
+    std::vector<std::string> merged;
+    for (const std::string& effect : *named) {
+      const std::string constant = constant_change_of(effect);
+      if (!constant.empty() && std::find(named->begin(), named->end(), constant) != named->end())
+        merged.push_back(constant);
+    }
+    for (const std::string& constant : merged) {
+      std::erase(*named, constant);
+      path.merged_constants.push_back(constant);
+    }
+  }
+}
+
+void restore_merged_constant(ActuatorPath& path, std::vector<std::string>& named,
+                             const std::string& rejected) {
+  const std::string constant = constant_change_of(rejected);
+  const auto at = std::find(path.merged_constants.begin(), path.merged_constants.end(), constant);
+  if (constant.empty() || at == path.merged_constants.end()) return;
+  path.merged_constants.erase(at);
+  named.push_back(constant);
+}
+
 }  // namespace rths::identify

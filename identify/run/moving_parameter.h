@@ -59,6 +59,29 @@ std::optional<MovingParameter> moving_parameter(const ActuatorPath& path, Channe
 // channel force; a rejected effect is not named any more).
 std::vector<MovingParameter> moving_parameters(const ActuatorPath& path);
 
+// One quantity, one finding. Where a path names a parameter moving (time_varying_stiffness on
+// channel force, time_varying_gain or time_varying_delay on channel measured) and also its
+// constant off the declared ("stiffness change", "gain error", "delay change"), the record shows
+// the quantity moving, not one changed value: the constant's name leaves the named list into
+// ActuatorPath::merged_constants (not rejected: the fitted constant stays in the re-run and the
+// written study, under the moving path) and the moving finding states the declared value beside
+// its start and end (declared_constant). Run after judge_named and judge_plausible.
+void merge_constant_changes(ActuatorPath& path);
+
+// `rejected` (a moving parameter the re-run rejected, taken out of `named`, one of `path`'s named
+// lists): the constant change it had merged is named again on its own, since the record still
+// shows the value off the declared once the path is not held moving.
+void restore_merged_constant(ActuatorPath& path, std::vector<std::string>& named,
+                             const std::string& rejected);
+
+// The constant change `moving_effect` holds ("stiffness change" for "time_varying_stiffness",
+// "gain error", "delay change"); empty for any other effect.
+std::string constant_change_of(const std::string& moving_effect);
+
+// The declared value of the quantity `moving_effect` moves, in its MovingParameter unit (N/m,
+// a gain, s).
+double declared_constant(const ActuatorPath& path, const std::string& moving_effect);
+
 // The parameter `described`'s trend moves (above), with `specimen_rerun`: whether the re-run
 // holds the fitted specimen; nullopt without a trend, on another part or with no constant.
 std::optional<MovingParameter> described_moving(const Unexplained& described,

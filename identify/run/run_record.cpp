@@ -2,6 +2,7 @@
 
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
+#include "identify/run/moving_parameter.h"
 #include "identify/run/plausibility.h"
 #include "identify/run/residual_floor.h"
 #include "identify/run/sensors.h"
@@ -435,6 +436,7 @@ bool reject(const ResidualShare& worse, std::vector<ActuatorPath>& paths) {
         continue;
       named.erase(at);
       path.rejected.push_back({channel, worse.link, worse.effect, -worse.removed, ""});
+      restore_merged_constant(path, named, worse.effect);
       return true;
     }
   return false;
@@ -573,6 +575,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     estimate_effects(path);
     judge_named(path);
     judge_plausible(path);
+    merge_constant_changes(path);
     std::vector<Unexplained> described = describe_unexplained(path);
     judge_noise_beside(path, described);
     for (auto& f : channel_floors(path)) out.floors.push_back(std::move(f));
@@ -588,7 +591,8 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
   }
   out.findings = collect_findings(out.links, out.actuators, out.residual ? &*out.residual : nullptr,
                                   out.clock);
-  describe_direction_delays(out.actuators, out.unexplained, out.findings);
+  describe_direction_delays(out.actuators, out.unexplained, out.findings,
+                            out.residual ? &*out.residual : nullptr);
   return out;
 }
 

@@ -70,6 +70,9 @@ void actuator_text(const ActuatorPath& a, std::ostream& out) {
           << channel_name(a.not_named[i].channel) << ")";
     out << "\n";
   }
+  if (!a.delay_by_direction.empty()) out << "  delay: " << a.delay_by_direction << "\n";
+  for (const auto& held : a.held_not_named)
+    out << "  held, not named (" << channel_name(held.channel) << "): " << held.why << "\n";
   sensors_text(a, out);
   if (a.declared_specimen.empty()) return;
   out << "  specimen: declared";
@@ -227,6 +230,15 @@ nlohmann::json not_named_json(const ActuatorPath& a) {
   return out;
 }
 
+// The effects held in the re-run but not named (ActuatorPath::held_not_named): [{channel, effect,
+// why}].
+nlohmann::json held_json(const ActuatorPath& a) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& h : a.held_not_named)
+    out.push_back({{"channel", channel_name(h.channel)}, {"effect", h.effect}, {"why", h.why}});
+  return out;
+}
+
 nlohmann::json actuators_json(const RunIdentification& run) {
   nlohmann::json actuators = nlohmann::json::array();
   for (const auto& a : run.actuators) {
@@ -244,27 +256,31 @@ nlohmann::json actuators_json(const RunIdentification& run) {
                           {"identified_heldout_error", c.final_fit.heldout_error},
                           {"effects", effects}});
     }
-    actuators.push_back({{"actuator", a.actuator},
-                         {"declared", a.declared},
-                         {"declared_gain", a.declared_gain},
-                         {"fitted_gain", a.fitted_gain},
-                         {"delay_declared", a.delay_declared},
-                         {"declared_delay_s", a.declared_delay},
-                         {"fitted_delay_s", a.fitted_delay},
-                         {"channels", channels},
-                         {"undeclared", a.undeclared},
-                         {"declared_specimen", a.declared_specimen},
-                         {"declared_stiffness_n_per_m", a.declared_stiffness},
-                         {"fitted_stiffness_n_per_m", a.fitted_stiffness},
-                         {"specimen_undeclared", a.specimen_undeclared},
-                         {"not_named", not_named_json(a)},
-                         {"sensors",
-                          {{"displacement_noise_m", a.displacement_noise},
-                           {"declared_displacement_noise_m", a.declared_displacement_noise},
-                           {"force_noise_n", a.force_noise},
-                           {"declared_force_noise_n", a.declared_force_noise},
-                           {"displacement_scale", a.displacement_scale},
-                           {"displacement_scale_std_error", a.displacement_scale_error}}}});
+    actuators.push_back(
+        {{"actuator", a.actuator},
+         {"declared", a.declared},
+         {"declared_gain", a.declared_gain},
+         {"fitted_gain", a.fitted_gain},
+         {"delay_declared", a.delay_declared},
+         {"declared_delay_s", a.declared_delay},
+         {"fitted_delay_s", a.fitted_delay},
+         {"channels", channels},
+         {"undeclared", a.undeclared},
+         {"declared_specimen", a.declared_specimen},
+         {"declared_stiffness_n_per_m", a.declared_stiffness},
+         {"fitted_stiffness_n_per_m", a.fitted_stiffness},
+         {"specimen_undeclared", a.specimen_undeclared},
+         {"not_named", not_named_json(a)},
+         {"held_not_named", held_json(a)},
+         {"delay_by_direction",
+          a.delay_by_direction.empty() ? nlohmann::json() : nlohmann::json(a.delay_by_direction)},
+         {"sensors",
+          {{"displacement_noise_m", a.displacement_noise},
+           {"declared_displacement_noise_m", a.declared_displacement_noise},
+           {"force_noise_n", a.force_noise},
+           {"declared_force_noise_n", a.declared_force_noise},
+           {"displacement_scale", a.displacement_scale},
+           {"displacement_scale_std_error", a.displacement_scale_error}}}});
   }
   return actuators;
 }

@@ -197,9 +197,11 @@ RigModels rig_models(const ActuatorPath& path) {
                                 ": actuator path not identified");
   const double s = path.was_rejected(Channel::kMeasured, "scale") ? 1.0 : path.displacement_scale;
   RigModels out{std::nullopt, std::nullopt, s, {}};
-  std::vector<std::string> contradicted = path.undeclared;
+  std::vector<std::string> contradicted = path.undeclared, re_run = path.specimen_undeclared;
+  for (const auto& held : path.held_not_named)
+    (held.channel == Channel::kMeasured ? contradicted : re_run).push_back(held.effect);
   remove(contradicted, "noise");
-  if (!contradicted.empty()) {
+  if (!contradicted.empty() || !path.delay_by_direction.empty()) {
     out.actuator = c->final_fit.model;
     take_out_rejected(*out.actuator, path, Channel::kMeasured);
     if (s != 1.0)
@@ -207,7 +209,6 @@ RigModels rig_models(const ActuatorPath& path) {
                   signal_scales(identified_signals(path.id, Channel::kMeasured)));
   }
   const ChannelIdentification* force = path.id.find(Channel::kForce);
-  std::vector<std::string> re_run = path.specimen_undeclared;
   remove(re_run, "noise");
   if (!force || re_run.empty()) return out;
   out.specimen = force->final_fit.model;

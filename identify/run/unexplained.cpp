@@ -96,6 +96,46 @@ bool the_limit_holds_the_reading(const ActuatorPath& path, Channel channel,
   return before > 0.0 && left < kFlatShare * kFlatShare * before;
 }
 
+// The coefficient of the effect's term e = with - without that the residual without it,
+// r = target - without, holds over the samples with |e| below its median and above it.
+std::pair<double, double> coefficient_by_size(std::span<const double> target,
+                                              std::span<const double> with,
+                                              std::span<const double> without) {
+  std::vector<double> size(target.size());
+  for (std::size_t j = 0; j < size.size(); ++j) size[j] = std::abs(with[j] - without[j]);
+  std::vector<double> sorted = size;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  double re_low = 0.0, ee_low = 0.0, re_high = 0.0, ee_high = 0.0;
+  for (std::size_t j = 0; j < size.size(); ++j) {
+    const double e = with[j] - without[j], r = target[j] - without[j];
+    (size[j] <= median ? re_low : re_high) += r * e;
+    (size[j] <= median ? ee_low : ee_high) += e * e;
+  }
+  return {ee_low > 0.0 ? re_low / ee_low : 0.0, ee_high > 0.0 ? re_high / ee_high : 0.0};
+}
+
+// Where the record shows `effect`'s term is not proportional to its signal (unexplained.h): the
+// words that say so, with its coefficient over the smaller and the larger half of the term;
+// empty where it is proportional or `effect` is no such term.
+std::string not_proportional(const ActuatorPath& path, Channel channel, const std::string& effect,
+                             const std::vector<std::string>& kept,
+                             const std::vector<std::string>& without) {
+  if (effect != "damping" && effect != "inertia" && effect != "cubic_stiffness") return "";
+  const EffectEstimate* estimate = path.estimate(channel, parse_effect(effect));
+  if (!estimate || estimate->parameters.empty()) return "";
+  const ChannelSignals& s = identified_signals(path.id, channel);
+  const auto [low, high] = coefficient_by_size(s.target, prediction_without(path, channel, kept),
+                                               prediction_without(path, channel, without));
+  if (!(std::abs(high - low) > kProportionalSpread * std::max(std::abs(low), std::abs(high))))
+    return "";
+  const ParameterEstimate& p = estimate->parameters.front();
+  return effect + " not named: its form is not what the record shows (" + p.name + " " +
+         number_text(low * p.value) + " " + p.unit + " over the smaller half of its term, " +
+         number_text(high * p.value) + " " + p.unit + " over the larger)";
+}
+
 void judge_channel(ActuatorPath& path, Channel channel) {
   if (!path.id.find(channel)) return;
   const std::vector<std::string> named =
@@ -111,8 +151,20 @@ void judge_channel(ActuatorPath& path, Channel channel) {
       continue;
     }
     const ResidualDescription d = describe_channel(path, channel, without);
-    if (d.any() && d.heldout_rms < kDescriptionWins * final_heldout_rms(path, channel, kept))
+    if (d.any() && d.heldout_rms < kDescriptionWins * final_heldout_rms(path, channel, kept)) {
       take_out(path, channel, effect);
+      continue;
+    }
+    const std::string why = not_proportional(path, channel, effect, kept, without);
+    if (why.empty()) continue;
+    if (effect == "cubic_stiffness") {  // no study's stage holds it: described only
+      take_out(path, channel, effect);
+      continue;
+    }
+    auto& list = channel == Channel::kMeasured ? path.undeclared : path.specimen_undeclared;
+    std::erase(list, effect);
+    path.held_not_named.push_back(
+        {channel, effect, why + "; the re-run holds the fitted one, the nearest form it has"});
   }
 }
 
@@ -257,6 +309,8 @@ std::vector<Unexplained> describe_unexplained(const ActuatorPath& path) {
     u.unit = force ? "N" : "m";
     u.description = std::move(d);
     u.time = s.time;
+    for (const auto& held : path.held_not_named)
+      if (held.channel == channel) u.notes.push_back(held.why);
     out.push_back(std::move(u));
   }
   return out;

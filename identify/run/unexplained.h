@@ -30,6 +30,16 @@
 // the RMS the drift leaves: an offset that changed at one moment (a joint that slipped, a zero
 // that jumped) is no drift, and the events search locates it in time (residual_floor.h).
 //
+// A term proportional to one signal (damping: the rate, inertia: the acceleration,
+// cubic_stiffness: the displacement cubed; its part of the model e_j = p_j - p_j without it) is
+// named only where the record shows that form: the coefficient a of e that the residual without
+// the effect holds, r_j = a e_j by least squares, over the samples with |e_j| below its median
+// and over those above it, differs by at most kProportionalSpread of the larger (a damper in
+// v |v| holds a coefficient at its large rates several times the one at its small rates). Where
+// it differs more the effect is not named: a term a study's stage holds (damping, inertia) stays
+// in the re-run as the nearest form it has and is said beside the channel's description
+// (ActuatorPath::held_not_named); one that none holds (cubic_stiffness) is taken out as above.
+//
 // A stroke limit is not named where, over the samples it acts on, it leaves kFlatShare or more of
 // the RMS the model without it leaves there: a rod at its end stop reads flat, a reading that
 // rounds off at its largest strokes (a valve's gain, a pump that sags) is no end stop.
@@ -53,8 +63,9 @@
 
 namespace rths::identify {
 
-inline constexpr double kMinSignalShare = 0.01;  // described RMS / the target's std
-inline constexpr double kDescriptionWins = 0.8;  // x the identified model's held-out RMS error
+inline constexpr double kMinSignalShare = 0.01;     // described RMS / the target's std
+inline constexpr double kDescriptionWins = 0.8;     // x the identified model's held-out RMS error
+inline constexpr double kProportionalSpread = 0.3;  // |a_high - a_low| / max(|a_low|, |a_high|)
 inline constexpr double kFlatShare = 0.25;     // RMS, where a stroke limit acts: with / without it
 inline constexpr std::size_t kStepEdge = 100;  // a step lies 1 / kStepEdge of the record in
 

@@ -78,6 +78,7 @@ struct RigTruth {
   double stiffness_scale = 1.0;      // of the specimen's (linear or initial) stiffness
   bool bouc_wen = false;             // a hysteretic specimen: alpha 0.1, uy 4 mm
   double specimen_damping = 0.0;     // N s/m, a viscous force on the specimen's drift rate
+  double squared_damping = 0.0;      // N s^2/m^2, a force c v |v| on the drift rate v
   double displacement_scale = 1.0;   // of the displacement sensor (g_x)
   double displacement_offset = 0.0;  // m, on the displacement sensor
   double force_scale = 1.0;          // of the load cell (g_f)
@@ -157,9 +158,11 @@ class TrueSpecimen {
   TrueSpecimen(const RigTruth& rig, double k0, double duration)
       : rig_(rig), k0_(k0 * rig.stiffness_scale), duration_(duration) {}
   // At displacement x (m) at time t (s) after `dt` s: the spring (or hysteresis) plus the
-  // viscous force and the pump's ripple.
+  // viscous forces and the pump's ripple.
   double force(double x, double t, double dt) {
-    const double viscous = rig_.specimen_damping * (x - last_) / dt;
+    const double rate = (x - last_) / dt;
+    const double viscous =
+        rig_.specimen_damping * rate + rig_.squared_damping * rate * std::abs(rate);
     const double ripple =
         rig_.force_ripple * std::sin(2.0 * std::numbers::pi * rig_.ripple_frequency * t);
     return viscous + spring(x, t) + ripple;

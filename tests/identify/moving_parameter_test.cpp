@@ -4,7 +4,9 @@
 // by 20 % linearly or loses 30 % of its stiffness at once, and on a record of rths's own run whose
 // actuator's lag rises (undeclared_run.h), the re-run holding the fitted shape: its held-out error
 // well below the constant's, the shape's start, end and step time where the record put them, the
-// report and the written study saying how each holds it.
+// report and the written study saying how each holds it. One quantity, one finding: a stiffness
+// named moving is not named a constant "stiffness change" beside it (its finding gives the
+// declared value), and the constant comes back named where the moving one is rejected.
 #include "identify/run/moving_parameter.h"
 
 #include <gtest/gtest.h>
@@ -59,6 +61,21 @@ TEST(MovingParameter, AMovingGainScalesTheDisplacementByItsPathOverItsConstant) 
   ASSERT_NE(stage, nullptr);
   EXPECT_NEAR(stage->step({8.0, 0.01, 0.0}), 0.01 * 180.0 / 150.0, 1e-12);
   EXPECT_DOUBLE_EQ(stage->measure_force(7.0), 7.0);
+}
+
+TEST(MovingParameter, AConstantChangeBesideItsMovingQuantityIsNamedByTheMovingOneOnly) {
+  ActuatorPath path;
+  path.undeclared = {"gain error", "first_order"};
+  path.specimen_undeclared = {"time_varying_stiffness", "stiffness change", "bouc_wen"};
+  merge_constant_changes(path);
+  EXPECT_EQ(path.specimen_undeclared,
+            (std::vector<std::string>{"time_varying_stiffness", "bouc_wen"}));
+  EXPECT_EQ(path.undeclared, (std::vector<std::string>{"gain error", "first_order"}));
+  EXPECT_EQ(path.merged_constants, std::vector<std::string>{"stiffness change"});
+  std::erase(path.specimen_undeclared, std::string("time_varying_stiffness"));
+  restore_merged_constant(path, path.specimen_undeclared, "time_varying_stiffness");
+  EXPECT_EQ(path.specimen_undeclared, (std::vector<std::string>{"bouc_wen", "stiffness change"}));
+  EXPECT_TRUE(path.merged_constants.empty());
 }
 
 TEST(MovingParameter, AMovingDelayReplacesTheShiftByItsTraceOverTheRecord) {
@@ -137,6 +154,16 @@ TEST(MovingParameterRecords, AStiffnessFallingByAFifthIsHeldAsItsLine) {
   EXPECT_NEAR(m->parameter.shape.start, kSpecimenStiffness * (1.0 - 0.2 * 0.375 / 15.0), 1500.0);
   EXPECT_NEAR(m->parameter.shape.end, kSpecimenStiffness * (1.0 - 0.2 * 14.625 / 15.0), 1500.0);
   expect_held_moving(run, *m);
+  // Its mean, 10 % under the declared, is the moving stiffness's, not a second finding.
+  const std::string text = run_record_text(run);
+  bool moving_named = false;
+  for (const Finding& f : run.findings) {
+    EXPECT_NE(f.effect, "stiffness change") << text;
+    if (f.effect != "time_varying_stiffness") continue;
+    moving_named = true;
+    EXPECT_NE(f.magnitude.find("(declared 5.264e+04 N/m)"), std::string::npos) << f.magnitude;
+  }
+  EXPECT_TRUE(moving_named) << text;
 }
 
 TEST(MovingParameterRecords, AStiffnessThatStepsDownIsHeldAsItsStep) {
