@@ -116,8 +116,7 @@ std::string serialise(const rths::runtime::RecordEntry& entry) {
   return bytes;
 }
 
-Motion read_motion(const fs::path& data_dir, double dt, int steps) {
-  const std::string file = "RSN175_IMPVALL.H_H-E12140.AT2";
+Motion read_motion(const fs::path& data_dir, double dt, int steps, const std::string& file) {
   const fs::path path = fs::absolute(data_dir / "ground_motions" / file);
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read " + path.string());
@@ -131,6 +130,8 @@ Motion read_motion(const fs::path& data_dir, double dt, int steps) {
   double value = 0.0;
   while (in >> value) g.push_back(value);
   if (file_dt <= 0.0 || g.empty()) throw std::runtime_error("no DT or samples in " + path.string());
+  if ((steps - 1) * dt > (static_cast<double>(g.size()) - 1.0) * file_dt)
+    throw std::runtime_error(path.string() + " is shorter than the run");
   Motion motion;
   motion.name = path.stem().string();
   motion.path = path.string();

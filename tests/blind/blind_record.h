@@ -38,10 +38,12 @@ struct Motion {
   std::vector<double> accel;  // m/s^2 at the run's dt
 };
 
-// The El Centro AT2 file of data_dir/ground_motions (NPTS, DT; values in g) linearly
-// interpolated to dt for `steps` samples, with its checksum from data_dir/SHA256SUMS. Throws
-// std::runtime_error naming the file when it cannot be read or has no checksum.
-Motion read_motion(const std::filesystem::path& data_dir, double dt, int steps);
+// The AT2 file `file` of data_dir/ground_motions (four header lines, one holding "DT= s"; values
+// in g; by default the 1979 El Centro record) linearly interpolated to dt for `steps` samples,
+// with its checksum from data_dir/SHA256SUMS. Throws std::runtime_error naming the file when it
+// cannot be read, is shorter than the run or has no checksum.
+Motion read_motion(const std::filesystem::path& data_dir, double dt, int steps,
+                   const std::string& file = "RSN175_IMPVALL.H_H-E12140.AT2");
 
 // The state of one record step at t_k = k dt: the integrator's u_k (m), v_k (m/s), a_k (m/s^2),
 // the command u_k (m), the realised (measured) displacement y_k (m) and the load cell's F_k (N).

@@ -126,40 +126,6 @@ constexpr int kSpikeCount = 9;
 constexpr double kSpikeHeight = 1.5e-3;  // m
 constexpr double kHumHz = 50.0;
 
-// The El Centro 1940 NS record (AT2: four header lines, the fourth "NPTS= n, DT= s SEC", values
-// in g) linearly interpolated to dt for `steps` samples, with its checksum from SHA256SUMS.
-blind::Motion read_el_centro_1940(const fs::path& data_dir, double dt, int steps) {
-  const fs::path path = fs::absolute(data_dir / "ground_motions" / kMotionFile);
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path.string());
-  std::string line;
-  double file_dt = 0.0;
-  for (int i = 0; i < 4 && std::getline(in, line); ++i) {
-    const auto at = line.find("DT=");
-    if (at != std::string::npos) file_dt = std::stod(line.substr(at + 3));
-  }
-  std::vector<double> g;
-  for (double value = 0.0; in >> value;) g.push_back(value);
-  if (file_dt <= 0.0 || g.size() < 2)
-    throw std::runtime_error("no DT or samples in " + path.string());
-  if ((steps - 1) * dt > (static_cast<double>(g.size()) - 1.0) * file_dt)
-    throw std::runtime_error(path.string() + " is shorter than the run");
-  blind::Motion motion{path.stem().string(), path.string(), "", {}};
-  std::ifstream sums(data_dir / "SHA256SUMS");
-  while (std::getline(sums, line))
-    if (line.size() > 66 && line.find(kMotionFile) != std::string::npos)
-      motion.file_sha256 = line.substr(0, 64);
-  if (motion.file_sha256.empty())
-    throw std::runtime_error(std::string("no checksum for ") + kMotionFile);
-  for (int k = 0; k < steps; ++k) {
-    const double s = k * dt / file_dt;
-    const auto i = static_cast<std::size_t>(s);
-    const double w = s - static_cast<double>(i);
-    motion.accel.push_back(((1.0 - w) * g[i] + w * g[std::min(i + 1, g.size() - 1)]) * 9.80665);
-  }
-  return motion;
-}
-
 // The servo and the clevis: command c_k (m) -> the brace end x_k (m). The LVDT on the brace reads
 // x_k + creep(t) before noise; the servo closes its loop on that reading, so the brace end falls
 // short of the target by the creep.
@@ -404,7 +370,7 @@ int main(int argc, char** argv) {
   if (!args) return 2;
   try {
     const int steps = static_cast<int>(std::lround(args->duration / kDt)) + 1;
-    const blind::Motion motion = read_el_centro_1940(args->data_dir, kDt, steps);
+    const blind::Motion motion = blind::read_motion(args->data_dir, kDt, steps, kMotionFile);
     const std::vector<FifthCase> all = cases();
     std::vector<std::string> names;
     for (const FifthCase& c : all) names.push_back(c.truth.name);
