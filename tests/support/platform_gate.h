@@ -19,7 +19,7 @@
 //     threads on n CPUs it is about n / (n + k). Measured on this project's 2-core VM
 //     (2026-12-08 01:28-01:45 UTC, 0.25 s, this loop in a stand-alone probe): 0.95-0.98 in
 //     the moments no other work ran; 0.45-0.58 most of the time (0.14-0.72 in all, 142
-//     samples) beside other sessions' two compilers; 0.07-0.19 beside two CPU burners
+//     samples) beside other sessions' two compilers; 0.07-0.29 beside two CPU burners
 //     (`sh -c 'while :; do :; done'` twice) and those compilers.
 //   kLoadedCpuShare   0.7: under it other busy threads took more than the CPUs' slack (two busy
 //     threads on two CPUs give 0.5); a timing failure beside it is the machine's.

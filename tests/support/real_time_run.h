@@ -25,9 +25,9 @@
 // coordinator's summary prints ("loop CPU per step: median X ms, ..."). Its median must stay under
 // kLoopCpuMedianBound; this never skips. Measured on this project's 2-core VM (2026-12-08, the
 // real-time tests that launch a coordinator, its medians): clean 0.05-0.10 ms beside other
-// sessions' compilers and 0.06-0.12 ms beside two CPU burners as well (the p99 moves, 0.13-0.37
+// sessions' compilers and 0.02-0.12 ms beside two CPU burners as well (the p99 moves, 0.13-0.37
 // ms: hence the median); with a 0.5 ms busy-wait planted at the top of each step 0.55-0.63 ms
-// beside the compilers and 0.55-0.64 ms beside the burners. 0.2 ms sits between them with a
+// beside the compilers and 0.51-0.65 ms beside the burners. 0.2 ms sits between them with a
 // margin both ways.
 //
 //   stall_window(status, header) -> s: the window `status` names that a stall can pass, the reply
