@@ -24,6 +24,7 @@
 #include "security/check.h"
 #include "security/pki.h"
 #include "security/run_secret.h"
+#include "security/secret_options.h"
 #include "transport/dds_endpoint.h"
 #include "view/context.h"
 #include "view/feed.h"
@@ -217,15 +218,11 @@ void add_arguments(CLI::App& app, ProgramArgs& a) {
                  "blocks of 1024 steps, each flushed: a run killed mid-way keeps them); needs "
                  "--record");
   app.add_option("--domain", a.domain, "DDS domain id (default: deployment.domain_id)");
-  app.add_option("--security", a.security_dir,
-                 "DDS Security: the coordinator's folder from `rths pki init` (DIR/node_0); "
-                 "default: deployment.security_dir");
-  app.add_option("--secret-file", a.secret.file,
-                 "the run secret (`rths pki secret FILE`, mode 0600); default: $" +
-                     std::string(security::kSecretFileEnv) + " or $" + security::kSecretEnv);
-  app.add_flag("--insecure", a.secret.insecure,
-               "run without a run secret or DDS Security: any participant on the domain can then "
-               "speak as a node until it is pinned");
+  security::add_secret_options(
+      app, a.security_dir, a.secret,
+      "the coordinator's folder from `rths pki init` (DIR/node_0); default: "
+      "deployment.security_dir",
+      "any participant on the domain can then speak as a node until it is pinned");
   app.add_option(
       "--view", a.view_address,
       "serve the live view of the run at HOST:PORT (e.g. 127.0.0.1:8080); needs --record");

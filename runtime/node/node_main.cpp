@@ -13,6 +13,7 @@
 #include "security/check.h"
 #include "security/pki.h"
 #include "security/run_secret.h"
+#include "security/secret_options.h"
 #include "study/study.h"
 #include "transport/dds_endpoint.h"
 
@@ -49,15 +50,11 @@ void add_node_options(CLI::App& app, NodeArgs& a) {
                  "the run this node joins (default: the config's deployment.run_id); required");
   app.add_option("--assign-timeout", a.loop.assign_timeout,
                  "s to wait for an assignment (finite, > 0)");
-  app.add_option("--security", a.security_dir,
-                 "DDS Security: this node's folder from `rths pki init` (DIR/node_<id>); default: "
-                 "the config's deployment.security_dir");
-  app.add_option("--secret-file", a.secret.file,
-                 "the run secret (`rths pki secret FILE`, mode 0600); default: $" +
-                     std::string(security::kSecretFileEnv) + " or $" + security::kSecretEnv);
-  app.add_flag("--insecure", a.secret.insecure,
-               "run without a run secret or DDS Security: any participant on the domain can then "
-               "speak as the coordinator to this node");
+  security::add_secret_options(
+      app, a.security_dir, a.secret,
+      "this node's folder from `rths pki init` (DIR/node_<id>); default: the "
+      "config's deployment.security_dir",
+      "any participant on the domain can then speak as the coordinator to this node");
 }
 
 // The arguments checked and completed from --config; the endpoint's options. Throws
