@@ -213,7 +213,7 @@ struct RunState : RunConfiguration, core::HybridEvaluator, core::StepHooks {
   // step_wall times: what the step itself ran, never the time it waited for a CPU or slept for
   // answers, so a machine's load barely moves it while code that burns CPU in the step does.
   // s, one per step after the first; reserved for the run's steps (no growth on the loop).
-  std::chrono::nanoseconds step_cpu_start{};
+  std::int64_t step_cpu_start = 0;  // ns, runtime::thread_cpu_ns
   std::vector<double> step_cpu;
 
   void before_step(std::size_t k) override;

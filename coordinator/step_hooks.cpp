@@ -8,11 +8,11 @@
 #include <string>
 
 #include "runtime/node/plan.h"
+#include "runtime/rt/clock.h"
 #include "study/study_inputs.h"
 #include "transport/dds_endpoint.h"
 #include "util/crc32c.h"
 #include "util/process.h"
-#include "view/snapshot_cache.h"
 
 namespace rths::coordinator {
 
@@ -87,15 +87,13 @@ void RunState::before_step(std::size_t k) {
   intake->await_step(step);
   step_start = Clock::now();
   step_start_realtime_ns = transport::realtime_ns();
-  step_cpu_start = view::SnapshotCache::thread_cpu_time();
+  step_cpu_start = runtime::thread_cpu_ns();
 }
 
 bool RunState::after_step(std::size_t k, const core::SimulationResult& result) {
   const double step_wall = k == 0 ? 0.0 : seconds_since(step_start);
   if (k > 0)
-    step_cpu.push_back(
-        std::chrono::duration<double>(view::SnapshotCache::thread_cpu_time() - step_cpu_start)
-            .count());
+    step_cpu.push_back(static_cast<double>(runtime::thread_cpu_ns() - step_cpu_start) * 1e-9);
   write_step(k, result, step_wall);
   check_record();
   if (k > 0)

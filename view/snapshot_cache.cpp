@@ -1,7 +1,5 @@
 #include "view/snapshot_cache.h"
 
-#include <time.h>
-
 #include <algorithm>
 
 namespace rths::view {
@@ -13,12 +11,6 @@ SnapshotCache::SnapshotCache(std::function<std::string()> build, std::chrono::mi
       now_(std::move(now)),
       cpu_(std::move(cpu)),
       interval_(period) {}
-
-std::chrono::nanoseconds SnapshotCache::thread_cpu_time() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return std::chrono::seconds(t.tv_sec) + std::chrono::nanoseconds(t.tv_nsec);
-}
 
 std::shared_ptr<const std::string> SnapshotCache::get() {
   std::unique_lock lock(mutex_);

@@ -26,6 +26,8 @@
 #include <mutex>
 #include <string>
 
+#include "runtime/rt/clock.h"
+
 namespace rths::view {
 
 class SnapshotCache {
@@ -36,10 +38,8 @@ class SnapshotCache {
 
   SnapshotCache(
       std::function<std::string()> build, std::chrono::milliseconds period,
-      Clock now = [] { return std::chrono::steady_clock::now(); }, CpuClock cpu = thread_cpu_time);
-
-  // CLOCK_THREAD_CPUTIME_ID: what the calling thread has run, never the time it waited for a CPU.
-  static std::chrono::nanoseconds thread_cpu_time();
+      Clock now = [] { return std::chrono::steady_clock::now(); },
+      CpuClock cpu = [] { return std::chrono::nanoseconds(runtime::thread_cpu_ns()); });
 
   std::shared_ptr<const std::string> get();
   std::uint64_t builds() const;

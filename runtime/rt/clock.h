@@ -12,6 +12,11 @@ namespace rths::runtime {
 // runtime, the node loop and the controller link measure is on it.
 std::int64_t monotonic_ns();
 
+// The CPU time the calling thread has run, ns (CLOCK_THREAD_CPUTIME_ID): never the time it waited
+// for a CPU, so a loaded machine does not move it. A loop's own work per step and a thread's
+// budget for itself are measured on it.
+std::int64_t thread_cpu_ns();
+
 class PacingClock {
  public:
   virtual ~PacingClock() = default;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "rt_check/check.h"
-#include "view/snapshot_cache.h"
+#include "runtime/rt/clock.h"
 
 namespace rths::test {
 
@@ -41,14 +41,14 @@ double measure_cpu_share(double seconds) {
   std::vector<std::thread> spinners;
   for (double& share : shares)
     spinners.emplace_back([&share, seconds] {
-      const auto cpu_start = view::SnapshotCache::thread_cpu_time();
+      const std::int64_t cpu_start = runtime::thread_cpu_ns();
       const auto wall_start = Wall::now();
       const auto until = wall_start + std::chrono::duration_cast<Wall::duration>(
                                           std::chrono::duration<double>(seconds));
       auto now = wall_start;
       while (now < until) now = Wall::now();
-      const std::chrono::duration<double> cpu = view::SnapshotCache::thread_cpu_time() - cpu_start;
-      share = cpu.count() / std::chrono::duration<double>(now - wall_start).count();
+      const double cpu = static_cast<double>(runtime::thread_cpu_ns() - cpu_start) * 1e-9;
+      share = cpu / std::chrono::duration<double>(now - wall_start).count();
     });
   for (std::thread& spinner : spinners) spinner.join();
   return std::accumulate(shares.begin(), shares.end(), 0.0) / static_cast<double>(shares.size());
