@@ -442,9 +442,43 @@ std::pair<double, double> trend_line(const std::vector<double>& rho) {
   return {slope, std::sqrt(sse / (n - 2.0) / sww)};
 }
 
-// The time-varying test on r: rho tracked in windows.
+// Whether the windows' rho follows their size (the RMS of p in each) at least as closely as it
+// follows time: the sum of squares each line leaves.
+bool follows_size_more_than_time(std::span<const double> p, const Halves& h,
+                                 const std::vector<double>& rho) {
+  std::vector<double> squares(kDescriptionWindows, 0.0), counts(kDescriptionWindows, 0.0);
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    squares[h.window[j]] += p[j] * p[j];
+    counts[h.window[j]] += 1.0;
+  }
+  const auto left_by_line = [&](const std::vector<double>& x) {
+    const auto n = static_cast<double>(rho.size());
+    double mx = 0.0, mr = 0.0;
+    for (std::size_t w = 0; w < rho.size(); ++w) {
+      mx += x[w] / n;
+      mr += rho[w] / n;
+    }
+    double sxx = 0.0, sxr = 0.0, srr = 0.0;
+    for (std::size_t w = 0; w < rho.size(); ++w) {
+      sxx += (x[w] - mx) * (x[w] - mx);
+      sxr += (x[w] - mx) * (rho[w] - mr);
+      srr += (rho[w] - mr) * (rho[w] - mr);
+    }
+    return sxx > 0.0 ? srr - sxr * sxr / sxx : srr;
+  };
+  std::vector<double> size(kDescriptionWindows), place(kDescriptionWindows);
+  for (std::size_t w = 0; w < size.size(); ++w) {
+    size[w] = counts[w] > 0.0 ? std::sqrt(squares[w] / counts[w]) : 0.0;
+    place[w] = static_cast<double>(w);
+  }
+  return left_by_line(size) <= left_by_line(place);
+}
+
+// The time-varying test on r: rho tracked in windows, against p (or, of_rate, p's rate, where
+// rho follows time more closely than the rate's size: a term that grows unlike the rate is the
+// rate map's amplitude, not a change over the record).
 void trend_test(std::span<const double> time, std::span<const double> p, std::vector<double>& r,
-                const Halves& h, ResidualDescription& out) {
+                const Halves& h, ResidualDescription& out, bool of_rate = false) {
   const std::vector<double> rho = window_gains(r, p, h);
   std::vector<double> d(r.size(), 0.0);
   const std::size_t n = r.size();
@@ -461,11 +495,13 @@ void trend_test(std::span<const double> time, std::span<const double> p, std::ve
   const double e = explained(r, d, h.heldout);
   const auto [slope, error] = trend_line(rho);
   if (e < kMinExplained || !(std::abs(slope) >= kTrendSigmas * error)) return;
+  if (of_rate && follows_size_more_than_time(p, h, rho)) return;
   std::vector<double> centres(kDescriptionWindows);
   for (std::size_t w = 0; w < centres.size(); ++w)
     centres[w] = time[std::min(n - 1, (2 * w + 1) * n / (2 * kDescriptionWindows))];
   const ShapeFit shape = fit_shape(centres, rho);
-  out.time_varying = TrendSignature{e, 100.0 * (shape.end - shape.start), shape};
+  out.time_varying =
+      TrendSignature{e, of_rate ? 0.0 : 100.0 * (shape.end - shape.start), shape, of_rate};
   for (std::size_t j = 0; j < n; ++j) {
     r[j] -= d[j];
     out.described[j] += d[j];
@@ -485,6 +521,7 @@ void input_tests(std::span<const double> time, std::span<const double> p, std::v
   const bool map_wins = spread_over(r_map, h.heldout) <= spread_over(r_trend, h.heldout);
   out = map_wins ? std::move(map_first) : std::move(trend_first);
   r = map_wins ? std::move(r_map) : std::move(r_trend);
+  if (!out.time_varying) trend_test(time, rate_of(p, dt), r, h, out, true);
 }
 
 }  // namespace

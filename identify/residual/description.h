@@ -53,6 +53,13 @@
 //              train samples less their line (a drift is the library's offset_drift): its highest
 //              bin, taken only where every bin below it is lower (a drift's spectrum falls from
 //              0 Hz, a period's rises to its frequency), standing out and not the input's as above.
+//              Where neither order finds a trend, the same test on what they left against p's
+//              rate v = dp/dt (rho_w = sum r v / sum v^2, s: the measured's lead on the model,
+//              of_rate): a term in quadrature with p whose size moves over the record (a damper
+//              whose oil warms, a lag that grows) is no ratio to p and shows only there; kept
+//              only where the windows' rho follows time more closely (the sum of squares its line
+//              leaves) than the windows' RMS rate (a force in v |v| on a motion that grows reads
+//              as a lead that grows with the rate, not with time).
 //   trend shape the windows' rho fitted as a line, a step and an exponential approach
 //              (drift_shape.h): the shape, the ratio at the start and at the end of the record.
 // A test counts only when it explains at least kMinExplained of the residual's held-out variance
@@ -105,8 +112,10 @@ struct DirectionSignature {
 struct TrendSignature {
   double explained = 0.0;
   double change_pct = 0.0;  // of the measured / model ratio, start to end of the record
-  // rho's shape over the windows (drift_shape.h): start and end are measured / model - 1.
+  // rho's shape over the windows (drift_shape.h): start and end are measured / model - 1, or,
+  // of_rate, the measured's lead on the model (s; change_pct is then 0).
   ShapeFit shape;
+  bool of_rate = false;
 };
 
 // One channel's description (describe_residual).

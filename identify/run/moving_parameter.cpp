@@ -115,7 +115,8 @@ std::optional<MovingParameter> described_moving(const Unexplained& described,
   const auto& trend = described.description.time_varying;
   const bool force = described.channel == Channel::kForce;
   const std::string part = (force ? "specimen " : "actuator ") + std::to_string(path.actuator);
-  if (!trend || described.part != part) return std::nullopt;
+  // A trend of the lead on the model (of_rate) moves no stiffness or gain.
+  if (!trend || trend->of_rate || described.part != part) return std::nullopt;
   MovingParameter out;
   out.actuator = path.actuator;
   out.channel = described.channel;

@@ -181,8 +181,8 @@ std::string channel_part(const ResidualDescription& d, Channel channel, int actu
 // A force that falls against the model in one step from some time on: the specimen lost capacity.
 bool capacity_drop(const Unexplained& u) {
   const auto& trend = u.description.time_varying;
-  return trend && u.channel == Channel::kForce && trend->shape.shape == DriftShape::kStep &&
-         trend->shape.end < trend->shape.start;
+  return trend && !trend->of_rate && u.channel == Channel::kForce &&
+         trend->shape.shape == DriftShape::kStep && trend->shape.end < trend->shape.start;
 }
 
 std::vector<std::string> kinds_of(const Unexplained& u) {
@@ -223,7 +223,16 @@ std::string signature_text(const Unexplained& u) {
               " " + u.unit + " RMS";
     parts.push_back(text);
   }
-  if (d.time_varying) {
+  if (d.time_varying && d.time_varying->of_rate) {
+    const ShapeFit& shape = d.time_varying->shape;
+    std::string text = "the measured's lead on the model changes over the record, " +
+                       shape_name(shape.shape) + ": " + lead_text(shape.start) + " at the start, " +
+                       lead_text(shape.end) + " at the end";
+    if (shape.shape == DriftShape::kStep) text += ", the step at " + fixed_text(shape.at, 2) + " s";
+    if (shape.shape == DriftShape::kExponential)
+      text += ", time constant " + number_text(shape.at) + " s";
+    parts.push_back(text);
+  } else if (d.time_varying) {
     const ShapeFit& shape = d.time_varying->shape;
     std::string text = "changes over the record, " + shape_name(shape.shape) +
                        ": measured / model " + number_text(100.0 * shape.start) +
@@ -241,9 +250,12 @@ std::string signature_text(const Unexplained& u) {
 nlohmann::json trend_json(const TrendSignature& t) {
   return {{"explained_pct", 100.0 * t.explained},
           {"change_pct", t.change_pct},
+          {"of_rate", t.of_rate},
           {"shape", shape_name(t.shape.shape)},
-          {"start_pct", 100.0 * t.shape.start},
-          {"end_pct", 100.0 * t.shape.end},
+          {"start_pct", t.of_rate ? nlohmann::json() : nlohmann::json(100.0 * t.shape.start)},
+          {"end_pct", t.of_rate ? nlohmann::json() : nlohmann::json(100.0 * t.shape.end)},
+          {"start_lead_s", t.of_rate ? nlohmann::json(t.shape.start) : nlohmann::json()},
+          {"end_lead_s", t.of_rate ? nlohmann::json(t.shape.end) : nlohmann::json()},
           {"at_s",
            t.shape.shape == DriftShape::kLinear ? nlohmann::json() : nlohmann::json(t.shape.at)}};
 }

@@ -4,7 +4,7 @@
 // residual is not), a residual of the input's sign or amplitude or of its direction is the map's,
 // one of the rate's sign or amplitude the rate map's, and a gain that moves over the record is
 // time-varying with its change and its shape (a line, a step with its time, an exponential
-// approach).
+// approach), and a lead on the model that moves over the record time-varying of the rate.
 #include "identify/residual/description.h"
 
 #include <gtest/gtest.h>
@@ -198,6 +198,24 @@ TEST(DescribeResidual, AModelsLagOnTheMotionIsNoPeriodAndNoSignatureOfTheRate) {
   EXPECT_FALSE(d.periodic.has_value());
   EXPECT_FALSE(d.direction && d.direction->of_rate);
   EXPECT_FALSE(d.amplitude && d.amplitude->of_rate);
+  EXPECT_FALSE(d.time_varying.has_value());  // a constant lead does not move
+}
+
+// A term in quadrature with the model whose size moves (a damper whose oil warms): the measured
+// leads the model by 2 ms at the start and lags it by 2 ms at the end, linearly. No ratio to p
+// holds it; the trend against p's rate does, with its lead at the start and at the end.
+TEST(DescribeResidual, ALeadThatMovesOverTheRecordIsTimeVaryingOfTheRate) {
+  Synthetic s = broadband(0.05);
+  const std::vector<double> v = rate(s);
+  for (std::size_t j = 0; j < kSamples; ++j)
+    s.residual[j] += 0.004 * (0.5 - s.time[j] / s.time.back()) * v[j];
+  const ResidualDescription d = described(s);
+  ASSERT_TRUE(d.time_varying.has_value());
+  EXPECT_TRUE(d.time_varying->of_rate);
+  EXPECT_EQ(d.time_varying->shape.shape, DriftShape::kLinear);
+  EXPECT_NEAR(d.time_varying->shape.start, 0.002, 0.0004);
+  EXPECT_NEAR(d.time_varying->shape.end, -0.002, 0.0004);
+  EXPECT_GT(d.explained, 0.5);
 }
 
 // An actuator that lags 4 ms extending and 12 ms retracting, fitted with one 8 ms lag: the
