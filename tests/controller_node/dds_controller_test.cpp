@@ -177,6 +177,7 @@ TEST_F(DdsController, AControllerThatFallsBehindHoldsWithinTheAnswerWindow) {
   const std::string& status = run.record.footer()->status();
   const bool named = status.find("answers late: frame") != std::string::npos ||
                      status.find("never applied") != std::string::npos;
+  if (const auto burned = test::loop_cpu_over_bound(coordinator_log)) FAIL() << *burned;
   if (!named)
     if (const auto why = test::machine_stalled(status, *run.record.header(), witnessed.machine))
       GTEST_SKIP() << *why;

@@ -126,6 +126,7 @@ void run_drill(Drill drill) {
   const bool named = std::all_of(drill.cause.begin(), drill.cause.end(), [&](const auto& word) {
     return footer->status().find(word) != std::string::npos;
   });
+  if (const auto burned = test::loop_cpu_over_bound(coordinator_log)) FAIL() << *burned;
   if (!named)
     if (const auto why =
             test::machine_stalled(footer->status(), *run.record.header(), witnessed.machine))

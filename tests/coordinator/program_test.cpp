@@ -95,6 +95,8 @@ TEST(PlatformGate, AcceptPlatformRunsAndTheRecordSaysSo) {
   EXPECT_EQ(p.verdict(), kVerdict);
   EXPECT_EQ(p.dma_latency_held(), rt_check::DmaLatencyHold().held());
   // The run's own verdict is judged by the suite's one rule (tests/support/real_time_run.h).
+  if (const auto burned = test::loop_cpu_over_bound(test::read_file(result.coordinator_log)))
+    FAIL() << *burned;
   if (result.coordinator_exit != 0 && record.footer() != nullptr)
     if (const auto why =
             test::machine_stalled(record.footer()->status(), *record.header(), machine))

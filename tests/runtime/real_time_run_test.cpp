@@ -137,13 +137,14 @@ TEST(StallRule, ATimingFailureBesideALoadedMachineIsTheMachines) {
   const runtime::RunHeader h = header(0.001);
   const std::string missed = "completed with deadline misses: 211 overruns in 999 steps";
   const std::string window = "node 2: no answer for 30 consecutive steps (steps 1 to 30)";
+  const std::string few = "failed: node 2 answered 585 of 592 steps (at least 99 % needed)";
   test::MeasuredPlatform machine = stalled_for(0.001);
   machine.p99 = 0.0001;
   machine.cpu_share = test::kLoadedCpuShare;
-  EXPECT_FALSE(test::machine_stalled(missed, h, machine).has_value());
-  EXPECT_FALSE(test::machine_stalled(window, h, machine).has_value());
+  for (const std::string& status : {missed, window, few})
+    EXPECT_FALSE(test::machine_stalled(status, h, machine).has_value()) << status;
   machine.cpu_share = 0.51;
-  for (const std::string& status : {missed, window}) {
+  for (const std::string& status : {missed, window, few}) {
     const auto why = test::machine_stalled(status, h, machine);
     ASSERT_TRUE(why.has_value()) << status;
     EXPECT_NE(why->find("a busy thread got 0.51 of its CPU, under the 0.70"), std::string::npos)
@@ -151,6 +152,7 @@ TEST(StallRule, ATimingFailureBesideALoadedMachineIsTheMachines) {
     EXPECT_NE(why->find(status), std::string::npos) << *why;
   }
   EXPECT_FALSE(test::machine_loaded("diverged at step 40", h, machine).has_value());
+  EXPECT_FALSE(test::machine_loaded("failed: node 2 sent a garbage message", h, machine));
 }
 
 // The loop's CPU time per step bounds the code whatever the machine: over the bound, or a

@@ -67,8 +67,12 @@ std::optional<std::string> machine_cannot_pace(const std::string& status,
 std::optional<std::string> machine_loaded(const std::string& status,
                                           const runtime::RunHeader& header,
                                           const MeasuredPlatform& machine) {
+  // The timing verdicts: the deadline's, a window's, and too few fresh answers (a node's answers
+  // that came after the steps that needed them: coordinator/answer_verdict.cpp).
+  const bool too_few_answers =
+      status.rfind("failed: node ", 0) == 0 && status.find(" % needed)") != std::string::npos;
   const bool timing = status.rfind("completed with deadline misses", 0) == 0 ||
-                      stall_window(status, header).has_value();
+                      stall_window(status, header).has_value() || too_few_answers;
   if (!timing || machine.cpu_share >= kLoadedCpuShare) return std::nullopt;
   char figures[128];
   std::snprintf(figures, sizeof figures,

@@ -15,20 +15,24 @@
 // start cannot keep its deadlines (on a quiet machine the p99 is tens of us, so a loop that
 // overruns there still fails the test). A window's failure beside such a machine is its too,
 // however short its longest stall: the lateness of successive wake-ups of the run's processes adds
-// up past the window. Either kind of failure (a window passed, or the deadline verdict) is also
-// the machine's when the witness saw its CPU share (platform_gate.h) under kLoadedCpuShare:
+// up past the window. Either kind of failure (a window passed, or the deadline verdict), or a
+// node that answered too few steps in time ("failed: node N answered F of S steps (at least P %
+// needed)"), is also the machine's when the witness saw its CPU share (platform_gate.h) under
+// kLoadedCpuShare:
 // other busy threads took the CPUs the run's loop and nodes needed, which a sleeper's wake-up
 // lateness barely shows. Any other failure, or one beside a quiet machine, is the code's.
 //
-// Whatever the machine's load, the code is judged by a figure load cannot move: the loop
-// thread's CPU time per step (CLOCK_THREAD_CPUTIME_ID over each step's work), which the
+// Whatever the machine's load, the coordinator's loop is judged by a figure load cannot move: the
+// loop thread's CPU time per step (CLOCK_THREAD_CPUTIME_ID over each step's work), which the
 // coordinator's summary prints ("loop CPU per step: median X ms, ..."). Its median must stay under
 // kLoopCpuMedianBound; this never skips. Measured on this project's 2-core VM (2026-12-08, the
 // real-time tests that launch a coordinator, its medians): clean 0.05-0.10 ms beside other
 // sessions' compilers and 0.02-0.12 ms beside two CPU burners as well (the p99 moves, 0.13-0.37
 // ms: hence the median); with a 0.5 ms busy-wait planted at the top of each step 0.55-0.63 ms
 // beside the compilers and 0.51-0.65 ms beside the burners. 0.2 ms sits between them with a
-// margin both ways.
+// margin both ways. It sees CPU burned on the loop thread within a step only: a node's, the
+// emulator's or the record writer's regression, or a loop that blocks rather than burns, is
+// judged only by the rules above.
 //
 //   stall_window(status, header) -> s: the window `status` names that a stall can pass, the reply
 //     timeout read from the study's controller nodes; nullopt for any other status.
@@ -37,8 +41,8 @@
 //     machine's (its p99 wake-up lateness >= dt / 2), or nullopt.
 //   machine_stalled(status, header, machine) -> why the failure is the machine's (any of the rules
 //     above), or nullopt.
-//   machine_loaded(status, header, machine) -> why a timing failure (a window or the deadline
-//     verdict) is the machine's (its CPU share under kLoadedCpuShare), or nullopt.
+//   machine_loaded(status, header, machine) -> why a timing failure (a window, the deadline
+//     verdict or too few fresh answers) is the machine's (its CPU share under kLoadedCpuShare), or nullopt.
 //   loop_cpu_median(coordinator_log) -> s: the median of the summary's loop CPU per step, nullopt
 //     without that line.
 //   loop_cpu_over_bound(coordinator_log) -> why the run's code burned too much CPU per step (its
