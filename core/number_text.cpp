@@ -24,6 +24,10 @@ std::string format_number(double value, int significant_digits) {
   return buffer;
 }
 
+std::string format_percent(double fraction, int significant_digits) {
+  return format_number(100.0 * fraction, significant_digits) + " %";
+}
+
 std::string printable(std::string_view token) {
   constexpr std::size_t kMax = 40;
   std::string out;

@@ -18,6 +18,10 @@ std::string format_number(double value);
 // the text that reads back as the same double.
 std::string format_number(double value, int significant_digits);
 
+// A fraction as a percentage, as messages print it: 100 x fraction to `significant_digits`
+// digits, then " %" (0.01234 gives "1.23 %").
+std::string format_percent(double fraction, int significant_digits = 3);
+
 // A token as an error message may show it: bytes outside printable ASCII as \xNN, at most 40
 // characters ("..." after), so a binary file never reaches the terminal raw.
 std::string printable(std::string_view token);

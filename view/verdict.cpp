@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "core/number_text.h"
+
 namespace rths::view {
 namespace {
 
@@ -14,7 +16,7 @@ std::string overruns_within(const runtime::DeadlineCounts& c, const runtime::Dea
                             : fmt::format("within the tolerance of {:.3g} % (max_overrun_fraction)",
                                           100.0 * rule.max_fraction);
   return std::to_string(c.overruns) + " overruns in " + std::to_string(c.steps) + " steps (" +
-         fmt::format("{:.3g} %", 100.0 * share) + "), " + tolerance + "; worst streak " +
+         core::format_percent(share) + "), " + tolerance + "; worst streak " +
          std::to_string(c.worst_streak) + " steps, within the fail-safe's window of " +
          std::to_string(rule.max_streak) + "; each late step is marked in the record";
 }

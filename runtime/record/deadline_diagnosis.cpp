@@ -1,11 +1,10 @@
 #include "runtime/record/deadline_diagnosis.h"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <sstream>
 
 #include "core/metrics.h"
+#include "core/number_text.h"
 #include "core/time_text.h"
 
 namespace rths::runtime {
@@ -36,7 +35,7 @@ std::string usability_of(const DeadlineDiagnosis& d, const DeadlineRule& rule) {
   const std::uint64_t streak_window = rule.max_streak;
   const DeadlineBreach breach = deadline_breach(d.counts(), rule);
   if (breach == DeadlineBreach::kDominated)
-    return "dominated by overruns: " + fmt::format("{:.3g} %", 100.0 * share) +
+    return "dominated by overruns: " + core::format_percent(share) +
            " of the steps overran, so the response shows the platform as much as the rig; the "
            "lag measurements stand, the response and what is identified from it do not stand for "
            "a real-time test";
@@ -45,13 +44,13 @@ std::string usability_of(const DeadlineDiagnosis& d, const DeadlineRule& rule) {
            " steps in a row overran, so the integrator used stale forces that long; "
            "the lag measurements stand, the response is not a real-time test's";
   if (share > DeadlineDiagnosis::kUsableShare)
-    return "use with care: " + fmt::format("{:.3g} %", 100.0 * share) +
+    return "use with care: " + core::format_percent(share) +
            " of the steps overran (isolated, worst streak " + std::to_string(d.worst_streak) +
            "); every force is tied to the step it answers, but the response carries that many "
            "late steps";
   return "usable as recorded: the overruns were isolated (worst streak " +
          std::to_string(d.worst_streak) + " steps, within the fail-safe's " +
-         std::to_string(streak_window) + "), " + fmt::format("{:.3g} %", 100.0 * share) +
+         std::to_string(streak_window) + "), " + core::format_percent(share) +
          " of the steps, every force is tied to the step it answers and the late steps are marked";
 }
 

@@ -22,6 +22,13 @@ TEST(FormatNumber, TheGivenSignificantDigits) {
   EXPECT_EQ(std::stod(format_number(0.1 + 0.2, 17)), 0.1 + 0.2);
 }
 
+TEST(FormatPercent, AFractionAsAPercentageToTheGivenDigits) {
+  EXPECT_EQ(format_percent(0.01234), "1.23 %");
+  EXPECT_EQ(format_percent(0.5), "50 %");
+  EXPECT_EQ(format_percent(0.383127, 4), "38.31 %");
+  EXPECT_EQ(format_percent(0.0), "0 %");
+}
+
 TEST(ParseFinite, OneFiniteNumberOrNothing) {
   EXPECT_EQ(parse_finite("1e-3"), 1e-3);
   EXPECT_EQ(parse_finite("-.5"), -0.5);
