@@ -498,8 +498,8 @@ std::string modal_assumption(int dofs, int count) {
                                "part at its initial stiffness";
   if (count < dofs)
     text += "; the lowest " + std::to_string(count) +
-            " modes only (the model is held sparse: a sparse eigensolver gives them; higher "
-            "modes, damped the more by Rayleigh damping, are not checked)";
+            " modes only (the model is held sparse: a sparse eigensolver gives them; the higher "
+            "modes are not checked)";
   return text;
 }
 

@@ -1,11 +1,13 @@
 #pragma once
 // Each case's setup of a study, built once (study::setup_for_case) and held for its run, with
-// one copy of the structural model alive at a time. setup_for_case copies the base setup's model
+// one copy of the structural model held among them (a compensated case's verdict builds one
+// more, briefly, for its uncompensated twin: analysis/study_run/study_run.cpp). setup_for_case copies the base setup's model
 // (at 2,000 DOFs its dense M, C and K: about 100 MB) and changes only the case's delays,
 // compensators, force predictors and links, never the model; so every setup here but the one
 // lent out is held without its model, and the one model (the last case's own copy) goes to the
 // case that asks for it. Each case's loop (its experimental parts, no lags, and its lag: what
-// the critical-delay check needs of it) is taken while its setup is built.
+// the critical-delay check needs of it) is taken while its setup is built. A case whose setup
+// changed the model (its size or sparsity) is refused: std::logic_error naming it.
 // Inputs: a prepared study, its cases (each alive as long as this), the extra lag (s) added to
 // each case's answer lag.
 

@@ -14,7 +14,7 @@
 // Wall-clock stamps are CLOCK_REALTIME (transport::realtime_ns); the servo and answer threads
 // pace and wait on CLOCK_MONOTONIC (runtime/rt/clock.h monotonic_ns).
 //
-// Threads: four, sharing one mutex (the loop's `state`) over the service, the timers and the
+// Threads: four that run the node, sharing one mutex (the loop's `state`) over the service, the timers and the
 // lag queues; each holds it only while it acts, never while it waits.
 //   loop      the caller's thread: keep time, write and apply what is due, wait for a message
 //             (lock released in the wait). Allocates per message it queues behind a lag, never
@@ -26,6 +26,9 @@
 //             period, paced on CLOCK_MONOTONIC with the deployment's wait policy.
 //   answers   a node with an answer source only (runtime/node/answer_source.h): waits on the
 //             source without the lock (at most kAnswerPoll), then forwards what it answered.
+//   set-up    while an ASSIGN builds the node's part (on the loop or receive thread, under
+//   watcher   `state`): runtime/node/setup_progress.h's watcher logs the phase past 3 s; it
+//             takes only its own mutex, never `state`, and is joined before READY is sent.
 // realtime_priority raises the loop's thread before the servo and answer threads start (they
 // inherit it) and names the transport's receive threads.
 

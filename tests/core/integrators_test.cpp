@@ -229,8 +229,9 @@ TEST_P(DissipativeSchemes, AgreesWithExplicitNewmarkAsDtShrinks) {
 
 // Far past the explicit limit (omega dt = 50), free vibration from 0.01 m: a dissipative scheme
 // ends within its start; KR-alpha without dissipation (rho_inf = 1) is only marginally stable
-// there: it keeps an oscillation larger than its start (measured: a peak of 25.02x in each 2000
-// steps of 8000), bounded, neither decaying nor growing from one 2000-step window to the next.
+// there: its oscillation stays bounded (under 100x its start), neither decaying nor growing from
+// one 2000-step window to the next. Its size against the start (an overshoot today) is not its
+// contract.
 TEST_P(DissipativeSchemes, BoundedFarBeyondTheExplicitLimit) {
   const auto& p = GetParam();
   const StructuralModel model = make_sdof(1.0, 0.0);
@@ -246,7 +247,7 @@ TEST_P(DissipativeSchemes, BoundedFarBeyondTheExplicitLimit) {
     peak[k / kWindow] = std::max(peak[k / kWindow], std::abs(integrator->displacement()(0)));
   }
   if (p.kind == IntegratorKind::kKRAlpha && p.parameters.rho_infinity == 1.0) {
-    EXPECT_GT(peak[0], 0.01) << p.name << ": undamped, past the explicit limit";
+    EXPECT_LT(peak[0], 100 * 0.01) << p.name << ": bounded past the explicit limit";
     for (int w = 1; w < kWindows; ++w) {
       EXPECT_LE(peak[w], peak[0] * (1 + 1e-6)) << p.name << " window " << w << ": grew";
       EXPECT_GE(peak[w], peak[0] * (1 - 1e-3)) << p.name << " window " << w << ": decayed";
