@@ -3,6 +3,7 @@
 #include "identify/fit/effect_parameters.h"
 #include "identify/model/study_config.h"
 #include "identify/run/moving_parameter.h"
+#include "identify/run/noise_period.h"
 #include "identify/run/plausibility.h"
 #include "identify/run/residual_floor.h"
 #include "identify/run/sensors.h"
@@ -576,7 +577,7 @@ RunIdentification identify_run_record(const std::filesystem::path& record,
     judge_named(path);
     judge_plausible(path);
     merge_constant_changes(path);
-    std::vector<Unexplained> described = describe_unexplained(path);
+    std::vector<Unexplained> described = describe_with_noise_periods(path);
     judge_noise_beside(path, described);
     for (auto& f : channel_floors(path)) out.floors.push_back(std::move(f));
     for (auto& u : described) out.unexplained.push_back(std::move(u));

@@ -4,6 +4,7 @@
 
 #include "core/number_text.h"
 #include "identify/run/findings.h"
+#include "identify/run/response_floor.h"
 
 namespace rths::identify {
 namespace {
@@ -307,6 +308,7 @@ std::string run_record_text(const RunIdentification& run) {
   out << findings_text(run.findings, run.residual ? &*run.residual : nullptr);
   out << rejected_text(run.actuators);
   out << unexplained_section(run.unexplained, run.floors);
+  if (const auto floor = response_floor(run)) out << "  " << floor->text() << "\n";
   return out.str();
 }
 
@@ -321,6 +323,11 @@ nlohmann::json run_record_json(const RunIdentification& run) {
   out["rejected"] = rejected_json(run.actuators);
   out["unexplained"] = unexplained_json(run.unexplained, run.floors);
   out["residual_floor"] = json_array(run.floors);
+  if (const auto floor = response_floor(run)) {
+    out["response_floor"] = floor->json();
+    if (const nlohmann::json entry = floor->unexplained_json(); !entry.is_null())
+      out["unexplained"].push_back(entry);
+  }
   if (const auto& p = run.platform)
     out["platform"] = {
         {"steps", p->steps},

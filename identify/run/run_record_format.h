@@ -15,14 +15,16 @@
 //   the re-run's NRMSE per floor (declared -> identified) with what each link and effect removes;
 //   the findings, every part (findings.h), and what the re-run leaves unexplained;
 //   what each channel's model leaves, described without presuming an effect (unexplained.h):
-//   "unexplained on PART (CHANNEL): SIGNATURE; share X %", or none.
+//   "unexplained on PART (CHANNEL): SIGNATURE; share X %", or none;
+//   the re-run's response against its floor (response_floor.h), and where above, what locates it.
 // One finding, one magnitude: a channel's or a link's own part of its held-out error is printed
 // "held-out share" (JSON heldout_share), never "share", which is the re-run's (the findings' and
 // the residual's; null in the findings' JSON for a finding not re-run, where it was a 0 beside a
 // link's held-out share of the same finding).
 // JSON keys: record, case, clock, held, inputs, steps, duration_s, links, actuators, residual,
-// undeclared (the findings), unexplained (Unexplained::json, [] when none), platform,
-// answers_used.
+// undeclared (the findings), unexplained (Unexplained::json, [] when none; with the response
+// floor's entry where silent, ResponseFloor::unexplained_json), response_floor
+// (ResponseFloor::json), platform, answers_used.
 
 #include <nlohmann/json.hpp>
 

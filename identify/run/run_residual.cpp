@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <memory>
+#include <random>
 #include <span>
 #include <sstream>
 #include <stdexcept>
@@ -191,6 +192,13 @@ class Reruns {
   // `described`: a channel's described residual put back (DescribedResidual), or none.
   Rerun run(const std::vector<RigModel>& models, bool replayed = false,
             const Unexplained* described = nullptr) const {
+    return run(
+        models, replayed,
+        described ? std::span<const Unexplained>(described, 1) : std::span<const Unexplained>());
+  }
+  // As above, with every residual of `put_back` put back.
+  Rerun run(const std::vector<RigModel>& models, bool replayed,
+            std::span<const Unexplained> put_back) const {
     core::HybridSetup setup = setup_;
     for (std::size_t a = 0; a < models.size(); ++a) {
       const RigModel& m = models[a];
@@ -212,10 +220,10 @@ class Reruns {
         if (auto stage = moving_stage(moving, m.displacement_scale))
           setup.delays[a].add(std::move(stage));
     }
-    if (described) {
-      const auto a = static_cast<std::size_t>(described->actuator - 1);
+    for (const Unexplained& described : put_back) {
+      const auto a = static_cast<std::size_t>(described.actuator - 1);
       if (a < setup.delays.size())
-        setup.delays[a].add(std::make_unique<DescribedResidual>(*described));
+        setup.delays[a].add(std::make_unique<DescribedResidual>(described));
     }
     const core::AnswerSchedule& answers =
         replayed && replays() ? input_.platform->schedule : no_replay_;
@@ -393,6 +401,46 @@ void add_described(const Reruns& reruns, const std::vector<RigModel>& all,
   }
 }
 
+// The re-run floor (run_residual.h noise_floor): the identified re-run with each load cell's
+// white noise put back as one seeded draw, against the identified re-run, the worst floor's
+// RMS difference over the median |u| of the record's column.
+double noise_floor(const Reruns& reruns, const std::vector<RigModel>& all,
+                   const std::vector<ActuatorPath>& paths, const Rerun& after,
+                   const ResidualInput& input) {
+  std::mt19937_64 rng(kNoiseFloorSeed);
+  std::normal_distribution<double> draw(0.0, 1.0);
+  std::vector<Unexplained> noise;
+  for (const ActuatorPath& path : paths) {
+    if (!path.id.find(Channel::kForce) || !(path.force_noise > 0.0)) continue;
+    Unexplained u;
+    u.actuator = path.actuator;
+    u.channel = Channel::kForce;
+    u.time = identified_signals(path.id, Channel::kForce).time;
+    for (std::size_t j = 0; j < u.time.size(); ++j)
+      u.description.described.push_back(path.force_noise * draw(rng));
+    noise.push_back(std::move(u));
+  }
+  if (noise.empty()) return 0.0;
+  const Rerun noisy = reruns.run(all, true, noise);
+  const core::Mat& recorded = *input.recorded;
+  const Eigen::Index n =
+      std::min<Eigen::Index>({static_cast<Eigen::Index>(noisy.result.steps()),
+                              static_cast<Eigen::Index>(after.result.steps()), recorded.rows()});
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < recorded.cols(); ++i) {
+    const Eigen::Index a = rerun_column(after.result, input.recorded_dofs, i),
+                       b = rerun_column(noisy.result, input.recorded_dofs, i);
+    std::vector<double> rec(static_cast<std::size_t>(n)), moved(rec.size());
+    for (Eigen::Index j = 0; j < n; ++j) {
+      rec[static_cast<std::size_t>(j)] = recorded(j, i);
+      moved[static_cast<std::size_t>(j)] =
+          recorded(j, i) + noisy.result.displacement(j, b) - after.result.displacement(j, a);
+    }
+    worst = std::max(worst, core::nrmse(rec, moved));
+  }
+  return worst;
+}
+
 }  // namespace
 
 config::Case declared_case(const config::Study& study, const config::Case& study_case) {
@@ -453,6 +501,7 @@ RunResidual run_residual(const ResidualInput& input) {
   out.identified_response = after.result.displacement.topRows(rows);
   add_shares(reruns, paths, all, out);
   if (input.unexplained) add_described(reruns, all, *input.unexplained, out);
+  out.noise_floor = noise_floor(reruns, all, paths, after, input);
   if (reruns.replays()) out.platform = input.platform->text();
   if (input.clock == "real_time")
     out.notes.push_back(reruns.replays()

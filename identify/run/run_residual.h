@@ -72,6 +72,7 @@ struct ActuatorPath;
 struct Unexplained;
 
 inline constexpr double kMinMovingGain = 1.0e-4;  // NRMSE of the worst floor, held-out steps
+inline constexpr unsigned kNoiseFloorSeed = 62;   // the noise floor's draw (noise_floor)
 
 struct FloorError {
   int dof = 0;                              // 1-based, the DOF the record's column holds
@@ -103,8 +104,14 @@ struct RunResidual {
   // Per described channel (link: its part, effect: its channel word); share of `identified`.
   std::vector<ResidualShare> described;
   std::vector<MovingRerun> moving;  // every moving parameter named, kept or not
-  std::vector<std::string> notes;   // stages left out of the re-run, network paths
-  std::string platform;             // the replayed answers (PlatformReplay::text); empty: none
+  // The re-run floor: the worst floor's NRMSE (against the record's median |u|) by which the
+  // identified re-run moves with each load cell's white noise (ActuatorPath::force_noise) put
+  // back where the integrator receives the force, one seeded draw: what a clean record of this
+  // rig leaves, since the run's integrator received the reading and the re-run the model's force
+  // (response_floor.h). 0 without a load cell's noise.
+  double noise_floor = 0.0;
+  std::vector<std::string> notes;  // stages left out of the re-run, network paths
+  std::string platform;            // the replayed answers (PlatformReplay::text); empty: none
   // The responses compared (steps x recorded DOFs, m; column i is floors[i]'s DOF) at `time`
   // (s): for plots.
   std::vector<double> time;

@@ -380,16 +380,23 @@ nlohmann::json Unexplained::json() const {
 }
 
 void judge_noise_beside(ActuatorPath& path, const std::vector<Unexplained>& described) {
-  for (const Unexplained& u : described) {
-    if (u.actuator != path.actuator) continue;
-    const ChannelSignals& s = identified_signals(path.id, u.channel);
-    const std::vector<double> left =
-        minus(minus(s.target, prediction_without(path, u.channel, not_named_on(path, u.channel))),
-              u.description.described);
-    const bool force = u.channel == Channel::kForce;
+  for (Channel channel : {Channel::kMeasured, Channel::kForce}) {
+    if (!path.id.find(channel)) continue;
+    const ChannelSignals& s = identified_signals(path.id, channel);
+    // What every description of the channel leaves (a trend's and a hum's alike).
+    std::vector<double> left =
+        minus(s.target, prediction_without(path, channel, not_named_on(path, channel)));
+    bool any = false;
+    for (const Unexplained& u : described) {
+      if (u.actuator != path.actuator || u.channel != channel) continue;
+      left = minus(left, u.description.described);
+      any = true;
+    }
+    if (!any) continue;
+    const bool force = channel == Channel::kForce;
     double& sigma = force ? path.force_noise : path.displacement_noise;
     sigma = white_noise(left);
-    if (noise_named(path.id, u.channel, sigma,
+    if (noise_named(path.id, channel, sigma,
                     force ? path.declared_force_noise : path.declared_displacement_noise))
       continue;
     auto& list = force ? path.specimen_undeclared : path.undeclared;

@@ -99,7 +99,7 @@ void judge_named(ActuatorPath& path);
 // model without what judge_named took out (ActuatorPath::not_named).
 std::vector<Unexplained> describe_unexplained(const ActuatorPath& path);
 
-// Each described channel's noise judged again on what its description leaves (sensors.h
+// Each described channel's noise judged again on what its descriptions leave together (sensors.h
 // white_noise, noise_named): the sensor's noise estimate updated, "noise" no longer named where
 // it falls below the thresholds (a ripple's steps are not noise).
 void judge_noise_beside(ActuatorPath& path, const std::vector<Unexplained>& described);

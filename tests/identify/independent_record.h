@@ -106,6 +106,10 @@ struct RigTruth {
   double step_force = 0.0, step_time = 0.0;
   // A specimen that loses capacity_drop of its stiffness at drop_time s, for the rest of the run.
   double capacity_drop = 0.0, drop_time = 0.0;
+  // m over the record, linear in time: the displacement sensor's mount creeps and the loop
+  // follows the reading, so the specimen travels the reading less the creep (a bracket that
+  // creeps); the reading itself stays true to the command.
+  double followed_creep = 0.0;
   std::uint64_t seed = 7;
   PlatformTruth platform;
   NetworkTruth network;  // in a lockstep record: give no platform beside it
@@ -341,7 +345,7 @@ inline std::filesystem::path independent_record(const std::string& name, const R
       commands.push_back(command);
       const double x = actuator.step(commands.front());
       commands.pop_front();
-      const double f = specimen.force(x, t, dt);
+      const double f = specimen.force(x - rig.followed_creep * t / duration, t, dt);
       answered_x[step] = converted(rig.displacement_scale * x + rig.displacement_offset +
                                        rig.displacement_noise * normal(rng),
                                    rig.displacement_range);
