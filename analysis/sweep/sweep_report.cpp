@@ -13,6 +13,7 @@
 
 #include "analysis/sweep/sweep_internal.h"
 #include "core/metrics.h"
+#include "core/time_text.h"
 #include "util/plot.h"
 
 namespace rths::analysis {
@@ -65,7 +66,7 @@ struct SweepAxes {
   }
   std::string label(const SeriesKey& key) const {
     const auto& [model, alpha, dt, motion, delay] = key;
-    std::string text = fmt::format("delay {:.4g} ms", delay * 1e3);
+    std::string text = "delay " + core::format_ms(delay, 4);
     if (models.size() > 1) text += ", " + model_label(model);
     if (alphas.size() > 1) text += ", alpha " + format_number(alpha);
     if (dts.size() > 1) text += ", dt " + format_number(dt * 1e3) + " ms";
@@ -138,8 +139,8 @@ void mark_critical_delays(util::PlotSpec& plot, const std::vector<double>& perio
   if (!critical_delay) return;
   for (double period : periods) {
     if (const auto critical = critical_delay(period, at.alpha, at.dt)) {
-      plot.markers.push_back({*critical * 1e3, fmt::format("critical, T = {:.3g} s: {:.3g} ms",
-                                                           period, *critical * 1e3)});
+      plot.markers.push_back({*critical * 1e3, fmt::format("critical, T = {:.3g} s: {}", period,
+                                                           core::format_ms(*critical))});
     }
   }
   const std::size_t before = plot.markers.size();
